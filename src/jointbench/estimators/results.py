@@ -1,0 +1,75 @@
+"""Frozen result types returned by every estimator."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["AxisResult", "CenterResult", "JointCenterResult"]
+
+
+def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
+    if value is None:
+        return None
+    array = np.array(value, dtype=float)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True)
+class _Result:
+    converged: bool
+    iterations: int
+    status: str
+    method: str
+    cost: float = float("nan")
+    diagnostics: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True, kw_only=True)
+class CenterResult(_Result):
+    """Centre of rotation of one segment's markers in the reference frame.
+
+    ``center`` is ``(3,)`` [mm]; ``radii`` is ``(n_markers,)`` [mm] where the method defines
+    them (sphere fits), else ``None``.
+    """
+
+    center: np.ndarray
+    radii: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _frozen_array(self.center))
+        object.__setattr__(self, "radii", _frozen_array(self.radii))
+
+
+@dataclass(frozen=True, kw_only=True)
+class AxisResult(_Result):
+    """Axis of rotation: a ``point`` ``(3,)`` [mm] on it and a unit ``direction`` ``(3,)``.
+
+    ``radii`` ``(n_markers,)`` [mm] are the markers' mean distances from the axis.
+    """
+
+    point: np.ndarray
+    direction: np.ndarray
+    radii: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "point", _frozen_array(self.point))
+        object.__setattr__(self, "direction", _frozen_array(self.direction))
+        object.__setattr__(self, "radii", _frozen_array(self.radii))
+
+
+@dataclass(frozen=True, kw_only=True)
+class JointCenterResult(_Result):
+    """Joint centre of two segments, in the body-fixed frame shared at frame 0.
+
+    ``center`` is ``(3,)`` [mm]; ``covariance`` ``(3, 3)`` [mm^2] where the method predicts one.
+    """
+
+    center: np.ndarray
+    covariance: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _frozen_array(self.center))
+        object.__setattr__(self, "covariance", _frozen_array(self.covariance))
