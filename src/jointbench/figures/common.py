@@ -1,0 +1,94 @@
+"""Shared output helpers: figure saving, tables as CSV + Markdown, method styles."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+import yaml  # noqa: E402
+
+__all__ = ["markdown_table", "method_style", "read_published", "save_figure", "write_tables"]
+
+# Fixed colours per method so every figure of the benchmark reads the same way.
+_STYLES = {
+    "NM": ("#1b9e77", "o"),
+    "LS": ("#d95f02", "s"),
+    "BC": ("#7570b3", "^"),
+    "MA": ("#e7298a", "D"),
+    "IS": ("#66a61e", "v"),
+    "SCoRE": ("#a6761d", "P"),
+    "planar": ("#d95f02", "s"),
+    "radial": ("#7570b3", "^"),
+    "combined": ("#1b9e77", "o"),
+    "SARA": ("#a6761d", "P"),
+    "gauss-markov": ("#1b9e77", "o"),
+    "analytic": ("#d95f02", "s"),
+}
+
+
+def method_style(method: str, index: int = 0) -> dict[str, object]:
+    """Matplotlib line style for a method; unknown (user) methods cycle through the palette."""
+    if method in _STYLES:
+        color, marker = _STYLES[method]
+    else:
+        color, marker = plt.get_cmap("tab10")(index % 10), "X"
+    return {"color": color, "marker": marker}
+
+
+def save_figure(fig: plt.Figure, outputs: Mapping[str, str] | object) -> None:
+    """Save to every path given (``png`` and ``pdf`` keys or attributes) and close the figure."""
+    for path in _paths(outputs, ("png", "pdf")):
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=150, bbox_inches="tight", metadata=_stable_metadata(path))
+    plt.close(fig)
+
+
+def _stable_metadata(path: str) -> dict[str, object]:
+    # Dated metadata would make identical results differ byte for byte between runs.
+    if str(path).endswith(".pdf"):
+        return {"CreationDate": None, "Producer": "jointbench"}
+    return {"Software": "jointbench"}
+
+
+def _paths(outputs, keys) -> list[str]:
+    if isinstance(outputs, Mapping):
+        return [outputs[k] for k in keys if k in outputs]
+    return [getattr(outputs, k) for k in keys if hasattr(outputs, k)]
+
+
+def _format(value: object) -> str:
+    if isinstance(value, float):
+        if pd.isna(value):
+            return "–"
+        return f"{value:.4g}" if abs(value) < 1e-2 or abs(value) >= 1e4 else f"{value:.2f}"
+    return str(value).replace("|", "\\|")
+
+
+def markdown_table(frame: pd.DataFrame) -> str:
+    """A GitHub-flavoured Markdown table of ``frame`` (floats to 2 decimals or 4 significant)."""
+    header = "| " + " | ".join(map(str, frame.columns)) + " |"
+    rule = "|" + "|".join("---" for _ in frame.columns) + "|"
+    rows = ["| " + " | ".join(_format(v) for v in row) + " |" for row in frame.itertuples(False)]
+    return "\n".join([header, rule, *rows]) + "\n"
+
+
+def write_tables(
+    frame: pd.DataFrame, outputs: Mapping[str, str] | object, *, title: str = "", note: str = ""
+) -> None:
+    """Write ``frame`` as CSV and as Markdown (with an optional title and note)."""
+    csv_path, md_path = _paths(outputs, ("csv", "md"))
+    Path(csv_path).parent.mkdir(parents=True, exist_ok=True)
+    frame.to_csv(csv_path, index=False)
+    parts = [f"# {title}\n" if title else "", markdown_table(frame), f"\n{note}\n" if note else ""]
+    Path(md_path).write_text("\n".join(p for p in parts if p))
+
+
+def read_published(path: str | Path) -> dict:
+    """A paper's published values and claims (``config/published/*.yaml``)."""
+    return yaml.safe_load(Path(path).read_text())

@@ -1,0 +1,89 @@
+"""Datasets and estimates on disk (parquet).
+
+Dataset files are long format, one row per (segment, trial, frame, marker) with columns
+``segment, trial, frame, marker, x, y, z`` [mm]; the study, condition, ground truth and generator
+parameters are JSON in the parquet metadata under the key ``jointbench``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from jointbench.simulate import Trials
+
+__all__ = ["read_dataset", "read_metadata", "write_dataset", "write_table"]
+
+_META_KEY = b"jointbench"
+
+
+def _long_table(trials: Trials) -> pa.Table:
+    columns: dict[str, list[np.ndarray]] = {k: [] for k in ("segment", "trial", "frame", "marker")}
+    coords: list[np.ndarray] = []
+    for name, markers in trials.segments.items():
+        n_trials, n_frames, n_markers, _ = markers.shape
+        trial, frame, marker = np.meshgrid(
+            np.arange(n_trials), np.arange(n_frames), np.arange(n_markers), indexing="ij"
+        )
+        columns["segment"].append(np.full(trial.size, name))
+        columns["trial"].append(trial.ravel())
+        columns["frame"].append(frame.ravel())
+        columns["marker"].append(marker.ravel())
+        coords.append(markers.reshape(-1, 3))
+    xyz = np.concatenate(coords)
+    data = {key: np.concatenate(parts) for key, parts in columns.items()}
+    data["segment"] = pa.array(data["segment"]).dictionary_encode()
+    for axis, name in enumerate("xyz"):
+        data[name] = xyz[:, axis]
+    return pa.table(data)
+
+
+def write_dataset(
+    path: str | Path, trials: Trials, *, study: str, condition: Mapping[str, object]
+) -> None:
+    """Write ``trials`` to ``path`` with study, condition, truth and parameters as metadata."""
+    table = _long_table(trials)
+    metadata = {
+        "study": study,
+        "condition": dict(condition),
+        "truth": trials.truth,
+        "parameters": trials.parameters,
+    }
+    table = table.replace_schema_metadata({_META_KEY: json.dumps(metadata).encode()})
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    pq.write_table(table, path)
+
+
+def read_metadata(path: str | Path) -> dict:
+    """The ``jointbench`` metadata of a dataset file."""
+    metadata = pq.read_schema(path).metadata or {}
+    if _META_KEY not in metadata:
+        raise ValueError(f"{path} is not a jointbench dataset (no 'jointbench' metadata)")
+    return json.loads(metadata[_META_KEY])
+
+
+def read_dataset(path: str | Path) -> tuple[Trials, dict]:
+    """Read a dataset file back into :class:`Trials` and its metadata."""
+    metadata = read_metadata(path)
+    frame = pq.read_table(path).to_pandas()
+    segments = {}
+    for name, part in frame.groupby("segment", observed=True, sort=False):
+        part = part.sort_values(["trial", "frame", "marker"])
+        shape = (part["trial"].nunique(), part["frame"].nunique(), part["marker"].nunique(), 3)
+        segments[str(name)] = part[["x", "y", "z"]].to_numpy().reshape(shape)
+    trials = Trials(
+        segments=segments, truth=metadata["truth"], parameters=metadata["parameters"]
+    )
+    return trials, metadata
+
+
+def write_table(frame: pd.DataFrame, path: str | Path) -> None:
+    """Write a results table to parquet, creating the directory."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    frame.to_parquet(path, index=False)

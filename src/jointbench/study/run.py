@@ -1,0 +1,104 @@
+"""Simulate a condition, run an estimator over its trials, collect the results."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from jointbench.estimators import registry
+from jointbench.simulate import Trials
+from jointbench.study.io import read_dataset, write_dataset, write_table
+from jointbench.study.schema import check_estimates
+from jointbench.study.seeds import trial_rng
+from jointbench.study.studies import get_study
+
+__all__ = ["collect", "estimate", "run_estimate", "run_simulate", "simulate_condition"]
+
+
+def simulate_condition(config: Mapping, study: str, condition: Mapping[str, object]) -> Trials:
+    """All trials of one condition, each from its own seed (see :mod:`jointbench.study.seeds`)."""
+    spec = get_study(study)
+    settings = config["studies"][study]
+    protocol = spec.protocol(settings.get("protocol"))
+    seed_condition = {key: condition[key] for key in spec.seed_keys}
+    rngs = [
+        trial_rng(config["base_seed"], study, seed_condition, trial)
+        for trial in range(int(settings["trials"]))
+    ]
+    return spec.simulate(condition, protocol, rngs)
+
+
+def _fit_one(fit, arguments, options) -> tuple[object, str, bool, int]:
+    """Run one fit; an exception becomes a failed row rather than a failed run."""
+    try:
+        result = fit(*arguments, **options)
+    except Exception as error:  # noqa: BLE001 - any estimator failure is data for the study
+        return None, f"error: {type(error).__name__}: {error}", False, 0
+    return result, str(result.status), bool(result.converged), int(result.iterations)
+
+
+def estimate(
+    study: str,
+    method: str,
+    trials: Trials,
+    condition: Mapping[str, object],
+    options: Mapping[str, object] | None = None,
+) -> pd.DataFrame:
+    """One row per trial: condition, estimate, error, converged, iterations, seconds, status."""
+    spec = get_study(study)
+    fit = registry.get(spec.kind, method)
+    rows = []
+    for trial in range(trials.n_trials):
+        arguments = spec.fit_arguments(trials, trial)
+        start = time.perf_counter()
+        result, status, converged, iterations = _fit_one(fit, arguments, options or {})
+        seconds = time.perf_counter() - start
+        rows.append(
+            {
+                **condition,
+                "trial": trial,
+                "method": method,
+                **spec.score(result, trials.truth),
+                "converged": converged,
+                "iterations": iterations,
+                "seconds": seconds,
+                "status": status,
+            }
+        )
+    frame = pd.DataFrame(rows)
+    check_estimates(frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method)
+    return frame
+
+
+def run_simulate(config: Mapping, study: str, condition: Mapping[str, object], output: str) -> None:
+    """Simulate one condition and write its dataset file."""
+    trials = simulate_condition(config, study, condition)
+    write_dataset(output, trials, study=study, condition=condition)
+
+
+def run_estimate(config: Mapping, study: str, method: str, dataset: str, output: str) -> None:
+    """Run one built-in estimator over one dataset file and write its estimates file."""
+    trials, metadata = read_dataset(dataset)
+    options = config["studies"][study].get("options", {}).get(method, {})
+    frame = estimate(study, method, trials, metadata["condition"], options)
+    write_table(frame, output)
+
+
+def collect(study: str, paths: Sequence[str | Path], output: str) -> pd.DataFrame:
+    """Concatenate a study's estimates files after checking each one's schema."""
+    spec = get_study(study)
+    frames = []
+    for path in paths:
+        frame = pd.read_parquet(path)
+        method = Path(path).parent.name
+        check_estimates(
+            frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
+        )
+        frames.append(frame)
+    collected = pd.concat(frames, ignore_index=True)
+    collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
+    write_table(collected, output)
+    return collected

@@ -1,0 +1,122 @@
+"""The study layer: seeds, conditions, dataset files, failure capture, schema checks."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from jointbench.estimators import registry
+from jointbench.estimators.results import CenterResult
+from jointbench.simulate import Trials
+from jointbench.study import config as study_config
+from jointbench.study.io import read_dataset, write_dataset
+from jointbench.study.run import estimate, simulate_condition
+from jointbench.study.schema import check_estimates
+from jointbench.study.seeds import trial_seed
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def config():
+    return study_config.load_config(ROOT / "config" / "config.yaml")
+
+
+def test_seed_depends_only_on_study_condition_trial():
+    a = trial_seed(1, "cmc", {"marker_set": "M", "rom_deg": 5}, 3)
+    assert a == trial_seed(1, "cmc", {"rom_deg": 5, "marker_set": "M"}, 3)
+    assert a != trial_seed(1, "cmc", {"marker_set": "M", "rom_deg": 5}, 4)
+    assert a != trial_seed(1, "cmc", {"marker_set": "H", "rom_deg": 5}, 3)
+    assert a != trial_seed(2, "cmc", {"marker_set": "M", "rom_deg": 5}, 3)
+
+
+def test_condition_ids_round_trip(config):
+    for study in study_config.study_names(config):
+        for condition in study_config.conditions(config, study):
+            identifier = study_config.condition_id(condition)
+            assert study_config.parse_condition_id(config, study, identifier) == condition
+
+
+def test_unknown_condition_is_a_clear_error(config):
+    with pytest.raises(ValueError, match="not a condition of study 'cmc'"):
+        study_config.parse_condition_id(config, "cmc", "marker_set-X__rom_deg-5__noise_mm-1.0")
+
+
+def test_config_schema_rejects_bad_config(config):
+    bad = {**config, "studies": {"cmc": {**config["studies"]["cmc"], "trials": 0}}}
+    with pytest.raises(ValueError, match="trials"):
+        study_config.validate_config(bad)
+    with pytest.raises(ValueError, match="unknown_study"):
+        study_config.validate_config({**config, "studies": {"unknown_study": {}}})
+
+
+def test_one_trial_regenerates_alone(config):
+    """Trial k is the same whether simulated among 30 or on its own."""
+    condition = study_config.conditions(config, "cmc")[0]
+    full = simulate_condition(config, "cmc", condition)
+    small = {**config, "studies": {"cmc": {**config["studies"]["cmc"], "trials": 2}}}
+    alone = simulate_condition(small, "cmc", condition)
+    np.testing.assert_array_equal(full.segments["moving"][:2], alone.segments["moving"])
+
+
+def test_dataset_round_trip(tmp_path):
+    rng = np.random.default_rng(0)
+    trials = Trials(
+        segments={"proximal": rng.normal(size=(2, 5, 3, 3)), "distal": rng.normal(size=(2, 5, 4, 3))},
+        truth={"center": [1.0, 2.0, 3.0]},
+        parameters={"note": "test"},
+    )
+    path = tmp_path / "d.parquet"
+    write_dataset(path, trials, study="hip", condition={"n_frames": 5})
+    back, metadata = read_dataset(path)
+    for name, markers in trials.segments.items():
+        np.testing.assert_array_equal(back.segments[name], markers)
+    assert metadata["condition"] == {"n_frames": 5}
+    assert back.truth == trials.truth
+
+
+@pytest.fixture
+def flaky_estimator():
+    """A throwaway estimator that fails on odd trials (raises) and reports non-convergence."""
+    calls = {"n": 0}
+
+    def flaky(markers):
+        calls["n"] += 1
+        if calls["n"] % 2 == 0:
+            raise RuntimeError("boom")
+        return CenterResult(center=markers.mean(axis=(0, 1)), converged=False, iterations=7,
+                            status="max iterations", method="flaky")
+
+    registry.register("center", "flaky")(flaky)
+    yield "flaky"
+    del registry._REGISTRY["center"]["flaky"]
+
+
+def test_failures_become_rows_and_the_run_goes_on(config, flaky_estimator):
+    condition = study_config.conditions(config, "cmc")[0]
+    small = {**config, "studies": {"cmc": {**config["studies"]["cmc"], "trials": 4}}}
+    trials = simulate_condition(small, "cmc", condition)
+    frame = estimate("cmc", flaky_estimator, trials, condition)
+    assert len(frame) == 4
+    assert not frame["converged"].any()
+    assert frame["status"].str.startswith("error: RuntimeError: boom").sum() == 2
+    assert (frame["status"] == "max iterations").sum() == 2
+    assert frame.loc[frame["status"].str.startswith("error"), "error_mm"].isna().all()
+
+
+def test_schema_check_names_the_column():
+    frame = pd.DataFrame({"marker_set": ["M"], "rom_deg": [5], "noise_mm": [1.0], "trial": [0],
+                          "method": ["x"], "center_x": [0.0], "center_y": [0.0],
+                          "center_z": [0.0], "error_mm": [1.0], "converged": [True],
+                          "iterations": [1], "seconds": [0.1], "status": ["ok"]})
+    keys = ("marker_set", "rom_deg", "noise_mm")
+    check_estimates(frame, kind="center", condition_keys=keys)
+    with pytest.raises(ValueError, match="missing column 'error_mm'"):
+        check_estimates(frame.drop(columns="error_mm"), kind="center", condition_keys=keys)
+    with pytest.raises(ValueError, match="column 'converged' must be boolean"):
+        check_estimates(frame.assign(converged=["yes"]), kind="center", condition_keys=keys)
+    with pytest.raises(ValueError, match="'method' must be 'NM'"):
+        check_estimates(frame, kind="center", condition_keys=keys, method="NM")
