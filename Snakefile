@@ -19,3 +19,5 @@ rule all:
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/estimate.smk"
 include: "workflow/rules/paper_a.smk"
+include: "workflow/rules/paper_b.smk"
+include: "workflow/rules/paper_c.smk"

@@ -65,7 +65,10 @@ def test_one_trial_regenerates_alone(config):
 def test_dataset_round_trip(tmp_path):
     rng = np.random.default_rng(0)
     trials = Trials(
-        segments={"proximal": rng.normal(size=(2, 5, 3, 3)), "distal": rng.normal(size=(2, 5, 4, 3))},
+        segments={
+            "proximal": rng.normal(size=(2, 5, 3, 3)),
+            "distal": rng.normal(size=(2, 5, 4, 3)),
+        },
         truth={"center": [1.0, 2.0, 3.0]},
         parameters={"note": "test"},
     )
@@ -87,8 +90,13 @@ def flaky_estimator():
         calls["n"] += 1
         if calls["n"] % 2 == 0:
             raise RuntimeError("boom")
-        return CenterResult(center=markers.mean(axis=(0, 1)), converged=False, iterations=7,
-                            status="max iterations", method="flaky")
+        return CenterResult(
+            center=markers.mean(axis=(0, 1)),
+            converged=False,
+            iterations=7,
+            status="max iterations",
+            method="flaky",
+        )
 
     registry.register("center", "flaky")(flaky)
     yield "flaky"
@@ -108,10 +116,23 @@ def test_failures_become_rows_and_the_run_goes_on(config, flaky_estimator):
 
 
 def test_schema_check_names_the_column():
-    frame = pd.DataFrame({"marker_set": ["M"], "rom_deg": [5], "noise_mm": [1.0], "trial": [0],
-                          "method": ["x"], "center_x": [0.0], "center_y": [0.0],
-                          "center_z": [0.0], "error_mm": [1.0], "converged": [True],
-                          "iterations": [1], "seconds": [0.1], "status": ["ok"]})
+    frame = pd.DataFrame(
+        {
+            "marker_set": ["M"],
+            "rom_deg": [5],
+            "noise_mm": [1.0],
+            "trial": [0],
+            "method": ["x"],
+            "center_x": [0.0],
+            "center_y": [0.0],
+            "center_z": [0.0],
+            "error_mm": [1.0],
+            "converged": [True],
+            "iterations": [1],
+            "seconds": [0.1],
+            "status": ["ok"],
+        }
+    )
     keys = ("marker_set", "rom_deg", "noise_mm")
     check_estimates(frame, kind="center", condition_keys=keys)
     with pytest.raises(ValueError, match="missing column 'error_mm'"):

@@ -42,6 +42,18 @@ STUDY_TARGETS = {
         *expand("results/figures/paper_a_{fig}.{ext}", fig=["fig3", "fig4"], ext=["png", "pdf"]),
         *expand("results/tables/paper_a_{table}.{ext}", table=["table2", "claims"], ext=["csv", "md"]),
     ],
+    "hinge": [
+        *expand("results/figures/paper_b_{fig}.{ext}", fig=["fig2", "fig5"], ext=["png", "pdf"]),
+        *expand("results/tables/paper_b_{table}.{ext}", table=["table1", "claims"], ext=["csv", "md"]),
+    ],
+    "hip": [
+        *expand("results/figures/paper_c_uncertainty.{ext}", ext=["png", "pdf"]),
+        *expand(
+            "results/tables/paper_c_{table}.{ext}",
+            table=["table1", "calibration", "claims"],
+            ext=["csv", "md"],
+        ),
+    ],
 }
 
 

@@ -9,11 +9,18 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
-import pandas as pd  # noqa: E402
-import yaml  # noqa: E402
+import matplotlib.pyplot as plt
+import pandas as pd
+import yaml
 
-__all__ = ["markdown_table", "method_style", "read_published", "save_figure", "write_tables"]
+__all__ = [
+    "evaluate_claims",
+    "markdown_table",
+    "method_style",
+    "read_published",
+    "save_figure",
+    "write_tables",
+]
 
 # Fixed colours per method so every figure of the benchmark reads the same way.
 _STYLES = {
@@ -92,3 +99,35 @@ def write_tables(
 def read_published(path: str | Path) -> dict:
     """A paper's published values and claims (``config/published/*.yaml``)."""
     return yaml.safe_load(Path(path).read_text())
+
+
+def _published_text(value: object) -> str:
+    if isinstance(value, Mapping):
+        return ", ".join(f"{k} {v}" for k, v in value.items())
+    return str(value)
+
+
+def evaluate_claims(specs, evaluators: Mapping, *data) -> pd.DataFrame:
+    """One row per published claim: id, claim, published, reproduced, status, criterion.
+
+    ``evaluators[id](*data, spec)`` returns ``(reproduced_text, holds)``. A claim whose data are
+    missing from the run (e.g. a method switched off) is ``not applicable``.
+    """
+    rows = []
+    for spec in specs:
+        try:
+            reproduced, holds = evaluators[spec["id"]](*data, spec)
+            status = "reproduced" if holds else "not reproduced"
+        except (KeyError, IndexError, ValueError) as missing:
+            reproduced, status = f"cannot evaluate: {missing}", "not applicable"
+        rows.append(
+            {
+                "id": spec["id"],
+                "claim": spec["claim"],
+                "published": _published_text(spec["published"]),
+                "reproduced": reproduced,
+                "status": status,
+                "criterion": spec["criterion"],
+            }
+        )
+    return pd.DataFrame(rows)

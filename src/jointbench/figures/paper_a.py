@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from jointbench.figures.common import method_style, save_figure
+from jointbench.figures.common import evaluate_claims, method_style, save_figure
 
 __all__ = [
     "PAPER_METHODS",
@@ -64,8 +64,12 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
     noises = sorted(means["noise_mm"].unique())
     n_total = collected["trial"].nunique()
     fig, axes = plt.subplots(
-        len(sets), len(noises), figsize=(3.4 * len(noises), 3.0 * len(sets)),
-        sharex=True, sharey=True, squeeze=False,
+        len(sets),
+        len(noises),
+        figsize=(3.4 * len(noises), 3.0 * len(sets)),
+        sharex=True,
+        sharey=True,
+        squeeze=False,
     )
     for row, marker_set in enumerate(sets):
         for col, noise in enumerate(noises):
@@ -75,14 +79,25 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
                 line = cell[cell["method"] == method].sort_values("rom_deg")
                 if line.empty:
                     continue
-                ax.plot(line["rom_deg"], line["mean_error_mm"], label=method, lw=1.5, ms=5,
-                        **method_style(method, index))
+                ax.plot(
+                    line["rom_deg"],
+                    line["mean_error_mm"],
+                    label=method,
+                    lw=1.5,
+                    ms=5,
+                    **method_style(method, index),
+                )
             counts = cell.groupby("rom_deg")["n_trials"].max()
             for rom, count in counts.items():
                 if count < n_total:
                     top = cell[cell["rom_deg"] == rom]["mean_error_mm"].max()
-                    ax.annotate(f"n={count}", (rom, top), textcoords="offset points",
-                                xytext=(4, 4), fontsize=7)
+                    ax.annotate(
+                        f"n={count}",
+                        (rom, top),
+                        textcoords="offset points",
+                        xytext=(4, 4),
+                        fontsize=7,
+                    )
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.set_xticks(sorted(means["rom_deg"].unique()))
@@ -97,14 +112,16 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
     axes[0, -1].legend(fontsize=8, loc="upper right")
     fig.suptitle(
         "Paper A Fig 4 reproduced: mean CoR error over the trials where BC converged "
-        f"(n shown where fewer than {n_total})", fontsize=10,
+        f"(n shown where fewer than {n_total})",
+        fontsize=10,
     )
     fig.tight_layout()
     save_figure(fig, outputs)
 
 
-def fig3(markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published: Mapping,
-         outputs) -> None:
+def fig3(
+    markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published: Mapping, outputs
+) -> None:
     """One M-set, ±5°, 1.0 mm trial: trajectories, true CoR, every method's estimate and error.
 
     ``markers`` ``(n_frames, n_markers, 3)`` [mm]; ``errors`` has columns method, center_x/y/z,
@@ -118,8 +135,15 @@ def fig3(markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published
     ax.scatter(*truth, color="k", marker="*", s=120, label="true CoR")
     for index, row in enumerate(errors.itertuples()):
         style = method_style(row.method, index)
-        ax.scatter(row.center_x, row.center_y, row.center_z, color=style["color"],
-                   marker=style["marker"], s=40, label=f"{row.method}: {row.error_mm:.1f} mm")
+        ax.scatter(
+            row.center_x,
+            row.center_y,
+            row.center_z,
+            color=style["color"],
+            marker=style["marker"],
+            s=40,
+            label=f"{row.method}: {row.error_mm:.1f} mm",
+        )
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")
@@ -131,7 +155,9 @@ def fig3(markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published
     ours = errors.set_index("method").loc[methods, "error_mm"].to_numpy()
     paper = np.array([published.get(m, np.nan) for m in methods], dtype=float)
     x = np.arange(len(methods))
-    bars.bar(x - 0.2, ours, 0.4, label="this trial", color=[method_style(m)["color"] for m in methods])
+    bars.bar(
+        x - 0.2, ours, 0.4, label="this trial", color=[method_style(m)["color"] for m in methods]
+    )
     bars.bar(x + 0.2, paper, 0.4, label="paper's example trial", color="0.75")
     bars.set_xticks(x, methods)
     bars.set_yscale("log")
@@ -170,19 +196,24 @@ def _binomial_interval(n: int, proportion: float) -> tuple[int, int]:
 
 
 def _claim_a1(collected, means, spec):
-    wide = means.pivot_table(index=["marker_set", "method", "rom_deg"], columns="noise_mm",
-                             values="mean_error_mm")
+    wide = means.pivot_table(
+        index=["marker_set", "method", "rom_deg"], columns="noise_mm", values="mean_error_mm"
+    )
     up_noise = (np.diff(wide.to_numpy(), axis=1) > 0).ravel()
-    by_rom = means.pivot_table(index=["marker_set", "method", "noise_mm"], columns="rom_deg",
-                               values="mean_error_mm")
+    by_rom = means.pivot_table(
+        index=["marker_set", "method", "noise_mm"], columns="rom_deg", values="mean_error_mm"
+    )
     down_rom = (np.diff(by_rom.to_numpy(), axis=1) < 0).ravel()
     share = float(np.mean(np.concatenate([up_noise, down_rom])))
     return f"{share:.0%} of one-step comparisons", share >= spec["tolerance"]
 
 
 def _claim_a2(collected, means, spec):
-    bc = collected[(collected["method"] == "BC") & (collected["marker_set"] == "M")
-                   & (collected["rom_deg"] == collected["rom_deg"].min())]
+    bc = collected[
+        (collected["method"] == "BC")
+        & (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == collected["rom_deg"].min())
+    ]
     n_trials = collected["trial"].nunique()
     counts = bc.groupby("noise_mm")["converged"].sum().sort_index().astype(int).tolist()
     inside = all(
@@ -203,10 +234,16 @@ def _claim_a3(collected, means, spec):
 
 def _claim_a4(collected, means, spec):
     wide = _wide(means)
-    wide = wide.drop(index=[i for i in wide.index if i[0] == "M" and i[1] == wide.index.get_level_values(1).min()])
+    wide = wide.drop(
+        index=[
+            i for i in wide.index if i[0] == "M" and i[1] == wide.index.get_level_values(1).min()
+        ]
+    )
     worst = wide[list(SPHERE_FITS)].idxmax(axis=1)
     share = float(np.mean(worst == "LS"))
-    return f"LS worst sphere fit in {share:.0%} of {len(wide)} conditions", share >= spec["tolerance"]
+    return f"LS worst sphere fit in {share:.0%} of {len(wide)} conditions", share >= spec[
+        "tolerance"
+    ]
 
 
 def _claim_a5(collected, means, spec):
@@ -214,7 +251,10 @@ def _claim_a5(collected, means, spec):
     others = wide[[m for m in PAPER_METHODS if m != "MA"]].min(axis=1)
     excess_h = float((wide["MA"] - others).xs("H", level="marker_set").max())
     ratio_m = float((wide["MA"] / others).xs("M", level="marker_set").median())
-    low, high = (1 - spec["tolerance"]) * spec["published"], (1 + spec["tolerance"]) * spec["published"]
+    low, high = (
+        (1 - spec["tolerance"]) * spec["published"],
+        (1 + spec["tolerance"]) * spec["published"],
+    )
     ok = low <= excess_h <= high and ratio_m <= 1.5
     return f"H: up to {excess_h:.1f} mm worse; M: median ratio to best {ratio_m:.2f}", ok
 
@@ -252,8 +292,12 @@ def _claim_a8(collected, means, spec):
 
 
 def _claim_a9(collected, means, spec):
-    cell = means[(means["marker_set"] == "H") & (means["rom_deg"] == 15)
-                 & (means["noise_mm"] == 1.0) & (means["method"] == "LS")]
+    cell = means[
+        (means["marker_set"] == "H")
+        & (means["rom_deg"] == 15)
+        & (means["noise_mm"] == 1.0)
+        & (means["method"] == "LS")
+    ]
     value = float(cell["mean_error_mm"].iloc[0]) if len(cell) else np.nan
     tolerance = max(2.0, 0.25 * spec["published"])
     return f"{value:.1f} mm", abs(value - spec["published"]) <= tolerance
@@ -269,8 +313,12 @@ def _claim_a10(collected, means, spec):
 
 
 def _claim_a11(collected, means, spec, sample_trial: int = 0):
-    trial = collected[(collected["marker_set"] == "M") & (collected["rom_deg"] == 5)
-                      & (collected["noise_mm"] == 1.0) & (collected["trial"] == sample_trial)]
+    trial = collected[
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+        & (collected["trial"] == sample_trial)
+    ]
     errors = trial[trial["method"].isin(PAPER_METHODS)].set_index("method")["error_mm"]
     text = ", ".join(f"{m} {errors[m]:.1f}" for m in PAPER_METHODS if m in errors)
     ok = errors.idxmax() == "LS" and errors.idxmin() == "NM"
@@ -278,43 +326,23 @@ def _claim_a11(collected, means, spec, sample_trial: int = 0):
 
 
 _CLAIMS = {
-    "A1": _claim_a1, "A2": _claim_a2, "A3": _claim_a3, "A4": _claim_a4, "A5": _claim_a5,
-    "A6": _claim_a6, "A7": _claim_a7, "A8": _claim_a8, "A9": _claim_a9, "A10": _claim_a10,
+    "A1": _claim_a1,
+    "A2": _claim_a2,
+    "A3": _claim_a3,
+    "A4": _claim_a4,
+    "A5": _claim_a5,
+    "A6": _claim_a6,
+    "A7": _claim_a7,
+    "A8": _claim_a8,
+    "A9": _claim_a9,
+    "A10": _claim_a10,
     "A11": _claim_a11,
 }
 
 
-def _published_text(value: object) -> str:
-    if isinstance(value, Mapping):
-        return ", ".join(f"{k} {v}" for k, v in value.items())
-    return str(value)
-
-
 def claims_table(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """One row per claim of ``published["claims"]``: id, claim, published, reproduced, status.
-
-    A claim whose data are missing from the run (e.g. a method switched off) is
-    ``not applicable``.
-    """
-    means = condition_means(collected)
-    rows = []
-    for spec in published["claims"]:
-        try:
-            reproduced, ok = _CLAIMS[spec["id"]](collected, means, spec)
-            status = "reproduced" if ok else "not reproduced"
-        except (KeyError, IndexError, ValueError) as missing:
-            reproduced, status = f"cannot evaluate: {missing}", "not applicable"
-        rows.append(
-            {
-                "id": spec["id"],
-                "claim": spec["claim"],
-                "published": _published_text(spec["published"]),
-                "reproduced": reproduced,
-                "status": status,
-                "criterion": spec["criterion"],
-            }
-        )
-    return pd.DataFrame(rows)
+    """Claims A1–A11 recomputed from ``collected`` (see :func:`common.evaluate_claims`)."""
+    return evaluate_claims(published["claims"], _CLAIMS, collected, condition_means(collected))
 
 
 # ----------------------------------------------------------------------------- file outputs
@@ -335,24 +363,38 @@ def render(rule: str, inputs, outputs, config: Mapping) -> None:
         trials, metadata = read_dataset(inputs.dataset)
         sample = 0
         rows = collected[
-            (collected["marker_set"] == "M") & (collected["rom_deg"] == 5)
-            & (collected["noise_mm"] == 1.0) & (collected["trial"] == sample)
+            (collected["marker_set"] == "M")
+            & (collected["rom_deg"] == 5)
+            & (collected["noise_mm"] == 1.0)
+            & (collected["trial"] == sample)
             & collected["method"].isin(PAPER_METHODS)
         ]
         example = next(c for c in published["claims"] if c["id"] == "A11")["published"]
-        fig3(trials.segments["moving"][sample], np.asarray(metadata["truth"]["center"]),
-             rows, example, outputs)
+        fig3(
+            trials.segments["moving"][sample],
+            np.asarray(metadata["truth"]["center"]),
+            rows,
+            example,
+            outputs,
+        )
     elif rule == "paper_a_table2":
-        seconds = {v["id"].removeprefix("A-T2-"): v["published"]
-                   for v in published["values"] if v["id"].startswith("A-T2-")}
+        seconds = {
+            v["id"].removeprefix("A-T2-"): v["published"]
+            for v in published["values"]
+            if v["id"].startswith("A-T2-")
+        }
         write_tables(
-            table2(collected, seconds), outputs,
+            table2(collected, seconds),
+            outputs,
             title="Paper A Table 2: computation time per trial (trials where BC converged)",
             note="Ours: Python/NumPy on 2 cores, one trial at a time. Paper: MATLAB 6.5 on a "
-                 "3 GHz Pentium 4. speedup_vs_paper = paper_matlab_s / mean_s.",
+            "3 GHz Pentium 4. speedup_vs_paper = paper_matlab_s / mean_s.",
         )
     elif rule == "paper_a_claims":
-        write_tables(claims_table(collected, published), outputs,
-                     title="Paper A claims, recomputed from our results")
+        write_tables(
+            claims_table(collected, published),
+            outputs,
+            title="Paper A claims, recomputed from our results",
+        )
     else:
         raise ValueError(f"paper A has no output for rule {rule!r}")

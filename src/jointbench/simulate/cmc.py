@@ -7,8 +7,12 @@ metacarpal segment (M1, M2, and M3) and the H marker set represents markers on t
 with the layout is not in the text. The directions below are therefore our choice, made
 anatomically and kept as configurable protocol parameters.
 
-Frame (ours): origin at the CMC centre of rotation (the nominal CoR), ``x`` dorsal, ``y`` radial,
-``z`` distal along the thumb metacarpal in its mean position.
+Frame (ours): ``x`` dorsal, ``y`` radial, ``z`` distal along the thumb metacarpal in its mean
+position. The nominal CoR sits at ``center_mm`` = (20, -25, -30) mm, 44 mm from the origin, as a
+joint does from the origin of a technical frame defined by a marker cluster. It must not sit at
+the origin: the simplex searches (IS, MA) scale their initial simplex with the coordinates of the
+start point (fminsearch's rule), so they are not translation invariant, and a start at the origin
+would give a degenerate 0.00025 mm simplex.
 
 * M set, on the dorsoradial skin of the thumb metacarpal (about 45 mm long, skin 6–8 mm above
   the bone axis): M1 over the base, dorsal (13.8 mm, 30° from the shaft axis); M2 over the distal
@@ -28,7 +32,8 @@ axis (an Archimedean spiral of the segment's long axis on the sphere). The numbe
 not given; two turns over 120 frames is our choice.
 
 Noise: "The directions of the error vectors were uniformly distributed, and the magnitudes of
-the random errors were normally distributed" (see :func:`jointbench.simulate.noise.isotropic_noise`).
+the random errors were normally distributed" (see
+:func:`jointbench.simulate.noise.isotropic_noise`).
 """
 
 from __future__ import annotations
@@ -70,6 +75,7 @@ class CmcProtocol:
     ``directions``: per marker set, one direction per marker from the CoR (any length) in the
     frame described in the module docstring. ``distances_mm``: paper A Table 1.
     ``spiral_turns``: turns of the circumduction spiral. ``n_frames``: 120 (paper A §5.1).
+    ``center_mm``: the nominal CoR in the reference frame.
     """
 
     directions: dict[str, tuple] = field(default_factory=lambda: _as_tuples(_DEFAULT_DIRECTIONS))
@@ -78,6 +84,7 @@ class CmcProtocol:
     )
     spiral_turns: float = 2.0
     n_frames: int = 120
+    center_mm: tuple[float, float, float] = (20.0, -25.0, -30.0)
 
     @classmethod
     def from_config(cls, overrides: Mapping[str, object] | None = None) -> CmcProtocol:
@@ -120,21 +127,24 @@ def spiral_rotations(max_angle_deg: float, n_frames: int, turns: float) -> np.nd
 
 
 def nominal_trajectory(protocol: CmcProtocol, marker_set: str, rom_deg: float) -> np.ndarray:
-    """Noise-free marker trajectories ``(n_frames, n_markers, 3)`` [mm], CoR at the origin."""
+    """Noise-free marker trajectories ``(n_frames, n_markers, 3)`` [mm] about ``center_mm``."""
     rotations = spiral_rotations(rom_deg, protocol.n_frames, protocol.spiral_turns)
-    return np.einsum("fij,pj->fpi", rotations, marker_positions(protocol, marker_set))
+    offsets = np.einsum("fij,pj->fpi", rotations, marker_positions(protocol, marker_set))
+    return offsets + np.asarray(protocol.center_mm, dtype=float)
 
 
 def simulate(
     condition: Mapping[str, object], protocol: CmcProtocol, rngs: Sequence[np.random.Generator]
 ) -> Trials:
-    """Trials of one condition ``{"marker_set", "rom_deg", "noise_mm"}``; one generator per trial."""
-    nominal = nominal_trajectory(protocol, str(condition["marker_set"]), float(condition["rom_deg"]))
+    """Trials of one condition (keys marker_set, rom_deg, noise_mm); one generator per trial."""
+    nominal = nominal_trajectory(
+        protocol, str(condition["marker_set"]), float(condition["rom_deg"])
+    )
     noise_mm = float(condition["noise_mm"])
     moving = np.stack([nominal + isotropic_noise(rng, nominal.shape[:2], noise_mm) for rng in rngs])
     return Trials(
         segments={"moving": moving},
-        truth={"center": [0.0, 0.0, 0.0]},
+        truth={"center": [float(x) for x in protocol.center_mm]},
         parameters={
             "spiral_turns": protocol.spiral_turns,
             "n_frames": protocol.n_frames,

@@ -53,7 +53,10 @@ def conditions(config: Mapping, study: str) -> list[dict[str, object]]:
     missing = [key for key in keys if key not in grid]
     if missing:
         raise ValueError(f"config: study {study!r} grid lacks {missing}")
-    return [dict(zip(keys, values, strict=True)) for values in itertools.product(*(grid[k] for k in keys))]
+    return [
+        dict(zip(keys, values, strict=True))
+        for values in itertools.product(*(grid[k] for k in keys))
+    ]
 
 
 def condition_id(condition: Mapping[str, object]) -> str:
@@ -62,7 +65,7 @@ def condition_id(condition: Mapping[str, object]) -> str:
 
 
 def parse_condition_id(config: Mapping, study: str, identifier: str) -> dict[str, object]:
-    """The grid condition whose :func:`condition_id` is ``identifier`` (values keep config types)."""
+    """The grid condition named ``identifier`` by :func:`condition_id`, with config types."""
     for condition in conditions(config, study):
         if condition_id(condition) == identifier:
             return condition

@@ -77,9 +77,7 @@ def read_dataset(path: str | Path) -> tuple[Trials, dict]:
         part = part.sort_values(["trial", "frame", "marker"])
         shape = (part["trial"].nunique(), part["frame"].nunique(), part["marker"].nunique(), 3)
         segments[str(name)] = part[["x", "y", "z"]].to_numpy().reshape(shape)
-    trials = Trials(
-        segments=segments, truth=metadata["truth"], parameters=metadata["parameters"]
-    )
+    trials = Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"])
     return trials, metadata
 
 

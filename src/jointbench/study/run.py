@@ -10,6 +10,7 @@ import pandas as pd
 
 from jointbench.estimators import registry
 from jointbench.simulate import Trials
+from jointbench.study.diagnostics import DIAGNOSTICS
 from jointbench.study.io import read_dataset, write_dataset, write_table
 from jointbench.study.schema import check_estimates
 from jointbench.study.seeds import trial_rng
@@ -35,7 +36,7 @@ def _fit_one(fit, arguments, options) -> tuple[object, str, bool, int]:
     """Run one fit; an exception becomes a failed row rather than a failed run."""
     try:
         result = fit(*arguments, **options)
-    except Exception as error:  # noqa: BLE001 - any estimator failure is data for the study
+    except Exception as error:
         return None, f"error: {type(error).__name__}: {error}", False, 0
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
@@ -50,12 +51,14 @@ def estimate(
     """One row per trial: condition, estimate, error, converged, iterations, seconds, status."""
     spec = get_study(study)
     fit = registry.get(spec.kind, method)
+    diagnose = DIAGNOSTICS.get((study, method))
     rows = []
     for trial in range(trials.n_trials):
         arguments = spec.fit_arguments(trials, trial)
         start = time.perf_counter()
         result, status, converged, iterations = _fit_one(fit, arguments, options or {})
         seconds = time.perf_counter() - start
+        extra = diagnose(arguments, result, trials.truth) if diagnose and result else {}
         rows.append(
             {
                 **condition,
@@ -66,6 +69,7 @@ def estimate(
                 "iterations": iterations,
                 "seconds": seconds,
                 "status": status,
+                **extra,
             }
         )
     frame = pd.DataFrame(rows)

@@ -55,8 +55,11 @@ def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tupl
     """Column name -> (dtype predicate, description) for an estimates file of ``kind``."""
     if kind not in KIND_COLUMNS:
         raise ValueError(f"unknown estimator kind {kind!r}")
-    return {**dict.fromkeys(condition_keys, (lambda d: True, "any")),
-            **COMMON_COLUMNS, **KIND_COLUMNS[kind]}
+    return {
+        **dict.fromkeys(condition_keys, (lambda d: True, "any")),
+        **COMMON_COLUMNS,
+        **KIND_COLUMNS[kind],
+    }
 
 
 def check_estimates(

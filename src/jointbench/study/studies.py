@@ -65,7 +65,9 @@ def _score_center(result, truth) -> dict[str, float]:
 def _score_axis(result, truth) -> dict[str, float]:
     point = _NAN3 if result is None else result.point
     direction = _NAN3 if result is None else result.direction
-    error = float(angle_between_lines_deg(np.asarray(direction), np.asarray(truth["axis_direction"])))
+    error = float(
+        angle_between_lines_deg(np.asarray(direction), np.asarray(truth["axis_direction"]))
+    )
     return {
         **{f"point_{a}": float(v) for a, v in zip("xyz", point, strict=True)},
         **{f"direction_{a}": float(v) for a, v in zip("xyz", direction, strict=True)},
@@ -81,8 +83,12 @@ def _score_joint_center(result, truth) -> dict[str, float]:
     scores = _score_center(result, truth)
     covariance = None if result is None else result.covariance
     if covariance is None:
-        return {**scores, "sqrt_trace_cov_mm": np.nan, "mahalanobis_sq": np.nan,
-                "validation_index": np.nan}
+        return {
+            **scores,
+            "sqrt_trace_cov_mm": np.nan,
+            "mahalanobis_sq": np.nan,
+            "validation_index": np.nan,
+        }
     offset = np.asarray(result.center) - np.asarray(truth["center"])
     try:
         mahalanobis_sq = float(offset @ np.linalg.solve(covariance, offset))
