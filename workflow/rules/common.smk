@@ -1,4 +1,6 @@
 # Helpers shared by the rules: config validation, the condition grid and file lists.
+from pathlib import Path
+
 from snakemake.utils import validate
 
 from jointbench.study import config as jb_config
@@ -57,9 +59,57 @@ STUDY_TARGETS = {
 }
 
 
+PUBLISHED_TABLES = {
+    "cmc": ["paper_a_table2", "paper_a_claims"],
+    "hinge": ["paper_b_table1", "paper_b_claims"],
+    "hip": ["paper_c_table1", "paper_c_claims"],
+}
+
+
+def caption_tables():
+    """Extra tables the report captions summarise."""
+    tables = {"published_comparison": "results/tables/published_comparison.csv"}
+    if "hip" in STUDIES:
+        tables["paper_c_calibration"] = "results/tables/paper_c_calibration.csv"
+    return tables
+
+
+def published_tables():
+    """The per-paper tables the published-value check reads, by name."""
+    return {
+        name: f"results/tables/{name}.csv" for study in STUDIES for name in PUBLISHED_TABLES[study]
+    }
+
+
+CAPTIONS = "results/report/captions/{name}.rst"
+CATEGORIES = {
+    "paper_a": "Paper A: centre of rotation",
+    "paper_b": "Paper B: axis of rotation",
+    "paper_c": "Paper C: hip joint centre",
+    "published": "Agreement with the papers",
+}
+
+
+def reported(path, name):
+    """``path`` flagged for `snakemake --report`, captioned by results/report/captions/{name}.rst."""
+    return report(
+        path,
+        caption="../../" + CAPTIONS.format(name=name),
+        category=CATEGORIES[name[:7] if name.startswith("paper_") else "published"],
+    )
+
+
+def caption_names():
+    names = [Path(t).stem for study in STUDIES for t in STUDY_TARGETS.get(study, [])]
+    return sorted(set(names)) + ["published_comparison"]
+
+
+def study_targets(study):
+    """The collected results and every figure and table of one study."""
+    return [f"results/collected/{study}.parquet", *STUDY_TARGETS.get(study, [])]
+
+
 def all_targets():
-    targets = []
-    for study in STUDIES:
-        targets.append(f"results/collected/{study}.parquet")
-        targets.extend(STUDY_TARGETS.get(study, []))
-    return targets
+    targets = [target for study in STUDIES for target in study_targets(study)]
+    captions = [CAPTIONS.format(name=name) for name in caption_names()]
+    return [*targets, "results/tables/published_comparison.csv", *captions]

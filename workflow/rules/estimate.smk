@@ -12,6 +12,17 @@ rule estimate:
         "../scripts/estimate.py"
 
 
+rule summarise_estimator:
+    """One estimator's mean and median error per condition: `snakemake -j2
+    results/summaries/cmc/NM.csv` runs that estimator alone."""
+    input:
+        lambda w: estimates_files(w.study, [w.method]),
+    output:
+        "results/summaries/{study}/{method}.csv",
+    script:
+        "../scripts/summarise.py"
+
+
 rule collect:
     """All estimates of a study in one table, each file's schema checked first."""
     input:

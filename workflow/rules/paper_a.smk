@@ -3,7 +3,7 @@ rule paper_a_fig4:
     input:
         "results/collected/cmc.parquet",
     output:
-        png="results/figures/paper_a_fig4.png",
+        png=reported("results/figures/paper_a_fig4.png", "paper_a_fig4"),
         pdf="results/figures/paper_a_fig4.pdf",
     script:
         "../scripts/paper_a.py"
@@ -16,7 +16,7 @@ rule paper_a_fig3:
         collected="results/collected/cmc.parquet",
         published="config/published/paper_a.yaml",
     output:
-        png="results/figures/paper_a_fig3.png",
+        png=reported("results/figures/paper_a_fig3.png", "paper_a_fig3"),
         pdf="results/figures/paper_a_fig3.pdf",
     script:
         "../scripts/paper_a.py"
@@ -28,7 +28,7 @@ rule paper_a_table2:
         collected="results/collected/cmc.parquet",
         published="config/published/paper_a.yaml",
     output:
-        csv="results/tables/paper_a_table2.csv",
+        csv=reported("results/tables/paper_a_table2.csv", "paper_a_table2"),
         md="results/tables/paper_a_table2.md",
     script:
         "../scripts/paper_a.py"
@@ -40,7 +40,7 @@ rule paper_a_claims:
         collected="results/collected/cmc.parquet",
         published="config/published/paper_a.yaml",
     output:
-        csv="results/tables/paper_a_claims.csv",
+        csv=reported("results/tables/paper_a_claims.csv", "paper_a_claims"),
         md="results/tables/paper_a_claims.md",
     script:
         "../scripts/paper_a.py"

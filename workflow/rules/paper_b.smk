@@ -4,7 +4,7 @@ rule paper_b_table1:
         collected="results/collected/hinge.parquet",
         published="config/published/paper_b.yaml",
     output:
-        csv="results/tables/paper_b_table1.csv",
+        csv=reported("results/tables/paper_b_table1.csv", "paper_b_table1"),
         md="results/tables/paper_b_table1.md",
     script:
         "../scripts/paper_b.py"
@@ -15,7 +15,7 @@ rule paper_b_fig5:
     input:
         collected="results/collected/hinge.parquet",
     output:
-        png="results/figures/paper_b_fig5.png",
+        png=reported("results/figures/paper_b_fig5.png", "paper_b_fig5"),
         pdf="results/figures/paper_b_fig5.pdf",
     script:
         "../scripts/paper_b.py"
@@ -24,7 +24,7 @@ rule paper_b_fig5:
 rule paper_b_fig2:
     """Paper B Fig 2: best-fitting plane, cylinder and circle on two trials with a known axis."""
     output:
-        png="results/figures/paper_b_fig2.png",
+        png=reported("results/figures/paper_b_fig2.png", "paper_b_fig2"),
         pdf="results/figures/paper_b_fig2.pdf",
     script:
         "../scripts/paper_b.py"
@@ -36,7 +36,7 @@ rule paper_b_claims:
         collected="results/collected/hinge.parquet",
         published="config/published/paper_b.yaml",
     output:
-        csv="results/tables/paper_b_claims.csv",
+        csv=reported("results/tables/paper_b_claims.csv", "paper_b_claims"),
         md="results/tables/paper_b_claims.md",
     script:
         "../scripts/paper_b.py"

@@ -4,7 +4,7 @@ rule paper_c_table1:
         collected="results/collected/hip.parquet",
         published="config/published/paper_c.yaml",
     output:
-        csv="results/tables/paper_c_table1.csv",
+        csv=reported("results/tables/paper_c_table1.csv", "paper_c_table1"),
         md="results/tables/paper_c_table1.md",
     script:
         "../scripts/paper_c.py"
@@ -16,7 +16,7 @@ rule paper_c_calibration:
         collected="results/collected/hip.parquet",
         published="config/published/paper_c.yaml",
     output:
-        csv="results/tables/paper_c_calibration.csv",
+        csv=reported("results/tables/paper_c_calibration.csv", "paper_c_calibration"),
         md="results/tables/paper_c_calibration.md",
     script:
         "../scripts/paper_c.py"
@@ -28,7 +28,7 @@ rule paper_c_uncertainty:
         collected="results/collected/hip.parquet",
         published="config/published/paper_c.yaml",
     output:
-        png="results/figures/paper_c_uncertainty.png",
+        png=reported("results/figures/paper_c_uncertainty.png", "paper_c_uncertainty"),
         pdf="results/figures/paper_c_uncertainty.pdf",
     script:
         "../scripts/paper_c.py"
@@ -40,7 +40,7 @@ rule paper_c_claims:
         collected="results/collected/hip.parquet",
         published="config/published/paper_c.yaml",
     output:
-        csv="results/tables/paper_c_claims.csv",
+        csv=reported("results/tables/paper_c_claims.csv", "paper_c_claims"),
         md="results/tables/paper_c_claims.md",
     script:
         "../scripts/paper_c.py"

@@ -1,0 +1,135 @@
+"""Regression guard: a committed snapshot of the tabulated means, and the README summary.
+
+The pipeline is deterministic (seeded per trial), so the per-condition mean and median errors of
+every estimator are fixed numbers. ``tests/snapshots/summary.csv`` holds them; a change in any of
+them beyond round-off fails the tests. After an intended change, regenerate it with
+``jointbench snapshot`` (after ``snakemake -j2``) and commit the new file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from jointbench.study.summary import summarise
+
+__all__ = [
+    "SNAPSHOT_RTOL",
+    "compare_snapshot",
+    "reproduction_summary",
+    "snapshot_table",
+    "update_readme",
+]
+
+# Relative tolerance on snapshot means and medians. Seeds fix every random number, so the only
+# differences left are floating-point round-off (BLAS, SIMD paths), orders of magnitude below
+# this; any real change of an estimator or a simulation moves some mean by far more.
+SNAPSHOT_RTOL = 1e-6
+SNAPSHOT_ATOL = 1e-9
+_SUMMARY_START = "<!-- reproduction-summary:start -->"
+_SUMMARY_END = "<!-- reproduction-summary:end -->"
+
+
+def snapshot_table(collected_dir: str | Path) -> pd.DataFrame:
+    """Mean and median error per study, condition and method, in long form.
+
+    Columns: study, condition, method, statistic, value.
+    """
+    rows = []
+    for path in sorted(Path(collected_dir).glob("*.parquet")):
+        study = path.stem
+        summary = summarise(pd.read_parquet(path), study)
+        error_columns = [c for c in summary.columns if c.startswith(("mean_error", "median_error"))]
+        keys = [
+            c
+            for c in summary.columns
+            if c not in {*error_columns, "trials", "converged", "failed", "mean_seconds", "method"}
+        ]
+        for row in summary.itertuples(index=False):
+            record = row._asdict()
+            condition = "__".join(f"{k}-{record[k]}" for k in keys)
+            for column in [*error_columns, "converged"]:
+                rows.append(
+                    {
+                        "study": study,
+                        "condition": condition,
+                        "method": record["method"],
+                        "statistic": column,
+                        "value": float(record[column]),
+                    }
+                )
+    return pd.DataFrame(rows, columns=["study", "condition", "method", "statistic", "value"])
+
+
+def compare_snapshot(current: pd.DataFrame, snapshot: pd.DataFrame) -> list[str]:
+    """Human-readable differences between two snapshot tables (empty when they agree)."""
+    keys = ["study", "condition", "method", "statistic"]
+    merged = snapshot.merge(
+        current, on=keys, how="outer", suffixes=("_snapshot", "_now"), indicator="where"
+    )
+    problems = []
+    for row in merged.itertuples(index=False):
+        name = f"{row.study} {row.method} {row.condition} {row.statistic}"
+        if row.where == "left_only":
+            problems.append(f"{name}: in the snapshot but not in the results")
+        elif row.where == "right_only":
+            problems.append(f"{name}: in the results but not in the snapshot")
+        elif not np.isclose(
+            row.value_now,
+            row.value_snapshot,
+            rtol=SNAPSHOT_RTOL,
+            atol=SNAPSHOT_ATOL,
+            equal_nan=True,
+        ):
+            problems.append(
+                f"{name}: {row.value_snapshot:.6g} in the snapshot, now {row.value_now:.6g}"
+            )
+    return problems
+
+
+def reproduction_summary(comparison: pd.DataFrame) -> str:
+    """The README's opening table: per paper, values and claims reproduced out of those tested."""
+    papers = {
+        "cmc": "A (centre of rotation)",
+        "hinge": "B (axis of rotation)",
+        "hip": "C (hip joint centre)",
+    }
+    is_claim = comparison["id"].str.fullmatch(r"[A-C]\d+")
+    lines = [
+        "| paper | published values reproduced | claims reproduced | not comparable |",
+        "|---|---|---|---|",
+    ]
+    for study, label in papers.items():
+        part = comparison[comparison["study"] == study]
+        if part.empty:
+            continue
+        cells = []
+        for selection in (part[~is_claim.loc[part.index]], part[is_claim.loc[part.index]]):
+            tested = selection[selection["status"] != "not applicable"]
+            cells.append(f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}")
+        cells.append(str(int((part["status"] == "not applicable").sum())))
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return (
+        "**Reproduction summary** (generated from `results/tables/published_comparison.csv`; "
+        "every deviation has its reason there):\n\n" + "\n".join(lines)
+    )
+
+
+def update_readme(readme: str | Path, summary: str) -> bool:
+    """Replace the README's summary block; return whether the file changed."""
+    path = Path(readme)
+    text = path.read_text()
+    start, end = text.index(_SUMMARY_START), text.index(_SUMMARY_END)
+    new = text[: start + len(_SUMMARY_START)] + "\n" + summary + "\n" + text[end:]
+    if new != text:
+        path.write_text(new)
+    return new != text
+
+
+def readme_summary(readme: str | Path) -> str:
+    """The summary block currently in the README."""
+    text = Path(readme).read_text()
+    start, end = text.index(_SUMMARY_START), text.index(_SUMMARY_END)
+    return text[start + len(_SUMMARY_START) : end].strip()
