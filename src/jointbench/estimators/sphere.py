@@ -1,23 +1,58 @@
-"""Sphere-fitting centre-of-rotation estimators: LS, NM (and BC, IS added below).
+"""Sphere-fitting centre-of-rotation estimators: LS, NM, BC and IS.
 
 All take the moving segment's markers in the reference frame, ``(n_frames, n_markers, 3)``
-[mm], and fit concentric spheres (one radius per marker, common centre).
+[mm], and fit concentric spheres (one radius per marker, common centre). Equation numbers refer
+to paper A (Chang & Pollard 2007, J Biomech 40:1392).
+
+The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minimised with a
+Nelder–Mead simplex equivalent to ``fminsearch`` at its defaults, and "the convergence criterion
+for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most 200·n = 600
+iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds those settings.
 """
 
 from __future__ import annotations
 
+import math
+from functools import lru_cache
+from types import MappingProxyType
+from typing import NamedTuple
+
 import numpy as np
+from scipy.linalg import lapack
+from scipy.optimize import minimize
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.validation import check_markers, check_moves
 
-__all__ = ["fit_ls", "fit_nm", "ls_system", "mean_sq_radii"]
+__all__ = [
+    "FMINSEARCH_OPTIONS",
+    "fit_bc",
+    "fit_is",
+    "fit_ls",
+    "fit_nm",
+    "geometric_cost",
+    "ls_system",
+    "mean_sq_radii",
+    "solve_ls_system",
+]
 
 # The LS normal matrix of a pure hinge is singular to rounding; only then is a singular
 # value dropped (Gamage & Lasenby). Ill-conditioned but regular systems are solved as they are:
 # their poor answers at small RoM are what the benchmark measures.
 _SINGULAR_RCOND = 1e-12
+_EPS = float(np.finfo(float).eps)
+
+#: ``scipy.optimize.minimize(method="Nelder-Mead")`` options equivalent to MATLAB's
+#: ``fminsearch`` defaults for three unknowns: TolX = TolFun = 1e-4 and
+#: MaxIter = MaxFunEvals = 200 * 3. SciPy's termination test (every vertex within ``xatol`` of
+#: the best one in every coordinate *and* every function value within ``fatol`` of the best)
+#: and its initial simplex (each coordinate of the start in turn scaled by 1.05, or set to
+#: 0.00025 where it is zero) are those of ``fminsearch``, as are the reflection, expansion,
+#: contraction and shrink coefficients (1, 2, 0.5, 0.5) with ``adaptive=False`` (checked against
+#: SciPy 1.17's source; fminsearch also floors both tolerances at 10 eps of the current values,
+#: which is immaterial at 1e-4 mm).
+FMINSEARCH_OPTIONS = MappingProxyType({"xatol": 1e-4, "fatol": 1e-4, "maxiter": 600, "maxfev": 600})
 
 
 def _prepare(markers: object, min_frames: int = 4) -> np.ndarray:
@@ -26,19 +61,74 @@ def _prepare(markers: object, min_frames: int = 4) -> np.ndarray:
     return array
 
 
+def _check_point(point: object, name: str) -> np.ndarray:
+    array = np.asarray(point, dtype=float)
+    if array.shape != (3,):
+        raise ValueError(f"{name} must be a point shaped (3,), got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} contains NaN or inf")
+    return array
+
+
+_ONES3 = np.ones(3)
+
+
+def _row_sq(flat: np.ndarray) -> np.ndarray:
+    """Squared norms of the rows of a ``(n, 3)`` array (a matmul is cheaper than einsum here)."""
+    return (flat * flat) @ _ONES3
+
+
+@lru_cache(maxsize=64)
+def _mean_weights(n: int) -> np.ndarray:
+    """``(n,)`` of ``1 / n``, read-only: ``weights @ x`` is the mean of the rows of ``x``."""
+    weights = np.full(n, 1.0 / n)
+    weights.setflags(write=False)
+    return weights
+
+
+# --------------------------------------------------------------------------------------------
+# LS — Gamage & Lasenby (2002)
+# --------------------------------------------------------------------------------------------
+
+
+class _LSMoments(NamedTuple):
+    """Gamage & Lasenby's normal equations with the per-marker moments they are made of.
+
+    Each (frame, marker) row is augmented to ``x = (v, |v|^2)`` and centred on its marker's
+    mean over frames; every sum the LS, BC and cost formulas need is then a product with these
+    rows, and ``A`` and ``b`` are blocks of one 4 x 4 Gram matrix.
+    """
+
+    a_matrix: np.ndarray  # (3, 3) [mm^2]
+    b_vector: np.ndarray  # (3,) [mm^3]
+    means: np.ndarray  # (P, 4): mean_k v_k^p [mm] and mean_k |v_k^p|^2 [mm^2]
+    centred: np.ndarray  # (N P, 4): x_k^p - mean_k x_k^p, frame-major rows
+
+
+def _ls_moments(markers: np.ndarray) -> _LSMoments:
+    n_frames, n_markers, _ = markers.shape
+    augmented = np.empty((n_frames, n_markers, 4))
+    augmented[..., :3] = markers
+    augmented[..., 3] = _row_sq(markers.reshape(-1, 3)).reshape(n_frames, n_markers)
+    # Means over frames as one vector-matrix product with the (frames, markers * 4) view, and
+    # the sums over frames and markers as one matmul of the (frames * markers, 4) rows: at the
+    # usual 100-1000 frames NumPy's per-call overhead, not arithmetic, sets the cost.
+    wide = augmented.reshape(n_frames, -1)
+    means = _mean_weights(n_frames) @ wide
+    wide -= means
+    centred = wide.reshape(-1, 4)
+    gram = (centred.T @ centred) * (1.0 / n_frames)
+    return _LSMoments(2.0 * gram[:3, :3], gram[:3, 3].copy(), means.reshape(-1, 4), centred)
+
+
 def ls_system(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Gamage & Lasenby's normal equations ``A c = b`` (paper A eq. 4 minimised over ``c``).
 
     ``A = 2 sum_p Cov(v^p)`` ``(3, 3)`` [mm^2] and
     ``b = sum_p [mean(|v|^2 v) - mean(v) mean(|v|^2)]`` ``(3,)`` [mm^3], covariances with 1/N.
     """
-    mean = markers.mean(axis=0)  # (P, 3)
-    centred = markers - mean
-    n_frames = markers.shape[0]
-    a_matrix = 2.0 * np.einsum("kpi,kpj->ij", centred, centred) / n_frames
-    sq = np.einsum("kpi,kpi->kp", markers, markers)  # (N, P)
-    b_vector = np.einsum("kp,kpi->i", sq - sq.mean(axis=0), centred) / n_frames
-    return a_matrix, b_vector
+    moments = _ls_moments(markers)
+    return moments.a_matrix, moments.b_vector
 
 
 def solve_ls_system(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
@@ -48,9 +138,68 @@ def solve_ls_system(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
     return vt.T @ (inverse * (u.T @ b_vector))
 
 
+def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
+    """Pseudo-inverse of the symmetric ``A`` with the rule of :func:`solve_ls_system`.
+
+    For a symmetric matrix the singular values are the eigenvalues' magnitudes, so this is the
+    same pseudo-inverse; LAPACK's ``dsyev`` is called directly because NumPy's wrappers cost more
+    than the 3×3 factorisation itself.
+    """
+    eigenvalues, vectors, info = lapack.dsyev(a_matrix)
+    if info != 0:
+        return np.linalg.pinv(a_matrix, rcond=_SINGULAR_RCOND)
+    # Three scalars: plain Python is cheaper than NumPy calls on a 3-vector.
+    values = eigenvalues.tolist()
+    threshold = _SINGULAR_RCOND * max(abs(value) for value in values)
+    inverse = [1.0 / value if abs(value) > threshold else 0.0 for value in values]
+    return (vectors * inverse) @ vectors.T
+
+
 def mean_sq_radii(markers: np.ndarray, center: np.ndarray) -> np.ndarray:
     """``r_p^2 = mean_k |v_k^p - c|^2`` ``(n_markers,)`` [mm^2]."""
-    return np.mean(np.sum((markers - center) ** 2, axis=-1), axis=0)
+    n_frames = markers.shape[0]
+    sq = _row_sq(markers.reshape(-1, 3) - center).reshape(n_frames, -1)
+    return sq.sum(axis=0) / n_frames
+
+
+def _algebraic_fit(moments: _LSMoments, center: np.ndarray) -> tuple[np.ndarray, float]:
+    """Radii ``(P,)`` [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 [mm^4].
+
+    From the moments instead of another pass over the data: with ``w = (-2 c, 1)``,
+    ``|v - c|^2 - mean_k |v - c|^2 = (x - mean_k x) . w`` and
+    ``r_p^2 = mean_k |v - c|^2 = mean_k x . w + |c|^2``.
+    """
+    x, y, z = center.tolist()
+    weights = np.array([-2.0 * x, -2.0 * y, -2.0 * z, 1.0])
+    residual = moments.centred @ weights
+    sq_radii = moments.means @ weights + center @ center
+    return np.sqrt(np.maximum(sq_radii, 0.0)), float(residual @ residual)
+
+
+def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
+    """``A^+ b`` by the rule of :func:`solve_ls_system`; by Cholesky where it drops nothing.
+
+    For the positive semi-definite ``A`` with eigenvalues ``l1 >= l2 >= l3``,
+    ``l3 / l1 >= 4 det(A) / trace(A)^3`` (``l1 l2 <= ((l1 + l2) / 2)^2`` and ``l1 <= trace``).
+    When that bound exceeds 1e-10, a hundred times the 1e-12 cut, no singular value would be
+    dropped and ``A^+ b = A^-1 b``, which a Cholesky solve gives in half the time of an
+    eigen-decomposition; otherwise (a hinge, a static marker set) the pseudo-inverse is used.
+    """
+    lower, info = lapack.dpotrf(a_matrix, lower=1)
+    if info == 0:
+        l00, l11, l22 = lower.diagonal().tolist()
+        determinant = (l00 * l11 * l22) ** 2
+        if 4.0 * determinant > 1e-10 * float(a_matrix.trace()) ** 3:
+            solution, info = lapack.dpotrs(lower, b_vector, lower=1)
+            if info == 0:
+                return solution
+    return _symmetric_pinv(a_matrix) @ b_vector
+
+
+def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, _LSMoments]:
+    """LS centre ``(3,)`` and the moments it came from."""
+    moments = _ls_moments(markers)
+    return _ls_solve(moments.a_matrix, moments.b_vector), moments
 
 
 @register("center", "LS")
@@ -59,21 +208,33 @@ def fit_ls(markers: np.ndarray) -> CenterResult:
 
     For a pure hinge ``A`` is singular and the centre is the point on the axis given by the
     pseudo-inverse with the vanishing singular value dropped.
+
+    Parameters
+    ----------
+    markers : (n_frames >= 4, n_markers, 3) array [mm], reference frame.
+
+    Returns
+    -------
+    CenterResult with ``center`` (3,) [mm], ``radii`` (n_markers,) [mm] (``r_p^2`` the mean
+    squared distance, the minimiser of eq. 4 over ``r_p``) and ``cost`` = f2 [mm^4].
     """
     markers = _prepare(markers)
-    a_matrix, b_vector = ls_system(markers)
-    center = solve_ls_system(a_matrix, b_vector)
-    sq_radii = mean_sq_radii(markers, center)
-    residual = np.sum((markers - center) ** 2, axis=-1) - sq_radii
+    center, moments = _ls_start(markers)
+    radii, cost = _algebraic_fit(moments, center)
     return CenterResult(
         center=center,
-        radii=np.sqrt(sq_radii),
+        radii=radii,
         converged=True,
         iterations=0,
         status="ok",
         method="LS",
-        cost=float(np.sum(residual**2)),
+        cost=cost,
     )
+
+
+# --------------------------------------------------------------------------------------------
+# NM — Chang & Pollard (2007), paper A §3–4
+# --------------------------------------------------------------------------------------------
 
 
 def _nm_scatter(scaled: np.ndarray) -> np.ndarray:
@@ -83,13 +244,16 @@ def _nm_scatter(scaled: np.ndarray) -> np.ndarray:
     indicator of the marker's own constant term.
     """
     n_frames, n_markers, _ = scaled.shape
-    basis = np.concatenate([np.sum(scaled**2, axis=-1, keepdims=True), scaled], axis=-1)
-    flat = basis.reshape(-1, 4)
-    scatter = np.empty((4 + n_markers, 4 + n_markers))
-    scatter[:4, :4] = flat.T @ flat
-    scatter[:4, 4:] = basis.sum(axis=0).T
+    flat = scaled.reshape(-1, 3)
+    basis = np.empty((flat.shape[0], 4))
+    basis[:, 0] = _row_sq(flat)
+    basis[:, 1:] = flat
+    scatter = np.zeros((4 + n_markers, 4 + n_markers))
+    scatter[:4, :4] = basis.T @ basis
+    # Per-marker sums over frames as a vector-matrix product (cheaper than a reduction here).
+    scatter[:4, 4:] = (np.ones(n_frames) @ basis.reshape(n_frames, -1)).reshape(n_markers, 4).T
     scatter[4:, :4] = scatter[:4, 4:].T
-    scatter[4:, 4:] = n_frames * np.eye(n_markers)
+    scatter[4:, 4:].flat[:: n_markers + 1] = n_frames
     return scatter
 
 
@@ -102,22 +266,31 @@ def _nm_design(scaled: np.ndarray) -> np.ndarray:
     return np.concatenate([w, per_marker, one_hot], axis=-1).reshape(n_markers * n_frames, -1)
 
 
+@lru_cache(maxsize=16)
 def _nm_constraint(n_markers: int) -> np.ndarray:
-    """Constraint matrix ``C`` of paper A eq. 24: ``u' C u = sum_p (b^2 + c^2 + d^2 - 4 a e_p)``."""
+    """Constraint matrix ``C`` of paper A eq. 24: ``u' C u = sum_p (b^2 + c^2 + d^2 - 4 a e_p)``.
+
+    Cached per marker count and returned read-only.
+    """
     constraint = np.zeros((4 + n_markers, 4 + n_markers))
     constraint[1:4, 1:4] = n_markers * np.eye(3)
     constraint[0, 4:] = constraint[4:, 0] = -2.0
+    constraint.setflags(write=False)
     return constraint
 
 
 def _largest_admissible(whitened: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, float]:
     """Solve ``M y = mu y`` with ``M = W C W'``; return ``u = W' y`` of the largest ``mu > 0``."""
     m_matrix = whitened @ constraint @ whitened.T
-    mu, y = np.linalg.eigh((m_matrix + m_matrix.T) / 2.0)
-    if mu[-1] <= 0:
+    m_matrix = (m_matrix + m_matrix.T) / 2.0
+    mu, y, info = lapack.dsyev(m_matrix)
+    if info != 0:
+        mu, y = np.linalg.eigh(m_matrix)
+    largest = float(mu[-1])
+    if largest <= 0:
         raise ValueError("NM: no admissible sphere (every generalised eigenvalue is negative)")
     u = whitened.T @ y[:, -1]
-    return u / np.sqrt(u @ constraint @ u), float(1.0 / mu[-1])
+    return u / np.sqrt(u @ constraint @ u), 1.0 / largest
 
 
 def _nm_coefficients(scaled: np.ndarray) -> tuple[np.ndarray, float]:
@@ -131,13 +304,13 @@ def _nm_coefficients(scaled: np.ndarray) -> tuple[np.ndarray, float]:
     """
     constraint = _nm_constraint(scaled.shape[1])
     scatter = _nm_scatter(scaled)
-    try:
-        lower = np.linalg.cholesky(scatter)
-    except np.linalg.LinAlgError:
-        lower = None
-    pivots = None if lower is None else np.diag(lower) ** 2
-    if pivots is not None and pivots.min() > 1e-9 * pivots.max():
-        return _largest_admissible(np.linalg.inv(lower), constraint)
+    # LAPACK directly: for these (4+P)-square matrices NumPy's wrapper overhead dominates.
+    lower, info = lapack.dpotrf(scatter, lower=1)
+    pivots = (lower.diagonal() ** 2).tolist() if info == 0 else None
+    if pivots is not None and min(pivots) > 1e-9 * max(pivots):
+        inverse, info = lapack.dtrtri(lower, lower=1)
+        if info == 0:
+            return _largest_admissible(inverse, constraint)
     _, s, vt = np.linalg.svd(_nm_design(scaled), full_matrices=False)
     if s[-1] <= 1e-13 * s[0]:
         u = vt[-1]
@@ -160,23 +333,280 @@ def fit_nm(markers: np.ndarray) -> CenterResult:
     The constraint is invariant to translation, rotation and scale, so the data are first centred
     on their centroid and scaled to unit RMS; this changes nothing but the conditioning. The
     reported ``cost`` is that of the unit-RMS data.
+
+    Parameters
+    ----------
+    markers : (n_frames >= 4, n_markers, 3) array [mm], reference frame.
     """
     markers = _prepare(markers)
-    origin = markers.reshape(-1, 3).mean(axis=0)
-    scale = float(np.sqrt(np.mean(np.sum((markers - origin) ** 2, axis=-1))))
-    scaled = (markers - origin) / scale
+    n_rows = markers.shape[0] * markers.shape[1]
+    shifted = markers.reshape(-1, 3)
+    origin = _mean_weights(n_rows) @ shifted
+    shifted = shifted - origin
+    flat = shifted.reshape(-1)
+    scale = float(np.sqrt((flat @ flat) / n_rows))
+    scaled = (shifted / scale).reshape(markers.shape)
     u, cost = _nm_coefficients(scaled)
-    a, bcd, e = u[0], u[1:4], u[4:]
-    if abs(a) < np.finfo(float).eps * np.abs(u).max():
+    a, bcd, e = float(u[0]), u[1:4], u[4:]
+    if abs(a) < _EPS * float(np.abs(u).max()):
         raise ValueError("NM: the best fit is a plane (a = 0); the markers do not rotate")
-    center_scaled = -bcd / (2.0 * a)
+    center_scaled = bcd / (-2.0 * a)
     sq_radii_scaled = center_scaled @ center_scaled - e / a
     return CenterResult(
         center=origin + scale * center_scaled,
-        radii=scale * np.sqrt(np.clip(sq_radii_scaled, 0.0, None)),
+        radii=scale * np.sqrt(np.maximum(sq_radii_scaled, 0.0)),
         converged=True,
         iterations=0,
         status="ok",
         method="NM",
         cost=cost,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# BC — Halvorsen (2003), bias-compensated LS
+# --------------------------------------------------------------------------------------------
+
+# A centre that has moved this many times the markers' RMS distance from the LS centre away
+# from it counts as divergence: no physical joint lies there and the fixed-point iteration does
+# not come back from it.
+_BC_DIVERGENCE_FACTOR = 1e3
+
+
+class _BCState(NamedTuple):
+    """What one BC iteration needs, in coordinates relative to the LS centre ``c_0``.
+
+    With ``y = v - c_0`` and the centre ``c = c_0 + d``, ``u^2 = |y - d|^2`` and, for
+    ``w = (-2 d, 1)``, ``u^2 - mean_k u^2 = (x - mean_k x) . w`` with ``x = (y, |y|^2)``: the sum
+    of squares over frames is ``w' G_p w`` with ``G_p`` marker ``p``'s 4 x 4 Gram matrix of the
+    centred ``x``. Each iteration then costs O(P), not O(N P). Working relative to ``c_0``
+    keeps ``|y|^2`` of the order of the radii, so the Gram matrices lose no precision to
+    cancellation even for data far from the origin.
+    """
+
+    moments: _LSMoments  # of the shifted data y
+    grams: np.ndarray  # (P, 4, 4)
+    means: np.ndarray  # (P, 4): mean_k y and mean_k |y|^2
+    b_vector: np.ndarray  # (3,) b of the shifted data
+    sum_of_means: np.ndarray  # (3,) sum_p mean_k y_k^p
+    n_frames: int
+
+
+def _bc_state(markers: np.ndarray, origin: np.ndarray) -> _BCState:
+    n_frames, n_markers, _ = markers.shape
+    moments = _ls_moments(markers - origin)
+    rows = moments.centred.reshape(n_frames, n_markers, 4)
+    grams = np.einsum("kpi,kpj->pij", rows, rows)
+    sum_of_means = moments.means[:, :3].sum(axis=0)
+    return _BCState(moments, grams, moments.means, moments.b_vector, sum_of_means, n_frames)
+
+
+def _bc_noise_variance(state: _BCState, shift: np.ndarray) -> float:
+    """Halvorsen's per-coordinate noise variance estimate ``sigma^2`` [mm^2] at ``c_0 + shift``.
+
+    ``sigma_p^2 = sum_k (u_k^2 - mean u^2)^2 / (4 mean(u^2) N)`` with ``u_k = |v_k^p - c|``,
+    averaged over the markers. The squared deviations of ``u^2`` are ``4 r^2 sigma^2`` to first
+    order in the noise, hence the division by ``4 mean(u^2)``.
+    """
+    weights = np.empty(4)
+    weights[:3] = -2.0 * shift
+    weights[3] = 1.0
+    spread = (state.grams @ weights) @ weights
+    mean_sq = state.means @ weights + shift @ shift
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(np.mean(spread / (4.0 * state.n_frames * mean_sq)))
+
+
+@register("center", "BC")
+def fit_bc(
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> CenterResult:
+    """Bias-compensated least squares of Halvorsen (2003), started from the LS centre.
+
+    Noise of per-coordinate variance ``sigma^2`` biases Gamage & Lasenby's normal equations:
+    ``E[A] = A_0 + 2 P sigma^2 I`` and ``E[b] = b_0 + 2 sigma^2 sum_p mean(v^p)``. Starting from
+    ``c_0 = A^+ b`` (the LS centre, :func:`fit_ls`), every iteration ``j = 0, 1, ...``
+
+    1. estimates ``sigma_j^2 = mean_p sum_k (u_k^2 - mean u^2)^2 / (4 mean(u^2) N)`` with
+       ``u_k = |v_k^p - c_j|`` (one variance shared by the markers);
+    2. forms ``db = 2 sigma_j^2 sum_p (mean(v^p) - c_j)``;
+    3. updates ``c_{j+1} = A^+ (b - db)`` (``A`` and ``b`` stay those of the data; ``A^+`` is
+       the pseudo-inverse of :func:`solve_ls_system`).
+
+    The sums over frames are evaluated from per-marker moments (see ``_BCState``); the
+    arithmetic is that of the formulas above.
+
+    Stopping rule. Paper A (§5): "The convergence criterion for BC was set to the same values as
+    fminsearch", i.e. TolX = TolFun = 1e-4 and at most 200·n = 600 iterations for n = 3
+    unknowns. Halvorsen's own rule is not known, so, as ``fminsearch`` requires both its x and
+    its function-value tests, the iteration has converged after update ``j`` when
+    ``max_i |c_{j+1,i} - c_{j,i}| <= tol_x`` [mm] **and** ``|sigma^2(c_{j+1}) - sigma^2(c_j)|
+    <= tol_fun`` [mm^2] (``sigma^2`` is the quantity BC re-estimates besides the centre; it has
+    no cost function of its own). ``iterations`` counts the updates made.
+
+    Failure is reported, never raised: ``converged=False`` with ``status`` saying
+    ``"maximum iterations (600) reached without convergence"``, ``"non-finite ..."`` (the last
+    finite centre is returned) or ``"diverged ..."`` (the centre has moved more than ``1e3``
+    times the markers' RMS distance from the LS centre away from the LS centre).
+
+    Parameters
+    ----------
+    markers : (n_frames >= 4, n_markers, 3) array [mm], reference frame.
+    max_iterations, tol_x, tol_fun : the fminsearch-equivalent limits above.
+
+    Returns
+    -------
+    CenterResult with ``center`` (3,) [mm], ``radii`` (n_markers,) [mm] (root mean squared
+    distances, as for LS), ``cost`` = f2 (eq. 4) at the centre [mm^4], and
+    ``diagnostics["noise_variance"]`` the final ``sigma^2`` [mm^2].
+    """
+    markers = _prepare(markers)
+    n_markers = markers.shape[1]
+    origin, moments = _ls_start(markers)
+    a_pinv = _symmetric_pinv(moments.a_matrix)
+    state = _bc_state(markers, origin)
+    # Relative to c_0: d_{j+1} = A^+ (b_y - 2 sigma^2 (sum_p mean y^p - P d_j)), d_0 = 0.
+    shift = np.zeros(3)
+    limit = _BC_DIVERGENCE_FACTOR * float(np.sqrt(np.mean(state.means[:, 3])))
+
+    sigma2 = _bc_noise_variance(state, shift)
+    converged = False
+    status = f"maximum iterations ({max_iterations}) reached without convergence"
+    iterations = 0
+    if not math.isfinite(sigma2):
+        status = "non-finite noise variance at the LS start"
+    else:
+        for iterations in range(1, max_iterations + 1):
+            compensation = (2.0 * sigma2) * (state.sum_of_means - n_markers * shift)
+            new_shift = a_pinv @ (state.b_vector - compensation)
+            new_sigma2 = _bc_noise_variance(state, new_shift)
+            step = float(np.abs(new_shift - shift).max())
+            if not (math.isfinite(step) and math.isfinite(new_sigma2)):
+                status = f"non-finite centre or noise variance at iteration {iterations}"
+                break
+            change = abs(new_sigma2 - sigma2)
+            shift, sigma2 = new_shift, new_sigma2
+            if step <= tol_x and change <= tol_fun:
+                converged, status = True, "ok"
+                break
+            if math.sqrt(shift @ shift) > limit:
+                status = (
+                    f"diverged at iteration {iterations}: centre more than {limit:.3g} mm "
+                    "from the LS centre"
+                )
+                break
+    # Radii and f2 are translation invariant: evaluate them in the shifted coordinates.
+    radii, cost = _algebraic_fit(state.moments, shift)
+    center = origin + shift
+    return CenterResult(
+        center=center,
+        radii=radii,
+        converged=converged,
+        iterations=iterations,
+        status=status,
+        method="BC",
+        cost=cost,
+        diagnostics={"noise_variance": sigma2},
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# IS — iterative search on the geometric cost f1
+# --------------------------------------------------------------------------------------------
+
+
+def _geometric_cost(center: np.ndarray, flat: np.ndarray, n_frames: int) -> float:
+    """f1 with the radii profiled out, on rows ``(n_frames * n_markers, 3)`` frame-major."""
+    # Distances from differences, not |v|^2 - 2 v.c + |c|^2: no cancellation far from the origin.
+    distance = np.sqrt(_row_sq(flat - center)).reshape(n_frames, -1)
+    distance -= _mean_weights(n_frames) @ distance
+    distance = distance.reshape(-1)
+    return float(distance @ distance)
+
+
+def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
+    """Geometric sphere-fit cost f1 (paper A eq. 2) at ``center``, radii profiled out.
+
+    ``f1 = sum_p sum_k (|v_k^p - c| - r_p)^2`` with ``r_p = mean_k |v_k^p - c|``, the radius that
+    minimises f1 for a fixed centre.
+
+    Parameters
+    ----------
+    markers : (n_frames, n_markers, 3) array [mm].
+    center : (3,) array [mm].
+
+    Returns
+    -------
+    f1 [mm^2].
+    """
+    markers = check_markers(markers)
+    center = _check_point(center, "center")
+    return _geometric_cost(center, markers.reshape(-1, 3), markers.shape[0])
+
+
+@register("center", "IS")
+def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult:
+    """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
+
+    Paper A (§5) minimised f1 with MATLAB's ``fminsearch`` started from the LS centre; here
+    ``scipy.optimize.minimize(method="Nelder-Mead")`` with :data:`FMINSEARCH_OPTIONS`, whose
+    initial simplex, moves and termination test are those of ``fminsearch``. The radii are
+    profiled out (``r_p`` = mean distance, the closed-form minimiser for a fixed centre), so the
+    search is over the 3 coordinates of the centre only — paper A does not say whether it
+    searched over the radii too; profiling them out is the cheaper and better-posed choice.
+
+    Choices the paper leaves open, made here:
+
+    * the simplex is built in the caller's coordinates: its initial edges are 5 % of the start's
+      coordinates (0.00025 mm where a coordinate is zero), so a translation of the data changes
+      the search path and the result moves with the data only to within the tolerance (and, in
+      hard cases, may fall into a different local minimum);
+    * ``start`` lets a study restart from another point, e.g. the true centre, to classify a
+      result as a local minimum (paper A claim A7): a trial whose IS result has a higher f1 than
+      IS restarted from the true centre.
+
+    On small-RoM data f1 flattens towards the plane limit (centre at infinity along the
+    trajectories' normal); a simplex that wanders onto that plateau can meet fminsearch's test
+    there and stop metres away with ``converged=True``. That is the behaviour of the method as
+    specified, reported as it is; ``fatol`` is absolute, so compare f1 values to about 1e-4.
+
+    Parameters
+    ----------
+    markers : (n_frames >= 4, n_markers, 3) array [mm], reference frame.
+    start : (3,) [mm] starting centre; default the LS centre (:func:`fit_ls`).
+
+    Returns
+    -------
+    CenterResult with ``center`` (3,) [mm], ``radii`` (n_markers,) the mean distances [mm],
+    ``cost`` = f1 [mm^2], ``converged`` the optimiser's success (False when it stops at 600
+    iterations or function evaluations) and ``iterations`` its iteration count;
+    ``diagnostics["function_evaluations"]``.
+    """
+    markers = _prepare(markers)
+    start = _ls_start(markers)[0] if start is None else _check_point(start, "start")
+    n_frames = markers.shape[0]
+    flat = np.ascontiguousarray(markers.reshape(-1, 3))
+    result = minimize(
+        _geometric_cost,
+        start,
+        args=(flat, n_frames),
+        method="Nelder-Mead",
+        options=dict(FMINSEARCH_OPTIONS),
+    )
+    center = np.asarray(result.x, dtype=float)
+    finite = bool(np.all(np.isfinite(center)) and np.isfinite(result.fun))
+    radii = _mean_weights(n_frames) @ np.sqrt(_row_sq(flat - center)).reshape(n_frames, -1)
+    return CenterResult(
+        center=center,
+        radii=radii,
+        converged=bool(result.success) and finite,
+        iterations=int(result.nit),
+        status="ok" if result.success and finite else str(result.message),
+        method="IS",
+        cost=float(result.fun),
+        diagnostics={"function_evaluations": int(result.nfev)},
     )

@@ -10,12 +10,14 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from jointbench.estimators.sphere import fit_is, geometric_cost
+from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, fit_is, geometric_cost
 
 __all__ = ["DIAGNOSTICS", "is_local_minimum"]
 
-# f1 values are compared with this relative margin: below it, two simplex searches that stopped
-# at TolX = TolFun = 1e-4 found the same minimum.
+# Two searches found the same minimum when their f1 differ by less than this margin: fminsearch
+# stops once the simplex's f1 values agree to TolFun (absolute, mm^2), so final values of one
+# minimum can differ by a few TolFun; ten times TolFun, or 1e-6 relative for large f1.
+_SAME_MINIMUM_ATOL = 10.0 * FMINSEARCH_OPTIONS["fatol"]
 _SAME_MINIMUM_RTOL = 1e-6
 
 
@@ -30,7 +32,7 @@ def is_local_minimum(arguments, result, truth: Mapping) -> dict[str, object]:
     own = geometric_cost(markers, result.center)
     best = geometric_cost(markers, from_truth.center)
     return {
-        "local_minimum": bool(own > best * (1.0 + _SAME_MINIMUM_RTOL)),
+        "local_minimum": bool(own - best > max(_SAME_MINIMUM_ATOL, _SAME_MINIMUM_RTOL * best)),
         "f1_gap": float(own - best),
     }
 

@@ -153,8 +153,8 @@ def _paper_a_rows(document: Mapping, tables: Mapping[str, pd.DataFrame]) -> list
                     f"{ours:.3g} s ({speedup:.0f}× faster)",
                     "not compared",
                     "not applicable",
-                    "MATLAB 6.5 on a 3 GHz Pentium 4 vs NumPy on this machine: times are shown, the "
-                    "claim tested is the ordering and speed-up in paper_a_table2",
+                    "MATLAB 6.5 on a 3 GHz Pentium 4 vs NumPy on this machine: times are "
+                    "shown, the claim tested is the ordering and speed-up in paper_a_table2",
                 )
             )
     return rows + _claim_rows("cmc", document["claims"], tables["paper_a_claims"])

@@ -1,0 +1,285 @@
+"""Time every registered estimator on standard synthetic trials and check the speed targets.
+
+Usage::
+
+    python benchmarks/estimators.py            # full run (a few minutes at most)
+    python benchmarks/estimators.py --quick    # seconds; for CI and smoke tests
+    python benchmarks/estimators.py --kind center --strict
+
+Every method registered for a kind (``jointbench.methods(kind)``) is called through the public
+API (``fit_center``, ``fit_axis``, ``fit_joint_center``) on trials this script builds itself from
+``jointbench.geometry`` and ``jointbench.simulate.noise.isotropic_noise``:
+
+* ``center``: 3 markers (paper A's M set distances) x 120 frames, a ~15 degree circumduction
+  spiral, 1 mm noise;
+* ``axis``: 3 markers x 121 frames and x 5000 frames, a 60 degree flexion with abduction 0.3
+  times the flexion (paper B's kind of near-hinge), 1 mm noise;
+* ``joint_center``: 3 + 3 markers x 1200 frames, both segments moving in the world and joined by
+  a ball joint, 0.5 mm noise.
+
+A method whose signature takes two segments but is registered under ``axis`` gets two-segment
+hinge trials of 3 + 3 markers x 1200 frames. Each method is timed call by call on distinct
+trials; the median is reported with the target, and kinds with no registered method are
+skipped. Timings are wall-clock on a shared machine: run twice before trusting a failure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import platform
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+import jointbench
+from jointbench import geometry
+from jointbench.estimators import registry
+from jointbench.simulate.noise import isotropic_noise
+
+# Targets [s], by (kind, method, data label); ``None`` label applies to every data set.
+TARGETS: dict[tuple[str, str, str | None], float] = {
+    ("center", "NM", None): 100e-6,
+    ("center", "LS", None): 50e-6,
+    ("center", "BC", None): 2e-3,
+    ("center", "IS", None): 30e-3,
+    ("center", "MA", None): 100e-3,
+    ("axis", "combined", "3 x 121"): 20e-3,
+    ("axis", "combined", "3 x 5000"): 200e-3,
+    # The one-segment SARA on 3 markers x 1200 frames in the reference frame is the 3 + 3 x 1200
+    # two-segment problem expressed in the proximal frame.
+    ("axis", "SARA", "3 x 1200"): 20e-3,
+    ("axis", "SARA", "3+3 x 1200"): 20e-3,
+    ("joint_center", "gauss-markov", None): 100e-3,
+    ("joint_center", "SCoRE", None): 20e-3,
+    ("joint_center", "SARA", None): 20e-3,
+}
+
+# Paper A Table 1, M set (distances from the CoR); directions are this script's choice.
+_M_SET = geometry.unit(np.array([[0.2, 0.3, 1.0], [0.0, 0.1, 1.0], [-0.3, 0.2, 1.0]])) * np.array(
+    [[13.8], [29.0], [15.7]]
+)
+_N_TRIALS_POOL = 32  # distinct noisy trials per data set, cycled when timing
+
+
+@dataclass(frozen=True)
+class DataSet:
+    kind: str
+    label: str
+    trials: list[tuple[np.ndarray, ...]]  # positional arguments of the estimator
+
+
+def _spiral(rom_deg: float, n_frames: int, turns: float = 3.0) -> np.ndarray:
+    """Circumduction: rotation vectors spiralling out from the mean pose to ``rom_deg``."""
+    t = np.linspace(0.0, 1.0, n_frames)
+    angle, phase = np.radians(rom_deg) * t, 2.0 * np.pi * turns * t
+    rotvec = np.stack([angle * np.cos(phase), angle * np.sin(phase), np.zeros_like(t)], axis=-1)
+    return geometry.rotation_matrix(rotvec)
+
+
+def _near_hinge(n_frames: int, rom_deg: float = 60.0, ratio: float = 0.3) -> np.ndarray:
+    """Flexion about z over ``rom_deg`` with abduction about x of ``ratio`` times the flexion."""
+    flexion = np.radians(rom_deg / 2.0) * np.sin(np.linspace(0.0, 2.0 * np.pi, n_frames))
+    abduction = geometry.rotation_about_axis(np.array([1.0, 0.0, 0.0]), ratio * flexion)
+    return geometry.rotation_about_axis(np.array([0.0, 0.0, 1.0]), flexion) @ abduction
+
+
+def _rigid(rotations: np.ndarray, body: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    return np.einsum("kij,pj->kpi", rotations, body) + origin
+
+
+def center_data(rng: np.random.Generator, n_trials: int) -> DataSet:
+    clean = _rigid(_spiral(15.0, 120), _M_SET, np.array([10.0, -20.0, 30.0]))
+    trials = [(clean + isotropic_noise(rng, clean.shape[:2], 1.0),) for _ in range(n_trials)]
+    return DataSet("center", "3 x 120", trials)
+
+
+def axis_data(rng: np.random.Generator, n_trials: int, n_frames: int) -> DataSet:
+    body = np.array([[60.0, 20.0, 10.0], [90.0, -15.0, 25.0], [75.0, 5.0, -30.0]])
+    clean = _rigid(_near_hinge(n_frames), body, np.array([5.0, 10.0, -20.0]))
+    trials = [(clean + isotropic_noise(rng, clean.shape[:2], 1.0),) for _ in range(n_trials)]
+    return DataSet("axis", f"3 x {n_frames}", trials)
+
+
+def two_segment_data(
+    rng: np.random.Generator, n_trials: int, kind: str, joint: str, n_frames: int = 1200
+) -> DataSet:
+    """Proximal and distal markers in the world, joined at a ball joint or a near-hinge."""
+    proximal_body = np.array([[0.0, 0.0, 0.0], [80.0, 0.0, 10.0], [20.0, 70.0, -15.0]])
+    center_in_proximal = np.array([40.0, 30.0, -90.0])
+    distal_body = np.array([[30.0, 10.0, -120.0], [-25.0, 20.0, -200.0], [5.0, -30.0, -300.0]])
+    # The proximal segment sways and drifts; the distal one moves about the joint on top of it.
+    t = np.linspace(0.0, 1.0, n_frames)
+    sway = 0.15 * np.stack([np.sin(3 * t), np.sin(5 * t + 1), np.cos(4 * t)], axis=-1)
+    proximal_rot = geometry.rotation_matrix(sway)
+    proximal_pos = np.stack([300 * t, 20 * np.sin(7 * t), 900 + 10 * t], axis=-1)
+    joint_rot = _spiral(30.0, n_frames) if joint == "ball" else _near_hinge(n_frames)
+    center_world = proximal_rot @ center_in_proximal + proximal_pos
+    clean_prox = np.einsum("kij,pj->kpi", proximal_rot, proximal_body) + proximal_pos[:, None]
+    clean_dist = np.einsum("kij,pj->kpi", proximal_rot @ joint_rot, distal_body)
+    clean_dist = clean_dist + center_world[:, None]
+    trials = [
+        (
+            clean_prox + isotropic_noise(rng, clean_prox.shape[:2], 0.5),
+            clean_dist + isotropic_noise(rng, clean_dist.shape[:2], 0.5),
+        )
+        for _ in range(n_trials)
+    ]
+    return DataSet(kind, f"3+3 x {n_frames}", trials)
+
+
+def build_data(kind: str, label: str, rng: np.random.Generator, n_pool: int) -> DataSet:
+    """The standard data set ``label`` ("3 x 120", "3 x <frames>", "3+3 x 1200") of ``kind``."""
+    if label == "3 x 120":
+        return center_data(rng, n_pool)
+    if label == "3+3 x 1200":
+        return two_segment_data(rng, n_pool, kind, "ball" if kind == "joint_center" else "hinge")
+    n_frames = int(label.split(" x ")[1])
+    return axis_data(rng, n_pool if n_frames <= 1200 else max(2, n_pool // 4), n_frames)
+
+
+_PUBLIC: dict[str, Callable] = {
+    "center": jointbench.fit_center,
+    "axis": jointbench.fit_axis,
+    "joint_center": jointbench.fit_joint_center,
+}
+
+
+def _n_segments(kind: str, name: str) -> int:
+    """Positional marker arrays the estimator takes (1, or 2 for two-segment methods)."""
+    if kind == "joint_center":
+        return 2
+    parameters = inspect.signature(registry.get(kind, name)).parameters.values()
+    required = [
+        p
+        for p in parameters
+        if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty
+    ]
+    return max(1, len(required))
+
+
+def time_method(
+    kind: str, name: str, data: DataSet, seconds: float, min_calls: int, max_calls: int
+) -> tuple[float, int, str]:
+    """Median wall-clock seconds per call over distinct trials; also calls made and a note."""
+    fit = _PUBLIC[kind]
+    calls: list[float] = []
+    note = ""
+    deadline = time.perf_counter() + seconds
+    try:
+        fit(*data.trials[0], method=name)  # warm-up: imports, caches
+        while len(calls) < max_calls and (len(calls) < min_calls or time.perf_counter() < deadline):
+            trial = data.trials[len(calls) % len(data.trials)]
+            start = time.perf_counter()
+            result = fit(*trial, method=name)
+            calls.append(time.perf_counter() - start)
+            if not result.converged and not note:
+                note = "some trials did not converge"
+    except Exception as error:  # report and go on: one broken method must not hide the others
+        return float("nan"), len(calls), f"error: {type(error).__name__}: {error}"
+    return statistics.median(calls), len(calls), note
+
+
+def _format_seconds(value: float) -> str:
+    if not np.isfinite(value):
+        return "—"
+    if value < 1e-3:
+        return f"{value * 1e6:.1f} µs"
+    if value < 1.0:
+        return f"{value * 1e3:.2f} ms"
+    return f"{value:.2f} s"
+
+
+def _labels(kind: str, name: str) -> list[str]:
+    """The standard data sets a method of ``kind`` is timed on."""
+    if _n_segments(kind, name) == 2:
+        return ["3+3 x 1200"]
+    if kind == "center":
+        return ["3 x 120"]
+    labels = ["3 x 121", "3 x 5000"]
+    # Extra sizes only where a target asks for them (one-segment SARA: 3 x 1200).
+    extra = [label for (k, n, label) in TARGETS if (k, n) == (kind, name) and label]
+    return labels + [label for label in extra if label not in labels and "+" not in label]
+
+
+def _target(kind: str, name: str, label: str) -> float | None:
+    return TARGETS.get((kind, name, label), TARGETS.get((kind, name, None)))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="few calls per method (seconds)")
+    parser.add_argument(
+        "--kind",
+        action="append",
+        choices=registry.KINDS,
+        help="only this kind (repeatable); default all",
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=None, help="time budget per method and data set"
+    )
+    parser.add_argument("--max-calls", type=int, default=None, help="calls per method at most")
+    parser.add_argument("--seed", type=int, default=20070514, help="seed of the synthetic trials")
+    parser.add_argument(
+        "--strict", action="store_true", help="exit with status 1 when a target is missed"
+    )
+    args = parser.parse_args(argv)
+
+    seconds = args.seconds if args.seconds is not None else (0.3 if args.quick else 3.0)
+    max_calls = args.max_calls if args.max_calls is not None else (30 if args.quick else 400)
+    # Fast methods reach max_calls (>= 200 in a full run) well within the budget; slow ones stop
+    # at the budget but never below min_calls.
+    min_calls = min(3 if args.quick else 10, max_calls)
+    n_pool = 4 if args.quick else _N_TRIALS_POOL
+    kinds = args.kind or list(registry.KINDS)
+    rng = np.random.default_rng(args.seed)
+
+    rows: list[tuple[str, str, str, int, float, float | None, str]] = []
+    for kind in kinds:
+        names = jointbench.methods(kind)
+        if not names:
+            print(f"<!-- kind {kind!r}: no registered methods, skipped -->")
+            continue
+        data_sets: dict[str, DataSet] = {}  # built once per kind and label, shared by methods
+        for name in names:
+            for label in _labels(kind, name):
+                if label not in data_sets:
+                    data_sets[label] = build_data(kind, label, rng, n_pool)
+                data = data_sets[label]
+                median, n_calls, note = time_method(kind, name, data, seconds, min_calls, max_calls)
+                rows.append(
+                    (kind, name, data.label, n_calls, median, _target(kind, name, data.label), note)
+                )
+
+    print(
+        f"Estimator timings: median wall-clock seconds per call "
+        f"({'quick' if args.quick else 'full'} run; Python {platform.python_version()}, "
+        f"NumPy {np.__version__}, {platform.machine()})\n"
+    )
+    print("| kind | method | data (markers x frames) | calls | median | target | pass |")
+    print("|---|---|---|---:|---:|---:|:---:|")
+    failed = False
+    for kind, name, label, n_calls, median, target, note in rows:
+        if note.startswith("error"):
+            verdict, failed = "error", True
+        elif target is None:
+            verdict = "—"
+        elif median <= target:
+            verdict = "pass"
+        else:
+            verdict, failed = "FAIL", True
+        target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
+        line = (
+            f"| {kind} | {name} | {label} | {n_calls} | {_format_seconds(median)} | "
+            f"{target_text} | {verdict} |"
+        )
+        print(line + (f" {note}" if note else ""))
+    return 1 if failed and args.strict else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
