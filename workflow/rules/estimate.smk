@@ -1,15 +1,23 @@
-rule estimate:
-    """Run one built-in estimator over every trial of one dataset file."""
-    input:
-        "results/datasets/{study}/{condition}.parquet",
-    output:
-        "results/estimates/{study}/{method}/{condition}.parquet",
-    wildcard_constraints:
-        method=_alternatives(BUILTIN),
-    log:
-        "results/logs/estimate/{study}/{method}/{condition}.log",
-    script:
-        "../scripts/estimate.py"
+# One job per (study, built-in estimator) runs it over every condition's dataset and writes one
+# estimates file per condition. A user's rule for an external estimator may produce the same
+# files one condition at a time; the method wildcard of these rules only matches built-ins.
+for _study in STUDIES:
+
+    rule:
+        name:
+            f"estimate_{_study}"
+        input:
+            expand("results/datasets/{study}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
+        output:
+            expand("results/estimates/{study}/{{method}}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
+        wildcard_constraints:
+            method=_alternatives(jb_config.estimator_names(config, _study, source="builtin")),
+        log:
+            f"results/logs/estimate/{_study}/{{method}}.log",
+        params:
+            study=_study,
+        script:
+            "../scripts/estimate.py"
 
 
 rule summarise_estimator:

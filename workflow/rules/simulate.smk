@@ -1,8 +1,15 @@
-rule simulate:
-    """Synthetic trials of one condition of a study, with ground truth in the metadata."""
-    output:
-        "results/datasets/{study}/{condition}.parquet",
-    log:
-        "results/logs/simulate/{study}/{condition}.log",
-    script:
-        "../scripts/simulate.py"
+# One job per study writes every condition's dataset file: the simulation of a condition takes
+# milliseconds, far less than starting a job.
+for _study in STUDIES:
+
+    rule:
+        name:
+            f"simulate_{_study}"
+        output:
+            expand("results/datasets/{study}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
+        log:
+            f"results/logs/simulate/{_study}.log",
+        params:
+            study=_study,
+        script:
+            "../scripts/simulate.py"

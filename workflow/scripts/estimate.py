@@ -1,9 +1,9 @@
-from jointbench.study.run import run_estimate
+from jointbench.study.run import run_estimate_files
 
-run_estimate(
+run_estimate_files(
     snakemake.config,
-    snakemake.wildcards.study,
+    snakemake.params.study,
     snakemake.wildcards.method,
-    snakemake.input[0],
-    snakemake.output[0],
+    snakemake.input,
+    snakemake.output,
 )

@@ -1,6 +1,3 @@
-from jointbench.study.config import parse_condition_id
-from jointbench.study.run import run_simulate
+from jointbench.study.run import run_simulate_files
 
-study = snakemake.wildcards.study
-condition = parse_condition_id(snakemake.config, study, snakemake.wildcards.condition)
-run_simulate(snakemake.config, study, condition, snakemake.output[0])
+run_simulate_files(snakemake.config, snakemake.params.study, snakemake.output)

@@ -1,1 +1,527 @@
-"""(placeholder: being written)"""
+"""Axis-of-rotation estimators of Chang & Pollard (2007), paper B §2: planar, radial, combined.
+
+All three take the moving segment's markers in the reference segment's frame,
+``(n_frames, n_markers, 3)`` [mm], and return an :class:`AxisResult`.
+
+Model (paper B eqs. 1–12). The axis is the line through a point ``m`` with unit direction ``n``.
+Marker ``p`` at frame ``k`` is ``v = v_k^p``; ``u = v - mean_k v^p`` is its offset from its own
+trajectory centroid.
+
+* planar cost (eqs. 2–8), best-fitting parallel planes: ``f_p(n) = n' S n``,
+  ``S = sum_p sum_k u u'`` (3, 3) [mm^2]. This is Gamage & Lasenby's (2002) axis cost.
+* radial cost (eqs. 9–11), best-fitting coaxial cylinders through ``m``:
+  ``f_r(n) = sum_p sum_k (|(I - n n') (v - m)| - r_p)^2`` with the radius profiled out,
+  ``r_p = mean_k |(I - n n') (v - m)|`` (eq. 11).
+* combined cost (eq. 12), best-fitting circles: ``f = f_p + f_r``.
+
+Point on the axis. ``m`` is not searched: it is the NM sphere-fit centre of paper A (Chang &
+Pollard's constrained least squares, :func:`jointbench.estimators.sphere.fit_nm`), as in paper B
+§2.4 and §4 ("provided an adequate CoR location to use in the optimization without
+refinement"). The axis passes through ``m`` by construction, so ``m`` is its own foot on the
+axis and is what ``AxisResult.point`` returns, for all three methods (the planar cost does not
+use ``m``; its line is still anchored there). For a near-pure hinge the sphere fit is poorly
+determined *along* the axis, so ``m`` may lie far from the markers;
+``diagnostics["centroid_foot"]`` is the point of the axis closest to the markers' centroid.
+
+Search (paper B §3): MATLAB's ``fminsearch`` (Nelder–Mead, Lagarias et al. 1998), re-implemented
+in :func:`nelder_mead` with its coefficients, initial simplex and stopping rules, from ten
+starting directions: one vertex of each antipodal pair of a regular dodecahedron,
+``(±1,±1,±1)``, ``(0,±1/φ,±φ)``, ``(±1/φ,±φ,0)``, ``(±φ,0,±1/φ)`` with ``φ`` the golden ratio,
+normalised; of each pair the vertex whose first non-zero coordinate is positive (the costs are
+even in ``n``). The lowest final cost over the ten wins; ``converged`` is the winning start's
+own flag. Tolerances are ``fminsearch``'s defaults, ``TolX = TolFun = 1e-4`` and at most
+``200 * n_params`` iterations and evaluations; the paper states no other values.
+
+Parameterisation (``parameterisation="angles"``, the default): the direction is searched as two
+spherical angles, MATLAB ``cart2sph``'s azimuth and elevation,
+``n = (cos el cos az, cos el sin az, sin el)``, each start converted to its angles. Searching an
+unnormalised 3-vector ``x`` with the cost evaluated at ``x / |x|`` (``parameterisation="vector"``,
+the literal reading of "fminsearch over ``n``") is ill-posed: the cost is constant along every
+ray, so the minimiser is a half-line, not a point, and the simplex drifts along it. On 30 noisy
+hinge trials (10 starts each) the final ``|x|`` ranged from 0.003 to 4e17 (48 of 300 runs above
+2, 134 below 0.5); since ``TolX`` is absolute, the angular precision at convergence then varies
+by orders of magnitude (about 2 degrees at ``|x| = 0.003``). With two angles the minimum is
+isolated, ``TolX`` is in radians (scaled by ``cos el`` for the azimuth), the simplex has three
+vertices and the search needs roughly a third of the evaluations. The angles are singular only
+at the poles ``±z``; the map is smooth there (a direction near a pole is reached with a small
+``|el - ±90°|`` at any azimuth), so the search still converges, with the azimuth ill-determined.
+fminsearch's initial simplex scales each non-zero angle by 1.05 (steps of 1–4 degrees for these
+starts) and sets a zero one to 0.00025 rad, as it would for the paper's MATLAB code.
+
+The planar optimum is also the eigenvector of the smallest eigenvalue of ``S`` (Gamage &
+Lasenby's closed form); the planar method nevertheless runs the search, as the paper did, and
+reports the closed-form eigenvector in ``diagnostics["eigenvector"]`` for comparison.
+
+Where the costs are degenerate:
+
+* planar: ``S`` must have a unique smallest eigenvalue. It does not when every marker moves
+  along one line (a tiny RoM), or when the markers all lie on the axis. Rotation about a second
+  axis adds variance along the FE axis and the normal can flip to the markers' radial direction
+  (paper B Fig. 2b).
+* radial: for a pure hinge a tilt ``t`` of the axis about ``m`` changes a marker's distance from
+  it, to first order, only in proportion to the marker's offset ``h_p`` along the axis from
+  ``m``; when every marker's circle lies in the plane through ``m`` normal to the axis
+  (``h_p = 0``) ``f_r`` grows like ``t^4`` and the minimum is very flat. Conversely, when ``m``
+  is far along the axis from the markers (``|h_p|`` much larger than the arcs, as the sphere fit
+  of a noise-free pure hinge may return, its centre being undetermined along the axis) the
+  markers' short arcs lie close to many cylinders through ``m`` and the search is trapped in
+  local minima far from the axis. Pass ``point`` to fix ``m`` in such cases.
+* combined: inherits the planar cost's curvature in every direction, so it is well posed
+  whenever the planar cost is.
+
+Returned ``direction`` is a unit vector with a canonical sign: its largest-magnitude component
+is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_between_lines_deg`).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from collections.abc import Callable, Generator, Sequence
+
+import numpy as np
+
+from jointbench.estimators.registry import register
+from jointbench.estimators.results import AxisResult
+from jointbench.estimators.sphere import fit_nm
+from jointbench.estimators.validation import check_markers, check_moves
+
+__all__ = [
+    "DODECAHEDRON_STARTS",
+    "PARAMETERISATIONS",
+    "AxisCosts",
+    "angles_to_direction",
+    "angles_to_directions",
+    "canonical_sign",
+    "direction_to_angles",
+    "fit_combined",
+    "fit_planar",
+    "fit_radial",
+    "nelder_mead",
+    "nelder_mead_steps",
+]
+
+_GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
+PARAMETERISATIONS = ("angles", "vector")
+
+# fminsearch defaults (MATLAB): TolX = TolFun = 1e-4, MaxIter = MaxFunEvals = 200 * n_params.
+_XATOL = 1e-4
+_FATOL = 1e-4
+
+
+def _dodecahedron_starts() -> np.ndarray:
+    """One vertex of each of the ten antipodal vertex pairs of a regular dodecahedron, normalised.
+
+    ``(10, 3)``. Of each pair, the vertex whose first non-zero coordinate is positive.
+    """
+    g, h = _GOLDEN, 1.0 / _GOLDEN
+    vertices = [
+        (1.0, 1.0, 1.0),
+        (1.0, 1.0, -1.0),
+        (1.0, -1.0, 1.0),
+        (1.0, -1.0, -1.0),
+        (0.0, h, g),
+        (0.0, h, -g),
+        (h, g, 0.0),
+        (h, -g, 0.0),
+        (g, 0.0, h),
+        (g, 0.0, -h),
+    ]
+    starts = np.array(vertices)
+    starts /= np.linalg.norm(starts, axis=1, keepdims=True)
+    starts.setflags(write=False)
+    return starts
+
+
+DODECAHEDRON_STARTS = _dodecahedron_starts()
+
+
+def direction_to_angles(direction: np.ndarray) -> tuple[float, float]:
+    """``(azimuth, elevation)`` [rad] of a direction (3,), as MATLAB's ``cart2sph``."""
+    x, y, z = (float(c) for c in direction)
+    return math.atan2(y, x), math.atan2(z, math.hypot(x, y))
+
+
+def angles_to_direction(azimuth: float, elevation: float) -> np.ndarray:
+    """Unit direction (3,) ``(cos el cos az, cos el sin az, sin el)``, as MATLAB's ``sph2cart``."""
+    c = math.cos(elevation)
+    return np.array((c * math.cos(azimuth), c * math.sin(azimuth), math.sin(elevation)))
+
+
+def angles_to_directions(params: np.ndarray) -> np.ndarray:
+    """Vectorised :func:`angles_to_direction`: ``(k, 2)`` [rad] -> unit ``(k, 3)``."""
+    azimuth, elevation = params[:, 0], params[:, 1]
+    c = np.cos(elevation)
+    return np.stack((c * np.cos(azimuth), c * np.sin(azimuth), np.sin(elevation)), axis=1)
+
+
+Point = tuple[float, ...]
+NelderMeadSteps = Generator[list[Point], list[float], tuple[Point, float, bool, int, int]]
+
+
+def nelder_mead_steps(
+    x0: Sequence[float],
+    *,
+    xatol: float = _XATOL,
+    fatol: float = _FATOL,
+    max_iter: int | None = None,
+    max_fev: int | None = None,
+) -> NelderMeadSteps:
+    """Nelder–Mead exactly as MATLAB's ``fminsearch``, as an ask/tell generator.
+
+    The generator yields the list of points it needs evaluated and is sent back their costs;
+    it returns (``StopIteration.value``) ``(x_best, f_best, converged, iterations,
+    evaluations)``. :func:`nelder_mead` drives one run; :func:`_multistart` drives several in
+    lockstep so each round evaluates all their pending points in one batch, which removes most of
+    the per-call overhead for short recordings. Written over plain
+    floats: the simplex is tiny and numpy's per-call overhead would dominate.
+
+    Algorithm (Lagarias et al. 1998, as in ``fminsearch``): reflection 1, expansion 2,
+    contraction 1/2, shrink 1/2. Initial simplex: ``x0`` and, for each coordinate, ``x0`` with
+    that coordinate scaled by 1.05 (set to 0.00025 if it is zero). Vertices are kept sorted by
+    cost (stable sort). Stops when both the largest cost difference to the best vertex is
+    ``<= max(fatol, 10 eps(f_best))`` and the largest coordinate difference is
+    ``<= max(xatol, 10 eps(max(x_best)))`` (converged), or when ``max_iter`` iterations or
+    ``max_fev`` evaluations (default ``200 * len(x0)`` each) are used up (not converged).
+    """
+    start = [float(c) for c in x0]
+    n = len(start)
+    max_iter = 200 * n if max_iter is None else int(max_iter)
+    max_fev = 200 * n if max_fev is None else int(max_fev)
+    simplex = [tuple(start)]
+    for j in range(n):
+        y = list(start)
+        y[j] = 1.05 * y[j] if y[j] != 0.0 else 0.00025
+        simplex.append(tuple(y))
+    values = list((yield simplex))
+    order = sorted(range(n + 1), key=values.__getitem__)
+    simplex = [simplex[i] for i in order]
+    values = [values[i] for i in order]
+    evaluations = n + 1
+    iterations = 1
+    while evaluations < max_fev and iterations < max_iter:
+        best, f_best = simplex[0], values[0]
+        # Sorted ascending, so the largest |f_best - f_j| is the last minus the first.
+        f_spread = values[n] - f_best
+        x_spread = max(abs(a - b) for x in simplex[1:] for a, b in zip(x, best, strict=True))
+        if f_spread <= max(fatol, 10.0 * math.ulp(f_best)) and x_spread <= max(
+            xatol, 10.0 * math.ulp(max(best))
+        ):
+            break
+        worst, f_worst = simplex[n], values[n]
+        bar = [sum(c) / n for c in zip(*simplex[:n], strict=True)]
+        xr = tuple(2.0 * b - w for b, w in zip(bar, worst, strict=True))
+        (fr,) = yield [xr]
+        evaluations += 1
+        shrink = False
+        if fr < f_best:
+            xe = tuple(3.0 * b - 2.0 * w for b, w in zip(bar, worst, strict=True))
+            (fe,) = yield [xe]
+            evaluations += 1
+            new, f_new = (xe, fe) if fe < fr else (xr, fr)
+        elif fr < values[n - 1]:
+            new, f_new = xr, fr
+        elif fr < f_worst:
+            new = tuple(1.5 * b - 0.5 * w for b, w in zip(bar, worst, strict=True))
+            (f_new,) = yield [new]
+            evaluations += 1
+            shrink = f_new > fr
+        else:
+            new = tuple(0.5 * b + 0.5 * w for b, w in zip(bar, worst, strict=True))
+            (f_new,) = yield [new]
+            evaluations += 1
+            shrink = f_new >= f_worst
+        if shrink:
+            simplex = [best] + [
+                tuple(b + 0.5 * (c - b) for b, c in zip(best, x, strict=True)) for x in simplex[1:]
+            ]
+            values = [f_best, *(yield simplex[1:])]
+            evaluations += n
+            order = sorted(range(n + 1), key=values.__getitem__)
+            simplex = [simplex[i] for i in order]
+            values = [values[i] for i in order]
+        else:
+            # The new vertex replaces the worst; a stable sort puts it after equal costs.
+            del simplex[n], values[n]
+            position = bisect.bisect_right(values, f_new)
+            simplex.insert(position, new)
+            values.insert(position, f_new)
+        iterations += 1
+    converged = evaluations < max_fev and iterations < max_iter
+    return simplex[0], values[0], converged, iterations, evaluations
+
+
+def nelder_mead(
+    cost: Callable[..., float], x0: Sequence[float], **options: float | int | None
+) -> tuple[Point, float, bool, int, int]:
+    """Minimise ``cost(*x)`` from ``x0`` as MATLAB's ``fminsearch`` (see :func:`nelder_mead_steps`).
+
+    Returns ``(x_best, f_best, converged, iterations, evaluations)``.
+    """
+    steps = nelder_mead_steps(x0, **options)
+    points = next(steps)
+    while True:
+        try:
+            points = steps.send([cost(*x) for x in points])
+        except StopIteration as stop:
+            return stop.value
+
+
+def _multistart(
+    batch_cost: Callable[[np.ndarray], np.ndarray],
+    starts: Sequence[Sequence[float]],
+    **options: float | int | None,
+) -> list[tuple[Point, float, bool, int, int]]:
+    """Independent :func:`nelder_mead_steps` runs, advanced in lockstep.
+
+    Each round gathers every running start's pending points and evaluates them with one call of
+    ``batch_cost`` (``(k, n_params) -> (k,)``); every run follows the path it would follow
+    alone (up to last-bit differences between batched and single matrix products).
+    """
+    runs = [nelder_mead_steps(x0, **options) for x0 in starts]
+    pending = {i: next(run) for i, run in enumerate(runs)}
+    results: list = [None] * len(runs)
+    while pending:
+        keys = list(pending)
+        points = [x for i in keys for x in pending[i]]
+        values = batch_cost(np.array(points)).tolist()
+        position = 0
+        for i in keys:
+            count = len(pending[i])
+            try:
+                pending[i] = runs[i].send(values[position : position + count])
+            except StopIteration as stop:
+                results[i] = stop.value
+                del pending[i]
+            position += count
+    return results
+
+
+class AxisCosts:
+    """Paper B's planar, radial and combined costs for one data set, with everything precomputed.
+
+    Parameters
+    ----------
+    markers : (n_frames, n_markers, 3) [mm], already validated.
+    point : (3,) [mm], the point ``m`` on the axis (used by the radial cost only).
+
+    ``planar``, ``radial`` and ``combined`` take unit directions ``(3,)`` or ``(k, 3)`` and
+    return the cost(s) [mm^2]. ``planar`` is the quadratic form ``n' S n`` on the precomputed
+    ``S``. The radial cost needs one matrix product per batch of directions: with ``w = v - m``
+    fixed, ``|(I - n n') w|^2 = |w|^2 - (n . w)^2``, so only ``n . w`` depends on ``n``. Radii
+    and squared deviations are summed in two passes; the one-pass form ``sum d^2 - N sum r_p^2``
+    cancels catastrophically near an exact fit.
+    """
+
+    def __init__(self, markers: np.ndarray, point: np.ndarray) -> None:
+        n_frames, n_markers, _ = markers.shape
+        centred = markers - markers.mean(axis=0)
+        self.scatter = np.einsum("kpi,kpj->ij", centred, centred)
+        self.point = np.asarray(point, dtype=float)
+        # Marker-major and transposed, (3, P N) contiguous: n @ w_t gives n . w for every sample.
+        offsets = np.transpose(markers - self.point, (2, 1, 0)).reshape(3, -1)
+        self._w_t = np.ascontiguousarray(offsets)
+        self._w_sq = np.einsum("ij,ij->j", self._w_t, self._w_t)
+        self._shape = (n_markers, n_frames)
+        self._work = np.empty((0, n_markers * n_frames))
+
+    def planar(self, directions: np.ndarray) -> np.ndarray:
+        """``f_p = n' S n`` (paper B eq. 8): ``(3,)`` -> scalar array, ``(k, 3)`` -> ``(k,)``."""
+        n = np.asarray(directions, dtype=float)
+        return np.einsum("...i,ij,...j->...", n, self.scatter, n)
+
+    def _distances_into(self, directions: np.ndarray) -> np.ndarray:
+        """Distances for unit directions ``(k, 3)`` into a reused ``(k, P N)`` work buffer.
+
+        Temporaries of this size would be fresh ``mmap`` allocations on every call (glibc), whose
+        page faults cost more than the arithmetic, hence the buffer (this object is not
+        thread-safe).
+        """
+        k = directions.shape[0]
+        if self._work.shape[0] < k:
+            self._work = np.empty((k, self._w_t.shape[1]))
+        work = self._work[:k]
+        np.matmul(directions, self._w_t, out=work)
+        np.multiply(work, work, out=work)
+        np.subtract(self._w_sq, work, out=work)
+        # |w|^2 - (n.w)^2 can round below zero for a sample on the axis itself.
+        np.maximum(work, 0.0, out=work)
+        return np.sqrt(work, out=work)
+
+    def radial_distances(self, directions: np.ndarray) -> np.ndarray:
+        """Distances ``|(I - n n')(v - m)|`` [mm]: ``(..., n_markers, n_frames)``."""
+        n = np.asarray(directions, dtype=float)
+        distances = self._distances_into(n.reshape(-1, 3)).copy()
+        return distances.reshape(*n.shape[:-1], *self._shape)
+
+    def radial(self, directions: np.ndarray) -> np.ndarray:
+        """``f_r`` with the radii profiled out (paper B eqs. 10–11)."""
+        n = np.asarray(directions, dtype=float)
+        flat = self._distances_into(n.reshape(-1, 3))
+        by_marker = flat.reshape(-1, *self._shape)
+        radii = np.add.reduce(by_marker, axis=2, keepdims=True)
+        radii *= 1.0 / self._shape[1]
+        np.subtract(by_marker, radii, out=by_marker)
+        return np.einsum("ij,ij->i", flat, flat).reshape(n.shape[:-1])
+
+    def combined(self, directions: np.ndarray) -> np.ndarray:
+        """``f = f_p + f_r`` (paper B eq. 12)."""
+        return self.planar(directions) + self.radial(directions)
+
+    def batch_cost(self, method: str, parameterisation: str) -> Callable[[np.ndarray], np.ndarray]:
+        """Cost of a batch of search parameters, ``(k, 2)`` angles or ``(k, 3)`` vectors."""
+        cost = {"planar": self.planar, "radial": self.radial, "combined": self.combined}[method]
+        if parameterisation == "angles":
+            return lambda params: cost(angles_to_directions(params))
+
+        def cost_vector(params: np.ndarray) -> np.ndarray:
+            norm = np.linalg.norm(params, axis=1)
+            zero = norm == 0.0
+            value = cost(params / np.where(zero, 1.0, norm)[:, None])
+            value[zero] = np.inf
+            return value
+
+        return cost_vector
+
+
+def canonical_sign(direction: np.ndarray) -> np.ndarray:
+    """Unit ``direction`` (3,) flipped so that its largest-magnitude component is positive."""
+    direction = np.asarray(direction, dtype=float)
+    direction = direction / np.linalg.norm(direction)
+    return -direction if direction[np.argmax(np.abs(direction))] < 0 else direction
+
+
+def _fit(
+    markers: object,
+    method: str,
+    *,
+    point: object | None,
+    parameterisation: str,
+    xatol: float,
+    fatol: float,
+    max_iter: int | None,
+    max_fev: int | None,
+) -> AxisResult:
+    array = check_markers(markers, min_frames=4, min_markers=1)
+    check_moves(array)
+    if parameterisation not in PARAMETERISATIONS:
+        raise ValueError(
+            f"unknown parameterisation {parameterisation!r}; choose one of "
+            f"{', '.join(PARAMETERISATIONS)}"
+        )
+    if point is None:
+        m = np.asarray(fit_nm(array).center, dtype=float)
+    else:
+        m = np.asarray(point, dtype=float)
+        if m.shape != (3,) or not np.all(np.isfinite(m)):
+            raise ValueError(f"point must be a finite (3,) array [mm], got {m!r}")
+    costs = AxisCosts(array, m)
+    if parameterisation == "angles":
+        starts = [direction_to_angles(start) for start in DODECAHEDRON_STARTS]
+    else:
+        starts = [tuple(start) for start in DODECAHEDRON_STARTS]
+    runs = _multistart(
+        costs.batch_cost(method, parameterisation),
+        starts,
+        xatol=xatol,
+        fatol=fatol,
+        max_iter=max_iter,
+        max_fev=max_fev,
+    )
+    winner = min(range(len(runs)), key=lambda i: runs[i][1])
+    x_best, f_best, converged, iterations, evaluations = runs[winner]
+    raw = angles_to_direction(*x_best) if parameterisation == "angles" else np.array(x_best)
+    direction = canonical_sign(raw)
+    radii = costs.radial_distances(direction).mean(axis=1)
+    centroid = array.reshape(-1, 3).mean(axis=0)
+    foot = m + direction * float(direction @ (centroid - m))
+    eigenvalues, eigenvectors = np.linalg.eigh(costs.scatter)
+    status = "ok" if converged else "winning start stopped at the iteration/evaluation limit"
+    return AxisResult(
+        point=m,
+        direction=direction,
+        radii=radii,
+        converged=converged,
+        iterations=iterations,
+        status=status,
+        method=method,
+        cost=float(f_best),
+        diagnostics={
+            "start": winner,
+            "start_costs": [float(r[1]) for r in runs],
+            "start_converged": [bool(r[2]) for r in runs],
+            "evaluations": evaluations,
+            "total_evaluations": int(sum(r[4] for r in runs)),
+            "parameterisation": parameterisation,
+            "centroid_foot": foot.tolist(),
+            "eigenvector": canonical_sign(eigenvectors[:, 0]).tolist(),
+            "eigenvalues": eigenvalues.tolist(),
+        },
+    )
+
+
+_DOC = """
+
+    Parameters
+    ----------
+    markers : (n_frames, n_markers, 3) [mm]
+        The moving segment's markers in the reference segment's frame; at least 4 frames.
+    point : (3,) [mm], optional
+        The point ``m`` on the axis. Default: the NM sphere-fit centre (paper A), as in paper B.
+    parameterisation : "angles" (default) or "vector"
+        Search over azimuth/elevation, or over an unnormalised 3-vector (see the module notes).
+    xatol, fatol, max_iter, max_fev
+        Nelder–Mead stopping rules; defaults are ``fminsearch``'s (1e-4, 1e-4, 200 per
+        parameter, 200 per parameter).
+
+    Returns
+    -------
+    AxisResult
+        ``point`` = ``m``; ``direction`` unit (3,) with its largest component positive;
+        ``radii`` (n_markers,) the mean distances from the axis [mm]; ``cost`` the winning
+        cost [mm^2]; ``converged``/``iterations`` of the winning start.
+
+    Raises
+    ------
+    ValueError
+        Bad shape, NaN/inf, fewer than 4 frames, markers that do not move, a sphere fit without
+        a finite centre, or an unknown parameterisation.
+    """
+
+
+def _make(method: str, summary: str) -> Callable[..., AxisResult]:
+    def fit(
+        markers: np.ndarray,
+        *,
+        point: np.ndarray | None = None,
+        parameterisation: str = "angles",
+        xatol: float = _XATOL,
+        fatol: float = _FATOL,
+        max_iter: int | None = None,
+        max_fev: int | None = None,
+    ) -> AxisResult:
+        return _fit(
+            markers,
+            method,
+            point=point,
+            parameterisation=parameterisation,
+            xatol=xatol,
+            fatol=fatol,
+            max_iter=max_iter,
+            max_fev=max_fev,
+        )
+
+    fit.__name__ = fit.__qualname__ = f"fit_{method}"
+    fit.__doc__ = summary + _DOC
+    return fit
+
+
+fit_planar = register("axis", "planar")(
+    _make("planar", "Normal of the best-fitting parallel planes, paper B eq. 8, by search.")
+)
+fit_radial = register("axis", "radial")(
+    _make("radial", "Axis of the best-fitting coaxial cylinders through m, paper B eqs. 10–11.")
+)
+fit_combined = register("axis", "combined")(
+    _make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial).")
+)

@@ -1,1 +1,450 @@
-"""(placeholder: being written)"""
+"""Hip joint centre with uncertainty: paper C (Stoddart et al. 1999), and an extension.
+
+Two segments (0 = proximal, 1 = distal) carry >= 3 markers each, measured in the world frame.
+Notation of paper C: the pose ``f_a(t) = {R_a(t), d_a(t)}`` maps body-fixed coordinates to the
+world, ``y = R_a x + d_a`` (eq. 1); both body frames coincide with the world at ``t = 0``, so the
+ball joint has one body-fixed position ``c`` in both (eq. 2): ``0 = f0(t) c - f1(t) c``.
+
+Steps (one function per registered method below):
+
+1. Poses (§5): :func:`jointbench.geometry.rigid_poses` for each segment -- SVD fits alternating
+   with the re-estimated body-fixed coordinates of eq. 5, body frame = world at frame 0.
+2. Analytic centre (§6, eq. 9), minimising ``sum_t |f0(t) c - f1(t) c|^2`` (eq. 6): with
+   ``M_t = R0(t) - R1(t)`` and ``y_t = d1(t) - d0(t)``,
+   ``c = [sum_t M_t' M_t]^-1 sum_t M_t' y_t`` (eq. 9 multiplied out: ``M' M = 2I - R0'R1 - R1'R0``).
+3. Pose covariance (Pennec & Thirion 1997). Marker noise is isotropic with per-coordinate
+   variance ``s^2``. The pose is perturbed as ``R -> exp([w]x) R``, ``d -> d + tau`` (a
+   rotation vector ``w`` of the error, in the world frame), so the marker Jacobian is
+   ``J_i = [-[R x_i]x, I3]`` and ``W_f = s^2 (sum_i J_i' J_i)^-1`` (6x6).
+4. Constraint ``h_t(x_t, c) = R0 c + d0 - R1 c - d1`` (eq. 11) with ``x_t`` the two poses (12
+   numbers). Jacobians (eqs. 13–14): ``M_t = dh/dc = R0 - R1`` and
+   ``dh/dx_t = [-[R0 c]x, I3, [R1 c]x, -I3]`` (paper: ``[dR0/dr0 c, I3, -dR1/dr1 c, -I3]``; in
+   this parameterisation ``d(R c)/dw = -[R c]x``). Pseudo-measurement (eq. 18):
+   ``y_t = -h(x_t, c_hat) + M_t c_hat = d1(t) - d0(t)`` -- eq. 15; because ``h`` is linear in
+   ``c`` it does not depend on the linearisation point, only ``W_y,t`` does.
+   ``W_y,t = dh/dx W_x,t dh/dx'`` (eq. 20, ``W_x,t`` block-diagonal, eq. 12). Multiplied out,
+   each segment contributes the covariance of the world position of a body point ``c``
+   predicted from that segment's pose fit::
+
+       W_y,t = sum_a R_a(t) A_a(c) R_a(t)',
+       A_a(c) = s^2 ( [c - m_a]x K_a^-1 [c - m_a]x' + I3 / n_a ),
+
+   with ``m_a`` the centroid of the segment's ``n_a`` body-fixed marker coordinates and
+   ``K_a = sum_i (|u_i|^2 I3 - u_i u_i')``, ``u_i = x_i - m_a`` (the cluster's "inertia"):
+   the translation of the centroid and the rotation decouple, so ``W_f`` never needs forming.
+5. Gauss–Markov (eqs. 22–23): ``c = [sum M' W^-1 M]^-1 sum M' W^-1 y``,
+   ``W_c = [sum M' W^-1 M]^-1``; ``W_y`` depends on ``c`` through the lever arm ``c - m_a``,
+   so the solution is iterated from the analytic centre until ``c`` moves less than
+   ``tol_mm`` (default 1e-6 mm, far below any predicted uncertainty); after
+   ``max_iterations`` the result has ``converged=False``. Frame 0 is left out: its poses are
+   the identity by construction and ``M_0 = 0``.
+
+Noise convention. ``noise_mm`` is ``sqrt(tr W_y)`` of the marker covariance ``W_y``: the RMS
+length of a 3-D marker error, paper C's "1.7 mm" and the ``sd_mm`` of
+:func:`jointbench.simulate.noise.isotropic_noise`. Paper C writes the isotropic variance as
+"sigma^2 = Tr(W_y)"; used as a per-coordinate variance that would overstate ``W_c`` three
+times. Here the per-coordinate variance is ``s^2 = noise_mm^2 / 3``, which is what
+``W_f = s^2 (sum J'J)^-1`` needs. Without ``noise_mm``, ``s^2`` is the pooled residual variance
+of the two segments' rigid-body fits: ``s^2 = (RSS_0 + RSS_1) / (dof_0 + dof_1)`` with
+``dof = 3 n N - 6 N - 3 n + 6 = 3 (n - 2)(N - 1)`` per segment (``3 n N`` coordinates, ``6 N``
+pose parameters, ``3 n`` body coordinates, 6 gauge freedoms removed by pinning the body frame to
+frame 0), unbiased to first order for any isotropic noise.
+
+Frame 0 (an extension, method ``gauss-markov-frame0``). Paper C treats ``f_a(0) = I`` as exact.
+With noisy markers it is not: each segment's body frame is placed by *its own* frame-0 fit,
+whose rotation error (~0.01 rad for 1.7 mm noise on a 150 mm cluster) moves a point 500 mm away
+by several mm, independently for the two segments. So (i) the two body frames do not coincide
+at frame 0, the single ``c`` of eq. 2 does not exist, and the paper's estimate is biased by a
+few mm; (ii) every relative pose shares that frame-0 error, so the errors of ``y_t`` are
+correlated across ``t`` and ``W_c`` is far too small for the centre's position in the true
+world at frame 0 (its true error does not fall below the frame-0 error however many frames are
+used). ``gauss-markov-frame0`` applies the same Gauss–Markov theorem with these errors in the
+measurement model: unknowns ``c`` (world at frame 0), ``c0``, ``c1`` (the centre in each
+segment's frame as placed at frame 0); data ``R0 c0 - R1 c1 = d1 - d0`` for ``t >= 1`` with
+covariance ``W_y,t`` as above; and the frame-0 placement errors as pseudo-measurements
+``c0 - c = 0`` and ``c1 - c = 0`` with covariances ``A_0(c0)``, ``A_1(c1)`` (the frame-0 fit's
+error at the joint). This is the generalised least-squares solution with the full,
+correlated ``W_y``; its ``W_c`` covers the true centre. Its diagnostics carry ``c0`` and its
+covariance, the centre relative to the proximal markers (what a pelvis frame built from them
+needs), which is not limited by the frame-0 error.
+
+Degenerate motion. Before anything is solved, the analytic normal matrix ``sum M'M`` must have
+rank 3: an eigenvalue below ``1e-12`` of the largest (relative rotation off the main axis below
+~1e-6 rad) means rotation about a single axis, and a largest eigenvalue below ``1e-16 N``
+(relative rotation below ~1e-8 rad) means none; both raise ``ValueError``. Anything above is
+solved: a large predicted covariance from a valid but poorly conditioned fit (paper C: 1872 mm
+at Nt = 4) is an honest answer, not an error.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jointbench.estimators.registry import register
+from jointbench.estimators.results import JointCenterResult
+from jointbench.estimators.twosegment import SINGULAR_RCOND, SegmentPoses, two_segment_poses
+from jointbench.geometry import rigid_fit, skew
+
+__all__ = [
+    "align_to_markers",
+    "constraint_covariance",
+    "fit_analytic",
+    "fit_gauss_markov",
+    "fit_gauss_markov_frame0",
+    "point_covariance",
+]
+
+# "No relative rotation": largest eigenvalue of sum M'M below this times the number of frames.
+_NO_ROTATION = 1e-16
+
+
+def _as_noise(noise_mm: float | None) -> float | None:
+    if noise_mm is None:
+        return None
+    value = float(noise_mm)
+    if not np.isfinite(value) or value < 0:
+        raise ValueError(f"noise_mm must be a finite number >= 0, got {noise_mm!r}")
+    return value
+
+
+def _per_coordinate_variance(
+    noise_mm: float | None, prox: SegmentPoses, dist: SegmentPoses
+) -> tuple[float, float, str]:
+    """``(s^2 [mm^2], noise_mm = sqrt(3 s^2), source)`` -- see the module docstring."""
+    if noise_mm is not None:
+        return noise_mm**2 / 3.0, noise_mm, "given"
+    variance = (prox.residual_ss + dist.residual_ss) / (prox.dof + dist.dof)
+    return variance, float(np.sqrt(3.0 * variance)), "rigid-body residuals"
+
+
+def _lever_factors(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """Centroid ``m``, inverse "inertia" ``K^-1`` and count ``n`` of body-fixed markers."""
+    mean = body.mean(axis=0)
+    u = body - mean
+    inertia = np.sum(u * u) * np.eye(3) - u.T @ u
+    return mean, np.linalg.inv(inertia), body.shape[0]
+
+
+def point_covariance(point: np.ndarray, body: np.ndarray) -> np.ndarray:
+    """``A(c) / s^2``: covariance, per unit marker variance, of the world position of the body
+    point ``c`` predicted by an LS pose fit of the markers ``body`` ``(n, 3)`` in the frame
+    where the pose is the identity (``R A R'`` for any other pose ``R``)."""
+    return _point_covariance(point, *_lever_factors(body))
+
+
+def _point_covariance(point, mean, inertia_inv, n) -> np.ndarray:
+    lever = skew(np.asarray(point, dtype=float) - mean)
+    return lever @ inertia_inv @ lever.T + np.eye(3) / n
+
+
+def constraint_covariance(
+    r0: np.ndarray, a0: np.ndarray, r1: np.ndarray, a1: np.ndarray
+) -> np.ndarray:
+    """``W_y,t = R0 A0 R0' + R1 A1 R1'`` for rotation stacks ``(N, 3, 3)``: ``(N, 3, 3)``."""
+    return r0 @ a0 @ np.swapaxes(r0, -1, -2) + r1 @ a1 @ np.swapaxes(r1, -1, -2)
+
+
+def _relative_system(prox: SegmentPoses, dist: SegmentPoses) -> tuple[np.ndarray, np.ndarray]:
+    """``M_t = R0 - R1`` ``(N-1, 3, 3)`` and ``y_t = d1 - d0`` ``(N-1, 3)`` for ``t >= 1``."""
+    return (
+        prox.rotation[1:] - dist.rotation[1:],
+        dist.translation[1:] - prox.translation[1:],
+    )
+
+
+def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
+    """Eq. 9 with the degenerate-motion checks; returns ``(c, rcond)``."""
+    normal = np.einsum("fki,fkj->ij", m, m)
+    rhs = np.einsum("fki,fk->i", m, y)
+    values, vectors = np.linalg.eigh(normal)
+    if values[-1] <= _NO_ROTATION * n_frames:
+        raise ValueError(
+            f"{what}: degenerate motion: the segments do not rotate relative to each other"
+        )
+    if values[0] <= SINGULAR_RCOND * values[-1]:
+        raise ValueError(
+            f"{what}: degenerate motion: the relative rotation is about a single axis (a "
+            "hinge), so the centre is not determined along that axis"
+        )
+    return vectors @ ((vectors.T @ rhs) / values), float(values[0] / values[-1])
+
+
+@register("joint_center", "analytic")
+def fit_analytic(
+    proximal: np.ndarray, distal: np.ndarray, *, noise_mm: float | None = None
+) -> JointCenterResult:
+    """Paper C's analytic joint centre (§6, eq. 9).
+
+    Parameters
+    ----------
+    proximal, distal : (n_frames >= 3, n_markers >= 3, 3) [mm], world frame, same frames.
+    noise_mm : accepted for a uniform ``joint_center`` signature; unused.
+
+    Returns
+    -------
+    JointCenterResult
+        ``center`` ``(3,)`` [mm] in the body-fixed frame shared at frame 0 (the world at frame
+        0); ``covariance`` ``None``; ``cost`` ``sum_t |f0(t) c - f1(t) c|^2`` [mm^2] (eq. 6);
+        ``diagnostics["rcond"]`` the smallest over largest eigenvalue of ``sum M'M``.
+    """
+    del noise_mm
+    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    m, y = _relative_system(prox, dist)
+    center, rcond = _analytic(m, y, prox.rotation.shape[0], "analytic")
+    residual = np.einsum("fij,j->fi", m, center) - y
+    return JointCenterResult(
+        center=center,
+        covariance=None,
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="analytic",
+        cost=float(np.sum(residual**2)),
+        diagnostics={"rcond": rcond},
+    )
+
+
+def _weights(r0, r1, a0, a1) -> np.ndarray:
+    return np.linalg.inv(constraint_covariance(r0, a0, r1, a1))
+
+
+def _iterate_single(m, y, r0, r1, lever0, lever1, start, max_iterations, tol_mm):
+    """Paper C's iteration: returns ``c``, information (unit variance), chi^2 (unit), k, step."""
+    center = start
+    step = np.inf
+    iteration = 0
+    while iteration < max_iterations:
+        iteration += 1
+        weights = _weights(
+            r0, r1, _point_covariance(center, *lever0), _point_covariance(center, *lever1)
+        )
+        weighted = weights @ m
+        information = np.einsum("fki,fkj->ij", m, weighted)
+        # Solved for the correction from the residuals, which keeps full precision when the
+        # residuals are tiny (noise-free data) however large the coordinates.
+        residual = y - np.einsum("fij,j->fi", m, center)
+        correction = np.linalg.solve(information, np.einsum("fki,fk->i", weighted, residual))
+        step = float(np.linalg.norm(correction))
+        center = center + correction
+        if step <= tol_mm:
+            break
+    residual = y - np.einsum("fij,j->fi", m, center)
+    chi2 = float(np.einsum("fi,fij,fj->", residual, weights, residual))
+    return center, information, chi2, iteration, step
+
+
+def _iterate_frame0(y, r0, r1, lever0, lever1, start, max_iterations, tol_mm):
+    """The frame-0 extension: unknowns ``(c, c0, c1)``; same returns (information 9x9)."""
+    design = np.concatenate([r0, -r1], axis=2)  # (N-1, 3, 6): [R0, -R1] [c0; c1]
+    state = np.concatenate([start, start, start])
+    gradient = np.empty(9)
+    step = np.inf
+    iteration = 0
+    while iteration < max_iterations:
+        iteration += 1
+        a0 = _point_covariance(state[3:6], *lever0)
+        a1 = _point_covariance(state[6:], *lever1)
+        weights = _weights(r0, r1, a0, a1)
+        weighted = weights @ design
+        p0, p1 = np.linalg.inv(a0), np.linalg.inv(a1)
+        information = np.zeros((9, 9))
+        information[3:, 3:] = np.einsum("fki,fkj->ij", design, weighted)
+        # Pseudo-measurements c0 - c = 0 (cov A0) and c1 - c = 0 (cov A1): the frame-0 placement.
+        information[:3, :3] = p0 + p1
+        information[:3, 3:6] = information[3:6, :3] = -p0
+        information[:3, 6:] = information[6:, :3] = -p1
+        information[3:6, 3:6] += p0
+        information[6:, 6:] += p1
+        # Correction from the residuals (see _iterate_single).
+        residual = y - np.einsum("fij,j->fi", design, state[3:])
+        offsets = (state[3:6] - state[:3], state[6:] - state[:3])
+        gradient[:3] = p0 @ offsets[0] + p1 @ offsets[1]
+        gradient[3:] = np.einsum("fki,fk->i", weighted, residual)
+        gradient[3:6] -= p0 @ offsets[0]
+        gradient[6:] -= p1 @ offsets[1]
+        correction = np.linalg.solve(information, gradient)
+        step = float(np.max(np.linalg.norm(correction.reshape(3, 3), axis=1)))
+        state = state + correction
+        if step <= tol_mm:
+            break
+    center, c0, c1 = state[:3], state[3:6], state[6:]
+    residual = y - np.einsum("fij,j->fi", design, state[3:])
+    chi2 = float(
+        np.einsum("fi,fij,fj->", residual, weights, residual)
+        + (c0 - center) @ p0 @ (c0 - center)
+        + (c1 - center) @ p1 @ (c1 - center)
+    )
+    return state, information, chi2, iteration, step
+
+
+def _gauss_markov(
+    proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
+) -> JointCenterResult:
+    method = "gauss-markov-frame0" if frame0 else "gauss-markov"
+    noise_mm = _as_noise(noise_mm)
+    if int(max_iterations) < 1 or not tol_mm >= 0:
+        raise ValueError("max_iterations must be >= 1 and tol_mm >= 0")
+    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    n_frames = prox.rotation.shape[0]
+    m, y = _relative_system(prox, dist)
+    analytic_center, rcond = _analytic(m, y, n_frames, method)
+    variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
+    lever0, lever1 = _lever_factors(prox.body), _lever_factors(dist.body)
+    r0, r1 = prox.rotation[1:], dist.rotation[1:]
+    diagnostics = {
+        "noise_mm": noise_used,
+        "noise_source": noise_source,
+        "analytic_center": analytic_center.tolist(),
+        "rcond": rcond,
+    }
+    try:
+        if frame0:
+            state, information, chi2, iterations, step = _iterate_frame0(
+                y, r0, r1, lever0, lever1, analytic_center, int(max_iterations), tol_mm
+            )
+            center = state[:3]
+        else:
+            center, information, chi2, iterations, step = _iterate_single(
+                m, y, r0, r1, lever0, lever1, analytic_center, int(max_iterations), tol_mm
+            )
+        covariance_all = variance * np.linalg.inv(information)
+        covariance_all = 0.5 * (covariance_all + covariance_all.T)
+    except np.linalg.LinAlgError as error:
+        return JointCenterResult(
+            center=analytic_center,
+            covariance=None,
+            converged=False,
+            iterations=0,
+            status=f"singular Gauss–Markov information matrix ({error})",
+            method=method,
+            diagnostics=diagnostics,
+        )
+    covariance = covariance_all[:3, :3]
+    if frame0:
+        diagnostics["proximal_body"] = prox.body.tolist()
+        diagnostics["center_proximal"] = state[3:6].tolist()
+        diagnostics["covariance_proximal"] = covariance_all[3:6, 3:6].tolist()
+        diagnostics["center_distal"] = state[6:].tolist()
+        diagnostics["covariance_distal"] = covariance_all[6:, 6:].tolist()
+    dof = 3 * (n_frames - 1) - 3
+    chi2 = chi2 / variance if variance > 0 else float("nan")
+    diagnostics["chi2"] = chi2
+    diagnostics["chi2_dof"] = dof
+    converged = bool(step <= tol_mm and np.all(np.isfinite(covariance)))
+    status = (
+        "ok"
+        if converged
+        else f"did not converge: the centre still moved {step:.3g} mm at iteration {iterations}"
+    )
+    return JointCenterResult(
+        center=center,
+        covariance=covariance,
+        converged=converged,
+        iterations=iterations,
+        status=status,
+        method=method,
+        cost=chi2,
+        diagnostics=diagnostics,
+    )
+
+
+@register("joint_center", "gauss-markov")
+def fit_gauss_markov(
+    proximal: np.ndarray,
+    distal: np.ndarray,
+    *,
+    noise_mm: float | None = None,
+    max_iterations: int = 100,
+    tol_mm: float = 1e-6,
+) -> JointCenterResult:
+    """Paper C's Gauss–Markov joint centre with its predicted covariance (eqs. 11–23).
+
+    Parameters
+    ----------
+    proximal, distal : (n_frames >= 3, n_markers >= 3, 3) [mm], world frame, same frames.
+    noise_mm : ``sqrt(tr W_y)`` of the isotropic marker noise [mm] (RMS length of the 3-D
+        error; per-coordinate variance ``noise_mm**2 / 3``). ``None``: estimated from the
+        rigid-body fit residuals (module docstring).
+    max_iterations, tol_mm : the re-linearisation stops when the centre moves ``<= tol_mm``.
+
+    Returns
+    -------
+    JointCenterResult
+        ``center`` ``(3,)`` [mm] in the body-fixed frame shared at frame 0; ``covariance``
+        ``W_c`` ``(3, 3)`` [mm^2], conditional on the two segments' frame-0 poses as paper C
+        assumes (see the module docstring, "Frame 0", for what it does not cover);
+        ``cost`` the Gauss–Markov chi^2 ``sum_t r_t' W_y,t^-1 r_t``. ``diagnostics``:
+        ``noise_mm`` used and its ``noise_source``, ``analytic_center``, ``rcond`` of the
+        analytic normal matrix, ``chi2`` and ``chi2_dof`` (``3 (N - 1) - 3``; chi2/dof near 1
+        when the noise model fits).
+    """
+    return _gauss_markov(
+        proximal,
+        distal,
+        noise_mm=noise_mm,
+        frame0=False,
+        max_iterations=max_iterations,
+        tol_mm=tol_mm,
+    )
+
+
+@register("joint_center", "gauss-markov-frame0")
+def fit_gauss_markov_frame0(
+    proximal: np.ndarray,
+    distal: np.ndarray,
+    *,
+    noise_mm: float | None = None,
+    max_iterations: int = 100,
+    tol_mm: float = 1e-6,
+) -> JointCenterResult:
+    """Gauss–Markov joint centre whose covariance includes the frame-0 pose errors.
+
+    Same inputs and outputs as :func:`fit_gauss_markov`; the model is paper C's plus the
+    errors of the frame-0 poses that define the shared body frame (module docstring, "Frame
+    0"), so ``covariance`` is the uncertainty of the centre in the true world frame at frame 0.
+    ``diagnostics`` adds ``center_proximal`` / ``center_distal`` (the centre in each segment's
+    frame as placed by its own frame-0 fit) and their covariances ``covariance_proximal`` /
+    ``covariance_distal`` [mm^2], i.e. the uncertainty relative to that segment's markers, and
+    ``proximal_body``, the estimated body-fixed proximal markers ``(n, 3)`` that place that
+    frame: :func:`align_to_markers` moves ``center_proximal`` into any frame in which those
+    markers are known (e.g. a pelvis frame, or a simulation's true marker layout).
+    """
+    return _gauss_markov(
+        proximal,
+        distal,
+        noise_mm=noise_mm,
+        frame0=True,
+        max_iterations=max_iterations,
+        tol_mm=tol_mm,
+    )
+
+
+def align_to_markers(
+    point: np.ndarray,
+    covariance: np.ndarray | None,
+    markers_from: np.ndarray,
+    markers_to: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Express a point given relative to a marker cluster in another frame of that cluster.
+
+    ``point`` ``(3,)`` [mm] (and its ``covariance`` ``(3, 3)`` [mm^2] or ``None``) is known in
+    the frame where the cluster's markers are ``markers_from`` ``(n, 3)``; the result is the
+    same body point in the frame where they are ``markers_to`` ``(n, 3)``, via the
+    least-squares rigid transform between the two (``R p + t``, ``R W R'``). With
+    ``gauss-markov-frame0``'s ``center_proximal``, ``covariance_proximal`` and
+    ``proximal_body``, this is the centre relative to the proximal markers, free of the
+    frame-0 placement error.
+    """
+    markers_from = np.asarray(markers_from, dtype=float)
+    markers_to = np.asarray(markers_to, dtype=float)
+    if markers_from.shape != markers_to.shape or markers_from.ndim != 2:
+        raise ValueError(
+            f"markers_from and markers_to must both be (n, 3), got {markers_from.shape} "
+            f"and {markers_to.shape}"
+        )
+    rotation, translation = rigid_fit(markers_from, markers_to[None])
+    rotation, translation = rotation[0], translation[0]
+    moved = rotation @ np.asarray(point, dtype=float) + translation
+    if covariance is None:
+        return moved, None
+    return moved, rotation @ np.asarray(covariance, dtype=float) @ rotation.T

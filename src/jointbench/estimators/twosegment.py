@@ -1,1 +1,317 @@
-"""(placeholder: being written)"""
+"""SCoRE and SARA (Ehrig et al. 2006, 2007): joint centre and axis from two segments' poses.
+
+Both segments' poses per frame come from :func:`jointbench.geometry.rigid_poses` (paper C §5:
+SVD fits alternating with re-estimated body-fixed marker coordinates); each body frame
+coincides with the world at frame 0 (``R(0) = I``, ``t(0) = 0``).
+
+SCoRE: a point fixed in both segments, ``c1`` in the proximal frame and ``c2`` in the distal
+frame, has the same world position in every frame, ``R1 c1 + t1 = R2 c2 + t2``. Stacking the
+frames gives the ``3N x 6`` least-squares problem ``[R1, -R2] [c1; c2] = t2 - t1``.
+
+SARA: for a hinge the same matrix has a null vector: the axis direction ``n1`` (proximal frame)
+and ``n2`` (distal frame) with ``R1 n1 = R2 n2``. The right singular vector of the smallest
+singular value is taken as the axis (both frames); a point on the axis is the least-squares
+solution with that singular value dropped (pseudo-inverse).
+
+Numerics: the normal matrix of the stacked system is built from 3x3 sums,
+``A'A = [[N I, -S], [-S', N I]]`` with ``S = sum_t R1' R2``, and ``A'b`` likewise, so no
+``3N x 6`` matrix is formed. Its eigen-decomposition gives the right singular vectors of ``A``
+and the squared singular values. Squaring the condition number is harmless here: the
+eigenvalues are ``N -+ sigma_k(S)``, bounded by ``2N``, and a pose set that determines the
+centre keeps the smallest well away from rounding level (the noise-free tests recover the
+centre to ~1e-10 mm).
+
+Degenerate motion: the relative rotation must not be about a single axis (SCoRE) and must not
+vanish (SCoRE, SARA). An eigenvalue below ``1e-12`` of the largest counts as zero -- that is a
+relative rotation off the axis of less than about 1e-6 rad, a thousand times below what markers
+with micrometre noise resolve -- and raises ``ValueError``. Merely ill-conditioned motion is
+solved as it is: its poor answer is what a benchmark should see.
+
+One-segment use (``center`` "SCoRE", ``axis`` "SARA"): the markers are already in the
+reference segment's frame, so the reference pose is exactly the identity (``R1 = I``,
+``t1 = 0``) and the answer is ``c1`` (or the axis ``n1``, ``p1``), in the reference frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointbench.estimators.registry import register
+from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
+from jointbench.estimators.validation import (
+    check_markers,
+    check_not_collinear,
+    check_same_frames,
+)
+from jointbench.geometry import rigid_poses
+
+__all__ = [
+    "SegmentPoses",
+    "fit_sara",
+    "fit_sara_two_segment",
+    "fit_score",
+    "fit_score_center",
+    "segment_poses",
+    "two_segment_poses",
+]
+
+# Eigenvalues of the (dimensionless) normal matrices below this fraction of the largest are zero.
+SINGULAR_RCOND = 1e-12
+
+
+@dataclass(frozen=True)
+class SegmentPoses:
+    """One segment's pose in every frame (body frame = world at frame 0).
+
+    ``markers`` ``(N, n_markers, 3)`` [mm] the checked input, ``rotation`` ``(N, 3, 3)``,
+    ``translation`` ``(N, 3)`` [mm], ``body`` ``(n_markers, 3)`` [mm] the estimated body-fixed
+    marker coordinates, ``residual_ss`` the sum of squared marker residuals [mm^2] and ``dof``
+    its degrees of freedom, ``3 (n_markers - 2) (N - 1)``: ``3 n N`` coordinates less ``6 N``
+    pose parameters and ``3 n`` body coordinates, plus the 6 of the
+    gauge (the body frame is pinned to frame 0).
+    """
+
+    markers: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    body: np.ndarray
+    residual_ss: float
+    dof: int
+
+
+def segment_poses(markers: np.ndarray, *, name: str) -> SegmentPoses:
+    """Paper C §5 poses of one segment's (already checked) markers ``(N, n_markers, 3)``.
+
+    Collinearity is checked on frame 0 (the starting body coordinates) and on the estimated
+    body-fixed coordinates, which is what every frame's fit uses -- checking every frame would
+    cost more than the fit.
+    """
+    check_not_collinear(markers[:1], name=name)
+    rotation, translation, body = rigid_poses(markers)
+    check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
+    fitted = body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
+    n_frames, n_markers, _ = markers.shape
+    return SegmentPoses(
+        markers=markers,
+        rotation=rotation,
+        translation=translation,
+        body=body,
+        residual_ss=float(np.sum((markers - fitted) ** 2)),
+        dof=3 * (n_markers - 2) * (n_frames - 1),
+    )
+
+
+def two_segment_poses(
+    proximal: object, distal: object, *, min_frames: int
+) -> tuple[SegmentPoses, SegmentPoses]:
+    """Check both segments' world-frame markers and fit their poses."""
+    proximal = check_markers(proximal, min_frames=min_frames, min_markers=3, name="proximal")
+    distal = check_markers(distal, min_frames=min_frames, min_markers=3, name="distal")
+    check_same_frames(proximal, distal)
+    return segment_poses(proximal, name="proximal"), segment_poses(distal, name="distal")
+
+
+def stacked_normal_equations(
+    r1: np.ndarray | None, t1: np.ndarray | None, r2: np.ndarray, t2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``A'A`` ``(6, 6)`` and ``A'b`` ``(6,)`` of ``A = [R1, -R2]`` (stacked), ``b = t2 - t1``.
+
+    ``r1 = t1 = None`` means the identity reference pose (one-segment data).
+    """
+    n_frames = r2.shape[0]
+    rhs = t2 if t1 is None else t2 - t1
+    normal = np.empty((6, 6))
+    normal[:3, :3] = normal[3:, 3:] = n_frames * np.eye(3)
+    if r1 is None:
+        s = r2.sum(axis=0)
+        g1 = rhs.sum(axis=0)
+    else:
+        s = np.einsum("fji,fjk->ik", r1, r2)
+        g1 = np.einsum("fji,fj->i", r1, rhs)
+    normal[:3, 3:] = -s
+    normal[3:, :3] = -s.T
+    g2 = -np.einsum("fji,fj->i", r2, rhs)
+    return normal, np.concatenate([g1, g2])
+
+
+def _eigen(normal: np.ndarray, *, what: str, min_rank: int) -> tuple[np.ndarray, np.ndarray]:
+    """Eigen-decomposition of a normal matrix; ``ValueError`` when its rank is below
+    ``min_rank`` (the segments do not rotate relative to each other, or only about one axis)."""
+    values, vectors = np.linalg.eigh(normal)
+    zero = values <= SINGULAR_RCOND * values[-1]
+    rank = int(np.sum(~zero))
+    if rank < min_rank:
+        if rank <= 3:
+            problem = "the segments do not rotate relative to each other"
+        else:
+            problem = (
+                "the relative rotation is about a single axis (a hinge), so the centre is not "
+                "determined along that axis; fit an axis (SARA) instead"
+            )
+        raise ValueError(f"{what}: degenerate motion: {problem}")
+    return values, vectors
+
+
+def _residual_ss(r1, t1, c1, r2, t2, c2) -> float:
+    """``sum_t |R1 c1 + t1 - R2 c2 - t2|^2`` [mm^2]; ``r1 = t1 = None`` is the identity."""
+    world2 = r2 @ c2 + t2
+    world1 = c1 if r1 is None else r1 @ c1 + t1
+    return float(np.sum((world1 - world2) ** 2))
+
+
+def _score_solve(r1, t1, r2, t2, *, what: str) -> tuple[np.ndarray, np.ndarray, float]:
+    normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
+    values, vectors = _eigen(normal, what=what, min_rank=6)
+    solution = vectors @ ((vectors.T @ rhs) / values)
+    return solution[:3], solution[3:], float(values[0] / values[-1])
+
+
+@register("joint_center", "SCoRE")
+def fit_score(
+    proximal: np.ndarray, distal: np.ndarray, *, noise_mm: float | None = None
+) -> JointCenterResult:
+    """Symmetrical Centre of Rotation Estimation (Ehrig et al. 2006) for two moving segments.
+
+    Parameters
+    ----------
+    proximal, distal : (n_frames >= 3, n_markers >= 3, 3) [mm], world frame, same frames.
+    noise_mm : accepted for a uniform ``joint_center`` signature; SCoRE does not use it.
+
+    Returns
+    -------
+    JointCenterResult
+        ``center`` ``(3,)`` [mm] in the body-fixed frame shared at frame 0 (the world at frame
+        0): the mean of the two segments' estimates mapped by their frame-0 poses,
+        ``(R1(0) c1 + t1(0) + R2(0) c2 + t2(0)) / 2``, i.e. the least-squares world position of
+        the joint at frame 0 (Ehrig et al. average the two per-frame positions the same way).
+        ``covariance`` is ``None``. ``cost`` is ``sum_t |R1 c1 + t1 - R2 c2 - t2|^2`` [mm^2].
+        ``diagnostics``: ``center_proximal`` ``c1``, ``center_distal`` ``c2`` (body frames) and
+        ``rcond`` (smallest over largest eigenvalue of the normal matrix).
+    """
+    del noise_mm
+    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
+    c1, c2, rcond = _score_solve(r1, t1, r2, t2, what="SCoRE")
+    world = 0.5 * (r1[0] @ c1 + t1[0] + r2[0] @ c2 + t2[0])
+    return JointCenterResult(
+        center=world,
+        covariance=None,
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="SCoRE",
+        cost=_residual_ss(r1, t1, c1, r2, t2, c2),
+        diagnostics={"center_proximal": c1.tolist(), "center_distal": c2.tolist(), "rcond": rcond},
+    )
+
+
+@register("center", "SCoRE")
+def fit_score_center(markers: np.ndarray) -> CenterResult:
+    """SCoRE for one segment whose markers ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are
+    already in the reference segment's frame: the reference pose is the identity, so the
+    stacked system is ``[I, -R2] [c1; c2] = t2``; the centre ``c1`` is in the reference frame.
+    ``cost`` is ``sum_t |c1 - R2 c2 - t2|^2`` [mm^2]; ``radii`` is ``None``.
+    """
+    markers = check_markers(markers, min_frames=3, min_markers=3)
+    poses = segment_poses(markers, name="markers")
+    r2, t2 = poses.rotation, poses.translation
+    c1, c2, rcond = _score_solve(None, None, r2, t2, what="SCoRE")
+    return CenterResult(
+        center=c1,
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="SCoRE",
+        cost=_residual_ss(None, None, c1, r2, t2, c2),
+        diagnostics={"center_moving": c2.tolist(), "rcond": rcond},
+    )
+
+
+def _sara_solve(r1, t1, r2, t2) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """Axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` of SARA.
+
+    The point is the minimum-norm least-squares solution with the axis direction dropped, so
+    ``p1 . n1 + p2 . n2 = 0``: for a noise-free hinge, the point of the axis nearest the origin.
+    """
+    normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
+    values, vectors = _eigen(normal, what="SARA", min_rank=5)
+    axis = vectors[:, 0]
+    rest = vectors[:, 1:]
+    point = rest @ ((rest.T @ rhs) / values[1:])
+    n1, n2 = axis[:3], axis[3:]
+    return (
+        n1 / np.linalg.norm(n1),
+        n2 / np.linalg.norm(n2),
+        point[:3],
+        point[3:],
+        float(values[0] / values[1]),
+    )
+
+
+def _mean_distance_to_axis(points: np.ndarray, point: np.ndarray, direction: np.ndarray):
+    """Mean over frames of each marker's distance from the line ``(point, direction)``."""
+    offset = points - point
+    along = offset @ direction
+    perpendicular = offset - along[..., None] * direction
+    return np.linalg.norm(perpendicular, axis=-1).mean(axis=0)
+
+
+@register("axis", "SARA")
+def fit_sara(markers: np.ndarray) -> AxisResult:
+    """Symmetrical Axis of Rotation Approach (Ehrig et al. 2007) for one segment whose markers
+    ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are in the reference segment's frame.
+
+    The reference pose is the identity (``R1 = I``, ``t1 = 0``); the axis ``(p1, n1)`` is
+    returned in the reference frame. ``radii`` are the markers' mean distances from the axis
+    [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
+    normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
+    """
+    markers = check_markers(markers, min_frames=3, min_markers=3)
+    poses = segment_poses(markers, name="markers")
+    n1, n2, p1, p2, ratio = _sara_solve(None, None, poses.rotation, poses.translation)
+    return AxisResult(
+        point=p1,
+        direction=n1,
+        radii=_mean_distance_to_axis(markers, p1, n1),
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="SARA",
+        diagnostics={"direction_moving": n2.tolist(), "point_moving": p2.tolist(), "ratio": ratio},
+    )
+
+
+def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult:
+    """SARA for two segments moving in the world ``(n_frames >= 3, n_markers >= 3, 3)`` [mm].
+
+    The axis is returned in the body-fixed frame shared at frame 0 (the world at frame 0) as
+    the mean of the two segments' versions mapped by their frame-0 poses: direction
+    ``unit(R1(0) n1 + R2(0) n2)`` (one eigenvector gives both, so their signs agree), point
+    ``(R1(0) p1 + t1(0) + R2(0) p2 + t2(0)) / 2``. ``radii`` are the distal markers' mean
+    distances from the axis ``(p1, n1)`` in the proximal frame [mm]. ``diagnostics`` carries each
+    frame's version and ``ratio`` (see :func:`fit_sara`).
+    """
+    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
+    n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2)
+    direction = r1[0] @ n1 + r2[0] @ n2
+    point = 0.5 * (r1[0] @ p1 + t1[0] + r2[0] @ p2 + t2[0])
+    distal_in_proximal = np.einsum("fji,fmj->fmi", r1, dist.markers - t1[:, None, :])
+    return AxisResult(
+        point=point,
+        direction=direction / np.linalg.norm(direction),
+        radii=_mean_distance_to_axis(distal_in_proximal, p1, n1),
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="SARA",
+        diagnostics={
+            "direction_proximal": n1.tolist(),
+            "point_proximal": p1.tolist(),
+            "direction_distal": n2.tolist(),
+            "point_distal": p2.tolist(),
+            "ratio": ratio,
+        },
+    )

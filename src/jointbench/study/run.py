@@ -10,13 +10,14 @@ import pandas as pd
 
 from jointbench.estimators import registry
 from jointbench.simulate import Trials
+from jointbench.study.config import parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
 from jointbench.study.io import read_dataset, write_dataset, write_table
 from jointbench.study.schema import check_estimates
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
 
-__all__ = ["collect", "estimate", "run_estimate", "run_simulate", "simulate_condition"]
+__all__ = ["collect", "estimate", "run_estimate_files", "run_simulate_files", "simulate_condition"]
 
 
 def simulate_condition(config: Mapping, study: str, condition: Mapping[str, object]) -> Trials:
@@ -77,18 +78,24 @@ def estimate(
     return frame
 
 
-def run_simulate(config: Mapping, study: str, condition: Mapping[str, object], output: str) -> None:
-    """Simulate one condition and write its dataset file."""
-    trials = simulate_condition(config, study, condition)
-    write_dataset(output, trials, study=study, condition=condition)
+def run_simulate_files(config: Mapping, study: str, outputs: Sequence[str]) -> None:
+    """Simulate the condition each output file is named after (see ``condition_id``)."""
+    for output in outputs:
+        condition = parse_condition_id(config, study, Path(output).stem)
+        trials = simulate_condition(config, study, condition)
+        write_dataset(output, trials, study=study, condition=condition)
 
 
-def run_estimate(config: Mapping, study: str, method: str, dataset: str, output: str) -> None:
-    """Run one built-in estimator over one dataset file and write its estimates file."""
-    trials, metadata = read_dataset(dataset)
+def run_estimate_files(
+    config: Mapping, study: str, method: str, datasets: Sequence[str], outputs: Sequence[str]
+) -> None:
+    """Run one built-in estimator over each dataset file, writing the estimates file of the
+    same condition."""
     options = config["studies"][study].get("options", {}).get(method, {})
-    frame = estimate(study, method, trials, metadata["condition"], options)
-    write_table(frame, output)
+    by_condition = {Path(path).stem: path for path in datasets}
+    for output in outputs:
+        trials, metadata = read_dataset(by_condition[Path(output).stem])
+        write_table(estimate(study, method, trials, metadata["condition"], options), output)
 
 
 def collect(study: str, paths: Sequence[str | Path], output: str) -> pd.DataFrame:

@@ -75,19 +75,48 @@ def _score_axis(result, truth) -> dict[str, float]:
     }
 
 
+_COVARIANCE_ENTRIES = {
+    "cov_xx": (0, 0),
+    "cov_xy": (0, 1),
+    "cov_xz": (0, 2),
+    "cov_yy": (1, 1),
+    "cov_yz": (1, 2),
+    "cov_zz": (2, 2),
+}
+
+
+def _covariance_entries(covariance) -> dict[str, float]:
+    """The six distinct entries of a predicted 3×3 covariance [mm²] (NaN when there is none)."""
+    return {
+        name: (np.nan if covariance is None else float(covariance[index]))
+        for name, index in _COVARIANCE_ENTRIES.items()
+    }
+
+
+def covariance_from_entries(frame) -> np.ndarray:
+    """``(n, 3, 3)`` covariances rebuilt from the ``cov_*`` columns of a results table."""
+    out = np.empty((len(frame), 3, 3))
+    for name, (i, j) in _COVARIANCE_ENTRIES.items():
+        out[:, i, j] = out[:, j, i] = frame[name].to_numpy(float)
+    return out
+
+
 def _score_joint_center(result, truth) -> dict[str, float]:
     """Centre error, predicted uncertainty and its honesty against the TRUE centre.
 
-    ``mahalanobis_sq`` is ``e`` of paper C eq. 16, ``validation_index`` is ``v = sqrt(e / 3)``.
+    ``mahalanobis_sq`` is ``e`` of paper C eq. 16, ``validation_index`` is ``v = sqrt(e / 3)``;
+    ``cov_*`` are the predicted covariance's entries, so other references can be used later.
     """
     scores = _score_center(result, truth)
     covariance = None if result is None else result.covariance
+    entries = _covariance_entries(covariance)
     if covariance is None:
         return {
             **scores,
             "sqrt_trace_cov_mm": np.nan,
             "mahalanobis_sq": np.nan,
             "validation_index": np.nan,
+            **entries,
         }
     offset = np.asarray(result.center) - np.asarray(truth["center"])
     try:
@@ -99,6 +128,7 @@ def _score_joint_center(result, truth) -> dict[str, float]:
         "sqrt_trace_cov_mm": float(np.sqrt(np.trace(covariance))),
         "mahalanobis_sq": mahalanobis_sq,
         "validation_index": float(np.sqrt(mahalanobis_sq / 3.0)),
+        **entries,
     }
 
 

@@ -1,0 +1,252 @@
+"""Two-segment rig swung like a pendulum: the experiment of paper C (§8), simulated.
+
+Paper C: "One of the authors held by hand a two segment mechanical test rig on which the
+markers were mounted and swung it like a pendulum making sure that over the 20 second time
+interval the second segment moved around at least 2 of the axes." 1200 frames (60 Hz), 3
+markers per segment, "The individual sets of 3 markers were about 100-200mm apart and the two
+sets were about 1m apart with the joint halfway between", marker noise ``sqrt(tr W_y)`` =
+1.7 mm. The motion itself is not published; everything below is our choice, kept in
+:class:`HipProtocol`.
+
+World frame (ours): ``z`` up. The ball joint sits at ``joint_mm`` at frame 0; the proximal
+(hand-held) segment's markers are about 500 mm above it, the distal (swinging) segment's about
+500 mm below, each cluster a scalene triangle with sides of 150–200 mm. Both body-fixed frames
+coincide with the world at frame 0 (paper C's convention), so the true centre, the ``truth``,
+is ``joint_mm`` in that frame.
+
+Motion, everything starting from rest at frame 0 (the holder steadies the rig, then lets the
+lower segment swing), so that, as in the paper, the first frames span very little rotation
+(Nt = 4 frames is 0.05 s):
+
+* proximal (hand): a slow wandering translation, ``A_k sin(2 pi f_k t)`` per axis (tens of mm,
+  0.1–0.3 Hz), and small rotations about the grip (the proximal cluster's centroid), rotation
+  vector components ``A_k (1 - cos(2 pi f_k t)) / 2`` (a few degrees, 0.1–0.3 Hz);
+* distal, relative to the proximal segment, a rotation vector (proximal frame) of: the main
+  swing released from rest at one extreme, ``A (cos(2 pi f t) - 1)`` (a 2A arc at the
+  pendulum frequency of a ~0.5 m segment, ~0.75 Hz); a cross swing about the second horizontal
+  axis that the hand builds up, ``B (1 - exp(-t / tau)) sin(2 pi f2 t)``; and a small twist
+  about the long axis, ``C (1 - cos(2 pi f3 t)) / 2``.
+
+The nominal motion is the same in every trial; only the noise differs, so the spread of the
+estimates over trials is the sampling distribution that the predicted covariance should match.
+
+Noise: :func:`jointbench.simulate.noise.isotropic_noise` with ``sd_mm = noise_mm``: its RMS
+error length is ``sd_mm``, i.e. ``sqrt(tr W_y)`` (per-coordinate SD ``noise_mm / sqrt(3)``),
+exactly paper C's "sqrt(tr Wy) = 1.7 mm". Each trial draws the noise of the full ``n_frames``
+recording (proximal markers, then distal, per frame) before the condition's first ``Nt``
+frames are kept, so the trial of any ``Nt`` is a prefix of the same recording -- with the same
+generator, the first ``Nt`` frames are identical for every ``Nt`` (paper C analyses "the first
+Nt frames" of one 1200-frame recording).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+from jointbench.geometry import rotation_matrix
+from jointbench.simulate import Trials
+from jointbench.simulate.noise import isotropic_noise
+
+__all__ = ["HipProtocol", "marker_layout", "nominal_recording", "simulate"]
+
+_CONDITION_KEYS = ("n_frames", "noise_mm")
+
+
+def _triples(value: object, name: str) -> tuple:
+    array = np.asarray(value, dtype=float)
+    if array.ndim != 2 or array.shape[1] != 3 or array.shape[0] < 3:
+        raise ValueError(f"{name} must be (n >= 3) rows of (x, y, z), got shape {array.shape}")
+    return tuple(tuple(float(x) for x in row) for row in array)
+
+
+def _triple(value: object, name: str) -> tuple[float, float, float]:
+    array = np.asarray(value, dtype=float)
+    if array.shape != (3,) or not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be three finite numbers, got {value!r}")
+    return tuple(float(x) for x in array)
+
+
+@dataclass(frozen=True)
+class HipProtocol:
+    """Modelling choices of the hip-rig study; every field can be overridden from the config.
+
+    Geometry [mm], world frame at frame 0 (``z`` up): ``joint_mm`` the ball joint;
+    ``proximal_markers_mm`` / ``distal_markers_mm`` the markers relative to the joint.
+    Recording: ``n_frames`` (1200) at ``fps`` (60 Hz), marker noise ``noise_mm`` =
+    ``sqrt(tr W_y)`` (1.7 mm). Hand (proximal) motion: translation amplitudes
+    ``hand_translation_mm`` and frequencies ``hand_translation_hz`` per world axis; rotation
+    amplitudes ``hand_rotation_deg`` and frequencies ``hand_rotation_hz`` per axis, about the
+    proximal cluster's centroid. Pendulum (distal relative to proximal): main swing about ``x``
+    (``swing_deg``, ``swing_hz``), cross swing about ``y`` (``cross_swing_deg``,
+    ``cross_swing_hz``, build-up time constant ``cross_swing_rise_s``), twist about ``z``
+    (``twist_deg``, ``twist_hz``). See the module docstring for the formulas.
+    """
+
+    n_frames: int = 1200
+    fps: float = 60.0
+    noise_mm: float = 1.7
+    joint_mm: tuple[float, float, float] = (0.0, 0.0, 1000.0)
+    proximal_markers_mm: tuple[tuple[float, float, float], ...] = (
+        (90.0, 0.0, 500.0),
+        (-60.0, 90.0, 520.0),
+        (-50.0, -100.0, 480.0),
+    )
+    distal_markers_mm: tuple[tuple[float, float, float], ...] = (
+        (80.0, 20.0, -500.0),
+        (-70.0, 80.0, -470.0),
+        (-30.0, -90.0, -530.0),
+    )
+    hand_translation_mm: tuple[float, float, float] = (40.0, 30.0, 20.0)
+    hand_translation_hz: tuple[float, float, float] = (0.21, 0.13, 0.31)
+    hand_rotation_deg: tuple[float, float, float] = (4.0, 3.0, 5.0)
+    hand_rotation_hz: tuple[float, float, float] = (0.17, 0.29, 0.11)
+    swing_deg: float = 35.0
+    swing_hz: float = 0.75
+    cross_swing_deg: float = 25.0
+    cross_swing_hz: float = 0.7
+    cross_swing_rise_s: float = 3.0
+    twist_deg: float = 8.0
+    twist_hz: float = 0.23
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "proximal_markers_mm", _triples(self.proximal_markers_mm, "proximal_markers_mm"))
+        set_(self, "distal_markers_mm", _triples(self.distal_markers_mm, "distal_markers_mm"))
+        for name in (
+            "joint_mm",
+            "hand_translation_mm",
+            "hand_translation_hz",
+            "hand_rotation_deg",
+            "hand_rotation_hz",
+        ):
+            set_(self, name, _triple(getattr(self, name), name))
+        if int(self.n_frames) != self.n_frames or self.n_frames < 3:
+            raise ValueError(f"n_frames must be an integer >= 3, got {self.n_frames!r}")
+        set_(self, "n_frames", int(self.n_frames))
+        if not self.fps > 0:
+            raise ValueError(f"fps must be positive, got {self.fps!r}")
+        if not (np.isfinite(self.noise_mm) and self.noise_mm >= 0):
+            raise ValueError(f"noise_mm must be finite and >= 0, got {self.noise_mm!r}")
+        if not self.cross_swing_rise_s > 0:
+            raise ValueError(
+                f"cross_swing_rise_s must be positive, got {self.cross_swing_rise_s!r}"
+            )
+
+    @classmethod
+    def from_config(cls, overrides: Mapping[str, object] | None = None) -> HipProtocol:
+        """Defaults updated by the config's ``protocol`` mapping (unknown keys are an error)."""
+        overrides = dict(overrides or {})
+        unknown = set(overrides) - {f.name for f in fields(cls)}
+        if unknown:
+            raise ValueError(f"unknown hip protocol parameters: {sorted(unknown)}")
+        return cls(**overrides)
+
+
+def marker_layout(protocol: HipProtocol) -> tuple[np.ndarray, np.ndarray]:
+    """Body-fixed (= world at frame 0) markers ``(n, 3)`` [mm] of the proximal and distal
+    segments."""
+    joint = np.asarray(protocol.joint_mm)
+    return (
+        joint + np.asarray(protocol.proximal_markers_mm),
+        joint + np.asarray(protocol.distal_markers_mm),
+    )
+
+
+def _from_rest(amplitude: np.ndarray, hz: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``A (1 - cos(2 pi f t)) / 2``: 0 with zero velocity at ``t = 0``."""
+    return np.asarray(amplitude) * (1.0 - np.cos(2.0 * np.pi * np.asarray(hz) * t[:, None])) / 2.0
+
+
+def nominal_recording(protocol: HipProtocol) -> tuple[np.ndarray, np.ndarray]:
+    """Noise-free proximal and distal markers ``(n_frames, n, 3)`` [mm] of the whole recording
+    (world frame; frame 0 equals :func:`marker_layout`)."""
+    t = np.arange(protocol.n_frames) / protocol.fps
+    proximal_body, distal_body = marker_layout(protocol)
+    joint = np.asarray(protocol.joint_mm)
+
+    # Proximal pose: rotation about the grip (cluster centroid) plus the wandering translation.
+    hand_rotvec = _from_rest(np.radians(protocol.hand_rotation_deg), protocol.hand_rotation_hz, t)
+    r0 = rotation_matrix(hand_rotvec)
+    wander = np.asarray(protocol.hand_translation_mm) * np.sin(
+        2.0 * np.pi * np.asarray(protocol.hand_translation_hz) * t[:, None]
+    )
+    grip = proximal_body.mean(axis=0)
+    d0 = grip + wander - r0 @ grip
+
+    # Distal pose relative to the proximal segment: swing, cross swing, twist.
+    swing = np.radians(protocol.swing_deg) * (np.cos(2.0 * np.pi * protocol.swing_hz * t) - 1.0)
+    cross = (
+        np.radians(protocol.cross_swing_deg)
+        * (1.0 - np.exp(-t / protocol.cross_swing_rise_s))
+        * np.sin(2.0 * np.pi * protocol.cross_swing_hz * t)
+    )
+    twist = _from_rest(np.radians([protocol.twist_deg]), np.array([protocol.twist_hz]), t)[:, 0]
+    r1 = r0 @ rotation_matrix(np.stack([swing, cross, twist], axis=-1))
+    # Ball joint: the joint's world position is shared, R0 c + d0 = R1 c + d1.
+    d1 = r0 @ joint + d0 - r1 @ joint
+
+    proximal = proximal_body @ np.swapaxes(r0, -1, -2) + d0[:, None, :]
+    distal = distal_body @ np.swapaxes(r1, -1, -2) + d1[:, None, :]
+    return proximal, distal
+
+
+def simulate(
+    condition: Mapping[str, object], protocol: HipProtocol, rngs: Sequence[np.random.Generator]
+) -> Trials:
+    """Trials of one condition: the first ``Nt`` frames of the noisy recording.
+
+    ``condition`` keys: ``n_frames`` (Nt, ``1 <= Nt <= protocol.n_frames``; default the whole
+    recording) and ``noise_mm`` (default ``protocol.noise_mm``). One generator per trial; each
+    draws the noise of all ``protocol.n_frames`` frames, so the trials of different Nt from the
+    same generators share their first frames exactly.
+
+    Returns :class:`~jointbench.simulate.Trials` with ``segments["proximal"]`` and
+    ``segments["distal"]`` ``(n_trials, Nt, 3, 3)`` [mm] in the world frame and
+    ``truth["center"]`` the joint in the body-fixed frame shared at frame 0.
+    """
+    unknown = set(condition) - set(_CONDITION_KEYS)
+    if unknown:
+        raise ValueError(
+            f"unknown hip condition keys {sorted(unknown)}; known: {', '.join(_CONDITION_KEYS)}"
+        )
+    n_used = condition.get("n_frames", protocol.n_frames)
+    if int(n_used) != n_used or not 1 <= n_used <= protocol.n_frames:
+        raise ValueError(
+            f"n_frames must be an integer in [1, {protocol.n_frames}] (the recording), "
+            f"got {n_used!r}"
+        )
+    n_used = int(n_used)
+    noise_mm = float(condition.get("noise_mm", protocol.noise_mm))
+    if not (np.isfinite(noise_mm) and noise_mm >= 0):
+        raise ValueError(f"noise_mm must be finite and >= 0, got {noise_mm!r}")
+
+    proximal, distal = nominal_recording(protocol)
+    n_proximal = proximal.shape[1]
+    recording = np.concatenate([proximal, distal], axis=1)
+    noisy = np.stack(
+        [recording + isotropic_noise(rng, recording.shape[:2], noise_mm) for rng in rngs]
+    )[:, :n_used]
+    parameters = {
+        **asdict(protocol),
+        "n_frames_recorded": protocol.n_frames,
+        "n_frames": n_used,
+        "noise_mm": noise_mm,
+        "duration_s": n_used / protocol.fps,
+    }
+    return Trials(
+        segments={"proximal": noisy[:, :, :n_proximal], "distal": noisy[:, :, n_proximal:]},
+        truth={"center": [float(x) for x in protocol.joint_mm]},
+        parameters=_jsonable(parameters),
+    )
+
+
+def _jsonable(value: object) -> object:
+    """Tuples to lists, recursively, so the parameters survive a JSON round trip unchanged."""
+    if isinstance(value, dict):
+        return {key: _jsonable(item) for key, item in value.items()}
+    if isinstance(value, (tuple, list)):
+        return [_jsonable(item) for item in value]
+    return value

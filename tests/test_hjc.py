@@ -1,0 +1,314 @@
+"""Paper C's analytic and Gauss–Markov joint centre, and the frame-0 extension."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import jointbench as jb
+from jointbench.estimators.hjc import (
+    align_to_markers,
+    constraint_covariance,
+    fit_gauss_markov,
+    point_covariance,
+)
+from jointbench.geometry import rigid_poses, rotation_matrix, skew, unit
+from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
+from jointbench.simulate.noise import isotropic_noise
+from jointbench.study.seeds import trial_rng
+
+JOINT = np.array([30.0, -20.0, 900.0])
+PROXIMAL = JOINT + np.array([[90.0, 0.0, 500.0], [-60.0, 90.0, 520.0], [-50.0, -100.0, 480.0]])
+DISTAL = JOINT + np.array([[80.0, 20.0, -500.0], [-70.0, 80.0, -470.0], [-30.0, -90.0, -530.0]])
+HINGE = unit(np.array([1.0, 0.3, -0.2]))
+METHODS = ("analytic", "gauss-markov", "gauss-markov-frame0")
+CHI2_3_95 = stats.chi2(3).ppf(0.95)
+
+
+def _apply(rotation, translation, body):
+    return body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
+
+
+def two_segments(n_frames=200, *, relative="ball"):
+    """Noise-free world markers of two segments joined at JOINT (poses = identity at frame 0)."""
+    t = np.linspace(0.0, 4.0, n_frames)
+    s = np.sin
+    r0 = rotation_matrix(np.stack([0.1 * s(t), 0.07 * s(0.7 * t), 0.05 * s(1.3 * t)], -1))
+    d0 = np.stack([40 * s(0.5 * t), 30 * s(0.8 * t), 20 * s(1.1 * t)], -1)
+    if relative == "ball":
+        rel = np.stack([0.6 * s(1.9 * t), 0.4 * s(1.3 * t), 0.15 * s(2.3 * t)], -1)
+    elif relative == "hinge":
+        rel = 0.7 * s(1.9 * t)[:, None] * HINGE
+    else:
+        rel = np.zeros((n_frames, 3))
+    r1 = r0 @ rotation_matrix(rel)
+    d1 = r0 @ JOINT + d0 - r1 @ JOINT
+    return _apply(r0, d0, PROXIMAL), _apply(r1, d1, DISTAL)
+
+
+def _noisy(markers, seed, sd=1.7):
+    return markers + isotropic_noise(np.random.default_rng(seed), markers.shape[:2], sd)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_noise_free_recovery(method):
+    proximal, distal = two_segments()
+    result = jb.fit_joint_center(proximal, distal, method=method)
+    np.testing.assert_allclose(result.center, JOINT, atol=1e-9)
+    assert result.converged and result.status == "ok" and result.method == method
+    if method != "analytic":
+        assert result.diagnostics["noise_mm"] < 1e-9
+        assert np.sqrt(np.trace(result.covariance)) < 1e-9
+        exact = jb.fit_joint_center(proximal, distal, method=method, noise_mm=0.0)
+        np.testing.assert_array_equal(exact.covariance, np.zeros((3, 3)))
+    else:
+        assert result.covariance is None
+
+
+def test_frame0_extension_noise_free_segment_centres():
+    result = jb.fit_joint_center(*two_segments(), method="gauss-markov-frame0")
+    np.testing.assert_allclose(result.diagnostics["center_proximal"], JOINT, atol=1e-9)
+    np.testing.assert_allclose(result.diagnostics["center_distal"], JOINT, atol=1e-9)
+    np.testing.assert_allclose(result.diagnostics["proximal_body"], PROXIMAL, atol=1e-9)
+
+
+def test_point_covariance_matches_pennec_pose_covariance():
+    """Closed form R A R' equals dh/dx W_f dh/dx' with W_f = (sum J'J)^-1, J = [-[Rx]x, I]."""
+    rng = np.random.default_rng(0)
+    body = rng.normal(scale=80.0, size=(4, 3)) + np.array([200.0, -50.0, 700.0])
+    point = np.array([10.0, 40.0, 150.0])
+    rotation = rotation_matrix(rng.normal(size=3))
+    jacobians = np.concatenate(
+        [-skew(body @ rotation.T), np.broadcast_to(np.eye(3), (4, 3, 3))], axis=2
+    )
+    pose_covariance = np.linalg.inv(np.einsum("mki,mkj->ij", jacobians, jacobians))
+    dh_dx = np.concatenate([-skew(rotation @ point), np.eye(3)], axis=1)
+    explicit = dh_dx @ pose_covariance @ dh_dx.T
+    closed = rotation @ point_covariance(point, body) @ rotation.T
+    np.testing.assert_allclose(closed, explicit, rtol=1e-10, atol=1e-12)
+    # Two segments: the constraint covariance is the sum (paper C eq. 20 with eq. 12).
+    other = rotation_matrix(rng.normal(size=3))
+    a0, a1 = point_covariance(point, body), point_covariance(point, body[::-1] * 1.5)
+    summed = constraint_covariance(rotation[None], a0, other[None], a1)[0]
+    np.testing.assert_allclose(summed, rotation @ a0 @ rotation.T + other @ a1 @ other.T)
+
+
+def test_analytic_is_paper_eq9():
+    """Eq. 9 as printed, with p = -R' d (eq. 7), equals the implementation."""
+    proximal, distal = two_segments(100)
+    proximal, distal = _noisy(proximal, 1), _noisy(distal, 2)
+    r0, d0, _ = rigid_poses(proximal)
+    r1, d1, _ = rigid_poses(distal)
+    p0, p1 = -np.einsum("fji,fj->fi", r0, d0), -np.einsum("fji,fj->fi", r1, d1)
+    r01 = np.swapaxes(r0, -1, -2) @ r1
+    matrix = 2 * len(r0) * np.eye(3) - r01.sum(0) - np.swapaxes(r01, -1, -2).sum(0)
+    vector = (p0 + p1 - np.einsum("fij,fj->fi", r01, p1) - np.einsum("fji,fj->fi", r01, p0)).sum(0)
+    result = jb.fit_joint_center(proximal, distal, method="analytic")
+    np.testing.assert_allclose(result.center, np.linalg.solve(matrix, vector), atol=1e-8)
+
+
+def test_gauss_markov_agrees_with_analytic_at_low_noise():
+    proximal, distal = two_segments(300)
+    proximal, distal = _noisy(proximal, 3, 0.01), _noisy(distal, 4, 0.01)
+    analytic = jb.fit_joint_center(proximal, distal, method="analytic")
+    for method in ("gauss-markov", "gauss-markov-frame0"):
+        result = jb.fit_joint_center(proximal, distal, method=method)
+        assert np.linalg.norm(result.center - analytic.center) < 0.05
+        assert result.diagnostics["noise_mm"] == pytest.approx(0.01, rel=0.1)
+    # Only the extension's covariance covers the true centre (frame-0 errors, see below).
+    sd = np.sqrt(np.trace(result.covariance))
+    assert np.linalg.norm(result.center - JOINT) < 4 * sd
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_world_transform_marker_order_and_segment_swap(method):
+    proximal, distal = two_segments(150)
+    proximal, distal = _noisy(proximal, 5), _noisy(distal, 6)
+    rng = np.random.default_rng(11)
+    rotation, shift = rotation_matrix(rng.normal(size=3)), rng.normal(scale=500.0, size=3)
+    base = jb.fit_joint_center(proximal, distal, method=method)
+    moved = jb.fit_joint_center(
+        proximal @ rotation.T + shift, distal @ rotation.T + shift, method=method
+    )
+    np.testing.assert_allclose(moved.center, rotation @ base.center + shift, atol=1e-7)
+    reordered = jb.fit_joint_center(proximal[:, [1, 2, 0]], distal[:, [2, 0, 1]], method=method)
+    np.testing.assert_allclose(reordered.center, base.center, atol=1e-7)
+    if method != "gauss-markov-frame0":  # the paper's single-c model is symmetric in h -> -h
+        swapped = jb.fit_joint_center(distal, proximal, method=method)
+        np.testing.assert_allclose(swapped.center, base.center, atol=1e-7)
+    if base.covariance is not None:
+        rotated = rotation @ base.covariance @ rotation.T
+        np.testing.assert_allclose(moved.covariance, rotated, rtol=1e-6, atol=1e-12)
+        np.testing.assert_allclose(reordered.covariance, base.covariance, rtol=1e-6)
+
+
+def test_noise_estimate_from_rigid_body_residuals():
+    """s^2 = RSS / (3 (n - 2)(N - 1)) per segment, pooled: unbiased even at Nt = 8."""
+    protocol = HipProtocol()
+    full = simulate({}, protocol, [trial_rng(3, "hip-test", {}, 0)])
+    one = fit_gauss_markov(full.segments["proximal"][0], full.segments["distal"][0])
+    assert one.diagnostics["noise_source"] == "rigid-body residuals"
+    assert one.diagnostics["noise_mm"] == pytest.approx(1.7, rel=0.03)
+    short = simulate(
+        {"n_frames": 8}, protocol, [trial_rng(3, "hip-test", {}, k) for k in range(100)]
+    )
+    variances = [
+        fit_gauss_markov(p, d).diagnostics["noise_mm"] ** 2 / 3.0
+        for p, d in zip(short.segments["proximal"], short.segments["distal"], strict=True)
+    ]
+    # 42 degrees of freedom per trial; counting 3nN - 6N = 24 per segment would be 14 % low.
+    assert np.mean(variances) == pytest.approx(1.7**2 / 3.0, rel=0.08)
+    given = fit_gauss_markov(
+        short.segments["proximal"][0], short.segments["distal"][0], noise_mm=1.7
+    )
+    assert given.diagnostics["noise_source"] == "given" and given.diagnostics["noise_mm"] == 1.7
+
+
+def _monte_carlo(nt=300, trials=100, *, exact_frame0=False):
+    protocol = HipProtocol()
+    rngs = [trial_rng(20070507, "hip-calibration", {}, k) for k in range(trials)]
+    data = simulate({"n_frames": nt}, protocol, rngs)
+    proximal, distal = data.segments["proximal"], data.segments["distal"]
+    if exact_frame0:  # paper C's assumption: the frame-0 poses are known exactly
+        clean = nominal_recording(protocol)
+        proximal, distal = proximal.copy(), distal.copy()
+        proximal[:, 0], distal[:, 0] = clean[0][0], clean[1][0]
+    return protocol, proximal, distal
+
+
+def _mahalanobis(centers, covariances, truth):
+    offsets = np.asarray(centers) - truth
+    return np.array([o @ np.linalg.solve(w, o) for o, w in zip(offsets, covariances, strict=True)])
+
+
+def _assert_calibrated(mahalanobis):
+    """Coverage of the 95 % ellipsoid within Binomial(100, 0.95)'s central 99.8 %, and
+    E[v^2] = E[e / 3] = 1 within about 3.5 standard errors (0.08 each for 100 trials)."""
+    low, high = stats.binom(len(mahalanobis), 0.95).ppf([0.001, 0.999]) / len(mahalanobis)
+    inside = np.mean(mahalanobis <= CHI2_3_95)
+    assert low <= inside <= high, inside
+    assert 0.72 <= np.mean(mahalanobis / 3.0) <= 1.3, np.mean(mahalanobis / 3.0)
+
+
+def test_frame0_extension_covariance_covers_the_true_centre():
+    protocol, proximal, distal = _monte_carlo()
+    results = [
+        jb.fit_joint_center(p, d, method="gauss-markov-frame0", noise_mm=1.7)
+        for p, d in zip(proximal, distal, strict=True)
+    ]
+    assert all(r.converged for r in results)
+    truth = np.asarray(protocol.joint_mm)
+    _assert_calibrated(
+        _mahalanobis([r.center for r in results], [r.covariance for r in results], truth)
+    )
+    # The centre relative to the proximal markers: free of the frame-0 placement error.
+    layout = marker_layout(protocol)[0]
+    moved = [
+        align_to_markers(
+            r.diagnostics["center_proximal"],
+            r.diagnostics["covariance_proximal"],
+            r.diagnostics["proximal_body"],
+            layout,
+        )
+        for r in results
+    ]
+    relative = _mahalanobis([m[0] for m in moved], [m[1] for m in moved], truth)
+    _assert_calibrated(relative)
+    assert np.median([np.trace(m[1]) for m in moved]) < 0.2 * np.median(
+        [np.trace(r.covariance) for r in results]
+    )
+
+
+def test_paper_covariance_is_honest_given_exact_frame0_poses():
+    protocol, proximal, distal = _monte_carlo(exact_frame0=True)
+    results = [fit_gauss_markov(p, d, noise_mm=1.7) for p, d in zip(proximal, distal, strict=True)]
+    truth = np.asarray(protocol.joint_mm)
+    _assert_calibrated(
+        _mahalanobis([r.center for r in results], [r.covariance for r in results], truth)
+    )
+
+
+def test_paper_covariance_ignores_the_frame0_pose_errors():
+    """With noise on frame 0 too, paper C's W_c is far too small for the true centre."""
+    protocol, proximal, distal = _monte_carlo(trials=30)
+    results = [fit_gauss_markov(p, d, noise_mm=1.7) for p, d in zip(proximal, distal, strict=True)]
+    truth = np.asarray(protocol.joint_mm)
+    mahalanobis = _mahalanobis([r.center for r in results], [r.covariance for r in results], truth)
+    assert np.mean(mahalanobis / 3.0) > 4.0
+    # ... and its own chi^2 shows the misfit: the frame-0 errors enter every constraint.
+    assert np.mean([r.diagnostics["chi2"] / r.diagnostics["chi2_dof"] for r in results]) > 1.2
+
+
+def test_degenerate_motion():
+    hinge = two_segments(relative="hinge")
+    still = two_segments(relative="none")
+    for method in METHODS:
+        with pytest.raises(ValueError, match="single axis"):
+            jb.fit_joint_center(*hinge, method=method)
+        with pytest.raises(ValueError, match="do not rotate relative to each other"):
+            jb.fit_joint_center(*still, method=method)
+
+
+def test_noisy_hinge_is_ill_conditioned_not_an_error():
+    """Noise makes a hinge regular but poorly conditioned: a large, honest uncertainty along
+    the axis, not an exception."""
+    proximal, distal = two_segments(300, relative="hinge")
+    result = fit_gauss_markov(_noisy(proximal, 7), _noisy(distal, 8), noise_mm=1.7)
+    assert result.converged
+    along = np.sqrt(HINGE @ result.covariance @ HINGE)
+    smallest = np.sqrt(np.linalg.eigvalsh(result.covariance)[0])
+    assert along > 5 * smallest
+
+
+def test_few_frames_give_a_large_uncertainty_not_an_error():
+    """Paper C Table 1: Nt = 4 (0.05 s) is valid but nearly uninformative."""
+    data = simulate({"n_frames": 4}, HipProtocol(), [trial_rng(1, "hip-test", {}, 0)])
+    result = fit_gauss_markov(
+        data.segments["proximal"][0], data.segments["distal"][0], noise_mm=1.7
+    )
+    assert np.all(np.isfinite(result.center))
+    assert np.sqrt(np.trace(result.covariance)) > 20.0
+
+
+def test_iteration_cap_reports_non_convergence():
+    proximal, distal = two_segments(150)
+    result = fit_gauss_markov(_noisy(proximal, 9), _noisy(distal, 10), max_iterations=1)
+    assert not result.converged
+    assert result.iterations == 1
+    assert "did not converge" in result.status
+    full = fit_gauss_markov(_noisy(proximal, 9), _noisy(distal, 10))
+    assert full.converged and 1 < full.iterations < 20
+
+
+def test_bad_input_is_named():
+    proximal, distal = two_segments(20)
+    with pytest.raises(ValueError, match="noise_mm must be a finite number >= 0"):
+        fit_gauss_markov(proximal, distal, noise_mm=-1.0)
+    with pytest.raises(ValueError, match="max_iterations"):
+        fit_gauss_markov(proximal, distal, max_iterations=0)
+    with pytest.raises(ValueError, match="at least 3"):
+        jb.fit_joint_center(proximal[:2], distal[:2], method="gauss-markov")
+    with pytest.raises(ValueError, match="must share frames"):
+        jb.fit_joint_center(proximal, distal[:10], method="analytic")
+    with pytest.raises(ValueError, match="proximal has 2 markers"):
+        jb.fit_joint_center(proximal[:, :2], distal, method="gauss-markov-frame0")
+
+
+def test_align_to_markers():
+    rng = np.random.default_rng(4)
+    rotation, shift = rotation_matrix(rng.normal(size=3)), rng.normal(size=3)
+    covariance = np.diag([1.0, 2.0, 3.0])
+    point, moved = align_to_markers(
+        [1.0, 2.0, 3.0], covariance, PROXIMAL, PROXIMAL @ rotation.T + shift
+    )
+    np.testing.assert_allclose(point, rotation @ [1.0, 2.0, 3.0] + shift, atol=1e-9)
+    np.testing.assert_allclose(moved, rotation @ covariance @ rotation.T, atol=1e-12)
+    assert align_to_markers(np.zeros(3), None, PROXIMAL, PROXIMAL)[1] is None
+    with pytest.raises(ValueError, match="markers_from and markers_to"):
+        align_to_markers(np.zeros(3), None, PROXIMAL, PROXIMAL[:2])
+
+
+def test_registered():
+    for method in (*METHODS, "SCoRE"):
+        assert method in jb.methods("joint_center")

@@ -1,0 +1,219 @@
+"""SCoRE and SARA (Ehrig et al. 2006, 2007)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import jointbench as jb
+from jointbench.estimators.twosegment import fit_sara, fit_sara_two_segment
+from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
+from jointbench.simulate.noise import isotropic_noise
+
+JOINT = np.array([30.0, -20.0, 900.0])
+PROXIMAL = JOINT + np.array([[90.0, 0.0, 500.0], [-60.0, 90.0, 520.0], [-50.0, -100.0, 480.0]])
+DISTAL = JOINT + np.array([[80.0, 20.0, -500.0], [-70.0, 80.0, -470.0], [-30.0, -90.0, -530.0]])
+HINGE = unit(np.array([1.0, 0.3, -0.2]))
+
+
+def _apply(rotation, translation, body):
+    return body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
+
+
+def two_segments(n_frames=200, *, relative="ball", proximal_moves=True):
+    """Noise-free world markers of two segments joined at JOINT (poses = identity at frame 0).
+
+    ``relative``: "ball" (rotation about three axes), "hinge" (about HINGE only) or "none".
+    """
+    t = np.linspace(0.0, 4.0, n_frames)
+    s = np.sin
+    scale = 1.0 if proximal_moves else 0.0
+    r0 = rotation_matrix(scale * np.stack([0.1 * s(t), 0.07 * s(0.7 * t), 0.05 * s(1.3 * t)], -1))
+    d0 = scale * np.stack([40 * s(0.5 * t), 30 * s(0.8 * t), 20 * s(1.1 * t)], -1)
+    if relative == "ball":
+        rel = np.stack([0.6 * s(1.9 * t), 0.4 * s(1.3 * t), 0.15 * s(2.3 * t)], -1)
+    elif relative == "hinge":
+        rel = 0.7 * s(1.9 * t)[:, None] * HINGE
+    else:
+        rel = np.zeros((n_frames, 3))
+    r1 = r0 @ rotation_matrix(rel)
+    d1 = r0 @ JOINT + d0 - r1 @ JOINT
+    return _apply(r0, d0, PROXIMAL), _apply(r1, d1, DISTAL)
+
+
+def one_segment(n_frames=200, *, hinge=False):
+    """Noise-free moving markers in the reference frame about JOINT (ball or HINGE)."""
+    t = np.linspace(0.0, 4.0, n_frames)
+    if hinge:
+        rel = 0.7 * np.sin(1.9 * t)[:, None] * HINGE
+    else:
+        rel = np.stack([0.6 * np.sin(1.9 * t), 0.4 * np.sin(1.3 * t), 0.1 * np.sin(t)], -1)
+    rotation = rotation_matrix(rel)
+    return _apply(rotation, JOINT - rotation @ JOINT, DISTAL)
+
+
+def _noisy(markers, seed, sd=1.0):
+    return markers + isotropic_noise(np.random.default_rng(seed), markers.shape[:2], sd)
+
+
+def _random_rigid(seed):
+    rng = np.random.default_rng(seed)
+    return rotation_matrix(rng.normal(size=3)), rng.normal(scale=500.0, size=3)
+
+
+def test_score_recovers_centre_noise_free():
+    proximal, distal = two_segments()
+    result = jb.fit_joint_center(proximal, distal, method="SCoRE")
+    np.testing.assert_allclose(result.center, JOINT, atol=1e-9)
+    np.testing.assert_allclose(result.diagnostics["center_proximal"], JOINT, atol=1e-9)
+    np.testing.assert_allclose(result.diagnostics["center_distal"], JOINT, atol=1e-9)
+    assert result.cost < 1e-15
+    assert result.converged and result.covariance is None and result.method == "SCoRE"
+
+
+def test_score_with_a_still_proximal_segment():
+    proximal, distal = two_segments(proximal_moves=False)
+    result = jb.fit_joint_center(proximal, distal, method="SCoRE")
+    np.testing.assert_allclose(result.center, JOINT, atol=1e-9)
+
+
+def test_score_one_segment_centre_in_reference_frame():
+    result = jb.fit_center(one_segment(), method="SCoRE")
+    np.testing.assert_allclose(result.center, JOINT, atol=1e-9)
+    assert result.method == "SCoRE" and result.radii is None
+
+
+def test_score_noisy_is_close():
+    proximal, distal = two_segments(300)
+    result = jb.fit_joint_center(_noisy(proximal, 1), _noisy(distal, 2), method="SCoRE")
+    assert np.linalg.norm(result.center - JOINT) < 10.0
+
+
+def test_sara_one_segment_recovers_hinge():
+    markers = one_segment(hinge=True)
+    result = jb.fit_axis(markers, method="SARA")
+    assert angle_between_lines_deg(result.direction, HINGE) < 1e-8
+    # The point lies on the axis: the one nearest the origin of the reference frame.
+    offset = result.point - JOINT
+    assert np.linalg.norm(offset - (offset @ HINGE) * HINGE) < 1e-9
+    assert abs(result.point @ HINGE) < 1e-9
+    radii = np.linalg.norm((DISTAL - JOINT) - np.outer((DISTAL - JOINT) @ HINGE, HINGE), axis=1)
+    np.testing.assert_allclose(result.radii, radii, atol=1e-9)
+    assert result.diagnostics["ratio"] < 1e-12
+
+
+def test_sara_two_segment_recovers_hinge_in_frame0_world():
+    proximal, distal = two_segments(relative="hinge")
+    result = fit_sara_two_segment(proximal, distal)
+    assert angle_between_lines_deg(result.direction, HINGE) < 1e-8
+    offset = result.point - JOINT
+    assert np.linalg.norm(offset - (offset @ HINGE) * HINGE) < 1e-9
+    radii = np.linalg.norm((DISTAL - JOINT) - np.outer((DISTAL - JOINT) @ HINGE, HINGE), axis=1)
+    np.testing.assert_allclose(result.radii, radii, atol=1e-8)
+
+
+def test_sara_noisy_hinge_direction():
+    proximal, distal = two_segments(300, relative="hinge")
+    result = fit_sara_two_segment(_noisy(proximal, 3), _noisy(distal, 4))
+    assert angle_between_lines_deg(result.direction, HINGE) < 2.0
+
+
+def test_world_transform_moves_results_consistently():
+    """The answer is in the world at frame 0: transforming the world transforms it."""
+    proximal, distal = two_segments(150)
+    proximal, distal = _noisy(proximal, 5), _noisy(distal, 6)
+    rotation, shift = _random_rigid(0)
+    moved = [m @ rotation.T + shift for m in (proximal, distal)]
+    before = jb.fit_joint_center(proximal, distal, method="SCoRE")
+    after = jb.fit_joint_center(*moved, method="SCoRE")
+    np.testing.assert_allclose(after.center, rotation @ before.center + shift, atol=1e-8)
+    axis_before = fit_sara_two_segment(proximal, distal)
+    axis_after = fit_sara_two_segment(*moved)
+    np.testing.assert_allclose(axis_after.direction, rotation @ axis_before.direction, atol=1e-9)
+
+
+def test_one_segment_methods_follow_the_reference_frame():
+    markers = _noisy(one_segment(), 7)
+    rotation, shift = _random_rigid(1)
+    moved = markers @ rotation.T + shift
+    before, after = jb.fit_center(markers, method="SCoRE"), jb.fit_center(moved, method="SCoRE")
+    np.testing.assert_allclose(after.center, rotation @ before.center + shift, atol=1e-8)
+    hinge = _noisy(one_segment(hinge=True), 8)
+    axis_before = fit_sara(hinge)
+    axis_after = fit_sara(hinge @ rotation.T + shift)
+    assert angle_between_lines_deg(axis_after.direction, rotation @ axis_before.direction) < 1e-8
+
+
+def test_marker_order_and_segment_order_do_not_matter():
+    proximal, distal = two_segments(150)
+    proximal, distal = _noisy(proximal, 9), _noisy(distal, 10)
+    reference = jb.fit_joint_center(proximal, distal, method="SCoRE").center
+    shuffled = jb.fit_joint_center(proximal[:, [2, 0, 1]], distal[:, [1, 2, 0]], method="SCoRE")
+    np.testing.assert_allclose(shuffled.center, reference, atol=1e-8)
+    # SCoRE is symmetrical: swapping the segments gives the same centre.
+    swapped = jb.fit_joint_center(distal, proximal, method="SCoRE")
+    np.testing.assert_allclose(swapped.center, reference, atol=1e-8)
+
+
+def test_degenerate_motion_raises():
+    proximal, distal = two_segments(relative="hinge")
+    with pytest.raises(ValueError, match="single axis"):
+        jb.fit_joint_center(proximal, distal, method="SCoRE")
+    with pytest.raises(ValueError, match="single axis"):
+        jb.fit_center(one_segment(hinge=True), method="SCoRE")
+    still_p, still_d = two_segments(relative="none")
+    with pytest.raises(ValueError, match="do not rotate relative to each other"):
+        jb.fit_joint_center(still_p, still_d, method="SCoRE")
+    with pytest.raises(ValueError, match="do not rotate relative to each other"):
+        fit_sara_two_segment(still_p, still_d)
+    with pytest.raises(ValueError, match="do not rotate"):
+        fit_sara(np.repeat(DISTAL[None], 10, axis=0) + np.arange(10)[:, None, None])
+
+
+def test_bad_input_is_named():
+    proximal, distal = two_segments(20)
+    with pytest.raises(ValueError, match="proximal must be shaped"):
+        jb.fit_joint_center(proximal[..., :2], distal, method="SCoRE")
+    bad = distal.copy()
+    bad[3, 1, 2] = np.nan
+    with pytest.raises(ValueError, match="distal contains NaN"):
+        jb.fit_joint_center(proximal, bad, method="SCoRE")
+    with pytest.raises(ValueError, match="distal has 2 markers"):
+        jb.fit_joint_center(proximal, distal[:, :2], method="SCoRE")
+    with pytest.raises(ValueError, match="must share frames"):
+        jb.fit_joint_center(proximal, distal[:-1], method="SCoRE")
+    with pytest.raises(ValueError, match="at least 3"):
+        jb.fit_joint_center(proximal[:2], distal[:2], method="SCoRE")
+    line = np.repeat(np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])[None], 20, axis=0)
+    with pytest.raises(ValueError, match="collinear"):
+        jb.fit_joint_center(proximal, line, method="SCoRE")
+    with pytest.raises(ValueError, match="collinear"):
+        fit_sara(line)
+
+
+def test_registered():
+    assert "SCoRE" in jb.methods("joint_center")
+    assert "SCoRE" in jb.methods("center")
+    assert "SARA" in jb.methods("axis")
+
+
+def test_best_rotation_matches_the_svd_solution():
+    """geometry.best_rotation (Horn/QCP, used by rigid_fit and rigid_poses) = Kabsch SVD."""
+    from jointbench.geometry import _kabsch_rotation, best_rotation
+
+    rng = np.random.default_rng(12)
+    # Random clusters and targets (3 and 5 markers), exact rotations up to pi, degenerate ones.
+    for n_markers in (3, 5):
+        source = rng.normal(scale=100.0, size=(n_markers, 3))
+        target = rng.normal(scale=100.0, size=(400, n_markers, 3))
+        cross = np.einsum("fmi,mj->fij", target - target.mean(1, keepdims=True), source)
+        np.testing.assert_allclose(best_rotation(cross), _kabsch_rotation(cross), atol=1e-11)
+    angles = np.concatenate([rng.uniform(0, np.pi, 200), [np.pi, np.pi - 1e-9, 0.0]])
+    rotations = rotation_matrix(unit(rng.normal(size=(203, 3))) * angles[:, None])
+    source = rng.normal(scale=100.0, size=(3, 3))
+    source -= source.mean(0)
+    cross = rotations @ (source.T @ source)
+    np.testing.assert_allclose(best_rotation(cross), rotations, atol=1e-12)
+    collinear = np.outer([1.0, 2.0, 3.0], [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(best_rotation(collinear), _kabsch_rotation(collinear), atol=1e-12)
+    np.testing.assert_allclose(best_rotation(np.zeros((3, 3))), np.eye(3))
