@@ -13,31 +13,41 @@ __all__ = ["headline", "write_captions"]
 
 def _claims(table: pd.DataFrame) -> str:
     tested = table[table["status"] != "not applicable"]
-    return (f"{int((tested['status'] == 'reproduced').sum())} of {len(tested)} claims "
-            "reproduced (criteria and reasons in the claims table).")
+    return (
+        f"{int((tested['status'] == 'reproduced').sum())} of {len(tested)} claims "
+        "reproduced (criteria and reasons in the claims table)."
+    )
 
 
 def _table1_b(table: pd.DataFrame) -> str:
-    return (f"{int(table['within_tolerance'].sum())} of {len(table)} Table 1 cells within "
-            "tolerance.")
+    return f"{int(table['within_tolerance'].sum())} of {len(table)} Table 1 cells within tolerance."
 
 
 def _table2_a(table: pd.DataFrame) -> str:
     speedup = table.set_index("method")["speedup_vs_paper"]
-    return ("Speed-up over the paper's MATLAB times: "
-            + ", ".join(f"{m} {s:.0f}×" for m, s in speedup.items()) + ".")
+    return (
+        "Speed-up over the paper's MATLAB times: "
+        + ", ".join(f"{m} {s:.0f}×" for m, s in speedup.items())
+        + "."
+    )
 
 
 def _calibration_c(table: pd.DataFrame) -> str:
     ok = table[table["calibrated"].astype(str) == "True"]["n_frames"].tolist()
-    return (f"Coverage consistent with 95 % at Nt = {', '.join(map(str, ok)) or 'none'}; "
-            f"range {table['inside_95'].min():.2f}–{table['inside_95'].max():.2f}.")
+    return (
+        f"Coverage consistent with 95 % at Nt = {', '.join(map(str, ok)) or 'none'}; "
+        f"range {table['inside_95'].min():.2f}–{table['inside_95'].max():.2f}."
+    )
 
 
 def _comparison(table: pd.DataFrame) -> str:
     counts = table["status"].value_counts()
-    return ", ".join(f"{counts.get(s, 0)} {s}" for s in
-                     ("reproduced", "not reproduced", "not applicable")) + "."
+    return (
+        ", ".join(
+            f"{counts.get(s, 0)} {s}" for s in ("reproduced", "not reproduced", "not applicable")
+        )
+        + "."
+    )
 
 
 # output name -> (table it summarises, how)
