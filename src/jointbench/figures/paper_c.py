@@ -240,7 +240,7 @@ def render(rule: str, inputs, outputs, config: Mapping) -> None:
         write_tables(
             calibration_table(collected),
             outputs,
-            title="Coverage of the predicted 95 % ellipsoid (gauss-markov, true centre)",
+            title="Coverage of the predicted 95 % ellipsoid, against the true centre",
             note="calibrated: the fraction lies in the central 95 % range of what an honest "
             "covariance gives over this many trials.",
         )
