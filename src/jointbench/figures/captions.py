@@ -33,11 +33,14 @@ def _table2_a(table: pd.DataFrame) -> str:
 
 
 def _calibration_c(table: pd.DataFrame) -> str:
-    ok = table[table["calibrated"].astype(str) == "True"]["n_frames"].tolist()
-    return (
-        f"Coverage consistent with 95 % at Nt = {', '.join(map(str, ok)) or 'none'}; "
-        f"range {table['inside_95'].min():.2f}–{table['inside_95'].max():.2f}."
-    )
+    parts = []
+    for method, part in table.groupby("method", sort=False):
+        ok = part[part["calibrated"].astype(str) == "True"]["n_frames"].tolist()
+        parts.append(
+            f"{method}: share inside {part['inside_95'].min():.2f}–{part['inside_95'].max():.2f}, "
+            f"consistent with 95 % at Nt = {', '.join(map(str, ok)) or 'none'}"
+        )
+    return "; ".join(parts) + "."
 
 
 def _comparison(table: pd.DataFrame) -> str:
