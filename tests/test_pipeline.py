@@ -85,7 +85,9 @@ def test_collected_cmc_has_one_row_per_trial_and_method(reduced_run):
     for values in study["grid"].values():
         n_conditions *= len(values)
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
-    methods = config["studies"]["cmc"]["estimators"]
+    methods = config["studies"]["cmc"]["estimators"] + config["studies"]["cmc"].get(
+        "external_estimators", []
+    )
     assert len(collected) == n_conditions * study["trials"] * len(methods)
     required = [
         "marker_set",

@@ -92,6 +92,7 @@ PUBLISHED_TABLES = {
 def caption_tables():
     """Extra tables the report captions summarise."""
     tables = {"published_comparison": "results/tables/published_comparison.csv"}
+    tables.update({f"extended_{s}": f"results/tables/extended_{s}.csv" for s in STUDIES})
     if "hip" in STUDIES:
         tables["paper_c_calibration"] = "results/tables/paper_c_calibration.csv"
     return tables
@@ -106,6 +107,7 @@ def published_tables():
 
 CAPTIONS = "results/report/captions/{name}.rst"
 CATEGORIES = {
+    "extended": "Extended ranking of every estimator",
     "paper_a": "Paper A: centre of rotation",
     "paper_b": "Paper B: axis of rotation",
     "paper_c": "Paper C: hip joint centre",
@@ -118,18 +120,23 @@ def reported(path, name):
     return report(
         path,
         caption="../../" + CAPTIONS.format(name=name),
-        category=CATEGORIES[name[:7] if name.startswith("paper_") else "published"],
+        category=CATEGORIES[name[:7] if name.startswith("paper_") else name.split("_")[0]],
     )
 
 
 def caption_names():
     names = [Path(t).stem for study in STUDIES for t in STUDY_TARGETS.get(study, [])]
-    return sorted(set(names)) + ["published_comparison"]
+    extended = [f"extended_{s}{suffix}" for s in STUDIES for suffix in ("", "_figure")]
+    return sorted(set(names)) + extended + ["published_comparison"]
 
 
 def study_targets(study):
-    """The collected results and every figure and table of one study."""
-    return [f"results/collected/{study}.parquet", *STUDY_TARGETS.get(study, [])]
+    """The collected results, every figure and table of one study and its extended ranking."""
+    extended = [
+        *expand("results/tables/extended_{study}.{ext}", study=study, ext=["csv", "md"]),
+        *expand("results/figures/extended_{study}.{ext}", study=study, ext=["png", "pdf"]),
+    ]
+    return [f"results/collected/{study}.parquet", *STUDY_TARGETS.get(study, []), *extended]
 
 
 def all_targets():

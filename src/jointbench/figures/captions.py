@@ -43,6 +43,14 @@ def _calibration_c(table: pd.DataFrame) -> str:
     return "; ".join(parts) + "."
 
 
+def _extended(table: pd.DataFrame) -> str:
+    best = table[table["best"].astype(str) == "True"]["method"].value_counts()
+    # The condition columns come first, before "method".
+    conditions = table.groupby(list(table.columns[: table.columns.get_loc("method")])).ngroups
+    leaders = ", ".join(f"{m} ({n})" for m, n in best.items())
+    return f"best mean error per condition, out of {conditions} conditions: {leaders}."
+
+
 def _comparison(table: pd.DataFrame) -> str:
     counts = table["status"].value_counts()
     return (
@@ -73,6 +81,8 @@ _HEADLINES: dict[str, tuple[str, Callable[[pd.DataFrame], str]]] = {
 
 def headline(name: str, tables: Mapping[str, pd.DataFrame]) -> str:
     """The headline agreement of output ``name`` from the tables it summarises."""
+    if name.startswith("extended_"):
+        return _extended(tables[name.removesuffix("_figure")])
     source, summarise = _HEADLINES[name]
     return summarise(tables[source])
 

@@ -1,0 +1,280 @@
+"""The extended ranking: every estimator of a study, the paper's and any added, built-in or
+external, ranked by mean error on every condition.
+
+Everything is computed from the collected results of one study (one row per condition, trial
+and method); method names need not be known in advance, so a user's estimator appears here as
+soon as its estimates files are collected.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.colors import LogNorm
+from matplotlib.patches import Patch, Rectangle
+
+from jointbench.figures.common import method_style, save_figure, write_tables
+from jointbench.study import config as jb_config
+from jointbench.study.studies import get_study
+from jointbench.study.summary import ERROR_COLUMN, summarise
+
+__all__ = [
+    "PAPERS",
+    "extended_figure",
+    "extended_table",
+    "mean_ranks",
+    "origin_note",
+    "render",
+]
+
+# The paper each study reproduces and the methods that paper compared (paper A §5, paper B §4,
+# paper C eq. 9 and §8); any other method in a study's results is an addition.
+PAPERS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "cmc": ("A", ("MA", "LS", "IS", "BC", "NM")),
+    "hinge": ("B", ("planar", "radial", "combined")),
+    "hip": ("C", ("gauss-markov", "analytic")),
+}
+
+
+#: Mean errors equal to this many significant digits tie in the ranking.
+TIE_DIGITS = 3
+# tab10 entries for methods without a fixed style, the ones least like the fixed palette first.
+_USER_COLORS = (0, 3, 9, 7, 8, 1, 2, 4, 5, 6)
+
+
+def _mean_column(study: str) -> str:
+    """Name of the mean-error column of :func:`summarise` for ``study``, e.g. ``mean_error_mm``."""
+    return "mean_" + ERROR_COLUMN[get_study(study).kind]
+
+
+def _unit(study: str) -> str:
+    unit = ERROR_COLUMN[get_study(study).kind].removeprefix("error_")
+    return {"deg": "°"}.get(unit, f" {unit}")
+
+
+def _paper_methods(study: str) -> tuple[str, ...]:
+    return PAPERS.get(study, ("", ()))[1]
+
+
+def extended_table(collected: pd.DataFrame, study: str) -> pd.DataFrame:
+    """Every method on every condition of ``study``, ranked within the condition.
+
+    Columns: the study's condition keys, ``method``, ``source`` (``"paper A"`` or ``"added"``),
+    then :func:`summarise`'s ``trials, converged, failed, mean_error_<unit>,
+    median_error_<unit>, mean_seconds``, then ``rank`` (1 = lowest mean error in the condition;
+    means equal to :data:`TIE_DIGITS` significant digits tie and share the lower rank; a method
+    with no finite error ranks last) and ``best`` (rank 1 with a finite error). Means leave out
+    failed trials (NaN errors), so read ``rank`` together with ``failed``. Rows are sorted by
+    condition, then rank.
+    """
+    keys = list(get_study(study).grid_keys)
+    mean = _mean_column(study)
+    table = summarise(collected, study)
+    letter, paper = PAPERS.get(study, ("", ()))
+    table.insert(
+        len(keys) + 1,
+        "source",
+        np.where(table["method"].isin(paper), f"paper {letter}", "added"),
+    )
+    # Rank on 3 significant digits: methods that reach the same minimum (IS and LM do) differ
+    # by rounding noise, which must not decide a rank.
+    table["_key"] = table[mean].map(lambda value: float(f"{value:.{TIE_DIGITS}g}"))
+    by_condition = table.groupby(keys, observed=True, sort=False)["_key"]
+    table["rank"] = by_condition.rank(method="min", na_option="bottom").astype(int)
+    table["best"] = table["_key"].eq(by_condition.transform("min"))
+    table = table.drop(columns="_key")
+    return table.sort_values([*keys, "rank", "method"], kind="stable", ignore_index=True)
+
+
+def mean_ranks(table: pd.DataFrame) -> pd.DataFrame:
+    """Per method, over the conditions of an :func:`extended_table`: ``mean_rank``,
+    ``best_in`` (conditions where it is best) and ``conditions``; sorted best first."""
+    ranks = table.groupby("method", observed=True).agg(
+        mean_rank=("rank", "mean"), best_in=("best", "sum"), conditions=("rank", "size")
+    )
+    ranks["best_in"] = ranks["best_in"].astype(int)
+    return ranks.reset_index().sort_values(["mean_rank", "method"], ignore_index=True)
+
+
+def origin_note(study: str, methods: Sequence[str], config: Mapping | None = None) -> str:
+    """A sentence naming the paper's methods and the additions among ``methods``, the external
+    ones (written by rules of their own, ``external_estimators`` in ``config``) separately."""
+    letter, paper = PAPERS.get(study, ("", ()))
+    external = set()
+    if config is not None and study in config.get("studies", {}):
+        external = set(jb_config.estimator_names(config, study, source="external"))
+    ours = [m for m in paper if m in methods]
+    added = [m for m in methods if m not in paper and m not in external]
+    outside = [m for m in methods if m in external and m not in paper]
+    parts = [f"Paper {letter}'s methods: {', '.join(ours) or 'none'}." if letter else ""]
+    parts.append(f"Added, built in: {', '.join(added) or 'none'}.")
+    parts.append(f"Added, external (a rule of their own): {', '.join(outside) or 'none'}.")
+    return " ".join(p for p in parts if p)
+
+
+def _condition_label(values: Sequence[object]) -> str:
+    return " / ".join(str(v) for v in values)
+
+
+def _cell_text(value: float, failed: int) -> str:
+    # "†" flags a mean over fewer trials than the others: some of this method's trials failed.
+    if not np.isfinite(value):
+        return "failed"
+    return f"{value:.3g}" + ("†" if failed else "")
+
+
+def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[str]):
+    """``column`` as a condition × method frame, methods in the given order (NaN where a
+    method has no row for a condition)."""
+    wide = table.set_index([*keys, "method"])[column].unstack("method")
+    return wide.reindex(columns=list(methods))
+
+
+def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
+    """Condition × method heat map of mean error (log colour scale), values printed in the
+    cells, the best of each condition outlined. Returns the image for a colour bar."""
+    keys = list(get_study(study).grid_keys)
+    wide = _wide(table, keys, _mean_column(study), methods)
+    failed = _wide(table, keys, "failed", methods).fillna(0)
+    best = _wide(table, keys, "best", methods).fillna(False).astype(bool)
+    values = wide.to_numpy(dtype=float)
+    positive = values[np.isfinite(values) & (values > 0)]
+    # An error of exactly zero (noise-free data) cannot sit on a log scale: floor it.
+    low = positive.min() if positive.size else 1e-3
+    high = max(positive.max() if positive.size else 1.0, low * 10)
+    shown = np.where(np.isfinite(values), np.clip(values, low, None), np.nan)
+    cmap = plt.get_cmap("viridis").with_extremes(bad="0.85")
+    norm = LogNorm(vmin=low, vmax=high)
+    image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
+    size = 8 if len(methods) <= 8 else 6
+    for (row, col), value in np.ndenumerate(values):
+        dark = np.isfinite(value) and norm(shown[row, col]) < 0.55
+        ax.text(
+            col,
+            row,
+            _cell_text(value, int(failed.iat[row, col])),
+            ha="center",
+            va="center",
+            fontsize=size,
+            color="white" if dark else "black",
+        )
+        if best.iat[row, col]:
+            ax.add_patch(Rectangle((col - 0.5, row - 0.5), 1, 1, fill=False, ec="#e41a1c", lw=2.2))
+    paper = _paper_methods(study)
+    ax.set_xticks(range(len(methods)), [m if m in paper else f"{m}*" for m in methods])
+    if len(methods) > 5 or max(map(len, methods)) > 6:
+        plt.setp(ax.get_xticklabels(), rotation=40, ha="right", rotation_mode="anchor")
+    labels = [_condition_label(i if isinstance(i, tuple) else (i,)) for i in wide.index]
+    ax.set_yticks(range(len(labels)), labels, fontsize=8)
+    ax.set_ylabel(" / ".join(keys))
+    ax.set_xlabel("method (best first; * not in the paper)")
+    return image
+
+
+def _rank_bars(ax, ranks: pd.DataFrame, study: str, styles: Mapping[str, Mapping]) -> None:
+    """Horizontal bars of each method's mean rank, best at the top, additions hatched."""
+    paper = _paper_methods(study)
+    y = np.arange(len(ranks))
+    for position, row in zip(y, ranks.itertuples(), strict=True):
+        ax.barh(
+            position,
+            row.mean_rank,
+            color=styles[row.method]["color"],
+            hatch=None if row.method in paper else "//",
+            edgecolor="0.2",
+        )
+        ax.text(
+            row.mean_rank,
+            position,
+            f" {row.mean_rank:.2f} (best in {row.best_in}/{row.conditions})",
+            va="center",
+            fontsize=7,
+        )
+    ax.set_yticks(y, list(ranks["method"]))
+    ax.invert_yaxis()
+    ax.set_xlim(0, len(ranks) * 1.6 + 0.5)
+    ax.set_xlabel("mean rank over conditions (1 = best)")
+    ax.set_title("Overall", fontsize=9)
+    ax.legend(
+        handles=[
+            Patch(facecolor="white", edgecolor="0.2", label="paper's method"),
+            Patch(facecolor="white", edgecolor="0.2", hatch="//", label="added"),
+        ],
+        fontsize=7,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.3),
+        ncol=2,
+    )
+
+
+def _styles(methods: Sequence[str]) -> dict[str, dict[str, object]]:
+    """The benchmark's fixed style per method; methods without one get tab10 colours unlike the
+    fixed palette's, in order of name, so a colour does not follow the ranking around."""
+    # A method with a fixed style ignores the palette index; an unknown one cycles with it.
+    unknown = sorted(m for m in methods if method_style(m, 0) != method_style(m, 1))
+    styles = {m: method_style(m) for m in methods if m not in unknown}
+    for i, m in enumerate(unknown):
+        styles[m] = method_style(m, _USER_COLORS[i % len(_USER_COLORS)])
+    return styles
+
+
+def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
+    """One figure per study: the condition × method heat map of mean error with each
+    condition's best outlined, beside each method's mean rank. Saved to ``outputs`` (png, pdf).
+    """
+    table = extended_table(collected, study)
+    ranks = mean_ranks(table)
+    methods = list(ranks["method"])
+    styles = _styles(methods)
+    n_conditions = table[list(get_study(study).grid_keys)].drop_duplicates().shape[0]
+    height = max(3.5, 0.3 * n_conditions + 1.8)
+    bars_height = min(height, 0.35 * len(methods) + 1.4)
+    heat_width = max(3.0, 0.8 * len(methods)) + 2.5
+    fig = plt.figure(figsize=(heat_width + 4.5, height), layout="constrained")
+    outer = fig.add_gridspec(1, 2, width_ratios=[heat_width, 4.5])
+    heat = fig.add_subplot(outer[0, 0])
+    right = outer[0, 1].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
+    bars = fig.add_subplot(right[0, 0])
+    image = _heatmap(heat, table, study, methods)
+    colorbar = fig.colorbar(image, ax=heat, fraction=0.05, pad=0.02)
+    colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
+    _rank_bars(bars, ranks, study, styles)
+    kind = get_study(study).kind
+    fig.suptitle(
+        f"Study {study} ({kind}): every estimator's mean error per condition "
+        f"({_unit(study).strip()}); red outline = best of the condition, † = some trials failed",
+        fontsize=10,
+    )
+    save_figure(fig, outputs)
+
+
+def render(rule: str, inputs, outputs, config: Mapping) -> None:
+    """Write the output of Snakemake rule ``rule`` (``extended_table`` or ``extended_figure``)
+    from the collected results of one study, ``results/collected/{study}.parquet``."""
+    path = Path(inputs[0])
+    study = path.stem
+    get_study(study)
+    collected = pd.read_parquet(path)
+    if rule == "extended_figure":
+        extended_figure(collected, study, outputs)
+    elif rule == "extended_table":
+        table = extended_table(collected, study)
+        methods = list(mean_ranks(table)["method"])
+        note = (
+            f"{origin_note(study, methods, config)} rank: 1 = lowest mean error of the "
+            f"condition (means equal to {TIE_DIGITS} significant digits share a rank; a method "
+            "without a finite error ranks last); best: rank 1 with a finite mean. Means and "
+            "medians leave out failed trials (no finite error), counted in failed."
+        )
+        write_tables(
+            table,
+            outputs,
+            title=f"Extended ranking, study {study}: every estimator on every condition",
+            note=note,
+        )
+    else:
+        raise ValueError(f"the extended ranking has no output for rule {rule!r}")

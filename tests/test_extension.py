@@ -1,0 +1,274 @@
+"""Adding an estimator is adding a rule: a user's rule file and a config entry, end to end;
+the extended ranking and the external LM script on their own.
+
+Each pipeline test copies the workflow to a temporary directory, as a user's clone, and runs
+Snakemake on a two-condition cmc grid of two trials.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+import yaml
+
+from jointbench.figures import extended
+from jointbench.study.schema import check_estimates
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+
+# The minimal external estimator of the README's "Adding an estimator", verbatim: the centroid
+# of every marker position as the "centre" (a template, not a method).
+CENTROID_RULE = '''
+rule estimate_cmc_centroid:
+    """centroid: the mean of every marker position of a trial (a template, not a method)."""
+    input:
+        "results/datasets/cmc/{condition}.parquet",
+    output:
+        "results/estimates/cmc/centroid/{condition}.parquet",
+    run:
+        import json
+        import time
+
+        import numpy as np
+        import pandas as pd
+        import pyarrow.parquet as pq
+
+        meta = json.loads(pq.read_schema(input[0]).metadata[b"jointbench"])
+        truth = np.array(meta["truth"]["center"])
+        rows = []
+        for trial, markers in pd.read_parquet(input[0]).groupby("trial"):
+            start = time.perf_counter()
+            center = markers[["x", "y", "z"]].to_numpy().mean(axis=0)
+            rows.append(
+                {
+                    **meta["condition"],
+                    "trial": trial,
+                    "method": "centroid",
+                    "center_x": center[0],
+                    "center_y": center[1],
+                    "center_z": center[2],
+                    "error_mm": np.linalg.norm(center - truth),
+                    "converged": True,
+                    "iterations": 0,
+                    "seconds": time.perf_counter() - start,
+                    "status": "ok",
+                }
+            )
+        pd.DataFrame(rows).to_parquet(output[0], index=False)
+'''
+
+
+def user_clone(
+    destination: Path, *, estimators: list[str], external: list[str], rule: str | None
+) -> Path:
+    """The workflow as a user clones it, a cmc-only overlay config, and optionally the centroid
+    rule in ``workflow/rules/estimators/centroid.smk``; returns the overlay's path."""
+    shutil.copy(ROOT / "Snakefile", destination / "Snakefile")
+    shutil.copytree(ROOT / "workflow", destination / "workflow")
+    shutil.copytree(ROOT / "config", destination / "config")
+    if rule is not None:
+        (destination / "workflow" / "rules" / "estimators" / "centroid.smk").write_text(rule)
+    defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}
+    studies["cmc"] = {
+        "trials": 2,
+        "grid": {"marker_set": ["M"], "rom_deg": [5, 15], "noise_mm": [1.0]},
+        "estimators": estimators,
+        "external_estimators": external,
+    }
+    overlay = destination / "overlay.yaml"
+    overlay.write_text(yaml.safe_dump({"studies": studies}))
+    return overlay
+
+
+def snakemake(workdir: Path, overlay: Path, *targets: str, dry_run: bool = False):
+    command = [
+        str(SNAKEMAKE),
+        *targets,
+        "-j2",
+        "--directory",
+        str(workdir),
+        "-s",
+        str(workdir / "Snakefile"),
+        "--configfile",
+        str(overlay),
+        *(["--dry-run"] if dry_run else []),
+    ]
+    return subprocess.run(command, capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.pipeline
+def test_user_rule_joins_collected_results_and_extended_ranking(tmp_path):
+    overlay = user_clone(
+        tmp_path, estimators=["NM", "LS"], external=["LM", "centroid"], rule=CENTROID_RULE
+    )
+    run = snakemake(
+        tmp_path,
+        overlay,
+        "results/tables/extended_cmc.csv",
+        "results/figures/extended_cmc.png",
+        "results/collected/cmc.parquet",
+        "results/tables/paper_a_claims.csv",
+        "results/summaries/cmc/centroid.csv",
+    )
+    assert run.returncode == 0, run.stderr[-4000:]
+    results = tmp_path / "results"
+
+    collected = pd.read_parquet(results / "collected" / "cmc.parquet")
+    assert set(collected["method"]) == {"NM", "LS", "LM", "centroid"}
+    assert len(collected) == 2 * 2 * 4  # conditions x trials x methods
+    lm = collected[collected["method"] == "LM"]
+    assert lm["converged"].all() and lm["f1_mm2"].notna().all()
+    assert collected.loc[collected["method"] == "centroid", "error_mm"].notna().all()
+
+    table = pd.read_csv(results / "tables" / "extended_cmc.csv")
+    assert {"centroid", "LM"} <= set(table["method"])
+    assert (table.groupby(["rom_deg"])["best"].sum() >= 1).all()
+    assert set(table.loc[table["method"].isin(["centroid", "LM"]), "source"]) == {"added"}
+    note = (results / "tables" / "extended_cmc.md").read_text()
+    assert "external (a rule of their own): LM, centroid" in note
+
+    assert (results / "figures" / "extended_cmc.png").stat().st_size > 10_000
+    assert (results / "tables" / "paper_a_claims.csv").exists()
+    summary = pd.read_csv(results / "summaries" / "cmc" / "centroid.csv")
+    assert list(summary["method"].unique()) == ["centroid"]
+
+
+@pytest.mark.pipeline
+def test_wrong_column_fails_naming_it(tmp_path):
+    wrong = CENTROID_RULE.replace('"error_mm"', '"err_mm"')
+    overlay = user_clone(tmp_path, estimators=[], external=["centroid"], rule=wrong)
+    run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet")
+    assert run.returncode != 0
+    assert "missing column 'error_mm'" in run.stdout + run.stderr
+    assert not (tmp_path / "results" / "collected" / "cmc.parquet").exists()
+
+
+@pytest.mark.pipeline
+def test_external_name_of_a_builtin_is_rejected(tmp_path):
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["NM"], rule=None)
+    run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet", dry_run=True)
+    assert run.returncode != 0
+    message = run.stdout + run.stderr
+    assert "'NM'" in message and "built-in" in message, message[-2000:]
+
+
+# ------------------------------------------------------------------------ without Snakemake
+
+
+def _results(methods: dict[str, list[float]], study: str = "cmc") -> pd.DataFrame:
+    """A collected-results table: one condition, one row per (method, trial) error."""
+    error = "error_deg" if study == "hinge" else "error_mm"
+    condition = (
+        {"protocol": "knee", "fe_rom_deg": 60, "aa_ratio": 0.1}
+        if study == "hinge"
+        else {"marker_set": "M", "rom_deg": 5, "noise_mm": 1.0}
+    )
+    rows = [
+        {
+            **condition,
+            "trial": t,
+            "method": m,
+            error: e,
+            "converged": np.isfinite(e),
+            "seconds": 0.1,
+        }
+        for m, errors in methods.items()
+        for t, e in enumerate(errors)
+    ]
+    return pd.DataFrame(rows)
+
+
+def test_extended_table_ranks_any_method_and_survives_failures():
+    collected = _results(
+        {
+            "NM": [1.0, 2.0],
+            "IS": [1.0002, 2.0],  # equal to 3 significant digits: ties with NM
+            "my method": [0.5, np.nan],  # one failed trial: mean over the other
+            "broken": [np.nan, np.nan],
+        }
+    )
+    table = extended.extended_table(collected, "cmc").set_index("method")
+    assert table.loc["my method", "rank"] == 1 and table.loc["my method", "best"]
+    assert table.loc["my method", "failed"] == 1
+    assert table.loc["NM", "rank"] == table.loc["IS", "rank"] == 2
+    assert table.loc["broken", "rank"] == 4 and not table.loc["broken", "best"]
+    assert table.loc["NM", "source"] == "paper A" and table.loc["my method", "source"] == "added"
+
+
+def test_extended_outputs_for_an_axis_study(tmp_path):
+    collected = _results({"combined": [2.0, 3.0], "SARA": [1.0, 1.5], "user": [4.0, 5.0]}, "hinge")
+    table = extended.extended_table(collected, "hinge")
+    assert "mean_error_deg" in table.columns
+    assert table.loc[table["best"], "method"].tolist() == ["SARA"]
+    path = tmp_path / "hinge.parquet"
+    collected.to_parquet(path)
+    config = {"studies": {"hinge": {"external_estimators": ["user"]}}}
+    outputs = {name: str(tmp_path / f"extended_hinge.{name}") for name in ("csv", "md", "png")}
+    extended.render("extended_table", [str(path)], outputs, config)
+    extended.render("extended_figure", [str(path)], outputs, config)
+    note = Path(outputs["md"]).read_text()
+    assert "Paper B's methods: combined" in note and "external (a rule of their own): user" in note
+    assert Path(outputs["png"]).stat().st_size > 10_000
+
+
+def _lm_script():
+    path = ROOT / "workflow" / "external" / "lm_sphere.py"
+    spec = importlib.util.spec_from_file_location("lm_sphere", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _sphere_dataset(path: Path, n_trials: int = 3) -> np.ndarray:
+    """A cmc-like dataset of markers on concentric spheres about a known centre; returns it."""
+    rng = np.random.default_rng(7)
+    center = np.array([20.0, -25.0, -30.0])
+    rows = []
+    for trial in range(n_trials):
+        for frame in range(40):
+            angle = np.deg2rad(30.0) * np.array([np.sin(frame / 6), np.cos(frame / 9), 0.3])
+            for marker, radius in enumerate((15.0, 30.0, 20.0)):
+                direction = np.array([np.sin(angle[0] + marker), np.cos(angle[1]), angle[2]])
+                point = center + radius * direction / np.linalg.norm(direction)
+                point += rng.normal(scale=0.01, size=3)
+                rows.append(("moving", trial, frame, marker, *point))
+    frame = pd.DataFrame(rows, columns=["segment", "trial", "frame", "marker", "x", "y", "z"])
+    frame.loc[(frame["trial"] == 1) & (frame["frame"] == 3), "x"] = np.nan  # one bad trial
+    metadata = {
+        "study": "cmc",
+        "condition": {"marker_set": "M", "rom_deg": 30, "noise_mm": 0.0},
+        "truth": {"center": center.tolist()},
+        "parameters": {},
+    }
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    table = table.replace_schema_metadata({b"jointbench": json.dumps(metadata).encode()})
+    pq.write_table(table, path)
+    return center
+
+
+def test_lm_script_fits_and_turns_a_bad_trial_into_a_row(tmp_path):
+    lm = _lm_script()
+    dataset, output = tmp_path / "dataset.parquet", tmp_path / "out" / "LM.parquet"
+    _sphere_dataset(dataset)
+    assert lm.main([str(dataset), str(output)]) == 0
+    estimates = pd.read_parquet(output)
+    check_estimates(
+        estimates, kind="center", condition_keys=["marker_set", "rom_deg", "noise_mm"], method="LM"
+    )
+    good = estimates[estimates["trial"] != 1]
+    assert good["converged"].all() and (good["error_mm"] < 0.1).all()
+    bad = estimates[estimates["trial"] == 1].iloc[0]
+    assert not bad["converged"] and np.isnan(bad["error_mm"]) and "NaN" in bad["status"]
+    assert estimates["rom_deg"].tolist() == [30, 30, 30]
