@@ -116,7 +116,18 @@ class HingeProtocol:
         return np.array(self.markers_mm)
 
 
-HINGE_PROTOCOLS: dict[str, HingeProtocol] = {}
+HINGE_PROTOCOLS: dict[str, HingeProtocol] = {
+    "knee": HingeProtocol(
+        name="knee",
+        marker_names=("L1", "L2", "L3"),
+        markers_mm=((65.8, 24.4, -174.4), (-23.5, -30.9, -188.8), (42.3, -18.8, -153.2)),
+    ),
+    "mcp": HingeProtocol(
+        name="mcp",
+        marker_names=("P1", "P2", "P3"),
+        markers_mm=((3.0, 11.0, -12.0), (6.0, 10.0, -24.0), (2.0, 10.0, -36.0)),
+    ),
+}
 
 
 def protocol_from_config(config: Mapping[str, object] | str) -> HingeProtocol:
@@ -151,7 +162,9 @@ def protocol_from_config(config: Mapping[str, object] | str) -> HingeProtocol:
     return dataclasses.replace(base, **settings)
 
 
-def _check_condition(condition: Mapping[str, object], protocol: HingeProtocol) -> tuple[float, float]:
+def _check_condition(
+    condition: Mapping[str, object], protocol: HingeProtocol
+) -> tuple[float, float]:
     missing = [key for key in ("fe_rom_deg", "aa_ratio") if key not in condition]
     if missing:
         raise ValueError(f"hinge condition needs {', '.join(missing)}; got {dict(condition)}")
@@ -189,9 +202,11 @@ def joint_angles(
         fe_wave = -np.cos(2.0 * np.pi * protocol.fe_cycles * t)
         aa_wave = np.sin(2.0 * np.pi * protocol.aa_cycles * t + phase)
     elif protocol.motion == "sequential":
+        # An FE cycle about mid-range with AA at neutral, then an AA cycle at mid-range FE.
         split = n // 2
-        fe_wave = np.concatenate([-np.cos(2.0 * np.pi * np.linspace(0, 1, split)), -np.ones(n - split)])
-        aa_wave = np.concatenate([np.zeros(split), np.sin(2.0 * np.pi * np.linspace(0, 1, n - split))])
+        first, second = np.linspace(0.0, 1.0, split), np.linspace(0.0, 1.0, n - split)
+        fe_wave = np.concatenate([np.sin(2.0 * np.pi * first), np.zeros(n - split)])
+        aa_wave = np.concatenate([np.zeros(split), np.sin(2.0 * np.pi * second)])
     elif protocol.motion == "superimposed":
         fe_wave = np.linspace(-1.0, 1.0, n)
         aa_wave = np.sin(2.0 * np.pi * protocol.aa_cycles * t + phase)
@@ -235,9 +250,16 @@ def simulate(
     """
     nominal = nominal_markers(condition, protocol)
     fe, aa = joint_angles(condition, protocol)
-    moving = np.stack(
-        [nominal + isotropic_noise(rng, nominal.shape[:2], protocol.noise_sd_mm) for rng in rngs]
-    ) if len(rngs) else np.empty((0, *nominal.shape))
+    moving = (
+        np.stack(
+            [
+                nominal + isotropic_noise(rng, nominal.shape[:2], protocol.noise_sd_mm)
+                for rng in rngs
+            ]
+        )
+        if len(rngs)
+        else np.empty((0, *nominal.shape))
+    )
     parameters = {
         **{key: value for key, value in dataclasses.asdict(protocol).items()},
         "condition": dict(condition),
