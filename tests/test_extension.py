@@ -9,9 +9,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,12 +17,10 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
+from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench.figures import extended
 from jointbench.study.schema import check_estimates
-
-ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 
 # The minimal external estimator of the README's "Adding an estimator", verbatim: the centroid
 # of every marker position as the "centre" (a template, not a method).
@@ -74,9 +69,7 @@ def user_clone(
 ) -> Path:
     """The workflow as a user clones it, a cmc-only overlay config, and optionally the centroid
     rule in ``workflow/rules/estimators/centroid.smk``; returns the overlay's path."""
-    shutil.copy(ROOT / "Snakefile", destination / "Snakefile")
-    shutil.copytree(ROOT / "workflow", destination / "workflow")
-    shutil.copytree(ROOT / "config", destination / "config")
+    copy_workflow(destination)
     if rule is not None:
         (destination / "workflow" / "rules" / "estimators" / "centroid.smk").write_text(rule)
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
@@ -93,19 +86,8 @@ def user_clone(
 
 
 def snakemake(workdir: Path, overlay: Path, *targets: str, dry_run: bool = False):
-    command = [
-        str(SNAKEMAKE),
-        *targets,
-        "-j2",
-        "--directory",
-        str(workdir),
-        "-s",
-        str(workdir / "Snakefile"),
-        "--configfile",
-        str(overlay),
-        *(["--dry-run"] if dry_run else []),
-    ]
-    return subprocess.run(command, capture_output=True, text=True, timeout=300)
+    arguments = [*targets, "--configfile", str(overlay), *(["--dry-run"] if dry_run else [])]
+    return run_snakemake(workdir, *arguments, timeout=300)
 
 
 @pytest.mark.pipeline

@@ -2,39 +2,12 @@
 
 from __future__ import annotations
 
-import shutil
-import subprocess
-import sys
-from pathlib import Path
-
 import pandas as pd
 import pytest
 import yaml
+from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 pytestmark = pytest.mark.pipeline
-
-
-def copy_workflow(destination: Path) -> Path:
-    """The files a user clones: Snakefile, workflow/ and config/ (results/ starts empty)."""
-    shutil.copy(ROOT / "Snakefile", destination / "Snakefile")
-    shutil.copytree(ROOT / "workflow", destination / "workflow")
-    shutil.copytree(ROOT / "config", destination / "config")
-    return destination
-
-
-def run_snakemake(workdir: Path, *arguments: str) -> subprocess.CompletedProcess:
-    command = [
-        str(SNAKEMAKE),
-        "-j2",
-        "--directory",
-        str(workdir),
-        "-s",
-        str(workdir / "Snakefile"),
-        *arguments,
-    ]
-    return subprocess.run(command, capture_output=True, text=True, timeout=900)
 
 
 @pytest.fixture(scope="session")
@@ -43,7 +16,7 @@ def reduced_run(tmp_path_factory):
     reduced = ROOT / "tests" / "data" / "reduced.yaml"
     first = run_snakemake(workdir, "--configfile", str(reduced))
     assert first.returncode == 0, first.stderr[-4000:]
-    second = run_snakemake(workdir, "--configfile", str(reduced), "--dry-run")
+    second = run_snakemake(workdir, "--dry-run", "--configfile", str(reduced))
     return workdir, yaml.safe_load(reduced.read_text()), second
 
 

@@ -18,20 +18,27 @@ __all__ = [
     "load_config",
     "parse_condition_id",
     "study_names",
+    "validate_against",
     "validate_config",
 ]
 
 SCHEMA_PATH = Path(__file__).resolve().parents[3] / "config" / "schema" / "config.schema.yaml"
 
 
-def validate_config(config: Mapping, schema_path: str | Path = SCHEMA_PATH) -> None:
-    """Raise ``ValueError`` when ``config`` does not match the JSON schema."""
+def validate_against(document: Mapping, schema_path: str | Path, what: str) -> None:
+    """Raise ``ValueError`` naming ``what`` and the offending path when ``document`` does not
+    match the JSON schema (YAML) at ``schema_path``."""
     schema = yaml.safe_load(Path(schema_path).read_text())
     try:
-        jsonschema.validate(dict(config), schema)
+        jsonschema.validate(dict(document), schema)
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
-        raise ValueError(f"config error at {where}: {error.message}") from None
+        raise ValueError(f"{what} error at {where}: {error.message}") from None
+
+
+def validate_config(config: Mapping, schema_path: str | Path = SCHEMA_PATH) -> None:
+    """Raise ``ValueError`` when ``config`` does not match the JSON schema."""
+    validate_against(config, schema_path, "config")
 
 
 def load_config(path: str | Path, schema_path: str | Path = SCHEMA_PATH) -> dict:

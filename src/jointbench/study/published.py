@@ -35,16 +35,9 @@ _SCHEMA = Path(__file__).resolve().parents[3] / "config" / "schema" / "published
 
 def validate_published(document: Mapping, schema_path: str | Path = _SCHEMA) -> None:
     """Raise ``ValueError`` when a published-values document does not match its schema."""
-    import jsonschema
+    from jointbench.study.config import validate_against
 
-    schema = yaml.safe_load(Path(schema_path).read_text())
-    try:
-        jsonschema.validate(dict(document), schema)
-    except jsonschema.ValidationError as error:
-        where = "/".join(map(str, error.absolute_path)) or "(top level)"
-        raise ValueError(
-            f"published values of paper {document.get('paper')}: {where}: {error.message}"
-        ) from None
+    validate_against(document, schema_path, f"published values of paper {document.get('paper')}")
 
 
 def load_published(directory: str | Path = _PUBLISHED_DIR) -> dict[str, dict]:
