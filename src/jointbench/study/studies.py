@@ -155,7 +155,7 @@ STUDIES: dict[str, StudySpec] = {
             kind="axis",
             grid_keys=("protocol", "fe_rom_deg", "aa_ratio"),
             seed_keys=("protocol", "fe_rom_deg", "aa_ratio"),
-            simulator="jointbench.simulate.hinge",
+            simulator="jointbench.simulate.hinge_study",
             protocol_class="HingeStudyProtocol",
             segments=("moving",),
         ),

@@ -1,0 +1,48 @@
+"""The hinge study: paper B's knee and index-MCP protocols, chosen by the condition.
+
+The joint models themselves, with every modelling choice documented, are in
+:mod:`jointbench.simulate.hinge`; this module holds the pair the study runs and applies the
+config's overrides: ``protocol: {all: {...}, knee: {...}, mcp: {...}}``, where ``all`` applies
+to both joints (e.g. the motion model) and a joint's own entry to that joint.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointbench.simulate import Trials, hinge
+
+__all__ = ["HingeStudyProtocol", "simulate"]
+
+
+@dataclass(frozen=True)
+class HingeStudyProtocol:
+    """The joints of the hinge study by name (``"knee"``, ``"mcp"``)."""
+
+    joints: dict[str, hinge.HingeProtocol]
+
+    @classmethod
+    def from_config(cls, overrides: Mapping[str, Mapping] | None = None) -> HingeStudyProtocol:
+        overrides = dict(overrides or {})
+        shared = dict(overrides.pop("all", {}))
+        names = set(hinge.HINGE_PROTOCOLS) | set(overrides)
+        joints = {
+            name: hinge.protocol_from_config({"name": name, **shared, **overrides.get(name, {})})
+            for name in sorted(names)
+        }
+        return cls(joints)
+
+
+def simulate(
+    condition: Mapping[str, object],
+    protocol: HingeStudyProtocol,
+    rngs: Sequence[np.random.Generator],
+) -> Trials:
+    """Trials of one condition (keys protocol, fe_rom_deg, aa_ratio) of the chosen joint."""
+    name = str(condition["protocol"])
+    if name not in protocol.joints:
+        raise ValueError(f"unknown hinge protocol {name!r}; known: {', '.join(protocol.joints)}")
+    return hinge.simulate(condition, protocol.joints[name], rngs)
