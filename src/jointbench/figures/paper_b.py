@@ -299,7 +299,8 @@ def render(rule: str, inputs, outputs, config: Mapping) -> None:
             outputs,
             title="Paper B Table 1: mean AoR angular error (degrees), published vs reproduced",
             note=f"{within} of {len(table)} cells within tolerance. "
-            f"Tolerance: {published['table1']['tolerance']['rule']}.",
+            f"Tolerance: {published['table1']['tolerance']['rule']}. "
+            f"{published['table1'].get('note', '')}",
         )
     elif rule == "paper_b_claims":
         write_tables(
