@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rigs import HINGE, JOINT, PROXIMAL, two_segments
 from scipy import stats
 
 import jointbench as jb
@@ -13,38 +14,13 @@ from jointbench.estimators.hjc import (
     fit_gauss_markov,
     point_covariance,
 )
-from jointbench.geometry import rigid_poses, rotation_matrix, skew, unit
+from jointbench.geometry import rigid_poses, rotation_matrix, skew
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.simulate.noise import isotropic_noise
 from jointbench.study.seeds import trial_rng
 
-JOINT = np.array([30.0, -20.0, 900.0])
-PROXIMAL = JOINT + np.array([[90.0, 0.0, 500.0], [-60.0, 90.0, 520.0], [-50.0, -100.0, 480.0]])
-DISTAL = JOINT + np.array([[80.0, 20.0, -500.0], [-70.0, 80.0, -470.0], [-30.0, -90.0, -530.0]])
-HINGE = unit(np.array([1.0, 0.3, -0.2]))
 METHODS = ("analytic", "gauss-markov", "gauss-markov-frame0")
 CHI2_3_95 = stats.chi2(3).ppf(0.95)
-
-
-def _apply(rotation, translation, body):
-    return body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
-
-
-def two_segments(n_frames=200, *, relative="ball"):
-    """Noise-free world markers of two segments joined at JOINT (poses = identity at frame 0)."""
-    t = np.linspace(0.0, 4.0, n_frames)
-    s = np.sin
-    r0 = rotation_matrix(np.stack([0.1 * s(t), 0.07 * s(0.7 * t), 0.05 * s(1.3 * t)], -1))
-    d0 = np.stack([40 * s(0.5 * t), 30 * s(0.8 * t), 20 * s(1.1 * t)], -1)
-    if relative == "ball":
-        rel = np.stack([0.6 * s(1.9 * t), 0.4 * s(1.3 * t), 0.15 * s(2.3 * t)], -1)
-    elif relative == "hinge":
-        rel = 0.7 * s(1.9 * t)[:, None] * HINGE
-    else:
-        rel = np.zeros((n_frames, 3))
-    r1 = r0 @ rotation_matrix(rel)
-    d1 = r0 @ JOINT + d0 - r1 @ JOINT
-    return _apply(r0, d0, PROXIMAL), _apply(r1, d1, DISTAL)
 
 
 def _noisy(markers, seed, sd=1.7):
