@@ -97,8 +97,12 @@ def write_tables(
 
 
 def read_published(path: str | Path) -> dict:
-    """A paper's published values and claims (``config/published/*.yaml``)."""
-    return yaml.safe_load(Path(path).read_text())
+    """A paper's published values and claims (``config/published/*.yaml``), schema-checked."""
+    from jointbench.study.published import validate_published
+
+    document = yaml.safe_load(Path(path).read_text())
+    validate_published(document)
+    return document
 
 
 def _published_text(value: object) -> str:
