@@ -75,19 +75,29 @@ def to_local(rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray)
     return np.einsum("fji,fmj->fmi", rotation, markers - translation[:, None, :])
 
 
-def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
-    """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
-    in the frame of its first complete frame (the caller fixes the frame)."""
+def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
+    """The cluster ``(n, 3)`` in its most typical complete frame: the one whose inter-marker
+    distances are nearest their medians over the trial, which a minority of broken frames
+    cannot pull."""
     complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
     if complete.size == 0:
         raise ValueError(
             f"{source}: markers {', '.join(labels)} are never all visible in one frame; "
             "a segment needs one frame showing its whole cluster"
         )
+    clusters = markers[complete]
+    distances = np.linalg.norm(clusters[:, :, None] - clusters[:, None], axis=-1)
+    deviation = np.abs(distances - np.median(distances, axis=0)).max(axis=(1, 2))
+    return clusters[int(np.argmin(deviation))].copy()
+
+
+def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
+    """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
+    in the frame of its most typical complete frame (the caller fixes the frame)."""
     seen = np.isfinite(markers[..., 0]).any(axis=0)
     if not seen.all():
         raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
-    shape = markers[complete[0]].copy()
+    shape = typical_shape(markers, labels, source)
     for _ in range(_MAX_ITERATIONS):
         rotation, translation = fit_poses(shape, markers)
         posed = np.isfinite(rotation[:, 0, 0])
@@ -126,9 +136,9 @@ class ArtefactRules:
     """When a sample or a step is far above the trial's own level (module docstring)."""
 
     residual_factor: float = 10.0
-    min_residual_mm: float = 10.0
+    min_residual_mm: float = 5.0
     jump_factor: float = 20.0
-    min_jump_mm: float = 30.0
+    min_jump_mm: float = 20.0
 
 
 @dataclass(frozen=True)
@@ -153,15 +163,26 @@ class Artefact:
 def find_jumps(
     markers: np.ndarray, labels: tuple[str, ...], rules: ArtefactRules
 ) -> list[Artefact]:
-    """Steps between consecutive samples of one marker far above the cluster's median step."""
-    step = np.linalg.norm(np.diff(markers, axis=0), axis=-1)  # (n_frames - 1, n), NaN at gaps
-    if not np.isfinite(step).any():
+    """Steps of one marker that differ from both neighbouring steps by far more than usual.
+
+    A fast but smooth movement changes its step little from frame to frame; a label swap or a
+    marker knocked off adds a step of its own. The size of the step at frame ``k`` is
+    ``min(|s_k - s_(k-1)|, |s_k - s_(k+1)|)`` with ``s_k = x_k - x_(k-1)``.
+    """
+    steps = np.diff(markers, axis=0)  # (n_frames - 1, n, 3), NaN at gaps
+    if steps.shape[0] < 3:
         return []
-    level = max(rules.min_jump_mm, rules.jump_factor * float(np.nanmedian(step)))
-    frame, marker = np.nonzero(np.nan_to_num(step) > level)
+    size = np.fmin(
+        np.linalg.norm(steps[1:-1] - steps[:-2], axis=-1),
+        np.linalg.norm(steps[1:-1] - steps[2:], axis=-1),
+    )
+    if not np.isfinite(size).any():
+        return []
+    level = max(rules.min_jump_mm, rules.jump_factor * float(np.nanmedian(size)))
+    step, marker = np.nonzero(np.nan_to_num(size) > level)
     return [
-        Artefact("jump", labels[m], int(f) + 1, float(step[f, m]), level)
-        for f, m in zip(frame, marker, strict=True)
+        Artefact("jump", labels[m], int(k) + 2, float(size[k, m]), level)
+        for k, m in zip(step, marker, strict=True)
     ]
 
 
@@ -213,19 +234,24 @@ class Segment:
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
         markers = recording.markers[:, index]
-        shape = mean_shape(markers, labels, recording.source)
-        rotation, translation = fit_poses(shape, markers)
-        residuals = _residuals(shape, rotation, translation, markers)
-        breaks = find_rigidity_breaks(residuals, labels, rules)
-        if breaks:
-            # Refit without the broken samples, so a swap does not distort the shape itself.
+        # First judged against one typical frame, which the broken frames cannot distort; then
+        # the mean shape is refitted on the samples not flagged, until the flags settle.
+        shape = typical_shape(markers, labels, recording.source)
+        breaks: list[Artefact] | None = None
+        for _ in range(5):
+            rotation, translation = fit_poses(shape, markers)
+            residuals = _residuals(shape, rotation, translation, markers)
+            found = find_rigidity_breaks(residuals, labels, rules)
+            if found == breaks:
+                break
+            breaks = found
             clean = markers.copy()
             for artefact in breaks:
                 clean[artefact.frame, labels.index(artefact.label)] = np.nan
             shape = mean_shape(clean, labels, recording.source)
-            rotation, translation = fit_poses(shape, clean)
+        else:
+            rotation, translation = fit_poses(shape, markers)
             residuals = _residuals(shape, rotation, translation, markers)
-            breaks = find_rigidity_breaks(residuals, labels, rules)
         # World x = R (A q + o) + t for technical coordinates q: pose (R A, R o + t).
         frame = technical_frame(shape, labels, recording.source)
         axes, origin = frame[:3, :3], frame[:3, 3]
