@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import ezc3d
@@ -95,7 +94,7 @@ def test_trc_reader(tmp_path):
     rows = [
         "PathFileType\t4\t(X/Y/Z)\trig.trc",
         "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits",
-        f"50\t50\t10\t6\tcm",
+        "50\t50\t10\t6\tcm",
         "Frame#\tTime\t" + "\t\t\t".join(recording.labels),
         "\t\t" + "\t".join(f"X{i}\tY{i}\tZ{i}" for i in range(1, 7)),
     ]
@@ -151,7 +150,7 @@ def test_unreadable_files_are_named(tmp_path, name, content, message):
 
 
 def test_unknown_label_lists_the_file_labels():
-    with pytest.raises(ValueError, match="no marker labelled 'RASI'.*labels in the file: P1"):
+    with pytest.raises(ValueError, match=r"no marker labelled 'RASI'.*labels in the file: P1"):
         rig_recording(10).select("P1,RASI")
 
 
