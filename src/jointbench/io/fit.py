@@ -267,10 +267,8 @@ def prepare(
         segments.append(mov)
     found = _artefacts(recording, segments, [] if mov else moving_index, rules)
     if found and artefacts == "refuse":
-        listed = "; ".join(a.describe(recording) for a in found[:3])
-        more = f" (and {len(found) - 3} more)" if len(found) > 3 else ""
         raise ValueError(
-            f"{recording.source}: {listed}{more}. Choose other frames, or pass "
+            f"{recording.source}: {_summarise(found, recording)}. Choose other frames, or pass "
             "artefacts='exclude' (--artefacts exclude) to leave such frames out"
         )
 
@@ -286,8 +284,8 @@ def prepare(
         bad[artefact.frame] = True
     if found:
         warnings.warn(
-            f"{recording.source}: left out {int(bad.sum())} frames with artefacts, e.g. "
-            f"{found[0].describe(recording)}",
+            f"{recording.source}: left out {int(bad.sum())} frames with artefacts: "
+            f"{_summarise(found, recording)}",
             stacklevel=3,
         )
     usable = np.flatnonzero(visible & ~bad)
@@ -304,6 +302,19 @@ def prepare(
         found=tuple(found),
         artefacts=artefacts,
     )
+
+
+def _summarise(found: list[Artefact], recording: Recording) -> str:
+    """The first artefact in full, then how many more, over which frames and markers."""
+    text = found[0].describe(recording)
+    if len(found) > 1:
+        frames = [a.frame for a in found]
+        markers = sorted({a.label for a in found})
+        text += (
+            f"; {len(found)} flagged samples in all, frames {min(frames) + recording.first_frame}"
+            f" to {max(frames) + recording.first_frame}, markers {', '.join(markers)}"
+        )
+    return text
 
 
 def fit(
