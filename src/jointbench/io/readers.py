@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import ezc3d
 import numpy as np
 import pandas as pd
 
@@ -46,8 +47,6 @@ def read(path: str | Path) -> Recording:
 
 def read_c3d(path: str | Path) -> Recording:
     """A C3D file via ``ezc3d``: POINT labels, rate and units; negative residuals are gaps."""
-    import ezc3d  # imported here: reading C3D is the only use, and it costs 0.1 s to import
-
     path = _check_file(path)
     try:
         c3d = ezc3d.c3d(str(path))
