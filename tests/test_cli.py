@@ -171,3 +171,20 @@ def test_fit_knee_axis_with_bootstrap(capsys):
     assert code == 0
     row = csv_rows(out).iloc[0]
     assert row["frames"] == 922 and 0.0 < row["boot_cone95_deg"] < 30.0
+
+
+def test_world_trajectory_on_request(tmp_path, capsys):
+    path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording().markers)
+    world = tmp_path / "world.csv"
+    arguments = ["--reference", ",".join(PROX), "--moving", ",".join(DIST)]
+    code, _, err = run(
+        capsys, "fit", str(path), "--kind", "joint_center", *arguments, "--method", "SCoRE",
+        "--frames", "10:60", "--world", str(world),
+    )  # fmt: skip
+    assert code == 0 and "world trajectory" in err
+    table = pd.read_csv(world)
+    assert table["frame"].tolist() == list(range(10, 60))
+    # The joint of the rig stays at the same distance from every distal marker.
+    distal = rig_recording().markers[10:60, 3:]
+    distance = np.linalg.norm(table[["x_mm", "y_mm", "z_mm"]].to_numpy()[:, None] - distal, axis=-1)
+    np.testing.assert_allclose(distance, np.broadcast_to(distance[0], distance.shape), atol=2e-3)

@@ -180,6 +180,8 @@ def _fit(args: argparse.Namespace) -> int:
         ]
     for warning in caught:
         print(f"jointbench: warning: {warning.message}", file=sys.stderr)
+    if args.world is not None:
+        _write_world(args.world, fits)
     if args.format == "json":
         print(json.dumps([fitted.to_dict() for fitted in fits], indent=2))
         return 0
@@ -198,6 +200,19 @@ def _fit(args: argparse.Namespace) -> int:
     if fits[0].anchor_frame is not None:
         print(f"anchor frame (both body frames coincide): {fits[0].anchor_frame}")
     return 0
+
+
+def _write_world(path: Path, fits: list) -> None:
+    """Per frame and method, the centre (or axis point) in the lab frame [mm], as CSV."""
+    tables = []
+    for fitted in fits:
+        world = fitted.world()
+        table = pd.DataFrame(world, columns=["x_mm", "y_mm", "z_mm"])
+        table.insert(0, "frame", np.arange(len(world)) + fitted.first_frame)
+        table.insert(1, "method", fitted.method)
+        tables.append(table)
+    pd.concat(tables).to_csv(path, index=False, float_format="%.6f")
+    print(f"wrote the world trajectory per frame to {path}", file=sys.stderr)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -253,6 +268,11 @@ def _parser() -> argparse.ArgumentParser:
         "--block-length", type=int, default=None, help="bootstrap block [frames]; default sqrt(N)"
     )
     fit.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    fit.add_argument(
+        "--world",
+        type=Path,
+        help="also write the centre (or axis point) in the lab frame, per frame, to this CSV",
+    )
     fit.set_defaults(run=_fit)
 
     snap = sub.add_parser(

@@ -63,6 +63,7 @@ class RecordingFit:
     anchor_frame: int | None = None
     bootstrap: Bootstrap | None = None
     reference: Segment | None = field(default=None, repr=False)
+    first_frame: int = 0
 
     def estimate(self) -> np.ndarray:
         """The centre ``(3,)``, or an axis' direction and point ``(6,)``, in the frame."""
@@ -70,7 +71,8 @@ class RecordingFit:
 
     def world(self) -> np.ndarray:
         """The centre (or the axis point) in the world in every frame ``(n_frames, 3)`` [mm]
-        (NaN where the reference pose is undefined). Needs a reference segment."""
+        of the fitted range, whose row 0 is frame ``first_frame`` (NaN where the reference pose
+        is undefined). Needs a reference segment."""
         if self.reference is None:
             raise ValueError("no reference segment: the result is already in the data's frame")
         return self.reference.world(self.estimate()[-3:])
@@ -224,6 +226,7 @@ class Prepared:
             anchor_frame=None if anchor is None else anchor + offset,
             bootstrap=boot,
             reference=self.reference,
+            first_frame=offset,
         )
 
 
