@@ -14,8 +14,11 @@ A pose ``(R, t)`` maps technical coordinates to the world, ``R @ p + t``.
 Artefacts. A label swap or a marker that falls off breaks rigidity: that marker's residual from
 the fitted pose jumps far above the trial's own level, which for skin markers is soft-tissue
 artefact of a few mm. A sample is flagged when its residual exceeds ``residual_factor`` times
-the median residual of the cluster and ``min_residual_mm``; a step between consecutive samples
-of one marker when it exceeds ``jump_factor`` times the median step and ``min_jump_mm``.
+the median residual of the cluster and ``min_residual_mm``. The residuals are first taken from
+the cluster's most typical frame (which a minority of broken frames cannot distort, as they
+would a mean), then from the mean shape of the samples not flagged, until the flags settle. A
+step of one marker is flagged when it differs from both neighbouring steps by more than
+``jump_factor`` times the median such difference and ``min_jump_mm`` (:func:`find_jumps`).
 """
 
 from __future__ import annotations
@@ -34,9 +37,13 @@ __all__ = [
     "Artefact",
     "ArtefactRules",
     "Segment",
+    "find_jumps",
+    "find_rigidity_breaks",
     "fit_poses",
     "mean_shape",
     "technical_frame",
+    "to_local",
+    "typical_shape",
 ]
 
 _MAX_ITERATIONS = 200
