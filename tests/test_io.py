@@ -209,6 +209,23 @@ def test_gaps_are_left_out_and_counted(tmp_path, stored_as):
     np.testing.assert_allclose(in_memory.fit("NM").result.center, truth, atol=1e-8)
 
 
+def test_a_marker_never_seen_is_named(tmp_path):
+    markers = rig_recording().markers.copy()
+    markers[:, 4] = 0.0
+    recording = read(write_c3d(tmp_path / "dropped.c3d", PROX + DIST, markers))
+    with pytest.raises(ValueError, match=r"dropped.c3d: marker D2 is never visible"):
+        prepare(recording, "joint_center", DIST, PROX)
+
+
+def test_estimator_errors_name_the_file_and_method():
+    proximal, distal = two_segments(100, relative="hinge")
+    recording = Recording(
+        tuple(PROX + DIST), np.concatenate([proximal, distal], 1), 100.0, "hinge.c3d"
+    )
+    with pytest.raises(ValueError, match=r"hinge.c3d: joint_center SCoRE: .*degenerate motion"):
+        prepare(recording, "joint_center", DIST, PROX).fit("SCoRE")
+
+
 def swapped(recording, frame, first, second):
     markers = recording.markers.copy()
     i, j = recording.index([first, second])

@@ -179,7 +179,10 @@ class Prepared:
             anchor = anchor_frame(self.reference, self.moving, rows)
             first = int(np.flatnonzero(rows == anchor)[0])
             rows = np.concatenate([[anchor], np.delete(rows, first)])
-        result = _FITTERS[self.kind](*(a[rows] for a in self.arrays), method=method, **options)
+        try:
+            result = _FITTERS[self.kind](*(a[rows] for a in self.arrays), method=method, **options)
+        except ValueError as error:
+            raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
         return result, anchor
 
     def fit(

@@ -86,6 +86,9 @@ def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> 
     """The cluster ``(n, 3)`` in its most typical complete frame: the one whose inter-marker
     distances are nearest their medians over the trial, which a minority of broken frames
     cannot pull."""
+    seen = np.isfinite(markers[..., 0]).any(axis=0)
+    if not seen.all():
+        raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
     complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
     if complete.size == 0:
         raise ValueError(
@@ -101,9 +104,6 @@ def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> 
 def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
     """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
     in the frame of its most typical complete frame (the caller fixes the frame)."""
-    seen = np.isfinite(markers[..., 0]).any(axis=0)
-    if not seen.all():
-        raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
     shape = typical_shape(markers, labels, source)
     for _ in range(_MAX_ITERATIONS):
         rotation, translation = fit_poses(shape, markers)
