@@ -5,8 +5,8 @@ every estimator over its converged trials, and how many converged, are fixed num
 ``tests/snapshots/summary.csv`` holds them; a change in any of them beyond round-off fails the
 tests. A trial whose iteration did not converge is left out of the snapshot's means: where an
 iteration oscillates without settling, the iterate it stops at amplifies round-off, so it
-differs between BLAS builds and processors by far more than round-off. After an intended change, regenerate it with
-``jointbench snapshot`` (after ``snakemake -j2``) and commit the new file.
+differs between BLAS builds and processors by far more than round-off. After an intended
+change, regenerate it with ``jointbench snapshot`` (after ``snakemake -j2``) and commit it.
 """
 
 from __future__ import annotations
