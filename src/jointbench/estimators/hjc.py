@@ -7,8 +7,9 @@ ball joint has one body-fixed position ``c`` in both (eq. 2): ``0 = f0(t) c - f1
 
 Steps (one function per registered method below):
 
-1. Poses (§5): :func:`jointbench.geometry.rigid_poses` for each segment -- SVD fits alternating
-   with the re-estimated body-fixed coordinates of eq. 5, body frame = world at frame 0.
+1. Poses (§5): :func:`jointbench.numerics.poses.rigid_poses` for each segment -- SVD fits
+   alternating with the re-estimated body-fixed coordinates of eq. 5, body frame = world at
+   frame 0.
 2. Analytic centre (§6, eq. 9), minimising ``sum_t |f0(t) c - f1(t) c|^2`` (eq. 6): with
    ``M_t = R0(t) - R1(t)`` and ``y_t = d1(t) - d0(t)``,
    ``c = [sum_t M_t' M_t]^-1 sum_t M_t' y_t`` (eq. 9 multiplied out: ``M' M = 2I - R0'R1 - R1'R0``).
@@ -82,8 +83,10 @@ import numpy as np
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
-from jointbench.estimators.twosegment import SINGULAR_RCOND, SegmentPoses, two_segment_poses
-from jointbench.geometry import rigid_fit, skew
+from jointbench.estimators.twosegment import SegmentPoses, two_segment_poses
+from jointbench.geometry import skew
+from jointbench.numerics.poses import rigid_fit
+from jointbench.numerics.rank import negligible
 
 __all__ = [
     "align_to_markers",
@@ -161,7 +164,7 @@ def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
         raise ValueError(
             f"{what}: degenerate motion: the segments do not rotate relative to each other"
         )
-    if values[0] <= SINGULAR_RCOND * values[-1]:
+    if negligible(values[0], values[-1]):
         raise ValueError(
             f"{what}: degenerate motion: the relative rotation is about a single axis (a "
             "hinge), so the centre is not determined along that axis"

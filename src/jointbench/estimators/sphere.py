@@ -4,26 +4,27 @@ All take the moving segment's markers in the reference frame, ``(n_frames, n_mar
 [mm], and fit concentric spheres (one radius per marker, common centre). Equation numbers refer
 to paper A (Chang & Pollard 2007, J Biomech 40:1392).
 
-The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minimised with a
-Nelder–Mead simplex equivalent to ``fminsearch`` at its defaults, and "the convergence criterion
-for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most 200·n = 600
-iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds those settings.
+The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minimised by
+``fminsearch`` at its defaults (:mod:`jointbench.numerics.simplex`), and "the convergence
+criterion for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most
+200·n = 600 iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds
+those settings.
 """
 
 from __future__ import annotations
 
 import math
 from functools import lru_cache
-from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import lapack
-from scipy.optimize import minimize
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.validation import check_markers, check_moves
+from jointbench.numerics.rank import RCOND, negligible
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, nelder_mead, stop_status
 
 __all__ = [
     "FMINSEARCH_OPTIONS",
@@ -37,22 +38,7 @@ __all__ = [
     "solve_ls_system",
 ]
 
-# The LS normal matrix of a pure hinge is singular to rounding; only then is a singular
-# value dropped (Gamage & Lasenby). Ill-conditioned but regular systems are solved as they are:
-# their poor answers at small RoM are what the benchmark measures.
-_SINGULAR_RCOND = 1e-12
 _EPS = float(np.finfo(float).eps)
-
-#: ``scipy.optimize.minimize(method="Nelder-Mead")`` options equivalent to MATLAB's
-#: ``fminsearch`` defaults for three unknowns: TolX = TolFun = 1e-4 and
-#: MaxIter = MaxFunEvals = 200 * 3. SciPy's termination test (every vertex within ``xatol`` of
-#: the best one in every coordinate *and* every function value within ``fatol`` of the best)
-#: and its initial simplex (each coordinate of the start in turn scaled by 1.05, or set to
-#: 0.00025 where it is zero) are those of ``fminsearch``, as are the reflection, expansion,
-#: contraction and shrink coefficients (1, 2, 0.5, 0.5) with ``adaptive=False`` (checked against
-#: SciPy 1.17's source; fminsearch also floors both tolerances at 10 eps of the current values,
-#: which is immaterial at 1e-4 mm).
-FMINSEARCH_OPTIONS = MappingProxyType({"xatol": 1e-4, "fatol": 1e-4, "maxiter": 600, "maxfev": 600})
 
 
 def _prepare(markers: object, min_frames: int = 4) -> np.ndarray:
@@ -132,9 +118,10 @@ def ls_system(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_ls_system(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
-    """Solve ``A c = b``, dropping singular values below ``1e-12`` of the largest (pure hinge)."""
+    """Solve ``A c = b``, dropping singular values negligible by
+    :func:`jointbench.numerics.rank.negligible` (a pure hinge)."""
     u, s, vt = np.linalg.svd(a_matrix)
-    inverse = np.where(s > _SINGULAR_RCOND * s[0], 1.0 / np.where(s > 0, s, 1.0), 0.0)
+    inverse = np.where(negligible(s, s[0]), 0.0, 1.0 / np.where(s > 0, s, 1.0))
     return vt.T @ (inverse * (u.T @ b_vector))
 
 
@@ -147,10 +134,10 @@ def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
     """
     eigenvalues, vectors, info = lapack.dsyev(a_matrix)
     if info != 0:
-        return np.linalg.pinv(a_matrix, rcond=_SINGULAR_RCOND)
+        return np.linalg.pinv(a_matrix, rcond=RCOND)
     # Three scalars: plain Python is cheaper than NumPy calls on a 3-vector.
     values = eigenvalues.tolist()
-    threshold = _SINGULAR_RCOND * max(abs(value) for value in values)
+    threshold = RCOND * max(abs(value) for value in values)
     inverse = [1.0 / value if abs(value) > threshold else 0.0 for value in values]
     return (vectors * inverse) @ vectors.T
 
@@ -181,7 +168,7 @@ def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
 
     For the positive semi-definite ``A`` with eigenvalues ``l1 >= l2 >= l3``,
     ``l3 / l1 >= 4 det(A) / trace(A)^3`` (``l1 l2 <= ((l1 + l2) / 2)^2`` and ``l1 <= trace``).
-    When that bound exceeds 1e-10, a hundred times the 1e-12 cut, no singular value would be
+    When that bound exceeds 1e-10, a hundred times the rank threshold, no singular value would be
     dropped and ``A^+ b = A^-1 b``, which a Cholesky solve gives in half the time of an
     eigen-decomposition; otherwise (a hinge, a static marker set) the pseudo-inverse is used.
     """
@@ -553,8 +540,8 @@ def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
 
     Paper A (§5) minimised f1 with MATLAB's ``fminsearch`` started from the LS centre; here
-    ``scipy.optimize.minimize(method="Nelder-Mead")`` with :data:`FMINSEARCH_OPTIONS`, whose
-    initial simplex, moves and termination test are those of ``fminsearch``. The radii are
+    :func:`jointbench.numerics.simplex.nelder_mead` with :data:`FMINSEARCH_OPTIONS`, the same
+    initial simplex, moves and termination test. The radii are
     profiled out (``r_p`` = mean distance, the closed-form minimiser for a fixed centre), so the
     search is over the 3 coordinates of the centre only — paper A does not say whether it
     searched over the radii too; profiling them out is the cheaper and better-posed choice.
@@ -590,23 +577,25 @@ def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     start = _ls_start(markers)[0] if start is None else _check_point(start, "start")
     n_frames = markers.shape[0]
     flat = np.ascontiguousarray(markers.reshape(-1, 3))
-    result = minimize(
-        _geometric_cost,
-        start,
-        args=(flat, n_frames),
-        method="Nelder-Mead",
-        options=dict(FMINSEARCH_OPTIONS),
+    search = nelder_mead(
+        lambda *x: _geometric_cost(np.array(x), flat, n_frames), start, **FMINSEARCH_OPTIONS
     )
-    center = np.asarray(result.x, dtype=float)
-    finite = bool(np.all(np.isfinite(center)) and np.isfinite(result.fun))
+    return _is_result(search, flat, n_frames)
+
+
+def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
+    """IS's :class:`CenterResult` from its simplex search on rows ``(n_frames * P, 3)``."""
+    center = np.array(search.x)
+    finite = bool(np.all(np.isfinite(center)) and math.isfinite(search.fun))
     radii = _mean_weights(n_frames) @ np.sqrt(_row_sq(flat - center)).reshape(n_frames, -1)
+    status = stop_status(search, FMINSEARCH_OPTIONS["max_fev"])
     return CenterResult(
         center=center,
         radii=radii,
-        converged=bool(result.success) and finite,
-        iterations=int(result.nit),
-        status="ok" if result.success and finite else str(result.message),
+        converged=search.converged and finite,
+        iterations=search.iterations,
+        status="ok" if search.converged and finite else status,
         method="IS",
-        cost=float(result.fun),
-        diagnostics={"function_evaluations": int(result.nfev)},
+        cost=float(search.fun),
+        diagnostics={"function_evaluations": search.evaluations},
     )

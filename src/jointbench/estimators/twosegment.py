@@ -1,6 +1,6 @@
 """SCoRE and SARA (Ehrig et al. 2006, 2007): joint centre and axis from two segments' poses.
 
-Both segments' poses per frame come from :func:`jointbench.geometry.rigid_poses` (paper C §5:
+Both segments' poses per frame come from :func:`jointbench.numerics.poses.rigid_poses` (paper C §5:
 SVD fits alternating with re-estimated body-fixed marker coordinates); each body frame
 coincides with the world at frame 0 (``R(0) = I``, ``t(0) = 0``).
 
@@ -22,7 +22,8 @@ centre keeps the smallest well away from rounding level (the noise-free tests re
 centre to ~1e-10 mm).
 
 Degenerate motion: the relative rotation must not be about a single axis (SCoRE) and must not
-vanish (SCoRE, SARA). An eigenvalue below ``1e-12`` of the largest counts as zero -- that is a
+vanish (SCoRE, SARA). An eigenvalue below ``1e-12`` of the largest counts as zero
+(:mod:`jointbench.numerics.rank`) -- that is a
 relative rotation off the axis of less than about 1e-6 rad, a thousand times below what markers
 with micrometre noise resolve -- and raises ``ValueError``. Merely ill-conditioned motion is
 solved as it is: its poor answer is what a benchmark should see.
@@ -45,7 +46,8 @@ from jointbench.estimators.validation import (
     check_not_collinear,
     check_same_frames,
 )
-from jointbench.geometry import rigid_poses
+from jointbench.numerics.poses import rigid_poses
+from jointbench.numerics.rank import negligible
 
 __all__ = [
     "SegmentPoses",
@@ -56,9 +58,6 @@ __all__ = [
     "segment_poses",
     "two_segment_poses",
 ]
-
-# Eigenvalues of the (dimensionless) normal matrices below this fraction of the largest are zero.
-SINGULAR_RCOND = 1e-12
 
 
 @dataclass(frozen=True)
@@ -140,7 +139,7 @@ def _eigen(normal: np.ndarray, *, what: str, min_rank: int) -> tuple[np.ndarray,
     """Eigen-decomposition of a normal matrix; ``ValueError`` when its rank is below
     ``min_rank`` (the segments do not rotate relative to each other, or only about one axis)."""
     values, vectors = np.linalg.eigh(normal)
-    zero = values <= SINGULAR_RCOND * values[-1]
+    zero = negligible(values, values[-1])
     rank = int(np.sum(~zero))
     if rank < min_rank:
         if rank <= 3:
