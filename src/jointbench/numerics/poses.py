@@ -159,37 +159,49 @@ def rigid_poses(
     of the back-transformed measurements (paper C eq. 5) and repeat until they stop changing.
     The body-fixed frame coincides with the world at frame 0 (``R[0] = I``, ``t[0] = 0``).
 
+    Leading axes are independent trials, fitted together: each stops iterating when its own
+    body-fixed coordinates stop changing, so a trial's poses do not depend on its batch.
+
     Parameters
     ----------
-    markers : (n_frames, n_markers, 3) [mm], ``n_markers >= 3`` and not collinear.
+    markers : (..., n_frames, n_markers, 3) [mm], ``n_markers >= 3`` and not collinear.
 
     Returns
     -------
-    R : (n_frames, 3, 3), t : (n_frames, 3) [mm], body : (n_markers, 3) [mm]
+    R : (..., n_frames, 3, 3), t : (..., n_frames, 3) [mm], body : (..., n_markers, 3) [mm]
     """
     markers = np.asarray(markers, dtype=float)
-    n_frames = markers.shape[0]
+    n_frames = markers.shape[-3]
     # What rigid_fit recomputes on every call is hoisted out of the loop: the frames' centroids
     # and centred markers do not change between iterations.
-    target_mean = markers.mean(axis=1)
-    centred = markers - target_mean[:, None, :]
-    centred_t = np.swapaxes(centred, 1, 2)
+    target_mean = markers.mean(axis=-2)
+    centred = markers - target_mean[..., None, :]
+    centred_t = np.swapaxes(centred, -1, -2)
 
     def fit(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        body_mean = body.mean(axis=0)
-        rotation = best_rotation(centred_t @ (body - body_mean))
-        return rotation, target_mean - rotation @ body_mean, body_mean
+        body_mean = body.mean(axis=-2)
+        rotation = best_rotation(centred_t @ (body - body_mean[..., None, :])[..., None, :, :])
+        translation = target_mean - (rotation @ body_mean[..., None, :, None])[..., 0]
+        return rotation, translation, body_mean
 
-    body = markers[0].copy()
+    body = markers[..., 0, :, :].copy()
+    active = np.ones(markers.shape[:-3], dtype=bool)
     for _ in range(max_iterations):
         rotation, translation, body_mean = fit(body)
         # Back-transform every frame into the body frame, then re-anchor at frame 0 (eq. 5):
         # R'(y - t) = R'(y - mean(y)) + mean(body), averaged over the frames.
-        mean_local = np.einsum("fji,fmj->mi", rotation, centred) / n_frames + body_mean
-        new_body = mean_local @ rotation[0].T + translation[0]
-        change = np.max(np.abs(new_body - body))
-        body = new_body
-        if change < tol_mm:
+        mean_local = (
+            np.einsum("...fji,...fmj->...mi", rotation, centred) / n_frames
+            + body_mean[..., None, :]
+        )
+        new_body = (
+            mean_local @ np.swapaxes(rotation[..., 0, :, :], -1, -2) + translation[..., 0, None, :]
+        )
+        change = np.max(np.abs(new_body - body), axis=(-2, -1))
+        # A trial that has converged keeps its coordinates while the others iterate on.
+        body = np.where(active[..., None, None], new_body, body)
+        active &= ~(change < tol_mm)
+        if not active.any():
             break
     rotation, translation, _ = fit(body)
     return rotation, translation, body
