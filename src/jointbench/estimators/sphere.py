@@ -14,7 +14,7 @@ those settings.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import NamedTuple
 
 import numpy as np
@@ -599,3 +599,232 @@ def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
         cost=float(search.fun),
         diagnostics={"function_evaluations": search.evaluations},
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Many trials at once: LS, NM and BC over markers (n_trials, n_frames, n_markers, 3)
+# --------------------------------------------------------------------------------------------
+
+
+def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked trials as float64 and the mask of those :func:`_prepare` would reject.
+
+    The checks are vectorised over trials; a rejected trial is then passed to the one-trial
+    function, which raises its own ``ValueError``.
+    """
+    array = np.asarray(markers, dtype=float)
+    if array.ndim != 4 or array.shape[-1] != 3 or array.shape[1] < min_frames:
+        return array, np.ones(array.shape[0] if array.ndim else 1, dtype=bool)
+    finite = np.isfinite(array).all(axis=(1, 2, 3))
+    first = array[:, :1]
+    with np.errstate(invalid="ignore"):
+        spread = np.abs(array - first).max(axis=(1, 2, 3))
+        scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
+        still = spread <= 1e-9 * scale
+    return array, ~finite | still | (array.shape[2] < 1)
+
+
+def _with_fallback(fit, markers: np.ndarray, outcomes: list, redo: np.ndarray) -> list:
+    """Fill ``outcomes`` for the trials in ``redo`` with the one-trial ``fit`` (or its error)."""
+    for trial in np.flatnonzero(redo):
+        try:
+            outcomes[trial] = fit(markers[trial])
+        except ValueError as error:
+            outcomes[trial] = error
+    return outcomes
+
+
+def _ls_moments_batch(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:class:`_LSMoments` of every trial: ``A`` (T, 3, 3), ``b`` (T, 3), means (T, P, 4),
+    centred rows (T, N P, 4)."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    augmented = np.empty((n_trials, n_frames, n_markers, 4))
+    augmented[..., :3] = markers
+    augmented[..., 3] = np.einsum("...i,...i->...", markers, markers)
+    means = augmented.mean(axis=1)
+    centred = (augmented - means[:, None]).reshape(n_trials, -1, 4)
+    gram = (np.swapaxes(centred, 1, 2) @ centred) * (1.0 / n_frames)
+    return 2.0 * gram[:, :3, :3], gram[:, :3, 3].copy(), means, centred
+
+
+def _pinv_solve_batch(a_matrix: np.ndarray, b_vector: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``A^+ b`` (T, 3) and ``A^+`` (T, 3, 3) by the rule of :func:`solve_ls_system`."""
+    values, vectors = np.linalg.eigh(a_matrix)
+    largest = np.abs(values).max(axis=-1, keepdims=True)
+    keep = ~negligible(values, largest)
+    inverse = np.where(keep, 1.0 / np.where(keep, values, 1.0), 0.0)
+    pinv = (vectors * inverse[:, None, :]) @ np.swapaxes(vectors, 1, 2)
+    return np.einsum("tij,tj->ti", pinv, b_vector), pinv
+
+
+def _algebraic_fit_batch(means, centred, center) -> tuple[np.ndarray, np.ndarray]:
+    """Radii (T, P) [mm] and cost f2 (T,) of :func:`_algebraic_fit` for every trial."""
+    weights = np.concatenate([-2.0 * center, np.ones((center.shape[0], 1))], axis=1)
+    residual = np.einsum("tri,ti->tr", centred, weights)
+    sq_radii = (
+        np.einsum("tpi,ti->tp", means, weights) + np.einsum("ti,ti->t", center, center)[:, None]
+    )
+    return np.sqrt(np.maximum(sq_radii, 0.0)), np.einsum("tr,tr->t", residual, residual)
+
+
+def _fit_ls_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        a_matrix, b_vector, means, centred = _ls_moments_batch(markers[good])
+        centers, _ = _pinv_solve_batch(a_matrix, b_vector)
+        radii, costs = _algebraic_fit_batch(means, centred, centers)
+        for index, trial in enumerate(good):
+            outcomes[trial] = CenterResult(
+                center=centers[index],
+                radii=radii[index],
+                converged=True,
+                iterations=0,
+                status="ok",
+                method="LS",
+                cost=float(costs[index]),
+            )
+    return _with_fallback(fit_ls, markers, outcomes, bad)
+
+
+def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        data = markers[good]
+        n_trials, n_frames, n_markers, _ = data.shape
+        rows = data.reshape(n_trials, -1, 3)
+        origin = rows.mean(axis=1)
+        shifted = rows - origin[:, None]
+        scale = np.sqrt(np.einsum("tri,tri->t", shifted, shifted) / rows.shape[1])
+        scaled = shifted / scale[:, None, None]
+        basis = np.empty((n_trials, rows.shape[1], 4))
+        basis[..., 0] = np.einsum("tri,tri->tr", scaled, scaled)
+        basis[..., 1:] = scaled
+        size = 4 + n_markers
+        scatter = np.zeros((n_trials, size, size))
+        scatter[:, :4, :4] = np.swapaxes(basis, 1, 2) @ basis
+        per_marker = basis.reshape(n_trials, n_frames, n_markers, 4).sum(axis=1)
+        scatter[:, :4, 4:] = np.swapaxes(per_marker, 1, 2)
+        scatter[:, 4:, :4] = per_marker
+        scatter[:, 4:, 4:] = n_frames * np.eye(n_markers)
+        constraint = _nm_constraint(n_markers)
+        try:
+            lower = np.linalg.cholesky(scatter)
+        except np.linalg.LinAlgError:
+            # Some trial is (nearly) noise-free: its scatter is singular; fit one at a time.
+            return _with_fallback(fit_nm, markers, outcomes, np.ones(len(bad), dtype=bool))
+        pivots = np.diagonal(lower, axis1=1, axis2=2) ** 2
+        regular = pivots.min(axis=1) > 1e-9 * pivots.max(axis=1)
+        whitened = np.linalg.inv(np.where(regular[:, None, None], lower, np.eye(size)))
+        m_matrix = whitened @ constraint @ np.swapaxes(whitened, 1, 2)
+        mu, y = np.linalg.eigh((m_matrix + np.swapaxes(m_matrix, 1, 2)) / 2.0)
+        largest = mu[:, -1]
+        u = np.einsum("tji,tj->ti", whitened, y[:, :, -1])
+        norm = np.einsum("ti,ij,tj->t", u, constraint, u)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = u / np.sqrt(norm)[:, None]
+            a = u[:, 0]
+            solved = regular & (largest > 0) & (np.abs(a) >= _EPS * np.abs(u).max(axis=1))
+            center_scaled = u[:, 1:4] / (-2.0 * a[:, None])
+            sq_radii = np.einsum("ti,ti->t", center_scaled, center_scaled)[:, None] - (
+                u[:, 4:] / a[:, None]
+            )
+        for index, trial in enumerate(good):
+            if not solved[index]:
+                bad[trial] = True
+                continue
+            outcomes[trial] = CenterResult(
+                center=origin[index] + scale[index] * center_scaled[index],
+                radii=scale[index] * np.sqrt(np.maximum(sq_radii[index], 0.0)),
+                converged=True,
+                iterations=0,
+                status="ok",
+                method="NM",
+                cost=1.0 / float(largest[index]),
+            )
+    return _with_fallback(fit_nm, markers, outcomes, bad)
+
+
+def _fit_bc_batch(
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> list[CenterResult | ValueError]:
+    """:func:`fit_bc` for every trial, iterated in lockstep; each trial stops by its own test.
+
+    Trials that fail otherwise than by reaching the iteration limit (non-finite, diverged) are
+    re-run one at a time, so their statuses are the one-trial function's.
+    """
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        data = markers[good]
+        n_trials, n_frames, n_markers, _ = data.shape
+        a_matrix, b_vector, _, _ = _ls_moments_batch(data)
+        origin, a_pinv = _pinv_solve_batch(a_matrix, b_vector)
+        _, b_shifted, means, centred = _ls_moments_batch(data - origin[:, None, None, :])
+        rows = centred.reshape(n_trials, n_frames, n_markers, 4)
+        grams = np.einsum("tkpi,tkpj->tpij", rows, rows)
+        sum_of_means = means[..., :3].sum(axis=1)
+        limit = _BC_DIVERGENCE_FACTOR * np.sqrt(means[..., 3].mean(axis=1))
+
+        def noise_variance(shift: np.ndarray) -> np.ndarray:
+            weights = np.concatenate([-2.0 * shift, np.ones((n_trials, 1))], axis=1)
+            spread = np.einsum("tpij,ti,tj->tp", grams, weights, weights)
+            mean_sq = (
+                np.einsum("tpi,ti->tp", means, weights)
+                + np.einsum("ti,ti->t", shift, shift)[:, None]
+            )
+            return np.mean(spread / (4.0 * n_frames * mean_sq), axis=1)
+
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            shift = np.zeros((n_trials, 3))
+            sigma2 = noise_variance(shift)
+            active = np.isfinite(sigma2)
+            iterations = np.zeros(n_trials, dtype=int)
+            converged = np.zeros(n_trials, dtype=bool)
+            for iteration in range(1, max_iterations + 1):
+                if not active.any():
+                    break
+                compensation = (2.0 * sigma2)[:, None] * (sum_of_means - n_markers * shift)
+                new_shift = np.einsum("tij,tj->ti", a_pinv, b_shifted - compensation)
+                new_sigma2 = noise_variance(new_shift)
+                step = np.abs(new_shift - shift).max(axis=1)
+                active &= np.isfinite(step) & np.isfinite(new_sigma2)
+                change = np.abs(new_sigma2 - sigma2)
+                shift = np.where(active[:, None], new_shift, shift)
+                sigma2 = np.where(active, new_sigma2, sigma2)
+                iterations[active] = iteration
+                done = active & (step <= tol_x) & (change <= tol_fun)
+                converged |= done
+                active &= ~done
+                active &= np.sqrt(np.einsum("ti,ti->t", shift, shift)) <= limit
+        radii, costs = _algebraic_fit_batch(means, centred, shift)
+        exhausted = f"maximum iterations ({max_iterations}) reached without convergence"
+        for index, trial in enumerate(good):
+            if not (converged[index] or active[index]):
+                bad[trial] = True
+                continue
+            outcomes[trial] = CenterResult(
+                center=origin[index] + shift[index],
+                radii=radii[index],
+                converged=bool(converged[index]),
+                iterations=int(iterations[index]),
+                status="ok" if converged[index] else exhausted,
+                method="BC",
+                cost=float(costs[index]),
+                diagnostics={"noise_variance": float(sigma2[index])},
+            )
+    one_trial = partial(fit_bc, max_iterations=max_iterations, tol_x=tol_x, tol_fun=tol_fun)
+    return _with_fallback(one_trial, markers, outcomes, bad)
+
+
+fit_ls.batched = _fit_ls_batch
+fit_nm.batched = _fit_nm_batch
+fit_bc.batched = _fit_bc_batch
