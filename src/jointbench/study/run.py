@@ -12,7 +12,7 @@ from jointbench.estimators import registry
 from jointbench.simulate import Trials
 from jointbench.study.config import parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
-from jointbench.study.io import read_dataset, write_dataset, write_table
+from jointbench.study.io import iter_dataset, read_metadata, write_dataset, write_table
 from jointbench.study.schema import check_estimates
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
@@ -124,8 +124,16 @@ def run_estimate_files(
     options = config["studies"][study].get("options", {}).get(method, {})
     by_condition = {Path(path).stem: path for path in datasets}
     for output in outputs:
-        trials, metadata = read_dataset(by_condition[Path(output).stem])
-        write_table(estimate(study, method, trials, metadata["condition"], options), output)
+        path = by_condition[Path(output).stem]
+        condition = read_metadata(path)["condition"]
+        # A block of trials at a time, so memory does not grow with the number of trials.
+        frames = [
+            estimate(study, method, block, condition, options).assign(
+                trial=lambda frame, first=first: frame["trial"] + first
+            )
+            for first, block in iter_dataset(path)
+        ]
+        write_table(pd.concat(frames, ignore_index=True), output)
 
 
 def collect(study: str, paths: Sequence[str | Path], output: str) -> pd.DataFrame:
