@@ -615,9 +615,11 @@ def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarra
     array = np.asarray(markers, dtype=float)
     if array.ndim != 4 or array.shape[-1] != 3 or array.shape[1] < min_frames:
         return array, np.ones(array.shape[0] if array.ndim else 1, dtype=bool)
-    finite = np.isfinite(array).all(axis=(1, 2, 3))
     first = array[:, :1]
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
+        # A sum is finite only if every term is (an overflow merely sends a trial to the
+        # one-trial path, which decides).
+        finite = np.isfinite(array.sum(axis=(1, 2, 3)))
         spread = np.abs(array - first).max(axis=(1, 2, 3))
         scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
         still = spread <= 1e-9 * scale
@@ -640,10 +642,13 @@ def _ls_moments_batch(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     n_trials, n_frames, n_markers, _ = markers.shape
     augmented = np.empty((n_trials, n_frames, n_markers, 4))
     augmented[..., :3] = markers
-    augmented[..., 3] = np.einsum("...i,...i->...", markers, markers)
-    means = augmented.mean(axis=1)
-    centred = (augmented - means[:, None]).reshape(n_trials, -1, 4)
-    gram = (np.swapaxes(centred, 1, 2) @ centred) * (1.0 / n_frames)
+    np.einsum("...i,...i->...", markers, markers, out=augmented[..., 3])
+    means = augmented.sum(axis=1)
+    means *= 1.0 / n_frames
+    augmented -= means[:, None]
+    centred = augmented.reshape(n_trials, -1, 4)
+    gram = np.swapaxes(centred, 1, 2) @ centred
+    gram *= 1.0 / n_frames
     return 2.0 * gram[:, :3, :3], gram[:, :3, 3].copy(), means, centred
 
 
