@@ -163,3 +163,22 @@ def test_bc_at_its_iteration_limit_reports_as_one_trial():
     assert any(not o.converged for o in outcomes)
     for trial, outcome in enumerate(outcomes):
         _assert_same(outcome, fit(markers[trial], max_iterations=3))
+
+
+def test_batched_fits_do_not_import_scipy_linalg_or_optimize():
+    """An estimate job that fits whole batches does not pay for importing them."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from jointbench.estimators import sphere\n"
+        "import jointbench.study.run\n"
+        "rng = np.random.default_rng(0)\n"
+        "markers = rng.normal(size=(3, 20, 3, 3)) + rng.normal(size=(3, 1, 3, 3)) * 10\n"
+        "for fit in (sphere.fit_ls, sphere.fit_nm, sphere.fit_bc):\n"
+        "    fit.batched(markers)\n"
+        "print(sorted(m for m in ('scipy.linalg', 'scipy.optimize') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -18,7 +18,6 @@ from functools import lru_cache, partial
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import lapack
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
@@ -39,6 +38,16 @@ __all__ = [
 ]
 
 _EPS = float(np.finfo(float).eps)
+
+
+@lru_cache(maxsize=1)
+def _lapack():
+    """SciPy's LAPACK wrappers, imported on first use: the one-trial fits call them directly
+    (NumPy's wrappers cost more than a 3x3 factorisation), but a job that fits whole batches
+    never needs them and should not pay for importing ``scipy.linalg``."""
+    from scipy.linalg import lapack
+
+    return lapack
 
 
 def _prepare(markers: object, min_frames: int = 4) -> np.ndarray:
@@ -132,7 +141,7 @@ def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
     same pseudo-inverse; LAPACK's ``dsyev`` is called directly because NumPy's wrappers cost more
     than the 3×3 factorisation itself.
     """
-    eigenvalues, vectors, info = lapack.dsyev(a_matrix)
+    eigenvalues, vectors, info = _lapack().dsyev(a_matrix)
     if info != 0:
         return np.linalg.pinv(a_matrix, rcond=RCOND)
     # Three scalars: plain Python is cheaper than NumPy calls on a 3-vector.
@@ -172,12 +181,12 @@ def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
     dropped and ``A^+ b = A^-1 b``, which a Cholesky solve gives in half the time of an
     eigen-decomposition; otherwise (a hinge, a static marker set) the pseudo-inverse is used.
     """
-    lower, info = lapack.dpotrf(a_matrix, lower=1)
+    lower, info = _lapack().dpotrf(a_matrix, lower=1)
     if info == 0:
         l00, l11, l22 = lower.diagonal().tolist()
         determinant = (l00 * l11 * l22) ** 2
         if 4.0 * determinant > 1e-10 * float(a_matrix.trace()) ** 3:
-            solution, info = lapack.dpotrs(lower, b_vector, lower=1)
+            solution, info = _lapack().dpotrs(lower, b_vector, lower=1)
             if info == 0:
                 return solution
     return _symmetric_pinv(a_matrix) @ b_vector
@@ -270,7 +279,7 @@ def _largest_admissible(whitened: np.ndarray, constraint: np.ndarray) -> tuple[n
     """Solve ``M y = mu y`` with ``M = W C W'``; return ``u = W' y`` of the largest ``mu > 0``."""
     m_matrix = whitened @ constraint @ whitened.T
     m_matrix = (m_matrix + m_matrix.T) / 2.0
-    mu, y, info = lapack.dsyev(m_matrix)
+    mu, y, info = _lapack().dsyev(m_matrix)
     if info != 0:
         mu, y = np.linalg.eigh(m_matrix)
     largest = float(mu[-1])
@@ -292,10 +301,10 @@ def _nm_coefficients(scaled: np.ndarray) -> tuple[np.ndarray, float]:
     constraint = _nm_constraint(scaled.shape[1])
     scatter = _nm_scatter(scaled)
     # LAPACK directly: for these (4+P)-square matrices NumPy's wrapper overhead dominates.
-    lower, info = lapack.dpotrf(scatter, lower=1)
+    lower, info = _lapack().dpotrf(scatter, lower=1)
     pivots = (lower.diagonal() ** 2).tolist() if info == 0 else None
     if pivots is not None and min(pivots) > 1e-9 * max(pivots):
-        inverse, info = lapack.dtrtri(lower, lower=1)
+        inverse, info = _lapack().dtrtri(lower, lower=1)
         if info == 0:
             return _largest_admissible(inverse, constraint)
     _, s, vt = np.linalg.svd(_nm_design(scaled), full_matrices=False)
