@@ -182,3 +182,14 @@ def test_batched_fits_do_not_import_scipy_linalg_or_optimize():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_rigid_poses_in_chunks_equal_one_call(monkeypatch):
+    from jointbench.numerics import poses
+
+    markers = _trials("hip", 1).segments["proximal"]
+    whole = poses.rigid_poses(markers)
+    monkeypatch.setattr(poses, "_CHUNK_FRAMES", 2 * markers.shape[1])
+    chunked = poses.rigid_poses(markers)
+    for a, b in zip(whole, chunked, strict=True):
+        np.testing.assert_array_equal(a, b)

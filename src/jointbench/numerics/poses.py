@@ -6,9 +6,14 @@ A pose ``(R, t)`` maps body-fixed coordinates ``x`` to the world as ``R @ x + t`
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["best_rotation", "rigid_fit", "rigid_poses"]
+
+# Frames per chunk of a many-trial pose fit.
+_CHUNK_FRAMES = 4096
 
 
 def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -172,6 +177,20 @@ def rigid_poses(
     """
     markers = np.asarray(markers, dtype=float)
     n_frames = markers.shape[-3]
+    batch = markers.shape[:-3]
+    per_chunk = max(1, _CHUNK_FRAMES // max(n_frames, 1))
+    if math.prod(batch) > per_chunk:
+        # Element-wise work on a few thousand frames at a time stays in cache; whole batches
+        # of long recordings would stream every temporary through memory.
+        flat = markers.reshape(-1, *markers.shape[-3:])
+        parts = [
+            rigid_poses(flat[i : i + per_chunk], max_iterations=max_iterations, tol_mm=tol_mm)
+            for i in range(0, flat.shape[0], per_chunk)
+        ]
+        return tuple(
+            np.concatenate([part[k] for part in parts]).reshape(*batch, *parts[0][k].shape[1:])
+            for k in range(3)
+        )
     # What rigid_fit recomputes on every call is hoisted out of the loop: the frames' centroids
     # and centred markers do not change between iterations.
     target_mean = markers.mean(axis=-2)
