@@ -219,6 +219,33 @@ run_slurm() {
     log "SLURM run: $submitted jobs submitted"
 }
 
+# A job that fails must stop the run with an error, not leave Snakemake waiting: the way the
+# executor learns about failures (squeue, no accounting) is the part most likely to go wrong.
+check_failure_is_noticed() {
+    local folder=$WORK/failing
+    mkdir -p "$folder"
+    cat >"$folder/Snakefile" <<'EOF'
+rule fail:
+    output:
+        "never.txt",
+    shell:
+        "echo 'a deliberate failure' >&2; exit 3"
+EOF
+    log "a failing job through SLURM (must stop the run within 5 minutes)"
+    local status=0
+    (cd "$folder" && timeout 300 "$VENV/bin/snakemake" --profile "$ROOT/profiles/slurm" \
+        --slurm-status-command squeue \
+        --slurm-no-account \
+        --slurm-init-seconds-before-status-checks 2 \
+        --latency-wait 5) >"$WORK/failing.log" 2>&1 || status=$?
+    if ((status == 124)); then
+        die "a failed SLURM job went unnoticed: Snakemake still waiting after 300 s" \
+            "(see $WORK/failing.log)"
+    fi
+    ((status != 0)) || die "the deliberately failing job succeeded (see $WORK/failing.log)"
+    log "the failed job was reported (snakemake exit status $status)"
+}
+
 # timed NAME COMMAND...: run COMMAND here (not in a subshell, so its failure stops the script)
 # and store its wall time in seconds in the variable NAME.
 timed() {
@@ -247,6 +274,10 @@ main() {
     "$VENV/bin/python" "$ROOT/benchmarks/compare_collected.py" "$WORK/local" "$WORK/slurm" \
         || die "the SLURM run's results differ from the local run's"
     log "wall time: local -j2 ${local_seconds}s, SLURM ${slurm_seconds}s (same results)"
+    check_failure_is_noticed
 }
 
-main "$@"
+# Run when executed; sourcing only defines the functions (to run one step by hand).
+if [[ ${BASH_SOURCE[0]} == "$0" ]]; then
+    main "$@"
+fi
