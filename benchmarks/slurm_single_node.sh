@@ -69,7 +69,7 @@ install_python() {
         python3 -m venv "$VENV"
     fi
     log "installing jointbench with the cluster extra into $VENV"
-    "$VENV/bin/pip" install -q -e "$ROOT[cluster]" >"$WORK/pip.log" 2>&1 \
+    "$VENV/bin/pip" install -q -e "${ROOT}[cluster]" >"$WORK/pip.log" 2>&1 \
         || die "pip install failed, see $WORK/pip.log"
 }
 
