@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy import stats
-from test_io import KNEE
+from test_io_recordings import KNEE
 
 from jointbench.io import Recording, prepare, read
 from jointbench.io.segments import technical_frame

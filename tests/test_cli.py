@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from rigs import JOINT, PROXIMAL
-from test_io import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
+from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
 
 import jointbench
 from jointbench.cli import main

@@ -69,6 +69,7 @@ def _snapshot(args: argparse.Namespace) -> int:
 
 
 def _readme(args: argparse.Namespace) -> int:
+    from jointbench.pipeline import paper_labels
     from jointbench.study.snapshot import reproduction_summary, update_readme
 
     comparison_path = args.results / "tables" / "published_comparison.csv"
@@ -81,7 +82,8 @@ def _readme(args: argparse.Namespace) -> int:
         return 1
     if not args.readme.is_file():
         raise ValueError(f"{args.readme}: no such file")
-    changed = update_readme(args.readme, reproduction_summary(pd.read_csv(comparison_path)))
+    comparison = pd.read_csv(comparison_path)
+    changed = update_readme(args.readme, reproduction_summary(comparison, paper_labels()))
     print(f"{args.readme}: summary {'updated' if changed else 'already current'}")
     return 0
 

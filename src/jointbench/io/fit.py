@@ -26,9 +26,10 @@ import numpy as np
 
 from jointbench.api import fit_axis, fit_center, fit_joint_center
 from jointbench.estimators.registry import KINDS
-from jointbench.geometry import angle_between_lines_deg, best_rotation
+from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import Artefact, ArtefactRules, Segment, find_jumps
+from jointbench.numerics.poses import best_rotation
 from jointbench.uncertainty import Bootstrap, bootstrap
 
 __all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]

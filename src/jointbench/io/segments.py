@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from jointbench.geometry import best_rotation
+from jointbench.numerics.poses import best_rotation
 
 if TYPE_CHECKING:
     from jointbench.io.recording import Recording
