@@ -27,8 +27,9 @@ from jointbench.geometry import angle_between_lines_deg
 from jointbench.io import Recording, prepare, read
 from jointbench.io.segments import technical_frame
 from jointbench.simulate.hip import marker_layout
+from jointbench.study.scoring import CHI2_3DOF_95
 from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import CHI2_3DOF_95, get_study
+from jointbench.study.studies import get_study
 
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
 THIGH = "RTHI1,RTHI2,RTHI3,RGT"

@@ -10,8 +10,9 @@ from test_io_recordings import KNEE
 from jointbench.io import Recording, prepare, read
 from jointbench.io.segments import technical_frame
 from jointbench.simulate.hip import marker_layout
+from jointbench.study.scoring import CHI2_3DOF_95
 from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import CHI2_3DOF_95, get_study
+from jointbench.study.studies import get_study
 from jointbench.uncertainty import block_indices, bootstrap
 
 HIP = ("P1", "P2", "P3", "D1", "D2", "D3")
@@ -32,21 +33,24 @@ def test_block_length_out_of_range_is_refused():
 
 
 def test_refits_that_fail_are_counted_and_too_many_refuse():
-    def statistic(indices):
-        return None if indices[0] % 3 == 0 else np.array([indices.mean()])
+    def statistic(resamples):
+        return [None if rows[0] % 3 == 0 else np.array([rows.mean()]) for rows in resamples]
 
     result = bootstrap(statistic, 50, n_resamples=40, block_length=5, seed=1)
     assert 0 < result.n_failed < 40
     assert np.isnan(result.samples).any(axis=1).sum() == result.n_failed
 
     with pytest.raises(ValueError, match="refits failed"):
-        bootstrap(lambda indices: None, 50, n_resamples=10)
+        bootstrap(lambda resamples: [None] * len(resamples), 50, n_resamples=10)
 
 
 def test_mean_of_white_noise_has_the_textbook_spread():
     values = np.random.default_rng(4).normal(size=400)
     result = bootstrap(
-        lambda indices: np.array([values[indices].mean()]), 400, n_resamples=400, seed=2
+        lambda resamples: [np.array([values[rows].mean()]) for rows in resamples],
+        400,
+        n_resamples=400,
+        seed=2,
     )
     spread = float(np.sqrt(result.covariance()[0, 0]))
     assert 0.8 < spread / (1.0 / np.sqrt(400)) < 1.2
@@ -88,3 +92,14 @@ def test_knee_bootstrap_is_much_wider_than_gauss_markov():
     predicted = np.sqrt(np.trace(fitted.result.covariance))
     resampled = np.sqrt(np.trace(fitted.bootstrap.covariance()))
     assert resampled > 5.0 * predicted
+
+
+@pytest.mark.parametrize(("kind", "method"), [("joint_center", "SCoRE"), ("center", "SCoRE")])
+def test_batched_refits_equal_one_at_a_time(kind, method):
+    recording, _ = hip_trial(0, 120)
+    prepared = prepare(recording, kind, "D1,D2,D3", "P1,P2,P3")
+    rng = np.random.default_rng(5)
+    rows = [prepared.rows(block_indices(prepared.usable.size, 11, rng)) for _ in range(3)]
+    for batched, subset in zip(prepared.refits(method, rows, {}), rows, strict=True):
+        alone = prepared.solve(method, subset, {})
+        np.testing.assert_allclose(batched.center, alone.center, atol=1e-9)

@@ -13,7 +13,7 @@ is a common compromise between that and having enough distinct blocks.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,30 +62,27 @@ class Bootstrap:
 
 
 def bootstrap(
-    statistic: Callable[[np.ndarray], np.ndarray | None],
+    statistic: Callable[[np.ndarray], Sequence[np.ndarray | None]],
     n_frames: int,
     *,
     n_resamples: int = 200,
     block_length: int | None = None,
     seed: int = 0,
 ) -> Bootstrap:
-    """Moving-block bootstrap of ``statistic(frame_indices) -> (d,)`` over ``n_frames`` frames.
+    """Moving-block bootstrap over ``n_frames`` frames.
 
-    ``statistic`` refits on the frames it is given and returns ``None`` (or raises
-    ``ValueError``) when it cannot support an answer on them; such refits count as failed.
+    ``statistic`` receives the frame indices of every resample, ``(n_resamples, n_frames)``,
+    all at once (so an estimator can refit them as one batch) and returns one ``(d,)`` row per
+    resample, or ``None`` where the refit cannot support an answer; those count as failed.
     """
     if int(n_resamples) < 2:
         raise ValueError(f"n_resamples must be >= 2, got {n_resamples}")
     block_length = default_block_length(n_frames) if block_length is None else int(block_length)
     rng = np.random.default_rng(seed)
-    rows = []
-    for _ in range(int(n_resamples)):
-        indices = block_indices(n_frames, block_length, rng)
-        try:
-            value = statistic(indices)
-        except ValueError:
-            value = None
-        rows.append(value)
+    indices = np.stack(
+        [block_indices(n_frames, block_length, rng) for _ in range(int(n_resamples))]
+    )
+    rows = list(statistic(indices))
     width = next((len(row) for row in rows if row is not None), 1)
     samples = np.array([np.full(width, np.nan) if row is None else row for row in rows], float)
     n_failed = int(np.sum(~np.isfinite(samples).all(axis=1)))

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointbench.api import fit_axis, fit_center, fit_joint_center
-from jointbench.estimators.registry import KINDS
+from jointbench.estimators.registry import KINDS, get
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import Artefact, ArtefactRules, Segment, find_jumps
@@ -35,8 +35,9 @@ from jointbench.uncertainty import Bootstrap, bootstrap
 __all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]
 
 ARTEFACT_POLICIES = ("refuse", "exclude")
-DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
+# The main fit goes through the public entry points, so it gets every check they make.
 _FITTERS = {"center": fit_center, "axis": fit_axis, "joint_center": fit_joint_center}
+DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,6 +127,15 @@ def _estimate_vector(kind: str, result) -> np.ndarray:
     return np.asarray(result.center, dtype=float)
 
 
+def _bootstrap_row(kind: str, refit, estimate: np.ndarray) -> np.ndarray | None:
+    """What a refit contributes to the bootstrap; ``None`` when it failed or did not converge."""
+    if isinstance(refit, Exception) or not refit.converged:
+        return None
+    if kind == "axis":
+        return _axis_crossing(refit.direction, refit.point, estimate)
+    return np.asarray(refit.center, dtype=float)
+
+
 def _axis_crossing(direction, point, reference) -> np.ndarray:
     """Refit axis as (sign-aligned direction, its crossing of the reference plane) ``(6,)``."""
     ref_direction, ref_point = reference[:3], reference[3:]
@@ -172,19 +182,35 @@ class Prepared:
     found: tuple[Artefact, ...]
     artefacts: str
 
-    def solve(self, method: str, indices: np.ndarray, options: dict):
-        """Fit on ``usable[indices]``; returns the result and the anchor row (or ``None``)."""
+    def rows(self, indices: np.ndarray) -> np.ndarray:
+        """Recording rows of ``usable[indices]``, the anchor frame first for two segments."""
         rows = self.usable[indices]
-        anchor = None
-        if self.kind == "joint_center":
-            anchor = anchor_frame(self.reference, self.moving, rows)
-            first = int(np.flatnonzero(rows == anchor)[0])
-            rows = np.concatenate([[anchor], np.delete(rows, first)])
+        if self.kind != "joint_center":
+            return rows
+        anchor = anchor_frame(self.reference, self.moving, rows)
+        first = int(np.flatnonzero(rows == anchor)[0])
+        return np.concatenate([[anchor], np.delete(rows, first)])
+
+    def solve(self, method: str, rows: np.ndarray, options: dict):
+        """The estimator's result on the recording ``rows``."""
         try:
-            result = _FITTERS[self.kind](*(a[rows] for a in self.arrays), method=method, **options)
+            return _FITTERS[self.kind](*(a[rows] for a in self.arrays), method=method, **options)
         except ValueError as error:
             raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
-        return result, anchor
+
+    def refits(self, method: str, rows: list[np.ndarray], options: dict) -> list:
+        """Results (or ``ValueError``) on many row sets, as one batch where the method can."""
+        fit = get(self.kind, method)
+        batched = getattr(fit, "batched", None)
+        if batched is not None:
+            return batched(*(np.stack([a[r] for r in rows]) for a in self.arrays), **options)
+        outcomes = []
+        for subset in rows:
+            try:
+                outcomes.append(fit(*(a[subset] for a in self.arrays), **options))
+            except ValueError as error:
+                outcomes.append(error)
+        return outcomes
 
     def fit(
         self,
@@ -198,18 +224,16 @@ class Prepared:
         """One method's :class:`RecordingFit` (parameters as in :func:`fit`)."""
         kind = self.kind
         method = method or DEFAULT_METHODS[kind]
-        result, anchor = self.solve(method, np.arange(self.usable.size), options)
+        rows = self.rows(np.arange(self.usable.size))
+        result = self.solve(method, rows, options)
+        anchor = int(rows[0]) if kind == "joint_center" else None
         boot = None
         if n_bootstrap:
             estimate = _estimate_vector(kind, result)
 
-            def statistic(indices: np.ndarray) -> np.ndarray | None:
-                refit, _ = self.solve(method, indices, options)
-                if not refit.converged:
-                    return None
-                if kind == "axis":
-                    return _axis_crossing(refit.direction, refit.point, estimate)
-                return np.asarray(refit.center, dtype=float)
+            def statistic(indices: np.ndarray) -> list[np.ndarray | None]:
+                outcomes = self.refits(method, [self.rows(i) for i in indices], options)
+                return [_bootstrap_row(kind, refit, estimate) for refit in outcomes]
 
             boot = bootstrap(
                 statistic,
