@@ -10,12 +10,15 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 import yaml
 
 __all__ = [
+    "equal_3d_limits",
     "evaluate_claims",
     "markdown_table",
+    "median_trial",
     "method_style",
     "read_published",
     "save_figure",
@@ -48,6 +51,29 @@ def method_style(method: str, index: int = 0) -> dict[str, object]:
     return {"color": color, "marker": marker}
 
 
+def equal_3d_limits(ax, points: np.ndarray, margin: float = 0.08) -> None:
+    """Same scale on x, y and z of a 3-D axes spanning ``points`` ``(n, 3)``, so distances
+    and angles in the plot are true ones (matplotlib otherwise stretches each axis to fill)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    centre, half = (low + high) / 2, (high - low).max() / 2 * (1 + margin)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+
+
+def median_trial(errors: pd.Series) -> int:
+    """The trial (index of ``errors``) with the median error; for an even count the lower of
+    the two middle ones, so it is a real trial. Equal errors are ordered by trial number.
+    NaN errors are left out."""
+    finite = errors.dropna()
+    if finite.empty:
+        raise ValueError("no trial with a finite error to choose from")
+    ordered = sorted(zip(finite.to_numpy(), finite.index, strict=True))
+    return int(ordered[(len(ordered) - 1) // 2][1])
+
+
 def save_figure(fig: plt.Figure, outputs: Mapping[str, str] | object) -> None:
     """Save to every path given (``png`` and ``pdf`` keys or attributes) and close the figure."""
     for path in _paths(outputs, ("png", "pdf")):
@@ -78,8 +104,13 @@ def _format(value: object) -> str:
 
 
 def markdown_table(frame: pd.DataFrame) -> str:
-    """A GitHub-flavoured Markdown table of ``frame`` (floats to 2 decimals or 4 significant)."""
-    header = "| " + " | ".join(map(str, frame.columns)) + " |"
+    """A GitHub-flavoured Markdown table of ``frame`` (floats to 2 decimals or 4 significant).
+
+    Column headers are ``frame.attrs["labels"][column]`` where a table builder gave readable
+    ones, so the Markdown reads well while the CSV keeps short, stable keys for programs.
+    """
+    labels = frame.attrs.get("labels", {})
+    header = "| " + " | ".join(str(labels.get(c, c)) for c in frame.columns) + " |"
     rule = "|" + "|".join("---" for _ in frame.columns) + "|"
     rows = ["| " + " | ".join(_format(v) for v in row) + " |" for row in frame.itertuples(False)]
     return "\n".join([header, rule, *rows]) + "\n"
