@@ -374,3 +374,32 @@ def test_paper_c_outputs_run_with_readable_headers(tmp_path):
     assert "gm_v_vs_own_1200" in table.columns
     paper_c.uncertainty_figure(collected, published, _outputs(tmp_path, "uncertainty"))
     assert (tmp_path / "uncertainty.png").exists()
+
+
+def test_fig2_draws_the_model_each_cost_fits():
+    from mpl_toolkits.mplot3d.art3d import Line3D, Poly3DCollection
+
+    t = np.linspace(-0.5, 0.5, 30)
+    trajectory = np.stack([60 * np.cos(t), 60 * np.sin(t), 0 * t], -1)
+    point, direction = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    fig = plt.figure()
+    kinds = {}
+    for method, (label, draw) in paper_b._MODELS.items():
+        ax = fig.add_subplot(projection="3d")
+        draw(ax, trajectory, point, direction, "C0")
+        kinds[method] = (label, {type(a) for a in [*ax.collections, *ax.lines]})
+    plt.close(fig)
+    assert kinds["planar"] == ("best-fitting planes", {Poly3DCollection})
+    assert kinds["radial"] == ("best-fitting cylinders", {Poly3DCollection})
+    assert kinds["combined"] == ("best-fitting circles", {Line3D})
+
+
+def test_3d_axes_get_equal_scales():
+    from jointbench.figures.common import equal_3d_limits
+
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    equal_3d_limits(ax, np.array([[0, 0, 0], [25.0, 10.0, 60.0]]))
+    spans = [np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim()), np.ptp(ax.get_zlim())]
+    plt.close(fig)
+    assert spans == pytest.approx([spans[0]] * 3)

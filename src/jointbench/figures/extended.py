@@ -278,7 +278,7 @@ def _rank_bars(ax, ranks: pd.DataFrame, study: str, styles: Mapping[str, Mapping
     ax.invert_yaxis()
     ax.set_xlim(0, len(ranks))
     ax.set_xticks(range(1, len(ranks) + 1))
-    ax.set_xlabel("mean rank over conditions (1 = best)")
+    ax.set_xlabel("mean rank\nover conditions (1 = best)", fontsize=8)
     ax.set_title("Overall", fontsize=9)
     ax.legend(
         handles=[
@@ -315,10 +315,11 @@ def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
     height = max(3.5, 0.3 * n_conditions + 1.8)
     bars_height = min(height, 0.35 * len(methods) + 1.4)
     heat_width = max(3.0, 0.8 * len(methods)) + 2.5
-    fig = plt.figure(figsize=(heat_width + 4.5, height), layout="constrained")
-    outer = fig.add_gridspec(1, 2, width_ratios=[heat_width, 4.5])
+    # The middle column is room for the colour bar, an inset of the map the layout ignores.
+    fig = plt.figure(figsize=(heat_width + 5.6, height), layout="constrained")
+    outer = fig.add_gridspec(1, 3, width_ratios=[heat_width, 1.0, 4.6])
     heat = fig.add_subplot(outer[0, 0])
-    right = outer[0, 1].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
+    right = outer[0, 2].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
     bars = fig.add_subplot(right[0, 0])
     image = _heatmap(heat, table, study, methods)
     # An inset the map's own height: a colour bar stolen from the grid cell is sized by the
@@ -326,7 +327,7 @@ def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
     colorbar = fig.colorbar(image, cax=heat.inset_axes([1.02, 0.0, 0.035, 1.0]))
     colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
     _rank_bars(bars, ranks, study, styles)
-    kind = get_study(study).kind
+    kind = get_study(study).kind.replace("_", " ")
     fig.suptitle(
         f"Study {study} ({kind}): every estimator's mean error per condition "
         f"({_unit(study).strip()})\nred outline = best (or tied) in the condition; "

@@ -94,7 +94,7 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
             x_of = {rom: base + i * step for i, rom in enumerate(roms)}
             for index, method in enumerate(methods):
                 line = cell[cell["method"] == method].sort_values("rom_deg")
-                offset = (index - (len(methods) - 1) / 2) * 0.09
+                offset = (index - (len(methods) - 1) / 2) * 0.13
                 ax.plot(
                     [x_of[r] + offset for r in line["rom_deg"]],
                     line["mean_error_mm"],
@@ -108,11 +108,12 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
             for rom in roms:
                 ticks.append(x_of[rom])
                 count = int(counts.get(rom, 0))
-                labels.append(f"±{rom:g}°" + (f"\nn={count}" if count < n_total else ""))
+                # Every label has two lines so both panels' x labels line up.
+                labels.append(f"±{rom:g}°\n" + (f"n={count}" if count < n_total else ""))
             ax.text(
                 base + (len(roms) - 1) * step / 2,
                 1.01,
-                f"noise SD {noise:g} mm",
+                f"noise SD {noise:.1f} mm",
                 transform=ax.get_xaxis_transform(),
                 ha="center",
                 va="bottom",
@@ -132,7 +133,7 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
     )
     fig.suptitle(
         "Paper A Fig 4 reproduced: mean CoR error over the trials where BC converged "
-        f"(n = that count where below {n_total})",
+        f"(n = trials averaged, where fewer than {n_total})",
         fontsize=10,
     )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
@@ -170,6 +171,43 @@ def choose_fig3_trial(collected: pd.DataFrame) -> int:
     return median_trial(candidates)
 
 
+def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
+    """Label each trajectory "marker p" on the side with the most room on screen.
+
+    Candidate offsets around the trajectory are compared in the 3-D axes' projected (2-D)
+    coordinates; each label takes the one farthest from the estimates, the other
+    trajectories and the labels already placed, so labels do not sit on points or each other.
+    """
+    from mpl_toolkits.mplot3d import proj3d
+
+    def screen(points):
+        x, y, _ = proj3d.proj_transform(*np.asarray(points, dtype=float).T, ax.get_proj())
+        return np.column_stack([x, y])
+
+    means = screen(markers.mean(axis=0))
+    occupied = [screen(avoid), screen(markers.reshape(-1, 3))]
+    scale = np.ptp(np.vstack(occupied), axis=0).max()
+    angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+    for p, centre in enumerate(means):
+        taken = np.vstack(occupied)
+        directions = np.column_stack([np.cos(angles), np.sin(angles)])
+        candidates = centre + 0.2 * scale * directions
+        room = np.linalg.norm(candidates[:, None] - taken[None], axis=2).min(axis=1)
+        choice = int(np.argmax(room))
+        best = candidates[choice]
+        # The text runs away from its trajectory, not back across it.
+        ax.annotate(
+            f"marker {p + 1}",
+            xy=centre,
+            xytext=best,
+            fontsize=8,
+            ha="left" if directions[choice, 0] >= 0 else "right",
+            va="center",
+            arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6},
+        )
+        occupied.append(best[None])
+
+
 def fig3(
     markers: np.ndarray,
     truth: np.ndarray,
@@ -194,15 +232,8 @@ def fig3(
     fig = plt.figure(figsize=(11, 5.0))
     grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1])
     ax = fig.add_subplot(grid[0, 0], projection="3d", computed_zorder=False)
-    centroid = markers.reshape(-1, 3).mean(axis=0)
     for p in range(markers.shape[1]):
         ax.plot(*markers[:, p].T, lw=0.9, color="0.45", zorder=1)
-        # Each label sits beyond its trajectory, away from the others and from the estimates.
-        start = markers[:, p].mean(axis=0)
-        away = start - centroid
-        away = away / (np.linalg.norm(away) or 1.0)
-        spread = np.ptp(markers[:, p], axis=0).max()
-        ax.text(*(start + away * (0.6 * spread + 2.0)), f"marker {p + 1}", fontsize=8, zorder=5)
     ax.scatter(*truth, color="k", marker="*", s=160, zorder=4, label="true CoR")
     for index, (method, row) in enumerate(by_method.iterrows()):
         style = method_style(method, index)
@@ -219,6 +250,7 @@ def fig3(
             label=f"{method}: {row['error_mm']:.1f} mm",
         )
     equal_3d_limits(ax, np.vstack([markers.reshape(-1, 3), truth[None], estimates]))
+    _label_markers(ax, markers, np.vstack([truth[None], estimates]))
     ax.set_xlabel("x (mm)", fontsize=8)
     ax.set_ylabel("y (mm)", fontsize=8)
     ax.set_zlabel("z (mm)", fontsize=8)
