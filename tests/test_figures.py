@@ -232,6 +232,19 @@ def test_ties_are_shared_not_counted_twice():
     assert (ranks["best_in"] == ranks["best_alone"] + ranks["best_tied"]).all()
 
 
+def test_best_headline_counts_each_condition_once(tmp_path):
+    table = extended.extended_table(_tied_cmc(), "cmc")
+    # As the caption builder reads it: from the CSV.
+    table.to_csv(tmp_path / "extended.csv", index=False)
+    headline = extended.best_headline(pd.read_csv(tmp_path / "extended.csv"))
+    counts = [
+        int(part.rsplit(" ", 1)[1]) for part in headline.rstrip(".").split(": ")[1].split(", ")
+    ]
+    assert sum(counts) == 18
+    assert "IS = LM tied in" in headline
+    assert "IS alone" not in headline and "LM alone" not in headline
+
+
 def test_best_text_shows_ties_separately():
     assert extended.best_text(8, 2, 18) == "best in 8 of 18, tied in 2"
     assert extended.best_text(3, 0, 18) == "best in 3 of 18"

@@ -24,8 +24,13 @@ from jointbench.study.summary import ERROR_COLUMN, summarise
 
 __all__ = [
     "PAPERS",
+    "best_headline",
+    "best_text",
+    "cell_text",
+    "condition_label",
     "extended_figure",
     "extended_table",
+    "incomplete",
     "mean_ranks",
     "origin_note",
     "render",
@@ -122,6 +127,23 @@ def best_text(best_alone: int, best_tied: int, conditions: int) -> str:
     """How often a method is best, ties shown as shared: "best in 8 of 18, tied in 2"."""
     text = f"best in {best_alone} of {conditions}"
     return text + (f", tied in {best_tied}" if best_tied else "")
+
+
+def best_headline(table: pd.DataFrame) -> str:
+    """Who is best per condition, each condition counted once: sole winners, then each group
+    of methods tied for best with the number of conditions they share.
+
+    Works on an :func:`extended_table` or the CSV read back (``best`` as booleans).
+    """
+    keys = list(table.columns[: table.columns.get_loc("method")])
+    best = table[table["best"].astype(str) == "True"]
+    winners = best.groupby(keys, observed=True)["method"].apply(lambda m: tuple(sorted(m)))
+    counts = winners.value_counts()
+    alone = [(group[0], n) for group, n in counts.items() if len(group) == 1]
+    tied = [(" = ".join(group), n) for group, n in counts.items() if len(group) > 1]
+    conditions = table[keys].drop_duplicates().shape[0]
+    parts = [f"{m} alone in {n}" for m, n in alone] + [f"{m} tied in {n}" for m, n in tied]
+    return f"best mean error, out of {conditions} conditions: " + ", ".join(parts) + "."
 
 
 def origin_note(study: str, methods: Sequence[str], config: Mapping | None = None) -> str:

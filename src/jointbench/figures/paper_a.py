@@ -234,7 +234,17 @@ def fig3(
     ax = fig.add_subplot(grid[0, 0], projection="3d", computed_zorder=False)
     for p in range(markers.shape[1]):
         ax.plot(*markers[:, p].T, lw=0.9, color="0.45", zorder=1)
-    ax.scatter(*truth, color="k", marker="*", s=160, zorder=4, label="true CoR")
+    # Hollow, so an estimate within a few millimetres of it still shows through.
+    ax.scatter(
+        *truth,
+        facecolor="none",
+        edgecolor="k",
+        marker="*",
+        s=260,
+        lw=1.2,
+        zorder=4,
+        label="true CoR",
+    )
     for index, (method, row) in enumerate(by_method.iterrows()):
         style = method_style(method, index)
         ax.scatter(
