@@ -14,6 +14,7 @@ from jointbench.study.config import parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
 from jointbench.study.io import read_dataset, write_dataset, write_table
 from jointbench.study.schema import check_estimates
+from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
 
@@ -65,7 +66,7 @@ def estimate(
                 **condition,
                 "trial": trial,
                 "method": method,
-                **spec.score(result, trials.truth),
+                **score(spec.kind, result, trials.truth),
                 "converged": converged,
                 "iterations": iterations,
                 "seconds": seconds,
