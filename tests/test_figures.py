@@ -8,9 +8,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import pytest
+from mpl_toolkits.mplot3d.art3d import Line3D, Poly3DCollection
 
 from jointbench.figures import extended, paper_a, paper_b, paper_c
-from jointbench.figures.common import median_trial
+from jointbench.figures.common import equal_3d_limits, median_trial
 from jointbench.study.tables import markdown_table
 
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
@@ -387,8 +388,6 @@ def test_paper_c_outputs_run_with_readable_headers():
 
 
 def test_fig2_draws_the_model_each_cost_fits():
-    from mpl_toolkits.mplot3d.art3d import Line3D, Poly3DCollection
-
     t = np.linspace(-0.5, 0.5, 30)
     trajectory = np.stack([60 * np.cos(t), 60 * np.sin(t), 0 * t], -1)
     point, direction = np.zeros(3), np.array([0.0, 0.0, 1.0])
@@ -405,8 +404,6 @@ def test_fig2_draws_the_model_each_cost_fits():
 
 
 def test_3d_axes_get_equal_scales():
-    from jointbench.figures.common import equal_3d_limits
-
     fig = plt.figure()
     ax = fig.add_subplot(projection="3d")
     equal_3d_limits(ax, np.array([[0, 0, 0], [25.0, 10.0, 60.0]]))

@@ -7,11 +7,14 @@ claims are in :mod:`jointbench.papers.paper_a`.
 
 from __future__ import annotations
 
+import os
+import platform
 from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from mpl_toolkits.mplot3d import proj3d
 
 from jointbench.figures.common import equal_3d_limits, median_trial, method_style
 
@@ -174,7 +177,6 @@ def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
     coordinates; each label takes the one farthest from the estimates, the other
     trajectories and the labels already placed, so labels do not sit on points or each other.
     """
-    from mpl_toolkits.mplot3d import proj3d
 
     def screen(points):
         x, y, _ = proj3d.proj_transform(*np.asarray(points, dtype=float).T, ax.get_proj())
@@ -353,9 +355,6 @@ def table2_headline(table: pd.DataFrame) -> str:
 
 def run_environment() -> str:
     """The machine and software that run this process: CPU model, logical CPUs, Python, NumPy."""
-    import os
-    import platform
-
     cpu = platform.processor() or platform.machine()
     try:
         with open("/proc/cpuinfo") as info:
