@@ -193,3 +193,37 @@ def test_rigid_poses_in_chunks_equal_one_call(monkeypatch):
     chunked = poses.rigid_poses(markers)
     for a, b in zip(whole, chunked, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(("kind", "method"), [("center", "LS"), ("center", "NM"), ("center", "BC")])
+def test_a_bad_trial_fails_alone_with_the_one_trial_error(kind, method):
+    markers = _trials("cmc", 1).segments["moving"].copy()
+    markers[2, 5, 1, 0] = np.nan
+    markers[4] = markers[4, :1]  # does not move
+    fit = registry.get(kind, method)
+    outcomes = fit.batched(markers)
+    for trial, outcome in enumerate(outcomes):
+        try:
+            single = fit(markers[trial])
+        except ValueError as error:
+            single = error
+        _assert_same(outcome, single)
+    assert isinstance(outcomes[2], ValueError) and isinstance(outcomes[4], ValueError)
+    assert not isinstance(outcomes[3], ValueError)
+
+
+def test_a_bad_trial_fails_alone_in_a_two_segment_batch():
+    trials = _trials("hip", 1)
+    proximal = trials.segments["proximal"].copy()
+    distal = trials.segments["distal"].copy()
+    proximal[1, 0, 2] = proximal[1, 0, 0] + 2.0 * (proximal[1, 0, 1] - proximal[1, 0, 0])
+    distal[3, 2, 0, 1] = np.inf
+    fit = registry.get("joint_center", "SCoRE")
+    outcomes = fit.batched(proximal, distal)
+    for trial, outcome in enumerate(outcomes):
+        try:
+            single = fit(proximal[trial], distal[trial])
+        except ValueError as error:
+            single = error
+        _assert_same(outcome, single)
+    assert "collinear" in str(outcomes[1]) and "NaN or inf" in str(outcomes[3])
