@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import special
@@ -12,11 +13,60 @@ from scipy import special
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.simulate import Trials
 
-__all__ = ["STUDIES", "StudySpec", "get_study"]
+__all__ = ["STUDIES", "GridValues", "StudySpec", "get_study"]
 
 _NAN3 = (np.nan, np.nan, np.nan)
 # 95 % quantile of chi-square with 3 degrees of freedom (scipy.stats costs 0.7 s to import).
 CHI2_3DOF_95 = float(special.chdtri(3, 0.05))
+
+
+@dataclass(frozen=True)
+class GridValues:
+    """The values one grid key allows: numbers of ``type`` (``int`` or ``float``) within bounds,
+    or text among ``choices``.
+
+    ``maximum`` and ``choices`` may be functions of the study's protocol, for limits the
+    protocol defines (its marker sets, its joints, its recording length), so that a config that
+    adds a marker set to the protocol may use it in the grid.
+    """
+
+    type: type
+    minimum: float | None = None
+    exclusive_minimum: bool = False
+    maximum: float | Callable[[object], float] | None = None
+    choices: tuple[str, ...] | Callable[[object], tuple[str, ...]] | None = None
+
+    def allowed(self, protocol) -> str:
+        """The allowed values in words, e.g. ``"a number > 0 and <= 180"``."""
+        if self.type is str:
+            return "one of " + ", ".join(map(str, self._resolve(self.choices, protocol)))
+        words = ["an integer" if self.type is int else "a number"]
+        if self.minimum is not None:
+            words.append(f"{'>' if self.exclusive_minimum else '>='} {self.minimum:g}")
+        maximum = self._resolve(self.maximum, protocol)
+        if maximum is not None:
+            words.append(f"<= {maximum:g}")
+        return " ".join(words[:2]) + "".join(f" and {w}" for w in words[2:])
+
+    def accepts(self, value, protocol) -> bool:
+        """Whether ``value`` (as YAML gives it) is one of the allowed values."""
+        if self.type is str:
+            return isinstance(value, str) and value in self._resolve(self.choices, protocol)
+        # bool is an int to Python but never a grid value; an integer key takes no 5.0, whose
+        # file name and seed would differ from 5's.
+        numeric = (int,) if self.type is int else (int, float)
+        if isinstance(value, bool) or not isinstance(value, numeric) or not math.isfinite(value):
+            return False
+        if self.minimum is not None and (
+            value <= self.minimum if self.exclusive_minimum else value < self.minimum
+        ):
+            return False
+        maximum = self._resolve(self.maximum, protocol)
+        return maximum is None or value <= maximum
+
+    @staticmethod
+    def _resolve(limit, protocol):
+        return limit(protocol) if callable(limit) else limit
 
 
 @dataclass(frozen=True)
@@ -26,7 +76,7 @@ class StudySpec:
     ``kind`` is the estimator kind it runs; ``grid_keys`` its condition columns, in order;
     ``seed_keys`` the condition keys that define a random trial (the rest select a view of the
     same trial, e.g. the first Nt frames); ``simulator`` the module providing ``simulate`` and
-    the protocol class named ``protocol_class``.
+    the protocol class named ``protocol_class``; ``grid_spec`` the values each grid key allows.
     """
 
     name: str
@@ -36,6 +86,14 @@ class StudySpec:
     simulator: str
     protocol_class: str
     segments: tuple[str, ...]
+    grid_spec: Mapping[str, GridValues] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if tuple(self.grid_spec) != self.grid_keys:
+            raise ValueError(
+                f"study {self.name!r}: grid_spec keys {tuple(self.grid_spec)} must be the grid "
+                f"keys {self.grid_keys}, in order"
+            )
 
     def module(self):
         return importlib.import_module(self.simulator)
@@ -149,6 +207,12 @@ STUDIES: dict[str, StudySpec] = {
             simulator="jointbench.simulate.cmc",
             protocol_class="CmcProtocol",
             segments=("moving",),
+            grid_spec={
+                "marker_set": GridValues(str, choices=lambda protocol: tuple(protocol.directions)),
+                # A circumduction tilt: 0° does not move, beyond 180° it repeats.
+                "rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
+                "noise_mm": GridValues(float, minimum=0),
+            },
         ),
         StudySpec(
             name="hinge",
@@ -158,6 +222,11 @@ STUDIES: dict[str, StudySpec] = {
             simulator="jointbench.simulate.hinge_study",
             protocol_class="HingeStudyProtocol",
             segments=("moving",),
+            grid_spec={
+                "protocol": GridValues(str, choices=lambda protocol: tuple(protocol.joints)),
+                "fe_rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
+                "aa_ratio": GridValues(float, minimum=0),
+            },
         ),
         StudySpec(
             name="hip",
@@ -168,6 +237,10 @@ STUDIES: dict[str, StudySpec] = {
             simulator="jointbench.simulate.hip",
             protocol_class="HipProtocol",
             segments=("proximal", "distal"),
+            # Nt frames of a recording of the protocol's n_frames.
+            grid_spec={
+                "n_frames": GridValues(int, minimum=1, maximum=lambda protocol: protocol.n_frames)
+            },
         ),
     )
 }
