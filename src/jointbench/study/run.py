@@ -6,6 +6,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from jointbench.estimators import registry
@@ -33,11 +34,18 @@ def simulate_condition(config: Mapping, study: str, condition: Mapping[str, obje
     return spec.simulate(condition, protocol, rngs)
 
 
+# What an estimator raises when one trial's data defeat it (bad geometry, a singular system,
+# an overflow); such a trial becomes a failed row. Anything else (TypeError, KeyError, …) is a
+# bug in the estimator or its options and stops the run. LinAlgError is a ValueError; it is
+# listed for the reader.
+NUMERICAL_FAILURES = (ValueError, np.linalg.LinAlgError, FloatingPointError)
+
+
 def _fit_one(fit, arguments, options) -> tuple[object, str, bool, int]:
-    """Run one fit; an exception becomes a failed row rather than a failed run."""
+    """Run one fit; a numerical failure becomes a failed row rather than a failed run."""
     try:
         result = fit(*arguments, **options)
-    except Exception as error:
+    except NUMERICAL_FAILURES as error:
         return None, f"error: {type(error).__name__}: {error}", False, 0
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
