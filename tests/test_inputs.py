@@ -6,11 +6,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from jointbench.estimators import registry
 from jointbench.study import config as study_config
-from jointbench.study.run import estimate, simulate_condition
+from jointbench.study.io import write_dataset, write_table
+from jointbench.study.run import collect, estimate, simulate_condition
+from jointbench.study.schema import check_against_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -73,3 +76,79 @@ def test_an_option_the_estimator_does_not_take_stops_the_run(cmc_trials):
     condition, trials = cmc_trials
     with pytest.raises(TypeError, match="tolerance"):
         estimate("cmc", "NM", trials, condition, {"tolerance": 1e-3})
+
+
+# ------------------------------------------------- estimates files held to their datasets
+
+
+@pytest.fixture
+def estimates_and_dataset(tmp_path, config, cmc_trials):
+    """A cmc dataset file of two trials and NM's estimates file of the same condition."""
+    condition, trials = cmc_trials
+    name = f"{study_config.condition_id(condition)}.parquet"
+    dataset = tmp_path / "datasets" / "cmc" / name
+    write_dataset(dataset, trials, study="cmc", condition=condition)
+    estimates = tmp_path / "estimates" / "cmc" / "NM" / name
+    write_table(estimate("cmc", "NM", trials, condition), estimates)
+    return estimates, dataset
+
+
+def rewrite(path, change):
+    """Apply ``change`` to the table at ``path`` in place."""
+    write_table(change(pd.read_parquet(path)), path)
+
+
+def test_a_matching_estimates_file_is_collected(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    collected = collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    assert sorted(collected["trial"]) == [0, 1]
+
+
+LIES = {
+    "missing trial": (lambda f: f[f["trial"] != 1], "missing trials: 1; the dataset has 2 trials"),
+    "trial twice": (lambda f: pd.concat([f, f.iloc[[0]]]), "trials listed more than once: 0"),
+    "invented trial": (
+        lambda f: f.assign(trial=[0, 7]),
+        "missing trials: 1; trials not in the dataset: 7; the dataset has 2 trials (0, 1)",
+    ),
+    "invented condition": (
+        lambda f: f.assign(rom_deg=999),
+        "column 'rom_deg' must be the dataset's 5 in every row, got 999",
+    ),
+    "no rows": (lambda f: f.iloc[:0], "no rows; the dataset has 2 trials (0, 1)"),
+}
+
+
+@pytest.mark.parametrize("lie", LIES)
+def test_an_estimates_file_that_lies_is_named(tmp_path, estimates_and_dataset, lie):
+    estimates, dataset = estimates_and_dataset
+    change, message = LIES[lie]
+    rewrite(estimates, change)
+    with pytest.raises(ValueError) as error:
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    assert str(error.value).startswith(f"{estimates}: ")
+    assert message in str(error.value)
+    assert not (tmp_path / "c.parquet").exists()
+
+
+def test_five_and_five_point_zero_are_one_condition_value(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(estimates, lambda f: f.assign(rom_deg=f["rom_deg"].astype(float)))
+    collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+
+
+def test_a_text_condition_value_is_not_the_number(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(estimates, lambda f: f.assign(rom_deg="5"))
+    with pytest.raises(ValueError, match="column 'rom_deg' must be the dataset's 5"):
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+
+
+def test_long_trial_lists_are_shortened(tmp_path, estimates_and_dataset):
+    estimates, _ = estimates_and_dataset
+    frame = pd.read_parquet(estimates)
+    many = pd.concat([frame.iloc[[0]].assign(trial=t) for t in range(2, 40, 3)])
+    with pytest.raises(ValueError, match=r"not in the dataset: 2, 5, .*, 29, … \(13 in all\)"):
+        check_against_dataset(
+            pd.concat([frame, many]), trials=[0, 1], condition={}, source=str(estimates)
+        )

@@ -32,9 +32,11 @@ rule summarise_estimator:
 
 
 rule collect:
-    """All estimates of a study in one table, each file's schema checked first."""
+    """All estimates of a study in one table, each file's schema checked first and each held
+    to its condition's dataset (same trials, each once, same condition values)."""
     input:
-        lambda w: estimates_files(w.study),
+        estimates=lambda w: estimates_files(w.study),
+        datasets=lambda w: expand("results/datasets/{study}/{condition}.parquet", study=w.study, condition=condition_ids(w.study)),
     output:
         "results/collected/{study}.parquet",
     log:

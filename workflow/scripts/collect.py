@@ -1,3 +1,8 @@
 from jointbench.study.run import collect
 
-collect(snakemake.wildcards.study, snakemake.input, snakemake.output[0])
+collect(
+    snakemake.wildcards.study,
+    snakemake.input.estimates,
+    snakemake.output[0],
+    datasets=snakemake.input.datasets,
+)

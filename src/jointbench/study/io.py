@@ -18,7 +18,7 @@ import pyarrow.parquet as pq
 
 from jointbench.simulate import Trials
 
-__all__ = ["read_dataset", "read_metadata", "write_dataset", "write_table"]
+__all__ = ["read_dataset", "read_metadata", "read_trial_numbers", "write_dataset", "write_table"]
 
 _META_KEY = b"jointbench"
 
@@ -66,6 +66,11 @@ def read_metadata(path: str | Path) -> dict:
     if _META_KEY not in metadata:
         raise ValueError(f"{path} is not a jointbench dataset (no 'jointbench' metadata)")
     return json.loads(metadata[_META_KEY])
+
+
+def read_trial_numbers(path: str | Path) -> np.ndarray:
+    """The sorted trial numbers of a dataset file (reads the ``trial`` column only)."""
+    return np.unique(pq.read_table(path, columns=["trial"]).column("trial").to_numpy())
 
 
 def read_dataset(path: str | Path) -> tuple[Trials, dict]:

@@ -13,8 +13,14 @@ from jointbench.estimators import registry
 from jointbench.simulate import Trials
 from jointbench.study.config import parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
-from jointbench.study.io import read_dataset, write_dataset, write_table
-from jointbench.study.schema import check_estimates
+from jointbench.study.io import (
+    read_dataset,
+    read_metadata,
+    read_trial_numbers,
+    write_dataset,
+    write_table,
+)
+from jointbench.study.schema import check_against_dataset, check_estimates
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
 
@@ -106,15 +112,31 @@ def run_estimate_files(
         write_table(estimate(study, method, trials, metadata["condition"], options), output)
 
 
-def collect(study: str, paths: Sequence[str | Path], output: str) -> pd.DataFrame:
-    """Concatenate a study's estimates files after checking each one's schema."""
+def collect(
+    study: str,
+    paths: Sequence[str | Path],
+    output: str,
+    datasets: Sequence[str | Path],
+) -> pd.DataFrame:
+    """Concatenate a study's estimates files after checking each one's schema and holding it to
+    the dataset file of its condition (same trials, each once, same condition values)."""
     spec = get_study(study)
+    by_condition = {Path(path).stem: path for path in datasets}
     frames = []
     for path in paths:
         frame = pd.read_parquet(path)
         method = Path(path).parent.name
         check_estimates(
             frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
+        )
+        dataset = by_condition.get(Path(path).stem)
+        if dataset is None:
+            raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
+        check_against_dataset(
+            frame,
+            trials=read_trial_numbers(dataset),
+            condition=read_metadata(dataset)["condition"],
+            source=str(path),
         )
         frames.append(frame)
     collected = pd.concat(frames, ignore_index=True)
