@@ -3,6 +3,11 @@ corrupt intermediate files named."""
 
 from __future__ import annotations
 
+import logging
+import os
+import re
+import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +16,15 @@ import pytest
 
 from jointbench.estimators import registry
 from jointbench.study import config as study_config
-from jointbench.study.io import write_dataset, write_table
+from jointbench.study.io import (
+    read_dataset,
+    read_metadata,
+    read_table,
+    read_trial_numbers,
+    write_dataset,
+    write_table,
+)
+from jointbench.study.logs import logging_to
 from jointbench.study.run import collect, estimate, simulate_condition
 from jointbench.study.schema import check_against_dataset
 
@@ -152,3 +165,58 @@ def test_long_trial_lists_are_shortened(tmp_path, estimates_and_dataset):
         check_against_dataset(
             pd.concat([frame, many]), trials=[0, 1], condition={}, source=str(estimates)
         )
+
+
+# ----------------------------------------------------------- unreadable intermediate files
+
+
+def truncate(path: Path) -> None:
+    """Cut a file to half its length, keeping its modification time (an interrupted copy)."""
+    stat = path.stat()
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+
+
+@pytest.mark.parametrize("read", [read_dataset, read_metadata, read_trial_numbers, read_table])
+def test_a_truncated_file_is_named_with_the_command_that_regenerates_it(
+    estimates_and_dataset, read
+):
+    _, dataset = estimates_and_dataset
+    truncate(dataset)
+    with pytest.raises(ValueError) as error:
+        read(dataset)
+    message = str(error.value)
+    assert message.startswith(f"{dataset}: cannot be read as parquet (ArrowInvalid")
+    assert f"snakemake -j2 --forcerun {dataset}" in message
+    assert dataset.exists()
+
+
+def test_a_missing_file_is_named(tmp_path):
+    with pytest.raises(ValueError, match=r"nowhere\.parquet: cannot be read as parquet"):
+        read_dataset(tmp_path / "nowhere.parquet")
+
+
+def test_collect_names_a_truncated_estimates_file(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    truncate(estimates)
+    with pytest.raises(ValueError, match=f"^{re.escape(str(estimates))}: cannot be read"):
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+
+
+# ------------------------------------------------------------------------------ job logs
+
+
+def test_the_log_holds_the_error_stderr_and_warnings(tmp_path):
+    log = tmp_path / "logs" / "job.log"
+    stderr = sys.stderr
+    with pytest.raises(ValueError, match="bad trial"), logging_to(log):
+        print("to stderr", file=sys.stderr)
+        warnings.warn("a warning", UserWarning, stacklevel=1)
+        logging.getLogger("jointbench").warning("a log record")
+        raise ValueError("bad trial")
+    text = log.read_text()
+    for line in ["to stderr", "a warning", "a log record", "ValueError: bad trial"]:
+        assert line in text, text
+    assert "Traceback" in text
+    assert sys.stderr is stderr

@@ -7,8 +7,9 @@ parameters are JSON in the parquet metadata under the key ``jointbench``.
 
 from __future__ import annotations
 
+import functools
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -18,9 +19,35 @@ import pyarrow.parquet as pq
 
 from jointbench.simulate import Trials
 
-__all__ = ["read_dataset", "read_metadata", "read_trial_numbers", "write_dataset", "write_table"]
+__all__ = [
+    "read_dataset",
+    "read_metadata",
+    "read_table",
+    "read_trial_numbers",
+    "write_dataset",
+    "write_table",
+]
 
 _META_KEY = b"jointbench"
+
+
+def _names_unreadable_file(read: Callable) -> Callable:
+    """Turn pyarrow's errors on a missing, truncated or corrupt file (``ArrowInvalid: Parquet
+    magic bytes not found``, which names no file) into a ``ValueError`` naming the file and the
+    command that regenerates it, with everything downstream of it."""
+
+    @functools.wraps(read)
+    def reading(path, *args, **kwargs):
+        try:
+            return read(path, *args, **kwargs)
+        except (pa.ArrowException, OSError) as error:
+            raise ValueError(
+                f"{path}: cannot be read as parquet ({type(error).__name__}: {error}); the file "
+                f"is missing, truncated or corrupt. Regenerate it and what depends on it with: "
+                f"snakemake -j2 --forcerun {path}"
+            ) from error
+
+    return reading
 
 
 def _long_table(trials: Trials) -> pa.Table:
@@ -60,6 +87,7 @@ def write_dataset(
     pq.write_table(table, path)
 
 
+@_names_unreadable_file
 def read_metadata(path: str | Path) -> dict:
     """The ``jointbench`` metadata of a dataset file."""
     metadata = pq.read_schema(path).metadata or {}
@@ -68,11 +96,13 @@ def read_metadata(path: str | Path) -> dict:
     return json.loads(metadata[_META_KEY])
 
 
+@_names_unreadable_file
 def read_trial_numbers(path: str | Path) -> np.ndarray:
     """The sorted trial numbers of a dataset file (reads the ``trial`` column only)."""
     return np.unique(pq.read_table(path, columns=["trial"]).column("trial").to_numpy())
 
 
+@_names_unreadable_file
 def read_dataset(path: str | Path) -> tuple[Trials, dict]:
     """Read a dataset file back into :class:`Trials` and its metadata."""
     metadata = read_metadata(path)
@@ -84,6 +114,12 @@ def read_dataset(path: str | Path) -> tuple[Trials, dict]:
         segments[str(name)] = part[["x", "y", "z"]].to_numpy().reshape(shape)
     trials = Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"])
     return trials, metadata
+
+
+@_names_unreadable_file
+def read_table(path: str | Path) -> pd.DataFrame:
+    """A results table (estimates, collected results) written by :func:`write_table`."""
+    return pd.read_parquet(path)
 
 
 def write_table(frame: pd.DataFrame, path: str | Path) -> None:

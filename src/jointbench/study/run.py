@@ -16,6 +16,7 @@ from jointbench.study.diagnostics import DIAGNOSTICS
 from jointbench.study.io import (
     read_dataset,
     read_metadata,
+    read_table,
     read_trial_numbers,
     write_dataset,
     write_table,
@@ -124,7 +125,7 @@ def collect(
     by_condition = {Path(path).stem: path for path in datasets}
     frames = []
     for path in paths:
-        frame = pd.read_parquet(path)
+        frame = read_table(path)
         method = Path(path).parent.name
         check_estimates(
             frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
