@@ -13,6 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from test_extension import CENTROID_RULE, user_clone
+from workflow_copy import run_snakemake
 
 from jointbench.estimators import registry
 from jointbench.study import config as study_config
@@ -220,3 +222,59 @@ def test_the_log_holds_the_error_stderr_and_warnings(tmp_path):
         assert line in text, text
     assert "Traceback" in text
     assert sys.stderr is stderr
+
+
+# ---------------------------------------------------------------------------- end to end
+
+DATASET = "results/datasets/cmc/marker_set-M__rom_deg-5__noise_mm-1.0.parquet"
+
+
+def cmc_clone(destination: Path, *, estimators, external=(), rule=None) -> list[str]:
+    """The workflow copied to ``destination`` with a two-condition, two-trial cmc grid; returns
+    the Snakemake arguments selecting that config."""
+    overlay = user_clone(
+        destination, estimators=list(estimators), external=list(external), rule=rule
+    )
+    return ["--configfile", str(overlay)]
+
+
+@pytest.mark.pipeline
+def test_a_truncated_dataset_is_named_logged_and_regenerated(tmp_path):
+    config = cmc_clone(tmp_path, estimators=["LS"])
+    assert run_snakemake(tmp_path, DATASET, *config).returncode == 0
+    truncate(tmp_path / DATASET)
+
+    failed = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config)
+    assert failed.returncode != 0
+    message = f"{DATASET}: cannot be read as parquet"
+    assert message in failed.stdout + failed.stderr
+    assert message in (tmp_path / "results/logs/estimate/cmc/LS.log").read_text()
+    assert (tmp_path / DATASET).exists()  # nothing removed: the user decides
+
+    again = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config, "--forcerun", DATASET)
+    assert again.returncode == 0, again.stderr[-3000:]
+    read_dataset(tmp_path / DATASET)
+    assert len(pd.read_parquet(tmp_path / "results/collected/cmc.parquet")) == 2 * 2
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize(
+    ("lie", "message"),
+    [
+        ("rows[1:]", "missing trials: 0; the dataset has 2 trials (0, 1)"),
+        ("[{**r, 'rom_deg': 999} for r in rows]", "column 'rom_deg' must be the dataset's 5"),
+    ],
+    ids=["trial missing", "condition invented"],
+)
+def test_an_external_estimator_that_lies_stops_collect(tmp_path, lie, message):
+    rule = CENTROID_RULE.replace("pd.DataFrame(rows)", f"pd.DataFrame({lie})")
+    assert rule != CENTROID_RULE
+    config = cmc_clone(tmp_path, estimators=[], external=["centroid"], rule=rule)
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config)
+    assert run.returncode != 0
+    named = (
+        f"results/estimates/cmc/centroid/marker_set-M__rom_deg-5__noise_mm-1.0.parquet: {message}"
+    )
+    assert named in run.stdout + run.stderr, (run.stdout + run.stderr)[-3000:]
+    assert named in (tmp_path / "results/logs/collect/cmc.log").read_text()
+    assert not (tmp_path / "results/collected/cmc.parquet").exists()
