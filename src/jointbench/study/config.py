@@ -118,7 +118,8 @@ def _check_estimators(spec: StudySpec, settings: Mapping, where: str) -> None:
     for name, options in settings.get("options", {}).items():
         if name not in builtin:
             raise ValueError(
-                f"{where}.options.{name}: not an estimator of this study; options are for: "
+                f"{where}.options.{name}: {name!r} is not listed under "
+                f"studies.{spec.name}.estimators; options go to those built-in estimators: "
                 f"{', '.join(builtin) or 'none'}"
             )
         accepted = _option_names(registry.get(spec.kind, name), len(spec.segments))
