@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from jointbench.simulate import Trials
@@ -99,7 +100,8 @@ def read_metadata(path: str | Path) -> dict:
 @_names_unreadable_file
 def read_trial_numbers(path: str | Path) -> np.ndarray:
     """The sorted trial numbers of a dataset file (reads the ``trial`` column only)."""
-    return np.unique(pq.read_table(path, columns=["trial"]).column("trial").to_numpy())
+    trials = pq.read_table(path, columns=["trial"]).column("trial")
+    return np.sort(pc.unique(trials).to_numpy())
 
 
 @_names_unreadable_file

@@ -122,7 +122,14 @@ def collect(
     """Concatenate a study's estimates files after checking each one's schema and holding it to
     the dataset file of its condition (same trials, each once, same condition values)."""
     spec = get_study(study)
-    by_condition = {Path(path).stem: path for path in datasets}
+    # Each dataset is read once, whatever the number of estimators.
+    expected = {
+        Path(path).stem: {
+            "trials": read_trial_numbers(path),
+            "condition": read_metadata(path)["condition"],
+        }
+        for path in datasets
+    }
     frames = []
     for path in paths:
         frame = read_table(path)
@@ -130,15 +137,9 @@ def collect(
         check_estimates(
             frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
         )
-        dataset = by_condition.get(Path(path).stem)
-        if dataset is None:
+        if Path(path).stem not in expected:
             raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
-        check_against_dataset(
-            frame,
-            trials=read_trial_numbers(dataset),
-            condition=read_metadata(dataset)["condition"],
-            source=str(path),
-        )
+        check_against_dataset(frame, **expected[Path(path).stem], source=str(path))
         frames.append(frame)
     collected = pd.concat(frames, ignore_index=True)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
