@@ -63,6 +63,18 @@ BAD = [
         ["options.BC.tolerance", "max_iterations, tol_x, tol_fun"],
     ),
     ("cmc", ("options",), {"XX": {}}, ["studies.cmc.options.XX", "NM, LS, BC"]),
+    (
+        "cmc",
+        ("options",),
+        {"BC": {"max_iterations": "many"}},
+        ["options.BC.max_iterations: 'many' is not an integer (the default is 600)"],
+    ),
+    (
+        "cmc",
+        ("options",),
+        {"BC": {"tol_x": True}},
+        ["options.BC.tol_x: True is not a number (the default is 0.0001)"],
+    ),
     ("cmc", ("external_estimators",), ["NM"], ["external_estimators", "'NM'", "built-in"]),
     ("cmc", ("protocol",), {"spiral": 2}, ["studies.cmc.protocol", "spiral"]),
 ]
@@ -93,7 +105,7 @@ def test_a_marker_set_added_by_the_protocol_may_be_used(config):
 
 
 def test_every_option_the_estimators_take_is_accepted(config):
-    good = changed(config, "cmc", ("options",), {"BC": {"max_iterations": 10, "tol_x": 1e-3}})
+    good = changed(config, "cmc", ("options",), {"BC": {"max_iterations": 10, "tol_x": 1}})
     study_config.check_config(good)
     hip = changed(config, "hip", ("options",), {"gauss-markov": {"noise_mm": 1.7}})
     study_config.check_config(hip)

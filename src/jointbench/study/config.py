@@ -122,22 +122,47 @@ def _check_estimators(spec: StudySpec, settings: Mapping, where: str) -> None:
                 f"studies.{spec.name}.estimators; options go to those built-in estimators: "
                 f"{', '.join(builtin) or 'none'}"
             )
-        accepted = _option_names(registry.get(spec.kind, name), len(spec.segments))
-        for option in options:
+        accepted = _options(registry.get(spec.kind, name), len(spec.segments))
+        for option, value in options.items():
+            key = f"{where}.options.{name}.{option}"
             if accepted is not None and option not in accepted:
                 raise ValueError(
-                    f"{where}.options.{name}.{option}: {name} takes no option {option!r}; "
+                    f"{key}: {name} takes no option {option!r}; "
                     f"its options: {', '.join(accepted) or 'none'}"
+                )
+            expected = _unlike(value, (accepted or {}).get(option))
+            if expected:
+                raise ValueError(
+                    f"{key}: {value!r} is not {expected} (the default is {accepted[option]!r})"
                 )
 
 
-def _option_names(fit, n_arrays: int) -> list[str] | None:
-    """Keyword options ``fit`` takes after its ``n_arrays`` marker arrays (``None``: any)."""
+def _options(fit, n_arrays: int) -> dict[str, object] | None:
+    """Keyword options ``fit`` takes after its ``n_arrays`` marker arrays, with their defaults
+    (``None``: it takes any)."""
     parameters = list(inspect.signature(fit).parameters.values())[n_arrays:]
     if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
         return None
     keyword = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
-    return [p.name for p in parameters if p.kind in keyword]
+    return {p.name: p.default for p in parameters if p.kind in keyword}
+
+
+def _unlike(value: object, default: object) -> str | None:
+    """What ``value`` should be to replace ``default`` when it does not fit, else ``None``.
+
+    Only plain defaults say what an option takes; ``None`` or an array default says nothing.
+    bool is an int to Python, so it is told apart first.
+    """
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if isinstance(default, bool):
+        return None if isinstance(value, bool) else "true or false"
+    if isinstance(default, int):
+        return None if number and isinstance(value, int) else "an integer"
+    if isinstance(default, float):
+        return None if number else "a number"
+    if isinstance(default, str):
+        return None if isinstance(value, str) else "text"
+    return None
 
 
 def study_names(config: Mapping) -> list[str]:
