@@ -10,7 +10,7 @@ import yaml
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench.study import config as study_config
-from jointbench.study.studies import STUDIES
+from jointbench.study.studies import get_study, study_names
 
 
 @pytest.fixture(scope="module")
@@ -112,7 +112,8 @@ def test_every_option_the_estimators_take_is_accepted(config):
 
 
 def test_every_study_declares_the_values_of_each_grid_key():
-    for spec in STUDIES.values():
+    for name in study_names():
+        spec = get_study(name)
         assert tuple(spec.grid_spec) == spec.grid_keys
 
 

@@ -3,11 +3,8 @@ corrupt intermediate files named."""
 
 from __future__ import annotations
 
-import logging
 import os
 import re
-import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +23,6 @@ from jointbench.study.io import (
     write_dataset,
     write_table,
 )
-from jointbench.study.logs import logging_to
 from jointbench.study.run import collect, estimate, simulate_condition
 from jointbench.study.schema import check_against_dataset
 
@@ -204,24 +200,6 @@ def test_collect_names_a_truncated_estimates_file(tmp_path, estimates_and_datase
     truncate(estimates)
     with pytest.raises(ValueError, match=f"^{re.escape(str(estimates))}: cannot be read"):
         collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
-
-
-# ------------------------------------------------------------------------------ job logs
-
-
-def test_the_log_holds_the_error_stderr_and_warnings(tmp_path):
-    log = tmp_path / "logs" / "job.log"
-    stderr = sys.stderr
-    with pytest.raises(ValueError, match="bad trial"), logging_to(log):
-        print("to stderr", file=sys.stderr)
-        warnings.warn("a warning", UserWarning, stacklevel=1)
-        logging.getLogger("jointbench").warning("a log record")
-        raise ValueError("bad trial")
-    text = log.read_text()
-    for line in ["to stderr", "a warning", "a log record", "ValueError: bad trial"]:
-        assert line in text, text
-    assert "Traceback" in text
-    assert sys.stderr is stderr
 
 
 # ---------------------------------------------------------------------------- end to end

@@ -7,15 +7,26 @@ for _study in STUDIES:
         name:
             f"estimate_{_study}"
         input:
-            expand("results/datasets/{study}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
+            expand(
+                "results/datasets/{study}/{condition}.parquet",
+                study=_study,
+                condition=condition_ids(_study),
+            ),
         output:
-            expand("results/estimates/{study}/{{method}}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
-        wildcard_constraints:
-            method=_alternatives(jb_config.estimator_names(config, _study, source="builtin")),
+            expand(
+                "results/estimates/{study}/{{method}}/{condition}.parquet",
+                study=_study,
+                condition=condition_ids(_study),
+            ),
         log:
             f"results/logs/estimate/{_study}/{{method}}.log",
+        wildcard_constraints:
+            method=_alternatives(
+                jb_config.estimator_names(config, _study, source="builtin")
+            ),
         params:
             study=_study,
+            code=estimate_code(_study),
         script:
             "../scripts/estimate.py"
 
@@ -27,6 +38,10 @@ rule summarise_estimator:
         lambda w: estimates_files(w.study, [w.method]),
     output:
         "results/summaries/{study}/{method}.csv",
+    log:
+        "results/logs/summarise/{study}/{method}.log",
+    params:
+        code=code_fingerprint(pipeline.summarise_estimates),
     script:
         "../scripts/summarise.py"
 
@@ -36,10 +51,14 @@ rule collect:
     to its condition's dataset (same trials, each once, same condition values)."""
     input:
         estimates=lambda w: estimates_files(w.study),
-        datasets=lambda w: expand("results/datasets/{study}/{condition}.parquet", study=w.study, condition=condition_ids(w.study)),
+        datasets=lambda w: [
+            dataset_file(w.study, c) for c in jb_config.conditions(config, w.study)
+        ],
     output:
         "results/collected/{study}.parquet",
     log:
         "results/logs/collect/{study}.log",
+    params:
+        code=code_fingerprint(jb_run.collect),
     script:
         "../scripts/collect.py"

@@ -6,10 +6,15 @@ for _study in STUDIES:
         name:
             f"simulate_{_study}"
         output:
-            expand("results/datasets/{study}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
+            expand(
+                "results/datasets/{study}/{condition}.parquet",
+                study=_study,
+                condition=condition_ids(_study),
+            ),
         log:
             f"results/logs/simulate/{_study}.log",
         params:
             study=_study,
+            code=simulate_code(_study),
         script:
             "../scripts/simulate.py"

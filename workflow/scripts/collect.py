@@ -1,7 +1,7 @@
-from jointbench.study.logs import logging_to
+from jointbench import pipeline
 from jointbench.study.run import collect
 
-with logging_to(snakemake.log[0]):
+with pipeline.job(snakemake):
     collect(
         snakemake.wildcards.study,
         snakemake.input.estimates,

@@ -1,7 +1,7 @@
-from jointbench.study.logs import logging_to
+from jointbench import pipeline
 from jointbench.study.run import run_estimate_files
 
-with logging_to(snakemake.log[0]):
+with pipeline.job(snakemake):
     run_estimate_files(
         snakemake.config,
         snakemake.params.study,

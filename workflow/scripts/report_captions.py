@@ -1,4 +1,4 @@
-from jointbench.figures.captions import write_captions
+from jointbench import pipeline
 
-tables = {name: path for name, path in snakemake.input.items() if name != "descriptions"}
-write_captions(snakemake.input.descriptions, tables, snakemake.output)
+with pipeline.job(snakemake):
+    pipeline.write_captions(dict(snakemake.input.items()), snakemake.output, snakemake.config)

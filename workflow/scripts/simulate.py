@@ -1,5 +1,5 @@
-from jointbench.study.logs import logging_to
+from jointbench import pipeline
 from jointbench.study.run import run_simulate_files
 
-with logging_to(snakemake.log[0]):
+with pipeline.job(snakemake):
     run_simulate_files(snakemake.config, snakemake.params.study, snakemake.output)

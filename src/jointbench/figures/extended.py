@@ -9,7 +9,6 @@ soon as its estimates files are collected.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -17,27 +16,24 @@ import pandas as pd
 from matplotlib.colors import LogNorm
 from matplotlib.patches import Patch, Rectangle
 
-from jointbench.figures.common import method_style, save_figure, write_tables
+from jointbench.figures.common import method_style
 from jointbench.study import config as jb_config
+from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
-from jointbench.study.summary import ERROR_COLUMN, summarise
+from jointbench.study.summary import summarise
 
 __all__ = [
-    "PAPERS",
+    "NO_PAPER",
     "extended_figure",
     "extended_table",
     "mean_ranks",
     "origin_note",
-    "render",
 ]
 
-# The paper each study reproduces and the methods that paper compared (paper A §5, paper B §4,
-# paper C eq. 9 and §8); any other method in a study's results is an addition.
-PAPERS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "cmc": ("A", ("MA", "LS", "IS", "BC", "NM")),
-    "hinge": ("B", ("planar", "radial", "combined")),
-    "hip": ("C", ("gauss-markov", "analytic")),
-}
+#: A study's paper: its letter and the methods it compared (``("", ())`` for none); any other
+#: method in a study's results is an addition.
+PaperMethods = tuple[str, Sequence[str]]
+NO_PAPER: PaperMethods = ("", ())
 
 
 #: Mean errors equal to this many significant digits tie in the ranking.
@@ -56,11 +52,9 @@ def _unit(study: str) -> str:
     return {"deg": "°"}.get(unit, f" {unit}")
 
 
-def _paper_methods(study: str) -> tuple[str, ...]:
-    return PAPERS.get(study, ("", ()))[1]
-
-
-def extended_table(collected: pd.DataFrame, study: str) -> pd.DataFrame:
+def extended_table(
+    collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER
+) -> pd.DataFrame:
     """Every method on every condition of ``study``, ranked within the condition.
 
     Columns: the study's condition keys, ``method``, ``source`` (``"paper A"`` or ``"added"``),
@@ -74,11 +68,11 @@ def extended_table(collected: pd.DataFrame, study: str) -> pd.DataFrame:
     keys = list(get_study(study).grid_keys)
     mean = _mean_column(study)
     table = summarise(collected, study)
-    letter, paper = PAPERS.get(study, ("", ()))
+    letter, methods = paper
     table.insert(
         len(keys) + 1,
         "source",
-        np.where(table["method"].isin(paper), f"paper {letter}", "added"),
+        np.where(table["method"].isin(methods), f"paper {letter}", "added"),
     )
     # Rank on 3 significant digits: methods that reach the same minimum (IS and LM do) differ
     # by rounding noise, which must not decide a rank.
@@ -100,16 +94,21 @@ def mean_ranks(table: pd.DataFrame) -> pd.DataFrame:
     return ranks.reset_index().sort_values(["mean_rank", "method"], ignore_index=True)
 
 
-def origin_note(study: str, methods: Sequence[str], config: Mapping | None = None) -> str:
+def origin_note(
+    study: str,
+    methods: Sequence[str],
+    paper: PaperMethods = NO_PAPER,
+    config: Mapping | None = None,
+) -> str:
     """A sentence naming the paper's methods and the additions among ``methods``, the external
     ones (written by rules of their own, ``external_estimators`` in ``config``) separately."""
-    letter, paper = PAPERS.get(study, ("", ()))
+    letter, paper_methods = paper
     external = set()
     if config is not None and study in config.get("studies", {}):
         external = set(jb_config.estimator_names(config, study, source="external"))
-    ours = [m for m in paper if m in methods]
-    added = [m for m in methods if m not in paper and m not in external]
-    outside = [m for m in methods if m in external and m not in paper]
+    ours = [m for m in paper_methods if m in methods]
+    added = [m for m in methods if m not in paper_methods and m not in external]
+    outside = [m for m in methods if m in external and m not in paper_methods]
     parts = [f"Paper {letter}'s methods: {', '.join(ours) or 'none'}." if letter else ""]
     parts.append(f"Added, built in: {', '.join(added) or 'none'}.")
     parts.append(f"Added, external (a rule of their own): {', '.join(outside) or 'none'}.")
@@ -134,7 +133,7 @@ def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[s
     return wide.reindex(columns=list(methods))
 
 
-def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
+def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper: Sequence[str]):
     """Condition × method heat map of mean error (log colour scale), values printed in the
     cells, the best of each condition outlined. Returns the image for a colour bar."""
     keys = list(get_study(study).grid_keys)
@@ -164,7 +163,6 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
         )
         if best.iat[row, col]:
             ax.add_patch(Rectangle((col - 0.5, row - 0.5), 1, 1, fill=False, ec="#e41a1c", lw=2.2))
-    paper = _paper_methods(study)
     ax.set_xticks(range(len(methods)), [m if m in paper else f"{m}*" for m in methods])
     if len(methods) > 5 or max(map(len, methods)) > 6:
         plt.setp(ax.get_xticklabels(), rotation=40, ha="right", rotation_mode="anchor")
@@ -175,9 +173,10 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
     return image
 
 
-def _rank_bars(ax, ranks: pd.DataFrame, study: str, styles: Mapping[str, Mapping]) -> None:
+def _rank_bars(
+    ax, ranks: pd.DataFrame, styles: Mapping[str, Mapping], paper: Sequence[str]
+) -> None:
     """Horizontal bars of each method's mean rank, best at the top, additions hatched."""
-    paper = _paper_methods(study)
     y = np.arange(len(ranks))
     for position, row in zip(y, ranks.itertuples(), strict=True):
         ax.barh(
@@ -222,11 +221,13 @@ def _styles(methods: Sequence[str]) -> dict[str, dict[str, object]]:
     return styles
 
 
-def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
+def extended_figure(
+    collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER
+) -> plt.Figure:
     """One figure per study: the condition × method heat map of mean error with each
-    condition's best outlined, beside each method's mean rank. Saved to ``outputs`` (png, pdf).
+    condition's best outlined, beside each method's mean rank.
     """
-    table = extended_table(collected, study)
+    table = extended_table(collected, study, paper)
     ranks = mean_ranks(table)
     methods = list(ranks["method"])
     styles = _styles(methods)
@@ -239,42 +240,14 @@ def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
     heat = fig.add_subplot(outer[0, 0])
     right = outer[0, 1].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
     bars = fig.add_subplot(right[0, 0])
-    image = _heatmap(heat, table, study, methods)
+    image = _heatmap(heat, table, study, methods, paper[1])
     colorbar = fig.colorbar(image, ax=heat, fraction=0.05, pad=0.02)
     colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
-    _rank_bars(bars, ranks, study, styles)
+    _rank_bars(bars, ranks, styles, paper[1])
     kind = get_study(study).kind
     fig.suptitle(
         f"Study {study} ({kind}): every estimator's mean error per condition "
         f"({_unit(study).strip()}); red outline = best of the condition, † = some trials failed",
         fontsize=10,
     )
-    save_figure(fig, outputs)
-
-
-def render(rule: str, inputs, outputs, config: Mapping) -> None:
-    """Write the output of Snakemake rule ``rule`` (``extended_table`` or ``extended_figure``)
-    from the collected results of one study, ``results/collected/{study}.parquet``."""
-    path = Path(inputs[0])
-    study = path.stem
-    get_study(study)
-    collected = pd.read_parquet(path)
-    if rule == "extended_figure":
-        extended_figure(collected, study, outputs)
-    elif rule == "extended_table":
-        table = extended_table(collected, study)
-        methods = list(mean_ranks(table)["method"])
-        note = (
-            f"{origin_note(study, methods, config)} rank: 1 = lowest mean error of the "
-            f"condition (means equal to {TIE_DIGITS} significant digits share a rank; a method "
-            "without a finite error ranks last); best: rank 1 with a finite mean. Means and "
-            "medians leave out failed trials (no finite error), counted in failed."
-        )
-        write_tables(
-            table,
-            outputs,
-            title=f"Extended ranking, study {study}: every estimator on every condition",
-            note=note,
-        )
-    else:
-        raise ValueError(f"the extended ranking has no output for rule {rule!r}")
+    return fig

@@ -1,8 +1,8 @@
-"""Paper A (Chang & Pollard 2007, centre of rotation): Fig 3, Fig 4, Table 2 and claims A1–A11.
+"""Paper A (Chang & Pollard 2007, centre of rotation): drawing Fig 3 and Fig 4, building Table 2.
 
 Every function takes the collected ``cmc`` results (one row per marker set, RoM, noise, trial
-and method) and returns a table or draws a figure; nothing is read from the paper but the
-published values in ``config/published/paper_a.yaml``.
+and method) and returns a table or a figure; the paper's declaration, its published values and
+claims are in :mod:`jointbench.papers.paper_a`.
 """
 
 from __future__ import annotations
@@ -12,14 +12,13 @@ from collections.abc import Mapping
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from scipy import stats
 
-from jointbench.figures.common import evaluate_claims, method_style, save_figure
+from jointbench.figures.common import method_style
 
 __all__ = [
+    "CONDITION",
     "PAPER_METHODS",
     "bc_converged",
-    "claims_table",
     "condition_means",
     "fig3",
     "fig4",
@@ -57,7 +56,7 @@ def _wide(means: pd.DataFrame) -> pd.DataFrame:
     return means.pivot_table(index=CONDITION, columns="method", values="mean_error_mm")
 
 
-def fig4(collected: pd.DataFrame, outputs) -> None:
+def fig4(collected: pd.DataFrame) -> plt.Figure:
     """Mean CoR error vs RoM, one panel per marker set (rows) and noise level (columns)."""
     means = condition_means(collected)
     sets = sorted(means["marker_set"].unique(), key=lambda s: "MH".find(s))
@@ -116,12 +115,12 @@ def fig4(collected: pd.DataFrame, outputs) -> None:
         fontsize=10,
     )
     fig.tight_layout()
-    save_figure(fig, outputs)
+    return fig
 
 
 def fig3(
-    markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published: Mapping, outputs
-) -> None:
+    markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published: Mapping
+) -> plt.Figure:
     """One M-set, ±5°, 1.0 mm trial: trajectories, true CoR, every method's estimate and error.
 
     ``markers`` ``(n_frames, n_markers, 3)`` [mm]; ``errors`` has columns method, center_x/y/z,
@@ -166,7 +165,7 @@ def fig3(
     bars.set_title("CoR error: this trial vs paper A's Fig 3 trial", fontsize=9)
     fig.suptitle("Paper A Fig 3 reproduced: M set, ±5° RoM, 1.0 mm noise, one trial", fontsize=10)
     fig.tight_layout()
-    save_figure(fig, outputs)
+    return fig
 
 
 def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> pd.DataFrame:
@@ -184,225 +183,3 @@ def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> p
     )
     table["speedup_vs_paper"] = table["paper_matlab_s"] / table["mean_s"]
     return table
-
-
-# ----------------------------------------------------------------------------- claims
-
-
-def _binomial_interval(n: int, proportion: float) -> tuple[int, int]:
-    """Central 95 % range of a Binomial(n, proportion) count."""
-    dist = stats.binom(n, proportion)
-    return int(dist.ppf(0.025)), int(dist.ppf(0.975))
-
-
-def _claim_a1(collected, means, spec):
-    wide = means.pivot_table(
-        index=["marker_set", "method", "rom_deg"], columns="noise_mm", values="mean_error_mm"
-    )
-    up_noise = (np.diff(wide.to_numpy(), axis=1) > 0).ravel()
-    by_rom = means.pivot_table(
-        index=["marker_set", "method", "noise_mm"], columns="rom_deg", values="mean_error_mm"
-    )
-    down_rom = (np.diff(by_rom.to_numpy(), axis=1) < 0).ravel()
-    share = float(np.mean(np.concatenate([up_noise, down_rom])))
-    return f"{share:.0%} of one-step comparisons", share >= spec["tolerance"]
-
-
-def _claim_a2(collected, means, spec):
-    bc = collected[
-        (collected["method"] == "BC")
-        & (collected["marker_set"] == "M")
-        & (collected["rom_deg"] == collected["rom_deg"].min())
-    ]
-    n_trials = collected["trial"].nunique()
-    counts = bc.groupby("noise_mm")["converged"].sum().sort_index().astype(int).tolist()
-    inside = all(
-        lo <= count <= hi
-        for count, published in zip(counts, spec["published"], strict=True)
-        for lo, hi in [_binomial_interval(n_trials, published / 30)]
-    )
-    return f"{counts} of {n_trials}", inside
-
-
-def _claim_a3(collected, means, spec):
-    cell = means[(means["marker_set"] == "M") & (means["rom_deg"] == means["rom_deg"].min())]
-    lowest = cell.groupby("noise_mm")["mean_error_mm"].min()
-    values = [float(lowest.get(1.0, np.nan)), float(lowest.get(2.0, np.nan))]
-    ok = values[0] > spec["published"][0] and values[1] > spec["published"][1]
-    return f"lowest mean {values[0]:.1f} mm (1.0 mm), {values[1]:.1f} mm (2.0 mm)", ok
-
-
-def _claim_a4(collected, means, spec):
-    wide = _wide(means)
-    wide = wide.drop(
-        index=[
-            i for i in wide.index if i[0] == "M" and i[1] == wide.index.get_level_values(1).min()
-        ]
-    )
-    worst = wide[list(SPHERE_FITS)].idxmax(axis=1)
-    share = float(np.mean(worst == "LS"))
-    return f"LS worst sphere fit in {share:.0%} of {len(wide)} conditions", share >= spec[
-        "tolerance"
-    ]
-
-
-def _claim_a5(collected, means, spec):
-    wide = _wide(means)
-    others = wide[[m for m in PAPER_METHODS if m != "MA"]].min(axis=1)
-    excess_h = float((wide["MA"] - others).xs("H", level="marker_set").max())
-    ratio_m = float((wide["MA"] / others).xs("M", level="marker_set").median())
-    low, high = (
-        (1 - spec["tolerance"]) * spec["published"],
-        (1 + spec["tolerance"]) * spec["published"],
-    )
-    ok = low <= excess_h <= high and ratio_m <= 1.5
-    return f"H: up to {excess_h:.1f} mm worse; M: median ratio to best {ratio_m:.2f}", ok
-
-
-def _claim_a6(collected, means, spec):
-    best = _wide(means)[list(PAPER_METHODS)].idxmin(axis=1)
-    share = float(np.mean(best == "IS"))
-    return f"IS best in {share:.0%} of {len(best)} conditions", share > spec["published"]
-
-
-def _claim_a7(collected, means, spec):
-    if "local_minimum" not in collected.columns:
-        return "local minima not recorded", False
-    roms = sorted(collected["rom_deg"].unique())
-    # The paper counts at 5° among the BC-converged trials, at 15° among all trials.
-    converged = bc_converged(collected)
-    at_5 = converged[
-        (converged["method"] == "IS")
-        & (converged["marker_set"] == "M")
-        & (converged["rom_deg"] == roms[0])
-    ]
-    at_15 = collected[
-        (collected["method"] == "IS")
-        & (collected["marker_set"] == "M")
-        & (collected["rom_deg"] == roms[1])
-    ]
-    counts = [int(at_5["local_minimum"].sum()), int(at_15["local_minimum"].sum())]
-    sizes = [len(at_5), len(at_15)]
-    intervals = [_binomial_interval(sizes[0], 42 / 55), _binomial_interval(sizes[1], 17 / 90)]
-    ok = all(lo <= c <= hi for c, (lo, hi) in zip(counts, intervals, strict=True))
-    return f"{counts[0]} of {sizes[0]} at 5°, {counts[1]} of {sizes[1]} at 15°", ok
-
-
-def _claim_a8(collected, means, spec):
-    n_trials = collected["trial"].nunique()
-    complete = means.groupby(CONDITION)["n_trials"].min() == n_trials
-    wide = _wide(means).loc[complete[complete].index]
-    gap = wide["NM"] - wide[list(PAPER_METHODS)].min(axis=1)
-    share, largest = float(np.mean(gap <= 0.5)), float(gap.max())
-    tol_share, tol_gap = spec["tolerance"]
-    ok = share >= spec["published"][0] - tol_share and largest <= spec["published"][1] + tol_gap
-    return f"within 0.5 mm in {share:.0%} of {len(wide)}; largest gap {largest:.2f} mm", ok
-
-
-def _claim_a9(collected, means, spec):
-    cell = means[
-        (means["marker_set"] == "H")
-        & (means["rom_deg"] == 15)
-        & (means["noise_mm"] == 1.0)
-        & (means["method"] == "LS")
-    ]
-    value = float(cell["mean_error_mm"].iloc[0]) if len(cell) else np.nan
-    tolerance = max(2.0, 0.25 * spec["published"])
-    return f"{value:.1f} mm", abs(value - spec["published"]) <= tolerance
-
-
-def _claim_a10(collected, means, spec):
-    wide = _wide(means)
-    ratio = (wide.xs("H", level="marker_set") / wide.xs("M", level="marker_set")).median()
-    better_h, worse_h = ("IS", "BC", "NM"), ("LS", "MA")
-    ok = all(ratio[m] < 1 for m in better_h) and all(ratio[m] > 1 for m in worse_h)
-    text = ", ".join(f"{m} {ratio[m]:.2f}" for m in PAPER_METHODS)
-    return f"median H/M error ratio: {text}", ok
-
-
-def _claim_a11(collected, means, spec, sample_trial: int = 0):
-    trial = collected[
-        (collected["marker_set"] == "M")
-        & (collected["rom_deg"] == 5)
-        & (collected["noise_mm"] == 1.0)
-        & (collected["trial"] == sample_trial)
-    ]
-    errors = trial[trial["method"].isin(PAPER_METHODS)].set_index("method")["error_mm"]
-    text = ", ".join(f"{m} {errors[m]:.1f}" for m in PAPER_METHODS if m in errors)
-    ok = errors.idxmax() == "LS" and errors.idxmin() == "NM"
-    return f"trial {sample_trial}: {text} mm", ok
-
-
-_CLAIMS = {
-    "A1": _claim_a1,
-    "A2": _claim_a2,
-    "A3": _claim_a3,
-    "A4": _claim_a4,
-    "A5": _claim_a5,
-    "A6": _claim_a6,
-    "A7": _claim_a7,
-    "A8": _claim_a8,
-    "A9": _claim_a9,
-    "A10": _claim_a10,
-    "A11": _claim_a11,
-}
-
-
-def claims_table(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """Claims A1–A11 recomputed from ``collected`` (see :func:`common.evaluate_claims`)."""
-    return evaluate_claims(published["claims"], _CLAIMS, collected, condition_means(collected))
-
-
-# ----------------------------------------------------------------------------- file outputs
-
-
-def render(rule: str, inputs, outputs, config: Mapping) -> None:
-    """Write the output of Snakemake rule ``rule`` (``paper_a_fig3``, ``_fig4``, ``_table2``,
-    ``_claims``) from its input files."""
-    from jointbench.figures.common import read_published, write_tables
-    from jointbench.study.io import read_dataset
-
-    collected = pd.read_parquet(inputs.collected if hasattr(inputs, "collected") else inputs[0])
-    if rule == "paper_a_fig4":
-        fig4(collected, outputs)
-        return
-    published = read_published(inputs.published) if hasattr(inputs, "published") else None
-    if rule == "paper_a_fig3":
-        trials, metadata = read_dataset(inputs.dataset)
-        sample = 0
-        rows = collected[
-            (collected["marker_set"] == "M")
-            & (collected["rom_deg"] == 5)
-            & (collected["noise_mm"] == 1.0)
-            & (collected["trial"] == sample)
-            & collected["method"].isin(PAPER_METHODS)
-        ]
-        example = next(c for c in published["claims"] if c["id"] == "A11")["published"]
-        fig3(
-            trials.segments["moving"][sample],
-            np.asarray(metadata["truth"]["center"]),
-            rows,
-            example,
-            outputs,
-        )
-    elif rule == "paper_a_table2":
-        seconds = {
-            v["id"].removeprefix("A-T2-"): v["published"]
-            for v in published["values"]
-            if v["id"].startswith("A-T2-")
-        }
-        write_tables(
-            table2(collected, seconds),
-            outputs,
-            title="Paper A Table 2: computation time per trial (trials where BC converged)",
-            note="Ours: Python/NumPy on 2 cores, one trial at a time. Paper: MATLAB 6.5 on a "
-            "3 GHz Pentium 4. speedup_vs_paper = paper_matlab_s / mean_s.",
-        )
-    elif rule == "paper_a_claims":
-        write_tables(
-            claims_table(collected, published),
-            outputs,
-            title="Paper A claims, recomputed from our results",
-        )
-    else:
-        raise ValueError(f"paper A has no output for rule {rule!r}")

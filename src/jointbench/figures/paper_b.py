@@ -6,29 +6,17 @@ trial and method); Fig 2 fits the three costs to two freshly simulated trials.
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Mapping
-
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import evaluate_claims, method_style, save_figure
+from jointbench.figures.common import method_style
 
-__all__ = ["PAPER_METHODS", "claims_table", "fig2", "fig5", "table1", "within_tolerance"]
+__all__ = ["BREAKDOWN_DEG", "CELL", "PAPER_METHODS", "cell_statistics", "fig2", "fig5", "table1"]
 
 PAPER_METHODS = ("planar", "radial", "combined")
 CELL = ["protocol", "method", "fe_rom_deg", "aa_ratio"]
 BREAKDOWN_DEG = 20.0
-
-
-def within_tolerance(published: float, reproduced: float) -> bool:
-    """Table 1 tolerance: below 20° within max(2°, 25 %); from 20° (breakdown) ≥ 20° and ±15°."""
-    if np.isnan(reproduced):
-        return False
-    if published < BREAKDOWN_DEG:
-        return abs(reproduced - published) <= max(2.0, 0.25 * published)
-    return reproduced >= BREAKDOWN_DEG and abs(reproduced - published) <= 15.0
 
 
 def cell_statistics(collected: pd.DataFrame) -> pd.DataFrame:
@@ -39,15 +27,15 @@ def cell_statistics(collected: pd.DataFrame) -> pd.DataFrame:
     return stats.reset_index()
 
 
-def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """Every published Table 1 cell beside our mean and SD, and whether it is within tolerance."""
-    cells = pd.DataFrame(published["table1"]["cells"])
+def table1(collected: pd.DataFrame, cells: pd.DataFrame) -> pd.DataFrame:
+    """Every published Table 1 cell beside our mean and SD.
+
+    ``cells`` has the cell keys (:data:`CELL`), ``published``, and the verdict of the cell's
+    tolerance, ``within_tolerance`` and ``margin``.
+    """
     ours = cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
-    table = cells[[*CELL, "published"]].merge(ours, on=CELL, how="left")
+    table = cells.merge(ours, on=CELL, how="left")
     table["difference"] = table["mean"] - table["published"]
-    table["within_tolerance"] = [
-        within_tolerance(p, r) for p, r in zip(table["published"], table["mean"], strict=True)
-    ]
     return table.rename(columns={"mean": "reproduced_mean", "sd": "reproduced_sd"})[
         [
             *CELL,
@@ -56,12 +44,13 @@ def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
             "reproduced_sd",
             "difference",
             "within_tolerance",
+            "margin",
             "not_converged",
         ]
     ]
 
 
-def fig5(collected: pd.DataFrame, outputs) -> None:
+def fig5(collected: pd.DataFrame) -> plt.Figure:
     """Mean angular error with min–max bars for every condition: (a) knee, (b) index MCP."""
     stats = cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
     protocols = [p for p in ("knee", "mcp") if p in set(stats["protocol"])]
@@ -106,7 +95,7 @@ def fig5(collected: pd.DataFrame, outputs) -> None:
     axes[0, 0].legend(fontsize=8, loc="center left")
     fig.suptitle("Paper B Fig 5 reproduced: AoR error over 30 trials per condition", fontsize=10)
     fig.tight_layout()
-    save_figure(fig, outputs)
+    return fig
 
 
 def _circle_points(point, direction, center_of, radius, n=100):
@@ -121,7 +110,7 @@ def _circle_points(point, direction, center_of, radius, n=100):
     return centre + radius * (np.outer(np.cos(angle), e1) + np.outer(np.sin(angle), e2))
 
 
-def fig2(examples, outputs) -> None:
+def fig2(examples) -> plt.Figure:
     """Best-fitting plane, cylinder and circle on two trials with a known axis.
 
     ``examples``: list of ``(title, markers, truth, fits)`` with markers
@@ -168,145 +157,4 @@ def fig2(examples, outputs) -> None:
         fontsize=10,
     )
     fig.tight_layout()
-    save_figure(fig, outputs)
-
-
-# ----------------------------------------------------------------------------- claims
-
-
-def _means(collected: pd.DataFrame) -> pd.DataFrame:
-    return cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
-
-
-def _claim_b1(means, spec):
-    wide = means.pivot_table(
-        index=["protocol", "method", "fe_rom_deg"], columns="aa_ratio", values="mean"
-    )
-    share = float(np.mean(np.diff(wide.to_numpy(), axis=1) > 0))
-    return f"error grows in {share:.0%} of one-step ratio increases", share >= spec["tolerance"]
-
-
-def _claim_b2(means, spec):
-    planar = means[means["method"] == "planar"]
-    low = planar[planar["aa_ratio"] == planar["aa_ratio"].min()]
-    rest = planar[planar["aa_ratio"] != planar["aa_ratio"].min()]
-    text = f"ratio 0.1: max {low['mean'].max():.1f}°; other ratios: min {rest['mean'].min():.1f}°"
-    return text, bool((low["mean"] < 5).all() and (rest["mean"] >= 5).all())
-
-
-def _claim_b3(means, spec):
-    combined = means[means["method"] == "combined"]
-    upto_03 = combined[combined["aa_ratio"] <= 0.3]
-    at_05 = combined[(combined["aa_ratio"] == 0.5) & combined["fe_rom_deg"].isin([30, 60])]
-    text = (
-        f"ratio ≤ 0.3: max {upto_03['mean'].max():.1f}°; "
-        f"0.5 at FE 30/60: max {at_05['mean'].max():.1f}°"
-    )
-    return text, bool((upto_03["mean"] < 5).all() and (at_05["mean"] < 10).all() and len(at_05))
-
-
-def _claim_b4(means, spec):
-    low = means[means["aa_ratio"] <= 0.3].pivot_table(
-        index=["protocol", "fe_rom_deg", "aa_ratio"], columns="method", values="mean"
-    )
-    holds = low["radial"] > low["combined"]
-    return f"radial > combined in {int(holds.sum())} of {len(holds)} cells", bool(holds.all())
-
-
-def _claim_b5(means, spec):
-    wide = means.pivot_table(
-        index=["method", "fe_rom_deg", "aa_ratio"], columns="protocol", values="mean"
-    )
-    gap = (wide["knee"] - wide["mcp"]).abs()
-    return f"largest knee–MCP difference {gap.max():.2f}° ({len(gap)} cells)", bool(
-        gap.max() < spec["published"]
-    )
-
-
-def _claim_b6(means, spec):
-    jumps, crossings = 0, 0
-    for _, line in means.sort_values("aa_ratio").groupby(["protocol", "method", "fe_rom_deg"]):
-        values = line["mean"].to_numpy()
-        for before, after in itertools.pairwise(values):
-            if before < BREAKDOWN_DEG <= after:
-                crossings += 1
-                jumps += after > 50
-    return (
-        f"{jumps} of {crossings} crossings of 20° land above 50°",
-        crossings > 0 and jumps == crossings,
-    )
-
-
-_CLAIMS = {
-    "B1": _claim_b1,
-    "B2": _claim_b2,
-    "B3": _claim_b3,
-    "B4": _claim_b4,
-    "B5": _claim_b5,
-    "B6": _claim_b6,
-}
-
-
-def claims_table(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """Claims B1–B6 recomputed from ``collected`` (see :func:`common.evaluate_claims`)."""
-    return evaluate_claims(published["claims"], _CLAIMS, _means(collected))
-
-
-# ----------------------------------------------------------------------------- file outputs
-
-FIG2_EXAMPLES = (
-    # (title, condition): a large FE range, then a limited FE range with a large AA range.
-    ("knee, FE RoM 90°, AA/FE 0.3", {"protocol": "knee", "fe_rom_deg": 90, "aa_ratio": 0.3}),
-    ("knee, FE RoM 30°, AA/FE 0.5", {"protocol": "knee", "fe_rom_deg": 30, "aa_ratio": 0.5}),
-)
-
-
-def _fig2_examples(config: Mapping):
-    from jointbench.api import fit_axis
-    from jointbench.study.run import simulate_condition
-
-    one_trial = {
-        **config,
-        "studies": {**config["studies"], "hinge": {**config["studies"]["hinge"], "trials": 1}},
-    }
-    examples = []
-    for title, condition in FIG2_EXAMPLES:
-        trials = simulate_condition(one_trial, "hinge", condition)
-        markers = trials.segments["moving"][0]
-        fits = {method: fit_axis(markers, method) for method in PAPER_METHODS}
-        examples.append((title, markers, trials.truth, fits))
-    return examples
-
-
-def render(rule: str, inputs, outputs, config: Mapping) -> None:
-    """Write the output of Snakemake rule ``rule`` (``paper_b_table1``, ``_fig5``, ``_fig2``,
-    ``_claims``) from its input files."""
-    from jointbench.figures.common import read_published, write_tables
-
-    if rule == "paper_b_fig2":
-        fig2(_fig2_examples(config), outputs)
-        return
-    collected = pd.read_parquet(inputs.collected)
-    if rule == "paper_b_fig5":
-        fig5(collected, outputs)
-        return
-    published = read_published(inputs.published)
-    if rule == "paper_b_table1":
-        table = table1(collected, published)
-        within = int(table["within_tolerance"].sum())
-        write_tables(
-            table,
-            outputs,
-            title="Paper B Table 1: mean AoR angular error (degrees), published vs reproduced",
-            note=f"{within} of {len(table)} cells within tolerance. "
-            f"Tolerance: {published['table1']['tolerance']['rule']}. "
-            f"{published['table1'].get('note', '')}",
-        )
-    elif rule == "paper_b_claims":
-        write_tables(
-            claims_table(collected, published),
-            outputs,
-            title="Paper B claims, recomputed from our results",
-        )
-    else:
-        raise ValueError(f"paper B has no output for rule {rule!r}")
+    return fig

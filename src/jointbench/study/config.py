@@ -5,13 +5,17 @@ from __future__ import annotations
 import inspect
 import itertools
 from collections.abc import Mapping
+from importlib import resources
+from importlib.abc import Traversable
 from pathlib import Path
 
 import jsonschema
 import yaml
 
 from jointbench.estimators import registry
-from jointbench.study.studies import StudySpec, get_study
+from jointbench.simulate import Study
+from jointbench.study.studies import get_study
+from jointbench.study.studies import study_names as registered_studies
 
 __all__ = [
     "MAX_TRIALS",
@@ -26,7 +30,7 @@ __all__ = [
     "validate_config",
 ]
 
-SCHEMA_PATH = Path(__file__).resolve().parents[3] / "config" / "schema" / "config.schema.yaml"
+SCHEMA_PATH = resources.files("jointbench.schemas").joinpath("config.schema.yaml")
 
 # Trials per condition. At 10 000 the Monte Carlo standard error of a mean error is 1 % of the
 # trials' spread, finer than any published tolerance; the largest dataset (hip: 1200 frames of
@@ -34,10 +38,12 @@ SCHEMA_PATH = Path(__file__).resolve().parents[3] / "config" / "schema" / "confi
 MAX_TRIALS = 10_000
 
 
-def validate_against(document: Mapping, schema_path: str | Path, what: str) -> None:
+def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
     """Raise ``ValueError`` naming ``what`` and the offending path when ``document`` does not
     match the JSON schema (YAML) at ``schema_path``."""
-    schema = yaml.safe_load(Path(schema_path).read_text())
+    if isinstance(schema_path, str):
+        schema_path = Path(schema_path)
+    schema = yaml.safe_load(schema_path.read_text())
     try:
         jsonschema.validate(dict(document), schema)
     except jsonschema.ValidationError as error:
@@ -45,12 +51,20 @@ def validate_against(document: Mapping, schema_path: str | Path, what: str) -> N
         raise ValueError(f"{what} error at {where}: {error.message}") from None
 
 
-def validate_config(config: Mapping, schema_path: str | Path = SCHEMA_PATH) -> None:
-    """Raise ``ValueError`` when ``config`` does not match the JSON schema."""
+def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCHEMA_PATH) -> None:
+    """Raise ``ValueError`` when ``config`` does not match the JSON schema, or names a study
+    that is not registered."""
     validate_against(config, schema_path, "config")
+    unknown = sorted(set(config["studies"]) - set(registered_studies()))
+    if unknown:
+        raise ValueError(
+            f"config error at studies: unknown studies {unknown}; registered studies are "
+            f"{', '.join(registered_studies())} (a study outside the package is added by listing "
+            "its module under extensions)"
+        )
 
 
-def load_config(path: str | Path, schema_path: str | Path = SCHEMA_PATH) -> dict:
+def load_config(path: str | Path, schema_path: str | Path | Traversable = SCHEMA_PATH) -> dict:
     """Read and validate a YAML config (schema, then :func:`check_config`)."""
     config = yaml.safe_load(Path(path).read_text())
     validate_config(config, schema_path)
@@ -79,16 +93,17 @@ def check_config(config: Mapping) -> None:
         _check_estimators(spec, settings, where)
 
 
-def _check_grid(spec: StudySpec, grid: Mapping, protocol, where: str) -> None:
+def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
     keys = ", ".join(spec.grid_keys)
     for key in grid:
-        if key not in spec.grid_spec:
+        if key not in spec.grid_keys:
             raise ValueError(f"{where}.grid.{key}: unknown grid key; the {spec.name} keys: {keys}")
-    for key, allowed in spec.grid_spec.items():
+    for key in spec.grid_keys:
         if key not in grid:
             raise ValueError(f"{where}.grid.{key}: missing; the {spec.name} grid needs {keys}")
+        allowed = spec.grid_spec.get(key)
         for value in grid[key]:
-            if not allowed.accepts(value, protocol):
+            if allowed is not None and not allowed.accepts(value, protocol):
                 raise ValueError(
                     f"{where}.grid.{key}: {value!r} is not allowed; "
                     f"allowed: {allowed.allowed(protocol)}"
@@ -98,7 +113,7 @@ def _check_grid(spec: StudySpec, grid: Mapping, protocol, where: str) -> None:
             raise ValueError(f"{where}.grid.{key}: {', '.join(repeated)} listed more than once")
 
 
-def _check_estimators(spec: StudySpec, settings: Mapping, where: str) -> None:
+def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     known = registry.methods(spec.kind)
     builtin = list(settings.get("estimators", []))
     for name in builtin:

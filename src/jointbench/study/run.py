@@ -22,6 +22,7 @@ from jointbench.study.io import (
     write_table,
 )
 from jointbench.study.schema import check_against_dataset, check_estimates
+from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
 
@@ -80,7 +81,7 @@ def estimate(
                 **condition,
                 "trial": trial,
                 "method": method,
-                **spec.score(result, trials.truth),
+                **score(spec.kind, result, trials.truth),
                 "converged": converged,
                 "iterations": iterations,
                 "seconds": seconds,

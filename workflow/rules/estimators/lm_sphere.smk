@@ -4,16 +4,22 @@
 
 
 rule estimate_cmc_LM:
-    """LM: paper A's geometric sphere fit (f1) by Levenberg–Marquardt from the LS centre, one
-    condition at a time (workflow/external/lm_sphere.py)."""
+    """LM: paper A's geometric sphere fit (f1) by Levenberg–Marquardt from the LS centre, every
+    condition of the study in one job (workflow/external/lm_sphere.py)."""
     input:
-        "results/datasets/cmc/{condition}.parquet",
+        expand(
+            "results/datasets/cmc/{condition}.parquet", condition=condition_ids("cmc")
+        ),
     output:
-        "results/estimates/cmc/LM/{condition}.parquet",
+        expand(
+            "results/estimates/cmc/LM/{condition}.parquet",
+            condition=condition_ids("cmc"),
+        ),
     log:
-        "results/logs/estimate/cmc/LM/{condition}.log",
+        "results/logs/estimate/cmc/LM.log",
     params:
         # From the Snakefile's folder, so that `snakemake --directory elsewhere` finds it too.
         script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
+        out_dir="results/estimates/cmc/LM",
     shell:
-        "{PYTHON:q} {params.script:q} {input:q} {output:q} 2> {log:q}"
+        "{PYTHON:q} {params.script:q} --out-dir {params.out_dir:q} {input:q} 2> {log:q}"
