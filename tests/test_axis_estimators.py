@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.optimize import minimize
 
 import jointbench
 from jointbench.estimators import axis
@@ -185,44 +184,6 @@ def test_dodecahedron_starts():
     nearest = np.sort(gaps, axis=1)[:, 1:4]
     np.testing.assert_allclose(nearest, nearest[0, 0], rtol=1e-12)
     assert np.all(np.sort(gaps, axis=1)[:, 4] > nearest[0, 0] + 0.1)
-
-
-def rosenbrock3(a: float, b: float, c: float) -> float:
-    return (1 - a) ** 2 + 100 * (b - a * a) ** 2 + (c - 0.5) ** 2
-
-
-@pytest.mark.parametrize("x0", [(-1.2, 1.0, 0.0), (0.5, 0.5, 0.5), (2.0, 0.0, 1.0)])
-def test_nelder_mead_matches_scipy_fminsearch_port(x0):
-    """Same coefficients, initial simplex and stopping rules as fminsearch (and scipy's port)."""
-    x, f, converged, iterations, evaluations = axis.nelder_mead(rosenbrock3, x0)
-    reference = minimize(
-        lambda v: rosenbrock3(*v),
-        x0,
-        method="Nelder-Mead",
-        options={"xatol": 1e-4, "fatol": 1e-4, "maxiter": 600, "maxfev": 600},
-    )
-    np.testing.assert_array_equal(x, reference.x)
-    assert f == reference.fun
-    assert (iterations, evaluations, converged) == (reference.nit, reference.nfev, True)
-
-
-def test_nelder_mead_reports_the_iteration_limit():
-    _, _, converged, iterations, _ = axis.nelder_mead(rosenbrock3, (-1.2, 1.0, 0.0), max_iter=20)
-    assert not converged
-    assert iterations == 20
-
-
-def test_lockstep_runs_equal_independent_runs(noisy_hinge):
-    costs = axis.AxisCosts(noisy_hinge["markers"], noisy_hinge["center"])
-    batch = costs.batch_cost("combined", "angles")
-    starts = [axis.direction_to_angles(s) for s in axis.DODECAHEDRON_STARTS]
-    together = axis._multistart(batch, starts)
-    for x0, joint in zip(starts, together, strict=True):
-        alone = axis.nelder_mead(lambda az, el: float(batch(np.array([[az, el]]))[0]), x0)
-        # Batched products may round differently in the last bit; the paths agree otherwise.
-        np.testing.assert_allclose(alone[0], joint[0], atol=1e-9)
-        assert alone[1] == pytest.approx(joint[1], rel=1e-12)
-        assert alone[2:] == joint[2:]
 
 
 def test_winning_start_and_convergence_are_reported(noisy_hinge):

@@ -14,8 +14,10 @@ from test_extension import CENTROID_RULE, user_clone
 from workflow_copy import run_snakemake
 
 from jointbench.estimators import registry
+from jointbench.estimators.results import CenterResult
 from jointbench.study import config as study_config
 from jointbench.study.io import (
+    iter_dataset,
     read_dataset,
     read_metadata,
     read_table,
@@ -81,6 +83,36 @@ def test_programming_error_stops_the_run(cmc_trials, raising_estimator, error):
     condition, trials = cmc_trials
     with pytest.raises(type(error)):
         estimate("cmc", raising_estimator(error), trials, condition)
+
+
+@pytest.fixture
+def batched_estimator():
+    """Register a centre estimator whose batched form returns the given per-trial outcomes."""
+    outcomes = {}
+
+    def fits(markers):
+        raise AssertionError("the batched form is used")
+
+    fits.batched = lambda markers: outcomes["value"]
+    registry.register("center", "batched-outcomes")(fits)
+    yield lambda value: outcomes.__setitem__("value", value) or "batched-outcomes"
+    del registry._REGISTRY["center"]["batched-outcomes"]
+
+
+def test_a_batched_numerical_failure_becomes_a_failed_row(cmc_trials, batched_estimator):
+    condition, trials = cmc_trials
+    ok = CenterResult(center=np.zeros(3), converged=True, iterations=1, status="ok", method="b")
+    name = batched_estimator([np.linalg.LinAlgError("Singular matrix"), ok])
+    frame = estimate("cmc", name, trials, condition)
+    assert list(frame["status"]) == ["error: LinAlgError: Singular matrix", "ok"]
+
+
+def test_a_batched_programming_error_stops_the_run(cmc_trials, batched_estimator):
+    condition, trials = cmc_trials
+    ok = CenterResult(center=np.zeros(3), converged=True, iterations=1, status="ok", method="b")
+    name = batched_estimator([ok, TypeError("unsupported operand")])
+    with pytest.raises(TypeError, match="unsupported operand"):
+        estimate("cmc", name, trials, condition)
 
 
 def test_an_option_the_estimator_does_not_take_stops_the_run(cmc_trials):
@@ -176,7 +208,13 @@ def truncate(path: Path) -> None:
     os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
 
 
-@pytest.mark.parametrize("read", [read_dataset, read_metadata, read_trial_numbers, read_table])
+def read_blocks(path):
+    return list(iter_dataset(path))
+
+
+@pytest.mark.parametrize(
+    "read", [read_dataset, read_blocks, read_metadata, read_trial_numbers, read_table]
+)
 def test_a_truncated_file_is_named_with_the_command_that_regenerates_it(
     estimates_and_dataset, read
 ):

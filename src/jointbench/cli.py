@@ -26,10 +26,11 @@ def _snapshot(args: argparse.Namespace) -> int:
 
 
 def _readme(args: argparse.Namespace) -> int:
+    from jointbench.pipeline import paper_labels
     from jointbench.study.snapshot import reproduction_summary, update_readme
 
     comparison = pd.read_csv(args.results / "tables" / "published_comparison.csv")
-    changed = update_readme(args.readme, reproduction_summary(comparison))
+    changed = update_readme(args.readme, reproduction_summary(comparison, paper_labels()))
     print(f"{args.readme}: summary {'updated' if changed else 'already current'}")
     return 0
 

@@ -10,8 +10,11 @@ registries.
 from __future__ import annotations
 
 import contextlib
+import importlib.metadata
 import importlib.util
 import logging
+import os
+import platform
 import sys
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
@@ -48,11 +51,14 @@ __all__ = [
     "check_published",
     "job",
     "load_extensions",
+    "paper_labels",
     "paper_output",
     "render_extended",
     "render_output",
+    "run_metadata",
     "summarise_estimates",
     "write_captions",
+    "write_front_page",
 ]
 
 log = logging.getLogger("jointbench")
@@ -166,6 +172,16 @@ def render_extended(study: str, collected: str, outputs, config: Mapping, *, wha
         title=f"Extended ranking, study {study}: every estimator on every condition",
         note=note,
     )
+
+
+def paper_labels() -> dict[str, str]:
+    """Each registered paper's label for summaries, by letter: ``"A (centre of rotation)"``."""
+    labels = {}
+    for key in paper_names():
+        paper = get_paper(key)
+        subject = paper.title.split(":", 1)[-1].strip()
+        labels[paper.letter] = f"{paper.letter} ({subject})"
+    return labels
 
 
 def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
@@ -284,3 +300,110 @@ def write_captions(tables: Mapping[str, str], outputs: Sequence[str], config: Ma
         body = caption_text(name, config)
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Path(path).write_text(f"{body}\n\n**Headline:** {headline}\n" if headline else f"{body}\n")
+
+
+# ----------------------------------------------------------------------------- report front page
+
+FRONT_INTRO = """\
+jointbench: functional joint-parameter estimators, benchmarked
+==============================================================
+
+jointbench regenerates the figures and tables of three classic papers on functional joint
+estimation from simulated motion-capture data with a known truth, ranks every estimator
+(the papers' and any added) on identical trials, and checks every published value and claim
+against what it reproduces, with a typed tolerance and its margin. Every number below is
+generated from this run's results.
+"""
+
+
+def _rst_table(frame: pd.DataFrame, title: str) -> str:
+    """``frame`` as an RST list-table (cells as text)."""
+    lines = [f".. list-table:: {title}", "   :header-rows: 1", ""]
+    for row in [list(frame.columns), *frame.astype(str).values.tolist()]:
+        lines.append("   * - " + str(row[0]))
+        lines += [f"     - {cell}" for cell in row[1:]]
+    return "\n".join(lines) + "\n"
+
+
+def _summary_frame(comparison: pd.DataFrame) -> pd.DataFrame:
+    labels = paper_labels()
+    rows = []
+    for paper, part in comparison.groupby("paper", sort=True):
+        row = {"paper": labels.get(paper, paper)}
+        for entry, column in (("value", "published values"), ("claim", "claims")):
+            tested = part[(part["entry"] == entry) & (part["status"] != "not applicable")]
+            row[column] = f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}"
+        row["not comparable"] = int((part["status"] == "not applicable").sum())
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _rankings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
+    lines = []
+    for name, table in sorted(tables.items()):
+        if not name.startswith("extended_"):
+            continue
+        ranks = extended.mean_ranks(table)
+        leaders = ", ".join(
+            f"{row.method} (mean rank {row.mean_rank:.2f})" for row in ranks.head(3).itertuples()
+        )
+        lines.append(f"- study ``{name.removeprefix('extended_')}``: {leaders}")
+    return lines
+
+
+def _processor() -> str:
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or "unknown"
+
+
+def run_metadata() -> dict[str, str]:
+    """The machine and software versions of this run, for the report beside the timings."""
+    versions = {name: importlib.metadata.version(name) for name in _VERSIONED}
+    return {
+        "machine": f"{platform.system()} {platform.machine()}, {os.cpu_count()} logical CPUs",
+        "processor": _processor(),
+        "python": platform.python_version(),
+        **versions,
+    }
+
+
+_VERSIONED = ("jointbench", "numpy", "scipy", "pandas", "matplotlib", "snakemake")
+
+
+def write_front_page(tables: Mapping[str, str], path: str, config: Mapping) -> None:
+    """The report's landing page: the benchmark, its headline findings and the run's machine."""
+    loaded = {name: pd.read_csv(p) for name, p in tables.items()}
+    parts = [FRONT_INTRO]
+    comparison = loaded.get("published_comparison")
+    if comparison is not None and not comparison.empty:
+        parts += [
+            "Reproduction summary\n--------------------\n",
+            _rst_table(_summary_frame(comparison), "published values and claims reproduced"),
+            "Every value and claim, with the paper's sentence, the criterion, the margin and the "
+            "reason for each deviation, is under *Agreement with the papers*.\n",
+        ]
+    rankings = _rankings(loaded)
+    if rankings:
+        parts += ["Rankings\n--------\n", "\n".join(rankings) + "\n"]
+    if "paper_c_calibration" in loaded:
+        calibration = loaded["paper_c_calibration"][
+            ["method", "n_frames", "trials", "inside_95", "calibrated"]
+        ]
+        parts += [
+            "Calibration of the predicted covariance\n---------------------------------------\n",
+            _rst_table(
+                calibration, "share of trials whose true centre is inside the 95 % ellipsoid"
+            ),
+        ]
+    metadata = pd.DataFrame(list(run_metadata().items()), columns=["", "this run"])
+    parts += [
+        "This run\n--------\n",
+        "Timings in the tables were measured inside the jobs of this run, on this machine:\n",
+        _rst_table(metadata, "machine and software"),
+    ]
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text("\n".join(parts))

@@ -9,11 +9,13 @@ rule check_published:
             }
         ),
     output:
-        csv=reported(
-            "results/tables/published_comparison.csv",
+        html=reported(
+            "results/tables/published_comparison.html",
             "published_comparison",
             "Agreement with the papers",
+            "Every value and claim",
         ),
+        csv="results/tables/published_comparison.csv",
         md="results/tables/published_comparison.md",
     log:
         "results/logs/check_published.log",
@@ -28,7 +30,8 @@ rule report_captions:
     input:
         unpack(lambda w: summarised_tables()),
     output:
-        [CAPTIONS.format(name=name) for name in caption_names()],
+        captions=[CAPTIONS.format(name=name) for name in caption_names()],
+        front=FRONT_PAGE,
     log:
         "results/logs/report_captions.log",
     params:

@@ -33,7 +33,9 @@ __all__ = [
 ]
 
 COLUMNS = [
+    "paper",
     "study",
+    "entry",
     "id",
     "quantity",
     "published",
@@ -84,12 +86,16 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     without one is not applicable in this run.
     """
     rows = []
-    for entry in [*document.get("values", []), *document["claims"]]:
+    entries = [("value", e) for e in document.get("values", [])]
+    entries += [("claim", e) for e in document["claims"]]
+    for kind, entry in entries:
         measured = measurements.get(entry["id"])
         status, margin, reason = _verdict(entry, measured)
         rows.append(
             {
+                "paper": document["paper"],
                 "study": document["study"],
+                "entry": kind,
                 "id": entry["id"],
                 "quantity": entry.get("quantity", entry.get("claim")),
                 "published": _published_text(entry["published"]),
