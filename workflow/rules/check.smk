@@ -19,6 +19,8 @@ rule check_published:
         md="results/tables/published_comparison.md",
     log:
         "results/logs/check_published.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=check_code(),
     script:
@@ -34,6 +36,8 @@ rule report_captions:
         front=FRONT_PAGE,
     log:
         "results/logs/report_captions.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=code_fingerprint(pipeline.write_captions),
     script:

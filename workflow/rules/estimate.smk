@@ -24,6 +24,8 @@ for _study in STUDIES:
                 f"results/logs/estimate/{_study}/{{method}}/{{condition}}.log",
             wildcard_constraints:
                 method=_builtin,
+            conda:
+                "../envs/jointbench.yaml"
             params:
                 study=_study,
                 code=estimate_code(_study),
@@ -51,6 +53,8 @@ for _study in STUDIES:
                 f"results/logs/estimate/{_study}/{{method}}.log",
             wildcard_constraints:
                 method=_builtin,
+            conda:
+                "../envs/jointbench.yaml"
             params:
                 study=_study,
                 code=estimate_code(_study),
@@ -67,6 +71,8 @@ rule summarise_estimator:
         "results/summaries/{study}/{method}.csv",
     log:
         "results/logs/summarise/{study}/{method}.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=code_fingerprint(pipeline.summarise_estimates),
     script:
@@ -85,6 +91,8 @@ rule collect:
         "results/collected/{study}.parquet",
     log:
         "results/logs/collect/{study}.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=code_fingerprint(jb_run.collect),
     script:

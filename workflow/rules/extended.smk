@@ -19,6 +19,8 @@ for _study in STUDIES:
             md=f"results/tables/extended_{_study}.md",
         log:
             f"results/logs/extended_table_{_study}.log",
+        conda:
+            "../envs/jointbench.yaml"
         params:
             study=_study,
             what="table",
@@ -41,6 +43,8 @@ for _study in STUDIES:
             pdf=f"results/figures/extended_{_study}.pdf",
         log:
             f"results/logs/extended_figure_{_study}.log",
+        conda:
+            "../envs/jointbench.yaml"
         params:
             study=_study,
             what="figure",

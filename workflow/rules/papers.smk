@@ -22,6 +22,8 @@ for _study in STUDIES:
                 **_files,
             log:
                 f"results/logs/{_output.name}.log",
+            conda:
+                "../envs/jointbench.yaml"
             params:
                 paper=_paper.key,
                 output=_output.name,
