@@ -36,7 +36,7 @@ from jointbench.papers import (
 )
 from jointbench.simulate import Study
 from jointbench.study import config as jb_config
-from jointbench.study.io import read_dataset
+from jointbench.study.io import read_dataset, read_table
 from jointbench.study.published import (
     comparison_rows,
     enforce_design,
@@ -119,7 +119,7 @@ def job(snakemake) -> Iterator[None]:
 
 def _inputs(paper: Paper, collected: str, datasets: Sequence[str], config: Mapping) -> Inputs:
     return Inputs(
-        collected=pd.read_parquet(collected),
+        collected=read_table(collected),
         published=load_published(paper.published),
         config=config,
         datasets=[read_dataset(path) for path in datasets],
@@ -154,7 +154,7 @@ def _paper_methods(study: str) -> extended.PaperMethods:
 
 def render_extended(study: str, collected: str, outputs, config: Mapping, *, what: str) -> None:
     """The extended ranking of ``study``: ``what`` is ``"table"`` or ``"figure"``."""
-    frame = pd.read_parquet(collected)
+    frame = read_table(collected)
     paper = _paper_methods(study)
     if what == "figure":
         save_figure(extended.extended_figure(frame, study, paper), outputs)
@@ -187,7 +187,7 @@ def paper_labels() -> dict[str, str]:
 
 def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
     """One estimator's mean and median error per condition, from its estimates files."""
-    estimates = pd.concat([pd.read_parquet(path) for path in paths], ignore_index=True)
+    estimates = pd.concat([read_table(path) for path in paths], ignore_index=True)
     summarise(estimates, study).to_csv(output, index=False)
 
 
@@ -198,7 +198,7 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
     """
     frames = []
     for study, path in collected.items():
-        frame = pd.read_parquet(path)
+        frame = read_table(path)
         for paper in papers_of_study(study):
             document = load_published(paper.published)
             inputs = Inputs(collected=frame, published=document, config=config)

@@ -14,7 +14,7 @@ import numpy as np
 
 from jointbench.estimators import CenterResult, register
 from jointbench.papers import Inputs, Measured, Output, Paper
-from jointbench.simulate import Study, Trials, isotropic_noise
+from jointbench.simulate import GridValues, Study, Trials, isotropic_noise
 
 CENTRE = np.array([10.0, -5.0, 20.0])
 
@@ -65,6 +65,8 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=ToyProtocol,
     simulate=simulate,
+    # What each grid key allows: checked before any job runs, naming the key.
+    grid_spec={"noise_mm": GridValues(float, minimum=0)},
 )
 
 
