@@ -40,7 +40,10 @@ def simulate(condition, protocol: ToyProtocol, rngs) -> Trials:
         frames.append(body @ (ry @ rx).T + CENTRE)
     clean = np.asarray(frames)
     noisy = np.stack(
-        [clean + isotropic_noise(rng, clean.shape[:-1], float(condition["noise_mm"])) for rng in rngs]
+        [
+            clean + isotropic_noise(rng, clean.shape[:-1], float(condition["noise_mm"]))
+            for rng in rngs
+        ]
     )
     return Trials(segments={"moving": noisy}, truth={"center": CENTRE.tolist()})
 
