@@ -71,10 +71,10 @@ def _planned_rules(workdir) -> dict[str, int]:
         words = line.split()
         if words[:2] == ["job", "count"]:
             in_stats = True
-        elif in_stats and len(words) == 2 and words[1].isdigit():
-            planned[words[0]] = int(words[1])
         elif in_stats and words and words[0] == "total":
             break
+        elif in_stats and len(words) == 2 and words[1].isdigit():
+            planned[words[0]] = int(words[1])
     return planned
 
 
