@@ -2,20 +2,80 @@
 
 Kinds:
 
-* ``"center"``: ``fn(markers) -> CenterResult``, one segment's markers in the reference frame;
-* ``"axis"``: ``fn(markers) -> AxisResult``, likewise;
+* ``"center"``: ``fn(markers, **options) -> CenterResult``, one segment's markers in the
+  reference frame;
+* ``"axis"``: ``fn(markers, **options) -> AxisResult``, likewise;
 * ``"joint_center"``: ``fn(proximal, distal, **options) -> JointCenterResult``, both segments'
   markers in the world frame.
+
+:func:`get` returns the estimator wrapped in the checks every estimator of its kind is held
+to: the input checks of :func:`jointbench.estimators.validation.check_input` before the fit,
+and the support verdict of :func:`jointbench.estimators.support.assess` written into the
+result after it. A newly registered estimator gets both without code of its own.
+:func:`register` returns the function itself, unwrapped, for direct and internal use.
+
+At registration an estimator states its :class:`Claims`: how closely it recovers a noise-free
+answer and under which transformations of the data its answer moves with the data. The
+conformance suite (``tests/test_conformance.py``) checks the claims of every registered
+estimator, so the defaults are the strict ones and a method relaxes them only where its paper
+makes it so.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
-__all__ = ["KINDS", "get", "methods", "register"]
+from jointbench.estimators import support, validation
+
+__all__ = ["INVARIANCES", "KINDS", "Claims", "claims", "get", "methods", "register"]
 
 KINDS = ("center", "axis", "joint_center")
-_REGISTRY: dict[str, dict[str, Callable]] = {kind: {} for kind in KINDS}
+
+#: Transformations of the data an answer may be claimed to follow: a rigid translation or
+#: rotation of all markers, and a permutation of the markers or of the frames.
+INVARIANCES = ("translation", "rotation", "marker_order", "frame_order")
+
+_EXACT = 1e-9
+
+
+def _all_exact() -> Mapping[str, float]:
+    return MappingProxyType(dict.fromkeys(INVARIANCES, _EXACT))
+
+
+@dataclass(frozen=True)
+class Claims:
+    """What an estimator promises about its answers.
+
+    ``recovery``: the largest error of its answer on noise-free data, with default options
+    ([mm] for points, [rad] for axis directions). ``invariances``: for each transformation in
+    :data:`INVARIANCES` that the answer follows (moves with the data, or is unchanged by a
+    permutation), the tolerance to which it does on noisy data, in the same units and relative
+    to the data's magnitude where rounding sets it; a transformation left out is not claimed.
+    """
+
+    recovery: float = _EXACT
+    invariances: Mapping[str, float] = field(default_factory=_all_exact)
+
+    def __post_init__(self) -> None:
+        unknown = set(self.invariances) - set(INVARIANCES)
+        if unknown:
+            raise ValueError(
+                f"unknown invariance {sorted(unknown)}; choose from {', '.join(INVARIANCES)}"
+            )
+        object.__setattr__(self, "invariances", MappingProxyType(dict(self.invariances)))
+
+
+@dataclass(frozen=True)
+class _Entry:
+    fn: Callable
+    checked: Callable
+    claims: Claims
+
+
+_REGISTRY: dict[str, dict[str, _Entry]] = {kind: {} for kind in KINDS}
 
 
 def _check_kind(kind: str) -> None:
@@ -23,27 +83,59 @@ def _check_kind(kind: str) -> None:
         raise ValueError(f"unknown estimator kind {kind!r}; choose one of {', '.join(KINDS)}")
 
 
-def register(kind: str, name: str) -> Callable[[Callable], Callable]:
-    """Decorator registering ``fn`` as estimator ``name`` of ``kind``."""
+def _checked(kind: str, fn: Callable) -> Callable:
+    """``fn`` with the input checks before and the support verdict after."""
+
+    @functools.wraps(fn)
+    def checked(*arrays: object, **options: object):
+        clean = validation.check_input(kind, arrays)
+        result = fn(*clean, **options)
+        return support.annotate(result, support.assess(kind, clean))
+
+    return checked
+
+
+def register(
+    kind: str,
+    name: str,
+    *,
+    recovery: float = _EXACT,
+    invariances: Mapping[str, float] | None = None,
+) -> Callable[[Callable], Callable]:
+    """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`.
+
+    ``invariances=None`` claims every transformation at rounding level (1e-9).
+    """
     _check_kind(kind)
+    stated = Claims(recovery, _all_exact() if invariances is None else invariances)
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind][name] = fn
+        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated)
         return fn
 
     return decorate
 
 
-def get(kind: str, name: str) -> Callable:
-    """The estimator ``name`` of ``kind``; ``ValueError`` listing the known names otherwise."""
+def _entry(kind: str, name: str) -> _Entry:
     _check_kind(kind)
     try:
         return _REGISTRY[kind][name]
     except KeyError:
         known = ", ".join(_REGISTRY[kind]) or "none"
         raise ValueError(f"unknown {kind} method {name!r}; known: {known}") from None
+
+
+def get(kind: str, name: str) -> Callable:
+    """The estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the known
+    names otherwise."""
+    return _entry(kind, name).checked
+
+
+def claims(kind: str, name: str) -> Claims:
+    """The :class:`Claims` estimator ``name`` of ``kind`` registered with."""
+    return _entry(kind, name).claims
 
 
 def methods(kind: str) -> tuple[str, ...]:

@@ -219,8 +219,10 @@ def fit_ls(markers: np.ndarray) -> CenterResult:
     squared distance, the minimiser of eq. 4 over ``r_p``) and ``cost`` = f2 [mm^4].
     """
     markers = _prepare(markers)
-    center, moments = _ls_start(markers)
+    # Relative to the first sample: far from the origin |v|^2 loses the radii to rounding.
+    center, moments = _ls_start(markers - markers[0, 0])
     radii, cost = _algebraic_fit(moments, center)
+    center = center + markers[0, 0]
     return CenterResult(
         center=center,
         radii=radii,
