@@ -151,7 +151,7 @@ def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
         f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
         f"{100 * cluster.nonrigid_share:.0f}% of their scatter about their centroid unexplained "
         f"(residual {np.sqrt(3.0 * cluster.residual_ss / cluster.dof):.3g} mm)"
-        for name, cluster in zip(names, clusters)
+        for name, cluster in zip(names, clusters, strict=True)
         if cluster.nonrigid_share >= MAX_NONRIGID_SHARE
     ]
     # A rotation test on markers that keep no shape would only restate that.

@@ -174,7 +174,9 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
             f"a {kind} estimator takes {len(names)} marker arrays ({', '.join(names)}), "
             f"got {len(arrays)}"
         )
-    checked = tuple(check_markers(array, name=name) for array, name in zip(arrays, names))
+    checked = tuple(
+        check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
+    )
     if kind == "joint_center":
         check_same_frames(*checked)
     else:
