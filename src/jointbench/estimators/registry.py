@@ -35,7 +35,8 @@ __all__ = ["INVARIANCES", "KINDS", "Claims", "claims", "get", "methods", "regist
 KINDS = ("center", "axis", "joint_center")
 
 #: Transformations of the data an answer may be claimed to follow: a rigid translation or
-#: rotation of all markers, and a permutation of the markers or of the frames.
+#: rotation of all markers, and a permutation of the markers or of the frames after the first
+#: (several methods anchor the body frame at frame 0).
 INVARIANCES = ("translation", "rotation", "marker_order", "frame_order")
 
 _EXACT = 1e-9
@@ -50,13 +51,15 @@ class Claims:
     """What an estimator promises about its answers.
 
     ``recovery``: the largest error of its answer on noise-free data, with default options
-    ([mm] for points, [rad] for axis directions). ``invariances``: for each transformation in
+    ([mm] for a centre or the distance of an axis's point from the true axis, [rad] for an
+    axis direction); ``None`` where the method's defaults do not recover every noise-free
+    case (say why at the registration). ``invariances``: for each transformation in
     :data:`INVARIANCES` that the answer follows (moves with the data, or is unchanged by a
     permutation), the tolerance to which it does on noisy data, in the same units and relative
     to the data's magnitude where rounding sets it; a transformation left out is not claimed.
     """
 
-    recovery: float = _EXACT
+    recovery: float | None = _EXACT
     invariances: Mapping[str, float] = field(default_factory=_all_exact)
 
     def __post_init__(self) -> None:
@@ -99,15 +102,18 @@ def register(
     kind: str,
     name: str,
     *,
-    recovery: float = _EXACT,
-    invariances: Mapping[str, float] | None = None,
+    recovery: float | None = _EXACT,
+    invariances: float | Mapping[str, float] = _EXACT,
 ) -> Callable[[Callable], Callable]:
     """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`.
 
-    ``invariances=None`` claims every transformation at rounding level (1e-9).
+    ``invariances`` as a number claims every transformation of :data:`INVARIANCES` to that
+    tolerance; the default claims them all at rounding level (1e-9).
     """
     _check_kind(kind)
-    stated = Claims(recovery, _all_exact() if invariances is None else invariances)
+    if not isinstance(invariances, Mapping):
+        invariances = dict.fromkeys(INVARIANCES, float(invariances))
+    stated = Claims(recovery, invariances)
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:

@@ -419,7 +419,7 @@ def _bc_noise_variance(state: _BCState, shift: np.ndarray) -> float:
         return float(np.mean(spread / (4.0 * state.n_frames * mean_sq)))
 
 
-@register("center", "BC")
+@register("center", "BC", invariances=1e-3)  # stops on steps of 1e-4 mm
 def fit_bc(
     markers: np.ndarray,
     *,
@@ -550,7 +550,7 @@ def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
     return _geometric_cost(center, markers.reshape(-1, 3), markers.shape[0])
 
 
-@register("center", "IS")
+@register("center", "IS", invariances=1e-3)  # a simplex stopped at 1e-4 mm
 def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult:
     """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
 

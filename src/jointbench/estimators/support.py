@@ -8,11 +8,12 @@ This module judges the data, not the answer, from the rigid-body fit of the movi
 * Rigidity. The residual of a cluster's rigid-body fit per degree of freedom,
   ``s^2 = RSS / (3 (n - 2)(N - 1))`` [mm^2], is the noise a rigid body would have; the markers'
   scatter about each frame's centroid per degree of freedom, ``v = sum |x - mean x|^2 /
-  (3 (n - 1) N)``, is what a rigid shape must explain. For a rigid body with noise ``s^2 / v`` is
-  the noise's share of that scatter; for markers that keep no shape the rigid fit explains no
-  more than its share and ``s^2 / v`` is near 1 whatever their number. When the rigid fit
-  leaves at least :data:`MAX_NONRIGID_SHARE` of the scatter unexplained, the markers are
-  reported as not one rigid body.
+  (3 (n - 1) N)``, is what the cluster's shape must explain. For a rigid body with noise,
+  ``s^2 / v = s^2 / (s^2 + r^2)`` with ``r^2`` the shape's own spread per coordinate: the
+  noise's share of the scatter. When it reaches :data:`MAX_NONRIGID_SHARE` the noise is more
+  than ``1 / sqrt(3)`` of the shape it would be fitted to, so there is no shape to speak of and
+  the markers are reported as not one rigid body. (Points drawn at random in every frame give
+  a share of 0.4 for three markers, rising towards 1 with more.)
 * Range of motion. The rotation of the moving segment relative to the reference (the identity
   for one-segment data; the proximal segment's pose for two-segment data) is compared with
   what noise alone produces. With ``w_k`` the rotation vector of frame ``k`` about the mean
@@ -22,7 +23,11 @@ This module judges the data, not the answer, from the rigid-body fit of the movi
   for two segments), ``W = sum_k w_k' S^-1 w_k / (3 (N - 1))``
   is F-distributed with ``(3 (N - 1), dof)`` degrees of freedom when the segment does not rotate.
   A rotation not significant at the level :data:`ROTATION_ALPHA` is too small to support a
-  centre or axis: whatever an estimator returns is fitted to noise.
+  centre or axis: whatever an estimator returns is fitted to noise. For a centre
+  (:data:`CENTRE_KINDS`) the rotation must also span a second axis: the middle eigenvalue of
+  the whitened scatter ``sum_k z_k z_k'`` (``z_k`` the rotation vector whitened by ``S``) is
+  tested the same way with ``(N - 1, dof)`` degrees of freedom; rotation about one axis leaves
+  the centre undetermined along it.
 
 The verdict is a list of warnings; :func:`annotate` writes them into a result's ``status`` and
 its numbers into ``diagnostics["support"]``. It never changes ``converged``, which keeps the
@@ -41,15 +46,18 @@ from scipy import stats
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import best_rotation, rigid_poses, rotation_vector
 
-__all__ = ["MAX_NONRIGID_SHARE", "ROTATION_ALPHA", "Support", "annotate", "assess"]
+__all__ = ["CENTRE_KINDS", "MAX_NONRIGID_SHARE", "ROTATION_ALPHA", "Support", "annotate", "assess"]
 
 #: A rotation the data cannot tell from noise at this significance level is "not resolved": a
 #: recording that does not rotate is passed as rotating in one trial in a thousand.
 ROTATION_ALPHA = 1e-3
 
 #: Markers are not one rigid body when the rigid fit leaves this share of their scatter about
-#: the centroid unexplained: most of their configuration then is not a shape at all.
-MAX_NONRIGID_SHARE = 0.5
+#: the centroid unexplained (noise above 1 / sqrt(3) of the shape's spread; module docstring).
+MAX_NONRIGID_SHARE = 0.25
+
+#: The kinds whose answer is a centre, which rotation about a single axis leaves undetermined.
+CENTRE_KINDS = ("center", "joint_center")
 
 _LABELS = {"markers": "markers", "proximal": "proximal markers", "distal": "distal markers"}
 
@@ -58,8 +66,10 @@ class Support(NamedTuple):
     """The verdict on a data set: ``warnings`` (empty when it supports an answer) and the
     numbers behind it (``diagnostics``: ``rigid_residual_mm`` the RMS 3-D residual of the
     rigid-body fits, ``nonrigid_share`` the larger ``s^2 / v`` of the clusters,
-    ``rotation_rms_deg`` the RMS rotation about the mean relative pose [deg] and
-    ``rotation_p_value`` that of "the segment does not rotate")."""
+    ``rotation_rms_deg`` the RMS rotation about the mean relative pose [deg],
+    ``rotation_p_value`` the p-value of "the segment does not rotate", and
+    ``off_axis_rotation_rms_deg`` and ``off_axis_p_value`` the same for rotation about all but
+    the dominant axis)."""
 
     warnings: tuple[str, ...]
     diagnostics: dict
@@ -105,10 +115,17 @@ def _mean_rotation(rotations: np.ndarray) -> np.ndarray:
     return best_rotation(rotations.mean(axis=0)[None])[0]
 
 
+class _Rotation(NamedTuple):
+    rms_rad: float  # RMS rotation about the mean relative pose
+    p_any: float  # p-value of "the segment does not rotate"
+    second_rms_rad: float  # RMS rotation about all but the dominant (noise-weighted) axis
+    p_second: float  # p-value of "it rotates about one axis only"
+
+
 def _rotation_test(
     moving: _Cluster, reference: _Cluster | None, variance: float, dof: int
-) -> tuple[float, float]:
-    """RMS rotation about the mean relative pose [rad] and the p-value of "no rotation"."""
+) -> _Rotation:
+    """The rotation of ``moving`` relative to ``reference`` (or the identity) against noise."""
     relative = moving.rotation
     covariance = moving.inertia_inv
     if reference is not None:
@@ -120,13 +137,19 @@ def _rotation_test(
     deviation = rotation_vector(np.swapaxes(mean, -1, -2) @ relative)
     deviation = deviation - deviation.mean(axis=0)
     n_frames = relative.shape[0]
-    rms = float(np.sqrt(np.sum(deviation**2) / n_frames))
+    # Rotation vectors whitened by their noise covariance (per unit variance): under "no
+    # rotation" each coordinate of each frame is noise of variance s^2.
+    whitening = np.linalg.cholesky(np.linalg.inv(covariance))
+    whitened = deviation @ whitening
+    spread = np.linalg.eigvalsh(whitened.T @ whitened)  # ascending, [rad^2 / mm^-2]
+    raw = np.linalg.eigvalsh(deviation.T @ deviation)
+    rms = float(np.sqrt(raw.sum() / n_frames))
+    second = float(np.sqrt(raw[:2].sum() / n_frames))
     if variance == 0.0:
-        return rms, 0.0 if rms > 0.0 else 1.0
-    dof_rotation = 3 * (n_frames - 1)
-    wald = np.einsum("ki,ij,kj->", deviation, np.linalg.inv(covariance), deviation)
-    statistic = float(wald) / (variance * dof_rotation)
-    return rms, float(stats.f.sf(statistic, dof_rotation, dof))
+        return _Rotation(rms, float(rms == 0.0), second, float(raw[1] <= 1e-12 * raw[2]))
+    p_any = stats.f.sf(spread.sum() / (variance * 3 * (n_frames - 1)), 3 * (n_frames - 1), dof)
+    p_second = stats.f.sf(spread[1] / (variance * (n_frames - 1)), n_frames - 1, dof)
+    return _Rotation(rms, float(p_any), second, float(p_second))
 
 
 def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
@@ -145,7 +168,7 @@ def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
     variance = sum(cluster.residual_ss for cluster in clusters) / dof
     residual_mm = float(np.sqrt(3.0 * variance))
     reference = clusters[0] if kind == "joint_center" else None
-    rotation_rms, p_value = _rotation_test(clusters[-1], reference, variance, dof)
+    rotation = _rotation_test(clusters[-1], reference, variance, dof)
 
     warnings = [
         f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
@@ -155,11 +178,18 @@ def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
         if cluster.nonrigid_share >= MAX_NONRIGID_SHARE
     ]
     # A rotation test on markers that keep no shape would only restate that.
-    if not warnings and p_value >= ROTATION_ALPHA:
+    if not warnings and rotation.p_any >= ROTATION_ALPHA:
         warnings.append(
             f"range of motion too small to support an answer: a rotation of "
-            f"{np.degrees(rotation_rms):.3g} deg RMS is not resolved above the rigid-body "
-            f"residual of {residual_mm:.3g} mm (p = {p_value:.2g})"
+            f"{np.degrees(rotation.rms_rad):.3g} deg RMS is not resolved above the rigid-body "
+            f"residual of {residual_mm:.3g} mm (p = {rotation.p_any:.2g})"
+        )
+    elif not warnings and kind in CENTRE_KINDS and rotation.p_second >= ROTATION_ALPHA:
+        warnings.append(
+            f"rotation about a single axis: the centre is not determined along it (rotation "
+            f"about other axes, {np.degrees(rotation.second_rms_rad):.3g} deg RMS, is not "
+            f"resolved above the rigid-body residual of {residual_mm:.3g} mm, "
+            f"p = {rotation.p_second:.2g})"
         )
     return Support(
         tuple(warnings),
@@ -167,8 +197,10 @@ def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
             "assessed": True,
             "rigid_residual_mm": residual_mm,
             "nonrigid_share": max(cluster.nonrigid_share for cluster in clusters),
-            "rotation_rms_deg": float(np.degrees(rotation_rms)),
-            "rotation_p_value": p_value,
+            "rotation_rms_deg": float(np.degrees(rotation.rms_rad)),
+            "rotation_p_value": rotation.p_any,
+            "off_axis_rotation_rms_deg": float(np.degrees(rotation.second_rms_rad)),
+            "off_axis_p_value": rotation.p_second,
         },
     )
 
