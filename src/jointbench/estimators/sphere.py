@@ -197,9 +197,10 @@ def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
 
 
 def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, _LSMoments]:
-    """LS centre ``(3,)`` and the moments it came from."""
-    moments = _ls_moments(markers)
-    return _ls_solve(moments.a_matrix, moments.b_vector), moments
+    """LS centre ``(3,)`` and the moments it came from, which are of the data relative to its
+    first sample: far from the origin ``|v|^2`` would lose the radii to rounding."""
+    moments = _ls_moments(markers - markers[0, 0])
+    return markers[0, 0] + _ls_solve(moments.a_matrix, moments.b_vector), moments
 
 
 @register("center", "LS")
@@ -219,10 +220,8 @@ def fit_ls(markers: np.ndarray) -> CenterResult:
     squared distance, the minimiser of eq. 4 over ``r_p``) and ``cost`` = f2 [mm^4].
     """
     markers = _prepare(markers)
-    # Relative to the first sample: far from the origin |v|^2 loses the radii to rounding.
-    center, moments = _ls_start(markers - markers[0, 0])
-    radii, cost = _algebraic_fit(moments, center)
-    center = center + markers[0, 0]
+    center, moments = _ls_start(markers)
+    radii, cost = _algebraic_fit(moments, center - markers[0, 0])
     return CenterResult(
         center=center,
         radii=radii,
