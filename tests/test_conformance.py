@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rigs import DISTAL, HINGE, JOINT, apply_pose, two_segments
 
 import jointbench
-from jointbench.estimators import registry
+from jointbench.estimators import registry, support
 from jointbench.estimators.results import CenterResult
 from jointbench.geometry import rotation_matrix, unit
 
@@ -350,3 +352,63 @@ def test_a_new_estimator_gets_the_checks_without_code_of_its_own(naive_estimator
 def test_claims_name_only_known_invariances():
     with pytest.raises(ValueError, match="unknown invariance"):
         registry.Claims(invariances={"scale": 1e-9})
+
+
+# --- the support verdict ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["center", "joint_center"])
+def test_the_rotation_test_is_calibrated_on_static_clusters(kind):
+    """With no rotation the p-value is uniform: about half the trials fall below 0.5 (the
+    bounds are four binomial standard deviations)."""
+    rng = np.random.default_rng(6)
+    still = tuple(np.repeat(array[:1], 60, axis=0) for array in clean(kind))
+    p_values = [
+        support.assess(kind, tuple(a + rng.normal(size=a.shape) for a in still)).diagnostics[
+            "rotation_p_value"
+        ]
+        for _ in range(200)
+    ]
+    assert 0.36 <= np.mean(np.array(p_values) < 0.5) <= 0.64
+
+
+def test_rotation_about_a_single_axis_is_flagged_for_centres_only():
+    hinge = clean("axis")
+    assert "rotation about a single axis" in fit("center", "LS", hinge).status
+    assert fit("axis", "planar", hinge).status == "ok"
+
+
+def test_a_small_cluster_with_large_noise_is_still_one_rigid_body():
+    """Paper A's M marker set (13.8, 29.0, 15.7 mm from the centre) with 2 mm noise is a hard
+    but legitimate recording, not a non-rigid one."""
+    body = unit(np.array([[0.2, 0.3, 1.0], [0.0, 0.1, 1.0], [-0.3, 0.2, 1.0]]))
+    body = body * np.array([[13.8], [29.0], [15.7]])
+    t = np.linspace(0.0, 4.0, 120)
+    rotvec = np.stack([0.6 * np.sin(1.9 * t), 0.4 * np.sin(1.3 * t), 0.1 * np.sin(t)], -1)
+    markers = np.einsum("fij,pj->fpi", rotation_matrix(rotvec), body) + JOINT
+    rng = np.random.default_rng(7)
+    result = fit(
+        "center", "NM", (markers + rng.normal(scale=2.0 / np.sqrt(3), size=markers.shape),)
+    )
+    assert result.status == "ok", result.status
+    assert result.diagnostics["support"]["nonrigid_share"] < support.MAX_NONRIGID_SHARE
+
+
+def test_support_leaves_converged_as_the_method_set_it():
+    arrays = _static_with_noise("center")
+    raw = registry._REGISTRY["center"]["LS"].fn(*arrays)
+    checked = fit("center", "LS", arrays)
+    assert raw.converged and checked.converged and raw.status == "ok"
+    assert checked.status.startswith("warning: range of motion too small")
+    np.testing.assert_array_equal(checked.center, raw.center)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    frame=st.integers(0, N_FRAMES - 1), marker=st.integers(0, 2), gap=st.sampled_from([np.nan, 0.0])
+)
+def test_a_gap_anywhere_is_named_by_marker_and_frame(frame, marker, gap):
+    markers = clean("center")[0].copy()
+    markers[frame, marker] = gap
+    with pytest.raises(ValueError, match=rf"at marker {marker}, frame {frame}\b"):
+        jointbench.fit_center(markers, method="NM")
