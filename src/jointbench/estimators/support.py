@@ -143,7 +143,7 @@ def _rotation_test(
     # rotation" each coordinate of each frame is noise of variance s^2.
     whitening = np.linalg.cholesky(np.linalg.inv(covariance))
     whitened = deviation @ whitening
-    spread = np.linalg.eigvalsh(whitened.T @ whitened)  # ascending, [rad^2 / mm^-2]
+    spread = np.linalg.eigvalsh(whitened.T @ whitened)  # ascending [rad^2 mm^2]
     raw = np.linalg.eigvalsh(deviation.T @ deviation)
     rms = float(np.sqrt(raw.sum() / n_frames))
     second = float(np.sqrt(raw[:2].sum() / n_frames))
