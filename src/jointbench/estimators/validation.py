@@ -37,8 +37,8 @@ def _real_array(markers: object, name: str) -> np.ndarray:
         if mask.any():
             frame, marker = _first_sample(mask)
             raise ValueError(
-                f"{name} is a masked array with {int(mask.sum())} masked values (first at "
-                f"marker {marker}, frame {frame}); masks are not read: {_GAP_ADVICE}"
+                f"{name} is a masked array with masked values (first at marker {marker}, frame "
+                f"{frame}; {int(mask.sum())} in all); masks are not read: {_GAP_ADVICE}"
             )
         markers = np.ma.getdata(markers)
     try:
@@ -83,15 +83,15 @@ def check_markers(
         frame, marker = _first_sample(~finite)
         count = int((~finite).any(axis=-1).sum())
         raise ValueError(
-            f"{name} contains NaN or inf at marker {marker}, frame {frame} ({count} samples in "
-            f"all); {_GAP_ADVICE}"
+            f"{name} contains NaN or inf at marker {marker}, frame {frame} ({count} in all); "
+            f"{_GAP_ADVICE}"
         )
     origin = ~array.any(axis=-1)
     if origin.any():
         frame, marker = _first_sample(origin)
         raise ValueError(
             f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
-            f"({int(origin.sum())} such samples): some C3D readers store gaps as zeros; "
+            f"({int(origin.sum())} in all): some C3D readers store gaps as zeros; "
             f"{_GAP_ADVICE}"
         )
     n_frames, n_markers, _ = array.shape
