@@ -9,13 +9,17 @@ min_version("8.20")
 configfile: "config/config.yaml"
 
 
+# The report's landing page is written by the report_captions rule (workflow/rules/check.smk).
+report: "results/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 
 
 rule all:
+    default_target: True
     input:
         all_targets(),
-    default_target: True
 
 
 # `snakemake -j2 study_cmc` (or study_hinge, study_hip) regenerates one study alone.
@@ -33,13 +37,13 @@ include: "workflow/rules/estimate.smk"
 
 
 # Estimators outside the package: each file here holds the rule of one external estimator.
-for _rules in sorted(Path(workflow.basedir, "workflow", "rules", "estimators").glob("*.smk")):
+for _rules in sorted(
+    Path(workflow.basedir, "workflow", "rules", "estimators").glob("*.smk")
+):
 
     include: _rules
 
 
-include: "workflow/rules/paper_a.smk"
-include: "workflow/rules/paper_b.smk"
-include: "workflow/rules/paper_c.smk"
+include: "workflow/rules/papers.smk"
 include: "workflow/rules/check.smk"
 include: "workflow/rules/extended.smk"

@@ -19,7 +19,9 @@ import pytest
 import yaml
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
+from jointbench import pipeline
 from jointbench.figures import extended
+from jointbench.papers import get_paper
 from jointbench.study.schema import check_estimates
 
 # The minimal external estimator of the README's "Adding an estimator", verbatim: the centroid
@@ -181,7 +183,8 @@ def test_extended_table_ranks_any_method_and_survives_failures():
             "broken": [np.nan, np.nan],
         }
     )
-    table = extended.extended_table(collected, "cmc").set_index("method")
+    paper_a = ("A", get_paper("paper_a").methods)
+    table = extended.extended_table(collected, "cmc", paper_a).set_index("method")
     assert table.loc["my method", "rank"] == 1 and table.loc["my method", "best"]
     assert table.loc["my method", "failed"] == 1
     assert table.loc["NM", "rank"] == table.loc["IS", "rank"] == 2
@@ -198,8 +201,8 @@ def test_extended_outputs_for_an_axis_study(tmp_path):
     collected.to_parquet(path)
     config = {"studies": {"hinge": {"external_estimators": ["user"]}}}
     outputs = {name: str(tmp_path / f"extended_hinge.{name}") for name in ("csv", "md", "png")}
-    extended.render("extended_table", [str(path)], outputs, config)
-    extended.render("extended_figure", [str(path)], outputs, config)
+    pipeline.render_extended("hinge", str(path), outputs, config, what="table")
+    pipeline.render_extended("hinge", str(path), outputs, config, what="figure")
     note = Path(outputs["md"]).read_text()
     assert "Paper B's methods: combined" in note and "external (a rule of their own): user" in note
     assert Path(outputs["png"]).stat().st_size > 10_000
@@ -242,9 +245,9 @@ def _sphere_dataset(path: Path, n_trials: int = 3) -> np.ndarray:
 
 def test_lm_script_fits_and_turns_a_bad_trial_into_a_row(tmp_path):
     lm = _lm_script()
-    dataset, output = tmp_path / "dataset.parquet", tmp_path / "out" / "LM.parquet"
+    dataset, output = tmp_path / "dataset.parquet", tmp_path / "out" / "dataset.parquet"
     _sphere_dataset(dataset)
-    assert lm.main([str(dataset), str(output)]) == 0
+    assert lm.main(["--out-dir", str(output.parent), str(dataset)]) == 0
     estimates = pd.read_parquet(output)
     check_estimates(
         estimates, kind="center", condition_keys=["marker_set", "rom_deg", "noise_mm"], method="LM"

@@ -7,6 +7,8 @@ import pytest
 import yaml
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
+from jointbench.papers import papers_of_study
+
 pytestmark = pytest.mark.pipeline
 
 
@@ -20,25 +22,20 @@ def reduced_run(tmp_path_factory):
     return workdir, yaml.safe_load(reduced.read_text()), second
 
 
-OUTPUTS = {
-    "cmc": [
-        "collected/cmc.parquet",
-        "figures/paper_a_fig3.png",
-        "figures/paper_a_fig3.pdf",
-        "figures/paper_a_fig4.png",
-        "figures/paper_a_fig4.pdf",
-        "tables/paper_a_table2.csv",
-        "tables/paper_a_table2.md",
-        "tables/paper_a_claims.csv",
-        "tables/paper_a_claims.md",
-    ],
-}
+def _outputs(study: str) -> list[str]:
+    """Every file a study's paper outputs and extended ranking write, from the registries."""
+    files = [f"collected/{study}.parquet"]
+    for paper in papers_of_study(study):
+        for output in paper.outputs:
+            files += [path.removeprefix("results/") for path in output.files.values()]
+    files += [f"tables/extended_{study}.html", f"figures/extended_{study}.png"]
+    return files
 
 
 def test_every_output_is_produced(reduced_run):
     workdir, reduced, _ = reduced_run
     for study in reduced["studies"]:
-        for name in OUTPUTS[study]:
+        for name in _outputs(study):
             path = workdir / "results" / name
             assert path.exists(), f"missing output results/{name}"
             assert path.stat().st_size > 200, f"results/{name} is nearly empty"
@@ -86,3 +83,38 @@ def test_claims_tables_are_computed(reduced_run):
     claims = pd.read_csv(workdir / "results" / "tables" / "paper_a_claims.csv")
     assert list(claims["id"]) == [f"A{i}" for i in range(1, 12)]
     assert set(claims["status"]) <= {"reproduced", "not reproduced", "not applicable"}
+
+
+def test_every_study_is_reduced():
+    reduced = yaml.safe_load((ROOT / "tests" / "data" / "reduced.yaml").read_text())
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    assert set(reduced["studies"]) == set(config["studies"])
+    for name, study in reduced["studies"].items():
+        assert study["trials"] < config["studies"][name]["trials"]
+
+
+def test_the_report_holds_every_figure_and_table(reduced_run):
+    workdir, reduced, _ = reduced_run
+    report = run_snakemake(
+        workdir,
+        "--configfile",
+        str(ROOT / "tests" / "data" / "reduced.yaml"),
+        "--report",
+        "results/report.html",
+    )
+    assert report.returncode == 0, report.stderr[-4000:]
+    html = (workdir / "results" / "report.html").read_text(errors="replace")
+    for study in reduced["studies"]:
+        for name in _outputs(study):
+            if name.endswith((".png", ".html")) and not name.startswith("collected"):
+                assert name.split("/")[-1] in html, f"{name} missing from the report"
+    assert "published_comparison.html" in html
+    assert "Reproduction summary" in html, "the report does not open on its description"
+
+
+def test_every_rule_writes_its_log(reduced_run):
+    workdir, _, _ = reduced_run
+    logs = list((workdir / "results" / "logs").rglob("*.log"))
+    assert logs, "no logs written"
+    empty = [str(p.relative_to(workdir)) for p in logs if p.stat().st_size == 0]
+    assert not empty, f"empty logs: {empty}"

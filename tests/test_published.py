@@ -12,14 +12,16 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+import yaml
 
-from jointbench.figures.paper_b import table1, within_tolerance
+from jointbench.papers import Inputs, get_paper, paper_names
+from jointbench.papers import paper_b as paper_b_module
+from jointbench.pipeline import paper_labels
 from jointbench.study.published import (
     UNEXPLAINED,
-    comparison_table,
+    comparison_rows,
     load_published,
     unexplained,
-    validate_published,
 )
 from jointbench.study.snapshot import (
     compare_snapshot,
@@ -39,7 +41,12 @@ needs_results = pytest.mark.skipif(
 
 @pytest.fixture(scope="module")
 def published():
-    return load_published()
+    """Every built-in paper's published values, by letter, schema-checked."""
+    return {
+        get_paper(key).letter: load_published(get_paper(key).published)
+        for key in paper_names()
+        if key in ("paper_a", "paper_b", "paper_c")
+    }
 
 
 @pytest.fixture(scope="module")
@@ -50,16 +57,7 @@ def comparison():
 def expected_ids(published) -> set[str]:
     ids = set()
     for document in published.values():
-        ids |= {entry["id"] for entry in document.get("values", [])}
-        ids |= {claim["id"] for claim in document["claims"]}
-        for cell in document.get("table1", {}).get("cells", []):
-            ids.add("B-T1-{protocol}-{method}-{fe_rom_deg}-{aa_ratio}".format(**cell))
-        for row in document.get("table1", {}).get("rows", []):
-            ids |= {
-                f"C-T1-{column}-{row['n_frames']}"
-                for column in ("sqrt_trace_cov_mm", "validation_index")
-                if row[column] is not None
-            }
+        ids |= {entry["id"] for entry in [*document.get("values", []), *document["claims"]]}
     return ids
 
 
@@ -94,17 +92,22 @@ def test_results_match_the_regression_snapshot():
 
 @needs_results
 def test_readme_summary_is_current(comparison):
-    assert readme_summary(ROOT / "README.md") == reproduction_summary(comparison).strip(), (
-        "README reproduction summary is stale: run `jointbench readme`"
-    )
+    assert (
+        readme_summary(ROOT / "README.md")
+        == reproduction_summary(comparison, paper_labels()).strip()
+    ), "README reproduction summary is stale: run `jointbench readme`"
 
 
-def test_published_files_match_their_schema(published):
+def test_published_files_match_their_schema(published, tmp_path):
     assert set(published) == {"A", "B", "C"}
-    broken = copy.deepcopy(published["B"])
-    del broken["table1"]["cells"][0]
-    with pytest.raises(ValueError, match="table1/cells"):
-        validate_published(broken)
+    assert len(published["B"]["values"]) == 72
+    for broken_tolerance in ({}, {"abs": 1.0, "rel": 0.1}, "within 2 mm", {"roughly": 2}):
+        broken = copy.deepcopy(published["B"])
+        broken["values"][0]["tolerance"] = broken_tolerance
+        path = tmp_path / "broken.yaml"
+        path.write_text(yaml.safe_dump(broken))
+        with pytest.raises(ValueError, match="values/0/tolerance"):
+            load_published(path)
 
 
 # ------------------------------------------------------------- the checks can fail
@@ -112,74 +115,74 @@ def test_published_files_match_their_schema(published):
 
 @pytest.fixture
 def pristine(published):
-    """The published values with every recorded deviation removed: nothing is pre-explained."""
-    documents = copy.deepcopy(published)
-    for entry in [*documents["B"]["table1"]["cells"], *documents["B"]["claims"]]:
+    """Paper B's published values with every recorded deviation removed."""
+    document = copy.deepcopy(published["B"])
+    for entry in [*document["values"], *document["claims"]]:
         entry.pop("deviation", None)
-    return documents
+    return document
 
 
-def synthetic_paper_b_tables(published) -> dict[str, pd.DataFrame]:
-    """Paper B tables whose every cell reproduces its published mean exactly."""
+def exact_paper_b_results(document) -> pd.DataFrame:
+    """Collected hinge rows whose every Table 1 cell has its published mean exactly."""
     rows = []
-    for cell in published["B"]["table1"]["cells"]:
+    for entry in document["values"]:
+        protocol, method, fe, ratio = entry["id"].removeprefix("B-T1-").split("-")
         for trial, offset in enumerate((-0.1, 0.0, 0.1)):
             rows.append(
-                {key: cell[key] for key in ("protocol", "method", "fe_rom_deg", "aa_ratio")}
-                | {"trial": trial, "error_deg": cell["published"] + offset, "converged": True}
+                {
+                    "protocol": protocol,
+                    "method": method,
+                    "fe_rom_deg": int(fe),
+                    "aa_ratio": float(ratio),
+                    "trial": trial,
+                    "error_deg": entry["published"] + offset,
+                    "converged": True,
+                }
             )
-    cells = table1(pd.DataFrame(rows), published["B"])
-    claims = pd.DataFrame(
-        {
-            "id": [c["id"] for c in published["B"]["claims"]],
-            "published": "x",
-            "reproduced": "x",
-            "status": "reproduced",
-        }
-    )
-    return {"paper_b_table1": cells, "paper_b_claims": claims}
+    return pd.DataFrame(rows)
+
+
+def _comparison(document, collected) -> pd.DataFrame:
+    inputs = Inputs(collected=collected, published=document, config={})
+    return comparison_rows(document, paper_b_module.measure(inputs))
 
 
 def test_exact_reproduction_passes(pristine):
-    published = pristine
-    comparison = comparison_table({"B": published["B"]}, synthetic_paper_b_tables(published))
-    assert len(comparison) == 72 + 6
-    assert unexplained(comparison).empty
+    comparison = _comparison(pristine, exact_paper_b_results(pristine))
+    values = comparison[comparison["id"].str.startswith("B-T1-")]
+    assert len(values) == 72
+    assert (values["status"] == "reproduced").all()
+    assert unexplained(values).empty
 
 
 def test_perturbed_published_value_is_reported(pristine):
-    published = pristine
-    document = copy.deepcopy(published["B"])
-    cell = document["table1"]["cells"][5]
-    tables = synthetic_paper_b_tables(published)
-    cell["published"] += 30.0
-    cell.pop("deviation", None)
-    tables["paper_b_table1"] = table1(_rows_from(tables["paper_b_table1"]), document)
-    moved = unexplained(comparison_table({"B": document}, tables))
-    expected = "B-T1-{protocol}-{method}-{fe_rom_deg}-{aa_ratio}".format(**cell)
-    assert list(moved["id"]) == [expected]
+    collected = exact_paper_b_results(pristine)
+    pristine["values"][5]["published"] += 30.0
+    moved = unexplained(_comparison(pristine, collected))
+    assert pristine["values"][5]["id"] in set(moved["id"])
+    assert not any(i.startswith("B-T1-") and i != pristine["values"][5]["id"] for i in moved["id"])
 
 
 def test_perturbed_reproduced_mean_is_reported(pristine):
-    published = pristine
-    tables = synthetic_paper_b_tables(published)
-    table = tables["paper_b_table1"]
-    table.loc[0, "reproduced_mean"] += 5.0
-    table.loc[0, "within_tolerance"] = within_tolerance(
-        table.loc[0, "published"], table.loc[0, "reproduced_mean"]
-    )
-    moved = unexplained(comparison_table({"B": published["B"]}, tables))
-    assert len(moved) == 1 and moved.iloc[0]["id"].startswith("B-T1-knee-planar-30-0.1")
+    collected = exact_paper_b_results(pristine)
+    first = pristine["values"][0]["id"].removeprefix("B-T1-").split("-")
+    cell = (collected["protocol"] == first[0]) & (collected["method"] == first[1])
+    cell &= (collected["fe_rom_deg"] == int(first[2])) & (collected["aa_ratio"] == float(first[3]))
+    collected.loc[cell, "error_deg"] += 5.0
+    moved = unexplained(_comparison(pristine, collected))
+    assert pristine["values"][0]["id"] in set(moved["id"])
+    row = moved.set_index("id").loc[pristine["values"][0]["id"]]
+    assert float(row["margin"]) < 0
 
 
-def test_a_claim_that_stops_reproducing_is_reported(pristine):
-    published = pristine
-    tables = synthetic_paper_b_tables(published)
-    tables["paper_b_claims"].loc[2, "status"] = "not reproduced"
-    document = copy.deepcopy(published["B"])
-    document["claims"][2].pop("deviation", None)
-    moved = unexplained(comparison_table({"B": document}, tables))
-    assert list(moved["id"]) == [document["claims"][2]["id"]]
+def test_a_recorded_deviation_explains_a_miss(pristine):
+    collected = exact_paper_b_results(pristine)
+    pristine["values"][5]["published"] += 30.0
+    pristine["values"][5]["deviation"] = "a recorded reason for the test"
+    comparison = _comparison(pristine, collected)
+    row = comparison.set_index("id").loc[pristine["values"][5]["id"]]
+    assert row["status"] == "not reproduced" and row["reason"] == "a recorded reason for the test"
+    assert pristine["values"][5]["id"] not in set(unexplained(comparison)["id"])
 
 
 def test_snapshot_comparison_catches_a_moved_mean():
@@ -200,9 +203,3 @@ def test_snapshot_comparison_catches_a_moved_mean():
     assert compare_snapshot(snapshot.iloc[:1], snapshot) == [
         "cmc NM b mean_error_mm: in the snapshot but not in the results"
     ]
-
-
-def _rows_from(cells: pd.DataFrame) -> pd.DataFrame:
-    """Trial rows whose cell means are ``cells['reproduced_mean']``."""
-    keys = ["protocol", "method", "fe_rom_deg", "aa_ratio"]
-    return cells[keys].assign(trial=0, error_deg=cells["reproduced_mean"], converged=True)

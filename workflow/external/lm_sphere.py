@@ -2,13 +2,14 @@
 """LM: geometric sphere fit by Levenberg–Marquardt — an external jointbench estimator.
 
 This script is the worked example of an estimator that lives outside the ``jointbench``
-package: it reads one dataset file and writes one estimates file, and depends on nothing but
-NumPy, pandas, pyarrow and SciPy. Copy it, replace :func:`fit_trial`, and add a rule to
-``workflow/rules/estimators/`` (see ``lm_sphere.smk`` there).
+package: for each dataset file it writes the estimates file of the same name, and it depends on
+nothing but NumPy, pandas, pyarrow and SciPy. Copy it, replace :func:`fit_trial`, and add a rule
+to ``workflow/rules/estimators/`` (see ``lm_sphere.smk`` there). One run takes every condition of
+a study, so the interpreter and SciPy start once per study, not once per condition.
 
 Usage::
 
-    python workflow/external/lm_sphere.py DATASET.parquet ESTIMATES.parquet
+    python workflow/external/lm_sphere.py --out-dir ESTIMATES_DIR DATASET.parquet [...]
 
 The method
 ----------
@@ -276,8 +277,13 @@ def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
         description="Geometric sphere fit by Levenberg–Marquardt (method LM) on every trial of a "
         "jointbench dataset file.",
     )
-    parser.add_argument("dataset", type=Path, help="dataset parquet file (input)")
-    parser.add_argument("estimates", type=Path, help="estimates parquet file (output)")
+    parser.add_argument("datasets", type=Path, nargs="+", help="dataset parquet files (input)")
+    parser.add_argument(
+        "--out-dir",
+        type=Path,
+        required=True,
+        help="folder of the estimates files, each named as its dataset (output)",
+    )
     parser.add_argument(
         "--segment", default=SEGMENT, help=f"segment whose markers are fitted (default {SEGMENT})"
     )
@@ -286,19 +292,20 @@ def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
 
 def main(argv: Sequence[str] | None = None) -> int:
     arguments = parse_arguments(argv)
-    try:
-        trials, metadata = read_dataset(arguments.dataset, arguments.segment)
-    except (OSError, ValueError) as error:
-        print(f"lm_sphere: {error}", file=sys.stderr)
-        return 1
-    estimates = estimate(trials, metadata)
-    arguments.estimates.parent.mkdir(parents=True, exist_ok=True)
-    estimates.to_parquet(arguments.estimates, index=False)
-    print(
-        f"lm_sphere: {arguments.dataset.name}: {len(estimates)} trials, "
-        f"{int(estimates['converged'].sum())} converged",
-        file=sys.stderr,
-    )
+    arguments.out_dir.mkdir(parents=True, exist_ok=True)
+    for dataset in arguments.datasets:
+        try:
+            trials, metadata = read_dataset(dataset, arguments.segment)
+        except (OSError, ValueError) as error:
+            print(f"lm_sphere: {dataset}: {error}", file=sys.stderr)
+            return 1
+        estimates = estimate(trials, metadata)
+        estimates.to_parquet(arguments.out_dir / dataset.name, index=False)
+        print(
+            f"lm_sphere: {dataset.name}: {len(estimates)} trials, "
+            f"{int(estimates['converged'].sum())} converged",
+            file=sys.stderr,
+        )
     return 0
 
 

@@ -1,16 +1,20 @@
-# Helpers shared by the rules: config validation, the condition grid and file lists.
-from pathlib import Path
+# Helpers shared by the rules: config checks, the study and paper registries, file lists.
+import re
+import sys
 
 from snakemake.utils import validate
 
+from jointbench import pipeline
+from jointbench.estimators import registry
+from jointbench.fingerprint import code_fingerprint
+from jointbench.study import run as jb_run
+from jointbench.papers import papers_of_study
 from jointbench.study import config as jb_config
 from jointbench.study.studies import get_study
 
-validate(config, "../../config/schema/config.schema.yaml")
-
-import sys
-
-from jointbench.estimators import registry
+validate(config, str(jb_config.SCHEMA_PATH))
+pipeline.load_extensions(config)
+jb_config.validate_config(config)
 
 STUDIES = jb_config.study_names(config)
 # The interpreter running this workflow, for external estimators' shell commands.
@@ -22,23 +26,21 @@ def _check_external_names():
     for study in STUDIES:
         kind = get_study(study).kind
         clash = set(jb_config.estimator_names(config, study, source="external")) & (
-            set(registry.methods(kind)) | set(jb_config.estimator_names(config, study, source="builtin"))
+            set(registry.methods(kind))
+            | set(jb_config.estimator_names(config, study, source="builtin"))
         )
         if clash:
             raise ValueError(
-                f"config: external estimators {sorted(clash)} of study {study!r} have the name of "
-                "a built-in estimator; rename them"
+                f"config: external estimators {sorted(clash)} of study {study!r} have the name "
+                "of a built-in estimator; rename them"
             )
 
 
 _check_external_names()
-BUILTIN = sorted({m for s in STUDIES for m in jb_config.estimator_names(config, s, source="builtin")})
 
 
 def _alternatives(names):
     """A regex matching exactly one of ``names`` (never matches when the list is empty)."""
-    import re
-
     return "|".join(re.escape(n) for n in names) or "(?!)"
 
 
@@ -49,6 +51,10 @@ wildcard_constraints:
 
 def condition_ids(study):
     return [jb_config.condition_id(c) for c in jb_config.conditions(config, study)]
+
+
+def dataset_file(study, condition):
+    return f"results/datasets/{study}/{jb_config.condition_id(condition)}.parquet"
 
 
 def estimates_files(study, methods=None):
@@ -62,84 +68,108 @@ def estimates_files(study, methods=None):
     )
 
 
-STUDY_TARGETS = {
-    "cmc": [
-        *expand("results/figures/paper_a_{fig}.{ext}", fig=["fig3", "fig4"], ext=["png", "pdf"]),
-        *expand("results/tables/paper_a_{table}.{ext}", table=["table2", "claims"], ext=["csv", "md"]),
-    ],
-    "hinge": [
-        *expand("results/figures/paper_b_{fig}.{ext}", fig=["fig2", "fig5"], ext=["png", "pdf"]),
-        *expand("results/tables/paper_b_{table}.{ext}", table=["table1", "claims"], ext=["csv", "md"]),
-    ],
-    "hip": [
-        *expand("results/figures/paper_c_uncertainty.{ext}", ext=["png", "pdf"]),
-        *expand(
-            "results/tables/paper_c_{table}.{ext}",
-            table=["table1", "calibration", "claims"],
-            ext=["csv", "md"],
-        ),
-    ],
-}
+def _in_grid(study, condition):
+    return jb_config.condition_id(condition) in set(condition_ids(study))
 
 
-PUBLISHED_TABLES = {
-    "cmc": ["paper_a_table2", "paper_a_claims"],
-    "hinge": ["paper_b_table1", "paper_b_claims"],
-    "hip": ["paper_c_table1", "paper_c_claims"],
-}
+def paper_outputs(study):
+    """``(paper, output)`` of every paper output of ``study`` this run can render; an output
+    that draws a condition missing from the grid is skipped with a one-line note."""
+    found = []
+    for paper in papers_of_study(study):
+        for output in paper.outputs:
+            missing = [c for c in output.conditions if not _in_grid(study, c)]
+            if missing:
+                print(
+                    f"note: {output.name} skipped: it draws {jb_config.condition_id(missing[0])}, "
+                    f"which is not in this run's {study} grid",
+                    file=sys.stderr,
+                )
+                continue
+            found.append((paper, output))
+    return found
 
 
-def caption_tables():
-    """Extra tables the report captions summarise."""
-    tables = {"published_comparison": "results/tables/published_comparison.csv"}
-    tables.update({f"extended_{s}": f"results/tables/extended_{s}.csv" for s in STUDIES})
-    if "hip" in STUDIES:
-        tables["paper_c_calibration"] = "results/tables/paper_c_calibration.csv"
-    return tables
-
-
-def published_tables():
-    """The per-paper tables the published-value check reads, by name."""
-    return {
-        name: f"results/tables/{name}.csv" for study in STUDIES for name in PUBLISHED_TABLES[study]
-    }
-
-
+PAPER_OUTPUTS = {study: paper_outputs(study) for study in STUDIES}
 CAPTIONS = "results/report/captions/{name}.rst"
-CATEGORIES = {
-    "extended": "Extended ranking of every estimator",
-    "paper_a": "Paper A: centre of rotation",
-    "paper_b": "Paper B: axis of rotation",
-    "paper_c": "Paper C: hip joint centre",
-    "published": "Agreement with the papers",
-}
+# The report's landing page: what the benchmark is, its headline findings and the run's machine.
+FRONT_PAGE = "results/report/workflow.rst"
 
 
-def reported(path, name):
-    """``path`` flagged for `snakemake --report`, captioned by results/report/captions/{name}.rst."""
+def category(study):
+    """The report category of a study's outputs: its paper's title, or the study's name."""
+    papers = papers_of_study(study)
+    return papers[0].title if papers else f"Study {study}"
+
+
+def reported(path, name, group, subgroup):
+    """``path`` flagged for `snakemake --report`, captioned by its generated caption file."""
     return report(
         path,
-        caption="../../" + CAPTIONS.format(name=name),
-        category=CATEGORIES[name[:7] if name.startswith("paper_") else name.split("_")[0]],
+        caption=f"../../{CAPTIONS.format(name=name)}",
+        category=group,
+        subcategory=subgroup,
     )
 
 
+def summarised_tables():
+    """Every table a caption's headline summarises, by name."""
+    tables = {"published_comparison": "results/tables/published_comparison.csv"}
+    for study in STUDIES:
+        tables[f"extended_{study}"] = f"results/tables/extended_{study}.csv"
+        for _, output in PAPER_OUTPUTS[study]:
+            for name in output.summarises:
+                tables[name] = f"results/tables/{name}.csv"
+    return tables
+
+
 def caption_names():
-    names = [Path(t).stem for study in STUDIES for t in STUDY_TARGETS.get(study, [])]
-    extended = [f"extended_{s}{suffix}" for s in STUDIES for suffix in ("", "_figure")]
-    return sorted(set(names)) + extended + ["published_comparison"]
+    names = [o.name for study in STUDIES for _, o in PAPER_OUTPUTS[study]]
+    names += [f"extended_{s}{suffix}" for s in STUDIES for suffix in ("", "_figure")]
+    return [*names, "published_comparison"]
 
 
 def study_targets(study):
-    """The collected results, every figure and table of one study and its extended ranking."""
+    """The collected results, every paper output of one study and its extended ranking."""
+    outputs = [path for _, o in PAPER_OUTPUTS[study] for path in o.files.values()]
     extended = [
-        *expand("results/tables/extended_{study}.{ext}", study=study, ext=["csv", "md"]),
-        *expand("results/figures/extended_{study}.{ext}", study=study, ext=["png", "pdf"]),
+        *expand(
+            "results/tables/extended_{study}.{ext}", study=study, ext=["csv", "md"]
+        ),
+        *expand(
+            "results/figures/extended_{study}.{ext}", study=study, ext=["png", "pdf"]
+        ),
     ]
-    return [f"results/collected/{study}.parquet", *STUDY_TARGETS.get(study, []), *extended]
+    return [f"results/collected/{study}.parquet", *outputs, *extended]
 
 
 def all_targets():
     targets = [target for study in STUDIES for target in study_targets(study)]
     captions = [CAPTIONS.format(name=name) for name in caption_names()]
-    return [*targets, "results/tables/published_comparison.csv", *captions]
+    return [*targets, "results/tables/published_comparison.csv", *captions, FRONT_PAGE]
+
+
+# Every job that runs library code gets a `code` parameter: the fingerprint of the code it runs
+# (jointbench.fingerprint), so an edited estimator, simulator or figure reruns its jobs and only
+# them (Snakemake reruns a job whose parameters changed).
+def simulate_code(study):
+    spec = get_study(study)
+    return code_fingerprint(
+        spec.simulate, spec.protocol_class, jb_run.run_simulate_files
+    )
+
+
+def estimate_code(study):
+    kind = get_study(study).kind
+    return lambda w: code_fingerprint(
+        registry.get(kind, w.method), jb_run.run_estimate_files
+    )
+
+
+def output_code(paper, output):
+    return code_fingerprint(output.render, output.headline, pipeline.render_output)
+
+
+def check_code():
+    measures = [p.measure for s in STUDIES for p in papers_of_study(s)]
+    return code_fingerprint(*measures, pipeline.check_published)

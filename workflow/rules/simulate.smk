@@ -6,10 +6,17 @@ for _study in STUDIES:
         name:
             f"simulate_{_study}"
         output:
-            expand("results/datasets/{study}/{condition}.parquet", study=_study, condition=condition_ids(_study)),
+            expand(
+                "results/datasets/{study}/{condition}.parquet",
+                study=_study,
+                condition=condition_ids(_study),
+            ),
         log:
             f"results/logs/simulate/{_study}.log",
+        conda:
+            "../envs/jointbench.yaml"
         params:
             study=_study,
+            code=simulate_code(_study),
         script:
             "../scripts/simulate.py"

@@ -1,3 +1,4 @@
-from jointbench.study.published import run_check
+from jointbench import pipeline
 
-run_check(dict(snakemake.input.items()), snakemake.output, snakemake.config)
+with pipeline.job(snakemake):
+    pipeline.check_published(dict(snakemake.input.items()), snakemake.output, snakemake.config)

@@ -1,3 +1,5 @@
+from jointbench import pipeline
 from jointbench.study.run import collect
 
-collect(snakemake.wildcards.study, snakemake.input, snakemake.output[0])
+with pipeline.job(snakemake):
+    collect(snakemake.wildcards.study, snakemake.input, snakemake.output[0])

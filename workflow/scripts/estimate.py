@@ -1,9 +1,11 @@
+from jointbench import pipeline
 from jointbench.study.run import run_estimate_files
 
-run_estimate_files(
-    snakemake.config,
-    snakemake.params.study,
-    snakemake.wildcards.method,
-    snakemake.input,
-    snakemake.output,
-)
+with pipeline.job(snakemake):
+    run_estimate_files(
+        snakemake.config,
+        snakemake.params.study,
+        snakemake.wildcards.method,
+        snakemake.input,
+        snakemake.output,
+    )

@@ -1,3 +1,10 @@
-from jointbench.figures import extended
+from jointbench import pipeline
 
-extended.render(snakemake.rule, snakemake.input, snakemake.output, snakemake.config)
+with pipeline.job(snakemake):
+    pipeline.render_extended(
+        snakemake.params.study,
+        snakemake.input[0],
+        snakemake.output,
+        snakemake.config,
+        what=snakemake.params.what,
+    )

@@ -1,4 +1,6 @@
-from jointbench.figures.captions import write_captions
+from jointbench import pipeline
 
-tables = {name: path for name, path in snakemake.input.items() if name != "descriptions"}
-write_captions(snakemake.input.descriptions, tables, snakemake.output)
+with pipeline.job(snakemake):
+    tables = dict(snakemake.input.items())
+    pipeline.write_captions(tables, snakemake.output.captions, snakemake.config)
+    pipeline.write_front_page(tables, snakemake.output.front, snakemake.config)

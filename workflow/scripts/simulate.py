@@ -1,3 +1,5 @@
+from jointbench import pipeline
 from jointbench.study.run import run_simulate_files
 
-run_simulate_files(snakemake.config, snakemake.params.study, snakemake.output)
+with pipeline.job(snakemake):
+    run_simulate_files(snakemake.config, snakemake.params.study, snakemake.output)

@@ -1,6 +1,4 @@
-import pandas as pd
+from jointbench import pipeline
 
-from jointbench.study.summary import summarise
-
-estimates = pd.concat([pd.read_parquet(path) for path in snakemake.input], ignore_index=True)
-summarise(estimates, snakemake.wildcards.study).to_csv(snakemake.output[0], index=False)
+with pipeline.job(snakemake):
+    pipeline.summarise_estimates(snakemake.wildcards.study, snakemake.input, snakemake.output[0])

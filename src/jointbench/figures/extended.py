@@ -9,7 +9,6 @@ soon as its estimates files are collected.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -17,27 +16,29 @@ import pandas as pd
 from matplotlib.colors import LogNorm
 from matplotlib.patches import Patch, Rectangle
 
-from jointbench.figures.common import method_style, save_figure, write_tables
+from jointbench.figures.common import method_style
 from jointbench.study import config as jb_config
+from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
-from jointbench.study.summary import ERROR_COLUMN, summarise
+from jointbench.study.summary import summarise
 
 __all__ = [
-    "PAPERS",
+    "NO_PAPER",
+    "best_headline",
+    "best_text",
+    "cell_text",
+    "condition_label",
     "extended_figure",
     "extended_table",
+    "incomplete",
     "mean_ranks",
     "origin_note",
-    "render",
 ]
 
-# The paper each study reproduces and the methods that paper compared (paper A §5, paper B §4,
-# paper C eq. 9 and §8); any other method in a study's results is an addition.
-PAPERS: dict[str, tuple[str, tuple[str, ...]]] = {
-    "cmc": ("A", ("MA", "LS", "IS", "BC", "NM")),
-    "hinge": ("B", ("planar", "radial", "combined")),
-    "hip": ("C", ("gauss-markov", "analytic")),
-}
+#: A study's paper: its letter and the methods it compared (``("", ())`` for none); any other
+#: method in a study's results is an addition.
+PaperMethods = tuple[str, Sequence[str]]
+NO_PAPER: PaperMethods = ("", ())
 
 
 #: Mean errors equal to this many significant digits tie in the ranking.
@@ -56,11 +57,9 @@ def _unit(study: str) -> str:
     return {"deg": "°"}.get(unit, f" {unit}")
 
 
-def _paper_methods(study: str) -> tuple[str, ...]:
-    return PAPERS.get(study, ("", ()))[1]
-
-
-def extended_table(collected: pd.DataFrame, study: str) -> pd.DataFrame:
+def extended_table(
+    collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER
+) -> pd.DataFrame:
     """Every method on every condition of ``study``, ranked within the condition.
 
     Columns: the study's condition keys, ``method``, ``source`` (``"paper A"`` or ``"added"``),
@@ -74,11 +73,11 @@ def extended_table(collected: pd.DataFrame, study: str) -> pd.DataFrame:
     keys = list(get_study(study).grid_keys)
     mean = _mean_column(study)
     table = summarise(collected, study)
-    letter, paper = PAPERS.get(study, ("", ()))
+    letter, methods = paper
     table.insert(
         len(keys) + 1,
         "source",
-        np.where(table["method"].isin(paper), f"paper {letter}", "added"),
+        np.where(table["method"].isin(methods), f"paper {letter}", "added"),
     )
     # Rank on 3 significant digits: methods that reach the same minimum (IS and LM do) differ
     # by rounding noise, which must not decide a rank.
@@ -92,39 +91,124 @@ def extended_table(collected: pd.DataFrame, study: str) -> pd.DataFrame:
 
 def mean_ranks(table: pd.DataFrame) -> pd.DataFrame:
     """Per method, over the conditions of an :func:`extended_table`: ``mean_rank``,
-    ``best_in`` (conditions where it is best) and ``conditions``; sorted best first."""
-    ranks = table.groupby("method", observed=True).agg(
-        mean_rank=("rank", "mean"), best_in=("best", "sum"), conditions=("rank", "size")
+    ``best_alone`` (conditions where it alone is best), ``best_tied`` (conditions where it
+    shares the best mean), ``best_in`` (their sum: best or tied) and ``conditions``; sorted
+    best first.
+
+    A tie is reported as shared, not as a win for each method, so two methods tied everywhere
+    read "best alone in 0, tied in n" rather than both "best in n".
+    """
+    best = table["best"].astype(bool)
+    keys = list(table.columns[: table.columns.get_loc("method")])
+    sharing = best.groupby([table[k] for k in keys], observed=True).transform("sum")
+    counted = table.assign(
+        _alone=best & (sharing == 1),
+        _tied=best & (sharing > 1),
     )
-    ranks["best_in"] = ranks["best_in"].astype(int)
+    ranks = counted.groupby("method", observed=True).agg(
+        mean_rank=("rank", "mean"),
+        best_alone=("_alone", "sum"),
+        best_tied=("_tied", "sum"),
+        conditions=("rank", "size"),
+    )
+    ranks["best_alone"] = ranks["best_alone"].astype(int)
+    ranks["best_tied"] = ranks["best_tied"].astype(int)
+    ranks.insert(3, "best_in", ranks["best_alone"] + ranks["best_tied"])
     return ranks.reset_index().sort_values(["mean_rank", "method"], ignore_index=True)
 
 
-def origin_note(study: str, methods: Sequence[str], config: Mapping | None = None) -> str:
+def best_text(best_alone: int, best_tied: int, conditions: int) -> str:
+    """How often a method is best, ties shown as shared: "best in 8 of 18, tied in 2"."""
+    text = f"best in {best_alone} of {conditions}"
+    return text + (f", tied in {best_tied}" if best_tied else "")
+
+
+def best_headline(table: pd.DataFrame) -> str:
+    """Who is best per condition, each condition counted once: sole winners, then each group
+    of methods tied for best with the number of conditions they share.
+
+    Works on an :func:`extended_table` or the CSV read back (``best`` as booleans).
+    """
+    keys = list(table.columns[: table.columns.get_loc("method")])
+    best = table[table["best"].astype(str) == "True"]
+    winners = best.groupby(keys, observed=True)["method"].apply(lambda m: tuple(sorted(m)))
+    counts = winners.value_counts()
+    alone = [(group[0], n) for group, n in counts.items() if len(group) == 1]
+    tied = [(" = ".join(group), n) for group, n in counts.items() if len(group) > 1]
+    conditions = table[keys].drop_duplicates().shape[0]
+    parts = [f"{m} alone in {n}" for m, n in alone] + [f"{m} tied in {n}" for m, n in tied]
+    return f"best mean error, out of {conditions} conditions: " + ", ".join(parts) + "."
+
+
+def origin_note(
+    study: str,
+    methods: Sequence[str],
+    paper: PaperMethods = NO_PAPER,
+    config: Mapping | None = None,
+) -> str:
     """A sentence naming the paper's methods and the additions among ``methods``, the external
     ones (written by rules of their own, ``external_estimators`` in ``config``) separately."""
-    letter, paper = PAPERS.get(study, ("", ()))
+    letter, paper_methods = paper
     external = set()
     if config is not None and study in config.get("studies", {}):
         external = set(jb_config.estimator_names(config, study, source="external"))
-    ours = [m for m in paper if m in methods]
-    added = [m for m in methods if m not in paper and m not in external]
-    outside = [m for m in methods if m in external and m not in paper]
+    ours = [m for m in paper_methods if m in methods]
+    added = [m for m in methods if m not in paper_methods and m not in external]
+    outside = [m for m in methods if m in external and m not in paper_methods]
     parts = [f"Paper {letter}'s methods: {', '.join(ours) or 'none'}." if letter else ""]
     parts.append(f"Added, built in: {', '.join(added) or 'none'}.")
     parts.append(f"Added, external (a rule of their own): {', '.join(outside) or 'none'}.")
     return " ".join(p for p in parts if p)
 
 
-def _condition_label(values: Sequence[object]) -> str:
-    return " / ".join(str(v) for v in values)
+# How a grid key reads in a row label, e.g. rom_deg 5 -> "±5°"; unknown keys fall back to
+# their unit suffix (_deg, _mm) or "key=value".
+_KEY_FORMATS = {
+    "marker_set": "{} set",
+    "rom_deg": "±{:g}°",
+    "noise_mm": "{:g} mm noise",
+    "protocol": "{}",
+    "fe_rom_deg": "FE {:g}°",
+    "aa_ratio": "AA/FE {:g}",
+    "n_frames": "Nt = {}",
+}
+_KEY_NAMES = {
+    "marker_set": "marker set",
+    "rom_deg": "RoM",
+    "noise_mm": "noise SD",
+    "protocol": "protocol",
+    "fe_rom_deg": "FE RoM",
+    "aa_ratio": "AA/FE ratio",
+    "n_frames": "frames used",
+}
 
 
-def _cell_text(value: float, failed: int) -> str:
-    # "†" flags a mean over fewer trials than the others: some of this method's trials failed.
+def _key_text(key: str, value: object) -> str:
+    if key in _KEY_FORMATS:
+        return _KEY_FORMATS[key].format(value)
+    if key.endswith("_deg"):
+        return f"{key.removesuffix('_deg')} {value:g}°"
+    if key.endswith("_mm"):
+        return f"{key.removesuffix('_mm')} {value:g} mm"
+    return f"{key}={value}"
+
+
+def condition_label(keys: Sequence[str], values: Sequence[object]) -> str:
+    """A row label with units, e.g. ``("M", 5, 0.5)`` -> "M set, ±5°, 0.5 mm noise"."""
+    return ", ".join(_key_text(k, v) for k, v in zip(keys, values, strict=True))
+
+
+def incomplete(trials: int, converged: int, failed: int) -> bool:
+    """Whether a cell's mean hides trouble: some trials failed (no error) or did not converge
+    (an error, but from an estimate the method itself did not stand behind)."""
+    return failed > 0 or converged < trials
+
+
+def cell_text(value: float, flagged: bool) -> str:
+    """A heat-map cell: the mean to 3 significant digits, "†" when :func:`incomplete`."""
     if not np.isfinite(value):
         return "failed"
-    return f"{value:.3g}" + ("†" if failed else "")
+    return f"{value:.3g}" + ("†" if flagged else "")
 
 
 def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[str]):
@@ -134,12 +218,25 @@ def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[s
     return wide.reindex(columns=list(methods))
 
 
-def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
+def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper: Sequence[str]):
     """Condition × method heat map of mean error (log colour scale), values printed in the
     cells, the best of each condition outlined. Returns the image for a colour bar."""
     keys = list(get_study(study).grid_keys)
     wide = _wide(table, keys, _mean_column(study), methods)
-    failed = _wide(table, keys, "failed", methods).fillna(0)
+    flagged = _wide(
+        table.assign(
+            _flag=[
+                incomplete(t, c, f)
+                for t, c, f in zip(
+                    table["trials"], table["converged"], table["failed"], strict=True
+                )
+            ]
+        ),
+        keys,
+        "_flag",
+        methods,
+    )
+    flagged = flagged.fillna(False).astype(bool)
     best = _wide(table, keys, "best", methods).fillna(False).astype(bool)
     values = wide.to_numpy(dtype=float)
     positive = values[np.isfinite(values) & (values > 0)]
@@ -156,7 +253,7 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
         ax.text(
             col,
             row,
-            _cell_text(value, int(failed.iat[row, col])),
+            cell_text(value, bool(flagged.iat[row, col])),
             ha="center",
             va="center",
             fontsize=size,
@@ -164,20 +261,20 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str]):
         )
         if best.iat[row, col]:
             ax.add_patch(Rectangle((col - 0.5, row - 0.5), 1, 1, fill=False, ec="#e41a1c", lw=2.2))
-    paper = _paper_methods(study)
     ax.set_xticks(range(len(methods)), [m if m in paper else f"{m}*" for m in methods])
     if len(methods) > 5 or max(map(len, methods)) > 6:
         plt.setp(ax.get_xticklabels(), rotation=40, ha="right", rotation_mode="anchor")
-    labels = [_condition_label(i if isinstance(i, tuple) else (i,)) for i in wide.index]
+    labels = [condition_label(keys, i if isinstance(i, tuple) else (i,)) for i in wide.index]
     ax.set_yticks(range(len(labels)), labels, fontsize=8)
-    ax.set_ylabel(" / ".join(keys))
+    ax.set_ylabel("condition: " + ", ".join(_KEY_NAMES.get(k, k) for k in keys))
     ax.set_xlabel("method (best first; * not in the paper)")
     return image
 
 
-def _rank_bars(ax, ranks: pd.DataFrame, study: str, styles: Mapping[str, Mapping]) -> None:
+def _rank_bars(
+    ax, ranks: pd.DataFrame, styles: Mapping[str, Mapping], paper: Sequence[str]
+) -> None:
     """Horizontal bars of each method's mean rank, best at the top, additions hatched."""
-    paper = _paper_methods(study)
     y = np.arange(len(ranks))
     for position, row in zip(y, ranks.itertuples(), strict=True):
         ax.barh(
@@ -187,17 +284,22 @@ def _rank_bars(ax, ranks: pd.DataFrame, study: str, styles: Mapping[str, Mapping
             hatch=None if row.method in paper else "//",
             edgecolor="0.2",
         )
-        ax.text(
-            row.mean_rank,
-            position,
-            f" {row.mean_rank:.2f} (best in {row.best_in}/{row.conditions})",
+        # Written beside the axes, not at the bar's end, so the axis can stop at the worst
+        # possible rank.
+        ax.annotate(
+            f"{row.mean_rank:.2f}; {best_text(row.best_alone, row.best_tied, row.conditions)}",
+            (1.0, position),
+            xycoords=("axes fraction", "data"),
+            xytext=(4, 0),
+            textcoords="offset points",
             va="center",
             fontsize=7,
         )
     ax.set_yticks(y, list(ranks["method"]))
     ax.invert_yaxis()
-    ax.set_xlim(0, len(ranks) * 1.6 + 0.5)
-    ax.set_xlabel("mean rank over conditions (1 = best)")
+    ax.set_xlim(0, len(ranks))
+    ax.set_xticks(range(1, len(ranks) + 1))
+    ax.set_xlabel("mean rank\nover conditions (1 = best)", fontsize=8)
     ax.set_title("Overall", fontsize=9)
     ax.legend(
         handles=[
@@ -222,11 +324,13 @@ def _styles(methods: Sequence[str]) -> dict[str, dict[str, object]]:
     return styles
 
 
-def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
+def extended_figure(
+    collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER
+) -> plt.Figure:
     """One figure per study: the condition × method heat map of mean error with each
-    condition's best outlined, beside each method's mean rank. Saved to ``outputs`` (png, pdf).
+    condition's best outlined, beside each method's mean rank.
     """
-    table = extended_table(collected, study)
+    table = extended_table(collected, study, paper)
     ranks = mean_ranks(table)
     methods = list(ranks["method"])
     styles = _styles(methods)
@@ -234,47 +338,23 @@ def extended_figure(collected: pd.DataFrame, study: str, outputs) -> None:
     height = max(3.5, 0.3 * n_conditions + 1.8)
     bars_height = min(height, 0.35 * len(methods) + 1.4)
     heat_width = max(3.0, 0.8 * len(methods)) + 2.5
-    fig = plt.figure(figsize=(heat_width + 4.5, height), layout="constrained")
-    outer = fig.add_gridspec(1, 2, width_ratios=[heat_width, 4.5])
+    # The middle column is room for the colour bar, an inset of the map the layout ignores.
+    fig = plt.figure(figsize=(heat_width + 5.6, height), layout="constrained")
+    outer = fig.add_gridspec(1, 3, width_ratios=[heat_width, 1.0, 4.6])
     heat = fig.add_subplot(outer[0, 0])
-    right = outer[0, 1].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
+    right = outer[0, 2].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
     bars = fig.add_subplot(right[0, 0])
-    image = _heatmap(heat, table, study, methods)
-    colorbar = fig.colorbar(image, ax=heat, fraction=0.05, pad=0.02)
+    image = _heatmap(heat, table, study, methods, paper[1])
+    # An inset the map's own height: a colour bar stolen from the grid cell is sized by the
+    # layout and ends up shorter than a tall map.
+    colorbar = fig.colorbar(image, cax=heat.inset_axes([1.02, 0.0, 0.035, 1.0]))
     colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
-    _rank_bars(bars, ranks, study, styles)
-    kind = get_study(study).kind
+    _rank_bars(bars, ranks, styles, paper[1])
+    kind = get_study(study).kind.replace("_", " ")
     fig.suptitle(
         f"Study {study} ({kind}): every estimator's mean error per condition "
-        f"({_unit(study).strip()}); red outline = best of the condition, † = some trials failed",
+        f"({_unit(study).strip()})\nred outline = best (or tied) in the condition; "
+        "† = some trials failed or did not converge",
         fontsize=10,
     )
-    save_figure(fig, outputs)
-
-
-def render(rule: str, inputs, outputs, config: Mapping) -> None:
-    """Write the output of Snakemake rule ``rule`` (``extended_table`` or ``extended_figure``)
-    from the collected results of one study, ``results/collected/{study}.parquet``."""
-    path = Path(inputs[0])
-    study = path.stem
-    get_study(study)
-    collected = pd.read_parquet(path)
-    if rule == "extended_figure":
-        extended_figure(collected, study, outputs)
-    elif rule == "extended_table":
-        table = extended_table(collected, study)
-        methods = list(mean_ranks(table)["method"])
-        note = (
-            f"{origin_note(study, methods, config)} rank: 1 = lowest mean error of the "
-            f"condition (means equal to {TIE_DIGITS} significant digits share a rank; a method "
-            "without a finite error ranks last); best: rank 1 with a finite mean. Means and "
-            "medians leave out failed trials (no finite error), counted in failed."
-        )
-        write_tables(
-            table,
-            outputs,
-            title=f"Extended ranking, study {study}: every estimator on every condition",
-            note=note,
-        )
-    else:
-        raise ValueError(f"the extended ranking has no output for rule {rule!r}")
+    return fig

@@ -1,34 +1,34 @@
 """Paper B (Chang & Pollard 2007, dominant axis of rotation): Table 1, Fig 5, Fig 2, claims B1–B6.
 
 Tables and Fig 5 read the collected ``hinge`` results (one row per protocol, FE RoM, AA/FE ratio,
-trial and method); Fig 2 fits the three costs to two freshly simulated trials.
+trial and method); Fig 2 draws the three costs' fits on two already-simulated trials.
 """
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import evaluate_claims, method_style, save_figure
+from jointbench.figures.common import equal_3d_limits, median_trial, method_style
 
-__all__ = ["PAPER_METHODS", "claims_table", "fig2", "fig5", "table1", "within_tolerance"]
+__all__ = [
+    "BREAKDOWN_DEG",
+    "CELL",
+    "PAPER_METHODS",
+    "axis_error_deg",
+    "cell_statistics",
+    "choose_fig2_trial",
+    "fig2",
+    "fig5",
+    "table1",
+]
 
 PAPER_METHODS = ("planar", "radial", "combined")
 CELL = ["protocol", "method", "fe_rom_deg", "aa_ratio"]
 BREAKDOWN_DEG = 20.0
-
-
-def within_tolerance(published: float, reproduced: float) -> bool:
-    """Table 1 tolerance: below 20° within max(2°, 25 %); from 20° (breakdown) ≥ 20° and ±15°."""
-    if np.isnan(reproduced):
-        return False
-    if published < BREAKDOWN_DEG:
-        return abs(reproduced - published) <= max(2.0, 0.25 * published)
-    return reproduced >= BREAKDOWN_DEG and abs(reproduced - published) <= 15.0
 
 
 def cell_statistics(collected: pd.DataFrame) -> pd.DataFrame:
@@ -39,15 +39,15 @@ def cell_statistics(collected: pd.DataFrame) -> pd.DataFrame:
     return stats.reset_index()
 
 
-def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """Every published Table 1 cell beside our mean and SD, and whether it is within tolerance."""
-    cells = pd.DataFrame(published["table1"]["cells"])
+def table1(collected: pd.DataFrame, cells: pd.DataFrame) -> pd.DataFrame:
+    """Every published Table 1 cell beside our mean and SD.
+
+    ``cells`` has the cell keys (:data:`CELL`), ``published``, and the verdict of the cell's
+    tolerance, ``within_tolerance`` and ``margin``.
+    """
     ours = cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
-    table = cells[[*CELL, "published"]].merge(ours, on=CELL, how="left")
+    table = cells.merge(ours, on=CELL, how="left")
     table["difference"] = table["mean"] - table["published"]
-    table["within_tolerance"] = [
-        within_tolerance(p, r) for p, r in zip(table["published"], table["mean"], strict=True)
-    ]
     return table.rename(columns={"mean": "reproduced_mean", "sd": "reproduced_sd"})[
         [
             *CELL,
@@ -56,12 +56,13 @@ def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
             "reproduced_sd",
             "difference",
             "within_tolerance",
+            "margin",
             "not_converged",
         ]
     ]
 
 
-def fig5(collected: pd.DataFrame, outputs) -> None:
+def fig5(collected: pd.DataFrame) -> plt.Figure:
     """Mean angular error with min–max bars for every condition: (a) knee, (b) index MCP."""
     stats = cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
     protocols = [p for p in ("knee", "mcp") if p in set(stats["protocol"])]
@@ -106,207 +107,163 @@ def fig5(collected: pd.DataFrame, outputs) -> None:
     axes[0, 0].legend(fontsize=8, loc="center left")
     fig.suptitle("Paper B Fig 5 reproduced: AoR error over 30 trials per condition", fontsize=10)
     fig.tight_layout()
-    save_figure(fig, outputs)
+    return fig
+
+
+def _frame(direction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit axis ``n`` and two unit vectors spanning the plane orthogonal to it."""
+    n_hat = np.asarray(direction, dtype=float)
+    n_hat = n_hat / np.linalg.norm(n_hat)
+    helper = np.eye(3)[np.argmin(np.abs(n_hat))]
+    e1 = np.cross(n_hat, helper)
+    e1 /= np.linalg.norm(e1)
+    return n_hat, e1, np.cross(n_hat, e1)
 
 
 def _circle_points(point, direction, center_of, radius, n=100):
     """Points of the circle of ``radius`` about the axis, in the plane through ``center_of``."""
-    n_hat = direction / np.linalg.norm(direction)
+    n_hat, e1, e2 = _frame(direction)
     centre = point + n_hat * (n_hat @ (center_of - point))
-    helper = np.eye(3)[np.argmin(np.abs(n_hat))]
-    e1 = np.cross(n_hat, helper)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(n_hat, e1)
     angle = np.linspace(0, 2 * np.pi, n)
     return centre + radius * (np.outer(np.cos(angle), e1) + np.outer(np.sin(angle), e2))
 
 
-def fig2(examples, outputs) -> None:
-    """Best-fitting plane, cylinder and circle on two trials with a known axis.
+def _line(fit) -> tuple[np.ndarray, np.ndarray]:
+    """``(point, unit direction)`` of a fit given as an AxisResult or a ``(point, direction)``
+    pair."""
+    point, direction = (fit.point, fit.direction) if hasattr(fit, "point") else fit
+    direction = np.asarray(direction, dtype=float)
+    return np.asarray(point, dtype=float), direction / np.linalg.norm(direction)
 
-    ``examples``: list of ``(title, markers, truth, fits)`` with markers
-    ``(n_frames, n_markers, 3)`` [mm] and fits ``{method: AxisResult}``.
-    For each cost the fitted axis is drawn through its point, and each marker's fitted circle
-    (radius = its mean distance from that axis, in the plane through its centroid) shows how well
-    the cost's model matches the trajectory.
-    """
-    fig = plt.figure(figsize=(6 * len(examples), 5))
-    for column, (title, markers, truth, fits) in enumerate(examples):
-        ax = fig.add_subplot(1, len(examples), column + 1, projection="3d")
-        for p in range(markers.shape[1]):
-            ax.plot(*markers[:, p].T, ".", ms=2, color="0.3")
-        span = np.ptp(markers.reshape(-1, 3), axis=0).max()
-        true_point = np.asarray(truth["axis_point"])
-        true_dir = np.asarray(truth["axis_direction"])
-        ax.plot(
-            *np.stack([true_point - span * true_dir, true_point + span * true_dir]).T,
-            "k--",
-            lw=1.2,
-            label="true axis",
-        )
-        for index, method in enumerate(PAPER_METHODS):
-            fit = fits[method]
-            style = method_style(method, index)
-            error = np.degrees(np.arccos(min(1.0, abs(float(fit.direction @ true_dir)))))
-            ends = np.stack([fit.point - span * fit.direction, fit.point + span * fit.direction])
-            ax.plot(*ends.T, color=style["color"], lw=1.5, label=f"{method}: {error:.1f}°")
-            for p in range(markers.shape[1]):
-                centroid = markers[:, p].mean(axis=0)
-                offsets = markers[:, p] - fit.point
-                radial = offsets - np.outer(offsets @ fit.direction, fit.direction)
-                radius = np.linalg.norm(radial, axis=1).mean()
-                circle = _circle_points(fit.point, fit.direction, centroid, radius)
-                ax.plot(*circle.T, color=style["color"], lw=0.8, alpha=0.8)
-        ax.set_title(f"({'ab'[column]}) {title}", fontsize=9)
-        ax.legend(fontsize=7, loc="upper left")
-        ax.set_xlabel("x (mm)")
-        ax.set_ylabel("y (mm)")
-        ax.set_zlabel("z (mm)")
-    fig.suptitle(
-        "Paper B Fig 2 reproduced: best-fitting plane (planar), cylinder (radial) and "
-        "circle (combined)",
-        fontsize=10,
+
+def _draw_planes(ax, trajectory, point, direction, color) -> np.ndarray:
+    """The best-fitting plane of one marker: orthogonal to the axis through the trajectory's
+    centroid, a square the size of the trajectory. Returns the points drawn."""
+    _, e1, e2 = _frame(direction)
+    centroid = trajectory.mean(axis=0)
+    offsets = trajectory - centroid
+    half = np.abs(offsets @ np.stack([e1, e2]).T).max() * 1.1
+    s, t = np.meshgrid([-half, half], [-half, half])
+    surface = centroid + s[..., None] * e1 + t[..., None] * e2
+    ax.plot_surface(*np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, zorder=2)
+    return surface.reshape(-1, 3)
+
+
+def _draw_cylinder(ax, trajectory, point, direction, color) -> np.ndarray:
+    """The best-fitting cylinder of one marker: about the axis, radius its mean distance from
+    it, as long as the trajectory's extent along the axis and around the arc it covers.
+    Returns the points drawn."""
+    n_hat, e1, e2 = _frame(direction)
+    offsets = trajectory - point
+    along = offsets @ n_hat
+    radial = offsets - np.outer(along, n_hat)
+    radius = np.linalg.norm(radial, axis=1).mean()
+    angles = np.unwrap(np.arctan2(radial @ e2, radial @ e1))
+    theta = np.linspace(angles.min() - 0.15, angles.max() + 0.15, 30)
+    length = np.linspace(along.min() - 0.1 * radius, along.max() + 0.1 * radius, 6)
+    a, h = np.meshgrid(theta, length)
+    surface = (
+        point
+        + h[..., None] * n_hat
+        + radius * (np.cos(a)[..., None] * e1 + np.sin(a)[..., None] * e2)
     )
-    fig.tight_layout()
-    save_figure(fig, outputs)
+    ax.plot_surface(*np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, zorder=2)
+    return surface.reshape(-1, 3)
 
 
-# ----------------------------------------------------------------------------- claims
+def _draw_circle(ax, trajectory, point, direction, color) -> np.ndarray:
+    """The best-fitting circle of one marker: about the axis, in the plane through the
+    trajectory's centroid, radius its mean distance from the axis. Returns the points drawn."""
+    n_hat, _, _ = _frame(direction)
+    offsets = trajectory - point
+    radius = np.linalg.norm(offsets - np.outer(offsets @ n_hat, n_hat), axis=1).mean()
+    circle = _circle_points(point, n_hat, trajectory.mean(axis=0), radius)
+    ax.plot(*circle.T, color=color, lw=1.4, zorder=2)
+    return circle
 
 
-def _means(collected: pd.DataFrame) -> pd.DataFrame:
-    return cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
-
-
-def _claim_b1(means, spec):
-    wide = means.pivot_table(
-        index=["protocol", "method", "fe_rom_deg"], columns="aa_ratio", values="mean"
-    )
-    share = float(np.mean(np.diff(wide.to_numpy(), axis=1) > 0))
-    return f"error grows in {share:.0%} of one-step ratio increases", share >= spec["tolerance"]
-
-
-def _claim_b2(means, spec):
-    planar = means[means["method"] == "planar"]
-    low = planar[planar["aa_ratio"] == planar["aa_ratio"].min()]
-    rest = planar[planar["aa_ratio"] != planar["aa_ratio"].min()]
-    text = f"ratio 0.1: max {low['mean'].max():.1f}°; other ratios: min {rest['mean'].min():.1f}°"
-    return text, bool((low["mean"] < 5).all() and (rest["mean"] >= 5).all())
-
-
-def _claim_b3(means, spec):
-    combined = means[means["method"] == "combined"]
-    upto_03 = combined[combined["aa_ratio"] <= 0.3]
-    at_05 = combined[(combined["aa_ratio"] == 0.5) & combined["fe_rom_deg"].isin([30, 60])]
-    text = (
-        f"ratio ≤ 0.3: max {upto_03['mean'].max():.1f}°; "
-        f"0.5 at FE 30/60: max {at_05['mean'].max():.1f}°"
-    )
-    return text, bool((upto_03["mean"] < 5).all() and (at_05["mean"] < 10).all() and len(at_05))
-
-
-def _claim_b4(means, spec):
-    low = means[means["aa_ratio"] <= 0.3].pivot_table(
-        index=["protocol", "fe_rom_deg", "aa_ratio"], columns="method", values="mean"
-    )
-    holds = low["radial"] > low["combined"]
-    return f"radial > combined in {int(holds.sum())} of {len(holds)} cells", bool(holds.all())
-
-
-def _claim_b5(means, spec):
-    wide = means.pivot_table(
-        index=["method", "fe_rom_deg", "aa_ratio"], columns="protocol", values="mean"
-    )
-    gap = (wide["knee"] - wide["mcp"]).abs()
-    return f"largest knee–MCP difference {gap.max():.2f}° ({len(gap)} cells)", bool(
-        gap.max() < spec["published"]
-    )
-
-
-def _claim_b6(means, spec):
-    jumps, crossings = 0, 0
-    for _, line in means.sort_values("aa_ratio").groupby(["protocol", "method", "fe_rom_deg"]):
-        values = line["mean"].to_numpy()
-        for before, after in itertools.pairwise(values):
-            if before < BREAKDOWN_DEG <= after:
-                crossings += 1
-                jumps += after > 50
-    return (
-        f"{jumps} of {crossings} crossings of 20° land above 50°",
-        crossings > 0 and jumps == crossings,
-    )
-
-
-_CLAIMS = {
-    "B1": _claim_b1,
-    "B2": _claim_b2,
-    "B3": _claim_b3,
-    "B4": _claim_b4,
-    "B5": _claim_b5,
-    "B6": _claim_b6,
+# The model each cost fits (paper B Fig 2): one drawing per method.
+_MODELS = {
+    "planar": ("best-fitting planes", _draw_planes),
+    "radial": ("best-fitting cylinders", _draw_cylinder),
+    "combined": ("best-fitting circles", _draw_circle),
 }
 
 
-def claims_table(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """Claims B1–B6 recomputed from ``collected`` (see :func:`common.evaluate_claims`)."""
-    return evaluate_claims(published["claims"], _CLAIMS, _means(collected))
+def axis_error_deg(direction: np.ndarray, true_direction: np.ndarray) -> float:
+    """Angle [°] between two axis directions, sign-free (an axis has no arrow)."""
+    a = np.asarray(direction, dtype=float)
+    b = np.asarray(true_direction, dtype=float)
+    cosine = abs(float(a @ b)) / (np.linalg.norm(a) * np.linalg.norm(b))
+    return float(np.degrees(np.arccos(min(1.0, cosine))))
 
 
-# ----------------------------------------------------------------------------- file outputs
+def fig2(examples) -> plt.Figure:
+    """Best-fitting plane, cylinder and circle on two trials with a known axis (paper B Fig 2).
 
-FIG2_EXAMPLES = (
-    # (title, condition): a large FE range, then a limited FE range with a large AA range.
-    ("knee, FE RoM 90°, AA/FE 0.3", {"protocol": "knee", "fe_rom_deg": 90, "aa_ratio": 0.3}),
-    ("knee, FE RoM 30°, AA/FE 0.5", {"protocol": "knee", "fe_rom_deg": 30, "aa_ratio": 0.5}),
-)
+    ``examples``: list of ``(title, markers, truth, fits)``: markers ``(n_frames, n_markers,
+    3)`` [mm] of one already-simulated trial, truth ``{"axis_point", "axis_direction"}`` and
+    fits ``{method: AxisResult or (point, direction)}`` for planar, radial and combined.
+    One row per example, one panel per cost: the model that cost fits to each marker's
+    trajectory (planes, cylinders, circles), its axis, and the true axis drawn on top.
+    """
+    methods = [m for m in PAPER_METHODS if all(m in e[3] for e in examples)]
+    fig = plt.figure(figsize=(4.1 * len(methods), 4.1 * len(examples)))
+    for row, (title, markers, truth, fits) in enumerate(examples):
+        true_point = np.asarray(truth["axis_point"], dtype=float)
+        true_dir = np.asarray(truth["axis_direction"], dtype=float)
+        true_dir = true_dir / np.linalg.norm(true_dir)
+        points = markers.reshape(-1, 3)
+        span = np.ptp(points, axis=0).max()
+        centre = points.mean(axis=0)
+        # Axis lines are drawn through the point on them nearest the markers, as long as
+        # the data are wide, so they cross the picture instead of leaving it.
+        for column, method in enumerate(methods):
+            ax = fig.add_subplot(
+                len(examples),
+                len(methods),
+                row * len(methods) + column + 1,
+                projection="3d",
+                computed_zorder=False,
+            )
+            point, direction = _line(fits[method])
+            style = method_style(method, column)
+            label, draw = _MODELS.get(method, ("fitted circles", _draw_circle))
+            drawn = [points]
+            for p in range(markers.shape[1]):
+                drawn.append(draw(ax, markers[:, p], point, direction, style["color"]))
+                ax.plot(*markers[:, p].T, ".", ms=1.5, color="0.25", zorder=3)
+            near = point + direction * (direction @ (centre - point))
+            fitted = np.stack([near - 0.7 * span * direction, near + 0.7 * span * direction])
+            ax.plot(*fitted.T, color=style["color"], lw=2.0, zorder=4, label=f"{method} axis")
+            near = true_point + true_dir * (true_dir @ (centre - true_point))
+            true_line = np.stack([near - 0.7 * span * true_dir, near + 0.7 * span * true_dir])
+            ax.plot(*true_line.T, "k--", lw=1.6, zorder=5, label="true axis")
+            # 3-D lines are not clipped to the axes: every drawn model must fit inside.
+            equal_3d_limits(ax, np.vstack([*drawn, true_line, fitted]), margin=0.02)
+            ax.tick_params(labelsize=6, pad=0)
+            ax.set_xlabel("x (mm)", fontsize=7, labelpad=-4)
+            ax.set_ylabel("y (mm)", fontsize=7, labelpad=-4)
+            ax.set_zlabel("z (mm)", fontsize=7, labelpad=-4)
+            error = axis_error_deg(direction, true_dir)
+            ax.set_title(
+                f"({'ab'[row]}) {title}\n{method} cost: {label}; axis error {error:.1f}°",
+                fontsize=8,
+            )
+    fig.suptitle(
+        "Paper B Fig 2 reproduced: best-fitting plane (planar cost), cylinder (radial) and "
+        "circle (combined)\ncoloured line = the cost's fitted axis, black dashed = true axis, "
+        "grey dots = marker positions; equal axis scales",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return fig
 
 
-def _fig2_examples(config: Mapping):
-    from jointbench.api import fit_axis
-    from jointbench.study.run import simulate_condition
-
-    one_trial = {
-        **config,
-        "studies": {**config["studies"], "hinge": {**config["studies"]["hinge"], "trials": 1}},
-    }
-    examples = []
-    for title, condition in FIG2_EXAMPLES:
-        trials = simulate_condition(one_trial, "hinge", condition)
-        markers = trials.segments["moving"][0]
-        fits = {method: fit_axis(markers, method) for method in PAPER_METHODS}
-        examples.append((title, markers, trials.truth, fits))
-    return examples
-
-
-def render(rule: str, inputs, outputs, config: Mapping) -> None:
-    """Write the output of Snakemake rule ``rule`` (``paper_b_table1``, ``_fig5``, ``_fig2``,
-    ``_claims``) from its input files."""
-    from jointbench.figures.common import read_published, write_tables
-
-    if rule == "paper_b_fig2":
-        fig2(_fig2_examples(config), outputs)
-        return
-    collected = pd.read_parquet(inputs.collected)
-    if rule == "paper_b_fig5":
-        fig5(collected, outputs)
-        return
-    published = read_published(inputs.published)
-    if rule == "paper_b_table1":
-        table = table1(collected, published)
-        within = int(table["within_tolerance"].sum())
-        write_tables(
-            table,
-            outputs,
-            title="Paper B Table 1: mean AoR angular error (degrees), published vs reproduced",
-            note=f"{within} of {len(table)} cells within tolerance. "
-            f"Tolerance: {published['table1']['tolerance']['rule']}. "
-            f"{published['table1'].get('note', '')}",
-        )
-    elif rule == "paper_b_claims":
-        write_tables(
-            claims_table(collected, published),
-            outputs,
-            title="Paper B claims, recomputed from our results",
-        )
-    else:
-        raise ValueError(f"paper B has no output for rule {rule!r}")
+def choose_fig2_trial(collected: pd.DataFrame, condition: Mapping[str, object]) -> int:
+    """The trial Fig 2 draws for ``condition``: the median trial by the combined cost's error
+    (the paper's proposed method), so the example is typical rather than picked."""
+    rows = collected[collected["method"] == "combined"]
+    for key, value in condition.items():
+        rows = rows[rows[key] == value]
+    return median_trial(rows.set_index("trial")["error_deg"])

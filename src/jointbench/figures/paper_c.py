@@ -6,21 +6,25 @@ calibration use it, which tests whether the predicted covariance is honest.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from scipy import special, stats
+from scipy import stats
 
-from jointbench.figures.common import evaluate_claims, save_figure
-from jointbench.study.studies import covariance_from_entries
+from jointbench.study.scoring import CHI2_3DOF_95, covariance_from_entries
 
-__all__ = ["calibration_table", "claims_table", "table1", "uncertainty_figure"]
+__all__ = [
+    "EXTENDED",
+    "METHOD",
+    "TABLE1_LABELS",
+    "calibration_table",
+    "per_frames",
+    "table1",
+    "uncertainty_figure",
+]
 
 METHOD = "gauss-markov"
 EXTENDED = "gauss-markov-frame0"
-CHI2_3DOF_95 = float(special.chdtri(3, 0.05))
 
 
 def _paper_validation_index(rows: pd.DataFrame) -> pd.Series:
@@ -40,7 +44,7 @@ def _paper_validation_index(rows: pd.DataFrame) -> pd.Series:
     return pd.Series(np.sqrt(e / 3.0), index=shorter.index).reindex(rows.index)
 
 
-def _per_frames(collected: pd.DataFrame, method: str = METHOD) -> pd.DataFrame:
+def per_frames(collected: pd.DataFrame, method: str = METHOD) -> pd.DataFrame:
     """Per Nt: trials, converged, median sqrt(tr Wc), RMS error, mean v (true centre and the
     paper's reference) and the share inside the 95 % ellipsoid, for one method."""
     rows = collected[collected["method"] == method].copy()
@@ -61,14 +65,14 @@ def _per_frames(collected: pd.DataFrame, method: str = METHOD) -> pd.DataFrame:
     ).reset_index()
 
 
-def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
+def table1(collected: pd.DataFrame, paper: pd.DataFrame) -> pd.DataFrame:
     """Per Nt: the paper's sqrt(tr Wc) and v beside ours for gauss-markov (paper C's method)
     and gauss-markov-frame0; v against the true centre and, as the paper did, against each
     trial's own 1200-frame estimate."""
-    paper = pd.DataFrame(published["table1"]["rows"]).rename(
+    paper = paper.rename(
         columns={"sqrt_trace_cov_mm": "paper_sqrt_trace_cov_mm", "validation_index": "paper_v"}
     )
-    gm = _per_frames(collected)[
+    gm = per_frames(collected)[
         [
             "n_frames",
             "median_sqrt_trace_cov_mm",
@@ -89,7 +93,7 @@ def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
     )
     table = paper.merge(gm, on="n_frames", how="left")
     if EXTENDED in set(collected["method"]):
-        f0 = _per_frames(collected, EXTENDED)[
+        f0 = per_frames(collected, EXTENDED)[
             ["n_frames", "median_sqrt_trace_cov_mm", "rms_error_mm", "mean_validation_index"]
         ].rename(
             columns={
@@ -99,7 +103,25 @@ def table1(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
             }
         )
         table = table.merge(f0, on="n_frames", how="left")
-    return table
+    return table.rename(columns=TABLE1_LABELS)
+
+
+#: :func:`table1`'s column headers (GM = gauss-markov, paper C's method; GM-f0 =
+#: gauss-markov-frame0), keyed by the quantity each holds.
+TABLE1_LABELS = {
+    "n_frames": "frames used, Nt",
+    "paper_sqrt_trace_cov_mm": "paper: sqrt(tr Wc) (mm)",
+    "paper_v": "paper: v (vs its own 1200-frame estimate)",
+    "gm_sqrt_trace_cov_mm": "GM: median sqrt(tr Wc) (mm)",
+    "gm_rms_error_mm": "GM: RMS error vs true centre (mm)",
+    "gm_v_vs_own_1200": "GM: mean v vs own 1200-frame estimate",
+    "gm_v_vs_truth": "GM: mean v vs true centre",
+    "gm_converged": "GM: trials converged",
+    "trials": "trials",
+    "f0_sqrt_trace_cov_mm": "GM-f0: median sqrt(tr Wc) (mm)",
+    "f0_rms_error_mm": "GM-f0: RMS error vs true centre (mm)",
+    "f0_v_vs_truth": "GM-f0: mean v vs true centre",
+}
 
 
 def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
@@ -110,7 +132,7 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
     methods = [m for m in (METHOD, EXTENDED) if m in set(collected["method"])]
     parts = []
     for method in methods:
-        ours = _per_frames(collected, method)
+        ours = per_frames(collected, method)
         part = ours[["n_frames", "trials", "inside_95", "mean_validation_index"]].copy()
         part.insert(0, "method", method)
         bounds = np.array(
@@ -122,29 +144,37 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def uncertainty_figure(collected: pd.DataFrame, published: Mapping, outputs) -> None:
+def _frames_axis(ax, n_frames) -> None:
+    """Log x axis ticked at the Nt values of the run, not at powers of ten."""
+    ax.set_xscale("log")
+    ax.set_xticks(list(n_frames), [str(n) for n in n_frames])
+    ax.xaxis.set_minor_locator(plt.NullLocator())
+    ax.set_xlabel("frames used, Nt (log scale)")
+
+
+def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> plt.Figure:
     """Predicted sqrt(tr Wc) and the actual RMS error against Nt (log–log), and coverage."""
-    paper = pd.DataFrame(published["table1"]["rows"])
     calibration = calibration_table(collected)
-    fig, (ax, cal) = plt.subplots(1, 2, figsize=(11.5, 4.5))
+    n_frames = sorted(set(collected["n_frames"]) | set(paper["n_frames"]))
+    fig, (ax, cal) = plt.subplots(1, 2, figsize=(12, 4.8))
     for method, color in ((METHOD, "#1b9e77"), (EXTENDED, "#7570b3")):
         if method not in set(collected["method"]):
             continue
-        ours = _per_frames(collected, method)
+        ours = per_frames(collected, method)
         ax.plot(
             ours["n_frames"],
             ours["median_sqrt_trace_cov_mm"],
             "-o",
             color=color,
             ms=4,
-            label=f"{method}: predicted sqrt(tr Wc)",
+            label=f"{method}: predicted sqrt(tr Wc), median",
         )
         ax.plot(
             ours["n_frames"],
             ours["rms_error_mm"],
             "--x",
             color=color,
-            label=f"{method}: actual RMS error",
+            label=f"{method}: actual RMS error vs true centre",
         )
         part = calibration[calibration["method"] == method]
         cal.plot(part["n_frames"], part["inside_95"], "-o", color=color, ms=4, label=method)
@@ -156,99 +186,29 @@ def uncertainty_figure(collected: pd.DataFrame, published: Mapping, outputs) -> 
         ms=4,
         label="paper C: sqrt(tr Wc) (its rig)",
     )
-    ax.set_xscale("log")
+    _frames_axis(ax, n_frames)
     ax.set_yscale("log")
-    ax.set_xlabel("frames used, Nt")
-    ax.set_ylabel("mm")
+    ax.set_ylabel("predicted uncertainty or actual error (mm, log scale)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title("Predicted uncertainty vs actual error (true centre)", fontsize=9)
+    ax.set_title("(a) Predicted uncertainty vs actual error", fontsize=9)
     band = calibration.drop_duplicates("n_frames")
+    trials = int(band["trials"].median())
     cal.fill_between(
         band["n_frames"],
         band["binomial_low"],
         band["binomial_high"],
         color="0.85",
-        label="honest covariance (95 % band)",
+        label="range an honest covariance gives:\n"
+        f"central 95 % of Binomial({trials}, 0.95) / {trials}",
     )
-    cal.axhline(0.95, color="k", lw=0.8)
-    cal.set_xscale("log")
+    cal.axhline(0.95, color="k", lw=0.8, label="0.95, the ellipsoid's nominal coverage")
+    _frames_axis(cal, n_frames)
     cal.set_ylim(0, 1.02)
-    cal.set_xlabel("frames used, Nt")
-    cal.set_ylabel("share of trials with the true centre inside")
+    cal.set_ylabel("share of trials with the true centre\ninside the predicted 95 % ellipsoid")
     cal.grid(True, which="both", alpha=0.3)
-    cal.legend(fontsize=7, loc="center right")
-    cal.set_title("Coverage of the predicted 95 % ellipsoid", fontsize=9)
+    cal.legend(fontsize=7, loc="lower right")
+    cal.set_title("(b) Coverage of the predicted 95 % ellipsoid", fontsize=9)
     fig.suptitle("Paper C Table 1 extended: is the Gauss–Markov covariance honest?", fontsize=10)
     fig.tight_layout()
-    save_figure(fig, outputs)
-
-
-def _claim_c1(ours, spec):
-    values = ours.sort_values("n_frames")["median_sqrt_trace_cov_mm"].to_numpy()
-    steps = np.diff(values) < 0
-    text = f"{values[0]:.3g} mm at Nt={ours['n_frames'].min()} to {values[-1]:.3g} mm"
-    return f"{text}; falls at {int(steps.sum())} of {len(steps)} steps", bool(steps.all())
-
-
-def _claim_c2(ours, spec):
-    value = float(ours.loc[ours["n_frames"] == ours["n_frames"].max(), "rms_error_mm"].iloc[0])
-    return f"{value:.3f} mm", spec["published"] / 2 <= value <= spec["published"] * 2
-
-
-def _claim_c3(ours, spec):
-    shorter = ours[ours["n_frames"] < ours["n_frames"].max()]
-    values = shorter["mean_v_paper_reference"]
-    text = ", ".join(f"Nt={n}: {v:.2f}" for n, v in zip(shorter["n_frames"], values, strict=True))
-    holds = bool(values.between(0.46 / 2, 3.18 * 1.5).all()) and values.median() > 1
-    return f"mean v vs own 1200-frame estimate: {text}", holds and len(values) > 0
-
-
-def _claim_c4(ours, spec):
-    low, high = spec["tolerance"]
-    band = ours[ours["n_frames"] >= 75]
-    values = band["mean_validation_index"]
-    text = ", ".join(f"Nt={n}: {v:.2f}" for n, v in zip(band["n_frames"], values, strict=True))
-    return f"mean v vs true centre: {text}", bool(values.between(low, high).all()) and len(band) > 0
-
-
-_CLAIMS = {"C1": _claim_c1, "C2": _claim_c2, "C3": _claim_c3, "C4": _claim_c4}
-
-
-def claims_table(collected: pd.DataFrame, published: Mapping) -> pd.DataFrame:
-    """Claims C1–C4 recomputed from ``collected`` (see :func:`common.evaluate_claims`)."""
-    return evaluate_claims(published["claims"], _CLAIMS, _per_frames(collected))
-
-
-def render(rule: str, inputs, outputs, config: Mapping) -> None:
-    """Write the output of Snakemake rule ``rule`` (``paper_c_table1``, ``_calibration``,
-    ``_uncertainty``, ``_claims``) from its input files."""
-    from jointbench.figures.common import read_published, write_tables
-
-    collected = pd.read_parquet(inputs.collected)
-    published = read_published(inputs.published)
-    if rule == "paper_c_uncertainty":
-        uncertainty_figure(collected, published, outputs)
-    elif rule == "paper_c_table1":
-        write_tables(
-            table1(collected, published),
-            outputs,
-            title="Paper C Table 1: predicted uncertainty and validation index vs frames used",
-            note=published["table1"]["note"],
-        )
-    elif rule == "paper_c_calibration":
-        write_tables(
-            calibration_table(collected),
-            outputs,
-            title="Coverage of the predicted 95 % ellipsoid, against the true centre",
-            note="calibrated: the fraction lies in the central 95 % range of what an honest "
-            "covariance gives over this many trials.",
-        )
-    elif rule == "paper_c_claims":
-        write_tables(
-            claims_table(collected, published),
-            outputs,
-            title="Paper C claims, recomputed from our results",
-        )
-    else:
-        raise ValueError(f"paper C has no output for rule {rule!r}")
+    return fig

@@ -14,13 +14,17 @@ between trials.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from jointbench.simulate.noise import isotropic_noise
 
-__all__ = ["Trials", "isotropic_noise"]
+__all__ = ["KINDS", "Study", "Trials", "isotropic_noise"]
+
+#: Estimator kinds a study can run: each kind's estimators share a signature and a scorer.
+KINDS = ("center", "axis", "joint_center")
 
 
 @dataclass(frozen=True)
@@ -41,3 +45,39 @@ class Trials:
     @property
     def n_trials(self) -> int:
         return next(iter(self.segments.values())).shape[0]
+
+
+@dataclass(frozen=True)
+class Study:
+    """One simulation study of the benchmark, exported by its simulator module as ``STUDY``.
+
+    ``kind`` is the estimator kind it runs (one of :data:`KINDS`); ``grid_keys`` its condition
+    columns, in order; ``seed_keys`` the condition keys that define a random trial (the rest
+    select a view of the same trial, e.g. the first Nt frames); ``segments`` the names of the
+    marker arrays passed to an estimator, in argument order; ``protocol_class`` the class of its
+    documented modelling choices (with ``from_config(overrides)``); ``simulate`` the function of
+    the signature above.
+    """
+
+    name: str
+    kind: str
+    grid_keys: tuple[str, ...]
+    seed_keys: tuple[str, ...]
+    segments: tuple[str, ...]
+    protocol_class: type
+    simulate: Callable[[Mapping[str, object], object, Sequence[np.random.Generator]], Trials]
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"study {self.name!r}: kind {self.kind!r} is not one of {KINDS}")
+        stray = set(self.seed_keys) - set(self.grid_keys)
+        if stray:
+            raise ValueError(f"study {self.name!r}: seed keys {sorted(stray)} are not grid keys")
+
+    def protocol(self, overrides: Mapping[str, object] | None = None) -> object:
+        """The study's protocol: documented defaults updated by the config's ``protocol``."""
+        return self.protocol_class.from_config(overrides)
+
+    def fit_arguments(self, trials: Trials, trial: int) -> tuple[np.ndarray, ...]:
+        """The arrays passed to the estimator for one trial, in :attr:`segments` order."""
+        return tuple(trials.segments[name][trial] for name in self.segments)

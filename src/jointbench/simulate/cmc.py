@@ -44,10 +44,17 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from jointbench.geometry import rotation_matrix, unit
-from jointbench.simulate import Trials
+from jointbench.simulate import Study, Trials
 from jointbench.simulate.noise import isotropic_noise
 
-__all__ = ["CmcProtocol", "marker_positions", "nominal_trajectory", "simulate", "spiral_rotations"]
+__all__ = [
+    "STUDY",
+    "CmcProtocol",
+    "marker_positions",
+    "nominal_trajectory",
+    "simulate",
+    "spiral_rotations",
+]
 
 _DEFAULT_DIRECTIONS = {
     # (dorsal, radial, distal) components; only the direction matters, length comes from Table 1.
@@ -151,3 +158,14 @@ def simulate(
             "markers_mm": marker_positions(protocol, str(condition["marker_set"])).tolist(),
         },
     )
+
+
+STUDY = Study(
+    name="cmc",
+    kind="center",
+    grid_keys=("marker_set", "rom_deg", "noise_mm"),
+    seed_keys=("marker_set", "rom_deg", "noise_mm"),
+    segments=("moving",),
+    protocol_class=CmcProtocol,
+    simulate=simulate,
+)

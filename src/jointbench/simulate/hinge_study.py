@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.simulate import Trials, hinge
+from jointbench.simulate import Study, Trials, hinge
 
-__all__ = ["HingeStudyProtocol", "simulate"]
+__all__ = ["STUDY", "HingeStudyProtocol", "simulate"]
 
 
 @dataclass(frozen=True)
@@ -46,3 +46,14 @@ def simulate(
     if name not in protocol.joints:
         raise ValueError(f"unknown hinge protocol {name!r}; known: {', '.join(protocol.joints)}")
     return hinge.simulate(condition, protocol.joints[name], rngs)
+
+
+STUDY = Study(
+    name="hinge",
+    kind="axis",
+    grid_keys=("protocol", "fe_rom_deg", "aa_ratio"),
+    seed_keys=("protocol", "fe_rom_deg", "aa_ratio"),
+    segments=("moving",),
+    protocol_class=HingeStudyProtocol,
+    simulate=simulate,
+)

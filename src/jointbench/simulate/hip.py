@@ -47,10 +47,10 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from jointbench.geometry import rotation_matrix
-from jointbench.simulate import Trials
+from jointbench.simulate import Study, Trials
 from jointbench.simulate.noise import isotropic_noise
 
-__all__ = ["HipProtocol", "marker_layout", "nominal_recording", "simulate"]
+__all__ = ["STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
 
 _CONDITION_KEYS = ("n_frames", "noise_mm")
 
@@ -250,3 +250,15 @@ def _jsonable(value: object) -> object:
     if isinstance(value, (tuple, list)):
         return [_jsonable(item) for item in value]
     return value
+
+
+STUDY = Study(
+    name="hip",
+    kind="joint_center",
+    grid_keys=("n_frames",),
+    # Paper C §8 analyses the first Nt frames of one recording: Nt selects a view, not a trial.
+    seed_keys=(),
+    segments=("proximal", "distal"),
+    protocol_class=HipProtocol,
+    simulate=simulate,
+)

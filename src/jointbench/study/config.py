@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Mapping
+from importlib import resources
+from importlib.abc import Traversable
 from pathlib import Path
 
 import jsonschema
 import yaml
 
 from jointbench.study.studies import get_study
+from jointbench.study.studies import study_names as registered_studies
 
 __all__ = [
     "condition_id",
@@ -22,13 +25,15 @@ __all__ = [
     "validate_config",
 ]
 
-SCHEMA_PATH = Path(__file__).resolve().parents[3] / "config" / "schema" / "config.schema.yaml"
+SCHEMA_PATH = resources.files("jointbench.schemas").joinpath("config.schema.yaml")
 
 
-def validate_against(document: Mapping, schema_path: str | Path, what: str) -> None:
+def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
     """Raise ``ValueError`` naming ``what`` and the offending path when ``document`` does not
     match the JSON schema (YAML) at ``schema_path``."""
-    schema = yaml.safe_load(Path(schema_path).read_text())
+    if isinstance(schema_path, str):
+        schema_path = Path(schema_path)
+    schema = yaml.safe_load(schema_path.read_text())
     try:
         jsonschema.validate(dict(document), schema)
     except jsonschema.ValidationError as error:
@@ -36,12 +41,20 @@ def validate_against(document: Mapping, schema_path: str | Path, what: str) -> N
         raise ValueError(f"{what} error at {where}: {error.message}") from None
 
 
-def validate_config(config: Mapping, schema_path: str | Path = SCHEMA_PATH) -> None:
-    """Raise ``ValueError`` when ``config`` does not match the JSON schema."""
+def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCHEMA_PATH) -> None:
+    """Raise ``ValueError`` when ``config`` does not match the JSON schema, or names a study
+    that is not registered."""
     validate_against(config, schema_path, "config")
+    unknown = sorted(set(config["studies"]) - set(registered_studies()))
+    if unknown:
+        raise ValueError(
+            f"config error at studies: unknown studies {unknown}; registered studies are "
+            f"{', '.join(registered_studies())} (a study outside the package is added by listing "
+            "its module under extensions)"
+        )
 
 
-def load_config(path: str | Path, schema_path: str | Path = SCHEMA_PATH) -> dict:
+def load_config(path: str | Path, schema_path: str | Path | Traversable = SCHEMA_PATH) -> dict:
     """Read and validate a YAML config."""
     config = yaml.safe_load(Path(path).read_text())
     validate_config(config, schema_path)

@@ -1,181 +1,40 @@
-"""The studies: what each simulates, which estimator kind it runs, and how a result is scored."""
+"""The study registry: every :class:`~jointbench.simulate.Study` the benchmark can run.
+
+The built-in studies are collected by importing their simulator modules; a study outside the
+package joins by :func:`register_study` (the workflow does this for the modules listed under
+``extensions`` in the config, see :mod:`jointbench.extensions`).
+"""
 
 from __future__ import annotations
 
-import importlib
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from jointbench.simulate import Study, cmc, hinge_study, hip
 
-import numpy as np
-from scipy import special
+__all__ = ["get_study", "register_study", "study_names"]
 
-from jointbench.geometry import angle_between_lines_deg
-from jointbench.simulate import Trials
-
-__all__ = ["STUDIES", "StudySpec", "get_study"]
-
-_NAN3 = (np.nan, np.nan, np.nan)
-# 95 % quantile of chi-square with 3 degrees of freedom (scipy.stats costs 0.7 s to import).
-CHI2_3DOF_95 = float(special.chdtri(3, 0.05))
+_STUDIES: dict[str, Study] = {}
 
 
-@dataclass(frozen=True)
-class StudySpec:
-    """One study of the benchmark.
-
-    ``kind`` is the estimator kind it runs; ``grid_keys`` its condition columns, in order;
-    ``seed_keys`` the condition keys that define a random trial (the rest select a view of the
-    same trial, e.g. the first Nt frames); ``simulator`` the module providing ``simulate`` and
-    the protocol class named ``protocol_class``.
-    """
-
-    name: str
-    kind: str
-    grid_keys: tuple[str, ...]
-    seed_keys: tuple[str, ...]
-    simulator: str
-    protocol_class: str
-    segments: tuple[str, ...]
-
-    def module(self):
-        return importlib.import_module(self.simulator)
-
-    def protocol(self, overrides: Mapping[str, object] | None = None):
-        """The study's protocol: documented defaults updated by the config's ``protocol``."""
-        return getattr(self.module(), self.protocol_class).from_config(overrides)
-
-    def simulate(self, condition, protocol, rngs) -> Trials:
-        return self.module().simulate(condition, protocol, rngs)
-
-    def fit_arguments(self, trials: Trials, trial: int) -> tuple[np.ndarray, ...]:
-        """The arrays passed to the estimator for one trial."""
-        return tuple(trials.segments[name][trial] for name in self.segments)
-
-    def score(self, result, truth: Mapping[str, list[float]]) -> dict[str, float]:
-        """Estimate and error columns of one result (NaN where the estimator failed)."""
-        return _SCORERS[self.kind](result, truth)
+def register_study(study: Study) -> Study:
+    """Add ``study`` to the registry; registering the same value twice is harmless."""
+    known = _STUDIES.get(study.name)
+    if known is not None and known is not study:
+        raise ValueError(f"a different study named {study.name!r} is already registered")
+    _STUDIES[study.name] = study
+    return study
 
 
-def _score_center(result, truth) -> dict[str, float]:
-    center = _NAN3 if result is None else result.center
-    error = float(np.linalg.norm(np.asarray(center) - np.asarray(truth["center"])))
-    return {"center_x": center[0], "center_y": center[1], "center_z": center[2], "error_mm": error}
-
-
-def _score_axis(result, truth) -> dict[str, float]:
-    point = _NAN3 if result is None else result.point
-    direction = _NAN3 if result is None else result.direction
-    error = float(
-        angle_between_lines_deg(np.asarray(direction), np.asarray(truth["axis_direction"]))
-    )
-    return {
-        **{f"point_{a}": float(v) for a, v in zip("xyz", point, strict=True)},
-        **{f"direction_{a}": float(v) for a, v in zip("xyz", direction, strict=True)},
-        "error_deg": error,
-    }
-
-
-_COVARIANCE_ENTRIES = {
-    "cov_xx": (0, 0),
-    "cov_xy": (0, 1),
-    "cov_xz": (0, 2),
-    "cov_yy": (1, 1),
-    "cov_yz": (1, 2),
-    "cov_zz": (2, 2),
-}
-
-
-def _covariance_entries(covariance) -> dict[str, float]:
-    """The six distinct entries of a predicted 3×3 covariance [mm²] (NaN when there is none)."""
-    return {
-        name: (np.nan if covariance is None else float(covariance[index]))
-        for name, index in _COVARIANCE_ENTRIES.items()
-    }
-
-
-def covariance_from_entries(frame) -> np.ndarray:
-    """``(n, 3, 3)`` covariances rebuilt from the ``cov_*`` columns of a results table."""
-    out = np.empty((len(frame), 3, 3))
-    for name, (i, j) in _COVARIANCE_ENTRIES.items():
-        out[:, i, j] = out[:, j, i] = frame[name].to_numpy(float)
-    return out
-
-
-def _score_joint_center(result, truth) -> dict[str, float]:
-    """Centre error, predicted uncertainty and its honesty against the TRUE centre.
-
-    ``mahalanobis_sq`` is ``e`` of paper C eq. 16, ``validation_index`` is ``v = sqrt(e / 3)``;
-    ``cov_*`` are the predicted covariance's entries, so other references can be used later.
-    """
-    scores = _score_center(result, truth)
-    covariance = None if result is None else result.covariance
-    entries = _covariance_entries(covariance)
-    if covariance is None:
-        return {
-            **scores,
-            "sqrt_trace_cov_mm": np.nan,
-            "mahalanobis_sq": np.nan,
-            "validation_index": np.nan,
-            **entries,
-        }
-    offset = np.asarray(result.center) - np.asarray(truth["center"])
-    try:
-        mahalanobis_sq = float(offset @ np.linalg.solve(covariance, offset))
-    except np.linalg.LinAlgError:
-        mahalanobis_sq = np.nan
-    return {
-        **scores,
-        "sqrt_trace_cov_mm": float(np.sqrt(np.trace(covariance))),
-        "mahalanobis_sq": mahalanobis_sq,
-        "validation_index": float(np.sqrt(mahalanobis_sq / 3.0)),
-        **entries,
-    }
-
-
-_SCORERS: dict[str, Callable] = {
-    "center": _score_center,
-    "axis": _score_axis,
-    "joint_center": _score_joint_center,
-}
-
-STUDIES: dict[str, StudySpec] = {
-    spec.name: spec
-    for spec in (
-        StudySpec(
-            name="cmc",
-            kind="center",
-            grid_keys=("marker_set", "rom_deg", "noise_mm"),
-            seed_keys=("marker_set", "rom_deg", "noise_mm"),
-            simulator="jointbench.simulate.cmc",
-            protocol_class="CmcProtocol",
-            segments=("moving",),
-        ),
-        StudySpec(
-            name="hinge",
-            kind="axis",
-            grid_keys=("protocol", "fe_rom_deg", "aa_ratio"),
-            seed_keys=("protocol", "fe_rom_deg", "aa_ratio"),
-            simulator="jointbench.simulate.hinge_study",
-            protocol_class="HingeStudyProtocol",
-            segments=("moving",),
-        ),
-        StudySpec(
-            name="hip",
-            kind="joint_center",
-            grid_keys=("n_frames",),
-            # Paper C §8 analyses the first Nt frames of one recording: Nt selects a view.
-            seed_keys=(),
-            simulator="jointbench.simulate.hip",
-            protocol_class="HipProtocol",
-            segments=("proximal", "distal"),
-        ),
-    )
-}
-
-
-def get_study(name: str) -> StudySpec:
+def get_study(name: str) -> Study:
     """The study called ``name``; ``ValueError`` listing the known studies otherwise."""
     try:
-        return STUDIES[name]
+        return _STUDIES[name]
     except KeyError:
-        raise ValueError(f"unknown study {name!r}; known: {', '.join(STUDIES)}") from None
+        raise ValueError(f"unknown study {name!r}; known: {', '.join(_STUDIES)}") from None
+
+
+def study_names() -> tuple[str, ...]:
+    """Names of the registered studies, built-ins first."""
+    return tuple(_STUDIES)
+
+
+for _study in (cmc.STUDY, hinge_study.STUDY, hip.STUDY):
+    register_study(_study)

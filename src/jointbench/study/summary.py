@@ -6,11 +6,10 @@ from collections.abc import Sequence
 
 import pandas as pd
 
+from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
 
 __all__ = ["ERROR_COLUMN", "summarise"]
-
-ERROR_COLUMN = {"center": "error_mm", "axis": "error_deg", "joint_center": "error_mm"}
 
 
 def summarise(estimates: pd.DataFrame, study: str, by: Sequence[str] = ()) -> pd.DataFrame:

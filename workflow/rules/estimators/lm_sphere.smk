@@ -4,16 +4,26 @@
 
 
 rule estimate_cmc_LM:
-    """LM: paper A's geometric sphere fit (f1) by Levenberg–Marquardt from the LS centre, one
-    condition at a time (workflow/external/lm_sphere.py)."""
+    """LM: paper A's geometric sphere fit (f1) by Levenberg–Marquardt from the LS centre, every
+    condition of the study in one job (workflow/external/lm_sphere.py)."""
     input:
-        "results/datasets/cmc/{condition}.parquet",
+        expand(
+            "results/datasets/cmc/{condition}.parquet", condition=condition_ids("cmc")
+        ),
     output:
-        "results/estimates/cmc/LM/{condition}.parquet",
+        expand(
+            "results/estimates/cmc/LM/{condition}.parquet",
+            condition=condition_ids("cmc"),
+        ),
     log:
-        "results/logs/estimate/cmc/LM/{condition}.log",
+        "results/logs/estimate/cmc/LM.log",
+    conda:
+        "../../envs/jointbench.yaml"
     params:
         # From the Snakefile's folder, so that `snakemake --directory elsewhere` finds it too.
         script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
+        out_dir=lambda w, output: Path(output[0]).parent,
+        # The interpreter running this workflow: the project's environment.
+        python=PYTHON,
     shell:
-        "{PYTHON:q} {params.script:q} {input:q} {output:q} 2> {log:q}"
+        "{params.python:q} {params.script:q} --out-dir {params.out_dir:q} {input:q} 2> {log:q}"

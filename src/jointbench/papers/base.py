@@ -1,0 +1,125 @@
+"""What a reproduced paper is: its outputs, their inputs, and its measured published values.
+
+A :class:`Paper` names its study, the methods it compared, its outputs (figures and tables, each
+with the function that renders it, the simulated conditions it draws and its report caption),
+its published values (a YAML file of typed tolerances, package data beside the module) and the
+function that measures every published value and claim from the collected results.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import pandas as pd
+
+from jointbench.simulate import Trials
+
+__all__ = [
+    "Inputs",
+    "Measured",
+    "Output",
+    "Paper",
+    "Table",
+]
+
+
+@dataclass(frozen=True)
+class Table:
+    """A rendered table: its rows, and the title and note of its Markdown form."""
+
+    frame: pd.DataFrame
+    title: str = ""
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One published value or claim as reproduced: ``value`` is what its tolerance compares (a
+    number, a list, or a mapping of named parts for ``all`` and ``binomial95``); ``text`` says it
+    in words for the tables."""
+
+    value: object
+    text: str
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What an output is rendered from.
+
+    ``collected`` the study's collected results; ``published`` the paper's published-values
+    document; ``datasets`` the simulated trials (and file metadata) of the output's conditions,
+    by condition in :attr:`Output.conditions` order (absent conditions are left out); ``config``
+    the run's configuration.
+    """
+
+    collected: pd.DataFrame
+    published: Mapping
+    config: Mapping
+    datasets: Sequence[tuple[Trials, Mapping]] = ()
+
+
+@dataclass(frozen=True)
+class Output:
+    """One figure or table of a paper.
+
+    ``name`` is the file stem and rule name (``results/figures/<name>.{png,pdf}`` or
+    ``results/tables/<name>.{html,csv,md}``); ``render`` draws it from :class:`Inputs` (a figure
+    returns a matplotlib ``Figure``, a table a :class:`Table`); ``conditions`` are the simulated
+    conditions whose trials it draws; ``caption`` says what it shows (reStructuredText);
+    ``headline`` summarises the tables named in ``summarises`` for its caption.
+    """
+
+    name: str
+    kind: Literal["figure", "table"]
+    render: Callable[[Inputs], object]
+    caption: str
+    conditions: tuple[Mapping[str, object], ...] = ()
+    summarises: tuple[str, ...] = ()
+    headline: Callable[..., str] | None = None
+
+    @property
+    def files(self) -> dict[str, str]:
+        """The output's files by extension; the first is the one the report shows."""
+        folder, extensions = (
+            ("figures", ("png", "pdf"))
+            if self.kind == "figure"
+            else ("tables", ("html", "csv", "md"))
+        )
+        return {ext: f"results/{folder}/{self.name}.{ext}" for ext in extensions}
+
+
+@dataclass(frozen=True)
+class Paper:
+    """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names."""
+
+    key: str
+    letter: str
+    title: str
+    citation: str
+    study: str
+    methods: tuple[str, ...]
+    outputs: tuple[Output, ...]
+    published: Path
+    measure: Callable[[Inputs], Mapping[str, Measured]]
+    claims_caption: str = ""
+    extra: Mapping[str, object] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        names = [o.name for o in self.outputs]
+        stray = [n for n in names if not n.startswith(f"{self.key}_")]
+        if stray or len(set(names)) != len(names):
+            raise ValueError(
+                f"paper {self.key!r}: output names must be unique and start with "
+                f"'{self.key}_' (got {names})"
+            )
+
+    def output(self, name: str) -> Output:
+        """The output called ``name``; ``ValueError`` listing the paper's outputs otherwise."""
+        for candidate in self.outputs:
+            if candidate.name == name:
+                return candidate
+        known = ", ".join(o.name for o in self.outputs)
+        raise ValueError(f"paper {self.key!r} has no output {name!r}; it has {known}")

@@ -1,0 +1,206 @@
+"""Typed tolerances: the one place a published value is compared with a reproduced one.
+
+A tolerance is a mapping with exactly one type key (and, inside ``all``, an ``of`` naming the
+part of a compound measurement it reads):
+
+============================  ============================================================
+``{abs: a}``                  ``|m − p| ≤ a``
+``{rel: r}``                  ``|m − p| ≤ r |p|``
+``{max_abs_rel: [a, r]}``     ``|m − p| ≤ max(a, r |p|)``
+``{factor: f}``               ``p / f ≤ m ≤ p f``
+``{at_least: v}``             ``m ≥ v``
+``{at_most: v}``              ``m ≤ v``
+``{greater_than: v}``         ``m > v``
+``{less_than: v}``            ``m < v``
+``{range: [lo, hi]}``         ``lo ≤ m ≤ hi``
+``{binomial95: {of_n: n}}``   each count inside the central 95 % range of Binomial(trials,
+                              p / n), with the measurement ``{count: [...], trials: [...]}``
+``{all: [t, ...]}``           every part holds (a part with ``of: key`` reads that part of a
+                              compound measurement, and may carry its own ``published``)
+``{shown_only: true}``        not compared: the value is shown beside ours
+============================  ============================================================
+
+``m`` and ``p`` may be numbers or equal-length lists (elementwise, all must hold); ``v`` may be
+a number or a list of the same length. The **margin** is how far inside (positive) or outside
+(negative) the tolerance the worst element lies, in the tolerance's own units (mm, degrees,
+shares, counts, or the factor for ``factor``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["TYPES", "Verdict", "describe", "evaluate"]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Whether a reproduced value is within its tolerance, and by how much (see module doc)."""
+
+    holds: bool
+    margin: float
+    margin_text: str
+
+
+def _array(value: object) -> np.ndarray:
+    return np.atleast_1d(np.asarray(value, dtype=float))
+
+
+def _margin_verdict(margins: np.ndarray, unit: str = "") -> Verdict:
+    worst = float(np.min(margins)) if margins.size else float("nan")
+    holds = bool(margins.size and np.all(margins >= 0) and np.isfinite(worst))
+    return Verdict(holds, worst, f"{worst:+.3g}{unit}")
+
+
+def _abs(spec, published, measured) -> Verdict:
+    return _margin_verdict(spec - np.abs(_array(measured) - _array(published)))
+
+
+def _rel(spec, published, measured) -> Verdict:
+    p = _array(published)
+    return _margin_verdict(spec * np.abs(p) - np.abs(_array(measured) - p))
+
+
+def _max_abs_rel(spec, published, measured) -> Verdict:
+    absolute, relative = spec
+    p = _array(published)
+    return _margin_verdict(
+        np.maximum(absolute, relative * np.abs(p)) - np.abs(_array(measured) - p)
+    )
+
+
+def _factor(spec, published, measured) -> Verdict:
+    p, m = _array(published), _array(measured)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # Inside by a factor ``spec / (m/p or p/m)``: 1 at the edge; the margin is that less one.
+        off = np.maximum(m / p, p / m)
+        margins = spec / off - 1.0
+    return _margin_verdict(np.where(np.isfinite(margins), margins, -np.inf), "×")
+
+
+def _at_least(spec, published, measured) -> Verdict:
+    return _margin_verdict(_array(measured) - _array(spec))
+
+
+def _at_most(spec, published, measured) -> Verdict:
+    return _margin_verdict(_array(spec) - _array(measured))
+
+
+def _strict(margins: np.ndarray) -> Verdict:
+    verdict = _margin_verdict(margins)
+    holds = verdict.holds and bool(np.all(margins > 0))
+    return Verdict(holds, verdict.margin, verdict.margin_text)
+
+
+def _greater_than(spec, published, measured) -> Verdict:
+    return _strict(_array(measured) - _array(spec))
+
+
+def _less_than(spec, published, measured) -> Verdict:
+    return _strict(_array(spec) - _array(measured))
+
+
+def _range(spec, published, measured) -> Verdict:
+    low, high = spec
+    m = _array(measured)
+    return _margin_verdict(np.minimum(m - low, high - m))
+
+
+def binomial_interval(trials: int, proportion: float) -> tuple[int, int]:
+    """Central 95 % range of a Binomial(``trials``, ``proportion``) count."""
+    distribution = stats.binom(int(trials), float(proportion))
+    return int(distribution.ppf(0.025)), int(distribution.ppf(0.975))
+
+
+def _binomial95(spec, published, measured) -> Verdict:
+    counts, trials = _array(measured["count"]), _array(measured["trials"])
+    proportions = _array(published) / _array(spec["of_n"])
+    margins = []
+    for count, n, proportion in zip(
+        counts, trials, np.broadcast_to(proportions, counts.shape), strict=True
+    ):
+        low, high = binomial_interval(int(n), float(proportion))
+        margins.append(min(count - low, high - count))
+    return _margin_verdict(np.asarray(margins, dtype=float), " trials")
+
+
+def _all(spec, published, measured) -> Verdict:
+    verdicts = []
+    for part in spec:
+        rest = {k: v for k, v in part.items() if k not in ("of", "published")}
+        value = measured[part["of"]] if "of" in part else measured
+        verdicts.append(evaluate(rest, part.get("published", published), value))
+    holds = all(v.holds for v in verdicts)
+    margin = min(v.margin for v in verdicts)
+    text = "; ".join(
+        f"{part.get('of', describe(part))} {v.margin_text}"
+        for part, v in zip(spec, verdicts, strict=True)
+    )
+    return Verdict(holds, margin, text)
+
+
+TYPES: dict[str, Callable[[object, object, object], Verdict]] = {
+    "abs": _abs,
+    "rel": _rel,
+    "max_abs_rel": _max_abs_rel,
+    "factor": _factor,
+    "at_least": _at_least,
+    "at_most": _at_most,
+    "greater_than": _greater_than,
+    "less_than": _less_than,
+    "range": _range,
+    "binomial95": _binomial95,
+    "all": _all,
+}
+NOT_COMPARED = "shown_only"
+
+
+def _type_of(tolerance: Mapping) -> str:
+    kinds = [key for key in tolerance if key in TYPES or key == NOT_COMPARED]
+    if len(kinds) != 1:
+        raise ValueError(
+            f"a tolerance needs exactly one type of {sorted([*TYPES, NOT_COMPARED])}; "
+            f"got {dict(tolerance)}"
+        )
+    return kinds[0]
+
+
+def is_compared(tolerance: Mapping) -> bool:
+    """False for ``{shown_only: true}``: the value is shown beside ours, not tested."""
+    return _type_of(tolerance) != NOT_COMPARED
+
+
+def evaluate(tolerance: Mapping, published: object, measured: object) -> Verdict:
+    """Whether ``measured`` is within ``tolerance`` of ``published`` (see the module doc)."""
+    kind = _type_of(tolerance)
+    if kind == NOT_COMPARED:
+        raise ValueError("a shown-only value is not compared; check is_compared() first")
+    return TYPES[kind](tolerance[kind], published, measured)
+
+
+def describe(tolerance: Mapping) -> str:
+    """A short human-readable form, e.g. ``max(2, 25 %)`` or ``≥ 0.8``."""
+    kind = _type_of(tolerance)
+    value = tolerance[kind]
+    simple = {
+        "abs": lambda v: f"± {v:g}",
+        "rel": lambda v: f"± {v:.0%}",
+        "max_abs_rel": lambda v: f"± max({v[0]:g}, {v[1]:.0%})",
+        "factor": lambda v: f"within a factor {v:g}",
+        "at_least": lambda v: f"≥ {v}",
+        "at_most": lambda v: f"≤ {v}",
+        "greater_than": lambda v: f"> {v}",
+        "less_than": lambda v: f"< {v}",
+        "range": lambda v: f"in [{v[0]:g}, {v[1]:g}]",
+        "binomial95": lambda v: f"inside the 95 % binomial range (of {v['of_n']})",
+        NOT_COMPARED: lambda v: "shown, not compared",
+    }
+    if kind == "all":
+        return " and ".join(
+            f"{part['of']} {describe(part)}" if "of" in part else describe(part) for part in value
+        )
+    return simple[kind](value)

@@ -1,0 +1,101 @@
+"""A fourth study with its own paper, added from outside the package in three files.
+
+The files are ``tests/data/fourth_study/``: ``toy_study.py`` (the study's simulator and its
+paper: one figure, two published values), ``paper_t.yaml`` (the published values with typed
+tolerances, one recorded deviation) and ``toy.yaml`` (the config overlay naming the module under
+``extensions``). Nothing in the package or the workflow is edited.
+"""
+
+from __future__ import annotations
+
+import shutil
+
+import pandas as pd
+import pytest
+from workflow_copy import ROOT, copy_workflow, run_snakemake
+
+pytestmark = pytest.mark.pipeline
+
+FILES = ("toy_study.py", "paper_t.yaml", "toy.yaml")
+
+
+@pytest.fixture(scope="module")
+def toy_run(tmp_path_factory):
+    workdir = copy_workflow(tmp_path_factory.mktemp("fourth_study"))
+    for name in FILES:
+        shutil.copy(ROOT / "tests" / "data" / "fourth_study" / name, workdir / name)
+    run = run_snakemake(workdir, "--configfile", str(workdir / "toy.yaml"))
+    assert run.returncode == 0, run.stderr[-4000:]
+    return workdir
+
+
+def test_the_extension_needs_at_most_five_files():
+    assert len(FILES) <= 5
+
+
+def test_the_toy_study_runs_and_draws_its_figure(toy_run):
+    results = toy_run / "results"
+    collected = pd.read_parquet(results / "collected" / "toy.parquet")
+    assert set(collected["method"]) == {"NM", "LS", "toy-centroid"}
+    assert len(collected) == 3 * 2 * 4
+    assert (results / "figures" / "paper_t_errors.png").stat().st_size > 1000
+    assert (results / "tables" / "extended_toy.csv").exists()
+    assert (results / "report" / "captions" / "paper_t_errors.rst").exists()
+
+
+def test_its_published_values_are_checked(toy_run):
+    comparison = pd.read_csv(toy_run / "results" / "tables" / "published_comparison.csv")
+    rows = comparison.set_index("id")
+    assert rows.loc["T1", "status"] == "reproduced"
+    assert rows.loc["T2", "status"] == "not reproduced"
+    assert "biased by noise" in rows.loc["T2", "reason"]
+    assert set(comparison["study"]) == {"toy"}
+
+
+def test_its_figure_is_in_the_report(toy_run):
+    report = run_snakemake(
+        toy_run, "--configfile", str(toy_run / "toy.yaml"), "--report", "results/report.html"
+    )
+    assert report.returncode == 0, report.stderr[-4000:]
+    html = (toy_run / "results" / "report.html").read_text(errors="replace")
+    for name in ("paper_t_errors.png", "published_comparison.html", "extended_toy.png"):
+        assert name in html, f"{name} missing from the report"
+
+
+def _planned_rules(workdir) -> dict[str, int]:
+    """Rule name -> job count that a dry run plans (from Snakemake's job stats)."""
+    run = run_snakemake(workdir, "--configfile", str(workdir / "toy.yaml"), "--dry-run")
+    assert run.returncode == 0, run.stderr[-4000:]
+    planned, in_stats = {}, False
+    for line in (run.stdout + run.stderr).splitlines():
+        words = line.split()
+        if words[:2] == ["job", "count"]:
+            in_stats = True
+        elif in_stats and len(words) == 2 and words[1].isdigit():
+            planned[words[0]] = int(words[1])
+        elif in_stats and words and words[0] == "total":
+            break
+    return planned
+
+
+def _edit(path, old, new):
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+
+
+def test_edited_code_reruns_its_jobs_and_only_them(toy_run):
+    """The library is code Snakemake does not track: fingerprints make an edit rerun its jobs."""
+    assert _planned_rules(toy_run) == {}
+    module = toy_run / "toy_study.py"
+    original = module.read_text()
+    try:
+        _edit(module, 'ax.set_xlabel("noise SD (mm)")', 'ax.set_xlabel("noise (mm)")')
+        assert set(_planned_rules(toy_run)) == {"paper_t_errors", "all"}
+        module.write_text(original)
+        _edit(module, "markers.reshape(-1, 3).mean(axis=0)", "markers.reshape(-1, 3).mean(0) + 1")
+        planned = _planned_rules(toy_run)
+        assert planned.get("estimate_toy") == 1, planned
+        assert "simulate_toy" not in planned
+    finally:
+        module.write_text(original)

@@ -1,0 +1,91 @@
+"""The code style checks, as tests: ruff (lint and format), snakefmt and Snakemake's linter."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from workflow_copy import ROOT
+
+BIN = Path(sys.executable).parent
+
+
+def _run(*command: str) -> subprocess.CompletedProcess:
+    return subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("ruff", "check", "."),
+        ("ruff", "format", "--check", "."),
+        ("snakefmt", "--check", "Snakefile", "workflow"),
+    ],
+    ids=["ruff-check", "ruff-format", "snakefmt"],
+)
+def test_style(command):
+    result = _run(str(BIN / command[0]), *command[1:])
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+
+
+def test_snakemake_lint():
+    result = _run(str(BIN / "snakemake"), "--lint", "-n")
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "Lints for" not in result.stdout, result.stdout[-3000:]
+
+
+def _module_imports(path: Path, modules: set[str]) -> set[str]:
+    """The jointbench modules that ``path`` imports at module level."""
+    found = set()
+    for node in ast.parse(path.read_text()).body:
+        names = []
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names = [f"{node.module}.{alias.name}" for alias in node.names] + [node.module]
+        elif isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        for name in names:
+            if name in modules:
+                found.add(name)
+                break
+    return found
+
+
+def test_imports_point_downward_without_cycles():
+    """The module-level import graph of jointbench has no cycle (see docs/architecture.md)."""
+    paths = {
+        ".".join(path.relative_to(ROOT / "src").with_suffix("").parts).removesuffix(
+            ".__init__"
+        ): path
+        for path in (ROOT / "src" / "jointbench").rglob("*.py")
+    }
+    graph = {module: _module_imports(path, set(paths)) for module, path in paths.items()}
+    state: dict[str, int] = {}
+
+    def visit(module: str, trail: tuple[str, ...]) -> None:
+        if state.get(module) == 2:
+            return
+        assert state.get(module) != 1, "import cycle: " + " -> ".join([*trail, module])
+        state[module] = 1
+        for target in sorted(graph[module]):
+            visit(target, (*trail, module))
+        state[module] = 2
+
+    for module in sorted(graph):
+        visit(module, ())
+
+
+def test_no_function_local_imports_of_the_package():
+    """Imports of jointbench happen at module level, never inside a function to dodge a cycle."""
+    offenders = []
+    for path in (ROOT / "src" / "jointbench").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                for inner in ast.walk(node):
+                    if isinstance(inner, ast.ImportFrom) and (inner.module or "").startswith(
+                        "jointbench"
+                    ):
+                        offenders.append(f"{path.relative_to(ROOT)}:{inner.lineno}")
+    assert not offenders, offenders

@@ -1,0 +1,77 @@
+"""Typed tolerances: each type's verdict and margin, and that a tolerance names one type."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from jointbench.study.tolerance import binomial_interval, describe, evaluate, is_compared
+
+
+@pytest.mark.parametrize(
+    ("tolerance", "published", "measured", "holds", "margin"),
+    [
+        ({"abs": 2.0}, 10.0, 11.5, True, 0.5),
+        ({"abs": 2.0}, 10.0, 12.5, False, -0.5),
+        ({"rel": 0.25}, 8.0, 9.0, True, 1.0),
+        ({"max_abs_rel": [2.0, 0.25]}, 4.0, 5.9, True, 0.1),
+        ({"max_abs_rel": [2.0, 0.25]}, 40.0, 51.0, False, -1.0),
+        ({"at_least": 0.8}, None, 0.9, True, 0.1),
+        ({"at_least": 0.8}, None, 0.7, False, -0.1),
+        ({"at_most": 0}, None, 0, True, 0.0),
+        ({"at_most": 0}, None, 2, False, -2.0),
+        ({"greater_than": [25, 60]}, None, [30, 61], True, 1.0),
+        ({"greater_than": 0.55}, None, 0.55, False, 0.0),
+        ({"less_than": 1.5}, None, 1.2, True, 0.3),
+        ({"range": [0.8, 1.25]}, None, [0.9, 1.2], True, 0.05),
+        ({"range": [0.8, 1.25]}, None, [0.9, 1.3], False, -0.05),
+        ({"factor": 2}, 0.2, 0.3, True, 2 / 1.5 - 1),
+        ({"factor": 2}, 0.2, 0.5, False, 2 / 2.5 - 1),
+    ],
+)
+def test_verdict_and_margin(tolerance, published, measured, holds, margin):
+    verdict = evaluate(tolerance, published, measured)
+    assert verdict.holds is holds
+    assert verdict.margin == pytest.approx(margin)
+
+
+def test_nan_never_holds():
+    assert not evaluate({"abs": 1.0}, 1.0, float("nan")).holds
+    assert not evaluate({"at_least": 0.5}, None, [0.9, float("nan")]).holds
+
+
+def test_binomial_counts_inside_and_outside():
+    low, high = binomial_interval(30, 16 / 30)
+    inside = evaluate({"binomial95": {"of_n": 30}}, [16], {"count": [low], "trials": [30]})
+    outside = evaluate({"binomial95": {"of_n": 30}}, [16], {"count": [high + 1], "trials": [30]})
+    assert inside.holds and inside.margin == 0
+    assert not outside.holds and outside.margin == -1
+
+
+def test_all_needs_every_part_and_reads_named_parts():
+    tolerance = {"all": [{"of": "share", "at_least": 0.68}, {"of": "gap", "at_most": 3.7}]}
+    assert evaluate(tolerance, None, {"share": 0.9, "gap": 0.3}).holds
+    verdict = evaluate(tolerance, None, {"share": 0.9, "gap": 26.6})
+    assert not verdict.holds and verdict.margin == pytest.approx(3.7 - 26.6)
+    assert "gap" in verdict.margin_text
+
+
+@pytest.mark.parametrize("tolerance", [{}, {"abs": 1, "rel": 0.1}, {"roughly": 1}])
+def test_a_tolerance_has_exactly_one_type(tolerance):
+    with pytest.raises(ValueError, match="exactly one type"):
+        evaluate(tolerance, 1.0, 1.0)
+
+
+def test_shown_only_is_not_compared():
+    assert not is_compared({"shown_only": True})
+    with pytest.raises(ValueError, match="not compared"):
+        evaluate({"shown_only": True}, 1.0, 1.0)
+    assert describe({"shown_only": True}) == "shown, not compared"
+
+
+@given(st.floats(-1e3, 1e3), st.floats(0, 1e3), st.floats(-1e3, 1e3, allow_nan=False))
+def test_abs_margin_is_the_distance_to_the_edge(published, width, measured):
+    verdict = evaluate({"abs": width}, published, measured)
+    assert verdict.margin == pytest.approx(width - abs(measured - published), abs=1e-9)
+    assert verdict.holds == (abs(measured - published) <= width)
