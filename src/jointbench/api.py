@@ -9,7 +9,7 @@ Every method is reached through the registry, which holds it to the same rules:
 * data that cannot support an answer — markers that are not one rigid body, a rotation not
   resolved above the rigid-body residual, or (for a centre) rotation about a single axis — give
   a result whose ``status`` starts with or carries ``"warning: ..."``, with the numbers in
-  ``diagnostics["support"]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
+  ``diagnostics["support_..."]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
   the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer.
 """
 

@@ -86,16 +86,51 @@ def _check_kind(kind: str) -> None:
         raise ValueError(f"unknown estimator kind {kind!r}; choose one of {', '.join(KINDS)}")
 
 
-def _checked(kind: str, fn: Callable) -> Callable:
-    """``fn`` with the input checks before and the support verdict after."""
+class _Checked:
+    """An estimator with the input checks before and the support verdict after each fit.
 
-    @functools.wraps(fn)
-    def checked(*arrays: object, **options: object):
-        clean = validation.check_input(kind, arrays)
-        result = fn(*clean, **options)
-        return support.annotate(result, support.assess(kind, clean))
+    Where the estimator has a ``batched`` form (``fn.batched(*segments, **options)`` over
+    ``(n_trials, ...)`` arrays, returning per trial a result or the exception), so does this,
+    with the same checks per trial. Modules attach ``fn.batched`` after registering ``fn``, so
+    it is looked up on first use and then kept as a plain attribute (which can be replaced or
+    deleted like any other).
+    """
 
-    return checked
+    def __init__(self, kind: str, fn: Callable) -> None:
+        self._kind = kind
+        self._fn = fn
+        functools.update_wrapper(self, fn)
+        self.__dict__.pop("batched", None)  # never the unchecked form
+        self.__dict__["_batched_resolved"] = False
+
+    def __call__(self, *arrays: object, **options: object):
+        clean = validation.check_input(self._kind, arrays)
+        result = self._fn(*clean, **options)
+        return support.annotate(result, support.assess(self._kind, clean))
+
+    def __getattr__(self, name: str):
+        # Reached only when ordinary lookup fails, i.e. before "batched" was first resolved.
+        if name != "batched" or self.__dict__.get("_batched_resolved", True):
+            raise AttributeError(name)
+        self.__dict__["_batched_resolved"] = True
+        raw = getattr(self._fn, "batched", None)
+        if raw is None:
+            raise AttributeError(f"{self.__name__} has no batched form")
+        self.batched = functools.partial(self._batched, raw)
+        return self.batched
+
+    def _batched(self, raw: Callable, *segments: object, **options: object) -> list:
+        outcomes = list(raw(*segments, **options))
+        for trial, outcome in enumerate(outcomes):
+            # As for one trial: the input checks come first and their error wins.
+            try:
+                clean = validation.check_input(self._kind, tuple(s[trial] for s in segments))
+            except ValueError as error:
+                outcomes[trial] = error
+                continue
+            if not isinstance(outcome, Exception):
+                outcomes[trial] = support.annotate(outcome, support.assess(self._kind, clean))
+        return outcomes
 
 
 def register(
@@ -118,7 +153,7 @@ def register(
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated)
+        _REGISTRY[kind][name] = _Entry(fn, _Checked(kind, fn), stated)
         return fn
 
     return decorate

@@ -32,7 +32,7 @@ This module judges the data, not the answer, from the rigid-body fit of the movi
   as spanning two axes in about 0.5 % of trials at the 0.1 % level).
 
 The verdict is a list of warnings; :func:`annotate` writes them into a result's ``status`` and
-its numbers into ``diagnostics["support"]``. It never changes ``converged``, which keeps the
+its numbers into ``diagnostics["support_..."]``. It never changes ``converged``, which keeps the
 meaning each method's paper gives it (so a hard but legitimate condition, e.g. a small range
 of motion with large noise, is warned about, not dropped from a study).
 """
@@ -43,10 +43,11 @@ import dataclasses
 from typing import NamedTuple
 
 import numpy as np
-from scipy import stats
+from scipy.special import fdtrc
 
 from jointbench.estimators.validation import ARRAY_NAMES
-from jointbench.geometry import best_rotation, rigid_poses, rotation_vector
+from jointbench.geometry import rotation_vector
+from jointbench.numerics.poses import best_rotation, rigid_poses
 
 __all__ = ["CENTRE_KINDS", "MAX_NONRIGID_SHARE", "ROTATION_ALPHA", "Support", "annotate", "assess"]
 
@@ -149,9 +150,10 @@ def _rotation_test(
     second = float(np.sqrt(raw[:2].sum() / n_frames))
     if variance == 0.0:
         return _Rotation(rms, float(rms == 0.0), second, float(raw[1] <= 1e-12 * raw[2]))
-    p_any = stats.f.sf(spread.sum() / (variance * 3 * (n_frames - 1)), 3 * (n_frames - 1), dof)
+    # fdtrc(d1, d2, x) is the F survival function (scipy.stats would import far more).
+    p_any = fdtrc(3 * (n_frames - 1), dof, spread.sum() / (variance * 3 * (n_frames - 1)))
     off_axis = 2 * (n_frames - 1)
-    p_second = stats.f.sf(spread[:2].sum() / (variance * off_axis), off_axis, dof)
+    p_second = fdtrc(off_axis, dof, spread[:2].sum() / (variance * off_axis))
     return _Rotation(rms, float(p_any), second, float(p_second))
 
 
@@ -209,11 +211,12 @@ def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
 
 
 def annotate(result, support: Support):
-    """``result`` with the support warnings appended to its ``status`` and the numbers in
-    ``diagnostics["support"]``; ``converged`` is left as the method set it."""
+    """``result`` with the support warnings appended to its ``status`` and the numbers in its
+    ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
     status = result.status
     if support.warnings:
         words = "; ".join(f"warning: {warning}" for warning in support.warnings)
         status = words if status == "ok" else f"{status}; {words}"
-    diagnostics = {**result.diagnostics, "support": support.diagnostics}
+    numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
+    diagnostics = {**result.diagnostics, **numbers}
     return dataclasses.replace(result, status=status, diagnostics=diagnostics)
