@@ -28,6 +28,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
+import numpy as np
+
 from jointbench.estimators import support, validation
 
 __all__ = ["INVARIANCES", "KINDS", "Claims", "claims", "get", "methods", "register"]
@@ -121,15 +123,22 @@ class _Checked:
 
     def _batched(self, raw: Callable, *segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
+        fitted, clean = [], []
         for trial, outcome in enumerate(outcomes):
             # As for one trial: the input checks come first and their error wins.
             try:
-                clean = validation.check_input(self._kind, tuple(s[trial] for s in segments))
+                arrays = validation.check_input(self._kind, tuple(s[trial] for s in segments))
             except ValueError as error:
                 outcomes[trial] = error
                 continue
             if not isinstance(outcome, Exception):
-                outcomes[trial] = support.annotate(outcome, support.assess(self._kind, clean))
+                fitted.append(trial)
+                clean.append(arrays)
+        if fitted:
+            stacked = tuple(np.stack(arrays) for arrays in zip(*clean, strict=True))
+            verdicts = support.assess_many(self._kind, stacked)
+            for trial, verdict in zip(fitted, verdicts, strict=True):
+                outcomes[trial] = support.annotate(outcomes[trial], verdict)
         return outcomes
 
 

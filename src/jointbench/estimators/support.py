@@ -49,7 +49,15 @@ from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.poses import best_rotation, rigid_poses
 
-__all__ = ["CENTRE_KINDS", "MAX_NONRIGID_SHARE", "ROTATION_ALPHA", "Support", "annotate", "assess"]
+__all__ = [
+    "CENTRE_KINDS",
+    "MAX_NONRIGID_SHARE",
+    "ROTATION_ALPHA",
+    "Support",
+    "annotate",
+    "assess",
+    "assess_many",
+]
 
 #: A rotation the data cannot tell from noise at this significance level is "not resolved": a
 #: recording that does not rotate is passed as rotating in one trial in a thousand.
@@ -78,33 +86,43 @@ class Support(NamedTuple):
     diagnostics: dict
 
 
-class _Cluster(NamedTuple):
-    rotation: np.ndarray  # (N, 3, 3)
-    inertia_inv: np.ndarray  # (3, 3) [mm^-2]
-    residual_ss: float  # [mm^2]
+class _Clusters(NamedTuple):
+    """Rigid-body fits of one segment in each of ``T`` trials."""
+
+    rotation: np.ndarray  # (T, N, 3, 3)
+    inertia_inv: np.ndarray  # (T, 3, 3) [mm^-2]
+    residual_ss: np.ndarray  # (T,) [mm^2]
     dof: int
-    nonrigid_share: float  # s^2 / v, see the module docstring
+    nonrigid_share: np.ndarray  # (T,) s^2 / v, see the module docstring
 
 
-def _cluster(markers: np.ndarray) -> _Cluster | None:
-    """Rigid-body fit of one cluster ``(N, n, 3)``; ``None`` when it cannot define a pose."""
-    n_frames, n_markers, _ = markers.shape
+def _poses_defined(markers: np.ndarray) -> bool:
+    """Whether every trial's clusters ``(T, N, n, 3)`` can define a pose (3 non-collinear
+    markers at frame 0, two frames or more)."""
+    _, n_frames, n_markers, _ = markers.shape
     if n_markers < 3 or n_frames < 2:
-        return None
-    centred = markers[0] - markers[0].mean(axis=0)
-    singular = np.linalg.svd(centred, compute_uv=False)
-    if singular[1] <= 1e-6 * singular[0]:
-        return None
+        return False
+    first = markers[:, 0] - markers[:, 0].mean(axis=1, keepdims=True)
+    singular = np.linalg.svd(first, compute_uv=False)
+    return bool(np.all(singular[:, 1] > 1e-6 * singular[:, 0]))
+
+
+def _clusters(markers: np.ndarray) -> _Clusters:
+    """Rigid-body fits of ``(T, N, n, 3)`` clusters, all trials in one call."""
+    _, n_frames, n_markers, _ = markers.shape
     # One re-estimation of the body-fixed coordinates leaves them within ~s / sqrt(N) of the
     # converged ones: plenty for a verdict, at a quarter of the cost of a converged fit.
     rotation, translation, body = rigid_poses(markers, max_iterations=1)
-    fitted = body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
-    u = body - body.mean(axis=0)
-    inertia = np.sum(u * u) * np.eye(3) - u.T @ u
-    residual_ss = float(np.sum((markers - fitted) ** 2))
+    fitted = np.einsum("tmj,tfij->tfmi", body, rotation) + translation[:, :, None, :]
+    u = body - body.mean(axis=1, keepdims=True)
+    inertia = np.einsum("tmi,tmi->t", u, u)[:, None, None] * np.eye(3) - np.einsum(
+        "tmi,tmj->tij", u, u
+    )
+    residual_ss = np.einsum("tfmi,tfmi->t", markers - fitted, markers - fitted)
     dof = 3 * (n_markers - 2) * (n_frames - 1)
-    scatter = float(np.sum((markers - markers.mean(axis=1, keepdims=True)) ** 2))
-    return _Cluster(
+    centred = markers - markers.mean(axis=2, keepdims=True)
+    scatter = np.einsum("tfmi,tfmi->t", centred, centred)
+    return _Clusters(
         rotation=rotation,
         inertia_inv=np.linalg.inv(inertia),
         residual_ss=residual_ss,
@@ -113,48 +131,107 @@ def _cluster(markers: np.ndarray) -> _Cluster | None:
     )
 
 
-def _mean_rotation(rotations: np.ndarray) -> np.ndarray:
-    """The rotation nearest (Frobenius) the mean of ``rotations`` ``(N, 3, 3)``."""
-    return best_rotation(rotations.mean(axis=0)[None])[0]
-
-
 class _Rotation(NamedTuple):
-    rms_rad: float  # RMS rotation about the mean relative pose
-    p_any: float  # p-value of "the segment does not rotate"
-    second_rms_rad: float  # RMS rotation about all but the dominant (noise-weighted) axis
-    p_second: float  # p-value of "it rotates about one axis only"
+    rms_rad: np.ndarray  # (T,) RMS rotation about the mean relative pose
+    p_any: np.ndarray  # (T,) p-value of "the segment does not rotate"
+    second_rms_rad: np.ndarray  # (T,) RMS rotation about all but the dominant axis
+    p_second: np.ndarray  # (T,) p-value of "it rotates about one axis only"
 
 
 def _rotation_test(
-    moving: _Cluster, reference: _Cluster | None, variance: float, dof: int
+    moving: _Clusters, reference: _Clusters | None, variance: np.ndarray, dof: int
 ) -> _Rotation:
-    """The rotation of ``moving`` relative to ``reference`` (or the identity) against noise."""
+    """The rotation of ``moving`` relative to ``reference`` (or the identity) against noise,
+    per trial; ``variance`` ``(T,)`` [mm^2]."""
     relative = moving.rotation
     covariance = moving.inertia_inv
     if reference is not None:
         relative = np.swapaxes(reference.rotation, -1, -2) @ relative
-    mean = _mean_rotation(relative)
+    # The rotation nearest (Frobenius) the mean of each trial's rotations.
+    mean = best_rotation(relative.mean(axis=1))
     if reference is not None:
         # The proximal pose's error, mapped into the distal body frame at the mean pose.
-        covariance = covariance + mean.T @ reference.inertia_inv @ mean
-    deviation = rotation_vector(np.swapaxes(mean, -1, -2) @ relative)
-    deviation = deviation - deviation.mean(axis=0)
-    n_frames = relative.shape[0]
+        covariance = covariance + np.swapaxes(mean, -1, -2) @ reference.inertia_inv @ mean
+    deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
+    deviation = deviation - deviation.mean(axis=1, keepdims=True)
+    n_frames = relative.shape[1]
     # Rotation vectors whitened by their noise covariance (per unit variance): under "no
     # rotation" each coordinate of each frame is noise of variance s^2.
     whitening = np.linalg.cholesky(np.linalg.inv(covariance))
     whitened = deviation @ whitening
-    spread = np.linalg.eigvalsh(whitened.T @ whitened)  # ascending [rad^2 mm^2]
-    raw = np.linalg.eigvalsh(deviation.T @ deviation)
-    rms = float(np.sqrt(raw.sum() / n_frames))
-    second = float(np.sqrt(raw[:2].sum() / n_frames))
-    if variance == 0.0:
-        return _Rotation(rms, float(rms == 0.0), second, float(raw[1] <= 1e-12 * raw[2]))
+    spread = np.linalg.eigvalsh(np.swapaxes(whitened, 1, 2) @ whitened)  # ascending [rad^2 mm^2]
+    raw = np.linalg.eigvalsh(np.swapaxes(deviation, 1, 2) @ deviation)
+    rms = np.sqrt(raw.sum(axis=1) / n_frames)
+    second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
+    exact = variance == 0.0
+    noise = np.where(exact, 1.0, variance)
     # fdtrc(d1, d2, x) is the F survival function (scipy.stats would import far more).
-    p_any = fdtrc(3 * (n_frames - 1), dof, spread.sum() / (variance * 3 * (n_frames - 1)))
+    any_dof = 3 * (n_frames - 1)
+    p_any = fdtrc(any_dof, dof, spread.sum(axis=1) / (noise * any_dof))
     off_axis = 2 * (n_frames - 1)
-    p_second = fdtrc(off_axis, dof, spread[:2].sum() / (variance * off_axis))
-    return _Rotation(rms, float(p_any), second, float(p_second))
+    p_second = fdtrc(off_axis, dof, spread[:, :2].sum(axis=1) / (noise * off_axis))
+    # Noise-free data: any rotation at all is resolved.
+    p_any = np.where(exact, (rms == 0.0).astype(float), p_any)
+    p_second = np.where(exact, (raw[:, 1] <= 1e-12 * raw[:, 2]).astype(float), p_second)
+    return _Rotation(rms, p_any, second, p_second)
+
+
+def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
+    """:func:`assess` for ``T`` trials at once: ``arrays`` as there with a leading trial axis,
+    ``(T, N, n, 3)`` each; one :class:`Support` per trial."""
+    n_trials = arrays[0].shape[0]
+    if not all(_poses_defined(array) for array in arrays):
+        if n_trials > 1:
+            return [assess(kind, tuple(array[t] for array in arrays)) for t in range(n_trials)]
+        return [Support((), {"assessed": False, "reason": "fewer than 3 non-collinear markers"})]
+    names = ARRAY_NAMES[kind]
+    clusters = [_clusters(array) for array in arrays]
+    dof = sum(cluster.dof for cluster in clusters)
+    variance = sum(cluster.residual_ss for cluster in clusters) / dof
+    reference = clusters[0] if kind == "joint_center" else None
+    rotation = _rotation_test(clusters[-1], reference, variance, dof)
+    return [
+        _verdict(kind, names, clusters, t, float(variance[t]), rotation) for t in range(n_trials)
+    ]
+
+
+def _verdict(kind, names, clusters, t, variance, rotation) -> Support:
+    """Trial ``t``'s warnings and numbers."""
+    residual_mm = float(np.sqrt(3.0 * variance))
+    p_any, p_second = float(rotation.p_any[t]), float(rotation.p_second[t])
+    warnings = [
+        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
+        f"{100 * cluster.nonrigid_share[t]:.0f}% of their scatter about their centroid "
+        f"unexplained (residual {np.sqrt(3.0 * cluster.residual_ss[t] / cluster.dof):.3g} mm)"
+        for name, cluster in zip(names, clusters, strict=True)
+        if cluster.nonrigid_share[t] >= MAX_NONRIGID_SHARE
+    ]
+    # A rotation test on markers that keep no shape would only restate that.
+    if not warnings and p_any >= ROTATION_ALPHA:
+        warnings.append(
+            f"range of motion too small to support an answer: a rotation of "
+            f"{np.degrees(rotation.rms_rad[t]):.3g} deg RMS is not resolved above the "
+            f"rigid-body residual of {residual_mm:.3g} mm (p = {p_any:.2g})"
+        )
+    elif not warnings and kind in CENTRE_KINDS and p_second >= ROTATION_ALPHA:
+        warnings.append(
+            f"rotation about a single axis: the centre is not determined along it (rotation "
+            f"about other axes, {np.degrees(rotation.second_rms_rad[t]):.3g} deg RMS, is not "
+            f"resolved above the rigid-body residual of {residual_mm:.3g} mm, "
+            f"p = {p_second:.2g})"
+        )
+    return Support(
+        tuple(warnings),
+        {
+            "assessed": True,
+            "rigid_residual_mm": residual_mm,
+            "nonrigid_share": float(max(cluster.nonrigid_share[t] for cluster in clusters)),
+            "rotation_rms_deg": float(np.degrees(rotation.rms_rad[t])),
+            "rotation_p_value": p_any,
+            "off_axis_rotation_rms_deg": float(np.degrees(rotation.second_rms_rad[t])),
+            "off_axis_p_value": p_second,
+        },
+    )
 
 
 def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
@@ -165,49 +242,7 @@ def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
     are not assessed (``diagnostics["assessed"]`` is False).
     """
-    names = ARRAY_NAMES[kind]
-    clusters = [_cluster(array) for array in arrays]
-    if any(cluster is None for cluster in clusters):
-        return Support((), {"assessed": False, "reason": "fewer than 3 non-collinear markers"})
-    dof = sum(cluster.dof for cluster in clusters)
-    variance = sum(cluster.residual_ss for cluster in clusters) / dof
-    residual_mm = float(np.sqrt(3.0 * variance))
-    reference = clusters[0] if kind == "joint_center" else None
-    rotation = _rotation_test(clusters[-1], reference, variance, dof)
-
-    warnings = [
-        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
-        f"{100 * cluster.nonrigid_share:.0f}% of their scatter about their centroid unexplained "
-        f"(residual {np.sqrt(3.0 * cluster.residual_ss / cluster.dof):.3g} mm)"
-        for name, cluster in zip(names, clusters, strict=True)
-        if cluster.nonrigid_share >= MAX_NONRIGID_SHARE
-    ]
-    # A rotation test on markers that keep no shape would only restate that.
-    if not warnings and rotation.p_any >= ROTATION_ALPHA:
-        warnings.append(
-            f"range of motion too small to support an answer: a rotation of "
-            f"{np.degrees(rotation.rms_rad):.3g} deg RMS is not resolved above the rigid-body "
-            f"residual of {residual_mm:.3g} mm (p = {rotation.p_any:.2g})"
-        )
-    elif not warnings and kind in CENTRE_KINDS and rotation.p_second >= ROTATION_ALPHA:
-        warnings.append(
-            f"rotation about a single axis: the centre is not determined along it (rotation "
-            f"about other axes, {np.degrees(rotation.second_rms_rad):.3g} deg RMS, is not "
-            f"resolved above the rigid-body residual of {residual_mm:.3g} mm, "
-            f"p = {rotation.p_second:.2g})"
-        )
-    return Support(
-        tuple(warnings),
-        {
-            "assessed": True,
-            "rigid_residual_mm": residual_mm,
-            "nonrigid_share": max(cluster.nonrigid_share for cluster in clusters),
-            "rotation_rms_deg": float(np.degrees(rotation.rms_rad)),
-            "rotation_p_value": rotation.p_any,
-            "off_axis_rotation_rms_deg": float(np.degrees(rotation.second_rms_rad)),
-            "off_axis_p_value": rotation.p_second,
-        },
-    )
+    return assess_many(kind, tuple(np.asarray(array)[None] for array in arrays))[0]
 
 
 def annotate(result, support: Support):
