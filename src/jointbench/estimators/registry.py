@@ -81,6 +81,8 @@ class _Entry:
 
 
 _REGISTRY: dict[str, dict[str, _Entry]] = {kind: {} for kind in KINDS}
+# (kind, name) pairs whose ``batched`` form has been looked up (see :func:`get`).
+_BATCHED_RESOLVED: set[tuple[str, str]] = set()
 
 
 def _check_kind(kind: str) -> None:
@@ -88,46 +90,35 @@ def _check_kind(kind: str) -> None:
         raise ValueError(f"unknown estimator kind {kind!r}; choose one of {', '.join(KINDS)}")
 
 
-class _Checked:
-    """An estimator with the input checks before and the support verdict after each fit.
+def _checked(kind: str, fn: Callable) -> Callable:
+    """``fn`` with the input checks before and the support verdict after each fit.
 
-    Where the estimator has a ``batched`` form (``fn.batched(*segments, **options)`` over
-    ``(n_trials, ...)`` arrays, returning per trial a result or the exception), so does this,
-    with the same checks per trial. Modules attach ``fn.batched`` after registering ``fn``, so
-    it is looked up on first use and then kept as a plain attribute (which can be replaced or
-    deleted like any other).
+    A plain function (not a callable object), so that the code fingerprint of a job reaches
+    ``fn`` and the checks through its closure and globals.
     """
 
-    def __init__(self, kind: str, fn: Callable) -> None:
-        self._kind = kind
-        self._fn = fn
-        functools.update_wrapper(self, fn)
-        self.__dict__.pop("batched", None)  # never the unchecked form
-        self.__dict__["_batched_resolved"] = False
+    @functools.wraps(fn)
+    def checked(*arrays: object, **options: object):
+        clean = validation.check_input(kind, arrays)
+        return support.annotate(fn(*clean, **options), support.assess(kind, clean))
 
-    def __call__(self, *arrays: object, **options: object):
-        clean = validation.check_input(self._kind, arrays)
-        result = self._fn(*clean, **options)
-        return support.annotate(result, support.assess(self._kind, clean))
+    checked.__dict__.pop("batched", None)  # never the unchecked form
+    return checked
 
-    def __getattr__(self, name: str):
-        # Reached only when ordinary lookup fails, i.e. before "batched" was first resolved.
-        if name != "batched" or self.__dict__.get("_batched_resolved", True):
-            raise AttributeError(name)
-        self.__dict__["_batched_resolved"] = True
-        raw = getattr(self._fn, "batched", None)
-        if raw is None:
-            raise AttributeError(f"{self.__name__} has no batched form")
-        self.batched = functools.partial(self._batched, raw)
-        return self.batched
 
-    def _batched(self, raw: Callable, *segments: object, **options: object) -> list:
+def _checked_batched(kind: str, raw: Callable) -> Callable[..., list]:
+    """A ``batched`` form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
+    returning per trial a result or the exception) with the checks of :func:`_checked` per
+    trial and the support verdict of all trials in one call."""
+
+    @functools.wraps(raw)
+    def batched(*segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
         fitted, clean = [], []
         for trial, outcome in enumerate(outcomes):
             # As for one trial: the input checks come first and their error wins.
             try:
-                arrays = validation.check_input(self._kind, tuple(s[trial] for s in segments))
+                arrays = validation.check_input(kind, tuple(s[trial] for s in segments))
             except ValueError as error:
                 outcomes[trial] = error
                 continue
@@ -136,10 +127,12 @@ class _Checked:
                 clean.append(arrays)
         if fitted:
             stacked = tuple(np.stack(arrays) for arrays in zip(*clean, strict=True))
-            verdicts = support.assess_many(self._kind, stacked)
+            verdicts = support.assess_many(kind, stacked)
             for trial, verdict in zip(fitted, verdicts, strict=True):
                 outcomes[trial] = support.annotate(outcomes[trial], verdict)
         return outcomes
+
+    return batched
 
 
 def register(
@@ -162,7 +155,8 @@ def register(
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind][name] = _Entry(fn, _Checked(kind, fn), stated)
+        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated)
+        _BATCHED_RESOLVED.discard((kind, name))
         return fn
 
     return decorate
@@ -179,8 +173,20 @@ def _entry(kind: str, name: str) -> _Entry:
 
 def get(kind: str, name: str) -> Callable:
     """The estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the known
-    names otherwise."""
-    return _entry(kind, name).checked
+    names otherwise.
+
+    Where the estimator has a ``batched`` form, the returned function carries a checked one as
+    its ``batched`` attribute. Modules attach ``fn.batched`` after registering ``fn``, so it is
+    looked up at the first ``get`` and then kept as a plain attribute (which can be replaced or
+    deleted like any other).
+    """
+    entry = _entry(kind, name)
+    if (kind, name) not in _BATCHED_RESOLVED:
+        _BATCHED_RESOLVED.add((kind, name))
+        raw = getattr(entry.fn, "batched", None)
+        if raw is not None:
+            entry.checked.batched = _checked_batched(kind, raw)
+    return entry.checked
 
 
 def claims(kind: str, name: str) -> Claims:
