@@ -83,13 +83,14 @@ def test_dataset_round_trip(tmp_path):
 
 @pytest.fixture
 def flaky_estimator():
-    """A throwaway estimator that fails on odd trials (raises) and reports non-convergence."""
+    """A throwaway estimator that fails on odd trials (a numerical ``ValueError``) and reports
+    non-convergence on the others."""
     calls = {"n": 0}
 
     def flaky(markers):
         calls["n"] += 1
         if calls["n"] % 2 == 0:
-            raise RuntimeError("boom")
+            raise ValueError("boom")
         return CenterResult(
             center=markers.mean(axis=(0, 1)),
             converged=False,
@@ -110,7 +111,7 @@ def test_failures_become_rows_and_the_run_goes_on(config, flaky_estimator):
     frame = estimate("cmc", flaky_estimator, trials, condition)
     assert len(frame) == 4
     assert not frame["converged"].any()
-    assert frame["status"].str.startswith("error: RuntimeError: boom").sum() == 2
+    assert frame["status"].str.startswith("error: ValueError: boom").sum() == 2
     assert (frame["status"] == "max iterations").sum() == 2
     assert frame.loc[frame["status"].str.startswith("error"), "error_mm"].isna().all()
 

@@ -20,6 +20,8 @@ import pandas as pd
 import jointbench
 from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
+from jointbench.pipeline import paper_labels
+from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
 
 __all__ = ["main"]
 
@@ -56,8 +58,6 @@ def _method_list() -> str:
 
 
 def _snapshot(args: argparse.Namespace) -> int:
-    from jointbench.study.snapshot import snapshot_table
-
     table = snapshot_table(args.results / "collected")
     if table.empty:
         print(f"no collected results under {args.results}; run `snakemake -j2` first")
@@ -69,9 +69,6 @@ def _snapshot(args: argparse.Namespace) -> int:
 
 
 def _readme(args: argparse.Namespace) -> int:
-    from jointbench.pipeline import paper_labels
-    from jointbench.study.snapshot import reproduction_summary, update_readme
-
     comparison_path = args.results / "tables" / "published_comparison.csv"
     if not comparison_path.is_file():
         print(

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from jointbench import machine
 from jointbench.figures import extended
 from jointbench.figures.common import save_figure
 from jointbench.papers import (
@@ -35,7 +36,7 @@ from jointbench.papers import (
 )
 from jointbench.simulate import Study
 from jointbench.study import config as jb_config
-from jointbench.study.io import read_dataset
+from jointbench.study.io import read_dataset, read_table
 from jointbench.study.published import (
     comparison_rows,
     enforce_design,
@@ -118,7 +119,7 @@ def job(snakemake) -> Iterator[None]:
 
 def _inputs(paper: Paper, collected: str, datasets: Sequence[str], config: Mapping) -> Inputs:
     return Inputs(
-        collected=pd.read_parquet(collected),
+        collected=read_table(collected),
         published=load_published(paper.published),
         config=config,
         datasets=[read_dataset(path) for path in datasets],
@@ -153,7 +154,7 @@ def _paper_methods(study: str) -> extended.PaperMethods:
 
 def render_extended(study: str, collected: str, outputs, config: Mapping, *, what: str) -> None:
     """The extended ranking of ``study``: ``what`` is ``"table"`` or ``"figure"``."""
-    frame = pd.read_parquet(collected)
+    frame = read_table(collected)
     paper = _paper_methods(study)
     if what == "figure":
         save_figure(extended.extended_figure(frame, study, paper), outputs)
@@ -186,7 +187,7 @@ def paper_labels() -> dict[str, str]:
 
 def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
     """One estimator's mean and median error per condition, from its estimates files."""
-    estimates = pd.concat([pd.read_parquet(path) for path in paths], ignore_index=True)
+    estimates = pd.concat([read_table(path) for path in paths], ignore_index=True)
     summarise(estimates, study).to_csv(output, index=False)
 
 
@@ -197,7 +198,7 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
     """
     frames = []
     for study, path in collected.items():
-        frame = pd.read_parquet(path)
+        frame = read_table(path)
         for paper in papers_of_study(study):
             document = load_published(paper.published)
             inputs = Inputs(collected=frame, published=document, config=config)
@@ -227,13 +228,15 @@ def check_published(collected: Mapping[str, str], outputs, config: Mapping) -> p
 # ----------------------------------------------------------------------------- report captions
 
 EXTENDED_TABLE_CAPTION = (
-    "Every {kind_name} estimator of the `{study}` study, the paper's and the additions "
-    "({methods}), ranked by mean error in each condition on identical trials: mean and median "
-    "error, trials converged and failed, rank."
+    "Every {kind_name} estimator of the `{study}` study ({methods}), ranked by mean error in "
+    "each condition on identical trials: mean and median error, trials converged and failed, "
+    "rank. The note under the table says which are the paper's methods and which were added."
 )
 EXTENDED_FIGURE_CAPTION = (
-    "Mean error of every estimator of the `{study}` study in every condition (log colour scale; "
-    "the best per condition outlined), and each estimator's mean rank over the conditions."
+    "Mean error of every estimator of the `{study}` study in every condition (log colour "
+    "scale), and each estimator's mean rank over the conditions. † marks a cell where some "
+    "trials failed or did not converge; a red outline marks the best of the condition, every "
+    "tied method outlined."
 )
 COMPARISON_CAPTION = (
     "Every published value and claim of the papers beside ours, with the typed tolerance, the "
@@ -280,11 +283,7 @@ def _headline(name: str, tables: Mapping[str, pd.DataFrame]) -> str:
             + "."
         )
     if name.startswith("extended_"):
-        table = tables[name.removesuffix("_figure")]
-        best = table[table["best"].astype(str) == "True"]["method"].value_counts()
-        conditions = table.groupby(list(table.columns[: table.columns.get_loc("method")])).ngroups
-        leaders = ", ".join(f"{m} ({n})" for m, n in best.items())
-        return f"best mean error per condition, out of {conditions} conditions: {leaders}."
+        return extended.best_headline(tables[name.removesuffix("_figure")])
     output = paper_output(name)
     if output.headline is None:
         return ""
@@ -351,21 +350,12 @@ def _rankings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
     return lines
 
 
-def _processor() -> str:
-    cpuinfo = Path("/proc/cpuinfo")
-    if cpuinfo.exists():
-        for line in cpuinfo.read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    return platform.processor() or "unknown"
-
-
 def run_metadata() -> dict[str, str]:
     """The machine and software versions of this run, for the report beside the timings."""
     versions = {name: importlib.metadata.version(name) for name in _VERSIONED}
     return {
         "machine": f"{platform.system()} {platform.machine()}, {os.cpu_count()} logical CPUs",
-        "processor": _processor(),
+        "processor": machine.processor(),
         "python": platform.python_version(),
         **versions,
     }

@@ -15,28 +15,12 @@ from jointbench.study.studies import get_study
 validate(config, str(jb_config.SCHEMA_PATH))
 pipeline.load_extensions(config)
 jb_config.validate_config(config)
+# Grid values, estimator names and options: a mistake stops the run here, naming the key.
+jb_config.check_config(config)
 
 STUDIES = jb_config.study_names(config)
 # The interpreter running this workflow, for external estimators' shell commands.
 PYTHON = sys.executable
-
-
-def _check_external_names():
-    """External estimators must not share a name with a built-in: their files would collide."""
-    for study in STUDIES:
-        kind = get_study(study).kind
-        clash = set(jb_config.estimator_names(config, study, source="external")) & (
-            set(registry.methods(kind))
-            | set(jb_config.estimator_names(config, study, source="builtin"))
-        )
-        if clash:
-            raise ValueError(
-                f"config: external estimators {sorted(clash)} of study {study!r} have the name "
-                "of a built-in estimator; rename them"
-            )
-
-
-_check_external_names()
 
 
 def _alternatives(names):

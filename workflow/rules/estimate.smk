@@ -80,9 +80,13 @@ rule summarise_estimator:
 
 
 rule collect:
-    """All estimates of a study in one table, each file's schema checked first."""
+    """All estimates of a study in one table, each file's schema checked first and each held
+    to its condition's dataset (same trials, each once, same condition values)."""
     input:
-        lambda w: estimates_files(w.study),
+        estimates=lambda w: estimates_files(w.study),
+        datasets=lambda w: [
+            dataset_file(w.study, c) for c in jb_config.conditions(config, w.study)
+        ],
     output:
         "results/collected/{study}.parquet",
     log:

@@ -7,8 +7,6 @@ claims are in :mod:`jointbench.papers.paper_a`.
 
 from __future__ import annotations
 
-import os
-import platform
 from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
@@ -16,6 +14,8 @@ import numpy as np
 import pandas as pd
 from mpl_toolkits.mplot3d import proj3d
 
+from jointbench import machine
+from jointbench.estimators import registry
 from jointbench.figures.common import equal_3d_limits, median_trial, method_style
 
 __all__ = [
@@ -28,7 +28,6 @@ __all__ = [
     "fig3",
     "fig3_chosen_text",
     "fig4",
-    "run_environment",
     "speed_wording",
     "table2",
     "table2_headline",
@@ -353,34 +352,24 @@ def table2_headline(table: pd.DataFrame) -> str:
     return "Mean time per trial against the paper's MATLAB times: " + ", ".join(parts) + "."
 
 
-def run_environment() -> str:
-    """The machine and software that run this process: CPU model, logical CPUs, Python, NumPy."""
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as info:
-            cpu = next(
-                (line.split(":", 1)[1].strip() for line in info if line.startswith("model name")),
-                cpu,
-            )
-    except OSError:
-        pass
-    return (
-        f"{cpu}, {os.cpu_count()} logical CPUs, {platform.system()}; "
-        f"Python {platform.python_version()}, NumPy {np.__version__}"
-    )
-
-
 def timing_note(environment: str | None = None) -> str:
     """How Table 2's times were measured, for the note under the table.
 
     ``environment`` describes the machine; by default the one running this process, which is
     the run's machine when the table is built in the same run as the estimates.
     """
-    environment = environment or run_environment()
+    environment = environment or machine.describe()
+    batched = [m for m in PAPER_METHODS if hasattr(registry.get("center", m), "batched")]
+    one_at_a_time = [m for m in PAPER_METHODS if m not in batched]
+    how = f"{', '.join(one_at_a_time)}: each trial's fit timed on its own"
+    if batched:
+        how += (
+            f"; {', '.join(batched)}: all trials of a condition fitted in one batched call, "
+            "whose time is divided by its trials"
+        )
     return (
-        "Ours: wall-clock time of each estimator call, measured inside the estimate job "
-        "around one trial at a time (simulation and file I/O excluded), on this run's machine "
-        f"({environment}). Other jobs of the run (snakemake -j) may have shared the CPUs, so "
-        "times are indicative. Paper: MATLAB 6.5 on a 3 GHz Pentium 4. "
-        "speedup_vs_paper = paper_matlab_s / mean_s; above 1 ours is faster."
+        f"Ours: wall-clock time per trial, measured inside the estimate job ({how}; simulation "
+        f"and file I/O excluded), on this run's machine ({environment}). Other jobs of the run "
+        "(snakemake -j) may have shared the CPUs, so times are indicative. Paper: MATLAB 6.5 on "
+        "a 3 GHz Pentium 4. speedup_vs_paper = paper_matlab_s / mean_s; above 1 ours is faster."
     )

@@ -14,6 +14,7 @@ between trials.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -21,7 +22,7 @@ import numpy as np
 
 from jointbench.simulate.noise import isotropic_noise
 
-__all__ = ["KINDS", "Study", "Trials", "isotropic_noise"]
+__all__ = ["KINDS", "GridValues", "Study", "Trials", "isotropic_noise"]
 
 #: Estimator kinds a study can run: each kind's estimators share a signature and a scorer.
 KINDS = ("center", "axis", "joint_center")
@@ -48,6 +49,55 @@ class Trials:
 
 
 @dataclass(frozen=True)
+class GridValues:
+    """The values one grid key allows: numbers of ``type`` (``int`` or ``float``) within bounds,
+    or text among ``choices``.
+
+    ``maximum`` and ``choices`` may be functions of the study's protocol, for limits the
+    protocol defines (its marker sets, its joints, its recording length), so that a config that
+    adds a marker set to the protocol may use it in the grid.
+    """
+
+    type: type
+    minimum: float | None = None
+    exclusive_minimum: bool = False
+    maximum: float | Callable[[object], float] | None = None
+    choices: tuple[str, ...] | Callable[[object], tuple[str, ...]] | None = None
+
+    def allowed(self, protocol) -> str:
+        """The allowed values in words, e.g. ``"a number > 0 and <= 180"``."""
+        if self.type is str:
+            return "one of " + ", ".join(map(str, self._resolve(self.choices, protocol)))
+        words = ["an integer" if self.type is int else "a number"]
+        if self.minimum is not None:
+            words.append(f"{'>' if self.exclusive_minimum else '>='} {self.minimum:g}")
+        maximum = self._resolve(self.maximum, protocol)
+        if maximum is not None:
+            words.append(f"<= {maximum:g}")
+        return " ".join(words[:2]) + "".join(f" and {w}" for w in words[2:])
+
+    def accepts(self, value, protocol) -> bool:
+        """Whether ``value`` (as YAML gives it) is one of the allowed values."""
+        if self.type is str:
+            return isinstance(value, str) and value in self._resolve(self.choices, protocol)
+        # bool is an int to Python but never a grid value; an integer key takes no 5.0, whose
+        # file name and seed would differ from 5's.
+        numeric = (int,) if self.type is int else (int, float)
+        if isinstance(value, bool) or not isinstance(value, numeric) or not math.isfinite(value):
+            return False
+        if self.minimum is not None and (
+            value <= self.minimum if self.exclusive_minimum else value < self.minimum
+        ):
+            return False
+        maximum = self._resolve(self.maximum, protocol)
+        return maximum is None or value <= maximum
+
+    @staticmethod
+    def _resolve(limit, protocol):
+        return limit(protocol) if callable(limit) else limit
+
+
+@dataclass(frozen=True)
 class Study:
     """One simulation study of the benchmark, exported by its simulator module as ``STUDY``.
 
@@ -56,7 +106,8 @@ class Study:
     select a view of the same trial, e.g. the first Nt frames); ``segments`` the names of the
     marker arrays passed to an estimator, in argument order; ``protocol_class`` the class of its
     documented modelling choices (with ``from_config(overrides)``); ``simulate`` the function of
-    the signature above.
+    the signature above; ``grid_spec`` the values each grid key allows, checked before any job
+    runs (a study without one has its grid values checked by the schema only).
     """
 
     name: str
@@ -66,6 +117,7 @@ class Study:
     segments: tuple[str, ...]
     protocol_class: type
     simulate: Callable[[Mapping[str, object], object, Sequence[np.random.Generator]], Trials]
+    grid_spec: Mapping[str, GridValues] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -73,6 +125,11 @@ class Study:
         stray = set(self.seed_keys) - set(self.grid_keys)
         if stray:
             raise ValueError(f"study {self.name!r}: seed keys {sorted(stray)} are not grid keys")
+        if self.grid_spec and tuple(self.grid_spec) != self.grid_keys:
+            raise ValueError(
+                f"study {self.name!r}: grid_spec keys {tuple(self.grid_spec)} must be the grid "
+                f"keys {self.grid_keys}, in order"
+            )
 
     def protocol(self, overrides: Mapping[str, object] | None = None) -> object:
         """The study's protocol: documented defaults updated by the config's ``protocol``."""

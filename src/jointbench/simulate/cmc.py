@@ -44,7 +44,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from jointbench.geometry import rotation_matrix, unit
-from jointbench.simulate import Study, Trials
+from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise
 
 __all__ = [
@@ -168,4 +168,10 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=CmcProtocol,
     simulate=simulate,
+    grid_spec={
+        "marker_set": GridValues(str, choices=lambda protocol: tuple(protocol.directions)),
+        # A circumduction tilt: 0° does not move, beyond 180° it repeats.
+        "rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
+        "noise_mm": GridValues(float, minimum=0),
+    },
 )

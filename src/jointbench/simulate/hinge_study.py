@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.simulate import Study, Trials, hinge
+from jointbench.simulate import GridValues, Study, Trials, hinge
 
 __all__ = ["STUDY", "HingeStudyProtocol", "simulate"]
 
@@ -56,4 +56,9 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=HingeStudyProtocol,
     simulate=simulate,
+    grid_spec={
+        "protocol": GridValues(str, choices=lambda protocol: tuple(protocol.joints)),
+        "fe_rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
+        "aa_ratio": GridValues(float, minimum=0),
+    },
 )

@@ -47,7 +47,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from jointbench.geometry import rotation_matrix
-from jointbench.simulate import Study, Trials
+from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise
 
 __all__ = ["STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
@@ -261,4 +261,6 @@ STUDY = Study(
     segments=("proximal", "distal"),
     protocol_class=HipProtocol,
     simulate=simulate,
+    # Nt frames of a recording of the protocol's n_frames.
+    grid_spec={"n_frames": GridValues(int, minimum=1, maximum=lambda protocol: protocol.n_frames)},
 )

@@ -10,8 +10,10 @@ memory does not grow with the number of trials.
 
 from __future__ import annotations
 
+import functools
+import inspect
 import json
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -22,13 +24,55 @@ import pyarrow.parquet as pq
 
 from jointbench.simulate import Trials
 
-__all__ = ["iter_dataset", "read_dataset", "read_metadata", "write_dataset", "write_table"]
+__all__ = [
+    "iter_dataset",
+    "read_dataset",
+    "read_metadata",
+    "read_table",
+    "read_trial_numbers",
+    "write_dataset",
+    "write_table",
+]
 
 _META_KEY = b"jointbench"
 _INDEX = ("trial", "frame", "marker")
 # Marker coordinates per block of trials: large enough that per-block overheads vanish, small
 # enough that a block and the estimators' temporaries stay far below a job's memory.
 BLOCK_BYTES = 32 * 2**20
+
+
+def _unreadable(path, error: Exception) -> ValueError:
+    return ValueError(
+        f"{path}: cannot be read as parquet ({type(error).__name__}: {error}); the file is "
+        "missing, truncated or corrupt. Regenerate it and what depends on it with: "
+        f"snakemake -j2 --forcerun {path}"
+    )
+
+
+def _names_unreadable_file(read: Callable) -> Callable:
+    """Turn pyarrow's errors on a missing, truncated or corrupt file (``ArrowInvalid: Parquet
+    magic bytes not found``, which names no file) into a ``ValueError`` naming the file and the
+    command that regenerates it, with everything downstream of it."""
+    unreadable = (pa.ArrowException, OSError)
+    if inspect.isgeneratorfunction(read):
+
+        @functools.wraps(read)
+        def reading_blocks(path, *args, **kwargs):
+            try:
+                yield from read(path, *args, **kwargs)
+            except unreadable as error:
+                raise _unreadable(path, error) from error
+
+        return reading_blocks
+
+    @functools.wraps(read)
+    def reading(path, *args, **kwargs):
+        try:
+            return read(path, *args, **kwargs)
+        except unreadable as error:
+            raise _unreadable(path, error) from error
+
+    return reading
 
 
 def block_trials(shapes: Mapping[str, tuple[int, ...]], block_bytes: int | None = None) -> int:
@@ -97,6 +141,7 @@ def write_dataset(
             writer.close()
 
 
+@_names_unreadable_file
 def read_metadata(path: str | Path) -> dict:
     """The ``jointbench`` metadata of a dataset file."""
     metadata = pq.read_schema(path).metadata or {}
@@ -171,6 +216,7 @@ def _block(path, dataset, shapes, offsets, first: int, count: int) -> dict[str, 
     return segments
 
 
+@_names_unreadable_file
 def iter_dataset(
     path: str | Path, *, block_bytes: int | None = None
 ) -> Iterator[tuple[int, Trials]]:
@@ -201,6 +247,7 @@ def iter_dataset(
         )
 
 
+@_names_unreadable_file
 def read_dataset(path: str | Path) -> tuple[Trials, dict]:
     """Read a dataset file back into :class:`Trials` and its metadata."""
     metadata = read_metadata(path)
@@ -211,6 +258,19 @@ def read_dataset(path: str | Path) -> tuple[Trials, dict]:
             segments[name][first : first + markers.shape[0]] = markers
     trials = Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"])
     return trials, metadata
+
+
+@_names_unreadable_file
+def read_trial_numbers(path: str | Path) -> np.ndarray:
+    """The trial numbers of a dataset file, ``0 .. n_trials - 1``."""
+    shapes = _shapes(path, read_metadata(path))
+    return np.arange(next(iter(shapes.values()))[0])
+
+
+@_names_unreadable_file
+def read_table(path: str | Path) -> pd.DataFrame:
+    """A results table (estimates, collected results) written by :func:`write_table`."""
+    return pd.read_parquet(path)
 
 
 def write_table(frame: pd.DataFrame, path: str | Path) -> None:

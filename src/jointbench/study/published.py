@@ -73,7 +73,10 @@ def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
         return "not applicable", "", entry.get("not_applicable", entry["tolerance_reason"])
     if measured is None:
         return "not applicable", "", entry.get("not_applicable", NOT_IN_RUN)
-    verdict = evaluate(tolerance, entry["published"], measured.value)
+    try:
+        verdict = evaluate(tolerance, entry["published"], measured.value)
+    except ValueError as error:
+        return "not applicable", "", f"cannot evaluate: {error}"
     if verdict.holds:
         return "reproduced", verdict.margin_text, ""
     return "not reproduced", verdict.margin_text, entry.get("deviation", UNEXPLAINED)

@@ -6,14 +6,22 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from jointbench.estimators import registry
 from jointbench.simulate import Trials
 from jointbench.study.config import parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
-from jointbench.study.io import iter_dataset, read_metadata, write_dataset, write_table
-from jointbench.study.schema import check_estimates
+from jointbench.study.io import (
+    iter_dataset,
+    read_metadata,
+    read_table,
+    read_trial_numbers,
+    write_dataset,
+    write_table,
+)
+from jointbench.study.schema import check_against_dataset, check_estimates
 from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
@@ -34,18 +42,29 @@ def simulate_condition(config: Mapping, study: str, condition: Mapping[str, obje
     return spec.simulate(condition, protocol, rngs)
 
 
+# What an estimator raises when one trial's data defeat it (bad geometry, a singular system,
+# an overflow); such a trial becomes a failed row. Anything else (TypeError, KeyError, …) is a
+# bug in the estimator or its options and stops the run. LinAlgError is a ValueError; it is
+# listed for the reader.
+NUMERICAL_FAILURES = (ValueError, np.linalg.LinAlgError, FloatingPointError)
+
+
 def _fit_one(fit, arguments, options) -> tuple[object, str, bool, int]:
-    """Run one fit; an exception becomes a failed row rather than a failed run."""
+    """Run one fit; a numerical failure becomes a failed row rather than a failed run."""
     try:
         result = fit(*arguments, **options)
-    except Exception as error:
+    except NUMERICAL_FAILURES as error:
         return _outcome(error)
     return _outcome(result)
 
 
 def _outcome(result) -> tuple[object, str, bool, int]:
-    if isinstance(result, Exception):
+    """Row fields of one fit's result, or of the exception a batched form returned for a trial;
+    an exception that is not a numerical failure is raised."""
+    if isinstance(result, NUMERICAL_FAILURES):
         return None, f"error: {type(result).__name__}: {result}", False, 0
+    if isinstance(result, BaseException):
+        raise result
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
 
@@ -137,16 +156,33 @@ def run_estimate_files(
         write_table(pd.concat(frames, ignore_index=True), output)
 
 
-def collect(study: str, paths: Sequence[str | Path], output: str) -> pd.DataFrame:
-    """Concatenate a study's estimates files after checking each one's schema."""
+def collect(
+    study: str,
+    paths: Sequence[str | Path],
+    output: str,
+    datasets: Sequence[str | Path],
+) -> pd.DataFrame:
+    """Concatenate a study's estimates files after checking each one's schema and holding it to
+    the dataset file of its condition (same trials, each once, same condition values)."""
     spec = get_study(study)
+    # Each dataset is read once, whatever the number of estimators.
+    expected = {
+        Path(path).stem: {
+            "trials": read_trial_numbers(path),
+            "condition": read_metadata(path)["condition"],
+        }
+        for path in datasets
+    }
     frames = []
     for path in paths:
-        frame = pd.read_parquet(path)
+        frame = read_table(path)
         method = Path(path).parent.name
         check_estimates(
             frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
         )
+        if Path(path).stem not in expected:
+            raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
+        check_against_dataset(frame, **expected[Path(path).stem], source=str(path))
         frames.append(frame)
     collected = pd.concat(frames, ignore_index=True)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")

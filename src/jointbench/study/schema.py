@@ -2,17 +2,25 @@
 
 A user's estimator (built-in or a rule in any language) writes one parquet file per study
 condition with one row per trial. :func:`check_estimates` is run on every such file before it
-is collected, so a wrong or missing column fails with its name rather than as a broken figure.
+is collected, so a wrong or missing column fails with its name rather than as a broken figure;
+:func:`check_against_dataset` then holds it to its dataset, so that a missing, repeated or
+invented trial or condition cannot change a ranking unnoticed.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import pandas as pd
 from pandas.api import types
 
-__all__ = ["COMMON_COLUMNS", "KIND_COLUMNS", "check_estimates", "required_columns"]
+__all__ = [
+    "COMMON_COLUMNS",
+    "KIND_COLUMNS",
+    "check_against_dataset",
+    "check_estimates",
+    "required_columns",
+]
 
 # column -> predicate on the pandas dtype, and what the predicate means for the message
 _NUMBER = (types.is_numeric_dtype, "numeric")
@@ -81,3 +89,52 @@ def check_estimates(
     if method is not None and not frame.empty and set(frame["method"]) != {method}:
         found = sorted(set(map(str, frame["method"])))
         raise ValueError(f"{source}: column 'method' must be {method!r} in every row, got {found}")
+
+
+def check_against_dataset(
+    frame: pd.DataFrame,
+    *,
+    trials: Iterable[int],
+    condition: Mapping[str, object],
+    source: str = "estimates",
+) -> None:
+    """Raise ``ValueError`` naming ``source`` unless ``frame`` (checked by
+    :func:`check_estimates`) has one row per trial of its dataset, no other trial, and the
+    dataset's ``condition`` values in every row."""
+    expected = sorted(set(map(int, trials)))
+    described = f"the dataset has {len(expected)} trials ({_listed(expected)})"
+    if frame.empty:
+        raise ValueError(f"{source}: no rows; {described}")
+    found = frame["trial"].astype(int)
+    problems = {
+        "missing trials": sorted(set(expected) - set(found)),
+        "trials not in the dataset": sorted(set(found) - set(expected)),
+        "trials listed more than once": sorted(set(found[found.duplicated()])),
+    }
+    found_problems = [
+        f"{problem}: {_listed(numbers)}" for problem, numbers in problems.items() if numbers
+    ]
+    if found_problems:
+        raise ValueError(f"{source}: {'; '.join(found_problems)}; {described}")
+    for key, value in condition.items():
+        wrong = sorted({str(v) for v in frame[key] if not _same_value(v, value)})
+        if wrong:
+            raise ValueError(
+                f"{source}: column {key!r} must be the dataset's {value!r} in every row, "
+                f"got {', '.join(wrong)}"
+            )
+
+
+def _same_value(found: object, expected: object) -> bool:
+    # 5 and 5.0 are one grid value; "5" is not.
+    if isinstance(expected, str) or isinstance(found, str):
+        return found == expected
+    return bool(pd.notna(found)) and float(found) == float(expected)
+
+
+def _listed(numbers: Sequence[int], most: int = 10) -> str:
+    """``0–29`` for a run, else the first ``most`` numbers and how many in all."""
+    if len(numbers) > 2 and numbers[-1] - numbers[0] == len(numbers) - 1:
+        return f"{numbers[0]}–{numbers[-1]}"
+    shown = ", ".join(map(str, numbers[:most]))
+    return shown if len(numbers) <= most else f"{shown}, … ({len(numbers)} in all)"

@@ -14,7 +14,7 @@ import numpy as np
 
 from jointbench.estimators import CenterResult, register
 from jointbench.papers import Inputs, Measured, Output, Paper
-from jointbench.simulate import Study, Trials, isotropic_noise
+from jointbench.simulate import GridValues, Study, Trials, isotropic_noise
 
 CENTRE = np.array([10.0, -5.0, 20.0])
 
@@ -40,7 +40,10 @@ def simulate(condition, protocol: ToyProtocol, rngs) -> Trials:
         frames.append(body @ (ry @ rx).T + CENTRE)
     clean = np.asarray(frames)
     noisy = np.stack(
-        [clean + isotropic_noise(rng, clean.shape, float(condition["noise_mm"])) for rng in rngs]
+        [
+            clean + isotropic_noise(rng, clean.shape[:-1], float(condition["noise_mm"]))
+            for rng in rngs
+        ]
     )
     return Trials(segments={"moving": noisy}, truth={"center": CENTRE.tolist()})
 
@@ -65,6 +68,8 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=ToyProtocol,
     simulate=simulate,
+    # What each grid key allows: checked before any job runs, naming the key.
+    grid_spec={"noise_mm": GridValues(float, minimum=0)},
 )
 
 

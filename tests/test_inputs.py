@@ -1,0 +1,296 @@
+"""Inputs that cannot lie: estimator failures, estimates files checked against their datasets,
+corrupt intermediate files named."""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_extension import CENTROID_RULE, user_clone
+from workflow_copy import run_snakemake
+
+from jointbench.estimators import registry
+from jointbench.estimators.results import CenterResult
+from jointbench.study import config as study_config
+from jointbench.study.io import (
+    iter_dataset,
+    read_dataset,
+    read_metadata,
+    read_table,
+    read_trial_numbers,
+    write_dataset,
+    write_table,
+)
+from jointbench.study.run import collect, estimate, simulate_condition
+from jointbench.study.schema import check_against_dataset
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def config():
+    small = study_config.load_config(ROOT / "config" / "config.yaml")
+    small["studies"]["cmc"]["trials"] = 2
+    return small
+
+
+@pytest.fixture(scope="module")
+def cmc_trials(config):
+    condition = study_config.conditions(config, "cmc")[0]
+    return condition, simulate_condition(config, "cmc", condition)
+
+
+@pytest.fixture
+def raising_estimator():
+    """Register a centre estimator raising the given exception; yields a setter of it."""
+    raised = {}
+
+    def fails(markers):
+        raise raised["error"]
+
+    registry.register("center", "raises")(fails)
+    yield lambda error: raised.__setitem__("error", error) or "raises"
+    del registry._REGISTRY["center"]["raises"]
+
+
+@pytest.mark.parametrize(
+    "error",
+    [
+        ValueError("markers do not move"),
+        np.linalg.LinAlgError("Singular matrix"),
+        FloatingPointError("overflow encountered"),
+    ],
+    ids=lambda e: type(e).__name__,
+)
+def test_numerical_failure_becomes_a_failed_row(cmc_trials, raising_estimator, error):
+    condition, trials = cmc_trials
+    frame = estimate("cmc", raising_estimator(error), trials, condition)
+    assert len(frame) == 2 and not frame["converged"].any()
+    assert frame["status"].str.startswith(f"error: {type(error).__name__}: ").all()
+    assert frame["error_mm"].isna().all()
+
+
+@pytest.mark.parametrize(
+    "error",
+    [TypeError("fits() got an unexpected keyword argument"), KeyError("x"), AttributeError("y")],
+    ids=lambda e: type(e).__name__,
+)
+def test_programming_error_stops_the_run(cmc_trials, raising_estimator, error):
+    condition, trials = cmc_trials
+    with pytest.raises(type(error)):
+        estimate("cmc", raising_estimator(error), trials, condition)
+
+
+@pytest.fixture
+def batched_estimator():
+    """Register a centre estimator whose batched form returns the given per-trial outcomes."""
+    outcomes = {}
+
+    def fits(markers):
+        raise AssertionError("the batched form is used")
+
+    fits.batched = lambda markers: outcomes["value"]
+    registry.register("center", "batched-outcomes")(fits)
+    yield lambda value: outcomes.__setitem__("value", value) or "batched-outcomes"
+    del registry._REGISTRY["center"]["batched-outcomes"]
+
+
+def test_a_batched_numerical_failure_becomes_a_failed_row(cmc_trials, batched_estimator):
+    condition, trials = cmc_trials
+    ok = CenterResult(center=np.zeros(3), converged=True, iterations=1, status="ok", method="b")
+    name = batched_estimator([np.linalg.LinAlgError("Singular matrix"), ok])
+    frame = estimate("cmc", name, trials, condition)
+    assert list(frame["status"]) == ["error: LinAlgError: Singular matrix", "ok"]
+
+
+def test_a_batched_programming_error_stops_the_run(cmc_trials, batched_estimator):
+    condition, trials = cmc_trials
+    ok = CenterResult(center=np.zeros(3), converged=True, iterations=1, status="ok", method="b")
+    name = batched_estimator([ok, TypeError("unsupported operand")])
+    with pytest.raises(TypeError, match="unsupported operand"):
+        estimate("cmc", name, trials, condition)
+
+
+def test_an_option_the_estimator_does_not_take_stops_the_run(cmc_trials):
+    condition, trials = cmc_trials
+    with pytest.raises(TypeError, match="tolerance"):
+        estimate("cmc", "NM", trials, condition, {"tolerance": 1e-3})
+
+
+# ------------------------------------------------- estimates files held to their datasets
+
+
+@pytest.fixture
+def estimates_and_dataset(tmp_path, config, cmc_trials):
+    """A cmc dataset file of two trials and NM's estimates file of the same condition."""
+    condition, trials = cmc_trials
+    name = f"{study_config.condition_id(condition)}.parquet"
+    dataset = tmp_path / "datasets" / "cmc" / name
+    write_dataset(dataset, trials, study="cmc", condition=condition)
+    estimates = tmp_path / "estimates" / "cmc" / "NM" / name
+    write_table(estimate("cmc", "NM", trials, condition), estimates)
+    return estimates, dataset
+
+
+def rewrite(path, change):
+    """Apply ``change`` to the table at ``path`` in place."""
+    write_table(change(pd.read_parquet(path)), path)
+
+
+def test_a_matching_estimates_file_is_collected(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    collected = collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    assert sorted(collected["trial"]) == [0, 1]
+
+
+LIES = {
+    "missing trial": (lambda f: f[f["trial"] != 1], "missing trials: 1; the dataset has 2 trials"),
+    "trial twice": (lambda f: pd.concat([f, f.iloc[[0]]]), "trials listed more than once: 0"),
+    "invented trial": (
+        lambda f: f.assign(trial=[0, 7]),
+        "missing trials: 1; trials not in the dataset: 7; the dataset has 2 trials (0, 1)",
+    ),
+    "invented condition": (
+        lambda f: f.assign(rom_deg=999),
+        "column 'rom_deg' must be the dataset's 5 in every row, got 999",
+    ),
+    "no rows": (lambda f: f.iloc[:0], "no rows; the dataset has 2 trials (0, 1)"),
+}
+
+
+@pytest.mark.parametrize("lie", LIES)
+def test_an_estimates_file_that_lies_is_named(tmp_path, estimates_and_dataset, lie):
+    estimates, dataset = estimates_and_dataset
+    change, message = LIES[lie]
+    rewrite(estimates, change)
+    with pytest.raises(ValueError) as error:
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    assert str(error.value).startswith(f"{estimates}: ")
+    assert message in str(error.value)
+    assert not (tmp_path / "c.parquet").exists()
+
+
+def test_five_and_five_point_zero_are_one_condition_value(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(estimates, lambda f: f.assign(rom_deg=f["rom_deg"].astype(float)))
+    collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+
+
+def test_a_text_condition_value_is_not_the_number(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(estimates, lambda f: f.assign(rom_deg="5"))
+    with pytest.raises(ValueError, match="column 'rom_deg' must be the dataset's 5"):
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+
+
+def test_long_trial_lists_are_shortened(tmp_path, estimates_and_dataset):
+    estimates, _ = estimates_and_dataset
+    frame = pd.read_parquet(estimates)
+    many = pd.concat([frame.iloc[[0]].assign(trial=t) for t in range(2, 40, 3)])
+    with pytest.raises(ValueError, match=r"not in the dataset: 2, 5, .*, 29, … \(13 in all\)"):
+        check_against_dataset(
+            pd.concat([frame, many]), trials=[0, 1], condition={}, source=str(estimates)
+        )
+
+
+# ----------------------------------------------------------- unreadable intermediate files
+
+
+def truncate(path: Path) -> None:
+    """Cut a file to half its length, keeping its modification time (an interrupted copy)."""
+    stat = path.stat()
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+
+
+def read_blocks(path):
+    return list(iter_dataset(path))
+
+
+@pytest.mark.parametrize(
+    "read", [read_dataset, read_blocks, read_metadata, read_trial_numbers, read_table]
+)
+def test_a_truncated_file_is_named_with_the_command_that_regenerates_it(
+    estimates_and_dataset, read
+):
+    _, dataset = estimates_and_dataset
+    truncate(dataset)
+    with pytest.raises(ValueError) as error:
+        read(dataset)
+    message = str(error.value)
+    assert message.startswith(f"{dataset}: cannot be read as parquet (ArrowInvalid")
+    assert f"snakemake -j2 --forcerun {dataset}" in message
+    assert dataset.exists()
+
+
+def test_a_missing_file_is_named(tmp_path):
+    with pytest.raises(ValueError, match=r"nowhere\.parquet: cannot be read as parquet"):
+        read_dataset(tmp_path / "nowhere.parquet")
+
+
+def test_collect_names_a_truncated_estimates_file(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    truncate(estimates)
+    with pytest.raises(ValueError, match=f"^{re.escape(str(estimates))}: cannot be read"):
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+
+
+# ---------------------------------------------------------------------------- end to end
+
+DATASET = "results/datasets/cmc/marker_set-M__rom_deg-5__noise_mm-1.0.parquet"
+
+
+def cmc_clone(destination: Path, *, estimators, external=(), rule=None) -> list[str]:
+    """The workflow copied to ``destination`` with a two-condition, two-trial cmc grid; returns
+    the Snakemake arguments selecting that config."""
+    overlay = user_clone(
+        destination, estimators=list(estimators), external=list(external), rule=rule
+    )
+    return ["--configfile", str(overlay)]
+
+
+@pytest.mark.pipeline
+def test_a_truncated_dataset_is_named_logged_and_regenerated(tmp_path):
+    config = cmc_clone(tmp_path, estimators=["LS"])
+    assert run_snakemake(tmp_path, DATASET, *config).returncode == 0
+    truncate(tmp_path / DATASET)
+
+    failed = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config)
+    assert failed.returncode != 0
+    message = f"{DATASET}: cannot be read as parquet"
+    assert message in failed.stdout + failed.stderr
+    assert message in (tmp_path / "results/logs/estimate/cmc/LS.log").read_text()
+    assert (tmp_path / DATASET).exists()  # nothing removed: the user decides
+
+    again = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config, "--forcerun", DATASET)
+    assert again.returncode == 0, again.stderr[-3000:]
+    read_dataset(tmp_path / DATASET)
+    assert len(pd.read_parquet(tmp_path / "results/collected/cmc.parquet")) == 2 * 2
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize(
+    ("lie", "message"),
+    [
+        ("rows[1:]", "missing trials: 0; the dataset has 2 trials (0, 1)"),
+        ("[{**r, 'rom_deg': 999} for r in rows]", "column 'rom_deg' must be the dataset's 5"),
+    ],
+    ids=["trial missing", "condition invented"],
+)
+def test_an_external_estimator_that_lies_stops_collect(tmp_path, lie, message):
+    rule = CENTROID_RULE.replace("pd.DataFrame(rows)", f"pd.DataFrame({lie})")
+    assert rule != CENTROID_RULE
+    config = cmc_clone(tmp_path, estimators=[], external=["centroid"], rule=rule)
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config)
+    assert run.returncode != 0
+    named = (
+        f"results/estimates/cmc/centroid/marker_set-M__rom_deg-5__noise_mm-1.0.parquet: {message}"
+    )
+    assert named in run.stdout + run.stderr, (run.stdout + run.stderr)[-3000:]
+    assert named in (tmp_path / "results/logs/collect/cmc.log").read_text()
+    assert not (tmp_path / "results/collected/cmc.parquet").exists()
