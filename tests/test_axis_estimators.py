@@ -293,7 +293,7 @@ def test_registered_and_reachable_through_the_api(noisy_hinge):
         (np.zeros((10, 3)), "shaped"),
         (np.zeros((10, 3, 2)), "shaped"),
         (np.full((10, 3, 3), np.nan), "NaN"),
-        (np.zeros((3, 3, 3)) + np.arange(3)[:, None, None], "at least 4"),
+        (np.zeros((3, 3, 3)) + np.eye(3)[:, None, :], "at least 4"),
         (np.ones((20, 3, 3)), "do not move"),
     ],
 )

@@ -155,7 +155,7 @@ def test_bad_input_is_named():
         jb.fit_joint_center(proximal, distal[:-1], method="SCoRE")
     with pytest.raises(ValueError, match="at least 3"):
         jb.fit_joint_center(proximal[:2], distal[:2], method="SCoRE")
-    line = np.repeat(np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])[None], 20, axis=0)
+    line = np.repeat(np.array([[1.0, 0, 0], [2, 0, 0], [3, 0, 0]])[None], 20, axis=0)
     with pytest.raises(ValueError, match="collinear"):
         jb.fit_joint_center(proximal, line, method="SCoRE")
     with pytest.raises(ValueError, match="collinear"):

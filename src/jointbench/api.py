@@ -1,4 +1,17 @@
-"""Public entry points: fit a centre, an axis or a two-segment joint centre by method name."""
+"""Public entry points: fit a centre, an axis or a two-segment joint centre by method name.
+
+Every method is reached through the registry, which holds it to the same rules:
+
+* bad input raises ``ValueError`` naming the problem and where it is: complex, boolean or
+  non-numeric arrays, masked arrays with masked values, a wrong shape, NaN/inf or a sample at
+  exactly ``(0, 0, 0)`` (marker and frame named), markers that do not move or that only slide
+  along straight lines (see :mod:`jointbench.estimators.validation`);
+* data that cannot support an answer — markers that are not one rigid body, a rotation not
+  resolved above the rigid-body residual, or (for a centre) rotation about a single axis — give
+  a result whose ``status`` starts with or carries ``"warning: ..."``, with the numbers in
+  ``diagnostics["support_..."]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
+  the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer.
+"""
 
 from __future__ import annotations
 

@@ -45,7 +45,11 @@ def amplitude(rotation: np.ndarray, translation: np.ndarray, point: np.ndarray) 
     return _amplitude(np.asarray(point, dtype=float), stacked, np.asarray(translation, float))
 
 
-@register("center", "MA")
+# The box is measured along the reference axes, so a rotation of noisy data is not followed;
+# the simplex path depends on the coordinates (see the docstring).
+@register(
+    "center", "MA", invariances={"translation": 0.5, "marker_order": 1e-3, "frame_order": 1e-3}
+)
 def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult:
     """Minimal amplitude point of Marin et al. (2003), minimised as in paper A (§5).
 

@@ -372,12 +372,14 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     return fit
 
 
-fit_planar = register("axis", "planar")(
+fit_planar = register("axis", "planar", recovery=1e-4, invariances=1e-4)(
     _make("planar", "Normal of the best-fitting parallel planes, paper B eq. 8, by search.")
 )
-fit_radial = register("axis", "radial")(
+# No recovery claim: on a pure hinge the default point (the NM centre) is undetermined along
+# the axis and can land where the radial search is trapped (module notes).
+fit_radial = register("axis", "radial", recovery=None, invariances=1e-4)(
     _make("radial", "Axis of the best-fitting coaxial cylinders through m, paper B eqs. 10–11.")
 )
-fit_combined = register("axis", "combined")(
+fit_combined = register("axis", "combined", recovery=1e-4, invariances=1e-4)(
     _make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial).")
 )

@@ -2,20 +2,87 @@
 
 Kinds:
 
-* ``"center"``: ``fn(markers) -> CenterResult``, one segment's markers in the reference frame;
-* ``"axis"``: ``fn(markers) -> AxisResult``, likewise;
+* ``"center"``: ``fn(markers, **options) -> CenterResult``, one segment's markers in the
+  reference frame;
+* ``"axis"``: ``fn(markers, **options) -> AxisResult``, likewise;
 * ``"joint_center"``: ``fn(proximal, distal, **options) -> JointCenterResult``, both segments'
   markers in the world frame.
+
+:func:`get` returns the estimator wrapped in the checks every estimator of its kind is held
+to: the input checks of :func:`jointbench.estimators.validation.check_input` before the fit,
+and the support verdict of :func:`jointbench.estimators.support.assess` written into the
+result after it. A newly registered estimator gets both without code of its own.
+:func:`register` returns the function itself, unwrapped, for direct and internal use.
+
+At registration an estimator states its :class:`Claims`: how closely it recovers a noise-free
+answer and under which transformations of the data its answer moves with the data. The
+conformance suite (``tests/test_conformance.py``) checks the claims of every registered
+estimator, so the defaults are the strict ones and a method relaxes them only where its paper
+makes it so.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
-__all__ = ["KINDS", "get", "methods", "register"]
+import numpy as np
+
+from jointbench.estimators import support, validation
+
+__all__ = ["INVARIANCES", "KINDS", "Claims", "claims", "get", "methods", "register"]
 
 KINDS = ("center", "axis", "joint_center")
-_REGISTRY: dict[str, dict[str, Callable]] = {kind: {} for kind in KINDS}
+
+#: Transformations of the data an answer may be claimed to follow: a rigid translation or
+#: rotation of all markers, and a permutation of the markers or of the frames after the first
+#: (several methods anchor the body frame at frame 0).
+INVARIANCES = ("translation", "rotation", "marker_order", "frame_order")
+
+_EXACT = 1e-9
+
+
+def _all_exact() -> Mapping[str, float]:
+    return MappingProxyType(dict.fromkeys(INVARIANCES, _EXACT))
+
+
+@dataclass(frozen=True)
+class Claims:
+    """What an estimator promises about its answers.
+
+    ``recovery``: the largest error of its answer on noise-free data, with default options
+    ([mm] for a centre or the distance of an axis's point from the true axis, [rad] for an
+    axis direction); ``None`` where the method's defaults do not recover every noise-free
+    case (say why at the registration). ``invariances``: for each transformation in
+    :data:`INVARIANCES` that the answer follows (moves with the data, or is unchanged by a
+    permutation), the tolerance to which it does on noisy data, in the same units and relative
+    to the data's magnitude where rounding sets it; a transformation left out is not claimed.
+    """
+
+    recovery: float | None = _EXACT
+    invariances: Mapping[str, float] = field(default_factory=_all_exact)
+
+    def __post_init__(self) -> None:
+        unknown = set(self.invariances) - set(INVARIANCES)
+        if unknown:
+            raise ValueError(
+                f"unknown invariance {sorted(unknown)}; choose from {', '.join(INVARIANCES)}"
+            )
+        object.__setattr__(self, "invariances", MappingProxyType(dict(self.invariances)))
+
+
+@dataclass(frozen=True)
+class _Entry:
+    fn: Callable
+    checked: Callable
+    claims: Claims
+
+
+_REGISTRY: dict[str, dict[str, _Entry]] = {kind: {} for kind in KINDS}
+# (kind, name) pairs whose ``batched`` form has been looked up (see :func:`get`).
+_BATCHED_RESOLVED: set[tuple[str, str]] = set()
 
 
 def _check_kind(kind: str) -> None:
@@ -23,27 +90,108 @@ def _check_kind(kind: str) -> None:
         raise ValueError(f"unknown estimator kind {kind!r}; choose one of {', '.join(KINDS)}")
 
 
-def register(kind: str, name: str) -> Callable[[Callable], Callable]:
-    """Decorator registering ``fn`` as estimator ``name`` of ``kind``."""
+def _checked(kind: str, fn: Callable) -> Callable:
+    """``fn`` with the input checks before and the support verdict after each fit.
+
+    A plain function (not a callable object), so that the code fingerprint of a job reaches
+    ``fn`` and the checks through its closure and globals.
+    """
+
+    @functools.wraps(fn)
+    def checked(*arrays: object, **options: object):
+        clean = validation.check_input(kind, arrays)
+        return support.annotate(fn(*clean, **options), support.assess(kind, clean))
+
+    checked.__dict__.pop("batched", None)  # never the unchecked form
+    return checked
+
+
+def _checked_batched(kind: str, raw: Callable) -> Callable[..., list]:
+    """A ``batched`` form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
+    returning per trial a result or the exception) with the checks of :func:`_checked` per
+    trial and the support verdict of all trials in one call."""
+
+    @functools.wraps(raw)
+    def batched(*segments: object, **options: object) -> list:
+        outcomes = list(raw(*segments, **options))
+        fitted, clean = [], []
+        for trial, outcome in enumerate(outcomes):
+            # As for one trial: the input checks come first and their error wins.
+            try:
+                arrays = validation.check_input(kind, tuple(s[trial] for s in segments))
+            except ValueError as error:
+                outcomes[trial] = error
+                continue
+            if not isinstance(outcome, Exception):
+                fitted.append(trial)
+                clean.append(arrays)
+        if fitted:
+            stacked = tuple(np.stack(arrays) for arrays in zip(*clean, strict=True))
+            verdicts = support.assess_many(kind, stacked)
+            for trial, verdict in zip(fitted, verdicts, strict=True):
+                outcomes[trial] = support.annotate(outcomes[trial], verdict)
+        return outcomes
+
+    return batched
+
+
+def register(
+    kind: str,
+    name: str,
+    *,
+    recovery: float | None = _EXACT,
+    invariances: float | Mapping[str, float] = _EXACT,
+) -> Callable[[Callable], Callable]:
+    """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`.
+
+    ``invariances`` as a number claims every transformation of :data:`INVARIANCES` to that
+    tolerance; the default claims them all at rounding level (1e-9).
+    """
     _check_kind(kind)
+    if not isinstance(invariances, Mapping):
+        invariances = dict.fromkeys(INVARIANCES, float(invariances))
+    stated = Claims(recovery, invariances)
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind][name] = fn
+        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated)
+        _BATCHED_RESOLVED.discard((kind, name))
         return fn
 
     return decorate
 
 
-def get(kind: str, name: str) -> Callable:
-    """The estimator ``name`` of ``kind``; ``ValueError`` listing the known names otherwise."""
+def _entry(kind: str, name: str) -> _Entry:
     _check_kind(kind)
     try:
         return _REGISTRY[kind][name]
     except KeyError:
         known = ", ".join(_REGISTRY[kind]) or "none"
         raise ValueError(f"unknown {kind} method {name!r}; known: {known}") from None
+
+
+def get(kind: str, name: str) -> Callable:
+    """The estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the known
+    names otherwise.
+
+    Where the estimator has a ``batched`` form, the returned function carries a checked one as
+    its ``batched`` attribute. Modules attach ``fn.batched`` after registering ``fn``, so it is
+    looked up at the first ``get`` and then kept as a plain attribute (which can be replaced or
+    deleted like any other).
+    """
+    entry = _entry(kind, name)
+    if (kind, name) not in _BATCHED_RESOLVED:
+        _BATCHED_RESOLVED.add((kind, name))
+        raw = getattr(entry.fn, "batched", None)
+        if raw is not None:
+            entry.checked.batched = _checked_batched(kind, raw)
+    return entry.checked
+
+
+def claims(kind: str, name: str) -> Claims:
+    """The :class:`Claims` estimator ``name`` of ``kind`` registered with."""
+    return _entry(kind, name).claims
 
 
 def methods(kind: str) -> tuple[str, ...]:

@@ -193,9 +193,10 @@ def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
 
 
 def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, _LSMoments]:
-    """LS centre ``(3,)`` and the moments it came from."""
-    moments = _ls_moments(markers)
-    return _ls_solve(moments.a_matrix, moments.b_vector), moments
+    """LS centre ``(3,)`` and the moments it came from, which are of the data relative to its
+    first sample: far from the origin ``|v|^2`` would lose the radii to rounding."""
+    moments = _ls_moments(markers - markers[0, 0])
+    return markers[0, 0] + _ls_solve(moments.a_matrix, moments.b_vector), moments
 
 
 @register("center", "LS")
@@ -216,7 +217,7 @@ def fit_ls(markers: np.ndarray) -> CenterResult:
     """
     markers = _prepare(markers)
     center, moments = _ls_start(markers)
-    radii, cost = _algebraic_fit(moments, center)
+    radii, cost = _algebraic_fit(moments, center - markers[0, 0])
     return CenterResult(
         center=center,
         radii=radii,
@@ -413,7 +414,7 @@ def _bc_noise_variance(state: _BCState, shift: np.ndarray) -> float:
         return float(np.mean(spread / (4.0 * state.n_frames * mean_sq)))
 
 
-@register("center", "BC")
+@register("center", "BC", invariances=1e-3)  # stops on steps of 1e-4 mm
 def fit_bc(
     markers: np.ndarray,
     *,
@@ -544,7 +545,7 @@ def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
     return _geometric_cost(center, markers.reshape(-1, 3), markers.shape[0])
 
 
-@register("center", "IS")
+@register("center", "IS", invariances=1e-3)  # a simplex stopped at 1e-4 mm
 def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult:
     """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
 

@@ -1,10 +1,66 @@
-"""Input checks shared by the estimators. Every failure is a ``ValueError`` naming the problem."""
+"""Input checks shared by the estimators. Every failure is a ``ValueError`` naming the problem.
+
+The registry applies :func:`check_input` to every registered estimator, so a new estimator is
+held to these checks without code of its own; estimators still call :func:`check_markers` with
+their own minimum numbers of frames and markers.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_markers", "check_moves", "check_not_collinear", "check_same_frames"]
+__all__ = [
+    "ARRAY_NAMES",
+    "check_input",
+    "check_markers",
+    "check_moves",
+    "check_not_collinear",
+    "check_rotates",
+    "check_same_frames",
+]
+
+#: The marker arrays each estimator kind takes, in order.
+ARRAY_NAMES = {"center": ("markers",), "axis": ("markers",), "joint_center": ("proximal", "distal")}
+
+_GAP_ADVICE = "mark gaps as NaN and drop those frames before fitting"
+
+# A trajectory counts as a straight line when its second principal spread is below this
+# fraction of its first; the same relative level at which check_not_collinear calls markers
+# collinear, far below any rotation a marker set can resolve.
+_LINE_RTOL = 1e-6
+
+
+def _real_array(markers: object, name: str) -> np.ndarray:
+    """``markers`` as a float64 array; complex, boolean, non-numeric and masked data raise."""
+    if np.ma.isMaskedArray(markers):
+        mask = np.ma.getmaskarray(markers)
+        if mask.any():
+            frame, marker = _first_sample(mask)
+            raise ValueError(
+                f"{name} is a masked array with masked values (first at marker {marker}, frame "
+                f"{frame}; {int(mask.sum())} in all); masks are not read: {_GAP_ADVICE}"
+            )
+        markers = np.ma.getdata(markers)
+    try:
+        array = np.asarray(markers)
+    except ValueError as error:
+        raise ValueError(f"{name} is not a regular numeric array ({error})") from None
+    if array.dtype.kind == "c":
+        raise ValueError(
+            f"{name} is complex ({array.dtype}); marker coordinates must be real numbers [mm]"
+        )
+    if array.dtype.kind not in "iuf":
+        raise ValueError(
+            f"{name} has dtype {array.dtype}; marker coordinates must be real numbers [mm]"
+        )
+    return array.astype(float, copy=False)
+
+
+def _first_sample(flags: np.ndarray) -> tuple[int, int]:
+    """``(frame, marker)`` of the first flagged sample of a ``(n_frames, n_markers, ...)`` mask."""
+    per_sample = flags.reshape(flags.shape[0], flags.shape[1], -1).any(axis=-1)
+    frame, marker = np.argwhere(per_sample)[0]
+    return int(frame), int(marker)
 
 
 def check_markers(
@@ -12,16 +68,31 @@ def check_markers(
 ) -> np.ndarray:
     """Return ``markers`` as a float64 ``(n_frames, n_markers, 3)`` array, or raise ``ValueError``.
 
-    Checks the shape, finiteness and the minimum numbers of frames and markers a method needs.
+    Rejects complex, boolean or non-numeric data and masked arrays with masked values (the
+    mask would otherwise be dropped silently), checks the shape, rejects NaN/inf and samples at
+    exactly ``(0, 0, 0)`` (how some C3D readers store gaps), naming marker and frame, and
+    checks the minimum numbers of frames and markers a method needs.
     """
-    array = np.asarray(markers, dtype=float)
+    array = _real_array(markers, name)
     if array.ndim != 3 or array.shape[-1] != 3:
         raise ValueError(f"{name} must be shaped (n_frames, n_markers, 3), got shape {array.shape}")
-    if not np.isfinite(array).all():
-        bad = np.argwhere(~np.isfinite(array))[0]
+    if array.size == 0:
+        raise ValueError(f"{name} is empty (shape {array.shape})")
+    finite = np.isfinite(array)
+    if not finite.all():
+        frame, marker = _first_sample(~finite)
+        count = int((~finite).any(axis=-1).sum())
         raise ValueError(
-            f"{name} contains NaN or inf (first at frame {bad[0]}, marker {bad[1]}); "
-            "drop or fill gaps before fitting"
+            f"{name} contains NaN or inf at marker {marker}, frame {frame} ({count} in all); "
+            f"{_GAP_ADVICE}"
+        )
+    origin = ~array.any(axis=-1)
+    if origin.any():
+        frame, marker = _first_sample(origin)
+        raise ValueError(
+            f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
+            f"({int(origin.sum())} in all): some C3D readers store gaps as zeros; "
+            f"{_GAP_ADVICE}"
         )
     n_frames, n_markers, _ = array.shape
     if n_frames < min_frames:
@@ -43,6 +114,26 @@ def check_moves(markers: np.ndarray, *, name: str = "markers", tol_mm: float = 1
         raise ValueError(f"{name} do not move: every marker stays at one point in every frame")
 
 
+def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
+    """Raise ``ValueError`` when every marker moves along a straight line (or not at all).
+
+    Such a segment translates without rotating: no centre or axis of rotation exists, yet the
+    sphere and axis fits would still return one. Each marker's trajectory ``(n_frames, 3)`` is a
+    line when the second eigenvalue of its scatter matrix vanishes relative to the first.
+    Fewer than three frames always lie on a line and are left to the frame-count checks.
+    """
+    if markers.shape[0] < 3:
+        return
+    centred = markers - markers.mean(axis=0)
+    scatter = np.einsum("fpi,fpj->pij", centred, centred)
+    eigenvalues = np.linalg.eigvalsh(scatter)
+    if np.all(eigenvalues[:, 1] <= _LINE_RTOL**2 * eigenvalues[:, 2]):
+        raise ValueError(
+            f"{name} do not rotate: every marker moves along a straight line, so there is no "
+            "centre or axis of rotation"
+        )
+
+
 def check_not_collinear(markers: np.ndarray, *, name: str = "markers") -> None:
     """Raise ``ValueError`` when the markers of some frame are (nearly) collinear.
 
@@ -52,7 +143,7 @@ def check_not_collinear(markers: np.ndarray, *, name: str = "markers") -> None:
     centred = markers - markers.mean(axis=1, keepdims=True)
     singular = np.linalg.svd(centred, compute_uv=False)
     ratio = singular[:, 1] / np.maximum(singular[:, 0], np.finfo(float).tiny)
-    if np.any(ratio < 1e-6):
+    if np.any(ratio < _LINE_RTOL):
         frame = int(np.argmin(ratio))
         raise ValueError(
             f"{name} are collinear in frame {frame}: a rigid-body pose needs three "
@@ -67,3 +158,28 @@ def check_same_frames(first: np.ndarray, second: np.ndarray) -> None:
             f"proximal and distal markers have {first.shape[0]} and {second.shape[0]} frames; "
             "they must share frames"
         )
+
+
+def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]:
+    """The checks every estimator of ``kind`` needs; returns the arrays as float64.
+
+    ``arrays`` are the marker arrays named by :data:`ARRAY_NAMES` for ``kind``. One-segment
+    kinds (``center``, ``axis``) also need markers that move and rotate; two-segment data must
+    share frames (whether the segments rotate relative to each other is the estimators' and
+    the support check's business, as it needs their poses).
+    """
+    names = ARRAY_NAMES[kind]
+    if len(arrays) != len(names):
+        raise ValueError(
+            f"a {kind} estimator takes {len(names)} marker arrays ({', '.join(names)}), "
+            f"got {len(arrays)}"
+        )
+    checked = tuple(
+        check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
+    )
+    if kind == "joint_center":
+        check_same_frames(*checked)
+    else:
+        check_moves(checked[0])
+        check_rotates(checked[0])
+    return checked

@@ -1,0 +1,415 @@
+"""Every registered estimator, found by discovery, held to the same rules.
+
+For each kind the suite builds one rig (noise-free and noisy) and runs every method of
+``jointbench.methods(kind)`` through the public API:
+
+* bad input raises a ``ValueError`` naming the problem (and where it is);
+* data that cannot support an answer (no rotation beyond noise, markers that are not one
+  rigid body) give a result whose ``status`` says so;
+* noise-free data are recovered to the method's registered ``recovery`` claim, also 1e9 mm
+  from the origin;
+* the answer follows translation, rotation, marker order and frame order of the data to the
+  tolerance the method registered for each (those it does not claim are skipped).
+
+An estimator registered later is held to all of this without a line added here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from rigs import DISTAL, HINGE, JOINT, apply_pose, two_segments
+
+import jointbench
+from jointbench.estimators import registry, support
+from jointbench.estimators.results import CenterResult
+from jointbench.geometry import rotation_matrix, unit
+
+KINDS = ("center", "axis", "joint_center")
+CASES = [(kind, method) for kind in KINDS for method in jointbench.methods(kind)]
+IDS = [f"{kind}-{method}" for kind, method in CASES]
+N_FRAMES = 150
+# A rigid motion of the whole recording and a far offset, both arbitrary.
+ROTATION = rotation_matrix(np.array([0.4, -1.1, 0.7]))
+SHIFT = np.array([250.0, -80.0, 40.0])
+FAR = np.array([1e9, -1e9, 1e9])
+# Where a bad value is planted: (frame, marker).
+FRAME, MARKER = 7, 1
+
+
+def _one_segment(motion: str) -> np.ndarray:
+    """Noise-free markers ``(N, 3, 3)`` [mm] of DISTAL moving about JOINT in the reference frame:
+    ``"ball"`` about three axes, ``"hinge"`` about HINGE only."""
+    t = np.linspace(0.0, 4.0, N_FRAMES)
+    if motion == "hinge":
+        rotvec = 0.7 * np.sin(1.9 * t)[:, None] * HINGE
+    else:
+        rotvec = np.stack([0.6 * np.sin(1.9 * t), 0.4 * np.sin(1.3 * t), 0.1 * np.sin(t)], -1)
+    rotation = rotation_matrix(rotvec)
+    return apply_pose(rotation, JOINT - rotation @ JOINT, DISTAL)
+
+
+def clean(kind: str) -> tuple[np.ndarray, ...]:
+    """Noise-free marker arrays for ``kind`` whose answer is JOINT (and HINGE for axes)."""
+    if kind == "joint_center":
+        return two_segments(N_FRAMES)
+    return (_one_segment("hinge" if kind == "axis" else "ball"),)
+
+
+def noisy(kind: str, sd_mm: float = 0.5, seed: int = 0) -> tuple[np.ndarray, ...]:
+    rng = np.random.default_rng(seed)
+    arrays = clean(kind)
+    if kind == "axis":
+        # A small secondary rotation, as in any real hinge, so that the sphere fit behind the
+        # axis methods' default point is determined.
+        t = np.linspace(0.0, 4.0, N_FRAMES)
+        wobble = rotation_matrix(0.05 * np.sin(2.3 * t)[:, None] * unit(np.cross(HINGE, [0, 0, 1])))
+        arrays = (np.einsum("fij,fmj->fmi", wobble, clean(kind)[0] - JOINT) + JOINT,)
+    return tuple(
+        array + rng.normal(scale=sd_mm / np.sqrt(3.0), size=array.shape) for array in arrays
+    )
+
+
+def fit(kind: str, method: str, arrays, **options):
+    if kind == "center":
+        return jointbench.fit_center(*arrays, method=method, **options)
+    if kind == "axis":
+        return jointbench.fit_axis(*arrays, method=method, **options)
+    return jointbench.fit_joint_center(*arrays, method=method, **options)
+
+
+def _last_replaced(arrays: tuple, last: np.ndarray) -> tuple:
+    """``arrays`` with its last (for two segments: the distal) array replaced."""
+    return (*arrays[:-1], last)
+
+
+def _planted(kind: str, value) -> tuple:
+    arrays = clean(kind)
+    bad = arrays[-1].copy()
+    bad[FRAME, MARKER] = value
+    return _last_replaced(arrays, bad)
+
+
+def _name(kind: str) -> str:
+    return "distal" if kind == "joint_center" else "markers"
+
+
+# --- bad input -------------------------------------------------------------------------------
+
+
+def _complex(kind):
+    return _last_replaced(clean(kind), clean(kind)[-1] + 1e-3j)
+
+
+def _masked(kind):
+    last = clean(kind)[-1]
+    mask = np.zeros(last.shape, dtype=bool)
+    mask[FRAME, MARKER, 2] = True
+    return _last_replaced(clean(kind), np.ma.masked_array(last, mask=mask))
+
+
+def _boolean(kind):
+    last = clean(kind)[-1]
+    return _last_replaced(clean(kind), last > np.median(last))
+
+
+def _ragged(kind):
+    last = clean(kind)[-1].tolist()
+    last[FRAME] = last[FRAME][:2]
+    return _last_replaced(clean(kind), last)
+
+
+def _sliding(kind):
+    """Every marker of the moving segment slides along one straight line."""
+    arrays = clean(kind)
+    steps = np.linspace(0.0, 80.0, N_FRAMES)[:, None, None] * unit(np.array([0.3, 0.5, 0.8]))
+    still = tuple(np.repeat(array[:1], N_FRAMES, axis=0) for array in arrays)
+    return _last_replaced(still, still[-1] + steps)
+
+
+BAD_INPUT = {
+    "complex": (_complex, r"{name} is complex"),
+    "masked": (_masked, r"{name} is a masked array .* marker 1, frame 7"),
+    "bool": (_boolean, r"{name} has dtype bool"),
+    "ragged": (_ragged, r"{name} is not a regular numeric array"),
+    "nan": (lambda kind: _planted(kind, np.nan), r"{name} contains NaN .* marker 1, frame 7"),
+    "inf": (
+        lambda kind: _planted(kind, np.inf),
+        r"{name} contains NaN or inf at marker 1, frame 7",
+    ),
+    "zero-gap": (
+        lambda kind: _planted(kind, 0.0),
+        r"{name} has a sample at exactly \(0, 0, 0\) at marker 1, frame 7 .* mark gaps as NaN",
+    ),
+    "sliding": (_sliding, r"do not rotate"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_INPUT))
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_bad_input_raises_a_value_error_naming_it(kind, method, case):
+    make, message = BAD_INPUT[case]
+    with pytest.raises(ValueError, match=message.format(name=_name(kind))):
+        fit(kind, method, make(kind))
+
+
+# --- data that cannot support an answer ------------------------------------------------------
+
+
+def _static_with_noise(kind):
+    rng = np.random.default_rng(1)
+    still = tuple(np.repeat(array[:1], N_FRAMES, axis=0) for array in clean(kind))
+    return tuple(array + rng.normal(scale=0.5 / np.sqrt(3.0), size=array.shape) for array in still)
+
+
+def _sliding_with_noise(kind):
+    rng = np.random.default_rng(2)
+    return tuple(
+        array + rng.normal(scale=0.5 / np.sqrt(3.0), size=array.shape) for array in _sliding(kind)
+    )
+
+
+def _random_cloud(kind):
+    rng = np.random.default_rng(3)
+    # Points drawn anew in every frame from a 50 mm cube where the segment was: no shape at all.
+    where = clean(kind)[-1][0].mean(axis=0)
+    cloud = where + rng.uniform(-25.0, 25.0, size=(N_FRAMES, 3, 3))
+    return _last_replaced(clean(kind), cloud)
+
+
+UNSUPPORTED = {
+    "static-with-noise": (_static_with_noise, "range of motion too small"),
+    "sliding-with-noise": (_sliding_with_noise, "range of motion too small"),
+    "random-cloud": (_random_cloud, "not one rigid body"),
+}
+
+
+@pytest.mark.parametrize("case", list(UNSUPPORTED))
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_unsupported_data_are_flagged_in_the_status(kind, method, case):
+    make, words = UNSUPPORTED[case]
+    try:
+        result = fit(kind, method, make(kind))
+    except ValueError:
+        return  # refusing is as honest as flagging
+    assert words in result.status, result.status
+    assert result.diagnostics["support_assessed"]
+
+
+# --- known answers ---------------------------------------------------------------------------
+
+
+def _errors(kind: str, result, offset: np.ndarray | None = None) -> tuple[float, ...]:
+    """Errors against the rig's truth moved by ``offset``: [mm] for a centre; [rad] and [mm]
+    for an axis (the angle to HINGE and the distance of the fitted point from the true axis)."""
+    truth = JOINT if offset is None else JOINT + offset
+    if kind == "axis":
+        direction = np.asarray(result.direction)
+        angle = float(np.arccos(min(1.0, abs(float(direction @ HINGE)))))
+        arm = np.asarray(result.point) - truth
+        return angle, float(np.linalg.norm(arm - (arm @ HINGE) * HINGE))
+    return (float(np.linalg.norm(np.asarray(result.center) - truth)),)
+
+
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_noise_free_data_are_recovered_to_the_claimed_tolerance(kind, method):
+    recovery = registry.claims(kind, method).recovery
+    result = fit(kind, method, clean(kind))
+    assert result.converged and result.status == "ok", result.status
+    if recovery is None:
+        pytest.skip(f"{method} does not claim recovery with its default options")
+    assert max(_errors(kind, result)) <= recovery
+
+
+# Defects found by this suite in modules under other work; strict, so a fix shows up here.
+FAR_DEFECTS = {
+    ("axis", "SARA"): "SARA solves for the axis point nearest the origin in the caller's "
+    "coordinates and loses 0.02 mm 1e9 mm away: it should centre the data first",
+}
+FAR_CASES = [
+    pytest.param(*case, id=name, marks=pytest.mark.xfail(reason=FAR_DEFECTS[case], strict=True))
+    if case in FAR_DEFECTS
+    else pytest.param(*case, id=name)
+    for case, name in zip(CASES, IDS, strict=True)
+]
+
+
+@pytest.mark.parametrize(("kind", "method"), FAR_CASES)
+def test_noise_free_data_far_from_the_origin_are_recovered(kind, method):
+    """1e9 mm away the coordinates carry 1.2e-7 mm of rounding; the answer may lose at most
+    1e-12 of the offset (1e-3 mm) to it, beyond the method's claims at the origin."""
+    claims = registry.claims(kind, method)
+    if claims.recovery is None:
+        pytest.skip(f"{method} does not claim recovery with its default options")
+    result = fit(kind, method, tuple(array + FAR for array in clean(kind)))
+    allowed = claims.recovery + claims.invariances.get("translation", np.inf) + 1e-12 * 1e9
+    assert max(_errors(kind, result, FAR)) <= allowed
+
+
+# --- invariances -----------------------------------------------------------------------------
+
+
+def _answer(kind: str, result) -> tuple[np.ndarray, ...]:
+    if kind == "axis":
+        return np.asarray(result.point), np.asarray(result.direction)
+    return (np.asarray(result.center),)
+
+
+def _assert_same(kind, found, expected, tolerance, scale):
+    """``found`` equals ``expected`` to ``tolerance`` plus rounding (1e-12 of the data's
+    magnitude ``scale`` [mm]); axes are compared as lines."""
+    allowed = tolerance + 1e-12 * scale
+    if kind == "axis":
+        (point, direction), (point_expected, direction_expected) = found, expected
+        angle = float(np.arccos(min(1.0, abs(float(direction @ direction_expected)))))
+        offset = point_expected - point
+        distance = float(np.linalg.norm(offset - (offset @ direction) * direction))
+        assert angle <= allowed and distance <= allowed, (angle, distance, allowed)
+    else:
+        assert np.linalg.norm(found[0] - expected[0]) <= allowed, (found, expected, allowed)
+
+
+def _moved(kind, answer, rotation, shift):
+    if kind == "axis":
+        return rotation @ answer[0] + shift, rotation @ answer[1]
+    return (rotation @ answer[0] + shift,)
+
+
+TRANSFORMS = {
+    "translation": (lambda array: array + SHIFT, np.eye(3), SHIFT),
+    "rotation": (lambda array: array @ ROTATION.T, ROTATION, np.zeros(3)),
+}
+
+
+@pytest.mark.parametrize("invariance", list(TRANSFORMS))
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_answers_move_with_the_data(kind, method, invariance):
+    tolerance = registry.claims(kind, method).invariances.get(invariance)
+    if tolerance is None:
+        pytest.skip(f"{method} does not claim {invariance} invariance")
+    transform, rotation, shift = TRANSFORMS[invariance]
+    arrays = noisy(kind)
+    before = fit(kind, method, arrays)
+    after = fit(kind, method, tuple(transform(array) for array in arrays))
+    scale = max(float(np.abs(array).max()) for array in arrays) + float(np.abs(shift).max())
+    expected = _moved(kind, _answer(kind, before), rotation, shift)
+    _assert_same(kind, _answer(kind, after), expected, tolerance, scale)
+
+
+def _reordered(kind, arrays, what):
+    rng = np.random.default_rng(4)
+    if what == "marker_order":
+        return tuple(array[:, rng.permutation(array.shape[1])] for array in arrays)
+    # Frame 0 stays first: several methods anchor the body frame at it.
+    order = np.concatenate([[0], 1 + rng.permutation(N_FRAMES - 1)])
+    return tuple(array[order] for array in arrays)
+
+
+@pytest.mark.parametrize("invariance", ["marker_order", "frame_order"])
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_answers_ignore_the_order_of_markers_and_frames(kind, method, invariance):
+    tolerance = registry.claims(kind, method).invariances.get(invariance)
+    if tolerance is None:
+        pytest.skip(f"{method} does not claim {invariance} invariance")
+    arrays = noisy(kind)
+    before = fit(kind, method, arrays)
+    after = fit(kind, method, _reordered(kind, arrays, invariance))
+    scale = max(float(np.abs(array).max()) for array in arrays)
+    _assert_same(kind, _answer(kind, after), _answer(kind, before), tolerance, scale)
+
+
+# --- the rules hold for an estimator registered later ----------------------------------------
+
+
+@pytest.fixture
+def naive_estimator():
+    """A centre estimator with no checks of its own: the centroid, always "converged"."""
+
+    def centroid(markers, **options):
+        return CenterResult(
+            center=np.asarray(markers).reshape(-1, 3).mean(axis=0),
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="centroid",
+        )
+
+    registry.register("center", "centroid")(centroid)
+    yield "centroid"
+    del registry._REGISTRY["center"]["centroid"]
+
+
+def test_a_new_estimator_gets_the_checks_without_code_of_its_own(naive_estimator):
+    with pytest.raises(ValueError, match="markers contains NaN or inf at marker 1, frame 7"):
+        jointbench.fit_center(*_planted("center", np.nan), method=naive_estimator)
+    result = jointbench.fit_center(*_static_with_noise("center"), method=naive_estimator)
+    assert "range of motion too small" in result.status
+    assert jointbench.fit_center(*clean("center"), method=naive_estimator).status == "ok"
+
+
+def test_claims_name_only_known_invariances():
+    with pytest.raises(ValueError, match="unknown invariance"):
+        registry.Claims(invariances={"scale": 1e-9})
+
+
+# --- the support verdict ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["center", "joint_center"])
+def test_the_rotation_test_is_calibrated_on_static_clusters(kind):
+    """With no rotation the p-value is uniform: about half the trials fall below 0.5 (the
+    bounds are four binomial standard deviations)."""
+    rng = np.random.default_rng(6)
+    still = tuple(np.repeat(array[:1], 60, axis=0) for array in clean(kind))
+    p_values = [
+        support.assess(kind, tuple(a + rng.normal(size=a.shape) for a in still)).diagnostics[
+            "rotation_p_value"
+        ]
+        for _ in range(200)
+    ]
+    assert 0.36 <= np.mean(np.array(p_values) < 0.5) <= 0.64
+
+
+def test_rotation_about_a_single_axis_is_flagged_for_centres_only():
+    rng = np.random.default_rng(8)
+    hinge = (clean("axis")[0] + rng.normal(scale=0.5 / np.sqrt(3.0), size=(N_FRAMES, 3, 3)),)
+    assert "rotation about a single axis" in fit("center", "LS", hinge).status
+    assert fit("axis", "planar", hinge).status == "ok"
+
+
+def test_a_small_cluster_with_large_noise_is_still_one_rigid_body():
+    """Paper A's M marker set (13.8, 29.0, 15.7 mm from the centre) with 2 mm noise is a hard
+    but legitimate recording, not a non-rigid one."""
+    body = unit(np.array([[0.2, 0.3, 1.0], [0.0, 0.1, 1.0], [-0.3, 0.2, 1.0]]))
+    body = body * np.array([[13.8], [29.0], [15.7]])
+    t = np.linspace(0.0, 4.0, 120)
+    rotvec = np.stack([0.6 * np.sin(1.9 * t), 0.4 * np.sin(1.3 * t), 0.1 * np.sin(t)], -1)
+    markers = np.einsum("fij,pj->fpi", rotation_matrix(rotvec), body) + JOINT
+    rng = np.random.default_rng(7)
+    result = fit(
+        "center", "NM", (markers + rng.normal(scale=2.0 / np.sqrt(3), size=markers.shape),)
+    )
+    assert result.status == "ok", result.status
+    assert result.diagnostics["support_nonrigid_share"] < support.MAX_NONRIGID_SHARE
+
+
+def test_support_leaves_converged_as_the_method_set_it():
+    arrays = _static_with_noise("center")
+    raw = registry._REGISTRY["center"]["LS"].fn(*arrays)
+    checked = fit("center", "LS", arrays)
+    assert raw.converged and checked.converged and raw.status == "ok"
+    assert checked.status.startswith("warning: range of motion too small")
+    np.testing.assert_array_equal(checked.center, raw.center)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    frame=st.integers(0, N_FRAMES - 1), marker=st.integers(0, 2), gap=st.sampled_from([np.nan, 0.0])
+)
+def test_a_gap_anywhere_is_named_by_marker_and_frame(frame, marker, gap):
+    markers = clean("center")[0].copy()
+    markers[frame, marker] = gap
+    with pytest.raises(ValueError, match=rf"at marker {marker}, frame {frame}\b"):
+        jointbench.fit_center(markers, method="NM")
