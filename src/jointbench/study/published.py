@@ -3,7 +3,9 @@
 A paper's published-values document (``paper_*.yaml`` beside its module) lists ``values`` and
 ``claims`` in one shape, each with a typed tolerance; the paper measures each one from the
 collected results (:class:`~jointbench.papers.base.Measured`), and :func:`comparison_rows`
-evaluates every tolerance through :func:`jointbench.study.tolerance.evaluate`. Where a value is
+evaluates every tolerance through :func:`jointbench.study.tolerance.evaluate`. Each row shows
+the paper's own sentence (``quote``), the criterion derived from it, the reproduced figure and
+the margin: how far inside (+) or outside (−) the tolerance it lies, in the tolerance's units. Where a value is
 known not to reproduce, its entry carries a ``deviation`` with the reason; :func:`unexplained`
 lists the rows that did not reproduce without one, and the check fails on them.
 """
@@ -36,6 +38,8 @@ COLUMNS = [
     "study",
     "id",
     "quantity",
+    "quote",
+    "criterion",
     "published",
     "reproduced",
     "tolerance",
@@ -43,7 +47,16 @@ COLUMNS = [
     "status",
     "reason",
 ]
-CLAIM_COLUMNS = ["id", "claim", "published", "reproduced", "status", "criterion", "margin"]
+CLAIM_COLUMNS = [
+    "id",
+    "claim",
+    "quote",
+    "criterion",
+    "published",
+    "reproduced",
+    "status",
+    "margin",
+]
 STATUSES = ("reproduced", "not reproduced", "not applicable")
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"
 OFF_DESIGN = "not enforced: this run's grid or trial count differs from the paper's design"
@@ -62,6 +75,13 @@ def _published_text(value: object) -> str:
     if isinstance(value, Mapping):
         return ", ".join(f"{k} {v}" for k, v in value.items())
     return str(value)
+
+
+def _value_criterion(entry: Mapping) -> str:
+    """A published value's criterion when its entry states none: its tolerance in words."""
+    if not is_compared(entry["tolerance"]):
+        return "shown beside ours, not compared"
+    return f"reproduced value {describe(entry['tolerance'])} of the published"
 
 
 def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
@@ -92,6 +112,8 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
                 "study": document["study"],
                 "id": entry["id"],
                 "quantity": entry.get("quantity", entry.get("claim")),
+                "quote": entry.get("quote", ""),
+                "criterion": entry.get("criterion", _value_criterion(entry)),
                 "published": _published_text(entry["published"]),
                 "reproduced": "" if measured is None else measured.text,
                 "tolerance": describe(entry["tolerance"]),
@@ -106,9 +128,7 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
 def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     """The claims of ``document`` with what we measured (columns :data:`CLAIM_COLUMNS`)."""
     rows = comparison_rows({**document, "values": []}, measurements)
-    criteria = {c["id"]: c["criterion"] for c in document["claims"]}
     rows["claim"] = rows["quantity"]
-    rows["criterion"] = rows["id"].map(criteria)
     missing = rows["reproduced"] == ""
     rows.loc[missing, "reproduced"] = "cannot evaluate: " + NOT_IN_RUN
     return rows[CLAIM_COLUMNS]
