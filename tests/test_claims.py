@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
+from scipy import stats
 
 from jointbench.papers import Inputs, get_paper
 from jointbench.study.published import (
@@ -34,8 +35,7 @@ COLLECTED = ROOT / "results" / "collected"
 @pytest.fixture(scope="module")
 def documents():
     return {
-        letter: load_published(get_paper(f"paper_{letter.lower()}").published)
-        for letter in "ABC"
+        letter: load_published(get_paper(f"paper_{letter.lower()}").published) for letter in "ABC"
     }
 
 
@@ -158,7 +158,9 @@ def paper_a_world(change=None, trials=30, seed=0, spread=0.002) -> pd.DataFrame:
     is_m = (frame["method"] == "IS") & (frame["marker_set"] == "M")
     bc = frame[frame["method"] == "BC"].set_index(["marker_set", "rom_deg", "noise_mm", "trial"])
     at_5 = frame[is_m & (frame["rom_deg"] == 5)]
-    keys = list(zip(at_5["marker_set"], at_5["rom_deg"], at_5["noise_mm"], at_5["trial"]))
+    keys = list(
+        zip(at_5["marker_set"], at_5["rom_deg"], at_5["noise_mm"], at_5["trial"], strict=True)
+    )
     converged_5 = at_5.index[bc.loc[keys, "converged"].to_numpy()]
     frame.loc[converged_5[:42], "local_minimum"] = True
     frame.loc[frame[is_m & (frame["rom_deg"] == 15)].index[:17], "local_minimum"] = True
@@ -313,3 +315,281 @@ def test_a8_reads_the_paper_denominator(documents):
     assert float(row["margin"].split("largest_gap_mm ")[1]) < -15
     # The other reading, over the conditions where BC converged in every trial, is shown.
     assert "Other reading" in row["reproduced"]
+
+
+# ----------------------------------------------------------------------------- paper B
+
+B_CELL = ["protocol", "method", "fe_rom_deg", "aa_ratio"]
+
+
+def paper_b_world(documents, change=None) -> pd.DataFrame:
+    """Collected hinge rows whose every Table 1 cell has its published mean; ``change(cell,
+    mean)`` may return another mean (a deliberately wrong implementation)."""
+    rows = []
+    for entry in documents["B"]["values"]:
+        protocol, method, fe, ratio = entry["id"].removeprefix("B-T1-").split("-")
+        cell = (protocol, method, int(fe), float(ratio))
+        mean = entry["published"] if change is None else change(cell, entry["published"])
+        for trial, offset in enumerate((-0.1, 0.0, 0.1)):
+            rows.append(
+                {
+                    **dict(zip(B_CELL, cell, strict=True)),
+                    "trial": trial,
+                    "error_deg": mean + offset,
+                    "converged": True,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize("claim", [f"B{i}" for i in range(1, 7)])
+def test_paper_b_claims_hold_on_the_published_table(documents, claim):
+    row = _verdict("B", documents, paper_b_world(documents), claim)
+    assert row["status"] == "reproduced", (claim, row["reproduced"], row["margin"])
+
+
+def _published_b(documents):
+    return {
+        tuple(e["id"].removeprefix("B-T1-").split("-")): e["published"]
+        for e in documents["B"]["values"]
+    }
+
+
+def _b_wrong(name, documents):
+    published = _published_b(documents)
+
+    def mean_of(protocol, method, fe, ratio):
+        return published[(protocol, method, str(fe), str(ratio))]
+
+    def falls_with_ratio(cell, mean):  # the ratio axis read backwards
+        protocol, method, fe, ratio = cell
+        mirrored = {0.1: 0.7, 0.3: 0.5, 0.5: 0.3, 0.7: 0.1}[ratio]
+        return mean_of(protocol, method, fe, mirrored)
+
+    def planar_low_at_03(cell, mean):
+        return 4.0 if cell[1] == "planar" and cell[3] == 0.3 else mean
+
+    def combined_high_at_03(cell, mean):
+        return 6.0 if cell[1] == "combined" and cell[3] == 0.3 else mean
+
+    def radial_is_combined(cell, mean):
+        protocol, method, fe, ratio = cell
+        swap = {"radial": "combined", "combined": "radial"}.get(method, method)
+        return mean_of(protocol, swap, fe, ratio)
+
+    def mcp_offset(cell, mean):
+        return mean + 2.0 if cell[0] == "mcp" else mean
+
+    def gradual_break_down(cell, mean):  # every crossing of 20° lands at 30°
+        return min(mean, 30.0) if mean >= 20 else mean
+
+    return {
+        "B1": falls_with_ratio,
+        "B2": planar_low_at_03,
+        "B3": combined_high_at_03,
+        "B4": radial_is_combined,
+        "B5": mcp_offset,
+        "B6": gradual_break_down,
+    }[name]
+
+
+@pytest.mark.parametrize("claim", [f"B{i}" for i in range(1, 7)])
+def test_paper_b_claims_fail_a_wrong_implementation(documents, claim):
+    collected = paper_b_world(documents, _b_wrong(claim, documents))
+    row = _verdict("B", documents, collected, claim)
+    assert row["status"] == "not reproduced", (claim, row["reproduced"], row["margin"])
+
+
+def test_b6_often_is_not_always(documents):
+    """One crossing of many landing below 50° still leaves the transition 'often' quick."""
+
+    def one_slow_crossing(cell, mean):
+        return 30.0 if cell == ("mcp", "radial", 60, 0.7) else mean
+
+    row = _verdict("B", documents, paper_b_world(documents, one_slow_crossing), "B6")
+    assert row["status"] == "reproduced"
+    assert "not: mcp radial FE 60° ratio 0.7: 30.0°" in row["reproduced"]
+
+
+def test_b_table1_cells_show_the_relative_miss(documents):
+    """A small cell far off relatively is still within the 2° floor, and says so."""
+
+    def combined_knee_small(cell, mean):
+        return 0.09 if cell == ("knee", "combined", 90, 0.1) else mean
+
+    row = _verdict(
+        "B", documents, paper_b_world(documents, combined_knee_small), "B-T1-knee-combined-90-0.1"
+    )
+    assert row["status"] == "reproduced"
+    assert "-78% of published" in row["reproduced"]
+    assert "within only by the 2° floor" in row["reproduced"]
+    exact = _verdict("B", documents, paper_b_world(documents), "B-T1-knee-combined-90-0.1")
+    assert "floor" not in exact["reproduced"]
+
+
+def test_b_table1_has_the_relative_difference(documents):
+    paper = get_paper("paper_b")
+    inputs = Inputs(
+        collected=paper_b_world(documents), published=documents["B"], config={"studies": {}}
+    )
+    table = paper.output("paper_b_table1").render(inputs)
+    assert "relative_difference" in table.frame.columns
+    assert table.frame["relative_difference"].abs().max() < 0.01
+    assert "0 of them only through the 2° floor" in table.note
+
+
+# ----------------------------------------------------------------------------- paper C
+
+C_FRAMES = (4, 8, 16, 32, 75, 150, 300, 600, 1200)
+
+
+def paper_c_world(k=2.5, exponent=0.98, predicted_scale=1.0, trials=200, seed=0):
+    """Collected hip rows of gauss-markov on a synthetic rig whose true centre is the origin.
+
+    The predicted sqrt(tr Wc) is ``0.2 (1200 / Nt) ** exponent`` mm (times
+    ``predicted_scale``); each shorter-Nt estimate lies ``k`` predicted standard deviations
+    (per axis, Gaussian) from the trial's 1200-frame estimate, which is honest about the truth.
+    """
+    rng = np.random.default_rng(seed)
+    rows = []
+    for trial in range(trials):
+        reference = 0.2 / np.sqrt(3) * rng.normal(size=3)
+        for n_frames in C_FRAMES:
+            sigma = 0.2 * (1200 / n_frames) ** exponent / np.sqrt(3)
+            centre = reference if n_frames == 1200 else reference + k * sigma * rng.normal(size=3)
+            predicted = sigma * predicted_scale
+            mahalanobis = float(centre @ centre) / predicted**2
+            rows.append(
+                {
+                    "n_frames": n_frames,
+                    "trial": trial,
+                    "method": "gauss-markov",
+                    "center_x": centre[0],
+                    "center_y": centre[1],
+                    "center_z": centre[2],
+                    "error_mm": float(np.linalg.norm(centre)),
+                    "sqrt_trace_cov_mm": float(np.sqrt(3) * predicted),
+                    "mahalanobis_sq": mahalanobis,
+                    "validation_index": float(np.sqrt(mahalanobis / 3)),
+                    "cov_xx": predicted**2,
+                    "cov_yy": predicted**2,
+                    "cov_zz": predicted**2,
+                    "cov_xy": 0.0,
+                    "cov_xz": 0.0,
+                    "cov_yz": 0.0,
+                    "converged": True,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize(
+    ("claim", "world"), [("C1", {}), ("C2", {}), ("C3", {}), ("C4", {"k": 1.0})]
+)
+def test_paper_c_claims_hold_where_the_paper_is_right(documents, claim, world):
+    row = _verdict("C", documents, paper_c_world(**world), claim)
+    assert row["status"] == "reproduced", (claim, row["reproduced"], row["margin"])
+
+
+@pytest.mark.parametrize(
+    ("claim", "world"),
+    [
+        ("C1", {"exponent": 0.5}),  # the frame-count law alone: 4× from 75 to 1200 frames
+        ("C2", {}),  # a centre biased by 1 mm, below
+        ("C3", {"predicted_scale": 2.0}),  # a covariance four times too large
+        ("C3", {"k": 1.0}),  # an honest covariance: v near 1, not 'a little high'
+        ("C4", {"k": 1.0, "predicted_scale": 0.5}),  # a covariance four times too small
+    ],
+)
+def test_paper_c_claims_fail_a_wrong_implementation(documents, claim, world):
+    collected = paper_c_world(**world)
+    if claim == "C2":  # a centre biased by 1 mm
+        collected["center_x"] += 1.0
+        collected["error_mm"] = np.linalg.norm(
+            collected[["center_x", "center_y", "center_z"]].to_numpy(), axis=1
+        )
+    row = _verdict("C", documents, collected, claim)
+    assert row["status"] == "not reproduced", (claim, row["reproduced"], row["margin"])
+
+
+def test_c3_window_is_derived_from_the_paper_v_values(documents):
+    """[1.94, 3.46] is the 95 % interval of k from the paper's eight v: sum(3 v²) ~ k² χ²(24)."""
+    entry = next(c for c in documents["C"]["claims"] if c["id"] == "C3")
+    v = np.asarray(entry["published"])
+    low, high = stats.chi2.ppf([0.025, 0.975], 3 * len(v))
+    interval = np.sqrt(3 * np.sum(v**2) / np.array([high, low]))
+    assert entry["tolerance"]["range"] == pytest.approx(interval, abs=0.005)
+
+
+def test_c1_factor_is_the_midpoint_of_the_paper_and_the_count_law(documents):
+    entry = next(c for c in documents["C"]["claims"] if c["id"] == "C1")
+    (fall,) = [p for p in entry["tolerance"]["all"] if p["of"] == "fall_75_to_1200"]
+    published = {e["id"]: e["published"] for e in documents["C"]["values"]}
+    paper = published["C-T1-sqrt_trace_cov_mm-75"] / published["C-T1-sqrt_trace_cov_mm-1200"]
+    assert fall["published"] == pytest.approx(paper)
+    assert fall["factor"] == pytest.approx(np.sqrt(paper / np.sqrt(1200 / 75)), abs=1e-3)
+
+
+# ------------------------------------------------------------------- on the real results
+
+needs_collected = pytest.mark.skipif(
+    not all((COLLECTED / f"{s}.parquet").exists() for s in ("cmc", "hinge", "hip")),
+    reason="run `snakemake -j2` first: no results/collected/ to check",
+)
+
+
+def _relabel(collected, first, second):
+    """The two methods' results exchanged, everything else (BC's convergence too) kept."""
+    keys = [c for c in _TRIAL_KEYS if c in collected.columns]
+    swapped = collected.copy()
+    for a, b in ((first, second), (second, first)):
+        source = collected[collected["method"] == b].set_index(keys)
+        target = swapped["method"] == a
+        index = pd.MultiIndex.from_frame(swapped.loc[target, keys])
+        for column in _RESULT_COLUMNS & set(collected.columns):
+            swapped.loc[target, column] = source[column].reindex(index).to_numpy()
+    return swapped
+
+
+_RESULT_COLUMNS = {"error_mm", "error_deg", "center_x", "center_y", "center_z"}
+_TRIAL_KEYS = ("marker_set", "rom_deg", "noise_mm", "protocol", "fe_rom_deg", "aa_ratio", "trial")
+
+
+@pytest.fixture(scope="module")
+def real():
+    return {s: pd.read_parquet(COLLECTED / f"{s}.parquet") for s in ("cmc", "hinge", "hip")}
+
+
+@needs_collected
+def test_real_results_tell_nm_from_bc_in_a8(documents, real):
+    """NM misses 'within 2.7 mm in all' at M, 5°, 1.0 mm; BC in its place would not."""
+    assert not _holds("A", documents, real["cmc"], "A8")
+    assert _holds("A", documents, _relabel(real["cmc"], "NM", "BC"), "A8")
+
+
+@needs_collected
+@pytest.mark.parametrize(
+    ("claim", "first", "second"), [("A6", "IS", "NM"), ("A4", "LS", "BC"), ("A10", "LS", "IS")]
+)
+def test_real_results_fail_when_methods_are_swapped(documents, real, claim, first, second):
+    if claim == "A6":
+        assert _holds("A", documents, real["cmc"], claim)
+    row = _verdict("A", documents, _relabel(real["cmc"], first, second), claim)
+    assert row["status"] == "not reproduced", (claim, row["reproduced"])
+
+
+@needs_collected
+def test_real_results_fail_b4_with_radial_and_combined_swapped(documents, real):
+    assert _holds("B", documents, real["hinge"], "B4")
+    assert not _holds("B", documents, _relabel(real["hinge"], "radial", "combined"), "B4")
+
+
+@needs_collected
+@pytest.mark.parametrize("scale", [0.25, 4.0])
+def test_real_results_fail_c3_with_a_scaled_covariance(documents, real, scale):
+    assert _holds("C", documents, real["hip"], "C3")
+    scaled = real["hip"].copy()
+    for column in ("cov_xx", "cov_xy", "cov_xz", "cov_yy", "cov_yz", "cov_zz"):
+        scaled[column] *= scale
+    scaled["sqrt_trace_cov_mm"] *= np.sqrt(scale)
+    assert not _holds("C", documents, scaled, "C3")

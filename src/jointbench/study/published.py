@@ -5,9 +5,10 @@ A paper's published-values document (``paper_*.yaml`` beside its module) lists `
 collected results (:class:`~jointbench.papers.base.Measured`), and :func:`comparison_rows`
 evaluates every tolerance through :func:`jointbench.study.tolerance.evaluate`. Each row shows
 the paper's own sentence (``quote``), the criterion derived from it, the reproduced figure and
-the margin: how far inside (+) or outside (−) the tolerance it lies, in the tolerance's units. Where a value is
-known not to reproduce, its entry carries a ``deviation`` with the reason; :func:`unexplained`
-lists the rows that did not reproduce without one, and the check fails on them.
+the margin: how far inside (+) or outside (−) the tolerance it lies, in the tolerance's units.
+Where a value is known not to reproduce, its entry carries a ``deviation`` with the reason;
+:func:`unexplained` lists the rows that did not reproduce without one, and the check fails on
+them.
 """
 
 from __future__ import annotations
