@@ -103,6 +103,8 @@ def _a2(collected, means):
         & (collected["marker_set"] == "M")
         & (collected["rom_deg"] == collected["rom_deg"].min())
     ]
+    if bc.empty:
+        raise ValueError("BC is not in this run")
     n_trials = collected["trial"].nunique()
     counts = bc.groupby("noise_mm")["converged"].sum().sort_index().astype(int).tolist()
     value = {"count": counts, "trials": [n_trials] * len(counts)}
