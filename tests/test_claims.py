@@ -58,7 +58,7 @@ def test_a_claim_without_its_quote_is_rejected(documents, tmp_path):
 
 
 def test_comparison_and_claims_tables_show_quote_criterion_and_margin(documents):
-    for column in ("quote", "criterion", "margin"):
+    for column in ("quote", "criterion", "margin", "reason"):
         assert column in COLUMNS and column in CLAIM_COLUMNS
     document = documents["A"]
     rows = comparison_rows(document, {})

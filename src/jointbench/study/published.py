@@ -57,6 +57,7 @@ CLAIM_COLUMNS = [
     "reproduced",
     "status",
     "margin",
+    "reason",
 ]
 STATUSES = ("reproduced", "not reproduced", "not applicable")
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"
