@@ -9,6 +9,10 @@ min_version("8.20")
 configfile: "config/config.yaml"
 
 
+# The report's landing page is written by the report_captions rule (workflow/rules/check.smk).
+report: "results/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 
 

@@ -59,6 +59,18 @@ TARGETS: dict[tuple[str, str, str | None], float] = {
     ("joint_center", "SARA", None): 20e-3,
 }
 
+# Per-trial targets [s] of the many-trial (``batched``) forms, by (kind, method, data label).
+BATCHED_TARGETS: dict[tuple[str, str, str], float] = {
+    ("center", "LS", "3 x 120"): 20e-6,
+    ("center", "NM", "3 x 120"): 20e-6,
+    ("center", "BC", "3 x 120"): 100e-6,
+    ("joint_center", "SCoRE", "3+3 x 1200"): 3e-3,
+    ("joint_center", "gauss-markov", "3+3 x 1200"): 5e-3,
+    ("axis", "combined", "3 x 121"): 5e-3,
+}
+# Trials per batched call, by data label: enough to amortise per-call overheads.
+_BATCH_SIZE = {"3 x 120": 512, "3 x 121": 64, "3+3 x 1200": 64}
+
 # Paper A Table 1, M set (distances from the CoR); directions are this script's choice.
 _M_SET = geometry.unit(np.array([[0.2, 0.3, 1.0], [0.0, 0.1, 1.0], [-0.3, 0.2, 1.0]])) * np.array(
     [[13.8], [29.0], [15.7]]
@@ -184,6 +196,31 @@ def time_method(
     return statistics.median(calls), len(calls), note
 
 
+def time_batched(
+    kind: str, name: str, data: DataSet, n_trials: int, repeats: int
+) -> tuple[float, str]:
+    """Median over ``repeats`` of a batched call's wall-clock seconds divided by its trials.
+
+    The batch cycles through the data set's distinct trials up to ``n_trials``.
+    """
+    batched = getattr(registry.get(kind, name), "batched", None)
+    if batched is None:
+        return float("nan"), "no batched form: fitted one trial at a time"
+    picks = [data.trials[i % len(data.trials)] for i in range(n_trials)]
+    segments = [np.stack(arrays) for arrays in zip(*picks, strict=True)]
+    try:
+        batched(*(segment[:2] for segment in segments))  # warm-up
+        timings = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            outcomes = batched(*segments)
+            timings.append((time.perf_counter() - start) / n_trials)
+    except Exception as error:
+        return float("nan"), f"error: {type(error).__name__}: {error}"
+    failures = [o for o in outcomes if isinstance(o, Exception)]
+    return statistics.median(timings), f"{len(failures)} trials failed" if failures else ""
+
+
 def _format_seconds(value: float) -> str:
     if not np.isfinite(value):
         return "—"
@@ -239,12 +276,14 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(args.seed)
 
     rows: list[tuple[str, str, str, int, float, float | None, str]] = []
+    data_by_kind: dict[str, dict[str, DataSet]] = {}
     for kind in kinds:
         names = jointbench.methods(kind)
         if not names:
             print(f"<!-- kind {kind!r}: no registered methods, skipped -->")
             continue
         data_sets: dict[str, DataSet] = {}  # built once per kind and label, shared by methods
+        data_by_kind[kind] = data_sets
         for name in names:
             for label in _labels(kind, name):
                 if label not in data_sets:
@@ -278,6 +317,34 @@ def main(argv: list[str] | None = None) -> int:
             f"{target_text} | {verdict} |"
         )
         print(line + (f" {note}" if note else ""))
+
+    one_trial = {(kind, name, label): median for kind, name, label, _, median, _, _ in rows}
+    print(
+        "\nMany trials at once (each method's `batched` form): median over repeats of the "
+        "call's wall-clock time divided by its trials; ratio = one-trial median above / this.\n"
+    )
+    print("| kind | method | data | trials per call | per trial | ratio | target | pass |")
+    print("|---|---|---|---:|---:|---:|---:|:---:|")
+    for kind, name, label in BATCHED_TARGETS:
+        if kind not in kinds or (kind, name, label) not in one_trial:
+            continue
+        n_trials = max(4, _BATCH_SIZE[label] // (8 if args.quick else 1))
+        per_trial, note = time_batched(
+            kind, name, data_by_kind[kind][label], n_trials, 3 if args.quick else 7
+        )
+        target = BATCHED_TARGETS[(kind, name, label)]
+        if not np.isfinite(per_trial):
+            verdict, failed = ("error" if note.startswith("error") else "FAIL"), True
+        elif per_trial <= target:
+            verdict = "pass"
+        else:
+            verdict, failed = "FAIL", True
+        ratio = one_trial[(kind, name, label)] / per_trial
+        print(
+            f"| {kind} | {name} | {label} | {n_trials} | {_format_seconds(per_trial)} | "
+            f"{ratio:.1f}× | ≤ {_format_seconds(target)} | {verdict} |"
+            + (f" {note}" if note else "")
+        )
     return 1 if failed and args.strict else 0
 
 

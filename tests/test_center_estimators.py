@@ -26,6 +26,7 @@ from jointbench.estimators.sphere import (
     ls_system,
     solve_ls_system,
 )
+from jointbench.numerics.poses import rigid_poses
 from jointbench.simulate.noise import isotropic_noise
 
 CENTER_METHODS = ("NM", "LS", "BC", "IS", "MA")
@@ -124,26 +125,6 @@ def test_ls_on_a_pure_hinge_returns_a_point_on_the_axis():
         center = jointbench.fit_center(markers, method=method).center
         off_axis = (center - CENTER) - axis * (axis @ (center - CENTER))
         assert np.linalg.norm(off_axis) < 1e-6
-
-
-def test_simplex_settings_are_fminsearch_defaults():
-    """SciPy's Nelder–Mead with FMINSEARCH_OPTIONS starts from fminsearch's simplex: each
-    coordinate of the start in turn scaled by 1.05, or 0.00025 where it is zero."""
-    from scipy.optimize import minimize
-
-    from jointbench.estimators.sphere import FMINSEARCH_OPTIONS
-
-    seen = []
-    start = np.array([12.0, 0.0, -4.0])
-
-    def cost(x):
-        seen.append(x.copy())
-        return float(np.sum((x - 1.0) ** 2))
-
-    minimize(cost, start, method="Nelder-Mead", options=dict(FMINSEARCH_OPTIONS))
-    expected = [start, [12.6, 0.0, -4.0], [12.0, 0.00025, -4.0], [12.0, 0.0, -4.2]]
-    np.testing.assert_allclose(seen[:4], expected, rtol=1e-15)
-    assert dict(FMINSEARCH_OPTIONS) == {"xatol": 1e-4, "fatol": 1e-4, "maxiter": 600, "maxfev": 600}
 
 
 # --- invariances -----------------------------------------------------------------------------
@@ -313,7 +294,7 @@ def test_geometric_cost_is_f1_with_mean_radii():
 def test_ma_reports_the_mean_trajectory_of_the_least_moving_point():
     markers = well_conditioned(seed=6, noise_mm=0.5)
     result = fit_ma(markers)
-    rotation, translation, _ = geometry.rigid_poses(markers)
+    rotation, translation, _ = rigid_poses(markers)
     point = np.asarray(result.diagnostics["body_point"])
     trajectory = np.einsum("kij,j->ki", rotation, point) + translation
     np.testing.assert_allclose(result.center, trajectory.mean(axis=0), atol=1e-9)

@@ -1,44 +1,190 @@
-"""The command line: fitting a user's marker CSV, and clear errors for malformed files."""
+"""The command line: fitting files, clear errors for bad input, help, version."""
 
 from __future__ import annotations
 
+import io
+import json
+
 import numpy as np
 import pandas as pd
+import pytest
+from rigs import JOINT, PROXIMAL
+from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
 
+import jointbench
 from jointbench.cli import main
 from jointbench.geometry import rotation_matrix
 
+SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
+THIGH = "RTHI1,RTHI2,RTHI3,RGT"
 
-def write_markers(path, markers: np.ndarray) -> None:
+
+def long_table(markers: np.ndarray) -> pd.DataFrame:
     n_frames, n_markers, _ = markers.shape
     frame, marker = np.meshgrid(np.arange(n_frames), np.arange(n_markers), indexing="ij")
     table = pd.DataFrame({"frame": frame.ravel(), "marker": marker.ravel()})
     table[["x", "y", "z"]] = markers.reshape(-1, 3)
-    table.sample(frac=1.0, random_state=0).to_csv(path, index=False)  # row order must not matter
+    return table.sample(frac=1.0, random_state=0)  # row order must not matter
 
 
-def test_fit_center_from_csv(tmp_path, capsys):
+def sphere_markers() -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(3)
     center = np.array([12.0, -40.0, 7.0])
     body = rng.normal(size=(3, 3)) * 30.0
     rotations = rotation_matrix(rng.normal(size=(60, 3)) * 0.5)
+    return np.einsum("fij,pj->fpi", rotations, body) + center, center
+
+
+def run(capsys, *argv) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return code, out, err
+
+
+def csv_rows(text: str) -> pd.DataFrame:
+    return pd.read_csv(io.StringIO(text))
+
+
+def test_fit_center_from_csv(tmp_path, capsys):
+    markers, center = sphere_markers()
     path = tmp_path / "markers.csv"
-    write_markers(path, np.einsum("fij,pj->fpi", rotations, body) + center)
-    assert main(["fit", "center", str(path), "--method", "NM"]) == 0
-    printed = capsys.readouterr().out
-    line = next(line for line in printed.splitlines() if line.startswith("centre (mm):"))
-    numbers = np.array(line.split("[")[1].split("]")[0].split(), dtype=float)
-    np.testing.assert_allclose(numbers, center, atol=1e-3)
-    assert "converged: True" in printed
+    long_table(markers).to_csv(path, index=False)
+    code, out, _ = run(capsys, "fit", "center", str(path), "--method", "NM", "--format", "csv")
+    assert code == 0
+    row = csv_rows(out).iloc[0]
+    np.testing.assert_allclose(row[["x_mm", "y_mm", "z_mm"]].to_numpy(float), center, atol=1e-3)
+    assert bool(row["converged"])
 
 
-def test_fit_reports_a_malformed_file(tmp_path, capsys):
+def test_csv_with_a_missing_row_leaves_the_frame_out(tmp_path, capsys):
+    markers, center = sphere_markers()
+    path = tmp_path / "markers.csv"
+    table = long_table(markers)
+    table[~((table["frame"] == 7) & (table["marker"] == 1))].to_csv(path, index=False)
+    code, out, _ = run(capsys, "fit", str(path), "--method", "NM", "--format", "csv")
+    assert code == 0
+    row = csv_rows(out).iloc[0]
+    assert row["frames"] == 59 and row["gap_frames"] == 1
+    np.testing.assert_allclose(row[["x_mm", "y_mm", "z_mm"]].to_numpy(float), center, atol=1e-3)
+
+
+def test_csv_with_a_duplicated_row_is_refused(tmp_path, capsys):
+    markers, _ = sphere_markers()
+    path = tmp_path / "markers.csv"
+    table = long_table(markers)
+    duplicate = table[(table["frame"] == 3) & (table["marker"] == 2)]
+    pd.concat([table[~((table["frame"] == 7) & (table["marker"] == 1))], duplicate]).to_csv(
+        path, index=False
+    )
+    code, _, err = run(capsys, "fit", "center", str(path))
+    assert code == 2
+    assert f"jointbench: {path}: frame 3, marker 2 has 2 rows" in err
+
+
+def test_malformed_csv_names_the_missing_columns(tmp_path, capsys):
     path = tmp_path / "bad.csv"
-    pd.DataFrame(
-        {"frame": [0, 0, 1], "marker": [0, 1, 0], "x": [0.0] * 3, "y": [0.0] * 3, "z": [0.0] * 3}
-    ).to_csv(path, index=False)
-    assert main(["fit", "center", str(path)]) == 2
-    assert "every frame needs every marker" in capsys.readouterr().err
     pd.DataFrame({"frame": [0], "x": [0.0]}).to_csv(path, index=False)
-    assert main(["fit", "axis", str(path)]) == 2
-    assert "missing columns ['marker', 'y', 'z']" in capsys.readouterr().err
+    code, _, err = run(capsys, "fit", "axis", str(path))
+    assert code == 2
+    assert "missing columns ['marker', 'y', 'z']" in err
+
+
+@pytest.mark.parametrize("command", ["fit", "inspect"])
+def test_missing_file_or_directory_is_one_line(tmp_path, capsys, command):
+    code, _, err = run(capsys, command, str(tmp_path / "absent.c3d"))
+    assert code == 2 and err.strip() == f"jointbench: {tmp_path / 'absent.c3d'}: no such file"
+    code, _, err = run(capsys, command, str(tmp_path))
+    assert code == 2 and "is a directory" in err
+
+
+def test_help_lists_every_method_and_the_defaults(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["fit", "--help"])
+    assert exit_.value.code == 0
+    out = capsys.readouterr().out
+    for kind in ("center", "axis", "joint_center"):
+        for name in jointbench.methods(kind):
+            assert f"    {name} " in out
+    assert "(default: refuse)" in out and "center (default NM)" in out
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0
+    assert capsys.readouterr().out.strip() == f"jointbench {jointbench.__version__}"
+
+
+def test_readme_without_results_says_what_to_run(tmp_path, capsys):
+    code, _, err = run(capsys, "readme", "--results", str(tmp_path))
+    assert code == 1
+    assert "run `snakemake -j2` first" in err
+
+
+def test_inspect_lists_labels_rate_and_gaps(tmp_path, capsys):
+    markers = rig_recording(20).markers.copy()
+    markers[4:7, 2] = 0.0
+    path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, markers)
+    code, out, _ = run(capsys, "inspect", str(path), "--format", "json")
+    assert code == 0
+    summary = json.loads(out)
+    assert summary["n_frames"] == 20 and summary["rate_hz"] == 100.0
+    assert summary["missing_samples"] == {"P1": 0, "P2": 0, "P3": 3, "D1": 0, "D2": 0, "D3": 0}
+
+
+def test_fit_joint_centre_of_a_c3d_in_the_reference_frame(tmp_path, capsys):
+    path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording().markers)
+    arguments = ["--reference", ",".join(PROX), "--moving", ",".join(DIST)]
+    code, out, _ = run(
+        capsys, "fit", str(path), "--kind", "joint_center", *arguments, "--method", "all",
+        "--format", "json",
+    )  # fmt: skip
+    assert code == 0
+    fits = json.loads(out)
+    assert [f["method"] for f in fits] == list(jointbench.methods("joint_center"))
+    for fitted in fits:
+        # A C3D file holds float32: ~1e-4 mm on these coordinates.
+        np.testing.assert_allclose(fitted["center_mm"], in_frame(JOINT, PROXIMAL), atol=2e-3)
+        assert fitted["frame"]["x"] == "from P1 towards P2"
+
+
+def test_artefact_is_refused_or_excluded_on_request(tmp_path, capsys):
+    path = write_c3d(
+        tmp_path / "swap.c3d", PROX + DIST, swapped(rig_recording(), 150, "D1", "D2").markers
+    )
+    arguments = ["fit", str(path), "--reference", ",".join(PROX), "--moving", ",".join(DIST)]
+    code, _, err = run(capsys, *arguments)
+    assert code == 2
+    assert "swap.c3d: marker D" in err and "at frame 150 (1.50 s)" in err
+    code, out, err = run(capsys, *arguments, "--artefacts", "exclude", "--format", "csv")
+    assert code == 0
+    assert "jointbench: warning:" in err and "left out 50 frames" in err
+    assert csv_rows(out).iloc[0]["frames"] == 150
+
+
+def test_fit_knee_axis_with_bootstrap(capsys):
+    code, out, _ = run(
+        capsys, "fit", str(KNEE), "--kind", "axis", "--reference", THIGH, "--moving", SHANK,
+        "--method", "SARA", "--bootstrap", "20", "--format", "csv",
+    )  # fmt: skip
+    assert code == 0
+    row = csv_rows(out).iloc[0]
+    assert row["frames"] == 922 and 0.0 < row["boot_cone95_deg"] < 30.0
+
+
+def test_world_trajectory_on_request(tmp_path, capsys):
+    path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording().markers)
+    world = tmp_path / "world.csv"
+    arguments = ["--reference", ",".join(PROX), "--moving", ",".join(DIST)]
+    code, _, err = run(
+        capsys, "fit", str(path), "--kind", "joint_center", *arguments, "--method", "SCoRE",
+        "--frames", "10:60", "--world", str(world),
+    )  # fmt: skip
+    assert code == 0 and "world trajectory" in err
+    table = pd.read_csv(world)
+    assert table["frame"].tolist() == list(range(10, 60))
+    # The joint of the rig stays at the same distance from every distal marker.
+    distal = rig_recording().markers[10:60, 3:]
+    distance = np.linalg.norm(table[["x_mm", "y_mm", "z_mm"]].to_numpy()[:, None] - distal, axis=-1)
+    np.testing.assert_allclose(distance, np.broadcast_to(distance[0], distance.shape), atol=2e-3)

@@ -36,8 +36,8 @@ def test_the_extension_needs_at_most_five_files():
 def test_the_toy_study_runs_and_draws_its_figure(toy_run):
     results = toy_run / "results"
     collected = pd.read_parquet(results / "collected" / "toy.parquet")
-    assert set(collected["method"]) == {"NM", "LS"}
-    assert len(collected) == 2 * 2 * 4
+    assert set(collected["method"]) == {"NM", "LS", "toy-centroid"}
+    assert len(collected) == 3 * 2 * 4
     assert (results / "figures" / "paper_t_errors.png").stat().st_size > 1000
     assert (results / "tables" / "extended_toy.csv").exists()
     assert (results / "report" / "captions" / "paper_t_errors.rst").exists()
@@ -58,5 +58,44 @@ def test_its_figure_is_in_the_report(toy_run):
     )
     assert report.returncode == 0, report.stderr[-4000:]
     html = (toy_run / "results" / "report.html").read_text(errors="replace")
-    for name in ("paper_t_errors.png", "published_comparison.csv", "extended_toy.png"):
+    for name in ("paper_t_errors.png", "published_comparison.html", "extended_toy.png"):
         assert name in html, f"{name} missing from the report"
+
+
+def _planned_rules(workdir) -> dict[str, int]:
+    """Rule name -> job count that a dry run plans (from Snakemake's job stats)."""
+    run = run_snakemake(workdir, "--configfile", str(workdir / "toy.yaml"), "--dry-run")
+    assert run.returncode == 0, run.stderr[-4000:]
+    planned, in_stats = {}, False
+    for line in (run.stdout + run.stderr).splitlines():
+        words = line.split()
+        if words[:2] == ["job", "count"]:
+            in_stats = True
+        elif in_stats and len(words) == 2 and words[1].isdigit():
+            planned[words[0]] = int(words[1])
+        elif in_stats and words and words[0] == "total":
+            break
+    return planned
+
+
+def _edit(path, old, new):
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new))
+
+
+def test_edited_code_reruns_its_jobs_and_only_them(toy_run):
+    """The library is code Snakemake does not track: fingerprints make an edit rerun its jobs."""
+    assert _planned_rules(toy_run) == {}
+    module = toy_run / "toy_study.py"
+    original = module.read_text()
+    try:
+        _edit(module, 'ax.set_xlabel("noise SD (mm)")', 'ax.set_xlabel("noise (mm)")')
+        assert set(_planned_rules(toy_run)) == {"paper_t_errors", "all"}
+        module.write_text(original)
+        _edit(module, "markers.reshape(-1, 3).mean(axis=0)", "markers.reshape(-1, 3).mean(0) + 1")
+        planned = _planned_rules(toy_run)
+        assert planned.get("estimate_toy") == 1, planned
+        assert "simulate_toy" not in planned
+    finally:
+        module.write_text(original)

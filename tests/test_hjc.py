@@ -14,7 +14,8 @@ from jointbench.estimators.hjc import (
     fit_gauss_markov,
     point_covariance,
 )
-from jointbench.geometry import rigid_poses, rotation_matrix, skew
+from jointbench.geometry import rotation_matrix, skew
+from jointbench.numerics.poses import rigid_poses
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.simulate.noise import isotropic_noise
 from jointbench.study.seeds import trial_rng

@@ -28,7 +28,7 @@ def _outputs(study: str) -> list[str]:
     for paper in papers_of_study(study):
         for output in paper.outputs:
             files += [path.removeprefix("results/") for path in output.files.values()]
-    files += [f"tables/extended_{study}.csv", f"figures/extended_{study}.png"]
+    files += [f"tables/extended_{study}.html", f"figures/extended_{study}.png"]
     return files
 
 
@@ -106,9 +106,10 @@ def test_the_report_holds_every_figure_and_table(reduced_run):
     html = (workdir / "results" / "report.html").read_text(errors="replace")
     for study in reduced["studies"]:
         for name in _outputs(study):
-            if name.endswith((".png", ".csv")) and not name.startswith("collected"):
+            if name.endswith((".png", ".html")) and not name.startswith("collected"):
                 assert name.split("/")[-1] in html, f"{name} missing from the report"
-    assert "published_comparison.csv" in html
+    assert "published_comparison.html" in html
+    assert "Reproduction summary" in html, "the report does not open on its description"
 
 
 def test_every_rule_writes_its_log(reduced_run):

@@ -16,6 +16,7 @@ import yaml
 
 from jointbench.papers import Inputs, get_paper, paper_names
 from jointbench.papers import paper_b as paper_b_module
+from jointbench.pipeline import paper_labels
 from jointbench.study.published import (
     UNEXPLAINED,
     comparison_rows,
@@ -91,9 +92,10 @@ def test_results_match_the_regression_snapshot():
 
 @needs_results
 def test_readme_summary_is_current(comparison):
-    assert readme_summary(ROOT / "README.md") == reproduction_summary(comparison).strip(), (
-        "README reproduction summary is stale: run `jointbench readme`"
-    )
+    assert (
+        readme_summary(ROOT / "README.md")
+        == reproduction_summary(comparison, paper_labels()).strip()
+    ), "README reproduction summary is stale: run `jointbench readme`"
 
 
 def test_published_files_match_their_schema(published, tmp_path):

@@ -7,7 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from jointbench.geometry import rigid_fit, rotation_vector
+from jointbench.geometry import rotation_vector
+from jointbench.numerics.poses import rigid_fit
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.study.seeds import trial_rng
 

@@ -75,3 +75,10 @@ def test_abs_margin_is_the_distance_to_the_edge(published, width, measured):
     verdict = evaluate({"abs": width}, published, measured)
     assert verdict.margin == pytest.approx(width - abs(measured - published), abs=1e-9)
     assert verdict.holds == (abs(measured - published) <= width)
+
+
+def test_a_measurement_of_the_wrong_length_is_refused():
+    with pytest.raises(ValueError, match="lacks part"):
+        evaluate({"binomial95": {"of_n": 30}}, [30, 16, 9], {"count": [], "trials": []})
+    with pytest.raises(ValueError, match="lacks part"):
+        evaluate({"greater_than": [25, 60]}, None, [30.0])

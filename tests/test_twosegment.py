@@ -169,8 +169,8 @@ def test_registered():
 
 
 def test_best_rotation_matches_the_svd_solution():
-    """geometry.best_rotation (Horn/QCP, used by rigid_fit and rigid_poses) = Kabsch SVD."""
-    from jointbench.geometry import _kabsch_rotation, best_rotation
+    """poses.best_rotation (Horn/QCP, used by rigid_fit and rigid_poses) = Kabsch SVD."""
+    from jointbench.numerics.poses import _kabsch_rotation, best_rotation
 
     rng = np.random.default_rng(12)
     # Random clusters and targets (3 and 5 markers), exact rotations up to pi, degenerate ones.

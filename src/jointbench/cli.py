@@ -1,20 +1,63 @@
-"""Command line: ``jointbench snapshot``, ``jointbench readme`` and ``jointbench fit``."""
+"""Command line: ``jointbench inspect``, ``fit``, ``snapshot`` and ``readme``.
+
+Every expected failure (a missing or unreadable file, an unknown label or method, an artefact
+in the data) is one line on stderr naming the file, the label and the frame, and exit code 2;
+never a traceback.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
+import re
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+import jointbench
+from jointbench.estimators.registry import KINDS, get
+from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
+from jointbench.pipeline import paper_labels
+from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
+
 __all__ = ["main"]
+
+FORMATS = ("table", "json", "csv")
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps the method list's line breaks and shows every option's default (when it has one)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        if action.default not in (None, argparse.SUPPRESS) and "%(default)" not in text:
+            text += " (default: %(default)s)"
+        return text
+
+
+def _summary(function) -> str:
+    """The first sentence of a docstring, on one line; a clause before ``:`` when that alone
+    says enough."""
+    paragraph = (function.__doc__ or "").strip().split("\n\n")[0]
+    text = " ".join(paragraph.split()).replace("``", "")
+    text = re.split(r"\.\s+(?=[A-Z])", text)[0].rstrip(".")
+    clause = text.split(": ")[0]
+    return clause if len(clause) >= 30 else text
+
+
+def _method_list() -> str:
+    lines = ["methods (--kind, then --method; 'all' runs every method of the kind):"]
+    for kind in KINDS:
+        lines.append(f"  {kind} (default {DEFAULT_METHODS[kind]}):")
+        for name in jointbench.methods(kind):
+            lines.append(f"    {name:<20} {_summary(get(kind, name))}")
+    return "\n".join(lines)
 
 
 def _snapshot(args: argparse.Namespace) -> int:
-    from jointbench.study.snapshot import snapshot_table
-
     table = snapshot_table(args.results / "collected")
     if table.empty:
         print(f"no collected results under {args.results}; run `snakemake -j2` first")
@@ -26,71 +69,243 @@ def _snapshot(args: argparse.Namespace) -> int:
 
 
 def _readme(args: argparse.Namespace) -> int:
-    from jointbench.study.snapshot import reproduction_summary, update_readme
-
-    comparison = pd.read_csv(args.results / "tables" / "published_comparison.csv")
-    changed = update_readme(args.readme, reproduction_summary(comparison))
+    comparison_path = args.results / "tables" / "published_comparison.csv"
+    if not comparison_path.is_file():
+        print(
+            f"jointbench: no {comparison_path}: run `snakemake -j2` first to produce the "
+            "results the README summarises",
+            file=sys.stderr,
+        )
+        return 1
+    if not args.readme.is_file():
+        raise ValueError(f"{args.readme}: no such file")
+    comparison = pd.read_csv(comparison_path)
+    changed = update_readme(args.readme, reproduction_summary(comparison, paper_labels()))
     print(f"{args.readme}: summary {'updated' if changed else 'already current'}")
     return 0
 
 
-def _read_markers(path: Path) -> np.ndarray:
-    """Long CSV with columns frame, marker, x, y, z [mm] -> (n_frames, n_markers, 3)."""
-    frame = pd.read_csv(path)
-    missing = {"frame", "marker", "x", "y", "z"} - set(frame.columns)
-    if missing:
-        raise ValueError(f"{path}: missing columns {sorted(missing)}")
-    frame = frame.sort_values(["frame", "marker"])
-    n_frames, n_markers = frame["frame"].nunique(), frame["marker"].nunique()
-    if len(frame) != n_frames * n_markers:
-        raise ValueError(
-            f"{path}: every frame needs every marker ({len(frame)} rows for "
-            f"{n_frames} frames × {n_markers} markers)"
+def _inspect(args: argparse.Namespace) -> int:
+    recording = read(args.file)
+    gaps = recording.gaps()
+    if args.format == "json":
+        rate = recording.rate_hz
+        print(
+            json.dumps(
+                {
+                    "file": str(args.file),
+                    "n_frames": recording.n_frames,
+                    "rate_hz": rate,
+                    "labels": list(recording.labels),
+                    "missing_samples": gaps,
+                },
+                indent=2,
+            )
         )
-    return frame[["x", "y", "z"]].to_numpy(float).reshape(n_frames, n_markers, 3)
-
-
-def _fit(args: argparse.Namespace) -> int:
-    import jointbench
-
-    markers = _read_markers(args.markers)
-    if args.kind == "center":
-        result = jointbench.fit_center(markers, method=args.method)
-        print(f"centre (mm): {np.array2string(result.center, precision=3)}")
-    else:
-        result = jointbench.fit_axis(markers, method=args.method)
-        print(f"point (mm): {np.array2string(result.point, precision=3)}")
-        print(f"direction: {np.array2string(result.direction, precision=5)}")
-    print(f"converged: {result.converged} ({result.iterations} iterations, {result.status})")
+        return 0
+    rate = "unknown" if recording.rate_hz is None else f"{recording.rate_hz:g} Hz"
+    print(f"{args.file}: {recording.n_frames} frames, {rate}, {len(recording.labels)} markers")
+    print(f"{'marker':<16}{'missing':>8}")
+    for label, n in gaps.items():
+        print(f"{label:<16}{n:>8}")
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="jointbench", description=__doc__)
+def _labels(text: str | None) -> list[str] | None:
+    if text is None:
+        return None
+    labels = [label.strip() for label in text.split(",") if label.strip()]
+    if not labels:
+        raise ValueError(f"no marker labels in {text!r}")
+    return labels
+
+
+def _row(fitted) -> dict:
+    """One flat row of a fit for the table and CSV outputs."""
+    row = {"method": fitted.method}
+    result = fitted.result
+    if fitted.kind == "axis":
+        row.update(zip(("dir_x", "dir_y", "dir_z"), result.direction, strict=True))
+        row.update(zip(("point_x_mm", "point_y_mm", "point_z_mm"), result.point, strict=True))
+    else:
+        row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
+    covariance = getattr(result, "covariance", None)
+    if covariance is not None:
+        row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(covariance)))
+    if fitted.bootstrap is not None:
+        if fitted.kind == "axis":
+            row["boot_cone95_deg"] = fitted.bootstrap_cone_deg()
+        else:
+            row["boot_sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(fitted.bootstrap.covariance())))
+        low, high = fitted.bootstrap.interval()[:, -3:]
+        for axis, lo, hi in zip("xyz", low, high, strict=True):
+            row[f"boot95_{axis}_mm"] = f"[{lo:.2f}, {hi:.2f}]"
+    row.update(
+        converged=bool(result.converged),
+        status=result.status,
+        frames=len(fitted.frames_used),
+        gap_frames=fitted.n_gap_frames,
+    )
+    return row
+
+
+def _fit(args: argparse.Namespace) -> int:
+    recording = read(args.file)
+    moving = _labels(args.moving)
+    reference = _labels(args.reference)
+    if moving is None:
+        if reference is not None:
+            raise ValueError("name the moving segment's markers with --moving")
+        moving = list(recording.labels)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        prepared = prepare(
+            recording,
+            args.kind,
+            moving,
+            reference,
+            frames=args.frames,
+            artefacts=args.artefacts,
+        )
+        names = jointbench.methods(args.kind) if args.method == "all" else [args.method]
+        fits = [
+            prepared.fit(
+                name,
+                n_bootstrap=args.bootstrap,
+                block_length=args.block_length,
+                seed=args.seed,
+            )
+            for name in names
+        ]
+    for warning in caught:
+        print(f"jointbench: warning: {warning.message}", file=sys.stderr)
+    if args.world is not None:
+        _write_world(args.world, fits)
+    if args.format == "json":
+        print(json.dumps([fitted.to_dict() for fitted in fits], indent=2))
+        return 0
+    table = pd.DataFrame([_row(fitted) for fitted in fits])
+    if args.format == "csv":
+        print(table.to_csv(index=False, float_format="%.9g"), end="")
+        return 0
+    print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
+    frame = fits[0].frame
+    if frame is None:
+        print("frame: as recorded (markers taken as already in the reference frame)")
+    else:
+        print(f"frame: technical frame of {', '.join(frame['segment'])}:")
+        for key in ("origin", "x", "y", "z"):
+            print(f"  {key}: {frame[key]}")
+    if fits[0].anchor_frame is not None:
+        print(f"anchor frame (both body frames coincide): {fits[0].anchor_frame}")
+    return 0
+
+
+def _write_world(path: Path, fits: list) -> None:
+    """Per frame and method, the centre (or axis point) in the lab frame [mm], as CSV."""
+    tables = []
+    for fitted in fits:
+        world = fitted.world()
+        table = pd.DataFrame(world, columns=["x_mm", "y_mm", "z_mm"])
+        table.insert(0, "frame", np.arange(len(world)) + fitted.first_frame)
+        table.insert(1, "method", fitted.method)
+        tables.append(table)
+    pd.concat(tables).to_csv(path, index=False, float_format="%.6f")
+    print(f"wrote the world trajectory per frame to {path}", file=sys.stderr)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="jointbench",
+        description="Functional joint centre and axis estimators, and the benchmark studies.",
+        epilog=_method_list(),
+        formatter_class=_Formatter,
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {jointbench.__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    snap = sub.add_parser("snapshot", help="write the regression snapshot of tabulated means")
+    inspect = sub.add_parser(
+        "inspect",
+        help="labels, frames, rate and missing samples of a C3D, TRC or CSV file",
+        formatter_class=_Formatter,
+    )
+    inspect.add_argument("file", type=Path)
+    inspect.add_argument("--format", choices=("table", "json"), default="table")
+    inspect.set_defaults(run=_inspect)
+
+    fit = sub.add_parser(
+        "fit",
+        help="fit a centre, an axis or a joint centre to a recording",
+        description=(
+            "Fit estimators to a recording (C3D, TRC, or CSV with columns frame,marker,x,y,z in "
+            "mm). The answer is in the technical frame of the --reference markers (origin at "
+            "their centroid, x from the first towards the second, z normal to the first three)."
+            " Without --reference, the markers are taken as already in the reference frame."
+        ),
+        epilog=_method_list(),
+        formatter_class=_Formatter,
+    )
+    fit.add_argument("file", type=Path)
+    fit.add_argument("--kind", choices=KINDS, default="center", help="what to estimate")
+    fit.add_argument("--reference", help="reference (proximal) segment's labels, comma-separated")
+    fit.add_argument("--moving", help="moving (distal) segment's labels; default: every marker")
+    fit.add_argument("--frames", help="0-based frame range start:stop (stop excluded)")
+    fit.add_argument(
+        "--method", default=None, help="a method name (see below) or 'all'; default per kind"
+    )
+    fit.add_argument("--format", choices=FORMATS, default="table")
+    fit.add_argument(
+        "--artefacts",
+        choices=ARTEFACT_POLICIES,
+        default="refuse",
+        help="label swaps / markers falling off: refuse with a message, or leave the frames out",
+    )
+    fit.add_argument(
+        "--bootstrap", type=int, default=0, help="moving-block bootstrap resamples (0: none)"
+    )
+    fit.add_argument(
+        "--block-length", type=int, default=None, help="bootstrap block [frames]; default sqrt(N)"
+    )
+    fit.add_argument("--seed", type=int, default=0, help="bootstrap seed")
+    fit.add_argument(
+        "--world",
+        type=Path,
+        help="also write the centre (or axis point) in the lab frame, per frame, to this CSV",
+    )
+    fit.set_defaults(run=_fit)
+
+    snap = sub.add_parser(
+        "snapshot",
+        help="write the regression snapshot of tabulated means",
+        formatter_class=_Formatter,
+    )
     snap.add_argument("--results", type=Path, default=Path("results"))
     snap.add_argument("--output", type=Path, default=Path("tests/snapshots/summary.csv"))
     snap.set_defaults(run=_snapshot)
 
-    readme = sub.add_parser("readme", help="refresh the README's reproduction summary")
+    readme = sub.add_parser(
+        "readme", help="refresh the README's reproduction summary", formatter_class=_Formatter
+    )
     readme.add_argument("--results", type=Path, default=Path("results"))
     readme.add_argument("--readme", type=Path, default=Path("README.md"))
     readme.set_defaults(run=_readme)
+    return parser
 
-    fit = sub.add_parser("fit", help="fit a centre or axis to a marker CSV (frame,marker,x,y,z)")
-    fit.add_argument("kind", choices=["center", "axis"])
-    fit.add_argument("markers", type=Path)
-    fit.add_argument("--method", default=None)
-    fit.set_defaults(run=_fit)
 
-    args = parser.parse_args(argv)
+def _legacy(argv: list[str]) -> list[str]:
+    """``fit KIND FILE`` (the earlier form) is ``fit FILE --kind KIND``."""
+    if len(argv) >= 3 and argv[0] == "fit" and argv[1] in KINDS:
+        return ["fit", argv[2], "--kind", argv[1], *argv[3:]]
+    return argv
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(_legacy(list(sys.argv[1:] if argv is None else argv)))
     if args.command == "fit" and args.method is None:
-        args.method = "NM" if args.kind == "center" else "combined"
+        args.method = DEFAULT_METHODS[args.kind]
     try:
         return args.run(args)
-    except ValueError as error:
+    except (ValueError, OSError) as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
 

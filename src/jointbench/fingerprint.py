@@ -17,6 +17,8 @@ import types
 from collections.abc import Iterable, Mapping
 from functools import partial
 
+import numpy as np
+
 __all__ = ["code_fingerprint", "reached"]
 
 _SIMPLE = (int, float, str, bytes, bool, type(None))
@@ -48,9 +50,12 @@ def _names(obj: object) -> set[str]:
 
 
 def _is_simple(value: object) -> bool:
-    """A constant whose ``repr`` is stable across runs: scalars and containers of them."""
-    if isinstance(value, _SIMPLE):
+    """A constant whose ``repr`` is stable across runs: scalars, small numeric arrays, and
+    containers of them."""
+    if isinstance(value, (*_SIMPLE, np.generic)):
         return True
+    if isinstance(value, np.ndarray):
+        return value.size <= 100_000 and value.dtype.kind in "biuf"
     if isinstance(value, Mapping):
         return all(_is_simple(k) and _is_simple(v) for k, v in value.items())
     if isinstance(value, tuple | list | frozenset):
@@ -63,6 +68,14 @@ def _contents(value: object) -> list:
     if isinstance(value, Mapping):
         return [*value.keys(), *value.values()]
     return list(value)
+
+
+def _has_contents(cell) -> bool:
+    try:
+        cell.cell_contents  # noqa: B018
+    except ValueError:  # an empty cell
+        return False
+    return True
 
 
 def _globals(obj: object) -> dict:
@@ -88,6 +101,8 @@ def reached(roots: Iterable[object], prefixes: tuple[str, ...] = ("jointbench",)
         if not _ours(obj, prefixes):
             continue
         seen[id(obj)] = obj
+        if inspect.isfunction(obj):
+            stack.extend(c.cell_contents for c in obj.__closure__ or () if _has_contents(c))
         names = _names(obj)
         namespace = _globals(obj)
         for name in names:
@@ -103,8 +118,8 @@ def reached(roots: Iterable[object], prefixes: tuple[str, ...] = ("jointbench",)
                 stack.append(value)
         if inspect.isclass(obj):
             stack.extend(obj.__mro__[1:])
-    ordered = sorted(seen.values(), key=lambda o: (o.__module__, o.__qualname__))
-    return [*ordered, *sorted((m, n, repr(v)) for (m, n), v in constants.items())]
+    ordered = sorted(seen.values(), key=lambda o: (o.__module__, o.__qualname__, _identity(o)))
+    return [*ordered, *sorted((m, n, _stable_repr(v)) for (m, n), v in constants.items())]
 
 
 def _code_bytes(code: types.CodeType) -> bytes:
@@ -121,6 +136,8 @@ def _code_bytes(code: types.CodeType) -> bytes:
 
 def _stable_repr(value: object) -> str:
     """``repr`` where it is stable across runs, else the type's name (no memory addresses)."""
+    if isinstance(value, np.ndarray) and _is_simple(value):
+        return f"array{value.shape}{value.dtype}{value.tobytes().hex()}"
     return repr(value) if _is_simple(value) else type(value).__qualname__
 
 
@@ -130,7 +147,9 @@ def _identity(obj: object) -> bytes:
     name = f"{obj.__module__}.{obj.__qualname__}".encode()
     if inspect.isfunction(obj):
         defaults = [_stable_repr(v) for v in obj.__defaults__ or ()]
-        return name + _code_bytes(obj.__code__) + repr(defaults).encode()
+        # A function made by a factory differs from its siblings by its closure's values.
+        cells = [_stable_repr(c.cell_contents) for c in obj.__closure__ or () if _has_contents(c)]
+        return name + _code_bytes(obj.__code__) + repr([defaults, cells]).encode()
     members = [
         (key, _identity(v) if inspect.isfunction(v) else repr(v).encode())
         for key, v in sorted(vars(obj).items())

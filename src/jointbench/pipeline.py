@@ -10,14 +10,18 @@ registries.
 from __future__ import annotations
 
 import contextlib
+import importlib.metadata
 import importlib.util
 import logging
+import os
+import platform
 import sys
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import pandas as pd
 
+from jointbench import machine
 from jointbench.figures import extended
 from jointbench.figures.common import save_figure
 from jointbench.papers import (
@@ -48,11 +52,14 @@ __all__ = [
     "check_published",
     "job",
     "load_extensions",
+    "paper_labels",
     "paper_output",
     "render_extended",
     "render_output",
+    "run_metadata",
     "summarise_estimates",
     "write_captions",
+    "write_front_page",
 ]
 
 log = logging.getLogger("jointbench")
@@ -168,6 +175,16 @@ def render_extended(study: str, collected: str, outputs, config: Mapping, *, wha
     )
 
 
+def paper_labels() -> dict[str, str]:
+    """Each registered paper's label for summaries, by letter: ``"A (centre of rotation)"``."""
+    labels = {}
+    for key in paper_names():
+        paper = get_paper(key)
+        subject = paper.title.split(":", 1)[-1].strip()
+        labels[paper.letter] = f"{paper.letter} ({subject})"
+    return labels
+
+
 def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
     """One estimator's mean and median error per condition, from its estimates files."""
     estimates = pd.concat([pd.read_parquet(path) for path in paths], ignore_index=True)
@@ -211,13 +228,15 @@ def check_published(collected: Mapping[str, str], outputs, config: Mapping) -> p
 # ----------------------------------------------------------------------------- report captions
 
 EXTENDED_TABLE_CAPTION = (
-    "Every {kind_name} estimator of the `{study}` study, the paper's and the additions "
-    "({methods}), ranked by mean error in each condition on identical trials: mean and median "
-    "error, trials converged and failed, rank."
+    "Every {kind_name} estimator of the `{study}` study ({methods}), ranked by mean error in "
+    "each condition on identical trials: mean and median error, trials converged and failed, "
+    "rank. The note under the table says which are the paper's methods and which were added."
 )
 EXTENDED_FIGURE_CAPTION = (
-    "Mean error of every estimator of the `{study}` study in every condition (log colour scale; "
-    "the best per condition outlined), and each estimator's mean rank over the conditions."
+    "Mean error of every estimator of the `{study}` study in every condition (log colour "
+    "scale), and each estimator's mean rank over the conditions. † marks a cell where some "
+    "trials failed or did not converge; a red outline marks the best of the condition, every "
+    "tied method outlined."
 )
 COMPARISON_CAPTION = (
     "Every published value and claim of the papers beside ours, with the typed tolerance, the "
@@ -264,11 +283,7 @@ def _headline(name: str, tables: Mapping[str, pd.DataFrame]) -> str:
             + "."
         )
     if name.startswith("extended_"):
-        table = tables[name.removesuffix("_figure")]
-        best = table[table["best"].astype(str) == "True"]["method"].value_counts()
-        conditions = table.groupby(list(table.columns[: table.columns.get_loc("method")])).ngroups
-        leaders = ", ".join(f"{m} ({n})" for m, n in best.items())
-        return f"best mean error per condition, out of {conditions} conditions: {leaders}."
+        return extended.best_headline(tables[name.removesuffix("_figure")])
     output = paper_output(name)
     if output.headline is None:
         return ""
@@ -284,3 +299,101 @@ def write_captions(tables: Mapping[str, str], outputs: Sequence[str], config: Ma
         body = caption_text(name, config)
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Path(path).write_text(f"{body}\n\n**Headline:** {headline}\n" if headline else f"{body}\n")
+
+
+# ----------------------------------------------------------------------------- report front page
+
+FRONT_INTRO = """\
+jointbench: functional joint-parameter estimators, benchmarked
+==============================================================
+
+jointbench regenerates the figures and tables of three classic papers on functional joint
+estimation from simulated motion-capture data with a known truth, ranks every estimator
+(the papers' and any added) on identical trials, and checks every published value and claim
+against what it reproduces, with a typed tolerance and its margin. Every number below is
+generated from this run's results.
+"""
+
+
+def _rst_table(frame: pd.DataFrame, title: str) -> str:
+    """``frame`` as an RST list-table (cells as text)."""
+    lines = [f".. list-table:: {title}", "   :header-rows: 1", ""]
+    for row in [list(frame.columns), *frame.astype(str).values.tolist()]:
+        lines.append("   * - " + str(row[0]))
+        lines += [f"     - {cell}" for cell in row[1:]]
+    return "\n".join(lines) + "\n"
+
+
+def _summary_frame(comparison: pd.DataFrame) -> pd.DataFrame:
+    labels = paper_labels()
+    rows = []
+    for paper, part in comparison.groupby("paper", sort=True):
+        row = {"paper": labels.get(paper, paper)}
+        for entry, column in (("value", "published values"), ("claim", "claims")):
+            tested = part[(part["entry"] == entry) & (part["status"] != "not applicable")]
+            row[column] = f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}"
+        row["not comparable"] = int((part["status"] == "not applicable").sum())
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _rankings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
+    lines = []
+    for name, table in sorted(tables.items()):
+        if not name.startswith("extended_"):
+            continue
+        ranks = extended.mean_ranks(table)
+        leaders = ", ".join(
+            f"{row.method} (mean rank {row.mean_rank:.2f})" for row in ranks.head(3).itertuples()
+        )
+        lines.append(f"- study ``{name.removeprefix('extended_')}``: {leaders}")
+    return lines
+
+
+def run_metadata() -> dict[str, str]:
+    """The machine and software versions of this run, for the report beside the timings."""
+    versions = {name: importlib.metadata.version(name) for name in _VERSIONED}
+    return {
+        "machine": f"{platform.system()} {platform.machine()}, {os.cpu_count()} logical CPUs",
+        "processor": machine.processor(),
+        "python": platform.python_version(),
+        **versions,
+    }
+
+
+_VERSIONED = ("jointbench", "numpy", "scipy", "pandas", "matplotlib", "snakemake")
+
+
+def write_front_page(tables: Mapping[str, str], path: str, config: Mapping) -> None:
+    """The report's landing page: the benchmark, its headline findings and the run's machine."""
+    loaded = {name: pd.read_csv(p) for name, p in tables.items()}
+    parts = [FRONT_INTRO]
+    comparison = loaded.get("published_comparison")
+    if comparison is not None and not comparison.empty:
+        parts += [
+            "Reproduction summary\n--------------------\n",
+            _rst_table(_summary_frame(comparison), "published values and claims reproduced"),
+            "Every value and claim, with the paper's sentence, the criterion, the margin and the "
+            "reason for each deviation, is under *Agreement with the papers*.\n",
+        ]
+    rankings = _rankings(loaded)
+    if rankings:
+        parts += ["Rankings\n--------\n", "\n".join(rankings) + "\n"]
+    if "paper_c_calibration" in loaded:
+        calibration = loaded["paper_c_calibration"][
+            ["method", "n_frames", "trials", "inside_95", "calibrated"]
+        ]
+        parts += [
+            "Calibration of the predicted covariance\n---------------------------------------\n",
+            _rst_table(
+                calibration, "share of trials whose true centre is inside the 95 % ellipsoid"
+            ),
+        ]
+    metadata = pd.DataFrame(list(run_metadata().items()), columns=["", "this run"])
+    parts += [
+        "This run\n--------\n",
+        "Timings in the tables were measured inside the jobs of this run, on this machine:\n",
+        _rst_table(metadata, "machine and software"),
+    ]
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text("\n".join(parts))

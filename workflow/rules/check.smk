@@ -9,14 +9,18 @@ rule check_published:
             }
         ),
     output:
-        csv=reported(
-            "results/tables/published_comparison.csv",
+        html=reported(
+            "results/tables/published_comparison.html",
             "published_comparison",
             "Agreement with the papers",
+            "Every value and claim",
         ),
+        csv="results/tables/published_comparison.csv",
         md="results/tables/published_comparison.md",
     log:
         "results/logs/check_published.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=check_code(),
     script:
@@ -28,9 +32,12 @@ rule report_captions:
     input:
         unpack(lambda w: summarised_tables()),
     output:
-        [CAPTIONS.format(name=name) for name in caption_names()],
+        captions=[CAPTIONS.format(name=name) for name in caption_names()],
+        front=FRONT_PAGE,
     log:
         "results/logs/report_captions.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=code_fingerprint(pipeline.write_captions),
     script:

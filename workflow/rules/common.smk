@@ -92,6 +92,8 @@ def paper_outputs(study):
 
 PAPER_OUTPUTS = {study: paper_outputs(study) for study in STUDIES}
 CAPTIONS = "results/report/captions/{name}.rst"
+# The report's landing page: what the benchmark is, its headline findings and the run's machine.
+FRONT_PAGE = "results/report/workflow.rst"
 
 
 def category(study):
@@ -100,9 +102,14 @@ def category(study):
     return papers[0].title if papers else f"Study {study}"
 
 
-def reported(path, name, group):
+def reported(path, name, group, subgroup):
     """``path`` flagged for `snakemake --report`, captioned by its generated caption file."""
-    return report(path, caption=f"../../{CAPTIONS.format(name=name)}", category=group)
+    return report(
+        path,
+        caption=f"../../{CAPTIONS.format(name=name)}",
+        category=group,
+        subcategory=subgroup,
+    )
 
 
 def summarised_tables():
@@ -139,7 +146,7 @@ def study_targets(study):
 def all_targets():
     targets = [target for study in STUDIES for target in study_targets(study)]
     captions = [CAPTIONS.format(name=name) for name in caption_names()]
-    return [*targets, "results/tables/published_comparison.csv", *captions]
+    return [*targets, "results/tables/published_comparison.csv", *captions, FRONT_PAGE]
 
 
 # Every job that runs library code gets a `code` parameter: the fingerprint of the code it runs

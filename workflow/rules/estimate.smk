@@ -1,34 +1,65 @@
-# One job per (study, built-in estimator) runs it over every condition's dataset and writes one
-# estimates file per condition. A user's rule for an external estimator may produce the same
-# files one condition at a time; the method wildcard of these rules only matches built-ins.
-for _study in STUDIES:
+# Built-in estimators run in one of two granularities, chosen by `jobs.estimate` in the config:
+# `per_study` (the default: one job per study and estimator over every condition, few fat jobs
+# for one machine) or `per_condition` (one job per condition and estimator, enough jobs to fill
+# a cluster). Either way each condition has its own estimates file, and editing one estimator
+# reruns only its jobs. The method wildcard of these rules only matches built-ins, so a user's
+# rule may write an external estimator's files.
+PER_CONDITION = config.get("jobs", {}).get("estimate", "per_study") == "per_condition"
 
-    rule:
-        name:
-            f"estimate_{_study}"
-        input:
-            expand(
-                "results/datasets/{study}/{condition}.parquet",
+for _study in STUDIES:
+    _builtin = _alternatives(
+        jb_config.estimator_names(config, _study, source="builtin")
+    )
+
+    if PER_CONDITION:
+
+        rule:
+            name:
+                f"estimate_{_study}"
+            input:
+                f"results/datasets/{_study}/{{condition}}.parquet",
+            output:
+                f"results/estimates/{_study}/{{method}}/{{condition}}.parquet",
+            log:
+                f"results/logs/estimate/{_study}/{{method}}/{{condition}}.log",
+            wildcard_constraints:
+                method=_builtin,
+            conda:
+                "../envs/jointbench.yaml"
+            params:
                 study=_study,
-                condition=condition_ids(_study),
-            ),
-        output:
-            expand(
-                "results/estimates/{study}/{{method}}/{condition}.parquet",
+                code=estimate_code(_study),
+            script:
+                "../scripts/estimate.py"
+
+    else:
+
+        rule:
+            name:
+                f"estimate_{_study}"
+            input:
+                expand(
+                    "results/datasets/{study}/{condition}.parquet",
+                    study=_study,
+                    condition=condition_ids(_study),
+                ),
+            output:
+                expand(
+                    "results/estimates/{study}/{{method}}/{condition}.parquet",
+                    study=_study,
+                    condition=condition_ids(_study),
+                ),
+            log:
+                f"results/logs/estimate/{_study}/{{method}}.log",
+            wildcard_constraints:
+                method=_builtin,
+            conda:
+                "../envs/jointbench.yaml"
+            params:
                 study=_study,
-                condition=condition_ids(_study),
-            ),
-        log:
-            f"results/logs/estimate/{_study}/{{method}}.log",
-        wildcard_constraints:
-            method=_alternatives(
-                jb_config.estimator_names(config, _study, source="builtin")
-            ),
-        params:
-            study=_study,
-            code=estimate_code(_study),
-        script:
-            "../scripts/estimate.py"
+                code=estimate_code(_study),
+            script:
+                "../scripts/estimate.py"
 
 
 rule summarise_estimator:
@@ -40,6 +71,8 @@ rule summarise_estimator:
         "results/summaries/{study}/{method}.csv",
     log:
         "results/logs/summarise/{study}/{method}.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=code_fingerprint(pipeline.summarise_estimates),
     script:
@@ -54,6 +87,8 @@ rule collect:
         "results/collected/{study}.parquet",
     log:
         "results/logs/collect/{study}.log",
+    conda:
+        "../envs/jointbench.yaml"
     params:
         code=code_fingerprint(jb_run.collect),
     script:

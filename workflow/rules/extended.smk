@@ -9,14 +9,18 @@ for _study in STUDIES:
         input:
             f"results/collected/{_study}.parquet",
         output:
-            csv=reported(
-                f"results/tables/extended_{_study}.csv",
+            html=reported(
+                f"results/tables/extended_{_study}.html",
                 f"extended_{_study}",
                 "Extended ranking of every estimator",
+                _study,
             ),
+            csv=f"results/tables/extended_{_study}.csv",
             md=f"results/tables/extended_{_study}.md",
         log:
             f"results/logs/extended_table_{_study}.log",
+        conda:
+            "../envs/jointbench.yaml"
         params:
             study=_study,
             what="table",
@@ -34,10 +38,13 @@ for _study in STUDIES:
                 f"results/figures/extended_{_study}.png",
                 f"extended_{_study}_figure",
                 "Extended ranking of every estimator",
+                _study,
             ),
             pdf=f"results/figures/extended_{_study}.pdf",
         log:
             f"results/logs/extended_figure_{_study}.log",
+        conda:
+            "../envs/jointbench.yaml"
         params:
             study=_study,
             what="figure",

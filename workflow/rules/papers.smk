@@ -4,7 +4,12 @@ for _study in STUDIES:
     for _paper, _output in PAPER_OUTPUTS[_study]:
         _files = dict(_output.files)
         _first = next(iter(_files))
-        _files[_first] = reported(_files[_first], _output.name, _paper.title)
+        _files[_first] = reported(
+            _files[_first],
+            _output.name,
+            _paper.title,
+            "Figures" if _output.kind == "figure" else "Tables",
+        )
 
         rule:
             name:
@@ -17,6 +22,8 @@ for _study in STUDIES:
                 **_files,
             log:
                 f"results/logs/{_output.name}.log",
+            conda:
+                "../envs/jointbench.yaml"
             params:
                 paper=_paper.key,
                 output=_output.name,

@@ -13,6 +13,8 @@ for _study in STUDIES:
             ),
         log:
             f"results/logs/simulate/{_study}.log",
+        conda:
+            "../envs/jointbench.yaml"
         params:
             study=_study,
             code=simulate_code(_study),

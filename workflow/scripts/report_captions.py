@@ -1,4 +1,6 @@
 from jointbench import pipeline
 
 with pipeline.job(snakemake):
-    pipeline.write_captions(dict(snakemake.input.items()), snakemake.output, snakemake.config)
+    tables = dict(snakemake.input.items())
+    pipeline.write_captions(tables, snakemake.output.captions, snakemake.config)
+    pipeline.write_front_page(tables, snakemake.output.front, snakemake.config)

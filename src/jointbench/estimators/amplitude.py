@@ -7,14 +7,16 @@ hence at least three non-collinear markers.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from scipy.optimize import minimize
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
-from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, _check_point, fit_ls
+from jointbench.estimators.sphere import _check_point, fit_ls
 from jointbench.estimators.validation import check_markers, check_moves, check_not_collinear
-from jointbench.geometry import rigid_poses
+from jointbench.numerics.poses import rigid_poses
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, nelder_mead, stop_status
 
 __all__ = ["amplitude", "fit_ma"]
 
@@ -48,13 +50,13 @@ def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     """Minimal amplitude point of Marin et al. (2003), minimised as in paper A (§5).
 
     1. Pose ``(R_k, t_k)`` of the moving segment in every frame by SVD with iterated body-fixed
-       marker coordinates (:func:`jointbench.geometry.rigid_poses`); the body frame coincides
+       marker coordinates (:func:`jointbench.numerics.poses.rigid_poses`); the body frame coincides
        with the reference frame at frame 0.
     2. The body-fixed point ``p`` minimising the amplitude of its trajectory
-       ``q_k = R_k p + t_k``, ``sum_{x,y,z} (max_k q_k - min_k q_k)``, found by Nelder–Mead with
-       the ``fminsearch``-equivalent settings ``sphere.FMINSEARCH_OPTIONS`` (TolX = TolFun =
-       1e-4, at most 600 iterations and evaluations), started from the LS centre (paper A
-       initialised MA and IS with LS).
+       ``q_k = R_k p + t_k``, ``sum_{x,y,z} (max_k q_k - min_k q_k)``, found by ``fminsearch``
+       (:mod:`jointbench.numerics.simplex`) at its defaults (TolX = TolFun = 1e-4, at most 600
+       iterations and evaluations), started from the LS centre (paper A initialised MA and IS
+       with LS).
 
     Choices the papers leave open, made here:
 
@@ -92,24 +94,21 @@ def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     rotation, translation, _ = rigid_poses(markers)
     body_start = rotation[0].T @ (start - translation[0])
     stacked = np.ascontiguousarray(rotation.reshape(-1, 3))
-    result = minimize(
-        _amplitude,
-        body_start,
-        args=(stacked, translation),
-        method="Nelder-Mead",
-        options=dict(FMINSEARCH_OPTIONS),
+    search = nelder_mead(
+        lambda *p: _amplitude(np.array(p), stacked, translation), body_start, **FMINSEARCH_OPTIONS
     )
-    point = np.asarray(result.x, dtype=float)
+    point = np.array(search.x)
     trajectory = (stacked @ point).reshape(-1, 3) + translation
     center = trajectory.mean(axis=0)
-    finite = bool(np.all(np.isfinite(center)) and np.isfinite(result.fun))
+    finite = bool(np.all(np.isfinite(center)) and math.isfinite(search.fun))
+    ok = search.converged and finite
     return CenterResult(
         center=center,
         radii=None,
-        converged=bool(result.success) and finite,
-        iterations=int(result.nit),
-        status="ok" if result.success and finite else str(result.message),
+        converged=ok,
+        iterations=search.iterations,
+        status="ok" if ok else stop_status(search, FMINSEARCH_OPTIONS["max_fev"]),
         method="MA",
-        cost=float(result.fun),
-        diagnostics={"body_point": point.tolist(), "function_evaluations": int(result.nfev)},
+        cost=float(search.fun),
+        diagnostics={"body_point": point.tolist(), "function_evaluations": search.evaluations},
     )

@@ -23,9 +23,9 @@ use ``m``; its line is still anchored there). For a near-pure hinge the sphere f
 determined *along* the axis, so ``m`` may lie far from the markers;
 ``diagnostics["centroid_foot"]`` is the point of the axis closest to the markers' centroid.
 
-Search (paper B §3): MATLAB's ``fminsearch`` (Nelder–Mead, Lagarias et al. 1998), re-implemented
-in :func:`nelder_mead` with its coefficients, initial simplex and stopping rules, from ten
-starting directions: one vertex of each antipodal pair of a regular dodecahedron,
+Search (paper B §3): MATLAB's ``fminsearch`` (Nelder–Mead, Lagarias et al. 1998) as
+re-implemented in :mod:`jointbench.numerics.simplex`, from ten starting directions: one vertex
+of each antipodal pair of a regular dodecahedron,
 ``(±1,±1,±1)``, ``(0,±1/φ,±φ)``, ``(±1/φ,±φ,0)``, ``(±φ,0,±1/φ)`` with ``φ`` the golden ratio,
 normalised; of each pair the vertex whose first non-zero coordinate is positive (the costs are
 even in ``n``). The lowest final cost over the ten wins; ``converged`` is the winning start's
@@ -78,9 +78,8 @@ is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_betw
 
 from __future__ import annotations
 
-import bisect
 import math
-from collections.abc import Callable, Generator, Sequence
+from collections.abc import Callable
 
 import numpy as np
 
@@ -88,6 +87,7 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
 from jointbench.estimators.validation import check_markers, check_moves
+from jointbench.numerics.simplex import FATOL, XATOL, lockstep
 
 __all__ = [
     "DODECAHEDRON_STARTS",
@@ -100,16 +100,10 @@ __all__ = [
     "fit_combined",
     "fit_planar",
     "fit_radial",
-    "nelder_mead",
-    "nelder_mead_steps",
 ]
 
 _GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
 PARAMETERISATIONS = ("angles", "vector")
-
-# fminsearch defaults (MATLAB): TolX = TolFun = 1e-4, MaxIter = MaxFunEvals = 200 * n_params.
-_XATOL = 1e-4
-_FATOL = 1e-4
 
 
 def _dodecahedron_starts() -> np.ndarray:
@@ -156,148 +150,6 @@ def angles_to_directions(params: np.ndarray) -> np.ndarray:
     azimuth, elevation = params[:, 0], params[:, 1]
     c = np.cos(elevation)
     return np.stack((c * np.cos(azimuth), c * np.sin(azimuth), np.sin(elevation)), axis=1)
-
-
-Point = tuple[float, ...]
-NelderMeadSteps = Generator[list[Point], list[float], tuple[Point, float, bool, int, int]]
-
-
-def nelder_mead_steps(
-    x0: Sequence[float],
-    *,
-    xatol: float = _XATOL,
-    fatol: float = _FATOL,
-    max_iter: int | None = None,
-    max_fev: int | None = None,
-) -> NelderMeadSteps:
-    """Nelder–Mead exactly as MATLAB's ``fminsearch``, as an ask/tell generator.
-
-    The generator yields the list of points it needs evaluated and is sent back their costs;
-    it returns (``StopIteration.value``) ``(x_best, f_best, converged, iterations,
-    evaluations)``. :func:`nelder_mead` drives one run; :func:`_multistart` drives several in
-    lockstep so each round evaluates all their pending points in one batch, which removes most of
-    the per-call overhead for short recordings. Written over plain
-    floats: the simplex is tiny and numpy's per-call overhead would dominate.
-
-    Algorithm (Lagarias et al. 1998, as in ``fminsearch``): reflection 1, expansion 2,
-    contraction 1/2, shrink 1/2. Initial simplex: ``x0`` and, for each coordinate, ``x0`` with
-    that coordinate scaled by 1.05 (set to 0.00025 if it is zero). Vertices are kept sorted by
-    cost (stable sort). Stops when both the largest cost difference to the best vertex is
-    ``<= max(fatol, 10 eps(f_best))`` and the largest coordinate difference is
-    ``<= max(xatol, 10 eps(max(x_best)))`` (converged), or when ``max_iter`` iterations or
-    ``max_fev`` evaluations (default ``200 * len(x0)`` each) are used up (not converged).
-    """
-    start = [float(c) for c in x0]
-    n = len(start)
-    max_iter = 200 * n if max_iter is None else int(max_iter)
-    max_fev = 200 * n if max_fev is None else int(max_fev)
-    simplex = [tuple(start)]
-    for j in range(n):
-        y = list(start)
-        y[j] = 1.05 * y[j] if y[j] != 0.0 else 0.00025
-        simplex.append(tuple(y))
-    values = list((yield simplex))
-    order = sorted(range(n + 1), key=values.__getitem__)
-    simplex = [simplex[i] for i in order]
-    values = [values[i] for i in order]
-    evaluations = n + 1
-    iterations = 1
-    while evaluations < max_fev and iterations < max_iter:
-        best, f_best = simplex[0], values[0]
-        # Sorted ascending, so the largest |f_best - f_j| is the last minus the first.
-        f_spread = values[n] - f_best
-        x_spread = max(abs(a - b) for x in simplex[1:] for a, b in zip(x, best, strict=True))
-        if f_spread <= max(fatol, 10.0 * math.ulp(f_best)) and x_spread <= max(
-            xatol, 10.0 * math.ulp(max(best))
-        ):
-            break
-        worst, f_worst = simplex[n], values[n]
-        bar = [sum(c) / n for c in zip(*simplex[:n], strict=True)]
-        xr = tuple(2.0 * b - w for b, w in zip(bar, worst, strict=True))
-        (fr,) = yield [xr]
-        evaluations += 1
-        shrink = False
-        if fr < f_best:
-            xe = tuple(3.0 * b - 2.0 * w for b, w in zip(bar, worst, strict=True))
-            (fe,) = yield [xe]
-            evaluations += 1
-            new, f_new = (xe, fe) if fe < fr else (xr, fr)
-        elif fr < values[n - 1]:
-            new, f_new = xr, fr
-        elif fr < f_worst:
-            new = tuple(1.5 * b - 0.5 * w for b, w in zip(bar, worst, strict=True))
-            (f_new,) = yield [new]
-            evaluations += 1
-            shrink = f_new > fr
-        else:
-            new = tuple(0.5 * b + 0.5 * w for b, w in zip(bar, worst, strict=True))
-            (f_new,) = yield [new]
-            evaluations += 1
-            shrink = f_new >= f_worst
-        if shrink:
-            simplex = [best] + [
-                tuple(b + 0.5 * (c - b) for b, c in zip(best, x, strict=True)) for x in simplex[1:]
-            ]
-            values = [f_best, *(yield simplex[1:])]
-            evaluations += n
-            order = sorted(range(n + 1), key=values.__getitem__)
-            simplex = [simplex[i] for i in order]
-            values = [values[i] for i in order]
-        else:
-            # The new vertex replaces the worst; a stable sort puts it after equal costs.
-            del simplex[n], values[n]
-            position = bisect.bisect_right(values, f_new)
-            simplex.insert(position, new)
-            values.insert(position, f_new)
-        iterations += 1
-    converged = evaluations < max_fev and iterations < max_iter
-    return simplex[0], values[0], converged, iterations, evaluations
-
-
-def nelder_mead(
-    cost: Callable[..., float], x0: Sequence[float], **options: float | int | None
-) -> tuple[Point, float, bool, int, int]:
-    """Minimise ``cost(*x)`` from ``x0`` as MATLAB's ``fminsearch`` (see :func:`nelder_mead_steps`).
-
-    Returns ``(x_best, f_best, converged, iterations, evaluations)``.
-    """
-    steps = nelder_mead_steps(x0, **options)
-    points = next(steps)
-    while True:
-        try:
-            points = steps.send([cost(*x) for x in points])
-        except StopIteration as stop:
-            return stop.value
-
-
-def _multistart(
-    batch_cost: Callable[[np.ndarray], np.ndarray],
-    starts: Sequence[Sequence[float]],
-    **options: float | int | None,
-) -> list[tuple[Point, float, bool, int, int]]:
-    """Independent :func:`nelder_mead_steps` runs, advanced in lockstep.
-
-    Each round gathers every running start's pending points and evaluates them with one call of
-    ``batch_cost`` (``(k, n_params) -> (k,)``); every run follows the path it would follow
-    alone (up to last-bit differences between batched and single matrix products).
-    """
-    runs = [nelder_mead_steps(x0, **options) for x0 in starts]
-    pending = {i: next(run) for i, run in enumerate(runs)}
-    results: list = [None] * len(runs)
-    while pending:
-        keys = list(pending)
-        points = [x for i in keys for x in pending[i]]
-        values = batch_cost(np.array(points)).tolist()
-        position = 0
-        for i in keys:
-            count = len(pending[i])
-            try:
-                pending[i] = runs[i].send(values[position : position + count])
-            except StopIteration as stop:
-                results[i] = stop.value
-                del pending[i]
-            position += count
-    return results
 
 
 class AxisCosts:
@@ -423,8 +275,9 @@ def _fit(
         starts = [direction_to_angles(start) for start in DODECAHEDRON_STARTS]
     else:
         starts = [tuple(start) for start in DODECAHEDRON_STARTS]
-    runs = _multistart(
-        costs.batch_cost(method, parameterisation),
+    cost = costs.batch_cost(method, parameterisation)
+    runs = lockstep(
+        lambda points, _owners: cost(points),
         starts,
         xatol=xatol,
         fatol=fatol,
@@ -498,8 +351,8 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
         *,
         point: np.ndarray | None = None,
         parameterisation: str = "angles",
-        xatol: float = _XATOL,
-        fatol: float = _FATOL,
+        xatol: float = XATOL,
+        fatol: float = FATOL,
         max_iter: int | None = None,
         max_fev: int | None = None,
     ) -> AxisResult:

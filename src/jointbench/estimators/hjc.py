@@ -7,8 +7,9 @@ ball joint has one body-fixed position ``c`` in both (eq. 2): ``0 = f0(t) c - f1
 
 Steps (one function per registered method below):
 
-1. Poses (§5): :func:`jointbench.geometry.rigid_poses` for each segment -- SVD fits alternating
-   with the re-estimated body-fixed coordinates of eq. 5, body frame = world at frame 0.
+1. Poses (§5): :func:`jointbench.numerics.poses.rigid_poses` for each segment -- SVD fits
+   alternating with the re-estimated body-fixed coordinates of eq. 5, body frame = world at
+   frame 0.
 2. Analytic centre (§6, eq. 9), minimising ``sum_t |f0(t) c - f1(t) c|^2`` (eq. 6): with
    ``M_t = R0(t) - R1(t)`` and ``y_t = d1(t) - d0(t)``,
    ``c = [sum_t M_t' M_t]^-1 sum_t M_t' y_t`` (eq. 9 multiplied out: ``M' M = 2I - R0'R1 - R1'R0``).
@@ -82,8 +83,10 @@ import numpy as np
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
-from jointbench.estimators.twosegment import SINGULAR_RCOND, SegmentPoses, two_segment_poses
-from jointbench.geometry import rigid_fit, skew
+from jointbench.estimators.twosegment import SegmentPoses, batched, two_segment_poses
+from jointbench.geometry import skew
+from jointbench.numerics.poses import rigid_fit
+from jointbench.numerics.rank import negligible
 
 __all__ = [
     "align_to_markers",
@@ -161,7 +164,7 @@ def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
         raise ValueError(
             f"{what}: degenerate motion: the segments do not rotate relative to each other"
         )
-    if values[0] <= SINGULAR_RCOND * values[-1]:
+    if negligible(values[0], values[-1]):
         raise ValueError(
             f"{what}: degenerate motion: the relative rotation is about a single axis (a "
             "hinge), so the centre is not determined along that axis"
@@ -188,7 +191,10 @@ def fit_analytic(
         ``diagnostics["rcond"]`` the smallest over largest eigenvalue of ``sum M'M``.
     """
     del noise_mm
-    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    return _analytic_result(*two_segment_poses(proximal, distal, min_frames=3))
+
+
+def _analytic_result(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
     m, y = _relative_system(prox, dist)
     center, rcond = _analytic(m, y, prox.rotation.shape[0], "analytic")
     residual = np.einsum("fij,j->fi", m, center) - y
@@ -280,11 +286,35 @@ def _iterate_frame0(y, r0, r1, lever0, lever1, start, max_iterations, tol_mm):
 def _gauss_markov(
     proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
 ) -> JointCenterResult:
-    method = "gauss-markov-frame0" if frame0 else "gauss-markov"
-    noise_mm = _as_noise(noise_mm)
+    _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
+    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    return _gauss_markov_result(
+        prox,
+        dist,
+        noise_mm=noise_mm,
+        frame0=frame0,
+        max_iterations=max_iterations,
+        tol_mm=tol_mm,
+    )
+
+
+def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
+    _as_noise(noise_mm)
     if int(max_iterations) < 1 or not tol_mm >= 0:
         raise ValueError("max_iterations must be >= 1 and tol_mm >= 0")
-    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+
+
+def _gauss_markov_result(
+    prox: SegmentPoses,
+    dist: SegmentPoses,
+    *,
+    noise_mm: float | None,
+    frame0: bool,
+    max_iterations: int,
+    tol_mm: float,
+) -> JointCenterResult:
+    method = "gauss-markov-frame0" if frame0 else "gauss-markov"
+    noise_mm = _as_noise(noise_mm)
     n_frames = prox.rotation.shape[0]
     m, y = _relative_system(prox, dist)
     analytic_center, rcond = _analytic(m, y, n_frames, method)
@@ -417,6 +447,53 @@ def fit_gauss_markov_frame0(
         max_iterations=max_iterations,
         tol_mm=tol_mm,
     )
+
+
+def _batched_gauss_markov(frame0: bool):
+    def finish(
+        prox: SegmentPoses,
+        dist: SegmentPoses,
+        *,
+        noise_mm: float | None = None,
+        max_iterations: int = 100,
+        tol_mm: float = 1e-6,
+    ) -> JointCenterResult:
+        return _gauss_markov_result(
+            prox,
+            dist,
+            noise_mm=noise_mm,
+            frame0=frame0,
+            max_iterations=max_iterations,
+            tol_mm=tol_mm,
+        )
+
+    run = batched(finish, ("proximal", "distal"))
+
+    def checked(proximal, distal, *, poses=None, **options):
+        # Bad options fail every trial, before its poses, as they do one trial at a time.
+        try:
+            _check_gauss_markov_options(
+                options.get("noise_mm"),
+                options.get("max_iterations", 100),
+                options.get("tol_mm", 1e-6),
+            )
+        except ValueError as error:
+            return [error] * len(proximal)
+        return run(proximal, distal, poses=poses, **options)
+
+    return checked
+
+
+def _analytic_finish(
+    prox: SegmentPoses, dist: SegmentPoses, *, noise_mm: float | None = None
+) -> JointCenterResult:
+    del noise_mm
+    return _analytic_result(prox, dist)
+
+
+fit_analytic.batched = batched(_analytic_finish, ("proximal", "distal"))
+fit_gauss_markov.batched = _batched_gauss_markov(frame0=False)
+fit_gauss_markov_frame0.batched = _batched_gauss_markov(frame0=True)
 
 
 def align_to_markers(

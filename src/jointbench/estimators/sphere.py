@@ -4,26 +4,26 @@ All take the moving segment's markers in the reference frame, ``(n_frames, n_mar
 [mm], and fit concentric spheres (one radius per marker, common centre). Equation numbers refer
 to paper A (Chang & Pollard 2007, J Biomech 40:1392).
 
-The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minimised with a
-Nelder–Mead simplex equivalent to ``fminsearch`` at its defaults, and "the convergence criterion
-for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most 200·n = 600
-iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds those settings.
+The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minimised by
+``fminsearch`` at its defaults (:mod:`jointbench.numerics.simplex`), and "the convergence
+criterion for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most
+200·n = 600 iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds
+those settings.
 """
 
 from __future__ import annotations
 
 import math
-from functools import lru_cache
-from types import MappingProxyType
+from functools import lru_cache, partial
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg import lapack
-from scipy.optimize import minimize
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.validation import check_markers, check_moves
+from jointbench.numerics.rank import RCOND, negligible
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, nelder_mead, stop_status
 
 __all__ = [
     "FMINSEARCH_OPTIONS",
@@ -37,22 +37,17 @@ __all__ = [
     "solve_ls_system",
 ]
 
-# The LS normal matrix of a pure hinge is singular to rounding; only then is a singular
-# value dropped (Gamage & Lasenby). Ill-conditioned but regular systems are solved as they are:
-# their poor answers at small RoM are what the benchmark measures.
-_SINGULAR_RCOND = 1e-12
 _EPS = float(np.finfo(float).eps)
 
-#: ``scipy.optimize.minimize(method="Nelder-Mead")`` options equivalent to MATLAB's
-#: ``fminsearch`` defaults for three unknowns: TolX = TolFun = 1e-4 and
-#: MaxIter = MaxFunEvals = 200 * 3. SciPy's termination test (every vertex within ``xatol`` of
-#: the best one in every coordinate *and* every function value within ``fatol`` of the best)
-#: and its initial simplex (each coordinate of the start in turn scaled by 1.05, or set to
-#: 0.00025 where it is zero) are those of ``fminsearch``, as are the reflection, expansion,
-#: contraction and shrink coefficients (1, 2, 0.5, 0.5) with ``adaptive=False`` (checked against
-#: SciPy 1.17's source; fminsearch also floors both tolerances at 10 eps of the current values,
-#: which is immaterial at 1e-4 mm).
-FMINSEARCH_OPTIONS = MappingProxyType({"xatol": 1e-4, "fatol": 1e-4, "maxiter": 600, "maxfev": 600})
+
+@lru_cache(maxsize=1)
+def _lapack():
+    """SciPy's LAPACK wrappers, imported on first use: the one-trial fits call them directly
+    (NumPy's wrappers cost more than a 3x3 factorisation), but a job that fits whole batches
+    never needs them and should not pay for importing ``scipy.linalg``."""
+    from scipy.linalg import lapack
+
+    return lapack
 
 
 def _prepare(markers: object, min_frames: int = 4) -> np.ndarray:
@@ -132,9 +127,10 @@ def ls_system(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve_ls_system(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
-    """Solve ``A c = b``, dropping singular values below ``1e-12`` of the largest (pure hinge)."""
+    """Solve ``A c = b``, dropping singular values negligible by
+    :func:`jointbench.numerics.rank.negligible` (a pure hinge)."""
     u, s, vt = np.linalg.svd(a_matrix)
-    inverse = np.where(s > _SINGULAR_RCOND * s[0], 1.0 / np.where(s > 0, s, 1.0), 0.0)
+    inverse = np.where(negligible(s, s[0]), 0.0, 1.0 / np.where(s > 0, s, 1.0))
     return vt.T @ (inverse * (u.T @ b_vector))
 
 
@@ -145,12 +141,12 @@ def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
     same pseudo-inverse; LAPACK's ``dsyev`` is called directly because NumPy's wrappers cost more
     than the 3×3 factorisation itself.
     """
-    eigenvalues, vectors, info = lapack.dsyev(a_matrix)
+    eigenvalues, vectors, info = _lapack().dsyev(a_matrix)
     if info != 0:
-        return np.linalg.pinv(a_matrix, rcond=_SINGULAR_RCOND)
+        return np.linalg.pinv(a_matrix, rcond=RCOND)
     # Three scalars: plain Python is cheaper than NumPy calls on a 3-vector.
     values = eigenvalues.tolist()
-    threshold = _SINGULAR_RCOND * max(abs(value) for value in values)
+    threshold = RCOND * max(abs(value) for value in values)
     inverse = [1.0 / value if abs(value) > threshold else 0.0 for value in values]
     return (vectors * inverse) @ vectors.T
 
@@ -181,16 +177,16 @@ def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
 
     For the positive semi-definite ``A`` with eigenvalues ``l1 >= l2 >= l3``,
     ``l3 / l1 >= 4 det(A) / trace(A)^3`` (``l1 l2 <= ((l1 + l2) / 2)^2`` and ``l1 <= trace``).
-    When that bound exceeds 1e-10, a hundred times the 1e-12 cut, no singular value would be
+    When that bound exceeds 1e-10, a hundred times the rank threshold, no singular value would be
     dropped and ``A^+ b = A^-1 b``, which a Cholesky solve gives in half the time of an
     eigen-decomposition; otherwise (a hinge, a static marker set) the pseudo-inverse is used.
     """
-    lower, info = lapack.dpotrf(a_matrix, lower=1)
+    lower, info = _lapack().dpotrf(a_matrix, lower=1)
     if info == 0:
         l00, l11, l22 = lower.diagonal().tolist()
         determinant = (l00 * l11 * l22) ** 2
         if 4.0 * determinant > 1e-10 * float(a_matrix.trace()) ** 3:
-            solution, info = lapack.dpotrs(lower, b_vector, lower=1)
+            solution, info = _lapack().dpotrs(lower, b_vector, lower=1)
             if info == 0:
                 return solution
     return _symmetric_pinv(a_matrix) @ b_vector
@@ -283,7 +279,7 @@ def _largest_admissible(whitened: np.ndarray, constraint: np.ndarray) -> tuple[n
     """Solve ``M y = mu y`` with ``M = W C W'``; return ``u = W' y`` of the largest ``mu > 0``."""
     m_matrix = whitened @ constraint @ whitened.T
     m_matrix = (m_matrix + m_matrix.T) / 2.0
-    mu, y, info = lapack.dsyev(m_matrix)
+    mu, y, info = _lapack().dsyev(m_matrix)
     if info != 0:
         mu, y = np.linalg.eigh(m_matrix)
     largest = float(mu[-1])
@@ -305,10 +301,10 @@ def _nm_coefficients(scaled: np.ndarray) -> tuple[np.ndarray, float]:
     constraint = _nm_constraint(scaled.shape[1])
     scatter = _nm_scatter(scaled)
     # LAPACK directly: for these (4+P)-square matrices NumPy's wrapper overhead dominates.
-    lower, info = lapack.dpotrf(scatter, lower=1)
+    lower, info = _lapack().dpotrf(scatter, lower=1)
     pivots = (lower.diagonal() ** 2).tolist() if info == 0 else None
     if pivots is not None and min(pivots) > 1e-9 * max(pivots):
-        inverse, info = lapack.dtrtri(lower, lower=1)
+        inverse, info = _lapack().dtrtri(lower, lower=1)
         if info == 0:
             return _largest_admissible(inverse, constraint)
     _, s, vt = np.linalg.svd(_nm_design(scaled), full_matrices=False)
@@ -553,8 +549,8 @@ def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
 
     Paper A (§5) minimised f1 with MATLAB's ``fminsearch`` started from the LS centre; here
-    ``scipy.optimize.minimize(method="Nelder-Mead")`` with :data:`FMINSEARCH_OPTIONS`, whose
-    initial simplex, moves and termination test are those of ``fminsearch``. The radii are
+    :func:`jointbench.numerics.simplex.nelder_mead` with :data:`FMINSEARCH_OPTIONS`, the same
+    initial simplex, moves and termination test. The radii are
     profiled out (``r_p`` = mean distance, the closed-form minimiser for a fixed centre), so the
     search is over the 3 coordinates of the centre only — paper A does not say whether it
     searched over the radii too; profiling them out is the cheaper and better-posed choice.
@@ -590,23 +586,259 @@ def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     start = _ls_start(markers)[0] if start is None else _check_point(start, "start")
     n_frames = markers.shape[0]
     flat = np.ascontiguousarray(markers.reshape(-1, 3))
-    result = minimize(
-        _geometric_cost,
-        start,
-        args=(flat, n_frames),
-        method="Nelder-Mead",
-        options=dict(FMINSEARCH_OPTIONS),
+    search = nelder_mead(
+        lambda *x: _geometric_cost(np.array(x), flat, n_frames), start, **FMINSEARCH_OPTIONS
     )
-    center = np.asarray(result.x, dtype=float)
-    finite = bool(np.all(np.isfinite(center)) and np.isfinite(result.fun))
+    return _is_result(search, flat, n_frames)
+
+
+def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
+    """IS's :class:`CenterResult` from its simplex search on rows ``(n_frames * P, 3)``."""
+    center = np.array(search.x)
+    finite = bool(np.all(np.isfinite(center)) and math.isfinite(search.fun))
     radii = _mean_weights(n_frames) @ np.sqrt(_row_sq(flat - center)).reshape(n_frames, -1)
+    status = stop_status(search, FMINSEARCH_OPTIONS["max_fev"])
     return CenterResult(
         center=center,
         radii=radii,
-        converged=bool(result.success) and finite,
-        iterations=int(result.nit),
-        status="ok" if result.success and finite else str(result.message),
+        converged=search.converged and finite,
+        iterations=search.iterations,
+        status="ok" if search.converged and finite else status,
         method="IS",
-        cost=float(result.fun),
-        diagnostics={"function_evaluations": int(result.nfev)},
+        cost=float(search.fun),
+        diagnostics={"function_evaluations": search.evaluations},
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Many trials at once: LS, NM and BC over markers (n_trials, n_frames, n_markers, 3)
+# --------------------------------------------------------------------------------------------
+
+
+def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked trials as float64 and the mask of those :func:`_prepare` would reject.
+
+    The checks are vectorised over trials; a rejected trial is then passed to the one-trial
+    function, which raises its own ``ValueError``.
+    """
+    array = np.asarray(markers, dtype=float)
+    if array.ndim != 4 or array.shape[-1] != 3 or array.shape[1] < min_frames:
+        return array, np.ones(array.shape[0] if array.ndim else 1, dtype=bool)
+    first = array[:, :1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        # A sum is finite only if every term is (an overflow merely sends a trial to the
+        # one-trial path, which decides).
+        finite = np.isfinite(array.sum(axis=(1, 2, 3)))
+        spread = np.abs(array - first).max(axis=(1, 2, 3))
+        scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
+        still = spread <= 1e-9 * scale
+    return array, ~finite | still | (array.shape[2] < 1)
+
+
+def _with_fallback(fit, markers: np.ndarray, outcomes: list, redo: np.ndarray) -> list:
+    """Fill ``outcomes`` for the trials in ``redo`` with the one-trial ``fit`` (or its error)."""
+    for trial in np.flatnonzero(redo):
+        try:
+            outcomes[trial] = fit(markers[trial])
+        except ValueError as error:
+            outcomes[trial] = error
+    return outcomes
+
+
+def _ls_moments_batch(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:class:`_LSMoments` of every trial: ``A`` (T, 3, 3), ``b`` (T, 3), means (T, P, 4),
+    centred rows (T, N P, 4)."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    augmented = np.empty((n_trials, n_frames, n_markers, 4))
+    augmented[..., :3] = markers
+    np.einsum("...i,...i->...", markers, markers, out=augmented[..., 3])
+    means = augmented.sum(axis=1)
+    means *= 1.0 / n_frames
+    augmented -= means[:, None]
+    centred = augmented.reshape(n_trials, -1, 4)
+    gram = np.swapaxes(centred, 1, 2) @ centred
+    gram *= 1.0 / n_frames
+    return 2.0 * gram[:, :3, :3], gram[:, :3, 3].copy(), means, centred
+
+
+def _pinv_solve_batch(a_matrix: np.ndarray, b_vector: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``A^+ b`` (T, 3) and ``A^+`` (T, 3, 3) by the rule of :func:`solve_ls_system`."""
+    values, vectors = np.linalg.eigh(a_matrix)
+    largest = np.abs(values).max(axis=-1, keepdims=True)
+    keep = ~negligible(values, largest)
+    inverse = np.where(keep, 1.0 / np.where(keep, values, 1.0), 0.0)
+    pinv = (vectors * inverse[:, None, :]) @ np.swapaxes(vectors, 1, 2)
+    return np.einsum("tij,tj->ti", pinv, b_vector), pinv
+
+
+def _algebraic_fit_batch(means, centred, center) -> tuple[np.ndarray, np.ndarray]:
+    """Radii (T, P) [mm] and cost f2 (T,) of :func:`_algebraic_fit` for every trial."""
+    weights = np.concatenate([-2.0 * center, np.ones((center.shape[0], 1))], axis=1)
+    residual = np.einsum("tri,ti->tr", centred, weights)
+    sq_radii = (
+        np.einsum("tpi,ti->tp", means, weights) + np.einsum("ti,ti->t", center, center)[:, None]
+    )
+    return np.sqrt(np.maximum(sq_radii, 0.0)), np.einsum("tr,tr->t", residual, residual)
+
+
+def _fit_ls_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        a_matrix, b_vector, means, centred = _ls_moments_batch(markers[good])
+        centers, _ = _pinv_solve_batch(a_matrix, b_vector)
+        radii, costs = _algebraic_fit_batch(means, centred, centers)
+        for index, trial in enumerate(good):
+            outcomes[trial] = CenterResult(
+                center=centers[index],
+                radii=radii[index],
+                converged=True,
+                iterations=0,
+                status="ok",
+                method="LS",
+                cost=float(costs[index]),
+            )
+    return _with_fallback(fit_ls, markers, outcomes, bad)
+
+
+def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        data = markers[good]
+        n_trials, n_frames, n_markers, _ = data.shape
+        rows = data.reshape(n_trials, -1, 3)
+        origin = rows.mean(axis=1)
+        shifted = rows - origin[:, None]
+        scale = np.sqrt(np.einsum("tri,tri->t", shifted, shifted) / rows.shape[1])
+        scaled = shifted / scale[:, None, None]
+        basis = np.empty((n_trials, rows.shape[1], 4))
+        basis[..., 0] = np.einsum("tri,tri->tr", scaled, scaled)
+        basis[..., 1:] = scaled
+        size = 4 + n_markers
+        scatter = np.zeros((n_trials, size, size))
+        scatter[:, :4, :4] = np.swapaxes(basis, 1, 2) @ basis
+        per_marker = basis.reshape(n_trials, n_frames, n_markers, 4).sum(axis=1)
+        scatter[:, :4, 4:] = np.swapaxes(per_marker, 1, 2)
+        scatter[:, 4:, :4] = per_marker
+        scatter[:, 4:, 4:] = n_frames * np.eye(n_markers)
+        constraint = _nm_constraint(n_markers)
+        try:
+            lower = np.linalg.cholesky(scatter)
+        except np.linalg.LinAlgError:
+            # Some trial is (nearly) noise-free: its scatter is singular; fit one at a time.
+            return _with_fallback(fit_nm, markers, outcomes, np.ones(len(bad), dtype=bool))
+        pivots = np.diagonal(lower, axis1=1, axis2=2) ** 2
+        regular = pivots.min(axis=1) > 1e-9 * pivots.max(axis=1)
+        whitened = np.linalg.inv(np.where(regular[:, None, None], lower, np.eye(size)))
+        m_matrix = whitened @ constraint @ np.swapaxes(whitened, 1, 2)
+        mu, y = np.linalg.eigh((m_matrix + np.swapaxes(m_matrix, 1, 2)) / 2.0)
+        largest = mu[:, -1]
+        u = np.einsum("tji,tj->ti", whitened, y[:, :, -1])
+        norm = np.einsum("ti,ij,tj->t", u, constraint, u)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = u / np.sqrt(norm)[:, None]
+            a = u[:, 0]
+            solved = regular & (largest > 0) & (np.abs(a) >= _EPS * np.abs(u).max(axis=1))
+            center_scaled = u[:, 1:4] / (-2.0 * a[:, None])
+            sq_radii = np.einsum("ti,ti->t", center_scaled, center_scaled)[:, None] - (
+                u[:, 4:] / a[:, None]
+            )
+        for index, trial in enumerate(good):
+            if not solved[index]:
+                bad[trial] = True
+                continue
+            outcomes[trial] = CenterResult(
+                center=origin[index] + scale[index] * center_scaled[index],
+                radii=scale[index] * np.sqrt(np.maximum(sq_radii[index], 0.0)),
+                converged=True,
+                iterations=0,
+                status="ok",
+                method="NM",
+                cost=1.0 / float(largest[index]),
+            )
+    return _with_fallback(fit_nm, markers, outcomes, bad)
+
+
+def _fit_bc_batch(
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> list[CenterResult | ValueError]:
+    """:func:`fit_bc` for every trial, iterated in lockstep; each trial stops by its own test.
+
+    Trials that fail otherwise than by reaching the iteration limit (non-finite, diverged) are
+    re-run one at a time, so their statuses are the one-trial function's.
+    """
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        data = markers[good]
+        n_trials, n_frames, n_markers, _ = data.shape
+        a_matrix, b_vector, _, _ = _ls_moments_batch(data)
+        origin, a_pinv = _pinv_solve_batch(a_matrix, b_vector)
+        _, b_shifted, means, centred = _ls_moments_batch(data - origin[:, None, None, :])
+        rows = centred.reshape(n_trials, n_frames, n_markers, 4)
+        grams = np.einsum("tkpi,tkpj->tpij", rows, rows)
+        sum_of_means = means[..., :3].sum(axis=1)
+        limit = _BC_DIVERGENCE_FACTOR * np.sqrt(means[..., 3].mean(axis=1))
+
+        def noise_variance(shift: np.ndarray) -> np.ndarray:
+            weights = np.concatenate([-2.0 * shift, np.ones((n_trials, 1))], axis=1)
+            spread = np.einsum("tpij,ti,tj->tp", grams, weights, weights)
+            mean_sq = (
+                np.einsum("tpi,ti->tp", means, weights)
+                + np.einsum("ti,ti->t", shift, shift)[:, None]
+            )
+            return np.mean(spread / (4.0 * n_frames * mean_sq), axis=1)
+
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            shift = np.zeros((n_trials, 3))
+            sigma2 = noise_variance(shift)
+            active = np.isfinite(sigma2)
+            iterations = np.zeros(n_trials, dtype=int)
+            converged = np.zeros(n_trials, dtype=bool)
+            for iteration in range(1, max_iterations + 1):
+                if not active.any():
+                    break
+                compensation = (2.0 * sigma2)[:, None] * (sum_of_means - n_markers * shift)
+                new_shift = np.einsum("tij,tj->ti", a_pinv, b_shifted - compensation)
+                new_sigma2 = noise_variance(new_shift)
+                step = np.abs(new_shift - shift).max(axis=1)
+                active &= np.isfinite(step) & np.isfinite(new_sigma2)
+                change = np.abs(new_sigma2 - sigma2)
+                shift = np.where(active[:, None], new_shift, shift)
+                sigma2 = np.where(active, new_sigma2, sigma2)
+                iterations[active] = iteration
+                done = active & (step <= tol_x) & (change <= tol_fun)
+                converged |= done
+                active &= ~done
+                active &= np.sqrt(np.einsum("ti,ti->t", shift, shift)) <= limit
+        radii, costs = _algebraic_fit_batch(means, centred, shift)
+        exhausted = f"maximum iterations ({max_iterations}) reached without convergence"
+        for index, trial in enumerate(good):
+            if not (converged[index] or active[index]):
+                bad[trial] = True
+                continue
+            outcomes[trial] = CenterResult(
+                center=origin[index] + shift[index],
+                radii=radii[index],
+                converged=bool(converged[index]),
+                iterations=int(iterations[index]),
+                status="ok" if converged[index] else exhausted,
+                method="BC",
+                cost=float(costs[index]),
+                diagnostics={"noise_variance": float(sigma2[index])},
+            )
+    one_trial = partial(fit_bc, max_iterations=max_iterations, tol_x=tol_x, tol_fun=tol_fun)
+    return _with_fallback(one_trial, markers, outcomes, bad)
+
+
+fit_ls.batched = _fit_ls_batch
+fit_nm.batched = _fit_nm_batch
+fit_bc.batched = _fit_bc_batch

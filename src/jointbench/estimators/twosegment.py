@@ -1,6 +1,6 @@
 """SCoRE and SARA (Ehrig et al. 2006, 2007): joint centre and axis from two segments' poses.
 
-Both segments' poses per frame come from :func:`jointbench.geometry.rigid_poses` (paper C §5:
+Both segments' poses per frame come from :func:`jointbench.numerics.poses.rigid_poses` (paper C §5:
 SVD fits alternating with re-estimated body-fixed marker coordinates); each body frame
 coincides with the world at frame 0 (``R(0) = I``, ``t(0) = 0``).
 
@@ -22,7 +22,8 @@ centre keeps the smallest well away from rounding level (the noise-free tests re
 centre to ~1e-10 mm).
 
 Degenerate motion: the relative rotation must not be about a single axis (SCoRE) and must not
-vanish (SCoRE, SARA). An eigenvalue below ``1e-12`` of the largest counts as zero -- that is a
+vanish (SCoRE, SARA). An eigenvalue below ``1e-12`` of the largest counts as zero
+(:mod:`jointbench.numerics.rank`) -- that is a
 relative rotation off the axis of less than about 1e-6 rad, a thousand times below what markers
 with micrometre noise resolve -- and raises ``ValueError``. Merely ill-conditioned motion is
 solved as it is: its poor answer is what a benchmark should see.
@@ -34,7 +35,9 @@ reference segment's frame, so the reference pose is exactly the identity (``R1 =
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
@@ -45,7 +48,8 @@ from jointbench.estimators.validation import (
     check_not_collinear,
     check_same_frames,
 )
-from jointbench.geometry import rigid_poses
+from jointbench.numerics.poses import rigid_poses
+from jointbench.numerics.rank import negligible
 
 __all__ = [
     "SegmentPoses",
@@ -56,9 +60,6 @@ __all__ = [
     "segment_poses",
     "two_segment_poses",
 ]
-
-# Eigenvalues of the (dimensionless) normal matrices below this fraction of the largest are zero.
-SINGULAR_RCOND = 1e-12
 
 
 @dataclass(frozen=True)
@@ -89,7 +90,10 @@ def segment_poses(markers: np.ndarray, *, name: str) -> SegmentPoses:
     cost more than the fit.
     """
     check_not_collinear(markers[:1], name=name)
-    rotation, translation, body = rigid_poses(markers)
+    return _segment_poses(markers, *rigid_poses(markers), name=name)
+
+
+def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
     fitted = body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
     n_frames, n_markers, _ = markers.shape
@@ -111,6 +115,67 @@ def two_segment_poses(
     distal = check_markers(distal, min_frames=min_frames, min_markers=3, name="distal")
     check_same_frames(proximal, distal)
     return segment_poses(proximal, name="proximal"), segment_poses(distal, name="distal")
+
+
+Outcome = TypeVar("Outcome")
+
+
+def trial_poses(
+    segments: dict[str, np.ndarray], *, min_frames: int
+) -> list[dict[str, SegmentPoses] | ValueError]:
+    """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
+    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm].
+
+    Per trial, the checks of :func:`two_segment_poses` / :func:`segment_poses` in the same
+    order, so a trial that the one-trial path rejects carries the same ``ValueError``; every
+    segment's poses are fitted for all trials in one call of
+    :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
+    ``batched`` form of every pose-based method.
+    """
+    names = list(segments)
+    arrays = {name: np.asarray(markers, dtype=float) for name, markers in segments.items()}
+    n_trials = next(iter(arrays.values())).shape[0]
+    outcomes: list = [None] * n_trials
+    for trial in range(n_trials):
+        try:
+            for name in names:
+                check_markers(arrays[name][trial], min_frames=min_frames, min_markers=3, name=name)
+            if len(names) == 2:
+                check_same_frames(*(arrays[name][trial] for name in names))
+            for name in names:
+                check_not_collinear(arrays[name][trial, :1], name=name)
+        except ValueError as error:
+            outcomes[trial] = error
+    good = [trial for trial in range(n_trials) if outcomes[trial] is None]
+    fitted = {name: rigid_poses(arrays[name][good]) for name in names}
+    for index, trial in enumerate(good):
+        try:
+            outcomes[trial] = {
+                name: _segment_poses(
+                    arrays[name][trial], *(part[index] for part in fitted[name]), name=name
+                )
+                for name in names
+            }
+        except ValueError as error:
+            outcomes[trial] = error
+    return outcomes
+
+
+def each_trial(
+    poses: list[dict[str, SegmentPoses] | ValueError],
+    finish: Callable[[dict[str, SegmentPoses]], Outcome],
+) -> list[Outcome | ValueError]:
+    """``finish`` applied to every trial's poses; a trial's ``ValueError`` is kept as its value."""
+    outcomes: list = []
+    for trial_poses_ in poses:
+        if isinstance(trial_poses_, ValueError):
+            outcomes.append(trial_poses_)
+            continue
+        try:
+            outcomes.append(finish(trial_poses_))
+        except ValueError as error:
+            outcomes.append(error)
+    return outcomes
 
 
 def stacked_normal_equations(
@@ -140,7 +205,7 @@ def _eigen(normal: np.ndarray, *, what: str, min_rank: int) -> tuple[np.ndarray,
     """Eigen-decomposition of a normal matrix; ``ValueError`` when its rank is below
     ``min_rank`` (the segments do not rotate relative to each other, or only about one axis)."""
     values, vectors = np.linalg.eigh(normal)
-    zero = values <= SINGULAR_RCOND * values[-1]
+    zero = negligible(values, values[-1])
     rank = int(np.sum(~zero))
     if rank < min_rank:
         if rank <= 3:
@@ -191,7 +256,10 @@ def fit_score(
         ``rcond`` (smallest over largest eigenvalue of the normal matrix).
     """
     del noise_mm
-    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    return _score_joint(*two_segment_poses(proximal, distal, min_frames=3))
+
+
+def _score_joint(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
     c1, c2, rcond = _score_solve(r1, t1, r2, t2, what="SCoRE")
     world = 0.5 * (r1[0] @ c1 + t1[0] + r2[0] @ c2 + t2[0])
@@ -215,7 +283,10 @@ def fit_score_center(markers: np.ndarray) -> CenterResult:
     ``cost`` is ``sum_t |c1 - R2 c2 - t2|^2`` [mm^2]; ``radii`` is ``None``.
     """
     markers = check_markers(markers, min_frames=3, min_markers=3)
-    poses = segment_poses(markers, name="markers")
+    return _score_center(segment_poses(markers, name="markers"))
+
+
+def _score_center(poses: SegmentPoses) -> CenterResult:
     r2, t2 = poses.rotation, poses.translation
     c1, c2, rcond = _score_solve(None, None, r2, t2, what="SCoRE")
     return CenterResult(
@@ -269,12 +340,15 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
     """
     markers = check_markers(markers, min_frames=3, min_markers=3)
-    poses = segment_poses(markers, name="markers")
+    return _sara(segment_poses(markers, name="markers"))
+
+
+def _sara(poses: SegmentPoses) -> AxisResult:
     n1, n2, p1, p2, ratio = _sara_solve(None, None, poses.rotation, poses.translation)
     return AxisResult(
         point=p1,
         direction=n1,
-        radii=_mean_distance_to_axis(markers, p1, n1),
+        radii=_mean_distance_to_axis(poses.markers, p1, n1),
         converged=True,
         iterations=0,
         status="ok",
@@ -315,3 +389,35 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
             "ratio": ratio,
         },
     )
+
+
+def batched(
+    finish: Callable[..., Outcome], names: tuple[str, ...]
+) -> Callable[..., list[Outcome | ValueError]]:
+    """The many-trial form of a pose-based method: ``(*segments, poses=None, **options)``.
+
+    Each segment is ``(n_trials, N, n_markers, 3)`` [mm]; ``poses`` (from :func:`trial_poses`)
+    lets several methods share one pose fit. Returns one result, or the ``ValueError`` the
+    one-trial function would raise, per trial; options the method ignores are accepted as the
+    one-trial function accepts them.
+    """
+
+    def run(*segments: np.ndarray, poses=None, **options) -> list[Outcome | ValueError]:
+        if poses is None:
+            poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+        return each_trial(poses, lambda p: finish(*(p[name] for name in names), **options))
+
+    return run
+
+
+def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:
+    def run(*poses: SegmentPoses, noise_mm: float | None = None) -> Outcome:
+        del noise_mm
+        return finish(*poses)
+
+    return run
+
+
+fit_score.batched = batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
+fit_score_center.batched = batched(_score_center, ("markers",))
+fit_sara.batched = batched(_sara, ("markers",))

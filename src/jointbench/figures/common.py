@@ -10,10 +10,12 @@ import matplotlib
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
 
 from jointbench.study.tables import output_paths
 
-__all__ = ["method_style", "save_figure"]
+__all__ = ["equal_3d_limits", "median_trial", "method_style", "save_figure"]
 
 # Fixed colours per method so every figure of the benchmark reads the same way.
 _STYLES = {
@@ -39,6 +41,29 @@ def method_style(method: str, index: int = 0) -> dict[str, object]:
     else:
         color, marker = plt.get_cmap("tab10")(index % 10), "X"
     return {"color": color, "marker": marker}
+
+
+def equal_3d_limits(ax, points: np.ndarray, margin: float = 0.08) -> None:
+    """Same scale on x, y and z of a 3-D axes spanning ``points`` ``(n, 3)``, so distances
+    and angles in the plot are true ones (matplotlib otherwise stretches each axis to fill)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+    centre, half = (low + high) / 2, (high - low).max() / 2 * (1 + margin)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+
+
+def median_trial(errors: pd.Series) -> int:
+    """The trial (index of ``errors``) with the median error; for an even count the lower of
+    the two middle ones, so it is a real trial. Equal errors are ordered by trial number.
+    NaN errors are left out."""
+    finite = errors.dropna()
+    if finite.empty:
+        raise ValueError("no trial with a finite error to choose from")
+    ordered = sorted(zip(finite.to_numpy(), finite.index, strict=True))
+    return int(ordered[(len(ordered) - 1) // 2][1])
 
 
 def save_figure(fig: plt.Figure, outputs: Mapping[str, str] | object) -> None:

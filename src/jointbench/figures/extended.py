@@ -24,8 +24,13 @@ from jointbench.study.summary import summarise
 
 __all__ = [
     "NO_PAPER",
+    "best_headline",
+    "best_text",
+    "cell_text",
+    "condition_label",
     "extended_figure",
     "extended_table",
+    "incomplete",
     "mean_ranks",
     "origin_note",
 ]
@@ -86,12 +91,53 @@ def extended_table(
 
 def mean_ranks(table: pd.DataFrame) -> pd.DataFrame:
     """Per method, over the conditions of an :func:`extended_table`: ``mean_rank``,
-    ``best_in`` (conditions where it is best) and ``conditions``; sorted best first."""
-    ranks = table.groupby("method", observed=True).agg(
-        mean_rank=("rank", "mean"), best_in=("best", "sum"), conditions=("rank", "size")
+    ``best_alone`` (conditions where it alone is best), ``best_tied`` (conditions where it
+    shares the best mean), ``best_in`` (their sum: best or tied) and ``conditions``; sorted
+    best first.
+
+    A tie is reported as shared, not as a win for each method, so two methods tied everywhere
+    read "best alone in 0, tied in n" rather than both "best in n".
+    """
+    best = table["best"].astype(bool)
+    keys = list(table.columns[: table.columns.get_loc("method")])
+    sharing = best.groupby([table[k] for k in keys], observed=True).transform("sum")
+    counted = table.assign(
+        _alone=best & (sharing == 1),
+        _tied=best & (sharing > 1),
     )
-    ranks["best_in"] = ranks["best_in"].astype(int)
+    ranks = counted.groupby("method", observed=True).agg(
+        mean_rank=("rank", "mean"),
+        best_alone=("_alone", "sum"),
+        best_tied=("_tied", "sum"),
+        conditions=("rank", "size"),
+    )
+    ranks["best_alone"] = ranks["best_alone"].astype(int)
+    ranks["best_tied"] = ranks["best_tied"].astype(int)
+    ranks.insert(3, "best_in", ranks["best_alone"] + ranks["best_tied"])
     return ranks.reset_index().sort_values(["mean_rank", "method"], ignore_index=True)
+
+
+def best_text(best_alone: int, best_tied: int, conditions: int) -> str:
+    """How often a method is best, ties shown as shared: "best in 8 of 18, tied in 2"."""
+    text = f"best in {best_alone} of {conditions}"
+    return text + (f", tied in {best_tied}" if best_tied else "")
+
+
+def best_headline(table: pd.DataFrame) -> str:
+    """Who is best per condition, each condition counted once: sole winners, then each group
+    of methods tied for best with the number of conditions they share.
+
+    Works on an :func:`extended_table` or the CSV read back (``best`` as booleans).
+    """
+    keys = list(table.columns[: table.columns.get_loc("method")])
+    best = table[table["best"].astype(str) == "True"]
+    winners = best.groupby(keys, observed=True)["method"].apply(lambda m: tuple(sorted(m)))
+    counts = winners.value_counts()
+    alone = [(group[0], n) for group, n in counts.items() if len(group) == 1]
+    tied = [(" = ".join(group), n) for group, n in counts.items() if len(group) > 1]
+    conditions = table[keys].drop_duplicates().shape[0]
+    parts = [f"{m} alone in {n}" for m, n in alone] + [f"{m} tied in {n}" for m, n in tied]
+    return f"best mean error, out of {conditions} conditions: " + ", ".join(parts) + "."
 
 
 def origin_note(
@@ -115,15 +161,54 @@ def origin_note(
     return " ".join(p for p in parts if p)
 
 
-def _condition_label(values: Sequence[object]) -> str:
-    return " / ".join(str(v) for v in values)
+# How a grid key reads in a row label, e.g. rom_deg 5 -> "±5°"; unknown keys fall back to
+# their unit suffix (_deg, _mm) or "key=value".
+_KEY_FORMATS = {
+    "marker_set": "{} set",
+    "rom_deg": "±{:g}°",
+    "noise_mm": "{:g} mm noise",
+    "protocol": "{}",
+    "fe_rom_deg": "FE {:g}°",
+    "aa_ratio": "AA/FE {:g}",
+    "n_frames": "Nt = {}",
+}
+_KEY_NAMES = {
+    "marker_set": "marker set",
+    "rom_deg": "RoM",
+    "noise_mm": "noise SD",
+    "protocol": "protocol",
+    "fe_rom_deg": "FE RoM",
+    "aa_ratio": "AA/FE ratio",
+    "n_frames": "frames used",
+}
 
 
-def _cell_text(value: float, failed: int) -> str:
-    # "†" flags a mean over fewer trials than the others: some of this method's trials failed.
+def _key_text(key: str, value: object) -> str:
+    if key in _KEY_FORMATS:
+        return _KEY_FORMATS[key].format(value)
+    if key.endswith("_deg"):
+        return f"{key.removesuffix('_deg')} {value:g}°"
+    if key.endswith("_mm"):
+        return f"{key.removesuffix('_mm')} {value:g} mm"
+    return f"{key}={value}"
+
+
+def condition_label(keys: Sequence[str], values: Sequence[object]) -> str:
+    """A row label with units, e.g. ``("M", 5, 0.5)`` -> "M set, ±5°, 0.5 mm noise"."""
+    return ", ".join(_key_text(k, v) for k, v in zip(keys, values, strict=True))
+
+
+def incomplete(trials: int, converged: int, failed: int) -> bool:
+    """Whether a cell's mean hides trouble: some trials failed (no error) or did not converge
+    (an error, but from an estimate the method itself did not stand behind)."""
+    return failed > 0 or converged < trials
+
+
+def cell_text(value: float, flagged: bool) -> str:
+    """A heat-map cell: the mean to 3 significant digits, "†" when :func:`incomplete`."""
     if not np.isfinite(value):
         return "failed"
-    return f"{value:.3g}" + ("†" if failed else "")
+    return f"{value:.3g}" + ("†" if flagged else "")
 
 
 def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[str]):
@@ -138,7 +223,20 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
     cells, the best of each condition outlined. Returns the image for a colour bar."""
     keys = list(get_study(study).grid_keys)
     wide = _wide(table, keys, _mean_column(study), methods)
-    failed = _wide(table, keys, "failed", methods).fillna(0)
+    flagged = _wide(
+        table.assign(
+            _flag=[
+                incomplete(t, c, f)
+                for t, c, f in zip(
+                    table["trials"], table["converged"], table["failed"], strict=True
+                )
+            ]
+        ),
+        keys,
+        "_flag",
+        methods,
+    )
+    flagged = flagged.fillna(False).astype(bool)
     best = _wide(table, keys, "best", methods).fillna(False).astype(bool)
     values = wide.to_numpy(dtype=float)
     positive = values[np.isfinite(values) & (values > 0)]
@@ -155,7 +253,7 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
         ax.text(
             col,
             row,
-            _cell_text(value, int(failed.iat[row, col])),
+            cell_text(value, bool(flagged.iat[row, col])),
             ha="center",
             va="center",
             fontsize=size,
@@ -166,9 +264,9 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
     ax.set_xticks(range(len(methods)), [m if m in paper else f"{m}*" for m in methods])
     if len(methods) > 5 or max(map(len, methods)) > 6:
         plt.setp(ax.get_xticklabels(), rotation=40, ha="right", rotation_mode="anchor")
-    labels = [_condition_label(i if isinstance(i, tuple) else (i,)) for i in wide.index]
+    labels = [condition_label(keys, i if isinstance(i, tuple) else (i,)) for i in wide.index]
     ax.set_yticks(range(len(labels)), labels, fontsize=8)
-    ax.set_ylabel(" / ".join(keys))
+    ax.set_ylabel("condition: " + ", ".join(_KEY_NAMES.get(k, k) for k in keys))
     ax.set_xlabel("method (best first; * not in the paper)")
     return image
 
@@ -186,17 +284,22 @@ def _rank_bars(
             hatch=None if row.method in paper else "//",
             edgecolor="0.2",
         )
-        ax.text(
-            row.mean_rank,
-            position,
-            f" {row.mean_rank:.2f} (best in {row.best_in}/{row.conditions})",
+        # Written beside the axes, not at the bar's end, so the axis can stop at the worst
+        # possible rank.
+        ax.annotate(
+            f"{row.mean_rank:.2f}; {best_text(row.best_alone, row.best_tied, row.conditions)}",
+            (1.0, position),
+            xycoords=("axes fraction", "data"),
+            xytext=(4, 0),
+            textcoords="offset points",
             va="center",
             fontsize=7,
         )
     ax.set_yticks(y, list(ranks["method"]))
     ax.invert_yaxis()
-    ax.set_xlim(0, len(ranks) * 1.6 + 0.5)
-    ax.set_xlabel("mean rank over conditions (1 = best)")
+    ax.set_xlim(0, len(ranks))
+    ax.set_xticks(range(1, len(ranks) + 1))
+    ax.set_xlabel("mean rank\nover conditions (1 = best)", fontsize=8)
     ax.set_title("Overall", fontsize=9)
     ax.legend(
         handles=[
@@ -235,19 +338,23 @@ def extended_figure(
     height = max(3.5, 0.3 * n_conditions + 1.8)
     bars_height = min(height, 0.35 * len(methods) + 1.4)
     heat_width = max(3.0, 0.8 * len(methods)) + 2.5
-    fig = plt.figure(figsize=(heat_width + 4.5, height), layout="constrained")
-    outer = fig.add_gridspec(1, 2, width_ratios=[heat_width, 4.5])
+    # The middle column is room for the colour bar, an inset of the map the layout ignores.
+    fig = plt.figure(figsize=(heat_width + 5.6, height), layout="constrained")
+    outer = fig.add_gridspec(1, 3, width_ratios=[heat_width, 1.0, 4.6])
     heat = fig.add_subplot(outer[0, 0])
-    right = outer[0, 1].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
+    right = outer[0, 2].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
     bars = fig.add_subplot(right[0, 0])
     image = _heatmap(heat, table, study, methods, paper[1])
-    colorbar = fig.colorbar(image, ax=heat, fraction=0.05, pad=0.02)
+    # An inset the map's own height: a colour bar stolen from the grid cell is sized by the
+    # layout and ends up shorter than a tall map.
+    colorbar = fig.colorbar(image, cax=heat.inset_axes([1.02, 0.0, 0.035, 1.0]))
     colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
     _rank_bars(bars, ranks, styles, paper[1])
-    kind = get_study(study).kind
+    kind = get_study(study).kind.replace("_", " ")
     fig.suptitle(
         f"Study {study} ({kind}): every estimator's mean error per condition "
-        f"({_unit(study).strip()}); red outline = best of the condition, † = some trials failed",
+        f"({_unit(study).strip()})\nred outline = best (or tied) in the condition; "
+        "† = some trials failed or did not converge",
         fontsize=10,
     )
     return fig

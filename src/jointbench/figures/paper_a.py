@@ -12,17 +12,26 @@ from collections.abc import Mapping
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from mpl_toolkits.mplot3d import proj3d
 
-from jointbench.figures.common import method_style
+from jointbench import machine
+from jointbench.estimators import registry
+from jointbench.figures.common import equal_3d_limits, median_trial, method_style
 
 __all__ = [
     "CONDITION",
+    "FIG3_CONDITION",
     "PAPER_METHODS",
     "bc_converged",
+    "choose_fig3_trial",
     "condition_means",
     "fig3",
+    "fig3_chosen_text",
     "fig4",
+    "speed_wording",
     "table2",
+    "table2_headline",
+    "timing_note",
 ]
 
 PAPER_METHODS = ("MA", "LS", "IS", "BC", "NM")
@@ -57,119 +66,262 @@ def _wide(means: pd.DataFrame) -> pd.DataFrame:
 
 
 def fig4(collected: pd.DataFrame) -> plt.Figure:
-    """Mean CoR error vs RoM, one panel per marker set (rows) and noise level (columns)."""
+    """Mean CoR error per condition in the paper's two panels, (a) M set and (b) H set.
+
+    Within a panel the conditions run noise level by noise level, RoM increasing within each;
+    a method's line joins its RoMs at one noise level. Methods are set slightly apart
+    horizontally so lines that coincide (IS, BC and NM on the H set) stay visible. Where BC
+    converged in fewer than all trials, the tick label carries the count the mean is over.
+    """
     means = condition_means(collected)
     sets = sorted(means["marker_set"].unique(), key=lambda s: "MH".find(s))
     noises = sorted(means["noise_mm"].unique())
+    roms = sorted(means["rom_deg"].unique())
     n_total = collected["trial"].nunique()
+    methods = [m for m in PAPER_METHODS if m in set(means["method"])]
+    step, gap = 1.0, 0.8
     fig, axes = plt.subplots(
-        len(sets),
-        len(noises),
-        figsize=(3.4 * len(noises), 3.0 * len(sets)),
-        sharex=True,
-        sharey=True,
-        squeeze=False,
+        1, len(sets), figsize=(6.0 * len(sets), 4.6), sharey=True, squeeze=False
     )
-    for row, marker_set in enumerate(sets):
-        for col, noise in enumerate(noises):
-            ax = axes[row, col]
-            cell = means[(means["marker_set"] == marker_set) & (means["noise_mm"] == noise)]
-            for index, method in enumerate(PAPER_METHODS):
+    for panel, (ax, marker_set) in enumerate(zip(axes[0], sets, strict=True)):
+        part = means[means["marker_set"] == marker_set]
+        ticks, labels = [], []
+        for group, noise in enumerate(noises):
+            base = group * (len(roms) * step + gap)
+            cell = part[part["noise_mm"] == noise]
+            x_of = {rom: base + i * step for i, rom in enumerate(roms)}
+            for index, method in enumerate(methods):
                 line = cell[cell["method"] == method].sort_values("rom_deg")
-                if line.empty:
-                    continue
+                offset = (index - (len(methods) - 1) / 2) * 0.13
                 ax.plot(
-                    line["rom_deg"],
+                    [x_of[r] + offset for r in line["rom_deg"]],
                     line["mean_error_mm"],
-                    label=method,
-                    lw=1.5,
+                    label=method if group == 0 and panel == 0 else None,
+                    lw=1.4,
                     ms=5,
+                    mfc="white" if index % 2 else None,
                     **method_style(method, index),
                 )
             counts = cell.groupby("rom_deg")["n_trials"].max()
-            for rom, count in counts.items():
-                if count < n_total:
-                    top = cell[cell["rom_deg"] == rom]["mean_error_mm"].max()
-                    ax.annotate(
-                        f"n={count}",
-                        (rom, top),
-                        textcoords="offset points",
-                        xytext=(4, 4),
-                        fontsize=7,
-                    )
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            ax.set_xticks(sorted(means["rom_deg"].unique()))
-            ax.xaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"±{v:g}°"))
-            ax.xaxis.set_minor_formatter(plt.NullFormatter())
-            ax.grid(True, which="both", alpha=0.3)
-            ax.set_title(f"({'ab'[row]}) {marker_set} set, noise SD {noise:g} mm", fontsize=9)
-            if col == 0:
-                ax.set_ylabel("mean CoR error (mm)")
-            if row == len(sets) - 1:
-                ax.set_xlabel("RoM")
-    axes[0, -1].legend(fontsize=8, loc="upper right")
+            for rom in roms:
+                ticks.append(x_of[rom])
+                count = int(counts.get(rom, 0))
+                # Every label has two lines so both panels' x labels line up.
+                labels.append(f"±{rom:g}°\n" + (f"n={count}" if count < n_total else ""))
+            ax.text(
+                base + (len(roms) - 1) * step / 2,
+                1.01,
+                f"noise SD {noise:.1f} mm",
+                transform=ax.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize=8,
+            )
+            if group:
+                ax.axvline(base - (step + gap) / 2, color="0.75", lw=0.8)
+        ax.set_xticks(ticks, labels, fontsize=8)
+        ax.set_xlim(ticks[0] - 0.5, ticks[-1] + 0.5)
+        ax.set_yscale("log")
+        ax.grid(True, which="both", axis="y", alpha=0.3)
+        ax.set_xlabel("RoM, grouped by noise level")
+        ax.set_title(f"({'ab'[panel]}) {marker_set} marker set", fontsize=10, pad=16)
+    axes[0, 0].set_ylabel("mean CoR error (mm, log scale)")
+    fig.legend(
+        loc="lower center", ncol=len(methods), fontsize=9, frameon=False, bbox_to_anchor=(0.5, 0)
+    )
     fig.suptitle(
         "Paper A Fig 4 reproduced: mean CoR error over the trials where BC converged "
-        f"(n shown where fewer than {n_total})",
+        f"(n = trials averaged, where fewer than {n_total})",
         fontsize=10,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
     return fig
 
 
+#: Paper A's Fig 3 condition: M set, ±5° RoM, 1.0 mm noise.
+FIG3_CONDITION = {"marker_set": "M", "rom_deg": 5, "noise_mm": 1.0}
+
+
+def choose_fig3_trial(collected: pd.DataFrame) -> int:
+    """The trial Fig 3 draws: the median trial by NM error at paper A's Fig 3 condition.
+
+    Candidates are the trials of :data:`FIG3_CONDITION` in which BC converged (the paper's
+    example has a BC estimate) and every paper method present has a finite error. Sorted by
+    NM error (then trial number), the candidate at position ``(n - 1) // 2`` is chosen: the
+    median for an odd count, the lower of the two middle ones for an even count, so the
+    figure shows a typical trial, not the best or a hand-picked one.
+    """
+    rows = collected
+    for key, value in FIG3_CONDITION.items():
+        rows = rows[rows[key] == value]
+    rows = rows[rows["method"].isin(PAPER_METHODS)]
+    if rows.empty:
+        raise ValueError(f"no trials at paper A's Fig 3 condition {FIG3_CONDITION}")
+    errors = rows.pivot_table(index="trial", columns="method", values="error_mm", dropna=False)
+    usable = errors.notna().all(axis=1)
+    if "BC" in errors.columns:
+        bc = rows[rows["method"] == "BC"].set_index("trial")["converged"].astype(bool)
+        usable &= bc.reindex(errors.index, fill_value=False)
+    reference = "NM" if "NM" in errors.columns else errors.columns[0]
+    candidates = errors.loc[usable, reference]
+    if candidates.empty:
+        raise ValueError("no Fig 3 trial where BC converged and every method has an error")
+    return median_trial(candidates)
+
+
+def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
+    """Label each trajectory "marker p" on the side with the most room on screen.
+
+    Candidate offsets around the trajectory are compared in the 3-D axes' projected (2-D)
+    coordinates; each label takes the one farthest from the estimates, the other
+    trajectories and the labels already placed, so labels do not sit on points or each other.
+    """
+
+    def screen(points):
+        x, y, _ = proj3d.proj_transform(*np.asarray(points, dtype=float).T, ax.get_proj())
+        return np.column_stack([x, y])
+
+    means = screen(markers.mean(axis=0))
+    occupied = [screen(avoid), screen(markers.reshape(-1, 3))]
+    scale = np.ptp(np.vstack(occupied), axis=0).max()
+    angles = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+    for p, centre in enumerate(means):
+        taken = np.vstack(occupied)
+        directions = np.column_stack([np.cos(angles), np.sin(angles)])
+        candidates = centre + 0.2 * scale * directions
+        room = np.linalg.norm(candidates[:, None] - taken[None], axis=2).min(axis=1)
+        choice = int(np.argmax(room))
+        best = candidates[choice]
+        # The text runs away from its trajectory, not back across it.
+        ax.annotate(
+            f"marker {p + 1}",
+            xy=centre,
+            xytext=best,
+            fontsize=8,
+            ha="left" if directions[choice, 0] >= 0 else "right",
+            va="center",
+            arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6},
+        )
+        occupied.append(best[None])
+
+
 def fig3(
-    markers: np.ndarray, truth: np.ndarray, errors: pd.DataFrame, published: Mapping
+    markers: np.ndarray,
+    truth: np.ndarray,
+    errors: pd.DataFrame,
+    published: Mapping,
+    *,
+    chosen: str = "",
 ) -> plt.Figure:
     """One M-set, ±5°, 1.0 mm trial: trajectories, true CoR, every method's estimate and error.
 
     ``markers`` ``(n_frames, n_markers, 3)`` [mm]; ``errors`` has columns method, center_x/y/z,
-    error_mm for that trial; ``published`` maps method to the paper's example error [mm].
+    error_mm for that trial; ``published`` maps method to the paper's example error [mm];
+    ``chosen`` says how the trial was chosen (e.g. "trial 12, the median by NM error ..."),
+    printed under the title.
     """
-    fig = plt.figure(figsize=(10, 4.2))
-    ax = fig.add_subplot(1, 2, 1, projection="3d")
+    methods = [m for m in PAPER_METHODS if m in set(errors["method"])]
+    by_method = errors.set_index("method").loc[methods]
+    estimates = by_method[["center_x", "center_y", "center_z"]].to_numpy(dtype=float)
+    truth = np.asarray(truth, dtype=float)
+
+    fig = plt.figure(figsize=(11, 5.0))
+    grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1])
+    ax = fig.add_subplot(grid[0, 0], projection="3d", computed_zorder=False)
     for p in range(markers.shape[1]):
-        ax.plot(*markers[:, p].T, lw=0.8, color="0.4")
-        ax.text(*markers[-1, p], f"M{p + 1}", fontsize=8)
-    ax.scatter(*truth, color="k", marker="*", s=120, label="true CoR")
-    for index, row in enumerate(errors.itertuples()):
-        style = method_style(row.method, index)
+        ax.plot(*markers[:, p].T, lw=0.9, color="0.45", zorder=1)
+    # Hollow, so an estimate within a few millimetres of it still shows through.
+    ax.scatter(
+        *truth,
+        facecolor="none",
+        edgecolor="k",
+        marker="*",
+        s=260,
+        lw=1.2,
+        zorder=4,
+        label="true CoR",
+    )
+    for index, (method, row) in enumerate(by_method.iterrows()):
+        style = method_style(method, index)
         ax.scatter(
-            row.center_x,
-            row.center_y,
-            row.center_z,
+            row["center_x"],
+            row["center_y"],
+            row["center_z"],
             color=style["color"],
             marker=style["marker"],
-            s=40,
-            label=f"{row.method}: {row.error_mm:.1f} mm",
+            s=45,
+            edgecolor="k",
+            linewidth=0.4,
+            zorder=3,
+            label=f"{method}: {row['error_mm']:.1f} mm",
         )
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
-    ax.set_zlabel("z (mm)")
-    ax.legend(fontsize=7, loc="upper left")
-    ax.set_title("Trajectories and CoR estimates", fontsize=9)
+    equal_3d_limits(ax, np.vstack([markers.reshape(-1, 3), truth[None], estimates]))
+    _label_markers(ax, markers, np.vstack([truth[None], estimates]))
+    ax.set_xlabel("x (mm)", fontsize=8)
+    ax.set_ylabel("y (mm)", fontsize=8)
+    ax.set_zlabel("z (mm)", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(-0.05, 1.0), title="estimate: error")
+    ax.set_title("(a) trajectories, true CoR and estimates (equal axis scales)", fontsize=9)
 
-    bars = fig.add_subplot(1, 2, 2)
-    methods = [m for m in PAPER_METHODS if m in set(errors["method"])]
-    ours = errors.set_index("method").loc[methods, "error_mm"].to_numpy()
+    bars = fig.add_subplot(grid[0, 1])
+    ours = by_method["error_mm"].to_numpy(dtype=float)
     paper = np.array([published.get(m, np.nan) for m in methods], dtype=float)
     x = np.arange(len(methods))
     bars.bar(
         x - 0.2, ours, 0.4, label="this trial", color=[method_style(m)["color"] for m in methods]
     )
-    bars.bar(x + 0.2, paper, 0.4, label="paper's example trial", color="0.75")
+    bars.bar(x + 0.2, paper, 0.4, label="paper's Fig 3 trial", color="0.75")
+    for position, value in zip(x - 0.2, ours, strict=True):
+        bars.text(position, value, f"{value:.1f}", ha="center", va="bottom", fontsize=7)
+    for position, value in zip(x + 0.2, paper, strict=True):
+        if np.isfinite(value):
+            bars.text(position, value, f"{value:g}", ha="center", va="bottom", fontsize=7)
     bars.set_xticks(x, methods)
     bars.set_yscale("log")
-    bars.set_ylabel("CoR error (mm)")
-    bars.legend(fontsize=8)
-    bars.set_title("CoR error: this trial vs paper A's Fig 3 trial", fontsize=9)
-    fig.suptitle("Paper A Fig 3 reproduced: M set, ±5° RoM, 1.0 mm noise, one trial", fontsize=10)
+    bars.set_ylabel("CoR error (mm, log scale)")
+    bars.margins(y=0.15)
+    bars.legend(fontsize=8, loc="upper right")
+    bars.set_title("(b) CoR error: this trial vs the paper's example", fontsize=9)
+    title = "Paper A Fig 3 reproduced: M set, ±5° RoM, 1.0 mm noise, one trial"
+    fig.suptitle(title + (f"\n{chosen}" if chosen else ""), fontsize=10)
     fig.tight_layout()
     return fig
 
 
+def fig3_chosen_text(collected: pd.DataFrame, trial: int) -> str:
+    """The sentence under Fig 3's title saying which trial it is and why."""
+    rows = collected
+    for key, value in FIG3_CONDITION.items():
+        rows = rows[rows[key] == value]
+    n_trials = rows["trial"].nunique()
+    return (
+        f"trial {trial} of {n_trials}: the median trial by NM error among those where BC converged"
+    )
+
+
+def speed_wording(ours_s: float, paper_s: float) -> str:
+    """Our time against the paper's, in words: "650× faster", "2.2× slower" or "as fast".
+
+    The ratio is always written as a number above 1 with the direction in the word, so a
+    method that takes twice the paper's time never reads as "0.5× faster" (or, rounded, "0×").
+    """
+    if not (np.isfinite(ours_s) and np.isfinite(paper_s)) or ours_s <= 0 or paper_s <= 0:
+        return "not comparable"
+    ratio = paper_s / ours_s
+    if 1 / 1.05 <= ratio <= 1.05:
+        return "as fast (within 5 %)"
+    factor = ratio if ratio > 1 else 1 / ratio
+    number = f"{factor:.0f}" if factor >= 10 else f"{factor:.1f}"
+    return f"{number}× {'faster' if ratio > 1 else 'slower'}"
+
+
 def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> pd.DataFrame:
-    """Seconds per trial per method over BC-converged trials, beside paper A Table 2."""
+    """Seconds per trial per method over BC-converged trials, beside paper A Table 2.
+
+    ``speedup_vs_paper`` is paper_matlab_s / mean_s (above 1: ours is faster) and
+    ``vs_paper`` says the same in words (:func:`speed_wording`).
+    """
     rows = bc_converged(collected[collected["method"].isin(PAPER_METHODS)])
     timing = rows.groupby("method")["seconds"].agg(["mean", "median", "size"])
     table = pd.DataFrame(
@@ -182,4 +334,42 @@ def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> p
         }
     )
     table["speedup_vs_paper"] = table["paper_matlab_s"] / table["mean_s"]
+    table["vs_paper"] = [
+        speed_wording(ours, paper)
+        for ours, paper in zip(table["mean_s"], table["paper_matlab_s"], strict=True)
+    ]
     return table
+
+
+def table2_headline(table: pd.DataFrame) -> str:
+    """One sentence for a caption, worded from :func:`table2`'s own ratios."""
+    parts = [
+        f"{m} {speed_wording(ours, paper)}"
+        for m, ours, paper in zip(
+            table["method"], table["mean_s"], table["paper_matlab_s"], strict=True
+        )
+    ]
+    return "Mean time per trial against the paper's MATLAB times: " + ", ".join(parts) + "."
+
+
+def timing_note(environment: str | None = None) -> str:
+    """How Table 2's times were measured, for the note under the table.
+
+    ``environment`` describes the machine; by default the one running this process, which is
+    the run's machine when the table is built in the same run as the estimates.
+    """
+    environment = environment or machine.describe()
+    batched = [m for m in PAPER_METHODS if hasattr(registry.get("center", m), "batched")]
+    one_at_a_time = [m for m in PAPER_METHODS if m not in batched]
+    how = f"{', '.join(one_at_a_time)}: each trial's fit timed on its own"
+    if batched:
+        how += (
+            f"; {', '.join(batched)}: all trials of a condition fitted in one batched call, "
+            "whose time is divided by its trials"
+        )
+    return (
+        f"Ours: wall-clock time per trial, measured inside the estimate job ({how}; simulation "
+        f"and file I/O excluded), on this run's machine ({environment}). Other jobs of the run "
+        "(snakemake -j) may have shared the CPUs, so times are indicative. Paper: MATLAB 6.5 on "
+        "a 3 GHz Pentium 4. speedup_vs_paper = paper_matlab_s / mean_s; above 1 ours is faster."
+    )

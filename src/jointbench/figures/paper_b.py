@@ -1,18 +1,30 @@
 """Paper B (Chang & Pollard 2007, dominant axis of rotation): Table 1, Fig 5, Fig 2, claims B1–B6.
 
 Tables and Fig 5 read the collected ``hinge`` results (one row per protocol, FE RoM, AA/FE ratio,
-trial and method); Fig 2 fits the three costs to two freshly simulated trials.
+trial and method); Fig 2 draws the three costs' fits on two already-simulated trials.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import method_style
+from jointbench.figures.common import equal_3d_limits, median_trial, method_style
 
-__all__ = ["BREAKDOWN_DEG", "CELL", "PAPER_METHODS", "cell_statistics", "fig2", "fig5", "table1"]
+__all__ = [
+    "BREAKDOWN_DEG",
+    "CELL",
+    "PAPER_METHODS",
+    "axis_error_deg",
+    "cell_statistics",
+    "choose_fig2_trial",
+    "fig2",
+    "fig5",
+    "table1",
+]
 
 PAPER_METHODS = ("planar", "radial", "combined")
 CELL = ["protocol", "method", "fe_rom_deg", "aa_ratio"]
@@ -98,63 +110,160 @@ def fig5(collected: pd.DataFrame) -> plt.Figure:
     return fig
 
 
-def _circle_points(point, direction, center_of, radius, n=100):
-    """Points of the circle of ``radius`` about the axis, in the plane through ``center_of``."""
-    n_hat = direction / np.linalg.norm(direction)
-    centre = point + n_hat * (n_hat @ (center_of - point))
+def _frame(direction: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit axis ``n`` and two unit vectors spanning the plane orthogonal to it."""
+    n_hat = np.asarray(direction, dtype=float)
+    n_hat = n_hat / np.linalg.norm(n_hat)
     helper = np.eye(3)[np.argmin(np.abs(n_hat))]
     e1 = np.cross(n_hat, helper)
     e1 /= np.linalg.norm(e1)
-    e2 = np.cross(n_hat, e1)
+    return n_hat, e1, np.cross(n_hat, e1)
+
+
+def _circle_points(point, direction, center_of, radius, n=100):
+    """Points of the circle of ``radius`` about the axis, in the plane through ``center_of``."""
+    n_hat, e1, e2 = _frame(direction)
+    centre = point + n_hat * (n_hat @ (center_of - point))
     angle = np.linspace(0, 2 * np.pi, n)
     return centre + radius * (np.outer(np.cos(angle), e1) + np.outer(np.sin(angle), e2))
 
 
-def fig2(examples) -> plt.Figure:
-    """Best-fitting plane, cylinder and circle on two trials with a known axis.
+def _line(fit) -> tuple[np.ndarray, np.ndarray]:
+    """``(point, unit direction)`` of a fit given as an AxisResult or a ``(point, direction)``
+    pair."""
+    point, direction = (fit.point, fit.direction) if hasattr(fit, "point") else fit
+    direction = np.asarray(direction, dtype=float)
+    return np.asarray(point, dtype=float), direction / np.linalg.norm(direction)
 
-    ``examples``: list of ``(title, markers, truth, fits)`` with markers
-    ``(n_frames, n_markers, 3)`` [mm] and fits ``{method: AxisResult}``.
-    For each cost the fitted axis is drawn through its point, and each marker's fitted circle
-    (radius = its mean distance from that axis, in the plane through its centroid) shows how well
-    the cost's model matches the trajectory.
+
+def _draw_planes(ax, trajectory, point, direction, color) -> np.ndarray:
+    """The best-fitting plane of one marker: orthogonal to the axis through the trajectory's
+    centroid, a square the size of the trajectory. Returns the points drawn."""
+    _, e1, e2 = _frame(direction)
+    centroid = trajectory.mean(axis=0)
+    offsets = trajectory - centroid
+    half = np.abs(offsets @ np.stack([e1, e2]).T).max() * 1.1
+    s, t = np.meshgrid([-half, half], [-half, half])
+    surface = centroid + s[..., None] * e1 + t[..., None] * e2
+    ax.plot_surface(*np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, zorder=2)
+    return surface.reshape(-1, 3)
+
+
+def _draw_cylinder(ax, trajectory, point, direction, color) -> np.ndarray:
+    """The best-fitting cylinder of one marker: about the axis, radius its mean distance from
+    it, as long as the trajectory's extent along the axis and around the arc it covers.
+    Returns the points drawn."""
+    n_hat, e1, e2 = _frame(direction)
+    offsets = trajectory - point
+    along = offsets @ n_hat
+    radial = offsets - np.outer(along, n_hat)
+    radius = np.linalg.norm(radial, axis=1).mean()
+    angles = np.unwrap(np.arctan2(radial @ e2, radial @ e1))
+    theta = np.linspace(angles.min() - 0.15, angles.max() + 0.15, 30)
+    length = np.linspace(along.min() - 0.1 * radius, along.max() + 0.1 * radius, 6)
+    a, h = np.meshgrid(theta, length)
+    surface = (
+        point
+        + h[..., None] * n_hat
+        + radius * (np.cos(a)[..., None] * e1 + np.sin(a)[..., None] * e2)
+    )
+    ax.plot_surface(*np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, zorder=2)
+    return surface.reshape(-1, 3)
+
+
+def _draw_circle(ax, trajectory, point, direction, color) -> np.ndarray:
+    """The best-fitting circle of one marker: about the axis, in the plane through the
+    trajectory's centroid, radius its mean distance from the axis. Returns the points drawn."""
+    n_hat, _, _ = _frame(direction)
+    offsets = trajectory - point
+    radius = np.linalg.norm(offsets - np.outer(offsets @ n_hat, n_hat), axis=1).mean()
+    circle = _circle_points(point, n_hat, trajectory.mean(axis=0), radius)
+    ax.plot(*circle.T, color=color, lw=1.4, zorder=2)
+    return circle
+
+
+# The model each cost fits (paper B Fig 2): one drawing per method.
+_MODELS = {
+    "planar": ("best-fitting planes", _draw_planes),
+    "radial": ("best-fitting cylinders", _draw_cylinder),
+    "combined": ("best-fitting circles", _draw_circle),
+}
+
+
+def axis_error_deg(direction: np.ndarray, true_direction: np.ndarray) -> float:
+    """Angle [°] between two axis directions, sign-free (an axis has no arrow)."""
+    a = np.asarray(direction, dtype=float)
+    b = np.asarray(true_direction, dtype=float)
+    cosine = abs(float(a @ b)) / (np.linalg.norm(a) * np.linalg.norm(b))
+    return float(np.degrees(np.arccos(min(1.0, cosine))))
+
+
+def fig2(examples) -> plt.Figure:
+    """Best-fitting plane, cylinder and circle on two trials with a known axis (paper B Fig 2).
+
+    ``examples``: list of ``(title, markers, truth, fits)``: markers ``(n_frames, n_markers,
+    3)`` [mm] of one already-simulated trial, truth ``{"axis_point", "axis_direction"}`` and
+    fits ``{method: AxisResult or (point, direction)}`` for planar, radial and combined.
+    One row per example, one panel per cost: the model that cost fits to each marker's
+    trajectory (planes, cylinders, circles), its axis, and the true axis drawn on top.
     """
-    fig = plt.figure(figsize=(6 * len(examples), 5))
-    for column, (title, markers, truth, fits) in enumerate(examples):
-        ax = fig.add_subplot(1, len(examples), column + 1, projection="3d")
-        for p in range(markers.shape[1]):
-            ax.plot(*markers[:, p].T, ".", ms=2, color="0.3")
-        span = np.ptp(markers.reshape(-1, 3), axis=0).max()
-        true_point = np.asarray(truth["axis_point"])
-        true_dir = np.asarray(truth["axis_direction"])
-        ax.plot(
-            *np.stack([true_point - span * true_dir, true_point + span * true_dir]).T,
-            "k--",
-            lw=1.2,
-            label="true axis",
-        )
-        for index, method in enumerate(PAPER_METHODS):
-            fit = fits[method]
-            style = method_style(method, index)
-            error = np.degrees(np.arccos(min(1.0, abs(float(fit.direction @ true_dir)))))
-            ends = np.stack([fit.point - span * fit.direction, fit.point + span * fit.direction])
-            ax.plot(*ends.T, color=style["color"], lw=1.5, label=f"{method}: {error:.1f}°")
+    methods = [m for m in PAPER_METHODS if all(m in e[3] for e in examples)]
+    fig = plt.figure(figsize=(4.1 * len(methods), 4.1 * len(examples)))
+    for row, (title, markers, truth, fits) in enumerate(examples):
+        true_point = np.asarray(truth["axis_point"], dtype=float)
+        true_dir = np.asarray(truth["axis_direction"], dtype=float)
+        true_dir = true_dir / np.linalg.norm(true_dir)
+        points = markers.reshape(-1, 3)
+        span = np.ptp(points, axis=0).max()
+        centre = points.mean(axis=0)
+        # Axis lines are drawn through the point on them nearest the markers, as long as
+        # the data are wide, so they cross the picture instead of leaving it.
+        for column, method in enumerate(methods):
+            ax = fig.add_subplot(
+                len(examples),
+                len(methods),
+                row * len(methods) + column + 1,
+                projection="3d",
+                computed_zorder=False,
+            )
+            point, direction = _line(fits[method])
+            style = method_style(method, column)
+            label, draw = _MODELS.get(method, ("fitted circles", _draw_circle))
+            drawn = [points]
             for p in range(markers.shape[1]):
-                centroid = markers[:, p].mean(axis=0)
-                offsets = markers[:, p] - fit.point
-                radial = offsets - np.outer(offsets @ fit.direction, fit.direction)
-                radius = np.linalg.norm(radial, axis=1).mean()
-                circle = _circle_points(fit.point, fit.direction, centroid, radius)
-                ax.plot(*circle.T, color=style["color"], lw=0.8, alpha=0.8)
-        ax.set_title(f"({'ab'[column]}) {title}", fontsize=9)
-        ax.legend(fontsize=7, loc="upper left")
-        ax.set_xlabel("x (mm)")
-        ax.set_ylabel("y (mm)")
-        ax.set_zlabel("z (mm)")
+                drawn.append(draw(ax, markers[:, p], point, direction, style["color"]))
+                ax.plot(*markers[:, p].T, ".", ms=1.5, color="0.25", zorder=3)
+            near = point + direction * (direction @ (centre - point))
+            fitted = np.stack([near - 0.7 * span * direction, near + 0.7 * span * direction])
+            ax.plot(*fitted.T, color=style["color"], lw=2.0, zorder=4, label=f"{method} axis")
+            near = true_point + true_dir * (true_dir @ (centre - true_point))
+            true_line = np.stack([near - 0.7 * span * true_dir, near + 0.7 * span * true_dir])
+            ax.plot(*true_line.T, "k--", lw=1.6, zorder=5, label="true axis")
+            # 3-D lines are not clipped to the axes: every drawn model must fit inside.
+            equal_3d_limits(ax, np.vstack([*drawn, true_line, fitted]), margin=0.02)
+            ax.tick_params(labelsize=6, pad=0)
+            ax.set_xlabel("x (mm)", fontsize=7, labelpad=-4)
+            ax.set_ylabel("y (mm)", fontsize=7, labelpad=-4)
+            ax.set_zlabel("z (mm)", fontsize=7, labelpad=-4)
+            error = axis_error_deg(direction, true_dir)
+            ax.set_title(
+                f"({'ab'[row]}) {title}\n{method} cost: {label}; axis error {error:.1f}°",
+                fontsize=8,
+            )
     fig.suptitle(
-        "Paper B Fig 2 reproduced: best-fitting plane (planar), cylinder (radial) and "
-        "circle (combined)",
+        "Paper B Fig 2 reproduced: best-fitting plane (planar cost), cylinder (radial) and "
+        "circle (combined)\ncoloured line = the cost's fitted axis, black dashed = true axis, "
+        "grey dots = marker positions; equal axis scales",
         fontsize=10,
     )
     fig.tight_layout()
     return fig
+
+
+def choose_fig2_trial(collected: pd.DataFrame, condition: Mapping[str, object]) -> int:
+    """The trial Fig 2 draws for ``condition``: the median trial by the combined cost's error
+    (the paper's proposed method), so the example is typical rather than picked."""
+    rows = collected[collected["method"] == "combined"]
+    for key, value in condition.items():
+        rows = rows[rows[key] == value]
+    return median_trial(rows.set_index("trial")["error_deg"])

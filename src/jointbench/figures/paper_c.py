@@ -13,7 +13,15 @@ from scipy import stats
 
 from jointbench.study.scoring import CHI2_3DOF_95, covariance_from_entries
 
-__all__ = ["EXTENDED", "METHOD", "calibration_table", "per_frames", "table1", "uncertainty_figure"]
+__all__ = [
+    "EXTENDED",
+    "METHOD",
+    "TABLE1_LABELS",
+    "calibration_table",
+    "per_frames",
+    "table1",
+    "uncertainty_figure",
+]
 
 METHOD = "gauss-markov"
 EXTENDED = "gauss-markov-frame0"
@@ -95,7 +103,25 @@ def table1(collected: pd.DataFrame, paper: pd.DataFrame) -> pd.DataFrame:
             }
         )
         table = table.merge(f0, on="n_frames", how="left")
-    return table
+    return table.rename(columns=TABLE1_LABELS)
+
+
+#: :func:`table1`'s column headers (GM = gauss-markov, paper C's method; GM-f0 =
+#: gauss-markov-frame0), keyed by the quantity each holds.
+TABLE1_LABELS = {
+    "n_frames": "frames used, Nt",
+    "paper_sqrt_trace_cov_mm": "paper: sqrt(tr Wc) (mm)",
+    "paper_v": "paper: v (vs its own 1200-frame estimate)",
+    "gm_sqrt_trace_cov_mm": "GM: median sqrt(tr Wc) (mm)",
+    "gm_rms_error_mm": "GM: RMS error vs true centre (mm)",
+    "gm_v_vs_own_1200": "GM: mean v vs own 1200-frame estimate",
+    "gm_v_vs_truth": "GM: mean v vs true centre",
+    "gm_converged": "GM: trials converged",
+    "trials": "trials",
+    "f0_sqrt_trace_cov_mm": "GM-f0: median sqrt(tr Wc) (mm)",
+    "f0_rms_error_mm": "GM-f0: RMS error vs true centre (mm)",
+    "f0_v_vs_truth": "GM-f0: mean v vs true centre",
+}
 
 
 def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
@@ -118,10 +144,19 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
+def _frames_axis(ax, n_frames) -> None:
+    """Log x axis ticked at the Nt values of the run, not at powers of ten."""
+    ax.set_xscale("log")
+    ax.set_xticks(list(n_frames), [str(n) for n in n_frames])
+    ax.xaxis.set_minor_locator(plt.NullLocator())
+    ax.set_xlabel("frames used, Nt (log scale)")
+
+
 def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> plt.Figure:
     """Predicted sqrt(tr Wc) and the actual RMS error against Nt (log–log), and coverage."""
     calibration = calibration_table(collected)
-    fig, (ax, cal) = plt.subplots(1, 2, figsize=(11.5, 4.5))
+    n_frames = sorted(set(collected["n_frames"]) | set(paper["n_frames"]))
+    fig, (ax, cal) = plt.subplots(1, 2, figsize=(12, 4.8))
     for method, color in ((METHOD, "#1b9e77"), (EXTENDED, "#7570b3")):
         if method not in set(collected["method"]):
             continue
@@ -132,14 +167,14 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> plt.Figu
             "-o",
             color=color,
             ms=4,
-            label=f"{method}: predicted sqrt(tr Wc)",
+            label=f"{method}: predicted sqrt(tr Wc), median",
         )
         ax.plot(
             ours["n_frames"],
             ours["rms_error_mm"],
             "--x",
             color=color,
-            label=f"{method}: actual RMS error",
+            label=f"{method}: actual RMS error vs true centre",
         )
         part = calibration[calibration["method"] == method]
         cal.plot(part["n_frames"], part["inside_95"], "-o", color=color, ms=4, label=method)
@@ -151,29 +186,29 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> plt.Figu
         ms=4,
         label="paper C: sqrt(tr Wc) (its rig)",
     )
-    ax.set_xscale("log")
+    _frames_axis(ax, n_frames)
     ax.set_yscale("log")
-    ax.set_xlabel("frames used, Nt")
-    ax.set_ylabel("mm")
+    ax.set_ylabel("predicted uncertainty or actual error (mm, log scale)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title("Predicted uncertainty vs actual error (true centre)", fontsize=9)
+    ax.set_title("(a) Predicted uncertainty vs actual error", fontsize=9)
     band = calibration.drop_duplicates("n_frames")
+    trials = int(band["trials"].median())
     cal.fill_between(
         band["n_frames"],
         band["binomial_low"],
         band["binomial_high"],
         color="0.85",
-        label="honest covariance (95 % band)",
+        label="range an honest covariance gives:\n"
+        f"central 95 % of Binomial({trials}, 0.95) / {trials}",
     )
-    cal.axhline(0.95, color="k", lw=0.8)
-    cal.set_xscale("log")
+    cal.axhline(0.95, color="k", lw=0.8, label="0.95, the ellipsoid's nominal coverage")
+    _frames_axis(cal, n_frames)
     cal.set_ylim(0, 1.02)
-    cal.set_xlabel("frames used, Nt")
-    cal.set_ylabel("share of trials with the true centre inside")
+    cal.set_ylabel("share of trials with the true centre\ninside the predicted 95 % ellipsoid")
     cal.grid(True, which="both", alpha=0.3)
-    cal.legend(fontsize=7, loc="center right")
-    cal.set_title("Coverage of the predicted 95 % ellipsoid", fontsize=9)
+    cal.legend(fontsize=7, loc="lower right")
+    cal.set_title("(b) Coverage of the predicted 95 % ellipsoid", fontsize=9)
     fig.suptitle("Paper C Table 1 extended: is the Gauss–Markov covariance honest?", fontsize=10)
     fig.tight_layout()
     return fig

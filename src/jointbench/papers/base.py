@@ -66,7 +66,7 @@ class Output:
     """One figure or table of a paper.
 
     ``name`` is the file stem and rule name (``results/figures/<name>.{png,pdf}`` or
-    ``results/tables/<name>.{csv,md}``); ``render`` draws it from :class:`Inputs` (a figure
+    ``results/tables/<name>.{html,csv,md}``); ``render`` draws it from :class:`Inputs` (a figure
     returns a matplotlib ``Figure``, a table a :class:`Table`); ``conditions`` are the simulated
     conditions whose trials it draws; ``caption`` says what it shows (reStructuredText);
     ``headline`` summarises the tables named in ``summarises`` for its caption.
@@ -82,9 +82,11 @@ class Output:
 
     @property
     def files(self) -> dict[str, str]:
-        """The output's files by extension."""
+        """The output's files by extension; the first is the one the report shows."""
         folder, extensions = (
-            ("figures", ("png", "pdf")) if self.kind == "figure" else ("tables", ("csv", "md"))
+            ("figures", ("png", "pdf"))
+            if self.kind == "figure"
+            else ("tables", ("html", "csv", "md"))
         )
         return {ext: f"results/{folder}/{self.name}.{ext}" for ext in extensions}
 

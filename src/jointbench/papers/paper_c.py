@@ -199,7 +199,8 @@ PAPER = Paper(
             _uncertainty,
             caption="Paper C Table 1 as a picture: predicted sqrt(tr Wc) and actual RMS error "
             "against Nt (log–log), with the paper's values, and the coverage of the predicted "
-            "95 % ellipsoid.",
+            "95 % ellipsoid; the grey band is the coverage an honest covariance gives over this "
+            "many trials (central 95 % of Binomial(n, 0.95)/n).",
             summarises=("paper_c_calibration",),
             headline=_calibration_headline,
         ),

@@ -33,53 +33,9 @@ What it does not state, and the choices made here (all configurable in :class:`H
   starts only rotates the data about the true axis and changes no error.
 * The marker coordinates (below).
 
-How Table 1 decides. The per-cell check (published mean < 20°: within max(2°, 25 %);
-otherwise reproduced >= 20° and within 15°; MCP combined 30/.1 and 30/.3 may be 1.9 and 1.7
-either way round) over the 72 cells, 30 trials per cell seeded by
-``trial_rng(0, "hinge", condition, trial)``:
-
-=============================================  ==========  ==========
-motion (each with its own marker positions,    full range  half range
-same search within the same anatomical bounds)
-=============================================  ==========  ==========
-grid 11 x 11 (chosen)                          66          58
-Lissajous FE:AA = 1:2, figure of eight         66          51
-sequential (FE sweep, then AA sweep)           57          46
-AA sinusoid (6 cycles) on a monotone FE sweep  58          56
-=============================================  ==========  ==========
-
-With the final marker positions held fixed: grid 69 (full) / 51 (half); Lissajous 1:2 67 / 46,
-1:3 68, 2:1 54, 1:1 (an ellipse) 61, 1:2 with a 90° phase (AA following FE², a "U") 34;
-sequential 54 / 37; AA on a monotone FE sweep with 6 cycles 54 / 55, with 1 cycle 27. The other
-rotation order (AA about the reference segment's axis, which drags the FE axis with it) drops the
-grid to 53 and the Lissajous 1:2 to 55.
-
-The reasoning behind those numbers:
-
-* Half range is rejected by the transitions. Doubling the excursions moves every transition:
-  the planar normal no longer flips at 60/.3 and 90/.3 (published 72.6°, 63.4°; half range
-  38°, 8°), the radial cost never breaks at 60/.7, and the combined cost breaks at 60/.5 already
-  (published 6.7°), against claim B3. The radial break-down ratio grows with the FE amplitude
-  (to leading order the competing cylinder's cost grows like FE^4, the true one's like AA^2),
-  which is why it breaks at 30/.5 and 60/.7 but never at FE 90 — in full range only.
-* Motions that never combine FE and AA are rejected. In the sequential motion each marker
-  traces two orthogonal arcs, which the circle about the FE axis fits except for the AA arc;
-  the combined cost then never breaks at 90/.5 (1.4°, published 69.8°) and the planar error at
-  90/.3 stays too low (43°, published 63.4°).
-* Motions that correlate AA with FE bias every cost at low ratios: a single AA cycle on an FE
-  sweep gives combined errors of about 17° at ratio 0.3, a 1:2 Lissajous with a 90° phase
-  30–50° (published about 1°). The grid, and Lissajous 1:2 / 1:3 with zero phase, sample FE and AA
-  independently (AA uncorrelated with FE and with FE²); they are the only candidates above 65.
-  Among them only the grid reproduces the discriminating combined cell 60/.5 (6.2° and 4.7°
-  here, published 6.7° and 5.9°) while breaking at 90/.5 (69.9° / 70.9°, published 69.8° /
-  69.6°); the figure of eight breaks at 60/.5 already.
-* The plane normal's saturation near 80° and the radial cost's 6–9° at ratio 0.1 are set by the
-  markers, not the motion: once AA is large, the least-variance direction of markers moving on
-  spheres is their mean direction from the joint centre, and the radial cost prefers the axis
-  normal to the markers' positions (where small AA motions leave their distances unchanged);
-  both agree with markers that lean, on balance, about 10° towards the FE axis. The radial
-  cost's competing solution at about 55° is an axis in the FE–AA plane normal to the markers'
-  offsets from the segment's long axis, so it is set by where round the segment they sit.
+How the motion model and the marker positions were chosen (the candidates, the search and its
+reasoning) is recorded in ``docs/hinge-model-selection.md``; how the defaults fare against
+Table 1 is in the generated ``results/tables/paper_b_table1.md``.
 
 Marker positions. The paper gives no coordinates, only the protocol figures: knee "Markers U1,
 U2, and U3 define the frame for the upper leg, and markers L1, L2, and L3 are attached to the
@@ -107,30 +63,6 @@ the number of the protocol's 36 cells within tolerance at once (never per cell),
   dorsoradial, near the phalanx head, 9.6 mm from the axis. P2 (-6.5, 12.0, -28.0):
   dorsoulnar, mid-shaft, 13.6 mm. P3 (11.0, -1.5, -24.5): radial mid-lateral, mid-shaft,
   11.1 mm.
-
-Result with the defaults (knee 35/36, MCP 34/36, 69/72 cells; mean (SD) in degrees, 30 trials;
-published in brackets; x = outside the tolerance):
-
-======== ======== ============ ============ ============ ============ ============ ============
-protocol cost     30/.1        30/.3        30/.5        60/.5        90/.3        90/.5
-======== ======== ============ ============ ============ ============ ============ ============
-knee     planar   4.0 [4.3]    76.7 [76.1]  79.9 [79.7]  79.7 [79.2]  64.2 [63.4]  79.4 [79.1]
-knee     radial   7.1 [8.8]    10.6 [16.6]x 57.2 [55.5]  14.5 [13.3]  9.7 [9.7]    11.9 [11.7]
-knee     combined 0.4 [1.3]    0.9 [2.2]    3.9 [3.8]    6.2 [6.7]    0.6 [0.8]    69.9 [69.8]
-mcp      planar   2.7 [4.7]    77.0 [75.7]  80.3 [80.3]  80.0 [79.5]  62.3 [62.3]  79.8 [79.2]
-mcp      radial   9.1 [8.5]    53.0 [15.3]x 52.7 [55.4]  22.9 [13.5]x 9.7 [9.9]    12.3 [11.9]
-mcp      combined 1.3 [1.9]    2.0 [1.7]    4.8 [4.3]    4.7 [5.9]    0.9 [0.6]    70.9 [69.6]
-======== ======== ============ ============ ============ ============ ============ ============
-
-(All 72 cells are listed in the report of this change.) What does not reproduce: the radial
-cost near its break-down, 30/.3 in both protocols and MCP 60/.5. The published values there
-(16.6 and 15.3 with SDs read as 18.2 and 15.5) are mixtures in which a few trials jump to the
-55° solution; here 1 of 30 knee trials jumps at 30/.3 (10.6, SD 8.5), all 30 MCP trials at
-30/.3 and 7 of 30 at 60/.5 (22.9, SD 8.5). Where the break-down falls between grid cells
-depends on details of the marker geometry that the paper does not give. Claim B5 (knee and MCP
-within 1.5° everywhere) holds in 27 of 36 cells: at the finger's scale the 1 mm noise is about
-ten times larger relative to the lever arms, which spreads the MCP errors (planar 30/.1 SD 2.0
-against 0.7) and moves the radial break-down.
 """
 
 from __future__ import annotations

@@ -1,63 +1,100 @@
 """Datasets and estimates on disk (parquet).
 
 Dataset files are long format, one row per (segment, trial, frame, marker) with columns
-``segment, trial, frame, marker, x, y, z`` [mm]; the study, condition, ground truth and generator
-parameters are JSON in the parquet metadata under the key ``jointbench``.
+``segment, trial, frame, marker, x, y, z`` [mm], rows in that order; the study, condition,
+ground truth, generator parameters and each segment's array shape are JSON in the parquet
+metadata under the key ``jointbench``. Trials are written in blocks, one row group per segment
+and block, so a condition is read back a block of trials at a time (:func:`iter_dataset`) and
+memory does not grow with the number of trials.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from jointbench.simulate import Trials
 
-__all__ = ["read_dataset", "read_metadata", "write_dataset", "write_table"]
+__all__ = ["iter_dataset", "read_dataset", "read_metadata", "write_dataset", "write_table"]
 
 _META_KEY = b"jointbench"
+_INDEX = ("trial", "frame", "marker")
+# Marker coordinates per block of trials: large enough that per-block overheads vanish, small
+# enough that a block and the estimators' temporaries stay far below a job's memory.
+BLOCK_BYTES = 32 * 2**20
 
 
-def _long_table(trials: Trials) -> pa.Table:
-    columns: dict[str, list[np.ndarray]] = {k: [] for k in ("segment", "trial", "frame", "marker")}
-    coords: list[np.ndarray] = []
-    for name, markers in trials.segments.items():
-        n_trials, n_frames, n_markers, _ = markers.shape
-        trial, frame, marker = np.meshgrid(
-            np.arange(n_trials), np.arange(n_frames), np.arange(n_markers), indexing="ij"
-        )
-        columns["segment"].append(np.full(trial.size, name))
-        columns["trial"].append(trial.ravel())
-        columns["frame"].append(frame.ravel())
-        columns["marker"].append(marker.ravel())
-        coords.append(markers.reshape(-1, 3))
-    xyz = np.concatenate(coords)
-    data = {key: np.concatenate(parts) for key, parts in columns.items()}
-    data["segment"] = pa.array(data["segment"]).dictionary_encode()
-    for axis, name in enumerate("xyz"):
-        data[name] = xyz[:, axis]
-    return pa.table(data)
+def block_trials(shapes: Mapping[str, tuple[int, ...]], block_bytes: int | None = None) -> int:
+    """Trials per block (of ``block_bytes``, default :data:`BLOCK_BYTES`) for segments shaped
+    ``(n_trials, n_frames, n_markers, 3)``."""
+    block_bytes = BLOCK_BYTES if block_bytes is None else block_bytes
+    per_trial = sum(8 * int(np.prod(shape[1:])) for shape in shapes.values())
+    return max(1, block_bytes // max(per_trial, 1))
+
+
+def _segment_block(name: str, markers: np.ndarray, first_trial: int) -> pa.Table:
+    """Long rows of trials ``first_trial, ...`` of one segment ``(n, n_frames, n_markers, 3)``."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    trial, frame, marker = np.meshgrid(
+        np.arange(first_trial, first_trial + n_trials),
+        np.arange(n_frames),
+        np.arange(n_markers),
+        indexing="ij",
+    )
+    xyz = markers.reshape(-1, 3)
+    return pa.table(
+        {
+            "segment": pa.DictionaryArray.from_arrays(
+                np.zeros(trial.size, dtype=np.int32), pa.array([name])
+            ),
+            "trial": trial.ravel(),
+            "frame": frame.ravel(),
+            "marker": marker.ravel(),
+            "x": xyz[:, 0],
+            "y": xyz[:, 1],
+            "z": xyz[:, 2],
+        }
+    )
 
 
 def write_dataset(
     path: str | Path, trials: Trials, *, study: str, condition: Mapping[str, object]
 ) -> None:
-    """Write ``trials`` to ``path`` with study, condition, truth and parameters as metadata."""
-    table = _long_table(trials)
+    """Write ``trials`` to ``path`` with study, condition, truth and parameters as metadata.
+
+    Rows are grouped by segment, then by blocks of trials (one row group each); no table of the
+    whole condition is built.
+    """
+    shapes = {name: markers.shape for name, markers in trials.segments.items()}
     metadata = {
         "study": study,
         "condition": dict(condition),
         "truth": trials.truth,
         "parameters": trials.parameters,
+        "shapes": {name: list(shape) for name, shape in shapes.items()},
     }
-    table = table.replace_schema_metadata({_META_KEY: json.dumps(metadata).encode()})
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    pq.write_table(table, path)
+    step = block_trials(shapes)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = None
+    try:
+        for name, markers in trials.segments.items():
+            for first in range(0, markers.shape[0], step):
+                table = _segment_block(name, markers[first : first + step], first)
+                if writer is None:
+                    schema = table.schema.with_metadata({_META_KEY: json.dumps(metadata).encode()})
+                    writer = pq.ParquetWriter(path, schema)
+                writer.write_table(table.replace_schema_metadata(schema.metadata))
+    finally:
+        if writer is not None:
+            writer.close()
 
 
 def read_metadata(path: str | Path) -> dict:
@@ -68,15 +105,110 @@ def read_metadata(path: str | Path) -> dict:
     return json.loads(metadata[_META_KEY])
 
 
+def _shapes(path: str | Path, metadata: Mapping) -> dict[str, tuple[int, ...]]:
+    """Each segment's ``(n_trials, n_frames, n_markers, 3)``, from the metadata or, for files
+    written before it was recorded there, from the index columns."""
+    if "shapes" in metadata:
+        return {name: tuple(shape) for name, shape in metadata["shapes"].items()}
+    table = pq.read_table(path, columns=["segment", *_INDEX])
+    shapes = {}
+    for name in table.column("segment").unique().to_pylist():
+        part = table.filter(pc.equal(table.column("segment").cast(pa.string()), name))
+        sizes = [pc.max(part.column(key)).as_py() + 1 for key in _INDEX]
+        shapes[str(name)] = (*sizes, 3)
+    return shapes
+
+
+def _read_rows(dataset: pq.ParquetFile, first_row: int, n_rows: int) -> pa.Table:
+    """Rows ``first_row .. first_row + n_rows`` of a parquet file, reading only the row groups
+    that hold them."""
+    meta = dataset.metadata
+    groups, offsets, start = [], [], 0
+    for index in range(meta.num_row_groups):
+        size = meta.row_group(index).num_rows
+        if start < first_row + n_rows and start + size > first_row:
+            groups.append(index)
+            offsets.append(start)
+        start += size
+    table = dataset.read_row_groups(groups, columns=["segment", *_INDEX, "x", "y", "z"])
+    return table.slice(first_row - offsets[0], n_rows)
+
+
+def _block(path, dataset, shapes, offsets, first: int, count: int) -> dict[str, np.ndarray]:
+    """Segments' markers ``(count, n_frames, n_markers, 3)`` of trials ``first ..``, checked
+    against the expected row order (``ValueError`` naming the file and the first bad row)."""
+    segments = {}
+    for name, shape in shapes.items():
+        _, n_frames, n_markers, _ = shape
+        per_trial = n_frames * n_markers
+        rows = _read_rows(dataset, offsets[name] + first * per_trial, count * per_trial)
+        expected = np.meshgrid(
+            np.arange(first, first + count),
+            np.arange(n_frames),
+            np.arange(n_markers),
+            indexing="ij",
+        )
+        labels = rows.column("segment").cast(pa.string())
+        if not pc.all(pc.equal(labels, name)).as_py():
+            raise ValueError(
+                f"{path}: expected segment {name!r} for trials {first}..{first + count - 1}; "
+                "rows are not grouped by segment, then trial, frame and marker"
+            )
+        for key, want in zip(_INDEX, expected, strict=True):
+            got = rows.column(key).to_numpy()
+            if not np.array_equal(got, want.ravel()):
+                bad = int(np.argmax(got != want.ravel()))
+                raise ValueError(
+                    f"{path}: rows of segment {name!r} are not in (trial, frame, marker) order "
+                    f"(expected trial {first + bad // per_trial}, frame "
+                    f"{bad % per_trial // n_markers}, marker {bad % n_markers} at the "
+                    f"{bad}-th row of the block); rewrite it with write_dataset"
+                )
+        out = np.empty((count, n_frames, n_markers, 3))
+        for axis, column in enumerate("xyz"):
+            out[..., axis] = rows.column(column).to_numpy().reshape(count, n_frames, n_markers)
+        segments[name] = out
+    return segments
+
+
+def iter_dataset(
+    path: str | Path, *, block_bytes: int | None = None
+) -> Iterator[tuple[int, Trials]]:
+    """A dataset file as ``(first_trial, Trials)`` blocks of consecutive trials.
+
+    Only one block is in memory at a time; its trials are numbered from 0 within the block.
+    """
+    metadata = read_metadata(path)
+    shapes = _shapes(path, metadata)
+    dataset = pq.ParquetFile(path)
+    offsets, start = {}, 0
+    for name, shape in shapes.items():
+        offsets[name] = start
+        start += int(np.prod(shape[:3]))
+    if start != dataset.metadata.num_rows:
+        raise ValueError(
+            f"{path}: {dataset.metadata.num_rows} rows, but its segments "
+            f"{ {name: list(shape) for name, shape in shapes.items()} } need {start}"
+        )
+    n_trials = next(iter(shapes.values()))[0]
+    step = block_trials(shapes, block_bytes)
+    for first in range(0, n_trials, step):
+        count = min(step, n_trials - first)
+        segments = _block(path, dataset, shapes, offsets, first, count)
+        yield (
+            first,
+            Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"]),
+        )
+
+
 def read_dataset(path: str | Path) -> tuple[Trials, dict]:
     """Read a dataset file back into :class:`Trials` and its metadata."""
     metadata = read_metadata(path)
-    frame = pq.read_table(path).to_pandas()
-    segments = {}
-    for name, part in frame.groupby("segment", observed=True, sort=False):
-        part = part.sort_values(["trial", "frame", "marker"])
-        shape = (part["trial"].nunique(), part["frame"].nunique(), part["marker"].nunique(), 3)
-        segments[str(name)] = part[["x", "y", "z"]].to_numpy().reshape(shape)
+    shapes = _shapes(path, metadata)
+    segments = {name: np.empty(shape) for name, shape in shapes.items()}
+    for first, block in iter_dataset(path):
+        for name, markers in block.segments.items():
+            segments[name][first : first + markers.shape[0]] = markers
     trials = Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"])
     return trials, metadata
 

@@ -36,7 +36,9 @@ __all__ = [
 ]
 
 COLUMNS = [
+    "paper",
     "study",
+    "entry",
     "id",
     "quantity",
     "quote",
@@ -93,7 +95,10 @@ def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
         return "not applicable", "", entry.get("not_applicable", entry["tolerance_reason"])
     if measured is None:
         return "not applicable", "", entry.get("not_applicable", NOT_IN_RUN)
-    verdict = evaluate(tolerance, entry["published"], measured.value)
+    try:
+        verdict = evaluate(tolerance, entry["published"], measured.value)
+    except ValueError as error:
+        return "not applicable", "", f"cannot evaluate: {error}"
     if verdict.holds:
         return "reproduced", verdict.margin_text, ""
     return "not reproduced", verdict.margin_text, entry.get("deviation", UNEXPLAINED)
@@ -106,12 +111,16 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     without one is not applicable in this run.
     """
     rows = []
-    for entry in [*document.get("values", []), *document["claims"]]:
+    entries = [("value", e) for e in document.get("values", [])]
+    entries += [("claim", e) for e in document["claims"]]
+    for kind, entry in entries:
         measured = measurements.get(entry["id"])
         status, margin, reason = _verdict(entry, measured)
         rows.append(
             {
+                "paper": document["paper"],
                 "study": document["study"],
+                "entry": kind,
                 "id": entry["id"],
                 "quantity": entry.get("quantity", entry.get("claim")),
                 "quote": entry.get("quote", ""),

@@ -12,7 +12,7 @@ from jointbench.estimators import registry
 from jointbench.simulate import Trials
 from jointbench.study.config import parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
-from jointbench.study.io import read_dataset, write_dataset, write_table
+from jointbench.study.io import iter_dataset, read_metadata, write_dataset, write_table
 from jointbench.study.schema import check_estimates
 from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
@@ -39,8 +39,29 @@ def _fit_one(fit, arguments, options) -> tuple[object, str, bool, int]:
     try:
         result = fit(*arguments, **options)
     except Exception as error:
-        return None, f"error: {type(error).__name__}: {error}", False, 0
+        return _outcome(error)
+    return _outcome(result)
+
+
+def _outcome(result) -> tuple[object, str, bool, int]:
+    if isinstance(result, Exception):
+        return None, f"error: {type(result).__name__}: {result}", False, 0
     return result, str(result.status), bool(result.converged), int(result.iterations)
+
+
+def _fit_all(fit, spec, trials: Trials, options) -> tuple[list, float] | None:
+    """All trials at once through the estimator's ``batched`` form, if it has one.
+
+    ``fit.batched(*segments, **options)`` takes each segment as ``(n_trials, ...)`` and returns
+    per trial what ``fit`` returns or the exception it raises. Returns the outcomes and the
+    batch's wall time divided by the trials, or ``None`` to fit one trial at a time.
+    """
+    batched = getattr(fit, "batched", None)
+    if batched is None:
+        return None
+    start = time.perf_counter()
+    outcomes = batched(*(trials.segments[name] for name in spec.segments), **options)
+    return outcomes, (time.perf_counter() - start) / max(trials.n_trials, 1)
 
 
 def estimate(
@@ -50,16 +71,25 @@ def estimate(
     condition: Mapping[str, object],
     options: Mapping[str, object] | None = None,
 ) -> pd.DataFrame:
-    """One row per trial: condition, estimate, error, converged, iterations, seconds, status."""
+    """One row per trial: condition, estimate, error, converged, iterations, seconds, status.
+
+    Estimators with a ``batched`` form fit all trials in one call; their ``seconds`` is the
+    batch's wall time divided by the number of trials.
+    """
     spec = get_study(study)
     fit = registry.get(spec.kind, method)
     diagnose = DIAGNOSTICS.get((study, method))
+    batch = _fit_all(fit, spec, trials, options or {})
     rows = []
     for trial in range(trials.n_trials):
         arguments = spec.fit_arguments(trials, trial)
-        start = time.perf_counter()
-        result, status, converged, iterations = _fit_one(fit, arguments, options or {})
-        seconds = time.perf_counter() - start
+        if batch is None:
+            start = time.perf_counter()
+            result, status, converged, iterations = _fit_one(fit, arguments, options or {})
+            seconds = time.perf_counter() - start
+        else:
+            result, status, converged, iterations = _outcome(batch[0][trial])
+            seconds = batch[1]
         extra = diagnose(arguments, result, trials.truth) if diagnose and result else {}
         rows.append(
             {
@@ -95,8 +125,16 @@ def run_estimate_files(
     options = config["studies"][study].get("options", {}).get(method, {})
     by_condition = {Path(path).stem: path for path in datasets}
     for output in outputs:
-        trials, metadata = read_dataset(by_condition[Path(output).stem])
-        write_table(estimate(study, method, trials, metadata["condition"], options), output)
+        path = by_condition[Path(output).stem]
+        condition = read_metadata(path)["condition"]
+        # A block of trials at a time, so memory does not grow with the number of trials.
+        frames = [
+            estimate(study, method, block, condition, options).assign(
+                trial=lambda frame, first=first: frame["trial"] + first
+            )
+            for first, block in iter_dataset(path)
+        ]
+        write_table(pd.concat(frames, ignore_index=True), output)
 
 
 def collect(study: str, paths: Sequence[str | Path], output: str) -> pd.DataFrame:

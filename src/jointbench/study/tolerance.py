@@ -50,6 +50,14 @@ def _array(value: object) -> np.ndarray:
     return np.atleast_1d(np.asarray(value, dtype=float))
 
 
+def _same_length(measured: np.ndarray, published: np.ndarray) -> None:
+    if published.size not in (1, measured.size):
+        raise ValueError(
+            f"{measured.size} reproduced value(s) for {published.size} published: this run "
+            "lacks part of what the entry compares"
+        )
+
+
 def _margin_verdict(margins: np.ndarray, unit: str = "") -> Verdict:
     worst = float(np.min(margins)) if margins.size else float("nan")
     holds = bool(margins.size and np.all(margins >= 0) and np.isfinite(worst))
@@ -57,17 +65,21 @@ def _margin_verdict(margins: np.ndarray, unit: str = "") -> Verdict:
 
 
 def _abs(spec, published, measured) -> Verdict:
-    return _margin_verdict(spec - np.abs(_array(measured) - _array(published)))
+    m, p = _array(measured), _array(published)
+    _same_length(m, p)
+    return _margin_verdict(spec - np.abs(m - p))
 
 
 def _rel(spec, published, measured) -> Verdict:
-    p = _array(published)
-    return _margin_verdict(spec * np.abs(p) - np.abs(_array(measured) - p))
+    m, p = _array(measured), _array(published)
+    _same_length(m, p)
+    return _margin_verdict(spec * np.abs(p) - np.abs(m - p))
 
 
 def _max_abs_rel(spec, published, measured) -> Verdict:
     absolute, relative = spec
-    p = _array(published)
+    m, p = _array(measured), _array(published)
+    _same_length(m, p)
     return _margin_verdict(
         np.maximum(absolute, relative * np.abs(p)) - np.abs(_array(measured) - p)
     )
@@ -75,6 +87,7 @@ def _max_abs_rel(spec, published, measured) -> Verdict:
 
 def _factor(spec, published, measured) -> Verdict:
     p, m = _array(published), _array(measured)
+    _same_length(m, p)
     with np.errstate(divide="ignore", invalid="ignore"):
         # Inside by a factor ``spec / (m/p or p/m)``: 1 at the edge; the margin is that less one.
         off = np.maximum(m / p, p / m)
@@ -82,12 +95,20 @@ def _factor(spec, published, measured) -> Verdict:
     return _margin_verdict(np.where(np.isfinite(margins), margins, -np.inf), "×")
 
 
+def _bound(spec, measured) -> tuple[np.ndarray, np.ndarray]:
+    m, bound = _array(measured), _array(spec)
+    _same_length(m, bound)
+    return m, bound
+
+
 def _at_least(spec, published, measured) -> Verdict:
-    return _margin_verdict(_array(measured) - _array(spec))
+    m, bound = _bound(spec, measured)
+    return _margin_verdict(m - bound)
 
 
 def _at_most(spec, published, measured) -> Verdict:
-    return _margin_verdict(_array(spec) - _array(measured))
+    m, bound = _bound(spec, measured)
+    return _margin_verdict(bound - m)
 
 
 def _strict(margins: np.ndarray) -> Verdict:
@@ -97,11 +118,13 @@ def _strict(margins: np.ndarray) -> Verdict:
 
 
 def _greater_than(spec, published, measured) -> Verdict:
-    return _strict(_array(measured) - _array(spec))
+    m, bound = _bound(spec, measured)
+    return _strict(m - bound)
 
 
 def _less_than(spec, published, measured) -> Verdict:
-    return _strict(_array(spec) - _array(measured))
+    m, bound = _bound(spec, measured)
+    return _strict(bound - m)
 
 
 def _range(spec, published, measured) -> Verdict:
@@ -119,6 +142,7 @@ def binomial_interval(trials: int, proportion: float) -> tuple[int, int]:
 def _binomial95(spec, published, measured) -> Verdict:
     counts, trials = _array(measured["count"]), _array(measured["trials"])
     proportions = _array(published) / _array(spec["of_n"])
+    _same_length(counts, proportions)
     margins = []
     for count, n, proportion in zip(
         counts, trials, np.broadcast_to(proportions, counts.shape), strict=True

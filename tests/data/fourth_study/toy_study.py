@@ -12,6 +12,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from jointbench.estimators import CenterResult, register
 from jointbench.papers import Inputs, Measured, Output, Paper
 from jointbench.simulate import Study, Trials, isotropic_noise
 
@@ -42,6 +43,18 @@ def simulate(condition, protocol: ToyProtocol, rngs) -> Trials:
         [clean + isotropic_noise(rng, clean.shape, float(condition["noise_mm"])) for rng in rngs]
     )
     return Trials(segments={"moving": noisy}, truth={"center": CENTRE.tolist()})
+
+
+@register("center", "toy-centroid")
+def fit_centroid(markers: np.ndarray) -> CenterResult:
+    """The mean marker position, (n_frames, n_markers, 3) [mm] -> (3,) [mm]: a user's estimator."""
+    return CenterResult(
+        center=markers.reshape(-1, 3).mean(axis=0),
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="toy-centroid",
+    )
 
 
 STUDY = Study(

@@ -17,9 +17,13 @@ rule estimate_cmc_LM:
         ),
     log:
         "results/logs/estimate/cmc/LM.log",
+    conda:
+        "../../envs/jointbench.yaml"
     params:
         # From the Snakefile's folder, so that `snakemake --directory elsewhere` finds it too.
         script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
-        out_dir="results/estimates/cmc/LM",
+        out_dir=lambda w, output: Path(output[0]).parent,
+        # The interpreter running this workflow: the project's environment.
+        python=PYTHON,
     shell:
-        "{PYTHON:q} {params.script:q} --out-dir {params.out_dir:q} {input:q} 2> {log:q}"
+        "{params.python:q} {params.script:q} --out-dir {params.out_dir:q} {input:q} 2> {log:q}"

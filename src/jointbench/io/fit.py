@@ -1,0 +1,392 @@
+"""Fitting a recording: segments, gaps, artefacts, frames, and an optional bootstrap.
+
+Every answer is in the reference segment's technical frame (:mod:`jointbench.io.segments`),
+whose definition travels with the result. For ``center`` and ``axis`` the moving markers are
+expressed in that frame, frame by frame, and passed to the estimator. For ``joint_center`` both
+clusters are expressed in it: the reference cluster's poses are then the identity, so the
+estimators' "world at frame 0" is the technical frame itself. Paper C's analytic and
+Gauss–Markov models (and SCoRE's reported centre) also need one instant at which both body
+frames coincide; it is taken at the *anchor* frame, the frame whose relative orientation of the
+two segments is nearest their mean relative orientation (chordal mean), which no reordering of
+the frames changes. It is moved to the front before the estimator is called.
+
+Gaps: a frame enters a fit only when the reference pose is defined (>= 3 reference markers) and
+every moving marker is visible (two-segment methods: every marker of both segments); the others
+are left out and counted. Artefacts (label swaps, markers falling off) are refused with a message
+naming the marker and frame, or, with ``artefacts="exclude"``, their frames are left out with a
+warning.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from jointbench.api import fit_axis, fit_center, fit_joint_center
+from jointbench.estimators.registry import KINDS, get
+from jointbench.geometry import angle_between_lines_deg
+from jointbench.io.recording import Recording
+from jointbench.io.segments import Artefact, ArtefactRules, Segment, find_jumps
+from jointbench.numerics.poses import best_rotation
+from jointbench.uncertainty import Bootstrap, bootstrap
+
+__all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]
+
+ARTEFACT_POLICIES = ("refuse", "exclude")
+# The main fit goes through the public entry points, so it gets every check they make.
+_FITTERS = {"center": fit_center, "axis": fit_axis, "joint_center": fit_joint_center}
+DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
+
+
+@dataclass(frozen=True, eq=False)
+class RecordingFit:
+    """An estimator's answer on a recording, and how it was obtained.
+
+    ``result`` is the estimator's own result, its coordinates in the reference segment's
+    technical frame (``frame`` holds that frame's definition; ``None`` when no reference was
+    given and the markers were taken as already in the reference frame). ``frames_used`` are
+    the recording's frame indices that entered the fit; ``n_gap_frames`` the frames left out for
+    missing markers; ``excluded`` the artefacts whose frames were left out; ``anchor_frame`` the
+    frame at which two-segment models let both body frames coincide. ``bootstrap`` holds the
+    moving-block refits when requested: the centre ``(3,)``, or for an axis its direction
+    ``(3,)`` (sign-aligned with the estimate) and the point ``(3,)`` where it crosses the plane
+    through the estimate's point normal to its direction.
+    """
+
+    kind: str
+    method: str
+    result: object
+    frame: dict | None
+    frames_used: np.ndarray
+    n_gap_frames: int
+    excluded: tuple[Artefact, ...] = ()
+    anchor_frame: int | None = None
+    bootstrap: Bootstrap | None = None
+    reference: Segment | None = field(default=None, repr=False)
+    first_frame: int = 0
+
+    def estimate(self) -> np.ndarray:
+        """The centre ``(3,)``, or an axis' direction and point ``(6,)``, in the frame."""
+        return _estimate_vector(self.kind, self.result)
+
+    def world(self) -> np.ndarray:
+        """The centre (or the axis point) in the world in every frame ``(n_frames, 3)`` [mm]
+        of the fitted range, whose row 0 is frame ``first_frame`` (NaN where the reference pose
+        is undefined). Needs a reference segment."""
+        if self.reference is None:
+            raise ValueError("no reference segment: the result is already in the data's frame")
+        return self.reference.world(self.estimate()[-3:])
+
+    def bootstrap_cone_deg(self, level: float = 0.95) -> float:
+        """Axis: the angle [deg] from the estimate holding ``level`` of the refit directions."""
+        if self.kind != "axis" or self.bootstrap is None:
+            raise ValueError("only an axis fit with a bootstrap has a direction cone")
+        angles = angle_between_lines_deg(self.bootstrap.valid[:, :3], self.result.direction)
+        return float(np.quantile(angles, level))
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary: estimate, status, frames, artefacts, frame definition."""
+        out: dict = {"kind": self.kind, "method": self.method}
+        if self.kind == "axis":
+            out["direction"] = self.result.direction.tolist()
+            out["point_mm"] = self.result.point.tolist()
+        else:
+            out["center_mm"] = self.result.center.tolist()
+        covariance = getattr(self.result, "covariance", None)
+        if covariance is not None:
+            out["covariance_mm2"] = np.asarray(covariance).tolist()
+        out.update(
+            converged=bool(self.result.converged),
+            status=self.result.status,
+            n_frames_used=len(self.frames_used),
+            n_gap_frames=self.n_gap_frames,
+            excluded=[vars(a) for a in self.excluded],
+            anchor_frame=self.anchor_frame,
+        )
+        if self.bootstrap is not None:
+            boot = {
+                "n_resamples": len(self.bootstrap.samples),
+                "n_failed": self.bootstrap.n_failed,
+                "block_length_frames": self.bootstrap.block_length,
+                "interval_95": self.bootstrap.interval().tolist(),
+            }
+            if self.kind == "axis":
+                boot["direction_cone_95_deg"] = self.bootstrap_cone_deg()
+            else:
+                boot["covariance_mm2"] = self.bootstrap.covariance().tolist()
+            out["bootstrap"] = boot
+        out["frame"] = self.frame or "as recorded (markers taken as already in the reference frame)"
+        return out
+
+
+def _estimate_vector(kind: str, result) -> np.ndarray:
+    if kind == "axis":
+        return np.concatenate([result.direction, result.point])
+    return np.asarray(result.center, dtype=float)
+
+
+def _bootstrap_row(kind: str, refit, estimate: np.ndarray) -> np.ndarray | None:
+    """What a refit contributes to the bootstrap; ``None`` when it failed or did not converge."""
+    if isinstance(refit, Exception) or not refit.converged:
+        return None
+    if kind == "axis":
+        return _axis_crossing(refit.direction, refit.point, estimate)
+    return np.asarray(refit.center, dtype=float)
+
+
+def _axis_crossing(direction, point, reference) -> np.ndarray:
+    """Refit axis as (sign-aligned direction, its crossing of the reference plane) ``(6,)``."""
+    ref_direction, ref_point = reference[:3], reference[3:]
+    cosine = float(direction @ ref_direction)
+    if abs(cosine) < 1e-12:
+        return np.full(6, np.nan)
+    along = float((ref_point - point) @ ref_direction) / cosine
+    return np.concatenate([np.sign(cosine) * direction, point + along * direction])
+
+
+def anchor_frame(reference: Segment, moving: Segment, frames: np.ndarray) -> int:
+    """Of ``frames``, the one whose relative orientation is nearest the chordal mean."""
+    relative = np.swapaxes(reference.rotation[frames], 1, 2) @ moving.rotation[frames]
+    mean = best_rotation(relative.sum(axis=0))
+    closeness = np.einsum("ij,fij->f", mean, relative)
+    return int(frames[int(np.argmax(closeness))])
+
+
+def _artefacts(
+    recording: Recording, segments: list[Segment], loose: list[int], rules: ArtefactRules
+) -> list[Artefact]:
+    found = [a for segment in segments for a in segment.artefacts]
+    if loose:
+        labels = tuple(recording.labels[i] for i in loose)
+        found += find_jumps(recording.markers[:, loose], labels, rules)
+    return sorted(found, key=lambda a: (a.frame, a.label))
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """A recording made ready for fitting (one preparation serves every method).
+
+    ``arrays`` the estimator's inputs over all frames of the recording, in the reference
+    technical frame; ``usable`` the frame rows that may enter a fit; ``found`` the artefacts.
+    """
+
+    kind: str
+    recording: Recording
+    reference: Segment | None
+    moving: Segment | None
+    arrays: tuple[np.ndarray, ...]
+    usable: np.ndarray
+    n_gap_frames: int
+    found: tuple[Artefact, ...]
+    artefacts: str
+
+    def rows(self, indices: np.ndarray) -> np.ndarray:
+        """Recording rows of ``usable[indices]``, the anchor frame first for two segments."""
+        rows = self.usable[indices]
+        if self.kind != "joint_center":
+            return rows
+        anchor = anchor_frame(self.reference, self.moving, rows)
+        first = int(np.flatnonzero(rows == anchor)[0])
+        return np.concatenate([[anchor], np.delete(rows, first)])
+
+    def solve(self, method: str, rows: np.ndarray, options: dict):
+        """The estimator's result on the recording ``rows``."""
+        try:
+            return _FITTERS[self.kind](*(a[rows] for a in self.arrays), method=method, **options)
+        except ValueError as error:
+            raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
+
+    def refits(self, method: str, rows: list[np.ndarray], options: dict) -> list:
+        """Results (or ``ValueError``) on many row sets, as one batch where the method can."""
+        fit = get(self.kind, method)
+        batched = getattr(fit, "batched", None)
+        if batched is not None:
+            return batched(*(np.stack([a[r] for r in rows]) for a in self.arrays), **options)
+        outcomes = []
+        for subset in rows:
+            try:
+                outcomes.append(fit(*(a[subset] for a in self.arrays), **options))
+            except ValueError as error:
+                outcomes.append(error)
+        return outcomes
+
+    def fit(
+        self,
+        method: str | None = None,
+        *,
+        n_bootstrap: int = 0,
+        block_length: int | None = None,
+        seed: int = 0,
+        **options: object,
+    ) -> RecordingFit:
+        """One method's :class:`RecordingFit` (parameters as in :func:`fit`)."""
+        kind = self.kind
+        method = method or DEFAULT_METHODS[kind]
+        rows = self.rows(np.arange(self.usable.size))
+        result = self.solve(method, rows, options)
+        anchor = int(rows[0]) if kind == "joint_center" else None
+        boot = None
+        if n_bootstrap:
+            estimate = _estimate_vector(kind, result)
+
+            def statistic(indices: np.ndarray) -> list[np.ndarray | None]:
+                outcomes = self.refits(method, [self.rows(i) for i in indices], options)
+                return [_bootstrap_row(kind, refit, estimate) for refit in outcomes]
+
+            boot = bootstrap(
+                statistic,
+                self.usable.size,
+                n_resamples=n_bootstrap,
+                block_length=block_length,
+                seed=seed,
+            )
+        offset = self.recording.first_frame
+        return RecordingFit(
+            kind=kind,
+            method=method,
+            result=result,
+            frame=None if self.reference is None else self.reference.definition(),
+            frames_used=self.usable + offset,
+            n_gap_frames=self.n_gap_frames,
+            excluded=self.found if self.artefacts == "exclude" else (),
+            anchor_frame=None if anchor is None else anchor + offset,
+            bootstrap=boot,
+            reference=self.reference,
+            first_frame=offset,
+        )
+
+
+def prepare(
+    recording: Recording,
+    kind: str,
+    moving: str | list[str],
+    reference: str | list[str] | None = None,
+    *,
+    frames: slice | str | None = None,
+    artefacts: str = "refuse",
+    rules: ArtefactRules | None = None,
+) -> Prepared:
+    """Segments, gaps and artefacts of a recording for one kind of fit (see :func:`fit`)."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
+    if artefacts not in ARTEFACT_POLICIES:
+        raise ValueError(
+            f"artefacts must be one of {', '.join(ARTEFACT_POLICIES)}, got {artefacts!r}"
+        )
+    rules = rules or ArtefactRules()
+    if frames is not None:
+        recording = recording.frames(frames)
+    moving_index = recording.index(moving)
+    segments: list[Segment] = []
+    ref = None
+    if reference is not None:
+        ref = Segment.fit(recording, reference, rules)
+        overlap = set(ref.labels) & {recording.labels[i] for i in moving_index}
+        if overlap:
+            raise ValueError(
+                f"{recording.source}: {', '.join(sorted(overlap))} named in both the reference "
+                "and the moving segment"
+            )
+        segments.append(ref)
+    elif kind == "joint_center":
+        raise ValueError("joint_center needs a reference segment (the proximal markers)")
+    mov = None
+    if kind == "joint_center" or len(moving_index) >= 3:
+        mov = Segment.fit(recording, moving, rules)
+        segments.append(mov)
+    found = _artefacts(recording, segments, [] if mov else moving_index, rules)
+    if found and artefacts == "refuse":
+        raise ValueError(
+            f"{recording.source}: {_summarise(found, recording)}. Choose other frames, or pass "
+            "artefacts='exclude' (--artefacts exclude) to leave such frames out"
+        )
+
+    world = recording.markers[:, moving_index]
+    if kind == "joint_center":
+        reference_world = recording.markers[:, recording.index(ref.labels)]
+        arrays = (ref.local(reference_world), ref.local(world))
+    else:
+        arrays = (world if ref is None else ref.local(world),)
+    visible = np.all([np.isfinite(a).all(axis=(1, 2)) for a in arrays], axis=0)
+    bad = np.zeros(recording.n_frames, dtype=bool)
+    for artefact in found:
+        bad[artefact.frame] = True
+    if found:
+        warnings.warn(
+            f"{recording.source}: left out {int(bad.sum())} frames with artefacts: "
+            f"{_summarise(found, recording)}",
+            stacklevel=3,
+        )
+    usable = np.flatnonzero(visible & ~bad)
+    if usable.size == 0:
+        raise ValueError(f"{recording.source}: no frame has every marker the fit needs")
+    return Prepared(
+        kind=kind,
+        recording=recording,
+        reference=ref,
+        moving=mov,
+        arrays=arrays,
+        usable=usable,
+        n_gap_frames=int(np.sum(~visible & ~bad)),
+        found=tuple(found),
+        artefacts=artefacts,
+    )
+
+
+def _summarise(found: list[Artefact], recording: Recording) -> str:
+    """The first artefact in full, then how many more, over which frames and markers."""
+    text = found[0].describe(recording)
+    if len(found) > 1:
+        frames = [a.frame for a in found]
+        markers = sorted({a.label for a in found})
+        text += (
+            f"; {len(found)} flagged samples in all, frames {min(frames) + recording.first_frame}"
+            f" to {max(frames) + recording.first_frame}, markers {', '.join(markers)}"
+        )
+    return text
+
+
+def fit(
+    recording: Recording,
+    kind: str,
+    moving: str | list[str],
+    reference: str | list[str] | None = None,
+    *,
+    method: str | None = None,
+    frames: slice | str | None = None,
+    artefacts: str = "refuse",
+    rules: ArtefactRules | None = None,
+    n_bootstrap: int = 0,
+    block_length: int | None = None,
+    seed: int = 0,
+    **options: object,
+) -> RecordingFit:
+    """Fit ``method`` of ``kind`` to the ``moving`` markers relative to the ``reference`` ones.
+
+    Parameters
+    ----------
+    recording : what :func:`jointbench.read` returns.
+    kind : ``"center"``, ``"axis"`` or ``"joint_center"``.
+    moving, reference : marker labels (list, or comma-separated string). The first three
+        reference labels define the technical frame of the answer. Without ``reference`` the
+        moving markers are taken as already expressed in the reference frame (not for
+        ``joint_center``, which needs both segments).
+    method : a name of ``jointbench.methods(kind)``; default :data:`DEFAULT_METHODS`.
+    frames : 0-based ``"start:stop"`` (stop excluded) or a slice of the recording's frames.
+    artefacts : ``"refuse"`` (``ValueError`` naming marker and frame) or ``"exclude"`` (leave
+        the frames out, with a warning).
+    rules : thresholds of the artefact detection (:class:`ArtefactRules`).
+    n_bootstrap, block_length, seed : moving-block bootstrap (:mod:`jointbench.uncertainty`);
+        0 resamples means none. The refits are conditional on the reference's mean shape.
+    options : passed to the estimator.
+
+    To fit several methods on one preparation, use :func:`prepare` and :meth:`Prepared.fit`.
+    """
+    prepared = prepare(
+        recording, kind, moving, reference, frames=frames, artefacts=artefacts, rules=rules
+    )
+    return prepared.fit(
+        method, n_bootstrap=n_bootstrap, block_length=block_length, seed=seed, **options
+    )

@@ -1,0 +1,134 @@
+"""One in-memory motion-capture recording: labels, frames, rate, markers in mm, gaps as NaN."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from jointbench.io.segments import Segment
+
+__all__ = ["Recording", "parse_frames"]
+
+
+def _as_missing(markers: np.ndarray) -> np.ndarray:
+    """Samples that are not finite or exactly (0, 0, 0) become NaN in all three coordinates.
+
+    Several C3D and TRC writers store an occluded marker as the origin; a real marker exactly
+    at the lab origin to the last bit does not happen, a gap stored that way does.
+    """
+    markers = np.array(markers, dtype=float)
+    missing = ~np.isfinite(markers).all(axis=-1) | (markers == 0.0).all(axis=-1)
+    markers[missing] = np.nan
+    return markers
+
+
+def parse_frames(text: str, n_frames: int) -> slice:
+    """``"start:stop"`` (0-based, stop exclusive, either side may be empty) -> ``slice``."""
+    parts = str(text).split(":")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        start = int(parts[0]) if parts[0].strip() else 0
+        stop = int(parts[1]) if parts[1].strip() else n_frames
+    except ValueError:
+        raise ValueError(
+            f"frames must be 'start:stop' (0-based frame indices, stop excluded), got {text!r}"
+        ) from None
+    if not 0 <= start < stop <= n_frames:
+        raise ValueError(
+            f"frames {text!r} do not fit the recording: need 0 <= start < stop <= {n_frames}"
+        )
+    return slice(start, stop)
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """Marker trajectories of one trial.
+
+        ``labels`` ``(n_markers,)`` names; ``markers`` ``(n_frames, n_markers, 3)`` float64 [mm],
+        NaN where a sample is missing (NaN, inf or exactly (0, 0, 0) in the file, or a negative
+        residual where the format has one); ``rate_hz`` the frame rate (``None`` when the file does
+        not say); ``source`` the file it came from, for messages. Frames are 0-based indices
+    into the file; ``first_frame`` is the file index of row 0 once a frame range is taken.
+    """
+
+    labels: tuple[str, ...]
+    markers: np.ndarray
+    rate_hz: float | None = None
+    source: str = "<memory>"
+    first_frame: int = 0
+
+    def __post_init__(self) -> None:
+        labels = tuple(str(label) for label in self.labels)
+        markers = _as_missing(self.markers)
+        if markers.ndim != 3 or markers.shape[1:] != (len(labels), 3):
+            raise ValueError(
+                f"{self.source}: markers must be (n_frames, {len(labels)}, 3) for "
+                f"{len(labels)} labels, got shape {markers.shape}"
+            )
+        seen: set[str] = set()
+        for label in labels:
+            if label in seen:
+                raise ValueError(f"{self.source}: marker label {label!r} appears twice")
+            seen.add(label)
+        if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ValueError(f"{self.source}: frame rate must be positive, got {self.rate_hz!r}")
+        markers.setflags(write=False)
+        object.__setattr__(self, "labels", labels)
+        object.__setattr__(self, "markers", markers)
+
+    @property
+    def n_frames(self) -> int:
+        return self.markers.shape[0]
+
+    @property
+    def name(self) -> str:
+        return Path(self.source).name
+
+    def index(self, labels: str | list[str] | tuple[str, ...]) -> list[int]:
+        """Column indices of ``labels`` (a list, or one comma-separated string)."""
+        if isinstance(labels, str):
+            labels = [label.strip() for label in labels.split(",") if label.strip()]
+        if not labels:
+            raise ValueError(f"{self.source}: no marker labels given")
+        known = {label: i for i, label in enumerate(self.labels)}
+        unknown = [label for label in labels if label not in known]
+        if unknown:
+            raise ValueError(
+                f"{self.source}: no marker labelled {', '.join(map(repr, unknown))}; "
+                f"labels in the file: {', '.join(self.labels)}"
+            )
+        if len(set(labels)) != len(labels):
+            raise ValueError(f"{self.source}: a label is named twice in {list(labels)}")
+        return [known[label] for label in labels]
+
+    def select(self, labels: str | list[str] | tuple[str, ...]) -> np.ndarray:
+        """Markers of ``labels``: ``(n_frames, len(labels), 3)`` [mm], NaN where missing."""
+        return self.markers[:, self.index(labels)]
+
+    def frames(self, frames: slice | str) -> Recording:
+        """The recording restricted to ``frames`` (a slice or ``"start:stop"``)."""
+        if isinstance(frames, str):
+            frames = parse_frames(frames, self.n_frames)
+        start = frames.indices(self.n_frames)[0]
+        return Recording(
+            self.labels, self.markers[frames], self.rate_hz, self.source, self.first_frame + start
+        )
+
+    def gaps(self) -> dict[str, int]:
+        """Missing samples per marker label."""
+        missing = np.isnan(self.markers[..., 0]).sum(axis=0)
+        return {label: int(n) for label, n in zip(self.labels, missing, strict=True)}
+
+    def when(self, frame: int) -> str:
+        """``"frame 731 (7.31 s)"``: how messages name row ``frame`` (by its file index)."""
+        frame = self.first_frame + frame
+        if self.rate_hz is None:
+            return f"frame {frame}"
+        return f"frame {frame} ({frame / self.rate_hz:.2f} s)"
+
+    def segment(self, labels: str | list[str] | tuple[str, ...]) -> Segment:
+        """The rigid segment carried by ``labels``: mean shape, technical frame, poses."""
+        return Segment.fit(self, labels)

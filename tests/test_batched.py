@@ -1,0 +1,229 @@
+"""Many-trial (batched) estimators agree with the one-trial functions on every study's data."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jointbench.estimators import registry
+from jointbench.numerics.poses import rigid_poses
+from jointbench.study import run
+from jointbench.study.config import load_config
+from jointbench.study.studies import get_study
+
+RTOL = 1e-9
+CONFIG = Path(__file__).resolve().parents[1] / "config" / "config.yaml"
+
+# A few conditions per study, chosen to include the hard ones (small RoM, few frames).
+CONDITIONS = {
+    "cmc": [
+        {"marker_set": "M", "rom_deg": 5, "noise_mm": 2.0},
+        {"marker_set": "H", "rom_deg": 45, "noise_mm": 0.5},
+    ],
+    "hinge": [
+        {"protocol": "knee", "fe_rom_deg": 30, "aa_ratio": 0.1},
+        {"protocol": "mcp", "fe_rom_deg": 90, "aa_ratio": 0.7},
+    ],
+    "hip": [{"n_frames": 4}, {"n_frames": 16}, {"n_frames": 300}],
+}
+N_TRIALS = 6
+
+
+@functools.cache
+def _trials(study: str, index: int):
+    config = load_config(CONFIG)
+    config["studies"][study]["trials"] = N_TRIALS
+    return run.simulate_condition(config, study, CONDITIONS[study][index])
+
+
+def _cases():
+    for study, conditions in CONDITIONS.items():
+        kind = get_study(study).kind
+        for method in registry.methods(kind):
+            if hasattr(registry.get(kind, method), "batched"):
+                for index in range(len(conditions)):
+                    yield study, method, index
+
+
+def _assert_same(batched, single) -> None:
+    if isinstance(single, Exception):
+        assert type(batched) is type(single) and str(batched) == str(single)
+        return
+    assert not isinstance(batched, Exception), batched
+    for field in dataclasses.fields(single):
+        a, b = getattr(batched, field.name), getattr(single, field.name)
+        if field.name == "diagnostics":
+            assert a.keys() == b.keys()
+            for key in b:
+                _assert_close(a[key], b[key], key)
+        else:
+            _assert_close(a, b, field.name)
+
+
+def _assert_close(a, b, name) -> None:
+    if isinstance(b, str | bool | int) or b is None:
+        assert a == b, name
+    else:
+        np.testing.assert_allclose(
+            np.asarray(a, float), np.asarray(b, float), rtol=RTOL, err_msg=name
+        )
+
+
+@pytest.mark.parametrize(("study", "method", "index"), list(_cases()))
+def test_batched_equals_one_trial(study, method, index):
+    spec = get_study(study)
+    fit = registry.get(spec.kind, method)
+    trials = _trials(study, index)
+    segments = [trials.segments[name] for name in spec.segments]
+    outcomes = fit.batched(*segments)
+    assert len(outcomes) == trials.n_trials
+    for trial, outcome in enumerate(outcomes):
+        try:
+            single = fit(*spec.fit_arguments(trials, trial))
+        except ValueError as error:
+            single = error
+        _assert_same(outcome, single)
+
+
+def test_every_closed_form_and_pose_based_method_is_batched():
+    expected = {
+        "center": {"LS", "NM", "BC", "SCoRE"},
+        "axis": {"SARA"},
+        "joint_center": {"SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0"},
+    }
+    for kind, names in expected.items():
+        for name in names:
+            assert hasattr(registry.get(kind, name), "batched"), (kind, name)
+
+
+def test_rigid_poses_of_many_trials_equal_each_trial_alone():
+    markers = _trials("hip", 2).segments["distal"]
+    together = rigid_poses(markers)
+    for trial in range(markers.shape[0]):
+        alone = rigid_poses(markers[trial])
+        for a, b in zip(together, alone, strict=True):
+            np.testing.assert_allclose(a[trial], b, rtol=1e-12, atol=1e-9)
+
+
+def test_shared_poses_give_the_same_answers():
+    from jointbench.estimators.twosegment import trial_poses
+
+    trials = _trials("hip", 1)
+    segments = {name: trials.segments[name] for name in ("proximal", "distal")}
+    poses = trial_poses(segments, min_frames=3)
+    for method in ("SCoRE", "analytic", "gauss-markov"):
+        fit = registry.get("joint_center", method)
+        shared = fit.batched(*segments.values(), poses=poses)
+        for a, b in zip(shared, fit.batched(*segments.values()), strict=True):
+            _assert_same(a, b)
+
+
+def test_bad_options_fail_every_trial_as_one_trial_does():
+    trials = _trials("hip", 1)
+    fit = registry.get("joint_center", "gauss-markov")
+    outcomes = fit.batched(trials.segments["proximal"], trials.segments["distal"], noise_mm=-1.0)
+    assert all(isinstance(o, ValueError) and "noise_mm" in str(o) for o in outcomes)
+
+
+@pytest.mark.parametrize(("study", "method"), [("cmc", "LS"), ("hip", "gauss-markov")])
+def test_estimate_uses_the_batched_form_and_keeps_its_table(study, method, monkeypatch):
+    spec = get_study(study)
+    fit = registry.get(spec.kind, method)
+    trials = _trials(study, 0)
+    condition = CONDITIONS[study][0]
+    calls = []
+    original = fit.batched
+
+    def spy(*segments, **options):
+        calls.append(len(segments))
+        return original(*segments, **options)
+
+    monkeypatch.setattr(fit, "batched", spy)
+    batched = run.estimate(study, method, trials, condition)
+    assert calls == [len(spec.segments)]
+    monkeypatch.delattr(fit, "batched")
+    alone = run.estimate(study, method, trials, condition)
+    assert list(batched.columns) == list(alone.columns)
+    for column in alone.columns.drop("seconds"):
+        if alone[column].dtype.kind == "f":
+            np.testing.assert_allclose(batched[column], alone[column], rtol=RTOL, err_msg=column)
+        else:
+            assert (batched[column] == alone[column]).all(), column
+
+
+def test_bc_at_its_iteration_limit_reports_as_one_trial():
+    trials = _trials("cmc", 0)
+    markers = trials.segments["moving"]
+    fit = registry.get("center", "BC")
+    outcomes = fit.batched(markers, max_iterations=3)
+    assert any(not o.converged for o in outcomes)
+    for trial, outcome in enumerate(outcomes):
+        _assert_same(outcome, fit(markers[trial], max_iterations=3))
+
+
+def test_batched_fits_do_not_import_scipy_linalg_or_optimize():
+    """An estimate job that fits whole batches does not pay for importing them."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from jointbench.estimators import sphere\n"
+        "import jointbench.study.run\n"
+        "rng = np.random.default_rng(0)\n"
+        "markers = rng.normal(size=(3, 20, 3, 3)) + rng.normal(size=(3, 1, 3, 3)) * 10\n"
+        "for fit in (sphere.fit_ls, sphere.fit_nm, sphere.fit_bc):\n"
+        "    fit.batched(markers)\n"
+        "print(sorted(m for m in ('scipy.linalg', 'scipy.optimize') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_rigid_poses_in_chunks_equal_one_call(monkeypatch):
+    from jointbench.numerics import poses
+
+    markers = _trials("hip", 1).segments["proximal"]
+    whole = poses.rigid_poses(markers)
+    monkeypatch.setattr(poses, "_CHUNK_FRAMES", 2 * markers.shape[1])
+    chunked = poses.rigid_poses(markers)
+    for a, b in zip(whole, chunked, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(("kind", "method"), [("center", "LS"), ("center", "NM"), ("center", "BC")])
+def test_a_bad_trial_fails_alone_with_the_one_trial_error(kind, method):
+    markers = _trials("cmc", 1).segments["moving"].copy()
+    markers[2, 5, 1, 0] = np.nan
+    markers[4] = markers[4, :1]  # does not move
+    fit = registry.get(kind, method)
+    outcomes = fit.batched(markers)
+    for trial, outcome in enumerate(outcomes):
+        try:
+            single = fit(markers[trial])
+        except ValueError as error:
+            single = error
+        _assert_same(outcome, single)
+    assert isinstance(outcomes[2], ValueError) and isinstance(outcomes[4], ValueError)
+    assert not isinstance(outcomes[3], ValueError)
+
+
+def test_a_bad_trial_fails_alone_in_a_two_segment_batch():
+    trials = _trials("hip", 1)
+    proximal = trials.segments["proximal"].copy()
+    distal = trials.segments["distal"].copy()
+    proximal[1, 0, 2] = proximal[1, 0, 0] + 2.0 * (proximal[1, 0, 1] - proximal[1, 0, 0])
+    distal[3, 2, 0, 1] = np.inf
+    fit = registry.get("joint_center", "SCoRE")
+    outcomes = fit.batched(proximal, distal)
+    for trial, outcome in enumerate(outcomes):
+        try:
+            single = fit(proximal[trial], distal[trial])
+        except ValueError as error:
+            single = error
+        _assert_same(outcome, single)
+    assert "collinear" in str(outcomes[1]) and "NaN or inf" in str(outcomes[3])

@@ -1,0 +1,412 @@
+"""Figure and table builders on small synthetic collected tables: wording, marks, choices."""
+
+from __future__ import annotations
+
+import itertools
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pytest
+from mpl_toolkits.mplot3d.art3d import Line3D, Poly3DCollection
+
+from jointbench.figures import extended, paper_a, paper_b, paper_c
+from jointbench.figures.common import equal_3d_limits, median_trial
+from jointbench.study.tables import markdown_table
+
+PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
+
+
+def _cmc(n_trials=5, seed=0, methods=("MA", "LS", "IS", "BC", "NM", "SCoRE")):
+    rng = np.random.default_rng(seed)
+    rows = []
+    for marker_set, rom, noise, trial, method in itertools.product(
+        ("M", "H"), (5, 15, 45), (0.5, 1.0, 2.0), range(n_trials), methods
+    ):
+        error = rng.gamma(2.0, noise * 10 / rom) + (5 if method == "LS" else 0)
+        rows.append(
+            {
+                "marker_set": marker_set,
+                "rom_deg": rom,
+                "noise_mm": noise,
+                "trial": trial,
+                "method": method,
+                "center_x": rng.normal(0, error),
+                "center_y": rng.normal(0, error),
+                "center_z": rng.normal(0, error),
+                "error_mm": error,
+                # BC fails to converge on some small-RoM trials, as in paper A.
+                "converged": not (method == "BC" and rom == 5 and trial % 2 == 1),
+                "iterations": 10,
+                "seconds": {"NM": 0.00165, "MA": 0.002}.get(method, 0.0001),
+                "status": "ok",
+                "local_minimum": bool(method == "IS" and trial == 0),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def _hinge(n_trials=4, seed=1, methods=("planar", "radial", "combined", "SARA")):
+    rng = np.random.default_rng(seed)
+    rows = []
+    for protocol, fe, ratio, trial, method in itertools.product(
+        ("knee", "mcp"), (30, 60, 90), (0.1, 0.3, 0.5, 0.7), range(n_trials), methods
+    ):
+        rows.append(
+            {
+                "protocol": protocol,
+                "fe_rom_deg": fe,
+                "aa_ratio": ratio,
+                "trial": trial,
+                "method": method,
+                "error_deg": rng.gamma(2.0, 10 * ratio),
+                "converged": True,
+                "iterations": 5,
+                "seconds": 0.001,
+                "status": "ok",
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def _hip(n_trials=20, seed=2):
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n_frames, trial, method in itertools.product(
+        (4, 8, 16, 32, 75, 150, 300, 600, 1200),
+        range(n_trials),
+        ("gauss-markov", "gauss-markov-frame0", "analytic"),
+    ):
+        sd = 30.0 / np.sqrt(n_frames)
+        offset = rng.normal(0, sd, 3)
+        rows.append(
+            {
+                "n_frames": n_frames,
+                "trial": trial,
+                "method": method,
+                "center_x": offset[0],
+                "center_y": offset[1],
+                "center_z": offset[2],
+                "error_mm": float(np.linalg.norm(offset)),
+                "sqrt_trace_cov_mm": sd * np.sqrt(3),
+                "mahalanobis_sq": float(offset @ offset) / sd**2,
+                "validation_index": float(np.sqrt(offset @ offset / sd**2 / 3)),
+                "cov_xx": sd**2,
+                "cov_xy": 0.0,
+                "cov_xz": 0.0,
+                "cov_yy": sd**2,
+                "cov_yz": 0.0,
+                "cov_zz": sd**2,
+                "converged": True,
+                "iterations": 3,
+                "seconds": 0.01,
+                "status": "ok",
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+CMC_PAPER = ("A", paper_a.PAPER_METHODS)
+
+
+def _drawn(fig) -> bool:
+    """Whether ``fig`` is a figure with axes; closes it."""
+    ok = isinstance(fig, plt.Figure) and len(fig.axes) > 0
+    fig.canvas.draw()
+    plt.close(fig)
+    return ok
+
+
+# ----------------------------------------------------------------------------- Table 2 wording
+
+
+@pytest.mark.parametrize(
+    ("ours", "paper", "expected"),
+    [
+        (0.00165, 0.00076, "2.2× slower"),  # NM: about twice the paper's time
+        (0.0018, 1.2, "667× faster"),
+        (0.05, 0.079, "1.6× faster"),
+        (0.079, 0.079, "as fast (within 5 %)"),
+        (0.0, 0.079, "not comparable"),
+    ],
+)
+def test_speed_wording_names_the_direction(ours, paper, expected):
+    assert paper_a.speed_wording(ours, paper) == expected
+
+
+def test_speed_wording_never_writes_a_ratio_below_one():
+    for ours in np.geomspace(1e-5, 10, 60):
+        text = paper_a.speed_wording(ours, 0.01)
+        number = text.split("×")[0]
+        if "×" in text:
+            assert float(number) >= 1.0, text
+
+
+def test_table2_words_agree_with_its_ratios():
+    table = paper_a.table2(_cmc(), PAPER_A_SECONDS)
+    for ratio, words in zip(table["speedup_vs_paper"], table["vs_paper"], strict=True):
+        assert ("faster" in words) == (ratio > 1.05), (ratio, words)
+        assert ("slower" in words) == (ratio < 1 / 1.05), (ratio, words)
+    nm = table.set_index("method").loc["NM"]
+    assert nm["vs_paper"].endswith("slower")
+
+
+def test_table2_headline_says_slower_where_the_table_does():
+    table = paper_a.table2(_cmc(), PAPER_A_SECONDS)
+    headline = paper_a.table2_headline(table)
+    for method, words in zip(table["method"], table["vs_paper"], strict=True):
+        assert f"{method} {words}" in headline
+    assert "NM 0×" not in headline
+
+
+def test_timing_note_says_how_and_where_times_were_measured():
+    note = paper_a.timing_note()
+    assert "inside the estimate job" in note
+    assert "timed on its own" in note or "batched call" in note
+    assert f"NumPy {np.__version__}" in note
+    assert "2 cores" not in note
+    assert "Python 3" in note
+
+
+# ----------------------------------------------------------------------------- Paper A Fig 3
+
+
+def test_fig3_trial_is_the_median_by_nm_error_among_bc_converged_trials():
+    collected = _cmc(n_trials=6)
+    cell = (
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+    )
+    nm = cell & (collected["method"] == "NM")
+    # NM errors by trial; BC did not converge on the odd trials 1, 3, 5.
+    collected.loc[nm, "error_mm"] = [0.1, 9.0, 3.0, 9.0, 2.0, 9.0]
+    # Candidates 0, 2, 4 with NM errors 0.1, 3.0, 2.0: the median is trial 4 (2.0 mm).
+    assert paper_a.choose_fig3_trial(collected) == 4
+
+
+def test_fig3_trial_takes_the_lower_middle_for_an_even_count():
+    collected = _cmc(n_trials=4)
+    collected["converged"] = True
+    nm = (
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+        & (collected["method"] == "NM")
+    )
+    collected.loc[nm, "error_mm"] = [4.0, 1.0, 3.0, 2.0]
+    assert paper_a.choose_fig3_trial(collected) == 3
+
+
+def test_fig3_trial_skips_trials_with_a_failed_method():
+    collected = _cmc(n_trials=3)
+    collected["converged"] = True
+    cell = (
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+    )
+    collected.loc[cell & (collected["method"] == "NM"), "error_mm"] = [1.0, 2.0, 3.0]
+    collected.loc[cell & (collected["method"] == "MA") & (collected["trial"] == 1), "error_mm"] = (
+        np.nan
+    )
+    assert paper_a.choose_fig3_trial(collected) == 0
+
+
+def test_median_trial_orders_equal_errors_by_trial():
+    assert median_trial(pd.Series([1.0, 1.0, 1.0], index=[7, 3, 5])) == 5
+    with pytest.raises(ValueError):
+        median_trial(pd.Series([np.nan]))
+
+
+# ----------------------------------------------------------------------------- extended
+
+
+def _tied_cmc():
+    collected = _cmc(n_trials=2)
+    # LM repeats IS exactly: every condition is a tie between them, never a double win.
+    lm = collected[collected["method"] == "IS"].assign(method="LM")
+    return pd.concat([collected, lm], ignore_index=True)
+
+
+def test_ties_are_shared_not_counted_twice():
+    table = extended.extended_table(_tied_cmc(), "cmc", CMC_PAPER)
+    ranks = extended.mean_ranks(table).set_index("method")
+    n_conditions = table[["marker_set", "rom_deg", "noise_mm"]].drop_duplicates().shape[0]
+    assert ranks.loc["LM", "best_alone"] == 0
+    assert ranks.loc["IS", "best_alone"] == 0
+    assert ranks.loc["LM", "best_tied"] == ranks.loc["IS", "best_tied"]
+    # Each condition has one sole winner or a tie; never more sole winners than conditions.
+    assert ranks["best_alone"].sum() <= n_conditions
+    assert (ranks["best_in"] == ranks["best_alone"] + ranks["best_tied"]).all()
+
+
+def test_best_headline_counts_each_condition_once(tmp_path):
+    table = extended.extended_table(_tied_cmc(), "cmc", CMC_PAPER)
+    # As the caption builder reads it: from the CSV.
+    table.to_csv(tmp_path / "extended.csv", index=False)
+    headline = extended.best_headline(pd.read_csv(tmp_path / "extended.csv"))
+    counts = [
+        int(part.rsplit(" ", 1)[1]) for part in headline.rstrip(".").split(": ")[1].split(", ")
+    ]
+    assert sum(counts) == 18
+    assert "IS = LM tied in" in headline
+    assert "IS alone" not in headline and "LM alone" not in headline
+
+
+def test_best_text_shows_ties_separately():
+    assert extended.best_text(8, 2, 18) == "best in 8 of 18, tied in 2"
+    assert extended.best_text(3, 0, 18) == "best in 3 of 18"
+
+
+@pytest.mark.parametrize(
+    ("trials", "converged", "failed", "flagged"),
+    [(30, 30, 0, False), (30, 11, 0, True), (30, 30, 2, True), (30, 28, 2, True)],
+)
+def test_cells_with_failed_or_non_converged_trials_are_marked(trials, converged, failed, flagged):
+    assert extended.incomplete(trials, converged, failed) is flagged
+    assert (
+        extended.cell_text(430.0, extended.incomplete(trials, converged, failed)).endswith("†")
+        is flagged
+    )
+
+
+def test_heat_map_marks_a_non_converged_cell():
+    collected = _cmc(n_trials=2)
+    table = extended.extended_table(collected, "cmc", CMC_PAPER)
+    methods = list(extended.mean_ranks(table)["method"])
+    fig, ax = plt.subplots()
+    extended._heatmap(ax, table, "cmc", methods, CMC_PAPER[1])
+    marked = [t.get_text() for t in ax.texts if t.get_text().endswith("†")]
+    plt.close(fig)
+    # BC did not converge on trial 1 at every ±5° condition: 6 cells, nothing failed outright.
+    assert len(marked) == 6
+    assert (table["failed"] == 0).all()
+
+
+def test_rows_are_labelled_with_units():
+    assert extended.condition_label(["marker_set", "rom_deg", "noise_mm"], ("H", 5, 0.5)) == (
+        "H set, ±5°, 0.5 mm noise"
+    )
+    assert extended.condition_label(["protocol", "fe_rom_deg", "aa_ratio"], ("knee", 30, 0.5)) == (
+        "knee, FE 30°, AA/FE 0.5"
+    )
+    assert extended.condition_label(["depth_mm", "tilt_deg", "k"], (2.0, 10, 3)) == (
+        "depth 2 mm, tilt 10°, k=3"
+    )
+
+
+def test_rank_axis_stops_at_the_number_of_methods():
+    table = extended.extended_table(_tied_cmc(), "cmc", CMC_PAPER)
+    ranks = extended.mean_ranks(table)
+    fig, ax = plt.subplots()
+    extended._rank_bars(ax, ranks, extended._styles(list(ranks["method"])), CMC_PAPER[1])
+    assert ax.get_xlim() == (0, len(ranks))
+    plt.close(fig)
+
+
+@pytest.mark.parametrize(("study", "make"), [("cmc", _tied_cmc), ("hinge", _hinge), ("hip", _hip)])
+def test_extended_figure_runs(study, make):
+    assert _drawn(extended.extended_figure(make(), study))
+
+
+# ----------------------------------------------------------------------------- paper figures
+
+
+def test_paper_a_figures_run():
+    collected = _cmc()
+    assert _drawn(paper_a.fig4(collected))
+    trial = paper_a.choose_fig3_trial(collected)
+    rows = collected[
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+        & (collected["trial"] == trial)
+    ]
+    t = np.linspace(0, 4 * np.pi, 120)
+    markers = np.stack(
+        [np.stack([20 * np.cos(t) + k, 20 * np.sin(t), 10 * k + 0 * t], -1) for k in range(3)], 1
+    )
+    fig = paper_a.fig3(
+        markers,
+        np.zeros(3),
+        rows,
+        {"LS": 10.9, "NM": 0.3, "MA": 3.7, "IS": 1.4, "BC": 3.7},
+        chosen=paper_a.fig3_chosen_text(collected, trial),
+    )
+    assert _drawn(fig)
+
+
+def test_paper_b_figures_run():
+    assert _drawn(paper_b.fig5(_hinge()))
+    t = np.linspace(-0.5, 0.5, 60)
+    markers = np.stack(
+        [
+            np.stack([r * np.cos(t), r * np.sin(t), 20.0 * k + 0 * t], -1)
+            for k, r in enumerate((60, 80, 70))
+        ],
+        1,
+    )
+    truth = {"axis_point": [0.0, 0.0, 0.0], "axis_direction": [0.0, 0.0, 1.0]}
+    fits = {
+        "planar": (np.zeros(3), np.array([0.3, 0.0, 1.0])),
+        "radial": (np.zeros(3), np.array([0.0, 0.2, 1.0])),
+        "combined": (np.zeros(3), np.array([0.0, 0.0, 1.0])),
+    }
+    assert _drawn(paper_b.fig2([("a", markers, truth, fits), ("b", markers, truth, fits)]))
+
+
+def test_fig2_trial_is_the_median_by_combined_error():
+    collected = _hinge()
+    cell = (collected["protocol"] == "knee") & (collected["fe_rom_deg"] == 30)
+    cell &= (collected["aa_ratio"] == 0.5) & (collected["method"] == "combined")
+    collected.loc[cell, "error_deg"] = [5.0, 1.0, 3.0, 4.0]
+    condition = {"protocol": "knee", "fe_rom_deg": 30, "aa_ratio": 0.5}
+    assert paper_b.choose_fig2_trial(collected, condition) == 2
+
+
+def test_axis_error_ignores_the_sign_of_the_direction():
+    assert paper_b.axis_error_deg(np.array([0, 0, -1.0]), np.array([0, 0, 2.0])) == 0.0
+    assert paper_b.axis_error_deg(np.array([1.0, 0, 0]), np.array([0, 0, 1.0])) == pytest.approx(
+        90.0
+    )
+
+
+def test_paper_c_outputs_run_with_readable_headers():
+    collected = _hip()
+    paper = pd.DataFrame(
+        [
+            {"n_frames": n, "sqrt_trace_cov_mm": 50.0 / n, "validation_index": 1.0}
+            for n in (4, 8, 16, 32, 75, 150, 300, 600, 1200)
+        ]
+    )
+    header = markdown_table(paper_c.table1(collected, paper)).splitlines()[0]
+    assert "gm_v_vs_own_1200" not in header
+    assert "GM: mean v vs own 1200-frame estimate" in header
+    assert "frames used, Nt" in header
+    assert _drawn(paper_c.uncertainty_figure(collected, paper))
+
+
+def test_fig2_draws_the_model_each_cost_fits():
+    t = np.linspace(-0.5, 0.5, 30)
+    trajectory = np.stack([60 * np.cos(t), 60 * np.sin(t), 0 * t], -1)
+    point, direction = np.zeros(3), np.array([0.0, 0.0, 1.0])
+    fig = plt.figure()
+    kinds = {}
+    for method, (label, draw) in paper_b._MODELS.items():
+        ax = fig.add_subplot(projection="3d")
+        draw(ax, trajectory, point, direction, "C0")
+        kinds[method] = (label, {type(a) for a in [*ax.collections, *ax.lines]})
+    plt.close(fig)
+    assert kinds["planar"] == ("best-fitting planes", {Poly3DCollection})
+    assert kinds["radial"] == ("best-fitting cylinders", {Poly3DCollection})
+    assert kinds["combined"] == ("best-fitting circles", {Line3D})
+
+
+def test_3d_axes_get_equal_scales():
+    fig = plt.figure()
+    ax = fig.add_subplot(projection="3d")
+    equal_3d_limits(ax, np.array([[0, 0, 0], [25.0, 10.0, 60.0]]))
+    spans = [np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim()), np.ptp(ax.get_zlim())]
+    plt.close(fig)
+    assert spans == pytest.approx([spans[0]] * 3)

@@ -1,0 +1,79 @@
+"""Code fingerprints: what makes an edited library function rerun the jobs that use it."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+
+from jointbench.estimators import registry
+from jointbench.fingerprint import code_fingerprint
+
+MODULE = """
+import numpy as np
+
+SCALE = {scale}
+OFFSET = np.array([0.0, 0.0, {offset}])
+
+
+def helper(x):
+    # a comment that does not count
+    return x * SCALE
+
+
+def uses_helper(x):
+    return helper(x) + OFFSET
+
+
+def independent(x):
+    return x - 1
+"""
+
+
+def _load(tmp_path, name, **values):
+    path = tmp_path / f"{name}.py"
+    path.write_text(MODULE.format(**values))
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _fingerprints(module):
+    prefixes = (module.__name__,)
+    return (
+        code_fingerprint(module.uses_helper, prefixes=prefixes),
+        code_fingerprint(module.independent, prefixes=prefixes),
+    )
+
+
+def test_a_change_reaches_the_functions_that_use_it_and_no_others(tmp_path):
+    base = _fingerprints(_load(tmp_path, "jbfp_a", scale=2, offset=0.0))
+    same = _fingerprints(_load(tmp_path, "jbfp_a", scale=2, offset=0.0))
+    constant = _fingerprints(_load(tmp_path, "jbfp_a", scale=3, offset=0.0))
+    array = _fingerprints(_load(tmp_path, "jbfp_a", scale=2, offset=1.0))
+    assert base == same
+    assert constant[0] != base[0] and constant[1] == base[1]
+    assert array[0] != base[0] and array[1] == base[1]
+
+
+def test_comments_and_line_numbers_do_not_count(tmp_path):
+    base = _fingerprints(_load(tmp_path, "jbfp_b", scale=2, offset=0.0))
+    path = tmp_path / "jbfp_b.py"
+    path.write_text("\n\n# moved down\n" + path.read_text().replace("a comment", "another"))
+    spec = importlib.util.spec_from_file_location("jbfp_b", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["jbfp_b"] = module
+    spec.loader.exec_module(module)
+    assert _fingerprints(module) == base
+
+
+def test_estimators_have_distinct_stable_fingerprints():
+    prints = {
+        (kind, name): code_fingerprint(registry.get(kind, name))
+        for kind in registry.KINDS
+        for name in registry.methods(kind)
+    }
+    assert len(set(prints.values())) == len(prints)
+    again = {key: code_fingerprint(registry.get(*key)) for key in prints}
+    assert again == prints

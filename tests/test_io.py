@@ -1,0 +1,129 @@
+"""Dataset files: round trips by blocks of trials, row-order checks, older files, memory."""
+
+from __future__ import annotations
+
+import json
+import tracemalloc
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from jointbench.simulate import Trials
+from jointbench.study import io, run
+from jointbench.study.io import iter_dataset, read_dataset, read_metadata, write_dataset
+
+
+def _trials(n_trials: int, n_frames: int = 7) -> Trials:
+    rng = np.random.default_rng(1)
+    return Trials(
+        segments={
+            "proximal": rng.normal(size=(n_trials, n_frames, 3, 3)),
+            "distal": rng.normal(size=(n_trials, n_frames, 4, 3)),
+        },
+        truth={"center": [1.0, 2.0, 3.0]},
+        parameters={"note": "test"},
+    )
+
+
+def test_blocks_of_trials_reassemble_the_condition(tmp_path):
+    trials = _trials(23)
+    path = tmp_path / "d.parquet"
+    write_dataset(path, trials, study="hip", condition={"n_frames": 7})
+    per_trial = 8 * 7 * 7 * 3
+    blocks = list(iter_dataset(path, block_bytes=5 * per_trial))
+    assert [first for first, _ in blocks] == [0, 5, 10, 15, 20]
+    for name, markers in trials.segments.items():
+        joined = np.concatenate([block.segments[name] for _, block in blocks])
+        np.testing.assert_array_equal(joined, markers)
+    assert blocks[0][1].truth == trials.truth
+
+
+def _old_format(path, trials: Trials, metadata: dict) -> None:
+    """A dataset as the first writer made it: one long table, no shapes in the metadata."""
+    parts = []
+    for name, markers in trials.segments.items():
+        n_trials, n_frames, n_markers, _ = markers.shape
+        trial, frame, marker = np.meshgrid(
+            np.arange(n_trials), np.arange(n_frames), np.arange(n_markers), indexing="ij"
+        )
+        xyz = markers.reshape(-1, 3)
+        parts.append(
+            pd.DataFrame(
+                {
+                    "segment": name,
+                    "trial": trial.ravel(),
+                    "frame": frame.ravel(),
+                    "marker": marker.ravel(),
+                    "x": xyz[:, 0],
+                    "y": xyz[:, 1],
+                    "z": xyz[:, 2],
+                }
+            )
+        )
+    table = pa.Table.from_pandas(pd.concat(parts, ignore_index=True), preserve_index=False)
+    table = table.replace_schema_metadata({b"jointbench": json.dumps(metadata).encode()})
+    pq.write_table(table, path)
+
+
+def test_files_without_recorded_shapes_still_read(tmp_path):
+    trials = _trials(4)
+    path = tmp_path / "old.parquet"
+    metadata = {"study": "hip", "condition": {}, "truth": trials.truth, "parameters": {}}
+    _old_format(path, trials, metadata)
+    back, _ = read_dataset(path)
+    for name, markers in trials.segments.items():
+        np.testing.assert_array_equal(back.segments[name], markers)
+
+
+def test_rows_out_of_order_are_named(tmp_path):
+    trials = _trials(3)
+    path = tmp_path / "shuffled.parquet"
+    write_dataset(path, trials, study="hip", condition={})
+    table = pq.read_table(path)
+    order = np.arange(table.num_rows)
+    order[[4, 5]] = order[[5, 4]]
+    pq.write_table(table.take(order), path)
+    with pytest.raises(ValueError, match=r"shuffled\.parquet.*not in \(trial, frame, marker\)"):
+        read_dataset(path)
+
+
+def test_reading_by_blocks_holds_one_block(tmp_path):
+    """Peak memory while streaming a condition is a block, not the condition."""
+    trials = _trials(400, n_frames=300)
+    path = tmp_path / "big.parquet"
+    write_dataset(path, trials, study="hip", condition={})
+    size = sum(markers.nbytes for markers in trials.segments.values())
+    del trials
+    block = 2 * 2**20
+    tracemalloc.start()
+    for _, part in iter_dataset(path, block_bytes=block):
+        del part
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert size > 10 * 2**20
+    assert peak < 4 * block
+
+
+def test_metadata_records_the_shapes(tmp_path):
+    trials = _trials(2)
+    path = tmp_path / "d.parquet"
+    write_dataset(path, trials, study="hip", condition={"n_frames": 7})
+    assert read_metadata(path)["shapes"] == {"proximal": [2, 7, 3, 3], "distal": [2, 7, 4, 3]}
+
+
+def test_estimates_by_blocks_equal_the_whole_condition(tmp_path, monkeypatch):
+    config = {"base_seed": 1, "studies": {"cmc": {"trials": 9, "options": {}}}}
+    condition = {"marker_set": "M", "rom_deg": 15, "noise_mm": 1.0}
+    trials = run.simulate_condition(config, "cmc", condition)
+    path = tmp_path / "datasets" / "c.parquet"
+    write_dataset(path, trials, study="cmc", condition=condition)
+    whole = run.estimate("cmc", "LS", trials, condition)
+    monkeypatch.setattr(io, "BLOCK_BYTES", 4 * trials.segments["moving"][0].nbytes)
+    output = tmp_path / "estimates" / "c.parquet"
+    run.run_estimate_files(config, "cmc", "LS", [str(path)], [str(output)])
+    blocked = pd.read_parquet(output)
+    assert blocked["trial"].tolist() == list(range(9))
+    pd.testing.assert_frame_equal(blocked.drop(columns="seconds"), whole.drop(columns="seconds"))

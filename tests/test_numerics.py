@@ -1,0 +1,79 @@
+"""Shared numerics: the fminsearch simplex, its lockstep driver and the rank threshold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize
+
+from jointbench.numerics import rank, simplex
+
+
+def rosenbrock3(a: float, b: float, c: float) -> float:
+    return (1 - a) ** 2 + 100 * (b - a * a) ** 2 + (c - 0.5) ** 2
+
+
+@pytest.mark.parametrize("x0", [(-1.2, 1.0, 0.0), (0.5, 0.5, 0.5), (2.0, 0.0, 1.0)])
+def test_nelder_mead_matches_scipy_fminsearch_port(x0):
+    """Same coefficients, initial simplex and stopping rules as fminsearch (and SciPy's port)."""
+    x, f, converged, iterations, evaluations = simplex.nelder_mead(rosenbrock3, x0)
+    reference = minimize(
+        lambda v: rosenbrock3(*v),
+        x0,
+        method="Nelder-Mead",
+        options={"xatol": 1e-4, "fatol": 1e-4, "maxiter": 600, "maxfev": 600},
+    )
+    np.testing.assert_array_equal(x, reference.x)
+    assert f == reference.fun
+    assert (iterations, evaluations, converged) == (reference.nit, reference.nfev, True)
+
+
+def test_initial_simplex_is_fminsearchs():
+    """Each coordinate of the start in turn scaled by 1.05, or 0.00025 where it is zero."""
+    steps = simplex.nelder_mead_steps((12.0, 0.0, -4.0))
+    first = next(steps)
+    expected = [(12.0, 0.0, -4.0), (12.6, 0.0, -4.0), (12.0, 0.00025, -4.0), (12.0, 0.0, -4.2)]
+    np.testing.assert_allclose(first, expected, rtol=1e-15)
+    assert dict(simplex.FMINSEARCH_OPTIONS) == {
+        "xatol": 1e-4,
+        "fatol": 1e-4,
+        "max_iter": 600,
+        "max_fev": 600,
+    }
+
+
+def test_nelder_mead_reports_the_iteration_limit():
+    result = simplex.nelder_mead(rosenbrock3, (-1.2, 1.0, 0.0), max_iter=20)
+    assert not result.converged
+    assert result.iterations == 20
+    assert simplex.stop_status(result, 600) == "Maximum number of iterations has been exceeded."
+
+
+def test_nelder_mead_reports_the_evaluation_limit():
+    result = simplex.nelder_mead(rosenbrock3, (-1.2, 1.0, 0.0), max_fev=30)
+    assert not result.converged
+    assert result.evaluations >= 30
+    assert simplex.stop_status(result, 30).startswith("Maximum number of function evaluations")
+
+
+def test_lockstep_runs_equal_independent_runs():
+    """Searches advanced together follow the paths they follow alone; owners say whose point."""
+    centres = np.array([[1.0, -2.0], [0.3, 0.4], [-5.0, 2.5]])
+
+    def batch(points, owners):
+        return np.sum((points - centres[owners]) ** 2, axis=1) + owners
+
+    starts = [(0.0, 1.0), (2.0, 2.0), (-1.0, 0.5)]
+    together = simplex.lockstep(batch, starts)
+    for i, (x0, joint) in enumerate(zip(starts, together, strict=True)):
+        alone = simplex.nelder_mead(
+            lambda a, b, i=i: float(batch(np.array([[a, b]]), np.array([i]))[0]), x0
+        )
+        assert alone == joint
+
+
+def test_negligible_is_relative_to_the_largest():
+    values = np.array([1e-13, 1e-11, 1.0])
+    np.testing.assert_array_equal(rank.negligible(values, 1.0), [True, False, False])
+    assert rank.negligible(-1e-13, 1.0)
+    assert rank.RCOND == 1e-12
