@@ -19,6 +19,7 @@ import pytest
 import yaml
 from scipy import stats
 
+from jointbench.figures import paper_a as paper_a_draw
 from jointbench.papers import Inputs, get_paper
 from jointbench.study.published import (
     CLAIM_COLUMNS,
@@ -88,7 +89,6 @@ def _holds(letter, documents, collected, claim_id) -> bool:
 # ----------------------------------------------------------------------------- paper A
 
 A_METHODS = ("MA", "LS", "IS", "BC", "NM")
-FIG3 = {"LS": 10.9, "NM": 0.3, "MA": 3.7, "IS": 1.4, "BC": 3.7}
 
 
 def _a_means(marker_set, rom, noise):
@@ -139,8 +139,6 @@ def paper_a_world(change=None, trials=30, seed=0, spread=0.002) -> pd.DataFrame:
                     for method in A_METHODS:
                         error = means[method] * (1 + 0.05 * common[trial])
                         error += own[method][trial]
-                        if (marker_set, rom, noise, trial) == ("M", 5, 1.0, 0):
-                            error = FIG3[method]
                         rows.append(
                             {
                                 "marker_set": marker_set,
@@ -154,6 +152,12 @@ def paper_a_world(change=None, trials=30, seed=0, spread=0.002) -> pd.DataFrame:
                             }
                         )
     frame = pd.DataFrame(rows)
+    # A11: in the trial Fig 3 draws (chosen by its NM error), LS errs most and NM least, as in
+    # the paper's example; NM's own error is left as it is, so the choice does not move.
+    sample = _fig3_rows(frame, paper_a_draw.choose_fig3_trial(frame))
+    nm = float(frame.loc[sample & (frame["method"] == "NM"), "error_mm"].iloc[0])
+    for method, above in {"LS": 10.0, "IS": 1.0, "BC": 2.0, "MA": 3.0}.items():
+        frame.loc[sample & (frame["method"] == method), "error_mm"] = nm + above
     # A7: 42 of the 55 BC-converged trials at 5°, 17 of the 90 trials at 15°, for IS on M.
     is_m = (frame["method"] == "IS") & (frame["marker_set"] == "M")
     bc = frame[frame["method"] == "BC"].set_index(["marker_set", "rom_deg", "noise_mm", "trial"])
@@ -165,6 +169,15 @@ def paper_a_world(change=None, trials=30, seed=0, spread=0.002) -> pd.DataFrame:
     frame.loc[converged_5[:42], "local_minimum"] = True
     frame.loc[frame[is_m & (frame["rom_deg"] == 15)].index[:17], "local_minimum"] = True
     return frame
+
+
+def _fig3_rows(frame, trial):
+    return (
+        (frame["marker_set"] == "M")
+        & (frame["rom_deg"] == 5)
+        & (frame["noise_mm"] == 1.0)
+        & (frame["trial"] == trial)
+    )
 
 
 def _swap(first, second):
@@ -281,7 +294,7 @@ def test_a6_fails_when_is_wins_only_within_the_noise(documents):
         Inputs(collected=collected, published=documents["A"], config={"studies": {}})
     )["A6"]
     # As counted IS leads almost everywhere; with ties split it has about half.
-    assert measured.value["share"] > 0.9
+    assert measured.value["share"] > 0.8
     assert measured.value["share_ties_split"] <= 0.55
 
 
@@ -293,10 +306,12 @@ def test_a2_a7_a11_fail_a_wrong_implementation(documents, world_a):
     none["local_minimum"] = False
     assert not _holds("A", documents, none, "A7")
     swapped = world_a.copy()
-    trial0 = (swapped["marker_set"] == "M") & (swapped["rom_deg"] == 5)
-    trial0 &= (swapped["noise_mm"] == 1.0) & (swapped["trial"] == 0)
-    ls, nm = trial0 & (swapped["method"] == "LS"), trial0 & (swapped["method"] == "NM")
-    swapped.loc[ls, "error_mm"], swapped.loc[nm, "error_mm"] = 0.3, 10.9
+    sample = _fig3_rows(swapped, paper_a_draw.choose_fig3_trial(swapped))
+    ls, nm = sample & (swapped["method"] == "LS"), sample & (swapped["method"] == "NM")
+    swapped.loc[ls, "error_mm"], swapped.loc[nm, "error_mm"] = (
+        float(swapped.loc[nm, "error_mm"].iloc[0]),
+        float(swapped.loc[ls, "error_mm"].iloc[0]),
+    )
     assert not _holds("A", documents, swapped, "A11")
 
 
