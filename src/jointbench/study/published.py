@@ -3,9 +3,12 @@
 A paper's published-values document (``paper_*.yaml`` beside its module) lists ``values`` and
 ``claims`` in one shape, each with a typed tolerance; the paper measures each one from the
 collected results (:class:`~jointbench.papers.base.Measured`), and :func:`comparison_rows`
-evaluates every tolerance through :func:`jointbench.study.tolerance.evaluate`. Where a value is
-known not to reproduce, its entry carries a ``deviation`` with the reason; :func:`unexplained`
-lists the rows that did not reproduce without one, and the check fails on them.
+evaluates every tolerance through :func:`jointbench.study.tolerance.evaluate`. Each row shows
+the paper's own sentence (``quote``), the criterion derived from it, the reproduced figure and
+the margin: how far inside (+) or outside (−) the tolerance it lies, in the tolerance's units.
+Where a value is known not to reproduce, its entry carries a ``deviation`` with the reason;
+:func:`unexplained` lists the rows that did not reproduce without one, and the check fails on
+them.
 """
 
 from __future__ import annotations
@@ -38,6 +41,8 @@ COLUMNS = [
     "entry",
     "id",
     "quantity",
+    "quote",
+    "criterion",
     "published",
     "reproduced",
     "tolerance",
@@ -45,7 +50,17 @@ COLUMNS = [
     "status",
     "reason",
 ]
-CLAIM_COLUMNS = ["id", "claim", "published", "reproduced", "status", "criterion", "margin"]
+CLAIM_COLUMNS = [
+    "id",
+    "claim",
+    "quote",
+    "criterion",
+    "published",
+    "reproduced",
+    "status",
+    "margin",
+    "reason",
+]
 STATUSES = ("reproduced", "not reproduced", "not applicable")
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"
 OFF_DESIGN = "not enforced: this run's grid or trial count differs from the paper's design"
@@ -64,6 +79,13 @@ def _published_text(value: object) -> str:
     if isinstance(value, Mapping):
         return ", ".join(f"{k} {v}" for k, v in value.items())
     return str(value)
+
+
+def _value_criterion(entry: Mapping) -> str:
+    """A published value's criterion when its entry states none: its tolerance in words."""
+    if not is_compared(entry["tolerance"]):
+        return "shown beside ours, not compared"
+    return f"reproduced value {describe(entry['tolerance'])} of the published"
 
 
 def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
@@ -101,6 +123,8 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
                 "entry": kind,
                 "id": entry["id"],
                 "quantity": entry.get("quantity", entry.get("claim")),
+                "quote": entry.get("quote", ""),
+                "criterion": entry.get("criterion", _value_criterion(entry)),
                 "published": _published_text(entry["published"]),
                 "reproduced": "" if measured is None else measured.text,
                 "tolerance": describe(entry["tolerance"]),
@@ -115,9 +139,7 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
 def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     """The claims of ``document`` with what we measured (columns :data:`CLAIM_COLUMNS`)."""
     rows = comparison_rows({**document, "values": []}, measurements)
-    criteria = {c["id"]: c["criterion"] for c in document["claims"]}
     rows["claim"] = rows["quantity"]
-    rows["criterion"] = rows["id"].map(criteria)
     missing = rows["reproduced"] == ""
     rows.loc[missing, "reproduced"] = "cannot evaluate: " + NOT_IN_RUN
     return rows[CLAIM_COLUMNS]
