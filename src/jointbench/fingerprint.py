@@ -103,6 +103,8 @@ def reached(roots: Iterable[object], prefixes: tuple[str, ...] = ("jointbench",)
         seen[id(obj)] = obj
         if inspect.isfunction(obj):
             stack.extend(c.cell_contents for c in obj.__closure__ or () if _has_contents(c))
+            # Attributes such as a ``batched`` form run in the same job as the function.
+            stack.extend(vars(obj).values())
         names = _names(obj)
         namespace = _globals(obj)
         for name in names:

@@ -171,7 +171,7 @@ def _entry(kind: str, name: str) -> _Entry:
         raise ValueError(f"unknown {kind} method {name!r}; known: {known}") from None
 
 
-def get(kind: str, name: str) -> Callable:
+def get(kind: str, name: str, *, checked: bool = True) -> Callable:
     """The estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the known
     names otherwise.
 
@@ -179,8 +179,14 @@ def get(kind: str, name: str) -> Callable:
     its ``batched`` attribute. Modules attach ``fn.batched`` after registering ``fn``, so it is
     looked up at the first ``get`` and then kept as a plain attribute (which can be replaced or
     deleted like any other).
+
+    ``checked=False`` gives the registered function itself (and its own ``batched`` form): for
+    the simulated studies, whose data are valid by construction and whose timings must be the
+    estimator's alone.
     """
     entry = _entry(kind, name)
+    if not checked:
+        return entry.fn
     if (kind, name) not in _BATCHED_RESOLVED:
         _BATCHED_RESOLVED.add((kind, name))
         raw = getattr(entry.fn, "batched", None)

@@ -28,6 +28,7 @@ __all__ = [
     "iter_dataset",
     "read_dataset",
     "read_metadata",
+    "read_provenance",
     "read_table",
     "read_trial_numbers",
     "write_dataset",
@@ -35,6 +36,7 @@ __all__ = [
 ]
 
 _META_KEY = b"jointbench"
+_PROVENANCE_KEY = b"jointbench.provenance"
 _INDEX = ("trial", "frame", "marker")
 # Marker coordinates per block of trials: large enough that per-block overheads vanish, small
 # enough that a block and the estimators' temporaries stay far below a job's memory.
@@ -109,9 +111,15 @@ def _segment_block(name: str, markers: np.ndarray, first_trial: int) -> pa.Table
 
 
 def write_dataset(
-    path: str | Path, trials: Trials, *, study: str, condition: Mapping[str, object]
+    path: str | Path,
+    trials: Trials,
+    *,
+    study: str,
+    condition: Mapping[str, object],
+    provenance: Mapping[str, object] | None = None,
 ) -> None:
-    """Write ``trials`` to ``path`` with study, condition, truth and parameters as metadata.
+    """Write ``trials`` to ``path`` with study, condition, truth, parameters and provenance (what
+    produced the file: see :func:`read_provenance`) as metadata.
 
     Rows are grouped by segment, then by blocks of trials (one row group each); no table of the
     whole condition is built.
@@ -123,6 +131,7 @@ def write_dataset(
         "truth": trials.truth,
         "parameters": trials.parameters,
         "shapes": {name: list(shape) for name, shape in shapes.items()},
+        "provenance": dict(provenance or {}),
     }
     step = block_trials(shapes)
     path = Path(path)
@@ -273,7 +282,24 @@ def read_table(path: str | Path) -> pd.DataFrame:
     return pd.read_parquet(path)
 
 
-def write_table(frame: pd.DataFrame, path: str | Path) -> None:
-    """Write a results table to parquet, creating the directory."""
+def write_table(
+    frame: pd.DataFrame, path: str | Path, provenance: Mapping[str, object] | None = None
+) -> None:
+    """Write a results table to parquet, creating the directory, with its provenance (what
+    produced it: see :func:`read_provenance`) in the file's metadata."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    frame.to_parquet(path, index=False)
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    metadata = {**(table.schema.metadata or {}), _PROVENANCE_KEY: json.dumps(provenance or {})}
+    pq.write_table(table.replace_schema_metadata(metadata), path)
+
+
+@_names_unreadable_file
+def read_provenance(path: str | Path) -> dict:
+    """What produced a results or dataset file: package version, the fingerprint of the code
+    that wrote it, the rule, and the config values it depends on (empty for older files)."""
+    metadata = pq.read_schema(path).metadata or {}
+    if _PROVENANCE_KEY in metadata:
+        return json.loads(metadata[_PROVENANCE_KEY])
+    if _META_KEY in metadata:
+        return json.loads(metadata[_META_KEY]).get("provenance", {})
+    return {}
