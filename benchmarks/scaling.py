@@ -6,7 +6,8 @@ Runs the study's target (`snakemake -j2 study_<name>`) in a fresh copy of the wo
 factor, with the config's trials multiplied by it, and prints every job's wall time, CPU time and
 peak resident memory, then each rule's totals across factors. From ``--reduce-from`` on, the
 study's grid is the small one of benchmarks/reduced.yaml (say so when quoting the numbers: the
-table shows conditions beside trials).
+table shows conditions beside trials). With today's code the default run costs about 17
+CPU-minutes (1x 96 CPU-s, 10x 293 CPU-s, 100x on the reduced grid about 10 minutes).
 
 The numbers come from the kernel, not from sampling: benchmarks/probe/sitecustomize.py is put on
 PYTHONPATH so that every Python process of the run (Snakemake, each job's script, an external
