@@ -54,6 +54,7 @@ __all__ = [
     "load_extensions",
     "paper_labels",
     "paper_output",
+    "provenance",
     "render_extended",
     "render_output",
     "run_metadata",
@@ -115,6 +116,19 @@ def job(snakemake) -> Iterator[None]:
         for handler in handlers:
             log.removeHandler(handler)
             handler.close()
+
+
+def provenance(snakemake) -> dict[str, object]:
+    """What a job's files record of how they were made: the package version, the rule, the
+    fingerprint of the code it ran, and the config values its study depends on."""
+    study = getattr(snakemake.params, "study", None) or snakemake.wildcards.get("study")
+    settings = snakemake.config.get("studies", {}).get(study, {}) if study else {}
+    return {
+        "jointbench": importlib.metadata.version("jointbench"),
+        "rule": snakemake.rule,
+        "code": getattr(snakemake.params, "code", ""),
+        "config": {"base_seed": snakemake.config.get("base_seed"), "study": settings},
+    }
 
 
 def _inputs(paper: Paper, collected: str, datasets: Sequence[str], config: Mapping) -> Inputs:
@@ -364,8 +378,11 @@ def run_metadata() -> dict[str, str]:
 _VERSIONED = ("jointbench", "numpy", "scipy", "pandas", "matplotlib", "snakemake")
 
 
-def write_front_page(tables: Mapping[str, str], path: str, config: Mapping) -> None:
-    """The report's landing page: the benchmark, its headline findings and the run's machine."""
+def write_front_page(
+    tables: Mapping[str, str], collected: Sequence[str], path: str, config: Mapping
+) -> None:
+    """The report's landing page: the benchmark, its headline findings, the provenance of every
+    estimator's results and the run's machine."""
     loaded = {name: pd.read_csv(p) for name, p in tables.items()}
     parts = [FRONT_INTRO]
     comparison = loaded.get("published_comparison")
@@ -388,6 +405,24 @@ def write_front_page(tables: Mapping[str, str], path: str, config: Mapping) -> N
             _rst_table(
                 calibration, "share of trials whose true centre is inside the 95 % ellipsoid"
             ),
+        ]
+    provenance_rows = [
+        {
+            "study": Path(path).stem,
+            "estimator": method,
+            "code fingerprint": record.get("code", "") or "(external rule)",
+            "jointbench": record.get("jointbench", ""),
+        }
+        for path in collected
+        for method, record in read_provenance(path).get("estimators", {}).items()
+    ]
+    if provenance_rows:
+        parts += [
+            "Provenance\n----------\n",
+            "Each estimates file records the fingerprint of the code that produced it "
+            "(``jointbench.fingerprint``); editing an estimator changes its fingerprint and "
+            "reruns its jobs only.\n",
+            _rst_table(pd.DataFrame(provenance_rows), "the code behind each estimator's results"),
         ]
     metadata = pd.DataFrame(list(run_metadata().items()), columns=["", "this run"])
     parts += [

@@ -1,5 +1,4 @@
 rule check_published:
-    """Every published value and claim beside ours; fails on a deviation with no recorded reason."""
     input:
         unpack(
             lambda w: {
@@ -19,6 +18,10 @@ rule check_published:
         md="results/tables/published_comparison.md",
     log:
         "results/logs/check_published.log",
+    """Every published value and claim beside ours; fails on a deviation with no recorded reason."""
+
+    # Small: on a cluster it runs on the submitting host rather than waiting in the queue.
+    localrule: True
     conda:
         "../envs/jointbench.yaml"
     params:
@@ -28,17 +31,19 @@ rule check_published:
 
 
 rule report_captions:
-    """Captions for `snakemake --report`: what each output shows, and its headline agreement."""
     input:
         unpack(lambda w: summarised_tables()),
+        collected=expand("results/collected/{study}.parquet", study=STUDIES),
     output:
         captions=[CAPTIONS.format(name=name) for name in caption_names()],
         front=FRONT_PAGE,
     log:
         "results/logs/report_captions.log",
+    """Captions for `snakemake --report`: what each output shows, and its headline agreement."""
+    localrule: True
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(pipeline.write_captions),
+        code=code_fingerprint(pipeline.write_captions, pipeline.write_front_page),
     script:
         "../scripts/report_captions.py"

@@ -63,14 +63,15 @@ for _study in STUDIES:
 
 
 rule summarise_estimator:
-    """One estimator's mean and median error per condition: `snakemake -j2
-    results/summaries/cmc/NM.csv` runs that estimator alone."""
     input:
         lambda w: estimates_files(w.study, [w.method]),
     output:
         "results/summaries/{study}/{method}.csv",
     log:
         "results/logs/summarise/{study}/{method}.log",
+    """One estimator's mean and median error per condition: `snakemake -j2
+    results/summaries/cmc/NM.csv` runs that estimator alone."""
+    localrule: True
     conda:
         "../envs/jointbench.yaml"
     params:

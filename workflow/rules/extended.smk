@@ -19,6 +19,8 @@ for _study in STUDIES:
             md=f"results/tables/extended_{_study}.md",
         log:
             f"results/logs/extended_table_{_study}.log",
+        # Small: on a cluster it runs on the submitting host rather than waiting in the queue.
+        localrule: True
         conda:
             "../envs/jointbench.yaml"
         params:

@@ -22,6 +22,8 @@ for _study in STUDIES:
                 **_files,
             log:
                 f"results/logs/{_output.name}.log",
+            # Tables are small: on a cluster they run on the submitting host.
+            localrule: _output.kind == "table"
             conda:
                 "../envs/jointbench.yaml"
             params:

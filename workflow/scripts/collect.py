@@ -7,4 +7,5 @@ with pipeline.job(snakemake):
         snakemake.input.estimates,
         snakemake.output[0],
         datasets=snakemake.input.datasets,
+        provenance=pipeline.provenance(snakemake),
     )

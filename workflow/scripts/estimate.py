@@ -8,4 +8,5 @@ with pipeline.job(snakemake):
         snakemake.wildcards.method,
         snakemake.input,
         snakemake.output,
+        provenance=pipeline.provenance(snakemake),
     )

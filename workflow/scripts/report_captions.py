@@ -1,6 +1,8 @@
 from jointbench import pipeline
 
 with pipeline.job(snakemake):
-    tables = dict(snakemake.input.items())
+    tables = {k: v for k, v in snakemake.input.items() if k != "collected"}
     pipeline.write_captions(tables, snakemake.output.captions, snakemake.config)
-    pipeline.write_front_page(tables, snakemake.output.front, snakemake.config)
+    pipeline.write_front_page(
+        tables, snakemake.input.collected, snakemake.output.front, snakemake.config
+    )
