@@ -36,7 +36,7 @@ from jointbench.papers import (
 )
 from jointbench.simulate import Study
 from jointbench.study import config as jb_config
-from jointbench.study.io import read_dataset, read_table
+from jointbench.study.io import read_dataset, read_provenance, read_table
 from jointbench.study.published import (
     comparison_rows,
     enforce_design,
