@@ -132,7 +132,8 @@ def test_bad_options_fail_every_trial_as_one_trial_does():
 @pytest.mark.parametrize(("study", "method"), [("cmc", "LS"), ("hip", "gauss-markov")])
 def test_estimate_uses_the_batched_form_and_keeps_its_table(study, method, monkeypatch):
     spec = get_study(study)
-    fit = registry.get(spec.kind, method)
+    # The studies run the registered function itself (their data are valid by construction).
+    fit = registry.get(spec.kind, method, checked=False)
     trials = _trials(study, 0)
     condition = CONDITIONS[study][0]
     calls = []

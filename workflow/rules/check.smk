@@ -1,3 +1,5 @@
+# Every published value and claim beside ours; fails on a deviation with no recorded reason.
+# Small rules like this one run on the submitting host of a cluster (localrule).
 rule check_published:
     input:
         unpack(
@@ -18,9 +20,6 @@ rule check_published:
         md="results/tables/published_comparison.md",
     log:
         "results/logs/check_published.log",
-    """Every published value and claim beside ours; fails on a deviation with no recorded reason."""
-
-    # Small: on a cluster it runs on the submitting host rather than waiting in the queue.
     localrule: True
     conda:
         "../envs/jointbench.yaml"
@@ -30,6 +29,8 @@ rule check_published:
         "../scripts/check_published.py"
 
 
+# Captions for `snakemake --report`: what each output shows, its headline agreement, and the
+# report's landing page.
 rule report_captions:
     input:
         unpack(lambda w: summarised_tables()),
@@ -39,7 +40,6 @@ rule report_captions:
         front=FRONT_PAGE,
     log:
         "results/logs/report_captions.log",
-    """Captions for `snakemake --report`: what each output shows, and its headline agreement."""
     localrule: True
     conda:
         "../envs/jointbench.yaml"

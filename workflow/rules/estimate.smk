@@ -69,8 +69,6 @@ rule summarise_estimator:
         "results/summaries/{study}/{method}.csv",
     log:
         "results/logs/summarise/{study}/{method}.log",
-    """One estimator's mean and median error per condition: `snakemake -j2
-    results/summaries/cmc/NM.csv` runs that estimator alone."""
     localrule: True
     conda:
         "../envs/jointbench.yaml"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -27,7 +28,16 @@ from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
 
-__all__ = ["collect", "estimate", "run_estimate_files", "run_simulate_files", "simulate_condition"]
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "collect",
+    "estimate",
+    "progress_line",
+    "run_estimate_files",
+    "run_simulate_files",
+    "simulate_condition",
+]
 
 
 def simulate_condition(config: Mapping, study: str, condition: Mapping[str, object]) -> Trials:
@@ -156,7 +166,8 @@ def run_estimate_files(
     same condition."""
     options = config["studies"][study].get("options", {}).get(method, {})
     by_condition = {Path(path).stem: path for path in datasets}
-    for output in outputs:
+    start = time.perf_counter()
+    for done, output in enumerate(outputs, start=1):
         path = by_condition[Path(output).stem]
         condition = read_metadata(path)["condition"]
         # A block of trials at a time, so memory does not grow with the number of trials.
@@ -166,7 +177,20 @@ def run_estimate_files(
             )
             for first, block in iter_dataset(path)
         ]
-        write_table(pd.concat(frames, ignore_index=True), output, provenance)
+        table = pd.concat(frames, ignore_index=True)
+        write_table(table, output, provenance)
+        log.info(progress_line(f"{study} {method}", done, len(outputs), start, len(table)))
+
+
+def progress_line(what: str, done: int, total: int, start: float, trials: int) -> str:
+    """A progress bar with the time left, for a job's log: ``[####------] 4/10 conditions``."""
+    elapsed = time.perf_counter() - start
+    left = elapsed / done * (total - done)
+    filled = round(20 * done / total)
+    return (
+        f"{what}: [{'#' * filled}{'-' * (20 - filled)}] {done}/{total} conditions "
+        f"({trials} trials in the last), {elapsed:.1f} s elapsed, about {left:.0f} s left"
+    )
 
 
 def collect(
