@@ -14,9 +14,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from jointbench.papers import Inputs, get_paper, paper_names
+from jointbench.papers import Inputs, get_paper, paper_labels, paper_names
 from jointbench.papers import paper_b as paper_b_module
-from jointbench.pipeline import paper_labels
 from jointbench.study.published import (
     UNEXPLAINED,
     comparison_rows,

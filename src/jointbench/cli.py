@@ -20,7 +20,7 @@ import pandas as pd
 import jointbench
 from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
-from jointbench.pipeline import paper_labels
+from jointbench.papers import paper_labels
 from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
 
 __all__ = ["main"]

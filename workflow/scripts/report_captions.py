@@ -1,8 +1,8 @@
-from jointbench import pipeline
+from jointbench import pipeline, report
 
 with pipeline.job(snakemake):
     tables = {k: v for k, v in snakemake.input.items() if k != "collected"}
-    pipeline.write_captions(tables, snakemake.output.captions, snakemake.config)
-    pipeline.write_front_page(
+    report.write_captions(tables, snakemake.output.captions, snakemake.config)
+    report.write_front_page(
         tables, snakemake.input.collected, snakemake.output.front, snakemake.config
     )

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from jointbench.papers import paper_a, paper_b, paper_c
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
+from jointbench.registries import Registry
 
 __all__ = [
     "Inputs",
@@ -17,34 +18,25 @@ __all__ = [
     "Paper",
     "Table",
     "get_paper",
+    "paper_labels",
     "paper_names",
     "papers_of_study",
     "register_paper",
 ]
 
-_PAPERS: dict[str, Paper] = {}
+_PAPERS: Registry[Paper] = Registry("paper", lambda paper: paper.key)
+register_paper = _PAPERS.register
+get_paper = _PAPERS.get
+paper_names = _PAPERS.names
 
 
-def register_paper(paper: Paper) -> Paper:
-    """Add ``paper`` to the registry; registering the same value twice is harmless."""
-    known = _PAPERS.get(paper.key)
-    if known is not None and known is not paper:
-        raise ValueError(f"a different paper {paper.key!r} is already registered")
-    _PAPERS[paper.key] = paper
-    return paper
-
-
-def get_paper(key: str) -> Paper:
-    """The paper called ``key`` (e.g. ``paper_a``); ``ValueError`` listing the known ones."""
-    try:
-        return _PAPERS[key]
-    except KeyError:
-        raise ValueError(f"unknown paper {key!r}; known: {', '.join(_PAPERS)}") from None
-
-
-def paper_names() -> tuple[str, ...]:
-    """Keys of the registered papers, built-ins first."""
-    return tuple(_PAPERS)
+def paper_labels() -> dict[str, str]:
+    """Each registered paper's label for summaries, by letter: ``"A (centre of rotation)"``."""
+    labels = {}
+    for paper in _PAPERS.values():
+        subject = paper.title.split(":", 1)[-1].strip()
+        labels[paper.letter] = f"{paper.letter} ({subject})"
+    return labels
 
 
 def papers_of_study(study: str) -> tuple[Paper, ...]:

@@ -1,0 +1,46 @@
+"""Named values of one kind, collected in registration order: the studies and the papers."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Generic, TypeVar
+
+__all__ = ["Registry"]
+
+T = TypeVar("T")
+
+
+class Registry(Generic[T]):
+    """Values of one kind by name. ``what`` names the kind in messages ("study", "paper");
+    ``name_of`` gives a value's name."""
+
+    def __init__(self, what: str, name_of: Callable[[T], str]) -> None:
+        self._what = what
+        self._name_of = name_of
+        self._values: dict[str, T] = {}
+
+    def register(self, value: T) -> T:
+        """Add ``value``; registering the same value twice is harmless, another of the same
+        name is refused."""
+        name = self._name_of(value)
+        known = self._values.get(name)
+        if known is not None and known is not value:
+            raise ValueError(f"a different {self._what} named {name!r} is already registered")
+        self._values[name] = value
+        return value
+
+    def get(self, name: str) -> T:
+        """The value called ``name``; ``ValueError`` listing the known names otherwise."""
+        try:
+            return self._values[name]
+        except KeyError:
+            known = ", ".join(self._values) or "none"
+            raise ValueError(f"unknown {self._what} {name!r}; known: {known}") from None
+
+    def names(self) -> tuple[str, ...]:
+        """The registered names, in registration order."""
+        return tuple(self._values)
+
+    def values(self) -> tuple[T, ...]:
+        """The registered values, in registration order."""
+        return tuple(self._values.values())
