@@ -44,6 +44,6 @@ rule report_captions:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(report.write_captions, report.write_front_page),
+        code=code_fingerprint(jb_report.write_captions, jb_report.write_front_page),
     script:
         "../scripts/report_captions.py"

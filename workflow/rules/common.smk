@@ -4,7 +4,8 @@ import sys
 
 from snakemake.utils import validate
 
-from jointbench import pipeline, report
+from jointbench import pipeline
+from jointbench import report as jb_report
 from jointbench.estimators import registry
 from jointbench.fingerprint import code_fingerprint
 from jointbench.study import run as jb_run
