@@ -199,8 +199,12 @@ class Prepared:
             raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
 
     def refits(self, method: str, rows: list[np.ndarray], options: dict) -> list:
-        """Results (or ``ValueError``) on many row sets, as one batch where the method can."""
-        fit = get(self.kind, method)
+        """Results (or ``ValueError``) on many row sets, as one batch where the method can.
+
+        The refits run the estimator without the input checks and support verdict of a user's
+        call: their rows are resamples of frames that passed them in the main fit.
+        """
+        fit = get(self.kind, method, checked=False)
         batched = getattr(fit, "batched", None)
         if batched is not None:
             return batched(*(np.stack([a[r] for r in rows]) for a in self.arrays), **options)
