@@ -16,6 +16,7 @@ from jointbench.figures import extended
 from jointbench.papers import Output, get_paper, paper_labels, paper_names
 from jointbench.study import config as jb_config
 from jointbench.study.io import read_provenance
+from jointbench.study.snapshot import reproduction_counts
 from jointbench.study.studies import get_study
 
 __all__ = [
@@ -124,19 +125,6 @@ def _rst_table(frame: pd.DataFrame, title: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _summary_frame(comparison: pd.DataFrame) -> pd.DataFrame:
-    labels = paper_labels()
-    rows = []
-    for paper, part in comparison.groupby("paper", sort=True):
-        row = {"paper": labels.get(paper, paper)}
-        for entry, column in (("value", "published values"), ("claim", "claims")):
-            tested = part[(part["entry"] == entry) & (part["status"] != "not applicable")]
-            row[column] = f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}"
-        row["not comparable"] = int((part["status"] == "not applicable").sum())
-        rows.append(row)
-    return pd.DataFrame(rows)
-
-
 def _rankings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
     lines = []
     for name, table in sorted(tables.items()):
@@ -175,7 +163,10 @@ def write_front_page(
     if comparison is not None and not comparison.empty:
         parts += [
             "Reproduction summary\n--------------------\n",
-            _rst_table(_summary_frame(comparison), "published values and claims reproduced"),
+            _rst_table(
+                reproduction_counts(comparison, paper_labels()),
+                "published values and claims reproduced",
+            ),
             "Every value and claim, with the paper's sentence, the criterion, the margin and the "
             "reason for each deviation, is under *Agreement with the papers*.\n",
         ]

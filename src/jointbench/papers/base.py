@@ -9,7 +9,7 @@ function that measures every published value and claim from the collected result
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
@@ -104,8 +104,6 @@ class Paper:
     outputs: tuple[Output, ...]
     published: Path
     measure: Callable[[Inputs], Mapping[str, Measured]]
-    claims_caption: str = ""
-    extra: Mapping[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         names = [o.name for o in self.outputs]

@@ -24,6 +24,7 @@ from jointbench.study.summary import summarise
 __all__ = [
     "SNAPSHOT_RTOL",
     "compare_snapshot",
+    "reproduction_counts",
     "reproduction_summary",
     "snapshot_table",
     "update_readme",
@@ -99,22 +100,28 @@ def compare_snapshot(current: pd.DataFrame, snapshot: pd.DataFrame) -> list[str]
     return problems
 
 
-def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) -> str:
-    """The README's opening table: per paper, values and claims reproduced out of those tested.
-
-    ``titles`` maps each paper's letter to the label shown (e.g. ``"A (centre of rotation)"``).
-    """
-    lines = [
-        "| paper | published values reproduced | claims reproduced | not comparable |",
-        "|---|---|---|---|",
-    ]
+def reproduction_counts(comparison: pd.DataFrame, titles: Mapping[str, str]) -> pd.DataFrame:
+    """Per paper: values and claims reproduced out of those tested, and how many are not
+    comparable. ``titles`` maps each paper's letter to the label shown."""
+    rows = []
     for paper, part in comparison.groupby("paper", sort=True):
-        cells = []
-        for entry in ("value", "claim"):
+        row = {"paper": titles.get(paper, paper)}
+        for entry, column in (
+            ("value", "published values reproduced"),
+            ("claim", "claims reproduced"),
+        ):
             tested = part[(part["entry"] == entry) & (part["status"] != "not applicable")]
-            cells.append(f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}")
-        cells.append(str(int((part["status"] == "not applicable").sum())))
-        lines.append(f"| {titles.get(paper, paper)} | " + " | ".join(cells) + " |")
+            row[column] = f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}"
+        row["not comparable"] = str(int((part["status"] == "not applicable").sum()))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) -> str:
+    """The README's opening table (:func:`reproduction_counts` as Markdown)."""
+    counts = reproduction_counts(comparison, titles)
+    lines = ["| " + " | ".join(counts.columns) + " |", "|---|---|---|---|"]
+    lines += ["| " + " | ".join(row) + " |" for row in counts.astype(str).values.tolist()]
     return (
         "**Reproduction summary** (generated from `results/tables/published_comparison.csv`; "
         "every deviation has its reason there):\n\n" + "\n".join(lines)
