@@ -73,7 +73,7 @@ def speed() -> None:
     recording, _ = hip_recording(1000, 0)
     for kind in ("center", "joint_center"):
         prepared = prepare(recording, kind, "D1,D2,D3", "P1,P2,P3")
-        wall, cpu = best_of(1, lambda p=prepared: p.fit("SCoRE", n_bootstrap=200))
+        wall, cpu = best_of(3, lambda p=prepared: p.fit("SCoRE", n_bootstrap=200))
         print(
             f"SCoRE ({kind}), 1000 frames, 200 resamples: {wall:.2f} s wall, {cpu:.2f} s CPU "
             "(target 2 s)"

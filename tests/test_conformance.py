@@ -25,7 +25,7 @@ from rigs import DISTAL, HINGE, JOINT, apply_pose, two_segments
 import jointbench
 from jointbench.estimators import registry, support
 from jointbench.estimators.results import CenterResult
-from jointbench.geometry import rotation_matrix, unit
+from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
 
 KINDS = ("center", "axis", "joint_center")
 CASES = [(kind, method) for kind in KINDS for method in jointbench.methods(kind)]
@@ -207,7 +207,7 @@ def _errors(kind: str, result, offset: np.ndarray | None = None) -> tuple[float,
     truth = JOINT if offset is None else JOINT + offset
     if kind == "axis":
         direction = np.asarray(result.direction)
-        angle = float(np.arccos(min(1.0, abs(float(direction @ HINGE)))))
+        angle = float(np.radians(angle_between_lines_deg(direction, HINGE)))
         arm = np.asarray(result.point) - truth
         return angle, float(np.linalg.norm(arm - (arm @ HINGE) * HINGE))
     return (float(np.linalg.norm(np.asarray(result.center) - truth)),)

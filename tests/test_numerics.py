@@ -1,4 +1,4 @@
-"""Shared numerics: the fminsearch simplex, its lockstep driver and the rank threshold."""
+"""Shared numerics: the fminsearch simplex, its lockstep driver, the rank threshold and angles."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
+from jointbench.geometry import angle_between_lines_deg
 from jointbench.numerics import rank, simplex
 
 
@@ -77,3 +78,13 @@ def test_negligible_is_relative_to_the_largest():
     np.testing.assert_array_equal(rank.negligible(values, 1.0), [True, False, False])
     assert rank.negligible(-1e-13, 1.0)
     assert rank.RCOND == 1e-12
+
+
+@pytest.mark.parametrize("angle_rad", [1e-12, 1e-9, 1e-6, 0.3, np.pi / 2])
+def test_angle_between_lines_resolves_small_angles(angle_rad):
+    """The cosine of an angle below ~1e-8 rad rounds to 1: the angle must not come from it."""
+    a = np.array([0.0, 0.0, 2.0])
+    b = 3.0 * np.array([np.sin(angle_rad), 0.0, np.cos(angle_rad)])
+    for sign in (1.0, -1.0):
+        measured = np.radians(angle_between_lines_deg(a, sign * b))
+        assert measured == pytest.approx(angle_rad, rel=1e-6, abs=0.0)

@@ -88,6 +88,11 @@ def rotation_vector(matrix: np.ndarray) -> np.ndarray:
 
 
 def angle_between_lines_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Sign-free angle between line directions ``a`` and ``b`` ``(..., 3)``, in [0, 90] degrees."""
-    cos_angle = np.abs(np.sum(unit(a) * unit(b), axis=-1))
-    return np.degrees(np.arccos(np.clip(cos_angle, 0.0, 1.0)))
+    """Sign-free angle between line directions ``a`` and ``b`` ``(..., 3)``, in [0, 90] degrees.
+
+    From both the sine and the cosine: the cosine alone rounds to 1 below ~1e-8 rad.
+    """
+    a, b = unit(a), unit(b)
+    sine = np.linalg.norm(np.cross(a, b), axis=-1)
+    cosine = np.abs(np.sum(a * b, axis=-1))
+    return np.degrees(np.arctan2(sine, cosine))

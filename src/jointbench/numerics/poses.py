@@ -71,7 +71,8 @@ def best_rotation(cross: np.ndarray) -> np.ndarray:
 
     ``cross`` is ``(..., 3, 3)``; the result has the same shape.
     """
-    cross = np.asarray(cross, dtype=float)
+    shape = np.shape(cross)
+    cross = np.asarray(cross, dtype=float).reshape(-1, 3, 3)
     # Horn's key matrix is built from M = H' (M_ab = sum_i source_a target_b).
     sxx, syx, szx = cross[..., 0, 0], cross[..., 0, 1], cross[..., 0, 2]
     sxy, syy, szy = cross[..., 1, 0], cross[..., 1, 1], cross[..., 1, 2]
@@ -80,7 +81,8 @@ def best_rotation(cross: np.ndarray) -> np.ndarray:
     n11, n12, n13 = sxx - syy - szz, sxy + syx, szx + sxz
     n22, n23, n33 = -sxx + syy - szz, syz + szy, -sxx - syy + szz
     # Characteristic polynomial of the traceless N: l^4 + c2 l^2 + c1 l + c0.
-    c2 = -2.0 * np.sum(cross * cross, axis=(-2, -1))
+    flat = cross.reshape(-1, 9)
+    c2 = -2.0 * np.einsum("...i,...i->...", flat, flat)
     c1 = -8.0 * (
         sxx * (syy * szz - syz * szy)
         - sxy * (syx * szz - syz * szx)
@@ -95,16 +97,20 @@ def best_rotation(cross: np.ndarray) -> np.ndarray:
     # sqrt(3) |H|_F >= s1 + s2 + s3 >= lambda_max: Newton from above converges monotonically.
     lam = np.sqrt(-1.5 * c2)
     scale = np.where(lam > 0, lam, 1.0)
-    done = np.zeros(lam.shape, dtype=bool)
+    tolerance = 1e-13 * scale
+    # A matrix stops stepping once its own step is small, so its answer does not depend on the
+    # other matrices of the stack.
+    active = np.ones(lam.shape, dtype=bool)
     for _ in range(60):
         l2 = lam * lam
         slope = (4.0 * l2 + 2.0 * c2) * lam + c1
-        step = ((l2 + c2) * l2 + c1 * lam + c0) / np.where(slope == 0, 1.0, slope)
-        lam = lam - np.where(done, 0.0, step)
-        small = np.abs(step) <= 1e-13 * scale
-        if np.all(done | small):
+        slope[slope == 0] = 1.0
+        step = ((l2 + c2) * l2 + c1 * lam + c0) / slope
+        step *= active
+        lam -= step
+        active &= np.abs(step) > tolerance
+        if not active.any():
             break
-        done |= small
     d0, d1, d2, d3 = n00 - lam, n11 - lam, n22 - lam, n33 - lam
     # Adjugate of A = N - lam I (symmetric); its columns span A's null vector, the quaternion.
     m01, m02, m03 = n02 * n13 - n12 * n03, n02 * n23 - d2 * n03, n02 * d3 - n23 * n03
@@ -121,37 +127,38 @@ def best_rotation(cross: np.ndarray) -> np.ndarray:
     c22 = n03 * u13 - n13 * u03 + d3 * u01
     c23 = -(n02 * u13 - n12 * u03 + n23 * u01)
     c33 = n02 * u12 - n12 * u02 + d2 * u01
-    adjugate = np.stack(
-        [
-            np.stack([c00, c01, c02, c03], axis=-1),
-            np.stack([c01, c11, c12, c13], axis=-1),
-            np.stack([c02, c12, c22, c23], axis=-1),
-            np.stack([c03, c13, c23, c33], axis=-1),
-        ],
-        axis=-2,
+    # The quaternion is the adjugate column of largest norm (selected element-wise).
+    columns = (
+        (c00, c01, c02, c03),
+        (c01, c11, c12, c13),
+        (c02, c12, c22, c23),
+        (c03, c13, c23, c33),
     )
-    norms = np.sqrt(np.sum(adjugate * adjugate, axis=-1))
-    best = np.argmax(norms, axis=-1)
-    q = np.take_along_axis(adjugate, best[..., None, None], axis=-2)[..., 0, :]
-    q_norm = np.take_along_axis(norms, best[..., None], axis=-1)[..., 0]
+    q, q_sq = columns[0], c00 * c00 + c01 * c01 + c02 * c02 + c03 * c03
+    for column in columns[1:]:
+        column_sq = sum(c * c for c in column)
+        larger = column_sq > q_sq
+        q_sq = np.where(larger, column_sq, q_sq)
+        q = tuple(np.where(larger, new, old) for new, old in zip(column, q, strict=True))
+    q_norm = np.sqrt(q_sq)
     # A simple largest eigenvalue leaves a cofactor of order gap * lambda^2; below 1e-8 lambda^3
     # the eigenvector is too ill-determined for element-wise arithmetic: use the SVD there.
     fallback = ~(q_norm > 1e-8 * scale**3) | ~np.isfinite(q_norm)
-    q = q / np.where(fallback, 1.0, q_norm)[..., None]
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    rotation = np.empty(cross.shape)
-    rotation[..., 0, 0] = w * w + x * x - y * y - z * z
-    rotation[..., 0, 1] = 2.0 * (x * y - w * z)
-    rotation[..., 0, 2] = 2.0 * (x * z + w * y)
-    rotation[..., 1, 0] = 2.0 * (x * y + w * z)
-    rotation[..., 1, 1] = w * w - x * x + y * y - z * z
-    rotation[..., 1, 2] = 2.0 * (y * z - w * x)
-    rotation[..., 2, 0] = 2.0 * (x * z - w * y)
-    rotation[..., 2, 1] = 2.0 * (y * z + w * x)
-    rotation[..., 2, 2] = w * w - x * x - y * y + z * z
+    inverse_norm = 1.0 / np.where(fallback, 1.0, q_norm)
+    w, x, y, z = (component * inverse_norm for component in q)
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    rotation = np.stack(
+        [
+            *(ww + xx - yy - zz, 2.0 * (xy - wz), 2.0 * (xz + wy)),
+            *(2.0 * (xy + wz), ww - xx + yy - zz, 2.0 * (yz - wx)),
+            *(2.0 * (xz - wy), 2.0 * (yz + wx), ww - xx - yy + zz),
+        ],
+        axis=-1,
+    ).reshape(-1, 3, 3)
     if np.any(fallback):
         rotation[fallback] = _kabsch_rotation(cross[fallback])
-    return rotation
+    return rotation.reshape(shape)
 
 
 def rigid_poses(
@@ -192,14 +199,20 @@ def rigid_poses(
             for k in range(3)
         )
     # What rigid_fit recomputes on every call is hoisted out of the loop: the frames' centroids
-    # and centred markers do not change between iterations.
+    # and centred markers do not change between iterations. Stacking every frame's coordinates
+    # as rows ``(frame, coordinate)`` turns the sums over markers and over frames into single
+    # matrix products per trial.
+    n_markers = markers.shape[-2]
     target_mean = markers.mean(axis=-2)
     centred = markers - target_mean[..., None, :]
-    centred_t = np.swapaxes(centred, -1, -2)
+    rows = np.ascontiguousarray(np.swapaxes(centred, -1, -2)).reshape(
+        *batch, n_frames * 3, n_markers
+    )
 
     def fit(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         body_mean = body.mean(axis=-2)
-        rotation = best_rotation(centred_t @ (body - body_mean[..., None, :])[..., None, :, :])
+        cross = rows @ (body - body_mean[..., None, :])
+        rotation = best_rotation(cross.reshape(*batch, n_frames, 3, 3))
         translation = target_mean - (rotation @ body_mean[..., None, :, None])[..., 0]
         return rotation, translation, body_mean
 
@@ -209,18 +222,18 @@ def rigid_poses(
         rotation, translation, body_mean = fit(body)
         # Back-transform every frame into the body frame, then re-anchor at frame 0 (eq. 5):
         # R'(y - t) = R'(y - mean(y)) + mean(body), averaged over the frames.
-        mean_local = (
-            np.einsum("...fji,...fmj->...mi", rotation, centred) / n_frames
-            + body_mean[..., None, :]
-        )
+        summed = np.swapaxes(rotation.reshape(*batch, n_frames * 3, 3), -1, -2) @ rows
+        mean_local = np.swapaxes(summed, -1, -2) / n_frames + body_mean[..., None, :]
         new_body = (
             mean_local @ np.swapaxes(rotation[..., 0, :, :], -1, -2) + translation[..., 0, None, :]
         )
-        change = np.max(np.abs(new_body - body), axis=(-2, -1))
-        # A trial that has converged keeps its coordinates while the others iterate on.
+        converged = np.max(np.abs(new_body - body), axis=(-2, -1)) < tol_mm
+        # A converged trial keeps the coordinates its poses were just fitted to (within
+        # ``tol_mm`` of the fixed point) while the others iterate on; refitting it gives the
+        # same poses, so a trial's answer does not depend on its batch.
+        active &= ~converged
         body = np.where(active[..., None, None], new_body, body)
-        active &= ~(change < tol_mm)
         if not active.any():
-            break
+            return rotation, translation, body
     rotation, translation, _ = fit(body)
     return rotation, translation, body
