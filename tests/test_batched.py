@@ -91,8 +91,8 @@ def test_batched_equals_one_trial(study, method, index):
 
 def test_every_closed_form_and_pose_based_method_is_batched():
     expected = {
-        "center": {"LS", "NM", "BC", "SCoRE"},
-        "axis": {"SARA"},
+        "center": {"LS", "NM", "BC", "IS", "MA", "SCoRE"},
+        "axis": {"planar", "radial", "combined", "SARA"},
         "joint_center": {"SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0"},
     }
     for kind, names in expected.items():

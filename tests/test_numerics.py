@@ -73,6 +73,50 @@ def test_lockstep_runs_equal_independent_runs():
         assert alone == joint
 
 
+def _rosenbrock_rows(points: np.ndarray) -> np.ndarray:
+    a, b, c = points[:, 0], points[:, 1], points[:, 2]
+    return (1 - a) ** 2 + 100 * (b - a * a) ** 2 + (c - 0.5) ** 2
+
+
+COSTS = {
+    "smooth": _rosenbrock_rows,
+    # Plateaus: ties between vertices, so the stable ordering decides the path.
+    "plateaus": lambda p: np.floor(2.0 * np.abs(p).sum(axis=1)),
+    # A wall of infinite cost.
+    "wall": lambda p: np.where(p[:, 0] > 1.5, np.inf, _rosenbrock_rows(p)),
+}
+LIMITS = [{}, {"max_iter": 7}, {"max_fev": 20}, {"xatol": 1e-9, "fatol": 1e-9}]
+
+
+@pytest.mark.parametrize("limits", LIMITS, ids=["defaults", "max_iter", "max_fev", "tight"])
+@pytest.mark.parametrize("name", sorted(COSTS))
+def test_array_searches_take_the_scalar_path_to_the_last_bit(name, limits):
+    """nelder_mead_many = nelder_mead_steps, run by run: same vertex, cost, counts and flags."""
+    cost = COSTS[name]
+    starts = np.random.default_rng(7).normal(size=(40, 3))
+    starts[0] = 0.0  # the 0.00025 initial step
+    starts[1] = -0.0
+    starts[2, 1] = 0.0
+    runs = simplex.nelder_mead_many(lambda points, _owners: cost(points), starts, **limits)
+    assert runs.exact.all()
+    for i, x0 in enumerate(starts):
+        alone = simplex.nelder_mead(lambda *x: float(cost(np.array([x]))[0]), x0, **limits)
+        assert runs.result(i) == alone
+
+
+def test_a_search_meeting_nan_costs_is_run_alone_by_lockstep():
+    def cost(points: np.ndarray) -> np.ndarray:
+        value = _rosenbrock_rows(points)
+        return np.where(points[:, 0] < -0.92, np.nan, value)
+
+    starts = [(-0.9, 0.0, 0.0), (0.5, 0.5, 0.5)]
+    runs = simplex.nelder_mead_many(lambda points, _owners: cost(points), starts)
+    assert runs.exact.tolist() == [False, True]
+    together = simplex.lockstep(lambda points, _owners: cost(points), starts)
+    for x0, joint in zip(starts, together, strict=True):
+        assert joint == simplex.nelder_mead(lambda *x: float(cost(np.array([x]))[0]), x0)
+
+
 def test_negligible_is_relative_to_the_largest():
     values = np.array([1e-13, 1e-11, 1.0])
     np.testing.assert_array_equal(rank.negligible(values, 1.0), [True, False, False])

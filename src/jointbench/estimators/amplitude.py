@@ -16,15 +16,27 @@ from jointbench.estimators.results import CenterResult
 from jointbench.estimators.sphere import _check_point, fit_ls
 from jointbench.estimators.validation import check_markers, check_moves, check_not_collinear
 from jointbench.numerics.poses import rigid_poses
-from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, nelder_mead, stop_status
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
 __all__ = ["amplitude", "fit_ma"]
 
 
-def _amplitude(point: np.ndarray, stacked: np.ndarray, translation: np.ndarray) -> float:
-    """Bounding-box size of ``q_k = R_k p + t_k``; ``stacked`` is ``R`` as ``(3 N, 3)`` rows."""
-    trajectory = (stacked @ point).reshape(-1, 3) + translation
-    return float(np.sum(trajectory.max(axis=0) - trajectory.min(axis=0)))
+def _amplitudes(
+    points: np.ndarray, rotation: np.ndarray, translation: np.ndarray, trials: np.ndarray
+) -> np.ndarray:
+    """Bounding-box sizes of ``q_k = R_k p + t_k`` for body-fixed points ``(k, 3)`` [mm], each
+    in its trial's poses ``rotation[trials]`` ``(N, 3, 3)`` and ``translation[trials]``
+    ``(N, 3)``.
+
+    Element by element, so a point's amplitude is the same whichever points share the call (the
+    one-trial search and the many-trial one then take the same path).
+    """
+    rotations, translations = rotation[trials], translation[trials]
+    x, y, z = (points[:, axis, None, None] for axis in range(3))
+    trajectory = rotations[..., 0] * x + rotations[..., 1] * y + rotations[..., 2] * z
+    trajectory += translations
+    sides = trajectory.max(axis=1) - trajectory.min(axis=1)
+    return sides[:, 0] + sides[:, 1] + sides[:, 2]
 
 
 def amplitude(rotation: np.ndarray, translation: np.ndarray, point: np.ndarray) -> float:
@@ -40,9 +52,10 @@ def amplitude(rotation: np.ndarray, translation: np.ndarray, point: np.ndarray) 
     -------
     The summed side lengths of the trajectory's axis-aligned bounding box [mm].
     """
-    rotation = np.asarray(rotation, dtype=float)
-    stacked = rotation.reshape(-1, 3)
-    return _amplitude(np.asarray(point, dtype=float), stacked, np.asarray(translation, float))
+    rotation = np.asarray(rotation, dtype=float)[None]
+    translation = np.asarray(translation, dtype=float)[None]
+    point = np.asarray(point, dtype=float)[None]
+    return float(_amplitudes(point, rotation, translation, np.zeros(1, dtype=int))[0])
 
 
 # The box is measured along the reference axes, so a rotation of noisy data is not followed;
@@ -91,18 +104,36 @@ def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     ``diagnostics["body_point"]`` is ``p*`` (a list [mm]), with
     ``diagnostics["function_evaluations"]``.
     """
+    markers, start = _ma_prepare(markers, start)
+    rotation, translation, _ = rigid_poses(markers)
+    body_start = _body_point(start, rotation, translation)
+    rotation, translation = rotation[None], translation[None]
+    trial = np.zeros(1, dtype=int)
+    search = nelder_mead(
+        lambda *p: float(_amplitudes(np.array([p]), rotation, translation, trial)[0]),
+        body_start,
+        **FMINSEARCH_OPTIONS,
+    )
+    return _ma_result(search, rotation[0], translation[0])
+
+
+def _ma_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.ndarray]:
+    """Validated markers and the starting point in the reference frame (default: LS centre)."""
     markers = check_markers(markers, min_frames=4, min_markers=3)
     check_moves(markers)
     check_not_collinear(markers)
-    start = fit_ls(markers).center if start is None else _check_point(start, "start")
-    rotation, translation, _ = rigid_poses(markers)
-    body_start = rotation[0].T @ (start - translation[0])
-    stacked = np.ascontiguousarray(rotation.reshape(-1, 3))
-    search = nelder_mead(
-        lambda *p: _amplitude(np.array(p), stacked, translation), body_start, **FMINSEARCH_OPTIONS
-    )
+    return markers, fit_ls(markers).center if start is None else _check_point(start, "start")
+
+
+def _body_point(point: np.ndarray, rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    """``point`` (3,) of the reference frame in body coordinates through frame 0's pose."""
+    return rotation[0].T @ (point - translation[0])
+
+
+def _ma_result(search, rotation: np.ndarray, translation: np.ndarray) -> CenterResult:
+    """MA's :class:`CenterResult` from its simplex search in the poses ``(N, 3, 3)``, ``(N, 3)``."""
     point = np.array(search.x)
-    trajectory = (stacked @ point).reshape(-1, 3) + translation
+    trajectory = rotation @ point + translation
     center = trajectory.mean(axis=0)
     finite = bool(np.all(np.isfinite(center)) and math.isfinite(search.fun))
     ok = search.converged and finite
@@ -116,3 +147,34 @@ def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
         cost=float(search.fun),
         diagnostics={"body_point": point.tolist(), "function_evaluations": search.evaluations},
     )
+
+
+def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
+    """:func:`fit_ma` for every trial of ``markers`` ``(n_trials, N, P, 3)``, the searches
+    advanced together (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
+    outcomes: list = []
+    prepared: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for trial, data in enumerate(np.asarray(markers, dtype=float)):
+        try:
+            prepared[trial] = _ma_prepare(data, start)
+            outcomes.append(None)
+        except ValueError as error:
+            outcomes.append(error)
+    if prepared:
+        arrays, points = zip(*prepared.values(), strict=True)
+        # Each trial's poses are those of its own call (the pose fit is per trial).
+        rotations, translations, _ = rigid_poses(np.stack(arrays))
+        starts = np.stack(
+            [_body_point(*parts) for parts in zip(points, rotations, translations, strict=True)]
+        )
+        searches = lockstep(
+            lambda points, owners: _amplitudes(points, rotations, translations, owners),
+            starts,
+            **FMINSEARCH_OPTIONS,
+        )
+        for index, (trial, search) in enumerate(zip(prepared, searches, strict=True)):
+            outcomes[trial] = _ma_result(search, rotations[index], translations[index])
+    return outcomes
+
+
+fit_ma.batched = _fit_ma_batch

@@ -153,86 +153,113 @@ def angles_to_directions(params: np.ndarray) -> np.ndarray:
 
 
 class AxisCosts:
-    """Paper B's planar, radial and combined costs for one data set, with everything precomputed.
+    """Paper B's planar, radial and combined costs for one data set or many, precomputed.
 
     Parameters
     ----------
-    markers : (n_frames, n_markers, 3) [mm], already validated.
-    point : (3,) [mm], the point ``m`` on the axis (used by the radial cost only).
+    markers : (n_frames, n_markers, 3) or (n_trials, n_frames, n_markers, 3) [mm], validated.
+    point : (3,) or (n_trials, 3) [mm], the point ``m`` on each trial's axis (used by the
+        radial cost only).
 
-    ``planar``, ``radial`` and ``combined`` take unit directions ``(3,)`` or ``(k, 3)`` and
-    return the cost(s) [mm^2]. ``planar`` is the quadratic form ``n' S n`` on the precomputed
-    ``S``. The radial cost needs one matrix product per batch of directions: with ``w = v - m``
-    fixed, ``|(I - n n') w|^2 = |w|^2 - (n . w)^2``, so only ``n . w`` depends on ``n``. Radii
-    and squared deviations are summed in two passes; the one-pass form ``sum d^2 - N sum r_p^2``
-    cancels catastrophically near an exact fit.
+    ``planar``, ``radial`` and ``combined`` take unit directions ``(3,)`` or ``(k, 3)`` and,
+    with many trials, the trial of each direction (``trials`` ``(k,)``; trial 0 by default);
+    they return the cost(s) [mm^2]. ``planar`` is the quadratic form ``n' S n`` on the
+    precomputed ``S``. With ``w = v - m`` fixed, the radial cost needs only ``n . w``:
+    ``|(I - n n') w|^2 = |w|^2 - (n . w)^2``. Radii and squared deviations are summed in two
+    passes; the one-pass form ``sum d^2 - N sum r_p^2`` cancels catastrophically near an exact
+    fit. Each direction's cost is computed element by element, the same way whichever trials
+    and directions share the call, so a search over many trials follows the path it follows
+    alone.
     """
 
     def __init__(self, markers: np.ndarray, point: np.ndarray) -> None:
-        n_frames, n_markers, _ = markers.shape
-        centred = markers - markers.mean(axis=0)
-        self.scatter = np.einsum("kpi,kpj->ij", centred, centred)
-        self.point = np.asarray(point, dtype=float)
-        # Marker-major and transposed, (3, P N) contiguous: n @ w_t gives n . w for every sample.
-        offsets = np.transpose(markers - self.point, (2, 1, 0)).reshape(3, -1)
-        self._w_t = np.ascontiguousarray(offsets)
-        self._w_sq = np.einsum("ij,ij->j", self._w_t, self._w_t)
+        markers = np.asarray(markers, dtype=float)
+        point = np.asarray(point, dtype=float)
+        if markers.ndim == 3:
+            markers, point = markers[None], point[None]
+        n_trials, n_frames, n_markers, _ = markers.shape
+        self.scatter = np.empty((n_trials, 3, 3))
+        for trial, data in enumerate(markers):
+            centred = data - data.mean(axis=0)
+            self.scatter[trial] = np.einsum("kpi,kpj->ij", centred, centred)
+        self.point = point
+        # Per coordinate, marker-major rows (n_trials, P N): the offsets w of every sample.
+        offsets = np.transpose(markers - point[:, None, None, :], (3, 0, 2, 1))
+        self._w = np.ascontiguousarray(offsets).reshape(3, n_trials, -1)
+        self._w_sq = self._w[0] * self._w[0] + self._w[1] * self._w[1] + self._w[2] * self._w[2]
         self._shape = (n_markers, n_frames)
-        self._work = np.empty((0, n_markers * n_frames))
+        self._work = np.empty((2, 0, n_markers * n_frames))
 
-    def planar(self, directions: np.ndarray) -> np.ndarray:
+    @staticmethod
+    def _trials(directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
+        return np.zeros(len(directions), dtype=int) if trials is None else np.asarray(trials)
+
+    def planar(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f_p = n' S n`` (paper B eq. 8): ``(3,)`` -> scalar array, ``(k, 3)`` -> ``(k,)``."""
         n = np.asarray(directions, dtype=float)
-        return np.einsum("...i,ij,...j->...", n, self.scatter, n)
+        flat = n.reshape(-1, 3)
+        scatter = self.scatter[self._trials(flat, trials)]
+        return np.einsum("ki,kij,kj->k", flat, scatter, flat).reshape(n.shape[:-1])
 
-    def _distances_into(self, directions: np.ndarray) -> np.ndarray:
+    def _distances_into(self, directions: np.ndarray, trials: np.ndarray) -> np.ndarray:
         """Distances for unit directions ``(k, 3)`` into a reused ``(k, P N)`` work buffer.
 
         Temporaries of this size would be fresh ``mmap`` allocations on every call (glibc), whose
-        page faults cost more than the arithmetic, hence the buffer (this object is not
+        page faults cost more than the arithmetic, hence the buffers (this object is not
         thread-safe).
         """
         k = directions.shape[0]
-        if self._work.shape[0] < k:
-            self._work = np.empty((k, self._w_t.shape[1]))
-        work = self._work[:k]
-        np.matmul(directions, self._w_t, out=work)
-        np.multiply(work, work, out=work)
-        np.subtract(self._w_sq, work, out=work)
+        if self._work.shape[1] < k:
+            self._work = np.empty((2, k, self._w.shape[2]))
+        work, term = self._work[0, :k], self._work[1, :k]
+        np.take(self._w[0], trials, axis=0, out=work)
+        work *= directions[:, 0, None]
+        for axis in (1, 2):
+            np.take(self._w[axis], trials, axis=0, out=term)
+            term *= directions[:, axis, None]
+            work += term
+        work *= work
+        np.take(self._w_sq, trials, axis=0, out=term)
+        np.subtract(term, work, out=work)
         # |w|^2 - (n.w)^2 can round below zero for a sample on the axis itself.
         np.maximum(work, 0.0, out=work)
         return np.sqrt(work, out=work)
 
-    def radial_distances(self, directions: np.ndarray) -> np.ndarray:
-        """Distances ``|(I - n n')(v - m)|`` [mm]: ``(..., n_markers, n_frames)``."""
+    def radial_distances(self, directions: np.ndarray, trial: int = 0) -> np.ndarray:
+        """Distances ``|(I - n n')(v - m)|`` [mm] in ``trial``: ``(..., n_markers, n_frames)``."""
         n = np.asarray(directions, dtype=float)
-        distances = self._distances_into(n.reshape(-1, 3)).copy()
+        flat = n.reshape(-1, 3)
+        distances = self._distances_into(flat, np.full(len(flat), trial)).copy()
         return distances.reshape(*n.shape[:-1], *self._shape)
 
-    def radial(self, directions: np.ndarray) -> np.ndarray:
+    def radial(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f_r`` with the radii profiled out (paper B eqs. 10–11)."""
         n = np.asarray(directions, dtype=float)
-        flat = self._distances_into(n.reshape(-1, 3))
+        flat_n = n.reshape(-1, 3)
+        flat = self._distances_into(flat_n, self._trials(flat_n, trials))
         by_marker = flat.reshape(-1, *self._shape)
         radii = np.add.reduce(by_marker, axis=2, keepdims=True)
         radii *= 1.0 / self._shape[1]
         np.subtract(by_marker, radii, out=by_marker)
         return np.einsum("ij,ij->i", flat, flat).reshape(n.shape[:-1])
 
-    def combined(self, directions: np.ndarray) -> np.ndarray:
+    def combined(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f = f_p + f_r`` (paper B eq. 12)."""
-        return self.planar(directions) + self.radial(directions)
+        return self.planar(directions, trials) + self.radial(directions, trials)
 
-    def batch_cost(self, method: str, parameterisation: str) -> Callable[[np.ndarray], np.ndarray]:
-        """Cost of a batch of search parameters, ``(k, 2)`` angles or ``(k, 3)`` vectors."""
+    def batch_cost(
+        self, method: str, parameterisation: str, trial_of: Callable[[np.ndarray], np.ndarray]
+    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """Cost of a batch of search parameters, ``(k, 2)`` angles or ``(k, 3)`` vectors, whose
+        searches ``owners`` ``(k,)`` belong to the trials ``trial_of(owners)``."""
         cost = {"planar": self.planar, "radial": self.radial, "combined": self.combined}[method]
         if parameterisation == "angles":
-            return lambda params: cost(angles_to_directions(params))
+            return lambda params, owners: cost(angles_to_directions(params), trial_of(owners))
 
-        def cost_vector(params: np.ndarray) -> np.ndarray:
+        def cost_vector(params: np.ndarray, owners: np.ndarray) -> np.ndarray:
             norm = np.linalg.norm(params, axis=1)
             zero = norm == 0.0
-            value = cost(params / np.where(zero, 1.0, norm)[:, None])
+            value = cost(params / np.where(zero, 1.0, norm)[:, None], trial_of(owners))
             value[zero] = np.inf
             return value
 
@@ -246,17 +273,8 @@ def canonical_sign(direction: np.ndarray) -> np.ndarray:
     return -direction if direction[np.argmax(np.abs(direction))] < 0 else direction
 
 
-def _fit(
-    markers: object,
-    method: str,
-    *,
-    point: object | None,
-    parameterisation: str,
-    xatol: float,
-    fatol: float,
-    max_iter: int | None,
-    max_fev: int | None,
-) -> AxisResult:
+def _prepare(markers: object, point: object | None, parameterisation: str):
+    """Validated markers ``(N, P, 3)`` and the point ``m`` on the axis (3,) [mm]."""
     array = check_markers(markers, min_frames=4, min_markers=1)
     check_moves(array)
     if parameterisation not in PARAMETERISATIONS:
@@ -265,33 +283,68 @@ def _fit(
             f"{', '.join(PARAMETERISATIONS)}"
         )
     if point is None:
-        m = np.asarray(fit_nm(array).center, dtype=float)
-    else:
-        m = np.asarray(point, dtype=float)
-        if m.shape != (3,) or not np.all(np.isfinite(m)):
-            raise ValueError(f"point must be a finite (3,) array [mm], got {m!r}")
-    costs = AxisCosts(array, m)
+        return array, np.asarray(fit_nm(array).center, dtype=float)
+    m = np.asarray(point, dtype=float)
+    if m.shape != (3,) or not np.all(np.isfinite(m)):
+        raise ValueError(f"point must be a finite (3,) array [mm], got {m!r}")
+    return array, m
+
+
+def _starts(parameterisation: str) -> np.ndarray:
+    """The ten dodecahedron starts as search parameters, ``(10, 2)`` angles or ``(10, 3)``."""
     if parameterisation == "angles":
-        starts = [direction_to_angles(start) for start in DODECAHEDRON_STARTS]
-    else:
-        starts = [tuple(start) for start in DODECAHEDRON_STARTS]
-    cost = costs.batch_cost(method, parameterisation)
+        return np.array([direction_to_angles(start) for start in DODECAHEDRON_STARTS])
+    return np.array(DODECAHEDRON_STARTS)
+
+
+def _fit_many(
+    arrays: list[np.ndarray],
+    points: list[np.ndarray],
+    method: str,
+    *,
+    parameterisation: str,
+    xatol: float,
+    fatol: float,
+    max_iter: int | None,
+    max_fev: int | None,
+) -> list[AxisResult]:
+    """The axis of each validated trial (``arrays`` of equal shape ``(N, P, 3)``, ``points``
+    ``m`` (3,)): the ten starts of every trial searched together, each on its own path."""
+    costs = AxisCosts(np.stack(arrays), np.stack(points))
+    starts = _starts(parameterisation)
+    n_starts = len(starts)
     runs = lockstep(
-        lambda points, _owners: cost(points),
-        starts,
+        costs.batch_cost(method, parameterisation, lambda owners: owners // n_starts),
+        np.tile(starts, (len(arrays), 1)),
         xatol=xatol,
         fatol=fatol,
         max_iter=max_iter,
         max_fev=max_fev,
     )
+    return [
+        _result(
+            array,
+            trial,
+            costs,
+            runs[trial * n_starts : (trial + 1) * n_starts],
+            method,
+            parameterisation,
+        )
+        for trial, array in enumerate(arrays)
+    ]
+
+
+def _result(array, trial, costs, runs, method, parameterisation) -> AxisResult:
+    """The winning start's axis of one trial, with its diagnostics."""
     winner = min(range(len(runs)), key=lambda i: runs[i][1])
     x_best, f_best, converged, iterations, evaluations = runs[winner]
     raw = angles_to_direction(*x_best) if parameterisation == "angles" else np.array(x_best)
     direction = canonical_sign(raw)
-    radii = costs.radial_distances(direction).mean(axis=1)
+    m = costs.point[trial]
+    radii = costs.radial_distances(direction, trial).mean(axis=1)
     centroid = array.reshape(-1, 3).mean(axis=0)
     foot = m + direction * float(direction @ (centroid - m))
-    eigenvalues, eigenvectors = np.linalg.eigh(costs.scatter)
+    eigenvalues, eigenvectors = np.linalg.eigh(costs.scatter[trial])
     status = "ok" if converged else "winning start stopped at the iteration/evaluation limit"
     return AxisResult(
         point=m,
@@ -314,6 +367,33 @@ def _fit(
             "eigenvalues": eigenvalues.tolist(),
         },
     )
+
+
+def _fit(markers: object, method: str, *, point: object | None, **search) -> AxisResult:
+    array, m = _prepare(markers, point, search["parameterisation"])
+    return _fit_many([array], [m], method, **search)[0]
+
+
+def _fit_batch(
+    markers: object, method: str, *, point: object | None, **search
+) -> list[AxisResult | ValueError]:
+    """:func:`_fit` for every trial of ``markers`` ``(n_trials, N, P, 3)``; a trial that the
+    one-trial function rejects carries its ``ValueError``."""
+    outcomes: list = []
+    prepared: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for trial, data in enumerate(markers):
+        try:
+            prepared[trial] = _prepare(data, point, search["parameterisation"])
+            outcomes.append(None)
+        except ValueError as error:
+            outcomes.append(error)
+    if prepared:
+        arrays, points = zip(*prepared.values(), strict=True)
+        for trial, result in zip(
+            prepared, _fit_many(list(arrays), list(points), method, **search), strict=True
+        ):
+            outcomes[trial] = result
+    return outcomes
 
 
 _DOC = """
@@ -367,8 +447,30 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
             max_fev=max_fev,
         )
 
+    def batched(
+        markers: np.ndarray,
+        *,
+        point: np.ndarray | None = None,
+        parameterisation: str = "angles",
+        xatol: float = XATOL,
+        fatol: float = FATOL,
+        max_iter: int | None = None,
+        max_fev: int | None = None,
+    ) -> list[AxisResult | ValueError]:
+        return _fit_batch(
+            markers,
+            method,
+            point=point,
+            parameterisation=parameterisation,
+            xatol=xatol,
+            fatol=fatol,
+            max_iter=max_iter,
+            max_fev=max_fev,
+        )
+
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
+    fit.batched = batched
     return fit
 
 

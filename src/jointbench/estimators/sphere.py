@@ -23,7 +23,7 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.validation import check_markers, check_moves
 from jointbench.numerics.rank import RCOND, negligible
-from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, nelder_mead, stop_status
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
 __all__ = [
     "FMINSEARCH_OPTIONS",
@@ -516,13 +516,24 @@ def fit_bc(
 # --------------------------------------------------------------------------------------------
 
 
-def _geometric_cost(center: np.ndarray, flat: np.ndarray, n_frames: int) -> float:
-    """f1 with the radii profiled out, on rows ``(n_frames * n_markers, 3)`` frame-major."""
+def _geometric_costs(
+    centers: np.ndarray, flats: np.ndarray, trials: np.ndarray, n_frames: int
+) -> np.ndarray:
+    """f1 with the radii profiled out for centres ``(k, 3)`` [mm], each on its trial's rows
+    ``flats[trials]`` (``flats`` ``(n_trials, n_frames * n_markers, 3)`` frame-major).
+
+    Element by element, so a centre's cost is the same whichever centres share the call (the
+    one-trial search and the many-trial one then take the same path).
+    """
     # Distances from differences, not |v|^2 - 2 v.c + |c|^2: no cancellation far from the origin.
-    distance = np.sqrt(_row_sq(flat - center)).reshape(n_frames, -1)
-    distance -= _mean_weights(n_frames) @ distance
-    distance = distance.reshape(-1)
-    return float(distance @ distance)
+    rows = flats[trials]
+    dx = rows[..., 0] - centers[:, 0, None]
+    dy = rows[..., 1] - centers[:, 1, None]
+    dz = rows[..., 2] - centers[:, 2, None]
+    distance = np.sqrt(dx * dx + dy * dy + dz * dz).reshape(len(centers), n_frames, -1)
+    distance -= np.add.reduce(distance, axis=1, keepdims=True) / n_frames
+    distance = distance.reshape(len(centers), -1)
+    return np.einsum("kr,kr->k", distance, distance)
 
 
 def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
@@ -542,7 +553,8 @@ def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
     """
     markers = check_markers(markers)
     center = _check_point(center, "center")
-    return _geometric_cost(center, markers.reshape(-1, 3), markers.shape[0])
+    flat = markers.reshape(1, -1, 3)
+    return float(_geometric_costs(center[None], flat, np.zeros(1, int), markers.shape[0])[0])
 
 
 @register("center", "IS", invariances=1e-3)  # a simplex stopped at 1e-4 mm
@@ -583,14 +595,47 @@ def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
     iterations or function evaluations) and ``iterations`` its iteration count;
     ``diagnostics["function_evaluations"]``.
     """
-    markers = _prepare(markers)
-    start = _ls_start(markers)[0] if start is None else _check_point(start, "start")
+    markers, start = _is_prepare(markers, start)
     n_frames = markers.shape[0]
-    flat = np.ascontiguousarray(markers.reshape(-1, 3))
+    flat = np.ascontiguousarray(markers.reshape(1, -1, 3))
+    trial = np.zeros(1, dtype=int)
     search = nelder_mead(
-        lambda *x: _geometric_cost(np.array(x), flat, n_frames), start, **FMINSEARCH_OPTIONS
+        lambda *x: float(_geometric_costs(np.array([x]), flat, trial, n_frames)[0]),
+        start,
+        **FMINSEARCH_OPTIONS,
     )
-    return _is_result(search, flat, n_frames)
+    return _is_result(search, flat[0], n_frames)
+
+
+def _is_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.ndarray]:
+    """IS's validated markers and starting centre (the LS centre by default)."""
+    markers = _prepare(markers)
+    return markers, _ls_start(markers)[0] if start is None else _check_point(start, "start")
+
+
+def _fit_is_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
+    """:func:`fit_is` for every trial of ``markers`` ``(n_trials, N, P, 3)``, the searches
+    advanced together (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
+    outcomes: list = []
+    prepared: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for trial, data in enumerate(np.asarray(markers, dtype=float)):
+        try:
+            prepared[trial] = _is_prepare(data, start)
+            outcomes.append(None)
+        except ValueError as error:
+            outcomes.append(error)
+    if prepared:
+        arrays, starts = zip(*prepared.values(), strict=True)
+        n_frames = arrays[0].shape[0]
+        flats = np.ascontiguousarray(np.stack(arrays).reshape(len(arrays), -1, 3))
+        searches = lockstep(
+            lambda centers, owners: _geometric_costs(centers, flats, owners, n_frames),
+            np.stack(starts),
+            **FMINSEARCH_OPTIONS,
+        )
+        for index, (trial, search) in enumerate(zip(prepared, searches, strict=True)):
+            outcomes[trial] = _is_result(search, flats[index], n_frames)
+    return outcomes
 
 
 def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
@@ -843,3 +888,4 @@ def _fit_bc_batch(
 fit_ls.batched = _fit_ls_batch
 fit_nm.batched = _fit_nm_batch
 fit_bc.batched = _fit_bc_batch
+fit_is.batched = _fit_is_batch
