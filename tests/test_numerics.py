@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import minimize
 
 from jointbench.geometry import angle_between_lines_deg
-from jointbench.numerics import rank, simplex
+from jointbench.numerics import rank, simplex, small
 
 
 def rosenbrock3(a: float, b: float, c: float) -> float:
@@ -132,3 +132,15 @@ def test_angle_between_lines_resolves_small_angles(angle_rad):
     for sign in (1.0, -1.0):
         measured = np.radians(angle_between_lines_deg(a, sign * b))
         assert measured == pytest.approx(angle_rad, rel=1e-6, abs=0.0)
+
+
+def test_small_matrix_helpers_match_numpy():
+    rng = np.random.default_rng(3)
+    matrices = rng.normal(size=(200, 3, 3))
+    spd = matrices @ np.swapaxes(matrices, 1, 2) + np.eye(3)
+    np.testing.assert_allclose(small.inverse3(spd), np.linalg.inv(spd), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(small.inverse3(matrices[0]), np.linalg.inv(matrices[0]), rtol=1e-10)
+    q, _ = np.linalg.qr(matrices)
+    expected = q @ spd[0] @ np.swapaxes(q, 1, 2)
+    np.testing.assert_allclose(small.rotated3(q, spd[0]), expected, rtol=1e-13, atol=1e-13)
+    assert not np.isfinite(small.inverse3(np.zeros((3, 3)))).any()

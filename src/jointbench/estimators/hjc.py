@@ -87,6 +87,7 @@ from jointbench.estimators.twosegment import SegmentPoses, batched, two_segment_
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
+from jointbench.numerics.small import inverse3, rotated3
 
 __all__ = [
     "align_to_markers",
@@ -144,7 +145,7 @@ def constraint_covariance(
     r0: np.ndarray, a0: np.ndarray, r1: np.ndarray, a1: np.ndarray
 ) -> np.ndarray:
     """``W_y,t = R0 A0 R0' + R1 A1 R1'`` for rotation stacks ``(N, 3, 3)``: ``(N, 3, 3)``."""
-    return r0 @ a0 @ np.swapaxes(r0, -1, -2) + r1 @ a1 @ np.swapaxes(r1, -1, -2)
+    return rotated3(r0, a0) + rotated3(r1, a1)
 
 
 def _relative_system(prox: SegmentPoses, dist: SegmentPoses) -> tuple[np.ndarray, np.ndarray]:
@@ -211,7 +212,7 @@ def _analytic_result(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResul
 
 
 def _weights(r0, r1, a0, a1) -> np.ndarray:
-    return np.linalg.inv(constraint_covariance(r0, a0, r1, a1))
+    return inverse3(constraint_covariance(r0, a0, r1, a1))
 
 
 def _iterate_single(m, y, r0, r1, lever0, lever1, start, max_iterations, tol_mm):

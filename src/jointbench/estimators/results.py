@@ -6,15 +6,32 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["AxisResult", "CenterResult", "JointCenterResult"]
+__all__ = ["AxisResult", "CenterResult", "JointCenterResult", "frozen_rows"]
 
 
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
+    """A read-only float64 copy of ``value``; a read-only view of read-only float64 memory (a
+    row of :func:`frozen_rows`) is already that and is kept as it is."""
     if value is None:
         return None
+    if (
+        type(value) is np.ndarray
+        and value.dtype == np.float64
+        and not value.flags.writeable
+        and (value.base is None or not value.base.flags.writeable)
+    ):
+        return value
     array = np.array(value, dtype=float)
     array.setflags(write=False)
     return array
+
+
+def frozen_rows(array: np.ndarray) -> list[np.ndarray]:
+    """The rows of a read-only float64 copy of ``array`` ``(n, ...)``: many results' fields
+    from one copy instead of one per result."""
+    frozen = np.array(array, dtype=float)
+    frozen.setflags(write=False)
+    return list(frozen)
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.registry import register
-from jointbench.estimators.results import CenterResult
+from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves
 from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
@@ -735,15 +735,17 @@ def _fit_ls_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
         a_matrix, b_vector, means, centred = _ls_moments_batch(markers[good])
         centers, _ = _pinv_solve_batch(a_matrix, b_vector)
         radii, costs = _algebraic_fit_batch(means, centred, centers)
-        for index, trial in enumerate(good):
+        for trial, center, radius, cost in zip(
+            good, frozen_rows(centers), frozen_rows(radii), costs.tolist(), strict=True
+        ):
             outcomes[trial] = CenterResult(
-                center=centers[index],
-                radii=radii[index],
+                center=center,
+                radii=radius,
                 converged=True,
                 iterations=0,
                 status="ok",
                 method="LS",
-                cost=float(costs[index]),
+                cost=cost,
             )
     return _with_fallback(fit_ls, markers, outcomes, bad)
 
@@ -792,18 +794,28 @@ def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
             sq_radii = np.einsum("ti,ti->t", center_scaled, center_scaled)[:, None] - (
                 u[:, 4:] / a[:, None]
             )
-        for index, trial in enumerate(good):
-            if not solved[index]:
+            centers = origin + scale[:, None] * center_scaled
+            radii = scale[:, None] * np.sqrt(np.maximum(sq_radii, 0.0))
+            costs = 1.0 / largest
+        for trial, ok, center, radius, cost in zip(
+            good,
+            solved.tolist(),
+            frozen_rows(centers),
+            frozen_rows(radii),
+            costs.tolist(),
+            strict=True,
+        ):
+            if not ok:
                 bad[trial] = True
                 continue
             outcomes[trial] = CenterResult(
-                center=origin[index] + scale[index] * center_scaled[index],
-                radii=scale[index] * np.sqrt(np.maximum(sq_radii[index], 0.0)),
+                center=center,
+                radii=radius,
                 converged=True,
                 iterations=0,
                 status="ok",
                 method="NM",
-                cost=1.0 / float(largest[index]),
+                cost=cost,
             )
     return _with_fallback(fit_nm, markers, outcomes, bad)
 
