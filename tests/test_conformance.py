@@ -223,20 +223,7 @@ def test_noise_free_data_are_recovered_to_the_claimed_tolerance(kind, method):
     assert max(_errors(kind, result)) <= recovery
 
 
-# Defects found by this suite in modules under other work; strict, so a fix shows up here.
-FAR_DEFECTS = {
-    ("axis", "SARA"): "SARA solves for the axis point nearest the origin in the caller's "
-    "coordinates and loses 0.02 mm 1e9 mm away: it should centre the data first",
-}
-FAR_CASES = [
-    pytest.param(*case, id=name, marks=pytest.mark.xfail(reason=FAR_DEFECTS[case], strict=True))
-    if case in FAR_DEFECTS
-    else pytest.param(*case, id=name)
-    for case, name in zip(CASES, IDS, strict=True)
-]
-
-
-@pytest.mark.parametrize(("kind", "method"), FAR_CASES)
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
 def test_noise_free_data_far_from_the_origin_are_recovered(kind, method):
     """1e9 mm away the coordinates carry 1.2e-7 mm of rounding; the answer may lose at most
     1e-12 of the offset (1e-3 mm) to it, beyond the method's claims at the origin."""

@@ -300,12 +300,22 @@ def _score_center(poses: SegmentPoses) -> CenterResult:
     )
 
 
-def _sara_solve(r1, t1, r2, t2) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+def _sara_solve(
+    r1, t1, r2, t2, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
     """Axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` of SARA.
 
-    The point is the minimum-norm least-squares solution with the axis direction dropped, so
-    ``p1 . n1 + p2 . n2 = 0``: for a noise-free hinge, the point of the axis nearest the origin.
+    Both body frames coincide with the world at frame 0. The point is the minimum-norm
+    least-squares solution about ``origin`` (3,) [mm] with the axis direction dropped, so
+    ``(p1 - origin) . n1 + (p2 - origin) . n2 = 0``: for a noise-free hinge, the point of the
+    axis nearest ``origin``. Solving about a point near the markers (not the coordinates'
+    origin) keeps the right-hand side small, so the answer does not lose digits to the data's
+    distance from the origin.
     """
+    # Each body frame moved to ``origin``: x = R (b' + o) + t, so t' = R o + t - o.
+    t2 = np.einsum("fij,j->fi", r2, origin) + t2 - origin
+    if r1 is not None:
+        t1 = np.einsum("fij,j->fi", r1, origin) + t1 - origin
     normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
     values, vectors = _eigen(normal, what="SARA", min_rank=5)
     axis = vectors[:, 0]
@@ -315,8 +325,8 @@ def _sara_solve(r1, t1, r2, t2) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     return (
         n1 / np.linalg.norm(n1),
         n2 / np.linalg.norm(n2),
-        point[:3],
-        point[3:],
+        point[:3] + origin,
+        point[3:] + origin,
         float(values[0] / values[1]),
     )
 
@@ -335,7 +345,8 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are in the reference segment's frame.
 
     The reference pose is the identity (``R1 = I``, ``t1 = 0``); the axis ``(p1, n1)`` is
-    returned in the reference frame. ``radii`` are the markers' mean distances from the axis
+    returned in the reference frame, ``p1`` its point nearest the moving markers' centroid at
+    frame 0 (for a noise-free hinge). ``radii`` are the markers' mean distances from the axis
     [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
     normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
     """
@@ -344,7 +355,8 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
 
 
 def _sara(poses: SegmentPoses) -> AxisResult:
-    n1, n2, p1, p2, ratio = _sara_solve(None, None, poses.rotation, poses.translation)
+    origin = poses.body.mean(axis=0)
+    n1, n2, p1, p2, ratio = _sara_solve(None, None, poses.rotation, poses.translation, origin)
     return AxisResult(
         point=p1,
         direction=n1,
@@ -369,7 +381,7 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
     """
     prox, dist = two_segment_poses(proximal, distal, min_frames=3)
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
-    n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2)
+    n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=0))
     direction = r1[0] @ n1 + r2[0] @ n2
     point = 0.5 * (r1[0] @ p1 + t1[0] + r2[0] @ p2 + t2[0])
     distal_in_proximal = np.einsum("fji,fmj->fmi", r1, dist.markers - t1[:, None, :])
