@@ -6,9 +6,11 @@ Usage::
     python benchmarks/estimators.py --quick    # seconds; for CI and smoke tests
     python benchmarks/estimators.py --kind center --strict
 
-Every method registered for a kind (``jointbench.methods(kind)``) is called through the public
-API (``fit_center``, ``fit_axis``, ``fit_joint_center``) on trials this script builds itself from
-``jointbench.geometry`` and ``jointbench.simulate.noise.isotropic_noise``:
+Every method registered for a kind (``jointbench.methods(kind)``) is timed twice on trials this
+script builds itself from ``jointbench.geometry`` and ``jointbench.simulate.noise.isotropic_noise``:
+alone (the registered function without checks, as a study's estimate job runs it; the targets
+apply to this) and through the public API (``fit_center``, ``fit_axis``, ``fit_joint_center``,
+which add the input checks and the support verdict):
 
 * ``center``: 3 markers (paper A's M set distances) x 120 frames, a ~15 degree circumduction
   spiral, 1 mm noise;
@@ -26,6 +28,7 @@ skipped. Timings are wall-clock on a shared machine: run twice before trusting a
 from __future__ import annotations
 
 import argparse
+import functools
 import inspect
 import platform
 import statistics
@@ -175,19 +178,19 @@ def _n_segments(kind: str, name: str) -> int:
 
 
 def time_method(
-    kind: str, name: str, data: DataSet, seconds: float, min_calls: int, max_calls: int
+    fit: Callable, data: DataSet, seconds: float, min_calls: int, max_calls: int
 ) -> tuple[float, int, str]:
-    """Median wall-clock seconds per call over distinct trials; also calls made and a note."""
-    fit = _PUBLIC[kind]
+    """Median wall-clock seconds per call of ``fit(*trial)`` over distinct trials; also calls
+    made and a note."""
     calls: list[float] = []
     note = ""
     deadline = time.perf_counter() + seconds
     try:
-        fit(*data.trials[0], method=name)  # warm-up: imports, caches
+        fit(*data.trials[0])  # warm-up: imports, caches
         while len(calls) < max_calls and (len(calls) < min_calls or time.perf_counter() < deadline):
             trial = data.trials[len(calls) % len(data.trials)]
             start = time.perf_counter()
-            result = fit(*trial, method=name)
+            result = fit(*trial)
             calls.append(time.perf_counter() - start)
             if not result.converged and not note:
                 note = "some trials did not converge"
@@ -197,13 +200,15 @@ def time_method(
 
 
 def time_batched(
-    kind: str, name: str, data: DataSet, n_trials: int, repeats: int
+    kind: str, name: str, data: DataSet, n_trials: int, repeats: int, *, checked: bool
 ) -> tuple[float, str]:
     """Median over ``repeats`` of a batched call's wall-clock seconds divided by its trials.
 
-    The batch cycles through the data set's distinct trials up to ``n_trials``.
+    The batch cycles through the data set's distinct trials up to ``n_trials``. ``checked``:
+    the registry's checked form (input checks and support verdict per trial, as a user's call)
+    rather than the bare estimator the study's estimate jobs run.
     """
-    batched = getattr(registry.get(kind, name), "batched", None)
+    batched = getattr(registry.get(kind, name, checked=checked), "batched", None)
     if batched is None:
         return float("nan"), "no batched form: fitted one trial at a time"
     picks = [data.trials[i % len(data.trials)] for i in range(n_trials)]
@@ -275,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     kinds = args.kind or list(registry.KINDS)
     rng = np.random.default_rng(args.seed)
 
-    rows: list[tuple[str, str, str, int, float, float | None, str]] = []
+    rows: list[tuple[str, str, str, int, float, float, float | None, str]] = []
     data_by_kind: dict[str, dict[str, DataSet]] = {}
     for kind in kinds:
         names = jointbench.methods(kind)
@@ -285,24 +290,34 @@ def main(argv: list[str] | None = None) -> int:
         data_sets: dict[str, DataSet] = {}  # built once per kind and label, shared by methods
         data_by_kind[kind] = data_sets
         for name in names:
+            bare = registry.get(kind, name, checked=False)
+            public = functools.partial(_PUBLIC[kind], method=name)
             for label in _labels(kind, name):
                 if label not in data_sets:
                     data_sets[label] = build_data(kind, label, rng, n_pool)
                 data = data_sets[label]
-                median, n_calls, note = time_method(kind, name, data, seconds, min_calls, max_calls)
+                median, n_calls, note = time_method(bare, data, seconds, min_calls, max_calls)
+                api, _, api_note = time_method(public, data, seconds, min_calls, max_calls)
+                target = _target(kind, name, data.label)
                 rows.append(
-                    (kind, name, data.label, n_calls, median, _target(kind, name, data.label), note)
+                    (kind, name, data.label, n_calls, median, api, target, note or api_note)
                 )
 
     print(
         f"Estimator timings: median wall-clock seconds per call "
         f"({'quick' if args.quick else 'full'} run; Python {platform.python_version()}, "
-        f"NumPy {np.__version__}, {platform.machine()})\n"
+        f"NumPy {np.__version__}, {platform.machine()}). 'estimator': the registered function "
+        "alone, as a study's estimate job calls it (the target applies to it); 'public call': "
+        "fit_center / fit_axis / fit_joint_center, which add the input checks and the support "
+        "verdict (jointbench.estimators.support).\n"
     )
-    print("| kind | method | data (markers x frames) | calls | median | target | pass |")
-    print("|---|---|---|---:|---:|---:|:---:|")
+    print(
+        "| kind | method | data (markers x frames) | calls | estimator | target | pass "
+        "| public call |"
+    )
+    print("|---|---|---|---:|---:|---:|:---:|---:|")
     failed = False
-    for kind, name, label, n_calls, median, target, note in rows:
+    for kind, name, label, n_calls, median, api, target, note in rows:
         if note.startswith("error"):
             verdict, failed = "error", True
         elif target is None:
@@ -314,24 +329,30 @@ def main(argv: list[str] | None = None) -> int:
         target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
         line = (
             f"| {kind} | {name} | {label} | {n_calls} | {_format_seconds(median)} | "
-            f"{target_text} | {verdict} |"
+            f"{target_text} | {verdict} | {_format_seconds(api)} |"
         )
         print(line + (f" {note}" if note else ""))
 
-    one_trial = {(kind, name, label): median for kind, name, label, _, median, _, _ in rows}
+    one_trial = {(kind, name, label): median for kind, name, label, _, median, *_ in rows}
     print(
         "\nMany trials at once (each method's `batched` form): median over repeats of the "
-        "call's wall-clock time divided by its trials; ratio = one-trial median above / this.\n"
+        "call's wall-clock time divided by its trials; 'estimator' is the bare form the "
+        "estimate jobs run (the target applies to it), 'checked' the registry's form with "
+        "every trial's input checks and support verdict; ratio = one-trial estimator median "
+        "above / batched estimator.\n"
     )
-    print("| kind | method | data | trials per call | per trial | ratio | target | pass |")
-    print("|---|---|---|---:|---:|---:|---:|:---:|")
+    print(
+        "| kind | method | data | trials per call | estimator | ratio | target | pass | checked |"
+    )
+    print("|---|---|---|---:|---:|---:|---:|:---:|---:|")
     for kind, name, label in BATCHED_TARGETS:
         if kind not in kinds or (kind, name, label) not in one_trial:
             continue
         n_trials = max(4, _BATCH_SIZE[label] // (8 if args.quick else 1))
-        per_trial, note = time_batched(
-            kind, name, data_by_kind[kind][label], n_trials, 3 if args.quick else 7
-        )
+        repeats = 3 if args.quick else 7
+        data = data_by_kind[kind][label]
+        per_trial, note = time_batched(kind, name, data, n_trials, repeats, checked=False)
+        checked, _ = time_batched(kind, name, data, n_trials, repeats, checked=True)
         target = BATCHED_TARGETS[(kind, name, label)]
         if not np.isfinite(per_trial):
             verdict, failed = ("error" if note.startswith("error") else "FAIL"), True
@@ -342,8 +363,8 @@ def main(argv: list[str] | None = None) -> int:
         ratio = one_trial[(kind, name, label)] / per_trial
         print(
             f"| {kind} | {name} | {label} | {n_trials} | {_format_seconds(per_trial)} | "
-            f"{ratio:.1f}× | ≤ {_format_seconds(target)} | {verdict} |"
-            + (f" {note}" if note else "")
+            f"{ratio:.1f}× | ≤ {_format_seconds(target)} | {verdict} | "
+            f"{_format_seconds(checked)} |" + (f" {note}" if note else "")
         )
     return 1 if failed and args.strict else 0
 

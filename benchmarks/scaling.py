@@ -1,6 +1,8 @@
 """How one study's cost grows with its number of trials, per Snakemake job.
 
     python benchmarks/scaling.py [--study cmc] [--factors 1 10 100] [--reduce-from 100]
+    python benchmarks/scaling.py --study cmc --grid benchmarks/ehrig_cmc.yaml --trials 100 \
+        --factors 1 10          # Ehrig-size: 54 conditions, 100 then 1000 trials each
 
 Runs the study's target (`snakemake -j2 study_<name>`) in a fresh copy of the workflow once per
 factor, with the config's trials multiplied by it, and prints every job's wall time, CPU time and
@@ -69,10 +71,31 @@ def reduced_grid(study: str) -> dict[str, list]:
     return studies[study]["grid"]
 
 
-def scales(study: str, factors: list[int], reduce_from: int) -> list[Scale]:
-    trials = study_config(study)["trials"]
+def grid_from(path: Path, study: str) -> dict[str, list]:
+    """The study's grid from a YAML file shaped like the config (``studies: {name: {grid}}``)."""
+    studies = yaml.safe_load(path.read_text())["studies"]
+    if study not in studies or "grid" not in studies[study]:
+        raise ValueError(f"{path} has no grid for study {study!r}")
+    return studies[study]["grid"]
+
+
+def scales(
+    study: str,
+    factors: list[int],
+    reduce_from: int,
+    *,
+    trials: int | None = None,
+    grid: dict[str, list] | None = None,
+) -> list[Scale]:
+    """One :class:`Scale` per factor: ``trials`` (default the config's) times the factor, on
+    ``grid`` (default the config's; the reduced grid from ``reduce_from`` on)."""
+    trials = study_config(study)["trials"] if trials is None else trials
     return [
-        Scale(factor, trials * factor, reduced_grid(study) if factor >= reduce_from else None)
+        Scale(
+            factor,
+            trials * factor,
+            grid or (reduced_grid(study) if factor >= reduce_from else None),
+        )
         for factor in factors
     ]
 
@@ -177,6 +200,15 @@ def main(argv: list[str] | None = None) -> int:
         default=100,
         help="factors from this one on use benchmarks/reduced.yaml's grid (default 100)",
     )
+    parser.add_argument(
+        "--trials", type=int, help="trials per condition at 1x (default: the config's)"
+    )
+    parser.add_argument(
+        "--grid",
+        type=Path,
+        help="YAML with studies.<study>.grid: run every factor on this grid "
+        "(e.g. benchmarks/ehrig_cmc.yaml, 54 conditions)",
+    )
     parser.add_argument("--jobs", type=int, default=2, help="snakemake -j (default 2)")
     parser.add_argument("--keep", type=Path, help="run in this folder and keep it")
     parser.add_argument("--json", type=Path, help="also write every process record here")
@@ -188,9 +220,20 @@ def main(argv: list[str] | None = None) -> int:
     folder = arguments.keep or Path(tempfile.mkdtemp(prefix="jointbench-scaling-"))
     tables, summary, everything = {}, [], {}
     pd.set_option("display.width", 120)
-    for scale in scales(arguments.study, arguments.factors, arguments.reduce_from):
+    grid = grid_from(arguments.grid, arguments.study) if arguments.grid else None
+    for scale in scales(
+        arguments.study,
+        arguments.factors,
+        arguments.reduce_from,
+        trials=arguments.trials,
+        grid=grid,
+    ):
         conditions = scale.conditions(full_grid)
-        grid_name = "reduced grid" if scale.grid else "full grid"
+        grid_name = (
+            f"grid of {arguments.grid}"
+            if grid
+            else ("reduced grid" if scale.grid else "config grid")
+        )
         print(
             f"\n== {arguments.study} {scale.factor}x: {scale.trials} trials x {conditions} "
             f"conditions ({grid_name}), snakemake -j{arguments.jobs}",

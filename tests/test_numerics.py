@@ -57,7 +57,8 @@ def test_nelder_mead_reports_the_evaluation_limit():
     assert simplex.stop_status(result, 30).startswith("Maximum number of function evaluations")
 
 
-def test_lockstep_runs_equal_independent_runs():
+@pytest.mark.parametrize("few", [True, False])
+def test_lockstep_runs_equal_independent_runs(few):
     """Searches advanced together follow the paths they follow alone; owners say whose point."""
     centres = np.array([[1.0, -2.0], [0.3, 0.4], [-5.0, 2.5]])
 
@@ -65,6 +66,9 @@ def test_lockstep_runs_equal_independent_runs():
         return np.sum((points - centres[owners]) ** 2, axis=1) + owners
 
     starts = [(0.0, 1.0), (2.0, 2.0), (-1.0, 0.5)]
+    # A few searches run as Python steps, many as arrays: both on the same paths.
+    starts = starts if few else starts * simplex.ARRAY_FROM
+    centres = np.tile(centres, (len(starts) // len(centres), 1))
     together = simplex.lockstep(batch, starts)
     for i, (x0, joint) in enumerate(zip(starts, together, strict=True)):
         alone = simplex.nelder_mead(
@@ -109,9 +113,10 @@ def test_a_search_meeting_nan_costs_is_run_alone_by_lockstep():
         value = _rosenbrock_rows(points)
         return np.where(points[:, 0] < -0.92, np.nan, value)
 
-    starts = [(-0.9, 0.0, 0.0), (0.5, 0.5, 0.5)]
+    # Enough searches for lockstep's array form; the first meets NaN costs.
+    starts = [(-0.9, 0.0, 0.0)] + [(0.5, 0.5, 0.1 * i) for i in range(simplex.ARRAY_FROM)]
     runs = simplex.nelder_mead_many(lambda points, _owners: cost(points), starts)
-    assert runs.exact.tolist() == [False, True]
+    assert runs.exact.tolist() == [False] + [True] * simplex.ARRAY_FROM
     together = simplex.lockstep(lambda points, _owners: cost(points), starts)
     for x0, joint in zip(starts, together, strict=True):
         assert joint == simplex.nelder_mead(lambda *x: float(cost(np.array([x]))[0]), x0)

@@ -19,6 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = [
+    "ARRAY_FROM",
     "FATOL",
     "FMINSEARCH_OPTIONS",
     "XATOL",
@@ -166,9 +167,14 @@ def nelder_mead(
             return stop.value
 
 
+#: From this many searches on, :func:`lockstep` runs them as arrays (:func:`nelder_mead_many`);
+#: below it, per-search Python steps cost less than the array bookkeeping (same paths either way).
+ARRAY_FROM = 32
+
+
 def lockstep(
     batch_cost: Callable[[np.ndarray, np.ndarray], np.ndarray],
-    starts: Sequence[Sequence[float]],
+    starts: Sequence[Sequence[float]] | np.ndarray,
     **options: float | int | None,
 ) -> list[SimplexResult]:
     """Independent :func:`nelder_mead_steps` runs from ``starts``, advanced together.
@@ -177,21 +183,41 @@ def lockstep(
     ``batch_cost(points, owners)``: ``points`` ``(k, n_params)``, ``owners`` ``(k,)`` the index
     into ``starts`` of the search each point belongs to; it returns the ``(k,)`` costs. Every
     search follows the path it would follow alone as long as ``batch_cost`` gives each point
-    the cost a one-point call would (:func:`nelder_mead_many`; a search that meets a NaN cost
-    is run again alone, so its path is the scalar search's too).
+    the cost a one-point call would. Many searches run as arrays (:func:`nelder_mead_many`; a
+    search that meets a NaN cost is then run again alone), a few as Python steps.
     """
+    if len(starts) < ARRAY_FROM:
+        return _lockstep_steps(batch_cost, starts, range(len(starts)), **options)
     runs = nelder_mead_many(batch_cost, starts, **options)
     results = [runs.result(i) for i in range(len(runs.fun))]
-    for i in np.flatnonzero(~runs.exact):
-        steps = nelder_mead_steps(starts[i], **options)
-        points = next(steps)
-        owners = np.full(len(points), i)
-        while True:
+    inexact = np.flatnonzero(~runs.exact).tolist()
+    redone = _lockstep_steps(batch_cost, [starts[i] for i in inexact], inexact, **options)
+    for i, result in zip(inexact, redone, strict=True):
+        results[i] = result
+    return results
+
+
+def _lockstep_steps(batch_cost, starts, owners, **options) -> list[SimplexResult]:
+    """:func:`lockstep` over :func:`nelder_mead_steps` generators; ``owners`` name the searches
+    to ``batch_cost``."""
+    owners = list(owners)
+    runs = [nelder_mead_steps(x0, **options) for x0 in starts]
+    pending = {i: next(run) for i, run in enumerate(runs)}
+    results: list = [None] * len(runs)
+    while pending:
+        keys = list(pending)
+        points = [x for i in keys for x in pending[i]]
+        owner = [owners[i] for i in keys for _ in pending[i]]
+        values = np.asarray(batch_cost(np.array(points), np.array(owner))).tolist()
+        position = 0
+        for i in keys:
+            count = len(pending[i])
             try:
-                points = steps.send(batch_cost(np.array(points), owners[: len(points)]).tolist())
+                pending[i] = runs[i].send(values[position : position + count])
             except StopIteration as stop:
                 results[i] = stop.value
-                break
+                del pending[i]
+            position += count
     return results
 
 
