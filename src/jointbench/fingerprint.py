@@ -143,9 +143,21 @@ def _stable_repr(value: object) -> str:
     return repr(value) if _is_simple(value) else type(value).__qualname__
 
 
+# Functions and classes do not change while a process runs; the workflow fingerprints dozens
+# of jobs whose code overlaps, so each object's identity is computed once.
+_IDENTITIES: dict[int, tuple[object, bytes]] = {}
+
+
 def _identity(obj: object) -> bytes:
     if isinstance(obj, tuple):
         return repr(obj).encode()
+    cached = _IDENTITIES.get(id(obj))
+    if cached is None or cached[0] is not obj:
+        cached = _IDENTITIES[id(obj)] = (obj, _compute_identity(obj))
+    return cached[1]
+
+
+def _compute_identity(obj: object) -> bytes:
     name = f"{obj.__module__}.{obj.__qualname__}".encode()
     if inspect.isfunction(obj):
         defaults = [_stable_repr(v) for v in obj.__defaults__ or ()]
