@@ -77,15 +77,35 @@ def test_imports_point_downward_without_cycles():
         visit(module, ())
 
 
+# The one function allowed to import the package at run time: the package's own PEP 562
+# __getattr__, which imports the module behind a public name (jointbench.fit_center, ...) on first
+# access, so that importing one submodule, as every workflow job does, does not load them all. It
+# dodges no cycle: the package's modules take nothing from jointbench/__init__.py.
+_LAZY_EXPORTS = ("src/jointbench/__init__.py", "__getattr__")
+
+
+def _imports_the_package(node: ast.AST) -> bool:
+    """An import statement of jointbench, or any ``importlib.import_module`` call."""
+    if isinstance(node, ast.ImportFrom):
+        return (node.module or "").startswith("jointbench")
+    if isinstance(node, ast.Import):
+        return any(alias.name.startswith("jointbench") for alias in node.names)
+    return (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr == "import_module"
+    )
+
+
 def test_no_function_local_imports_of_the_package():
     """Imports of jointbench happen at module level, never inside a function to dodge a cycle."""
     offenders = []
     for path in (ROOT / "src" / "jointbench").rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                if (str(path.relative_to(ROOT)), node.name) == _LAZY_EXPORTS:
+                    continue
                 for inner in ast.walk(node):
-                    if isinstance(inner, ast.ImportFrom) and (inner.module or "").startswith(
-                        "jointbench"
-                    ):
+                    if _imports_the_package(inner):
                         offenders.append(f"{path.relative_to(ROOT)}:{inner.lineno}")
     assert not offenders, offenders

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from scipy import stats
 
+from jointbench.study.config import MAX_TRIALS
 from jointbench.study.tolerance import binomial_interval, describe, evaluate, is_compared
 
 
@@ -47,6 +50,42 @@ def test_binomial_counts_inside_and_outside():
     outside = evaluate({"binomial95": {"of_n": 30}}, [16], {"count": [high + 1], "trials": [30]})
     assert inside.holds and inside.margin == 0
     assert not outside.holds and outside.margin == -1
+
+
+# binomial_interval once called scipy.stats, which costs a second to import in every job that
+# checks a tolerance or draws paper C's calibration; it now uses scipy.special. These tests hold
+# it to the calls it replaced, count for count.
+_TRIALS = [*range(61), 75, 100, 150, 200, 300, 600, 1000, 1200, 2000, 5000, MAX_TRIALS]
+_SHARES = sorted({*np.linspace(0, 1, 201), *(k / 30 for k in range(31)), 1e-9, 1 - 1e-9})
+
+
+@pytest.mark.parametrize("trials", _TRIALS)
+def test_binomial_interval_is_scipy_stats_binom_ppf(trials):
+    """``stats.binom(trials, p).ppf(0.025)`` and ``ppf(0.975)``, as tolerance.py called them."""
+    ours = np.array([binomial_interval(trials, p) for p in _SHARES])
+    theirs = stats.binom(trials, np.array(_SHARES)[:, None]).ppf([0.025, 0.975]).astype(int)
+    np.testing.assert_array_equal(ours, theirs)
+
+
+@given(st.integers(0, MAX_TRIALS), st.floats(0, 1))
+def test_binomial_interval_is_scipy_stats_binom_ppf_anywhere(trials, share):
+    ours = binomial_interval(trials, share)
+    assert ours == tuple(int(k) for k in stats.binom(trials, share).ppf([0.025, 0.975]))
+
+
+def test_the_calibration_band_is_the_one_scipy_stats_gave():
+    """figures/paper_c.py's bounds on the share of trials inside the 95 % ellipsoid, for every
+    number of trials a study may have."""
+    trials = np.arange(1, MAX_TRIALS + 1)
+    ours = np.array([binomial_interval(n, 0.95) for n in trials]) / trials[:, None]
+    theirs = stats.binom(trials[:, None], 0.95).ppf([0.025, 0.975]) / trials[:, None]
+    np.testing.assert_array_equal(ours, theirs)
+
+
+def test_a_binomial_interval_needs_a_distribution():
+    for trials, share in ((30, 1.5), (30, -0.1), (30, float("nan")), (-1, 0.5)):
+        with pytest.raises(ValueError):
+            binomial_interval(trials, share)
 
 
 def test_all_needs_every_part_and_reads_named_parts():

@@ -1,35 +1,23 @@
-"""What the workflow's jobs do, over the library: the scripts in ``workflow/scripts`` are thin
-calls into this module.
+"""What the jobs that render and check the papers do: a paper output, the extended ranking and
+the published-value check, each from the collected results to its files.
 
 It sits on top of every other layer: it reads files, asks the study and paper registries, renders
-outputs and writes them. Extensions (a study or paper outside the package, listed under
-``extensions`` in the config) are imported here, so the rules and the jobs see the same
-registries.
+outputs and writes them. Its scripts run it inside :func:`jointbench.jobs.job`; the jobs that
+simulate, estimate, collect and summarise call :mod:`jointbench.study.run` and do not import it.
+matplotlib is imported only when a figure is drawn (:func:`jointbench.figures.common.pyplot`), so
+the table jobs and the check run without it.
 """
 
 from __future__ import annotations
 
-import contextlib
-import importlib.metadata
-import importlib.util
 import logging
-import sys
-from collections.abc import Iterator, Mapping, Sequence
-from pathlib import Path
+from collections.abc import Mapping, Sequence
 
 import pandas as pd
 
 from jointbench.figures import extended
 from jointbench.figures.common import save_figure
-from jointbench.papers import (
-    Inputs,
-    Paper,
-    Table,
-    get_paper,
-    papers_of_study,
-    register_paper,
-)
-from jointbench.simulate import Study
+from jointbench.papers import Inputs, Paper, Table, get_paper, papers_of_study
 from jointbench.study.io import read_dataset, read_table
 from jointbench.study.published import (
     comparison_rows,
@@ -37,86 +25,11 @@ from jointbench.study.published import (
     failure_message,
     load_published,
 )
-from jointbench.study.studies import register_study
-from jointbench.study.summary import summarise
 from jointbench.study.tables import markdown_table, write_tables
 
-__all__ = [
-    "check_published",
-    "job",
-    "load_extensions",
-    "provenance",
-    "render_extended",
-    "render_output",
-    "summarise_estimates",
-]
+__all__ = ["check_published", "render_extended", "render_output"]
 
-log = logging.getLogger("jointbench")
-
-
-def load_extensions(config: Mapping, base: str | Path = ".") -> None:
-    """Import every file under ``extensions`` and register the ``Study`` and ``Paper`` values
-    it defines. Importing the same file again is a no-op."""
-    for entry in config.get("extensions", []):
-        path = (Path(base) / entry).resolve()
-        if not path.is_file():
-            raise ValueError(f"config error at extensions: {entry!r} is not a file ({path})")
-        name = f"jointbench_extension_{path.stem}"
-        module = sys.modules.get(name)
-        if module is None or Path(module.__file__).resolve() != path:
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-        for value in vars(module).values():
-            if isinstance(value, Study):
-                register_study(value)
-            elif isinstance(value, Paper):
-                register_paper(value)
-
-
-@contextlib.contextmanager
-def job(snakemake) -> Iterator[None]:
-    """Run one Snakemake job's work: extensions loaded, messages and any error written to the
-    job's log (the file Snakemake points to when the job fails)."""
-    handlers = []
-    for path in list(snakemake.log):
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        handler = logging.FileHandler(path, mode="w")
-        handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
-        handlers.append(handler)
-        log.addHandler(handler)
-    log.setLevel(logging.INFO)
-    try:
-        load_extensions(snakemake.config)
-        log.info(
-            "rule %s: %d input(s) -> %d output(s)",
-            snakemake.rule,
-            len(snakemake.input),
-            len(snakemake.output),
-        )
-        yield
-        log.info("done")
-    except Exception:
-        log.exception("rule %s failed", snakemake.rule)
-        raise
-    finally:
-        for handler in handlers:
-            log.removeHandler(handler)
-            handler.close()
-
-
-def provenance(snakemake) -> dict[str, object]:
-    """What a job's files record of how they were made: the package version, the rule, the
-    fingerprint of the code it ran, and the config values its study depends on."""
-    study = getattr(snakemake.params, "study", None) or snakemake.wildcards.get("study")
-    settings = snakemake.config.get("studies", {}).get(study, {}) if study else {}
-    return {
-        "jointbench": importlib.metadata.version("jointbench"),
-        "rule": snakemake.rule,
-        "code": getattr(snakemake.params, "code", ""),
-        "config": {"base_seed": snakemake.config.get("base_seed"), "study": settings},
-    }
+log = logging.getLogger(__name__)
 
 
 def _inputs(paper: Paper, collected: str, datasets: Sequence[str], config: Mapping) -> Inputs:
@@ -175,12 +88,6 @@ def render_extended(study: str, collected: str, outputs, config: Mapping, *, wha
         title=f"Extended ranking, study {study}: every estimator on every condition",
         note=note,
     )
-
-
-def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
-    """One estimator's mean and median error per condition, from its estimates files."""
-    estimates = pd.concat([read_table(path) for path in paths], ignore_index=True)
-    summarise(estimates, study).to_csv(output, index=False)
 
 
 def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:

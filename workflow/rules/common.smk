@@ -4,7 +4,7 @@ import sys
 
 from snakemake.utils import validate
 
-from jointbench import pipeline
+from jointbench import jobs, pipeline
 from jointbench import report as jb_report
 from jointbench.estimators import registry
 from jointbench.fingerprint import code_fingerprint
@@ -14,7 +14,7 @@ from jointbench.study import config as jb_config
 from jointbench.study.studies import get_study
 
 validate(config, str(jb_config.SCHEMA_PATH))
-pipeline.load_extensions(config)
+jobs.load_extensions(config)
 jb_config.validate_config(config)
 # Grid values, estimator names and options: a mistake stops the run here, naming the key.
 jb_config.check_config(config)

@@ -73,7 +73,7 @@ rule summarise_estimator:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(pipeline.summarise_estimates),
+        code=code_fingerprint(jb_run.summarise_estimates),
     script:
         "../scripts/summarise.py"
 

@@ -1,4 +1,4 @@
-from jointbench import pipeline
+from jointbench import jobs, pipeline
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     pipeline.check_published(dict(snakemake.input.items()), snakemake.output, snakemake.config)

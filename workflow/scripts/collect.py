@@ -1,11 +1,11 @@
-from jointbench import pipeline
+from jointbench import jobs
 from jointbench.study.run import collect
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     collect(
         snakemake.wildcards.study,
         snakemake.input.estimates,
         snakemake.output[0],
         datasets=snakemake.input.datasets,
-        provenance=pipeline.provenance(snakemake),
+        provenance=jobs.provenance(snakemake),
     )

@@ -1,12 +1,12 @@
-from jointbench import pipeline
+from jointbench import jobs
 from jointbench.study.run import run_estimate_files
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     run_estimate_files(
         snakemake.config,
         snakemake.params.study,
         snakemake.wildcards.method,
         snakemake.input,
         snakemake.output,
-        provenance=pipeline.provenance(snakemake),
+        provenance=jobs.provenance(snakemake),
     )

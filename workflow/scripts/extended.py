@@ -1,6 +1,6 @@
-from jointbench import pipeline
+from jointbench import jobs, pipeline
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     pipeline.render_extended(
         snakemake.params.study,
         snakemake.input[0],

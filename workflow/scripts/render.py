@@ -1,6 +1,6 @@
-from jointbench import pipeline
+from jointbench import jobs, pipeline
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     pipeline.render_output(
         snakemake.params.paper,
         snakemake.params.output,

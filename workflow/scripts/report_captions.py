@@ -1,6 +1,6 @@
-from jointbench import pipeline, report
+from jointbench import jobs, report
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     tables = {k: v for k, v in snakemake.input.items() if k != "collected"}
     report.write_captions(tables, snakemake.output.captions, snakemake.config)
     report.write_front_page(

@@ -1,10 +1,10 @@
-from jointbench import pipeline
+from jointbench import jobs
 from jointbench.study.run import run_simulate_files
 
-with pipeline.job(snakemake):
+with jobs.job(snakemake):
     run_simulate_files(
         snakemake.config,
         snakemake.params.study,
         snakemake.output,
-        provenance=pipeline.provenance(snakemake),
+        provenance=jobs.provenance(snakemake),
     )

@@ -1,4 +1,5 @@
-from jointbench import pipeline
+from jointbench import jobs
+from jointbench.study.run import summarise_estimates
 
-with pipeline.job(snakemake):
-    pipeline.summarise_estimates(snakemake.wildcards.study, snakemake.input, snakemake.output[0])
+with jobs.job(snakemake):
+    summarise_estimates(snakemake.wildcards.study, snakemake.input, snakemake.output[0])

@@ -9,18 +9,19 @@ soon as its estimates files are collected.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from matplotlib.colors import LogNorm
-from matplotlib.patches import Patch, Rectangle
 
-from jointbench.figures.common import method_style
+from jointbench.figures.common import method_style, pyplot
 from jointbench.study import config as jb_config
 from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
 from jointbench.study.summary import summarise
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "NO_PAPER",
@@ -221,6 +222,9 @@ def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[s
 def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper: Sequence[str]):
     """Condition × method heat map of mean error (log colour scale), values printed in the
     cells, the best of each condition outlined. Returns the image for a colour bar."""
+    from matplotlib.colors import LogNorm
+    from matplotlib.patches import Rectangle
+
     keys = list(get_study(study).grid_keys)
     wide = _wide(table, keys, _mean_column(study), methods)
     flagged = _wide(
@@ -244,6 +248,7 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
     low = positive.min() if positive.size else 1e-3
     high = max(positive.max() if positive.size else 1.0, low * 10)
     shown = np.where(np.isfinite(values), np.clip(values, low, None), np.nan)
+    plt = pyplot()
     cmap = plt.get_cmap("viridis").with_extremes(bad="0.85")
     norm = LogNorm(vmin=low, vmax=high)
     image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
@@ -275,6 +280,8 @@ def _rank_bars(
     ax, ranks: pd.DataFrame, styles: Mapping[str, Mapping], paper: Sequence[str]
 ) -> None:
     """Horizontal bars of each method's mean rank, best at the top, additions hatched."""
+    from matplotlib.patches import Patch
+
     y = np.arange(len(ranks))
     for position, row in zip(y, ranks.itertuples(), strict=True):
         ax.barh(
@@ -324,9 +331,7 @@ def _styles(methods: Sequence[str]) -> dict[str, dict[str, object]]:
     return styles
 
 
-def extended_figure(
-    collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER
-) -> plt.Figure:
+def extended_figure(collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER) -> Figure:
     """One figure per study: the condition × method heat map of mean error with each
     condition's best outlined, beside each method's mean rank.
     """
@@ -339,7 +344,7 @@ def extended_figure(
     bars_height = min(height, 0.35 * len(methods) + 1.4)
     heat_width = max(3.0, 0.8 * len(methods)) + 2.5
     # The middle column is room for the colour bar, an inset of the map the layout ignores.
-    fig = plt.figure(figsize=(heat_width + 5.6, height), layout="constrained")
+    fig = pyplot().figure(figsize=(heat_width + 5.6, height), layout="constrained")
     outer = fig.add_gridspec(1, 3, width_ratios=[heat_width, 1.0, 4.6])
     heat = fig.add_subplot(outer[0, 0])
     right = outer[0, 2].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])

@@ -8,15 +8,17 @@ claims are in :mod:`jointbench.papers.paper_a`.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from mpl_toolkits.mplot3d import proj3d
 
 from jointbench import machine
 from jointbench.estimators import registry
-from jointbench.figures.common import equal_3d_limits, median_trial, method_style
+from jointbench.figures.common import equal_3d_limits, median_trial, method_style, pyplot
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "CONDITION",
@@ -65,7 +67,7 @@ def _wide(means: pd.DataFrame) -> pd.DataFrame:
     return means.pivot_table(index=CONDITION, columns="method", values="mean_error_mm")
 
 
-def fig4(collected: pd.DataFrame) -> plt.Figure:
+def fig4(collected: pd.DataFrame) -> Figure:
     """Mean CoR error per condition in the paper's two panels, (a) M set and (b) H set.
 
     Within a panel the conditions run noise level by noise level, RoM increasing within each;
@@ -80,7 +82,7 @@ def fig4(collected: pd.DataFrame) -> plt.Figure:
     n_total = collected["trial"].nunique()
     methods = [m for m in PAPER_METHODS if m in set(means["method"])]
     step, gap = 1.0, 0.8
-    fig, axes = plt.subplots(
+    fig, axes = pyplot().subplots(
         1, len(sets), figsize=(6.0 * len(sets), 4.6), sharey=True, squeeze=False
     )
     for panel, (ax, marker_set) in enumerate(zip(axes[0], sets, strict=True)):
@@ -176,6 +178,7 @@ def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
     coordinates; each label takes the one farthest from the estimates, the other
     trajectories and the labels already placed, so labels do not sit on points or each other.
     """
+    from mpl_toolkits.mplot3d import proj3d
 
     def screen(points):
         x, y, _ = proj3d.proj_transform(*np.asarray(points, dtype=float).T, ax.get_proj())
@@ -212,7 +215,7 @@ def fig3(
     published: Mapping,
     *,
     chosen: str = "",
-) -> plt.Figure:
+) -> Figure:
     """One M-set, ±5°, 1.0 mm trial: trajectories, true CoR, every method's estimate and error.
 
     ``markers`` ``(n_frames, n_markers, 3)`` [mm]; ``errors`` has columns method, center_x/y/z,
@@ -225,7 +228,7 @@ def fig3(
     estimates = by_method[["center_x", "center_y", "center_z"]].to_numpy(dtype=float)
     truth = np.asarray(truth, dtype=float)
 
-    fig = plt.figure(figsize=(11, 5.0))
+    fig = pyplot().figure(figsize=(11, 5.0))
     grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1])
     ax = fig.add_subplot(grid[0, 0], projection="3d", computed_zorder=False)
     for p in range(markers.shape[1]):

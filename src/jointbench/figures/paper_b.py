@@ -7,12 +7,15 @@ trial and method); Fig 2 draws the three costs' fits on two already-simulated tr
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import equal_3d_limits, median_trial, method_style
+from jointbench.figures.common import equal_3d_limits, median_trial, method_style, pyplot
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "BREAKDOWN_DEG",
@@ -62,11 +65,11 @@ def table1(collected: pd.DataFrame, cells: pd.DataFrame) -> pd.DataFrame:
     ]
 
 
-def fig5(collected: pd.DataFrame) -> plt.Figure:
+def fig5(collected: pd.DataFrame) -> Figure:
     """Mean angular error with min–max bars for every condition: (a) knee, (b) index MCP."""
     stats = cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
     protocols = [p for p in ("knee", "mcp") if p in set(stats["protocol"])]
-    fig, axes = plt.subplots(
+    fig, axes = pyplot().subplots(
         1, len(protocols), figsize=(6.5 * len(protocols), 4.2), sharey=True, squeeze=False
     )
     conditions = (
@@ -198,7 +201,7 @@ def axis_error_deg(direction: np.ndarray, true_direction: np.ndarray) -> float:
     return float(np.degrees(np.arccos(min(1.0, cosine))))
 
 
-def fig2(examples) -> plt.Figure:
+def fig2(examples) -> Figure:
     """Best-fitting plane, cylinder and circle on two trials with a known axis (paper B Fig 2).
 
     ``examples``: list of ``(title, markers, truth, fits)``: markers ``(n_frames, n_markers,
@@ -208,7 +211,7 @@ def fig2(examples) -> plt.Figure:
     trajectory (planes, cylinders, circles), its axis, and the true axis drawn on top.
     """
     methods = [m for m in PAPER_METHODS if all(m in e[3] for e in examples)]
-    fig = plt.figure(figsize=(4.1 * len(methods), 4.1 * len(examples)))
+    fig = pyplot().figure(figsize=(4.1 * len(methods), 4.1 * len(examples)))
     for row, (title, markers, truth, fits) in enumerate(examples):
         true_point = np.asarray(truth["axis_point"], dtype=float)
         true_dir = np.asarray(truth["axis_direction"], dtype=float)

@@ -6,12 +6,17 @@ calibration use it, which tests whether the predicted covariance is honest.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pandas as pd
-from scipy import stats
 
+from jointbench.figures.common import pyplot
 from jointbench.study.scoring import CHI2_3DOF_95, covariance_from_entries
+from jointbench.study.tolerance import binomial_interval
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "EXTENDED",
@@ -135,9 +140,7 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
         ours = per_frames(collected, method)
         part = ours[["n_frames", "trials", "inside_95", "mean_validation_index"]].copy()
         part.insert(0, "method", method)
-        bounds = np.array(
-            [stats.binom(int(n), 0.95).ppf([0.025, 0.975]) / n for n in part["trials"]]
-        )
+        bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in part["trials"]])
         part["binomial_low"], part["binomial_high"] = bounds[:, 0], bounds[:, 1]
         part["calibrated"] = part["inside_95"].between(part["binomial_low"], part["binomial_high"])
         parts.append(part)
@@ -148,15 +151,15 @@ def _frames_axis(ax, n_frames) -> None:
     """Log x axis ticked at the Nt values of the run, not at powers of ten."""
     ax.set_xscale("log")
     ax.set_xticks(list(n_frames), [str(n) for n in n_frames])
-    ax.xaxis.set_minor_locator(plt.NullLocator())
+    ax.xaxis.set_minor_locator(pyplot().NullLocator())
     ax.set_xlabel("frames used, Nt (log scale)")
 
 
-def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> plt.Figure:
+def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     """Predicted sqrt(tr Wc) and the actual RMS error against Nt (log–log), and coverage."""
     calibration = calibration_table(collected)
     n_frames = sorted(set(collected["n_frames"]) | set(paper["n_frames"]))
-    fig, (ax, cal) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (ax, cal) = pyplot().subplots(1, 2, figsize=(12, 4.8))
     for method, color in ((METHOD, "#1b9e77"), (EXTENDED, "#7570b3")):
         if method not in set(collected["method"]):
             continue

@@ -1,4 +1,5 @@
-"""Simulate a condition, run an estimator over its trials, collect the results."""
+"""Simulate a condition, run an estimator over its trials, collect the results, summarise one
+estimator's estimates."""
 
 from __future__ import annotations
 
@@ -27,6 +28,7 @@ from jointbench.study.schema import check_against_dataset, check_estimates
 from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
+from jointbench.study.summary import summarise
 
 log = logging.getLogger(__name__)
 
@@ -37,6 +39,7 @@ __all__ = [
     "run_estimate_files",
     "run_simulate_files",
     "simulate_condition",
+    "summarise_estimates",
 ]
 
 
@@ -231,3 +234,9 @@ def collect(
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
     write_table(collected, output, {**(provenance or {}), "estimators": estimators})
     return collected
+
+
+def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
+    """One estimator's mean and median error per condition, from its estimates files."""
+    estimates = pd.concat([read_table(path) for path in paths], ignore_index=True)
+    summarise(estimates, study).to_csv(output, index=False)

@@ -2,7 +2,7 @@
 
 The built-in studies are collected by importing their simulator modules; a study outside the
 package joins by :func:`register_study` (the workflow does this for the modules listed under
-``extensions`` in the config, see :mod:`jointbench.extensions`).
+``extensions`` in the config, see :func:`jointbench.jobs.load_extensions`).
 """
 
 from __future__ import annotations

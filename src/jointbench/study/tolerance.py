@@ -28,13 +28,14 @@ shares, counts, or the factor for ``factor``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
-__all__ = ["TYPES", "Verdict", "describe", "evaluate"]
+__all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate"]
 
 
 @dataclass(frozen=True)
@@ -133,10 +134,26 @@ def _range(spec, published, measured) -> Verdict:
     return _margin_verdict(np.minimum(m - low, high - m))
 
 
+def _binomial_quantile(q: float, trials: int, proportion: float) -> int:
+    """The smallest count ``k`` with ``P(X ≤ k) ≥ q`` for ``X ~ Binomial(trials, proportion)``
+    and ``0 < q < 1``: ``scipy.stats.binom.ppf``, from ``scipy.special``, which costs a fraction
+    of ``scipy.stats`` to import (tests/test_tolerance.py compares the two)."""
+    if not (trials >= 0 and 0 <= proportion <= 1):
+        raise ValueError(f"Binomial({trials}, {proportion}) is not a distribution")
+    # bdtrik inverts the cdf continued to real k, so the quantile is its ceiling or one below:
+    # start below and step up to the first count whose cdf reaches q. bdtrik is NaN where the
+    # count is surely or nearly surely 0 (no trials, a proportion below ~1e-16): start at 0.
+    guess = special.bdtrik(q, trials, proportion)
+    k = max(math.ceil(guess) - 1, 0) if math.isfinite(guess) else 0
+    while special.bdtr(k, trials, proportion) < q:
+        k += 1
+    return k
+
+
 def binomial_interval(trials: int, proportion: float) -> tuple[int, int]:
     """Central 95 % range of a Binomial(``trials``, ``proportion``) count."""
-    distribution = stats.binom(int(trials), float(proportion))
-    return int(distribution.ppf(0.025)), int(distribution.ppf(0.975))
+    low, high = (_binomial_quantile(q, int(trials), float(proportion)) for q in (0.025, 0.975))
+    return low, high
 
 
 def _binomial95(spec, published, measured) -> Verdict:

@@ -1,0 +1,129 @@
+"""What a workflow job imports: each loads what its own work needs, not the whole package.
+
+Every job is a fresh interpreter, so what its script imports is paid once per job: matplotlib,
+scipy.stats and the recording readers cost seconds of CPU between them. Each check runs in a
+subprocess, which starts with nothing imported.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from workflow_copy import ROOT
+
+import jointbench
+
+SCRIPTS = ROOT / "workflow" / "scripts"
+# Nothing at start-up needs these: figures import matplotlib when they draw.
+NEVER = ("matplotlib", "mpl_toolkits", "scipy.stats", "ezc3d", "jointbench.io")
+# The jobs that simulate, estimate, collect and summarise render and check nothing.
+RUN_SIDE = ("simulate", "estimate", "collect", "summarise")
+RENDER_SIDE = ("render", "extended", "check_published", "report_captions")
+RENDERING = ("jointbench.figures", "jointbench.papers", "jointbench.pipeline", "jointbench.report")
+
+
+def _run(code: str) -> str:
+    """What ``code`` prints, run in a fresh interpreter."""
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
+
+
+def _loaded(code: str) -> list[str]:
+    """The modules loaded after running ``code`` in a fresh interpreter."""
+    code += "\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))\n"
+    return json.loads(_run(code).splitlines()[-1])
+
+
+def _within(modules: list[str], packages: tuple[str, ...]) -> list[str]:
+    return [m for m in modules if any(m == p or m.startswith(f"{p}.") for p in packages)]
+
+
+def _script_imports(scripts: tuple[str, ...]) -> str:
+    """The import statements of the named workflow scripts, as they are written there."""
+    lines = []
+    for name in scripts:
+        tree = ast.parse((SCRIPTS / f"{name}.py").read_text())
+        lines += [ast.unparse(n) for n in tree.body if isinstance(n, ast.Import | ast.ImportFrom)]
+    assert lines, scripts
+    return "\n".join(lines)
+
+
+def test_every_script_is_checked_here():
+    assert {p.stem for p in SCRIPTS.glob("*.py")} == {*RUN_SIDE, *RENDER_SIDE}
+
+
+def test_simulate_estimate_collect_and_summarise_jobs_import_no_drawing_or_papers():
+    loaded = _loaded(_script_imports(RUN_SIDE))
+    assert "jointbench.jobs" in loaded and "jointbench.study.run" in loaded
+    assert not _within(loaded, NEVER + RENDERING), _within(loaded, NEVER + RENDERING)
+
+
+def test_render_and_check_jobs_start_without_matplotlib_or_scipy_stats():
+    loaded = _loaded(_script_imports(RENDER_SIDE))
+    assert "jointbench.pipeline" in loaded and "jointbench.report" in loaded
+    assert not _within(loaded, NEVER), _within(loaded, NEVER)
+
+
+def test_a_job_registers_the_study_and_paper_of_an_extension():
+    """jointbench.jobs finds the paper registry through the extension that defines a paper."""
+    folder = ROOT / "tests" / "data" / "fourth_study"
+    code = textwrap.dedent(
+        f"""
+        from jointbench import jobs
+        jobs.load_extensions({{"extensions": ["toy_study.py"]}}, base={str(folder)!r})
+        from jointbench.papers import get_paper
+        from jointbench.study.studies import get_study
+        print(get_study("toy").name, get_paper("paper_t").key)
+        """
+    )
+    assert _run(code).split() == ["toy", "paper_t"]
+
+
+def test_a_table_job_never_imports_matplotlib_and_a_figure_job_does(tmp_path):
+    collected, folder = tmp_path / "cmc.parquet", tmp_path / "extended"
+    code = textwrap.dedent(
+        f"""
+        import sys
+        import pandas as pd
+        from jointbench import pipeline
+
+        rows = [
+            dict(marker_set="M", rom_deg=5, noise_mm=1.0, trial=t, method=m, error_mm=e,
+                 converged=True, seconds=0.1)
+            for m, e in (("NM", 1.0), ("a user's method", 2.0)) for t in range(2)
+        ]
+        pd.DataFrame(rows).to_parquet({str(collected)!r})
+        outputs = {{ext: {str(folder)!r} + "." + ext for ext in ("csv", "md", "png")}}
+        for what in ("table", "figure"):
+            pipeline.render_extended("cmc", {str(collected)!r}, outputs, {{}}, what=what)
+            print(what, "matplotlib" in sys.modules)
+        """
+    )
+    assert _run(code).split() == ["table", "False", "figure", "True"]
+
+
+def test_import_jointbench_loads_its_public_names_on_first_use():
+    loaded = _loaded("import jointbench")
+    assert not _within(loaded, ("jointbench.io", "jointbench.api", "ezc3d")), loaded
+    loaded = _loaded("from jointbench import fit_center")
+    assert "jointbench.api" in loaded and "jointbench.io" not in loaded
+
+
+def test_the_public_names_are_those_of_their_modules():
+    """``__all__``, the lazily imported names and the imports type checkers read agree."""
+    tree = ast.parse((ROOT / "src" / "jointbench" / "__init__.py").read_text())
+    (checking,) = [n for n in tree.body if isinstance(n, ast.If)]  # if TYPE_CHECKING:
+    typed = {(n.module, a.name) for n in checking.body for a in n.names}
+    assert typed == {(module, name) for name, module in jointbench._HOMES.items()}
+    assert sorted(jointbench.__all__) == sorted(jointbench._HOMES)
+    for name, module in jointbench._HOMES.items():
+        assert getattr(jointbench, name) is getattr(sys.modules[module], name)
+        assert name in dir(jointbench)
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        jointbench.nothing  # noqa: B018
