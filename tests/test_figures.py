@@ -159,10 +159,17 @@ def test_table2_headline_says_slower_where_the_table_does():
     assert "NM 0×" not in headline
 
 
+def test_table2_shows_the_paper_methods_the_run_estimated():
+    collected = _cmc()
+    table = paper_a.table2(collected[collected["method"].isin(["NM", "LS"])], PAPER_A_SECONDS)
+    assert list(table["method"]) == ["LS", "NM"]
+
+
 def test_timing_note_says_how_and_where_times_were_measured():
     note = paper_a.timing_note()
     assert "inside the estimate job" in note
     assert "timed on its own" in note or "batched call" in note
+    assert "(:" not in note and "(;" not in note  # no empty list of methods
     assert f"NumPy {np.__version__}" in note
     assert "2 cores" not in note
     assert "Python 3" in note

@@ -10,14 +10,17 @@ the table jobs and the check run without it.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 import pandas as pd
 
 from jointbench.figures import extended
 from jointbench.figures.common import save_figure
 from jointbench.papers import Inputs, Paper, Table, get_paper, papers_of_study
+from jointbench.study.config import condition_id
 from jointbench.study.io import read_dataset, read_table
 from jointbench.study.published import (
     comparison_rows,
@@ -27,37 +30,52 @@ from jointbench.study.published import (
 )
 from jointbench.study.tables import markdown_table, write_tables
 
-__all__ = ["check_published", "render_extended", "render_output"]
+__all__ = ["OUTPUT_SEPARATOR", "check_published", "render_extended", "render_paper"]
 
 log = logging.getLogger(__name__)
 
 
-def _inputs(paper: Paper, collected: str, datasets: Sequence[str], config: Mapping) -> Inputs:
+def _inputs(paper: Paper, collected: str, config: Mapping) -> Inputs:
+    """What every output of ``paper`` is rendered from, datasets aside."""
     return Inputs(
         collected=read_table(collected),
         published=load_published(paper.published),
         config=config,
-        datasets=[read_dataset(path) for path in datasets],
     )
 
 
-def render_output(
+#: Joins an output's name and a file kind in the output keys of a paper's job
+#: (``paper_a_fig3__png``): one job writes every output of its paper.
+OUTPUT_SEPARATOR = "__"
+
+
+def render_paper(
     paper_key: str,
-    output_name: str,
+    output_names: Sequence[str],
     collected: str,
     datasets: Sequence[str],
-    outputs,
+    outputs: Mapping[str, str],
     config: Mapping,
 ) -> None:
-    """Render one paper output from its input files into ``outputs`` (png/pdf or csv/md)."""
+    """Render the paper's outputs ``output_names`` from its input files, reading them once;
+    ``outputs`` maps ``<output name>__<kind>`` to a path (png/pdf or csv/md/html)."""
     paper = get_paper(paper_key)
-    output = paper.output(output_name)
-    result = output.render(_inputs(paper, collected, datasets, config))
-    if isinstance(result, Table):
-        write_tables(result.frame, outputs, title=result.title, note=result.note)
-    else:
-        save_figure(result, outputs)
-    log.info("%s written", output_name)
+    inputs = _inputs(paper, collected, config)
+    # Dataset files are named by their condition (study.config.condition_id).
+    by_condition = {Path(path).stem: read_dataset(path) for path in datasets}
+    for name in output_names:
+        output = paper.output(name)
+        drawn = [by_condition[condition_id(c)] for c in output.conditions]
+        prefix = f"{name}{OUTPUT_SEPARATOR}"
+        files = {
+            key[len(prefix) :]: path for key, path in outputs.items() if key.startswith(prefix)
+        }
+        result = output.render(dataclasses.replace(inputs, datasets=drawn))
+        if isinstance(result, Table):
+            write_tables(result.frame, files, title=result.title, note=result.note)
+        else:
+            save_figure(result, files)
+        log.info("%s written", name)
 
 
 def _paper_methods(study: str) -> extended.PaperMethods:

@@ -151,8 +151,37 @@ def estimate_code(study):
     )
 
 
-def output_code(paper, output):
-    return code_fingerprint(output.render, output.headline, pipeline.render_output)
+def papers_to_render(study):
+    """``(paper, outputs)`` for every paper of ``study`` with an output this run renders."""
+    grouped = {}
+    for paper, output in PAPER_OUTPUTS[study]:
+        grouped.setdefault(paper.key, (paper, []))[1].append(output)
+    return list(grouped.values())
+
+
+def paper_datasets(study, outputs):
+    """The datasets the outputs draw, each once."""
+    conditions = [c for output in outputs for c in output.conditions]
+    return list(dict.fromkeys(dataset_file(study, c) for c in conditions))
+
+
+def paper_files(paper, outputs):
+    """Every output's files keyed ``<output>__<kind>``; each output's first file is reported
+    (under its paper, as a figure or a table) and captioned by its own caption file."""
+    files = {}
+    for output in outputs:
+        for index, (kind, path) in enumerate(output.files.items()):
+            if index == 0:
+                group = "Figures" if output.kind == "figure" else "Tables"
+                path = reported(path, output.name, paper.title, group)
+            files[f"{output.name}{pipeline.OUTPUT_SEPARATOR}{kind}"] = path
+    return files
+
+
+def paper_code(outputs):
+    """The fingerprint of what renders the outputs: editing one reruns its paper's job."""
+    functions = [f for output in outputs for f in (output.render, output.headline)]
+    return code_fingerprint(*functions, pipeline.render_paper)
 
 
 def check_code():

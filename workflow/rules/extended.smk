@@ -1,11 +1,10 @@
 # The extended ranking: every estimator of a study, the paper's and any added (built-in or
-# external), ranked by mean error on each condition. One rule per study and output, so that
-# every report caption is a concrete file.
+# external), ranked by mean error on each condition, as a table and a figure from one job.
 for _study in STUDIES:
 
     rule:
         name:
-            f"extended_table_{_study}"
+            f"extended_{_study}"
         input:
             f"results/collected/{_study}.parquet",
         output:
@@ -17,25 +16,6 @@ for _study in STUDIES:
             ),
             csv=f"results/tables/extended_{_study}.csv",
             md=f"results/tables/extended_{_study}.md",
-        log:
-            f"results/logs/extended_table_{_study}.log",
-        # Small: on a cluster it runs on the submitting host rather than waiting in the queue.
-        localrule: True
-        conda:
-            "../envs/jointbench.yaml"
-        params:
-            study=_study,
-            what="table",
-            code=code_fingerprint(pipeline.render_extended),
-        script:
-            "../scripts/extended.py"
-
-    rule:
-        name:
-            f"extended_figure_{_study}"
-        input:
-            f"results/collected/{_study}.parquet",
-        output:
             png=reported(
                 f"results/figures/extended_{_study}.png",
                 f"extended_{_study}_figure",
@@ -44,12 +24,11 @@ for _study in STUDIES:
             ),
             pdf=f"results/figures/extended_{_study}.pdf",
         log:
-            f"results/logs/extended_figure_{_study}.log",
+            f"results/logs/extended_{_study}.log",
         conda:
             "../envs/jointbench.yaml"
         params:
             study=_study,
-            what="figure",
             code=code_fingerprint(pipeline.render_extended),
         script:
             "../scripts/extended.py"

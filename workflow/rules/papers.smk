@@ -1,34 +1,25 @@
-# One rule per paper output, derived from the paper registry (jointbench.papers): each reads its
-# study's collected results, its paper's published values and the datasets it draws.
+# One rule per paper, derived from the paper registry (jointbench.papers): it reads its study's
+# collected results, its published values and the datasets its outputs draw, and renders every
+# output of the paper this run can render (figures, tables, claims) in one job.
 for _study in STUDIES:
-    for _paper, _output in PAPER_OUTPUTS[_study]:
-        _files = dict(_output.files)
-        _first = next(iter(_files))
-        _files[_first] = reported(
-            _files[_first],
-            _output.name,
-            _paper.title,
-            "Figures" if _output.kind == "figure" else "Tables",
-        )
+    for _paper, _outputs in papers_to_render(_study):
 
         rule:
             name:
-                _output.name
+                _paper.key
             input:
                 collected=f"results/collected/{_study}.parquet",
                 published=str(_paper.published),
-                datasets=[dataset_file(_study, c) for c in _output.conditions],
+                datasets=paper_datasets(_study, _outputs),
             output:
-                **_files,
+                **paper_files(_paper, _outputs),
             log:
-                f"results/logs/{_output.name}.log",
-            # Tables are small: on a cluster they run on the submitting host.
-            localrule: _output.kind == "table"
+                f"results/logs/{_paper.key}.log",
             conda:
                 "../envs/jointbench.yaml"
             params:
                 paper=_paper.key,
-                output=_output.name,
-                code=output_code(_paper, _output),
+                outputs=[o.name for o in _outputs],
+                code=paper_code(_outputs),
             script:
                 "../scripts/render.py"

@@ -1,11 +1,11 @@
 from jointbench import jobs, pipeline
 
 with jobs.job(snakemake):
-    pipeline.render_output(
+    pipeline.render_paper(
         snakemake.params.paper,
-        snakemake.params.output,
+        snakemake.params.outputs,
         snakemake.input.collected,
         snakemake.input.datasets,
-        snakemake.output,
+        dict(snakemake.output.items()),
         snakemake.config,
     )

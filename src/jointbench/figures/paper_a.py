@@ -327,13 +327,15 @@ def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> p
     """
     rows = bc_converged(collected[collected["method"].isin(PAPER_METHODS)])
     timing = rows.groupby("method")["seconds"].agg(["mean", "median", "size"])
+    # The paper's methods this run estimated, in the paper's order.
+    methods = [m for m in PAPER_METHODS if m in timing.index]
     table = pd.DataFrame(
         {
-            "method": list(PAPER_METHODS),
-            "mean_s": [timing.loc[m, "mean"] for m in PAPER_METHODS],
-            "median_s": [timing.loc[m, "median"] for m in PAPER_METHODS],
-            "trials": [int(timing.loc[m, "size"]) for m in PAPER_METHODS],
-            "paper_matlab_s": [published_seconds[m] for m in PAPER_METHODS],
+            "method": methods,
+            "mean_s": [timing.loc[m, "mean"] for m in methods],
+            "median_s": [timing.loc[m, "median"] for m in methods],
+            "trials": [int(timing.loc[m, "size"]) for m in methods],
+            "paper_matlab_s": [published_seconds[m] for m in methods],
         }
     )
     table["speedup_vs_paper"] = table["paper_matlab_s"] / table["mean_s"]
@@ -364,12 +366,15 @@ def timing_note(environment: str | None = None) -> str:
     environment = environment or machine.describe()
     batched = [m for m in PAPER_METHODS if hasattr(registry.get("center", m), "batched")]
     one_at_a_time = [m for m in PAPER_METHODS if m not in batched]
-    how = f"{', '.join(one_at_a_time)}: each trial's fit timed on its own"
+    parts = []
+    if one_at_a_time:
+        parts.append(f"{', '.join(one_at_a_time)}: each trial's fit timed on its own")
     if batched:
-        how += (
-            f"; {', '.join(batched)}: all trials of a condition fitted in one batched call, "
+        parts.append(
+            f"{', '.join(batched)}: all trials of a condition fitted in one batched call, "
             "whose time is divided by its trials"
         )
+    how = "; ".join(parts)
     return (
         f"Ours: wall-clock time per trial, measured inside the estimate job ({how}; simulation "
         f"and file I/O excluded), on this run's machine ({environment}). Other jobs of the run "
