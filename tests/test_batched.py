@@ -228,3 +228,19 @@ def test_a_bad_trial_fails_alone_in_a_two_segment_batch():
             single = error
         _assert_same(outcome, single)
     assert "collinear" in str(outcomes[1]) and "NaN or inf" in str(outcomes[3])
+
+
+def test_local_minimum_diagnostic_equals_one_restart_per_trial():
+    """Claim A7's restarts from the truth run as one batch, with the one-trial searches' answers."""
+    from jointbench.estimators.sphere import fit_is, geometric_cost
+    from jointbench.study.diagnostics import is_local_minimum
+
+    trials = _trials("cmc", 0)
+    markers = trials.segments["moving"]
+    results = [fit_is(data) for data in markers]
+    rows = is_local_minimum((markers,), results, trials.truth)
+    for data, result, row in zip(markers, results, rows, strict=True):
+        restart = fit_is(data, start=np.asarray(trials.truth["center"], dtype=float))
+        gap = geometric_cost(data, result.center) - geometric_cost(data, restart.center)
+        assert row["f1_gap"] == gap
+    assert is_local_minimum((markers[:1],), [None], trials.truth) == [{}]

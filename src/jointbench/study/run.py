@@ -115,17 +115,22 @@ def estimate(
     fit = registry.get(spec.kind, method, checked=False)
     diagnose = DIAGNOSTICS.get((study, method))
     batch = _fit_all(fit, spec, trials, options or {})
-    rows = []
+    fitted = []
     for trial in range(trials.n_trials):
-        arguments = spec.fit_arguments(trials, trial)
         if batch is None:
             start = time.perf_counter()
-            result, status, converged, iterations = _fit_one(fit, arguments, options or {})
-            seconds = time.perf_counter() - start
+            outcome = _fit_one(fit, spec.fit_arguments(trials, trial), options or {})
+            fitted.append((*outcome, time.perf_counter() - start))
         else:
-            result, status, converged, iterations = _outcome(batch[0][trial])
-            seconds = batch[1]
-        extra = diagnose(arguments, result, trials.truth) if diagnose and result else {}
+            fitted.append((*_outcome(batch[0][trial]), batch[1]))
+    extras = [{}] * trials.n_trials
+    if diagnose:
+        segments = tuple(trials.segments[name] for name in spec.segments)
+        extras = diagnose(segments, [row[0] for row in fitted], trials.truth)
+    rows = []
+    for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
+        zip(fitted, extras, strict=True)
+    ):
         rows.append(
             {
                 **condition,
