@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -13,7 +14,14 @@ import pytest
 
 from jointbench.simulate import Trials
 from jointbench.study import io, run
-from jointbench.study.io import iter_dataset, read_dataset, read_metadata, write_dataset
+from jointbench.study.config import load_config
+from jointbench.study.io import (
+    iter_dataset,
+    read_dataset,
+    read_metadata,
+    write_dataset,
+    write_dataset_blocks,
+)
 
 
 def _trials(n_trials: int, n_frames: int = 7) -> Trials:
@@ -127,3 +135,27 @@ def test_estimates_by_blocks_equal_the_whole_condition(tmp_path, monkeypatch):
     blocked = pd.read_parquet(output)
     assert blocked["trial"].tolist() == list(range(9))
     pd.testing.assert_frame_equal(blocked.drop(columns="seconds"), whole.drop(columns="seconds"))
+
+
+def test_a_dataset_written_in_blocks_equals_one_written_at_once(tmp_path):
+    """Simulation streams blocks of trials into the file: same file content, bounded memory."""
+    config = load_config(Path(__file__).resolve().parents[1] / "config" / "config.yaml")
+    config["studies"]["hip"]["trials"] = 7
+    condition = {"n_frames": 16}
+    whole = run.simulate_condition(config, "hip", condition)
+    at_once, in_blocks = tmp_path / "once.parquet", tmp_path / "blocks.parquet"
+    write_dataset(at_once, whole, study="hip", condition=condition)
+    blocks = (
+        run.simulate_condition(config, "hip", condition, range(a, min(a + 3, 7))) for a in (0, 3, 6)
+    )
+    write_dataset_blocks(in_blocks, blocks, 7, study="hip", condition=condition)
+    assert read_metadata(in_blocks) == read_metadata(at_once)
+    (a, _), (b, _) = read_dataset(at_once), read_dataset(in_blocks)
+    for name in whole.segments:
+        np.testing.assert_array_equal(a.segments[name], b.segments[name])
+        np.testing.assert_array_equal(b.segments[name], whole.segments[name])
+    assert not list(tmp_path.glob(".*.tmp"))
+    with pytest.raises(ValueError, match="expected 8"):
+        write_dataset_blocks(
+            tmp_path / "short.parquet", [whole], 8, study="hip", condition=condition
+        )

@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import inspect
 import json
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +32,7 @@ __all__ = [
     "read_table",
     "read_trial_numbers",
     "write_dataset",
+    "write_dataset_blocks",
     "write_table",
 ]
 
@@ -119,35 +120,78 @@ def write_dataset(
     provenance: Mapping[str, object] | None = None,
 ) -> None:
     """Write ``trials`` to ``path`` with study, condition, truth, parameters and provenance (what
-    produced the file: see :func:`read_provenance`) as metadata.
+    produced the file: see :func:`read_provenance`) as metadata; the file's layout is
+    :func:`write_dataset_blocks`'s."""
+    write_dataset_blocks(
+        path, [trials], trials.n_trials, study=study, condition=condition, provenance=provenance
+    )
 
-    Rows are grouped by segment, then by blocks of trials (one row group each); no table of the
-    whole condition is built.
+
+def write_dataset_blocks(
+    path: str | Path,
+    blocks: Iterable[Trials],
+    n_trials: int,
+    *,
+    study: str,
+    condition: Mapping[str, object],
+    provenance: Mapping[str, object] | None = None,
+) -> None:
+    """Write a condition's ``n_trials`` trials, given as consecutive ``blocks`` (one
+    :class:`Trials` each, sharing truth and parameters), to ``path``; only one block is in
+    memory at a time.
+
+    Rows are grouped by segment, then by blocks of trials (one row group each): the first
+    segment's rows go to the file as each block arrives, the others' to a temporary file beside
+    it that is appended at the end. No table of the whole condition is built.
     """
-    shapes = {name: markers.shape for name, markers in trials.segments.items()}
-    metadata = {
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writers: dict[str, pq.ParquetWriter] = {}
+    spills: dict[str, Path] = {}
+    first_trial, metadata = 0, None
+    try:
+        for trials in blocks:
+            shapes = {name: markers.shape for name, markers in trials.segments.items()}
+            if metadata is None:
+                metadata = _dataset_metadata(trials, n_trials, study, condition, provenance)
+                names = list(shapes)
+                spills = {name: path.with_name(f".{path.name}.{name}.tmp") for name in names[1:]}
+            step = block_trials(shapes)
+            for name, markers in trials.segments.items():
+                for first in range(0, markers.shape[0], step):
+                    table = _segment_block(name, markers[first : first + step], first_trial + first)
+                    schema = table.schema.with_metadata({_META_KEY: json.dumps(metadata).encode()})
+                    if name not in writers:
+                        writers[name] = pq.ParquetWriter(spills.get(name, path), schema)
+                    writers[name].write_table(table.replace_schema_metadata(schema.metadata))
+            first_trial += trials.n_trials
+        if first_trial != n_trials:
+            raise ValueError(f"{path}: blocks hold {first_trial} trials, expected {n_trials}")
+        for name, spill in spills.items():
+            writers.pop(name).close()
+            spilled = pq.ParquetFile(spill)
+            for group in range(spilled.num_row_groups):
+                table = spilled.read_row_group(group)
+                writers[names[0]].write_table(table.replace_schema_metadata(schema.metadata))
+    finally:
+        for writer in writers.values():
+            writer.close()
+        for spill in spills.values():
+            spill.unlink(missing_ok=True)
+
+
+def _dataset_metadata(trials: Trials, n_trials: int, study, condition, provenance) -> dict:
+    """The file's metadata: study, condition, truth, parameters, shapes and provenance."""
+    return {
         "study": study,
         "condition": dict(condition),
         "truth": trials.truth,
         "parameters": trials.parameters,
-        "shapes": {name: list(shape) for name, shape in shapes.items()},
+        "shapes": {
+            name: [n_trials, *markers.shape[1:]] for name, markers in trials.segments.items()
+        },
         "provenance": dict(provenance or {}),
     }
-    step = block_trials(shapes)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    writer = None
-    try:
-        for name, markers in trials.segments.items():
-            for first in range(0, markers.shape[0], step):
-                table = _segment_block(name, markers[first : first + step], first)
-                if writer is None:
-                    schema = table.schema.with_metadata({_META_KEY: json.dumps(metadata).encode()})
-                    writer = pq.ParquetWriter(path, schema)
-                writer.write_table(table.replace_schema_metadata(schema.metadata))
-    finally:
-        if writer is not None:
-            writer.close()
 
 
 @_names_unreadable_file

@@ -21,7 +21,7 @@ from jointbench.study.io import (
     read_provenance,
     read_table,
     read_trial_numbers,
-    write_dataset,
+    write_dataset_blocks,
     write_table,
 )
 from jointbench.study.schema import check_against_dataset, check_estimates
@@ -43,16 +43,21 @@ __all__ = [
 ]
 
 
-def simulate_condition(config: Mapping, study: str, condition: Mapping[str, object]) -> Trials:
-    """All trials of one condition, each from its own seed (see :mod:`jointbench.study.seeds`)."""
+#: Trials simulated at once when writing a dataset: memory stays bounded whatever the trials.
+SIMULATE_BLOCK_TRIALS = 250
+
+
+def simulate_condition(
+    config: Mapping, study: str, condition: Mapping[str, object], trials: range | None = None
+) -> Trials:
+    """The trials of one condition (all, or the ``trials`` range), each from its own seed (see
+    :mod:`jointbench.study.seeds`), so a trial is the same whichever others are simulated."""
     spec = get_study(study)
     settings = config["studies"][study]
     protocol = spec.protocol(settings.get("protocol"))
     seed_condition = {key: condition[key] for key in spec.seed_keys}
-    rngs = [
-        trial_rng(config["base_seed"], study, seed_condition, trial)
-        for trial in range(int(settings["trials"]))
-    ]
+    numbers = range(int(settings["trials"])) if trials is None else trials
+    rngs = [trial_rng(config["base_seed"], study, seed_condition, trial) for trial in numbers]
     return spec.simulate(condition, protocol, rngs)
 
 
@@ -156,10 +161,18 @@ def run_simulate_files(
     provenance: Mapping[str, object] | None = None,
 ) -> None:
     """Simulate the condition each output file is named after (see ``condition_id``)."""
+    n_trials = int(config["studies"][study]["trials"])
     for output in outputs:
         condition = parse_condition_id(config, study, Path(output).stem)
-        trials = simulate_condition(config, study, condition)
-        write_dataset(output, trials, study=study, condition=condition, provenance=provenance)
+        blocks = (
+            simulate_condition(
+                config, study, condition, range(first, min(first + SIMULATE_BLOCK_TRIALS, n_trials))
+            )
+            for first in range(0, n_trials, SIMULATE_BLOCK_TRIALS)
+        )
+        write_dataset_blocks(
+            output, blocks, n_trials, study=study, condition=condition, provenance=provenance
+        )
 
 
 def run_estimate_files(
