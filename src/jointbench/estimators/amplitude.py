@@ -14,7 +14,12 @@ import numpy as np
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.sphere import _check_point, fit_ls
-from jointbench.estimators.validation import check_markers, check_moves, check_not_collinear
+from jointbench.estimators.validation import (
+    check_markers,
+    check_moves,
+    check_not_collinear,
+    prepare_trials,
+)
 from jointbench.numerics.poses import rigid_poses
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
@@ -152,14 +157,7 @@ def _ma_result(search, rotation: np.ndarray, translation: np.ndarray) -> CenterR
 def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
     """:func:`fit_ma` for every trial of ``markers`` ``(n_trials, N, P, 3)``, the searches
     advanced together (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
-    outcomes: list = []
-    prepared: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    for trial, data in enumerate(np.asarray(markers, dtype=float)):
-        try:
-            prepared[trial] = _ma_prepare(data, start)
-            outcomes.append(None)
-        except ValueError as error:
-            outcomes.append(error)
+    outcomes, prepared = prepare_trials(markers, lambda data: _ma_prepare(data, start))
     if prepared:
         arrays, points = zip(*prepared.values(), strict=True)
         # Each trial's poses are those of its own call (the pose fit is per trial).

@@ -86,7 +86,7 @@ import numpy as np
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
-from jointbench.estimators.validation import check_markers, check_moves
+from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.simplex import FATOL, XATOL, lockstep
 
 __all__ = [
@@ -379,14 +379,9 @@ def _fit_batch(
 ) -> list[AxisResult | ValueError]:
     """:func:`_fit` for every trial of ``markers`` ``(n_trials, N, P, 3)``; a trial that the
     one-trial function rejects carries its ``ValueError``."""
-    outcomes: list = []
-    prepared: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    for trial, data in enumerate(markers):
-        try:
-            prepared[trial] = _prepare(data, point, search["parameterisation"])
-            outcomes.append(None)
-        except ValueError as error:
-            outcomes.append(error)
+    outcomes, prepared = prepare_trials(
+        markers, lambda data: _prepare(data, point, search["parameterisation"])
+    )
     if prepared:
         arrays, points = zip(*prepared.values(), strict=True)
         for trial, result in zip(
@@ -425,49 +420,37 @@ _DOC = """
     """
 
 
+def _entry(solve: Callable, method: str) -> Callable:
+    """``solve(markers, method, **search)`` behind the estimators' keyword signature: the
+    one-trial function (``solve`` = :func:`_fit`) and its many-trial form (:func:`_fit_batch`)."""
+
+    def entry(
+        markers: np.ndarray,
+        *,
+        point: np.ndarray | None = None,
+        parameterisation: str = "angles",
+        xatol: float = XATOL,
+        fatol: float = FATOL,
+        max_iter: int | None = None,
+        max_fev: int | None = None,
+    ):
+        return solve(
+            markers,
+            method,
+            point=point,
+            parameterisation=parameterisation,
+            xatol=xatol,
+            fatol=fatol,
+            max_iter=max_iter,
+            max_fev=max_fev,
+        )
+
+    return entry
+
+
 def _make(method: str, summary: str) -> Callable[..., AxisResult]:
-    def fit(
-        markers: np.ndarray,
-        *,
-        point: np.ndarray | None = None,
-        parameterisation: str = "angles",
-        xatol: float = XATOL,
-        fatol: float = FATOL,
-        max_iter: int | None = None,
-        max_fev: int | None = None,
-    ) -> AxisResult:
-        return _fit(
-            markers,
-            method,
-            point=point,
-            parameterisation=parameterisation,
-            xatol=xatol,
-            fatol=fatol,
-            max_iter=max_iter,
-            max_fev=max_fev,
-        )
-
-    def batched(
-        markers: np.ndarray,
-        *,
-        point: np.ndarray | None = None,
-        parameterisation: str = "angles",
-        xatol: float = XATOL,
-        fatol: float = FATOL,
-        max_iter: int | None = None,
-        max_fev: int | None = None,
-    ) -> list[AxisResult | ValueError]:
-        return _fit_batch(
-            markers,
-            method,
-            point=point,
-            parameterisation=parameterisation,
-            xatol=xatol,
-            fatol=fatol,
-            max_iter=max_iter,
-            max_fev=max_fev,
-        )
-
+    fit = _entry(_fit, method)
+    batched = _entry(_fit_batch, method)
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
     fit.batched = batched

@@ -21,7 +21,7 @@ import numpy as np
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
-from jointbench.estimators.validation import check_markers, check_moves
+from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
@@ -616,14 +616,7 @@ def _is_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.n
 def _fit_is_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
     """:func:`fit_is` for every trial of ``markers`` ``(n_trials, N, P, 3)``, the searches
     advanced together (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
-    outcomes: list = []
-    prepared: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    for trial, data in enumerate(np.asarray(markers, dtype=float)):
-        try:
-            prepared[trial] = _is_prepare(data, start)
-            outcomes.append(None)
-        except ValueError as error:
-            outcomes.append(error)
+    outcomes, prepared = prepare_trials(markers, lambda data: _is_prepare(data, start))
     if prepared:
         arrays, starts = zip(*prepared.values(), strict=True)
         n_frames = arrays[0].shape[0]

@@ -7,6 +7,8 @@ their own minimum numbers of frames and markers.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 __all__ = [
@@ -17,6 +19,7 @@ __all__ = [
     "check_not_collinear",
     "check_rotates",
     "check_same_frames",
+    "prepare_trials",
 ]
 
 #: The marker arrays each estimator kind takes, in order.
@@ -183,3 +186,20 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
         check_moves(checked[0])
         check_rotates(checked[0])
     return checked
+
+
+def prepare_trials(
+    markers: object, prepare: Callable[[np.ndarray], object]
+) -> tuple[list[ValueError | None], dict[int, object]]:
+    """``prepare`` (a one-trial function's checks and set-up) on each trial of ``markers``
+    ``(n_trials, ...)``: per trial the ``ValueError`` it raised or ``None``, and the prepared
+    values of the trials that passed, by trial."""
+    outcomes: list[ValueError | None] = []
+    prepared: dict[int, object] = {}
+    for trial, data in enumerate(np.asarray(markers, dtype=float)):
+        try:
+            prepared[trial] = prepare(data)
+            outcomes.append(None)
+        except ValueError as error:
+            outcomes.append(error)
+    return outcomes, prepared
