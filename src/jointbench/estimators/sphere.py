@@ -728,19 +728,25 @@ def _fit_ls_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
         a_matrix, b_vector, means, centred = _ls_moments_batch(markers[good])
         centers, _ = _pinv_solve_batch(a_matrix, b_vector)
         radii, costs = _algebraic_fit_batch(means, centred, centers)
-        for trial, center, radius, cost in zip(
-            good, frozen_rows(centers), frozen_rows(radii), costs.tolist(), strict=True
-        ):
-            outcomes[trial] = CenterResult(
-                center=center,
-                radii=radius,
-                converged=True,
-                iterations=0,
-                status="ok",
-                method="LS",
-                cost=cost,
-            )
+        _closed_form_results(outcomes, "LS", good, centers, radii, costs)
     return _with_fallback(fit_ls, markers, outcomes, bad)
+
+
+def _closed_form_results(outcomes, method, trials, centers, radii, costs) -> None:
+    """Fill ``outcomes[trials]`` with a closed form's :class:`CenterResult` (centres ``(T, 3)``,
+    radii ``(T, P)`` [mm], costs ``(T,)``), its fields taken from one read-only copy each."""
+    for trial, center, radius, cost in zip(
+        trials, frozen_rows(centers), frozen_rows(radii), costs.tolist(), strict=True
+    ):
+        outcomes[trial] = CenterResult(
+            center=center,
+            radii=radius,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method=method,
+            cost=cost,
+        )
 
 
 def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
@@ -790,26 +796,11 @@ def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
             centers = origin + scale[:, None] * center_scaled
             radii = scale[:, None] * np.sqrt(np.maximum(sq_radii, 0.0))
             costs = 1.0 / largest
-        for trial, ok, center, radius, cost in zip(
-            good,
-            solved.tolist(),
-            frozen_rows(centers),
-            frozen_rows(radii),
-            costs.tolist(),
-            strict=True,
-        ):
-            if not ok:
-                bad[trial] = True
-                continue
-            outcomes[trial] = CenterResult(
-                center=center,
-                radii=radius,
-                converged=True,
-                iterations=0,
-                status="ok",
-                method="NM",
-                cost=cost,
-            )
+        # A trial without a solution goes to the one-trial function, which says why.
+        bad[good[~solved]] = True
+        _closed_form_results(
+            outcomes, "NM", good[solved], centers[solved], radii[solved], costs[solved]
+        )
     return _with_fallback(fit_nm, markers, outcomes, bad)
 
 
