@@ -21,8 +21,8 @@ import jointbench
 SCRIPTS = ROOT / "workflow" / "scripts"
 # Nothing at start-up needs these: figures import matplotlib when they draw.
 NEVER = ("matplotlib", "mpl_toolkits", "scipy.stats", "ezc3d", "jointbench.io")
-# The jobs that simulate, estimate, collect and summarise render and check nothing.
-RUN_SIDE = ("simulate", "estimate", "collect", "summarise")
+# The jobs that simulate, fit poses, estimate, collect and summarise render and check nothing.
+RUN_SIDE = ("simulate", "poses", "estimate", "collect", "summarise")
 RENDER_SIDE = ("render", "extended", "check_published", "report_captions")
 RENDERING = ("jointbench.figures", "jointbench.papers", "jointbench.pipeline", "jointbench.report")
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import tracemalloc
 from pathlib import Path
 
@@ -12,6 +13,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
 from jointbench.simulate import Trials
 from jointbench.study import io, run
 from jointbench.study.config import load_config
@@ -159,3 +161,74 @@ def test_a_dataset_written_in_blocks_equals_one_written_at_once(tmp_path):
         write_dataset_blocks(
             tmp_path / "short.parquet", [whole], 8, study="hip", condition=condition
         )
+
+
+def _hip_dataset(tmp_path, n_trials: int, collinear_trial: int | None = None):
+    """A small hip condition on disk (optionally one trial's proximal markers collinear)."""
+    config = load_config(Path(__file__).resolve().parents[1] / "config" / "config.yaml")
+    config["studies"]["hip"]["trials"] = n_trials
+    condition = {"n_frames": 16}
+    trials = run.simulate_condition(config, "hip", condition)
+    if collinear_trial is not None:
+        line = np.linspace(1.0, 2.0, trials.segments["proximal"].shape[2])[:, None] * [1, 2, 3]
+        trials.segments["proximal"][collinear_trial] = line
+    path = tmp_path / "datasets" / "n_frames-16.parquet"
+    write_dataset(path, trials, study="hip", condition=condition)
+    return config, condition, trials, path
+
+
+def test_shared_poses_are_stored_exactly_and_give_the_same_estimates(tmp_path, monkeypatch):
+    config, _, trials, dataset = _hip_dataset(tmp_path, 9, collinear_trial=4)
+    monkeypatch.setattr(io, "BLOCK_BYTES", 4 * sum(m[0].nbytes for m in trials.segments.values()))
+    poses = tmp_path / "poses" / "n_frames-16.parquet"
+    run.run_poses_files("hip", [str(dataset)], [str(poses)])
+    assert pq.ParquetFile(poses).num_row_groups == 3  # one per block of 4 trials
+    fitted = trial_poses(dict(trials.segments), min_frames=POSE_MIN_FRAMES)
+    stored = io.read_poses(poses, 0, trials.segments)
+    assert str(stored[4]) == str(fitted[4]) and "collinear" in str(stored[4])
+    for trial in (0, 8):
+        for name in ("proximal", "distal"):
+            a, b = fitted[trial][name], stored[trial][name]
+            for field in ("rotation", "translation", "body", "markers"):
+                np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+            assert (a.residual_ss, a.dof) == (b.residual_ss, b.dof)
+    for method in run.methods_sharing_poses(config, "hip"):
+        own, shared = (tmp_path / part / method / dataset.name for part in ("own", "shared"))
+        run.run_estimate_files(config, "hip", method, [str(dataset)], [str(own)])
+        run.run_estimate_files(
+            config, "hip", method, [str(dataset)], [str(shared)], poses=[str(poses)]
+        )
+        pd.testing.assert_frame_equal(
+            pd.read_parquet(shared).drop(columns="seconds"),
+            pd.read_parquet(own).drop(columns="seconds"),
+        )
+        assert pd.read_parquet(shared)["status"][4].startswith("error: ValueError")
+
+
+def test_poses_of_another_dataset_are_refused_naming_the_file(tmp_path):
+    _, _, trials, dataset = _hip_dataset(tmp_path, 3)
+    poses = tmp_path / "poses" / dataset.name
+    run.run_poses_files("hip", [str(dataset)], [str(poses)])
+    named = re.escape(str(poses))
+    with pytest.raises(ValueError, match=f"{named}.*another dataset"):
+        io.read_poses(poses, 0, {k: v[:, :8] for k, v in trials.segments.items()})
+    with pytest.raises(ValueError, match=f"{named}.*3 trials"):
+        io.read_poses(poses, 2, trials.segments)
+    with pytest.raises(ValueError, match="not a jointbench poses file"):
+        io.read_poses(dataset, 0, trials.segments)
+
+
+def test_only_a_study_with_two_pose_based_methods_shares_poses():
+    config = load_config(Path(__file__).resolve().parents[1] / "config" / "config.yaml")
+    assert run.methods_sharing_poses(config, "hip") == config["studies"]["hip"]["estimators"]
+    assert run.methods_sharing_poses(config, "cmc") == []  # SCoRE alone fits its own
+    config["studies"]["hip"]["estimators"] = ["SCoRE"]
+    assert run.methods_sharing_poses(config, "hip") == []
+
+
+def test_stored_poses_are_refused_by_a_method_that_fits_none():
+    config = {"base_seed": 1, "studies": {"cmc": {"trials": 2}}}
+    condition = {"marker_set": "M", "rom_deg": 15, "noise_mm": 1.0}
+    trials = run.simulate_condition(config, "cmc", condition)
+    with pytest.raises(ValueError, match="LS: not a pose-based method"):
+        run.estimate("cmc", "LS", trials, condition, poses=[])

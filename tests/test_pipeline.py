@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pandas as pd
 import pytest
 import yaml
@@ -124,6 +126,27 @@ def test_estimate_jobs_log_their_progress(reduced_run):
     workdir, _, _ = reduced_run
     log = (workdir / "results" / "logs" / "estimate" / "cmc" / "NM.log").read_text()
     assert "cmc NM: [" in log and "conditions" in log and "s left" in log
+
+
+def test_the_hip_methods_share_one_pose_fit_per_condition(reduced_run):
+    """One poses job fits the hip trials; each pose-based estimate job reads its files."""
+    workdir, reduced, _ = reduced_run
+    conditions = reduced["studies"]["hip"]["grid"]["n_frames"]
+    poses = sorted(p.name for p in (workdir / "results" / "poses" / "hip").glob("*.parquet"))
+    assert poses == sorted(f"n_frames-{n}.parquet" for n in conditions)
+    log = (workdir / "results" / "logs" / "poses" / "hip.log").read_text()
+    assert f"hip poses: [####################] {len(conditions)}/{len(conditions)}" in log
+    jobs = run_snakemake(
+        workdir,
+        "--dry-run",
+        "--forceall",
+        "--configfile",
+        str(ROOT / "tests" / "data" / "reduced.yaml"),
+    )
+    assert jobs.returncode == 0, jobs.stderr[-2000:]
+    stats = jobs.stdout + jobs.stderr
+    assert re.search(r"^poses_hip\s+1$", stats, re.MULTILINE), stats
+    assert "poses_cmc" not in stats and "poses_hinge" not in stats
 
 
 def test_a_grid_without_a_figures_condition_runs_without_that_figure(tmp_path):

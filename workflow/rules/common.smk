@@ -53,6 +53,23 @@ def estimates_files(study, methods=None):
     )
 
 
+POSES = "results/poses/{study}/{condition}.parquet"
+
+
+def shared_poses(study, shared, condition=None):
+    """The poses files an estimate job of ``study`` reads: those of its conditions (all, or
+    ``condition``) for a method in ``shared``, none for a method fitting its own poses.
+    """
+    conditions = [condition] if condition else condition_ids(study)
+
+    def files(wildcards):
+        if wildcards.method not in shared:
+            return []
+        return expand(POSES, study=study, condition=conditions)
+
+    return files
+
+
 def _in_grid(study, condition):
     return jb_config.condition_id(condition) in set(condition_ids(study))
 

@@ -4,12 +4,59 @@
 # a cluster). Either way each condition has its own estimates file, and editing one estimator
 # reruns only its jobs. The method wildcard of these rules only matches built-ins, so a user's
 # rule may write an external estimator's files.
+#
+# A study with two or more pose-based estimators (the hip study's four) fits every trial's poses
+# once, in a poses job of the same granularity, and its pose-based estimate jobs read them.
 PER_CONDITION = config.get("jobs", {}).get("estimate", "per_study") == "per_condition"
+
 
 for _study in STUDIES:
     _builtin = _alternatives(
         jb_config.estimator_names(config, _study, source="builtin")
     )
+    _shared = jb_run.methods_sharing_poses(config, _study)
+
+    if _shared and PER_CONDITION:
+
+        rule:
+            name:
+                f"poses_{_study}"
+            input:
+                f"results/datasets/{_study}/{{condition}}.parquet",
+            output:
+                f"results/poses/{_study}/{{condition}}.parquet",
+            log:
+                f"results/logs/poses/{_study}/{{condition}}.log",
+            conda:
+                "../envs/jointbench.yaml"
+            params:
+                study=_study,
+                code=code_fingerprint(jb_run.run_poses_files),
+            script:
+                "../scripts/poses.py"
+
+    elif _shared:
+
+        rule:
+            name:
+                f"poses_{_study}"
+            input:
+                expand(
+                    "results/datasets/{study}/{condition}.parquet",
+                    study=_study,
+                    condition=condition_ids(_study),
+                ),
+            output:
+                expand(POSES, study=_study, condition=condition_ids(_study)),
+            log:
+                f"results/logs/poses/{_study}.log",
+            conda:
+                "../envs/jointbench.yaml"
+            params:
+                study=_study,
+                code=code_fingerprint(jb_run.run_poses_files),
+            script:
+                "../scripts/poses.py"
 
     if PER_CONDITION:
 
@@ -17,7 +64,8 @@ for _study in STUDIES:
             name:
                 f"estimate_{_study}"
             input:
-                f"results/datasets/{_study}/{{condition}}.parquet",
+                datasets=f"results/datasets/{_study}/{{condition}}.parquet",
+                poses=shared_poses(_study, _shared, "{condition}"),
             output:
                 f"results/estimates/{_study}/{{method}}/{{condition}}.parquet",
             log:
@@ -38,11 +86,12 @@ for _study in STUDIES:
             name:
                 f"estimate_{_study}"
             input:
-                expand(
+                datasets=expand(
                     "results/datasets/{study}/{condition}.parquet",
                     study=_study,
                     condition=condition_ids(_study),
                 ),
+                poses=shared_poses(_study, _shared),
             output:
                 expand(
                     "results/estimates/{study}/{{method}}/{condition}.parquet",

@@ -6,7 +6,8 @@ with jobs.job(snakemake):
         snakemake.config,
         snakemake.params.study,
         snakemake.wildcards.method,
-        snakemake.input,
+        snakemake.input.datasets,
         snakemake.output,
         provenance=jobs.provenance(snakemake),
+        poses=snakemake.input.poses,
     )

@@ -83,7 +83,12 @@ import numpy as np
 
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
-from jointbench.estimators.twosegment import SegmentPoses, batched, two_segment_poses
+from jointbench.estimators.twosegment import (
+    POSE_MIN_FRAMES,
+    SegmentPoses,
+    batched,
+    two_segment_poses,
+)
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
@@ -192,7 +197,7 @@ def fit_analytic(
         ``diagnostics["rcond"]`` the smallest over largest eigenvalue of ``sum M'M``.
     """
     del noise_mm
-    return _analytic_result(*two_segment_poses(proximal, distal, min_frames=3))
+    return _analytic_result(*two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES))
 
 
 def _analytic_result(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
@@ -288,7 +293,7 @@ def _gauss_markov(
     proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
 ) -> JointCenterResult:
     _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
-    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
     return _gauss_markov_result(
         prox,
         dist,
@@ -482,6 +487,7 @@ def _batched_gauss_markov(frame0: bool):
             return [error] * len(proximal)
         return run(proximal, distal, poses=poses, **options)
 
+    checked.pose_segments = run.pose_segments
     return checked
 
 

@@ -52,14 +52,22 @@ from jointbench.numerics.poses import rigid_poses
 from jointbench.numerics.rank import negligible
 
 __all__ = [
+    "POSE_MIN_FRAMES",
     "SegmentPoses",
     "fit_sara",
     "fit_sara_two_segment",
     "fit_score",
     "fit_score_center",
+    "pose_segments",
     "segment_poses",
+    "stored_segment_poses",
+    "trial_poses",
     "two_segment_poses",
 ]
+
+#: Fewest frames a pose-based method accepts: every one of them needs the same, so their
+#: poses can be fitted once and shared.
+POSE_MIN_FRAMES = 3
 
 
 @dataclass(frozen=True)
@@ -96,13 +104,26 @@ def segment_poses(markers: np.ndarray, *, name: str) -> SegmentPoses:
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
     fitted = body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
+    residual_ss = float(np.sum((markers - fitted) ** 2))
+    return stored_segment_poses(markers, rotation, translation, body, residual_ss)
+
+
+def stored_segment_poses(
+    markers: np.ndarray,
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    body: np.ndarray,
+    residual_ss: float,
+) -> SegmentPoses:
+    """A segment's poses rebuilt from what a pose fit stored (see :class:`SegmentPoses` for the
+    shapes), with the markers they were fitted to."""
     n_frames, n_markers, _ = markers.shape
     return SegmentPoses(
         markers=markers,
         rotation=rotation,
         translation=translation,
         body=body,
-        residual_ss=float(np.sum((markers - fitted) ** 2)),
+        residual_ss=float(residual_ss),
         dof=3 * (n_markers - 2) * (n_frames - 1),
     )
 
@@ -256,7 +277,7 @@ def fit_score(
         ``rcond`` (smallest over largest eigenvalue of the normal matrix).
     """
     del noise_mm
-    return _score_joint(*two_segment_poses(proximal, distal, min_frames=3))
+    return _score_joint(*two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES))
 
 
 def _score_joint(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
@@ -282,7 +303,7 @@ def fit_score_center(markers: np.ndarray) -> CenterResult:
     stacked system is ``[I, -R2] [c1; c2] = t2``; the centre ``c1`` is in the reference frame.
     ``cost`` is ``sum_t |c1 - R2 c2 - t2|^2`` [mm^2]; ``radii`` is ``None``.
     """
-    markers = check_markers(markers, min_frames=3, min_markers=3)
+    markers = check_markers(markers, min_frames=POSE_MIN_FRAMES, min_markers=3)
     return _score_center(segment_poses(markers, name="markers"))
 
 
@@ -350,7 +371,7 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
     normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
     """
-    markers = check_markers(markers, min_frames=3, min_markers=3)
+    markers = check_markers(markers, min_frames=POSE_MIN_FRAMES, min_markers=3)
     return _sara(segment_poses(markers, name="markers"))
 
 
@@ -379,7 +400,7 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
     distances from the axis ``(p1, n1)`` in the proximal frame [mm]. ``diagnostics`` carries each
     frame's version and ``ratio`` (see :func:`fit_sara`).
     """
-    prox, dist = two_segment_poses(proximal, distal, min_frames=3)
+    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
     n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=0))
     direction = r1[0] @ n1 + r2[0] @ n2
@@ -416,10 +437,17 @@ def batched(
 
     def run(*segments: np.ndarray, poses=None, **options) -> list[Outcome | ValueError]:
         if poses is None:
-            poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+            poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
         return each_trial(poses, lambda p: finish(*(p[name] for name in names), **options))
 
+    run.pose_segments = names
     return run
+
+
+def pose_segments(fit: Callable) -> tuple[str, ...] | None:
+    """The segments whose poses (from :func:`trial_poses`) the ``batched`` form of ``fit``
+    accepts as ``poses=``, or ``None`` when it is not pose-based."""
+    return getattr(getattr(fit, "batched", None), "pose_segments", None)
 
 
 def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:

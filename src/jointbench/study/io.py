@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import inspect
 import json
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -22,23 +22,34 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from jointbench.estimators.twosegment import SegmentPoses, stored_segment_poses
 from jointbench.simulate import Trials
 
 __all__ = [
     "iter_dataset",
     "read_dataset",
     "read_metadata",
+    "read_poses",
     "read_provenance",
     "read_table",
     "read_trial_numbers",
     "write_dataset",
     "write_dataset_blocks",
+    "write_poses_blocks",
     "write_table",
 ]
 
 _META_KEY = b"jointbench"
 _PROVENANCE_KEY = b"jointbench.provenance"
+_POSES_KEY = b"jointbench.poses"
+# Per segment, the arrays a pose fit stores per trial, by the shape of one of them.
+_POSE_ARRAYS = {
+    "rotation": lambda n_frames, n_markers: (n_frames, 3, 3),
+    "translation": lambda n_frames, n_markers: (n_frames, 3),
+    "body": lambda n_frames, n_markers: (n_markers, 3),
+}
 _INDEX = ("trial", "frame", "marker")
+_DATASET_COLUMNS = ("segment", *_INDEX, "x", "y", "z")
 # Marker coordinates per block of trials: large enough that per-block overheads vanish, small
 # enough that a block and the estimators' temporaries stay far below a job's memory.
 BLOCK_BYTES = 32 * 2**20
@@ -217,9 +228,11 @@ def _shapes(path: str | Path, metadata: Mapping) -> dict[str, tuple[int, ...]]:
     return shapes
 
 
-def _read_rows(dataset: pq.ParquetFile, first_row: int, n_rows: int) -> pa.Table:
-    """Rows ``first_row .. first_row + n_rows`` of a parquet file, reading only the row groups
-    that hold them."""
+def _read_rows(
+    dataset: pq.ParquetFile, first_row: int, n_rows: int, columns: Sequence[str]
+) -> pa.Table:
+    """Rows ``first_row .. first_row + n_rows`` of a parquet file's ``columns``, reading only
+    the row groups that hold them."""
     meta = dataset.metadata
     groups, offsets, start = [], [], 0
     for index in range(meta.num_row_groups):
@@ -228,7 +241,7 @@ def _read_rows(dataset: pq.ParquetFile, first_row: int, n_rows: int) -> pa.Table
             groups.append(index)
             offsets.append(start)
         start += size
-    table = dataset.read_row_groups(groups, columns=["segment", *_INDEX, "x", "y", "z"])
+    table = dataset.read_row_groups(groups, columns=list(columns))
     return table.slice(first_row - offsets[0], n_rows)
 
 
@@ -239,7 +252,9 @@ def _block(path, dataset, shapes, offsets, first: int, count: int) -> dict[str, 
     for name, shape in shapes.items():
         _, n_frames, n_markers, _ = shape
         per_trial = n_frames * n_markers
-        rows = _read_rows(dataset, offsets[name] + first * per_trial, count * per_trial)
+        rows = _read_rows(
+            dataset, offsets[name] + first * per_trial, count * per_trial, _DATASET_COLUMNS
+        )
         expected = np.meshgrid(
             np.arange(first, first + count),
             np.arange(n_frames),
@@ -347,3 +362,131 @@ def read_provenance(path: str | Path) -> dict:
     if _META_KEY in metadata:
         return json.loads(metadata[_META_KEY]).get("provenance", {})
     return {}
+
+
+TrialPoses = dict[str, SegmentPoses] | ValueError
+
+
+def _poses_block(
+    outcomes: Sequence[TrialPoses], first_trial: int, shapes: Mapping[str, tuple[int, int]]
+) -> pa.Table:
+    """Rows of trials ``first_trial, ...``: the trial, its error (null when fitted) and, per
+    segment, its stored arrays (NaN for a trial that failed) and residual sum of squares."""
+    columns: dict[str, pa.Array] = {
+        "trial": pa.array(np.arange(first_trial, first_trial + len(outcomes))),
+        "error": pa.array(
+            [str(o) if isinstance(o, ValueError) else None for o in outcomes], pa.string()
+        ),
+    }
+    for name, (n_frames, n_markers) in shapes.items():
+        fitted = [None if isinstance(o, ValueError) else o[name] for o in outcomes]
+        for field, shape_of in _POSE_ARRAYS.items():
+            shape = shape_of(n_frames, n_markers)
+            values = np.full((len(outcomes), *shape), np.nan)
+            for trial, poses in enumerate(fitted):
+                if poses is not None:
+                    values[trial] = getattr(poses, field)
+            size = int(np.prod(shape))
+            columns[f"{name}/{field}"] = pa.FixedSizeListArray.from_arrays(values.ravel(), size)
+        columns[f"{name}/residual_ss"] = pa.array(
+            [np.nan if poses is None else poses.residual_ss for poses in fitted], pa.float64()
+        )
+    return pa.table(columns)
+
+
+def write_poses_blocks(
+    path: str | Path,
+    blocks: Iterable[Sequence[TrialPoses]],
+    *,
+    shapes: Mapping[str, tuple[int, ...]],
+    provenance: Mapping[str, object] | None = None,
+) -> None:
+    """Write the pose fits of a condition's trials (from
+    :func:`jointbench.estimators.twosegment.trial_poses`), given as consecutive ``blocks``, to
+    ``path``: one row per trial, one row group per block, so they are read back a block at a
+    time (:func:`read_poses`). ``shapes`` are the dataset's, ``(n_trials, n_frames,
+    n_markers, 3)`` per segment fitted. Values are stored exactly (float64)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    sizes = {name: (int(shape[1]), int(shape[2])) for name, shape in shapes.items()}
+    metadata = {
+        _POSES_KEY: json.dumps({"shapes": {k: list(v) for k, v in shapes.items()}}),
+        _PROVENANCE_KEY: json.dumps(dict(provenance or {})),
+    }
+    writer, first_trial = None, 0
+    try:
+        for outcomes in blocks:
+            table = _poses_block(outcomes, first_trial, sizes)
+            table = table.replace_schema_metadata(metadata)
+            if writer is None:
+                writer = pq.ParquetWriter(path, table.schema)
+            writer.write_table(table)
+            first_trial += len(outcomes)
+    finally:
+        if writer is not None:
+            writer.close()
+
+
+def _poses_shapes(path: str | Path) -> dict[str, tuple[int, ...]]:
+    metadata = pq.read_schema(path).metadata or {}
+    if _POSES_KEY not in metadata:
+        raise ValueError(f"{path} is not a jointbench poses file (no 'jointbench.poses' metadata)")
+    shapes = json.loads(metadata[_POSES_KEY])["shapes"]
+    return {name: tuple(shape) for name, shape in shapes.items()}
+
+
+@_names_unreadable_file
+def read_poses(
+    path: str | Path, first_trial: int, segments: Mapping[str, np.ndarray]
+) -> list[TrialPoses]:
+    """The stored pose fits of trials ``first_trial ..`` for a block of a dataset's
+    ``segments`` (name -> markers ``(count, n_frames, n_markers, 3)`` [mm]): per trial, each
+    segment's :class:`SegmentPoses`, or the ``ValueError`` its fit raised.
+
+    ``ValueError`` naming the file when it holds other segments, shapes or trials than the
+    block's (a poses file of another dataset).
+    """
+    shapes = _poses_shapes(path)
+    count = next(iter(segments.values())).shape[0]
+    for name, markers in segments.items():
+        if name not in shapes or tuple(shapes[name][1:]) != markers.shape[1:]:
+            raise ValueError(
+                f"{path}: holds poses of {{name: shape}} = "
+                f"{ {k: list(v) for k, v in shapes.items()} }, not of segment {name!r} shaped "
+                f"{list(markers.shape[1:])} per trial: it was written for another dataset"
+            )
+    n_trials = next(iter(shapes.values()))[0]
+    if first_trial + count > n_trials:
+        raise ValueError(
+            f"{path}: holds the poses of {n_trials} trials, not of trials "
+            f"{first_trial}..{first_trial + count - 1}"
+        )
+    stored = pq.ParquetFile(path)
+    rows = _read_rows(stored, first_trial, count, stored.schema_arrow.names)
+    trials = rows.column("trial").to_numpy()
+    if not np.array_equal(trials, np.arange(first_trial, first_trial + count)):
+        raise ValueError(f"{path}: rows are not trials {first_trial}..{first_trial + count - 1}")
+    arrays = {
+        (name, field): rows.column(f"{name}/{field}")
+        .combine_chunks()
+        .flatten()
+        .to_numpy()
+        .reshape(count, *shape_of(*markers.shape[1:3]))
+        for name, markers in segments.items()
+        for field, shape_of in _POSE_ARRAYS.items()
+    }
+    residuals = {name: rows.column(f"{name}/residual_ss").to_numpy() for name in segments}
+    errors = rows.column("error").to_pylist()
+    return [
+        ValueError(error)
+        if error is not None
+        else {
+            name: stored_segment_poses(
+                markers[trial],
+                *(arrays[name, field][trial] for field in _POSE_ARRAYS),
+                residuals[name][trial],
+            )
+            for name, markers in segments.items()
+        }
+        for trial, error in enumerate(errors)
+    ]

@@ -12,16 +12,19 @@ import numpy as np
 import pandas as pd
 
 from jointbench.estimators import registry
+from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.simulate import Trials
-from jointbench.study.config import parse_condition_id
+from jointbench.study.config import estimator_names, parse_condition_id
 from jointbench.study.diagnostics import DIAGNOSTICS
 from jointbench.study.io import (
     iter_dataset,
     read_metadata,
+    read_poses,
     read_provenance,
     read_table,
     read_trial_numbers,
     write_dataset_blocks,
+    write_poses_blocks,
     write_table,
 )
 from jointbench.study.schema import check_against_dataset, check_estimates
@@ -35,8 +38,10 @@ log = logging.getLogger(__name__)
 __all__ = [
     "collect",
     "estimate",
+    "methods_sharing_poses",
     "progress_line",
     "run_estimate_files",
+    "run_poses_files",
     "run_simulate_files",
     "simulate_condition",
     "summarise_estimates",
@@ -87,19 +92,38 @@ def _outcome(result) -> tuple[object, str, bool, int]:
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
 
-def _fit_all(fit, spec, trials: Trials, options) -> tuple[list, float] | None:
+def _fit_all(fit, spec, trials: Trials, options, poses=None) -> tuple[list, float] | None:
     """All trials at once through the estimator's ``batched`` form, if it has one.
 
     ``fit.batched(*segments, **options)`` takes each segment as ``(n_trials, ...)`` and returns
-    per trial what ``fit`` returns or the exception it raises. Returns the outcomes and the
-    batch's wall time divided by the trials, or ``None`` to fit one trial at a time.
+    per trial what ``fit`` returns or the exception it raises; a pose-based method also takes
+    the trials' fitted ``poses``. Returns the outcomes and the batch's wall time divided by the
+    trials, or ``None`` to fit one trial at a time.
     """
     batched = getattr(fit, "batched", None)
     if batched is None:
         return None
+    if poses is not None:
+        options = {**options, "poses": poses}
     start = time.perf_counter()
     outcomes = batched(*(trials.segments[name] for name in spec.segments), **options)
     return outcomes, (time.perf_counter() - start) / max(trials.n_trials, 1)
+
+
+def methods_sharing_poses(config: Mapping, study: str) -> list[str]:
+    """The study's built-in estimators that share one pose fit per trial: its pose-based ones
+    (see :func:`jointbench.estimators.twosegment.pose_segments`) when there are two or more.
+
+    Their estimate jobs read the poses that one job fitted (:func:`run_poses_files`) instead of
+    each fitting them again; a single pose-based method fits its own.
+    """
+    spec = get_study(study)
+    pose_based = [
+        method
+        for method in estimator_names(config, study, source="builtin")
+        if pose_segments(registry.get(spec.kind, method, checked=False)) == spec.segments
+    ]
+    return pose_based if len(pose_based) >= 2 else []
 
 
 def estimate(
@@ -108,18 +132,22 @@ def estimate(
     trials: Trials,
     condition: Mapping[str, object],
     options: Mapping[str, object] | None = None,
+    poses: list | None = None,
 ) -> pd.DataFrame:
     """One row per trial: condition, estimate, error, converged, iterations, seconds, status.
 
     Estimators with a ``batched`` form fit all trials in one call; their ``seconds`` is the
-    batch's wall time divided by the number of trials.
+    batch's wall time divided by the number of trials. ``poses``, the trials' pose fits (see
+    :func:`run_poses_files`), are passed to a pose-based method instead of fitting them again.
     """
     spec = get_study(study)
     # The estimator alone: simulated data are valid by construction, and the seconds column
     # (paper A Table 2) times the estimator, not the input checks a user's call goes through.
     fit = registry.get(spec.kind, method, checked=False)
+    if poses is not None and pose_segments(fit) != spec.segments:
+        raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = DIAGNOSTICS.get((study, method))
-    batch = _fit_all(fit, spec, trials, options or {})
+    batch = _fit_all(fit, spec, trials, options or {}, poses)
     fitted = []
     for trial in range(trials.n_trials):
         if batch is None:
@@ -175,6 +203,46 @@ def run_simulate_files(
         )
 
 
+def _same_condition(paths: Sequence[str], outputs: Sequence[str], what: str) -> list[str]:
+    """The file of ``paths`` named like each output (its condition), in the outputs' order."""
+    by_condition = {Path(path).stem: path for path in paths}
+    missing = [Path(output).stem for output in outputs if Path(output).stem not in by_condition]
+    if missing:
+        raise ValueError(f"no {what} file of condition {missing[0]!r} among {list(paths)}")
+    return [by_condition[Path(output).stem] for output in outputs]
+
+
+def run_poses_files(
+    study: str,
+    datasets: Sequence[str],
+    outputs: Sequence[str],
+    provenance: Mapping[str, object] | None = None,
+) -> None:
+    """Fit the poses of every trial of each dataset file once (paper C §5, see
+    :func:`jointbench.estimators.twosegment.trial_poses`), writing the poses file of the same
+    condition for the pose-based estimators to share."""
+    spec = get_study(study)
+    start = time.perf_counter()
+    paths = _same_condition(datasets, outputs, "dataset")
+    for done, (path, output) in enumerate(zip(paths, outputs, strict=True), start=1):
+        shapes = read_metadata(path)["shapes"]
+        blocks = (
+            trial_poses(
+                {name: block.segments[name] for name in spec.segments},
+                min_frames=POSE_MIN_FRAMES,
+            )
+            for _, block in iter_dataset(path)
+        )
+        write_poses_blocks(
+            output,
+            blocks,
+            shapes={name: shapes[name] for name in spec.segments},
+            provenance=provenance,
+        )
+        trials = shapes[spec.segments[0]][0]
+        log.info(progress_line(f"{study} poses", done, len(outputs), start, trials))
+
+
 def run_estimate_files(
     config: Mapping,
     study: str,
@@ -182,22 +250,28 @@ def run_estimate_files(
     datasets: Sequence[str],
     outputs: Sequence[str],
     provenance: Mapping[str, object] | None = None,
+    poses: Sequence[str] | None = None,
 ) -> None:
     """Run one built-in estimator over each dataset file, writing the estimates file of the
-    same condition."""
+    same condition; a pose-based method given the conditions' ``poses`` files (from
+    :func:`run_poses_files`) uses the poses stored there."""
     options = config["studies"][study].get("options", {}).get(method, {})
-    by_condition = {Path(path).stem: path for path in datasets}
+    segments = get_study(study).segments
+    paths = _same_condition(datasets, outputs, "dataset")
+    poses_paths = _same_condition(poses, outputs, "poses") if poses else [None] * len(outputs)
     start = time.perf_counter()
-    for done, output in enumerate(outputs, start=1):
-        path = by_condition[Path(output).stem]
+    for done, (path, poses_path, output) in enumerate(
+        zip(paths, poses_paths, outputs, strict=True), start=1
+    ):
         condition = read_metadata(path)["condition"]
         # A block of trials at a time, so memory does not grow with the number of trials.
-        frames = [
-            estimate(study, method, block, condition, options).assign(
-                trial=lambda frame, first=first: frame["trial"] + first
-            )
-            for first, block in iter_dataset(path)
-        ]
+        frames = []
+        for first, block in iter_dataset(path):
+            stored = None
+            if poses_path is not None:
+                stored = read_poses(poses_path, first, {s: block.segments[s] for s in segments})
+            frame = estimate(study, method, block, condition, options, poses=stored)
+            frames.append(frame.assign(trial=frame["trial"] + first))
         table = pd.concat(frames, ignore_index=True)
         write_table(table, output, provenance)
         log.info(progress_line(f"{study} {method}", done, len(outputs), start, len(table)))

@@ -1,0 +1,10 @@
+from jointbench import jobs
+from jointbench.study.run import run_poses_files
+
+with jobs.job(snakemake):
+    run_poses_files(
+        snakemake.params.study,
+        snakemake.input,
+        snakemake.output,
+        provenance=jobs.provenance(snakemake),
+    )
