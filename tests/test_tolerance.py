@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from scipy import stats
+from scipy import special, stats
 
 from jointbench.study.config import MAX_TRIALS
+from jointbench.study.scoring import CHI2_3DOF_95
 from jointbench.study.tolerance import binomial_interval, describe, evaluate, is_compared
 
 
@@ -121,3 +122,8 @@ def test_a_measurement_of_the_wrong_length_is_refused():
         evaluate({"binomial95": {"of_n": 30}}, [30, 16, 9], {"count": [], "trials": []})
     with pytest.raises(ValueError, match="lacks part"):
         evaluate({"greater_than": [25, 60]}, None, [30.0])
+
+
+def test_the_written_out_chi_square_quantile_is_scipys_to_the_last_bit():
+    assert CHI2_3DOF_95 == float(special.chdtri(3, 0.05))
+    assert CHI2_3DOF_95 == pytest.approx(stats.chi2(3).ppf(0.95), rel=1e-15)

@@ -9,7 +9,6 @@ from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
 
-import jsonschema
 import yaml
 
 from jointbench.estimators import registry
@@ -43,6 +42,9 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
     match the JSON schema (YAML) at ``schema_path``."""
     if isinstance(schema_path, str):
         schema_path = Path(schema_path)
+    # Imported here: only the workflow's start checks the config, not each job.
+    import jsonschema
+
     schema = yaml.safe_load(schema_path.read_text())
     try:
         jsonschema.validate(dict(document), schema)
