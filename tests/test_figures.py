@@ -11,7 +11,7 @@ import pytest
 from mpl_toolkits.mplot3d.art3d import Line3D, Poly3DCollection
 
 from jointbench.figures import extended, paper_a, paper_b, paper_c
-from jointbench.figures.common import equal_3d_limits, median_trial
+from jointbench.figures.common import SAVE_DPI, equal_3d_limits, median_trial, save_figure
 from jointbench.study.tables import markdown_table
 
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
@@ -417,3 +417,32 @@ def test_3d_axes_get_equal_scales():
     spans = [np.ptp(ax.get_xlim()), np.ptp(ax.get_ylim()), np.ptp(ax.get_zlim())]
     plt.close(fig)
     assert spans == pytest.approx([spans[0]] * 3)
+
+
+def _labelled_figure():
+    fig = plt.figure(figsize=(4, 3), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot([0, 1], [0, 1])
+    ax.set_title("a title that sets the crop")
+    ax.set_xlabel("x label")
+    return fig
+
+
+def test_figures_are_laid_out_once_and_cropped_as_a_tight_save_crops(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    reference = tmp_path / "tight.png"
+    _labelled_figure().savefig(reference, dpi=SAVE_DPI, bbox_inches="tight")
+    draws = []
+    original = Figure.draw
+    monkeypatch.setattr(
+        Figure, "draw", lambda self, renderer: draws.append(1) or original(self, renderer)
+    )
+    outputs = {"png": str(tmp_path / "f.png"), "pdf": str(tmp_path / "f.pdf")}
+    save_figure(_labelled_figure(), outputs)
+    # One layout pass, then one drawing per format (a tight save draws every format twice).
+    assert len(draws) == 3
+    with Image.open(reference) as tight, Image.open(outputs["png"]) as ours:
+        assert abs(ours.size[0] - tight.size[0]) <= 1 and abs(ours.size[1] - tight.size[1]) <= 1
+    assert (tmp_path / "f.pdf").read_bytes().startswith(b"%PDF")

@@ -84,11 +84,29 @@ def median_trial(errors: pd.Series) -> int:
     return int(ordered[(len(ordered) - 1) // 2][1])
 
 
+#: Resolution of the PNG files [dots per inch].
+SAVE_DPI = 150
+# Margin around the figure's drawn content [inches], matplotlib's default for a tight bounding box.
+_PAD_INCHES = 0.1
+
+
 def save_figure(fig: Figure, outputs: Mapping[str, str] | object) -> None:
-    """Save to every path given (``png`` and ``pdf`` keys or attributes) and close the figure."""
+    """Save to every path given (``png`` and ``pdf`` keys or attributes), cropped to what is
+    drawn, and close the figure.
+
+    The layout and the crop box are computed once, on the PNG's resolution, and every format is
+    saved with them: a ``bbox_inches="tight"`` save lays the figure out and draws it an extra
+    time per format, which was most of a figure job's CPU.
+    """
+    fig.set_dpi(SAVE_DPI)
+    fig.draw_without_rendering()
+    crop = fig.get_tightbbox().padded(_PAD_INCHES)
+    # No engine at all (not "none", a placeholder): a figure with one is laid out again, and
+    # drawn once more, before each save.
+    fig.set_layout_engine(None)
     for path in output_paths(outputs, ("png", "pdf")):
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=150, bbox_inches="tight", metadata=_stable_metadata(path))
+        fig.savefig(path, dpi=SAVE_DPI, bbox_inches=crop, metadata=_stable_metadata(path))
     pyplot().close(fig)
 
 
