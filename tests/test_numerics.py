@@ -149,3 +149,8 @@ def test_small_matrix_helpers_match_numpy():
     expected = q @ spd[0] @ np.swapaxes(q, 1, 2)
     np.testing.assert_allclose(small.rotated3(q, spd[0]), expected, rtol=1e-13, atol=1e-13)
     assert not np.isfinite(small.inverse3(np.zeros((3, 3)))).any()
+    # One matrix per leading index (per trial): each trial's frames with its own matrix.
+    per_trial = small.rotated3(q.reshape(4, 50, 3, 3), spd[:4])
+    for trial in range(4):
+        alone = small.rotated3(q[50 * trial : 50 * (trial + 1)], spd[trial])
+        np.testing.assert_array_equal(per_trial[trial], alone)

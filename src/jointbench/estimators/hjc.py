@@ -79,6 +79,8 @@ at Nt = 4) is an honest answer, not an error.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from jointbench.estimators.registry import register
@@ -87,6 +89,7 @@ from jointbench.estimators.twosegment import (
     POSE_MIN_FRAMES,
     SegmentPoses,
     batched,
+    batched_all,
     two_segment_poses,
 )
 from jointbench.geometry import skew
@@ -142,8 +145,10 @@ def point_covariance(point: np.ndarray, body: np.ndarray) -> np.ndarray:
 
 
 def _point_covariance(point, mean, inertia_inv, n) -> np.ndarray:
+    """``A(c) / s^2`` for points ``(..., 3)`` [mm] of segments with lever factors ``mean``
+    ``(..., 3)``, ``inertia_inv`` ``(..., 3, 3)`` and ``n`` markers: ``(..., 3, 3)``."""
     lever = skew(np.asarray(point, dtype=float) - mean)
-    return lever @ inertia_inv @ lever.T + np.eye(3) / n
+    return lever @ inertia_inv @ np.swapaxes(lever, -1, -2) + np.eye(3) / n
 
 
 def constraint_covariance(
@@ -220,134 +225,309 @@ def _weights(r0, r1, a0, a1) -> np.ndarray:
     return inverse3(constraint_covariance(r0, a0, r1, a1))
 
 
-def _iterate_single(m, y, r0, r1, lever0, lever1, start, max_iterations, tol_mm):
-    """Paper C's iteration: returns ``c``, information (unit variance), chi^2 (unit), k, step."""
-    center = start
-    step = np.inf
-    iteration = 0
-    while iteration < max_iterations:
-        iteration += 1
+# Trials per Gauss–Markov batch: about this many frames in all, so that a batch's
+# (trials, frames, 3, 3) temporaries stay in cache and memory does not grow with the trials.
+_CHUNK_FRAMES = 8192
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    """One trial's Gauss–Markov system before iterating (frames ``t >= 1``)."""
+
+    m: np.ndarray  # (N-1, 3, 3)
+    y: np.ndarray  # (N-1, 3) [mm]
+    r0: np.ndarray  # (N-1, 3, 3)
+    r1: np.ndarray  # (N-1, 3, 3)
+    lever0: tuple[np.ndarray, np.ndarray, int]
+    lever1: tuple[np.ndarray, np.ndarray, int]
+    analytic_center: np.ndarray  # (3,) [mm]
+    variance: float  # s^2 [mm^2]
+    diagnostics: dict
+    proximal_body: np.ndarray  # (n, 3) [mm]
+
+
+def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> _Prepared:
+    """The analytic start, the noise variance and the lever factors of one trial; the analytic
+    step's ``ValueError`` on degenerate motion."""
+    m, y = _relative_system(prox, dist)
+    analytic_center, rcond = _analytic(m, y, prox.rotation.shape[0], method)
+    variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
+    return _Prepared(
+        m=m,
+        y=y,
+        r0=prox.rotation[1:],
+        r1=dist.rotation[1:],
+        lever0=_lever_factors(prox.body),
+        lever1=_lever_factors(dist.body),
+        analytic_center=analytic_center,
+        variance=variance,
+        diagnostics={
+            "noise_mm": noise_used,
+            "noise_source": noise_source,
+            "analytic_center": analytic_center.tolist(),
+            "rcond": rcond,
+        },
+        proximal_body=prox.body,
+    )
+
+
+@dataclass(frozen=True)
+class _Stacked:
+    """The systems of trials with the same frames, stacked on a leading trial axis."""
+
+    m: np.ndarray  # (T, N-1, 3, 3)
+    y: np.ndarray  # (T, N-1, 3)
+    r0: np.ndarray
+    r1: np.ndarray
+    levers: tuple[tuple[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray, int]]
+
+    @classmethod
+    def of(cls, trials: list[_Prepared]) -> _Stacked:
+        def lever(segment: str):
+            factors = [getattr(trial, segment) for trial in trials]
+            return (
+                np.stack([f[0] for f in factors]),
+                np.stack([f[1] for f in factors]),
+                factors[0][2],
+            )
+
+        return cls(
+            m=np.stack([t.m for t in trials]),
+            y=np.stack([t.y for t in trials]),
+            r0=np.stack([t.r0 for t in trials]),
+            r1=np.stack([t.r1 for t in trials]),
+            levers=(lever("lever0"), lever("lever1")),
+        )
+
+    def point_covariances(self, trials: np.ndarray, c0: np.ndarray, c1: np.ndarray):
+        """``A_0(c0)``, ``A_1(c1)`` per unit variance of ``trials`` ``(t,)``: ``(t, 3, 3)``."""
+        (mean0, inverse0, n0), (mean1, inverse1, n1) = self.levers
+        return (
+            _point_covariance(c0, mean0[trials], inverse0[trials], n0),
+            _point_covariance(c1, mean1[trials], inverse1[trials], n1),
+        )
+
+
+def _rows(stack: np.ndarray) -> np.ndarray:
+    """Per-frame blocks ``(t, F, 3, k)`` as one ``(t, 3 F, k)`` matrix per trial."""
+    t, n_frames, _, k = stack.shape
+    return stack.reshape(t, 3 * n_frames, k)
+
+
+def _summed_products(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``sum_f a_f' b_f`` for ``(t, F, 3, k)`` and ``(t, F, 3, l)``: ``(t, k, l)``, one matrix
+    product per trial."""
+    return np.swapaxes(_rows(a), -1, -2) @ _rows(b)
+
+
+def _applied(a: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``a_f x`` for ``(t, F, 3, k)`` and ``(t, k)``: ``(t, F, 3)``."""
+    return (_rows(a) @ x[..., None]).reshape(a.shape[:3])
+
+
+def _projected(a: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """``sum_f a_f' r_f`` for ``(t, F, 3, k)`` and ``(t, F, 3)``: ``(t, k)``."""
+    return (np.swapaxes(_rows(a), -1, -2) @ r.reshape(r.shape[0], -1, 1))[..., 0]
+
+
+def _solve(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """``A x = b`` for ``(t, k, k)`` and ``(t, k)``."""
+    return np.linalg.solve(matrices, vectors[..., None])[..., 0]
+
+
+def _update_single(system: _Stacked):
+    """One re-linearisation of paper C's model for ``trials`` at ``centers`` ``(t, 3)``."""
+
+    def update(trials: np.ndarray, centers: np.ndarray):
+        m, y = system.m[trials], system.y[trials]
         weights = _weights(
-            r0, r1, _point_covariance(center, *lever0), _point_covariance(center, *lever1)
+            system.r0[trials],
+            system.r1[trials],
+            *system.point_covariances(trials, centers, centers),
         )
         weighted = weights @ m
-        information = np.einsum("fki,fkj->ij", m, weighted)
+        information = _summed_products(m, weighted)
         # Solved for the correction from the residuals, which keeps full precision when the
         # residuals are tiny (noise-free data) however large the coordinates.
-        residual = y - np.einsum("fij,j->fi", m, center)
-        correction = np.linalg.solve(information, np.einsum("fki,fk->i", weighted, residual))
-        step = float(np.linalg.norm(correction))
-        center = center + correction
-        if step <= tol_mm:
-            break
-    residual = y - np.einsum("fij,j->fi", m, center)
-    chi2 = float(np.einsum("fi,fij,fj->", residual, weights, residual))
-    return center, information, chi2, iteration, step
+        residual = y - _applied(m, centers)
+        correction = _solve(information, _projected(weighted, residual))
+        return correction, np.linalg.norm(correction, axis=1), information, {"weights": weights}
+
+    return update
 
 
-def _iterate_frame0(y, r0, r1, lever0, lever1, start, max_iterations, tol_mm):
-    """The frame-0 extension: unknowns ``(c, c0, c1)``; same returns (information 9x9)."""
-    design = np.concatenate([r0, -r1], axis=2)  # (N-1, 3, 6): [R0, -R1] [c0; c1]
-    state = np.concatenate([start, start, start])
-    gradient = np.empty(9)
-    step = np.inf
-    iteration = 0
-    while iteration < max_iterations:
-        iteration += 1
-        a0 = _point_covariance(state[3:6], *lever0)
-        a1 = _point_covariance(state[6:], *lever1)
-        weights = _weights(r0, r1, a0, a1)
-        weighted = weights @ design
+def _update_frame0(system: _Stacked):
+    """One re-linearisation of the frame-0 model for ``trials`` at ``states`` ``(t, 9)``:
+    unknowns ``(c, c0, c1)``."""
+    design = np.concatenate([system.r0, -system.r1], axis=-1)  # [R0, -R1] [c0; c1]
+
+    def update(trials: np.ndarray, states: np.ndarray):
+        a0, a1 = system.point_covariances(trials, states[:, 3:6], states[:, 6:])
+        weights = _weights(system.r0[trials], system.r1[trials], a0, a1)
+        rows = design[trials]
+        weighted = weights @ rows
         p0, p1 = np.linalg.inv(a0), np.linalg.inv(a1)
-        information = np.zeros((9, 9))
-        information[3:, 3:] = np.einsum("fki,fkj->ij", design, weighted)
+        information = np.zeros((len(trials), 9, 9))
+        information[:, 3:, 3:] = _summed_products(rows, weighted)
         # Pseudo-measurements c0 - c = 0 (cov A0) and c1 - c = 0 (cov A1): the frame-0 placement.
-        information[:3, :3] = p0 + p1
-        information[:3, 3:6] = information[3:6, :3] = -p0
-        information[:3, 6:] = information[6:, :3] = -p1
-        information[3:6, 3:6] += p0
-        information[6:, 6:] += p1
-        # Correction from the residuals (see _iterate_single).
-        residual = y - np.einsum("fij,j->fi", design, state[3:])
-        offsets = (state[3:6] - state[:3], state[6:] - state[:3])
-        gradient[:3] = p0 @ offsets[0] + p1 @ offsets[1]
-        gradient[3:] = np.einsum("fki,fk->i", weighted, residual)
-        gradient[3:6] -= p0 @ offsets[0]
-        gradient[6:] -= p1 @ offsets[1]
-        correction = np.linalg.solve(information, gradient)
-        step = float(np.max(np.linalg.norm(correction.reshape(3, 3), axis=1)))
-        state = state + correction
-        if step <= tol_mm:
+        information[:, :3, :3] = p0 + p1
+        information[:, :3, 3:6] = information[:, 3:6, :3] = -p0
+        information[:, :3, 6:] = information[:, 6:, :3] = -p1
+        information[:, 3:6, 3:6] += p0
+        information[:, 6:, 6:] += p1
+        # Correction from the residuals (see _update_single).
+        residual = system.y[trials] - _applied(rows, states[:, 3:])
+        pull0 = (p0 @ (states[:, 3:6] - states[:, :3])[..., None])[..., 0]
+        pull1 = (p1 @ (states[:, 6:] - states[:, :3])[..., None])[..., 0]
+        gradient = np.empty((len(trials), 9))
+        gradient[:, :3] = pull0 + pull1
+        gradient[:, 3:] = _projected(weighted, residual)
+        gradient[:, 3:6] -= pull0
+        gradient[:, 6:] -= pull1
+        correction = _solve(information, gradient)
+        step = np.max(np.linalg.norm(correction.reshape(-1, 3, 3), axis=2), axis=1)
+        return correction, step, information, {"weights": weights, "p0": p0, "p1": p1}
+
+    return update
+
+
+@dataclass
+class _Iterated:
+    """Where paper C's re-linearisation left each trial of a stack."""
+
+    state: np.ndarray  # (T, k): c, or (c, c0, c1)
+    information: np.ndarray  # (T, k, k), of the last iteration, unit variance
+    kept: dict[str, np.ndarray]  # the last iteration's weights (and p0, p1)
+    iterations: np.ndarray  # (T,)
+    step: np.ndarray  # (T,) [mm], the last correction
+    errors: dict[int, str]  # trial -> LinAlgError text
+
+
+def _relinearise(update, state: np.ndarray, max_iterations: int, tol_mm: float) -> _Iterated:
+    """Paper C's re-linearisation for stacked trials in lockstep, from ``state`` ``(T, k)``.
+
+    Each trial stops once its own correction is at most ``tol_mm`` (or at ``max_iterations``),
+    so its answer does not depend on the others'. A singular system (``LinAlgError``) among
+    the trials of an iteration is found by redoing that iteration one trial at a time; that
+    trial stops with its error, the others go on.
+    """
+    n_trials, k = state.shape
+    done = _Iterated(
+        state=state.copy(),
+        information=np.full((n_trials, k, k), np.nan),
+        kept={},
+        iterations=np.zeros(n_trials, dtype=int),
+        step=np.full(n_trials, np.inf),
+        errors={},
+    )
+    active = np.arange(n_trials)
+    for iteration in range(1, max_iterations + 1):
+        if active.size == 0:
             break
-    center, c0, c1 = state[:3], state[3:6], state[6:]
-    residual = y - np.einsum("fij,j->fi", design, state[3:])
-    chi2 = float(
-        np.einsum("fi,fij,fj->", residual, weights, residual)
-        + (c0 - center) @ p0 @ (c0 - center)
-        + (c1 - center) @ p1 @ (c1 - center)
-    )
-    return state, information, chi2, iteration, step
+        done.iterations[active] = iteration
+        try:
+            parts = [(active, update(active, done.state[active]))]
+        except np.linalg.LinAlgError:
+            parts = []
+            for trial in active:
+                try:
+                    parts.append(
+                        (np.array([trial]), update(np.array([trial]), done.state[[trial]]))
+                    )
+                except np.linalg.LinAlgError as error:
+                    done.errors[int(trial)] = str(error)
+        for trials, (correction, step, information, kept) in parts:
+            done.state[trials] += correction
+            done.step[trials] = step
+            done.information[trials] = information
+            for name, value in kept.items():
+                if name not in done.kept:
+                    done.kept[name] = np.full((n_trials, *value.shape[1:]), np.nan)
+                done.kept[name][trials] = value
+        still = np.concatenate([trials[step > tol_mm] for trials, (_, step, _, _) in parts] or [[]])
+        active = np.sort(still.astype(int))
+    return done
 
 
-def _gauss_markov(
-    proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
-) -> JointCenterResult:
-    _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
-    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
-    return _gauss_markov_result(
-        prox,
-        dist,
-        noise_mm=noise_mm,
-        frame0=frame0,
-        max_iterations=max_iterations,
-        tol_mm=tol_mm,
-    )
+def _chi2(system: _Stacked, done: _Iterated, frame0: bool) -> np.ndarray:
+    """``sum_t r_t' W_t^-1 r_t`` at the final state (plus the frame-0 terms), unit variance."""
+    state = np.nan_to_num(done.state)
+    weights = np.nan_to_num(done.kept.get("weights", np.zeros_like(system.m)))
+    if not frame0:
+        residual = system.y - _applied(system.m, state)
+        return np.einsum("tfi,tfij,tfj->t", residual, weights, residual)
+    design = np.concatenate([system.r0, -system.r1], axis=-1)
+    residual = system.y - _applied(design, state[:, 3:])
+    chi2 = np.einsum("tfi,tfij,tfj->t", residual, weights, residual)
+    for segment, unknowns in (("p0", slice(3, 6)), ("p1", slice(6, 9))):
+        offset = state[:, unknowns] - state[:, :3]
+        precision = np.nan_to_num(done.kept[segment])
+        chi2 = chi2 + np.einsum("ti,tij,tj->t", offset, precision, offset)
+    return chi2
 
 
-def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
-    _as_noise(noise_mm)
-    if int(max_iterations) < 1 or not tol_mm >= 0:
-        raise ValueError("max_iterations must be >= 1 and tol_mm >= 0")
+def _iterated_stack(trials: list[_Prepared], *, frame0: bool, max_iterations, tol_mm):
+    """Iterate a stack of trials with the same frames; returns the iteration and the chi^2."""
+    system = _Stacked.of(trials)
+    start = np.stack([trial.analytic_center for trial in trials])
+    if frame0:
+        done = _relinearise(_update_frame0(system), np.tile(start, 3), int(max_iterations), tol_mm)
+    else:
+        done = _relinearise(_update_single(system), start, int(max_iterations), tol_mm)
+    return done, _chi2(system, done, frame0)
 
 
-def _gauss_markov_result(
-    prox: SegmentPoses,
-    dist: SegmentPoses,
+def _gauss_markov_results(
+    pairs: list[tuple[SegmentPoses, SegmentPoses] | ValueError],
     *,
     noise_mm: float | None,
     frame0: bool,
     max_iterations: int,
     tol_mm: float,
-) -> JointCenterResult:
+) -> list[JointCenterResult | ValueError]:
+    """Paper C's Gauss–Markov fit of every trial's ``(proximal, distal)`` poses (a trial's
+    ``ValueError`` is kept as its outcome). Trials with the same frames iterate together, each
+    to its own convergence, so a trial's answer does not depend on its batch."""
     method = "gauss-markov-frame0" if frame0 else "gauss-markov"
     noise_mm = _as_noise(noise_mm)
-    n_frames = prox.rotation.shape[0]
-    m, y = _relative_system(prox, dist)
-    analytic_center, rcond = _analytic(m, y, n_frames, method)
-    variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
-    lever0, lever1 = _lever_factors(prox.body), _lever_factors(dist.body)
-    r0, r1 = prox.rotation[1:], dist.rotation[1:]
-    diagnostics = {
-        "noise_mm": noise_used,
-        "noise_source": noise_source,
-        "analytic_center": analytic_center.tolist(),
-        "rcond": rcond,
-    }
+    outcomes: list = []
+    for pair in pairs:
+        try:
+            outcomes.append(
+                pair if isinstance(pair, ValueError) else _prepared(*pair, noise_mm, method)
+            )
+        except ValueError as error:
+            outcomes.append(error)
+    by_frames: dict[int, list[int]] = {}
+    for index, outcome in enumerate(outcomes):
+        if isinstance(outcome, _Prepared):
+            by_frames.setdefault(outcome.m.shape[0], []).append(index)
+    for n_frames, indices in by_frames.items():
+        per_chunk = max(1, _CHUNK_FRAMES // max(n_frames, 1))
+        for first in range(0, len(indices), per_chunk):
+            chunk = indices[first : first + per_chunk]
+            trials = [outcomes[index] for index in chunk]
+            done, chi2 = _iterated_stack(
+                trials, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm
+            )
+            for row, index in enumerate(chunk):
+                outcomes[index] = _result(trials[row], done, row, chi2[row], method, frame0, tol_mm)
+    return outcomes
+
+
+def _result(
+    trial: _Prepared, done: _Iterated, row: int, chi2: float, method: str, frame0: bool, tol_mm
+) -> JointCenterResult:
+    """One trial's result from its row of a stack's iteration."""
+    diagnostics = dict(trial.diagnostics)
     try:
-        if frame0:
-            state, information, chi2, iterations, step = _iterate_frame0(
-                y, r0, r1, lever0, lever1, analytic_center, int(max_iterations), tol_mm
-            )
-            center = state[:3]
-        else:
-            center, information, chi2, iterations, step = _iterate_single(
-                m, y, r0, r1, lever0, lever1, analytic_center, int(max_iterations), tol_mm
-            )
-        covariance_all = variance * np.linalg.inv(information)
+        if row in done.errors:
+            raise np.linalg.LinAlgError(done.errors[row])
+        covariance_all = trial.variance * np.linalg.inv(done.information[row])
         covariance_all = 0.5 * (covariance_all + covariance_all.T)
     except np.linalg.LinAlgError as error:
         return JointCenterResult(
-            center=analytic_center,
+            center=trial.analytic_center,
             covariance=None,
             converged=False,
             iterations=0,
@@ -355,17 +535,19 @@ def _gauss_markov_result(
             method=method,
             diagnostics=diagnostics,
         )
+    state = done.state[row]
     covariance = covariance_all[:3, :3]
     if frame0:
-        diagnostics["proximal_body"] = prox.body.tolist()
+        diagnostics["proximal_body"] = trial.proximal_body.tolist()
         diagnostics["center_proximal"] = state[3:6].tolist()
         diagnostics["covariance_proximal"] = covariance_all[3:6, 3:6].tolist()
         diagnostics["center_distal"] = state[6:].tolist()
         diagnostics["covariance_distal"] = covariance_all[6:, 6:].tolist()
-    dof = 3 * (n_frames - 1) - 3
-    chi2 = chi2 / variance if variance > 0 else float("nan")
+    dof = 3 * trial.m.shape[0] - 3
+    chi2 = float(chi2) / trial.variance if trial.variance > 0 else float("nan")
     diagnostics["chi2"] = chi2
     diagnostics["chi2_dof"] = dof
+    step, iterations = float(done.step[row]), int(done.iterations[row])
     converged = bool(step <= tol_mm and np.all(np.isfinite(covariance)))
     status = (
         "ok"
@@ -373,7 +555,7 @@ def _gauss_markov_result(
         else f"did not converge: the centre still moved {step:.3g} mm at iteration {iterations}"
     )
     return JointCenterResult(
-        center=center,
+        center=state[:3].copy(),
         covariance=covariance,
         converged=converged,
         iterations=iterations,
@@ -382,6 +564,25 @@ def _gauss_markov_result(
         cost=chi2,
         diagnostics=diagnostics,
     )
+
+
+def _gauss_markov(
+    proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
+) -> JointCenterResult:
+    _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
+    poses = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
+    (outcome,) = _gauss_markov_results(
+        [poses], noise_mm=noise_mm, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm
+    )
+    if isinstance(outcome, ValueError):
+        raise outcome
+    return outcome
+
+
+def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
+    _as_noise(noise_mm)
+    if int(max_iterations) < 1 or not tol_mm >= 0:
+        raise ValueError("max_iterations must be >= 1 and tol_mm >= 0")
 
 
 @register("joint_center", "gauss-markov")
@@ -456,24 +657,23 @@ def fit_gauss_markov_frame0(
 
 
 def _batched_gauss_markov(frame0: bool):
-    def finish(
-        prox: SegmentPoses,
-        dist: SegmentPoses,
+    def finish_all(
+        poses: list,
         *,
         noise_mm: float | None = None,
         max_iterations: int = 100,
         tol_mm: float = 1e-6,
-    ) -> JointCenterResult:
-        return _gauss_markov_result(
-            prox,
-            dist,
+    ) -> list[JointCenterResult | ValueError]:
+        pairs = [p if isinstance(p, ValueError) else (p["proximal"], p["distal"]) for p in poses]
+        return _gauss_markov_results(
+            pairs,
             noise_mm=noise_mm,
             frame0=frame0,
             max_iterations=max_iterations,
             tol_mm=tol_mm,
         )
 
-    run = batched(finish, ("proximal", "distal"))
+    run = batched_all(finish_all, ("proximal", "distal"))
 
     def checked(proximal, distal, *, poses=None, **options):
         # Bad options fail every trial, before its poses, as they do one trial at a time.

@@ -54,6 +54,8 @@ from jointbench.numerics.rank import negligible
 __all__ = [
     "POSE_MIN_FRAMES",
     "SegmentPoses",
+    "batched",
+    "batched_all",
     "fit_sara",
     "fit_sara_two_segment",
     "fit_score",
@@ -432,13 +434,26 @@ def batched(
     Each segment is ``(n_trials, N, n_markers, 3)`` [mm]; ``poses`` (from :func:`trial_poses`)
     lets several methods share one pose fit. Returns one result, or the ``ValueError`` the
     one-trial function would raise, per trial; options the method ignores are accepted as the
-    one-trial function accepts them.
+    one-trial function accepts them. ``finish(*segment_poses, **options)`` fits one trial.
     """
+
+    def finish_each(poses: list, **options) -> list[Outcome | ValueError]:
+        return each_trial(poses, lambda p: finish(*(p[name] for name in names), **options))
+
+    return batched_all(finish_each, names)
+
+
+def batched_all(
+    finish_all: Callable[..., list[Outcome | ValueError]], names: tuple[str, ...]
+) -> Callable[..., list[Outcome | ValueError]]:
+    """:func:`batched` for a method that fits all trials' poses in one call:
+    ``finish_all(poses, **options)`` takes every trial's poses (or its ``ValueError``)."""
 
     def run(*segments: np.ndarray, poses=None, **options) -> list[Outcome | ValueError]:
         if poses is None:
-            poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
-        return each_trial(poses, lambda p: finish(*(p[name] for name in names), **options))
+            segments_by_name = dict(zip(names, segments, strict=True))
+            poses = trial_poses(segments_by_name, min_frames=POSE_MIN_FRAMES)
+        return finish_all(poses, **options)
 
     run.pose_segments = names
     return run

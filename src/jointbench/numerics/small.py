@@ -43,13 +43,15 @@ def inverse3(matrices: np.ndarray) -> np.ndarray:
 
 
 def rotated3(rotations: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """``R M R'`` for rotations ``(N, 3, 3)`` and one matrix ``M`` ``(3, 3)``: ``(N, 3, 3)``."""
+    """``R M R'`` for rotations ``(..., N, 3, 3)`` and one matrix ``M`` ``(..., 3, 3)`` per
+    leading index (e.g. per trial): ``(..., N, 3, 3)``."""
     rotations = np.asarray(rotations, dtype=float)
-    n_frames = rotations.shape[0]
+    *lead, n_frames, _, _ = rotations.shape
     # One matrix product for R M over all frames, then R' element-wise.
-    left = (rotations.reshape(-1, 3) @ np.asarray(matrix, dtype=float)).reshape(n_frames, 3, 3)
+    rows = rotations.reshape(*lead, n_frames * 3, 3)
+    left = (rows @ np.asarray(matrix, dtype=float)).reshape(rotations.shape)
     return (
-        left[:, :, None, 0] * rotations[:, None, :, 0]
-        + left[:, :, None, 1] * rotations[:, None, :, 1]
-        + left[:, :, None, 2] * rotations[:, None, :, 2]
+        left[..., :, None, 0] * rotations[..., None, :, 0]
+        + left[..., :, None, 1] * rotations[..., None, :, 1]
+        + left[..., :, None, 2] * rotations[..., None, :, 2]
     )
