@@ -44,6 +44,5 @@ for _rules in sorted(
     include: _rules
 
 
-include: "workflow/rules/papers.smk"
+include: "workflow/rules/render.smk"
 include: "workflow/rules/check.smk"
-include: "workflow/rules/extended.smk"

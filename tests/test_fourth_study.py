@@ -91,8 +91,10 @@ def test_edited_code_reruns_its_jobs_and_only_them(toy_run):
     original = module.read_text()
     try:
         _edit(module, 'ax.set_xlabel("noise SD (mm)")', 'ax.set_xlabel("noise (mm)")')
-        # The figure belongs to paper T: its job, which renders all of T's outputs, reruns.
-        assert set(_planned_rules(toy_run)) == {"paper_t", "all"}
+        # The figure belongs to paper T of study toy: the study's render job, which renders
+        # all of T's outputs and the study's extended ranking, reruns, then the captions that
+        # summarise its tables; no simulation, estimate or collection.
+        assert set(_planned_rules(toy_run)) == {"render_toy", "report_captions", "all"}
         module.write_text(original)
         _edit(module, "markers.reshape(-1, 3).mean(axis=0)", "markers.reshape(-1, 3).mean(0) + 1")
         planned = _planned_rules(toy_run)

@@ -23,7 +23,7 @@ SCRIPTS = ROOT / "workflow" / "scripts"
 NEVER = ("matplotlib", "mpl_toolkits", "scipy.stats", "ezc3d", "jointbench.io")
 # The jobs that simulate, fit poses, estimate, collect and summarise render and check nothing.
 RUN_SIDE = ("simulate", "poses", "estimate", "collect", "summarise")
-RENDER_SIDE = ("render", "extended", "check_published", "report_captions")
+RENDER_SIDE = ("render", "check_published", "report_captions")
 RENDERING = ("jointbench.figures", "jointbench.papers", "jointbench.pipeline", "jointbench.report")
 
 

@@ -19,7 +19,7 @@ import pandas as pd
 
 from jointbench.figures import extended
 from jointbench.figures.common import save_figure
-from jointbench.papers import Inputs, Paper, Table, get_paper, papers_of_study
+from jointbench.papers import Inputs, Table, get_paper, papers_of_study
 from jointbench.study.config import condition_id
 from jointbench.study.io import read_dataset, read_table
 from jointbench.study.published import (
@@ -30,52 +30,64 @@ from jointbench.study.published import (
 )
 from jointbench.study.tables import markdown_table, write_tables
 
-__all__ = ["OUTPUT_SEPARATOR", "check_published", "render_extended", "render_paper"]
+__all__ = [
+    "OUTPUT_SEPARATOR",
+    "check_published",
+    "extended_name",
+    "render_extended",
+    "render_study",
+]
 
 log = logging.getLogger(__name__)
 
 
-def _inputs(paper: Paper, collected: str, config: Mapping) -> Inputs:
-    """What every output of ``paper`` is rendered from, datasets aside."""
-    return Inputs(
-        collected=read_table(collected),
-        published=load_published(paper.published),
-        config=config,
-    )
-
-
-#: Joins an output's name and a file kind in the output keys of a paper's job
-#: (``paper_a_fig3__png``): one job writes every output of its paper.
+#: Joins an output's name and a file kind in the output keys of a study's render job
+#: (``paper_a_fig3__png``, ``extended_cmc__csv``): one job writes every output of its study.
 OUTPUT_SEPARATOR = "__"
 
 
-def render_paper(
-    paper_key: str,
-    output_names: Sequence[str],
+def extended_name(study: str) -> str:
+    """The output name of a study's extended ranking (table; its figure adds ``_figure``)."""
+    return f"extended_{study}"
+
+
+def _files(outputs: Mapping[str, str], name: str) -> dict[str, str]:
+    """The files of output ``name`` in a render job's outputs, by kind (png, pdf, csv, ...)."""
+    prefix = f"{name}{OUTPUT_SEPARATOR}"
+    return {key[len(prefix) :]: path for key, path in outputs.items() if key.startswith(prefix)}
+
+
+def render_study(
+    study: str,
+    paper_outputs: Mapping[str, Sequence[str]],
     collected: str,
     datasets: Sequence[str],
     outputs: Mapping[str, str],
     config: Mapping,
 ) -> None:
-    """Render the paper's outputs ``output_names`` from its input files, reading them once;
-    ``outputs`` maps ``<output name>__<kind>`` to a path (png/pdf or csv/md/html)."""
-    paper = get_paper(paper_key)
-    inputs = _inputs(paper, collected, config)
+    """Render, from one reading of the study's collected results and of each dataset, the
+    outputs ``paper_outputs`` names (paper key -> output names) and the study's extended
+    ranking; ``outputs`` maps ``<output name>__<kind>`` to a path (png/pdf or csv/md/html)."""
+    frame = read_table(collected)
     # Dataset files are named by their condition (study.config.condition_id).
     by_condition = {Path(path).stem: read_dataset(path) for path in datasets}
-    for name in output_names:
-        output = paper.output(name)
-        drawn = [by_condition[condition_id(c)] for c in output.conditions]
-        prefix = f"{name}{OUTPUT_SEPARATOR}"
-        files = {
-            key[len(prefix) :]: path for key, path in outputs.items() if key.startswith(prefix)
-        }
-        result = output.render(dataclasses.replace(inputs, datasets=drawn))
-        if isinstance(result, Table):
-            write_tables(result.frame, files, title=result.title, note=result.note)
-        else:
-            save_figure(result, files)
-        log.info("%s written", name)
+    for key, names in paper_outputs.items():
+        paper = get_paper(key)
+        inputs = Inputs(collected=frame, published=load_published(paper.published), config=config)
+        for name in names:
+            output = paper.output(name)
+            drawn = [by_condition[condition_id(c)] for c in output.conditions]
+            result = output.render(dataclasses.replace(inputs, datasets=drawn))
+            files = _files(outputs, name)
+            if isinstance(result, Table):
+                write_tables(result.frame, files, title=result.title, note=result.note)
+            else:
+                save_figure(result, files)
+            log.info("%s written", name)
+    files = _files(outputs, extended_name(study))
+    for what in ("table", "figure"):
+        _render_extended(study, frame, files, config, what=what)
+    log.info("%s written", extended_name(study))
 
 
 def _paper_methods(study: str) -> extended.PaperMethods:
@@ -86,8 +98,12 @@ def _paper_methods(study: str) -> extended.PaperMethods:
 
 
 def render_extended(study: str, collected: str, outputs, config: Mapping, *, what: str) -> None:
-    """The extended ranking of ``study``: ``what`` is ``"table"`` or ``"figure"``."""
-    frame = read_table(collected)
+    """The extended ranking of ``study`` from its collected results file: ``what`` is
+    ``"table"`` (``outputs``: csv, md, html) or ``"figure"`` (png, pdf)."""
+    _render_extended(study, read_table(collected), outputs, config, what=what)
+
+
+def _render_extended(study: str, frame: pd.DataFrame, outputs, config: Mapping, *, what: str):
     paper = _paper_methods(study)
     if what == "figure":
         save_figure(extended.extended_figure(frame, study, paper), outputs)

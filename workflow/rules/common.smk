@@ -176,29 +176,43 @@ def papers_to_render(study):
     return list(grouped.values())
 
 
-def paper_datasets(study, outputs):
-    """The datasets the outputs draw, each once."""
-    conditions = [c for output in outputs for c in output.conditions]
+def render_datasets(study):
+    """The datasets the study's paper outputs draw, each once."""
+    conditions = [c for _, output in PAPER_OUTPUTS[study] for c in output.conditions]
     return list(dict.fromkeys(dataset_file(study, c) for c in conditions))
 
 
-def paper_files(paper, outputs):
-    """Every output's files keyed ``<output>__<kind>``; each output's first file is reported
-    (under its paper, as a figure or a table) and captioned by its own caption file."""
+def _output_key(name, kind):
+    return f"{name}{pipeline.OUTPUT_SEPARATOR}{kind}"
+
+
+def render_files(study):
+    """Every file the study's render job writes, keyed ``<output>__<kind>``: its paper
+    outputs' (each output's first file reported under its paper, as a figure or a table) and
+    its extended ranking's (table and figure reported under the ranking)."""
     files = {}
-    for output in outputs:
+    for paper, output in PAPER_OUTPUTS[study]:
         for index, (kind, path) in enumerate(output.files.items()):
             if index == 0:
                 group = "Figures" if output.kind == "figure" else "Tables"
                 path = reported(path, output.name, paper.title, group)
-            files[f"{output.name}{pipeline.OUTPUT_SEPARATOR}{kind}"] = path
+            files[_output_key(output.name, kind)] = path
+    name = pipeline.extended_name(study)
+    for kind, folder in (("html", "tables"), ("csv", "tables"), ("md", "tables")):
+        files[_output_key(name, kind)] = f"results/{folder}/{name}.{kind}"
+    for kind in ("png", "pdf"):
+        files[_output_key(name, kind)] = f"results/figures/{name}.{kind}"
+    ranking = "Extended ranking of every estimator"
+    for kind, caption in (("html", name), ("png", f"{name}_figure")):
+        key = _output_key(name, kind)
+        files[key] = reported(files[key], caption, ranking, study)
     return files
 
 
-def paper_code(outputs):
-    """The fingerprint of what renders the outputs: editing one reruns its paper's job."""
-    functions = [f for output in outputs for f in (output.render, output.headline)]
-    return code_fingerprint(*functions, pipeline.render_paper)
+def render_code(study):
+    """The fingerprint of what renders the study's outputs: editing one reruns its job."""
+    functions = [f for _, o in PAPER_OUTPUTS[study] for f in (o.render, o.headline)]
+    return code_fingerprint(*functions, pipeline.render_study)
 
 
 def check_code():

@@ -1,9 +1,9 @@
 from jointbench import jobs, pipeline
 
 with jobs.job(snakemake):
-    pipeline.render_paper(
-        snakemake.params.paper,
-        snakemake.params.outputs,
+    pipeline.render_study(
+        snakemake.params.study,
+        snakemake.params.papers,
         snakemake.input.collected,
         snakemake.input.datasets,
         dict(snakemake.output.items()),
