@@ -42,6 +42,7 @@ import numpy as np
 import jointbench
 from jointbench import geometry
 from jointbench.estimators import registry
+from jointbench.estimators.twosegment import pose_segments, trial_poses
 from jointbench.simulate.noise import isotropic_noise
 
 # Targets [s], by (kind, method, data label); ``None`` label applies to every data set.
@@ -199,31 +200,65 @@ def time_method(
     return statistics.median(calls), len(calls), note
 
 
+def _batch(data: DataSet, n_trials: int) -> list[np.ndarray]:
+    """The data set's distinct trials, cycled up to ``n_trials``, stacked per argument."""
+    picks = [data.trials[i % len(data.trials)] for i in range(n_trials)]
+    return [np.stack(arrays) for arrays in zip(*picks, strict=True)]
+
+
 def time_batched(
-    kind: str, name: str, data: DataSet, n_trials: int, repeats: int, *, checked: bool
+    kind: str,
+    name: str,
+    data: DataSet,
+    n_trials: int,
+    repeats: int,
+    *,
+    checked: bool,
+    shared_poses: bool = False,
 ) -> tuple[float, str]:
     """Median over ``repeats`` of a batched call's wall-clock seconds divided by its trials.
 
     The batch cycles through the data set's distinct trials up to ``n_trials``. ``checked``:
     the registry's checked form (input checks and support verdict per trial, as a user's call)
-    rather than the bare estimator the study's estimate jobs run.
+    rather than the bare estimator the study's estimate jobs run. ``shared_poses``: a
+    pose-based method is given the trials' poses fitted beforehand, as the hip study's
+    estimate jobs are (the fit is timed by :func:`time_pose_fit`).
     """
-    batched = getattr(registry.get(kind, name, checked=checked), "batched", None)
+    fit = registry.get(kind, name, checked=checked)
+    batched = getattr(fit, "batched", None)
     if batched is None:
         return float("nan"), "no batched form: fitted one trial at a time"
-    picks = [data.trials[i % len(data.trials)] for i in range(n_trials)]
-    segments = [np.stack(arrays) for arrays in zip(*picks, strict=True)]
+    segments = _batch(data, n_trials)
+    options = {}
+    if shared_poses:
+        names = pose_segments(fit)
+        if names is None:
+            return float("nan"), ""
+        options["poses"] = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
     try:
         batched(*(segment[:2] for segment in segments))  # warm-up
         timings = []
         for _ in range(repeats):
             start = time.perf_counter()
-            outcomes = batched(*segments)
+            outcomes = batched(*segments, **options)
             timings.append((time.perf_counter() - start) / n_trials)
     except Exception as error:
         return float("nan"), f"error: {type(error).__name__}: {error}"
     failures = [o for o in outcomes if isinstance(o, Exception)]
     return statistics.median(timings), f"{len(failures)} trials failed" if failures else ""
+
+
+def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
+    """Median seconds per trial of fitting every segment's poses of a batch (with the checks
+    the pose-based methods make), which pose-based methods can share."""
+    segments = _batch(data, n_trials)
+    names = [f"segment {index}" for index in range(len(segments))]
+    timings = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+        timings.append((time.perf_counter() - start) / n_trials)
+    return statistics.median(timings)
 
 
 def _format_seconds(value: float) -> str:
@@ -342,9 +377,11 @@ def main(argv: list[str] | None = None) -> int:
         "above / batched estimator.\n"
     )
     print(
-        "| kind | method | data | trials per call | estimator | ratio | target | pass | checked |"
+        "| kind | method | data | trials per call | estimator | ratio | target | pass | checked "
+        "| from fitted poses |"
     )
-    print("|---|---|---|---:|---:|---:|---:|:---:|---:|")
+    print("|---|---|---|---:|---:|---:|---:|:---:|---:|---:|")
+    pose_labels = set()
     for kind, name, label in BATCHED_TARGETS:
         if kind not in kinds or (kind, name, label) not in one_trial:
             continue
@@ -353,6 +390,11 @@ def main(argv: list[str] | None = None) -> int:
         data = data_by_kind[kind][label]
         per_trial, note = time_batched(kind, name, data, n_trials, repeats, checked=False)
         checked, _ = time_batched(kind, name, data, n_trials, repeats, checked=True)
+        posed, _ = time_batched(
+            kind, name, data, n_trials, repeats, checked=False, shared_poses=True
+        )
+        if np.isfinite(posed):
+            pose_labels.add((kind, label, n_trials, repeats))
         target = BATCHED_TARGETS[(kind, name, label)]
         if not np.isfinite(per_trial):
             verdict, failed = ("error" if note.startswith("error") else "FAIL"), True
@@ -364,8 +406,18 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"| {kind} | {name} | {label} | {n_trials} | {_format_seconds(per_trial)} | "
             f"{ratio:.1f}× | ≤ {_format_seconds(target)} | {verdict} | "
-            f"{_format_seconds(checked)} |" + (f" {note}" if note else "")
+            f"{_format_seconds(checked)} | {_format_seconds(posed)} |"
+            + (f" {note}" if note else "")
         )
+    if pose_labels:
+        print(
+            "\n'from fitted poses': the bare batched form given every trial's poses fitted "
+            "beforehand, as the hip study's estimate jobs read them from its poses job. That fit, "
+            "shared by every pose-based method, costs per trial:\n"
+        )
+        for kind, label, n_trials, repeats in sorted(pose_labels):
+            seconds_per_trial = time_pose_fit(data_by_kind[kind][label], n_trials, repeats)
+            print(f"- {label}: {_format_seconds(seconds_per_trial)} (both segments' poses)")
     return 1 if failed and args.strict else 0
 
 

@@ -4,11 +4,13 @@ the allowed values (issue: inputs that cannot lie)."""
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import pytest
 import yaml
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
+from jointbench.papers import get_paper, paper_names
 from jointbench.study import config as study_config
 from jointbench.study.studies import get_study, study_names
 
@@ -127,3 +129,12 @@ def test_dry_run_stops_before_any_job_naming_the_key(tmp_path):
     assert run.returncode != 0
     assert "studies.cmc.estimators: unknown center estimator 'XX'" in message, message[-2000:]
     assert not (tmp_path / "results").exists()
+
+
+def test_yaml_is_read_as_the_safe_loader_reads_it():
+    """read_yaml may use PyYAML's C loader: same documents, and still no arbitrary objects."""
+    for name in paper_names():
+        text = Path(get_paper(name).published).read_text()
+        assert study_config.read_yaml(text) == yaml.safe_load(text)
+    with pytest.raises(yaml.YAMLError):
+        study_config.read_yaml("!!python/object/apply:os.system ['true']")

@@ -18,9 +18,8 @@ from importlib import resources
 from pathlib import Path
 
 import pandas as pd
-import yaml
 
-from jointbench.study.config import validate_against
+from jointbench.study.config import read_yaml, validate_against
 from jointbench.study.tolerance import describe, evaluate, is_compared
 
 __all__ = [
@@ -70,7 +69,7 @@ _SCHEMA = resources.files("jointbench.schemas").joinpath("published.schema.yaml"
 
 def load_published(path: str | Path) -> dict:
     """A paper's published-values document, schema-checked (``ValueError`` naming the file)."""
-    document = yaml.safe_load(Path(path).read_text())
+    document = read_yaml(Path(path).read_text())
     validate_against(document, _SCHEMA, f"published values {path}")
     return document
 
