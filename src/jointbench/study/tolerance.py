@@ -33,7 +33,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special
 
 __all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate"]
 
@@ -138,6 +137,10 @@ def _binomial_quantile(q: float, trials: int, proportion: float) -> int:
     """The smallest count ``k`` with ``P(X ≤ k) ≥ q`` for ``X ~ Binomial(trials, proportion)``
     and ``0 < q < 1``: ``scipy.stats.binom.ppf``, from ``scipy.special``, which costs a fraction
     of ``scipy.stats`` to import (tests/test_tolerance.py compares the two)."""
+    # Imported here: the workflow's start and the render jobs load this module for its
+    # registry of tolerance kinds, and scipy.special costs them a quarter of a second.
+    from scipy import special
+
     if not (trials >= 0 and 0 <= proportion <= 1):
         raise ValueError(f"Binomial({trials}, {proportion}) is not a distribution")
     # bdtrik inverts the cdf continued to real k, so the quantile is its ceiling or one below:
