@@ -9,6 +9,8 @@ best), so their answers are only as good as that simplex: 1e-3 mm on well-condit
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -385,3 +387,18 @@ def test_results_are_frozen():
     result = fit_nm(_good())
     with pytest.raises(ValueError):
         result.center[0] = 1.0
+
+
+def test_support_of_a_noise_free_pure_hinge_reports_zero_off_axis_rotation():
+    """Rounding leaves the Gram matrix's zero eigenvalues slightly negative; the off-axis RMS
+    must read (nearly) 0, not NaN from the square root of a negative."""
+    from jointbench.estimators.support import assess
+
+    rng = np.random.default_rng(11)
+    axis = geometry.unit(np.array([0.3, -0.5, 0.8]))
+    rotations = geometry.rotation_about_axis(axis, rng.uniform(-1.0, 1.0, 90))
+    markers = moving_markers(rotations, rng.normal(scale=30.0, size=(3, 3)), CENTER)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        support = assess("center", (markers,))
+    assert support.diagnostics["off_axis_rotation_rms_deg"] == pytest.approx(0.0, abs=1e-5)

@@ -158,8 +158,9 @@ def _rotation_test(
     # rotation" each coordinate of each frame is noise of variance s^2.
     whitening = np.linalg.cholesky(np.linalg.inv(covariance))
     whitened = deviation @ whitening
-    spread = np.linalg.eigvalsh(np.swapaxes(whitened, 1, 2) @ whitened)  # ascending [rad^2 mm^2]
-    raw = np.linalg.eigvalsh(np.swapaxes(deviation, 1, 2) @ deviation)
+    # Eigenvalues of Gram matrices, ascending; rounding can leave a zero one slightly negative.
+    spread = np.maximum(np.linalg.eigvalsh(np.swapaxes(whitened, 1, 2) @ whitened), 0.0)
+    raw = np.maximum(np.linalg.eigvalsh(np.swapaxes(deviation, 1, 2) @ deviation), 0.0)
     rms = np.sqrt(raw.sum(axis=1) / n_frames)
     second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
     exact = variance == 0.0
