@@ -147,6 +147,23 @@ def test_the_hip_methods_share_one_pose_fit_per_condition(reduced_run):
     stats = jobs.stdout + jobs.stderr
     assert re.search(r"^poses_hip\s+1$", stats, re.MULTILINE), stats
     assert "poses_cmc" not in stats and "poses_hinge" not in stats
+    # One job per condition for a cluster: a poses job per condition, read by that condition's
+    # estimate jobs.
+    per_condition = run_snakemake(
+        workdir,
+        "--dry-run",
+        "--forceall",
+        "--configfile",
+        str(ROOT / "tests" / "data" / "reduced.yaml"),
+        "--config",
+        "jobs={'estimate': 'per_condition'}",
+    )
+    assert per_condition.returncode == 0, per_condition.stderr[-2000:]
+    stats = per_condition.stdout + per_condition.stderr
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    n_methods = len(config["studies"]["hip"]["estimators"])
+    assert re.search(rf"^poses_hip\s+{len(conditions)}$", stats, re.MULTILINE), stats
+    assert re.search(rf"^estimate_hip\s+{n_methods * len(conditions)}$", stats, re.MULTILINE)
 
 
 def test_a_grid_without_a_figures_condition_runs_without_that_figure(tmp_path):

@@ -56,15 +56,15 @@ def estimates_files(study, methods=None):
 POSES = "results/poses/{study}/{condition}.parquet"
 
 
-def shared_poses(study, shared, condition=None):
-    """The poses files an estimate job of ``study`` reads: those of its conditions (all, or
-    ``condition``) for a method in ``shared``, none for a method fitting its own poses.
-    """
-    conditions = [condition] if condition else condition_ids(study)
+def shared_poses(study, shared, per_condition=False):
+    """The poses files an estimate job of ``study`` reads: those of its conditions (all, or the
+    job's own with ``per_condition``) for a method in ``shared``, none for a method fitting
+    its own poses."""
 
     def files(wildcards):
         if wildcards.method not in shared:
             return []
+        conditions = [wildcards.condition] if per_condition else condition_ids(study)
         return expand(POSES, study=study, condition=conditions)
 
     return files

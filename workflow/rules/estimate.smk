@@ -65,7 +65,7 @@ for _study in STUDIES:
                 f"estimate_{_study}"
             input:
                 datasets=f"results/datasets/{_study}/{{condition}}.parquet",
-                poses=shared_poses(_study, _shared, "{condition}"),
+                poses=shared_poses(_study, _shared, per_condition=True),
             output:
                 f"results/estimates/{_study}/{{method}}/{{condition}}.parquet",
             log:
