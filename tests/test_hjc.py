@@ -289,3 +289,37 @@ def test_align_to_markers():
 def test_registered():
     for method in (*METHODS, "SCoRE"):
         assert method in jb.methods("joint_center")
+
+
+@pytest.mark.parametrize("frame0", [False, True])
+def test_a_singular_gauss_markov_system_is_a_result_not_a_crash(monkeypatch, frame0):
+    """A LinAlgError while iterating a batch is traced to its trials by redoing the iteration
+    one trial at a time: the others are fitted as alone, and a singular trial becomes a
+    non-converged result naming it, centred on the analytic start."""
+    from jointbench.estimators import hjc
+
+    proximal, distal = two_segments(40)
+    trials = [(_noisy(proximal, seed), _noisy(distal, seed + 100)) for seed in range(3)]
+    stacked = [np.stack(part) for part in zip(*trials, strict=True)]
+    fit = hjc.fit_gauss_markov_frame0 if frame0 else fit_gauss_markov
+    alone = [fit(*trial) for trial in trials]
+    solve = hjc._solve
+
+    def singular_in_a_batch(matrices, vectors):
+        if len(matrices) > 1:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return solve(matrices, vectors)
+
+    monkeypatch.setattr(hjc, "_solve", singular_in_a_batch)
+    for result, single in zip(fit.batched(*stacked), alone, strict=True):
+        np.testing.assert_allclose(result.center, single.center, rtol=1e-12)
+        assert result.iterations == single.iterations and result.status == "ok"
+
+    def always_singular(matrices, vectors):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(hjc, "_solve", always_singular)
+    for result, single in zip(fit.batched(*stacked), alone, strict=True):
+        assert not result.converged and result.covariance is None
+        assert result.status == "singular Gauss–Markov information matrix (Singular matrix)"
+        np.testing.assert_array_equal(result.center, single.diagnostics["analytic_center"])

@@ -79,6 +79,7 @@ at Nt = 4) is an honest answer, not an error.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -299,6 +300,11 @@ class _Stacked:
             levers=(lever("lever0"), lever("lever1")),
         )
 
+    @functools.cached_property
+    def design(self) -> np.ndarray:
+        """``[R0, -R1]`` ``(T, N-1, 3, 6)``, acting on ``[c0; c1]``: the frame-0 model."""
+        return np.concatenate([self.r0, -self.r1], axis=-1)
+
     def point_covariances(self, trials: np.ndarray, c0: np.ndarray, c1: np.ndarray):
         """``A_0(c0)``, ``A_1(c1)`` per unit variance of ``trials`` ``(t,)``: ``(t, 3, 3)``."""
         (mean0, inverse0, n0), (mean1, inverse1, n1) = self.levers
@@ -359,12 +365,11 @@ def _update_single(system: _Stacked):
 def _update_frame0(system: _Stacked):
     """One re-linearisation of the frame-0 model for ``trials`` at ``states`` ``(t, 9)``:
     unknowns ``(c, c0, c1)``."""
-    design = np.concatenate([system.r0, -system.r1], axis=-1)  # [R0, -R1] [c0; c1]
 
     def update(trials: np.ndarray, states: np.ndarray):
         a0, a1 = system.point_covariances(trials, states[:, 3:6], states[:, 6:])
         weights = _weights(system.r0[trials], system.r1[trials], a0, a1)
-        rows = design[trials]
+        rows = system.design[trials]
         weighted = weights @ rows
         p0, p1 = np.linalg.inv(a0), np.linalg.inv(a1)
         information = np.zeros((len(trials), 9, 9))
@@ -450,19 +455,19 @@ def _relinearise(update, state: np.ndarray, max_iterations: int, tol_mm: float) 
 
 
 def _chi2(system: _Stacked, done: _Iterated, frame0: bool) -> np.ndarray:
-    """``sum_t r_t' W_t^-1 r_t`` at the final state (plus the frame-0 terms), unit variance."""
-    state = np.nan_to_num(done.state)
-    weights = np.nan_to_num(done.kept.get("weights", np.zeros_like(system.m)))
+    """``sum_t r_t' W_t^-1 r_t`` at the final state (plus the frame-0 terms), unit variance;
+    NaN for a trial stopped by a singular system before any iteration completed."""
+    if "weights" not in done.kept:
+        return np.full(len(done.state), np.nan)
+    weights = done.kept["weights"]
     if not frame0:
-        residual = system.y - _applied(system.m, state)
+        residual = system.y - _applied(system.m, done.state)
         return np.einsum("tfi,tfij,tfj->t", residual, weights, residual)
-    design = np.concatenate([system.r0, -system.r1], axis=-1)
-    residual = system.y - _applied(design, state[:, 3:])
+    residual = system.y - _applied(system.design, done.state[:, 3:])
     chi2 = np.einsum("tfi,tfij,tfj->t", residual, weights, residual)
     for segment, unknowns in (("p0", slice(3, 6)), ("p1", slice(6, 9))):
-        offset = state[:, unknowns] - state[:, :3]
-        precision = np.nan_to_num(done.kept[segment])
-        chi2 = chi2 + np.einsum("ti,tij,tj->t", offset, precision, offset)
+        offset = done.state[:, unknowns] - done.state[:, :3]
+        chi2 = chi2 + np.einsum("ti,tij,tj->t", offset, done.kept[segment], offset)
     return chi2
 
 
@@ -492,10 +497,11 @@ def _gauss_markov_results(
     noise_mm = _as_noise(noise_mm)
     outcomes: list = []
     for pair in pairs:
+        if isinstance(pair, ValueError):
+            outcomes.append(pair)
+            continue
         try:
-            outcomes.append(
-                pair if isinstance(pair, ValueError) else _prepared(*pair, noise_mm, method)
-            )
+            outcomes.append(_prepared(*pair, noise_mm, method))
         except ValueError as error:
             outcomes.append(error)
     by_frames: dict[int, list[int]] = {}
