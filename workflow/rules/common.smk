@@ -118,7 +118,7 @@ def summarised_tables():
     """Every table a caption's headline summarises, by name."""
     tables = {"published_comparison": "results/tables/published_comparison.csv"}
     for study in STUDIES:
-        tables[f"extended_{study}"] = f"results/tables/extended_{study}.csv"
+        tables[pipeline.extended_name(study)] = extended_files(study)["csv"]
         for _, output in PAPER_OUTPUTS[study]:
             for name in output.summarises:
                 tables[name] = f"results/tables/{name}.csv"
@@ -127,21 +127,28 @@ def summarised_tables():
 
 def caption_names():
     names = [o.name for study in STUDIES for _, o in PAPER_OUTPUTS[study]]
-    names += [f"extended_{s}{suffix}" for s in STUDIES for suffix in ("", "_figure")]
+    names += [
+        pipeline.extended_name(s) + suffix
+        for s in STUDIES
+        for suffix in ("", "_figure")
+    ]
     return [*names, "published_comparison"]
+
+
+def extended_files(study):
+    """The files of a study's extended ranking, by kind: its table and its figure."""
+    name = pipeline.extended_name(study)
+    tables = {kind: f"results/tables/{name}.{kind}" for kind in ("html", "csv", "md")}
+    return {
+        **tables,
+        **{kind: f"results/figures/{name}.{kind}" for kind in ("png", "pdf")},
+    }
 
 
 def study_targets(study):
     """The collected results, every paper output of one study and its extended ranking."""
     outputs = [path for _, o in PAPER_OUTPUTS[study] for path in o.files.values()]
-    extended = [
-        *expand(
-            "results/tables/extended_{study}.{ext}", study=study, ext=["csv", "md"]
-        ),
-        *expand(
-            "results/figures/extended_{study}.{ext}", study=study, ext=["png", "pdf"]
-        ),
-    ]
+    extended = extended_files(study).values()
     return [f"results/collected/{study}.parquet", *outputs, *extended]
 
 
@@ -198,10 +205,8 @@ def render_files(study):
                 path = reported(path, output.name, paper.title, group)
             files[_output_key(output.name, kind)] = path
     name = pipeline.extended_name(study)
-    for kind, folder in (("html", "tables"), ("csv", "tables"), ("md", "tables")):
-        files[_output_key(name, kind)] = f"results/{folder}/{name}.{kind}"
-    for kind in ("png", "pdf"):
-        files[_output_key(name, kind)] = f"results/figures/{name}.{kind}"
+    for kind, path in extended_files(study).items():
+        files[_output_key(name, kind)] = path
     ranking = "Extended ranking of every estimator"
     for kind, caption in (("html", name), ("png", f"{name}_figure")):
         key = _output_key(name, kind)
