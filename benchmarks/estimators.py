@@ -42,7 +42,7 @@ import numpy as np
 import jointbench
 from jointbench import geometry
 from jointbench.estimators import registry
-from jointbench.estimators.twosegment import pose_segments, trial_poses
+from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.simulate.noise import isotropic_noise
 
 # Targets [s], by (kind, method, data label); ``None`` label applies to every data set.
@@ -234,7 +234,8 @@ def time_batched(
         names = pose_segments(fit)
         if names is None:
             return float("nan"), ""
-        options["poses"] = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+        by_name = dict(zip(names, segments, strict=True))
+        options["poses"] = trial_poses(by_name, min_frames=POSE_MIN_FRAMES)
     try:
         batched(*(segment[:2] for segment in segments))  # warm-up
         timings = []
@@ -256,7 +257,7 @@ def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
     timings = []
     for _ in range(repeats):
         start = time.perf_counter()
-        trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+        trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
         timings.append((time.perf_counter() - start) / n_trials)
     return statistics.median(timings)
 
