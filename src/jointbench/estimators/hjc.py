@@ -91,6 +91,7 @@ from jointbench.estimators.twosegment import (
     SegmentPoses,
     batched,
     batched_all,
+    each_trial,
     two_segment_poses,
 )
 from jointbench.geometry import skew
@@ -483,27 +484,19 @@ def _iterated_stack(trials: list[_Prepared], *, frame0: bool, max_iterations, to
 
 
 def _gauss_markov_results(
-    pairs: list[tuple[SegmentPoses, SegmentPoses] | ValueError],
+    poses: list[dict[str, SegmentPoses] | ValueError],
     *,
     noise_mm: float | None,
     frame0: bool,
     max_iterations: int,
     tol_mm: float,
 ) -> list[JointCenterResult | ValueError]:
-    """Paper C's Gauss–Markov fit of every trial's ``(proximal, distal)`` poses (a trial's
+    """Paper C's Gauss–Markov fit of every trial's ``proximal`` and ``distal`` poses (a trial's
     ``ValueError`` is kept as its outcome). Trials with the same frames iterate together, each
     to its own convergence, so a trial's answer does not depend on its batch."""
     method = "gauss-markov-frame0" if frame0 else "gauss-markov"
     noise_mm = _as_noise(noise_mm)
-    outcomes: list = []
-    for pair in pairs:
-        if isinstance(pair, ValueError):
-            outcomes.append(pair)
-            continue
-        try:
-            outcomes.append(_prepared(*pair, noise_mm, method))
-        except ValueError as error:
-            outcomes.append(error)
+    outcomes = each_trial(poses, lambda p: _prepared(p["proximal"], p["distal"], noise_mm, method))
     by_frames: dict[int, list[int]] = {}
     for index, outcome in enumerate(outcomes):
         if isinstance(outcome, _Prepared):
@@ -576,9 +569,13 @@ def _gauss_markov(
     proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
 ) -> JointCenterResult:
     _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
-    poses = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
+    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
     (outcome,) = _gauss_markov_results(
-        [poses], noise_mm=noise_mm, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm
+        [{"proximal": prox, "distal": dist}],
+        noise_mm=noise_mm,
+        frame0=frame0,
+        max_iterations=max_iterations,
+        tol_mm=tol_mm,
     )
     if isinstance(outcome, ValueError):
         raise outcome
@@ -670,9 +667,8 @@ def _batched_gauss_markov(frame0: bool):
         max_iterations: int = 100,
         tol_mm: float = 1e-6,
     ) -> list[JointCenterResult | ValueError]:
-        pairs = [p if isinstance(p, ValueError) else (p["proximal"], p["distal"]) for p in poses]
         return _gauss_markov_results(
-            pairs,
+            poses,
             noise_mm=noise_mm,
             frame0=frame0,
             max_iterations=max_iterations,
