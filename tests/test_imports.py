@@ -127,3 +127,40 @@ def test_the_public_names_are_those_of_their_modules():
         assert name in dir(jointbench)
     with pytest.raises(AttributeError, match="no attribute 'nothing'"):
         jointbench.nothing  # noqa: B018
+
+
+def test_simulating_fitting_poses_and_estimating_never_import_pandas(tmp_path):
+    """These are most of a run's jobs: pandas would double their start-up. Every built-in
+    estimator runs, on one condition of each study, through the functions the jobs call."""
+    code = textwrap.dedent(
+        f"""
+        import sys
+        from pathlib import Path
+        from jointbench import jobs
+        from jointbench.study import config as study_config
+        from jointbench.study import run
+
+        config = study_config.load_config({str(ROOT / "config" / "config.yaml")!r})
+        folder = Path({str(tmp_path)!r})
+        for study, settings in config["studies"].items():
+            settings["trials"] = 3
+            settings["grid"] = {{k: v[-1:] for k, v in settings["grid"].items()}}
+            (condition,) = study_config.conditions(config, study)
+            name = study_config.condition_id(condition) + ".parquet"
+            dataset = str(folder / study / "datasets" / name)
+            run.run_simulate_files(config, study, [dataset])
+            poses = None
+            if run.methods_sharing_poses(config, study):
+                poses = [str(folder / study / "poses" / name)]
+                run.run_poses_files(study, [dataset], poses)
+            for method in study_config.estimator_names(config, study, source="builtin"):
+                output = str(folder / study / method / name)
+                shared = poses if method in run.methods_sharing_poses(config, study) else None
+                run.run_estimate_files(config, study, method, [dataset], [output], poses=shared)
+                print(study, method, Path(output).exists())
+        print("pandas" in sys.modules)
+        """
+    )
+    printed = _run(code).splitlines()
+    assert printed[-1] == "False"
+    assert len(printed) > 10 and all(line.endswith("True") for line in printed[:-1]), printed

@@ -16,6 +16,7 @@ from workflow_copy import run_snakemake
 from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
 from jointbench.study import config as study_config
+from jointbench.study.collected import collect
 from jointbench.study.io import (
     iter_dataset,
     read_dataset,
@@ -25,7 +26,7 @@ from jointbench.study.io import (
     write_dataset,
     write_table,
 )
-from jointbench.study.run import collect, estimate, simulate_condition
+from jointbench.study.run import estimate, simulate_condition
 from jointbench.study.schema import check_against_dataset
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -232,3 +232,35 @@ def test_stored_poses_are_refused_by_a_method_that_fits_none():
     trials = run.simulate_condition(config, "cmc", condition)
     with pytest.raises(ValueError, match="LS: not a pose-based method"):
         run.estimate("cmc", "LS", trials, condition, poses=[])
+
+
+def test_rows_table_stores_what_a_pandas_frame_of_the_rows_stores(tmp_path):
+    rows = [
+        {"name": "a", "n": 1, "x": 1.5, "flag": True, "note": None},
+        {"name": "b", "n": np.int64(2), "x": np.nan, "flag": np.bool_(False), "extra": 3},
+        {"name": "c", "n": 3, "x": np.float64(2), "flag": None, "note": "ok", "extra": 4.5},
+    ]
+    table = io.rows_table(rows)
+    assert table.column_names == ["name", "n", "x", "flag", "note", "extra"]
+    assert [table.schema.field(c).type for c in table.column_names] == [
+        pa.string(),
+        pa.int64(),
+        pa.float64(),
+        pa.bool_(),
+        pa.string(),
+        pa.float64(),
+    ]
+    ours, theirs = tmp_path / "rows.parquet", tmp_path / "pandas.parquet"
+    io.write_table(table, ours)
+    io.write_table(pd.DataFrame(rows), theirs)
+    pd.testing.assert_frame_equal(io.read_table(ours), io.read_table(theirs))
+    # NaN and None are both missing, as pandas stores them.
+    assert table.column("x").null_count == 1 and table.column("extra").to_pylist()[0] is None
+
+
+def test_rows_table_refuses_a_column_of_mixed_or_unstorable_values():
+    with pytest.raises(TypeError, match="column 'v' mixes integer and text"):
+        io.rows_table([{"v": 1}, {"v": "1"}])
+    with pytest.raises(TypeError, match="column 'v': list values cannot be stored"):
+        io.rows_table([{"v": [1, 2]}])
+    assert io.rows_table([{"v": None}]).column("v").type == pa.null()

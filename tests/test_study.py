@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 import pytest
 
 from jointbench.estimators import registry
@@ -142,3 +143,19 @@ def test_schema_check_names_the_column():
         check_estimates(frame.assign(converged=["yes"]), kind="center", condition_keys=keys)
     with pytest.raises(ValueError, match="'method' must be 'NM'"):
         check_estimates(frame, kind="center", condition_keys=keys, method="NM")
+
+
+def test_check_estimates_reads_arrow_tables_and_names_a_column_of_mixed_values():
+    keys = ("marker_set", "rom_deg", "noise_mm")
+    row = dict(marker_set="M", rom_deg=5, noise_mm=1.0, trial=0, method="NM", center_x=0.0)
+    row |= dict(center_y=0.0, center_z=0.0, error_mm=1.0, converged=True, iterations=1)
+    row |= dict(seconds=0.1, status="ok")
+    table = pa.table({name: [value] for name, value in row.items()})
+    check_estimates(table, kind="center", condition_keys=keys, method="NM")
+    with pytest.raises(ValueError, match="column 'iterations' must be integer, got double"):
+        check_estimates(
+            table.set_column(10, "iterations", pa.array([1.0])), kind="center", condition_keys=keys
+        )
+    mixed = pd.DataFrame([row, {**row, "status": 3}])
+    with pytest.raises(ValueError, match="estimates: column 'status' mixes types"):
+        check_estimates(mixed, kind="center", condition_keys=keys)

@@ -8,6 +8,7 @@ from jointbench import jobs, pipeline
 from jointbench import report as jb_report
 from jointbench.estimators import registry
 from jointbench.fingerprint import code_fingerprint
+from jointbench.study import collected as jb_collected
 from jointbench.study import run as jb_run
 from jointbench.papers import papers_of_study
 from jointbench.study import config as jb_config

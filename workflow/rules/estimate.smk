@@ -122,7 +122,7 @@ rule summarise_estimator:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(jb_run.summarise_estimates),
+        code=code_fingerprint(jb_collected.summarise_estimates),
     script:
         "../scripts/summarise.py"
 
@@ -142,6 +142,6 @@ rule collect:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(jb_run.collect),
+        code=code_fingerprint(jb_collected.collect),
     script:
         "../scripts/collect.py"

@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.run import collect
+from jointbench.study.collected import collect
 
 with jobs.job(snakemake):
     collect(

@@ -15,15 +15,18 @@ import inspect
 import json
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from jointbench.estimators.twosegment import SegmentPoses, stored_segment_poses
 from jointbench.simulate import Trials
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "iter_dataset",
@@ -33,6 +36,7 @@ __all__ = [
     "read_provenance",
     "read_table",
     "read_trial_numbers",
+    "rows_table",
     "write_dataset",
     "write_dataset_blocks",
     "write_poses_blocks",
@@ -89,6 +93,53 @@ def _names_unreadable_file(read: Callable) -> Callable:
     return reading
 
 
+# Arrow's own conversions from and to NumPy and Python values ask pandas whether a value is
+# one of its objects, and so import it: that would double the start-up of the many jobs that
+# need nothing else from it. Numeric columns are therefore converted through their buffers.
+_NUMPY_DTYPES = {
+    pa.float64(): np.float64,
+    pa.float32(): np.float32,
+    pa.int64(): np.int64,
+    pa.int32(): np.int32,
+    pa.int16(): np.int16,
+    pa.int8(): np.int8,
+    pa.uint64(): np.uint64,
+    pa.uint32(): np.uint32,
+    pa.uint16(): np.uint16,
+    pa.uint8(): np.uint8,
+}
+
+
+def _from_numpy(values: np.ndarray) -> pa.Array:
+    """A 1-D numeric NumPy array as an Arrow array of the same type (no missing values)."""
+    values = np.ascontiguousarray(values)
+    arrow_type = next(t for t, dtype in _NUMPY_DTYPES.items() if values.dtype == dtype)
+    return pa.Array.from_buffers(arrow_type, len(values), [None, pa.py_buffer(values)])
+
+
+def _to_numpy(values: pa.Array | pa.ChunkedArray) -> np.ndarray:
+    """A numeric Arrow column as a 1-D NumPy array; a missing float is NaN."""
+    chunks = values.chunks if isinstance(values, pa.ChunkedArray) else [values]
+    parts = [_chunk_to_numpy(chunk) for chunk in chunks]
+    if not parts:
+        return np.empty(0, dtype=_NUMPY_DTYPES.get(values.type, np.float64))
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+def _chunk_to_numpy(chunk: pa.Array) -> np.ndarray:
+    dtype = _NUMPY_DTYPES.get(chunk.type)
+    floating = pa.types.is_floating(chunk.type)
+    if dtype is None or (chunk.null_count and not floating):
+        # Not a plain numeric column: Arrow converts it (and imports pandas to do so).
+        return chunk.to_numpy(zero_copy_only=False)
+    validity, data = chunk.buffers()
+    out = np.frombuffer(data, dtype=dtype, count=len(chunk), offset=chunk.offset * dtype().itemsize)
+    if chunk.null_count:
+        bits = np.unpackbits(np.frombuffer(validity, dtype=np.uint8), bitorder="little")
+        out = np.where(bits[chunk.offset : chunk.offset + len(chunk)].astype(bool), out, np.nan)
+    return out
+
+
 def block_trials(shapes: Mapping[str, tuple[int, ...]], block_bytes: int | None = None) -> int:
     """Trials per block (of ``block_bytes``, default :data:`BLOCK_BYTES`) for segments shaped
     ``(n_trials, n_frames, n_markers, 3)``."""
@@ -110,14 +161,14 @@ def _segment_block(name: str, markers: np.ndarray, first_trial: int) -> pa.Table
     return pa.table(
         {
             "segment": pa.DictionaryArray.from_arrays(
-                np.zeros(trial.size, dtype=np.int32), pa.array([name])
+                _from_numpy(np.zeros(trial.size, dtype=np.int32)), _column([name], "segment")
             ),
-            "trial": trial.ravel(),
-            "frame": frame.ravel(),
-            "marker": marker.ravel(),
-            "x": xyz[:, 0],
-            "y": xyz[:, 1],
-            "z": xyz[:, 2],
+            "trial": _from_numpy(trial.ravel()),
+            "frame": _from_numpy(frame.ravel()),
+            "marker": _from_numpy(marker.ravel()),
+            "x": _from_numpy(xyz[:, 0]),
+            "y": _from_numpy(xyz[:, 1]),
+            "z": _from_numpy(xyz[:, 2]),
         }
     )
 
@@ -262,13 +313,13 @@ def _block(path, dataset, shapes, offsets, first: int, count: int) -> dict[str, 
             indexing="ij",
         )
         labels = rows.column("segment").cast(pa.string())
-        if not pc.all(pc.equal(labels, name)).as_py():
+        if pc.unique(labels).to_pylist() != [name]:
             raise ValueError(
                 f"{path}: expected segment {name!r} for trials {first}..{first + count - 1}; "
                 "rows are not grouped by segment, then trial, frame and marker"
             )
         for key, want in zip(_INDEX, expected, strict=True):
-            got = rows.column(key).to_numpy()
+            got = _to_numpy(rows.column(key))
             if not np.array_equal(got, want.ravel()):
                 bad = int(np.argmax(got != want.ravel()))
                 raise ValueError(
@@ -279,7 +330,7 @@ def _block(path, dataset, shapes, offsets, first: int, count: int) -> dict[str, 
                 )
         out = np.empty((count, n_frames, n_markers, 3))
         for axis, column in enumerate("xyz"):
-            out[..., axis] = rows.column(column).to_numpy().reshape(count, n_frames, n_markers)
+            out[..., axis] = _to_numpy(rows.column(column)).reshape(count, n_frames, n_markers)
         segments[name] = out
     return segments
 
@@ -338,18 +389,86 @@ def read_trial_numbers(path: str | Path) -> np.ndarray:
 @_names_unreadable_file
 def read_table(path: str | Path) -> pd.DataFrame:
     """A results table (estimates, collected results) written by :func:`write_table`."""
+    import pandas as pd  # the jobs that only write tables never import pandas
+
     return pd.read_parquet(path)
 
 
 def write_table(
-    frame: pd.DataFrame, path: str | Path, provenance: Mapping[str, object] | None = None
+    table: pa.Table | pd.DataFrame,
+    path: str | Path,
+    provenance: Mapping[str, object] | None = None,
 ) -> None:
-    """Write a results table to parquet, creating the directory, with its provenance (what
-    produced it: see :func:`read_provenance`) in the file's metadata."""
+    """Write a results table (Arrow or pandas) to parquet, creating the directory, with its
+    provenance (what produced it: see :func:`read_provenance`) in the file's metadata."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    table = pa.Table.from_pandas(frame, preserve_index=False)
+    if not isinstance(table, pa.Table):
+        table = pa.Table.from_pandas(table, preserve_index=False)
     metadata = {**(table.schema.metadata or {}), _PROVENANCE_KEY: json.dumps(provenance or {})}
     pq.write_table(table.replace_schema_metadata(metadata), path)
+
+
+def rows_table(rows: Sequence[Mapping[str, object]]) -> pa.Table:
+    """Rows (mappings of column name to a Python or NumPy scalar) as an Arrow table.
+
+    Columns come in the order their names first appear. Each column holds one kind of value:
+    booleans, integers, numbers (integers mixed with floats become floats) or text; ``None``,
+    a key a row lacks, and a float NaN are missing values, as ``pyarrow.Table.from_pandas``
+    stores them. Any other value raises ``TypeError`` naming its column.
+
+    The columns are assembled from their buffers: converting Python or NumPy values with
+    ``pyarrow.array`` imports pandas, which would double the start-up of a job that needs
+    nothing else from it.
+    """
+    names = list(dict.fromkeys(name for row in rows for name in row))
+    return pa.table({name: _column([row.get(name) for row in rows], name) for name in names})
+
+
+def _column(values: list, name: str) -> pa.Array:
+    """One column of :func:`rows_table` from its values, ``None`` where missing."""
+    present = [value for value in values if value is not None]
+    kinds = {_kind(value, name) for value in present}
+    if not kinds:
+        return pa.nulls(len(values))
+    if len(kinds) > 1 and kinds != {"integer", "float"}:
+        raise TypeError(f"column {name!r} mixes {' and '.join(sorted(kinds))} values")
+    present_mask = [value is not None for value in values]
+    if kinds == {"text"}:
+        encoded = [b"" if value is None else value.encode() for value in values]
+        offsets = np.zeros(len(values) + 1, dtype=np.int32)
+        np.cumsum([len(text) for text in encoded], out=offsets[1:])
+        data = [pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
+        return _from_buffers(pa.string(), data, present_mask)
+    if kinds == {"boolean"}:
+        bits = np.packbits([bool(value) for value in values], bitorder="little")
+        return _from_buffers(pa.bool_(), [pa.py_buffer(bits)], present_mask)
+    integers = kinds == {"integer"}
+    numbers = np.array(
+        [0 if value is None else value for value in values],
+        dtype=np.int64 if integers else np.float64,
+    )
+    valid = np.array(present_mask) & ~np.isnan(numbers)
+    return _from_buffers(_from_numpy(numbers).type, [pa.py_buffer(numbers)], valid)
+
+
+def _kind(value: object, name: str) -> str:
+    if isinstance(value, bool | np.bool_):
+        return "boolean"
+    if isinstance(value, int | np.integer):
+        return "integer"
+    if isinstance(value, float | np.floating):
+        return "float"
+    if isinstance(value, str):
+        return "text"
+    raise TypeError(f"column {name!r}: {type(value).__name__} values cannot be stored ({value!r})")
+
+
+def _from_buffers(arrow_type, data: list, valid) -> pa.Array:
+    """An Arrow array from its data buffers and whether each value is present."""
+    valid = np.asarray(valid, dtype=bool)
+    missing = int(len(valid) - np.count_nonzero(valid))
+    validity = pa.py_buffer(np.packbits(valid, bitorder="little")) if missing else None
+    return pa.Array.from_buffers(arrow_type, len(valid), [validity, *data], null_count=missing)
 
 
 @_names_unreadable_file
@@ -373,10 +492,10 @@ def _poses_block(
     """Rows of trials ``first_trial, ...``: the trial, its error (null when fitted) and, per
     segment, its stored arrays (NaN for a trial that failed) and residual sum of squares."""
     columns: dict[str, pa.Array] = {
-        "trial": pa.array(np.arange(first_trial, first_trial + len(outcomes))),
-        "error": pa.array(
-            [str(o) if isinstance(o, ValueError) else None for o in outcomes], pa.string()
-        ),
+        "trial": _from_numpy(np.arange(first_trial, first_trial + len(outcomes))),
+        "error": _column(
+            [str(o) if isinstance(o, ValueError) else None for o in outcomes], "error"
+        ).cast(pa.string()),
     }
     for name, (n_frames, n_markers) in shapes.items():
         fitted = [None if isinstance(o, ValueError) else o[name] for o in outcomes]
@@ -387,9 +506,11 @@ def _poses_block(
                 if poses is not None:
                     values[trial] = getattr(poses, field)
             size = int(np.prod(shape))
-            columns[f"{name}/{field}"] = pa.FixedSizeListArray.from_arrays(values.ravel(), size)
-        columns[f"{name}/residual_ss"] = pa.array(
-            [np.nan if poses is None else poses.residual_ss for poses in fitted], pa.float64()
+            columns[f"{name}/{field}"] = pa.FixedSizeListArray.from_arrays(
+                _from_numpy(values.ravel()), size
+            )
+        columns[f"{name}/residual_ss"] = _from_numpy(
+            np.array([np.nan if poses is None else poses.residual_ss for poses in fitted])
         )
     return pa.table(columns)
 
@@ -463,19 +584,17 @@ def read_poses(
         )
     stored = pq.ParquetFile(path)
     rows = _read_rows(stored, first_trial, count, stored.schema_arrow.names)
-    trials = rows.column("trial").to_numpy()
+    trials = _to_numpy(rows.column("trial"))
     if not np.array_equal(trials, np.arange(first_trial, first_trial + count)):
         raise ValueError(f"{path}: rows are not trials {first_trial}..{first_trial + count - 1}")
     arrays = {
-        (name, field): rows.column(f"{name}/{field}")
-        .combine_chunks()
-        .flatten()
-        .to_numpy()
-        .reshape(count, *shape_of(*markers.shape[1:3]))
+        (name, field): _to_numpy(rows.column(f"{name}/{field}").combine_chunks().flatten()).reshape(
+            count, *shape_of(*markers.shape[1:3])
+        )
         for name, markers in segments.items()
         for field, shape_of in _POSE_ARRAYS.items()
     }
-    residuals = {name: rows.column(f"{name}/residual_ss").to_numpy() for name in segments}
+    residuals = {name: _to_numpy(rows.column(f"{name}/residual_ss")) for name in segments}
     errors = rows.column("error").to_pylist()
     return [
         ValueError(error)

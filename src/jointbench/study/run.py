@@ -1,5 +1,9 @@
-"""Simulate a condition, run an estimator over its trials, collect the results, summarise one
-estimator's estimates."""
+"""Simulate a condition, fit its trials' poses, run an estimator over its trials.
+
+These are the many small jobs of a run, so this module and what it imports stay clear of
+pandas: estimates are built and written as Arrow tables (:mod:`jointbench.study.collected`
+gathers them into frames).
+"""
 
 from __future__ import annotations
 
@@ -7,9 +11,10 @@ import logging
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+import pyarrow as pa
 
 from jointbench.estimators import registry
 from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
@@ -20,31 +25,30 @@ from jointbench.study.io import (
     iter_dataset,
     read_metadata,
     read_poses,
-    read_provenance,
-    read_table,
-    read_trial_numbers,
+    rows_table,
     write_dataset_blocks,
     write_poses_blocks,
     write_table,
 )
-from jointbench.study.schema import check_against_dataset, check_estimates
+from jointbench.study.schema import check_estimates
 from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
-from jointbench.study.summary import summarise
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "collect",
     "estimate",
+    "estimate_table",
     "methods_sharing_poses",
     "progress_line",
     "run_estimate_files",
     "run_poses_files",
     "run_simulate_files",
     "simulate_condition",
-    "summarise_estimates",
 ]
 
 
@@ -139,7 +143,21 @@ def estimate(
     Estimators with a ``batched`` form fit all trials in one call; their ``seconds`` is the
     batch's wall time divided by the number of trials. ``poses``, the trials' pose fits (see
     :func:`run_poses_files`), are passed to a pose-based method instead of fitting them again.
+    The frame of :func:`estimate_table`.
     """
+    return estimate_table(study, method, trials, condition, options, poses).to_pandas()
+
+
+def estimate_table(
+    study: str,
+    method: str,
+    trials: Trials,
+    condition: Mapping[str, object],
+    options: Mapping[str, object] | None = None,
+    poses: list | None = None,
+    first_trial: int = 0,
+) -> pa.Table:
+    """:func:`estimate` as an Arrow table, its trials numbered from ``first_trial``."""
     spec = get_study(study)
     # The estimator alone: simulated data are valid by construction, and the seconds column
     # (paper A Table 2) times the estimator, not the input checks a user's call goes through.
@@ -167,7 +185,7 @@ def estimate(
         rows.append(
             {
                 **condition,
-                "trial": trial,
+                "trial": first_trial + trial,
                 "method": method,
                 **score(spec.kind, result, trials.truth),
                 "converged": converged,
@@ -177,9 +195,9 @@ def estimate(
                 **extra,
             }
         )
-    frame = pd.DataFrame(rows)
-    check_estimates(frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method)
-    return frame
+    table = rows_table(rows)
+    check_estimates(table, kind=spec.kind, condition_keys=spec.grid_keys, method=method)
+    return table
 
 
 def run_simulate_files(
@@ -265,14 +283,16 @@ def run_estimate_files(
     ):
         condition = read_metadata(path)["condition"]
         # A block of trials at a time, so memory does not grow with the number of trials.
-        frames = []
+        tables = []
         for first, block in iter_dataset(path):
             stored = None
             if poses_path is not None:
                 stored = read_poses(poses_path, first, {s: block.segments[s] for s in segments})
-            frame = estimate(study, method, block, condition, options, poses=stored)
-            frames.append(frame.assign(trial=frame["trial"] + first))
-        table = pd.concat(frames, ignore_index=True)
+            tables.append(
+                estimate_table(study, method, block, condition, options, stored, first_trial=first)
+            )
+        # A column that is missing in every row of one block takes the others' type.
+        table = pa.concat_tables(tables, promote_options="default")
         write_table(table, output, provenance)
         log.info(progress_line(f"{study} {method}", done, len(outputs), start, len(table)))
 
@@ -286,49 +306,3 @@ def progress_line(what: str, done: int, total: int, start: float, trials: int) -
         f"{what}: [{'#' * filled}{'-' * (20 - filled)}] {done}/{total} conditions "
         f"({trials} trials in the last), {elapsed:.1f} s elapsed, about {left:.0f} s left"
     )
-
-
-def collect(
-    study: str,
-    paths: Sequence[str | Path],
-    output: str,
-    datasets: Sequence[str | Path],
-    provenance: Mapping[str, object] | None = None,
-) -> pd.DataFrame:
-    """Concatenate a study's estimates files after checking each one's schema and holding it to
-    the dataset file of its condition (same trials, each once, same condition values).
-
-    The collected file's provenance adds, per estimator, the provenance of its estimates files
-    (an external estimator's files have none)."""
-    spec = get_study(study)
-    # Each dataset is read once, whatever the number of estimators.
-    expected = {
-        Path(path).stem: {
-            "trials": read_trial_numbers(path),
-            "condition": read_metadata(path)["condition"],
-        }
-        for path in datasets
-    }
-    frames = []
-    estimators: dict[str, dict] = {}
-    for path in paths:
-        frame = read_table(path)
-        method = Path(path).parent.name
-        estimators.setdefault(method, read_provenance(path))
-        check_estimates(
-            frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
-        )
-        if Path(path).stem not in expected:
-            raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
-        check_against_dataset(frame, **expected[Path(path).stem], source=str(path))
-        frames.append(frame)
-    collected = pd.concat(frames, ignore_index=True)
-    collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
-    write_table(collected, output, {**(provenance or {}), "estimators": estimators})
-    return collected
-
-
-def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
-    """One estimator's mean and median error per condition, from its estimates files."""
-    estimates = pd.concat([read_table(path) for path in paths], ignore_index=True)
-    summarise(estimates, study).to_csv(output, index=False)

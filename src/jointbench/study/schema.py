@@ -9,10 +9,15 @@ invented trial or condition cannot change a ranking unnoticed.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING
 
-import pandas as pd
-from pandas.api import types
+import numpy as np
+import pyarrow as pa
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "COMMON_COLUMNS",
@@ -22,11 +27,18 @@ __all__ = [
     "required_columns",
 ]
 
-# column -> predicate on the pandas dtype, and what the predicate means for the message
-_NUMBER = (types.is_numeric_dtype, "numeric")
-_INTEGER = (types.is_integer_dtype, "integer")
-_BOOL = (types.is_bool_dtype, "boolean")
-_TEXT = (lambda d: types.is_string_dtype(d) or types.is_object_dtype(d), "text")
+# column -> predicate on the column's Arrow type, and what the predicate means for the message.
+# Booleans count as numbers, as in NumPy; a column of nothing but missing values as text.
+_NUMBER = (
+    lambda t: pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t),
+    "numeric",
+)
+_INTEGER = (pa.types.is_integer, "integer")
+_BOOL = (pa.types.is_boolean, "boolean")
+_TEXT = (
+    lambda t: pa.types.is_string(t) or pa.types.is_large_string(t) or pa.types.is_null(t),
+    "text",
+)
 
 COMMON_COLUMNS = {
     "trial": _INTEGER,
@@ -60,7 +72,7 @@ KIND_COLUMNS = {
 
 
 def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tuple]:
-    """Column name -> (dtype predicate, description) for an estimates file of ``kind``."""
+    """Column name -> (Arrow type predicate, description) for an estimates file of ``kind``."""
     if kind not in KIND_COLUMNS:
         raise ValueError(f"unknown estimator kind {kind!r}")
     return {
@@ -71,45 +83,66 @@ def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tupl
 
 
 def check_estimates(
-    frame: pd.DataFrame,
+    table: pa.Table | pd.DataFrame,
     *,
     kind: str,
     condition_keys: Sequence[str],
     method: str | None = None,
     source: str = "estimates",
 ) -> None:
-    """Raise ``ValueError`` naming the first missing or mistyped column of an estimates table."""
+    """Raise ``ValueError`` naming the first missing or mistyped column of an estimates table.
+
+    ``table`` is an Arrow table or a pandas data frame; a column's type is its Arrow type (a
+    frame's columns are converted as parquet would store them).
+    """
+    names = table.column_names if isinstance(table, pa.Table) else list(table.columns)
     for column, (accepts, description) in required_columns(kind, condition_keys).items():
-        if column not in frame.columns:
+        if column not in names:
             raise ValueError(f"{source}: missing column {column!r} (needed for {kind} estimates)")
-        if not accepts(frame[column].dtype):
+        values = _arrow_column(table, column, source)
+        if not accepts(values.type):
             raise ValueError(
-                f"{source}: column {column!r} must be {description}, got {frame[column].dtype}"
+                f"{source}: column {column!r} must be {description}, got {values.type}"
             )
-    if method is not None and not frame.empty and set(frame["method"]) != {method}:
-        found = sorted(set(map(str, frame["method"])))
-        raise ValueError(f"{source}: column 'method' must be {method!r} in every row, got {found}")
+    if method is not None and len(table):
+        found = set(_arrow_column(table, "method", source).to_pylist())
+        if found != {method}:
+            listed = sorted(map(str, found))
+            raise ValueError(
+                f"{source}: column 'method' must be {method!r} in every row, got {listed}"
+            )
+
+
+def _arrow_column(table, column: str, source: str) -> pa.Array | pa.ChunkedArray:
+    """One column of an Arrow table or pandas frame as Arrow values."""
+    if isinstance(table, pa.Table):
+        return table.column(column)
+    try:
+        return pa.array(table[column])
+    except (pa.ArrowInvalid, pa.ArrowTypeError) as error:
+        raise ValueError(f"{source}: column {column!r} mixes types: {error}") from None
 
 
 def check_against_dataset(
-    frame: pd.DataFrame,
+    table: pa.Table | pd.DataFrame,
     *,
     trials: Iterable[int],
     condition: Mapping[str, object],
     source: str = "estimates",
 ) -> None:
-    """Raise ``ValueError`` naming ``source`` unless ``frame`` (checked by
+    """Raise ``ValueError`` naming ``source`` unless ``table`` (checked by
     :func:`check_estimates`) has one row per trial of its dataset, no other trial, and the
     dataset's ``condition`` values in every row."""
     expected = sorted(set(map(int, trials)))
     described = f"the dataset has {len(expected)} trials ({_listed(expected)})"
-    if frame.empty:
+    if not len(table):
         raise ValueError(f"{source}: no rows; {described}")
-    found = frame["trial"].astype(int)
+    found, counts = np.unique(np.asarray(table["trial"], dtype=np.int64), return_counts=True)
+    found_set = set(found.tolist())
     problems = {
-        "missing trials": sorted(set(expected) - set(found)),
-        "trials not in the dataset": sorted(set(found) - set(expected)),
-        "trials listed more than once": sorted(set(found[found.duplicated()])),
+        "missing trials": sorted(set(expected) - found_set),
+        "trials not in the dataset": sorted(found_set - set(expected)),
+        "trials listed more than once": found[counts > 1].tolist(),
     }
     found_problems = [
         f"{problem}: {_listed(numbers)}" for problem, numbers in problems.items() if numbers
@@ -117,7 +150,9 @@ def check_against_dataset(
     if found_problems:
         raise ValueError(f"{source}: {'; '.join(found_problems)}; {described}")
     for key, value in condition.items():
-        wrong = sorted({str(v) for v in frame[key] if not _same_value(v, value)})
+        column = table[key]
+        values = column.to_pylist() if isinstance(column, pa.ChunkedArray) else column.tolist()
+        wrong = sorted({str(v) for v in values if not _same_value(v, value)})
         if wrong:
             raise ValueError(
                 f"{source}: column {key!r} must be the dataset's {value!r} in every row, "
@@ -126,10 +161,14 @@ def check_against_dataset(
 
 
 def _same_value(found: object, expected: object) -> bool:
-    # 5 and 5.0 are one grid value; "5" is not.
+    # 5 and 5.0 are one grid value; "5" is not; a missing value is none.
     if isinstance(expected, str) or isinstance(found, str):
         return found == expected
-    return bool(pd.notna(found)) and float(found) == float(expected)
+    try:
+        number = float(found)
+    except (TypeError, ValueError):
+        return False
+    return not math.isnan(number) and number == float(expected)
 
 
 def _listed(numbers: Sequence[int], most: int = 10) -> str:
