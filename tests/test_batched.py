@@ -244,3 +244,22 @@ def test_local_minimum_diagnostic_equals_one_restart_per_trial():
         gap = geometric_cost(data, result.center) - geometric_cost(data, restart.center)
         assert row["f1_gap"] == gap
     assert is_local_minimum((markers[:1],), [None], trials.truth) == [{}]
+
+
+def test_a_noise_free_trial_leaves_the_nm_fits_of_the_others_as_they_are_alone():
+    """A noise-free trial's NM scatter is singular; it goes to the one-trial fit on its own,
+    and the trials beside it keep the answers they have in any other batch."""
+    fit_nm = registry.get("center", "NM")
+    noisy = _trials("cmc", 0).segments["moving"][:3]
+    rng = np.random.default_rng(7)
+    directions = rng.normal(size=(noisy.shape[1], noisy.shape[2], 3))
+    exact = 40.0 * directions / np.linalg.norm(directions, axis=-1, keepdims=True)
+    batch = np.concatenate([noisy[:1], exact[None], noisy[1:]])
+    outcomes = fit_nm.batched(batch)
+    alone = [fit_nm.batched(trial[None])[0] for trial in batch]
+    for outcome, single in zip(outcomes, alone, strict=True):
+        assert np.array_equal(outcome.center, single.center) and outcome.cost == single.cost
+    np.testing.assert_allclose(outcomes[1].center, 0.0, atol=1e-9)
+    # The noise-free trial took the one-trial path, the noisy ones the many-trial one.
+    assert np.array_equal(outcomes[1].center, fit_nm(exact).center)
+    assert not np.array_equal(outcomes[0].center, fit_nm(batch[0]).center)

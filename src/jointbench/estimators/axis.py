@@ -15,7 +15,8 @@ trajectory centroid.
 * combined cost (eq. 12), best-fitting circles: ``f = f_p + f_r``.
 
 Point on the axis. ``m`` is not searched: it is the NM sphere-fit centre of paper A (Chang &
-Pollard's constrained least squares, :func:`jointbench.estimators.sphere.fit_nm`), as in paper B
+Pollard's constrained least squares, the many-trial form of
+:func:`jointbench.estimators.sphere.fit_nm`, which agrees with it to ~1e-9 mm), as in paper B
 §2.4 and §4 ("provided an adequate CoR location to use in the optimization without
 refinement"). The axis passes through ``m`` by construction, so ``m`` is its own foot on the
 axis and is what ``AxisResult.point`` returns, for all three methods (the planar cost does not
@@ -273,8 +274,8 @@ def canonical_sign(direction: np.ndarray) -> np.ndarray:
     return -direction if direction[np.argmax(np.abs(direction))] < 0 else direction
 
 
-def _prepare(markers: object, point: object | None, parameterisation: str):
-    """Validated markers ``(N, P, 3)`` and the point ``m`` on the axis (3,) [mm]."""
+def _checked(markers: object, parameterisation: str) -> np.ndarray:
+    """Validated markers ``(N, P, 3)`` [mm] of one trial."""
     array = check_markers(markers, min_frames=4, min_markers=1)
     check_moves(array)
     if parameterisation not in PARAMETERISATIONS:
@@ -282,12 +283,27 @@ def _prepare(markers: object, point: object | None, parameterisation: str):
             f"unknown parameterisation {parameterisation!r}; choose one of "
             f"{', '.join(PARAMETERISATIONS)}"
         )
+    return array
+
+
+def _given_point(point: object | None) -> np.ndarray | None:
+    """The user's point ``m`` (3,) [mm], checked; ``None`` for the default."""
     if point is None:
-        return array, np.asarray(fit_nm(array).center, dtype=float)
+        return None
     m = np.asarray(point, dtype=float)
     if m.shape != (3,) or not np.all(np.isfinite(m)):
         raise ValueError(f"point must be a finite (3,) array [mm], got {m!r}")
-    return array, m
+    return m
+
+
+def _nm_points(arrays: list[np.ndarray]) -> list[np.ndarray | ValueError]:
+    """The default point ``m`` of each validated trial: its NM sphere-fit centre (3,) [mm], or
+    the ``ValueError`` of a fit without one. All trials are fitted at once; each trial's centre
+    is the one it has alone (the one-trial fit goes through the same code)."""
+    return [
+        outcome if isinstance(outcome, ValueError) else np.asarray(outcome.center, dtype=float)
+        for outcome in fit_nm.batched(np.stack(arrays))
+    ]
 
 
 def _starts(parameterisation: str) -> np.ndarray:
@@ -370,7 +386,12 @@ def _result(array, trial, costs, runs, method, parameterisation) -> AxisResult:
 
 
 def _fit(markers: object, method: str, *, point: object | None, **search) -> AxisResult:
-    array, m = _prepare(markers, point, search["parameterisation"])
+    array = _checked(markers, search["parameterisation"])
+    m = _given_point(point)
+    if m is None:
+        (m,) = _nm_points([array])
+        if isinstance(m, ValueError):
+            raise m
     return _fit_many([array], [m], method, **search)[0]
 
 
@@ -380,8 +401,16 @@ def _fit_batch(
     """:func:`_fit` for every trial of ``markers`` ``(n_trials, N, P, 3)``; a trial that the
     one-trial function rejects carries its ``ValueError``."""
     outcomes, prepared = prepare_trials(
-        markers, lambda data: _prepare(data, point, search["parameterisation"])
+        markers, lambda data: (_checked(data, search["parameterisation"]), _given_point(point))
     )
+    if point is None and prepared:
+        points = _nm_points([array for array, _ in prepared.values()])
+        for trial, m in zip(list(prepared), points, strict=True):
+            if isinstance(m, ValueError):
+                outcomes[trial] = m
+                del prepared[trial]
+            else:
+                prepared[trial] = (prepared[trial][0], m)
     if prepared:
         arrays, points = zip(*prepared.values(), strict=True)
         for trial, result in zip(

@@ -754,54 +754,86 @@ def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
     outcomes: list = [None] * len(bad)
     good = np.flatnonzero(~bad)
     if good.size:
-        data = markers[good]
-        n_trials, n_frames, n_markers, _ = data.shape
-        rows = data.reshape(n_trials, -1, 3)
-        origin = rows.mean(axis=1)
-        shifted = rows - origin[:, None]
-        scale = np.sqrt(np.einsum("tri,tri->t", shifted, shifted) / rows.shape[1])
-        scaled = shifted / scale[:, None, None]
-        basis = np.empty((n_trials, rows.shape[1], 4))
-        basis[..., 0] = np.einsum("tri,tri->tr", scaled, scaled)
-        basis[..., 1:] = scaled
-        size = 4 + n_markers
-        scatter = np.zeros((n_trials, size, size))
-        scatter[:, :4, :4] = np.swapaxes(basis, 1, 2) @ basis
-        per_marker = basis.reshape(n_trials, n_frames, n_markers, 4).sum(axis=1)
-        scatter[:, :4, 4:] = np.swapaxes(per_marker, 1, 2)
-        scatter[:, 4:, :4] = per_marker
-        scatter[:, 4:, 4:] = n_frames * np.eye(n_markers)
-        constraint = _nm_constraint(n_markers)
+        scatter, origin, scale = _nm_scatters(markers[good])
         try:
             lower = np.linalg.cholesky(scatter)
         except np.linalg.LinAlgError:
-            # Some trial is (nearly) noise-free: its scatter is singular; fit one at a time.
-            return _with_fallback(fit_nm, markers, outcomes, np.ones(len(bad), dtype=bool))
-        pivots = np.diagonal(lower, axis1=1, axis2=2) ** 2
-        regular = pivots.min(axis=1) > 1e-9 * pivots.max(axis=1)
-        whitened = np.linalg.inv(np.where(regular[:, None, None], lower, np.eye(size)))
-        m_matrix = whitened @ constraint @ np.swapaxes(whitened, 1, 2)
-        mu, y = np.linalg.eigh((m_matrix + np.swapaxes(m_matrix, 1, 2)) / 2.0)
-        largest = mu[:, -1]
-        u = np.einsum("tji,tj->ti", whitened, y[:, :, -1])
-        norm = np.einsum("ti,ij,tj->t", u, constraint, u)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u = u / np.sqrt(norm)[:, None]
-            a = u[:, 0]
-            solved = regular & (largest > 0) & (np.abs(a) >= _EPS * np.abs(u).max(axis=1))
-            center_scaled = u[:, 1:4] / (-2.0 * a[:, None])
-            sq_radii = np.einsum("ti,ti->t", center_scaled, center_scaled)[:, None] - (
-                u[:, 4:] / a[:, None]
-            )
-            centers = origin + scale[:, None] * center_scaled
-            radii = scale[:, None] * np.sqrt(np.maximum(sq_radii, 0.0))
-            costs = 1.0 / largest
+            # Some trial is (nearly) noise-free: its scatter is singular. It alone goes to the
+            # one-trial function; the others are solved together, so that a trial's answer
+            # does not depend on the trials beside it.
+            singular = np.array([not _positive_definite(matrix) for matrix in scatter])
+            bad[good[singular]] = True
+            good, scatter = good[~singular], scatter[~singular]
+            origin, scale = origin[~singular], scale[~singular]
+            if not good.size:
+                return _with_fallback(fit_nm, markers, outcomes, bad)
+            lower = np.linalg.cholesky(scatter)
+        solved, centers, radii, costs = _nm_solve(lower, origin, scale, markers.shape[2])
         # A trial without a solution goes to the one-trial function, which says why.
         bad[good[~solved]] = True
         _closed_form_results(
             outcomes, "NM", good[solved], centers[solved], radii[solved], costs[solved]
         )
     return _with_fallback(fit_nm, markers, outcomes, bad)
+
+
+def _positive_definite(matrix: np.ndarray) -> bool:
+    try:
+        np.linalg.cholesky(matrix)
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def _nm_scatters(data: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per trial of ``data`` ``(T, N, P, 3)``: the scatter of the NM design in scaled
+    coordinates ``(T, 4 + P, 4 + P)``, and the origin ``(T, 3)`` [mm] and scale ``(T,)`` [mm]
+    of those coordinates."""
+    n_trials, n_frames, n_markers, _ = data.shape
+    rows = data.reshape(n_trials, -1, 3)
+    origin = rows.mean(axis=1)
+    shifted = rows - origin[:, None]
+    scale = np.sqrt(np.einsum("tri,tri->t", shifted, shifted) / rows.shape[1])
+    scaled = shifted / scale[:, None, None]
+    basis = np.empty((n_trials, rows.shape[1], 4))
+    basis[..., 0] = np.einsum("tri,tri->tr", scaled, scaled)
+    basis[..., 1:] = scaled
+    size = 4 + n_markers
+    scatter = np.zeros((n_trials, size, size))
+    scatter[:, :4, :4] = np.swapaxes(basis, 1, 2) @ basis
+    per_marker = basis.reshape(n_trials, n_frames, n_markers, 4).sum(axis=1)
+    scatter[:, :4, 4:] = np.swapaxes(per_marker, 1, 2)
+    scatter[:, 4:, :4] = per_marker
+    scatter[:, 4:, 4:] = n_frames * np.eye(n_markers)
+    return scatter, origin, scale
+
+
+def _nm_solve(lower, origin, scale, n_markers: int):
+    """The NM generalised eigenproblem of each trial from the Cholesky factor of its scatter:
+    whether it has a solution, and the centres ``(T, 3)`` [mm], radii ``(T, P)`` [mm] and
+    costs ``(T,)``."""
+    size = 4 + n_markers
+    constraint = _nm_constraint(n_markers)
+    pivots = np.diagonal(lower, axis1=1, axis2=2) ** 2
+    regular = pivots.min(axis=1) > 1e-9 * pivots.max(axis=1)
+    whitened = np.linalg.inv(np.where(regular[:, None, None], lower, np.eye(size)))
+    m_matrix = whitened @ constraint @ np.swapaxes(whitened, 1, 2)
+    mu, y = np.linalg.eigh((m_matrix + np.swapaxes(m_matrix, 1, 2)) / 2.0)
+    largest = mu[:, -1]
+    u = np.einsum("tji,tj->ti", whitened, y[:, :, -1])
+    norm = np.einsum("ti,ij,tj->t", u, constraint, u)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = u / np.sqrt(norm)[:, None]
+        a = u[:, 0]
+        solved = regular & (largest > 0) & (np.abs(a) >= _EPS * np.abs(u).max(axis=1))
+        center_scaled = u[:, 1:4] / (-2.0 * a[:, None])
+        sq_radii = np.einsum("ti,ti->t", center_scaled, center_scaled)[:, None] - (
+            u[:, 4:] / a[:, None]
+        )
+        centers = origin + scale[:, None] * center_scaled
+        radii = scale[:, None] * np.sqrt(np.maximum(sq_radii, 0.0))
+        costs = 1.0 / largest
+    return solved, centers, radii, costs
 
 
 def _fit_bc_batch(
