@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pyarrow as pa
-import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from jointbench.estimators.twosegment import SegmentPoses, stored_segment_poses
@@ -118,7 +117,8 @@ def _from_numpy(values: np.ndarray) -> pa.Array:
 
 
 def _to_numpy(values: pa.Array | pa.ChunkedArray) -> np.ndarray:
-    """A numeric Arrow column as a 1-D NumPy array; a missing float is NaN."""
+    """A numeric Arrow column as a 1-D NumPy array (fixed-size lists flattened); a missing
+    float is NaN."""
     chunks = values.chunks if isinstance(values, pa.ChunkedArray) else [values]
     parts = [_chunk_to_numpy(chunk) for chunk in chunks]
     if not parts:
@@ -127,6 +127,9 @@ def _to_numpy(values: pa.Array | pa.ChunkedArray) -> np.ndarray:
 
 
 def _chunk_to_numpy(chunk: pa.Array) -> np.ndarray:
+    if pa.types.is_fixed_size_list(chunk.type) and not chunk.null_count:
+        size = chunk.type.list_size
+        return _chunk_to_numpy(chunk.values.slice(chunk.offset * size, len(chunk) * size))
     dtype = _NUMPY_DTYPES.get(chunk.type)
     floating = pa.types.is_floating(chunk.type)
     if dtype is None or (chunk.null_count and not floating):
@@ -270,13 +273,29 @@ def _shapes(path: str | Path, metadata: Mapping) -> dict[str, tuple[int, ...]]:
     written before it was recorded there, from the index columns."""
     if "shapes" in metadata:
         return {name: tuple(shape) for name, shape in metadata["shapes"].items()}
+    import pyarrow.compute as pc  # only files without recorded shapes need it
+
     table = pq.read_table(path, columns=["segment", *_INDEX])
     shapes = {}
     for name in table.column("segment").unique().to_pylist():
-        part = table.filter(pc.equal(table.column("segment").cast(pa.string()), name))
+        part = table.filter(pc.equal(table.column("segment").cast(pa.string()), pa.scalar(name)))
         sizes = [pc.max(part.column(key)).as_py() + 1 for key in _INDEX]
         shapes[str(name)] = (*sizes, 3)
     return shapes
+
+
+def _labels(column: pa.ChunkedArray) -> set[str]:
+    """The distinct values of a text column, as a dataset's dictionary-encoded ``segment``
+    column stores them: from each chunk's dictionary and indices, without Arrow's compute
+    module (see :func:`_to_numpy`)."""
+    labels: set[str] = set()
+    for chunk in column.chunks:
+        if not isinstance(chunk, pa.DictionaryArray):
+            labels.update(chunk.to_pylist())
+            continue
+        dictionary = chunk.dictionary.to_pylist()
+        labels.update(dictionary[index] for index in np.unique(_to_numpy(chunk.indices)))
+    return labels
 
 
 def _read_rows(
@@ -312,8 +331,7 @@ def _block(path, dataset, shapes, offsets, first: int, count: int) -> dict[str, 
             np.arange(n_markers),
             indexing="ij",
         )
-        labels = rows.column("segment").cast(pa.string())
-        if pc.unique(labels).to_pylist() != [name]:
+        if _labels(rows.column("segment")) != {name}:
             raise ValueError(
                 f"{path}: expected segment {name!r} for trials {first}..{first + count - 1}; "
                 "rows are not grouped by segment, then trial, frame and marker"
@@ -491,11 +509,11 @@ def _poses_block(
 ) -> pa.Table:
     """Rows of trials ``first_trial, ...``: the trial, its error (null when fitted) and, per
     segment, its stored arrays (NaN for a trial that failed) and residual sum of squares."""
+    errors = [str(o) if isinstance(o, ValueError) else None for o in outcomes]
     columns: dict[str, pa.Array] = {
         "trial": _from_numpy(np.arange(first_trial, first_trial + len(outcomes))),
-        "error": _column(
-            [str(o) if isinstance(o, ValueError) else None for o in outcomes], "error"
-        ).cast(pa.string()),
+        # Text even when no trial failed, so every block of a file has one schema.
+        "error": _column(errors, "error") if any(errors) else pa.nulls(len(errors), pa.string()),
     }
     for name, (n_frames, n_markers) in shapes.items():
         fitted = [None if isinstance(o, ValueError) else o[name] for o in outcomes]
@@ -588,7 +606,7 @@ def read_poses(
     if not np.array_equal(trials, np.arange(first_trial, first_trial + count)):
         raise ValueError(f"{path}: rows are not trials {first_trial}..{first_trial + count - 1}")
     arrays = {
-        (name, field): _to_numpy(rows.column(f"{name}/{field}").combine_chunks().flatten()).reshape(
+        (name, field): _to_numpy(rows.column(f"{name}/{field}")).reshape(
             count, *shape_of(*markers.shape[1:3])
         )
         for name, markers in segments.items()
