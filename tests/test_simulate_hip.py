@@ -9,7 +9,9 @@ import pytest
 
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.poses import rigid_fit
+from jointbench.simulate import noise
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
+from jointbench.simulate.noise import isotropic_noise
 from jointbench.study.seeds import trial_rng
 
 PROTOCOL = HipProtocol()
@@ -158,3 +160,25 @@ def test_study_spec_uses_this_simulator():
     protocol = spec.protocol({"n_frames": 300})
     trials = spec.simulate({"n_frames": 8}, protocol, _rngs(2))
     assert spec.fit_arguments(trials, 1)[0].shape == (8, 3, 3)
+
+
+def test_noise_from_a_generator_state_seen_before_is_drawn_once_and_equals_a_new_draw():
+    """Paper C's Nt conditions share each trial's generator: the noise is drawn once per job."""
+    first = isotropic_noise(np.random.default_rng(11), (50, 6), 1.7)
+    again_rng = np.random.default_rng(11)
+    again = isotropic_noise(again_rng, (50, 6), 1.7)
+    assert again is first and not again.flags.writeable
+    fresh_rng = np.random.default_rng(11)
+    fresh = noise._draw(fresh_rng, (50, 6), 1.7)
+    assert np.array_equal(fresh, again)
+    # The generator is left where the draw leaves it.
+    assert again_rng.bit_generator.state == fresh_rng.bit_generator.state
+    assert isotropic_noise(np.random.default_rng(11), (50, 6), 1.0) is not first
+
+
+def test_remembered_noise_is_bounded_in_bytes():
+    remembered = noise._Remembered(max_bytes=3 * 800)
+    for key in range(5):
+        remembered.put((key,), np.zeros(100), {})
+    assert remembered.nbytes == 2400 and [k for (k,) in remembered.draws] == [2, 3, 4]
+    assert remembered.get((2,)) is not None and remembered.get((0,)) is None

@@ -2,9 +2,38 @@
 
 from __future__ import annotations
 
+import json
+from collections import OrderedDict
+
 import numpy as np
 
 __all__ = ["isotropic_noise"]
+
+
+class _Remembered:
+    """Draws by generator state, the least recently used forgotten beyond ``max_bytes``."""
+
+    def __init__(self, max_bytes: int) -> None:
+        self.max_bytes = max_bytes
+        self.nbytes = 0
+        self.draws: OrderedDict[tuple, tuple[np.ndarray, dict]] = OrderedDict()
+
+    def get(self, key: tuple) -> tuple[np.ndarray, dict] | None:
+        if key in self.draws:
+            self.draws.move_to_end(key)
+            return self.draws[key]
+        return None
+
+    def put(self, key: tuple, noise: np.ndarray, state: dict) -> None:
+        self.draws[key] = (noise, state)
+        self.nbytes += noise.nbytes
+        while self.nbytes > self.max_bytes:
+            self.nbytes -= self.draws.popitem(last=False)[1][0].nbytes
+
+
+# Paper C's conditions (the first Nt frames of one recording per trial) share their generators,
+# so a job that simulates several of them draws each trial's noise once, not once per condition.
+_REMEMBERED = _Remembered(max_bytes=128 * 2**20)
 
 
 def isotropic_noise(rng: np.random.Generator, shape: tuple[int, ...], sd_mm: float) -> np.ndarray:
@@ -21,7 +50,23 @@ def isotropic_noise(rng: np.random.Generator, shape: tuple[int, ...], sd_mm: flo
     rng : the generator to draw from.
     shape : leading shape, e.g. ``(n_frames, n_markers)``; the result is ``(*shape, 3)`` [mm].
     sd_mm : standard deviation of the error magnitude [mm].
+
+    The result is read-only. A draw from a generator state seen before returns the noise drawn
+    then and leaves the generator where that draw left it, exactly as drawing again would.
     """
+    key = (json.dumps(rng.bit_generator.state, sort_keys=True), tuple(shape), float(sd_mm))
+    remembered = _REMEMBERED.get(key)
+    if remembered is not None:
+        noise, state = remembered
+        rng.bit_generator.state = state
+        return noise
+    noise = _draw(rng, shape, sd_mm)
+    noise.setflags(write=False)
+    _REMEMBERED.put(key, noise, rng.bit_generator.state)
+    return noise
+
+
+def _draw(rng: np.random.Generator, shape: tuple[int, ...], sd_mm: float) -> np.ndarray:
     directions = rng.normal(size=(*shape, 3))
     directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
     magnitudes = rng.normal(0.0, sd_mm, size=shape)
