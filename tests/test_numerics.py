@@ -147,7 +147,10 @@ def test_small_matrix_helpers_match_numpy():
     np.testing.assert_allclose(small.inverse3(matrices[0]), np.linalg.inv(matrices[0]), rtol=1e-10)
     q, _ = np.linalg.qr(matrices)
     expected = q @ spd[0] @ np.swapaxes(q, 1, 2)
-    np.testing.assert_allclose(small.rotated3(q, spd[0]), expected, rtol=1e-13, atol=1e-13)
+    rotated = small.rotated3(q, spd[0])
+    np.testing.assert_allclose(rotated, expected, rtol=1e-13, atol=1e-13)
+    # A covariance stays a covariance: exactly symmetric, not to rounding.
+    assert np.array_equal(rotated, np.swapaxes(rotated, 1, 2))
     assert not np.isfinite(small.inverse3(np.zeros((3, 3)))).any()
     # One matrix per leading index (per trial): each trial's frames with its own matrix.
     per_trial = small.rotated3(q.reshape(4, 50, 3, 3), spd[:4])

@@ -43,15 +43,24 @@ def inverse3(matrices: np.ndarray) -> np.ndarray:
 
 
 def rotated3(rotations: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """``R M R'`` for rotations ``(..., N, 3, 3)`` and one matrix ``M`` ``(..., 3, 3)`` per
-    leading index (e.g. per trial): ``(..., N, 3, 3)``."""
+    """``R M R'`` for rotations ``(..., N, 3, 3)`` and one symmetric matrix ``M`` ``(..., 3, 3)``
+    per leading index (e.g. per trial): ``(..., N, 3, 3)``, exactly symmetric.
+
+    One matrix product gives ``R M`` for all frames; the six distinct entries of the product
+    with ``R'`` are then formed element-wise and the lower triangle mirrors the upper one.
+    """
     rotations = np.asarray(rotations, dtype=float)
     *lead, n_frames, _, _ = rotations.shape
-    # One matrix product for R M over all frames, then R' element-wise.
     rows = rotations.reshape(*lead, n_frames * 3, 3)
     left = (rows @ np.asarray(matrix, dtype=float)).reshape(rotations.shape)
-    return (
-        left[..., :, None, 0] * rotations[..., None, :, 0]
-        + left[..., :, None, 1] * rotations[..., None, :, 1]
-        + left[..., :, None, 2] * rotations[..., None, :, 2]
-    )
+    out = np.empty(rotations.shape)
+    for i in range(3):
+        for j in range(i, 3):
+            entry = (
+                left[..., i, 0] * rotations[..., j, 0]
+                + left[..., i, 1] * rotations[..., j, 1]
+                + left[..., i, 2] * rotations[..., j, 2]
+            )
+            out[..., i, j] = entry
+            out[..., j, i] = entry
+    return out
