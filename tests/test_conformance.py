@@ -250,7 +250,9 @@ def _assert_same(kind, found, expected, tolerance, scale):
     allowed = tolerance + 1e-12 * scale
     if kind == "axis":
         (point, direction), (point_expected, direction_expected) = found, expected
-        angle = float(np.arccos(min(1.0, abs(float(direction @ direction_expected)))))
+        # From the sine and the cosine: arccos of the cosine alone cannot tell directions a
+        # rounding error apart from ones 1.5e-8 rad apart.
+        angle = float(np.radians(angle_between_lines_deg(direction, direction_expected)))
         offset = point_expected - point
         distance = float(np.linalg.norm(offset - (offset @ direction) * direction))
         assert angle <= allowed and distance <= allowed, (angle, distance, allowed)

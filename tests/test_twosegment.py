@@ -100,7 +100,8 @@ def test_world_transform_moves_results_consistently():
     np.testing.assert_allclose(after.center, rotation @ before.center + shift, atol=1e-8)
     axis_before = fit_sara_two_segment(proximal, distal)
     axis_after = fit_sara_two_segment(*moved)
-    np.testing.assert_allclose(axis_after.direction, rotation @ axis_before.direction, atol=1e-9)
+    # An axis is a line: its direction's sign is whatever the eigen-solver returns.
+    assert angle_between_lines_deg(axis_after.direction, rotation @ axis_before.direction) < 1e-8
 
 
 def test_one_segment_methods_follow_the_reference_frame():

@@ -39,10 +39,10 @@ def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.nd
     source = np.broadcast_to(np.asarray(source, dtype=float), target.shape)
     source_mean = source.mean(axis=-2)
     target_mean = target.mean(axis=-2)
-    cross = np.einsum(
-        "...mi,...mj->...ij", target - target_mean[..., None, :], source - source_mean[..., None, :]
-    )
-    rotation = best_rotation(cross)
+    centred_target = target - target_mean[..., None, :]
+    centred_source = source - source_mean[..., None, :]
+    cross = np.einsum("...mi,...mj->...ij", centred_target, centred_source)
+    rotation = best_rotation(cross, bound=_eigenvalue_bound(centred_target, centred_source))
     translation = target_mean - np.einsum("...ij,...j->...i", rotation, source_mean)
     return rotation, translation
 
@@ -57,19 +57,33 @@ def _kabsch_rotation(cross: np.ndarray) -> np.ndarray:
     return u @ vt
 
 
-def best_rotation(cross: np.ndarray) -> np.ndarray:
+def _eigenvalue_bound(centred_target: np.ndarray, centred_source: np.ndarray) -> np.ndarray:
+    """``(sum_i |target_i|^2 + |source_i|^2) / 2`` over the markers: at least
+    ``max trace(R' H) = sum_i target_i . R source_i`` (each term is at most the mean of the two
+    squared lengths), with equality for a perfect fit."""
+    return 0.5 * (
+        np.einsum("...mi,...mi->...", centred_target, centred_target)
+        + np.einsum("...mi,...mi->...", centred_source, centred_source)
+    )
+
+
+def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.ndarray:
     """Proper rotations ``R`` maximising ``trace(R' H)`` for ``H = sum_i target_i source_i'``.
 
     This is the rotation of :func:`rigid_fit` (Kanatani's / Kabsch's SVD solution). It is
     computed as Horn's unit quaternion, the eigenvector of the largest eigenvalue of the 4x4
     symmetric key matrix of ``H``: the eigenvalue by Newton's method on the characteristic
-    quartic started above the largest root (Theobald's QCP), the eigenvector as the largest
+    quartic started above the largest root (Theobald's QCP; the start is the smaller of
+    ``sqrt(3) |H|_F`` and ``bound``, an upper bound the caller knows, such as half the summed
+    squared lengths of the centred points, which a close fit nearly attains, so that Newton
+    needs a step or two), the eigenvector as the largest
     column of the adjugate of ``N - lambda I``. Everything is element-wise on the stack, which
     is an order of magnitude faster than batched LAPACK SVDs of 3x3 matrices and agrees with
     them to ~1e-15. Matrices where the largest eigenvalue is (nearly) repeated -- collinear or
     coincident points, where the rotation is not unique -- fall back to the SVD.
 
-    ``cross`` is ``(..., 3, 3)``; the result has the same shape.
+    ``cross`` is ``(..., 3, 3)``, ``bound`` ``(...)`` or ``None``; the result has the shape of
+    ``cross``.
     """
     shape = np.shape(cross)
     cross = np.asarray(cross, dtype=float).reshape(-1, 3, 3)
@@ -94,9 +108,12 @@ def best_rotation(cross: np.ndarray) -> np.ndarray:
     b01, b02, b03 = n02 * n13 - n12 * n03, n02 * n23 - n22 * n03, n02 * n33 - n23 * n03
     b12, b13, b23 = n12 * n23 - n22 * n13, n12 * n33 - n23 * n13, n22 * n33 - n23 * n23
     c0 = a01 * b23 - a02 * b13 + a03 * b12 + a12 * b03 - a13 * b02 + a23 * b01
-    # sqrt(3) |H|_F >= s1 + s2 + s3 >= lambda_max: Newton from above converges monotonically.
+    # sqrt(3) |H|_F >= s1 + s2 + s3 >= lambda_max: Newton from above converges monotonically
+    # (the key matrix is symmetric, so every root of its quartic is real).
     lam = np.sqrt(-1.5 * c2)
     scale = np.where(lam > 0, lam, 1.0)
+    if bound is not None:
+        lam = np.minimum(lam, np.asarray(bound, dtype=float).reshape(lam.shape))
     tolerance = 1e-13 * scale
     # A matrix stops stepping once its own step is small, so its answer does not depend on the
     # other matrices of the stack.
@@ -209,10 +226,16 @@ def rigid_poses(
         *batch, n_frames * 3, n_markers
     )
 
+    target_sq = np.einsum("...fmi,...fmi->...f", centred, centred)
+
     def fit(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         body_mean = body.mean(axis=-2)
-        cross = rows @ (body - body_mean[..., None, :])
-        rotation = best_rotation(cross.reshape(*batch, n_frames, 3, 3))
+        centred_body = body - body_mean[..., None, :]
+        cross = rows @ centred_body
+        # The eigenvalue bound of best_rotation (see _eigenvalue_bound), per frame.
+        body_sq = np.einsum("...mi,...mi->...", centred_body, centred_body)
+        bound = 0.5 * (target_sq + body_sq[..., None])
+        rotation = best_rotation(cross.reshape(*batch, n_frames, 3, 3), bound=bound)
         translation = target_mean - (rotation @ body_mean[..., None, :, None])[..., 0]
         return rotation, translation, body_mean
 
