@@ -668,7 +668,9 @@ def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarra
         # A sum is finite only if every term is (an overflow merely sends a trial to the
         # one-trial path, which decides).
         finite = np.isfinite(array.sum(axis=(1, 2, 3)))
-        spread = np.abs(array - first).max(axis=(1, 2, 3))
+        # In place: a second full-size temporary costs more than the arithmetic.
+        offsets = array - first
+        spread = np.abs(offsets, out=offsets).max(axis=(1, 2, 3))
         scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
         still = spread <= 1e-9 * scale
     return array, ~finite | still | (array.shape[2] < 1)
@@ -788,22 +790,28 @@ def _positive_definite(matrix: np.ndarray) -> bool:
 def _nm_scatters(data: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per trial of ``data`` ``(T, N, P, 3)``: the scatter of the NM design in scaled
     coordinates ``(T, 4 + P, 4 + P)``, and the origin ``(T, 3)`` [mm] and scale ``(T,)`` [mm]
-    of those coordinates."""
+    of those coordinates.
+
+    Sums over the rows are matrix products (with a vector of ones, or with the markers'
+    indicator matrix): reductions over the middle axis of a stack run several times slower.
+    """
     n_trials, n_frames, n_markers, _ = data.shape
     rows = data.reshape(n_trials, -1, 3)
-    origin = rows.mean(axis=1)
-    shifted = rows - origin[:, None]
-    scale = np.sqrt(np.einsum("tri,tri->t", shifted, shifted) / rows.shape[1])
-    scaled = shifted / scale[:, None, None]
-    basis = np.empty((n_trials, rows.shape[1], 4))
+    n_rows = rows.shape[1]
+    origin = (np.ones(n_rows) @ rows) / n_rows
+    scaled = rows - origin[:, None]
+    scale = np.sqrt(np.einsum("tri,tri->t", scaled, scaled) / n_rows)
+    scaled /= scale[:, None, None]
+    basis = np.empty((n_trials, n_rows, 4))
     basis[..., 0] = np.einsum("tri,tri->tr", scaled, scaled)
     basis[..., 1:] = scaled
+    transposed = np.swapaxes(basis, 1, 2)
     size = 4 + n_markers
     scatter = np.zeros((n_trials, size, size))
-    scatter[:, :4, :4] = np.swapaxes(basis, 1, 2) @ basis
-    per_marker = basis.reshape(n_trials, n_frames, n_markers, 4).sum(axis=1)
-    scatter[:, :4, 4:] = np.swapaxes(per_marker, 1, 2)
-    scatter[:, 4:, :4] = per_marker
+    scatter[:, :4, :4] = transposed @ basis
+    # Row r belongs to marker r % P.
+    scatter[:, :4, 4:] = transposed @ np.tile(np.eye(n_markers), (n_frames, 1))
+    scatter[:, 4:, :4] = np.swapaxes(scatter[:, :4, 4:], 1, 2)
     scatter[:, 4:, 4:] = n_frames * np.eye(n_markers)
     return scatter, origin, scale
 
