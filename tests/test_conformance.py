@@ -368,6 +368,16 @@ def test_rotation_about_a_single_axis_is_flagged_for_centres_only():
     assert fit("axis", "planar", hinge).status == "ok"
 
 
+@pytest.mark.parametrize("offset_mm", [0.0, 1e6])
+def test_a_noise_free_hinge_is_flagged_as_rotation_about_a_single_axis(offset_mm):
+    """Without noise the rigid-body residual is rounding, and so is the off-axis rotation:
+    their ratio means nothing, and the hinge is a hinge (also far from the origin)."""
+    hinge = (clean("axis")[0] + offset_mm,)
+    result = fit("center", "LS", hinge)
+    assert "rotation about a single axis" in result.status, result.status
+    assert result.diagnostics["support_off_axis_rotation_rms_deg"] < 1e-5
+
+
 def test_a_small_cluster_with_large_noise_is_still_one_rigid_body():
     """Paper A's M marker set (13.8, 29.0, 15.7 mm from the centre) with 2 mm noise is a hard
     but legitimate recording, not a non-rigid one."""

@@ -29,7 +29,10 @@ This module judges the data, not the answer, from the rigid-body fit of the movi
   same way with ``(2 (N - 1), dof)`` degrees of freedom, since rotation about one axis leaves
   the centre undetermined along it. Both tests are first order in the noise; with large
   rotations about the main axis the second is somewhat liberal (a pure hinge with noise passes
-  as spanning two axes in about 0.5 % of trials at the 0.1 % level).
+  as spanning two axes in about 0.5 % of trials at the 0.1 % level). Noise-free data (a
+  residual at rounding level, :data:`ROUNDING`) leave nothing to test against: any rotation
+  is resolved, and rotation about a second axis is when its mean square is above ``1e-12`` of
+  the main axis's.
 
 The verdict is a list of warnings; :func:`annotate` writes them into a result's ``status`` and
 its numbers into ``diagnostics["support_..."]``. It never changes ``converged``, which keeps the
@@ -52,6 +55,7 @@ __all__ = [
     "CENTRE_KINDS",
     "MAX_NONRIGID_SHARE",
     "ROTATION_ALPHA",
+    "ROUNDING",
     "Support",
     "annotate",
     "assess",
@@ -68,6 +72,11 @@ MAX_NONRIGID_SHARE = 0.25
 
 #: The kinds whose answer is a centre, which rotation about a single axis leaves undetermined.
 CENTRE_KINDS = ("center", "joint_center")
+
+#: A rigid-body residual (RMS per coordinate) below this fraction of the largest coordinate is
+#: rounding, not noise: the data are treated as noise-free. Rounding leaves ~1e-16 of the
+#: coordinates; the pose fits and the sums above it amplify that by a few orders.
+ROUNDING = 1e-12
 
 _LABELS = {"markers": "markers", "proximal": "proximal markers", "distal": "distal markers"}
 
@@ -138,10 +147,14 @@ class _Rotation(NamedTuple):
 
 
 def _rotation_test(
-    moving: _Clusters, reference: _Clusters | None, variance: np.ndarray, dof: int
+    moving: _Clusters,
+    reference: _Clusters | None,
+    variance: np.ndarray,
+    dof: int,
+    exact: np.ndarray,
 ) -> _Rotation:
     """The rotation of ``moving`` relative to ``reference`` (or the identity) against noise,
-    per trial; ``variance`` ``(T,)`` [mm^2]."""
+    per trial; ``variance`` ``(T,)`` [mm^2], ``exact`` ``(T,)`` where it is rounding only."""
     relative = moving.rotation
     covariance = moving.inertia_inv
     if reference is not None:
@@ -163,7 +176,6 @@ def _rotation_test(
     raw = np.maximum(np.linalg.eigvalsh(np.swapaxes(deviation, 1, 2) @ deviation), 0.0)
     rms = np.sqrt(raw.sum(axis=1) / n_frames)
     second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
-    exact = variance == 0.0
     noise = np.where(exact, 1.0, variance)
     # fdtrc(d1, d2, x) is the F survival function (scipy.stats would import far more). Imported
     # here: only a user's checked call assesses support, and the simulated studies' estimate
@@ -174,7 +186,8 @@ def _rotation_test(
     p_any = fdtrc(any_dof, dof, spread.sum(axis=1) / (noise * any_dof))
     off_axis = 2 * (n_frames - 1)
     p_second = fdtrc(off_axis, dof, spread[:, :2].sum(axis=1) / (noise * off_axis))
-    # Noise-free data: any rotation at all is resolved.
+    # Noise-free data: any rotation at all is resolved, and rotation about other axes is
+    # judged against the main one (the F-test would compare rounding with rounding).
     p_any = np.where(exact, (rms == 0.0).astype(float), p_any)
     p_second = np.where(exact, (raw[:, 1] <= 1e-12 * raw[:, 2]).astype(float), p_second)
     return _Rotation(rms, p_any, second, p_second)
@@ -192,8 +205,10 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
     clusters = [_clusters(array) for array in arrays]
     dof = sum(cluster.dof for cluster in clusters)
     variance = sum(cluster.residual_ss for cluster in clusters) / dof
+    largest = np.max([np.abs(array).max(axis=(1, 2, 3)) for array in arrays], axis=0)
+    exact = variance <= (ROUNDING * largest) ** 2
     reference = clusters[0] if kind == "joint_center" else None
-    rotation = _rotation_test(clusters[-1], reference, variance, dof)
+    rotation = _rotation_test(clusters[-1], reference, variance, dof, exact)
     return [
         _verdict(kind, names, clusters, t, float(variance[t]), rotation) for t in range(n_trials)
     ]
