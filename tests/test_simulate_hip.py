@@ -176,6 +176,14 @@ def test_noise_from_a_generator_state_seen_before_is_drawn_once_and_equals_a_new
     assert isotropic_noise(np.random.default_rng(11), (50, 6), 1.0) is not first
 
 
+def test_noise_from_any_bit_generator_is_remembered():
+    """The state of a Mersenne Twister holds an array; it keys a draw like any other."""
+    first = isotropic_noise(np.random.Generator(np.random.MT19937(3)), (40, 6), 1.0)
+    again = isotropic_noise(np.random.Generator(np.random.MT19937(3)), (40, 6), 1.0)
+    assert again is first
+    assert isotropic_noise(np.random.Generator(np.random.MT19937(4)), (40, 6), 1.0) is not first
+
+
 def test_remembered_noise_is_bounded_in_bytes():
     remembered = noise._Remembered(max_bytes=3 * 800)
     for key in range(5):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import json
+import pickle
 from collections import OrderedDict
 
 import numpy as np
@@ -54,7 +54,8 @@ def isotropic_noise(rng: np.random.Generator, shape: tuple[int, ...], sd_mm: flo
     The result is read-only. A draw from a generator state seen before returns the noise drawn
     then and leaves the generator where that draw left it, exactly as drawing again would.
     """
-    key = (json.dumps(rng.bit_generator.state, sort_keys=True), tuple(shape), float(sd_mm))
+    # Pickled, the state is bytes whatever it holds (a Mersenne Twister's holds an array).
+    key = (pickle.dumps(rng.bit_generator.state), tuple(shape), float(sd_mm))
     remembered = _REMEMBERED.get(key)
     if remembered is not None:
         noise, state = remembered
