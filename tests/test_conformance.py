@@ -378,6 +378,20 @@ def test_a_noise_free_hinge_is_flagged_as_rotation_about_a_single_axis(offset_mm
     assert result.diagnostics["support_off_axis_rotation_rms_deg"] < 1e-5
 
 
+def test_noise_free_segments_that_do_not_rotate_relative_to_each_other_are_flagged():
+    """Noise-free, the relative rotation of two rigidly joined segments is rounding only."""
+    rng = np.random.default_rng(3)
+    rotations = rotation_matrix(rng.normal(scale=0.3, size=(50, 3)))
+    shifts = rng.normal(scale=100.0, size=(50, 1, 3)) + [500.0, 800.0, 1000.0]
+    proximal_body = rng.normal(scale=40.0, size=(4, 3))
+    distal_body = rng.normal(scale=40.0, size=(4, 3)) + [0.0, 0.0, -300.0]
+    proximal, distal = (
+        np.einsum("fij,mj->fmi", rotations, body) + shifts for body in (proximal_body, distal_body)
+    )
+    verdict = support.assess("joint_center", (proximal, distal))
+    assert any("range of motion too small" in warning for warning in verdict.warnings), verdict
+
+
 def test_a_small_cluster_with_large_noise_is_still_one_rigid_body():
     """Paper A's M marker set (13.8, 29.0, 15.7 mm from the centre) with 2 mm noise is a hard
     but legitimate recording, not a non-rigid one."""

@@ -9,6 +9,7 @@ from rigs import DISTAL, HINGE, JOINT, apply_pose, two_segments
 import jointbench as jb
 from jointbench.estimators.twosegment import fit_sara, fit_sara_two_segment
 from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
+from jointbench.numerics.poses import rigid_fit
 from jointbench.simulate.noise import isotropic_noise
 
 
@@ -189,3 +190,18 @@ def test_best_rotation_matches_the_svd_solution():
     collinear = np.outer([1.0, 2.0, 3.0], [1.0, 0.0, 0.0])
     np.testing.assert_allclose(best_rotation(collinear), _kabsch_rotation(collinear), atol=1e-12)
     np.testing.assert_allclose(best_rotation(np.zeros((3, 3))), np.eye(3))
+
+
+def test_rigid_fit_of_collinear_points_is_the_best_rotation():
+    """Exactly collinear points make the largest eigenvalue of Horn's matrix a double root,
+    which the summed squared lengths then equal: Newton's search must still end on it (or
+    leave the matrix to the SVD), never on the negative double root, the worst rotation."""
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for _ in range(2000):
+        direction = unit(rng.normal(size=3))
+        points = np.outer(rng.normal(scale=50.0, size=3), direction) + rng.normal(size=3)
+        rotation, translation = rigid_fit(points, points[None])
+        fitted = points @ rotation[0].T + translation[0]
+        worst = max(worst, float(np.abs(fitted - points).max()))
+    assert worst < 1e-9

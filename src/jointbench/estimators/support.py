@@ -30,9 +30,9 @@ This module judges the data, not the answer, from the rigid-body fit of the movi
   the centre undetermined along it. Both tests are first order in the noise; with large
   rotations about the main axis the second is somewhat liberal (a pure hinge with noise passes
   as spanning two axes in about 0.5 % of trials at the 0.1 % level). Noise-free data (a
-  residual at rounding level, :data:`ROUNDING`) leave nothing to test against: any rotation
-  is resolved, and rotation about a second axis is when its mean square is above ``1e-12`` of
-  the main axis's.
+  residual at rounding level, :data:`ROUNDING`) leave nothing to test against: a rotation
+  above 1e-8 rad RMS is resolved, and rotation about a second axis is when its mean square is
+  above ``1e-12`` of the main axis's.
 
 The verdict is a list of warnings; :func:`annotate` writes them into a result's ``status`` and
 its numbers into ``diagnostics["support_..."]``. It never changes ``converged``, which keeps the
@@ -77,6 +77,9 @@ CENTRE_KINDS = ("center", "joint_center")
 #: rounding, not noise: the data are treated as noise-free. Rounding leaves ~1e-16 of the
 #: coordinates; the pose fits and the sums above it amplify that by a few orders.
 ROUNDING = 1e-12
+
+# In noise-free data, a rotation below this is rounding (a noise-free hinge leaves ~5e-10 rad).
+_ROUNDING_ROTATION_RAD = 1e-8
 
 _LABELS = {"markers": "markers", "proximal": "proximal markers", "distal": "distal markers"}
 
@@ -188,7 +191,7 @@ def _rotation_test(
     p_second = fdtrc(off_axis, dof, spread[:, :2].sum(axis=1) / (noise * off_axis))
     # Noise-free data: any rotation at all is resolved, and rotation about other axes is
     # judged against the main one (the F-test would compare rounding with rounding).
-    p_any = np.where(exact, (rms == 0.0).astype(float), p_any)
+    p_any = np.where(exact, (rms <= _ROUNDING_ROTATION_RAD).astype(float), p_any)
     p_second = np.where(exact, (raw[:, 1] <= 1e-12 * raw[:, 2]).astype(float), p_second)
     return _Rotation(rms, p_any, second, p_second)
 

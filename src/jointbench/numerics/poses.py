@@ -113,7 +113,11 @@ def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.n
     lam = np.sqrt(-1.5 * c2)
     scale = np.where(lam > 0, lam, 1.0)
     if bound is not None:
-        lam = np.minimum(lam, np.asarray(bound, dtype=float).reshape(lam.shape))
+        # Raised by a millionth: the bound equals the eigenvalue for an exact fit, and rounding
+        # could put it just below, where a double root (collinear points) sends Newton's step
+        # anywhere; from above, Newton still needs only a step or two more.
+        raised = np.asarray(bound, dtype=float).reshape(lam.shape) * (1.0 + 1e-6)
+        lam = np.minimum(lam, raised)
     tolerance = 1e-13 * scale
     # A matrix stops stepping once its own step is small, so its answer does not depend on the
     # other matrices of the stack.
@@ -160,7 +164,8 @@ def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.n
     q_norm = np.sqrt(q_sq)
     # A simple largest eigenvalue leaves a cofactor of order gap * lambda^2; below 1e-8 lambda^3
     # the eigenvector is too ill-determined for element-wise arithmetic: use the SVD there.
-    fallback = ~(q_norm > 1e-8 * scale**3) | ~np.isfinite(q_norm)
+    # So does a matrix whose Newton search did not settle.
+    fallback = ~(q_norm > 1e-8 * scale**3) | ~np.isfinite(q_norm) | active
     inverse_norm = 1.0 / np.where(fallback, 1.0, q_norm)
     w, x, y, z = (component * inverse_norm for component in q)
     ww, xx, yy, zz = w * w, x * x, y * y, z * z
