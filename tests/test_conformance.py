@@ -382,9 +382,9 @@ def test_noise_free_segments_that_do_not_rotate_relative_to_each_other_are_flagg
     """Noise-free, the relative rotation of two rigidly joined segments is rounding only."""
     rng = np.random.default_rng(3)
     rotations = rotation_matrix(rng.normal(scale=0.3, size=(50, 3)))
-    shifts = rng.normal(scale=100.0, size=(50, 1, 3)) + [500.0, 800.0, 1000.0]
+    shifts = rng.normal(scale=100.0, size=(50, 1, 3)) + np.array([500.0, 800.0, 1000.0])
     proximal_body = rng.normal(scale=40.0, size=(4, 3))
-    distal_body = rng.normal(scale=40.0, size=(4, 3)) + [0.0, 0.0, -300.0]
+    distal_body = rng.normal(scale=40.0, size=(4, 3)) + np.array([0.0, 0.0, -300.0])
     proximal, distal = (
         np.einsum("fij,mj->fmi", rotations, body) + shifts for body in (proximal_body, distal_body)
     )

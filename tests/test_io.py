@@ -264,3 +264,17 @@ def test_rows_table_refuses_a_column_of_mixed_or_unstorable_values():
     with pytest.raises(TypeError, match="column 'v': list values cannot be stored"):
         io.rows_table([{"v": [1, 2]}])
     assert io.rows_table([{"v": None}]).column("v").type == pa.null()
+
+
+def test_a_pose_fit_that_failed_with_an_empty_message_stays_failed(tmp_path):
+    block = io._poses_block([ValueError("")], 0, {"moving": (4, 3)})
+    assert block.column("error").to_pylist() == [""]
+
+
+def test_numpy_arrays_of_any_byte_order_are_stored_and_others_refused():
+    swapped = np.arange(4.0).astype(">f8")
+    assert io._to_numpy(io._from_numpy(swapped)).tolist() == [0.0, 1.0, 2.0, 3.0]
+    with pytest.raises(TypeError, match="bool"):
+        io._from_numpy(np.zeros(3, dtype=bool))
+    with pytest.raises(ValueError, match="1-D"):
+        io._from_numpy(np.zeros((2, 2)))

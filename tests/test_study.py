@@ -159,3 +159,9 @@ def test_check_estimates_reads_arrow_tables_and_names_a_column_of_mixed_values()
     mixed = pd.DataFrame([row, {**row, "status": 3}])
     with pytest.raises(ValueError, match="estimates: column 'status' mixes types"):
         check_estimates(mixed, kind="center", condition_keys=keys)
+    unreadable = pd.DataFrame([{**row, "status": 1 + 2j}])
+    with pytest.raises(ValueError, match="column 'status'"):
+        check_estimates(unreadable, kind="center", condition_keys=keys)
+    missing_trial = table.set_column(3, "trial", pa.array([None], pa.int64()))
+    with pytest.raises(ValueError, match="column 'trial' has missing values"):
+        check_estimates(missing_trial, kind="center", condition_keys=keys)

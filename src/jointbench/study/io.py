@@ -111,8 +111,13 @@ _NUMPY_DTYPES = {
 
 def _from_numpy(values: np.ndarray) -> pa.Array:
     """A 1-D numeric NumPy array as an Arrow array of the same type (no missing values)."""
-    values = np.ascontiguousarray(values)
-    arrow_type = next(t for t, dtype in _NUMPY_DTYPES.items() if values.dtype == dtype)
+    values = np.asarray(values)
+    if values.ndim != 1:
+        raise ValueError(f"expected a 1-D array, got shape {values.shape}")
+    values = np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("="))
+    arrow_type = next((t for t, dtype in _NUMPY_DTYPES.items() if values.dtype == dtype), None)
+    if arrow_type is None:
+        raise TypeError(f"{values.dtype} arrays are not stored as numbers here")
     return pa.Array.from_buffers(arrow_type, len(values), [None, pa.py_buffer(values)])
 
 
@@ -293,8 +298,11 @@ def _labels(column: pa.ChunkedArray) -> set[str]:
         if not isinstance(chunk, pa.DictionaryArray):
             labels.update(chunk.to_pylist())
             continue
+        if chunk.null_count:
+            labels.add(None)
+        valid = chunk.indices if not chunk.null_count else chunk.indices.drop_null()
         dictionary = chunk.dictionary.to_pylist()
-        labels.update(dictionary[index] for index in np.unique(_to_numpy(chunk.indices)))
+        labels.update(dictionary[index] for index in np.unique(_to_numpy(valid)))
     return labels
 
 
@@ -430,9 +438,12 @@ def rows_table(rows: Sequence[Mapping[str, object]]) -> pa.Table:
     """Rows (mappings of column name to a Python or NumPy scalar) as an Arrow table.
 
     Columns come in the order their names first appear. Each column holds one kind of value:
-    booleans, integers, numbers (integers mixed with floats become floats) or text; ``None``,
-    a key a row lacks, and a float NaN are missing values, as ``pyarrow.Table.from_pandas``
-    stores them. Any other value raises ``TypeError`` naming its column.
+    booleans, integers (64-bit), numbers (64-bit floats; integers mixed with floats become
+    floats) or text. ``None``, a key a row lacks, and a float NaN are missing values (NaN is
+    stored as missing, as ``pyarrow.Table.from_pandas`` stores it). Unlike a pandas frame, an
+    integer column with a missing value stays integer, and a missing value in a text or boolean
+    column must be ``None``. Any other value, or a column mixing kinds, raises ``TypeError``
+    naming its column.
 
     The columns are assembled from their buffers: converting Python or NumPy values with
     ``pyarrow.array`` imports pandas, which would double the start-up of a job that needs
@@ -453,10 +464,13 @@ def _column(values: list, name: str) -> pa.Array:
     present_mask = [value is not None for value in values]
     if kinds == {"text"}:
         encoded = [b"" if value is None else value.encode() for value in values]
-        offsets = np.zeros(len(values) + 1, dtype=np.int32)
+        offsets = np.zeros(len(values) + 1, dtype=np.int64)
         np.cumsum([len(text) for text in encoded], out=offsets[1:])
+        # Arrow's plain strings have 32-bit offsets; beyond 2 GiB of text, large strings.
+        large = offsets[-1] > np.iinfo(np.int32).max
+        offsets = offsets if large else offsets.astype(np.int32)
         data = [pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
-        return _from_buffers(pa.string(), data, present_mask)
+        return _from_buffers(pa.large_string() if large else pa.string(), data, present_mask)
     if kinds == {"boolean"}:
         bits = np.packbits([bool(value) for value in values], bitorder="little")
         return _from_buffers(pa.bool_(), [pa.py_buffer(bits)], present_mask)
@@ -513,7 +527,9 @@ def _poses_block(
     columns: dict[str, pa.Array] = {
         "trial": _from_numpy(np.arange(first_trial, first_trial + len(outcomes))),
         # Text even when no trial failed, so every block of a file has one schema.
-        "error": _column(errors, "error") if any(errors) else pa.nulls(len(errors), pa.string()),
+        "error": _column(errors, "error")
+        if any(error is not None for error in errors)
+        else pa.nulls(len(errors), pa.string()),
     }
     for name, (n_frames, n_markers) in shapes.items():
         fitted = [None if isinstance(o, ValueError) else o[name] for o in outcomes]

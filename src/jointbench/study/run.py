@@ -291,8 +291,9 @@ def run_estimate_files(
             tables.append(
                 estimate_table(study, method, block, condition, options, stored, first_trial=first)
             )
-        # A column that is missing in every row of one block takes the others' type.
-        table = pa.concat_tables(tables, promote_options="default")
+        # A column missing in every row of one block, or integer in one and float in another,
+        # takes the type that holds both.
+        table = pa.concat_tables(tables, promote_options="permissive")
         write_table(table, output, provenance)
         log.info(progress_line(f"{study} {method}", done, len(outputs), start, len(table)))
 

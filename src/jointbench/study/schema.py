@@ -104,6 +104,8 @@ def check_estimates(
             raise ValueError(
                 f"{source}: column {column!r} must be {description}, got {values.type}"
             )
+    if _arrow_column(table, "trial", source).null_count:
+        raise ValueError(f"{source}: column 'trial' has missing values")
     if method is not None and len(table):
         found = set(_arrow_column(table, "method", source).to_pylist())
         if found != {method}:
@@ -121,6 +123,8 @@ def _arrow_column(table, column: str, source: str) -> pa.Array | pa.ChunkedArray
         return pa.array(table[column])
     except (pa.ArrowInvalid, pa.ArrowTypeError) as error:
         raise ValueError(f"{source}: column {column!r} mixes types: {error}") from None
+    except pa.ArrowException as error:
+        raise ValueError(f"{source}: column {column!r} cannot be stored: {error}") from None
 
 
 def check_against_dataset(
