@@ -189,7 +189,7 @@ def _rotation_test(
     p_any = fdtrc(any_dof, dof, spread.sum(axis=1) / (noise * any_dof))
     off_axis = 2 * (n_frames - 1)
     p_second = fdtrc(off_axis, dof, spread[:, :2].sum(axis=1) / (noise * off_axis))
-    # Noise-free data: any rotation at all is resolved, and rotation about other axes is
+    # Noise-free data: a rotation above rounding is resolved, and rotation about other axes is
     # judged against the main one (the F-test would compare rounding with rounding).
     p_any = np.where(exact, (rms <= _ROUNDING_ROTATION_RAD).astype(float), p_any)
     p_second = np.where(exact, (raw[:, 1] <= 1e-12 * raw[:, 2]).astype(float), p_second)

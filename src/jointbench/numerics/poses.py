@@ -42,7 +42,8 @@ def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.nd
     centred_target = target - target_mean[..., None, :]
     centred_source = source - source_mean[..., None, :]
     cross = np.einsum("...mi,...mj->...ij", centred_target, centred_source)
-    rotation = best_rotation(cross, bound=_eigenvalue_bound(centred_target, centred_source))
+    bound = _eigenvalue_bound(_squared_length(centred_target), _squared_length(centred_source))
+    rotation = best_rotation(cross, bound=bound)
     translation = target_mean - np.einsum("...ij,...j->...i", rotation, source_mean)
     return rotation, translation
 
@@ -57,14 +58,16 @@ def _kabsch_rotation(cross: np.ndarray) -> np.ndarray:
     return u @ vt
 
 
-def _eigenvalue_bound(centred_target: np.ndarray, centred_source: np.ndarray) -> np.ndarray:
-    """``(sum_i |target_i|^2 + |source_i|^2) / 2`` over the markers: at least
-    ``max trace(R' H) = sum_i target_i . R source_i`` (each term is at most the mean of the two
-    squared lengths), with equality for a perfect fit."""
-    return 0.5 * (
-        np.einsum("...mi,...mi->...", centred_target, centred_target)
-        + np.einsum("...mi,...mi->...", centred_source, centred_source)
-    )
+def _squared_length(centred: np.ndarray) -> np.ndarray:
+    """``sum_i |p_i|^2`` over the points (axis -2) of ``(..., n, 3)``: ``(...)``."""
+    return np.einsum("...mi,...mi->...", centred, centred)
+
+
+def _eigenvalue_bound(target_sq: np.ndarray, source_sq: np.ndarray) -> np.ndarray:
+    """``(sum_i |target_i|^2 + sum_i |source_i|^2) / 2`` for centred points, from the two sums:
+    at least ``max trace(R' H) = sum_i target_i . R source_i`` (each term is at most the mean
+    of the two squared lengths), with equality for a perfect fit."""
+    return 0.5 * (target_sq + source_sq)
 
 
 def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.ndarray:
@@ -231,15 +234,13 @@ def rigid_poses(
         *batch, n_frames * 3, n_markers
     )
 
-    target_sq = np.einsum("...fmi,...fmi->...f", centred, centred)
+    target_sq = _squared_length(centred)
 
     def fit(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         body_mean = body.mean(axis=-2)
         centred_body = body - body_mean[..., None, :]
         cross = rows @ centred_body
-        # The eigenvalue bound of best_rotation (see _eigenvalue_bound), per frame.
-        body_sq = np.einsum("...mi,...mi->...", centred_body, centred_body)
-        bound = 0.5 * (target_sq + body_sq[..., None])
+        bound = _eigenvalue_bound(target_sq, _squared_length(centred_body)[..., None])
         rotation = best_rotation(cross.reshape(*batch, n_frames, 3, 3), bound=bound)
         translation = target_mean - (rotation @ body_mean[..., None, :, None])[..., 0]
         return rotation, translation, body_mean

@@ -480,7 +480,8 @@ def _column(values: list, name: str) -> pa.Array:
         dtype=np.int64 if integers else np.float64,
     )
     valid = np.array(present_mask) & ~np.isnan(numbers)
-    return _from_buffers(_from_numpy(numbers).type, [pa.py_buffer(numbers)], valid)
+    arrow_type = pa.int64() if integers else pa.float64()
+    return _from_buffers(arrow_type, [pa.py_buffer(numbers)], valid)
 
 
 def _kind(value: object, name: str) -> str:

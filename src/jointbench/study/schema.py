@@ -96,18 +96,19 @@ def check_estimates(
     frame's columns are converted as parquet would store them).
     """
     names = table.column_names if isinstance(table, pa.Table) else list(table.columns)
+    columns = {}
     for column, (accepts, description) in required_columns(kind, condition_keys).items():
         if column not in names:
             raise ValueError(f"{source}: missing column {column!r} (needed for {kind} estimates)")
-        values = _arrow_column(table, column, source)
-        if not accepts(values.type):
+        columns[column] = _arrow_column(table, column, source)
+        if not accepts(columns[column].type):
             raise ValueError(
-                f"{source}: column {column!r} must be {description}, got {values.type}"
+                f"{source}: column {column!r} must be {description}, got {columns[column].type}"
             )
-    if _arrow_column(table, "trial", source).null_count:
+    if columns["trial"].null_count:
         raise ValueError(f"{source}: column 'trial' has missing values")
     if method is not None and len(table):
-        found = set(_arrow_column(table, "method", source).to_pylist())
+        found = set(columns["method"].to_pylist())
         if found != {method}:
             listed = sorted(map(str, found))
             raise ValueError(
