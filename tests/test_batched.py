@@ -190,7 +190,7 @@ def test_rigid_poses_in_chunks_equal_one_call(monkeypatch):
 
     markers = _trials("hip", 1).segments["proximal"]
     whole = poses.rigid_poses(markers)
-    monkeypatch.setattr(poses, "_CHUNK_FRAMES", 2 * markers.shape[1])
+    monkeypatch.setattr(poses, "_BLOCK_FRAMES", 2 * markers.shape[1])
     chunked = poses.rigid_poses(markers)
     for a, b in zip(whole, chunked, strict=True):
         np.testing.assert_array_equal(a, b)

@@ -77,3 +77,55 @@ def test_estimators_have_distinct_stable_fingerprints():
     assert len(set(prints.values())) == len(prints)
     again = {key: code_fingerprint(registry.get(*key)) for key in prints}
     assert again == prints
+
+
+CACHED = """
+from functools import lru_cache
+
+
+@lru_cache(maxsize=4)
+def cached_table(n):
+    return tuple(range(n * {factor}))
+
+
+def _source():
+    return sum
+
+
+@lru_cache(maxsize=1)
+def compiled():
+    # stands for a loader that compiles a plain function of this module on first use
+    return _source
+
+
+def uses_cached(n):
+    return cached_table(n), compiled()
+"""
+
+
+def test_functions_behind_a_cache_count(tmp_path):
+    """A helper wrapped by functools.lru_cache (a lookup table, a compiled kernel's loader) is
+    part of the code of the functions that call it."""
+
+    def fingerprint(factor: int, source: str = "sum") -> str:
+        path = tmp_path / "jbfp_c.py"
+        path.write_text(CACHED.format(factor=factor).replace("return sum", f"return {source}"))
+        spec = importlib.util.spec_from_file_location("jbfp_c", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["jbfp_c"] = module
+        spec.loader.exec_module(module)
+        return code_fingerprint(module.uses_cached, prefixes=("jbfp_c",))
+
+    base = fingerprint(2)
+    assert fingerprint(2) == base
+    assert fingerprint(3) != base
+    assert fingerprint(2, source="max") != base
+
+
+def test_nm_fingerprint_reaches_its_cached_constraint_matrix():
+    from jointbench.estimators import sphere
+    from jointbench.fingerprint import reached
+    from jointbench.numerics import poses
+
+    assert sphere._nm_constraint.__wrapped__ in reached([registry.get("center", "NM")])
+    assert poses._horn_rotations in reached([poses.rigid_poses])

@@ -96,6 +96,11 @@ def reached(roots: Iterable[object], prefixes: tuple[str, ...] = ("jointbench",)
         if isinstance(obj, partial):
             stack.append(obj.func)
             continue
+        if not inspect.isfunction(obj) and inspect.isfunction(getattr(obj, "__wrapped__", None)):
+            # A cache (functools.lru_cache) or compiled (Numba) callable runs the function it
+            # wraps.
+            stack.append(obj.__wrapped__)
+            continue
         if id(obj) in seen or not (inspect.isfunction(obj) or inspect.isclass(obj)):
             continue
         if not _ours(obj, prefixes):

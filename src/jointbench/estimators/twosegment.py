@@ -105,8 +105,10 @@ def segment_poses(markers: np.ndarray, *, name: str) -> SegmentPoses:
 
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
-    fitted = body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
-    residual_ss = float(np.sum((markers - fitted) ** 2))
+    # R_f b_p for every frame and marker as one (3N, 3) @ (3, P) product.
+    turned = (rotation.reshape(-1, 3) @ body.T).reshape(len(rotation), 3, -1)
+    residual = markers - np.swapaxes(turned, 1, 2) - translation[:, None, :]
+    residual_ss = float(np.sum(residual * residual))
     return stored_segment_poses(markers, rotation, translation, body, residual_ss)
 
 

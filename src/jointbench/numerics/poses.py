@@ -7,13 +7,14 @@ A pose ``(R, t)`` maps body-fixed coordinates ``x`` to the world as ``R @ x + t`
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
 __all__ = ["best_rotation", "rigid_fit", "rigid_poses"]
 
-# Frames per chunk of a many-trial pose fit.
-_CHUNK_FRAMES = 4096
+# Frames per block of a many-trial pose fit.
+_BLOCK_FRAMES = 65536
 
 
 def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -73,117 +74,138 @@ def _eigenvalue_bound(target_sq: np.ndarray, source_sq: np.ndarray) -> np.ndarra
 def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.ndarray:
     """Proper rotations ``R`` maximising ``trace(R' H)`` for ``H = sum_i target_i source_i'``.
 
-    This is the rotation of :func:`rigid_fit` (Kanatani's / Kabsch's SVD solution). It is
-    computed as Horn's unit quaternion, the eigenvector of the largest eigenvalue of the 4x4
-    symmetric key matrix of ``H``: the eigenvalue by Newton's method on the characteristic
-    quartic started above the largest root (Theobald's QCP; the start is the smaller of
-    ``sqrt(3) |H|_F`` and ``bound``, an upper bound the caller knows, such as half the summed
-    squared lengths of the centred points, which a close fit nearly attains, so that Newton
-    needs a step or two), the eigenvector as the largest
-    column of the adjugate of ``N - lambda I``. Everything is element-wise on the stack, which
-    is an order of magnitude faster than batched LAPACK SVDs of 3x3 matrices and agrees with
-    them to ~1e-15. Matrices where the largest eigenvalue is (nearly) repeated -- collinear or
-    coincident points, where the rotation is not unique -- fall back to the SVD.
-
-    ``cross`` is ``(..., 3, 3)``, ``bound`` ``(...)`` or ``None``; the result has the shape of
-    ``cross``.
+    This is the rotation of :func:`rigid_fit` (Kanatani's / Kabsch's SVD solution), computed
+    matrix by matrix by the compiled :func:`_horn_rotations`; matrices where it cannot settle
+    the answer go to the SVD. ``cross`` is ``(..., 3, 3)``; ``bound`` ``(...)``, an upper bound
+    of ``max trace(R' H)`` the caller knows (such as half the summed squared lengths of the
+    centred points), or ``None``. The result has the shape of ``cross``.
     """
     shape = np.shape(cross)
-    cross = np.asarray(cross, dtype=float).reshape(-1, 3, 3)
-    # Horn's key matrix is built from M = H' (M_ab = sum_i source_a target_b).
-    sxx, syx, szx = cross[..., 0, 0], cross[..., 0, 1], cross[..., 0, 2]
-    sxy, syy, szy = cross[..., 1, 0], cross[..., 1, 1], cross[..., 1, 2]
-    sxz, syz, szz = cross[..., 2, 0], cross[..., 2, 1], cross[..., 2, 2]
-    n00, n01, n02, n03 = sxx + syy + szz, syz - szy, szx - sxz, sxy - syx
-    n11, n12, n13 = sxx - syy - szz, sxy + syx, szx + sxz
-    n22, n23, n33 = -sxx + syy - szz, syz + szy, -sxx - syy + szz
-    # Characteristic polynomial of the traceless N: l^4 + c2 l^2 + c1 l + c0.
-    flat = cross.reshape(-1, 9)
-    c2 = -2.0 * np.einsum("...i,...i->...", flat, flat)
-    c1 = -8.0 * (
-        sxx * (syy * szz - syz * szy)
-        - sxy * (syx * szz - syz * szx)
-        + sxz * (syx * szy - syy * szx)
-    )
-    # det N by Laplace expansion along rows (0, 1) with complementary minors of rows (2, 3).
-    a01, a02, a03 = n00 * n11 - n01 * n01, n00 * n12 - n02 * n01, n00 * n13 - n03 * n01
-    a12, a13, a23 = n01 * n12 - n02 * n11, n01 * n13 - n03 * n11, n02 * n13 - n03 * n12
-    b01, b02, b03 = n02 * n13 - n12 * n03, n02 * n23 - n22 * n03, n02 * n33 - n23 * n03
-    b12, b13, b23 = n12 * n23 - n22 * n13, n12 * n33 - n23 * n13, n22 * n33 - n23 * n23
-    c0 = a01 * b23 - a02 * b13 + a03 * b12 + a12 * b03 - a13 * b02 + a23 * b01
-    # sqrt(3) |H|_F >= s1 + s2 + s3 >= lambda_max: Newton from above converges monotonically
-    # (the key matrix is symmetric, so every root of its quartic is real).
-    lam = np.sqrt(-1.5 * c2)
-    scale = np.where(lam > 0, lam, 1.0)
-    if bound is not None:
+    flat = np.ascontiguousarray(cross, dtype=float).reshape(-1, 3, 3)
+    if bound is None:
+        limits = np.full(flat.shape[0], np.inf)
+    else:
+        limits = np.ascontiguousarray(np.broadcast_to(bound, shape[:-2]), dtype=float).reshape(-1)
+    rotation = np.empty_like(flat)
+    unsettled = np.empty(flat.shape[0], dtype=bool)
+    _compiled_rotations()(flat, limits, rotation, unsettled)
+    if unsettled.any():
+        rotation[unsettled] = _kabsch_rotation(flat[unsettled])
+    return rotation.reshape(shape)
+
+
+@lru_cache(maxsize=1)
+def _compiled_rotations():
+    """:func:`_horn_rotations` compiled by Numba, on first use: importing Numba costs about a
+    quarter of a second, which only processes that fit rotations pay. The machine code is cached
+    beside this file and recompiled when the file changes."""
+    import numba
+
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(_horn_rotations)
+
+
+def _horn_rotations(
+    cross: np.ndarray, bound: np.ndarray, rotation: np.ndarray, unsettled: np.ndarray
+) -> None:
+    """Horn's best rotation of each cross-covariance ``cross[k]`` (n, 3, 3) into ``rotation``
+    (n, 3, 3); ``unsettled[k]`` (n,) marks those left to the SVD. Written for Numba: as plain
+    Python it is correct but slow.
+
+    Horn's unit quaternion is the eigenvector of the largest eigenvalue of the 4x4 symmetric
+    key matrix ``N`` of ``H``. The eigenvalue comes from Newton's method on the characteristic
+    quartic, started above the largest root (Theobald's QCP) at the smaller of
+    ``sqrt(3) |H|_F >= s1 + s2 + s3`` and ``bound[k]``: a close fit nearly attains the bound,
+    so Newton needs a step or two. The eigenvector is the longest column of the adjugate of
+    ``N - lambda I``. A matrix whose largest eigenvalue is (nearly) repeated -- collinear or
+    coincident points, where the rotation is not unique -- or whose Newton search does not
+    settle is marked unsettled.
+    """
+    for k in range(cross.shape[0]):
+        h = cross[k]
+        # Horn's key matrix is built from M = H' (M_ab = sum_i source_a target_b).
+        sxx, syx, szx = h[0, 0], h[0, 1], h[0, 2]
+        sxy, syy, szy = h[1, 0], h[1, 1], h[1, 2]
+        sxz, syz, szz = h[2, 0], h[2, 1], h[2, 2]
+        n00, n01, n02, n03 = sxx + syy + szz, syz - szy, szx - sxz, sxy - syx
+        n11, n12, n13 = sxx - syy - szz, sxy + syx, szx + sxz
+        n22, n23, n33 = -sxx + syy - szz, syz + szy, -sxx - syy + szz
+        # Characteristic polynomial of the traceless N: l^4 + c2 l^2 + c1 l + c0.
+        c2 = 0.0
+        for i in range(3):
+            for j in range(3):
+                c2 += h[i, j] * h[i, j]
+        c2 *= -2.0
+        c1 = -8.0 * (
+            sxx * (syy * szz - syz * szy)
+            - sxy * (syx * szz - syz * szx)
+            + sxz * (syx * szy - syy * szx)
+        )
+        # det N by Laplace expansion along rows (0, 1) with complementary minors of rows (2, 3).
+        a01, a02, a03 = n00 * n11 - n01 * n01, n00 * n12 - n02 * n01, n00 * n13 - n03 * n01
+        a12, a13, a23 = n01 * n12 - n02 * n11, n01 * n13 - n03 * n11, n02 * n13 - n03 * n12
+        b01, b02, b03 = n02 * n13 - n12 * n03, n02 * n23 - n22 * n03, n02 * n33 - n23 * n03
+        b12, b13, b23 = n12 * n23 - n22 * n13, n12 * n33 - n23 * n13, n22 * n33 - n23 * n23
+        c0 = a01 * b23 - a02 * b13 + a03 * b12 + a12 * b03 - a13 * b02 + a23 * b01
+        lam = math.sqrt(-1.5 * c2)
+        scale = lam if lam > 0 else 1.0
         # Raised by a millionth: the bound equals the eigenvalue for an exact fit, and rounding
         # could put it just below, where a double root (collinear points) sends Newton's step
         # anywhere; from above, Newton still needs only a step or two more.
-        raised = np.asarray(bound, dtype=float).reshape(lam.shape) * (1.0 + 1e-6)
-        lam = np.minimum(lam, raised)
-    tolerance = 1e-13 * scale
-    # A matrix stops stepping once its own step is small, so its answer does not depend on the
-    # other matrices of the stack.
-    active = np.ones(lam.shape, dtype=bool)
-    for _ in range(60):
-        l2 = lam * lam
-        slope = (4.0 * l2 + 2.0 * c2) * lam + c1
-        slope[slope == 0] = 1.0
-        step = ((l2 + c2) * l2 + c1 * lam + c0) / slope
-        step *= active
-        lam -= step
-        active &= np.abs(step) > tolerance
-        if not active.any():
-            break
-    d0, d1, d2, d3 = n00 - lam, n11 - lam, n22 - lam, n33 - lam
-    # Adjugate of A = N - lam I (symmetric); its columns span A's null vector, the quaternion.
-    m01, m02, m03 = n02 * n13 - n12 * n03, n02 * n23 - d2 * n03, n02 * d3 - n23 * n03
-    m12, m13, m23 = n12 * n23 - d2 * n13, n12 * d3 - n23 * n13, d2 * d3 - n23 * n23
-    u01, u02, u03 = d0 * d1 - n01 * n01, d0 * n12 - n02 * n01, d0 * n13 - n03 * n01
-    u12, u13 = n01 * n12 - n02 * d1, n01 * n13 - n03 * d1
-    c00 = d1 * m23 - n12 * m13 + n13 * m12
-    c01 = -(n01 * m23 - n12 * m03 + n13 * m02)
-    c02 = n01 * m13 - d1 * m03 + n13 * m01
-    c03 = -(n01 * m12 - d1 * m02 + n12 * m01)
-    c11 = d0 * m23 - n02 * m03 + n03 * m02
-    c12 = -(d0 * m13 - n01 * m03 + n03 * m01)
-    c13 = d0 * m12 - n01 * m02 + n02 * m01
-    c22 = n03 * u13 - n13 * u03 + d3 * u01
-    c23 = -(n02 * u13 - n12 * u03 + n23 * u01)
-    c33 = n02 * u12 - n12 * u02 + d2 * u01
-    # The quaternion is the adjugate column of largest norm (selected element-wise).
-    columns = (
-        (c00, c01, c02, c03),
-        (c01, c11, c12, c13),
-        (c02, c12, c22, c23),
-        (c03, c13, c23, c33),
-    )
-    q, q_sq = columns[0], c00 * c00 + c01 * c01 + c02 * c02 + c03 * c03
-    for column in columns[1:]:
-        column_sq = sum(c * c for c in column)
-        larger = column_sq > q_sq
-        q_sq = np.where(larger, column_sq, q_sq)
-        q = tuple(np.where(larger, new, old) for new, old in zip(column, q, strict=True))
-    q_norm = np.sqrt(q_sq)
-    # A simple largest eigenvalue leaves a cofactor of order gap * lambda^2; below 1e-8 lambda^3
-    # the eigenvector is too ill-determined for element-wise arithmetic: use the SVD there.
-    # So does a matrix whose Newton search did not settle.
-    fallback = ~(q_norm > 1e-8 * scale**3) | ~np.isfinite(q_norm) | active
-    inverse_norm = 1.0 / np.where(fallback, 1.0, q_norm)
-    w, x, y, z = (component * inverse_norm for component in q)
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    rotation = np.stack(
-        [
-            *(ww + xx - yy - zz, 2.0 * (xy - wz), 2.0 * (xz + wy)),
-            *(2.0 * (xy + wz), ww - xx + yy - zz, 2.0 * (yz - wx)),
-            *(2.0 * (xz - wy), 2.0 * (yz + wx), ww - xx - yy + zz),
-        ],
-        axis=-1,
-    ).reshape(-1, 3, 3)
-    if np.any(fallback):
-        rotation[fallback] = _kabsch_rotation(cross[fallback])
-    return rotation.reshape(shape)
+        lam = min(lam, bound[k] * (1.0 + 1e-6))
+        tolerance = 1e-13 * scale
+        settled = False
+        for _ in range(60):
+            l2 = lam * lam
+            slope = (4.0 * l2 + 2.0 * c2) * lam + c1
+            if slope == 0:
+                slope = 1.0
+            step = ((l2 + c2) * l2 + c1 * lam + c0) / slope
+            lam -= step
+            if not abs(step) > tolerance:
+                settled = True
+                break
+        d0, d1, d2, d3 = n00 - lam, n11 - lam, n22 - lam, n33 - lam
+        # Adjugate of A = N - lam I (symmetric); its columns span A's null vector.
+        m01, m02, m03 = n02 * n13 - n12 * n03, n02 * n23 - d2 * n03, n02 * d3 - n23 * n03
+        m12, m13, m23 = n12 * n23 - d2 * n13, n12 * d3 - n23 * n13, d2 * d3 - n23 * n23
+        u01, u02, u03 = d0 * d1 - n01 * n01, d0 * n12 - n02 * n01, d0 * n13 - n03 * n01
+        u12, u13 = n01 * n12 - n02 * d1, n01 * n13 - n03 * d1
+        c00 = d1 * m23 - n12 * m13 + n13 * m12
+        c01 = -(n01 * m23 - n12 * m03 + n13 * m02)
+        c02 = n01 * m13 - d1 * m03 + n13 * m01
+        c03 = -(n01 * m12 - d1 * m02 + n12 * m01)
+        c11 = d0 * m23 - n02 * m03 + n03 * m02
+        c12 = -(d0 * m13 - n01 * m03 + n03 * m01)
+        c13 = d0 * m12 - n01 * m02 + n02 * m01
+        c22 = n03 * u13 - n13 * u03 + d3 * u01
+        c23 = -(n02 * u13 - n12 * u03 + n23 * u01)
+        c33 = n02 * u12 - n12 * u02 + d2 * u01
+        # The quaternion is the adjugate column of largest norm (the first, on a tie).
+        w, x, y, z = c00, c01, c02, c03
+        q_sq = c00 * c00 + c01 * c01 + c02 * c02 + c03 * c03
+        column_sq = c01 * c01 + c11 * c11 + c12 * c12 + c13 * c13
+        if column_sq > q_sq:
+            w, x, y, z, q_sq = c01, c11, c12, c13, column_sq
+        column_sq = c02 * c02 + c12 * c12 + c22 * c22 + c23 * c23
+        if column_sq > q_sq:
+            w, x, y, z, q_sq = c02, c12, c22, c23, column_sq
+        column_sq = c03 * c03 + c13 * c13 + c23 * c23 + c33 * c33
+        if column_sq > q_sq:
+            w, x, y, z, q_sq = c03, c13, c23, c33, column_sq
+        q_norm = math.sqrt(q_sq)
+        # A simple largest eigenvalue leaves a cofactor of order gap * lambda^2; below
+        # 1e-8 lambda^3 the eigenvector is too ill-determined for this arithmetic.
+        unsettled[k] = not (
+            settled and q_norm > 1e-8 * (scale * scale * scale) and math.isfinite(q_norm)
+        )
+        inverse_norm = 1.0 if unsettled[k] else 1.0 / q_norm
+        w, x, y, z = w * inverse_norm, x * inverse_norm, y * inverse_norm, z * inverse_norm
+        ww, xx, yy, zz = w * w, x * x, y * y, z * z
+        xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+        r = rotation[k]
+        r[0, 0], r[0, 1], r[0, 2] = ww + xx - yy - zz, 2.0 * (xy - wz), 2.0 * (xz + wy)
+        r[1, 0], r[1, 1], r[1, 2] = 2.0 * (xy + wz), ww - xx + yy - zz, 2.0 * (yz - wx)
+        r[2, 0], r[2, 1], r[2, 2] = 2.0 * (xz - wy), 2.0 * (yz + wx), ww - xx - yy + zz
 
 
 def rigid_poses(
@@ -208,61 +230,77 @@ def rigid_poses(
     R : (..., n_frames, 3, 3), t : (..., n_frames, 3) [mm], body : (..., n_markers, 3) [mm]
     """
     markers = np.asarray(markers, dtype=float)
-    n_frames = markers.shape[-3]
+    n_frames, n_markers = markers.shape[-3:-1]
     batch = markers.shape[:-3]
-    per_chunk = max(1, _CHUNK_FRAMES // max(n_frames, 1))
-    if math.prod(batch) > per_chunk:
-        # Element-wise work on a few thousand frames at a time stays in cache; whole batches
-        # of long recordings would stream every temporary through memory.
-        flat = markers.reshape(-1, *markers.shape[-3:])
-        parts = [
-            rigid_poses(flat[i : i + per_chunk], max_iterations=max_iterations, tol_mm=tol_mm)
-            for i in range(0, flat.shape[0], per_chunk)
-        ]
-        return tuple(
-            np.concatenate([part[k] for part in parts]).reshape(*batch, *parts[0][k].shape[1:])
-            for k in range(3)
-        )
-    # What rigid_fit recomputes on every call is hoisted out of the loop: the frames' centroids
-    # and centred markers do not change between iterations. Stacking every frame's coordinates
-    # as rows ``(frame, coordinate)`` turns the sums over markers and over frames into single
-    # matrix products per trial.
-    n_markers = markers.shape[-2]
-    target_mean = markers.mean(axis=-2)
-    centred = markers - target_mean[..., None, :]
-    rows = np.ascontiguousarray(np.swapaxes(centred, -1, -2)).reshape(
-        *batch, n_frames * 3, n_markers
+    flat = markers.reshape(-1, n_frames, n_markers, 3)
+    # Blocks of trials bound the temporaries' size, whatever the batch.
+    per_block = max(1, _BLOCK_FRAMES // max(n_frames, 1))
+    parts = [
+        _rigid_poses_block(flat[i : i + per_block], max_iterations, tol_mm)
+        for i in range(0, max(flat.shape[0], 1), per_block)
+    ]
+    return tuple(
+        np.concatenate([part[k] for part in parts]).reshape(*batch, *parts[0][k].shape[1:])
+        for k in range(3)
     )
 
+
+def _rigid_poses_block(
+    markers: np.ndarray, max_iterations: int, tol_mm: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`rigid_poses` of trials ``(T, N, P, 3)``, fitted together.
+
+    What :func:`rigid_fit` would recompute on every iteration is hoisted out of the loop: the
+    frames' centroids and centred markers do not change. Stacking every frame's coordinates as
+    rows ``(frame, coordinate)`` turns the sums over markers and over frames into one matrix
+    product per trial. Only the trials still iterating are refitted.
+    """
+    n_trials, n_frames, n_markers, _ = markers.shape
+    # einsum: NumPy's mean over a middle axis of three is several times slower.
+    target_mean = np.einsum("tfmi->tfi", markers) / n_markers
+    centred = markers - target_mean[:, :, None, :]
+    rows = np.ascontiguousarray(np.swapaxes(centred, -1, -2)).reshape(
+        n_trials, n_frames * 3, n_markers
+    )
     target_sq = _squared_length(centred)
+    rotation = np.empty((n_trials, n_frames, 3, 3))
 
-    def fit(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        body_mean = body.mean(axis=-2)
-        centred_body = body - body_mean[..., None, :]
-        cross = rows @ centred_body
-        bound = _eigenvalue_bound(target_sq, _squared_length(centred_body)[..., None])
-        rotation = best_rotation(cross.reshape(*batch, n_frames, 3, 3), bound=bound)
-        translation = target_mean - (rotation @ body_mean[..., None, :, None])[..., 0]
-        return rotation, translation, body_mean
+    def fit(trials: slice | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Fit the poses of ``trials`` to their current ``body`` (kept in ``rotation``);
+        return the rotations (k, N, 3, 3) and the body-fixed centroids (k, 3) [mm]."""
+        part = body[trials]
+        body_mean = part.mean(axis=1)
+        centred_body = part - body_mean[:, None, :]
+        cross = (rows[trials] @ centred_body).reshape(-1, n_frames, 3, 3)
+        bound = _eigenvalue_bound(target_sq[trials], _squared_length(centred_body)[:, None])
+        fitted = rotation[trials] = best_rotation(cross, bound=bound)
+        return fitted, body_mean
 
-    body = markers[..., 0, :, :].copy()
-    active = np.ones(markers.shape[:-3], dtype=bool)
+    body = markers[:, 0].copy()
+    active = np.ones(n_trials, dtype=bool)
     for _ in range(max_iterations):
-        rotation, translation, body_mean = fit(body)
+        trials = np.flatnonzero(active)
+        if not trials.size:
+            break
+        take = slice(None) if trials.size == n_trials else trials
+        fitted, body_mean = fit(take)
         # Back-transform every frame into the body frame, then re-anchor at frame 0 (eq. 5):
         # R'(y - t) = R'(y - mean(y)) + mean(body), averaged over the frames.
-        summed = np.swapaxes(rotation.reshape(*batch, n_frames * 3, 3), -1, -2) @ rows
-        mean_local = np.swapaxes(summed, -1, -2) / n_frames + body_mean[..., None, :]
-        new_body = (
-            mean_local @ np.swapaxes(rotation[..., 0, :, :], -1, -2) + translation[..., 0, None, :]
-        )
-        converged = np.max(np.abs(new_body - body), axis=(-2, -1)) < tol_mm
+        summed = np.swapaxes(fitted.reshape(-1, n_frames * 3, 3), 1, 2) @ rows[take]
+        mean_local = np.swapaxes(summed, 1, 2) / n_frames + body_mean[:, None, :]
+        first = fitted[:, 0]
+        first_translation = target_mean[take, 0] - (first @ body_mean[:, :, None])[..., 0]
+        new_body = mean_local @ np.swapaxes(first, 1, 2) + first_translation[:, None, :]
+        converged = np.max(np.abs(new_body - body[take]), axis=(1, 2)) < tol_mm
         # A converged trial keeps the coordinates its poses were just fitted to (within
-        # ``tol_mm`` of the fixed point) while the others iterate on; refitting it gives the
-        # same poses, so a trial's answer does not depend on its batch.
-        active &= ~converged
-        body = np.where(active[..., None, None], new_body, body)
-        if not active.any():
-            return rotation, translation, body
-    rotation, translation, _ = fit(body)
+        # ``tol_mm`` of the fixed point) while the others iterate on, so a trial's answer does
+        # not depend on its batch.
+        active[trials[converged]] = False
+        body[trials[~converged]] = new_body[~converged]
+    else:
+        if active.any():
+            fit(np.flatnonzero(active))
+    # t = mean(y) - R mean(body), every frame's rotation applied as one product per trial.
+    turned = rotation.reshape(n_trials, n_frames * 3, 3) @ body.mean(axis=1)[:, :, None]
+    translation = target_mean - turned.reshape(n_trials, n_frames, 3)
     return rotation, translation, body
