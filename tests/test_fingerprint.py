@@ -128,4 +128,4 @@ def test_nm_fingerprint_reaches_its_cached_constraint_matrix():
     from jointbench.numerics import poses
 
     assert sphere._nm_constraint.__wrapped__ in reached([registry.get("center", "NM")])
-    assert poses._horn_rotations in reached([poses.rigid_poses])
+    assert poses._horn_rotations.__wrapped__ in reached([poses.rigid_poses])

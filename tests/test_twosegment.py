@@ -205,38 +205,3 @@ def test_rigid_fit_of_collinear_points_is_the_best_rotation():
         fitted = points @ rotation[0].T + translation[0]
         worst = max(worst, float(np.abs(fitted - points).max()))
     assert worst < 1e-9
-
-
-def test_compiled_rotation_fit_runs_its_python_source():
-    """The compiled kernel computes what its Python source says, to the last bits: the source
-    is the specification the fingerprint tracks, Numba only makes it fast."""
-    from jointbench.numerics import poses
-
-    rng = np.random.default_rng(21)
-    source = rng.normal(scale=30.0, size=(3, 3))
-    target = source @ rotation_matrix(unit(rng.normal(size=(300, 3))) * 0.7).swapaxes(1, 2)
-    target += rng.normal(scale=0.5, size=target.shape)
-    centred_target = target - target.mean(1, keepdims=True)
-    centred_source = source - source.mean(0)
-    cross = np.concatenate(
-        [
-            np.einsum("fmi,mj->fij", centred_target, centred_source),
-            rng.normal(size=(100, 3, 3)),
-            np.outer([1.0, 2.0, 3.0], [1.0, 0.0, 0.0])[None],
-            np.zeros((1, 3, 3)),
-        ]
-    )
-    # The realistic fits start from the bound the pose fit passes, the others from |H|.
-    bound = np.full(len(cross), np.inf)
-    bound[:300] = 0.5 * (np.sum(centred_target**2, axis=(1, 2)) + np.sum(centred_source**2))
-    outputs = []
-    for kernel in (poses._compiled_rotations(), poses._horn_rotations):
-        rotation = np.empty_like(cross)
-        unsettled = np.empty(len(cross), dtype=bool)
-        kernel(cross, bound, rotation, unsettled)
-        outputs.append((rotation, unsettled))
-    (compiled, compiled_unsettled), (interpreted, interpreted_unsettled) = outputs
-    np.testing.assert_array_equal(compiled_unsettled, interpreted_unsettled)
-    assert compiled_unsettled[-2:].all() and not compiled_unsettled[:300].any()
-    settled = ~compiled_unsettled
-    np.testing.assert_allclose(compiled[settled], interpreted[settled], rtol=0, atol=1e-14)

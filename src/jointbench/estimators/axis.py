@@ -88,6 +88,7 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
+from jointbench.numerics.compiled import kernel
 from jointbench.numerics.simplex import FATOL, XATOL, lockstep
 
 __all__ = [
@@ -165,12 +166,9 @@ class AxisCosts:
     ``planar``, ``radial`` and ``combined`` take unit directions ``(3,)`` or ``(k, 3)`` and,
     with many trials, the trial of each direction (``trials`` ``(k,)``; trial 0 by default);
     they return the cost(s) [mm^2]. ``planar`` is the quadratic form ``n' S n`` on the
-    precomputed ``S``. With ``w = v - m`` fixed, the radial cost needs only ``n . w``:
-    ``|(I - n n') w|^2 = |w|^2 - (n . w)^2``. Radii and squared deviations are summed in two
-    passes; the one-pass form ``sum d^2 - N sum r_p^2`` cancels catastrophically near an exact
-    fit. Each direction's cost is computed element by element, the same way whichever trials
-    and directions share the call, so a search over many trials follows the path it follows
-    alone.
+    precomputed ``S``; the radial cost is :func:`_radial_costs`. Each direction's cost is
+    computed on its own, the same way whichever trials and directions share the call, so a
+    search over many trials follows the path it follows alone.
     """
 
     def __init__(self, markers: np.ndarray, point: np.ndarray) -> None:
@@ -189,11 +187,12 @@ class AxisCosts:
         self._w = np.ascontiguousarray(offsets).reshape(3, n_trials, -1)
         self._w_sq = self._w[0] * self._w[0] + self._w[1] * self._w[1] + self._w[2] * self._w[2]
         self._shape = (n_markers, n_frames)
-        self._work = np.empty((2, 0, n_markers * n_frames))
 
     @staticmethod
     def _trials(directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
-        return np.zeros(len(directions), dtype=int) if trials is None else np.asarray(trials)
+        if trials is None:
+            return np.zeros(len(directions), dtype=np.intp)
+        return np.asarray(trials, dtype=np.intp)
 
     def planar(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f_p = n' S n`` (paper B eq. 8): ``(3,)`` -> scalar array, ``(k, 3)`` -> ``(k,)``."""
@@ -202,47 +201,25 @@ class AxisCosts:
         scatter = self.scatter[self._trials(flat, trials)]
         return np.einsum("ki,kij,kj->k", flat, scatter, flat).reshape(n.shape[:-1])
 
-    def _distances_into(self, directions: np.ndarray, trials: np.ndarray) -> np.ndarray:
-        """Distances for unit directions ``(k, 3)`` into a reused ``(k, P N)`` work buffer.
-
-        Temporaries of this size would be fresh ``mmap`` allocations on every call (glibc), whose
-        page faults cost more than the arithmetic, hence the buffers (this object is not
-        thread-safe).
-        """
-        k = directions.shape[0]
-        if self._work.shape[1] < k:
-            self._work = np.empty((2, k, self._w.shape[2]))
-        work, term = self._work[0, :k], self._work[1, :k]
-        np.take(self._w[0], trials, axis=0, out=work)
-        work *= directions[:, 0, None]
-        for axis in (1, 2):
-            np.take(self._w[axis], trials, axis=0, out=term)
-            term *= directions[:, axis, None]
-            work += term
-        work *= work
-        np.take(self._w_sq, trials, axis=0, out=term)
-        np.subtract(term, work, out=work)
-        # |w|^2 - (n.w)^2 can round below zero for a sample on the axis itself.
-        np.maximum(work, 0.0, out=work)
-        return np.sqrt(work, out=work)
+    def _radial(self, directions: np.ndarray, trials: np.ndarray, distances: np.ndarray):
+        flat = np.ascontiguousarray(directions, dtype=float).reshape(-1, 3)
+        costs = np.empty(len(flat))
+        _radial_costs(self._w, self._w_sq, flat, trials, self._shape[0], costs, distances)
+        return costs
 
     def radial_distances(self, directions: np.ndarray, trial: int = 0) -> np.ndarray:
         """Distances ``|(I - n n')(v - m)|`` [mm] in ``trial``: ``(..., n_markers, n_frames)``."""
         n = np.asarray(directions, dtype=float)
-        flat = n.reshape(-1, 3)
-        distances = self._distances_into(flat, np.full(len(flat), trial)).copy()
+        k = math.prod(n.shape[:-1])
+        distances = np.empty((k, self._w.shape[2]))
+        self._radial(n, np.full(k, trial, dtype=np.intp), distances)
         return distances.reshape(*n.shape[:-1], *self._shape)
 
     def radial(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f_r`` with the radii profiled out (paper B eqs. 10–11)."""
         n = np.asarray(directions, dtype=float)
-        flat_n = n.reshape(-1, 3)
-        flat = self._distances_into(flat_n, self._trials(flat_n, trials))
-        by_marker = flat.reshape(-1, *self._shape)
-        radii = np.add.reduce(by_marker, axis=2, keepdims=True)
-        radii *= 1.0 / self._shape[1]
-        np.subtract(by_marker, radii, out=by_marker)
-        return np.einsum("ij,ij->i", flat, flat).reshape(n.shape[:-1])
+        flat = n.reshape(-1, 3)
+        return self._radial(flat, self._trials(flat, trials), _NO_DISTANCES).reshape(n.shape[:-1])
 
     def combined(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f = f_p + f_r`` (paper B eq. 12)."""
@@ -265,6 +242,59 @@ class AxisCosts:
             return value
 
         return cost_vector
+
+
+# ``_radial_costs`` stores no distances when given this.
+_NO_DISTANCES = np.empty((0, 0))
+
+
+@kernel
+def _radial_costs(
+    offsets: np.ndarray,
+    offsets_sq: np.ndarray,
+    directions: np.ndarray,
+    trials: np.ndarray,
+    n_markers: int,
+    costs: np.ndarray,
+    distances: np.ndarray,
+) -> None:
+    """Paper B's radial cost (eqs. 10–11) of each unit direction ``directions[k]`` (k, 3) in
+    trial ``trials[k]`` (k,), into ``costs[k]`` [mm^2]; and, unless ``distances`` is
+    ``(0, 0)``, each sample's distance from the axis into ``distances[k]`` (k, P N) [mm]. A
+    compiled kernel (:mod:`jointbench.numerics.compiled`).
+
+    ``offsets`` (3, T, P N) holds every sample's ``w = v - m`` per coordinate, marker-major;
+    ``offsets_sq`` (T, P N) its ``|w|^2``. With ``w`` fixed, a distance needs only ``n . w``:
+    ``|(I - n n') w|^2 = |w|^2 - (n . w)^2``. Radii and squared deviations are summed in two
+    passes; the one-pass form ``sum d^2 - N sum r_p^2`` cancels catastrophically near an exact
+    fit.
+    """
+    n_samples = offsets.shape[2]
+    n_frames = n_samples // n_markers
+    distance = np.empty(n_samples)
+    for k in range(directions.shape[0]):
+        trial = trials[k]
+        n0, n1, n2 = directions[k, 0], directions[k, 1], directions[k, 2]
+        for j in range(n_samples):
+            along = offsets[0, trial, j] * n0 + offsets[1, trial, j] * n1
+            along += offsets[2, trial, j] * n2
+            squared = offsets_sq[trial, j] - along * along
+            # It can round below zero for a sample on the axis itself.
+            if squared < 0.0:
+                squared = 0.0
+            distance[j] = math.sqrt(squared)
+        total = 0.0
+        for p in range(n_markers):
+            radius = 0.0
+            for j in range(p * n_frames, (p + 1) * n_frames):
+                radius += distance[j]
+            radius *= 1.0 / n_frames
+            for j in range(p * n_frames, (p + 1) * n_frames):
+                deviation = distance[j] - radius
+                total += deviation * deviation
+        costs[k] = total
+        if distances.shape[0]:
+            distances[k] = distance
 
 
 def canonical_sign(direction: np.ndarray) -> np.ndarray:

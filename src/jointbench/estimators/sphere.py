@@ -22,6 +22,7 @@ import numpy as np
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
+from jointbench.numerics.compiled import kernel
 from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
@@ -676,6 +677,12 @@ def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarra
     return array, ~finite | still | (array.shape[2] < 1)
 
 
+def _screened(markers: np.ndarray, good: np.ndarray) -> np.ndarray:
+    """The trials ``good`` of ``markers``: the array itself when that is all of them (copying
+    a whole batch costs as much as a closed-form fit)."""
+    return markers if good.size == markers.shape[0] else markers[good]
+
+
 def _with_fallback(fit, markers: np.ndarray, outcomes: list, redo: np.ndarray) -> list:
     """Fill ``outcomes`` for the trials in ``redo`` with the one-trial ``fit`` (or its error)."""
     for trial in np.flatnonzero(redo):
@@ -730,7 +737,7 @@ def _fit_ls_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
     outcomes: list = [None] * len(bad)
     good = np.flatnonzero(~bad)
     if good.size:
-        a_matrix, b_vector, means, centred = _ls_moments_batch(markers[good])
+        a_matrix, b_vector, means, centred = _ls_moments_batch(_screened(markers, good))
         centers, _ = _pinv_solve_batch(a_matrix, b_vector)
         radii, costs = _algebraic_fit_batch(means, centred, centers)
         _closed_form_results(outcomes, "LS", good, centers, radii, costs)
@@ -759,22 +766,14 @@ def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
     outcomes: list = [None] * len(bad)
     good = np.flatnonzero(~bad)
     if good.size:
-        scatter, origin, scale = _nm_scatters(markers[good])
-        try:
-            lower = np.linalg.cholesky(scatter)
-        except np.linalg.LinAlgError:
-            # Some trial is (nearly) noise-free: its scatter is singular. It alone goes to the
-            # one-trial function; the others are solved together, so that a trial's answer
-            # does not depend on the trials beside it.
-            singular = np.array([not _positive_definite(matrix) for matrix in scatter])
-            bad[good[singular]] = True
-            good, scatter = good[~singular], scatter[~singular]
-            origin, scale = origin[~singular], scale[~singular]
-            if not good.size:
-                return _with_fallback(fit_nm, markers, outcomes, bad)
-            lower = np.linalg.cholesky(scatter)
-        solved, centers, radii, costs = _nm_solve(lower, origin, scale, markers.shape[2])
-        # A trial without a solution goes to the one-trial function, which says why.
+        data = np.ascontiguousarray(_screened(markers, good))
+        n_trials, _, n_markers, _ = data.shape
+        centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
+        costs, solved = np.empty(n_trials), np.empty(n_trials, dtype=bool)
+        _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, solved)
+        # A trial without a solution here -- a (nearly) singular scatter, as for noise-free
+        # data, or no admissible sphere -- goes to the one-trial function, which solves it
+        # otherwise or says why not.
         bad[good[~solved]] = True
         _closed_form_results(
             outcomes, "NM", good[solved], centers[solved], radii[solved], costs[solved]
@@ -782,69 +781,181 @@ def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
     return _with_fallback(fit_nm, markers, outcomes, bad)
 
 
-def _positive_definite(matrix: np.ndarray) -> bool:
-    try:
-        np.linalg.cholesky(matrix)
-    except np.linalg.LinAlgError:
-        return False
-    return True
+@kernel
+def _nm_trials(
+    data: np.ndarray,
+    constraint: np.ndarray,
+    eps: float,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    costs: np.ndarray,
+    solved: np.ndarray,
+) -> None:
+    """:func:`fit_nm` of each trial of ``data`` (T, N, P, 3) [mm] whose scatter is regular:
+    centres (T, 3) [mm], radii (T, P) [mm] and costs (T,) into the arrays given, and
+    ``solved`` (T,) false where the scatter is (nearly) singular or no admissible sphere
+    exists. ``constraint`` is :func:`_nm_constraint`, ``eps`` the float64 machine epsilon. A
+    compiled kernel (:mod:`jointbench.numerics.compiled`).
 
-
-def _nm_scatters(data: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per trial of ``data`` ``(T, N, P, 3)``: the scatter of the NM design in scaled
-    coordinates ``(T, 4 + P, 4 + P)``, and the origin ``(T, 3)`` [mm] and scale ``(T,)`` [mm]
-    of those coordinates.
-
-    Sums over the rows are matrix products (with a vector of ones, or with the markers'
-    indicator matrix): reductions over the middle axis of a stack run several times slower.
+    The same steps as :func:`_nm_coefficients`, written out for small matrices: the scatter of
+    the unit-RMS design (paper A eq. 22) by blocks, its Cholesky factor ``L``, the admissible
+    eigenvector of largest ``mu`` of ``W C W'`` with ``W = L^-1``, ``u = W' y``.
     """
     n_trials, n_frames, n_markers, _ = data.shape
-    rows = data.reshape(n_trials, -1, 3)
-    n_rows = rows.shape[1]
-    origin = (np.ones(n_rows) @ rows) / n_rows
-    scaled = rows - origin[:, None]
-    scale = np.sqrt(np.einsum("tri,tri->t", scaled, scaled) / n_rows)
-    scaled /= scale[:, None, None]
-    basis = np.empty((n_trials, n_rows, 4))
-    basis[..., 0] = np.einsum("tri,tri->tr", scaled, scaled)
-    basis[..., 1:] = scaled
-    transposed = np.swapaxes(basis, 1, 2)
     size = 4 + n_markers
-    scatter = np.zeros((n_trials, size, size))
-    scatter[:, :4, :4] = transposed @ basis
-    # Row r belongs to marker r % P.
-    scatter[:, :4, 4:] = transposed @ np.tile(np.eye(n_markers), (n_frames, 1))
-    scatter[:, 4:, :4] = np.swapaxes(scatter[:, :4, 4:], 1, 2)
-    scatter[:, 4:, 4:] = n_frames * np.eye(n_markers)
-    return scatter, origin, scale
-
-
-def _nm_solve(lower, origin, scale, n_markers: int):
-    """The NM generalised eigenproblem of each trial from the Cholesky factor of its scatter:
-    whether it has a solution, and the centres ``(T, 3)`` [mm], radii ``(T, P)`` [mm] and
-    costs ``(T,)``."""
-    size = 4 + n_markers
-    constraint = _nm_constraint(n_markers)
-    pivots = np.diagonal(lower, axis1=1, axis2=2) ** 2
-    regular = pivots.min(axis=1) > 1e-9 * pivots.max(axis=1)
-    whitened = np.linalg.inv(np.where(regular[:, None, None], lower, np.eye(size)))
-    m_matrix = whitened @ constraint @ np.swapaxes(whitened, 1, 2)
-    mu, y = np.linalg.eigh((m_matrix + np.swapaxes(m_matrix, 1, 2)) / 2.0)
-    largest = mu[:, -1]
-    u = np.einsum("tji,tj->ti", whitened, y[:, :, -1])
-    norm = np.einsum("ti,ij,tj->t", u, constraint, u)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        u = u / np.sqrt(norm)[:, None]
-        a = u[:, 0]
-        solved = regular & (largest > 0) & (np.abs(a) >= _EPS * np.abs(u).max(axis=1))
-        center_scaled = u[:, 1:4] / (-2.0 * a[:, None])
-        sq_radii = np.einsum("ti,ti->t", center_scaled, center_scaled)[:, None] - (
-            u[:, 4:] / a[:, None]
-        )
-        centers = origin + scale[:, None] * center_scaled
-        radii = scale[:, None] * np.sqrt(np.maximum(sq_radii, 0.0))
-        costs = 1.0 / largest
-    return solved, centers, radii, costs
+    n_rows = n_frames * n_markers
+    scatter = np.empty((size, size))
+    lower = np.empty((size, size))
+    whitened = np.empty((size, size))
+    product = np.empty((size, size))
+    m_matrix = np.empty((size, size))
+    basis_vectors = np.empty((size, size))
+    vectors = np.empty(size)
+    basis = np.empty(4)
+    for t in range(n_trials):
+        origin = np.zeros(3)
+        for f in range(n_frames):
+            for p in range(n_markers):
+                for i in range(3):
+                    origin[i] += data[t, f, p, i]
+        origin /= n_rows
+        spread = 0.0
+        for f in range(n_frames):
+            for p in range(n_markers):
+                for i in range(3):
+                    offset = data[t, f, p, i] - origin[i]
+                    spread += offset * offset
+        scale = math.sqrt(spread / n_rows)
+        inverse_scale = 1.0 / scale
+        scatter[:] = 0.0
+        for f in range(n_frames):
+            for p in range(n_markers):
+                basis[0] = 0.0
+                for i in range(3):
+                    basis[1 + i] = (data[t, f, p, i] - origin[i]) * inverse_scale
+                    basis[0] += basis[1 + i] * basis[1 + i]
+                for i in range(4):
+                    for j in range(i, 4):
+                        scatter[i, j] += basis[i] * basis[j]
+                    scatter[i, 4 + p] += basis[i]
+        for p in range(n_markers):
+            scatter[4 + p, 4 + p] = n_frames
+        for i in range(size):
+            for j in range(i):
+                scatter[i, j] = scatter[j, i]
+        solved[t] = False
+        # Cholesky: a pivot that is not positive means a singular scatter.
+        regular = True
+        for j in range(size):
+            pivot = scatter[j, j]
+            for k in range(j):
+                pivot -= lower[j, k] * lower[j, k]
+            if not pivot > 0.0:
+                regular = False
+                break
+            lower[j, j] = math.sqrt(pivot)
+            for i in range(j + 1, size):
+                value = scatter[i, j]
+                for k in range(j):
+                    value -= lower[i, k] * lower[j, k]
+                lower[i, j] = value / lower[j, j]
+        if not regular:
+            continue
+        smallest, largest_pivot = lower[0, 0] ** 2, lower[0, 0] ** 2
+        for j in range(1, size):
+            smallest = min(smallest, lower[j, j] ** 2)
+            largest_pivot = max(largest_pivot, lower[j, j] ** 2)
+        if not smallest > 1e-9 * largest_pivot:
+            continue
+        # W = L^-1, lower triangular, by forward substitution column by column.
+        whitened[:] = 0.0
+        for j in range(size):
+            whitened[j, j] = 1.0 / lower[j, j]
+            for i in range(j + 1, size):
+                value = 0.0
+                for k in range(j, i):
+                    value -= lower[i, k] * whitened[k, j]
+                whitened[i, j] = value / lower[i, i]
+        # M = W C W' (symmetric), then its largest eigenpair by Jacobi's method.
+        for i in range(size):
+            for j in range(size):
+                value = 0.0
+                for k in range(j + 1):
+                    value += constraint[i, k] * whitened[j, k]
+                product[i, j] = value
+        for i in range(size):
+            for j in range(i + 1):
+                value = 0.0
+                for k in range(i + 1):
+                    value += whitened[i, k] * product[k, j]
+                m_matrix[i, j] = m_matrix[j, i] = value
+        # Cyclic Jacobi rotations until the off-diagonal part is negligible; the rotations
+        # accumulate in ``basis_vectors``.
+        basis_vectors[:] = 0.0
+        for i in range(size):
+            basis_vectors[i, i] = 1.0
+        frobenius = 0.0
+        for i in range(size):
+            for j in range(size):
+                frobenius += m_matrix[i, j] * m_matrix[i, j]
+        for _ in range(50):
+            off = 0.0
+            for i in range(size):
+                for j in range(i):
+                    off += m_matrix[i, j] * m_matrix[i, j]
+            if not off > (eps * eps) * frobenius:
+                break
+            for r in range(size - 1):
+                for c in range(r + 1, size):
+                    if m_matrix[r, c] == 0.0:
+                        continue
+                    tau = (m_matrix[c, c] - m_matrix[r, r]) / (2.0 * m_matrix[r, c])
+                    root = math.sqrt(1.0 + tau * tau)
+                    tangent = 1.0 / (tau + root) if tau >= 0.0 else -1.0 / (root - tau)
+                    cosine = 1.0 / math.sqrt(1.0 + tangent * tangent)
+                    sine = tangent * cosine
+                    for k in range(size):
+                        left, right = m_matrix[k, r], m_matrix[k, c]
+                        m_matrix[k, r] = cosine * left - sine * right
+                        m_matrix[k, c] = sine * left + cosine * right
+                    for k in range(size):
+                        left, right = m_matrix[r, k], m_matrix[c, k]
+                        m_matrix[r, k] = cosine * left - sine * right
+                        m_matrix[c, k] = sine * left + cosine * right
+                    for k in range(size):
+                        left, right = basis_vectors[k, r], basis_vectors[k, c]
+                        basis_vectors[k, r] = cosine * left - sine * right
+                        basis_vectors[k, c] = sine * left + cosine * right
+        top = 0
+        for i in range(1, size):
+            if m_matrix[i, i] > m_matrix[top, top]:
+                top = i
+        largest = m_matrix[top, top]
+        vectors[:] = basis_vectors[:, top]
+        u = np.zeros(size)
+        for i in range(size):
+            for k in range(i, size):
+                u[i] += whitened[k, i] * vectors[k]
+        norm = 0.0
+        for i in range(size):
+            for j in range(size):
+                norm += u[i] * constraint[i, j] * u[j]
+        if not (largest > 0.0 and norm > 0.0):
+            continue
+        u /= math.sqrt(norm)
+        a = u[0]
+        if not abs(a) >= eps * np.abs(u).max():
+            continue
+        center_scaled = u[1:4] / (-2.0 * a)
+        squared_distance = 0.0
+        for i in range(3):
+            squared_distance += center_scaled[i] * center_scaled[i]
+        for i in range(3):
+            centers[t, i] = origin[i] + scale * center_scaled[i]
+        for p in range(n_markers):
+            radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
+        costs[t] = 1.0 / largest
+        solved[t] = True
 
 
 def _fit_bc_batch(
@@ -863,7 +974,7 @@ def _fit_bc_batch(
     outcomes: list = [None] * len(bad)
     good = np.flatnonzero(~bad)
     if good.size:
-        data = markers[good]
+        data = _screened(markers, good)
         n_trials, n_frames, n_markers, _ = data.shape
         a_matrix, b_vector, _, _ = _ls_moments_batch(data)
         origin, a_pinv = _pinv_solve_batch(a_matrix, b_vector)

@@ -7,9 +7,10 @@ A pose ``(R, t)`` maps body-fixed coordinates ``x`` to the world as ``R @ x + t`
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 
 import numpy as np
+
+from jointbench.numerics.compiled import kernel
 
 __all__ = ["best_rotation", "rigid_fit", "rigid_poses"]
 
@@ -75,7 +76,7 @@ def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.n
     """Proper rotations ``R`` maximising ``trace(R' H)`` for ``H = sum_i target_i source_i'``.
 
     This is the rotation of :func:`rigid_fit` (Kanatani's / Kabsch's SVD solution), computed
-    matrix by matrix by the compiled :func:`_horn_rotations`; matrices where it cannot settle
+    matrix by matrix by the compiled :func:`_horn_rotations`; matrices where that cannot settle
     the answer go to the SVD. ``cross`` is ``(..., 3, 3)``; ``bound`` ``(...)``, an upper bound
     of ``max trace(R' H)`` the caller knows (such as half the summed squared lengths of the
     centred points), or ``None``. The result has the shape of ``cross``.
@@ -88,28 +89,19 @@ def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.n
         limits = np.ascontiguousarray(np.broadcast_to(bound, shape[:-2]), dtype=float).reshape(-1)
     rotation = np.empty_like(flat)
     unsettled = np.empty(flat.shape[0], dtype=bool)
-    _compiled_rotations()(flat, limits, rotation, unsettled)
+    _horn_rotations(flat, limits, rotation, unsettled)
     if unsettled.any():
         rotation[unsettled] = _kabsch_rotation(flat[unsettled])
     return rotation.reshape(shape)
 
 
-@lru_cache(maxsize=1)
-def _compiled_rotations():
-    """:func:`_horn_rotations` compiled by Numba, on first use: importing Numba costs about a
-    quarter of a second, which only processes that fit rotations pay. The machine code is cached
-    beside this file and recompiled when the file changes."""
-    import numba
-
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(_horn_rotations)
-
-
+@kernel
 def _horn_rotations(
     cross: np.ndarray, bound: np.ndarray, rotation: np.ndarray, unsettled: np.ndarray
 ) -> None:
     """Horn's best rotation of each cross-covariance ``cross[k]`` (n, 3, 3) into ``rotation``
-    (n, 3, 3); ``unsettled[k]`` (n,) marks those left to the SVD. Written for Numba: as plain
-    Python it is correct but slow.
+    (n, 3, 3); ``unsettled[k]`` (n,) marks those left to the SVD. A compiled kernel
+    (:mod:`jointbench.numerics.compiled`).
 
     Horn's unit quaternion is the eigenvector of the largest eigenvalue of the 4x4 symmetric
     key matrix ``N`` of ``H``. The eigenvalue comes from Newton's method on the characteristic

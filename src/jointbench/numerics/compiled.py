@@ -1,0 +1,41 @@
+"""Kernels compiled by Numba on first use.
+
+A kernel is a plain Python function over NumPy arrays and scalars that calls no other function
+of the package: loops a stack of small problems through, where NumPy would pay its per-call
+overhead on every tiny array. :func:`kernel` compiles it on its first call, so a process that
+never calls it never imports Numba (about a quarter of a second). The machine code is cached
+beside the source file and rebuilt when that file changes. The Python source stays the
+specification: it runs as written (slowly) through ``kernel.__wrapped__``, and the code
+fingerprint of a job (:mod:`jointbench.fingerprint`) follows it there.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+
+__all__ = ["kernel"]
+
+
+class _Kernel:
+    """A function compiled on its first call (see the module doc)."""
+
+    def __init__(self, function: Callable) -> None:
+        functools.update_wrapper(self, function)
+        self._compiled: Callable | None = None
+
+    def __call__(self, *args):
+        if self._compiled is None:
+            import numba
+
+            # error_model="numpy": a division by zero gives inf or nan, as in NumPy, instead of
+            # raising, so the compiled and the interpreted source agree.
+            self._compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(
+                self.__wrapped__
+            )
+        return self._compiled(*args)
+
+
+def kernel(function: Callable) -> Callable:
+    """Decorator: ``function`` compiled by Numba when first called (see the module doc)."""
+    return _Kernel(function)
