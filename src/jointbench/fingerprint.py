@@ -4,8 +4,9 @@ Snakemake reruns a job when its rule's code or parameters change, but the librar
 installed package it does not track. The workflow therefore passes each job a parameter
 ``code``: the hash of the compiled code of the functions that job runs, and of every
 function, class and simple constant of jointbench (or of an extension module) they reach through
-their global names. Comments and line numbers do not count; any change of what the code does
-does. Editing NM changes the fingerprint of NM's estimate job only; editing a helper shared by
+their global names; a cached or compiled callable counts as the function it wraps. Comments
+and line numbers do not count; any change of what the code does does. Editing NM changes the
+fingerprint of NM's estimate job only; editing a helper shared by
 several estimators changes each of theirs.
 """
 
