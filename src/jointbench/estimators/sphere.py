@@ -809,37 +809,54 @@ def _nm_trials(
     whitened = np.empty((size, size))
     product = np.empty((size, size))
     m_matrix = np.empty((size, size))
-    basis_vectors = np.empty((size, size))
-    vectors = np.empty(size)
-    basis = np.empty(4)
     for t in range(n_trials):
-        origin = np.zeros(3)
+        trial = data[t]
+        ox = oy = oz = 0.0
         for f in range(n_frames):
             for p in range(n_markers):
-                for i in range(3):
-                    origin[i] += data[t, f, p, i]
-        origin /= n_rows
+                ox += trial[f, p, 0]
+                oy += trial[f, p, 1]
+                oz += trial[f, p, 2]
+        ox, oy, oz = ox / n_rows, oy / n_rows, oz / n_rows
         spread = 0.0
         for f in range(n_frames):
             for p in range(n_markers):
-                for i in range(3):
-                    offset = data[t, f, p, i] - origin[i]
-                    spread += offset * offset
+                dx, dy, dz = trial[f, p, 0] - ox, trial[f, p, 1] - oy, trial[f, p, 2] - oz
+                spread += dx * dx + dy * dy + dz * dz
         scale = math.sqrt(spread / n_rows)
         inverse_scale = 1.0 / scale
+        # The 4 x 4 block sums basis' basis over every row, basis = (|s|^2, s) for the scaled
+        # sample s; column 4 + p sums the basis over marker p's rows. Scalars, so that the sums
+        # stay in registers.
+        s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
         scatter[:] = 0.0
-        for f in range(n_frames):
-            for p in range(n_markers):
-                basis[0] = 0.0
-                for i in range(3):
-                    basis[1 + i] = (data[t, f, p, i] - origin[i]) * inverse_scale
-                    basis[0] += basis[1 + i] * basis[1 + i]
-                for i in range(4):
-                    for j in range(i, 4):
-                        scatter[i, j] += basis[i] * basis[j]
-                    scatter[i, 4 + p] += basis[i]
         for p in range(n_markers):
+            m0 = m1 = m2 = m3 = 0.0
+            for f in range(n_frames):
+                x = (trial[f, p, 0] - ox) * inverse_scale
+                y = (trial[f, p, 1] - oy) * inverse_scale
+                z = (trial[f, p, 2] - oz) * inverse_scale
+                w = x * x + y * y + z * z
+                s00 += w * w
+                s01 += w * x
+                s02 += w * y
+                s03 += w * z
+                s11 += x * x
+                s12 += x * y
+                s13 += x * z
+                s22 += y * y
+                s23 += y * z
+                s33 += z * z
+                m0 += w
+                m1 += x
+                m2 += y
+                m3 += z
+            scatter[0, 4 + p], scatter[1, 4 + p] = m0, m1
+            scatter[2, 4 + p], scatter[3, 4 + p] = m2, m3
             scatter[4 + p, 4 + p] = n_frames
+        scatter[0, 0], scatter[0, 1], scatter[0, 2], scatter[0, 3] = s00, s01, s02, s03
+        scatter[1, 1], scatter[1, 2], scatter[1, 3] = s11, s12, s13
+        scatter[2, 2], scatter[2, 3], scatter[3, 3] = s22, s23, s33
         for i in range(size):
             for j in range(i):
                 scatter[i, j] = scatter[j, i]
@@ -876,7 +893,7 @@ def _nm_trials(
                 for k in range(j, i):
                     value -= lower[i, k] * whitened[k, j]
                 whitened[i, j] = value / lower[i, i]
-        # M = W C W' (symmetric), then its largest eigenpair by Jacobi's method.
+        # M = W C W', exactly symmetric, then its eigenvector of the largest eigenvalue.
         for i in range(size):
             for j in range(size):
                 value = 0.0
@@ -889,49 +906,9 @@ def _nm_trials(
                 for k in range(i + 1):
                     value += whitened[i, k] * product[k, j]
                 m_matrix[i, j] = m_matrix[j, i] = value
-        # Cyclic Jacobi rotations until the off-diagonal part is negligible; the rotations
-        # accumulate in ``basis_vectors``.
-        basis_vectors[:] = 0.0
-        for i in range(size):
-            basis_vectors[i, i] = 1.0
-        frobenius = 0.0
-        for i in range(size):
-            for j in range(size):
-                frobenius += m_matrix[i, j] * m_matrix[i, j]
-        for _ in range(50):
-            off = 0.0
-            for i in range(size):
-                for j in range(i):
-                    off += m_matrix[i, j] * m_matrix[i, j]
-            if not off > (eps * eps) * frobenius:
-                break
-            for r in range(size - 1):
-                for c in range(r + 1, size):
-                    if m_matrix[r, c] == 0.0:
-                        continue
-                    tau = (m_matrix[c, c] - m_matrix[r, r]) / (2.0 * m_matrix[r, c])
-                    root = math.sqrt(1.0 + tau * tau)
-                    tangent = 1.0 / (tau + root) if tau >= 0.0 else -1.0 / (root - tau)
-                    cosine = 1.0 / math.sqrt(1.0 + tangent * tangent)
-                    sine = tangent * cosine
-                    for k in range(size):
-                        left, right = m_matrix[k, r], m_matrix[k, c]
-                        m_matrix[k, r] = cosine * left - sine * right
-                        m_matrix[k, c] = sine * left + cosine * right
-                    for k in range(size):
-                        left, right = m_matrix[r, k], m_matrix[c, k]
-                        m_matrix[r, k] = cosine * left - sine * right
-                        m_matrix[c, k] = sine * left + cosine * right
-                    for k in range(size):
-                        left, right = basis_vectors[k, r], basis_vectors[k, c]
-                        basis_vectors[k, r] = cosine * left - sine * right
-                        basis_vectors[k, c] = sine * left + cosine * right
-        top = 0
-        for i in range(1, size):
-            if m_matrix[i, i] > m_matrix[top, top]:
-                top = i
-        largest = m_matrix[top, top]
-        vectors[:] = basis_vectors[:, top]
+        mu, eigenvectors = np.linalg.eigh(m_matrix)
+        largest = mu[-1]
+        vectors = eigenvectors[:, -1]
         u = np.zeros(size)
         for i in range(size):
             for k in range(i, size):
@@ -950,8 +927,9 @@ def _nm_trials(
         squared_distance = 0.0
         for i in range(3):
             squared_distance += center_scaled[i] * center_scaled[i]
-        for i in range(3):
-            centers[t, i] = origin[i] + scale * center_scaled[i]
+        centers[t, 0] = ox + scale * center_scaled[0]
+        centers[t, 1] = oy + scale * center_scaled[1]
+        centers[t, 2] = oz + scale * center_scaled[2]
         for p in range(n_markers):
             radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
         costs[t] = 1.0 / largest
