@@ -11,6 +11,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from jointbench.estimators import axis, sphere
 from jointbench.geometry import rotation_matrix, unit
@@ -125,3 +126,42 @@ def test_kernels_load_numba_only_when_called():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "True"]
+
+
+def test_each_kernel_is_compiled_once_whatever_its_inputs_look_like():
+    """Numba compiles a kernel once per argument type, and a read-only or strided array is a
+    type of its own: callers hand the kernels writable contiguous copies, so one signature
+    serves every call."""
+    rng = np.random.default_rng(5)
+    cross = rng.normal(size=(5, 3, 3))
+    read_only_cross = cross.copy()
+    read_only_cross.setflags(write=False)
+    poses.best_rotation(cross)
+    poses.best_rotation(read_only_cross, bound=np.full(5, 1e3))
+    poses.best_rotation(cross[::2], bound=np.full(3, 1e3)[None][0])
+    markers = _hinge_markers(rng, 4)[:, :40]
+    read_only = markers.copy()
+    read_only.setflags(write=False)
+    sphere.fit_nm.batched(markers)
+    sphere.fit_nm.batched(read_only)
+    costs = axis.AxisCosts(markers, rng.normal(size=(4, 3)))
+    directions = unit(rng.normal(size=(6, 3)))
+    frozen_directions = directions.copy()
+    frozen_directions.setflags(write=False)
+    costs.radial(directions, np.arange(6) % 4)
+    costs.radial(frozen_directions, (np.arange(12) % 4)[::2])
+    costs.radial_distances(frozen_directions[0], 1)
+    for kernel in (poses._horn_rotations, sphere._nm_trials, axis._radial_costs):
+        assert len(kernel._compiled.signatures) == 1, (kernel.__name__, kernel._compiled.signatures)
+
+
+def test_radial_costs_refuse_trials_that_do_not_fit():
+    rng = np.random.default_rng(6)
+    costs = axis.AxisCosts(_hinge_markers(rng, 4)[:, :40], rng.normal(size=(4, 3)))
+    directions = unit(rng.normal(size=(3, 3)))
+    with pytest.raises(ValueError, match="one per direction"):
+        costs.radial(directions, np.array([0, 1]))
+    with pytest.raises(ValueError, match=r"trial 7 .*4 trials"):
+        costs.radial(directions, np.array([0, 1, 7]))
+    with pytest.raises(ValueError, match="4 trials"):
+        costs.radial_distances(directions[0], trial=7)

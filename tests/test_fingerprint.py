@@ -129,3 +129,11 @@ def test_nm_fingerprint_reaches_its_cached_constraint_matrix():
 
     assert sphere._nm_constraint.__wrapped__ in reached([registry.get("center", "NM")])
     assert poses._horn_rotations.__wrapped__ in reached([poses.rigid_poses])
+
+
+def test_a_kernels_compile_options_count():
+    """The class that compiles a kernel (its Numba options) is part of the kernel's code."""
+    from jointbench.fingerprint import reached
+    from jointbench.numerics import compiled, poses
+
+    assert compiled._Kernel in reached([poses.rigid_poses])

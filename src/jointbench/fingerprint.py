@@ -98,9 +98,9 @@ def reached(roots: Iterable[object], prefixes: tuple[str, ...] = ("jointbench",)
             stack.append(obj.func)
             continue
         if not inspect.isfunction(obj) and inspect.isfunction(getattr(obj, "__wrapped__", None)):
-            # A cache (functools.lru_cache) or compiled (Numba) callable runs the function it
-            # wraps.
-            stack.append(obj.__wrapped__)
+            # A cache (functools.lru_cache) or compiled callable runs the function it wraps, the
+            # way its class says (a compiled kernel's options); a class not of ours is dropped.
+            stack.extend((obj.__wrapped__, type(obj)))
             continue
         if id(obj) in seen or not (inspect.isfunction(obj) or inspect.isclass(obj)):
             continue

@@ -88,7 +88,7 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
-from jointbench.numerics.compiled import kernel
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.simplex import FATOL, XATOL, lockstep
 
 __all__ = [
@@ -202,7 +202,19 @@ class AxisCosts:
         return np.einsum("ki,kij,kj->k", flat, scatter, flat).reshape(n.shape[:-1])
 
     def _radial(self, directions: np.ndarray, trials: np.ndarray, distances: np.ndarray):
-        flat = np.ascontiguousarray(directions, dtype=float).reshape(-1, 3)
+        flat = kernel_array(np.reshape(directions, (-1, 3)))
+        trials = kernel_array(trials, np.intp)
+        n_trials = self._w.shape[1]
+        if trials.shape != (len(flat),):
+            raise ValueError(
+                f"trials must be shaped ({len(flat)},), one per direction, got {trials.shape}"
+            )
+        outside = (trials < -n_trials) | (trials >= n_trials)
+        if outside.any():
+            raise ValueError(
+                f"trial {int(trials[outside][0])} does not exist: these costs hold {n_trials} "
+                "trials"
+            )
         costs = np.empty(len(flat))
         _radial_costs(self._w, self._w_sq, flat, trials, self._shape[0], costs, distances)
         return costs

@@ -22,7 +22,7 @@ import numpy as np
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
-from jointbench.numerics.compiled import kernel
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
@@ -766,7 +766,7 @@ def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
     outcomes: list = [None] * len(bad)
     good = np.flatnonzero(~bad)
     if good.size:
-        data = np.ascontiguousarray(_screened(markers, good))
+        data = kernel_array(_screened(markers, good))
         n_trials, _, n_markers, _ = data.shape
         centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
         costs, solved = np.empty(n_trials), np.empty(n_trials, dtype=bool)

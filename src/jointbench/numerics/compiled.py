@@ -14,7 +14,9 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 
-__all__ = ["kernel"]
+import numpy as np
+
+__all__ = ["kernel", "kernel_array"]
 
 
 class _Kernel:
@@ -28,12 +30,19 @@ class _Kernel:
         if self._compiled is None:
             import numba
 
-            # error_model="numpy": a division by zero gives inf or nan, as in NumPy, instead of
-            # raising, so the compiled and the interpreted source agree.
+            # error_model="numpy": a float division by zero gives inf or nan, as NumPy's does,
+            # instead of raising.
             self._compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(
                 self.__wrapped__
             )
         return self._compiled(*args)
+
+
+def kernel_array(array: object, dtype: type = float) -> np.ndarray:
+    """``array`` as a kernel's input: ``dtype``, C-contiguous and writable, copied only when it
+    is not. Numba compiles a kernel once per argument type, and a read-only or strided array is
+    a type of its own, which would cost another compilation."""
+    return np.require(array, dtype, ["C", "W"])
 
 
 def kernel(function: Callable) -> Callable:

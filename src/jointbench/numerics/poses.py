@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from jointbench.numerics.compiled import kernel
+from jointbench.numerics.compiled import kernel, kernel_array
 
 __all__ = ["best_rotation", "rigid_fit", "rigid_poses"]
 
@@ -82,11 +82,11 @@ def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.n
     centred points), or ``None``. The result has the shape of ``cross``.
     """
     shape = np.shape(cross)
-    flat = np.ascontiguousarray(cross, dtype=float).reshape(-1, 3, 3)
+    flat = kernel_array(np.reshape(cross, (-1, 3, 3)))
     if bound is None:
         limits = np.full(flat.shape[0], np.inf)
     else:
-        limits = np.ascontiguousarray(np.broadcast_to(bound, shape[:-2]), dtype=float).reshape(-1)
+        limits = kernel_array(np.broadcast_to(bound, shape[:-2]).reshape(-1))
     rotation = np.empty_like(flat)
     unsettled = np.empty(flat.shape[0], dtype=bool)
     _horn_rotations(flat, limits, rotation, unsettled)
