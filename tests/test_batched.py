@@ -205,12 +205,15 @@ def test_rigid_poses_in_chunks_equal_one_call(monkeypatch):
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("checked", [True, False])
 @pytest.mark.parametrize(("kind", "method"), [("center", "LS"), ("center", "NM"), ("center", "BC")])
-def test_a_bad_trial_fails_alone_with_the_one_trial_error(kind, method):
+def test_a_bad_trial_fails_alone_with_the_one_trial_error(kind, method, checked):
     markers = _trials("cmc", 1).segments["moving"].copy()
     markers[2, 5, 1, 0] = np.nan
     markers[4] = markers[4, :1]  # does not move
-    fit = registry.get(kind, method)
+    markers[5, 7, 2] = 0.0  # a gap stored as (0, 0, 0)
+    markers[1, 3, 0, 1] = 0.0  # one coordinate at zero is data
+    fit = registry.get(kind, method, checked=checked)
     outcomes = fit.batched(markers)
     for trial, outcome in enumerate(outcomes):
         try:
@@ -219,7 +222,8 @@ def test_a_bad_trial_fails_alone_with_the_one_trial_error(kind, method):
             single = error
         _assert_same(outcome, single)
     assert isinstance(outcomes[2], ValueError) and isinstance(outcomes[4], ValueError)
-    assert not isinstance(outcomes[3], ValueError)
+    assert "(0, 0, 0)" in str(outcomes[5])
+    assert not isinstance(outcomes[3], ValueError) and not isinstance(outcomes[1], ValueError)
 
 
 def test_a_bad_trial_fails_alone_in_a_two_segment_batch():

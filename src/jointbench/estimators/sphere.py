@@ -656,10 +656,11 @@ def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
 
 
 def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    """Stacked trials as float64 and the mask of those :func:`_prepare` would reject.
+    """Stacked trials as float64 and the mask of those :func:`_prepare` would reject, or
+    might (a coordinate at exactly zero).
 
-    The checks are vectorised over trials; a rejected trial is then passed to the one-trial
-    function, which raises its own ``ValueError``.
+    The checks are vectorised over trials; a masked trial is then passed to the one-trial
+    function, which fits it or raises its own ``ValueError``.
     """
     array = np.asarray(markers, dtype=float)
     if array.ndim != 4 or array.shape[-1] != 3 or array.shape[1] < min_frames:
@@ -674,7 +675,11 @@ def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarra
         spread = np.abs(offsets, out=offsets).max(axis=(1, 2, 3))
         scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
         still = spread <= 1e-9 * scale
-    return array, ~finite | still | (array.shape[2] < 1)
+        # A coordinate at exactly zero may belong to a sample at (0, 0, 0), how some readers
+        # store gaps, which the one-trial checks refuse; a coordinate is cheaper to test than a
+        # sample.
+        touches_zero = np.abs(array, out=offsets).min(axis=(1, 2, 3)) == 0
+    return array, ~finite | still | touches_zero | (array.shape[2] < 1)
 
 
 def _screened(markers: np.ndarray, good: np.ndarray) -> np.ndarray:
