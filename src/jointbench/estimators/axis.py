@@ -190,9 +190,7 @@ class AxisCosts:
 
     @staticmethod
     def _trials(directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
-        if trials is None:
-            return np.zeros(len(directions), dtype=np.intp)
-        return np.asarray(trials, dtype=np.intp)
+        return np.zeros(len(directions), dtype=int) if trials is None else np.asarray(trials)
 
     def planar(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f_p = n' S n`` (paper B eq. 8): ``(3,)`` -> scalar array, ``(k, 3)`` -> ``(k,)``."""
@@ -202,6 +200,8 @@ class AxisCosts:
         return np.einsum("ki,kij,kj->k", flat, scatter, flat).reshape(n.shape[:-1])
 
     def _radial(self, directions: np.ndarray, trials: np.ndarray, distances: np.ndarray):
+        """Radial costs ``(k,)`` of unit directions ``(k, 3)`` in ``trials`` ``(k,)``, and the
+        distances into ``distances`` ``(k, P N)`` unless it is ``(0, 0)``."""
         flat = kernel_array(np.reshape(directions, (-1, 3)))
         trials = kernel_array(trials, np.intp)
         n_trials = self._w.shape[1]
