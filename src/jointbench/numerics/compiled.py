@@ -3,7 +3,7 @@
 A kernel is a plain Python function over NumPy arrays and scalars that calls no other function
 of the package: loops a stack of small problems through, where NumPy would pay its per-call
 overhead on every tiny array. :func:`kernel` compiles it on its first call, so a process that
-never calls it never imports Numba (about a quarter of a second). The machine code is cached
+never calls it never pays for importing and starting Numba. The machine code is cached
 beside the source file and rebuilt when that file changes. The Python source stays the
 specification: it runs as written (slowly) through ``kernel.__wrapped__``, and the code
 fingerprint of a job (:mod:`jointbench.fingerprint`) follows it there.
