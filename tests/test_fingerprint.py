@@ -1,139 +1,186 @@
-"""Code fingerprints: what makes an edited library function rerun the jobs that use it."""
+"""Code fingerprints: every edit of what code does changes them, text alone does not.
+
+Each case edits one file of a small package made for the test and compares the fingerprint of a
+script that imports it before and after. ``tests/test_stale_results.py`` does the same through
+Snakemake on the real workflow.
+"""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
+import importlib
+import textwrap
+from pathlib import Path
 
-from jointbench.estimators import registry
-from jointbench.fingerprint import code_fingerprint
+import pytest
 
-MODULE = """
-import numpy as np
+from jointbench.fingerprint import code_fingerprint, module_closure
 
-SCALE = {scale}
-OFFSET = np.array([0.0, 0.0, {offset}])
+PACKAGE = "jbfp_pkg"
+
+FILES = {
+    "__init__.py": '''
+        """A package with a lazy name (PEP 562), as jointbench has."""
+        import importlib
+        from typing import TYPE_CHECKING
+
+        if TYPE_CHECKING:
+            from jbfp_pkg.typing_only import Hint
+
+        _HOMES = {"lazy_value": "jbfp_pkg.lazy"}
 
 
-def helper(x):
-    # a comment that does not count
-    return x * SCALE
+        def __getattr__(name):
+            return getattr(importlib.import_module(_HOMES[name]), name)
+        ''',
+    "core.py": '''
+        """Shared code."""
+        import functools
+        from dataclasses import dataclass, field
+
+        SCALE = 2.0
+        LAYOUT = ((1.0, 2.0), (3.0, 4.0))
 
 
-def uses_helper(x):
-    return helper(x) + OFFSET
+        @dataclass
+        class Model:
+            """A model."""
+
+            offsets: tuple = field(default_factory=lambda: (0.0, 1.0))
+            gain: float = 1.0
+
+            @property
+            def doubled(self):
+                return 2 * self.gain
+
+            @functools.cached_property
+            def cached(self):
+                return self.gain + 1
+
+            @staticmethod
+            def helper(x):
+                return x + 1
+
+            @classmethod
+            def make(cls):
+                return cls()
 
 
-def independent(x):
-    return x - 1
+        def fit(x, *, tol=1e-4):
+            """Fit ``x``."""
+            # a comment
+            from jbfp_pkg import inner
+
+            return inner.step(x) * SCALE + tol
+        ''',
+    "inner.py": """
+        def step(x):
+            return x
+        """,
+    "unused.py": """
+        def never_imported():
+            return 0
+        """,
+    "lazy.py": """
+        lazy_value = 1
+        """,
+    "typing_only.py": """
+        class Hint:
+            pass
+        """,
+    "sub/__init__.py": """
+        from .deep import deep_value
+        """,
+    "sub/deep.py": """
+        deep_value = 1
+        """,
+}
+
+SCRIPT = """
+from jbfp_pkg import core
+from jbfp_pkg.sub import deep_value
 """
 
 
-def _load(tmp_path, name, **values):
-    path = tmp_path / f"{name}.py"
-    path.write_text(MODULE.format(**values))
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture
+def package(tmp_path, monkeypatch) -> Path:
+    root = tmp_path / "site"
+    for name, text in FILES.items():
+        path = root / PACKAGE / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(textwrap.dedent(text).lstrip())
+    (tmp_path / "script.py").write_text(SCRIPT)
+    monkeypatch.syspath_prepend(str(root))
+    importlib.invalidate_caches()
+    return root / PACKAGE
 
 
-def _fingerprints(module):
-    prefixes = (module.__name__,)
-    return (
-        code_fingerprint(module.uses_helper, prefixes=prefixes),
-        code_fingerprint(module.independent, prefixes=prefixes),
-    )
+def _fingerprint(package: Path) -> str:
+    return code_fingerprint(package.parent.parent / "script.py", package=PACKAGE)
 
 
-def test_a_change_reaches_the_functions_that_use_it_and_no_others(tmp_path):
-    base = _fingerprints(_load(tmp_path, "jbfp_a", scale=2, offset=0.0))
-    same = _fingerprints(_load(tmp_path, "jbfp_a", scale=2, offset=0.0))
-    constant = _fingerprints(_load(tmp_path, "jbfp_a", scale=3, offset=0.0))
-    array = _fingerprints(_load(tmp_path, "jbfp_a", scale=2, offset=1.0))
-    assert base == same
-    assert constant[0] != base[0] and constant[1] == base[1]
-    assert array[0] != base[0] and array[1] == base[1]
+CHANGES = [
+    ("core.py", "SCALE = 2.0", "SCALE = 3.0"),
+    ("core.py", "LAYOUT = ((1.0, 2.0)", "LAYOUT = ((1.0, 2.5)"),
+    ("core.py", "lambda: (0.0, 1.0)", "lambda: (0.0, 2.0)"),
+    ("core.py", "gain: float = 1.0", "gain: float = 1.5"),
+    ("core.py", "return 2 * self.gain", "return 3 * self.gain"),
+    ("core.py", "return self.gain + 1", "return self.gain + 2"),
+    ("core.py", "return x + 1", "return x + 2"),
+    ("core.py", "return cls()", "return cls(gain=2.0)"),
+    ("core.py", "tol=1e-4", "tol=1e-3"),
+    ("core.py", "* SCALE + tol", "* SCALE - tol"),
+    ("inner.py", "return x", "return -x"),  # imported inside a function
+    ("sub/deep.py", "deep_value = 1", "deep_value = 2"),  # through a relative import
+    ("__init__.py", '"jbfp_pkg.lazy"}', '"jbfp_pkg.lazy", "other": "jbfp_pkg.lazy"}'),
+]
 
 
-def test_comments_and_line_numbers_do_not_count(tmp_path):
-    base = _fingerprints(_load(tmp_path, "jbfp_b", scale=2, offset=0.0))
-    path = tmp_path / "jbfp_b.py"
-    path.write_text("\n\n# moved down\n" + path.read_text().replace("a comment", "another"))
-    spec = importlib.util.spec_from_file_location("jbfp_b", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["jbfp_b"] = module
-    spec.loader.exec_module(module)
-    assert _fingerprints(module) == base
+@pytest.mark.parametrize("path, old, new", CHANGES, ids=[c[1] for c in CHANGES])
+def test_an_edit_of_what_code_does_changes_the_fingerprint(package, path, old, new):
+    before = _fingerprint(package)
+    text = (package / path).read_text()
+    assert old in text
+    (package / path).write_text(text.replace(old, new))
+    assert _fingerprint(package) != before
 
 
-def test_estimators_have_distinct_stable_fingerprints():
-    prints = {
-        (kind, name): code_fingerprint(registry.get(kind, name))
-        for kind in registry.KINDS
-        for name in registry.methods(kind)
-    }
-    assert len(set(prints.values())) == len(prints)
-    again = {key: code_fingerprint(registry.get(*key)) for key in prints}
-    assert again == prints
+TEXT_ONLY = [
+    ("core.py", '"""Fit ``x``."""', '"""Fit ``x``, better explained."""'),
+    ("core.py", '"""A model."""', '"""A model, with more words."""'),
+    ("core.py", "# a comment", "# another comment"),
+    ("core.py", "SCALE = 2.0", "\n\nSCALE = (\n    2.0\n)"),
+    ("unused.py", "return 0", "return 1"),  # no import of it can run
+    ("typing_only.py", "pass", "x = 1"),  # imported only for type checkers
+]
 
 
-CACHED = """
-from functools import lru_cache
+@pytest.mark.parametrize("path, old, new", TEXT_ONLY, ids=[c[2] for c in TEXT_ONLY])
+def test_docstrings_comments_layout_and_unreachable_modules_do_not_count(package, path, old, new):
+    before = _fingerprint(package)
+    text = (package / path).read_text()
+    assert old in text
+    (package / path).write_text(text.replace(old, new))
+    assert _fingerprint(package) == before
 
 
-@lru_cache(maxsize=4)
-def cached_table(n):
-    return tuple(range(n * {factor}))
+def test_lazy_names_count_only_where_the_package_object_is_imported(package):
+    script = package.parent.parent / "script.py"
+    assert f"{PACKAGE}.lazy" not in module_closure(script, package=PACKAGE)
+    script.write_text(SCRIPT + f"import {PACKAGE}\n")
+    assert f"{PACKAGE}.lazy" in module_closure(script, package=PACKAGE)
 
 
-def _source():
-    return sum
+def test_the_script_itself_counts(package):
+    before = _fingerprint(package)
+    script = package.parent.parent / "script.py"
+    script.write_text(SCRIPT + "x = core.fit(1.0)\n")
+    assert _fingerprint(package) != before
 
 
-@lru_cache(maxsize=1)
-def compiled():
-    # stands for a loader that compiles a plain function of this module on first use
-    return _source
-
-
-def uses_cached(n):
-    return cached_table(n), compiled()
-"""
-
-
-def test_functions_behind_a_cache_count(tmp_path):
-    """A helper wrapped by functools.lru_cache (a lookup table, a compiled kernel's loader) is
-    part of the code of the functions that call it."""
-
-    def fingerprint(factor: int, source: str = "sum") -> str:
-        path = tmp_path / "jbfp_c.py"
-        path.write_text(CACHED.format(factor=factor).replace("return sum", f"return {source}"))
-        spec = importlib.util.spec_from_file_location("jbfp_c", path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules["jbfp_c"] = module
-        spec.loader.exec_module(module)
-        return code_fingerprint(module.uses_cached, prefixes=("jbfp_c",))
-
-    base = fingerprint(2)
-    assert fingerprint(2) == base
-    assert fingerprint(3) != base
-    assert fingerprint(2, source="max") != base
-
-
-def test_nm_fingerprint_reaches_its_cached_constraint_matrix():
-    from jointbench.estimators import sphere
-    from jointbench.fingerprint import reached
-    from jointbench.numerics import poses
-
-    assert sphere._nm_constraint.__wrapped__ in reached([registry.get("center", "NM")])
-    assert poses._horn_rotations.__wrapped__ in reached([poses.rigid_poses])
-
-
-def test_a_kernels_compile_options_count():
-    """The class that compiles a kernel (its Numba options) is part of the kernel's code."""
-    from jointbench.fingerprint import reached
-    from jointbench.numerics import compiled, poses
-
-    assert compiled._Kernel in reached([poses.rigid_poses])
+def test_every_workflow_script_reaches_the_modules_it_runs():
+    scripts = Path(__file__).resolve().parents[1] / "workflow" / "scripts"
+    estimate = module_closure(scripts / "estimate.py")
+    assert {"jointbench.estimators.sphere", "jointbench.numerics.compiled"} <= set(estimate)
+    assert "jointbench.figures.common" not in estimate
+    render = module_closure(scripts / "render.py")
+    assert {"jointbench.figures.paper_a", "jointbench.papers.paper_b"} <= set(render)

@@ -1,187 +1,226 @@
-"""A fingerprint of the code behind a result: what makes an edited estimator rerun its jobs.
+"""A fingerprint of the code behind a result: what makes an edited library rerun its jobs.
 
-Snakemake reruns a job when its rule's code or parameters change, but the library lives in an
-installed package it does not track. The workflow therefore passes each job a parameter
-``code``: the hash of the compiled code of the functions that job runs, and of every
-function, class and simple constant of jointbench (or of an extension module) they reach through
-their global names; a cached or compiled callable counts as the function it wraps. Comments
-and line numbers do not count; any change of what the code does does. Editing NM changes the
-fingerprint of NM's estimate job only; editing a helper shared by
-several estimators changes each of theirs.
+Snakemake reruns a job when its parameters change, but the library lives in an installed
+package it does not track. Each job is therefore given a parameter ``code``: the hash of the
+source of its workflow script and of every module of the package that the script can import,
+found by reading import statements, never by following objects at run time. The rule is
+conservative by construction: a module counts if an import of it is written anywhere that can
+run, whether or not the job calls into it. What is hashed is each file's syntax tree without
+docstrings, so a change to what code does reruns its jobs, and a docstring, a comment or
+formatting does not. Data files a job reads (published values) are its rule's inputs.
+
+What a module can import:
+
+* every ``import`` and ``from … import`` statement in it, at module level or inside a function
+  (those under ``if TYPE_CHECKING:`` never run and do not count), with the parent packages of
+  what it names;
+* in a module that imports by name at run time (``importlib.import_module``,
+  ``importlib.resources.files``), every string constant that names a module of the package.
+  A package's ``__init__`` of that kind (PEP 562 lazy names) is followed that far only where
+  the package object itself is imported (``import jointbench``, ``from jointbench import
+  fit_center``): importing one of its submodules runs the ``__init__`` but cannot reach its
+  lazy names.
 """
 
 from __future__ import annotations
 
+import ast
 import hashlib
-import inspect
-import types
-from collections.abc import Iterable, Mapping
-from functools import partial
+import importlib.util
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
 
-import numpy as np
+__all__ = ["code_fingerprint", "module_closure"]
 
-__all__ = ["code_fingerprint", "reached"]
-
-_SIMPLE = (int, float, str, bytes, bool, type(None))
-
-
-def _ours(obj: object, prefixes: tuple[str, ...]) -> bool:
-    module = getattr(obj, "__module__", None) or getattr(obj, "__name__", "")
-    return isinstance(module, str) and module.startswith(prefixes)
+#: Calls that import a module named by a string at run time.
+_DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__"})
 
 
-def _code_objects(code: types.CodeType) -> Iterable[types.CodeType]:
-    yield code
-    for constant in code.co_consts:
-        if isinstance(constant, types.CodeType):
-            yield from _code_objects(constant)
+@dataclass(frozen=True)
+class _Package:
+    """The package whose modules are tracked: its name and the folder it is imported from."""
+
+    name: str
+    root: Path
+
+    def file(self, module: str) -> Path | None:
+        """The file of ``module`` (a package's ``__init__.py``), or ``None`` if it is not one
+        of the package's modules."""
+        if module != self.name and not module.startswith(self.name + "."):
+            return None
+        path = self.root.joinpath(*module.split(".")[1:])
+        for candidate in (path / "__init__.py", path.with_suffix(".py")):
+            if candidate.is_file():
+                return candidate
+        return None
 
 
-def _names(obj: object) -> set[str]:
-    """Global names a function (or every method of a class) refers to."""
-    functions = [obj] if inspect.isfunction(obj) else []
-    if inspect.isclass(obj):
-        functions = [v for v in vars(obj).values() if inspect.isfunction(v)]
-        functions += [v.__func__ for v in vars(obj).values() if isinstance(v, classmethod)]
-    names: set[str] = set()
-    for function in functions:
-        for code in _code_objects(function.__code__):
-            names.update(code.co_names)
-    return names
+def _package(name: str) -> _Package:
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        raise ValueError(f"{name!r} is not an importable package")
+    return _Package(name, Path(next(iter(spec.submodule_search_locations))))
 
 
-def _is_simple(value: object) -> bool:
-    """A constant whose ``repr`` is stable across runs: scalars, small numeric arrays, and
-    containers of them."""
-    if isinstance(value, (*_SIMPLE, np.generic)):
-        return True
-    if isinstance(value, np.ndarray):
-        return value.size <= 100_000 and value.dtype.kind in "biuf"
-    if isinstance(value, Mapping):
-        return all(_is_simple(k) and _is_simple(v) for k, v in value.items())
-    if isinstance(value, tuple | list | frozenset):
-        return all(_is_simple(v) for v in value)
-    return False
+@dataclass(frozen=True)
+class _Imports:
+    """What one file can import: ``whole`` (modules, and packages whose object it binds),
+    ``named`` (``from package import name`` pairs) and ``dynamic`` (string constants that
+    name modules, in a file that imports by name)."""
+
+    whole: frozenset[str]
+    named: frozenset[tuple[str, str]]
+    dynamic: frozenset[str]
 
 
-def _contents(value: object) -> list:
-    """The values inside a container (a mapping's keys and values), one level deep."""
-    if isinstance(value, Mapping):
-        return [*value.keys(), *value.values()]
-    return list(value)
-
-
-def _has_contents(cell) -> bool:
-    try:
-        cell.cell_contents  # noqa: B018
-    except ValueError:  # an empty cell
-        return False
-    return True
-
-
-def _globals(obj: object) -> dict:
-    if inspect.isfunction(obj):
-        return obj.__globals__
-    module = inspect.getmodule(obj)
-    return vars(module) if module else {}
-
-
-def reached(roots: Iterable[object], prefixes: tuple[str, ...] = ("jointbench",)) -> list:
-    """The functions and classes of our modules reachable from ``roots``, with ``(module, name,
-    value)`` triples for the simple constants they read; in a stable order."""
-    seen: dict[int, object] = {}
-    constants: dict[tuple[str, str], object] = {}
-    stack = [r for r in roots if r is not None]
+def _runs(tree: ast.AST) -> Iterator[ast.AST]:
+    """Every node of ``tree`` that can run: ``if TYPE_CHECKING:`` bodies are left out."""
+    stack = [tree]
     while stack:
-        obj = stack.pop()
-        if isinstance(obj, partial):
-            stack.append(obj.func)
+        node = stack.pop()
+        yield node
+        if isinstance(node, ast.If) and _is_type_checking(node.test):
+            stack.extend(node.orelse)
             continue
-        if not inspect.isfunction(obj) and inspect.isfunction(getattr(obj, "__wrapped__", None)):
-            # A cache (functools.lru_cache) or compiled callable runs the function it wraps, the
-            # way its class says (a compiled kernel's options); a class not of ours is dropped.
-            stack.extend((obj.__wrapped__, type(obj)))
+        stack.extend(ast.iter_child_nodes(node))
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    name = test.attr if isinstance(test, ast.Attribute) else getattr(test, "id", None)
+    return name == "TYPE_CHECKING"
+
+
+def _absolute(node: ast.ImportFrom, module: str, is_package: bool) -> str:
+    """The module a ``from … import`` names, relative imports resolved against ``module``."""
+    if not node.level:
+        return node.module or ""
+    parts = module.split(".")
+    base = parts if is_package else parts[:-1]
+    base = base[: len(base) - node.level + 1]
+    return ".".join([*base, *([node.module] if node.module else [])])
+
+
+def _read(path: Path) -> str:
+    return path.read_text(encoding="utf-8")
+
+
+# A workflow fingerprints dozens of jobs whose modules overlap: each text is parsed once, and a
+# file edited while a process runs is parsed again.
+@cache
+def _parsed(text: str) -> ast.Module:
+    """The syntax tree of ``text`` without docstrings: they document, they do not run."""
+    tree = ast.parse(text)
+    for node in ast.walk(tree):
+        if isinstance(node, _DOCUMENTED) and _has_docstring(node.body):
+            node.body = node.body[1:] or [ast.Pass()]
+    return tree
+
+
+_DOCUMENTED = (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)
+
+
+def _has_docstring(body: list[ast.stmt]) -> bool:
+    first = body[0] if body else None
+    return (
+        isinstance(first, ast.Expr)
+        and isinstance(first.value, ast.Constant)
+        and isinstance(first.value.value, str)
+    )
+
+
+def _imports(path: Path, module: str) -> _Imports:
+    return _imports_of(_read(path), module, path.name == "__init__.py")
+
+
+@cache
+def _imports_of(text: str, module: str, is_package: bool) -> _Imports:
+    whole: set[str] = set()
+    named: set[tuple[str, str]] = set()
+    strings: set[str] = set()
+    dynamic_calls = False
+    for node in _runs(_parsed(text)):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                # ``import a.b`` binds ``a``; ``import a.b as c`` binds only ``a.b``.
+                whole.add(alias.name if alias.asname else alias.name.split(".")[0])
+                whole.add(alias.name)
+        elif isinstance(node, ast.ImportFrom):
+            source = _absolute(node, module, is_package)
+            named.update((source, alias.name) for alias in node.names)
+        elif isinstance(node, ast.Call):
+            function = node.func
+            name = function.attr if isinstance(function, ast.Attribute) else function
+            dynamic_calls |= getattr(name, "id", name) in _DYNAMIC_IMPORTS
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            strings.add(node.value)
+    return _Imports(frozenset(whole), frozenset(named), frozenset(strings if dynamic_calls else ()))
+
+
+def _parents(module: str) -> list[str]:
+    parts = module.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
+
+
+def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
+    """Modules of ``package`` the files ``roots`` can import (see the module's docstring)."""
+    found: dict[str, Path] = {}
+    # (module, whole): ``whole`` when the module object itself is imported, not only run as
+    # the parent package of a submodule.
+    stack: list[tuple[str, bool]] = []
+
+    def follow(imports: _Imports, followed_dynamic: bool) -> None:
+        stack.extend((m, True) for m in imports.whole)
+        for source, name in imports.named:
+            submodule = f"{source}.{name}"
+            if package.file(submodule) is not None:
+                stack.append((submodule, True))
+                stack.append((source, False))
+            else:
+                stack.append((source, True))
+        if followed_dynamic:
+            stack.extend((m, True) for m in imports.dynamic if package.file(m) is not None)
+
+    for root in roots:
+        follow(_imports(Path(root), "__main__"), followed_dynamic=True)
+    visited: set[tuple[str, bool]] = set()
+    while stack:
+        module, whole = stack.pop()
+        path = package.file(module)
+        if path is None or (module, whole) in visited or (module, True) in visited:
             continue
-        if id(obj) in seen or not (inspect.isfunction(obj) or inspect.isclass(obj)):
-            continue
-        if not _ours(obj, prefixes):
-            continue
-        seen[id(obj)] = obj
-        if inspect.isfunction(obj):
-            stack.extend(c.cell_contents for c in obj.__closure__ or () if _has_contents(c))
-            # Attributes such as a ``batched`` form run in the same job as the function.
-            stack.extend(vars(obj).values())
-        names = _names(obj)
-        namespace = _globals(obj)
-        for name in names:
-            value = namespace.get(name)
-            if isinstance(value, types.ModuleType) and _ours(value, prefixes):
-                # ``module.attribute``: the attribute's name is among the same code's names.
-                stack.extend(getattr(value, n) for n in names if hasattr(value, n))
-            elif _is_simple(value):
-                constants[(namespace.get("__name__", ""), name)] = value
-            elif isinstance(value, Mapping | tuple | list | frozenset):
-                stack.extend(_contents(value))
-            elif value is not None:
-                stack.append(value)
-        if inspect.isclass(obj):
-            stack.extend(obj.__mro__[1:])
-    ordered = sorted(seen.values(), key=lambda o: (o.__module__, o.__qualname__, _identity(o)))
-    return [*ordered, *sorted((m, n, _stable_repr(v)) for (m, n), v in constants.items())]
+        visited.add((module, whole))
+        found[module] = path
+        stack.extend((parent, False) for parent in _parents(module))
+        is_package = path.name == "__init__.py"
+        follow(_imports(path, module), followed_dynamic=whole or not is_package)
+    return dict(sorted(found.items()))
 
 
-def _code_bytes(code: types.CodeType) -> bytes:
-    """Bytecode, names and constants of ``code`` and its nested code: what it does, not where it
-    stands in its file (line numbers and comments do not count)."""
-    parts = [code.co_code, repr(code.co_names).encode(), repr(code.co_varnames).encode()]
-    for constant in code.co_consts:
-        if isinstance(constant, types.CodeType):
-            parts.append(_code_bytes(constant))
-        else:
-            parts.append(_stable_repr(constant).encode())
-    return b"\x00".join(parts)
+def module_closure(*roots: str | Path, package: str = "jointbench") -> dict[str, Path]:
+    """The modules of ``package`` that the Python files ``roots`` can import, by name."""
+    return _closure(_package(package), [Path(r) for r in roots])
 
 
-def _stable_repr(value: object) -> str:
-    """``repr`` where it is stable across runs, else the type's name (no memory addresses)."""
-    if isinstance(value, np.ndarray) and _is_simple(value):
-        return f"array{value.shape}{value.dtype}{value.tobytes().hex()}"
-    return repr(value) if _is_simple(value) else type(value).__qualname__
+def _source_digest(path: Path) -> bytes:
+    """What the code of ``path`` does: its syntax tree without docstrings, line numbers or
+    comments."""
+    return _digest_of(_read(path))
 
 
-# Functions and classes do not change while a process runs; the workflow fingerprints dozens
-# of jobs whose code overlaps, so each object's identity is computed once.
-_IDENTITIES: dict[int, tuple[object, bytes]] = {}
+@cache
+def _digest_of(text: str) -> bytes:
+    return hashlib.sha256(ast.dump(_parsed(text)).encode()).digest()
 
 
-def _identity(obj: object) -> bytes:
-    if isinstance(obj, tuple):
-        return repr(obj).encode()
-    cached = _IDENTITIES.get(id(obj))
-    if cached is None or cached[0] is not obj:
-        cached = _IDENTITIES[id(obj)] = (obj, _compute_identity(obj))
-    return cached[1]
-
-
-def _compute_identity(obj: object) -> bytes:
-    name = f"{obj.__module__}.{obj.__qualname__}".encode()
-    if inspect.isfunction(obj):
-        defaults = [_stable_repr(v) for v in obj.__defaults__ or ()]
-        # A function made by a factory differs from its siblings by its closure's values.
-        cells = [_stable_repr(c.cell_contents) for c in obj.__closure__ or () if _has_contents(c)]
-        return name + _code_bytes(obj.__code__) + repr([defaults, cells]).encode()
-    members = [
-        (key, _identity(v) if inspect.isfunction(v) else repr(v).encode())
-        for key, v in sorted(vars(obj).items())
-        if key not in ("__dict__", "__weakref__", "__doc__", "__module__")
-        and (inspect.isfunction(v) or _is_simple(v))
-    ]
-    return name + repr(members).encode() + repr(getattr(obj, "__annotations__", {})).encode()
-
-
-def code_fingerprint(*roots: object, prefixes: tuple[str, ...] = ("jointbench",)) -> str:
-    """A short hash of the source of ``roots`` and all our code they reach (see module doc)."""
+def code_fingerprint(*roots: str | Path, package: str = "jointbench") -> str:
+    """A short hash of the Python files ``roots`` (a job's script, the extension modules it
+    loads) and of every module of ``package`` they can import. Equal fingerprints mean the same
+    code ran."""
     digest = hashlib.sha256()
-    for obj in reached(roots, prefixes):
-        digest.update(_identity(obj))
+    for root in sorted(Path(r).resolve() for r in roots):
+        digest.update(root.name.encode() + _source_digest(root))
+    for name, path in module_closure(*roots, package=package).items():
+        digest.update(name.encode() + _source_digest(path))
     return digest.hexdigest()[:16]

@@ -197,8 +197,8 @@ def write_front_page(
         parts += [
             "Provenance\n----------\n",
             "Each estimates file records the fingerprint of the code that produced it "
-            "(``jointbench.fingerprint``); editing an estimator changes its fingerprint and "
-            "reruns its jobs only.\n",
+            "(``jointbench.fingerprint``: its job's script and every module of the package "
+            "the script can import); an edit of any of them reruns the job.\n",
             _rst_table(pd.DataFrame(provenance_rows), "the code behind each estimator's results"),
         ]
     metadata = pd.DataFrame(list(run_metadata().items()), columns=["", "this run"])

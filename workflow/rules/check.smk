@@ -9,6 +9,7 @@ rule check_published:
                 if papers_of_study(study)
             }
         ),
+        published=published_files(STUDIES),
     output:
         html=reported(
             "results/tables/published_comparison.html",
@@ -24,7 +25,9 @@ rule check_published:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=check_code(),
+        code=script_code("check_published"),
+        settings={study: config["studies"][study] for study in STUDIES},
+        base_seed=config.get("base_seed"),
     script:
         "../scripts/check_published.py"
 
@@ -44,6 +47,8 @@ rule report_captions:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(jb_report.write_captions, jb_report.write_front_page),
+        code=script_code("report_captions"),
+        settings={study: config["studies"][study] for study in STUDIES},
+        base_seed=config.get("base_seed"),
     script:
         "../scripts/report_captions.py"

@@ -1,18 +1,16 @@
 # Helpers shared by the rules: config checks, the study and paper registries, file lists.
+import functools
 import re
 import sys
+from pathlib import Path
 
 from snakemake.utils import validate
 
 from jointbench import jobs, pipeline
-from jointbench import report as jb_report
-from jointbench.estimators import registry
 from jointbench.fingerprint import code_fingerprint
-from jointbench.study import collected as jb_collected
 from jointbench.study import run as jb_run
 from jointbench.papers import papers_of_study
 from jointbench.study import config as jb_config
-from jointbench.study.studies import get_study
 
 validate(config, str(jb_config.SCHEMA_PATH))
 jobs.load_extensions(config)
@@ -159,21 +157,46 @@ def all_targets():
     return [*targets, "results/tables/published_comparison.csv", *captions, FRONT_PAGE]
 
 
-# Every job that runs library code gets a `code` parameter: the fingerprint of the code it runs
-# (jointbench.fingerprint), so an edited estimator, simulator or figure reruns its jobs and only
-# them (Snakemake reruns a job whose parameters changed).
-def simulate_code(study):
-    spec = get_study(study)
-    return code_fingerprint(
-        spec.simulate, spec.protocol_class, jb_run.run_simulate_files
-    )
+# Provenance: every job that runs library code gets two parameters, and Snakemake reruns a job
+# whose parameters changed. `code` is the fingerprint of its workflow script, the extension
+# modules every job loads and every module of jointbench they can import (jointbench.fingerprint:
+# read from import statements, docstrings and comments left out). `settings` holds the config
+# values the job reads. Files a job reads are its inputs.
+SCRIPTS = Path(workflow.basedir, "workflow", "scripts")
+EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
 
 
-def estimate_code(study):
-    kind = get_study(study).kind
-    return lambda w: code_fingerprint(
-        registry.get(kind, w.method), jb_run.run_estimate_files
-    )
+@functools.cache
+def script_code(script):
+    """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
+    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS)
+
+
+def study_settings(study, *keys):
+    """The base seed and the ``keys`` of a study's config that a job of the study reads."""
+    settings = config["studies"][study]
+    return {"base_seed": config.get("base_seed"), **{k: settings.get(k) for k in keys}}
+
+
+# What simulates a condition: the trials of each condition derive from these.
+SIMULATION_KEYS = ("trials", "protocol")
+
+
+def estimate_settings(study):
+    """An estimate job's settings: the simulation's and its own estimator's options only, so
+    that changing one estimator's options reruns that estimator alone."""
+    options = config["studies"][study].get("options", {})
+    return lambda w: {
+        **study_settings(study, *SIMULATION_KEYS),
+        "options": options.get(w.method, {}),
+    }
+
+
+def published_files(studies):
+    """The published-values files of the papers of ``studies``: data a job reads."""
+    return [
+        str(paper.published) for study in studies for paper in papers_of_study(study)
+    ]
 
 
 def papers_to_render(study):
@@ -213,14 +236,3 @@ def render_files(study):
         key = _output_key(name, kind)
         files[key] = reported(files[key], caption, ranking, study)
     return files
-
-
-def render_code(study):
-    """The fingerprint of what renders the study's outputs: editing one reruns its job."""
-    functions = [f for _, o in PAPER_OUTPUTS[study] for f in (o.render, o.headline)]
-    return code_fingerprint(*functions, pipeline.render_study)
-
-
-def check_code():
-    measures = [p.measure for s in STUDIES for p in papers_of_study(s)]
-    return code_fingerprint(*measures, pipeline.check_published)

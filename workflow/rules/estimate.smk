@@ -31,7 +31,7 @@ for _study in STUDIES:
                 "../envs/jointbench.yaml"
             params:
                 study=_study,
-                code=code_fingerprint(jb_run.run_poses_files),
+                code=script_code("poses"),
             script:
                 "../scripts/poses.py"
 
@@ -54,7 +54,7 @@ for _study in STUDIES:
                 "../envs/jointbench.yaml"
             params:
                 study=_study,
-                code=code_fingerprint(jb_run.run_poses_files),
+                code=script_code("poses"),
             script:
                 "../scripts/poses.py"
 
@@ -76,7 +76,8 @@ for _study in STUDIES:
                 "../envs/jointbench.yaml"
             params:
                 study=_study,
-                code=estimate_code(_study),
+                code=script_code("estimate"),
+                settings=estimate_settings(_study),
             script:
                 "../scripts/estimate.py"
 
@@ -106,7 +107,8 @@ for _study in STUDIES:
                 "../envs/jointbench.yaml"
             params:
                 study=_study,
-                code=estimate_code(_study),
+                code=script_code("estimate"),
+                settings=estimate_settings(_study),
             script:
                 "../scripts/estimate.py"
 
@@ -122,7 +124,7 @@ rule summarise_estimator:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(jb_collected.summarise_estimates),
+        code=script_code("summarise"),
     script:
         "../scripts/summarise.py"
 
@@ -142,6 +144,9 @@ rule collect:
     conda:
         "../envs/jointbench.yaml"
     params:
-        code=code_fingerprint(jb_collected.collect),
+        code=script_code("collect"),
+        settings=lambda w: study_settings(
+            w.study, "trials", "estimators", "external_estimators"
+        ),
     script:
         "../scripts/collect.py"

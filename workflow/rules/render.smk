@@ -9,7 +9,7 @@ for _study in STUDIES:
             f"render_{_study}"
         input:
             collected=f"results/collected/{_study}.parquet",
-            published=[str(paper.published) for paper, _ in papers_to_render(_study)],
+            published=published_files([_study]),
             datasets=render_datasets(_study),
         output:
             **render_files(_study),
@@ -23,6 +23,7 @@ for _study in STUDIES:
                 paper.key: [o.name for o in outputs]
                 for paper, outputs in papers_to_render(_study)
             },
-            code=render_code(_study),
+            code=script_code("render"),
+            settings=study_settings(_study, *config["studies"][_study]),
         script:
             "../scripts/render.py"

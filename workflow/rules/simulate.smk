@@ -17,6 +17,7 @@ for _study in STUDIES:
             "../envs/jointbench.yaml"
         params:
             study=_study,
-            code=simulate_code(_study),
+            code=script_code("simulate"),
+            settings=study_settings(_study, "grid", *SIMULATION_KEYS),
         script:
             "../scripts/simulate.py"

@@ -91,11 +91,7 @@ def _check_kind(kind: str) -> None:
 
 
 def _checked(kind: str, fn: Callable) -> Callable:
-    """``fn`` with the input checks before and the support verdict after each fit.
-
-    A plain function (not a callable object), so that the code fingerprint of a job reaches
-    ``fn`` and the checks through its closure and globals.
-    """
+    """``fn`` with the input checks before and the support verdict after each fit."""
 
     @functools.wraps(fn)
     def checked(*arrays: object, **options: object):

@@ -5,8 +5,8 @@ of the package: loops a stack of small problems through, where NumPy would pay i
 overhead on every tiny array. :func:`kernel` compiles it on its first call, so a process that
 never calls it never pays for importing and starting Numba. The machine code is cached
 beside the source file and rebuilt when that file changes. The Python source stays the
-specification: it runs as written (slowly) through ``kernel.__wrapped__``, and the code
-fingerprint of a job (:mod:`jointbench.fingerprint`) follows it there.
+specification: it runs as written (slowly) through ``kernel.__wrapped__``, and it counts in
+the code fingerprint (:mod:`jointbench.fingerprint`) of every job that can import it.
 """
 
 from __future__ import annotations

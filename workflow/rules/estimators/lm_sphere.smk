@@ -7,7 +7,10 @@ rule estimate_cmc_LM:
     """LM: paper A's geometric sphere fit (f1) by Levenberg–Marquardt from the LS centre, every
     condition of the study in one job (workflow/external/lm_sphere.py)."""
     input:
-        expand(
+        # The program is an input: editing it reruns this job (Snakemake tracks a rule's own
+        # code, not the programs its shell command runs).
+        script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
+        datasets=expand(
             "results/datasets/cmc/{condition}.parquet", condition=condition_ids("cmc")
         ),
     output:
@@ -20,10 +23,8 @@ rule estimate_cmc_LM:
     conda:
         "../../envs/jointbench.yaml"
     params:
-        # From the Snakefile's folder, so that `snakemake --directory elsewhere` finds it too.
-        script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
         out_dir=lambda w, output: Path(output[0]).parent,
         # The interpreter running this workflow: the project's environment.
         python=PYTHON,
     shell:
-        "{params.python:q} {params.script:q} --out-dir {params.out_dir:q} {input:q} 2> {log:q}"
+        "{params.python:q} {input.script:q} --out-dir {params.out_dir:q} {input.datasets:q} 2> {log:q}"

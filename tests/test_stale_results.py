@@ -1,0 +1,459 @@
+"""The mutation suite: no edit leaves a stale result, and no text-only edit reruns anything.
+
+Two finished runs are made, each in a work tree with its own copy of the package, which its jobs
+import (``PYTHONPATH``): the reduced grid of the three built-in studies with the external LM
+rule (``builtin``), and the fourth study from ``tests/data/fourth_study`` alone, its module loaded
+as an extension (``extension``). Each case below applies one kind of edit a user makes: to library
+code, to the workflow's scripts and rules, to data files jobs read, to the config. It then asks
+``snakemake --dry-run`` what it would run, and holds that to the jobs the edit must rerun
+(``reruns``) and to jobs it must leave alone (``spares``). A new kind of edit is one more ``Edit``
+in ``EDITS`` (or entry in ``CONFIG_EDITS``).
+
+Every job loads the extension modules, so the modules an extension imports count for every job
+of a run that lists it: there, a paper's or a figure's edit reruns every job.
+
+Set ``JOINTBENCH_MUTATION_REPORT`` to a file path to have every case's scheduled jobs written
+there as JSON (``benchmarks/stale_results.py`` prints them as a table).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+import yaml
+from workflow_copy import ROOT, SNAKEMAKE
+
+pytestmark = pytest.mark.pipeline
+
+FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
+OVERLAY = "mutation.yaml"
+
+
+def _overlay(scenario: str) -> dict:
+    """The config overlay of a scenario: the reduced grid of the built-in studies, or the fourth
+    study alone."""
+    name = "reduced.yaml" if scenario == "builtin" else "fourth_study/toy.yaml"
+    return yaml.safe_load((ROOT / "tests" / "data" / name).read_text())
+
+
+@dataclass(frozen=True)
+class Edit:
+    """One edit: in ``path`` (relative to the work tree) replace ``old`` by ``new`` (``old``
+    must occur); or, with ``old`` empty, append ``new``. ``reruns``: jobs the dry run must
+    schedule; ``spares``: jobs it must not; a job is ``rule`` or ``rule[wildcard=value]``."""
+
+    kind: str
+    path: str
+    old: str
+    new: str
+    reruns: frozenset[str] = field(default_factory=frozenset)
+    spares: frozenset[str] = field(default_factory=frozenset)
+    scenario: str = "builtin"
+
+    def apply(self, text: str) -> str:
+        if not self.old:
+            return text + self.new
+        assert self.old in text, f"{self.kind}: {self.old!r} is no longer in {self.path}"
+        return text.replace(self.old, self.new, 1)
+
+
+def _jobs(*names: str) -> frozenset[str]:
+    return frozenset(names)
+
+
+PKG = "src/jointbench"
+NOTHING = _jobs()
+EVERY_ESTIMATE = _jobs("estimate_cmc", "estimate_hinge", "estimate_hip")
+SIMULATIONS = _jobs("simulate_cmc", "simulate_hinge", "simulate_hip")
+DATA_JOBS = EVERY_ESTIMATE | SIMULATIONS | _jobs("estimate_cmc_LM", "poses_hip")
+
+EDITS = (
+    # -- library code: every construct counts, wherever the job can import it from ------------
+    Edit(
+        "keyword default of an estimator (BC tol_x)",
+        f"{PKG}/estimators/sphere.py",
+        "    tol_x: float = 1e-4,\n",
+        "    tol_x: float = 1e-3,\n",
+        reruns=_jobs("estimate_cmc[method=BC]", "collect[study=cmc]", "render_cmc"),
+    ),
+    Edit(
+        "function body of an estimator",
+        f"{PKG}/estimators/sphere.py",
+        "if step <= tol_x and change <= tol_fun:",
+        "if step <= tol_x and change <= 2 * tol_fun:",
+        reruns=_jobs("estimate_cmc[method=BC]", "estimate_cmc[method=NM]"),
+    ),
+    Edit(
+        "staticmethod body",
+        f"{PKG}/estimators/axis.py",
+        "return np.zeros(len(directions), dtype=int) if trials is None",
+        "return np.zeros(len(directions), dtype=np.int64) if trials is None",
+        reruns=_jobs("estimate_hinge[method=radial]", "estimate_hinge[method=combined]"),
+    ),
+    Edit(
+        "property body",
+        f"{PKG}/simulate/__init__.py",
+        "return next(iter(self.segments.values())).shape[0]",
+        "return int(next(iter(self.segments.values())).shape[0])",
+        reruns=SIMULATIONS | EVERY_ESTIMATE,
+    ),
+    Edit(
+        "module-level constant (a simulator's marker distance table)",
+        f"{PKG}/simulate/cmc.py",
+        '_TABLE_1_DISTANCES_MM = {"M": (13.8, 29.0, 15.7)',
+        '_TABLE_1_DISTANCES_MM = {"M": (13.8, 29.0, 15.8)',
+        reruns=_jobs("simulate_cmc", "estimate_cmc_LM", "collect[study=cmc]", "render_cmc"),
+    ),
+    Edit(
+        "module-level instance (a hinge marker layout)",
+        f"{PKG}/simulate/hinge.py",
+        "markers_mm=((57.5, 36.0, -143.5)",
+        "markers_mm=((57.5, 36.0, -143.0)",
+        reruns=_jobs("simulate_hinge", "estimate_hinge[method=planar]", "render_hinge"),
+    ),
+    Edit(
+        "a Study's own field",
+        f"{PKG}/simulate/cmc.py",
+        '"noise_mm": GridValues(float, minimum=0),',
+        '"noise_mm": GridValues(float, minimum=0, maximum=1000),',
+        reruns=_jobs("simulate_cmc", "render_cmc", "check_published"),
+    ),
+    Edit(
+        "dataclass default factory",
+        f"{PKG}/simulate/cmc.py",
+        "default_factory=lambda: _as_tuples(_TABLE_1_DISTANCES_MM)",
+        "default_factory=lambda: dict(_as_tuples(_TABLE_1_DISTANCES_MM))",
+        reruns=_jobs("simulate_cmc", "estimate_cmc[method=LS]"),
+    ),
+    Edit(
+        "cached_property, classmethod and lambda added to a shared module",
+        f"{PKG}/geometry.py",
+        "",
+        "\n\nimport functools\n\n\nclass _Unused:\n    @functools.cached_property\n"
+        "    def x(self):\n        return 1\n\n    @classmethod\n    def y(cls):\n"
+        "        return lambda: 2\n",
+        reruns=SIMULATIONS,
+    ),
+    Edit(
+        "a compiled kernel's Python source",
+        f"{PKG}/numerics/compiled.py",
+        "",
+        "\n\n_KERNEL_NOTE = 1\n",
+        reruns=_jobs("estimate_cmc[method=NM]", "poses_hip"),
+    ),
+    Edit(
+        "figure code",
+        f"{PKG}/figures/common.py",
+        "",
+        "\n\n_FIGURE_NOTE = 1\n",
+        reruns=_jobs("render_cmc", "render_hinge", "render_hip"),
+        spares=DATA_JOBS | _jobs("collect"),
+    ),
+    Edit(
+        "a paper's measure (paper B)",
+        f"{PKG}/papers/paper_b.py",
+        "",
+        "\n\n_MEASURE_NOTE = 1\n",
+        reruns=_jobs("render_hinge", "check_published", "report_captions"),
+        spares=DATA_JOBS | _jobs("collect"),
+    ),
+    Edit(
+        "report code",
+        f"{PKG}/report.py",
+        "",
+        "\n\n_REPORT_NOTE = 1\n",
+        reruns=_jobs("report_captions"),
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published"),
+    ),
+    Edit(
+        "collect code",
+        f"{PKG}/study/collected.py",
+        "",
+        "\n\n_COLLECT_NOTE = 1\n",
+        reruns=_jobs("collect[study=cmc]", "collect[study=hip]"),
+        spares=DATA_JOBS,
+    ),
+    # -- text that does not change what code does: nothing reruns ------------------------------
+    Edit(
+        "docstring only (an estimator module's)",
+        f"{PKG}/estimators/sphere.py",
+        '"""',
+        '"""Edited. ',
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published"),
+    ),
+    Edit(
+        "comment only",
+        f"{PKG}/estimators/sphere.py",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published"),
+    ),
+    Edit(
+        "formatting only (blank lines, a line split)",
+        f"{PKG}/simulate/cmc.py",
+        '_TABLE_1_DISTANCES_MM = {"M": (13.8, 29.0, 15.7),',
+        '\n\n_TABLE_1_DISTANCES_MM = {\n    "M": (13.8, 29.0, 15.7),',
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published"),
+    ),
+    # -- the workflow and the programs its rules run ---------------------------------------
+    Edit(
+        "a workflow script",
+        "workflow/scripts/render.py",
+        "",
+        '\nlog_note = "rendered"\n',
+        reruns=_jobs("render_cmc", "render_hinge", "render_hip"),
+        spares=DATA_JOBS,
+    ),
+    Edit(
+        "an external estimator's program (LM)",
+        "workflow/external/lm_sphere.py",
+        "",
+        "\n_EDITED = 1.0\n",
+        reruns=_jobs("estimate_cmc_LM", "collect[study=cmc]", "render_cmc"),
+        spares=_jobs("estimate_cmc", "simulate_cmc", "estimate_hinge"),
+    ),
+    Edit(
+        "an extension module (the fourth study)",
+        "toy_study.py",
+        "",
+        "\n_EDITED = 1\n",
+        reruns=_jobs("simulate_toy", "estimate_toy[method=toy-centroid]", "render_toy"),
+        scenario="extension",
+    ),
+    Edit(
+        "a figure module an extension imports",
+        f"{PKG}/figures/common.py",
+        "",
+        "\n\n_FIGURE_NOTE = 1\n",
+        reruns=_jobs("render_toy", "estimate_toy[method=NM]", "simulate_toy"),
+        scenario="extension",
+    ),
+    # -- data files that jobs read -----------------------------------------------------------
+    Edit(
+        "a published value (paper B Table 1)",
+        f"{PKG}/papers/paper_b.yaml",
+        "  published: 4.3\n",
+        "  published: 5.3\n",
+        reruns=_jobs("render_hinge", "check_published", "report_captions"),
+        spares=DATA_JOBS | _jobs("collect"),
+    ),
+    Edit(
+        "an extension's published values",
+        "paper_t.yaml",
+        "published: 5.0\n",
+        "published: 4.0\n",
+        reruns=_jobs("render_toy", "check_published"),
+        spares=_jobs("simulate_toy", "estimate_toy", "collect"),
+        scenario="extension",
+    ),
+)
+
+
+def _config_edit(kind: str, change: Callable[[dict], None], reruns, spares=NOTHING):
+    return (kind, change, frozenset(reruns), frozenset(spares))
+
+
+def _set(path: str, value):
+    def change(config: dict) -> None:
+        *parents, last = path.split(".")
+        node = config
+        for key in parents:
+            node = node.setdefault(key, {})
+        node[last] = value
+
+    return change
+
+
+CONFIG_EDITS = (
+    _config_edit(
+        "trials",
+        _set("studies.cmc.trials", 4),
+        {"simulate_cmc", "estimate_cmc[method=NM]", "estimate_cmc_LM", "collect[study=cmc]"},
+        {"simulate_hinge", "estimate_hinge"},
+    ),
+    _config_edit("base_seed", _set("base_seed", 1), SIMULATIONS, set()),
+    _config_edit(
+        "protocol field",
+        _set("studies.cmc.protocol.spiral_turns", 3.0),
+        {"simulate_cmc", "render_cmc"},
+        {"simulate_hinge", "simulate_hip"},
+    ),
+    _config_edit(
+        "one estimator's options",
+        _set("studies.cmc.options.BC.tol_x", 1e-3),
+        {"estimate_cmc[method=BC]", "collect[study=cmc]"},
+        {"estimate_cmc[method=NM]", "estimate_cmc[method=LS]", "simulate_cmc"},
+    ),
+    _config_edit(
+        "a grid value added",
+        _set("studies.cmc.grid.noise_mm", [1.0, 2.0]),
+        {"simulate_cmc", "collect[study=cmc]"},
+        {"simulate_hinge"},
+    ),
+    _config_edit(
+        "an estimator removed from a study",
+        _set("studies.cmc.estimators", ["NM", "LS", "BC", "MA", "IS"]),
+        {"collect[study=cmc]", "render_cmc", "check_published"},
+        {"simulate_cmc", "estimate_cmc"},
+    ),
+)
+
+
+# -- the finished run, and what a dry run schedules ---------------------------------------------
+
+
+def _environment(workdir: Path) -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(workdir / "src")}
+
+
+def _snakemake(workdir: Path, *arguments: str) -> subprocess.CompletedProcess:
+    command = [
+        str(SNAKEMAKE),
+        *arguments,
+        "-j2",
+        # The repository's default profile hides each job's rule and wildcards.
+        "--workflow-profile",
+        "none",
+        "--directory",
+        str(workdir),
+        "-s",
+        str(workdir / "Snakefile"),
+        "--configfile",
+        str(workdir / OVERLAY),
+    ]
+    return subprocess.run(
+        command, capture_output=True, text=True, timeout=900, env=_environment(workdir)
+    )
+
+
+_RULE = re.compile(r"^(?:local)?rule (\S+):$")
+_WILDCARDS = re.compile(r"^\s+wildcards: (.*)$")
+
+
+def scheduled(dry_run_output: str) -> set[str]:
+    """Jobs a dry run lists: ``rule`` and, for a job with wildcards, ``rule[name=value]`` per
+    wildcard."""
+    jobs: set[str] = set()
+    rule = None
+    for line in dry_run_output.splitlines():
+        match = _RULE.match(line)
+        if match:
+            rule = match.group(1)
+            jobs.add(rule)
+            continue
+        match = _WILDCARDS.match(line)
+        if match and rule:
+            for pair in match.group(1).split(", "):
+                jobs.add(f"{rule}[{pair}]")
+    return jobs - {"all"}
+
+
+def _finish(workdir: Path, scenario: str) -> Path:
+    """A finished run of ``scenario`` in ``workdir``, with its own copy of the package."""
+    shutil.copy(ROOT / "Snakefile", workdir / "Snakefile")
+    for folder in ("workflow", "config"):
+        shutil.copytree(ROOT / folder, workdir / folder)
+    shutil.copytree(ROOT / "src", workdir / "src", ignore=shutil.ignore_patterns("*.egg-info"))
+    if scenario == "extension":
+        for name in ("toy_study.py", "paper_t.yaml"):
+            shutil.copy2(FOURTH_STUDY / name, workdir / name)
+    (workdir / OVERLAY).write_text(yaml.safe_dump(_overlay(scenario)))
+    run = _snakemake(workdir)
+    assert run.returncode == 0, run.stderr[-4000:]
+    again = _snakemake(workdir, "--dry-run")
+    assert again.returncode == 0, again.stderr[-4000:]
+    assert "Nothing to be done" in again.stdout, again.stdout[-4000:]
+    return workdir
+
+
+@pytest.fixture(scope="module")
+def builtin(tmp_path_factory) -> Path:
+    return _finish(tmp_path_factory.mktemp("mutations_builtin"), "builtin")
+
+
+@pytest.fixture(scope="module")
+def extension(tmp_path_factory) -> Path:
+    return _finish(tmp_path_factory.mktemp("mutations_extension"), "extension")
+
+
+def _dry_run(workdir: Path) -> set[str]:
+    run = _snakemake(workdir, "--dry-run")
+    assert run.returncode == 0, run.stdout[-4000:] + run.stderr[-4000:]
+    if os.environ.get("JOINTBENCH_MUTATION_DEBUG"):
+        print(run.stdout[-3000:], run.stderr[-3000:])
+    return scheduled(run.stdout)
+
+
+def _report(kind: str, jobs: set[str]) -> None:
+    target = os.environ.get("JOINTBENCH_MUTATION_REPORT")
+    if target:
+        path = Path(target)
+        report = json.loads(path.read_text()) if path.exists() else {}
+        report[kind] = sorted(jobs)
+        path.write_text(json.dumps(report, indent=1))
+
+
+def _edited(workdir: Path, path: str, text: str):
+    """Write ``text`` to ``path``; return a function that restores the file and its time."""
+    target = workdir / path
+    original, stat = target.read_text(), target.stat()
+
+    def restore() -> None:
+        target.write_text(original)
+        os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+
+    target.write_text(text)
+    return restore
+
+
+def _check(kind: str, jobs: set[str], reruns, spares) -> None:
+    _report(kind, jobs)
+    missing = sorted(set(reruns) - jobs)
+    assert not missing, f"{kind}: stale results, not rerun: {missing}; scheduled: {sorted(jobs)}"
+    wasted = sorted(set(spares) & jobs)
+    assert not wasted, f"{kind}: reran {wasted}, which the edit cannot change"
+
+
+@pytest.mark.parametrize("edit", EDITS, ids=[e.kind for e in EDITS])
+def test_an_edit_reruns_what_it_can_change_and_nothing_else(request, edit):
+    finished_run = request.getfixturevalue(edit.scenario)
+    text = (finished_run / edit.path).read_text()
+    restore = _edited(finished_run, edit.path, edit.apply(text))
+    try:
+        jobs = _dry_run(finished_run)
+    finally:
+        restore()
+    _check(edit.kind, jobs, edit.reruns, edit.spares)
+
+
+@pytest.mark.parametrize(
+    "kind, change, reruns, spares", CONFIG_EDITS, ids=[c[0] for c in CONFIG_EDITS]
+)
+def test_a_config_edit_reruns_what_it_can_change_and_nothing_else(
+    builtin, kind, change, reruns, spares
+):
+    finished_run = builtin
+    config = _overlay("builtin")
+    change(config)
+    restore = _edited(finished_run, OVERLAY, yaml.safe_dump(config))
+    try:
+        jobs = _dry_run(finished_run)
+    finally:
+        restore()
+    _check(kind, jobs, reruns, spares)
+
+
+def test_the_dry_run_parser_reads_rules_and_wildcards():
+    output = (
+        "rule estimate_cmc:\n    input: a\n    wildcards: method=BC\n"
+        "localrule check_published:\n    input: b\nrule all:\n"
+    )
+    assert scheduled(output) == {"estimate_cmc", "estimate_cmc[method=BC]", "check_published"}
