@@ -1,15 +1,23 @@
 """Config mistakes the schema cannot see stop the workflow before any job, naming the key and
-the allowed values (issue: inputs that cannot lie)."""
+the allowed values (issues: inputs that cannot lie; config checked completely before any job).
+
+Estimator options and protocol fields are checked against the types and ranges their own
+annotations declare (:mod:`jointbench.declared`)."""
 
 from __future__ import annotations
 
 import copy
+import dataclasses
+import inspect
+import re
 from pathlib import Path
 
 import pytest
 import yaml
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
+from jointbench import declared
+from jointbench.estimators import registry
 from jointbench.papers import get_paper, paper_names
 from jointbench.study import config as study_config
 from jointbench.study.studies import get_study, study_names
@@ -69,16 +77,132 @@ BAD = [
         "cmc",
         ("options",),
         {"BC": {"max_iterations": "many"}},
-        ["options.BC.max_iterations: 'many' is not an integer (the default is 600)"],
+        ["studies.cmc.options.BC.max_iterations: must be an integer >= 1, got 'many'"],
     ),
     (
         "cmc",
         ("options",),
         {"BC": {"tol_x": True}},
-        ["options.BC.tol_x: True is not a number (the default is 0.0001)"],
+        ["studies.cmc.options.BC.tol_x: must be a number > 0, got True"],
     ),
     ("cmc", ("external_estimators",), ["NM"], ["external_estimators", "'NM'", "built-in"]),
     ("cmc", ("protocol",), {"spiral": 2}, ["studies.cmc.protocol", "spiral"]),
+    # Options whose range, or whose type behind a None default, only the annotation declares.
+    (
+        "cmc",
+        ("options",),
+        {"BC": {"max_iterations": 0}},
+        ["studies.cmc.options.BC.max_iterations: must be an integer >= 1, got 0"],
+    ),
+    (
+        "cmc",
+        ("options",),
+        {"BC": {"tol_x": -1}},
+        ["studies.cmc.options.BC.tol_x: must be a number > 0, got -1"],
+    ),
+    (
+        "cmc",
+        ("options",),
+        {"IS": {"start": "abc"}},
+        ["studies.cmc.options.IS.start: must be 3 numbers or null, got 'abc'"],
+    ),
+    (
+        "cmc",
+        ("options",),
+        {"MA": {"start": [1, 2, "x"]}},
+        ["studies.cmc.options.MA.start[2]: must be a number, got 'x'"],
+    ),
+    (
+        "hinge",
+        ("options",),
+        {"planar": {"max_iter": "x"}},
+        ["studies.hinge.options.planar.max_iter: must be an integer >= 1 or null, got 'x'"],
+    ),
+    (
+        "hinge",
+        ("options",),
+        {"radial": {"parameterisation": "polar"}},
+        ["studies.hinge.options.radial.parameterisation: must be one of angles, vector"],
+    ),
+    (
+        "hip",
+        ("options",),
+        {"SCoRE": {"noise_mm": "abc"}},
+        ["studies.hip.options.SCoRE.noise_mm: must be a number >= 0 or null, got 'abc'"],
+    ),
+    # Protocol fields.
+    (
+        "cmc",
+        ("protocol",),
+        {"spiral_turns": "abc"},
+        ["studies.cmc.protocol.spiral_turns: must be a number >= 0, got 'abc'"],
+    ),
+    (
+        "cmc",
+        ("protocol",),
+        {"n_frames": 0},
+        ["studies.cmc.protocol.n_frames: must be an integer >= 1, got 0"],
+    ),
+    (
+        "cmc",
+        ("protocol",),
+        {"center_mm": [0, 0]},
+        ["studies.cmc.protocol.center_mm: must be 3 numbers, got [0, 0]"],
+    ),
+    (
+        "cmc",
+        ("protocol",),
+        {"directions": {"X": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}},
+        ["studies.cmc.protocol.distances_mm: has no marker set 'X'"],
+    ),
+    (
+        "cmc",
+        ("protocol",),
+        {"distances_mm": {"M": [10.0, 20.0]}},
+        ["studies.cmc.protocol.distances_mm.M: gives 2 distances for the 3 directions"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"n_frames": 2.5}},
+        ["studies.hinge.protocol.all.n_frames: must be an integer >= 4, got 2.5"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"knee": {"markers_mm": [[1, 2]]}},
+        ["studies.hinge.protocol.knee.markers_mm[0]: must be 3 numbers, got [1, 2]"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"fps": 0},
+        ["studies.hip.protocol.fps: must be a number > 0, got 0"],
+    ),
+    # Noise beyond the geometry: the farthest marker's distance from the joint centre.
+    ("cmc", ("grid", "noise_mm"), [1e200], ["studies.cmc.grid.noise_mm", "<= 69.1"]),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"noise_sd_mm": 1e200}},
+        ["studies.hinge.protocol.knee.noise_sd_mm: must be <= 176.458 mm"],
+    ),
+    ("hip", ("protocol",), {"noise_mm": 1e200}, ["studies.hip.protocol.noise_mm: must be <="]),
+    # Conditions no listed estimator can fit.
+    (
+        "hip",
+        ("grid", "n_frames"),
+        [1],
+        ["studies.hip.grid.n_frames: condition n_frames-1 has trials of 1 frame(s)", "SCoRE 3"],
+    ),
+    (
+        "cmc",
+        ("protocol",),
+        {"n_frames": 2},
+        ["studies.cmc.protocol: condition marker_set-M__rom_deg-5__noise_mm-0.5", "NM 4"],
+    ),
+    # A study that runs nothing.
+    ("hip", ("estimators",), [], ["studies.hip.estimators: empty, and no external_estimators"]),
 ]
 
 
@@ -88,6 +212,71 @@ def test_mistake_names_key_and_allowed_values(config, study, path, value, words)
         study_config.check_config(changed(config, study, path, value))
     for word in words:
         assert word in str(error.value), str(error.value)
+
+
+def test_a_run_of_no_study_is_refused_in_one_line(config):
+    bad = copy.deepcopy(config)
+    for settings in bad["studies"].values():
+        settings["enabled"] = False
+    with pytest.raises(ValueError, match=r"^config: studies: every study has enabled: false"):
+        study_config.check_config(bad)
+
+
+def test_a_disabled_study_may_list_no_estimator(config):
+    good = changed(config, "hip", ("estimators",), [])
+    good["studies"]["hip"]["enabled"] = False
+    study_config.check_config(good)
+
+
+def test_a_condition_some_listed_estimator_can_fit_is_run(config):
+    """Three frames: the pose-based estimators fit them, the sphere fits do not (their rows
+    fail, each saying so); only a condition no listed estimator fits is refused."""
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"n_frames": 3}))
+    only_spheres = changed(config, "cmc", ("protocol",), {"n_frames": 3})
+    only_spheres["studies"]["cmc"]["estimators"] = ["NM", "LS"]
+    with pytest.raises(ValueError, match=r"studies\.cmc\.protocol: .* 3 frame"):
+        study_config.check_config(only_spheres)
+
+
+def _declarations():
+    """``(where, annotation)`` of every built-in estimator option and protocol field."""
+    for kind in registry.KINDS:
+        n_arrays = 2 if kind == "joint_center" else 1
+        for name in registry.methods(kind):
+            options = declared.keyword_types(registry.get(kind, name), n_arrays)
+            assert options is not None, f"{kind} {name} takes **options: they cannot be checked"
+            yield from ((f"{kind} {name}.{o}", a) for o, a in options.items())
+    for study in study_names():
+        cls = get_study(study).protocol_class
+        yield from ((f"{cls.__name__}.{f}", a) for f, a in declared.field_types(cls).items())
+
+
+def test_every_option_and_protocol_field_declares_its_type():
+    for where, annotation in _declarations():
+        assert annotation is not inspect.Parameter.empty, f"{where} declares no type"
+        assert not declared.describe(annotation).startswith("a <"), where
+
+
+@pytest.mark.parametrize("name", study_names())
+def test_each_study_protocol_fits_its_own_declarations(name):
+    protocol = get_study(name).protocol()
+    fields = {f.name: getattr(protocol, f.name) for f in dataclasses.fields(protocol)}
+    declared.check_fields(type(protocol), fields)
+
+
+@pytest.mark.parametrize(
+    ("value", "annotation", "words"),
+    [
+        (True, int, "a: must be an integer, got True"),
+        (float("inf"), float, "a: must be a number, got inf"),
+        (3, str, "a: must be text, got 3"),
+        ([[1, 2, 3], [1, 2]], tuple[declared.Vector3, ...], "a[1]: must be 3 numbers"),
+        ({"M": 5}, dict[str, declared.Vector3], "a.M: must be 3 numbers, got 5"),
+    ],
+)
+def test_declared_checks_tell_types_apart_as_yaml_gives_them(value, annotation, words):
+    with pytest.raises(declared.DeclarationError, match=re.escape(words)):
+        declared.check(value, annotation, ("a",))
 
 
 def test_missing_grid_key_is_named(config):
@@ -111,6 +300,10 @@ def test_every_option_the_estimators_take_is_accepted(config):
     study_config.check_config(good)
     hip = changed(config, "hip", ("options",), {"gauss-markov": {"noise_mm": 1.7}})
     study_config.check_config(hip)
+    start = changed(config, "cmc", ("options",), {"IS": {"start": [20, -25, -30.5]}})
+    study_config.check_config(start)
+    axis = {"planar": {"point": None, "parameterisation": "vector", "max_iter": 400}}
+    study_config.check_config(changed(config, "hinge", ("options",), axis))
 
 
 def test_every_study_declares_the_values_of_each_grid_key():
@@ -123,11 +316,13 @@ def test_every_study_declares_the_values_of_each_grid_key():
 def test_dry_run_stops_before_any_job_naming_the_key(tmp_path):
     copy_workflow(tmp_path)
     overlay = tmp_path / "bad.yaml"
-    overlay.write_text(yaml.safe_dump({"studies": {"cmc": {"estimators": ["NM", "XX"]}}}))
+    overlay.write_text(yaml.safe_dump({"studies": {"cmc": {"options": {"BC": {"tol_x": -1}}}}}))
     run = run_snakemake(tmp_path, "--configfile", str(overlay), "--dry-run", timeout=300)
     message = run.stdout + run.stderr
     assert run.returncode != 0
-    assert "studies.cmc.estimators: unknown center estimator 'XX'" in message, message[-2000:]
+    expected = "config: studies.cmc.options.BC.tol_x: must be a number > 0, got -1"
+    assert expected in message, message[-2000:]
+    assert "Job stats" not in message
     assert not (tmp_path / "results").exists()
 
 

@@ -235,6 +235,24 @@ def test_noise_free_data_far_from_the_origin_are_recovered(kind, method):
     assert max(_errors(kind, result, FAR)) <= allowed
 
 
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_the_claimed_fewest_frames_are_exactly_those_the_method_fits(kind, method):
+    """The config check refuses a condition shorter than every listed method's claim, so the
+    claim must be the method's own limit: it fits that many frames (spread over the motion)
+    and refuses one fewer, naming the limit."""
+    fewest = registry.claims(kind, method).min_frames
+    arrays = noisy(kind)
+
+    def spread(n_frames):
+        keep = np.linspace(0, N_FRAMES - 1, n_frames).round().astype(int)
+        return tuple(array[keep] for array in arrays)
+
+    fit(kind, method, spread(fewest))
+    if fewest > 1:
+        with pytest.raises(ValueError, match=f"needs at least {fewest}"):
+            fit(kind, method, spread(fewest - 1))
+
+
 # --- invariances -----------------------------------------------------------------------------
 
 

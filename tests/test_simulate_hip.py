@@ -147,7 +147,7 @@ def test_protocol_from_config():
     layout = [[0, 0, 500], [100, 0, 500], [0, 100, 500], [50, 50, 550]]
     four = HipProtocol.from_config({"proximal_markers_mm": layout})
     assert simulate({"n_frames": 5}, four, _rngs(1)).segments["proximal"].shape == (1, 5, 4, 3)
-    with pytest.raises(ValueError, match="unknown hip protocol parameters"):
+    with pytest.raises(ValueError, match="swing: HipProtocol has no such field"):
         HipProtocol.from_config({"swing": 20})
     with pytest.raises(ValueError, match="proximal_markers_mm"):
         HipProtocol.from_config({"proximal_markers_mm": [[0, 0, 1], [1, 0, 1]]})

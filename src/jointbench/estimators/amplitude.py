@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from jointbench.declared import Point
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.sphere import _check_point, fit_ls
@@ -24,6 +25,9 @@ from jointbench.numerics.poses import rigid_poses
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
 
 __all__ = ["amplitude", "fit_ma"]
+
+# Fewest frames MA takes (registered as its claim, checked in _ma_prepare).
+_MIN_FRAMES = 4
 
 
 def _amplitudes(
@@ -66,9 +70,12 @@ def amplitude(rotation: np.ndarray, translation: np.ndarray, point: np.ndarray) 
 # The box is measured along the reference axes, so a rotation of noisy data is not followed;
 # the simplex path depends on the coordinates (see the docstring).
 @register(
-    "center", "MA", invariances={"translation": 0.5, "marker_order": 1e-3, "frame_order": 1e-3}
+    "center",
+    "MA",
+    invariances={"translation": 0.5, "marker_order": 1e-3, "frame_order": 1e-3},
+    min_frames=_MIN_FRAMES,
 )
-def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult:
+def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     """Minimal amplitude point of Marin et al. (2003), minimised as in paper A (§5).
 
     1. Pose ``(R_k, t_k)`` of the moving segment in every frame by SVD with iterated body-fixed
@@ -124,7 +131,7 @@ def fit_ma(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult
 
 def _ma_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.ndarray]:
     """Validated markers and the starting point in the reference frame (default: LS centre)."""
-    markers = check_markers(markers, min_frames=4, min_markers=3)
+    markers = check_markers(markers, min_frames=_MIN_FRAMES, min_markers=3)
     check_moves(markers)
     check_not_collinear(markers)
     return markers, fit_ls(markers).center if start is None else _check_point(start, "start")

@@ -80,10 +80,13 @@ is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_betw
 from __future__ import annotations
 
 import math
+import typing
 from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 
+from jointbench.declared import Count, Point, Positive
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
@@ -105,7 +108,10 @@ __all__ = [
 ]
 
 _GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
-PARAMETERISATIONS = ("angles", "vector")
+Parameterisation = Literal["angles", "vector"]
+PARAMETERISATIONS = typing.get_args(Parameterisation)
+# Fewest frames an axis search takes (registered as each method's claim, checked in _checked).
+_MIN_FRAMES = 4
 
 
 def _dodecahedron_starts() -> np.ndarray:
@@ -318,7 +324,7 @@ def canonical_sign(direction: np.ndarray) -> np.ndarray:
 
 def _checked(markers: object, parameterisation: str) -> np.ndarray:
     """Validated markers ``(N, P, 3)`` [mm] of one trial."""
-    array = check_markers(markers, min_frames=4, min_markers=1)
+    array = check_markers(markers, min_frames=_MIN_FRAMES, min_markers=1)
     check_moves(array)
     if parameterisation not in PARAMETERISATIONS:
         raise ValueError(
@@ -498,12 +504,12 @@ def _entry(solve: Callable, method: str) -> Callable:
     def entry(
         markers: np.ndarray,
         *,
-        point: np.ndarray | None = None,
-        parameterisation: str = "angles",
-        xatol: float = XATOL,
-        fatol: float = FATOL,
-        max_iter: int | None = None,
-        max_fev: int | None = None,
+        point: Point | None = None,
+        parameterisation: Parameterisation = "angles",
+        xatol: Positive = XATOL,
+        fatol: Positive = FATOL,
+        max_iter: Count | None = None,
+        max_fev: Count | None = None,
     ):
         return solve(
             markers,
@@ -528,14 +534,14 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     return fit
 
 
-fit_planar = register("axis", "planar", recovery=1e-4, invariances=1e-4)(
+fit_planar = register("axis", "planar", recovery=1e-4, invariances=1e-4, min_frames=_MIN_FRAMES)(
     _make("planar", "Normal of the best-fitting parallel planes, paper B eq. 8, by search.")
 )
 # No recovery claim: on a pure hinge the default point (the NM centre) is undetermined along
 # the axis and can land where the radial search is trapped (module notes).
-fit_radial = register("axis", "radial", recovery=None, invariances=1e-4)(
+fit_radial = register("axis", "radial", recovery=None, invariances=1e-4, min_frames=_MIN_FRAMES)(
     _make("radial", "Axis of the best-fitting coaxial cylinders through m, paper B eqs. 10–11.")
 )
-fit_combined = register("axis", "combined", recovery=1e-4, invariances=1e-4)(
-    _make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial).")
-)
+fit_combined = register(
+    "axis", "combined", recovery=1e-4, invariances=1e-4, min_frames=_MIN_FRAMES
+)(_make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial)."))

@@ -84,6 +84,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.declared import Count, NonNegative
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
@@ -185,9 +186,9 @@ def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
     return vectors @ ((vectors.T @ rhs) / values), float(values[0] / values[-1])
 
 
-@register("joint_center", "analytic")
+@register("joint_center", "analytic", min_frames=POSE_MIN_FRAMES)
 def fit_analytic(
-    proximal: np.ndarray, distal: np.ndarray, *, noise_mm: float | None = None
+    proximal: np.ndarray, distal: np.ndarray, *, noise_mm: NonNegative | None = None
 ) -> JointCenterResult:
     """Paper C's analytic joint centre (§6, eq. 9).
 
@@ -588,14 +589,14 @@ def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
         raise ValueError("max_iterations must be >= 1 and tol_mm >= 0")
 
 
-@register("joint_center", "gauss-markov")
+@register("joint_center", "gauss-markov", min_frames=POSE_MIN_FRAMES)
 def fit_gauss_markov(
     proximal: np.ndarray,
     distal: np.ndarray,
     *,
-    noise_mm: float | None = None,
-    max_iterations: int = 100,
-    tol_mm: float = 1e-6,
+    noise_mm: NonNegative | None = None,
+    max_iterations: Count = 100,
+    tol_mm: NonNegative = 1e-6,
 ) -> JointCenterResult:
     """Paper C's Gauss–Markov joint centre with its predicted covariance (eqs. 11–23).
 
@@ -628,14 +629,14 @@ def fit_gauss_markov(
     )
 
 
-@register("joint_center", "gauss-markov-frame0")
+@register("joint_center", "gauss-markov-frame0", min_frames=POSE_MIN_FRAMES)
 def fit_gauss_markov_frame0(
     proximal: np.ndarray,
     distal: np.ndarray,
     *,
-    noise_mm: float | None = None,
-    max_iterations: int = 100,
-    tol_mm: float = 1e-6,
+    noise_mm: NonNegative | None = None,
+    max_iterations: Count = 100,
+    tol_mm: NonNegative = 1e-6,
 ) -> JointCenterResult:
     """Gauss–Markov joint centre whose covariance includes the frame-0 pose errors.
 

@@ -14,8 +14,9 @@ and the support verdict of :func:`jointbench.estimators.support.assess` written 
 result after it. A newly registered estimator gets both without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
-At registration an estimator states its :class:`Claims`: how closely it recovers a noise-free
-answer and under which transformations of the data its answer moves with the data. The
+At registration an estimator states its :class:`Claims`: the fewest frames it fits, how
+closely it recovers a noise-free answer and under which transformations of the data its answer
+moves with the data. The
 conformance suite (``tests/test_conformance.py``) checks the claims of every registered
 estimator, so the defaults are the strict ones and a method relaxes them only where its paper
 makes it so.
@@ -52,7 +53,9 @@ def _all_exact() -> Mapping[str, float]:
 class Claims:
     """What an estimator promises about its answers.
 
-    ``recovery``: the largest error of its answer on noise-free data, with default options
+    ``min_frames``: the fewest frames it fits (fewer raise ``ValueError``), so that a study
+    whose conditions have fewer frames than all of its estimators take is refused before it
+    runs. ``recovery``: the largest error of its answer on noise-free data, with default options
     ([mm] for a centre or the distance of an axis's point from the true axis, [rad] for an
     axis direction); ``None`` where the method's defaults do not recover every noise-free
     case (say why at the registration). ``invariances``: for each transformation in
@@ -63,8 +66,13 @@ class Claims:
 
     recovery: float | None = _EXACT
     invariances: Mapping[str, float] = field(default_factory=_all_exact)
+    min_frames: int = 1
 
     def __post_init__(self) -> None:
+        if isinstance(self.min_frames, bool) or not (
+            isinstance(self.min_frames, int) and self.min_frames >= 1
+        ):
+            raise ValueError(f"min_frames must be an integer >= 1, got {self.min_frames!r}")
         unknown = set(self.invariances) - set(INVARIANCES)
         if unknown:
             raise ValueError(
@@ -137,6 +145,7 @@ def register(
     *,
     recovery: float | None = _EXACT,
     invariances: float | Mapping[str, float] = _EXACT,
+    min_frames: int = 1,
 ) -> Callable[[Callable], Callable]:
     """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`.
 
@@ -146,7 +155,7 @@ def register(
     _check_kind(kind)
     if not isinstance(invariances, Mapping):
         invariances = dict.fromkeys(INVARIANCES, float(invariances))
-    stated = Claims(recovery, invariances)
+    stated = Claims(recovery, invariances, min_frames)
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:

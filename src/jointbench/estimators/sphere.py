@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jointbench.declared import Count, Point, Positive
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
@@ -39,6 +40,8 @@ __all__ = [
 ]
 
 _EPS = float(np.finfo(float).eps)
+# Fewest frames a sphere fit takes (registered as each method's claim, checked in _prepare).
+_MIN_FRAMES = 4
 
 
 @lru_cache(maxsize=1)
@@ -51,7 +54,7 @@ def _lapack():
     return lapack
 
 
-def _prepare(markers: object, min_frames: int = 4) -> np.ndarray:
+def _prepare(markers: object, min_frames: int = _MIN_FRAMES) -> np.ndarray:
     array = check_markers(markers, min_frames=min_frames, min_markers=1)
     check_moves(array)
     return array
@@ -200,7 +203,7 @@ def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, _LSMoments]:
     return markers[0, 0] + _ls_solve(moments.a_matrix, moments.b_vector), moments
 
 
-@register("center", "LS")
+@register("center", "LS", min_frames=_MIN_FRAMES)
 def fit_ls(markers: np.ndarray) -> CenterResult:
     """Least-squares sphere fit of Gamage & Lasenby (2002): closed form, cost f2 (paper A eq. 4).
 
@@ -318,7 +321,7 @@ def _nm_coefficients(scaled: np.ndarray) -> tuple[np.ndarray, float]:
     return _largest_admissible((vt.T / s).T, constraint)
 
 
-@register("center", "NM")
+@register("center", "NM", min_frames=_MIN_FRAMES)
 def fit_nm(markers: np.ndarray) -> CenterResult:
     """Normalisation method of Chang & Pollard (2007), paper A §3–4: constrained least squares.
 
@@ -415,13 +418,14 @@ def _bc_noise_variance(state: _BCState, shift: np.ndarray) -> float:
         return float(np.mean(spread / (4.0 * state.n_frames * mean_sq)))
 
 
-@register("center", "BC", invariances=1e-3)  # stops on steps of 1e-4 mm
+# Stops on steps of 1e-4 mm.
+@register("center", "BC", invariances=1e-3, min_frames=_MIN_FRAMES)
 def fit_bc(
     markers: np.ndarray,
     *,
-    max_iterations: int = 600,
-    tol_x: float = 1e-4,
-    tol_fun: float = 1e-4,
+    max_iterations: Count = 600,
+    tol_x: Positive = 1e-4,
+    tol_fun: Positive = 1e-4,
 ) -> CenterResult:
     """Bias-compensated least squares of Halvorsen (2003), started from the LS centre.
 
@@ -558,8 +562,9 @@ def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
     return float(_geometric_costs(center[None], flat, np.zeros(1, int), markers.shape[0])[0])
 
 
-@register("center", "IS", invariances=1e-3)  # a simplex stopped at 1e-4 mm
-def fit_is(markers: np.ndarray, start: np.ndarray | None = None) -> CenterResult:
+# A simplex stopped at 1e-4 mm.
+@register("center", "IS", invariances=1e-3, min_frames=_MIN_FRAMES)
+def fit_is(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
 
     Paper A (§5) minimised f1 with MATLAB's ``fminsearch`` started from the LS centre; here
@@ -655,7 +660,7 @@ def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
 # --------------------------------------------------------------------------------------------
 
 
-def _screen(markers: object, min_frames: int = 4) -> tuple[np.ndarray, np.ndarray]:
+def _screen(markers: object, min_frames: int = _MIN_FRAMES) -> tuple[np.ndarray, np.ndarray]:
     """Stacked trials as float64 and the mask of those :func:`_prepare` would reject, or
     might (a coordinate at exactly zero).
 

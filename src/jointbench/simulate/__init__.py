@@ -14,12 +14,14 @@ between trials.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointbench.declared import check_fields
 from jointbench.simulate.noise import isotropic_noise
 
 __all__ = ["KINDS", "GridValues", "Study", "Trials", "isotropic_noise"]
@@ -55,7 +57,9 @@ class GridValues:
 
     ``maximum`` and ``choices`` may be functions of the study's protocol, for limits the
     protocol defines (its marker sets, its joints, its recording length), so that a config that
-    adds a marker set to the protocol may use it in the grid.
+    adds a marker set to the protocol may use it in the grid. ``frames``: the value sets how many
+    frames a condition's trials have, so a condition too short for every estimator is this
+    key's mistake (otherwise the protocol's).
     """
 
     type: type
@@ -63,6 +67,7 @@ class GridValues:
     exclusive_minimum: bool = False
     maximum: float | Callable[[object], float] | None = None
     choices: tuple[str, ...] | Callable[[object], tuple[str, ...]] | None = None
+    frames: bool = False
 
     def allowed(self, protocol) -> str:
         """The allowed values in words, e.g. ``"a number > 0 and <= 180"``."""
@@ -104,10 +109,11 @@ class Study:
     ``kind`` is the estimator kind it runs (one of :data:`KINDS`); ``grid_keys`` its condition
     columns, in order; ``seed_keys`` the condition keys that define a random trial (the rest
     select a view of the same trial, e.g. the first Nt frames); ``segments`` the names of the
-    marker arrays passed to an estimator, in argument order; ``protocol_class`` the class of its
-    documented modelling choices (with ``from_config(overrides)``); ``simulate`` the function of
-    the signature above; ``grid_spec`` the values each grid key allows, checked before any job
-    runs (a study without one has its grid values checked by the schema only).
+    marker arrays passed to an estimator, in argument order; ``protocol_class`` the dataclass of
+    its documented modelling choices (with ``from_config(overrides)``), each field annotated
+    with its type and range (:mod:`jointbench.declared`); ``simulate`` the function of the
+    signature above; ``grid_spec`` the values each grid key allows, checked before any job runs
+    (a study without one has its grid values checked by the schema only).
     """
 
     name: str
@@ -125,6 +131,11 @@ class Study:
         stray = set(self.seed_keys) - set(self.grid_keys)
         if stray:
             raise ValueError(f"study {self.name!r}: seed keys {sorted(stray)} are not grid keys")
+        if not dataclasses.is_dataclass(self.protocol_class):
+            raise ValueError(
+                f"study {self.name!r}: protocol_class {self.protocol_class!r} must be a "
+                "dataclass, whose annotated fields declare what the config may set"
+            )
         if self.grid_spec and tuple(self.grid_spec) != self.grid_keys:
             raise ValueError(
                 f"study {self.name!r}: grid_spec keys {tuple(self.grid_spec)} must be the grid "
@@ -132,8 +143,16 @@ class Study:
             )
 
     def protocol(self, overrides: Mapping[str, object] | None = None) -> object:
-        """The study's protocol: documented defaults updated by the config's ``protocol``."""
-        return self.protocol_class.from_config(overrides)
+        """The study's protocol: documented defaults updated by the config's ``protocol``.
+
+        Every field is then checked against its declaration, whatever ``from_config`` checked
+        itself, so a study defined outside the package is held to its declarations too;
+        ``DeclarationError`` (a ``ValueError``) names the field.
+        """
+        protocol = self.protocol_class.from_config(overrides)
+        fields = dataclasses.fields(self.protocol_class)
+        check_fields(self.protocol_class, {f.name: getattr(protocol, f.name) for f in fields})
+        return protocol
 
     def fit_arguments(self, trials: Trials, trial: int) -> tuple[np.ndarray, ...]:
         """The arrays passed to the estimator for one trial, in :attr:`segments` order."""

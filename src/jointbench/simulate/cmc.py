@@ -39,13 +39,16 @@ the random errors were normally distributed" (see
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
+from typing import Annotated
 
 import numpy as np
 
+from jointbench.declared import Count, DeclarationError, Length, NonNegative, Positive, Vector3
+from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.simulate import GridValues, Study, Trials
-from jointbench.simulate.noise import isotropic_noise
+from jointbench.simulate.noise import isotropic_noise, largest_noise_mm
 
 __all__ = [
     "STUDY",
@@ -82,25 +85,54 @@ class CmcProtocol:
     ``directions``: per marker set, one direction per marker from the CoR (any length) in the
     frame described in the module docstring. ``distances_mm``: paper A Table 1.
     ``spiral_turns``: turns of the circumduction spiral. ``n_frames``: 120 (paper A §5.1).
-    ``center_mm``: the nominal CoR in the reference frame.
+    ``center_mm``: the nominal CoR in the reference frame. A marker set has as many
+    directions as distances.
     """
 
-    directions: dict[str, tuple] = field(default_factory=lambda: _as_tuples(_DEFAULT_DIRECTIONS))
-    distances_mm: dict[str, tuple] = field(
+    directions: dict[str, Annotated[tuple[Vector3, ...], Length(1)]] = field(
+        default_factory=lambda: _as_tuples(_DEFAULT_DIRECTIONS)
+    )
+    distances_mm: dict[str, Annotated[tuple[Positive, ...], Length(1)]] = field(
         default_factory=lambda: _as_tuples(_TABLE_1_DISTANCES_MM)
     )
-    spiral_turns: float = 2.0
-    n_frames: int = 120
-    center_mm: tuple[float, float, float] = (20.0, -25.0, -30.0)
+    # No turns is a swing in one plane: a hinge, whose centre the fits cannot place (flagged).
+    spiral_turns: NonNegative = 2.0
+    n_frames: Count = 120
+    center_mm: Vector3 = (20.0, -25.0, -30.0)
+
+    def __post_init__(self) -> None:
+        for name in {**self.directions, **self.distances_mm}:
+            directions = self.directions.get(name)
+            distances = self.distances_mm.get(name)
+            if directions is None or distances is None:
+                missing = "directions" if directions is None else "distances_mm"
+                raise DeclarationError(
+                    (missing,),
+                    f"has no marker set {name!r}: a marker set needs both directions and "
+                    "distances_mm",
+                )
+            if len(directions) != len(distances):
+                raise DeclarationError(
+                    ("distances_mm", name),
+                    f"gives {len(distances)} distances for the {len(directions)} directions of "
+                    f"marker set {name!r}",
+                )
+            for index, direction in enumerate(directions):
+                if not any(direction):
+                    raise DeclarationError(("directions", name, index), "is zero, not a direction")
+
+    @property
+    def largest_noise_mm(self) -> float:
+        """The largest grid ``noise_mm`` [mm]: the farthest marker of any set from the CoR
+        (:func:`jointbench.simulate.noise.largest_noise_mm`)."""
+        return max(largest_noise_mm(marker_positions(self, name)) for name in self.directions)
 
     @classmethod
     def from_config(cls, overrides: Mapping[str, object] | None = None) -> CmcProtocol:
-        """Defaults updated by the config's ``protocol`` mapping (unknown keys are an error)."""
+        """Defaults updated by the config's ``protocol`` mapping (a marker set's directions and
+        distances replace the default set of that name, other sets are kept)."""
         overrides = dict(overrides or {})
-        known = {f.name for f in fields(cls)}
-        unknown = set(overrides) - known
-        if unknown:
-            raise ValueError(f"unknown cmc protocol parameters: {sorted(unknown)}")
+        check_declared(cls, overrides)
         for key in ("directions", "distances_mm"):
             if key in overrides:
                 overrides[key] = {**getattr(cls(), key), **_as_tuples(overrides[key])}
@@ -172,6 +204,8 @@ STUDY = Study(
         "marker_set": GridValues(str, choices=lambda protocol: tuple(protocol.directions)),
         # A circumduction tilt: 0° does not move, beyond 180° it repeats.
         "rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
-        "noise_mm": GridValues(float, minimum=0),
+        "noise_mm": GridValues(
+            float, minimum=0, maximum=lambda protocol: protocol.largest_noise_mm
+        ),
     },
 )

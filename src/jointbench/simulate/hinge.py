@@ -69,14 +69,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import typing
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Annotated, Literal
 
 import numpy as np
 
+from jointbench.declared import DeclarationError, Length, NonNegative, Positive, Range, Vector3
+from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_about_axis
 from jointbench.simulate import Trials
-from jointbench.simulate.noise import isotropic_noise
+from jointbench.simulate.noise import check_noise_level, isotropic_noise
 
 __all__ = [
     "FE_AXIS",
@@ -91,9 +95,12 @@ __all__ = [
     "simulate",
 ]
 
-MOTIONS = ("lissajous", "sequential", "superimposed", "grid")
-ROM_CONVENTIONS = ("full", "half")
-ROTATION_ORDERS = ("fe_aa", "aa_fe")
+Motion = Literal["lissajous", "sequential", "superimposed", "grid"]
+RomConvention = Literal["full", "half"]
+RotationOrder = Literal["fe_aa", "aa_fe"]
+MOTIONS = typing.get_args(Motion)
+ROM_CONVENTIONS = typing.get_args(RomConvention)
+ROTATION_ORDERS = typing.get_args(RotationOrder)
 
 #: The flexion–extension axis, the true axis of rotation, in the reference segment's frame.
 FE_AXIS = np.array([1.0, 0.0, 0.0])
@@ -131,46 +138,34 @@ class HingeProtocol:
     """
 
     name: str
-    marker_names: tuple[str, ...]
-    markers_mm: tuple[tuple[float, float, float], ...]
-    motion: str = "grid"
-    rom_convention: str = "full"
-    fe_cycles: float = 1.0
-    aa_cycles: float = 2.0
+    marker_names: Annotated[tuple[str, ...], Length(1)]
+    markers_mm: Annotated[tuple[Vector3, ...], Length(1)]
+    motion: Motion = "grid"
+    rom_convention: RomConvention = "full"
+    fe_cycles: Positive = 1.0
+    aa_cycles: Positive = 2.0
     aa_phase_deg: float = 0.0
-    rotation_order: str = "fe_aa"
-    noise_sd_mm: float = 1.0
-    n_frames: int = 121
+    rotation_order: RotationOrder = "fe_aa"
+    noise_sd_mm: NonNegative = 1.0
+    # Four frames: the fewest of a "grid" motion (2 x 2) and of the axis searches.
+    n_frames: Annotated[int, Range(4)] = 121
 
     def __post_init__(self) -> None:
+        # Lists from the config become tuples: a protocol is immutable and hashable.
         markers = tuple(tuple(float(c) for c in marker) for marker in self.markers_mm)
         object.__setattr__(self, "markers_mm", markers)
-        object.__setattr__(self, "marker_names", tuple(str(n) for n in self.marker_names))
-        if not markers or any(len(m) != 3 for m in markers):
-            raise ValueError("markers_mm must be a non-empty sequence of (x, y, z) positions")
-        if not all(math.isfinite(c) for m in markers for c in m):
-            raise ValueError("markers_mm must be finite")
+        object.__setattr__(self, "marker_names", tuple(self.marker_names))
         if len(self.marker_names) != len(markers):
-            raise ValueError(
-                f"marker_names has {len(self.marker_names)} names for {len(markers)} markers"
+            raise DeclarationError(
+                ("marker_names",),
+                f"has {len(self.marker_names)} names for {len(markers)} markers",
             )
-        for field, allowed in (
-            ("motion", MOTIONS),
-            ("rom_convention", ROM_CONVENTIONS),
-            ("rotation_order", ROTATION_ORDERS),
-        ):
-            if getattr(self, field) not in allowed:
-                raise ValueError(
-                    f"{field} must be one of {', '.join(allowed)}, got {getattr(self, field)!r}"
-                )
-        if not self.noise_sd_mm >= 0:
-            raise ValueError(f"noise_sd_mm must be >= 0, got {self.noise_sd_mm}")
-        if int(self.n_frames) != self.n_frames or self.n_frames < 4:
-            raise ValueError(f"n_frames must be an integer >= 4, got {self.n_frames}")
-        if self.motion == "grid" and math.isqrt(int(self.n_frames)) ** 2 != self.n_frames:
-            raise ValueError(f"motion 'grid' needs a square n_frames, got {self.n_frames}")
-        if not (self.fe_cycles > 0 and self.aa_cycles > 0):
-            raise ValueError("fe_cycles and aa_cycles must be > 0")
+        if self.motion == "grid" and math.isqrt(self.n_frames) ** 2 != self.n_frames:
+            raise DeclarationError(
+                ("n_frames",), f"motion 'grid' needs a square n_frames, got {self.n_frames}"
+            )
+        # The joint centre is the origin of the frame the markers are given in.
+        check_noise_level("noise_sd_mm", self.noise_sd_mm, np.array(markers))
 
     @property
     def markers(self) -> np.ndarray:
@@ -206,13 +201,7 @@ def protocol_from_config(config: Mapping[str, object] | str) -> HingeProtocol:
     settings = dict(config)
     if "name" not in settings:
         raise ValueError("a hinge protocol config needs a 'name' (e.g. 'knee' or 'mcp')")
-    fields = {f.name for f in dataclasses.fields(HingeProtocol)}
-    unknown = sorted(set(settings) - fields)
-    if unknown:
-        raise ValueError(
-            f"unknown hinge protocol settings: {', '.join(unknown)}; "
-            f"known: {', '.join(sorted(fields))}"
-        )
+    check_declared(HingeProtocol, settings)
     base = HINGE_PROTOCOLS.get(str(settings["name"]))
     if base is None:
         try:

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.declared import DeclarationError
+from jointbench.declared import check_fields as check_declared
 from jointbench.simulate import GridValues, Study, Trials, hinge
 
 __all__ = ["STUDY", "HingeStudyProtocol", "simulate"]
@@ -26,13 +28,24 @@ class HingeStudyProtocol:
 
     @classmethod
     def from_config(cls, overrides: Mapping[str, Mapping] | None = None) -> HingeStudyProtocol:
+        """Each joint's protocol: its built-in defaults, updated by ``all``, then by its own
+        entry (a name not built in adds a joint, which must give every field)."""
         overrides = dict(overrides or {})
+        # Checked where they are written, so that a mistake under ``all`` is named there.
+        for key, settings in overrides.items():
+            if not isinstance(settings, Mapping):
+                raise DeclarationError(
+                    (key,), f"must be a mapping of HingeProtocol fields, got {settings!r}"
+                )
+            check_declared(hinge.HingeProtocol, settings, (key,))
         shared = dict(overrides.pop("all", {}))
-        names = set(hinge.HINGE_PROTOCOLS) | set(overrides)
-        joints = {
-            name: hinge.protocol_from_config({"name": name, **shared, **overrides.get(name, {})})
-            for name in sorted(names)
-        }
+        joints = {}
+        for name in sorted(set(hinge.HINGE_PROTOCOLS) | set(overrides)):
+            settings = {"name": name, **shared, **overrides.get(name, {})}
+            try:
+                joints[name] = hinge.protocol_from_config(settings)
+            except DeclarationError as error:
+                raise error.under(name) from None
         return cls(joints)
 
 

@@ -42,31 +42,28 @@ Nt frames" of one 1200-frame recording).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
+from typing import Annotated
 
 import numpy as np
 
+from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
+from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix
 from jointbench.simulate import GridValues, Study, Trials
-from jointbench.simulate.noise import isotropic_noise
+from jointbench.simulate.noise import check_noise_level, isotropic_noise
 
 __all__ = ["STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
 
 _CONDITION_KEYS = ("n_frames", "noise_mm")
 
 
-def _triples(value: object, name: str) -> tuple:
-    array = np.asarray(value, dtype=float)
-    if array.ndim != 2 or array.shape[1] != 3 or array.shape[0] < 3:
-        raise ValueError(f"{name} must be (n >= 3) rows of (x, y, z), got shape {array.shape}")
-    return tuple(tuple(float(x) for x in row) for row in array)
+def _triples(rows: Sequence[Sequence[float]]) -> tuple[Vector3, ...]:
+    return tuple(_triple(row) for row in rows)
 
 
-def _triple(value: object, name: str) -> tuple[float, float, float]:
-    array = np.asarray(value, dtype=float)
-    if array.shape != (3,) or not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be three finite numbers, got {value!r}")
-    return tuple(float(x) for x in array)
+def _triple(row: Sequence[float]) -> Vector3:
+    return tuple(float(x) for x in row)
 
 
 @dataclass(frozen=True)
@@ -85,36 +82,39 @@ class HipProtocol:
     (``twist_deg``, ``twist_hz``). See the module docstring for the formulas.
     """
 
-    n_frames: int = 1200
-    fps: float = 60.0
-    noise_mm: float = 1.7
-    joint_mm: tuple[float, float, float] = (0.0, 0.0, 1000.0)
-    proximal_markers_mm: tuple[tuple[float, float, float], ...] = (
+    # Three frames: the fewest in which two segments' relative rotation can be seen at all.
+    n_frames: Annotated[int, Range(3)] = 1200
+    fps: Positive = 60.0
+    noise_mm: NonNegative = 1.7
+    joint_mm: Vector3 = (0.0, 0.0, 1000.0)
+    # Three markers: the fewest that give a segment's pose.
+    proximal_markers_mm: Annotated[tuple[Vector3, ...], Length(3)] = (
         (90.0, 0.0, 500.0),
         (-60.0, 90.0, 520.0),
         (-50.0, -100.0, 480.0),
     )
-    distal_markers_mm: tuple[tuple[float, float, float], ...] = (
+    distal_markers_mm: Annotated[tuple[Vector3, ...], Length(3)] = (
         (80.0, 20.0, -500.0),
         (-70.0, 80.0, -470.0),
         (-30.0, -90.0, -530.0),
     )
-    hand_translation_mm: tuple[float, float, float] = (40.0, 30.0, 20.0)
-    hand_translation_hz: tuple[float, float, float] = (0.21, 0.13, 0.31)
-    hand_rotation_deg: tuple[float, float, float] = (4.0, 3.0, 5.0)
-    hand_rotation_hz: tuple[float, float, float] = (0.17, 0.29, 0.11)
+    hand_translation_mm: Vector3 = (40.0, 30.0, 20.0)
+    hand_translation_hz: Vector3 = (0.21, 0.13, 0.31)
+    hand_rotation_deg: Vector3 = (4.0, 3.0, 5.0)
+    hand_rotation_hz: Vector3 = (0.17, 0.29, 0.11)
     swing_deg: float = 35.0
     swing_hz: float = 0.75
     cross_swing_deg: float = 25.0
     cross_swing_hz: float = 0.7
-    cross_swing_rise_s: float = 3.0
+    cross_swing_rise_s: Positive = 3.0
     twist_deg: float = 8.0
     twist_hz: float = 0.23
 
     def __post_init__(self) -> None:
+        # Lists from the config become tuples: a protocol is immutable and hashable.
         set_ = object.__setattr__
-        set_(self, "proximal_markers_mm", _triples(self.proximal_markers_mm, "proximal_markers_mm"))
-        set_(self, "distal_markers_mm", _triples(self.distal_markers_mm, "distal_markers_mm"))
+        set_(self, "proximal_markers_mm", _triples(self.proximal_markers_mm))
+        set_(self, "distal_markers_mm", _triples(self.distal_markers_mm))
         for name in (
             "joint_mm",
             "hand_translation_mm",
@@ -122,26 +122,15 @@ class HipProtocol:
             "hand_rotation_deg",
             "hand_rotation_hz",
         ):
-            set_(self, name, _triple(getattr(self, name), name))
-        if int(self.n_frames) != self.n_frames or self.n_frames < 3:
-            raise ValueError(f"n_frames must be an integer >= 3, got {self.n_frames!r}")
-        set_(self, "n_frames", int(self.n_frames))
-        if not self.fps > 0:
-            raise ValueError(f"fps must be positive, got {self.fps!r}")
-        if not (np.isfinite(self.noise_mm) and self.noise_mm >= 0):
-            raise ValueError(f"noise_mm must be finite and >= 0, got {self.noise_mm!r}")
-        if not self.cross_swing_rise_s > 0:
-            raise ValueError(
-                f"cross_swing_rise_s must be positive, got {self.cross_swing_rise_s!r}"
-            )
+            set_(self, name, _triple(getattr(self, name)))
+        markers = (*self.proximal_markers_mm, *self.distal_markers_mm)  # relative to the joint
+        check_noise_level("noise_mm", self.noise_mm, np.array(markers))
 
     @classmethod
     def from_config(cls, overrides: Mapping[str, object] | None = None) -> HipProtocol:
-        """Defaults updated by the config's ``protocol`` mapping (unknown keys are an error)."""
+        """Defaults updated by the config's ``protocol`` mapping."""
         overrides = dict(overrides or {})
-        unknown = set(overrides) - {f.name for f in fields(cls)}
-        if unknown:
-            raise ValueError(f"unknown hip protocol parameters: {sorted(unknown)}")
+        check_declared(cls, overrides)
         return cls(**overrides)
 
 
@@ -262,5 +251,9 @@ STUDY = Study(
     protocol_class=HipProtocol,
     simulate=simulate,
     # Nt frames of a recording of the protocol's n_frames.
-    grid_spec={"n_frames": GridValues(int, minimum=1, maximum=lambda protocol: protocol.n_frames)},
+    grid_spec={
+        "n_frames": GridValues(
+            int, minimum=1, maximum=lambda protocol: protocol.n_frames, frames=True
+        )
+    },
 )

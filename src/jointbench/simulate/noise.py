@@ -7,7 +7,9 @@ from collections import OrderedDict
 
 import numpy as np
 
-__all__ = ["isotropic_noise"]
+from jointbench.declared import DeclarationError
+
+__all__ = ["check_noise_level", "isotropic_noise", "largest_noise_mm"]
 
 
 class _Remembered:
@@ -72,3 +74,28 @@ def _draw(rng: np.random.Generator, shape: tuple[int, ...], sd_mm: float) -> np.
     directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
     magnitudes = rng.normal(0.0, sd_mm, size=shape)
     return directions * magnitudes[..., None]
+
+
+def largest_noise_mm(markers_mm: np.ndarray) -> float:
+    """The largest marker noise a study may simulate [mm]: the distance from the joint centre of
+    the farthest of ``markers_mm`` ``(..., 3)`` [mm, relative to the centre].
+
+    Noise whose RMS length exceeds every marker's distance from the joint scatters each marker
+    over a cloud wider than the whole body segment it is on: no trial then holds information on
+    a centre or an axis, and far beyond (``1e200`` mm, a typo) the fits' arithmetic overflows.
+    Real marker noise, from a fraction of a millimetre (cameras) to a few centimetres
+    (soft-tissue artefact), stays well below the bound of any marker set.
+    """
+    return float(np.linalg.norm(np.reshape(markers_mm, (-1, 3)), axis=-1).max())
+
+
+def check_noise_level(name: str, noise_mm: float, markers_mm: np.ndarray) -> None:
+    """Raise :class:`~jointbench.declared.DeclarationError` at ``name`` when ``noise_mm`` is above
+    :func:`largest_noise_mm` of ``markers_mm``."""
+    bound = largest_noise_mm(markers_mm)
+    if noise_mm > bound:
+        raise DeclarationError(
+            (name,),
+            f"must be <= {bound:g} mm (the farthest marker's distance from the joint centre: "
+            f"noise beyond the whole segment's size measures nothing), got {noise_mm!r}",
+        )

@@ -9,8 +9,10 @@ from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
 
+import numpy as np
 import yaml
 
+from jointbench import declared
 from jointbench.estimators import registry
 from jointbench.simulate import Study
 from jointbench.study.studies import get_study
@@ -83,23 +85,39 @@ def load_config(path: str | Path, schema_path: str | Path | Traversable = SCHEMA
 
 def check_config(config: Mapping) -> None:
     """Raise ``ValueError`` naming the key and its allowed values for what the schema cannot
-    see: the trial count's bound, grid keys and values, estimator names and their options.
+    see: a run of no study, the trial count's bound, protocol fields, grid keys and values,
+    estimator names and their options (each against the type and range its annotation
+    declares, see :mod:`jointbench.declared`), a study with no estimator, and a condition whose
+    trials are too short for every estimator listed.
 
     Run on a config that passed :func:`validate_config`, before any job, so that a mistake
     stops the workflow instead of turning into failed rows or numpy errors later.
     """
+    if not study_names(config):
+        raise ValueError(
+            "config: studies: every study has enabled: false, so there is nothing to run; "
+            "enable at least one"
+        )
     for study, settings in config["studies"].items():
         spec = get_study(study)
         where = f"config: studies.{study}"
         trials = settings["trials"]
         if not 1 <= trials <= MAX_TRIALS:
             raise ValueError(f"{where}.trials: {trials!r} is not an integer in [1, {MAX_TRIALS}]")
-        try:
-            protocol = spec.protocol(settings.get("protocol"))
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"{where}.protocol: {error}") from None
+        protocol = _protocol(spec, settings.get("protocol"), where)
         _check_grid(spec, settings["grid"], protocol, where)
         _check_estimators(spec, settings, where)
+        _check_frames(spec, settings, protocol, where)
+
+
+def _protocol(spec: Study, overrides: Mapping | None, where: str) -> object:
+    """The study's protocol from the config's overrides, or ``ValueError`` naming the field."""
+    try:
+        return spec.protocol(overrides)
+    except declared.DeclarationError as error:
+        raise ValueError(f"{where}.protocol.{error}") from None
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{where}.protocol: {error}") from None
 
 
 def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
@@ -125,6 +143,11 @@ def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
 def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     known = registry.methods(spec.kind)
     builtin = list(settings.get("estimators", []))
+    if settings.get("enabled", True) and not builtin and not settings.get("external_estimators"):
+        raise ValueError(
+            f"{where}.estimators: empty, and no external_estimators: the study would run no "
+            f"estimator; list some ({', '.join(known)}) or set enabled: false"
+        )
     for name in builtin:
         if name not in known:
             raise ValueError(
@@ -146,47 +169,64 @@ def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
                 f"studies.{spec.name}.estimators; options go to those built-in estimators: "
                 f"{', '.join(builtin) or 'none'}"
             )
-        accepted = _options(registry.get(spec.kind, name), len(spec.segments))
-        for option, value in options.items():
-            key = f"{where}.options.{name}.{option}"
-            if accepted is not None and option not in accepted:
-                raise ValueError(
-                    f"{key}: {name} takes no option {option!r}; "
-                    f"its options: {', '.join(accepted) or 'none'}"
-                )
-            expected = _unlike(value, (accepted or {}).get(option))
-            if expected:
-                raise ValueError(
-                    f"{key}: {value!r} is not {expected} (the default is {accepted[option]!r})"
-                )
+        _check_options(spec, name, options, f"{where}.options.{name}")
 
 
-def _options(fit, n_arrays: int) -> dict[str, object] | None:
-    """Keyword options ``fit`` takes after its ``n_arrays`` marker arrays, with their defaults
-    (``None``: it takes any)."""
-    parameters = list(inspect.signature(fit).parameters.values())[n_arrays:]
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters):
-        return None
-    keyword = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
-    return {p.name: p.default for p in parameters if p.kind in keyword}
+def _check_options(spec: Study, name: str, options: Mapping, where: str) -> None:
+    """Each of ``options`` against the type its estimator's signature declares for it."""
+    try:
+        accepted = declared.keyword_types(registry.get(spec.kind, name), len(spec.segments))
+    except NameError as error:
+        raise ValueError(
+            f"{where}: the types of {name}'s options cannot be read: {error}"
+        ) from None
+    if accepted is None:  # it takes **options: any name, any value
+        return
+    for option, value in options.items():
+        if option not in accepted:
+            raise ValueError(
+                f"{where}.{option}: {name} takes no option {option!r}; "
+                f"its options: {', '.join(accepted) or 'none'}"
+            )
+        if accepted[option] is inspect.Parameter.empty:
+            raise ValueError(
+                f"{where}.{option}: {name} does not declare what {option!r} takes, so it cannot "
+                "be checked before the run: annotate the parameter (jointbench.declared)"
+            )
+        try:
+            declared.check(value, accepted[option], (option,))
+        except declared.DeclarationError as error:
+            raise ValueError(f"{where}.{error}") from None
 
 
-def _unlike(value: object, default: object) -> str | None:
-    """What ``value`` should be to replace ``default`` when it does not fit, else ``None``.
+def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) -> None:
+    """Refuse a condition whose trials have fewer frames than any built-in estimator listed
+    fits (its :class:`~jointbench.estimators.registry.Claims`): all its rows would fail.
 
-    Only plain defaults say what an option takes; ``None`` or an array default says nothing.
-    bool is an int to Python, so it is told apart first.
+    The frames are counted on one simulated trial per condition, so they are the simulator's,
+    whatever key or protocol field sets them; external estimators declare no minimum and are
+    not counted.
     """
-    number = isinstance(value, int | float) and not isinstance(value, bool)
-    if isinstance(default, bool):
-        return None if isinstance(value, bool) else "true or false"
-    if isinstance(default, int):
-        return None if number and isinstance(value, int) else "an integer"
-    if isinstance(default, float):
-        return None if number else "a number"
-    if isinstance(default, str):
-        return None if isinstance(value, str) else "text"
-    return None
+    needs = {name: registry.claims(spec.kind, name).min_frames for name in settings["estimators"]}
+    if not needs:
+        return
+    fewest = min(needs.values())
+    frames_key = next((key for key, values in spec.grid_spec.items() if values.frames), None)
+    for condition in _cells(spec, settings["grid"]):
+        try:
+            trials = spec.simulate(condition, protocol, [np.random.default_rng(0)])
+        except ValueError as error:
+            raise ValueError(
+                f"{where}.grid: condition {condition_id(condition)}: {error}"
+            ) from None
+        n_frames = trials.segments[spec.segments[0]].shape[1]
+        if n_frames < fewest:
+            culprit = f"grid.{frames_key}" if frames_key else "protocol"
+            listed = ", ".join(f"{name} {n}" for name, n in needs.items())
+            raise ValueError(
+                f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
+                f"{n_frames} frame(s), fewer than any listed estimator fits (at least: {listed})"
+            )
 
 
 def study_names(config: Mapping) -> list[str]:
@@ -196,14 +236,16 @@ def study_names(config: Mapping) -> list[str]:
 
 def conditions(config: Mapping, study: str) -> list[dict[str, object]]:
     """Every cell of a study's grid, as dicts in the study's key order."""
-    keys = get_study(study).grid_keys
-    grid = config["studies"][study]["grid"]
-    missing = [key for key in keys if key not in grid]
+    return _cells(get_study(study), config["studies"][study]["grid"])
+
+
+def _cells(spec: Study, grid: Mapping[str, list]) -> list[dict[str, object]]:
+    missing = [key for key in spec.grid_keys if key not in grid]
     if missing:
-        raise ValueError(f"config: study {study!r} grid lacks {missing}")
+        raise ValueError(f"config: study {spec.name!r} grid lacks {missing}")
     return [
-        dict(zip(keys, values, strict=True))
-        for values in itertools.product(*(grid[k] for k in keys))
+        dict(zip(spec.grid_keys, values, strict=True))
+        for values in itertools.product(*(grid[k] for k in spec.grid_keys))
     ]
 
 
