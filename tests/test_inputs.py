@@ -420,3 +420,18 @@ def test_nothing_is_rendered_or_judged_from_trials_that_all_failed(
         pipeline.render_study("cmc", {}, str(path), [], {}, config)
     with pytest.raises(ValueError, match=re.escape(f"{path}: {message}")):
         pipeline.comparison({"cmc": str(path)}, config)
+
+
+def test_a_joint_centre_is_scored_with_its_covariance_in_a_table_or_a_mapping():
+    truth = {"center": [0.0, 0.0, 0.0]}
+    rows = {"center_x": [3.0, 3.0], "center_y": [4.0, 4.0], "center_z": [0.0, 0.0]}
+    covariance = {"cov_xx": [4.0, np.nan], "cov_yy": [4.0, np.nan], "cov_zz": [4.0, np.nan]}
+    covariance |= {key: [0.0, np.nan] for key in ("cov_xy", "cov_xz", "cov_yz")}
+    for estimates in ({**rows, **covariance}, pd.DataFrame({**rows, **covariance})):
+        scores = score_columns("joint_center", estimates, truth)
+        np.testing.assert_allclose(scores["error_mm"], [5.0, 5.0])
+        np.testing.assert_allclose(scores["sqrt_trace_cov_mm"], [np.sqrt(12.0), np.nan])
+        np.testing.assert_allclose(scores["mahalanobis_sq"], [25.0 / 4.0, np.nan])
+        np.testing.assert_allclose(scores["validation_index"], [np.sqrt(25.0 / 12.0), np.nan])
+    # Without covariance columns the method predicts none.
+    assert np.isnan(score_columns("joint_center", rows, truth)["mahalanobis_sq"]).all()

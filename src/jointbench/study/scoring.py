@@ -64,10 +64,10 @@ _COVARIANCE_ENTRIES = {
 COVARIANCE_COLUMNS = tuple(_COVARIANCE_ENTRIES)
 
 
-def covariance_from_entries(frame) -> np.ndarray:
-    """``(n, 3, 3)`` covariances rebuilt from the ``cov_*`` columns of a results table (NaN
-    where a column is absent)."""
-    out = np.full((len(frame), 3, 3), np.nan)
+def covariance_from_entries(frame, n_rows: int | None = None) -> np.ndarray:
+    """``(n, 3, 3)`` covariances rebuilt from the ``cov_*`` columns of a results table, or of a
+    mapping of column name to ``n_rows`` values (NaN where a column is absent)."""
+    out = np.full((len(frame) if n_rows is None else n_rows, 3, 3), np.nan)
     for name, (i, j) in _COVARIANCE_ENTRIES.items():
         if name in frame:
             out[:, i, j] = out[:, j, i] = np.asarray(frame[name], dtype=float)
@@ -134,7 +134,7 @@ def _score_joint_center(estimates, truth) -> dict[str, np.ndarray]:
     both NaN for a method that predicts no covariance.
     """
     center = _stack(estimates, _CENTER)
-    covariance = covariance_from_entries(estimates)
+    covariance = covariance_from_entries(estimates, len(center))
     mahalanobis_sq = _mahalanobis_sq(center - np.asarray(truth["center"], dtype=float), covariance)
     return {
         "error_mm": _distance(center, truth["center"]),
