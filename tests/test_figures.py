@@ -317,6 +317,19 @@ def test_extended_figure_runs(study, make):
     assert _drawn(extended.extended_figure(make(), study))
 
 
+@pytest.mark.parametrize("far", [1e300, np.inf], ids=["1e300", "inf"])
+def test_extended_figure_draws_a_mean_error_far_off_beyond_its_scale(tmp_path, far):
+    collected = _cmc(n_trials=2)
+    collected.loc[collected["method"] == "SCoRE", "error_mm"] = far
+    fig = extended.extended_figure(collected, "cmc", CMC_PAPER)
+    heat = fig.axes[0]
+    assert heat.images[0].norm.vmax < 1e3  # the others keep their colours
+    assert f"{far:.3g}" in [text.get_text() for text in heat.texts]
+    assert "beyond the colour scale" in fig.get_suptitle()
+    save_figure(fig, {"png": str(tmp_path / "extended.png")})
+    assert (tmp_path / "extended.png").stat().st_size > 10_000
+
+
 # ----------------------------------------------------------------------------- paper figures
 
 
@@ -341,6 +354,29 @@ def test_paper_a_figures_run():
         {"LS": 10.9, "NM": 0.3, "MA": 3.7, "IS": 1.4, "BC": 3.7},
         chosen=paper_a.fig3_chosen_text(collected, trial),
     )
+    assert _drawn(fig)
+
+
+def test_paper_a_fig3_lists_an_estimate_far_off_and_marks_its_bar():
+    collected = _cmc(n_trials=1)
+    rows = collected[
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+    ].copy()
+    far = rows["method"] == "BC"
+    rows.loc[far, ["center_x", "center_y", "center_z"]] = 1e300
+    rows.loc[far, "error_mm"] = np.sqrt(3) * 1e300
+    t = np.linspace(0, 4 * np.pi, 120)
+    markers = np.stack(
+        [np.stack([20 * np.cos(t), 20 * np.sin(t), 10 * k + 0 * t], -1) for k in range(3)], 1
+    )
+    fig = paper_a.fig3(markers, np.zeros(3), rows, {"BC": 3.7})
+    view, bars = fig.axes
+    labels = [text.get_text() for text in view.get_legend().get_texts()]
+    assert "BC: 1.73e+300 mm, outside the view" in labels
+    assert abs(np.diff(view.get_xlim())[0]) < 1e3  # the view keeps to the data
+    assert "1.73e+300 (beyond the scale)" in [text.get_text() for text in bars.texts]
     assert _drawn(fig)
 
 

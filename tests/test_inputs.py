@@ -1,5 +1,5 @@
-"""Inputs that cannot lie: estimator failures, estimates files checked against their datasets,
-corrupt intermediate files named."""
+"""Inputs that cannot lie: estimator failures, estimates files checked against their datasets
+and scored by the benchmark, not by themselves, corrupt intermediate files named."""
 
 from __future__ import annotations
 
@@ -13,8 +13,10 @@ import pytest
 from test_extension import CENTROID_RULE, user_clone
 from workflow_copy import run_snakemake
 
+from jointbench import pipeline
 from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
+from jointbench.figures import extended
 from jointbench.study import config as study_config
 from jointbench.study.collected import collect
 from jointbench.study.io import (
@@ -28,6 +30,7 @@ from jointbench.study.io import (
 )
 from jointbench.study.run import estimate, simulate_condition
 from jointbench.study.schema import check_against_dataset
+from jointbench.study.scoring import score_columns
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -295,3 +298,140 @@ def test_an_external_estimator_that_lies_stops_collect(tmp_path, lie, message):
     assert named in run.stdout + run.stderr, (run.stdout + run.stderr)[-3000:]
     assert named in (tmp_path / "results/logs/collect/cmc.log").read_text()
     assert not (tmp_path / "results/collected/cmc.parquet").exists()
+
+
+# ------------------------------------- every estimate scored by the benchmark, not by itself
+
+
+def estimates_of(path: Path, method: str) -> Path:
+    """The estimates file of ``method`` for the condition of estimates file ``path``."""
+    return path.parent.parent / method / path.name
+
+
+def test_a_file_reporting_half_its_error_is_named_with_the_trial(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(estimates, lambda f: f.assign(error_mm=f["error_mm"] * [1.0, 0.5]))
+    with pytest.raises(ValueError) as error:
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    assert str(error.value).startswith(f"{estimates}: trial 1: column 'error_mm' is ")
+    assert "1 of 2 rows disagree" in str(error.value)
+    assert not (tmp_path / "c.parquet").exists()
+
+
+def test_a_file_without_errors_is_ranked_by_its_true_error(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    nm = pd.read_parquet(estimates)
+    # 50 mm farther from the truth than NM, and silent about it.
+    far = estimates_of(estimates, "far")
+    write_table(
+        nm.assign(method="far", center_x=nm["center_x"] + 50.0).drop(columns="error_mm"), far
+    )
+    collected = collect("cmc", [estimates, far], str(tmp_path / "c.parquet"), datasets=[dataset])
+    truth = np.asarray(read_metadata(dataset)["truth"]["center"])
+    rows = collected[collected["method"] == "far"]
+    expected = np.linalg.norm(rows[["center_x", "center_y", "center_z"]].to_numpy() - truth, axis=1)
+    np.testing.assert_allclose(rows["error_mm"], expected, rtol=1e-12)
+    table = extended.extended_table(collected, "cmc").set_index("method")
+    assert table.loc["NM", "rank"] == 1 and table.loc["far", "rank"] == 2
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf], ids=["nan", "inf", "-inf"])
+@pytest.mark.parametrize("claim", [(True, "ok"), (True, "done"), (False, "ok")], ids=str)
+def test_a_non_finite_estimate_claiming_success_is_refused_by_name(
+    tmp_path, estimates_and_dataset, value, claim
+):
+    estimates, dataset = estimates_and_dataset
+
+    def claims(frame):
+        frame.loc[1, ["center_y", "error_mm"]] = value
+        frame.loc[1, ["converged", "status"]] = claim
+        return frame
+
+    rewrite(estimates, claims)
+    with pytest.raises(ValueError) as error:
+        collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    message = str(error.value)
+    assert message.startswith(f"{estimates}: method 'NM', trial 1: converged={claim[0]}")
+    assert f"center_y={value!r}" in message and "not finite" in message
+
+
+def test_a_non_finite_estimate_of_a_failed_trial_is_collected(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(
+        estimates,
+        lambda f: f.assign(
+            center_y=f["center_y"].where(f["trial"] != 1), converged=False, status="no fit"
+        ).drop(columns="error_mm"),
+    )
+    collected = collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
+    assert collected["error_mm"].isna().tolist() == [False, True]
+
+
+def test_estimates_far_off_have_their_true_error():
+    center = {"center_x": [1e300], "center_y": [0.0], "center_z": [0.0]}
+    assert score_columns("center", center, {"center": [1.0, 2.0, 3.0]})["error_mm"] == [1e300]
+    # A direction is a direction whatever its length: 1e300 along x and y is 45° from x.
+    directions = {f"direction_{a}": [1e300, 1e-300, 0.0] for a in "xy"}
+    axis = {**dict.fromkeys(["point_x", "point_y", "point_z"], [0.0] * 3), **directions}
+    axis["direction_z"] = [0.0, 0.0, 0.0]
+    errors = score_columns("axis", axis, {"axis_direction": [1.0, 0.0, 0.0]})["error_deg"]
+    np.testing.assert_allclose(errors[:2], 45.0)
+    assert np.isnan(errors[2])  # a zero vector has no direction
+
+
+def all_failed(frame: pd.DataFrame, methods) -> pd.DataFrame:
+    """``frame`` with every trial of ``methods`` failed: no estimate, the reason in status."""
+    rows = frame["method"].isin(methods)
+    frame = frame.copy()
+    frame.loc[rows, ["center_x", "center_y", "center_z", "error_mm"]] = np.nan
+    frame.loc[rows, ["converged", "status"]] = (False, "error: ValueError: too few frames")
+    return frame
+
+
+def test_a_study_whose_every_trial_failed_is_not_collected(tmp_path, estimates_and_dataset):
+    estimates, dataset = estimates_and_dataset
+    rewrite(estimates, lambda f: all_failed(f, ["NM"]))
+    output = tmp_path / "c.parquet"
+    with pytest.raises(ValueError) as error:
+        collect("cmc", [estimates], str(output), datasets=[dataset])
+    assert str(error.value).startswith(
+        f"{output}: study 'cmc': none of its 2 trials (NM) has a finite error_mm"
+    )
+    assert "2 × 'error: ValueError: too few frames'" in str(error.value)
+    assert not output.exists()
+
+
+@pytest.mark.parametrize(
+    ("failed", "message"),
+    [
+        (["NM", "BC"], "study 'cmc': none of its 4 trials (BC, NM) has a finite error_mm"),
+        (["BC"], "study 'cmc': every trial of BC failed (no finite error_mm)"),
+    ],
+    ids=["every method", "a paper's method"],
+)
+def test_nothing_is_rendered_or_judged_from_trials_that_all_failed(
+    tmp_path, config, estimates_and_dataset, failed, message
+):
+    estimates, _ = estimates_and_dataset
+    nm = pd.read_parquet(estimates)
+    path = tmp_path / "collected.parquet"
+    write_table(all_failed(pd.concat([nm, nm.assign(method="BC")]), failed), path)
+    with pytest.raises(ValueError, match=re.escape(f"{path}: {message}")):
+        pipeline.render_study("cmc", {}, str(path), [], {}, config)
+    with pytest.raises(ValueError, match=re.escape(f"{path}: {message}")):
+        pipeline.comparison({"cmc": str(path)}, config)
+
+
+def test_a_joint_centre_is_scored_with_its_covariance_in_a_table_or_a_mapping():
+    truth = {"center": [0.0, 0.0, 0.0]}
+    rows = {"center_x": [3.0, 3.0], "center_y": [4.0, 4.0], "center_z": [0.0, 0.0]}
+    covariance = {"cov_xx": [4.0, np.nan], "cov_yy": [4.0, np.nan], "cov_zz": [4.0, np.nan]}
+    covariance |= {key: [0.0, np.nan] for key in ("cov_xy", "cov_xz", "cov_yz")}
+    for estimates in ({**rows, **covariance}, pd.DataFrame({**rows, **covariance})):
+        scores = score_columns("joint_center", estimates, truth)
+        np.testing.assert_allclose(scores["error_mm"], [5.0, 5.0])
+        np.testing.assert_allclose(scores["sqrt_trace_cov_mm"], [np.sqrt(12.0), np.nan])
+        np.testing.assert_allclose(scores["mahalanobis_sq"], [25.0 / 4.0, np.nan])
+        np.testing.assert_allclose(scores["validation_index"], [np.sqrt(25.0 / 12.0), np.nan])
+    # Without covariance columns the method predicts none.
+    assert np.isnan(score_columns("joint_center", rows, truth)["mahalanobis_sq"]).all()

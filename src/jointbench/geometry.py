@@ -87,12 +87,22 @@ def rotation_vector(matrix: np.ndarray) -> np.ndarray:
     return rotvec
 
 
+def _unit_any_length(vectors: np.ndarray) -> np.ndarray:
+    """:func:`unit` of vectors ``(..., 3)`` scaled by their largest component first; NaN for a
+    zero vector."""
+    vectors = np.asarray(vectors, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return unit(vectors / np.max(np.abs(vectors), axis=-1, keepdims=True))
+
+
 def angle_between_lines_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Sign-free angle between line directions ``a`` and ``b`` ``(..., 3)``, in [0, 90] degrees.
 
-    From both the sine and the cosine: the cosine alone rounds to 1 below ~1e-8 rad.
+    From both the sine and the cosine: the cosine alone rounds to 1 below ~1e-8 rad. Each
+    vector is first divided by its largest component, so that a direction of any finite length
+    has its angle (a norm of ~1e155 or more overflows); a zero vector has none (NaN).
     """
-    a, b = unit(a), unit(b)
+    a, b = _unit_any_length(a), _unit_any_length(b)
     sine = np.linalg.norm(np.cross(a, b), axis=-1)
     cosine = np.abs(np.sum(a * b, axis=-1))
     return np.degrees(np.arctan2(sine, cosine))

@@ -20,6 +20,7 @@ import pandas as pd
 from jointbench.figures import extended
 from jointbench.figures.common import save_figure
 from jointbench.papers import Inputs, Table, get_paper, papers_of_study
+from jointbench.study.collected import require_results
 from jointbench.study.config import condition_id
 from jointbench.study.io import read_dataset, read_table
 from jointbench.study.published import (
@@ -67,8 +68,13 @@ def render_study(
 ) -> None:
     """Render, from one reading of the study's collected results and of each dataset, the
     outputs ``paper_outputs`` names (paper key -> output names) and the study's extended
-    ranking; ``outputs`` maps ``<output name>__<kind>`` to a path (png/pdf or csv/md/html)."""
+    ranking; ``outputs`` maps ``<output name>__<kind>`` to a path (png/pdf or csv/md/html).
+
+    ``ValueError`` naming the study when every trial failed, or every trial of a method its
+    papers compare (see :func:`jointbench.study.collected.require_results`): nothing is drawn
+    from nothing."""
     frame = read_table(collected)
+    require_results(frame, study, collected, _methods_compared(study))
     # Dataset files are named by their condition (study.config.condition_id).
     by_condition = {Path(path).stem: read_dataset(path) for path in datasets}
     for key, names in paper_outputs.items():
@@ -88,6 +94,11 @@ def render_study(
     for what in ("table", "figure"):
         _render_extended(study, frame, files, config, what=what)
     log.info("%s written", extended_name(study))
+
+
+def _methods_compared(study: str) -> list[str]:
+    """The methods the papers of ``study`` compare, each once."""
+    return list(dict.fromkeys(m for paper in papers_of_study(study) for m in paper.methods))
 
 
 def _paper_methods(study: str) -> extended.PaperMethods:
@@ -127,11 +138,14 @@ def _render_extended(study: str, frame: pd.DataFrame, outputs, config: Mapping, 
 def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
     """Every published value and claim of every paper whose study ran, beside ours.
 
-    ``collected`` maps study names to their collected results files.
+    ``collected`` maps study names to their collected results files; a study none of whose
+    trials has a finite error, or with a compared method none of whose trials has one, is
+    refused by name, not judged (:func:`jointbench.study.collected.require_results`).
     """
     frames = []
     for study, path in collected.items():
         frame = read_table(path)
+        require_results(frame, study, path, _methods_compared(study))
         for paper in papers_of_study(study):
             document = load_published(paper.published)
             inputs = Inputs(collected=frame, published=document, config=config)

@@ -29,7 +29,8 @@ Input: a dataset file
 Parquet, long format, one row per (segment, trial, frame, marker) with columns
 ``segment, trial, frame, marker, x, y, z`` [mm]. The schema metadata key ``jointbench`` holds
 JSON with ``study``, ``condition`` (grid values, e.g. ``{"marker_set": "M", "rom_deg": 5,
-"noise_mm": 1.0}``), ``truth`` (here ``{"center": [x, y, z]}`` in mm) and ``parameters``.
+"noise_mm": 1.0}``), ``truth`` and ``parameters``. The truth is the benchmark's, to score the
+estimates with; an estimator has no use for it, and this one does not read it.
 Centre studies have one segment, ``moving``: its markers in the reference segment's frame.
 
 Output: an estimates file
@@ -38,7 +39,9 @@ Parquet, one row per trial, with the columns of a ``center`` estimator:
 
 * every key of ``condition``, with its value;
 * ``trial`` (int), ``method`` (str, ``"LM"`` in every row);
-* ``center_x, center_y, center_z`` [mm] and ``error_mm`` = distance to the true centre [mm];
+* ``center_x, center_y, center_z`` [mm]: the estimate. No error column: the benchmark computes
+  ``error_mm`` from these and the truth when it collects the file (a file that gives one has it
+  checked against the benchmark's, and the run stops when they disagree);
 * ``converged`` (bool), ``iterations`` (int, Jacobian evaluations), ``seconds`` (float, the
   fit of that trial alone), ``status`` (str, ``"ok"`` or why it did not converge);
 * ``f1_mm2``: f1 at the final centre with the radii profiled out (``r_p`` = mean distance),
@@ -88,11 +91,6 @@ def read_dataset(path: str | Path, segment: str = SEGMENT) -> tuple[dict[int, pd
     if METADATA_KEY not in metadata:
         raise ValueError(f"{path} is not a jointbench dataset (no 'jointbench' metadata)")
     meta = json.loads(metadata[METADATA_KEY])
-    if "center" not in meta.get("truth", {}):
-        raise ValueError(
-            f"{path}: the truth has no 'center' (keys {sorted(meta.get('truth', {}))}); "
-            f"{METHOD} estimates centres of rotation"
-        )
     frame = pd.read_parquet(path, columns=["segment", "trial", "frame", "marker", "x", "y", "z"])
     segments = sorted(map(str, frame["segment"].unique()))
     if segment not in segments:
@@ -208,9 +206,7 @@ def fit_trial(markers: np.ndarray) -> dict[str, object]:
 # ------------------------------------------------------------------------------------ output
 
 
-def trial_row(
-    trial: int, rows: pd.DataFrame, truth: np.ndarray, condition: Mapping[str, object]
-) -> dict[str, object]:
+def trial_row(trial: int, rows: pd.DataFrame, condition: Mapping[str, object]) -> dict[str, object]:
     """The estimates row of one trial; any error becomes a failed row instead of a crash.
 
     ``seconds`` times the fit alone, as the benchmark times its built-in estimators.
@@ -237,7 +233,6 @@ def trial_row(
         "center_x": center[0],
         "center_y": center[1],
         "center_z": center[2],
-        "error_mm": float(np.linalg.norm(center - truth)),
         "converged": fit["converged"],
         "iterations": fit["iterations"],
         "seconds": seconds,
@@ -254,7 +249,6 @@ DTYPES = {
     "center_x": "float64",
     "center_y": "float64",
     "center_z": "float64",
-    "error_mm": "float64",
     "converged": "bool",
     "iterations": "int64",
     "seconds": "float64",
@@ -265,9 +259,8 @@ DTYPES = {
 
 def estimate(trials: Mapping[int, pd.DataFrame], metadata: Mapping) -> pd.DataFrame:
     """One row per trial of a dataset read by :func:`read_dataset`."""
-    truth = np.asarray(metadata["truth"]["center"], dtype=float)
     condition = dict(metadata["condition"])
-    rows = [trial_row(trial, part, truth, condition) for trial, part in trials.items()]
+    rows = [trial_row(trial, part, condition) for trial, part in trials.items()]
     columns = [*condition, *DTYPES]
     return pd.DataFrame(rows, columns=columns).astype(DTYPES)
 

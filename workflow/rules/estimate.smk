@@ -114,8 +114,13 @@ for _study in STUDIES:
 
 
 rule summarise_estimator:
+    """One estimator's errors per condition, its files scored against their datasets as collect
+    scores them."""
     input:
-        lambda w: estimates_files(w.study, [w.method]),
+        estimates=lambda w: estimates_files(w.study, [w.method]),
+        datasets=lambda w: [
+            dataset_file(w.study, c) for c in jb_config.conditions(config, w.study)
+        ],
     output:
         "results/summaries/{study}/{method}.csv",
     log:
@@ -130,8 +135,9 @@ rule summarise_estimator:
 
 
 rule collect:
-    """All estimates of a study in one table, each file's schema checked first and each held
-    to its condition's dataset (same trials, each once, same condition values)."""
+    """All estimates of a study in one table, each file's schema checked first, each held to
+    its condition's dataset (same trials, each once, same condition values) and scored against
+    its truth."""
     input:
         estimates=lambda w: estimates_files(w.study),
         datasets=lambda w: [

@@ -2,4 +2,9 @@ from jointbench import jobs
 from jointbench.study.collected import summarise_estimates
 
 with jobs.job(snakemake):
-    summarise_estimates(snakemake.wildcards.study, snakemake.input, snakemake.output[0])
+    summarise_estimates(
+        snakemake.wildcards.study,
+        snakemake.input.estimates,
+        snakemake.output[0],
+        datasets=snakemake.input.datasets,
+    )

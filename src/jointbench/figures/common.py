@@ -17,7 +17,15 @@ from jointbench.study.tables import output_paths
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["equal_3d_limits", "median_trial", "method_style", "pyplot", "save_figure"]
+__all__ = [
+    "DISPLAY_SPAN",
+    "display_limits",
+    "equal_3d_limits",
+    "median_trial",
+    "method_style",
+    "pyplot",
+    "save_figure",
+]
 
 # Fixed colours per method so every figure of the benchmark reads the same way.
 _STYLES = {
@@ -59,6 +67,27 @@ def method_style(method: str, index: int = 0) -> dict[str, object]:
     else:
         color, marker = pyplot().get_cmap("tab10")(index % 10), "X"
     return {"color": color, "marker": marker}
+
+
+#: A figure's scale of errors spans at most this factor either side of the median of its
+#: positive values: a value beyond it (an estimator far off, up to inf) is drawn at the scale's
+#: end and marked, so that it neither flattens every other value nor makes a log axis span
+#: hundreds of decades (matplotlib's log ticks overflow near 1e300).
+DISPLAY_SPAN = 1e6
+
+
+def display_limits(values) -> tuple[float, float]:
+    """``(low, high)`` of a log scale for ``values`` (any shape; NaN and values <= 0 left
+    out): the smallest and largest positive finite values within :data:`DISPLAY_SPAN` either
+    side of their median, at least a decade apart."""
+    values = np.asarray(values, dtype=float)
+    positive = values[np.isfinite(values) & (values > 0)]
+    if not positive.size:
+        return 1e-3, 1e-2
+    centre = float(np.median(positive))
+    shown = positive[(positive >= centre / DISPLAY_SPAN) & (positive <= centre * DISPLAY_SPAN)]
+    low = float(shown.min())
+    return low, max(float(shown.max()), low * 10)
 
 
 def equal_3d_limits(ax, points: np.ndarray, margin: float = 0.08) -> None:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import method_style, pyplot
+from jointbench.figures.common import DISPLAY_SPAN, display_limits, method_style, pyplot
 from jointbench.study import config as jb_config
 from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
@@ -206,10 +206,14 @@ def incomplete(trials: int, converged: int, failed: int) -> bool:
 
 
 def cell_text(value: float, flagged: bool) -> str:
-    """A heat-map cell: the mean to 3 significant digits, "†" when :func:`incomplete`."""
-    if not np.isfinite(value):
+    """A heat-map cell: the mean to 3 significant digits (``inf`` beyond the floats), "†"
+    when :func:`incomplete`; "failed" when no trial has an error."""
+    if np.isnan(value):
         return "failed"
     return f"{value:.3g}" + ("†" if flagged else "")
+
+
+_BEYOND_COLOR = "#c51b7d"
 
 
 def _wide(table: pd.DataFrame, keys: list[str], column: str, methods: Sequence[str]):
@@ -243,18 +247,18 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
     flagged = flagged.fillna(False).astype(bool)
     best = _wide(table, keys, "best", methods).fillna(False).astype(bool)
     values = wide.to_numpy(dtype=float)
-    positive = values[np.isfinite(values) & (values > 0)]
-    # An error of exactly zero (noise-free data) cannot sit on a log scale: floor it.
-    low = positive.min() if positive.size else 1e-3
-    high = max(positive.max() if positive.size else 1.0, low * 10)
-    shown = np.where(np.isfinite(values), np.clip(values, low, None), np.nan)
+    low, high = display_limits(values)
+    beyond = values > high
+    # An error of exactly zero (noise-free data) cannot sit on a log scale: floor it. A mean
+    # beyond the scale, inf included, takes the colour above its top.
+    shown = np.where(np.isnan(values), np.nan, np.clip(values, low, 10 * high))
     plt = pyplot()
-    cmap = plt.get_cmap("viridis").with_extremes(bad="0.85")
+    cmap = plt.get_cmap("viridis").with_extremes(bad="0.85", over=_BEYOND_COLOR)
     norm = LogNorm(vmin=low, vmax=high)
     image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
     size = 8 if len(methods) <= 8 else 6
     for (row, col), value in np.ndenumerate(values):
-        dark = np.isfinite(value) and norm(shown[row, col]) < 0.55
+        dark = beyond[row, col] or (np.isfinite(value) and norm(shown[row, col]) < 0.55)
         ax.text(
             col,
             row,
@@ -350,16 +354,26 @@ def extended_figure(collected: pd.DataFrame, study: str, paper: PaperMethods = N
     right = outer[0, 2].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
     bars = fig.add_subplot(right[0, 0])
     image = _heatmap(heat, table, study, methods, paper[1])
+    beyond = bool((table[_mean_column(study)] > image.norm.vmax).any())
     # An inset the map's own height: a colour bar stolen from the grid cell is sized by the
     # layout and ends up shorter than a tall map.
-    colorbar = fig.colorbar(image, cax=heat.inset_axes([1.02, 0.0, 0.035, 1.0]))
+    colorbar = fig.colorbar(
+        image,
+        cax=heat.inset_axes([1.02, 0.0, 0.035, 1.0]),
+        extend="max" if beyond else "neither",
+    )
     colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
     _rank_bars(bars, ranks, styles, paper[1])
     kind = get_study(study).kind.replace("_", " ")
     fig.suptitle(
         f"Study {study} ({kind}): every estimator's mean error per condition "
         f"({_unit(study).strip()})\nred outline = best (or tied) in the condition; "
-        "† = some trials failed or did not converge",
+        "† = some trials failed or did not converge"
+        + (
+            f"; magenta = beyond the colour scale (over {DISPLAY_SPAN:.0e} × the median mean)"
+            if beyond
+            else ""
+        ),
         fontsize=10,
     )
     return fig

@@ -15,7 +15,13 @@ import pandas as pd
 
 from jointbench import machine
 from jointbench.estimators import registry
-from jointbench.figures.common import equal_3d_limits, median_trial, method_style, pyplot
+from jointbench.figures.common import (
+    display_limits,
+    equal_3d_limits,
+    median_trial,
+    method_style,
+    pyplot,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -208,6 +214,25 @@ def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
         occupied.append(best[None])
 
 
+#: Fig 3's 3-D view holds the estimates within this many times the extent of the trajectories
+#: and the true centre from the true centre; one farther off is listed in the legend instead.
+VIEW_REACH = 10.0
+
+
+def _in_view(estimates: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """Which estimates ``(m, 3)`` [mm] are drawn beside ``data`` ``(n, 3)`` [mm] (markers, then
+    the true centre last): finite and within :data:`VIEW_REACH` extents of the true centre."""
+    extent = np.ptp(data, axis=0).max()
+    offsets = np.abs(estimates - data[-1])
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(estimates).all(axis=1) & (offsets.max(axis=1) <= VIEW_REACH * extent)
+
+
+def _mm(value: float) -> str:
+    """An error for a label [mm]: one decimal, or 3 significant digits when that is long."""
+    return f"{value:.1f}" if abs(value) < 1e5 else f"{value:.3g}"
+
+
 def fig3(
     markers: np.ndarray,
     truth: np.ndarray,
@@ -227,6 +252,7 @@ def fig3(
     by_method = errors.set_index("method").loc[methods]
     estimates = by_method[["center_x", "center_y", "center_z"]].to_numpy(dtype=float)
     truth = np.asarray(truth, dtype=float)
+    in_view = _in_view(estimates, np.vstack([markers.reshape(-1, 3), truth[None]]))
 
     fig = pyplot().figure(figsize=(11, 5.0))
     grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1])
@@ -246,6 +272,11 @@ def fig3(
     )
     for index, (method, row) in enumerate(by_method.iterrows()):
         style = method_style(method, index)
+        if not in_view[index]:
+            # Listed with its error, not drawn: the view would shrink the data to a point.
+            label = f"{method}: {_mm(row['error_mm'])} mm, outside the view"
+            ax.scatter([], [], [], color=style["color"], marker=style["marker"], label=label)
+            continue
         ax.scatter(
             row["center_x"],
             row["center_y"],
@@ -256,10 +287,11 @@ def fig3(
             edgecolor="k",
             linewidth=0.4,
             zorder=3,
-            label=f"{method}: {row['error_mm']:.1f} mm",
+            label=f"{method}: {_mm(row['error_mm'])} mm",
         )
-    equal_3d_limits(ax, np.vstack([markers.reshape(-1, 3), truth[None], estimates]))
-    _label_markers(ax, markers, np.vstack([truth[None], estimates]))
+    drawn = estimates[in_view]
+    equal_3d_limits(ax, np.vstack([markers.reshape(-1, 3), truth[None], drawn]))
+    _label_markers(ax, markers, np.vstack([truth[None], drawn]))
     ax.set_xlabel("x (mm)", fontsize=8)
     ax.set_ylabel("y (mm)", fontsize=8)
     ax.set_zlabel("z (mm)", fontsize=8)
@@ -271,19 +303,28 @@ def fig3(
     ours = by_method["error_mm"].to_numpy(dtype=float)
     paper = np.array([published.get(m, np.nan) for m in methods], dtype=float)
     x = np.arange(len(methods))
+    low, high = display_limits(np.concatenate([ours, paper]))
+    beyond = ours > high
+    # An error beyond the scale is a bar to its top, hatched, its value printed above it.
     bars.bar(
-        x - 0.2, ours, 0.4, label="this trial", color=[method_style(m)["color"] for m in methods]
+        x - 0.2,
+        np.minimum(ours, high),
+        0.4,
+        label="this trial",
+        color=[method_style(m)["color"] for m in methods],
+        hatch=["xx" if b else None for b in beyond],
     )
     bars.bar(x + 0.2, paper, 0.4, label="paper's Fig 3 trial", color="0.75")
     for position, value in zip(x - 0.2, ours, strict=True):
-        bars.text(position, value, f"{value:.1f}", ha="center", va="bottom", fontsize=7)
+        shown = _mm(value) + (" (beyond the scale)" if value > high else "")
+        bars.text(position, min(value, high), shown, ha="center", va="bottom", fontsize=7)
     for position, value in zip(x + 0.2, paper, strict=True):
         if np.isfinite(value):
             bars.text(position, value, f"{value:g}", ha="center", va="bottom", fontsize=7)
     bars.set_xticks(x, methods)
     bars.set_yscale("log")
     bars.set_ylabel("CoR error (mm, log scale)")
-    bars.margins(y=0.15)
+    bars.set_ylim(low / 2, high * 4)
     bars.legend(fontsize=8, loc="upper right")
     bars.set_title("(b) CoR error: this trial vs the paper's example", fontsize=9)
     title = "Paper A Fig 3 reproduced: M set, ±5° RoM, 1.0 mm noise, one trial"

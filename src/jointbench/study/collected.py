@@ -1,10 +1,16 @@
-"""Gather a study's estimates files into its collected results, and one estimator's summary."""
+"""Gather a study's estimates files into its collected results, and one estimator's summary.
+
+Both score every estimates file themselves (:func:`scored_estimates`): the errors a ranking is
+made of are computed here from each row's estimate and the truth in its condition's dataset,
+for built-in and external estimators alike.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from jointbench.study.io import (
@@ -14,11 +20,99 @@ from jointbench.study.io import (
     read_trial_numbers,
     write_table,
 )
-from jointbench.study.schema import check_against_dataset, check_estimates
+from jointbench.study.schema import (
+    check_against_dataset,
+    check_claimed_estimates,
+    check_estimates,
+    check_scores,
+)
+from jointbench.study.scoring import ERROR_COLUMN, score_columns
 from jointbench.study.studies import get_study
 from jointbench.study.summary import summarise
 
-__all__ = ["collect", "summarise_estimates"]
+__all__ = ["collect", "require_results", "scored_estimates", "summarise_estimates"]
+
+
+def scored_estimates(
+    frame: pd.DataFrame, *, kind: str, truth: Mapping[str, list[float]], source: str
+) -> pd.DataFrame:
+    """``frame``, one estimates file checked by :func:`check_estimates`, with its score columns
+    computed from its estimate columns and its dataset's ``truth``
+    (:func:`jointbench.study.scoring.score_columns`).
+
+    ``ValueError`` naming ``source`` and the trial when the file claims success without a
+    finite estimate (:func:`check_claimed_estimates`), or gives a score that disagrees
+    (:func:`check_scores`).
+    """
+    scores = score_columns(kind, frame, truth)
+    check_claimed_estimates(frame, kind, scores[ERROR_COLUMN[kind]], source=source)
+    check_scores(frame, scores, source=source)
+    return frame.assign(**scores)
+
+
+def require_results(
+    frame: pd.DataFrame, study: str, source: str, methods: Sequence[str] = ()
+) -> None:
+    """Raise ``ValueError`` naming ``study`` and ``source`` when no trial of any estimator has
+    a finite error, or when every trial of one of ``methods`` (those of them in ``frame``)
+    failed: a figure, table or verdict made of them would show nothing as if it were a result.
+    The message gives the most frequent reasons, from ``status``."""
+    error = ERROR_COLUMN[get_study(study).kind]
+    finite = np.isfinite(frame[error].to_numpy(dtype=float))
+    if not finite.any():
+        everyone = ", ".join(sorted(map(str, frame["method"].unique()))) or "no estimator"
+        raise ValueError(
+            f"{source}: study {study!r}: none of its {len(frame)} trials ({everyone}) has a "
+            f"finite {error}: every trial failed, so there is nothing to rank, draw or compare "
+            f"with a paper. Most frequent reasons: {_reasons(frame)}"
+        )
+    present, scored = set(frame["method"]), set(frame.loc[finite, "method"])
+    failed = [m for m in methods if m in present and m not in scored]
+    if failed:
+        rows = frame[frame["method"].isin(failed)]
+        raise ValueError(
+            f"{source}: study {study!r}: every trial of {', '.join(failed)} failed (no finite "
+            f"{error}), and the figures, tables and verdicts of the study's papers compare "
+            f"{'it' if len(failed) == 1 else 'them'} with the others: none is made of nothing. "
+            f"Most frequent reasons: {_reasons(rows)}"
+        )
+
+
+def _reasons(rows: pd.DataFrame, most: int = 3) -> str:
+    """The ``most`` most frequent statuses of ``rows`` with their counts."""
+    counts = rows["status"].astype(str).value_counts().head(most)
+    return "; ".join(f"{count} × {reason!r}" for reason, count in counts.items()) or "none"
+
+
+def _scored_file(path, kind: str, condition_keys, dataset: Mapping, source: str) -> pd.DataFrame:
+    """One estimates file read, its schema checked, held to its ``dataset`` (``trials``,
+    ``condition`` and ``truth`` of its condition's dataset file) and scored."""
+    frame = read_table(path)
+    method = Path(path).parent.name
+    check_estimates(frame, kind=kind, condition_keys=condition_keys, method=method, source=source)
+    check_against_dataset(
+        frame, trials=dataset["trials"], condition=dataset["condition"], source=source
+    )
+    return scored_estimates(frame, kind=kind, truth=dataset["truth"], source=source)
+
+
+def _datasets(datasets: Sequence[str | Path]) -> dict[str, dict]:
+    """Per condition (a dataset file's stem): its trial numbers, condition and truth."""
+    out = {}
+    for path in datasets:
+        metadata = read_metadata(path)
+        out[Path(path).stem] = {
+            "trials": read_trial_numbers(path),
+            "condition": metadata["condition"],
+            "truth": metadata["truth"],
+        }
+    return out
+
+
+def _dataset_of(path, datasets: Mapping[str, dict]) -> dict:
+    if Path(path).stem not in datasets:
+        raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
+    return datasets[Path(path).stem]
 
 
 def collect(
@@ -28,40 +122,41 @@ def collect(
     datasets: Sequence[str | Path],
     provenance: Mapping[str, object] | None = None,
 ) -> pd.DataFrame:
-    """Concatenate a study's estimates files after checking each one's schema and holding it to
-    the dataset file of its condition (same trials, each once, same condition values).
+    """Concatenate a study's estimates files after checking each one's schema, holding it to
+    the dataset file of its condition (same trials, each once, same condition values) and
+    scoring it against that dataset's truth (:func:`scored_estimates`); refuse a study with no
+    finite error at all (:func:`require_results`).
 
     The collected file's provenance adds, per estimator, the provenance of its estimates files
     (an external estimator's files have none)."""
     spec = get_study(study)
     # Each dataset is read once, whatever the number of estimators.
-    expected = {
-        Path(path).stem: {
-            "trials": read_trial_numbers(path),
-            "condition": read_metadata(path)["condition"],
-        }
-        for path in datasets
-    }
+    expected = _datasets(datasets)
     frames = []
     estimators: dict[str, dict] = {}
     for path in paths:
-        frame = read_table(path)
-        method = Path(path).parent.name
-        estimators.setdefault(method, read_provenance(path))
-        check_estimates(
-            frame, kind=spec.kind, condition_keys=spec.grid_keys, method=method, source=str(path)
-        )
-        if Path(path).stem not in expected:
-            raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
-        check_against_dataset(frame, **expected[Path(path).stem], source=str(path))
-        frames.append(frame)
+        estimators.setdefault(Path(path).parent.name, read_provenance(path))
+        dataset = _dataset_of(path, expected)
+        frames.append(_scored_file(path, spec.kind, spec.grid_keys, dataset, str(path)))
     collected = pd.concat(frames, ignore_index=True)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
+    require_results(collected, study, output)
     write_table(collected, output, {**(provenance or {}), "estimators": estimators})
     return collected
 
 
-def summarise_estimates(study: str, paths: Sequence[str], output: str) -> None:
-    """One estimator's mean and median error per condition, from its estimates files."""
-    estimates = pd.concat([read_table(path) for path in paths], ignore_index=True)
+def summarise_estimates(
+    study: str, paths: Sequence[str], output: str, datasets: Sequence[str | Path]
+) -> None:
+    """One estimator's mean and median error per condition, from its estimates files scored
+    against their conditions' ``datasets`` as :func:`collect` scores them."""
+    spec = get_study(study)
+    expected = _datasets(datasets)
+    estimates = pd.concat(
+        [
+            _scored_file(path, spec.kind, spec.grid_keys, _dataset_of(path, expected), str(path))
+            for path in paths
+        ],
+        ignore_index=True,
+    )
     summarise(estimates, study).to_csv(output, index=False)

@@ -4,7 +4,10 @@ A user's estimator (built-in or a rule in any language) writes one parquet file 
 condition with one row per trial. :func:`check_estimates` is run on every such file before it
 is collected, so a wrong or missing column fails with its name rather than as a broken figure;
 :func:`check_against_dataset` then holds it to its dataset, so that a missing, repeated or
-invented trial or condition cannot change a ranking unnoticed.
+invented trial or condition cannot change a ranking unnoticed. A file's errors are the
+benchmark's to compute (:mod:`jointbench.study.scoring`): a file may leave them out, and
+:func:`check_scores` stops the run when it gives ones that disagree; :func:`check_claimed_estimates`
+refuses a trial that claims success without a finite estimate.
 """
 
 from __future__ import annotations
@@ -16,14 +19,26 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pyarrow as pa
 
+from jointbench.study.scoring import (
+    COVARIANCE_COLUMNS,
+    ERROR_COLUMN,
+    ESTIMATE_COLUMNS,
+    SCORE_COLUMNS,
+)
+
 if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = [
     "COMMON_COLUMNS",
     "KIND_COLUMNS",
+    "OPTIONAL_COLUMNS",
+    "SCORE_ATOL",
+    "SCORE_RTOL",
     "check_against_dataset",
+    "check_claimed_estimates",
     "check_estimates",
+    "check_scores",
     "required_columns",
 ]
 
@@ -48,27 +63,21 @@ COMMON_COLUMNS = {
     "seconds": _NUMBER,
     "status": _TEXT,
 }
-KIND_COLUMNS = {
-    "center": {"center_x": _NUMBER, "center_y": _NUMBER, "center_z": _NUMBER, "error_mm": _NUMBER},
-    "axis": {
-        "point_x": _NUMBER,
-        "point_y": _NUMBER,
-        "point_z": _NUMBER,
-        "direction_x": _NUMBER,
-        "direction_y": _NUMBER,
-        "direction_z": _NUMBER,
-        "error_deg": _NUMBER,
-    },
-    "joint_center": {
-        "center_x": _NUMBER,
-        "center_y": _NUMBER,
-        "center_z": _NUMBER,
-        "error_mm": _NUMBER,
-        "sqrt_trace_cov_mm": _NUMBER,
-        "mahalanobis_sq": _NUMBER,
-        "validation_index": _NUMBER,
-    },
+#: Per kind, the estimate columns every file must carry.
+KIND_COLUMNS = {kind: dict.fromkeys(columns, _NUMBER) for kind, columns in ESTIMATE_COLUMNS.items()}
+#: Per kind, the columns a file may carry and the benchmark computes itself (see
+#: :mod:`jointbench.study.scoring`): when present, they must be numeric, and collect holds them
+#: to its own computation (:func:`check_scores`).
+OPTIONAL_COLUMNS = {
+    kind: dict.fromkeys(
+        [*columns, *(COVARIANCE_COLUMNS if kind == "joint_center" else ())], _NUMBER
+    )
+    for kind, columns in SCORE_COLUMNS.items()
 }
+#: A reported score agrees with the benchmark's when equal to this relative tolerance, or
+#: this absolute one in the column's own unit: rounding, not a different number.
+SCORE_RTOL = 1e-6
+SCORE_ATOL = 1e-6
 
 
 def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tuple]:
@@ -90,14 +99,17 @@ def check_estimates(
     method: str | None = None,
     source: str = "estimates",
 ) -> None:
-    """Raise ``ValueError`` naming the first missing or mistyped column of an estimates table.
+    """Raise ``ValueError`` naming the first missing or mistyped column of an estimates table
+    (a score column, :data:`OPTIONAL_COLUMNS`, may be absent, but not of another type).
 
     ``table`` is an Arrow table or a pandas data frame; a column's type is its Arrow type (a
     frame's columns are converted as parquet would store them).
     """
     names = table.column_names if isinstance(table, pa.Table) else list(table.columns)
     columns = {}
-    for column, (accepts, description) in required_columns(kind, condition_keys).items():
+    required = required_columns(kind, condition_keys)
+    optional = {c: check for c, check in OPTIONAL_COLUMNS[kind].items() if c in names}
+    for column, (accepts, description) in {**required, **optional}.items():
         if column not in names:
             raise ValueError(f"{source}: missing column {column!r} (needed for {kind} estimates)")
         columns[column] = _arrow_column(table, column, source)
@@ -182,3 +194,53 @@ def _listed(numbers: Sequence[int], most: int = 10) -> str:
         return f"{numbers[0]}–{numbers[-1]}"
     shown = ", ".join(map(str, numbers[:most]))
     return shown if len(numbers) <= most else f"{shown}, … ({len(numbers)} in all)"
+
+
+def check_scores(
+    table: pd.DataFrame, scores: Mapping[str, np.ndarray], *, source: str = "estimates"
+) -> None:
+    """Raise ``ValueError`` naming ``source``, the trial and the column when a score column
+    ``table`` gives disagrees with the benchmark's ``scores`` (name -> ``(n,)``, the rows'
+    order) beyond rounding (:data:`SCORE_RTOL`, :data:`SCORE_ATOL`); NaN agrees only with NaN.
+    Columns ``table`` leaves out are not checked."""
+    for column, ours in scores.items():
+        if column not in table:
+            continue
+        given = np.asarray(table[column], dtype=float)
+        agree = np.isclose(given, ours, rtol=SCORE_RTOL, atol=SCORE_ATOL, equal_nan=True)
+        if not agree.all():
+            row = int(np.argmin(agree))
+            raise ValueError(
+                f"{source}: trial {int(table['trial'].iloc[row])}: column {column!r} is "
+                f"{float(given[row])!r}, but the estimate and the dataset's truth give "
+                f"{float(ours[row])!r} "
+                f"({np.count_nonzero(~agree)} of {len(agree)} rows disagree); the benchmark "
+                f"computes {column!r} itself: leave the column out or fix it"
+            )
+
+
+def check_claimed_estimates(
+    table: pd.DataFrame, kind: str, error: np.ndarray, *, source: str = "estimates"
+) -> None:
+    """Raise ``ValueError`` naming ``source``, the method and the trial when a row claims
+    success (``converged`` true or ``status`` "ok") without a finite estimate and a finite
+    ``error`` ``(n,)`` (the benchmark's, e.g. NaN for an axis direction of zero length): a
+    failed trial says it failed, so that it is counted as one."""
+    claimed = np.asarray(table["converged"], dtype=bool) | (
+        np.asarray(table["status"], dtype=object) == "ok"
+    )
+    estimates = np.column_stack([np.asarray(table[c], dtype=float) for c in ESTIMATE_COLUMNS[kind]])
+    finite = np.isfinite(estimates).all(axis=1) & np.isfinite(error)
+    bad = np.flatnonzero(claimed & ~finite)
+    if bad.size:
+        row = int(bad[0])
+        values = ", ".join(
+            f"{c}={float(v)!r}" for c, v in zip(ESTIMATE_COLUMNS[kind], estimates[row], strict=True)
+        )
+        raise ValueError(
+            f"{source}: method {table['method'].iloc[row]!r}, trial "
+            f"{int(table['trial'].iloc[row])}: converged={bool(table['converged'].iloc[row])}, "
+            f"status {table['status'].iloc[row]!r}, but the estimate is not finite ({values}; "
+            f"{ERROR_COLUMN[kind]}={float(error[row])!r}); {bad.size} such rows. A trial "
+            "without an estimate is a failure: converged=False and the reason in 'status'"
+        )

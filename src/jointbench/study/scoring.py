@@ -1,43 +1,55 @@
-"""Scoring one estimator result against the simulated truth, by estimator kind."""
+"""Scoring estimates against the simulated truth, by estimator kind: one implementation for
+every estimator.
+
+An estimator reports its estimate (:data:`ESTIMATE_COLUMNS`, and for a joint centre optionally
+its predicted covariance, :data:`COVARIANCE_COLUMNS`); the benchmark computes the rest
+(:data:`SCORE_COLUMNS`, the error first) from those columns and the truth stored in the
+dataset, with :func:`score_columns`. The estimate jobs score their rows with it, and collect
+scores every file again with it, built-in and external alike, so a ranking never rests on an
+error an estimator reported about itself.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
 from jointbench.geometry import angle_between_lines_deg
 
-__all__ = ["CHI2_3DOF_95", "ERROR_COLUMN", "covariance_from_entries", "score"]
+__all__ = [
+    "CHI2_3DOF_95",
+    "COVARIANCE_COLUMNS",
+    "ERROR_COLUMN",
+    "ESTIMATE_COLUMNS",
+    "SCORE_COLUMNS",
+    "covariance_from_entries",
+    "estimate_values",
+    "score",
+    "score_columns",
+]
 
-#: The error column each kind's scorer writes; its unit is the suffix.
-ERROR_COLUMN = {"center": "error_mm", "axis": "error_deg", "joint_center": "error_mm"}
+_CENTER = ("center_x", "center_y", "center_z")
+#: Per kind, the columns holding an estimator's estimate of one trial [mm; a direction is any
+#: non-zero vector along the axis].
+ESTIMATE_COLUMNS = {
+    "center": _CENTER,
+    "axis": ("point_x", "point_y", "point_z", "direction_x", "direction_y", "direction_z"),
+    "joint_center": _CENTER,
+}
+#: Per kind, the columns the benchmark computes from the estimate and the truth; the first is
+#: the error a ranking is made of, its unit the suffix.
+SCORE_COLUMNS = {
+    "center": ("error_mm",),
+    "axis": ("error_deg",),
+    "joint_center": ("error_mm", "sqrt_trace_cov_mm", "mahalanobis_sq", "validation_index"),
+}
+ERROR_COLUMN = {kind: columns[0] for kind, columns in SCORE_COLUMNS.items()}
 
-_NAN3 = (np.nan, np.nan, np.nan)
 # 95 % quantile of chi-square with 3 degrees of freedom, scipy.special.chdtri(3, 0.05) to the
 # last bit (tests/test_tolerance.py checks it): written out because every estimate job scores
 # its trials, and importing scipy.special would cost each job a third of a second.
 CHI2_3DOF_95 = 7.814727903251178
-
-
-def _score_center(result, truth) -> dict[str, float]:
-    center = _NAN3 if result is None else result.center
-    error = float(np.linalg.norm(np.asarray(center) - np.asarray(truth["center"])))
-    return {"center_x": center[0], "center_y": center[1], "center_z": center[2], "error_mm": error}
-
-
-def _score_axis(result, truth) -> dict[str, float]:
-    point = _NAN3 if result is None else result.point
-    direction = _NAN3 if result is None else result.direction
-    error = float(
-        angle_between_lines_deg(np.asarray(direction), np.asarray(truth["axis_direction"]))
-    )
-    return {
-        **{f"point_{a}": float(v) for a, v in zip("xyz", point, strict=True)},
-        **{f"direction_{a}": float(v) for a, v in zip("xyz", direction, strict=True)},
-        "error_deg": error,
-    }
-
 
 _COVARIANCE_ENTRIES = {
     "cov_xx": (0, 0),
@@ -47,62 +59,110 @@ _COVARIANCE_ENTRIES = {
     "cov_yz": (1, 2),
     "cov_zz": (2, 2),
 }
+#: The six distinct entries of a joint-centre method's predicted 3×3 covariance [mm²]: NaN, or
+#: absent from a file, when the method predicts none.
+COVARIANCE_COLUMNS = tuple(_COVARIANCE_ENTRIES)
 
 
-def _covariance_entries(covariance) -> dict[str, float]:
-    """The six distinct entries of a predicted 3×3 covariance [mm²] (NaN when there is none)."""
-    return {
-        name: (np.nan if covariance is None else float(covariance[index]))
-        for name, index in _COVARIANCE_ENTRIES.items()
-    }
-
-
-def covariance_from_entries(frame) -> np.ndarray:
-    """``(n, 3, 3)`` covariances rebuilt from the ``cov_*`` columns of a results table."""
-    out = np.empty((len(frame), 3, 3))
+def covariance_from_entries(frame, n_rows: int | None = None) -> np.ndarray:
+    """``(n, 3, 3)`` covariances rebuilt from the ``cov_*`` columns of a results table, or of a
+    mapping of column name to ``n_rows`` values (NaN where a column is absent)."""
+    out = np.full((len(frame) if n_rows is None else n_rows, 3, 3), np.nan)
     for name, (i, j) in _COVARIANCE_ENTRIES.items():
-        out[:, i, j] = out[:, j, i] = frame[name].to_numpy(float)
+        if name in frame:
+            out[:, i, j] = out[:, j, i] = np.asarray(frame[name], dtype=float)
     return out
 
 
-def _score_joint_center(result, truth) -> dict[str, float]:
+def estimate_values(kind: str, result) -> dict[str, float]:
+    """The estimate columns of one result of a ``kind`` estimator (NaN where it failed: no
+    result), and for a joint centre the covariance entries (NaN when none is predicted)."""
+    if kind == "axis":
+        vectors = (None, None) if result is None else (result.point, result.direction)
+    else:
+        vectors = (None if result is None else result.center,)
+    values = np.concatenate([np.full(3, np.nan) if v is None else np.asarray(v) for v in vectors])
+    out = dict(zip(ESTIMATE_COLUMNS[kind], map(float, values), strict=True))
+    if kind == "joint_center":
+        covariance = None if result is None else result.covariance
+        for name, index in _COVARIANCE_ENTRIES.items():
+            out[name] = np.nan if covariance is None else float(covariance[index])
+    return out
+
+
+def _distance(points: np.ndarray, target) -> np.ndarray:
+    """Euclidean distances ``(n,)`` of ``(n, 3)`` points from one point ``(3,)``, by
+    ``hypot`` so that a finite point far out has a finite distance (a sum of squares
+    overflows from 1e154 on)."""
+    offset = points - np.asarray(target, dtype=float)
+    return np.hypot(np.hypot(offset[:, 0], offset[:, 1]), offset[:, 2])
+
+
+def _stack(estimates: Mapping[str, object], columns) -> np.ndarray:
+    """The ``columns`` of ``estimates`` as an ``(n, len(columns))`` float array."""
+    return np.column_stack([np.asarray(estimates[c], dtype=float) for c in columns])
+
+
+def _score_center(estimates, truth) -> dict[str, np.ndarray]:
+    return {"error_mm": _distance(_stack(estimates, _CENTER), truth["center"])}
+
+
+def _score_axis(estimates, truth) -> dict[str, np.ndarray]:
+    direction = _stack(estimates, ESTIMATE_COLUMNS["axis"][3:])
+    true_direction = np.asarray(truth["axis_direction"], dtype=float)
+    return {"error_deg": angle_between_lines_deg(direction, true_direction)}
+
+
+def _mahalanobis_sq(offsets: np.ndarray, covariances: np.ndarray) -> np.ndarray:
+    """``e = d' C^-1 d`` ``(n,)`` of offsets ``(n, 3)`` [mm] under covariances ``(n, 3, 3)``
+    [mm²]; NaN where either has a NaN or the covariance is singular."""
+    out = np.full(len(offsets), np.nan)
+    usable = np.isfinite(offsets).all(axis=1) & np.isfinite(covariances).all(axis=(1, 2))
+    # One at a time: a batched solve fails as a whole on one singular matrix.
+    for row in np.flatnonzero(usable):
+        try:
+            out[row] = offsets[row] @ np.linalg.solve(covariances[row], offsets[row])
+        except np.linalg.LinAlgError:
+            pass
+    return out
+
+
+def _score_joint_center(estimates, truth) -> dict[str, np.ndarray]:
     """Centre error, predicted uncertainty and its honesty against the TRUE centre.
 
     ``mahalanobis_sq`` is ``e`` of paper C eq. 16, ``validation_index`` is ``v = sqrt(e / 3)``;
-    ``cov_*`` are the predicted covariance's entries, so other references can be used later.
+    both NaN for a method that predicts no covariance.
     """
-    scores = _score_center(result, truth)
-    covariance = None if result is None else result.covariance
-    entries = _covariance_entries(covariance)
-    if covariance is None:
-        return {
-            **scores,
-            "sqrt_trace_cov_mm": np.nan,
-            "mahalanobis_sq": np.nan,
-            "validation_index": np.nan,
-            **entries,
-        }
-    offset = np.asarray(result.center) - np.asarray(truth["center"])
-    try:
-        mahalanobis_sq = float(offset @ np.linalg.solve(covariance, offset))
-    except np.linalg.LinAlgError:
-        mahalanobis_sq = np.nan
+    center = _stack(estimates, _CENTER)
+    covariance = covariance_from_entries(estimates, len(center))
+    mahalanobis_sq = _mahalanobis_sq(center - np.asarray(truth["center"], dtype=float), covariance)
     return {
-        **scores,
-        "sqrt_trace_cov_mm": float(np.sqrt(np.trace(covariance))),
+        "error_mm": _distance(center, truth["center"]),
+        "sqrt_trace_cov_mm": np.sqrt(np.trace(covariance, axis1=1, axis2=2)),
         "mahalanobis_sq": mahalanobis_sq,
-        "validation_index": float(np.sqrt(mahalanobis_sq / 3.0)),
-        **entries,
+        "validation_index": np.sqrt(mahalanobis_sq / 3.0),
     }
 
 
-_SCORERS: dict[str, Callable] = {
-    "center": _score_center,
-    "axis": _score_axis,
-    "joint_center": _score_joint_center,
-}
+_SCORERS = {"center": _score_center, "axis": _score_axis, "joint_center": _score_joint_center}
+
+
+def score_columns(
+    kind: str, estimates: Mapping[str, object], truth: Mapping[str, list[float]]
+) -> dict[str, np.ndarray]:
+    """The :data:`SCORE_COLUMNS` of ``kind`` ``(n,)`` from the estimate columns of ``n`` rows
+    (a table or a mapping of column name to values; covariance columns may be absent) and the
+    dataset's ``truth``. NaN where an estimate is missing; a finite estimate has a finite
+    error, however far out."""
+    # A negative variance or a NaN estimate is a NaN score, not a warning in a job's log.
+    with np.errstate(invalid="ignore", over="ignore"):
+        return _SCORERS[kind](estimates, truth)
 
 
 def score(kind: str, result, truth: Mapping[str, list[float]]) -> dict[str, float]:
-    """Estimate and error columns of one result of a ``kind`` estimator (NaN where it failed)."""
-    return _SCORERS[kind](result, truth)
+    """Estimate and score columns of one result of a ``kind`` estimator (NaN where it failed):
+    the estimate columns, the scores, then any covariance entries."""
+    values = estimate_values(kind, result)
+    scores = score_columns(kind, {name: [value] for name, value in values.items()}, truth)
+    estimate = {name: values.pop(name) for name in ESTIMATE_COLUMNS[kind]}
+    return {**estimate, **{name: float(column[0]) for name, column in scores.items()}, **values}
