@@ -80,8 +80,8 @@ EDITS = (
     Edit(
         "keyword default of an estimator (BC tol_x)",
         f"{PKG}/estimators/sphere.py",
-        "    tol_x: float = 1e-4,\n",
-        "    tol_x: float = 1e-3,\n",
+        "    tol_x: Positive = 1e-4,\n",
+        "    tol_x: Positive = 1e-3,\n",
         reruns=_jobs("estimate_cmc[method=BC]", "collect[study=cmc]", "render_cmc"),
     ),
     Edit(
