@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from jointbench.fingerprint import code_fingerprint, module_closure
+from jointbench import fingerprint
+from jointbench.fingerprint import code_fingerprint, dependency_versions, module_closure
 
 PACKAGE = "jbfp_pkg"
 
@@ -184,3 +185,14 @@ def test_every_workflow_script_reaches_the_modules_it_runs():
     assert "jointbench.figures.common" not in estimate
     render = module_closure(scripts / "render.py")
     assert {"jointbench.figures.paper_a", "jointbench.papers.paper_b"} <= set(render)
+
+
+def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    versions = dependency_versions()
+    assert {"python", "numpy", "scipy", "numba"} <= set(versions)
+    before = code_fingerprint(script)
+    monkeypatch.setattr(
+        fingerprint, "dependency_versions", lambda package: {**versions, "numpy": "0.0.1"}
+    )
+    assert code_fingerprint(script) != before

@@ -7,7 +7,8 @@ found by reading import statements, never by following objects at run time. The 
 conservative by construction: a module counts if an import of it is written anywhere that can
 run, whether or not the job calls into it. What is hashed is each file's syntax tree without
 docstrings, so a change to what code does reruns its jobs, and a docstring, a comment or
-formatting does not. Data files a job reads (published values) are its rule's inputs.
+formatting does not. The versions of Python and of the package's dependencies count too. Data
+files a job reads (published values) are its rule's inputs.
 
 What a module can import:
 
@@ -26,13 +27,16 @@ from __future__ import annotations
 
 import ast
 import hashlib
+import importlib.metadata
 import importlib.util
+import platform
+import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-__all__ = ["code_fingerprint", "module_closure"]
+__all__ = ["code_fingerprint", "dependency_versions", "module_closure"]
 
 #: Calls that import a module named by a string at run time.
 _DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__"})
@@ -214,11 +218,31 @@ def _digest_of(text: str) -> bytes:
     return hashlib.sha256(ast.dump(_parsed(text)).encode()).digest()
 
 
+def dependency_versions(package: str = "jointbench") -> dict[str, str]:
+    """The installed version of Python and of every distribution ``package`` requires (its
+    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too."""
+    versions = {"python": platform.python_version()}
+    try:
+        requirements = importlib.metadata.requires(package) or []
+    except importlib.metadata.PackageNotFoundError:  # modules on the path, not installed
+        requirements = []
+    for requirement in requirements:
+        if "extra ==" in requirement:
+            continue
+        name = re.split(r"[\s<>=!~;\[(]", requirement, maxsplit=1)[0]
+        try:
+            versions[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            versions[name] = "not installed"
+    return versions
+
+
 def code_fingerprint(*roots: str | Path, package: str = "jointbench") -> str:
     """A short hash of the Python files ``roots`` (a job's script, the extension modules it
-    loads) and of every module of ``package`` they can import. Equal fingerprints mean the same
-    code ran."""
+    loads), of every module of ``package`` they can import and of the versions of its
+    dependencies (:func:`dependency_versions`). Equal fingerprints mean the same code ran."""
     digest = hashlib.sha256()
+    digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for root in sorted(Path(r).resolve() for r in roots):
         digest.update(root.name.encode() + _source_digest(root))
     for name, path in module_closure(*roots, package=package).items():
