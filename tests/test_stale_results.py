@@ -122,8 +122,8 @@ EDITS = (
     Edit(
         "a Study's own field",
         f"{PKG}/simulate/cmc.py",
-        '"noise_mm": GridValues(float, minimum=0),',
-        '"noise_mm": GridValues(float, minimum=0, maximum=1000),',
+        "exclusive_minimum=True, maximum=180)",
+        "exclusive_minimum=True, maximum=179)",
         reruns=_jobs("simulate_cmc", "render_cmc", "check_published"),
     ),
     Edit(
@@ -219,6 +219,22 @@ EDITS = (
         "\n_EDITED = 1.0\n",
         reruns=_jobs("estimate_cmc_LM", "collect[study=cmc]", "render_cmc"),
         spares=_jobs("estimate_cmc", "simulate_cmc", "estimate_hinge"),
+    ),
+    Edit(
+        "an external rule's command line",
+        "workflow/rules/estimators/lm_sphere.smk",
+        "--out-dir {params.out_dir:q}",
+        "--out-dir {params.out_dir:q} ",
+        reruns=_jobs("estimate_cmc_LM", "collect[study=cmc]"),
+        spares=_jobs("estimate_cmc", "simulate_cmc"),
+    ),
+    Edit(
+        "a rule's parameters (render)",
+        "workflow/rules/render.smk",
+        "            study=_study,\n",
+        "            study=_study,\n            note=1,\n",
+        reruns=_jobs("render_cmc", "render_hinge", "render_hip"),
+        spares=DATA_JOBS | _jobs("collect"),
     ),
     Edit(
         "an extension module (the fourth study)",
