@@ -34,6 +34,7 @@ for _study in STUDIES:
 
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/estimate.smk"
+include: "workflow/rules/interchange.smk"
 
 
 # Estimators outside the package: each file here holds the rule of one external estimator.

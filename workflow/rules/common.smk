@@ -23,6 +23,26 @@ STUDIES = jb_config.study_names(config)
 PYTHON = sys.executable
 
 
+def studies_listing(estimator):
+    """The studies of this run that list ``estimator`` under ``external_estimators``: an
+    external rule written for every study runs for these and ignores the others."""
+    return [
+        study
+        for study in STUDIES
+        if estimator in jb_config.estimator_names(config, study, source="external")
+    ]
+
+
+# Every external estimator of this run's studies.
+EXTERNAL_ESTIMATORS = sorted(
+    {
+        n
+        for s in STUDIES
+        for n in jb_config.estimator_names(config, s, source="external")
+    }
+)
+
+
 def _alternatives(names):
     """A regex matching exactly one of ``names`` (never matches when the list is empty)."""
     return "|".join(re.escape(n) for n in names) or "(?!)"

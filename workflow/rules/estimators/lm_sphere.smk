@@ -1,30 +1,34 @@
 # LM, an estimator outside the jointbench package: the worked example of "Adding an estimator"
-# (README). Listed under studies.cmc.external_estimators, its estimates join the collected
-# results, the extended ranking and the per-estimator summaries like any built-in's.
+# (README). Listed under a study's external_estimators (the cmc study's by default), its
+# estimates join the collected results, the extended ranking and the per-estimator summaries
+# like any built-in's. One rule per study that lists it; a study not in the run has none.
+for _study in studies_listing("LM"):
 
-
-rule estimate_cmc_LM:
-    """LM: paper A's geometric sphere fit (f1) by Levenberg–Marquardt from the LS centre, every
-    condition of the study in one job (workflow/external/lm_sphere.py)."""
-    input:
-        # The program is an input: editing it reruns this job (Snakemake tracks a rule's own
-        # code, not the programs its shell command runs).
-        script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
-        datasets=expand(
-            "results/datasets/cmc/{condition}.parquet", condition=condition_ids("cmc")
-        ),
-    output:
-        expand(
-            "results/estimates/cmc/LM/{condition}.parquet",
-            condition=condition_ids("cmc"),
-        ),
-    log:
-        "results/logs/estimate/cmc/LM.log",
-    conda:
-        "../../envs/jointbench.yaml"
-    params:
-        out_dir=lambda w, output: Path(output[0]).parent,
-        # The interpreter running this workflow: the project's environment.
-        python=PYTHON,
-    shell:
-        "{params.python:q} {input.script:q} --out-dir {params.out_dir:q} {input.datasets:q} 2> {log:q}"
+    rule:
+        name:
+            f"estimate_{_study}_LM"
+        input:
+            # The program is an input: editing it reruns the job (Snakemake tracks a rule's
+            # own code, not the programs its shell command runs).
+            script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
+            datasets=expand(
+                "results/datasets/{study}/{condition}.parquet",
+                study=_study,
+                condition=condition_ids(_study),
+            ),
+        output:
+            expand(
+                "results/estimates/{study}/LM/{condition}.parquet",
+                study=_study,
+                condition=condition_ids(_study),
+            ),
+        log:
+            f"results/logs/estimate/{_study}/LM.log",
+        conda:
+            "../../envs/jointbench.yaml"
+        params:
+            out_dir=lambda w, output: Path(output[0]).parent,
+            # The interpreter running this workflow: the project's environment.
+            python=PYTHON,
+        shell:
+            "{params.python:q} {input.script:q} --out-dir {params.out_dir:q} {input.datasets:q} 2> {log:q}"

@@ -1,0 +1,104 @@
+"""Plain text for estimators in any language: a condition's markers as CSV, estimates from CSV.
+
+A C, R, Julia or awk program reads the CSV form of a dataset and writes its estimates as CSV; the
+workflow converts both ways (``workflow/rules/interchange.smk``), so the program needs no Parquet
+reader and no wrapper. The truth is not in the CSV: the benchmark scores the estimates itself.
+
+Dataset CSV (:func:`write_dataset_csv`), one header line, then one row per marker sample ordered
+by trial, segment (as in the dataset), frame and marker::
+
+    trial,segment,frame,marker,x,y,z
+
+``trial``, ``frame`` and ``marker`` count from 0; ``segment`` is ``moving`` for one-segment
+studies, ``proximal`` and ``distal`` for two-segment ones; ``x``, ``y``, ``z`` in mm, written
+with the digits that read back to the same double.
+
+Estimates CSV (:func:`read_estimates_csv`), one header line, one row per trial: ``trial``, the
+estimate columns of the study's kind (``center_x, center_y, center_z``; or ``point_*`` and
+``direction_*``; optionally ``cov_*``), ``converged`` (``true``/``false`` or ``1``/``0``),
+``iterations``, ``seconds`` and ``status``. The condition's columns and ``method`` are added
+from the dataset and the file's folder; the result is then checked and collected like any
+estimates file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.csv as pacsv
+import pyarrow.parquet as pq
+
+from jointbench.study.io import read_metadata, write_table
+
+__all__ = ["DATASET_COLUMNS", "ESTIMATE_ROW_COLUMNS", "read_estimates_csv", "write_dataset_csv"]
+
+#: The columns of a dataset's CSV form, in order.
+DATASET_COLUMNS = ("trial", "segment", "frame", "marker", "x", "y", "z")
+
+#: The columns every estimates CSV has besides its estimate columns.
+ESTIMATE_ROW_COLUMNS = ("trial", "converged", "iterations", "seconds", "status")
+
+
+def write_dataset_csv(dataset: str | Path, output: str | Path) -> None:
+    """Write the markers of a dataset file as CSV (see the module docstring)."""
+    table = pq.read_table(dataset, columns=list(DATASET_COLUMNS))
+    segment = table.column("segment").cast(pa.string())
+    table = table.set_column(table.schema.get_field_index("segment"), "segment", segment)
+    order = [("trial", "ascending"), ("frame", "ascending"), ("marker", "ascending")]
+    first_seen = pa.array(list(dict.fromkeys(segment.unique().to_pylist())), pa.string())
+    table = table.append_column("segment_rank", pc.index_in(segment, value_set=first_seen))
+    order.insert(1, ("segment_rank", "ascending"))
+    table = table.sort_by(order).drop_columns(["segment_rank"])
+    Path(output).parent.mkdir(parents=True, exist_ok=True)
+    # Arrow quotes a header it writes; a plain one is easier for a C or awk reader.
+    with open(output, "wb") as stream:
+        stream.write((",".join(DATASET_COLUMNS) + "\n").encode())
+        options = pacsv.WriteOptions(include_header=False, quoting_style="none")
+        pacsv.write_csv(table, stream, options)
+
+
+def read_estimates_csv(
+    path: str | Path, dataset: str | Path, output: str | Path, provenance: Mapping | None = None
+) -> None:
+    """Write the estimates CSV at ``path`` as an estimates file at ``output``: its columns, with
+    the condition of ``dataset`` and the method (the name of ``path``'s folder) in every row.
+
+    ``ValueError`` naming ``path`` when it cannot be read as CSV or lacks a required column; the
+    estimate columns and every value are checked when the file is collected.
+    """
+    try:
+        table = pacsv.read_csv(path)
+    except (pa.ArrowInvalid, OSError) as error:
+        raise ValueError(f"{path}: cannot be read as CSV ({error})") from None
+    missing = [name for name in ESTIMATE_ROW_COLUMNS if name not in table.column_names]
+    if missing:
+        raise ValueError(
+            f"{path}: missing column {missing[0]!r}; an estimates CSV has "
+            f"{', '.join(ESTIMATE_ROW_COLUMNS)} and the estimate columns of its study's kind"
+        )
+    table = table.set_column(
+        table.schema.get_field_index("converged"), "converged", _booleans(table, path)
+    )
+    status = table.column("status").cast(pa.string()).fill_null("")
+    table = table.set_column(table.schema.get_field_index("status"), "status", status)
+    condition = read_metadata(dataset)["condition"]
+    added = {key: pa.array([value] * table.num_rows) for key, value in condition.items()}
+    added["method"] = pa.array([Path(path).parent.name] * table.num_rows, pa.string())
+    columns = {**added, **{name: table.column(name) for name in table.column_names}}
+    write_table(pa.table(columns), output, provenance)
+
+
+def _booleans(table: pa.Table, path: str | Path) -> pa.Array:
+    """``converged`` as booleans, from ``true``/``false`` or ``1``/``0``."""
+    column = table.column("converged")
+    if pa.types.is_boolean(column.type):
+        return column
+    if pa.types.is_integer(column.type):
+        values = column.to_numpy()
+        if np.isin(values, (0, 1)).all():
+            return pa.array(values == 1)
+    raise ValueError(f"{path}: column 'converged' must hold true/false or 1/0, got {column.type}")

@@ -1,0 +1,16 @@
+# centroid: the smallest external estimator, a template to copy (README, "Adding an estimator").
+# It serves every centre study that lists it under external_estimators, and runs nowhere else.
+
+
+rule estimate_centroid:
+    """centroid: the mean of every marker position of a trial (a template, not a method)."""
+    input:
+        "results/datasets/{study}/{condition}.parquet",
+    output:
+        "results/estimates/{study}/centroid/{condition}.parquet",
+    log:
+        "results/logs/estimate/{study}/centroid/{condition}.log",
+    conda:
+        "../../envs/jointbench.yaml"
+    script:
+        "../../external/centroid.py"
