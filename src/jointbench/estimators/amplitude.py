@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from jointbench.declared import Point
+from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.sphere import _check_point, fit_ls
@@ -182,4 +183,4 @@ def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterRe
     return outcomes
 
 
-fit_ma.batched = _fit_ma_batch
+fit_ma.batched = isolated(_fit_ma_batch)

@@ -87,6 +87,7 @@ from typing import Literal
 import numpy as np
 
 from jointbench.declared import Count, Point, Positive
+from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
@@ -530,7 +531,7 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     batched = _entry(_fit_batch, method)
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
-    fit.batched = batched
+    fit.batched = isolated(batched)
     return fit
 
 

@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.declared import Count, Point, Positive
+from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
@@ -1023,7 +1024,7 @@ def _fit_bc_batch(
     return _with_fallback(one_trial, markers, outcomes, bad)
 
 
-fit_ls.batched = _fit_ls_batch
-fit_nm.batched = _fit_nm_batch
-fit_bc.batched = _fit_bc_batch
-fit_is.batched = _fit_is_batch
+fit_ls.batched = isolated(_fit_ls_batch)
+fit_nm.batched = isolated(_fit_nm_batch)
+fit_bc.batched = isolated(_fit_bc_batch)
+fit_is.batched = isolated(_fit_is_batch)
