@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.declared import Count, Point, Positive
+from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
@@ -1024,6 +1025,77 @@ def _fit_bc_batch(
     return _with_fallback(one_trial, markers, outcomes, bad)
 
 
+def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> CenterResult:
+    """IS's f1 against f1 at its closed-form neighbours, the LS and NM centres; where one is
+    lower by more than fminsearch's TolFun, IS restarted from it (one more search, paid only
+    then). See :mod:`jointbench.estimators.selfcheck`."""
+    del start  # the answer is judged, wherever it was started
+    neighbours = {"the LS centre": _ls_start(markers)[0]}
+    try:
+        neighbours["the NM centre"] = np.asarray(fit_nm(markers).center)
+    except ValueError:
+        pass  # no NM centre to compare with (a plane); the LS one remains
+    n_frames = markers.shape[0]
+    flat = np.ascontiguousarray(markers.reshape(1, -1, 3))
+    points = np.stack(list(neighbours.values()))
+    costs = _geometric_costs(points, flat, np.zeros(len(points), dtype=int), n_frames)
+    best = int(np.argmin(costs))
+    name = list(neighbours)[best]
+    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
+        return selfcheck.held(
+            result,
+            f"f1 at {' and '.join(neighbours)} is not below the answer's {result.cost:.6g} "
+            f"by more than TolFun (least {float(costs[best]):.6g})",
+        )
+    better = fit_is(markers, start=points[best])
+    moved = float(np.linalg.norm(better.center - result.center))
+    return selfcheck.restarted(
+        result, better, name, f"{moved:.3g} mm from the first answer, which is replaced"
+    )
+
+
+def _bc_self_check(
+    result: CenterResult,
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> CenterResult:
+    """Whether BC's answer is its fixed point: one more of Halvorsen's updates, computed from
+    the markers about the returned centre (not from the moments the iteration used), must
+    move it by at most ``tol_x``. BC has no cost to compare (:func:`fit_bc`); the update is
+    its defining equation. See :mod:`jointbench.estimators.selfcheck`."""
+    del max_iterations, tol_fun
+    if not result.converged:
+        return result
+    n_frames = markers.shape[0]
+    # About the returned centre c: y = v - c, and the update's shift from c is
+    # A^+ (b_y - 2 sigma^2 sum_p mean_k y^p) (A does not change with the shift).
+    offsets = markers - np.asarray(result.center)
+    a_matrix, b_vector = ls_system(offsets)
+    squared = np.einsum("kpi,kpi->kp", offsets, offsets)
+    mean_squared = squared.mean(axis=0)
+    sigma2 = float(
+        np.mean(((squared - mean_squared) ** 2).sum(axis=0) / (4.0 * mean_squared * n_frames))
+    )
+    compensation = 2.0 * sigma2 * offsets.mean(axis=0).sum(axis=0)
+    step = float(np.abs(solve_ls_system(a_matrix, b_vector - compensation)).max())
+    if step <= tol_x:
+        return selfcheck.held(
+            result,
+            f"one more update from the returned centre moves it by {step:.3g} mm "
+            f"(tol_x = {tol_x:g})",
+        )
+    return selfcheck.failed(
+        result,
+        f"not BC's fixed point: one more update from the returned centre moves it by "
+        f"{step:.3g} mm, more than tol_x = {tol_x:g}",
+    )
+
+
+fit_is.self_check = _is_self_check
+fit_bc.self_check = _bc_self_check
 fit_ls.batched = isolated(_fit_ls_batch)
 fit_nm.batched = isolated(_fit_nm_batch)
 fit_bc.batched = isolated(_fit_bc_batch)
