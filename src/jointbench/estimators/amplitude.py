@@ -16,7 +16,8 @@ from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
-from jointbench.estimators.sphere import _check_point, fit_ls
+from jointbench.estimators.sphere import _check_point, fit_ls, fit_nm
+from jointbench.estimators.twosegment import fit_score_center
 from jointbench.estimators.validation import (
     check_markers,
     check_moves,
@@ -117,7 +118,8 @@ def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     -------
     CenterResult with ``center`` (3,) [mm], ``radii=None``, ``cost`` the amplitude at ``p*``
     [mm], ``converged`` the optimiser's success, ``iterations`` its iteration count;
-    ``diagnostics["body_point"]`` is ``p*`` (a list [mm], equal to the centre), with
+    ``diagnostics["body_point"]`` is ``p*`` in the body frame of
+    :func:`jointbench.numerics.poses.rigid_poses` (its position at frame 0; a list [mm]), with
     ``diagnostics["function_evaluations"]``.
     """
     markers, start = _ma_prepare(markers, start)
@@ -171,7 +173,11 @@ def _ma_result(search, rotation: np.ndarray, translation: np.ndarray) -> CenterR
         status="ok" if ok else stop_status(search, FMINSEARCH_OPTIONS["max_fev"]),
         method="MA",
         cost=float(search.fun),
-        diagnostics={"body_point": point.tolist(), "function_evaluations": search.evaluations},
+        # In the body frame of rigid_poses, which is the reference frame at frame 0.
+        diagnostics={
+            "body_point": trajectory[0].tolist(),
+            "function_evaluations": search.evaluations,
+        },
     )
 
 
@@ -200,9 +206,6 @@ def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     cousin of MA's); where one is lower by more than fminsearch's TolFun, MA restarted from it
     (one more search, paid only then). See :mod:`jointbench.estimators.selfcheck`."""
     del start  # the answer is judged, wherever it was started
-    from jointbench.estimators.sphere import fit_nm
-    from jointbench.estimators.twosegment import fit_score_center
-
     neighbours = {"the LS centre": np.asarray(fit_ls(markers).center)}
     for name, fit in (("the NM centre", fit_nm), ("the SCoRE centre", fit_score_center)):
         try:

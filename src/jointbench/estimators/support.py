@@ -50,6 +50,7 @@ import numpy as np
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.poses import best_rotation, rigid_poses
+from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
     "CENTRE_KINDS",
@@ -257,8 +258,6 @@ def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
     a pose: the status always says so.
     """
     from scipy.special import fdtrc
-
-    from jointbench.estimators.sphere import ls_system, solve_ls_system
 
     markers = arrays[-1]
     n_frames, n_markers, _ = markers.shape
