@@ -276,3 +276,29 @@ def test_a_noise_free_trial_leaves_the_nm_fits_of_the_others_as_they_are_alone()
     # The noise-free trial took the one-trial path, the noisy ones the many-trial one.
     assert np.array_equal(outcomes[1].center, fit_nm(exact).center)
     assert not np.array_equal(outcomes[0].center, fit_nm(batch[0]).center)
+
+
+def _batched_cases():
+    for study in CONDITIONS:
+        kind = get_study(study).kind
+        for method in registry.methods(kind):
+            if hasattr(registry.get(kind, method, checked=False), "batched"):
+                yield study, method
+
+
+@pytest.mark.parametrize("checked", [False, True], ids=["unchecked", "checked"])
+@pytest.mark.parametrize(("study", "method"), list(_batched_cases()))
+def test_one_trial_near_1e200_fails_alone(study, method, checked):
+    """A trial whose values overflow the fit's arithmetic is that trial's failed outcome; the
+    other trials get exactly what they get alone."""
+    kind = get_study(study).kind
+    fit = registry.get(kind, method, checked=checked)
+    index = len(CONDITIONS[study]) - 1
+    segments = [np.array(s[:3]) for s in _trials(study, index).segments.values()]
+    segments[-1][1] *= 1e200 / np.abs(segments[-1][1]).max()
+    with np.errstate(all="ignore"):
+        outcomes = fit.batched(*segments)
+        alone = [fit.batched(*(s[[trial]] for s in segments))[0] for trial in (0, 2)]
+    assert isinstance(outcomes[1], ValueError | FloatingPointError), outcomes[1]
+    for batched, single in zip((outcomes[0], outcomes[2]), alone, strict=True):
+        _assert_same(batched, single)

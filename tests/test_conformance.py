@@ -217,7 +217,9 @@ def _errors(kind: str, result, offset: np.ndarray | None = None) -> tuple[float,
 def test_noise_free_data_are_recovered_to_the_claimed_tolerance(kind, method):
     recovery = registry.claims(kind, method).recovery
     result = fit(kind, method, clean(kind))
-    assert result.converged and result.status == "ok", result.status
+    # "restarted: ..." is the honest status of an answer found by the self-check's restart.
+    assert result.converged, result.status
+    assert result.status == "ok" or result.status.startswith("restarted: "), result.status
     if recovery is None:
         pytest.skip(f"{method} does not claim recovery with its default options")
     assert max(_errors(kind, result)) <= recovery
@@ -444,3 +446,136 @@ def test_a_gap_anywhere_is_named_by_marker_and_frame(frame, marker, gap):
     markers[frame, marker] = gap
     with pytest.raises(ValueError, match=rf"at marker {marker}, frame {frame}\b"):
         jointbench.fit_center(markers, method="NM")
+
+
+# --- noise-free and near-degenerate families ---------------------------------------------------
+
+
+def random_hinge(rng: np.random.Generator, n_frames: int = 150):
+    """Noise-free markers ``(N, P, 3)`` [mm] of a hinge at a random orientation: 3-5 markers
+    30-150 mm from the axis and up to 100 mm along it from a random point, 20-120 degrees of
+    flexion; returns the markers, the axis direction and a point on it."""
+    axis = unit(rng.normal(size=3))
+    point = rng.normal(scale=200.0, size=3)
+    radial = unit(np.cross(axis, rng.normal(size=3)))
+    body = np.array(
+        [
+            point
+            + rng.uniform(30.0, 150.0) * rotation_matrix(rng.uniform(0, 2 * np.pi) * axis) @ radial
+            + rng.uniform(-100.0, 100.0) * axis
+            for _ in range(int(rng.integers(3, 6)))
+        ]
+    )
+    t = np.linspace(0.0, 1.0, n_frames)
+    angle = np.radians(rng.uniform(20.0, 120.0)) * 0.5 * (1.0 - np.cos(2 * np.pi * t))
+    rotation = rotation_matrix((angle + rng.uniform(-1.0, 1.0))[:, None] * axis)
+    return np.einsum("fij,pj->fpi", rotation, body - point) + point, axis, point
+
+
+# Hinges (seeds of random_hinge) on which the ten-start searches stop in a local minimum: radial
+# on 2, 11 and 69 (90, 89 and 89 degrees off), combined on 11 and 69 (78 and 8.5 degrees off);
+# 5 is an ordinary one.
+HINGE_SEEDS = (2, 5, 11, 69)
+
+
+@pytest.mark.parametrize("seed", HINGE_SEEDS)
+@pytest.mark.parametrize("method", jointbench.methods("axis"))
+def test_noise_free_hinges_at_any_orientation_are_recovered_or_flagged(method, seed):
+    """The claim holds on every noise-free hinge: the checked call's answer is within the
+    claimed recovery, and "ok" only when the first search found it."""
+    markers, axis, _ = random_hinge(np.random.default_rng(seed))
+    result = jointbench.fit_axis(markers, method=method)
+    recovery = registry.claims("axis", method).recovery
+    angle = float(np.radians(angle_between_lines_deg(result.direction, axis)))
+    assert result.status == "ok" or result.status.startswith("restarted: "), result.status
+    assert angle <= recovery, (angle, result.status)
+
+
+def test_a_trapped_axis_search_says_it_restarted():
+    markers, axis, _ = random_hinge(np.random.default_rng(11))
+    raw = registry.get("axis", "combined", checked=False)(markers)
+    assert angle_between_lines_deg(raw.direction, axis) > 5.0  # the ten starts are trapped
+    result = jointbench.fit_axis(markers, method="combined")
+    assert result.status.startswith("restarted: the search stopped in a local minimum")
+    assert result.cost < raw.cost and result.diagnostics["local_minimum_cost"] == raw.cost
+
+
+def _one_segment_methods():
+    return [(kind, method) for kind in ("center", "axis") for method in jointbench.methods(kind)]
+
+
+def _few_markers(n_markers: int, seed: int) -> np.ndarray:
+    """Random positions (a cloud, no motion to speak of) of ``n_markers`` markers."""
+    return np.random.default_rng(seed).normal(size=(N_FRAMES, n_markers, 3)) * 50.0 + 100.0
+
+
+def _collinear_translation(seed: int = 0) -> np.ndarray:
+    """Three collinear markers translating along their own line, with 0.3 mm noise."""
+    rng = np.random.default_rng(seed)
+    line = unit(np.array([1.0, 0.5, 0.2]))
+    body = np.array([0.0, 40.0, 100.0])[:, None] * line + 300.0
+    steps = np.linspace(0.0, 80.0, N_FRAMES)[:, None, None] * line
+    return body + steps + rng.normal(scale=0.3, size=(N_FRAMES, 3, 3))
+
+
+def _one_marker_arc(n_markers: int) -> np.ndarray:
+    """Noise-free markers of the ball rig, only the first ``n_markers``."""
+    return clean("center")[0][:, :n_markers]
+
+
+DEGENERATE = {
+    "one-marker-cloud": lambda: _few_markers(1, 0),
+    "two-marker-cloud": lambda: _few_markers(2, 1),
+    "collinear-translation": _collinear_translation,
+    "one-marker-arc": lambda: _one_marker_arc(1),
+    "two-marker-arc": lambda: _one_marker_arc(2),
+}
+
+
+@pytest.mark.parametrize("case", list(DEGENERATE))
+@pytest.mark.parametrize(("kind", "method"), _one_segment_methods())
+def test_too_few_markers_or_collinear_ones_are_never_ok(kind, method, case):
+    """Without three non-collinear markers there is no pose to check rigidity or the rotation
+    with: the status says what was not verified (and why the data fail, where they do)."""
+    try:
+        result = fit(kind, method, (DEGENERATE[case](),))
+    except ValueError:
+        return  # refusing is as honest as flagging
+    assert result.status != "ok" and "not verified" in result.status, result.status
+    if case == "collinear-translation":
+        assert "range of motion too small" in result.status, result.status
+
+
+@pytest.mark.parametrize("kind", ["center", "axis"])
+def test_one_marker_on_its_sphere_is_recovered_and_says_what_it_did_not_check(kind):
+    method = "NM" if kind == "center" else "planar"
+    arrays = (_one_marker_arc(2),) if kind == "center" else (clean("axis")[0][:, :1],)
+    result = fit(kind, method, arrays)
+    assert "not verified" in result.status and "range of motion" not in result.status
+    assert max(_errors(kind, result)) <= registry.claims(kind, method).recovery
+
+
+def test_ma_ignores_the_order_of_the_frames_even_reversed():
+    """The body frame no longer follows frame 0, so reversing the recording moves nothing."""
+    markers = noisy("center")[0]
+    forward = jointbench.fit_center(markers, method="MA")
+    reverse = jointbench.fit_center(markers[::-1], method="MA")
+    tolerance = registry.claims("center", "MA").invariances["frame_order"]
+    assert np.linalg.norm(forward.center - reverse.center) <= tolerance + 1e-12 * 1e3
+
+
+@pytest.mark.parametrize("method", ["IS", "BC", "MA"])
+def test_search_based_centres_carry_their_self_check(method):
+    result = fit("center", method, noisy("center"))
+    assert result.status == "ok" and "self_check" in result.diagnostics
+
+
+def test_is_stopped_away_from_its_minimum_is_restarted():
+    """Started far away with a tiny iteration budget, IS stops short; the self-check finds
+    lower f1 at the NM centre and restarts from there."""
+    markers = noisy("center")[0]
+    raw = registry.get("center", "IS", checked=False)(markers, start=JOINT + 40.0)
+    result = jointbench.fit_center(markers, method="IS", start=JOINT + 40.0)
+    assert result.cost <= raw.cost
+    if raw.cost > result.cost + 1e-4:
+        assert result.status.startswith("restarted: ")

@@ -12,9 +12,12 @@ import math
 import numpy as np
 
 from jointbench.declared import Point
+from jointbench.estimators import selfcheck
+from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
-from jointbench.estimators.sphere import _check_point, fit_ls
+from jointbench.estimators.sphere import _check_point, fit_ls, fit_nm
+from jointbench.estimators.twosegment import fit_score_center
 from jointbench.estimators.validation import (
     check_markers,
     check_moves,
@@ -72,15 +75,14 @@ def amplitude(rotation: np.ndarray, translation: np.ndarray, point: np.ndarray) 
 @register(
     "center",
     "MA",
-    invariances={"translation": 0.5, "marker_order": 1e-3, "frame_order": 1e-3},
+    invariances={"translation": 0.5, "marker_order": 1e-3, "frame_order": 1e-9},
     min_frames=_MIN_FRAMES,
 )
 def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     """Minimal amplitude point of Marin et al. (2003), minimised as in paper A (§5).
 
     1. Pose ``(R_k, t_k)`` of the moving segment in every frame by SVD with iterated body-fixed
-       marker coordinates (:func:`jointbench.numerics.poses.rigid_poses`); the body frame coincides
-       with the reference frame at frame 0.
+       marker coordinates (:func:`jointbench.numerics.poses.rigid_poses`).
     2. The body-fixed point ``p`` minimising the amplitude of its trajectory
        ``q_k = R_k p + t_k``, ``sum_{x,y,z} (max_k q_k - min_k q_k)``, found by ``fminsearch``
        (:mod:`jointbench.numerics.simplex`) at its defaults (TolX = TolFun = 1e-4, at most 600
@@ -97,11 +99,14 @@ def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
       it is, the minimum being the zero-amplitude centre). It moves with a translation of the
       data only to within the simplex's stopping point, which depends on the coordinates
       (tenths of a millimetre at 0.5 mm noise).
-    * The start is expressed in the body frame through frame 0's pose,
-      ``p_0 = R_0' (c_LS - t_0)``, so the simplex (5 % of ``p_0``'s coordinates) is built in
-      the body frame, which at frame 0 is the reference frame.
+    * Body coordinates are those in which a point's coordinates are the mean of its trajectory
+      (:func:`_mean_anchored`), not those of frame 0: the search is then over the reported
+      centre itself, ``mean_k q_k(p) = p``, started at the LS centre with the simplex of
+      ``fminsearch`` (5 % of its coordinates) in the reference frame's axes, and neither
+      depends on which frame comes first (paper A does not say which body frame it used; one
+      pinned to frame 0 moved the answer by 0.15 mm when a recording's frames were reversed).
     * ``q_k(p*)`` is not a single point when ``p*`` does not stay fixed; the reported centre is
-      its mean over frames, ``mean_k q_k(p*)`` [mm] (the bounding box's centre would be
+      its mean over frames, ``mean_k q_k(p*) = p*`` [mm] (the bounding box's centre would be
       another choice; the mean is less sensitive to the extreme frames).
 
     Parameters
@@ -113,17 +118,17 @@ def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     -------
     CenterResult with ``center`` (3,) [mm], ``radii=None``, ``cost`` the amplitude at ``p*``
     [mm], ``converged`` the optimiser's success, ``iterations`` its iteration count;
-    ``diagnostics["body_point"]`` is ``p*`` (a list [mm]), with
+    ``diagnostics["body_point"]`` is ``p*`` in the body frame of
+    :func:`jointbench.numerics.poses.rigid_poses` (its position at frame 0; a list [mm]), with
     ``diagnostics["function_evaluations"]``.
     """
     markers, start = _ma_prepare(markers, start)
-    rotation, translation, _ = rigid_poses(markers)
-    body_start = _body_point(start, rotation, translation)
+    rotation, translation = _mean_anchored(*rigid_poses(markers)[:2])
     rotation, translation = rotation[None], translation[None]
     trial = np.zeros(1, dtype=int)
     search = nelder_mead(
         lambda *p: float(_amplitudes(np.array([p]), rotation, translation, trial)[0]),
-        body_start,
+        start,
         **FMINSEARCH_OPTIONS,
     )
     return _ma_result(search, rotation[0], translation[0])
@@ -137,9 +142,20 @@ def _ma_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.n
     return markers, fit_ls(markers).center if start is None else _check_point(start, "start")
 
 
-def _body_point(point: np.ndarray, rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
-    """``point`` (3,) of the reference frame in body coordinates through frame 0's pose."""
-    return rotation[0].T @ (point - translation[0])
+def _mean_anchored(rotation: np.ndarray, translation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Poses ``(..., N, 3, 3)``, ``(..., N, 3)`` re-expressed so that a body point's coordinates
+    are the mean of its trajectory: ``R_k' = R_k M^-1``, ``t_k' = t_k - R_k' t_mean`` with
+    ``M = mean_k R_k`` and ``t_mean = mean_k t_k``, so ``mean_k (R_k' p + t_k') = p``.
+
+    The body frame of :func:`rigid_poses` is pinned to frame 0; a search built in it starts
+    from a point and a simplex that depend on which frame is first. These coordinates depend on
+    no frame (a change of body frame ``R_k Q'`` cancels in ``R_k M^-1``), so the search, and
+    MA's answer, do not depend on the order of the frames.
+    """
+    inverse = np.linalg.inv(rotation.mean(axis=-3))
+    turned = rotation @ inverse[..., None, :, :]
+    mean = translation.mean(axis=-2)
+    return turned, translation - np.einsum("...kij,...j->...ki", turned, mean)
 
 
 def _ma_result(search, rotation: np.ndarray, translation: np.ndarray) -> CenterResult:
@@ -157,7 +173,11 @@ def _ma_result(search, rotation: np.ndarray, translation: np.ndarray) -> CenterR
         status="ok" if ok else stop_status(search, FMINSEARCH_OPTIONS["max_fev"]),
         method="MA",
         cost=float(search.fun),
-        diagnostics={"body_point": point.tolist(), "function_evaluations": search.evaluations},
+        # In the body frame of rigid_poses, which is the reference frame at frame 0.
+        diagnostics={
+            "body_point": trajectory[0].tolist(),
+            "function_evaluations": search.evaluations,
+        },
     )
 
 
@@ -168,10 +188,8 @@ def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterRe
     if prepared:
         arrays, points = zip(*prepared.values(), strict=True)
         # Each trial's poses are those of its own call (the pose fit is per trial).
-        rotations, translations, _ = rigid_poses(np.stack(arrays))
-        starts = np.stack(
-            [_body_point(*parts) for parts in zip(points, rotations, translations, strict=True)]
-        )
+        rotations, translations = _mean_anchored(*rigid_poses(np.stack(arrays))[:2])
+        starts = np.stack(points)
         searches = lockstep(
             lambda points, owners: _amplitudes(points, rotations, translations, owners),
             starts,
@@ -182,4 +200,37 @@ def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterRe
     return outcomes
 
 
-fit_ma.batched = _fit_ma_batch
+def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> CenterResult:
+    """MA's amplitude against its amplitude at the closed-form neighbours, the LS, NM and
+    SCoRE centres (SCoRE's is the least-squares point fixed in the segment, the linear
+    cousin of MA's); where one is lower by more than fminsearch's TolFun, MA restarted from it
+    (one more search, paid only then). See :mod:`jointbench.estimators.selfcheck`."""
+    del start  # the answer is judged, wherever it was started
+    neighbours = {"the LS centre": np.asarray(fit_ls(markers).center)}
+    for name, fit in (("the NM centre", fit_nm), ("the SCoRE centre", fit_score_center)):
+        try:
+            neighbours[name] = np.asarray(fit(markers).center)
+        except ValueError:
+            pass  # that neighbour does not exist for these data; the others remain
+    rotation, translation = _mean_anchored(*rigid_poses(markers)[:2])
+    points = np.stack(list(neighbours.values()))
+    costs = _amplitudes(points, rotation[None], translation[None], np.zeros(len(points), dtype=int))
+    best = int(np.argmin(costs))
+    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
+        return selfcheck.held(
+            result,
+            f"the amplitude at {', '.join(neighbours)} is not below the answer's "
+            f"{result.cost:.6g} mm by more than TolFun (least {float(costs[best]):.6g} mm)",
+        )
+    better = fit_ma(markers, start=points[best])
+    moved = float(np.linalg.norm(better.center - result.center))
+    return selfcheck.restarted(
+        result,
+        better,
+        list(neighbours)[best],
+        f"{moved:.3g} mm from the first answer, which is replaced",
+    )
+
+
+fit_ma.self_check = _ma_self_check
+fit_ma.batched = isolated(_fit_ma_batch)

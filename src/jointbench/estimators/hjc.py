@@ -85,6 +85,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.declared import Count, NonNegative
+from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
@@ -691,7 +692,7 @@ def _batched_gauss_markov(frame0: bool):
         return run(proximal, distal, poses=poses, **options)
 
     checked.pose_segments = run.pose_segments
-    return checked
+    return isolated(checked)
 
 
 def _analytic_finish(

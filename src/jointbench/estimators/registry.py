@@ -99,18 +99,29 @@ def _check_kind(kind: str) -> None:
 
 
 def _checked(kind: str, fn: Callable) -> Callable:
-    """``fn`` with the input checks before and the support verdict after each fit."""
+    """``fn`` with the input checks before, and its self-check and the support verdict after,
+    each fit."""
 
     @functools.wraps(fn)
     def checked(*arrays: object, **options: object):
         clean = validation.check_input(kind, arrays)
-        return support.annotate(fn(*clean, **options), support.assess(kind, clean))
+        result = _self_checked(fn, fn(*clean, **options), clean, options)
+        return support.annotate(result, support.assess(kind, clean))
 
     checked.__dict__.pop("batched", None)  # never the unchecked form
     return checked
 
 
-def _checked_batched(kind: str, raw: Callable) -> Callable[..., list]:
+def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
+    """``result`` after ``fn``'s self-check (:mod:`jointbench.estimators.selfcheck`), if
+    it has one (options the fit took are passed on; ``poses`` are the fit's own business)."""
+    check = getattr(fn, "self_check", None)
+    if check is None:
+        return result
+    return check(result, *arrays, **{k: v for k, v in options.items() if k != "poses"})
+
+
+def _checked_batched(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
     """A ``batched`` form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
     returning per trial a result or the exception) with the checks of :func:`_checked` per
     trial and the support verdict of all trials in one call."""
@@ -127,6 +138,7 @@ def _checked_batched(kind: str, raw: Callable) -> Callable[..., list]:
                 outcomes[trial] = error
                 continue
             if not isinstance(outcome, Exception):
+                outcomes[trial] = _self_checked(raw_fn, outcome, arrays, options)
                 fitted.append(trial)
                 clean.append(arrays)
         if fitted:
@@ -196,7 +208,7 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
         _BATCHED_RESOLVED.add((kind, name))
         raw = getattr(entry.fn, "batched", None)
         if raw is not None:
-            entry.checked.batched = _checked_batched(kind, raw)
+            entry.checked.batched = _checked_batched(kind, raw, entry.fn)
     return entry.checked
 
 

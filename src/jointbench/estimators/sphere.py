@@ -20,12 +20,22 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.declared import Count, Point, Positive
+from jointbench.estimators import selfcheck
+from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
+from jointbench.numerics.spheres import (
+    LSMoments,
+    ls_moments,
+    ls_system,
+    mean_weights,
+    row_sq,
+    solve_ls_system,
+)
 
 __all__ = [
     "FMINSEARCH_OPTIONS",
@@ -69,75 +79,6 @@ def _check_point(point: object, name: str) -> np.ndarray:
     return array
 
 
-_ONES3 = np.ones(3)
-
-
-def _row_sq(flat: np.ndarray) -> np.ndarray:
-    """Squared norms of the rows of a ``(n, 3)`` array (a matmul is cheaper than einsum here)."""
-    return (flat * flat) @ _ONES3
-
-
-@lru_cache(maxsize=64)
-def _mean_weights(n: int) -> np.ndarray:
-    """``(n,)`` of ``1 / n``, read-only: ``weights @ x`` is the mean of the rows of ``x``."""
-    weights = np.full(n, 1.0 / n)
-    weights.setflags(write=False)
-    return weights
-
-
-# --------------------------------------------------------------------------------------------
-# LS — Gamage & Lasenby (2002)
-# --------------------------------------------------------------------------------------------
-
-
-class _LSMoments(NamedTuple):
-    """Gamage & Lasenby's normal equations with the per-marker moments they are made of.
-
-    Each (frame, marker) row is augmented to ``x = (v, |v|^2)`` and centred on its marker's
-    mean over frames; every sum the LS, BC and cost formulas need is then a product with these
-    rows, and ``A`` and ``b`` are blocks of one 4 x 4 Gram matrix.
-    """
-
-    a_matrix: np.ndarray  # (3, 3) [mm^2]
-    b_vector: np.ndarray  # (3,) [mm^3]
-    means: np.ndarray  # (P, 4): mean_k v_k^p [mm] and mean_k |v_k^p|^2 [mm^2]
-    centred: np.ndarray  # (N P, 4): x_k^p - mean_k x_k^p, frame-major rows
-
-
-def _ls_moments(markers: np.ndarray) -> _LSMoments:
-    n_frames, n_markers, _ = markers.shape
-    augmented = np.empty((n_frames, n_markers, 4))
-    augmented[..., :3] = markers
-    augmented[..., 3] = _row_sq(markers.reshape(-1, 3)).reshape(n_frames, n_markers)
-    # Means over frames as one vector-matrix product with the (frames, markers * 4) view, and
-    # the sums over frames and markers as one matmul of the (frames * markers, 4) rows: at the
-    # usual 100-1000 frames NumPy's per-call overhead, not arithmetic, sets the cost.
-    wide = augmented.reshape(n_frames, -1)
-    means = _mean_weights(n_frames) @ wide
-    wide -= means
-    centred = wide.reshape(-1, 4)
-    gram = (centred.T @ centred) * (1.0 / n_frames)
-    return _LSMoments(2.0 * gram[:3, :3], gram[:3, 3].copy(), means.reshape(-1, 4), centred)
-
-
-def ls_system(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Gamage & Lasenby's normal equations ``A c = b`` (paper A eq. 4 minimised over ``c``).
-
-    ``A = 2 sum_p Cov(v^p)`` ``(3, 3)`` [mm^2] and
-    ``b = sum_p [mean(|v|^2 v) - mean(v) mean(|v|^2)]`` ``(3,)`` [mm^3], covariances with 1/N.
-    """
-    moments = _ls_moments(markers)
-    return moments.a_matrix, moments.b_vector
-
-
-def solve_ls_system(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
-    """Solve ``A c = b``, dropping singular values negligible by
-    :func:`jointbench.numerics.rank.negligible` (a pure hinge)."""
-    u, s, vt = np.linalg.svd(a_matrix)
-    inverse = np.where(negligible(s, s[0]), 0.0, 1.0 / np.where(s > 0, s, 1.0))
-    return vt.T @ (inverse * (u.T @ b_vector))
-
-
 def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
     """Pseudo-inverse of the symmetric ``A`` with the rule of :func:`solve_ls_system`.
 
@@ -158,11 +99,11 @@ def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
 def mean_sq_radii(markers: np.ndarray, center: np.ndarray) -> np.ndarray:
     """``r_p^2 = mean_k |v_k^p - c|^2`` ``(n_markers,)`` [mm^2]."""
     n_frames = markers.shape[0]
-    sq = _row_sq(markers.reshape(-1, 3) - center).reshape(n_frames, -1)
+    sq = row_sq(markers.reshape(-1, 3) - center).reshape(n_frames, -1)
     return sq.sum(axis=0) / n_frames
 
 
-def _algebraic_fit(moments: _LSMoments, center: np.ndarray) -> tuple[np.ndarray, float]:
+def _algebraic_fit(moments: LSMoments, center: np.ndarray) -> tuple[np.ndarray, float]:
     """Radii ``(P,)`` [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 [mm^4].
 
     From the moments instead of another pass over the data: with ``w = (-2 c, 1)``,
@@ -196,10 +137,10 @@ def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
     return _symmetric_pinv(a_matrix) @ b_vector
 
 
-def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, _LSMoments]:
+def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, LSMoments]:
     """LS centre ``(3,)`` and the moments it came from, which are of the data relative to its
     first sample: far from the origin ``|v|^2`` would lose the radii to rounding."""
-    moments = _ls_moments(markers - markers[0, 0])
+    moments = ls_moments(markers - markers[0, 0])
     return markers[0, 0] + _ls_solve(moments.a_matrix, moments.b_vector), moments
 
 
@@ -247,7 +188,7 @@ def _nm_scatter(scaled: np.ndarray) -> np.ndarray:
     n_frames, n_markers, _ = scaled.shape
     flat = scaled.reshape(-1, 3)
     basis = np.empty((flat.shape[0], 4))
-    basis[:, 0] = _row_sq(flat)
+    basis[:, 0] = row_sq(flat)
     basis[:, 1:] = flat
     scatter = np.zeros((4 + n_markers, 4 + n_markers))
     scatter[:4, :4] = basis.T @ basis
@@ -342,7 +283,7 @@ def fit_nm(markers: np.ndarray) -> CenterResult:
     markers = _prepare(markers)
     n_rows = markers.shape[0] * markers.shape[1]
     shifted = markers.reshape(-1, 3)
-    origin = _mean_weights(n_rows) @ shifted
+    origin = mean_weights(n_rows) @ shifted
     shifted = shifted - origin
     flat = shifted.reshape(-1)
     scale = float(np.sqrt((flat @ flat) / n_rows))
@@ -385,7 +326,7 @@ class _BCState(NamedTuple):
     cancellation even for data far from the origin.
     """
 
-    moments: _LSMoments  # of the shifted data y
+    moments: LSMoments  # of the shifted data y
     grams: np.ndarray  # (P, 4, 4)
     means: np.ndarray  # (P, 4): mean_k y and mean_k |y|^2
     b_vector: np.ndarray  # (3,) b of the shifted data
@@ -395,7 +336,7 @@ class _BCState(NamedTuple):
 
 def _bc_state(markers: np.ndarray, origin: np.ndarray) -> _BCState:
     n_frames, n_markers, _ = markers.shape
-    moments = _ls_moments(markers - origin)
+    moments = ls_moments(markers - origin)
     rows = moments.centred.reshape(n_frames, n_markers, 4)
     grams = np.einsum("kpi,kpj->pij", rows, rows)
     sum_of_means = moments.means[:, :3].sum(axis=0)
@@ -641,7 +582,7 @@ def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
     """IS's :class:`CenterResult` from its simplex search on rows ``(n_frames * P, 3)``."""
     center = np.array(search.x)
     finite = bool(np.all(np.isfinite(center)) and math.isfinite(search.fun))
-    radii = _mean_weights(n_frames) @ np.sqrt(_row_sq(flat - center)).reshape(n_frames, -1)
+    radii = mean_weights(n_frames) @ np.sqrt(row_sq(flat - center)).reshape(n_frames, -1)
     status = stop_status(search, FMINSEARCH_OPTIONS["max_fev"])
     return CenterResult(
         center=center,
@@ -704,7 +645,7 @@ def _with_fallback(fit, markers: np.ndarray, outcomes: list, redo: np.ndarray) -
 
 
 def _ls_moments_batch(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:class:`_LSMoments` of every trial: ``A`` (T, 3, 3), ``b`` (T, 3), means (T, P, 4),
+    """:class:`LSMoments` of every trial: ``A`` (T, 3, 3), ``b`` (T, 3), means (T, P, 4),
     centred rows (T, N P, 4)."""
     n_trials, n_frames, n_markers, _ = markers.shape
     augmented = np.empty((n_trials, n_frames, n_markers, 4))
@@ -1023,7 +964,78 @@ def _fit_bc_batch(
     return _with_fallback(one_trial, markers, outcomes, bad)
 
 
-fit_ls.batched = _fit_ls_batch
-fit_nm.batched = _fit_nm_batch
-fit_bc.batched = _fit_bc_batch
-fit_is.batched = _fit_is_batch
+def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> CenterResult:
+    """IS's f1 against f1 at its closed-form neighbours, the LS and NM centres; where one is
+    lower by more than fminsearch's TolFun, IS restarted from it (one more search, paid only
+    then). See :mod:`jointbench.estimators.selfcheck`."""
+    del start  # the answer is judged, wherever it was started
+    neighbours = {"the LS centre": _ls_start(markers)[0]}
+    try:
+        neighbours["the NM centre"] = np.asarray(fit_nm(markers).center)
+    except ValueError:
+        pass  # no NM centre to compare with (a plane); the LS one remains
+    n_frames = markers.shape[0]
+    flat = np.ascontiguousarray(markers.reshape(1, -1, 3))
+    points = np.stack(list(neighbours.values()))
+    costs = _geometric_costs(points, flat, np.zeros(len(points), dtype=int), n_frames)
+    best = int(np.argmin(costs))
+    name = list(neighbours)[best]
+    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
+        return selfcheck.held(
+            result,
+            f"f1 at {' and '.join(neighbours)} is not below the answer's {result.cost:.6g} "
+            f"by more than TolFun (least {float(costs[best]):.6g})",
+        )
+    better = fit_is(markers, start=points[best])
+    moved = float(np.linalg.norm(better.center - result.center))
+    return selfcheck.restarted(
+        result, better, name, f"{moved:.3g} mm from the first answer, which is replaced"
+    )
+
+
+def _bc_self_check(
+    result: CenterResult,
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> CenterResult:
+    """Whether BC's answer is its fixed point: one more of Halvorsen's updates, computed from
+    the markers about the returned centre (not from the moments the iteration used), must
+    move it by at most ``tol_x``. BC has no cost to compare (:func:`fit_bc`); the update is
+    its defining equation. See :mod:`jointbench.estimators.selfcheck`."""
+    del max_iterations, tol_fun
+    if not result.converged:
+        return result
+    n_frames = markers.shape[0]
+    # About the returned centre c: y = v - c, and the update's shift from c is
+    # A^+ (b_y - 2 sigma^2 sum_p mean_k y^p) (A does not change with the shift).
+    offsets = markers - np.asarray(result.center)
+    a_matrix, b_vector = ls_system(offsets)
+    squared = np.einsum("kpi,kpi->kp", offsets, offsets)
+    mean_squared = squared.mean(axis=0)
+    sigma2 = float(
+        np.mean(((squared - mean_squared) ** 2).sum(axis=0) / (4.0 * mean_squared * n_frames))
+    )
+    compensation = 2.0 * sigma2 * offsets.mean(axis=0).sum(axis=0)
+    step = float(np.abs(solve_ls_system(a_matrix, b_vector - compensation)).max())
+    if step <= tol_x:
+        return selfcheck.held(
+            result,
+            f"one more update from the returned centre moves it by {step:.3g} mm "
+            f"(tol_x = {tol_x:g})",
+        )
+    return selfcheck.failed(
+        result,
+        f"not BC's fixed point: one more update from the returned centre moves it by "
+        f"{step:.3g} mm, more than tol_x = {tol_x:g}",
+    )
+
+
+fit_is.self_check = _is_self_check
+fit_bc.self_check = _bc_self_check
+fit_ls.batched = isolated(_fit_ls_batch)
+fit_nm.batched = isolated(_fit_nm_batch)
+fit_bc.batched = isolated(_fit_bc_batch)
+fit_is.batched = isolated(_fit_is_batch)

@@ -50,6 +50,7 @@ import numpy as np
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.poses import best_rotation, rigid_poses
+from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
     "CENTRE_KINDS",
@@ -77,6 +78,12 @@ CENTRE_KINDS = ("center", "joint_center")
 #: rounding, not noise: the data are treated as noise-free. Rounding leaves ~1e-16 of the
 #: coordinates; the pose fits and the sums above it amplify that by a few orders.
 ROUNDING = 1e-12
+
+# A pose whose rotation about the cluster's weakest axis has a noise SD above this [rad], about
+# 29 degrees, is left to the noise: first-order error theory no longer describes it. Paper A's
+# smallest marker set (M) with its largest noise (2 mm) reaches 13 degrees and is a studied,
+# legitimate condition; three collinear markers with 0.3 mm noise reach 46 degrees.
+_MAX_POSE_SD_RAD = 0.5
 
 # In noise-free data, a rotation below this is rounding (a noise-free hinge leaves ~5e-10 rad).
 _ROUNDING_ROTATION_RAD = 1e-8
@@ -203,7 +210,7 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
     if not all(_poses_defined(array) for array in arrays):
         if n_trials > 1:
             return [assess(kind, tuple(array[t] for array in arrays)) for t in range(n_trials)]
-        return [Support((), {"assessed": False, "reason": "fewer than 3 non-collinear markers"})]
+        return [_without_poses(tuple(array[0] for array in arrays), "no 3 non-collinear markers")]
     names = ARRAY_NAMES[kind]
     clusters = [_clusters(array) for array in arrays]
     dof = sum(cluster.dof for cluster in clusters)
@@ -212,9 +219,89 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
     exact = variance <= (ROUNDING * largest) ** 2
     reference = clusters[0] if kind == "joint_center" else None
     rotation = _rotation_test(clusters[-1], reference, variance, dof, exact)
+    # A rotation about the cluster's weakest axis worse determined than this (noise s over the
+    # markers' spread about that axis) leaves the pose to the noise (nearly collinear markers):
+    # the first-order tests above do not hold, and the data are judged without poses.
+    weakest = np.sqrt(
+        np.max([np.linalg.eigvalsh(c.inertia_inv)[:, -1] for c in clusters], axis=0) * variance
+    )
     return [
-        _verdict(kind, names, clusters, t, float(variance[t]), rotation) for t in range(n_trials)
+        _without_poses(
+            tuple(array[t] for array in arrays),
+            f"nearly collinear markers (their pose is determined to {np.degrees(weakest[t]):.2g}"
+            " deg about their line)",
+        )
+        # Markers that keep no shape are reported as such (_verdict), collinear or not.
+        if weakest[t] > _MAX_POSE_SD_RAD
+        and all(cluster.nonrigid_share[t] < MAX_NONRIGID_SHARE for cluster in clusters)
+        else _verdict(kind, names, clusters, t, float(variance[t]), rotation)
+        for t in range(n_trials)
     ]
+
+
+def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
+    """The verdict on one trial whose markers give no rigid-body pose (``reason``): fewer
+    than three markers, or collinear ones. What the positions alone can show is tested on the
+    moving markers ``arrays[-1]`` ``(N, P, 3)``, fitted with the concentric spheres every centre
+    and axis model implies (a marker turning about an axis moves on a sphere about any of its
+    points; LS, closed form):
+
+    * the sphere fit's residual share of the markers' scatter about their mean positions, as
+      the rigidity share of the module docstring (a cloud has no sphere to fit);
+    * whether the trajectories are arcs at all: with ``RSS_line`` the scatter off each marker's
+      best straight line (2 coordinates per sample, ``2 P (N - 2)`` degrees of freedom) and
+      ``s^2`` the sphere residual per degree of freedom (``N P - 3 - P``),
+      ``(RSS_line / (2 P (N - 2))) / s^2`` is F-distributed near 1 when every marker moves on a
+      line (no rotation), and large for an arc resolved above the noise.
+
+    Rigidity between markers, and rotation about more than one axis, cannot be tested without
+    a pose: the status always says so.
+    """
+    from scipy.special import fdtrc
+
+    markers = arrays[-1]
+    n_frames, n_markers, _ = markers.shape
+    offsets = markers - markers[0, 0]
+    sphere = np.linalg.norm(offsets - solve_ls_system(*ls_system(offsets)), axis=-1)
+    rss_sphere = float(np.sum((sphere - sphere.mean(axis=0)) ** 2))
+    centred = markers - markers.mean(axis=0)
+    scatter = np.einsum("kpi,kpj->pij", centred, centred)
+    rss_line = float(np.maximum(np.linalg.eigvalsh(scatter)[:, :2], 0.0).sum())
+    share = rss_sphere / float(np.sum(centred * centred))
+    sphere_dof = n_frames * n_markers - 3 - n_markers
+    line_dof = 2 * n_markers * (n_frames - 2)
+    rounding = (ROUNDING * float(np.abs(markers).max())) ** 2 * n_frames * n_markers
+    if rss_sphere <= rounding:
+        p_line = float(rss_line <= rounding)
+    else:
+        p_line = float(
+            fdtrc(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
+        )
+    residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
+    warnings = [
+        f"not verified: {reason}, so no rigid-body pose: whether the markers are one rigid "
+        "body and rotate about more than one axis was not tested"
+    ]
+    if share >= MAX_NONRIGID_SHARE:
+        warnings.append(
+            f"the markers do not move on concentric spheres: the sphere fit leaves "
+            f"{100 * share:.0f}% of their scatter about their mean positions unexplained"
+        )
+    elif p_line >= ROTATION_ALPHA:
+        warnings.append(
+            "range of motion too small to support an answer: the trajectories are straight "
+            f"lines within the sphere fit's residual of {residual_mm:.3g} mm (p = {p_line:.2g})"
+        )
+    return Support(
+        tuple(warnings),
+        {
+            "assessed": False,
+            "reason": reason,
+            "sphere_residual_share": share,
+            "sphere_residual_mm": residual_mm,
+            "straight_line_p_value": p_line,
+        },
+    )
 
 
 def _verdict(kind, names, clusters, t, variance, rotation) -> Support:

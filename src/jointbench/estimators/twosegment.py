@@ -42,6 +42,7 @@ from typing import TypeVar
 import numpy as np
 
 from jointbench.declared import NonNegative
+from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import (
@@ -173,18 +174,35 @@ def trial_poses(
         except ValueError as error:
             outcomes[trial] = error
     good = [trial for trial in range(n_trials) if outcomes[trial] is None]
-    fitted = {name: rigid_poses(arrays[name][good]) for name in names}
+    fitted = {name: _fitted_poses(arrays[name][good]) for name in names}
     for index, trial in enumerate(good):
         try:
             outcomes[trial] = {
-                name: _segment_poses(
-                    arrays[name][trial], *(part[index] for part in fitted[name]), name=name
-                )
+                name: _segment_poses(arrays[name][trial], *_parts(fitted[name][index]), name=name)
                 for name in names
             }
         except ValueError as error:
             outcomes[trial] = error
     return outcomes
+
+
+def _fitted_poses(markers: np.ndarray) -> list:
+    """Per trial of ``markers`` ``(T, N, P, 3)`` its :func:`rigid_poses` parts, all trials in
+    one call; when that call fails numerically, each trial alone, a failing trial's error in
+    place of its parts."""
+    try:
+        return list(zip(*rigid_poses(markers), strict=True))
+    except NUMERICAL_FAILURES:
+        return each_alone(
+            lambda t: tuple(part[0] for part in rigid_poses(markers[t : t + 1])), len(markers)
+        )
+
+
+def _parts(fitted: tuple | Exception) -> tuple:
+    """A trial's pose parts, or its numerical failure raised."""
+    if isinstance(fitted, Exception):
+        raise fitted
+    return fitted
 
 
 def each_trial(
@@ -459,7 +477,7 @@ def batched_all(
         return finish_all(poses, **options)
 
     run.pose_segments = names
-    return run
+    return isolated(run)
 
 
 def pose_segments(fit: Callable) -> tuple[str, ...] | None:

@@ -1,0 +1,67 @@
+"""Many-trial forms that keep one trial's numerical failure to that trial.
+
+A ``batched`` form fits ``T`` trials with array operations over all of them, so a LAPACK routine
+that fails on one trial's values (an eigen-decomposition that does not converge on coordinates
+near 1e200, say) fails the call for every trial. :func:`isolated` turns that into the failing
+trial's own outcome: the batch is redone one trial at a time, each trial through the same
+batched form (whose one-trial batch equals the one-trial function), and a trial that still
+fails carries its exception. A batch without a failure pays nothing.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["NUMERICAL_FAILURES", "each_alone", "isolated"]
+
+#: What a fit raises when a trial's values defeat it (``LinAlgError`` is a ``ValueError``);
+#: anything else is a bug and propagates.
+NUMERICAL_FAILURES = (ValueError, FloatingPointError)
+
+
+def each_alone(fit_one: Callable[[int], object], n_trials: int) -> list:
+    """``fit_one(trial)`` for every trial, a numerical failure kept as that trial's outcome."""
+    outcomes: list = []
+    for trial in range(n_trials):
+        try:
+            outcomes.append(fit_one(trial))
+        except NUMERICAL_FAILURES as error:
+            outcomes.append(error)
+    return outcomes
+
+
+def isolated(batched: Callable[..., list]) -> Callable[..., list]:
+    """``batched(*segments, **options)`` (segments ``(n_trials, ...)``, one outcome per trial)
+    that, when the whole call fails numerically, returns per trial the outcome it has alone.
+
+    ``poses=`` (a list with one entry per trial, see
+    :func:`jointbench.estimators.twosegment.trial_poses`) is split with the trials.
+    """
+
+    @functools.wraps(batched)
+    def run(*segments: object, **options: object) -> list:
+        try:
+            return batched(*segments, **options)
+        except NUMERICAL_FAILURES as error:
+            arrays = [np.asarray(segment) for segment in segments]
+            n_trials = arrays[0].shape[0] if arrays and arrays[0].ndim else 0
+            if n_trials == 0:
+                raise
+            if n_trials == 1:
+                return [error]
+
+        poses = options.get("poses")
+
+        def alone(trial: int):
+            one = dict(options)
+            if poses is not None:
+                one["poses"] = poses[trial : trial + 1]
+            (outcome,) = batched(*(array[trial : trial + 1] for array in arrays), **one)
+            return outcome
+
+        return each_alone(alone, n_trials)
+
+    return run

@@ -1,0 +1,59 @@
+"""Evidence that a search found the minimum it reports, added to a user's checked call.
+
+A search-based estimator (a simplex from fixed starts, a fixed-point iteration) can stop where
+its own cost is not least and still meet its stopping test. After such a fit the registry
+(:func:`jointbench.estimators.registry.get`) calls the method's ``self_check``: each method
+compares its cost with its cost at a few closed-form neighbours or with a restart from one,
+which costs less than the fit itself. The outcome is written into the result:
+
+* the answer holds: ``status`` is left as it is, ``diagnostics["self_check"]`` says what was
+  compared;
+* a neighbour or restart reached a cost lower by more than the search's own function
+  tolerance: the search had stopped in a local minimum. The lower point, searched to the same
+  tolerances, is returned, with ``status`` starting ``"restarted: "`` and naming both costs,
+  so that a user never reads "ok" about a point that was not the least found;
+* a check that fails without a better point to offer (a fixed point that is not one) sets
+  ``converged=False`` and says so in ``status``.
+
+The simulated studies call the registered functions without these checks (as the papers ran
+their searches), so the published comparisons keep the papers' behaviour, local minima
+included.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+__all__ = ["failed", "held", "restarted"]
+
+
+def held(result, evidence: str):
+    """``result`` with the evidence that its minimum held in ``diagnostics["self_check"]``."""
+    return dataclasses.replace(result, diagnostics={**result.diagnostics, "self_check": evidence})
+
+
+def restarted(result, better, source: str, moved: str):
+    """``better`` (the lower minimum, reached from ``source``) in place of ``result``, its
+    status saying so; ``moved`` describes how far the answer moved."""
+    evidence = (
+        f"the search stopped in a local minimum (cost {result.cost:.6g}); a restart from "
+        f"{source} reached {better.cost:.6g}, {moved}"
+    )
+    status = f"restarted: {evidence}"
+    if better.status != "ok":
+        status = f"{status}; {better.status}"
+    diagnostics = {
+        **better.diagnostics,
+        "self_check": evidence,
+        "local_minimum_cost": result.cost,
+    }
+    return dataclasses.replace(better, status=status, diagnostics=diagnostics)
+
+
+def failed(result, evidence: str):
+    """``result`` marked as not converged because its self-check failed (``evidence``)."""
+    status = f"self-check failed: {evidence}"
+    if result.status != "ok":
+        status = f"{result.status}; {status}"
+    diagnostics = {**result.diagnostics, "self_check": evidence}
+    return dataclasses.replace(result, converged=False, status=status, diagnostics=diagnostics)
