@@ -7,11 +7,13 @@ import re
 import pandas as pd
 import pytest
 import yaml
-from workflow_copy import ROOT, copy_workflow, run_snakemake
+from workflow_copy import ROOT, copy_workflow, load_benchmark, run_snakemake
 
 from jointbench.papers import papers_of_study
 
 pytestmark = pytest.mark.pipeline
+
+compare_collected = load_benchmark("compare_collected")
 
 
 @pytest.fixture(scope="session")
@@ -182,3 +184,29 @@ def test_a_grid_without_a_figures_condition_runs_without_that_figure(tmp_path):
         target = f"results/figures/{figure}.png"
         run = run_snakemake(workdir, "--configfile", str(overlay), "--dry-run", target)
         assert (run.returncode == 0) is made, run.stderr[-3000:]
+
+
+def test_the_per_condition_grain_gives_the_default_grains_results(tmp_path):
+    """The cluster grain (one estimate job per condition) runs every study, the external LM rule
+    included, and collects the same values as the default grain, timings aside."""
+    grains = ROOT / "tests" / "data" / "grains.yaml"
+    per_condition = ROOT / "config" / "variants" / "per_condition.yaml"
+    targets = [f"results/collected/{study}.parquet" for study in ("cmc", "hinge", "hip")]
+    runs = {}
+    for name, overlays in (("default", [grains]), ("per_condition", [grains, per_condition])):
+        (tmp_path / name).mkdir()
+        workdir = copy_workflow(tmp_path / name)
+        run = run_snakemake(workdir, *targets, "--configfile", *map(str, overlays))
+        assert run.returncode == 0, f"{name}: {run.stderr[-4000:]}"
+        runs[name] = workdir
+    # The overlay took effect: one log per condition of an estimator, not one per estimator.
+    per_job_logs = runs["per_condition"] / "results" / "logs" / "estimate" / "hip" / "analytic"
+    assert sorted(p.name for p in per_job_logs.glob("*.log")) == [
+        "n_frames-16.log",
+        "n_frames-75.log",
+    ]
+    differences = compare_collected.compare_runs(runs["default"], runs["per_condition"])
+    assert set(differences) == {"cmc", "hinge", "hip"}
+    assert not any(differences.values()), differences
+    methods = set(pd.read_parquet(runs["per_condition"] / targets[0])["method"])
+    assert methods == {"NM", "LS", "LM"}

@@ -8,6 +8,7 @@ gathers them into frames).
 from __future__ import annotations
 
 import logging
+import os
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -223,6 +224,10 @@ def run_simulate_files(
 
 def _same_condition(paths: Sequence[str], outputs: Sequence[str], what: str) -> list[str]:
     """The file of ``paths`` named like each output (its condition), in the outputs' order."""
+    for files, kind in ((paths, what), (outputs, "output")):
+        # A string is a sequence too: iterated, it would give one "file" per character.
+        if isinstance(files, str | os.PathLike):
+            raise TypeError(f"{kind} files must be a list of paths, not one path: {files!r}")
     by_condition = {Path(path).stem: path for path in paths}
     missing = [Path(output).stem for output in outputs if Path(output).stem not in by_condition]
     if missing:
