@@ -4,7 +4,7 @@ import sys
 
 from snakemake.utils import validate
 
-from jointbench import jobs, pipeline
+from jointbench import invocation, jobs, pipeline
 from jointbench import report as jb_report
 from jointbench.estimators import registry
 from jointbench.fingerprint import code_fingerprint
@@ -19,6 +19,10 @@ jobs.load_extensions(config)
 jb_config.validate_config(config)
 # Grid values, estimator names and options: a mistake stops the run here, naming the key.
 jb_config.check_config(config)
+
+# Advice a job prints (the --forcerun for an unreadable file) repeats this run's options: its
+# --configfile and --config, --directory, --profile.
+invocation.record(sys.argv[1:])
 
 STUDIES = jb_config.study_names(config)
 # The interpreter running this workflow, for external estimators' shell commands.
