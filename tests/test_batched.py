@@ -140,12 +140,13 @@ def test_estimate_uses_the_batched_form_and_keeps_its_table(study, method, monke
     original = fit.batched
 
     def spy(*segments, **options):
-        calls.append(len(segments))
+        calls.append((len(segments), len(segments[0])))
         return original(*segments, **options)
 
     monkeypatch.setattr(fit, "batched", spy)
     batched = run.estimate(study, method, trials, condition)
-    assert calls == [len(spec.segments)]
+    # The untimed warm-up on the first trial, then every trial in one call.
+    assert calls == [(len(spec.segments), 1), (len(spec.segments), trials.n_trials)]
     monkeypatch.delattr(fit, "batched")
     alone = run.estimate(study, method, trials, condition)
     assert list(batched.columns) == list(alone.columns)

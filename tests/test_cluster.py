@@ -5,7 +5,6 @@ Fast checks only; the end-to-end proof on a real SLURM is benchmarks/slurm_singl
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import subprocess
@@ -16,26 +15,14 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from workflow_copy import ROOT, SNAKEMAKE, copy_workflow
+from workflow_copy import ROOT, SNAKEMAKE, copy_workflow, load_benchmark
 
 PROFILE = ROOT / "profiles" / "slurm" / "config.v8+.yaml"
 ENVIRONMENT = ROOT / "workflow" / "envs" / "jointbench.yaml"
 
 
-def _load(name: str):
-    """A script of benchmarks/ as a module (benchmarks/ is not a package)."""
-    spec = importlib.util.spec_from_file_location(
-        f"benchmarks_{name}", ROOT / "benchmarks" / f"{name}.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    # Registered first: dataclasses look their module up while the class is being made.
-    sys.modules[f"benchmarks_{name}"] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-compare_collected = _load("compare_collected")
-scaling = _load("scaling")
+compare_collected = load_benchmark("compare_collected")
+scaling = load_benchmark("scaling")
 
 
 @pytest.fixture(scope="module")

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from snakemake.utils import update_config
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench import declared
@@ -41,11 +42,11 @@ def changed(config, study, path, value):
 
 def test_shipped_configs_pass(config):
     study_config.check_config(config)
-    for path in [ROOT / "tests" / "data" / "reduced.yaml", *ROOT.glob("config/variants/*.yaml")]:
-        overlay = yaml.safe_load(path.read_text())
+    data = ROOT / "tests" / "data"
+    for path in [data / "reduced.yaml", data / "grains.yaml", *ROOT.glob("config/variants/*.yaml")]:
         merged = copy.deepcopy(config)
-        for study, settings in overlay["studies"].items():
-            merged["studies"][study].update(settings)
+        # Merged as `--configfile` merges an overlay: key by key, at every depth.
+        update_config(merged, yaml.safe_load(path.read_text()))
         study_config.check_config(merged)
 
 

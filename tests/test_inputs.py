@@ -5,15 +5,17 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
+import subprocess
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 from test_extension import CENTROID_RULE, user_clone
-from workflow_copy import run_snakemake
+from workflow_copy import SNAKEMAKE, run_snakemake
 
-from jointbench import pipeline
+from jointbench import invocation, pipeline
 from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
 from jointbench.figures import extended
@@ -232,6 +234,54 @@ def test_a_truncated_file_is_named_with_the_command_that_regenerates_it(
     assert dataset.exists()
 
 
+@pytest.mark.parametrize(
+    ("argv", "options"),
+    [
+        (
+            ["results/collected/cmc.parquet", "-j2", "--configfile", "my.yaml"],
+            ["--configfile", "my.yaml", "--jobs", "2"],
+        ),
+        (
+            ["--profile", "profiles/slurm", "--configfile", "a.yaml", "b.yaml", "--dry-run"],
+            ["--configfile", "a.yaml", "b.yaml", "--profile", "profiles/slurm"],
+        ),
+        (
+            ["--config", "jobs={'estimate': 'per_condition'}", "-d", "run", "--forcerun", "x"],
+            ["-j2", "--directory", "run", "--config", "jobs={'estimate': 'per_condition'}"],
+        ),
+        (["--cores=4", "-s", "other.smk", "-n"], ["--snakefile", "other.smk", "--cores", "4"]),
+    ],
+    ids=["configfile", "profile", "config and directory", "cores and snakefile"],
+)
+def test_the_options_a_follow_up_command_repeats(argv, options):
+    assert invocation.workflow_options(argv) == options
+
+
+def test_the_regenerating_command_keeps_the_users_options_and_quotes_paths():
+    environ = {}
+    invocation.record(["study_cmc", "-j2", "--configfile", "my config.yaml"], environ)
+    command = invocation.snakemake_command("--forcerun", "results/a b.parquet", environ=environ)
+    assert (
+        command
+        == "snakemake --configfile 'my config.yaml' --jobs 2 --forcerun 'results/a b.parquet'"
+    )
+    # A job of a cluster re-reads the rules under its own command line: the user's is kept.
+    invocation.record(["--snakefile", "/abs/Snakefile", "--mode", "remote"], environ)
+    assert environ[invocation.ENVIRONMENT_VARIABLE] == "--configfile 'my config.yaml' --jobs 2"
+    assert invocation.snakemake_command("--forcerun", "x", environ={}) == (
+        "snakemake -j2 --forcerun x"
+    )
+
+
+def test_a_truncated_file_is_named_with_the_runs_own_options(estimates_and_dataset, monkeypatch):
+    _, dataset = estimates_and_dataset
+    truncate(dataset)
+    monkeypatch.setenv(invocation.ENVIRONMENT_VARIABLE, "--configfile my.yaml --jobs 2")
+    with pytest.raises(ValueError) as error:
+        read_dataset(dataset)
+    assert f"snakemake --configfile my.yaml --jobs 2 --forcerun {dataset}" in str(error.value)
+
+
 def test_a_missing_file_is_named(tmp_path):
     with pytest.raises(ValueError, match=r"nowhere\.parquet: cannot be read as parquet"):
         read_dataset(tmp_path / "nowhere.parquet")
@@ -268,10 +318,23 @@ def test_a_truncated_dataset_is_named_logged_and_regenerated(tmp_path):
     assert failed.returncode != 0
     message = f"{DATASET}: cannot be read as parquet"
     assert message in failed.stdout + failed.stderr
-    assert message in (tmp_path / "results/logs/estimate/cmc/LS.log").read_text()
+    log = (tmp_path / "results/logs/estimate/cmc/LS.log").read_text()
+    assert message in log
     assert (tmp_path / DATASET).exists()  # nothing removed: the user decides
 
-    again = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config, "--forcerun", DATASET)
+    # The command the message prints, as printed: it must run this config, not the default one
+    # (whose grid has nine times the conditions).
+    printed = re.search(r"Regenerate it and what depends on it with: (snakemake .*)", log)[1]
+    assert f"--configfile {config[1]}" in printed
+    program, *options = shlex.split(printed)
+    assert program == "snakemake"
+    # The target first: --forcerun takes every word after it.
+    again = subprocess.run(
+        [str(SNAKEMAKE), "results/collected/cmc.parquet", *options],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert again.returncode == 0, again.stderr[-3000:]
     read_dataset(tmp_path / DATASET)
     assert len(pd.read_parquet(tmp_path / "results/collected/cmc.parquet")) == 2 * 2

@@ -278,3 +278,13 @@ def test_numpy_arrays_of_any_byte_order_are_stored_and_others_refused():
         io._from_numpy(np.zeros(3, dtype=bool))
     with pytest.raises(ValueError, match="1-D"):
         io._from_numpy(np.zeros((2, 2)))
+
+
+@pytest.mark.parametrize("one_path", ["d/c.parquet", Path("d/c.parquet")], ids=["str", "Path"])
+def test_one_path_where_a_list_of_files_is_expected_is_refused(one_path):
+    """A rule giving one dataset rather than a list of them is named, not read letter by letter."""
+    config = {"base_seed": 1, "studies": {"cmc": {"trials": 1}}}
+    with pytest.raises(TypeError, match="dataset files must be a list of paths, not one path"):
+        run.run_estimate_files(config, "cmc", "LS", one_path, ["e/c.parquet"])
+    with pytest.raises(TypeError, match="output files must be a list of paths"):
+        run.run_poses_files("hip", ["d/c.parquet"], one_path)

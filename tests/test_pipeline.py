@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
+import os
 import re
+import shlex
+import signal
+import subprocess
+import time
 
 import pandas as pd
 import pytest
 import yaml
-from workflow_copy import ROOT, copy_workflow, run_snakemake
+from workflow_copy import ROOT, SNAKEMAKE, copy_workflow, load_benchmark, run_snakemake
 
 from jointbench.papers import papers_of_study
 
 pytestmark = pytest.mark.pipeline
+
+compare_collected = load_benchmark("compare_collected")
 
 
 @pytest.fixture(scope="session")
@@ -182,3 +189,91 @@ def test_a_grid_without_a_figures_condition_runs_without_that_figure(tmp_path):
         target = f"results/figures/{figure}.png"
         run = run_snakemake(workdir, "--configfile", str(overlay), "--dry-run", target)
         assert (run.returncode == 0) is made, run.stderr[-3000:]
+
+
+def test_the_per_condition_grain_gives_the_default_grains_results(tmp_path):
+    """The cluster grain (one estimate job per condition) runs every study, the external LM rule
+    included, and collects the same values as the default grain, timings aside."""
+    grains = ROOT / "tests" / "data" / "grains.yaml"
+    per_condition = ROOT / "config" / "variants" / "per_condition.yaml"
+    targets = [f"results/collected/{study}.parquet" for study in ("cmc", "hinge", "hip")]
+    runs = {}
+    for name, overlays in (("default", [grains]), ("per_condition", [grains, per_condition])):
+        (tmp_path / name).mkdir()
+        workdir = copy_workflow(tmp_path / name)
+        run = run_snakemake(workdir, *targets, "--configfile", *map(str, overlays))
+        assert run.returncode == 0, f"{name}: {run.stderr[-4000:]}"
+        runs[name] = workdir
+    # The overlay took effect: one log per condition of an estimator, not one per estimator.
+    per_job_logs = runs["per_condition"] / "results" / "logs" / "estimate" / "hip" / "analytic"
+    assert sorted(p.name for p in per_job_logs.glob("*.log")) == [
+        "n_frames-16.log",
+        "n_frames-75.log",
+    ]
+    differences = compare_collected.compare_runs(runs["default"], runs["per_condition"])
+    assert set(differences) == {"cmc", "hinge", "hip"}
+    assert not any(differences.values()), differences
+    methods = set(pd.read_parquet(runs["per_condition"] / targets[0])["method"])
+    assert methods == {"NM", "LS", "LM"}
+
+
+def _readme_commands(heading: str) -> list[str]:
+    """The commands of the first shell block after the README line holding ``heading``."""
+    readme = (ROOT / "README.md").read_text()
+    after = readme[readme.index(heading) :]
+    block = re.search(r"```bash\n(.*?)```", after, re.DOTALL)[1]
+    return [line.strip() for line in block.splitlines() if line.strip()]
+
+
+def test_the_readmes_recovery_steps_finish_a_run_killed_mid_job(tmp_path):
+    """`kill -9` of a running Snakemake (and its jobs) leaves a lock and incomplete files; the
+    README's commands, run as written, finish the run."""
+    workdir = copy_workflow(tmp_path)
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    config["studies"]["cmc"].update(
+        trials=2,
+        grid={"marker_set": ["M"], "rom_deg": [5], "noise_mm": [1.0]},
+        estimators=["NM", "LS"],
+    )
+    for study in ("hinge", "hip"):
+        config["studies"][study]["enabled"] = False
+    # The user's own config, so that the README's commands need no --configfile.
+    (workdir / "config" / "config.yaml").write_text(yaml.safe_dump(config))
+    environment = {**os.environ, "PATH": f"{SNAKEMAKE.parent}{os.pathsep}{os.environ['PATH']}"}
+
+    def shell(command: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            shlex.split(command),
+            cwd=workdir,
+            env=environment,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+
+    running = subprocess.Popen(
+        ["snakemake", "-j2"],
+        cwd=workdir,
+        env=environment,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    incomplete = workdir / ".snakemake" / "incomplete"
+    deadline = time.monotonic() + 120
+    while not (incomplete.is_dir() and any(incomplete.iterdir())):
+        assert running.poll() is None, "the run ended before a job was seen running"
+        assert time.monotonic() < deadline, "no job started within 120 s"
+        time.sleep(0.05)
+    os.killpg(running.pid, signal.SIGKILL)  # its session: Snakemake and the job it runs
+    running.wait()
+
+    locked = shell("snakemake -j2 --rerun-incomplete")
+    assert locked.returncode != 0 and "LockException" in locked.stdout + locked.stderr
+    commands = _readme_commands("**A run was interrupted**")
+    assert commands == ["snakemake --unlock", "snakemake -j2 --rerun-incomplete"]
+    for command in commands:
+        done = shell(command)
+        assert done.returncode == 0, f"{command}: {done.stderr[-3000:]}"
+    finished = shell("snakemake -j2 --dry-run")
+    assert "Nothing to be done" in finished.stdout + finished.stderr

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -13,6 +15,7 @@ from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
 from jointbench.simulate import Trials
 from jointbench.study import config as study_config
+from jointbench.study import run
 from jointbench.study.io import read_dataset, write_dataset
 from jointbench.study.run import estimate, simulate_condition
 from jointbench.study.schema import check_estimates
@@ -115,6 +118,69 @@ def test_failures_become_rows_and_the_run_goes_on(config, flaky_estimator):
     assert frame["status"].str.startswith("error: ValueError: boom").sum() == 2
     assert (frame["status"] == "max iterations").sum() == 2
     assert frame.loc[frame["status"].str.startswith("error"), "error_mm"].isna().all()
+
+
+class _Clock:
+    """A stand-in for ``time.perf_counter`` [s] that moves only when an estimator is charged."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+COMPILE_S = 100.0  # one-time cost of an estimator's first call in a process
+FIT_S = 1.0  # cost of fitting one trial
+
+
+@pytest.fixture(params=[False, True], ids=["one trial at a time", "batched"])
+def compiling_estimator(request, monkeypatch):
+    """A throwaway estimator whose first call costs ``COMPILE_S`` besides ``FIT_S`` per trial,
+    on a clock that only its calls move (so the test times nothing real)."""
+    clock = _Clock()
+    monkeypatch.setattr(run, "time", SimpleNamespace(perf_counter=clock))
+    calls = []
+
+    def charge(n_trials: int) -> None:
+        clock.now += FIT_S * n_trials + (0.0 if calls else COMPILE_S)
+        calls.append(n_trials)
+
+    def centroid(markers):
+        return CenterResult(
+            center=markers.mean(axis=(0, 1)),
+            converged=True,
+            iterations=1,
+            status="ok",
+            method="compiling",
+        )
+
+    def compiling(markers):
+        charge(1)
+        return centroid(markers)
+
+    if request.param:
+
+        def batched(markers):
+            charge(len(markers))
+            return [centroid(trial) for trial in markers]
+
+        compiling.batched = batched
+    registry.register("center", "compiling")(compiling)
+    yield "compiling"
+    del registry._REGISTRY["center"]["compiling"]
+
+
+def test_a_first_calls_one_time_costs_are_in_no_trials_seconds(config, compiling_estimator, caplog):
+    """Numba's compilation on an estimator's first call in a job is timed apart (logged), not
+    charged to the first condition's trials (paper A Table 2 compares their times)."""
+    caplog.set_level(logging.INFO, logger="jointbench")
+    small = {**config, "studies": {"cmc": {**config["studies"]["cmc"], "trials": 3}}}
+    for condition in study_config.conditions(config, "cmc")[:2]:
+        trials = simulate_condition(small, "cmc", condition)
+        frame = estimate("cmc", compiling_estimator, trials, condition)
+        assert frame["seconds"].tolist() == [FIT_S] * 3, condition
+    assert f"warm-up fit of trial 0 in {COMPILE_S + FIT_S:.3f} s" in caplog.text
 
 
 def test_schema_check_names_the_column():

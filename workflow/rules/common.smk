@@ -6,7 +6,7 @@ from pathlib import Path
 
 from snakemake.utils import validate
 
-from jointbench import jobs, pipeline
+from jointbench import invocation, jobs, pipeline
 from jointbench.fingerprint import code_fingerprint
 from jointbench.study import run as jb_run
 from jointbench.papers import papers_of_study
@@ -17,6 +17,10 @@ jobs.load_extensions(config)
 jb_config.validate_config(config)
 # Grid values, estimator names and options: a mistake stops the run here, naming the key.
 jb_config.check_config(config)
+
+# Advice a job prints (the --forcerun for an unreadable file) repeats this run's options: its
+# --configfile and --config, --directory, --profile.
+invocation.record(sys.argv[1:])
 
 STUDIES = jb_config.study_names(config)
 # The interpreter running this workflow, for external estimators' shell commands.

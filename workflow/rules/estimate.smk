@@ -64,7 +64,8 @@ for _study in STUDIES:
             name:
                 f"estimate_{_study}"
             input:
-                datasets=f"results/datasets/{_study}/{{condition}}.parquet",
+                # A list, as in the per-study rule: the script takes a list of datasets.
+                datasets=[f"results/datasets/{_study}/{{condition}}.parquet"],
                 poses=shared_poses(_study, _shared, per_condition=True),
             output:
                 f"results/estimates/{_study}/{{method}}/{{condition}}.parquet",

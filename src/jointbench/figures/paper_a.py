@@ -360,11 +360,19 @@ def speed_wording(ours_s: float, paper_s: float) -> str:
     return f"{number}× {'faster' if ratio > 1 else 'slower'}"
 
 
+#: Our statistics of time per trial that Table 2 sets against the paper's means, the robust one
+#: (which words the headline) first.
+TABLE2_STATISTICS = ("median", "mean")
+
+
 def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> pd.DataFrame:
     """Seconds per trial per method over BC-converged trials, beside paper A Table 2.
 
-    ``speedup_vs_paper`` is paper_matlab_s / mean_s (above 1: ours is faster) and
-    ``vs_paper`` says the same in words (:func:`speed_wording`).
+    The paper gives each method's mean time per trial [s] (``paper_matlab_s``). Ours are set
+    against it by median and by mean: ``speedup_<statistic>`` is paper_matlab_s / ours (above
+    1: ours is faster) and ``vs_paper_<statistic>`` says the same in words
+    (:func:`speed_wording`). The median is the robust comparison: a few slow calls (a busy CPU,
+    a page fault) move our mean, not our median.
     """
     rows = bc_converged(collected[collected["method"].isin(PAPER_METHODS)])
     timing = rows.groupby("method")["seconds"].agg(["mean", "median", "size"])
@@ -379,23 +387,29 @@ def table2(collected: pd.DataFrame, published_seconds: Mapping[str, float]) -> p
             "paper_matlab_s": [published_seconds[m] for m in methods],
         }
     )
-    table["speedup_vs_paper"] = table["paper_matlab_s"] / table["mean_s"]
-    table["vs_paper"] = [
-        speed_wording(ours, paper)
-        for ours, paper in zip(table["mean_s"], table["paper_matlab_s"], strict=True)
-    ]
+    for statistic in TABLE2_STATISTICS:
+        ours = table[f"{statistic}_s"]
+        table[f"speedup_{statistic}"] = table["paper_matlab_s"] / ours
+        table[f"vs_paper_{statistic}"] = [
+            speed_wording(our, paper)
+            for our, paper in zip(ours, table["paper_matlab_s"], strict=True)
+        ]
     return table
 
 
 def table2_headline(table: pd.DataFrame) -> str:
-    """One sentence for a caption, worded from :func:`table2`'s own ratios."""
+    """One sentence for a caption, worded from :func:`table2`'s own ratios: by median, with the
+    mean's beside each."""
     parts = [
-        f"{m} {speed_wording(ours, paper)}"
-        for m, ours, paper in zip(
-            table["method"], table["mean_s"], table["paper_matlab_s"], strict=True
+        f"{method} {by_median} (by mean: {by_mean})"
+        for method, by_median, by_mean in zip(
+            table["method"], table["vs_paper_median"], table["vs_paper_mean"], strict=True
         )
     ]
-    return "Mean time per trial against the paper's MATLAB times: " + ", ".join(parts) + "."
+    return (
+        "Median time per trial against the paper's MATLAB times (the paper reports means; the "
+        "median is the robust comparison, unmoved by a few slow calls): " + ", ".join(parts) + "."
+    )
 
 
 def timing_note(environment: str | None = None) -> str:
@@ -418,7 +432,10 @@ def timing_note(environment: str | None = None) -> str:
     how = "; ".join(parts)
     return (
         f"Ours: wall-clock time per trial, measured inside the estimate job ({how}; simulation "
-        f"and file I/O excluded), on this run's machine ({environment}). Other jobs of the run "
-        "(snakemake -j) may have shared the CPUs, so times are indicative. Paper: MATLAB 6.5 on "
-        "a 3 GHz Pentium 4. speedup_vs_paper = paper_matlab_s / mean_s; above 1 ours is faster."
+        "and file I/O excluded; a first fit before the timed ones pays for compilation and "
+        f"first-call imports, its time in the job's log), on this run's machine ({environment}). "
+        "Other jobs of the run (snakemake -j) may have shared the CPUs, so times are indicative. "
+        "Paper: mean times, MATLAB 6.5 on a 3 GHz Pentium 4. speedup_median = paper_matlab_s / "
+        "median_s and speedup_mean = paper_matlab_s / mean_s; above 1 ours is faster. The "
+        "median is the robust comparison."
     )

@@ -22,6 +22,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from jointbench.estimators.twosegment import SegmentPoses, stored_segment_poses
+from jointbench.invocation import snakemake_command
 from jointbench.simulate import Trials
 
 if TYPE_CHECKING:
@@ -62,7 +63,7 @@ def _unreadable(path, error: Exception) -> ValueError:
     return ValueError(
         f"{path}: cannot be read as parquet ({type(error).__name__}: {error}); the file is "
         "missing, truncated or corrupt. Regenerate it and what depends on it with: "
-        f"snakemake -j2 --forcerun {path}"
+        + snakemake_command("--forcerun", str(path))
     )
 
 

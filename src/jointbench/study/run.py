@@ -7,7 +7,9 @@ gathers them into frames).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import os
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -114,6 +116,37 @@ def _fit_all(fit, spec, trials: Trials, options, poses=None) -> tuple[list, floa
     return outcomes, (time.perf_counter() - start) / max(trials.n_trials, 1)
 
 
+def _fit_trials(fit, spec, trials: Trials, options, poses=None) -> list[tuple]:
+    """``(result, status, converged, iterations, seconds)`` of every trial: ``seconds`` [s] is
+    the wall time of the trial's own fit, or for an estimator with a batched form
+    (:func:`_fit_all`) the batch's divided by its trials."""
+    batch = _fit_all(fit, spec, trials, options, poses)
+    if batch is not None:
+        outcomes, seconds = batch
+        return [(*_outcome(outcome), seconds) for outcome in outcomes]
+    fitted = []
+    for trial in range(trials.n_trials):
+        start = time.perf_counter()
+        outcome = _fit_one(fit, spec.fit_arguments(trials, trial), options)
+        fitted.append((*outcome, time.perf_counter() - start))
+    return fitted
+
+
+def _warm_up(fit, spec, trials: Trials, options, poses=None) -> float:
+    """Fit the first trial on its own, before any fit is timed; returns its wall time [s].
+
+    An estimator's first call in a process does one-time work besides fitting: Numba compiles
+    its kernels (or loads them from its cache), modules imported on first use load, caches
+    fill. Timed with the first trials, that work inflated the first condition of every job by up
+    to seconds per trial, and with it the means of paper A Table 2. The warm-up takes the same
+    path as the timed fits (same array types, batched or not), so nothing is compiled after it.
+    """
+    first = dataclasses.replace(trials, segments={k: v[:1] for k, v in trials.segments.items()})
+    start = time.perf_counter()
+    _fit_trials(fit, spec, first, options, None if poses is None else poses[:1])
+    return time.perf_counter() - start
+
+
 def methods_sharing_poses(config: Mapping, study: str) -> list[str]:
     """The study's built-in estimators that share one pose fit per trial: its pose-based ones
     (see :func:`jointbench.estimators.twosegment.pose_segments`) when there are two or more.
@@ -140,10 +173,11 @@ def estimate(
 ) -> pd.DataFrame:
     """One row per trial: condition, estimate, error, converged, iterations, seconds, status.
 
-    Estimators with a ``batched`` form fit all trials in one call; their ``seconds`` is the
-    batch's wall time divided by the number of trials. ``poses``, the trials' pose fits (see
-    :func:`run_poses_files`), are passed to a pose-based method instead of fitting them again.
-    The frame of :func:`estimate_table`.
+    ``seconds`` is the fit's wall time [s], after a warm-up fit whose one-time costs it leaves
+    out (:func:`_warm_up`; its time goes to the log). Estimators with a ``batched`` form fit all
+    trials in one call; their ``seconds`` is the batch's wall time divided by the trials.
+    ``poses``, the trials' pose fits (see :func:`run_poses_files`), are passed to a pose-based
+    method instead of fitting them again. The frame of :func:`estimate_table`.
     """
     return estimate_table(study, method, trials, condition, options, poses).to_pandas()
 
@@ -165,15 +199,16 @@ def estimate_table(
     if poses is not None and pose_segments(fit) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = DIAGNOSTICS.get((study, method))
-    batch = _fit_all(fit, spec, trials, options or {}, poses)
-    fitted = []
-    for trial in range(trials.n_trials):
-        if batch is None:
-            start = time.perf_counter()
-            outcome = _fit_one(fit, spec.fit_arguments(trials, trial), options or {})
-            fitted.append((*outcome, time.perf_counter() - start))
-        else:
-            fitted.append((*_outcome(batch[0][trial]), batch[1]))
+    warm_up = _warm_up(fit, spec, trials, options or {}, poses)
+    log.info(
+        "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
+        "not counted in any trial's seconds",
+        study,
+        method,
+        first_trial,
+        warm_up,
+    )
+    fitted = _fit_trials(fit, spec, trials, options or {}, poses)
     extras = [{}] * trials.n_trials
     if diagnose:
         segments = tuple(trials.segments[name] for name in spec.segments)
@@ -223,6 +258,10 @@ def run_simulate_files(
 
 def _same_condition(paths: Sequence[str], outputs: Sequence[str], what: str) -> list[str]:
     """The file of ``paths`` named like each output (its condition), in the outputs' order."""
+    for files, kind in ((paths, what), (outputs, "output")):
+        # A string is a sequence too: iterated, it would give one "file" per character.
+        if isinstance(files, str | os.PathLike):
+            raise TypeError(f"{kind} files must be a list of paths, not one path: {files!r}")
     by_condition = {Path(path).stem: path for path in paths}
     missing = [Path(output).stem for output in outputs if Path(output).stem not in by_condition]
     if missing:
