@@ -22,7 +22,15 @@ SCRIPTS = ROOT / "workflow" / "scripts"
 # Nothing at start-up needs these: figures import matplotlib when they draw.
 NEVER = ("matplotlib", "mpl_toolkits", "scipy.stats", "ezc3d", "jointbench.io")
 # The jobs that simulate, fit poses, estimate, collect and summarise render and check nothing.
-RUN_SIDE = ("simulate", "poses", "estimate", "collect", "summarise")
+RUN_SIDE = (
+    "simulate",
+    "poses",
+    "estimate",
+    "collect",
+    "summarise",
+    "dataset_csv",
+    "estimates_from_csv",
+)
 RENDER_SIDE = ("render", "check_published", "report_captions")
 RENDERING = ("jointbench.figures", "jointbench.papers", "jointbench.pipeline", "jointbench.report")
 
