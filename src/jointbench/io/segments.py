@@ -14,16 +14,26 @@ A pose ``(R, t)`` maps technical coordinates to the world, ``R @ p + t``.
 Artefacts. A label swap or a marker that falls off breaks rigidity: that marker's residual from
 the fitted pose jumps far above the trial's own level, which for skin markers is soft-tissue
 artefact of a few mm. A sample is flagged when its residual exceeds ``residual_factor`` times
-the median residual of the cluster and ``min_residual_mm``. The residuals are first taken from
-the cluster's most typical frame (which a minority of broken frames cannot distort, as they
-would a mean), then from the mean shape of the samples not flagged, until the flags settle. A
-step of one marker is flagged when it differs from both neighbouring steps by more than
-``jump_factor`` times the median such difference and ``min_jump_mm`` (:func:`find_jumps`).
+the lower quartile of the cluster's residuals and ``min_residual_mm``. The residuals are first
+taken from the cluster's most typical frame (which a minority of broken frames cannot distort,
+as they would a mean), then from the mean shape of the samples not flagged, until the flags settle.
+A label swap is an event at a frame: the frames it flags are explained by exchanging two labels,
+and :func:`find_swaps` reports the runs of frames carrying the pair one way round, so a message
+names where the labelling changes and both sides can be kept. None of this depends on the order
+of the frames. A step of one marker is flagged when it differs from both neighbouring steps by
+more than ``jump_factor`` times the median such difference and ``min_jump_mm``
+(:func:`find_jumps`), which needs the frames in time order: it is the only check of markers
+outside a cluster, and in a cluster it counts only where no rigidity break explains it (a swap
+of two markers of an isosceles triangle keeps the shape).
+
+:func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen` and the fit
+functions of :mod:`jointbench.api`; :meth:`Segment.fit` runs the same on a recording.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import combinations, pairwise
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,11 +46,17 @@ if TYPE_CHECKING:
 __all__ = [
     "Artefact",
     "ArtefactRules",
+    "Numbering",
+    "Screening",
     "Segment",
+    "Swap",
     "find_jumps",
     "find_rigidity_breaks",
+    "find_swaps",
     "fit_poses",
     "mean_shape",
+    "screen",
+    "summarise",
     "technical_frame",
     "to_local",
     "typical_shape",
@@ -139,10 +155,29 @@ def technical_frame(shape: np.ndarray, labels: tuple[str, ...], source: str) -> 
 
 
 @dataclass(frozen=True)
+class Numbering:
+    """How messages name the rows of a marker array: row ``i`` is frame ``first_frame + i``
+    (the file's numbering), at ``number / rate_hz`` seconds when the rate is known."""
+
+    first_frame: int = 0
+    rate_hz: float | None = None
+
+    def number(self, row: int) -> int:
+        return self.first_frame + int(row)
+
+    def name(self, row: int) -> str:
+        """``"frame 731 (7.31 s)"``."""
+        frame = self.number(row)
+        if self.rate_hz is None:
+            return f"frame {frame}"
+        return f"frame {frame} ({frame / self.rate_hz:.2f} s)"
+
+
+@dataclass(frozen=True)
 class ArtefactRules:
     """When a sample or a step is far above the trial's own level (module docstring)."""
 
-    residual_factor: float = 10.0
+    residual_factor: float = 15.0
     min_residual_mm: float = 5.0
     jump_factor: float = 20.0
     min_jump_mm: float = 20.0
@@ -159,12 +194,62 @@ class Artefact:
     size_mm: float
     level_mm: float
 
-    def describe(self, recording: Recording) -> str:
+    def describe(self, frames: Numbering) -> str:
+        """One line, naming the frame as ``frames`` does."""
         what = "jumps" if self.kind == "jump" else "leaves its cluster's rigid shape by"
         return (
-            f"marker {self.label} {what} {self.size_mm:.1f} mm at {recording.when(self.frame)} "
+            f"marker {self.label} {what} {self.size_mm:.1f} mm at {frames.name(self.frame)} "
             f"(threshold {self.level_mm:.1f} mm; a label swap or a marker falling off?)"
         )
+
+    def rows(self) -> tuple[int, ...]:
+        """The frames it spoils: a rigidity break its own; a jump the two frames of its step,
+        so that the same step gives the same frames whichever way the frames run."""
+        return (self.frame - 1, self.frame) if self.kind == "jump" else (self.frame,)
+
+
+@dataclass(frozen=True)
+class Swap:
+    """Markers ``labels`` carried the other way round, relative to the rest of the trial, in
+    rows ``start`` to ``stop - 1``: the labelling changes at ``start`` (unless 0) and back at
+    ``stop`` (unless the end of the trial, ``n_frames``)."""
+
+    labels: tuple[str, str]
+    start: int
+    stop: int
+    n_frames: int
+
+    def sides(self) -> list[tuple[int, int]]:
+        """Row ranges ``[start, stop)`` each labelled one consistent way, in time order."""
+        bounds = sorted({0, self.start, self.stop, self.n_frames})
+        return list(pairwise(bounds))
+
+    def describe(self, frames: Numbering) -> str:
+        """One line naming the frames where the labels change and both sides, as ``frames``
+        numbers them."""
+        first, second = self.labels
+        changes = [row for row in (self.start, self.stop) if 0 < row < self.n_frames]
+        sides = ", ".join(f"{frames.number(a)} to {frames.number(b - 1)}" for a, b in self.sides())
+        return (
+            f"markers {first} and {second} exchange labels at "
+            f"{' and back at '.join(frames.name(row) for row in changes)}; frames {sides} are "
+            "each labelled one consistent way and the data cannot tell which is right"
+        )
+
+
+def summarise(artefacts: list[Artefact], swaps: list[Swap], frames: Numbering) -> str:
+    """The swaps in full, else the first artefact; then how many flagged samples, over which
+    frames and markers."""
+    lines = [swap.describe(frames) for swap in swaps] or [artefacts[0].describe(frames)]
+    text = "; ".join(lines)
+    if len(artefacts) > 1:
+        rows = [a.frame for a in artefacts]
+        markers = sorted({a.label for a in artefacts})
+        text += (
+            f"; {len(artefacts)} flagged samples in all, frames {frames.number(min(rows))} to "
+            f"{frames.number(max(rows))}, markers {', '.join(markers)}"
+        )
+    return text
 
 
 def find_jumps(
@@ -196,15 +281,121 @@ def find_jumps(
 def find_rigidity_breaks(
     residuals: np.ndarray, labels: tuple[str, ...], rules: ArtefactRules
 ) -> list[Artefact]:
-    """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the median."""
+    """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the trial's level
+    (its lower quartile), so that up to three quarters of the samples may be broken."""
     if not np.isfinite(residuals).any():
         return []
-    level = max(rules.min_residual_mm, rules.residual_factor * float(np.nanmedian(residuals)))
+    # The lower quartile, not the median: a swap held by half the frames displaces more than
+    # half the samples (the pose fit spreads it), which would lift a median above them.
+    typical = float(np.nanpercentile(residuals, 25))
+    level = max(rules.min_residual_mm, rules.residual_factor * typical)
     frame, marker = np.nonzero(np.nan_to_num(residuals) > level)
     return [
         Artefact("rigidity", labels[m], int(f), float(residuals[f, m]), level)
         for f, m in zip(frame, marker, strict=True)
     ]
+
+
+def find_swaps(
+    shape: np.ndarray,
+    markers: np.ndarray,
+    flagged: np.ndarray,
+    labels: tuple[str, ...],
+    level_mm: float,
+) -> list[Swap]:
+    """Runs of frames in which exchanging two markers' labels fits the cluster's ``shape``.
+
+    ``markers`` ``(n_frames, n, 3)`` [mm] the cluster, ``flagged`` ``(n_frames, n)`` its
+    rigidity breaks, ``level_mm`` their threshold. A frame whose two flagged markers, exchanged,
+    fit ``shape`` within ``level_mm`` belongs to that pair's swap; frames where either marker
+    is missing do not interrupt a run.
+    """
+    swaps = []
+    for i, j in combinations(range(len(labels)), 2):
+        both = flagged[:, i] & flagged[:, j]
+        if not both.any():
+            continue
+        rows = np.flatnonzero(both)
+        exchanged = markers[rows].copy()
+        exchanged[:, [i, j]] = exchanged[:, [j, i]]
+        rotation, translation = fit_poses(shape, exchanged)
+        fits = np.nanmax(_residuals(shape, rotation, translation, exchanged), axis=1) <= level_mm
+        state = np.zeros(len(markers), dtype=bool)
+        state[rows[fits]] = True
+        seen = np.flatnonzero(np.isfinite(markers[:, [i, j]]).all(axis=(1, 2)))
+        # Runs of swapped frames among the frames showing both markers.
+        changes = np.flatnonzero(np.diff(state[seen].astype(int))) + 1
+        for run in np.split(np.arange(seen.size), changes):
+            if run.size and state[seen[run[0]]]:
+                start = 0 if run[0] == 0 else int(seen[run[0]])
+                stop = len(markers) if run[-1] == seen.size - 1 else int(seen[run[-1]]) + 1
+                swaps.append(Swap((labels[i], labels[j]), start, stop, len(markers)))
+    return sorted(swaps, key=lambda swap: (swap.start, swap.labels))
+
+
+@dataclass(frozen=True, eq=False)
+class Screening:
+    """What :func:`screen` found in one marker set: flagged ``artefacts`` (rigidity breaks of
+    a cluster of >= 3 markers, or jumps of fewer) and the ``swaps`` explaining some of them.
+    A cluster's fit is kept for :class:`Segment`: ``shape`` ``(n, 3)`` [mm], its ``rotation``
+    ``(n_frames, 3, 3)``, ``translation`` ``(n_frames, 3)`` and ``residuals`` ``(n_frames, n)``
+    [mm]; ``None`` for fewer than three markers."""
+
+    artefacts: tuple[Artefact, ...]
+    swaps: tuple[Swap, ...] = ()
+    shape: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    translation: np.ndarray | None = None
+    residuals: np.ndarray | None = None
+
+
+def screen(
+    markers: np.ndarray,
+    labels: tuple[str, ...],
+    source: str,
+    rules: ArtefactRules | None = None,
+) -> Screening:
+    """Artefacts of one marker set ``(n_frames, n, 3)`` [mm] (module docstring): rigidity
+    breaks and swaps of a cluster of >= 3 markers, jumps of fewer. ``source`` names the data
+    in messages. Frame order matters only to the jumps."""
+    rules = rules or ArtefactRules()
+    if len(labels) < 3:
+        return Screening(tuple(find_jumps(markers, labels, rules)))
+    # First judged against one typical frame, which the broken frames cannot distort; then the
+    # mean shape is refitted on the samples not flagged, until the flags settle.
+    shape = typical_shape(markers, labels, source)
+    breaks: list[Artefact] | None = None
+    for _ in range(5):
+        rotation, translation = fit_poses(shape, markers)
+        residuals = _residuals(shape, rotation, translation, markers)
+        found = find_rigidity_breaks(residuals, labels, rules)
+        if found == breaks:
+            break
+        breaks = found
+        clean = markers.copy()
+        for artefact in breaks:
+            clean[artefact.frame, labels.index(artefact.label)] = np.nan
+        shape = mean_shape(clean, labels, source)
+    else:
+        rotation, translation = fit_poses(shape, markers)
+        residuals = _residuals(shape, rotation, translation, markers)
+    swaps: list[Swap] = []
+    if breaks:
+        flagged = np.zeros(residuals.shape, dtype=bool)
+        for artefact in breaks:
+            flagged[artefact.frame, labels.index(artefact.label)] = True
+        swaps = find_swaps(shape, markers, flagged, labels, breaks[0].level_mm)
+    # A jump that a rigidity break explains adds nothing, and would spoil the frame on its
+    # other side; a jump without one is a swap that keeps the shape (two markers of an
+    # isosceles triangle), which only time order shows.
+    broken = {(a.label, a.frame) for a in breaks}
+    jumps = [
+        jump
+        for jump in find_jumps(markers, labels, rules)
+        if not {(jump.label, row) for row in jump.rows()} & broken
+    ]
+    artefacts = sorted([*jumps, *breaks], key=lambda a: (a.frame, a.label))
+    return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, residuals)
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,7 +406,8 @@ class Segment:
     mean shape in technical coordinates; ``rotation`` ``(n_frames, 3, 3)`` and ``translation``
     ``(n_frames, 3)`` [mm] the technical frame's pose in every frame (NaN where fewer than three
     markers are seen); ``residuals`` ``(n_frames, n)`` [mm] each marker's distance from its
-    fitted position (NaN where missing); ``artefacts`` the flagged jumps and rigidity breaks.
+    fitted position (NaN where missing); ``artefacts`` the flagged rigidity breaks and ``swaps``
+    the label swaps that explain some of them (:func:`screen`).
     """
 
     labels: tuple[str, ...]
@@ -224,6 +416,7 @@ class Segment:
     translation: np.ndarray
     residuals: np.ndarray
     artefacts: tuple[Artefact, ...]
+    swaps: tuple[Swap, ...] = ()
 
     @classmethod
     def fit(
@@ -232,7 +425,8 @@ class Segment:
         labels: str | list[str] | tuple[str, ...],
         rules: ArtefactRules | None = None,
     ) -> Segment:
-        """Fit the segment; frames whose samples break rigidity do not shape the mean."""
+        """Fit the segment (:func:`screen`); frames whose samples break rigidity do not shape
+        the mean."""
         rules = rules or ArtefactRules()
         index = recording.index(labels)
         labels = tuple(recording.labels[i] for i in index)
@@ -240,35 +434,23 @@ class Segment:
             raise ValueError(
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
-        markers = recording.markers[:, index]
-        # First judged against one typical frame, which the broken frames cannot distort; then
-        # the mean shape is refitted on the samples not flagged, until the flags settle.
-        shape = typical_shape(markers, labels, recording.source)
-        breaks: list[Artefact] | None = None
-        for _ in range(5):
-            rotation, translation = fit_poses(shape, markers)
-            residuals = _residuals(shape, rotation, translation, markers)
-            found = find_rigidity_breaks(residuals, labels, rules)
-            if found == breaks:
-                break
-            breaks = found
-            clean = markers.copy()
-            for artefact in breaks:
-                clean[artefact.frame, labels.index(artefact.label)] = np.nan
-            shape = mean_shape(clean, labels, recording.source)
-        else:
-            rotation, translation = fit_poses(shape, markers)
-            residuals = _residuals(shape, rotation, translation, markers)
+        screening = screen(recording.markers[:, index], labels, recording.source, rules)
+        shape, rotation, translation = screening.shape, screening.rotation, screening.translation
         # World x = R (A q + o) + t for technical coordinates q: pose (R A, R o + t).
         frame = technical_frame(shape, labels, recording.source)
         axes, origin = frame[:3, :3], frame[:3, 3]
         shape_local = (shape - origin) @ axes
         translation = translation + rotation @ origin
         rotation = rotation @ axes
-        artefacts = sorted(
-            [*find_jumps(markers, labels, rules), *breaks], key=lambda a: (a.frame, a.label)
+        return cls(
+            labels,
+            shape_local,
+            rotation,
+            translation,
+            screening.residuals,
+            screening.artefacts,
+            screening.swaps,
         )
-        return cls(labels, shape_local, rotation, translation, residuals, tuple(artefacts))
 
     def local(self, markers: np.ndarray) -> np.ndarray:
         """World markers ``(n_frames, m, 3)`` in this segment's technical frame, per frame."""
