@@ -13,7 +13,7 @@ Every method is reached through the registry, which holds it to the same rules:
   the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer.
 
 Before the fit, the arrays are screened for artefacts as a recording is
-(:func:`screen`, :func:`jointbench.io.segments.screen`): a label swap, a marker that falls off
+(:func:`screen`, :func:`jointbench.screening.screen`): a label swap, a marker that falls off
 (a cluster of >= 3 markers leaving its rigid shape in some frames) or a jump of a marker outside
 a cluster. By default (``artefacts="refuse"``) the fit raises ``ValueError`` naming the markers
 (``distal[:, 1]``: array, column) and the frame (row); ``"warn"`` fits and warns;
@@ -23,16 +23,14 @@ a cluster. By default (``artefacts="refuse"``) the fit raises ``ValueError`` nam
 from __future__ import annotations
 
 import warnings
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from jointbench.estimators import registry
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import check_input
-
-if TYPE_CHECKING:
-    from jointbench.io.segments import ArtefactRules, Screening
+from jointbench.screening import ArtefactRules, Numbering, Screening, summarise
+from jointbench.screening import screen as screen_markers
 
 __all__ = [
     "ARRAY_POLICIES",
@@ -66,12 +64,9 @@ def screen(
 
     Returns
     -------
-    ``{name: Screening}``; a :class:`~jointbench.io.segments.Screening` lists ``artefacts`` and
+    ``{name: Screening}``; a :class:`~jointbench.screening.Screening` lists ``artefacts`` and
     ``swaps``. :func:`describe_screening` words them.
     """
-    # Imported here: a workflow job that fits arrays loads no part of jointbench.io.
-    from jointbench.io.segments import screen as screen_markers
-
     names = names or (("markers",) if len(segments) == 1 else ("proximal", "distal"))
     if len(names) != len(segments):
         raise ValueError(f"{len(segments)} arrays but {len(names)} names {list(names)}")
@@ -85,8 +80,6 @@ def screen(
 
 def describe_screening(found: dict[str, Screening]) -> str | None:
     """One message for what :func:`screen` found; ``None`` when it found nothing."""
-    from jointbench.io.segments import Numbering, summarise
-
     artefacts = sorted(
         (a for screening in found.values() for a in screening.artefacts),
         key=lambda a: (a.frame, a.label),

@@ -13,7 +13,7 @@ the frames changes. It is moved to the front before the estimator is called.
 Gaps: a frame enters a fit only when the reference pose is defined (>= 3 reference markers) and
 every moving marker is visible (two-segment methods: every marker of both segments); the others
 are left out and counted. Artefacts (label swaps, markers falling off;
-:func:`jointbench.io.segments.screen`) are refused with a message naming the markers and frame --
+:func:`jointbench.screening.screen`) are refused with a message naming the markers and frame --
 for a swap, the frame where the labels change and the frames on each side, which ``frames``
 (``--frames``) can keep -- or, with ``artefacts="exclude"``, their frames are left out with a
 warning. Which frames a cluster excludes does not depend on the order of the frames: they are
@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.api import fit_axis, fit_center, fit_joint_center
 from jointbench.estimators.registry import KINDS, get
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -39,8 +38,6 @@ from jointbench.uncertainty import Bootstrap, bootstrap
 __all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]
 
 ARTEFACT_POLICIES = ("refuse", "exclude")
-# The main fit goes through the public entry points, so it gets every check they make.
-_FITTERS = {"center": fit_center, "axis": fit_axis, "joint_center": fit_joint_center}
 DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
 
 
@@ -235,10 +232,11 @@ class Prepared:
 
     def solve(self, method: str, rows: np.ndarray, options: dict):
         """The estimator's result on the recording ``rows``."""
+        # The checked estimator, as the public fit functions call it: every input check and
+        # the support verdict. Their artefact screen ran in prepare, over the whole recording.
         arrays = (a[rows] for a in self.arrays)
         try:
-            # Screened already, by the same rules, over the recording's frames (prepare).
-            return _FITTERS[self.kind](*arrays, method=method, artefacts="ignore", **options)
+            return get(self.kind, method)(*arrays, **options)
         except ValueError as error:
             raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
 
