@@ -156,7 +156,8 @@ def test_artefact_is_refused_or_excluded_on_request(tmp_path, capsys):
     arguments = ["fit", str(path), "--reference", ",".join(PROX), "--moving", ",".join(DIST)]
     code, _, err = run(capsys, *arguments)
     assert code == 2
-    assert "swap.c3d: marker D" in err and "at frame 150 (1.50 s)" in err
+    # A C3D file numbers its frames from 1: row 150 is frame 151.
+    assert "swap.c3d: markers D1 and D2 exchange labels at frame 151 (1.51 s)" in err
     code, out, err = run(capsys, *arguments, "--artefacts", "exclude", "--format", "csv")
     assert code == 0
     assert "jointbench: warning:" in err and "left out 50 frames" in err
@@ -179,11 +180,11 @@ def test_world_trajectory_on_request(tmp_path, capsys):
     arguments = ["--reference", ",".join(PROX), "--moving", ",".join(DIST)]
     code, _, err = run(
         capsys, "fit", str(path), "--kind", "joint_center", *arguments, "--method", "SCoRE",
-        "--frames", "10:60", "--world", str(world),
+        "--frames", "11:61", "--world", str(world),
     )  # fmt: skip
     assert code == 0 and "world trajectory" in err
     table = pd.read_csv(world)
-    assert table["frame"].tolist() == list(range(10, 60))
+    assert table["frame"].tolist() == list(range(11, 61))  # rows 10 to 59: frames from 1
     # The joint of the rig stays at the same distance from every distal marker.
     distal = rig_recording().markers[10:60, 3:]
     distance = np.linalg.norm(table[["x_mm", "y_mm", "z_mm"]].to_numpy()[:, None] - distal, axis=-1)

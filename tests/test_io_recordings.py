@@ -202,7 +202,7 @@ def test_gaps_are_left_out_and_counted(tmp_path, stored_as):
     for prepared in (from_file, in_memory):
         fitted = prepared.fit("NM")
         assert fitted.n_gap_frames == 6
-        assert not {10, 11, 12, 13, 14, 40} & set(fitted.frames_used)
+        assert not {10, 11, 12, 13, 14, 40} & set(fitted.frames_used - fitted.first_frame)
     # A C3D file holds float32 (~1e-4 mm here); the float64 recording gives the exact centre.
     truth = in_frame(JOINT, PROXIMAL)
     np.testing.assert_allclose(from_file.fit("NM").result.center, truth, atol=1e-3)
@@ -236,7 +236,8 @@ def swapped(recording, frame, first, second):
 @pytest.mark.parametrize("segment", ["P", "D"])
 def test_label_swap_is_refused_naming_marker_and_frame(segment):
     recording = swapped(rig_recording(), 150, f"{segment}1", f"{segment}2")
-    with pytest.raises(ValueError, match=rf"marker {segment}[12] .* at frame 150 \(1\.50 s\)"):
+    message = rf"markers {segment}1 and {segment}2 exchange labels at frame 150 \(1\.50 s\)"
+    with pytest.raises(ValueError, match=message):
         prepare(recording, "joint_center", DIST, PROX)
 
 

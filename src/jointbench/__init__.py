@@ -23,11 +23,12 @@ __all__ = [
     "methods",
     "prepare",
     "read",
+    "screen",
 ]
 __version__ = "0.1.0"
 
 if TYPE_CHECKING:  # for type checkers; at run time __getattr__ imports each name from _HOMES
-    from jointbench.api import fit_axis, fit_center, fit_joint_center, methods
+    from jointbench.api import fit_axis, fit_center, fit_joint_center, methods, screen
     from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
     from jointbench.io import Recording, RecordingFit, fit, prepare, read
 
@@ -46,6 +47,7 @@ _HOMES = {
     "methods": "jointbench.api",
     "prepare": "jointbench.io",
     "read": "jointbench.io",
+    "screen": "jointbench.api",
 }
 
 

@@ -11,19 +11,111 @@ Every method is reached through the registry, which holds it to the same rules:
   a result whose ``status`` starts with or carries ``"warning: ..."``, with the numbers in
   ``diagnostics["support_..."]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
   the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer.
+
+Before the fit, the arrays are screened for artefacts as a recording is
+(:func:`screen`, :func:`jointbench.screening.screen`): a label swap, a marker that falls off
+(a cluster of >= 3 markers leaving its rigid shape in some frames) or a jump of a marker outside
+a cluster. By default (``artefacts="refuse"``) the fit raises ``ValueError`` naming the markers
+(``distal[:, 1]``: array, column) and the frame (row); ``"warn"`` fits and warns;
+``"ignore"`` skips the screen, for data known to be clean.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
 from jointbench.estimators import registry
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
+from jointbench.estimators.validation import check_input
+from jointbench.screening import ArtefactRules, Numbering, Screening, summarise
+from jointbench.screening import screen as screen_markers
 
-__all__ = ["fit_axis", "fit_center", "fit_joint_center", "methods"]
+__all__ = [
+    "ARRAY_POLICIES",
+    "describe_screening",
+    "fit_axis",
+    "fit_center",
+    "fit_joint_center",
+    "methods",
+    "screen",
+]
+
+#: What the fit functions do with an artefact found by :func:`screen`.
+ARRAY_POLICIES = ("refuse", "warn", "ignore")
+
+_NAMES = {"center": ("markers",), "axis": ("markers",), "joint_center": ("proximal", "distal")}
 
 
-def fit_center(markers: np.ndarray, method: str = "NM", **options: object) -> CenterResult:
+def screen(
+    *segments: np.ndarray, names: tuple[str, ...] | None = None, rules: ArtefactRules | None = None
+) -> dict[str, Screening]:
+    """Artefacts of marker arrays, found as in a recording: per array, label swaps and rigidity
+    breaks of a cluster of >= 3 markers, or jumps of fewer markers.
+
+    Parameters
+    ----------
+    segments : (n_frames, n_markers, 3) arrays [mm], complete (no NaN), e.g. ``markers`` or
+        ``proximal, distal``.
+    names : a name per array (default ``markers``, or ``proximal``, ``distal`` for two); the
+        markers are labelled ``name[:, column]`` and frames are rows.
+    rules : thresholds (:class:`jointbench.io.ArtefactRules`).
+
+    Returns
+    -------
+    ``{name: Screening}``; a :class:`~jointbench.screening.Screening` lists ``artefacts`` and
+    ``swaps``. :func:`describe_screening` words them.
+    """
+    names = names or (("markers",) if len(segments) == 1 else ("proximal", "distal"))
+    if len(names) != len(segments):
+        raise ValueError(f"{len(segments)} arrays but {len(names)} names {list(names)}")
+    found = {}
+    for name, markers in zip(names, segments, strict=True):
+        markers = np.asarray(markers, dtype=float)
+        labels = tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
+        found[name] = screen_markers(markers, labels, name, rules)
+    return found
+
+
+def describe_screening(found: dict[str, Screening]) -> str | None:
+    """One message for what :func:`screen` found; ``None`` when it found nothing."""
+    artefacts = sorted(
+        (a for screening in found.values() for a in screening.artefacts),
+        key=lambda a: (a.frame, a.label),
+    )
+    if not artefacts:
+        return None
+    swaps = [swap for screening in found.values() for swap in screening.swaps]
+    text = summarise(artefacts, swaps, Numbering())
+    if swaps:
+        first = swaps[0]
+        name = first.labels[0].split("[")[0]
+        sides = " or ".join(f"{name}[{a}:{b}]" for a, b in first.sides())
+        text += f". Fit one side ({sides})"
+    return text
+
+
+def _screened(kind: str, arrays: tuple[object, ...], artefacts: str) -> None:
+    """Screen the inputs of a ``kind`` fit as ``artefacts`` says (module docstring)."""
+    if artefacts not in ARRAY_POLICIES:
+        raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
+    if artefacts == "ignore":
+        return
+    # The input checks come first, so bad input gets their message, not the screen's.
+    message = describe_screening(screen(*check_input(kind, arrays), names=_NAMES[kind]))
+    if message is None:
+        return
+    if artefacts == "refuse":
+        raise ValueError(
+            f"{message}. Pass artefacts='warn' or 'ignore' to fit the data as they are"
+        )
+    warnings.warn(f"artefacts in the data: {message}", stacklevel=3)
+
+
+def fit_center(
+    markers: np.ndarray, method: str = "NM", *, artefacts: str = "refuse", **options: object
+) -> CenterResult:
     """Centre of rotation of a segment moving about a fixed point.
 
     Parameters
@@ -31,11 +123,15 @@ def fit_center(markers: np.ndarray, method: str = "NM", **options: object) -> Ce
     markers : (n_frames, n_markers, 3) array [mm]
         The moving segment's markers in the reference segment's frame.
     method : one of ``methods("center")`` (NM, LS, BC, IS, MA, SCoRE, ...).
+    artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
+    _screened("center", (markers,), artefacts)
     return registry.get("center", method)(markers, **options)
 
 
-def fit_axis(markers: np.ndarray, method: str = "combined", **options: object) -> AxisResult:
+def fit_axis(
+    markers: np.ndarray, method: str = "combined", *, artefacts: str = "refuse", **options: object
+) -> AxisResult:
     """Dominant axis of rotation of a segment moving about a (nearly) fixed hinge.
 
     Parameters
@@ -43,12 +139,19 @@ def fit_axis(markers: np.ndarray, method: str = "combined", **options: object) -
     markers : (n_frames, n_markers, 3) array [mm]
         The moving segment's markers in the reference segment's frame.
     method : one of ``methods("axis")`` (planar, radial, combined, SARA, ...).
+    artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
+    _screened("axis", (markers,), artefacts)
     return registry.get("axis", method)(markers, **options)
 
 
 def fit_joint_center(
-    proximal: np.ndarray, distal: np.ndarray, method: str = "gauss-markov", **options: object
+    proximal: np.ndarray,
+    distal: np.ndarray,
+    method: str = "gauss-markov",
+    *,
+    artefacts: str = "refuse",
+    **options: object,
 ) -> JointCenterResult:
     """Ball-joint centre of two segments that both move in the world frame.
 
@@ -56,7 +159,9 @@ def fit_joint_center(
     ----------
     proximal, distal : (n_frames, n_markers >= 3, 3) arrays [mm], world frame.
     method : one of ``methods("joint_center")`` (gauss-markov, analytic, SCoRE, ...).
+    artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
+    _screened("joint_center", (proximal, distal), artefacts)
     return registry.get("joint_center", method)(proximal, distal, **options)
 
 

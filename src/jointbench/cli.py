@@ -2,7 +2,9 @@
 
 Every expected failure (a missing or unreadable file, an unknown label or method, an artefact
 in the data) is one line on stderr naming the file, the label and the frame, and exit code 2;
-never a traceback.
+never a traceback. With ``--method all`` a method that cannot fit the data gets a row whose
+status says why (``failed: ...``) and the others still run; the exit code is 2 only when every
+method failed.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import json
 import re
 import sys
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +23,7 @@ import pandas as pd
 import jointbench
 from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
+from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
 from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
 
@@ -88,14 +92,18 @@ def _readme(args: argparse.Namespace) -> int:
 def _inspect(args: argparse.Namespace) -> int:
     recording = read(args.file)
     gaps = recording.gaps()
+    last = recording.first_frame + recording.n_frames - 1
     if args.format == "json":
-        rate = recording.rate_hz
         print(
             json.dumps(
                 {
                     "file": str(args.file),
                     "n_frames": recording.n_frames,
-                    "rate_hz": rate,
+                    "first_frame": recording.first_frame,
+                    "last_frame": last,
+                    "rate_hz": recording.rate_hz,
+                    "units_in_file": recording.units,
+                    "units": "mm",
                     "labels": list(recording.labels),
                     "missing_samples": gaps,
                 },
@@ -104,7 +112,11 @@ def _inspect(args: argparse.Namespace) -> int:
         )
         return 0
     rate = "unknown" if recording.rate_hz is None else f"{recording.rate_hz:g} Hz"
-    print(f"{args.file}: {recording.n_frames} frames, {rate}, {len(recording.labels)} markers")
+    print(
+        f"{args.file}: {recording.n_frames} frames (numbered {recording.first_frame} to {last} "
+        f"as in the file), {rate}, {len(recording.labels)} markers, units {recording.units} "
+        "(read as mm)"
+    )
     print(f"{'marker':<16}{'missing':>8}")
     for label, n in gaps.items():
         print(f"{label:<16}{n:>8}")
@@ -121,7 +133,9 @@ def _labels(text: str | None) -> list[str] | None:
 
 
 def _row(fitted) -> dict:
-    """One flat row of a fit for the table and CSV outputs."""
+    """One flat row of a fit for the table and CSV outputs (a failed method: its status)."""
+    if isinstance(fitted, _Failed):
+        return {"method": fitted.method, "converged": False, "status": fitted.status}
     row = {"method": fitted.method}
     result = fitted.result
     if fitted.kind == "axis":
@@ -149,6 +163,42 @@ def _row(fitted) -> dict:
     return row
 
 
+@dataclass(frozen=True)
+class _Failed:
+    """A method of ``--method all`` that could not fit the data, and why."""
+
+    method: str
+    error: str
+
+    @property
+    def status(self) -> str:
+        return f"failed: {self.error}"
+
+    def to_dict(self) -> dict:
+        return {"method": self.method, "converged": False, "status": self.status}
+
+
+def _fit_all(prepared, names: list[str], args: argparse.Namespace) -> list:
+    """Each method's fit; with several methods, one that raises becomes a :class:`_Failed`."""
+    fits = []
+    for name in names:
+        try:
+            fits.append(
+                prepared.fit(
+                    name,
+                    n_bootstrap=args.bootstrap,
+                    block_length=args.block_length,
+                    seed=args.seed,
+                )
+            )
+        except ValueError as error:
+            if len(names) == 1:
+                raise
+            prefix = f"{prepared.recording.source}: {prepared.kind} {name}: "
+            fits.append(_Failed(name, str(error).removeprefix(prefix)))
+    return fits
+
+
 def _fit(args: argparse.Namespace) -> int:
     recording = read(args.file)
     moving = _labels(args.moving)
@@ -168,37 +218,39 @@ def _fit(args: argparse.Namespace) -> int:
             artefacts=args.artefacts,
         )
         names = jointbench.methods(args.kind) if args.method == "all" else [args.method]
-        fits = [
-            prepared.fit(
-                name,
-                n_bootstrap=args.bootstrap,
-                block_length=args.block_length,
-                seed=args.seed,
-            )
-            for name in names
-        ]
+        fits = _fit_all(prepared, list(names), args)
     for warning in caught:
         print(f"jointbench: warning: {warning.message}", file=sys.stderr)
-    if args.world is not None:
-        _write_world(args.world, fits)
+    done = [fitted for fitted in fits if not isinstance(fitted, _Failed)]
+    for failed in fits:
+        if isinstance(failed, _Failed):
+            message = f"{args.file}: {failed.method} did not run: {failed.error}"
+            print(f"jointbench: {message}", file=sys.stderr)
+    code = 0 if done else 2
+    if args.world is not None and done:
+        _write_world(args.world, done)
     if args.format == "json":
         print(json.dumps([fitted.to_dict() for fitted in fits], indent=2))
-        return 0
+        return code
     table = pd.DataFrame([_row(fitted) for fitted in fits])
     if args.format == "csv":
         print(table.to_csv(index=False, float_format="%.9g"), end="")
-        return 0
+        return code
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
-    frame = fits[0].frame
+    if not done:
+        return code
+    frame = done[0].frame
     if frame is None:
         print("frame: as recorded (markers taken as already in the reference frame)")
     else:
         print(f"frame: technical frame of {', '.join(frame['segment'])}:")
         for key in ("origin", "x", "y", "z"):
             print(f"  {key}: {frame[key]}")
-    if fits[0].anchor_frame is not None:
-        print(f"anchor frame (both body frames coincide): {fits[0].anchor_frame}")
-    return 0
+    if args.kind in CENTER_IS:
+        print(f"x_mm, y_mm, z_mm: {CENTER_IS[args.kind]}")
+    if done[0].anchor_frame is not None:
+        print(f"anchor frame (both body frames coincide): {done[0].anchor_frame}")
+    return code
 
 
 def _write_world(path: Path, fits: list) -> None:
@@ -249,16 +301,24 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument("--kind", choices=KINDS, default="center", help="what to estimate")
     fit.add_argument("--reference", help="reference (proximal) segment's labels, comma-separated")
     fit.add_argument("--moving", help="moving (distal) segment's labels; default: every marker")
-    fit.add_argument("--frames", help="0-based frame range start:stop (stop excluded)")
     fit.add_argument(
-        "--method", default=None, help="a method name (see below) or 'all'; default per kind"
+        "--frames",
+        help="frame range start:stop in the file's frame numbers (as inspect shows them; stop "
+        "excluded); a refused label swap names the ranges on each side",
+    )
+    fit.add_argument(
+        "--method",
+        default=None,
+        help="a method name (see below) or 'all' (a method that cannot fit the data gets a "
+        "failed status; exit code 2 only if all fail); default per kind",
     )
     fit.add_argument("--format", choices=FORMATS, default="table")
     fit.add_argument(
         "--artefacts",
         choices=ARTEFACT_POLICIES,
         default="refuse",
-        help="label swaps / markers falling off: refuse with a message, or leave the frames out",
+        help="label swaps / markers falling off: refuse with a message, or leave out the frames "
+        "that break the shape most frames share",
     )
     fit.add_argument(
         "--bootstrap", type=int, default=0, help="moving-block bootstrap resamples (0: none)"

@@ -10,7 +10,7 @@ from jointbench.io.fit import (
 )
 from jointbench.io.readers import read, read_c3d, read_csv, read_trc
 from jointbench.io.recording import Recording
-from jointbench.io.segments import Artefact, ArtefactRules, Segment
+from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap
 
 __all__ = [
     "ARTEFACT_POLICIES",
@@ -21,6 +21,7 @@ __all__ = [
     "Recording",
     "RecordingFit",
     "Segment",
+    "Swap",
     "fit",
     "prepare",
     "read",

@@ -12,9 +12,13 @@ the frames changes. It is moved to the front before the estimator is called.
 
 Gaps: a frame enters a fit only when the reference pose is defined (>= 3 reference markers) and
 every moving marker is visible (two-segment methods: every marker of both segments); the others
-are left out and counted. Artefacts (label swaps, markers falling off) are refused with a message
-naming the marker and frame, or, with ``artefacts="exclude"``, their frames are left out with a
-warning.
+are left out and counted. Artefacts (label swaps, markers falling off;
+:func:`jointbench.screening.screen`) are refused with a message naming the markers and frame --
+for a swap, the frame where the labels change and the frames on each side, which ``frames``
+(``--frames``) can keep -- or, with ``artefacts="exclude"``, their frames are left out with a
+warning. Which frames a cluster excludes does not depend on the order of the frames: they are
+those that break the shape most frames share (for a swap, the side with fewer frames, whichever
+labelling is right).
 """
 
 from __future__ import annotations
@@ -24,19 +28,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.api import fit_axis, fit_center, fit_joint_center
 from jointbench.estimators.registry import KINDS, get
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
-from jointbench.io.segments import Artefact, ArtefactRules, Segment, find_jumps
+from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap, find_jumps, summarise
 from jointbench.numerics.poses import best_rotation
 from jointbench.uncertainty import Bootstrap, bootstrap
 
 __all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]
 
 ARTEFACT_POLICIES = ("refuse", "exclude")
-# The main fit goes through the public entry points, so it gets every check they make.
-_FITTERS = {"center": fit_center, "axis": fit_axis, "joint_center": fit_joint_center}
 DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
 
 
@@ -94,6 +95,7 @@ class RecordingFit:
             out["point_mm"] = self.result.point.tolist()
         else:
             out["center_mm"] = self.result.center.tolist()
+            out.update(_joint_points(self.kind, self.result))
         covariance = getattr(self.result, "covariance", None)
         if covariance is not None:
             out["covariance_mm2"] = np.asarray(covariance).tolist()
@@ -119,6 +121,39 @@ class RecordingFit:
             out["bootstrap"] = boot
         out["frame"] = self.frame or "as recorded (markers taken as already in the reference frame)"
         return out
+
+
+CENTER_IS = {
+    "center": "the centre of rotation, fixed in the reference segment",
+    "joint_center": (
+        "the joint's position at the anchor frame, in the reference segment's technical frame at "
+        "that frame (the world of the two-segment model)"
+    ),
+}
+
+
+def _joint_points(kind: str, result) -> dict:
+    """What ``center_mm`` is, and the estimates it is made of where the method has two.
+
+    SCoRE estimates the centre once in each body; its ``center`` is their midpoint at the
+    anchor frame, which differs by the soft-tissue misfit from the proximal-fixed centre that
+    ``kind="center"`` (and other SCoRE implementations) report. Both are given.
+    """
+    out = {"center_is": CENTER_IS[kind]}
+    proximal = result.diagnostics.get("center_proximal")
+    distal = result.diagnostics.get("center_distal")
+    if kind == "joint_center" and proximal is not None and distal is not None:
+        out["center_is"] += ": the midpoint of center_proximal_mm and center_distal_mm"
+        out["center_proximal_mm"] = [float(v) for v in proximal]
+        out["center_distal_mm"] = [float(v) for v in distal]
+        out["center_proximal_is"] = (
+            "the centre fixed in the reference (proximal) segment, in its technical frame at the "
+            "anchor frame (as kind='center' reports it)"
+        )
+        out["center_distal_is"] = (
+            "the centre fixed in the moving (distal) segment, at the anchor frame, same frame"
+        )
+    return out
 
 
 def _estimate_vector(kind: str, result) -> np.ndarray:
@@ -156,12 +191,14 @@ def anchor_frame(reference: Segment, moving: Segment, frames: np.ndarray) -> int
 
 def _artefacts(
     recording: Recording, segments: list[Segment], loose: list[int], rules: ArtefactRules
-) -> list[Artefact]:
+) -> tuple[list[Artefact], list[Swap]]:
+    """Every cluster's rigidity breaks and swaps, and the jumps of ``loose`` markers."""
     found = [a for segment in segments for a in segment.artefacts]
+    swaps = [swap for segment in segments for swap in segment.swaps]
     if loose:
         labels = tuple(recording.labels[i] for i in loose)
         found += find_jumps(recording.markers[:, loose], labels, rules)
-    return sorted(found, key=lambda a: (a.frame, a.label))
+    return sorted(found, key=lambda a: (a.frame, a.label)), swaps
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,7 +206,8 @@ class Prepared:
     """A recording made ready for fitting (one preparation serves every method).
 
     ``arrays`` the estimator's inputs over all frames of the recording, in the reference
-    technical frame; ``usable`` the frame rows that may enter a fit; ``found`` the artefacts.
+    technical frame; ``usable`` the frame rows that may enter a fit; ``found`` the artefacts
+    and ``swaps`` the label swaps among them.
     """
 
     kind: str
@@ -181,6 +219,7 @@ class Prepared:
     n_gap_frames: int
     found: tuple[Artefact, ...]
     artefacts: str
+    swaps: tuple[Swap, ...] = ()
 
     def rows(self, indices: np.ndarray) -> np.ndarray:
         """Recording rows of ``usable[indices]``, the anchor frame first for two segments."""
@@ -193,8 +232,11 @@ class Prepared:
 
     def solve(self, method: str, rows: np.ndarray, options: dict):
         """The estimator's result on the recording ``rows``."""
+        # The checked estimator, as the public fit functions call it: every input check and
+        # the support verdict. Their artefact screen ran in prepare, over the whole recording.
+        arrays = (a[rows] for a in self.arrays)
         try:
-            return _FITTERS[self.kind](*(a[rows] for a in self.arrays), method=method, **options)
+            return get(self.kind, method)(*arrays, **options)
         except ValueError as error:
             raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
 
@@ -300,11 +342,19 @@ def prepare(
     if kind == "joint_center" or len(moving_index) >= 3:
         mov = Segment.fit(recording, moving, rules)
         segments.append(mov)
-    found = _artefacts(recording, segments, [] if mov else moving_index, rules)
+    found, swaps = _artefacts(recording, segments, [] if mov else moving_index, rules)
     if found and artefacts == "refuse":
+        keep = ""
+        if swaps:
+            sides = " or ".join(
+                f"'{recording.first_frame + a}:{recording.first_frame + b}'"
+                for a, b in swaps[0].sides()
+            )
+            keep = f"keep one side with frames={sides} (--frames), or "
         raise ValueError(
-            f"{recording.source}: {_summarise(found, recording)}. Choose other frames, or pass "
-            "artefacts='exclude' (--artefacts exclude) to leave such frames out"
+            f"{recording.source}: {summarise(found, swaps, recording.numbering)}. Choose other "
+            f"frames: {keep}pass artefacts='exclude' (--artefacts exclude) to leave out the "
+            "frames that break the shape most frames share"
         )
 
     world = recording.markers[:, moving_index]
@@ -316,11 +366,11 @@ def prepare(
     visible = np.all([np.isfinite(a).all(axis=(1, 2)) for a in arrays], axis=0)
     bad = np.zeros(recording.n_frames, dtype=bool)
     for artefact in found:
-        bad[artefact.frame] = True
+        bad[[row for row in artefact.rows() if row >= 0]] = True
     if found:
         warnings.warn(
             f"{recording.source}: left out {int(bad.sum())} frames with artefacts: "
-            f"{_summarise(found, recording)}",
+            f"{summarise(found, swaps, recording.numbering)}",
             stacklevel=3,
         )
     usable = np.flatnonzero(visible & ~bad)
@@ -336,20 +386,8 @@ def prepare(
         n_gap_frames=int(np.sum(~visible & ~bad)),
         found=tuple(found),
         artefacts=artefacts,
+        swaps=tuple(swaps),
     )
-
-
-def _summarise(found: list[Artefact], recording: Recording) -> str:
-    """The first artefact in full, then how many more, over which frames and markers."""
-    text = found[0].describe(recording)
-    if len(found) > 1:
-        frames = [a.frame for a in found]
-        markers = sorted({a.label for a in found})
-        text += (
-            f"; {len(found)} flagged samples in all, frames {min(frames) + recording.first_frame}"
-            f" to {max(frames) + recording.first_frame}, markers {', '.join(markers)}"
-        )
-    return text
 
 
 def fit(
@@ -378,9 +416,11 @@ def fit(
         moving markers are taken as already expressed in the reference frame (not for
         ``joint_center``, which needs both segments).
     method : a name of ``jointbench.methods(kind)``; default :data:`DEFAULT_METHODS`.
-    frames : 0-based ``"start:stop"`` (stop excluded) or a slice of the recording's frames.
-    artefacts : ``"refuse"`` (``ValueError`` naming marker and frame) or ``"exclude"`` (leave
-        the frames out, with a warning).
+    frames : ``"start:stop"`` in the file's frame numbers (stop excluded), or a slice of rows.
+        The refusal of a label swap names the ranges that keep either side of it.
+    artefacts : ``"refuse"`` (``ValueError`` naming markers and frame) or ``"exclude"`` (leave
+        out, with a warning, the frames that break the shape most frames share; the same
+        frames whatever their order).
     rules : thresholds of the artefact detection (:class:`ArtefactRules`).
     n_bootstrap, block_length, seed : moving-block bootstrap (:mod:`jointbench.uncertainty`);
         0 resamples means none. The refits are conditional on the reference's mean shape.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 import ezc3d
@@ -46,12 +47,17 @@ def read(path: str | Path) -> Recording:
 
 
 def read_c3d(path: str | Path) -> Recording:
-    """A C3D file via ``ezc3d``: POINT labels, rate and units; negative residuals are gaps."""
+    """A C3D file via ``ezc3d``: POINT labels, rate and units; negative residuals are gaps.
+
+    The file must hold every frame its header promises (:func:`_check_c3d_size`); row 0 is the
+    header's first frame, numbered as in the file (1-based, as other software shows it).
+    """
     path = _check_file(path)
     try:
         c3d = ezc3d.c3d(str(path))
     except Exception as error:  # ezc3d raises bare RuntimeError/IOError for any bad file
         raise ValueError(f"{path}: not a readable C3D file ({error})") from None
+    _check_c3d_size(c3d, path)
     point = c3d["parameters"]["POINT"]
     labels = list(point["LABELS"]["value"])
     for extra in ("LABELS2", "LABELS3"):
@@ -65,12 +71,54 @@ def read_c3d(path: str | Path) -> Recording:
     if residuals.size:
         markers[np.transpose(residuals[0]) < 0] = np.nan
     rate = float(c3d["header"]["points"]["frame_rate"])
-    return Recording(tuple(labels), markers, rate if rate > 0 else None, str(path))
+    # ezc3d counts frames from 0; the file (and every other program) from 1.
+    first = int(c3d["header"]["points"]["first_frame"]) + 1
+    return Recording(
+        tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
+    )
+
+
+def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
+    """``ValueError`` when the file ends before the frames its header promises.
+
+    ezc3d reads the frames that are there and rewrites its header and ``POINT:FRAMES`` to
+    match, so the promise is read from the file's own header block: the number of points, of
+    analog samples per frame (all channels), the first and last frame and the data's first
+    512-byte block. Each frame holds, per point, x, y, z and a residual word, then the analog
+    samples, each value a float32 (``POINT:SCALE`` < 0) or an int16.
+    """
+    with path.open("rb") as file:
+        block = file.read(512)
+        file.seek(max(0, (block[0] - 1) * 512 + 3))
+        processor = file.read(1)
+    # Intel (84) and DEC (85) store integers little-endian, MIPS (86) big-endian.
+    order = ">" if processor == bytes([86]) else "<"
+    n_points, n_analog, first, last = struct.unpack(order + "4H", block[2:10])
+    (data_block,) = struct.unpack(order + "H", block[16:18])
+    if last == 0xFFFF:  # a long file: the header cannot hold its last frame
+        return
+    frames = last - first + 1
+    scale = c3d["parameters"]["POINT"].get("SCALE", {"value": [-1.0]})["value"]
+    word = 4 if len(scale) == 0 or float(scale[0]) < 0 else 2
+    start = (data_block - 1) * 512
+    frame_bytes = word * (4 * n_points + n_analog)
+    size = path.stat().st_size
+    if frames <= 0 or size >= start + frames * frame_bytes:
+        return
+    complete = max(0, (size - start) // frame_bytes)
+    raise ValueError(
+        f"{path}: truncated C3D file: its header promises frames {first} to {last} ({frames} "
+        f"frames) of {n_points} points and {n_analog} analog samples each "
+        f"({start + frames * frame_bytes} bytes), but the file has {size} bytes: "
+        f"{complete} complete frames"
+    )
 
 
 def read_trc(path: str | Path) -> Recording:
-    """A TRC file (OpenSim / Motion Analysis): header keys ``DataRate``, ``Units``, then
-    ``Frame#  Time  label  …`` with one ``X Y Z`` triple per label; empty fields are gaps."""
+    """A TRC file (OpenSim / Motion Analysis): header keys ``DataRate``, ``Units``,
+    ``NumFrames``, ``NumMarkers``, then ``Frame#  Time  label  …`` with one ``X Y Z`` triple per
+    label; empty fields are gaps. The rows must be the ``NumFrames`` consecutive frames the
+    header promises; row 0 is the first row's ``Frame#``."""
     path = _check_file(path)
     lines = path.read_text(errors="replace").splitlines()
     if len(lines) < 6:
@@ -82,6 +130,7 @@ def read_trc(path: str | Path) -> Recording:
     names = [name.strip() for name in lines[3].split("\t")[2:]]
     labels = [name for name in names if name]
     rows = [line.split("\t") for line in lines[5:] if line.strip()]
+    numbers = _trc_frame_numbers(rows, header, len(labels), path)
     width = 2 + 3 * len(labels)
     markers = np.full((len(rows), len(labels) * 3), np.nan)
     for i, row in enumerate(rows):
@@ -93,17 +142,47 @@ def read_trc(path: str | Path) -> Recording:
                     markers[i, j] = float(text)
                 except ValueError:
                     raise ValueError(
-                        f"{path}: frame {i}, marker {labels[j // 3]}: {text!r} is not a number"
+                        f"{path}: frame {numbers[i]}, marker {labels[j // 3]}: {text!r} is not "
+                        "a number"
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * _to_mm(header["Units"], path)
     rate = header.get("DataRate")
-    return Recording(tuple(labels), markers, float(rate) if rate else None, str(path))
+    rate_hz = float(rate) if rate else None
+    return Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+
+
+def _trc_frame_numbers(rows: list[list[str]], header: dict, n_labels: int, path: Path) -> list:
+    """The ``Frame#`` of every row; ``ValueError`` when they are not consecutive integers or
+    not the frames and markers the header promises."""
+    promised = {key: header.get(key, "") for key in ("NumFrames", "NumMarkers")}
+    for key, found in (("NumFrames", len(rows)), ("NumMarkers", n_labels)):
+        if promised[key].isdigit() and int(promised[key]) != found:
+            raise ValueError(
+                f"{path}: the TRC header promises {key} {promised[key]} but the file has {found}"
+            )
+    numbers = []
+    for i, row in enumerate(rows):
+        try:
+            numbers.append(int(float(row[0])))
+        except ValueError:
+            raise ValueError(
+                f"{path}: data line {i + 1}: Frame# {row[0]!r} is not a frame number"
+            ) from None
+        if i and numbers[i] != numbers[i - 1] + 1:
+            raise ValueError(
+                f"{path}: frame {numbers[i]} follows frame {numbers[i - 1]}; a TRC file's frames "
+                "must be consecutive"
+            )
+    return numbers
 
 
 def read_csv(path: str | Path) -> Recording:
     """The long CSV ``frame,marker,x,y,z`` [mm], one row per sample, rows in any order.
 
-    A sample absent from the file is a gap; a (frame, marker) pair given twice is an error.
+    ``frame`` holds integer frame numbers; row 0 of the recording is the smallest. A sample
+    absent from the file is a gap, and so is a frame absent for every marker (it stays a frame
+    of missing samples, so the frames keep their numbers and spacing); a (frame, marker) pair
+    given twice is an error.
     """
     path = _check_file(path)
     try:
@@ -113,21 +192,53 @@ def read_csv(path: str | Path) -> Recording:
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
         raise ValueError(f"{path}: missing columns {sorted(missing)}")
+    if table.empty:
+        raise ValueError(f"{path}: no samples: the file has a header but no data rows")
+    numbers = _csv_frame_numbers(table["frame"], path)
     table["marker"] = table["marker"].astype(str)
     twice = table.duplicated(["frame", "marker"], keep=False)
     if twice.any():
         first = table[twice].iloc[0]
         raise ValueError(
-            f"{path}: frame {first['frame']}, marker {first['marker']} has {int(twice.sum())} "
-            "rows for the same (frame, marker); each sample must appear once"
+            f"{path}: frame {numbers[first.name]}, marker {first['marker']} has "
+            f"{int(twice.sum())} rows for the same (frame, marker); each sample must appear once"
         )
-    frames = np.sort(table["frame"].unique())
+    first_frame = int(numbers.min())
     labels = sorted(table["marker"].unique(), key=_natural)
-    row = np.searchsorted(frames, table["frame"].to_numpy())
     column = {label: i for i, label in enumerate(labels)}
-    markers = np.full((len(frames), len(labels), 3), np.nan)
-    markers[row, table["marker"].map(column).to_numpy()] = table[["x", "y", "z"]].to_numpy(float)
-    return Recording(tuple(labels), markers, None, str(path))
+    markers = np.full((int(numbers.max()) - first_frame + 1, len(labels), 3), np.nan)
+    coordinates = table[["x", "y", "z"]].apply(pd.to_numeric, errors="coerce")
+    bad = coordinates.isna().to_numpy() & table[["x", "y", "z"]].notna().to_numpy()
+    if bad.any():
+        row, axis = np.argwhere(bad)[0]
+        raise ValueError(
+            f"{path}: frame {numbers[row]}, marker {table['marker'].iloc[row]}: "
+            f"{'xyz'[axis]} = {table[['x', 'y', 'z']].iloc[row, axis]!r} is not a number"
+        )
+    markers[numbers - first_frame, table["marker"].map(column).to_numpy()] = coordinates.to_numpy(
+        float
+    )
+    return Recording(tuple(labels), markers, None, str(path), first_frame)
+
+
+def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
+    """The ``frame`` column as integers; ``ValueError`` naming a value that is not one, or a
+    range of numbers so much wider than the frames present that it is not frame numbers."""
+    values = pd.to_numeric(frames, errors="coerce").to_numpy(float)
+    bad = ~np.isfinite(values) | (values != np.round(values))
+    if bad.any():
+        raise ValueError(
+            f"{path}: frame {frames.iloc[int(np.argmax(bad))]!r} (data row "
+            f"{int(np.argmax(bad)) + 1}) is not an integer frame number"
+        )
+    numbers = values.astype(np.int64)
+    span, present = int(numbers.max() - numbers.min()) + 1, len(np.unique(numbers))
+    if span > 100 * present + 1000:
+        raise ValueError(
+            f"{path}: frame numbers run from {numbers.min()} to {numbers.max()} but only "
+            f"{present} frames have rows; is the 'frame' column a frame number?"
+        )
+    return numbers
 
 
 def _natural(label: str) -> tuple:

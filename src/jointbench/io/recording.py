@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jointbench.io.segments import Segment
+from jointbench.io.segments import Numbering, Segment
 
 __all__ = ["Recording", "parse_frames"]
 
@@ -24,34 +24,42 @@ def _as_missing(markers: np.ndarray) -> np.ndarray:
     return markers
 
 
-def parse_frames(text: str, n_frames: int) -> slice:
-    """``"start:stop"`` (0-based, stop exclusive, either side may be empty) -> ``slice``."""
+def parse_frames(text: str, n_frames: int, first_frame: int = 0) -> slice:
+    """``"start:stop"`` in the file's frame numbers (stop excluded, either side may be empty)
+    -> the ``slice`` of rows of a recording of ``n_frames`` whose row 0 is ``first_frame``."""
+    end = first_frame + n_frames
     parts = str(text).split(":")
     try:
         if len(parts) != 2:
             raise ValueError
-        start = int(parts[0]) if parts[0].strip() else 0
-        stop = int(parts[1]) if parts[1].strip() else n_frames
+        start = int(parts[0]) if parts[0].strip() else first_frame
+        stop = int(parts[1]) if parts[1].strip() else end
     except ValueError:
         raise ValueError(
-            f"frames must be 'start:stop' (0-based frame indices, stop excluded), got {text!r}"
+            f"frames must be 'start:stop' (the file's frame numbers, stop excluded), got {text!r}"
         ) from None
-    if not 0 <= start < stop <= n_frames:
+    if not first_frame <= start < stop <= end:
         raise ValueError(
-            f"frames {text!r} do not fit the recording: need 0 <= start < stop <= {n_frames}"
+            f"frames {text!r} do not fit the recording, frames {first_frame} to {end - 1}: "
+            f"need {first_frame} <= start < stop <= {end}"
         )
-    return slice(start, stop)
+    return slice(start - first_frame, stop - first_frame)
 
 
 @dataclass(frozen=True, eq=False)
 class Recording:
     """Marker trajectories of one trial.
 
-        ``labels`` ``(n_markers,)`` names; ``markers`` ``(n_frames, n_markers, 3)`` float64 [mm],
-        NaN where a sample is missing (NaN, inf or exactly (0, 0, 0) in the file, or a negative
-        residual where the format has one); ``rate_hz`` the frame rate (``None`` when the file does
-        not say); ``source`` the file it came from, for messages. Frames are 0-based indices
-    into the file; ``first_frame`` is the file index of row 0 once a frame range is taken.
+    ``labels`` ``(n_markers,)`` names; ``markers`` ``(n_frames, n_markers, 3)`` float64 [mm],
+    NaN where a sample is missing (NaN, inf or exactly (0, 0, 0) in the file, or a negative
+    residual where the format has one); ``rate_hz`` the frame rate (``None`` when the file does
+    not say); ``source`` the file it came from, for messages; ``units`` the point unit the file
+    states (the markers are converted to mm whatever it is).
+
+    Frames are named by the file's own numbers, as other motion-capture software shows them:
+    row ``i`` is frame ``first_frame + i`` (a C3D header's first frame, a TRC's first
+    ``Frame#``, a CSV's smallest ``frame``; 0 for arrays). Messages, frame ranges, fitted frames
+    and anchor frames all use these numbers.
     """
 
     labels: tuple[str, ...]
@@ -59,6 +67,7 @@ class Recording:
     rate_hz: float | None = None
     source: str = "<memory>"
     first_frame: int = 0
+    units: str = "mm"
 
     def __post_init__(self) -> None:
         labels = tuple(str(label) for label in self.labels)
@@ -109,12 +118,20 @@ class Recording:
         return self.markers[:, self.index(labels)]
 
     def frames(self, frames: slice | str) -> Recording:
-        """The recording restricted to ``frames`` (a slice or ``"start:stop"``)."""
+        """The recording restricted to ``frames``: ``"start:stop"`` in the file's frame numbers
+        (stop excluded), or a ``slice`` of rows (steps other than 1 are refused)."""
         if isinstance(frames, str):
-            frames = parse_frames(frames, self.n_frames)
-        start = frames.indices(self.n_frames)[0]
+            frames = parse_frames(frames, self.n_frames, self.first_frame)
+        start, stop, step = frames.indices(self.n_frames)
+        if step != 1:
+            raise ValueError(f"{self.source}: a frame range takes consecutive frames, got {frames}")
         return Recording(
-            self.labels, self.markers[frames], self.rate_hz, self.source, self.first_frame + start
+            self.labels,
+            self.markers[start:stop],
+            self.rate_hz,
+            self.source,
+            self.first_frame + start,
+            self.units,
         )
 
     def gaps(self) -> dict[str, int]:
@@ -123,11 +140,13 @@ class Recording:
         return {label: int(n) for label, n in zip(self.labels, missing, strict=True)}
 
     def when(self, frame: int) -> str:
-        """``"frame 731 (7.31 s)"``: how messages name row ``frame`` (by its file index)."""
-        frame = self.first_frame + frame
-        if self.rate_hz is None:
-            return f"frame {frame}"
-        return f"frame {frame} ({frame / self.rate_hz:.2f} s)"
+        """``"frame 731 (7.31 s)"``: how messages name row ``frame`` (by the file's number)."""
+        return self.numbering.name(frame)
+
+    @property
+    def numbering(self) -> Numbering:
+        """How the rows are numbered in messages (:class:`~jointbench.io.segments.Numbering`)."""
+        return Numbering(self.first_frame, self.rate_hz)
 
     def segment(self, labels: str | list[str] | tuple[str, ...]) -> Segment:
         """The rigid segment carried by ``labels``: mean shape, technical frame, poses."""

@@ -11,14 +11,7 @@ origin at the centroid of all the cluster's markers, ``x`` from the first marker
 second, ``z`` normal to the plane of the first three (``(p2 - p1) x (p3 - p1)``), ``y = z x x``.
 A pose ``(R, t)`` maps technical coordinates to the world, ``R @ p + t``.
 
-Artefacts. A label swap or a marker that falls off breaks rigidity: that marker's residual from
-the fitted pose jumps far above the trial's own level, which for skin markers is soft-tissue
-artefact of a few mm. A sample is flagged when its residual exceeds ``residual_factor`` times
-the median residual of the cluster and ``min_residual_mm``. The residuals are first taken from
-the cluster's most typical frame (which a minority of broken frames cannot distort, as they
-would a mean), then from the mean shape of the samples not flagged, until the flags settle. A
-step of one marker is flagged when it differs from both neighbouring steps by more than
-``jump_factor`` times the median such difference and ``min_jump_mm`` (:func:`find_jumps`).
+Artefacts are found by :func:`jointbench.screening.screen` (one home for files and arrays).
 """
 
 from __future__ import annotations
@@ -28,7 +21,22 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from jointbench.numerics.poses import best_rotation
+from jointbench.screening import (
+    Artefact,
+    ArtefactRules,
+    Numbering,
+    Screening,
+    Swap,
+    find_jumps,
+    find_rigidity_breaks,
+    find_swaps,
+    fit_poses,
+    mean_shape,
+    screen,
+    summarise,
+    to_local,
+    typical_shape,
+)
 
 if TYPE_CHECKING:
     from jointbench.io.recording import Recording
@@ -36,88 +44,21 @@ if TYPE_CHECKING:
 __all__ = [
     "Artefact",
     "ArtefactRules",
+    "Numbering",
+    "Screening",
     "Segment",
+    "Swap",
     "find_jumps",
     "find_rigidity_breaks",
+    "find_swaps",
     "fit_poses",
     "mean_shape",
+    "screen",
+    "summarise",
     "technical_frame",
     "to_local",
     "typical_shape",
 ]
-
-_MAX_ITERATIONS = 200
-_TOL_MM = 1e-10
-
-
-def fit_poses(shape: np.ndarray, markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares pose of ``shape`` ``(n, 3)`` onto every frame of ``markers``
-    ``(n_frames, n, 3)`` [mm], using the markers visible (finite) in each frame.
-
-    Returns ``R`` ``(n_frames, 3, 3)`` and ``t`` ``(n_frames, 3)`` [mm]; NaN in frames with
-    fewer than three visible markers.
-    """
-    visible = np.isfinite(markers).all(axis=-1)
-    count = visible.sum(axis=1)
-    weight = visible / np.maximum(count, 1)[:, None]
-    filled = np.where(visible[..., None], markers, 0.0)
-    target_mean = np.einsum("fm,fmi->fi", weight, filled)
-    shape_mean = weight @ shape
-    cross = np.einsum(
-        "fm,fmi,fmj->fij",
-        visible.astype(float),
-        filled - target_mean[:, None],
-        shape[None] - shape_mean[:, None],
-    )
-    rotation = best_rotation(cross)
-    translation = target_mean - np.einsum("fij,fj->fi", rotation, shape_mean)
-    posed = count >= 3
-    rotation[~posed] = np.nan
-    translation[~posed] = np.nan
-    return rotation, translation
-
-
-def to_local(rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray) -> np.ndarray:
-    """World markers ``(n_frames, n, 3)`` into the frame posed by ``(R, t)``: ``R' (x - t)``."""
-    return np.einsum("fji,fmj->fmi", rotation, markers - translation[:, None, :])
-
-
-def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
-    """The cluster ``(n, 3)`` in its most typical complete frame: the one whose inter-marker
-    distances are nearest their medians over the trial, which a minority of broken frames
-    cannot pull."""
-    seen = np.isfinite(markers[..., 0]).any(axis=0)
-    if not seen.all():
-        raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
-    complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
-    if complete.size == 0:
-        raise ValueError(
-            f"{source}: markers {', '.join(labels)} are never all visible in one frame; "
-            "a segment needs one frame showing its whole cluster"
-        )
-    clusters = markers[complete]
-    distances = np.linalg.norm(clusters[:, :, None] - clusters[:, None], axis=-1)
-    deviation = np.abs(distances - np.median(distances, axis=0)).max(axis=(1, 2))
-    return clusters[int(np.argmin(deviation))].copy()
-
-
-def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
-    """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
-    in the frame of its most typical complete frame (the caller fixes the frame)."""
-    shape = typical_shape(markers, labels, source)
-    for _ in range(_MAX_ITERATIONS):
-        rotation, translation = fit_poses(shape, markers)
-        posed = np.isfinite(rotation[:, 0, 0])
-        local = to_local(rotation[posed], translation[posed], markers[posed])
-        new = np.nanmean(local, axis=0)
-        change = float(np.max(np.abs(new - shape)))
-        shape = new
-        if change < _TOL_MM * max(1.0, float(np.abs(shape).max())):
-            return shape
-    raise ValueError(
-        f"{source}: the mean shape of {', '.join(labels)} did not converge in "
-        f"{_MAX_ITERATIONS} iterations (last change {change:.3g} mm)"
-    )
 
 
 def technical_frame(shape: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
@@ -138,75 +79,6 @@ def technical_frame(shape: np.ndarray, labels: tuple[str, ...], source: str) -> 
     return pose
 
 
-@dataclass(frozen=True)
-class ArtefactRules:
-    """When a sample or a step is far above the trial's own level (module docstring)."""
-
-    residual_factor: float = 10.0
-    min_residual_mm: float = 5.0
-    jump_factor: float = 20.0
-    min_jump_mm: float = 20.0
-
-
-@dataclass(frozen=True)
-class Artefact:
-    """One flagged sample: ``kind`` ``"jump"`` or ``"rigidity"``, ``size_mm`` the step or the
-    residual, ``level_mm`` the threshold it crossed."""
-
-    kind: str
-    label: str
-    frame: int
-    size_mm: float
-    level_mm: float
-
-    def describe(self, recording: Recording) -> str:
-        what = "jumps" if self.kind == "jump" else "leaves its cluster's rigid shape by"
-        return (
-            f"marker {self.label} {what} {self.size_mm:.1f} mm at {recording.when(self.frame)} "
-            f"(threshold {self.level_mm:.1f} mm; a label swap or a marker falling off?)"
-        )
-
-
-def find_jumps(
-    markers: np.ndarray, labels: tuple[str, ...], rules: ArtefactRules
-) -> list[Artefact]:
-    """Steps of one marker that differ from both neighbouring steps by far more than usual.
-
-    A fast but smooth movement changes its step little from frame to frame; a label swap or a
-    marker knocked off adds a step of its own. The size of the step at frame ``k`` is
-    ``min(|s_k - s_(k-1)|, |s_k - s_(k+1)|)`` with ``s_k = x_k - x_(k-1)``.
-    """
-    steps = np.diff(markers, axis=0)  # (n_frames - 1, n, 3), NaN at gaps
-    if steps.shape[0] < 3:
-        return []
-    size = np.fmin(
-        np.linalg.norm(steps[1:-1] - steps[:-2], axis=-1),
-        np.linalg.norm(steps[1:-1] - steps[2:], axis=-1),
-    )
-    if not np.isfinite(size).any():
-        return []
-    level = max(rules.min_jump_mm, rules.jump_factor * float(np.nanmedian(size)))
-    step, marker = np.nonzero(np.nan_to_num(size) > level)
-    return [
-        Artefact("jump", labels[m], int(k) + 2, float(size[k, m]), level)
-        for k, m in zip(step, marker, strict=True)
-    ]
-
-
-def find_rigidity_breaks(
-    residuals: np.ndarray, labels: tuple[str, ...], rules: ArtefactRules
-) -> list[Artefact]:
-    """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the median."""
-    if not np.isfinite(residuals).any():
-        return []
-    level = max(rules.min_residual_mm, rules.residual_factor * float(np.nanmedian(residuals)))
-    frame, marker = np.nonzero(np.nan_to_num(residuals) > level)
-    return [
-        Artefact("rigidity", labels[m], int(f), float(residuals[f, m]), level)
-        for f, m in zip(frame, marker, strict=True)
-    ]
-
-
 @dataclass(frozen=True, eq=False)
 class Segment:
     """A rigid marker cluster of a recording in its technical frame.
@@ -215,7 +87,8 @@ class Segment:
     mean shape in technical coordinates; ``rotation`` ``(n_frames, 3, 3)`` and ``translation``
     ``(n_frames, 3)`` [mm] the technical frame's pose in every frame (NaN where fewer than three
     markers are seen); ``residuals`` ``(n_frames, n)`` [mm] each marker's distance from its
-    fitted position (NaN where missing); ``artefacts`` the flagged jumps and rigidity breaks.
+    fitted position (NaN where missing); ``artefacts`` the flagged rigidity breaks and ``swaps``
+    the label swaps that explain some of them (:func:`screen`).
     """
 
     labels: tuple[str, ...]
@@ -224,6 +97,7 @@ class Segment:
     translation: np.ndarray
     residuals: np.ndarray
     artefacts: tuple[Artefact, ...]
+    swaps: tuple[Swap, ...] = ()
 
     @classmethod
     def fit(
@@ -232,7 +106,8 @@ class Segment:
         labels: str | list[str] | tuple[str, ...],
         rules: ArtefactRules | None = None,
     ) -> Segment:
-        """Fit the segment; frames whose samples break rigidity do not shape the mean."""
+        """Fit the segment (:func:`screen`); frames whose samples break rigidity do not shape
+        the mean."""
         rules = rules or ArtefactRules()
         index = recording.index(labels)
         labels = tuple(recording.labels[i] for i in index)
@@ -240,35 +115,23 @@ class Segment:
             raise ValueError(
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
-        markers = recording.markers[:, index]
-        # First judged against one typical frame, which the broken frames cannot distort; then
-        # the mean shape is refitted on the samples not flagged, until the flags settle.
-        shape = typical_shape(markers, labels, recording.source)
-        breaks: list[Artefact] | None = None
-        for _ in range(5):
-            rotation, translation = fit_poses(shape, markers)
-            residuals = _residuals(shape, rotation, translation, markers)
-            found = find_rigidity_breaks(residuals, labels, rules)
-            if found == breaks:
-                break
-            breaks = found
-            clean = markers.copy()
-            for artefact in breaks:
-                clean[artefact.frame, labels.index(artefact.label)] = np.nan
-            shape = mean_shape(clean, labels, recording.source)
-        else:
-            rotation, translation = fit_poses(shape, markers)
-            residuals = _residuals(shape, rotation, translation, markers)
+        screening = screen(recording.markers[:, index], labels, recording.source, rules)
+        shape, rotation, translation = screening.shape, screening.rotation, screening.translation
         # World x = R (A q + o) + t for technical coordinates q: pose (R A, R o + t).
         frame = technical_frame(shape, labels, recording.source)
         axes, origin = frame[:3, :3], frame[:3, 3]
         shape_local = (shape - origin) @ axes
         translation = translation + rotation @ origin
         rotation = rotation @ axes
-        artefacts = sorted(
-            [*find_jumps(markers, labels, rules), *breaks], key=lambda a: (a.frame, a.label)
+        return cls(
+            labels,
+            shape_local,
+            rotation,
+            translation,
+            screening.residuals,
+            screening.artefacts,
+            screening.swaps,
         )
-        return cls(labels, shape_local, rotation, translation, residuals, tuple(artefacts))
 
     def local(self, markers: np.ndarray) -> np.ndarray:
         """World markers ``(n_frames, m, 3)`` in this segment's technical frame, per frame."""
@@ -293,8 +156,3 @@ class Segment:
                 for label, point in zip(self.labels, self.shape, strict=True)
             },
         }
-
-
-def _residuals(shape, rotation, translation, markers) -> np.ndarray:
-    fitted = np.einsum("fij,mj->fmi", rotation, shape) + translation[:, None, :]
-    return np.linalg.norm(markers - fitted, axis=-1)

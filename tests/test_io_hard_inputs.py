@@ -1,0 +1,218 @@
+"""Hard inputs to the file and array paths: truncated files, frames named as in the file, label
+swaps as events, frame order in exclude mode, screening of arrays, and the CLI's answers."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from rigs import JOINT, PROXIMAL
+from test_cli import long_table, run, sphere_markers
+from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
+
+import jointbench
+from jointbench.io import Recording, prepare, read
+
+THIGH = "RTHI1,RTHI2,RTHI3,RGT,RLFE,RMFE"  # with the epicondyles, whose labels get swapped
+SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
+
+
+# --- readers ----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("cut", ["half", "1000 bytes"])
+def test_truncated_c3d_is_refused_naming_what_the_header_promised(tmp_path, cut):
+    content = KNEE.read_bytes()
+    path = tmp_path / "cut.c3d"
+    path.write_bytes(content[: len(content) // 2] if cut == "half" else content[:-1000])
+    complete = 458 if cut == "half" else 921
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value).startswith(f"{path}: truncated C3D file")
+    assert "promises frames 100 to 1021 (922 frames) of 73 points" in str(error.value)
+    assert f"{complete} complete frames" in str(error.value)
+
+
+def test_truncated_trc_is_refused(tmp_path):
+    header = "PathFileType\t4\t(X/Y/Z)\tcut.trc\n"
+    header += "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\n100\t100\t5\t1\tmm\n"
+    header += "Frame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n"
+    rows = "".join(f"{18 + i}\t{i / 100}\t{i}.0\t1.0\t2.0\n" for i in range(3))
+    path = tmp_path / "cut.trc"
+    path.write_text(header + rows)
+    with pytest.raises(ValueError, match="promises NumFrames 5 but the file has 3"):
+        read(path)
+    path.write_text(header.replace("\t5\t", "\t3\t") + rows)
+    assert read(path).first_frame == 18
+
+
+def test_header_only_csv_is_one_line(tmp_path, capsys):
+    path = tmp_path / "empty.csv"
+    path.write_text("frame,marker,x,y,z\n")
+    code, _, err = run(capsys, "inspect", str(path))
+    assert (
+        code == 2
+        and err.strip() == f"jointbench: {path}: no samples: the file has a header but no data rows"
+    )
+
+
+def test_csv_frame_absent_for_every_marker_stays_a_frame_of_gaps(tmp_path):
+    markers, center = sphere_markers()
+    table = long_table(markers)
+    table["frame"] += 18
+    path = tmp_path / "hole.csv"
+    table[table["frame"] != 40].to_csv(path, index=False)
+    recording = read(path)
+    assert recording.first_frame == 18 and recording.n_frames == 60
+    assert np.isnan(recording.markers[22]).all() and not np.isnan(recording.markers[21]).any()
+    fitted = prepare(recording, "center", ["0", "1", "2"]).fit("NM")
+    assert fitted.n_gap_frames == 1 and 40 not in fitted.frames_used
+    assert fitted.frames_used[0] == 18 and fitted.frames_used[-1] == 77
+    np.testing.assert_allclose(fitted.result.center, center, atol=1e-6)
+
+
+def test_messages_and_frame_ranges_use_the_files_frame_numbers(tmp_path):
+    markers = swapped(rig_recording(), 150, "D1", "D2").markers
+    table = long_table(markers)
+    table["frame"] += 18
+    table["marker"] = np.array(PROX + DIST)[table["marker"]]
+    path = tmp_path / "swap.csv"
+    table.to_csv(path, index=False)
+    recording = read(path)
+    with pytest.raises(ValueError, match="exchange labels at frame 168; frames 18 to 167, 168 to"):
+        prepare(recording, "center", DIST, PROX)
+    fitted = prepare(recording, "center", DIST, PROX, frames="18:168").fit("LS")
+    assert (fitted.frames_used[0], fitted.frames_used[-1]) == (18, 167)
+    with pytest.raises(ValueError, match="frames '0:100' do not fit the recording, frames 18 to"):
+        recording.frames("0:100")
+
+
+def test_inspect_shows_units_and_the_first_frame_number(capsys):
+    code, out, _ = run(capsys, "inspect", str(KNEE), "--format", "json")
+    summary = json.loads(out)
+    assert code == 0 and summary["first_frame"] == 100 and summary["last_frame"] == 1021
+    assert summary["units_in_file"] == "mm" and summary["units"] == "mm"
+    code, out, _ = run(capsys, "inspect", str(KNEE))
+    assert "922 frames (numbered 100 to 1021 as in the file)" in out and "units mm" in out
+
+
+# --- label swaps ------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def knee_swapped():
+    """The knee trial with RLFE and RMFE exchanged from row 300 (frame 400) to the end: the
+    swapped labelling holds two thirds of the frames."""
+    knee = read(KNEE)
+    markers = knee.markers.copy()
+    i, j = knee.index(["RLFE", "RMFE"])
+    markers[300:, [i, j]] = markers[300:, [j, i]]
+    return Recording(knee.labels, markers, knee.rate_hz, knee.source, knee.first_frame)
+
+
+def test_a_swap_held_by_most_frames_is_named_where_it_happens(knee_swapped):
+    with pytest.raises(ValueError) as error:
+        prepare(knee_swapped, "joint_center", SHANK, THIGH)
+    message = str(error.value)
+    assert "markers RLFE and RMFE exchange labels at frame 400 (4.00 s)" in message
+    assert "frames 100 to 399, 400 to 1021" in message
+    assert "frames='100:400' or '400:1022'" in message
+    for side in ("100:400", "400:1022"):
+        assert prepare(knee_swapped, "joint_center", SHANK, THIGH, frames=side).found == ()
+
+
+def excluded(recording: Recording, order: np.ndarray, **kwargs) -> set[int]:
+    """Rows of ``recording`` (in its own order) that exclude mode leaves out of a fit of the
+    frames taken in ``order``."""
+    shuffled = Recording(recording.labels, recording.markers[order], 100.0, "order")
+    with pytest.warns(UserWarning, match="left out"):
+        prepared = prepare(shuffled, artefacts="exclude", **kwargs)
+    return set(order.tolist()) - set(order[prepared.usable].tolist())
+
+
+def test_exclude_mode_leaves_out_the_same_frames_in_any_order():
+    recording = swapped(rig_recording(artefact_mm=1.0), 130, "D1", "D3")
+    frames = np.arange(recording.n_frames)
+    orders = [frames, frames[::-1], np.random.default_rng(2).permutation(frames)]
+    found = [excluded(recording, o, kind="center", moving=DIST, reference=PROX) for o in orders]
+    assert found[0] == set(range(130, 200)) and found[1] == found[0] and found[2] == found[0]
+    # A marker outside a cluster can only jump, which takes time order; reversed, the same
+    # step leaves out the same two frames.
+    markers = rig_recording(artefact_mm=1.0).markers.copy()
+    markers[90:, 3] += np.array([0.0, 0.0, 119.0])
+    loose = Recording(recording.labels, markers, 100.0, "loose")
+    found = [excluded(loose, o, kind="center", moving=["D1"], reference=PROX) for o in orders[:2]]
+    assert found[0] == found[1] == {89, 90}
+
+
+# --- arrays -----------------------------------------------------------------------------------
+
+
+def test_array_fits_screen_like_files():
+    markers = swapped(rig_recording(artefact_mm=1.0), 150, "P1", "P2").markers
+    proximal, distal = markers[:, :3], markers[:, 3:]
+    message = r"markers proximal\[:, 0\] and proximal\[:, 1\] exchange labels at frame 150"
+    with pytest.raises(ValueError, match=message):
+        jointbench.fit_joint_center(proximal, distal)
+    with pytest.raises(ValueError, match=r"Fit one side \(proximal\[0:150\] or proximal\[150"):
+        jointbench.fit_joint_center(proximal, distal, method="SCoRE")
+    with pytest.warns(UserWarning, match="artefacts in the data: markers proximal"):
+        warned = jointbench.fit_joint_center(proximal, distal, artefacts="warn")
+    ignored = jointbench.fit_joint_center(proximal, distal, artefacts="ignore")
+    np.testing.assert_array_equal(warned.center, ignored.center)
+    found = jointbench.screen(proximal, distal)
+    assert [swap.labels for swap in found["proximal"].swaps] == [
+        ("proximal[:, 0]", "proximal[:, 1]")
+    ]
+    assert found["distal"].artefacts == ()
+    clean = rig_recording().markers
+    assert jointbench.fit_joint_center(clean[:, :3], clean[:, 3:]).status == "ok"
+
+
+def test_array_fit_of_one_marker_refuses_its_jump():
+    markers = rig_recording(artefact_mm=1.0)
+    moving = prepare(markers, "center", DIST, PROX).arrays[0][:, :1].copy()
+    moving[90:] += np.array([0.0, 0.0, 119.0])
+    with pytest.raises(ValueError, match=r"marker markers\[:, 0\] jumps 11\d\.\d mm at frame 90"):
+        jointbench.fit_center(moving, method="LS")
+    with pytest.raises(ValueError, match="artefacts must be one of refuse, warn, ignore"):
+        jointbench.fit_center(moving, artefacts="exclude")
+
+
+def test_knee_arrays_with_the_swap_are_refused(knee_swapped):
+    thigh, shank = knee_swapped.select(THIGH), knee_swapped.select(SHANK)
+    with pytest.raises(ValueError, match=r"markers proximal.* exchange labels at frame 300"):
+        jointbench.fit_joint_center(thigh, shank, method="SCoRE")
+
+
+# --- the command line -------------------------------------------------------------------------
+
+
+def test_joint_center_json_says_which_point_and_gives_both(tmp_path, capsys):
+    path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording(artefact_mm=2.0).markers)
+    segments = ["--reference", ",".join(PROX), "--moving", ",".join(DIST), "--format", "json"]
+    code, out, _ = run(capsys, "fit", str(path), "--kind", "joint_center", "--method", "SCoRE",
+                       *segments)  # fmt: skip
+    (joint,) = json.loads(out)
+    assert code == 0 and "anchor frame" in joint["center_is"]
+    proximal, distal = np.array(joint["center_proximal_mm"]), np.array(joint["center_distal_mm"])
+    np.testing.assert_allclose(joint["center_mm"], (proximal + distal) / 2, atol=1e-9)
+    assert np.linalg.norm(proximal - distal) > 0.1  # two different points, both reported
+    code, out, _ = run(capsys, "fit", str(path), "--kind", "center", "--method", "SCoRE", *segments)
+    (center,) = json.loads(out)
+    assert "fixed in the reference segment" in center["center_is"]
+    np.testing.assert_allclose(center["center_mm"], in_frame(JOINT, PROXIMAL), atol=3.0)
+
+
+def test_method_all_runs_what_can_run_and_says_why_the_rest_did_not(tmp_path, capsys):
+    path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording(artefact_mm=1.0).markers)
+    arguments = ["fit", str(path), "--reference", ",".join(PROX), "--moving", "D1"]
+    code, out, err = run(capsys, *arguments, "--method", "all", "--format", "csv")
+    table = pd.read_csv(pd.io.common.StringIO(out)).set_index("method")
+    assert code == 0 and list(table.index) == list(jointbench.methods("center"))
+    assert table.loc["MA", "status"].startswith("failed: markers has 1 markers")
+    assert table.loc["NM", "status"] == "ok" and "MA did not run" in err
+    code, out, _ = run(capsys, *arguments, "--method", "all", "--frames", "1:4", "--format", "json")
+    assert code == 2 and all(f["status"].startswith("failed") for f in json.loads(out))
