@@ -259,3 +259,19 @@ def test_lm_script_fits_and_turns_a_bad_trial_into_a_row(tmp_path):
     bad = estimates[estimates["trial"] == 1].iloc[0]
     assert not bad["converged"] and np.isnan(bad["error_mm"]) and "NaN" in bad["status"]
     assert estimates["rom_deg"].tolist() == [30, 30, 30]
+
+
+def test_lm_says_when_a_restart_finds_a_lower_minimum():
+    """LM's self-check: an answer that is not f1's lowest minimum is named, a true one is not."""
+    lm = _lm_script()
+    rng = np.random.default_rng(3)
+    directions = rng.normal(size=(60, 3, 3))
+    directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
+    centre = np.array([10.0, -20.0, 30.0])
+    markers = centre + directions * np.array([40.0, 55.0, 70.0])[None, :, None]
+    truth_f1 = lm.profiled_f1(markers, centre)
+    assert lm.self_check(markers, centre, truth_f1) is None
+    # A centre 30 mm off, claimed with its own f1 as if it were a minimum: a restart goes lower.
+    off = centre + np.array([30.0, 0.0, 0.0])
+    doubt = lm.self_check(markers, off, lm.profiled_f1(markers, off))
+    assert doubt is not None and doubt.startswith("local minimum: a restart from")
