@@ -6,7 +6,7 @@ Run the suite with a report file, once per code version to compare::
     python benchmarks/stale_results.py after.json [before.json]
 
 Each cell counts the jobs the dry run scheduled after the edit (``all`` left out), and names
-up to four rules; ``nothing`` means Snakemake saw nothing to do.
+up to four of their rules; ``nothing`` means Snakemake saw nothing to do.
 """
 
 from __future__ import annotations
@@ -18,15 +18,17 @@ from pathlib import Path
 
 
 def _cell(jobs: list[str] | None) -> str:
-    """``n jobs: rule, rule (+k)`` for one dry run; rule-level entries only."""
+    """``n jobs: rule, rule (+k)`` for one dry run. A rule listed with wildcard values counts
+    one job per value (every rule of the default grain has at most one wildcard)."""
     if jobs is None:
         return "not run"
-    rules = Counter(job for job in jobs if "[" not in job)
+    rules = sorted(job for job in jobs if "[" not in job)
     if not rules:
         return "nothing"
-    names = sorted(rules)
-    shown = ", ".join(names[:4]) + (f" (+{len(names) - 4})" if len(names) > 4 else "")
-    return f"{len(names)} rules: {shown}"
+    per_value = Counter(job.split("[", 1)[0] for job in jobs if "[" in job)
+    count = sum(per_value.get(rule, 1) for rule in rules)
+    shown = ", ".join(rules[:4]) + (f" (+{len(rules) - 4} rules)" if len(rules) > 4 else "")
+    return f"{count} jobs: {shown}"
 
 
 def table(after: dict[str, list[str]], before: dict[str, list[str]] | None) -> str:
