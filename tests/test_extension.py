@@ -112,7 +112,10 @@ def test_user_rule_joins_collected_results_and_extended_ranking(tmp_path):
     assert set(collected["method"]) == {"NM", "LS", "LM", "centroid"}
     assert len(collected) == 2 * 2 * 4  # conditions x trials x methods
     lm = collected[collected["method"] == "LM"]
-    assert lm["converged"].all() and lm["f1_mm2"].notna().all()
+    # Every trial answered; one LM's restarts beat is marked as a local minimum, not "ok".
+    doubted = ~lm["converged"]
+    assert lm["f1_mm2"].notna().all() and lm["center_x"].notna().all()
+    assert lm.loc[doubted, "status"].str.startswith("local minimum").all()
     assert collected.loc[collected["method"] == "centroid", "error_mm"].notna().all()
 
     table = pd.read_csv(results / "tables" / "extended_cmc.csv")
