@@ -26,5 +26,7 @@ rule estimate_cmc_LM:
         out_dir=lambda w, output: Path(output[0]).parent,
         # The interpreter running this workflow: the project's environment.
         python=PYTHON,
+    message:
+        f"estimate cmc: LM (external) on {len(condition_ids('cmc'))} conditions"
     shell:
         "{params.python:q} {input.script:q} --out-dir {params.out_dir:q} {input.datasets:q} 2> {log:q}"
