@@ -4,6 +4,7 @@ page at a window size, evaluate JavaScript in it and take screenshots."""
 from __future__ import annotations
 
 import base64
+import fcntl
 import itertools
 import json
 import os
@@ -31,6 +32,13 @@ _FLAGS = (
 )
 
 
+def _above_nine(fd: int) -> int:
+    """``fd`` moved to the lowest free descriptor above 9."""
+    moved = fcntl.fcntl(fd, fcntl.F_DUPFD, 10)
+    os.close(fd)
+    return moved
+
+
 class Browser:
     """One Chromium process and one page; a context manager."""
 
@@ -41,21 +49,21 @@ class Browser:
 
     def __enter__(self) -> Browser:
         self._profile = tempfile.TemporaryDirectory()
-        # Chromium reads commands from fd 3 and writes replies to fd 4: the shell moves the
-        # pipe ends there for it.
+        # Chromium reads commands from fd 3 and writes replies to fd 4: the child moves the
+        # pipe ends there before it starts Chromium.
         to_child, self._to_browser = os.pipe()
         self._from_browser, from_child = os.pipe()
+        # Above 9, so that moving one end to 3 or 4 cannot overwrite the other.
+        to_child, from_child = (_above_nine(fd) for fd in (to_child, from_child))
+
+        def move_pipes() -> None:  # in the child, before Chromium starts
+            os.dup2(to_child, 3)
+            os.dup2(from_child, 4)
+
         self._process = subprocess.Popen(
-            [
-                "sh",
-                "-c",
-                f'exec "$0" "$@" 3<&{to_child} 4>&{from_child}',
-                CHROMIUM,
-                *_FLAGS,
-                f"--user-data-dir={self._profile.name}",
-                "about:blank",
-            ],
-            pass_fds=(to_child, from_child),
+            [CHROMIUM, *_FLAGS, f"--user-data-dir={self._profile.name}", "about:blank"],
+            pass_fds=(3, 4),
+            preexec_fn=move_pipes,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
         )

@@ -48,16 +48,21 @@ def job_line(record: logging.LogRecord) -> str:
 
 
 class _JobLines(logging.Formatter):
-    """Snakemake's formatter, with a job's multi-line block replaced by :func:`job_line`."""
+    """Snakemake's formatter, with a job's multi-line block replaced by :func:`job_line`; a dry
+    run lists each job in full (rule, wildcards, files: what would run), its message below."""
 
-    def __init__(self, base: logging.Formatter | None):
+    def __init__(self, base: logging.Formatter | None, dry_run: bool = False):
         super().__init__()
         self.base = base or logging.Formatter()
+        self.dry_run = dry_run
 
     def format(self, record: logging.LogRecord) -> str:
-        if _event(record) == "job_info":
-            return job_line(record)
-        return self.base.format(record)
+        if _event(record) != "job_info":
+            return self.base.format(record)
+        block = getattr(self.base, "_format_job_info", None)
+        if self.dry_run and block is not None:
+            return "\n".join([*block(record.__dict__), f"    message: {job_line(record)}"])
+        return job_line(record)
 
 
 class _Calm(logging.Filter):
@@ -79,5 +84,6 @@ def install(logger: logging.Logger) -> None:
     without that handler (a logger plugin writes the console) is left as it is."""
     for handler in logger.handlers:
         if handler.name == STREAM_HANDLER and not isinstance(handler.formatter, _JobLines):
+            dry_run = any(getattr(f, "dryrun", False) for f in handler.filters)
             handler.addFilter(_Calm(handler))
-            handler.setFormatter(_JobLines(handler.formatter))
+            handler.setFormatter(_JobLines(handler.formatter, dry_run))

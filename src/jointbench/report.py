@@ -18,7 +18,7 @@ import pandas as pd
 from jointbench import machine
 from jointbench.figures import extended
 from jointbench.figures.common import study_title
-from jointbench.papers import Output, get_paper, paper_labels, paper_names
+from jointbench.papers import Output, get_paper, paper_labels, paper_names, papers_of_study
 from jointbench.study import config as jb_config
 from jointbench.study.io import read_provenance
 from jointbench.study.snapshot import reproduction_counts
@@ -287,8 +287,6 @@ def calibration_sentence(calibration: pd.DataFrame) -> str:
 def findings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
     """One sentence per paper (claims and values reproduced, who ranks best on its study, and
     for paper C the calibration), generated from the run's tables."""
-    from jointbench.papers import papers_of_study
-
     comparison = tables.get("published_comparison")
     lines = []
     for key in paper_names():
@@ -440,16 +438,28 @@ def finish_report(path: str | Path) -> bool:
     return True
 
 
+def _option(argv: Sequence[str], names: Sequence[str], default: str) -> str | None:
+    """The value of a command-line option called any of ``names`` (``default`` when it is
+    given without one); ``None`` when it is absent."""
+    for index, argument in enumerate(argv):
+        for name in names:
+            if argument.startswith(f"{name}="):
+                return argument.split("=", 1)[1]
+            if argument == name:
+                following = argv[index + 1] if index + 1 < len(argv) else ""
+                return following if following and not following.startswith("-") else default
+    return None
+
+
 def report_path(argv: Sequence[str]) -> str | None:
     """The file a ``snakemake --report [FILE]`` command line writes (Snakemake's default
-    ``report.html`` when none is given); ``None`` for any other command."""
-    for index, argument in enumerate(argv):
-        if argument.startswith("--report="):
-            return argument.split("=", 1)[1]
-        if argument == "--report":
-            following = argv[index + 1] if index + 1 < len(argv) else ""
-            return following if following and not following.startswith("-") else "report.html"
-    return None
+    ``report.html`` when none is given), inside ``--directory`` when one is given (Snakemake
+    writes it there); ``None`` for any other command."""
+    path = _option(argv, ["--report"], "report.html")
+    if path is None:
+        return None
+    directory = _option(argv, ["--directory", "-d"], ".")
+    return str(Path(directory or ".", path))
 
 
 def closing_lines() -> str:
