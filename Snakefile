@@ -1,7 +1,13 @@
 # jointbench: regenerate every dataset, estimate, figure and table with `snakemake -j2`.
+import atexit
+import sys
 from pathlib import Path
 
+from snakemake.logging import logger
 from snakemake.utils import min_version
+
+from jointbench import console
+from jointbench import report as jb_report
 
 min_version("8.20")
 
@@ -11,6 +17,22 @@ configfile: "config/config.yaml"
 
 # The report's landing page is written by the report_captions rule (workflow/rules/check.smk).
 report: "results/report/workflow.rst"
+
+
+# The console: one line per job (its rule's message) and the progress, not the scheduler's
+# chatter (jointbench.console); the log under .snakemake/log/ keeps everything.
+console.install(logger)
+
+# `snakemake --report FILE`: once Snakemake has written the report, it gets the benchmark's name
+# as its tab title and a style that starts the landing page at the top of the window
+# (jointbench.report.finish_report; tests/test_report_browser.py looks at it in Chromium).
+_REPORT = jb_report.report_path(sys.argv)
+if _REPORT:
+    atexit.register(jb_report.finish_report, _REPORT)
+
+
+onsuccess:
+    print(jb_report.closing_lines(), file=sys.stderr)
 
 
 include: "workflow/rules/common.smk"

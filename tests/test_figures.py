@@ -11,7 +11,14 @@ import pytest
 from mpl_toolkits.mplot3d.art3d import Line3D, Poly3DCollection
 
 from jointbench.figures import extended, paper_a, paper_b, paper_c
-from jointbench.figures.common import SAVE_DPI, equal_3d_limits, median_trial, save_figure
+from jointbench.figures.common import (
+    SAVE_DPI,
+    equal_3d_limits,
+    median_trial,
+    method_style,
+    method_styles,
+    save_figure,
+)
 from jointbench.study.tables import markdown_table
 
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
@@ -325,7 +332,7 @@ def test_rank_axis_stops_at_the_number_of_methods():
     table = extended.extended_table(_tied_cmc(), "cmc", CMC_PAPER)
     ranks = extended.mean_ranks(table)
     fig, ax = plt.subplots()
-    extended._rank_bars(ax, ranks, extended._styles(list(ranks["method"])), CMC_PAPER[1])
+    extended._rank_bars(ax, ranks, method_styles(ranks["method"]), CMC_PAPER[1])
     assert ax.get_xlim() == (0, len(ranks))
     plt.close(fig)
 
@@ -501,3 +508,14 @@ def test_figures_are_laid_out_once_and_cropped_as_a_tight_save_crops(tmp_path, m
     with Image.open(reference) as tight, Image.open(outputs["png"]) as ours:
         assert abs(ours.size[0] - tight.size[0]) <= 1 and abs(ours.size[1] - tight.size[1]) <= 1
     assert (tmp_path / "f.pdf").read_bytes().startswith(b"%PDF")
+
+
+def test_every_method_has_one_colour_of_its_own():
+    known = ["NM", "LS", "BC", "MA", "IS", "SCoRE", "LM", "planar", "radial", "combined"]
+    known += ["SARA", "gauss-markov", "gauss-markov-frame0", "analytic"]
+    colours = [method_style(m)["color"] for m in known]
+    assert len(set(colours)) == len(colours)
+    # A newcomer's colour follows its name, and two newcomers in one figure never share one.
+    assert method_style("mine") == method_style("mine")
+    styles = method_styles([*known, *(f"new{i}" for i in range(6))])
+    assert len({s["color"] for s in styles.values()}) == len(styles)

@@ -113,12 +113,17 @@ def test_the_report_holds_every_figure_and_table(reduced_run):
     )
     assert report.returncode == 0, report.stderr[-4000:]
     html = (workdir / "results" / "report.html").read_text(errors="replace")
+    # Each output is shown on a page of its own beside its caption.
+    pages = set(re.findall(r"results/report/pages/(\w+)\.html", html))
     for study in reduced["studies"]:
         for name in _outputs(study):
             if name.endswith((".png", ".html")) and not name.startswith("collected"):
-                assert name.split("/")[-1] in html, f"{name} missing from the report"
-    assert "published_comparison.html" in html
-    assert "Reproduction summary" in html, "the report does not open on its description"
+                stem = name.split("/")[-1].rsplit(".", 1)[0]
+                page = f"{stem}_figure" if name.endswith(".png") and "extended_" in stem else stem
+                assert page in pages, f"{name} missing from the report"
+    assert "published_comparison" in pages
+    assert "Findings" in html, "the report does not open on its findings"
+    assert "<title>jointbench" in html, "the report keeps Snakemake's tab title"
 
 
 def test_every_rule_writes_its_log(reduced_run):

@@ -1,11 +1,15 @@
-"""The report's texts: each output's caption with its generated headline, and the landing page
-(what the benchmark is, its headline findings, provenance, and the run's machine)."""
+"""The report's texts: each output's caption with its generated headline, the page that shows an
+output beside its caption, the landing page (what the benchmark is, its findings in sentences,
+provenance, and the run's machine) and the finishing touches on Snakemake's HTML."""
 
 from __future__ import annotations
 
+import base64
+import html
 import importlib.metadata
 import os
 import platform
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -13,28 +17,38 @@ import pandas as pd
 
 from jointbench import machine
 from jointbench.figures import extended
-from jointbench.papers import Output, get_paper, paper_labels, paper_names
+from jointbench.figures.common import study_title
+from jointbench.papers import Output, get_paper, paper_labels, paper_names, papers_of_study
 from jointbench.study import config as jb_config
 from jointbench.study.io import read_provenance
 from jointbench.study.snapshot import reproduction_counts
 from jointbench.study.studies import get_study
 
 __all__ = [
+    "GLOSSARY",
+    "REPORT_TITLE",
     "caption_text",
+    "closing_lines",
+    "findings",
+    "finish_report",
+    "output_label",
+    "output_page",
+    "output_title",
     "paper_output",
     "run_metadata",
     "write_captions",
     "write_front_page",
+    "write_pages",
 ]
 
 
 EXTENDED_TABLE_CAPTION = (
-    "Every {kind_name} estimator of the `{study}` study ({methods}), ranked by mean error in "
+    "Every {kind_name} estimator of the {study} study ({methods}), ranked by mean error in "
     "each condition on identical trials: mean and median error, trials converged and failed, "
     "rank. The note under the table says which are the paper's methods and which were added."
 )
 EXTENDED_FIGURE_CAPTION = (
-    "Mean error of every estimator of the `{study}` study in every condition (log colour "
+    "Mean error of every estimator of the {study} study in every condition (log colour "
     "scale), and each estimator's mean rank over the conditions. † marks a cell where some "
     "trials failed or did not converge; a red outline marks the best of the condition, every "
     "tied method outlined."
@@ -57,10 +71,12 @@ def caption_text(name: str, config: Mapping) -> str:
     if name.startswith("extended_"):
         study = name.removeprefix("extended_").removesuffix("_figure")
         if name.endswith("_figure"):
-            return EXTENDED_FIGURE_CAPTION.format(study=study)
+            return EXTENDED_FIGURE_CAPTION.format(study=study_title(study))
         methods = ", ".join(jb_config.estimator_names(config, study))
         kind = _KIND_NAMES[get_study(study).kind]
-        return EXTENDED_TABLE_CAPTION.format(kind_name=kind, study=study, methods=methods)
+        return EXTENDED_TABLE_CAPTION.format(
+            kind_name=kind, study=study_title(study), methods=methods
+        )
     return paper_output(name).caption
 
 
@@ -102,18 +118,196 @@ def write_captions(tables: Mapping[str, str], outputs: Sequence[str], config: Ma
         Path(path).write_text(f"{body}\n\n**Headline:** {headline}\n" if headline else f"{body}\n")
 
 
+# ----------------------------------------------------------------------------- output pages
+
+#: The report's name: its browser tab and the landing page's title.
+REPORT_TITLE = "jointbench: functional joint centre and axis estimators, benchmarked"
+
+
+def output_label(name: str) -> str:
+    """How an output is listed in the report's menu: "Fig 3", "Table 1", "Claims",
+    "Extended ranking (figure)", "Every value and claim"."""
+    if name == "published_comparison":
+        return "Every value and claim"
+    if name.startswith("extended_"):
+        return "Extended ranking" + (" (figure)" if name.endswith("_figure") else " (table)")
+    stem = re.sub(r"^paper_[a-z]+_", "", name)
+    match = re.fullmatch(r"(fig|table)(\d+)", stem)
+    if match:
+        return f"{match[1].capitalize()} {match[2]}"
+    return stem.replace("_", " ").capitalize()
+
+
+def output_title(name: str) -> str:
+    """An output's title on its page: "Paper A Fig 3", "Extended ranking (figure): thumb CMC"."""
+    if name == "published_comparison":
+        return "Agreement with the papers: every value and claim"
+    if name.startswith("extended_"):
+        study = name.removeprefix("extended_").removesuffix("_figure")
+        return f"{output_label(name)}: {study_title(study)}"
+    key = re.match(r"paper_[a-z]+", name)
+    if key and key[0] in paper_names():
+        return f"Paper {get_paper(key[0]).letter} {output_label(name)}"
+    return output_label(name)
+
+
+_PAGE_STYLE = (
+    "body{font-family:sans-serif;font-size:14px;margin:0;padding:12px;color:#222}"
+    ".page{display:flex;flex-wrap:wrap;gap:16px;align-items:flex-start}"
+    ".caption{flex:1 1 18em;max-width:30em;line-height:1.45}"
+    ".caption h2{font-size:17px;margin:0 0 8px}"
+    ".shown{flex:1000 1 42em;min-width:0}"
+    ".shown img{width:100%;height:auto;display:block}"
+    ".shown table{border-collapse:collapse;font-size:13px}"
+    ".shown th,.shown td{padding:3px 8px;border-bottom:1px solid #ddd;text-align:left;"
+    "vertical-align:top}.shown th{background:#f3f3f3;position:sticky;top:0}"
+    ".file{color:#666;font-size:12px}"
+)
+
+
+def _caption_html(rst: str) -> str:
+    from docutils.core import publish_parts
+
+    return publish_parts(rst, writer_name="html")["body"]
+
+
+def _body(table_html: str) -> str:
+    """What is between ``<body>`` and ``</body>`` of a table page, its style left behind."""
+    match = re.search(r"<body>(.*)</body>", table_html, flags=re.S)
+    return match[1] if match else table_html
+
+
+def output_page(title: str, caption_rst: str, shown: str | Path) -> str:
+    """A self-contained HTML page of one output beside its caption: a PNG figure (embedded)
+    or a table page's body. The caption sits to the right of the output on a wide window and
+    above it on a narrow one, so a figure and what it shows are on screen together."""
+    path = Path(shown)
+    if path.suffix == ".png":
+        data = base64.b64encode(path.read_bytes()).decode()
+        content = f"<img alt='{html.escape(title)}' src='data:image/png;base64,{data}'>"
+    else:
+        content = _body(path.read_text())
+    return (
+        "<!DOCTYPE html><html><head><meta charset='utf-8'>"
+        f"<title>{html.escape(title)}</title><style>{_PAGE_STYLE}</style></head><body>"
+        "<div class='page'><div class='shown'>"
+        f"{content}</div><div class='caption'><h2>{html.escape(title)}</h2>"
+        f"{_caption_html(caption_rst)}<p class='file'>File: {html.escape(str(path))}</p>"
+        "</div></div></body></html>\n"
+    )
+
+
+def write_pages(
+    shown: Mapping[str, str],
+    captions: Mapping[str, str],
+    titles: Mapping[str, str],
+    pages: Sequence[str],
+) -> None:
+    """One :func:`output_page` per page path; its stem names the output in ``shown`` (the file
+    it shows), ``captions`` (its caption file) and ``titles``."""
+    for page in pages:
+        name = Path(page).stem
+        text = output_page(titles[name], Path(captions[name]).read_text(), shown[name])
+        Path(page).parent.mkdir(parents=True, exist_ok=True)
+        Path(page).write_text(text)
+
+
 # ----------------------------------------------------------------------------- report front page
 
-FRONT_INTRO = """\
-jointbench: functional joint-parameter estimators, benchmarked
-==============================================================
+FRONT_INTRO = f"""\
+{REPORT_TITLE}
+{"=" * len(REPORT_TITLE)}
 
 jointbench regenerates the figures and tables of three classic papers on functional joint
-estimation from simulated motion-capture data with a known truth, ranks every estimator
-(the papers' and any added) on identical trials, and checks every published value and claim
-against what it reproduces, with a typed tolerance and its margin. Every number below is
-generated from this run's results.
+estimation from simulated motion capture with a known truth, ranks every estimator (the
+papers' and any added) on identical trials, and checks every published value and claim against
+this run with a stated tolerance. Every number on this page is generated from this run.
 """
+
+#: Every abbreviation the report uses, defined once.
+GLOSSARY = {
+    "CoR / AoR": "centre / axis of rotation",
+    "CMC, MCP": "thumb carpometacarpal joint, index metacarpophalangeal joint",
+    "RoM; FE, AA": "range of motion; flexion–extension, abduction–adduction",
+    "NM, LS, BC, MA, IS": "paper A's five centre fits (Chang & Pollard's names; see README)",
+    "planar, radial, combined": "paper B's three axis costs",
+    "GM, GM-f0": "gauss-markov (paper C's method) and gauss-markov-frame0 (ours, which also "
+    "models the noise of the frame-0 poses)",
+    "SCoRE, SARA, LM": "added estimators: symmetrical centre and axis of rotation "
+    "estimation (Ehrig et al.), and paper A's sphere fit by Levenberg–Marquardt",
+    "Nt": "the number of frames a hip estimate uses",
+}
+
+
+def _count(part: pd.DataFrame, entry: str) -> tuple[int, int, int]:
+    """``(reproduced, tested, shown only)`` of the ``entry`` rows (value or claim)."""
+    rows = part[part["entry"] == entry]
+    tested = rows[rows["status"] != "not applicable"]
+    return (
+        int((tested["status"] == "reproduced").sum()),
+        len(tested),
+        len(rows) - len(tested),
+    )
+
+
+def _values_sentence(reproduced: int, tested: int, shown: int) -> str:
+    if tested:
+        text = f"{reproduced} of {tested} published values within tolerance"
+        return text + (f" ({shown} more shown beside ours)" if shown else "")
+    if shown:
+        return f"its {shown} published values are shown beside ours, none comparable as a test"
+    return "no published values"
+
+
+def calibration_sentence(calibration: pd.DataFrame) -> str:
+    """What the calibration table says about each method, in one sentence."""
+    parts = []
+    for method, rows in calibration.groupby("method", sort=False):
+        rows = rows.sort_values("n_frames")
+        good = rows[rows["status"] == "calibrated"]["n_frames"].tolist()
+        if len(good) == len(rows):
+            parts.append(f"{method} is calibrated at every Nt")
+        elif good and rows["n_frames"].tolist()[-len(good) :] == good:
+            text = f"{method} is calibrated at every Nt from {good[0]} on"
+            others = rows[rows["n_frames"] < good[0]]
+            notes = [
+                f"{o.status} at Nt = {o.n_frames} (coverage {o.inside_95:.3g})"
+                for o in others.itertuples()
+            ]
+            parts.append(text + (f", {', '.join(notes)}" if notes else ""))
+        else:
+            low, high = rows["inside_95"].min(), rows["inside_95"].max()
+            parts.append(
+                f"{method}'s 95 % ellipsoid holds the true centre in {low:.1%} to {high:.1%} "
+                "of trials"
+            )
+    return "; ".join(parts) + "."
+
+
+def findings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
+    """One sentence per paper (claims and values reproduced, who ranks best on its study, and
+    for paper C the calibration), generated from the run's tables."""
+    comparison = tables.get("published_comparison")
+    lines = []
+    for key in paper_names():
+        paper = get_paper(key)
+        text = f"**{paper.title}** (study {study_title(paper.study)})"
+        if comparison is not None:
+            part = comparison[comparison["paper"] == paper.letter]
+            if part.empty:
+                continue
+            claims_ok, claims, _ = _count(part, "claim")
+            text += f": {claims_ok} of {claims} claims reproduced; " + _values_sentence(
+                *_count(part, "value")
+            )
+        ranking = tables.get(f"extended_{paper.study}")
+        if ranking is not None and papers_of_study(paper.study)[0] is paper:
+            text += "; " + extended.best_headline(ranking).rstrip(".")
+        if paper.key == "paper_c" and "paper_c_calibration" in tables:
+            sentence = calibration_sentence(tables["paper_c_calibration"])
+            text += ". " + sentence[:1].upper() + sentence[1:]
+        lines.append("- " + text.rstrip(".") + ".")
+    return lines
 
 
 def _rst_table(frame: pd.DataFrame, title: str) -> str:
@@ -134,7 +328,7 @@ def _rankings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
         leaders = ", ".join(
             f"{row.method} (mean rank {row.mean_rank:.2f})" for row in ranks.head(3).itertuples()
         )
-        lines.append(f"- study ``{name.removeprefix('extended_')}``: {leaders}")
+        lines.append(f"- {study_title(name.removeprefix('extended_'))}: {leaders}")
     return lines
 
 
@@ -158,7 +352,12 @@ def write_front_page(
     """The report's landing page: the benchmark, its headline findings, the provenance of every
     estimator's results and the run's machine."""
     loaded = {name: pd.read_csv(p) for name, p in tables.items()}
-    parts = [FRONT_INTRO]
+    parts = [FRONT_INTRO, "Findings\n--------\n", "\n".join(findings(loaded)) + "\n"]
+    parts += [
+        "Each paper's figures and tables are in the menu on the left, each beside its caption; "
+        "*Agreement with the papers* has every value and claim with the paper's sentence.\n",
+        "Abbreviations: " + "; ".join(f"**{k}** {v}" for k, v in GLOSSARY.items()) + ".\n",
+    ]
     comparison = loaded.get("published_comparison")
     if comparison is not None and not comparison.empty:
         parts += [
@@ -175,8 +374,8 @@ def write_front_page(
         parts += ["Rankings\n--------\n", "\n".join(rankings) + "\n"]
     if "paper_c_calibration" in loaded:
         calibration = loaded["paper_c_calibration"][
-            ["method", "n_frames", "trials", "inside_95", "calibrated"]
-        ]
+            ["method", "n_frames", "trials", "inside_95", "status"]
+        ].rename(columns={"n_frames": "Nt", "inside_95": "share inside"})
         parts += [
             "Calibration of the predicted covariance\n---------------------------------------\n",
             _rst_table(
@@ -185,7 +384,7 @@ def write_front_page(
         ]
     provenance_rows = [
         {
-            "study": Path(path).stem,
+            "study": study_title(Path(path).stem),
             "estimator": method,
             "code fingerprint": record.get("code", "") or "(external rule)",
             "jointbench": record.get("jointbench", ""),
@@ -209,3 +408,64 @@ def write_front_page(
     ]
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text("\n".join(parts))
+
+
+# ----------------------------------------------------------------------------- finishing
+
+# Snakemake's template centres its landing pane vertically in a pane as tall as the window, so a
+# landing page taller than the window starts above the top, out of reach; it also narrows the
+# description to a column. These rules put the pane's top at the top and widen the text.
+REPORT_STYLE = """
+div.grow.h-screen.overflow-auto { align-items: flex-start !important; }
+div.prose.max-w-lg { max-width: 64rem !important; }
+"""
+
+
+def finish_report(path: str | Path) -> bool:
+    """Give the HTML report Snakemake wrote at ``path`` its name (the tab title, not "Snakemake
+    Report") and :data:`REPORT_STYLE`; ``False`` if there is no such HTML file. Idempotent."""
+    path = Path(path)
+    if path.suffix != ".html" or not path.is_file():
+        return False
+    text = path.read_text(errors="surrogateescape")
+    text = re.sub(
+        r"<title>.*?</title>", f"<title>{html.escape(REPORT_TITLE)}</title>", text, count=1
+    )
+    style = f"<style id='jointbench-style'>{REPORT_STYLE}</style>"
+    if "id='jointbench-style'" not in text:
+        text = text.replace("</head>", style + "</head>", 1)
+    path.write_text(text, errors="surrogateescape")
+    return True
+
+
+def _option(argv: Sequence[str], names: Sequence[str], default: str) -> str | None:
+    """The value of a command-line option called any of ``names`` (``default`` when it is
+    given without one); ``None`` when it is absent."""
+    for index, argument in enumerate(argv):
+        for name in names:
+            if argument.startswith(f"{name}="):
+                return argument.split("=", 1)[1]
+            if argument == name:
+                following = argv[index + 1] if index + 1 < len(argv) else ""
+                return following if following and not following.startswith("-") else default
+    return None
+
+
+def report_path(argv: Sequence[str]) -> str | None:
+    """The file a ``snakemake --report [FILE]`` command line writes (Snakemake's default
+    ``report.html`` when none is given), inside ``--directory`` when one is given (Snakemake
+    writes it there); ``None`` for any other command."""
+    path = _option(argv, ["--report"], "report.html")
+    if path is None:
+        return None
+    directory = _option(argv, ["--directory", "-d"], ".")
+    return str(Path(directory or ".", path))
+
+
+def closing_lines() -> str:
+    """What a successful run prints last: where the results are and how to make the report."""
+    return (
+        "Done. Figures in results/figures/, tables in results/tables/ (what each file holds: "
+        "results/README.md).\n"
+        "The report: snakemake --report results/report.html, then open results/report.html."
+    )

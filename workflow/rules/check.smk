@@ -11,12 +11,7 @@ rule check_published:
         ),
         published=published_files(STUDIES),
     output:
-        html=reported(
-            "results/tables/published_comparison.html",
-            "published_comparison",
-            "Agreement with the papers",
-            "Every value and claim",
-        ),
+        html="results/tables/published_comparison.html",
         csv="results/tables/published_comparison.csv",
         md="results/tables/published_comparison.md",
     log:
@@ -28,18 +23,25 @@ rule check_published:
         code=script_code("check_published"),
         settings={study: config["studies"][study] for study in STUDIES},
         base_seed=config.get("base_seed"),
+    message:
+        "check: every published value and claim against this run"
     script:
         "../scripts/check_published.py"
 
 
-# Captions for `snakemake --report`: what each output shows, its headline agreement, and the
-# report's landing page.
+# For `snakemake --report`: what each output shows and its headline agreement (its caption), a
+# page showing it beside its caption, and the report's landing page.
 rule report_captions:
     input:
         unpack(lambda w: summarised_tables()),
+        unpack(lambda w: {f"shown__{name}": path for name, path, *_ in REPORT_ENTRIES}),
         collected=expand("results/collected/{study}.parquet", study=STUDIES),
     output:
         captions=[CAPTIONS.format(name=name) for name in caption_names()],
+        pages=[
+            reported(PAGE.format(name=name), name, group, subgroup)
+            for name, _, group, subgroup in REPORT_ENTRIES
+        ],
         front=FRONT_PAGE,
     log:
         "results/logs/report_captions.log",
@@ -50,5 +52,7 @@ rule report_captions:
         code=script_code("report_captions"),
         settings={study: config["studies"][study] for study in STUDIES},
         base_seed=config.get("base_seed"),
+    message:
+        f"report: captions, {len(REPORT_ENTRIES)} pages and the landing page"
     script:
         "../scripts/report_captions.py"

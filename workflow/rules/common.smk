@@ -6,7 +6,8 @@ from pathlib import Path
 
 from snakemake.utils import validate
 
-from jointbench import invocation, jobs, pipeline
+from jointbench import invocation, jobs, pipeline, report as jb_report
+from jointbench.figures.common import study_title
 from jointbench.fingerprint import code_fingerprint
 from jointbench.study import run as jb_run
 from jointbench.papers import papers_of_study
@@ -127,14 +128,47 @@ def category(study):
     return papers[0].title if papers else f"Study {study}"
 
 
+# Each output is shown in the report on a page of its own beside its caption.
+PAGE = "results/report/pages/{name}.html"
+
+
 def reported(path, name, group, subgroup):
-    """``path`` flagged for `snakemake --report`, captioned by its generated caption file."""
+    """``path`` flagged for `snakemake --report`, captioned by its generated caption file and
+    listed in the report's menu by its name for people."""
     return report(
         path,
         caption=f"../../{CAPTIONS.format(name=name)}",
         category=group,
         subcategory=subgroup,
+        labels={"output": jb_report.output_label(name)},
     )
+
+
+def report_entries():
+    """``(name, file shown, category, subcategory)`` of every output the report shows: each
+    paper output's first file under its paper, each study's extended ranking, the comparison.
+    """
+    entries = []
+    for study in STUDIES:
+        for paper, output in PAPER_OUTPUTS[study]:
+            group = "Figures" if output.kind == "figure" else "Tables"
+            shown = next(iter(output.files.values()))
+            entries.append((output.name, shown, paper.title, group))
+        name = pipeline.extended_name(study)
+        files = extended_files(study)
+        ranking = "Extended ranking of every estimator"
+        entries.append((name, files["html"], ranking, study_title(study)))
+        entries.append((f"{name}_figure", files["png"], ranking, study_title(study)))
+    comparison = "results/tables/published_comparison.html"
+    entries.append(
+        (
+            "published_comparison",
+            comparison,
+            "Agreement with the papers",
+            "Every value and claim",
+        )
+    )
+    return entries
 
 
 def summarised_tables():
@@ -149,13 +183,8 @@ def summarised_tables():
 
 
 def caption_names():
-    names = [o.name for study in STUDIES for _, o in PAPER_OUTPUTS[study]]
-    names += [
-        pipeline.extended_name(s) + suffix
-        for s in STUDIES
-        for suffix in ("", "_figure")
-    ]
-    return [*names, "published_comparison"]
+    """Every output with a caption: those the report shows."""
+    return [name for name, *_ in report_entries()]
 
 
 def extended_files(study):
@@ -178,7 +207,14 @@ def study_targets(study):
 def all_targets():
     targets = [target for study in STUDIES for target in study_targets(study)]
     captions = [CAPTIONS.format(name=name) for name in caption_names()]
-    return [*targets, "results/tables/published_comparison.csv", *captions, FRONT_PAGE]
+    pages = [PAGE.format(name=name) for name, *_ in report_entries()]
+    return [
+        *targets,
+        "results/tables/published_comparison.csv",
+        *captions,
+        *pages,
+        FRONT_PAGE,
+    ]
 
 
 # Provenance: every job that runs library code gets two parameters, and Snakemake reruns a job
@@ -243,20 +279,17 @@ def _output_key(name, kind):
 
 def render_files(study):
     """Every file the study's render job writes, keyed ``<output>__<kind>``: its paper
-    outputs' (each output's first file reported under its paper, as a figure or a table) and
-    its extended ranking's (table and figure reported under the ranking)."""
+    outputs' and its extended ranking's (the report shows them on pages, ``report_entries``).
+    """
     files = {}
-    for paper, output in PAPER_OUTPUTS[study]:
-        for index, (kind, path) in enumerate(output.files.items()):
-            if index == 0:
-                group = "Figures" if output.kind == "figure" else "Tables"
-                path = reported(path, output.name, paper.title, group)
+    for _, output in PAPER_OUTPUTS[study]:
+        for kind, path in output.files.items():
             files[_output_key(output.name, kind)] = path
     name = pipeline.extended_name(study)
     for kind, path in extended_files(study).items():
         files[_output_key(name, kind)] = path
-    ranking = "Extended ranking of every estimator"
-    for kind, caption in (("html", name), ("png", f"{name}_figure")):
-        key = _output_key(name, kind)
-        files[key] = reported(files[key], caption, ranking, study)
     return files
+
+
+# Every output the report shows (``report_entries``), computed once.
+REPORT_ENTRIES = report_entries()

@@ -32,6 +32,8 @@ for _study in STUDIES:
             params:
                 study=_study,
                 code=script_code("poses"),
+            message:
+                f"poses {_study}: {{wildcards.condition}}"
             script:
                 "../scripts/poses.py"
 
@@ -55,6 +57,8 @@ for _study in STUDIES:
             params:
                 study=_study,
                 code=script_code("poses"),
+            message:
+                f"poses {_study}: {len(condition_ids(_study))} conditions"
             script:
                 "../scripts/poses.py"
 
@@ -79,6 +83,8 @@ for _study in STUDIES:
                 study=_study,
                 code=script_code("estimate"),
                 settings=estimate_settings(_study),
+            message:
+                f"estimate {_study}: {{wildcards.method}} on {{wildcards.condition}}"
             script:
                 "../scripts/estimate.py"
 
@@ -110,6 +116,8 @@ for _study in STUDIES:
                 study=_study,
                 code=script_code("estimate"),
                 settings=estimate_settings(_study),
+            message:
+                f"estimate {_study}: {{wildcards.method}} on {len(condition_ids(_study))} conditions"
             script:
                 "../scripts/estimate.py"
 
@@ -131,6 +139,8 @@ rule summarise_estimator:
         "../envs/jointbench.yaml"
     params:
         code=script_code("summarise"),
+    message:
+        "summarise {wildcards.study}: {wildcards.method}"
     script:
         "../scripts/summarise.py"
 
@@ -155,5 +165,7 @@ rule collect:
         settings=lambda w: study_settings(
             w.study, "trials", "estimators", "external_estimators"
         ),
+    message:
+        "collect {wildcards.study}: every estimator's estimates, scored"
     script:
         "../scripts/collect.py"

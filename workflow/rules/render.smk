@@ -25,5 +25,7 @@ for _study in STUDIES:
             },
             code=script_code("render"),
             settings=study_settings(_study, *config["studies"][_study]),
+        message:
+            f"render {_study}: {len(PAPER_OUTPUTS[_study])} paper outputs and the ranking"
         script:
             "../scripts/render.py"

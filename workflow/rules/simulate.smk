@@ -19,5 +19,7 @@ for _study in STUDIES:
             study=_study,
             code=script_code("simulate"),
             settings=study_settings(_study, "grid", *SIMULATION_KEYS),
+        message:
+            f"simulate {_study}: {len(condition_ids(_study))} conditions"
         script:
             "../scripts/simulate.py"

@@ -1,10 +1,11 @@
-"""Shared figure helpers: matplotlib on first use, one style per method, and saving figures
-reproducibly."""
+"""Shared figure helpers: matplotlib on first use, one colour and marker per method across every
+figure and study, the human names of studies, and saving figures reproducibly."""
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+import zlib
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -23,11 +24,14 @@ __all__ = [
     "equal_3d_limits",
     "median_trial",
     "method_style",
+    "method_styles",
     "pyplot",
     "save_figure",
+    "study_title",
 ]
 
-# Fixed colours per method so every figure of the benchmark reads the same way.
+# One colour and marker per method, the same in every figure and study; no two methods share a
+# colour, so a method keeps its colour wherever it appears beside any other.
 _STYLES = {
     "NM": ("#1b9e77", "o"),
     "LS": ("#d95f02", "s"),
@@ -35,13 +39,40 @@ _STYLES = {
     "MA": ("#e7298a", "D"),
     "IS": ("#66a61e", "v"),
     "SCoRE": ("#a6761d", "P"),
-    "planar": ("#d95f02", "s"),
-    "radial": ("#7570b3", "^"),
-    "combined": ("#1b9e77", "o"),
-    "SARA": ("#a6761d", "P"),
-    "gauss-markov": ("#1b9e77", "o"),
-    "analytic": ("#d95f02", "s"),
+    "LM": ("#e6ab02", "X"),
+    "planar": ("#6a3d9a", "s"),
+    "radial": ("#b2182b", "^"),
+    "combined": ("#17becf", "o"),
+    "SARA": ("#543005", "P"),
+    "gauss-markov": ("#2166ac", "o"),
+    "gauss-markov-frame0": ("#b35806", "D"),
+    "analytic": ("#fb9a99", "s"),
 }
+# Colours for methods without a fixed style (a newcomer's), none of them in the table above.
+_SPARE_COLORS = (
+    "#999933",
+    "#882255",
+    "#44aa99",
+    "#332288",
+    "#ddcc77",
+    "#117733",
+    "#aa4499",
+    "#88ccee",
+    "#525252",
+    "#f46d43",
+)
+
+# How a study is called in titles and text.
+_STUDY_TITLES = {
+    "cmc": "thumb CMC",
+    "hinge": "knee and index MCP",
+    "hip": "hip joint centre",
+}
+
+
+def study_title(study: str) -> str:
+    """A study's name for people: "thumb CMC" for ``cmc``; an unknown study keeps its name."""
+    return _STUDY_TITLES.get(study, study)
 
 
 @functools.cache
@@ -61,12 +92,32 @@ def pyplot() -> ModuleType:
 
 
 def method_style(method: str, index: int = 0) -> dict[str, object]:
-    """Matplotlib line style for a method; unknown (user) methods cycle through the palette."""
+    """Matplotlib colour and marker of a method: its own fixed one, or for a method without one
+    a spare colour chosen by its name (so the same in every figure) and marker "X".
+    ``index`` is unused; it is kept for callers that pass a method's position."""
     if method in _STYLES:
         color, marker = _STYLES[method]
-    else:
-        color, marker = pyplot().get_cmap("tab10")(index % 10), "X"
-    return {"color": color, "marker": marker}
+        return {"color": color, "marker": marker}
+    spare = _SPARE_COLORS[zlib.crc32(method.encode()) % len(_SPARE_COLORS)]
+    return {"color": spare, "marker": "X"}
+
+
+def method_styles(methods: Iterable[str]) -> dict[str, dict[str, object]]:
+    """:func:`method_style` of each of ``methods``, where two methods without a fixed style
+    would share a spare colour the later (by name) taking the next free one, so every method
+    of one figure has a colour of its own."""
+    methods = list(dict.fromkeys(methods))
+    styles = {m: method_style(m) for m in methods}
+    taken = {styles[m]["color"] for m in methods if m in _STYLES}
+    for method in sorted(m for m in methods if m not in _STYLES):
+        start = _SPARE_COLORS.index(styles[method]["color"])
+        for step in range(len(_SPARE_COLORS)):
+            color = _SPARE_COLORS[(start + step) % len(_SPARE_COLORS)]
+            if color not in taken:
+                styles[method] = {**styles[method], "color": color}
+                break
+        taken.add(styles[method]["color"])
+    return styles
 
 
 #: A figure's scale of errors spans at most this factor either side of the median of its

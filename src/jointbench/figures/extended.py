@@ -14,7 +14,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import DISPLAY_SPAN, display_limits, method_style, pyplot
+from jointbench.figures.common import (
+    display_limits,
+    method_styles,
+    pyplot,
+    study_title,
+)
 from jointbench.study import config as jb_config
 from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
@@ -44,8 +49,6 @@ NO_PAPER: PaperMethods = ("", ())
 
 #: Mean errors equal to this many significant digits tie in the ranking.
 TIE_DIGITS = 3
-# tab10 entries for methods without a fixed style, the ones least like the fixed palette first.
-_USER_COLORS = (0, 3, 9, 7, 8, 1, 2, 4, 5, 6)
 
 
 def _mean_column(study: str) -> str:
@@ -168,7 +171,7 @@ _KEY_FORMATS = {
     "marker_set": "{} set",
     "rom_deg": "±{:g}°",
     "noise_mm": "{:g} mm noise",
-    "protocol": "{}",
+    "protocol": "{}",  # values named by _VALUE_NAMES
     "fe_rom_deg": "FE {:g}°",
     "aa_ratio": "AA/FE {:g}",
     "n_frames": "Nt = {}",
@@ -184,7 +187,12 @@ _KEY_NAMES = {
 }
 
 
+# Grid values with a name for people.
+_VALUE_NAMES = {("protocol", "mcp"): "index MCP"}
+
+
 def _key_text(key: str, value: object) -> str:
+    value = _VALUE_NAMES.get((key, value), value)
     if key in _KEY_FORMATS:
         return _KEY_FORMATS[key].format(value)
     if key.endswith("_deg"):
@@ -248,6 +256,11 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
     best = _wide(table, keys, "best", methods).fillna(False).astype(bool)
     values = wide.to_numpy(dtype=float)
     low, high = display_limits(values)
+    # One far-off cell must not stretch the colours of all the others: the scale ends at twice
+    # the 95th percentile, and a cell beyond it takes the "beyond" colour, its value printed.
+    finite = values[np.isfinite(values) & (values > 0)]
+    if finite.size:
+        high = max(min(high, 2 * float(np.percentile(finite, 95))), low * 10)
     beyond = values > high
     # An error of exactly zero (noise-free data) cannot sit on a log scale: floor it. A mean
     # beyond the scale, inf included, takes the colour above its top.
@@ -324,15 +337,11 @@ def _rank_bars(
     )
 
 
-def _styles(methods: Sequence[str]) -> dict[str, dict[str, object]]:
-    """The benchmark's fixed style per method; methods without one get tab10 colours unlike the
-    fixed palette's, in order of name, so a colour does not follow the ranking around."""
-    # A method with a fixed style ignores the palette index; an unknown one cycles with it.
-    unknown = sorted(m for m in methods if method_style(m, 0) != method_style(m, 1))
-    styles = {m: method_style(m) for m in methods if m not in unknown}
-    for i, m in enumerate(unknown):
-        styles[m] = method_style(m, _USER_COLORS[i % len(_USER_COLORS)])
-    return styles
+_KIND_TITLES = {
+    "center": "centre of rotation",
+    "axis": "axis of rotation",
+    "joint_center": "joint centre",
+}
 
 
 def extended_figure(collected: pd.DataFrame, study: str, paper: PaperMethods = NO_PAPER) -> Figure:
@@ -342,7 +351,7 @@ def extended_figure(collected: pd.DataFrame, study: str, paper: PaperMethods = N
     table = extended_table(collected, study, paper)
     ranks = mean_ranks(table)
     methods = list(ranks["method"])
-    styles = _styles(methods)
+    styles = method_styles(methods)
     n_conditions = table[list(get_study(study).grid_keys)].drop_duplicates().shape[0]
     height = max(3.5, 0.3 * n_conditions + 1.8)
     bars_height = min(height, 0.35 * len(methods) + 1.4)
@@ -364,16 +373,12 @@ def extended_figure(collected: pd.DataFrame, study: str, paper: PaperMethods = N
     )
     colorbar.set_label(f"mean error ({_unit(study).strip()}), log scale")
     _rank_bars(bars, ranks, styles, paper[1])
-    kind = get_study(study).kind.replace("_", " ")
+    kind = _KIND_TITLES.get(get_study(study).kind, get_study(study).kind.replace("_", " "))
     fig.suptitle(
-        f"Study {study} ({kind}): every estimator's mean error per condition "
+        f"{study_title(study)} ({kind}): every estimator's mean error per condition "
         f"({_unit(study).strip()})\nred outline = best (or tied) in the condition; "
         "† = some trials failed or did not converge"
-        + (
-            f"; magenta = beyond the colour scale (over {DISPLAY_SPAN:.0e} × the median mean)"
-            if beyond
-            else ""
-        ),
+        + ("; magenta = beyond the colour scale (value printed)" if beyond else ""),
         fontsize=10,
     )
     return fig

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import pyplot
+from jointbench.figures.common import method_style, pyplot
 from jointbench.study.scoring import CHI2_3DOF_95, covariance_from_entries
 from jointbench.study.tolerance import binomial_interval
 
@@ -19,9 +19,11 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
+    "CALIBRATION_STATUSES",
     "EXTENDED",
     "METHOD",
     "TABLE1_LABELS",
+    "calibration_status",
     "calibration_table",
     "per_frames",
     "table1",
@@ -133,7 +135,8 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
     """Per method and Nt: share of trials whose true centre is inside the predicted 95 %
     ellipsoid ``(c - c_true)' Wc^-1 (c - c_true) <= chi2_3(0.95)``; ``binomial_low`` and
     ``binomial_high`` bound what an honest covariance gives over that many trials (central
-    95 % of Binomial(n, 0.95) / n), and ``calibrated`` says whether the share is inside."""
+    95 % of Binomial(n, 0.95) / n), ``calibrated`` says whether the share is inside (edges
+    included) and ``status`` says it in one word (:func:`calibration_status`)."""
     methods = [m for m in (METHOD, EXTENDED) if m in set(collected["method"])]
     parts = []
     for method in methods:
@@ -143,8 +146,33 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
         bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in part["trials"]])
         part["binomial_low"], part["binomial_high"] = bounds[:, 0], bounds[:, 1]
         part["calibrated"] = part["inside_95"].between(part["binomial_low"], part["binomial_high"])
+        part["status"] = [
+            calibration_status(share, low, high)
+            for share, low, high in zip(
+                part["inside_95"], part["binomial_low"], part["binomial_high"], strict=True
+            )
+        ]
         parts.append(part)
     return pd.concat(parts, ignore_index=True)
+
+
+#: One word per calibration verdict, for the tables and the report's sentences.
+CALIBRATION_STATUSES = {
+    "calibrated": "inside the band an honest covariance gives",
+    "borderline": "on an edge of that band: inside, only just",
+    "overconfident": "below the band: the ellipsoid is too small",
+    "conservative": "above the band: the ellipsoid is too large",
+}
+
+
+def calibration_status(share: float, low: float, high: float) -> str:
+    """The share of trials inside the 95 % ellipsoid against the band ``[low, high]`` an honest
+    covariance gives, in one word of :data:`CALIBRATION_STATUSES`."""
+    if share < low:
+        return "overconfident"
+    if share > high:
+        return "conservative"
+    return "borderline" if share in (low, high) else "calibrated"
 
 
 def _frames_axis(ax, n_frames) -> None:
@@ -155,14 +183,33 @@ def _frames_axis(ax, n_frames) -> None:
     ax.set_xlabel("frames used, Nt (log scale)")
 
 
+def _mark_not_converged(ax, coverage: pd.DataFrame, color) -> None:
+    """Ring each Nt where some trials did not converge, on the coverage curve, and print how
+    many: their estimates count in the coverage as the method returned them."""
+    for row in coverage.itertuples():
+        missing = int(row.trials - row.converged)
+        if missing:
+            ax.plot(row.n_frames, row.inside_95, "o", ms=11, mfc="none", mec=color)
+            ax.annotate(
+                f"{missing} of {row.trials} not converged",
+                (row.n_frames, row.inside_95),
+                xytext=(10, -10),
+                textcoords="offset points",
+                fontsize=8,
+                color=color,
+                va="top",
+            )
+
+
 def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     """Predicted sqrt(tr Wc) and the actual RMS error against Nt (log–log), and coverage."""
     calibration = calibration_table(collected)
     n_frames = sorted(set(collected["n_frames"]) | set(paper["n_frames"]))
-    fig, (ax, cal) = pyplot().subplots(1, 2, figsize=(12, 4.8))
-    for method, color in ((METHOD, "#1b9e77"), (EXTENDED, "#7570b3")):
+    fig, (ax, cal) = pyplot().subplots(1, 2, figsize=(12, 6.0))
+    for method in (METHOD, EXTENDED):
         if method not in set(collected["method"]):
             continue
+        color = method_style(method)["color"]
         ours = per_frames(collected, method)
         ax.plot(
             ours["n_frames"],
@@ -181,6 +228,7 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
         )
         part = calibration[calibration["method"] == method]
         cal.plot(part["n_frames"], part["inside_95"], "-o", color=color, ms=4, label=method)
+        _mark_not_converged(cal, part.merge(ours[["n_frames", "converged"]], on="n_frames"), color)
     ax.plot(
         paper["n_frames"],
         paper["sqrt_trace_cov_mm"],
@@ -193,8 +241,8 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     ax.set_yscale("log")
     ax.set_ylabel("predicted uncertainty or actual error (mm, log scale)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    ax.set_title("(a) Predicted uncertainty vs actual error", fontsize=9)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+    ax.set_title("(a) Predicted uncertainty vs actual error", fontsize=10)
     band = calibration.drop_duplicates("n_frames")
     trials = int(band["trials"].median())
     cal.fill_between(
@@ -210,8 +258,9 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     cal.set_ylim(0, 1.02)
     cal.set_ylabel("share of trials with the true centre\ninside the predicted 95 % ellipsoid")
     cal.grid(True, which="both", alpha=0.3)
-    cal.legend(fontsize=7, loc="lower right")
-    cal.set_title("(b) Coverage of the predicted 95 % ellipsoid", fontsize=9)
-    fig.suptitle("Paper C Table 1 extended: is the Gauss–Markov covariance honest?", fontsize=10)
+    # Below the axes: inside, it would hide the points at large Nt, the finding itself.
+    cal.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+    cal.set_title("(b) Coverage of the predicted 95 % ellipsoid", fontsize=10)
+    fig.suptitle("Paper C Table 1 extended: is the Gauss–Markov covariance honest?", fontsize=11)
     fig.tight_layout()
     return fig

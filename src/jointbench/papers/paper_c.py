@@ -140,8 +140,10 @@ def _calibration(inputs: Inputs) -> Table:
     return Table(
         draw.calibration_table(inputs.collected),
         title="Coverage of the predicted 95 % ellipsoid, against the true centre",
-        note="calibrated: the fraction lies in the central 95 % range of what an honest "
-        "covariance gives over this many trials.",
+        note="status: "
+        + "; ".join(f"{k}, {v}" for k, v in draw.CALIBRATION_STATUSES.items())
+        + " (the band: the central 95 % range of the share an honest covariance gives over "
+        "this many trials).",
     )
 
 
@@ -149,10 +151,10 @@ def _calibration_headline(tables) -> str:
     (table,) = tables.values()
     parts = []
     for method, part in table.groupby("method", sort=False):
-        ok = part[part["calibrated"].astype(str) == "True"]["n_frames"].tolist()
+        ok = part[part["status"] == "calibrated"]["n_frames"].tolist()
         parts.append(
-            f"{method}: share inside {part['inside_95'].min():.2f}–{part['inside_95'].max():.2f}, "
-            f"consistent with 95 % at Nt = {', '.join(map(str, ok)) or 'none'}"
+            f"{method}: share inside {part['inside_95'].min():.3g}–{part['inside_95'].max():.3g}, "
+            f"calibrated at Nt = {', '.join(map(str, ok)) or 'none'}"
         )
     return "; ".join(parts) + "."
 

@@ -30,5 +30,7 @@ for _study in studies_listing("LM"):
             out_dir=lambda w, output: Path(output[0]).parent,
             # The interpreter running this workflow: the project's environment.
             python=PYTHON,
+        message:
+            f"estimate {_study}: LM (external) on {len(condition_ids(_study))} conditions"
         shell:
             "{params.python:q} {input.script:q} --out-dir {params.out_dir:q} {input.datasets:q} 2> {log:q}"

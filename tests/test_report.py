@@ -1,0 +1,92 @@
+"""The report's texts and finishing, and the workflow's console, on small inputs."""
+
+from __future__ import annotations
+
+import logging
+
+import pandas as pd
+import pytest
+
+from jointbench import console, report
+from jointbench.figures.paper_c import calibration_status
+
+
+@pytest.mark.parametrize(
+    ("argv", "path"),
+    [
+        (["snakemake", "--report", "results/report.html"], "results/report.html"),
+        (["snakemake", "--report=out.html"], "out.html"),
+        (["snakemake", "--report", "-j2"], "report.html"),
+        (["snakemake", "-j2"], None),
+        (["snakemake", "--report", "r.html", "--directory", "/tmp/w"], "/tmp/w/r.html"),
+    ],
+)
+def test_the_report_path_is_read_from_the_command_line(argv, path):
+    assert report.report_path(argv) == path
+
+
+def test_finishing_titles_the_report_and_starts_it_at_the_top(tmp_path):
+    page = tmp_path / "report.html"
+    page.write_text("<html><head><title>Snakemake Report</title></head><body></body></html>")
+    assert report.finish_report(page)
+    assert report.finish_report(page)  # twice is once
+    text = page.read_text()
+    assert f"<title>{report.REPORT_TITLE}</title>" in text
+    assert text.count("jointbench-style") == 1 and "align-items: flex-start" in text
+    assert not report.finish_report(tmp_path / "missing.html")
+
+
+@pytest.mark.parametrize(
+    ("name", "label"),
+    [
+        ("paper_a_fig3", "Fig 3"),
+        ("paper_b_table1", "Table 1"),
+        ("paper_c_claims", "Claims"),
+        ("extended_cmc_figure", "Extended ranking (figure)"),
+        ("published_comparison", "Every value and claim"),
+    ],
+)
+def test_outputs_are_listed_by_names_for_people(name, label):
+    assert report.output_label(name) == label
+
+
+def test_a_calibration_on_the_band_edge_is_borderline_and_said_so():
+    assert calibration_status(0.98, 0.92, 0.98) == "borderline"
+    assert calibration_status(0.95, 0.92, 0.98) == "calibrated"
+    assert calibration_status(0.5, 0.92, 0.98) == "overconfident"
+    assert calibration_status(0.99, 0.92, 0.98) == "conservative"
+    table = pd.DataFrame(
+        {
+            "method": ["f0"] * 3,
+            "n_frames": [4, 8, 16],
+            "inside_95": [0.98, 0.955, 0.945],
+            "status": ["borderline", "calibrated", "calibrated"],
+        }
+    )
+    sentence = report.calibration_sentence(table)
+    assert "calibrated at every Nt from 8 on" in sentence and "borderline at Nt = 4" in sentence
+
+
+def test_an_output_page_shows_the_figure_beside_its_caption(tmp_path):
+    png = tmp_path / "fig.png"
+    png.write_bytes(b"\x89PNG\r\n\x1a\n")
+    page = report.output_page("Paper A Fig 3", "What it shows, **in bold**.", png)
+    assert "data:image/png;base64," in page and "<strong>in bold</strong>" in page
+    assert "class='caption'" in page and "Paper A Fig 3" in page
+
+
+def _record(msg, **extra):
+    record = logging.LogRecord("snakemake", logging.INFO, "", 0, msg, None, None)
+    record.__dict__.update(extra)
+    return record
+
+
+def test_the_console_shows_one_line_per_job_and_drops_the_chatter():
+    assert not console.shown(_record("Select jobs to execute..."))
+    assert not console.shown(_record("Execute 1 jobs..."))
+    assert console.shown(_record("12 of 28 steps (43%) done"))
+    job = _record(None, event="job_info", rule_msg="estimate cmc: NM on 18 conditions")
+    assert console.shown(job)
+    assert console.job_line(job) == "estimate cmc: NM on 18 conditions"
+    target = _record(None, event="job_info", rule_msg=None, rule_name="all", output=[])
+    assert not console.shown(target)
