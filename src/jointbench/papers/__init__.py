@@ -7,7 +7,7 @@ the config). The workflow derives its rules, targets, captions and report catego
 
 from __future__ import annotations
 
-from jointbench.papers import paper_a, paper_b, paper_c
+from jointbench.papers import paper_a, paper_b, paper_c, paper_sta
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.registries import Registry
 
@@ -44,5 +44,5 @@ def papers_of_study(study: str) -> tuple[Paper, ...]:
     return tuple(p for p in _PAPERS.values() if p.study == study)
 
 
-for _paper in (paper_a.PAPER, paper_b.PAPER, paper_c.PAPER):
+for _paper in (paper_a.PAPER, paper_b.PAPER, paper_c.PAPER, paper_sta.PAPER):
     register_paper(_paper)

@@ -8,7 +8,7 @@ package joins by :func:`register_study` (the workflow does this for the modules 
 from __future__ import annotations
 
 from jointbench.registries import Registry
-from jointbench.simulate import Study, cmc, hinge_study, hip
+from jointbench.simulate import Study, cmc, hinge_study, hip, hip_sta
 
 __all__ = ["get_study", "register_study", "study_names"]
 
@@ -17,5 +17,5 @@ register_study = _STUDIES.register
 get_study = _STUDIES.get
 study_names = _STUDIES.names
 
-for _study in (cmc.STUDY, hinge_study.STUDY, hip.STUDY):
+for _study in (cmc.STUDY, hinge_study.STUDY, hip.STUDY, hip_sta.STUDY):
     register_study(_study)

@@ -1,0 +1,144 @@
+"""The skin-marker hip study: rigid clusters without STA, the STA's documented amplitude and
+rigid share, determinism by seed, pairing across conditions, and the bootstrap's covariances."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from jointbench.geometry import skew
+from jointbench.numerics.poses import rigid_fit
+from jointbench.papers import paper_sta
+from jointbench.simulate import hip_sta
+from jointbench.simulate.hip_sta import (
+    HipStaProtocol,
+    hip_angles,
+    nominal_recording,
+    simulate,
+    sta_displacements,
+    sta_field,
+)
+from jointbench.study.seeds import trial_rng
+from jointbench.study.studies import get_study
+
+PROTOCOL = HipStaProtocol()
+QUIET = dataclasses.replace(PROTOCOL, noise_mm=0.0)
+
+
+def _rngs(n: int, base: int = 11) -> list[np.random.Generator]:
+    return [trial_rng(base, "hip_sta", {}, trial) for trial in range(n)]
+
+
+def _condition(motion="star_arc", rom=45.0, sta=0.0) -> dict:
+    return {"motion": motion, "rom_deg": rom, "sta_mm": sta}
+
+
+def _bodies(protocol: HipStaProtocol) -> tuple[np.ndarray, np.ndarray]:
+    joint = np.asarray(protocol.joint_mm)
+    return joint + np.asarray(protocol.pelvis_markers_mm), joint + np.asarray(
+        protocol.thigh_markers_mm
+    )
+
+
+def test_registered_with_its_shapes_truth_and_parameters():
+    assert get_study("hip_sta") is hip_sta.STUDY
+    trials = simulate(_condition(), PROTOCOL, _rngs(2))
+    assert trials.segments["proximal"].shape == (2, PROTOCOL.n_frames, 4, 3)
+    assert trials.segments["distal"].shape == (2, PROTOCOL.n_frames, 4, 3)
+    assert trials.truth == {"center": list(PROTOCOL.joint_mm)}
+    assert json.loads(json.dumps(trials.parameters)) == trials.parameters
+
+
+@pytest.mark.parametrize("motion", hip_sta.MOTIONS)
+def test_without_sta_or_noise_the_clusters_are_rigid_about_the_joint(motion):
+    trials = simulate(_condition(motion, 30.0, 0.0), QUIET, _rngs(1))
+    pelvis_body, thigh_body = _bodies(QUIET)
+    for name, body in (("proximal", pelvis_body), ("distal", thigh_body)):
+        markers = trials.segments[name][0]
+        np.testing.assert_allclose(markers[0], body, atol=1e-12)
+        rotation, translation = rigid_fit(body, markers)
+        fitted = body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
+        np.testing.assert_allclose(fitted, markers, atol=1e-9)
+    # The joint is where both segments put it in every frame.
+    r0, d0, r1, d1 = nominal_recording(hip_angles(motion, 30.0, QUIET), QUIET)
+    joint = np.asarray(QUIET.joint_mm)
+    np.testing.assert_allclose(r0 @ joint + d0, r1 @ joint + d1, atol=1e-9)
+
+
+@pytest.mark.parametrize("motion", hip_sta.MOTIONS)
+def test_the_thigh_reaches_the_range_and_starts_in_neutral(motion):
+    angles = hip_angles(motion, 45.0, PROTOCOL)
+    np.testing.assert_allclose(angles[0], 0.0, atol=1e-12)
+    excursion = np.degrees(np.linalg.norm(angles, axis=1))
+    assert 44.9 < excursion.max() <= 45.0 + 1e-9
+
+
+def test_sta_has_the_documented_amplitude_and_rigid_share():
+    _, thigh_body = _bodies(PROTOCOL)
+    field = sta_field(thigh_body, np.random.default_rng(3), 20.0, 30.0, 0.8)
+    directions = np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)
+    angles = np.radians(30.0) * np.stack([np.cos(directions), np.sin(directions)], axis=-1)
+    moved = sta_displacements(field, angles)
+    assert np.sqrt(np.mean(np.sum(moved**2, axis=-1))) == pytest.approx(20.0, rel=1e-12)
+    # Its rigid part: the best infinitesimal rigid motion of the cluster per angle.
+    offsets = thigh_body - thigh_body.mean(axis=0)
+    design = np.concatenate([np.tile(np.eye(3), (4, 1)), -np.concatenate(skew(offsets))], 1)
+    rigid = [design @ np.linalg.lstsq(design, f.ravel(), rcond=None)[0] for f in field]
+    share = sum(np.sum(r**2) for r in rigid) / np.sum(field**2)
+    assert share == pytest.approx(0.8, rel=1e-9)
+    # Linear in the angles: none in the neutral posture, twice the angle twice the displacement.
+    np.testing.assert_allclose(sta_displacements(field, np.zeros((1, 2))), 0.0)
+    np.testing.assert_allclose(sta_displacements(field, 2 * angles), 2 * moved)
+
+
+def test_simulated_markers_carry_the_sta_in_the_bone_frame():
+    rigid = simulate(_condition(sta=0.0), QUIET, _rngs(1))
+    skin = simulate(_condition(sta=15.0), QUIET, _rngs(1))
+    _, thigh_body = _bodies(QUIET)
+    angles = hip_angles("star_arc", 45.0, QUIET)
+    _, _, r1, _ = nominal_recording(angles, QUIET)
+    field = sta_field(thigh_body, _rngs(1)[0], 15.0, QUIET.sta_reference_deg, QUIET.sta_rigid_share)
+    in_bone = np.einsum(
+        "fji,fnj->fni", r1, skin.segments["distal"][0] - rigid.segments["distal"][0]
+    )
+    np.testing.assert_allclose(in_bone, sta_displacements(field, angles), atol=1e-9)
+    # No pelvis STA by default.
+    np.testing.assert_allclose(skin.segments["proximal"], rigid.segments["proximal"], atol=1e-12)
+
+
+def test_determinism_by_seed_and_pairing_across_conditions():
+    first = simulate(_condition(sta=20.0), PROTOCOL, _rngs(3))
+    again = simulate(_condition(sta=20.0), PROTOCOL, _rngs(3))
+    for name in ("proximal", "distal"):
+        np.testing.assert_array_equal(first.segments[name], again.segments[name])
+    assert not np.allclose(first.segments["distal"][0], first.segments["distal"][1])
+    # Trial k is the same subject and noise at every amplitude: frame 0 (neutral, no STA) agrees.
+    other = simulate(_condition(sta=10.0), PROTOCOL, _rngs(3))
+    np.testing.assert_array_equal(first.segments["distal"][:, 0], other.segments["distal"][:, 0])
+
+
+def test_bad_conditions_are_refused():
+    with pytest.raises(ValueError, match="rom_deg"):
+        simulate(_condition(rom=120.0), PROTOCOL, _rngs(1))
+    with pytest.raises(ValueError, match="motion"):
+        simulate(_condition(motion="walk"), PROTOCOL, _rngs(1))
+    with pytest.raises(ValueError, match="unknown"):
+        simulate({**_condition(), "n_frames": 10}, PROTOCOL, _rngs(1))
+    spec = hip_sta.STUDY.grid_spec
+    assert not spec["sta_mm"].accepts(-1.0, PROTOCOL)
+    assert not spec["sta_mm"].accepts(1e6, PROTOCOL)
+    assert spec["motion"].accepts("circumduction", PROTOCOL)
+
+
+def test_bootstrap_covariances_are_finite_and_widen_with_sta():
+    sizes = []
+    for sta in (0.0, 20.0):
+        trials = simulate(_condition(sta=sta), PROTOCOL, _rngs(2))
+        covariances = paper_sta.bootstrap_covariances(trials, 2, 6)
+        assert covariances.shape == (2, 3, 3)
+        assert np.isfinite(covariances).all()
+        sizes.append(np.sqrt(np.trace(covariances, axis1=1, axis2=2)).mean())
+    assert sizes[1] > sizes[0]
