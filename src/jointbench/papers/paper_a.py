@@ -163,6 +163,8 @@ def _a4(collected, means):
     # The exception, as the sentence reads: the progression breaks at the M set's smallest RoM,
     # i.e. there LS's excess shrinks beyond the noise at one noise step or more.
     at_exception = [c for c in exception if c in trials]
+    if len(at_exception) < 2:
+        raise ValueError("the exception needs two noise levels or more at the M set's smallest RoM")
     excess_there = {
         c: _excess(trials[c], "LS", _best_other(trials[c], others)) for c in at_exception
     }

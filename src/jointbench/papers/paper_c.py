@@ -207,6 +207,7 @@ PAPER = Paper(
     methods=("gauss-markov", "analytic"),
     published=Path(__file__).with_name("paper_c.yaml"),
     measure=measure,
+    also_measures=(FRAME0,),
     outputs=(
         Output(
             "paper_c_table1",
