@@ -240,9 +240,12 @@ def test_every_number_of_a_reason_is_in_its_row():
     """Each number the reason of a value that did not reproduce gives is in that row's results
     or the paper's text."""
     table = pd.read_csv(COMPARISON, dtype=str).fillna("")
+    # The paper's own numbers, wherever quoted in its rows, are not ours.
+    paper = {
+        letter: _numbers(" ".join([*rows["quote"], *rows["published"]]))
+        for letter, rows in table.groupby("paper")
+    }
     for row in table[table["status"] == "not reproduced"].itertuples():
-        shown = " ".join(
-            [row.reproduced, row.published, row.quote, row.criterion, row.tolerance, row.margin]
-        )
-        stray = _numbers(row.reason) - _numbers(shown)
+        shown = " ".join([row.reproduced, row.criterion, row.tolerance, row.margin])
+        stray = _numbers(row.reason) - _numbers(shown) - paper[row.paper]
         assert not stray, (row.id, sorted(stray))
