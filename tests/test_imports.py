@@ -32,6 +32,8 @@ RUN_SIDE = (
     "estimates_from_csv",
 )
 RENDER_SIDE = ("render", "check_published", "report_captions")
+# The seed ensemble's jobs (`snakemake verdicts`): they run a study and judge its papers.
+ENSEMBLE_SIDE = ("verdicts_member", "verdicts_summary")
 RENDERING = ("jointbench.figures", "jointbench.papers", "jointbench.pipeline", "jointbench.report")
 
 
@@ -63,7 +65,13 @@ def _script_imports(scripts: tuple[str, ...]) -> str:
 
 
 def test_every_script_is_checked_here():
-    assert {p.stem for p in SCRIPTS.glob("*.py")} == {*RUN_SIDE, *RENDER_SIDE}
+    assert {p.stem for p in SCRIPTS.glob("*.py")} == {*RUN_SIDE, *RENDER_SIDE, *ENSEMBLE_SIDE}
+
+
+def test_ensemble_jobs_start_without_matplotlib_or_scipy_stats():
+    loaded = _loaded(_script_imports(ENSEMBLE_SIDE))
+    assert "jointbench.study.ensemble" in loaded and "jointbench.study.verdicts" in loaded
+    assert not _within(loaded, NEVER), _within(loaded, NEVER)
 
 
 def test_simulate_estimate_collect_and_summarise_jobs_import_no_drawing_or_papers():

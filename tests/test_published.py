@@ -8,12 +8,14 @@ when a published value or a reproduced mean moves.
 from __future__ import annotations
 
 import copy
+import re
 from pathlib import Path
 
 import pandas as pd
 import pytest
 import yaml
 
+import jointbench.papers
 from jointbench.papers import Inputs, get_paper, paper_labels, paper_names
 from jointbench.papers import paper_b as paper_b_module
 from jointbench.study.published import (
@@ -28,6 +30,7 @@ from jointbench.study.snapshot import (
     reproduction_summary,
     snapshot_table,
 )
+from jointbench.study.tolerance import describe
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"
@@ -202,3 +205,47 @@ def test_snapshot_comparison_catches_a_moved_mean():
     assert compare_snapshot(snapshot.iloc[:1], snapshot) == [
         "cmc NM b mean_error_mm: in the snapshot but not in the results"
     ]
+
+
+# A number standing alone: not part of a name ("frame-0") nor an equation's ("eq. 2").
+NUMBER = re.compile(r"(?<![\w.])(?<![A-Za-z]-)(?<!eq\. )[-+−]?\d+(?:\.\d+)?")
+
+
+def _numbers(text: str) -> set[str]:
+    return {n.lstrip("+-−") for n in NUMBER.findall(str(text))}
+
+
+@pytest.mark.parametrize("letter", ["a", "b", "c"])
+def test_reasons_carry_no_typed_measurement(letter):
+    """A recorded reason may quote the paper, its criterion and its tolerance, never a number
+    of ours: those come from the measurement, in the row's reproduced column."""
+    document = load_published(Path(jointbench.papers.__file__).with_name(f"paper_{letter}.yaml"))
+    entries = [*document.get("values", []), *document["claims"]]
+    # The paper's own numbers, wherever quoted, are not ours.
+    paper = set().union(*(_numbers(e.get(k, "")) for e in entries for k in ("quote", "published")))
+    for entry in entries:
+        allowed = set(paper) | _numbers(describe(entry["tolerance"]))
+        for key in ("criterion", "tolerance", "tolerance_reason", "claim"):
+            allowed |= _numbers(entry.get(key, ""))
+        for key in ("deviation", "note", "not_applicable"):
+            stray = _numbers(entry.get(key, "")) - allowed
+            assert not stray, (entry["id"], key, sorted(stray))
+
+
+COMPARISON = Path(__file__).resolve().parents[1] / "results" / "tables" / "published_comparison.csv"
+
+
+@pytest.mark.skipif(not COMPARISON.exists(), reason="run `snakemake -j2` first")
+def test_every_number_of_a_reason_is_in_its_row():
+    """Each number the reason of a value that did not reproduce gives is in that row's results
+    or the paper's text."""
+    table = pd.read_csv(COMPARISON, dtype=str).fillna("")
+    # The paper's own numbers, wherever quoted in its rows, are not ours.
+    paper = {
+        letter: _numbers(" ".join([*rows["quote"], *rows["published"]]))
+        for letter, rows in table.groupby("paper")
+    }
+    for row in table[table["status"] == "not reproduced"].itertuples():
+        shown = " ".join([row.reproduced, row.criterion, row.tolerance, row.margin])
+        stray = _numbers(row.reason) - _numbers(shown) - paper[row.paper]
+        assert not stray, (row.id, sorted(stray))

@@ -93,7 +93,9 @@ class Output:
 
 @dataclass(frozen=True)
 class Paper:
-    """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names."""
+    """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names;
+    ``also_measures`` names the study's estimators beyond ``methods`` that ``measure`` reads
+    (beside the paper's own, never in its place)."""
 
     key: str
     letter: str
@@ -104,6 +106,7 @@ class Paper:
     outputs: tuple[Output, ...]
     published: Path
     measure: Callable[[Inputs], Mapping[str, Measured]]
+    also_measures: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         names = [o.name for o in self.outputs]

@@ -81,8 +81,11 @@ def _b5(means):
         index=["method", "fe_rom_deg", "aa_ratio"], columns="protocol", values="mean"
     )
     gap = (wide["knee"] - wide["mcp"]).abs()
+    method, fe, ratio = gap.idxmax()
     return Measured(
-        float(gap.max()), f"largest knee–MCP difference {gap.max():.2f}° ({len(gap)} cells)"
+        float(gap.max()),
+        f"largest knee–MCP difference {gap.max():.2f}° ({method}, FE {fe:g}°, ratio {ratio:g}); "
+        f"below 1.5° in {int((gap < 1.5).sum())} of {len(gap)} cells",
     )
 
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate"]
+__all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate", "wilson_interval"]
 
 
 @dataclass(frozen=True)
@@ -157,6 +157,23 @@ def binomial_interval(trials: int, proportion: float) -> tuple[int, int]:
     """Central 95 % range of a Binomial(``trials``, ``proportion``) count."""
     low, high = (_binomial_quantile(q, int(trials), float(proportion)) for q in (0.025, 0.975))
     return low, high
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.959964) -> tuple[float, float]:
+    """Wilson score interval of a share ``successes / n`` (95 % for the default ``z``).
+
+    Unlike the normal approximation it stays inside [0, 1] and is not empty at 0 or ``n``
+    successes; ``(0, 1)`` for ``n = 0``, where nothing is known.
+    """
+    if not 0 <= successes <= n:
+        raise ValueError(f"{successes} successes of {n} trials")
+    if n == 0:
+        return 0.0, 1.0
+    share = successes / n
+    denominator = 1 + z**2 / n
+    centre = (share + z**2 / (2 * n)) / denominator
+    half = z * math.sqrt(share * (1 - share) / n + z**2 / (4 * n**2)) / denominator
+    return max(0.0, centre - half), min(1.0, centre + half)
 
 
 def _binomial95(spec, published, measured) -> Verdict:

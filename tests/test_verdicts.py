@@ -1,0 +1,107 @@
+"""Seed ensembles: the member seeds, the verdict rule over seeds, and `snakemake verdicts`."""
+
+from __future__ import annotations
+
+import re
+
+import pandas as pd
+import pytest
+import yaml
+from scipy import stats
+from workflow_copy import ROOT, copy_workflow, run_snakemake
+
+from jointbench.study.ensemble import MEMBER_COLUMNS, member_seed
+from jointbench.study.tolerance import wilson_interval
+from jointbench.study.verdicts import (
+    SUMMARY_COLUMNS,
+    VERDICT_RULE,
+    seed_verdict,
+    summarise_members,
+)
+
+
+def test_member_zero_is_the_default_run_and_the_others_are_independent():
+    assert member_seed(20070507, 0) == 20070507
+    seeds = [member_seed(20070507, member) for member in range(50)]
+    assert len(set(seeds)) == 50
+    # Fixed by (base seed, member) alone, whatever K: a larger ensemble extends a smaller one.
+    assert seeds[7] == member_seed(20070507, 7)
+    assert member_seed(1, 3) != member_seed(2, 3)
+
+
+@pytest.mark.parametrize(("successes", "n"), [(0, 10), (10, 24), (20, 20), (15, 20), (1, 1)])
+def test_wilson_interval_is_scipys(successes, n):
+    expected = stats.binomtest(successes, n).proportion_ci(method="wilson")
+    assert wilson_interval(successes, n) == pytest.approx((expected.low, expected.high), abs=1e-8)
+
+
+@pytest.mark.parametrize(
+    ("reproduced_in", "seeds", "verdict"),
+    [
+        (20, 20, "reproduced"),
+        (15, 20, "reproduced"),
+        (14, 20, "seed-dependent"),
+        (10, 20, "seed-dependent"),
+        (6, 20, "seed-dependent"),
+        (5, 20, "not reproduced"),
+        (0, 20, "not reproduced"),
+        # One seed decides nothing: even a success is compatible with a coin toss.
+        (1, 1, "seed-dependent"),
+        (0, 0, "not applicable"),
+    ],
+)
+def test_seed_verdict_by_the_interval_around_one_half(reproduced_in, seeds, verdict):
+    assert seed_verdict(reproduced_in, seeds) == verdict
+
+
+def test_summary_counts_only_seeds_where_a_value_was_evaluated():
+    statuses = ["reproduced"] * 8 + ["not reproduced"] * 2 + ["not applicable"] * 5
+    members = pd.DataFrame(
+        {
+            "member": range(len(statuses)),
+            "base_seed": range(len(statuses)),
+            "paper": "A",
+            "study": "cmc",
+            "entry": "claim",
+            "id": "A1",
+            "status": statuses,
+            "margin": "",
+            "reproduced": [f"value {i}" for i in range(len(statuses))],
+        }
+    )[MEMBER_COLUMNS]
+    (row,) = summarise_members(members, {"A1": "a claim"}).to_dict("records")
+    assert list(row) == SUMMARY_COLUMNS
+    assert (row["seeds"], row["reproduced_in"], row["share"]) == (10, 8, 0.8)
+    assert row["verdict"] == "seed-dependent"
+    assert (row["default_seed"], row["default_reproduced"]) == ("reproduced", "value 0")
+
+
+@pytest.mark.pipeline
+def test_verdicts_target_runs_the_ensemble_and_is_never_stale(tmp_path):
+    workdir = copy_workflow(tmp_path)
+    reduced = ROOT / "tests" / "data" / "verdicts.yaml"
+    first = run_snakemake(workdir, "verdicts", "--configfile", str(reduced))
+    assert first.returncode == 0, first.stderr[-4000:]
+    summary = pd.read_csv(workdir / "results" / "tables" / "verdicts.csv")
+    assert list(summary.columns) == SUMMARY_COLUMNS
+    assert set(summary["paper"]) == {"A", "B", "C"}
+    tested = summary[summary["seeds"] > 0]
+    assert not tested.empty and (tested["seeds"] <= 2).all()
+    assert "Verdict over seeds" in (workdir / "results" / "tables" / "verdicts.md").read_text()
+    # One more seed runs its members and the summary, nothing else.
+    more = tmp_path / "more.yaml"
+    # Keys in the file's order: Snakemake compares parameters as written.
+    overlay = {**yaml.safe_load(reduced.read_text()), "verdicts": {"seeds": 3}}
+    more.write_text(yaml.safe_dump(overlay, sort_keys=False))
+    dry = run_snakemake(workdir, "verdicts", "--dry-run", "--configfile", str(more))
+    assert dry.returncode == 0, dry.stderr[-4000:]
+    # The dry run's job counts: the new member of each study and the summary, nothing else.
+    counts = dict(re.findall(r"^(\w+)\s+(\d+)$", dry.stdout + dry.stderr, flags=re.M))
+    counts.pop("total", None)
+    members = {f"verdicts_member_{study}": "1" for study in ("cmc", "hinge", "hip")}
+    assert counts == {**members, "verdicts_summary": "1", "verdicts": "1"}, counts
+
+
+def test_the_readme_states_the_rule_the_code_applies():
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert VERDICT_RULE in readme

@@ -1,0 +1,6 @@
+from jointbench import jobs
+from jointbench.study.ensemble import run_member
+
+with jobs.job(snakemake):
+    rows = run_member(snakemake.config, snakemake.params.study, int(snakemake.wildcards.member))
+    rows.to_csv(snakemake.output[0], index=False)
