@@ -84,7 +84,7 @@ def test_verdicts_target_runs_the_ensemble_and_is_never_stale(tmp_path):
     assert first.returncode == 0, first.stderr[-4000:]
     summary = pd.read_csv(workdir / "results" / "tables" / "verdicts.csv")
     assert list(summary.columns) == SUMMARY_COLUMNS
-    assert set(summary["paper"]) == {"A", "B", "C"}
+    assert set(summary["paper"]) == {"A", "B", "C", "S"}
     tested = summary[summary["seeds"] > 0]
     assert not tested.empty and (tested["seeds"] <= 2).all()
     assert "Verdict over seeds" in (workdir / "results" / "tables" / "verdicts.md").read_text()
@@ -98,7 +98,8 @@ def test_verdicts_target_runs_the_ensemble_and_is_never_stale(tmp_path):
     # The dry run's job counts: the new member of each study and the summary, nothing else.
     counts = dict(re.findall(r"^(\w+)\s+(\d+)$", dry.stdout + dry.stderr, flags=re.M))
     counts.pop("total", None)
-    members = {f"verdicts_member_{study}": "1" for study in ("cmc", "hinge", "hip")}
+    studies = ("cmc", "hinge", "hip", "hip_sta")
+    members = {f"verdicts_member_{study}": "1" for study in studies}
     assert counts == {**members, "verdicts_summary": "1", "verdicts": "1"}, counts
 
 
