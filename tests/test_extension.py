@@ -25,54 +25,24 @@ from jointbench.papers import get_paper
 from jointbench.study.collected import scored_estimates
 from jointbench.study.schema import check_estimates
 
-# The minimal external estimator of the README's "Adding an estimator", verbatim: the centroid
-# of every marker position as the "centre" (a template, not a method).
-CENTROID_RULE = '''
-rule estimate_cmc_centroid:
-    """centroid: the mean of every marker position of a trial (a template, not a method)."""
-    input:
-        "results/datasets/cmc/{condition}.parquet",
-    output:
-        "results/estimates/cmc/centroid/{condition}.parquet",
-    run:
-        import json
-        import time
-
-        import numpy as np
-        import pandas as pd
-        import pyarrow.parquet as pq
-
-        meta = json.loads(pq.read_schema(input[0]).metadata[b"jointbench"])
-        rows = []
-        for trial, markers in pd.read_parquet(input[0]).groupby("trial"):
-            start = time.perf_counter()
-            center = markers[["x", "y", "z"]].to_numpy().mean(axis=0)
-            rows.append(
-                {
-                    **meta["condition"],
-                    "trial": trial,
-                    "method": "centroid",
-                    "center_x": center[0],
-                    "center_y": center[1],
-                    "center_z": center[2],
-                    "converged": True,
-                    "iterations": 0,
-                    "seconds": time.perf_counter() - start,
-                    "status": "ok",
-                }
-            )
-        pd.DataFrame(rows).to_parquet(output[0], index=False)
-'''
+# The minimal external estimator of the README's "Adding an estimator", shipped as a template
+# (the README quotes these files verbatim: tests/test_any_language.py).
+CENTROID_SCRIPT = Path("workflow") / "external" / "centroid.py"
 
 
 def user_clone(
-    destination: Path, *, estimators: list[str], external: list[str], rule: str | None
+    destination: Path,
+    *,
+    estimators: list[str],
+    external: list[str],
+    centroid_script: str | None = None,
 ) -> Path:
-    """The workflow as a user clones it, a cmc-only overlay config, and optionally the centroid
-    rule in ``workflow/rules/estimators/centroid.smk``; returns the overlay's path."""
+    """The workflow as a user clones it (with the shipped centroid template, its script
+    replaced by ``centroid_script`` if given) and a cmc-only overlay config; returns the
+    overlay's path."""
     copy_workflow(destination)
-    if rule is not None:
-        (destination / "workflow" / "rules" / "estimators" / "centroid.smk").write_text(rule)
+    if centroid_script is not None:
+        (destination / CENTROID_SCRIPT).write_text(centroid_script)
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}
     studies["cmc"] = {
@@ -93,9 +63,7 @@ def snakemake(workdir: Path, overlay: Path, *targets: str, dry_run: bool = False
 
 @pytest.mark.pipeline
 def test_user_rule_joins_collected_results_and_extended_ranking(tmp_path):
-    overlay = user_clone(
-        tmp_path, estimators=["NM", "LS"], external=["LM", "centroid"], rule=CENTROID_RULE
-    )
+    overlay = user_clone(tmp_path, estimators=["NM", "LS"], external=["LM", "centroid"])
     run = snakemake(
         tmp_path,
         overlay,
@@ -133,8 +101,10 @@ def test_user_rule_joins_collected_results_and_extended_ranking(tmp_path):
 
 @pytest.mark.pipeline
 def test_wrong_column_fails_naming_it(tmp_path):
-    wrong = CENTROID_RULE.replace('"center_z"', '"centre_z"')
-    overlay = user_clone(tmp_path, estimators=[], external=["centroid"], rule=wrong)
+    shipped = (ROOT / CENTROID_SCRIPT).read_text()
+    assert '"center_z"' in shipped
+    wrong = shipped.replace('"center_z"', '"centre_z"')
+    overlay = user_clone(tmp_path, estimators=[], external=["centroid"], centroid_script=wrong)
     run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet")
     assert run.returncode != 0
     assert "missing column 'center_z'" in run.stdout + run.stderr
@@ -143,7 +113,7 @@ def test_wrong_column_fails_naming_it(tmp_path):
 
 @pytest.mark.pipeline
 def test_external_name_of_a_builtin_is_rejected(tmp_path):
-    overlay = user_clone(tmp_path, estimators=["LS"], external=["NM"], rule=None)
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["NM"])
     run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet", dry_run=True)
     assert run.returncode != 0
     message = run.stdout + run.stderr
