@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from test_extension import CENTROID_RULE, user_clone
+from test_extension import CENTROID_SCRIPT, user_clone
 from workflow_copy import SNAKEMAKE, run_snakemake
 
 from jointbench import invocation, pipeline
@@ -299,11 +299,15 @@ def test_collect_names_a_truncated_estimates_file(tmp_path, estimates_and_datase
 DATASET = "results/datasets/cmc/marker_set-M__rom_deg-5__noise_mm-1.0.parquet"
 
 
-def cmc_clone(destination: Path, *, estimators, external=(), rule=None) -> list[str]:
-    """The workflow copied to ``destination`` with a two-condition, two-trial cmc grid; returns
-    the Snakemake arguments selecting that config."""
+def cmc_clone(destination: Path, *, estimators, external=(), centroid_script=None) -> list[str]:
+    """The workflow copied to ``destination`` with a two-condition, two-trial cmc grid (the
+    shipped centroid template's script replaced by ``centroid_script`` if given); returns the
+    Snakemake arguments selecting that config."""
     overlay = user_clone(
-        destination, estimators=list(estimators), external=list(external), rule=rule
+        destination,
+        estimators=list(estimators),
+        external=list(external),
+        centroid_script=centroid_script,
     )
     return ["--configfile", str(overlay)]
 
@@ -350,9 +354,10 @@ def test_a_truncated_dataset_is_named_logged_and_regenerated(tmp_path):
     ids=["trial missing", "condition invented"],
 )
 def test_an_external_estimator_that_lies_stops_collect(tmp_path, lie, message):
-    rule = CENTROID_RULE.replace("pd.DataFrame(rows)", f"pd.DataFrame({lie})")
-    assert rule != CENTROID_RULE
-    config = cmc_clone(tmp_path, estimators=[], external=["centroid"], rule=rule)
+    shipped = (ROOT / CENTROID_SCRIPT).read_text()
+    script = shipped.replace("pd.DataFrame(rows)", f"pd.DataFrame({lie})")
+    assert script != shipped
+    config = cmc_clone(tmp_path, estimators=[], external=["centroid"], centroid_script=script)
     run = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config)
     assert run.returncode != 0
     named = (
