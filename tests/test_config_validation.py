@@ -204,6 +204,19 @@ BAD = [
     ),
     # A study that runs nothing.
     ("hip", ("estimators",), [], ["studies.hip.estimators: empty, and no external_estimators"]),
+    # A study of two kinds: names and options of both are checked, each against its own kind.
+    (
+        "hip_sta",
+        ("estimators",),
+        ["LS", "planar"],
+        ["studies.hip_sta.estimators", "joint_center or center estimator 'planar'", "NM", "SCoRE"],
+    ),
+    (
+        "hip_sta",
+        ("options",),
+        {"BC": {"tol_x": -1.0}},
+        ["studies.hip_sta.options.BC.tol_x", "-1"],
+    ),
 ]
 
 

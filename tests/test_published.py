@@ -29,6 +29,7 @@ from jointbench.study.snapshot import (
     readme_summary,
     reproduction_summary,
     snapshot_table,
+    update_readme,
 )
 from jointbench.study.tolerance import describe
 
@@ -98,6 +99,32 @@ def test_readme_summary_is_current(comparison):
         readme_summary(ROOT / "README.md")
         == reproduction_summary(comparison, paper_labels()).strip()
     ), "README reproduction summary is stale: run `jointbench readme`"
+
+
+@needs_results
+def test_readme_headlines_are_current():
+    from jointbench.report import readme_headlines
+
+    headlines = readme_headlines(RESULTS / "tables")
+    assert "paper_sta_ranking" in headlines
+    for block, text in headlines.items():
+        assert readme_summary(ROOT / "README.md", block) == text.strip(), (
+            f"README block {block} is stale: run `jointbench readme`"
+        )
+
+
+def test_readme_blocks_are_replaced_by_name_and_a_missing_one_is_named(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(
+        "top\n<!-- a:start -->\nold a\n<!-- a:end -->\nmiddle\n"
+        "<!-- b:start -->\nold b\n<!-- b:end -->\nend\n"
+    )
+    assert update_readme(readme, "new b", block="b")
+    assert not update_readme(readme, "new b", block="b")
+    assert readme_summary(readme, "a") == "old a"
+    assert readme_summary(readme, "b") == "new b"
+    with pytest.raises(ValueError, match="no generated block 'c'"):
+        update_readme(readme, "text", block="c")
 
 
 def test_published_files_match_their_schema(published, tmp_path):

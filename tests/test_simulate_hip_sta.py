@@ -142,3 +142,69 @@ def test_bootstrap_covariances_are_finite_and_widen_with_sta():
         assert np.isfinite(covariances).all()
         sizes.append(np.sqrt(np.trace(covariances, axis1=1, axis2=2)).mean())
     assert sizes[1] > sizes[0]
+
+
+# --------------------------------------------------------------- centre methods on the thigh
+
+
+def test_the_thigh_in_the_pelvis_frame_turns_about_the_true_centre():
+    # Without noise or STA the pelvis frame is exact, so in it the thigh markers keep their
+    # distances from the true centre while they move.
+    trials = simulate(_condition(sta=0.0), QUIET, _rngs(2))
+    thigh = trials.segments["thigh_in_pelvis"]
+    assert thigh.shape == trials.segments["distal"].shape
+    distances = np.linalg.norm(thigh - np.asarray(QUIET.joint_mm), axis=-1)
+    np.testing.assert_allclose(
+        distances, np.broadcast_to(distances[:, :1], distances.shape), atol=1e-9
+    )
+    assert np.ptp(thigh, axis=1).max() > 100.0  # they do move
+
+
+def test_the_pelvis_frame_follows_the_recorded_pelvis_not_the_world():
+    # A pelvis that sways carries the thigh with it: in the pelvis frame the sway is gone.
+    still = dataclasses.replace(QUIET, pelvis_sway_mm=(0.0, 0.0, 0.0), pelvis_sway_deg=(0, 0, 0))
+    swaying = simulate(_condition(), QUIET, _rngs(1))
+    fixed = simulate(_condition(), still, _rngs(1))
+    assert np.abs(swaying.segments["distal"] - fixed.segments["distal"]).max() > 5.0
+    np.testing.assert_allclose(
+        swaying.segments["thigh_in_pelvis"], fixed.segments["thigh_in_pelvis"], atol=1e-9
+    )
+
+
+@pytest.mark.parametrize("method", ["LS", "NM", "BC", "MA", "IS"])
+def test_every_centre_method_runs_on_the_study_and_recovers_the_centre(method):
+    from jointbench.study.run import estimate_table
+    from jointbench.study.studies import method_kind
+
+    study = get_study("hip_sta")
+    assert method_kind(study, method) == "center"
+    trials = simulate(_condition(), QUIET, _rngs(2))
+    table = estimate_table("hip_sta", method, trials, _condition()).to_pandas()
+    assert list(table["method"]) == [method, method]
+    assert table["converged"].all(), table["status"].tolist()
+    assert table["error_mm"].max() < 1e-6
+
+
+def test_each_name_runs_as_the_first_kind_that_has_it():
+    from jointbench.study.studies import method_kind
+
+    study = get_study("hip_sta")
+    assert study.kinds == ("joint_center", "center")
+    # SCoRE exists in both kinds: the study's own kind comes first.
+    assert method_kind(study, "SCoRE") == "joint_center"
+    assert method_kind(study, "gauss-markov") == "joint_center"
+    assert study.segments_of("center") == ("thigh_in_pelvis",)
+    assert study.all_segments == ("proximal", "distal", "thigh_in_pelvis")
+    with pytest.raises(
+        ValueError, match="runs no axis estimators; its kinds: joint_center, center"
+    ):
+        study.segments_of("axis")
+
+
+def test_a_study_refuses_kinds_scored_against_different_truths():
+    with pytest.raises(ValueError, match="scored against different truths"):
+        dataclasses.replace(hip_sta.STUDY, more_kinds={"axis": ("distal",)})
+    with pytest.raises(ValueError, match="repeats its kind"):
+        dataclasses.replace(hip_sta.STUDY, more_kinds={"joint_center": ("distal",)})
+    with pytest.raises(ValueError, match="kind 'knee' is not one of"):
+        dataclasses.replace(hip_sta.STUDY, more_kinds={"knee": ("distal",)})

@@ -83,9 +83,22 @@ def _readme(args: argparse.Namespace) -> int:
         return 1
     if not args.readme.is_file():
         raise ValueError(f"{args.readme}: no such file")
+    from jointbench.report import readme_headlines
+
     comparison = pd.read_csv(comparison_path)
-    changed = update_readme(args.readme, reproduction_summary(comparison, paper_labels()))
-    print(f"{args.readme}: summary {'updated' if changed else 'already current'}")
+    blocks = {
+        "summary": (
+            "reproduction-summary",
+            reproduction_summary(comparison, paper_labels()),
+        ),
+        **{
+            name: (name, headline)
+            for name, headline in readme_headlines(args.results / "tables").items()
+        },
+    }
+    for what, (block, text) in blocks.items():
+        changed = update_readme(args.readme, text, block=block)
+        print(f"{args.readme}: {what} {'updated' if changed else 'already current'}")
     return 0
 
 

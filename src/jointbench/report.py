@@ -107,6 +107,24 @@ def _headline(name: str, tables: Mapping[str, pd.DataFrame]) -> str:
     return output.headline({source: tables[source] for source in output.summarises})
 
 
+def readme_headlines(tables_dir: str | Path) -> dict[str, str]:
+    """Per paper output marked ``in_readme``: its headline, from its tables' CSV files in
+    ``tables_dir`` (``ValueError`` naming a missing one: the run did not make it)."""
+    out = {}
+    for key in paper_names():
+        for output in get_paper(key).outputs:
+            if not output.in_readme:
+                continue
+            tables = {}
+            for source in output.summarises:
+                path = Path(tables_dir) / f"{source}.csv"
+                if not path.is_file():
+                    raise ValueError(f"{path}: missing; the README's {output.name} needs it")
+                tables[source] = pd.read_csv(path)
+            out[output.name] = _headline(output.name, tables)
+    return out
+
+
 def write_captions(tables: Mapping[str, str], outputs: Sequence[str], config: Mapping) -> None:
     """One reStructuredText caption per output: what it shows, then its headline agreement."""
     loaded = {name: pd.read_csv(path) for name, path in tables.items()}

@@ -69,7 +69,9 @@ class Output:
     ``results/tables/<name>.{html,csv,md}``); ``render`` draws it from :class:`Inputs` (a figure
     returns a matplotlib ``Figure``, a table a :class:`Table`); ``conditions`` are the simulated
     conditions whose trials it draws; ``caption`` says what it shows (reStructuredText);
-    ``headline`` summarises the tables named in ``summarises`` for its caption.
+    ``headline`` summarises the tables named in ``summarises`` for its caption; ``in_readme``
+    puts that headline in the README too, between ``<!-- name:start -->`` and
+    ``<!-- name:end -->`` (``jointbench readme`` writes it; a test holds it to the results).
     """
 
     name: str
@@ -79,6 +81,7 @@ class Output:
     conditions: tuple[Mapping[str, object], ...] = ()
     summarises: tuple[str, ...] = ()
     headline: Callable[..., str] | None = None
+    in_readme: bool = False
 
     @property
     def files(self) -> dict[str, str]:

@@ -1,11 +1,12 @@
 """Paper S: what the soft-tissue-artefact literature found about functional hip joint centres.
 
-The ``hip_sta`` study (:mod:`jointbench.simulate.hip_sta`) puts every joint-centre estimator on
-skin-marker trials of a functional hip motion. This module draws each method's error against
-the STA amplitude, tabulates whether every predicted uncertainty still covers the true centre
-under STA (Gauss–Markov, ``gauss-markov-frame0`` and the moving-block bootstrap of
-:mod:`jointbench.uncertainty`), and measures the findings of the papers listed in
-``paper_sta.yaml`` beside it, each entry naming its source.
+The ``hip_sta`` study (:mod:`jointbench.simulate.hip_sta`) puts every estimator that finds a
+centre on skin-marker trials of a functional hip motion: the joint-centre methods on both
+clusters, the one-segment centre-of-rotation methods on the thigh in the pelvis frame. This
+module draws each method's error against the STA amplitude, tabulates whether every predicted
+uncertainty still covers the true centre under STA (Gauss–Markov, ``gauss-markov-frame0`` and
+the moving-block bootstrap of :mod:`jointbench.uncertainty`), and measures the findings of the
+papers listed in ``paper_sta.yaml`` beside it, each entry naming its source.
 """
 
 from __future__ import annotations
@@ -206,7 +207,7 @@ def ranking_table(collected: pd.DataFrame) -> pd.DataFrame:
 def _ranking(inputs: Inputs) -> Table:
     return Table(
         ranking_table(inputs.collected),
-        title="Ranking of every joint-centre estimator by STA amplitude",
+        title="Ranking of every centre estimator by STA amplitude",
         note="mean rank over the motions and ranges of motion of each amplitude; 0 mm is white "
         "noise only.",
     )
@@ -349,7 +350,8 @@ PAPER = Paper(
             "paper_sta_errors",
             "figure",
             errors_figure,
-            caption="Mean hip-centre error of every joint-centre estimator against the "
+            caption="Mean hip-centre error of every estimator (joint-centre methods on both "
+            "clusters, one-segment centre methods on the thigh in the pelvis frame) against the "
             "soft-tissue-artefact amplitude (RMS skin-marker displacement at a 30° hip "
             "excursion; 0 = white noise only), per motion and range of motion.",
         ),
@@ -357,10 +359,11 @@ PAPER = Paper(
             "paper_sta_ranking",
             "table",
             _ranking,
-            caption="Every joint-centre estimator ranked within each STA amplitude (mean rank "
+            caption="Every estimator ranked within each STA amplitude (mean rank "
             "over motions and ranges; per-condition ranks in the extended ranking).",
             summarises=("paper_sta_ranking",),
             headline=ranking_headline,
+            in_readme=True,
         ),
         Output(
             "paper_sta_calibration",

@@ -28,6 +28,8 @@ __all__ = ["KINDS", "GridValues", "Study", "Trials", "isotropic_noise"]
 
 #: Estimator kinds a study can run: each kind's estimators share a signature and a scorer.
 KINDS = ("center", "axis", "joint_center")
+# What each kind's errors are measured from: kinds sharing one can share a study.
+_TRUTH_OF = {"center": "center", "axis": "axis", "joint_center": "center"}
 
 
 @dataclass(frozen=True)
@@ -114,6 +116,12 @@ class Study:
     with its type and range (:mod:`jointbench.declared`); ``simulate`` the function of the
     signature above; ``grid_spec`` the values each grid key allows, checked before any job runs
     (a study without one has its grid values checked by the schema only).
+
+    ``more_kinds`` gives the trials to estimators of further kinds, each with the segments its
+    estimators take, in argument order (names in :attr:`Trials.segments`): a two-segment study
+    whose simulator also writes the distal markers in the proximal segment's frame lets the
+    one-segment centre methods fit them, e.g. ``{"center": ("distal_in_proximal",)}``. Every
+    kind of a study must share its truth (the point or axis its errors are measured from).
     """
 
     name: str
@@ -124,10 +132,20 @@ class Study:
     protocol_class: type
     simulate: Callable[[Mapping[str, object], object, Sequence[np.random.Generator]], Trials]
     grid_spec: Mapping[str, GridValues] = field(default_factory=dict)
+    more_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.kind not in KINDS:
-            raise ValueError(f"study {self.name!r}: kind {self.kind!r} is not one of {KINDS}")
+        for kind in self.kinds:
+            if kind not in KINDS:
+                raise ValueError(f"study {self.name!r}: kind {kind!r} is not one of {KINDS}")
+        if self.kind in self.more_kinds:
+            raise ValueError(f"study {self.name!r}: more_kinds repeats its kind {self.kind!r}")
+        scored = {_TRUTH_OF[kind] for kind in self.kinds}
+        if len(scored) > 1:
+            raise ValueError(
+                f"study {self.name!r}: kinds {', '.join(self.kinds)} are scored against different "
+                "truths; one study's errors must be comparable"
+            )
         stray = set(self.seed_keys) - set(self.grid_keys)
         if stray:
             raise ValueError(f"study {self.name!r}: seed keys {sorted(stray)} are not grid keys")
@@ -154,6 +172,30 @@ class Study:
         check_fields(self.protocol_class, {f.name: getattr(protocol, f.name) for f in fields})
         return protocol
 
-    def fit_arguments(self, trials: Trials, trial: int) -> tuple[np.ndarray, ...]:
-        """The arrays passed to the estimator for one trial, in :attr:`segments` order."""
-        return tuple(trials.segments[name][trial] for name in self.segments)
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """Every estimator kind the study runs: :attr:`kind` first, then :attr:`more_kinds`."""
+        return (self.kind, *self.more_kinds)
+
+    @property
+    def all_segments(self) -> tuple[str, ...]:
+        """Every segment some kind's estimators take, each once, in order of first use."""
+        return tuple(dict.fromkeys(name for kind in self.kinds for name in self.segments_of(kind)))
+
+    def segments_of(self, kind: str) -> tuple[str, ...]:
+        """The segments a ``kind`` estimator takes, in argument order."""
+        if kind == self.kind:
+            return self.segments
+        try:
+            return tuple(self.more_kinds[kind])
+        except KeyError:
+            raise ValueError(
+                f"study {self.name!r} runs no {kind} estimators; its kinds: {', '.join(self.kinds)}"
+            ) from None
+
+    def fit_arguments(
+        self, trials: Trials, trial: int, kind: str | None = None
+    ) -> tuple[np.ndarray, ...]:
+        """The arrays passed to a ``kind`` estimator (default :attr:`kind`) for one trial, in
+        :meth:`segments_of` order."""
+        return tuple(trials.segments[name][trial] for name in self.segments_of(kind or self.kind))

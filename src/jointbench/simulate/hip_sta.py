@@ -98,6 +98,8 @@ import numpy as np
 from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
 from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix, skew
+from jointbench.numerics.poses import rigid_poses
+from jointbench.screening import to_local
 from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.hip import _jsonable, _triple, _triples
 from jointbench.simulate.noise import check_noise_level, isotropic_noise, largest_noise_mm
@@ -111,6 +113,7 @@ __all__ = [
     "simulate",
     "sta_displacements",
     "sta_field",
+    "thigh_in_pelvis_frame",
 ]
 
 MOTIONS = ("star_arc", "circumduction")
@@ -297,6 +300,27 @@ def _placed(body: np.ndarray, rotation: np.ndarray, translation: np.ndarray) -> 
     return body @ np.swapaxes(rotation, -1, -2) + translation[:, None, :]
 
 
+def thigh_in_pelvis_frame(pelvis: np.ndarray, thigh: np.ndarray) -> np.ndarray:
+    """Thigh markers ``(n_trials, n_frames, n, 3)`` [mm] in the pelvis frame, as a lab gives them
+    to a one-segment centre method: per trial, the pelvis cluster's pose in every frame is
+    fitted from its recorded markers ``(n_trials, n_frames, 4, 3)`` (paper C §5,
+    :func:`~jointbench.numerics.poses.rigid_poses`: the frame coincides with the world at frame
+    0), and the thigh markers are carried into it.
+
+    Any other pelvis-fixed frame differs from this one by a constant rigid motion, to which
+    the centre methods are invariant; this one makes the true centre the same point,
+    ``joint_mm``, as in the two-segment methods' frame-0 body frames. The pelvis markers'
+    noise and artefact go into the frame, as they do in the lab.
+    """
+    rotation, translation, _ = rigid_poses(pelvis)
+    return np.stack(
+        [
+            to_local(r, t, markers)
+            for r, t, markers in zip(rotation, translation, thigh, strict=True)
+        ]
+    )
+
+
 def simulate(
     condition: Mapping[str, object], protocol: HipStaProtocol, rngs: Sequence[np.random.Generator]
 ) -> Trials:
@@ -306,8 +330,9 @@ def simulate(
 
     Returns :class:`~jointbench.simulate.Trials` with ``segments["proximal"]`` (pelvis)
     ``(n_trials, n_frames, 4, 3)`` and ``segments["distal"]`` (thigh) ``(n_trials, n_frames, 4,
-    3)`` [mm] in the world frame, ``truth["center"]`` the HJC in the body frames shared at
-    frame 0.
+    3)`` [mm] in the world frame, ``segments["thigh_in_pelvis"]`` the thigh markers in the
+    pelvis frame (:func:`thigh_in_pelvis_frame`), and ``truth["center"]`` the HJC in the body
+    frames shared at frame 0.
     """
     unknown = set(condition) - set(_CONDITION_KEYS)
     if unknown:
@@ -340,6 +365,7 @@ def simulate(
         markers = np.concatenate([pelvis, thigh], axis=1)
         trials.append(markers + isotropic_noise(rng, markers.shape[:2], protocol.noise_mm))
     stacked = np.stack(trials)
+    pelvis, thigh = stacked[:, :, :n_pelvis], stacked[:, :, n_pelvis:]
     parameters = {
         **asdict(protocol),
         "n_frames": protocol.n_frames,
@@ -348,7 +374,11 @@ def simulate(
         "sta_mm": sta_mm,
     }
     return Trials(
-        segments={"proximal": stacked[:, :, :n_pelvis], "distal": stacked[:, :, n_pelvis:]},
+        segments={
+            "proximal": pelvis,
+            "distal": thigh,
+            "thigh_in_pelvis": thigh_in_pelvis_frame(pelvis, thigh),
+        },
         truth={"center": [float(x) for x in joint]},
         parameters=_jsonable(parameters),
     )
@@ -356,12 +386,14 @@ def simulate(
 
 STUDY = Study(
     name="hip_sta",
-    # One kind per study: the two-segment estimators, which see both clusters as recorded.
+    # The two-segment estimators see both clusters as recorded; the one-segment centre methods
+    # the thigh in the pelvis frame, with the same true centre.
     kind="joint_center",
     grid_keys=_CONDITION_KEYS,
     # Trial k is the same subject and camera noise in every condition (module docstring).
     seed_keys=(),
     segments=("proximal", "distal"),
+    more_kinds={"center": ("thigh_in_pelvis",)},
     protocol_class=HipStaProtocol,
     simulate=simulate,
     grid_spec={

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.simulate import Study
 from jointbench.study.io import (
     read_metadata,
     read_provenance,
@@ -27,7 +28,7 @@ from jointbench.study.schema import (
     check_scores,
 )
 from jointbench.study.scoring import ERROR_COLUMN, score_columns
-from jointbench.study.studies import get_study
+from jointbench.study.studies import get_study, method_kind
 from jointbench.study.summary import summarise
 
 __all__ = ["collect", "require_results", "scored_estimates", "summarise_estimates"]
@@ -84,12 +85,14 @@ def _reasons(rows: pd.DataFrame, most: int = 3) -> str:
     return "; ".join(f"{count} × {reason!r}" for reason, count in counts.items()) or "none"
 
 
-def _scored_file(path, kind: str, condition_keys, dataset: Mapping, source: str) -> pd.DataFrame:
-    """One estimates file read, its schema checked, held to its ``dataset`` (``trials``,
-    ``condition`` and ``truth`` of its condition's dataset file) and scored."""
+def _scored_file(path, spec: Study, dataset: Mapping, source: str) -> pd.DataFrame:
+    """One estimates file of study ``spec`` read, its schema checked, held to its ``dataset``
+    (``trials``, ``condition`` and ``truth`` of its condition's dataset file) and scored as
+    its method's kind."""
     frame = read_table(path)
     method = Path(path).parent.name
-    check_estimates(frame, kind=kind, condition_keys=condition_keys, method=method, source=source)
+    kind = method_kind(spec, method)
+    check_estimates(frame, kind=kind, condition_keys=spec.grid_keys, method=method, source=source)
     check_against_dataset(
         frame, trials=dataset["trials"], condition=dataset["condition"], source=source
     )
@@ -137,7 +140,7 @@ def collect(
     for path in paths:
         estimators.setdefault(Path(path).parent.name, read_provenance(path))
         dataset = _dataset_of(path, expected)
-        frames.append(_scored_file(path, spec.kind, spec.grid_keys, dataset, str(path)))
+        frames.append(_scored_file(path, spec, dataset, str(path)))
     collected = pd.concat(frames, ignore_index=True)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
     require_results(collected, study, output)
@@ -153,10 +156,7 @@ def summarise_estimates(
     spec = get_study(study)
     expected = _datasets(datasets)
     estimates = pd.concat(
-        [
-            _scored_file(path, spec.kind, spec.grid_keys, _dataset_of(path, expected), str(path))
-            for path in paths
-        ],
+        [_scored_file(path, spec, _dataset_of(path, expected), str(path)) for path in paths],
         ignore_index=True,
     )
     summarise(estimates, study).to_csv(output, index=False)

@@ -15,7 +15,7 @@ import yaml
 from jointbench import declared
 from jointbench.estimators import registry
 from jointbench.simulate import Study
-from jointbench.study.studies import get_study
+from jointbench.study.studies import get_study, method_kind
 from jointbench.study.studies import study_names as registered_studies
 
 __all__ = [
@@ -141,7 +141,7 @@ def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
 
 
 def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
-    known = registry.methods(spec.kind)
+    known = list(dict.fromkeys(m for kind in spec.kinds for m in registry.methods(kind)))
     builtin = list(settings.get("estimators", []))
     if settings.get("enabled", True) and not builtin and not settings.get("external_estimators"):
         raise ValueError(
@@ -151,7 +151,7 @@ def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     for name in builtin:
         if name not in known:
             raise ValueError(
-                f"{where}.estimators: unknown {spec.kind} estimator {name!r}; known: "
+                f"{where}.estimators: unknown {' or '.join(spec.kinds)} estimator {name!r}; known: "
                 f"{', '.join(known)} (an estimator with a rule of its own goes under "
                 "external_estimators)"
             )
@@ -175,7 +175,8 @@ def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
 def _check_options(spec: Study, name: str, options: Mapping, where: str) -> None:
     """Each of ``options`` against the type its estimator's signature declares for it."""
     try:
-        accepted = declared.keyword_types(registry.get(spec.kind, name), len(spec.segments))
+        kind = method_kind(spec, name)
+        accepted = declared.keyword_types(registry.get(kind, name), len(spec.segments_of(kind)))
     except NameError as error:
         raise ValueError(
             f"{where}: the types of {name}'s options cannot be read: {error}"
@@ -207,7 +208,10 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     whatever key or protocol field sets them; external estimators declare no minimum and are
     not counted.
     """
-    needs = {name: registry.claims(spec.kind, name).min_frames for name in settings["estimators"]}
+    needs = {
+        name: registry.claims(method_kind(spec, name), name).min_frames
+        for name in settings["estimators"]
+    }
     if not needs:
         return
     fewest = min(needs.values())

@@ -10,8 +10,9 @@ by trial, segment (as in the dataset), frame and marker::
     trial,segment,frame,marker,x,y,z
 
 ``trial``, ``frame`` and ``marker`` count from 0; ``segment`` is ``moving`` for one-segment
-studies, ``proximal`` and ``distal`` for two-segment ones; ``x``, ``y``, ``z`` in mm, written
-with the digits that read back to the same double.
+studies, ``proximal`` and ``distal`` for two-segment ones, plus any segment a study derives
+for another kind of estimator (``thigh_in_pelvis`` in ``hip_sta``); ``x``, ``y``, ``z`` in mm,
+written with the digits that read back to the same double.
 
 Estimates CSV (:func:`read_estimates_csv`), one header line, one row per trial: ``trial``, the
 estimate columns of the study's kind (``center_x, center_y, center_z``; or ``point_*`` and

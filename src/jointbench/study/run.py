@@ -35,7 +35,7 @@ from jointbench.study.io import (
 from jointbench.study.schema import check_estimates
 from jointbench.study.scoring import score
 from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import get_study
+from jointbench.study.studies import get_study, method_kind
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -98,11 +98,12 @@ def _outcome(result) -> tuple[object, str, bool, int]:
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
 
-def _fit_all(fit, spec, trials: Trials, options, poses=None) -> tuple[list, float] | None:
+def _fit_all(fit, segments, trials: Trials, options, poses=None) -> tuple[list, float] | None:
     """All trials at once through the estimator's ``batched`` form, if it has one.
 
-    ``fit.batched(*segments, **options)`` takes each segment as ``(n_trials, ...)`` and returns
-    per trial what ``fit`` returns or the exception it raises; a pose-based method also takes
+    ``fit.batched(*arrays, **options)`` takes the arrays of the ``segments`` named, each
+    ``(n_trials, ...)``, and returns per trial what ``fit`` returns or the exception it raises;
+    a pose-based method also takes
     the trials' fitted ``poses``. Returns the outcomes and the batch's wall time divided by the
     trials, or ``None`` to fit one trial at a time.
     """
@@ -112,27 +113,29 @@ def _fit_all(fit, spec, trials: Trials, options, poses=None) -> tuple[list, floa
     if poses is not None:
         options = {**options, "poses": poses}
     start = time.perf_counter()
-    outcomes = batched(*(trials.segments[name] for name in spec.segments), **options)
+    outcomes = batched(*(trials.segments[name] for name in segments), **options)
     return outcomes, (time.perf_counter() - start) / max(trials.n_trials, 1)
 
 
-def _fit_trials(fit, spec, trials: Trials, options, poses=None) -> list[tuple]:
-    """``(result, status, converged, iterations, seconds)`` of every trial: ``seconds`` [s] is
-    the wall time of the trial's own fit, or for an estimator with a batched form
-    (:func:`_fit_all`) the batch's divided by its trials."""
-    batch = _fit_all(fit, spec, trials, options, poses)
+def _fit_trials(fit, segments, trials: Trials, options, poses=None) -> list[tuple]:
+    """``(result, status, converged, iterations, seconds)`` of every trial, fitted on its
+    ``segments`` (names, in argument order): ``seconds`` [s] is the wall time of the trial's own
+    fit, or for an estimator with a batched form (:func:`_fit_all`) the batch's divided by its
+    trials."""
+    batch = _fit_all(fit, segments, trials, options, poses)
     if batch is not None:
         outcomes, seconds = batch
         return [(*_outcome(outcome), seconds) for outcome in outcomes]
     fitted = []
     for trial in range(trials.n_trials):
         start = time.perf_counter()
-        outcome = _fit_one(fit, spec.fit_arguments(trials, trial), options)
+        arguments = tuple(trials.segments[name][trial] for name in segments)
+        outcome = _fit_one(fit, arguments, options)
         fitted.append((*outcome, time.perf_counter() - start))
     return fitted
 
 
-def _warm_up(fit, spec, trials: Trials, options, poses=None) -> float:
+def _warm_up(fit, segments, trials: Trials, options, poses=None) -> float:
     """Fit the first trial on its own, before any fit is timed; returns its wall time [s].
 
     An estimator's first call in a process does one-time work besides fitting: Numba compiles
@@ -143,7 +146,7 @@ def _warm_up(fit, spec, trials: Trials, options, poses=None) -> float:
     """
     first = dataclasses.replace(trials, segments={k: v[:1] for k, v in trials.segments.items()})
     start = time.perf_counter()
-    _fit_trials(fit, spec, first, options, None if poses is None else poses[:1])
+    _fit_trials(fit, segments, first, options, None if poses is None else poses[:1])
     return time.perf_counter() - start
 
 
@@ -158,7 +161,8 @@ def methods_sharing_poses(config: Mapping, study: str) -> list[str]:
     pose_based = [
         method
         for method in estimator_names(config, study, source="builtin")
-        if pose_segments(registry.get(spec.kind, method, checked=False)) == spec.segments
+        if pose_segments(registry.get(method_kind(spec, method), method, checked=False))
+        == spec.segments
     ]
     return pose_based if len(pose_based) >= 2 else []
 
@@ -195,11 +199,13 @@ def estimate_table(
     spec = get_study(study)
     # The estimator alone: simulated data are valid by construction, and the seconds column
     # (paper A Table 2) times the estimator, not the input checks a user's call goes through.
-    fit = registry.get(spec.kind, method, checked=False)
+    kind = method_kind(spec, method)
+    segments = spec.segments_of(kind)
+    fit = registry.get(kind, method, checked=False)
     if poses is not None and pose_segments(fit) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = DIAGNOSTICS.get((study, method))
-    warm_up = _warm_up(fit, spec, trials, options or {}, poses)
+    warm_up = _warm_up(fit, segments, trials, options or {}, poses)
     log.info(
         "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
         "not counted in any trial's seconds",
@@ -208,11 +214,11 @@ def estimate_table(
         first_trial,
         warm_up,
     )
-    fitted = _fit_trials(fit, spec, trials, options or {}, poses)
+    fitted = _fit_trials(fit, segments, trials, options or {}, poses)
     extras = [{}] * trials.n_trials
     if diagnose:
-        segments = tuple(trials.segments[name] for name in spec.segments)
-        extras = diagnose(segments, [row[0] for row in fitted], trials.truth)
+        arrays = tuple(trials.segments[name] for name in segments)
+        extras = diagnose(arrays, [row[0] for row in fitted], trials.truth)
     rows = []
     for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
         zip(fitted, extras, strict=True)
@@ -222,7 +228,7 @@ def estimate_table(
                 **condition,
                 "trial": first_trial + trial,
                 "method": method,
-                **score(spec.kind, result, trials.truth),
+                **score(kind, result, trials.truth),
                 "converged": converged,
                 "iterations": iterations,
                 "seconds": seconds,
@@ -231,7 +237,7 @@ def estimate_table(
             }
         )
     table = rows_table(rows)
-    check_estimates(table, kind=spec.kind, condition_keys=spec.grid_keys, method=method)
+    check_estimates(table, kind=kind, condition_keys=spec.grid_keys, method=method)
     return table
 
 

@@ -35,8 +35,7 @@ __all__ = [
 # this; any real change of an estimator or a simulation moves some mean by far more.
 SNAPSHOT_RTOL = 1e-6
 SNAPSHOT_ATOL = 1e-9
-_SUMMARY_START = "<!-- reproduction-summary:start -->"
-_SUMMARY_END = "<!-- reproduction-summary:end -->"
+_SUMMARY = "reproduction-summary"
 
 
 def snapshot_table(collected_dir: str | Path) -> pd.DataFrame:
@@ -128,19 +127,29 @@ def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) ->
     )
 
 
-def update_readme(readme: str | Path, summary: str) -> bool:
-    """Replace the README's summary block; return whether the file changed."""
+def _block_bounds(text: str, block: str, source: str) -> tuple[int, int]:
+    """Where the generated ``block``'s text starts and ends in ``text``: between
+    ``<!-- block:start -->`` and ``<!-- block:end -->``."""
+    start_mark, end_mark = f"<!-- {block}:start -->", f"<!-- {block}:end -->"
+    if start_mark not in text or end_mark not in text:
+        raise ValueError(f"{source}: no generated block {block!r} ({start_mark} … {end_mark})")
+    return text.index(start_mark) + len(start_mark), text.index(end_mark)
+
+
+def update_readme(readme: str | Path, summary: str, block: str = _SUMMARY) -> bool:
+    """Replace the README's generated ``block`` (by default the reproduction summary) with
+    ``summary``; return whether the file changed."""
     path = Path(readme)
     text = path.read_text()
-    start, end = text.index(_SUMMARY_START), text.index(_SUMMARY_END)
-    new = text[: start + len(_SUMMARY_START)] + "\n" + summary + "\n" + text[end:]
+    start, end = _block_bounds(text, block, str(path))
+    new = text[:start] + "\n" + summary + "\n" + text[end:]
     if new != text:
         path.write_text(new)
     return new != text
 
 
-def readme_summary(readme: str | Path) -> str:
-    """The summary block currently in the README."""
+def readme_summary(readme: str | Path, block: str = _SUMMARY) -> str:
+    """The text of the README's generated ``block`` (by default the reproduction summary)."""
     text = Path(readme).read_text()
-    start, end = text.index(_SUMMARY_START), text.index(_SUMMARY_END)
-    return text[start + len(_SUMMARY_START) : end].strip()
+    start, end = _block_bounds(text, block, str(readme))
+    return text[start:end].strip()

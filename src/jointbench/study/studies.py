@@ -7,10 +7,11 @@ package joins by :func:`register_study` (the workflow does this for the modules 
 
 from __future__ import annotations
 
+from jointbench.estimators import registry
 from jointbench.registries import Registry
 from jointbench.simulate import Study, cmc, hinge_study, hip, hip_sta
 
-__all__ = ["get_study", "register_study", "study_names"]
+__all__ = ["get_study", "method_kind", "register_study", "study_names"]
 
 _STUDIES: Registry[Study] = Registry("study", lambda study: study.name)
 register_study = _STUDIES.register
@@ -19,3 +20,11 @@ study_names = _STUDIES.names
 
 for _study in (cmc.STUDY, hinge_study.STUDY, hip.STUDY, hip_sta.STUDY):
     register_study(_study)
+
+
+def method_kind(study: Study, method: str) -> str:
+    """The kind under which ``study`` runs ``method``: the first of its kinds whose registry
+    holds the name. A name no kind registers (an estimator with a rule of its own) runs as the
+    study's own :attr:`~jointbench.simulate.Study.kind`, the kind its rule's file is scored as.
+    """
+    return next((kind for kind in study.kinds if method in registry.methods(kind)), study.kind)
