@@ -25,6 +25,7 @@ from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
+from jointbench.report import readme_headlines
 from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
 
 __all__ = ["main"]
@@ -83,8 +84,6 @@ def _readme(args: argparse.Namespace) -> int:
         return 1
     if not args.readme.is_file():
         raise ValueError(f"{args.readme}: no such file")
-    from jointbench.report import readme_headlines
-
     comparison = pd.read_csv(comparison_path)
     blocks = {
         "summary": (
