@@ -86,7 +86,13 @@ def render_study(
             result = output.render(dataclasses.replace(inputs, datasets=drawn))
             files = _files(outputs, name)
             if isinstance(result, Table):
-                write_tables(result.frame, files, title=result.title, note=result.note)
+                write_tables(
+                    result.frame,
+                    files,
+                    title=result.title,
+                    note=result.note,
+                    headers=result.headers,
+                )
             else:
                 save_figure(result, files)
             log.info("%s written", name)

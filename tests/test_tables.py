@@ -1,0 +1,106 @@
+"""Tables for people: headers in words with units, numbers that never misquote the papers."""
+
+from __future__ import annotations
+
+import re
+
+import pandas as pd
+import pytest
+
+from jointbench.study.formatting import format_column, header, margin_words, number, words
+from jointbench.study.tables import for_people, markdown_table
+
+#: Paper A Table 2's published times (s), as printed in the paper.
+PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
+
+#: The columns of every table a run writes (see results/README.md).
+COLUMNS = [
+    "marker_set",
+    "rom_deg",
+    "noise_mm",
+    "fe_rom_deg",
+    "aa_ratio",
+    "sta_mm",
+    "n_frames",
+    "mean_error_mm",
+    "median_error_mm",
+    "mean_error_deg",
+    "median_error_deg",
+    "mean_seconds",
+    "mean_s",
+    "median_s",
+    "paper_matlab_s",
+    "speedup_median",
+    "vs_paper_median",
+    "reproduced_mean",
+    "reproduced_sd",
+    "relative_difference",
+    "within_tolerance",
+    "not_converged",
+    "inside_95",
+    "mean_validation_index",
+    "binomial_low",
+    "binomial_high",
+    "median_sqrt_trace_cov_mm",
+    "rms_error_mm",
+    "mean_rank",
+]
+
+
+def _table2() -> pd.DataFrame:
+    return pd.DataFrame(
+        {
+            "method": list(PAPER_A_SECONDS),
+            "median_s": [0.00739, 2.234e-05, 0.0115, 0.0002478, 1.664e-05],
+            "paper_matlab_s": list(PAPER_A_SECONDS.values()),
+        }
+    )
+
+
+def test_published_values_keep_their_digits_and_ours_keep_three_figures():
+    rows = markdown_table(_table2()).splitlines()[2:]
+    cells = [[c.strip() for c in row.strip("|").split("|")] for row in rows]
+    assert [c[2] for c in cells] == ["1.2", "0.0056", "0.079", "0.12", "0.00076"]
+    assert [c[1] for c in cells] == ["0.00739", "0.0000223", "0.0115", "0.000248", "0.0000166"]
+
+
+@pytest.mark.parametrize(
+    ("value", "text"),
+    [(0.845, "0.845"), (0.02, "0.0200"), (3.125e-05, "0.0000313"), (556.6, "557"), (0.0, "0")],
+)
+def test_ours_is_written_to_three_significant_figures_without_exponents(value, text):
+    assert number(value) == text
+
+
+def test_no_header_a_person_reads_is_a_variable_name():
+    frame = pd.DataFrame({c: [1.5] for c in COLUMNS})
+    shown = list(for_people(frame).columns)
+    assert not [h for h in shown if re.search(r"\w_\w", h)], shown
+    assert header("rom_deg") == "RoM (°)" and header("mean_error_mm") == "mean error (mm)"
+    assert header("paper_matlab_s").endswith("(s)")
+
+
+def test_a_table_may_name_its_own_headers():
+    frame = pd.DataFrame({"published": [4.3], "difference": [0.25]})
+    shown = for_people(frame, {"published": "published mean (°)"})
+    assert list(shown.columns) == ["published mean (°)", "difference"]
+    assert shown.iloc[0].tolist() == ["4.3", "0.250"]
+
+
+def test_truth_is_yes_or_no_and_a_grid_of_whole_numbers_has_no_decimals():
+    assert format_column([True, False]) == ["yes", "no"]
+    assert format_column([0.0, 10.0, 30.0]) == ["0", "10", "30"]
+    assert format_column([float("nan"), 1.25]) == ["–", "1.25"]
+
+
+def test_two_columns_with_one_header_are_refused():
+    with pytest.raises(ValueError, match="same header"):
+        for_people(pd.DataFrame({"a_mm": [1.0], "a (mm)": [2.0]}))
+
+
+def test_margins_and_part_names_are_words():
+    assert margin_words(1.7) == "1.70 inside"
+    assert margin_words(-3, " trials") == "3 trials outside"
+    assert margin_words(0.0) == "on the edge"
+    assert words("ls_worst_share") == "LS worst share"
+    assert words("share_within_0_5_mm") == "share within 0.5 (mm)"
