@@ -9,6 +9,7 @@ import pytest
 
 from jointbench.study.formatting import format_column, header, margin_words, number, words
 from jointbench.study.tables import for_people, markdown_table
+from jointbench.study.tolerance import describe, evaluate
 
 #: Paper A Table 2's published times (s), as printed in the paper.
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
@@ -104,3 +105,15 @@ def test_margins_and_part_names_are_words():
     assert margin_words(0.0) == "on the edge"
     assert words("ls_worst_share") == "LS worst share"
     assert words("share_within_0_5_mm") == "share within 0.5 (mm)"
+
+
+def test_a_compound_margin_names_its_parts_in_words():
+    tolerance = {
+        "all": [
+            {"of": "ls_worst_share", "at_least": 1.0},
+            {"of": "h_excess_mm", "rel": 0.5, "published": 40},
+        ]
+    }
+    verdict = evaluate(tolerance, None, {"ls_worst_share": 1.0, "h_excess_mm": 45.7})
+    assert verdict.margin_text == "LS worst share: on the edge; H excess (mm): 14.3 inside"
+    assert "_" not in describe(tolerance)
