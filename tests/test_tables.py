@@ -7,7 +7,10 @@ import re
 import pandas as pd
 import pytest
 
+from jointbench.figures import paper_a
 from jointbench.study.formatting import format_column, header, margin_words, number, words
+from jointbench.study.published import STATUSES, reader_order, status_legend
+from jointbench.study.snapshot import NONE_TESTED, reproduction_counts, reproduction_summary
 from jointbench.study.tables import for_people, markdown_table
 from jointbench.study.tolerance import describe, evaluate
 
@@ -117,3 +120,44 @@ def test_a_compound_margin_names_its_parts_in_words():
     verdict = evaluate(tolerance, None, {"ls_worst_share": 1.0, "h_excess_mm": 45.7})
     assert verdict.margin_text == "LS worst share: on the edge; H excess (mm): 14.3 inside"
     assert "_" not in describe(tolerance)
+
+
+def _comparison() -> pd.DataFrame:
+    """A comparison as the check writes it: paper A's values all shown beside ours."""
+    rows = [
+        ("A", "value", "A-T2-IS", "not applicable"),
+        ("A", "claim", "A1", "reproduced"),
+        ("A", "claim", "A2", "not reproduced"),
+        ("B", "value", "B-T1", "reproduced"),
+        ("B", "claim", "B1", "not applicable"),
+        ("B", "claim", "B2", "reproduced"),
+    ]
+    return pd.DataFrame(rows, columns=["paper", "entry", "id", "status"])
+
+
+def test_every_status_is_one_of_three_words_defined_once():
+    assert list(STATUSES) == ["reproduced", "not reproduced", "not applicable"]
+    legend = status_legend()
+    assert all(f"{word}, {meaning}" in legend for word, meaning in STATUSES.items())
+    counts = reproduction_counts(_comparison(), {})
+    assert list(counts.columns)[-1] == "not applicable"
+    said = " ".join(
+        [
+            reproduction_summary(_comparison(), {}),
+            describe({"shown_only": True}),
+            paper_a.speed_wording(0.0, 0.079),
+        ]
+    )
+    assert "comparable" not in said and "not compared" not in said
+
+
+def test_a_paper_with_nothing_tested_says_so_instead_of_zero_of_zero():
+    counts = reproduction_counts(_comparison(), {}).set_index("paper")
+    assert counts.loc["A", "published values reproduced"] == NONE_TESTED
+    assert counts.loc["A", "claims reproduced"] == "1 / 2"
+    assert "0 / 0" not in reproduction_summary(_comparison(), {})
+
+
+def test_the_comparison_opens_on_its_verdicts():
+    ordered = reader_order(_comparison())
+    assert list(ordered["id"]) == ["A1", "A2", "B2", "B-T1", "B1", "A-T2-IS"]

@@ -22,6 +22,7 @@ from jointbench.figures.common import (
     method_style,
     pyplot,
 )
+from jointbench.study.published import NOT_APPLICABLE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -351,7 +352,7 @@ def speed_wording(ours_s: float, paper_s: float) -> str:
     method that takes twice the paper's time never reads as "0.5× faster" (or, rounded, "0×").
     """
     if not (np.isfinite(ours_s) and np.isfinite(paper_s)) or ours_s <= 0 or paper_s <= 0:
-        return "not comparable"
+        return NOT_APPLICABLE
     ratio = paper_s / ours_s
     if 1 / 1.05 <= ratio <= 1.05:
         return "as fast (within 5 %)"

@@ -265,7 +265,7 @@ def describe(tolerance: Mapping) -> str:
         "less_than": lambda v: f"< {v}",
         "range": lambda v: f"in [{v[0]:g}, {v[1]:g}]",
         "binomial95": lambda v: f"inside the 95 % binomial range (of {v['of_n']})",
-        NOT_COMPARED: lambda v: "shown, not compared",
+        NOT_COMPARED: lambda v: "none (shown beside ours)",
     }
     if kind == "all":
         return " and ".join(
