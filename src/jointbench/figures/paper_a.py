@@ -436,7 +436,7 @@ def timing_note(environment: str | None = None) -> str:
         "and file I/O excluded; a first fit before the timed ones pays for compilation and "
         f"first-call imports, its time in the job's log), on this run's machine ({environment}). "
         "Other jobs of the run (snakemake -j) may have shared the CPUs, so times are indicative. "
-        "Paper: mean times, MATLAB 6.5 on a 3 GHz Pentium 4. speedup_median = paper_matlab_s / "
-        "median_s and speedup_mean = paper_matlab_s / mean_s; above 1 ours is faster. The "
-        "median is the robust comparison."
+        "Paper: mean times, MATLAB 6.5 on a 3 GHz Pentium 4. Speed-up: the paper's time over "
+        "ours (by our median or mean); above 1 ours is faster. The median is the robust "
+        "comparison."
     )

@@ -443,7 +443,20 @@ def _table2(inputs: Inputs) -> Table:
         draw.table2(inputs.collected, _published_seconds(inputs.published)),
         title="Paper A Table 2: computation time per trial (trials where BC converged)",
         note=draw.timing_note(),
+        headers=TABLE2_HEADERS,
     )
+
+
+#: Table 2's headers for people, with units.
+TABLE2_HEADERS = {
+    "mean_s": "our mean time per trial (s)",
+    "median_s": "our median time per trial (s)",
+    "paper_matlab_s": "paper's mean MATLAB time per trial (s)",
+    "speedup_median": "speed-up by median (×)",
+    "speedup_mean": "speed-up by mean (×)",
+    "vs_paper_median": "against the paper, by median",
+    "vs_paper_mean": "against the paper, by mean",
+}
 
 
 def _speedups(tables) -> str:

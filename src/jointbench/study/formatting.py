@@ -71,13 +71,6 @@ _HEADERS = {
     "binomial_low": "honest band, low",
     "binomial_high": "honest band, high",
     "mean_seconds": "mean time per trial (s)",
-    "mean_s": "our mean time per trial (s)",
-    "median_s": "our median time per trial (s)",
-    "paper_matlab_s": "paper's mean MATLAB time per trial (s)",
-    "speedup_median": "speed-up by median (×)",
-    "speedup_mean": "speed-up by mean (×)",
-    "vs_paper_median": "against the paper, by median",
-    "vs_paper_mean": "against the paper, by mean",
     "not_converged": "trials not converged",
 }
 #: A column whose name starts with one of these holds the papers' own values.
