@@ -7,9 +7,12 @@ import re
 import pandas as pd
 import pytest
 
+from jointbench import report
 from jointbench.figures import paper_a
+from jointbench.papers import get_paper
+from jointbench.papers import paper_a as paper_a_paper
 from jointbench.study.formatting import format_column, header, margin_words, number, words
-from jointbench.study.published import STATUSES, reader_order, status_legend
+from jointbench.study.published import STATUSES, load_published, reader_order, status_legend
 from jointbench.study.snapshot import NONE_TESTED, reproduction_counts, reproduction_summary
 from jointbench.study.tables import for_people, markdown_table
 from jointbench.study.tolerance import describe, evaluate
@@ -161,3 +164,40 @@ def test_a_paper_with_nothing_tested_says_so_instead_of_zero_of_zero():
 def test_the_comparison_opens_on_its_verdicts():
     ordered = reader_order(_comparison())
     assert list(ordered["id"]) == ["A1", "A2", "B2", "B-T1", "B1", "A-T2-IS"]
+
+
+def test_the_landing_page_and_the_table_print_a_coverage_alike():
+    table = pd.DataFrame(
+        {
+            "method": ["f0"] * 2,
+            "n_frames": [4, 8],
+            "inside_95": [0.845, 0.955],
+            "status": ["overconfident", "calibrated"],
+        }
+    )
+    sentence = report.calibration_sentence(table)
+    assert "(coverage 0.845)" in sentence
+    assert "| 0.845 |" in markdown_table(table)
+
+
+def test_table2_quotes_a_small_time_as_its_table_does():
+    rows = []
+    for method, seconds in (("LS", 2.377e-05), ("IS", 0.0039)):
+        for trial in range(3):
+            rows.append(
+                {
+                    "marker_set": "M",
+                    "rom_deg": 5,
+                    "noise_mm": 0.5,
+                    "trial": trial,
+                    "method": method,
+                    "seconds": seconds,
+                    "converged": True,
+                    "error_mm": 1.0,
+                }
+            )
+    collected = pd.DataFrame(rows)
+    published = load_published(get_paper("paper_a").published)
+    texts = paper_a_paper._timings(collected, published)
+    assert texts["A-T2-LS"].text.startswith("0.0000238 s")
+    assert "0.0000238" in markdown_table(paper_a.table2(collected, PAPER_A_SECONDS))
