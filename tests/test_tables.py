@@ -88,7 +88,7 @@ def test_no_header_a_person_reads_is_a_variable_name():
 
 
 def test_a_table_may_name_its_own_headers():
-    frame = pd.DataFrame({"published": [4.3], "difference": [0.25]})
+    frame = pd.DataFrame({"published": [4.3], "difference": [0.24987]})
     shown = for_people(frame, {"published": "published mean (°)"})
     assert list(shown.columns) == ["published mean (°)", "difference"]
     assert shown.iloc[0].tolist() == ["4.3", "0.250"]
@@ -201,3 +201,9 @@ def test_table2_quotes_a_small_time_as_its_table_does():
     texts = paper_a_paper._timings(collected, published)
     assert texts["A-T2-LS"].text.startswith("0.0000238 s")
     assert "0.0000238" in markdown_table(paper_a.table2(collected, PAPER_A_SECONDS))
+
+
+def test_a_grid_and_exact_shares_are_written_as_given():
+    assert format_column([0.5, 1.0, 2.0]) == ["0.5", "1", "2"]
+    assert format_column([0.845, 0.14]) == ["0.845", "0.14"]
+    assert format_column([0.02, 3.125e-05]) == ["0.0200", "0.0000313"]

@@ -8,7 +8,9 @@ A value is printed the same way wherever it appears:
 - one of **ours** to :data:`SIGNIFICANT` significant figures in fixed-point notation, its
   integer digits never rounded away (0.0115, 0.845, 6.83, 556.6 → 557), so a small time and a
   large error stand in one column without an exponent;
-- a column whose values are all whole numbers (a grid of 10, 20, 30 mm) without decimals;
+- a column whose values are all whole numbers (a grid of 10, 20, 30 mm) without decimals, and
+  one whose values all have at most :data:`SIGNIFICANT` significant digits (a grid of 0.5, 1.0,
+  2.0 mm; shares of 200 trials) each exactly, as it was given, not padded with zeros;
 - ``True`` / ``False`` as ``yes`` / ``no``; a missing value as ``–``.
 
 A column name becomes a header by its words and unit: ``mean_error_mm`` → ``mean error (mm)``,
@@ -71,6 +73,7 @@ _HEADERS = {
     "binomial_low": "honest band, low",
     "binomial_high": "honest band, high",
     "mean_seconds": "mean time per trial (s)",
+    "median_sqrt_trace_cov_mm": "median predicted sqrt(tr Wc) (mm)",
     "not_converged": "trials not converged",
 }
 #: A column whose name starts with one of these holds the papers' own values.
@@ -139,9 +142,20 @@ def published_number(value: float) -> str:
     return text
 
 
+def _finite(values: list[float]) -> list[float]:
+    return [v for v in values if not _missing(v) and not math.isinf(v)]
+
+
 def _whole(values: list[float]) -> bool:
-    finite = [v for v in values if not _missing(v) and not math.isinf(v)]
+    finite = _finite(values)
     return bool(finite) and all(float(v).is_integer() for v in finite)
+
+
+def _short(values: list[float]) -> bool:
+    """Whether every finite value is a decimal of at most :data:`SIGNIFICANT` digits."""
+    finite = _finite(values)
+    digits = [published_number(v).lstrip("-").replace(".", "").strip("0") for v in finite]
+    return bool(finite) and all(len(d) <= SIGNIFICANT for d in digits)
 
 
 def format_column(values: Iterable[object], *, published: bool = False) -> list[str]:
@@ -150,6 +164,7 @@ def format_column(values: Iterable[object], *, published: bool = False) -> list[
     values = list(values)
     floats = [v for v in values if isinstance(v, float)]
     whole = _whole(floats)
+    exact = published or _short(floats)
 
     def cell(value: object) -> str:
         if isinstance(value, bool):
@@ -159,7 +174,7 @@ def format_column(values: Iterable[object], *, published: bool = False) -> list[
         if isinstance(value, float):
             if whole and not math.isinf(value):
                 return str(int(value))
-            return published_number(value) if published else number(value)
+            return published_number(value) if exact else number(value)
         return str(value)
 
     return [cell(v) for v in values]
