@@ -68,8 +68,8 @@ CLAIM_COLUMNS = [
 STATUSES = {
     "reproduced": "within its tolerance (a claim: its sentence holds as tested)",
     "not reproduced": "outside its tolerance; the reason says why",
-    "not applicable": "no verdict: the published value is shown beside ours without a "
-    "tolerance, or this run could not measure it; the reason says which",
+    "not applicable": "given no verdict (the published value is shown beside ours without a "
+    "tolerance, or this run could not measure it; the reason says which)",
 }
 NOT_APPLICABLE = "not applicable"
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"

@@ -139,10 +139,9 @@ def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) ->
     lines += ["| " + " | ".join(row) + " |" for row in counts.astype(str).values.tolist()]
     return (
         "**Reproduction summary** (generated from `results/tables/published_comparison.csv`; "
-        'every deviation has its reason there). A cell "6 / 11" counts the values or claims '
-        "reproduced (within their tolerance) of those given a verdict; "
-        f"{NOT_APPLICABLE} counts those given none: {STATUSES[NOT_APPLICABLE]}.\n\n"
-        + "\n".join(lines)
+        "every deviation has its reason there). A cell such as 6 / 11 counts the values or "
+        "claims reproduced (within their tolerance) of those given a verdict; "
+        f"*{NOT_APPLICABLE}*: {STATUSES[NOT_APPLICABLE]}.\n\n" + "\n".join(lines)
     )
 
 
