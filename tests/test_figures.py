@@ -134,7 +134,7 @@ def _drawn(fig) -> bool:
         (0.0018, 1.2, "667× faster"),
         (0.05, 0.079, "1.6× faster"),
         (0.079, 0.079, "as fast (within 5 %)"),
-        (0.0, 0.079, "not comparable"),
+        (0.0, 0.079, "not applicable"),
     ],
 )
 def test_speed_wording_names_the_direction(ours, paper, expected):

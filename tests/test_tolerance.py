@@ -107,7 +107,7 @@ def test_shown_only_is_not_compared():
     assert not is_compared({"shown_only": True})
     with pytest.raises(ValueError, match="not compared"):
         evaluate({"shown_only": True}, 1.0, 1.0)
-    assert describe({"shown_only": True}) == "shown, not compared"
+    assert describe({"shown_only": True}) == "none (shown beside ours)"
 
 
 @given(st.floats(-1e3, 1e3), st.floats(0, 1e3), st.floats(-1e3, 1e3, allow_nan=False))

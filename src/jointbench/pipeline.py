@@ -28,6 +28,8 @@ from jointbench.study.published import (
     enforce_design,
     failure_message,
     load_published,
+    reader_order,
+    status_legend,
 )
 from jointbench.study.tables import markdown_table, write_tables
 
@@ -86,7 +88,13 @@ def render_study(
             result = output.render(dataclasses.replace(inputs, datasets=drawn))
             files = _files(outputs, name)
             if isinstance(result, Table):
-                write_tables(result.frame, files, title=result.title, note=result.note)
+                write_tables(
+                    result.frame,
+                    files,
+                    title=result.title,
+                    note=result.note,
+                    headers=result.headers,
+                )
             else:
                 save_figure(result, files)
             log.info("%s written", name)
@@ -157,14 +165,16 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
 def check_published(collected: Mapping[str, str], outputs, config: Mapping) -> pd.DataFrame:
     """Write ``published_comparison.{csv,md}``; raise ``ValueError`` naming every value that no
     longer reproduces without a recorded reason."""
-    table = comparison(collected, config)
+    table = reader_order(comparison(collected, config))
     counts = table.groupby(["study", "status"]).size().unstack(fill_value=0).reset_index()
     write_tables(
         table,
         outputs,
         title="Published values and claims beside ours",
-        note="margin: how far inside (+) or outside (−) its tolerance each value lies, in the "
-        "tolerance's own units.\n\n## Counts by study and status\n\n" + markdown_table(counts),
+        note="Claims with a verdict first, then values with a verdict, then the rows without "
+        f"one. {status_legend()}. margin: how far inside or outside its tolerance each value "
+        "lies, in the tolerance's own units.\n\n## Counts by study and status\n\n"
+        + markdown_table(counts),
     )
     message = failure_message(table)
     if message:

@@ -20,6 +20,7 @@ from jointbench.figures import extended
 from jointbench.figures.common import study_title
 from jointbench.papers import Output, get_paper, paper_labels, paper_names, papers_of_study
 from jointbench.study import config as jb_config
+from jointbench.study.formatting import number
 from jointbench.study.io import read_provenance
 from jointbench.study.snapshot import reproduction_counts
 from jointbench.study.studies import get_study
@@ -289,7 +290,7 @@ def calibration_sentence(calibration: pd.DataFrame) -> str:
             text = f"{method} is calibrated at every Nt from {good[0]} on"
             others = rows[rows["n_frames"] < good[0]]
             notes = [
-                f"{o.status} at Nt = {o.n_frames} (coverage {o.inside_95:.3g})"
+                f"{o.status} at Nt = {o.n_frames} (coverage {number(o.inside_95)})"
                 for o in others.itertuples()
             ]
             parts.append(text + (f", {', '.join(notes)}" if notes else ""))

@@ -22,6 +22,7 @@ from jointbench.figures.common import (
     method_style,
     pyplot,
 )
+from jointbench.study.published import NOT_APPLICABLE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -351,7 +352,7 @@ def speed_wording(ours_s: float, paper_s: float) -> str:
     method that takes twice the paper's time never reads as "0.5× faster" (or, rounded, "0×").
     """
     if not (np.isfinite(ours_s) and np.isfinite(paper_s)) or ours_s <= 0 or paper_s <= 0:
-        return "not comparable"
+        return NOT_APPLICABLE
     ratio = paper_s / ours_s
     if 1 / 1.05 <= ratio <= 1.05:
         return "as fast (within 5 %)"
@@ -435,7 +436,7 @@ def timing_note(environment: str | None = None) -> str:
         "and file I/O excluded; a first fit before the timed ones pays for compilation and "
         f"first-call imports, its time in the job's log), on this run's machine ({environment}). "
         "Other jobs of the run (snakemake -j) may have shared the CPUs, so times are indicative. "
-        "Paper: mean times, MATLAB 6.5 on a 3 GHz Pentium 4. speedup_median = paper_matlab_s / "
-        "median_s and speedup_mean = paper_matlab_s / mean_s; above 1 ours is faster. The "
-        "median is the robust comparison."
+        "Paper: mean times, MATLAB 6.5 on a 3 GHz Pentium 4. Speed-up: the paper's time over "
+        "ours (by our median or mean); above 1 ours is faster. The median is the robust "
+        "comparison."
     )

@@ -113,8 +113,13 @@ def table1(collected: pd.DataFrame, paper: pd.DataFrame) -> pd.DataFrame:
     return table.rename(columns=TABLE1_LABELS)
 
 
-#: :func:`table1`'s column headers (GM = gauss-markov, paper C's method; GM-f0 =
-#: gauss-markov-frame0), keyed by the quantity each holds.
+#: The short names :data:`TABLE1_LABELS` uses, in words for the table's note.
+TABLE1_ABBREVIATIONS = (
+    f"GM: {METHOD}, paper C's method; GM-f0: {EXTENDED}, which also models the noise of the "
+    "frame-0 poses each body frame is pinned to."
+)
+#: :func:`table1`'s column headers (:data:`TABLE1_ABBREVIATIONS`), keyed by the quantity each
+#: holds.
 TABLE1_LABELS = {
     "n_frames": "frames used, Nt",
     "paper_sqrt_trace_cov_mm": "paper: sqrt(tr Wc) (mm)",

@@ -9,7 +9,7 @@ function that measures every published value and claim from the collected result
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
 
@@ -28,11 +28,14 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Table:
-    """A rendered table: its rows, and the title and note of its Markdown form."""
+    """A rendered table: its rows, the title and note of its Markdown form, and ``headers``,
+    the table's own headers for people by column name (others are written by
+    :func:`jointbench.study.formatting.header`)."""
 
     frame: pd.DataFrame
     title: str = ""
     note: str = ""
+    headers: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

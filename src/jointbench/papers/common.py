@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 from jointbench.papers.base import Inputs, Measured, Output, Table
-from jointbench.study.published import claims_rows
+from jointbench.study.published import NOT_APPLICABLE, claims_rows, status_legend
 
 __all__ = ["claims_headline", "claims_output"]
 
@@ -13,7 +13,7 @@ __all__ = ["claims_headline", "claims_output"]
 def claims_headline(tables: Mapping) -> str:
     """How many of a paper's tested claims reproduced, from its claims table."""
     (table,) = tables.values()
-    tested = table[table["status"] != "not applicable"]
+    tested = table[table["status"] != NOT_APPLICABLE]
     return (
         f"{int((tested['status'] == 'reproduced').sum())} of {len(tested)} claims "
         "reproduced (criteria and reasons in the claims table)."
@@ -29,6 +29,8 @@ def claims_output(
         return Table(
             claims_rows(inputs.published, measure(inputs)),
             title=f"Paper {inputs.published['paper']} claims, recomputed from our results",
+            note=f"{status_legend()}. margin: how far inside or outside its criterion the "
+            "reproduced value lies.",
         )
 
     return Output(

@@ -16,6 +16,7 @@ from jointbench.figures import paper_a as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
 from jointbench.simulate.cmc import marker_positions
+from jointbench.study.formatting import number
 from jointbench.study.studies import get_study
 from jointbench.study.tolerance import wilson_interval
 
@@ -379,7 +380,7 @@ def _timings(collected: pd.DataFrame, published: dict) -> dict[str, Measured]:
         # The paper's value is a mean, so ours is too; the words compare medians (robust).
         f"A-T2-{method}": Measured(
             float(row.mean_s),
-            f"{row.mean_s:.3g} s (median {row.median_s:.3g} s: {row.vs_paper_median})",
+            f"{number(row.mean_s)} s (median {number(row.median_s)} s: {row.vs_paper_median})",
         )
         for method, row in ours.iterrows()
     }
@@ -443,7 +444,20 @@ def _table2(inputs: Inputs) -> Table:
         draw.table2(inputs.collected, _published_seconds(inputs.published)),
         title="Paper A Table 2: computation time per trial (trials where BC converged)",
         note=draw.timing_note(),
+        headers=TABLE2_HEADERS,
     )
+
+
+#: Table 2's headers for people, with units.
+TABLE2_HEADERS = {
+    "mean_s": "our mean time per trial (s)",
+    "median_s": "our median time per trial (s)",
+    "paper_matlab_s": "paper's mean MATLAB time per trial (s)",
+    "speedup_median": "speed-up by median (×)",
+    "speedup_mean": "speed-up by mean (×)",
+    "vs_paper_median": "against the paper, by median",
+    "vs_paper_mean": "against the paper, by mean",
+}
 
 
 def _speedups(tables) -> str:

@@ -178,7 +178,7 @@ def _table1(inputs: Inputs) -> Table:
     table.insert(
         table.columns.get_loc("difference") + 1,
         "relative_difference",
-        (table["difference"] / table["published"]).round(3),
+        table["difference"] / table["published"],
     )
     floor_only = (table["published"] < BREAKDOWN_DEG) & (
         table["difference"].abs() > 0.25 * table["published"].abs()
@@ -188,13 +188,25 @@ def _table1(inputs: Inputs) -> Table:
     return Table(
         table,
         title="Paper B Table 1: mean AoR angular error (degrees), published vs reproduced",
+        headers=TABLE1_HEADERS,
         note=f"{within} of {len(table)} cells within tolerance, {floor_within} of them only "
         "through the 2° floor (more than 25 % off the published mean). Tolerance: below 20° "
         "within max(2°, 25 % of published); from 20° (the method has broken down) at least 20° "
-        "and within 15°. margin: how far inside (+) or outside (−) the tolerance, in degrees; "
-        "relative_difference: (reproduced − published) / published. "
+        "and within 15°. Margin: how far inside or outside the tolerance, in degrees; "
+        "relative difference: (ours − published) / published. "
         f"{inputs.published['notes']['table1']}",
     )
+
+
+#: Table 1's headers for people, with units.
+TABLE1_HEADERS = {
+    "published": "published mean (°)",
+    "reproduced_mean": "our mean (°)",
+    "reproduced_sd": "our SD (°)",
+    "difference": "difference (°)",
+    "relative_difference": "relative difference",
+    "margin": "margin (°)",
+}
 
 
 def _table1_headline(tables) -> str:

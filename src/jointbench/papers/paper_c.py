@@ -168,7 +168,7 @@ def _table1(inputs: Inputs) -> Table:
     return Table(
         draw.table1(inputs.collected, published_table1(inputs.published)),
         title="Paper C Table 1: predicted uncertainty and validation index vs frames used",
-        note=inputs.published["notes"]["table1"],
+        note=f"{draw.TABLE1_ABBREVIATIONS} {inputs.published['notes']['table1']}",
     )
 
 

@@ -24,6 +24,7 @@ from jointbench.study.tolerance import describe, evaluate, is_compared
 
 __all__ = [
     "COLUMNS",
+    "NOT_APPLICABLE",
     "STATUSES",
     "claims_rows",
     "comparison_rows",
@@ -31,6 +32,8 @@ __all__ = [
     "failure_message",
     "load_published",
     "matches_design",
+    "reader_order",
+    "status_legend",
     "unexplained",
 ]
 
@@ -60,7 +63,15 @@ CLAIM_COLUMNS = [
     "margin",
     "reason",
 ]
-STATUSES = ("reproduced", "not reproduced", "not applicable")
+#: The one word for each status of a published value or claim, and what it means: the tables'
+#: notes and the README's summary say it with these words.
+STATUSES = {
+    "reproduced": "within its tolerance (a claim: its sentence holds as tested)",
+    "not reproduced": "outside its tolerance; the reason says why",
+    "not applicable": "given no verdict (the published value is shown beside ours without a "
+    "tolerance, or this run could not measure it; the reason says which)",
+}
+NOT_APPLICABLE = "not applicable"
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"
 OFF_DESIGN = "not enforced: this run's grid or trial count differs from the paper's design"
 NOT_IN_RUN = "not measured in this run (method, condition or study not run)"
@@ -83,7 +94,7 @@ def _published_text(value: object) -> str:
 def _value_criterion(entry: Mapping) -> str:
     """A published value's criterion when its entry states none: its tolerance in words."""
     if not is_compared(entry["tolerance"]):
-        return "shown beside ours, not compared"
+        return "none: the published value is shown beside ours"
     return f"reproduced value {describe(entry['tolerance'])} of the published"
 
 
@@ -91,13 +102,13 @@ def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
     """``(status, margin, reason)`` of one entry given its measurement (or None)."""
     tolerance = entry["tolerance"]
     if not is_compared(tolerance):
-        return "not applicable", "", entry.get("not_applicable", entry["tolerance_reason"])
+        return NOT_APPLICABLE, "", entry.get("not_applicable", entry["tolerance_reason"])
     if measured is None:
-        return "not applicable", "", entry.get("not_applicable", NOT_IN_RUN)
+        return NOT_APPLICABLE, "", entry.get("not_applicable", NOT_IN_RUN)
     try:
         verdict = evaluate(tolerance, entry["published"], measured.value)
     except ValueError as error:
-        return "not applicable", "", f"cannot evaluate: {error}"
+        return NOT_APPLICABLE, "", f"cannot evaluate: {error}"
     if verdict.holds:
         return "reproduced", verdict.margin_text, ""
     return "not reproduced", verdict.margin_text, entry.get("deviation", UNEXPLAINED)
@@ -142,6 +153,19 @@ def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     missing = rows["reproduced"] == ""
     rows.loc[missing, "reproduced"] = "cannot evaluate: " + NOT_IN_RUN
     return rows[CLAIM_COLUMNS]
+
+
+def status_legend() -> str:
+    """Every status in its one word and what it means, for a table's note."""
+    return "status: " + "; ".join(f"{word}, {meaning}" for word, meaning in STATUSES.items())
+
+
+def reader_order(comparison: pd.DataFrame) -> pd.DataFrame:
+    """``comparison`` in the order a reader wants it: the claims with a verdict, then the values
+    with a verdict, then the rows without one (:data:`NOT_APPLICABLE`), claims before values;
+    each part in the papers' order."""
+    key = 2 * (comparison["status"] == NOT_APPLICABLE) + (comparison["entry"] != "claim")
+    return comparison.iloc[key.argsort(kind="stable")].reset_index(drop=True)
 
 
 def unexplained(comparison: pd.DataFrame) -> pd.DataFrame:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.study.published import NOT_APPLICABLE, STATUSES
 from jointbench.study.scoring import ERROR_COLUMN
 from jointbench.study.studies import get_study
 from jointbench.study.summary import summarise
@@ -99,20 +100,34 @@ def compare_snapshot(current: pd.DataFrame, snapshot: pd.DataFrame) -> list[str]
     return problems
 
 
+#: A count cell of :func:`reproduction_counts` with nothing tested.
+NONE_TESTED = "none tested"
+
+
+def _reproduced_of_tested(rows: pd.DataFrame) -> str:
+    """``"6 / 11"``: reproduced of those with a verdict, or :data:`NONE_TESTED`."""
+    tested = rows[rows["status"] != NOT_APPLICABLE]
+    if tested.empty:
+        return NONE_TESTED
+    return f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}"
+
+
 def reproduction_counts(comparison: pd.DataFrame, titles: Mapping[str, str]) -> pd.DataFrame:
-    """Per paper: values and claims reproduced out of those tested, and how many are not
-    comparable. ``titles`` maps each paper's letter to the label shown."""
+    """Per paper: values and claims reproduced out of those with a verdict, and how many rows
+    are :data:`~jointbench.study.published.NOT_APPLICABLE`. ``titles`` maps each paper's letter
+    to the label shown."""
     rows = []
     for paper, part in comparison.groupby("paper", sort=True):
-        row = {"paper": titles.get(paper, paper)}
-        for entry, column in (
-            ("value", "published values reproduced"),
-            ("claim", "claims reproduced"),
-        ):
-            tested = part[(part["entry"] == entry) & (part["status"] != "not applicable")]
-            row[column] = f"{int((tested['status'] == 'reproduced').sum())} / {len(tested)}"
-        row["not comparable"] = str(int((part["status"] == "not applicable").sum()))
-        rows.append(row)
+        rows.append(
+            {
+                "paper": titles.get(paper, paper),
+                "published values reproduced": _reproduced_of_tested(
+                    part[part["entry"] == "value"]
+                ),
+                "claims reproduced": _reproduced_of_tested(part[part["entry"] == "claim"]),
+                NOT_APPLICABLE: str(int((part["status"] == NOT_APPLICABLE).sum())),
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -123,7 +138,9 @@ def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) ->
     lines += ["| " + " | ".join(row) + " |" for row in counts.astype(str).values.tolist()]
     return (
         "**Reproduction summary** (generated from `results/tables/published_comparison.csv`; "
-        "every deviation has its reason there):\n\n" + "\n".join(lines)
+        "every deviation has its reason there). A cell such as 6 / 11 counts the values or "
+        "claims reproduced (within their tolerance) of those given a verdict; "
+        f"*{NOT_APPLICABLE}*: {STATUSES[NOT_APPLICABLE]}.\n\n" + "\n".join(lines)
     )
 
 

@@ -23,7 +23,8 @@ part of a compound measurement it reads):
 ``m`` and ``p`` may be numbers or equal-length lists (elementwise, all must hold); ``v`` may be
 a number or a list of the same length. The **margin** is how far inside (positive) or outside
 (negative) the tolerance the worst element lies, in the tolerance's own units (mm, degrees,
-shares, counts, or the factor for ``factor``).
+shares, counts, or the factor for ``factor``); its text says it in words ("1.70 inside",
+"3 trials outside", "on the edge"; an ``all`` names each part: "LS worst share: on the edge").
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
+
+from jointbench.study.formatting import margin_words, words
 
 __all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate", "wilson_interval"]
 
@@ -61,7 +64,7 @@ def _same_length(measured: np.ndarray, published: np.ndarray) -> None:
 def _margin_verdict(margins: np.ndarray, unit: str = "") -> Verdict:
     worst = float(np.min(margins)) if margins.size else float("nan")
     holds = bool(margins.size and np.all(margins >= 0) and np.isfinite(worst))
-    return Verdict(holds, worst, f"{worst:+.3g}{unit}")
+    return Verdict(holds, worst, margin_words(worst, unit))
 
 
 def _abs(spec, published, measured) -> Verdict:
@@ -198,10 +201,14 @@ def _all(spec, published, measured) -> Verdict:
     holds = all(v.holds for v in verdicts)
     margin = min(v.margin for v in verdicts)
     text = "; ".join(
-        f"{part.get('of', describe(part))} {v.margin_text}"
-        for part, v in zip(spec, verdicts, strict=True)
+        f"{_part_name(part)}: {v.margin_text}" for part, v in zip(spec, verdicts, strict=True)
     )
     return Verdict(holds, margin, text)
+
+
+def _part_name(part: Mapping) -> str:
+    """A part of an ``all`` tolerance in words: the measurement it reads, else its bound."""
+    return words(part["of"]) if "of" in part else describe(part)
 
 
 TYPES: dict[str, Callable[[object, object, object], Verdict]] = {
@@ -258,10 +265,11 @@ def describe(tolerance: Mapping) -> str:
         "less_than": lambda v: f"< {v}",
         "range": lambda v: f"in [{v[0]:g}, {v[1]:g}]",
         "binomial95": lambda v: f"inside the 95 % binomial range (of {v['of_n']})",
-        NOT_COMPARED: lambda v: "shown, not compared",
+        NOT_COMPARED: lambda v: "none (shown beside ours)",
     }
     if kind == "all":
         return " and ".join(
-            f"{part['of']} {describe(part)}" if "of" in part else describe(part) for part in value
+            f"{words(part['of'])} {describe(part)}" if "of" in part else describe(part)
+            for part in value
         )
     return simple[kind](value)
