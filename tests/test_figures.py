@@ -519,3 +519,82 @@ def test_every_method_has_one_colour_of_its_own():
     assert method_style("mine") == method_style("mine")
     styles = method_styles([*known, *(f"new{i}" for i in range(6))])
     assert len({s["color"] for s in styles.values()}) == len(styles)
+
+
+# ----------------------------------------------------------------------------- figure defects
+
+
+def _published(paper):
+    from jointbench.study.published import load_published
+
+    return load_published(paper.published)
+
+
+def _fig3_on_one_trial():
+    collected = _cmc(n_trials=1)
+    rows = collected[
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+    ]
+    t = np.linspace(0, 4 * np.pi, 120)
+    markers = np.stack(
+        [np.stack([20 * np.cos(t), 20 * np.sin(t), 10 * k + 0 * t], -1) for k in range(3)], 1
+    )
+    example = {"LS": 10.9, "NM": 0.3, "MA": 3.7, "IS": 1.4, "BC": 3.7}
+    return paper_a.fig3(markers, np.zeros(3), rows, example), rows
+
+
+def _method_colours():
+    from matplotlib.colors import to_rgb
+
+    return {to_rgb(method_style(m)["color"]) for m in paper_a.PAPER_METHODS}
+
+
+def test_fig3_errors_are_points_on_a_log_axis_not_bars():
+    from matplotlib.colors import to_rgb
+    from matplotlib.patches import Rectangle
+
+    fig, rows = _fig3_on_one_trial()
+    _, errors = fig.axes
+    assert errors.get_yscale() == "log"
+    # On a log axis a bar's length means nothing: no bars at all.
+    assert not [p for p in errors.patches if isinstance(p, Rectangle)]
+    drawn = {round(float(y), 9) for line in errors.lines for y in line.get_ydata()}
+    ours = rows.loc[rows["method"].isin(paper_a.PAPER_METHODS), "error_mm"]
+    assert {round(float(e), 9) for e in ours} <= drawn
+    # The legend's "this trial" entry is not in any method's colour.
+    entries = dict(zip(errors.get_legend().get_texts(), errors.get_legend().legend_handles))
+    (this_trial,) = [h for t, h in entries.items() if t.get_text().startswith("this trial")]
+    assert to_rgb(this_trial.get_markerfacecolor()) not in _method_colours()
+    plt.close(fig)
+
+
+def test_fig3_estimates_are_hollow_so_one_does_not_hide_another():
+    fig, _ = _fig3_on_one_trial()
+    view = fig.axes[0]
+    names = paper_a.PAPER_METHODS
+    estimates = [c for c in view.collections if c.get_label().split(":")[0] in names]
+    assert len(estimates) == 5
+    for scatter in estimates:
+        assert (scatter.get_facecolor()[:, 3] == 0).all(), scatter.get_label()
+    plt.close(fig)
+
+
+def test_fig4_draws_the_papers_stated_values_read_from_its_published_values():
+    from jointbench.papers.paper_a import PAPER
+
+    published = _published(PAPER)
+    claims = {c["id"]: c["published"] for c in published["claims"]}
+    stated = paper_a.fig4_stated(published)
+    assert sorted(stated["value_mm"]) == sorted([*claims["A3"], claims["A9"]])
+    fig = paper_a.fig4(_cmc(), published)
+    m_panel, h_panel = fig.axes
+    m_values = {round(float(y), 6) for line in m_panel.lines for y in line.get_ydata()}
+    h_values = {round(float(y), 6) for line in h_panel.lines for y in line.get_ydata()}
+    assert set(claims["A3"]) <= m_values
+    assert claims["A9"] in h_values
+    assert m_panel.get_ylim()[1] > max(claims["A3"])
+    texts = [t.get_text() for t in m_panel.texts]
+    assert f"paper: all > {claims['A3'][0]:g}" in texts
+    plt.close(fig)

@@ -415,7 +415,7 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
 
 
 def _fig4(inputs: Inputs):
-    return draw.fig4(inputs.collected)
+    return draw.fig4(inputs.collected, inputs.published)
 
 
 def _fig3(inputs: Inputs):
