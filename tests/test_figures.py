@@ -598,3 +598,105 @@ def test_fig4_draws_the_papers_stated_values_read_from_its_published_values():
     texts = [t.get_text() for t in m_panel.texts]
     assert f"paper: all > {claims['A3'][0]:g}" in texts
     plt.close(fig)
+
+
+def _legends_off_the_data(fig) -> list[str]:
+    """The data points (of every line, in display coordinates) that some legend of ``fig``
+    covers, as "axes title: x, y"; empty when every legend is off the data."""
+    fig.canvas.draw()
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend()] + list(fig.legends)
+    boxes = [legend.get_window_extent() for legend in legends]
+    covered = []
+    for ax in fig.axes:
+        for line in ax.lines:
+            xy = np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
+            xy = xy[np.isfinite(xy).all(axis=1)]
+            for x, y in ax.transData.transform(xy) if len(xy) else []:
+                if any(box.contains(x, y) for box in boxes):
+                    covered.append(f"{ax.get_title()}: {x:.0f}, {y:.0f}")
+    return covered
+
+
+def _paper_b_cells():
+    from jointbench.papers.paper_b import PAPER
+
+    entries = [e for e in _published(PAPER)["values"] if e["id"].startswith("B-T1-")]
+    keys = [e["id"].removeprefix("B-T1-").split("-") for e in entries]
+    cells = pd.DataFrame(keys, columns=paper_b.CELL)
+    cells["fe_rom_deg"] = cells["fe_rom_deg"].astype(int)
+    cells["aa_ratio"] = cells["aa_ratio"].astype(float)
+    cells["published"] = [e["published"] for e in entries]
+    cells["within_tolerance"] = [i % 10 != 0 for i in range(len(cells))]
+    return cells
+
+
+def test_fig5_legend_covers_no_data():
+    # The planar curve's rise from ratio 0.1 to 0.3 runs through the axes' left middle.
+    collected = _hinge()
+    planar = collected["method"] == "planar"
+    collected.loc[planar, "error_deg"] = 10 + 100 * collected.loc[planar, "aa_ratio"]
+    for cells in (None, _paper_b_cells()):
+        fig = paper_b.fig5(collected, *([] if cells is None else [cells]))
+        assert _legends_off_the_data(fig) == []
+        plt.close(fig)
+
+
+def test_fig5_draws_every_published_mean_and_rings_the_cells_outside_tolerance():
+    cells = _paper_b_cells()
+    fig = paper_b.fig5(_hinge(), cells)
+    for ax, protocol in zip(fig.axes, ("knee", "mcp"), strict=True):
+        drawn = {round(float(y), 6) for line in ax.lines for y in line.get_ydata()}
+        published = cells.loc[cells["protocol"] == protocol, "published"]
+        assert {round(float(v), 6) for v in published} <= drawn
+        rings = [line for line in ax.lines if line.get_markeredgecolor() == "red"]
+        missed = cells[(cells["protocol"] == protocol) & ~cells["within_tolerance"]]
+        assert sum(len(line.get_xdata()) for line in rings) == len(missed)
+    within = int(cells["within_tolerance"].sum())
+    assert f"{within} of {len(cells)} Table 1 means within tolerance" in fig.get_suptitle()
+    assert "mcp" not in " ".join(ax.get_title() for ax in fig.axes)
+    plt.close(fig)
+
+
+def _fig2_examples():
+    t = np.linspace(-0.5, 0.5, 60)
+    markers = np.stack(
+        [
+            np.stack([r * np.cos(t), r * np.sin(t), 20.0 * k + 0 * t], -1)
+            for k, r in enumerate((60, 80, 70))
+        ],
+        1,
+    )
+    truth = {"axis_point": [0.0, 0.0, 0.0], "axis_direction": [0.0, 0.0, 1.0]}
+    fits = {
+        "planar": (np.zeros(3), np.array([0.3, 0.0, 1.0])),
+        "radial": (np.zeros(3), np.array([0.0, 0.2, 1.0])),
+        "combined": (np.zeros(3), np.array([0.0, 0.0, 1.0])),
+    }
+    # The second row's trial is smaller and tilted: its planes face another way.
+    tilted = markers[..., [2, 1, 0]] * 0.5
+    tilted_fits = {m: (p, d[[2, 1, 0]]) for m, (p, d) in fits.items()}
+    tilted_truth = {"axis_point": [0.0, 0.0, 0.0], "axis_direction": [1.0, 0.0, 0.0]}
+    return [("a", markers, truth, fits), ("b", tilted, tilted_truth, tilted_fits)]
+
+
+def test_fig2_shares_axis_limits_within_a_row():
+    fig = paper_b.fig2(_fig2_examples())
+    for row in (fig.axes[:3], fig.axes[3:]):
+        for get in ("get_xlim", "get_ylim", "get_zlim"):
+            limits = {tuple(np.round(getattr(ax, get)(), 9)) for ax in row}
+            assert len(limits) == 1, (get, limits)
+    plt.close(fig)
+
+
+def test_fig2_draws_each_cost_in_one_colour_in_every_row():
+    fig = paper_b.fig2(_fig2_examples())
+    for column in range(3):
+        colours = {
+            tuple(np.round(face, 6))
+            for ax in fig.axes[column::3]
+            for surface in ax.collections
+            if isinstance(surface, Poly3DCollection)
+            for face in surface.get_facecolor()
+        }
+        assert len(colours) <= 1, (column, colours)
+    plt.close(fig)

@@ -203,7 +203,7 @@ def _table1_headline(tables) -> str:
 
 
 def _fig5(inputs: Inputs):
-    return draw.fig5(inputs.collected)
+    return draw.fig5(inputs.collected, _table1_cells(inputs))
 
 
 def _fig2(inputs: Inputs):
@@ -213,7 +213,7 @@ def _fig2(inputs: Inputs):
         markers = trials.segments["moving"][trial]
         fits = {method: fit_axis(markers, method) for method in METHODS}
         title = (
-            f"{condition['protocol']}, FE RoM {condition['fe_rom_deg']}°, "
+            f"{draw.protocol_name(condition['protocol'])}, FE RoM {condition['fe_rom_deg']}°, "
             f"AA/FE {condition['aa_ratio']}, trial {trial}"
         )
         examples.append((title, markers, metadata["truth"], fits))
