@@ -700,3 +700,57 @@ def test_fig2_draws_each_cost_in_one_colour_in_every_row():
         }
         assert len(colours) <= 1, (column, colours)
     plt.close(fig)
+
+
+#: The report shows a figure this wide [px]; every text of a figure must then be at least
+#: READABLE_PX tall (its font size in display pixels).
+REPORT_WIDTH_PX = 870
+READABLE_PX = 9.0
+
+
+def _text_px(fig) -> dict[str, float]:
+    """Every visible, non-empty text of ``fig`` and its font size [px] when the figure, cropped
+    as saved, is shown REPORT_WIDTH_PX wide."""
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    width_in = fig.get_tightbbox(renderer).padded(0.1).width
+    scale = REPORT_WIDTH_PX / (72 * width_in)
+    return {
+        text.get_text(): text.get_fontsize() * scale
+        for text in fig.findobj(Text)
+        if text.get_visible() and text.get_text().strip() and text.get_window_extent().width > 0
+    }
+
+
+def _hip_paper():
+    return pd.DataFrame(
+        [
+            {"n_frames": n, "sqrt_trace_cov_mm": 50.0 / n, "validation_index": 1.0}
+            for n in (4, 8, 16, 32, 75, 150, 300, 600, 1200)
+        ]
+    )
+
+
+def _paper_a_published():
+    from jointbench.papers.paper_a import PAPER
+
+    return _published(PAPER)
+
+
+PAPER_FIGURES = {
+    "paper_a_fig4": lambda: paper_a.fig4(_cmc(), _paper_a_published()),
+    "paper_a_fig3": lambda: _fig3_on_one_trial()[0],
+    "paper_b_fig5": lambda: paper_b.fig5(_hinge(), _paper_b_cells()),
+    "paper_b_fig2": lambda: paper_b.fig2(_fig2_examples()),
+    "paper_c_uncertainty": lambda: paper_c.uncertainty_figure(_hip(), _hip_paper()),
+}
+
+
+@pytest.mark.parametrize("name", PAPER_FIGURES)
+def test_paper_figure_text_is_readable_at_the_report_width(name):
+    fig = PAPER_FIGURES[name]()
+    small = {text: round(px, 1) for text, px in _text_px(fig).items() if px < READABLE_PX}
+    plt.close(fig)
+    assert small == {}

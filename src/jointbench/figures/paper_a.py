@@ -18,6 +18,7 @@ from jointbench.estimators import registry
 from jointbench.figures.common import (
     display_limits,
     equal_3d_limits,
+    few_3d_ticks,
     median_trial,
     method_style,
     pyplot,
@@ -318,7 +319,7 @@ def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
             f"marker {p + 1}",
             xy=centre,
             xytext=best,
-            fontsize=8,
+            fontsize=9,
             ha="left" if directions[choice, 0] >= 0 else "right",
             va="center",
             arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6},
@@ -497,12 +498,13 @@ def fig3(
     drawn = estimates[in_view]
     equal_3d_limits(ax, np.vstack([markers.reshape(-1, 3), truth[None], drawn]))
     _label_markers(ax, markers, np.vstack([truth[None], drawn]))
-    ax.set_xlabel("x (mm)", fontsize=8)
-    ax.set_ylabel("y (mm)", fontsize=8)
-    ax.set_zlabel("z (mm)", fontsize=8)
-    ax.tick_params(labelsize=7)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(-0.05, 1.0), title="estimate: error")
-    ax.set_title("(a) trajectories, true CoR and estimates (equal axis scales)", fontsize=9)
+    ax.set_xlabel("x (mm)", fontsize=9)
+    ax.set_ylabel("y (mm)", fontsize=9)
+    ax.set_zlabel("z (mm)", fontsize=9)
+    few_3d_ticks(ax)
+    ax.tick_params(labelsize=8.5)
+    ax.legend(fontsize=8.5, loc="upper left", bbox_to_anchor=(-0.05, 1.0), title="estimate: error")
+    ax.set_title("(a) trajectories, true CoR and estimates (equal axis scales)", fontsize=10)
 
     _error_points(fig.add_subplot(grid[0, 1]), methods, by_method["error_mm"], published)
     title = "Paper A Fig 3 reproduced: M set, ±5° RoM, 1.0 mm noise, one trial"

@@ -12,7 +12,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import equal_3d_limits, median_trial, method_style, pyplot
+from jointbench.figures.common import (
+    equal_3d_limits,
+    few_3d_ticks,
+    median_trial,
+    method_style,
+    pyplot,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -282,7 +288,7 @@ def fig2(examples) -> Figure:
     trajectory (planes, cylinders, circles), its axis, and the true axis drawn on top.
     """
     methods = [m for m in PAPER_METHODS if all(m in e[3] for e in examples)]
-    fig = pyplot().figure(figsize=(4.1 * len(methods), 4.1 * len(examples)))
+    fig = pyplot().figure(figsize=(3.6 * len(methods), 3.9 * len(examples)))
     for row, (title, markers, truth, fits) in enumerate(examples):
         true_point = np.asarray(truth["axis_point"], dtype=float)
         true_dir = np.asarray(truth["axis_direction"], dtype=float)
@@ -316,14 +322,15 @@ def fig2(examples) -> Figure:
             ax.plot(*true_line.T, "k--", lw=1.6, zorder=5, label="true axis")
             row_axes.append(ax)
             row_drawn += [*drawn, true_line, fitted]
-            ax.tick_params(labelsize=6, pad=0)
-            ax.set_xlabel("x (mm)", fontsize=7, labelpad=-4)
-            ax.set_ylabel("y (mm)", fontsize=7, labelpad=-4)
-            ax.set_zlabel("z (mm)", fontsize=7, labelpad=-4)
+            few_3d_ticks(ax)
+            ax.tick_params(labelsize=9, pad=0)
+            ax.set_xlabel("x (mm)", fontsize=9, labelpad=2)
+            ax.set_ylabel("y (mm)", fontsize=9, labelpad=2)
+            ax.set_zlabel("z (mm)", fontsize=9, labelpad=2)
             error = axis_error_deg(direction, true_dir)
             ax.set_title(
                 f"({'ab'[row]}) {title}\n{method} cost: {label}; axis error {error:.1f}°",
-                fontsize=8,
+                fontsize=9,
             )
         # One trial, three costs: the same limits across the row, so the models compare at
         # a glance. 3-D lines are not clipped to the axes: every drawn model must fit inside.
