@@ -754,3 +754,33 @@ def test_paper_figure_text_is_readable_at_the_report_width(name):
     small = {text: round(px, 1) for text, px in _text_px(fig).items() if px < READABLE_PX}
     plt.close(fig)
     assert small == {}
+
+
+#: Names of the code that a reader of a figure should never meet.
+INTERNAL_NAMES = ("mcp", "cmc", "hinge", "hip_sta", "center", "axis_point", "marker_set")
+
+
+@pytest.mark.parametrize("name", PAPER_FIGURES)
+def test_paper_figures_use_no_internal_names(name):
+    import re
+
+    fig = PAPER_FIGURES[name]()
+    texts = " ".join(_text_px(fig))
+    plt.close(fig)
+    found = [word for word in INTERNAL_NAMES if re.search(rf"\b{word}\b", texts)]
+    assert found == []
+
+
+def test_paper_c_panels_keep_their_width_and_legends_stay_apart():
+    fig = paper_c.uncertainty_figure(_hip(), _hip_paper())
+    fig.canvas.draw()
+    width = fig.get_tightbbox(fig.canvas.get_renderer()).width * fig.dpi
+    for ax in fig.axes:
+        # A panel squeezed by its legends shows Nt's tick labels on top of each other.
+        assert ax.get_window_extent().width > 0.33 * width, ax.get_title()
+    boxes = [legend.get_window_extent() for legend in fig.legends]
+    boxes += [ax.get_legend().get_window_extent() for ax in fig.axes if ax.get_legend()]
+    assert len(boxes) == 2
+    assert not boxes[0].overlaps(boxes[1])
+    assert _legends_off_the_data(fig) == []
+    plt.close(fig)

@@ -342,7 +342,7 @@ def fig2(examples) -> Figure:
         "grey dots = marker positions; equal axis scales",
         fontsize=10,
     )
-    fig.tight_layout()
+    fig.tight_layout(h_pad=3.0)
     return fig
 
 
