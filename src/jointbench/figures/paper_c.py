@@ -193,7 +193,7 @@ def _mark_not_converged(ax, coverage: pd.DataFrame, color) -> None:
             ax.annotate(
                 f"{missing} of {row.trials} not converged",
                 (row.n_frames, row.inside_95),
-                xytext=(10, -10),
+                xytext=(12, -24),
                 textcoords="offset points",
                 fontsize=9,
                 color=color,

@@ -247,7 +247,9 @@ PAPER = Paper(
             "figure",
             _fig5,
             caption="Reproduces paper B Fig 5: mean AoR angular error with minimum–maximum bars "
-            "for every condition, (a) knee, (b) index MCP.",
+            "for every condition, (a) knee, (b) index MCP; the paper's Table 1 mean of each "
+            "condition as a black dash, and our mean ringed in red where it is outside that "
+            "cell's tolerance.",
             summarises=("paper_b_table1",),
             headline=_table1_headline,
         ),
