@@ -519,3 +519,268 @@ def test_every_method_has_one_colour_of_its_own():
     assert method_style("mine") == method_style("mine")
     styles = method_styles([*known, *(f"new{i}" for i in range(6))])
     assert len({s["color"] for s in styles.values()}) == len(styles)
+
+
+# ----------------------------------------------------------------------------- figure defects
+
+
+def _published(paper):
+    from jointbench.study.published import load_published
+
+    return load_published(paper.published)
+
+
+def _fig3_on_one_trial():
+    collected = _cmc(n_trials=1)
+    rows = collected[
+        (collected["marker_set"] == "M")
+        & (collected["rom_deg"] == 5)
+        & (collected["noise_mm"] == 1.0)
+    ]
+    t = np.linspace(0, 4 * np.pi, 120)
+    markers = np.stack(
+        [np.stack([20 * np.cos(t), 20 * np.sin(t), 10 * k + 0 * t], -1) for k in range(3)], 1
+    )
+    example = {"LS": 10.9, "NM": 0.3, "MA": 3.7, "IS": 1.4, "BC": 3.7}
+    return paper_a.fig3(markers, np.zeros(3), rows, example), rows
+
+
+def _method_colours():
+    from matplotlib.colors import to_rgb
+
+    return {to_rgb(method_style(m)["color"]) for m in paper_a.PAPER_METHODS}
+
+
+def test_fig3_errors_are_points_on_a_log_axis_not_bars():
+    from matplotlib.colors import to_rgb
+    from matplotlib.patches import Rectangle
+
+    fig, rows = _fig3_on_one_trial()
+    _, errors = fig.axes
+    assert errors.get_yscale() == "log"
+    # On a log axis a bar's length means nothing: no bars at all.
+    assert not [p for p in errors.patches if isinstance(p, Rectangle)]
+    drawn = {round(float(y), 9) for line in errors.lines for y in line.get_ydata()}
+    ours = rows.loc[rows["method"].isin(paper_a.PAPER_METHODS), "error_mm"]
+    assert {round(float(e), 9) for e in ours} <= drawn
+    # The legend's "this trial" entry is not in any method's colour.
+    entries = dict(zip(errors.get_legend().get_texts(), errors.get_legend().legend_handles))
+    (this_trial,) = [h for t, h in entries.items() if t.get_text().startswith("this trial")]
+    assert to_rgb(this_trial.get_markerfacecolor()) not in _method_colours()
+    plt.close(fig)
+
+
+def test_fig3_estimates_are_hollow_so_one_does_not_hide_another():
+    fig, _ = _fig3_on_one_trial()
+    view = fig.axes[0]
+    names = paper_a.PAPER_METHODS
+    estimates = [c for c in view.collections if c.get_label().split(":")[0] in names]
+    assert len(estimates) == 5
+    for scatter in estimates:
+        assert (scatter.get_facecolor()[:, 3] == 0).all(), scatter.get_label()
+    plt.close(fig)
+
+
+def test_fig4_draws_the_papers_stated_values_read_from_its_published_values():
+    from jointbench.papers.paper_a import PAPER
+
+    published = _published(PAPER)
+    claims = {c["id"]: c["published"] for c in published["claims"]}
+    stated = paper_a.fig4_stated(published)
+    assert sorted(stated["value_mm"]) == sorted([*claims["A3"], claims["A9"]])
+    fig = paper_a.fig4(_cmc(), published)
+    m_panel, h_panel = fig.axes
+    m_values = {round(float(y), 6) for line in m_panel.lines for y in line.get_ydata()}
+    h_values = {round(float(y), 6) for line in h_panel.lines for y in line.get_ydata()}
+    assert set(claims["A3"]) <= m_values
+    assert claims["A9"] in h_values
+    assert m_panel.get_ylim()[1] > max(claims["A3"])
+    texts = [t.get_text() for t in m_panel.texts]
+    assert f"paper: all > {claims['A3'][0]:g}" in texts
+    plt.close(fig)
+
+
+def _legends_off_the_data(fig) -> list[str]:
+    """The data points (of every line, in display coordinates) that some legend of ``fig``
+    covers, as "axes title: x, y"; empty when every legend is off the data."""
+    fig.canvas.draw()
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend()] + list(fig.legends)
+    boxes = [legend.get_window_extent() for legend in legends]
+    covered = []
+    for ax in fig.axes:
+        for line in ax.lines:
+            xy = np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
+            xy = xy[np.isfinite(xy).all(axis=1)]
+            for x, y in ax.transData.transform(xy) if len(xy) else []:
+                if any(box.contains(x, y) for box in boxes):
+                    covered.append(f"{ax.get_title()}: {x:.0f}, {y:.0f}")
+    return covered
+
+
+def _paper_b_cells():
+    from jointbench.papers.paper_b import PAPER
+
+    entries = [e for e in _published(PAPER)["values"] if e["id"].startswith("B-T1-")]
+    keys = [e["id"].removeprefix("B-T1-").split("-") for e in entries]
+    cells = pd.DataFrame(keys, columns=paper_b.CELL)
+    cells["fe_rom_deg"] = cells["fe_rom_deg"].astype(int)
+    cells["aa_ratio"] = cells["aa_ratio"].astype(float)
+    cells["published"] = [e["published"] for e in entries]
+    cells["within_tolerance"] = [i % 10 != 0 for i in range(len(cells))]
+    return cells
+
+
+def test_fig5_legend_covers_no_data():
+    # The planar curve's rise from ratio 0.1 to 0.3 runs through the axes' left middle.
+    collected = _hinge()
+    planar = collected["method"] == "planar"
+    collected.loc[planar, "error_deg"] = 10 + 100 * collected.loc[planar, "aa_ratio"]
+    for cells in (None, _paper_b_cells()):
+        fig = paper_b.fig5(collected, *([] if cells is None else [cells]))
+        assert _legends_off_the_data(fig) == []
+        plt.close(fig)
+
+
+def test_fig5_draws_every_published_mean_and_rings_the_cells_outside_tolerance():
+    cells = _paper_b_cells()
+    fig = paper_b.fig5(_hinge(), cells)
+    for ax, protocol in zip(fig.axes, ("knee", "mcp"), strict=True):
+        drawn = {round(float(y), 6) for line in ax.lines for y in line.get_ydata()}
+        published = cells.loc[cells["protocol"] == protocol, "published"]
+        assert {round(float(v), 6) for v in published} <= drawn
+        rings = [line for line in ax.lines if line.get_markeredgecolor() == "red"]
+        missed = cells[(cells["protocol"] == protocol) & ~cells["within_tolerance"]]
+        assert sum(len(line.get_xdata()) for line in rings) == len(missed)
+    within = int(cells["within_tolerance"].sum())
+    assert f"{within} of {len(cells)} Table 1 means within tolerance" in fig.get_suptitle()
+    assert "mcp" not in " ".join(ax.get_title() for ax in fig.axes)
+    plt.close(fig)
+
+
+def _fig2_examples():
+    t = np.linspace(-0.5, 0.5, 60)
+    markers = np.stack(
+        [
+            np.stack([r * np.cos(t), r * np.sin(t), 20.0 * k + 0 * t], -1)
+            for k, r in enumerate((60, 80, 70))
+        ],
+        1,
+    )
+    truth = {"axis_point": [0.0, 0.0, 0.0], "axis_direction": [0.0, 0.0, 1.0]}
+    fits = {
+        "planar": (np.zeros(3), np.array([0.3, 0.0, 1.0])),
+        "radial": (np.zeros(3), np.array([0.0, 0.2, 1.0])),
+        "combined": (np.zeros(3), np.array([0.0, 0.0, 1.0])),
+    }
+    # The second row's trial is smaller and tilted: its planes face another way.
+    tilted = markers[..., [2, 1, 0]] * 0.5
+    tilted_fits = {m: (p, d[[2, 1, 0]]) for m, (p, d) in fits.items()}
+    tilted_truth = {"axis_point": [0.0, 0.0, 0.0], "axis_direction": [1.0, 0.0, 0.0]}
+    return [("a", markers, truth, fits), ("b", tilted, tilted_truth, tilted_fits)]
+
+
+def test_fig2_shares_axis_limits_within_a_row():
+    fig = paper_b.fig2(_fig2_examples())
+    for row in (fig.axes[:3], fig.axes[3:]):
+        for get in ("get_xlim", "get_ylim", "get_zlim"):
+            limits = {tuple(np.round(getattr(ax, get)(), 9)) for ax in row}
+            assert len(limits) == 1, (get, limits)
+    plt.close(fig)
+
+
+def test_fig2_draws_each_cost_in_one_colour_in_every_row():
+    fig = paper_b.fig2(_fig2_examples())
+    for column in range(3):
+        colours = {
+            tuple(np.round(face, 6))
+            for ax in fig.axes[column::3]
+            for surface in ax.collections
+            if isinstance(surface, Poly3DCollection)
+            for face in surface.get_facecolor()
+        }
+        assert len(colours) <= 1, (column, colours)
+    plt.close(fig)
+
+
+#: The report shows a figure this wide [px]; every text of a figure must then be at least
+#: READABLE_PX tall (its font size in display pixels).
+REPORT_WIDTH_PX = 870
+READABLE_PX = 9.0
+
+
+def _text_px(fig) -> dict[str, float]:
+    """Every visible, non-empty text of ``fig`` and its font size [px] when the figure, cropped
+    as saved, is shown REPORT_WIDTH_PX wide."""
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    width_in = fig.get_tightbbox(renderer).padded(0.1).width
+    scale = REPORT_WIDTH_PX / (72 * width_in)
+    return {
+        text.get_text(): text.get_fontsize() * scale
+        for text in fig.findobj(Text)
+        if text.get_visible() and text.get_text().strip() and text.get_window_extent().width > 0
+    }
+
+
+def _hip_paper():
+    return pd.DataFrame(
+        [
+            {"n_frames": n, "sqrt_trace_cov_mm": 50.0 / n, "validation_index": 1.0}
+            for n in (4, 8, 16, 32, 75, 150, 300, 600, 1200)
+        ]
+    )
+
+
+def _paper_a_published():
+    from jointbench.papers.paper_a import PAPER
+
+    return _published(PAPER)
+
+
+PAPER_FIGURES = {
+    "paper_a_fig4": lambda: paper_a.fig4(_cmc(), _paper_a_published()),
+    "paper_a_fig3": lambda: _fig3_on_one_trial()[0],
+    "paper_b_fig5": lambda: paper_b.fig5(_hinge(), _paper_b_cells()),
+    "paper_b_fig2": lambda: paper_b.fig2(_fig2_examples()),
+    "paper_c_uncertainty": lambda: paper_c.uncertainty_figure(_hip(), _hip_paper()),
+}
+
+
+@pytest.mark.parametrize("name", PAPER_FIGURES)
+def test_paper_figure_text_is_readable_at_the_report_width(name):
+    fig = PAPER_FIGURES[name]()
+    small = {text: round(px, 1) for text, px in _text_px(fig).items() if px < READABLE_PX}
+    plt.close(fig)
+    assert small == {}
+
+
+#: Names of the code that a reader of a figure should never meet.
+INTERNAL_NAMES = ("mcp", "cmc", "hinge", "hip_sta", "center", "axis_point", "marker_set")
+
+
+@pytest.mark.parametrize("name", PAPER_FIGURES)
+def test_paper_figures_use_no_internal_names(name):
+    import re
+
+    fig = PAPER_FIGURES[name]()
+    texts = " ".join(_text_px(fig))
+    plt.close(fig)
+    found = [word for word in INTERNAL_NAMES if re.search(rf"\b{word}\b", texts)]
+    assert found == []
+
+
+def test_paper_c_panels_keep_their_width_and_legends_stay_apart():
+    fig = paper_c.uncertainty_figure(_hip(), _hip_paper())
+    fig.canvas.draw()
+    width = fig.get_tightbbox(fig.canvas.get_renderer()).width * fig.dpi
+    for ax in fig.axes:
+        # A panel squeezed by its legends shows Nt's tick labels on top of each other.
+        assert ax.get_window_extent().width > 0.33 * width, ax.get_title()
+    boxes = [legend.get_window_extent() for legend in fig.legends]
+    boxes += [ax.get_legend().get_window_extent() for ax in fig.axes if ax.get_legend()]
+    assert len(boxes) == 2
+    assert not boxes[0].overlaps(boxes[1])
+    assert _legends_off_the_data(fig) == []
+    plt.close(fig)

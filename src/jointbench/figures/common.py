@@ -22,6 +22,7 @@ __all__ = [
     "DISPLAY_SPAN",
     "display_limits",
     "equal_3d_limits",
+    "few_3d_ticks",
     "median_trial",
     "method_style",
     "method_styles",
@@ -151,6 +152,15 @@ def equal_3d_limits(ax, points: np.ndarray, margin: float = 0.08) -> None:
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
     ax.set_box_aspect((1, 1, 1))
+
+
+def few_3d_ticks(ax, n: int = 4) -> None:
+    """At most about ``n`` ticks on each axis of a 3-D axes, so tick labels large enough to
+    read when the figure is shown small do not run into each other."""
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(n))
 
 
 def median_trial(errors: pd.Series) -> int:

@@ -18,6 +18,7 @@ from jointbench.estimators import registry
 from jointbench.figures.common import (
     display_limits,
     equal_3d_limits,
+    few_3d_ticks,
     median_trial,
     method_style,
     pyplot,
@@ -74,14 +75,100 @@ def _wide(means: pd.DataFrame) -> pd.DataFrame:
     return means.pivot_table(index=CONDITION, columns="method", values="mean_error_mm")
 
 
-def fig4(collected: pd.DataFrame) -> Figure:
-    """Mean CoR error per condition in the paper's two panels, (a) M set and (b) H set.
+#: Where Fig 4 draws the values paper A states about its Fig 4, by claim id: the conditions
+#: each published number belongs to (in the order of its list) and the methods it is about
+#: (empty: all five). A3 bounds every method's mean from below, A9 gives LS's mean.
+FIG4_STATED = {
+    "A3": (
+        (
+            {"marker_set": "M", "rom_deg": 5, "noise_mm": 1.0},
+            {"marker_set": "M", "rom_deg": 5, "noise_mm": 2.0},
+        ),
+        (),
+    ),
+    "A9": (({"marker_set": "H", "rom_deg": 15, "noise_mm": 1.0},), ("LS",)),
+}
+
+
+def fig4_stated(published: Mapping | None) -> pd.DataFrame:
+    """The values paper A states about its Fig 4, from its typed published values
+    (``published``: the paper's YAML as loaded, or None for none): one row per condition and
+    claim, columns marker_set, rom_deg, noise_mm, claim, methods (a tuple, empty for all),
+    value_mm and bound (True: the paper gives a lower bound, "greater than")."""
+    claims = {c["id"]: c for c in (published or {}).get("claims", [])}
+    rows = []
+    for claim, (conditions, methods) in FIG4_STATED.items():
+        if claim not in claims:
+            continue
+        values = np.atleast_1d(np.asarray(claims[claim]["published"], dtype=float))
+        bound = "greater_than" in claims[claim].get("tolerance", {})
+        for condition, value in zip(conditions, values, strict=True):
+            rows.append(
+                {**condition, "claim": claim, "methods": methods, "value_mm": value, "bound": bound}
+            )
+    columns = [*CONDITION, "claim", "methods", "value_mm", "bound"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+#: Colour of the paper's own values in Fig 4, a black no method uses.
+STATED_COLOR = "k"
+
+
+def _draw_stated(ax, stated: pd.DataFrame, x_of, offset_of) -> None:
+    """The paper's stated values on one panel of Fig 4: a lower bound ("all five > 25 mm") as
+    a black bar across the condition's methods with an arrow up, a method's value as a black
+    star at that method's position. ``x_of(rom, noise)`` and ``offset_of(method)`` place them."""
+    for row in stated.itertuples():
+        x = x_of(row.rom_deg, row.noise_mm)
+        if row.bound:
+            ax.plot([x - 0.4, x + 0.4], [row.value_mm] * 2, color=STATED_COLOR, lw=2.2)
+            ax.annotate(
+                "",
+                (x, row.value_mm * 1.6),
+                xytext=(x, row.value_mm),
+                arrowprops={"arrowstyle": "->", "color": STATED_COLOR, "lw": 1.4},
+            )
+            who = "all" if not row.methods else ", ".join(row.methods)
+            ax.annotate(
+                f"paper: {who} > {row.value_mm:g}",
+                (x, row.value_mm * 1.6),
+                ha="center",
+                va="bottom",
+                fontsize=9,
+                color=STATED_COLOR,
+            )
+            continue
+        for method in row.methods:
+            ax.plot(
+                x + offset_of(method),
+                row.value_mm,
+                "*",
+                ms=13,
+                mfc="none",
+                mec=STATED_COLOR,
+                mew=1.4,
+            )
+            ax.annotate(
+                f"paper: {method} ≈ {row.value_mm:g}",
+                (x + offset_of(method), row.value_mm),
+                xytext=(8, 6),
+                textcoords="offset points",
+                fontsize=9,
+                color=STATED_COLOR,
+            )
+
+
+def fig4(collected: pd.DataFrame, published: Mapping | None = None) -> Figure:
+    """Mean CoR error per condition in the paper's two panels, (a) M set and (b) H set, with
+    the values the paper states about its Fig 4 (:func:`fig4_stated` of ``published``, the
+    paper's typed published values) drawn in black where their conditions are.
 
     Within a panel the conditions run noise level by noise level, RoM increasing within each;
     a method's line joins its RoMs at one noise level. Methods are set slightly apart
     horizontally so lines that coincide (IS, BC and NM on the H set) stay visible. Where BC
     converged in fewer than all trials, the tick label carries the count the mean is over.
     """
+    stated = fig4_stated(published)
     means = condition_means(collected)
     sets = sorted(means["marker_set"].unique(), key=lambda s: "MH".find(s))
     noises = sorted(means["noise_mm"].unique())
@@ -90,20 +177,25 @@ def fig4(collected: pd.DataFrame) -> Figure:
     methods = [m for m in PAPER_METHODS if m in set(means["method"])]
     step, gap = 1.0, 0.8
     fig, axes = pyplot().subplots(
-        1, len(sets), figsize=(6.0 * len(sets), 4.6), sharey=True, squeeze=False
+        1, len(sets), figsize=(5.0 * len(sets), 4.6), sharey=True, squeeze=False
     )
+
+    def x_of(rom, noise) -> float:
+        return noises.index(noise) * (len(roms) * step + gap) + roms.index(rom) * step
+
+    def offset_of(method) -> float:
+        return (methods.index(method) - (len(methods) - 1) / 2) * 0.13
+
     for panel, (ax, marker_set) in enumerate(zip(axes[0], sets, strict=True)):
         part = means[means["marker_set"] == marker_set]
         ticks, labels = [], []
         for group, noise in enumerate(noises):
-            base = group * (len(roms) * step + gap)
+            base = x_of(roms[0], noise)
             cell = part[part["noise_mm"] == noise]
-            x_of = {rom: base + i * step for i, rom in enumerate(roms)}
             for index, method in enumerate(methods):
                 line = cell[cell["method"] == method].sort_values("rom_deg")
-                offset = (index - (len(methods) - 1) / 2) * 0.13
                 ax.plot(
-                    [x_of[r] + offset for r in line["rom_deg"]],
+                    [x_of(r, noise) + offset_of(method) for r in line["rom_deg"]],
                     line["mean_error_mm"],
                     label=method if group == 0 and panel == 0 else None,
                     lw=1.4,
@@ -113,7 +205,7 @@ def fig4(collected: pd.DataFrame) -> Figure:
                 )
             counts = cell.groupby("rom_deg")["n_trials"].max()
             for rom in roms:
-                ticks.append(x_of[rom])
+                ticks.append(x_of(rom, noise))
                 count = int(counts.get(rom, 0))
                 # Every label has two lines so both panels' x labels line up.
                 labels.append(f"±{rom:g}°\n" + (f"n={count}" if count < n_total else ""))
@@ -124,23 +216,45 @@ def fig4(collected: pd.DataFrame) -> Figure:
                 transform=ax.get_xaxis_transform(),
                 ha="center",
                 va="bottom",
-                fontsize=8,
+                fontsize=9,
             )
             if group:
                 ax.axvline(base - (step + gap) / 2, color="0.75", lw=0.8)
-        ax.set_xticks(ticks, labels, fontsize=8)
+        shown = stated[
+            (stated["marker_set"] == marker_set)
+            & stated["rom_deg"].isin(roms)
+            & stated["noise_mm"].isin(noises)
+        ]
+        _draw_stated(ax, shown, x_of, offset_of)
+        ax.set_xticks(ticks, labels, fontsize=9)
         ax.set_xlim(ticks[0] - 0.5, ticks[-1] + 0.5)
         ax.set_yscale("log")
         ax.grid(True, which="both", axis="y", alpha=0.3)
-        ax.set_xlabel("RoM, grouped by noise level")
-        ax.set_title(f"({'ab'[panel]}) {marker_set} marker set", fontsize=10, pad=16)
+        ax.set_xlabel("RoM (°), grouped by noise level")
+        ax.set_title(f"({'ab'[panel]}) {marker_set} marker set", fontsize=10, pad=18)
+    if not stated.empty:
+        # Room above the highest stated value for its arrow and label.
+        low, high = axes[0, 0].get_ylim()
+        axes[0, 0].set_ylim(low, max(high, 4 * stated["value_mm"].max()))
     axes[0, 0].set_ylabel("mean CoR error (mm, log scale)")
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    if not stated.empty:
+        handles.append(
+            pyplot().Line2D([], [], color=STATED_COLOR, marker="*", mfc="none", ms=10, lw=2.2)
+        )
+        names.append("paper A's stated values (§5.1.1, §6)")
     fig.legend(
-        loc="lower center", ncol=len(methods), fontsize=9, frameon=False, bbox_to_anchor=(0.5, 0)
+        handles,
+        names,
+        loc="lower center",
+        ncol=len(handles),
+        fontsize=9,
+        frameon=False,
+        bbox_to_anchor=(0.5, 0),
     )
     fig.suptitle(
-        "Paper A Fig 4 reproduced: mean CoR error over the trials where BC converged "
-        f"(n = trials averaged, where fewer than {n_total})",
+        "Paper A Fig 4 reproduced: mean CoR error over the trials where BC converged\n"
+        f"(n = trials averaged, where fewer than {n_total}); black: values the paper states",
         fontsize=10,
     )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
@@ -207,7 +321,7 @@ def _label_markers(ax, markers: np.ndarray, avoid: np.ndarray) -> None:
             f"marker {p + 1}",
             xy=centre,
             xytext=best,
-            fontsize=8,
+            fontsize=9,
             ha="left" if directions[choice, 0] >= 0 else "right",
             va="center",
             arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.6},
@@ -232,6 +346,97 @@ def _in_view(estimates: np.ndarray, data: np.ndarray) -> np.ndarray:
 def _mm(value: float) -> str:
     """An error for a label [mm]: one decimal, or 3 significant digits when that is long."""
     return f"{value:.1f}" if abs(value) < 1e5 else f"{value:.3g}"
+
+
+#: Colours of Fig 3(b)'s legend entries, grey so no method's colour stands for them: our
+#: trial's points carry each method's colour, the paper's example is hollow.
+THIS_TRIAL_COLOR = "0.25"
+PAPER_COLOR = "0.45"
+
+
+def _error_points(ax, methods: list[str], ours, published: Mapping) -> None:
+    """Each method's CoR error [mm] on this trial and in the paper's example, as points on a
+    log axis (a bar's length means nothing on one): ours filled in the method's colour and
+    marker, the paper's hollow beside it, a thin line between the two. An error beyond the
+    scale is drawn at its top as an up-pointing marker with its value printed."""
+    from matplotlib.lines import Line2D
+
+    ours = np.asarray(ours, dtype=float)
+    paper = np.array([published.get(m, np.nan) for m in methods], dtype=float)
+    low, high = display_limits(np.concatenate([ours, paper]))
+    x = np.arange(len(methods))
+    for position, method, value, theirs in zip(x, methods, ours, paper, strict=True):
+        style = method_style(method)
+        beyond = value > high
+        shown = min(value, high)
+        if np.isfinite(theirs):
+            ax.plot([position - 0.15, position + 0.15], [shown, theirs], color="0.7", lw=0.8)
+            ax.plot(position + 0.15, theirs, style["marker"], ms=8, mfc="white", mec=PAPER_COLOR)
+            ax.annotate(
+                f"{theirs:g}",
+                (position + 0.15, theirs),
+                xytext=(7, 0),
+                textcoords="offset points",
+                va="center",
+                fontsize=9,
+                color=PAPER_COLOR,
+            )
+        ax.plot(
+            position - 0.15,
+            shown,
+            "^" if beyond else style["marker"],
+            ms=9,
+            color=style["color"],
+            mec="k",
+            mew=0.5,
+        )
+        ax.annotate(
+            _mm(value) + (" (beyond the scale)" if beyond else ""),
+            (position - 0.15, shown),
+            xytext=(-7, 0),
+            textcoords="offset points",
+            ha="right",
+            va="center",
+            fontsize=9,
+        )
+    handles = [
+        Line2D(
+            [],
+            [],
+            ls="",
+            marker="o",
+            ms=8,
+            color=THIS_TRIAL_COLOR,
+            mec="k",
+            mew=0.5,
+            label="this trial (method's colour)",
+        ),
+        Line2D(
+            [],
+            [],
+            ls="",
+            marker="o",
+            ms=8,
+            mfc="white",
+            mec=PAPER_COLOR,
+            label="paper's Fig 3 trial",
+        ),
+    ]
+    ax.set_xticks(x, methods)
+    ax.set_xlim(-0.7, len(methods) - 0.3)
+    ax.set_yscale("log")
+    ax.set_ylabel("CoR error (mm, log scale)")
+    ax.set_ylim(low / 2, high * 2)
+    ax.grid(True, which="both", axis="y", alpha=0.3)
+    ax.legend(
+        handles=handles,
+        fontsize=9,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.08),
+        ncol=2,
+        frameon=False,
+    )
+    ax.set_title("(b) CoR error: this trial vs the paper's example", fontsize=10)
 
 
 def fig3(
@@ -278,56 +483,32 @@ def fig3(
             label = f"{method}: {_mm(row['error_mm'])} mm, outside the view"
             ax.scatter([], [], [], color=style["color"], marker=style["marker"], label=label)
             continue
+        # Hollow, each method its own shape: estimates a millimetre apart (BC's and NM's,
+        # often) both stay visible, one outline through the other.
         ax.scatter(
             row["center_x"],
             row["center_y"],
             row["center_z"],
-            color=style["color"],
+            facecolor="none",
+            edgecolor=style["color"],
             marker=style["marker"],
-            s=45,
-            edgecolor="k",
-            linewidth=0.4,
+            s=80,
+            linewidth=1.8,
             zorder=3,
             label=f"{method}: {_mm(row['error_mm'])} mm",
         )
     drawn = estimates[in_view]
     equal_3d_limits(ax, np.vstack([markers.reshape(-1, 3), truth[None], drawn]))
     _label_markers(ax, markers, np.vstack([truth[None], drawn]))
-    ax.set_xlabel("x (mm)", fontsize=8)
-    ax.set_ylabel("y (mm)", fontsize=8)
-    ax.set_zlabel("z (mm)", fontsize=8)
-    ax.tick_params(labelsize=7)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(-0.05, 1.0), title="estimate: error")
-    ax.set_title("(a) trajectories, true CoR and estimates (equal axis scales)", fontsize=9)
+    ax.set_xlabel("x (mm)", fontsize=9)
+    ax.set_ylabel("y (mm)", fontsize=9)
+    ax.set_zlabel("z (mm)", fontsize=9)
+    few_3d_ticks(ax)
+    ax.tick_params(labelsize=8.5)
+    ax.legend(fontsize=8.5, loc="upper left", bbox_to_anchor=(-0.05, 1.0), title="estimate: error")
+    ax.set_title("(a) trajectories, true CoR and estimates (equal axis scales)", fontsize=10)
 
-    bars = fig.add_subplot(grid[0, 1])
-    ours = by_method["error_mm"].to_numpy(dtype=float)
-    paper = np.array([published.get(m, np.nan) for m in methods], dtype=float)
-    x = np.arange(len(methods))
-    low, high = display_limits(np.concatenate([ours, paper]))
-    beyond = ours > high
-    # An error beyond the scale is a bar to its top, hatched, its value printed above it.
-    bars.bar(
-        x - 0.2,
-        np.minimum(ours, high),
-        0.4,
-        label="this trial",
-        color=[method_style(m)["color"] for m in methods],
-        hatch=["xx" if b else None for b in beyond],
-    )
-    bars.bar(x + 0.2, paper, 0.4, label="paper's Fig 3 trial", color="0.75")
-    for position, value in zip(x - 0.2, ours, strict=True):
-        shown = _mm(value) + (" (beyond the scale)" if value > high else "")
-        bars.text(position, min(value, high), shown, ha="center", va="bottom", fontsize=7)
-    for position, value in zip(x + 0.2, paper, strict=True):
-        if np.isfinite(value):
-            bars.text(position, value, f"{value:g}", ha="center", va="bottom", fontsize=7)
-    bars.set_xticks(x, methods)
-    bars.set_yscale("log")
-    bars.set_ylabel("CoR error (mm, log scale)")
-    bars.set_ylim(low / 2, high * 4)
-    bars.legend(fontsize=8, loc="upper right")
-    bars.set_title("(b) CoR error: this trial vs the paper's example", fontsize=9)
+    _error_points(fig.add_subplot(grid[0, 1]), methods, by_method["error_mm"], published)
     title = "Paper A Fig 3 reproduced: M set, ±5° RoM, 1.0 mm noise, one trial"
     fig.suptitle(title + (f"\n{chosen}" if chosen else ""), fontsize=10)
     fig.tight_layout()

@@ -12,7 +12,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from jointbench.figures.common import equal_3d_limits, median_trial, method_style, pyplot
+from jointbench.figures.common import (
+    equal_3d_limits,
+    few_3d_ticks,
+    median_trial,
+    method_style,
+    pyplot,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -26,6 +32,7 @@ __all__ = [
     "choose_fig2_trial",
     "fig2",
     "fig5",
+    "protocol_name",
     "table1",
 ]
 
@@ -65,12 +72,34 @@ def table1(collected: pd.DataFrame, cells: pd.DataFrame) -> pd.DataFrame:
     ]
 
 
-def fig5(collected: pd.DataFrame) -> Figure:
-    """Mean angular error with min–max bars for every condition: (a) knee, (b) index MCP."""
+#: How the protocols are called in titles.
+PROTOCOL_NAMES = {"knee": "knee", "mcp": "index MCP"}
+
+
+def protocol_name(protocol: str) -> str:
+    """A protocol's name for people ("index MCP" for ``mcp``); an unknown one keeps its name."""
+    return PROTOCOL_NAMES.get(protocol, protocol)
+
+
+#: Colours of the paper's values in Fig 5 and of a cell outside its tolerance; neither is a
+#: method's colour.
+PUBLISHED_COLOR = "k"
+MISSED_COLOR = "red"
+
+
+def fig5(collected: pd.DataFrame, cells: pd.DataFrame | None = None) -> Figure:
+    """Mean angular error with min–max bars for every condition: (a) knee, (b) index MCP.
+
+    ``cells`` (optional): the published Table 1 cells, columns :data:`CELL`, ``published``
+    (the paper's mean [°]) and ``within_tolerance``; each is drawn as a black dash at its
+    cell, and our mean of a cell outside its tolerance is ringed in red.
+    """
     stats = cell_statistics(collected[collected["method"].isin(PAPER_METHODS)])
+    if cells is not None:
+        stats = stats.merge(cells[[*CELL, "published", "within_tolerance"]], on=CELL, how="left")
     protocols = [p for p in ("knee", "mcp") if p in set(stats["protocol"])]
     fig, axes = pyplot().subplots(
-        1, len(protocols), figsize=(6.5 * len(protocols), 4.2), sharey=True, squeeze=False
+        1, len(protocols), figsize=(5.5 * len(protocols), 4.4), sharey=True, squeeze=False
     )
     conditions = (
         stats[["fe_rom_deg", "aa_ratio"]].drop_duplicates().sort_values(["fe_rom_deg", "aa_ratio"])
@@ -80,7 +109,7 @@ def fig5(collected: pd.DataFrame) -> Figure:
         for index, method in enumerate(PAPER_METHODS):
             line = stats[(stats["protocol"] == protocol) & (stats["method"] == method)]
             line = conditions.merge(line, on=["fe_rom_deg", "aa_ratio"], how="left")
-            x = np.arange(len(line)) + (index - 1) * 0.12
+            x = np.arange(len(line)) + (index - 1) * 0.17
             style = method_style(method, index)
             for fe in line["fe_rom_deg"].unique():
                 part = (line["fe_rom_deg"] == fe).to_numpy()
@@ -97,19 +126,63 @@ def fig5(collected: pd.DataFrame) -> Figure:
                     label=method if fe == line["fe_rom_deg"].iloc[0] else None,
                     **style,
                 )
+            if "published" in line:
+                ax.plot(x, line["published"], "_", ms=9, mew=2.0, color=PUBLISHED_COLOR, zorder=4)
+                # A cell the paper has no value for (NaN) is not ringed.
+                missed = line["within_tolerance"].eq(False).to_numpy()
+                ax.plot(
+                    x[missed],
+                    line["mean"][missed],
+                    "o",
+                    ms=10,
+                    mfc="none",
+                    mec=MISSED_COLOR,
+                    mew=1.4,
+                    zorder=5,
+                )
         for boundary in np.flatnonzero(np.diff(conditions["fe_rom_deg"].to_numpy())) + 0.5:
             ax.axvline(boundary, color="0.7", lw=0.8)
         for fe, group in conditions.reset_index(drop=True).groupby("fe_rom_deg"):
-            ax.text(group.index.to_numpy().mean(), 92, f"FE RoM {fe:g}°", ha="center", fontsize=8)
+            ax.text(
+                group.index.to_numpy().mean(),
+                1.01,
+                f"FE RoM {fe:g}°",
+                transform=ax.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize=9,
+            )
         ax.set_xticks(np.arange(len(labels)), labels)
-        ax.set_xlabel("AA RoM / FE RoM")
-        ax.set_ylim(0, 97)
+        ax.set_xlabel("AA RoM / FE RoM (ratio)")
+        # An axis error is at most 90°.
+        ax.set_ylim(0, 92)
         ax.grid(True, axis="y", alpha=0.3)
-        ax.set_title(f"({letter}) {'knee' if protocol == 'knee' else 'index MCP'}", fontsize=9)
+        ax.set_title(f"({letter}) {protocol_name(protocol)}", fontsize=10, pad=18)
     axes[0, 0].set_ylabel("AoR angular error (°): mean, min–max")
-    axes[0, 0].legend(fontsize=8, loc="center left")
-    fig.suptitle("Paper B Fig 5 reproduced: AoR error over 30 trials per condition", fontsize=10)
-    fig.tight_layout()
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    title = "Paper B Fig 5 reproduced: AoR error over {} trials per condition".format(
+        collected["trial"].nunique()
+    )
+    if cells is not None:
+        handles += [
+            pyplot().Line2D([], [], ls="", marker="_", ms=9, mew=2.0, color=PUBLISHED_COLOR),
+            pyplot().Line2D([], [], ls="", marker="o", ms=9, mfc="none", mec=MISSED_COLOR),
+        ]
+        names += ["paper B Table 1 mean", "outside the cell's tolerance"]
+        within = int(cells["within_tolerance"].sum())
+        title += f"; {within} of {len(cells)} Table 1 means within tolerance"
+    # Below the panels: inside, it would cover curves (planar's rise from ratio 0.1 to 0.3).
+    fig.legend(
+        handles,
+        names,
+        loc="lower center",
+        ncol=len(handles),
+        fontsize=9,
+        frameon=False,
+        bbox_to_anchor=(0.5, 0),
+    )
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     return fig
 
 
@@ -148,7 +221,9 @@ def _draw_planes(ax, trajectory, point, direction, color) -> np.ndarray:
     half = np.abs(offsets @ np.stack([e1, e2]).T).max() * 1.1
     s, t = np.meshgrid([-half, half], [-half, half])
     surface = centroid + s[..., None] * e1 + t[..., None] * e2
-    ax.plot_surface(*np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, zorder=2)
+    ax.plot_surface(
+        *np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, shade=False, zorder=2
+    )
     return surface.reshape(-1, 3)
 
 
@@ -170,7 +245,9 @@ def _draw_cylinder(ax, trajectory, point, direction, color) -> np.ndarray:
         + h[..., None] * n_hat
         + radius * (np.cos(a)[..., None] * e1 + np.sin(a)[..., None] * e2)
     )
-    ax.plot_surface(*np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, zorder=2)
+    ax.plot_surface(
+        *np.moveaxis(surface, -1, 0), color=color, alpha=0.25, lw=0, shade=False, zorder=2
+    )
     return surface.reshape(-1, 3)
 
 
@@ -211,7 +288,7 @@ def fig2(examples) -> Figure:
     trajectory (planes, cylinders, circles), its axis, and the true axis drawn on top.
     """
     methods = [m for m in PAPER_METHODS if all(m in e[3] for e in examples)]
-    fig = pyplot().figure(figsize=(4.1 * len(methods), 4.1 * len(examples)))
+    fig = pyplot().figure(figsize=(3.6 * len(methods), 3.9 * len(examples)))
     for row, (title, markers, truth, fits) in enumerate(examples):
         true_point = np.asarray(truth["axis_point"], dtype=float)
         true_dir = np.asarray(truth["axis_direction"], dtype=float)
@@ -221,6 +298,7 @@ def fig2(examples) -> Figure:
         centre = points.mean(axis=0)
         # Axis lines are drawn through the point on them nearest the markers, as long as
         # the data are wide, so they cross the picture instead of leaving it.
+        row_axes, row_drawn = [], []
         for column, method in enumerate(methods):
             ax = fig.add_subplot(
                 len(examples),
@@ -242,24 +320,29 @@ def fig2(examples) -> Figure:
             near = true_point + true_dir * (true_dir @ (centre - true_point))
             true_line = np.stack([near - 0.7 * span * true_dir, near + 0.7 * span * true_dir])
             ax.plot(*true_line.T, "k--", lw=1.6, zorder=5, label="true axis")
-            # 3-D lines are not clipped to the axes: every drawn model must fit inside.
-            equal_3d_limits(ax, np.vstack([*drawn, true_line, fitted]), margin=0.02)
-            ax.tick_params(labelsize=6, pad=0)
-            ax.set_xlabel("x (mm)", fontsize=7, labelpad=-4)
-            ax.set_ylabel("y (mm)", fontsize=7, labelpad=-4)
-            ax.set_zlabel("z (mm)", fontsize=7, labelpad=-4)
+            row_axes.append(ax)
+            row_drawn += [*drawn, true_line, fitted]
+            few_3d_ticks(ax)
+            ax.tick_params(labelsize=9, pad=0)
+            ax.set_xlabel("x (mm)", fontsize=9, labelpad=2)
+            ax.set_ylabel("y (mm)", fontsize=9, labelpad=2)
+            ax.set_zlabel("z (mm)", fontsize=9, labelpad=2)
             error = axis_error_deg(direction, true_dir)
             ax.set_title(
                 f"({'ab'[row]}) {title}\n{method} cost: {label}; axis error {error:.1f}°",
-                fontsize=8,
+                fontsize=9,
             )
+        # One trial, three costs: the same limits across the row, so the models compare at
+        # a glance. 3-D lines are not clipped to the axes: every drawn model must fit inside.
+        for ax in row_axes:
+            equal_3d_limits(ax, np.vstack(row_drawn), margin=0.02)
     fig.suptitle(
         "Paper B Fig 2 reproduced: best-fitting plane (planar cost), cylinder (radial) and "
         "circle (combined)\ncoloured line = the cost's fitted axis, black dashed = true axis, "
         "grey dots = marker positions; equal axis scales",
         fontsize=10,
     )
-    fig.tight_layout()
+    fig.tight_layout(h_pad=3.0)
     return fig
 
 

@@ -198,9 +198,9 @@ def _mark_not_converged(ax, coverage: pd.DataFrame, color) -> None:
             ax.annotate(
                 f"{missing} of {row.trials} not converged",
                 (row.n_frames, row.inside_95),
-                xytext=(10, -10),
+                xytext=(12, -24),
                 textcoords="offset points",
-                fontsize=8,
+                fontsize=9,
                 color=color,
                 va="top",
             )
@@ -210,7 +210,7 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     """Predicted sqrt(tr Wc) and the actual RMS error against Nt (log–log), and coverage."""
     calibration = calibration_table(collected)
     n_frames = sorted(set(collected["n_frames"]) | set(paper["n_frames"]))
-    fig, (ax, cal) = pyplot().subplots(1, 2, figsize=(12, 6.0))
+    fig, (ax, cal) = pyplot().subplots(1, 2, figsize=(10.4, 6.6))
     for method in (METHOD, EXTENDED):
         if method not in set(collected["method"]):
             continue
@@ -246,7 +246,6 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     ax.set_yscale("log")
     ax.set_ylabel("predicted uncertainty or actual error (mm, log scale)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     ax.set_title("(a) Predicted uncertainty vs actual error", fontsize=10)
     band = calibration.drop_duplicates("n_frames")
     trials = int(band["trials"].median())
@@ -263,9 +262,22 @@ def uncertainty_figure(collected: pd.DataFrame, paper: pd.DataFrame) -> Figure:
     cal.set_ylim(0, 1.02)
     cal.set_ylabel("share of trials with the true centre\ninside the predicted 95 % ellipsoid")
     cal.grid(True, which="both", alpha=0.3)
-    # Below the axes: inside, it would hide the points at large Nt, the finding itself.
-    cal.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     cal.set_title("(b) Coverage of the predicted 95 % ellipsoid", fontsize=10)
     fig.suptitle("Paper C Table 1 extended: is the Gauss–Markov covariance honest?", fontsize=11)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, _LEGEND_ROOM, 1, 1))
+    # Below each panel: inside, they would hide the points at large Nt, the finding itself.
+    # Figure legends, which the layout leaves out, so the panels keep their width.
+    for panel in (ax, cal):
+        box = panel.get_position()
+        fig.legend(
+            *panel.get_legend_handles_labels(),
+            fontsize=9,
+            loc="upper center",
+            bbox_to_anchor=((box.x0 + box.x1) / 2, _LEGEND_ROOM),
+            ncol=1,
+        )
     return fig
+
+
+#: Share of the figure's height below the panels kept for their legends.
+_LEGEND_ROOM = 0.25

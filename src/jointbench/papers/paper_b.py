@@ -215,7 +215,7 @@ def _table1_headline(tables) -> str:
 
 
 def _fig5(inputs: Inputs):
-    return draw.fig5(inputs.collected)
+    return draw.fig5(inputs.collected, _table1_cells(inputs))
 
 
 def _fig2(inputs: Inputs):
@@ -225,7 +225,7 @@ def _fig2(inputs: Inputs):
         markers = trials.segments["moving"][trial]
         fits = {method: fit_axis(markers, method) for method in METHODS}
         title = (
-            f"{condition['protocol']}, FE RoM {condition['fe_rom_deg']}°, "
+            f"{draw.protocol_name(condition['protocol'])}, FE RoM {condition['fe_rom_deg']}°, "
             f"AA/FE {condition['aa_ratio']}, trial {trial}"
         )
         examples.append((title, markers, metadata["truth"], fits))
@@ -259,7 +259,9 @@ PAPER = Paper(
             "figure",
             _fig5,
             caption="Reproduces paper B Fig 5: mean AoR angular error with minimum–maximum bars "
-            "for every condition, (a) knee, (b) index MCP.",
+            "for every condition, (a) knee, (b) index MCP; the paper's Table 1 mean of each "
+            "condition as a black dash, and our mean ringed in red where it is outside that "
+            "cell's tolerance.",
             summarises=("paper_b_table1",),
             headline=_table1_headline,
         ),
