@@ -85,7 +85,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.declared import Count, NonNegative
-from jointbench.estimators.batching import isolated
+from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
@@ -94,7 +94,6 @@ from jointbench.estimators.twosegment import (
     batched,
     batched_all,
     each_trial,
-    two_segment_poses,
 )
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
@@ -205,8 +204,7 @@ def fit_analytic(
         0); ``covariance`` ``None``; ``cost`` ``sum_t |f0(t) c - f1(t) c|^2`` [mm^2] (eq. 6);
         ``diagnostics["rcond"]`` the smallest over largest eigenvalue of ``sum M'M``.
     """
-    del noise_mm
-    return _analytic_result(*two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES))
+    return one_trial(_analytic_trials, proximal, distal, noise_mm=noise_mm)
 
 
 def _analytic_result(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
@@ -570,18 +568,14 @@ def _result(
 def _gauss_markov(
     proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
 ) -> JointCenterResult:
-    _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
-    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
-    (outcome,) = _gauss_markov_results(
-        [{"proximal": prox, "distal": dist}],
+    return one_trial(
+        _gauss_markov_trials[frame0],
+        proximal,
+        distal,
         noise_mm=noise_mm,
-        frame0=frame0,
         max_iterations=max_iterations,
         tol_mm=tol_mm,
     )
-    if isinstance(outcome, ValueError):
-        raise outcome
-    return outcome
 
 
 def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
@@ -702,9 +696,12 @@ def _analytic_finish(
     return _analytic_result(prox, dist)
 
 
-fit_analytic.batched = batched(_analytic_finish, ("proximal", "distal"))
-fit_gauss_markov.batched = _batched_gauss_markov(frame0=False)
-fit_gauss_markov_frame0.batched = _batched_gauss_markov(frame0=True)
+_analytic_trials = batched(_analytic_finish, ("proximal", "distal"))
+_gauss_markov_trials = {frame0: _batched_gauss_markov(frame0) for frame0 in (False, True)}
+
+fit_analytic.batched = _analytic_trials
+fit_gauss_markov.batched = _gauss_markov_trials[False]
+fit_gauss_markov_frame0.batched = _gauss_markov_trials[True]
 
 
 def align_to_markers(

@@ -42,7 +42,7 @@ from typing import TypeVar
 import numpy as np
 
 from jointbench.declared import NonNegative
-from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated
+from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated, one_trial
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import (
@@ -63,10 +63,8 @@ __all__ = [
     "fit_score",
     "fit_score_center",
     "pose_segments",
-    "segment_poses",
     "stored_segment_poses",
     "trial_poses",
-    "two_segment_poses",
 ]
 
 #: Fewest frames a pose-based method accepts: every one of them needs the same, so their
@@ -92,17 +90,6 @@ class SegmentPoses:
     body: np.ndarray
     residual_ss: float
     dof: int
-
-
-def segment_poses(markers: np.ndarray, *, name: str) -> SegmentPoses:
-    """Paper C §5 poses of one segment's (already checked) markers ``(N, n_markers, 3)``.
-
-    Collinearity is checked on frame 0 (the starting body coordinates) and on the estimated
-    body-fixed coordinates, which is what every frame's fit uses -- checking every frame would
-    cost more than the fit.
-    """
-    check_not_collinear(markers[:1], name=name)
-    return _segment_poses(markers, *rigid_poses(markers), name=name)
 
 
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
@@ -134,16 +121,6 @@ def stored_segment_poses(
     )
 
 
-def two_segment_poses(
-    proximal: object, distal: object, *, min_frames: int
-) -> tuple[SegmentPoses, SegmentPoses]:
-    """Check both segments' world-frame markers and fit their poses."""
-    proximal = check_markers(proximal, min_frames=min_frames, min_markers=3, name="proximal")
-    distal = check_markers(distal, min_frames=min_frames, min_markers=3, name="distal")
-    check_same_frames(proximal, distal)
-    return segment_poses(proximal, name="proximal"), segment_poses(distal, name="distal")
-
-
 Outcome = TypeVar("Outcome")
 
 
@@ -151,35 +128,47 @@ def trial_poses(
     segments: dict[str, np.ndarray], *, min_frames: int
 ) -> list[dict[str, SegmentPoses] | ValueError]:
     """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
-    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm].
+    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials.
 
-    Per trial, the checks of :func:`two_segment_poses` / :func:`segment_poses` in the same
-    order, so a trial that the one-trial path rejects carries the same ``ValueError``; every
-    segment's poses are fitted for all trials in one call of
+    Per trial, each segment's markers are checked (at least ``min_frames`` frames and 3
+    markers, not collinear at frame 0), two segments must share frames, and the body-fixed
+    coordinates the fit estimates must not be collinear; a trial that fails a check carries
+    its ``ValueError``. Every segment's poses are fitted for all trials in one call of
     :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
     ``batched`` form of every pose-based method.
     """
     names = list(segments)
-    arrays = {name: np.asarray(markers, dtype=float) for name, markers in segments.items()}
-    n_trials = next(iter(arrays.values())).shape[0]
+    arrays = {
+        name: markers if isinstance(markers, list) else np.asarray(markers)
+        for name, markers in segments.items()
+    }
+    n_trials = len(arrays[names[0]])
     outcomes: list = [None] * n_trials
+    checked: dict[int, list[np.ndarray]] = {}
     for trial in range(n_trials):
         try:
-            for name in names:
+            checked[trial] = [
                 check_markers(arrays[name][trial], min_frames=min_frames, min_markers=3, name=name)
+                for name in names
+            ]
             if len(names) == 2:
-                check_same_frames(*(arrays[name][trial] for name in names))
-            for name in names:
-                check_not_collinear(arrays[name][trial, :1], name=name)
+                check_same_frames(*checked[trial])
+            for name, markers in zip(names, checked[trial], strict=True):
+                check_not_collinear(markers[:1], name=name)
         except ValueError as error:
             outcomes[trial] = error
-    good = [trial for trial in range(n_trials) if outcomes[trial] is None]
-    fitted = {name: _fitted_poses(arrays[name][good]) for name in names}
-    for index, trial in enumerate(good):
+            checked.pop(trial, None)
+    good = list(checked)
+    stacked = [
+        np.stack([checked[trial][index] for trial in good]) if good else None
+        for index in range(len(names))
+    ]
+    fitted = [_fitted_poses(markers) if good else [] for markers in stacked]
+    for row, trial in enumerate(good):
         try:
             outcomes[trial] = {
-                name: _segment_poses(arrays[name][trial], *_parts(fitted[name][index]), name=name)
-                for name in names
+                name: _segment_poses(stacked[index][row], *_parts(fitted[index][row]), name=name)
+                for index, name in enumerate(names)
             }
         except ValueError as error:
             outcomes[trial] = error
@@ -299,8 +288,7 @@ def fit_score(
         ``diagnostics``: ``center_proximal`` ``c1``, ``center_distal`` ``c2`` (body frames) and
         ``rcond`` (smallest over largest eigenvalue of the normal matrix).
     """
-    del noise_mm
-    return _score_joint(*two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES))
+    return one_trial(_score_trials, proximal, distal, noise_mm=noise_mm)
 
 
 def _score_joint(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
@@ -326,8 +314,7 @@ def fit_score_center(markers: np.ndarray) -> CenterResult:
     stacked system is ``[I, -R2] [c1; c2] = t2``; the centre ``c1`` is in the reference frame.
     ``cost`` is ``sum_t |c1 - R2 c2 - t2|^2`` [mm^2]; ``radii`` is ``None``.
     """
-    markers = check_markers(markers, min_frames=POSE_MIN_FRAMES, min_markers=3)
-    return _score_center(segment_poses(markers, name="markers"))
+    return one_trial(_score_center_trials, markers)
 
 
 def _score_center(poses: SegmentPoses) -> CenterResult:
@@ -394,8 +381,7 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
     normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
     """
-    markers = check_markers(markers, min_frames=POSE_MIN_FRAMES, min_markers=3)
-    return _sara(segment_poses(markers, name="markers"))
+    return one_trial(_sara_trials, markers)
 
 
 def _sara(poses: SegmentPoses) -> AxisResult:
@@ -423,7 +409,10 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
     distances from the axis ``(p1, n1)`` in the proximal frame [mm]. ``diagnostics`` carries each
     frame's version and ``ratio`` (see :func:`fit_sara`).
     """
-    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
+    return one_trial(_sara_two_segment_trials, proximal, distal)
+
+
+def _sara_two_segment(prox: SegmentPoses, dist: SegmentPoses) -> AxisResult:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
     n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=0))
     direction = r1[0] @ n1 + r2[0] @ n2
@@ -494,6 +483,11 @@ def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:
     return run
 
 
-fit_score.batched = batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
-fit_score_center.batched = batched(_score_center, ("markers",))
-fit_sara.batched = batched(_sara, ("markers",))
+_score_trials = batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
+_score_center_trials = batched(_score_center, ("markers",))
+_sara_trials = batched(_sara, ("markers",))
+_sara_two_segment_trials = batched(_sara_two_segment, ("proximal", "distal"))
+
+fit_score.batched = _score_trials
+fit_score_center.batched = _score_center_trials
+fit_sara.batched = _sara_trials
