@@ -90,10 +90,12 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
     POSE_MIN_FRAMES,
+    PoseStack,
     SegmentPoses,
     batched,
     batched_all,
     each_trial,
+    eigen_solution,
 )
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
@@ -161,29 +163,42 @@ def constraint_covariance(
     return rotated3(r0, a0) + rotated3(r1, a1)
 
 
-def _relative_system(prox: SegmentPoses, dist: SegmentPoses) -> tuple[np.ndarray, np.ndarray]:
-    """``M_t = R0 - R1`` ``(N-1, 3, 3)`` and ``y_t = d1 - d0`` ``(N-1, 3)`` for ``t >= 1``."""
+def _relative_system(prox, dist) -> tuple[np.ndarray, np.ndarray]:
+    """``M_t = R0 - R1`` ``(..., N-1, 3, 3)`` and ``y_t = d1 - d0`` ``(..., N-1, 3)`` for
+    ``t >= 1``, of one trial's poses (:class:`SegmentPoses`) or a stack's (:class:`PoseStack`)."""
     return (
-        prox.rotation[1:] - dist.rotation[1:],
-        dist.translation[1:] - prox.translation[1:],
+        prox.rotation[..., 1:, :, :] - dist.rotation[..., 1:, :, :],
+        dist.translation[..., 1:, :] - prox.translation[..., 1:, :],
     )
 
 
 def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
-    """Eq. 9 with the degenerate-motion checks; returns ``(c, rcond)``."""
-    normal = np.einsum("fki,fkj->ij", m, m)
-    rhs = np.einsum("fki,fk->i", m, y)
+    """Eq. 9 for trials ``m`` ``(T, N-1, 3, 3)``, ``y`` ``(T, N-1, 3)``: centres ``c``
+    ``(T, 3)`` [mm], ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of
+    degenerate motion (the centre of such a trial is not used)."""
+    normal = np.einsum("tfki,tfkj->tij", m, m)
+    rhs = np.einsum("tfki,tfk->ti", m, y)
     values, vectors = np.linalg.eigh(normal)
+    errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
+    # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rcond = values[:, 0] / values[:, -1]
+    return eigen_solution(vectors, values, rhs), rcond, errors
+
+
+def _motion_error(values: np.ndarray, n_frames: int, what: str) -> ValueError | None:
+    """The degenerate-motion error of a normal matrix with eigenvalues ``values`` (3,),
+    ascending, or ``None``."""
     if values[-1] <= _NO_ROTATION * n_frames:
-        raise ValueError(
+        return ValueError(
             f"{what}: degenerate motion: the segments do not rotate relative to each other"
         )
     if negligible(values[0], values[-1]):
-        raise ValueError(
+        return ValueError(
             f"{what}: degenerate motion: the relative rotation is about a single axis (a "
             "hinge), so the centre is not determined along that axis"
         )
-    return vectors @ ((vectors.T @ rhs) / values), float(values[0] / values[-1])
+    return None
 
 
 @register("joint_center", "analytic", min_frames=POSE_MIN_FRAMES)
@@ -207,20 +222,25 @@ def fit_analytic(
     return one_trial(_analytic_trials, proximal, distal, noise_mm=noise_mm)
 
 
-def _analytic_result(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
+def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | ValueError]:
     m, y = _relative_system(prox, dist)
-    center, rcond = _analytic(m, y, prox.rotation.shape[0], "analytic")
-    residual = np.einsum("fij,j->fi", m, center) - y
-    return JointCenterResult(
-        center=center,
-        covariance=None,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="analytic",
-        cost=float(np.sum(residual**2)),
-        diagnostics={"rcond": rcond},
-    )
+    centers, rcond, errors = _analytic(m, y, prox.rotation.shape[1], "analytic")
+    residual = np.einsum("tfij,tj->tfi", m, centers) - y
+    cost = np.sum(residual**2, axis=(1, 2))
+    return [
+        error
+        or JointCenterResult(
+            center=centers[trial],
+            covariance=None,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="analytic",
+            cost=float(cost[trial]),
+            diagnostics={"rcond": float(rcond[trial])},
+        )
+        for trial, error in enumerate(errors)
+    ]
 
 
 def _weights(r0, r1, a0, a1) -> np.ndarray:
@@ -252,7 +272,10 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
     """The analytic start, the noise variance and the lever factors of one trial; the analytic
     step's ``ValueError`` on degenerate motion."""
     m, y = _relative_system(prox, dist)
-    analytic_center, rcond = _analytic(m, y, prox.rotation.shape[0], method)
+    centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
+    if errors[0] is not None:
+        raise errors[0]
+    analytic_center, rcond = centers[0], float(rconds[0])
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
     return _Prepared(
         m=m,
@@ -690,8 +713,8 @@ def _batched_gauss_markov(frame0: bool):
 
 
 def _analytic_finish(
-    prox: SegmentPoses, dist: SegmentPoses, *, noise_mm: float | None = None
-) -> JointCenterResult:
+    prox: PoseStack, dist: PoseStack, *, noise_mm: float | None = None
+) -> list[JointCenterResult | ValueError]:
     del noise_mm
     return _analytic_result(prox, dist)
 

@@ -55,9 +55,11 @@ from jointbench.numerics.rank import negligible
 
 __all__ = [
     "POSE_MIN_FRAMES",
+    "PoseStack",
     "SegmentPoses",
     "batched",
     "batched_all",
+    "eigen_solution",
     "fit_sara",
     "fit_sara_two_segment",
     "fit_score",
@@ -211,59 +213,110 @@ def each_trial(
     return outcomes
 
 
+@dataclass(frozen=True)
+class PoseStack:
+    """The poses of trials with the same numbers of frames and markers, stacked on a leading
+    trial axis (see :class:`SegmentPoses`): ``markers`` ``(T, N, P, 3)`` [mm], ``rotation``
+    ``(T, N, 3, 3)``, ``translation`` ``(T, N, 3)`` [mm], ``body`` ``(T, P, 3)`` [mm]."""
+
+    markers: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    body: np.ndarray
+
+    @classmethod
+    def of(cls, poses: list[SegmentPoses]) -> PoseStack:
+        return cls(
+            *(
+                np.stack([getattr(pose, field) for pose in poses])
+                for field in ("markers", "rotation", "translation", "body")
+            )
+        )
+
+
 def stacked_normal_equations(
     r1: np.ndarray | None, t1: np.ndarray | None, r2: np.ndarray, t2: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``A'A`` ``(6, 6)`` and ``A'b`` ``(6,)`` of ``A = [R1, -R2]`` (stacked), ``b = t2 - t1``.
+    """Per trial, ``A'A`` ``(T, 6, 6)`` and ``A'b`` ``(T, 6)`` of ``A = [R1, -R2]`` stacked over
+    the frames and ``b = t2 - t1``, for rotations ``(T, N, 3, 3)`` and translations
+    ``(T, N, 3)`` [mm].
 
     ``r1 = t1 = None`` means the identity reference pose (one-segment data).
     """
-    n_frames = r2.shape[0]
+    n_trials, n_frames = r2.shape[:2]
     rhs = t2 if t1 is None else t2 - t1
-    normal = np.empty((6, 6))
-    normal[:3, :3] = normal[3:, 3:] = n_frames * np.eye(3)
+    normal = np.empty((n_trials, 6, 6))
+    normal[:, :3, :3] = normal[:, 3:, 3:] = n_frames * np.eye(3)
     if r1 is None:
-        s = r2.sum(axis=0)
-        g1 = rhs.sum(axis=0)
+        s = r2.sum(axis=1)
+        g1 = rhs.sum(axis=1)
     else:
-        s = np.einsum("fji,fjk->ik", r1, r2)
-        g1 = np.einsum("fji,fj->i", r1, rhs)
-    normal[:3, 3:] = -s
-    normal[3:, :3] = -s.T
-    g2 = -np.einsum("fji,fj->i", r2, rhs)
-    return normal, np.concatenate([g1, g2])
+        s = np.einsum("tfji,tfjk->tik", r1, r2)
+        g1 = np.einsum("tfji,tfj->ti", r1, rhs)
+    normal[:, :3, 3:] = -s
+    normal[:, 3:, :3] = -np.swapaxes(s, 1, 2)
+    g2 = -np.einsum("tfji,tfj->ti", r2, rhs)
+    return normal, np.concatenate([g1, g2], axis=1)
 
 
-def _eigen(normal: np.ndarray, *, what: str, min_rank: int) -> tuple[np.ndarray, np.ndarray]:
-    """Eigen-decomposition of a normal matrix; ``ValueError`` when its rank is below
-    ``min_rank`` (the segments do not rotate relative to each other, or only about one axis)."""
+def _eigen(
+    normal: np.ndarray, *, what: str, min_rank: int
+) -> tuple[np.ndarray, np.ndarray, list[ValueError | None]]:
+    """Eigen-decomposition of normal matrices ``(T, 6, 6)``, and per trial ``None`` or the
+    ``ValueError`` of a rank below ``min_rank`` (the segments do not rotate relative to each
+    other, or only about one axis)."""
     values, vectors = np.linalg.eigh(normal)
-    zero = negligible(values, values[-1])
-    rank = int(np.sum(~zero))
-    if rank < min_rank:
-        if rank <= 3:
-            problem = "the segments do not rotate relative to each other"
-        else:
-            problem = (
-                "the relative rotation is about a single axis (a hinge), so the centre is not "
-                "determined along that axis; fit an axis (SARA) instead"
-            )
-        raise ValueError(f"{what}: degenerate motion: {problem}")
-    return values, vectors
+    ranks = np.sum(~negligible(values, values[:, -1:]), axis=1)
+    return values, vectors, [_rank_error(int(rank), what, min_rank) for rank in ranks]
 
 
-def _residual_ss(r1, t1, c1, r2, t2, c2) -> float:
-    """``sum_t |R1 c1 + t1 - R2 c2 - t2|^2`` [mm^2]; ``r1 = t1 = None`` is the identity."""
-    world2 = r2 @ c2 + t2
-    world1 = c1 if r1 is None else r1 @ c1 + t1
-    return float(np.sum((world1 - world2) ** 2))
+def _rank_error(rank: int, what: str, min_rank: int) -> ValueError | None:
+    if rank >= min_rank:
+        return None
+    if rank <= 3:
+        problem = "the segments do not rotate relative to each other"
+    else:
+        problem = (
+            "the relative rotation is about a single axis (a hinge), so the centre is not "
+            "determined along that axis; fit an axis (SARA) instead"
+        )
+    return ValueError(f"{what}: degenerate motion: {problem}")
 
 
-def _score_solve(r1, t1, r2, t2, *, what: str) -> tuple[np.ndarray, np.ndarray, float]:
+def _applied(rotation: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """``R_f p`` for rotations ``(T, N, 3, 3)`` and a point per trial ``(T, 3)``: ``(T, N, 3)``."""
+    return np.einsum("tfij,tj->tfi", rotation, point)
+
+
+def _residual_ss(r1, t1, c1, r2, t2, c2) -> np.ndarray:
+    """``sum_f |R1 c1 + t1 - R2 c2 - t2|^2`` [mm^2] per trial ``(T,)``; ``r1 = t1 = None`` is
+    the identity."""
+    world2 = _applied(r2, c2) + t2
+    world1 = c1[:, None, :] if r1 is None else _applied(r1, c1) + t1
+    return np.sum((world1 - world2) ** 2, axis=(1, 2))
+
+
+def eigen_solution(vectors: np.ndarray, values: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``V diag(1 / values) V' b`` per trial: the least-squares solution of normal equations
+    from their eigenvectors ``V`` ``(T, n, k)`` (all ``n``, or ``k`` of them to drop a
+    direction), eigenvalues ``(T, k)`` and right-hand sides ``b`` ``(T, n)``: ``(T, n)``."""
+    # A trial rejected for its rank divides by a vanishing eigenvalue; its answer is dropped.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        projected = (np.swapaxes(vectors, 1, 2) @ rhs[..., None])[..., 0] / values
+    return (vectors @ projected[..., None])[..., 0]
+
+
+def _score_solve(r1, t1, r2, t2) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """SCoRE's ``c1``, ``c2`` ``(T, 3)`` [mm], rcond ``(T,)`` and per-trial rank errors."""
     normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
-    values, vectors = _eigen(normal, what=what, min_rank=6)
-    solution = vectors @ ((vectors.T @ rhs) / values)
-    return solution[:3], solution[3:], float(values[0] / values[-1])
+    values, vectors, errors = _eigen(normal, what="SCoRE", min_rank=6)
+    solution = eigen_solution(vectors, values, rhs)
+    return solution[:, :3], solution[:, 3:], values[:, 0] / values[:, -1], errors
+
+
+def _outcomes(errors: list[ValueError | None], result: Callable[[int], Outcome]) -> list:
+    """Per trial its rank error, or ``result(trial)``."""
+    return [result(trial) if error is None else error for trial, error in enumerate(errors)]
 
 
 @register("joint_center", "SCoRE", min_frames=POSE_MIN_FRAMES)
@@ -291,19 +344,28 @@ def fit_score(
     return one_trial(_score_trials, proximal, distal, noise_mm=noise_mm)
 
 
-def _score_joint(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
+def _score_joint(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | ValueError]:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
-    c1, c2, rcond = _score_solve(r1, t1, r2, t2, what="SCoRE")
-    world = 0.5 * (r1[0] @ c1 + t1[0] + r2[0] @ c2 + t2[0])
-    return JointCenterResult(
-        center=world,
-        covariance=None,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SCoRE",
-        cost=_residual_ss(r1, t1, c1, r2, t2, c2),
-        diagnostics={"center_proximal": c1.tolist(), "center_distal": c2.tolist(), "rcond": rcond},
+    c1, c2, rcond, errors = _score_solve(r1, t1, r2, t2)
+    at_frame0 = _applied(r1[:, :1], c1)[:, 0], _applied(r2[:, :1], c2)[:, 0]
+    world = 0.5 * (at_frame0[0] + t1[:, 0] + at_frame0[1] + t2[:, 0])
+    cost = _residual_ss(r1, t1, c1, r2, t2, c2)
+    return _outcomes(
+        errors,
+        lambda t: JointCenterResult(
+            center=world[t],
+            covariance=None,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SCoRE",
+            cost=float(cost[t]),
+            diagnostics={
+                "center_proximal": c1[t].tolist(),
+                "center_distal": c2[t].tolist(),
+                "rcond": float(rcond[t]),
+            },
+        ),
     )
 
 
@@ -317,57 +379,64 @@ def fit_score_center(markers: np.ndarray) -> CenterResult:
     return one_trial(_score_center_trials, markers)
 
 
-def _score_center(poses: SegmentPoses) -> CenterResult:
+def _score_center(poses: PoseStack) -> list[CenterResult | ValueError]:
     r2, t2 = poses.rotation, poses.translation
-    c1, c2, rcond = _score_solve(None, None, r2, t2, what="SCoRE")
-    return CenterResult(
-        center=c1,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SCoRE",
-        cost=_residual_ss(None, None, c1, r2, t2, c2),
-        diagnostics={"center_moving": c2.tolist(), "rcond": rcond},
+    c1, c2, rcond, errors = _score_solve(None, None, r2, t2)
+    cost = _residual_ss(None, None, c1, r2, t2, c2)
+    return _outcomes(
+        errors,
+        lambda t: CenterResult(
+            center=c1[t],
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SCoRE",
+            cost=float(cost[t]),
+            diagnostics={"center_moving": c2[t].tolist(), "rcond": float(rcond[t])},
+        ),
     )
 
 
-def _sara_solve(
-    r1, t1, r2, t2, origin: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
-    """Axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` of SARA.
+def _sara_solve(r1, t1, r2, t2, origin: np.ndarray):
+    """SARA's axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` [mm], each
+    ``(T, 3)``, the eigenvalue ratio ``(T,)`` and the per-trial rank errors.
 
     Both body frames coincide with the world at frame 0. The point is the minimum-norm
-    least-squares solution about ``origin`` (3,) [mm] with the axis direction dropped, so
+    least-squares solution about ``origin`` ``(T, 3)`` [mm] with the axis direction dropped, so
     ``(p1 - origin) . n1 + (p2 - origin) . n2 = 0``: for a noise-free hinge, the point of the
     axis nearest ``origin``. Solving about a point near the markers (not the coordinates'
     origin) keeps the right-hand side small, so the answer does not lose digits to the data's
     distance from the origin.
     """
     # Each body frame moved to ``origin``: x = R (b' + o) + t, so t' = R o + t - o.
-    t2 = np.einsum("fij,j->fi", r2, origin) + t2 - origin
+    t2 = _applied(r2, origin) + t2 - origin[:, None, :]
     if r1 is not None:
-        t1 = np.einsum("fij,j->fi", r1, origin) + t1 - origin
+        t1 = _applied(r1, origin) + t1 - origin[:, None, :]
     normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
-    values, vectors = _eigen(normal, what="SARA", min_rank=5)
-    axis = vectors[:, 0]
-    rest = vectors[:, 1:]
-    point = rest @ ((rest.T @ rhs) / values[1:])
-    n1, n2 = axis[:3], axis[3:]
+    values, vectors, errors = _eigen(normal, what="SARA", min_rank=5)
+    axis = vectors[:, :, 0]
+    point = eigen_solution(vectors[:, :, 1:], values[:, 1:], rhs)
+    n1, n2 = axis[:, :3], axis[:, 3:]
+    # A trial without relative rotation has a zero second eigenvalue; its error is returned.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = values[:, 0] / values[:, 1]
     return (
-        n1 / np.linalg.norm(n1),
-        n2 / np.linalg.norm(n2),
-        point[:3] + origin,
-        point[3:] + origin,
-        float(values[0] / values[1]),
+        n1 / np.linalg.norm(n1, axis=1, keepdims=True),
+        n2 / np.linalg.norm(n2, axis=1, keepdims=True),
+        point[:, :3] + origin,
+        point[:, 3:] + origin,
+        ratio,
+        errors,
     )
 
 
 def _mean_distance_to_axis(points: np.ndarray, point: np.ndarray, direction: np.ndarray):
-    """Mean over frames of each marker's distance from the line ``(point, direction)``."""
-    offset = points - point
-    along = offset @ direction
-    perpendicular = offset - along[..., None] * direction
-    return np.linalg.norm(perpendicular, axis=-1).mean(axis=0)
+    """Mean over frames of each marker's distance [mm] from the line ``(point, direction)``,
+    per trial: points ``(T, N, P, 3)``, one line per trial ``(T, 3)`` -> ``(T, P)``."""
+    offset = points - point[:, None, None, :]
+    along = np.einsum("tfpi,ti->tfp", offset, direction)
+    perpendicular = offset - along[..., None] * direction[:, None, None, :]
+    return np.linalg.norm(perpendicular, axis=-1).mean(axis=1)
 
 
 @register("axis", "SARA", min_frames=POSE_MIN_FRAMES)
@@ -384,18 +453,28 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     return one_trial(_sara_trials, markers)
 
 
-def _sara(poses: SegmentPoses) -> AxisResult:
-    origin = poses.body.mean(axis=0)
-    n1, n2, p1, p2, ratio = _sara_solve(None, None, poses.rotation, poses.translation, origin)
-    return AxisResult(
-        point=p1,
-        direction=n1,
-        radii=_mean_distance_to_axis(poses.markers, p1, n1),
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SARA",
-        diagnostics={"direction_moving": n2.tolist(), "point_moving": p2.tolist(), "ratio": ratio},
+def _sara(poses: PoseStack) -> list[AxisResult | ValueError]:
+    origin = poses.body.mean(axis=1)
+    n1, n2, p1, p2, ratio, errors = _sara_solve(
+        None, None, poses.rotation, poses.translation, origin
+    )
+    radii = _mean_distance_to_axis(poses.markers, p1, n1)
+    return _outcomes(
+        errors,
+        lambda t: AxisResult(
+            point=p1[t],
+            direction=n1[t],
+            radii=radii[t],
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SARA",
+            diagnostics={
+                "direction_moving": n2[t].tolist(),
+                "point_moving": p2[t].tolist(),
+                "ratio": float(ratio[t]),
+            },
+        ),
     )
 
 
@@ -412,27 +491,33 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
     return one_trial(_sara_two_segment_trials, proximal, distal)
 
 
-def _sara_two_segment(prox: SegmentPoses, dist: SegmentPoses) -> AxisResult:
+def _sara_two_segment(prox: PoseStack, dist: PoseStack) -> list[AxisResult | ValueError]:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
-    n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=0))
-    direction = r1[0] @ n1 + r2[0] @ n2
-    point = 0.5 * (r1[0] @ p1 + t1[0] + r2[0] @ p2 + t2[0])
-    distal_in_proximal = np.einsum("fji,fmj->fmi", r1, dist.markers - t1[:, None, :])
-    return AxisResult(
-        point=point,
-        direction=direction / np.linalg.norm(direction),
-        radii=_mean_distance_to_axis(distal_in_proximal, p1, n1),
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SARA",
-        diagnostics={
-            "direction_proximal": n1.tolist(),
-            "point_proximal": p1.tolist(),
-            "direction_distal": n2.tolist(),
-            "point_distal": p2.tolist(),
-            "ratio": ratio,
-        },
+    n1, n2, p1, p2, ratio, errors = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=1))
+    direction = _applied(r1[:, :1], n1)[:, 0] + _applied(r2[:, :1], n2)[:, 0]
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    at_frame0 = _applied(r1[:, :1], p1)[:, 0], _applied(r2[:, :1], p2)[:, 0]
+    point = 0.5 * (at_frame0[0] + t1[:, 0] + at_frame0[1] + t2[:, 0])
+    distal_in_proximal = np.einsum("tfji,tfmj->tfmi", r1, dist.markers - t1[:, :, None, :])
+    radii = _mean_distance_to_axis(distal_in_proximal, p1, n1)
+    return _outcomes(
+        errors,
+        lambda t: AxisResult(
+            point=point[t],
+            direction=direction[t],
+            radii=radii[t],
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SARA",
+            diagnostics={
+                "direction_proximal": n1[t].tolist(),
+                "point_proximal": p1[t].tolist(),
+                "direction_distal": n2[t].tolist(),
+                "point_distal": p2[t].tolist(),
+                "ratio": float(ratio[t]),
+            },
+        ),
     )
 
 
@@ -442,15 +527,27 @@ def batched(
     """The many-trial form of a pose-based method: ``(*segments, poses=None, **options)``.
 
     Each segment is ``(n_trials, N, n_markers, 3)`` [mm]; ``poses`` (from :func:`trial_poses`)
-    lets several methods share one pose fit. Returns one result, or the ``ValueError`` the
-    one-trial function would raise, per trial; options the method ignores are accepted as the
-    one-trial function accepts them. ``finish(*segment_poses, **options)`` fits one trial.
+    lets several methods share one pose fit. Returns one result, or the ``ValueError`` of a
+    trial that cannot be fitted, per trial; options the method ignores are accepted.
+    ``finish(*stacks, **options)`` fits trials whose poses are stacked, one
+    :class:`PoseStack` per segment in ``names`` order, and returns one outcome per trial.
     """
 
-    def finish_each(poses: list, **options) -> list[Outcome | ValueError]:
-        return each_trial(poses, lambda p: finish(*(p[name] for name in names), **options))
+    def finish_stacked(poses: list, **options) -> list[Outcome | ValueError]:
+        outcomes = list(poses)
+        # Trials of one batch share their shapes; poses passed in are grouped to be safe.
+        groups: dict[tuple, list[int]] = {}
+        for trial, fitted in enumerate(poses):
+            if not isinstance(fitted, ValueError):
+                shapes = tuple(fitted[name].markers.shape for name in names)
+                groups.setdefault(shapes, []).append(trial)
+        for group in groups.values():
+            stacks = [PoseStack.of([poses[trial][name] for trial in group]) for name in names]
+            for trial, outcome in zip(group, finish(*stacks, **options), strict=True):
+                outcomes[trial] = outcome
+        return outcomes
 
-    return batched_all(finish_each, names)
+    return batched_all(finish_stacked, names)
 
 
 def batched_all(
@@ -475,10 +572,10 @@ def pose_segments(fit: Callable) -> tuple[str, ...] | None:
     return getattr(getattr(fit, "batched", None), "pose_segments", None)
 
 
-def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:
-    def run(*poses: SegmentPoses, noise_mm: float | None = None) -> Outcome:
+def _ignoring_noise(finish: Callable[..., list]) -> Callable[..., list]:
+    def run(*stacks: PoseStack, noise_mm: float | None = None) -> list:
         del noise_mm
-        return finish(*poses)
+        return finish(*stacks)
 
     return run
 
