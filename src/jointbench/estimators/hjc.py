@@ -96,6 +96,7 @@ from jointbench.estimators.twosegment import (
     batched_all,
     each_trial,
     eigen_solution,
+    trial_outcomes,
 )
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
@@ -227,9 +228,9 @@ def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult
     centers, rcond, errors = _analytic(m, y, prox.rotation.shape[1], "analytic")
     residual = np.einsum("tfij,tj->tfi", m, centers) - y
     cost = np.sum(residual**2, axis=(1, 2))
-    return [
-        error
-        or JointCenterResult(
+    return trial_outcomes(
+        errors,
+        lambda trial: JointCenterResult(
             center=centers[trial],
             covariance=None,
             converged=True,
@@ -238,9 +239,8 @@ def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult
             method="analytic",
             cost=float(cost[trial]),
             diagnostics={"rcond": float(rcond[trial])},
-        )
-        for trial, error in enumerate(errors)
-    ]
+        ),
+    )
 
 
 def _weights(r0, r1, a0, a1) -> np.ndarray:

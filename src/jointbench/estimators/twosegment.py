@@ -66,6 +66,7 @@ __all__ = [
     "fit_score_center",
     "pose_segments",
     "stored_segment_poses",
+    "trial_outcomes",
     "trial_poses",
 ]
 
@@ -314,8 +315,8 @@ def _score_solve(r1, t1, r2, t2) -> tuple[np.ndarray, np.ndarray, np.ndarray, li
     return solution[:, :3], solution[:, 3:], values[:, 0] / values[:, -1], errors
 
 
-def _outcomes(errors: list[ValueError | None], result: Callable[[int], Outcome]) -> list:
-    """Per trial its rank error, or ``result(trial)``."""
+def trial_outcomes(errors: list[ValueError | None], result: Callable[[int], Outcome]) -> list:
+    """Per trial its error (a ``ValueError``), or ``result(trial)`` when it has none."""
     return [result(trial) if error is None else error for trial, error in enumerate(errors)]
 
 
@@ -350,7 +351,7 @@ def _score_joint(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | V
     at_frame0 = _applied(r1[:, :1], c1)[:, 0], _applied(r2[:, :1], c2)[:, 0]
     world = 0.5 * (at_frame0[0] + t1[:, 0] + at_frame0[1] + t2[:, 0])
     cost = _residual_ss(r1, t1, c1, r2, t2, c2)
-    return _outcomes(
+    return trial_outcomes(
         errors,
         lambda t: JointCenterResult(
             center=world[t],
@@ -383,7 +384,7 @@ def _score_center(poses: PoseStack) -> list[CenterResult | ValueError]:
     r2, t2 = poses.rotation, poses.translation
     c1, c2, rcond, errors = _score_solve(None, None, r2, t2)
     cost = _residual_ss(None, None, c1, r2, t2, c2)
-    return _outcomes(
+    return trial_outcomes(
         errors,
         lambda t: CenterResult(
             center=c1[t],
@@ -459,19 +460,24 @@ def _sara(poses: PoseStack) -> list[AxisResult | ValueError]:
         None, None, poses.rotation, poses.translation, origin
     )
     radii = _mean_distance_to_axis(poses.markers, p1, n1)
-    return _outcomes(
+    return _sara_results(errors, p1, n1, radii, ratio, direction_moving=n2, point_moving=p2)
+
+
+def _sara_results(errors, point, direction, radii, ratio, **versions) -> list:
+    """Per trial its rank error or its SARA :class:`AxisResult`, from the stacks ``(T, ...)``
+    of the answer and of the ``versions`` the diagnostics carry (with ``ratio``)."""
+    return trial_outcomes(
         errors,
         lambda t: AxisResult(
-            point=p1[t],
-            direction=n1[t],
+            point=point[t],
+            direction=direction[t],
             radii=radii[t],
             converged=True,
             iterations=0,
             status="ok",
             method="SARA",
             diagnostics={
-                "direction_moving": n2[t].tolist(),
-                "point_moving": p2[t].tolist(),
+                **{name: version[t].tolist() for name, version in versions.items()},
                 "ratio": float(ratio[t]),
             },
         ),
@@ -500,24 +506,16 @@ def _sara_two_segment(prox: PoseStack, dist: PoseStack) -> list[AxisResult | Val
     point = 0.5 * (at_frame0[0] + t1[:, 0] + at_frame0[1] + t2[:, 0])
     distal_in_proximal = np.einsum("tfji,tfmj->tfmi", r1, dist.markers - t1[:, :, None, :])
     radii = _mean_distance_to_axis(distal_in_proximal, p1, n1)
-    return _outcomes(
+    return _sara_results(
         errors,
-        lambda t: AxisResult(
-            point=point[t],
-            direction=direction[t],
-            radii=radii[t],
-            converged=True,
-            iterations=0,
-            status="ok",
-            method="SARA",
-            diagnostics={
-                "direction_proximal": n1[t].tolist(),
-                "point_proximal": p1[t].tolist(),
-                "direction_distal": n2[t].tolist(),
-                "point_distal": p2[t].tolist(),
-                "ratio": float(ratio[t]),
-            },
-        ),
+        point,
+        direction,
+        radii,
+        ratio,
+        direction_proximal=n1,
+        point_proximal=p1,
+        direction_distal=n2,
+        point_distal=p2,
     )
 
 
