@@ -301,9 +301,10 @@ def eigen_solution(vectors: np.ndarray, values: np.ndarray, rhs: np.ndarray) -> 
     """``V diag(1 / values) V' b`` per trial: the least-squares solution of normal equations
     from their eigenvectors ``V`` ``(T, n, k)`` (all ``n``, or ``k`` of them to drop a
     direction), eigenvalues ``(T, k)`` and right-hand sides ``b`` ``(T, n)``: ``(T, n)``."""
-    # A trial rejected for its rank divides by a vanishing eigenvalue; its answer is dropped.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        projected = (np.swapaxes(vectors, 1, 2) @ rhs[..., None])[..., 0] / values
+    # Negligible eigenvalues (only a trial rejected for its rank has any) are left out, so that
+    # trial's unused answer stays finite.
+    kept = np.where(negligible(values, values[:, -1:]), np.inf, values)
+    projected = (np.swapaxes(vectors, 1, 2) @ rhs[..., None])[..., 0] / kept
     return (vectors @ projected[..., None])[..., 0]
 
 
