@@ -322,3 +322,13 @@ def test_result_is_frozen(noisy_hinge):
     assert result.method == "radial"
     assert result.radii.shape == (3,)
     assert result.diagnostics["start"] == int(np.argmin(result.diagnostics["start_costs"]))
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_one_trial_call_checks_the_input_as_given(noisy_hinge, method):
+    """The one-trial function is the many-trial search on a batch of one that holds the
+    caller's array as given: a masked gap is named, not dropped with its mask."""
+    markers = np.ma.masked_array(noisy_hinge["markers"])
+    markers[7, 1] = np.ma.masked
+    with pytest.raises(ValueError, match="markers is a masked array with masked values"):
+        getattr(axis, f"fit_{method}")(markers)

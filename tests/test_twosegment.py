@@ -205,3 +205,43 @@ def test_rigid_fit_of_collinear_points_is_the_best_rotation():
         fitted = points @ rotation[0].T + translation[0]
         worst = max(worst, float(np.abs(fitted - points).max()))
     assert worst < 1e-9
+
+
+def test_one_trial_call_checks_the_input_as_given():
+    """The one-trial function is its many-trial form on a batch of one that holds the caller's
+    array as given: a masked gap and complex coordinates are named, not converted away."""
+    proximal, distal = two_segments(20)
+    masked = np.ma.masked_array(distal, mask=np.zeros(distal.shape, dtype=bool))
+    masked.mask[4, 1, 0] = True
+    with pytest.raises(ValueError, match="distal is a masked array with masked values"):
+        jb.estimators.twosegment.fit_score(proximal, masked)
+    with pytest.raises(ValueError, match="markers is complex"):
+        fit_sara(one_segment(hinge=True).astype(complex))
+
+
+@pytest.mark.parametrize("method", ["SCoRE", "analytic", "SARA two-segment"])
+def test_degenerate_trial_in_a_stack_fails_alone(method):
+    """Trials are solved as one stack; a trial whose motion does not determine the answer
+    carries the degenerate-motion error, and the others get what they get alone."""
+    from jointbench.estimators import hjc, twosegment
+
+    fits = {
+        "SCoRE": twosegment._score_trials,
+        "analytic": hjc._analytic_trials,
+        "SARA two-segment": twosegment._sara_two_segment_trials,
+    }
+    fit = fits[method]
+    ball, still = two_segments(40), two_segments(40, relative="none")
+    trials = [
+        (_noisy(ball[0], 1), _noisy(ball[1], 2)),
+        still,
+        (_noisy(ball[0], 3), _noisy(ball[1], 4)),
+    ]
+    outcomes = fit(*(np.stack(segment) for segment in zip(*trials, strict=True)))
+    assert isinstance(outcomes[1], ValueError)
+    assert "do not rotate relative to each other" in str(outcomes[1])
+    for index in (0, 2):
+        (alone,) = fit(*(segment[None] for segment in trials[index]))
+        answer = "point" if method.startswith("SARA") else "center"
+        np.testing.assert_array_equal(getattr(outcomes[index], answer), getattr(alone, answer))
+        assert outcomes[index].diagnostics == alone.diagnostics

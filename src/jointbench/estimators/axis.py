@@ -88,7 +88,7 @@ import numpy as np
 
 from jointbench.declared import Count, Point, Positive
 from jointbench.estimators import selfcheck
-from jointbench.estimators.batching import isolated
+from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm
@@ -436,21 +436,12 @@ def _result(array, trial, costs, runs, method, parameterisation) -> AxisResult:
     )
 
 
-def _fit(markers: object, method: str, *, point: object | None, **search) -> AxisResult:
-    array = _checked(markers, search["parameterisation"])
-    m = _given_point(point)
-    if m is None:
-        (m,) = _nm_points([array])
-        if isinstance(m, ValueError):
-            raise m
-    return _fit_many([array], [m], method, **search)[0]
-
-
-def _fit_batch(
+def _fit_trials(
     markers: object, method: str, *, point: object | None, **search
 ) -> list[AxisResult | ValueError]:
-    """:func:`_fit` for every trial of ``markers`` ``(n_trials, N, P, 3)``; a trial that the
-    one-trial function rejects carries its ``ValueError``."""
+    """The axis of every trial of ``markers`` ``(n_trials, N, P, 3)`` [mm] (or a list of
+    trials): per trial its :class:`AxisResult`, or the ``ValueError`` of a trial that cannot be
+    fitted."""
     outcomes, prepared = prepare_trials(
         markers, lambda data: (_checked(data, search["parameterisation"]), _given_point(point))
     )
@@ -500,9 +491,14 @@ _DOC = """
     """
 
 
+def _fit(markers: object, method: str, **search) -> AxisResult:
+    """:func:`_fit_trials` on one trial ``(N, P, 3)`` [mm]."""
+    return one_trial(_fit_trials, markers, method=method, **search)
+
+
 def _entry(solve: Callable, method: str) -> Callable:
     """``solve(markers, method, **search)`` behind the estimators' keyword signature: the
-    one-trial function (``solve`` = :func:`_fit`) and its many-trial form (:func:`_fit_batch`)."""
+    one-trial function (``solve`` = :func:`_fit`) and its many-trial form (:func:`_fit_trials`)."""
 
     def entry(
         markers: np.ndarray,
@@ -580,7 +576,7 @@ def _self_check(
 
 def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     fit = _entry(_fit, method)
-    batched = _entry(_fit_batch, method)
+    batched = _entry(_fit_trials, method)
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
     fit.batched = isolated(batched)

@@ -15,11 +15,24 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["NUMERICAL_FAILURES", "each_alone", "isolated"]
+__all__ = ["NUMERICAL_FAILURES", "each_alone", "isolated", "one_trial"]
 
 #: What a fit raises when a trial's values defeat it (``LinAlgError`` is a ``ValueError``);
 #: anything else is a bug and propagates.
 NUMERICAL_FAILURES = (ValueError, FloatingPointError)
+
+
+def one_trial(fit_trials: Callable[..., list], *segments: object, **options: object):
+    """The one-trial function of a method written over trials: ``fit_trials`` on a batch of one.
+
+    Each segment is passed as a list holding the caller's object, so the trial's input checks
+    see it as given (its dtype, its mask) and name the problem as for one trial. Returns the
+    trial's result; a trial that fails raises its ``ValueError``.
+    """
+    (outcome,) = fit_trials(*([segment] for segment in segments), **options)
+    if isinstance(outcome, Exception):
+        raise outcome
+    return outcome
 
 
 def each_alone(fit_one: Callable[[int], object], n_trials: int) -> list:

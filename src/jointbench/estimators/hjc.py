@@ -85,16 +85,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.declared import Count, NonNegative
-from jointbench.estimators.batching import isolated
+from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
     POSE_MIN_FRAMES,
+    PoseStack,
     SegmentPoses,
     batched,
     batched_all,
     each_trial,
-    two_segment_poses,
+    eigen_solution,
+    trial_outcomes,
 )
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
@@ -162,29 +164,42 @@ def constraint_covariance(
     return rotated3(r0, a0) + rotated3(r1, a1)
 
 
-def _relative_system(prox: SegmentPoses, dist: SegmentPoses) -> tuple[np.ndarray, np.ndarray]:
-    """``M_t = R0 - R1`` ``(N-1, 3, 3)`` and ``y_t = d1 - d0`` ``(N-1, 3)`` for ``t >= 1``."""
+def _relative_system(prox, dist) -> tuple[np.ndarray, np.ndarray]:
+    """``M_t = R0 - R1`` ``(..., N-1, 3, 3)`` and ``y_t = d1 - d0`` ``(..., N-1, 3)`` for
+    ``t >= 1``, of one trial's poses (:class:`SegmentPoses`) or a stack's (:class:`PoseStack`)."""
     return (
-        prox.rotation[1:] - dist.rotation[1:],
-        dist.translation[1:] - prox.translation[1:],
+        prox.rotation[..., 1:, :, :] - dist.rotation[..., 1:, :, :],
+        dist.translation[..., 1:, :] - prox.translation[..., 1:, :],
     )
 
 
 def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
-    """Eq. 9 with the degenerate-motion checks; returns ``(c, rcond)``."""
-    normal = np.einsum("fki,fkj->ij", m, m)
-    rhs = np.einsum("fki,fk->i", m, y)
+    """Eq. 9 for trials ``m`` ``(T, N-1, 3, 3)``, ``y`` ``(T, N-1, 3)``: centres ``c``
+    ``(T, 3)`` [mm], ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of
+    degenerate motion (the centre of such a trial is not used)."""
+    normal = np.einsum("tfki,tfkj->tij", m, m)
+    rhs = np.einsum("tfki,tfk->ti", m, y)
     values, vectors = np.linalg.eigh(normal)
+    errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
+    # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rcond = values[:, 0] / values[:, -1]
+    return eigen_solution(vectors, values, rhs), rcond, errors
+
+
+def _motion_error(values: np.ndarray, n_frames: int, what: str) -> ValueError | None:
+    """The degenerate-motion error of a normal matrix with eigenvalues ``values`` (3,),
+    ascending, or ``None``."""
     if values[-1] <= _NO_ROTATION * n_frames:
-        raise ValueError(
+        return ValueError(
             f"{what}: degenerate motion: the segments do not rotate relative to each other"
         )
     if negligible(values[0], values[-1]):
-        raise ValueError(
+        return ValueError(
             f"{what}: degenerate motion: the relative rotation is about a single axis (a "
             "hinge), so the centre is not determined along that axis"
         )
-    return vectors @ ((vectors.T @ rhs) / values), float(values[0] / values[-1])
+    return None
 
 
 @register("joint_center", "analytic", min_frames=POSE_MIN_FRAMES)
@@ -205,23 +220,26 @@ def fit_analytic(
         0); ``covariance`` ``None``; ``cost`` ``sum_t |f0(t) c - f1(t) c|^2`` [mm^2] (eq. 6);
         ``diagnostics["rcond"]`` the smallest over largest eigenvalue of ``sum M'M``.
     """
-    del noise_mm
-    return _analytic_result(*two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES))
+    return one_trial(_analytic_trials, proximal, distal, noise_mm=noise_mm)
 
 
-def _analytic_result(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
+def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | ValueError]:
     m, y = _relative_system(prox, dist)
-    center, rcond = _analytic(m, y, prox.rotation.shape[0], "analytic")
-    residual = np.einsum("fij,j->fi", m, center) - y
-    return JointCenterResult(
-        center=center,
-        covariance=None,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="analytic",
-        cost=float(np.sum(residual**2)),
-        diagnostics={"rcond": rcond},
+    centers, rcond, errors = _analytic(m, y, prox.rotation.shape[1], "analytic")
+    residual = np.einsum("tfij,tj->tfi", m, centers) - y
+    cost = np.sum(residual**2, axis=(1, 2))
+    return trial_outcomes(
+        errors,
+        lambda trial: JointCenterResult(
+            center=centers[trial],
+            covariance=None,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="analytic",
+            cost=float(cost[trial]),
+            diagnostics={"rcond": float(rcond[trial])},
+        ),
     )
 
 
@@ -254,7 +272,10 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
     """The analytic start, the noise variance and the lever factors of one trial; the analytic
     step's ``ValueError`` on degenerate motion."""
     m, y = _relative_system(prox, dist)
-    analytic_center, rcond = _analytic(m, y, prox.rotation.shape[0], method)
+    centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
+    if errors[0] is not None:
+        raise errors[0]
+    analytic_center, rcond = centers[0], float(rconds[0])
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
     return _Prepared(
         m=m,
@@ -570,18 +591,14 @@ def _result(
 def _gauss_markov(
     proximal, distal, *, noise_mm, frame0: bool, max_iterations: int, tol_mm: float
 ) -> JointCenterResult:
-    _check_gauss_markov_options(noise_mm, max_iterations, tol_mm)
-    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
-    (outcome,) = _gauss_markov_results(
-        [{"proximal": prox, "distal": dist}],
+    return one_trial(
+        _gauss_markov_trials[frame0],
+        proximal,
+        distal,
         noise_mm=noise_mm,
-        frame0=frame0,
         max_iterations=max_iterations,
         tol_mm=tol_mm,
     )
-    if isinstance(outcome, ValueError):
-        raise outcome
-    return outcome
 
 
 def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
@@ -696,15 +713,18 @@ def _batched_gauss_markov(frame0: bool):
 
 
 def _analytic_finish(
-    prox: SegmentPoses, dist: SegmentPoses, *, noise_mm: float | None = None
-) -> JointCenterResult:
+    prox: PoseStack, dist: PoseStack, *, noise_mm: float | None = None
+) -> list[JointCenterResult | ValueError]:
     del noise_mm
     return _analytic_result(prox, dist)
 
 
-fit_analytic.batched = batched(_analytic_finish, ("proximal", "distal"))
-fit_gauss_markov.batched = _batched_gauss_markov(frame0=False)
-fit_gauss_markov_frame0.batched = _batched_gauss_markov(frame0=True)
+_analytic_trials = batched(_analytic_finish, ("proximal", "distal"))
+_gauss_markov_trials = {frame0: _batched_gauss_markov(frame0) for frame0 in (False, True)}
+
+fit_analytic.batched = _analytic_trials
+fit_gauss_markov.batched = _gauss_markov_trials[False]
+fit_gauss_markov_frame0.batched = _gauss_markov_trials[True]
 
 
 def align_to_markers(

@@ -42,7 +42,7 @@ from typing import TypeVar
 import numpy as np
 
 from jointbench.declared import NonNegative
-from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated
+from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated, one_trial
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import (
@@ -55,18 +55,19 @@ from jointbench.numerics.rank import negligible
 
 __all__ = [
     "POSE_MIN_FRAMES",
+    "PoseStack",
     "SegmentPoses",
     "batched",
     "batched_all",
+    "eigen_solution",
     "fit_sara",
     "fit_sara_two_segment",
     "fit_score",
     "fit_score_center",
     "pose_segments",
-    "segment_poses",
     "stored_segment_poses",
+    "trial_outcomes",
     "trial_poses",
-    "two_segment_poses",
 ]
 
 #: Fewest frames a pose-based method accepts: every one of them needs the same, so their
@@ -92,17 +93,6 @@ class SegmentPoses:
     body: np.ndarray
     residual_ss: float
     dof: int
-
-
-def segment_poses(markers: np.ndarray, *, name: str) -> SegmentPoses:
-    """Paper C §5 poses of one segment's (already checked) markers ``(N, n_markers, 3)``.
-
-    Collinearity is checked on frame 0 (the starting body coordinates) and on the estimated
-    body-fixed coordinates, which is what every frame's fit uses -- checking every frame would
-    cost more than the fit.
-    """
-    check_not_collinear(markers[:1], name=name)
-    return _segment_poses(markers, *rigid_poses(markers), name=name)
 
 
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
@@ -134,16 +124,6 @@ def stored_segment_poses(
     )
 
 
-def two_segment_poses(
-    proximal: object, distal: object, *, min_frames: int
-) -> tuple[SegmentPoses, SegmentPoses]:
-    """Check both segments' world-frame markers and fit their poses."""
-    proximal = check_markers(proximal, min_frames=min_frames, min_markers=3, name="proximal")
-    distal = check_markers(distal, min_frames=min_frames, min_markers=3, name="distal")
-    check_same_frames(proximal, distal)
-    return segment_poses(proximal, name="proximal"), segment_poses(distal, name="distal")
-
-
 Outcome = TypeVar("Outcome")
 
 
@@ -151,35 +131,47 @@ def trial_poses(
     segments: dict[str, np.ndarray], *, min_frames: int
 ) -> list[dict[str, SegmentPoses] | ValueError]:
     """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
-    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm].
+    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials.
 
-    Per trial, the checks of :func:`two_segment_poses` / :func:`segment_poses` in the same
-    order, so a trial that the one-trial path rejects carries the same ``ValueError``; every
-    segment's poses are fitted for all trials in one call of
+    Per trial, each segment's markers are checked (at least ``min_frames`` frames and 3
+    markers, not collinear at frame 0), two segments must share frames, and the body-fixed
+    coordinates the fit estimates must not be collinear; a trial that fails a check carries
+    its ``ValueError``. Every segment's poses are fitted for all trials in one call of
     :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
     ``batched`` form of every pose-based method.
     """
     names = list(segments)
-    arrays = {name: np.asarray(markers, dtype=float) for name, markers in segments.items()}
-    n_trials = next(iter(arrays.values())).shape[0]
+    arrays = {
+        name: markers if isinstance(markers, list) else np.asarray(markers)
+        for name, markers in segments.items()
+    }
+    n_trials = len(arrays[names[0]])
     outcomes: list = [None] * n_trials
+    checked: dict[int, list[np.ndarray]] = {}
     for trial in range(n_trials):
         try:
-            for name in names:
+            checked[trial] = [
                 check_markers(arrays[name][trial], min_frames=min_frames, min_markers=3, name=name)
+                for name in names
+            ]
             if len(names) == 2:
-                check_same_frames(*(arrays[name][trial] for name in names))
-            for name in names:
-                check_not_collinear(arrays[name][trial, :1], name=name)
+                check_same_frames(*checked[trial])
+            for name, markers in zip(names, checked[trial], strict=True):
+                check_not_collinear(markers[:1], name=name)
         except ValueError as error:
             outcomes[trial] = error
-    good = [trial for trial in range(n_trials) if outcomes[trial] is None]
-    fitted = {name: _fitted_poses(arrays[name][good]) for name in names}
-    for index, trial in enumerate(good):
+            checked.pop(trial, None)
+    good = list(checked)
+    stacked = [
+        np.stack([checked[trial][index] for trial in good]) if good else None
+        for index in range(len(names))
+    ]
+    fitted = [_fitted_poses(markers) if good else [] for markers in stacked]
+    for row, trial in enumerate(good):
         try:
             outcomes[trial] = {
-                name: _segment_poses(arrays[name][trial], *_parts(fitted[name][index]), name=name)
-                for name in names
+                name: _segment_poses(stacked[index][row], *_parts(fitted[index][row]), name=name)
+                for index, name in enumerate(names)
             }
         except ValueError as error:
             outcomes[trial] = error
@@ -222,59 +214,111 @@ def each_trial(
     return outcomes
 
 
+@dataclass(frozen=True)
+class PoseStack:
+    """The poses of trials with the same numbers of frames and markers, stacked on a leading
+    trial axis (see :class:`SegmentPoses`): ``markers`` ``(T, N, P, 3)`` [mm], ``rotation``
+    ``(T, N, 3, 3)``, ``translation`` ``(T, N, 3)`` [mm], ``body`` ``(T, P, 3)`` [mm]."""
+
+    markers: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    body: np.ndarray
+
+    @classmethod
+    def of(cls, poses: list[SegmentPoses]) -> PoseStack:
+        return cls(
+            *(
+                np.stack([getattr(pose, field) for pose in poses])
+                for field in ("markers", "rotation", "translation", "body")
+            )
+        )
+
+
 def stacked_normal_equations(
     r1: np.ndarray | None, t1: np.ndarray | None, r2: np.ndarray, t2: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``A'A`` ``(6, 6)`` and ``A'b`` ``(6,)`` of ``A = [R1, -R2]`` (stacked), ``b = t2 - t1``.
+    """Per trial, ``A'A`` ``(T, 6, 6)`` and ``A'b`` ``(T, 6)`` of ``A = [R1, -R2]`` stacked over
+    the frames and ``b = t2 - t1``, for rotations ``(T, N, 3, 3)`` and translations
+    ``(T, N, 3)`` [mm].
 
     ``r1 = t1 = None`` means the identity reference pose (one-segment data).
     """
-    n_frames = r2.shape[0]
+    n_trials, n_frames = r2.shape[:2]
     rhs = t2 if t1 is None else t2 - t1
-    normal = np.empty((6, 6))
-    normal[:3, :3] = normal[3:, 3:] = n_frames * np.eye(3)
+    normal = np.empty((n_trials, 6, 6))
+    normal[:, :3, :3] = normal[:, 3:, 3:] = n_frames * np.eye(3)
     if r1 is None:
-        s = r2.sum(axis=0)
-        g1 = rhs.sum(axis=0)
+        s = r2.sum(axis=1)
+        g1 = rhs.sum(axis=1)
     else:
-        s = np.einsum("fji,fjk->ik", r1, r2)
-        g1 = np.einsum("fji,fj->i", r1, rhs)
-    normal[:3, 3:] = -s
-    normal[3:, :3] = -s.T
-    g2 = -np.einsum("fji,fj->i", r2, rhs)
-    return normal, np.concatenate([g1, g2])
+        s = np.einsum("tfji,tfjk->tik", r1, r2)
+        g1 = np.einsum("tfji,tfj->ti", r1, rhs)
+    normal[:, :3, 3:] = -s
+    normal[:, 3:, :3] = -np.swapaxes(s, 1, 2)
+    g2 = -np.einsum("tfji,tfj->ti", r2, rhs)
+    return normal, np.concatenate([g1, g2], axis=1)
 
 
-def _eigen(normal: np.ndarray, *, what: str, min_rank: int) -> tuple[np.ndarray, np.ndarray]:
-    """Eigen-decomposition of a normal matrix; ``ValueError`` when its rank is below
-    ``min_rank`` (the segments do not rotate relative to each other, or only about one axis)."""
+def _eigen(
+    normal: np.ndarray, *, what: str, min_rank: int
+) -> tuple[np.ndarray, np.ndarray, list[ValueError | None]]:
+    """Eigen-decomposition of normal matrices ``(T, 6, 6)``, and per trial ``None`` or the
+    ``ValueError`` of a rank below ``min_rank`` (the segments do not rotate relative to each
+    other, or only about one axis)."""
     values, vectors = np.linalg.eigh(normal)
-    zero = negligible(values, values[-1])
-    rank = int(np.sum(~zero))
-    if rank < min_rank:
-        if rank <= 3:
-            problem = "the segments do not rotate relative to each other"
-        else:
-            problem = (
-                "the relative rotation is about a single axis (a hinge), so the centre is not "
-                "determined along that axis; fit an axis (SARA) instead"
-            )
-        raise ValueError(f"{what}: degenerate motion: {problem}")
-    return values, vectors
+    ranks = np.sum(~negligible(values, values[:, -1:]), axis=1)
+    return values, vectors, [_rank_error(int(rank), what, min_rank) for rank in ranks]
 
 
-def _residual_ss(r1, t1, c1, r2, t2, c2) -> float:
-    """``sum_t |R1 c1 + t1 - R2 c2 - t2|^2`` [mm^2]; ``r1 = t1 = None`` is the identity."""
-    world2 = r2 @ c2 + t2
-    world1 = c1 if r1 is None else r1 @ c1 + t1
-    return float(np.sum((world1 - world2) ** 2))
+def _rank_error(rank: int, what: str, min_rank: int) -> ValueError | None:
+    if rank >= min_rank:
+        return None
+    if rank <= 3:
+        problem = "the segments do not rotate relative to each other"
+    else:
+        problem = (
+            "the relative rotation is about a single axis (a hinge), so the centre is not "
+            "determined along that axis; fit an axis (SARA) instead"
+        )
+    return ValueError(f"{what}: degenerate motion: {problem}")
 
 
-def _score_solve(r1, t1, r2, t2, *, what: str) -> tuple[np.ndarray, np.ndarray, float]:
+def _applied(rotation: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """``R_f p`` for rotations ``(T, N, 3, 3)`` and a point per trial ``(T, 3)``: ``(T, N, 3)``."""
+    return np.einsum("tfij,tj->tfi", rotation, point)
+
+
+def _residual_ss(r1, t1, c1, r2, t2, c2) -> np.ndarray:
+    """``sum_f |R1 c1 + t1 - R2 c2 - t2|^2`` [mm^2] per trial ``(T,)``; ``r1 = t1 = None`` is
+    the identity."""
+    world2 = _applied(r2, c2) + t2
+    world1 = c1[:, None, :] if r1 is None else _applied(r1, c1) + t1
+    return np.sum((world1 - world2) ** 2, axis=(1, 2))
+
+
+def eigen_solution(vectors: np.ndarray, values: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``V diag(1 / values) V' b`` per trial: the least-squares solution of normal equations
+    from their eigenvectors ``V`` ``(T, n, k)`` (all ``n``, or ``k`` of them to drop a
+    direction), eigenvalues ``(T, k)`` and right-hand sides ``b`` ``(T, n)``: ``(T, n)``."""
+    # Negligible eigenvalues (only a trial rejected for its rank has any) are left out, so that
+    # trial's unused answer stays finite.
+    kept = np.where(negligible(values, values[:, -1:]), np.inf, values)
+    projected = (np.swapaxes(vectors, 1, 2) @ rhs[..., None])[..., 0] / kept
+    return (vectors @ projected[..., None])[..., 0]
+
+
+def _score_solve(r1, t1, r2, t2) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """SCoRE's ``c1``, ``c2`` ``(T, 3)`` [mm], rcond ``(T,)`` and per-trial rank errors."""
     normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
-    values, vectors = _eigen(normal, what=what, min_rank=6)
-    solution = vectors @ ((vectors.T @ rhs) / values)
-    return solution[:3], solution[3:], float(values[0] / values[-1])
+    values, vectors, errors = _eigen(normal, what="SCoRE", min_rank=6)
+    solution = eigen_solution(vectors, values, rhs)
+    return solution[:, :3], solution[:, 3:], values[:, 0] / values[:, -1], errors
+
+
+def trial_outcomes(errors: list[ValueError | None], result: Callable[[int], Outcome]) -> list:
+    """Per trial its error (a ``ValueError``), or ``result(trial)`` when it has none."""
+    return [result(trial) if error is None else error for trial, error in enumerate(errors)]
 
 
 @register("joint_center", "SCoRE", min_frames=POSE_MIN_FRAMES)
@@ -299,23 +343,31 @@ def fit_score(
         ``diagnostics``: ``center_proximal`` ``c1``, ``center_distal`` ``c2`` (body frames) and
         ``rcond`` (smallest over largest eigenvalue of the normal matrix).
     """
-    del noise_mm
-    return _score_joint(*two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES))
+    return one_trial(_score_trials, proximal, distal, noise_mm=noise_mm)
 
 
-def _score_joint(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
+def _score_joint(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | ValueError]:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
-    c1, c2, rcond = _score_solve(r1, t1, r2, t2, what="SCoRE")
-    world = 0.5 * (r1[0] @ c1 + t1[0] + r2[0] @ c2 + t2[0])
-    return JointCenterResult(
-        center=world,
-        covariance=None,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SCoRE",
-        cost=_residual_ss(r1, t1, c1, r2, t2, c2),
-        diagnostics={"center_proximal": c1.tolist(), "center_distal": c2.tolist(), "rcond": rcond},
+    c1, c2, rcond, errors = _score_solve(r1, t1, r2, t2)
+    at_frame0 = _applied(r1[:, :1], c1)[:, 0], _applied(r2[:, :1], c2)[:, 0]
+    world = 0.5 * (at_frame0[0] + t1[:, 0] + at_frame0[1] + t2[:, 0])
+    cost = _residual_ss(r1, t1, c1, r2, t2, c2)
+    return trial_outcomes(
+        errors,
+        lambda t: JointCenterResult(
+            center=world[t],
+            covariance=None,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SCoRE",
+            cost=float(cost[t]),
+            diagnostics={
+                "center_proximal": c1[t].tolist(),
+                "center_distal": c2[t].tolist(),
+                "rcond": float(rcond[t]),
+            },
+        ),
     )
 
 
@@ -326,61 +378,67 @@ def fit_score_center(markers: np.ndarray) -> CenterResult:
     stacked system is ``[I, -R2] [c1; c2] = t2``; the centre ``c1`` is in the reference frame.
     ``cost`` is ``sum_t |c1 - R2 c2 - t2|^2`` [mm^2]; ``radii`` is ``None``.
     """
-    markers = check_markers(markers, min_frames=POSE_MIN_FRAMES, min_markers=3)
-    return _score_center(segment_poses(markers, name="markers"))
+    return one_trial(_score_center_trials, markers)
 
 
-def _score_center(poses: SegmentPoses) -> CenterResult:
+def _score_center(poses: PoseStack) -> list[CenterResult | ValueError]:
     r2, t2 = poses.rotation, poses.translation
-    c1, c2, rcond = _score_solve(None, None, r2, t2, what="SCoRE")
-    return CenterResult(
-        center=c1,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SCoRE",
-        cost=_residual_ss(None, None, c1, r2, t2, c2),
-        diagnostics={"center_moving": c2.tolist(), "rcond": rcond},
+    c1, c2, rcond, errors = _score_solve(None, None, r2, t2)
+    cost = _residual_ss(None, None, c1, r2, t2, c2)
+    return trial_outcomes(
+        errors,
+        lambda t: CenterResult(
+            center=c1[t],
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SCoRE",
+            cost=float(cost[t]),
+            diagnostics={"center_moving": c2[t].tolist(), "rcond": float(rcond[t])},
+        ),
     )
 
 
-def _sara_solve(
-    r1, t1, r2, t2, origin: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
-    """Axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` of SARA.
+def _sara_solve(r1, t1, r2, t2, origin: np.ndarray):
+    """SARA's axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` [mm], each
+    ``(T, 3)``, the eigenvalue ratio ``(T,)`` and the per-trial rank errors.
 
     Both body frames coincide with the world at frame 0. The point is the minimum-norm
-    least-squares solution about ``origin`` (3,) [mm] with the axis direction dropped, so
+    least-squares solution about ``origin`` ``(T, 3)`` [mm] with the axis direction dropped, so
     ``(p1 - origin) . n1 + (p2 - origin) . n2 = 0``: for a noise-free hinge, the point of the
     axis nearest ``origin``. Solving about a point near the markers (not the coordinates'
     origin) keeps the right-hand side small, so the answer does not lose digits to the data's
     distance from the origin.
     """
     # Each body frame moved to ``origin``: x = R (b' + o) + t, so t' = R o + t - o.
-    t2 = np.einsum("fij,j->fi", r2, origin) + t2 - origin
+    t2 = _applied(r2, origin) + t2 - origin[:, None, :]
     if r1 is not None:
-        t1 = np.einsum("fij,j->fi", r1, origin) + t1 - origin
+        t1 = _applied(r1, origin) + t1 - origin[:, None, :]
     normal, rhs = stacked_normal_equations(r1, t1, r2, t2)
-    values, vectors = _eigen(normal, what="SARA", min_rank=5)
-    axis = vectors[:, 0]
-    rest = vectors[:, 1:]
-    point = rest @ ((rest.T @ rhs) / values[1:])
-    n1, n2 = axis[:3], axis[3:]
+    values, vectors, errors = _eigen(normal, what="SARA", min_rank=5)
+    axis = vectors[:, :, 0]
+    point = eigen_solution(vectors[:, :, 1:], values[:, 1:], rhs)
+    n1, n2 = axis[:, :3], axis[:, 3:]
+    # A trial without relative rotation has a zero second eigenvalue; its error is returned.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = values[:, 0] / values[:, 1]
     return (
-        n1 / np.linalg.norm(n1),
-        n2 / np.linalg.norm(n2),
-        point[:3] + origin,
-        point[3:] + origin,
-        float(values[0] / values[1]),
+        n1 / np.linalg.norm(n1, axis=1, keepdims=True),
+        n2 / np.linalg.norm(n2, axis=1, keepdims=True),
+        point[:, :3] + origin,
+        point[:, 3:] + origin,
+        ratio,
+        errors,
     )
 
 
 def _mean_distance_to_axis(points: np.ndarray, point: np.ndarray, direction: np.ndarray):
-    """Mean over frames of each marker's distance from the line ``(point, direction)``."""
-    offset = points - point
-    along = offset @ direction
-    perpendicular = offset - along[..., None] * direction
-    return np.linalg.norm(perpendicular, axis=-1).mean(axis=0)
+    """Mean over frames of each marker's distance [mm] from the line ``(point, direction)``,
+    per trial: points ``(T, N, P, 3)``, one line per trial ``(T, 3)`` -> ``(T, P)``."""
+    offset = points - point[:, None, None, :]
+    along = np.einsum("tfpi,ti->tfp", offset, direction)
+    perpendicular = offset - along[..., None] * direction[:, None, None, :]
+    return np.linalg.norm(perpendicular, axis=-1).mean(axis=1)
 
 
 @register("axis", "SARA", min_frames=POSE_MIN_FRAMES)
@@ -394,22 +452,36 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
     normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
     """
-    markers = check_markers(markers, min_frames=POSE_MIN_FRAMES, min_markers=3)
-    return _sara(segment_poses(markers, name="markers"))
+    return one_trial(_sara_trials, markers)
 
 
-def _sara(poses: SegmentPoses) -> AxisResult:
-    origin = poses.body.mean(axis=0)
-    n1, n2, p1, p2, ratio = _sara_solve(None, None, poses.rotation, poses.translation, origin)
-    return AxisResult(
-        point=p1,
-        direction=n1,
-        radii=_mean_distance_to_axis(poses.markers, p1, n1),
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SARA",
-        diagnostics={"direction_moving": n2.tolist(), "point_moving": p2.tolist(), "ratio": ratio},
+def _sara(poses: PoseStack) -> list[AxisResult | ValueError]:
+    origin = poses.body.mean(axis=1)
+    n1, n2, p1, p2, ratio, errors = _sara_solve(
+        None, None, poses.rotation, poses.translation, origin
+    )
+    radii = _mean_distance_to_axis(poses.markers, p1, n1)
+    return _sara_results(errors, p1, n1, radii, ratio, direction_moving=n2, point_moving=p2)
+
+
+def _sara_results(errors, point, direction, radii, ratio, **versions) -> list:
+    """Per trial its rank error or its SARA :class:`AxisResult`, from the stacks ``(T, ...)``
+    of the answer and of the ``versions`` the diagnostics carry (with ``ratio``)."""
+    return trial_outcomes(
+        errors,
+        lambda t: AxisResult(
+            point=point[t],
+            direction=direction[t],
+            radii=radii[t],
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="SARA",
+            diagnostics={
+                **{name: version[t].tolist() for name, version in versions.items()},
+                "ratio": float(ratio[t]),
+            },
+        ),
     )
 
 
@@ -423,27 +495,28 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
     distances from the axis ``(p1, n1)`` in the proximal frame [mm]. ``diagnostics`` carries each
     frame's version and ``ratio`` (see :func:`fit_sara`).
     """
-    prox, dist = two_segment_poses(proximal, distal, min_frames=POSE_MIN_FRAMES)
+    return one_trial(_sara_two_segment_trials, proximal, distal)
+
+
+def _sara_two_segment(prox: PoseStack, dist: PoseStack) -> list[AxisResult | ValueError]:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
-    n1, n2, p1, p2, ratio = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=0))
-    direction = r1[0] @ n1 + r2[0] @ n2
-    point = 0.5 * (r1[0] @ p1 + t1[0] + r2[0] @ p2 + t2[0])
-    distal_in_proximal = np.einsum("fji,fmj->fmi", r1, dist.markers - t1[:, None, :])
-    return AxisResult(
-        point=point,
-        direction=direction / np.linalg.norm(direction),
-        radii=_mean_distance_to_axis(distal_in_proximal, p1, n1),
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="SARA",
-        diagnostics={
-            "direction_proximal": n1.tolist(),
-            "point_proximal": p1.tolist(),
-            "direction_distal": n2.tolist(),
-            "point_distal": p2.tolist(),
-            "ratio": ratio,
-        },
+    n1, n2, p1, p2, ratio, errors = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=1))
+    direction = _applied(r1[:, :1], n1)[:, 0] + _applied(r2[:, :1], n2)[:, 0]
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    at_frame0 = _applied(r1[:, :1], p1)[:, 0], _applied(r2[:, :1], p2)[:, 0]
+    point = 0.5 * (at_frame0[0] + t1[:, 0] + at_frame0[1] + t2[:, 0])
+    distal_in_proximal = np.einsum("tfji,tfmj->tfmi", r1, dist.markers - t1[:, :, None, :])
+    radii = _mean_distance_to_axis(distal_in_proximal, p1, n1)
+    return _sara_results(
+        errors,
+        point,
+        direction,
+        radii,
+        ratio,
+        direction_proximal=n1,
+        point_proximal=p1,
+        direction_distal=n2,
+        point_distal=p2,
     )
 
 
@@ -453,15 +526,27 @@ def batched(
     """The many-trial form of a pose-based method: ``(*segments, poses=None, **options)``.
 
     Each segment is ``(n_trials, N, n_markers, 3)`` [mm]; ``poses`` (from :func:`trial_poses`)
-    lets several methods share one pose fit. Returns one result, or the ``ValueError`` the
-    one-trial function would raise, per trial; options the method ignores are accepted as the
-    one-trial function accepts them. ``finish(*segment_poses, **options)`` fits one trial.
+    lets several methods share one pose fit. Returns one result, or the ``ValueError`` of a
+    trial that cannot be fitted, per trial; options the method ignores are accepted.
+    ``finish(*stacks, **options)`` fits trials whose poses are stacked, one
+    :class:`PoseStack` per segment in ``names`` order, and returns one outcome per trial.
     """
 
-    def finish_each(poses: list, **options) -> list[Outcome | ValueError]:
-        return each_trial(poses, lambda p: finish(*(p[name] for name in names), **options))
+    def finish_stacked(poses: list, **options) -> list[Outcome | ValueError]:
+        outcomes = list(poses)
+        # Trials of one batch share their shapes; poses passed in are grouped to be safe.
+        groups: dict[tuple, list[int]] = {}
+        for trial, fitted in enumerate(poses):
+            if not isinstance(fitted, ValueError):
+                shapes = tuple(fitted[name].markers.shape for name in names)
+                groups.setdefault(shapes, []).append(trial)
+        for group in groups.values():
+            stacks = [PoseStack.of([poses[trial][name] for trial in group]) for name in names]
+            for trial, outcome in zip(group, finish(*stacks, **options), strict=True):
+                outcomes[trial] = outcome
+        return outcomes
 
-    return batched_all(finish_each, names)
+    return batched_all(finish_stacked, names)
 
 
 def batched_all(
@@ -486,14 +571,19 @@ def pose_segments(fit: Callable) -> tuple[str, ...] | None:
     return getattr(getattr(fit, "batched", None), "pose_segments", None)
 
 
-def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:
-    def run(*poses: SegmentPoses, noise_mm: float | None = None) -> Outcome:
+def _ignoring_noise(finish: Callable[..., list]) -> Callable[..., list]:
+    def run(*stacks: PoseStack, noise_mm: float | None = None) -> list:
         del noise_mm
-        return finish(*poses)
+        return finish(*stacks)
 
     return run
 
 
-fit_score.batched = batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
-fit_score_center.batched = batched(_score_center, ("markers",))
-fit_sara.batched = batched(_sara, ("markers",))
+_score_trials = batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
+_score_center_trials = batched(_score_center, ("markers",))
+_sara_trials = batched(_sara, ("markers",))
+_sara_two_segment_trials = batched(_sara_two_segment, ("proximal", "distal"))
+
+fit_score.batched = _score_trials
+fit_score_center.batched = _score_center_trials
+fit_sara.batched = _sara_trials

@@ -196,10 +196,11 @@ def prepare_trials(
 ) -> tuple[list[ValueError | None], dict[int, object]]:
     """``prepare`` (a one-trial function's checks and set-up) on each trial of ``markers``
     ``(n_trials, ...)``: per trial the ``ValueError`` it raised or ``None``, and the prepared
-    values of the trials that passed, by trial."""
+    values of the trials that passed, by trial. A list's trials reach ``prepare`` as given."""
     outcomes: list[ValueError | None] = []
     prepared: dict[int, object] = {}
-    for trial, data in enumerate(np.asarray(markers, dtype=float)):
+    trials = markers if isinstance(markers, list) else np.asarray(markers, dtype=float)
+    for trial, data in enumerate(trials):
         try:
             prepared[trial] = prepare(data)
             outcomes.append(None)
