@@ -62,6 +62,9 @@ for _study in SENSITIVITY_STUDIES:
             curve=SENSITIVITY_CURVE.replace("{study}", _study),
         log:
             f"results/logs/sensitivity/{_study}/{{member}}.log",
+        # Each member's wall and CPU time: what the target's duration is made of.
+        benchmark:
+            f"results/benchmarks/sensitivity/{_study}/{{member}}.tsv"
         wildcard_constraints:
             member=_alternatives([DEFAULT, *SENSITIVITY_NAMED]) + rf"|{DRAW_PREFIX}\d+",
         conda:
