@@ -15,6 +15,7 @@ from jointbench.simulate.prior import Choice, Prior, default_values, draw_values
 from jointbench.study.config import load_config
 from jointbench.study.ensemble import MEMBER_COLUMNS
 from jointbench.study.sensitivity import (
+    DEPENDENCE_MEASURE,
     PRIORS,
     SUMMARY_COLUMNS,
     depends_most_on,
@@ -217,3 +218,8 @@ def test_sensitivity_target_runs_the_protocol_ensemble(tmp_path):
     assert (workdir / "results" / "benchmarks" / "sensitivity" / "hip" / "draw-1.tsv").exists()
     again = run_snakemake(workdir, "sensitivity", "--dry-run", "--configfile", str(reduced))
     assert "Nothing to be done" in again.stdout + again.stderr
+
+
+def test_the_readme_states_the_measure_the_code_applies():
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert DEPENDENCE_MEASURE in readme
