@@ -20,6 +20,7 @@ from jointbench.study.sensitivity import (
     SUMMARY_COLUMNS,
     depends_most_on,
     draw_seed,
+    member_names,
     member_protocol,
     member_values,
     protocol_verdict,
@@ -223,3 +224,16 @@ def test_sensitivity_target_runs_the_protocol_ensemble(tmp_path):
 def test_the_readme_states_the_measure_the_code_applies():
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert DEPENDENCE_MEASURE in readme
+
+
+def test_members_are_the_default_the_draws_and_the_named_protocols_of_the_study():
+    overlays = {"anatomical-knee": {"studies": {"hinge": {"protocol": {"knee": {}}}}}}
+    assert member_names("hinge", 2, overlays) == [
+        "default",
+        "draw-1",
+        "draw-2",
+        "anatomical-knee",
+    ]
+    assert member_names("hip", 1, overlays) == ["default", "draw-1"]
+    with pytest.raises(ValueError, match="takes the name of a default or drawn one"):
+        member_names("hinge", 1, {"draw-2": overlays["anatomical-knee"]})

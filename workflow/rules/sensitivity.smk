@@ -2,48 +2,32 @@
 # studies with a prior over their unpublished choices (jointbench.study.sensitivity) in the
 # default protocol, in N protocols drawn from the prior (`sensitivity: {draws: N}`) and in each
 # named protocol (`sensitivity: {named: {name: overlay}}`), every one from the run's base seed.
-import yaml
-
 from jointbench.figures.sensitivity import FIGURES as SENSITIVITY_FIGURES
-from jointbench.study.sensitivity import DEFAULT, DRAW_PREFIX, PRIORS
+from jointbench.study.sensitivity import DEFAULT, DRAW_PREFIX, PRIORS, member_names
 
 SENSITIVITY = config.get("sensitivity", {})
-SENSITIVITY_DRAWS = int(SENSITIVITY.get("draws", 1))
 SENSITIVITY_STUDIES = [s for s in STUDIES if s in PRIORS and papers_of_study(s)]
-SENSITIVITY_ROWS = "results/sensitivity/{study}/{member}.csv"
-SENSITIVITY_VALUES = "results/sensitivity/{study}/{member}-values.csv"
-SENSITIVITY_CURVE = "results/sensitivity/{study}/{member}-curve.csv"
-
-
-def _overlay_studies(path):
-    """The studies whose protocol the config overlay at ``path`` sets."""
-    document = yaml.safe_load(Path(path).read_text()) or {}
-    return [
-        s for s, v in document.get("studies", {}).items() if "protocol" in (v or {})
-    ]
-
-
-SENSITIVITY_NAMED = {
-    name: path
-    for name, path in SENSITIVITY.get("named", {}).items()
-    if name != DEFAULT and not name.startswith(DRAW_PREFIX)
+# Each named protocol's config overlay, read here to know which studies it sets.
+SENSITIVITY_NAMED = dict(SENSITIVITY.get("named", {}))
+SENSITIVITY_MEMBERS = {
+    study: member_names(
+        study,
+        int(SENSITIVITY.get("draws", 1)),
+        {
+            n: jb_config.read_yaml(Path(p).read_text())
+            for n, p in SENSITIVITY_NAMED.items()
+        },
+    )
+    for study in SENSITIVITY_STUDIES
 }
-
-
-def sensitivity_members(study):
-    """Every member of ``study``'s protocol ensemble: the default, the draws, the named
-    protocols that set its protocol."""
-    draws = [f"{DRAW_PREFIX}{k}" for k in range(1, SENSITIVITY_DRAWS + 1)]
-    named = [n for n, p in SENSITIVITY_NAMED.items() if study in _overlay_studies(p)]
-    return [DEFAULT, *draws, *named]
-
-
-def sensitivity_files(pattern, studies):
-    return [
-        pattern.format(study=s, member=m)
-        for s in studies
-        for m in sensitivity_members(s)
+SENSITIVITY_FILES = {
+    kind: [
+        f"results/sensitivity/{study}/{member}{suffix}.csv"
+        for study in SENSITIVITY_STUDIES
+        for member in SENSITIVITY_MEMBERS[study]
     ]
+    for kind, suffix in (("rows", ""), ("values", "-values"), ("curve", "-curve"))
+}
 
 
 for _study in SENSITIVITY_STUDIES:
@@ -57,9 +41,9 @@ for _study in SENSITIVITY_STUDIES:
                 [SENSITIVITY_NAMED[w.member]] if w.member in SENSITIVITY_NAMED else []
             ),
         output:
-            rows=SENSITIVITY_ROWS.replace("{study}", _study),
-            values=SENSITIVITY_VALUES.replace("{study}", _study),
-            curve=SENSITIVITY_CURVE.replace("{study}", _study),
+            rows=f"results/sensitivity/{_study}/{{member}}.csv",
+            values=f"results/sensitivity/{_study}/{{member}}-values.csv",
+            curve=f"results/sensitivity/{_study}/{{member}}-curve.csv",
         log:
             f"results/logs/sensitivity/{_study}/{{member}}.log",
         # Each member's wall and CPU time: what the target's duration is made of.
@@ -84,8 +68,8 @@ for _study in SENSITIVITY_STUDIES:
 
 rule sensitivity_summary:
     input:
-        rows=sensitivity_files(SENSITIVITY_ROWS, SENSITIVITY_STUDIES),
-        values=sensitivity_files(SENSITIVITY_VALUES, SENSITIVITY_STUDIES),
+        rows=SENSITIVITY_FILES["rows"],
+        values=SENSITIVITY_FILES["values"],
         published=published_files(SENSITIVITY_STUDIES),
     output:
         csv="results/tables/sensitivity.csv",
@@ -104,15 +88,15 @@ rule sensitivity_summary:
         "../envs/jointbench.yaml"
     params:
         code=script_code("sensitivity_summary"),
-        settings={"draws": SENSITIVITY_DRAWS, "base_seed": config.get("base_seed")},
+        settings={"members": SENSITIVITY_MEMBERS, "base_seed": config.get("base_seed")},
     script:
         "../scripts/sensitivity_summary.py"
 
 
 rule sensitivity_figures:
     input:
-        rows=sensitivity_files(SENSITIVITY_ROWS, SENSITIVITY_STUDIES),
-        curves=sensitivity_files(SENSITIVITY_CURVE, SENSITIVITY_STUDIES),
+        rows=SENSITIVITY_FILES["rows"],
+        curves=SENSITIVITY_FILES["curve"],
     output:
         **{
             f"{SENSITIVITY_FIGURES[s]}_{kind}": (
@@ -128,7 +112,7 @@ rule sensitivity_figures:
         "../envs/jointbench.yaml"
     params:
         code=script_code("sensitivity_figures"),
-        settings={"draws": SENSITIVITY_DRAWS, "named": SENSITIVITY_NAMED},
+        settings={"members": SENSITIVITY_MEMBERS, "named": SENSITIVITY_NAMED},
     script:
         "../scripts/sensitivity_figures.py"
 

@@ -42,6 +42,7 @@ __all__ = [
     "SUMMARY_COLUMNS",
     "depends_most_on",
     "draw_seed",
+    "member_names",
     "member_protocol",
     "member_values",
     "prior_table",
@@ -115,6 +116,20 @@ def member_values(base_seed: int, study: str, member: str) -> dict[str, float]:
     if member.startswith(DRAW_PREFIX) and member[len(DRAW_PREFIX) :].isdigit():
         return draw_values(prior, draw_seed(base_seed, study, int(member[len(DRAW_PREFIX) :])))
     raise ValueError(f"member {member!r} of {study!r} is neither {DEFAULT!r} nor 'draw-<k>'")
+
+
+def member_names(study: str, draws: int, overlays: Mapping[str, Mapping]) -> list[str]:
+    """Every member of ``study``'s ensemble: the default, ``draw-1`` to ``draw-<draws>`` and
+    each named member whose overlay (a config document, by name) sets ``study``'s protocol."""
+    named = [
+        name
+        for name, overlay in overlays.items()
+        if "protocol" in ((overlay or {}).get("studies", {}).get(study) or {})
+    ]
+    for name in named:
+        if name == DEFAULT or name.startswith(DRAW_PREFIX):
+            raise ValueError(f"named protocol {name!r} takes the name of a default or drawn one")
+    return [DEFAULT, *(f"{DRAW_PREFIX}{k}" for k in range(1, draws + 1)), *named]
 
 
 def _merged(base: Mapping, overrides: Mapping) -> dict:
