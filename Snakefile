@@ -70,3 +70,4 @@ for _rules in sorted(
 include: "workflow/rules/render.smk"
 include: "workflow/rules/check.smk"
 include: "workflow/rules/verdicts.smk"
+include: "workflow/rules/sensitivity.smk"

@@ -31,9 +31,15 @@ RUN_SIDE = (
     "dataset_csv",
     "estimates_from_csv",
 )
-RENDER_SIDE = ("render", "check_published", "report_captions")
-# The seed ensemble's jobs (`snakemake verdicts`): they run a study and judge its papers.
-ENSEMBLE_SIDE = ("verdicts_member", "verdicts_summary")
+RENDER_SIDE = ("render", "check_published", "report_captions", "sensitivity_figures")
+# The seed and protocol ensembles' jobs (`snakemake verdicts`, `snakemake sensitivity`): they
+# run a study and judge its papers.
+ENSEMBLE_SIDE = (
+    "verdicts_member",
+    "verdicts_summary",
+    "sensitivity_member",
+    "sensitivity_summary",
+)
 RENDERING = ("jointbench.figures", "jointbench.papers", "jointbench.pipeline", "jointbench.report")
 
 

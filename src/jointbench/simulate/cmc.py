@@ -29,7 +29,12 @@ maximum angular RoMs tested were 5°, 15°, and 45° from the mean position." We
 swing with no axial twist whose tilt angle grows linearly from 0 in the first frame to the
 maximum RoM in the last, while the tilt direction turns ``spiral_turns`` times round the mean
 axis (an Archimedean spiral of the segment's long axis on the sphere). The number of turns is
-not given; two turns over 120 frames is our choice.
+not given; two turns over 120 frames is our choice. ``tilt_power`` bends the spiral: the tilt
+grows as the frame's fraction of the trial to that power (1, linear, is our choice).
+
+:data:`PRIOR` spans the plausible values of every choice above (the directions within the
+skin regions named, the turns, the spiral's shape and the CoR's distance from the origin), each
+with the sentence it fills in; the defaults are one of its members.
 
 Noise: "The directions of the error vectors were uniformly distributed, and the magnitudes of
 the random errors were normally distributed" (see
@@ -49,8 +54,10 @@ from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise, largest_noise_mm
+from jointbench.simulate.prior import Choice, Prior
 
 __all__ = [
+    "PRIOR",
     "STUDY",
     "CmcProtocol",
     "marker_positions",
@@ -84,7 +91,8 @@ class CmcProtocol:
 
     ``directions``: per marker set, one direction per marker from the CoR (any length) in the
     frame described in the module docstring. ``distances_mm``: paper A Table 1.
-    ``spiral_turns``: turns of the circumduction spiral. ``n_frames``: 120 (paper A §5.1).
+    ``spiral_turns``: turns of the circumduction spiral. ``tilt_power``: the tilt grows as the
+    frame's fraction of the trial to this power. ``n_frames``: 120 (paper A §5.1).
     ``center_mm``: the nominal CoR in the reference frame. A marker set has as many
     directions as distances.
     """
@@ -97,6 +105,7 @@ class CmcProtocol:
     )
     # No turns is a swing in one plane: a hinge, whose centre the fits cannot place (flagged).
     spiral_turns: NonNegative = 2.0
+    tilt_power: Positive = 1.0
     n_frames: Count = 120
     center_mm: Vector3 = (20.0, -25.0, -30.0)
 
@@ -152,14 +161,17 @@ def marker_positions(protocol: CmcProtocol, marker_set: str) -> np.ndarray:
     return directions * distances[:, None]
 
 
-def spiral_rotations(max_angle_deg: float, n_frames: int, turns: float) -> np.ndarray:
+def spiral_rotations(
+    max_angle_deg: float, n_frames: int, turns: float, tilt_power: float = 1.0
+) -> np.ndarray:
     """Circumduction spiral ``(n_frames, 3, 3)``: tilt from 0 to ``max_angle_deg``, no twist.
 
     The tilt axis ``(cos phi, sin phi, 0)`` lies in the plane normal to the mean long axis ``z``
-    and turns ``turns`` times; the tilt angle grows linearly with the frame index.
+    and turns ``turns`` times at a constant rate; the tilt angle grows as the frame's fraction
+    of the trial to the power ``tilt_power`` (1: linearly with the frame index).
     """
     progress = np.linspace(0.0, 1.0, n_frames)
-    tilt = np.radians(max_angle_deg) * progress
+    tilt = np.radians(max_angle_deg) * progress**tilt_power
     phase = 2.0 * np.pi * turns * progress
     axes = np.stack([np.cos(phase), np.sin(phase), np.zeros_like(phase)], axis=-1)
     return rotation_matrix(axes * tilt[:, None])
@@ -167,7 +179,9 @@ def spiral_rotations(max_angle_deg: float, n_frames: int, turns: float) -> np.nd
 
 def nominal_trajectory(protocol: CmcProtocol, marker_set: str, rom_deg: float) -> np.ndarray:
     """Noise-free marker trajectories ``(n_frames, n_markers, 3)`` [mm] about ``center_mm``."""
-    rotations = spiral_rotations(rom_deg, protocol.n_frames, protocol.spiral_turns)
+    rotations = spiral_rotations(
+        rom_deg, protocol.n_frames, protocol.spiral_turns, protocol.tilt_power
+    )
     offsets = np.einsum("fij,pj->fpi", rotations, marker_positions(protocol, marker_set))
     return offsets + np.asarray(protocol.center_mm, dtype=float)
 
@@ -209,3 +223,140 @@ STUDY = Study(
         ),
     },
 )
+
+
+_CIRCUMDUCTION = (
+    "The generated marker trajectories simulated thumb circumduction by beginning from a "
+    "nominal mean position and circling out to increasing angles relative to the mean position."
+)
+_MARKER_SETS = (
+    "The M marker set models markers on the thumb metacarpal segment (M1, M2, and M3) and the "
+    "H marker set represents markers on the hand dorsum (H1, H2, and H3) (Table 1)."
+)
+_SIMPLEX = (
+    "The procedures for MA and IS employ the MATLAB function fminsearch, which uses simplex "
+    "direct search."
+)
+_DEFAULT_CENTER_MM = np.array(CmcProtocol().center_mm)
+# The M set's (polar angle from the shaft axis, azimuth from dorsal towards radial) [deg]: M1
+# fixes the dorsal direction; each is drawn within ±10° of the skin spot the module names.
+_M_ANGLES_DEG = {"M1": (30.0, 0.0), "M2": (15.0, 0.0), "M3": (35.0, 90.0)}
+_M_POLAR_BOUNDS_DEG = {"M1": (20.0, 40.0), "M2": (5.0, 25.0), "M3": (25.0, 45.0)}
+_M_AZIMUTH_BOUNDS_DEG = {"M2": (-30.0, 30.0), "M3": (60.0, 120.0)}
+_H_NAMES = ("H1", "H2", "H3")
+# Each H marker's radial and distal offset may move 10 mm over its metacarpal base or shaft.
+_H_SHIFT_MM = 10.0
+
+
+def _m_direction(polar_deg: float, azimuth_deg: float) -> list[float]:
+    polar, azimuth = np.radians(polar_deg), np.radians(azimuth_deg)
+    return [
+        float(np.sin(polar) * np.cos(azimuth)),
+        float(np.sin(polar) * np.sin(azimuth)),
+        float(np.cos(polar)),
+    ]
+
+
+def _cmc_choices() -> tuple[Choice, ...]:
+    choices = [
+        Choice(
+            "center_distance_mm",
+            20.0,
+            1500.0,
+            float(np.linalg.norm(_DEFAULT_CENTER_MM)),
+            _SIMPLEX,
+            "fminsearch scales its first simplex with the start point's coordinates, so the "
+            "CoR's distance from the origin matters: from a marker cluster's own frame (tens "
+            "of mm) to a laboratory origin (1.5 m); log-uniform, the direction kept",
+            log=True,
+        ),
+        Choice(
+            "spiral_turns",
+            1.0,
+            4.0,
+            CmcProtocol().spiral_turns,
+            _CIRCUMDUCTION,
+            "at least one full circle, at most four in 120 frames (30 frames a circle)",
+        ),
+        Choice(
+            "tilt_power",
+            0.5,
+            2.0,
+            CmcProtocol().tilt_power,
+            _CIRCUMDUCTION,
+            "circling out faster early (0.5) or late (2); log-uniform around linear",
+            log=True,
+        ),
+    ]
+    for name, (low, high) in _M_POLAR_BOUNDS_DEG.items():
+        choices.append(
+            Choice(
+                f"{name}_polar_deg",
+                low,
+                high,
+                _M_ANGLES_DEG[name][0],
+                _MARKER_SETS,
+                "within 10° of its skin spot on the thumb metacarpal",
+            )
+        )
+    for name, (low, high) in _M_AZIMUTH_BOUNDS_DEG.items():
+        choices.append(
+            Choice(
+                f"{name}_azimuth_deg",
+                low,
+                high,
+                _M_ANGLES_DEG[name][1],
+                _MARKER_SETS,
+                "within 30° round the shaft from its skin spot",
+            )
+        )
+    choices.append(
+        Choice(
+            "H_dorsal_mm",
+            8.0,
+            16.0,
+            _DEFAULT_DIRECTIONS["H"][0][0],
+            _MARKER_SETS,
+            "the hand dorsum 8–16 mm dorsal to the CMC joint",
+        )
+    )
+    for name, (_, radial, distal) in zip(_H_NAMES, _DEFAULT_DIRECTIONS["H"], strict=True):
+        for axis, value in (("radial", radial), ("distal", distal)):
+            choices.append(
+                Choice(
+                    f"{name}_{axis}_mm",
+                    value - _H_SHIFT_MM,
+                    value + _H_SHIFT_MM,
+                    value,
+                    _MARKER_SETS,
+                    "within 10 mm of its spot over the metacarpal",
+                )
+            )
+    return tuple(choices)
+
+
+def _cmc_protocol(values: Mapping[str, float]) -> dict:
+    """The ``protocol`` overrides of one member of :data:`PRIOR` (directions as unit vectors
+    for M, as offsets from the CoR [mm] for H; the CoR scaled along its default direction)."""
+    scale = values["center_distance_mm"] / float(np.linalg.norm(_DEFAULT_CENTER_MM))
+    m_directions = [
+        _m_direction(
+            values[f"{name}_polar_deg"],
+            values.get(f"{name}_azimuth_deg", _M_ANGLES_DEG[name][1]),
+        )
+        for name in _M_ANGLES_DEG
+    ]
+    h_directions = [
+        [values["H_dorsal_mm"], values[f"{name}_radial_mm"], values[f"{name}_distal_mm"]]
+        for name in _H_NAMES
+    ]
+    return {
+        "center_mm": [float(x) for x in _DEFAULT_CENTER_MM * scale],
+        "spiral_turns": values["spiral_turns"],
+        "tilt_power": values["tilt_power"],
+        "directions": {"M": m_directions, "H": h_directions},
+    }
+
+
+#: The plausible thumb-CMC protocols: every unpublished choice of this module, with its bounds.
+PRIOR = Prior(study="cmc", choices=_cmc_choices(), build=_cmc_protocol)

@@ -4,10 +4,16 @@ The joint models themselves, with every modelling choice documented, are in
 :mod:`jointbench.simulate.hinge`; this module holds the pair the study runs and applies the
 config's overrides: ``protocol: {all: {...}, knee: {...}, mcp: {...}}``, where ``all`` applies
 to both joints (e.g. the motion model) and a joint's own entry to that joint.
+
+:data:`PRIOR` spans the marker layouts within the anatomical bounds the default layouts were
+searched in (:mod:`jointbench.simulate.hinge`); the defaults, fitted to paper B's Table 1, are
+one of its members.
 """
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -16,8 +22,9 @@ import numpy as np
 from jointbench.declared import DeclarationError
 from jointbench.declared import check_fields as check_declared
 from jointbench.simulate import GridValues, Study, Trials, hinge
+from jointbench.simulate.prior import Choice, Prior
 
-__all__ = ["STUDY", "HingeStudyProtocol", "simulate"]
+__all__ = ["PRIOR", "STUDY", "HingeStudyProtocol", "simulate"]
 
 
 @dataclass(frozen=True)
@@ -75,3 +82,94 @@ STUDY = Study(
         "aa_ratio": GridValues(float, minimum=0),
     },
 )
+
+
+_LAYOUT = (
+    "The nominal surface marker positions are based on marker protocols for the knee joint and "
+    "the index finger metacarpo-phalangeal (MCP) joint."
+)
+
+
+@dataclass(frozen=True)
+class _LayoutBounds:
+    """Where a joint's markers may sit, in cylindrical coordinates about the moving segment's
+    long axis in the neutral pose: ``depth`` [mm] along it from the joint centre, ``radius``
+    [mm] from it, ``azimuth`` [deg] from ``+x`` towards ``+y``; markers at least ``spacing``
+    [mm] apart, so that a camera tells them apart; ``reason`` in words."""
+
+    depth_mm: tuple[float, float]
+    radius_mm: tuple[float, float]
+    azimuth_deg: tuple[float, float]
+    spacing_mm: float
+    reason: str
+
+
+# The bounds of the layout search (jointbench.simulate.hinge's notes).
+_BOUNDS = {
+    "knee": _LayoutBounds(
+        (40.0, 420.0),
+        (35.0, 70.0),
+        (-180.0, 180.0),
+        30.0,
+        "on the shank: 40–420 mm below the joint centre, 35–70 mm from its axis, any side",
+    ),
+    "mcp": _LayoutBounds(
+        (8.0, 42.0),
+        (9.5, 14.0),
+        (-30.0, 210.0),
+        10.0,
+        "on the proximal phalanx: 8–42 mm distal to the MCP centre, 9.5–14 mm from its axis, "
+        "not on the palmar third",
+    ),
+}
+
+
+def _cylindrical(marker: Sequence[float]) -> tuple[float, float, float]:
+    x, y, z = marker
+    return -z, math.hypot(x, y), math.degrees(math.atan2(y, x))
+
+
+def _hinge_choices() -> tuple[Choice, ...]:
+    choices = []
+    for joint, bounds in _BOUNDS.items():
+        default = hinge.HINGE_PROTOCOLS[joint]
+        for name, marker in zip(default.marker_names, default.markers_mm, strict=True):
+            for coordinate, value in zip(
+                ("depth_mm", "radius_mm", "azimuth_deg"), _cylindrical(marker), strict=True
+            ):
+                low, high = getattr(bounds, coordinate)
+                choices.append(
+                    Choice(f"{joint}.{name}.{coordinate}", low, high, value, _LAYOUT, bounds.reason)
+                )
+    return tuple(choices)
+
+
+def _markers(values: Mapping[str, float], joint: str) -> list[list[float]]:
+    """The neutral-pose markers ``[[x, y, z], ...]`` [mm] of ``joint`` in one member."""
+    markers = []
+    for name in hinge.HINGE_PROTOCOLS[joint].marker_names:
+        depth, radius, azimuth = (
+            values[f"{joint}.{name}.{coordinate}"]
+            for coordinate in ("depth_mm", "radius_mm", "azimuth_deg")
+        )
+        angle = math.radians(azimuth)
+        markers.append([radius * math.cos(angle), radius * math.sin(angle), -depth])
+    return markers
+
+
+def _hinge_protocol(values: Mapping[str, float]) -> dict:
+    """The ``protocol`` overrides of one member of :data:`PRIOR`: each joint's markers."""
+    return {joint: {"markers_mm": _markers(values, joint)} for joint in _BOUNDS}
+
+
+def _spaced(values: Mapping[str, float]) -> bool:
+    """Whether every joint's markers are at least its ``spacing_mm`` apart."""
+    return all(
+        math.dist(a, b) >= bounds.spacing_mm
+        for joint, bounds in _BOUNDS.items()
+        for a, b in itertools.combinations(_markers(values, joint), 2)
+    )
+
+
+#: The plausible hinge marker layouts, knee and index MCP.
+PRIOR = Prior(study="hinge", choices=_hinge_choices(), build=_hinge_protocol, accept=_spaced)

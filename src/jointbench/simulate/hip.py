@@ -37,6 +37,8 @@ recording (proximal markers, then distal, per frame) before the condition's firs
 frames are kept, so the trial of any ``Nt`` is a prefix of the same recording -- with the same
 generator, the first ``Nt`` frames are identical for every ``Nt`` (paper C analyses "the first
 Nt frames" of one 1200-frame recording).
+:data:`PRIOR` spans the plausible rig motions (the swings' amplitudes and frequencies, the
+twist and how much the hand moves); the motion above is one of its members.
 """
 
 from __future__ import annotations
@@ -52,8 +54,9 @@ from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix
 from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
+from jointbench.simulate.prior import Choice, Prior
 
-__all__ = ["STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
+__all__ = ["PRIOR", "STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
 
 _CONDITION_KEYS = ("n_frames", "noise_mm")
 
@@ -257,3 +260,57 @@ STUDY = Study(
         )
     },
 )
+
+
+_SWUNG = (
+    "One of the authors held by hand a two segment mechanical test rig on which the markers "
+    "were mounted and swung it like a pendulum making sure that over the 20 second time "
+    "interval the second segment moved around at least 2 of the axes."
+)
+_PENDULUM = "a pendulum of a 0.4–0.7 m segment swings at 0.6–0.9 Hz"
+# (field, low, high, reason); the hand's amplitudes are scaled together by ``hand_scale``.
+_MOTION_BOUNDS = (
+    ("swing_deg", 20.0, 50.0, "a main swing of 40–100° peak to peak"),
+    ("swing_hz", 0.6, 0.9, _PENDULUM),
+    ("cross_swing_deg", 10.0, 40.0, "the second axis moves at least 10° (2 of the axes)"),
+    ("cross_swing_hz", 0.5, 0.9, _PENDULUM),
+    ("cross_swing_rise_s", 1.0, 6.0, "the hand builds the cross swing up in 1–6 s"),
+    ("twist_deg", 0.0, 15.0, "a ball joint lets the lower segment twist a little"),
+    ("twist_hz", 0.1, 0.4, "the twist drifts slowly"),
+)
+
+
+def _hip_choices() -> tuple[Choice, ...]:
+    default = HipProtocol()
+    choices = [
+        Choice(name, low, high, getattr(default, name), _SWUNG, reason)
+        for name, low, high, reason in _MOTION_BOUNDS
+    ]
+    choices.append(
+        Choice(
+            "hand_scale",
+            0.5,
+            2.0,
+            1.0,
+            _SWUNG,
+            "the holding hand wanders half to twice as much as the default (every translation "
+            "and rotation amplitude scaled together); log-uniform",
+            log=True,
+        )
+    )
+    return tuple(choices)
+
+
+def _hip_protocol(values: Mapping[str, float]) -> dict:
+    """The ``protocol`` overrides of one member of :data:`PRIOR`."""
+    default = HipProtocol()
+    scale = values["hand_scale"]
+    return {
+        **{name: values[name] for name, *_ in _MOTION_BOUNDS},
+        "hand_translation_mm": [scale * x for x in default.hand_translation_mm],
+        "hand_rotation_deg": [scale * x for x in default.hand_rotation_deg],
+    }
+
+
+#: The plausible rig motions of paper C's experiment.
+PRIOR = Prior(study="hip", choices=_hip_choices(), build=_hip_protocol)

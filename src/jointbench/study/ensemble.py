@@ -24,7 +24,14 @@ from jointbench.study.published import comparison_rows, load_published
 from jointbench.study.run import estimate_table, methods_sharing_poses, simulate_condition
 from jointbench.study.studies import get_study
 
-__all__ = ["MEMBER_COLUMNS", "collect_member", "measured_methods", "member_seed", "run_member"]
+__all__ = [
+    "MEMBER_COLUMNS",
+    "collect_member",
+    "judge",
+    "measured_methods",
+    "member_seed",
+    "run_member",
+]
 
 MEMBER_COLUMNS = [
     "member",
@@ -100,11 +107,18 @@ def run_member(config: Mapping, study: str, member: int) -> pd.DataFrame:
     seed = member_seed(config["base_seed"], member)
     member_config = _member_config(config, study, seed)
     collected = collect_member(member_config, study)
+    rows = judge(member_config, study, collected, f"ensemble member {member}")
+    return rows.assign(member=member, base_seed=seed)[MEMBER_COLUMNS]
+
+
+def judge(config: Mapping, study: str, collected: pd.DataFrame, label: str) -> pd.DataFrame:
+    """Every published value and claim of ``study``'s papers judged on ``collected`` (the
+    results of ``config``) as the comparison judges them; ``label`` names the results in an
+    error."""
     frames = []
     for paper in papers_of_study(study):
-        require_results(collected, study, f"ensemble member {member}", paper.methods)
+        require_results(collected, study, label, paper.methods)
         document = load_published(paper.published)
-        inputs = Inputs(collected=collected, published=document, config=member_config)
-        rows = comparison_rows(document, paper.measure(inputs))
-        frames.append(rows.assign(member=member, base_seed=seed))
-    return pd.concat(frames, ignore_index=True)[MEMBER_COLUMNS]
+        inputs = Inputs(collected=collected, published=document, config=config)
+        frames.append(comparison_rows(document, paper.measure(inputs)))
+    return pd.concat(frames, ignore_index=True)
