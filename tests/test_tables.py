@@ -141,7 +141,7 @@ def _comparison() -> pd.DataFrame:
 def test_every_status_is_one_of_three_words_defined_once():
     assert list(STATUSES) == ["reproduced", "not reproduced", "not applicable"]
     legend = status_legend()
-    assert all(f"{word}, {meaning}" in legend for word, meaning in STATUSES.items())
+    assert all(f"{word}: {meaning}" in legend for word, meaning in STATUSES.items())
     counts = reproduction_counts(_comparison(), {})
     assert list(counts.columns)[-1] == "not applicable"
     said = " ".join(

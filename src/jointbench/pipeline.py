@@ -172,7 +172,7 @@ def check_published(collected: Mapping[str, str], outputs, config: Mapping) -> p
         outputs,
         title="Published values and claims beside ours",
         note="Claims with a verdict first, then values with a verdict, then the rows without "
-        f"one. {status_legend()}. margin: how far inside or outside its tolerance each value "
+        f"one. {status_legend()}. Margin: how far inside or outside its tolerance each value "
         "lies, in the tolerance's own units.\n\n## Counts by study and status\n\n"
         + markdown_table(counts),
     )

@@ -29,7 +29,7 @@ def claims_output(
         return Table(
             claims_rows(inputs.published, measure(inputs)),
             title=f"Paper {inputs.published['paper']} claims, recomputed from our results",
-            note=f"{status_legend()}. margin: how far inside or outside its criterion the "
+            note=f"{status_legend()}. Margin: how far inside or outside its criterion the "
             "reproduced value lies.",
         )
 

@@ -67,7 +67,7 @@ CLAIM_COLUMNS = [
 #: notes and the README's summary say it with these words.
 STATUSES = {
     "reproduced": "within its tolerance (a claim: its sentence holds as tested)",
-    "not reproduced": "outside its tolerance; the reason says why",
+    "not reproduced": "outside its tolerance (the reason says why)",
     "not applicable": "given no verdict (the published value is shown beside ours without a "
     "tolerance, or this run could not measure it; the reason says which)",
 }
@@ -157,7 +157,7 @@ def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
 
 def status_legend() -> str:
     """Every status in its one word and what it means, for a table's note."""
-    return "status: " + "; ".join(f"{word}, {meaning}" for word, meaning in STATUSES.items())
+    return "Status — " + "; ".join(f"{word}: {meaning}" for word, meaning in STATUSES.items())
 
 
 def reader_order(comparison: pd.DataFrame) -> pd.DataFrame:
