@@ -564,7 +564,8 @@ def test_fig3_errors_are_points_on_a_log_axis_not_bars():
     ours = rows.loc[rows["method"].isin(paper_a.PAPER_METHODS), "error_mm"]
     assert {round(float(e), 9) for e in ours} <= drawn
     # The legend's "this trial" entry is not in any method's colour.
-    entries = dict(zip(errors.get_legend().get_texts(), errors.get_legend().legend_handles))
+    legend = errors.get_legend()
+    entries = dict(zip(legend.get_texts(), legend.legend_handles, strict=True))
     (this_trial,) = [h for t, h in entries.items() if t.get_text().startswith("this trial")]
     assert to_rgb(this_trial.get_markerfacecolor()) not in _method_colours()
     plt.close(fig)
