@@ -407,21 +407,7 @@ def test_paper_a_fig3_lists_an_estimate_far_off_and_marks_its_bar():
 
 def test_paper_b_figures_run():
     assert _drawn(paper_b.fig5(_hinge()))
-    t = np.linspace(-0.5, 0.5, 60)
-    markers = np.stack(
-        [
-            np.stack([r * np.cos(t), r * np.sin(t), 20.0 * k + 0 * t], -1)
-            for k, r in enumerate((60, 80, 70))
-        ],
-        1,
-    )
-    truth = {"axis_point": [0.0, 0.0, 0.0], "axis_direction": [0.0, 0.0, 1.0]}
-    fits = {
-        "planar": (np.zeros(3), np.array([0.3, 0.0, 1.0])),
-        "radial": (np.zeros(3), np.array([0.0, 0.2, 1.0])),
-        "combined": (np.zeros(3), np.array([0.0, 0.0, 1.0])),
-    }
-    assert _drawn(paper_b.fig2([("a", markers, truth, fits), ("b", markers, truth, fits)]))
+    assert _drawn(paper_b.fig2(_fig2_examples()))
 
 
 def test_fig2_trial_is_the_median_by_combined_error():
@@ -564,7 +550,8 @@ def test_fig3_errors_are_points_on_a_log_axis_not_bars():
     ours = rows.loc[rows["method"].isin(paper_a.PAPER_METHODS), "error_mm"]
     assert {round(float(e), 9) for e in ours} <= drawn
     # The legend's "this trial" entry is not in any method's colour.
-    entries = dict(zip(errors.get_legend().get_texts(), errors.get_legend().legend_handles))
+    legend = errors.get_legend()
+    entries = dict(zip(legend.get_texts(), legend.legend_handles, strict=True))
     (this_trial,) = [h for t, h in entries.items() if t.get_text().startswith("this trial")]
     assert to_rgb(this_trial.get_markerfacecolor()) not in _method_colours()
     plt.close(fig)

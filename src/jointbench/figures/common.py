@@ -23,6 +23,8 @@ __all__ = [
     "display_limits",
     "equal_3d_limits",
     "few_3d_ticks",
+    "group_label",
+    "legend_below",
     "median_trial",
     "method_style",
     "method_styles",
@@ -161,6 +163,34 @@ def few_3d_ticks(ax, n: int = 4) -> None:
 
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
         axis.set_major_locator(MaxNLocator(n))
+
+
+def legend_below(fig, handles, names) -> None:
+    """One legend for the whole figure, in a row under its panels, off every curve; the
+    caller's layout leaves room for it at the bottom."""
+    fig.legend(
+        handles,
+        names,
+        loc="lower center",
+        ncol=len(handles),
+        fontsize=9,
+        frameon=False,
+        bbox_to_anchor=(0.5, 0),
+    )
+
+
+def group_label(ax, x: float, text: str) -> None:
+    """Name a group of conditions (e.g. "noise SD 1.0 mm") just above the axes, centred on
+    ``x`` in data coordinates, where it cannot cover data."""
+    ax.text(
+        x,
+        1.01,
+        text,
+        transform=ax.get_xaxis_transform(),
+        ha="center",
+        va="bottom",
+        fontsize=9,
+    )
 
 
 def median_trial(errors: pd.Series) -> int:

@@ -19,6 +19,8 @@ from jointbench.figures.common import (
     display_limits,
     equal_3d_limits,
     few_3d_ticks,
+    group_label,
+    legend_below,
     median_trial,
     method_style,
     pyplot,
@@ -209,15 +211,7 @@ def fig4(collected: pd.DataFrame, published: Mapping | None = None) -> Figure:
                 count = int(counts.get(rom, 0))
                 # Every label has two lines so both panels' x labels line up.
                 labels.append(f"±{rom:g}°\n" + (f"n={count}" if count < n_total else ""))
-            ax.text(
-                base + (len(roms) - 1) * step / 2,
-                1.01,
-                f"noise SD {noise:.1f} mm",
-                transform=ax.get_xaxis_transform(),
-                ha="center",
-                va="bottom",
-                fontsize=9,
-            )
+            group_label(ax, base + (len(roms) - 1) * step / 2, f"noise SD {noise:.1f} mm")
             if group:
                 ax.axvline(base - (step + gap) / 2, color="0.75", lw=0.8)
         shown = stated[
@@ -243,15 +237,7 @@ def fig4(collected: pd.DataFrame, published: Mapping | None = None) -> Figure:
             pyplot().Line2D([], [], color=STATED_COLOR, marker="*", mfc="none", ms=10, lw=2.2)
         )
         names.append("paper A's stated values (§5.1.1, §6)")
-    fig.legend(
-        handles,
-        names,
-        loc="lower center",
-        ncol=len(handles),
-        fontsize=9,
-        frameon=False,
-        bbox_to_anchor=(0.5, 0),
-    )
+    legend_below(fig, handles, names)
     fig.suptitle(
         "Paper A Fig 4 reproduced: mean CoR error over the trials where BC converged\n"
         f"(n = trials averaged, where fewer than {n_total}); black: values the paper states",

@@ -15,6 +15,8 @@ import pandas as pd
 from jointbench.figures.common import (
     equal_3d_limits,
     few_3d_ticks,
+    group_label,
+    legend_below,
     median_trial,
     method_style,
     pyplot,
@@ -143,15 +145,7 @@ def fig5(collected: pd.DataFrame, cells: pd.DataFrame | None = None) -> Figure:
         for boundary in np.flatnonzero(np.diff(conditions["fe_rom_deg"].to_numpy())) + 0.5:
             ax.axvline(boundary, color="0.7", lw=0.8)
         for fe, group in conditions.reset_index(drop=True).groupby("fe_rom_deg"):
-            ax.text(
-                group.index.to_numpy().mean(),
-                1.01,
-                f"FE RoM {fe:g}°",
-                transform=ax.get_xaxis_transform(),
-                ha="center",
-                va="bottom",
-                fontsize=9,
-            )
+            group_label(ax, group.index.to_numpy().mean(), f"FE RoM {fe:g}°")
         ax.set_xticks(np.arange(len(labels)), labels)
         ax.set_xlabel("AA RoM / FE RoM (ratio)")
         # An axis error is at most 90°.
@@ -172,15 +166,7 @@ def fig5(collected: pd.DataFrame, cells: pd.DataFrame | None = None) -> Figure:
         within = int(cells["within_tolerance"].sum())
         title += f"; {within} of {len(cells)} Table 1 means within tolerance"
     # Below the panels: inside, it would cover curves (planar's rise from ratio 0.1 to 0.3).
-    fig.legend(
-        handles,
-        names,
-        loc="lower center",
-        ncol=len(handles),
-        fontsize=9,
-        frameon=False,
-        bbox_to_anchor=(0.5, 0),
-    )
+    legend_below(fig, handles, names)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     return fig
