@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.figures.paper_a import condition_means
+from jointbench.figures.paper_c import calibration_table
 from jointbench.simulate import cmc, hinge_study, hip
 from jointbench.simulate.prior import Prior, default_values, draw_values
 from jointbench.study.config import read_yaml
@@ -82,22 +84,11 @@ SUMMARY_COLUMNS = [
 ]
 
 
-def _figure_a_means(collected: pd.DataFrame) -> pd.DataFrame:
-    from jointbench.figures.paper_a import condition_means
-
-    return condition_means(collected)
-
-
-def _figure_c_coverage(collected: pd.DataFrame) -> pd.DataFrame:
-    from jointbench.figures.paper_c import calibration_table
-
-    return calibration_table(collected)
-
-
-#: Per study, the per-member curve the sensitivity figures draw bands of.
+#: Per study, the per-member curve the sensitivity figures draw bands of: paper A's Fig 4
+#: means, paper C's calibration table.
 CURVES: dict[str, Callable[[pd.DataFrame], pd.DataFrame]] = {
-    "cmc": _figure_a_means,
-    "hip": _figure_c_coverage,
+    "cmc": condition_means,
+    "hip": calibration_table,
 }
 
 
