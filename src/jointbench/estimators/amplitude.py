@@ -8,6 +8,7 @@ hence at least three non-collinear markers.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
@@ -215,20 +216,14 @@ def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     rotation, translation = _mean_anchored(*rigid_poses(markers)[:2])
     points = np.stack(list(neighbours.values()))
     costs = _amplitudes(points, rotation[None], translation[None], np.zeros(len(points), dtype=int))
-    best = int(np.argmin(costs))
-    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
-        return selfcheck.held(
-            result,
-            f"the amplitude at {', '.join(neighbours)} is not below the answer's "
-            f"{result.cost:.6g} mm by more than TolFun (least {float(costs[best]):.6g} mm)",
-        )
-    better = fit_ma(markers, start=points[best])
-    moved = float(np.linalg.norm(better.center - result.center))
-    return selfcheck.restarted(
+    return selfcheck.lowest_neighbour(
         result,
-        better,
-        list(neighbours)[best],
-        f"{moved:.3g} mm from the first answer, which is replaced",
+        neighbours,
+        costs,
+        partial(fit_ma, markers),
+        tol_fun=FMINSEARCH_OPTIONS["fatol"],
+        cost_name="the amplitude",
+        unit=" mm",
     )
 
 

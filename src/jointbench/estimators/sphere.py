@@ -978,18 +978,13 @@ def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     flat = np.ascontiguousarray(markers.reshape(1, -1, 3))
     points = np.stack(list(neighbours.values()))
     costs = _geometric_costs(points, flat, np.zeros(len(points), dtype=int), n_frames)
-    best = int(np.argmin(costs))
-    name = list(neighbours)[best]
-    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
-        return selfcheck.held(
-            result,
-            f"f1 at {' and '.join(neighbours)} is not below the answer's {result.cost:.6g} "
-            f"by more than TolFun (least {float(costs[best]):.6g})",
-        )
-    better = fit_is(markers, start=points[best])
-    moved = float(np.linalg.norm(better.center - result.center))
-    return selfcheck.restarted(
-        result, better, name, f"{moved:.3g} mm from the first answer, which is replaced"
+    return selfcheck.lowest_neighbour(
+        result,
+        neighbours,
+        costs,
+        partial(fit_is, markers),
+        tol_fun=FMINSEARCH_OPTIONS["fatol"],
+        cost_name="f1",
     )
 
 
