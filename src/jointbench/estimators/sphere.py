@@ -9,6 +9,12 @@ The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minim
 criterion for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most
 200·n = 600 iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds
 those settings.
+
+Each method is written once, over a stack of trials ``(n_trials, n_frames, n_markers, 3)``
+(``_ls_fits``, ``_nm_fits``, ``_bc_fits``, ``_is_fits``): the one-trial function is that
+implementation on a batch of one, and its ``batched`` form the same over many trials. The loops
+over samples and iterations run in compiled kernels (:mod:`jointbench.numerics.compiled`) whose
+Python source is the implementation.
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.rank import negligible
+from jointbench.numerics.rank import RCOND
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
 from jointbench.numerics.spheres import ls_system, mean_weights, row_sq, solve_ls_system
 
@@ -129,63 +135,141 @@ def _over_trials(fits, fit_one, markers: object, **options) -> list[CenterResult
     return outcomes
 
 
-def _ls_moments_batch(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:class:`LSMoments` of every trial: ``A`` (T, 3, 3), ``b`` (T, 3), means (T, P, 4),
-    centred rows (T, N P, 4)."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    augmented = np.empty((n_trials, n_frames, n_markers, 4))
-    augmented[..., :3] = markers
-    np.einsum("...i,...i->...", markers, markers, out=augmented[..., 3])
-    # The sum over frames as a vector-matrix product: reducing the middle axis is slower.
-    means = (np.ones(n_frames) @ augmented.reshape(n_trials, n_frames, -1)).reshape(
-        n_trials, n_markers, 4
-    )
-    means *= 1.0 / n_frames
-    augmented -= means[:, None]
-    centred = augmented.reshape(n_trials, -1, 4)
-    gram = np.swapaxes(centred, 1, 2) @ centred
-    gram *= 1.0 / n_frames
-    return 2.0 * gram[:, :3, :3], gram[:, :3, 3].copy(), means, centred
+@kernel
+def _sphere_moments(data: np.ndarray, origins: np.ndarray, means: np.ndarray, grams: np.ndarray):
+    """Per-marker moments of each trial's samples ``y = v - origin`` augmented to
+    ``x = (y, |y|^2)``: ``means`` (T, P, 4) the means over frames [mm, mm^2] and ``grams``
+    (T, P, 4, 4) the sums over frames of ``(x - mean x)(x - mean x)'``, into the arrays given,
+    for ``data`` (T, N, P, 3) [mm] and ``origins`` (T, 3) [mm]. A compiled kernel
+    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+
+    Every sum Gamage & Lasenby's fit and Halvorsen's iteration need is a product with these:
+    ``A = 2 sum_p G_p[:3, :3] / N`` and ``b = sum_p G_p[:3, 3] / N`` (paper A eq. 4 minimised
+    over the centre), and ``sum_k (|y - d|^2 - mean_k |y - d|^2)^2 = w' G_p w`` for
+    ``w = (-2 d, 1)``. Relative to an origin near the data ``|y|^2`` keeps the precision that
+    ``|v|^2`` would lose far from the coordinates' origin.
+    """
+    n_trials, n_frames, n_markers, _ = data.shape
+    x = np.empty(4)
+    for t in range(n_trials):
+        for p in range(n_markers):
+            means[t, p] = 0.0
+            grams[t, p] = 0.0
+            for f in range(n_frames):
+                squared = 0.0
+                for i in range(3):
+                    x[i] = data[t, f, p, i] - origins[t, i]
+                    squared += x[i] * x[i]
+                x[3] = squared
+                for i in range(4):
+                    means[t, p, i] += x[i]
+            for i in range(4):
+                means[t, p, i] /= n_frames
+            for f in range(n_frames):
+                squared = 0.0
+                for i in range(3):
+                    x[i] = data[t, f, p, i] - origins[t, i]
+                    squared += x[i] * x[i]
+                x[3] = squared
+                for i in range(4):
+                    x[i] -= means[t, p, i]
+                for i in range(4):
+                    for j in range(i + 1):
+                        grams[t, p, i, j] += x[i] * x[j]
+            for i in range(4):
+                for j in range(i):
+                    grams[t, p, j, i] = grams[t, p, i, j]
 
 
-def _pinv_batch(a_matrix: np.ndarray) -> np.ndarray:
-    """``A^+`` (T, 3, 3) of the symmetric ``A`` (T, 3, 3) by the rule of
-    :func:`solve_ls_system`: for a symmetric matrix the singular values are the eigenvalues'
-    magnitudes, so the eigen-decomposition gives the same pseudo-inverse."""
-    values, vectors = np.linalg.eigh(a_matrix)
-    largest = np.abs(values).max(axis=-1, keepdims=True)
-    keep = ~negligible(values, largest)
-    inverse = np.where(keep, 1.0 / np.where(keep, values, 1.0), 0.0)
-    return (vectors * inverse[:, None, :]) @ np.swapaxes(vectors, 1, 2)
+def _moments(data: np.ndarray, origins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_sphere_moments` of ``data`` (T, N, P, 3) about ``origins`` (T, 3) [mm]:
+    ``means`` (T, P, 4) and ``grams`` (T, P, 4, 4)."""
+    n_trials, _, n_markers, _ = data.shape
+    means, grams = np.empty((n_trials, n_markers, 4)), np.empty((n_trials, n_markers, 4, 4))
+    _sphere_moments(kernel_array(data), kernel_array(origins), means, grams)
+    return means, grams
 
 
-def _algebraic_fit_batch(means, centred, center) -> tuple[np.ndarray, np.ndarray]:
-    """Radii (T, P) [mm] and cost f2 (T,) of :func:`_algebraic_fit` for every trial."""
-    weights = np.concatenate([-2.0 * center, np.ones((center.shape[0], 1))], axis=1)
-    residual = np.einsum("tri,ti->tr", centred, weights)
-    sq_radii = (
-        np.einsum("tpi,ti->tp", means, weights) + np.einsum("ti,ti->t", center, center)[:, None]
-    )
-    return np.sqrt(np.maximum(sq_radii, 0.0)), np.einsum("tr,tr->t", residual, residual)
+@kernel
+def _ls_solve(
+    grams: np.ndarray, n_frames: int, rcond: float, a_pinv: np.ndarray, shifts: np.ndarray
+) -> None:
+    """Gamage & Lasenby's centre of each trial from the moments of :func:`_sphere_moments`
+    (``grams`` (T, P, 4, 4)) about its origin: ``A = 2 sum_p G_p[:3, :3] / N``,
+    ``b = sum_p G_p[:3, 3] / N``, ``A^+`` (T, 3, 3) into ``a_pinv`` and ``A^+ b`` (T, 3) [mm]
+    into ``shifts``. ``A^+`` by the rule of :func:`solve_ls_system`, eigenvalues of magnitude
+    at most ``rcond`` times the largest dropped (for a symmetric matrix the singular values
+    are the eigenvalues' magnitudes). A compiled kernel (:mod:`jointbench.numerics.compiled`):
+    this source is the implementation."""
+    n_trials, n_markers = grams.shape[0], grams.shape[1]
+    a_matrix = np.empty((3, 3))
+    b_vector = np.empty(3)
+    for t in range(n_trials):
+        for i in range(3):
+            b_vector[i] = 0.0
+            for j in range(3):
+                a_matrix[i, j] = 0.0
+        for p in range(n_markers):
+            for i in range(3):
+                b_vector[i] += grams[t, p, i, 3]
+                for j in range(3):
+                    a_matrix[i, j] += grams[t, p, i, j]
+        for i in range(3):
+            b_vector[i] *= 1.0 / n_frames
+            for j in range(3):
+                a_matrix[i, j] = 2.0 * (a_matrix[i, j] * (1.0 / n_frames))
+        values, vectors = np.linalg.eigh(a_matrix)
+        largest = max(abs(values[0]), abs(values[2]))  # ascending
+        for i in range(3):
+            for j in range(3):
+                a_pinv[t, i, j] = 0.0
+        for k in range(3):
+            if abs(values[k]) > rcond * largest:
+                for i in range(3):
+                    for j in range(3):
+                        a_pinv[t, i, j] += vectors[i, k] * vectors[j, k] / values[k]
+        for i in range(3):
+            shifts[t, i] = 0.0
+            for j in range(3):
+                shifts[t, i] += a_pinv[t, i, j] * b_vector[j]
+
+
+def _algebraic_fit(
+    means: np.ndarray, total: np.ndarray, center: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Radii (T, P) [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 (T,) [mm^4], at
+    ``center`` (T, 3) [mm], from the moments of :func:`_sphere_moments` about the centre's
+    origin (``total`` (T, 4, 4) the grams summed over the markers).
+
+    With ``w = (-2 c, 1)``, ``|y - c|^2 - mean_k |y - c|^2 = (x - mean_k x) . w``, so
+    ``f2 = w' G w``, and ``r_p^2 = mean_k |y - c|^2 = mean_k x . w + |c|^2``.
+    """
+    weights = np.ones((center.shape[0], 4, 1))
+    weights[:, :3, 0] = -2.0 * center
+    cost = (np.swapaxes(weights, 1, 2) @ total @ weights)[:, 0, 0]
+    sq_radii = (means @ weights)[..., 0] + row_sq(center)[:, None]
+    return np.sqrt(np.maximum(sq_radii, 0.0)), cost
 
 
 class _LSFit(NamedTuple):
-    """Gamage & Lasenby's fit of each trial, in coordinates relative to its first sample:
-    far from the origin ``|v|^2`` would lose the radii to rounding."""
+    """Gamage & Lasenby's fit of each trial, in coordinates relative to its first sample
+    (far from the origin ``|v|^2`` would lose the radii to rounding)."""
 
     origin: np.ndarray  # (T, 3) [mm], each trial's first sample
     shift: np.ndarray  # (T, 3) [mm], the LS centre relative to ``origin``
     a_pinv: np.ndarray  # (T, 3, 3) [mm^-2], A^+ (A does not change with the origin)
-    means: np.ndarray  # (T, P, 4), of the shifted data
-    centred: np.ndarray  # (T, N P, 4), of the shifted data
+    means: np.ndarray  # (T, P, 4), of :func:`_sphere_moments` about ``origin``
+    total: np.ndarray  # (T, 4, 4), its grams summed over the markers
 
 
 def _ls_fit(data: np.ndarray) -> _LSFit:
     """:class:`_LSFit` of validated trials ``(T, N, P, 3)`` [mm]."""
+    n_trials, n_frames = data.shape[:2]
     origin = data[:, 0, 0]
-    a_matrix, b_vector, means, centred = _ls_moments_batch(data - origin[:, None, None])
-    a_pinv = _pinv_batch(a_matrix)
-    return _LSFit(origin, np.einsum("tij,tj->ti", a_pinv, b_vector), a_pinv, means, centred)
+    means, grams = _moments(data, origin)
+    a_pinv, shift = np.empty((n_trials, 3, 3)), np.empty((n_trials, 3))
+    _ls_solve(grams, n_frames, RCOND, a_pinv, shift)
+    return _LSFit(origin, shift, a_pinv, means, grams.sum(axis=1))
 
 
 def _closed_form_results(method, centers, radii, costs) -> list[CenterResult]:
@@ -210,7 +294,7 @@ def _closed_form_results(method, centers, radii, costs) -> list[CenterResult]:
 def _ls_fits(data: np.ndarray) -> list[CenterResult]:
     """:func:`fit_ls` of validated trials ``(T, N, P, 3)`` [mm]."""
     fit = _ls_fit(data)
-    radii, costs = _algebraic_fit_batch(fit.means, fit.centred, fit.shift)
+    radii, costs = _algebraic_fit(fit.means, fit.total, fit.shift)
     return _closed_form_results("LS", fit.origin + fit.shift, radii, costs)
 
 
@@ -539,7 +623,7 @@ def fit_bc(
     3. updates ``c_{j+1} = A^+ (b - db)`` (``A`` and ``b`` stay those of the data; ``A^+`` is
        the pseudo-inverse of :func:`solve_ls_system`).
 
-    The sums over frames are evaluated from per-marker moments (see ``_BCState``); the
+    The sums over frames are evaluated from per-marker moments (see :func:`_bc_fits`); the
     arithmetic is that of the formulas above.
 
     Stopping rule. Paper A (§5): "The convergence criterion for BC was set to the same values as
@@ -587,12 +671,12 @@ def _bc_fits(
     Each iteration then costs O(P), not O(N P), and ``|y|^2`` stays of the order of the radii,
     so the Gram matrices lose no precision to cancellation even far from the origin.
     """
-    n_trials, n_frames, n_markers, _ = data.shape
+    n_trials, n_frames, _, _ = data.shape
     ls = _ls_fit(data)
     origin = ls.origin + ls.shift
-    _, b_vector, means, centred = _ls_moments_batch(data - origin[:, None, None])
-    rows = centred.reshape(n_trials, n_frames, n_markers, 4)
-    grams = np.einsum("tkpi,tkpj->tpij", rows, rows)
+    means, grams = _moments(data, origin)
+    total = grams.sum(axis=1)
+    b_vector = total[:, :3, 3] * (1.0 / n_frames)
     sum_of_means = means[..., :3].sum(axis=1)
     limits = _BC_DIVERGENCE_FACTOR * np.sqrt(means[..., 3].mean(axis=1))
 
@@ -601,16 +685,16 @@ def _bc_fits(
     _bc_iterations(
         *(kernel_array(a) for a in (grams, means, sum_of_means, ls.a_pinv, b_vector, limits)),
         n_frames,
-        max_iterations,
-        tol_x,
-        tol_fun,
+        int(max_iterations),
+        float(tol_x),
+        float(tol_fun),
         shifts,
         sigma2,
         iterations,
         stops,
     )
     # Radii and f2 are translation invariant: evaluate them in the shifted coordinates.
-    radii, costs = _algebraic_fit_batch(means, centred, shifts)
+    radii, costs = _algebraic_fit(means, total, shifts)
     return [
         CenterResult(
             center=center,
