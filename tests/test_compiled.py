@@ -92,7 +92,7 @@ def test_radial_cost_kernel():
 def test_nm_kernel():
     rng = np.random.default_rng(4)
     markers = _hinge_markers(rng, 4)[:, :40]
-    # A noise-free trial has a singular scatter: it must be handed back unsolved.
+    # A noise-free trial has a singular scatter: solved from the SVD of the data matrix.
     angles = np.linspace(0.0, 0.8, 40)[:, None] * unit(np.array([1.0, 2.0, 0.5]))
     markers[1] = np.einsum("fij,pj->fpi", rotation_matrix(angles), rng.normal(size=(3, 3)) * 30)
     n_trials = len(markers)
@@ -102,17 +102,80 @@ def test_nm_kernel():
             np.empty((n_trials, 3)),
             np.empty((n_trials, 3)),
             np.empty(n_trials),
-            np.empty(n_trials, dtype=bool),
+            np.empty(n_trials, dtype=np.int64),
         ),
         np.ascontiguousarray(markers),
         sphere._nm_constraint(3),
         sphere._EPS,
     )
     np.testing.assert_array_equal(compiled[3], interpreted[3])
-    solved = compiled[3]
-    assert list(solved) == [True, False, True, True]
+    assert list(compiled[3]) == [0, 0, 0, 0]
+    solved = compiled[3] == 0
     for a, b in zip(compiled[:3], interpreted[:3], strict=True):
         np.testing.assert_allclose(a[solved], b[solved], rtol=1e-12, atol=1e-9)
+    assert compiled[2][1] == 0.0  # the noise-free trial is fitted exactly
+
+
+def test_sphere_kernels():
+    """LS's moments and solution and BC's iteration, compiled and interpreted, on noisy trials
+    and on a pure hinge (a singular ``A``, whose null direction the pseudo-inverse drops)."""
+    rng = np.random.default_rng(7)
+    markers = _hinge_markers(rng, 3)[:, :40] + rng.normal(size=(3, 40, 3, 3)) * 0.5
+    angles = np.linspace(0.0, 0.8, 40)[:, None] * np.array([0.0, 0.0, 1.0])
+    markers[2] = np.einsum("fij,pj->fpi", rotation_matrix(angles), rng.normal(size=(3, 3)) * 30)
+    data = np.ascontiguousarray(markers)
+    n_trials = len(data)
+    origins = np.ascontiguousarray(data[:, 0, 0])
+    moments = _both(
+        sphere._sphere_moments,
+        lambda: (np.empty((n_trials, 3, 4)), np.empty((n_trials, 3, 4, 4))),
+        data,
+        origins,
+    )
+    for a, b in zip(*moments, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-9)
+    means, grams = moments[0]
+    solutions = _both(
+        sphere._ls_solve,
+        lambda: (np.empty((n_trials, 3, 3)), np.empty((n_trials, 3))),
+        grams,
+        40,
+        sphere.RCOND,
+    )
+    for a, b in zip(*solutions, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
+    a_pinv = solutions[0][0]
+    # The hinge's A has rank 2: A^+ A projects onto the plane of rotation.
+    total = grams[2].sum(axis=0) / 40
+    np.testing.assert_allclose(
+        a_pinv[2] @ (2.0 * total[:3, :3]), np.diag([1.0, 1.0, 0.0]), atol=1e-9
+    )
+    sum_of_means = means[..., :3].sum(axis=1)
+    limits = np.full(n_trials, 1e6)
+    b_vector = np.ascontiguousarray(grams.sum(axis=1)[:, :3, 3] / 40)
+    iterations = _both(
+        sphere._bc_iterations,
+        lambda: (
+            np.empty((n_trials, 3)),
+            np.empty(n_trials),
+            np.empty(n_trials, dtype=np.int64),
+            np.empty(n_trials, dtype=np.int64),
+        ),
+        grams,
+        means,
+        sum_of_means,
+        a_pinv,
+        b_vector,
+        limits,
+        40,
+        600,
+        1e-4,
+        1e-4,
+    )
+    np.testing.assert_array_equal(iterations[0][2], iterations[1][2])
+    np.testing.assert_array_equal(iterations[0][3], iterations[1][3])
+    for a, b in zip(iterations[0][:2], iterations[1][:2], strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
 
 
 def test_kernels_load_numba_only_when_called():
@@ -142,8 +205,10 @@ def test_each_kernel_is_compiled_once_whatever_its_inputs_look_like():
     markers = _hinge_markers(rng, 4)[:, :40]
     read_only = markers.copy()
     read_only.setflags(write=False)
-    sphere.fit_nm.batched(markers)
-    sphere.fit_nm.batched(read_only)
+    for fit in (sphere.fit_nm, sphere.fit_ls, sphere.fit_bc):
+        fit.batched(markers)
+        fit.batched(read_only)
+    sphere.fit_bc(markers[0], max_iterations=np.int64(50), tol_x=1)
     costs = axis.AxisCosts(markers, rng.normal(size=(4, 3)))
     directions = unit(rng.normal(size=(6, 3)))
     frozen_directions = directions.copy()
@@ -151,7 +216,15 @@ def test_each_kernel_is_compiled_once_whatever_its_inputs_look_like():
     costs.radial(directions, np.arange(6) % 4)
     costs.radial(frozen_directions, (np.arange(12) % 4)[::2])
     costs.radial_distances(frozen_directions[0], 1)
-    for kernel in (poses._horn_rotations, sphere._nm_trials, axis._radial_costs):
+    kernels = (
+        poses._horn_rotations,
+        sphere._nm_trials,
+        sphere._sphere_moments,
+        sphere._ls_solve,
+        sphere._bc_iterations,
+        axis._radial_costs,
+    )
+    for kernel in kernels:
         assert len(kernel._compiled.signatures) == 1, (kernel.__name__, kernel._compiled.signatures)
 
 

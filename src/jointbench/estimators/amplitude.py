@@ -8,6 +8,7 @@ hence at least three non-collinear markers.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from jointbench.estimators.validation import (
     prepare_trials,
 )
 from jointbench.numerics.poses import rigid_poses
-from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
 
 __all__ = ["amplitude", "fit_ma"]
 
@@ -123,15 +124,7 @@ def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     ``diagnostics["function_evaluations"]``.
     """
     markers, start = _ma_prepare(markers, start)
-    rotation, translation = _mean_anchored(*rigid_poses(markers)[:2])
-    rotation, translation = rotation[None], translation[None]
-    trial = np.zeros(1, dtype=int)
-    search = nelder_mead(
-        lambda *p: float(_amplitudes(np.array([p]), rotation, translation, trial)[0]),
-        start,
-        **FMINSEARCH_OPTIONS,
-    )
-    return _ma_result(search, rotation[0], translation[0])
+    return _ma_fits([markers], [start])[0]
 
 
 def _ma_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.ndarray]:
@@ -181,22 +174,30 @@ def _ma_result(search, rotation: np.ndarray, translation: np.ndarray) -> CenterR
     )
 
 
+def _ma_fits(arrays: list[np.ndarray], starts: list[np.ndarray]) -> list[CenterResult]:
+    """:func:`fit_ma` of validated trials (each ``(N, P, 3)`` [mm], the same shape) from
+    ``starts`` (each ``(3,)`` [mm]), the searches advanced together
+    (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
+    # Each trial's poses are those of its own call (the pose fit is per trial).
+    rotations, translations = _mean_anchored(*rigid_poses(np.stack(arrays))[:2])
+    searches = lockstep(
+        lambda points, owners: _amplitudes(points, rotations, translations, owners),
+        np.stack(starts),
+        **FMINSEARCH_OPTIONS,
+    )
+    return [
+        _ma_result(search, rotation, translation)
+        for search, rotation, translation in zip(searches, rotations, translations, strict=True)
+    ]
+
+
 def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
-    """:func:`fit_ma` for every trial of ``markers`` ``(n_trials, N, P, 3)``, the searches
-    advanced together (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
+    """:func:`fit_ma` for every trial of ``markers`` ``(n_trials, N, P, 3)``."""
     outcomes, prepared = prepare_trials(markers, lambda data: _ma_prepare(data, start))
     if prepared:
         arrays, points = zip(*prepared.values(), strict=True)
-        # Each trial's poses are those of its own call (the pose fit is per trial).
-        rotations, translations = _mean_anchored(*rigid_poses(np.stack(arrays))[:2])
-        starts = np.stack(points)
-        searches = lockstep(
-            lambda points, owners: _amplitudes(points, rotations, translations, owners),
-            starts,
-            **FMINSEARCH_OPTIONS,
-        )
-        for index, (trial, search) in enumerate(zip(prepared, searches, strict=True)):
-            outcomes[trial] = _ma_result(search, rotations[index], translations[index])
+        for trial, result in zip(prepared, _ma_fits(arrays, points), strict=True):
+            outcomes[trial] = result
     return outcomes
 
 
@@ -215,20 +216,14 @@ def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     rotation, translation = _mean_anchored(*rigid_poses(markers)[:2])
     points = np.stack(list(neighbours.values()))
     costs = _amplitudes(points, rotation[None], translation[None], np.zeros(len(points), dtype=int))
-    best = int(np.argmin(costs))
-    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
-        return selfcheck.held(
-            result,
-            f"the amplitude at {', '.join(neighbours)} is not below the answer's "
-            f"{result.cost:.6g} mm by more than TolFun (least {float(costs[best]):.6g} mm)",
-        )
-    better = fit_ma(markers, start=points[best])
-    moved = float(np.linalg.norm(better.center - result.center))
-    return selfcheck.restarted(
+    return selfcheck.lowest_neighbour(
         result,
-        better,
-        list(neighbours)[best],
-        f"{moved:.3g} mm from the first answer, which is replaced",
+        neighbours,
+        costs,
+        partial(fit_ma, markers),
+        tol_fun=FMINSEARCH_OPTIONS["fatol"],
+        cost_name="the amplitude",
+        unit=" mm",
     )
 
 

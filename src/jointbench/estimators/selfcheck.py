@@ -23,8 +23,44 @@ included.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Mapping
 
-__all__ = ["failed", "held", "restarted"]
+import numpy as np
+
+__all__ = ["failed", "held", "lowest_neighbour", "restarted"]
+
+
+def lowest_neighbour(
+    result,
+    neighbours: Mapping[str, np.ndarray],
+    costs: np.ndarray,
+    restart: Callable[[np.ndarray], object],
+    *,
+    tol_fun: float,
+    cost_name: str,
+    unit: str = "",
+):
+    """A search's answer judged against its cost at closed-form neighbouring points.
+
+    ``neighbours`` maps a description ("the LS centre") to a point ``(3,)`` [mm], ``costs``
+    ``(len(neighbours),)`` are the method's cost there. When none is below ``result.cost`` by
+    more than ``tol_fun`` (the search's own function tolerance) the answer holds (:func:`held`);
+    otherwise ``restart(point)`` searches again from the lowest one, and its answer replaces
+    ``result`` (:func:`restarted`). ``cost_name`` and ``unit`` word the evidence.
+    """
+    names = list(neighbours)
+    best = int(np.argmin(costs))
+    if not costs[best] < result.cost - tol_fun:
+        return held(
+            result,
+            f"{cost_name} at {', '.join(names)} is not below the answer's {result.cost:.6g}"
+            f"{unit} by more than TolFun (least {float(costs[best]):.6g}{unit})",
+        )
+    better = restart(neighbours[names[best]])
+    moved = float(np.linalg.norm(np.asarray(better.center) - np.asarray(result.center)))
+    return restarted(
+        result, better, names[best], f"{moved:.3g} mm from the first answer, which is replaced"
+    )
 
 
 def held(result, evidence: str):

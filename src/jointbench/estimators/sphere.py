@@ -9,6 +9,12 @@ The two iterative methods reproduce paper A's MATLAB settings (§5): IS is minim
 criterion for BC was set to the same values as fminsearch" (TolX = TolFun = 1e-4, at most
 200·n = 600 iterations for the n = 3 unknowns of a centre). :data:`FMINSEARCH_OPTIONS` holds
 those settings.
+
+Each method is written once, over a stack of trials ``(n_trials, n_frames, n_markers, 3)``
+(``_ls_fits``, ``_nm_fits``, ``_bc_fits``, ``_is_fits``): the one-trial function is that
+implementation on a batch of one, and its ``batched`` form the same over many trials. The loops
+over samples and iterations run in compiled kernels (:mod:`jointbench.numerics.compiled`) whose
+Python source is the implementation.
 """
 
 from __future__ import annotations
@@ -26,16 +32,9 @@ from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.rank import RCOND, negligible
-from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, nelder_mead, stop_status
-from jointbench.numerics.spheres import (
-    LSMoments,
-    ls_moments,
-    ls_system,
-    mean_weights,
-    row_sq,
-    solve_ls_system,
-)
+from jointbench.numerics.rank import RCOND
+from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
+from jointbench.numerics.spheres import ls_system, mean_weights, row_sq, solve_ls_system
 
 __all__ = [
     "FMINSEARCH_OPTIONS",
@@ -54,16 +53,6 @@ _EPS = float(np.finfo(float).eps)
 _MIN_FRAMES = 4
 
 
-@lru_cache(maxsize=1)
-def _lapack():
-    """SciPy's LAPACK wrappers, imported on first use: the one-trial fits call them directly
-    (NumPy's wrappers cost more than a 3x3 factorisation), but a job that fits whole batches
-    never needs them and should not pay for importing ``scipy.linalg``."""
-    from scipy.linalg import lapack
-
-    return lapack
-
-
 def _prepare(markers: object, min_frames: int = _MIN_FRAMES) -> np.ndarray:
     array = check_markers(markers, min_frames=min_frames, min_markers=1)
     check_moves(array)
@@ -79,23 +68,6 @@ def _check_point(point: object, name: str) -> np.ndarray:
     return array
 
 
-def _symmetric_pinv(a_matrix: np.ndarray) -> np.ndarray:
-    """Pseudo-inverse of the symmetric ``A`` with the rule of :func:`solve_ls_system`.
-
-    For a symmetric matrix the singular values are the eigenvalues' magnitudes, so this is the
-    same pseudo-inverse; LAPACK's ``dsyev`` is called directly because NumPy's wrappers cost more
-    than the 3×3 factorisation itself.
-    """
-    eigenvalues, vectors, info = _lapack().dsyev(a_matrix)
-    if info != 0:
-        return np.linalg.pinv(a_matrix, rcond=RCOND)
-    # Three scalars: plain Python is cheaper than NumPy calls on a 3-vector.
-    values = eigenvalues.tolist()
-    threshold = RCOND * max(abs(value) for value in values)
-    inverse = [1.0 / value if abs(value) > threshold else 0.0 for value in values]
-    return (vectors * inverse) @ vectors.T
-
-
 def mean_sq_radii(markers: np.ndarray, center: np.ndarray) -> np.ndarray:
     """``r_p^2 = mean_k |v_k^p - c|^2`` ``(n_markers,)`` [mm^2]."""
     n_frames = markers.shape[0]
@@ -103,45 +75,227 @@ def mean_sq_radii(markers: np.ndarray, center: np.ndarray) -> np.ndarray:
     return sq.sum(axis=0) / n_frames
 
 
-def _algebraic_fit(moments: LSMoments, center: np.ndarray) -> tuple[np.ndarray, float]:
-    """Radii ``(P,)`` [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 [mm^4].
+def _one(outcomes: list) -> CenterResult:
+    """The outcome of a batch of one trial: its result, or its error raised."""
+    (outcome,) = outcomes
+    if isinstance(outcome, Exception):
+        raise outcome
+    return outcome
 
-    From the moments instead of another pass over the data: with ``w = (-2 c, 1)``,
-    ``|v - c|^2 - mean_k |v - c|^2 = (x - mean_k x) . w`` and
-    ``r_p^2 = mean_k |v - c|^2 = mean_k x . w + |c|^2``.
+
+def _screen(markers: object, min_frames: int = _MIN_FRAMES) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked trials as float64 and the mask of those :func:`_prepare` would reject, or
+    might (a coordinate at exactly zero).
+
+    The checks are vectorised over trials; a masked trial is then passed to the one-trial
+    function, which fits it or raises its own ``ValueError``.
     """
-    x, y, z = center.tolist()
-    weights = np.array([-2.0 * x, -2.0 * y, -2.0 * z, 1.0])
-    residual = moments.centred @ weights
-    sq_radii = moments.means @ weights + center @ center
-    return np.sqrt(np.maximum(sq_radii, 0.0)), float(residual @ residual)
+    array = np.asarray(markers, dtype=float)
+    if array.ndim != 4 or array.shape[-1] != 3 or array.shape[1] < min_frames:
+        return array, np.ones(array.shape[0] if array.ndim else 1, dtype=bool)
+    first = array[:, :1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        # A sum is finite only if every term is (an overflow merely sends a trial to the
+        # one-trial path, which decides).
+        finite = np.isfinite(array.sum(axis=(1, 2, 3)))
+        # In place: a second full-size temporary costs more than the arithmetic.
+        offsets = array - first
+        spread = np.abs(offsets, out=offsets).max(axis=(1, 2, 3))
+        scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
+        still = spread <= 1e-9 * scale
+        # A coordinate at exactly zero may belong to a sample at (0, 0, 0), how some readers
+        # store gaps, which the one-trial checks refuse; a coordinate is cheaper to test than a
+        # sample.
+        touches_zero = np.abs(array, out=offsets).min(axis=(1, 2, 3)) == 0
+    return array, ~finite | still | touches_zero | (array.shape[2] < 1)
 
 
-def _ls_solve(a_matrix: np.ndarray, b_vector: np.ndarray) -> np.ndarray:
-    """``A^+ b`` by the rule of :func:`solve_ls_system`; by Cholesky where it drops nothing.
+def _screened(markers: np.ndarray, good: np.ndarray) -> np.ndarray:
+    """The trials ``good`` of ``markers``: the array itself when that is all of them (copying
+    a whole batch costs as much as a closed-form fit)."""
+    return markers if good.size == markers.shape[0] else markers[good]
 
-    For the positive semi-definite ``A`` with eigenvalues ``l1 >= l2 >= l3``,
-    ``l3 / l1 >= 4 det(A) / trace(A)^3`` (``l1 l2 <= ((l1 + l2) / 2)^2`` and ``l1 <= trace``).
-    When that bound exceeds 1e-10, a hundred times the rank threshold, no singular value would be
-    dropped and ``A^+ b = A^-1 b``, which a Cholesky solve gives in half the time of an
-    eigen-decomposition; otherwise (a hinge, a static marker set) the pseudo-inverse is used.
+
+def _over_trials(fits, fit_one, markers: object, **options) -> list[CenterResult | ValueError]:
+    """A method's many-trial form: ``fits(data, **options)`` (its implementation over validated
+    trials ``(T, N, P, 3)`` [mm], one outcome per trial) on the trials :func:`_screen` passes;
+    a trial it does not is given to the one-trial ``fit_one``, whose checks decide (its
+    ``ValueError`` becomes that trial's outcome)."""
+    markers, bad = _screen(markers)
+    outcomes: list = [None] * len(bad)
+    good = np.flatnonzero(~bad)
+    if good.size:
+        for trial, outcome in zip(good, fits(_screened(markers, good), **options), strict=True):
+            outcomes[trial] = outcome
+    for trial in np.flatnonzero(bad):
+        try:
+            outcomes[trial] = fit_one(markers[trial], **options)
+        except ValueError as error:
+            outcomes[trial] = error
+    return outcomes
+
+
+@kernel
+def _sphere_moments(data: np.ndarray, origins: np.ndarray, means: np.ndarray, grams: np.ndarray):
+    """Per-marker moments of each trial's samples ``y = v - origin`` augmented to
+    ``x = (y, |y|^2)``: ``means`` (T, P, 4) the means over frames [mm, mm^2] and ``grams``
+    (T, P, 4, 4) the sums over frames of ``(x - mean x)(x - mean x)'``, into the arrays given,
+    for ``data`` (T, N, P, 3) [mm] and ``origins`` (T, 3) [mm]. A compiled kernel
+    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+
+    Every sum Gamage & Lasenby's fit and Halvorsen's iteration need is a product with these:
+    ``A = 2 sum_p G_p[:3, :3] / N`` and ``b = sum_p G_p[:3, 3] / N`` (paper A eq. 4 minimised
+    over the centre), and ``sum_k (|y - d|^2 - mean_k |y - d|^2)^2 = w' G_p w`` for
+    ``w = (-2 d, 1)``. Relative to an origin near the data ``|y|^2`` keeps the precision that
+    ``|v|^2`` would lose far from the coordinates' origin.
     """
-    lower, info = _lapack().dpotrf(a_matrix, lower=1)
-    if info == 0:
-        l00, l11, l22 = lower.diagonal().tolist()
-        determinant = (l00 * l11 * l22) ** 2
-        if 4.0 * determinant > 1e-10 * float(a_matrix.trace()) ** 3:
-            solution, info = _lapack().dpotrs(lower, b_vector, lower=1)
-            if info == 0:
-                return solution
-    return _symmetric_pinv(a_matrix) @ b_vector
+    n_trials, n_frames, n_markers, _ = data.shape
+    x = np.empty(4)
+    for t in range(n_trials):
+        for p in range(n_markers):
+            means[t, p] = 0.0
+            grams[t, p] = 0.0
+            for f in range(n_frames):
+                squared = 0.0
+                for i in range(3):
+                    x[i] = data[t, f, p, i] - origins[t, i]
+                    squared += x[i] * x[i]
+                x[3] = squared
+                for i in range(4):
+                    means[t, p, i] += x[i]
+            for i in range(4):
+                means[t, p, i] /= n_frames
+            for f in range(n_frames):
+                squared = 0.0
+                for i in range(3):
+                    x[i] = data[t, f, p, i] - origins[t, i]
+                    squared += x[i] * x[i]
+                x[3] = squared
+                for i in range(4):
+                    x[i] -= means[t, p, i]
+                for i in range(4):
+                    for j in range(i + 1):
+                        grams[t, p, i, j] += x[i] * x[j]
+            for i in range(4):
+                for j in range(i):
+                    grams[t, p, j, i] = grams[t, p, i, j]
 
 
-def _ls_start(markers: np.ndarray) -> tuple[np.ndarray, LSMoments]:
-    """LS centre ``(3,)`` and the moments it came from, which are of the data relative to its
-    first sample: far from the origin ``|v|^2`` would lose the radii to rounding."""
-    moments = ls_moments(markers - markers[0, 0])
-    return markers[0, 0] + _ls_solve(moments.a_matrix, moments.b_vector), moments
+def _moments(data: np.ndarray, origins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_sphere_moments` of ``data`` (T, N, P, 3) about ``origins`` (T, 3) [mm]:
+    ``means`` (T, P, 4) and ``grams`` (T, P, 4, 4)."""
+    n_trials, _, n_markers, _ = data.shape
+    means, grams = np.empty((n_trials, n_markers, 4)), np.empty((n_trials, n_markers, 4, 4))
+    _sphere_moments(kernel_array(data), kernel_array(origins), means, grams)
+    return means, grams
+
+
+@kernel
+def _ls_solve(
+    grams: np.ndarray, n_frames: int, rcond: float, a_pinv: np.ndarray, shifts: np.ndarray
+) -> None:
+    """Gamage & Lasenby's centre of each trial from the moments of :func:`_sphere_moments`
+    (``grams`` (T, P, 4, 4)) about its origin: ``A = 2 sum_p G_p[:3, :3] / N``,
+    ``b = sum_p G_p[:3, 3] / N``, ``A^+`` (T, 3, 3) into ``a_pinv`` and ``A^+ b`` (T, 3) [mm]
+    into ``shifts``. ``A^+`` by the rule of :func:`solve_ls_system`, eigenvalues of magnitude
+    at most ``rcond`` times the largest dropped (for a symmetric matrix the singular values
+    are the eigenvalues' magnitudes). A compiled kernel (:mod:`jointbench.numerics.compiled`):
+    this source is the implementation."""
+    n_trials, n_markers = grams.shape[0], grams.shape[1]
+    a_matrix = np.empty((3, 3))
+    b_vector = np.empty(3)
+    for t in range(n_trials):
+        for i in range(3):
+            b_vector[i] = 0.0
+            for j in range(3):
+                a_matrix[i, j] = 0.0
+        for p in range(n_markers):
+            for i in range(3):
+                b_vector[i] += grams[t, p, i, 3]
+                for j in range(3):
+                    a_matrix[i, j] += grams[t, p, i, j]
+        for i in range(3):
+            b_vector[i] *= 1.0 / n_frames
+            for j in range(3):
+                a_matrix[i, j] = 2.0 * (a_matrix[i, j] * (1.0 / n_frames))
+        values, vectors = np.linalg.eigh(a_matrix)
+        largest = max(abs(values[0]), abs(values[2]))  # ascending
+        for i in range(3):
+            for j in range(3):
+                a_pinv[t, i, j] = 0.0
+        for k in range(3):
+            if abs(values[k]) > rcond * largest:
+                for i in range(3):
+                    for j in range(3):
+                        a_pinv[t, i, j] += vectors[i, k] * vectors[j, k] / values[k]
+        for i in range(3):
+            shifts[t, i] = 0.0
+            for j in range(3):
+                shifts[t, i] += a_pinv[t, i, j] * b_vector[j]
+
+
+def _algebraic_fit(
+    means: np.ndarray, total: np.ndarray, center: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Radii (T, P) [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 (T,) [mm^4], at
+    ``center`` (T, 3) [mm], from the moments of :func:`_sphere_moments` about the centre's
+    origin (``total`` (T, 4, 4) the grams summed over the markers).
+
+    With ``w = (-2 c, 1)``, ``|y - c|^2 - mean_k |y - c|^2 = (x - mean_k x) . w``, so
+    ``f2 = w' G w``, and ``r_p^2 = mean_k |y - c|^2 = mean_k x . w + |c|^2``.
+    """
+    weights = np.ones((center.shape[0], 4, 1))
+    weights[:, :3, 0] = -2.0 * center
+    cost = (np.swapaxes(weights, 1, 2) @ total @ weights)[:, 0, 0]
+    sq_radii = (means @ weights)[..., 0] + row_sq(center)[:, None]
+    return np.sqrt(np.maximum(sq_radii, 0.0)), cost
+
+
+class _LSFit(NamedTuple):
+    """Gamage & Lasenby's fit of each trial, in coordinates relative to its first sample
+    (far from the origin ``|v|^2`` would lose the radii to rounding)."""
+
+    origin: np.ndarray  # (T, 3) [mm], each trial's first sample
+    shift: np.ndarray  # (T, 3) [mm], the LS centre relative to ``origin``
+    a_pinv: np.ndarray  # (T, 3, 3) [mm^-2], A^+ (A does not change with the origin)
+    means: np.ndarray  # (T, P, 4), of :func:`_sphere_moments` about ``origin``
+    total: np.ndarray  # (T, 4, 4), its grams summed over the markers
+
+
+def _ls_fit(data: np.ndarray) -> _LSFit:
+    """:class:`_LSFit` of validated trials ``(T, N, P, 3)`` [mm]."""
+    n_trials, n_frames = data.shape[:2]
+    origin = data[:, 0, 0]
+    means, grams = _moments(data, origin)
+    a_pinv, shift = np.empty((n_trials, 3, 3)), np.empty((n_trials, 3))
+    _ls_solve(grams, n_frames, RCOND, a_pinv, shift)
+    return _LSFit(origin, shift, a_pinv, means, grams.sum(axis=1))
+
+
+def _closed_form_results(method, centers, radii, costs) -> list[CenterResult]:
+    """A closed form's :class:`CenterResult` per trial (centres ``(T, 3)``, radii ``(T, P)``
+    [mm], costs ``(T,)``), its fields taken from one read-only copy each."""
+    return [
+        CenterResult(
+            center=center,
+            radii=radius,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method=method,
+            cost=cost,
+        )
+        for center, radius, cost in zip(
+            frozen_rows(centers), frozen_rows(radii), costs.tolist(), strict=True
+        )
+    ]
+
+
+def _ls_fits(data: np.ndarray) -> list[CenterResult]:
+    """:func:`fit_ls` of validated trials ``(T, N, P, 3)`` [mm]."""
+    fit = _ls_fit(data)
+    radii, costs = _algebraic_fit(fit.means, fit.total, fit.shift)
+    return _closed_form_results("LS", fit.origin + fit.shift, radii, costs)
 
 
 @register("center", "LS", min_frames=_MIN_FRAMES)
@@ -160,52 +314,16 @@ def fit_ls(markers: np.ndarray) -> CenterResult:
     CenterResult with ``center`` (3,) [mm], ``radii`` (n_markers,) [mm] (``r_p^2`` the mean
     squared distance, the minimiser of eq. 4 over ``r_p``) and ``cost`` = f2 [mm^4].
     """
-    markers = _prepare(markers)
-    center, moments = _ls_start(markers)
-    radii, cost = _algebraic_fit(moments, center - markers[0, 0])
-    return CenterResult(
-        center=center,
-        radii=radii,
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="LS",
-        cost=cost,
-    )
+    return _one(_ls_fits(_prepare(markers)[None]))
+
+
+def _fit_ls_batch(markers: object) -> list[CenterResult | ValueError]:
+    return _over_trials(_ls_fits, fit_ls, markers)
 
 
 # --------------------------------------------------------------------------------------------
 # NM — Chang & Pollard (2007), paper A §3–4
 # --------------------------------------------------------------------------------------------
-
-
-def _nm_scatter(scaled: np.ndarray) -> np.ndarray:
-    """``S = D'D`` ``(4 + P, 4 + P)`` for the data matrix ``D`` of paper A eq. 22, built by blocks.
-
-    Rows of ``D`` for marker ``p`` are ``[|v|^2, x, y, z, e_p]`` with ``e_p`` the one-hot
-    indicator of the marker's own constant term.
-    """
-    n_frames, n_markers, _ = scaled.shape
-    flat = scaled.reshape(-1, 3)
-    basis = np.empty((flat.shape[0], 4))
-    basis[:, 0] = row_sq(flat)
-    basis[:, 1:] = flat
-    scatter = np.zeros((4 + n_markers, 4 + n_markers))
-    scatter[:4, :4] = basis.T @ basis
-    # Per-marker sums over frames as a vector-matrix product (cheaper than a reduction here).
-    scatter[:4, 4:] = (np.ones(n_frames) @ basis.reshape(n_frames, -1)).reshape(n_markers, 4).T
-    scatter[4:, :4] = scatter[:4, 4:].T
-    scatter[4:, 4:].flat[:: n_markers + 1] = n_frames
-    return scatter
-
-
-def _nm_design(scaled: np.ndarray) -> np.ndarray:
-    """The data matrix ``D`` ``(P N, 4 + P)`` itself (paper A eq. 22)."""
-    n_frames, n_markers, _ = scaled.shape
-    per_marker = np.transpose(scaled, (1, 0, 2))
-    w = np.sum(per_marker**2, axis=-1, keepdims=True)
-    one_hot = np.repeat(np.eye(n_markers)[:, None, :], n_frames, axis=1)
-    return np.concatenate([w, per_marker, one_hot], axis=-1).reshape(n_markers * n_frames, -1)
 
 
 @lru_cache(maxsize=16)
@@ -221,45 +339,25 @@ def _nm_constraint(n_markers: int) -> np.ndarray:
     return constraint
 
 
-def _largest_admissible(whitened: np.ndarray, constraint: np.ndarray) -> tuple[np.ndarray, float]:
-    """Solve ``M y = mu y`` with ``M = W C W'``; return ``u = W' y`` of the largest ``mu > 0``."""
-    m_matrix = whitened @ constraint @ whitened.T
-    m_matrix = (m_matrix + m_matrix.T) / 2.0
-    mu, y, info = _lapack().dsyev(m_matrix)
-    if info != 0:
-        mu, y = np.linalg.eigh(m_matrix)
-    largest = float(mu[-1])
-    if largest <= 0:
-        raise ValueError("NM: no admissible sphere (every generalised eigenvalue is negative)")
-    u = whitened.T @ y[:, -1]
-    return u / np.sqrt(u @ constraint @ u), 1.0 / largest
+# Why a trial has no NM centre, by the code :func:`_nm_trials` gives it.
+_NM_FAILURES = {
+    1: "NM: no admissible sphere (every generalised eigenvalue is negative)",
+    2: "NM: the best fit is a plane (a = 0); the markers do not rotate",
+}
 
 
-def _nm_coefficients(scaled: np.ndarray) -> tuple[np.ndarray, float]:
-    """Minimise ``|D u|^2`` subject to ``u' C u = 1`` (paper A eq. 15); returns ``u`` and the cost.
-
-    ``S u = lambda C u`` (eq. 17) is whitened with a factor ``S = L L'``: ``u = L^-T y`` gives the
-    symmetric problem ``L^-1 C L^-T y = mu y`` with ``mu = 1 / lambda``, so the admissible
-    eigenvector of least cost ``lambda`` is the one of largest positive ``mu``. When ``S`` is
-    (nearly) singular, as for noise-free data, the factor comes from the SVD of ``D`` instead,
-    and an exact fit is ``D``'s null vector.
-    """
-    constraint = _nm_constraint(scaled.shape[1])
-    scatter = _nm_scatter(scaled)
-    # LAPACK directly: for these (4+P)-square matrices NumPy's wrapper overhead dominates.
-    lower, info = _lapack().dpotrf(scatter, lower=1)
-    pivots = (lower.diagonal() ** 2).tolist() if info == 0 else None
-    if pivots is not None and min(pivots) > 1e-9 * max(pivots):
-        inverse, info = _lapack().dtrtri(lower, lower=1)
-        if info == 0:
-            return _largest_admissible(inverse, constraint)
-    _, s, vt = np.linalg.svd(_nm_design(scaled), full_matrices=False)
-    if s[-1] <= 1e-13 * s[0]:
-        u = vt[-1]
-        norm = u @ constraint @ u
-        if norm > 0:
-            return u / np.sqrt(norm), 0.0
-    return _largest_admissible((vt.T / s).T, constraint)
+def _nm_fits(data: np.ndarray) -> list[CenterResult | ValueError]:
+    """:func:`fit_nm` of validated trials ``(T, N, P, 3)`` [mm] by the kernel
+    :func:`_nm_trials`; a trial without a centre carries the ``ValueError`` saying why."""
+    data = kernel_array(data)
+    n_trials, _, n_markers, _ = data.shape
+    centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
+    costs, failures = np.empty(n_trials), np.zeros(n_trials, dtype=np.int64)
+    _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, failures)
+    outcomes: list = _closed_form_results("NM", centers, radii, costs)
+    for trial in np.flatnonzero(failures):
+        outcomes[trial] = ValueError(_NM_FAILURES[int(failures[trial])])
+    return outcomes
 
 
 @register("center", "NM", min_frames=_MIN_FRAMES)
@@ -280,29 +378,201 @@ def fit_nm(markers: np.ndarray) -> CenterResult:
     ----------
     markers : (n_frames >= 4, n_markers, 3) array [mm], reference frame.
     """
-    markers = _prepare(markers)
-    n_rows = markers.shape[0] * markers.shape[1]
-    shifted = markers.reshape(-1, 3)
-    origin = mean_weights(n_rows) @ shifted
-    shifted = shifted - origin
-    flat = shifted.reshape(-1)
-    scale = float(np.sqrt((flat @ flat) / n_rows))
-    scaled = (shifted / scale).reshape(markers.shape)
-    u, cost = _nm_coefficients(scaled)
-    a, bcd, e = float(u[0]), u[1:4], u[4:]
-    if abs(a) < _EPS * float(np.abs(u).max()):
-        raise ValueError("NM: the best fit is a plane (a = 0); the markers do not rotate")
-    center_scaled = bcd / (-2.0 * a)
-    sq_radii_scaled = center_scaled @ center_scaled - e / a
-    return CenterResult(
-        center=origin + scale * center_scaled,
-        radii=scale * np.sqrt(np.maximum(sq_radii_scaled, 0.0)),
-        converged=True,
-        iterations=0,
-        status="ok",
-        method="NM",
-        cost=cost,
-    )
+    return _one(_nm_fits(_prepare(markers)[None]))
+
+
+def _fit_nm_batch(markers: object) -> list[CenterResult | ValueError]:
+    return _over_trials(_nm_fits, fit_nm, markers)
+
+
+@kernel
+def _nm_trials(
+    data: np.ndarray,
+    constraint: np.ndarray,
+    eps: float,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    costs: np.ndarray,
+    failures: np.ndarray,
+) -> None:
+    """NM's fit of each trial of ``data`` (T, N, P, 3) [mm] (see :func:`fit_nm`): centres
+    (T, 3) [mm], radii (T, P) [mm] and costs (T,) into the arrays given, and ``failures`` (T,)
+    a key of :data:`_NM_FAILURES` where a trial has no centre (0 where it has one).
+    ``constraint`` is :func:`_nm_constraint`, ``eps`` the float64 machine epsilon. A compiled
+    kernel (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+
+    Minimise ``|D u|^2`` subject to ``u' C u = 1`` (paper A eq. 15) for the data matrix ``D``
+    of the unit-RMS markers (eq. 22, rows ``[|s|^2, s, e_p]``) and ``C`` of eq. 24.
+    ``S u = lambda C u`` (eq. 17) is whitened with ``W`` such that ``W' W = S^-1``: ``u = W' y``
+    gives the symmetric problem ``W C W' y = mu y`` with ``mu = 1 / lambda``, so the admissible
+    eigenvector of least cost ``lambda`` is the one of largest positive ``mu``. ``W = L^-1``
+    for the Cholesky factor ``S = L L'``; when ``S`` is (nearly) singular, as for noise-free
+    data, ``W = diag(1 / s) V'`` from the SVD of ``D`` instead, and an exact fit is ``D``'s
+    null vector. ``m = -(b, c, d) / 2a`` (eq. 18), ``r_p^2 = |m|^2 - e_p / a``.
+    """
+    n_trials, n_frames, n_markers, _ = data.shape
+    size = 4 + n_markers
+    n_rows = n_frames * n_markers
+    scatter = np.empty((size, size))
+    lower = np.empty((size, size))
+    whitened = np.empty((size, size))
+    product = np.empty((size, size))
+    design = np.empty((n_rows, size))
+    u = np.empty(size)
+    for t in range(n_trials):
+        trial = data[t]
+        failures[t] = 0
+        ox = oy = oz = 0.0
+        for f in range(n_frames):
+            for p in range(n_markers):
+                ox += trial[f, p, 0]
+                oy += trial[f, p, 1]
+                oz += trial[f, p, 2]
+        ox, oy, oz = ox / n_rows, oy / n_rows, oz / n_rows
+        spread = 0.0
+        for f in range(n_frames):
+            for p in range(n_markers):
+                dx, dy, dz = trial[f, p, 0] - ox, trial[f, p, 1] - oy, trial[f, p, 2] - oz
+                spread += dx * dx + dy * dy + dz * dz
+        scale = math.sqrt(spread / n_rows)
+        inverse_scale = 1.0 / scale
+        # The scatter S = D'D by blocks: the 4 x 4 block sums basis' basis over every row,
+        # basis = (|s|^2, s) for the scaled sample s; column 4 + p sums the basis over marker
+        # p's rows. Scalars, so that the sums stay in registers.
+        s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
+        scatter[:] = 0.0
+        design[:] = 0.0
+        for p in range(n_markers):
+            m0 = m1 = m2 = m3 = 0.0
+            for f in range(n_frames):
+                x = (trial[f, p, 0] - ox) * inverse_scale
+                y = (trial[f, p, 1] - oy) * inverse_scale
+                z = (trial[f, p, 2] - oz) * inverse_scale
+                w = x * x + y * y + z * z
+                row = p * n_frames + f
+                design[row, 0], design[row, 1], design[row, 2], design[row, 3] = w, x, y, z
+                design[row, 4 + p] = 1.0
+                s00 += w * w
+                s01 += w * x
+                s02 += w * y
+                s03 += w * z
+                s11 += x * x
+                s12 += x * y
+                s13 += x * z
+                s22 += y * y
+                s23 += y * z
+                s33 += z * z
+                m0 += w
+                m1 += x
+                m2 += y
+                m3 += z
+            scatter[0, 4 + p], scatter[1, 4 + p] = m0, m1
+            scatter[2, 4 + p], scatter[3, 4 + p] = m2, m3
+            scatter[4 + p, 4 + p] = n_frames
+        scatter[0, 0], scatter[0, 1], scatter[0, 2], scatter[0, 3] = s00, s01, s02, s03
+        scatter[1, 1], scatter[1, 2], scatter[1, 3] = s11, s12, s13
+        scatter[2, 2], scatter[2, 3], scatter[3, 3] = s22, s23, s33
+        for i in range(size):
+            for j in range(i):
+                scatter[i, j] = scatter[j, i]
+        # Cholesky: a pivot that is not positive means a singular scatter.
+        regular = True
+        for j in range(size):
+            pivot = scatter[j, j]
+            for k in range(j):
+                pivot -= lower[j, k] * lower[j, k]
+            if not pivot > 0.0:
+                regular = False
+                break
+            lower[j, j] = math.sqrt(pivot)
+            for i in range(j + 1, size):
+                value = scatter[i, j]
+                for k in range(j):
+                    value -= lower[i, k] * lower[j, k]
+                lower[i, j] = value / lower[j, j]
+        if regular:
+            smallest, largest_pivot = lower[0, 0] ** 2, lower[0, 0] ** 2
+            for j in range(1, size):
+                smallest = min(smallest, lower[j, j] ** 2)
+                largest_pivot = max(largest_pivot, lower[j, j] ** 2)
+            regular = smallest > 1e-9 * largest_pivot
+        exact = False
+        rank = size
+        if regular:
+            # W = L^-1, lower triangular, by forward substitution column by column.
+            whitened[:] = 0.0
+            for j in range(size):
+                whitened[j, j] = 1.0 / lower[j, j]
+                for i in range(j + 1, size):
+                    value = 0.0
+                    for k in range(j, i):
+                        value -= lower[i, k] * whitened[k, j]
+                    whitened[i, j] = value / lower[i, i]
+        else:
+            _, singular, vt = np.linalg.svd(design, full_matrices=False)
+            rank = singular.size
+            if singular[rank - 1] <= 1e-13 * singular[0]:
+                norm = 0.0
+                for i in range(size):
+                    for j in range(size):
+                        norm += vt[rank - 1, i] * constraint[i, j] * vt[rank - 1, j]
+                if norm > 0.0:
+                    for i in range(size):
+                        u[i] = vt[rank - 1, i] / math.sqrt(norm)
+                    exact = True
+                    costs[t] = 0.0
+            if not exact:
+                for i in range(rank):
+                    for j in range(size):
+                        whitened[i, j] = vt[i, j] / singular[i]
+        if not exact:
+            # M = W C W', exactly symmetric, then its eigenvector of the largest eigenvalue.
+            for i in range(size):
+                for j in range(rank):
+                    value = 0.0
+                    for k in range(size):
+                        value += constraint[i, k] * whitened[j, k]
+                    product[i, j] = value
+            m_matrix = np.empty((rank, rank))
+            for i in range(rank):
+                for j in range(i + 1):
+                    value = 0.0
+                    for k in range(size):
+                        value += whitened[i, k] * product[k, j]
+                    m_matrix[i, j] = m_matrix[j, i] = value
+            mu, eigenvectors = np.linalg.eigh(m_matrix)
+            largest = mu[rank - 1]
+            if not largest > 0.0:
+                failures[t] = 1
+                continue
+            for i in range(size):
+                value = 0.0
+                for k in range(rank):
+                    value += whitened[k, i] * eigenvectors[k, rank - 1]
+                u[i] = value
+            norm = 0.0
+            for i in range(size):
+                for j in range(size):
+                    norm += u[i] * constraint[i, j] * u[j]
+            if not norm > 0.0:
+                failures[t] = 1
+                continue
+            for i in range(size):
+                u[i] /= math.sqrt(norm)
+            costs[t] = 1.0 / largest
+        a = u[0]
+        if not abs(a) >= eps * np.abs(u).max():
+            failures[t] = 2
+            continue
+        center_scaled = u[1:4] / (-2.0 * a)
+        squared_distance = 0.0
+        for i in range(3):
+            squared_distance += center_scaled[i] * center_scaled[i]
+        centers[t, 0] = ox + scale * center_scaled[0]
+        centers[t, 1] = oy + scale * center_scaled[1]
+        centers[t, 2] = oz + scale * center_scaled[2]
+        for p in range(n_markers):
+            radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
 
 
 # --------------------------------------------------------------------------------------------
@@ -315,48 +585,21 @@ def fit_nm(markers: np.ndarray) -> CenterResult:
 _BC_DIVERGENCE_FACTOR = 1e3
 
 
-class _BCState(NamedTuple):
-    """What one BC iteration needs, in coordinates relative to the LS centre ``c_0``.
-
-    With ``y = v - c_0`` and the centre ``c = c_0 + d``, ``u^2 = |y - d|^2`` and, for
-    ``w = (-2 d, 1)``, ``u^2 - mean_k u^2 = (x - mean_k x) . w`` with ``x = (y, |y|^2)``: the sum
-    of squares over frames is ``w' G_p w`` with ``G_p`` marker ``p``'s 4 x 4 Gram matrix of the
-    centred ``x``. Each iteration then costs O(P), not O(N P). Working relative to ``c_0``
-    keeps ``|y|^2`` of the order of the radii, so the Gram matrices lose no precision to
-    cancellation even for data far from the origin.
-    """
-
-    moments: LSMoments  # of the shifted data y
-    grams: np.ndarray  # (P, 4, 4)
-    means: np.ndarray  # (P, 4): mean_k y and mean_k |y|^2
-    b_vector: np.ndarray  # (3,) b of the shifted data
-    sum_of_means: np.ndarray  # (3,) sum_p mean_k y_k^p
-    n_frames: int
+# How a BC iteration ended, per trial.
+_EXHAUSTED, _CONVERGED, _NONFINITE_START, _NONFINITE, _DIVERGED = range(5)
 
 
-def _bc_state(markers: np.ndarray, origin: np.ndarray) -> _BCState:
-    n_frames, n_markers, _ = markers.shape
-    moments = ls_moments(markers - origin)
-    rows = moments.centred.reshape(n_frames, n_markers, 4)
-    grams = np.einsum("kpi,kpj->pij", rows, rows)
-    sum_of_means = moments.means[:, :3].sum(axis=0)
-    return _BCState(moments, grams, moments.means, moments.b_vector, sum_of_means, n_frames)
-
-
-def _bc_noise_variance(state: _BCState, shift: np.ndarray) -> float:
-    """Halvorsen's per-coordinate noise variance estimate ``sigma^2`` [mm^2] at ``c_0 + shift``.
-
-    ``sigma_p^2 = sum_k (u_k^2 - mean u^2)^2 / (4 mean(u^2) N)`` with ``u_k = |v_k^p - c|``,
-    averaged over the markers. The squared deviations of ``u^2`` are ``4 r^2 sigma^2`` to first
-    order in the noise, hence the division by ``4 mean(u^2)``.
-    """
-    weights = np.empty(4)
-    weights[:3] = -2.0 * shift
-    weights[3] = 1.0
-    spread = (state.grams @ weights) @ weights
-    mean_sq = state.means @ weights + shift @ shift
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return float(np.mean(spread / (4.0 * state.n_frames * mean_sq)))
+def _bc_status(stop: int, iterations: int, max_iterations: int, limit: float) -> str:
+    return {
+        _EXHAUSTED: f"maximum iterations ({max_iterations}) reached without convergence",
+        _CONVERGED: "ok",
+        _NONFINITE_START: "non-finite noise variance at the LS start",
+        _NONFINITE: f"non-finite centre or noise variance at iteration {iterations}",
+        _DIVERGED: (
+            f"diverged at iteration {iterations}: centre more than {limit:.3g} mm "
+            "from the LS centre"
+        ),
+    }[stop]
 
 
 # Stops on steps of 1e-4 mm.
@@ -380,7 +623,7 @@ def fit_bc(
     3. updates ``c_{j+1} = A^+ (b - db)`` (``A`` and ``b`` stay those of the data; ``A^+`` is
        the pseudo-inverse of :func:`solve_ls_system`).
 
-    The sums over frames are evaluated from per-marker moments (see ``_BCState``); the
+    The sums over frames are evaluated from per-marker moments (see :func:`_bc_fits`); the
     arithmetic is that of the formulas above.
 
     Stopping rule. Paper A (§5): "The convergence criterion for BC was set to the same values as
@@ -407,54 +650,165 @@ def fit_bc(
     distances, as for LS), ``cost`` = f2 (eq. 4) at the centre [mm^4], and
     ``diagnostics["noise_variance"]`` the final ``sigma^2`` [mm^2].
     """
-    markers = _prepare(markers)
-    n_markers = markers.shape[1]
-    origin, moments = _ls_start(markers)
-    a_pinv = _symmetric_pinv(moments.a_matrix)
-    state = _bc_state(markers, origin)
-    # Relative to c_0: d_{j+1} = A^+ (b_y - 2 sigma^2 (sum_p mean y^p - P d_j)), d_0 = 0.
-    shift = np.zeros(3)
-    limit = _BC_DIVERGENCE_FACTOR * float(np.sqrt(np.mean(state.means[:, 3])))
+    options = {"max_iterations": max_iterations, "tol_x": tol_x, "tol_fun": tol_fun}
+    return _one(_bc_fits(_prepare(markers)[None], **options))
 
-    sigma2 = _bc_noise_variance(state, shift)
-    converged = False
-    status = f"maximum iterations ({max_iterations}) reached without convergence"
-    iterations = 0
-    if not math.isfinite(sigma2):
-        status = "non-finite noise variance at the LS start"
-    else:
-        for iterations in range(1, max_iterations + 1):
-            compensation = (2.0 * sigma2) * (state.sum_of_means - n_markers * shift)
-            new_shift = a_pinv @ (state.b_vector - compensation)
-            new_sigma2 = _bc_noise_variance(state, new_shift)
-            step = float(np.abs(new_shift - shift).max())
-            if not (math.isfinite(step) and math.isfinite(new_sigma2)):
-                status = f"non-finite centre or noise variance at iteration {iterations}"
-                break
-            change = abs(new_sigma2 - sigma2)
-            shift, sigma2 = new_shift, new_sigma2
-            if step <= tol_x and change <= tol_fun:
-                converged, status = True, "ok"
-                break
-            if math.sqrt(shift @ shift) > limit:
-                status = (
-                    f"diverged at iteration {iterations}: centre more than {limit:.3g} mm "
-                    "from the LS centre"
-                )
-                break
-    # Radii and f2 are translation invariant: evaluate them in the shifted coordinates.
-    radii, cost = _algebraic_fit(state.moments, shift)
-    center = origin + shift
-    return CenterResult(
-        center=center,
-        radii=radii,
-        converged=converged,
-        iterations=iterations,
-        status=status,
-        method="BC",
-        cost=cost,
-        diagnostics={"noise_variance": sigma2},
+
+def _fit_bc_batch(markers: object, **options) -> list[CenterResult | ValueError]:
+    return _over_trials(_bc_fits, fit_bc, markers, **options)
+
+
+def _bc_fits(
+    data: np.ndarray, *, max_iterations: int = 600, tol_x: float = 1e-4, tol_fun: float = 1e-4
+) -> list[CenterResult]:
+    """:func:`fit_bc` of validated trials ``(T, N, P, 3)`` [mm], iterated together; each trial
+    stops by its own test.
+
+    Relative to each trial's LS centre ``c_0``: with ``y = v - c_0`` and the centre
+    ``c = c_0 + d``, ``u^2 = |y - d|^2`` and, for ``w = (-2 d, 1)``,
+    ``u^2 - mean_k u^2 = (x - mean_k x) . w`` with ``x = (y, |y|^2)``: the sum of squares over
+    frames is ``w' G_p w`` with ``G_p`` marker ``p``'s 4 x 4 Gram matrix of the centred ``x``.
+    Each iteration then costs O(P), not O(N P), and ``|y|^2`` stays of the order of the radii,
+    so the Gram matrices lose no precision to cancellation even far from the origin.
+    """
+    n_trials, n_frames, _, _ = data.shape
+    ls = _ls_fit(data)
+    origin = ls.origin + ls.shift
+    means, grams = _moments(data, origin)
+    total = grams.sum(axis=1)
+    b_vector = total[:, :3, 3] * (1.0 / n_frames)
+    sum_of_means = means[..., :3].sum(axis=1)
+    limits = _BC_DIVERGENCE_FACTOR * np.sqrt(means[..., 3].mean(axis=1))
+
+    shifts, sigma2 = np.empty((n_trials, 3)), np.empty(n_trials)
+    iterations, stops = np.empty(n_trials, dtype=np.int64), np.empty(n_trials, dtype=np.int64)
+    _bc_iterations(
+        *(kernel_array(a) for a in (grams, means, sum_of_means, ls.a_pinv, b_vector, limits)),
+        n_frames,
+        int(max_iterations),
+        float(tol_x),
+        float(tol_fun),
+        shifts,
+        sigma2,
+        iterations,
+        stops,
     )
+    # Radii and f2 are translation invariant: evaluate them in the shifted coordinates.
+    radii, costs = _algebraic_fit(means, total, shifts)
+    return [
+        CenterResult(
+            center=center,
+            radii=radius,
+            converged=stop == _CONVERGED,
+            iterations=count,
+            status=_bc_status(stop, count, max_iterations, limit),
+            method="BC",
+            cost=cost,
+            diagnostics={"noise_variance": variance},
+        )
+        for center, radius, stop, count, limit, cost, variance in zip(
+            origin + shifts,
+            radii,
+            stops.tolist(),
+            iterations.tolist(),
+            limits.tolist(),
+            costs.tolist(),
+            sigma2.tolist(),
+            strict=True,
+        )
+    ]
+
+
+@kernel
+def _bc_iterations(
+    grams: np.ndarray,
+    means: np.ndarray,
+    sum_of_means: np.ndarray,
+    a_pinv: np.ndarray,
+    b_vector: np.ndarray,
+    limits: np.ndarray,
+    n_frames: int,
+    max_iterations: int,
+    tol_x: float,
+    tol_fun: float,
+    shifts: np.ndarray,
+    sigma2: np.ndarray,
+    iterations: np.ndarray,
+    stops: np.ndarray,
+) -> None:
+    """Halvorsen's iteration of each trial, relative to its LS centre (see :func:`_bc_fits`):
+    from Gram matrices ``grams`` (T, P, 4, 4), ``means`` (T, P, 4), ``sum_of_means`` (T, 3)
+    [mm], ``A^+`` (T, 3, 3), ``b`` (T, 3) and divergence ``limits`` (T,) [mm], the final shift
+    from the LS centre (T, 3) [mm], ``sigma^2`` (T,) [mm^2], the updates made and how each
+    trial stopped (``_EXHAUSTED``, ...) into the arrays given. A compiled kernel
+    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+
+    Each pass estimates ``sigma^2`` at the candidate shift ``d``,
+    ``mean_p (w' G_p w) / (4 N (mean_p . w + |d|^2))`` with ``w = (-2 d, 1)``, tests it
+    against the last accepted one, then updates
+    ``d = A^+ (b - 2 sigma^2 (sum_p mean y^p - P d))``.
+    """
+    n_trials, n_markers = means.shape[0], means.shape[1]
+    weights = np.empty(4)
+    candidate = np.empty(3)
+    shift = np.empty(3)
+    for t in range(n_trials):
+        candidate[:] = 0.0
+        shift[:] = 0.0
+        variance = math.nan
+        stops[t] = 0  # _EXHAUSTED unless another stop comes first
+        iterations[t] = 0
+        for iteration in range(max_iterations + 1):
+            for i in range(3):
+                weights[i] = -2.0 * candidate[i]
+            weights[3] = 1.0
+            squared = candidate[0] ** 2 + candidate[1] ** 2 + candidate[2] ** 2
+            estimate = 0.0
+            for p in range(n_markers):
+                spread = 0.0
+                for i in range(4):
+                    row = 0.0
+                    for j in range(4):
+                        row += grams[t, p, i, j] * weights[j]
+                    spread += row * weights[i]
+                mean_sq = squared
+                for i in range(4):
+                    mean_sq += means[t, p, i] * weights[i]
+                estimate += spread / (4.0 * n_frames * mean_sq)
+            estimate /= n_markers
+            if iteration == 0:
+                if not math.isfinite(estimate):
+                    stops[t] = 2  # _NONFINITE_START
+                    break
+            else:
+                step = 0.0
+                for i in range(3):
+                    step = max(step, abs(candidate[i] - shift[i]))
+                if not (math.isfinite(step) and math.isfinite(estimate)):
+                    stops[t], iterations[t] = 3, iteration  # _NONFINITE
+                    break
+                change = abs(estimate - variance)
+                shift[:] = candidate
+                iterations[t] = iteration
+                if step <= tol_x and change <= tol_fun:
+                    stops[t] = 1  # _CONVERGED
+                    variance = estimate
+                    break
+                if math.sqrt(shift[0] ** 2 + shift[1] ** 2 + shift[2] ** 2) > limits[t]:
+                    stops[t] = 4  # _DIVERGED
+                    variance = estimate
+                    break
+            variance = estimate
+            if iteration == max_iterations:
+                break
+            for i in range(3):
+                value = 0.0
+                for j in range(3):
+                    compensation = 2.0 * variance * (sum_of_means[t, j] - n_markers * shift[j])
+                    value += a_pinv[t, i, j] * (b_vector[t, j] - compensation)
+                candidate[i] = value
+        shifts[t] = shift
+        sigma2[t] = variance
 
 
 # --------------------------------------------------------------------------------------------
@@ -543,38 +897,44 @@ def fit_is(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     ``diagnostics["function_evaluations"]``.
     """
     markers, start = _is_prepare(markers, start)
-    n_frames = markers.shape[0]
-    flat = np.ascontiguousarray(markers.reshape(1, -1, 3))
-    trial = np.zeros(1, dtype=int)
-    search = nelder_mead(
-        lambda *x: float(_geometric_costs(np.array([x]), flat, trial, n_frames)[0]),
-        start,
-        **FMINSEARCH_OPTIONS,
-    )
-    return _is_result(search, flat[0], n_frames)
+    return _is_fits([markers], [start])[0]
 
 
 def _is_prepare(markers: object, start: object | None) -> tuple[np.ndarray, np.ndarray]:
     """IS's validated markers and starting centre (the LS centre by default)."""
     markers = _prepare(markers)
-    return markers, _ls_start(markers)[0] if start is None else _check_point(start, "start")
+    return markers, _ls_center(markers) if start is None else _check_point(start, "start")
+
+
+def _ls_center(markers: np.ndarray) -> np.ndarray:
+    """The LS centre ``(3,)`` [mm] of validated markers ``(N, P, 3)``."""
+    fit = _ls_fit(markers[None])
+    return fit.origin[0] + fit.shift[0]
+
+
+def _is_fits(arrays: list[np.ndarray], starts: list[np.ndarray]) -> list[CenterResult]:
+    """:func:`fit_is` of validated trials (each ``(N, P, 3)`` [mm], the same ``N``) from
+    ``starts`` (each ``(3,)`` [mm]), the searches advanced together
+    (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
+    n_frames = arrays[0].shape[0]
+    flats = np.ascontiguousarray(np.stack(arrays).reshape(len(arrays), -1, 3))
+    searches = lockstep(
+        lambda centers, owners: _geometric_costs(centers, flats, owners, n_frames),
+        np.stack(starts),
+        **FMINSEARCH_OPTIONS,
+    )
+    return [
+        _is_result(search, flat, n_frames) for search, flat in zip(searches, flats, strict=True)
+    ]
 
 
 def _fit_is_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
-    """:func:`fit_is` for every trial of ``markers`` ``(n_trials, N, P, 3)``, the searches
-    advanced together (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
+    """:func:`fit_is` for every trial of ``markers`` ``(n_trials, N, P, 3)``."""
     outcomes, prepared = prepare_trials(markers, lambda data: _is_prepare(data, start))
     if prepared:
         arrays, starts = zip(*prepared.values(), strict=True)
-        n_frames = arrays[0].shape[0]
-        flats = np.ascontiguousarray(np.stack(arrays).reshape(len(arrays), -1, 3))
-        searches = lockstep(
-            lambda centers, owners: _geometric_costs(centers, flats, owners, n_frames),
-            np.stack(starts),
-            **FMINSEARCH_OPTIONS,
-        )
-        for index, (trial, search) in enumerate(zip(prepared, searches, strict=True)):
-            outcomes[trial] = _is_result(search, flats[index], n_frames)
+        for trial, result in zip(prepared, _is_fits(arrays, starts), strict=True):
+            outcomes[trial] = result
     return outcomes
 
 
@@ -596,380 +956,12 @@ def _is_result(search, flat: np.ndarray, n_frames: int) -> CenterResult:
     )
 
 
-# --------------------------------------------------------------------------------------------
-# Many trials at once: LS, NM and BC over markers (n_trials, n_frames, n_markers, 3)
-# --------------------------------------------------------------------------------------------
-
-
-def _screen(markers: object, min_frames: int = _MIN_FRAMES) -> tuple[np.ndarray, np.ndarray]:
-    """Stacked trials as float64 and the mask of those :func:`_prepare` would reject, or
-    might (a coordinate at exactly zero).
-
-    The checks are vectorised over trials; a masked trial is then passed to the one-trial
-    function, which fits it or raises its own ``ValueError``.
-    """
-    array = np.asarray(markers, dtype=float)
-    if array.ndim != 4 or array.shape[-1] != 3 or array.shape[1] < min_frames:
-        return array, np.ones(array.shape[0] if array.ndim else 1, dtype=bool)
-    first = array[:, :1]
-    with np.errstate(invalid="ignore", over="ignore"):
-        # A sum is finite only if every term is (an overflow merely sends a trial to the
-        # one-trial path, which decides).
-        finite = np.isfinite(array.sum(axis=(1, 2, 3)))
-        # In place: a second full-size temporary costs more than the arithmetic.
-        offsets = array - first
-        spread = np.abs(offsets, out=offsets).max(axis=(1, 2, 3))
-        scale = np.maximum(1.0, np.abs(first).max(axis=(1, 2, 3)))
-        still = spread <= 1e-9 * scale
-        # A coordinate at exactly zero may belong to a sample at (0, 0, 0), how some readers
-        # store gaps, which the one-trial checks refuse; a coordinate is cheaper to test than a
-        # sample.
-        touches_zero = np.abs(array, out=offsets).min(axis=(1, 2, 3)) == 0
-    return array, ~finite | still | touches_zero | (array.shape[2] < 1)
-
-
-def _screened(markers: np.ndarray, good: np.ndarray) -> np.ndarray:
-    """The trials ``good`` of ``markers``: the array itself when that is all of them (copying
-    a whole batch costs as much as a closed-form fit)."""
-    return markers if good.size == markers.shape[0] else markers[good]
-
-
-def _with_fallback(fit, markers: np.ndarray, outcomes: list, redo: np.ndarray) -> list:
-    """Fill ``outcomes`` for the trials in ``redo`` with the one-trial ``fit`` (or its error)."""
-    for trial in np.flatnonzero(redo):
-        try:
-            outcomes[trial] = fit(markers[trial])
-        except ValueError as error:
-            outcomes[trial] = error
-    return outcomes
-
-
-def _ls_moments_batch(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:class:`LSMoments` of every trial: ``A`` (T, 3, 3), ``b`` (T, 3), means (T, P, 4),
-    centred rows (T, N P, 4)."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    augmented = np.empty((n_trials, n_frames, n_markers, 4))
-    augmented[..., :3] = markers
-    np.einsum("...i,...i->...", markers, markers, out=augmented[..., 3])
-    # The sum over frames as a vector-matrix product: reducing the middle axis is slower.
-    means = (np.ones(n_frames) @ augmented.reshape(n_trials, n_frames, -1)).reshape(
-        n_trials, n_markers, 4
-    )
-    means *= 1.0 / n_frames
-    augmented -= means[:, None]
-    centred = augmented.reshape(n_trials, -1, 4)
-    gram = np.swapaxes(centred, 1, 2) @ centred
-    gram *= 1.0 / n_frames
-    return 2.0 * gram[:, :3, :3], gram[:, :3, 3].copy(), means, centred
-
-
-def _pinv_solve_batch(a_matrix: np.ndarray, b_vector: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``A^+ b`` (T, 3) and ``A^+`` (T, 3, 3) by the rule of :func:`solve_ls_system`."""
-    values, vectors = np.linalg.eigh(a_matrix)
-    largest = np.abs(values).max(axis=-1, keepdims=True)
-    keep = ~negligible(values, largest)
-    inverse = np.where(keep, 1.0 / np.where(keep, values, 1.0), 0.0)
-    pinv = (vectors * inverse[:, None, :]) @ np.swapaxes(vectors, 1, 2)
-    return np.einsum("tij,tj->ti", pinv, b_vector), pinv
-
-
-def _algebraic_fit_batch(means, centred, center) -> tuple[np.ndarray, np.ndarray]:
-    """Radii (T, P) [mm] and cost f2 (T,) of :func:`_algebraic_fit` for every trial."""
-    weights = np.concatenate([-2.0 * center, np.ones((center.shape[0], 1))], axis=1)
-    residual = np.einsum("tri,ti->tr", centred, weights)
-    sq_radii = (
-        np.einsum("tpi,ti->tp", means, weights) + np.einsum("ti,ti->t", center, center)[:, None]
-    )
-    return np.sqrt(np.maximum(sq_radii, 0.0)), np.einsum("tr,tr->t", residual, residual)
-
-
-def _fit_ls_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
-    markers, bad = _screen(markers)
-    outcomes: list = [None] * len(bad)
-    good = np.flatnonzero(~bad)
-    if good.size:
-        a_matrix, b_vector, means, centred = _ls_moments_batch(_screened(markers, good))
-        centers, _ = _pinv_solve_batch(a_matrix, b_vector)
-        radii, costs = _algebraic_fit_batch(means, centred, centers)
-        _closed_form_results(outcomes, "LS", good, centers, radii, costs)
-    return _with_fallback(fit_ls, markers, outcomes, bad)
-
-
-def _closed_form_results(outcomes, method, trials, centers, radii, costs) -> None:
-    """Fill ``outcomes[trials]`` with a closed form's :class:`CenterResult` (centres ``(T, 3)``,
-    radii ``(T, P)`` [mm], costs ``(T,)``), its fields taken from one read-only copy each."""
-    for trial, center, radius, cost in zip(
-        trials, frozen_rows(centers), frozen_rows(radii), costs.tolist(), strict=True
-    ):
-        outcomes[trial] = CenterResult(
-            center=center,
-            radii=radius,
-            converged=True,
-            iterations=0,
-            status="ok",
-            method=method,
-            cost=cost,
-        )
-
-
-def _fit_nm_batch(markers: np.ndarray) -> list[CenterResult | ValueError]:
-    markers, bad = _screen(markers)
-    outcomes: list = [None] * len(bad)
-    good = np.flatnonzero(~bad)
-    if good.size:
-        data = kernel_array(_screened(markers, good))
-        n_trials, _, n_markers, _ = data.shape
-        centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
-        costs, solved = np.empty(n_trials), np.empty(n_trials, dtype=bool)
-        _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, solved)
-        # A trial without a solution here -- a (nearly) singular scatter, as for noise-free
-        # data, or no admissible sphere -- goes to the one-trial function, which solves it
-        # otherwise or says why not.
-        bad[good[~solved]] = True
-        _closed_form_results(
-            outcomes, "NM", good[solved], centers[solved], radii[solved], costs[solved]
-        )
-    return _with_fallback(fit_nm, markers, outcomes, bad)
-
-
-@kernel
-def _nm_trials(
-    data: np.ndarray,
-    constraint: np.ndarray,
-    eps: float,
-    centers: np.ndarray,
-    radii: np.ndarray,
-    costs: np.ndarray,
-    solved: np.ndarray,
-) -> None:
-    """:func:`fit_nm` of each trial of ``data`` (T, N, P, 3) [mm] whose scatter is regular:
-    centres (T, 3) [mm], radii (T, P) [mm] and costs (T,) into the arrays given, and
-    ``solved`` (T,) false where the scatter is (nearly) singular or no admissible sphere
-    exists. ``constraint`` is :func:`_nm_constraint`, ``eps`` the float64 machine epsilon. A
-    compiled kernel (:mod:`jointbench.numerics.compiled`).
-
-    The same steps as :func:`_nm_coefficients`, written out for small matrices: the scatter of
-    the unit-RMS design (paper A eq. 22) by blocks, its Cholesky factor ``L``, the admissible
-    eigenvector of largest ``mu`` of ``W C W'`` with ``W = L^-1``, ``u = W' y``.
-    """
-    n_trials, n_frames, n_markers, _ = data.shape
-    size = 4 + n_markers
-    n_rows = n_frames * n_markers
-    scatter = np.empty((size, size))
-    lower = np.empty((size, size))
-    whitened = np.empty((size, size))
-    product = np.empty((size, size))
-    m_matrix = np.empty((size, size))
-    for t in range(n_trials):
-        trial = data[t]
-        ox = oy = oz = 0.0
-        for f in range(n_frames):
-            for p in range(n_markers):
-                ox += trial[f, p, 0]
-                oy += trial[f, p, 1]
-                oz += trial[f, p, 2]
-        ox, oy, oz = ox / n_rows, oy / n_rows, oz / n_rows
-        spread = 0.0
-        for f in range(n_frames):
-            for p in range(n_markers):
-                dx, dy, dz = trial[f, p, 0] - ox, trial[f, p, 1] - oy, trial[f, p, 2] - oz
-                spread += dx * dx + dy * dy + dz * dz
-        scale = math.sqrt(spread / n_rows)
-        inverse_scale = 1.0 / scale
-        # The 4 x 4 block sums basis' basis over every row, basis = (|s|^2, s) for the scaled
-        # sample s; column 4 + p sums the basis over marker p's rows. Scalars, so that the sums
-        # stay in registers.
-        s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
-        scatter[:] = 0.0
-        for p in range(n_markers):
-            m0 = m1 = m2 = m3 = 0.0
-            for f in range(n_frames):
-                x = (trial[f, p, 0] - ox) * inverse_scale
-                y = (trial[f, p, 1] - oy) * inverse_scale
-                z = (trial[f, p, 2] - oz) * inverse_scale
-                w = x * x + y * y + z * z
-                s00 += w * w
-                s01 += w * x
-                s02 += w * y
-                s03 += w * z
-                s11 += x * x
-                s12 += x * y
-                s13 += x * z
-                s22 += y * y
-                s23 += y * z
-                s33 += z * z
-                m0 += w
-                m1 += x
-                m2 += y
-                m3 += z
-            scatter[0, 4 + p], scatter[1, 4 + p] = m0, m1
-            scatter[2, 4 + p], scatter[3, 4 + p] = m2, m3
-            scatter[4 + p, 4 + p] = n_frames
-        scatter[0, 0], scatter[0, 1], scatter[0, 2], scatter[0, 3] = s00, s01, s02, s03
-        scatter[1, 1], scatter[1, 2], scatter[1, 3] = s11, s12, s13
-        scatter[2, 2], scatter[2, 3], scatter[3, 3] = s22, s23, s33
-        for i in range(size):
-            for j in range(i):
-                scatter[i, j] = scatter[j, i]
-        solved[t] = False
-        # Cholesky: a pivot that is not positive means a singular scatter.
-        regular = True
-        for j in range(size):
-            pivot = scatter[j, j]
-            for k in range(j):
-                pivot -= lower[j, k] * lower[j, k]
-            if not pivot > 0.0:
-                regular = False
-                break
-            lower[j, j] = math.sqrt(pivot)
-            for i in range(j + 1, size):
-                value = scatter[i, j]
-                for k in range(j):
-                    value -= lower[i, k] * lower[j, k]
-                lower[i, j] = value / lower[j, j]
-        if not regular:
-            continue
-        smallest, largest_pivot = lower[0, 0] ** 2, lower[0, 0] ** 2
-        for j in range(1, size):
-            smallest = min(smallest, lower[j, j] ** 2)
-            largest_pivot = max(largest_pivot, lower[j, j] ** 2)
-        if not smallest > 1e-9 * largest_pivot:
-            continue
-        # W = L^-1, lower triangular, by forward substitution column by column.
-        whitened[:] = 0.0
-        for j in range(size):
-            whitened[j, j] = 1.0 / lower[j, j]
-            for i in range(j + 1, size):
-                value = 0.0
-                for k in range(j, i):
-                    value -= lower[i, k] * whitened[k, j]
-                whitened[i, j] = value / lower[i, i]
-        # M = W C W', exactly symmetric, then its eigenvector of the largest eigenvalue.
-        for i in range(size):
-            for j in range(size):
-                value = 0.0
-                for k in range(j + 1):
-                    value += constraint[i, k] * whitened[j, k]
-                product[i, j] = value
-        for i in range(size):
-            for j in range(i + 1):
-                value = 0.0
-                for k in range(i + 1):
-                    value += whitened[i, k] * product[k, j]
-                m_matrix[i, j] = m_matrix[j, i] = value
-        mu, eigenvectors = np.linalg.eigh(m_matrix)
-        largest = mu[-1]
-        vectors = eigenvectors[:, -1]
-        u = np.zeros(size)
-        for i in range(size):
-            for k in range(i, size):
-                u[i] += whitened[k, i] * vectors[k]
-        norm = 0.0
-        for i in range(size):
-            for j in range(size):
-                norm += u[i] * constraint[i, j] * u[j]
-        if not (largest > 0.0 and norm > 0.0):
-            continue
-        u /= math.sqrt(norm)
-        a = u[0]
-        if not abs(a) >= eps * np.abs(u).max():
-            continue
-        center_scaled = u[1:4] / (-2.0 * a)
-        squared_distance = 0.0
-        for i in range(3):
-            squared_distance += center_scaled[i] * center_scaled[i]
-        centers[t, 0] = ox + scale * center_scaled[0]
-        centers[t, 1] = oy + scale * center_scaled[1]
-        centers[t, 2] = oz + scale * center_scaled[2]
-        for p in range(n_markers):
-            radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
-        costs[t] = 1.0 / largest
-        solved[t] = True
-
-
-def _fit_bc_batch(
-    markers: np.ndarray,
-    *,
-    max_iterations: int = 600,
-    tol_x: float = 1e-4,
-    tol_fun: float = 1e-4,
-) -> list[CenterResult | ValueError]:
-    """:func:`fit_bc` for every trial, iterated in lockstep; each trial stops by its own test.
-
-    Trials that fail otherwise than by reaching the iteration limit (non-finite, diverged) are
-    re-run one at a time, so their statuses are the one-trial function's.
-    """
-    markers, bad = _screen(markers)
-    outcomes: list = [None] * len(bad)
-    good = np.flatnonzero(~bad)
-    if good.size:
-        data = _screened(markers, good)
-        n_trials, n_frames, n_markers, _ = data.shape
-        a_matrix, b_vector, _, _ = _ls_moments_batch(data)
-        origin, a_pinv = _pinv_solve_batch(a_matrix, b_vector)
-        _, b_shifted, means, centred = _ls_moments_batch(data - origin[:, None, None, :])
-        rows = centred.reshape(n_trials, n_frames, n_markers, 4)
-        grams = np.einsum("tkpi,tkpj->tpij", rows, rows)
-        sum_of_means = means[..., :3].sum(axis=1)
-        limit = _BC_DIVERGENCE_FACTOR * np.sqrt(means[..., 3].mean(axis=1))
-
-        def noise_variance(shift: np.ndarray) -> np.ndarray:
-            weights = np.concatenate([-2.0 * shift, np.ones((n_trials, 1))], axis=1)
-            spread = np.einsum("tpij,ti,tj->tp", grams, weights, weights)
-            mean_sq = (
-                np.einsum("tpi,ti->tp", means, weights)
-                + np.einsum("ti,ti->t", shift, shift)[:, None]
-            )
-            return np.mean(spread / (4.0 * n_frames * mean_sq), axis=1)
-
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            shift = np.zeros((n_trials, 3))
-            sigma2 = noise_variance(shift)
-            active = np.isfinite(sigma2)
-            iterations = np.zeros(n_trials, dtype=int)
-            converged = np.zeros(n_trials, dtype=bool)
-            for iteration in range(1, max_iterations + 1):
-                if not active.any():
-                    break
-                compensation = (2.0 * sigma2)[:, None] * (sum_of_means - n_markers * shift)
-                new_shift = np.einsum("tij,tj->ti", a_pinv, b_shifted - compensation)
-                new_sigma2 = noise_variance(new_shift)
-                step = np.abs(new_shift - shift).max(axis=1)
-                active &= np.isfinite(step) & np.isfinite(new_sigma2)
-                change = np.abs(new_sigma2 - sigma2)
-                shift = np.where(active[:, None], new_shift, shift)
-                sigma2 = np.where(active, new_sigma2, sigma2)
-                iterations[active] = iteration
-                done = active & (step <= tol_x) & (change <= tol_fun)
-                converged |= done
-                active &= ~done
-                active &= np.sqrt(np.einsum("ti,ti->t", shift, shift)) <= limit
-        radii, costs = _algebraic_fit_batch(means, centred, shift)
-        exhausted = f"maximum iterations ({max_iterations}) reached without convergence"
-        for index, trial in enumerate(good):
-            if not (converged[index] or active[index]):
-                bad[trial] = True
-                continue
-            outcomes[trial] = CenterResult(
-                center=origin[index] + shift[index],
-                radii=radii[index],
-                converged=bool(converged[index]),
-                iterations=int(iterations[index]),
-                status="ok" if converged[index] else exhausted,
-                method="BC",
-                cost=float(costs[index]),
-                diagnostics={"noise_variance": float(sigma2[index])},
-            )
-    one_trial = partial(fit_bc, max_iterations=max_iterations, tol_x=tol_x, tol_fun=tol_fun)
-    return _with_fallback(one_trial, markers, outcomes, bad)
-
-
 def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> CenterResult:
     """IS's f1 against f1 at its closed-form neighbours, the LS and NM centres; where one is
     lower by more than fminsearch's TolFun, IS restarted from it (one more search, paid only
     then). See :mod:`jointbench.estimators.selfcheck`."""
     del start  # the answer is judged, wherever it was started
-    neighbours = {"the LS centre": _ls_start(markers)[0]}
+    neighbours = {"the LS centre": _ls_center(markers)}
     try:
         neighbours["the NM centre"] = np.asarray(fit_nm(markers).center)
     except ValueError:
@@ -978,18 +970,13 @@ def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     flat = np.ascontiguousarray(markers.reshape(1, -1, 3))
     points = np.stack(list(neighbours.values()))
     costs = _geometric_costs(points, flat, np.zeros(len(points), dtype=int), n_frames)
-    best = int(np.argmin(costs))
-    name = list(neighbours)[best]
-    if not costs[best] < result.cost - FMINSEARCH_OPTIONS["fatol"]:
-        return selfcheck.held(
-            result,
-            f"f1 at {' and '.join(neighbours)} is not below the answer's {result.cost:.6g} "
-            f"by more than TolFun (least {float(costs[best]):.6g})",
-        )
-    better = fit_is(markers, start=points[best])
-    moved = float(np.linalg.norm(better.center - result.center))
-    return selfcheck.restarted(
-        result, better, name, f"{moved:.3g} mm from the first answer, which is replaced"
+    return selfcheck.lowest_neighbour(
+        result,
+        neighbours,
+        costs,
+        partial(fit_is, markers),
+        tol_fun=FMINSEARCH_OPTIONS["fatol"],
+        cost_name="f1",
     )
 
 

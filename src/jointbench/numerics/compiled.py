@@ -42,6 +42,13 @@ def kernel_array(array: object, dtype: type = float) -> np.ndarray:
     """``array`` as a kernel's input: ``dtype``, C-contiguous and writable, copied only when it
     is not. Numba compiles a kernel once per argument type, and a read-only or strided array is
     a type of its own, which would cost another compilation."""
+    if (
+        isinstance(array, np.ndarray)
+        and array.dtype == dtype
+        and array.flags.c_contiguous
+        and array.flags.writeable
+    ):
+        return array  # np.require's own checks cost more than a small kernel call
     return np.require(array, dtype, ["C", "W"])
 
 
