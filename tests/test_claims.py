@@ -544,6 +544,11 @@ def paper_c_world(k=2.5, exponent=0.98, predicted_scale=1.0, trials=200, seed=0)
                     "error_mm": float(np.linalg.norm(centre)),
                     "sqrt_trace_cov_mm": float(np.sqrt(3) * predicted),
                     "mahalanobis_sq": mahalanobis,
+                    # The synthetic frames are placed exactly: relative to the proximal
+                    # markers is the same as in the world.
+                    "error_proximal_mm": float(np.linalg.norm(centre)),
+                    "sqrt_trace_cov_proximal_mm": float(np.sqrt(3) * predicted),
+                    "mahalanobis_sq_proximal": mahalanobis,
                     "validation_index": float(np.sqrt(mahalanobis / 3)),
                     "cov_xx": predicted**2,
                     "cov_yy": predicted**2,
@@ -577,13 +582,26 @@ def test_paper_c_claims_hold_where_the_paper_is_right(documents, claim, world):
 )
 def test_paper_c_claims_fail_a_wrong_implementation(documents, claim, world):
     collected = paper_c_world(**world)
-    if claim == "C2":  # a centre biased by 1 mm
+    if claim == "C2":  # a centre biased by 1 mm, relative to the proximal markers too
         collected["center_x"] += 1.0
         collected["error_mm"] = np.linalg.norm(
             collected[["center_x", "center_y", "center_z"]].to_numpy(), axis=1
         )
+        collected["error_proximal_mm"] = collected["error_mm"]
     row = _verdict("C", documents, collected, claim)
     assert row["status"] == "not reproduced", (claim, row["reproduced"], row["margin"])
+
+
+def test_c2_is_the_accuracy_relative_to_the_proximal_markers(documents):
+    """Paper C's 0.20 mm describes the centre in the body frame the markers place: a centre
+    accurate there is reproduced however far the noisy frame-0 fit placed the frame in the
+    world, and one biased there is not, however accurate in the world."""
+    placed_off = paper_c_world()
+    placed_off["error_mm"] += 4.0
+    assert _verdict("C", documents, placed_off, "C2")["status"] == "reproduced"
+    biased = paper_c_world()
+    biased["error_proximal_mm"] += 1.0
+    assert _verdict("C", documents, biased, "C2")["status"] == "not reproduced"
 
 
 def test_c3_window_is_derived_from_the_paper_v_values(documents):

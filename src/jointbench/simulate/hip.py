@@ -50,7 +50,7 @@ import numpy as np
 from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
 from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix
-from jointbench.simulate import GridValues, Study, Trials
+from jointbench.simulate import PROXIMAL_TRUTH, GridValues, Study, Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
 
 __all__ = ["STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
@@ -194,7 +194,8 @@ def simulate(
 
     Returns :class:`~jointbench.simulate.Trials` with ``segments["proximal"]`` and
     ``segments["distal"]`` ``(n_trials, Nt, 3, 3)`` [mm] in the world frame and
-    ``truth["center"]`` the joint in the body-fixed frame shared at frame 0.
+    ``truth["center"]`` the joint in the body-fixed frame shared at frame 0 and
+    ``truth["proximal_frame0"]`` the proximal markers there, noise-free ``(3, 3)`` [mm].
     """
     unknown = set(condition) - set(_CONDITION_KEYS)
     if unknown:
@@ -227,7 +228,10 @@ def simulate(
     }
     return Trials(
         segments={"proximal": noisy[:, :, :n_proximal], "distal": noisy[:, :, n_proximal:]},
-        truth={"center": [float(x) for x in protocol.joint_mm]},
+        truth={
+            "center": [float(x) for x in protocol.joint_mm],
+            PROXIMAL_TRUTH: proximal[0].tolist(),
+        },
         parameters=_jsonable(parameters),
     )
 

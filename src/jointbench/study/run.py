@@ -33,7 +33,7 @@ from jointbench.study.io import (
     write_table,
 )
 from jointbench.study.schema import check_estimates
-from jointbench.study.scoring import score
+from jointbench.study.scoring import proximal_at_frame0, score
 from jointbench.study.seeds import trial_rng
 from jointbench.study.studies import get_study
 
@@ -213,6 +213,7 @@ def estimate_table(
     if diagnose:
         segments = tuple(trials.segments[name] for name in spec.segments)
         extras = diagnose(segments, [row[0] for row in fitted], trials.truth)
+    frame0 = proximal_at_frame0(trials.segments, spec.segments)
     rows = []
     for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
         zip(fitted, extras, strict=True)
@@ -222,7 +223,7 @@ def estimate_table(
                 **condition,
                 "trial": first_trial + trial,
                 "method": method,
-                **score(spec.kind, result, trials.truth),
+                **score(spec.kind, result, trials.truth, None if frame0 is None else frame0[trial]),
                 "converged": converged,
                 "iterations": iterations,
                 "seconds": seconds,
