@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import re
 
 import pandas as pd
@@ -10,7 +11,8 @@ import yaml
 from scipy import stats
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.study.ensemble import MEMBER_COLUMNS, member_seed
+from jointbench.study.config import load_config
+from jointbench.study.ensemble import MEMBER_COLUMNS, collect_member, member_seed
 from jointbench.study.tolerance import wilson_interval
 from jointbench.study.verdicts import (
     SUMMARY_COLUMNS,
@@ -106,3 +108,17 @@ def test_verdicts_target_runs_the_ensemble_and_is_never_stale(tmp_path):
 def test_the_readme_states_the_rule_the_code_applies():
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert VERDICT_RULE in readme
+
+
+def test_a_member_warms_each_method_up_once(caplog):
+    """An ensemble member pays each estimator's one-time work once, not once per condition:
+    a warm-up fit costs up to a third of a batch."""
+    config = load_config(ROOT / "config" / "config.yaml")
+    hinge = {**config["studies"]["hinge"], "trials": 2, "estimators": ["planar", "radial"]}
+    hinge["grid"] = {"protocol": ["knee"], "fe_rom_deg": [30, 60], "aa_ratio": [0.1]}
+    config = {**config, "studies": {**config["studies"], "hinge": hinge}}
+    with caplog.at_level(logging.INFO, logger="jointbench"):
+        collected = collect_member(config, "hinge")
+    assert len(collected) == 2 * 2 * 2
+    warm_ups = [r.getMessage() for r in caplog.records if "warm-up fit" in r.getMessage()]
+    assert len(warm_ups) == 2, warm_ups

@@ -190,8 +190,13 @@ def estimate_table(
     options: Mapping[str, object] | None = None,
     poses: list | None = None,
     first_trial: int = 0,
+    warm_up: bool = True,
 ) -> pa.Table:
-    """:func:`estimate` as an Arrow table, its trials numbered from ``first_trial``."""
+    """:func:`estimate` as an Arrow table, its trials numbered from ``first_trial``.
+
+    ``warm_up=False`` leaves out the warm-up fit (:func:`_warm_up`): for a process that has
+    already fitted ``method`` once, whose one-time work is done.
+    """
     spec = get_study(study)
     # The estimator alone: simulated data are valid by construction, and the seconds column
     # (paper A Table 2) times the estimator, not the input checks a user's call goes through.
@@ -199,15 +204,15 @@ def estimate_table(
     if poses is not None and pose_segments(fit) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = DIAGNOSTICS.get((study, method))
-    warm_up = _warm_up(fit, spec, trials, options or {}, poses)
-    log.info(
-        "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
-        "not counted in any trial's seconds",
-        study,
-        method,
-        first_trial,
-        warm_up,
-    )
+    if warm_up:
+        log.info(
+            "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
+            "not counted in any trial's seconds",
+            study,
+            method,
+            first_trial,
+            _warm_up(fit, spec, trials, options or {}, poses),
+        )
     fitted = _fit_trials(fit, spec, trials, options or {}, poses)
     extras = [{}] * trials.n_trials
     if diagnose:
