@@ -512,6 +512,28 @@ def test_b_table1_has_the_relative_difference(documents):
     assert "0 of them only through the 2° floor" in table.note
 
 
+def _timed(world, seconds, slow_nm_calls=0):
+    """``world`` with each method's ``seconds`` per trial, and NM's first ``slow_nm_calls``
+    calls of each condition a thousand times slower (a busy machine)."""
+    world = world.assign(seconds=world["method"].map(seconds))
+    slow = (world["method"] == "NM") & (world["trial"] < slow_nm_calls)
+    world.loc[slow, "seconds"] *= 1000.0
+    return world
+
+
+A_SPEEDS = {"NM": 1e-4, "LS": 4e-4, "IS": 0.01, "BC": 0.02, "MA": 0.3}
+
+
+def test_a12_nm_fastest_by_median(documents):
+    """NM fastest by median is reproduced even when a few slow calls make its mean the
+    largest but one; NM slower than LS by median is not."""
+    fast = _verdict("A", documents, _timed(paper_a_world(), A_SPEEDS, slow_nm_calls=3), "A12")
+    assert fast["status"] == "reproduced", fast["reproduced"]
+    assert "NM 0.0001 s < LS 0.0004 s" in fast["reproduced"]
+    slower = _timed(paper_a_world(), {**A_SPEEDS, "NM": 5e-4})
+    assert _verdict("A", documents, slower, "A12")["status"] == "not reproduced"
+
+
 # ----------------------------------------------------------------------------- paper C
 
 C_FRAMES = (4, 8, 16, 32, 75, 150, 300, 600, 1200)
