@@ -13,11 +13,14 @@ from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench.study.config import load_config
 from jointbench.study.ensemble import MEMBER_COLUMNS, collect_member, member_seed
+from jointbench.study.snapshot import VERDICTS_BLOCK, readme_summary
 from jointbench.study.tolerance import wilson_interval
 from jointbench.study.verdicts import (
+    PROTOCOL_SHARES,
     SUMMARY_COLUMNS,
     VERDICT_RULE,
     seed_verdict,
+    standout_summary,
     summarise_members,
 )
 
@@ -122,3 +125,63 @@ def test_a_member_warms_each_method_up_once(caplog):
     assert len(collected) == 2 * 2 * 2
     warm_ups = [r.getMessage() for r in caplog.records if "warm-up fit" in r.getMessage()]
     assert len(warm_ups) == 2, warm_ups
+
+
+def _summary_of(shares: dict[str, tuple[int, int]]) -> pd.DataFrame:
+    """A verdicts summary with each id reproduced in ``k`` of ``n`` seeds."""
+    rows = []
+    for entry_id, (k, n) in shares.items():
+        statuses = ["reproduced"] * k + ["not reproduced"] * (n - k)
+        rows.append(
+            pd.DataFrame(
+                {
+                    "member": range(n),
+                    "base_seed": range(n),
+                    "paper": entry_id[0],
+                    "study": "cmc",
+                    "entry": "claim",
+                    "id": entry_id,
+                    "status": statuses,
+                    "margin": "",
+                    "reproduced": "",
+                }
+            )
+        )
+    members = pd.concat(rows, ignore_index=True)[MEMBER_COLUMNS]
+    return summarise_members(members, {i: f"claim {i}" for i in shares})
+
+
+def test_the_readme_verdicts_are_generated_from_the_seed_shares():
+    """Counts per paper and the closest calls, nearest a share of 1/2 first, with the
+    intervals of the summary; a protocol share beside each when the sensitivity file gives
+    one."""
+    summary = _summary_of({"A1": (20, 20), "A2": (1, 20), "A4": (12, 20), "B2": (9, 20)})
+    text = standout_summary(summary, closest=2)
+    assert "**Verdicts over 20 base seeds**" in text
+    assert "| A | 1 | 1 | 1 |" in text and "| B | 0 | 0 | 1 |" in text
+    lines = [line for line in text.splitlines() if line.startswith(("| A", "| B"))]
+    calls = [line for line in lines if "seeds" not in line and "of 20" in line]
+    # 9/20 is nearer 1/2 than 12/20; the others are not among the two closest.
+    assert [line.split(" | ")[0] for line in calls] == ["| B2", "| A4"]
+    (b2,) = summary.loc[summary["id"] == "B2", "interval_95"]
+    assert f"| 9 of 20 | {b2} | seed-dependent |" in calls[0]
+    assert "protocols" not in text
+    protocols = pd.DataFrame({"id": ["A4"], "share": [0.35]})
+    with_protocols = standout_summary(summary, protocols, closest=2)
+    assert "| protocols reproducing |" in with_protocols
+    assert "| seed-dependent | 35% |" in with_protocols
+
+
+@pytest.mark.skipif(
+    not (ROOT / "results" / "tables" / "verdicts.csv").is_file(),
+    reason="run `snakemake -j2 verdicts` first: no results/tables/verdicts.csv",
+)
+def test_the_readme_verdicts_are_current():
+    summary = pd.read_csv(ROOT / "results" / "tables" / "verdicts.csv")
+    protocols = ROOT / "results" / PROTOCOL_SHARES
+    expected = standout_summary(
+        summary, pd.read_csv(protocols) if protocols.is_file() else None
+    ).strip()
+    assert readme_summary(ROOT / "README.md", VERDICTS_BLOCK) == expected, (
+        "README verdicts over seeds are stale: run `jointbench readme`"
+    )

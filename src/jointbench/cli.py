@@ -25,7 +25,13 @@ from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
-from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
+from jointbench.study.snapshot import (
+    VERDICTS_BLOCK,
+    reproduction_summary,
+    snapshot_table,
+    update_readme,
+)
+from jointbench.study.verdicts import PROTOCOL_SHARES, standout_summary
 
 __all__ = ["main"]
 
@@ -86,6 +92,18 @@ def _readme(args: argparse.Namespace) -> int:
     comparison = pd.read_csv(comparison_path)
     changed = update_readme(args.readme, reproduction_summary(comparison, paper_labels()))
     print(f"{args.readme}: summary {'updated' if changed else 'already current'}")
+    verdicts_path = args.results / "tables" / "verdicts.csv"
+    if not verdicts_path.is_file():
+        print(
+            f"{args.readme}: verdicts over seeds left as they are: no {verdicts_path} "
+            "(`snakemake -j2 verdicts` writes it)"
+        )
+        return 0
+    protocols_path = args.results / PROTOCOL_SHARES
+    protocols = pd.read_csv(protocols_path) if protocols_path.is_file() else None
+    summary = standout_summary(pd.read_csv(verdicts_path), protocols)
+    changed = update_readme(args.readme, summary, VERDICTS_BLOCK)
+    print(f"{args.readme}: verdicts over seeds {'updated' if changed else 'already current'}")
     return 0
 
 

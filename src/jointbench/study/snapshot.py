@@ -35,8 +35,22 @@ __all__ = [
 # this; any real change of an estimator or a simulation moves some mean by far more.
 SNAPSHOT_RTOL = 1e-6
 SNAPSHOT_ATOL = 1e-9
-_SUMMARY_START = "<!-- reproduction-summary:start -->"
-_SUMMARY_END = "<!-- reproduction-summary:end -->"
+#: The README's generated blocks, each between ``<!-- NAME:start -->`` and ``<!-- NAME:end -->``:
+#: the reproduction summary, and the verdicts over seeds in "What stands out".
+SUMMARY_BLOCK = "reproduction-summary"
+VERDICTS_BLOCK = "verdicts-summary"
+
+
+def _markers(block: str) -> tuple[str, str]:
+    return f"<!-- {block}:start -->", f"<!-- {block}:end -->"
+
+
+def _block_span(text: str, block: str, readme) -> tuple[int, int]:
+    """Where the text between ``block``'s markers starts and ends in ``text``."""
+    start, end = _markers(block)
+    if start not in text or end not in text:
+        raise ValueError(f"{readme}: no {start} … {end} block")
+    return text.index(start) + len(start), text.index(end)
 
 
 def snapshot_table(collected_dir: str | Path) -> pd.DataFrame:
@@ -128,19 +142,20 @@ def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) ->
     )
 
 
-def update_readme(readme: str | Path, summary: str) -> bool:
-    """Replace the README's summary block; return whether the file changed."""
+def update_readme(readme: str | Path, summary: str, block: str = SUMMARY_BLOCK) -> bool:
+    """Replace the README's generated ``block`` with ``summary``; return whether the file
+    changed."""
     path = Path(readme)
     text = path.read_text()
-    start, end = text.index(_SUMMARY_START), text.index(_SUMMARY_END)
-    new = text[: start + len(_SUMMARY_START)] + "\n" + summary + "\n" + text[end:]
+    start, end = _block_span(text, block, readme)
+    new = text[:start] + "\n" + summary.strip() + "\n" + text[end:]
     if new != text:
         path.write_text(new)
     return new != text
 
 
-def readme_summary(readme: str | Path) -> str:
-    """The summary block currently in the README."""
+def readme_summary(readme: str | Path, block: str = SUMMARY_BLOCK) -> str:
+    """The generated ``block`` currently in the README."""
     text = Path(readme).read_text()
-    start, end = text.index(_SUMMARY_START), text.index(_SUMMARY_END)
-    return text[start + len(_SUMMARY_START) : end].strip()
+    start, end = _block_span(text, block, readme)
+    return text[start:end].strip()
