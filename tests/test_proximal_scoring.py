@@ -134,3 +134,25 @@ def test_a_frame_column_of_the_wrong_type_is_refused(hip_condition):
     bad = rows.assign(proximal_center_x="near")
     with pytest.raises(ValueError, match="proximal_center_x"):
         check_estimates(bad, kind="joint_center", condition_keys=["n_frames"])
+
+
+def test_the_noise_free_frame0_control_removes_the_bias_of_eq2():
+    """The same trials with frame 0 recorded exactly: every later frame is the same draw, and
+    gauss-markov's error against the true centre falls to the size of its predicted sqrt(tr Wc),
+    which it exceeds many times over when frame 0 is noisy: the frame-0 diagnosis."""
+    config = study_config.load_config(ROOT / "config" / "config.yaml")
+    hip = {**config["studies"]["hip"], "trials": 8}
+    default = {**config, "studies": {"hip": hip}}
+    control = {**config, "studies": {"hip": {**hip, "protocol": {"noise_free_frame0": True}}}}
+    condition = {"n_frames": 1200}
+    noisy = simulate_condition(default, "hip", condition)
+    exact = simulate_condition(control, "hip", condition)
+    for name, markers in noisy.segments.items():
+        np.testing.assert_array_equal(exact.segments[name][:, 1:], markers[:, 1:])
+        assert np.ptp(exact.segments[name][:, 0], axis=0).max() == 0.0
+    ratios = []
+    for trials in (noisy, exact):
+        rows = estimate("hip", "gauss-markov", trials, condition)
+        rms = float(np.sqrt(np.mean(rows["error_mm"] ** 2)))
+        ratios.append(rms / float(rows["sqrt_trace_cov_mm"].median()))
+    assert ratios[0] > 5.0 and ratios[1] < 2.0, ratios

@@ -109,6 +109,9 @@ class HipProtocol:
     cross_swing_rise_s: Positive = 3.0
     twist_deg: float = 8.0
     twist_hz: float = 0.23
+    # The frame-0 control: the same trials (the same draws) with frame 0 recorded exactly, so
+    # that both body frames are placed without error and eq. 2's single centre exists.
+    noise_free_frame0: bool = False
 
     def __post_init__(self) -> None:
         # Lists from the config become tuples: a protocol is immutable and hashable.
@@ -216,9 +219,10 @@ def simulate(
     proximal, distal = nominal_recording(protocol)
     n_proximal = proximal.shape[1]
     recording = np.concatenate([proximal, distal], axis=1)
-    noisy = np.stack(
-        [recording + isotropic_noise(rng, recording.shape[:2], noise_mm) for rng in rngs]
-    )[:, :n_used]
+    noise = np.stack([isotropic_noise(rng, recording.shape[:2], noise_mm) for rng in rngs])
+    if protocol.noise_free_frame0:
+        noise[:, 0] = 0.0
+    noisy = (recording + noise)[:, :n_used]
     parameters = {
         **asdict(protocol),
         "n_frames_recorded": protocol.n_frames,
