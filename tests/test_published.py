@@ -123,7 +123,7 @@ def test_readme_blocks_are_replaced_by_name_and_a_missing_one_is_named(tmp_path)
     assert not update_readme(readme, "new b", block="b")
     assert readme_summary(readme, "a") == "old a"
     assert readme_summary(readme, "b") == "new b"
-    with pytest.raises(ValueError, match="no generated block 'c'"):
+    with pytest.raises(ValueError, match="no <!-- c:start -->"):
         update_readme(readme, "text", block="c")
 
 

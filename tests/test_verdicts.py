@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import re
 
 import pandas as pd
@@ -10,12 +11,16 @@ import yaml
 from scipy import stats
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.study.ensemble import MEMBER_COLUMNS, member_seed
+from jointbench.study.config import load_config
+from jointbench.study.ensemble import MEMBER_COLUMNS, collect_member, member_seed
+from jointbench.study.snapshot import VERDICTS_BLOCK, readme_summary
 from jointbench.study.tolerance import wilson_interval
 from jointbench.study.verdicts import (
+    PROTOCOL_SHARES,
     SUMMARY_COLUMNS,
     VERDICT_RULE,
     seed_verdict,
+    standout_summary,
     summarise_members,
 )
 
@@ -106,3 +111,77 @@ def test_verdicts_target_runs_the_ensemble_and_is_never_stale(tmp_path):
 def test_the_readme_states_the_rule_the_code_applies():
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert VERDICT_RULE in readme
+
+
+def test_a_member_warms_each_method_up_once(caplog):
+    """An ensemble member pays each estimator's one-time work once, not once per condition:
+    a warm-up fit costs up to a third of a batch."""
+    config = load_config(ROOT / "config" / "config.yaml")
+    hinge = {**config["studies"]["hinge"], "trials": 2, "estimators": ["planar", "radial"]}
+    hinge["grid"] = {"protocol": ["knee"], "fe_rom_deg": [30, 60], "aa_ratio": [0.1]}
+    config = {**config, "studies": {**config["studies"], "hinge": hinge}}
+    with caplog.at_level(logging.INFO, logger="jointbench"):
+        collected = collect_member(config, "hinge")
+    assert len(collected) == 2 * 2 * 2
+    warm_ups = [r.getMessage() for r in caplog.records if "warm-up fit" in r.getMessage()]
+    assert len(warm_ups) == 2, warm_ups
+
+
+def _summary_of(shares: dict[str, tuple[int, int]]) -> pd.DataFrame:
+    """A verdicts summary with each id reproduced in ``k`` of ``n`` seeds."""
+    rows = []
+    for entry_id, (k, n) in shares.items():
+        statuses = ["reproduced"] * k + ["not reproduced"] * (n - k)
+        rows.append(
+            pd.DataFrame(
+                {
+                    "member": range(n),
+                    "base_seed": range(n),
+                    "paper": entry_id[0],
+                    "study": "cmc",
+                    "entry": "claim",
+                    "id": entry_id,
+                    "status": statuses,
+                    "margin": "",
+                    "reproduced": "",
+                }
+            )
+        )
+    members = pd.concat(rows, ignore_index=True)[MEMBER_COLUMNS]
+    return summarise_members(members, {i: f"claim {i}" for i in shares})
+
+
+def test_the_readme_verdicts_are_generated_from_the_seed_shares():
+    """Counts per paper and the closest calls, nearest a share of 1/2 first, with the
+    intervals of the summary; a protocol share beside each when the sensitivity file gives
+    one."""
+    summary = _summary_of({"A1": (20, 20), "A2": (1, 20), "A4": (12, 20), "B2": (9, 20)})
+    text = standout_summary(summary, closest=2)
+    assert "**Verdicts over 20 base seeds**" in text
+    assert "| A | 1 | 1 | 1 |" in text and "| B | 0 | 0 | 1 |" in text
+    lines = [line for line in text.splitlines() if line.startswith(("| A", "| B"))]
+    calls = [line for line in lines if "seeds" not in line and "of 20" in line]
+    # 9/20 is nearer 1/2 than 12/20; the others are not among the two closest.
+    assert [line.split(" | ")[0] for line in calls] == ["| B2", "| A4"]
+    (b2,) = summary.loc[summary["id"] == "B2", "interval_95"]
+    assert f"| 9 of 20 | {b2} | seed-dependent |" in calls[0]
+    assert "protocols" not in text
+    protocols = pd.DataFrame({"id": ["A4"], "share": [0.35]})
+    with_protocols = standout_summary(summary, protocols, closest=2)
+    assert "| protocols reproducing |" in with_protocols
+    assert "| seed-dependent | 35% |" in with_protocols
+
+
+@pytest.mark.skipif(
+    not (ROOT / "results" / "tables" / "verdicts.csv").is_file(),
+    reason="run `snakemake -j2 verdicts` first: no results/tables/verdicts.csv",
+)
+def test_the_readme_verdicts_are_current():
+    summary = pd.read_csv(ROOT / "results" / "tables" / "verdicts.csv")
+    protocols = ROOT / "results" / PROTOCOL_SHARES
+    expected = standout_summary(
+        summary, pd.read_csv(protocols) if protocols.is_file() else None
+    ).strip()
+    assert readme_summary(ROOT / "README.md", VERDICTS_BLOCK) == expected, (
+        "README verdicts over seeds are stale: run `jointbench readme`"
+    )

@@ -26,7 +26,13 @@ from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
 from jointbench.report import readme_headlines
-from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
+from jointbench.study.snapshot import (
+    VERDICTS_BLOCK,
+    reproduction_summary,
+    snapshot_table,
+    update_readme,
+)
+from jointbench.study.verdicts import PROTOCOL_SHARES, standout_summary
 
 __all__ = ["main"]
 
@@ -98,6 +104,18 @@ def _readme(args: argparse.Namespace) -> int:
     for what, (block, text) in blocks.items():
         changed = update_readme(args.readme, text, block=block)
         print(f"{args.readme}: {what} {'updated' if changed else 'already current'}")
+    verdicts_path = args.results / "tables" / "verdicts.csv"
+    if not verdicts_path.is_file():
+        print(
+            f"{args.readme}: verdicts over seeds left as they are: no {verdicts_path} "
+            "(`snakemake -j2 verdicts` writes it)"
+        )
+        return 0
+    protocols_path = args.results / PROTOCOL_SHARES
+    protocols = pd.read_csv(protocols_path) if protocols_path.is_file() else None
+    summary = standout_summary(pd.read_csv(verdicts_path), protocols)
+    changed = update_readme(args.readme, summary, VERDICTS_BLOCK)
+    print(f"{args.readme}: verdicts over seeds {'updated' if changed else 'already current'}")
     return 0
 
 

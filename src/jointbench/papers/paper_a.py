@@ -386,6 +386,19 @@ def _timings(collected: pd.DataFrame, published: dict) -> dict[str, Measured]:
     }
 
 
+def _fastest(collected: pd.DataFrame, published: dict) -> Measured:
+    """Claim A12: how many of the other methods are at least as fast as NM by median time per
+    trial over the BC-converged trials (:func:`jointbench.figures.paper_a.table2`)."""
+    ours = draw.table2(collected, _published_seconds(published)).set_index("method")
+    if "NM" not in ours.index or len(ours) < 2:
+        raise KeyError("NM and at least one other method are needed to rank speed")
+    medians = ours["median_s"].sort_values(kind="stable")
+    others = medians.drop("NM")
+    as_fast = int((others <= medians["NM"]).sum())
+    order = " < ".join(f"{method} {seconds:.2g} s" for method, seconds in medians.items())
+    return Measured(as_fast, f"by median: {order}; {as_fast} of {len(others)} as fast as NM")
+
+
 def _published_seconds(published) -> dict[str, float]:
     return {
         entry["id"].removeprefix("A-T2-"): entry["published"]
@@ -405,6 +418,7 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
     out = _marker_distances(inputs.config)
     try:
         out.update(_timings(collected, inputs.published))
+        out["A12"] = _fastest(collected, inputs.published)
     except KeyError:
         pass
     for key, claim in _CLAIMS.items():

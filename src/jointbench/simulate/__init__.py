@@ -24,12 +24,15 @@ import numpy as np
 from jointbench.declared import check_fields
 from jointbench.simulate.noise import isotropic_noise
 
-__all__ = ["KINDS", "GridValues", "Study", "Trials", "isotropic_noise"]
+__all__ = ["KINDS", "PROXIMAL_TRUTH", "GridValues", "Study", "Trials", "isotropic_noise"]
 
 #: Estimator kinds a study can run: each kind's estimators share a signature and a scorer.
 KINDS = ("center", "axis", "joint_center")
 # What each kind's errors are measured from: kinds sharing one can share a study.
 _TRUTH_OF = {"center": "center", "axis": "axis", "joint_center": "center"}
+#: The ``truth`` key of a two-segment study's noise-free proximal markers at frame 0
+#: ``(n_markers, 3)`` [mm], in the frame of ``truth["center"]``.
+PROXIMAL_TRUTH = "proximal_frame0"
 
 
 @dataclass(frozen=True)
@@ -39,8 +42,9 @@ class Trials:
     ``segments`` maps a segment name to its markers ``(n_trials, n_frames, n_markers, 3)`` [mm]:
     ``"moving"`` for one-segment studies (markers in the reference segment's frame), or
     ``"proximal"`` and ``"distal"`` (world frame) for two-segment studies. ``truth`` holds the
-    JSON-serialisable ground truth shared by all trials (``"center"``; or ``"axis_point"`` and
-    ``"axis_direction"``), ``parameters`` the generator settings for provenance.
+    JSON-serialisable ground truth shared by all trials (``"center"``, and optionally
+    :data:`PROXIMAL_TRUTH`; or ``"axis_point"`` and ``"axis_direction"``), ``parameters`` the
+    generator settings for provenance.
     """
 
     segments: dict[str, np.ndarray]

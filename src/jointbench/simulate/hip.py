@@ -52,7 +52,7 @@ import numpy as np
 from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
 from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_matrix
-from jointbench.simulate import GridValues, Study, Trials
+from jointbench.simulate import PROXIMAL_TRUTH, GridValues, Study, Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
 from jointbench.simulate.prior import Choice, Prior
 
@@ -112,6 +112,9 @@ class HipProtocol:
     cross_swing_rise_s: Positive = 3.0
     twist_deg: float = 8.0
     twist_hz: float = 0.23
+    # The frame-0 control: the same trials (the same draws) with frame 0 recorded exactly, so
+    # that both body frames are placed without error and eq. 2's single centre exists.
+    noise_free_frame0: bool = False
 
     def __post_init__(self) -> None:
         # Lists from the config become tuples: a protocol is immutable and hashable.
@@ -197,7 +200,8 @@ def simulate(
 
     Returns :class:`~jointbench.simulate.Trials` with ``segments["proximal"]`` and
     ``segments["distal"]`` ``(n_trials, Nt, 3, 3)`` [mm] in the world frame and
-    ``truth["center"]`` the joint in the body-fixed frame shared at frame 0.
+    ``truth["center"]`` the joint in the body-fixed frame shared at frame 0 and
+    ``truth["proximal_frame0"]`` the proximal markers there, noise-free ``(3, 3)`` [mm].
     """
     unknown = set(condition) - set(_CONDITION_KEYS)
     if unknown:
@@ -218,9 +222,10 @@ def simulate(
     proximal, distal = nominal_recording(protocol)
     n_proximal = proximal.shape[1]
     recording = np.concatenate([proximal, distal], axis=1)
-    noisy = np.stack(
-        [recording + isotropic_noise(rng, recording.shape[:2], noise_mm) for rng in rngs]
-    )[:, :n_used]
+    noise = np.stack([isotropic_noise(rng, recording.shape[:2], noise_mm) for rng in rngs])
+    if protocol.noise_free_frame0:
+        noise[:, 0] = 0.0
+    noisy = (recording + noise)[:, :n_used]
     parameters = {
         **asdict(protocol),
         "n_frames_recorded": protocol.n_frames,
@@ -230,7 +235,10 @@ def simulate(
     }
     return Trials(
         segments={"proximal": noisy[:, :, :n_proximal], "distal": noisy[:, :, n_proximal:]},
-        truth={"center": [float(x) for x in protocol.joint_mm]},
+        truth={
+            "center": [float(x) for x in protocol.joint_mm],
+            PROXIMAL_TRUTH: proximal[0].tolist(),
+        },
         parameters=_jsonable(parameters),
     )
 

@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.simulate import Study
+from jointbench.simulate import PROXIMAL_TRUTH, Study
 from jointbench.study.io import (
+    iter_dataset,
     read_metadata,
     read_provenance,
     read_table,
@@ -27,7 +28,7 @@ from jointbench.study.schema import (
     check_estimates,
     check_scores,
 )
-from jointbench.study.scoring import ERROR_COLUMN, score_columns
+from jointbench.study.scoring import ERROR_COLUMN, proximal_at_frame0, score_columns
 from jointbench.study.studies import get_study, method_kind
 from jointbench.study.summary import summarise
 
@@ -35,17 +36,23 @@ __all__ = ["collect", "require_results", "scored_estimates", "summarise_estimate
 
 
 def scored_estimates(
-    frame: pd.DataFrame, *, kind: str, truth: Mapping[str, list[float]], source: str
+    frame: pd.DataFrame,
+    *,
+    kind: str,
+    truth: Mapping[str, list[float]],
+    source: str,
+    proximal_frame0: np.ndarray | None = None,
 ) -> pd.DataFrame:
     """``frame``, one estimates file checked by :func:`check_estimates`, with its score columns
     computed from its estimate columns and its dataset's ``truth``
-    (:func:`jointbench.study.scoring.score_columns`).
+    (:func:`jointbench.study.scoring.score_columns`); ``proximal_frame0`` ``(n_rows, k, 3)``,
+    each row's proximal markers at frame 0 in a two-segment study.
 
     ``ValueError`` naming ``source`` and the trial when the file claims success without a
     finite estimate (:func:`check_claimed_estimates`), or gives a score that disagrees
     (:func:`check_scores`).
     """
-    scores = score_columns(kind, frame, truth)
+    scores = score_columns(kind, frame, truth, proximal_frame0)
     check_claimed_estimates(frame, kind, scores[ERROR_COLUMN[kind]], source=source)
     check_scores(frame, scores, source=source)
     return frame.assign(**scores)
@@ -96,18 +103,32 @@ def _scored_file(path, spec: Study, dataset: Mapping, source: str) -> pd.DataFra
     check_against_dataset(
         frame, trials=dataset["trials"], condition=dataset["condition"], source=source
     )
-    return scored_estimates(frame, kind=kind, truth=dataset["truth"], source=source)
+    frame0 = dataset["proximal_frame0"]
+    if frame0 is not None:
+        frame0 = frame0[np.searchsorted(dataset["trials"], frame["trial"].to_numpy())]
+    return scored_estimates(
+        frame, kind=kind, truth=dataset["truth"], source=source, proximal_frame0=frame0
+    )
 
 
-def _datasets(datasets: Sequence[str | Path]) -> dict[str, dict]:
-    """Per condition (a dataset file's stem): its trial numbers, condition and truth."""
+def _datasets(datasets: Sequence[str | Path], segments: Sequence[str]) -> dict[str, dict]:
+    """Per condition (a dataset file's stem): its trial numbers (sorted), condition, truth and,
+    when its truth scores a centre relative to the proximal markers, those markers at frame 0
+    of each trial (:func:`jointbench.study.scoring.proximal_at_frame0`), else ``None``."""
     out = {}
     for path in datasets:
         metadata = read_metadata(path)
+        trials = read_trial_numbers(path)
+        frame0 = None
+        if PROXIMAL_TRUTH in metadata["truth"]:
+            frame0 = np.concatenate(
+                [proximal_at_frame0(block.segments, segments) for _, block in iter_dataset(path)]
+            )[np.argsort(trials)]
         out[Path(path).stem] = {
-            "trials": read_trial_numbers(path),
+            "trials": np.sort(trials),
             "condition": metadata["condition"],
             "truth": metadata["truth"],
+            "proximal_frame0": frame0,
         }
     return out
 
@@ -134,7 +155,7 @@ def collect(
     (an external estimator's files have none)."""
     spec = get_study(study)
     # Each dataset is read once, whatever the number of estimators.
-    expected = _datasets(datasets)
+    expected = _datasets(datasets, spec.segments)
     frames = []
     estimators: dict[str, dict] = {}
     for path in paths:
@@ -154,7 +175,7 @@ def summarise_estimates(
     """One estimator's mean and median error per condition, from its estimates files scored
     against their conditions' ``datasets`` as :func:`collect` scores them."""
     spec = get_study(study)
-    expected = _datasets(datasets)
+    expected = _datasets(datasets, spec.segments)
     estimates = pd.concat(
         [_scored_file(path, spec, _dataset_of(path, expected), str(path)) for path in paths],
         ignore_index=True,

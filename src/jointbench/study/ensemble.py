@@ -79,6 +79,9 @@ def collect_member(config: Mapping, study: str) -> pd.DataFrame:
     shared = set(methods_sharing_poses(config, study))
     options = config["studies"][study].get("options", {})
     frames = []
+    # One warm-up per method: its one-time work (compilation, first-call imports) is done
+    # after its first condition, and a warm-up fit costs up to a third of a batch.
+    warmed: set[str] = set()
     for condition in conditions(config, study):
         trials = simulate_condition(config, study, condition)
         poses = None
@@ -95,7 +98,9 @@ def collect_member(config: Mapping, study: str) -> pd.DataFrame:
                 condition,
                 options.get(method, {}),
                 poses if method in shared else None,
+                warm_up=method not in warmed,
             )
+            warmed.add(method)
             frames.append(table.to_pandas())
     collected = pd.concat(frames, ignore_index=True)
     return collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")

@@ -23,6 +23,7 @@ from jointbench.study.scoring import (
     COVARIANCE_COLUMNS,
     ERROR_COLUMN,
     ESTIMATE_COLUMNS,
+    PROXIMAL_COLUMNS,
     SCORE_COLUMNS,
 )
 
@@ -70,7 +71,11 @@ KIND_COLUMNS = {kind: dict.fromkeys(columns, _NUMBER) for kind, columns in ESTIM
 #: to its own computation (:func:`check_scores`).
 OPTIONAL_COLUMNS = {
     kind: dict.fromkeys(
-        [*columns, *(COVARIANCE_COLUMNS if kind == "joint_center" else ())], _NUMBER
+        [
+            *columns,
+            *((*COVARIANCE_COLUMNS, *PROXIMAL_COLUMNS) if kind == "joint_center" else ()),
+        ],
+        _NUMBER,
     )
     for kind, columns in SCORE_COLUMNS.items()
 }

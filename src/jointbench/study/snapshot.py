@@ -36,7 +36,22 @@ __all__ = [
 # this; any real change of an estimator or a simulation moves some mean by far more.
 SNAPSHOT_RTOL = 1e-6
 SNAPSHOT_ATOL = 1e-9
-_SUMMARY = "reproduction-summary"
+#: The README's generated blocks, each between ``<!-- NAME:start -->`` and ``<!-- NAME:end -->``:
+#: the reproduction summary, and the verdicts over seeds in "What stands out".
+SUMMARY_BLOCK = "reproduction-summary"
+VERDICTS_BLOCK = "verdicts-summary"
+
+
+def _markers(block: str) -> tuple[str, str]:
+    return f"<!-- {block}:start -->", f"<!-- {block}:end -->"
+
+
+def _block_span(text: str, block: str, readme) -> tuple[int, int]:
+    """Where the text between ``block``'s markers starts and ends in ``text``."""
+    start, end = _markers(block)
+    if start not in text or end not in text:
+        raise ValueError(f"{readme}: no {start} … {end} block")
+    return text.index(start) + len(start), text.index(end)
 
 
 def snapshot_table(collected_dir: str | Path) -> pd.DataFrame:
@@ -144,29 +159,20 @@ def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) ->
     )
 
 
-def _block_bounds(text: str, block: str, source: str) -> tuple[int, int]:
-    """Where the generated ``block``'s text starts and ends in ``text``: between
-    ``<!-- block:start -->`` and ``<!-- block:end -->``."""
-    start_mark, end_mark = f"<!-- {block}:start -->", f"<!-- {block}:end -->"
-    if start_mark not in text or end_mark not in text:
-        raise ValueError(f"{source}: no generated block {block!r} ({start_mark} … {end_mark})")
-    return text.index(start_mark) + len(start_mark), text.index(end_mark)
-
-
-def update_readme(readme: str | Path, summary: str, block: str = _SUMMARY) -> bool:
-    """Replace the README's generated ``block`` (by default the reproduction summary) with
-    ``summary``; return whether the file changed."""
+def update_readme(readme: str | Path, summary: str, block: str = SUMMARY_BLOCK) -> bool:
+    """Replace the README's generated ``block`` with ``summary``; return whether the file
+    changed."""
     path = Path(readme)
     text = path.read_text()
-    start, end = _block_bounds(text, block, str(path))
-    new = text[:start] + "\n" + summary + "\n" + text[end:]
+    start, end = _block_span(text, block, readme)
+    new = text[:start] + "\n" + summary.strip() + "\n" + text[end:]
     if new != text:
         path.write_text(new)
     return new != text
 
 
-def readme_summary(readme: str | Path, block: str = _SUMMARY) -> str:
-    """The text of the README's generated ``block`` (by default the reproduction summary)."""
+def readme_summary(readme: str | Path, block: str = SUMMARY_BLOCK) -> str:
+    """The generated ``block`` currently in the README."""
     text = Path(readme).read_text()
-    start, end = _block_bounds(text, block, str(readme))
+    start, end = _block_span(text, block, readme)
     return text[start:end].strip()

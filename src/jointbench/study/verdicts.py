@@ -18,11 +18,13 @@ from jointbench.study.tables import markdown_table, write_tables
 from jointbench.study.tolerance import wilson_interval
 
 __all__ = [
+    "PROTOCOL_SHARES",
     "SUMMARY_COLUMNS",
     "VERDICTS",
     "VERDICT_RULE",
     "quantities_of",
     "seed_verdict",
+    "standout_summary",
     "summarise_members",
     "verdict_counts",
     "write_summary",
@@ -48,6 +50,10 @@ SUMMARY_COLUMNS = [
     "default_reproduced",
 ]
 TESTED = ("reproduced", "not reproduced")
+#: Under the results folder: the ``sensitivity`` target's share of plausible protocols in which
+#: each value and claim reproduces (columns ``id`` and ``share``), read beside the seeds' when
+#: it exists.
+PROTOCOL_SHARES = "tables/sensitivity.csv"
 
 
 def seed_verdict(reproduced_in: int, seeds: int) -> str:
@@ -128,3 +134,46 @@ def write_summary(members: Sequence[str], published: Sequence[str], outputs) -> 
         note=note,
     )
     return summary
+
+
+def _closest_calls(summary: pd.DataFrame, count: int) -> pd.DataFrame:
+    """The ``count`` compared entries whose share of seeds lies nearest 1/2, in that order."""
+    compared = summary[summary["verdict"] != "not applicable"]
+    distance = (compared["share"] - 0.5).abs()
+    return compared.assign(_distance=distance).sort_values("_distance", kind="stable").head(count)
+
+
+def standout_summary(
+    summary: pd.DataFrame, protocols: pd.DataFrame | None = None, closest: int = 5
+) -> str:
+    """The README's verdicts over seeds, as Markdown, from the summary :func:`write_summary`
+    returns (or its CSV read back): the counts of each verdict per paper, and the ``closest``
+    entries whose share of seeds lies nearest 1/2 with their intervals. ``protocols``, the
+    ``sensitivity`` target's per-entry shares (columns ``id`` and ``share``), adds the share of
+    plausible protocols in which each reproduces."""
+    seeds = int(summary["seeds"].max()) if len(summary) else 0
+    counts = verdict_counts(summary)
+    calls = _closest_calls(summary, closest)
+    table = pd.DataFrame(
+        {
+            "id": calls["id"],
+            "value or claim": calls["quantity"],
+            "seeds reproducing": [
+                f"{k} of {n}" for k, n in zip(calls["reproduced_in"], calls["seeds"], strict=True)
+            ],
+            "95 % interval": calls["interval_95"],
+            "verdict": calls["verdict"],
+        }
+    )
+    if protocols is not None:
+        shares = protocols.set_index("id")["share"]
+        table["protocols reproducing"] = [
+            f"{shares[i]:.0%}" if i in shares.index else "" for i in calls["id"]
+        ]
+    return (
+        f"**Verdicts over {seeds} base seeds** (generated from `results/tables/verdicts.csv`, "
+        f"`snakemake -j2 verdicts`; {VERDICT_RULE}):\n\n"
+        + markdown_table(counts)
+        + f"\n\nThe {len(table)} closest calls (share of seeds nearest 1/2):\n\n"
+        + markdown_table(table)
+    )
