@@ -237,3 +237,16 @@ def test_members_are_the_default_the_draws_and_the_named_protocols_of_the_study(
     assert member_names("hip", 1, overlays) == ["default", "draw-1"]
     with pytest.raises(ValueError, match="takes the name of a default or drawn one"):
         member_names("hinge", 1, {"draw-2": overlays["anatomical-knee"]})
+
+
+@pytest.mark.parametrize(
+    ("tilt_power", "halfway_share"), [(1.0, 0.5), (2.0, 0.25), (0.5, 0.5**0.5)]
+)
+def test_the_circumduction_tilt_grows_as_the_trials_fraction_to_its_power(
+    tilt_power, halfway_share
+):
+    rotations = cmc.spiral_rotations(40.0, 121, 2.0, tilt_power)
+    # The tilt is the angle between the mean long axis z and where the rotation carries it.
+    tilt_deg = np.degrees(np.arccos(np.clip(rotations[:, 2, 2], -1.0, 1.0)))
+    assert tilt_deg[60] == pytest.approx(40.0 * halfway_share)
+    assert (tilt_deg[0], tilt_deg[-1]) == pytest.approx((0.0, 40.0))

@@ -37,6 +37,7 @@ recording (proximal markers, then distal, per frame) before the condition's firs
 frames are kept, so the trial of any ``Nt`` is a prefix of the same recording -- with the same
 generator, the first ``Nt`` frames are identical for every ``Nt`` (paper C analyses "the first
 Nt frames" of one 1200-frame recording).
+
 :data:`PRIOR` spans the plausible rig motions (the swings' amplitudes and frequencies, the
 twist and how much the hand moves); the motion above is one of its members.
 """

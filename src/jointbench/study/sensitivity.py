@@ -33,8 +33,7 @@ from jointbench.study.config import read_yaml
 from jointbench.study.ensemble import _member_config, collect_member, judge
 from jointbench.study.published import load_published
 from jointbench.study.tables import markdown_table, write_tables
-from jointbench.study.tolerance import wilson_interval
-from jointbench.study.verdicts import TESTED, quantities_of, seed_verdict
+from jointbench.study.verdicts import TESTED, quantities_of, seed_verdict, share_columns
 
 __all__ = [
     "CURVES",
@@ -222,7 +221,6 @@ def summarise(
         draws = part[part["member"].str.startswith(DRAW_PREFIX) & part["status"].isin(TESTED)]
         held = (draws["status"] == "reproduced").reset_index(drop=True)
         k, n = int(held.sum()), len(held)
-        low, high = wilson_interval(k, n)
         drawn = values[values["study"] == study].drop(columns="study").set_index("member")
         drawn = drawn.reindex(draws["member"]).dropna(axis=1, how="all").reset_index(drop=True)
         choice, difference = depends_most_on(held, drawn)
@@ -236,9 +234,7 @@ def summarise(
                 "id": entry_id,
                 "quantity": quantities.get(entry_id, ""),
                 "draws": n,
-                "reproduced_in": k,
-                "share": k / n if n else np.nan,
-                "interval_95": f"{low:.2f}–{high:.2f}" if n else "",
+                **share_columns(k, n),
                 "verdict": protocol_verdict(k, n),
                 "default": default["status"].iloc[0] if len(default) else "",
                 "default_margin": default_margin,

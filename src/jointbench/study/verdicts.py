@@ -24,6 +24,7 @@ __all__ = [
     "VERDICT_RULE",
     "quantities_of",
     "seed_verdict",
+    "share_columns",
     "standout_summary",
     "summarise_members",
     "verdict_counts",
@@ -70,6 +71,17 @@ def seed_verdict(reproduced_in: int, seeds: int) -> str:
     return "seed-dependent"
 
 
+def share_columns(reproduced_in: int, members: int) -> dict[str, object]:
+    """``reproduced_in``, the share of ``members`` it makes and its Wilson 95 % interval as
+    text (NaN and empty for no members): the columns an ensemble's summary gives each value."""
+    low, high = wilson_interval(reproduced_in, members)
+    return {
+        "reproduced_in": reproduced_in,
+        "share": reproduced_in / members if members else np.nan,
+        "interval_95": f"{low:.2f}–{high:.2f}" if members else "",
+    }
+
+
 def summarise_members(members: pd.DataFrame, quantities: Mapping[str, str]) -> pd.DataFrame:
     """Per value and claim, the share of members in which it reproduces, its Wilson 95 %
     interval, the verdict by :data:`VERDICT_RULE` and the default member's own status and
@@ -80,7 +92,6 @@ def summarise_members(members: pd.DataFrame, quantities: Mapping[str, str]) -> p
     ):
         tested = part[part["status"].isin(TESTED)]
         k, n = int((tested["status"] == "reproduced").sum()), len(tested)
-        low, high = wilson_interval(k, n)
         default = part[part["member"] == 0]
         rows.append(
             {
@@ -89,9 +100,7 @@ def summarise_members(members: pd.DataFrame, quantities: Mapping[str, str]) -> p
                 "id": entry_id,
                 "quantity": quantities.get(entry_id, ""),
                 "seeds": n,
-                "reproduced_in": k,
-                "share": k / n if n else np.nan,
-                "interval_95": f"{low:.2f}–{high:.2f}" if n else "",
+                **share_columns(k, n),
                 "verdict": seed_verdict(k, n),
                 "default_seed": default["status"].iloc[0] if len(default) else "",
                 "default_reproduced": default["reproduced"].iloc[0] if len(default) else "",
