@@ -31,6 +31,7 @@ from jointbench.study.snapshot import (
     snapshot_table,
     update_readme,
 )
+from jointbench.study.tables import for_people
 from jointbench.study.tolerance import describe
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -276,3 +277,16 @@ def test_every_number_of_a_reason_is_in_its_row():
         shown = " ".join([row.reproduced, row.criterion, row.tolerance, row.margin])
         stray = _numbers(row.reason) - _numbers(shown) - paper[row.paper]
         assert not stray, (row.id, sorted(stray))
+
+
+def test_a_cell_is_quoted_in_the_comparison_as_table_1_prints_it(pristine):
+    collected = exact_paper_b_results(pristine)
+    collected["error_deg"] *= 1.00123  # digits beyond three significant figures
+    inputs = Inputs(collected=collected, published=pristine, config={})
+    measured = paper_b_module.measure(inputs)
+    table = paper_b_module._table1(inputs)
+    shown = for_people(table.frame, table.headers)
+    for i in (0, 5, 40):
+        cell = pristine["values"][i]["id"]
+        mean, sd = shown.iloc[i][["our mean (°)", "our SD (°)"]]
+        assert measured[cell].text.startswith(f"{mean} (SD {sd})"), (cell, measured[cell].text)

@@ -73,7 +73,15 @@ def test_published_values_keep_their_digits_and_ours_keep_three_figures():
 
 @pytest.mark.parametrize(
     ("value", "text"),
-    [(0.845, "0.845"), (0.02, "0.0200"), (3.125e-05, "0.0000313"), (556.6, "557"), (0.0, "0")],
+    [
+        (0.845, "0.845"),
+        (0.019996, "0.0200"),
+        (0.02, "0.02"),
+        (3.125e-05, "0.0000313"),
+        (556.6, "557"),
+        (1500.0, "1500"),
+        (0.0, "0"),
+    ],
 )
 def test_ours_is_written_to_three_significant_figures_without_exponents(value, text):
     assert number(value) == text
@@ -106,7 +114,7 @@ def test_two_columns_with_one_header_are_refused():
 
 
 def test_margins_and_part_names_are_words():
-    assert margin_words(1.7) == "1.70 inside"
+    assert margin_words(1.7) == "1.7 inside"
     assert margin_words(-3, " trials") == "3 trials outside"
     assert margin_words(0.0) == "on the edge"
     assert words("ls_worst_share") == "LS worst share"
@@ -206,4 +214,4 @@ def test_table2_quotes_a_small_time_as_its_table_does():
 def test_a_grid_and_exact_shares_are_written_as_given():
     assert format_column([0.5, 1.0, 2.0]) == ["0.5", "1", "2"]
     assert format_column([0.845, 0.14]) == ["0.845", "0.14"]
-    assert format_column([0.02, 3.125e-05]) == ["0.0200", "0.0000313"]
+    assert format_column([0.02, 3.125e-05]) == ["0.02", "0.0000313"]

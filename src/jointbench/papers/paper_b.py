@@ -16,6 +16,7 @@ from jointbench.api import fit_axis
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
+from jointbench.study.formatting import number
 from jointbench.study.published import comparison_rows
 
 __all__ = ["PAPER", "measure"]
@@ -138,7 +139,7 @@ def _cells(means: pd.DataFrame, published=None) -> dict[str, Measured]:
         key = _cell_id(r.protocol, r.method, r.fe_rom_deg, r.aa_ratio)
         entry = entries.get(key, {})
         relative = _relative_text(float(r.mean), entry.get("published"), entry.get("tolerance"))
-        out[key] = Measured(float(r.mean), f"{r.mean:.2f} (SD {r.sd:.2f}){relative}")
+        out[key] = Measured(float(r.mean), f"{number(r.mean)} (SD {number(r.sd)}){relative}")
     return out
 
 

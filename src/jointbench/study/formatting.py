@@ -7,10 +7,9 @@ A value is printed the same way wherever it appears:
   the value held, so 0.079 stays 0.079 and 1872.02 stays 1872.02), never rounded;
 - one of **ours** to :data:`SIGNIFICANT` significant figures in fixed-point notation, its
   integer digits never rounded away (0.0115, 0.845, 6.83, 556.6 → 557), so a small time and a
-  large error stand in one column without an exponent;
-- a column whose values are all whole numbers (a grid of 10, 20, 30 mm) without decimals, and
-  one whose values all have at most :data:`SIGNIFICANT` significant digits (a grid of 0.5, 1.0,
-  2.0 mm; shares of 200 trials) each exactly, as it was given, not padded with zeros;
+  large error stand in one column without an exponent; a value with no more digits than that
+  (a grid's 0.5 or 20 mm, a share of 200 trials such as 0.14) exactly as it is, not padded
+  with zeros;
 - ``True`` / ``False`` as ``yes`` / ``no``; a missing value as ``–``.
 
 A column name becomes a header by its words and unit: ``mean_error_mm`` → ``mean error (mm)``,
@@ -113,13 +112,17 @@ def _missing(value: object) -> bool:
 
 def number(value: float, significant: int = SIGNIFICANT) -> str:
     """``value`` to ``significant`` figures in fixed-point notation, keeping every integer digit:
-    ``number(0.0115)`` → ``0.0115``, ``number(0.02)`` → ``0.0200``, ``number(556.6)`` → ``557``."""
+    ``number(0.0115)`` → ``0.0115``, ``number(0.019996)`` → ``0.0200``, ``number(556.6)`` →
+    ``557``, ``number(0.5)`` → ``0.5``."""
     if _missing(value):
         return MISSING
     if math.isinf(value):
         return "∞" if value > 0 else "−∞"
     if value == 0:
         return "0"
+    exact = published_number(value)
+    if len(exact.lstrip("-").replace(".", "").strip("0")) <= significant:
+        return exact
     decimals = max(0, significant - 1 - math.floor(math.log10(abs(value))))
     text = f"{value:.{decimals}f}"
     # Rounding may carry into a new digit (0.09996 → 0.1000): one decimal fewer then.
@@ -131,8 +134,8 @@ def number(value: float, significant: int = SIGNIFICANT) -> str:
 def published_number(value: float) -> str:
     """A published value as the paper printed it: the shortest decimal that reads back as
     ``value`` (``0.079``, ``1872.02``, ``4.3``), never in exponent notation."""
-    if _missing(value):
-        return MISSING
+    if _missing(value) or math.isinf(value):
+        return number(value)
     if float(value).is_integer():
         return str(int(value))
     text = repr(float(value))
@@ -142,29 +145,9 @@ def published_number(value: float) -> str:
     return text
 
 
-def _finite(values: list[float]) -> list[float]:
-    return [v for v in values if not _missing(v) and not math.isinf(v)]
-
-
-def _whole(values: list[float]) -> bool:
-    finite = _finite(values)
-    return bool(finite) and all(float(v).is_integer() for v in finite)
-
-
-def _short(values: list[float]) -> bool:
-    """Whether every finite value is a decimal of at most :data:`SIGNIFICANT` digits."""
-    finite = _finite(values)
-    digits = [published_number(v).lstrip("-").replace(".", "").strip("0") for v in finite]
-    return bool(finite) and all(len(d) <= SIGNIFICANT for d in digits)
-
-
 def format_column(values: Iterable[object], *, published: bool = False) -> list[str]:
     """Every cell of one column as people read it (see the module doc): ``published`` for a
     column of the papers' values."""
-    values = list(values)
-    floats = [v for v in values if isinstance(v, float)]
-    whole = _whole(floats)
-    exact = published or _short(floats)
 
     def cell(value: object) -> str:
         if isinstance(value, bool):
@@ -172,9 +155,7 @@ def format_column(values: Iterable[object], *, published: bool = False) -> list[
         if _missing(value):
             return MISSING
         if isinstance(value, float):
-            if whole and not math.isinf(value):
-                return str(int(value))
-            return published_number(value) if exact else number(value)
+            return published_number(value) if published else number(value)
         return str(value)
 
     return [cell(v) for v in values]
@@ -188,7 +169,4 @@ def margin_words(margin: float, unit: str = "") -> str:
     if margin == 0:
         return "on the edge"
     side = "inside" if margin > 0 else "outside"
-    size = abs(margin)
-    # A count (trials, cells) stays a count.
-    text = str(int(size)) if float(size).is_integer() else number(size)
-    return f"{text}{unit} {side}"
+    return f"{number(abs(margin))}{unit} {side}"
