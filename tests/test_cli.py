@@ -189,3 +189,43 @@ def test_world_trajectory_on_request(tmp_path, capsys):
     distal = rig_recording().markers[10:60, 3:]
     distance = np.linalg.norm(table[["x_mm", "y_mm", "z_mm"]].to_numpy()[:, None] - distal, axis=-1)
     np.testing.assert_allclose(distance, np.broadcast_to(distance[0], distance.shape), atol=2e-3)
+
+
+def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys):
+    """`jointbench readme` fills the README's verdicts block from results/tables/verdicts.csv
+    (and the protocol shares beside them when results/tables/sensitivity.csv exists)."""
+    tables = tmp_path / "results" / "tables"
+    tables.mkdir(parents=True)
+    pd.DataFrame({"paper": ["A"], "entry": ["claim"], "status": ["reproduced"]}).to_csv(
+        tables / "published_comparison.csv", index=False
+    )
+    pd.DataFrame(
+        {
+            "paper": ["A", "A"],
+            "entry": ["claim", "claim"],
+            "id": ["A1", "A2"],
+            "quantity": ["first", "second"],
+            "seeds": [20, 20],
+            "reproduced_in": [20, 9],
+            "share": [1.0, 0.45],
+            "interval_95": ["0.84–1.00", "0.26–0.66"],
+            "verdict": ["reproduced", "seed-dependent"],
+            "default_seed": ["reproduced", "not reproduced"],
+            "default_reproduced": ["", ""],
+        }
+    ).to_csv(tables / "verdicts.csv", index=False)
+    readme = tmp_path / "README.md"
+    readme.write_text(
+        "<!-- reproduction-summary:start -->\n<!-- reproduction-summary:end -->\n"
+        "<!-- verdicts-summary:start -->\ntyped\n<!-- verdicts-summary:end -->\n"
+    )
+    arguments = ("readme", "--results", str(tmp_path / "results"), "--readme", str(readme))
+    code, out, _ = run(capsys, *arguments)
+    assert code == 0 and "verdicts over seeds updated" in out
+    text = readme.read_text()
+    assert "typed" not in text
+    assert "| A2 | second | 9 of 20 | 0.26–0.66 | seed-dependent |" in text
+    assert "protocols reproducing" not in text
+    pd.DataFrame({"id": ["A2"], "share": [0.8]}).to_csv(tables / "sensitivity.csv", index=False)
+    code, _, _ = run(capsys, *arguments)
+    assert "| seed-dependent | 80% |" in readme.read_text()

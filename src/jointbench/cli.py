@@ -374,7 +374,9 @@ def _parser() -> argparse.ArgumentParser:
     snap.set_defaults(run=_snapshot)
 
     readme = sub.add_parser(
-        "readme", help="refresh the README's reproduction summary", formatter_class=_Formatter
+        "readme",
+        help="refresh the README's reproduction summary and verdicts over seeds",
+        formatter_class=_Formatter,
     )
     readme.add_argument("--results", type=Path, default=Path("results"))
     readme.add_argument("--readme", type=Path, default=Path("README.md"))
