@@ -150,7 +150,7 @@ def _sphere_moments(data: np.ndarray, origins: np.ndarray, means: np.ndarray, gr
     ``|v|^2`` would lose far from the coordinates' origin.
     """
     n_trials, n_frames, n_markers, _ = data.shape
-    x = np.empty(4)
+    rows = np.empty((n_frames, 4))
     for t in range(n_trials):
         for p in range(n_markers):
             means[t, p] = 0.0
@@ -158,24 +158,19 @@ def _sphere_moments(data: np.ndarray, origins: np.ndarray, means: np.ndarray, gr
             for f in range(n_frames):
                 squared = 0.0
                 for i in range(3):
-                    x[i] = data[t, f, p, i] - origins[t, i]
-                    squared += x[i] * x[i]
-                x[3] = squared
+                    rows[f, i] = data[t, f, p, i] - origins[t, i]
+                    squared += rows[f, i] * rows[f, i]
+                rows[f, 3] = squared
                 for i in range(4):
-                    means[t, p, i] += x[i]
+                    means[t, p, i] += rows[f, i]
             for i in range(4):
                 means[t, p, i] /= n_frames
             for f in range(n_frames):
-                squared = 0.0
-                for i in range(3):
-                    x[i] = data[t, f, p, i] - origins[t, i]
-                    squared += x[i] * x[i]
-                x[3] = squared
                 for i in range(4):
-                    x[i] -= means[t, p, i]
+                    rows[f, i] -= means[t, p, i]
                 for i in range(4):
                     for j in range(i + 1):
-                        grams[t, p, i, j] += x[i] * x[j]
+                        grams[t, p, i, j] += rows[f, i] * rows[f, j]
             for i in range(4):
                 for j in range(i):
                     grams[t, p, j, i] = grams[t, p, i, j]
@@ -981,10 +976,17 @@ def _is_fits(arrays: list[np.ndarray], starts: list[np.ndarray]) -> list[CenterR
 
 def _fit_is_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
     """:func:`fit_is` for every trial of ``markers`` ``(n_trials, N, P, 3)``."""
-    outcomes, prepared = prepare_trials(markers, lambda data: _is_prepare(data, start))
+    return _prepared_fits(markers, lambda data: _is_prepare(data, start), _is_fits)
+
+
+def _prepared_fits(markers: object, prepare, fits) -> list:
+    """A search's many-trial form: ``fits(arrays, starts)`` over the trials of ``markers``
+    ``(n_trials, ...)`` that ``prepare`` (the one-trial checks, returning the trial and its
+    start) passes; a trial it refuses carries its ``ValueError``."""
+    outcomes, prepared = prepare_trials(markers, prepare)
     if prepared:
         arrays, starts = zip(*prepared.values(), strict=True)
-        for trial, result in zip(prepared, _is_fits(arrays, starts), strict=True):
+        for trial, result in zip(prepared, fits(arrays, starts), strict=True):
             outcomes[trial] = result
     return outcomes
 
