@@ -17,13 +17,12 @@ from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register
 from jointbench.estimators.results import CenterResult
-from jointbench.estimators.sphere import _check_point, fit_ls, fit_nm
+from jointbench.estimators.sphere import _check_point, _prepared_fits, fit_ls, fit_nm
 from jointbench.estimators.twosegment import fit_score_center
 from jointbench.estimators.validation import (
     check_markers,
     check_moves,
     check_not_collinear,
-    prepare_trials,
 )
 from jointbench.numerics.poses import rigid_poses
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
@@ -193,12 +192,7 @@ def _ma_fits(arrays: list[np.ndarray], starts: list[np.ndarray]) -> list[CenterR
 
 def _fit_ma_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
     """:func:`fit_ma` for every trial of ``markers`` ``(n_trials, N, P, 3)``."""
-    outcomes, prepared = prepare_trials(markers, lambda data: _ma_prepare(data, start))
-    if prepared:
-        arrays, points = zip(*prepared.values(), strict=True)
-        for trial, result in zip(prepared, _ma_fits(arrays, points), strict=True):
-            outcomes[trial] = result
-    return outcomes
+    return _prepared_fits(markers, lambda data: _ma_prepare(data, start), _ma_fits)
 
 
 def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> CenterResult:

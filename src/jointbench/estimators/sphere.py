@@ -150,7 +150,7 @@ def _sphere_moments(data: np.ndarray, origins: np.ndarray, means: np.ndarray, gr
     ``|v|^2`` would lose far from the coordinates' origin.
     """
     n_trials, n_frames, n_markers, _ = data.shape
-    x = np.empty(4)
+    rows = np.empty((n_frames, 4))
     for t in range(n_trials):
         for p in range(n_markers):
             means[t, p] = 0.0
@@ -158,24 +158,19 @@ def _sphere_moments(data: np.ndarray, origins: np.ndarray, means: np.ndarray, gr
             for f in range(n_frames):
                 squared = 0.0
                 for i in range(3):
-                    x[i] = data[t, f, p, i] - origins[t, i]
-                    squared += x[i] * x[i]
-                x[3] = squared
+                    rows[f, i] = data[t, f, p, i] - origins[t, i]
+                    squared += rows[f, i] * rows[f, i]
+                rows[f, 3] = squared
                 for i in range(4):
-                    means[t, p, i] += x[i]
+                    means[t, p, i] += rows[f, i]
             for i in range(4):
                 means[t, p, i] /= n_frames
             for f in range(n_frames):
-                squared = 0.0
-                for i in range(3):
-                    x[i] = data[t, f, p, i] - origins[t, i]
-                    squared += x[i] * x[i]
-                x[3] = squared
                 for i in range(4):
-                    x[i] -= means[t, p, i]
+                    rows[f, i] -= means[t, p, i]
                 for i in range(4):
                     for j in range(i + 1):
-                        grams[t, p, i, j] += x[i] * x[j]
+                        grams[t, p, i, j] += rows[f, i] * rows[f, j]
             for i in range(4):
                 for j in range(i):
                     grams[t, p, j, i] = grams[t, p, i, j]
@@ -234,21 +229,50 @@ def _ls_solve(
                 shifts[t, i] += a_pinv[t, i, j] * b_vector[j]
 
 
-def _algebraic_fit(
-    means: np.ndarray, total: np.ndarray, center: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Radii (T, P) [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 (T,) [mm^4], at
-    ``center`` (T, 3) [mm], from the moments of :func:`_sphere_moments` about the centre's
-    origin (``total`` (T, 4, 4) the grams summed over the markers).
+@kernel
+def _f2_costs(
+    data: np.ndarray, origins: np.ndarray, means: np.ndarray, shifts: np.ndarray, costs: np.ndarray
+) -> None:
+    """f2 (paper A eq. 4, radii profiled out) [mm^4] of each trial of ``data`` (T, N, P, 3)
+    [mm] at the centre ``origins + shifts`` (T, 3) [mm], into ``costs`` (T,), with ``means``
+    (T, P, 4) those of :func:`_sphere_moments` about ``origins``. A compiled kernel
+    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
 
-    With ``w = (-2 c, 1)``, ``|y - c|^2 - mean_k |y - c|^2 = (x - mean_k x) . w``, so
-    ``f2 = w' G w``, and ``r_p^2 = mean_k |y - c|^2 = mean_k x . w + |c|^2``.
+    With ``y = v - origin``, ``x = (y, |y|^2)`` and ``w = (-2 shift, 1)``, each residual
+    ``|y - shift|^2 - mean_k |y - shift|^2`` is ``(x - mean_k x) . w``, summed in squares.
     """
-    weights = np.ones((center.shape[0], 4, 1))
-    weights[:, :3, 0] = -2.0 * center
-    cost = (np.swapaxes(weights, 1, 2) @ total @ weights)[:, 0, 0]
-    sq_radii = (means @ weights)[..., 0] + row_sq(center)[:, None]
-    return np.sqrt(np.maximum(sq_radii, 0.0)), cost
+    n_trials, n_frames, n_markers, _ = data.shape
+    x = np.empty(4)
+    for t in range(n_trials):
+        cost = 0.0
+        for f in range(n_frames):
+            for p in range(n_markers):
+                squared = 0.0
+                for i in range(3):
+                    x[i] = data[t, f, p, i] - origins[t, i]
+                    squared += x[i] * x[i]
+                x[3] = squared
+                residual = x[3] - means[t, p, 3]
+                for i in range(3):
+                    residual += (x[i] - means[t, p, i]) * (-2.0 * shifts[t, i])
+                cost += residual * residual
+        costs[t] = cost
+
+
+def _algebraic_fit(
+    data: np.ndarray, origins: np.ndarray, means: np.ndarray, shifts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Radii (T, P) [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 (T,) [mm^4]
+    (:func:`_f2_costs`), of trials ``data`` (T, N, P, 3) [mm] at the centres
+    ``origins + shifts`` (T, 3) [mm], ``means`` (T, P, 4) those of :func:`_sphere_moments`
+    about ``origins``: ``r_p^2 = mean_k |y - shift|^2 = mean_k x . w + |shift|^2`` with
+    ``x = (y, |y|^2)``, ``w = (-2 shift, 1)``."""
+    weights = np.ones((shifts.shape[0], 4, 1))
+    weights[:, :3, 0] = -2.0 * shifts
+    sq_radii = (means @ weights)[..., 0] + row_sq(shifts)[:, None]
+    costs = np.empty(shifts.shape[0])
+    _f2_costs(kernel_array(data), kernel_array(origins), means, kernel_array(shifts), costs)
+    return np.sqrt(np.maximum(sq_radii, 0.0)), costs
 
 
 class _LSFit(NamedTuple):
@@ -259,7 +283,6 @@ class _LSFit(NamedTuple):
     shift: np.ndarray  # (T, 3) [mm], the LS centre relative to ``origin``
     a_pinv: np.ndarray  # (T, 3, 3) [mm^-2], A^+ (A does not change with the origin)
     means: np.ndarray  # (T, P, 4), of :func:`_sphere_moments` about ``origin``
-    total: np.ndarray  # (T, 4, 4), its grams summed over the markers
 
 
 def _ls_fit(data: np.ndarray) -> _LSFit:
@@ -269,7 +292,7 @@ def _ls_fit(data: np.ndarray) -> _LSFit:
     means, grams = _moments(data, origin)
     a_pinv, shift = np.empty((n_trials, 3, 3)), np.empty((n_trials, 3))
     _ls_solve(grams, n_frames, RCOND, a_pinv, shift)
-    return _LSFit(origin, shift, a_pinv, means, grams.sum(axis=1))
+    return _LSFit(origin, shift, a_pinv, means)
 
 
 def _closed_form_results(method, centers, radii, costs) -> list[CenterResult]:
@@ -294,7 +317,7 @@ def _closed_form_results(method, centers, radii, costs) -> list[CenterResult]:
 def _ls_fits(data: np.ndarray) -> list[CenterResult]:
     """:func:`fit_ls` of validated trials ``(T, N, P, 3)`` [mm]."""
     fit = _ls_fit(data)
-    radii, costs = _algebraic_fit(fit.means, fit.total, fit.shift)
+    radii, costs = _algebraic_fit(data, fit.origin, fit.means, fit.shift)
     return _closed_form_results("LS", fit.origin + fit.shift, radii, costs)
 
 
@@ -346,9 +369,57 @@ _NM_FAILURES = {
 }
 
 
+def _nm_design(scaled: np.ndarray) -> np.ndarray:
+    """The data matrix ``D`` ``(P N, 4 + P)`` of paper A eq. 22 for markers ``(N, P, 3)``:
+    rows ``[|v|^2, x, y, z, e_p]``, ``e_p`` the one-hot indicator of marker ``p``'s constant."""
+    n_frames, n_markers, _ = scaled.shape
+    per_marker = np.transpose(scaled, (1, 0, 2))
+    w = np.sum(per_marker**2, axis=-1, keepdims=True)
+    one_hot = np.repeat(np.eye(n_markers)[:, None, :], n_frames, axis=1)
+    return np.concatenate([w, per_marker, one_hot], axis=-1).reshape(n_markers * n_frames, -1)
+
+
+def _nm_singular(markers: np.ndarray) -> CenterResult | ValueError:
+    """NM of one trial ``(N, P, 3)`` [mm] whose scatter ``S = D'D`` is (nearly) singular, as
+    for noise-free data, which :func:`_nm_trials` leaves: the problem of :func:`_nm_trials`
+    whitened with ``W = diag(1 / s) V'`` from the SVD of ``D`` instead of a Cholesky factor
+    (``W' W = S^+``); an exact fit is ``D``'s null vector."""
+    n_rows = markers.shape[0] * markers.shape[1]
+    shifted = markers.reshape(-1, 3)
+    origin = mean_weights(n_rows) @ shifted
+    shifted = shifted - origin
+    flat = shifted.reshape(-1)
+    scale = float(np.sqrt((flat @ flat) / n_rows))
+    constraint = _nm_constraint(markers.shape[1])
+    _, s, vt = np.linalg.svd(_nm_design((shifted / scale).reshape(markers.shape)), False)
+    u, cost = vt[-1], 0.0
+    norm = u @ constraint @ u
+    if not (s[-1] <= 1e-13 * s[0] and norm > 0):
+        whitened = (vt.T / s).T
+        m_matrix = whitened @ constraint @ whitened.T
+        mu, y = np.linalg.eigh((m_matrix + m_matrix.T) / 2.0)
+        if not mu[-1] > 0:
+            return ValueError(_NM_FAILURES[1])
+        u, cost = whitened.T @ y[:, -1], 1.0 / float(mu[-1])
+        norm = u @ constraint @ u
+    u = u / np.sqrt(norm)
+    a, bcd, e = float(u[0]), u[1:4], u[4:]
+    if not abs(a) >= _EPS * float(np.abs(u).max()):
+        return ValueError(_NM_FAILURES[2])
+    center = bcd / (-2.0 * a)
+    (result,) = _closed_form_results(
+        "NM",
+        (origin + scale * center)[None],
+        (scale * np.sqrt(np.maximum(center @ center - e / a, 0.0)))[None],
+        np.array([cost]),
+    )
+    return result
+
+
 def _nm_fits(data: np.ndarray) -> list[CenterResult | ValueError]:
     """:func:`fit_nm` of validated trials ``(T, N, P, 3)`` [mm] by the kernel
-    :func:`_nm_trials`; a trial without a centre carries the ``ValueError`` saying why."""
+    :func:`_nm_trials`, a trial with a singular scatter by :func:`_nm_singular`; a trial
+    without a centre carries the ``ValueError`` saying why."""
     data = kernel_array(data)
     n_trials, _, n_markers, _ = data.shape
     centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
@@ -356,7 +427,8 @@ def _nm_fits(data: np.ndarray) -> list[CenterResult | ValueError]:
     _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, failures)
     outcomes: list = _closed_form_results("NM", centers, radii, costs)
     for trial in np.flatnonzero(failures):
-        outcomes[trial] = ValueError(_NM_FAILURES[int(failures[trial])])
+        code = int(failures[trial])
+        outcomes[trial] = _nm_singular(data[trial]) if code == 3 else ValueError(_NM_FAILURES[code])
     return outcomes
 
 
@@ -397,18 +469,19 @@ def _nm_trials(
 ) -> None:
     """NM's fit of each trial of ``data`` (T, N, P, 3) [mm] (see :func:`fit_nm`): centres
     (T, 3) [mm], radii (T, P) [mm] and costs (T,) into the arrays given, and ``failures`` (T,)
-    a key of :data:`_NM_FAILURES` where a trial has no centre (0 where it has one).
+    a key of :data:`_NM_FAILURES` where a trial has no centre, 3 where its scatter is (nearly)
+    singular, 0 where it has a centre.
     ``constraint`` is :func:`_nm_constraint`, ``eps`` the float64 machine epsilon. A compiled
     kernel (:mod:`jointbench.numerics.compiled`): this source is the implementation.
 
     Minimise ``|D u|^2`` subject to ``u' C u = 1`` (paper A eq. 15) for the data matrix ``D``
     of the unit-RMS markers (eq. 22, rows ``[|s|^2, s, e_p]``) and ``C`` of eq. 24.
-    ``S u = lambda C u`` (eq. 17) is whitened with ``W`` such that ``W' W = S^-1``: ``u = W' y``
-    gives the symmetric problem ``W C W' y = mu y`` with ``mu = 1 / lambda``, so the admissible
-    eigenvector of least cost ``lambda`` is the one of largest positive ``mu``. ``W = L^-1``
-    for the Cholesky factor ``S = L L'``; when ``S`` is (nearly) singular, as for noise-free
-    data, ``W = diag(1 / s) V'`` from the SVD of ``D`` instead, and an exact fit is ``D``'s
-    null vector. ``m = -(b, c, d) / 2a`` (eq. 18), ``r_p^2 = |m|^2 - e_p / a``.
+    ``S u = lambda C u`` (eq. 17) is whitened with the Cholesky factor ``S = L L'``:
+    ``u = W' y`` with ``W = L^-1`` gives the symmetric problem ``W C W' y = mu y`` with
+    ``mu = 1 / lambda``, so the admissible eigenvector of least cost ``lambda`` is the one of
+    largest positive ``mu``. ``m = -(b, c, d) / 2a`` (eq. 18), ``r_p^2 = |m|^2 - e_p / a``.
+    A (nearly) singular ``S``, as for noise-free data, is left to :func:`_nm_singular`
+    (failure code 3).
     """
     n_trials, n_frames, n_markers, _ = data.shape
     size = 4 + n_markers
@@ -417,7 +490,7 @@ def _nm_trials(
     lower = np.empty((size, size))
     whitened = np.empty((size, size))
     product = np.empty((size, size))
-    design = np.empty((n_rows, size))
+    m_matrix = np.empty((size, size))
     u = np.empty(size)
     for t in range(n_trials):
         trial = data[t]
@@ -441,7 +514,6 @@ def _nm_trials(
         # p's rows. Scalars, so that the sums stay in registers.
         s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
         scatter[:] = 0.0
-        design[:] = 0.0
         for p in range(n_markers):
             m0 = m1 = m2 = m3 = 0.0
             for f in range(n_frames):
@@ -449,9 +521,6 @@ def _nm_trials(
                 y = (trial[f, p, 1] - oy) * inverse_scale
                 z = (trial[f, p, 2] - oz) * inverse_scale
                 w = x * x + y * y + z * z
-                row = p * n_frames + f
-                design[row, 0], design[row, 1], design[row, 2], design[row, 3] = w, x, y, z
-                design[row, 4 + p] = 1.0
                 s00 += w * w
                 s01 += w * x
                 s02 += w * y
@@ -496,70 +565,47 @@ def _nm_trials(
                 smallest = min(smallest, lower[j, j] ** 2)
                 largest_pivot = max(largest_pivot, lower[j, j] ** 2)
             regular = smallest > 1e-9 * largest_pivot
-        exact = False
-        rank = size
-        if regular:
-            # W = L^-1, lower triangular, by forward substitution column by column.
-            whitened[:] = 0.0
-            for j in range(size):
-                whitened[j, j] = 1.0 / lower[j, j]
-                for i in range(j + 1, size):
-                    value = 0.0
-                    for k in range(j, i):
-                        value -= lower[i, k] * whitened[k, j]
-                    whitened[i, j] = value / lower[i, i]
-        else:
-            _, singular, vt = np.linalg.svd(design, full_matrices=False)
-            rank = singular.size
-            if singular[rank - 1] <= 1e-13 * singular[0]:
-                norm = 0.0
-                for i in range(size):
-                    for j in range(size):
-                        norm += vt[rank - 1, i] * constraint[i, j] * vt[rank - 1, j]
-                if norm > 0.0:
-                    for i in range(size):
-                        u[i] = vt[rank - 1, i] / math.sqrt(norm)
-                    exact = True
-                    costs[t] = 0.0
-            if not exact:
-                for i in range(rank):
-                    for j in range(size):
-                        whitened[i, j] = vt[i, j] / singular[i]
-        if not exact:
-            # M = W C W', exactly symmetric, then its eigenvector of the largest eigenvalue.
-            for i in range(size):
-                for j in range(rank):
-                    value = 0.0
-                    for k in range(size):
-                        value += constraint[i, k] * whitened[j, k]
-                    product[i, j] = value
-            m_matrix = np.empty((rank, rank))
-            for i in range(rank):
-                for j in range(i + 1):
-                    value = 0.0
-                    for k in range(size):
-                        value += whitened[i, k] * product[k, j]
-                    m_matrix[i, j] = m_matrix[j, i] = value
-            mu, eigenvectors = np.linalg.eigh(m_matrix)
-            largest = mu[rank - 1]
-            if not largest > 0.0:
-                failures[t] = 1
-                continue
-            for i in range(size):
+        if not regular:
+            failures[t] = 3
+            continue
+        # W = L^-1, lower triangular, by forward substitution column by column.
+        whitened[:] = 0.0
+        for j in range(size):
+            whitened[j, j] = 1.0 / lower[j, j]
+            for i in range(j + 1, size):
                 value = 0.0
-                for k in range(rank):
-                    value += whitened[k, i] * eigenvectors[k, rank - 1]
-                u[i] = value
-            norm = 0.0
-            for i in range(size):
-                for j in range(size):
-                    norm += u[i] * constraint[i, j] * u[j]
-            if not norm > 0.0:
-                failures[t] = 1
-                continue
-            for i in range(size):
-                u[i] /= math.sqrt(norm)
-            costs[t] = 1.0 / largest
+                for k in range(j, i):
+                    value -= lower[i, k] * whitened[k, j]
+                whitened[i, j] = value / lower[i, i]
+        # M = W C W', exactly symmetric, then its eigenvector of the largest eigenvalue.
+        for i in range(size):
+            for j in range(size):
+                value = 0.0
+                for k in range(j + 1):
+                    value += constraint[i, k] * whitened[j, k]
+                product[i, j] = value
+        for i in range(size):
+            for j in range(i + 1):
+                value = 0.0
+                for k in range(i + 1):
+                    value += whitened[i, k] * product[k, j]
+                m_matrix[i, j] = m_matrix[j, i] = value
+        mu, eigenvectors = np.linalg.eigh(m_matrix)
+        largest = mu[-1]
+        for i in range(size):
+            u[i] = 0.0
+            for k in range(i, size):
+                u[i] += whitened[k, i] * eigenvectors[k, size - 1]
+        norm = 0.0
+        for i in range(size):
+            for j in range(size):
+                norm += u[i] * constraint[i, j] * u[j]
+        if not (largest > 0.0 and norm > 0.0):
+            failures[t] = 1
+            continue
+        for i in range(size):
+            u[i] /= math.sqrt(norm)
+        costs[t] = 1.0 / largest
         a = u[0]
         if not abs(a) >= eps * np.abs(u).max():
             failures[t] = 2
@@ -694,7 +740,7 @@ def _bc_fits(
         stops,
     )
     # Radii and f2 are translation invariant: evaluate them in the shifted coordinates.
-    radii, costs = _algebraic_fit(means, total, shifts)
+    radii, costs = _algebraic_fit(data, origin, means, shifts)
     return [
         CenterResult(
             center=center,
@@ -930,10 +976,17 @@ def _is_fits(arrays: list[np.ndarray], starts: list[np.ndarray]) -> list[CenterR
 
 def _fit_is_batch(markers: object, start: object | None = None) -> list[CenterResult | ValueError]:
     """:func:`fit_is` for every trial of ``markers`` ``(n_trials, N, P, 3)``."""
-    outcomes, prepared = prepare_trials(markers, lambda data: _is_prepare(data, start))
+    return _prepared_fits(markers, lambda data: _is_prepare(data, start), _is_fits)
+
+
+def _prepared_fits(markers: object, prepare, fits) -> list:
+    """A search's many-trial form: ``fits(arrays, starts)`` over the trials of ``markers``
+    ``(n_trials, ...)`` that ``prepare`` (the one-trial checks, returning the trial and its
+    start) passes; a trial it refuses carries its ``ValueError``."""
+    outcomes, prepared = prepare_trials(markers, prepare)
     if prepared:
         arrays, starts = zip(*prepared.values(), strict=True)
-        for trial, result in zip(prepared, _is_fits(arrays, starts), strict=True):
+        for trial, result in zip(prepared, fits(arrays, starts), strict=True):
             outcomes[trial] = result
     return outcomes
 
