@@ -30,12 +30,17 @@ from __future__ import annotations
 import argparse
 import functools
 import inspect
+import json
+import os
 import platform
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -227,7 +232,9 @@ def time_batched(
     fit = registry.get(kind, name, checked=checked)
     batched = getattr(fit, "batched", None)
     if batched is None:
-        return float("nan"), "no batched form: fitted one trial at a time"
+        if shared_poses:
+            return float("nan"), ""
+        batched = functools.partial(_trial_by_trial, fit)
     segments = _batch(data, n_trials)
     options = {}
     if shared_poses:
@@ -249,6 +256,12 @@ def time_batched(
     return statistics.median(timings), f"{len(failures)} trials failed" if failures else ""
 
 
+def _trial_by_trial(fit: Callable, *segments: np.ndarray, **options: object) -> list:
+    """``fit`` on each trial of ``segments`` ``(n_trials, ...)``: a method's many-trial form
+    when it has none of its own."""
+    return [fit(*trial, **options) for trial in zip(*segments, strict=True)]
+
+
 def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
     """Median seconds per trial of fitting every segment's poses of a batch (with the checks
     the pose-based methods make), which pose-based methods can share."""
@@ -260,6 +273,50 @@ def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
         trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
         timings.append((time.perf_counter() - start) / n_trials)
     return statistics.median(timings)
+
+
+#: The landed code of Nov 22, before the input checks and the support verdict joined the
+#: public call: its public call is the reference the checked call is held to.
+BASELINE_COMMIT = "235295a"
+
+
+def baseline_timings(
+    commit: str, jobs: dict[tuple[str, str, str], DataSet], calls: int
+) -> dict[tuple[str, str, str], float]:
+    """Median seconds per public call of ``commit``'s jointbench on the same trials, by
+    ``(kind, method, data label)``: the commit is checked out into a temporary ``git
+    worktree`` and timed in a subprocess (``benchmarks/baseline_worker.py``) whose
+    ``PYTHONPATH`` is that checkout's ``src``. NaN where it lacks the method."""
+    repo = Path(__file__).resolve().parent.parent
+    worker = Path(__file__).resolve().parent / "baseline_worker.py"
+    with tempfile.TemporaryDirectory(prefix="jointbench-baseline-") as scratch:
+        checkout = Path(scratch) / "checkout"
+        git = ["git", "-C", str(repo)]
+        subprocess.run(
+            [*git, "worktree", "add", "--detach", "--quiet", str(checkout), commit], check=True
+        )
+        try:
+            trials = Path(scratch) / "trials.npz"
+            stacks = {
+                f"{kind}|{name}|{label}|{index}": np.stack([trial[index] for trial in data.trials])
+                for (kind, name, label), data in jobs.items()
+                for index in range(len(data.trials[0]))
+            }
+            np.savez(trials, **stacks)
+            env = {**os.environ, "PYTHONPATH": str(checkout / "src")}
+            found = subprocess.run(
+                [sys.executable, str(worker), str(trials), str(calls)],
+                check=True,
+                capture_output=True,
+                text=True,
+                env=env,
+            )
+        finally:
+            subprocess.run([*git, "worktree", "remove", "--force", str(checkout)], check=True)
+    timings = json.loads(found.stdout.strip().splitlines()[-1])
+    if not str(timings.pop("jointbench")).startswith(str(checkout)):
+        raise RuntimeError(f"the baseline worker did not import {commit}'s jointbench")
+    return {tuple(key.split("|")): float(value) for key, value in timings.items()}
 
 
 def _format_seconds(value: float) -> str:
@@ -288,6 +345,18 @@ def _target(kind: str, name: str, label: str) -> float | None:
     return TARGETS.get((kind, name, label), TARGETS.get((kind, name, None)))
 
 
+#: The most the public (checked) call may cost, as a multiple of the bare estimator.
+MAX_CHECK_RATIO = 1.5
+
+
+def _verdict(value: float, limit: float | None, note: str = "") -> str:
+    if note.startswith("error") or not np.isfinite(value):
+        return "error" if note.startswith("error") else "—"
+    if limit is None:
+        return "—"
+    return "pass" if value <= limit else "FAIL"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="few calls per method (seconds)")
@@ -303,7 +372,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-calls", type=int, default=None, help="calls per method at most")
     parser.add_argument("--seed", type=int, default=20070514, help="seed of the synthetic trials")
     parser.add_argument(
-        "--strict", action="store_true", help="exit with status 1 when a target is missed"
+        "--baseline",
+        default=BASELINE_COMMIT,
+        help="commit whose public call is timed beside today's (default: Nov 22's, %(default)s)",
+    )
+    parser.add_argument("--no-baseline", action="store_true", help="do not time the baseline")
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help="exit with status 1 when a target or the checks' cost limit is missed",
     )
     args = parser.parse_args(argv)
 
@@ -339,75 +416,81 @@ def main(argv: list[str] | None = None) -> int:
                     (kind, name, data.label, n_calls, median, api, target, note or api_note)
                 )
 
+    baseline: dict[tuple[str, str, str], float] = {}
+    if not args.no_baseline:
+        jobs = {(kind, name, label): data_by_kind[kind][label] for kind, name, label, *_ in rows}
+        calls = max(min_calls, min(max_calls, 100))
+        baseline = baseline_timings(args.baseline, jobs, calls)
+    old = f"public call at {args.baseline}" if baseline else "baseline"
+
     print(
         f"Estimator timings: median wall-clock seconds per call "
         f"({'quick' if args.quick else 'full'} run; Python {platform.python_version()}, "
         f"NumPy {np.__version__}, {platform.machine()}). 'estimator': the registered function "
         "alone, as a study's estimate job calls it (the target applies to it); 'public call': "
         "fit_center / fit_axis / fit_joint_center, which add the input checks and the support "
-        "verdict (jointbench.estimators.support).\n"
+        f"verdict (jointbench.estimators.support), held to at most {MAX_CHECK_RATIO}x the "
+        f"estimator; '{old}': the same public call of that commit (Nov 22's by default, before "
+        "the checks), checked out in a git worktree and timed the same way in a subprocess on "
+        "the same trials. On a shared machine only ratios within one run are comparable.\n"
     )
     print(
         "| kind | method | data (markers x frames) | calls | estimator | target | pass "
-        "| public call |"
+        f"| public call | public / estimator | ≤ {MAX_CHECK_RATIO}× | {old} |"
     )
-    print("|---|---|---|---:|---:|---:|:---:|---:|")
+    print("|---|---|---|---:|---:|---:|:---:|---:|---:|:---:|---:|")
     failed = False
     for kind, name, label, n_calls, median, api, target, note in rows:
-        if note.startswith("error"):
-            verdict, failed = "error", True
-        elif target is None:
-            verdict = "—"
-        elif median <= target:
-            verdict = "pass"
-        else:
-            verdict, failed = "FAIL", True
+        verdict = _verdict(median, target, note)
+        ratio = api / median
+        cheap = _verdict(ratio, MAX_CHECK_RATIO, note)
+        failed = failed or verdict in ("error", "FAIL") or cheap == "FAIL"
         target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
         line = (
             f"| {kind} | {name} | {label} | {n_calls} | {_format_seconds(median)} | "
-            f"{target_text} | {verdict} | {_format_seconds(api)} |"
+            f"{target_text} | {verdict} | {_format_seconds(api)} | {ratio:.2f}× | {cheap} | "
+            f"{_format_seconds(baseline.get((kind, name, label), float('nan')))} |"
         )
         print(line + (f" {note}" if note else ""))
 
     one_trial = {(kind, name, label): median for kind, name, label, _, median, *_ in rows}
     print(
-        "\nMany trials at once (each method's `batched` form): median over repeats of the "
-        "call's wall-clock time divided by its trials; 'estimator' is the bare form the "
-        "estimate jobs run (the target applies to it), 'checked' the registry's form with "
-        "every trial's input checks and support verdict; ratio = one-trial estimator median "
-        "above / batched estimator.\n"
+        "\nMany trials at once: median over repeats of the call's wall-clock time divided by its "
+        "trials; 'estimator' is the bare many-trial form the estimate jobs run (the target "
+        "applies to it; a method without one is fitted trial by trial), 'checked' the "
+        "registry's checked form with every trial's input checks and support verdict; "
+        "'speed-up' = one-trial estimator median above / batched estimator. The baseline had no "
+        "many-trial form: its column repeats its one-trial public call.\n"
     )
     print(
-        "| kind | method | data | trials per call | estimator | ratio | target | pass | checked "
-        "| from fitted poses |"
+        "| kind | method | data | trials per call | estimator | speed-up | target | pass "
+        f"| checked | checked / estimator | ≤ {MAX_CHECK_RATIO}× | from fitted poses | {old} |"
     )
-    print("|---|---|---|---:|---:|---:|---:|:---:|---:|---:|")
+    print("|---|---|---|---:|---:|---:|---:|:---:|---:|---:|:---:|---:|---:|")
     pose_labels = set()
-    for kind, name, label in BATCHED_TARGETS:
-        if kind not in kinds or (kind, name, label) not in one_trial:
-            continue
-        n_trials = max(4, _BATCH_SIZE[label] // (8 if args.quick else 1))
-        repeats = 3 if args.quick else 7
+    for kind, name, label in one_trial:
+        target = BATCHED_TARGETS.get((kind, name, label))
+        n_trials = _BATCH_SIZE.get(label, 8) if target else 8
+        n_trials = max(4, n_trials // (8 if args.quick else 1))
+        repeats = 3 if args.quick or target is None else 7
         data = data_by_kind[kind][label]
         per_trial, note = time_batched(kind, name, data, n_trials, repeats, checked=False)
-        checked, _ = time_batched(kind, name, data, n_trials, repeats, checked=True)
+        checked, checked_note = time_batched(kind, name, data, n_trials, repeats, checked=True)
         posed, _ = time_batched(
             kind, name, data, n_trials, repeats, checked=False, shared_poses=True
         )
         if np.isfinite(posed):
             pose_labels.add((kind, label, n_trials, repeats))
-        target = BATCHED_TARGETS[(kind, name, label)]
-        if not np.isfinite(per_trial):
-            verdict, failed = ("error" if note.startswith("error") else "FAIL"), True
-        elif per_trial <= target:
-            verdict = "pass"
-        else:
-            verdict, failed = "FAIL", True
-        ratio = one_trial[(kind, name, label)] / per_trial
+        verdict = _verdict(per_trial, target, note)
+        ratio = checked / per_trial
+        cheap = _verdict(ratio, MAX_CHECK_RATIO, note or checked_note)
+        failed = failed or verdict in ("error", "FAIL") or cheap == "FAIL"
+        target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
         print(
             f"| {kind} | {name} | {label} | {n_trials} | {_format_seconds(per_trial)} | "
-            f"{ratio:.1f}× | ≤ {_format_seconds(target)} | {verdict} | "
-            f"{_format_seconds(checked)} | {_format_seconds(posed)} |"
+            f"{one_trial[(kind, name, label)] / per_trial:.1f}× | {target_text} | {verdict} | "
+            f"{_format_seconds(checked)} | {ratio:.2f}× | {cheap} | {_format_seconds(posed)} | "
+            f"{_format_seconds(baseline.get((kind, name, label), float('nan')))} |"
             + (f" {note}" if note else "")
         )
     if pose_labels:
