@@ -235,16 +235,11 @@ def time_batched(
     pose-based method is given the trials' poses fitted beforehand, as the hip study's
     estimate jobs are (the fit is timed by :func:`time_pose_fit`).
     """
-    fit = registry.get(kind, name, checked=checked)
-    batched = getattr(fit, "batched", None)
-    if batched is None:
-        if shared_poses:
-            return float("nan"), ""
-        batched = functools.partial(_trial_by_trial, fit)
+    batched = registry.many(kind, name, checked=checked)
     segments = _batch(data, n_trials)
     options = {}
     if shared_poses:
-        names = pose_segments(fit)
+        names = pose_segments(batched)
         if names is None:
             return float("nan"), ""
         by_name = dict(zip(names, segments, strict=True))
@@ -260,12 +255,6 @@ def time_batched(
         return float("nan"), f"error: {type(error).__name__}: {error}"
     failures = [o for o in outcomes if isinstance(o, Exception)]
     return statistics.median(timings), f"{len(failures)} trials failed" if failures else ""
-
-
-def _trial_by_trial(fit: Callable, *segments: np.ndarray, **options: object) -> list:
-    """``fit`` on each trial of ``segments`` ``(n_trials, ...)``: a method's many-trial form
-    when it has none of its own."""
-    return [fit(*trial, **options) for trial in zip(*segments, strict=True)]
 
 
 def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
@@ -467,8 +456,8 @@ def main(argv: list[str] | None = None) -> int:
     one_trial = {(kind, name, label): median for kind, name, label, _, median, *_ in rows}
     print(
         "\nMany trials at once: median over repeats of the call's wall-clock time divided by its "
-        "trials; 'estimator' is the bare many-trial form the estimate jobs run (the target "
-        "applies to it; a method without one is fitted trial by trial), 'checked' the "
+        "trials; 'estimator' is the bare many-trial form the estimate jobs run and time (the "
+        "target applies to it; a method without its own is fitted trial by trial), 'checked' the "
         "registry's checked form with every trial's input checks and support verdict; "
         "'speed-up' = one-trial estimator median above / batched estimator. The baseline had no "
         "many-trial form: its column repeats its one-trial public call.\n"

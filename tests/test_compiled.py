@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from jointbench.estimators import axis, sphere
+from jointbench.estimators import axis, registry, sphere
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import poses
 
@@ -142,8 +142,8 @@ def test_each_kernel_is_compiled_once_whatever_its_inputs_look_like():
     markers = _hinge_markers(rng, 4)[:, :40]
     read_only = markers.copy()
     read_only.setflags(write=False)
-    sphere.fit_nm.batched(markers)
-    sphere.fit_nm.batched(read_only)
+    registry.many("center", "NM", checked=False)(markers)
+    registry.many("center", "NM", checked=False)(read_only)
     costs = axis.AxisCosts(markers, rng.normal(size=(4, 3)))
     directions = unit(rng.normal(size=(6, 3)))
     frozen_directions = directions.copy()

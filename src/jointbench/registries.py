@@ -29,6 +29,10 @@ class Registry(Generic[T]):
         self._values[name] = value
         return value
 
+    def remove(self, name: str) -> None:
+        """Forget the value called ``name`` (``KeyError`` if there is none)."""
+        del self._values[name]
+
     def get(self, name: str) -> T:
         """The value called ``name``; ``ValueError`` listing the known names otherwise."""
         try:

@@ -86,7 +86,7 @@ import numpy as np
 
 from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
     POSE_MIN_FRAMES,
@@ -702,9 +702,9 @@ def _analytic_finish(
     return _analytic_result(prox, dist)
 
 
-fit_analytic.batched = batched(_analytic_finish, ("proximal", "distal"))
-fit_gauss_markov.batched = _batched_gauss_markov(frame0=False)
-fit_gauss_markov_frame0.batched = _batched_gauss_markov(frame0=True)
+register_many("joint_center", "analytic", batched(_analytic_finish, ("proximal", "distal")))
+register_many("joint_center", "gauss-markov", _batched_gauss_markov(frame0=False))
+register_many("joint_center", "gauss-markov-frame0", _batched_gauss_markov(frame0=True))
 
 
 def align_to_markers(

@@ -43,7 +43,7 @@ import numpy as np
 
 from jointbench.declared import NonNegative
 from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import (
     check_markers,
@@ -480,10 +480,11 @@ def batched_all(
     return isolated(run)
 
 
-def pose_segments(fit: Callable) -> tuple[str, ...] | None:
-    """The segments whose poses (from :func:`trial_poses`) the ``batched`` form of ``fit``
-    accepts as ``poses=``, or ``None`` when it is not pose-based."""
-    return getattr(getattr(fit, "batched", None), "pose_segments", None)
+def pose_segments(many: Callable) -> tuple[str, ...] | None:
+    """The segments whose poses (from :func:`trial_poses`) the many-trial form ``many`` (see
+    :func:`jointbench.estimators.registry.many`) accepts as ``poses=``, or ``None`` when it is
+    not pose-based."""
+    return getattr(many, "pose_segments", None)
 
 
 def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:
@@ -494,6 +495,8 @@ def _ignoring_noise(finish: Callable[..., Outcome]) -> Callable[..., Outcome]:
     return run
 
 
-fit_score.batched = batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
-fit_score_center.batched = batched(_score_center, ("markers",))
-fit_sara.batched = batched(_sara, ("markers",))
+register_many(
+    "joint_center", "SCoRE", batched(_ignoring_noise(_score_joint), ("proximal", "distal"))
+)
+register_many("center", "SCoRE", batched(_score_center, ("markers",)))
+register_many("axis", "SARA", batched(_sara, ("markers",)))
