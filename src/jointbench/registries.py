@@ -1,4 +1,5 @@
-"""Named values of one kind, collected in registration order: the studies and the papers."""
+"""Named values of one kind, collected in registration order: the studies, the papers and, per
+kind, the estimators (:mod:`jointbench.estimators.registry`)."""
 
 from __future__ import annotations
 
