@@ -6,11 +6,17 @@ Usage::
     python benchmarks/estimators.py --quick    # seconds; for CI and smoke tests
     python benchmarks/estimators.py --kind center --strict
 
-Every method registered for a kind (``jointbench.methods(kind)``) is timed twice on trials this
-script builds itself from ``jointbench.geometry`` and ``jointbench.simulate.noise.isotropic_noise``:
-alone (the registered function without checks, as a study's estimate job runs it; the targets
-apply to this) and through the public API (``fit_center``, ``fit_axis``, ``fit_joint_center``,
-which add the input checks and the support verdict):
+Every method registered for a kind (``jointbench.methods(kind)``) is timed three ways on trials
+this script builds itself from ``jointbench.geometry`` and
+``jointbench.simulate.noise.isotropic_noise``: alone (the registered function without checks, as
+a study's estimate job runs it; the targets apply to this), checked (``registry.get(kind,
+name)``: the input checks, the method's self-check and the support verdict; held to at most
+:data:`MAX_CHECK_RATIO` times alone) and through the public API (``fit_center``, ``fit_axis``,
+``fit_joint_center``: the checked call after the artefact screen). Beside them, the public call
+of the commit ``--baseline`` (Nov 22's, :data:`BASELINE_COMMIT`, by default), checked out in a
+``git worktree`` and timed the same way on the same trials in a subprocess
+(``benchmarks/baseline_worker.py``). The many-trial forms are timed likewise, bare and checked.
+Data sets:
 
 * ``center``: 3 markers (paper A's M set distances) x 120 frames, a ~15 degree circumduction
   spiral, 1 mm noise;
@@ -30,12 +36,17 @@ from __future__ import annotations
 import argparse
 import functools
 import inspect
+import json
+import os
 import platform
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -224,14 +235,11 @@ def time_batched(
     pose-based method is given the trials' poses fitted beforehand, as the hip study's
     estimate jobs are (the fit is timed by :func:`time_pose_fit`).
     """
-    fit = registry.get(kind, name, checked=checked)
-    batched = getattr(fit, "batched", None)
-    if batched is None:
-        return float("nan"), "no batched form: fitted one trial at a time"
+    batched = registry.many(kind, name, checked=checked)
     segments = _batch(data, n_trials)
     options = {}
     if shared_poses:
-        names = pose_segments(fit)
+        names = pose_segments(batched)
         if names is None:
             return float("nan"), ""
         by_name = dict(zip(names, segments, strict=True))
@@ -262,6 +270,50 @@ def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
     return statistics.median(timings)
 
 
+#: The landed code of Nov 22, before the input checks and the support verdict joined the
+#: public call: its public call is the reference the checked call is held to.
+BASELINE_COMMIT = "235295a"
+
+
+def baseline_timings(
+    commit: str, jobs: dict[tuple[str, str, str], DataSet], calls: int
+) -> dict[tuple[str, str, str], float]:
+    """Median seconds per public call of ``commit``'s jointbench on the same trials, by
+    ``(kind, method, data label)``: the commit is checked out into a temporary ``git
+    worktree`` and timed in a subprocess (``benchmarks/baseline_worker.py``) whose
+    ``PYTHONPATH`` is that checkout's ``src``. NaN where it lacks the method."""
+    repo = Path(__file__).resolve().parent.parent
+    worker = Path(__file__).resolve().parent / "baseline_worker.py"
+    with tempfile.TemporaryDirectory(prefix="jointbench-baseline-") as scratch:
+        checkout = Path(scratch) / "checkout"
+        git = ["git", "-C", str(repo)]
+        subprocess.run(
+            [*git, "worktree", "add", "--detach", "--quiet", str(checkout), commit], check=True
+        )
+        try:
+            trials = Path(scratch) / "trials.npz"
+            stacks = {
+                f"{kind}|{name}|{label}|{index}": np.stack([trial[index] for trial in data.trials])
+                for (kind, name, label), data in jobs.items()
+                for index in range(len(data.trials[0]))
+            }
+            np.savez(trials, **stacks)
+            env = {**os.environ, "PYTHONPATH": str(checkout / "src")}
+            found = subprocess.run(
+                [sys.executable, str(worker), str(trials), str(calls)],
+                check=True,
+                capture_output=True,
+                text=True,
+                env=env,
+            )
+        finally:
+            subprocess.run([*git, "worktree", "remove", "--force", str(checkout)], check=True)
+    timings = json.loads(found.stdout.strip().splitlines()[-1])
+    if not str(timings.pop("jointbench")).startswith(str(checkout)):
+        raise RuntimeError(f"the baseline worker did not import {commit}'s jointbench")
+    return {tuple(key.split("|")): float(value) for key, value in timings.items()}
+
+
 def _format_seconds(value: float) -> str:
     if not np.isfinite(value):
         return "—"
@@ -288,6 +340,18 @@ def _target(kind: str, name: str, label: str) -> float | None:
     return TARGETS.get((kind, name, label), TARGETS.get((kind, name, None)))
 
 
+#: The most the public (checked) call may cost, as a multiple of the bare estimator.
+MAX_CHECK_RATIO = 1.5
+
+
+def _verdict(value: float, limit: float | None, note: str = "") -> str:
+    if note.startswith("error") or not np.isfinite(value):
+        return "error" if note.startswith("error") else "—"
+    if limit is None:
+        return "—"
+    return "pass" if value <= limit else "FAIL"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="few calls per method (seconds)")
@@ -303,7 +367,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-calls", type=int, default=None, help="calls per method at most")
     parser.add_argument("--seed", type=int, default=20070514, help="seed of the synthetic trials")
     parser.add_argument(
-        "--strict", action="store_true", help="exit with status 1 when a target is missed"
+        "--baseline",
+        default=BASELINE_COMMIT,
+        help="commit whose public call is timed beside today's (default: Nov 22's, %(default)s)",
+    )
+    parser.add_argument("--no-baseline", action="store_true", help="do not time the baseline")
+    parser.add_argument(
+        "--strict",
+        action="store_true",
+        help="exit with status 1 when a target or the checks' cost limit is missed",
     )
     args = parser.parse_args(argv)
 
@@ -316,7 +388,7 @@ def main(argv: list[str] | None = None) -> int:
     kinds = args.kind or list(registry.KINDS)
     rng = np.random.default_rng(args.seed)
 
-    rows: list[tuple[str, str, str, int, float, float, float | None, str]] = []
+    rows: list[tuple[str, str, str, int, float, float, float, float | None, str]] = []
     data_by_kind: dict[str, dict[str, DataSet]] = {}
     for kind in kinds:
         names = jointbench.methods(kind)
@@ -327,87 +399,98 @@ def main(argv: list[str] | None = None) -> int:
         data_by_kind[kind] = data_sets
         for name in names:
             bare = registry.get(kind, name, checked=False)
+            checked = registry.get(kind, name)
             public = functools.partial(_PUBLIC[kind], method=name)
             for label in _labels(kind, name):
                 if label not in data_sets:
                     data_sets[label] = build_data(kind, label, rng, n_pool)
                 data = data_sets[label]
                 median, n_calls, note = time_method(bare, data, seconds, min_calls, max_calls)
+                held, _, held_note = time_method(checked, data, seconds, min_calls, max_calls)
                 api, _, api_note = time_method(public, data, seconds, min_calls, max_calls)
                 target = _target(kind, name, data.label)
-                rows.append(
-                    (kind, name, data.label, n_calls, median, api, target, note or api_note)
-                )
+                note = note or held_note or api_note
+                rows.append((kind, name, data.label, n_calls, median, held, api, target, note))
+
+    baseline: dict[tuple[str, str, str], float] = {}
+    if not args.no_baseline:
+        jobs = {(kind, name, label): data_by_kind[kind][label] for kind, name, label, *_ in rows}
+        calls = max(min_calls, min(max_calls, 100))
+        baseline = baseline_timings(args.baseline, jobs, calls)
+    old = f"public call at {args.baseline}" if baseline else "baseline"
 
     print(
         f"Estimator timings: median wall-clock seconds per call "
         f"({'quick' if args.quick else 'full'} run; Python {platform.python_version()}, "
         f"NumPy {np.__version__}, {platform.machine()}). 'estimator': the registered function "
-        "alone, as a study's estimate job calls it (the target applies to it); 'public call': "
-        "fit_center / fit_axis / fit_joint_center, which add the input checks and the support "
-        "verdict (jointbench.estimators.support).\n"
+        "alone, as a study's estimate job calls it (the target applies to it); 'checked': "
+        "registry.get(kind, name), which adds the input checks, the method's self-check and the "
+        "support verdict (jointbench.estimators.support), held to at most "
+        f"{MAX_CHECK_RATIO}x the estimator; 'public call': fit_center / fit_axis / "
+        "fit_joint_center, the checked call after the artefact screen (jointbench.screen, "
+        f"artefacts='refuse'); '{old}': the public call of that commit (Nov 22's by default, "
+        "before the checks and the screen), checked out in a git worktree and timed the same "
+        "way in a subprocess on the same trials. On a shared machine only ratios within one run "
+        "are comparable.\n"
     )
     print(
         "| kind | method | data (markers x frames) | calls | estimator | target | pass "
-        "| public call |"
+        f"| checked | checked / estimator | ≤ {MAX_CHECK_RATIO}× | public call | {old} |"
     )
-    print("|---|---|---|---:|---:|---:|:---:|---:|")
+    print("|---|---|---|---:|---:|---:|:---:|---:|---:|:---:|---:|---:|")
     failed = False
-    for kind, name, label, n_calls, median, api, target, note in rows:
-        if note.startswith("error"):
-            verdict, failed = "error", True
-        elif target is None:
-            verdict = "—"
-        elif median <= target:
-            verdict = "pass"
-        else:
-            verdict, failed = "FAIL", True
+    for kind, name, label, n_calls, median, held, api, target, note in rows:
+        verdict = _verdict(median, target, note)
+        ratio = held / median
+        cheap = _verdict(ratio, MAX_CHECK_RATIO, note)
+        failed = failed or verdict in ("error", "FAIL") or cheap == "FAIL"
         target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
         line = (
             f"| {kind} | {name} | {label} | {n_calls} | {_format_seconds(median)} | "
-            f"{target_text} | {verdict} | {_format_seconds(api)} |"
+            f"{target_text} | {verdict} | {_format_seconds(held)} | {ratio:.2f}× | {cheap} | "
+            f"{_format_seconds(api)} | "
+            f"{_format_seconds(baseline.get((kind, name, label), float('nan')))} |"
         )
         print(line + (f" {note}" if note else ""))
 
     one_trial = {(kind, name, label): median for kind, name, label, _, median, *_ in rows}
     print(
-        "\nMany trials at once (each method's `batched` form): median over repeats of the "
-        "call's wall-clock time divided by its trials; 'estimator' is the bare form the "
-        "estimate jobs run (the target applies to it), 'checked' the registry's form with "
-        "every trial's input checks and support verdict; ratio = one-trial estimator median "
-        "above / batched estimator.\n"
+        "\nMany trials at once: median over repeats of the call's wall-clock time divided by its "
+        "trials; 'estimator' is the bare many-trial form the estimate jobs run and time (the "
+        "target applies to it; a method without its own is fitted trial by trial), 'checked' the "
+        "registry's checked form with every trial's input checks and support verdict; "
+        "'speed-up' = one-trial estimator median above / batched estimator. The baseline had no "
+        "many-trial form: its column repeats its one-trial public call.\n"
     )
     print(
-        "| kind | method | data | trials per call | estimator | ratio | target | pass | checked "
-        "| from fitted poses |"
+        "| kind | method | data | trials per call | estimator | speed-up | target | pass "
+        f"| checked | checked / estimator | ≤ {MAX_CHECK_RATIO}× | from fitted poses | {old} |"
     )
-    print("|---|---|---|---:|---:|---:|---:|:---:|---:|---:|")
+    print("|---|---|---|---:|---:|---:|---:|:---:|---:|---:|:---:|---:|---:|")
     pose_labels = set()
-    for kind, name, label in BATCHED_TARGETS:
-        if kind not in kinds or (kind, name, label) not in one_trial:
-            continue
-        n_trials = max(4, _BATCH_SIZE[label] // (8 if args.quick else 1))
-        repeats = 3 if args.quick else 7
+    for kind, name, label in one_trial:
+        target = BATCHED_TARGETS.get((kind, name, label))
+        n_trials = _BATCH_SIZE.get(label, 8) if target else 8
+        n_trials = max(4, n_trials // (8 if args.quick else 1))
+        repeats = 3 if args.quick or target is None else 7
         data = data_by_kind[kind][label]
         per_trial, note = time_batched(kind, name, data, n_trials, repeats, checked=False)
-        checked, _ = time_batched(kind, name, data, n_trials, repeats, checked=True)
+        checked, checked_note = time_batched(kind, name, data, n_trials, repeats, checked=True)
         posed, _ = time_batched(
             kind, name, data, n_trials, repeats, checked=False, shared_poses=True
         )
         if np.isfinite(posed):
             pose_labels.add((kind, label, n_trials, repeats))
-        target = BATCHED_TARGETS[(kind, name, label)]
-        if not np.isfinite(per_trial):
-            verdict, failed = ("error" if note.startswith("error") else "FAIL"), True
-        elif per_trial <= target:
-            verdict = "pass"
-        else:
-            verdict, failed = "FAIL", True
-        ratio = one_trial[(kind, name, label)] / per_trial
+        verdict = _verdict(per_trial, target, note)
+        ratio = checked / per_trial
+        cheap = _verdict(ratio, MAX_CHECK_RATIO, note or checked_note)
+        failed = failed or verdict in ("error", "FAIL") or cheap == "FAIL"
+        target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
         print(
             f"| {kind} | {name} | {label} | {n_trials} | {_format_seconds(per_trial)} | "
-            f"{ratio:.1f}× | ≤ {_format_seconds(target)} | {verdict} | "
-            f"{_format_seconds(checked)} | {_format_seconds(posed)} |"
+            f"{one_trial[(kind, name, label)] / per_trial:.1f}× | {target_text} | {verdict} | "
+            f"{_format_seconds(checked)} | {ratio:.2f}× | {cheap} | {_format_seconds(posed)} | "
+            f"{_format_seconds(baseline.get((kind, name, label), float('nan')))} |"
             + (f" {note}" if note else "")
         )
     if pose_labels:

@@ -44,7 +44,7 @@ def _cases():
     for study, conditions in CONDITIONS.items():
         kind = get_study(study).kind
         for method in registry.methods(kind):
-            if hasattr(registry.get(kind, method), "batched"):
+            if registry.has_own_many(kind, method):
                 for index in range(len(conditions)):
                     yield study, method, index
 
@@ -79,7 +79,7 @@ def test_batched_equals_one_trial(study, method, index):
     fit = registry.get(spec.kind, method)
     trials = _trials(study, index)
     segments = [trials.segments[name] for name in spec.segments]
-    outcomes = fit.batched(*segments)
+    outcomes = registry.many(spec.kind, method)(*segments)
     assert len(outcomes) == trials.n_trials
     for trial, outcome in enumerate(outcomes):
         try:
@@ -97,7 +97,7 @@ def test_every_closed_form_and_pose_based_method_is_batched():
     }
     for kind, names in expected.items():
         for name in names:
-            assert hasattr(registry.get(kind, name), "batched"), (kind, name)
+            assert registry.has_own_many(kind, name), (kind, name)
 
 
 def test_rigid_poses_of_many_trials_equal_each_trial_alone():
@@ -116,16 +116,16 @@ def test_shared_poses_give_the_same_answers():
     segments = {name: trials.segments[name] for name in ("proximal", "distal")}
     poses = trial_poses(segments, min_frames=3)
     for method in ("SCoRE", "analytic", "gauss-markov"):
-        fit = registry.get("joint_center", method)
-        shared = fit.batched(*segments.values(), poses=poses)
-        for a, b in zip(shared, fit.batched(*segments.values()), strict=True):
+        many = registry.many("joint_center", method)
+        shared = many(*segments.values(), poses=poses)
+        for a, b in zip(shared, many(*segments.values()), strict=True):
             _assert_same(a, b)
 
 
 def test_bad_options_fail_every_trial_as_one_trial_does():
     trials = _trials("hip", 1)
-    fit = registry.get("joint_center", "gauss-markov")
-    outcomes = fit.batched(trials.segments["proximal"], trials.segments["distal"], noise_mm=-1.0)
+    many = registry.many("joint_center", "gauss-markov")
+    outcomes = many(trials.segments["proximal"], trials.segments["distal"], noise_mm=-1.0)
     assert all(isinstance(o, ValueError) and "noise_mm" in str(o) for o in outcomes)
 
 
@@ -133,21 +133,21 @@ def test_bad_options_fail_every_trial_as_one_trial_does():
 def test_estimate_uses_the_batched_form_and_keeps_its_table(study, method, monkeypatch):
     spec = get_study(study)
     # The studies run the registered function itself (their data are valid by construction).
-    fit = registry.get(spec.kind, method, checked=False)
+    entry = registry._REGISTRY[spec.kind].get(method)
     trials = _trials(study, 0)
     condition = CONDITIONS[study][0]
     calls = []
-    original = fit.batched
+    original = entry.many
 
     def spy(*segments, **options):
         calls.append((len(segments), len(segments[0])))
         return original(*segments, **options)
 
-    monkeypatch.setattr(fit, "batched", spy)
+    monkeypatch.setattr(entry, "many", spy)
     batched = run.estimate(study, method, trials, condition)
     # The untimed warm-up on the first trial, then every trial in one call.
     assert calls == [(len(spec.segments), 1), (len(spec.segments), trials.n_trials)]
-    monkeypatch.delattr(fit, "batched")
+    monkeypatch.setattr(entry, "many", None)  # the one-trial function, trial by trial
     alone = run.estimate(study, method, trials, condition)
     assert list(batched.columns) == list(alone.columns)
     for column in alone.columns.drop("seconds"):
@@ -161,7 +161,7 @@ def test_bc_at_its_iteration_limit_reports_as_one_trial():
     trials = _trials("cmc", 0)
     markers = trials.segments["moving"]
     fit = registry.get("center", "BC")
-    outcomes = fit.batched(markers, max_iterations=3)
+    outcomes = registry.many("center", "BC")(markers, max_iterations=3)
     assert any(not o.converged for o in outcomes)
     for trial, outcome in enumerate(outcomes):
         _assert_same(outcome, fit(markers[trial], max_iterations=3))
@@ -172,7 +172,7 @@ def test_bc_at_its_iteration_limit_reports_as_one_trial():
     [
         # The sphere fits' compiled kernels load Numba, whose start-up imports SciPy's BLAS
         # bindings (scipy.linalg); the optimisers are still not paid for.
-        (("fit_ls", "fit_nm", "fit_bc"), ("scipy.optimize",)),
+        (("LS", "NM", "BC"), ("scipy.optimize",)),
     ],
 )
 def test_batched_fits_do_not_import_what_they_do_not_use(methods, absent):
@@ -182,12 +182,12 @@ def test_batched_fits_do_not_import_what_they_do_not_use(methods, absent):
 
     code = (
         "import sys, numpy as np\n"
-        "from jointbench.estimators import sphere\n"
+        "from jointbench.estimators import registry, sphere\n"
         "import jointbench.study.run\n"
         "rng = np.random.default_rng(0)\n"
         "markers = rng.normal(size=(3, 20, 3, 3)) + rng.normal(size=(3, 1, 3, 3)) * 10\n"
         f"for name in {methods!r}:\n"
-        "    getattr(sphere, name).batched(markers)\n"
+        "    registry.many('center', name, checked=False)(markers)\n"
         f"print(sorted(m for m in {absent!r} if m in sys.modules))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -214,7 +214,7 @@ def test_a_bad_trial_fails_alone_with_the_one_trial_error(kind, method, checked)
     markers[5, 7, 2] = 0.0  # a gap stored as (0, 0, 0)
     markers[1, 3, 0, 1] = 0.0  # one coordinate at zero is data
     fit = registry.get(kind, method, checked=checked)
-    outcomes = fit.batched(markers)
+    outcomes = registry.many(kind, method, checked=checked)(markers)
     for trial, outcome in enumerate(outcomes):
         try:
             single = fit(markers[trial])
@@ -233,7 +233,7 @@ def test_a_bad_trial_fails_alone_in_a_two_segment_batch():
     proximal[1, 0, 2] = proximal[1, 0, 0] + 2.0 * (proximal[1, 0, 1] - proximal[1, 0, 0])
     distal[3, 2, 0, 1] = np.inf
     fit = registry.get("joint_center", "SCoRE")
-    outcomes = fit.batched(proximal, distal)
+    outcomes = registry.many("joint_center", "SCoRE")(proximal, distal)
     for trial, outcome in enumerate(outcomes):
         try:
             single = fit(proximal[trial], distal[trial])
@@ -264,13 +264,14 @@ def test_a_noise_free_trial_leaves_the_nm_fits_of_the_others_as_they_are_alone()
     instead; the trials beside it keep the answers they have in any other batch, and every
     trial's answer is the one-trial function's to the last bit (one implementation)."""
     fit_nm = registry.get("center", "NM")
+    many_nm = registry.many("center", "NM")
     noisy = _trials("cmc", 0).segments["moving"][:3]
     rng = np.random.default_rng(7)
     directions = rng.normal(size=(noisy.shape[1], noisy.shape[2], 3))
     exact = 40.0 * directions / np.linalg.norm(directions, axis=-1, keepdims=True)
     batch = np.concatenate([noisy[:1], exact[None], noisy[1:]])
-    outcomes = fit_nm.batched(batch)
-    alone = [fit_nm.batched(trial[None])[0] for trial in batch]
+    outcomes = many_nm(batch)
+    alone = [many_nm(trial[None])[0] for trial in batch]
     for outcome, single in zip(outcomes, alone, strict=True):
         assert np.array_equal(outcome.center, single.center) and outcome.cost == single.cost
     np.testing.assert_allclose(outcomes[1].center, 0.0, atol=1e-9)
@@ -282,7 +283,7 @@ def _batched_cases():
     for study in CONDITIONS:
         kind = get_study(study).kind
         for method in registry.methods(kind):
-            if hasattr(registry.get(kind, method, checked=False), "batched"):
+            if registry.has_own_many(kind, method):
                 yield study, method
 
 
@@ -292,13 +293,13 @@ def test_one_trial_near_1e200_fails_alone(study, method, checked):
     """A trial whose values overflow the fit's arithmetic is that trial's failed outcome; the
     other trials get exactly what they get alone."""
     kind = get_study(study).kind
-    fit = registry.get(kind, method, checked=checked)
+    fit = registry.many(kind, method, checked=checked)
     index = len(CONDITIONS[study]) - 1
     segments = [np.array(s[:3]) for s in _trials(study, index).segments.values()]
     segments[-1][1] *= 1e200 / np.abs(segments[-1][1]).max()
     with np.errstate(all="ignore"):
-        outcomes = fit.batched(*segments)
-        alone = [fit.batched(*(s[[trial]] for s in segments))[0] for trial in (0, 2)]
+        outcomes = fit(*segments)
+        alone = [fit(*(s[[trial]] for s in segments))[0] for trial in (0, 2)]
     assert isinstance(outcomes[1], ValueError | FloatingPointError), outcomes[1]
     for batched, single in zip((outcomes[0], outcomes[2]), alone, strict=True):
         _assert_same(batched, single)

@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from jointbench.estimators import axis, sphere
+from jointbench.estimators import axis, registry, sphere
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import poses
 
@@ -204,9 +204,9 @@ def test_each_kernel_is_compiled_once_whatever_its_inputs_look_like():
     markers = _hinge_markers(rng, 4)[:, :40]
     read_only = markers.copy()
     read_only.setflags(write=False)
-    for fit in (sphere.fit_nm, sphere.fit_ls, sphere.fit_bc):
-        fit.batched(markers)
-        fit.batched(read_only)
+    for name in ("NM", "LS", "BC"):
+        registry.many("center", name, checked=False)(markers)
+        registry.many("center", name, checked=False)(read_only)
     sphere.fit_bc(markers[0], max_iterations=np.int64(50), tol_x=1)
     costs = axis.AxisCosts(markers, rng.normal(size=(4, 3)))
     directions = unit(rng.normal(size=(6, 3)))

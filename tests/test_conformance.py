@@ -347,7 +347,7 @@ def naive_estimator():
 
     registry.register("center", "centroid")(centroid)
     yield "centroid"
-    del registry._REGISTRY["center"]["centroid"]
+    registry.unregister("center", "centroid")
 
 
 def test_a_new_estimator_gets_the_checks_without_code_of_its_own(naive_estimator):
@@ -430,7 +430,7 @@ def test_a_small_cluster_with_large_noise_is_still_one_rigid_body():
 
 def test_support_leaves_converged_as_the_method_set_it():
     arrays = _static_with_noise("center")
-    raw = registry._REGISTRY["center"]["LS"].fn(*arrays)
+    raw = registry.get("center", "LS", checked=False)(*arrays)
     checked = fit("center", "LS", arrays)
     assert raw.converged and checked.converged and raw.status == "ok"
     assert checked.status.startswith("warning: range of motion too small")

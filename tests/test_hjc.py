@@ -302,6 +302,9 @@ def test_a_singular_gauss_markov_system_is_a_result_not_a_crash(monkeypatch, fra
     trials = [(_noisy(proximal, seed), _noisy(distal, seed + 100)) for seed in range(3)]
     stacked = [np.stack(part) for part in zip(*trials, strict=True)]
     fit = hjc.fit_gauss_markov_frame0 if frame0 else fit_gauss_markov
+    many = jb.estimators.registry.many(
+        "joint_center", "gauss-markov-frame0" if frame0 else "gauss-markov", checked=False
+    )
     alone = [fit(*trial) for trial in trials]
     solve = hjc._solve
 
@@ -311,7 +314,7 @@ def test_a_singular_gauss_markov_system_is_a_result_not_a_crash(monkeypatch, fra
         return solve(matrices, vectors)
 
     monkeypatch.setattr(hjc, "_solve", singular_in_a_batch)
-    for result, single in zip(fit.batched(*stacked), alone, strict=True):
+    for result, single in zip(many(*stacked), alone, strict=True):
         np.testing.assert_allclose(result.center, single.center, rtol=1e-12)
         assert result.iterations == single.iterations and result.status == "ok"
 
@@ -319,7 +322,7 @@ def test_a_singular_gauss_markov_system_is_a_result_not_a_crash(monkeypatch, fra
         raise np.linalg.LinAlgError("Singular matrix")
 
     monkeypatch.setattr(hjc, "_solve", always_singular)
-    for result, single in zip(fit.batched(*stacked), alone, strict=True):
+    for result, single in zip(many(*stacked), alone, strict=True):
         assert not result.converged and result.covariance is None
         assert result.status == "singular Gauss–Markov information matrix (Singular matrix)"
         np.testing.assert_array_equal(result.center, single.diagnostics["analytic_center"])

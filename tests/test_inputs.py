@@ -60,7 +60,7 @@ def raising_estimator():
 
     registry.register("center", "raises")(fails)
     yield lambda error: raised.__setitem__("error", error) or "raises"
-    del registry._REGISTRY["center"]["raises"]
+    registry.unregister("center", "raises")
 
 
 @pytest.mark.parametrize(
@@ -99,10 +99,9 @@ def batched_estimator():
     def fits(markers):
         raise AssertionError("the batched form is used")
 
-    fits.batched = lambda markers: outcomes["value"]
-    registry.register("center", "batched-outcomes")(fits)
+    registry.register("center", "batched-outcomes", many=lambda markers: outcomes["value"])(fits)
     yield lambda value: outcomes.__setitem__("value", value) or "batched-outcomes"
-    del registry._REGISTRY["center"]["batched-outcomes"]
+    registry.unregister("center", "batched-outcomes")
 
 
 def test_a_batched_numerical_failure_becomes_a_failed_row(cmc_trials, batched_estimator):

@@ -105,7 +105,7 @@ def flaky_estimator():
 
     registry.register("center", "flaky")(flaky)
     yield "flaky"
-    del registry._REGISTRY["center"]["flaky"]
+    registry.unregister("center", "flaky")
 
 
 def test_failures_become_rows_and_the_run_goes_on(config, flaky_estimator):
@@ -159,16 +159,13 @@ def compiling_estimator(request, monkeypatch):
         charge(1)
         return centroid(markers)
 
-    if request.param:
+    def batched(markers):
+        charge(len(markers))
+        return [centroid(trial) for trial in markers]
 
-        def batched(markers):
-            charge(len(markers))
-            return [centroid(trial) for trial in markers]
-
-        compiling.batched = batched
-    registry.register("center", "compiling")(compiling)
+    registry.register("center", "compiling", many=batched if request.param else None)(compiling)
     yield "compiling"
-    del registry._REGISTRY["center"]["compiling"]
+    registry.unregister("center", "compiling")
 
 
 def test_a_first_calls_one_time_costs_are_in_no_trials_seconds(config, compiling_estimator, caplog):

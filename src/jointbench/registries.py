@@ -1,4 +1,5 @@
-"""Named values of one kind, collected in registration order: the studies and the papers."""
+"""Named values of one kind, collected in registration order: the studies, the papers and, per
+kind, the estimators (:mod:`jointbench.estimators.registry`)."""
 
 from __future__ import annotations
 
@@ -28,6 +29,10 @@ class Registry(Generic[T]):
             raise ValueError(f"a different {self._what} named {name!r} is already registered")
         self._values[name] = value
         return value
+
+    def remove(self, name: str) -> None:
+        """Forget the value called ``name`` (``KeyError`` if there is none)."""
+        del self._values[name]
 
     def get(self, name: str) -> T:
         """The value called ``name``; ``ValueError`` listing the known names otherwise."""

@@ -15,7 +15,7 @@ import numpy as np
 from jointbench.declared import Point
 from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.sphere import _check_point, _prepared_fits, fit_ls, fit_nm
 from jointbench.estimators.twosegment import fit_score_center
@@ -222,4 +222,4 @@ def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
 
 
 fit_ma.self_check = _ma_self_check
-fit_ma.batched = isolated(_fit_ma_batch)
+register_many("center", "MA", isolated(_fit_ma_batch))

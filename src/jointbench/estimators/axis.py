@@ -89,9 +89,9 @@ import numpy as np
 from jointbench.declared import Count, Point, Positive
 from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated, one_trial
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import many, register
 from jointbench.estimators.results import AxisResult
-from jointbench.estimators.sphere import fit_nm
+from jointbench.estimators.sphere import fit_nm  # noqa: F401 (registers NM, used below)
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.numerics.compiled import kernel, kernel_array
@@ -353,7 +353,7 @@ def _nm_points(arrays: list[np.ndarray]) -> list[np.ndarray | ValueError]:
     is the one it has alone (the one-trial fit goes through the same code)."""
     return [
         outcome if isinstance(outcome, ValueError) else np.asarray(outcome.center, dtype=float)
-        for outcome in fit_nm.batched(np.stack(arrays))
+        for outcome in many("center", "NM", checked=False)(np.stack(arrays))
     ]
 
 
@@ -576,23 +576,26 @@ def _self_check(
 
 def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     fit = _entry(_fit, method)
-    batched = _entry(_fit_trials, method)
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
-    fit.batched = isolated(batched)
     fit.self_check = _self_check
     return fit
 
 
-fit_planar = register("axis", "planar", recovery=1e-4, invariances=1e-4, min_frames=_MIN_FRAMES)(
+def _many(method: str) -> Callable[..., list]:
+    return isolated(_entry(_fit_trials, method))
+
+
+_CLAIMS = {"recovery": 1e-4, "invariances": 1e-4, "min_frames": _MIN_FRAMES}
+fit_planar = register("axis", "planar", **_CLAIMS, many=_many("planar"))(
     _make("planar", "Normal of the best-fitting parallel planes, paper B eq. 8, by search.")
 )
 # On a pure hinge the default point (the NM centre) is undetermined along the axis and can
 # land where all ten radial searches are trapped (module notes); the recovery claim holds for
 # the checked call, whose self-check restarts from the planar eigenvector (_self_check).
-fit_radial = register("axis", "radial", recovery=1e-4, invariances=1e-4, min_frames=_MIN_FRAMES)(
+fit_radial = register("axis", "radial", **_CLAIMS, many=_many("radial"))(
     _make("radial", "Axis of the best-fitting coaxial cylinders through m, paper B eqs. 10–11.")
 )
-fit_combined = register(
-    "axis", "combined", recovery=1e-4, invariances=1e-4, min_frames=_MIN_FRAMES
-)(_make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial)."))
+fit_combined = register("axis", "combined", **_CLAIMS, many=_many("combined"))(
+    _make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial).")
+)

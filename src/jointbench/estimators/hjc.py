@@ -86,7 +86,7 @@ import numpy as np
 
 from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated, one_trial
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import JointCenterResult
 from jointbench.estimators.twosegment import (
     POSE_MIN_FRAMES,
@@ -722,9 +722,9 @@ def _analytic_finish(
 _analytic_trials = batched(_analytic_finish, ("proximal", "distal"))
 _gauss_markov_trials = {frame0: _batched_gauss_markov(frame0) for frame0 in (False, True)}
 
-fit_analytic.batched = _analytic_trials
-fit_gauss_markov.batched = _gauss_markov_trials[False]
-fit_gauss_markov_frame0.batched = _gauss_markov_trials[True]
+register_many("joint_center", "analytic", _analytic_trials)
+register_many("joint_center", "gauss-markov", _gauss_markov_trials[False])
+register_many("joint_center", "gauss-markov-frame0", _gauss_markov_trials[True])
 
 
 def align_to_markers(

@@ -14,6 +14,15 @@ and the support verdict of :func:`jointbench.estimators.support.assess` written 
 result after it. A newly registered estimator gets both without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
+Every method has a one-trial and a many-trial form, each checked or not (:func:`get`,
+:func:`many`). The many-trial form ``many(*segments, **options) -> list`` takes each marker
+array with a leading trials axis, ``(n_trials, n_frames, n_markers, 3)``, and returns per trial
+what the one-trial function returns, or the numerical failure (``ValueError``,
+``FloatingPointError``) it raises. A method states its own many-trial form at registration
+(``register(..., many=...)``, or :func:`register_many` where the module defines it after the
+one-trial function); a method without one, such as a newcomer's per-trial function, gets the
+one-trial function called trial by trial.
+
 At registration an estimator states its :class:`Claims`: the fewest frames it fits, how
 closely it recovers a noise-free answer and under which transformations of the data its answer
 moves with the data. The
@@ -32,8 +41,22 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench.estimators import support, validation
+from jointbench.estimators.batching import each_alone
+from jointbench.registries import Registry
 
-__all__ = ["INVARIANCES", "KINDS", "Claims", "claims", "get", "methods", "register"]
+__all__ = [
+    "INVARIANCES",
+    "KINDS",
+    "Claims",
+    "claims",
+    "get",
+    "has_own_many",
+    "many",
+    "methods",
+    "register",
+    "register_many",
+    "unregister",
+]
 
 KINDS = ("center", "axis", "joint_center")
 
@@ -81,16 +104,21 @@ class Claims:
         object.__setattr__(self, "invariances", MappingProxyType(dict(self.invariances)))
 
 
-@dataclass(frozen=True)
+@dataclass
 class _Entry:
+    """A registered method: its one-trial function, checked and not, its claims and its own
+    many-trial form (``None`` until stated, or for none)."""
+
+    name: str
     fn: Callable
     checked: Callable
     claims: Claims
+    many: Callable[..., list] | None = None
 
 
-_REGISTRY: dict[str, dict[str, _Entry]] = {kind: {} for kind in KINDS}
-# (kind, name) pairs whose ``batched`` form has been looked up (see :func:`get`).
-_BATCHED_RESOLVED: set[tuple[str, str]] = set()
+_REGISTRY: dict[str, Registry[_Entry]] = {
+    kind: Registry(f"{kind} method", lambda entry: entry.name) for kind in KINDS
+}
 
 
 def _check_kind(kind: str) -> None:
@@ -108,7 +136,6 @@ def _checked(kind: str, fn: Callable) -> Callable:
         result = _self_checked(fn, fn(*clean, **options), clean, options)
         return support.annotate(result, support.assess(kind, clean))
 
-    checked.__dict__.pop("batched", None)  # never the unchecked form
     return checked
 
 
@@ -121,13 +148,13 @@ def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
     return check(result, *arrays, **{k: v for k, v in options.items() if k != "poses"})
 
 
-def _checked_batched(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
-    """A ``batched`` form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
+def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
+    """A many-trial form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
     returning per trial a result or the exception) with the checks of :func:`_checked` per
     trial and the support verdict of all trials in one call."""
 
     @functools.wraps(raw)
-    def batched(*segments: object, **options: object) -> list:
+    def checked_many(*segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
         fitted, clean = [], []
         for trial, outcome in enumerate(outcomes):
@@ -148,7 +175,7 @@ def _checked_batched(kind: str, raw: Callable, raw_fn: Callable) -> Callable[...
                 outcomes[trial] = support.annotate(outcomes[trial], verdict)
         return outcomes
 
-    return batched
+    return checked_many
 
 
 def register(
@@ -158,8 +185,10 @@ def register(
     recovery: float | None = _EXACT,
     invariances: float | Mapping[str, float] = _EXACT,
     min_frames: int = 1,
+    many: Callable[..., list] | None = None,
 ) -> Callable[[Callable], Callable]:
-    """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`.
+    """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`
+    and, if it has one, its many-trial form ``many`` (module docstring).
 
     ``invariances`` as a number claims every transformation of :data:`INVARIANCES` to that
     tolerance; the default claims them all at rounding level (1e-9).
@@ -170,46 +199,72 @@ def register(
     stated = Claims(recovery, invariances, min_frames)
 
     def decorate(fn: Callable) -> Callable:
-        if name in _REGISTRY[kind]:
+        if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated)
-        _BATCHED_RESOLVED.discard((kind, name))
+        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), stated, many))
         return fn
 
     return decorate
 
 
+def register_many(kind: str, name: str, many: Callable[..., list]) -> Callable[..., list]:
+    """State the many-trial form ``many`` of the registered estimator ``name`` of ``kind``
+    (module docstring), for a module that defines it after registering the one-trial
+    function; a method has one many-trial form. Returns ``many``."""
+    entry = _entry(kind, name)
+    if entry.many is not None:
+        raise ValueError(f"{kind} estimator {name!r} already has a many-trial form")
+    entry.many = many
+    return many
+
+
+def unregister(kind: str, name: str) -> None:
+    """Remove the estimator ``name`` of ``kind`` (a test's or a session's own estimator)."""
+    _entry(kind, name)
+    _REGISTRY[kind].remove(name)
+
+
 def _entry(kind: str, name: str) -> _Entry:
     _check_kind(kind)
-    try:
-        return _REGISTRY[kind][name]
-    except KeyError:
-        known = ", ".join(_REGISTRY[kind]) or "none"
-        raise ValueError(f"unknown {kind} method {name!r}; known: {known}") from None
+    return _REGISTRY[kind].get(name)
 
 
 def get(kind: str, name: str, *, checked: bool = True) -> Callable:
-    """The estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the known
-    names otherwise.
+    """The one-trial estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the
+    known names otherwise.
 
-    Where the estimator has a ``batched`` form, the returned function carries a checked one as
-    its ``batched`` attribute. Modules attach ``fn.batched`` after registering ``fn``, so it is
-    looked up at the first ``get`` and then kept as a plain attribute (which can be replaced or
-    deleted like any other).
-
-    ``checked=False`` gives the registered function itself (and its own ``batched`` form): for
-    the simulated studies, whose data are valid by construction and whose timings must be the
-    estimator's alone.
+    ``checked=False`` gives the registered function itself: for the simulated studies, whose
+    data are valid by construction and whose timings must be the estimator's alone.
     """
     entry = _entry(kind, name)
-    if not checked:
-        return entry.fn
-    if (kind, name) not in _BATCHED_RESOLVED:
-        _BATCHED_RESOLVED.add((kind, name))
-        raw = getattr(entry.fn, "batched", None)
-        if raw is not None:
-            entry.checked.batched = _checked_batched(kind, raw, entry.fn)
-    return entry.checked
+    return entry.checked if checked else entry.fn
+
+
+def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:
+    """The many-trial form of estimator ``name`` of ``kind`` (module docstring), with the checks
+    of :func:`get` per trial or, ``checked=False``, without; every method has one."""
+    entry = _entry(kind, name)
+    if entry.many is None:
+        return _trial_by_trial(entry.checked if checked else entry.fn)
+    return _checked_many(kind, entry.many, entry.fn) if checked else entry.many
+
+
+def has_own_many(kind: str, name: str) -> bool:
+    """Whether estimator ``name`` of ``kind`` stated a many-trial form of its own."""
+    return _entry(kind, name).many is not None
+
+
+def _trial_by_trial(fn: Callable) -> Callable[..., list]:
+    """The many-trial form of a method without its own: ``fn`` on each trial, a numerical
+    failure kept as that trial's outcome."""
+
+    @functools.wraps(fn)
+    def each(*segments: object, **options: object) -> list:
+        arrays = [np.asarray(segment) for segment in segments]
+        return each_alone(lambda t: fn(*(array[t] for array in arrays), **options), len(arrays[0]))
+
+    each.__dict__.pop("self_check", None)  # the checked form applies it, once
+    return each
 
 
 def claims(kind: str, name: str) -> Claims:
@@ -220,4 +275,4 @@ def claims(kind: str, name: str) -> Claims:
 def methods(kind: str) -> tuple[str, ...]:
     """Names of the registered estimators of ``kind``, in registration order."""
     _check_kind(kind)
-    return tuple(_REGISTRY[kind])
+    return _REGISTRY[kind].names()

@@ -28,7 +28,7 @@ import numpy as np
 from jointbench.declared import Count, Point, Positive
 from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.compiled import kernel, kernel_array
@@ -1075,7 +1075,7 @@ def _bc_self_check(
 
 fit_is.self_check = _is_self_check
 fit_bc.self_check = _bc_self_check
-fit_ls.batched = isolated(_fit_ls_batch)
-fit_nm.batched = isolated(_fit_nm_batch)
-fit_bc.batched = isolated(_fit_bc_batch)
-fit_is.batched = isolated(_fit_is_batch)
+register_many("center", "LS", isolated(_fit_ls_batch))
+register_many("center", "NM", isolated(_fit_nm_batch))
+register_many("center", "BC", isolated(_fit_bc_batch))
+register_many("center", "IS", isolated(_fit_is_batch))

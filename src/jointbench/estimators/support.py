@@ -49,7 +49,8 @@ import numpy as np
 
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
-from jointbench.numerics.poses import best_rotation, rigid_poses
+from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.poses import best_rotation
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
@@ -109,7 +110,9 @@ class _Clusters(NamedTuple):
 
     rotation: np.ndarray  # (T, N, 3, 3)
     inertia_inv: np.ndarray  # (T, 3, 3) [mm^-2]
+    weakest_variance: np.ndarray  # (T,) largest eigenvalue of inertia_inv [mm^-2]
     residual_ss: np.ndarray  # (T,) [mm^2]
+    largest: np.ndarray  # (T,) largest absolute coordinate [mm]
     dof: int
     nonrigid_share: np.ndarray  # (T,) s^2 / v, see the module docstring
 
@@ -120,30 +123,187 @@ def _poses_defined(markers: np.ndarray) -> bool:
     _, n_frames, n_markers, _ = markers.shape
     if n_markers < 3 or n_frames < 2:
         return False
-    first = markers[:, 0] - markers[:, 0].mean(axis=1, keepdims=True)
-    singular = np.linalg.svd(first, compute_uv=False)
-    return bool(np.all(singular[:, 1] > 1e-6 * singular[:, 0]))
+    return bool(_first_frame_spread(kernel_array(markers)).all())
+
+
+@kernel
+def _first_frame_spread(markers: np.ndarray) -> np.ndarray:
+    """Per trial of ``markers`` ``(T, N, n, 3)``: whether the centred frame-0 cluster's second
+    singular value exceeds 1e-6 of its first (not collinear). A compiled kernel."""
+    n_trials, _, n_markers, _ = markers.shape
+    spread = np.empty(n_trials, dtype=np.bool_)
+    centred = np.empty((n_markers, 3))
+    for t in range(n_trials):
+        for i in range(3):
+            mean = 0.0
+            for m in range(n_markers):
+                mean += markers[t, 0, m, i]
+            mean /= n_markers
+            for m in range(n_markers):
+                centred[m, i] = markers[t, 0, m, i] - mean
+        singular = np.linalg.svd(centred)[1]
+        spread[t] = singular[1] > 1e-6 * singular[0]
+    return spread
+
+
+@kernel
+def _cross_covariances(markers: np.ndarray, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per trial and frame of ``markers`` ``(T, N, n, 3)`` [mm]: the cross-covariance
+    ``sum_m (x_m - mean x)(b_m - mean b)'`` with the body-fixed coordinates ``body``
+    ``(T, n, 3)``, ``(T, N, 3, 3)`` [mm^2], and half the summed squared lengths of the two
+    centred clusters, ``(T, N)`` [mm^2] (an upper bound of the best rotation's
+    ``trace(R' H)``). A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    cross = np.zeros((n_trials, n_frames, 3, 3))
+    bound = np.empty((n_trials, n_frames))
+    centred_body = np.empty((n_markers, 3))
+    target = np.empty((n_markers, 3))
+    for t in range(n_trials):
+        body_sq = 0.0
+        for i in range(3):
+            mean = 0.0
+            for m in range(n_markers):
+                mean += body[t, m, i]
+            mean /= n_markers
+            for m in range(n_markers):
+                centred_body[m, i] = body[t, m, i] - mean
+                body_sq += centred_body[m, i] ** 2
+        for f in range(n_frames):
+            target_sq = 0.0
+            for i in range(3):
+                mean = 0.0
+                for m in range(n_markers):
+                    mean += markers[t, f, m, i]
+                mean /= n_markers
+                for m in range(n_markers):
+                    target[m, i] = markers[t, f, m, i] - mean
+                    target_sq += target[m, i] ** 2
+            for m in range(n_markers):
+                for i in range(3):
+                    for j in range(3):
+                        cross[t, f, i, j] += target[m, i] * centred_body[m, j]
+            bound[t, f] = 0.5 * (target_sq + body_sq)
+    return cross, bound
+
+
+@kernel
+def _reestimated_body(
+    markers: np.ndarray, rotation: np.ndarray, body: np.ndarray, tol_mm: float
+) -> np.ndarray:
+    """One step of paper C eq. 5 per trial: the mean over frames of the back-transformed
+    markers ``(T, N, n, 3)`` [mm] under the poses ``rotation`` ``(T, N, 3, 3)`` fitted to
+    ``body`` ``(T, n, 3)``, anchored at frame 0; where that moves no coordinate by ``tol_mm``
+    or more, ``body`` itself (as :func:`jointbench.numerics.poses.rigid_poses` keeps it). A
+    compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    updated = np.empty_like(body)
+    local = np.empty((n_markers, 3))
+    first_mean = np.empty(3)
+    for t in range(n_trials):
+        local[:] = 0.0
+        for f in range(n_frames):
+            for i in range(3):
+                mean = 0.0
+                for m in range(n_markers):
+                    mean += markers[t, f, m, i]
+                mean /= n_markers
+                if f == 0:
+                    first_mean[i] = mean
+                for m in range(n_markers):
+                    centred = markers[t, f, m, i] - mean
+                    for j in range(3):
+                        local[m, j] += rotation[t, f, i, j] * centred
+        largest = 0.0
+        for m in range(n_markers):
+            for i in range(3):
+                value = first_mean[i]
+                for j in range(3):
+                    value += rotation[t, 0, i, j] * local[m, j] / n_frames
+                updated[t, m, i] = value
+                largest = max(largest, abs(value - body[t, m, i]))
+        if largest < tol_mm:
+            updated[t] = body[t]
+    return updated
+
+
+@kernel
+def _fit_numbers(
+    markers: np.ndarray, rotation: np.ndarray, body: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per trial of ``markers`` ``(T, N, n, 3)`` [mm] with poses ``rotation`` ``(T, N, 3, 3)``
+    of ``body`` ``(T, n, 3)``: the rigid fit's residual sum of squares and the markers' scatter
+    about each frame's centroid ``(T,)`` [mm^2], the inverse of the centred body's inertia
+    ``K = sum_m (|u_m|^2 I - u_m u_m')`` ``(T, 3, 3)`` [mm^-2] and its largest eigenvalue
+    ``(T,)``; and the largest absolute coordinate ``(T,)`` [mm]. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    largest = np.zeros(n_trials)
+    residual_ss = np.zeros(n_trials)
+    scatter = np.zeros(n_trials)
+    inertia_inv = np.empty((n_trials, 3, 3))
+    weakest = np.empty(n_trials)
+    u = np.empty((n_markers, 3))
+    centred = np.empty((n_markers, 3))
+    inertia = np.empty((3, 3))
+    for t in range(n_trials):
+        for i in range(3):
+            mean = 0.0
+            for m in range(n_markers):
+                mean += body[t, m, i]
+            mean /= n_markers
+            for m in range(n_markers):
+                u[m, i] = body[t, m, i] - mean
+        for f in range(n_frames):
+            for i in range(3):
+                mean = 0.0
+                for m in range(n_markers):
+                    mean += markers[t, f, m, i]
+                mean /= n_markers
+                for m in range(n_markers):
+                    centred[m, i] = markers[t, f, m, i] - mean
+                    scatter[t] += centred[m, i] ** 2
+                    largest[t] = max(largest[t], abs(markers[t, f, m, i]))
+            for m in range(n_markers):
+                for i in range(3):
+                    fitted = 0.0
+                    for j in range(3):
+                        fitted += rotation[t, f, i, j] * u[m, j]
+                    residual_ss[t] += (centred[m, i] - fitted) ** 2
+        squared = 0.0
+        for m in range(n_markers):
+            for i in range(3):
+                squared += u[m, i] ** 2
+        for i in range(3):
+            for j in range(3):
+                value = squared if i == j else 0.0
+                for m in range(n_markers):
+                    value -= u[m, i] * u[m, j]
+                inertia[i, j] = value
+        inertia_inv[t] = np.linalg.inv(inertia)
+        weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
+    return residual_ss, scatter, inertia_inv, weakest, largest
 
 
 def _clusters(markers: np.ndarray) -> _Clusters:
-    """Rigid-body fits of ``(T, N, n, 3)`` clusters, all trials in one call."""
+    """Rigid-body fits of ``(T, N, n, 3)`` clusters, all trials in one call: the poses of
+    :func:`jointbench.numerics.poses.rigid_poses` after one re-estimation of the body-fixed
+    coordinates, each step in one compiled pass over the frames."""
     _, n_frames, n_markers, _ = markers.shape
+    markers = kernel_array(markers)
     # One re-estimation of the body-fixed coordinates leaves them within ~s / sqrt(N) of the
     # converged ones: plenty for a verdict, at a quarter of the cost of a converged fit.
-    rotation, translation, body = rigid_poses(markers, max_iterations=1)
-    fitted = np.einsum("tmj,tfij->tfmi", body, rotation) + translation[:, :, None, :]
-    u = body - body.mean(axis=1, keepdims=True)
-    inertia = np.einsum("tmi,tmi->t", u, u)[:, None, None] * np.eye(3) - np.einsum(
-        "tmi,tmj->tij", u, u
-    )
-    residual_ss = np.einsum("tfmi,tfmi->t", markers - fitted, markers - fitted)
+    first = np.ascontiguousarray(markers[:, 0])
+    cross, bound = _cross_covariances(markers, first)
+    body = _reestimated_body(markers, best_rotation(cross, bound=bound), first, 1e-12)
+    cross, bound = _cross_covariances(markers, body)
+    rotation = best_rotation(cross, bound=bound)
+    residual_ss, scatter, inertia_inv, weakest, largest = _fit_numbers(markers, rotation, body)
     dof = 3 * (n_markers - 2) * (n_frames - 1)
-    centred = markers - markers.mean(axis=2, keepdims=True)
-    scatter = np.einsum("tfmi,tfmi->t", centred, centred)
     return _Clusters(
         rotation=rotation,
-        inertia_inv=np.linalg.inv(inertia),
+        inertia_inv=inertia_inv,
+        weakest_variance=weakest,
         residual_ss=residual_ss,
+        largest=largest,
         dof=dof,
         nonrigid_share=(residual_ss / dof) / (scatter / (3 * (n_markers - 1) * n_frames)),
     )
@@ -156,6 +316,106 @@ class _Rotation(NamedTuple):
     p_second: np.ndarray  # (T,) p-value of "it rotates about one axis only"
 
 
+@kernel
+def _rotation_spreads(
+    moving: np.ndarray,
+    moving_inertia_inv: np.ndarray,
+    reference: np.ndarray,
+    reference_inertia_inv: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The rotations ``moving`` ``(T, N, 3, 3)`` relative to ``reference`` (the same shape,
+    or no frames for the identity) about their mean, against their noise. A compiled kernel.
+
+    Per trial: the mean rotation ``M`` is the rotation nearest (Frobenius) the mean of the
+    relative rotations (Kabsch's SVD); ``w_k`` the rotation vector of ``M' relative_k``, as
+    :func:`jointbench.geometry.rotation_vector` gives it away from pi, centred over the
+    frames; the noise covariance per unit variance is ``moving_inertia_inv`` plus, with a
+    reference, ``M' reference_inertia_inv M`` (``(T, 3, 3)`` each). Returns the ascending
+    eigenvalues of ``sum_k w_k w_k'`` [rad^2] and of the same sum whitened by the covariance
+    (``z_k = L' w_k``, ``L L'`` its inverse), ``(T, 3)`` each; and whether some rotation is
+    within 1e-4 of pi, where that rotation vector does not hold.
+    """
+    n_trials, n_frames, _, _ = moving.shape
+    with_reference = reference.shape[1] > 0
+    raw = np.empty((n_trials, 3))
+    spread = np.empty((n_trials, 3))
+    relative = np.empty((n_frames, 3, 3))
+    vectors = np.empty((n_frames, 3))
+    gram = np.empty((3, 3))
+    near_pi = False
+    for t in range(n_trials):
+        mean = np.zeros((3, 3))
+        for f in range(n_frames):
+            for i in range(3):
+                for j in range(3):
+                    if with_reference:
+                        value = 0.0
+                        for k in range(3):
+                            value += reference[t, f, k, i] * moving[t, f, k, j]
+                    else:
+                        value = moving[t, f, i, j]
+                    relative[f, i, j] = value
+                    mean[i, j] += value
+        u, _, vt = np.linalg.svd(mean / n_frames)
+        if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
+            u[:, 2] = -u[:, 2]
+        nearest = u @ vt
+        covariance = moving_inertia_inv[t].copy()
+        if with_reference:
+            covariance += nearest.T @ reference_inertia_inv[t] @ nearest
+        centre = np.zeros(3)
+        for f in range(n_frames):
+            d = np.zeros((3, 3))
+            for i in range(3):
+                for j in range(3):
+                    for k in range(3):
+                        d[i, j] += nearest[k, i] * relative[f, k, j]
+            cos_theta = min(max((d[0, 0] + d[1, 1] + d[2, 2] - 1.0) / 2.0, -1.0), 1.0)
+            theta = np.arccos(cos_theta)
+            near_pi = near_pi or theta > np.pi - 1e-4
+            if theta < 1e-6:
+                scale = 0.5 + theta**2 / 12.0
+            else:
+                scale = theta / (2.0 * np.sin(theta))
+            vectors[f, 0] = scale * (d[2, 1] - d[1, 2])
+            vectors[f, 1] = scale * (d[0, 2] - d[2, 0])
+            vectors[f, 2] = scale * (d[1, 0] - d[0, 1])
+            for i in range(3):
+                centre[i] += vectors[f, i]
+        for i in range(3):
+            centre[i] /= n_frames
+        gram[:] = 0.0
+        for f in range(n_frames):
+            for i in range(3):
+                for j in range(3):
+                    gram[i, j] += (vectors[f, i] - centre[i]) * (vectors[f, j] - centre[j])
+        whitening = np.linalg.cholesky(np.linalg.inv(covariance))
+        white = whitening.T @ gram @ whitening
+        raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
+        spread[t] = np.maximum(np.linalg.eigvalsh(white), 0.0)
+    return raw, spread, near_pi
+
+
+def _spreads_near_pi(
+    moving: _Clusters, reference: _Clusters | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_rotation_spreads` ``(raw, spread)`` through
+    :func:`jointbench.geometry.rotation_vector`, which holds near pi too."""
+    relative = moving.rotation
+    covariance = moving.inertia_inv
+    if reference is not None:
+        relative = np.swapaxes(reference.rotation, -1, -2) @ relative
+    mean = best_rotation(relative.mean(axis=1))
+    if reference is not None:
+        covariance = covariance + np.swapaxes(mean, -1, -2) @ reference.inertia_inv @ mean
+    deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
+    deviation = deviation - deviation.mean(axis=1, keepdims=True)
+    whitened = deviation @ np.linalg.cholesky(np.linalg.inv(covariance))
+    gram = np.swapaxes(deviation, 1, 2) @ deviation
+    white = np.swapaxes(whitened, 1, 2) @ whitened
+    return np.maximum(np.linalg.eigvalsh(gram), 0.0), np.maximum(np.linalg.eigvalsh(white), 0.0)
+
+
 def _rotation_test(
     moving: _Clusters,
     reference: _Clusters | None,
@@ -165,25 +425,19 @@ def _rotation_test(
 ) -> _Rotation:
     """The rotation of ``moving`` relative to ``reference`` (or the identity) against noise,
     per trial; ``variance`` ``(T,)`` [mm^2], ``exact`` ``(T,)`` where it is rounding only."""
-    relative = moving.rotation
-    covariance = moving.inertia_inv
-    if reference is not None:
-        relative = np.swapaxes(reference.rotation, -1, -2) @ relative
-    # The rotation nearest (Frobenius) the mean of each trial's rotations.
-    mean = best_rotation(relative.mean(axis=1))
-    if reference is not None:
-        # The proximal pose's error, mapped into the distal body frame at the mean pose.
-        covariance = covariance + np.swapaxes(mean, -1, -2) @ reference.inertia_inv @ mean
-    deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
-    deviation = deviation - deviation.mean(axis=1, keepdims=True)
-    n_frames = relative.shape[1]
-    # Rotation vectors whitened by their noise covariance (per unit variance): under "no
-    # rotation" each coordinate of each frame is noise of variance s^2.
-    whitening = np.linalg.cholesky(np.linalg.inv(covariance))
-    whitened = deviation @ whitening
-    # Eigenvalues of Gram matrices, ascending; rounding can leave a zero one slightly negative.
-    spread = np.maximum(np.linalg.eigvalsh(np.swapaxes(whitened, 1, 2) @ whitened), 0.0)
-    raw = np.maximum(np.linalg.eigvalsh(np.swapaxes(deviation, 1, 2) @ deviation), 0.0)
+    if reference is None:
+        no_frames = np.empty((moving.rotation.shape[0], 0, 3, 3))
+        arguments = (moving.rotation, moving.inertia_inv, no_frames, moving.inertia_inv)
+    else:
+        arguments = (moving.rotation, moving.inertia_inv, reference.rotation, reference.inertia_inv)
+    # Eigenvalues of the Gram matrices of the rotation vectors about the mean pose, raw and
+    # whitened by their noise covariance (per unit variance: under "no rotation" each
+    # coordinate of each frame is noise of variance s^2); ascending, rounding's negative zeros
+    # clipped.
+    raw, spread, near_pi = _rotation_spreads(*arguments)
+    if near_pi:
+        raw, spread = _spreads_near_pi(moving, reference)
+    n_frames = moving.rotation.shape[1]
     rms = np.sqrt(raw.sum(axis=1) / n_frames)
     second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
     noise = np.where(exact, 1.0, variance)
@@ -193,9 +447,14 @@ def _rotation_test(
     from scipy.special import fdtrc
 
     any_dof = 3 * (n_frames - 1)
-    p_any = fdtrc(any_dof, dof, spread.sum(axis=1) / (noise * any_dof))
     off_axis = 2 * (n_frames - 1)
-    p_second = fdtrc(off_axis, dof, spread[:, :2].sum(axis=1) / (noise * off_axis))
+    # Both tests in one call: "any rotation" (3 (N - 1) degrees of freedom) and "rotation
+    # about a second axis" (2 (N - 1)).
+    p_any, p_second = fdtrc(
+        np.array([[any_dof], [off_axis]]),
+        dof,
+        np.stack([spread.sum(axis=1) / any_dof, spread[:, :2].sum(axis=1) / off_axis]) / noise,
+    )
     # Noise-free data: a rotation above rounding is resolved, and rotation about other axes is
     # judged against the main one (the F-test would compare rounding with rounding).
     p_any = np.where(exact, (rms <= _ROUNDING_ROTATION_RAD).astype(float), p_any)
@@ -215,16 +474,14 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
     clusters = [_clusters(array) for array in arrays]
     dof = sum(cluster.dof for cluster in clusters)
     variance = sum(cluster.residual_ss for cluster in clusters) / dof
-    largest = np.max([np.abs(array).max(axis=(1, 2, 3)) for array in arrays], axis=0)
+    largest = np.maximum.reduce([cluster.largest for cluster in clusters])
     exact = variance <= (ROUNDING * largest) ** 2
     reference = clusters[0] if kind == "joint_center" else None
     rotation = _rotation_test(clusters[-1], reference, variance, dof, exact)
     # A rotation about the cluster's weakest axis worse determined than this (noise s over the
     # markers' spread about that axis) leaves the pose to the noise (nearly collinear markers):
     # the first-order tests above do not hold, and the data are judged without poses.
-    weakest = np.sqrt(
-        np.max([np.linalg.eigvalsh(c.inertia_inv)[:, -1] for c in clusters], axis=0) * variance
-    )
+    weakest = np.sqrt(np.maximum.reduce([c.weakest_variance for c in clusters]) * variance)
     return [
         _without_poses(
             tuple(array[t] for array in arrays),

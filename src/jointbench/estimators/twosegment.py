@@ -43,7 +43,7 @@ import numpy as np
 
 from jointbench.declared import NonNegative
 from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated, one_trial
-from jointbench.estimators.registry import register
+from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import (
     check_markers,
@@ -565,10 +565,11 @@ def batched_all(
     return isolated(run)
 
 
-def pose_segments(fit: Callable) -> tuple[str, ...] | None:
-    """The segments whose poses (from :func:`trial_poses`) the ``batched`` form of ``fit``
-    accepts as ``poses=``, or ``None`` when it is not pose-based."""
-    return getattr(getattr(fit, "batched", None), "pose_segments", None)
+def pose_segments(many: Callable) -> tuple[str, ...] | None:
+    """The segments whose poses (from :func:`trial_poses`) the many-trial form ``many`` (see
+    :func:`jointbench.estimators.registry.many`) accepts as ``poses=``, or ``None`` when it is
+    not pose-based."""
+    return getattr(many, "pose_segments", None)
 
 
 def _ignoring_noise(finish: Callable[..., list]) -> Callable[..., list]:
@@ -584,6 +585,6 @@ _score_center_trials = batched(_score_center, ("markers",))
 _sara_trials = batched(_sara, ("markers",))
 _sara_two_segment_trials = batched(_sara_two_segment, ("proximal", "distal"))
 
-fit_score.batched = _score_trials
-fit_score_center.batched = _score_center_trials
-fit_sara.batched = _sara_trials
+register_many("joint_center", "SCoRE", _score_trials)
+register_many("center", "SCoRE", _score_center_trials)
+register_many("axis", "SARA", _sara_trials)

@@ -11,6 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from jointbench.numerics.compiled import kernel, kernel_array
+
 __all__ = [
     "ARRAY_NAMES",
     "check_input",
@@ -130,14 +132,38 @@ def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
     """
     if markers.shape[0] < 3:
         return
-    centred = markers - markers.mean(axis=0)
-    scatter = np.einsum("fpi,fpj->pij", centred, centred)
-    eigenvalues = np.linalg.eigvalsh(scatter)
-    if np.all(eigenvalues[:, 1] <= _LINE_RTOL**2 * eigenvalues[:, 2]):
+    if _all_straight(kernel_array(markers), _LINE_RTOL**2):
         raise ValueError(
             f"{name} do not rotate: every marker moves along a straight line, so there is no "
             "centre or axis of rotation"
         )
+
+
+@kernel
+def _all_straight(markers: np.ndarray, ratio: float) -> bool:
+    """Whether every marker's trajectory over the frames of ``markers``
+    ``(n_frames, n_markers, 3)`` is a line: the second eigenvalue of its scatter matrix about
+    its mean position at most ``ratio`` times the largest. A compiled kernel: the checks run
+    before every fit, and NumPy's per-call overhead on these 3 x 3 matrices cost as much as a
+    closed-form fit."""
+    n_frames, n_markers, _ = markers.shape
+    scatter = np.empty((3, 3))
+    mean = np.empty(3)
+    for p in range(n_markers):
+        for i in range(3):
+            total = 0.0
+            for f in range(n_frames):
+                total += markers[f, p, i]
+            mean[i] = total / n_frames
+        scatter[:] = 0.0
+        for f in range(n_frames):
+            for i in range(3):
+                for j in range(3):
+                    scatter[i, j] += (markers[f, p, i] - mean[i]) * (markers[f, p, j] - mean[j])
+        eigenvalues = np.linalg.eigvalsh(scatter)
+        if eigenvalues[1] > ratio * eigenvalues[2]:
+            return False
+    return True
 
 
 def check_not_collinear(markers: np.ndarray, *, name: str = "markers") -> None:

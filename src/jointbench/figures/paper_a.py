@@ -14,7 +14,6 @@ import numpy as np
 import pandas as pd
 
 from jointbench import machine
-from jointbench.estimators import registry
 from jointbench.figures.common import (
     display_limits,
     equal_3d_limits,
@@ -587,17 +586,11 @@ def timing_note(environment: str | None = None) -> str:
     the run's machine when the table is built in the same run as the estimates.
     """
     environment = environment or machine.describe()
-    batched = [m for m in PAPER_METHODS if hasattr(registry.get("center", m), "batched")]
-    one_at_a_time = [m for m in PAPER_METHODS if m not in batched]
-    parts = []
-    if one_at_a_time:
-        parts.append(f"{', '.join(one_at_a_time)}: each trial's fit timed on its own")
-    if batched:
-        parts.append(
-            f"{', '.join(batched)}: all trials of a condition fitted in one batched call, "
-            "whose time is divided by its trials"
-        )
-    how = "; ".join(parts)
+    how = (
+        "every method timed the same way: all trials of a condition fitted in one batched call "
+        "of the method's many-trial form (its own, or its one-trial function trial by trial), "
+        "whose time is divided by its trials"
+    )
     return (
         f"Ours: wall-clock time per trial, measured inside the estimate job ({how}; simulation "
         "and file I/O excluded; a first fit before the timed ones pays for compilation and "

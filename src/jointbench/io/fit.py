@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.estimators.registry import KINDS, get
+from jointbench.estimators.registry import KINDS, get, many
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap, find_jumps, summarise
@@ -246,17 +246,8 @@ class Prepared:
         The refits run the estimator without the input checks and support verdict of a user's
         call: their rows are resamples of frames that passed them in the main fit.
         """
-        fit = get(self.kind, method, checked=False)
-        batched = getattr(fit, "batched", None)
-        if batched is not None:
-            return batched(*(np.stack([a[r] for r in rows]) for a in self.arrays), **options)
-        outcomes = []
-        for subset in rows:
-            try:
-                outcomes.append(fit(*(a[subset] for a in self.arrays), **options))
-            except ValueError as error:
-                outcomes.append(error)
-        return outcomes
+        refit = many(self.kind, method, checked=False)
+        return refit(*(np.stack([a[r] for r in rows]) for a in self.arrays), **options)
 
     def fit(
         self,

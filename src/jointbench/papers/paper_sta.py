@@ -66,14 +66,14 @@ def bootstrap_covariances(trials: Trials, n_trials: int, n_resamples: int) -> np
     Frame 0 stays first in every resample: it defines the body frames in which the centre, and
     the truth, are expressed; the other frames are resampled in blocks.
     """
-    fit = registry.get("joint_center", BOOTSTRAP_METHOD, checked=False)
+    fit = registry.many("joint_center", BOOTSTRAP_METHOD, checked=False)
     out = np.full((n_trials, 3, 3), np.nan)
     for trial in range(n_trials):
         proximal, distal = (trials.segments[name][trial] for name in ("proximal", "distal"))
 
         def refits(indices: np.ndarray, proximal=proximal, distal=distal) -> list:
             rows = np.concatenate([np.zeros((len(indices), 1), dtype=int), indices + 1], axis=1)
-            results = fit.batched(proximal[rows], distal[rows])
+            results = fit(proximal[rows], distal[rows])
             return [
                 None
                 if isinstance(r, Exception) or not r.converged

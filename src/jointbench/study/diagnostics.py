@@ -11,7 +11,8 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, fit_is, geometric_cost
+from jointbench.estimators.registry import many
+from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, geometric_cost
 
 __all__ = ["DIAGNOSTICS", "is_local_minimum"]
 
@@ -30,7 +31,9 @@ def is_local_minimum(arguments, results: Sequence, truth: Mapping) -> list[dict[
     The restarts of all trials run as one batch (the same searches as one at a time).
     """
     (markers,) = arguments
-    restarts = fit_is.batched(markers, start=np.asarray(truth["center"], dtype=float))
+    restarts = many("center", "IS", checked=False)(
+        markers, start=np.asarray(truth["center"], dtype=float)
+    )
     rows: list[dict[str, object]] = []
     for data, result, from_truth in zip(markers, results, restarts, strict=True):
         if result is None:

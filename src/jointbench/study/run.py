@@ -79,17 +79,8 @@ def simulate_condition(
 NUMERICAL_FAILURES = (ValueError, np.linalg.LinAlgError, FloatingPointError)
 
 
-def _fit_one(fit, arguments, options) -> tuple[object, str, bool, int]:
-    """Run one fit; a numerical failure becomes a failed row rather than a failed run."""
-    try:
-        result = fit(*arguments, **options)
-    except NUMERICAL_FAILURES as error:
-        return _outcome(error)
-    return _outcome(result)
-
-
 def _outcome(result) -> tuple[object, str, bool, int]:
-    """Row fields of one fit's result, or of the exception a batched form returned for a trial;
+    """Row fields of one fit's result, or of the exception a many-trial form returned for a trial;
     an exception that is not a numerical failure is raised."""
     if isinstance(result, NUMERICAL_FAILURES):
         return None, f"error: {type(result).__name__}: {result}", False, 0
@@ -98,55 +89,34 @@ def _outcome(result) -> tuple[object, str, bool, int]:
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
 
-def _fit_all(fit, segments, trials: Trials, options, poses=None) -> tuple[list, float] | None:
-    """All trials at once through the estimator's ``batched`` form, if it has one.
-
-    ``fit.batched(*arrays, **options)`` takes the arrays of the ``segments`` named, each
-    ``(n_trials, ...)``, and returns per trial what ``fit`` returns or the exception it raises;
-    a pose-based method also takes
-    the trials' fitted ``poses``. Returns the outcomes and the batch's wall time divided by the
-    trials, or ``None`` to fit one trial at a time.
-    """
-    batched = getattr(fit, "batched", None)
-    if batched is None:
-        return None
+def _fit_trials(many, segments, trials: Trials, options, poses=None) -> list[tuple]:
+    """``(result, status, converged, iterations, seconds)`` of every trial, fitted on its
+    ``segments`` (names, in argument order), all trials in one call of the method's many-trial
+    form ``many`` (:func:`jointbench.estimators.registry.many`: its own, or its one-trial
+    function trial by trial); a pose-based method also takes the trials' fitted ``poses``.
+    ``seconds`` [s] is that call's wall time divided by the trials: every estimator, built-in
+    or not, is timed this one way."""
     if poses is not None:
         options = {**options, "poses": poses}
     start = time.perf_counter()
-    outcomes = batched(*(trials.segments[name] for name in segments), **options)
-    return outcomes, (time.perf_counter() - start) / max(trials.n_trials, 1)
+    outcomes = many(*(trials.segments[name] for name in segments), **options)
+    seconds = (time.perf_counter() - start) / max(trials.n_trials, 1)
+    return [(*_outcome(outcome), seconds) for outcome in outcomes]
 
 
-def _fit_trials(fit, segments, trials: Trials, options, poses=None) -> list[tuple]:
-    """``(result, status, converged, iterations, seconds)`` of every trial, fitted on its
-    ``segments`` (names, in argument order): ``seconds`` [s] is the wall time of the trial's own
-    fit, or for an estimator with a batched form (:func:`_fit_all`) the batch's divided by its
-    trials."""
-    batch = _fit_all(fit, segments, trials, options, poses)
-    if batch is not None:
-        outcomes, seconds = batch
-        return [(*_outcome(outcome), seconds) for outcome in outcomes]
-    fitted = []
-    for trial in range(trials.n_trials):
-        start = time.perf_counter()
-        arguments = tuple(trials.segments[name][trial] for name in segments)
-        outcome = _fit_one(fit, arguments, options)
-        fitted.append((*outcome, time.perf_counter() - start))
-    return fitted
-
-
-def _warm_up(fit, segments, trials: Trials, options, poses=None) -> float:
+def _warm_up(many, segments, trials: Trials, options, poses=None) -> float:
     """Fit the first trial on its own, before any fit is timed; returns its wall time [s].
 
     An estimator's first call in a process does one-time work besides fitting: Numba compiles
     its kernels (or loads them from its cache), modules imported on first use load, caches
     fill. Timed with the first trials, that work inflated the first condition of every job by up
     to seconds per trial, and with it the means of paper A Table 2. The warm-up takes the same
-    path as the timed fits (same array types, batched or not), so nothing is compiled after it.
+    path as the timed fits (the same many-trial form and array types), so nothing is compiled
+    after it.
     """
     first = dataclasses.replace(trials, segments={k: v[:1] for k, v in trials.segments.items()})
     start = time.perf_counter()
-    _fit_trials(fit, segments, first, options, None if poses is None else poses[:1])
+    _fit_trials(many, segments, first, options, None if poses is None else poses[:1])
     return time.perf_counter() - start
 
 
@@ -161,7 +131,7 @@ def methods_sharing_poses(config: Mapping, study: str) -> list[str]:
     pose_based = [
         method
         for method in estimator_names(config, study, source="builtin")
-        if pose_segments(registry.get(method_kind(spec, method), method, checked=False))
+        if pose_segments(registry.many(method_kind(spec, method), method, checked=False))
         == spec.segments
     ]
     return pose_based if len(pose_based) >= 2 else []
@@ -178,8 +148,8 @@ def estimate(
     """One row per trial: condition, estimate, error, converged, iterations, seconds, status.
 
     ``seconds`` is the fit's wall time [s], after a warm-up fit whose one-time costs it leaves
-    out (:func:`_warm_up`; its time goes to the log). Estimators with a ``batched`` form fit all
-    trials in one call; their ``seconds`` is the batch's wall time divided by the trials.
+    out (:func:`_warm_up`; its time goes to the log). Every estimator fits all trials in one call
+    of its many-trial form, and ``seconds`` is that call's wall time divided by the trials.
     ``poses``, the trials' pose fits (see :func:`run_poses_files`), are passed to a pose-based
     method instead of fitting them again. The frame of :func:`estimate_table`.
     """
@@ -206,8 +176,8 @@ def estimate_table(
     # (paper A Table 2) times the estimator, not the input checks a user's call goes through.
     kind = method_kind(spec, method)
     segments = spec.segments_of(kind)
-    fit = registry.get(kind, method, checked=False)
-    if poses is not None and pose_segments(fit) != spec.segments:
+    many = registry.many(kind, method, checked=False)
+    if poses is not None and pose_segments(many) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = DIAGNOSTICS.get((study, method))
     if warm_up:
@@ -217,9 +187,9 @@ def estimate_table(
             study,
             method,
             first_trial,
-            _warm_up(fit, segments, trials, options or {}, poses),
+            _warm_up(many, segments, trials, options or {}, poses),
         )
-    fitted = _fit_trials(fit, segments, trials, options or {}, poses)
+    fitted = _fit_trials(many, segments, trials, options or {}, poses)
     extras = [{}] * trials.n_trials
     if diagnose:
         arrays = tuple(trials.segments[name] for name in segments)
