@@ -33,7 +33,16 @@ import numpy as np
 
 from jointbench.estimators import support, validation
 
-__all__ = ["INVARIANCES", "KINDS", "Claims", "claims", "get", "methods", "register"]
+__all__ = [
+    "INVARIANCES",
+    "KINDS",
+    "Claims",
+    "claims",
+    "get",
+    "methods",
+    "register",
+    "styles",
+]
 
 KINDS = ("center", "axis", "joint_center")
 
@@ -86,6 +95,7 @@ class _Entry:
     fn: Callable
     checked: Callable
     claims: Claims
+    style: Mapping[str, str]
 
 
 _REGISTRY: dict[str, dict[str, _Entry]] = {kind: {} for kind in KINDS}
@@ -158,21 +168,28 @@ def register(
     recovery: float | None = _EXACT,
     invariances: float | Mapping[str, float] = _EXACT,
     min_frames: int = 1,
+    color: str | None = None,
+    marker: str | None = None,
 ) -> Callable[[Callable], Callable]:
     """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`.
 
     ``invariances`` as a number claims every transformation of :data:`INVARIANCES` to that
-    tolerance; the default claims them all at rounding level (1e-9).
+    tolerance; the default claims them all at rounding level (1e-9). ``color`` and ``marker``
+    (matplotlib's) draw the method in every figure; a method without a colour gets one no
+    registered method has (:func:`jointbench.figures.common.method_style`).
     """
     _check_kind(kind)
     if not isinstance(invariances, Mapping):
         invariances = dict.fromkeys(INVARIANCES, float(invariances))
     stated = Claims(recovery, invariances, min_frames)
+    style = MappingProxyType(
+        {k: v for k, v in (("color", color), ("marker", marker)) if v is not None}
+    )
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind]:
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated)
+        _REGISTRY[kind][name] = _Entry(fn, _checked(kind, fn), stated, style)
         _BATCHED_RESOLVED.discard((kind, name))
         return fn
 
@@ -215,6 +232,17 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
 def claims(kind: str, name: str) -> Claims:
     """The :class:`Claims` estimator ``name`` of ``kind`` registered with."""
     return _entry(kind, name).claims
+
+
+def styles() -> dict[str, Mapping[str, str]]:
+    """The ``color`` and ``marker`` each estimator registered with, by name, for those that
+    registered either (a name registered under several kinds: its first registration's)."""
+    found: dict[str, Mapping[str, str]] = {}
+    for entries in _REGISTRY.values():
+        for name, entry in entries.items():
+            if entry.style and name not in found:
+                found[name] = entry.style
+    return found
 
 
 def methods(kind: str) -> tuple[str, ...]:

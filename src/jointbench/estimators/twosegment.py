@@ -277,7 +277,7 @@ def _score_solve(r1, t1, r2, t2, *, what: str) -> tuple[np.ndarray, np.ndarray, 
     return solution[:3], solution[3:], float(values[0] / values[-1])
 
 
-@register("joint_center", "SCoRE", min_frames=POSE_MIN_FRAMES)
+@register("joint_center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")
 def fit_score(
     proximal: np.ndarray, distal: np.ndarray, *, noise_mm: NonNegative | None = None
 ) -> JointCenterResult:
@@ -319,7 +319,7 @@ def _score_joint(prox: SegmentPoses, dist: SegmentPoses) -> JointCenterResult:
     )
 
 
-@register("center", "SCoRE", min_frames=POSE_MIN_FRAMES)
+@register("center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")
 def fit_score_center(markers: np.ndarray) -> CenterResult:
     """SCoRE for one segment whose markers ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are
     already in the reference segment's frame: the reference pose is the identity, so the
@@ -383,7 +383,7 @@ def _mean_distance_to_axis(points: np.ndarray, point: np.ndarray, direction: np.
     return np.linalg.norm(perpendicular, axis=-1).mean(axis=0)
 
 
-@register("axis", "SARA", min_frames=POSE_MIN_FRAMES)
+@register("axis", "SARA", min_frames=POSE_MIN_FRAMES, color="#543005", marker="P")
 def fit_sara(markers: np.ndarray) -> AxisResult:
     """Symmetrical Axis of Rotation Approach (Ehrig et al. 2007) for one segment whose markers
     ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are in the reference segment's frame.

@@ -8,10 +8,11 @@ the config). The workflow derives its rules, targets, captions and report catego
 from __future__ import annotations
 
 from jointbench.papers import paper_a, paper_b, paper_c, paper_sta
-from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
+from jointbench.papers.base import FrontPart, Inputs, Measured, Output, Paper, Table
 from jointbench.registries import Registry
 
 __all__ = [
+    "FrontPart",
     "Inputs",
     "Measured",
     "Output",
