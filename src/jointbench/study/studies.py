@@ -1,14 +1,18 @@
 """The study registry: every :class:`~jointbench.simulate.Study` the benchmark can run.
 
-The built-in studies are collected by importing their simulator modules; a study outside the
+The built-in studies are collected by importing every simulator module (each module of
+:mod:`jointbench.simulate` that exports a ``STUDY``, in module name order); a study outside the
 package joins by :func:`register_study` (the workflow does this for the modules listed under
 ``extensions`` in the config, see :func:`jointbench.jobs.load_extensions`).
 """
 
 from __future__ import annotations
 
-from jointbench.registries import Registry
-from jointbench.simulate import Study, cmc, hinge_study, hip, hip_sta
+import importlib
+
+from jointbench import simulate
+from jointbench.registries import Registry, exported, submodules
+from jointbench.simulate import Study
 
 __all__ = ["get_study", "register_study", "study_names"]
 
@@ -17,5 +21,6 @@ register_study = _STUDIES.register
 get_study = _STUDIES.get
 study_names = _STUDIES.names
 
-for _study in (cmc.STUDY, hinge_study.STUDY, hip.STUDY, hip_sta.STUDY):
+_SIMULATORS = [importlib.import_module(name) for name in submodules(simulate)]
+for _study in exported(_SIMULATORS, "STUDY"):
     register_study(_study)
