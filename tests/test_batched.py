@@ -246,7 +246,7 @@ def test_a_bad_trial_fails_alone_in_a_two_segment_batch():
 def test_local_minimum_diagnostic_equals_one_restart_per_trial():
     """Claim A7's restarts from the truth run as one batch, with the one-trial searches' answers."""
     from jointbench.estimators.sphere import fit_is, geometric_cost
-    from jointbench.study.diagnostics import is_local_minimum
+    from jointbench.simulate.cmc import is_local_minimum
 
     trials = _trials("cmc", 0)
     markers = trials.segments["moving"]

@@ -229,3 +229,70 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
     pd.DataFrame({"id": ["A2"], "share": [0.8]}).to_csv(tables / "sensitivity.csv", index=False)
     code, _, _ = run(capsys, *arguments)
     assert "| seed-dependent | 80% |" in readme.read_text()
+
+
+def _toy_run(tmp_path):
+    """A run directory of the fourth study (an extension): its files, the repository's config,
+    and the results the snapshot and the README read."""
+    from workflow_copy import ROOT
+
+    for name in ("toy_study.py", "paper_t.yaml", "toy.yaml"):
+        (tmp_path / name).write_text((ROOT / "tests" / "data" / "fourth_study" / name).read_text())
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text((ROOT / "config" / "config.yaml").read_text())
+    (tmp_path / "results" / "collected").mkdir(parents=True)
+    (tmp_path / "results" / "tables").mkdir()
+    pd.DataFrame(
+        {
+            "noise_mm": [0.5, 0.5, 1.0, 1.0],
+            "trial": [0, 1, 0, 1],
+            "method": ["toy-centroid"] * 4,
+            "error_mm": [1.0, 2.0, 3.0, 4.0],
+            "converged": [True] * 4,
+            "seconds": [0.1] * 4,
+        }
+    ).to_parquet(tmp_path / "results" / "collected" / "toy.parquet")
+    pd.DataFrame(
+        {"paper": ["T", "T"], "entry": ["value", "value"], "status": ["reproduced", "x"]}
+    ).to_csv(tmp_path / "results" / "tables" / "published_comparison.csv", index=False)
+    (tmp_path / "README.md").write_text(
+        "# toy\n<!-- reproduction-summary:start -->\n<!-- reproduction-summary:end -->\n"
+    )
+    return tmp_path
+
+
+def _cli(workdir, *argv):
+    """The command line in a fresh interpreter (an extension registers its study, paper and
+    estimator for the rest of the process)."""
+    import subprocess
+    import sys
+
+    code = "import sys; from jointbench.cli import main; sys.exit(main(sys.argv[1:]))"
+    return subprocess.run(
+        [sys.executable, "-c", code, *argv], cwd=workdir, capture_output=True, text=True
+    )
+
+
+def test_snapshot_loads_the_configs_extensions(tmp_path):
+    workdir = _toy_run(tmp_path)
+    done = _cli(workdir, "snapshot", "--configfile", "toy.yaml", "--output", "summary.csv")
+    assert done.returncode == 0, done.stderr
+    snapshot = pd.read_csv(workdir / "summary.csv")
+    assert set(snapshot["study"]) == {"toy"} and set(snapshot["method"]) == {"toy-centroid"}
+    # Without the extension the study is unknown, and the error says so.
+    bare = _cli(workdir, "snapshot", "--output", "summary.csv")
+    assert bare.returncode == 2 and "unknown study 'toy'" in bare.stderr
+
+
+def test_readme_names_an_extensions_paper(tmp_path):
+    workdir = _toy_run(tmp_path)
+    done = _cli(workdir, "readme", "--configfile", "toy.yaml")
+    assert done.returncode == 0, done.stderr
+    assert "| T (a toy study) | 1 / 2 |" in (workdir / "README.md").read_text()
+
+
+def test_a_configs_missing_extension_is_named(tmp_path):
+    workdir = _toy_run(tmp_path)
+    (workdir / "toy_study.py").unlink()
+    done = _cli(workdir, "snapshot", "--configfile", "toy.yaml")
+    assert done.returncode == 2 and "extensions: 'toy_study.py' is not a file" in done.stderr

@@ -26,6 +26,7 @@ from jointbench.study.published import (
 )
 from jointbench.study.snapshot import (
     compare_snapshot,
+    readme_blocks,
     readme_summary,
     reproduction_summary,
     snapshot_table,
@@ -106,7 +107,7 @@ def test_readme_summary_is_current(comparison):
 def test_readme_headlines_are_current():
     from jointbench.report import readme_headlines
 
-    headlines = readme_headlines(RESULTS / "tables")
+    headlines = readme_headlines(RESULTS / "tables", readme_blocks(ROOT / "README.md"))
     assert "paper_sta_ranking" in headlines
     for block, text in headlines.items():
         assert readme_summary(ROOT / "README.md", block) == text.strip(), (

@@ -9,6 +9,7 @@ import pytest
 
 from jointbench import console, report
 from jointbench.figures.paper_c import calibration_status
+from jointbench.papers import paper_c
 
 
 @pytest.mark.parametrize(
@@ -63,7 +64,7 @@ def test_a_calibration_on_the_band_edge_is_borderline_and_said_so():
             "status": ["borderline", "calibrated", "calibrated"],
         }
     )
-    sentence = report.calibration_sentence(table)
+    sentence = paper_c.calibration_sentence(table)
     assert "calibrated at every Nt from 8 on" in sentence and "borderline at Nt = 4" in sentence
 
 

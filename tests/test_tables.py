@@ -7,9 +7,8 @@ import re
 import pandas as pd
 import pytest
 
-from jointbench import report
 from jointbench.figures import paper_a
-from jointbench.papers import get_paper
+from jointbench.papers import get_paper, paper_c
 from jointbench.papers import paper_a as paper_a_paper
 from jointbench.study.formatting import format_column, header, margin_words, number, words
 from jointbench.study.published import STATUSES, load_published, reader_order, status_legend
@@ -183,7 +182,7 @@ def test_the_landing_page_and_the_table_print_a_coverage_alike():
             "status": ["overconfident", "calibrated"],
         }
     )
-    sentence = report.calibration_sentence(table)
+    sentence = paper_c.calibration_sentence(table)
     assert "(coverage 0.845)" in sentence
     assert "| 0.845 |" in markdown_table(table)
 

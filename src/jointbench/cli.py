@@ -26,13 +26,19 @@ from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
 from jointbench.report import readme_headlines
+from jointbench.study.config import open_config, read_configs
 from jointbench.study.snapshot import (
     VERDICTS_BLOCK,
+    readme_blocks,
     reproduction_summary,
     snapshot_table,
     update_readme,
 )
 from jointbench.study.verdicts import PROTOCOL_SHARES, standout_summary
+
+#: The config every run starts from (the Snakefile's ``configfile``), relative to the run's
+#: directory.
+DEFAULT_CONFIG = Path("config/config.yaml")
 
 __all__ = ["main"]
 
@@ -68,7 +74,14 @@ def _method_list() -> str:
     return "\n".join(lines)
 
 
+def _open_run(args: argparse.Namespace) -> None:
+    """The run's config, as the workflow opens it: the repository's config and each
+    ``--configfile`` over it, extensions loaded (relative to the working directory)."""
+    open_config(read_configs([DEFAULT_CONFIG, *args.configfile]))
+
+
 def _snapshot(args: argparse.Namespace) -> int:
+    _open_run(args)
     table = snapshot_table(args.results / "collected")
     if table.empty:
         print(f"no collected results under {args.results}; run `snakemake -j2` first")
@@ -90,6 +103,7 @@ def _readme(args: argparse.Namespace) -> int:
         return 1
     if not args.readme.is_file():
         raise ValueError(f"{args.readme}: no such file")
+    _open_run(args)
     comparison = pd.read_csv(comparison_path)
     blocks = {
         "summary": (
@@ -98,7 +112,9 @@ def _readme(args: argparse.Namespace) -> int:
         ),
         **{
             name: (name, headline)
-            for name, headline in readme_headlines(args.results / "tables").items()
+            for name, headline in readme_headlines(
+                args.results / "tables", readme_blocks(args.readme)
+            ).items()
         },
     }
     for what, (block, text) in blocks.items():
@@ -370,6 +386,14 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=_Formatter,
     )
     snap.add_argument("--results", type=Path, default=Path("results"))
+    snap.add_argument(
+        "--configfile",
+        type=Path,
+        action="append",
+        default=[],
+        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (its extensions "
+        "are loaded); may be repeated",
+    )
     snap.add_argument("--output", type=Path, default=Path("tests/snapshots/summary.csv"))
     snap.set_defaults(run=_snapshot)
 
@@ -379,6 +403,14 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=_Formatter,
     )
     readme.add_argument("--results", type=Path, default=Path("results"))
+    readme.add_argument(
+        "--configfile",
+        type=Path,
+        action="append",
+        default=[],
+        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (its extensions "
+        "are loaded); may be repeated",
+    )
     readme.add_argument("--readme", type=Path, default=Path("README.md"))
     readme.set_defaults(run=_readme)
     return parser

@@ -1,12 +1,15 @@
 """Named values of one kind, collected in registration order: the studies, the papers and, per
-kind, the estimators (:mod:`jointbench.estimators.registry`)."""
+kind, the estimators (:mod:`jointbench.estimators.registry`); and the discovery of the built-in
+studies and papers."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import pkgutil
+from collections.abc import Callable, Iterable
+from types import ModuleType
 from typing import Generic, TypeVar
 
-__all__ = ["Registry"]
+__all__ = ["Registry", "exported", "submodules"]
 
 T = TypeVar("T")
 
@@ -49,3 +52,15 @@ class Registry(Generic[T]):
     def values(self) -> tuple[T, ...]:
         """The registered values, in registration order."""
         return tuple(self._values.values())
+
+
+def submodules(package: ModuleType) -> list[str]:
+    """The full names of ``package``'s modules, in name order: where the built-in studies and
+    papers are found, so that adding one is adding its module, not also editing a list (the
+    importing is the caller's, at its module level)."""
+    return sorted(f"{package.__name__}.{m.name}" for m in pkgutil.iter_modules(package.__path__))
+
+
+def exported(modules: Iterable[ModuleType], attribute: str) -> list:
+    """The ``attribute`` of each of ``modules`` that defines one (``STUDY``, ``PAPER``)."""
+    return [getattr(m, attribute) for m in modules if hasattr(m, attribute)]

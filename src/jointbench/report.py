@@ -10,7 +10,7 @@ import importlib.metadata
 import os
 import platform
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 
 import pandas as pd
@@ -20,7 +20,6 @@ from jointbench.figures import extended
 from jointbench.figures.common import study_title
 from jointbench.papers import Output, get_paper, paper_labels, paper_names, papers_of_study
 from jointbench.study import config as jb_config
-from jointbench.study.formatting import number
 from jointbench.study.io import read_provenance
 from jointbench.study.snapshot import reproduction_counts
 from jointbench.study.studies import get_study
@@ -32,6 +31,7 @@ __all__ = [
     "closing_lines",
     "findings",
     "finish_report",
+    "front_intro",
     "output_label",
     "output_page",
     "output_title",
@@ -108,13 +108,14 @@ def _headline(name: str, tables: Mapping[str, pd.DataFrame]) -> str:
     return output.headline({source: tables[source] for source in output.summarises})
 
 
-def readme_headlines(tables_dir: str | Path) -> dict[str, str]:
-    """Per paper output marked ``in_readme``: its headline, from its tables' CSV files in
-    ``tables_dir`` (``ValueError`` naming a missing one: the run did not make it)."""
+def readme_headlines(tables_dir: str | Path, blocks: Collection[str]) -> dict[str, str]:
+    """Per paper output marked ``in_readme`` whose block is among the README's ``blocks``: its
+    headline, from its tables' CSV files in ``tables_dir`` (``ValueError`` naming a missing
+    one: the run did not make it)."""
     out = {}
     for key in paper_names():
         for output in get_paper(key).outputs:
-            if not output.in_readme:
+            if not output.in_readme or output.name not in blocks:
                 continue
             tables = {}
             for source in output.summarises:
@@ -233,15 +234,21 @@ def write_pages(
 
 # ----------------------------------------------------------------------------- report front page
 
-FRONT_INTRO = f"""\
+
+def front_intro() -> str:
+    """The landing page's opening: what the benchmark is, naming the registered papers."""
+    papers = [get_paper(key) for key in paper_names()]
+    named = "; ".join(f"{p.letter}: {p.citation}" for p in papers)
+    return f"""\
 {REPORT_TITLE}
 {"=" * len(REPORT_TITLE)}
 
-jointbench regenerates the figures and tables of three classic papers on functional joint
-estimation from simulated motion capture with a known truth, ranks every estimator (the
-papers' and any added) on identical trials, and checks every published value and claim against
-this run with a stated tolerance. Every number on this page is generated from this run.
+jointbench regenerates the figures and tables of {len(papers)} papers on functional joint
+estimation ({named}) from simulated motion capture with a known truth, ranks every estimator
+(the papers' and any added) on identical trials, and checks every published value and claim
+against this run with a stated tolerance. Every number on this page is generated from this run.
 """
+
 
 #: Every abbreviation the report uses, defined once.
 GLOSSARY = {
@@ -278,34 +285,9 @@ def _values_sentence(reproduced: int, tested: int, shown: int) -> str:
     return "no published values"
 
 
-def calibration_sentence(calibration: pd.DataFrame) -> str:
-    """What the calibration table says about each method, in one sentence."""
-    parts = []
-    for method, rows in calibration.groupby("method", sort=False):
-        rows = rows.sort_values("n_frames")
-        good = rows[rows["status"] == "calibrated"]["n_frames"].tolist()
-        if len(good) == len(rows):
-            parts.append(f"{method} is calibrated at every Nt")
-        elif good and rows["n_frames"].tolist()[-len(good) :] == good:
-            text = f"{method} is calibrated at every Nt from {good[0]} on"
-            others = rows[rows["n_frames"] < good[0]]
-            notes = [
-                f"{o.status} at Nt = {o.n_frames} (coverage {number(o.inside_95)})"
-                for o in others.itertuples()
-            ]
-            parts.append(text + (f", {', '.join(notes)}" if notes else ""))
-        else:
-            low, high = rows["inside_95"].min(), rows["inside_95"].max()
-            parts.append(
-                f"{method}'s 95 % ellipsoid holds the true centre in {low:.1%} to {high:.1%} "
-                "of trials"
-            )
-    return "; ".join(parts) + "."
-
-
 def findings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
     """One sentence per paper (claims and values reproduced, who ranks best on its study, and
-    for paper C the calibration), generated from the run's tables."""
+    what the paper itself adds, :attr:`Paper.front_page`), generated from the run's tables."""
     comparison = tables.get("published_comparison")
     lines = []
     for key in paper_names():
@@ -322,8 +304,8 @@ def findings(tables: Mapping[str, pd.DataFrame]) -> list[str]:
         ranking = tables.get(f"extended_{paper.study}")
         if ranking is not None and papers_of_study(paper.study)[0] is paper:
             text += "; " + extended.best_headline(ranking).rstrip(".")
-        if paper.key == "paper_c" and "paper_c_calibration" in tables:
-            sentence = calibration_sentence(tables["paper_c_calibration"])
+        sentence = paper.front_page(tables).finding if paper.front_page else ""
+        if sentence:
             text += ". " + sentence[:1].upper() + sentence[1:]
         lines.append("- " + text.rstrip(".") + ".")
     return lines
@@ -371,7 +353,7 @@ def write_front_page(
     """The report's landing page: the benchmark, its headline findings, the provenance of every
     estimator's results and the run's machine."""
     loaded = {name: pd.read_csv(p) for name, p in tables.items()}
-    parts = [FRONT_INTRO, "Findings\n--------\n", "\n".join(findings(loaded)) + "\n"]
+    parts = [front_intro(), "Findings\n--------\n", "\n".join(findings(loaded)) + "\n"]
     parts += [
         "Each paper's figures and tables are in the menu on the left, each beside its caption; "
         "*Agreement with the papers* has every value and claim with the paper's sentence.\n",
@@ -391,16 +373,10 @@ def write_front_page(
     rankings = _rankings(loaded)
     if rankings:
         parts += ["Rankings\n--------\n", "\n".join(rankings) + "\n"]
-    if "paper_c_calibration" in loaded:
-        calibration = loaded["paper_c_calibration"][
-            ["method", "n_frames", "trials", "inside_95", "status"]
-        ].rename(columns={"n_frames": "Nt", "inside_95": "share inside"})
-        parts += [
-            "Calibration of the predicted covariance\n---------------------------------------\n",
-            _rst_table(
-                calibration, "share of trials whose true centre is inside the 95 % ellipsoid"
-            ),
-        ]
+    for key in paper_names():
+        paper = get_paper(key)
+        for heading, title, frame in paper.front_page(loaded).sections if paper.front_page else ():
+            parts += [f"{heading}\n{'-' * len(heading)}\n", _rst_table(frame, title)]
     provenance_rows = [
         {
             "study": study_title(Path(path).stem),

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from snakemake.utils import validate
 
-from jointbench import invocation, jobs, pipeline, report as jb_report
+from jointbench import invocation, pipeline, report as jb_report
 from jointbench.figures.common import study_title
 from jointbench.fingerprint import code_fingerprint
 from jointbench.study import run as jb_run
@@ -14,10 +14,9 @@ from jointbench.papers import papers_of_study
 from jointbench.study import config as jb_config
 
 validate(config, str(jb_config.SCHEMA_PATH))
-jobs.load_extensions(config)
-jb_config.validate_config(config)
-# Grid values, estimator names and options: a mistake stops the run here, naming the key.
-jb_config.check_config(config)
+# Extensions loaded, then grid values, estimator names and options checked: a mistake stops the
+# run here, naming the key (the command line opens a run's config the same way).
+jb_config.open_config(config)
 
 # Advice a job prints (the --forcerun for an unreadable file) repeats this run's options: its
 # --configfile and --config, --directory, --profile.

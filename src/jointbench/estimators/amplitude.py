@@ -77,6 +77,8 @@ def amplitude(rotation: np.ndarray, translation: np.ndarray, point: np.ndarray) 
     "MA",
     invariances={"translation": 0.5, "marker_order": 1e-3, "frame_order": 1e-9},
     min_frames=_MIN_FRAMES,
+    color="#e7298a",
+    marker="D",
 )
 def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     """Minimal amplitude point of Marin et al. (2003), minimised as in paper A (§5).

@@ -587,15 +587,15 @@ def _many(method: str) -> Callable[..., list]:
 
 
 _CLAIMS = {"recovery": 1e-4, "invariances": 1e-4, "min_frames": _MIN_FRAMES}
-fit_planar = register("axis", "planar", **_CLAIMS, many=_many("planar"))(
-    _make("planar", "Normal of the best-fitting parallel planes, paper B eq. 8, by search.")
-)
+fit_planar = register(
+    "axis", "planar", **_CLAIMS, many=_many("planar"), color="#6a3d9a", marker="s"
+)(_make("planar", "Normal of the best-fitting parallel planes, paper B eq. 8, by search."))
 # On a pure hinge the default point (the NM centre) is undetermined along the axis and can
 # land where all ten radial searches are trapped (module notes); the recovery claim holds for
 # the checked call, whose self-check restarts from the planar eigenvector (_self_check).
-fit_radial = register("axis", "radial", **_CLAIMS, many=_many("radial"))(
-    _make("radial", "Axis of the best-fitting coaxial cylinders through m, paper B eqs. 10–11.")
-)
-fit_combined = register("axis", "combined", **_CLAIMS, many=_many("combined"))(
-    _make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial).")
-)
+fit_radial = register(
+    "axis", "radial", **_CLAIMS, many=_many("radial"), color="#b2182b", marker="^"
+)(_make("radial", "Axis of the best-fitting coaxial cylinders through m, paper B eqs. 10–11."))
+fit_combined = register(
+    "axis", "combined", **_CLAIMS, many=_many("combined"), color="#17becf", marker="o"
+)(_make("combined", "Axis of the best-fitting coaxial circles, paper B eq. 12 (planar + radial)."))

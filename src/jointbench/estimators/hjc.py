@@ -202,7 +202,7 @@ def _motion_error(values: np.ndarray, n_frames: int, what: str) -> ValueError | 
     return None
 
 
-@register("joint_center", "analytic", min_frames=POSE_MIN_FRAMES)
+@register("joint_center", "analytic", min_frames=POSE_MIN_FRAMES, color="#fb9a99", marker="s")
 def fit_analytic(
     proximal: np.ndarray, distal: np.ndarray, *, noise_mm: NonNegative | None = None
 ) -> JointCenterResult:
@@ -607,7 +607,7 @@ def _check_gauss_markov_options(noise_mm, max_iterations, tol_mm) -> None:
         raise ValueError("max_iterations must be >= 1 and tol_mm >= 0")
 
 
-@register("joint_center", "gauss-markov", min_frames=POSE_MIN_FRAMES)
+@register("joint_center", "gauss-markov", min_frames=POSE_MIN_FRAMES, color="#2166ac", marker="o")
 def fit_gauss_markov(
     proximal: np.ndarray,
     distal: np.ndarray,
@@ -647,7 +647,9 @@ def fit_gauss_markov(
     )
 
 
-@register("joint_center", "gauss-markov-frame0", min_frames=POSE_MIN_FRAMES)
+@register(
+    "joint_center", "gauss-markov-frame0", min_frames=POSE_MIN_FRAMES, color="#b35806", marker="D"
+)
 def fit_gauss_markov_frame0(
     proximal: np.ndarray,
     distal: np.ndarray,

@@ -55,6 +55,7 @@ __all__ = [
     "methods",
     "register",
     "register_many",
+    "styles",
     "unregister",
 ]
 
@@ -106,13 +107,15 @@ class Claims:
 
 @dataclass
 class _Entry:
-    """A registered method: its one-trial function, checked and not, its claims and its own
+    """A registered method: its one-trial function, checked and not, its claims, its figure style
+    and its own
     many-trial form (``None`` until stated, or for none)."""
 
     name: str
     fn: Callable
     checked: Callable
     claims: Claims
+    style: Mapping[str, str]
     many: Callable[..., list] | None = None
 
 
@@ -186,22 +189,29 @@ def register(
     invariances: float | Mapping[str, float] = _EXACT,
     min_frames: int = 1,
     many: Callable[..., list] | None = None,
+    color: str | None = None,
+    marker: str | None = None,
 ) -> Callable[[Callable], Callable]:
     """Decorator registering ``fn`` as estimator ``name`` of ``kind`` with its :class:`Claims`
     and, if it has one, its many-trial form ``many`` (module docstring).
 
     ``invariances`` as a number claims every transformation of :data:`INVARIANCES` to that
-    tolerance; the default claims them all at rounding level (1e-9).
+    tolerance; the default claims them all at rounding level (1e-9). ``color`` and ``marker``
+    (matplotlib's) draw the method in every figure; a method without a colour gets one no
+    registered method has (:func:`jointbench.figures.common.method_style`).
     """
     _check_kind(kind)
     if not isinstance(invariances, Mapping):
         invariances = dict.fromkeys(INVARIANCES, float(invariances))
     stated = Claims(recovery, invariances, min_frames)
+    style = MappingProxyType(
+        {k: v for k, v in (("color", color), ("marker", marker)) if v is not None}
+    )
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), stated, many))
+        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), stated, style, many))
         return fn
 
     return decorate
@@ -270,6 +280,17 @@ def _trial_by_trial(fn: Callable) -> Callable[..., list]:
 def claims(kind: str, name: str) -> Claims:
     """The :class:`Claims` estimator ``name`` of ``kind`` registered with."""
     return _entry(kind, name).claims
+
+
+def styles() -> dict[str, Mapping[str, str]]:
+    """The ``color`` and ``marker`` each estimator registered with, by name, for those that
+    registered either (a name registered under several kinds: its first registration's)."""
+    found: dict[str, Mapping[str, str]] = {}
+    for entries in _REGISTRY.values():
+        for entry in entries.values():
+            if entry.style and entry.name not in found:
+                found[entry.name] = entry.style
+    return found
 
 
 def methods(kind: str) -> tuple[str, ...]:

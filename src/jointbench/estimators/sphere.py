@@ -321,7 +321,7 @@ def _ls_fits(data: np.ndarray) -> list[CenterResult]:
     return _closed_form_results("LS", fit.origin + fit.shift, radii, costs)
 
 
-@register("center", "LS", min_frames=_MIN_FRAMES)
+@register("center", "LS", min_frames=_MIN_FRAMES, color="#d95f02", marker="s")
 def fit_ls(markers: np.ndarray) -> CenterResult:
     """Least-squares sphere fit of Gamage & Lasenby (2002): closed form, cost f2 (paper A eq. 4).
 
@@ -432,7 +432,7 @@ def _nm_fits(data: np.ndarray) -> list[CenterResult | ValueError]:
     return outcomes
 
 
-@register("center", "NM", min_frames=_MIN_FRAMES)
+@register("center", "NM", min_frames=_MIN_FRAMES, color="#1b9e77", marker="o")
 def fit_nm(markers: np.ndarray) -> CenterResult:
     """Normalisation method of Chang & Pollard (2007), paper A §3–4: constrained least squares.
 
@@ -649,7 +649,7 @@ def _bc_status(stop: int, iterations: int, max_iterations: int, limit: float) ->
 
 
 # Stops on steps of 1e-4 mm.
-@register("center", "BC", invariances=1e-3, min_frames=_MIN_FRAMES)
+@register("center", "BC", invariances=1e-3, min_frames=_MIN_FRAMES, color="#7570b3", marker="^")
 def fit_bc(
     markers: np.ndarray,
     *,
@@ -904,7 +904,7 @@ def geometric_cost(markers: np.ndarray, center: np.ndarray) -> float:
 
 
 # A simplex stopped at 1e-4 mm.
-@register("center", "IS", invariances=1e-3, min_frames=_MIN_FRAMES)
+@register("center", "IS", invariances=1e-3, min_frames=_MIN_FRAMES, color="#66a61e", marker="v")
 def fit_is(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     """Iterative search: minimise the geometric cost f1 (paper A eq. 2) by Nelder–Mead.
 

@@ -321,7 +321,7 @@ def trial_outcomes(errors: list[ValueError | None], result: Callable[[int], Outc
     return [result(trial) if error is None else error for trial, error in enumerate(errors)]
 
 
-@register("joint_center", "SCoRE", min_frames=POSE_MIN_FRAMES)
+@register("joint_center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")
 def fit_score(
     proximal: np.ndarray, distal: np.ndarray, *, noise_mm: NonNegative | None = None
 ) -> JointCenterResult:
@@ -371,7 +371,7 @@ def _score_joint(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | V
     )
 
 
-@register("center", "SCoRE", min_frames=POSE_MIN_FRAMES)
+@register("center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")
 def fit_score_center(markers: np.ndarray) -> CenterResult:
     """SCoRE for one segment whose markers ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are
     already in the reference segment's frame: the reference pose is the identity, so the
@@ -441,7 +441,7 @@ def _mean_distance_to_axis(points: np.ndarray, point: np.ndarray, direction: np.
     return np.linalg.norm(perpendicular, axis=-1).mean(axis=1)
 
 
-@register("axis", "SARA", min_frames=POSE_MIN_FRAMES)
+@register("axis", "SARA", min_frames=POSE_MIN_FRAMES, color="#543005", marker="P")
 def fit_sara(markers: np.ndarray) -> AxisResult:
     """Symmetrical Axis of Rotation Approach (Ehrig et al. 2007) for one segment whose markers
     ``(n_frames >= 3, n_markers >= 3, 3)`` [mm] are in the reference segment's frame.

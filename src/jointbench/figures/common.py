@@ -1,5 +1,6 @@
 """Shared figure helpers: matplotlib on first use, one colour and marker per method across every
-figure and study, the human names of studies, and saving figures reproducibly."""
+figure and study (each method's own, from its registration), the studies' names for people, and
+saving figures reproducibly."""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from jointbench.estimators import registry
+from jointbench.study.studies import get_study, study_names
 from jointbench.study.tables import output_paths
 
 if TYPE_CHECKING:
@@ -33,25 +36,8 @@ __all__ = [
     "study_title",
 ]
 
-# One colour and marker per method, the same in every figure and study; no two methods share a
-# colour, so a method keeps its colour wherever it appears beside any other.
-_STYLES = {
-    "NM": ("#1b9e77", "o"),
-    "LS": ("#d95f02", "s"),
-    "BC": ("#7570b3", "^"),
-    "MA": ("#e7298a", "D"),
-    "IS": ("#66a61e", "v"),
-    "SCoRE": ("#a6761d", "P"),
-    "LM": ("#e6ab02", "X"),
-    "planar": ("#6a3d9a", "s"),
-    "radial": ("#b2182b", "^"),
-    "combined": ("#17becf", "o"),
-    "SARA": ("#543005", "P"),
-    "gauss-markov": ("#2166ac", "o"),
-    "gauss-markov-frame0": ("#b35806", "D"),
-    "analytic": ("#fb9a99", "s"),
-}
-# Colours for methods without a fixed style (a newcomer's), none of them in the table above.
+# Colours for methods that registered none (a newcomer's), none of them a built-in's; a
+# method's own colour and marker are those it registered with (`register(..., color=...)`).
 _SPARE_COLORS = (
     "#999933",
     "#882255",
@@ -65,17 +51,13 @@ _SPARE_COLORS = (
     "#f46d43",
 )
 
-# How a study is called in titles and text.
-_STUDY_TITLES = {
-    "cmc": "thumb CMC",
-    "hinge": "knee and index MCP",
-    "hip": "hip joint centre",
-}
-
 
 def study_title(study: str) -> str:
-    """A study's name for people: "thumb CMC" for ``cmc``; an unknown study keeps its name."""
-    return _STUDY_TITLES.get(study, study)
+    """A study's name for people, its ``Study.title`` ("thumb CMC" for ``cmc``); a study
+    without one, or not registered, keeps its name."""
+    if study not in study_names():
+        return study
+    return get_study(study).display_name
 
 
 @functools.cache
@@ -95,24 +77,23 @@ def pyplot() -> ModuleType:
 
 
 def method_style(method: str, index: int = 0) -> dict[str, object]:
-    """Matplotlib colour and marker of a method: its own fixed one, or for a method without one
-    a spare colour chosen by its name (so the same in every figure) and marker "X".
-    ``index`` is unused; it is kept for callers that pass a method's position."""
-    if method in _STYLES:
-        color, marker = _STYLES[method]
-        return {"color": color, "marker": marker}
+    """Matplotlib colour and marker of a method: those it registered with, or for a method
+    without a colour a spare one chosen by its name (so the same in every figure) and marker
+    "X". ``index`` is unused; it is kept for callers that pass a method's position."""
+    own = registry.styles().get(method, {})
     spare = _SPARE_COLORS[zlib.crc32(method.encode()) % len(_SPARE_COLORS)]
-    return {"color": spare, "marker": "X"}
+    return {"color": own.get("color", spare), "marker": own.get("marker", "X")}
 
 
 def method_styles(methods: Iterable[str]) -> dict[str, dict[str, object]]:
-    """:func:`method_style` of each of ``methods``, where two methods without a fixed style
-    would share a spare colour the later (by name) taking the next free one, so every method
-    of one figure has a colour of its own."""
+    """:func:`method_style` of each of ``methods``, where a method without a colour of its
+    own would share one with another method of the figure it takes the next spare colour free
+    (methods in name order), so every method of one figure has a colour of its own."""
     methods = list(dict.fromkeys(methods))
     styles = {m: method_style(m) for m in methods}
-    taken = {styles[m]["color"] for m in methods if m in _STYLES}
-    for method in sorted(m for m in methods if m not in _STYLES):
+    own = {m for m in methods if "color" in registry.styles().get(m, {})}
+    taken = {styles[m]["color"] for m in own}
+    for method in sorted(m for m in methods if m not in own):
         start = _SPARE_COLORS.index(styles[method]["color"])
         for step in range(len(_SPARE_COLORS)):
             color = _SPARE_COLORS[(start + step) % len(_SPARE_COLORS)]

@@ -165,46 +165,10 @@ def origin_note(
     return " ".join(p for p in parts if p)
 
 
-# How a grid key reads in a row label, e.g. rom_deg 5 -> "±5°"; unknown keys fall back to
-# their unit suffix (_deg, _mm) or "key=value".
-_KEY_FORMATS = {
-    "marker_set": "{} set",
-    "rom_deg": "±{:g}°",
-    "noise_mm": "{:g} mm noise",
-    "protocol": "{}",  # values named by _VALUE_NAMES
-    "fe_rom_deg": "FE {:g}°",
-    "aa_ratio": "AA/FE {:g}",
-    "n_frames": "Nt = {}",
-}
-_KEY_NAMES = {
-    "marker_set": "marker set",
-    "rom_deg": "RoM",
-    "noise_mm": "noise SD",
-    "protocol": "protocol",
-    "fe_rom_deg": "FE RoM",
-    "aa_ratio": "AA/FE ratio",
-    "n_frames": "frames used",
-}
-
-
-# Grid values with a name for people.
-_VALUE_NAMES = {("protocol", "mcp"): "index MCP"}
-
-
-def _key_text(key: str, value: object) -> str:
-    value = _VALUE_NAMES.get((key, value), value)
-    if key in _KEY_FORMATS:
-        return _KEY_FORMATS[key].format(value)
-    if key.endswith("_deg"):
-        return f"{key.removesuffix('_deg')} {value:g}°"
-    if key.endswith("_mm"):
-        return f"{key.removesuffix('_mm')} {value:g} mm"
-    return f"{key}={value}"
-
-
-def condition_label(keys: Sequence[str], values: Sequence[object]) -> str:
-    """A row label with units, e.g. ``("M", 5, 0.5)`` -> "M set, ±5°, 0.5 mm noise"."""
-    return ", ".join(_key_text(k, v) for k, v in zip(keys, values, strict=True))
+def condition_label(study: str, values: Sequence[object]) -> str:
+    """A row label with units, as the study words its grid keys (:meth:`Study.condition_label`),
+    e.g. ``("M", 5, 0.5)`` of ``cmc`` -> "M set, ±5°, 0.5 mm noise"."""
+    return get_study(study).condition_label(values)
 
 
 def incomplete(trials: int, converged: int, failed: int) -> bool:
@@ -286,9 +250,9 @@ def _heatmap(ax, table: pd.DataFrame, study: str, methods: Sequence[str], paper:
     ax.set_xticks(range(len(methods)), [m if m in paper else f"{m}*" for m in methods])
     if len(methods) > 5 or max(map(len, methods)) > 6:
         plt.setp(ax.get_xticklabels(), rotation=40, ha="right", rotation_mode="anchor")
-    labels = [condition_label(keys, i if isinstance(i, tuple) else (i,)) for i in wide.index]
+    labels = [condition_label(study, i if isinstance(i, tuple) else (i,)) for i in wide.index]
     ax.set_yticks(range(len(labels)), labels, fontsize=8)
-    ax.set_ylabel("condition: " + ", ".join(_KEY_NAMES.get(k, k) for k in keys))
+    ax.set_ylabel("condition: " + ", ".join(get_study(study).key_label(k) for k in keys))
     ax.set_xlabel("method (best first; * not in the paper)")
     return image
 

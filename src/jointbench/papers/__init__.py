@@ -1,17 +1,21 @@
 """The papers the benchmark reproduces: one module per paper, each exporting one ``PAPER``.
 
-The registry below collects the built-in papers by import; a paper outside the package joins by
+The registry below collects the built-in papers by importing every module of this package that
+exports a ``PAPER`` (in module name order); a paper outside the package joins by
 :func:`register_paper` (the workflow does this for the modules listed under ``extensions`` in
 the config). The workflow derives its rules, targets, captions and report categories from it.
 """
 
 from __future__ import annotations
 
-from jointbench.papers import paper_a, paper_b, paper_c, paper_sta
-from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
-from jointbench.registries import Registry
+import importlib
+import sys
+
+from jointbench.papers.base import FrontPart, Inputs, Measured, Output, Paper, Table
+from jointbench.registries import Registry, exported, submodules
 
 __all__ = [
+    "FrontPart",
     "Inputs",
     "Measured",
     "Output",
@@ -44,5 +48,6 @@ def papers_of_study(study: str) -> tuple[Paper, ...]:
     return tuple(p for p in _PAPERS.values() if p.study == study)
 
 
-for _paper in (paper_a.PAPER, paper_b.PAPER, paper_c.PAPER, paper_sta.PAPER):
+_MODULES = [importlib.import_module(name) for name in submodules(sys.modules[__name__])]
+for _paper in exported(_MODULES, "PAPER"):
     register_paper(_paper)

@@ -18,6 +18,7 @@ import pandas as pd
 from jointbench.simulate import Trials
 
 __all__ = [
+    "FrontPart",
     "Inputs",
     "Measured",
     "Output",
@@ -98,10 +99,22 @@ class Output:
 
 
 @dataclass(frozen=True)
+class FrontPart:
+    """What a paper adds to the report's landing page from the run's tables: ``finding``, a
+    sentence after the paper's line of findings; ``sections``, each a heading, a table title
+    and the table's rows, shown after the rankings."""
+
+    finding: str = ""
+    sections: tuple[tuple[str, str, pd.DataFrame], ...] = ()
+
+
+@dataclass(frozen=True)
 class Paper:
     """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names;
     ``also_measures`` names the study's estimators beyond ``methods`` that ``measure`` reads
-    (beside the paper's own, never in its place)."""
+    (beside the paper's own, never in its place); ``front_page`` gives what the paper adds to
+    the report's landing page (:class:`FrontPart`) from the run's tables by name (those of
+    its outputs absent from a run are absent from the mapping)."""
 
     key: str
     letter: str
@@ -113,6 +126,7 @@ class Paper:
     published: Path
     measure: Callable[[Inputs], Mapping[str, Measured]]
     also_measures: tuple[str, ...] = ()
+    front_page: Callable[[Mapping[str, pd.DataFrame]], FrontPart] | None = None
 
     def __post_init__(self) -> None:
         names = [o.name for o in self.outputs]

@@ -12,11 +12,12 @@ import numpy as np
 import pandas as pd
 
 from jointbench.figures import paper_c as draw
-from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
+from jointbench.papers.base import FrontPart, Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
+from jointbench.study.formatting import number
 from jointbench.study.scoring import covariance_from_entries
 
-__all__ = ["PAPER", "measure", "published_table1", "v_against_longest"]
+__all__ = ["PAPER", "calibration_sentence", "measure", "published_table1", "v_against_longest"]
 
 _ROW_PREFIX = "C-T1-"
 _CENTRE = ("center_x", "center_y", "center_z")
@@ -202,6 +203,51 @@ def _calibration_headline(tables) -> str:
     return "; ".join(parts) + "."
 
 
+def calibration_sentence(calibration: pd.DataFrame) -> str:
+    """What the calibration table says about each method, in one sentence."""
+    parts = []
+    for method, rows in calibration.groupby("method", sort=False):
+        rows = rows.sort_values("n_frames")
+        good = rows[rows["status"] == "calibrated"]["n_frames"].tolist()
+        if len(good) == len(rows):
+            parts.append(f"{method} is calibrated at every Nt")
+        elif good and rows["n_frames"].tolist()[-len(good) :] == good:
+            text = f"{method} is calibrated at every Nt from {good[0]} on"
+            others = rows[rows["n_frames"] < good[0]]
+            notes = [
+                f"{o.status} at Nt = {o.n_frames} (coverage {number(o.inside_95)})"
+                for o in others.itertuples()
+            ]
+            parts.append(text + (f", {', '.join(notes)}" if notes else ""))
+        else:
+            low, high = rows["inside_95"].min(), rows["inside_95"].max()
+            parts.append(
+                f"{method}'s 95 % ellipsoid holds the true centre in {low:.1%} to {high:.1%} "
+                "of trials"
+            )
+    return "; ".join(parts) + "."
+
+
+def _front_page(tables) -> FrontPart:
+    """The calibration in the report's findings and as a table of its own."""
+    calibration = tables.get("paper_c_calibration")
+    if calibration is None:
+        return FrontPart()
+    shown = calibration[["method", "n_frames", "trials", "inside_95", "status"]].rename(
+        columns={"n_frames": "Nt", "inside_95": "share inside"}
+    )
+    return FrontPart(
+        finding=calibration_sentence(calibration),
+        sections=(
+            (
+                "Calibration of the predicted covariance",
+                "share of trials whose true centre is inside the 95 % ellipsoid",
+                shown,
+            ),
+        ),
+    )
+
+
 def _uncertainty(inputs: Inputs):
     return draw.uncertainty_figure(inputs.collected, published_table1(inputs.published))
 
@@ -217,6 +263,7 @@ PAPER = Paper(
     published=Path(__file__).with_name("paper_c.yaml"),
     measure=measure,
     also_measures=(FRAME0,),
+    front_page=_front_page,
     outputs=(
         Output(
             "paper_c_table1",

@@ -24,7 +24,16 @@ import numpy as np
 from jointbench.declared import check_fields
 from jointbench.simulate.noise import isotropic_noise
 
-__all__ = ["KINDS", "PROXIMAL_TRUTH", "GridValues", "Study", "Trials", "isotropic_noise"]
+__all__ = [
+    "KINDS",
+    "PROXIMAL_TRUTH",
+    "GridValues",
+    "Study",
+    "Trials",
+    "isotropic_noise",
+    "key_label",
+    "value_text",
+]
 
 #: Estimator kinds a study can run: each kind's estimators share a signature and a scorer.
 KINDS = ("center", "axis", "joint_center")
@@ -66,6 +75,11 @@ class GridValues:
     adds a marker set to the protocol may use it in the grid. ``frames``: the value sets how many
     frames a condition's trials have, so a condition too short for every estimator is this
     key's mistake (otherwise the protocol's).
+
+    How the key reads for people: ``label`` names it (``"RoM"``); ``text`` formats one value
+    with its unit (``"±{:g}°"``, a :meth:`str.format` template of one value), ``names`` gives
+    values a name of their own (``{"mcp": "index MCP"}``). Without them the key reads by its
+    unit suffix (``rom_deg`` 20 -> "rom 20°", ``_mm`` likewise) or as "key=value".
     """
 
     type: type
@@ -74,6 +88,9 @@ class GridValues:
     maximum: float | Callable[[object], float] | None = None
     choices: tuple[str, ...] | Callable[[object], tuple[str, ...]] | None = None
     frames: bool = False
+    label: str | None = None
+    text: str | None = None
+    names: Mapping[object, str] = field(default_factory=dict)
 
     def allowed(self, protocol) -> str:
         """The allowed values in words, e.g. ``"a number > 0 and <= 180"``."""
@@ -108,6 +125,30 @@ class GridValues:
         return limit(protocol) if callable(limit) else limit
 
 
+def key_label(key: str, spec: GridValues | None = None) -> str:
+    """How grid key ``key`` is named for people: its ``spec.label``, else the key itself with
+    its unit suffix dropped and underscores as spaces (``depth_mm`` -> "depth")."""
+    if spec is not None and spec.label:
+        return spec.label
+    return key.removesuffix("_deg").removesuffix("_mm").replace("_", " ")
+
+
+def value_text(key: str, value: object, spec: GridValues | None = None) -> str:
+    """One grid value with its unit, as a row label reads it: by ``spec`` (its ``names``, then
+    its ``text``), else by the key's unit suffix (``_deg``: "tilt 10°", ``_mm``: "depth 2 mm"),
+    else "key=value"."""
+    if spec is not None:
+        if value in spec.names:
+            return spec.names[value]
+        if spec.text:
+            return spec.text.format(value)
+    if key.endswith("_deg"):
+        return f"{key.removesuffix('_deg')} {value:g}°"
+    if key.endswith("_mm"):
+        return f"{key.removesuffix('_mm')} {value:g} mm"
+    return f"{key}={value}"
+
+
 @dataclass(frozen=True)
 class Study:
     """One simulation study of the benchmark, exported by its simulator module as ``STUDY``.
@@ -119,7 +160,15 @@ class Study:
     its documented modelling choices (with ``from_config(overrides)``), each field annotated
     with its type and range (:mod:`jointbench.declared`); ``simulate`` the function of the
     signature above; ``grid_spec`` the values each grid key allows, checked before any job runs
-    (a study without one has its grid values checked by the schema only).
+    (a study without one has its grid values checked by the schema only), and how each key
+    reads for people (:class:`GridValues`).
+
+    ``title`` is the study's name for people in titles and text ("thumb CMC"; the name when
+    empty). ``diagnostics`` maps a method to a diagnostic that needs the ground truth:
+    ``diagnose(segments, results, truth) -> rows``, given the estimator's arguments for all
+    trials of a condition (each segment ``(n_trials, ...)``), its results (``None`` where it
+    returned none) and the truth, returning the extra columns of each trial's row (an empty
+    mapping where there was no result); the estimate job adds them to that method's rows.
 
     ``more_kinds`` gives the trials to estimators of further kinds, each with the segments its
     estimators take, in argument order (names in :attr:`Trials.segments`): a two-segment study
@@ -136,6 +185,8 @@ class Study:
     protocol_class: type
     simulate: Callable[[Mapping[str, object], object, Sequence[np.random.Generator]], Trials]
     grid_spec: Mapping[str, GridValues] = field(default_factory=dict)
+    title: str = ""
+    diagnostics: Mapping[str, Callable[..., list[dict[str, object]]]] = field(default_factory=dict)
     more_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -196,6 +247,22 @@ class Study:
             raise ValueError(
                 f"study {self.name!r} runs no {kind} estimators; its kinds: {', '.join(self.kinds)}"
             ) from None
+
+    def display_name(self) -> str:
+        """The study's name for people: its :attr:`title`, else its name."""
+        return self.title or self.name
+
+    def key_label(self, key: str) -> str:
+        """How grid key ``key`` is named in axis titles and headers (:func:`key_label`)."""
+        return key_label(key, self.grid_spec.get(key))
+
+    def condition_label(self, values: Sequence[object], keys: Sequence[str] = ()) -> str:
+        """A condition as a row label with units, e.g. ``("M", 5, 0.5)`` -> "M set, ±5°,
+        0.5 mm noise"; ``values`` of ``keys`` (the study's grid keys when not given)."""
+        keys = tuple(keys) or self.grid_keys
+        return ", ".join(
+            value_text(k, v, self.grid_spec.get(k)) for k, v in zip(keys, values, strict=True)
+        )
 
     def fit_arguments(
         self, trials: Trials, trial: int, kind: str | None = None

@@ -51,6 +51,8 @@ import numpy as np
 
 from jointbench.declared import Count, DeclarationError, Length, NonNegative, Positive, Vector3
 from jointbench.declared import check_fields as check_declared
+from jointbench.estimators.registry import many
+from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, geometric_cost
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise, largest_noise_mm
@@ -60,6 +62,7 @@ __all__ = [
     "PRIOR",
     "STUDY",
     "CmcProtocol",
+    "is_local_minimum",
     "marker_positions",
     "nominal_trajectory",
     "simulate",
@@ -206,6 +209,42 @@ def simulate(
     )
 
 
+def is_local_minimum(arguments, results: Sequence, truth: Mapping) -> list[dict[str, object]]:
+    """Claim A7 (paper A §5.1.1), made operational: IS "returned a local minimum" when IS
+    restarted from the true centre reaches a lower geometric cost f1 than IS from the LS centre.
+
+    A diagnostic of :attr:`Study.diagnostics`: ``arguments`` is ``(markers,)``, the markers of
+    all trials ``(n_trials, n_frames, n_markers, 3)`` [mm]. Columns: ``local_minimum`` (bool)
+    and ``f1_gap`` = f1(IS from LS) − f1(IS from truth) [mm²]. The restarts of all trials run
+    as one batch (the same searches as one at a time).
+    """
+    # Two searches found the same minimum when their f1 differ by less than this margin:
+    # fminsearch stops once the simplex's f1 values agree to TolFun (absolute, mm^2), so final
+    # values of one minimum can differ by a few TolFun; ten times TolFun, or 1e-6 relative for
+    # large f1.
+    same_atol, same_rtol = 10.0 * FMINSEARCH_OPTIONS["fatol"], 1e-6
+    (markers,) = arguments
+    restarts = many("center", "IS", checked=False)(
+        markers, start=np.asarray(truth["center"], dtype=float)
+    )
+    rows: list[dict[str, object]] = []
+    for data, result, from_truth in zip(markers, results, restarts, strict=True):
+        if result is None:
+            rows.append({})
+            continue
+        if isinstance(from_truth, Exception):
+            raise from_truth
+        own = geometric_cost(data, result.center)
+        best = geometric_cost(data, from_truth.center)
+        rows.append(
+            {
+                "local_minimum": bool(own - best > max(same_atol, same_rtol * best)),
+                "f1_gap": float(own - best),
+            }
+        )
+    return rows
+
+
 STUDY = Study(
     name="cmc",
     kind="center",
@@ -215,13 +254,26 @@ STUDY = Study(
     protocol_class=CmcProtocol,
     simulate=simulate,
     grid_spec={
-        "marker_set": GridValues(str, choices=lambda protocol: tuple(protocol.directions)),
+        "marker_set": GridValues(
+            str,
+            choices=lambda protocol: tuple(protocol.directions),
+            label="marker set",
+            text="{} set",
+        ),
         # A circumduction tilt: 0° does not move, beyond 180° it repeats.
-        "rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
+        "rom_deg": GridValues(
+            float, minimum=0, exclusive_minimum=True, maximum=180, label="RoM", text="±{:g}°"
+        ),
         "noise_mm": GridValues(
-            float, minimum=0, maximum=lambda protocol: protocol.largest_noise_mm
+            float,
+            minimum=0,
+            maximum=lambda protocol: protocol.largest_noise_mm,
+            label="noise SD",
+            text="{:g} mm noise",
         ),
     },
+    title="thumb CMC",
+    diagnostics={"IS": is_local_minimum},
 )
 
 

@@ -77,10 +77,19 @@ STUDY = Study(
     protocol_class=HingeStudyProtocol,
     simulate=simulate,
     grid_spec={
-        "protocol": GridValues(str, choices=lambda protocol: tuple(protocol.joints)),
-        "fe_rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=180),
-        "aa_ratio": GridValues(float, minimum=0),
+        "protocol": GridValues(
+            str,
+            choices=lambda protocol: tuple(protocol.joints),
+            label="protocol",
+            text="{}",
+            names={"mcp": "index MCP"},
+        ),
+        "fe_rom_deg": GridValues(
+            float, minimum=0, exclusive_minimum=True, maximum=180, label="FE RoM", text="FE {:g}°"
+        ),
+        "aa_ratio": GridValues(float, minimum=0, label="AA/FE ratio", text="AA/FE {:g}"),
     },
+    title="knee and index MCP",
 )
 
 

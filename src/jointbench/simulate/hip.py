@@ -265,9 +265,15 @@ STUDY = Study(
     # Nt frames of a recording of the protocol's n_frames.
     grid_spec={
         "n_frames": GridValues(
-            int, minimum=1, maximum=lambda protocol: protocol.n_frames, frames=True
+            int,
+            minimum=1,
+            maximum=lambda protocol: protocol.n_frames,
+            frames=True,
+            label="frames used",
+            text="Nt = {}",
         )
     },
+    title="hip joint centre",
 )
 
 

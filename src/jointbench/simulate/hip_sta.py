@@ -397,8 +397,10 @@ STUDY = Study(
     protocol_class=HipStaProtocol,
     simulate=simulate,
     grid_spec={
-        "motion": GridValues(str, choices=MOTIONS),
-        "rom_deg": GridValues(float, minimum=0, exclusive_minimum=True, maximum=90),
+        "motion": GridValues(str, choices=MOTIONS, label="motion", text="{}"),
+        "rom_deg": GridValues(
+            float, minimum=0, exclusive_minimum=True, maximum=90, label="RoM", text="RoM {:g}°"
+        ),
         # As for white noise: an artefact beyond the farthest marker's distance from the joint
         # moves markers over more than the whole segment.
         "sta_mm": GridValues(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import inspect
 import itertools
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
@@ -14,6 +14,7 @@ import yaml
 
 from jointbench import declared
 from jointbench.estimators import registry
+from jointbench.jobs import load_extensions
 from jointbench.simulate import Study
 from jointbench.study.studies import get_study, method_kind
 from jointbench.study.studies import study_names as registered_studies
@@ -25,7 +26,9 @@ __all__ = [
     "conditions",
     "estimator_names",
     "load_config",
+    "open_config",
     "parse_condition_id",
+    "read_configs",
     "read_yaml",
     "study_names",
     "validate_against",
@@ -75,12 +78,45 @@ def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCH
         )
 
 
-def load_config(path: str | Path, schema_path: str | Path | Traversable = SCHEMA_PATH) -> dict:
-    """Read and validate a YAML config (schema, then :func:`check_config`)."""
-    config = read_yaml(Path(path).read_text())
-    validate_config(config, schema_path)
+def load_config(path: str | Path) -> dict:
+    """A YAML config opened as a run opens it (:func:`open_config`)."""
+    return dict(open_config(read_configs([path])))
+
+
+def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
+    """What a run starts from, in the workflow and on the command line alike: ``config`` with
+    its extensions loaded (relative to ``base``) and registered, then checked against its
+    schema and the registries (:func:`validate_config`, :func:`check_config`; ``ValueError``
+    naming the key). Returns ``config``."""
+    load_extensions(config, base)
+    validate_config(config)
     check_config(config)
     return config
+
+
+def read_configs(paths: Sequence[str | Path]) -> dict:
+    """The config of YAML files read in order, each updating the ones before as Snakemake's
+    ``--configfile`` does: a mapping merged key by key, any other value replaced."""
+    config: dict = {}
+    for path in paths:
+        path = Path(path)
+        if not path.is_file():
+            raise ValueError(f"config file {path}: no such file")
+        document = read_yaml(path.read_text()) or {}
+        if not isinstance(document, Mapping):
+            raise ValueError(f"config file {path}: not a mapping of keys to values")
+        config = _merged(config, document)
+    return config
+
+
+def _merged(base: Mapping, update: Mapping) -> dict:
+    merged = dict(base)
+    for key, value in update.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = _merged(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
 
 
 def check_config(config: Mapping) -> None:

@@ -22,7 +22,6 @@ from jointbench.estimators import registry
 from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.simulate import Trials
 from jointbench.study.config import estimator_names, parse_condition_id
-from jointbench.study.diagnostics import DIAGNOSTICS
 from jointbench.study.io import (
     iter_dataset,
     read_metadata,
@@ -179,7 +178,7 @@ def estimate_table(
     many = registry.many(kind, method, checked=False)
     if poses is not None and pose_segments(many) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
-    diagnose = DIAGNOSTICS.get((study, method))
+    diagnose = spec.diagnostics.get(method)
     if warm_up:
         log.info(
             "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "

@@ -11,6 +11,7 @@ change, regenerate it with ``jointbench snapshot`` (after ``snakemake -j2``) and
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -169,6 +170,11 @@ def update_readme(readme: str | Path, summary: str, block: str = SUMMARY_BLOCK) 
     if new != text:
         path.write_text(new)
     return new != text
+
+
+def readme_blocks(readme: str | Path) -> list[str]:
+    """The names of the generated blocks in the README, in order."""
+    return re.findall(r"<!-- (\S+):start -->", Path(readme).read_text())
 
 
 def readme_summary(readme: str | Path, block: str = SUMMARY_BLOCK) -> str:

@@ -1,15 +1,19 @@
 """The study registry: every :class:`~jointbench.simulate.Study` the benchmark can run.
 
-The built-in studies are collected by importing their simulator modules; a study outside the
+The built-in studies are collected by importing every simulator module (each module of
+:mod:`jointbench.simulate` that exports a ``STUDY``, in module name order); a study outside the
 package joins by :func:`register_study` (the workflow does this for the modules listed under
 ``extensions`` in the config, see :func:`jointbench.jobs.load_extensions`).
 """
 
 from __future__ import annotations
 
+import importlib
+
+from jointbench import simulate
 from jointbench.estimators import registry
-from jointbench.registries import Registry
-from jointbench.simulate import Study, cmc, hinge_study, hip, hip_sta
+from jointbench.registries import Registry, exported, submodules
+from jointbench.simulate import Study
 
 __all__ = ["get_study", "method_kind", "register_study", "study_names"]
 
@@ -18,7 +22,8 @@ register_study = _STUDIES.register
 get_study = _STUDIES.get
 study_names = _STUDIES.names
 
-for _study in (cmc.STUDY, hinge_study.STUDY, hip.STUDY, hip_sta.STUDY):
+_SIMULATORS = [importlib.import_module(name) for name in submodules(simulate)]
+for _study in exported(_SIMULATORS, "STUDY"):
     register_study(_study)
 
 

@@ -1,0 +1,189 @@
+"""Specifics live on what owns them: a study words its grid keys and names its title and its
+truth diagnostics, a paper adds to the report's landing page, a method registers its colour.
+A newcomer sets each of its own without editing the package."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from jointbench import papers, report
+from jointbench.estimators import CenterResult, registry
+from jointbench.figures import extended
+from jointbench.figures.common import method_style, method_styles, study_title
+from jointbench.papers import FrontPart, Paper
+from jointbench.simulate import GridValues, Study, Trials
+from jointbench.study import run, studies
+
+CENTRE = [1.0, 2.0, 3.0]
+
+
+@dataclass(frozen=True)
+class _Protocol:
+    @classmethod
+    def from_config(cls, overrides=None):
+        return cls()
+
+
+def _simulate(condition, protocol, rngs):
+    markers = np.stack([rng.normal(size=(20, 3, 3)) * 30 for rng in rngs])
+    return Trials(segments={"moving": markers}, truth={"center": CENTRE})
+
+
+def _study(**extra) -> Study:
+    return Study(
+        name="gh",
+        kind="center",
+        grid_keys=("rom_deg", "noise_mm"),
+        seed_keys=("rom_deg", "noise_mm"),
+        segments=("moving",),
+        protocol_class=_Protocol,
+        simulate=_simulate,
+        **extra,
+    )
+
+
+@pytest.fixture
+def newcomer(monkeypatch):
+    """Registries that forget what a test registers."""
+    fresh = {kind: dict(entries) for kind, entries in registry._REGISTRY.items()}
+    monkeypatch.setattr(registry, "_REGISTRY", fresh)
+    monkeypatch.setattr(studies._STUDIES, "_values", dict(studies._STUDIES._values))
+    monkeypatch.setattr(papers._PAPERS, "_values", dict(papers._PAPERS._values))
+
+    def add(study: Study) -> Study:
+        return studies.register_study(study)
+
+    return add
+
+
+def test_a_newcomer_study_without_wording_reads_by_unit_not_as_another_study(newcomer):
+    newcomer(_study())
+    # cmc's RoM is a ±tilt; the newcomer's rom_deg is not labelled as one.
+    assert extended.condition_label("gh", (20, 0.5)) == "rom 20°, noise 0.5 mm"
+    assert studies.get_study("gh").key_label("rom_deg") == "rom"
+    assert study_title("gh") == "gh"
+
+
+def test_a_newcomer_study_words_its_own_keys_and_title(newcomer):
+    newcomer(
+        _study(
+            grid_spec={
+                "rom_deg": GridValues(float, minimum=0, label="arc", text="{:g}° arc"),
+                "noise_mm": GridValues(float, label="noise", text="σ {:g} mm", names={0: "clean"}),
+            },
+            title="glenohumeral centre",
+        )
+    )
+    assert extended.condition_label("gh", (20, 0.5)) == "20° arc, σ 0.5 mm"
+    assert extended.condition_label("gh", (20, 0)) == "20° arc, clean"
+    assert studies.get_study("gh").key_label("noise_mm") == "noise"
+    assert study_title("gh") == "glenohumeral centre"
+
+
+def test_built_in_studies_word_their_keys():
+    assert extended.condition_label("cmc", ("H", 5, 0.5)) == "H set, ±5°, 0.5 mm noise"
+    assert extended.condition_label("hinge", ("knee", 30, 0.5)) == "knee, FE 30°, AA/FE 0.5"
+    assert extended.condition_label("hinge", ("mcp", 30, 0.5)) == "index MCP, FE 30°, AA/FE 0.5"
+    assert extended.condition_label("hip", (75,)) == "Nt = 75"
+    assert study_title("cmc") == "thumb CMC" and study_title("unknown") == "unknown"
+
+
+def _centroid(markers):
+    return CenterResult(
+        center=markers.reshape(-1, 3).mean(axis=0),
+        converged=True,
+        iterations=0,
+        status="ok",
+        method="centroid",
+    )
+
+
+def test_a_newcomer_method_draws_in_the_colour_it_registers(newcomer):
+    registry.register("center", "mine", color="#123456", marker="*")(_centroid)
+    assert method_style("mine") == {"color": "#123456", "marker": "*"}
+    assert method_style("LS") == {"color": "#d95f02", "marker": "s"}
+
+
+def test_a_newcomer_method_without_a_colour_never_takes_a_registered_one(newcomer):
+    registry.register("center", "plain")(_centroid)
+    registered = {style["color"] for style in registry.styles().values()}
+    assert "plain" not in registry.styles()
+    assert method_style("plain")["color"] not in registered
+    styles = method_styles(["LS", "NM", "plain", "other", "third"])
+    assert len({s["color"] for s in styles.values()}) == 5
+
+
+def _spread(arguments, results, truth):
+    (markers,) = arguments
+    return [
+        {} if result is None else {"spread_mm": float(np.ptp(data))}
+        for data, result in zip(markers, results, strict=True)
+    ]
+
+
+def test_a_newcomer_study_runs_its_own_truth_diagnostic(newcomer):
+    newcomer(_study(diagnostics={"LS": _spread}))
+    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
+    condition = {"rom_deg": 20.0, "noise_mm": 0.5}
+    table = run.estimate_table("gh", "LS", trials, condition).to_pandas()
+    assert table["spread_mm"].notna().all() and "local_minimum" not in table
+    other = run.estimate_table("gh", "NM", trials, condition).to_pandas()
+    assert "spread_mm" not in other
+
+
+def test_the_cmc_study_owns_paper_a_local_minimum_diagnostic():
+    cmc = studies.get_study("cmc")
+    assert set(cmc.diagnostics) == {"IS"}
+    assert all(not studies.get_study(s).diagnostics for s in ("hinge", "hip", "hip_sta"))
+
+
+def test_a_newcomer_paper_adds_its_own_finding_and_table(newcomer):
+    newcomer(_study())
+    shown = pd.DataFrame({"method": ["LS"], "coverage": [0.9]})
+
+    def front_page(tables):
+        if "paper_g_coverage" not in tables:
+            return FrontPart()
+        return FrontPart("LS covers the truth in 90 % of trials.", (("Coverage", "cov", shown),))
+
+    papers.register_paper(
+        Paper(
+            key="paper_g",
+            letter="G",
+            title="Paper G: glenohumeral centre",
+            citation="Someone (2026)",
+            study="gh",
+            methods=("LS",),
+            outputs=(),
+            published=Path("unused.yaml"),
+            measure=lambda inputs: {},
+            front_page=front_page,
+        )
+    )
+    lines = report.findings({"paper_g_coverage": shown})
+    assert any("Paper G" in line and "LS covers the truth in 90 %" in line for line in lines)
+    assert not any("Paper G" in line and "covers" in line for line in report.findings({}))
+    assert f"of {len(papers.paper_names())} papers" in report.front_intro()
+    assert "Someone (2026)" in report.front_intro()
+
+
+def test_paper_c_adds_its_calibration_to_the_landing_page():
+    calibration = pd.DataFrame(
+        {
+            "method": ["gauss-markov"] * 2,
+            "n_frames": [75, 150],
+            "trials": [200, 200],
+            "inside_95": [0.95, 0.94],
+            "status": ["calibrated", "calibrated"],
+        }
+    )
+    part = papers.get_paper("paper_c").front_page({"paper_c_calibration": calibration})
+    assert part.finding == "gauss-markov is calibrated at every Nt."
+    ((heading, _, frame),) = part.sections
+    assert heading.startswith("Calibration") and list(frame.columns)[1] == "Nt"
+    assert papers.get_paper("paper_a").front_page is None
