@@ -98,6 +98,11 @@ def _hip(n_trials=20, seed=2):
                 "sqrt_trace_cov_mm": sd * np.sqrt(3),
                 "mahalanobis_sq": float(offset @ offset) / sd**2,
                 "validation_index": float(np.sqrt(offset @ offset / sd**2 / 3)),
+                # Relative to the proximal markers: the same numbers, as for a rig whose
+                # frame-0 markers are exact.
+                "error_proximal_mm": float(np.linalg.norm(offset)),
+                "sqrt_trace_cov_proximal_mm": sd * np.sqrt(3),
+                "mahalanobis_sq_proximal": float(offset @ offset) / sd**2,
                 "cov_xx": sd**2,
                 "cov_xy": 0.0,
                 "cov_xz": 0.0,
