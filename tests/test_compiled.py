@@ -149,6 +149,22 @@ def test_sphere_kernels():
     np.testing.assert_allclose(
         a_pinv[2] @ (2.0 * total[:3, :3]), np.diag([1.0, 1.0, 0.0]), atol=1e-9
     )
+    fits = _both(
+        sphere._algebraic_fits,
+        lambda: (np.empty((n_trials, 3)), np.empty(n_trials)),
+        data,
+        origins,
+        means,
+        np.ascontiguousarray(solutions[0][1]),
+    )
+    for a, b in zip(*fits, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-10)
+    # Radii and f2 are those of the LS definition (paper A eq. 4 with r_p profiled out).
+    centers = origins + solutions[0][1]
+    distances = np.sum((data - centers[:, None, None]) ** 2, axis=-1)
+    np.testing.assert_allclose(fits[0][0], np.sqrt(distances.mean(axis=1)), rtol=1e-9)
+    deviations = distances - distances.mean(axis=1, keepdims=True)
+    np.testing.assert_allclose(fits[0][1], (deviations**2).sum(axis=(1, 2)), rtol=1e-6, atol=1e-9)
     sum_of_means = means[..., :3].sum(axis=1)
     limits = np.full(n_trials, 1e6)
     b_vector = np.ascontiguousarray(grams.sum(axis=1)[:, :3, 3] / 40)
@@ -220,6 +236,7 @@ def test_each_kernel_is_compiled_once_whatever_its_inputs_look_like():
         sphere._nm_trials,
         sphere._sphere_moments,
         sphere._ls_solve,
+        sphere._algebraic_fits,
         sphere._bc_iterations,
         axis._radial_costs,
     )

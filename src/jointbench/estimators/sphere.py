@@ -230,20 +230,34 @@ def _ls_solve(
 
 
 @kernel
-def _f2_costs(
-    data: np.ndarray, origins: np.ndarray, means: np.ndarray, shifts: np.ndarray, costs: np.ndarray
+def _algebraic_fits(
+    data: np.ndarray,
+    origins: np.ndarray,
+    means: np.ndarray,
+    shifts: np.ndarray,
+    radii: np.ndarray,
+    costs: np.ndarray,
 ) -> None:
-    """f2 (paper A eq. 4, radii profiled out) [mm^4] of each trial of ``data`` (T, N, P, 3)
-    [mm] at the centre ``origins + shifts`` (T, 3) [mm], into ``costs`` (T,), with ``means``
-    (T, P, 4) those of :func:`_sphere_moments` about ``origins``. A compiled kernel
-    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+    """Radii (T, P) [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 (T,) [mm^4], of
+    each trial of ``data`` (T, N, P, 3) [mm] at the centre ``origins + shifts`` (T, 3) [mm],
+    into ``radii`` and ``costs``; ``means`` (T, P, 4) are those of :func:`_sphere_moments`
+    about ``origins``. A compiled kernel (:mod:`jointbench.numerics.compiled`): this source is
+    the implementation.
 
-    With ``y = v - origin``, ``x = (y, |y|^2)`` and ``w = (-2 shift, 1)``, each residual
+    With ``y = v - origin``, ``x = (y, |y|^2)`` and ``w = (-2 shift, 1)``:
+    ``r_p^2 = mean_k |y - shift|^2 = mean_k x . w + |shift|^2``, and each residual
     ``|y - shift|^2 - mean_k |y - shift|^2`` is ``(x - mean_k x) . w``, summed in squares.
     """
     n_trials, n_frames, n_markers, _ = data.shape
     x = np.empty(4)
     for t in range(n_trials):
+        squared_shift = shifts[t, 0] ** 2 + shifts[t, 1] ** 2 + shifts[t, 2] ** 2
+        for p in range(n_markers):
+            value = 0.0
+            for i in range(3):
+                value += means[t, p, i] * (-2.0 * shifts[t, i])
+            value += means[t, p, 3]
+            radii[t, p] = math.sqrt(max(value + squared_shift, 0.0))
         cost = 0.0
         for f in range(n_frames):
             for p in range(n_markers):
@@ -262,17 +276,10 @@ def _f2_costs(
 def _algebraic_fit(
     data: np.ndarray, origins: np.ndarray, means: np.ndarray, shifts: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Radii (T, P) [mm] with ``r_p^2`` profiled out of eq. 4, and the cost f2 (T,) [mm^4]
-    (:func:`_f2_costs`), of trials ``data`` (T, N, P, 3) [mm] at the centres
-    ``origins + shifts`` (T, 3) [mm], ``means`` (T, P, 4) those of :func:`_sphere_moments`
-    about ``origins``: ``r_p^2 = mean_k |y - shift|^2 = mean_k x . w + |shift|^2`` with
-    ``x = (y, |y|^2)``, ``w = (-2 shift, 1)``."""
-    weights = np.ones((shifts.shape[0], 4, 1))
-    weights[:, :3, 0] = -2.0 * shifts
-    sq_radii = (means @ weights)[..., 0] + row_sq(shifts)[:, None]
-    costs = np.empty(shifts.shape[0])
-    _f2_costs(kernel_array(data), kernel_array(origins), means, kernel_array(shifts), costs)
-    return np.sqrt(np.maximum(sq_radii, 0.0)), costs
+    """:func:`_algebraic_fits`: radii (T, P) [mm] and f2 (T,) [mm^4]."""
+    radii, costs = np.empty(means.shape[:2]), np.empty(shifts.shape[0])
+    _algebraic_fits(*(kernel_array(a) for a in (data, origins, means, shifts)), radii, costs)
+    return radii, costs
 
 
 class _LSFit(NamedTuple):
