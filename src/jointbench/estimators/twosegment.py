@@ -35,6 +35,7 @@ reference segment's frame, so the reference pose is exactly the identity (``R1 =
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
@@ -214,25 +215,27 @@ def each_trial(
     return outcomes
 
 
-@dataclass(frozen=True)
+def _stacked(field: str) -> functools.cached_property:
+    """A :class:`PoseStack` attribute: ``field`` of its trials' poses, stacked when first read."""
+    return functools.cached_property(
+        lambda stack: np.stack([getattr(pose, field) for pose in stack.poses])
+    )
+
+
 class PoseStack:
-    """The poses of trials with the same numbers of frames and markers, stacked on a leading
-    trial axis (see :class:`SegmentPoses`): ``markers`` ``(T, N, P, 3)`` [mm], ``rotation``
-    ``(T, N, 3, 3)``, ``translation`` ``(T, N, 3)`` [mm], ``body`` ``(T, P, 3)`` [mm]."""
+    """The poses of trials with the same numbers of frames and markers (``poses``, one
+    :class:`SegmentPoses` per trial), stacked on a leading trial axis as a method reads them:
+    ``markers`` ``(T, N, P, 3)`` [mm], ``rotation`` ``(T, N, 3, 3)``, ``translation``
+    ``(T, N, 3)`` [mm], ``body`` ``(T, P, 3)`` [mm]. A method that does not read the markers
+    does not pay for stacking them."""
 
-    markers: np.ndarray
-    rotation: np.ndarray
-    translation: np.ndarray
-    body: np.ndarray
+    markers = _stacked("markers")
+    rotation = _stacked("rotation")
+    translation = _stacked("translation")
+    body = _stacked("body")
 
-    @classmethod
-    def of(cls, poses: list[SegmentPoses]) -> PoseStack:
-        return cls(
-            *(
-                np.stack([getattr(pose, field) for pose in poses])
-                for field in ("markers", "rotation", "translation", "body")
-            )
-        )
+    def __init__(self, poses: list[SegmentPoses]) -> None:
+        self.poses = poses
 
 
 def stacked_normal_equations(
@@ -541,7 +544,7 @@ def batched(
                 shapes = tuple(fitted[name].markers.shape for name in names)
                 groups.setdefault(shapes, []).append(trial)
         for group in groups.values():
-            stacks = [PoseStack.of([poses[trial][name] for trial in group]) for name in names]
+            stacks = [PoseStack([poses[trial][name] for trial in group]) for name in names]
             for trial, outcome in zip(group, finish(*stacks, **options), strict=True):
                 outcomes[trial] = outcome
         return outcomes
