@@ -9,6 +9,8 @@ import json
 import numpy as np
 import pytest
 
+from jointbench.configuration.seeds import trial_rng
+from jointbench.configuration.studies import get_study
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
 from jointbench.papers import paper_sta
@@ -21,8 +23,6 @@ from jointbench.simulate.hip_sta import (
     sta_displacements,
     sta_field,
 )
-from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import get_study
 
 PROTOCOL = HipStaProtocol()
 QUIET = dataclasses.replace(PROTOCOL, noise_mm=0.0)

@@ -10,9 +10,9 @@ import yaml
 from scipy import stats
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.study.ensemble import MEMBER_COLUMNS, member_seed
-from jointbench.study.tolerance import wilson_interval
-from jointbench.study.verdicts import (
+from jointbench.comparison.tolerance import wilson_interval
+from jointbench.ensembles.members import MEMBER_COLUMNS, member_seed
+from jointbench.ensembles.verdicts import (
     SUMMARY_COLUMNS,
     VERDICT_RULE,
     seed_verdict,

@@ -21,12 +21,12 @@ import numpy as np
 import pandas as pd
 
 import jointbench
+from jointbench.comparison.snapshot import reproduction_summary, snapshot_table, update_readme
+from jointbench.configuration.config import open_config, read_configs
 from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
-from jointbench.study.config import open_config, read_configs
-from jointbench.study.snapshot import reproduction_summary, snapshot_table, update_readme
 
 #: The config every run starts from (the Snakefile's ``configfile``), relative to the run's
 #: directory.

@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.study.scoring import ERROR_COLUMN
-from jointbench.study.studies import get_study
-from jointbench.study.summary import summarise
+from jointbench.configuration.studies import get_study
+from jointbench.running.scoring import ERROR_COLUMN
+from jointbench.running.summary import summarise
 
 __all__ = [
     "SNAPSHOT_RTOL",

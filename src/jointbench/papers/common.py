@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from jointbench.comparison.published import claims_rows
 from jointbench.papers.base import Inputs, Measured, Output, Table
-from jointbench.study.published import claims_rows
 
 __all__ = ["claims_headline", "claims_output"]
 

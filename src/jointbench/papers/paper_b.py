@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 
 from jointbench.api import fit_axis
+from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
-from jointbench.study.published import comparison_rows
 
 __all__ = ["PAPER", "measure"]
 

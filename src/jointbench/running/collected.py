@@ -13,22 +13,22 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.study.io import (
+from jointbench.configuration.studies import get_study
+from jointbench.resultfiles.parquet import (
     read_metadata,
     read_provenance,
     read_table,
     read_trial_numbers,
     write_table,
 )
-from jointbench.study.schema import (
+from jointbench.resultfiles.schema import (
     check_against_dataset,
     check_claimed_estimates,
     check_estimates,
     check_scores,
 )
-from jointbench.study.scoring import ERROR_COLUMN, score_columns
-from jointbench.study.studies import get_study
-from jointbench.study.summary import summarise
+from jointbench.running.scoring import ERROR_COLUMN, score_columns
+from jointbench.running.summary import summarise
 
 __all__ = ["collect", "require_results", "scored_estimates", "summarise_estimates"]
 
@@ -38,7 +38,7 @@ def scored_estimates(
 ) -> pd.DataFrame:
     """``frame``, one estimates file checked by :func:`check_estimates`, with its score columns
     computed from its estimate columns and its dataset's ``truth``
-    (:func:`jointbench.study.scoring.score_columns`).
+    (:func:`jointbench.running.scoring.score_columns`).
 
     ``ValueError`` naming ``source`` and the trial when the file claims success without a
     finite estimate (:func:`check_claimed_estimates`), or gives a score that disagrees
