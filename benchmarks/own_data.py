@@ -23,13 +23,13 @@ import numpy as np
 from scipy import stats
 
 import jointbench
+from jointbench.configuration.seeds import trial_rng
+from jointbench.configuration.studies import get_study
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io import Recording, prepare, read
 from jointbench.io.segments import technical_frame
+from jointbench.running.scoring import CHI2_3DOF_95
 from jointbench.simulate.hip import marker_layout
-from jointbench.study.scoring import CHI2_3DOF_95
-from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import get_study
 
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
 THIGH = "RTHI1,RTHI2,RTHI3,RGT"

@@ -14,13 +14,13 @@ import pytest
 import yaml
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.simulate import Trials
-from jointbench.study.interchange import (
+from jointbench.resultfiles.interchange import (
     DATASET_COLUMNS,
     read_estimates_csv,
     write_dataset_csv,
 )
-from jointbench.study.io import write_dataset
+from jointbench.resultfiles.parquet import write_dataset
+from jointbench.simulate import Trials
 
 
 def _dataset(tmp_path, segments=("moving",)):

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from jointbench.configuration.config import load_config
+from jointbench.configuration.studies import get_study
 from jointbench.estimators import registry
 from jointbench.numerics.poses import rigid_poses
-from jointbench.study import run
-from jointbench.study.config import load_config
-from jointbench.study.studies import get_study
+from jointbench.running import run
 
 RTOL = 1e-9
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "config.yaml"
@@ -183,7 +183,7 @@ def test_batched_fits_do_not_import_what_they_do_not_use(methods, absent):
     code = (
         "import sys, numpy as np\n"
         "from jointbench.estimators import registry, sphere\n"
-        "import jointbench.study.run\n"
+        "import jointbench.running.run\n"
         "rng = np.random.default_rng(0)\n"
         "markers = rng.normal(size=(3, 20, 3, 3)) + rng.normal(size=(3, 1, 3, 3)) * 10\n"
         f"for name in {methods!r}:\n"

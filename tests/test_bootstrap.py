@@ -7,12 +7,12 @@ import pytest
 from scipy import stats
 from test_io_recordings import KNEE
 
+from jointbench.configuration.seeds import trial_rng
+from jointbench.configuration.studies import get_study
 from jointbench.io import Recording, prepare, read
 from jointbench.io.segments import technical_frame
+from jointbench.running.scoring import CHI2_3DOF_95
 from jointbench.simulate.hip import marker_layout
-from jointbench.study.scoring import CHI2_3DOF_95
-from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import get_study
 from jointbench.uncertainty import block_indices, bootstrap
 
 HIP = ("P1", "P2", "P3", "D1", "D2", "D3")

@@ -19,15 +19,15 @@ import pytest
 import yaml
 from scipy import stats
 
-from jointbench.figures import paper_a as paper_a_draw
-from jointbench.papers import Inputs, get_paper, paper_a
-from jointbench.study.published import (
+from jointbench.comparison.published import (
     CLAIM_COLUMNS,
     COLUMNS,
     claims_rows,
     comparison_rows,
     load_published,
 )
+from jointbench.figures import paper_a as paper_a_draw
+from jointbench.papers import Inputs, get_paper, paper_a
 
 ROOT = Path(__file__).resolve().parents[1]
 COLLECTED = ROOT / "results" / "collected"

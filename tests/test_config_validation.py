@@ -18,10 +18,10 @@ from snakemake.utils import update_config
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench import declared
+from jointbench.configuration import config as study_config
+from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators import registry
 from jointbench.papers import get_paper, paper_names
-from jointbench.study import config as study_config
-from jointbench.study.studies import get_study, study_names
 
 
 @pytest.fixture(scope="module")

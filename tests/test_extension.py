@@ -22,8 +22,8 @@ from workflow_copy import ROOT, copy_workflow, run_snakemake
 from jointbench import pipeline
 from jointbench.figures import extended
 from jointbench.papers import get_paper
-from jointbench.study.collected import scored_estimates
-from jointbench.study.schema import check_estimates
+from jointbench.resultfiles.schema import check_estimates
+from jointbench.running.collected import scored_estimates
 
 # The minimal external estimator of the README's "Adding an estimator", shipped as a template
 # (the README quotes these files verbatim: tests/test_any_language.py).

@@ -19,7 +19,7 @@ from jointbench.figures.common import (
     method_styles,
     save_figure,
 )
-from jointbench.study.tables import markdown_table
+from jointbench.resultfiles.tables import markdown_table
 
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
 
@@ -509,7 +509,7 @@ def test_every_method_has_one_colour_of_its_own():
 
 
 def _published(paper):
-    from jointbench.study.published import load_published
+    from jointbench.comparison.published import load_published
 
     return load_published(paper.published)
 

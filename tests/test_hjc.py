@@ -8,6 +8,7 @@ from rigs import HINGE, JOINT, PROXIMAL, two_segments
 from scipy import stats
 
 import jointbench as jb
+from jointbench.configuration.seeds import trial_rng
 from jointbench.estimators.hjc import (
     align_to_markers,
     constraint_covariance,
@@ -18,7 +19,6 @@ from jointbench.geometry import rotation_matrix, skew
 from jointbench.numerics.poses import rigid_poses
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.simulate.noise import isotropic_noise
-from jointbench.study.seeds import trial_rng
 
 METHODS = ("analytic", "gauss-markov", "gauss-markov-frame0")
 CHI2_3_95 = stats.chi2(3).ppf(0.95)

@@ -76,13 +76,13 @@ def test_every_script_is_checked_here():
 
 def test_ensemble_jobs_start_without_matplotlib_or_scipy_stats():
     loaded = _loaded(_script_imports(ENSEMBLE_SIDE))
-    assert "jointbench.study.ensemble" in loaded and "jointbench.study.verdicts" in loaded
+    assert "jointbench.ensembles.members" in loaded and "jointbench.ensembles.verdicts" in loaded
     assert not _within(loaded, NEVER), _within(loaded, NEVER)
 
 
 def test_simulate_estimate_collect_and_summarise_jobs_import_no_drawing_or_papers():
     loaded = _loaded(_script_imports(RUN_SIDE))
-    assert "jointbench.jobs" in loaded and "jointbench.study.run" in loaded
+    assert "jointbench.jobs" in loaded and "jointbench.running.run" in loaded
     assert not _within(loaded, NEVER + RENDERING), _within(loaded, NEVER + RENDERING)
 
 
@@ -93,14 +93,14 @@ def test_render_and_check_jobs_start_without_matplotlib_or_scipy_stats():
 
 
 def test_a_job_registers_the_study_and_paper_of_an_extension():
-    """jointbench.jobs finds the paper registry through the extension that defines a paper."""
+    """Loading extensions finds the paper registry through the extension that defines a paper."""
     folder = ROOT / "tests" / "data" / "fourth_study"
     code = textwrap.dedent(
         f"""
-        from jointbench import jobs
-        jobs.load_extensions({{"extensions": ["toy_study.py"]}}, base={str(folder)!r})
+        from jointbench.configuration.extensions import load_extensions
+        load_extensions({{"extensions": ["toy_study.py"]}}, base={str(folder)!r})
         from jointbench.papers import get_paper
-        from jointbench.study.studies import get_study
+        from jointbench.configuration.studies import get_study
         print(get_study("toy").name, get_paper("paper_t").key)
         """
     )
@@ -160,8 +160,8 @@ def test_simulating_fitting_poses_and_estimating_never_import_pandas(tmp_path):
         import sys
         from pathlib import Path
         from jointbench import jobs
-        from jointbench.study import config as study_config
-        from jointbench.study import run
+        from jointbench.configuration import config as study_config
+        from jointbench.running import run
 
         config = study_config.load_config({str(ROOT / "config" / "config.yaml")!r})
         folder = Path({str(tmp_path)!r})

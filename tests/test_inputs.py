@@ -16,12 +16,11 @@ from test_extension import CENTROID_SCRIPT, user_clone
 from workflow_copy import SNAKEMAKE, run_snakemake
 
 from jointbench import invocation, pipeline
+from jointbench.configuration import config as study_config
 from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
 from jointbench.figures import extended
-from jointbench.study import config as study_config
-from jointbench.study.collected import collect
-from jointbench.study.io import (
+from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_dataset,
     read_metadata,
@@ -30,9 +29,10 @@ from jointbench.study.io import (
     write_dataset,
     write_table,
 )
-from jointbench.study.run import estimate, simulate_condition
-from jointbench.study.schema import check_against_dataset
-from jointbench.study.scoring import score_columns
+from jointbench.resultfiles.schema import check_against_dataset
+from jointbench.running.collected import collect
+from jointbench.running.run import estimate, simulate_condition
+from jointbench.running.scoring import score_columns
 
 ROOT = Path(__file__).resolve().parents[1]
 

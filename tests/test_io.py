@@ -13,17 +13,18 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from jointbench.configuration.config import load_config
 from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
-from jointbench.simulate import Trials
-from jointbench.study import io, run
-from jointbench.study.config import load_config
-from jointbench.study.io import (
+from jointbench.resultfiles import parquet
+from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_dataset,
     read_metadata,
     write_dataset,
     write_dataset_blocks,
 )
+from jointbench.running import run
+from jointbench.simulate import Trials
 
 
 def _trials(n_trials: int, n_frames: int = 7) -> Trials:
@@ -131,7 +132,7 @@ def test_estimates_by_blocks_equal_the_whole_condition(tmp_path, monkeypatch):
     path = tmp_path / "datasets" / "c.parquet"
     write_dataset(path, trials, study="cmc", condition=condition)
     whole = run.estimate("cmc", "LS", trials, condition)
-    monkeypatch.setattr(io, "BLOCK_BYTES", 4 * trials.segments["moving"][0].nbytes)
+    monkeypatch.setattr(parquet, "BLOCK_BYTES", 4 * trials.segments["moving"][0].nbytes)
     output = tmp_path / "estimates" / "c.parquet"
     run.run_estimate_files(config, "cmc", "LS", [str(path)], [str(output)])
     blocked = pd.read_parquet(output)
@@ -179,12 +180,14 @@ def _hip_dataset(tmp_path, n_trials: int, collinear_trial: int | None = None):
 
 def test_shared_poses_are_stored_exactly_and_give_the_same_estimates(tmp_path, monkeypatch):
     config, _, trials, dataset = _hip_dataset(tmp_path, 9, collinear_trial=4)
-    monkeypatch.setattr(io, "BLOCK_BYTES", 4 * sum(m[0].nbytes for m in trials.segments.values()))
+    monkeypatch.setattr(
+        parquet, "BLOCK_BYTES", 4 * sum(m[0].nbytes for m in trials.segments.values())
+    )
     poses = tmp_path / "poses" / "n_frames-16.parquet"
     run.run_poses_files("hip", [str(dataset)], [str(poses)])
     assert pq.ParquetFile(poses).num_row_groups == 3  # one per block of 4 trials
     fitted = trial_poses(dict(trials.segments), min_frames=POSE_MIN_FRAMES)
-    stored = io.read_poses(poses, 0, trials.segments)
+    stored = parquet.read_poses(poses, 0, trials.segments)
     assert str(stored[4]) == str(fitted[4]) and "collinear" in str(stored[4])
     for trial in (0, 8):
         for name in ("proximal", "distal"):
@@ -211,11 +214,11 @@ def test_poses_of_another_dataset_are_refused_naming_the_file(tmp_path):
     run.run_poses_files("hip", [str(dataset)], [str(poses)])
     named = re.escape(str(poses))
     with pytest.raises(ValueError, match=f"{named}.*another dataset"):
-        io.read_poses(poses, 0, {k: v[:, :8] for k, v in trials.segments.items()})
+        parquet.read_poses(poses, 0, {k: v[:, :8] for k, v in trials.segments.items()})
     with pytest.raises(ValueError, match=f"{named}.*3 trials"):
-        io.read_poses(poses, 2, trials.segments)
+        parquet.read_poses(poses, 2, trials.segments)
     with pytest.raises(ValueError, match="not a jointbench poses file"):
-        io.read_poses(dataset, 0, trials.segments)
+        parquet.read_poses(dataset, 0, trials.segments)
 
 
 def test_only_a_study_with_two_pose_based_methods_shares_poses():
@@ -240,7 +243,7 @@ def test_rows_table_stores_what_a_pandas_frame_of_the_rows_stores(tmp_path):
         {"name": "b", "n": np.int64(2), "x": np.nan, "flag": np.bool_(False), "extra": 3},
         {"name": "c", "n": 3, "x": np.float64(2), "flag": None, "note": "ok", "extra": 4.5},
     ]
-    table = io.rows_table(rows)
+    table = parquet.rows_table(rows)
     assert table.column_names == ["name", "n", "x", "flag", "note", "extra"]
     assert [table.schema.field(c).type for c in table.column_names] == [
         pa.string(),
@@ -251,33 +254,33 @@ def test_rows_table_stores_what_a_pandas_frame_of_the_rows_stores(tmp_path):
         pa.float64(),
     ]
     ours, theirs = tmp_path / "rows.parquet", tmp_path / "pandas.parquet"
-    io.write_table(table, ours)
-    io.write_table(pd.DataFrame(rows), theirs)
-    pd.testing.assert_frame_equal(io.read_table(ours), io.read_table(theirs))
+    parquet.write_table(table, ours)
+    parquet.write_table(pd.DataFrame(rows), theirs)
+    pd.testing.assert_frame_equal(parquet.read_table(ours), parquet.read_table(theirs))
     # NaN and None are both missing, as pandas stores them.
     assert table.column("x").null_count == 1 and table.column("extra").to_pylist()[0] is None
 
 
 def test_rows_table_refuses_a_column_of_mixed_or_unstorable_values():
     with pytest.raises(TypeError, match="column 'v' mixes integer and text"):
-        io.rows_table([{"v": 1}, {"v": "1"}])
+        parquet.rows_table([{"v": 1}, {"v": "1"}])
     with pytest.raises(TypeError, match="column 'v': list values cannot be stored"):
-        io.rows_table([{"v": [1, 2]}])
-    assert io.rows_table([{"v": None}]).column("v").type == pa.null()
+        parquet.rows_table([{"v": [1, 2]}])
+    assert parquet.rows_table([{"v": None}]).column("v").type == pa.null()
 
 
 def test_a_pose_fit_that_failed_with_an_empty_message_stays_failed(tmp_path):
-    block = io._poses_block([ValueError("")], 0, {"moving": (4, 3)})
+    block = parquet._poses_block([ValueError("")], 0, {"moving": (4, 3)})
     assert block.column("error").to_pylist() == [""]
 
 
 def test_numpy_arrays_of_any_byte_order_are_stored_and_others_refused():
     swapped = np.arange(4.0).astype(">f8")
-    assert io._to_numpy(io._from_numpy(swapped)).tolist() == [0.0, 1.0, 2.0, 3.0]
+    assert parquet._to_numpy(parquet._from_numpy(swapped)).tolist() == [0.0, 1.0, 2.0, 3.0]
     with pytest.raises(TypeError, match="bool"):
-        io._from_numpy(np.zeros(3, dtype=bool))
+        parquet._from_numpy(np.zeros(3, dtype=bool))
     with pytest.raises(ValueError, match="1-D"):
-        io._from_numpy(np.zeros((2, 2)))
+        parquet._from_numpy(np.zeros((2, 2)))
 
 
 @pytest.mark.parametrize("one_path", ["d/c.parquet", Path("d/c.parquet")], ids=["str", "Path"])

@@ -62,8 +62,9 @@ def test_a_study_in_the_package_takes_three_files_and_one_edit(tmp_path):
         import jointbench
         from jointbench.figures import extended
         from jointbench.papers import Inputs, get_paper
-        from jointbench.study import published, run
-        from jointbench.study.config import conditions, load_config
+        from jointbench.comparison import published
+        from jointbench.running import run
+        from jointbench.configuration.config import conditions, load_config
 
         assert jointbench.__file__.startswith(sys.argv[1]), jointbench.__file__
         config = load_config("config/config.yaml")

@@ -12,12 +12,13 @@ import pandas as pd
 import pytest
 
 from jointbench import papers, report
+from jointbench.configuration import studies
 from jointbench.estimators import CenterResult, registry
 from jointbench.figures import extended
 from jointbench.figures.common import method_style, method_styles, study_title
 from jointbench.papers import FrontPart, Paper
+from jointbench.running import run
 from jointbench.simulate import GridValues, Study, Trials
-from jointbench.study import run, studies
 
 CENTRE = [1.0, 2.0, 3.0]
 

@@ -7,14 +7,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from jointbench.configuration import config as study_config
 from jointbench.geometry import rotation_matrix
+from jointbench.resultfiles.parquet import write_dataset, write_table
+from jointbench.resultfiles.schema import check_estimates
+from jointbench.running.collected import collect
+from jointbench.running.run import estimate, simulate_condition
+from jointbench.running.scoring import CHI2_3DOF_95, PROXIMAL_COLUMNS, score_columns
 from jointbench.simulate import PROXIMAL_TRUTH
-from jointbench.study import config as study_config
-from jointbench.study.collected import collect
-from jointbench.study.io import write_dataset, write_table
-from jointbench.study.run import estimate, simulate_condition
-from jointbench.study.schema import check_estimates
-from jointbench.study.scoring import CHI2_3DOF_95, PROXIMAL_COLUMNS, score_columns
 
 ROOT = Path(__file__).resolve().parents[1]
 

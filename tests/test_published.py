@@ -16,15 +16,13 @@ import pytest
 import yaml
 
 import jointbench.papers
-from jointbench.papers import Inputs, get_paper, paper_labels, paper_names
-from jointbench.papers import paper_b as paper_b_module
-from jointbench.study.published import (
+from jointbench.comparison.published import (
     UNEXPLAINED,
     comparison_rows,
     load_published,
     unexplained,
 )
-from jointbench.study.snapshot import (
+from jointbench.comparison.snapshot import (
     compare_snapshot,
     readme_blocks,
     readme_summary,
@@ -32,8 +30,10 @@ from jointbench.study.snapshot import (
     snapshot_table,
     update_readme,
 )
-from jointbench.study.tables import for_people
-from jointbench.study.tolerance import describe
+from jointbench.comparison.tolerance import describe
+from jointbench.papers import Inputs, get_paper, paper_labels, paper_names
+from jointbench.papers import paper_b as paper_b_module
+from jointbench.resultfiles.tables import for_people
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results"

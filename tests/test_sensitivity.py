@@ -10,11 +10,9 @@ import pandas as pd
 import pytest
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.simulate import cmc, hinge, hinge_study, hip
-from jointbench.simulate.prior import Choice, Prior, default_values, draw_values
-from jointbench.study.config import load_config
-from jointbench.study.ensemble import MEMBER_COLUMNS
-from jointbench.study.sensitivity import (
+from jointbench.configuration.config import load_config
+from jointbench.ensembles.members import MEMBER_COLUMNS
+from jointbench.ensembles.sensitivity import (
     DEPENDENCE_MEASURE,
     PRIORS,
     SUMMARY_COLUMNS,
@@ -27,6 +25,8 @@ from jointbench.study.sensitivity import (
     split_half_effects,
     summarise,
 )
+from jointbench.simulate import cmc, hinge, hinge_study, hip
+from jointbench.simulate.prior import Choice, Prior, default_values, draw_values
 
 CONFIG = load_config(ROOT / "config" / "config.yaml")
 

@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from jointbench.configuration.seeds import trial_rng
 from jointbench.estimators.axis import fit_combined
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.simulate import Trials, hinge
-from jointbench.study.seeds import trial_rng
 
 CONDITION = {"protocol": "knee", "fe_rom_deg": 60, "aa_ratio": 0.3}
 

@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
+from jointbench.configuration.seeds import trial_rng
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.poses import rigid_fit
 from jointbench.simulate import noise
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.simulate.noise import isotropic_noise
-from jointbench.study.seeds import trial_rng
 
 PROTOCOL = HipProtocol()
 
@@ -154,7 +154,7 @@ def test_protocol_from_config():
 
 
 def test_study_spec_uses_this_simulator():
-    from jointbench.study.studies import get_study
+    from jointbench.configuration.studies import get_study
 
     spec = get_study("hip")
     protocol = spec.protocol({"n_frames": 300})

@@ -9,6 +9,8 @@ import json
 import numpy as np
 import pytest
 
+from jointbench.configuration.seeds import trial_rng
+from jointbench.configuration.studies import get_study
 from jointbench.geometry import skew
 from jointbench.numerics.poses import rigid_fit
 from jointbench.papers import paper_sta
@@ -21,8 +23,6 @@ from jointbench.simulate.hip_sta import (
     sta_displacements,
     sta_field,
 )
-from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import get_study
 
 PROTOCOL = HipStaProtocol()
 QUIET = dataclasses.replace(PROTOCOL, noise_mm=0.0)
@@ -173,8 +173,8 @@ def test_the_pelvis_frame_follows_the_recorded_pelvis_not_the_world():
 
 @pytest.mark.parametrize("method", ["LS", "NM", "BC", "MA", "IS"])
 def test_every_centre_method_runs_on_the_study_and_recovers_the_centre(method):
-    from jointbench.study.run import estimate_table
-    from jointbench.study.studies import method_kind
+    from jointbench.configuration.studies import method_kind
+    from jointbench.running.run import estimate_table
 
     study = get_study("hip_sta")
     assert method_kind(study, method) == "center"
@@ -186,7 +186,7 @@ def test_every_centre_method_runs_on_the_study_and_recovers_the_centre(method):
 
 
 def test_each_name_runs_as_the_first_kind_that_has_it():
-    from jointbench.study.studies import method_kind
+    from jointbench.configuration.studies import method_kind
 
     study = get_study("hip_sta")
     assert study.kinds == ("joint_center", "center")

@@ -175,7 +175,7 @@ EDITS = (
     ),
     Edit(
         "collect code",
-        f"{PKG}/study/collected.py",
+        f"{PKG}/running/collected.py",
         "",
         "\n\n_COLLECT_NOTE = 1\n",
         reruns=_jobs("collect[study=cmc]", "collect[study=hip]"),

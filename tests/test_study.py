@@ -11,15 +11,15 @@ import pandas as pd
 import pyarrow as pa
 import pytest
 
+from jointbench.configuration import config as study_config
+from jointbench.configuration.seeds import trial_seed
 from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
+from jointbench.resultfiles.parquet import read_dataset, write_dataset
+from jointbench.resultfiles.schema import check_estimates
+from jointbench.running import run
+from jointbench.running.run import estimate, simulate_condition
 from jointbench.simulate import Trials
-from jointbench.study import config as study_config
-from jointbench.study import run
-from jointbench.study.io import read_dataset, write_dataset
-from jointbench.study.run import estimate, simulate_condition
-from jointbench.study.schema import check_estimates
-from jointbench.study.seeds import trial_seed
 
 ROOT = Path(__file__).resolve().parents[1]
 

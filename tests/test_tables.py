@@ -7,14 +7,14 @@ import re
 import pandas as pd
 import pytest
 
+from jointbench.comparison.published import STATUSES, load_published, reader_order, status_legend
+from jointbench.comparison.snapshot import NONE_TESTED, reproduction_counts, reproduction_summary
+from jointbench.comparison.tolerance import describe, evaluate
 from jointbench.figures import paper_a
 from jointbench.papers import get_paper, paper_c
 from jointbench.papers import paper_a as paper_a_paper
-from jointbench.study.formatting import format_column, header, margin_words, number, words
-from jointbench.study.published import STATUSES, load_published, reader_order, status_legend
-from jointbench.study.snapshot import NONE_TESTED, reproduction_counts, reproduction_summary
-from jointbench.study.tables import for_people, markdown_table
-from jointbench.study.tolerance import describe, evaluate
+from jointbench.resultfiles.formatting import format_column, header, margin_words, number, words
+from jointbench.resultfiles.tables import for_people, markdown_table
 
 #: Paper A Table 2's published times (s), as printed in the paper.
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}

@@ -8,9 +8,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy import special, stats
 
-from jointbench.study.config import MAX_TRIALS
-from jointbench.study.scoring import CHI2_3DOF_95
-from jointbench.study.tolerance import binomial_interval, describe, evaluate, is_compared
+from jointbench.comparison.tolerance import binomial_interval, describe, evaluate, is_compared
+from jointbench.configuration.config import MAX_TRIALS
+from jointbench.running.scoring import CHI2_3DOF_95
 
 
 @pytest.mark.parametrize(

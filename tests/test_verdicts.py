@@ -11,11 +11,11 @@ import yaml
 from scipy import stats
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.study.config import load_config
-from jointbench.study.ensemble import MEMBER_COLUMNS, collect_member, member_seed
-from jointbench.study.snapshot import VERDICTS_BLOCK, readme_summary
-from jointbench.study.tolerance import wilson_interval
-from jointbench.study.verdicts import (
+from jointbench.comparison.snapshot import VERDICTS_BLOCK, readme_summary
+from jointbench.comparison.tolerance import wilson_interval
+from jointbench.configuration.config import load_config
+from jointbench.ensembles.members import MEMBER_COLUMNS, collect_member, member_seed
+from jointbench.ensembles.verdicts import (
     PROTOCOL_SHARES,
     SUMMARY_COLUMNS,
     VERDICT_RULE,

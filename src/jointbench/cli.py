@@ -21,20 +21,20 @@ import numpy as np
 import pandas as pd
 
 import jointbench
-from jointbench.estimators.registry import KINDS, get
-from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
-from jointbench.io.fit import CENTER_IS
-from jointbench.papers import paper_labels
-from jointbench.report import readme_headlines
-from jointbench.study.config import open_config, read_configs
-from jointbench.study.snapshot import (
+from jointbench.comparison.snapshot import (
     VERDICTS_BLOCK,
     readme_blocks,
     reproduction_summary,
     snapshot_table,
     update_readme,
 )
-from jointbench.study.verdicts import PROTOCOL_SHARES, standout_summary
+from jointbench.configuration.config import open_config, read_configs
+from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
+from jointbench.estimators.registry import KINDS, get
+from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
+from jointbench.io.fit import CENTER_IS
+from jointbench.papers import paper_labels
+from jointbench.report import readme_headlines
 
 #: The config every run starts from (the Snakefile's ``configfile``), relative to the run's
 #: directory.

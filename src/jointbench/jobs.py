@@ -2,65 +2,31 @@
 to the rule's log) and the provenance its files record.
 
 Each script in ``workflow/scripts`` runs its work inside :func:`job`, calling the module that
-does it: :mod:`jointbench.study.run` to simulate, estimate, collect and summarise,
+does it: :mod:`jointbench.running.run` to simulate, estimate, collect and summarise,
 :mod:`jointbench.pipeline` for paper outputs, the extended ranking and the published-value check,
 :mod:`jointbench.report` for the report's texts. This module imports none of them, so that a job
 loads only what its own work needs.
 
-Extensions (a study or paper outside the package, listed under ``extensions`` in the config) are
-imported here, in the Snakemake process and in every job, so the rules and the jobs see the same
-registries.
+Every job loads the run's extensions (a study or paper outside the package, listed under
+``extensions`` in the config; :mod:`jointbench.configuration.extensions`), as the Snakemake
+process does, so the rules and the jobs see the same registries.
 """
 
 from __future__ import annotations
 
 import contextlib
 import importlib.metadata
-import importlib.util
 import logging
-import sys
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from pathlib import Path
 
-from jointbench.simulate import Study
-from jointbench.study.studies import register_study
+from jointbench.configuration.extensions import load_extensions
 
-__all__ = ["job", "load_extensions", "provenance"]
+__all__ = ["job", "provenance"]
 
 # The package's logger: every module's messages (``getLogger(__name__)``) reach the job's log
 # through it.
 log = logging.getLogger("jointbench")
-
-
-def _register(value: object) -> None:
-    """Register ``value`` if it is a ``Study`` or a ``Paper``."""
-    if isinstance(value, Study):
-        register_study(value)
-        return
-    # A Paper exists only once jointbench.papers, the home of its class and of the paper
-    # registry, has been imported (by the extension defining it); it is looked up there rather
-    # than imported here, so that jobs rendering no paper output do not load every paper.
-    papers = sys.modules.get("jointbench.papers")
-    if papers is not None and isinstance(value, papers.Paper):
-        papers.register_paper(value)
-
-
-def load_extensions(config: Mapping, base: str | Path = ".") -> None:
-    """Import every file under ``extensions`` and register the ``Study`` and ``Paper`` values
-    it defines. Importing the same file again is a no-op."""
-    for entry in config.get("extensions", []):
-        path = (Path(base) / entry).resolve()
-        if not path.is_file():
-            raise ValueError(f"config error at extensions: {entry!r} is not a file ({path})")
-        name = f"jointbench_extension_{path.stem}"
-        module = sys.modules.get(name)
-        if module is None or Path(module.__file__).resolve() != path:
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-        for value in vars(module).values():
-            _register(value)
 
 
 @contextlib.contextmanager

@@ -3,7 +3,7 @@ the published-value check, each from the collected results to its files.
 
 It sits on top of every other layer: it reads files, asks the study and paper registries, renders
 outputs and writes them. Its scripts run it inside :func:`jointbench.jobs.job`; the jobs that
-simulate, estimate, collect and summarise call :mod:`jointbench.study.run` and do not import it.
+simulate, estimate, collect and summarise call :mod:`jointbench.running.run` and do not import it.
 matplotlib is imported only when a figure is drawn (:func:`jointbench.figures.common.pyplot`), so
 the table jobs and the check run without it.
 """
@@ -17,13 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from jointbench.figures import extended
-from jointbench.figures.common import save_figure
-from jointbench.papers import Inputs, Table, get_paper, papers_of_study
-from jointbench.study.collected import require_results
-from jointbench.study.config import condition_id
-from jointbench.study.io import read_dataset, read_table
-from jointbench.study.published import (
+from jointbench.comparison.published import (
     comparison_rows,
     enforce_design,
     failure_message,
@@ -31,7 +25,13 @@ from jointbench.study.published import (
     reader_order,
     status_legend,
 )
-from jointbench.study.tables import markdown_table, write_tables
+from jointbench.configuration.config import condition_id
+from jointbench.figures import extended
+from jointbench.figures.common import save_figure
+from jointbench.papers import Inputs, Table, get_paper, papers_of_study
+from jointbench.resultfiles.parquet import read_dataset, read_table
+from jointbench.resultfiles.tables import markdown_table, write_tables
+from jointbench.running.collected import require_results
 
 __all__ = [
     "OUTPUT_SEPARATOR",
@@ -73,11 +73,11 @@ def render_study(
     ranking; ``outputs`` maps ``<output name>__<kind>`` to a path (png/pdf or csv/md/html).
 
     ``ValueError`` naming the study when every trial failed, or every trial of a method its
-    papers compare (see :func:`jointbench.study.collected.require_results`): nothing is drawn
+    papers compare (see :func:`jointbench.running.collected.require_results`): nothing is drawn
     from nothing."""
     frame = read_table(collected)
     require_results(frame, study, collected, _methods_compared(study))
-    # Dataset files are named by their condition (study.config.condition_id).
+    # Dataset files are named by their condition (configuration.config.condition_id).
     by_condition = {Path(path).stem: read_dataset(path) for path in datasets}
     for key, names in paper_outputs.items():
         paper = get_paper(key)
@@ -148,7 +148,7 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
 
     ``collected`` maps study names to their collected results files; a study none of whose
     trials has a finite error, or with a compared method none of whose trials has one, is
-    refused by name, not judged (:func:`jointbench.study.collected.require_results`).
+    refused by name, not judged (:func:`jointbench.running.collected.require_results`).
     """
     frames = []
     for study, path in collected.items():

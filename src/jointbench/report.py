@@ -16,13 +16,13 @@ from pathlib import Path
 import pandas as pd
 
 from jointbench import machine
+from jointbench.comparison.snapshot import reproduction_counts
+from jointbench.configuration import config as jb_config
+from jointbench.configuration.studies import get_study
 from jointbench.figures import extended
 from jointbench.figures.common import study_title
 from jointbench.papers import Output, get_paper, paper_labels, paper_names, papers_of_study
-from jointbench.study import config as jb_config
-from jointbench.study.io import read_provenance
-from jointbench.study.snapshot import reproduction_counts
-from jointbench.study.studies import get_study
+from jointbench.resultfiles.parquet import read_provenance
 
 __all__ = [
     "GLOSSARY",

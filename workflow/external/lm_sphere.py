@@ -287,8 +287,8 @@ def trial_row(trial: int, rows: pd.DataFrame, condition: Mapping[str, object]) -
     }
 
 
-# The dtypes the benchmark checks (jointbench.study.schema), set explicitly so that an empty or
-# all-failed table still has them.
+# The dtypes the benchmark checks (jointbench.resultfiles.schema), set explicitly so that an
+# empty or all-failed table still has them.
 DTYPES = {
     "trial": "int64",
     "method": "object",

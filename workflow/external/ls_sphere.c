@@ -4,7 +4,7 @@
  *
  *   ls_sphere DATASET.csv > ESTIMATES.csv
  *
- * Reads a condition's markers as plain CSV (jointbench.study.interchange: a header naming
+ * Reads a condition's markers as plain CSV (jointbench.resultfiles.interchange: a header naming
  * trial, segment, frame, marker, x, y, z, one row per sample, trial by trial), fits every trial
  * of the "moving" segment and writes one CSV row per trial:
  *

@@ -9,9 +9,9 @@ from snakemake.utils import validate
 from jointbench import invocation, pipeline, report as jb_report
 from jointbench.figures.common import study_title
 from jointbench.fingerprint import code_fingerprint
-from jointbench.study import run as jb_run
+from jointbench.running import run as jb_run
 from jointbench.papers import papers_of_study
-from jointbench.study import config as jb_config
+from jointbench.configuration import config as jb_config
 
 validate(config, str(jb_config.SCHEMA_PATH))
 # Extensions loaded, then grid values, estimator names and options checked: a mistake stops the

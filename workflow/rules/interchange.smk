@@ -1,5 +1,6 @@
-# Plain text for estimators in any language (jointbench.study.interchange): a condition's markers
-# as CSV for a program to read, and the estimates CSV it writes turned into an estimates file.
+# Plain text for estimators in any language (jointbench.resultfiles.interchange): a condition's
+# markers as CSV for a program to read, and the estimates CSV it writes turned into an estimates
+# file.
 # Both rules serve every study, and run only for a file some rule asks for.
 
 

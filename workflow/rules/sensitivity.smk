@@ -1,9 +1,9 @@
 # Protocol ensembles: `snakemake -j2 sensitivity` judges every published value and claim of the
-# studies with a prior over their unpublished choices (jointbench.study.sensitivity) in the
+# studies with a prior over their unpublished choices (jointbench.ensembles.sensitivity) in the
 # default protocol, in N protocols drawn from the prior (`sensitivity: {draws: N}`) and in each
 # named protocol (`sensitivity: {named: {name: overlay}}`), every one from the run's base seed.
 from jointbench.figures.sensitivity import FIGURES as SENSITIVITY_FIGURES
-from jointbench.study.sensitivity import DEFAULT, DRAW_PREFIX, PRIORS, member_names
+from jointbench.ensembles.sensitivity import DEFAULT, DRAW_PREFIX, PRIORS, member_names
 
 SENSITIVITY = config.get("sensitivity", {})
 SENSITIVITY_STUDIES = [s for s in STUDIES if s in PRIORS and papers_of_study(s)]

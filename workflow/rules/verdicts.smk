@@ -1,7 +1,7 @@
 # Seed ensembles: `snakemake -j2 verdicts` judges every published value and claim in K members,
 # each the papers' whole study grids from its own base seed (member 0 is the run's base_seed),
 # and tabulates per value and claim the share of seeds in which it reproduces
-# (jointbench.study.ensemble). K is `verdicts: {seeds: K}` in the config.
+# (jointbench.ensembles.members). K is `verdicts: {seeds: K}` in the config.
 VERDICT_SEEDS = int(config.get("verdicts", {}).get("seeds", 1))
 VERDICT_STUDIES = [study for study in STUDIES if papers_of_study(study)]
 MEMBER = "results/verdicts/{study}/member-{member}.csv"

@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.collected import collect
+from jointbench.running.collected import collect
 
 with jobs.job(snakemake):
     collect(

@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.run import run_estimate_files
+from jointbench.running.run import run_estimate_files
 
 with jobs.job(snakemake):
     run_estimate_files(

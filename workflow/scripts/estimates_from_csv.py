@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.interchange import read_estimates_csv
+from jointbench.resultfiles.interchange import read_estimates_csv
 
 with jobs.job(snakemake):
     read_estimates_csv(

@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.run import run_poses_files
+from jointbench.running.run import run_poses_files
 
 with jobs.job(snakemake):
     run_poses_files(

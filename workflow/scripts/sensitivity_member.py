@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.sensitivity import write_member
+from jointbench.ensembles.sensitivity import write_member
 
 with jobs.job(snakemake):
     # A named member reads its config overlay; a default or drawn member reads none.

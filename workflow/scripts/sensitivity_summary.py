@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.sensitivity import write_summary
+from jointbench.ensembles.sensitivity import write_summary
 
 with jobs.job(snakemake):
     write_summary(

@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.collected import summarise_estimates
+from jointbench.running.collected import summarise_estimates
 
 with jobs.job(snakemake):
     summarise_estimates(

@@ -1,5 +1,5 @@
 from jointbench import jobs
-from jointbench.study.ensemble import run_member
+from jointbench.ensembles.members import run_member
 
 with jobs.job(snakemake):
     rows = run_member(snakemake.config, snakemake.params.study, int(snakemake.wildcards.member))

@@ -3,7 +3,7 @@
 A paper's published-values document (``paper_*.yaml`` beside its module) lists ``values`` and
 ``claims`` in one shape, each with a typed tolerance; the paper measures each one from the
 collected results (:class:`~jointbench.papers.base.Measured`), and :func:`comparison_rows`
-evaluates every tolerance through :func:`jointbench.study.tolerance.evaluate`. Each row shows
+evaluates every tolerance through :func:`jointbench.comparison.tolerance.evaluate`. Each row shows
 the paper's own sentence (``quote``), the criterion derived from it, the reproduced figure and
 the margin: how far inside (+) or outside (−) the tolerance it lies, in the tolerance's units.
 Where a value is known not to reproduce, its entry carries a ``deviation`` with the reason;
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from jointbench.study.config import read_yaml, validate_against
-from jointbench.study.tolerance import describe, evaluate, is_compared
+from jointbench.comparison.tolerance import describe, evaluate, is_compared
+from jointbench.configuration.config import read_yaml, validate_against
 
 __all__ = [
     "COLUMNS",

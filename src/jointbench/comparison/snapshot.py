@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.study.published import NOT_APPLICABLE, STATUSES
-from jointbench.study.scoring import ERROR_COLUMN
-from jointbench.study.studies import get_study
-from jointbench.study.summary import summarise
+from jointbench.comparison.published import NOT_APPLICABLE, STATUSES
+from jointbench.configuration.studies import get_study
+from jointbench.running.scoring import ERROR_COLUMN
+from jointbench.running.summary import summarise
 
 __all__ = [
     "SNAPSHOT_RTOL",
@@ -130,7 +130,7 @@ def _reproduced_of_tested(rows: pd.DataFrame) -> str:
 
 def reproduction_counts(comparison: pd.DataFrame, titles: Mapping[str, str]) -> pd.DataFrame:
     """Per paper: values and claims reproduced out of those with a verdict, and how many rows
-    are :data:`~jointbench.study.published.NOT_APPLICABLE`. ``titles`` maps each paper's letter
+    are :data:`~jointbench.comparison.published.NOT_APPLICABLE`. ``titles`` maps each paper's letter
     to the label shown."""
     rows = []
     for paper, part in comparison.groupby("paper", sort=True):

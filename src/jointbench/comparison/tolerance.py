@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.study.formatting import margin_words, words
+from jointbench.resultfiles.formatting import margin_words, words
 
 __all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate", "wilson_interval"]
 

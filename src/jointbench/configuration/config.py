@@ -13,11 +13,11 @@ import numpy as np
 import yaml
 
 from jointbench import declared
+from jointbench.configuration.extensions import load_extensions
+from jointbench.configuration.studies import get_study, method_kind
+from jointbench.configuration.studies import study_names as registered_studies
 from jointbench.estimators import registry
-from jointbench.jobs import load_extensions
 from jointbench.simulate import Study
-from jointbench.study.studies import get_study, method_kind
-from jointbench.study.studies import study_names as registered_studies
 
 __all__ = [
     "MAX_TRIALS",

@@ -3,7 +3,7 @@
 The built-in studies are collected by importing every simulator module (each module of
 :mod:`jointbench.simulate` that exports a ``STUDY``, in module name order); a study outside the
 package joins by :func:`register_study` (the workflow does this for the modules listed under
-``extensions`` in the config, see :func:`jointbench.jobs.load_extensions`).
+``extensions`` in the config, see :func:`jointbench.configuration.extensions.load_extensions`).
 """
 
 from __future__ import annotations

@@ -3,10 +3,11 @@
 One run of the benchmark draws its trials from one base seed, so each verdict of the comparison
 is one draw. An ensemble reruns each study's papers from ``K`` base seeds (member 0 is the
 run's own ``base_seed``, so the default run is one named member), judges every value and claim
-in each member exactly as the comparison does (:func:`jointbench.study.published.comparison_rows`)
-and writes each member's rows (:data:`MEMBER_COLUMNS`).
+in each member exactly as the comparison does
+(:func:`jointbench.comparison.published.comparison_rows`) and writes each member's rows
+(:data:`MEMBER_COLUMNS`).
 
-:mod:`jointbench.study.verdicts` turns the members' rows into the verdict over seeds.
+:mod:`jointbench.ensembles.verdicts` turns the members' rows into the verdict over seeds.
 """
 
 from __future__ import annotations
@@ -16,13 +17,13 @@ from collections.abc import Mapping
 
 import pandas as pd
 
+from jointbench.comparison.published import comparison_rows, load_published
+from jointbench.configuration.config import conditions, estimator_names
+from jointbench.configuration.studies import get_study
 from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
 from jointbench.papers import Inputs, papers_of_study
-from jointbench.study.collected import require_results
-from jointbench.study.config import conditions, estimator_names
-from jointbench.study.published import comparison_rows, load_published
-from jointbench.study.run import estimate_table, methods_sharing_poses, simulate_condition
-from jointbench.study.studies import get_study
+from jointbench.running.collected import require_results
+from jointbench.running.run import estimate_table, methods_sharing_poses, simulate_condition
 
 __all__ = [
     "MEMBER_COLUMNS",

@@ -4,7 +4,7 @@ The papers leave choices unsaid (marker directions, the motion's shape, where th
 the rig's swing) and each simulator fills them with one value. A protocol ensemble reruns a
 study's papers on ``N`` protocols drawn from the study's prior
 (:data:`PRIORS`, :mod:`jointbench.simulate.prior`), judging every value and claim as the
-comparison does (:func:`jointbench.study.ensemble.judge`). Members, by name:
+comparison does (:func:`jointbench.ensembles.members.judge`). Members, by name:
 
 * ``default``: the config's own protocol, the run that the comparison reports;
 * ``draw-k`` (``k = 1..N``): the ``k``-th draw of the prior, fixed by the base seed, the study
@@ -25,15 +25,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.published import load_published
+from jointbench.configuration.config import read_yaml
+from jointbench.ensembles.members import _member_config, collect_member, judge
+from jointbench.ensembles.verdicts import TESTED, quantities_of, seed_verdict, share_columns
 from jointbench.figures.paper_a import condition_means
 from jointbench.figures.paper_c import calibration_table
+from jointbench.resultfiles.tables import markdown_table, write_tables
 from jointbench.simulate import cmc, hinge_study, hip
 from jointbench.simulate.prior import Prior, default_values, draw_values
-from jointbench.study.config import read_yaml
-from jointbench.study.ensemble import _member_config, collect_member, judge
-from jointbench.study.published import load_published
-from jointbench.study.tables import markdown_table, write_tables
-from jointbench.study.verdicts import TESTED, quantities_of, seed_verdict, share_columns
 
 __all__ = [
     "CURVES",
@@ -154,7 +154,7 @@ def run_member(
     config: Mapping, study: str, member: str, overlay: Mapping | None = None
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``study``'s papers judged in protocol ``member``, from the run's base seed: the rows of
-    :func:`jointbench.study.ensemble.judge` with ``member``, and the member's curve
+    :func:`jointbench.ensembles.members.judge` with ``member``, and the member's curve
     (:data:`CURVES`; empty for a study without one)."""
     settings = {**config["studies"][study]}
     settings["protocol"] = member_protocol(config, study, member, overlay)
@@ -168,7 +168,7 @@ def run_member(
 
 def protocol_verdict(reproduced_in: int, draws: int) -> str:
     """The verdict over protocols, by the rule of the verdict over seeds
-    (:data:`jointbench.study.verdicts.VERDICT_RULE`) with protocols for seeds."""
+    (:data:`jointbench.ensembles.verdicts.VERDICT_RULE`) with protocols for seeds."""
     return seed_verdict(reproduced_in, draws).replace("seed-", "protocol-")
 
 

@@ -1,8 +1,8 @@
-"""The verdict over seeds: the members of a seed ensemble (:mod:`jointbench.study.ensemble`)
+"""The verdict over seeds: the members of a seed ensemble (:mod:`jointbench.ensembles.members`)
 summarised per published value and claim.
 
 Each value and claim gets the share of seeds in which it reproduces, with its Wilson 95 %
-interval (:func:`jointbench.study.tolerance.wilson_interval`), and one verdict by the rule
+interval (:func:`jointbench.comparison.tolerance.wilson_interval`), and one verdict by the rule
 :data:`VERDICT_RULE`, implemented by :func:`seed_verdict` and nowhere else.
 """
 
@@ -13,9 +13,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from jointbench.study.published import load_published
-from jointbench.study.tables import markdown_table, write_tables
-from jointbench.study.tolerance import wilson_interval
+from jointbench.comparison.published import load_published
+from jointbench.comparison.tolerance import wilson_interval
+from jointbench.resultfiles.tables import markdown_table, write_tables
 
 __all__ = [
     "PROTOCOL_SHARES",

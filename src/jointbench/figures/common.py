@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators import registry
-from jointbench.study.studies import get_study, study_names
-from jointbench.study.tables import output_paths
+from jointbench.resultfiles.tables import output_paths
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

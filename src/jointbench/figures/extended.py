@@ -14,16 +14,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from jointbench.configuration import config as jb_config
+from jointbench.configuration.studies import get_study
 from jointbench.figures.common import (
     display_limits,
     method_styles,
     pyplot,
     study_title,
 )
-from jointbench.study import config as jb_config
-from jointbench.study.scoring import ERROR_COLUMN
-from jointbench.study.studies import get_study
-from jointbench.study.summary import summarise
+from jointbench.running.scoring import ERROR_COLUMN
+from jointbench.running.summary import summarise
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

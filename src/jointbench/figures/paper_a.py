@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from jointbench import machine
+from jointbench.comparison.published import NOT_APPLICABLE
 from jointbench.figures.common import (
     display_limits,
     equal_3d_limits,
@@ -24,7 +25,6 @@ from jointbench.figures.common import (
     method_style,
     pyplot,
 )
-from jointbench.study.published import NOT_APPLICABLE
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

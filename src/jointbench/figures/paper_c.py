@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.tolerance import binomial_interval
 from jointbench.figures.common import method_style, pyplot
-from jointbench.study.scoring import CHI2_3DOF_95, covariance_from_entries
-from jointbench.study.tolerance import binomial_interval
+from jointbench.running.scoring import CHI2_3DOF_95, covariance_from_entries
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -1,4 +1,4 @@
-"""Figures of the protocol ensemble (:mod:`jointbench.study.sensitivity`): the papers' results
+"""Figures of the protocol ensemble (:mod:`jointbench.ensembles.sensitivity`): the papers' results
 over plausible protocols, the default protocol drawn on top.
 
 * paper A Fig 4 with bands: per marker set and noise, each method's mean CoR error against the

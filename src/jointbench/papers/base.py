@@ -31,7 +31,7 @@ __all__ = [
 class Table:
     """A rendered table: its rows, the title and note of its Markdown form, and ``headers``,
     the table's own headers for people by column name (others are written by
-    :func:`jointbench.study.formatting.header`)."""
+    :func:`jointbench.resultfiles.formatting.header`)."""
 
     frame: pd.DataFrame
     title: str = ""

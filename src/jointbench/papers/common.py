@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from jointbench.comparison.published import NOT_APPLICABLE, claims_rows, status_legend
 from jointbench.papers.base import Inputs, Measured, Output, Table
-from jointbench.study.published import NOT_APPLICABLE, claims_rows, status_legend
 
 __all__ = ["claims_headline", "claims_output"]
 

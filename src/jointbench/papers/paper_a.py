@@ -12,13 +12,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.tolerance import wilson_interval
+from jointbench.configuration.studies import get_study
 from jointbench.figures import paper_a as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
+from jointbench.resultfiles.formatting import number
 from jointbench.simulate.cmc import marker_positions
-from jointbench.study.formatting import number
-from jointbench.study.studies import get_study
-from jointbench.study.tolerance import wilson_interval
 
 __all__ = ["PAPER", "example_ordering_share", "measure"]
 

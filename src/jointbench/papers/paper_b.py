@@ -13,11 +13,11 @@ import numpy as np
 import pandas as pd
 
 from jointbench.api import fit_axis
+from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
-from jointbench.study.formatting import number
-from jointbench.study.published import comparison_rows
+from jointbench.resultfiles.formatting import number
 
 __all__ = ["PAPER", "measure"]
 

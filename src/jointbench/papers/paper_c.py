@@ -14,8 +14,8 @@ import pandas as pd
 from jointbench.figures import paper_c as draw
 from jointbench.papers.base import FrontPart, Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_headline, claims_output
-from jointbench.study.formatting import number
-from jointbench.study.scoring import covariance_from_entries
+from jointbench.resultfiles.formatting import number
+from jointbench.running.scoring import covariance_from_entries
 
 __all__ = ["PAPER", "calibration_sentence", "measure", "published_table1", "v_against_longest"]
 

@@ -17,14 +17,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.tolerance import binomial_interval
 from jointbench.estimators import registry
 from jointbench.figures.common import method_style, pyplot
 from jointbench.figures.extended import extended_table, mean_ranks
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import claims_output
+from jointbench.running.scoring import CHI2_3DOF_95, score_columns
 from jointbench.simulate import Trials
-from jointbench.study.scoring import CHI2_3DOF_95, score_columns
-from jointbench.study.tolerance import binomial_interval
 from jointbench.uncertainty import bootstrap
 
 if TYPE_CHECKING:

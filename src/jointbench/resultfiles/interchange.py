@@ -33,7 +33,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
-from jointbench.study.io import read_metadata, write_table
+from jointbench.resultfiles.parquet import read_metadata, write_table
 
 __all__ = ["DATASET_COLUMNS", "ESTIMATE_ROW_COLUMNS", "read_estimates_csv", "write_dataset_csv"]
 

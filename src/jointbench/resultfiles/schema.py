@@ -5,7 +5,7 @@ condition with one row per trial. :func:`check_estimates` is run on every such f
 is collected, so a wrong or missing column fails with its name rather than as a broken figure;
 :func:`check_against_dataset` then holds it to its dataset, so that a missing, repeated or
 invented trial or condition cannot change a ranking unnoticed. A file's errors are the
-benchmark's to compute (:mod:`jointbench.study.scoring`): a file may leave them out, and
+benchmark's to compute (:mod:`jointbench.running.scoring`): a file may leave them out, and
 :func:`check_scores` stops the run when it gives ones that disagree; :func:`check_claimed_estimates`
 refuses a trial that claims success without a finite estimate.
 """
@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pyarrow as pa
 
-from jointbench.study.scoring import (
+from jointbench.running.scoring import (
     COVARIANCE_COLUMNS,
     ERROR_COLUMN,
     ESTIMATE_COLUMNS,
@@ -67,7 +67,7 @@ COMMON_COLUMNS = {
 #: Per kind, the estimate columns every file must carry.
 KIND_COLUMNS = {kind: dict.fromkeys(columns, _NUMBER) for kind, columns in ESTIMATE_COLUMNS.items()}
 #: Per kind, the columns a file may carry and the benchmark computes itself (see
-#: :mod:`jointbench.study.scoring`): when present, they must be numeric, and collect holds them
+#: :mod:`jointbench.running.scoring`): when present, they must be numeric, and collect holds them
 #: to its own computation (:func:`check_scores`).
 OPTIONAL_COLUMNS = {
     kind: dict.fromkeys(

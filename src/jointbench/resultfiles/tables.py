@@ -2,7 +2,8 @@
 
 The CSV keeps each column's name and full precision, for the programs (and the report's
 headlines) that read it; the Markdown and the HTML are for people: headers in words with units
-and every cell written by :mod:`jointbench.study.formatting`, the one formatting of the project.
+and every cell written by :mod:`jointbench.resultfiles.formatting`, the one formatting of the
+project.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from jointbench.study.formatting import format_column, header, is_published_column
+from jointbench.resultfiles.formatting import format_column, header, is_published_column
 
 __all__ = ["for_people", "html_table", "markdown_table", "output_paths", "write_tables"]
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.simulate import PROXIMAL_TRUTH, Study
-from jointbench.study.io import (
+from jointbench.configuration.studies import get_study, method_kind
+from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_metadata,
     read_provenance,
@@ -22,15 +22,15 @@ from jointbench.study.io import (
     read_trial_numbers,
     write_table,
 )
-from jointbench.study.schema import (
+from jointbench.resultfiles.schema import (
     check_against_dataset,
     check_claimed_estimates,
     check_estimates,
     check_scores,
 )
-from jointbench.study.scoring import ERROR_COLUMN, proximal_at_frame0, score_columns
-from jointbench.study.studies import get_study, method_kind
-from jointbench.study.summary import summarise
+from jointbench.running.scoring import ERROR_COLUMN, proximal_at_frame0, score_columns
+from jointbench.running.summary import summarise
+from jointbench.simulate import PROXIMAL_TRUTH, Study
 
 __all__ = ["collect", "require_results", "scored_estimates", "summarise_estimates"]
 
@@ -45,7 +45,7 @@ def scored_estimates(
 ) -> pd.DataFrame:
     """``frame``, one estimates file checked by :func:`check_estimates`, with its score columns
     computed from its estimate columns and its dataset's ``truth``
-    (:func:`jointbench.study.scoring.score_columns`); ``proximal_frame0`` ``(n_rows, k, 3)``,
+    (:func:`jointbench.running.scoring.score_columns`); ``proximal_frame0`` ``(n_rows, k, 3)``,
     each row's proximal markers at frame 0 in a two-segment study.
 
     ``ValueError`` naming ``source`` and the trial when the file claims success without a
@@ -114,7 +114,7 @@ def _scored_file(path, spec: Study, dataset: Mapping, source: str) -> pd.DataFra
 def _datasets(datasets: Sequence[str | Path], segments: Sequence[str]) -> dict[str, dict]:
     """Per condition (a dataset file's stem): its trial numbers (sorted), condition, truth and,
     when its truth scores a centre relative to the proximal markers, those markers at frame 0
-    of each trial (:func:`jointbench.study.scoring.proximal_at_frame0`), else ``None``."""
+    of each trial (:func:`jointbench.running.scoring.proximal_at_frame0`), else ``None``."""
     out = {}
     for path in datasets:
         metadata = read_metadata(path)

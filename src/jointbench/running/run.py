@@ -1,7 +1,7 @@
 """Simulate a condition, fit its trials' poses, run an estimator over its trials.
 
 These are the many small jobs of a run, so this module and what it imports stay clear of
-pandas: estimates are built and written as Arrow tables (:mod:`jointbench.study.collected`
+pandas: estimates are built and written as Arrow tables (:mod:`jointbench.running.collected`
 gathers them into frames).
 """
 
@@ -18,11 +18,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pyarrow as pa
 
+from jointbench.configuration.config import estimator_names, parse_condition_id
+from jointbench.configuration.seeds import trial_rng
+from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
 from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
-from jointbench.simulate import Trials
-from jointbench.study.config import estimator_names, parse_condition_id
-from jointbench.study.io import (
+from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_metadata,
     read_poses,
@@ -31,10 +32,9 @@ from jointbench.study.io import (
     write_poses_blocks,
     write_table,
 )
-from jointbench.study.schema import check_estimates
-from jointbench.study.scoring import proximal_at_frame0, score
-from jointbench.study.seeds import trial_rng
-from jointbench.study.studies import get_study, method_kind
+from jointbench.resultfiles.schema import check_estimates
+from jointbench.running.scoring import proximal_at_frame0, score
+from jointbench.simulate import Trials
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -61,7 +61,8 @@ def simulate_condition(
     config: Mapping, study: str, condition: Mapping[str, object], trials: range | None = None
 ) -> Trials:
     """The trials of one condition (all, or the ``trials`` range), each from its own seed (see
-    :mod:`jointbench.study.seeds`), so a trial is the same whichever others are simulated."""
+    :mod:`jointbench.configuration.seeds`), so a trial is the same whichever others are
+    simulated."""
     spec = get_study(study)
     settings = config["studies"][study]
     protocol = spec.protocol(settings.get("protocol"))

@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 import pandas as pd
 
-from jointbench.study.scoring import ERROR_COLUMN
-from jointbench.study.studies import get_study
+from jointbench.configuration.studies import get_study
+from jointbench.running.scoring import ERROR_COLUMN
 
 __all__ = ["ERROR_COLUMN", "summarise"]
 
