@@ -187,6 +187,16 @@ def test_every_workflow_script_reaches_the_modules_it_runs():
     assert {"jointbench.figures.paper_a", "jointbench.papers.paper_b"} <= set(render)
 
 
+def test_modules_found_by_a_registry_are_in_the_fingerprint():
+    """The study and paper registries import every module of their packages by name; an edit
+    of any of them reruns the jobs that load the registry."""
+    scripts = Path(__file__).resolve().parents[1] / "workflow" / "scripts"
+    simulate = set(module_closure(scripts / "simulate.py"))
+    assert {"jointbench.simulate.hip_sta", "jointbench.simulate.cmc"} <= simulate
+    render = set(module_closure(scripts / "render.py"))
+    assert {"jointbench.papers.paper_sta", "jointbench.papers.paper_c"} <= render
+
+
 def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):
     script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
     versions = dependency_versions()

@@ -122,8 +122,8 @@ EDITS = (
     Edit(
         "a Study's own field",
         f"{PKG}/simulate/cmc.py",
-        "exclusive_minimum=True, maximum=180)",
-        "exclusive_minimum=True, maximum=179)",
+        'exclusive_minimum=True, maximum=180, label="RoM"',
+        'exclusive_minimum=True, maximum=179, label="RoM"',
         reruns=_jobs("simulate_cmc", "render_cmc", "check_published"),
     ),
     Edit(

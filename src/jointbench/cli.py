@@ -312,6 +312,19 @@ def _write_world(path: Path, fits: list) -> None:
     print(f"wrote the world trajectory per frame to {path}", file=sys.stderr)
 
 
+def _run_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a command reading a run: its results folder and its configs."""
+    parser.add_argument("--results", type=Path, default=Path("results"))
+    parser.add_argument(
+        "--configfile",
+        type=Path,
+        action="append",
+        default=[],
+        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (its extensions "
+        "are loaded); may be repeated",
+    )
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="jointbench",
@@ -385,15 +398,7 @@ def _parser() -> argparse.ArgumentParser:
         help="write the regression snapshot of tabulated means",
         formatter_class=_Formatter,
     )
-    snap.add_argument("--results", type=Path, default=Path("results"))
-    snap.add_argument(
-        "--configfile",
-        type=Path,
-        action="append",
-        default=[],
-        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (its extensions "
-        "are loaded); may be repeated",
-    )
+    _run_options(snap)
     snap.add_argument("--output", type=Path, default=Path("tests/snapshots/summary.csv"))
     snap.set_defaults(run=_snapshot)
 
@@ -402,15 +407,7 @@ def _parser() -> argparse.ArgumentParser:
         help="refresh the README's reproduction summary and verdicts over seeds",
         formatter_class=_Formatter,
     )
-    readme.add_argument("--results", type=Path, default=Path("results"))
-    readme.add_argument(
-        "--configfile",
-        type=Path,
-        action="append",
-        default=[],
-        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (its extensions "
-        "are loaded); may be repeated",
-    )
+    _run_options(readme)
     readme.add_argument("--readme", type=Path, default=Path("README.md"))
     readme.set_defaults(run=_readme)
     return parser

@@ -20,7 +20,10 @@ What a module can import:
   A package's ``__init__`` of that kind (PEP 562 lazy names) is followed that far only where
   the package object itself is imported (``import jointbench``, ``from jointbench import
   fit_center``): importing one of its submodules runs the ``__init__`` but cannot reach its
-  lazy names.
+  lazy names;
+* in a module that calls ``submodules("jointbench.<package>")`` (:mod:`jointbench.registries`:
+  the study and paper registries import every module of their package), every module of that
+  package.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ import ast
 import hashlib
 import importlib.metadata
 import importlib.util
+import pkgutil
 import platform
 import re
 from collections.abc import Iterable, Iterator
@@ -40,6 +44,9 @@ __all__ = ["code_fingerprint", "dependency_versions", "module_closure"]
 
 #: Calls that import a module named by a string at run time.
 _DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__"})
+#: The call that lists every module of a package for its caller to import
+#: (:func:`jointbench.registries.submodules`).
+_EVERY_MODULE = "submodules"
 
 
 @dataclass(frozen=True)
@@ -60,6 +67,13 @@ class _Package:
                 return candidate
         return None
 
+    def modules(self, package: str) -> list[str]:
+        """The modules of ``package``, one of the package's subpackages (none for another)."""
+        path = self.file(package)
+        if path is None or path.name != "__init__.py":
+            return []
+        return [f"{package}.{m.name}" for m in pkgutil.iter_modules([str(path.parent)])]
+
 
 def _package(name: str) -> _Package:
     spec = importlib.util.find_spec(name)
@@ -71,12 +85,14 @@ def _package(name: str) -> _Package:
 @dataclass(frozen=True)
 class _Imports:
     """What one file can import: ``whole`` (modules, and packages whose object it binds),
-    ``named`` (``from package import name`` pairs) and ``dynamic`` (string constants that
-    name modules, in a file that imports by name)."""
+    ``named`` (``from package import name`` pairs), ``dynamic`` (string constants that
+    name modules, in a file that imports by name) and ``every`` (packages it imports every
+    module of)."""
 
     whole: frozenset[str]
     named: frozenset[tuple[str, str]]
     dynamic: frozenset[str]
+    every: frozenset[str] = frozenset()
 
 
 def _runs(tree: ast.AST) -> Iterator[ast.AST]:
@@ -143,6 +159,7 @@ def _imports_of(text: str, module: str, is_package: bool) -> _Imports:
     whole: set[str] = set()
     named: set[tuple[str, str]] = set()
     strings: set[str] = set()
+    every: set[str] = set()
     dynamic_calls = False
     for node in _runs(_parsed(text)):
         if isinstance(node, ast.Import):
@@ -157,9 +174,18 @@ def _imports_of(text: str, module: str, is_package: bool) -> _Imports:
             function = node.func
             name = function.attr if isinstance(function, ast.Attribute) else function
             dynamic_calls |= getattr(name, "id", name) in _DYNAMIC_IMPORTS
+            if getattr(name, "id", name) == _EVERY_MODULE and node.args:
+                first = node.args[0]
+                if isinstance(first, ast.Constant) and isinstance(first.value, str):
+                    every.add(first.value)
         elif isinstance(node, ast.Constant) and isinstance(node.value, str):
             strings.add(node.value)
-    return _Imports(frozenset(whole), frozenset(named), frozenset(strings if dynamic_calls else ()))
+    return _Imports(
+        frozenset(whole),
+        frozenset(named),
+        frozenset(strings if dynamic_calls else ()),
+        frozenset(every),
+    )
 
 
 def _parents(module: str) -> list[str]:
@@ -185,6 +211,8 @@ def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
                 stack.append((source, True))
         if followed_dynamic:
             stack.extend((m, True) for m in imports.dynamic if package.file(m) is not None)
+        # Run whenever the file runs, however it was imported.
+        stack.extend((m, True) for p in imports.every for m in package.modules(p))
 
     for root in roots:
         follow(_imports(Path(root), "__main__"), followed_dynamic=True)

@@ -4,6 +4,7 @@ studies and papers."""
 
 from __future__ import annotations
 
+import importlib.util
 import pkgutil
 from collections.abc import Callable, Iterable
 from types import ModuleType
@@ -54,11 +55,13 @@ class Registry(Generic[T]):
         return tuple(self._values.values())
 
 
-def submodules(package: ModuleType) -> list[str]:
-    """The full names of ``package``'s modules, in name order: where the built-in studies and
-    papers are found, so that adding one is adding its module, not also editing a list (the
-    importing is the caller's, at its module level)."""
-    return sorted(f"{package.__name__}.{m.name}" for m in pkgutil.iter_modules(package.__path__))
+def submodules(package: str) -> list[str]:
+    """The full names of the modules of ``package`` (its dotted name, written as a literal so
+    that the code fingerprint finds them: :mod:`jointbench.fingerprint`), in name order: where
+    the built-in studies and papers are found, so that adding one is adding its module, not
+    also editing a list. The importing is the caller's, at its module level."""
+    folders = importlib.util.find_spec(package).submodule_search_locations
+    return sorted(f"{package}.{m.name}" for m in pkgutil.iter_modules(folders))
 
 
 def exported(modules: Iterable[ModuleType], attribute: str) -> list:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import importlib
 
-from jointbench import simulate
 from jointbench.estimators import registry
 from jointbench.registries import Registry, exported, submodules
 from jointbench.simulate import Study
@@ -22,7 +21,7 @@ register_study = _STUDIES.register
 get_study = _STUDIES.get
 study_names = _STUDIES.names
 
-_SIMULATORS = [importlib.import_module(name) for name in submodules(simulate)]
+_SIMULATORS = [importlib.import_module(name) for name in submodules("jointbench.simulate")]
 for _study in exported(_SIMULATORS, "STUDY"):
     register_study(_study)
 

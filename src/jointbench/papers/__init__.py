@@ -9,7 +9,6 @@ the config). The workflow derives its rules, targets, captions and report catego
 from __future__ import annotations
 
 import importlib
-import sys
 
 from jointbench.papers.base import FrontPart, Inputs, Measured, Output, Paper, Table
 from jointbench.registries import Registry, exported, submodules
@@ -48,6 +47,6 @@ def papers_of_study(study: str) -> tuple[Paper, ...]:
     return tuple(p for p in _PAPERS.values() if p.study == study)
 
 
-_MODULES = [importlib.import_module(name) for name in submodules(sys.modules[__name__])]
+_MODULES = [importlib.import_module(name) for name in submodules("jointbench.papers")]
 for _paper in exported(_MODULES, "PAPER"):
     register_paper(_paper)
