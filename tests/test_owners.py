@@ -51,8 +51,8 @@ def _study(**extra) -> Study:
 @pytest.fixture
 def newcomer(monkeypatch):
     """Registries that forget what a test registers."""
-    fresh = {kind: dict(entries) for kind, entries in registry._REGISTRY.items()}
-    monkeypatch.setattr(registry, "_REGISTRY", fresh)
+    for entries in registry._REGISTRY.values():
+        monkeypatch.setattr(entries, "_values", dict(entries._values))
     monkeypatch.setattr(studies._STUDIES, "_values", dict(studies._STUDIES._values))
     monkeypatch.setattr(papers._PAPERS, "_values", dict(papers._PAPERS._values))
 

@@ -10,7 +10,7 @@ import pytest
 from jointbench.configuration.seeds import trial_rng
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.poses import rigid_fit
-from jointbench.simulate import noise
+from jointbench.simulate import PROXIMAL_TRUTH, noise
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.simulate.noise import isotropic_noise
 
@@ -35,7 +35,12 @@ def test_shapes_truth_and_parameters():
     assert trials.n_trials == 4
     assert trials.segments["proximal"].shape == (4, 75, 3, 3)
     assert trials.segments["distal"].shape == (4, 75, 3, 3)
-    assert trials.truth == {"center": [0.0, 0.0, 1000.0]}
+    assert trials.truth["center"] == [0.0, 0.0, 1000.0]
+    # The proximal markers' noise-free frame-0 positions, for scoring relative to them.
+    np.testing.assert_allclose(
+        np.asarray(trials.truth[PROXIMAL_TRUTH]) - trials.truth["center"],
+        [[90.0, 0.0, 500.0], [-60.0, 90.0, 520.0], [-50.0, -100.0, 480.0]],
+    )
     assert trials.parameters["n_frames"] == 75
     assert trials.parameters["n_frames_recorded"] == 1200
     assert trials.parameters["noise_mm"] == 1.7
@@ -143,7 +148,12 @@ def test_protocol_from_config():
     protocol = HipProtocol.from_config({"swing_deg": 20, "joint_mm": [1, 2, 3], "n_frames": 600})
     assert protocol.swing_deg == 20
     assert protocol.joint_mm == (1.0, 2.0, 3.0)
-    assert simulate({}, protocol, _rngs(1)).truth == {"center": [1.0, 2.0, 3.0]}
+    truth = simulate({}, protocol, _rngs(1)).truth
+    assert truth["center"] == [1.0, 2.0, 3.0]
+    np.testing.assert_allclose(
+        np.asarray(truth[PROXIMAL_TRUTH]) - truth["center"],
+        [[90.0, 0.0, 500.0], [-60.0, 90.0, 520.0], [-50.0, -100.0, 480.0]],
+    )
     layout = [[0, 0, 500], [100, 0, 500], [0, 100, 500], [50, 50, 550]]
     four = HipProtocol.from_config({"proximal_markers_mm": layout})
     assert simulate({"n_frames": 5}, four, _rngs(1)).segments["proximal"].shape == (1, 5, 4, 3)

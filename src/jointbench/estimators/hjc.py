@@ -648,7 +648,7 @@ def fit_gauss_markov(
 
 
 @register(
-    "joint_center", "gauss-markov-frame0", min_frames=POSE_MIN_FRAMES, color="#b35806", marker="D"
+    "joint_center", "gauss-markov-frame0", min_frames=POSE_MIN_FRAMES, color="#e6ab02", marker="D"
 )
 def fit_gauss_markov_frame0(
     proximal: np.ndarray,

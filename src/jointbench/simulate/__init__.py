@@ -248,6 +248,7 @@ class Study:
                 f"study {self.name!r} runs no {kind} estimators; its kinds: {', '.join(self.kinds)}"
             ) from None
 
+    @property
     def display_name(self) -> str:
         """The study's name for people: its :attr:`title`, else its name."""
         return self.title or self.name

@@ -397,14 +397,25 @@ STUDY = Study(
     protocol_class=HipStaProtocol,
     simulate=simulate,
     grid_spec={
-        "motion": GridValues(str, choices=MOTIONS, label="motion", text="{}"),
+        "motion": GridValues(
+            str,
+            choices=MOTIONS,
+            label="motion",
+            text="{}",
+            names={"star_arc": "star-arc", "circumduction": "circumduction"},
+        ),
         "rom_deg": GridValues(
             float, minimum=0, exclusive_minimum=True, maximum=90, label="RoM", text="RoM {:g}°"
         ),
         # As for white noise: an artefact beyond the farthest marker's distance from the joint
         # moves markers over more than the whole segment.
         "sta_mm": GridValues(
-            float, minimum=0, maximum=lambda p: largest_noise_mm(p.markers_from_joint())
+            float,
+            minimum=0,
+            maximum=lambda p: largest_noise_mm(p.markers_from_joint()),
+            label="STA amplitude",
+            text="STA {:g} mm",
         ),
     },
+    title="hip on skin markers",
 )
