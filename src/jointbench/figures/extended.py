@@ -286,7 +286,7 @@ def _rank_bars(
     ax.set_yticks(y, list(ranks["method"]))
     ax.invert_yaxis()
     ax.set_xlim(0, len(ranks))
-    ax.set_xticks(range(1, len(ranks) + 1))
+    ax.set_xticks(range(1, len(ranks) + 1, max(1, len(ranks) // 4)))
     ax.set_xlabel("mean rank\nover conditions (1 = best)", fontsize=8)
     ax.set_title("Overall", fontsize=9)
     ax.legend(
@@ -321,8 +321,10 @@ def extended_figure(collected: pd.DataFrame, study: str, paper: PaperMethods = N
     bars_height = min(height, 0.35 * len(methods) + 1.4)
     heat_width = max(3.0, 0.8 * len(methods)) + 2.5
     # The middle column is room for the colour bar, an inset of the map the layout ignores.
-    fig = pyplot().figure(figsize=(heat_width + 5.6, height), layout="constrained")
-    outer = fig.add_gridspec(1, 3, width_ratios=[heat_width, 1.0, 4.6])
+    # The right column holds the method names, the bars and the notes written beside them:
+    # wide enough that the bars keep room for their rank ticks.
+    fig = pyplot().figure(figsize=(heat_width + 7.0, height), layout="constrained")
+    outer = fig.add_gridspec(1, 3, width_ratios=[heat_width, 1.0, 6.0])
     heat = fig.add_subplot(outer[0, 0])
     right = outer[0, 2].subgridspec(2, 1, height_ratios=[bars_height, height - bars_height + 1e-3])
     bars = fig.add_subplot(right[0, 0])
