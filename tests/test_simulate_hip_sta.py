@@ -4,9 +4,11 @@ rigid share, determinism by seed, pairing across conditions, and the bootstrap's
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from jointbench.configuration.seeds import trial_rng
@@ -208,3 +210,31 @@ def test_a_study_refuses_kinds_scored_against_different_truths():
         dataclasses.replace(hip_sta.STUDY, more_kinds={"joint_center": ("distal",)})
     with pytest.raises(ValueError, match="kind 'knee' is not one of"):
         dataclasses.replace(hip_sta.STUDY, more_kinds={"knee": ("distal",)})
+
+
+def test_the_findings_count_the_joint_centre_methods_whatever_else_runs():
+    # The ensembles run only the methods a paper measures; the default run runs every listed
+    # estimator. A finding must read the same in both.
+    from jointbench.papers.base import Inputs
+
+    rows = []
+    for method, motion, rom, sta in itertools.product(
+        (*paper_sta.MEASURED, "LS"), hip_sta.MOTIONS, (20.0, 45.0), (0.0, 10.0)
+    ):
+        # LS far worse than everyone, everywhere: were it counted, S1 would change.
+        error = 50.0 if method == "LS" else 1.0 + sta + (rom == 20.0)
+        rows.append(
+            {"method": method, "motion": motion, "rom_deg": rom, "sta_mm": sta, "error_mm": error}
+        )
+    collected = pd.DataFrame(rows)
+    every = paper_sta.measure(Inputs(collected, {}, {}))
+    measured = paper_sta.measure(
+        Inputs(collected[collected["method"].isin(paper_sta.MEASURED)], {}, {})
+    )
+    assert every.keys() == measured.keys() and "S1" in every
+    for key in every:
+        assert every[key].value == measured[key].value, key
+    assert every["S1"].value == 1.0
+    assert set(paper_sta.PAPER.methods) | set(paper_sta.PAPER.also_measures) == set(
+        paper_sta.MEASURED
+    )
