@@ -214,7 +214,8 @@ def _ranking(inputs: Inputs) -> Table:
 
 
 def ranking_headline(tables) -> str:
-    """The order of the methods at no STA and at the largest STA, from the ranking table."""
+    """The order of the methods by mean rank at no STA and at the largest STA, from the
+    ranking table."""
     (table,) = tables.values()
 
     def order(sta: float) -> str:
@@ -224,7 +225,10 @@ def ranking_headline(tables) -> str:
         )
 
     low, high = table["sta_mm"].min(), table["sta_mm"].max()
-    return f"By mean error, white noise only: {order(low)}; at {high:g} mm STA: {order(high)}."
+    return (
+        "By mean rank over the motions and ranges (mean error in parentheses), white noise only: "
+        f"{order(low)}; at {high:g} mm STA: {order(high)}."
+    )
 
 
 def errors_figure(inputs: Inputs) -> Figure:
