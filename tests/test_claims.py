@@ -524,14 +524,15 @@ def _timed(world, seconds, slow_nm_calls=0):
 A_SPEEDS = {"NM": 1e-4, "LS": 4e-4, "IS": 0.01, "BC": 0.02, "MA": 0.3}
 
 
-def test_a12_nm_fastest_by_median(documents):
-    """NM fastest by median is reproduced even when a few slow calls make its mean the
-    largest but one; NM slower than LS by median is not."""
+def test_a12_shows_the_order_by_median_untested(documents):
+    """The order is read by median, so a few slow NM calls that make its mean the largest but
+    one do not move it; it is shown beside the paper's, not tested (the order of two compiled
+    closed forms flips between runs)."""
     fast = _verdict("A", documents, _timed(paper_a_world(), A_SPEEDS, slow_nm_calls=3), "A12")
-    assert fast["status"] == "reproduced", fast["reproduced"]
+    assert fast["status"] == "not applicable", fast["reproduced"]
     assert "NM 0.0001 s < LS 0.0004 s" in fast["reproduced"]
     slower = _timed(paper_a_world(), {**A_SPEEDS, "NM": 5e-4})
-    assert _verdict("A", documents, slower, "A12")["status"] == "not reproduced"
+    assert "LS 0.0004 s < NM 0.0005 s" in _verdict("A", documents, slower, "A12")["reproduced"]
 
 
 # ----------------------------------------------------------------------------- paper C
