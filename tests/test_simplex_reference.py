@@ -139,7 +139,7 @@ def _same(result: simplex.SimplexResult, reference: tuple) -> bool:
 @pytest.mark.parametrize("name", list(COSTS))
 def test_searches_together_take_the_reference_path_to_the_last_bit(name, limits):
     cost = COSTS[name]
-    starts = _starts(120)
+    starts = _starts(64)
     together = simplex.lockstep(lambda points, _owners: cost(points), starts, **limits)
     mismatched = [
         i
