@@ -121,11 +121,13 @@ def test_the_block_gives_reasons_shares_and_the_default_protocol():
     assert "- **Paper X (a paper)**" in lines
     (x2,) = [line for line in lines if line.startswith("  - **X2**")]
     assert "not reproduced — the recorded reason." in x2 and "second sentence" not in x2
-    seeds = "    - Seeds reproducing it: 17 of 20 (interval of X3); drawn protocols: 20 of 20"
-    assert seeds in text
+    assert "    - Seeds reproducing it: 17 of 20 (interval of X3)." in lines
+    assert "    - Drawn protocols reproducing it: 20 of 20 (interval of X3)." in lines
     (x4,) = [i for i, line in enumerate(lines) if line.startswith("  - **X4**")]
-    assert "the default protocol reproduces it, most drawn ones do not" in lines[x4 + 2]
-    assert "depends most on `choice_mm`" in lines[x4 + 2]
+    assert lines[x4 + 3] == (
+        "    - Drawn protocols reproducing it: 3 of 20 (interval of X4); the default protocol "
+        "reproduces it, most drawn ones do not; depends most on `choice_mm`."
+    )
     assert "    - Under the other-layout protocol: not reproduced." in lines
     assert "  - **X-V1** not reproduced: the recorded reason." in lines
     assert "  - Reproduced in the default run, every seed and every drawn protocol: X1." in lines

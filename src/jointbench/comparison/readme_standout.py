@@ -173,30 +173,29 @@ def _where_default(protocols: Mapping | None, status: str) -> list[str]:
 
 def _claim_lines(row: Mapping, ensembles: Ensembles) -> list[str]:
     """One standing-out claim as a bullet and its sub-bullets: its verdict in the default run
-    (with the recorded reason when not reproduced); the paper's value beside ours; its shares
-    over seeds and drawn protocols, where the default protocol sits and the named protocols
-    that change it."""
+    (with the recorded reason when not reproduced); the paper's value beside ours; its share
+    of seeds; its share of drawn protocols, with where the default protocol sits among them
+    and the choice it depends on most; each named protocol that changes it."""
     seeds = _row(ensembles.seeds, row["id"])
     protocols = _row(ensembles.protocols, row["id"])
     verdict = row["status"]
     if verdict == "not reproduced" and isinstance(row.get("reason"), str) and row["reason"]:
         verdict += f" — {first_sentence(row['reason'])}"
-    held = [
+    drawn = "; ".join(
+        [_share(protocols, "draws", "Drawn protocols reproducing it")]
+        + (_where_default(protocols, row["status"]) if _members(protocols, "draws") else [])
+    )
+    details = [
+        f"Paper: {row['published']}; ours: {row['reproduced']}.",
         _share(seeds, "seeds", "Seeds reproducing it"),
-        _share(protocols, "draws", "drawn protocols"),
-        *_where_default(protocols, row["status"]),
+        drawn,
         *(
-            f"under the {name} protocol: {status}"
+            f"Under the {name} protocol: {status}"
             for name, status in _named_changes(ensembles.named, row["id"]).items()
         ),
     ]
-    held = "; ".join(h for h in held if h)
-    lines = [
-        f"**{row['id']}** ({row['quantity']}): {verdict}.",
-        f"  - Paper: {row['published']}; ours: {row['reproduced']}.",
-    ]
-    if held:
-        lines.append(f"  - {held[0].upper()}{held[1:]}.")
+    lines = [f"**{row['id']}** ({row['quantity']}): {verdict}."]
+    lines += [f"  - {d if d.endswith('.') else d + '.'}" for d in details if d]
     return lines
 
 
