@@ -226,9 +226,11 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
     assert "typed" not in text
     assert "| A2 | second | 9 of 20 | 0.26–0.66 | seed-dependent |" in text
     assert "protocols reproducing" not in text
-    pd.DataFrame({"id": ["A2"], "share": [0.8]}).to_csv(tables / "sensitivity.csv", index=False)
+    pd.DataFrame({"id": ["A2"], "reproduced_in": [16], "draws": [20]}).to_csv(
+        tables / "sensitivity.csv", index=False
+    )
     code, _, _ = run(capsys, *arguments)
-    assert "| seed-dependent | 80% |" in readme.read_text()
+    assert "| seed-dependent | 16 of 20 |" in readme.read_text()
 
 
 def _toy_run(tmp_path):

@@ -8,7 +8,6 @@ when a published value or a reproduced mean moves.
 from __future__ import annotations
 
 import copy
-import re
 from pathlib import Path
 
 import pandas as pd
@@ -16,6 +15,7 @@ import pytest
 import yaml
 
 import jointbench.papers
+from jointbench.comparison.cited_numbers import numbers_in
 from jointbench.comparison.published import (
     UNEXPLAINED,
     comparison_rows,
@@ -236,12 +236,8 @@ def test_snapshot_comparison_catches_a_moved_mean():
     ]
 
 
-# A number standing alone: not part of a name ("frame-0") nor an equation's ("eq. 2").
-NUMBER = re.compile(r"(?<![\w.])(?<![A-Za-z]-)(?<!eq\. )[-+−]?\d+(?:\.\d+)?")
-
-
 def _numbers(text: str) -> set[str]:
-    return {n.lstrip("+-−") for n in NUMBER.findall(str(text))}
+    return numbers_in(text)
 
 
 @pytest.mark.parametrize("letter", ["a", "b", "c"])
@@ -266,15 +262,15 @@ COMPARISON = Path(__file__).resolve().parents[1] / "results" / "tables" / "publi
 
 @pytest.mark.skipif(not COMPARISON.exists(), reason="run `snakemake -j2` first")
 def test_every_number_of_a_reason_is_in_its_row():
-    """Each number the reason of a value that did not reproduce gives is in that row's results
-    or the paper's text."""
+    """Each number the reason of a value or claim gives (not reproduced, or not applicable) is
+    in that row's results or the paper's text."""
     table = pd.read_csv(COMPARISON, dtype=str).fillna("")
     # The paper's own numbers, wherever quoted in its rows, are not ours.
     paper = {
         letter: _numbers(" ".join([*rows["quote"], *rows["published"]]))
         for letter, rows in table.groupby("paper")
     }
-    for row in table[table["status"] == "not reproduced"].itertuples():
+    for row in table[table["reason"] != ""].itertuples():
         shown = " ".join([row.reproduced, row.criterion, row.tolerance, row.margin])
         stray = _numbers(row.reason) - _numbers(shown) - paper[row.paper]
         assert not stray, (row.id, sorted(stray))

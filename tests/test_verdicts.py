@@ -166,10 +166,10 @@ def test_the_readme_verdicts_are_generated_from_the_seed_shares():
     (b2,) = summary.loc[summary["id"] == "B2", "interval_95"]
     assert f"| 9 of 20 | {b2} | seed-dependent |" in calls[0]
     assert "protocols" not in text
-    protocols = pd.DataFrame({"id": ["A4"], "share": [0.35]})
+    protocols = pd.DataFrame({"id": ["A4"], "reproduced_in": [7], "draws": [20]})
     with_protocols = standout_summary(summary, protocols, closest=2)
     assert "| protocols reproducing |" in with_protocols
-    assert "| seed-dependent | 35% |" in with_protocols
+    assert "| seed-dependent | 7 of 20 |" in with_protocols
 
 
 @pytest.mark.skipif(

@@ -21,6 +21,11 @@ import numpy as np
 import pandas as pd
 
 import jointbench
+from jointbench.comparison.readme_standout import (
+    STANDOUT_BLOCK,
+    read_ensembles,
+    standout_block,
+)
 from jointbench.comparison.snapshot import (
     VERDICTS_BLOCK,
     readme_blocks,
@@ -117,6 +122,11 @@ def _readme(args: argparse.Namespace) -> int:
             ).items()
         },
     }
+    if STANDOUT_BLOCK in readme_blocks(args.readme):
+        blocks["what stands out"] = (
+            STANDOUT_BLOCK,
+            standout_block(comparison, read_ensembles(args.results), paper_labels()),
+        )
     for what, (block, text) in blocks.items():
         changed = update_readme(args.readme, text, block=block)
         print(f"{args.readme}: {what} {'updated' if changed else 'already current'}")

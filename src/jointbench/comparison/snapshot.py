@@ -38,7 +38,8 @@ __all__ = [
 SNAPSHOT_RTOL = 1e-6
 SNAPSHOT_ATOL = 1e-9
 #: The README's generated blocks, each between ``<!-- NAME:start -->`` and ``<!-- NAME:end -->``:
-#: the reproduction summary, and the verdicts over seeds in "What stands out".
+#: the reproduction summary, and the verdicts over seeds in "What stands out" (that section's
+#: bullets: :data:`jointbench.comparison.readme_standout.STANDOUT_BLOCK`).
 SUMMARY_BLOCK = "reproduction-summary"
 VERDICTS_BLOCK = "verdicts-summary"
 
@@ -152,9 +153,11 @@ def reproduction_summary(comparison: pd.DataFrame, titles: Mapping[str, str]) ->
     counts = reproduction_counts(comparison, titles)
     lines = ["| " + " | ".join(counts.columns) + " |", "|---|---|---|---|"]
     lines += ["| " + " | ".join(row) + " |" for row in counts.astype(str).values.tolist()]
+    cells = counts[["published values reproduced", "claims reproduced"]].to_numpy().ravel()
+    example = next((f" such as {c}" for c in cells if c != NONE_TESTED), "")
     return (
         "**Reproduction summary** (generated from `results/tables/published_comparison.csv`; "
-        "every deviation has its reason there). A cell such as 6 / 11 counts the values or "
+        f"every deviation has its reason there). A cell{example} counts the values or "
         "claims reproduced (within their tolerance) of those given a verdict; "
         f"*{NOT_APPLICABLE}*: {STATUSES[NOT_APPLICABLE]}.\n\n" + "\n".join(lines)
     )

@@ -51,9 +51,9 @@ SUMMARY_COLUMNS = [
     "default_reproduced",
 ]
 TESTED = ("reproduced", "not reproduced")
-#: Under the results folder: the ``sensitivity`` target's share of plausible protocols in which
-#: each value and claim reproduces (columns ``id`` and ``share``), read beside the seeds' when
-#: it exists.
+#: Under the results folder: the ``sensitivity`` target's count of drawn protocols in which
+#: each value and claim reproduces (columns ``id``, ``reproduced_in`` and ``draws``), read
+#: beside the seeds' when it exists.
 PROTOCOL_SHARES = "tables/sensitivity.csv"
 
 
@@ -158,8 +158,8 @@ def standout_summary(
     """The README's verdicts over seeds, as Markdown, from the summary :func:`write_summary`
     returns (or its CSV read back): the counts of each verdict per paper, and the ``closest``
     entries whose share of seeds lies nearest 1/2 with their intervals. ``protocols``, the
-    ``sensitivity`` target's per-entry shares (columns ``id`` and ``share``), adds the share of
-    plausible protocols in which each reproduces."""
+    ``sensitivity`` target's per-entry counts (columns ``id``, ``reproduced_in`` and
+    ``draws``), adds how many of the drawn protocols reproduce each."""
     seeds = int(summary["seeds"].max()) if len(summary) else 0
     counts = verdict_counts(summary)
     calls = _closest_calls(summary, closest)
@@ -175,9 +175,12 @@ def standout_summary(
         }
     )
     if protocols is not None:
-        shares = protocols.set_index("id")["share"]
+        drawn = protocols.set_index("id")
         table["protocols reproducing"] = [
-            f"{shares[i]:.0%}" if i in shares.index else "" for i in calls["id"]
+            f"{drawn.at[i, 'reproduced_in']} of {drawn.at[i, 'draws']}"
+            if i in drawn.index and drawn.at[i, "draws"] > 0
+            else ""
+            for i in calls["id"]
         ]
     return (
         f"**Verdicts over {seeds} base seeds** (generated from `results/tables/verdicts.csv`, "
