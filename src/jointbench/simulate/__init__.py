@@ -56,8 +56,8 @@ class Trials:
     ``"moving"`` for one-segment studies (markers in the reference segment's frame), or
     ``"proximal"`` and ``"distal"`` (world frame) for two-segment studies. ``truth`` holds the
     JSON-serialisable ground truth shared by all trials (``"center"``, and optionally
-    :data:`PROXIMAL_TRUTH` or :data:`RADII_TRUTH`; or ``"axis_point"`` and ``"axis_direction"``), ``parameters`` the
-    generator settings for provenance.
+    :data:`PROXIMAL_TRUTH` or :data:`RADII_TRUTH`; or ``"axis_point"`` and
+    ``"axis_direction"``), ``parameters`` the generator settings for provenance.
     """
 
     segments: dict[str, np.ndarray]
