@@ -1,0 +1,85 @@
+"""Paper C's method checked per trial: the pose alternation's convergence (§5) and the
+frame-0 control (the same trials with frame 0 recorded exactly)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jointbench.configuration.studies import get_study
+from jointbench.numerics.poses import fit_rigid_poses, rigid_poses
+from jointbench.running.run import estimate
+from jointbench.running.scoring import CHI2_3DOF_95
+from jointbench.simulate.hip import EXACT_FRAME0_COLUMNS, POSE_FIT_COLUMNS
+
+HIP = get_study("hip")
+
+
+def _trials(n_frames: int, n_trials: int, **protocol):
+    condition = {"n_frames": n_frames}
+    rngs = [np.random.default_rng(seed) for seed in range(n_trials)]
+    return condition, HIP.simulate(condition, HIP.protocol(protocol), rngs)
+
+
+def _rms(values) -> float:
+    return float(np.sqrt(np.mean(np.asarray(values) ** 2)))
+
+
+def test_the_pose_fit_says_how_its_alternation_ended():
+    _, trials = _trials(75, 6)
+    markers = trials.segments["distal"]
+    fit = fit_rigid_poses(markers)
+    for mine, plain in zip(fit[:3], rigid_poses(markers), strict=True):
+        np.testing.assert_array_equal(mine, plain)
+    assert fit.iterations.shape == fit.change_mm.shape == (6,)
+    assert (fit.iterations >= 2).all() and (fit.iterations < 20).all()
+    assert (fit.change_mm < 1e-12).all()
+    # Stopped early: the last change is the one of the last iteration made, above tolerance.
+    once = fit_rigid_poses(markers, max_iterations=1)
+    np.testing.assert_array_equal(once.iterations, 1)
+    assert (once.change_mm > 1e-3).all()
+
+
+def test_exact_markers_need_one_iteration_to_confirm_their_coordinates():
+    _, trials = _trials(32, 2, noise_mm=0.0)
+    fit = fit_rigid_poses(trials.segments["proximal"])
+    np.testing.assert_array_equal(fit.iterations, 1)
+
+
+@pytest.fixture(scope="module")
+def gauss_markov_rows():
+    condition, trials = _trials(1200, 40)
+    return estimate("hip", "gauss-markov", trials, condition)
+
+
+def test_gauss_markov_rows_carry_the_pose_fits(gauss_markov_rows):
+    rows = gauss_markov_rows
+    for column in POSE_FIT_COLUMNS:
+        assert rows[column].notna().all(), column
+    for segment in ("proximal", "distal"):
+        fit = fit_rigid_poses(_trials(1200, 40)[1].segments[segment])
+        np.testing.assert_array_equal(rows[f"pose_iterations_{segment}"], fit.iterations)
+        assert (rows[f"pose_change_mm_{segment}"] < 1e-12).all()
+
+
+def test_the_frame0_control_removes_the_bias_of_eq2s_single_centre(gauss_markov_rows):
+    """With a noisy frame 0 gauss-markov's error is many times its predicted sqrt(tr Wc);
+    with frame 0 exact (the control) its error matches the prediction and the 95 % ellipsoid
+    holds the true centre in most trials."""
+    rows = gauss_markov_rows
+    error, predicted, e = (rows[EXACT_FRAME0_COLUMNS[c]] for c in EXACT_FRAME0_COLUMNS)
+    default_ratio = _rms(rows["error_mm"]) / rows["sqrt_trace_cov_mm"].median()
+    control_ratio = _rms(error) / predicted.median()
+    assert default_ratio > 5
+    assert 0.7 < control_ratio < 1.4
+    assert np.mean(e <= CHI2_3DOF_95) > 0.8
+    assert np.mean(rows["mahalanobis_sq"] <= CHI2_3DOF_95) < 0.2
+
+
+def test_the_control_is_the_noise_free_frame0_run(gauss_markov_rows):
+    """The control refits the same draws as the protocol option ``noise_free_frame0``
+    simulates them: its scores are that run's gauss-markov scores."""
+    condition, trials = _trials(1200, 40, noise_free_frame0=True)
+    variant = estimate("hip", "gauss-markov", trials, condition)
+    for column, control in EXACT_FRAME0_COLUMNS.items():
+        np.testing.assert_allclose(gauss_markov_rows[control], variant[column], rtol=1e-9)
