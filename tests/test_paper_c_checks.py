@@ -6,8 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from jointbench.comparison.published import comparison_rows, load_published
 from jointbench.configuration.studies import get_study
 from jointbench.numerics.poses import fit_rigid_poses, rigid_poses
+from jointbench.papers import Inputs, get_paper
+from jointbench.papers.paper_c import converged_after
 from jointbench.running.run import estimate
 from jointbench.running.scoring import CHI2_3DOF_95
 from jointbench.simulate.hip import EXACT_FRAME0_COLUMNS, POSE_FIT_COLUMNS
@@ -83,3 +86,53 @@ def test_the_control_is_the_noise_free_frame0_run(gauss_markov_rows):
     variant = estimate("hip", "gauss-markov", trials, condition)
     for column, control in EXACT_FRAME0_COLUMNS.items():
         np.testing.assert_allclose(gauss_markov_rows[control], variant[column], rtol=1e-9)
+
+
+# ------------------------------------------------------------------------ claim C5 (paper C)
+
+
+def _c5(rows):
+    document = load_published(get_paper("paper_c").published)
+    measured = get_paper("paper_c").measure(
+        Inputs(collected=rows, published=document, config={"studies": {}})
+    )
+    return comparison_rows(document, measured).set_index("id").loc["C5"]
+
+
+def test_c5_counts_the_iterations_before_the_one_that_confirms_convergence(gauss_markov_rows):
+    row = _c5(gauss_markov_rows)
+    counts = converged_after(gauss_markov_rows)
+    made = gauss_markov_rows[["pose_iterations_proximal", "pose_iterations_distal"]]
+    np.testing.assert_array_equal(counts.to_numpy(), made.to_numpy() - 1)
+    assert row["status"] == "reproduced"
+    assert f"largest {int(counts.to_numpy().max())}" in row["reproduced"]
+
+
+@pytest.mark.parametrize(
+    ("iterations", "change_mm", "status"),
+    [
+        (5, 1e-13, "reproduced"),  # converged after 4, confirmed by the 5th
+        (5, 1e-11, "not reproduced"),  # still changing after 5
+        (6, 1e-13, "not reproduced"),  # converged after 5
+        (20, 1e-6, "not reproduced"),  # never converged
+    ],
+)
+def test_c5_fails_when_one_trial_needs_5_iterations(
+    gauss_markov_rows, iterations, change_mm, status
+):
+    rows = gauss_markov_rows.copy()
+    rows.loc[rows.index[3], "pose_iterations_distal"] = iterations
+    rows.loc[rows.index[3], "pose_change_mm_distal"] = change_mm
+    assert _c5(rows)["status"] == status
+
+
+def test_c5_is_not_applicable_without_recorded_pose_fits(gauss_markov_rows):
+    rows = gauss_markov_rows.drop(columns=list(POSE_FIT_COLUMNS))
+    assert _c5(rows)["status"] == "not applicable"
+
+
+def test_one_trial_without_a_trial_axis_has_scalar_counts():
+    _, trials = _trials(16, 1)
+    fit = fit_rigid_poses(trials.segments["proximal"][0])
+    assert fit.rotation.shape == (16, 3, 3) and fit.body.shape == (3, 3)
+    assert fit.iterations.shape == fit.change_mm.shape == ()

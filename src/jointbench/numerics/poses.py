@@ -13,7 +13,21 @@ import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
 
-__all__ = ["PoseFit", "best_rotation", "fit_rigid_poses", "rigid_fit", "rigid_poses"]
+__all__ = [
+    "POSE_MAX_ITERATIONS",
+    "POSE_TOL_MM",
+    "PoseFit",
+    "best_rotation",
+    "fit_rigid_poses",
+    "rigid_fit",
+    "rigid_poses",
+]
+
+#: The alternation of :func:`fit_rigid_poses` stops once no body-fixed coordinate changes by
+#: this much [mm]: 15 significant digits of coordinates of order 1000 mm (paper C §5's "15
+#: decimals of precision"), or after this many re-estimations.
+POSE_TOL_MM = 1e-12
+POSE_MAX_ITERATIONS = 20
 
 # Frames per block of a many-trial pose fit.
 _BLOCK_FRAMES = 65536
@@ -219,7 +233,7 @@ class PoseFit(NamedTuple):
 
 
 def rigid_poses(
-    markers: np.ndarray, *, max_iterations: int = 20, tol_mm: float = 1e-12
+    markers: np.ndarray, *, max_iterations: int = POSE_MAX_ITERATIONS, tol_mm: float = POSE_TOL_MM
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pose of a rigid marker cluster in every frame, with estimated body-fixed coordinates:
     ``(R, t, body)`` of :func:`fit_rigid_poses`, which says how the alternation ended."""
@@ -227,7 +241,7 @@ def rigid_poses(
 
 
 def fit_rigid_poses(
-    markers: np.ndarray, *, max_iterations: int = 20, tol_mm: float = 1e-12
+    markers: np.ndarray, *, max_iterations: int = POSE_MAX_ITERATIONS, tol_mm: float = POSE_TOL_MM
 ) -> PoseFit:
     """Pose of a rigid marker cluster in every frame, with estimated body-fixed coordinates.
 
@@ -260,7 +274,7 @@ def fit_rigid_poses(
     ]
     return PoseFit(
         *(
-            np.concatenate([part[k] for part in parts]).reshape(*batch, *parts[0][k].shape[1:])
+            np.concatenate([part[k] for part in parts]).reshape(batch + parts[0][k].shape[1:])
             for k in range(len(PoseFit._fields))
         )
     )
