@@ -4,10 +4,12 @@ frame-0 control (the same trials with frame 0 recorded exactly)."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from jointbench.comparison.published import comparison_rows, load_published
 from jointbench.configuration.studies import get_study
+from jointbench.figures.paper_c import CONTROL, frame0_control_table
 from jointbench.numerics.poses import fit_rigid_poses, rigid_poses
 from jointbench.papers import Inputs, get_paper
 from jointbench.papers.paper_c import converged_after
@@ -136,3 +138,32 @@ def test_one_trial_without_a_trial_axis_has_scalar_counts():
     fit = fit_rigid_poses(trials.segments["proximal"][0])
     assert fit.rotation.shape == (16, 3, 3) and fit.body.shape == (3, 3)
     assert fit.iterations.shape == fit.change_mm.shape == ()
+
+
+# ----------------------------------------------------------- the frame-0 control, reported
+
+
+def test_the_control_is_reported_beside_the_default(gauss_markov_rows):
+    condition, trials = _trials(1200, 40)
+    frame0 = estimate("hip", "gauss-markov-frame0", trials, condition)
+    collected = pd.concat([gauss_markov_rows, frame0], ignore_index=True)
+    output = {o.name: o for o in get_paper("paper_c").outputs}["paper_c_frame0_control"]
+    document = load_published(get_paper("paper_c").published)
+    table = output.render(Inputs(collected=collected, published=document, config={})).frame
+    ratio = table.set_index("variant")["error_over_predicted"]
+    assert list(ratio.index) == ["gauss-markov", "gauss-markov-frame0", CONTROL]
+    assert ratio["gauss-markov"] > 5
+    assert 0.7 < ratio[CONTROL] < 1.4
+    control = table.set_index("variant").loc[CONTROL]
+    assert control["rms_error_mm"] == pytest.approx(
+        _rms(gauss_markov_rows["exact_frame0_error_mm"])
+    )
+    headline = output.headline({output.name: table})
+    assert f"{CONTROL} {ratio[CONTROL]:.2f}×" in headline
+    assert f"gauss-markov {ratio['gauss-markov']:.2f}×" in headline
+
+
+def test_a_run_without_the_control_columns_reports_the_variants_it_has(gauss_markov_rows):
+    rows = gauss_markov_rows.drop(columns=list(EXACT_FRAME0_COLUMNS.values()))
+    table = frame0_control_table(rows)
+    assert set(table["variant"]) == {"gauss-markov"}
