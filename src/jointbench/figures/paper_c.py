@@ -177,17 +177,26 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
             ["n_frames", "trials", "inside_95", "mean_validation_index", "inside_95_proximal"]
         ].copy()
         part.insert(0, "method", method)
-        bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in part["trials"]])
-        part["binomial_low"], part["binomial_high"] = bounds[:, 0], bounds[:, 1]
+        part["binomial_low"], part["binomial_high"] = _honest_band(part["trials"])
         part["calibrated"] = part["inside_95"].between(part["binomial_low"], part["binomial_high"])
-        part["status"] = [
-            calibration_status(share, low, high)
-            for share, low, high in zip(
-                part["inside_95"], part["binomial_low"], part["binomial_high"], strict=True
-            )
-        ]
+        part["status"] = _statuses(part)
         parts.append(part)
     return pd.concat(parts, ignore_index=True)
+
+
+def _honest_band(trials: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """The central 95 % range of the share inside the 95 % ellipsoid that an honest covariance
+    gives over each count of ``trials``: ``(low, high)``, each ``(n,)``."""
+    bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in trials])
+    return bounds[:, 0], bounds[:, 1]
+
+
+def _statuses(part: pd.DataFrame) -> list[str]:
+    """:func:`calibration_status` of each row's ``inside_95`` over its ``trials``."""
+    low, high = _honest_band(part["trials"])
+    return [
+        calibration_status(*values) for values in zip(part["inside_95"], low, high, strict=True)
+    ]
 
 
 #: The frame-0 control's name in tables: gauss-markov on the same trials with frame 0 exact.
@@ -228,11 +237,7 @@ def frame0_control_table(collected: pd.DataFrame) -> pd.DataFrame:
         part.insert(
             5, "error_over_predicted", part["rms_error_mm"] / part["median_sqrt_trace_cov_mm"]
         )
-        bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in part["trials"]])
-        part["status"] = [
-            calibration_status(share, low, high)
-            for share, (low, high) in zip(part["inside_95"], bounds, strict=True)
-        ]
+        part["status"] = _statuses(part)
         parts.append(part)
     if not parts:
         raise KeyError(f"no {METHOD} results in this run")
