@@ -140,7 +140,11 @@ def test_a_newcomer_study_runs_its_own_truth_diagnostic(newcomer):
 def test_the_cmc_study_owns_paper_a_local_minimum_diagnostic():
     cmc = studies.get_study("cmc")
     assert set(cmc.diagnostics) == {"IS"}
-    assert all(not studies.get_study(s).diagnostics for s in ("hinge", "hip", "hip_sta"))
+    assert all(not studies.get_study(s).diagnostics for s in ("hinge", "hip_sta"))
+
+
+def test_the_hip_study_owns_paper_c_checks_of_gauss_markov():
+    assert set(studies.get_study("hip").diagnostics) == {"gauss-markov"}
 
 
 def test_a_newcomer_paper_adds_its_own_finding_and_table(newcomer):

@@ -90,7 +90,7 @@ def test_collected_cmc_has_one_row_per_trial_and_method(reduced_run):
 def test_claims_tables_are_computed(reduced_run):
     workdir, _, _ = reduced_run
     claims = pd.read_csv(workdir / "results" / "tables" / "paper_a_claims.csv")
-    assert list(claims["id"]) == [f"A{i}" for i in range(1, 13)]
+    assert list(claims["id"]) == [f"A{i}" for i in range(1, 14)]
     assert set(claims["status"]) <= {"reproduced", "not reproduced", "not applicable"}
 
 

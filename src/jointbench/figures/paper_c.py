@@ -14,17 +14,20 @@ import pandas as pd
 from jointbench.comparison.tolerance import binomial_interval
 from jointbench.figures.common import method_style, pyplot
 from jointbench.running.scoring import CHI2_3DOF_95, covariance_from_entries
+from jointbench.simulate.hip import EXACT_FRAME0_COLUMNS
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
     "CALIBRATION_STATUSES",
+    "CONTROL",
     "EXTENDED",
     "METHOD",
     "TABLE1_LABELS",
     "calibration_status",
     "calibration_table",
+    "frame0_control_table",
     "per_frames",
     "table1",
     "uncertainty_figure",
@@ -174,16 +177,70 @@ def calibration_table(collected: pd.DataFrame) -> pd.DataFrame:
             ["n_frames", "trials", "inside_95", "mean_validation_index", "inside_95_proximal"]
         ].copy()
         part.insert(0, "method", method)
-        bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in part["trials"]])
-        part["binomial_low"], part["binomial_high"] = bounds[:, 0], bounds[:, 1]
+        part["binomial_low"], part["binomial_high"] = _honest_band(part["trials"])
         part["calibrated"] = part["inside_95"].between(part["binomial_low"], part["binomial_high"])
-        part["status"] = [
-            calibration_status(share, low, high)
-            for share, low, high in zip(
-                part["inside_95"], part["binomial_low"], part["binomial_high"], strict=True
-            )
-        ]
+        part["status"] = _statuses(part)
         parts.append(part)
+    return pd.concat(parts, ignore_index=True)
+
+
+def _honest_band(trials: pd.Series) -> tuple[np.ndarray, np.ndarray]:
+    """The central 95 % range of the share inside the 95 % ellipsoid that an honest covariance
+    gives over each count of ``trials``: ``(low, high)``, each ``(n,)``."""
+    bounds = np.array([np.array(binomial_interval(n, 0.95)) / n for n in trials])
+    return bounds[:, 0], bounds[:, 1]
+
+
+def _statuses(part: pd.DataFrame) -> list[str]:
+    """:func:`calibration_status` of each row's ``inside_95`` over its ``trials``."""
+    low, high = _honest_band(part["trials"])
+    return [
+        calibration_status(*values) for values in zip(part["inside_95"], low, high, strict=True)
+    ]
+
+
+#: The frame-0 control's name in tables: gauss-markov on the same trials with frame 0 exact.
+CONTROL = f"{METHOD}, frame 0 exact"
+
+
+def frame0_control_table(collected: pd.DataFrame) -> pd.DataFrame:
+    """Per variant and Nt: gauss-markov with frame 0 recorded (the default), gauss-markov-frame0
+    and the frame-0 control (:data:`CONTROL`, gauss-markov's ``exact_frame0_*`` columns: the
+    same trials with frame 0 exact), each with its RMS error against the true centre [mm],
+    median predicted ``sqrt(tr Wc)`` [mm], their ratio (1 for an honest prediction), the share
+    of trials inside the 95 % ellipsoid and its calibration ``status``
+    (:func:`calibration_status`). A variant absent from the run is left out."""
+    present = set(collected["method"])
+    scores = ("error_mm", "sqrt_trace_cov_mm", "mahalanobis_sq")
+    variants = [(m, m, dict(zip(scores, scores, strict=True))) for m in (METHOD, EXTENDED)]
+    variants.append((CONTROL, METHOD, EXACT_FRAME0_COLUMNS))
+    parts = []
+    for name, method, columns in variants:
+        rows = collected[collected["method"] == method]
+        if method not in present or not set(columns.values()) <= set(rows.columns):
+            continue
+        rows = rows[[*columns.values(), "n_frames"]].rename(
+            columns={v: k for k, v in columns.items()}
+        )
+        grouped = rows.groupby("n_frames")
+        part = pd.DataFrame(
+            {
+                "trials": grouped.size(),
+                "rms_error_mm": grouped["error_mm"].apply(lambda e: float(np.sqrt(np.mean(e**2)))),
+                "median_sqrt_trace_cov_mm": grouped["sqrt_trace_cov_mm"].median(),
+                "inside_95": grouped["mahalanobis_sq"].apply(
+                    lambda m: float(np.mean(m <= CHI2_3DOF_95))
+                ),
+            }
+        ).reset_index()
+        part.insert(0, "variant", name)
+        part.insert(
+            5, "error_over_predicted", part["rms_error_mm"] / part["median_sqrt_trace_cov_mm"]
+        )
+        part["status"] = _statuses(part)
+        parts.append(part)
+    if not parts:
+        raise KeyError(f"no {METHOD} results in this run")
     return pd.concat(parts, ignore_index=True)
 
 

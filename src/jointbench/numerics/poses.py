@@ -7,12 +7,27 @@ A pose ``(R, t)`` maps body-fixed coordinates ``x`` to the world as ``R @ x + t`
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
 
-__all__ = ["best_rotation", "rigid_fit", "rigid_poses"]
+__all__ = [
+    "POSE_MAX_ITERATIONS",
+    "POSE_TOL_MM",
+    "PoseFit",
+    "best_rotation",
+    "fit_rigid_poses",
+    "rigid_fit",
+    "rigid_poses",
+]
+
+#: The alternation of :func:`fit_rigid_poses` stops once no body-fixed coordinate changes by
+#: this much [mm]: 15 significant digits of coordinates of order 1000 mm (paper C §5's "15
+#: decimals of precision"), or after this many re-estimations.
+POSE_TOL_MM = 1e-12
+POSE_MAX_ITERATIONS = 20
 
 # Frames per block of a many-trial pose fit.
 _BLOCK_FRAMES = 65536
@@ -200,15 +215,41 @@ def _horn_rotations(
         r[2, 0], r[2, 1], r[2, 2] = 2.0 * (xz - wy), 2.0 * (yz + wx), ww - xx - yy + zz
 
 
+class PoseFit(NamedTuple):
+    """:func:`fit_rigid_poses`: the poses, the body-fixed coordinates and how the alternation
+    of paper C §5 ended, per trial (leading axes ``...``).
+
+    ``rotation`` (..., n_frames, 3, 3), ``translation`` (..., n_frames, 3) [mm], ``body``
+    (..., n_markers, 3) [mm]; ``iterations`` (...) the re-estimations of the body-fixed
+    coordinates (eq. 5) made, ``change_mm`` (...) the largest change of a body-fixed
+    coordinate in the last of them [mm]: below the tolerance when it converged.
+    """
+
+    rotation: np.ndarray
+    translation: np.ndarray
+    body: np.ndarray
+    iterations: np.ndarray
+    change_mm: np.ndarray
+
+
 def rigid_poses(
-    markers: np.ndarray, *, max_iterations: int = 20, tol_mm: float = 1e-12
+    markers: np.ndarray, *, max_iterations: int = POSE_MAX_ITERATIONS, tol_mm: float = POSE_TOL_MM
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pose of a rigid marker cluster in every frame, with estimated body-fixed coordinates:
+    ``(R, t, body)`` of :func:`fit_rigid_poses`, which says how the alternation ended."""
+    return tuple(fit_rigid_poses(markers, max_iterations=max_iterations, tol_mm=tol_mm)[:3])
+
+
+def fit_rigid_poses(
+    markers: np.ndarray, *, max_iterations: int = POSE_MAX_ITERATIONS, tol_mm: float = POSE_TOL_MM
+) -> PoseFit:
     """Pose of a rigid marker cluster in every frame, with estimated body-fixed coordinates.
 
     Follows paper C §5: start from the body-fixed coordinates equal to the first frame,
     fit the pose of every frame by SVD, re-estimate the body-fixed coordinates as the mean
-    of the back-transformed measurements (paper C eq. 5) and repeat until they stop changing.
-    The body-fixed frame coincides with the world at frame 0 (``R[0] = I``, ``t[0] = 0``).
+    of the back-transformed measurements (paper C eq. 5) and repeat until they change by less
+    than ``tol_mm``, at most ``max_iterations`` times. The body-fixed frame coincides with the
+    world at frame 0 (``R[0] = I``, ``t[0] = 0``).
 
     Leading axes are independent trials, fitted together: each stops iterating when its own
     body-fixed coordinates stop changing, so a trial's poses do not depend on its batch.
@@ -219,7 +260,7 @@ def rigid_poses(
 
     Returns
     -------
-    R : (..., n_frames, 3, 3), t : (..., n_frames, 3) [mm], body : (..., n_markers, 3) [mm]
+    :class:`PoseFit`
     """
     markers = np.asarray(markers, dtype=float)
     n_frames, n_markers = markers.shape[-3:-1]
@@ -231,16 +272,16 @@ def rigid_poses(
         _rigid_poses_block(flat[i : i + per_block], max_iterations, tol_mm)
         for i in range(0, max(flat.shape[0], 1), per_block)
     ]
-    return tuple(
-        np.concatenate([part[k] for part in parts]).reshape(*batch, *parts[0][k].shape[1:])
-        for k in range(3)
+    return PoseFit(
+        *(
+            np.concatenate([part[k] for part in parts]).reshape(batch + parts[0][k].shape[1:])
+            for k in range(len(PoseFit._fields))
+        )
     )
 
 
-def _rigid_poses_block(
-    markers: np.ndarray, max_iterations: int, tol_mm: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`rigid_poses` of trials ``(T, N, P, 3)``, fitted together.
+def _rigid_poses_block(markers: np.ndarray, max_iterations: int, tol_mm: float) -> PoseFit:
+    """:func:`fit_rigid_poses` of trials ``(T, N, P, 3)``, fitted together.
 
     What :func:`rigid_fit` would recompute on every iteration is hoisted out of the loop: the
     frames' centroids and centred markers do not change. Stacking every frame's coordinates as
@@ -270,6 +311,8 @@ def _rigid_poses_block(
 
     body = markers[:, 0].copy()
     active = np.ones(n_trials, dtype=bool)
+    iterations = np.zeros(n_trials, dtype=int)
+    change = np.full(n_trials, np.nan)
     for _ in range(max_iterations):
         trials = np.flatnonzero(active)
         if not trials.size:
@@ -283,7 +326,9 @@ def _rigid_poses_block(
         first = fitted[:, 0]
         first_translation = target_mean[take, 0] - (first @ body_mean[:, :, None])[..., 0]
         new_body = mean_local @ np.swapaxes(first, 1, 2) + first_translation[:, None, :]
-        converged = np.max(np.abs(new_body - body[take]), axis=(1, 2)) < tol_mm
+        change[trials] = np.max(np.abs(new_body - body[take]), axis=(1, 2))
+        iterations[trials] += 1
+        converged = change[trials] < tol_mm
         # A converged trial keeps the coordinates its poses were just fitted to (within
         # ``tol_mm`` of the fixed point) while the others iterate on, so a trial's answer does
         # not depend on its batch.
@@ -295,4 +340,4 @@ def _rigid_poses_block(
     # t = mean(y) - R mean(body), every frame's rotation applied as one product per trial.
     turned = rotation.reshape(n_trials, n_frames * 3, 3) @ body.mean(axis=1)[:, :, None]
     translation = target_mean - turned.reshape(n_trials, n_frames, 3)
-    return rotation, translation, body
+    return PoseFit(rotation, translation, body, iterations, change)

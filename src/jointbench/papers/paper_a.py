@@ -1,4 +1,4 @@
-"""Paper A: Chang & Pollard (2007), centre of rotation — Fig 3, Fig 4, Table 2, claims A1–A11.
+"""Paper A: Chang & Pollard (2007), centre of rotation — Fig 3, Fig 4, Table 2, claims A1–A13.
 
 Each measurement returns the quantity its published entry's typed tolerance compares (see
 ``paper_a.yaml`` beside this module); drawing lives in :mod:`jointbench.figures.paper_a`.
@@ -20,7 +20,7 @@ from jointbench.papers.common import claims_headline, claims_output
 from jointbench.resultfiles.formatting import number
 from jointbench.simulate.cmc import marker_positions
 
-__all__ = ["PAPER", "example_ordering_share", "measure"]
+__all__ = ["PAPER", "example_ordering_share", "measure", "radius_errors"]
 
 METHODS = draw.PAPER_METHODS
 SPHERE_FITS = ("LS", "NM", "BC", "IS")
@@ -347,6 +347,42 @@ def _a11(collected, means):
     )
 
 
+def radius_errors(collected: pd.DataFrame, methods=("LS", "NM")) -> pd.DataFrame:
+    """Mean signed radius error [mm] (``radius_error_mm``: fitted less true, negative for an
+    underestimate) per condition (rows, :data:`CONDITION`) and method (columns), over the
+    trials that fitted radii."""
+    rows = collected[collected["method"].isin(methods)]
+    errors = rows.pivot_table(index=CONDITION, columns="method", values="radius_error_mm")
+    if errors.empty or not set(methods) <= set(errors.columns):
+        raise KeyError(f"no fitted radii of {', '.join(methods)} in this run")
+    return errors[list(methods)]
+
+
+def _a13(collected, means):
+    errors = radius_errors(collected)
+    roms = errors.index.get_level_values("rom_deg")
+    smallest, largest = roms.min(), roms.max()
+    if smallest == largest:
+        raise ValueError("one RoM in this run: reduced RoM cannot be told from the others")
+    small, large = errors.xs(smallest, level="rom_deg"), errors.xs(largest, level="rom_deg")
+    holds = (
+        (small["LS"] < 0)
+        & (small["LS"].abs() > small["NM"].abs())
+        & (small["LS"] < large["LS"].reindex(small.index))
+    )
+    by_rom = errors.groupby(level="rom_deg").mean()
+    shown = "; ".join(
+        f"±{rom:g}°: LS {row.LS:+.2f}, NM {row.NM:+.2f}" for rom, row in by_rom.iterrows()
+    )
+    failing = ", ".join(f"{m} set {n:g} mm" for m, n in small.index[~holds])
+    return Measured(
+        int((~holds).sum()),
+        f"mean signed radius error over the marker sets and noise levels, mm: {shown}; "
+        f"{int(holds.sum())} of {len(holds)} cells as stated"
+        + (f" (not at {failing})" if failing else ""),
+    )
+
+
 _CLAIMS = {
     "A1": _a1,
     "A2": _a2,
@@ -359,6 +395,7 @@ _CLAIMS = {
     "A9": _a9,
     "A10": _a10,
     "A11": _a11,
+    "A13": _a13,
 }
 
 

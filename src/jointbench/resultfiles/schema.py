@@ -24,6 +24,7 @@ from jointbench.running.scoring import (
     ERROR_COLUMN,
     ESTIMATE_COLUMNS,
     PROXIMAL_COLUMNS,
+    RADIUS_COLUMN,
     SCORE_COLUMNS,
 )
 
@@ -74,6 +75,7 @@ OPTIONAL_COLUMNS = {
         [
             *columns,
             *((*COVARIANCE_COLUMNS, *PROXIMAL_COLUMNS) if kind == "joint_center" else ()),
+            *((RADIUS_COLUMN,) if kind == "center" else ()),
         ],
         _NUMBER,
     )

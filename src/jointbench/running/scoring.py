@@ -17,7 +17,7 @@ import numpy as np
 
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.numerics.poses import rigid_fit
-from jointbench.simulate import PROXIMAL_TRUTH
+from jointbench.simulate import PROXIMAL_TRUTH, RADII_TRUTH
 
 __all__ = [
     "CHI2_3DOF_95",
@@ -26,6 +26,7 @@ __all__ = [
     "ESTIMATE_COLUMNS",
     "PROXIMAL_COLUMNS",
     "PROXIMAL_TRUTH",
+    "RADIUS_COLUMN",
     "SCORE_COLUMNS",
     "covariance_from_entries",
     "estimate_values",
@@ -45,7 +46,7 @@ ESTIMATE_COLUMNS = {
 #: Per kind, the columns the benchmark computes from the estimate and the truth; the first is
 #: the error a ranking is made of, its unit the suffix.
 SCORE_COLUMNS = {
-    "center": ("error_mm",),
+    "center": ("error_mm", "radius_error_mm"),
     "axis": ("error_deg",),
     "joint_center": (
         "error_mm",
@@ -76,6 +77,10 @@ _COVARIANCE_ENTRIES = {
 #: absent from a file, when the method predicts none.
 COVARIANCE_COLUMNS = tuple(_COVARIANCE_ENTRIES)
 
+#: A centre's optional estimate column: the mean of its fitted marker radii [mm], for a method
+#: that fits one radius per marker (the sphere fits); NaN, or absent from a file, otherwise.
+RADIUS_COLUMN = "mean_radius_mm"
+
 #: A joint centre's optional estimate columns: the centre [mm] and its covariance [mm²] in the
 #: proximal segment's own frame as its frame-0 fit places it, for a method that estimates it
 #: apart from its shared-frame centre (``gauss-markov-frame0``, whose centre is in the world at
@@ -101,7 +106,8 @@ def covariance_from_entries(frame, n_rows: int | None = None) -> np.ndarray:
 
 def estimate_values(kind: str, result) -> dict[str, float]:
     """The estimate columns of one result of a ``kind`` estimator (NaN where it failed: no
-    result), and for a joint centre the covariance entries (NaN when none is predicted)."""
+    result), for a joint centre the covariance entries (NaN when none is predicted) and for a
+    centre its mean fitted radius, :data:`RADIUS_COLUMN` (NaN when it fits no radii)."""
     if kind == "axis":
         vectors = (None, None) if result is None else (result.point, result.direction)
     else:
@@ -113,6 +119,9 @@ def estimate_values(kind: str, result) -> dict[str, float]:
         for name, index in _COVARIANCE_ENTRIES.items():
             out[name] = np.nan if covariance is None else float(covariance[index])
         out.update(_proximal_values(result))
+    if kind == "center":
+        radii = None if result is None else result.radii
+        out[RADIUS_COLUMN] = np.nan if radii is None else float(np.mean(radii))
     return out
 
 
@@ -142,7 +151,15 @@ def _stack(estimates: Mapping[str, object], columns) -> np.ndarray:
 
 
 def _score_center(estimates, truth) -> dict[str, np.ndarray]:
-    return {"error_mm": _distance(_stack(estimates, _CENTER), truth["center"])}
+    """The centre's error and ``radius_error_mm``, the signed error of the mean fitted marker
+    radius: :data:`RADIUS_COLUMN` less the mean true radius (:data:`RADII_TRUTH`), negative
+    for an underestimate; NaN without either."""
+    center = _stack(estimates, _CENTER)
+    radius_error = np.full(len(center), np.nan)
+    if RADIUS_COLUMN in estimates and RADII_TRUTH in truth:
+        fitted = np.asarray(estimates[RADIUS_COLUMN], dtype=float)
+        radius_error = fitted - float(np.mean(truth[RADII_TRUTH]))
+    return {"error_mm": _distance(center, truth["center"]), "radius_error_mm": radius_error}
 
 
 def _score_axis(estimates, truth) -> dict[str, np.ndarray]:

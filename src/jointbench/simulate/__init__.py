@@ -27,6 +27,7 @@ from jointbench.simulate.noise import isotropic_noise
 __all__ = [
     "KINDS",
     "PROXIMAL_TRUTH",
+    "RADII_TRUTH",
     "GridValues",
     "Study",
     "Trials",
@@ -42,6 +43,9 @@ _TRUTH_OF = {"center": "center", "axis": "axis", "joint_center": "center"}
 #: The ``truth`` key of a two-segment study's noise-free proximal markers at frame 0
 #: ``(n_markers, 3)`` [mm], in the frame of ``truth["center"]``.
 PROXIMAL_TRUTH = "proximal_frame0"
+#: The ``truth`` key of a one-segment study's true marker radii ``(n_markers,)`` [mm]: each
+#: marker's distance from the centre of rotation, which a sphere fit's radii estimate.
+RADII_TRUTH = "radii"
 
 
 @dataclass(frozen=True)
@@ -52,8 +56,8 @@ class Trials:
     ``"moving"`` for one-segment studies (markers in the reference segment's frame), or
     ``"proximal"`` and ``"distal"`` (world frame) for two-segment studies. ``truth`` holds the
     JSON-serialisable ground truth shared by all trials (``"center"``, and optionally
-    :data:`PROXIMAL_TRUTH`; or ``"axis_point"`` and ``"axis_direction"``), ``parameters`` the
-    generator settings for provenance.
+    :data:`PROXIMAL_TRUTH` or :data:`RADII_TRUTH`; or ``"axis_point"`` and
+    ``"axis_direction"``), ``parameters`` the generator settings for provenance.
     """
 
     segments: dict[str, np.ndarray]

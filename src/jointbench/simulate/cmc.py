@@ -54,7 +54,7 @@ from jointbench.declared import check_fields as check_declared
 from jointbench.estimators.registry import many
 from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, geometric_cost
 from jointbench.geometry import rotation_matrix, unit
-from jointbench.simulate import GridValues, Study, Trials
+from jointbench.simulate import RADII_TRUTH, GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise, largest_noise_mm
 from jointbench.simulate.prior import Choice, Prior
 
@@ -198,13 +198,17 @@ def simulate(
     )
     noise_mm = float(condition["noise_mm"])
     moving = np.stack([nominal + isotropic_noise(rng, nominal.shape[:2], noise_mm) for rng in rngs])
+    markers = marker_positions(protocol, str(condition["marker_set"]))
     return Trials(
         segments={"moving": moving},
-        truth={"center": [float(x) for x in protocol.center_mm]},
+        truth={
+            "center": [float(x) for x in protocol.center_mm],
+            RADII_TRUTH: np.linalg.norm(markers, axis=1).tolist(),
+        },
         parameters={
             "spiral_turns": protocol.spiral_turns,
             "n_frames": protocol.n_frames,
-            "markers_mm": marker_positions(protocol, str(condition["marker_set"])).tolist(),
+            "markers_mm": markers.tolist(),
         },
     )
 

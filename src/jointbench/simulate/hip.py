@@ -52,14 +52,43 @@ import numpy as np
 
 from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
 from jointbench.declared import check_fields as check_declared
+from jointbench.estimators.registry import many
 from jointbench.geometry import rotation_matrix
+from jointbench.numerics.poses import fit_rigid_poses
+from jointbench.running.scoring import score
 from jointbench.simulate import PROXIMAL_TRUTH, GridValues, Study, Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
 from jointbench.simulate.prior import Choice, Prior
 
-__all__ = ["PRIOR", "STUDY", "HipProtocol", "marker_layout", "nominal_recording", "simulate"]
+__all__ = [
+    "DISTAL_TRUTH",
+    "EXACT_FRAME0_COLUMNS",
+    "POSE_FIT_COLUMNS",
+    "PRIOR",
+    "STUDY",
+    "HipProtocol",
+    "marker_layout",
+    "nominal_recording",
+    "paper_c_checks",
+    "simulate",
+]
 
 _CONDITION_KEYS = ("n_frames", "noise_mm")
+#: The ``truth`` key of the distal markers at frame 0, noise-free ``(3, 3)`` [mm].
+DISTAL_TRUTH = "distal_frame0"
+#: gauss-markov's scores on the frame-0 control: the trial refitted with frame 0 exact.
+EXACT_FRAME0_COLUMNS = {
+    "error_mm": "exact_frame0_error_mm",
+    "sqrt_trace_cov_mm": "exact_frame0_sqrt_trace_cov_mm",
+    "mahalanobis_sq": "exact_frame0_mahalanobis_sq",
+}
+#: How paper C's alternation of SVD poses and body-fixed coordinates (§5, eq. 5) ended, per
+#: segment: the re-estimations made and the last one's largest change [mm].
+POSE_FIT_COLUMNS = tuple(
+    f"pose_{what}_{segment}"
+    for segment in ("proximal", "distal")
+    for what in ("iterations", "change_mm")
+)
 
 
 def _triples(rows: Sequence[Sequence[float]]) -> tuple[Vector3, ...]:
@@ -202,7 +231,8 @@ def simulate(
     Returns :class:`~jointbench.simulate.Trials` with ``segments["proximal"]`` and
     ``segments["distal"]`` ``(n_trials, Nt, 3, 3)`` [mm] in the world frame and
     ``truth["center"]`` the joint in the body-fixed frame shared at frame 0 and
-    ``truth["proximal_frame0"]`` the proximal markers there, noise-free ``(3, 3)`` [mm].
+    ``truth["proximal_frame0"]`` and ``truth["distal_frame0"]`` the proximal and distal
+    markers there, noise-free ``(3, 3)`` [mm].
     """
     unknown = set(condition) - set(_CONDITION_KEYS)
     if unknown:
@@ -239,9 +269,51 @@ def simulate(
         truth={
             "center": [float(x) for x in protocol.joint_mm],
             PROXIMAL_TRUTH: proximal[0].tolist(),
+            DISTAL_TRUTH: distal[0].tolist(),
         },
         parameters=_jsonable(parameters),
     )
+
+
+def paper_c_checks(arguments, results: Sequence, truth: Mapping) -> list[dict[str, object]]:
+    """Paper C's method checked against what the paper says of it, per trial: the pose fit's
+    convergence and the frame-0 control.
+
+    A diagnostic of :attr:`Study.diagnostics` for gauss-markov: ``arguments`` is ``(proximal,
+    distal)``, each ``(n_trials, Nt, 3, 3)`` [mm]. Columns :data:`POSE_FIT_COLUMNS`: how the
+    alternation of poses and body-fixed coordinates of each segment ended
+    (:func:`~jointbench.numerics.poses.fit_rigid_poses`, as the poses gauss-markov used were
+    fitted). Columns :data:`EXACT_FRAME0_COLUMNS`: gauss-markov's error, predicted
+    ``sqrt(tr Wc)`` and ``e`` (eq. 16) on the same trial with frame 0 replaced by the exact
+    markers (:data:`PROXIMAL_TRUTH`, :data:`DISTAL_TRUTH`), the run the protocol option
+    ``noise_free_frame0`` simulates: both body frames placed without error, so that eq. 2's
+    single centre exists. The control uses gauss-markov's default options.
+    """
+    proximal, distal = (np.asarray(markers, dtype=float) for markers in arguments)
+    fits = [fit_rigid_poses(markers) for markers in (proximal, distal)]
+    exact = []
+    for markers, key in ((proximal, PROXIMAL_TRUTH), (distal, DISTAL_TRUTH)):
+        markers = markers.copy()
+        markers[:, 0] = truth[key]
+        exact.append(markers)
+    controls = many("joint_center", "gauss-markov", checked=False)(*exact)
+    rows: list[dict[str, object]] = []
+    for trial, (result, control) in enumerate(zip(results, controls, strict=True)):
+        if result is None:
+            rows.append({})
+            continue
+        row: dict[str, object] = {}
+        for fit, segment in zip(fits, ("proximal", "distal"), strict=True):
+            row[f"pose_iterations_{segment}"] = int(fit.iterations[trial])
+            row[f"pose_change_mm_{segment}"] = float(fit.change_mm[trial])
+        if isinstance(control, (ValueError, FloatingPointError)):
+            control = None
+        elif isinstance(control, BaseException):
+            raise control
+        scores = score("joint_center", control, truth)
+        row.update({name: scores[column] for column, name in EXACT_FRAME0_COLUMNS.items()})
+        rows.append(row)
+    return rows
 
 
 def _jsonable(value: object) -> object:
@@ -274,6 +346,7 @@ STUDY = Study(
         )
     },
     title="hip joint centre",
+    diagnostics={"gauss-markov": paper_c_checks},
 )
 
 
