@@ -3,7 +3,8 @@
 What stands out is chosen by :data:`STANDOUT_RULE`, implemented by :func:`stands_out` and
 nowhere else, so a claim added to a paper's published values is picked up without an edit
 here. Every number in the block is copied from the tables it cites (:data:`SOURCES`), as those
-tables print it; ``tests/test_readme_numbers.py`` holds the block to that.
+tables print it; ``tests/test_readme_standout.py`` holds the block to that
+(:func:`jointbench.comparison.cited_numbers.unfound_numbers`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from jointbench.comparison.published import NOT_APPLICABLE
+from jointbench.ensembles.verdicts import TESTED
 from jointbench.resultfiles.formatting import number
 
 __all__ = [
@@ -57,8 +59,6 @@ COMPARISON_COLUMNS = (
     "status",
     "reason",
 )
-#: The statuses that are verdicts (the rest are not applicable).
-_TESTED = ("reproduced", "not reproduced")
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,7 @@ def _default_against_most(status: str, protocols: Mapping | None) -> bool:
 
 def stands_out(row: Mapping, ensembles: Ensembles) -> bool:
     """Whether the claim of comparison ``row`` stands out by :data:`STANDOUT_RULE`."""
-    if row["status"] not in _TESTED:
+    if row["status"] not in TESTED:
         return False
     seeds = _row(ensembles.seeds, row["id"])
     protocols = _row(ensembles.protocols, row["id"])
