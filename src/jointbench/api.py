@@ -29,7 +29,13 @@ import numpy as np
 from jointbench.estimators import registry
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import check_input
-from jointbench.screening import ArtefactRules, Numbering, Screening, summarise
+from jointbench.screening import (
+    ArtefactRules,
+    Numbering,
+    Screening,
+    find_artefacts,
+    summarise,
+)
 from jointbench.screening import screen as screen_markers
 
 __all__ = [
@@ -73,9 +79,13 @@ def screen(
     found = {}
     for name, markers in zip(names, segments, strict=True):
         markers = np.asarray(markers, dtype=float)
-        labels = tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
-        found[name] = screen_markers(markers, labels, name, rules)
+        found[name] = screen_markers(markers, _column_labels(name, markers), name, rules)
     return found
+
+
+def _column_labels(name: str, markers: np.ndarray) -> tuple[str, ...]:
+    """The labels of ``markers`` ``(n_frames, n, 3)`` in messages: ``name[:, column]``."""
+    return tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
 
 
 def describe_screening(found: dict[str, Screening]) -> str | None:
@@ -102,8 +112,13 @@ def _screened(kind: str, arrays: tuple[object, ...], artefacts: str) -> None:
         raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
     if artefacts == "ignore":
         return
-    # The input checks come first, so bad input gets their message, not the screen's.
-    message = describe_screening(screen(*check_input(kind, arrays), names=_NAMES[kind]))
+    # The input checks come first, so bad input gets their message, not the screen's. Only
+    # the artefacts are needed here, not the clusters' fits that a Screening also keeps.
+    found = {
+        name: Screening(*find_artefacts(markers, _column_labels(name, markers), name))
+        for name, markers in zip(_NAMES[kind], check_input(kind, arrays), strict=True)
+    }
+    message = describe_screening(found)
     if message is None:
         return
     if artefacts == "refuse":
