@@ -213,3 +213,25 @@ def test_the_public_fits_screen_costs_less_than_the_fit_it_guards():
         function(trials[0])  # compiles what it needs
     bare, public, ignored = _median_seconds(functions, trials)
     assert public - ignored < 5.0 * bare
+
+
+@pytest.mark.parametrize("artefacts", ["refuse", "warn", "ignore"])
+def test_the_public_fits_check_their_inputs_once(monkeypatch, artefacts):
+    from jointbench import api
+    from jointbench.estimators import validation
+
+    calls = []
+
+    def counted(check):
+        def check_input(kind, arrays):
+            calls.append(kind)
+            return check(kind, arrays)
+
+        return check_input
+
+    monkeypatch.setattr(api, "check_input", counted(api.check_input))
+    monkeypatch.setattr(validation, "check_input", counted(validation.check_input))
+    rng = np.random.default_rng(9)
+    jointbench.fit_center(_cluster(rng, noise_mm=0.5), "LS", artefacts=artefacts)
+    jointbench.fit_joint_center(_cluster(rng), _cluster(rng, rom_deg=60.0), artefacts=artefacts)
+    assert calls == ["center", "joint_center"]

@@ -106,17 +106,26 @@ def describe_screening(found: dict[str, Screening]) -> str | None:
     return text
 
 
-def _screened(kind: str, arrays: tuple[object, ...], artefacts: str) -> None:
-    """Screen the inputs of a ``kind`` fit as ``artefacts`` says (module docstring)."""
+def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, options: dict):
+    """Check the inputs of a ``kind`` fit once, screen them as ``artefacts`` says (module
+    docstring) and fit them with the checked ``method``."""
     if artefacts not in ARRAY_POLICIES:
         raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
     if artefacts == "ignore":
-        return
-    # The input checks come first, so bad input gets their message, not the screen's. Only
-    # the artefacts are needed here, not the clusters' fits that a Screening also keeps.
+        fit = registry.get_for_valid(kind, method)  # an unknown method is named first, as ever
+        return fit(check_input(kind, arrays), **options)
+    # The input checks come first, so bad input gets their message, not the screen's.
+    clean = check_input(kind, arrays)
+    _screen_valid(kind, clean, artefacts)
+    return registry.get_for_valid(kind, method)(clean, **options)
+
+
+def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> None:
+    """Refuse or warn (``artefacts``) what the screen finds in ``clean``, the checked inputs of
+    a ``kind`` fit. Only the artefacts are needed, not the clusters' fits a Screening keeps."""
     found = {
         name: Screening(*find_artefacts(markers, _column_labels(name, markers), name))
-        for name, markers in zip(_NAMES[kind], check_input(kind, arrays), strict=True)
+        for name, markers in zip(_NAMES[kind], clean, strict=True)
     }
     message = describe_screening(found)
     if message is None:
@@ -125,7 +134,7 @@ def _screened(kind: str, arrays: tuple[object, ...], artefacts: str) -> None:
         raise ValueError(
             f"{message}. Pass artefacts='warn' or 'ignore' to fit the data as they are"
         )
-    warnings.warn(f"artefacts in the data: {message}", stacklevel=3)
+    warnings.warn(f"artefacts in the data: {message}", stacklevel=4)
 
 
 def fit_center(
@@ -140,8 +149,7 @@ def fit_center(
     method : one of ``methods("center")`` (NM, LS, BC, IS, MA, SCoRE, ...).
     artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
-    _screened("center", (markers,), artefacts)
-    return registry.get("center", method)(markers, **options)
+    return _fit("center", method, (markers,), artefacts, options)
 
 
 def fit_axis(
@@ -156,8 +164,7 @@ def fit_axis(
     method : one of ``methods("axis")`` (planar, radial, combined, SARA, ...).
     artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
-    _screened("axis", (markers,), artefacts)
-    return registry.get("axis", method)(markers, **options)
+    return _fit("axis", method, (markers,), artefacts, options)
 
 
 def fit_joint_center(
@@ -176,8 +183,7 @@ def fit_joint_center(
     method : one of ``methods("joint_center")`` (gauss-markov, analytic, SCoRE, ...).
     artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
-    _screened("joint_center", (proximal, distal), artefacts)
-    return registry.get("joint_center", method)(proximal, distal, **options)
+    return _fit("joint_center", method, (proximal, distal), artefacts, options)
 
 
 def methods(kind: str) -> tuple[str, ...]:
