@@ -15,8 +15,11 @@ more than ``jump_factor`` times the median such difference and ``min_jump_mm``
 outside a cluster, and in a cluster it counts only where no rigidity break explains it (a swap
 of two markers of an isosceles triangle keeps the shape).
 
-:func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen` and the fit
-functions of :mod:`jointbench.api`; :meth:`Segment.fit` runs the same on a recording.
+:func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen`;
+:meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
+need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
+a complete cluster whose residuals a bound keeps below ``min_residual_mm``
+(:func:`surely_rigid`, two pose fits) it skips the iterated mean shape.
 """
 
 from __future__ import annotations
