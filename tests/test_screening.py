@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -235,3 +236,18 @@ def test_the_public_fits_check_their_inputs_once(monkeypatch, artefacts):
     jointbench.fit_center(_cluster(rng, noise_mm=0.5), "LS", artefacts=artefacts)
     jointbench.fit_joint_center(_cluster(rng), _cluster(rng, rom_deg=60.0), artefacts=artefacts)
     assert calls == ["center", "joint_center"]
+
+
+def test_lower_quartile_is_numpys_to_the_last_bit():
+    rng = np.random.default_rng(10)
+    for _ in range(300):
+        shape = (int(rng.integers(1, 200)), int(rng.integers(1, 5)))
+        values = rng.exponential(scale=float(rng.choice([0.01, 1.0, 100.0])), size=shape)
+        values[rng.random(shape) < rng.random()] = np.nan
+        values[rng.random(shape) < 0.02] = np.inf
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            expected = np.nanpercentile(values, 25)
+        for quartile in (screening._lower_quartile, screening._lower_quartile.__wrapped__):
+            with np.errstate(invalid="ignore"):
+                np.testing.assert_array_equal(quartile(values), expected)

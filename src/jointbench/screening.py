@@ -381,17 +381,35 @@ def find_rigidity_breaks(
 ) -> list[Artefact]:
     """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the trial's level
     (its lower quartile), so that up to three quarters of the samples may be broken."""
-    if not np.isfinite(residuals).any():
-        return []
     # The lower quartile, not the median: a swap held by half the frames displaces more than
     # half the samples (the pose fit spreads it), which would lift a median above them.
-    typical = float(np.nanpercentile(residuals, 25))
+    typical = _lower_quartile(kernel_array(residuals))
+    if not np.isfinite(typical):
+        return []
     level = max(rules.min_residual_mm, rules.residual_factor * typical)
-    frame, marker = np.nonzero(np.nan_to_num(residuals) > level)
+    frame, marker = np.nonzero(residuals > level)
     return [
         Artefact("rigidity", labels[m], int(f), float(residuals[f, m]), level)
         for f, m in zip(frame, marker, strict=True)
     ]
+
+
+@kernel
+def _lower_quartile(values: np.ndarray) -> float:
+    """The lower quartile of the ``values`` (any shape) that are not NaN, NaN if none: NumPy's
+    ``nanpercentile(values, 25)`` (linear interpolation) to the last bit. A compiled kernel."""
+    flat = values.ravel()
+    known = np.sort(flat[~np.isnan(flat)])
+    if known.size == 0:
+        return np.nan
+    index = (known.size - 1) * 0.25
+    below = int(np.floor(index))
+    low, high = known[below], known[min(below + 1, known.size - 1)]
+    gamma = index - below
+    # NumPy's interpolation, which works from the nearer end.
+    if gamma >= 0.5:
+        return high - (high - low) * (1.0 - gamma)
+    return low + (high - low) * gamma
 
 
 def find_swaps(
