@@ -29,7 +29,13 @@ import numpy as np
 from jointbench.estimators import registry
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.validation import check_input
-from jointbench.screening import ArtefactRules, Numbering, Screening, summarise
+from jointbench.screening import (
+    ArtefactRules,
+    Numbering,
+    Screening,
+    find_artefacts,
+    summarise,
+)
 from jointbench.screening import screen as screen_markers
 
 __all__ = [
@@ -73,9 +79,13 @@ def screen(
     found = {}
     for name, markers in zip(names, segments, strict=True):
         markers = np.asarray(markers, dtype=float)
-        labels = tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
-        found[name] = screen_markers(markers, labels, name, rules)
+        found[name] = screen_markers(markers, _column_labels(name, markers), name, rules)
     return found
+
+
+def _column_labels(name: str, markers: np.ndarray) -> tuple[str, ...]:
+    """The labels of ``markers`` ``(n_frames, n, 3)`` in messages: ``name[:, column]``."""
+    return tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
 
 
 def describe_screening(found: dict[str, Screening]) -> str | None:
@@ -96,21 +106,35 @@ def describe_screening(found: dict[str, Screening]) -> str | None:
     return text
 
 
-def _screened(kind: str, arrays: tuple[object, ...], artefacts: str) -> None:
-    """Screen the inputs of a ``kind`` fit as ``artefacts`` says (module docstring)."""
+def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, options: dict):
+    """Check the inputs of a ``kind`` fit once, screen them as ``artefacts`` says (module
+    docstring) and fit them with the checked ``method``."""
     if artefacts not in ARRAY_POLICIES:
         raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
     if artefacts == "ignore":
-        return
+        fit = registry.get_for_valid(kind, method)  # an unknown method is named first, as ever
+        return fit(check_input(kind, arrays), **options)
     # The input checks come first, so bad input gets their message, not the screen's.
-    message = describe_screening(screen(*check_input(kind, arrays), names=_NAMES[kind]))
+    clean = check_input(kind, arrays)
+    _screen_valid(kind, clean, artefacts)
+    return registry.get_for_valid(kind, method)(clean, **options)
+
+
+def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> None:
+    """Refuse or warn (``artefacts``) what the screen finds in ``clean``, the checked inputs of
+    a ``kind`` fit. Only the artefacts are needed, not the clusters' fits a Screening keeps."""
+    found = {
+        name: Screening(*find_artefacts(markers, _column_labels(name, markers), name))
+        for name, markers in zip(_NAMES[kind], clean, strict=True)
+    }
+    message = describe_screening(found)
     if message is None:
         return
     if artefacts == "refuse":
         raise ValueError(
             f"{message}. Pass artefacts='warn' or 'ignore' to fit the data as they are"
         )
-    warnings.warn(f"artefacts in the data: {message}", stacklevel=3)
+    warnings.warn(f"artefacts in the data: {message}", stacklevel=4)
 
 
 def fit_center(
@@ -125,8 +149,7 @@ def fit_center(
     method : one of ``methods("center")`` (NM, LS, BC, IS, MA, SCoRE, ...).
     artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
-    _screened("center", (markers,), artefacts)
-    return registry.get("center", method)(markers, **options)
+    return _fit("center", method, (markers,), artefacts, options)
 
 
 def fit_axis(
@@ -141,8 +164,7 @@ def fit_axis(
     method : one of ``methods("axis")`` (planar, radial, combined, SARA, ...).
     artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
-    _screened("axis", (markers,), artefacts)
-    return registry.get("axis", method)(markers, **options)
+    return _fit("axis", method, (markers,), artefacts, options)
 
 
 def fit_joint_center(
@@ -161,8 +183,7 @@ def fit_joint_center(
     method : one of ``methods("joint_center")`` (gauss-markov, analytic, SCoRE, ...).
     artefacts : ``"refuse"``, ``"warn"`` or ``"ignore"`` what :func:`screen` finds.
     """
-    _screened("joint_center", (proximal, distal), artefacts)
-    return registry.get("joint_center", method)(proximal, distal, **options)
+    return _fit("joint_center", method, (proximal, distal), artefacts, options)
 
 
 def methods(kind: str) -> tuple[str, ...]:

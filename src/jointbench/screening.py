@@ -15,8 +15,11 @@ more than ``jump_factor`` times the median such difference and ``min_jump_mm``
 outside a cluster, and in a cluster it counts only where no rigidity break explains it (a swap
 of two markers of an isosceles triangle keeps the shape).
 
-:func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen` and the fit
-functions of :mod:`jointbench.api`; :meth:`Segment.fit` runs the same on a recording.
+:func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen`;
+:meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
+need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
+a complete cluster whose residuals a bound keeps below ``min_residual_mm``
+(:func:`surely_rigid`, two pose fits) it skips the iterated mean shape.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from itertools import combinations, pairwise
 
 import numpy as np
 
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import best_rotation
 
 __all__ = [
@@ -34,6 +38,7 @@ __all__ = [
     "Numbering",
     "Screening",
     "Swap",
+    "find_artefacts",
     "find_jumps",
     "find_rigidity_breaks",
     "find_swaps",
@@ -42,6 +47,7 @@ __all__ = [
     "residuals",
     "screen",
     "summarise",
+    "surely_rigid",
     "to_local",
     "typical_shape",
 ]
@@ -57,24 +63,84 @@ def fit_poses(shape: np.ndarray, markers: np.ndarray) -> tuple[np.ndarray, np.nd
     Returns ``R`` ``(n_frames, 3, 3)`` and ``t`` ``(n_frames, 3)`` [mm]; NaN in frames with
     fewer than three visible markers.
     """
-    visible = np.isfinite(markers).all(axis=-1)
-    count = visible.sum(axis=1)
-    weight = visible / np.maximum(count, 1)[:, None]
-    filled = np.where(visible[..., None], markers, 0.0)
-    target_mean = np.einsum("fm,fmi->fi", weight, filled)
-    shape_mean = weight @ shape
-    cross = np.einsum(
-        "fm,fmi,fmj->fij",
-        visible.astype(float),
-        filled - target_mean[:, None],
-        shape[None] - shape_mean[:, None],
-    )
-    rotation = best_rotation(cross)
-    translation = target_mean - np.einsum("fij,fj->fi", rotation, shape_mean)
-    posed = count >= 3
-    rotation[~posed] = np.nan
-    translation[~posed] = np.nan
+    shape, markers = kernel_array(shape), kernel_array(markers)
+    n_frames = markers.shape[0]
+    cross = np.empty((n_frames, 3, 3))
+    centroids = np.empty((n_frames, 2, 3))
+    bound = np.empty(n_frames)
+    _pose_sums(shape, markers, cross, centroids, bound)
+    rotation = best_rotation(cross, bound=bound)
+    translation = np.empty((n_frames, 3))
+    _translations(rotation, centroids, translation)
     return rotation, translation
+
+
+@kernel
+def _pose_sums(
+    shape: np.ndarray,
+    markers: np.ndarray,
+    cross: np.ndarray,
+    centroids: np.ndarray,
+    bound: np.ndarray,
+) -> None:
+    """Per frame of ``markers`` ``(n_frames, n, 3)``, over its visible (finite) markers: the
+    cross-covariance ``cross`` ``(n_frames, 3, 3)`` of the markers (rows) and ``shape``
+    ``(n, 3)`` (columns); ``centroids`` ``(n_frames, 2, 3)`` of the markers and of their
+    points of ``shape``, NaN where fewer than three are visible; and ``bound`` ``(n_frames,)``
+    [mm^2], half the summed squared lengths of both centred point sets, which no rotation's
+    ``trace(R' cross)`` exceeds. A compiled kernel (:mod:`jointbench.numerics.compiled`)."""
+    n_markers = shape.shape[0]
+    visible = np.empty(n_markers, dtype=np.bool_)
+    target = np.empty(3)
+    source = np.empty(3)
+    for f in range(markers.shape[0]):
+        count = 0
+        target[:] = 0.0
+        source[:] = 0.0
+        for m in range(n_markers):
+            visible[m] = (
+                np.isfinite(markers[f, m, 0])
+                and np.isfinite(markers[f, m, 1])
+                and np.isfinite(markers[f, m, 2])
+            )
+            if visible[m]:
+                count += 1
+                for i in range(3):
+                    target[i] += markers[f, m, i]
+                    source[i] += shape[m, i]
+        for i in range(3):
+            target[i] /= max(count, 1)
+            source[i] /= max(count, 1)
+            for j in range(3):
+                cross[f, i, j] = 0.0
+        bound[f] = 0.0
+        for m in range(n_markers):
+            if visible[m]:
+                for i in range(3):
+                    x = markers[f, m, i] - target[i]
+                    bound[f] += 0.5 * (x * x + (shape[m, i] - source[i]) ** 2)
+                    for j in range(3):
+                        cross[f, i, j] += x * (shape[m, j] - source[j])
+        for i in range(3):
+            centroids[f, 0, i] = target[i] if count >= 3 else np.nan
+            centroids[f, 1, i] = source[i] if count >= 3 else np.nan
+
+
+@kernel
+def _translations(rotation: np.ndarray, centroids: np.ndarray, translation: np.ndarray):
+    """``translation`` ``(n_frames, 3)`` taking the shape's centroid ``centroids[:, 1]`` by
+    ``rotation`` ``(n_frames, 3, 3)`` onto the markers' ``centroids[:, 0]``; ``rotation`` and
+    ``translation`` NaN where the centroids are (too few markers). A compiled kernel."""
+    for f in range(rotation.shape[0]):
+        if not np.isfinite(centroids[f, 0, 0]):
+            rotation[f] = np.nan
+            translation[f] = np.nan
+            continue
+        for i in range(3):
+            moved = 0.0
+            for j in range(3):
+                moved += rotation[f, i, j] * centroids[f, 1, j]
+            translation[f, i] = centroids[f, 0, i] - moved
 
 
 def to_local(rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray) -> np.ndarray:
@@ -96,9 +162,32 @@ def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> 
             "a segment needs one frame showing its whole cluster"
         )
     clusters = markers[complete]
-    distances = np.linalg.norm(clusters[:, :, None] - clusters[:, None], axis=-1)
-    deviation = np.abs(distances - np.median(distances, axis=0)).max(axis=(1, 2))
-    return clusters[int(np.argmin(deviation))].copy()
+    return clusters[_most_typical(kernel_array(clusters))].copy()
+
+
+@kernel
+def _most_typical(clusters: np.ndarray) -> int:
+    """The index of the frame of ``clusters`` ``(n_frames, n, 3)`` [mm] whose largest
+    inter-marker distance deviation from that distance's median over the frames is least (the
+    first, on a tie). A compiled kernel (:mod:`jointbench.numerics.compiled`)."""
+    n_frames, n_markers = clusters.shape[0], clusters.shape[1]
+    n_pairs = n_markers * (n_markers - 1) // 2
+    distances = np.empty((n_pairs, n_frames))
+    pair = 0
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            for f in range(n_frames):
+                dx = clusters[f, a, 0] - clusters[f, b, 0]
+                dy = clusters[f, a, 1] - clusters[f, b, 1]
+                dz = clusters[f, a, 2] - clusters[f, b, 2]
+                distances[pair, f] = np.sqrt(dx * dx + dy * dy + dz * dz)
+            pair += 1
+    deviation = np.zeros(n_frames)
+    for pair in range(n_pairs):
+        median = np.median(distances[pair])
+        for f in range(n_frames):
+            deviation[f] = max(deviation[f], abs(distances[pair, f] - median))
+    return int(np.argmin(deviation))
 
 
 def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
@@ -107,9 +196,8 @@ def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.
     shape = typical_shape(markers, labels, source)
     for _ in range(_MAX_ITERATIONS):
         rotation, translation = fit_poses(shape, markers)
-        posed = np.isfinite(rotation[:, 0, 0])
-        local = to_local(rotation[posed], translation[posed], markers[posed])
-        new = np.nanmean(local, axis=0)
+        new = np.empty_like(shape)
+        _mean_local(rotation, translation, kernel_array(markers), new)
         change = float(np.max(np.abs(new - shape)))
         shape = new
         if change < _TOL_MM * max(1.0, float(np.abs(shape).max())):
@@ -118,6 +206,31 @@ def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.
         f"{source}: the mean shape of {', '.join(labels)} did not converge in "
         f"{_MAX_ITERATIONS} iterations (last change {change:.3g} mm)"
     )
+
+
+@kernel
+def _mean_local(
+    rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray, mean: np.ndarray
+) -> None:
+    """``mean`` ``(n, 3)`` [mm]: each marker of ``markers`` ``(n_frames, n, 3)`` taken into
+    the local frame ``R' (x - t)`` of every posed frame (finite ``rotation``) and averaged over
+    the frames where it is visible; NaN for a marker never seen. A compiled kernel."""
+    n_markers = markers.shape[1]
+    for m in range(n_markers):
+        total = np.zeros(3)
+        count = 0
+        for f in range(markers.shape[0]):
+            x = markers[f, m]
+            if not (np.isfinite(rotation[f, 0, 0]) and np.isfinite(x[0] + x[1] + x[2])):
+                continue
+            count += 1
+            for i in range(3):
+                local = 0.0
+                for j in range(3):
+                    local += rotation[f, j, i] * (x[j] - translation[f, j])
+                total[i] += local
+        for i in range(3):
+            mean[m, i] = total[i] / count if count else np.nan
 
 
 @dataclass(frozen=True)
@@ -227,21 +340,40 @@ def find_jumps(
     marker knocked off adds a step of its own. The size of the step at frame ``k`` is
     ``min(|s_k - s_(k-1)|, |s_k - s_(k+1)|)`` with ``s_k = x_k - x_(k-1)``.
     """
-    steps = np.diff(markers, axis=0)  # (n_frames - 1, n, 3), NaN at gaps
-    if steps.shape[0] < 3:
+    n_frames, n_markers = markers.shape[:2]
+    if n_frames < 4:
         return []
-    size = np.fmin(
-        np.linalg.norm(steps[1:-1] - steps[:-2], axis=-1),
-        np.linalg.norm(steps[1:-1] - steps[2:], axis=-1),
-    )
-    if not np.isfinite(size).any():
+    size = np.empty((n_frames - 3, n_markers))
+    median = _jump_sizes(kernel_array(markers), size)
+    if not np.isfinite(median):
         return []
-    level = max(rules.min_jump_mm, rules.jump_factor * float(np.nanmedian(size)))
-    step, marker = np.nonzero(np.nan_to_num(size) > level)
+    level = max(rules.min_jump_mm, rules.jump_factor * median)
+    step, marker = np.nonzero(size > level)
     return [
         Artefact("jump", labels[m], int(k) + 2, float(size[k, m]), level)
         for k, m in zip(step, marker, strict=True)
     ]
+
+
+@kernel
+def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
+    """Fill ``size`` ``(n_frames - 3, n)`` [mm] with the step sizes of :func:`find_jumps` of
+    ``markers`` ``(n_frames, n, 3)`` (NaN where a gap leaves neither neighbour difference) and
+    return their median over the finite ones (NaN if none). A compiled kernel
+    (:mod:`jointbench.numerics.compiled`)."""
+    before = np.empty(3)
+    after = np.empty(3)
+    for k in range(size.shape[0]):
+        for m in range(size.shape[1]):
+            for i in range(3):
+                step = markers[k + 2, m, i] - markers[k + 1, m, i]
+                before[i] = step - (markers[k + 1, m, i] - markers[k, m, i])
+                after[i] = step - (markers[k + 3, m, i] - markers[k + 2, m, i])
+            back = np.sqrt(before[0] ** 2 + before[1] ** 2 + before[2] ** 2)
+            ahead = np.sqrt(after[0] ** 2 + after[1] ** 2 + after[2] ** 2)
+            # As np.fmin: the other difference where one is NaN.
+            size[k, m] = ahead if np.isnan(back) or ahead < back else back
+    return np.nanmedian(size)
 
 
 def find_rigidity_breaks(
@@ -249,17 +381,35 @@ def find_rigidity_breaks(
 ) -> list[Artefact]:
     """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the trial's level
     (its lower quartile), so that up to three quarters of the samples may be broken."""
-    if not np.isfinite(residuals).any():
-        return []
     # The lower quartile, not the median: a swap held by half the frames displaces more than
     # half the samples (the pose fit spreads it), which would lift a median above them.
-    typical = float(np.nanpercentile(residuals, 25))
+    typical = _lower_quartile(kernel_array(residuals))
+    if not np.isfinite(typical):
+        return []
     level = max(rules.min_residual_mm, rules.residual_factor * typical)
-    frame, marker = np.nonzero(np.nan_to_num(residuals) > level)
+    frame, marker = np.nonzero(residuals > level)
     return [
         Artefact("rigidity", labels[m], int(f), float(residuals[f, m]), level)
         for f, m in zip(frame, marker, strict=True)
     ]
+
+
+@kernel
+def _lower_quartile(values: np.ndarray) -> float:
+    """The lower quartile of the ``values`` (any shape) that are not NaN, NaN if none: NumPy's
+    ``nanpercentile(values, 25)`` (linear interpolation) to the last bit. A compiled kernel."""
+    flat = values.ravel()
+    known = np.sort(flat[~np.isnan(flat)])
+    if known.size == 0:
+        return np.nan
+    index = (known.size - 1) * 0.25
+    below = int(np.floor(index))
+    low, high = known[below], known[min(below + 1, known.size - 1)]
+    gamma = index - below
+    # NumPy's interpolation, which works from the nearer end.
+    if gamma >= 0.5:
+        return high - (high - low) * (1.0 - gamma)
+    return low + (high - low) * gamma
 
 
 def find_swaps(
@@ -364,10 +514,100 @@ def screen(
     return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, misfit)
 
 
+def find_artefacts(
+    markers: np.ndarray,
+    labels: tuple[str, ...],
+    source: str,
+    rules: ArtefactRules | None = None,
+) -> tuple[tuple[Artefact, ...], tuple[Swap, ...]]:
+    """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
+    [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears needs
+    only the jump check, anything else gets the whole screen."""
+    rules = rules or ArtefactRules()
+    if len(labels) < 3:
+        return tuple(find_jumps(markers, labels, rules)), ()
+    if not surely_rigid(markers, labels, source, rules):
+        found = screen(markers, labels, source, rules)
+        return found.artefacts, found.swaps
+    jumps = sorted(find_jumps(markers, labels, rules), key=lambda a: (a.frame, a.label))
+    return tuple(jumps), ()
+
+
+def surely_rigid(
+    markers: np.ndarray, labels: tuple[str, ...], source: str, rules: ArtefactRules
+) -> bool:
+    """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
+    ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
+    is too loose), not broken.
+
+    ``screen`` flags nothing when every residual from the typical frame ``T`` and from the
+    mean shape ``S`` is at most ``rules.min_residual_mm``. The first are computed; the second
+    are bounded without iterating to ``S``. With ``d_f(A)`` frame ``f``'s residual norm from
+    shape ``A`` in its best pose, ``d(A, B)`` the least norm between poses of two shapes and
+    ``S1`` the mean shape's first iterate (the mean of the frames taken to ``T``'s poses):
+    ``r_fm(S) <= d_f(S) <= d_f(S1) + d(S1, S)``; averaging ``d(S1, S) <= d_g(S1) + d_g(S)``
+    over frames ``g`` and bounding the mean of ``d_g(S)`` by its root mean square, which no
+    iterate after ``S1`` increases, gives ``d(S1, S) <= mean d_g(S1) + rms d_g(S1)``.
+    """
+    if not np.isfinite(markers).all():
+        return False
+    limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
+    markers = kernel_array(markers)
+    typical = markers[_most_typical(markers)]  # typical_shape's frame, every frame complete
+    rotation, translation = fit_poses(typical, markers)
+    if not residuals(typical, rotation, translation, markers).max() <= limit:
+        return False
+    first = np.empty_like(typical)
+    _mean_local(rotation, translation, markers, first)
+    rotation, translation = fit_poses(first, markers)
+    return _residual_bound(residuals(first, rotation, translation, markers)) <= limit
+
+
+@kernel
+def _residual_bound(distance: np.ndarray) -> float:
+    """``max d_f + mean d_f + rms d_f`` [mm] of the frames' residual norms ``d_f`` of
+    ``distance`` ``(n_frames, n)`` [mm] (:func:`surely_rigid`). A compiled kernel."""
+    largest = total = total_sq = 0.0
+    for f in range(distance.shape[0]):
+        norm_sq = 0.0
+        for m in range(distance.shape[1]):
+            norm_sq += distance[f, m] ** 2
+        norm = np.sqrt(norm_sq)
+        largest = max(largest, norm)
+        total += norm
+        total_sq += norm_sq
+    n_frames = distance.shape[0]
+    return largest + total / n_frames + np.sqrt(total_sq / n_frames)
+
+
 def residuals(
     shape: np.ndarray, rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray
 ) -> np.ndarray:
     """Each marker's distance ``(n_frames, n)`` [mm] from ``shape`` ``(n, 3)`` posed by
     ``(R, t)`` in every frame (NaN where missing)."""
-    fitted = np.einsum("fij,mj->fmi", rotation, shape) + translation[:, None, :]
-    return np.linalg.norm(markers - fitted, axis=-1)
+    markers = kernel_array(markers)
+    distance = np.empty(markers.shape[:2])
+    _residuals(
+        kernel_array(shape), kernel_array(rotation), kernel_array(translation), markers, distance
+    )
+    return distance
+
+
+@kernel
+def _residuals(
+    shape: np.ndarray,
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    markers: np.ndarray,
+    distance: np.ndarray,
+) -> None:
+    """``distance`` ``(n_frames, n)`` [mm] of :func:`residuals`. A compiled kernel."""
+    for f in range(markers.shape[0]):
+        for m in range(markers.shape[1]):
+            total = 0.0
+            for i in range(3):
+                fitted = translation[f, i]
+                for j in range(3):
+                    fitted += rotation[f, i, j] * shape[m, j]
+                total += (markers[f, m, i] - fitted) ** 2
+            distance[f, m] = np.sqrt(total)

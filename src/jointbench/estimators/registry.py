@@ -135,11 +135,16 @@ def _checked(kind: str, fn: Callable) -> Callable:
 
     @functools.wraps(fn)
     def checked(*arrays: object, **options: object):
-        clean = validation.check_input(kind, arrays)
-        result = _self_checked(fn, fn(*clean, **options), clean, options)
-        return support.annotate(result, support.assess(kind, clean))
+        return _fit_valid(kind, fn, validation.check_input(kind, arrays), **options)
 
     return checked
+
+
+def _fit_valid(kind: str, fn: Callable, clean: tuple[np.ndarray, ...], **options: object):
+    """``fn`` on ``clean``, arrays that passed the input checks, then its self-check and the
+    support verdict."""
+    result = _self_checked(fn, fn(*clean, **options), clean, options)
+    return support.annotate(result, support.assess(kind, clean))
 
 
 def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
@@ -248,6 +253,13 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
     """
     entry = _entry(kind, name)
     return entry.checked if checked else entry.fn
+
+
+def get_for_valid(kind: str, name: str) -> Callable:
+    """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
+    already passed :func:`jointbench.estimators.validation.check_input`, whose checks it does
+    not repeat: for a caller that ran them itself."""
+    return functools.partial(_fit_valid, kind, _entry(kind, name).fn)
 
 
 def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:
