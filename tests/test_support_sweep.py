@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import math
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -119,9 +118,7 @@ def _packed(decided: list[dict]) -> dict:
             continue
         diagnostics = entry["diagnostics"]
         keys = "|".join(diagnostics)
-        values = [
-            float(f"{v:.12g}") if isinstance(v, float) else v for v in diagnostics.values()
-        ]
+        values = [float(f"{v:.12g}") if isinstance(v, float) else v for v in diagnostics.values()]
         codes = [texts.setdefault(text, len(texts)) for text in [keys, *entry["warnings"]]]
         entries.append([codes, values])
     return {"texts": list(texts), "entries": entries}
