@@ -342,9 +342,12 @@ def _rotation_spreads(
     relative = np.empty((n_frames, 3, 3))
     vectors = np.empty((n_frames, 3))
     gram = np.empty((3, 3))
+    mean = np.empty((3, 3))
+    d = np.empty((3, 3))
+    centre = np.empty(3)
     near_pi = False
     for t in range(n_trials):
-        mean = np.zeros((3, 3))
+        mean[:] = 0.0
         for f in range(n_frames):
             for i in range(3):
                 for j in range(3):
@@ -363,9 +366,9 @@ def _rotation_spreads(
         covariance = moving_inertia_inv[t].copy()
         if with_reference:
             covariance += nearest.T @ reference_inertia_inv[t] @ nearest
-        centre = np.zeros(3)
+        centre[:] = 0.0
         for f in range(n_frames):
-            d = np.zeros((3, 3))
+            d[:] = 0.0
             for i in range(3):
                 for j in range(3):
                     for k in range(3):
