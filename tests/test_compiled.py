@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from jointbench.estimators import axis, registry, sphere
+from jointbench.estimators import axis, registry, sphere, validation
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import poses
 
@@ -60,6 +60,36 @@ def test_rotation_kernel():
     assert compiled_unsettled[-2:].all() and not compiled_unsettled[:300].any()
     settled = ~compiled_unsettled
     np.testing.assert_allclose(compiled[settled], interpreted[settled], rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize(
+    "sample",
+    [None, (3, 1, [np.nan, 0, 0]), (0, 2, [0, np.inf, 1]), (5, 0, [0, 0, 0]), (2, 2, [0, 0, 1])],
+)
+def test_input_check_kernels(sample):
+    """The input checks' compiled passes find what their Python source says: non-finite and
+    (0, 0, 0) samples, and how far the markers move from frame 0."""
+    rng = np.random.default_rng(22)
+    markers = rng.normal(scale=100.0, size=(7, 3, 3))
+    if sample is not None:
+        frame, marker, value = sample
+        markers[frame, marker] = value
+    flags = validation._sample_flags
+    assert flags(markers) == flags.__wrapped__(markers)
+    all_finite, any_origin = flags(markers)
+    assert all_finite == bool(np.isfinite(markers).all())
+    assert any_origin == bool((~markers.any(axis=-1)).any())
+    # Motion is measured only on markers that passed the finite check.
+    if all_finite:
+        move = validation._largest_move
+        assert (
+            move(markers)
+            == move.__wrapped__(markers)
+            == (
+                float(np.abs(markers - markers[0]).max()),
+                float(np.abs(markers[0]).max()),
+            )
+        )
 
 
 def _hinge_markers(rng, n_trials: int) -> np.ndarray:

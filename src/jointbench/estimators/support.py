@@ -43,6 +43,9 @@ of motion with large noise, is warned about, not dropped from a study).
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
+import operator
 from typing import NamedTuple
 
 import numpy as np
@@ -342,9 +345,12 @@ def _rotation_spreads(
     relative = np.empty((n_frames, 3, 3))
     vectors = np.empty((n_frames, 3))
     gram = np.empty((3, 3))
+    mean = np.empty((3, 3))
+    d = np.empty((3, 3))
+    centre = np.empty(3)
     near_pi = False
     for t in range(n_trials):
-        mean = np.zeros((3, 3))
+        mean[:] = 0.0
         for f in range(n_frames):
             for i in range(3):
                 for j in range(3):
@@ -363,9 +369,9 @@ def _rotation_spreads(
         covariance = moving_inertia_inv[t].copy()
         if with_reference:
             covariance += nearest.T @ reference_inertia_inv[t] @ nearest
-        centre = np.zeros(3)
+        centre[:] = 0.0
         for f in range(n_frames):
-            d = np.zeros((3, 3))
+            d[:] = 0.0
             for i in range(3):
                 for j in range(3):
                     for k in range(3):
@@ -457,8 +463,9 @@ def _rotation_test(
     )
     # Noise-free data: a rotation above rounding is resolved, and rotation about other axes is
     # judged against the main one (the F-test would compare rounding with rounding).
-    p_any = np.where(exact, (rms <= _ROUNDING_ROTATION_RAD).astype(float), p_any)
-    p_second = np.where(exact, (raw[:, 1] <= 1e-12 * raw[:, 2]).astype(float), p_second)
+    if exact.any():
+        p_any = np.where(exact, (rms <= _ROUNDING_ROTATION_RAD).astype(float), p_any)
+        p_second = np.where(exact, (raw[:, 1] <= 1e-12 * raw[:, 2]).astype(float), p_second)
     return _Rotation(rms, p_any, second, p_second)
 
 
@@ -472,16 +479,20 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
         return [_without_poses(tuple(array[0] for array in arrays), "no 3 non-collinear markers")]
     names = ARRAY_NAMES[kind]
     clusters = [_clusters(array) for array in arrays]
+    # functools.reduce, not sum or np.maximum.reduce: one cluster needs no arithmetic, and these
+    # small array operations are most of the verdict's cost outside the compiled passes.
     dof = sum(cluster.dof for cluster in clusters)
-    variance = sum(cluster.residual_ss for cluster in clusters) / dof
-    largest = np.maximum.reduce([cluster.largest for cluster in clusters])
+    variance = functools.reduce(operator.add, [cluster.residual_ss for cluster in clusters]) / dof
+    largest = functools.reduce(np.maximum, [cluster.largest for cluster in clusters])
     exact = variance <= (ROUNDING * largest) ** 2
     reference = clusters[0] if kind == "joint_center" else None
     rotation = _rotation_test(clusters[-1], reference, variance, dof, exact)
     # A rotation about the cluster's weakest axis worse determined than this (noise s over the
     # markers' spread about that axis) leaves the pose to the noise (nearly collinear markers):
     # the first-order tests above do not hold, and the data are judged without poses.
-    weakest = np.sqrt(np.maximum.reduce([c.weakest_variance for c in clusters]) * variance)
+    weakest = np.sqrt(
+        functools.reduce(np.maximum, [c.weakest_variance for c in clusters]) * variance
+    )
     return [
         _without_poses(
             tuple(array[t] for array in arrays),
@@ -563,8 +574,10 @@ def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
 
 def _verdict(kind, names, clusters, t, variance, rotation) -> Support:
     """Trial ``t``'s warnings and numbers."""
-    residual_mm = float(np.sqrt(3.0 * variance))
+    residual_mm = math.sqrt(3.0 * variance)
     p_any, p_second = float(rotation.p_any[t]), float(rotation.p_second[t])
+    rms_deg = math.degrees(rotation.rms_rad[t])
+    second_rms_deg = math.degrees(rotation.second_rms_rad[t])
     warnings = [
         f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
         f"{100 * cluster.nonrigid_share[t]:.0f}% of their scatter about their centroid "
@@ -576,13 +589,13 @@ def _verdict(kind, names, clusters, t, variance, rotation) -> Support:
     if not warnings and p_any >= ROTATION_ALPHA:
         warnings.append(
             f"range of motion too small to support an answer: a rotation of "
-            f"{np.degrees(rotation.rms_rad[t]):.3g} deg RMS is not resolved above the "
+            f"{rms_deg:.3g} deg RMS is not resolved above the "
             f"rigid-body residual of {residual_mm:.3g} mm (p = {p_any:.2g})"
         )
     elif not warnings and kind in CENTRE_KINDS and p_second >= ROTATION_ALPHA:
         warnings.append(
             f"rotation about a single axis: the centre is not determined along it (rotation "
-            f"about other axes, {np.degrees(rotation.second_rms_rad[t]):.3g} deg RMS, is not "
+            f"about other axes, {second_rms_deg:.3g} deg RMS, is not "
             f"resolved above the rigid-body residual of {residual_mm:.3g} mm, "
             f"p = {p_second:.2g})"
         )
@@ -592,9 +605,9 @@ def _verdict(kind, names, clusters, t, variance, rotation) -> Support:
             "assessed": True,
             "rigid_residual_mm": residual_mm,
             "nonrigid_share": float(max(cluster.nonrigid_share[t] for cluster in clusters)),
-            "rotation_rms_deg": float(np.degrees(rotation.rms_rad[t])),
+            "rotation_rms_deg": rms_deg,
             "rotation_p_value": p_any,
-            "off_axis_rotation_rms_deg": float(np.degrees(rotation.second_rms_rad[t])),
+            "off_axis_rotation_rms_deg": second_rms_deg,
             "off_axis_p_value": p_second,
         },
     )

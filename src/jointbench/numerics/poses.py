@@ -101,7 +101,10 @@ def best_rotation(cross: np.ndarray, *, bound: np.ndarray | None = None) -> np.n
     if bound is None:
         limits = np.full(flat.shape[0], np.inf)
     else:
-        limits = kernel_array(np.broadcast_to(bound, shape[:-2]).reshape(-1))
+        # np.broadcast_to costs more than a closed-form fit: taken only when shapes differ.
+        if np.shape(bound) != shape[:-2]:
+            bound = np.broadcast_to(bound, shape[:-2])
+        limits = kernel_array(np.reshape(bound, -1))
     rotation = np.empty_like(flat)
     unsettled = np.empty(flat.shape[0], dtype=bool)
     _horn_rotations(flat, limits, rotation, unsettled)
