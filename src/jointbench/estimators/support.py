@@ -395,7 +395,11 @@ def _rotation_spreads(
             for i in range(3):
                 for j in range(3):
                     gram[i, j] += (vectors[f, i] - centre[i]) * (vectors[f, j] - centre[j])
-        whitening = np.linalg.cholesky(np.linalg.inv(covariance))
+        # L = V diag(mu)^-1/2 from the covariance's own eigenvectors, not the Cholesky factor
+        # of its inverse: with nearly collinear markers the covariance's inverse is rounding
+        # in one direction and need not come out positive definite.
+        mu, basis = np.linalg.eigh(covariance)
+        whitening = basis / np.sqrt(mu)
         white = whitening.T @ gram @ whitening
         raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
         spread[t] = np.maximum(np.linalg.eigvalsh(white), 0.0)
@@ -416,7 +420,8 @@ def _spreads_near_pi(
         covariance = covariance + np.swapaxes(mean, -1, -2) @ reference.inertia_inv @ mean
     deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
     deviation = deviation - deviation.mean(axis=1, keepdims=True)
-    whitened = deviation @ np.linalg.cholesky(np.linalg.inv(covariance))
+    mu, basis = np.linalg.eigh(covariance)
+    whitened = deviation @ (basis / np.sqrt(mu)[:, None, :])
     gram = np.swapaxes(deviation, 1, 2) @ deviation
     white = np.swapaxes(whitened, 1, 2) @ whitened
     return np.maximum(np.linalg.eigvalsh(gram), 0.0), np.maximum(np.linalg.eigvalsh(white), 0.0)
