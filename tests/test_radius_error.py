@@ -119,11 +119,18 @@ def test_a13_holds_when_ls_underestimates_at_small_rom_and_nm_less():
     assert "6 of 6 cells" in row["reproduced"]
 
 
+def test_a13_reads_underestimation_only():
+    """An NM overestimate larger than LS's underestimate does not contradict "reduces the
+    potential for radius underestimation"."""
+    row = _a13(_radius_world(ls_small=-2.0, nm_small=5.0))
+    assert row["status"] == "reproduced"
+
+
 @pytest.mark.parametrize(
     "wrong",
     [
         {"ls_small": 2.0},  # LS overestimates
-        {"ls_small": -0.4, "nm_small": 0.6},  # NM's error larger than LS's
+        {"ls_small": -0.4, "nm_small": -0.6},  # NM underestimates more than LS
         {"ls_small": -0.5, "ls_large": -3.0},  # LS underestimates more at the largest RoM
     ],
 )

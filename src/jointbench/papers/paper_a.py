@@ -367,7 +367,7 @@ def _a13(collected, means):
     small, large = errors.xs(smallest, level="rom_deg"), errors.xs(largest, level="rom_deg")
     holds = (
         (small["LS"] < 0)
-        & (small["LS"].abs() > small["NM"].abs())
+        & (small["NM"] > small["LS"])
         & (small["LS"] < large["LS"].reindex(small.index))
     )
     by_rom = errors.groupby(level="rom_deg").mean()
