@@ -8,11 +8,8 @@ tolerances, one recorded deviation) and ``toy.yaml`` (the config overlay naming 
 
 from __future__ import annotations
 
-import shutil
-
 import pandas as pd
 import pytest
-from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 pytestmark = pytest.mark.pipeline
 
@@ -20,13 +17,9 @@ FILES = ("toy_study.py", "paper_t.yaml", "toy.yaml")
 
 
 @pytest.fixture(scope="module")
-def toy_run(tmp_path_factory):
-    workdir = copy_workflow(tmp_path_factory.mktemp("fourth_study"))
-    for name in FILES:
-        shutil.copy(ROOT / "tests" / "data" / "fourth_study" / name, workdir / name)
-    run = run_snakemake(workdir, "--configfile", str(workdir / "toy.yaml"))
-    assert run.returncode == 0, run.stderr[-4000:]
-    return workdir
+def toy_run(fourth_study_run):
+    """The session's finished run of the three files (``tests/conftest.py``), read only."""
+    return fourth_study_run.workdir
 
 
 def test_the_extension_needs_at_most_five_files():
@@ -52,11 +45,10 @@ def test_its_published_values_are_checked(toy_run):
     assert set(comparison["study"]) == {"toy"}
 
 
-def test_its_figure_is_in_the_report(toy_run):
-    report = run_snakemake(
-        toy_run, "--configfile", str(toy_run / "toy.yaml"), "--report", "results/report.html"
-    )
+def test_its_figure_is_in_the_report(fourth_study_run, tmp_path):
+    run = fourth_study_run.copy(tmp_path / "run")
+    report = run.snakemake("--report", "results/report.html")
     assert report.returncode == 0, report.stderr[-4000:]
-    html = (toy_run / "results" / "report.html").read_text(errors="replace")
+    html = (run.workdir / "results" / "report.html").read_text(errors="replace")
     for name in ("paper_t_errors.png", "published_comparison.html", "extended_toy.png"):
         assert name in html, f"{name} missing from the report"

@@ -21,16 +21,6 @@ pytestmark = pytest.mark.pipeline
 compare_collected = load_benchmark("compare_collected")
 
 
-@pytest.fixture(scope="session")
-def reduced_run(tmp_path_factory):
-    workdir = copy_workflow(tmp_path_factory.mktemp("workflow"))
-    reduced = ROOT / "tests" / "data" / "reduced.yaml"
-    first = run_snakemake(workdir, "--configfile", str(reduced))
-    assert first.returncode == 0, first.stderr[-4000:]
-    second = run_snakemake(workdir, "--dry-run", "--configfile", str(reduced))
-    return workdir, yaml.safe_load(reduced.read_text()), second
-
-
 def _outputs(study: str) -> list[str]:
     """Every file a study's paper outputs and extended ranking write, from the registries."""
     files = [f"collected/{study}.parquet"]
@@ -42,7 +32,7 @@ def _outputs(study: str) -> list[str]:
 
 
 def test_every_output_is_produced(reduced_run):
-    workdir, reduced, _ = reduced_run
+    workdir, reduced = reduced_run.workdir, reduced_run.overlay
     for study in reduced["studies"]:
         for name in _outputs(study):
             path = workdir / "results" / name
@@ -51,13 +41,13 @@ def test_every_output_is_produced(reduced_run):
 
 
 def test_second_run_has_nothing_to_do(reduced_run):
-    _, _, second = reduced_run
+    second = reduced_run.dry_run
     assert second.returncode == 0
     assert "Nothing to be done" in second.stdout + second.stderr
 
 
 def test_collected_cmc_has_one_row_per_trial_and_method(reduced_run):
-    workdir, reduced, _ = reduced_run
+    workdir, reduced = reduced_run.workdir, reduced_run.overlay
     collected = pd.read_parquet(workdir / "results" / "collected" / "cmc.parquet")
     study = reduced["studies"]["cmc"]
     n_conditions = 1
@@ -88,8 +78,7 @@ def test_collected_cmc_has_one_row_per_trial_and_method(reduced_run):
 
 
 def test_claims_tables_are_computed(reduced_run):
-    workdir, _, _ = reduced_run
-    claims = pd.read_csv(workdir / "results" / "tables" / "paper_a_claims.csv")
+    claims = pd.read_csv(reduced_run.workdir / "results" / "tables" / "paper_a_claims.csv")
     assert list(claims["id"]) == [f"A{i}" for i in range(1, 14)]
     assert set(claims["status"]) <= {"reproduced", "not reproduced", "not applicable"}
 
@@ -102,15 +91,10 @@ def test_every_study_is_reduced():
         assert study["trials"] < config["studies"][name]["trials"]
 
 
-def test_the_report_holds_every_figure_and_table(reduced_run):
-    workdir, reduced, _ = reduced_run
-    report = run_snakemake(
-        workdir,
-        "--configfile",
-        str(ROOT / "tests" / "data" / "reduced.yaml"),
-        "--report",
-        "results/report.html",
-    )
+def test_the_report_holds_every_figure_and_table(reduced_run, tmp_path):
+    run, reduced = reduced_run.copy(tmp_path / "run"), reduced_run.overlay
+    workdir = run.workdir
+    report = run.snakemake("--report", "results/report.html")
     assert report.returncode == 0, report.stderr[-4000:]
     html = (workdir / "results" / "report.html").read_text(errors="replace")
     # Each output is shown on a page of its own beside its caption.
@@ -127,7 +111,7 @@ def test_the_report_holds_every_figure_and_table(reduced_run):
 
 
 def test_every_rule_writes_its_log(reduced_run):
-    workdir, _, _ = reduced_run
+    workdir = reduced_run.workdir
     logs = list((workdir / "results" / "logs").rglob("*.log"))
     assert logs, "no logs written"
     empty = [str(p.relative_to(workdir)) for p in logs if p.stat().st_size == 0]
@@ -135,40 +119,27 @@ def test_every_rule_writes_its_log(reduced_run):
 
 
 def test_estimate_jobs_log_their_progress(reduced_run):
-    workdir, _, _ = reduced_run
-    log = (workdir / "results" / "logs" / "estimate" / "cmc" / "NM.log").read_text()
+    log = (reduced_run.workdir / "results" / "logs" / "estimate" / "cmc" / "NM.log").read_text()
     assert "cmc NM: [" in log and "conditions" in log and "s left" in log
 
 
 def test_the_hip_methods_share_one_pose_fit_per_condition(reduced_run):
     """One poses job fits the hip trials; each pose-based estimate job reads its files."""
-    workdir, reduced, _ = reduced_run
+    workdir, reduced = reduced_run.workdir, reduced_run.overlay
     conditions = reduced["studies"]["hip"]["grid"]["n_frames"]
     poses = sorted(p.name for p in (workdir / "results" / "poses" / "hip").glob("*.parquet"))
     assert poses == sorted(f"n_frames-{n}.parquet" for n in conditions)
     log = (workdir / "results" / "logs" / "poses" / "hip.log").read_text()
     assert f"hip poses: [####################] {len(conditions)}/{len(conditions)}" in log
-    jobs = run_snakemake(
-        workdir,
-        "--dry-run",
-        "--forceall",
-        "--configfile",
-        str(ROOT / "tests" / "data" / "reduced.yaml"),
-    )
+    jobs = reduced_run.snakemake("--dry-run", "--forceall")
     assert jobs.returncode == 0, jobs.stderr[-2000:]
     stats = jobs.stdout + jobs.stderr
     assert re.search(r"^poses_hip\s+1$", stats, re.MULTILINE), stats
     assert "poses_cmc" not in stats and "poses_hinge" not in stats
     # One job per condition for a cluster: a poses job per condition, read by that condition's
     # estimate jobs.
-    per_condition = run_snakemake(
-        workdir,
-        "--dry-run",
-        "--forceall",
-        "--configfile",
-        str(ROOT / "tests" / "data" / "reduced.yaml"),
-        "--config",
-        "jobs={'estimate': 'per_condition'}",
+    per_condition = reduced_run.snakemake(
+        "--dry-run", "--forceall", "--config", "jobs={'estimate': 'per_condition'}"
     )
     assert per_condition.returncode == 0, per_condition.stderr[-2000:]
     stats = per_condition.stdout + per_condition.stderr

@@ -1,13 +1,14 @@
 """The mutation suite: no edit leaves a stale result, and no text-only edit reruns anything.
 
-Two finished runs are made, each in a work tree with its own copy of the package, which its jobs
-import (``PYTHONPATH``): the reduced grid of the three built-in studies with the external LM
-rule (``builtin``), and the fourth study from ``tests/data/fourth_study`` alone, its module loaded
-as an extension (``extension``). Each case below applies one kind of edit a user makes: to library
-code, to the workflow's scripts and rules, to data files jobs read, to the config. It then asks
-``snakemake --dry-run`` what it would run, and holds that to the jobs the edit must rerun
-(``reruns``) and to jobs it must leave alone (``spares``). A new kind of edit is one more ``Edit``
-in ``EDITS`` (or entry in ``CONFIG_EDITS``).
+Two finished runs the session shares (``tests/conftest.py``) are edited, each in a work tree with
+its own copy of the package, which its jobs import (``PYTHONPATH``): the reduced grid of the
+three built-in studies with the external LM rule (``builtin``), and the fourth study from
+``tests/data/fourth_study`` alone, its module loaded as an extension (``extension``). Each case
+below applies one kind of edit a user makes: to library code, to the workflow's scripts and
+rules, to data files jobs read, to the config. It then asks ``snakemake --dry-run`` what it would
+run, and holds that to the jobs the edit must rerun (``reruns``) and to jobs it must leave alone
+(``spares``), and puts the file back as it was. A new kind of edit is one more ``Edit`` in
+``EDITS`` (or entry in ``CONFIG_EDITS``).
 
 Every job loads the extension modules, so the modules an extension imports count for every job
 of a run that lists it: there, a paper's or a figure's edit reruns every job.
@@ -18,30 +19,19 @@ there as JSON (``benchmarks/stale_results.py`` prints them as a table).
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 import re
-import shutil
-import subprocess
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
 import yaml
-from workflow_copy import ROOT, SNAKEMAKE
+from workflow_copy import OVERLAY, FinishedRun
 
 pytestmark = pytest.mark.pipeline
-
-FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
-OVERLAY = "mutation.yaml"
-
-
-def _overlay(scenario: str) -> dict:
-    """The config overlay of a scenario: the reduced grid of the built-in studies, or the fourth
-    study alone."""
-    name = "reduced.yaml" if scenario == "builtin" else "fourth_study/toy.yaml"
-    return yaml.safe_load((ROOT / "tests" / "data" / name).read_text())
 
 
 @dataclass(frozen=True)
@@ -326,30 +316,6 @@ CONFIG_EDITS = (
 # -- the finished run, and what a dry run schedules ---------------------------------------------
 
 
-def _environment(workdir: Path) -> dict[str, str]:
-    return {**os.environ, "PYTHONPATH": str(workdir / "src")}
-
-
-def _snakemake(workdir: Path, *arguments: str) -> subprocess.CompletedProcess:
-    command = [
-        str(SNAKEMAKE),
-        *arguments,
-        "-j2",
-        # The repository's default profile hides each job's rule and wildcards.
-        "--workflow-profile",
-        "none",
-        "--directory",
-        str(workdir),
-        "-s",
-        str(workdir / "Snakefile"),
-        "--configfile",
-        str(workdir / OVERLAY),
-    ]
-    return subprocess.run(
-        command, capture_output=True, text=True, timeout=900, env=_environment(workdir)
-    )
-
-
 _RULE = re.compile(r"^(?:local)?rule (\S+):$")
 _WILDCARDS = re.compile(r"^\s+wildcards: (.*)$")
 
@@ -372,36 +338,20 @@ def scheduled(dry_run_output: str) -> set[str]:
     return jobs - {"all"}
 
 
-def _finish(workdir: Path, scenario: str) -> Path:
-    """A finished run of ``scenario`` in ``workdir``, with its own copy of the package."""
-    shutil.copy(ROOT / "Snakefile", workdir / "Snakefile")
-    for folder in ("workflow", "config"):
-        shutil.copytree(ROOT / folder, workdir / folder)
-    shutil.copytree(ROOT / "src", workdir / "src", ignore=shutil.ignore_patterns("*.egg-info"))
-    if scenario == "extension":
-        for name in ("toy_study.py", "paper_t.yaml"):
-            shutil.copy2(FOURTH_STUDY / name, workdir / name)
-    (workdir / OVERLAY).write_text(yaml.safe_dump(_overlay(scenario)))
-    run = _snakemake(workdir)
-    assert run.returncode == 0, run.stderr[-4000:]
-    again = _snakemake(workdir, "--dry-run")
-    assert again.returncode == 0, again.stderr[-4000:]
-    assert "Nothing to be done" in again.stdout, again.stdout[-4000:]
-    return workdir
+# Edited in place, not in a copy: Snakemake records the published-value files by absolute path,
+# so in a copy the jobs reading them would be out of date before any edit.
+@pytest.fixture(scope="module")
+def builtin(reduced_run) -> FinishedRun:
+    return reduced_run
 
 
 @pytest.fixture(scope="module")
-def builtin(tmp_path_factory) -> Path:
-    return _finish(tmp_path_factory.mktemp("mutations_builtin"), "builtin")
+def extension(fourth_study_run) -> FinishedRun:
+    return fourth_study_run
 
 
-@pytest.fixture(scope="module")
-def extension(tmp_path_factory) -> Path:
-    return _finish(tmp_path_factory.mktemp("mutations_extension"), "extension")
-
-
-def _dry_run(workdir: Path) -> set[str]:
-    run = _snakemake(workdir, "--dry-run")
+def _dry_run(finished_run: FinishedRun) -> set[str]:
+    run = finished_run.snakemake("--dry-run")
     assert run.returncode == 0, run.stdout[-4000:] + run.stderr[-4000:]
     if os.environ.get("JOINTBENCH_MUTATION_DEBUG"):
         print(run.stdout[-3000:], run.stderr[-3000:])
@@ -441,8 +391,8 @@ def _check(kind: str, jobs: set[str], reruns, spares) -> None:
 @pytest.mark.parametrize("edit", EDITS, ids=[e.kind for e in EDITS])
 def test_an_edit_reruns_what_it_can_change_and_nothing_else(request, edit):
     finished_run = request.getfixturevalue(edit.scenario)
-    text = (finished_run / edit.path).read_text()
-    restore = _edited(finished_run, edit.path, edit.apply(text))
+    text = (finished_run.workdir / edit.path).read_text()
+    restore = _edited(finished_run.workdir, edit.path, edit.apply(text))
     try:
         jobs = _dry_run(finished_run)
     finally:
@@ -457,9 +407,9 @@ def test_a_config_edit_reruns_what_it_can_change_and_nothing_else(
     builtin, kind, change, reruns, spares
 ):
     finished_run = builtin
-    config = _overlay("builtin")
+    config = copy.deepcopy(finished_run.overlay)
     change(config)
-    restore = _edited(finished_run, OVERLAY, yaml.safe_dump(config))
+    restore = _edited(finished_run.workdir, OVERLAY, yaml.safe_dump(config))
     try:
         jobs = _dry_run(finished_run)
     finally:

@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import importlib.util
+import os
 import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
+
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+OVERLAY = "overlay.yaml"
 
 
 def load_benchmark(name: str):
@@ -44,3 +49,68 @@ def run_snakemake(workdir: Path, *arguments: str, timeout: int = 900):
         str(workdir / "Snakefile"),
     ]
     return subprocess.run(command, capture_output=True, text=True, timeout=timeout)
+
+
+@dataclass(frozen=True)
+class FinishedRun:
+    """A finished run in ``workdir``: the workflow, its own copy of the package under ``src/``
+    and its config overlay ``overlay.yaml`` (``overlay``, as loaded); ``dry_run``, the dry run
+    made once it had finished."""
+
+    workdir: Path
+    overlay: dict
+    dry_run: subprocess.CompletedProcess | None = None
+
+    def snakemake(self, *arguments: str, timeout: int = 900) -> subprocess.CompletedProcess:
+        """``snakemake -j2`` with ``arguments`` (targets first) on this run's tree, config
+        overlay and copy of the package."""
+        command = [
+            str(SNAKEMAKE),
+            *arguments,
+            "-j2",
+            # A repository's default profile would hide each job's rule and wildcards.
+            "--workflow-profile",
+            "none",
+            "--directory",
+            str(self.workdir),
+            "-s",
+            str(self.workdir / "Snakefile"),
+            "--configfile",
+            str(self.workdir / OVERLAY),
+        ]
+        environment = {**os.environ, "PYTHONPATH": str(self.workdir / "src")}
+        return subprocess.run(
+            command, capture_output=True, text=True, timeout=timeout, env=environment
+        )
+
+    def finished(self) -> FinishedRun:
+        """This run with its dry run, which must have nothing to do."""
+        again = self.snakemake("--dry-run")
+        assert again.returncode == 0, again.stderr[-4000:]
+        assert "Nothing to be done" in again.stdout, again.stdout[-4000:]
+        return FinishedRun(self.workdir, self.overlay, again)
+
+    def copy(self, destination: Path) -> FinishedRun:
+        """This run copied into the new directory ``destination``, to write into (a report).
+        Its files keep their times, but Snakemake records the published-value files a job
+        reads by absolute path, so there the jobs reading them count as changed: ask the
+        original, not a copy, what is out of date."""
+        shutil.copytree(self.workdir, destination, symlinks=True)
+        return FinishedRun(destination, self.overlay)
+
+
+def finish_run(workdir: Path, overlay: dict, extension_files: tuple[Path, ...] = ()) -> FinishedRun:
+    """Run ``overlay`` to the end in ``workdir``, with a copy of the package and the files of
+    an extension; the run must then have nothing left to do."""
+    shutil.copy(ROOT / "Snakefile", workdir / "Snakefile")
+    for folder in ("workflow", "config"):
+        shutil.copytree(ROOT / folder, workdir / folder)
+    # Compiled kernels' caches come along (their sources keep their times): no job recompiles.
+    shutil.copytree(ROOT / "src", workdir / "src", ignore=shutil.ignore_patterns("*.egg-info"))
+    for path in extension_files:
+        shutil.copy2(path, workdir / path.name)
+    (workdir / OVERLAY).write_text(yaml.safe_dump(overlay))
+    run = FinishedRun(workdir, overlay)
+    done = run.snakemake()
+    assert done.returncode == 0, done.stderr[-4000:]
+    return run.finished()

@@ -1,0 +1,62 @@
+"""Finished runs that the end-to-end suites share.
+
+A reduced run of the built-in studies costs a minute of both cores, and the fourth study's run
+a good part of one. Each is made once per session, in a work tree with its own copy of the
+package, which its jobs import (``PYTHONPATH``), and handed out read only to the suites that
+read a finished run (``test_pipeline.py``, ``test_fourth_study.py``) or ask it what an edit
+makes stale (``test_stale_results.py``, whose every edit puts the file back as it was, times
+included). A test that writes a file into a run (a report) writes into
+:meth:`~workflow_copy.FinishedRun.copy`. At the end of the session each shared tree must be as
+it was made: a test that left a change in one fails there.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+from workflow_copy import ROOT, FinishedRun, finish_run
+
+FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
+
+
+def _state(workdir: Path) -> dict[str, tuple[int, int]]:
+    """Size and modification time of every file of a work tree outside Snakemake's own
+    records (which a dry run may touch)."""
+    return {
+        str(path.relative_to(workdir)): (path.stat().st_size, path.stat().st_mtime_ns)
+        for path in workdir.rglob("*")
+        if path.is_file() and ".snakemake" not in path.parts and "__pycache__" not in path.parts
+    }
+
+
+def _shared(run: FinishedRun):
+    """Hand ``run`` out, then check that no test wrote into it."""
+    before = _state(run.workdir)
+    yield run
+    after = _state(run.workdir)
+    changed = sorted(
+        name for name in before.keys() | after.keys() if before.get(name) != after.get(name)
+    )
+    assert not changed, f"a test wrote into the shared run (use FinishedRun.copy): {changed[:20]}"
+
+
+def _load(name: str) -> dict:
+    return yaml.safe_load((ROOT / "tests" / "data" / name).read_text())
+
+
+@pytest.fixture(scope="session")
+def reduced_run(tmp_path_factory) -> FinishedRun:
+    """The reduced grid of the built-in studies (``tests/data/reduced.yaml``), with the
+    external LM rule of the default config, finished. Read only: write into a copy."""
+    yield from _shared(finish_run(tmp_path_factory.mktemp("reduced_run"), _load("reduced.yaml")))
+
+
+@pytest.fixture(scope="session")
+def fourth_study_run(tmp_path_factory) -> FinishedRun:
+    """The fourth study of ``tests/data/fourth_study`` alone, its module loaded as an
+    extension, finished. Read only: write into a copy."""
+    files = tuple(FOURTH_STUDY / name for name in ("toy_study.py", "paper_t.yaml"))
+    workdir = tmp_path_factory.mktemp("fourth_study_run")
+    yield from _shared(finish_run(workdir, _load("fourth_study/toy.yaml"), files))
