@@ -2,37 +2,67 @@
 
 An estimator answers the question it is asked even when the data cannot: a static cluster
 with noise, or markers that are not one rigid body, still yield a confident-looking centre.
-This module judges the data, not the answer, from the rigid-body fit of the moving cluster
-(three or more non-collinear markers):
+This module judges the data, not the answer, by three tests on the moving cluster (three or
+more non-collinear markers), each first order in the noise:
 
-* Rigidity. The residual of a cluster's rigid-body fit per degree of freedom,
-  ``s^2 = RSS / (3 (n - 2)(N - 1))`` [mm^2], is the noise a rigid body would have; the markers'
-  scatter about each frame's centroid per degree of freedom, ``v = sum |x - mean x|^2 /
-  (3 (n - 1) N)``, is what the cluster's shape must explain. For a rigid body with noise,
-  ``s^2 / v = s^2 / (s^2 + r^2)`` with ``r^2`` the shape's own spread per coordinate: the
-  noise's share of the scatter. When it reaches :data:`MAX_NONRIGID_SHARE` the noise is more
-  than ``1 / sqrt(3)`` of the shape it would be fitted to, so there is no shape to speak of and
-  the markers are reported as not one rigid body. (Points drawn at random in every frame give
-  a share of 0.4 for three markers, rising towards 1 with more.)
+* Rigidity. The rigid-body residual per degree of freedom, ``s^2`` [mm^2], is the noise a rigid
+  body would have; the markers' scatter about each frame's centroid per degree of freedom,
+  ``v = sum |x - mean x|^2 / (3 (n - 1) N)``, is what the cluster's shape must explain. For a
+  rigid body with noise, ``s^2 / v = s^2 / (s^2 + r^2)`` with ``r^2`` the shape's own spread per
+  coordinate: the noise's share of the scatter. When it reaches :data:`MAX_NONRIGID_SHARE` the
+  noise is more than ``1 / sqrt(3)`` of the shape it would be fitted to, so there is no shape to
+  speak of and the markers are reported as not one rigid body.
 * Range of motion. The rotation of the moving segment relative to the reference (the identity
-  for one-segment data; the proximal segment's pose for two-segment data) is compared with
-  what noise alone produces. With ``w_k`` the rotation vector of frame ``k`` about the mean
-  rotation and ``S`` its noise covariance (``s^2 K^-1`` with ``s^2`` pooled over the clusters
-  and ``K = sum_i (|u_i|^2 I - u_i u_i')`` the inertia of the centred body-fixed markers, Pennec
-  & Thirion's pose covariance; plus the proximal cluster's term mapped into the distal frame
-  for two segments), ``W = sum_k w_k' S^-1 w_k / (3 (N - 1))``
-  is F-distributed with ``(3 (N - 1), dof)`` degrees of freedom when the segment does not rotate.
-  A rotation not significant at the level :data:`ROTATION_ALPHA` is too small to support a
-  centre or axis: whatever an estimator returns is fitted to noise. For a centre
-  (:data:`CENTRE_KINDS`) the rotation must also span a second axis: the two smaller
-  eigenvalues of the whitened scatter ``sum_k z_k z_k'`` (``z_k = S^-1/2 w_k``) are tested the
-  same way with ``(2 (N - 1), dof)`` degrees of freedom, since rotation about one axis leaves
-  the centre undetermined along it. Both tests are first order in the noise; with large
-  rotations about the main axis the second is somewhat liberal (a pure hinge with noise passes
-  as spanning two axes in about 0.5 % of trials at the 0.1 % level). Noise-free data (a
-  residual at rounding level, :data:`ROUNDING`) leave nothing to test against: a rotation
-  above 1e-8 rad RMS is resolved, and rotation about a second axis is when its mean square is
-  above ``1e-12`` of the main axis's.
+  for one-segment data; the proximal segment's pose for two-segment data) against what noise
+  alone produces: F-distributed when the segment does not rotate. A rotation not significant
+  at the level :data:`ROTATION_ALPHA` is too small to support a centre or axis: whatever an
+  estimator returns is fitted to noise.
+* A second axis. For a centre (:data:`CENTRE_KINDS`) the rotation must also span a second
+  axis, since rotation about one axis leaves the centre undetermined along it; tested the same
+  way against "a hinge plus noise".
+
+Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
+against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
+its sum of squares is above ``1e-12`` of the main rotation's.
+
+One segment (``center``, ``axis``: markers in the reference frame) needs no pose, and is
+judged from sums over the frames in two compiled passes:
+
+* ``s^2`` from the inter-marker distances, which a rigid body keeps in any pose: to first order
+  the rigid fit's residual is ``sum_k dd_k' G+ dd_k`` over the frames' distance deviations
+  ``dd_k`` from their means, with ``G = J J'`` and ``J`` the distances' Jacobian at the mean
+  shape (its entries follow from the mean distances by the law of cosines). ``G``'s rank,
+  ``3 n - 6`` for a non-degenerate cluster, sets the degrees of freedom,
+  ``rank (N - 1)``; a mode weaker than :data:`_FLEX` of the strongest is a flex of a (nearly)
+  flat or collinear cluster, which moves no distance to first order, and is not counted.
+* Rotation: the scatter of the centred markers about their mean positions is the rotation's
+  sum of squares plus the rigid residual, so their difference, with
+  ``(3 (n - 1) - rank)(N - 1)`` degrees of freedom, is tested against ``s^2``. Its RMS angle is
+  the one that displaces the markers as much, ``(2/3) sum |u|^2`` being the inertia about an
+  axis averaged over axes.
+* A second axis: about a hinge axis ``h`` every marker moves in a plane normal to ``h`` and the
+  cluster's projection on that plane is a rigid plane figure, at any range of motion. The
+  markers' motion along ``h`` plus the projection's distance residual (as above, in 2-D),
+  less the cluster's own residual, is what a hinge about ``h`` leaves unexplained, with
+  ``(n - 1 + rank_2D - rank)(N - 1)`` degrees of freedom (2 (N - 1) for a non-degenerate
+  cluster). It is taken about two candidate axes: the direction the markers move least along
+  (exact for a hinge of any range, poor for a small one) and the principal axis of the
+  rotations from frame 0, linearised and whitened by their noise (good for a small rotation);
+  the hinge gets the candidate that explains the data better. A projection that keeps no plane
+  figure (the rigidity share above, in 2-D) is no hinge's. Taking the better of two axes makes
+  the test conservative; ``tests/test_support_calibration.py`` measures its rates on pure
+  hinges and static clusters.
+
+Two segments (``joint_center``: both clusters in the world) are judged from their rigid-body
+poses, the poses of :func:`jointbench.numerics.poses.rigid_poses` after one re-estimation of the
+body-fixed coordinates: ``s^2 = RSS / (3 (n - 2)(N - 1))`` pooled over the clusters; with
+``w_k`` the distal segment's rotation vector relative to the proximal one about their mean and
+``S`` its noise covariance (``s^2 K^-1`` with ``K = sum_i (|u_i|^2 I - u_i u_i')`` the inertia of
+the centred body-fixed markers, Pennec & Thirion's pose covariance, plus the proximal
+cluster's term mapped into the distal frame), ``sum_k w_k' S^-1 w_k / (3 (N - 1))`` is
+F-distributed with ``(3 (N - 1), dof)`` degrees of freedom when the segment does not rotate;
+the two smaller eigenvalues of the whitened scatter ``sum_k z_k z_k'`` (``z_k = S^-1/2 w_k``)
+are tested the same way with ``(2 (N - 1), dof)``.
 
 The verdict is a list of warnings; :func:`annotate` writes them into a result's ``status`` and
 its numbers into ``diagnostics["support_..."]``. It never changes ``converged``, which keeps the
@@ -54,6 +84,7 @@ from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import best_rotation
+from jointbench.numerics.small import inertia, symmetric_eigen
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
@@ -99,7 +130,8 @@ class Support(NamedTuple):
     """The verdict on a data set: ``warnings`` (empty when it supports an answer) and the
     numbers behind it (``diagnostics``: ``rigid_residual_mm`` the RMS 3-D residual of the
     rigid-body fits, ``nonrigid_share`` the larger ``s^2 / v`` of the clusters,
-    ``rotation_rms_deg`` the RMS rotation about the mean relative pose [deg],
+    ``rotation_rms_deg`` the RMS rotation about the mean relative pose [deg] (for one segment,
+    the angle that displaces the markers as much),
     ``rotation_p_value`` the p-value of "the segment does not rotate", and
     ``off_axis_rotation_rms_deg`` and ``off_axis_p_value`` the same for rotation about all but
     the dominant axis)."""
@@ -246,7 +278,6 @@ def _fit_numbers(
     weakest = np.empty(n_trials)
     u = np.empty((n_markers, 3))
     centred = np.empty((n_markers, 3))
-    inertia = np.empty((3, 3))
     for t in range(n_trials):
         for i in range(3):
             mean = 0.0
@@ -271,17 +302,7 @@ def _fit_numbers(
                     for j in range(3):
                         fitted += rotation[t, f, i, j] * u[m, j]
                     residual_ss[t] += (centred[m, i] - fitted) ** 2
-        squared = 0.0
-        for m in range(n_markers):
-            for i in range(3):
-                squared += u[m, i] ** 2
-        for i in range(3):
-            for j in range(3):
-                value = squared if i == j else 0.0
-                for m in range(n_markers):
-                    value -= u[m, i] * u[m, j]
-                inertia[i, j] = value
-        inertia_inv[t] = np.linalg.inv(inertia)
+        inertia_inv[t] = np.linalg.inv(inertia(u))
         weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
     return residual_ss, scatter, inertia_inv, weakest, largest
 
@@ -310,6 +331,320 @@ def _clusters(markers: np.ndarray) -> _Clusters:
         dof=dof,
         nonrigid_share=(residual_ss / dof) / (scatter / (3 * (n_markers - 1) * n_frames)),
     )
+
+
+#: The columns of :func:`_one_segment_numbers`, per trial: the rigid residual per coordinate
+#: [mm^2], the non-rigid share, the pose's SD about the weakest axis [rad], 1.0 for a collinear
+#: mean shape and the residual's degrees of freedom; then per test (any rotation; off the hinge
+#: about each candidate axis) the RMS rotation [rad], the F ratio and its numerator's degrees
+#: of freedom.
+_ONE_SEGMENT_COLUMNS = (
+    "variance",
+    "nonrigid_share",
+    "weakest_pose_sd_rad",
+    "collinear",
+    "residual_dof",
+    "rotation_rms_rad",
+    "rotation_f",
+    "rotation_dof",
+    "least_moving_rms_rad",
+    "least_moving_f",
+    "least_moving_dof",
+    "rotation_axis_rms_rad",
+    "rotation_axis_f",
+    "rotation_axis_dof",
+)
+
+# A mode of a distance Gram matrix this much weaker than the strongest is a flex of a (nearly)
+# flat or collinear cluster, which moves no distance to first order: it is not counted as shape.
+_FLEX = 1e-2
+
+
+@kernel
+def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
+    """The numbers of the one-segment verdict (module docstring) for ``markers``
+    ``(T, N, n >= 3, 3)`` [mm]: per trial the columns of :data:`_ONE_SEGMENT_COLUMNS`, from
+    two passes over the frames. Modes of a distance Gram matrix weaker than
+    ``flex`` times its strongest are flexes, not shape. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    n_pairs = n_markers * (n_markers - 1) // 2
+    out = np.zeros((n_trials, len(_ONE_SEGMENT_COLUMNS)))
+    off_axis = np.empty(2)
+    off_axis_rank = np.empty(2)
+    flat = np.zeros(2, dtype=np.bool_)
+    pair_a = np.empty(n_pairs, dtype=np.int64)
+    pair_b = np.empty(n_pairs, dtype=np.int64)
+    p = 0
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            pair_a[p] = a
+            pair_b[p] = b
+            p += 1
+    # Three sets of distances: the cluster's own (set 0), and those of its projections on the
+    # planes normal to the two candidate hinge axes (sets 1 and 2).
+    planes = np.empty((3, 2, 3))
+    first_d = np.empty((3, n_pairs))
+    sum_d = np.empty((3, n_pairs))
+    scatter_d = np.empty((3, n_pairs, n_pairs))
+    residual = np.empty(3)
+    rank = np.empty(3)
+    delta = np.empty(n_pairs)
+    first_c = np.empty((n_markers, 3))
+    sum_e = np.empty((n_markers, 3))
+    pooled = np.empty((3, 3))
+    inverse = np.empty((3, 3))
+    root = np.empty((3, 3))
+    sum_w = np.empty(3)
+    outer_w = np.empty((3, 3))
+    moment = np.empty(3)
+    w = np.empty(3)
+    centroid = np.empty(3)
+    centred = np.empty((n_markers, 3))
+    squared = np.empty((n_markers, n_markers))
+    mean_d = np.empty(n_pairs)
+    gram = np.empty((n_markers, n_markers))
+    g = np.empty((n_pairs, n_pairs))
+    axes = np.empty((2, 3))
+    for t in range(n_trials):
+        variance = 0.0
+        for stage in range(2):
+            first_set, last_set = (0, 1) if stage == 0 else (1, 3)
+            sum_d[first_set:last_set] = 0.0
+            scatter_d[first_set:last_set] = 0.0
+            if stage == 0:
+                sum_e[:] = 0.0
+                pooled[:] = 0.0
+                sum_w[:] = 0.0
+                outer_w[:] = 0.0
+                centroid_sq = 0.0
+                largest = 0.0
+            for f in range(n_frames):
+                for i in range(3):
+                    total = 0.0
+                    for m in range(n_markers):
+                        total += markers[t, f, m, i]
+                    centroid[i] = total / n_markers
+                for m in range(n_markers):
+                    for i in range(3):
+                        centred[m, i] = markers[t, f, m, i] - centroid[i]
+                if stage == 0:
+                    if f == 0:
+                        first_c[:] = centred
+                        # Frame 0's inertia sum |u|^2 I - sum u u', its inverse and square
+                        # root: the rotations from frame 0, linearised, and their noise.
+                        weights, frame = symmetric_eigen(inertia(centred))
+                        for i in range(3):
+                            for j in range(3):
+                                inverse[i, j] = 0.0
+                                root[i, j] = 0.0
+                                for k in range(3):
+                                    if weights[k] > 1e-12 * weights[2]:
+                                        inverse[i, j] += frame[i, k] * frame[j, k] / weights[k]
+                                        root[i, j] += (
+                                            frame[i, k] * frame[j, k] * np.sqrt(weights[k])
+                                        )
+                    moment[:] = 0.0
+                    for m in range(n_markers):
+                        e0 = centred[m, 0] - first_c[m, 0]
+                        e1 = centred[m, 1] - first_c[m, 1]
+                        e2 = centred[m, 2] - first_c[m, 2]
+                        for i in range(3):
+                            largest = max(largest, abs(markers[t, f, m, i]))
+                            centroid_sq += centred[m, i] ** 2
+                        sum_e[m, 0] += e0
+                        sum_e[m, 1] += e1
+                        sum_e[m, 2] += e2
+                        pooled[0, 0] += e0 * e0
+                        pooled[0, 1] += e0 * e1
+                        pooled[0, 2] += e0 * e2
+                        pooled[1, 1] += e1 * e1
+                        pooled[1, 2] += e1 * e2
+                        pooled[2, 2] += e2 * e2
+                        moment[0] += first_c[m, 1] * e2 - first_c[m, 2] * e1
+                        moment[1] += first_c[m, 2] * e0 - first_c[m, 0] * e2
+                        moment[2] += first_c[m, 0] * e1 - first_c[m, 1] * e0
+                    for i in range(3):
+                        w[i] = inverse[i, 0] * moment[0] + inverse[i, 1] * moment[1]
+                        w[i] += inverse[i, 2] * moment[2]
+                        sum_w[i] += w[i]
+                    for i in range(3):
+                        for j in range(i, 3):
+                            outer_w[i, j] += w[i] * w[j]
+                for s in range(first_set, last_set):
+                    for p in range(n_pairs):
+                        a, b = pair_a[p], pair_b[p]
+                        length = 0.0
+                        if s == 0:
+                            for i in range(3):
+                                length += (centred[a, i] - centred[b, i]) ** 2
+                        else:
+                            for k in range(2):
+                                along = 0.0
+                                for i in range(3):
+                                    along += planes[s, k, i] * (centred[a, i] - centred[b, i])
+                                length += along * along
+                        length = np.sqrt(length)
+                        if f == 0:
+                            first_d[s, p] = length
+                        delta[p] = length - first_d[s, p]
+                        sum_d[s, p] += delta[p]
+                    for p in range(n_pairs):
+                        for q in range(p, n_pairs):
+                            scatter_d[s, p, q] += delta[p] * delta[q]
+            # Per set: the distances' residual from a rigid figure to first order,
+            # sum_k dd_k' G+ dd_k with G = J J' (J the distances' Jacobian at the mean
+            # figure, whose entries the mean distances give by the law of cosines).
+            for s in range(first_set, last_set):
+                for p in range(n_pairs):
+                    mean_d[p] = first_d[s, p] + sum_d[s, p] / n_frames
+                    for q in range(p, n_pairs):
+                        value = scatter_d[s, p, q] - sum_d[s, p] * sum_d[s, q] / n_frames
+                        scatter_d[s, p, q] = value
+                        scatter_d[s, q, p] = value
+                squared[:] = 0.0
+                for p in range(n_pairs):
+                    squared[pair_a[p], pair_b[p]] = mean_d[p] ** 2
+                    squared[pair_b[p], pair_a[p]] = mean_d[p] ** 2
+                for p in range(n_pairs):
+                    a, b = pair_a[p], pair_b[p]
+                    for q in range(n_pairs):
+                        c, d = pair_a[q], pair_b[q]
+                        shared = int(a == c) - int(a == d) - int(b == c) + int(b == d)
+                        if shared == 0 or mean_d[p] == 0.0 or mean_d[q] == 0.0:
+                            g[p, q] = 0.0
+                        else:
+                            dot = 0.5 * (squared[a, d] + squared[b, c])
+                            dot -= 0.5 * (squared[a, c] + squared[b, d])
+                            g[p, q] = shared * dot / (mean_d[p] * mean_d[q])
+                strength, modes = symmetric_eigen(g)
+                residual[s] = 0.0
+                rank[s] = 0
+                for k in range(n_pairs):
+                    if strength[k] > flex * strength[n_pairs - 1]:
+                        rank[s] += 1
+                        value = 0.0
+                        for p in range(n_pairs):
+                            for q in range(n_pairs):
+                                value += modes[p, k] * scatter_d[s, p, q] * modes[q, k]
+                        residual[s] += value / strength[k]
+                if s > 0:
+                    # A projection that keeps no plane figure (its residual is the share of
+                    # its scatter that makes markers "not one rigid body") is no hinge's: the
+                    # first-order residual would not measure its departure from one.
+                    scatter_2d = 0.0
+                    for p in range(n_pairs):
+                        scatter_2d += (
+                            first_d[s, p] ** 2 + 2.0 * first_d[s, p] * sum_d[s, p] / n_frames
+                        )
+                        scatter_2d += (scatter_d[s, p, p] + sum_d[s, p] ** 2 / n_frames) / n_frames
+                    per_dof = residual[s] / max(rank[s] * (n_frames - 1), 1)
+                    spread_2d = scatter_2d / n_markers / (2 * (n_markers - 1))
+                    flat[s - 1] = per_dof >= MAX_NONRIGID_SHARE * spread_2d
+            if stage == 1:
+                break
+            variance = residual[0] / max(rank[0] * (n_frames - 1), 1)
+            # The mean shape's principal moments by classical scaling of the mean squared
+            # distances less their noise (6 s^2 per pair).
+            for p in range(n_pairs):
+                mean_sq = first_d[0, p] ** 2 + 2.0 * first_d[0, p] * sum_d[0, p] / n_frames
+                mean_sq += (scatter_d[0, p, p] + sum_d[0, p] ** 2 / n_frames) / n_frames
+                squared[pair_a[p], pair_b[p]] = mean_sq - 6.0 * variance
+                squared[pair_b[p], pair_a[p]] = mean_sq - 6.0 * variance
+            for a in range(n_markers):
+                squared[a, a] = 0.0
+            total = 0.0
+            for a in range(n_markers):
+                for b in range(n_markers):
+                    total += squared[a, b]
+            for a in range(n_markers):
+                row_a = 0.0
+                for b in range(n_markers):
+                    row_a += squared[a, b]
+                for b in range(n_markers):
+                    row_b = 0.0
+                    for c in range(n_markers):
+                        row_b += squared[b, c]
+                    gram[a, b] = -0.5 * (
+                        squared[a, b] - (row_a + row_b) / n_markers + total / n_markers**2
+                    )
+            mu = symmetric_eigen(gram)[0]
+            top = max(mu[n_markers - 1], 0.0)
+            second = max(mu[n_markers - 2], 0.0)
+            third = max(mu[n_markers - 3], 0.0)
+            for i in range(3):
+                for j in range(i, 3):
+                    value = pooled[i, j]
+                    for m in range(n_markers):
+                        value -= sum_e[m, i] * sum_e[m, j] / n_frames
+                    pooled[i, j] = value
+                    pooled[j, i] = value
+                    outer_w[i, j] -= sum_w[i] * sum_w[j] / n_frames
+                    outer_w[j, i] = outer_w[i, j]
+            motion = pooled[0, 0] + pooled[1, 1] + pooled[2, 2]
+            spread = top + second + third
+            collinear = second <= 1e-12 * top
+            # Candidate hinge axes: the direction the markers move least along (exact for a
+            # hinge of any range), and the principal axis of the rotations from frame 0,
+            # linearised and whitened by their noise (the better estimate of a small one).
+            axes[0] = symmetric_eigen(pooled)[1][:, 0]
+            principal = np.ascontiguousarray(symmetric_eigen(root @ outer_w @ root)[1][:, 2])
+            axes[1] = inverse @ (root @ principal)
+            for c in range(2):
+                h = axes[c] / max(np.sqrt(np.sum(axes[c] ** 2)), 1e-300)
+                # A unit vector normal to h from the coordinate axis least along it.
+                k = int(np.argmin(np.abs(h)))
+                normal = np.zeros(3)
+                normal[k] = 1.0
+                normal = normal - h[k] * h
+                normal = normal / np.sqrt(np.sum(normal**2))
+                planes[c + 1, 0] = normal
+                planes[c + 1, 1] = np.cross(h, normal)
+                value = 0.0
+                for i in range(3):
+                    for j in range(3):
+                        value += h[i] * pooled[i, j] * h[j]
+                off_axis[c] = value
+        for c in range(2):
+            # Off the hinge about candidate c: motion along the axis, plus the projection's
+            # departure from a rigid plane figure, less the cluster's own residual.
+            off_axis[c] += residual[c + 1] - residual[0]
+            off_axis_rank[c] = n_markers - 1 + rank[c + 1] - rank[0]
+        # The tests' statistics (module docstring, "one segment"), each as the F ratio and
+        # its numerator's degrees of freedom, for the caller's F survival function. Noise-free
+        # data are judged against rounding instead (the ratio would compare rounding with
+        # rounding): a ratio of inf for resolved, 0 for not; no degree of freedom left: 0.
+        n_steps = n_frames - 1
+        exact = variance <= (ROUNDING * largest) ** 2
+        rotation_ss = max(motion - residual[0], 0.0)
+        # Marker displacement over (2/3) sum |u|^2, the inertia about an axis averaged over
+        # axes: the RMS angle that moves the markers as much, to first order.
+        displacement = n_frames * 2.0 / 3.0 * spread
+        out[t, 0] = variance
+        out[t, 1] = variance / (centroid_sq / (3 * (n_markers - 1) * n_frames))
+        out[t, 2] = np.sqrt(variance / (second + third)) if second + third > 0.0 else np.inf
+        out[t, 3] = collinear
+        out[t, 4] = max(rank[0] * n_steps, 1.0)
+        for test in range(3):
+            if test == 0:
+                tested_ss = rotation_ss
+                dof = (3 * (n_markers - 1) - rank[0]) * n_steps
+                rounding = rotation_ss <= _ROUNDING_ROTATION_RAD**2 * displacement
+            else:
+                tested_ss = max(off_axis[test - 1], 0.0)
+                dof = off_axis_rank[test - 1] * n_steps
+                rounding = tested_ss <= 1e-12 * rotation_ss
+            column = 5 + 3 * test
+            out[t, column] = np.sqrt(tested_ss / displacement)
+            if dof <= 0:
+                out[t, column + 1] = 0.0
+            elif test > 0 and flat[test - 1]:
+                out[t, column + 1] = np.inf
+            elif exact:
+                out[t, column + 1] = 0.0 if rounding else np.inf
+            else:
+                out[t, column + 1] = tested_ss / dof / variance
+            out[t, column + 2] = max(dof, 1.0)
+    return out
 
 
 class _Rotation(NamedTuple):
@@ -478,10 +813,50 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
     """:func:`assess` for ``T`` trials at once: ``arrays`` as there with a leading trial axis,
     ``(T, N, n, 3)`` each; one :class:`Support` per trial."""
     n_trials = arrays[0].shape[0]
+    if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
+        return _one_segment(kind, arrays[0])
     if not all(_poses_defined(array) for array in arrays):
         if n_trials > 1:
             return [assess(kind, tuple(array[t] for array in arrays)) for t in range(n_trials)]
         return [_without_poses(tuple(array[0] for array in arrays), "no 3 non-collinear markers")]
+    return _two_segments(kind, arrays)
+
+
+def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
+    """The verdicts on one segment's markers ``(T, N, n >= 3, 3)`` in the reference frame, from
+    one compiled call (module docstring, "one segment")."""
+    from scipy.special import fdtrc
+
+    numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
+    # p-values (T, 3): any rotation, off the hinge about each candidate axis.
+    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3])
+    verdicts = []
+    for t, row in enumerate(numbers.tolist()):
+        variance, share, weakest, collinear = row[:4]
+        if collinear:
+            verdicts.append(_without_poses((markers[t],), "no 3 non-collinear markers"))
+        elif weakest > _MAX_POSE_SD_RAD and share < MAX_NONRIGID_SHARE:
+            verdicts.append(
+                _without_poses(
+                    (markers[t],),
+                    "nearly collinear markers (their pose is determined to "
+                    f"{math.degrees(weakest):.2g} deg about their line)",
+                )
+            )
+        else:
+            # The hinge is given the candidate axis that explains the data better.
+            p_any, *p_off = p_values[t].tolist()
+            better = 1 + int(p_off[1] > p_off[0])
+            tests = (row[5], p_any, row[5 + 3 * better], p_off[better - 1])
+            rigidity = [(share, math.sqrt(3.0 * variance))]
+            verdicts.append(_verdict(kind, ("markers",), rigidity, variance, tests))
+    return verdicts
+
+
+def _two_segments(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
+    """The verdicts on two segments' markers ``(T, N, n >= 3, 3)`` each, in the world frame,
+    from their rigid-body poses (module docstring, "two segments")."""
+    n_trials = arrays[0].shape[0]
     names = ARRAY_NAMES[kind]
     clusters = [_clusters(array) for array in arrays]
     # functools.reduce, not sum or np.maximum.reduce: one cluster needs no arithmetic, and these
@@ -507,7 +882,18 @@ def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
         # Markers that keep no shape are reported as such (_verdict), collinear or not.
         if weakest[t] > _MAX_POSE_SD_RAD
         and all(cluster.nonrigid_share[t] < MAX_NONRIGID_SHARE for cluster in clusters)
-        else _verdict(kind, names, clusters, t, float(variance[t]), rotation)
+        else _verdict(
+            kind,
+            names,
+            [(c.nonrigid_share[t], np.sqrt(3.0 * c.residual_ss[t] / c.dof)) for c in clusters],
+            float(variance[t]),
+            (
+                rotation.rms_rad[t],
+                rotation.p_any[t],
+                rotation.second_rms_rad[t],
+                rotation.p_second[t],
+            ),
+        )
         for t in range(n_trials)
     ]
 
@@ -577,18 +963,20 @@ def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
     )
 
 
-def _verdict(kind, names, clusters, t, variance, rotation) -> Support:
-    """Trial ``t``'s warnings and numbers."""
+def _verdict(kind, names, rigidity, variance, tests) -> Support:
+    """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
+    share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
+    [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
+    off the main axis."""
     residual_mm = math.sqrt(3.0 * variance)
-    p_any, p_second = float(rotation.p_any[t]), float(rotation.p_second[t])
-    rms_deg = math.degrees(rotation.rms_rad[t])
-    second_rms_deg = math.degrees(rotation.second_rms_rad[t])
+    rms_rad, p_any, second_rms_rad, p_second = (float(value) for value in tests)
+    rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
     warnings = [
         f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
-        f"{100 * cluster.nonrigid_share[t]:.0f}% of their scatter about their centroid "
-        f"unexplained (residual {np.sqrt(3.0 * cluster.residual_ss[t] / cluster.dof):.3g} mm)"
-        for name, cluster in zip(names, clusters, strict=True)
-        if cluster.nonrigid_share[t] >= MAX_NONRIGID_SHARE
+        f"{100 * share:.0f}% of their scatter about their centroid "
+        f"unexplained (residual {residual:.3g} mm)"
+        for name, (share, residual) in zip(names, rigidity, strict=True)
+        if share >= MAX_NONRIGID_SHARE
     ]
     # A rotation test on markers that keep no shape would only restate that.
     if not warnings and p_any >= ROTATION_ALPHA:
@@ -609,7 +997,7 @@ def _verdict(kind, names, clusters, t, variance, rotation) -> Support:
         {
             "assessed": True,
             "rigid_residual_mm": residual_mm,
-            "nonrigid_share": float(max(cluster.nonrigid_share[t] for cluster in clusters)),
+            "nonrigid_share": float(max(share for share, _ in rigidity)),
             "rotation_rms_deg": rms_deg,
             "rotation_p_value": p_any,
             "off_axis_rotation_rms_deg": second_rms_deg,

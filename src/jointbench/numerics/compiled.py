@@ -1,10 +1,10 @@
 """Kernels compiled by Numba on first use.
 
 A kernel is a plain Python function over NumPy arrays and scalars that calls no other function
-of the package: loops a stack of small problems through, where NumPy would pay its per-call
-overhead on every tiny array. :func:`kernel` compiles it on its first call, so a process that
-never calls it never pays for importing and starting Numba. The machine code is cached
-beside the source file and rebuilt when that file changes. The Python source stays the
+of the package but other kernels: loops a stack of small problems through, where NumPy would
+pay its per-call overhead on every tiny array. :func:`kernel` compiles it on its first call, so
+a process that never calls it never pays for importing and starting Numba. The machine code is
+cached beside the source file and rebuilt when that file changes. The Python source stays the
 specification: it runs as written (slowly) through ``kernel.__wrapped__``, and it counts in
 the code fingerprint (:mod:`jointbench.fingerprint`) of every job that can import it.
 """
@@ -12,6 +12,7 @@ the code fingerprint (:mod:`jointbench.fingerprint`) of every job that can impor
 from __future__ import annotations
 
 import functools
+import types
 from collections.abc import Callable
 
 import numpy as np
@@ -27,15 +28,33 @@ class _Kernel:
         self._compiled: Callable | None = None
 
     def __call__(self, *args):
+        return self.compiled()(*args)
+
+    def compiled(self) -> Callable:
+        """The compiled function (Numba's dispatcher), compiled now if it was not yet."""
         if self._compiled is None:
             import numba
 
+            function = self.__wrapped__
+            # The kernels it calls, by the names it calls them, as compiled functions: Numba
+            # calls those from compiled code, not the Python objects around them.
+            called = {
+                name: value.compiled()
+                for name in function.__code__.co_names
+                if isinstance(value := function.__globals__.get(name), _Kernel)
+            }
+            if called:
+                function = types.FunctionType(
+                    function.__code__,
+                    {**function.__globals__, **called},
+                    function.__name__,
+                    function.__defaults__,
+                    function.__closure__,
+                )
             # error_model="numpy": a float division by zero gives inf or nan, as NumPy's does,
             # instead of raising.
-            self._compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(
-                self.__wrapped__
-            )
-        return self._compiled(*args)
+            self._compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+        return self._compiled
 
 
 def kernel_array(array: object, dtype: type = float) -> np.ndarray:

@@ -1,14 +1,17 @@
-"""Stacks of 3 x 3 matrices, element-wise: LAPACK and ``matmul`` spend microseconds of call
-overhead per 3 x 3 matrix, the arithmetic takes nanoseconds.
+"""Small matrices: LAPACK and ``matmul`` spend microseconds of call overhead per 3 x 3 matrix, the
+arithmetic takes nanoseconds.
 
-Matrices are ``float64`` arrays shaped ``(..., 3, 3)``.
+Stacks of 3 x 3 matrices, element-wise (``float64`` arrays shaped ``(..., 3, 3)``), and the
+eigen-decomposition of one small symmetric matrix inside a compiled kernel.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["inverse3", "rotated3"]
+from jointbench.numerics.compiled import kernel
+
+__all__ = ["inertia", "inverse3", "rotated3", "symmetric_eigen"]
 
 
 def inverse3(matrices: np.ndarray) -> np.ndarray:
@@ -64,3 +67,75 @@ def rotated3(rotations: np.ndarray, matrix: np.ndarray) -> np.ndarray:
             out[..., i, j] = entry
             out[..., j, i] = entry
     return out
+
+
+@kernel
+def symmetric_eigen(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues ``(n,)`` in ascending order and orthonormal eigenvectors (columns, ``(n, n)``)
+    of the symmetric ``matrix`` ``(n, n)`` (its upper triangle is read), by cyclic Jacobi
+    rotations (Golub & Van Loan, Algorithm 8.5.3) until the off-diagonal part is rounding
+    relative to the whole: the accuracy of LAPACK's ``syevd``, without its call overhead on the
+    matrices of a few rows a kernel decomposes per trial. A compiled kernel."""
+    n = matrix.shape[0]
+    a = np.empty((n, n))
+    for i in range(n):
+        for j in range(i, n):
+            a[i, j] = matrix[i, j]
+            a[j, i] = matrix[i, j]
+    vectors = np.eye(n)
+    for _ in range(60):
+        off = 0.0
+        whole = 0.0
+        for i in range(n):
+            whole += a[i, i] ** 2
+            for j in range(i + 1, n):
+                off += a[i, j] ** 2
+        whole += 2.0 * off
+        if off <= 1e-32 * whole:
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                if a[p, q] == 0.0:
+                    continue
+                tau = (a[q, q] - a[p, p]) / (2.0 * a[p, q])
+                if abs(tau) > 1e150:
+                    t = 0.5 / tau
+                else:
+                    t = (1.0 if tau >= 0.0 else -1.0) / (abs(tau) + np.sqrt(1.0 + tau * tau))
+                c = 1.0 / np.sqrt(1.0 + t * t)
+                s = t * c
+                for k in range(n):
+                    kp, kq = a[k, p], a[k, q]
+                    a[k, p] = c * kp - s * kq
+                    a[k, q] = s * kp + c * kq
+                for k in range(n):
+                    pk, qk = a[p, k], a[q, k]
+                    a[p, k] = c * pk - s * qk
+                    a[q, k] = s * pk + c * qk
+                for k in range(n):
+                    kp, kq = vectors[k, p], vectors[k, q]
+                    vectors[k, p] = c * kp - s * kq
+                    vectors[k, q] = s * kp + c * kq
+    values = np.empty(n)
+    for i in range(n):
+        values[i] = a[i, i]
+    order = np.argsort(values)
+    return values[order], vectors[:, order]
+
+
+@kernel
+def inertia(points: np.ndarray) -> np.ndarray:
+    """``K = sum_m (|u_m|^2 I - u_m u_m')`` ``(3, 3)`` [mm^2] of the points ``u`` ``(n, 3)`` [mm]
+    as given (centre them first for the inertia about their centroid). A compiled kernel."""
+    squared = 0.0
+    for m in range(points.shape[0]):
+        for i in range(3):
+            squared += points[m, i] ** 2
+    tensor = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            value = squared if i == j else 0.0
+            for m in range(points.shape[0]):
+                value -= points[m, i] * points[m, j]
+            tensor[i, j] = value
+    return tensor
