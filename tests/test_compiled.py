@@ -67,29 +67,29 @@ def test_rotation_kernel():
     [None, (3, 1, [np.nan, 0, 0]), (0, 2, [0, np.inf, 1]), (5, 0, [0, 0, 0]), (2, 2, [0, 0, 1])],
 )
 def test_input_check_kernels(sample):
-    """The input checks' compiled passes find what their Python source says: non-finite and
-    (0, 0, 0) samples, and how far the markers move from frame 0."""
+    """The input checks' compiled pass finds what its Python source says, per trial: non-finite
+    and (0, 0, 0) samples, markers that stay at frame 0 and markers that slide along lines."""
     rng = np.random.default_rng(22)
     markers = rng.normal(scale=100.0, size=(7, 3, 3))
     if sample is not None:
         frame, marker, value = sample
         markers[frame, marker] = value
-    flags = validation._sample_flags
-    assert flags(markers) == flags.__wrapped__(markers)
-    all_finite, any_origin = flags(markers)
-    assert all_finite == bool(np.isfinite(markers).all())
-    assert any_origin == bool((~markers.any(axis=-1)).any())
-    # Motion is measured only on markers that passed the finite check.
-    if all_finite:
-        move = validation._largest_move
-        assert (
-            move(markers)
-            == move.__wrapped__(markers)
-            == (
-                float(np.abs(markers - markers[0]).max()),
-                float(np.abs(markers[0]).max()),
-            )
-        )
+    still = np.repeat(markers[:1], len(markers), axis=0)
+    sliding = markers[0] + np.linspace(0.0, 50.0, 7)[:, None, None] * np.array([0.2, 0.5, -0.3])
+    batch = np.stack([markers, still, sliding])
+    inputs = (batch, True, True, True, 1e-9, 1e-12)
+    flags = validation._trial_flags
+    compiled, interpreted = flags(*inputs), flags.__wrapped__(*inputs)
+    for ours, source in zip(compiled, interpreted, strict=True):
+        np.testing.assert_array_equal(ours, source)
+    finite, origin, stays, straight = compiled
+    np.testing.assert_array_equal(finite, np.isfinite(batch).all(axis=(1, 2, 3)))
+    np.testing.assert_array_equal(origin, (~batch.any(axis=-1)).any(axis=(1, 2)))
+    # Motion is measured only on trials whose coordinates are all finite.
+    with np.errstate(invalid="ignore"):  # inf - inf in the non-finite trials
+        moved = [np.abs(t - t[0]).max() > 1e-9 * max(1.0, np.abs(t[0]).max()) for t in batch]
+    np.testing.assert_array_equal(stays, finite & ~np.array(moved))
+    np.testing.assert_array_equal(straight, finite & [False, True, True])
 
 
 def _hinge_markers(rng, n_trials: int) -> np.ndarray:

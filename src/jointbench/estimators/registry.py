@@ -159,26 +159,24 @@ def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
 def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
     """A many-trial form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
     returning per trial a result or the exception) with the checks of :func:`_checked` per
-    trial and the support verdict of all trials in one call."""
+    trial: the input checks of all trials in one pass
+    (:func:`jointbench.estimators.validation.check_input_many`) and the support verdict of all
+    trials in one call."""
 
     @functools.wraps(raw)
     def checked_many(*segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
-        fitted, clean = [], []
-        for trial, outcome in enumerate(outcomes):
+        checked = validation.check_input_many(kind, segments, len(outcomes))
+        fitted = []
+        for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
             # As for one trial: the input checks come first and their error wins.
-            try:
-                arrays = validation.check_input(kind, tuple(s[trial] for s in segments))
-            except ValueError as error:
+            if error is not None:
                 outcomes[trial] = error
-                continue
-            if not isinstance(outcome, Exception):
-                outcomes[trial] = _self_checked(raw_fn, outcome, arrays, options)
+            elif not isinstance(outcome, Exception):
+                outcomes[trial] = _self_checked(raw_fn, outcome, checked.arrays(trial), options)
                 fitted.append(trial)
-                clean.append(arrays)
         if fitted:
-            stacked = tuple(np.stack(arrays) for arrays in zip(*clean, strict=True))
-            verdicts = support.assess_many(kind, stacked)
+            verdicts = support.assess_many(kind, checked.stacked(fitted))
             for trial, verdict in zip(fitted, verdicts, strict=True):
                 outcomes[trial] = support.annotate(outcomes[trial], verdict)
         return outcomes
