@@ -107,13 +107,14 @@ class Claims:
 
 @dataclass
 class _Entry:
-    """A registered method: its one-trial function, checked and not, its claims, its figure style
-    and its own
+    """A registered method: its one-trial function, checked and not, its checked form for input
+    that passed the input checks (:func:`get_for_valid`), its claims, its figure style and its own
     many-trial form (``None`` until stated, or for none)."""
 
     name: str
     fn: Callable
     checked: Callable
+    valid: Callable
     claims: Claims
     style: Mapping[str, str]
     many: Callable[..., list] | None = None
@@ -214,7 +215,8 @@ def register(
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), stated, style, many))
+        valid = functools.partial(_fit_valid, kind, fn)
+        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), valid, stated, style, many))
         return fn
 
     return decorate
@@ -257,7 +259,7 @@ def get_for_valid(kind: str, name: str) -> Callable:
     """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
     already passed :func:`jointbench.estimators.validation.check_input`, whose checks it does
     not repeat: for a caller that ran them itself."""
-    return functools.partial(_fit_valid, kind, _entry(kind, name).fn)
+    return _entry(kind, name).valid
 
 
 def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:

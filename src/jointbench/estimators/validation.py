@@ -89,9 +89,14 @@ def check_markers(
     checks the minimum numbers of frames and markers a method needs.
     """
     array = _shaped(markers, name)
-    finite, origin, _, _ = _flags_of_one(array, samples=True)
-    _refuse_bad_samples(array, name, finite, origin)
-    _refuse_too_few(array, name, min_frames, min_markers)
+    _refuse(array, name, _first_failure(array, samples=True))
+    n_frames, n_markers, _ = array.shape
+    if n_frames < min_frames:
+        raise ValueError(f"{name} has {n_frames} frames; this method needs at least {min_frames}")
+    if n_markers < min_markers:
+        raise ValueError(
+            f"{name} has {n_markers} markers; this method needs at least {min_markers}"
+        )
     return array
 
 
@@ -106,107 +111,86 @@ def _shaped(markers: object, name: str) -> np.ndarray:
     return array
 
 
-def _refuse_bad_samples(array: np.ndarray, name: str, finite: bool, origin: bool) -> None:
-    """Raise ``ValueError`` naming the first NaN/inf sample, or else the first sample at exactly
-    ``(0, 0, 0)``, of ``array`` ``(n_frames, n_markers, 3)``, as its flags from
-    :func:`_trial_flags` say there is one; the samples are located only then."""
-    if not finite:
+# The checks of _first_failures in the order their errors are raised; 0 for none failed.
+_NOT_FINITE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4
+
+
+def _refuse(array: np.ndarray, name: str, failure: int) -> None:
+    """Raise the ``ValueError`` for the ``failure`` :func:`_first_failures` found in ``array``
+    ``(n_frames, n_markers, 3)``, locating the offending samples only then; nothing for 0."""
+    if failure == _NOT_FINITE:
         bad = ~np.isfinite(array)
         frame, marker = _first_sample(bad)
-        count = int(bad.any(axis=-1).sum())
         raise ValueError(
-            f"{name} contains NaN or inf at marker {marker}, frame {frame} ({count} in all); "
+            f"{name} contains NaN or inf at marker {marker}, frame {frame} "
+            f"({int(bad.any(axis=-1).sum())} in all); {_GAP_ADVICE}"
+        )
+    if failure == _AT_ORIGIN:
+        at_origin = ~array.any(axis=-1)
+        frame, marker = _first_sample(at_origin)
+        raise ValueError(
+            f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
+            f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; "
             f"{_GAP_ADVICE}"
         )
-    if origin:
-        at_origin = ~array.any(axis=-1)
-        if at_origin.any():
-            frame, marker = _first_sample(at_origin)
-            raise ValueError(
-                f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
-                f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; "
-                f"{_GAP_ADVICE}"
-            )
-
-
-def _refuse_too_few(array: np.ndarray, name: str, min_frames: int, min_markers: int) -> None:
-    """Raise ``ValueError`` when ``array`` ``(n_frames, n_markers, 3)`` has fewer frames or
-    markers than a method needs."""
-    n_frames, n_markers, _ = array.shape
-    if n_frames < min_frames:
-        raise ValueError(f"{name} has {n_frames} frames; this method needs at least {min_frames}")
-    if n_markers < min_markers:
-        raise ValueError(
-            f"{name} has {n_markers} markers; this method needs at least {min_markers}"
-        )
-
-
-def _refuse_still(name: str, still: bool) -> None:
-    if still:
+    if failure == _STILL:
         raise ValueError(f"{name} do not move: every marker stays at one point in every frame")
-
-
-def _refuse_straight(name: str, straight: bool) -> None:
-    if straight:
+    if failure == _STRAIGHT:
         raise ValueError(
             f"{name} do not rotate: every marker moves along a straight line, so there is no "
             "centre or axis of rotation"
         )
 
 
-def _flags_of_one(
+def _first_failure(
     markers: object,
     *,
     samples: bool = False,
     moves: bool = False,
     lines: bool = False,
     move_tol_mm: float = _MOVE_TOL_MM,
-) -> tuple[bool, bool, bool, bool]:
-    """:func:`_trial_flags` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch of
-    one: ``(finite, origin, still, straight)``."""
-    flags = _trial_flags(
-        kernel_array(markers)[np.newaxis], samples, moves, lines, move_tol_mm, _LINE_RATIO
-    )
-    return flags[0][0], flags[1][0], flags[2][0], flags[3][0]
+) -> int:
+    """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
+    of one."""
+    failure = np.empty(1, dtype=np.int8)
+    batch = kernel_array(markers)[np.newaxis]
+    _first_failures(batch, samples, moves, lines, move_tol_mm, _LINE_RATIO, failure)
+    return failure[0]
 
 
 @kernel
-def _trial_flags(
+def _first_failures(
     markers: np.ndarray,
     samples: bool,
     moves: bool,
     lines: bool,
     move_tol_mm: float,
     line_ratio: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """What the input checks decide on, per trial of ``markers``
-    ``(n_trials, n_frames, n_markers, 3)`` [mm]: four ``(n_trials,)`` booleans.
+    failures: np.ndarray,
+) -> None:
+    """Write into ``failures`` ``(n_trials,)`` the first check each trial of ``markers``
+    ``(n_trials, n_frames, n_markers, 3)`` [mm] fails, of those asked, in this order, or 0:
 
-    * with ``samples``: ``finite``, every coordinate is finite; ``origin``, some sample is
-      exactly ``(0, 0, 0)``;
-    * with ``moves``: ``still``, no coordinate changes from frame 0 by more than
+    * ``samples``: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_AT_ORIGIN`, a
+      sample is exactly ``(0, 0, 0)``;
+    * ``moves``: :data:`_STILL`, no coordinate changes from frame 0 by more than
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
-    * with ``lines``: ``straight``, every marker's trajectory is a line, the second eigenvalue
+    * ``lines``: :data:`_STRAIGHT`, every marker's trajectory is a line, the second eigenvalue
       of its scatter matrix about its mean position at most ``line_ratio`` times the largest
       (never for fewer than three frames, which always lie on a line).
 
-    Motion is not measured in a trial with a non-finite coordinate; what is not asked stays
-    ``finite``, not ``origin``, not ``still``, not ``straight``. A compiled kernel: the checks
-    run before every fit, and NumPy's passes over the array and its per-call overhead on 3 x 3
-    matrices cost as much as a closed-form fit.
+    A compiled kernel: the checks run before every fit, and NumPy's passes over the array and
+    its per-call overhead on 3 x 3 matrices cost as much as a closed-form fit.
     """
     n_trials, n_frames, n_markers, _ = markers.shape
-    finite = np.ones(n_trials, dtype=np.bool_)
-    origin = np.zeros(n_trials, dtype=np.bool_)
-    still = np.zeros(n_trials, dtype=np.bool_)
-    straight = np.zeros(n_trials, dtype=np.bool_)
     scatter = np.empty((3, 3))
     mean = np.empty(3)
     for t in range(n_trials):
         trial = markers[t]
-        all_finite = True
-        any_origin = False
+        failures[t] = 0
         if samples:
+            all_finite = True
+            any_origin = False
             for f in range(n_frames):
                 for m in range(n_markers):
                     x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
@@ -214,10 +198,12 @@ def _trial_flags(
                         all_finite and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
                     )
                     any_origin = any_origin or (x == 0.0 and y == 0.0 and z == 0.0)
-        finite[t] = all_finite
-        origin[t] = any_origin
-        if not all_finite:
-            continue
+            if not all_finite:
+                failures[t] = _NOT_FINITE
+                continue
+            if any_origin:
+                failures[t] = _AT_ORIGIN
+                continue
         if moves:
             spread = 0.0
             first = 0.0
@@ -226,7 +212,9 @@ def _trial_flags(
                     first = max(first, abs(trial[0, m, i]))
                     for f in range(n_frames):
                         spread = max(spread, abs(trial[f, m, i] - trial[0, m, i]))
-            still[t] = spread <= move_tol_mm * max(1.0, first)
+            if spread <= move_tol_mm * max(1.0, first):
+                failures[t] = _STILL
+                continue
         if lines and n_frames >= 3:
             every = True
             for p in range(n_markers):
@@ -244,15 +232,15 @@ def _trial_flags(
                 if eigenvalues[1] > line_ratio * eigenvalues[2]:
                     every = False
                     break
-            straight[t] = every
-    return finite, origin, still, straight
+            if every:
+                failures[t] = _STRAIGHT
 
 
 def check_moves(
     markers: np.ndarray, *, name: str = "markers", tol_mm: float = _MOVE_TOL_MM
 ) -> None:
     """Raise ``ValueError`` when no marker moves (every trajectory is a single point)."""
-    _refuse_still(name, _flags_of_one(markers, moves=True, move_tol_mm=tol_mm)[2])
+    _refuse(markers, name, _first_failure(markers, moves=True, move_tol_mm=tol_mm))
 
 
 def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
@@ -263,7 +251,7 @@ def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
     line when the second eigenvalue of its scatter matrix vanishes relative to the first.
     Fewer than three frames always lie on a line and are left to the frame-count checks.
     """
-    _refuse_straight(name, _flags_of_one(markers, lines=True)[3])
+    _refuse(markers, name, _first_failure(markers, lines=True))
 
 
 def check_not_collinear(markers: np.ndarray, *, name: str = "markers") -> None:
@@ -312,15 +300,11 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
         )
         check_same_frames(*checked)
         return checked
-    # One pass of the kernel for all four checks; their messages keep check_markers',
-    # check_moves' and check_rotates' order.
+    # One pass of the kernel for the checks of check_markers, check_moves and check_rotates,
+    # in their order (the counts of frames and markers: at least one, as the array is not empty).
     name = names[0]
     array = _shaped(arrays[0], name)
-    finite, origin, still, straight = _flags_of_one(array, samples=True, moves=True, lines=True)
-    _refuse_bad_samples(array, name, finite, origin)
-    _refuse_too_few(array, name, 1, 1)
-    _refuse_still(name, still)
-    _refuse_straight(name, straight)
+    _refuse(array, name, _first_failure(array, samples=True, moves=True, lines=True))
     return (array,)
 
 
@@ -371,12 +355,13 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
         return _check_each(kind, segments, n_trials)
     motion = kind != "joint_center"
     passes = np.ones(n_trials, dtype=bool)
+    failures = np.empty(n_trials, dtype=np.int8)
     try:
         for array in batch:
-            finite, origin, still, straight = _trial_flags(
-                kernel_array(array), True, motion, motion, _MOVE_TOL_MM, _LINE_RATIO
+            _first_failures(
+                kernel_array(array), True, motion, motion, _MOVE_TOL_MM, _LINE_RATIO, failures
             )
-            passes &= finite & ~origin & ~still & ~straight
+            passes &= failures == 0
     except np.linalg.LinAlgError:
         # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
         # their own error for it, and the others pass or fail alone.
