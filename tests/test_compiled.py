@@ -80,7 +80,9 @@ def test_input_check_kernels(sample):
     runs = []
     for function in (validation._first_failures, validation._first_failures.__wrapped__):
         failures = np.full(len(batch), -1, dtype=np.int8)
-        function(batch, True, True, True, 1e-9, 1e-12, failures)
+        checks = validation._SAMPLES | validation._MOVES | validation._LINES
+        first = function(batch, checks, 1e-9, failures)
+        assert first == failures[np.flatnonzero(failures)[0]] if failures.any() else first == 0
         runs.append(failures)
     np.testing.assert_array_equal(*runs)
     finite = np.isfinite(batch).all(axis=(1, 2, 3))

@@ -44,9 +44,13 @@ _LINE_RATIO = _LINE_RTOL**2
 # 1 mm), of markers that do not move: rounding.
 _MOVE_TOL_MM = 1e-9
 
+_FLOAT64 = np.dtype(np.float64)
+
 
 def _real_array(markers: object, name: str) -> np.ndarray:
     """``markers`` as a float64 array; complex, boolean, non-numeric and masked data raise."""
+    if type(markers) is np.ndarray and markers.dtype is _FLOAT64:
+        return markers  # the common case, before the checks' own cost
     if np.ma.isMaskedArray(markers):
         mask = np.ma.getmaskarray(markers)
         if mask.any():
@@ -89,7 +93,7 @@ def check_markers(
     checks the minimum numbers of frames and markers a method needs.
     """
     array = _shaped(markers, name)
-    _refuse(array, name, _first_failure(array, samples=True))
+    _refuse(array, name, _first_failure(array, _SAMPLES))
     n_frames, n_markers, _ = array.shape
     if n_frames < min_frames:
         raise ValueError(f"{name} has {n_frames} frames; this method needs at least {min_frames}")
@@ -111,13 +115,18 @@ def _shaped(markers: object, name: str) -> np.ndarray:
     return array
 
 
-# The checks of _first_failures in the order their errors are raised; 0 for none failed.
+# The checks _first_failures can make, as bits: the samples, the motion from frame 0 and the
+# straightness of the trajectories; and the failures it reports, in the order their errors are
+# raised (0: none).
+_SAMPLES, _MOVES, _LINES = 1, 2, 4
 _NOT_FINITE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4
 
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
     """Raise the ``ValueError`` for the ``failure`` :func:`_first_failures` found in ``array``
     ``(n_frames, n_markers, 3)``, locating the offending samples only then; nothing for 0."""
+    if not failure:
+        return
     if failure == _NOT_FINITE:
         bad = ~np.isfinite(array)
         frame, marker = _first_sample(bad)
@@ -142,42 +151,32 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         )
 
 
-def _first_failure(
-    markers: object,
-    *,
-    samples: bool = False,
-    moves: bool = False,
-    lines: bool = False,
-    move_tol_mm: float = _MOVE_TOL_MM,
-) -> int:
+def _first_failure(markers: object, checks: int, move_tol_mm: float = _MOVE_TOL_MM) -> int:
     """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
-    of one."""
-    failure = np.empty(1, dtype=np.int8)
-    batch = kernel_array(markers)[np.newaxis]
-    _first_failures(batch, samples, moves, lines, move_tol_mm, _LINE_RATIO, failure)
-    return failure[0]
+    of one: its failure, or 0."""
+    return _first_failures(kernel_array(markers)[np.newaxis], checks, move_tol_mm, _UNRECORDED)
+
+
+# The failures array of a call of _first_failures that needs only its return value.
+_UNRECORDED = np.empty(0, dtype=np.int8)
 
 
 @kernel
 def _first_failures(
-    markers: np.ndarray,
-    samples: bool,
-    moves: bool,
-    lines: bool,
-    move_tol_mm: float,
-    line_ratio: float,
-    failures: np.ndarray,
-) -> None:
-    """Write into ``failures`` ``(n_trials,)`` the first check each trial of ``markers``
-    ``(n_trials, n_frames, n_markers, 3)`` [mm] fails, of those asked, in this order, or 0:
+    markers: np.ndarray, checks: int, move_tol_mm: float, failures: np.ndarray
+) -> int:
+    """The first check each trial of ``markers`` ``(n_trials, n_frames, n_markers, 3)`` [mm]
+    fails, of those asked, in this order, or 0: written into ``failures`` ``(n_trials,)``
+    (unless it is empty), and the first trial's that fails one returned (0 if none does).
+    ``checks`` asks for some, as bits:
 
-    * ``samples``: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_AT_ORIGIN`, a
+    * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_AT_ORIGIN`, a
       sample is exactly ``(0, 0, 0)``;
-    * ``moves``: :data:`_STILL`, no coordinate changes from frame 0 by more than
+    * :data:`_MOVES`: :data:`_STILL`, no coordinate changes from frame 0 by more than
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
-    * ``lines``: :data:`_STRAIGHT`, every marker's trajectory is a line, the second eigenvalue
-      of its scatter matrix about its mean position at most ``line_ratio`` times the largest
-      (never for fewer than three frames, which always lie on a line).
+    * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
+      eigenvalue of its scatter matrix about its mean position at most :data:`_LINE_RATIO`
+      times the largest (never for fewer than three frames, which always lie on a line).
 
     A compiled kernel: the checks run before every fit, and NumPy's passes over the array and
     its per-call overhead on 3 x 3 matrices cost as much as a closed-form fit.
@@ -185,10 +184,11 @@ def _first_failures(
     n_trials, n_frames, n_markers, _ = markers.shape
     scatter = np.empty((3, 3))
     mean = np.empty(3)
+    first_failure = 0
     for t in range(n_trials):
         trial = markers[t]
-        failures[t] = 0
-        if samples:
+        failure = 0
+        if checks & _SAMPLES:
             all_finite = True
             any_origin = False
             for f in range(n_frames):
@@ -199,12 +199,10 @@ def _first_failures(
                     )
                     any_origin = any_origin or (x == 0.0 and y == 0.0 and z == 0.0)
             if not all_finite:
-                failures[t] = _NOT_FINITE
-                continue
-            if any_origin:
-                failures[t] = _AT_ORIGIN
-                continue
-        if moves:
+                failure = _NOT_FINITE
+            elif any_origin:
+                failure = _AT_ORIGIN
+        if failure == 0 and checks & _MOVES:
             spread = 0.0
             first = 0.0
             for m in range(n_markers):
@@ -213,9 +211,8 @@ def _first_failures(
                     for f in range(n_frames):
                         spread = max(spread, abs(trial[f, m, i] - trial[0, m, i]))
             if spread <= move_tol_mm * max(1.0, first):
-                failures[t] = _STILL
-                continue
-        if lines and n_frames >= 3:
+                failure = _STILL
+        if failure == 0 and checks & _LINES and n_frames >= 3:
             every = True
             for p in range(n_markers):
                 for i in range(3):
@@ -229,18 +226,23 @@ def _first_failures(
                         for j in range(3):
                             scatter[i, j] += (trial[f, p, i] - mean[i]) * (trial[f, p, j] - mean[j])
                 eigenvalues = np.linalg.eigvalsh(scatter)
-                if eigenvalues[1] > line_ratio * eigenvalues[2]:
+                if eigenvalues[1] > _LINE_RATIO * eigenvalues[2]:
                     every = False
                     break
             if every:
-                failures[t] = _STRAIGHT
+                failure = _STRAIGHT
+        if len(failures):
+            failures[t] = failure
+        if first_failure == 0:
+            first_failure = failure
+    return first_failure
 
 
 def check_moves(
     markers: np.ndarray, *, name: str = "markers", tol_mm: float = _MOVE_TOL_MM
 ) -> None:
     """Raise ``ValueError`` when no marker moves (every trajectory is a single point)."""
-    _refuse(markers, name, _first_failure(markers, moves=True, move_tol_mm=tol_mm))
+    _refuse(markers, name, _first_failure(markers, _MOVES, tol_mm))
 
 
 def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
@@ -251,7 +253,7 @@ def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
     line when the second eigenvalue of its scatter matrix vanishes relative to the first.
     Fewer than three frames always lie on a line and are left to the frame-count checks.
     """
-    _refuse(markers, name, _first_failure(markers, lines=True))
+    _refuse(markers, name, _first_failure(markers, _LINES))
 
 
 def check_not_collinear(markers: np.ndarray, *, name: str = "markers") -> None:
@@ -304,7 +306,7 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
     # in their order (the counts of frames and markers: at least one, as the array is not empty).
     name = names[0]
     array = _shaped(arrays[0], name)
-    _refuse(array, name, _first_failure(array, samples=True, moves=True, lines=True))
+    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES))
     return (array,)
 
 
@@ -353,15 +355,13 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
     batch = _regular_batch(kind, segments, n_trials)
     if batch is None:
         return _check_each(kind, segments, n_trials)
-    motion = kind != "joint_center"
+    checks = _SAMPLES if kind == "joint_center" else _SAMPLES | _MOVES | _LINES
     passes = np.ones(n_trials, dtype=bool)
     failures = np.empty(n_trials, dtype=np.int8)
     try:
         for array in batch:
-            _first_failures(
-                kernel_array(array), True, motion, motion, _MOVE_TOL_MM, _LINE_RATIO, failures
-            )
-            passes &= failures == 0
+            if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures):
+                passes &= failures == 0
     except np.linalg.LinAlgError:
         # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
         # their own error for it, and the others pass or fail alone.
