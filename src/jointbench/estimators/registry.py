@@ -168,13 +168,16 @@ def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., l
     def checked_many(*segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
         checked = validation.check_input_many(kind, segments, len(outcomes))
+        self_checks = hasattr(raw_fn, "self_check")
         fitted = []
         for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
             # As for one trial: the input checks come first and their error wins.
             if error is not None:
                 outcomes[trial] = error
             elif not isinstance(outcome, Exception):
-                outcomes[trial] = _self_checked(raw_fn, outcome, checked.arrays(trial), options)
+                if self_checks:
+                    arrays = checked.arrays(trial)
+                    outcomes[trial] = _self_checked(raw_fn, outcome, arrays, options)
                 fitted.append(trial)
         if fitted:
             verdicts = support.assess_many(kind, checked.stacked(fitted))
