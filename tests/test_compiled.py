@@ -290,3 +290,38 @@ def test_radial_costs_refuse_trials_that_do_not_fit():
         costs.radial(directions, np.array([0, 1, 7]))
     with pytest.raises(ValueError, match="4 trials"):
         costs.radial_distances(directions[0], trial=7)
+
+
+def test_the_line_check_decides_as_the_eigenvalues_do_near_its_threshold():
+    """Trajectories bent off a line by a middle/largest eigenvalue ratio from far below to far
+    above the threshold (1e-12): the kernel, which skips the eigenvalue solver for clearly bent
+    ones, calls a trial straight exactly when every marker's scatter eigenvalues say so."""
+    rng = np.random.default_rng(8)
+    n_frames = 50
+    along = rng.uniform(-40.0, 40.0, n_frames)
+    across = rng.normal(size=n_frames)
+    across -= along * (across @ along) / (along @ along) + across.mean()
+    direction, normal = unit(np.array([0.3, -0.5, 0.8])), unit(np.array([1.0, 1.0, 0.5 / 0.8]))
+    normal = unit(normal - direction * (normal @ direction))
+    trials = []
+    for exponent in np.arange(-16.1, -4.0, 0.25):
+        bend = np.sqrt(10.0**exponent * (along @ along) / (across @ across))
+        line = 500.0 + along[:, None] * direction + bend * across[:, None] * normal
+        trials.append(np.stack([line, line + 7.0, line - 3.0], axis=1))
+        curved = np.stack([line, line + 7.0, 500.0 + 30.0 * rng.normal(size=(n_frames, 3))], 1)
+        trials.append(curved)
+    batch = np.stack(trials)
+    failures = np.empty(len(batch), dtype=np.int8)
+    validation._first_failures(batch, validation._LINES, 1e-9, failures)
+
+    def straight(trial):
+        for marker in np.moveaxis(trial, 1, 0):
+            centred = marker - marker.mean(axis=0)
+            eigenvalues = np.linalg.eigvalsh(centred.T @ centred)
+            if eigenvalues[1] > 1e-12 * eigenvalues[2]:
+                return False
+        return True
+
+    expected = [validation._STRAIGHT if straight(trial) else 0 for trial in batch]
+    np.testing.assert_array_equal(failures, expected)
+    assert 0 < np.count_nonzero(failures) < len(batch) // 2

@@ -39,6 +39,12 @@ _GAP_ADVICE = "mark gaps as NaN and drop those frames before fitting"
 _LINE_RTOL = 1e-6
 # ... as the ratio of eigenvalues (squared singular values) of a trajectory's scatter.
 _LINE_RATIO = _LINE_RTOL**2
+# A scatter matrix whose principal 2 x 2 minors sum to more than this times its squared trace
+# is not a line's: the sum is at most three times the product of the two largest eigenvalues,
+# and the largest at most the trace, so its middle eigenvalue exceeds a thousand times
+# _LINE_RATIO times the largest, a margin rounding in the minors or the eigenvalue solver
+# cannot close. Only the other matrices need their eigenvalues.
+_CURVED_MINORS = 3e3 * _LINE_RATIO
 
 # The largest change from frame 0 [mm], relative to frame 0's largest coordinate (at least
 # 1 mm), of markers that do not move: rounding.
@@ -203,12 +209,14 @@ def _first_failures(
             elif any_origin:
                 failure = _AT_ORIGIN
         if failure == 0 and checks & _MOVES:
-            spread = 0.0
             first = 0.0
             for m in range(n_markers):
                 for i in range(3):
                     first = max(first, abs(trial[0, m, i]))
-                    for f in range(n_frames):
+            spread = 0.0  # frame by frame, in memory order
+            for f in range(1, n_frames):
+                for m in range(n_markers):
+                    for i in range(3):
                         spread = max(spread, abs(trial[f, m, i] - trial[0, m, i]))
             if spread <= move_tol_mm * max(1.0, first):
                 failure = _STILL
@@ -225,6 +233,15 @@ def _first_failures(
                     for i in range(3):
                         for j in range(3):
                             scatter[i, j] += (trial[f, p, i] - mean[i]) * (trial[f, p, j] - mean[j])
+                trace = scatter[0, 0] + scatter[1, 1] + scatter[2, 2]
+                minors = (
+                    (scatter[0, 0] * scatter[1, 1] - scatter[0, 1] * scatter[0, 1])
+                    + (scatter[0, 0] * scatter[2, 2] - scatter[0, 2] * scatter[0, 2])
+                    + (scatter[1, 1] * scatter[2, 2] - scatter[1, 2] * scatter[1, 2])
+                )
+                if minors > _CURVED_MINORS * trace * trace:
+                    every = False  # so far above the line that the eigenvalues need no solver
+                    break
                 eigenvalues = np.linalg.eigvalsh(scatter)
                 if eigenvalues[1] > _LINE_RATIO * eigenvalues[2]:
                     every = False
