@@ -1,8 +1,9 @@
 """Input checks shared by the estimators. Every failure is a ``ValueError`` naming the problem.
 
-The registry applies :func:`check_input` to every registered estimator, so a new estimator is
-held to these checks without code of its own; estimators still call :func:`check_markers` with
-their own minimum numbers of frames and markers.
+The registry applies :func:`check_input` to every registered estimator (to a batch of trials,
+:func:`check_input_many`, which decides and words each trial's error as :func:`check_input`
+does), so a new estimator is held to these checks without code of its own; estimators still
+call :func:`check_markers` with their own minimum numbers of frames and markers.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ _GAP_ADVICE = "mark gaps as NaN and drop those frames before fitting"
 # fraction of its first; the same relative level at which check_not_collinear calls markers
 # collinear, far below any rotation a marker set can resolve.
 _LINE_RTOL = 1e-6
-# ... as the ratio of eigenvalues (squared singular values) of a trajectory's scatter.
+# The same level as a ratio of eigenvalues (squared singular values) of a trajectory's scatter.
 _LINE_RATIO = _LINE_RTOL**2
 # A scatter matrix whose principal 2 x 2 minors sum to more than this times its squared trace
 # is not a line's: the sum is at most three times the product of the two largest eigenvalues,
