@@ -230,9 +230,11 @@ def assessed(monkeypatch):
 
 def test_a_batch_of_clean_trials_reaches_the_verdict_without_a_copy(assessed):
     markers = np.stack([_moving(seed) for seed in range(4)])
+    given = markers.copy()
     registry.many("center", "LS")(markers)
     (arrays,) = assessed
     assert arrays[0] is markers
+    np.testing.assert_array_equal(markers, given)  # and left as it was given
 
 
 def test_only_the_trials_that_passed_reach_the_verdict(assessed):
