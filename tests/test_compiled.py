@@ -67,29 +67,35 @@ def test_rotation_kernel():
     [None, (3, 1, [np.nan, 0, 0]), (0, 2, [0, np.inf, 1]), (5, 0, [0, 0, 0]), (2, 2, [0, 0, 1])],
 )
 def test_input_check_kernels(sample):
-    """The input checks' compiled passes find what their Python source says: non-finite and
-    (0, 0, 0) samples, and how far the markers move from frame 0."""
+    """The input checks' compiled pass finds what its Python source says, per trial: non-finite
+    and (0, 0, 0) samples, markers that stay at frame 0 and markers that slide along lines."""
     rng = np.random.default_rng(22)
     markers = rng.normal(scale=100.0, size=(7, 3, 3))
     if sample is not None:
         frame, marker, value = sample
         markers[frame, marker] = value
-    flags = validation._sample_flags
-    assert flags(markers) == flags.__wrapped__(markers)
-    all_finite, any_origin = flags(markers)
-    assert all_finite == bool(np.isfinite(markers).all())
-    assert any_origin == bool((~markers.any(axis=-1)).any())
-    # Motion is measured only on markers that passed the finite check.
-    if all_finite:
-        move = validation._largest_move
-        assert (
-            move(markers)
-            == move.__wrapped__(markers)
-            == (
-                float(np.abs(markers - markers[0]).max()),
-                float(np.abs(markers[0]).max()),
-            )
-        )
+    still = np.repeat(markers[:1], len(markers), axis=0)
+    sliding = markers[0] + np.linspace(0.0, 50.0, 7)[:, None, None] * np.array([0.2, 0.5, -0.3])
+    batch = np.stack([markers, still, sliding])
+    runs = []
+    for function in (validation._first_failures, validation._first_failures.__wrapped__):
+        failures = np.full(len(batch), -1, dtype=np.int8)
+        checks = validation._SAMPLES | validation._MOVES | validation._LINES
+        first = function(batch, checks, 1e-9, failures)
+        assert first == failures[np.flatnonzero(failures)[0]] if failures.any() else first == 0
+        runs.append(failures)
+    np.testing.assert_array_equal(*runs)
+    finite = np.isfinite(batch).all(axis=(1, 2, 3))
+    origin = (~batch.any(axis=-1)).any(axis=(1, 2))
+    with np.errstate(invalid="ignore"):  # inf - inf in the non-finite trials
+        moved = [np.abs(t - t[0]).max() > 1e-9 * max(1.0, np.abs(t[0]).max()) for t in batch]
+    # The first check failed, in the order their errors are raised; motion is measured only
+    # on trials whose samples pass.
+    expected = [
+        1 if not finite[t] else 2 if origin[t] else 3 if not moved[t] else 4 if t > 0 else 0
+        for t in range(len(batch))
+    ]
+    np.testing.assert_array_equal(runs[0], expected)
 
 
 def _hinge_markers(rng, n_trials: int) -> np.ndarray:
@@ -325,3 +331,38 @@ def test_a_kernel_calls_another_kernel_compiled_and_as_written():
     compiled = support._one_segment_numbers(markers, support._FLEX)
     interpreted = support._one_segment_numbers.__wrapped__(markers, support._FLEX)
     np.testing.assert_allclose(compiled, interpreted, rtol=1e-9, atol=1e-12)
+
+
+def test_the_line_check_decides_as_the_eigenvalues_do_near_its_threshold():
+    """Trajectories bent off a line by a middle/largest eigenvalue ratio from far below to far
+    above the threshold (1e-12): the kernel, which skips the eigenvalue solver for clearly bent
+    ones, calls a trial straight exactly when every marker's scatter eigenvalues say so."""
+    rng = np.random.default_rng(8)
+    n_frames = 50
+    along = rng.uniform(-40.0, 40.0, n_frames)
+    across = rng.normal(size=n_frames)
+    across -= along * (across @ along) / (along @ along) + across.mean()
+    direction, normal = unit(np.array([0.3, -0.5, 0.8])), unit(np.array([1.0, 1.0, 0.5 / 0.8]))
+    normal = unit(normal - direction * (normal @ direction))
+    trials = []
+    for exponent in np.arange(-16.1, -4.0, 0.25):
+        bend = np.sqrt(10.0**exponent * (along @ along) / (across @ across))
+        line = 500.0 + along[:, None] * direction + bend * across[:, None] * normal
+        trials.append(np.stack([line, line + 7.0, line - 3.0], axis=1))
+        curved = np.stack([line, line + 7.0, 500.0 + 30.0 * rng.normal(size=(n_frames, 3))], 1)
+        trials.append(curved)
+    batch = np.stack(trials)
+    failures = np.empty(len(batch), dtype=np.int8)
+    validation._first_failures(batch, validation._LINES, 1e-9, failures)
+
+    def straight(trial):
+        for marker in np.moveaxis(trial, 1, 0):
+            centred = marker - marker.mean(axis=0)
+            eigenvalues = np.linalg.eigvalsh(centred.T @ centred)
+            if eigenvalues[1] > 1e-12 * eigenvalues[2]:
+                return False
+        return True
+
+    expected = [validation._STRAIGHT if straight(trial) else 0 for trial in batch]
+    np.testing.assert_array_equal(failures, expected)
+    assert 0 < np.count_nonzero(failures) < len(batch) // 2

@@ -107,13 +107,14 @@ class Claims:
 
 @dataclass
 class _Entry:
-    """A registered method: its one-trial function, checked and not, its claims, its figure style
-    and its own
+    """A registered method: its one-trial function, checked and not, its checked form for input
+    that passed the input checks (:func:`get_for_valid`), its claims, its figure style and its own
     many-trial form (``None`` until stated, or for none)."""
 
     name: str
     fn: Callable
     checked: Callable
+    valid: Callable
     claims: Claims
     style: Mapping[str, str]
     many: Callable[..., list] | None = None
@@ -159,26 +160,27 @@ def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
 def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
     """A many-trial form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
     returning per trial a result or the exception) with the checks of :func:`_checked` per
-    trial and the support verdict of all trials in one call."""
+    trial: the input checks of all trials in one pass
+    (:func:`jointbench.estimators.validation.check_input_many`) and the support verdict of all
+    trials in one call."""
 
     @functools.wraps(raw)
     def checked_many(*segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
-        fitted, clean = [], []
-        for trial, outcome in enumerate(outcomes):
+        checked = validation.check_input_many(kind, segments, len(outcomes))
+        self_checks = hasattr(raw_fn, "self_check")
+        fitted = []
+        for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
             # As for one trial: the input checks come first and their error wins.
-            try:
-                arrays = validation.check_input(kind, tuple(s[trial] for s in segments))
-            except ValueError as error:
+            if error is not None:
                 outcomes[trial] = error
-                continue
-            if not isinstance(outcome, Exception):
-                outcomes[trial] = _self_checked(raw_fn, outcome, arrays, options)
+            elif not isinstance(outcome, Exception):
+                if self_checks:
+                    arrays = checked.arrays(trial)
+                    outcomes[trial] = _self_checked(raw_fn, outcome, arrays, options)
                 fitted.append(trial)
-                clean.append(arrays)
         if fitted:
-            stacked = tuple(np.stack(arrays) for arrays in zip(*clean, strict=True))
-            verdicts = support.assess_many(kind, stacked)
+            verdicts = support.assess_many(kind, checked.stacked(fitted))
             for trial, verdict in zip(fitted, verdicts, strict=True):
                 outcomes[trial] = support.annotate(outcomes[trial], verdict)
         return outcomes
@@ -216,7 +218,8 @@ def register(
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), stated, style, many))
+        valid = functools.partial(_fit_valid, kind, fn)
+        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), valid, stated, style, many))
         return fn
 
     return decorate
@@ -259,7 +262,7 @@ def get_for_valid(kind: str, name: str) -> Callable:
     """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
     already passed :func:`jointbench.estimators.validation.check_input`, whose checks it does
     not repeat: for a caller that ran them itself."""
-    return functools.partial(_fit_valid, kind, _entry(kind, name).fn)
+    return _entry(kind, name).valid
 
 
 def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:

@@ -1,14 +1,16 @@
 """Input checks shared by the estimators. Every failure is a ``ValueError`` naming the problem.
 
-The registry applies :func:`check_input` to every registered estimator, so a new estimator is
-held to these checks without code of its own; estimators still call :func:`check_markers` with
-their own minimum numbers of frames and markers.
+The registry applies :func:`check_input` to every registered estimator (to a batch of trials,
+:func:`check_input_many`, which decides and words each trial's error as :func:`check_input`
+does), so a new estimator is held to these checks without code of its own; estimators still
+call :func:`check_markers` with their own minimum numbers of frames and markers.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -16,7 +18,9 @@ from jointbench.numerics.compiled import kernel, kernel_array
 
 __all__ = [
     "ARRAY_NAMES",
+    "CheckedTrials",
     "check_input",
+    "check_input_many",
     "check_markers",
     "check_moves",
     "check_not_collinear",
@@ -34,10 +38,26 @@ _GAP_ADVICE = "mark gaps as NaN and drop those frames before fitting"
 # fraction of its first; the same relative level at which check_not_collinear calls markers
 # collinear, far below any rotation a marker set can resolve.
 _LINE_RTOL = 1e-6
+# The same level as a ratio of eigenvalues (squared singular values) of a trajectory's scatter.
+_LINE_RATIO = _LINE_RTOL**2
+# A scatter matrix whose principal 2 x 2 minors sum to more than this times its squared trace
+# is not a line's: the sum is at most three times the product of the two largest eigenvalues,
+# and the largest at most the trace, so its middle eigenvalue exceeds a thousand times
+# _LINE_RATIO times the largest, a margin rounding in the minors or the eigenvalue solver
+# cannot close. Only the other matrices need their eigenvalues.
+_CURVED_MINORS = 3e3 * _LINE_RATIO
+
+# The largest change from frame 0 [mm], relative to frame 0's largest coordinate (at least
+# 1 mm), of markers that do not move: rounding.
+_MOVE_TOL_MM = 1e-9
+
+_FLOAT64 = np.dtype(np.float64)
 
 
 def _real_array(markers: object, name: str) -> np.ndarray:
     """``markers`` as a float64 array; complex, boolean, non-numeric and masked data raise."""
+    if type(markers) is np.ndarray and markers.dtype is _FLOAT64:
+        return markers  # the common case, before the checks' own cost
     if np.ma.isMaskedArray(markers):
         mask = np.ma.getmaskarray(markers)
         if mask.any():
@@ -79,31 +99,8 @@ def check_markers(
     exactly ``(0, 0, 0)`` (how some C3D readers store gaps), naming marker and frame, and
     checks the minimum numbers of frames and markers a method needs.
     """
-    array = _real_array(markers, name)
-    if array.ndim != 3 or array.shape[-1] != 3:
-        raise ValueError(f"{name} must be shaped (n_frames, n_markers, 3), got shape {array.shape}")
-    if array.size == 0:
-        raise ValueError(f"{name} is empty (shape {array.shape})")
-    # One compiled pass finds whether there is anything to report; only then are the
-    # offending samples located.
-    all_finite, any_origin = _sample_flags(kernel_array(array))
-    if not all_finite:
-        finite = np.isfinite(array)
-        frame, marker = _first_sample(~finite)
-        count = int((~finite).any(axis=-1).sum())
-        raise ValueError(
-            f"{name} contains NaN or inf at marker {marker}, frame {frame} ({count} in all); "
-            f"{_GAP_ADVICE}"
-        )
-    if any_origin:
-        origin = ~array.any(axis=-1)
-        if origin.any():
-            frame, marker = _first_sample(origin)
-            raise ValueError(
-                f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
-                f"({int(origin.sum())} in all): some C3D readers store gaps as zeros; "
-                f"{_GAP_ADVICE}"
-            )
+    array = _shaped(markers, name)
+    _refuse(array, name, _first_failure(array, _SAMPLES))
     n_frames, n_markers, _ = array.shape
     if n_frames < min_frames:
         raise ValueError(f"{name} has {n_frames} frames; this method needs at least {min_frames}")
@@ -114,41 +111,156 @@ def check_markers(
     return array
 
 
-@kernel
-def _sample_flags(markers: np.ndarray) -> tuple[bool, bool]:
-    """Whether every coordinate of ``markers`` ``(n_frames, n_markers, 3)`` is finite, and
-    whether some sample is exactly ``(0, 0, 0)``. A compiled kernel: these checks run before
-    every fit, and NumPy's passes over the array cost a tenth of a closed-form fit."""
-    all_finite = True
-    any_origin = False
-    for f in range(markers.shape[0]):
-        for m in range(markers.shape[1]):
-            x, y, z = markers[f, m, 0], markers[f, m, 1], markers[f, m, 2]
-            all_finite = all_finite and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
-            any_origin = any_origin or (x == 0.0 and y == 0.0 and z == 0.0)
-    return all_finite, any_origin
+def _shaped(markers: object, name: str) -> np.ndarray:
+    """``markers`` as a float64 array of shape ``(n_frames, n_markers, 3)``, not empty; what
+    :func:`_real_array` refuses, a wrong shape and an empty array raise."""
+    array = _real_array(markers, name)
+    if array.ndim != 3 or array.shape[-1] != 3:
+        raise ValueError(f"{name} must be shaped (n_frames, n_markers, 3), got shape {array.shape}")
+    if array.size == 0:
+        raise ValueError(f"{name} is empty (shape {array.shape})")
+    return array
 
 
-@kernel
-def _largest_move(markers: np.ndarray) -> tuple[float, float]:
-    """The largest absolute coordinate change from frame 0 of ``markers``
-    ``(n_frames, n_markers, 3)`` [mm], and the largest absolute coordinate of frame 0 [mm]. A
-    compiled kernel (see :func:`_sample_flags`)."""
-    spread = 0.0
-    first = 0.0
-    for m in range(markers.shape[1]):
-        for i in range(3):
-            first = max(first, abs(markers[0, m, i]))
-            for f in range(markers.shape[0]):
-                spread = max(spread, abs(markers[f, m, i] - markers[0, m, i]))
-    return spread, first
+# The checks _first_failures can make, as bits: the samples, the motion from frame 0 and the
+# straightness of the trajectories; and the failures it reports, in the order their errors are
+# raised (0: none).
+_SAMPLES, _MOVES, _LINES = 1, 2, 4
+_NOT_FINITE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4
 
 
-def check_moves(markers: np.ndarray, *, name: str = "markers", tol_mm: float = 1e-9) -> None:
-    """Raise ``ValueError`` when no marker moves (every trajectory is a single point)."""
-    spread, first = _largest_move(kernel_array(markers))
-    if spread <= tol_mm * max(1.0, first):
+def _refuse(array: np.ndarray, name: str, failure: int) -> None:
+    """Raise the ``ValueError`` for the ``failure`` :func:`_first_failures` found in ``array``
+    ``(n_frames, n_markers, 3)``, locating the offending samples only then; nothing for 0."""
+    if not failure:
+        return
+    if failure == _NOT_FINITE:
+        bad = ~np.isfinite(array)
+        frame, marker = _first_sample(bad)
+        raise ValueError(
+            f"{name} contains NaN or inf at marker {marker}, frame {frame} "
+            f"({int(bad.any(axis=-1).sum())} in all); {_GAP_ADVICE}"
+        )
+    if failure == _AT_ORIGIN:
+        at_origin = ~array.any(axis=-1)
+        frame, marker = _first_sample(at_origin)
+        raise ValueError(
+            f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
+            f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; "
+            f"{_GAP_ADVICE}"
+        )
+    if failure == _STILL:
         raise ValueError(f"{name} do not move: every marker stays at one point in every frame")
+    if failure == _STRAIGHT:
+        raise ValueError(
+            f"{name} do not rotate: every marker moves along a straight line, so there is no "
+            "centre or axis of rotation"
+        )
+
+
+def _first_failure(markers: object, checks: int, move_tol_mm: float = _MOVE_TOL_MM) -> int:
+    """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
+    of one: its failure, or 0."""
+    return _first_failures(kernel_array(markers)[np.newaxis], checks, move_tol_mm, _UNRECORDED)
+
+
+# The failures array of a call of _first_failures that needs only its return value.
+_UNRECORDED = np.empty(0, dtype=np.int8)
+
+
+@kernel
+def _first_failures(
+    markers: np.ndarray, checks: int, move_tol_mm: float, failures: np.ndarray
+) -> int:
+    """The first check each trial of ``markers`` ``(n_trials, n_frames, n_markers, 3)`` [mm]
+    fails, of those asked, in this order, or 0: written into ``failures`` ``(n_trials,)``
+    (unless it is empty), and the first trial's that fails one returned (0 if none does).
+    ``checks`` asks for some, as bits:
+
+    * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_AT_ORIGIN`, a
+      sample is exactly ``(0, 0, 0)``;
+    * :data:`_MOVES`: :data:`_STILL`, no coordinate changes from frame 0 by more than
+      ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
+    * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
+      eigenvalue of its scatter matrix about its mean position at most :data:`_LINE_RATIO`
+      times the largest (never for fewer than three frames, which always lie on a line).
+
+    A compiled kernel: the checks run before every fit, and NumPy's passes over the array and
+    its per-call overhead on 3 x 3 matrices cost as much as a closed-form fit.
+    """
+    n_trials, n_frames, n_markers, _ = markers.shape
+    scatter = np.empty((3, 3))
+    mean = np.empty(3)
+    first_failure = 0
+    for t in range(n_trials):
+        trial = markers[t]
+        failure = 0
+        if checks & _SAMPLES:
+            all_finite = True
+            any_origin = False
+            for f in range(n_frames):
+                for m in range(n_markers):
+                    x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
+                    all_finite = (
+                        all_finite and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
+                    )
+                    any_origin = any_origin or (x == 0.0 and y == 0.0 and z == 0.0)
+            if not all_finite:
+                failure = _NOT_FINITE
+            elif any_origin:
+                failure = _AT_ORIGIN
+        if failure == 0 and checks & _MOVES:
+            first = 0.0
+            for m in range(n_markers):
+                for i in range(3):
+                    first = max(first, abs(trial[0, m, i]))
+            spread = 0.0  # frame by frame, in memory order
+            for f in range(1, n_frames):
+                for m in range(n_markers):
+                    for i in range(3):
+                        spread = max(spread, abs(trial[f, m, i] - trial[0, m, i]))
+            if spread <= move_tol_mm * max(1.0, first):
+                failure = _STILL
+        if failure == 0 and checks & _LINES and n_frames >= 3:
+            every = True
+            for p in range(n_markers):
+                for i in range(3):
+                    total = 0.0
+                    for f in range(n_frames):
+                        total += trial[f, p, i]
+                    mean[i] = total / n_frames
+                scatter[:] = 0.0
+                for f in range(n_frames):
+                    for i in range(3):
+                        for j in range(3):
+                            scatter[i, j] += (trial[f, p, i] - mean[i]) * (trial[f, p, j] - mean[j])
+                trace = scatter[0, 0] + scatter[1, 1] + scatter[2, 2]
+                minors = (
+                    (scatter[0, 0] * scatter[1, 1] - scatter[0, 1] * scatter[0, 1])
+                    + (scatter[0, 0] * scatter[2, 2] - scatter[0, 2] * scatter[0, 2])
+                    + (scatter[1, 1] * scatter[2, 2] - scatter[1, 2] * scatter[1, 2])
+                )
+                if minors > _CURVED_MINORS * trace * trace:
+                    every = False  # so far above the line that the eigenvalues need no solver
+                    break
+                eigenvalues = np.linalg.eigvalsh(scatter)
+                if eigenvalues[1] > _LINE_RATIO * eigenvalues[2]:
+                    every = False
+                    break
+            if every:
+                failure = _STRAIGHT
+        if len(failures):
+            failures[t] = failure
+        if first_failure == 0:
+            first_failure = failure
+    return first_failure
+
+
+def check_moves(
+    markers: np.ndarray, *, name: str = "markers", tol_mm: float = _MOVE_TOL_MM
+) -> None:
+    """Raise ``ValueError`` when no marker moves (every trajectory is a single point)."""
+    _refuse(markers, name, _first_failure(markers, _MOVES, tol_mm))
 
 
 def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
@@ -159,40 +271,7 @@ def check_rotates(markers: np.ndarray, *, name: str = "markers") -> None:
     line when the second eigenvalue of its scatter matrix vanishes relative to the first.
     Fewer than three frames always lie on a line and are left to the frame-count checks.
     """
-    if markers.shape[0] < 3:
-        return
-    if _all_straight(kernel_array(markers), _LINE_RTOL**2):
-        raise ValueError(
-            f"{name} do not rotate: every marker moves along a straight line, so there is no "
-            "centre or axis of rotation"
-        )
-
-
-@kernel
-def _all_straight(markers: np.ndarray, ratio: float) -> bool:
-    """Whether every marker's trajectory over the frames of ``markers``
-    ``(n_frames, n_markers, 3)`` is a line: the second eigenvalue of its scatter matrix about
-    its mean position at most ``ratio`` times the largest. A compiled kernel: the checks run
-    before every fit, and NumPy's per-call overhead on these 3 x 3 matrices cost as much as a
-    closed-form fit."""
-    n_frames, n_markers, _ = markers.shape
-    scatter = np.empty((3, 3))
-    mean = np.empty(3)
-    for p in range(n_markers):
-        for i in range(3):
-            total = 0.0
-            for f in range(n_frames):
-                total += markers[f, p, i]
-            mean[i] = total / n_frames
-        scatter[:] = 0.0
-        for f in range(n_frames):
-            for i in range(3):
-                for j in range(3):
-                    scatter[i, j] += (markers[f, p, i] - mean[i]) * (markers[f, p, j] - mean[j])
-        eigenvalues = np.linalg.eigvalsh(scatter)
-        if eigenvalues[1] > ratio * eigenvalues[2]:
-            return False
-    return True
+    _refuse(markers, name, _first_failure(markers, _LINES))
 
 
 def check_not_collinear(markers: np.ndarray, *, name: str = "markers") -> None:
@@ -235,15 +314,129 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
             f"a {kind} estimator takes {len(names)} marker arrays ({', '.join(names)}), "
             f"got {len(arrays)}"
         )
-    checked = tuple(
-        check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
-    )
     if kind == "joint_center":
+        checked = tuple(
+            check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
+        )
         check_same_frames(*checked)
-    else:
-        check_moves(checked[0])
-        check_rotates(checked[0])
-    return checked
+        return checked
+    # One pass of the kernel for the checks of check_markers, check_moves and check_rotates,
+    # in their order (the counts of frames and markers: at least one, as the array is not empty).
+    name = names[0]
+    array = _shaped(arrays[0], name)
+    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES))
+    return (array,)
+
+
+@dataclass(frozen=True)
+class CheckedTrials:
+    """The input checks of a batch of trials (:func:`check_input_many`).
+
+    ``errors``: per trial, the ``ValueError`` :func:`check_input` raises for it, or ``None``.
+    The checked float64 arrays of the trials that passed are those of ``batch``, one
+    ``(n_trials, n_frames, n_markers, 3)`` array per segment where the segments were regular
+    arrays, or else of ``each``, per trial its tuple of arrays (``None`` for a refused trial).
+    """
+
+    errors: list[ValueError | None]
+    batch: tuple[np.ndarray, ...] | None = None
+    each: list[tuple[np.ndarray, ...] | None] | None = None
+
+    def arrays(self, trial: int) -> tuple[np.ndarray, ...]:
+        """The checked arrays of ``trial``, one that passed, as :func:`check_input` returns
+        them."""
+        if self.batch is None:
+            return self.each[trial]
+        return tuple(segment[trial] for segment in self.batch)
+
+    def stacked(self, trials: list[int]) -> tuple[np.ndarray, ...]:
+        """The checked arrays of ``trials`` (increasing, each one that passed), one
+        ``(len(trials), ...)`` array per segment; the batch's own arrays, not copies, when
+        ``trials`` are all of them."""
+        if self.batch is None:
+            chosen = [self.each[trial] for trial in trials]
+            return tuple(np.stack(arrays) for arrays in zip(*chosen, strict=True))
+        if len(trials) == len(self.errors):
+            return self.batch
+        return tuple(segment[trials] for segment in self.batch)
+
+
+def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> CheckedTrials:
+    """:func:`check_input` on each of the ``n_trials`` trials of ``segments``, the marker arrays
+    of ``kind`` with a leading trials axis ``(n_trials, n_frames, n_markers, 3)``.
+
+    Where every segment is a regular real array of that shape (none empty, the two segments
+    sharing frames), one pass of the compiled kernel over all trials finds the trials that
+    pass; only those that do not are checked one by one, for :func:`check_input`'s own error.
+    Other segments (lists of trials, other shapes or types) are checked trial by trial.
+    """
+    batch = _regular_batch(kind, segments, n_trials)
+    if batch is None:
+        return _check_each(kind, segments, n_trials)
+    checks = _SAMPLES if kind == "joint_center" else _SAMPLES | _MOVES | _LINES
+    passes = np.ones(n_trials, dtype=bool)
+    failures = np.empty(n_trials, dtype=np.int8)
+    try:
+        for array in batch:
+            if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures):
+                passes &= failures == 0
+    except np.linalg.LinAlgError:
+        # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
+        # their own error for it, and the others pass or fail alone.
+        return _check_each(kind, segments, n_trials)
+    errors: list[ValueError | None] = [None] * n_trials
+    for trial in np.flatnonzero(~passes).tolist():
+        errors[trial] = _error_of(kind, tuple(segment[trial] for segment in segments))
+    return CheckedTrials(errors, batch=batch)
+
+
+def _check_each(kind: str, segments: tuple[object, ...], n_trials: int) -> CheckedTrials:
+    """:func:`check_input_many` trial by trial."""
+    errors: list[ValueError | None] = []
+    each: list[tuple[np.ndarray, ...] | None] = []
+    for trial in range(n_trials):
+        try:
+            each.append(check_input(kind, tuple(segment[trial] for segment in segments)))
+            errors.append(None)
+        except ValueError as error:
+            each.append(None)
+            errors.append(error)
+    return CheckedTrials(errors, each=each)
+
+
+def _regular_batch(
+    kind: str, segments: tuple[object, ...], n_trials: int
+) -> tuple[np.ndarray, ...] | None:
+    """``segments`` as float64 arrays (views where they already are), when each is a real,
+    unmasked ``(n_trials, n_frames, n_markers, 3)`` array whose trials are not empty and the
+    segments share frames: a batch the kernel checks at once. ``None`` otherwise."""
+    if len(segments) != len(ARRAY_NAMES[kind]):
+        return None
+    batch = []
+    for segment in segments:
+        if (
+            not isinstance(segment, np.ndarray)
+            or np.ma.isMaskedArray(segment)
+            or segment.dtype.kind not in "iuf"
+            or segment.ndim != 4
+            or segment.shape[0] != n_trials
+            or segment.shape[-1] != 3
+            or 0 in segment.shape[1:]
+        ):
+            return None
+        batch.append(segment.astype(float, copy=False))
+    if len({array.shape[1] for array in batch}) > 1:
+        return None
+    return tuple(batch)
+
+
+def _error_of(kind: str, arrays: tuple[object, ...]) -> ValueError | None:
+    """The ``ValueError`` :func:`check_input` raises for ``arrays``, or ``None``."""
+    try:
+        check_input(kind, arrays)
+    except ValueError as error:
+        return error
+    return None
 
 
 def prepare_trials(

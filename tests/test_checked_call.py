@@ -1,0 +1,46 @@
+"""The checked one-trial call's own path: built once per method, one compiled pass of the input
+checks per marker array."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from rigs import two_segments
+
+import jointbench
+from jointbench.estimators import registry, validation
+
+
+@pytest.mark.parametrize("kind", registry.KINDS)
+def test_the_checked_form_for_valid_input_is_built_once_per_method(kind):
+    for name in jointbench.methods(kind):
+        assert registry.get_for_valid(kind, name) is registry.get_for_valid(kind, name), name
+
+
+@pytest.fixture
+def kernel_calls(monkeypatch):
+    """The number of calls of the input checks' kernel."""
+    calls = []
+    kernel = validation._first_failures
+
+    def counting(*args):
+        calls.append(args[0].shape)
+        return kernel(*args)
+
+    monkeypatch.setattr(validation, "_first_failures", counting)
+    return calls
+
+
+@pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
+def test_the_one_trial_input_checks_make_one_compiled_pass_per_array(kind, kernel_calls):
+    proximal, distal = two_segments(60)
+    arrays = (proximal, distal) if kind == "joint_center" else (distal,)
+    validation.check_input(kind, arrays)
+    assert kernel_calls == [(1, *array.shape) for array in arrays]
+
+
+def test_the_input_checks_of_a_batch_make_one_compiled_pass(kernel_calls):
+    markers = np.stack([two_segments(60)[1]] * 5)
+    checked = validation.check_input_many("center", (markers,), len(markers))
+    assert checked.errors == [None] * 5
+    assert kernel_calls == [markers.shape]
