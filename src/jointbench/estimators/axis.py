@@ -79,6 +79,7 @@ is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_betw
 
 from __future__ import annotations
 
+import functools
 import math
 import typing
 from collections.abc import Callable
@@ -191,11 +192,22 @@ class AxisCosts:
             centred = data - data.mean(axis=0)
             self.scatter[trial] = np.einsum("kpi,kpj->ij", centred, centred)
         self.point = point
-        # Per coordinate, marker-major rows (n_trials, P N): the offsets w of every sample.
-        offsets = np.transpose(markers - point[:, None, None, :], (3, 0, 2, 1))
-        self._w = np.ascontiguousarray(offsets).reshape(3, n_trials, -1)
-        self._w_sq = self._w[0] * self._w[0] + self._w[1] * self._w[1] + self._w[2] * self._w[2]
+        self._markers = markers
         self._shape = (n_markers, n_frames)
+
+    # The radial cost's arrays are made on first use: the planar cost never needs them.
+    @functools.cached_property
+    def _w(self) -> np.ndarray:
+        """Per coordinate, marker-major rows ``(3, n_trials, P N)``: the offsets ``w`` of every
+        sample [mm]."""
+        offsets = np.transpose(self._markers - self.point[:, None, None, :], (3, 0, 2, 1))
+        return np.ascontiguousarray(offsets).reshape(3, len(self.point), -1)
+
+    @functools.cached_property
+    def _w_sq(self) -> np.ndarray:
+        """``|w|^2`` of every sample ``(n_trials, P N)`` [mm^2]."""
+        w = self._w
+        return w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
 
     @staticmethod
     def _trials(directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
@@ -252,17 +264,56 @@ class AxisCosts:
         """Cost of a batch of search parameters, ``(k, 2)`` angles or ``(k, 3)`` vectors, whose
         searches ``owners`` ``(k,)`` belong to the trials ``trial_of(owners)``."""
         cost = {"planar": self.planar, "radial": self.radial, "combined": self.combined}[method]
-        if parameterisation == "angles":
-            return lambda params, owners: cost(angles_to_directions(params), trial_of(owners))
+        return _of_parameters(
+            lambda directions, owners: cost(directions, trial_of(owners)), parameterisation
+        )
 
-        def cost_vector(params: np.ndarray, owners: np.ndarray) -> np.ndarray:
-            norm = np.linalg.norm(params, axis=1)
-            zero = norm == 0.0
-            value = cost(params / np.where(zero, 1.0, norm)[:, None], trial_of(owners))
-            value[zero] = np.inf
-            return value
+    def first_trial_cost(
+        self, method: str, parameterisation: str
+    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """:meth:`batch_cost` of searches all in trial 0, each cost computed by the same
+        operations, without the checks and trial look-ups of the public costs: for a single
+        search, whose every evaluation pays them (the self-check's restart)."""
+        n_markers = self._shape[0]
+        first = {}  # trial 0 for each number of directions, and its scatter matrices
 
-        return cost_vector
+        def cost(directions: np.ndarray, owners: np.ndarray) -> np.ndarray:
+            k = len(directions)
+            if k not in first:
+                trials = np.zeros(k, dtype=np.intp)
+                first[k] = trials, self.scatter[trials]
+            trials, scatter = first[k]
+            directions = kernel_array(directions)
+            if method != "planar":
+                radial = np.empty(k)
+                _radial_costs(
+                    self._w, self._w_sq, directions, trials, n_markers, radial, _NO_DISTANCES
+                )
+                if method == "radial":
+                    return radial
+            planar = np.einsum("ki,kij,kj->k", directions, scatter, directions)
+            return planar if method == "planar" else planar + radial
+
+        return _of_parameters(cost, parameterisation)
+
+
+def _of_parameters(
+    cost: Callable[[np.ndarray, np.ndarray], np.ndarray], parameterisation: str
+) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """``cost(directions, owners)`` of unit directions ``(k, 3)`` as the cost of search
+    parameters ``(k, 2)`` angles or ``(k, 3)`` vectors (module notes); a zero vector costs
+    ``inf``."""
+    if parameterisation == "angles":
+        return lambda params, owners: cost(angles_to_directions(params), owners)
+
+    def cost_vector(params: np.ndarray, owners: np.ndarray) -> np.ndarray:
+        norm = np.linalg.norm(params, axis=1)
+        zero = norm == 0.0
+        value = cost(params / np.where(zero, 1.0, norm)[:, None], owners)
+        value[zero] = np.inf
+        return value
+
+    return cost_vector
 
 
 # ``_radial_costs`` stores no distances when given this.
@@ -550,7 +601,7 @@ def _self_check(
         else eigenvector[None]
     )
     run = lockstep(
-        costs.batch_cost(method, parameterisation, lambda owners: owners),
+        costs.first_trial_cost(method, parameterisation),
         start,
         xatol=xatol,
         fatol=fatol,
