@@ -22,7 +22,6 @@ included.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Mapping
 
 import numpy as np
@@ -65,7 +64,7 @@ def lowest_neighbour(
 
 def held(result, evidence: str):
     """``result`` with the evidence that its minimum held in ``diagnostics["self_check"]``."""
-    return dataclasses.replace(result, diagnostics={**result.diagnostics, "self_check": evidence})
+    return _with(result, diagnostics={**result.diagnostics, "self_check": evidence})
 
 
 def restarted(result, better, source: str, moved: str):
@@ -83,7 +82,7 @@ def restarted(result, better, source: str, moved: str):
         "self_check": evidence,
         "local_minimum_cost": result.cost,
     }
-    return dataclasses.replace(better, status=status, diagnostics=diagnostics)
+    return _with(better, status=status, diagnostics=diagnostics)
 
 
 def failed(result, evidence: str):
@@ -92,4 +91,19 @@ def failed(result, evidence: str):
     if result.status != "ok":
         status = f"{result.status}; {status}"
     diagnostics = {**result.diagnostics, "self_check": evidence}
-    return dataclasses.replace(result, converged=False, status=status, diagnostics=diagnostics)
+    return _with(result, converged=False, status=status, diagnostics=diagnostics)
+
+
+def _with(result, **changes):
+    """``result`` (a frozen result dataclass) with ``changes`` to fields that hold no array.
+
+    As ``dataclasses.replace`` gives it, without running the constructor again: that would
+    re-validate the arrays ``result`` already holds, read-only, which costs more than many a
+    check (the constructor only freezes arrays, so nothing it does is skipped for these
+    fields)."""
+    unknown = set(changes) - set(result.__dataclass_fields__)
+    if unknown:
+        raise ValueError(f"{type(result).__name__} has no field {sorted(unknown)[0]!r}")
+    copy = object.__new__(type(result))
+    copy.__dict__.update(result.__dict__, **changes)
+    return copy
