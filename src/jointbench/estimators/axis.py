@@ -195,6 +195,10 @@ class AxisCosts:
         self._markers = markers
         self._shape = (n_markers, n_frames)
 
+    def trial_markers(self, trial: int) -> np.ndarray:
+        """The markers ``(N, P, 3)`` [mm] of ``trial``."""
+        return self._markers[trial]
+
     # The radial cost's arrays are made on first use: the planar cost never needs them.
     @functools.cached_property
     def _w(self) -> np.ndarray:
@@ -268,30 +272,24 @@ class AxisCosts:
             lambda directions, owners: cost(directions, trial_of(owners)), parameterisation
         )
 
-    def first_trial_cost(
+    def search_cost(
         self, method: str, parameterisation: str
     ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """:meth:`batch_cost` of searches all in trial 0, each cost computed by the same
-        operations, without the checks and trial look-ups of the public costs: for a single
-        search, whose every evaluation pays them (the self-check's restart)."""
+        """:meth:`batch_cost` of one search per trial (``owners`` are the trials), each cost
+        computed by the same operations, without the checks of the public costs: for few
+        searches, whose every evaluation would pay them (the self-check's restarts)."""
         n_markers = self._shape[0]
-        first = {}  # trial 0 for each number of directions, and its scatter matrices
 
-        def cost(directions: np.ndarray, owners: np.ndarray) -> np.ndarray:
-            k = len(directions)
-            if k not in first:
-                trials = np.zeros(k, dtype=np.intp)
-                first[k] = trials, self.scatter[trials]
-            trials, scatter = first[k]
+        def cost(directions: np.ndarray, trials: np.ndarray) -> np.ndarray:
             directions = kernel_array(directions)
             if method != "planar":
-                radial = np.empty(k)
+                radial = np.empty(len(directions))
                 _radial_costs(
                     self._w, self._w_sq, directions, trials, n_markers, radial, _NO_DISTANCES
                 )
                 if method == "radial":
                     return radial
-            planar = np.einsum("ki,kij,kj->k", directions, scatter, directions)
+            planar = np.einsum("ki,kij,kj->k", directions, self.scatter[trials], directions)
             return planar if method == "planar" else planar + radial
 
         return _of_parameters(cost, parameterisation)
@@ -575,8 +573,17 @@ def _entry(solve: Callable, method: str) -> Callable:
     return entry
 
 
-def _self_check(
-    result: AxisResult,
+def _self_check(result: AxisResult, markers: np.ndarray, **search) -> AxisResult:
+    """The ten-start answer against one more search, started from the planar cost's closed-form
+    minimum (the eigenvector of the smallest eigenvalue of ``S``, Gamage & Lasenby's axis):
+    a closed-form neighbour of every axis cost, exact for a noise-free hinge, where the radial
+    term's local minima can capture all ten starts (module notes). One search more than the
+    fit's ten (:mod:`jointbench.estimators.selfcheck`). ``search`` are the fit's options."""
+    return _self_check_many([result], markers[None], **search)[0]
+
+
+def _self_check_many(
+    results: list[AxisResult],
     markers: np.ndarray,
     *,
     point: object | None = None,
@@ -585,29 +592,39 @@ def _self_check(
     fatol: float = FATOL,
     max_iter: int | None = None,
     max_fev: int | None = None,
-) -> AxisResult:
-    """The ten-start answer against one more search, started from the planar cost's closed-form
-    minimum (the eigenvector of the smallest eigenvalue of ``S``, Gamage & Lasenby's axis):
-    a closed-form neighbour of every axis cost, exact for a noise-free hinge, where the radial
-    term's local minima can capture all ten starts (module notes). One search more than the
-    fit's ten (:mod:`jointbench.estimators.selfcheck`)."""
-    del point  # the result's point is the one searched with
-    method = result.method
-    costs = AxisCosts(markers, np.asarray(result.point))
-    eigenvector = np.asarray(result.diagnostics["eigenvector"])
-    start = (
-        np.array([direction_to_angles(eigenvector)])
-        if parameterisation == "angles"
-        else eigenvector[None]
+) -> list[AxisResult]:
+    """:func:`_self_check` of the answers ``results`` of one method for the trials of
+    ``markers`` ``(T, N, P, 3)`` [mm] (or a list of equal-shape trials), their restarts
+    searched together, each on its own path (:func:`jointbench.numerics.simplex.lockstep`):
+    each trial's outcome is the one it has alone."""
+    del point  # each result's point is the one searched with
+    method = results[0].method
+    costs = AxisCosts(
+        markers if isinstance(markers, np.ndarray) else np.stack(markers),
+        np.stack([np.asarray(result.point) for result in results]),
     )
-    run = lockstep(
-        costs.first_trial_cost(method, parameterisation),
-        start,
+    eigenvectors = [np.asarray(result.diagnostics["eigenvector"]) for result in results]
+    starts = (
+        np.array([direction_to_angles(eigenvector) for eigenvector in eigenvectors])
+        if parameterisation == "angles"
+        else np.stack(eigenvectors)
+    )
+    runs = lockstep(
+        costs.search_cost(method, parameterisation),
+        starts,
         xatol=xatol,
         fatol=fatol,
         max_iter=max_iter,
         max_fev=max_fev,
     )
+    return [
+        _judged(result, costs, trial, runs[trial : trial + 1], parameterisation, fatol)
+        for trial, result in enumerate(results)
+    ]
+
+
+def _judged(result, costs, trial, run, parameterisation, fatol) -> AxisResult:
+    """``result`` of ``trial`` judged against the ``run`` of its restart (:func:`_self_check`)."""
     restart_cost = float(run[0][1])
     if not restart_cost < result.cost - fatol:
         return selfcheck.held(
@@ -615,7 +632,8 @@ def _self_check(
             f"a restart from the planar-cost eigenvector reached {restart_cost:.6g}, not below "
             f"the answer's {result.cost:.6g} by more than fatol = {fatol:g}",
         )
-    better = _result(markers, 0, costs, run, method, parameterisation)
+    array = costs.trial_markers(trial)
+    better = _result(array, trial, costs, run, result.method, parameterisation)
     angle = angle_between_lines_deg(better.direction, result.direction)
     return selfcheck.restarted(
         result,
@@ -630,6 +648,7 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
     fit.self_check = _self_check
+    fit.self_check_many = _self_check_many
     return fit
 
 

@@ -1118,23 +1118,42 @@ def _bc_steps(data: np.ndarray, centers: np.ndarray, rcond: float, steps: np.nda
         steps[t] = step if math.isfinite(variance) else math.nan
 
 
-def _bc_self_check(
-    result: CenterResult,
+def _bc_self_check(result: CenterResult, markers: np.ndarray, **options) -> CenterResult:
+    """Whether BC's answer is its fixed point: one more of Halvorsen's updates, computed from
+    the markers about the returned centre (not from the moments the iteration used), must
+    move it by at most ``tol_x`` (:func:`_bc_update_steps`). BC has no cost to compare
+    (:func:`fit_bc`); the update is its defining equation. See
+    :mod:`jointbench.estimators.selfcheck`. ``options`` are the fit's."""
+    return _bc_self_check_many([result], markers[None], **options)[0]
+
+
+def _bc_self_check_many(
+    results: list[CenterResult],
     markers: np.ndarray,
     *,
     max_iterations: int = 600,
     tol_x: float = 1e-4,
     tol_fun: float = 1e-4,
-) -> CenterResult:
-    """Whether BC's answer is its fixed point: one more of Halvorsen's updates, computed from
-    the markers about the returned centre (not from the moments the iteration used), must
-    move it by at most ``tol_x`` (:func:`_bc_update_steps`). BC has no cost to compare
-    (:func:`fit_bc`); the update is its defining equation. See
-    :mod:`jointbench.estimators.selfcheck`."""
+) -> list[CenterResult]:
+    """:func:`_bc_self_check` of BC's answers ``results`` for the trials of ``markers``
+    ``(T, N, P, 3)`` [mm] (or a list of equal-shape trials), the updates computed together."""
     del max_iterations, tol_fun
-    if not result.converged:
-        return result
-    step = float(_bc_update_steps(markers[None], np.asarray(result.center)[None])[0])
+    judged = [trial for trial, result in enumerate(results) if result.converged]
+    if not judged:
+        return list(results)
+    data = markers if isinstance(markers, np.ndarray) else np.stack(markers)
+    if len(judged) < len(results):
+        data = data[judged]
+    centers = np.stack([np.asarray(results[trial].center) for trial in judged])
+    checked = list(results)
+    for trial, step in zip(judged, _bc_update_steps(data, centers).tolist(), strict=True):
+        checked[trial] = _bc_judged(results[trial], step, tol_x)
+    return checked
+
+
+def _bc_judged(result: CenterResult, step: float, tol_x: float) -> CenterResult:
+    """``result``, whose next update moves it by ``step`` [mm], held or failed against
+    ``tol_x``."""
     if step <= tol_x:
         return selfcheck.held(
             result,
@@ -1150,6 +1169,7 @@ def _bc_self_check(
 
 fit_is.self_check = _is_self_check
 fit_bc.self_check = _bc_self_check
+fit_bc.self_check_many = _bc_self_check_many
 register_many("center", "LS", isolated(_fit_ls_batch))
 register_many("center", "NM", isolated(_fit_nm_batch))
 register_many("center", "BC", isolated(_fit_bc_batch))
