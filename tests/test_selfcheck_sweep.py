@@ -29,7 +29,7 @@ AXIS_METHODS = ("planar", "radial", "combined")
 TOLERANCE = 1e-9
 
 
-def _sphere_trial(seed: int) -> np.ndarray:
+def sphere_trial(seed: int) -> np.ndarray:
     """Markers ``(120, 3, 3)`` [mm] on spheres about a random centre, 5-45 degrees of
     circumduction, 0.5-2 mm noise."""
     rng = np.random.default_rng(seed)
@@ -45,7 +45,7 @@ def _sphere_trial(seed: int) -> np.ndarray:
     return clean + rng.normal(scale=noise, size=clean.shape)
 
 
-def _near_hinge_trial(seed: int) -> np.ndarray:
+def near_hinge_trial(seed: int) -> np.ndarray:
     """Markers ``(121, 3, 3)`` [mm] of a flexion with some abduction, 1 mm noise."""
     rng = np.random.default_rng(seed)
     flexion = np.radians(rng.uniform(20.0, 90.0)) * np.sin(np.linspace(0.0, 2 * np.pi, 121))
@@ -68,7 +68,7 @@ def _altered(result, *, shift: float = 0.0, extra_cost: float = 0.0):
 def _cases():
     """``(name, kind, method, markers, options, alter)`` of every case of the sweep."""
     for seed in range(9):
-        markers = _sphere_trial(seed)
+        markers = sphere_trial(seed)
         for method in CENTER_METHODS:
             yield f"{method}-sphere-{seed}", "center", method, markers, {}, None
         yield f"IS-far-start-{seed}", "center", "IS", markers, {"start": markers[0, 0] * 3}, None
@@ -81,7 +81,7 @@ def _cases():
         for method in AXIS_METHODS:
             yield f"{method}-hinge-{seed}", "axis", method, markers, {}, None
     for seed in range(4):
-        markers = _near_hinge_trial(seed)
+        markers = near_hinge_trial(seed)
         for method in AXIS_METHODS:
             yield f"{method}-near-hinge-{seed}", "axis", method, markers, {}, None
             yield (
@@ -102,13 +102,20 @@ def _cases():
         )
 
 
-def _outcome(kind, method, markers, options, alter) -> dict:
-    """What the self-check returns for the bare answer (altered by ``alter``)."""
+def _fitted(kind, method, markers, options, alter):
+    """The bare answer for ``markers`` (altered by ``alter``) and the method's function."""
     fit = registry.get(kind, method, checked=False)
     result = fit(markers, **options)
-    if alter is not None:
-        result = _altered(result, **alter)
-    checked = fit.self_check(result, markers, **options)
+    return fit, result if alter is None else _altered(result, **alter)
+
+
+def _outcome(kind, method, markers, options, alter) -> dict:
+    """What the self-check returns for the bare answer (altered by ``alter``)."""
+    fit, result = _fitted(kind, method, markers, options, alter)
+    return _summary(kind, fit.self_check(result, markers, **options))
+
+
+def _summary(kind: str, checked) -> dict:
     answer = checked.center if kind == "center" else checked.direction
     return {
         "status": checked.status,
@@ -145,10 +152,7 @@ def test_the_sweep_holds_every_decision():
     assert set(_pinned()) == set(CASES)
 
 
-@pytest.mark.parametrize("name", list(CASES))
-def test_a_self_check_decides_and_returns_what_it_did(name):
-    pinned = _pinned()[name]
-    outcome = _outcome(*CASES[name])
+def _assert_as_pinned(outcome: dict, pinned: dict) -> None:
     assert _decision(outcome) == _decision(pinned)
     assert outcome["status"] == pinned["status"]
     assert outcome["evidence"] == pinned["evidence"]
@@ -156,6 +160,35 @@ def test_a_self_check_decides_and_returns_what_it_did(name):
     np.testing.assert_allclose(outcome["answer"], pinned["answer"], rtol=0, atol=TOLERANCE)
     assert abs(outcome["cost"] - pinned["cost"]) <= TOLERANCE * max(1.0, abs(pinned["cost"]))
     assert outcome["local_minimum_cost"] == pinned["local_minimum_cost"]
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_self_check_decides_and_returns_what_it_did(name):
+    _assert_as_pinned(_outcome(*CASES[name]), _pinned()[name])
+
+
+def _many_groups() -> dict[tuple, list[str]]:
+    """The cases a method's many-trial self-check can take together: same method, options
+    and alteration, trials of one shape."""
+    groups: dict[tuple, list[str]] = {}
+    for name, (kind, method, markers, options, alter) in CASES.items():
+        fit = registry.get(kind, method, checked=False)
+        if hasattr(fit, "self_check_many"):
+            key = (kind, method, markers.shape, repr(options), repr(alter))
+            groups.setdefault(key, []).append(name)
+    return groups
+
+
+@pytest.mark.parametrize("names", list(_many_groups().values()), ids=lambda names: names[0])
+def test_the_many_trial_self_check_gives_each_trial_its_own_outcome(names):
+    kind, _, _, options, _ = CASES[names[0]]
+    fits = [_fitted(*CASES[name]) for name in names]
+    fit = fits[0][0]
+    markers = np.stack([CASES[name][2] for name in names])
+    checked = fit.self_check_many([result for _, result in fits], markers, **options)
+    pinned = _pinned()
+    for name, result in zip(names, checked, strict=True):
+        _assert_as_pinned(_summary(kind, result), pinned[name])
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["--pin"]:
