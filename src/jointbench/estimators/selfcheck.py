@@ -15,6 +15,12 @@ which costs less than the fit itself. The outcome is written into the result:
 * a check that fails without a better point to offer (a fixed point that is not one) sets
   ``converged=False`` and says so in ``status``.
 
+A method whose check can judge many trials at once also gives its fit a
+``self_check_many(results, markers, **options)``: the answers of the trials of ``markers``
+``(T, N, P, 3)`` judged together (neighbours and updates of all trials in one pass, the axis
+methods' restarts in one :func:`jointbench.numerics.simplex.lockstep`), each trial's outcome
+the one ``self_check`` gives it alone.
+
 The simulated studies call the registered functions without these checks (as the papers ran
 their searches), so the published comparisons keep the papers' behaviour, local minima
 included.

@@ -1043,66 +1043,50 @@ def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
 def _bc_update_steps(data: np.ndarray, centers: np.ndarray) -> np.ndarray:
     """How far one more of Halvorsen's updates moves each trial's centre: ``(T,)`` [mm], its
     largest coordinate (``nan`` where the update is not finite), for validated trials ``data``
-    ``(T, N, P, 3)`` [mm] and ``centers`` ``(T, 3)`` [mm] (:func:`_bc_steps`)."""
+    ``(T, N, P, 3)`` [mm] and ``centers`` ``(T, 3)`` [mm]: :func:`_bc_steps` on the moments
+    recomputed from the markers about each centre, not those an iteration used."""
+    means, grams = _moments(data, centers)
     steps = np.empty(len(data))
-    _bc_steps(kernel_array(data), kernel_array(centers), RCOND, steps)
+    _bc_steps(grams, means, data.shape[1], RCOND, steps)
     return steps
 
 
 @kernel
-def _bc_steps(data: np.ndarray, centers: np.ndarray, rcond: float, steps: np.ndarray) -> None:
-    """One of Halvorsen's updates from each centre, computed from the markers about it (not
-    from the moments an iteration used), and the largest coordinate of its shift into
-    ``steps`` (T,) [mm]; ``data`` (T, N, P, 3), ``centers`` (T, 3) [mm]. A compiled kernel
+def _bc_steps(
+    grams: np.ndarray, means: np.ndarray, n_frames: int, rcond: float, steps: np.ndarray
+) -> None:
+    """The largest coordinate of the shift one of Halvorsen's updates makes from a centre,
+    into ``steps`` (T,) [mm], from the moments of :func:`_sphere_moments` about it (``grams``
+    (T, P, 4, 4), ``means`` (T, P, 4)). A compiled kernel
     (:mod:`jointbench.numerics.compiled`): this source is the implementation.
 
-    With ``y = v - c`` about the centre ``c``, the update's shift from ``c`` is
-    ``A^+ (b - 2 sigma^2 sum_p mean_k y^p)``: ``A`` and ``b`` Gamage & Lasenby's normal
-    equations of the ``y`` (as :func:`_ls_solve`, the same pseudo-inverse rule) and
-    ``sigma^2 = mean_p sum_k (|y|^2 - mean_k |y|^2)^2 / (4 N mean_k |y|^2)``, the estimate
-    :func:`_bc_iterations` makes at a zero shift. Moments are summed about each marker's mean
-    (two passes), as :func:`_sphere_moments` sums them.
+    The shift is ``A^+ (b - 2 sigma^2 sum_p mean_k y^p)`` with ``y = v - c``: ``A`` and ``b``
+    Gamage & Lasenby's normal equations of the ``y`` with the pseudo-inverse rule of
+    :func:`_ls_solve`, and ``sigma^2 = mean_p G_p[3, 3] / (4 N mean_k |y^p|^2)``, the
+    estimate :func:`_bc_iterations` makes at a zero shift.
     """
-    n_trials, n_frames, n_markers, _ = data.shape
-    a_matrix, b_vector, mean = np.empty((3, 3)), np.empty(3), np.empty(4)
-    sum_of_means, rows = np.empty(3), np.empty((n_frames, 4))
+    n_trials, n_markers = grams.shape[0], grams.shape[1]
+    a_matrix, b_vector = np.empty((3, 3)), np.empty(3)
     for t in range(n_trials):
-        a_matrix[:] = 0.0
-        b_vector[:] = 0.0
-        sum_of_means[:] = 0.0
         variance = 0.0
         for p in range(n_markers):
-            mean[:] = 0.0
-            for f in range(n_frames):
-                squared = 0.0
-                for i in range(3):
-                    rows[f, i] = data[t, f, p, i] - centers[t, i]
-                    squared += rows[f, i] * rows[f, i]
-                rows[f, 3] = squared
-                for i in range(4):
-                    mean[i] += rows[f, i]
-            for i in range(4):
-                mean[i] /= n_frames
-            spread = 0.0
-            for f in range(n_frames):
-                for i in range(4):
-                    rows[f, i] -= mean[i]
-                spread += rows[f, 3] * rows[f, 3]
-                for i in range(3):
-                    b_vector[i] += rows[f, i] * rows[f, 3]
-                    for j in range(3):
-                        a_matrix[i, j] += rows[f, i] * rows[f, j]
-            variance += spread / (4.0 * n_frames * mean[3])
-            for i in range(3):
-                sum_of_means[i] += mean[i]
+            variance += grams[t, p, 3, 3] / (4.0 * n_frames * means[t, p, 3])
         variance /= n_markers
         for i in range(3):
-            b_vector[i] = b_vector[i] * (1.0 / n_frames) - 2.0 * variance * sum_of_means[i]
+            b_vector[i] = 0.0
+            sum_of_means = 0.0
+            for p in range(n_markers):
+                b_vector[i] += grams[t, p, i, 3]
+                sum_of_means += means[t, p, i]
+            b_vector[i] = b_vector[i] * (1.0 / n_frames) - 2.0 * variance * sum_of_means
             for j in range(3):
+                a_matrix[i, j] = 0.0
+                for p in range(n_markers):
+                    a_matrix[i, j] += grams[t, p, i, j]
                 a_matrix[i, j] = 2.0 * (a_matrix[i, j] * (1.0 / n_frames))
         values, vectors = np.linalg.eigh(a_matrix)
         largest = max(abs(values[0]), abs(values[2]))  # ascending
-        step = 0.0
+        step = 0.0 if math.isfinite(variance) else math.nan
         for i in range(3):
             shift = 0.0
             for k in range(3):
@@ -1111,11 +1095,9 @@ def _bc_steps(data: np.ndarray, centers: np.ndarray, rcond: float, steps: np.nda
                     for j in range(3):
                         along += vectors[j, k] * b_vector[j]
                     shift += vectors[i, k] * along / values[k]
-            # max() would pass over a nan shift; the step must not.
-            step = shift if math.isnan(shift) else max(step, abs(shift))
-            if math.isnan(step):
-                break
-        steps[t] = step if math.isfinite(variance) else math.nan
+            # max() passes over a nan; a nan shift must make the step nan.
+            step = math.nan if math.isnan(shift) else max(step, abs(shift))
+        steps[t] = step
 
 
 def _bc_self_check(result: CenterResult, markers: np.ndarray, **options) -> CenterResult:
