@@ -1100,13 +1100,25 @@ def _bc_steps(
         steps[t] = step
 
 
-def _bc_self_check(result: CenterResult, markers: np.ndarray, **options) -> CenterResult:
+def _bc_self_check(
+    result: CenterResult,
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> CenterResult:
     """Whether BC's answer is its fixed point: one more of Halvorsen's updates, computed from
     the markers about the returned centre (not from the moments the iteration used), must
     move it by at most ``tol_x`` (:func:`_bc_update_steps`). BC has no cost to compare
     (:func:`fit_bc`); the update is its defining equation. See
-    :mod:`jointbench.estimators.selfcheck`. ``options`` are the fit's."""
-    return _bc_self_check_many([result], markers[None], **options)[0]
+    :mod:`jointbench.estimators.selfcheck`."""
+    del max_iterations, tol_fun
+    if not result.converged:
+        return result
+    # A writable copy: the result's read-only centre would cost the kernel a slower one.
+    step = _bc_update_steps(markers[None], np.array(result.center)[None])[0]
+    return _bc_judged(result, float(step), tol_x)
 
 
 def _bc_self_check_many(
@@ -1126,7 +1138,7 @@ def _bc_self_check_many(
     data = markers if isinstance(markers, np.ndarray) else np.stack(markers)
     if len(judged) < len(results):
         data = data[judged]
-    centers = np.stack([np.asarray(results[trial].center) for trial in judged])
+    centers = np.array([results[trial].center for trial in judged])
     checked = list(results)
     for trial, step in zip(judged, _bc_update_steps(data, centers).tolist(), strict=True):
         checked[trial] = _bc_judged(results[trial], step, tol_x)
