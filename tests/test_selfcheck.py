@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from test_selfcheck_sweep import near_hinge_trial, sphere_trial
 
-from jointbench.estimators import axis, registry, sphere
+from jointbench.estimators import axis, registry, selfcheck, sphere
 from jointbench.estimators.results import CenterResult
 from jointbench.estimators.selfcheck import failed, held, lowest_neighbour, restarted
 from jointbench.numerics import poses
@@ -160,3 +160,8 @@ def test_the_outcome_is_written_without_building_the_result_again(monkeypatch):
     assert held(answer, "x") == dataclasses.replace(
         answer, diagnostics={**answer.diagnostics, "self_check": "x"}
     )
+
+
+def test_an_outcome_for_a_field_the_result_lacks_is_refused():
+    with pytest.raises(ValueError, match="CenterResult has no field 'colour'"):
+        selfcheck._with(_result([0.0, 0.0, 0.0], 1.0), colour="red")

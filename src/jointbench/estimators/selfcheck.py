@@ -107,9 +107,9 @@ def _with(result, **changes):
     re-validate the arrays ``result`` already holds, read-only, which costs more than many a
     check (the constructor only freezes arrays, so nothing it does is skipped for these
     fields)."""
-    unknown = set(changes) - set(result.__dataclass_fields__)
-    if unknown:
-        raise ValueError(f"{type(result).__name__} has no field {sorted(unknown)[0]!r}")
+    if not changes.keys() <= result.__dataclass_fields__.keys():
+        unknown = sorted(changes.keys() - result.__dataclass_fields__.keys())
+        raise ValueError(f"{type(result).__name__} has no field {unknown[0]!r}")
     copy = object.__new__(type(result))
     copy.__dict__.update(result.__dict__, **changes)
     return copy
