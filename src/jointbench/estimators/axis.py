@@ -199,7 +199,8 @@ class AxisCosts:
         """The markers ``(N, P, 3)`` [mm] of ``trial``."""
         return self._markers[trial]
 
-    # The radial cost's arrays are made on first use: the planar cost never needs them.
+    # The radial cost's arrays are made on first use, from the markers as they are then: the
+    # planar cost never needs them.
     @functools.cached_property
     def _w(self) -> np.ndarray:
         """Per coordinate, marker-major rows ``(3, n_trials, P N)``: the offsets ``w`` of every
