@@ -15,10 +15,10 @@ import numpy as np
 from jointbench.declared import Point
 from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
-from jointbench.estimators.registry import register, register_many
+from jointbench.estimators.registry import many, register, register_many
 from jointbench.estimators.results import CenterResult
-from jointbench.estimators.sphere import _check_point, _prepared_fits, fit_ls, fit_nm
-from jointbench.estimators.twosegment import fit_score_center
+from jointbench.estimators.sphere import _check_point, _prepared_fits, fit_ls
+from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
 from jointbench.estimators.validation import (
     check_markers,
     check_moves,
@@ -202,14 +202,67 @@ def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     SCoRE centres (SCoRE's is the least-squares point fixed in the segment, the linear
     cousin of MA's); where one is lower by more than fminsearch's TolFun, MA restarted from it
     (one more search, paid only then). See :mod:`jointbench.estimators.selfcheck`."""
-    del start  # the answer is judged, wherever it was started
-    neighbours = {"the LS centre": np.asarray(fit_ls(markers).center)}
-    for name, fit in (("the NM centre", fit_nm), ("the SCoRE centre", fit_score_center)):
-        try:
-            neighbours[name] = np.asarray(fit(markers).center)
-        except ValueError:
-            pass  # that neighbour does not exist for these data; the others remain
-    rotation, translation = _mean_anchored(*rigid_poses(markers)[:2])
+    return _ma_self_check_many([result], markers[None], start)[0]
+
+
+def _ma_self_check_many(
+    results: list[CenterResult], markers: np.ndarray, start=None
+) -> list[CenterResult]:
+    """:func:`_ma_self_check` of MA's answers ``results`` for the trials of ``markers``
+    ``(T, N, P, 3)`` [mm] (or a list of equal-shape trials): the neighbours of all trials
+    from the many-trial forms, SCoRE's and the amplitudes' from one pose fit (each trial's
+    poses are those it has alone)."""
+    del start  # each answer is judged, wherever it was started
+    data = markers if isinstance(markers, np.ndarray) else np.stack(markers)
+    poses = trial_poses({"markers": data}, min_frames=POSE_MIN_FRAMES)
+    centres = {
+        "the LS centre": many("center", "LS", checked=False)(data),
+        "the NM centre": many("center", "NM", checked=False)(data),
+        "the SCoRE centre": many("center", "SCoRE", checked=False)(data, poses=poses),
+    }
+    if isinstance(centres["the LS centre"][0], ValueError):
+        raise centres["the LS centre"][0]  # as the one-trial fit would
+    rotation, translation = _mean_anchored(*_segment_poses(data, poses))
+    return [
+        _ma_judged(
+            result,
+            data[trial],
+            {
+                name: np.asarray(outcomes[trial].center)
+                for name, outcomes in centres.items()
+                if not isinstance(outcomes[trial], ValueError)
+            },
+            rotation[trial],
+            translation[trial],
+        )
+        for trial, result in enumerate(results)
+    ]
+
+
+def _segment_poses(data: np.ndarray, poses: list) -> tuple[np.ndarray, np.ndarray]:
+    """Rotations ``(T, N, 3, 3)`` and translations ``(T, N, 3)`` [mm] of the trials ``data``
+    from their :func:`trial_poses`; a trial those refuse (its body-fixed coordinates collinear)
+    gets its own :func:`rigid_poses`, as MA's fit does."""
+    rotations, translations = [], []
+    for trial, fitted in enumerate(poses):
+        if isinstance(fitted, ValueError):
+            rotation, translation = rigid_poses(data[trial])[:2]
+        else:
+            rotation, translation = fitted["markers"].rotation, fitted["markers"].translation
+        rotations.append(rotation)
+        translations.append(translation)
+    return np.stack(rotations), np.stack(translations)
+
+
+def _ma_judged(
+    result: CenterResult,
+    markers: np.ndarray,
+    neighbours: dict[str, np.ndarray],
+    rotation: np.ndarray,
+    translation: np.ndarray,
+) -> CenterResult:
+    """``result`` judged against the amplitudes at its ``neighbours`` (each ``(3,)`` [mm]) in
+    the trial's mean-anchored poses ``rotation`` ``(N, 3, 3)``, ``translation`` ``(N, 3)``."""
     points = np.stack(list(neighbours.values()))
     costs = _amplitudes(points, rotation[None], translation[None], np.zeros(len(points), dtype=int))
     return selfcheck.lowest_neighbour(
@@ -224,4 +277,5 @@ def _ma_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
 
 
 fit_ma.self_check = _ma_self_check
+fit_ma.self_check_many = _ma_self_check_many
 register_many("center", "MA", isolated(_fit_ma_batch))

@@ -79,6 +79,7 @@ is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_betw
 
 from __future__ import annotations
 
+import functools
 import math
 import typing
 from collections.abc import Callable
@@ -191,11 +192,27 @@ class AxisCosts:
             centred = data - data.mean(axis=0)
             self.scatter[trial] = np.einsum("kpi,kpj->ij", centred, centred)
         self.point = point
-        # Per coordinate, marker-major rows (n_trials, P N): the offsets w of every sample.
-        offsets = np.transpose(markers - point[:, None, None, :], (3, 0, 2, 1))
-        self._w = np.ascontiguousarray(offsets).reshape(3, n_trials, -1)
-        self._w_sq = self._w[0] * self._w[0] + self._w[1] * self._w[1] + self._w[2] * self._w[2]
+        self._markers = markers
         self._shape = (n_markers, n_frames)
+
+    def trial_markers(self, trial: int) -> np.ndarray:
+        """The markers ``(N, P, 3)`` [mm] of ``trial``."""
+        return self._markers[trial]
+
+    # The radial cost's arrays are made on first use, from the markers as they are then: the
+    # planar cost never needs them.
+    @functools.cached_property
+    def _w(self) -> np.ndarray:
+        """Per coordinate, marker-major rows ``(3, n_trials, P N)``: the offsets ``w`` of every
+        sample [mm]."""
+        offsets = np.transpose(self._markers - self.point[:, None, None, :], (3, 0, 2, 1))
+        return np.ascontiguousarray(offsets).reshape(3, len(self.point), -1)
+
+    @functools.cached_property
+    def _w_sq(self) -> np.ndarray:
+        """``|w|^2`` of every sample ``(n_trials, P N)`` [mm^2]."""
+        w = self._w
+        return w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
 
     @staticmethod
     def _trials(directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
@@ -252,17 +269,50 @@ class AxisCosts:
         """Cost of a batch of search parameters, ``(k, 2)`` angles or ``(k, 3)`` vectors, whose
         searches ``owners`` ``(k,)`` belong to the trials ``trial_of(owners)``."""
         cost = {"planar": self.planar, "radial": self.radial, "combined": self.combined}[method]
-        if parameterisation == "angles":
-            return lambda params, owners: cost(angles_to_directions(params), trial_of(owners))
+        return _of_parameters(
+            lambda directions, owners: cost(directions, trial_of(owners)), parameterisation
+        )
 
-        def cost_vector(params: np.ndarray, owners: np.ndarray) -> np.ndarray:
-            norm = np.linalg.norm(params, axis=1)
-            zero = norm == 0.0
-            value = cost(params / np.where(zero, 1.0, norm)[:, None], trial_of(owners))
-            value[zero] = np.inf
-            return value
+    def search_cost(
+        self, method: str, parameterisation: str
+    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """:meth:`batch_cost` of one search per trial (``owners`` are the trials), each cost
+        computed by the same operations, without the checks of the public costs: for few
+        searches, whose every evaluation would pay them (the self-check's restarts)."""
+        n_markers = self._shape[0]
 
-        return cost_vector
+        def cost(directions: np.ndarray, trials: np.ndarray) -> np.ndarray:
+            directions = kernel_array(directions)
+            if method != "planar":
+                radial = np.empty(len(directions))
+                _radial_costs(
+                    self._w, self._w_sq, directions, trials, n_markers, radial, _NO_DISTANCES
+                )
+                if method == "radial":
+                    return radial
+            planar = np.einsum("ki,kij,kj->k", directions, self.scatter[trials], directions)
+            return planar if method == "planar" else planar + radial
+
+        return _of_parameters(cost, parameterisation)
+
+
+def _of_parameters(
+    cost: Callable[[np.ndarray, np.ndarray], np.ndarray], parameterisation: str
+) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """``cost(directions, owners)`` of unit directions ``(k, 3)`` as the cost of search
+    parameters ``(k, 2)`` angles or ``(k, 3)`` vectors (module notes); a zero vector costs
+    ``inf``."""
+    if parameterisation == "angles":
+        return lambda params, owners: cost(angles_to_directions(params), owners)
+
+    def cost_vector(params: np.ndarray, owners: np.ndarray) -> np.ndarray:
+        norm = np.linalg.norm(params, axis=1)
+        zero = norm == 0.0
+        value = cost(params / np.where(zero, 1.0, norm)[:, None], owners)
+        value[zero] = np.inf
+        return value
+
+    return cost_vector
 
 
 # ``_radial_costs`` stores no distances when given this.
@@ -524,8 +574,17 @@ def _entry(solve: Callable, method: str) -> Callable:
     return entry
 
 
-def _self_check(
-    result: AxisResult,
+def _self_check(result: AxisResult, markers: np.ndarray, **search) -> AxisResult:
+    """The ten-start answer against one more search, started from the planar cost's closed-form
+    minimum (the eigenvector of the smallest eigenvalue of ``S``, Gamage & Lasenby's axis):
+    a closed-form neighbour of every axis cost, exact for a noise-free hinge, where the radial
+    term's local minima can capture all ten starts (module notes). One search more than the
+    fit's ten (:mod:`jointbench.estimators.selfcheck`). ``search`` are the fit's options."""
+    return _self_check_many([result], markers[None], **search)[0]
+
+
+def _self_check_many(
+    results: list[AxisResult],
     markers: np.ndarray,
     *,
     point: object | None = None,
@@ -534,29 +593,39 @@ def _self_check(
     fatol: float = FATOL,
     max_iter: int | None = None,
     max_fev: int | None = None,
-) -> AxisResult:
-    """The ten-start answer against one more search, started from the planar cost's closed-form
-    minimum (the eigenvector of the smallest eigenvalue of ``S``, Gamage & Lasenby's axis):
-    a closed-form neighbour of every axis cost, exact for a noise-free hinge, where the radial
-    term's local minima can capture all ten starts (module notes). One search more than the
-    fit's ten (:mod:`jointbench.estimators.selfcheck`)."""
-    del point  # the result's point is the one searched with
-    method = result.method
-    costs = AxisCosts(markers, np.asarray(result.point))
-    eigenvector = np.asarray(result.diagnostics["eigenvector"])
-    start = (
-        np.array([direction_to_angles(eigenvector)])
-        if parameterisation == "angles"
-        else eigenvector[None]
+) -> list[AxisResult]:
+    """:func:`_self_check` of the answers ``results`` of one method for the trials of
+    ``markers`` ``(T, N, P, 3)`` [mm] (or a list of equal-shape trials), their restarts
+    searched together, each on its own path (:func:`jointbench.numerics.simplex.lockstep`):
+    each trial's outcome is the one it has alone."""
+    del point  # each result's point is the one searched with
+    method = results[0].method
+    costs = AxisCosts(
+        markers if isinstance(markers, np.ndarray) else np.stack(markers),
+        np.stack([np.asarray(result.point) for result in results]),
     )
-    run = lockstep(
-        costs.batch_cost(method, parameterisation, lambda owners: owners),
-        start,
+    eigenvectors = [np.asarray(result.diagnostics["eigenvector"]) for result in results]
+    starts = (
+        np.array([direction_to_angles(eigenvector) for eigenvector in eigenvectors])
+        if parameterisation == "angles"
+        else np.stack(eigenvectors)
+    )
+    runs = lockstep(
+        costs.search_cost(method, parameterisation),
+        starts,
         xatol=xatol,
         fatol=fatol,
         max_iter=max_iter,
         max_fev=max_fev,
     )
+    return [
+        _judged(result, costs, trial, runs[trial : trial + 1], parameterisation, fatol)
+        for trial, result in enumerate(results)
+    ]
+
+
+def _judged(result, costs, trial, run, parameterisation, fatol) -> AxisResult:
+    """``result`` of ``trial`` judged against the ``run`` of its restart (:func:`_self_check`)."""
     restart_cost = float(run[0][1])
     if not restart_cost < result.cost - fatol:
         return selfcheck.held(
@@ -564,7 +633,8 @@ def _self_check(
             f"a restart from the planar-cost eigenvector reached {restart_cost:.6g}, not below "
             f"the answer's {result.cost:.6g} by more than fatol = {fatol:g}",
         )
-    better = _result(markers, 0, costs, run, method, parameterisation)
+    array = costs.trial_markers(trial)
+    better = _result(array, trial, costs, run, result.method, parameterisation)
     angle = angle_between_lines_deg(better.direction, result.direction)
     return selfcheck.restarted(
         result,
@@ -579,6 +649,7 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
     fit.self_check = _self_check
+    fit.self_check_many = _self_check_many
     return fit
 
 

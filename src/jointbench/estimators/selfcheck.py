@@ -15,6 +15,12 @@ which costs less than the fit itself. The outcome is written into the result:
 * a check that fails without a better point to offer (a fixed point that is not one) sets
   ``converged=False`` and says so in ``status``.
 
+A method whose check can judge many trials at once also gives its fit a
+``self_check_many(results, markers, **options)``: the answers of the trials of ``markers``
+``(T, N, P, 3)`` judged together (neighbours and updates of all trials in one pass, the axis
+methods' restarts in one :func:`jointbench.numerics.simplex.lockstep`), each trial's outcome
+the one ``self_check`` gives it alone.
+
 The simulated studies call the registered functions without these checks (as the papers ran
 their searches), so the published comparisons keep the papers' behaviour, local minima
 included.
@@ -22,7 +28,6 @@ included.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Mapping
 
 import numpy as np
@@ -65,7 +70,7 @@ def lowest_neighbour(
 
 def held(result, evidence: str):
     """``result`` with the evidence that its minimum held in ``diagnostics["self_check"]``."""
-    return dataclasses.replace(result, diagnostics={**result.diagnostics, "self_check": evidence})
+    return _with(result, diagnostics={**result.diagnostics, "self_check": evidence})
 
 
 def restarted(result, better, source: str, moved: str):
@@ -83,7 +88,7 @@ def restarted(result, better, source: str, moved: str):
         "self_check": evidence,
         "local_minimum_cost": result.cost,
     }
-    return dataclasses.replace(better, status=status, diagnostics=diagnostics)
+    return _with(better, status=status, diagnostics=diagnostics)
 
 
 def failed(result, evidence: str):
@@ -92,4 +97,19 @@ def failed(result, evidence: str):
     if result.status != "ok":
         status = f"{result.status}; {status}"
     diagnostics = {**result.diagnostics, "self_check": evidence}
-    return dataclasses.replace(result, converged=False, status=status, diagnostics=diagnostics)
+    return _with(result, converged=False, status=status, diagnostics=diagnostics)
+
+
+def _with(result, **changes):
+    """``result`` (a frozen result dataclass) with ``changes`` to fields that hold no array.
+
+    As ``dataclasses.replace`` gives it, without running the constructor again: that would
+    re-validate the arrays ``result`` already holds, read-only, which costs more than many a
+    check (the constructor only freezes arrays, so nothing it does is skipped for these
+    fields)."""
+    if not changes.keys() <= result.__dataclass_fields__.keys():
+        unknown = sorted(changes.keys() - result.__dataclass_fields__.keys())
+        raise ValueError(f"{type(result).__name__} has no field {unknown[0]!r}")
+    copy = object.__new__(type(result))
+    copy.__dict__.update(result.__dict__, **changes)
+    return copy

@@ -1040,6 +1040,66 @@ def _is_self_check(result: CenterResult, markers: np.ndarray, start=None) -> Cen
     )
 
 
+def _bc_update_steps(data: np.ndarray, centers: np.ndarray) -> np.ndarray:
+    """How far one more of Halvorsen's updates moves each trial's centre: ``(T,)`` [mm], its
+    largest coordinate (``nan`` where the update is not finite), for validated trials ``data``
+    ``(T, N, P, 3)`` [mm] and ``centers`` ``(T, 3)`` [mm]: :func:`_bc_steps` on the moments
+    recomputed from the markers about each centre, not those an iteration used."""
+    means, grams = _moments(data, centers)
+    steps = np.empty(len(data))
+    _bc_steps(grams, means, data.shape[1], RCOND, steps)
+    return steps
+
+
+@kernel
+def _bc_steps(
+    grams: np.ndarray, means: np.ndarray, n_frames: int, rcond: float, steps: np.ndarray
+) -> None:
+    """The largest coordinate of the shift one of Halvorsen's updates makes from a centre,
+    into ``steps`` (T,) [mm], from the moments of :func:`_sphere_moments` about it (``grams``
+    (T, P, 4, 4), ``means`` (T, P, 4)). A compiled kernel
+    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+
+    The shift is ``A^+ (b - 2 sigma^2 sum_p mean_k y^p)`` with ``y = v - c``: ``A`` and ``b``
+    Gamage & Lasenby's normal equations of the ``y`` with the pseudo-inverse rule of
+    :func:`_ls_solve`, and ``sigma^2 = mean_p G_p[3, 3] / (4 N mean_k |y^p|^2)``, the
+    estimate :func:`_bc_iterations` makes at a zero shift.
+    """
+    n_trials, n_markers = grams.shape[0], grams.shape[1]
+    a_matrix, b_vector = np.empty((3, 3)), np.empty(3)
+    for t in range(n_trials):
+        variance = 0.0
+        for p in range(n_markers):
+            variance += grams[t, p, 3, 3] / (4.0 * n_frames * means[t, p, 3])
+        variance /= n_markers
+        for i in range(3):
+            b_vector[i] = 0.0
+            sum_of_means = 0.0
+            for p in range(n_markers):
+                b_vector[i] += grams[t, p, i, 3]
+                sum_of_means += means[t, p, i]
+            b_vector[i] = b_vector[i] * (1.0 / n_frames) - 2.0 * variance * sum_of_means
+            for j in range(3):
+                a_matrix[i, j] = 0.0
+                for p in range(n_markers):
+                    a_matrix[i, j] += grams[t, p, i, j]
+                a_matrix[i, j] = 2.0 * (a_matrix[i, j] * (1.0 / n_frames))
+        values, vectors = np.linalg.eigh(a_matrix)
+        largest = max(abs(values[0]), abs(values[2]))  # ascending
+        step = 0.0 if math.isfinite(variance) else math.nan
+        for i in range(3):
+            shift = 0.0
+            for k in range(3):
+                if abs(values[k]) > rcond * largest:
+                    along = 0.0
+                    for j in range(3):
+                        along += vectors[j, k] * b_vector[j]
+                    shift += vectors[i, k] * along / values[k]
+            # max() passes over a nan; a nan shift must make the step nan.
+            step = math.nan if math.isnan(shift) else max(step, abs(shift))
+        steps[t] = step
+
+
 def _bc_self_check(
     result: CenterResult,
     markers: np.ndarray,
@@ -1050,23 +1110,44 @@ def _bc_self_check(
 ) -> CenterResult:
     """Whether BC's answer is its fixed point: one more of Halvorsen's updates, computed from
     the markers about the returned centre (not from the moments the iteration used), must
-    move it by at most ``tol_x``. BC has no cost to compare (:func:`fit_bc`); the update is
-    its defining equation. See :mod:`jointbench.estimators.selfcheck`."""
+    move it by at most ``tol_x`` (:func:`_bc_update_steps`). BC has no cost to compare
+    (:func:`fit_bc`); the update is its defining equation. See
+    :mod:`jointbench.estimators.selfcheck`."""
     del max_iterations, tol_fun
     if not result.converged:
         return result
-    n_frames = markers.shape[0]
-    # About the returned centre c: y = v - c, and the update's shift from c is
-    # A^+ (b_y - 2 sigma^2 sum_p mean_k y^p) (A does not change with the shift).
-    offsets = markers - np.asarray(result.center)
-    a_matrix, b_vector = ls_system(offsets)
-    squared = np.einsum("kpi,kpi->kp", offsets, offsets)
-    mean_squared = squared.mean(axis=0)
-    sigma2 = float(
-        np.mean(((squared - mean_squared) ** 2).sum(axis=0) / (4.0 * mean_squared * n_frames))
-    )
-    compensation = 2.0 * sigma2 * offsets.mean(axis=0).sum(axis=0)
-    step = float(np.abs(solve_ls_system(a_matrix, b_vector - compensation)).max())
+    # A writable copy: the result's read-only centre would cost the kernel a slower one.
+    step = _bc_update_steps(markers[None], np.array(result.center)[None])[0]
+    return _bc_judged(result, float(step), tol_x)
+
+
+def _bc_self_check_many(
+    results: list[CenterResult],
+    markers: np.ndarray,
+    *,
+    max_iterations: int = 600,
+    tol_x: float = 1e-4,
+    tol_fun: float = 1e-4,
+) -> list[CenterResult]:
+    """:func:`_bc_self_check` of BC's answers ``results`` for the trials of ``markers``
+    ``(T, N, P, 3)`` [mm] (or a list of equal-shape trials), the updates computed together."""
+    del max_iterations, tol_fun
+    judged = [trial for trial, result in enumerate(results) if result.converged]
+    if not judged:
+        return list(results)
+    data = markers if isinstance(markers, np.ndarray) else np.stack(markers)
+    if len(judged) < len(results):
+        data = data[judged]
+    centers = np.array([results[trial].center for trial in judged])
+    checked = list(results)
+    for trial, step in zip(judged, _bc_update_steps(data, centers).tolist(), strict=True):
+        checked[trial] = _bc_judged(results[trial], step, tol_x)
+    return checked
+
+
+def _bc_judged(result: CenterResult, step: float, tol_x: float) -> CenterResult:
+    """``result``, whose next update moves it by ``step`` [mm], held or failed against
+    ``tol_x``."""
     if step <= tol_x:
         return selfcheck.held(
             result,
@@ -1082,6 +1163,7 @@ def _bc_self_check(
 
 fit_is.self_check = _is_self_check
 fit_bc.self_check = _bc_self_check
+fit_bc.self_check_many = _bc_self_check_many
 register_many("center", "LS", isolated(_fit_ls_batch))
 register_many("center", "NM", isolated(_fit_nm_batch))
 register_many("center", "BC", isolated(_fit_bc_batch))
