@@ -157,6 +157,18 @@ def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
     return check(result, *arrays, **{k: v for k, v in options.items() if k != "poses"})
 
 
+def _self_checked_many(fn: Callable, results: list, stacked: tuple, options: dict) -> list:
+    """:func:`_self_checked` of many trials' ``results`` on their arrays ``stacked``
+    ``(T, N, n, 3)`` each: all trials in one call where the method has ``self_check_many``."""
+    check_many = getattr(fn, "self_check_many", None)
+    if check_many is None:
+        return [
+            _self_checked(fn, result, tuple(array[t] for array in stacked), options)
+            for t, result in enumerate(results)
+        ]
+    return check_many(results, *stacked, **{k: v for k, v in options.items() if k != "poses"})
+
+
 def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
     """A many-trial form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
     returning per trial a result or the exception) with the checks of :func:`_checked` per
@@ -168,21 +180,19 @@ def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., l
     def checked_many(*segments: object, **options: object) -> list:
         outcomes = list(raw(*segments, **options))
         checked = validation.check_input_many(kind, segments, len(outcomes))
-        self_checks = hasattr(raw_fn, "self_check")
         fitted = []
         for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
             # As for one trial: the input checks come first and their error wins.
             if error is not None:
                 outcomes[trial] = error
             elif not isinstance(outcome, Exception):
-                if self_checks:
-                    arrays = checked.arrays(trial)
-                    outcomes[trial] = _self_checked(raw_fn, outcome, arrays, options)
                 fitted.append(trial)
         if fitted:
-            verdicts = support.assess_many(kind, checked.stacked(fitted))
-            for trial, verdict in zip(fitted, verdicts, strict=True):
-                outcomes[trial] = support.annotate(outcomes[trial], verdict)
+            stacked = checked.stacked(fitted)
+            results = _self_checked_many(raw_fn, [outcomes[t] for t in fitted], stacked, options)
+            verdicts = support.assess_many(kind, stacked)
+            for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
+                outcomes[trial] = support.annotate(result, verdict)
         return outcomes
 
     return checked_many
