@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from test_selfcheck_sweep import near_hinge_trial, sphere_trial
 
-from jointbench.estimators import axis, registry, selfcheck, sphere
-from jointbench.estimators.results import CenterResult
+from jointbench.estimators import axis, registry, sphere
+from jointbench.estimators.results import CenterResult, with_fields
 from jointbench.estimators.selfcheck import failed, held, lowest_neighbour, restarted
 from jointbench.numerics import poses
 
@@ -164,4 +164,4 @@ def test_the_outcome_is_written_without_building_the_result_again(monkeypatch):
 
 def test_an_outcome_for_a_field_the_result_lacks_is_refused():
     with pytest.raises(ValueError, match="CenterResult has no field 'colour'"):
-        selfcheck._with(_result([0.0, 0.0, 0.0], 1.0), colour="red")
+        with_fields(_result([0.0, 0.0, 0.0], 1.0), colour="red")

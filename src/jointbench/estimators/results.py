@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["AxisResult", "CenterResult", "JointCenterResult", "frozen_rows"]
+__all__ = ["AxisResult", "CenterResult", "JointCenterResult", "frozen_rows", "with_fields"]
 
 
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
@@ -90,3 +90,18 @@ class JointCenterResult(_Result):
     def __post_init__(self) -> None:
         object.__setattr__(self, "center", _frozen_array(self.center))
         object.__setattr__(self, "covariance", _frozen_array(self.covariance))
+
+
+def with_fields(result, **changes):
+    """``result`` (a frozen result dataclass) with ``changes`` to fields that hold no array.
+
+    As ``dataclasses.replace`` gives it, without running the constructor again: that would
+    re-validate the arrays ``result`` already holds, read-only, which costs more than many a
+    check (the constructor only freezes arrays, so nothing it does is skipped for these
+    fields)."""
+    if not changes.keys() <= result.__dataclass_fields__.keys():
+        unknown = sorted(changes.keys() - result.__dataclass_fields__.keys())
+        raise ValueError(f"{type(result).__name__} has no field {unknown[0]!r}")
+    copy = object.__new__(type(result))
+    copy.__dict__.update(result.__dict__, **changes)
+    return copy

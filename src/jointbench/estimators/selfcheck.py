@@ -32,6 +32,8 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
+from jointbench.estimators.results import with_fields
+
 __all__ = ["failed", "held", "lowest_neighbour", "restarted"]
 
 
@@ -70,7 +72,7 @@ def lowest_neighbour(
 
 def held(result, evidence: str):
     """``result`` with the evidence that its minimum held in ``diagnostics["self_check"]``."""
-    return _with(result, diagnostics={**result.diagnostics, "self_check": evidence})
+    return with_fields(result, diagnostics={**result.diagnostics, "self_check": evidence})
 
 
 def restarted(result, better, source: str, moved: str):
@@ -88,7 +90,7 @@ def restarted(result, better, source: str, moved: str):
         "self_check": evidence,
         "local_minimum_cost": result.cost,
     }
-    return _with(better, status=status, diagnostics=diagnostics)
+    return with_fields(better, status=status, diagnostics=diagnostics)
 
 
 def failed(result, evidence: str):
@@ -97,19 +99,4 @@ def failed(result, evidence: str):
     if result.status != "ok":
         status = f"{result.status}; {status}"
     diagnostics = {**result.diagnostics, "self_check": evidence}
-    return _with(result, converged=False, status=status, diagnostics=diagnostics)
-
-
-def _with(result, **changes):
-    """``result`` (a frozen result dataclass) with ``changes`` to fields that hold no array.
-
-    As ``dataclasses.replace`` gives it, without running the constructor again: that would
-    re-validate the arrays ``result`` already holds, read-only, which costs more than many a
-    check (the constructor only freezes arrays, so nothing it does is skipped for these
-    fields)."""
-    if not changes.keys() <= result.__dataclass_fields__.keys():
-        unknown = sorted(changes.keys() - result.__dataclass_fields__.keys())
-        raise ValueError(f"{type(result).__name__} has no field {unknown[0]!r}")
-    copy = object.__new__(type(result))
-    copy.__dict__.update(result.__dict__, **changes)
-    return copy
+    return with_fields(result, converged=False, status=status, diagnostics=diagnostics)

@@ -72,7 +72,6 @@ of motion with large noise, is warned about, not dropped from a study).
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 import operator
@@ -80,6 +79,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jointbench.estimators.results import with_fields
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
@@ -1026,4 +1026,4 @@ def annotate(result, support: Support):
         status = words if status == "ok" else f"{status}; {words}"
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
     diagnostics = {**result.diagnostics, **numbers}
-    return dataclasses.replace(result, status=status, diagnostics=diagnostics)
+    return with_fields(result, status=status, diagnostics=diagnostics)
