@@ -116,11 +116,20 @@ def symmetric_eigen(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                     kp, kq = vectors[k, p], vectors[k, q]
                     vectors[k, p] = c * kp - s * kq
                     vectors[k, q] = s * kp + c * kq
+    # Ascending by selection, swapping the eigenvectors along (n is a few).
     values = np.empty(n)
     for i in range(n):
         values[i] = a[i, i]
-    order = np.argsort(values)
-    return values[order], vectors[:, order]
+    for i in range(n - 1):
+        least = i
+        for j in range(i + 1, n):
+            if values[j] < values[least]:
+                least = j
+        if least != i:
+            values[i], values[least] = values[least], values[i]
+            for k in range(n):
+                vectors[k, i], vectors[k, least] = vectors[k, least], vectors[k, i]
+    return values, vectors
 
 
 @kernel
