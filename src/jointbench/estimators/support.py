@@ -402,6 +402,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     centred = np.empty((n_markers, 3))
     squared = np.empty((n_markers, n_markers))
     mean_d = np.empty(n_pairs)
+    mean_sq = np.empty(n_pairs)
     gram = np.empty((n_markers, n_markers))
     g = np.empty((n_pairs, n_pairs))
     axes = np.empty((2, 3))
@@ -493,63 +494,77 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                             scatter_d[s, p, q] += delta[p] * delta[q]
             # Per set: the distances' residual from a rigid figure to first order,
             # sum_k dd_k' G+ dd_k with G = J J' (J the distances' Jacobian at the mean
-            # figure, whose entries the mean distances give by the law of cosines).
+            # figure, whose entries the mean distances give by the law of cosines). The
+            # cluster's own (set 0) is taken twice: the second time, and for the projections,
+            # from the mean squared distances less their noise (2 dim s^2 per pair), and a
+            # mode counts as shape only where its first-order signal is 3 times the
+            # second-order one, s^2 / d (d the RMS distance), which noise adds to a flex.
             for s in range(first_set, last_set):
+                dim = 3 if s == 0 else 2
                 for p in range(n_pairs):
-                    mean_d[p] = first_d[s, p] + sum_d[s, p] / n_frames
+                    mean_sq[p] = first_d[s, p] ** 2 + 2.0 * first_d[s, p] * sum_d[s, p] / n_frames
+                    mean_sq[p] += (scatter_d[s, p, p] + sum_d[s, p] ** 2 / n_frames) / n_frames
                     for q in range(p, n_pairs):
                         value = scatter_d[s, p, q] - sum_d[s, p] * sum_d[s, q] / n_frames
                         scatter_d[s, p, q] = value
                         scatter_d[s, q, p] = value
-                squared[:] = 0.0
-                for p in range(n_pairs):
-                    squared[pair_a[p], pair_b[p]] = mean_d[p] ** 2
-                    squared[pair_b[p], pair_a[p]] = mean_d[p] ** 2
-                for p in range(n_pairs):
-                    a, b = pair_a[p], pair_b[p]
-                    for q in range(n_pairs):
-                        c, d = pair_a[q], pair_b[q]
-                        shared = int(a == c) - int(a == d) - int(b == c) + int(b == d)
-                        if shared == 0 or mean_d[p] == 0.0 or mean_d[q] == 0.0:
-                            g[p, q] = 0.0
+                for refined in range(2 if s == 0 else 1):
+                    corrected = refined == 1 or s > 0
+                    bias = 2.0 * dim * variance if corrected else 0.0
+                    rms_sq = 0.0
+                    squared[:] = 0.0
+                    for p in range(n_pairs):
+                        if corrected:
+                            mean_d[p] = np.sqrt(max(mean_sq[p] - bias, 0.0))
                         else:
-                            dot = 0.5 * (squared[a, d] + squared[b, c])
-                            dot -= 0.5 * (squared[a, c] + squared[b, d])
-                            g[p, q] = shared * dot / (mean_d[p] * mean_d[q])
-                strength, modes = symmetric_eigen(g)
-                residual[s] = 0.0
-                rank[s] = 0
-                for k in range(n_pairs):
-                    if strength[k] > flex * strength[n_pairs - 1]:
-                        rank[s] += 1
-                        value = 0.0
-                        for p in range(n_pairs):
-                            for q in range(n_pairs):
-                                value += modes[p, k] * scatter_d[s, p, q] * modes[q, k]
-                        residual[s] += value / strength[k]
+                            mean_d[p] = first_d[s, p] + sum_d[s, p] / n_frames
+                        squared[pair_a[p], pair_b[p]] = mean_d[p] ** 2
+                        squared[pair_b[p], pair_a[p]] = mean_d[p] ** 2
+                        rms_sq += mean_d[p] ** 2 / n_pairs
+                    for p in range(n_pairs):
+                        a, b = pair_a[p], pair_b[p]
+                        for q in range(n_pairs):
+                            c, d = pair_a[q], pair_b[q]
+                            shared = int(a == c) - int(a == d) - int(b == c) + int(b == d)
+                            if shared == 0 or mean_d[p] == 0.0 or mean_d[q] == 0.0:
+                                g[p, q] = 0.0
+                            else:
+                                dot = 0.5 * (squared[a, d] + squared[b, c])
+                                dot -= 0.5 * (squared[a, c] + squared[b, d])
+                                g[p, q] = shared * dot / (mean_d[p] * mean_d[q])
+                    strength, modes = symmetric_eigen(g)
+                    weakest_mode = flex * strength[n_pairs - 1]
+                    if corrected and rms_sq > 0.0:
+                        weakest_mode = max(weakest_mode, 9.0 * variance / rms_sq)
+                    residual[s] = 0.0
+                    rank[s] = 0
+                    for k in range(n_pairs):
+                        if strength[k] > weakest_mode:
+                            rank[s] += 1
+                            value = 0.0
+                            for p in range(n_pairs):
+                                for q in range(n_pairs):
+                                    value += modes[p, k] * scatter_d[s, p, q] * modes[q, k]
+                            residual[s] += value / strength[k]
+                    if s == 0:
+                        variance = residual[0] / max(rank[0] * (n_frames - 1), 1)
                 if s > 0:
                     # A projection that keeps no plane figure (its residual is the share of
                     # its scatter that makes markers "not one rigid body") is no hinge's: the
                     # first-order residual would not measure its departure from one.
                     scatter_2d = 0.0
                     for p in range(n_pairs):
-                        scatter_2d += (
-                            first_d[s, p] ** 2 + 2.0 * first_d[s, p] * sum_d[s, p] / n_frames
-                        )
-                        scatter_2d += (scatter_d[s, p, p] + sum_d[s, p] ** 2 / n_frames) / n_frames
+                        scatter_2d += mean_sq[p]
                     per_dof = residual[s] / max(rank[s] * (n_frames - 1), 1)
                     spread_2d = scatter_2d / n_markers / (2 * (n_markers - 1))
                     flat[s - 1] = per_dof >= MAX_NONRIGID_SHARE * spread_2d
             if stage == 1:
                 break
-            variance = residual[0] / max(rank[0] * (n_frames - 1), 1)
             # The mean shape's principal moments by classical scaling of the mean squared
             # distances less their noise (6 s^2 per pair).
             for p in range(n_pairs):
-                mean_sq = first_d[0, p] ** 2 + 2.0 * first_d[0, p] * sum_d[0, p] / n_frames
-                mean_sq += (scatter_d[0, p, p] + sum_d[0, p] ** 2 / n_frames) / n_frames
-                squared[pair_a[p], pair_b[p]] = mean_sq - 6.0 * variance
-                squared[pair_b[p], pair_a[p]] = mean_sq - 6.0 * variance
+                squared[pair_a[p], pair_b[p]] = mean_sq[p] - 6.0 * variance
+                squared[pair_b[p], pair_a[p]] = mean_sq[p] - 6.0 * variance
             for a in range(n_markers):
                 squared[a, a] = 0.0
             total = 0.0
