@@ -19,7 +19,7 @@ of two markers of an isosceles triangle keeps the shape).
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
 need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
 a complete cluster whose residuals a bound keeps below ``min_residual_mm``
-(:func:`surely_rigid`, two pose fits) it skips the iterated mean shape.
+(:func:`surely_rigid`, one pose fit) it skips the iterated mean shape.
 """
 
 from __future__ import annotations
@@ -538,46 +538,88 @@ def surely_rigid(
 ) -> bool:
     """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
     ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
-    is too loose), not broken.
+    is too loose), not broken. One pose fit, of the typical frame ``T``.
 
-    ``screen`` flags nothing when every residual from the typical frame ``T`` and from the
-    mean shape ``S`` is at most ``rules.min_residual_mm``. The first are computed; the second
-    are bounded without iterating to ``S``. With ``d_f(A)`` frame ``f``'s residual norm from
-    shape ``A`` in its best pose, ``d(A, B)`` the least norm between poses of two shapes and
-    ``S1`` the mean shape's first iterate (the mean of the frames taken to ``T``'s poses):
-    ``r_fm(S) <= d_f(S) <= d_f(S1) + d(S1, S)``; averaging ``d(S1, S) <= d_g(S1) + d_g(S)``
-    over frames ``g`` and bounding the mean of ``d_g(S)`` by its root mean square, which no
-    iterate after ``S1`` increases, gives ``d(S1, S) <= mean d_g(S1) + rms d_g(S1)``.
+    ``screen`` flags nothing when every residual from ``T`` and from the mean shape ``S`` is at
+    most ``rules.min_residual_mm``. The first are computed; the second are bounded without
+    iterating to ``S``. Notation: ``d_f(A)`` is frame ``f``'s residual norm from shape ``A`` in
+    its best pose, ``d(A, B)`` the least norm between poses of two shapes, ``J(A)`` the mean
+    of ``d_f(A)^2``, ``y_f`` frame ``f`` taken into ``T``'s pose in it, ``M`` the mean of the
+    ``y_f`` and ``u_f = |y_f - M| >= d_f(M)`` (a pose, not the best, of ``M``).
+
+    1. Per marker: a best pose matches the centroids, so the residual vectors ``e_m`` of a
+       frame sum to zero; then ``|e_m|^2 = |sum of the others|^2 <= (n - 1) (d^2 - |e_m|^2)``,
+       and ``r_fm(S) <= c d_f(S)`` with ``c = sqrt((n - 1) / n)``.
+    2. ``d_f(S) <= d_f(M) + d(M, S) <= u_f + d(M, S)``, and averaging
+       ``d(M, S) <= d_g(M) + d_g(S)`` over the frames ``g`` gives
+       ``d(M, S) <= mean u + rms d(S)``.
+    3. ``rms d(S) = sqrt(J(S)) <= rms u``: every iterate of the mean shape (the mean of the
+       frames in the previous iterate's best poses) lowers ``J``, so ``J(S) <= J(S1)`` for the
+       first iterate ``S1``, the mean of the ``y_f``, which is ``M``; and ``J(M) <= mean u^2``.
+
+    Hence every ``r_fm(S) <= c (max u + mean u + rms u)``. Step 1 is attained (one marker
+    displaced away from the centroid, the others ``1 / (n - 1)`` as far back), steps 2 and 3
+    nearly so when one frame of many carries all the misfit.
     """
     if not np.isfinite(markers).all():
         return False
     limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
+    return max(_rigid_misfits(markers)) <= limit
+
+
+def _rigid_misfits(markers: np.ndarray) -> tuple[float, float]:
+    """For the complete cluster ``markers`` ``(n_frames, n >= 3, 3)`` [mm]: the largest
+    residual [mm] from its typical frame, and :func:`surely_rigid`'s bound [mm] of the
+    largest from its mean shape."""
     markers = kernel_array(markers)
     typical = markers[_most_typical(markers)]  # typical_shape's frame, every frame complete
     rotation, translation = fit_poses(typical, markers)
-    if not residuals(typical, rotation, translation, markers).max() <= limit:
-        return False
-    first = np.empty_like(typical)
-    _mean_local(rotation, translation, markers, first)
-    rotation, translation = fit_poses(first, markers)
-    return _residual_bound(residuals(first, rotation, translation, markers)) <= limit
+    largest, bound = _residual_bounds(typical, rotation, translation, markers)
+    n_markers = markers.shape[1]
+    return largest, np.sqrt((n_markers - 1) / n_markers) * bound
 
 
 @kernel
-def _residual_bound(distance: np.ndarray) -> float:
-    """``max d_f + mean d_f + rms d_f`` [mm] of the frames' residual norms ``d_f`` of
-    ``distance`` ``(n_frames, n)`` [mm] (:func:`surely_rigid`). A compiled kernel."""
-    largest = total = total_sq = 0.0
-    for f in range(distance.shape[0]):
+def _residual_bounds(
+    typical: np.ndarray, rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray
+) -> tuple[float, float]:
+    """The largest residual [mm] of ``markers`` ``(n_frames, n, 3)`` from ``typical``
+    ``(n, 3)`` posed by ``(rotation, translation)`` (as :func:`residuals` computes them), and
+    ``max u + mean u + rms u`` [mm] of :func:`surely_rigid`, with ``u_f = |y_f - M|`` the
+    frames ``y_f`` taken into those poses and ``M`` their mean. A compiled kernel."""
+    n_frames, n_markers = markers.shape[0], markers.shape[1]
+    mean = np.zeros((n_markers, 3))
+    local = np.empty((n_markers, 3))
+    largest = 0.0
+    for f in range(n_frames):
+        for m in range(n_markers):
+            total = 0.0
+            for i in range(3):
+                fitted = translation[f, i]
+                for j in range(3):
+                    fitted += rotation[f, i, j] * typical[m, j]
+                total += (markers[f, m, i] - fitted) ** 2
+            largest = max(largest, np.sqrt(total))
+            for i in range(3):
+                for j in range(3):
+                    mean[m, i] += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
+    mean /= n_frames
+    highest = total = total_sq = 0.0
+    for f in range(n_frames):
+        for m in range(n_markers):
+            for i in range(3):
+                local[m, i] = 0.0
+                for j in range(3):
+                    local[m, i] += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
         norm_sq = 0.0
-        for m in range(distance.shape[1]):
-            norm_sq += distance[f, m] ** 2
+        for m in range(n_markers):
+            for i in range(3):
+                norm_sq += (local[m, i] - mean[m, i]) ** 2
         norm = np.sqrt(norm_sq)
-        largest = max(largest, norm)
+        highest = max(highest, norm)
         total += norm
         total_sq += norm_sq
-    n_frames = distance.shape[0]
-    return largest + total / n_frames + np.sqrt(total_sq / n_frames)
+    return largest, highest + total / n_frames + np.sqrt(total_sq / n_frames)
 
 
 def residuals(
