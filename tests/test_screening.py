@@ -236,6 +236,53 @@ def test_trials_near_the_threshold_find_what_the_whole_screen_finds():
     assert cleared >= 30
 
 
+def _jumps_by_definition(markers, labels, rules):
+    """:func:`find_jumps` as its docstring defines it, in NumPy: ``(label, frame, size)``."""
+    step = np.diff(markers, axis=0)
+    change = np.linalg.norm(np.diff(step, axis=0), axis=-1)
+    size = np.fmin(change[:-1], change[1:])  # frames 2 to n_frames - 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all NaN
+        level = max(rules.min_jump_mm, rules.jump_factor * np.nanmedian(size))
+    row, marker = np.nonzero(size > level)
+    return [(labels[m], int(k) + 2, float(size[k, m])) for k, m in zip(row, marker, strict=True)]
+
+
+def test_jumps_just_below_and_above_their_level_are_found_as_defined():
+    """Spikes 2 % below or above the level: ``min_jump_mm`` under little noise, where no median
+    is needed, or ``jump_factor`` times the median step change under much noise."""
+    rng = np.random.default_rng(20071394)
+    flagged = {(noisy, above): 0 for noisy in (False, True) for above in (False, True)}
+    for _ in range(200):
+        n_markers = int(rng.integers(1, 5))
+        noisy, above = bool(rng.integers(2)), bool(rng.integers(2))
+        markers = _cluster(
+            rng,
+            n_markers=n_markers,
+            n_frames=int(rng.choice([120, 1000])),
+            noise_mm=1.2 if noisy else 0.02,
+        )
+        change = np.linalg.norm(np.diff(markers, n=2, axis=0), axis=-1)
+        typical = float(np.median(np.fmin(change[:-1], change[1:])))
+        level = max(RULES.min_jump_mm, RULES.jump_factor * typical)
+        direction = rng.normal(size=3)
+        frame, marker = int(rng.integers(len(markers))), int(rng.integers(n_markers))
+        markers[frame, marker] += (
+            (1.02 if above else 0.98) * level * direction / np.linalg.norm(direction)
+        )
+        labels = _labels(n_markers)
+        expected = _jumps_by_definition(markers, labels, RULES)
+        found = screening.find_jumps(markers, labels, RULES)
+        assert [(a.label, a.frame) for a in found] == [(label, k) for label, k, _ in expected]
+        np.testing.assert_allclose(
+            [a.size_mm for a in found], [size for *_, size in expected], rtol=1e-12
+        )
+        flagged[noisy, above] += bool(found)
+    # Under little noise the spike alone decides (at the first or last frame it is no jump).
+    assert flagged[False, False] == 0 and flagged[False, True] >= 30
+    assert flagged[True, True] >= 20
+
+
 def test_kernels_compute_what_their_source_says():
     rng = np.random.default_rng(7)
     markers = _cluster(rng, n_markers=4, n_frames=40)

@@ -344,10 +344,10 @@ def find_jumps(
     if n_frames < 4:
         return []
     size = np.empty((n_frames - 3, n_markers))
-    median = _jump_sizes(kernel_array(markers), size)
-    if not np.isfinite(median):
+    # The level is at least min_jump_mm, so no step below it needs the median.
+    if not _jump_sizes(kernel_array(markers), size) > rules.min_jump_mm:
         return []
-    level = max(rules.min_jump_mm, rules.jump_factor * median)
+    level = max(rules.min_jump_mm, rules.jump_factor * _finite_median(size))
     step, marker = np.nonzero(size > level)
     return [
         Artefact("jump", labels[m], int(k) + 2, float(size[k, m]), level)
@@ -359,10 +359,11 @@ def find_jumps(
 def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
     """Fill ``size`` ``(n_frames - 3, n)`` [mm] with the step sizes of :func:`find_jumps` of
     ``markers`` ``(n_frames, n, 3)`` (NaN where a gap leaves neither neighbour difference) and
-    return their median over the finite ones (NaN if none). A compiled kernel
+    return the largest (-inf if all are NaN). A compiled kernel
     (:mod:`jointbench.numerics.compiled`)."""
     before = np.empty(3)
     after = np.empty(3)
+    largest = -np.inf
     for k in range(size.shape[0]):
         for m in range(size.shape[1]):
             for i in range(3):
@@ -373,7 +374,16 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
             ahead = np.sqrt(after[0] ** 2 + after[1] ** 2 + after[2] ** 2)
             # As np.fmin: the other difference where one is NaN.
             size[k, m] = ahead if np.isnan(back) or ahead < back else back
-    return np.nanmedian(size)
+            if size[k, m] > largest:  # never for NaN
+                largest = size[k, m]
+    return largest
+
+
+@kernel
+def _finite_median(values: np.ndarray) -> float:
+    """The median of the ``values`` (any shape) that are not NaN, NaN if none. A compiled
+    kernel."""
+    return np.nanmedian(values)
 
 
 def find_rigidity_breaks(
