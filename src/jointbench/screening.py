@@ -598,8 +598,8 @@ def _residual_bounds(
     ``max u + mean u + rms u`` [mm] of :func:`surely_rigid`, with ``u_f = |y_f - M|`` the
     frames ``y_f`` taken into those poses and ``M`` their mean. A compiled kernel."""
     n_frames, n_markers = markers.shape[0], markers.shape[1]
+    local = np.empty((n_frames, n_markers, 3))
     mean = np.zeros((n_markers, 3))
-    local = np.empty((n_markers, 3))
     largest = 0.0
     for f in range(n_frames):
         for m in range(n_markers):
@@ -611,20 +611,18 @@ def _residual_bounds(
                 total += (markers[f, m, i] - fitted) ** 2
             largest = max(largest, np.sqrt(total))
             for i in range(3):
+                x = 0.0
                 for j in range(3):
-                    mean[m, i] += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
+                    x += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
+                local[f, m, i] = x
+                mean[m, i] += x
     mean /= n_frames
     highest = total = total_sq = 0.0
     for f in range(n_frames):
-        for m in range(n_markers):
-            for i in range(3):
-                local[m, i] = 0.0
-                for j in range(3):
-                    local[m, i] += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
         norm_sq = 0.0
         for m in range(n_markers):
             for i in range(3):
-                norm_sq += (local[m, i] - mean[m, i]) ** 2
+                norm_sq += (local[f, m, i] - mean[m, i]) ** 2
         norm = np.sqrt(norm_sq)
         highest = max(highest, norm)
         total += norm
