@@ -409,12 +409,15 @@ def _lower_quartile(values: np.ndarray) -> float:
     """The lower quartile of the ``values`` (any shape) that are not NaN, NaN if none: NumPy's
     ``nanpercentile(values, 25)`` (linear interpolation) to the last bit. A compiled kernel."""
     flat = values.ravel()
-    known = np.sort(flat[~np.isnan(flat)])
+    known = flat[~np.isnan(flat)]
     if known.size == 0:
         return np.nan
     index = (known.size - 1) * 0.25
     below = int(np.floor(index))
-    low, high = known[below], known[min(below + 1, known.size - 1)]
+    # Selection, not a sort: the order statistic at ``below`` and the least value after it.
+    known = np.partition(known, below)
+    low = known[below]
+    high = np.min(known[below + 1 :]) if below + 1 < known.size else low
     gamma = index - below
     # NumPy's interpolation, which works from the nearer end.
     if gamma >= 0.5:
