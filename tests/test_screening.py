@@ -146,6 +146,9 @@ def test_random_trials_with_artefacts_find_what_the_whole_screen_finds():
             continue
         fast = screening.find_artefacts(markers, labels, "m")
         assert _outcome(*fast) == _outcome(whole.artefacts, whole.swaps)
+        complete = np.isfinite(markers).all()
+        if markers.shape[1] >= 3 and complete:
+            _assert_bounded(markers)
         if markers.shape[1] >= 3 and screening.surely_rigid(markers, labels, "m", RULES):
             cleared += 1
             # The bound holds for the mean shape the whole screen iterated to.
@@ -154,16 +157,17 @@ def test_random_trials_with_artefacts_find_what_the_whole_screen_finds():
 
 
 def _one_frame_stretched(rng, n_markers, n_frames, size_mm, noise_mm=0.0):
-    """A rigid cluster turning and drifting in which, at the middle frame, marker 0 stands
-    ``size_mm`` further out from the centroid and the others ``size_mm / (n - 1)`` back: a
-    misfit with no net shift or turn, all of one frame, where :func:`surely_rigid`'s bound
-    is nearly attained."""
+    """A rigid cluster turning and drifting in which, at the middle frame, its last marker
+    stands ``size_mm`` further out from the centroid and the others ``size_mm / (n - 1)`` back:
+    a misfit with no net shift or turn, all of one frame, where the bounds of
+    :func:`surely_rigid` are nearly attained (the first three markers keep their plane and
+    the direction between the first two)."""
     body = rng.normal(scale=30.0, size=(n_markers, 3))
     body -= body.mean(axis=0)
     bodies = np.repeat(body[None], n_frames, axis=0)
-    out = size_mm * body[0] / np.linalg.norm(body[0])
-    bodies[n_frames // 2, 0] += out
-    bodies[n_frames // 2, 1:] -= out / (n_markers - 1)
+    out = size_mm * body[-1] / np.linalg.norm(body[-1])
+    bodies[n_frames // 2, -1] += out
+    bodies[n_frames // 2, :-1] -= out / (n_markers - 1)
     t = np.linspace(0.0, 1.0, n_frames)[:, None]
     rotvec = np.radians(30.0) * np.hstack(
         [np.sin(2 * np.pi * t), 0.5 * np.cos(3 * np.pi * t), 0.2 * t]
@@ -171,6 +175,33 @@ def _one_frame_stretched(rng, n_markers, n_frames, size_mm, noise_mm=0.0):
     markers = np.einsum("fij,fmj->fmi", rotation_matrix(rotvec), bodies)
     markers += 20.0 * t[:, :, None] + np.array([10.0, -40.0, 25.0])
     return markers + rng.normal(scale=noise_mm, size=markers.shape)
+
+
+def _true_misfits(markers):
+    """The largest residuals [mm] of a complete cluster from its typical frame and from its
+    mean shape (NaN if that does not converge), each in its best poses: what
+    :func:`screening._rigid_misfits` bounds."""
+    labels = _labels(markers.shape[1])
+    shapes = [screening.typical_shape(markers, labels, "m")]
+    try:
+        shapes.append(screening.mean_shape(markers, labels, "m"))
+    except ValueError:
+        pass
+    misfits = [np.nan, np.nan]
+    for k, shape in enumerate(shapes):
+        rotation, translation = screening.fit_poses(shape, markers)
+        misfits[k] = float(np.max(screening.residuals(shape, rotation, translation, markers)))
+    return misfits
+
+
+def _assert_bounded(markers):
+    """Both bounds of :func:`screening._rigid_misfits` hold (to rounding) on ``markers``."""
+    true = _true_misfits(markers)
+    typical = screening._most_typical(screening.kernel_array(markers))
+    for fitted in (False, True):
+        bounds = screening._rigid_misfits(markers, typical, fitted)
+        for bound, misfit in zip(bounds, true, strict=True):
+            assert misfit <= bound * (1.0 + 1e-9) or not np.isfinite(bound * misfit)
 
 
 def _largest_residual(markers):
@@ -203,15 +234,18 @@ def test_the_bound_clears_just_below_the_threshold_and_not_just_above(n_markers)
 
 
 @pytest.mark.parametrize("n_markers", [3, 4, 5])
-def test_the_bound_of_the_mean_shapes_residuals_holds_and_is_nearly_attained(n_markers):
-    """On the stretched frame of 10000, the bound of the residuals from the mean shape lies
-    within 1.1 % above the largest of them: a bound 1.5 % lower would fail to bound it."""
+def test_the_bounds_hold_and_are_nearly_attained(n_markers):
+    """On the stretched frame of 10000, both pairs of bounds lie within 1.1 % above the
+    largest residuals they bound: bounds 1.5 % lower would fail to bound them."""
     markers = _one_frame_stretched(np.random.default_rng(12), n_markers, 10_000, 3.0)
-    whole = screening.screen(markers, _labels(n_markers), "m")
-    largest = float(np.nanmax(whole.residuals))
-    from_typical, bound = screening._rigid_misfits(markers)
-    assert largest <= bound <= 1.011 * largest
-    assert from_typical == pytest.approx(3.0, rel=1e-9)  # the typical frame is a clean one
+    true = _true_misfits(markers)
+    typical = screening._most_typical(markers)
+    for fitted in (False, True):
+        bounds = screening._rigid_misfits(markers, typical, fitted)
+        for bound, misfit in zip(bounds, true, strict=True):
+            assert misfit <= bound * (1.0 + 1e-9)  # surely_rigid's margin for rounding
+            assert bound <= 1.011 * misfit
+    assert true[0] == pytest.approx(3.0, rel=1e-9)  # the typical frame is a clean one
 
 
 def test_trials_near_the_threshold_find_what_the_whole_screen_finds():
@@ -231,6 +265,7 @@ def test_trials_near_the_threshold_find_what_the_whole_screen_finds():
         whole = screening.screen(markers, labels, "m")
         fast = screening.find_artefacts(markers, labels, "m")
         assert _outcome(*fast) == _outcome(whole.artefacts, whole.swaps)
+        _assert_bounded(markers)
         if screening.surely_rigid(markers, labels, "m", RULES):
             cleared += 1
             assert np.nanmax(whole.residuals) <= RULES.min_residual_mm
@@ -311,10 +346,10 @@ def test_kernels_compute_what_their_source_says():
     both(screening._jump_sizes, [(37, 4)], markers)
     complete = markers[np.isfinite(markers).all(axis=(1, 2))]
     rotation, translation = screening.fit_poses(shape, complete)
+    local = both(screening._fitted_local, [complete.shape], shape, rotation, translation, complete)
+    both(screening._triad_local, [complete.shape], complete)
     np.testing.assert_allclose(
-        screening._residual_bounds(shape, rotation, translation, complete),
-        screening._residual_bounds.__wrapped__(shape, rotation, translation, complete),
-        rtol=1e-12,
+        screening._spread(local[0], 3), screening._spread.__wrapped__(local[0], 3), rtol=1e-12
     )
     assert screening._most_typical(complete) == screening._most_typical.__wrapped__(complete)
 

@@ -19,7 +19,7 @@ of two markers of an isosceles triangle keeps the shape).
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
 need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
 a complete cluster whose residuals a bound keeps below ``min_residual_mm``
-(:func:`surely_rigid`, one pose fit) it skips the iterated mean shape.
+(:func:`surely_rigid`, at most one pose fit) it skips the iterated mean shape.
 """
 
 from __future__ import annotations
@@ -551,61 +551,76 @@ def surely_rigid(
 ) -> bool:
     """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
     ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
-    is too loose), not broken. One pose fit, of the typical frame ``T``.
-
-    ``screen`` flags nothing when every residual from ``T`` and from the mean shape ``S`` is at
-    most ``rules.min_residual_mm``. The first are computed; the second are bounded without
-    iterating to ``S``. Notation: ``d_f(A)`` is frame ``f``'s residual norm from shape ``A`` in
-    its best pose, ``d(A, B)`` the least norm between poses of two shapes, ``J(A)`` the mean
-    of ``d_f(A)^2``, ``y_f`` frame ``f`` taken into ``T``'s pose in it, ``M`` the mean of the
-    ``y_f`` and ``u_f = |y_f - M| >= d_f(M)`` (a pose, not the best, of ``M``).
-
-    1. Per marker: a best pose matches the centroids, so the residual vectors ``e_m`` of a
-       frame sum to zero; then ``|e_m|^2 = |sum of the others|^2 <= (n - 1) (d^2 - |e_m|^2)``,
-       and ``r_fm(S) <= c d_f(S)`` with ``c = sqrt((n - 1) / n)``.
-    2. ``d_f(S) <= d_f(M) + d(M, S) <= u_f + d(M, S)``, and averaging
-       ``d(M, S) <= d_g(M) + d_g(S)`` over the frames ``g`` gives
-       ``d(M, S) <= mean u + rms d(S)``.
-    3. ``rms d(S) = sqrt(J(S)) <= rms u``: every iterate of the mean shape (the mean of the
-       frames in the previous iterate's best poses) lowers ``J``, so ``J(S) <= J(S1)`` for the
-       first iterate ``S1``, the mean of the ``y_f``, which is ``M``; and ``J(M) <= mean u^2``.
-
-    Hence every ``r_fm(S) <= c (max u + mean u + rms u)``. Step 1 is attained (one marker
-    displaced away from the centroid, the others ``1 / (n - 1)`` as far back), steps 2 and 3
-    nearly so when one frame of many carries all the misfit.
-    """
+    is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
+    first."""
     if not np.isfinite(markers).all():
         return False
     limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
-    return max(_rigid_misfits(markers)) <= limit
-
-
-def _rigid_misfits(markers: np.ndarray) -> tuple[float, float]:
-    """For the complete cluster ``markers`` ``(n_frames, n >= 3, 3)`` [mm]: the largest
-    residual [mm] from its typical frame, and :func:`surely_rigid`'s bound [mm] of the
-    largest from its mean shape."""
     markers = kernel_array(markers)
-    typical = markers[_most_typical(markers)]  # typical_shape's frame, every frame complete
-    rotation, translation = fit_poses(typical, markers)
-    largest, bound = _residual_bounds(typical, rotation, translation, markers)
-    n_markers = markers.shape[1]
-    return largest, np.sqrt((n_markers - 1) / n_markers) * bound
+    typical = _most_typical(markers)  # typical_shape's frame, every frame complete
+    return any(
+        all(bound <= limit for bound in _rigid_misfits(markers, typical, fitted))
+        for fitted in (False, True)
+    )
+
+
+def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
+    """Bounds [mm] of the largest residual :func:`screen` finds in the complete cluster
+    ``markers`` ``(n_frames, n >= 3, 3)`` [mm] from its typical frame ``T``
+    (``markers[typical]``) and of the largest from its mean shape ``S``, from a pose ``Q_f``
+    of each frame: with ``fitted`` ``T``'s best poses (one pose fit, and the first bound is
+    the largest residual itself), else a frame of each frame's own, at its centroid and
+    along its first three markers (no fit).
+
+    ``screen`` flags nothing when every residual from ``T`` and from ``S`` is at most
+    ``rules.min_residual_mm``. Notation: ``d_f(A)`` is frame ``f``'s residual norm from shape
+    ``A`` in its best pose, ``d(A, B)`` the least norm between poses of two shapes, ``J(A)``
+    the mean of ``d_f(A)^2``; ``y_f`` is frame ``f`` taken into ``Q_f``, ``M`` the mean of the
+    ``y_f``, ``u_f = |y_f - M| >= d_f(M)`` (a pose, perhaps not the best, of ``M``) and ``t``
+    the typical frame, so that ``d(M, T) = d_t(M) <= u_t``.
+
+    1. Per marker: a best pose matches the centroids, so the residual vectors ``e_m`` of a
+       frame sum to zero; then ``|e_m|^2 = |sum of the others|^2 <= (n - 1) (d^2 - |e_m|^2)``,
+       and ``r_fm(A) <= c d_f(A)`` with ``c = sqrt((n - 1) / n)``, for any shape ``A``.
+    2. ``d_f(A) <= d_f(M) + d(M, A)``, so ``r_fm(T) <= c (u_f + u_t)``.
+    3. Averaging ``d(M, S) <= d_g(M) + d_g(S)`` over the frames ``g`` gives
+       ``d(M, S) <= mean u + rms d(S)``, so ``r_fm(S) <= c (u_f + mean u + rms d(S))``.
+    4. Every iterate of the mean shape (the mean of the frames in the previous iterate's best
+       poses, from ``T``) lowers ``J``, so ``rms d(S) <= sqrt(J(T))``, and
+       ``J(T) <= mean |y_f - y_t|^2 = mean u^2 + u_t^2``. With ``T``'s best poses ``M`` is the
+       first iterate, so ``rms d(S) <= sqrt(J(M)) <= rms u``.
+
+    Step 1 is attained (one marker displaced away from the centroid, the others
+    ``1 / (n - 1)`` as far back), steps 2-4 nearly so when one frame of many carries all the
+    misfit and ``Q_f`` is its best pose.
+    """
+    local = np.empty_like(markers)
+    if fitted:
+        rotation, translation = fit_poses(markers[typical], markers)
+        largest = _fitted_local(markers[typical], rotation, translation, markers, local)
+    else:
+        _triad_local(markers, local)
+    highest, mean, rms, at_typical = _spread(local, typical)
+    c = np.sqrt((markers.shape[1] - 1) / markers.shape[1])
+    if fitted:
+        return largest, c * (highest + mean + rms)
+    return c * (highest + at_typical), c * (highest + mean + np.hypot(rms, at_typical))
 
 
 @kernel
-def _residual_bounds(
-    typical: np.ndarray, rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray
-) -> tuple[float, float]:
-    """The largest residual [mm] of ``markers`` ``(n_frames, n, 3)`` from ``typical``
-    ``(n, 3)`` posed by ``(rotation, translation)`` (as :func:`residuals` computes them), and
-    ``max u + mean u + rms u`` [mm] of :func:`surely_rigid`, with ``u_f = |y_f - M|`` the
-    frames ``y_f`` taken into those poses and ``M`` their mean. A compiled kernel."""
-    n_frames, n_markers = markers.shape[0], markers.shape[1]
-    local = np.empty((n_frames, n_markers, 3))
-    mean = np.zeros((n_markers, 3))
+def _fitted_local(
+    typical: np.ndarray,
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    markers: np.ndarray,
+    local: np.ndarray,
+) -> float:
+    """Fill ``local`` ``(n_frames, n, 3)`` [mm] with ``markers`` ``(n_frames, n, 3)`` taken
+    into the poses ``(rotation, translation)`` of ``typical`` ``(n, 3)``, and return the
+    largest residual [mm] from it (as :func:`residuals` computes them). A compiled kernel."""
     largest = 0.0
-    for f in range(n_frames):
-        for m in range(n_markers):
+    for f in range(markers.shape[0]):
+        for m in range(markers.shape[1]):
             total = 0.0
             for i in range(3):
                 fitted = translation[f, i]
@@ -618,19 +633,71 @@ def _residual_bounds(
                 for j in range(3):
                     x += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
                 local[f, m, i] = x
-                mean[m, i] += x
+    return largest
+
+
+@kernel
+def _triad_local(markers: np.ndarray, local: np.ndarray) -> None:
+    """Fill ``local`` ``(n_frames, n, 3)`` [mm] with each frame of ``markers``
+    ``(n_frames, n >= 3, 3)`` in a frame of its own: origin the centroid (as a best pose
+    places it), axes along the first two markers, then normal to the first three (NaN if
+    collinear). A compiled kernel."""
+    n_markers = markers.shape[1]
+    axes = np.empty((3, 3))
+    centroid = np.empty(3)
+    for f in range(markers.shape[0]):
+        x = markers[f]
+        for i in range(3):
+            centroid[i] = 0.0
+            for m in range(n_markers):
+                centroid[i] += x[m, i]
+            centroid[i] /= n_markers
+            axes[0, i] = x[1, i] - x[0, i]
+            axes[1, i] = x[2, i] - x[0, i]
+        # axes[2] = axes[0] x axes[1], then axes[1] = axes[2] x axes[0], each normalised.
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            axes[2, i] = axes[0, a] * axes[1, b] - axes[0, b] * axes[1, a]
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            axes[1, i] = axes[2, a] * axes[0, b] - axes[2, b] * axes[0, a]
+        for k in range(3):
+            norm = np.sqrt(axes[k, 0] ** 2 + axes[k, 1] ** 2 + axes[k, 2] ** 2)
+            for i in range(3):
+                axes[k, i] /= norm
+        for m in range(n_markers):
+            for k in range(3):
+                value = 0.0
+                for i in range(3):
+                    value += axes[k, i] * (x[m, i] - centroid[i])
+                local[f, m, k] = value
+
+
+@kernel
+def _spread(local: np.ndarray, typical: int) -> tuple[float, float, float, float]:
+    """``max u``, ``mean u``, ``rms u`` and ``u_typical`` [mm] of the distances
+    ``u_f = |local[f] - M|`` of the frames ``local`` ``(n_frames, n, 3)`` [mm] from their mean
+    ``M`` (:func:`_rigid_misfits`). A compiled kernel."""
+    n_frames, n_markers = local.shape[0], local.shape[1]
+    mean = np.zeros((n_markers, 3))
+    for f in range(n_frames):
+        for m in range(n_markers):
+            for i in range(3):
+                mean[m, i] += local[f, m, i]
     mean /= n_frames
-    highest = total = total_sq = 0.0
+    highest = total = total_sq = at_typical = 0.0
     for f in range(n_frames):
         norm_sq = 0.0
         for m in range(n_markers):
             for i in range(3):
                 norm_sq += (local[f, m, i] - mean[m, i]) ** 2
         norm = np.sqrt(norm_sq)
-        highest = max(highest, norm)
+        highest = max(highest, norm)  # a NaN (collinear markers) stays in the mean
         total += norm
         total_sq += norm_sq
-    return largest, highest + total / n_frames + np.sqrt(total_sq / n_frames)
+        if f == typical:
+            at_typical = norm
+    return highest, total / n_frames, np.sqrt(total_sq / n_frames), at_typical
 
 
 def residuals(
