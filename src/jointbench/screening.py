@@ -643,34 +643,35 @@ def _triad_local(markers: np.ndarray, local: np.ndarray) -> None:
     places it), axes along the first two markers, then normal to the first three (NaN if
     collinear). A compiled kernel."""
     n_markers = markers.shape[1]
-    axes = np.empty((3, 3))
-    centroid = np.empty(3)
     for f in range(markers.shape[0]):
-        x = markers[f]
-        for i in range(3):
-            centroid[i] = 0.0
-            for m in range(n_markers):
-                centroid[i] += x[m, i]
-            centroid[i] /= n_markers
-            axes[0, i] = x[1, i] - x[0, i]
-            axes[1, i] = x[2, i] - x[0, i]
-        # axes[2] = axes[0] x axes[1], then axes[1] = axes[2] x axes[0], each normalised.
-        for i in range(3):
-            a, b = (i + 1) % 3, (i + 2) % 3
-            axes[2, i] = axes[0, a] * axes[1, b] - axes[0, b] * axes[1, a]
-        for i in range(3):
-            a, b = (i + 1) % 3, (i + 2) % 3
-            axes[1, i] = axes[2, a] * axes[0, b] - axes[2, b] * axes[0, a]
-        for k in range(3):
-            norm = np.sqrt(axes[k, 0] ** 2 + axes[k, 1] ** 2 + axes[k, 2] ** 2)
-            for i in range(3):
-                axes[k, i] /= norm
+        cx = cy = cz = 0.0
         for m in range(n_markers):
-            for k in range(3):
-                value = 0.0
-                for i in range(3):
-                    value += axes[k, i] * (x[m, i] - centroid[i])
-                local[f, m, k] = value
+            cx += markers[f, m, 0]
+            cy += markers[f, m, 1]
+            cz += markers[f, m, 2]
+        cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
+        # u along the first two markers, w = u x (third - first), v = w x u.
+        ux = markers[f, 1, 0] - markers[f, 0, 0]
+        uy = markers[f, 1, 1] - markers[f, 0, 1]
+        uz = markers[f, 1, 2] - markers[f, 0, 2]
+        px = markers[f, 2, 0] - markers[f, 0, 0]
+        py = markers[f, 2, 1] - markers[f, 0, 1]
+        pz = markers[f, 2, 2] - markers[f, 0, 2]
+        wx, wy, wz = uy * pz - uz * py, uz * px - ux * pz, ux * py - uy * px
+        vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
+        scale = 1.0 / np.sqrt(ux * ux + uy * uy + uz * uz)
+        ux, uy, uz = ux * scale, uy * scale, uz * scale
+        scale = 1.0 / np.sqrt(vx * vx + vy * vy + vz * vz)
+        vx, vy, vz = vx * scale, vy * scale, vz * scale
+        scale = 1.0 / np.sqrt(wx * wx + wy * wy + wz * wz)
+        wx, wy, wz = wx * scale, wy * scale, wz * scale
+        for m in range(n_markers):
+            dx = markers[f, m, 0] - cx
+            dy = markers[f, m, 1] - cy
+            dz = markers[f, m, 2] - cz
+            local[f, m, 0] = ux * dx + uy * dy + uz * dz
+            local[f, m, 1] = vx * dx + vy * dy + vz * dz
+            local[f, m, 2] = wx * dx + wy * dy + wz * dz
 
 
 @kernel
