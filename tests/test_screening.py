@@ -346,10 +346,10 @@ def test_kernels_compute_what_their_source_says():
     both(screening._jump_sizes, [(37, 4)], markers)
     complete = markers[np.isfinite(markers).all(axis=(1, 2))]
     rotation, translation = screening.fit_poses(shape, complete)
-    local = both(screening._fitted_local, [complete.shape], shape, rotation, translation, complete)
+    (local,) = both(screening._fitted_local, [complete.shape], rotation, translation, complete)
     both(screening._triad_local, [complete.shape], complete)
     np.testing.assert_allclose(
-        screening._spread(local[0], 3), screening._spread.__wrapped__(local[0], 3), rtol=1e-12
+        screening._spread(local, 3), screening._spread.__wrapped__(local, 3), rtol=1e-12
     )
     assert screening._most_typical(complete) == screening._most_typical.__wrapped__(complete)
 

@@ -597,7 +597,8 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
     local = np.empty_like(markers)
     if fitted:
         rotation, translation = fit_poses(markers[typical], markers)
-        largest = _fitted_local(markers[typical], rotation, translation, markers, local)
+        largest = float(residuals(markers[typical], rotation, translation, markers).max())
+        _fitted_local(rotation, translation, markers, local)
     else:
         _triad_local(markers, local)
     highest, mean, rms, at_typical = _spread(local, typical)
@@ -609,31 +610,17 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
 
 @kernel
 def _fitted_local(
-    typical: np.ndarray,
-    rotation: np.ndarray,
-    translation: np.ndarray,
-    markers: np.ndarray,
-    local: np.ndarray,
-) -> float:
+    rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray, local: np.ndarray
+) -> None:
     """Fill ``local`` ``(n_frames, n, 3)`` [mm] with ``markers`` ``(n_frames, n, 3)`` taken
-    into the poses ``(rotation, translation)`` of ``typical`` ``(n, 3)``, and return the
-    largest residual [mm] from it (as :func:`residuals` computes them). A compiled kernel."""
-    largest = 0.0
+    into the poses ``(rotation, translation)``: ``R' (x - t)``. A compiled kernel."""
     for f in range(markers.shape[0]):
         for m in range(markers.shape[1]):
-            total = 0.0
-            for i in range(3):
-                fitted = translation[f, i]
-                for j in range(3):
-                    fitted += rotation[f, i, j] * typical[m, j]
-                total += (markers[f, m, i] - fitted) ** 2
-            largest = max(largest, np.sqrt(total))
             for i in range(3):
                 x = 0.0
                 for j in range(3):
                     x += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
                 local[f, m, i] = x
-    return largest
 
 
 @kernel
