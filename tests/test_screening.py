@@ -90,6 +90,17 @@ def test_clean_clusters_are_cleared_by_the_bound(noise_mm):
     assert _same_as_screen(markers) == ((), ())
 
 
+def test_coincident_first_markers_leave_the_bound_to_the_fitted_poses():
+    """A 4-marker cluster whose second and third markers coincide gives no marker frame:
+    that bound fails (NaN), and the typical frame's fitted poses clear it."""
+    markers = _cluster(np.random.default_rng(14), n_markers=4, noise_mm=0.3)
+    markers[:, 2] = markers[:, 1]
+    typical = screening._most_typical(markers)
+    assert np.isnan(screening._rigid_misfits(markers, typical, False)[1])
+    assert screening.surely_rigid(markers, _labels(4), "m", RULES)
+    assert _same_as_screen(markers) == ((), ())
+
+
 def test_large_noise_is_left_to_the_whole_screen():
     markers = _cluster(np.random.default_rng(5), noise_mm=5.0)
     assert not screening.surely_rigid(markers, _labels(3), "m", RULES)
