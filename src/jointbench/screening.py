@@ -570,7 +570,7 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
     (``markers[typical]``) and of the largest from its mean shape ``S``, from a pose ``Q_f``
     of each frame: with ``fitted`` ``T``'s best poses (one pose fit, and the first bound is
     the largest residual itself), else a frame of each frame's own, at its centroid and
-    along its first three markers (no fit).
+    along three of its markers (no fit).
 
     ``screen`` flags nothing when every residual from ``T`` and from ``S`` is at most
     ``rules.min_residual_mm``. Notation: ``d_f(A)`` is frame ``f``'s residual norm from shape
@@ -600,7 +600,7 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
         largest = float(residuals(markers[typical], rotation, translation, markers).max())
         _fitted_local(rotation, translation, markers, local)
     else:
-        _triad_local(markers, local)
+        _triad_local(markers, typical, local)
     highest, mean, rms, at_typical = _spread(local, typical)
     c = np.sqrt((markers.shape[1] - 1) / markers.shape[1])
     if fitted:
@@ -624,12 +624,28 @@ def _fitted_local(
 
 
 @kernel
-def _triad_local(markers: np.ndarray, local: np.ndarray) -> None:
+def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
     """Fill ``local`` ``(n_frames, n, 3)`` [mm] with each frame of ``markers``
     ``(n_frames, n >= 3, 3)`` in a frame of its own: origin the centroid (as a best pose
-    places it), axes along the first two markers, then normal to the first three (NaN if
-    collinear). A compiled kernel."""
+    places it), axes along markers ``a`` to ``b``, then normal to them and ``c`` (NaN if the
+    three are collinear), chosen in frame ``typical`` as the two farthest apart and the one
+    farthest from their line, which makes the axes least sensitive to noise. A compiled
+    kernel."""
     n_markers = markers.shape[1]
+    x = markers[typical]
+    a = b = c = 0
+    longest = farthest = -1.0
+    for i in range(n_markers):
+        for j in range(i + 1, n_markers):
+            length = np.sqrt(np.sum((x[j] - x[i]) ** 2))
+            if length > longest:
+                a, b, longest = i, j, length
+    for k in range(n_markers):
+        along = x[b] - x[a]
+        off = x[k] - x[a]
+        distance = np.sum(np.cross(along, off) ** 2)
+        if distance > farthest:
+            c, farthest = k, distance
     for f in range(markers.shape[0]):
         cx = cy = cz = 0.0
         for m in range(n_markers):
@@ -637,13 +653,13 @@ def _triad_local(markers: np.ndarray, local: np.ndarray) -> None:
             cy += markers[f, m, 1]
             cz += markers[f, m, 2]
         cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
-        # u along the first two markers, w = u x (third - first), v = w x u.
-        ux = markers[f, 1, 0] - markers[f, 0, 0]
-        uy = markers[f, 1, 1] - markers[f, 0, 1]
-        uz = markers[f, 1, 2] - markers[f, 0, 2]
-        px = markers[f, 2, 0] - markers[f, 0, 0]
-        py = markers[f, 2, 1] - markers[f, 0, 1]
-        pz = markers[f, 2, 2] - markers[f, 0, 2]
+        # u from a to b, w = u x (c - a), v = w x u.
+        ux = markers[f, b, 0] - markers[f, a, 0]
+        uy = markers[f, b, 1] - markers[f, a, 1]
+        uz = markers[f, b, 2] - markers[f, a, 2]
+        px = markers[f, c, 0] - markers[f, a, 0]
+        py = markers[f, c, 1] - markers[f, a, 1]
+        pz = markers[f, c, 2] - markers[f, a, 2]
         wx, wy, wz = uy * pz - uz * py, uz * px - ux * pz, ux * py - uy * px
         vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
         scale = 1.0 / np.sqrt(ux * ux + uy * uy + uz * uz)
