@@ -452,6 +452,41 @@ def test_the_public_fits_check_their_inputs_once(monkeypatch, artefacts):
     assert calls == ["center", "joint_center"]
 
 
+def test_rigidity_breaks_just_below_and_above_their_level_are_found_as_defined():
+    """Residuals with one sample 2 % below or above the level: ``min_residual_mm`` for small
+    residuals (where no quartile is needed) or ``residual_factor`` times the lower quartile
+    for large ones; some samples missing."""
+    rng = np.random.default_rng(20071395)
+    flagged = {(large, above): 0 for large in (False, True) for above in (False, True)}
+    for _ in range(400):
+        large, above = bool(rng.integers(2)), bool(rng.integers(2))
+        shape = (int(rng.integers(2, 300)), int(rng.integers(3, 6)))
+        residuals = rng.uniform(0.5, 1.0, size=shape) * (0.8 if large else 0.2)
+        residuals[rng.random(shape) < 0.05] = np.nan
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all NaN
+            level = max(
+                RULES.min_residual_mm, RULES.residual_factor * np.nanpercentile(residuals, 25)
+            )
+        frame, marker = int(rng.integers(shape[0])), int(rng.integers(shape[1]))
+        residuals[frame, marker] = (1.02 if above else 0.98) * level
+        labels = _labels(shape[1])
+        found = screening.find_rigidity_breaks(residuals, labels, RULES)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            level = max(
+                RULES.min_residual_mm, RULES.residual_factor * np.nanpercentile(residuals, 25)
+            )
+        expected = [
+            (labels[m], int(f)) for f, m in zip(*np.nonzero(residuals > level), strict=True)
+        ]
+        assert [(a.label, a.frame) for a in found] == expected
+        assert all(a.level_mm == level for a in found)
+        flagged[large, above] += bool(found)
+    assert flagged[False, False] == flagged[True, False] == 0
+    assert flagged[False, True] >= 50 and flagged[True, True] >= 50
+
+
 def test_lower_quartile_is_numpys_to_the_last_bit():
     rng = np.random.default_rng(10)
     for _ in range(300):

@@ -391,6 +391,9 @@ def find_rigidity_breaks(
 ) -> list[Artefact]:
     """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the trial's level
     (its lower quartile), so that up to three quarters of the samples may be broken."""
+    # The level is at least min_residual_mm, so no residual below it needs the quartile.
+    if not np.fmax.reduce(residuals, axis=None) > rules.min_residual_mm:
+        return []
     # The lower quartile, not the median: a swap held by half the frames displaces more than
     # half the samples (the pose fit spreads it), which would lift a median above them.
     typical = _lower_quartile(kernel_array(residuals))
