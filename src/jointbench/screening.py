@@ -555,7 +555,8 @@ def surely_rigid(
     """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
     ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
     is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
-    first."""
+    first. It does not show that the screen's mean shape converges (where it does not, the
+    screen raises)."""
     if not np.isfinite(markers).all():
         return False
     limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
@@ -656,7 +657,7 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
             cy += markers[f, m, 1]
             cz += markers[f, m, 2]
         cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
-        # u from a to b, w = u x (c - a), v = w x u.
+        # u from a to b, w = u x (c - a), v = w x u: a right-handed frame, a proper rotation.
         ux = markers[f, b, 0] - markers[f, a, 0]
         uy = markers[f, b, 1] - markers[f, a, 1]
         uz = markers[f, b, 2] - markers[f, a, 2]
