@@ -19,7 +19,7 @@ of two markers of an isosceles triangle keeps the shape).
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
 need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
 a complete cluster whose residuals a bound keeps below ``min_residual_mm``
-(:func:`surely_rigid`, two pose fits) it skips the iterated mean shape.
+(:func:`surely_rigid`, at most one pose fit) it skips the iterated mean shape.
 """
 
 from __future__ import annotations
@@ -344,10 +344,10 @@ def find_jumps(
     if n_frames < 4:
         return []
     size = np.empty((n_frames - 3, n_markers))
-    median = _jump_sizes(kernel_array(markers), size)
-    if not np.isfinite(median):
+    # The level is at least min_jump_mm, so no step below it needs the median.
+    if not _jump_sizes(kernel_array(markers), size) > rules.min_jump_mm:
         return []
-    level = max(rules.min_jump_mm, rules.jump_factor * median)
+    level = max(rules.min_jump_mm, rules.jump_factor * _finite_median(size))
     step, marker = np.nonzero(size > level)
     return [
         Artefact("jump", labels[m], int(k) + 2, float(size[k, m]), level)
@@ -359,10 +359,11 @@ def find_jumps(
 def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
     """Fill ``size`` ``(n_frames - 3, n)`` [mm] with the step sizes of :func:`find_jumps` of
     ``markers`` ``(n_frames, n, 3)`` (NaN where a gap leaves neither neighbour difference) and
-    return their median over the finite ones (NaN if none). A compiled kernel
+    return the largest (-inf if all are NaN). A compiled kernel
     (:mod:`jointbench.numerics.compiled`)."""
     before = np.empty(3)
     after = np.empty(3)
+    largest = -np.inf
     for k in range(size.shape[0]):
         for m in range(size.shape[1]):
             for i in range(3):
@@ -373,7 +374,16 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
             ahead = np.sqrt(after[0] ** 2 + after[1] ** 2 + after[2] ** 2)
             # As np.fmin: the other difference where one is NaN.
             size[k, m] = ahead if np.isnan(back) or ahead < back else back
-    return np.nanmedian(size)
+            if size[k, m] > largest:  # never for NaN
+                largest = size[k, m]
+    return largest
+
+
+@kernel
+def _finite_median(values: np.ndarray) -> float:
+    """The median of the ``values`` (any shape) that are not NaN, NaN if none. A compiled
+    kernel."""
+    return np.nanmedian(values)
 
 
 def find_rigidity_breaks(
@@ -381,6 +391,9 @@ def find_rigidity_breaks(
 ) -> list[Artefact]:
     """Samples whose rigid-fit residual ``(n_frames, n)`` [mm] is far above the trial's level
     (its lower quartile), so that up to three quarters of the samples may be broken."""
+    # The level is at least min_residual_mm, so no residual below it needs the quartile.
+    if not np.fmax.reduce(residuals, axis=None) > rules.min_residual_mm:
+        return []
     # The lower quartile, not the median: a swap held by half the frames displaces more than
     # half the samples (the pose fit spreads it), which would lift a median above them.
     typical = _lower_quartile(kernel_array(residuals))
@@ -399,12 +412,15 @@ def _lower_quartile(values: np.ndarray) -> float:
     """The lower quartile of the ``values`` (any shape) that are not NaN, NaN if none: NumPy's
     ``nanpercentile(values, 25)`` (linear interpolation) to the last bit. A compiled kernel."""
     flat = values.ravel()
-    known = np.sort(flat[~np.isnan(flat)])
+    known = flat[~np.isnan(flat)]
     if known.size == 0:
         return np.nan
     index = (known.size - 1) * 0.25
     below = int(np.floor(index))
-    low, high = known[below], known[min(below + 1, known.size - 1)]
+    # Selection, not a sort: the order statistic at ``below`` and the least value after it.
+    known = np.partition(known, below)
+    low = known[below]
+    high = np.min(known[below + 1 :]) if below + 1 < known.size else low
     gamma = index - below
     # NumPy's interpolation, which works from the nearer end.
     if gamma >= 0.5:
@@ -538,46 +554,158 @@ def surely_rigid(
 ) -> bool:
     """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
     ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
-    is too loose), not broken.
-
-    ``screen`` flags nothing when every residual from the typical frame ``T`` and from the
-    mean shape ``S`` is at most ``rules.min_residual_mm``. The first are computed; the second
-    are bounded without iterating to ``S``. With ``d_f(A)`` frame ``f``'s residual norm from
-    shape ``A`` in its best pose, ``d(A, B)`` the least norm between poses of two shapes and
-    ``S1`` the mean shape's first iterate (the mean of the frames taken to ``T``'s poses):
-    ``r_fm(S) <= d_f(S) <= d_f(S1) + d(S1, S)``; averaging ``d(S1, S) <= d_g(S1) + d_g(S)``
-    over frames ``g`` and bounding the mean of ``d_g(S)`` by its root mean square, which no
-    iterate after ``S1`` increases, gives ``d(S1, S) <= mean d_g(S1) + rms d_g(S1)``.
-    """
+    is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
+    first. It does not show that the screen's mean shape converges (where it does not, the
+    screen raises)."""
     if not np.isfinite(markers).all():
         return False
     limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
     markers = kernel_array(markers)
-    typical = markers[_most_typical(markers)]  # typical_shape's frame, every frame complete
-    rotation, translation = fit_poses(typical, markers)
-    if not residuals(typical, rotation, translation, markers).max() <= limit:
-        return False
-    first = np.empty_like(typical)
-    _mean_local(rotation, translation, markers, first)
-    rotation, translation = fit_poses(first, markers)
-    return _residual_bound(residuals(first, rotation, translation, markers)) <= limit
+    typical = _most_typical(markers)  # typical_shape's frame, every frame complete
+    return any(
+        all(bound <= limit for bound in _rigid_misfits(markers, typical, fitted))
+        for fitted in (False, True)
+    )
+
+
+def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
+    """Bounds [mm] of the largest residual :func:`screen` finds in the complete cluster
+    ``markers`` ``(n_frames, n >= 3, 3)`` [mm] from its typical frame ``T``
+    (``markers[typical]``) and of the largest from its mean shape ``S``, from a pose ``Q_f``
+    of each frame: with ``fitted`` ``T``'s best poses (one pose fit, and the first bound is
+    the largest residual itself), else a frame of each frame's own, at its centroid and
+    along three of its markers (no fit).
+
+    ``screen`` flags nothing when every residual from ``T`` and from ``S`` is at most
+    ``rules.min_residual_mm``. Notation: ``d_f(A)`` is frame ``f``'s residual norm from shape
+    ``A`` in its best pose, ``d(A, B)`` the least norm between poses of two shapes, ``J(A)``
+    the mean of ``d_f(A)^2``; ``y_f`` is frame ``f`` taken into ``Q_f``, ``M`` the mean of the
+    ``y_f``, ``u_f = |y_f - M| >= d_f(M)`` (a pose, perhaps not the best, of ``M``) and ``t``
+    the typical frame, so that ``d(M, T) = d_t(M) <= u_t``.
+
+    1. Per marker: a best pose matches the centroids, so the residual vectors ``e_m`` of a
+       frame sum to zero; then ``|e_m|^2 = |sum of the others|^2 <= (n - 1) (d^2 - |e_m|^2)``,
+       and ``r_fm(A) <= c d_f(A)`` with ``c = sqrt((n - 1) / n)``, for any shape ``A``.
+    2. ``d_f(A) <= d_f(M) + d(M, A)``, so ``r_fm(T) <= c (u_f + u_t)``.
+    3. Averaging ``d(M, S) <= d_g(M) + d_g(S)`` over the frames ``g`` gives
+       ``d(M, S) <= mean u + rms d(S)``, so ``r_fm(S) <= c (u_f + mean u + rms d(S))``.
+    4. Every iterate of the mean shape (the mean of the frames in the previous iterate's best
+       poses, from ``T``) lowers ``J``, so ``rms d(S) <= sqrt(J(T))``, and
+       ``J(T) <= mean |y_f - y_t|^2 = mean u^2 + u_t^2``. With ``T``'s best poses ``M`` is the
+       first iterate, so ``rms d(S) <= sqrt(J(M)) <= rms u``.
+
+    Step 1 is attained (one marker displaced away from the centroid, the others
+    ``1 / (n - 1)`` as far back), steps 2-4 nearly so when one frame of many carries all the
+    misfit and ``Q_f`` is its best pose.
+    """
+    local = np.empty_like(markers)
+    if fitted:
+        rotation, translation = fit_poses(markers[typical], markers)
+        largest = float(residuals(markers[typical], rotation, translation, markers).max())
+        _fitted_local(rotation, translation, markers, local)
+    else:
+        _triad_local(markers, typical, local)
+    highest, mean, rms, at_typical = _spread(local, typical)
+    c = np.sqrt((markers.shape[1] - 1) / markers.shape[1])
+    if fitted:
+        return largest, c * (highest + mean + rms)
+    return c * (highest + at_typical), c * (highest + mean + np.hypot(rms, at_typical))
 
 
 @kernel
-def _residual_bound(distance: np.ndarray) -> float:
-    """``max d_f + mean d_f + rms d_f`` [mm] of the frames' residual norms ``d_f`` of
-    ``distance`` ``(n_frames, n)`` [mm] (:func:`surely_rigid`). A compiled kernel."""
-    largest = total = total_sq = 0.0
-    for f in range(distance.shape[0]):
+def _fitted_local(
+    rotation: np.ndarray, translation: np.ndarray, markers: np.ndarray, local: np.ndarray
+) -> None:
+    """Fill ``local`` ``(n_frames, n, 3)`` [mm] with ``markers`` ``(n_frames, n, 3)`` taken
+    into the poses ``(rotation, translation)``: ``R' (x - t)``. A compiled kernel."""
+    for f in range(markers.shape[0]):
+        for m in range(markers.shape[1]):
+            for i in range(3):
+                x = 0.0
+                for j in range(3):
+                    x += rotation[f, j, i] * (markers[f, m, j] - translation[f, j])
+                local[f, m, i] = x
+
+
+@kernel
+def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
+    """Fill ``local`` ``(n_frames, n, 3)`` [mm] with each frame of ``markers``
+    ``(n_frames, n >= 3, 3)`` in a frame of its own: origin the centroid (as a best pose
+    places it), axes along markers ``a`` to ``b``, then normal to them and ``c`` (NaN if the
+    three are collinear), chosen in frame ``typical`` as the two farthest apart and the one
+    farthest from their line, which makes the axes least sensitive to noise. A compiled
+    kernel."""
+    n_markers = markers.shape[1]
+    x = markers[typical]
+    a = b = c = 0
+    longest = farthest = -1.0
+    for i in range(n_markers):
+        for j in range(i + 1, n_markers):
+            length = np.sqrt(np.sum((x[j] - x[i]) ** 2))
+            if length > longest:
+                a, b, longest = i, j, length
+    for k in range(n_markers):
+        along = x[b] - x[a]
+        off = x[k] - x[a]
+        distance = np.sum(np.cross(along, off) ** 2)
+        if distance > farthest:
+            c, farthest = k, distance
+    for f in range(markers.shape[0]):
+        cx = cy = cz = 0.0
+        for m in range(n_markers):
+            cx += markers[f, m, 0]
+            cy += markers[f, m, 1]
+            cz += markers[f, m, 2]
+        cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
+        # u from a to b, w = u x (c - a), v = w x u: a right-handed frame, a proper rotation.
+        ux = markers[f, b, 0] - markers[f, a, 0]
+        uy = markers[f, b, 1] - markers[f, a, 1]
+        uz = markers[f, b, 2] - markers[f, a, 2]
+        px = markers[f, c, 0] - markers[f, a, 0]
+        py = markers[f, c, 1] - markers[f, a, 1]
+        pz = markers[f, c, 2] - markers[f, a, 2]
+        wx, wy, wz = uy * pz - uz * py, uz * px - ux * pz, ux * py - uy * px
+        vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
+        scale = 1.0 / np.sqrt(ux * ux + uy * uy + uz * uz)
+        ux, uy, uz = ux * scale, uy * scale, uz * scale
+        scale = 1.0 / np.sqrt(vx * vx + vy * vy + vz * vz)
+        vx, vy, vz = vx * scale, vy * scale, vz * scale
+        scale = 1.0 / np.sqrt(wx * wx + wy * wy + wz * wz)
+        wx, wy, wz = wx * scale, wy * scale, wz * scale
+        for m in range(n_markers):
+            dx = markers[f, m, 0] - cx
+            dy = markers[f, m, 1] - cy
+            dz = markers[f, m, 2] - cz
+            local[f, m, 0] = ux * dx + uy * dy + uz * dz
+            local[f, m, 1] = vx * dx + vy * dy + vz * dz
+            local[f, m, 2] = wx * dx + wy * dy + wz * dz
+
+
+@kernel
+def _spread(local: np.ndarray, typical: int) -> tuple[float, float, float, float]:
+    """``max u``, ``mean u``, ``rms u`` and ``u_typical`` [mm] of the distances
+    ``u_f = |local[f] - M|`` of the frames ``local`` ``(n_frames, n, 3)`` [mm] from their mean
+    ``M`` (:func:`_rigid_misfits`). A compiled kernel."""
+    n_frames, n_markers = local.shape[0], local.shape[1]
+    mean = np.zeros((n_markers, 3))
+    for f in range(n_frames):
+        for m in range(n_markers):
+            for i in range(3):
+                mean[m, i] += local[f, m, i]
+    mean /= n_frames
+    highest = total = total_sq = at_typical = 0.0
+    for f in range(n_frames):
         norm_sq = 0.0
-        for m in range(distance.shape[1]):
-            norm_sq += distance[f, m] ** 2
+        for m in range(n_markers):
+            for i in range(3):
+                norm_sq += (local[f, m, i] - mean[m, i]) ** 2
         norm = np.sqrt(norm_sq)
-        largest = max(largest, norm)
+        highest = max(highest, norm)  # a NaN (collinear markers) stays in the mean
         total += norm
         total_sq += norm_sq
-    n_frames = distance.shape[0]
-    return largest + total / n_frames + np.sqrt(total_sq / n_frames)
+        if f == typical:
+            at_typical = norm
+    return highest, total / n_frames, np.sqrt(total_sq / n_frames), at_typical
 
 
 def residuals(
