@@ -9,7 +9,6 @@ source says; and the screen must cost less than the fit it guards.
 from __future__ import annotations
 
 import re
-import time
 import warnings
 
 import numpy as np
@@ -17,9 +16,7 @@ import pytest
 
 import jointbench
 from jointbench import screening
-from jointbench.estimators import registry
 from jointbench.geometry import rotation_matrix
-from jointbench.simulate.noise import isotropic_noise
 
 RULES = screening.ArtefactRules()
 
@@ -371,63 +368,6 @@ def test_kernels_compute_what_their_source_says():
         screening._spread(local, 3), screening._spread.__wrapped__(local, 3), rtol=1e-12
     )
     assert screening._most_typical(complete) == screening._most_typical.__wrapped__(complete)
-
-
-def _median_seconds(functions, trials, repeats=7):
-    """Median seconds per call of each of ``functions`` on ``trials``, the calls interleaved so
-    that a change in the machine's load touches them all alike."""
-    timings = [[] for _ in functions]
-    for _ in range(repeats):
-        for markers in trials:
-            for function, kept in zip(functions, timings, strict=True):
-                start = time.perf_counter()
-                function(markers)
-                kept.append(time.perf_counter() - start)
-    return [float(np.median(kept)) for kept in timings]
-
-
-def test_the_public_fits_screen_costs_less_than_the_fit_it_guards():
-    """``fit_center``'s screen (its cost over ``artefacts="ignore"``) against the bare LS fit
-    on the same clean trials (3 markers x 120 frames, 0.5 mm noise), as a ratio measured in
-    one process."""
-    rng = np.random.default_rng(8)
-    trials = [_cluster(rng, noise_mm=0.5) for _ in range(8)]
-    functions = (
-        registry.get("center", "LS", checked=False),
-        lambda markers: jointbench.fit_center(markers, "LS"),
-        lambda markers: jointbench.fit_center(markers, "LS", artefacts="ignore"),
-    )
-    for function in functions:
-        function(trials[0])  # compiles what it needs
-    bare, public, ignored = _median_seconds(functions, trials)
-    assert public - ignored < 5.0 * bare
-
-
-@pytest.mark.parametrize(
-    ("n_frames", "kind", "method", "share"),
-    [(120, "center", "LS", 1.5), (3000, "axis", "planar", 1 / 3)],
-)
-def test_the_screen_of_clean_trials_costs_a_share_of_the_fit(n_frames, kind, method, share):
-    """The screen of clean 3-marker trials (the papers' 1 mm noise), which the bound clears,
-    against a bare fit of the same trials, as a ratio measured in one process. Idle, the
-    screen costs somewhat less than the LS fit of 120 frames (a pose per frame against one
-    linear solve) and a small part of the planar fit of 3000; the shares asserted leave
-    room for load."""
-    rng = np.random.default_rng(13)
-    trials = [
-        _cluster(rng, n_frames=n_frames, noise_mm=0.0) + isotropic_noise(rng, (n_frames, 3), 1.0)
-        for _ in range(4)
-    ]
-    labels = _labels(3)
-    assert all(screening.surely_rigid(markers, labels, "m", RULES) for markers in trials)
-    functions = (
-        registry.get(kind, method, checked=False),
-        lambda markers: screening.find_artefacts(markers, labels, "m"),
-    )
-    for function in functions:
-        function(trials[0])  # compiles what it needs
-    bare, screened = _median_seconds(functions, trials, repeats=5 if n_frames > 1000 else 25)
-    assert screened < share * bare
 
 
 @pytest.mark.parametrize("artefacts", ["refuse", "warn", "ignore"])
