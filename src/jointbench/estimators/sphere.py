@@ -1113,12 +1113,9 @@ def _bc_self_check(
     move it by at most ``tol_x`` (:func:`_bc_update_steps`). BC has no cost to compare
     (:func:`fit_bc`); the update is its defining equation. See
     :mod:`jointbench.estimators.selfcheck`."""
-    del max_iterations, tol_fun
-    if not result.converged:
-        return result
-    # A writable copy: the result's read-only centre would cost the kernel a slower one.
-    step = _bc_update_steps(markers[None], np.array(result.center)[None])[0]
-    return _bc_judged(result, float(step), tol_x)
+    return _bc_self_check_many(
+        [result], markers[None], max_iterations=max_iterations, tol_x=tol_x, tol_fun=tol_fun
+    )[0]
 
 
 def _bc_self_check_many(

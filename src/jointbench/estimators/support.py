@@ -31,10 +31,13 @@ judged from sums over the frames in two compiled passes:
 * ``s^2`` from the inter-marker distances, which a rigid body keeps in any pose: to first order
   the rigid fit's residual is ``sum_k dd_k' G+ dd_k`` over the frames' distance deviations
   ``dd_k`` from their means, with ``G = J J'`` and ``J`` the distances' Jacobian at the mean
-  shape (its entries follow from the mean distances by the law of cosines). ``G``'s rank,
-  ``3 n - 6`` for a non-degenerate cluster, sets the degrees of freedom,
-  ``rank (N - 1)``; a mode weaker than :data:`_FLEX` of the strongest is a flex of a (nearly)
-  flat or collinear cluster, which moves no distance to first order, and is not counted.
+  shape (its entries follow from the mean distances by the law of cosines; a second time
+  from the mean squared distances less their noise, ``6 s^2`` per pair, once ``s^2`` is
+  known). ``G``'s rank, ``3 n - 6`` for a non-degenerate cluster, sets the degrees of freedom,
+  ``rank (N - 1)``. A mode weaker than :data:`_FLEX` of the strongest, or whose first-order
+  signal is under 3 times the second-order one noise adds to a flex (``s^2 / d``, ``d`` the
+  RMS distance), is a flex of a (nearly) flat or collinear cluster, which moves no distance to
+  first order, and is not counted.
 * Rotation: the scatter of the centred markers about their mean positions is the rotation's
   sum of squares plus the rigid residual, so their difference, with
   ``(3 (n - 1) - rank)(N - 1)`` degrees of freedom, is tested against ``s^2``. Its RMS angle is
