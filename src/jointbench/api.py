@@ -22,6 +22,7 @@ a cluster. By default (``artefacts="refuse"``) the fit raises ``ValueError`` nam
 
 from __future__ import annotations
 
+import functools
 import warnings
 
 import numpy as np
@@ -79,13 +80,16 @@ def screen(
     found = {}
     for name, markers in zip(names, segments, strict=True):
         markers = np.asarray(markers, dtype=float)
-        found[name] = screen_markers(markers, _column_labels(name, markers), name, rules)
+        labels = _column_labels(name, markers.shape[1])
+        found[name] = screen_markers(markers, labels, name, rules)
     return found
 
 
-def _column_labels(name: str, markers: np.ndarray) -> tuple[str, ...]:
-    """The labels of ``markers`` ``(n_frames, n, 3)`` in messages: ``name[:, column]``."""
-    return tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
+@functools.cache
+def _column_labels(name: str, n_markers: int) -> tuple[str, ...]:
+    """The labels of the ``n_markers`` columns of the array ``name`` in messages:
+    ``name[:, column]``."""
+    return tuple(f"{name}[:, {column}]" for column in range(n_markers))
 
 
 def describe_screening(found: dict[str, Screening]) -> str | None:
@@ -123,13 +127,14 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
 def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> None:
     """Refuse or warn (``artefacts``) what the screen finds in ``clean``, the checked inputs of
     a ``kind`` fit. Only the artefacts are needed, not the clusters' fits a Screening keeps."""
-    found = {
-        name: Screening(*find_artefacts(markers, _column_labels(name, markers), name))
-        for name, markers in zip(_NAMES[kind], clean, strict=True)
-    }
-    message = describe_screening(found)
-    if message is None:
+    found = {}
+    for name, markers in zip(_NAMES[kind], clean, strict=True):
+        flagged, swaps = find_artefacts(markers, _column_labels(name, markers.shape[1]), name)
+        if flagged:  # swaps come only with the artefacts they explain
+            found[name] = Screening(flagged, swaps)
+    if not found:
         return
+    message = describe_screening(found)
     if artefacts == "refuse":
         raise ValueError(
             f"{message}. Pass artefacts='warn' or 'ignore' to fit the data as they are"

@@ -262,6 +262,9 @@ class ArtefactRules:
     min_jump_mm: float = 20.0
 
 
+_RULES = ArtefactRules()  # the default, made once: a clean trial's screen takes microseconds
+
+
 @dataclass(frozen=True)
 class Artefact:
     """One flagged sample: ``kind`` ``"jump"`` or ``"rigidity"``, ``size_mm`` the step or the
@@ -361,22 +364,43 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
     ``markers`` ``(n_frames, n, 3)`` (NaN where a gap leaves neither neighbour difference) and
     return the largest (-inf if all are NaN). A compiled kernel
     (:mod:`jointbench.numerics.compiled`)."""
-    before = np.empty(3)
-    after = np.empty(3)
     largest = -np.inf
     for k in range(size.shape[0]):
         for m in range(size.shape[1]):
-            for i in range(3):
-                step = markers[k + 2, m, i] - markers[k + 1, m, i]
-                before[i] = step - (markers[k + 1, m, i] - markers[k, m, i])
-                after[i] = step - (markers[k + 3, m, i] - markers[k + 2, m, i])
-            back = np.sqrt(before[0] ** 2 + before[1] ** 2 + before[2] ** 2)
-            ahead = np.sqrt(after[0] ** 2 + after[1] ** 2 + after[2] ** 2)
-            # As np.fmin: the other difference where one is NaN.
-            size[k, m] = ahead if np.isnan(back) or ahead < back else back
+            size[k, m] = np.sqrt(_jump_size_sq(markers, k + 2, m))
             if size[k, m] > largest:  # never for NaN
                 largest = size[k, m]
     return largest
+
+
+@kernel
+def _largest_jump(markers: np.ndarray) -> float:
+    """The largest step size of :func:`find_jumps` of ``markers`` ``(n_frames, n, 3)`` [mm]
+    (-inf if there is none): what :func:`_jump_sizes` returns, without the sizes. A compiled
+    kernel."""
+    largest_sq = -np.inf
+    for k in range(2, markers.shape[0] - 1):
+        for m in range(markers.shape[1]):
+            size_sq = _jump_size_sq(markers, k, m)
+            if size_sq > largest_sq:  # never for NaN
+                largest_sq = size_sq
+    # The square root is monotone, so the root of the largest square is the largest root.
+    return np.sqrt(largest_sq) if largest_sq >= 0.0 else largest_sq
+
+
+@kernel
+def _jump_size_sq(markers: np.ndarray, k: int, m: int) -> float:
+    """The squared step size [mm^2] of :func:`find_jumps` of marker ``m`` at frame ``k``
+    (``2 <= k <= n_frames - 2``) of ``markers`` ``(n_frames, n, 3)``: of the squared changes
+    from the step before and to the step after, the lesser, or the one that is not NaN. A
+    compiled kernel."""
+    back = ahead = 0.0
+    for i in range(3):
+        step = markers[k, m, i] - markers[k - 1, m, i]
+        back += (step - (markers[k - 1, m, i] - markers[k - 2, m, i])) ** 2
+        ahead += (step - (markers[k + 1, m, i] - markers[k, m, i])) ** 2
+    # As np.fmin; squares order as their roots do.
+    return ahead if np.isnan(back) or ahead < back else back
 
 
 @kernel
@@ -490,7 +514,7 @@ def screen(
     """Artefacts of one marker set ``(n_frames, n, 3)`` [mm] (module docstring): rigidity
     breaks and swaps of a cluster of >= 3 markers, jumps of fewer. ``source`` names the data
     in messages. Frame order matters only to the jumps."""
-    rules = rules or ArtefactRules()
+    rules = rules or _RULES
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
     # First judged against one typical frame, which the broken frames cannot distort; then the
@@ -539,12 +563,16 @@ def find_artefacts(
     """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
     [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears needs
     only the jump check, anything else gets the whole screen."""
-    rules = rules or ArtefactRules()
+    rules = rules or _RULES
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules)), ()
-    if not surely_rigid(markers, labels, source, rules):
+    markers = kernel_array(markers)
+    rigid, largest_jump = _rigid_and_largest_jump(markers, rules)
+    if not rigid:
         found = screen(markers, labels, source, rules)
         return found.artefacts, found.swaps
+    if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm
+        return (), ()
     jumps = sorted(find_jumps(markers, labels, rules), key=lambda a: (a.frame, a.label))
     return tuple(jumps), ()
 
@@ -557,15 +585,36 @@ def surely_rigid(
     is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
     first. It does not show that the screen's mean shape converges (where it does not, the
     screen raises)."""
-    if not np.isfinite(markers).all():
-        return False
+    return _rigid_and_largest_jump(kernel_array(markers), rules)[0]
+
+
+def _rigid_and_largest_jump(markers: np.ndarray, rules: ArtefactRules) -> tuple[bool, float]:
+    """:func:`surely_rigid`'s decision on ``markers`` ``(n_frames, n >= 3, 3)`` [mm] (a kernel
+    array) and their largest step size [mm] of :func:`find_jumps`: one compiled call where
+    the marker-frame bounds clear the cluster, a pose fit more where only the fitted ones do."""
     limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
-    markers = kernel_array(markers)
-    typical = _most_typical(markers)  # typical_shape's frame, every frame complete
-    return any(
-        all(bound <= limit for bound in _rigid_misfits(markers, typical, fitted))
-        for fitted in (False, True)
-    )
+    typical, cleared, largest_jump = _screen_sums(markers, limit)
+    if not cleared and typical >= 0:
+        cleared = all(bound <= limit for bound in _rigid_misfits(markers, typical, True))
+    return cleared, largest_jump
+
+
+@kernel
+def _screen_sums(markers: np.ndarray, limit: float) -> tuple[int, bool, float]:
+    """What :func:`find_artefacts` needs of the cluster ``markers`` ``(n_frames, n >= 3, 3)``
+    [mm] before a pose fit: its typical frame (:func:`typical_shape`'s; -1 where a sample is
+    missing, which leaves no bound to try), whether the marker-frame bounds of
+    :func:`_rigid_misfits` are at most ``limit`` [mm], and the largest step size [mm] of
+    :func:`find_jumps` (-inf if none). A compiled kernel."""
+    largest_jump = _largest_jump(markers)
+    for f in range(markers.shape[0]):
+        for m in range(markers.shape[1]):
+            for i in range(3):
+                if not np.isfinite(markers[f, m, i]):
+                    return -1, False, largest_jump
+    typical = _most_typical(markers)  # every frame complete
+    first, second = _frame_misfits(markers, typical)
+    return typical, first <= limit and second <= limit, largest_jump
 
 
 def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
@@ -598,18 +647,33 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
     ``1 / (n - 1)`` as far back), steps 2-4 nearly so when one frame of many carries all the
     misfit and ``Q_f`` is its best pose.
     """
+    if not fitted:
+        return _frame_misfits(markers, typical)
+    rotation, translation = fit_poses(markers[typical], markers)
+    largest = float(residuals(markers[typical], rotation, translation, markers).max())
     local = np.empty_like(markers)
-    if fitted:
-        rotation, translation = fit_poses(markers[typical], markers)
-        largest = float(residuals(markers[typical], rotation, translation, markers).max())
-        _fitted_local(rotation, translation, markers, local)
-    else:
-        _triad_local(markers, typical, local)
+    _fitted_local(rotation, translation, markers, local)
+    highest, mean, rms, _ = _spread(local, typical)
+    return largest, _per_marker(markers.shape[1]) * (highest + mean + rms)
+
+
+@kernel
+def _frame_misfits(markers: np.ndarray, typical: int) -> tuple[float, float]:
+    """The bounds [mm] of :func:`_rigid_misfits` without ``fitted``: from each frame of
+    ``markers`` ``(n_frames, n >= 3, 3)`` [mm] in its marker frame (:func:`_triad_local`).
+    A compiled kernel."""
+    local = np.empty_like(markers)
+    _triad_local(markers, typical, local)
     highest, mean, rms, at_typical = _spread(local, typical)
-    c = np.sqrt((markers.shape[1] - 1) / markers.shape[1])
-    if fitted:
-        return largest, c * (highest + mean + rms)
+    c = _per_marker(markers.shape[1])
     return c * (highest + at_typical), c * (highest + mean + np.hypot(rms, at_typical))
+
+
+@kernel
+def _per_marker(n_markers: int) -> float:
+    """``c = sqrt((n - 1) / n)`` of :func:`_rigid_misfits`, which takes a frame's residual
+    norm to a bound of its markers' residuals. A compiled kernel."""
+    return np.sqrt((n_markers - 1) / n_markers)
 
 
 @kernel
