@@ -365,41 +365,52 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
     return the largest (-inf if all are NaN). A compiled kernel
     (:mod:`jointbench.numerics.compiled`)."""
     largest = -np.inf
-    for k in range(size.shape[0]):
-        for m in range(size.shape[1]):
-            size[k, m] = np.sqrt(_jump_size_sq(markers, k + 2, m))
+    for m in range(size.shape[1] if size.shape[0] else 0):
+        # Each change of step is the one after a frame and the one before the next.
+        back = _step_change_sq(markers, 2, m)
+        for k in range(size.shape[0]):
+            ahead = _step_change_sq(markers, k + 3, m)
+            size[k, m] = np.sqrt(_lesser(back, ahead))
             if size[k, m] > largest:  # never for NaN
                 largest = size[k, m]
+            back = ahead
     return largest
 
 
 @kernel
 def _largest_jump(markers: np.ndarray) -> float:
-    """The largest step size of :func:`find_jumps` of ``markers`` ``(n_frames, n, 3)`` [mm]
+    """The largest step size [mm] of :func:`find_jumps` of ``markers`` ``(n_frames, n, 3)``
     (-inf if there is none): what :func:`_jump_sizes` returns, without the sizes. A compiled
     kernel."""
     largest_sq = -np.inf
-    for k in range(2, markers.shape[0] - 1):
-        for m in range(markers.shape[1]):
-            size_sq = _jump_size_sq(markers, k, m)
+    for m in range(markers.shape[1] if markers.shape[0] >= 4 else 0):
+        back = _step_change_sq(markers, 2, m)
+        for k in range(3, markers.shape[0]):
+            ahead = _step_change_sq(markers, k, m)
+            size_sq = _lesser(back, ahead)
             if size_sq > largest_sq:  # never for NaN
                 largest_sq = size_sq
-    # The square root is monotone, so the root of the largest square is the largest root.
+            back = ahead
+    # The square root is monotone: the root of the largest square is the largest root.
     return np.sqrt(largest_sq) if largest_sq >= 0.0 else largest_sq
 
 
 @kernel
-def _jump_size_sq(markers: np.ndarray, k: int, m: int) -> float:
-    """The squared step size [mm^2] of :func:`find_jumps` of marker ``m`` at frame ``k``
-    (``2 <= k <= n_frames - 2``) of ``markers`` ``(n_frames, n, 3)``: of the squared changes
-    from the step before and to the step after, the lesser, or the one that is not NaN. A
-    compiled kernel."""
-    back = ahead = 0.0
+def _step_change_sq(markers: np.ndarray, k: int, m: int) -> float:
+    """``|s_k - s_(k-1)|^2`` [mm^2] of marker ``m`` of ``markers`` ``(n_frames, n, 3)`` at frame
+    ``2 <= k < n_frames``, ``s_k = x_k - x_(k-1)``: the squared change of :func:`find_jumps`
+    from the step before frame ``k - 1`` to the step after it. A compiled kernel."""
+    change = 0.0
     for i in range(3):
         step = markers[k, m, i] - markers[k - 1, m, i]
-        back += (step - (markers[k - 1, m, i] - markers[k - 2, m, i])) ** 2
-        ahead += (step - (markers[k + 1, m, i] - markers[k, m, i])) ** 2
-    # As np.fmin; squares order as their roots do.
+        change += (step - (markers[k - 1, m, i] - markers[k - 2, m, i])) ** 2
+    return change
+
+
+@kernel
+def _lesser(back: float, ahead: float) -> float:
+    """The lesser of two squared changes, or the one that is not NaN, as ``np.fmin``; squares
+    order as their roots do. A compiled kernel."""
     return ahead if np.isnan(back) or ahead < back else back
 
 
@@ -605,16 +616,15 @@ def _screen_sums(markers: np.ndarray, limit: float) -> tuple[int, bool, float]:
     [mm] before a pose fit: its typical frame (:func:`typical_shape`'s; -1 where a sample is
     missing, which leaves no bound to try), whether the marker-frame bounds of
     :func:`_rigid_misfits` are at most ``limit`` [mm], and the largest step size [mm] of
-    :func:`find_jumps` (-inf if none). A compiled kernel."""
-    largest_jump = _largest_jump(markers)
+    :func:`find_jumps` (-inf if none; NaN where a sample is missing). A compiled kernel."""
     for f in range(markers.shape[0]):
         for m in range(markers.shape[1]):
             for i in range(3):
                 if not np.isfinite(markers[f, m, i]):
-                    return -1, False, largest_jump
+                    return -1, False, np.nan  # the whole screen finds the jumps
     typical = _most_typical(markers)  # every frame complete
     first, second = _frame_misfits(markers, typical)
-    return typical, first <= limit and second <= limit, largest_jump
+    return typical, first <= limit and second <= limit, _largest_jump(markers)
 
 
 def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
@@ -705,13 +715,15 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
     longest = farthest = -1.0
     for i in range(n_markers):
         for j in range(i + 1, n_markers):
-            length = np.sqrt(np.sum((x[j] - x[i]) ** 2))
+            length = np.sqrt(
+                (x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2
+            )
             if length > longest:
                 a, b, longest = i, j, length
+    ux, uy, uz = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
     for k in range(n_markers):
-        along = x[b] - x[a]
-        off = x[k] - x[a]
-        distance = np.sum(np.cross(along, off) ** 2)
+        px, py, pz = x[k, 0] - x[a, 0], x[k, 1] - x[a, 1], x[k, 2] - x[a, 2]
+        distance = (uy * pz - uz * py) ** 2 + (uz * px - ux * pz) ** 2 + (ux * py - uy * px) ** 2
         if distance > farthest:
             c, farthest = k, distance
     for f in range(markers.shape[0]):
