@@ -91,12 +91,11 @@ def _pose_sums(
     ``trace(R' cross)`` exceeds. A compiled kernel (:mod:`jointbench.numerics.compiled`)."""
     n_markers = shape.shape[0]
     visible = np.empty(n_markers, dtype=np.bool_)
-    target = np.empty(3)
-    source = np.empty(3)
     for f in range(markers.shape[0]):
+        # Sums in local variables, not in the arrays: the compiler must assume that a store
+        # into an array may change any other, and would reload every operand after each.
         count = 0
-        target[:] = 0.0
-        source[:] = 0.0
+        tx = ty = tz = sx = sy = sz = 0.0
         for m in range(n_markers):
             visible[m] = (
                 np.isfinite(markers[f, m, 0])
@@ -105,25 +104,33 @@ def _pose_sums(
             )
             if visible[m]:
                 count += 1
-                for i in range(3):
-                    target[i] += markers[f, m, i]
-                    source[i] += shape[m, i]
-        for i in range(3):
-            target[i] /= max(count, 1)
-            source[i] /= max(count, 1)
-            for j in range(3):
-                cross[f, i, j] = 0.0
-        bound[f] = 0.0
+                tx, ty, tz = tx + markers[f, m, 0], ty + markers[f, m, 1], tz + markers[f, m, 2]
+                sx, sy, sz = sx + shape[m, 0], sy + shape[m, 1], sz + shape[m, 2]
+        divisor = max(count, 1)
+        tx, ty, tz = tx / divisor, ty / divisor, tz / divisor
+        sx, sy, sz = sx / divisor, sy / divisor, sz / divisor
+        hxx = hxy = hxz = hyx = hyy = hyz = hzx = hzy = hzz = total = 0.0
         for m in range(n_markers):
             if visible[m]:
-                for i in range(3):
-                    x = markers[f, m, i] - target[i]
-                    bound[f] += 0.5 * (x * x + (shape[m, i] - source[i]) ** 2)
-                    for j in range(3):
-                        cross[f, i, j] += x * (shape[m, j] - source[j])
-        for i in range(3):
-            centroids[f, 0, i] = target[i] if count >= 3 else np.nan
-            centroids[f, 1, i] = source[i] if count >= 3 else np.nan
+                x, y, z = markers[f, m, 0] - tx, markers[f, m, 1] - ty, markers[f, m, 2] - tz
+                a, b, c = shape[m, 0] - sx, shape[m, 1] - sy, shape[m, 2] - sz
+                total += 0.5 * (x * x + a**2)
+                total += 0.5 * (y * y + b**2)
+                total += 0.5 * (z * z + c**2)
+                hxx, hxy, hxz = hxx + x * a, hxy + x * b, hxz + x * c
+                hyx, hyy, hyz = hyx + y * a, hyy + y * b, hyz + y * c
+                hzx, hzy, hzz = hzx + z * a, hzy + z * b, hzz + z * c
+        cross[f, 0, 0], cross[f, 0, 1], cross[f, 0, 2] = hxx, hxy, hxz
+        cross[f, 1, 0], cross[f, 1, 1], cross[f, 1, 2] = hyx, hyy, hyz
+        cross[f, 2, 0], cross[f, 2, 1], cross[f, 2, 2] = hzx, hzy, hzz
+        bound[f] = total
+        complete = count >= 3
+        centroids[f, 0, 0] = tx if complete else np.nan
+        centroids[f, 0, 1] = ty if complete else np.nan
+        centroids[f, 0, 2] = tz if complete else np.nan
+        centroids[f, 1, 0] = sx if complete else np.nan
+        centroids[f, 1, 1] = sy if complete else np.nan
+        centroids[f, 1, 2] = sz if complete else np.nan
 
 
 @kernel
