@@ -735,14 +735,13 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
         distance = (uy * pz - uz * py) ** 2 + (uz * px - ux * pz) ** 2 + (ux * py - uy * px) ** 2
         if distance > farthest:
             c, farthest = k, distance
-    for f in range(markers.shape[0]):
-        cx = cy = cz = 0.0
-        for m in range(n_markers):
-            cx += markers[f, m, 0]
-            cy += markers[f, m, 1]
-            cz += markers[f, m, 2]
-        cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
-        # u from a to b, w = u x (c - a), v = w x u: a right-handed frame, a proper rotation.
+    n_frames = markers.shape[0]
+    # u from a to b, w = u x (c - a), v = w x u: a right-handed frame, a proper rotation. The
+    # axes' reciprocal lengths are taken in a loop of their own, where the roots and divisions
+    # of many frames overlap instead of waiting on each other.
+    axes = np.empty((n_frames, 3, 3))
+    scales = np.empty(n_frames * 3)
+    for f in range(n_frames):
         ux = markers[f, b, 0] - markers[f, a, 0]
         uy = markers[f, b, 1] - markers[f, a, 1]
         uz = markers[f, b, 2] - markers[f, a, 2]
@@ -751,12 +750,27 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
         pz = markers[f, c, 2] - markers[f, a, 2]
         wx, wy, wz = uy * pz - uz * py, uz * px - ux * pz, ux * py - uy * px
         vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
-        scale = 1.0 / np.sqrt(ux * ux + uy * uy + uz * uz)
-        ux, uy, uz = ux * scale, uy * scale, uz * scale
-        scale = 1.0 / np.sqrt(vx * vx + vy * vy + vz * vz)
-        vx, vy, vz = vx * scale, vy * scale, vz * scale
-        scale = 1.0 / np.sqrt(wx * wx + wy * wy + wz * wz)
-        wx, wy, wz = wx * scale, wy * scale, wz * scale
+        axes[f, 0, 0], axes[f, 0, 1], axes[f, 0, 2] = ux, uy, uz
+        axes[f, 1, 0], axes[f, 1, 1], axes[f, 1, 2] = vx, vy, vz
+        axes[f, 2, 0], axes[f, 2, 1], axes[f, 2, 2] = wx, wy, wz
+        scales[3 * f] = ux * ux + uy * uy + uz * uz
+        scales[3 * f + 1] = vx * vx + vy * vy + vz * vz
+        scales[3 * f + 2] = wx * wx + wy * wy + wz * wz
+    for k in range(scales.size):
+        scales[k] = 1.0 / np.sqrt(scales[k])
+    for f in range(n_frames):
+        cx = cy = cz = 0.0
+        for m in range(n_markers):
+            cx += markers[f, m, 0]
+            cy += markers[f, m, 1]
+            cz += markers[f, m, 2]
+        cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
+        scale = scales[3 * f]
+        ux, uy, uz = axes[f, 0, 0] * scale, axes[f, 0, 1] * scale, axes[f, 0, 2] * scale
+        scale = scales[3 * f + 1]
+        vx, vy, vz = axes[f, 1, 0] * scale, axes[f, 1, 1] * scale, axes[f, 1, 2] * scale
+        scale = scales[3 * f + 2]
+        wx, wy, wz = axes[f, 2, 0] * scale, axes[f, 2, 1] * scale, axes[f, 2, 2] * scale
         for m in range(n_markers):
             dx = markers[f, m, 0] - cx
             dy = markers[f, m, 1] - cy
