@@ -736,23 +736,11 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
         if distance > farthest:
             c, farthest = k, distance
     n_frames = markers.shape[0]
-    # u from a to b, w = u x (c - a), v = w x u: a right-handed frame, a proper rotation. The
-    # axes' reciprocal lengths are taken in a loop of their own, where the roots and divisions
-    # of many frames overlap instead of waiting on each other.
-    axes = np.empty((n_frames, 3, 3))
-    scales = np.empty(n_frames * 3)
+    # The axes' reciprocal lengths in a loop of their own, where the roots and divisions of
+    # many frames overlap instead of waiting on each other; the axes are made again after.
+    scales = np.empty(3 * n_frames)
     for f in range(n_frames):
-        ux = markers[f, b, 0] - markers[f, a, 0]
-        uy = markers[f, b, 1] - markers[f, a, 1]
-        uz = markers[f, b, 2] - markers[f, a, 2]
-        px = markers[f, c, 0] - markers[f, a, 0]
-        py = markers[f, c, 1] - markers[f, a, 1]
-        pz = markers[f, c, 2] - markers[f, a, 2]
-        wx, wy, wz = uy * pz - uz * py, uz * px - ux * pz, ux * py - uy * px
-        vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
-        axes[f, 0, 0], axes[f, 0, 1], axes[f, 0, 2] = ux, uy, uz
-        axes[f, 1, 0], axes[f, 1, 1], axes[f, 1, 2] = vx, vy, vz
-        axes[f, 2, 0], axes[f, 2, 1], axes[f, 2, 2] = wx, wy, wz
+        ux, uy, uz, vx, vy, vz, wx, wy, wz = _triad_axes(markers, f, a, b, c)
         scales[3 * f] = ux * ux + uy * uy + uz * uz
         scales[3 * f + 1] = vx * vx + vy * vy + vz * vz
         scales[3 * f + 2] = wx * wx + wy * wy + wz * wz
@@ -765,12 +753,13 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
             cy += markers[f, m, 1]
             cz += markers[f, m, 2]
         cx, cy, cz = cx / n_markers, cy / n_markers, cz / n_markers
+        ux, uy, uz, vx, vy, vz, wx, wy, wz = _triad_axes(markers, f, a, b, c)
         scale = scales[3 * f]
-        ux, uy, uz = axes[f, 0, 0] * scale, axes[f, 0, 1] * scale, axes[f, 0, 2] * scale
+        ux, uy, uz = ux * scale, uy * scale, uz * scale
         scale = scales[3 * f + 1]
-        vx, vy, vz = axes[f, 1, 0] * scale, axes[f, 1, 1] * scale, axes[f, 1, 2] * scale
+        vx, vy, vz = vx * scale, vy * scale, vz * scale
         scale = scales[3 * f + 2]
-        wx, wy, wz = axes[f, 2, 0] * scale, axes[f, 2, 1] * scale, axes[f, 2, 2] * scale
+        wx, wy, wz = wx * scale, wy * scale, wz * scale
         for m in range(n_markers):
             dx = markers[f, m, 0] - cx
             dy = markers[f, m, 1] - cy
@@ -778,6 +767,25 @@ def _triad_local(markers: np.ndarray, typical: int, local: np.ndarray) -> None:
             local[f, m, 0] = ux * dx + uy * dy + uz * dz
             local[f, m, 1] = vx * dx + vy * dy + vz * dz
             local[f, m, 2] = wx * dx + wy * dy + wz * dz
+
+
+@kernel
+def _triad_axes(
+    markers: np.ndarray, f: int, a: int, b: int, c: int
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """The axes ``u, v, w`` of :func:`_triad_local`'s frame of frame ``f`` of ``markers``
+    ``(n_frames, n, 3)`` [mm], not yet of unit length: ``u`` from marker ``a`` to ``b``,
+    ``w = u x (c - a)``, ``v = w x u``, a right-handed frame (a proper rotation once
+    normalised). A compiled kernel."""
+    ux = markers[f, b, 0] - markers[f, a, 0]
+    uy = markers[f, b, 1] - markers[f, a, 1]
+    uz = markers[f, b, 2] - markers[f, a, 2]
+    px = markers[f, c, 0] - markers[f, a, 0]
+    py = markers[f, c, 1] - markers[f, a, 1]
+    pz = markers[f, c, 2] - markers[f, a, 2]
+    wx, wy, wz = uy * pz - uz * py, uz * px - ux * pz, ux * py - uy * px
+    vx, vy, vz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
+    return ux, uy, uz, vx, vy, vz, wx, wy, wz
 
 
 @kernel
