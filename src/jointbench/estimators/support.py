@@ -954,7 +954,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
 
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
-    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3])
+    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
     verdicts = []
     for t, row in enumerate(numbers.tolist()):
         variance, share, weakest, collinear = row[:4]
@@ -970,9 +970,11 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             )
         else:
             # The hinge is given the candidate axis that explains the data better.
-            p_any, *p_off = p_values[t].tolist()
-            better = 1 + int(p_off[1] > p_off[0])
-            tests = (row[5], p_any, row[5 + 3 * better], p_off[better - 1])
+            p_any, p_least_moving, p_rotation_axis = p_values[t]
+            if p_rotation_axis > p_least_moving:
+                tests = (row[5], p_any, row[11], p_rotation_axis)
+            else:
+                tests = (row[5], p_any, row[8], p_least_moving)
             rigidity = [(share, math.sqrt(3.0 * variance))]
             verdicts.append(_verdict(kind, ("markers",), rigidity, variance, tests))
     return verdicts
@@ -1094,7 +1096,7 @@ def _verdict(kind, names, rigidity, variance, tests) -> Support:
     [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
     off the main axis."""
     residual_mm = math.sqrt(3.0 * variance)
-    rms_rad, p_any, second_rms_rad, p_second = (float(value) for value in tests)
+    rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
     warnings = [
         f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
