@@ -425,19 +425,6 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     )
     for t in range(n_trials):
         trial = markers[t]
-        # Frame 0's inertia sum |u|^2 I - sum u u', its inverse and square root: the
-        # rotations from frame 0, linearised, and their noise.
-        _centred_frame(trial[0], first_c)
-        inertia_into(first_c, work3)
-        symmetric_eigen_into(work3, values3, vectors3, whitened)
-        for i in range(3):
-            for j in range(3):
-                inverse[i, j] = 0.0
-                root[i, j] = 0.0
-                for k in range(3):
-                    if values3[k] > 1e-12 * values3[2]:
-                        inverse[i, j] += vectors3[i, k] * vectors3[j, k] / values3[k]
-                        root[i, j] += vectors3[i, k] * vectors3[j, k] * np.sqrt(values3[k])
         sum_e[:] = 0.0
         # Scalar sums: the pooled scatter of the displacements e, and the linearised rotations
         # w and their outer products (upper triangles).
@@ -448,7 +435,19 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
         largest = 0.0
         # First pass: the markers' motion from frame 0, and their pair differences.
         for f in range(n_frames):
-            _centred_frame(trial[f], centred)
+            for i in range(3):
+                total = 0.0
+                for m in range(n_markers):
+                    total += trial[f, m, i]
+                mean = total / n_markers
+                for m in range(n_markers):
+                    centred[m, i] = trial[f, m, i] - mean
+            if f == 0:
+                # Frame 0's inertia sum |u|^2 I - sum u u', its inverse and square root: the
+                # rotations from frame 0, linearised, and their noise.
+                first_c[:] = centred
+                inertia_into(first_c, work3)
+                _inverse_and_root(work3, inverse, root, (values3, vectors3, whitened))
             moment0 = 0.0
             moment1 = 0.0
             moment2 = 0.0
@@ -625,17 +624,23 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
 
 
 @kernel
-def _centred_frame(frame: np.ndarray, centred: np.ndarray) -> None:
-    """The markers ``frame`` ``(n, 3)`` [mm] less their centroid, into ``centred`` ``(n, 3)``.
-    A compiled kernel."""
-    n_markers = frame.shape[0]
+def _inverse_and_root(
+    matrix: np.ndarray, inverse: np.ndarray, root: np.ndarray, scratch: tuple[np.ndarray, ...]
+) -> None:
+    """The pseudo-inverse and the square root of the symmetric positive semi-definite
+    ``matrix`` ``(3, 3)``, into ``inverse`` and ``root`` ``(3, 3)``, from its eigen-decomposition
+    (modes at or below 1e-12 of the strongest left out); ``scratch`` holds work arrays ``(3,)``,
+    ``(3, 3)`` and ``(3, 3)``. A compiled kernel."""
+    values, vectors, work = scratch
+    symmetric_eigen_into(matrix, values, vectors, work)
     for i in range(3):
-        total = 0.0
-        for m in range(n_markers):
-            total += frame[m, i]
-        mean = total / n_markers
-        for m in range(n_markers):
-            centred[m, i] = frame[m, i] - mean
+        for j in range(3):
+            inverse[i, j] = 0.0
+            root[i, j] = 0.0
+            for k in range(3):
+                if values[k] > 1e-12 * values[2]:
+                    inverse[i, j] += vectors[i, k] * vectors[j, k] / values[k]
+                    root[i, j] += vectors[i, k] * vectors[j, k] * np.sqrt(values[k])
 
 
 @kernel
