@@ -383,7 +383,19 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             p += 1
     # Work arrays, reused by every trial.
     differences = np.empty((n_pairs, 3, n_frames))
-    lengths = np.empty((n_pairs, n_frames))
+    # The distances per frame, and a row of ones (_distance_moments).
+    lengths = np.ones((n_pairs + 1, n_frames))
+    n_terms = n_pairs + n_pairs * (n_pairs + 1) // 2
+    left = np.full(4 * ((n_terms + 3) // 4), n_pairs)
+    right = np.full(left.shape[0], n_pairs)
+    k = n_pairs
+    for p in range(n_pairs):
+        left[p] = p
+        for q in range(p, n_pairs):
+            left[k] = p
+            right[k] = q
+            k += 1
+    terms = (left, right, np.empty(left.shape[0]))
     # Three sets of distances: the cluster's own (set 0), and those of its projections on the
     # planes normal to the two candidate hinge axes (sets 1 and 2).
     planes = np.empty((3, 2, 3))
@@ -391,7 +403,6 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     sum_d = np.empty(n_pairs)
     scatter_d = np.empty((3, n_pairs, n_pairs))
     mean_sq = np.empty((3, n_pairs))
-    delta = np.empty(n_pairs)
     residual = np.empty(3)
     rank = np.empty(3)
     off_axis = np.empty(2)
@@ -407,6 +418,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     whitened = np.empty((3, 3))
     axes = np.empty((2, 3))
     values3 = np.empty(3)
+    principal = np.empty(3)
     vectors3 = np.empty((3, 3))
     work3 = np.empty((3, 3))
     mean_d = np.empty(n_pairs)
@@ -495,7 +507,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             dx, dy, dz = differences[p, 0], differences[p, 1], differences[p, 2]
             for f in range(n_frames):
                 lengths[p, f] = np.sqrt(dx[f] * dx[f] + dy[f] * dy[f] + dz[f] * dz[f])
-        _distance_moments(lengths, first_d[0], sum_d, scatter_d[0], mean_sq[0], delta)
+        _distance_moments(lengths, first_d[0], sum_d, scatter_d[0], mean_sq[0], terms)
         # The cluster's own distance residual, from its mean distances and again from its mean
         # squared distances less their noise (6 s^2 per pair), and the residual per degree of
         # freedom each gives.
@@ -551,9 +563,15 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
         symmetric_eigen_into(pooled, values3, vectors3, work3)
         for i in range(3):
             axes[0, i] = vectors3[i, 0]
-        whitened[:] = root @ outer_w @ root
+        # Products by BLAS, into the work arrays: the axis is an eigenvector of a nearly
+        # isotropic matrix when the rotation is small, and moves with the products' rounding.
+        np.dot(root, outer_w, work3)
+        np.dot(work3, root, whitened)
         symmetric_eigen_into(whitened, values3, vectors3, work3)
-        axes[1] = inverse @ (root @ np.ascontiguousarray(vectors3[:, 2]))
+        for i in range(3):
+            principal[i] = vectors3[i, 2]
+        np.dot(root, principal, values3)
+        np.dot(inverse, values3, axes[1])
         for c in range(2):
             off_axis[c] = _hinge_plane(axes[c], pooled, planes[c + 1])
         # Second pass: the distances of the projections on the candidate hinges' planes.
@@ -566,7 +584,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                     along_u = u0 * dx[f] + u1 * dy[f] + u2 * dz[f]
                     along_v = v0 * dx[f] + v1 * dy[f] + v2 * dz[f]
                     lengths[p, f] = np.sqrt(along_u * along_u + along_v * along_v)
-            _distance_moments(lengths, first_d[s], sum_d, scatter_d[s], mean_sq[s], delta)
+            _distance_moments(lengths, first_d[s], sum_d, scatter_d[s], mean_sq[s], terms)
             # The projection's mean distances less their noise (4 s^2 per pair in 2-D).
             for p in range(n_pairs):
                 mean_d[p] = np.sqrt(max(mean_sq[s, p] - 4.0 * variance, 0.0))
@@ -650,25 +668,51 @@ def _distance_moments(
     total: np.ndarray,
     scatter: np.ndarray,
     mean_sq: np.ndarray,
-    delta: np.ndarray,
+    terms: tuple[np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
-    """The moments of the distances ``lengths`` ``(P, N)`` [mm] over the frames: their values at
-    frame 0 ``first`` ``(P,)`` [mm], the sum ``total`` ``(P,)`` [mm] of their deviations from
+    """The moments of the distances ``lengths[:P]`` ``(P, N)`` [mm] over the frames: their values
+    at frame 0 ``first`` ``(P,)`` [mm], the sum ``total`` ``(P,)`` [mm] of their deviations from
     those, the deviations' scatter about their mean ``scatter`` ``(P, P)`` [mm^2] and the mean
-    squared distances ``mean_sq`` ``(P,)`` [mm^2], summed frame by frame from the deviations;
-    ``delta`` ``(P,)`` is scratch. A compiled kernel."""
-    n_pairs, n_frames = lengths.shape
+    squared distances ``mean_sq`` ``(P,)`` [mm^2], each sum taken frame by frame.
+
+    The distances are replaced by their deviations; ``lengths[P]`` holds ones. ``terms`` holds
+    the rows ``left`` and ``right`` ``(K,)`` whose products are summed (``K`` a multiple of 4:
+    the ``P`` totals as products with the ones, then the upper scatter row by row, then
+    padding) and their sums ``(K,)``: four sums at a time, side by side, each in frame order.
+    A compiled kernel."""
+    left, right, sums = terms
+    n_pairs = first.shape[0]
+    n_frames = lengths.shape[1]
     for p in range(n_pairs):
         first[p] = lengths[p, 0]
-    total[:] = 0.0
-    scatter[:] = 0.0
-    for f in range(n_frames):
-        for p in range(n_pairs):
-            delta[p] = lengths[p, f] - first[p]
-            total[p] += delta[p]
-        for p in range(n_pairs):
-            for q in range(p, n_pairs):
-                scatter[p, q] += delta[p] * delta[q]
+        for f in range(n_frames):
+            lengths[p, f] -= first[p]
+    for k in range(0, left.shape[0], 4):
+        a0, a1, a2, a3 = (
+            lengths[left[k]],
+            lengths[left[k + 1]],
+            lengths[left[k + 2]],
+            lengths[left[k + 3]],
+        )
+        b0, b1, b2, b3 = (
+            lengths[right[k]],
+            lengths[right[k + 1]],
+            lengths[right[k + 2]],
+            lengths[right[k + 3]],
+        )
+        sum0 = sum1 = sum2 = sum3 = 0.0
+        for f in range(n_frames):
+            sum0 += a0[f] * b0[f]
+            sum1 += a1[f] * b1[f]
+            sum2 += a2[f] * b2[f]
+            sum3 += a3[f] * b3[f]
+        sums[k], sums[k + 1], sums[k + 2], sums[k + 3] = sum0, sum1, sum2, sum3
+    k = n_pairs
+    for p in range(n_pairs):
+        total[p] = sums[p]
+        for q in range(p, n_pairs):
+            scatter[p, q] = sums[k]
+            k += 1
     for p in range(n_pairs):
         mean_sq[p] = first[p] ** 2 + 2.0 * first[p] * total[p] / n_frames
         mean_sq[p] += (scatter[p, p] + total[p] ** 2 / n_frames) / n_frames
