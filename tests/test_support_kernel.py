@@ -7,7 +7,7 @@ support sweep, the calibration's hinges, static clusters, rotations about two ax
 and elongated clusters, and edge cases of its own (3 to 8 markers, 2 to 300 frames, collinear
 and nearly collinear clusters, noise-free data, offsets of 1e6 mm and coordinates at 1e9 mm).
 A faster kernel must compute the same numbers: to 1e-12 relative, or 1e-12 of the column's
-largest finite value where a number is near zero; infinities and zeros where they were.
+largest finite value where a number is near zero; infinities where they were.
 ``python tests/test_support_kernel.py`` rewrites the file, for a deliberate change of the
 verdict only.
 """
