@@ -87,7 +87,7 @@ from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import best_rotation
-from jointbench.numerics.small import inertia, symmetric_eigen
+from jointbench.numerics.small import inertia, inertia_into, symmetric_eigen_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
@@ -367,14 +367,12 @@ _FLEX = 1e-2
 def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     """The numbers of the one-segment verdict (module docstring) for ``markers``
     ``(T, N, n >= 3, 3)`` [mm]: per trial the columns of :data:`_ONE_SEGMENT_COLUMNS`, from
-    two passes over the frames. Modes of a distance Gram matrix weaker than
-    ``flex`` times its strongest are flexes, not shape. A compiled kernel."""
+    one pass over the frames' markers, which keeps each frame's marker-pair differences, and
+    one over those differences. Modes of a distance Gram matrix weaker than ``flex`` times its
+    strongest are flexes, not shape. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
     n_pairs = n_markers * (n_markers - 1) // 2
     out = np.zeros((n_trials, len(_ONE_SEGMENT_COLUMNS)))
-    off_axis = np.empty(2)
-    off_axis_rank = np.empty(2)
-    flat = np.zeros(2, dtype=np.bool_)
     pair_a = np.empty(n_pairs, dtype=np.int64)
     pair_b = np.empty(n_pairs, dtype=np.int64)
     p = 0
@@ -383,250 +381,225 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             pair_a[p] = a
             pair_b[p] = b
             p += 1
+    # Work arrays, reused by every trial.
+    differences = np.empty((n_pairs, 3, n_frames))
+    # The distances per frame, and a row of ones (_distance_moments).
+    lengths = np.ones((n_pairs + 1, n_frames))
+    n_terms = n_pairs + n_pairs * (n_pairs + 1) // 2
+    left = np.full(4 * ((n_terms + 3) // 4), n_pairs)
+    right = np.full(left.shape[0], n_pairs)
+    k = n_pairs
+    for p in range(n_pairs):
+        left[p] = p
+        for q in range(p, n_pairs):
+            left[k] = p
+            right[k] = q
+            k += 1
+    terms = (left, right, np.empty(left.shape[0]))
     # Three sets of distances: the cluster's own (set 0), and those of its projections on the
     # planes normal to the two candidate hinge axes (sets 1 and 2).
     planes = np.empty((3, 2, 3))
     first_d = np.empty((3, n_pairs))
-    sum_d = np.empty((3, n_pairs))
+    sum_d = np.empty(n_pairs)
     scatter_d = np.empty((3, n_pairs, n_pairs))
+    mean_sq = np.empty((3, n_pairs))
     residual = np.empty(3)
     rank = np.empty(3)
-    delta = np.empty(n_pairs)
+    off_axis = np.empty(2)
+    flat = np.zeros(2, dtype=np.bool_)
     first_c = np.empty((n_markers, 3))
+    centred = np.empty((n_markers, 3))
     sum_e = np.empty((n_markers, 3))
     pooled = np.empty((3, 3))
     inverse = np.empty((3, 3))
     root = np.empty((3, 3))
     sum_w = np.empty(3)
     outer_w = np.empty((3, 3))
-    moment = np.empty(3)
-    w = np.empty(3)
-    centroid = np.empty(3)
-    centred = np.empty((n_markers, 3))
-    squared = np.empty((n_markers, n_markers))
-    mean_d = np.empty(n_pairs)
-    mean_sq = np.empty(n_pairs)
-    gram = np.empty((n_markers, n_markers))
-    g = np.empty((n_pairs, n_pairs))
+    whitened = np.empty((3, 3))
     axes = np.empty((2, 3))
+    values3 = np.empty(3)
+    principal = np.empty(3)
+    vectors3 = np.empty((3, 3))
+    work3 = np.empty((3, 3))
+    mean_d = np.empty(n_pairs)
+    squared = np.empty((n_markers, n_markers))
+    row_sums = np.empty(n_markers)
+    gram = np.empty((n_markers, n_markers))
+    mu = np.empty(n_markers)
+    vectors_n = np.empty((n_markers, n_markers))
+    work_n = np.empty((n_markers, n_markers))
+    scratch = (
+        squared,
+        np.empty((n_pairs, n_pairs)),
+        np.empty(n_pairs),
+        np.empty((n_pairs, n_pairs)),
+        np.empty((n_pairs, n_pairs)),
+    )
     for t in range(n_trials):
-        variance = 0.0
-        for stage in range(2):
-            first_set, last_set = (0, 1) if stage == 0 else (1, 3)
-            sum_d[first_set:last_set] = 0.0
-            scatter_d[first_set:last_set] = 0.0
-            if stage == 0:
-                sum_e[:] = 0.0
-                pooled[:] = 0.0
-                sum_w[:] = 0.0
-                outer_w[:] = 0.0
-                centroid_sq = 0.0
-                largest = 0.0
-            for f in range(n_frames):
-                for i in range(3):
-                    total = 0.0
-                    for m in range(n_markers):
-                        total += markers[t, f, m, i]
-                    centroid[i] = total / n_markers
-                for m in range(n_markers):
-                    for i in range(3):
-                        centred[m, i] = markers[t, f, m, i] - centroid[i]
-                if stage == 0:
-                    if f == 0:
-                        first_c[:] = centred
-                        # Frame 0's inertia sum |u|^2 I - sum u u', its inverse and square
-                        # root: the rotations from frame 0, linearised, and their noise.
-                        weights, frame = symmetric_eigen(inertia(centred))
-                        for i in range(3):
-                            for j in range(3):
-                                inverse[i, j] = 0.0
-                                root[i, j] = 0.0
-                                for k in range(3):
-                                    if weights[k] > 1e-12 * weights[2]:
-                                        inverse[i, j] += frame[i, k] * frame[j, k] / weights[k]
-                                        root[i, j] += (
-                                            frame[i, k] * frame[j, k] * np.sqrt(weights[k])
-                                        )
-                    moment[:] = 0.0
-                    for m in range(n_markers):
-                        e0 = centred[m, 0] - first_c[m, 0]
-                        e1 = centred[m, 1] - first_c[m, 1]
-                        e2 = centred[m, 2] - first_c[m, 2]
-                        for i in range(3):
-                            largest = max(largest, abs(markers[t, f, m, i]))
-                            centroid_sq += centred[m, i] ** 2
-                        sum_e[m, 0] += e0
-                        sum_e[m, 1] += e1
-                        sum_e[m, 2] += e2
-                        pooled[0, 0] += e0 * e0
-                        pooled[0, 1] += e0 * e1
-                        pooled[0, 2] += e0 * e2
-                        pooled[1, 1] += e1 * e1
-                        pooled[1, 2] += e1 * e2
-                        pooled[2, 2] += e2 * e2
-                        moment[0] += first_c[m, 1] * e2 - first_c[m, 2] * e1
-                        moment[1] += first_c[m, 2] * e0 - first_c[m, 0] * e2
-                        moment[2] += first_c[m, 0] * e1 - first_c[m, 1] * e0
-                    for i in range(3):
-                        w[i] = inverse[i, 0] * moment[0] + inverse[i, 1] * moment[1]
-                        w[i] += inverse[i, 2] * moment[2]
-                        sum_w[i] += w[i]
-                    for i in range(3):
-                        for j in range(i, 3):
-                            outer_w[i, j] += w[i] * w[j]
-                for s in range(first_set, last_set):
-                    for p in range(n_pairs):
-                        a, b = pair_a[p], pair_b[p]
-                        length = 0.0
-                        if s == 0:
-                            for i in range(3):
-                                length += (centred[a, i] - centred[b, i]) ** 2
-                        else:
-                            for k in range(2):
-                                along = 0.0
-                                for i in range(3):
-                                    along += planes[s, k, i] * (centred[a, i] - centred[b, i])
-                                length += along * along
-                        length = np.sqrt(length)
-                        if f == 0:
-                            first_d[s, p] = length
-                        delta[p] = length - first_d[s, p]
-                        sum_d[s, p] += delta[p]
-                    for p in range(n_pairs):
-                        for q in range(p, n_pairs):
-                            scatter_d[s, p, q] += delta[p] * delta[q]
-            # Per set: the distances' residual from a rigid figure to first order,
-            # sum_k dd_k' G+ dd_k with G = J J' (J the distances' Jacobian at the mean
-            # figure, whose entries the mean distances give by the law of cosines). The
-            # cluster's own (set 0) is taken twice: the second time, and for the projections,
-            # from the mean squared distances less their noise (2 dim s^2 per pair), and a
-            # mode counts as shape only where its first-order signal is 3 times the
-            # second-order one, s^2 / d (d the RMS distance), which noise adds to a flex.
-            for s in range(first_set, last_set):
-                dim = 3 if s == 0 else 2
-                for p in range(n_pairs):
-                    mean_sq[p] = first_d[s, p] ** 2 + 2.0 * first_d[s, p] * sum_d[s, p] / n_frames
-                    mean_sq[p] += (scatter_d[s, p, p] + sum_d[s, p] ** 2 / n_frames) / n_frames
-                    for q in range(p, n_pairs):
-                        value = scatter_d[s, p, q] - sum_d[s, p] * sum_d[s, q] / n_frames
-                        scatter_d[s, p, q] = value
-                        scatter_d[s, q, p] = value
-                for refined in range(2 if s == 0 else 1):
-                    corrected = refined == 1 or s > 0
-                    bias = 2.0 * dim * variance if corrected else 0.0
-                    rms_sq = 0.0
-                    squared[:] = 0.0
-                    for p in range(n_pairs):
-                        if corrected:
-                            mean_d[p] = np.sqrt(max(mean_sq[p] - bias, 0.0))
-                        else:
-                            mean_d[p] = first_d[s, p] + sum_d[s, p] / n_frames
-                        squared[pair_a[p], pair_b[p]] = mean_d[p] ** 2
-                        squared[pair_b[p], pair_a[p]] = mean_d[p] ** 2
-                        rms_sq += mean_d[p] ** 2 / n_pairs
-                    for p in range(n_pairs):
-                        a, b = pair_a[p], pair_b[p]
-                        for q in range(n_pairs):
-                            c, d = pair_a[q], pair_b[q]
-                            shared = int(a == c) - int(a == d) - int(b == c) + int(b == d)
-                            if shared == 0 or mean_d[p] == 0.0 or mean_d[q] == 0.0:
-                                g[p, q] = 0.0
-                            else:
-                                dot = 0.5 * (squared[a, d] + squared[b, c])
-                                dot -= 0.5 * (squared[a, c] + squared[b, d])
-                                g[p, q] = shared * dot / (mean_d[p] * mean_d[q])
-                    strength, modes = symmetric_eigen(g)
-                    weakest_mode = flex * strength[n_pairs - 1]
-                    if corrected and rms_sq > 0.0:
-                        weakest_mode = max(weakest_mode, 9.0 * variance / rms_sq)
-                    residual[s] = 0.0
-                    rank[s] = 0
-                    for k in range(n_pairs):
-                        if strength[k] > weakest_mode:
-                            rank[s] += 1
-                            value = 0.0
-                            for p in range(n_pairs):
-                                for q in range(n_pairs):
-                                    value += modes[p, k] * scatter_d[s, p, q] * modes[q, k]
-                            residual[s] += value / strength[k]
-                    if s == 0:
-                        variance = residual[0] / max(rank[0] * (n_frames - 1), 1)
-                if s > 0:
-                    # A projection that keeps no plane figure (its residual is the share of
-                    # its scatter that makes markers "not one rigid body") is no hinge's: the
-                    # first-order residual would not measure its departure from one.
-                    scatter_2d = 0.0
-                    for p in range(n_pairs):
-                        scatter_2d += mean_sq[p]
-                    per_dof = residual[s] / max(rank[s] * (n_frames - 1), 1)
-                    spread_2d = scatter_2d / n_markers / (2 * (n_markers - 1))
-                    flat[s - 1] = per_dof >= MAX_NONRIGID_SHARE * spread_2d
-            if stage == 1:
-                break
-            # The mean shape's principal moments by classical scaling of the mean squared
-            # distances less their noise (6 s^2 per pair).
-            for p in range(n_pairs):
-                squared[pair_a[p], pair_b[p]] = mean_sq[p] - 6.0 * variance
-                squared[pair_b[p], pair_a[p]] = mean_sq[p] - 6.0 * variance
-            for a in range(n_markers):
-                squared[a, a] = 0.0
-            total = 0.0
-            for a in range(n_markers):
-                for b in range(n_markers):
-                    total += squared[a, b]
-            for a in range(n_markers):
-                row_a = 0.0
-                for b in range(n_markers):
-                    row_a += squared[a, b]
-                for b in range(n_markers):
-                    row_b = 0.0
-                    for c in range(n_markers):
-                        row_b += squared[b, c]
-                    gram[a, b] = -0.5 * (
-                        squared[a, b] - (row_a + row_b) / n_markers + total / n_markers**2
-                    )
-            mu = symmetric_eigen(gram)[0]
-            top = max(mu[n_markers - 1], 0.0)
-            second = max(mu[n_markers - 2], 0.0)
-            third = max(mu[n_markers - 3], 0.0)
+        trial = markers[t]
+        sum_e[:] = 0.0
+        # Scalar sums: the pooled scatter of the displacements e, and the linearised rotations
+        # w and their outer products (upper triangles).
+        e00 = e01 = e02 = e11 = e12 = e22 = 0.0
+        w_sum0 = w_sum1 = w_sum2 = 0.0
+        w00 = w01 = w02 = w11 = w12 = w22 = 0.0
+        centroid_sq = 0.0
+        largest = 0.0
+        # First pass: the markers' motion from frame 0, and their pair differences.
+        for f in range(n_frames):
             for i in range(3):
-                for j in range(i, 3):
-                    value = pooled[i, j]
-                    for m in range(n_markers):
-                        value -= sum_e[m, i] * sum_e[m, j] / n_frames
-                    pooled[i, j] = value
-                    pooled[j, i] = value
-                    outer_w[i, j] -= sum_w[i] * sum_w[j] / n_frames
-                    outer_w[j, i] = outer_w[i, j]
-            motion = pooled[0, 0] + pooled[1, 1] + pooled[2, 2]
-            spread = top + second + third
-            collinear = second <= 1e-12 * top
-            # Candidate hinge axes: the direction the markers move least along (exact for a
-            # hinge of any range), and the principal axis of the rotations from frame 0,
-            # linearised and whitened by their noise (the better estimate of a small one).
-            axes[0] = symmetric_eigen(pooled)[1][:, 0]
-            principal = np.ascontiguousarray(symmetric_eigen(root @ outer_w @ root)[1][:, 2])
-            axes[1] = inverse @ (root @ principal)
-            for c in range(2):
-                h = axes[c] / max(np.sqrt(np.sum(axes[c] ** 2)), 1e-300)
-                # A unit vector normal to h from the coordinate axis least along it.
-                k = int(np.argmin(np.abs(h)))
-                normal = np.zeros(3)
-                normal[k] = 1.0
-                normal = normal - h[k] * h
-                normal = normal / np.sqrt(np.sum(normal**2))
-                planes[c + 1, 0] = normal
-                planes[c + 1, 1] = np.cross(h, normal)
-                value = 0.0
+                total = 0.0
+                for m in range(n_markers):
+                    total += trial[f, m, i]
+                mean = total / n_markers
+                for m in range(n_markers):
+                    centred[m, i] = trial[f, m, i] - mean
+            if f == 0:
+                # Frame 0's inertia sum |u|^2 I - sum u u', its inverse and square root: the
+                # rotations from frame 0, linearised, and their noise.
+                first_c[:] = centred
+                inertia_into(first_c, work3)
+                _inverse_and_root(work3, inverse, root, (values3, vectors3, whitened))
+            moment0 = 0.0
+            moment1 = 0.0
+            moment2 = 0.0
+            for m in range(n_markers):
+                e0 = centred[m, 0] - first_c[m, 0]
+                e1 = centred[m, 1] - first_c[m, 1]
+                e2 = centred[m, 2] - first_c[m, 2]
                 for i in range(3):
-                    for j in range(3):
-                        value += h[i] * pooled[i, j] * h[j]
-                off_axis[c] = value
+                    largest = max(largest, abs(trial[f, m, i]))
+                    centroid_sq += centred[m, i] ** 2
+                sum_e[m, 0] += e0
+                sum_e[m, 1] += e1
+                sum_e[m, 2] += e2
+                e00 += e0 * e0
+                e01 += e0 * e1
+                e02 += e0 * e2
+                e11 += e1 * e1
+                e12 += e1 * e2
+                e22 += e2 * e2
+                moment0 += first_c[m, 1] * e2 - first_c[m, 2] * e1
+                moment1 += first_c[m, 2] * e0 - first_c[m, 0] * e2
+                moment2 += first_c[m, 0] * e1 - first_c[m, 1] * e0
+            w0 = inverse[0, 0] * moment0 + inverse[0, 1] * moment1 + inverse[0, 2] * moment2
+            w1 = inverse[1, 0] * moment0 + inverse[1, 1] * moment1 + inverse[1, 2] * moment2
+            w2 = inverse[2, 0] * moment0 + inverse[2, 1] * moment1 + inverse[2, 2] * moment2
+            w_sum0 += w0
+            w_sum1 += w1
+            w_sum2 += w2
+            w00 += w0 * w0
+            w01 += w0 * w1
+            w02 += w0 * w2
+            w11 += w1 * w1
+            w12 += w1 * w2
+            w22 += w2 * w2
+            for p in range(n_pairs):
+                for i in range(3):
+                    differences[p, i, f] = centred[pair_a[p], i] - centred[pair_b[p], i]
+        pooled[0, 0], pooled[0, 1], pooled[0, 2] = e00, e01, e02
+        pooled[1, 1], pooled[1, 2], pooled[2, 2] = e11, e12, e22
+        sum_w[0], sum_w[1], sum_w[2] = w_sum0, w_sum1, w_sum2
+        outer_w[0, 0], outer_w[0, 1], outer_w[0, 2] = w00, w01, w02
+        outer_w[1, 1], outer_w[1, 2], outer_w[2, 2] = w11, w12, w22
+        # The cluster's own distances.
+        for p in range(n_pairs):
+            dx, dy, dz = differences[p, 0], differences[p, 1], differences[p, 2]
+            for f in range(n_frames):
+                lengths[p, f] = np.sqrt(dx[f] * dx[f] + dy[f] * dy[f] + dz[f] * dz[f])
+        _distance_moments(lengths, first_d[0], sum_d, scatter_d[0], mean_sq[0], terms)
+        # The cluster's own distance residual, from its mean distances and again from its mean
+        # squared distances less their noise (6 s^2 per pair), and the residual per degree of
+        # freedom each gives.
+        variance = 0.0
+        for corrected in (False, True):
+            for p in range(n_pairs):
+                if corrected:
+                    mean_d[p] = np.sqrt(max(mean_sq[0, p] - 6.0 * variance, 0.0))
+                else:
+                    mean_d[p] = first_d[0, p] + sum_d[p] / n_frames
+            residual[0], rank[0] = _shape_residual(
+                mean_d, scatter_d[0], corrected, variance, flex, pair_a, pair_b, scratch
+            )
+            variance = residual[0] / max(rank[0] * (n_frames - 1), 1)
+        # The mean shape's principal moments by classical scaling of the mean squared
+        # distances less their noise (6 s^2 per pair).
+        for p in range(n_pairs):
+            squared[pair_a[p], pair_b[p]] = mean_sq[0, p] - 6.0 * variance
+            squared[pair_b[p], pair_a[p]] = mean_sq[0, p] - 6.0 * variance
+        for a in range(n_markers):
+            squared[a, a] = 0.0
+        total = 0.0
+        for a in range(n_markers):
+            row = 0.0
+            for b in range(n_markers):
+                total += squared[a, b]
+                row += squared[a, b]
+            row_sums[a] = row
+        for a in range(n_markers):
+            for b in range(n_markers):
+                gram[a, b] = -0.5 * (
+                    squared[a, b] - (row_sums[a] + row_sums[b]) / n_markers + total / n_markers**2
+                )
+        symmetric_eigen_into(gram, mu, vectors_n, work_n)
+        top = max(mu[n_markers - 1], 0.0)
+        second = max(mu[n_markers - 2], 0.0)
+        third = max(mu[n_markers - 3], 0.0)
+        for i in range(3):
+            for j in range(i, 3):
+                value = pooled[i, j]
+                for m in range(n_markers):
+                    value -= sum_e[m, i] * sum_e[m, j] / n_frames
+                pooled[i, j] = value
+                pooled[j, i] = value
+                outer_w[i, j] -= sum_w[i] * sum_w[j] / n_frames
+                outer_w[j, i] = outer_w[i, j]
+        motion = pooled[0, 0] + pooled[1, 1] + pooled[2, 2]
+        spread = top + second + third
+        collinear = second <= 1e-12 * top
+        # Candidate hinge axes: the direction the markers move least along (exact for a
+        # hinge of any range), and the principal axis of the rotations from frame 0,
+        # linearised and whitened by their noise (the better estimate of a small one).
+        symmetric_eigen_into(pooled, values3, vectors3, work3)
+        for i in range(3):
+            axes[0, i] = vectors3[i, 0]
+        # Products by BLAS, into the work arrays: the axis is an eigenvector of a nearly
+        # isotropic matrix when the rotation is small, and moves with the products' rounding.
+        np.dot(root, outer_w, work3)
+        np.dot(work3, root, whitened)
+        symmetric_eigen_into(whitened, values3, vectors3, work3)
+        for i in range(3):
+            principal[i] = vectors3[i, 2]
+        np.dot(root, principal, values3)
+        np.dot(inverse, values3, axes[1])
         for c in range(2):
-            # Off the hinge about candidate c: motion along the axis, plus the projection's
-            # departure from a rigid plane figure, less the cluster's own residual.
-            off_axis[c] += residual[c + 1] - residual[0]
-            off_axis_rank[c] = n_markers - 1 + rank[c + 1] - rank[0]
+            off_axis[c] = _hinge_plane(axes[c], pooled, planes[c + 1])
+        # Second pass: the distances of the projections on the candidate hinges' planes.
+        for s in range(1, 3):
+            u0, u1, u2 = planes[s, 0, 0], planes[s, 0, 1], planes[s, 0, 2]
+            v0, v1, v2 = planes[s, 1, 0], planes[s, 1, 1], planes[s, 1, 2]
+            for p in range(n_pairs):
+                dx, dy, dz = differences[p, 0], differences[p, 1], differences[p, 2]
+                for f in range(n_frames):
+                    along_u = u0 * dx[f] + u1 * dy[f] + u2 * dz[f]
+                    along_v = v0 * dx[f] + v1 * dy[f] + v2 * dz[f]
+                    lengths[p, f] = np.sqrt(along_u * along_u + along_v * along_v)
+            _distance_moments(lengths, first_d[s], sum_d, scatter_d[s], mean_sq[s], terms)
+            # The projection's mean distances less their noise (4 s^2 per pair in 2-D).
+            for p in range(n_pairs):
+                mean_d[p] = np.sqrt(max(mean_sq[s, p] - 4.0 * variance, 0.0))
+            residual[s], rank[s] = _shape_residual(
+                mean_d, scatter_d[s], True, variance, flex, pair_a, pair_b, scratch
+            )
+            # A projection that keeps no plane figure (its residual is the share of its
+            # scatter that makes markers "not one rigid body") is no hinge's: the first-order
+            # residual would not measure its departure from one.
+            scatter_2d = 0.0
+            for p in range(n_pairs):
+                scatter_2d += mean_sq[s, p]
+            per_dof = residual[s] / max(rank[s] * (n_frames - 1), 1)
+            spread_2d = scatter_2d / n_markers / (2 * (n_markers - 1))
+            flat[s - 1] = per_dof >= MAX_NONRIGID_SHARE * spread_2d
         # The tests' statistics (module docstring, "one segment"), each as the F ratio and
         # its numerator's degrees of freedom, for the caller's F survival function. Noise-free
         # data are judged against rounding instead (the ratio would compare rounding with
@@ -648,8 +621,11 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                 dof = (3 * (n_markers - 1) - rank[0]) * n_steps
                 rounding = rotation_ss <= _ROUNDING_ROTATION_RAD**2 * displacement
             else:
-                tested_ss = max(off_axis[test - 1], 0.0)
-                dof = off_axis_rank[test - 1] * n_steps
+                # Off the hinge about candidate c: motion along the axis, plus the
+                # projection's departure from a rigid plane figure, less the cluster's own
+                # residual.
+                tested_ss = max(off_axis[test - 1] + (residual[test] - residual[0]), 0.0)
+                dof = (n_markers - 1 + rank[test] - rank[0]) * n_steps
                 rounding = tested_ss <= 1e-12 * rotation_ss
             column = 5 + 3 * test
             out[t, column] = np.sqrt(tested_ss / displacement)
@@ -663,6 +639,186 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                 out[t, column + 1] = tested_ss / dof / variance
             out[t, column + 2] = max(dof, 1.0)
     return out
+
+
+@kernel
+def _inverse_and_root(
+    matrix: np.ndarray, inverse: np.ndarray, root: np.ndarray, scratch: tuple[np.ndarray, ...]
+) -> None:
+    """The pseudo-inverse and the square root of the symmetric positive semi-definite
+    ``matrix`` ``(3, 3)``, into ``inverse`` and ``root`` ``(3, 3)``, from its eigen-decomposition
+    (modes at or below 1e-12 of the strongest left out); ``scratch`` holds work arrays ``(3,)``,
+    ``(3, 3)`` and ``(3, 3)``. A compiled kernel."""
+    values, vectors, work = scratch
+    symmetric_eigen_into(matrix, values, vectors, work)
+    for i in range(3):
+        for j in range(3):
+            inverse[i, j] = 0.0
+            root[i, j] = 0.0
+            for k in range(3):
+                if values[k] > 1e-12 * values[2]:
+                    inverse[i, j] += vectors[i, k] * vectors[j, k] / values[k]
+                    root[i, j] += vectors[i, k] * vectors[j, k] * np.sqrt(values[k])
+
+
+@kernel
+def _distance_moments(
+    lengths: np.ndarray,
+    first: np.ndarray,
+    total: np.ndarray,
+    scatter: np.ndarray,
+    mean_sq: np.ndarray,
+    terms: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """The moments of the distances ``lengths[:P]`` ``(P, N)`` [mm] over the frames: their values
+    at frame 0 ``first`` ``(P,)`` [mm], the sum ``total`` ``(P,)`` [mm] of their deviations from
+    those, the deviations' scatter about their mean ``scatter`` ``(P, P)`` [mm^2] and the mean
+    squared distances ``mean_sq`` ``(P,)`` [mm^2], each sum taken frame by frame.
+
+    The distances are replaced by their deviations; ``lengths[P]`` holds ones. ``terms`` holds
+    the rows ``left`` and ``right`` ``(K,)`` whose products are summed (``K`` a multiple of 4:
+    the ``P`` totals as products with the ones, then the upper scatter row by row, then
+    padding) and their sums ``(K,)``: four sums at a time, side by side, each in frame order.
+    A compiled kernel."""
+    left, right, sums = terms
+    n_pairs = first.shape[0]
+    n_frames = lengths.shape[1]
+    for p in range(n_pairs):
+        first[p] = lengths[p, 0]
+        for f in range(n_frames):
+            lengths[p, f] -= first[p]
+    for k in range(0, left.shape[0], 4):
+        a0, a1, a2, a3 = (
+            lengths[left[k]],
+            lengths[left[k + 1]],
+            lengths[left[k + 2]],
+            lengths[left[k + 3]],
+        )
+        b0, b1, b2, b3 = (
+            lengths[right[k]],
+            lengths[right[k + 1]],
+            lengths[right[k + 2]],
+            lengths[right[k + 3]],
+        )
+        sum0 = sum1 = sum2 = sum3 = 0.0
+        for f in range(n_frames):
+            sum0 += a0[f] * b0[f]
+            sum1 += a1[f] * b1[f]
+            sum2 += a2[f] * b2[f]
+            sum3 += a3[f] * b3[f]
+        sums[k], sums[k + 1], sums[k + 2], sums[k + 3] = sum0, sum1, sum2, sum3
+    k = n_pairs
+    for p in range(n_pairs):
+        total[p] = sums[p]
+        for q in range(p, n_pairs):
+            scatter[p, q] = sums[k]
+            k += 1
+    for p in range(n_pairs):
+        mean_sq[p] = first[p] ** 2 + 2.0 * first[p] * total[p] / n_frames
+        mean_sq[p] += (scatter[p, p] + total[p] ** 2 / n_frames) / n_frames
+        for q in range(p, n_pairs):
+            value = scatter[p, q] - total[p] * total[q] / n_frames
+            scatter[p, q] = value
+            scatter[q, p] = value
+
+
+@kernel
+def _shape_residual(
+    mean_d: np.ndarray,
+    scatter: np.ndarray,
+    corrected: bool,
+    variance: float,
+    flex: float,
+    pair_a: np.ndarray,
+    pair_b: np.ndarray,
+    scratch: tuple[np.ndarray, ...],
+) -> tuple[float, int]:
+    """The distances' residual from a rigid figure to first order and its rank (module
+    docstring, "one segment"): ``sum_k dd_k' G+ dd_k`` [mm^2] from the deviations' scatter
+    ``scatter`` ``(P, P)`` [mm^2], with ``G = J J'`` and ``J`` the Jacobian of the distances
+    between markers ``pair_a`` and ``pair_b`` ``(P,)`` at the mean figure, whose entries the
+    mean distances ``mean_d`` ``(P,)`` [mm] give by the law of cosines. A mode counts as shape
+    where it is above ``flex`` of the strongest and, for mean distances ``corrected`` for the
+    noise ``variance`` [mm^2], where its first-order signal is 3 times the second-order one,
+    ``s^2 / d`` (``d`` the RMS distance), which noise adds to a flex. ``scratch`` holds work
+    arrays ``(n, n)``, ``(P, P)``, ``(P,)``, ``(P, P)`` and ``(P, P)``. A compiled kernel."""
+    squared, g, strength, modes, work = scratch
+    n_pairs = mean_d.shape[0]
+    rms_sq = 0.0
+    squared[:] = 0.0
+    for p in range(n_pairs):
+        squared[pair_a[p], pair_b[p]] = mean_d[p] ** 2
+        squared[pair_b[p], pair_a[p]] = mean_d[p] ** 2
+        rms_sq += mean_d[p] ** 2 / n_pairs
+    for p in range(n_pairs):
+        a, b = pair_a[p], pair_b[p]
+        for q in range(n_pairs):
+            c, d = pair_a[q], pair_b[q]
+            shared = int(a == c) - int(a == d) - int(b == c) + int(b == d)
+            if shared == 0 or mean_d[p] == 0.0 or mean_d[q] == 0.0:
+                g[p, q] = 0.0
+            else:
+                dot = 0.5 * (squared[a, d] + squared[b, c])
+                dot -= 0.5 * (squared[a, c] + squared[b, d])
+                g[p, q] = shared * dot / (mean_d[p] * mean_d[q])
+    symmetric_eigen_into(g, strength, modes, work)
+    weakest_mode = flex * strength[n_pairs - 1]
+    if corrected and rms_sq > 0.0:
+        weakest_mode = max(weakest_mode, 9.0 * variance / rms_sq)
+    residual = 0.0
+    rank = 0
+    for k in range(n_pairs):
+        if strength[k] > weakest_mode:
+            rank += 1
+            value = 0.0
+            for p in range(n_pairs):
+                for q in range(n_pairs):
+                    value += modes[p, k] * scatter[p, q] * modes[q, k]
+            residual += value / strength[k]
+    return residual, rank
+
+
+@kernel
+def _product3(left: np.ndarray, right: np.ndarray, out: np.ndarray) -> None:
+    """The matrix product of ``left`` and ``right`` ``(3, 3)`` into ``out``. A compiled
+    kernel."""
+    for i in range(3):
+        for j in range(3):
+            value = left[i, 0] * right[0, j]
+            value += left[i, 1] * right[1, j]
+            value += left[i, 2] * right[2, j]
+            out[i, j] = value
+
+
+@kernel
+def _hinge_plane(axis: np.ndarray, pooled: np.ndarray, plane: np.ndarray) -> float:
+    """An orthonormal basis ``plane`` ``(2, 3)`` of the plane normal to ``axis`` ``(3,)``, and
+    the markers' motion along the axis, ``h' pooled h`` [mm^2] with ``h`` its unit vector and
+    ``pooled`` ``(3, 3)`` their scatter about their mean displacements. A compiled kernel."""
+    norm = max(np.sqrt(axis[0] ** 2 + axis[1] ** 2 + axis[2] ** 2), 1e-300)
+    h0, h1, h2 = axis[0] / norm, axis[1] / norm, axis[2] / norm
+    # The first normal from the coordinate axis least along h.
+    k = 0
+    if abs(h1) < abs(h0):
+        k = 1
+    if abs(h2) < abs((h0, h1)[k]):
+        k = 2
+    hk = (h0, h1, h2)[k]
+    n0 = (1.0 if k == 0 else 0.0) - hk * h0
+    n1 = (1.0 if k == 1 else 0.0) - hk * h1
+    n2 = (1.0 if k == 2 else 0.0) - hk * h2
+    length = np.sqrt(n0**2 + n1**2 + n2**2)
+    n0, n1, n2 = n0 / length, n1 / length, n2 / length
+    plane[0, 0], plane[0, 1], plane[0, 2] = n0, n1, n2
+    plane[1, 0] = h1 * n2 - h2 * n1
+    plane[1, 1] = h2 * n0 - h0 * n2
+    plane[1, 2] = h0 * n1 - h1 * n0
+    h = (h0, h1, h2)
+    along = 0.0
+    for i in range(3):
+        for j in range(3):
+            along += h[i] * pooled[i, j] * h[j]
+    return along
 
 
 class _Rotation(NamedTuple):
@@ -847,7 +1003,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
 
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
-    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3])
+    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
     verdicts = []
     for t, row in enumerate(numbers.tolist()):
         variance, share, weakest, collinear = row[:4]
@@ -863,9 +1019,11 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             )
         else:
             # The hinge is given the candidate axis that explains the data better.
-            p_any, *p_off = p_values[t].tolist()
-            better = 1 + int(p_off[1] > p_off[0])
-            tests = (row[5], p_any, row[5 + 3 * better], p_off[better - 1])
+            p_any, p_least_moving, p_rotation_axis = p_values[t]
+            if p_rotation_axis > p_least_moving:
+                tests = (row[5], p_any, row[11], p_rotation_axis)
+            else:
+                tests = (row[5], p_any, row[8], p_least_moving)
             rigidity = [(share, math.sqrt(3.0 * variance))]
             verdicts.append(_verdict(kind, ("markers",), rigidity, variance, tests))
     return verdicts
@@ -987,7 +1145,7 @@ def _verdict(kind, names, rigidity, variance, tests) -> Support:
     [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
     off the main axis."""
     residual_mm = math.sqrt(3.0 * variance)
-    rms_rad, p_any, second_rms_rad, p_second = (float(value) for value in tests)
+    rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
     warnings = [
         f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "

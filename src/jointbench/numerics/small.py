@@ -11,7 +11,14 @@ import numpy as np
 
 from jointbench.numerics.compiled import kernel
 
-__all__ = ["inertia", "inverse3", "rotated3", "symmetric_eigen"]
+__all__ = [
+    "inertia",
+    "inertia_into",
+    "inverse3",
+    "rotated3",
+    "symmetric_eigen",
+    "symmetric_eigen_into",
+]
 
 
 def inverse3(matrices: np.ndarray) -> np.ndarray:
@@ -77,12 +84,27 @@ def symmetric_eigen(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     relative to the whole: the accuracy of LAPACK's ``syevd``, without its call overhead on the
     matrices of a few rows a kernel decomposes per trial. A compiled kernel."""
     n = matrix.shape[0]
-    a = np.empty((n, n))
+    values = np.empty(n)
+    vectors = np.empty((n, n))
+    symmetric_eigen_into(matrix, values, vectors, np.empty((n, n)))
+    return values, vectors
+
+
+@kernel
+def symmetric_eigen_into(
+    matrix: np.ndarray, values: np.ndarray, vectors: np.ndarray, work: np.ndarray
+) -> None:
+    """:func:`symmetric_eigen` of ``matrix`` ``(n, n)`` written into ``values`` ``(n,)`` and
+    ``vectors`` ``(n, n)``, with ``work`` ``(n, n)`` as scratch: for a kernel that decomposes a
+    small matrix per trial without allocating. A compiled kernel."""
+    n = matrix.shape[0]
+    a = work
     for i in range(n):
         for j in range(i, n):
             a[i, j] = matrix[i, j]
             a[j, i] = matrix[i, j]
-    vectors = np.eye(n)
+        for j in range(n):
+            vectors[i, j] = 1.0 if i == j else 0.0
     for _ in range(60):
         off = 0.0
         whole = 0.0
@@ -117,7 +139,6 @@ def symmetric_eigen(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                     vectors[k, p] = c * kp - s * kq
                     vectors[k, q] = s * kp + c * kq
     # Ascending by selection, swapping the eigenvectors along (n is a few).
-    values = np.empty(n)
     for i in range(n):
         values[i] = a[i, i]
     for i in range(n - 1):
@@ -129,22 +150,28 @@ def symmetric_eigen(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             values[i], values[least] = values[least], values[i]
             for k in range(n):
                 vectors[k, i], vectors[k, least] = vectors[k, least], vectors[k, i]
-    return values, vectors
 
 
 @kernel
 def inertia(points: np.ndarray) -> np.ndarray:
     """``K = sum_m (|u_m|^2 I - u_m u_m')`` ``(3, 3)`` [mm^2] of the points ``u`` ``(n, 3)`` [mm]
     as given (centre them first for the inertia about their centroid). A compiled kernel."""
+    tensor = np.empty((3, 3))
+    inertia_into(points, tensor)
+    return tensor
+
+
+@kernel
+def inertia_into(points: np.ndarray, tensor: np.ndarray) -> None:
+    """:func:`inertia` of ``points`` ``(n, 3)`` written into ``tensor`` ``(3, 3)``. A compiled
+    kernel."""
     squared = 0.0
     for m in range(points.shape[0]):
         for i in range(3):
             squared += points[m, i] ** 2
-    tensor = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
             value = squared if i == j else 0.0
             for m in range(points.shape[0]):
                 value -= points[m, i] * points[m, j]
             tensor[i, j] = value
-    return tensor

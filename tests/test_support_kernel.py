@@ -1,0 +1,149 @@
+"""The one-segment verdict's compiled numbers, pinned column by column.
+
+``tests/snapshots/one_segment_numbers.npz`` holds what
+:func:`jointbench.estimators.support._one_segment_numbers` computed, when it was written, on a
+seeded set of trials: the pinned verdict cases and every eighth one-segment trial of the
+support sweep, the calibration's hinges, static clusters, rotations about two axes, flat plates
+and elongated clusters, and edge cases of its own (3 to 8 markers, 2 to 300 frames, collinear
+and nearly collinear clusters, noise-free data, offsets of 1e6 mm and coordinates at 1e9 mm).
+A faster kernel must compute the same numbers: to 1e-12 relative, or 1e-12 of the column's
+largest finite value where a number is near zero; infinities where they were.
+``python tests/test_support_kernel.py`` rewrites the file, for a deliberate change of the
+verdict only.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_support_calibration import _draw, _elongated, _plate, _trial
+from test_support_sweep import TRIALS as SWEEP
+from test_support_verdicts import _one_segment_cases
+
+from jointbench.estimators import support
+from jointbench.geometry import rotation_matrix, unit
+
+PINNED = Path(__file__).parent / "snapshots" / "one_segment_numbers.npz"
+
+
+def _calibration() -> list[np.ndarray]:
+    """Trials drawn as the calibration draws them: a hinge, a static cluster, two axes, a
+    flat plate on a hinge and standing still, and an elongated cluster on a hinge."""
+    rng = np.random.default_rng(20261203)
+    found = []
+    for _ in range(30):
+        t, body, noise_mm = _draw(rng)
+        angle = 10.0 ** rng.uniform(-2.0, 0.3) * np.sin(2.0 * np.pi * rng.uniform(0.5, 2.0) * t)
+        found.append(_trial(rng, np.outer(angle, unit(rng.normal(size=3))), body, noise_mm))
+        found.append(_trial(rng, np.zeros((t.size, 3)), body, noise_mm))
+        second = 10.0 ** rng.uniform(-3.0, 0.0) * np.cos(7.0 * t)
+        vectors = np.outer(angle, unit(rng.normal(size=3)))
+        found.append(_trial(rng, vectors + np.outer(second, unit(rng.normal(size=3))), body, 0.1))
+    for _ in range(15):
+        n_frames, noise_mm = int(rng.integers(30, 200)), 10.0 ** rng.uniform(-1.0, 0.3)
+        plate = _plate(rng, noise_mm)
+        angle = 10.0 ** rng.uniform(-2.0, 0.3) * np.sin(np.linspace(0.0, 9.0, n_frames))
+        found.append(_trial(rng, np.outer(angle, unit(rng.normal(size=3))), plate, noise_mm))
+        found.append(_trial(rng, np.zeros((n_frames, 3)), plate, noise_mm))
+    for amplitude_deg in (1.0, 60.0, 120.0):
+        angle = np.radians(amplitude_deg) * np.sin(np.linspace(0.0, 4.0 * np.pi, 150))
+        axis = unit(np.array([0.2, 1.0, 0.3]))
+        found.append(_trial(rng, np.outer(angle, axis), _elongated(0.5), 0.5))
+    return found
+
+
+def _edge_cases() -> list[np.ndarray]:
+    """3 to 8 markers and 2 to 300 frames: static, hinged and two-axis clusters, wide, flat,
+    collinear and nearly collinear, with and without noise, near the origin, 1e6 mm off it
+    and at 1e9 mm."""
+    rng = np.random.default_rng(20261204)
+    found = []
+    for k in range(120):
+        n_markers = 3 + k % 6
+        n_frames = int(rng.choice([2, 3, 5, 10, 30, 120, 300]))
+        shape = k // 6 % 4
+        body = rng.normal(scale=40.0, size=(n_markers, 3))
+        if shape == 1:
+            body[:, 2] = 0.0  # a flat plate
+        elif shape == 2:
+            body = np.outer(rng.uniform(-50.0, 50.0, n_markers), unit(rng.normal(size=3)))
+        elif shape == 3:
+            body = np.outer(rng.uniform(-50.0, 50.0, n_markers), unit(rng.normal(size=3)))
+            body += rng.normal(scale=10.0 ** rng.uniform(-5.0, -1.0), size=body.shape)
+        body = body + 80.0 * unit(rng.normal(size=3))
+        t = np.linspace(0.0, 1.0, n_frames)
+        motion = k // 24 % 3
+        vectors = np.zeros((n_frames, 3))
+        if motion >= 1:
+            vectors += np.outer(0.6 * np.sin(5.0 * t), unit(rng.normal(size=3)))
+        if motion == 2:
+            vectors += np.outer(0.3 * np.cos(3.0 * t), unit(rng.normal(size=3)))
+        markers = np.einsum("fij,mj->fmi", rotation_matrix(vectors), body)
+        noise_mm = [0.0, 0.01, 0.5, 3.0][k % 4]
+        markers = markers + rng.normal(scale=noise_mm / np.sqrt(3.0), size=markers.shape)
+        found.append(markers + [0.0, 1e6, 1e9][k % 3])
+    return found
+
+
+def trials() -> list[np.ndarray]:
+    """The pinned trials ``(N >= 2, n >= 3, 3)`` [mm]."""
+    cases = [m for m in _one_segment_cases().values() if m.shape[0] >= 2 and m.shape[1] >= 3]
+    sweep = [arrays[0] for kind, arrays in SWEEP if kind != "joint_center"][::8]
+    return cases + sweep + _calibration() + _edge_cases()
+
+
+TRIALS = trials()
+
+
+def _numbers(markers: np.ndarray) -> np.ndarray:
+    return support._one_segment_numbers(markers[None], support._FLEX)[0]
+
+
+def _assert_same(found: np.ndarray, pinned: np.ndarray) -> None:
+    """Equal to 1e-12 relative, or 1e-12 of each column's largest finite value."""
+    finite = np.isfinite(pinned)
+    assert np.array_equal(np.isfinite(found), finite)
+    assert np.array_equal(found[~finite], pinned[~finite], equal_nan=True)
+    found, pinned = np.where(finite, found, 0.0), np.where(finite, pinned, 0.0)
+    tolerance = 1e-12 * np.maximum(np.abs(pinned), np.abs(pinned).max(axis=0))
+    worst = np.abs(found - pinned) - tolerance
+    assert worst.max() <= 0.0, np.unravel_index(np.argmax(worst), worst.shape)
+
+
+@pytest.fixture(scope="module")
+def pinned() -> np.ndarray:
+    with np.load(PINNED) as stored:
+        return stored["numbers"]
+
+
+def test_the_trials_span_the_kernels_range(pinned):
+    assert len(pinned) == len(TRIALS)
+    assert {m.shape[1] for m in TRIALS} == set(range(3, 9))
+    assert {2, 300} <= {m.shape[0] for m in TRIALS}
+    assert pinned[:, 3].any() and not pinned[:, 3].all()  # collinear and not
+    assert np.isinf(pinned[:, 6::3]).any() and (pinned[:, 6::3] == 0.0).any()
+
+
+def test_every_trial_computes_the_pinned_numbers(pinned):
+    _assert_same(np.array([_numbers(markers) for markers in TRIALS]), pinned)
+
+
+def test_a_batch_computes_each_trials_numbers(pinned):
+    groups: dict[tuple, list[int]] = {}
+    for index, markers in enumerate(TRIALS):
+        groups.setdefault(markers.shape, []).append(index)
+    batches = [group for group in groups.values() if len(group) > 1]
+    assert batches
+    for group in batches:
+        stacked = np.stack([TRIALS[index] for index in group])
+        _assert_same(support._one_segment_numbers(stacked, support._FLEX), pinned[group])
+
+
+def _write() -> None:
+    np.savez_compressed(PINNED, numbers=np.array([_numbers(markers) for markers in TRIALS]))
+
+
+if __name__ == "__main__":
+    _write()
