@@ -86,7 +86,7 @@ from jointbench.estimators.results import with_fields
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.poses import _horn_rotations, best_rotation
+from jointbench.numerics.poses import POSE_TOL_MM, _horn_rotations, best_rotation
 from jointbench.numerics.small import inertia, symmetric_eigen
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
@@ -320,7 +320,7 @@ def _clusters(markers: np.ndarray) -> _Clusters:
     markers = kernel_array(markers)
     # One re-estimation of the body-fixed coordinates leaves them within ~s / sqrt(N) of the
     # converged ones: plenty for a verdict, at a quarter of the cost of a converged fit.
-    settled, *numbers = _cluster_fits(markers, _BODY_TOL_MM)
+    settled, *numbers = _cluster_fits(markers, POSE_TOL_MM)
     if not settled.all():
         unsettled = np.flatnonzero(~settled)
         for part, stepwise in zip(numbers, _stepwise_cluster_fits(markers[unsettled]), strict=True):
@@ -338,17 +338,12 @@ def _clusters(markers: np.ndarray) -> _Clusters:
     )
 
 
-# The body-fixed coordinates are re-estimated unless that moves none by this much [mm], as
-# :func:`jointbench.numerics.poses.rigid_poses` stops.
-_BODY_TOL_MM = 1e-12
-
-
 def _stepwise_cluster_fits(markers: np.ndarray) -> tuple[np.ndarray, ...]:
     """:func:`_cluster_fits`'s numbers (without ``settled``) of ``markers`` ``(T, N, n, 3)``
     [mm] step by step, each rotation by :func:`jointbench.numerics.poses.best_rotation`."""
     first = np.ascontiguousarray(markers[:, 0])
     cross, bound = _cross_covariances(markers, first)
-    body = _reestimated_body(markers, best_rotation(cross, bound=bound), first, _BODY_TOL_MM)
+    body = _reestimated_body(markers, best_rotation(cross, bound=bound), first, POSE_TOL_MM)
     cross, bound = _cross_covariances(markers, body)
     rotation = best_rotation(cross, bound=bound)
     return (rotation, *_fit_numbers(markers, rotation, body))
@@ -368,11 +363,11 @@ def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
     n_trials, n_frames, n_markers, _ = markers.shape
     settled = np.ones(n_trials, dtype=np.bool_)
     rotation = np.empty((n_trials, n_frames, 3, 3))
-    residual_ss = np.zeros(n_trials)
-    scatter = np.zeros(n_trials)
+    residual_ss = np.empty(n_trials)
+    scatter = np.empty(n_trials)
     inertia_inv = np.empty((n_trials, 3, 3))
     weakest = np.empty(n_trials)
-    largest = np.zeros(n_trials)
+    largest = np.empty(n_trials)
     centred = np.empty((n_frames, n_markers, 3))
     target_sq = np.empty(n_frames)
     cross = np.empty((n_frames, 3, 3))
@@ -439,17 +434,19 @@ def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
                 body[:] = updated
         if not settled[t]:
             continue
+        trial_scatter, trial_largest, trial_residual_ss = 0.0, 0.0, 0.0
         for f in range(n_frames):
             for i in range(3):
                 for m in range(n_markers):
-                    scatter[t] += centred[f, m, i] ** 2
-                    largest[t] = max(largest[t], abs(markers[t, f, m, i]))
+                    trial_scatter += centred[f, m, i] ** 2
+                    trial_largest = max(trial_largest, abs(markers[t, f, m, i]))
             for m in range(n_markers):
                 for i in range(3):
                     fitted = 0.0
                     for j in range(3):
                         fitted += rotation[t, f, i, j] * u[m, j]
-                    residual_ss[t] += (centred[f, m, i] - fitted) ** 2
+                    trial_residual_ss += (centred[f, m, i] - fitted) ** 2
+        scatter[t], largest[t], residual_ss[t] = trial_scatter, trial_largest, trial_residual_ss
         inertia_inv[t] = np.linalg.inv(inertia(u))
         weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
     return settled, rotation, residual_ss, scatter, inertia_inv, weakest, largest
