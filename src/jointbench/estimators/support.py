@@ -380,6 +380,8 @@ def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
     first_mean = np.empty(3)
     for t in range(n_trials):
         body[:] = markers[t, 0]
+        # Stage 0 fits the poses to frame 0 and re-estimates the body from them; stage 1 fits
+        # the poses to that body. The frames are centred once, in stage 0.
         for stage in range(2):
             body_sq = 0.0
             for i in range(3):
