@@ -381,7 +381,7 @@ def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
     for t in range(n_trials):
         body[:] = markers[t, 0]
         # Stage 0 fits the poses to frame 0 and re-estimates the body from them; stage 1 fits
-        # the poses to that body. The frames are centred once, in stage 0.
+        # the poses to that body, where it moved. The frames are centred once, in stage 0.
         for stage in range(2):
             body_sq = 0.0
             for i in range(3):
@@ -432,8 +432,9 @@ def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
                         value += rotation[t, 0, i, j] * local[m, j] / n_frames
                     updated[m, i] = value
                     change = max(change, abs(value - body[m, i]))
-            if not change < tol_mm:
-                body[:] = updated
+            if change < tol_mm:
+                break  # the body stands, and stage 0's poses are already fitted to it
+            body[:] = updated
         if not settled[t]:
             continue
         trial_scatter, trial_largest, trial_residual_ss = 0.0, 0.0, 0.0
