@@ -161,7 +161,12 @@ def angles_to_directions(params: np.ndarray) -> np.ndarray:
     """Vectorised :func:`angles_to_direction`: ``(k, 2)`` [rad] -> unit ``(k, 3)``."""
     azimuth, elevation = params[:, 0], params[:, 1]
     c = np.cos(elevation)
-    return np.stack((c * np.cos(azimuth), c * np.sin(azimuth), np.sin(elevation)), axis=1)
+    # Filled column by column: np.stack costs more than the trigonometry for a few directions.
+    directions = np.empty((len(params), 3))
+    np.multiply(c, np.cos(azimuth), out=directions[:, 0])
+    np.multiply(c, np.sin(azimuth), out=directions[:, 1])
+    np.sin(elevation, out=directions[:, 2])
+    return directions
 
 
 class AxisCosts:
@@ -186,11 +191,8 @@ class AxisCosts:
         point = np.asarray(point, dtype=float)
         if markers.ndim == 3:
             markers, point = markers[None], point[None]
-        n_trials, n_frames, n_markers, _ = markers.shape
-        self.scatter = np.empty((n_trials, 3, 3))
-        for trial, data in enumerate(markers):
-            centred = data - data.mean(axis=0)
-            self.scatter[trial] = np.einsum("kpi,kpj->ij", centred, centred)
+        _, n_frames, n_markers, _ = markers.shape
+        self.scatter = _scatters(kernel_array(markers))
         self.point = point
         self._markers = markers
         self._shape = (n_markers, n_frames)
@@ -221,19 +223,19 @@ class AxisCosts:
     def planar(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f_p = n' S n`` (paper B eq. 8): ``(3,)`` -> scalar array, ``(k, 3)`` -> ``(k,)``."""
         n = np.asarray(directions, dtype=float)
-        flat = n.reshape(-1, 3)
-        scatter = self.scatter[self._trials(flat, trials)]
-        return np.einsum("ki,kij,kj->k", flat, scatter, flat).reshape(n.shape[:-1])
+        flat = kernel_array(n.reshape(-1, 3))
+        costs = np.empty(len(flat))
+        _planar_costs(self.scatter, flat, self._checked_trials(flat, trials), costs)
+        return costs.reshape(n.shape[:-1])
 
-    def _radial(self, directions: np.ndarray, trials: np.ndarray, distances: np.ndarray):
-        """Radial costs ``(k,)`` of unit directions ``(k, 3)`` in ``trials`` ``(k,)``, and the
-        distances into ``distances`` ``(k, P N)`` unless it is ``(0, 0)``."""
-        flat = kernel_array(np.reshape(directions, (-1, 3)))
-        trials = kernel_array(trials, np.intp)
-        n_trials = self._w.shape[1]
-        if trials.shape != (len(flat),):
+    def _checked_trials(self, directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
+        """The trial of each of ``directions`` ``(k, 3)`` (trial 0 by default) as a kernel's
+        ``(k,)`` indices; ``ValueError`` for a trial these costs do not hold."""
+        trials = kernel_array(self._trials(directions, trials), np.intp)
+        n_trials = len(self.scatter)
+        if trials.shape != (len(directions),):
             raise ValueError(
-                f"trials must be shaped ({len(flat)},), one per direction, got {trials.shape}"
+                f"trials must be shaped ({len(directions)},), one per direction, got {trials.shape}"
             )
         outside = (trials < -n_trials) | (trials >= n_trials)
         if outside.any():
@@ -241,6 +243,13 @@ class AxisCosts:
                 f"trial {int(trials[outside][0])} does not exist: these costs hold {n_trials} "
                 "trials"
             )
+        return trials
+
+    def _radial(self, directions: np.ndarray, trials: np.ndarray, distances: np.ndarray):
+        """Radial costs ``(k,)`` of unit directions ``(k, 3)`` in ``trials`` ``(k,)``, and the
+        distances into ``distances`` ``(k, P N)`` unless it is ``(0, 0)``."""
+        flat = kernel_array(np.reshape(directions, (-1, 3)))
+        trials = self._checked_trials(flat, trials)
         costs = np.empty(len(flat))
         _radial_costs(self._w, self._w_sq, flat, trials, self._shape[0], costs, distances)
         return costs
@@ -283,6 +292,7 @@ class AxisCosts:
 
         def cost(directions: np.ndarray, trials: np.ndarray) -> np.ndarray:
             directions = kernel_array(directions)
+            trials = kernel_array(trials, np.intp)
             if method != "planar":
                 radial = np.empty(len(directions))
                 _radial_costs(
@@ -290,7 +300,8 @@ class AxisCosts:
                 )
                 if method == "radial":
                     return radial
-            planar = np.einsum("ki,kij,kj->k", directions, self.scatter[trials], directions)
+            planar = np.empty(len(directions))
+            _planar_costs(self.scatter, directions, trials, planar)
             return planar if method == "planar" else planar + radial
 
         return _of_parameters(cost, parameterisation)
@@ -313,6 +324,48 @@ def _of_parameters(
         return value
 
     return cost_vector
+
+
+@kernel
+def _scatters(markers: np.ndarray) -> np.ndarray:
+    """Paper B's ``S = sum_p sum_k u u'`` ``(T, 3, 3)`` [mm^2] of each trial of ``markers``
+    ``(T, N, P, 3)`` [mm], ``u`` a marker's offset from its trajectory centroid. A compiled
+    kernel: summed frame by frame as NumPy's ``mean(axis=0)`` and
+    ``np.einsum("kpi,kpj->ij", u, u)`` sum, so ``S`` is theirs to the last bit."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    scatter = np.zeros((n_trials, 3, 3))
+    centroid = np.empty((n_markers, 3))
+    for t in range(n_trials):
+        centroid[:] = 0.0
+        for k in range(n_frames):
+            for p in range(n_markers):
+                for i in range(3):
+                    centroid[p, i] += markers[t, k, p, i]
+        centroid /= n_frames
+        for k in range(n_frames):
+            for p in range(n_markers):
+                for i in range(3):
+                    u_i = markers[t, k, p, i] - centroid[p, i]
+                    for j in range(3):
+                        scatter[t, i, j] += u_i * (markers[t, k, p, j] - centroid[p, j])
+    return scatter
+
+
+@kernel
+def _planar_costs(
+    scatter: np.ndarray, directions: np.ndarray, trials: np.ndarray, costs: np.ndarray
+) -> None:
+    """Paper B's planar cost ``n' S n`` (eq. 8) of each unit direction ``directions[k]``
+    (k, 3) with the scatter ``scatter[trials[k]]`` (T, 3, 3) [mm^2], into ``costs[k]``. A
+    compiled kernel: summed as ``np.einsum("ki,kij,kj->k", ...)`` sums it, term by term in
+    row-major order, so a cost is the same to the last bit whichever form computed it."""
+    for k in range(directions.shape[0]):
+        s = scatter[trials[k]]
+        total = 0.0
+        for i in range(3):
+            for j in range(3):
+                total += directions[k, i] * s[i, j] * directions[k, j]
+        costs[k] = total
 
 
 # ``_radial_costs`` stores no distances when given this.

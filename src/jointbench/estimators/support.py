@@ -86,7 +86,7 @@ from jointbench.estimators.results import with_fields
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.poses import best_rotation
+from jointbench.numerics.poses import POSE_TOL_MM, _horn_rotations, best_rotation
 from jointbench.numerics.small import inertia, inertia_into, symmetric_eigen_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
@@ -313,17 +313,19 @@ def _fit_numbers(
 def _clusters(markers: np.ndarray) -> _Clusters:
     """Rigid-body fits of ``(T, N, n, 3)`` clusters, all trials in one call: the poses of
     :func:`jointbench.numerics.poses.rigid_poses` after one re-estimation of the body-fixed
-    coordinates, each step in one compiled pass over the frames."""
+    coordinates, in two compiled passes over the frames (:func:`_cluster_fits`); a trial with a
+    frame whose rotation Horn's method leaves to the SVD (nearly collinear markers) is fitted
+    step by step, the SVD between the compiled steps (:func:`_stepwise_cluster_fits`)."""
     _, n_frames, n_markers, _ = markers.shape
     markers = kernel_array(markers)
     # One re-estimation of the body-fixed coordinates leaves them within ~s / sqrt(N) of the
     # converged ones: plenty for a verdict, at a quarter of the cost of a converged fit.
-    first = np.ascontiguousarray(markers[:, 0])
-    cross, bound = _cross_covariances(markers, first)
-    body = _reestimated_body(markers, best_rotation(cross, bound=bound), first, 1e-12)
-    cross, bound = _cross_covariances(markers, body)
-    rotation = best_rotation(cross, bound=bound)
-    residual_ss, scatter, inertia_inv, weakest, largest = _fit_numbers(markers, rotation, body)
+    settled, *numbers = _cluster_fits(markers, POSE_TOL_MM)
+    if not settled.all():
+        unsettled = np.flatnonzero(~settled)
+        for part, stepwise in zip(numbers, _stepwise_cluster_fits(markers[unsettled]), strict=True):
+            part[unsettled] = stepwise
+    rotation, residual_ss, scatter, inertia_inv, weakest, largest = numbers
     dof = 3 * (n_markers - 2) * (n_frames - 1)
     return _Clusters(
         rotation=rotation,
@@ -334,6 +336,123 @@ def _clusters(markers: np.ndarray) -> _Clusters:
         dof=dof,
         nonrigid_share=(residual_ss / dof) / (scatter / (3 * (n_markers - 1) * n_frames)),
     )
+
+
+def _stepwise_cluster_fits(markers: np.ndarray) -> tuple[np.ndarray, ...]:
+    """:func:`_cluster_fits`'s numbers (without ``settled``) of ``markers`` ``(T, N, n, 3)``
+    [mm] step by step, each rotation by :func:`jointbench.numerics.poses.best_rotation`."""
+    first = np.ascontiguousarray(markers[:, 0])
+    cross, bound = _cross_covariances(markers, first)
+    body = _reestimated_body(markers, best_rotation(cross, bound=bound), first, POSE_TOL_MM)
+    cross, bound = _cross_covariances(markers, body)
+    rotation = best_rotation(cross, bound=bound)
+    return (rotation, *_fit_numbers(markers, rotation, body))
+
+
+@kernel
+def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
+    """The fits of :func:`_stepwise_cluster_fits` in two passes over the frames of ``markers``
+    ``(T, N, n, 3)`` [mm], the centred markers kept between them: poses fitted to frame 0
+    (:func:`_cross_covariances`, Horn's rotations) while the back-transformed markers are
+    summed, the body-fixed coordinates re-estimated (:func:`_reestimated_body`, ``tol_mm``),
+    then poses fitted to them while their residual is summed (:func:`_fit_numbers`). Each sum
+    runs in the order of the step it stands for, so every number is that step's to the last
+    bit. Returns per trial whether Horn's method settled every rotation ``(T,)`` (where it did
+    not, the trial's other numbers are not computed: they need the SVD), then the rotations
+    ``(T, N, 3, 3)`` and :func:`_fit_numbers`'s numbers. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    settled = np.ones(n_trials, dtype=np.bool_)
+    rotation = np.empty((n_trials, n_frames, 3, 3))
+    residual_ss = np.empty(n_trials)
+    scatter = np.empty(n_trials)
+    inertia_inv = np.empty((n_trials, 3, 3))
+    weakest = np.empty(n_trials)
+    largest = np.empty(n_trials)
+    centred = np.empty((n_frames, n_markers, 3))
+    target_sq = np.empty(n_frames)
+    cross = np.empty((n_frames, 3, 3))
+    bound = np.empty(n_frames)
+    unsettled = np.empty(n_frames, dtype=np.bool_)
+    body = np.empty((n_markers, 3))
+    updated = np.empty((n_markers, 3))
+    u = np.empty((n_markers, 3))
+    local = np.empty((n_markers, 3))
+    first_mean = np.empty(3)
+    for t in range(n_trials):
+        body[:] = markers[t, 0]
+        # Stage 0 fits the poses to frame 0 and re-estimates the body from them; stage 1 fits
+        # the poses to that body, where it moved. The frames are centred once, in stage 0.
+        for stage in range(2):
+            body_sq = 0.0
+            for i in range(3):
+                mean = 0.0
+                for m in range(n_markers):
+                    mean += body[m, i]
+                mean /= n_markers
+                for m in range(n_markers):
+                    u[m, i] = body[m, i] - mean
+                    body_sq += u[m, i] ** 2
+            cross[:] = 0.0
+            for f in range(n_frames):
+                if stage == 0:
+                    frame_sq = 0.0
+                    for i in range(3):
+                        mean = 0.0
+                        for m in range(n_markers):
+                            mean += markers[t, f, m, i]
+                        mean /= n_markers
+                        if f == 0:
+                            first_mean[i] = mean
+                        for m in range(n_markers):
+                            centred[f, m, i] = markers[t, f, m, i] - mean
+                            frame_sq += centred[f, m, i] ** 2
+                    target_sq[f] = frame_sq
+                for m in range(n_markers):
+                    for i in range(3):
+                        for j in range(3):
+                            cross[f, i, j] += centred[f, m, i] * u[m, j]
+                bound[f] = 0.5 * (target_sq[f] + body_sq)
+            _horn_rotations(cross, bound, rotation[t], unsettled)
+            if unsettled.any():
+                settled[t] = False
+                break
+            if stage == 1:
+                break
+            local[:] = 0.0
+            for f in range(n_frames):
+                for i in range(3):
+                    for m in range(n_markers):
+                        for j in range(3):
+                            local[m, j] += rotation[t, f, i, j] * centred[f, m, i]
+            change = 0.0
+            for m in range(n_markers):
+                for i in range(3):
+                    value = first_mean[i]
+                    for j in range(3):
+                        value += rotation[t, 0, i, j] * local[m, j] / n_frames
+                    updated[m, i] = value
+                    change = max(change, abs(value - body[m, i]))
+            if change < tol_mm:
+                break  # the body stands, and stage 0's poses are already fitted to it
+            body[:] = updated
+        if not settled[t]:
+            continue
+        trial_scatter, trial_largest, trial_residual_ss = 0.0, 0.0, 0.0
+        for f in range(n_frames):
+            for i in range(3):
+                for m in range(n_markers):
+                    trial_scatter += centred[f, m, i] ** 2
+                    trial_largest = max(trial_largest, abs(markers[t, f, m, i]))
+            for m in range(n_markers):
+                for i in range(3):
+                    fitted = 0.0
+                    for j in range(3):
+                        fitted += rotation[t, f, i, j] * u[m, j]
+                    trial_residual_ss += (centred[f, m, i] - fitted) ** 2
+        scatter[t], largest[t], residual_ss[t] = trial_scatter, trial_largest, trial_residual_ss
+        inertia_inv[t] = np.linalg.inv(inertia(u))
+        weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
+    return settled, rotation, residual_ss, scatter, inertia_inv, weakest, largest
 
 
 #: The columns of :func:`_one_segment_numbers`, per trial: the rigid residual per coordinate
