@@ -13,6 +13,8 @@ Under ``pytest -n 2 --dist loadgroup`` every test of one run is in that run's gr
 worker makes the run, once, and runs them one after another: the mutation suite edits its run
 in place, which no other test may read meanwhile. A test that asks for the run by name
 (``test_stale_results.py``) puts itself in the group; any other is put there at collection.
+Without the groups each worker makes its own runs, in its own temporary directory: slower, and
+as safe.
 """
 
 from __future__ import annotations
