@@ -8,6 +8,13 @@ makes stale (``test_stale_results.py``, whose every edit puts the file back as i
 included). A test that writes a file into a run (a report) writes into
 :meth:`~workflow_copy.FinishedRun.copy`. At the end of the session each shared tree must be as
 it was made: a test that left a change in one fails there.
+
+Under ``pytest -n 2 --dist loadgroup`` every test of one run is in that run's group, so one
+worker makes the run, once, and runs them one after another: the mutation suite edits its run
+in place, which no other test may read meanwhile. A test that asks for the run by name
+(``test_stale_results.py``) puts itself in the group; any other is put there at collection.
+Without the groups each worker makes its own runs, in its own temporary directory: slower, and
+as safe.
 """
 
 from __future__ import annotations
@@ -19,6 +26,8 @@ import yaml
 from workflow_copy import ROOT, FinishedRun, finish_run
 
 FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
+# The fixtures below: each names its run's pytest-xdist group.
+SHARED_RUNS = frozenset({"reduced_run", "fourth_study_run"})
 
 
 def _state(workdir: Path) -> dict[str, tuple[int, int]]:
@@ -40,6 +49,18 @@ def _shared(run: FinishedRun):
         name for name in before.keys() | after.keys() if before.get(name) != after.get(name)
     )
     assert not changed, f"a test wrote into the shared run (use FinishedRun.copy): {changed[:20]}"
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Put each test that uses a shared run in the group named after the run's fixture
+    (before pytest-xdist reads the groups)."""
+    for item in items:
+        runs = SHARED_RUNS & set(item.fixturenames)
+        # A test of two runs would be in a group of its own, beside the tests that edit them.
+        assert len(runs) <= 1, f"{item.nodeid} uses two shared runs: {sorted(runs)}"
+        for name in runs:
+            item.add_marker(pytest.mark.xdist_group(name))
 
 
 def _load(name: str) -> dict:

@@ -388,7 +388,18 @@ def _check(kind: str, jobs: set[str], reruns, spares) -> None:
     assert not wasted, f"{kind}: reran {wasted}, which the edit cannot change"
 
 
-@pytest.mark.parametrize("edit", EDITS, ids=[e.kind for e in EDITS])
+# The shared run each scenario edits, by fixture: a case asks for it by name, so it joins the
+# run's group itself (tests/conftest.py).
+SHARED_RUN = {"builtin": "reduced_run", "extension": "fourth_study_run"}
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        pytest.param(e, id=e.kind, marks=pytest.mark.xdist_group(SHARED_RUN[e.scenario]))
+        for e in EDITS
+    ],
+)
 def test_an_edit_reruns_what_it_can_change_and_nothing_else(request, edit):
     finished_run = request.getfixturevalue(edit.scenario)
     text = (finished_run.workdir / edit.path).read_text()
