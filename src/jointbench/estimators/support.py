@@ -185,146 +185,136 @@ def _first_frame_spread(markers: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def _cross_covariances(markers: np.ndarray, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per trial and frame of ``markers`` ``(T, N, n, 3)`` [mm]: the cross-covariance
-    ``sum_m (x_m - mean x)(b_m - mean b)'`` with the body-fixed coordinates ``body``
-    ``(T, n, 3)``, ``(T, N, 3, 3)`` [mm^2], and half the summed squared lengths of the two
-    centred clusters, ``(T, N)`` [mm^2] (an upper bound of the best rotation's
-    ``trace(R' H)``). A compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    cross = np.zeros((n_trials, n_frames, 3, 3))
-    bound = np.empty((n_trials, n_frames))
-    centred_body = np.empty((n_markers, 3))
-    target = np.empty((n_markers, 3))
-    for t in range(n_trials):
-        body_sq = 0.0
+def _centred(
+    frames: np.ndarray, centred: np.ndarray, squared: np.ndarray, first_mean: np.ndarray
+) -> None:
+    """Each point set of ``frames`` ``(N, n, 3)`` [mm] (a trial's frames, or one body) about
+    its centroid: writes ``centred`` ``(N, n, 3)`` [mm], the summed squared centred coordinates
+    ``squared`` ``(N,)`` [mm^2] and the first set's centroid ``first_mean`` ``(3,)`` [mm]. A
+    compiled kernel."""
+    n_frames, n_markers, _ = frames.shape
+    for f in range(n_frames):
+        frame_sq = 0.0
         for i in range(3):
             mean = 0.0
             for m in range(n_markers):
-                mean += body[t, m, i]
+                mean += frames[f, m, i]
             mean /= n_markers
+            if f == 0:
+                first_mean[i] = mean
             for m in range(n_markers):
-                centred_body[m, i] = body[t, m, i] - mean
-                body_sq += centred_body[m, i] ** 2
-        for f in range(n_frames):
-            target_sq = 0.0
+                centred[f, m, i] = frames[f, m, i] - mean
+                frame_sq += centred[f, m, i] ** 2
+        squared[f] = frame_sq
+
+
+@kernel
+def _cross_covariances(
+    centred: np.ndarray,
+    squared: np.ndarray,
+    body: np.ndarray,
+    u: np.ndarray,
+    cross: np.ndarray,
+    bound: np.ndarray,
+) -> None:
+    """Per frame of one trial's centred markers ``centred`` ``(N, n, 3)`` [mm] with summed
+    squares ``squared`` ``(N,)`` [mm^2]: writes the centred body-fixed coordinates ``u``
+    ``(n, 3)`` [mm] of ``body`` ``(n, 3)``, the cross-covariances ``sum_m c_m u_m'`` into
+    ``cross`` ``(N, 3, 3)`` [mm^2] and half the summed squared lengths of the two centred
+    clusters into ``bound`` ``(N,)`` [mm^2] (an upper bound of the best rotation's
+    ``trace(R' H)``). A compiled kernel."""
+    n_frames, n_markers, _ = centred.shape
+    body_sq = np.empty(1)
+    _centred(body.reshape((1, n_markers, 3)), u.reshape((1, n_markers, 3)), body_sq, np.empty(3))
+    cross[:] = 0.0
+    for f in range(n_frames):
+        for m in range(n_markers):
             for i in range(3):
-                mean = 0.0
-                for m in range(n_markers):
-                    mean += markers[t, f, m, i]
-                mean /= n_markers
-                for m in range(n_markers):
-                    target[m, i] = markers[t, f, m, i] - mean
-                    target_sq += target[m, i] ** 2
-            for m in range(n_markers):
-                for i in range(3):
-                    for j in range(3):
-                        cross[t, f, i, j] += target[m, i] * centred_body[m, j]
-            bound[t, f] = 0.5 * (target_sq + body_sq)
-    return cross, bound
+                for j in range(3):
+                    cross[f, i, j] += centred[f, m, i] * u[m, j]
+        bound[f] = 0.5 * (squared[f] + body_sq[0])
 
 
 @kernel
 def _reestimated_body(
-    markers: np.ndarray, rotation: np.ndarray, body: np.ndarray, tol_mm: float
-) -> np.ndarray:
-    """One step of paper C eq. 5 per trial: the mean over frames of the back-transformed
-    markers ``(T, N, n, 3)`` [mm] under the poses ``rotation`` ``(T, N, 3, 3)`` fitted to
-    ``body`` ``(T, n, 3)``, anchored at frame 0; where that moves no coordinate by ``tol_mm``
-    or more, ``body`` itself (as :func:`jointbench.numerics.poses.rigid_poses` keeps it). A
-    compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    updated = np.empty_like(body)
-    local = np.empty((n_markers, 3))
-    first_mean = np.empty(3)
-    for t in range(n_trials):
-        local[:] = 0.0
-        for f in range(n_frames):
-            for i in range(3):
-                mean = 0.0
-                for m in range(n_markers):
-                    mean += markers[t, f, m, i]
-                mean /= n_markers
-                if f == 0:
-                    first_mean[i] = mean
-                for m in range(n_markers):
-                    centred = markers[t, f, m, i] - mean
-                    for j in range(3):
-                        local[m, j] += rotation[t, f, i, j] * centred
-        largest = 0.0
-        for m in range(n_markers):
-            for i in range(3):
-                value = first_mean[i]
+    centred: np.ndarray,
+    rotation: np.ndarray,
+    first_mean: np.ndarray,
+    body: np.ndarray,
+    tol_mm: float,
+) -> bool:
+    """One step of paper C eq. 5 for one trial: the mean over frames of the back-transformed
+    centred markers ``centred`` ``(N, n, 3)`` [mm] under the poses ``rotation`` ``(N, 3, 3)``
+    fitted to ``body`` ``(n, 3)`` [mm], anchored at frame 0 (centroid ``first_mean`` ``(3,)``
+    [mm]). Overwrites ``body`` and returns True where that moves a coordinate by ``tol_mm`` or
+    more; else leaves ``body`` as it is (as :func:`jointbench.numerics.poses.rigid_poses` keeps
+    it) and returns False. A compiled kernel."""
+    n_frames, n_markers, _ = centred.shape
+    local = np.zeros((n_markers, 3))
+    for f in range(n_frames):
+        for i in range(3):
+            for m in range(n_markers):
                 for j in range(3):
-                    value += rotation[t, 0, i, j] * local[m, j] / n_frames
-                updated[t, m, i] = value
-                largest = max(largest, abs(value - body[t, m, i]))
-        if largest < tol_mm:
-            updated[t] = body[t]
-    return updated
+                    local[m, j] += rotation[f, i, j] * centred[f, m, i]
+    updated = np.empty((n_markers, 3))
+    change = 0.0
+    for m in range(n_markers):
+        for i in range(3):
+            value = first_mean[i]
+            for j in range(3):
+                value += rotation[0, i, j] * local[m, j] / n_frames
+            updated[m, i] = value
+            change = max(change, abs(value - body[m, i]))
+    if change < tol_mm:
+        return False
+    body[:] = updated
+    return True
 
 
 @kernel
 def _fit_numbers(
-    markers: np.ndarray, rotation: np.ndarray, body: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per trial of ``markers`` ``(T, N, n, 3)`` [mm] with poses ``rotation`` ``(T, N, 3, 3)``
-    of ``body`` ``(T, n, 3)``: the rigid fit's residual sum of squares and the markers' scatter
-    about each frame's centroid ``(T,)`` [mm^2], the inverse of the centred body's inertia
-    ``K = sum_m (|u_m|^2 I - u_m u_m')`` ``(T, 3, 3)`` [mm^-2] and its largest eigenvalue
-    ``(T,)``; and the largest absolute coordinate ``(T,)`` [mm]. A compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    largest = np.zeros(n_trials)
-    residual_ss = np.zeros(n_trials)
-    scatter = np.zeros(n_trials)
-    inertia_inv = np.empty((n_trials, 3, 3))
-    weakest = np.empty(n_trials)
-    u = np.empty((n_markers, 3))
-    centred = np.empty((n_markers, 3))
-    for t in range(n_trials):
+    frames: np.ndarray,
+    centred: np.ndarray,
+    rotation: np.ndarray,
+    u: np.ndarray,
+    inertia_inv: np.ndarray,
+) -> tuple[float, float, float, float]:
+    """For one trial's ``frames`` ``(N, n, 3)`` [mm], centred ``centred`` ``(N, n, 3)``, with
+    poses ``rotation`` ``(N, 3, 3)`` of the centred body ``u`` ``(n, 3)`` [mm]: writes the
+    inverse of the body's inertia ``K = sum_m (|u_m|^2 I - u_m u_m')`` into ``inertia_inv``
+    ``(3, 3)`` [mm^-2]; returns the rigid fit's residual sum of squares and the markers'
+    scatter about each frame's centroid [mm^2], the largest eigenvalue of ``K^-1`` [mm^-2] and
+    the largest absolute coordinate [mm]. A compiled kernel."""
+    n_frames, n_markers, _ = frames.shape
+    scatter, largest, residual_ss = 0.0, 0.0, 0.0
+    for f in range(n_frames):
         for i in range(3):
-            mean = 0.0
             for m in range(n_markers):
-                mean += body[t, m, i]
-            mean /= n_markers
-            for m in range(n_markers):
-                u[m, i] = body[t, m, i] - mean
-        for f in range(n_frames):
+                scatter += centred[f, m, i] ** 2
+                largest = max(largest, abs(frames[f, m, i]))
+        for m in range(n_markers):
             for i in range(3):
-                mean = 0.0
-                for m in range(n_markers):
-                    mean += markers[t, f, m, i]
-                mean /= n_markers
-                for m in range(n_markers):
-                    centred[m, i] = markers[t, f, m, i] - mean
-                    scatter[t] += centred[m, i] ** 2
-                    largest[t] = max(largest[t], abs(markers[t, f, m, i]))
-            for m in range(n_markers):
-                for i in range(3):
-                    fitted = 0.0
-                    for j in range(3):
-                        fitted += rotation[t, f, i, j] * u[m, j]
-                    residual_ss[t] += (centred[m, i] - fitted) ** 2
-        inertia_inv[t] = np.linalg.inv(inertia(u))
-        weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
-    return residual_ss, scatter, inertia_inv, weakest, largest
+                fitted = 0.0
+                for j in range(3):
+                    fitted += rotation[f, i, j] * u[m, j]
+                residual_ss += (centred[f, m, i] - fitted) ** 2
+    inertia_inv[:] = np.linalg.inv(inertia(u))
+    return residual_ss, scatter, np.linalg.eigvalsh(inertia_inv)[2], largest
 
 
 def _clusters(markers: np.ndarray) -> _Clusters:
     """Rigid-body fits of ``(T, N, n, 3)`` clusters, all trials in one call: the poses of
     :func:`jointbench.numerics.poses.rigid_poses` after one re-estimation of the body-fixed
-    coordinates, in two compiled passes over the frames (:func:`_cluster_fits`); a trial with a
-    frame whose rotation Horn's method leaves to the SVD (nearly collinear markers) is fitted
-    step by step, the SVD between the compiled steps (:func:`_stepwise_cluster_fits`)."""
+    coordinates, fitted by :func:`_cluster_fits`; a trial with a frame whose rotation Horn's
+    method leaves to the SVD (nearly collinear markers) is fitted by :func:`_trial_fits`."""
     _, n_frames, n_markers, _ = markers.shape
     markers = kernel_array(markers)
     # One re-estimation of the body-fixed coordinates leaves them within ~s / sqrt(N) of the
     # converged ones: plenty for a verdict, at a quarter of the cost of a converged fit.
     settled, *numbers = _cluster_fits(markers, POSE_TOL_MM)
-    if not settled.all():
-        unsettled = np.flatnonzero(~settled)
-        for part, stepwise in zip(numbers, _stepwise_cluster_fits(markers[unsettled]), strict=True):
-            part[unsettled] = stepwise
+    for t in np.flatnonzero(~settled):
+        for part, value in zip(numbers, _trial_fits(markers[t], POSE_TOL_MM), strict=True):
+            part[t] = value
     rotation, residual_ss, scatter, inertia_inv, weakest, largest = numbers
     dof = 3 * (n_markers - 2) * (n_frames - 1)
     return _Clusters(
@@ -338,28 +328,41 @@ def _clusters(markers: np.ndarray) -> _Clusters:
     )
 
 
-def _stepwise_cluster_fits(markers: np.ndarray) -> tuple[np.ndarray, ...]:
-    """:func:`_cluster_fits`'s numbers (without ``settled``) of ``markers`` ``(T, N, n, 3)``
-    [mm] step by step, each rotation by :func:`jointbench.numerics.poses.best_rotation`."""
-    first = np.ascontiguousarray(markers[:, 0])
-    cross, bound = _cross_covariances(markers, first)
-    body = _reestimated_body(markers, best_rotation(cross, bound=bound), first, POSE_TOL_MM)
-    cross, bound = _cross_covariances(markers, body)
+def _trial_fits(frames: np.ndarray, tol_mm: float) -> tuple:
+    """:func:`_cluster_fits`'s numbers of one trial's ``frames`` ``(N, n, 3)`` [mm] by the same
+    steps, each rotation by :func:`jointbench.numerics.poses.best_rotation` (the SVD where
+    Horn's method cannot settle it): ``rotation`` ``(N, 3, 3)``, ``residual_ss``, ``scatter``,
+    ``inertia_inv`` ``(3, 3)``, ``weakest`` and ``largest``."""
+    n_frames, n_markers, _ = frames.shape
+    centred = np.empty_like(frames)
+    squared = np.empty(n_frames)
+    first_mean = np.empty(3)
+    _centred(frames, centred, squared, first_mean)
+    body = frames[0].copy()
+    u = np.empty((n_markers, 3))
+    cross = np.empty((n_frames, 3, 3))
+    bound = np.empty(n_frames)
+    _cross_covariances(centred, squared, body, u, cross, bound)
     rotation = best_rotation(cross, bound=bound)
-    return (rotation, *_fit_numbers(markers, rotation, body))
+    if _reestimated_body(centred, rotation, first_mean, body, tol_mm):
+        _cross_covariances(centred, squared, body, u, cross, bound)
+        rotation = best_rotation(cross, bound=bound)
+    inertia_inv = np.empty((3, 3))
+    residual_ss, scatter, weakest, largest = _fit_numbers(frames, centred, rotation, u, inertia_inv)
+    return rotation, residual_ss, scatter, inertia_inv, weakest, largest
 
 
 @kernel
 def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
-    """The fits of :func:`_stepwise_cluster_fits` in two passes over the frames of ``markers``
-    ``(T, N, n, 3)`` [mm], the centred markers kept between them: poses fitted to frame 0
-    (:func:`_cross_covariances`, Horn's rotations) while the back-transformed markers are
-    summed, the body-fixed coordinates re-estimated (:func:`_reestimated_body`, ``tol_mm``),
-    then poses fitted to them while their residual is summed (:func:`_fit_numbers`). Each sum
-    runs in the order of the step it stands for, so every number is that step's to the last
-    bit. Returns per trial whether Horn's method settled every rotation ``(T,)`` (where it did
-    not, the trial's other numbers are not computed: they need the SVD), then the rotations
-    ``(T, N, 3, 3)`` and :func:`_fit_numbers`'s numbers. A compiled kernel."""
+    """The rigid-body fits of ``markers`` ``(T, N, n, 3)`` [mm], trial by trial: poses fitted
+    to frame 0 (:func:`_cross_covariances`, Horn's rotations), the body-fixed coordinates
+    re-estimated from them (:func:`_reestimated_body`, ``tol_mm``) and, where they moved,
+    poses fitted again; then :func:`_fit_numbers` of the last poses. Returns per trial whether
+    Horn's method settled every rotation ``(T,)`` (where it did not, the trial's other numbers
+    are not computed: they need the SVD, see :func:`_trial_fits`), then the rotations
+    ``(T, N, 3, 3)``, the residual sums of squares and scatters ``(T,)`` [mm^2], the inverse
+    inertias ``(T, 3, 3)`` [mm^-2] and their largest eigenvalues ``(T,)``, and the largest
+    absolute coordinates ``(T,)`` [mm]. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
     settled = np.ones(n_trials, dtype=np.bool_)
     rotation = np.empty((n_trials, n_frames, 3, 3))
@@ -369,89 +372,29 @@ def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
     weakest = np.empty(n_trials)
     largest = np.empty(n_trials)
     centred = np.empty((n_frames, n_markers, 3))
-    target_sq = np.empty(n_frames)
+    squared = np.empty(n_frames)
+    first_mean = np.empty(3)
+    body = np.empty((n_markers, 3))
+    u = np.empty((n_markers, 3))
     cross = np.empty((n_frames, 3, 3))
     bound = np.empty(n_frames)
     unsettled = np.empty(n_frames, dtype=np.bool_)
-    body = np.empty((n_markers, 3))
-    updated = np.empty((n_markers, 3))
-    u = np.empty((n_markers, 3))
-    local = np.empty((n_markers, 3))
-    first_mean = np.empty(3)
     for t in range(n_trials):
+        _centred(markers[t], centred, squared, first_mean)
         body[:] = markers[t, 0]
-        # Stage 0 fits the poses to frame 0 and re-estimates the body from them; stage 1 fits
-        # the poses to that body, where it moved. The frames are centred once, in stage 0.
+        # The poses fitted to frame 0 stand where the re-estimated body did not move.
         for stage in range(2):
-            body_sq = 0.0
-            for i in range(3):
-                mean = 0.0
-                for m in range(n_markers):
-                    mean += body[m, i]
-                mean /= n_markers
-                for m in range(n_markers):
-                    u[m, i] = body[m, i] - mean
-                    body_sq += u[m, i] ** 2
-            cross[:] = 0.0
-            for f in range(n_frames):
-                if stage == 0:
-                    frame_sq = 0.0
-                    for i in range(3):
-                        mean = 0.0
-                        for m in range(n_markers):
-                            mean += markers[t, f, m, i]
-                        mean /= n_markers
-                        if f == 0:
-                            first_mean[i] = mean
-                        for m in range(n_markers):
-                            centred[f, m, i] = markers[t, f, m, i] - mean
-                            frame_sq += centred[f, m, i] ** 2
-                    target_sq[f] = frame_sq
-                for m in range(n_markers):
-                    for i in range(3):
-                        for j in range(3):
-                            cross[f, i, j] += centred[f, m, i] * u[m, j]
-                bound[f] = 0.5 * (target_sq[f] + body_sq)
+            _cross_covariances(centred, squared, body, u, cross, bound)
             _horn_rotations(cross, bound, rotation[t], unsettled)
             if unsettled.any():
                 settled[t] = False
                 break
-            if stage == 1:
+            if stage == 1 or not _reestimated_body(centred, rotation[t], first_mean, body, tol_mm):
                 break
-            local[:] = 0.0
-            for f in range(n_frames):
-                for i in range(3):
-                    for m in range(n_markers):
-                        for j in range(3):
-                            local[m, j] += rotation[t, f, i, j] * centred[f, m, i]
-            change = 0.0
-            for m in range(n_markers):
-                for i in range(3):
-                    value = first_mean[i]
-                    for j in range(3):
-                        value += rotation[t, 0, i, j] * local[m, j] / n_frames
-                    updated[m, i] = value
-                    change = max(change, abs(value - body[m, i]))
-            if change < tol_mm:
-                break  # the body stands, and stage 0's poses are already fitted to it
-            body[:] = updated
-        if not settled[t]:
-            continue
-        trial_scatter, trial_largest, trial_residual_ss = 0.0, 0.0, 0.0
-        for f in range(n_frames):
-            for i in range(3):
-                for m in range(n_markers):
-                    trial_scatter += centred[f, m, i] ** 2
-                    trial_largest = max(trial_largest, abs(markers[t, f, m, i]))
-            for m in range(n_markers):
-                for i in range(3):
-                    fitted = 0.0
-                    for j in range(3):
-                        fitted += rotation[t, f, i, j] * u[m, j]
-                    trial_residual_ss += (centred[f, m, i] - fitted) ** 2
-        scatter[t], largest[t], residual_ss[t] = trial_scatter, trial_largest, trial_residual_ss
-        inertia_inv[t] = np.linalg.inv(inertia(u))
-        weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
+        if settled[t]:
+            residual_ss[t], scatter[t], weakest[t], largest[t] = _fit_numbers(
+                markers[t], centred, rotation[t], u, inertia_inv[t]
+            )
     return settled, rotation, residual_ss, scatter, inertia_inv, weakest, largest
 
 
