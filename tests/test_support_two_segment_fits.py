@@ -5,15 +5,15 @@ noisy, noise-free, static, nearly collinear and non-rigid clusters and relative 
 pi.
 
 Two guards: the fits agree with a plain NumPy fit (SVD rotations) to rounding where the
-rotations are well determined, and they equal, to the last bit, the numbers pinned in
-``tests/snapshots/two_segment_fits.npz`` (the rotations by their SHA-256 digest) when it was
-written. ``python tests/test_support_two_segment_fits.py`` rewrites the file, for a deliberate
+rotations are well determined, and they equal, to 1e-12 relative, the numbers pinned in
+``tests/snapshots/two_segment_fits.npz`` when it was written (the rotations by their sums over
+the frames, plain and weighted by the frame's index, which any change of a frame's rotation
+moves). ``python tests/test_support_two_segment_fits.py`` rewrites the file, for a deliberate
 change of the fits only.
 """
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -137,8 +137,21 @@ def _pinned_numbers(fitted: support._Clusters) -> np.ndarray:
     return np.concatenate([*scalars, fitted.inertia_inv.ravel()])
 
 
-def _digest(rotation: np.ndarray) -> str:
-    return hashlib.sha256(np.ascontiguousarray(rotation, dtype=float).tobytes()).hexdigest()
+def _rotation_sums(rotation: np.ndarray) -> np.ndarray:
+    """``rotation`` ``(1, N, 3, 3)`` summed over its frames, plain and weighted by the frame's
+    index over ``N`` ``(2, 3, 3)``: a frame's rotation cannot change without moving them."""
+    frames = rotation[0]
+    weights = np.arange(1, len(frames) + 1) / len(frames)
+    return np.stack([frames.sum(axis=0), np.einsum("k,kij->ij", weights, frames)])
+
+
+def _assert_pinned(found: np.ndarray, pinned: np.ndarray) -> None:
+    """``found`` equals ``pinned`` to 1e-12 relative, or 1e-12 of the column's largest value
+    where a value is near zero."""
+    assert found.shape == pinned.shape
+    scale = np.max(np.abs(pinned), axis=0, keepdims=True, initial=0.0)
+    off = np.abs(found - pinned) > 1e-12 * np.maximum(np.abs(pinned), scale)
+    assert not off.any(), f"{off.sum()} numbers moved, first at {np.argwhere(off)[0]}"
 
 
 @pytest.fixture(scope="module")
@@ -164,12 +177,12 @@ def test_the_fits_are_numpys_to_rounding(case):
 
 
 @pytest.mark.parametrize("case", list(CASES))
-def test_the_fits_are_the_pinned_fits_to_the_last_bit(case, pinned):
+def test_the_fits_are_the_pinned_fits(case, pinned):
     fitted = _fitted(case)
-    np.testing.assert_array_equal(
-        np.array([_pinned_numbers(f) for f in fitted]).reshape(-1, 13), pinned[f"{case}/numbers"]
-    )
-    assert [_digest(f.rotation) for f in fitted] == list(pinned[f"{case}/rotations"])
+    numbers = np.array([_pinned_numbers(f) for f in fitted]).reshape(-1, 13)
+    _assert_pinned(numbers, pinned[f"{case}/numbers"])
+    rotations = np.array([_rotation_sums(f.rotation) for f in fitted]).reshape(-1, 18)
+    _assert_pinned(rotations, pinned[f"{case}/rotations"])
 
 
 def test_trials_fitted_together_are_fitted_as_each_alone():
@@ -209,7 +222,8 @@ def _write() -> None:
     for case in CASES:
         fitted = _fitted(case)
         stored[f"{case}/numbers"] = np.array([_pinned_numbers(f) for f in fitted]).reshape(-1, 13)
-        stored[f"{case}/rotations"] = np.array([_digest(f.rotation) for f in fitted], dtype=str)
+        sums = [_rotation_sums(f.rotation) for f in fitted]
+        stored[f"{case}/rotations"] = np.array(sums).reshape(-1, 18)
     np.savez_compressed(PINNED, **stored)
 
 
