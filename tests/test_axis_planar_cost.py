@@ -76,3 +76,13 @@ def test_planar_costs_refuse_trials_they_do_not_hold():
         costs.planar(directions, np.array([0, 1]))
     with pytest.raises(ValueError, match=r"trial 3 .*3 trials"):
         costs.planar(directions, np.array([0, 1, 3]))
+
+
+@pytest.mark.parametrize("cost", ["planar", "radial", "combined"])
+def test_the_costs_refuse_trials_that_are_not_indices(cost):
+    """A fractional trial would otherwise be truncated to a trial it does not name."""
+    rng = np.random.default_rng(8)
+    costs = axis.AxisCosts(_hinge_markers(rng, 3)[:, :40], rng.normal(size=(3, 3)))
+    directions = unit(rng.normal(size=(3, 3)))
+    with pytest.raises(ValueError, match="integer indices"):
+        getattr(costs, cost)(directions, np.array([0.9, 1.0, 2.0]))

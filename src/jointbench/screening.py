@@ -580,9 +580,10 @@ def find_artefacts(
 ) -> tuple[tuple[Artefact, ...], tuple[Swap, ...]]:
     """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
     [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears needs
-    only the jump check, anything else gets the whole screen. A clean cluster costs one
-    compiled call (:func:`_screen_sums`), which finds what the bound and the jump check need
-    together; the step sizes themselves only where a step exceeds ``min_jump_mm``."""
+    only the jump check, anything else gets the whole screen. A cluster the marker-frame
+    bounds clear costs one compiled call (:func:`_screen_sums`), which finds what the bound
+    and the jump check need together; the step sizes themselves only where a step exceeds
+    ``min_jump_mm``."""
     rules = rules or _RULES
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules)), ()

@@ -231,7 +231,10 @@ class AxisCosts:
     def _checked_trials(self, directions: np.ndarray, trials: np.ndarray | None) -> np.ndarray:
         """The trial of each of ``directions`` ``(k, 3)`` (trial 0 by default) as a kernel's
         ``(k,)`` indices; ``ValueError`` for a trial these costs do not hold."""
-        trials = kernel_array(self._trials(directions, trials), np.intp)
+        trials = self._trials(directions, trials)
+        if not np.issubdtype(trials.dtype, np.integer):
+            raise ValueError(f"trials must be integer indices, got {trials.dtype} {trials!r}")
+        trials = kernel_array(trials, np.intp)
         n_trials = len(self.scatter)
         if trials.shape != (len(directions),):
             raise ValueError(
@@ -266,7 +269,7 @@ class AxisCosts:
         """``f_r`` with the radii profiled out (paper B eqs. 10–11)."""
         n = np.asarray(directions, dtype=float)
         flat = n.reshape(-1, 3)
-        return self._radial(flat, self._trials(flat, trials), _NO_DISTANCES).reshape(n.shape[:-1])
+        return self._radial(flat, trials, _NO_DISTANCES).reshape(n.shape[:-1])
 
     def combined(self, directions: np.ndarray, trials: np.ndarray | None = None) -> np.ndarray:
         """``f = f_p + f_r`` (paper B eq. 12)."""

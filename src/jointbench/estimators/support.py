@@ -26,7 +26,9 @@ against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second 
 its sum of squares is above ``1e-12`` of the main rotation's.
 
 One segment (``center``, ``axis``: markers in the reference frame) needs no pose, and is
-judged from sums over the frames in two compiled passes:
+judged from sums over the frames, in one compiled pass over the markers that keeps each
+frame's marker-pair differences and one over those per set of distances (the cluster's own,
+then its projections on the two candidate hinge planes below):
 
 * ``s^2`` from the inter-marker distances, which a rigid body keeps in any pose: to first order
   the rigid fit's residual is ``sum_k dd_k' G+ dd_k`` over the frames' distance deviations
@@ -430,7 +432,8 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     """The numbers of the one-segment verdict (module docstring) for ``markers``
     ``(T, N, n >= 3, 3)`` [mm]: per trial the columns of :data:`_ONE_SEGMENT_COLUMNS`, from
     one pass over the frames' markers, which keeps each frame's marker-pair differences, and
-    one over those differences. Modes of a distance Gram matrix weaker than ``flex`` times its
+    one over those differences per set of distances (the cluster's, then its two projections).
+    Modes of a distance Gram matrix weaker than ``flex`` times its
     strongest are flexes, not shape. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
     n_pairs = n_markers * (n_markers - 1) // 2
@@ -838,18 +841,6 @@ def _shape_residual(
                     value += modes[p, k] * scatter[p, q] * modes[q, k]
             residual += value / strength[k]
     return residual, rank
-
-
-@kernel
-def _product3(left: np.ndarray, right: np.ndarray, out: np.ndarray) -> None:
-    """The matrix product of ``left`` and ``right`` ``(3, 3)`` into ``out``. A compiled
-    kernel."""
-    for i in range(3):
-        for j in range(3):
-            value = left[i, 0] * right[0, j]
-            value += left[i, 1] * right[1, j]
-            value += left[i, 2] * right[2, j]
-            out[i, j] = value
 
 
 @kernel
