@@ -385,24 +385,6 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
 
 
 @kernel
-def _largest_jump(markers: np.ndarray) -> float:
-    """The largest step size [mm] of :func:`find_jumps` of ``markers`` ``(n_frames, n, 3)``
-    (-inf if there is none): what :func:`_jump_sizes` returns, without the sizes. A compiled
-    kernel."""
-    largest_sq = -np.inf
-    for m in range(markers.shape[1] if markers.shape[0] >= 4 else 0):
-        back = _step_change_sq(markers, 2, m)
-        for k in range(3, markers.shape[0]):
-            ahead = _step_change_sq(markers, k, m)
-            size_sq = _lesser(back, ahead)
-            if size_sq > largest_sq:  # never for NaN
-                largest_sq = size_sq
-            back = ahead
-    # The square root is monotone: the root of the largest square is the largest root.
-    return np.sqrt(largest_sq) if largest_sq >= 0.0 else largest_sq
-
-
-@kernel
 def _step_change_sq(markers: np.ndarray, k: int, m: int) -> float:
     """``|s_k - s_(k-1)|^2`` [mm^2] of marker ``m`` of ``markers`` ``(n_frames, n, 3)`` at frame
     ``2 <= k < n_frames``, ``s_k = x_k - x_(k-1)``: the squared change of :func:`find_jumps`
@@ -582,7 +564,7 @@ def find_artefacts(
     [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears needs
     only the jump check, anything else gets the whole screen. A cluster the marker-frame
     bounds clear costs one compiled call (:func:`_screen_sums`), which finds what the bound
-    and the jump check need together; the step sizes themselves only where a step exceeds
+    and the jump check need together; the jumps are located only where a step exceeds
     ``min_jump_mm``."""
     rules = rules or _RULES
     if len(labels) < 3:
@@ -634,7 +616,9 @@ def _screen_sums(markers: np.ndarray, limit: float) -> tuple[int, bool, float]:
                     return -1, False, np.nan  # the whole screen finds the jumps
     typical = _most_typical(markers)  # every frame complete
     first, second = _frame_misfits(markers, typical)
-    return typical, first <= limit and second <= limit, _largest_jump(markers)
+    n_frames, n_markers, _ = markers.shape
+    largest_jump = _jump_sizes(markers, np.empty((max(n_frames - 3, 0), n_markers)))
+    return typical, first <= limit and second <= limit, largest_jump
 
 
 def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
