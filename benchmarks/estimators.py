@@ -27,8 +27,11 @@ Data sets:
 
 A method whose signature takes two segments but is registered under ``axis`` gets two-segment
 hinge trials of 3 + 3 markers x 1200 frames. Each method is timed call by call on distinct
-trials; the median is reported with the target, and kinds with no registered method are
-skipped. Timings are wall-clock on a shared machine: run twice before trusting a failure.
+trials, its three calls (alone, checked, public) in alternating blocks of the same trials after
+an untimed first call each (:func:`time_variants`), its many-trial forms likewise
+(:func:`time_batched`); medians are reported with the targets, and kinds with no registered
+method are skipped. Timings are wall-clock on a shared machine: run twice before trusting a
+failure.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from __future__ import annotations
 import argparse
 import functools
 import inspect
+import itertools
 import json
 import os
 import platform
@@ -47,6 +51,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -189,26 +194,81 @@ def _n_segments(kind: str, name: str) -> int:
     return max(1, len(required))
 
 
-def time_method(
-    fit: Callable, data: DataSet, seconds: float, min_calls: int, max_calls: int
-) -> tuple[float, int, str]:
-    """Median wall-clock seconds per call of ``fit(*trial)`` over distinct trials; also calls
-    made and a note."""
-    calls: list[float] = []
-    note = ""
-    deadline = time.perf_counter() + seconds
-    try:
-        fit(*data.trials[0])  # warm-up: imports, caches
-        while len(calls) < max_calls and (len(calls) < min_calls or time.perf_counter() < deadline):
-            trial = data.trials[len(calls) % len(data.trials)]
-            start = time.perf_counter()
-            result = fit(*trial)
-            calls.append(time.perf_counter() - start)
-            if not result.converged and not note:
-                note = "some trials did not converge"
-    except Exception as error:  # report and go on: one broken method must not hide the others
-        return float("nan"), len(calls), f"error: {type(error).__name__}: {error}"
-    return statistics.median(calls), len(calls), note
+class Timed(NamedTuple):
+    """One variant's timing: median wall-clock seconds per call (NaN if it failed), the calls
+    timed and a note (an error, or trials that did not converge)."""
+
+    seconds: float
+    calls: int
+    note: str
+
+
+def time_variants(
+    fits: dict[str, Callable], data: DataSet, seconds: float, min_calls: int, max_calls: int
+) -> dict[str, Timed]:
+    """:class:`Timed` of each of ``fits`` (the variants of one method: alone, checked, public)
+    called on the trials of ``data``, by the same name.
+
+    Each variant is first called once untimed, before the clock starts: the imports, the
+    compilation of kernels and the caches of a first call are not what is measured, and must not
+    use up a variant's time. The variants are then timed in rounds, each fitting the same block
+    of distinct trials in turn, the order rotating from round to round, so that every variant
+    meets the same windows of the machine's load and their ratios compare like with like. The
+    rounds stop when every variant has ``max_calls`` calls, or, once each has ``min_calls``,
+    when they have used ``seconds`` each. A variant that raises is reported (its note) and
+    dropped; the others go on.
+    """
+    timings: dict[str, list[float]] = {name: [] for name in fits}
+    notes = dict.fromkeys(fits, "")
+    live = []
+    for name, fit in fits.items():
+        try:
+            fit(*data.trials[0])
+            live.append(name)
+        except Exception as error:  # report and go on: one broken variant must not hide others
+            notes[name] = f"error: {type(error).__name__}: {error}"
+    block = data.trials[: min(len(data.trials), max_calls)]
+    budget = seconds * len(fits)
+    start = time.perf_counter()
+    for round_index in itertools.count():
+        if not live or all(len(timings[name]) >= max_calls for name in live):
+            break
+        if time.perf_counter() - start > budget and all(
+            len(timings[name]) >= min_calls for name in live
+        ):
+            break
+        shift = round_index % len(live)
+        for name in live[shift:] + live[:shift]:
+            try:
+                converged = _time_block(
+                    fits[name], block[: max_calls - len(timings[name])], timings[name]
+                )
+            except Exception as error:
+                notes[name] = f"error: {type(error).__name__}: {error}"
+                continue
+            if not converged and not notes[name]:
+                notes[name] = "some trials did not converge"
+        live = [name for name in live if not notes[name].startswith("error")]
+    return {
+        name: Timed(
+            statistics.median(timings[name]) if name in live else float("nan"),
+            len(timings[name]),
+            notes[name],
+        )
+        for name in fits
+    }
+
+
+def _time_block(fit: Callable, trials: list, timings: list[float]) -> bool:
+    """Append the wall-clock seconds of ``fit(*trial)`` for each of ``trials`` to ``timings``;
+    whether every result converged."""
+    converged = True
+    for trial in trials:
+        start = time.perf_counter()
+        result = fit(*trial)
+        timings.append(time.perf_counter() - start)
+        converged = converged and bool(result.converged)
+    return converged
 
 
 def _batch(data: DataSet, n_trials: int) -> list[np.ndarray]:
@@ -218,43 +278,60 @@ def _batch(data: DataSet, n_trials: int) -> list[np.ndarray]:
 
 
 def time_batched(
-    kind: str,
-    name: str,
-    data: DataSet,
-    n_trials: int,
-    repeats: int,
-    *,
-    checked: bool,
-    shared_poses: bool = False,
-) -> tuple[float, str]:
-    """Median over ``repeats`` of a batched call's wall-clock seconds divided by its trials.
+    kind: str, name: str, data: DataSet, n_trials: int, repeats: int
+) -> dict[str, tuple[float, str]]:
+    """Median over ``repeats`` of a batched call's wall-clock seconds divided by its trials, and a
+    note, for each variant of the many-trial form of method ``name``: ``"estimator"``, the bare
+    form the study's estimate jobs run; ``"checked"``, the registry's checked form (input checks
+    and support verdict per trial, as a user's call); and, for a pose-based method, ``"from
+    fitted poses"``, the bare form given the trials' poses fitted beforehand, as the hip study's
+    estimate jobs are (that fit is timed by :func:`time_pose_fit`).
 
-    The batch cycles through the data set's distinct trials up to ``n_trials``. ``checked``:
-    the registry's checked form (input checks and support verdict per trial, as a user's call)
-    rather than the bare estimator the study's estimate jobs run. ``shared_poses``: a
-    pose-based method is given the trials' poses fitted beforehand, as the hip study's
-    estimate jobs are (the fit is timed by :func:`time_pose_fit`).
+    The batch cycles through the data set's distinct trials up to ``n_trials``. Each variant is
+    called once untimed on two trials first; then every repeat calls the variants in turn, the
+    order rotating, so that they share the machine's load as the one-trial variants do
+    (:func:`time_variants`). A variant that raises is reported and dropped.
     """
-    batched = registry.many(kind, name, checked=checked)
     segments = _batch(data, n_trials)
-    options = {}
-    if shared_poses:
-        names = pose_segments(batched)
-        if names is None:
-            return float("nan"), ""
-        by_name = dict(zip(names, segments, strict=True))
-        options["poses"] = trial_poses(by_name, min_frames=POSE_MIN_FRAMES)
-    try:
-        batched(*(segment[:2] for segment in segments))  # warm-up
-        timings = []
-        for _ in range(repeats):
-            start = time.perf_counter()
-            outcomes = batched(*segments, **options)
-            timings.append((time.perf_counter() - start) / n_trials)
-    except Exception as error:
-        return float("nan"), f"error: {type(error).__name__}: {error}"
-    failures = [o for o in outcomes if isinstance(o, Exception)]
-    return statistics.median(timings), f"{len(failures)} trials failed" if failures else ""
+    bare = registry.many(kind, name, checked=False)
+    variants: dict[str, tuple[Callable, dict]] = {
+        "estimator": (bare, {}),
+        "checked": (registry.many(kind, name, checked=True), {}),
+    }
+    names = pose_segments(bare)
+    if names is not None:
+        poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
+        variants["from fitted poses"] = (bare, {"poses": poses})
+    timings: dict[str, list[float]] = {variant: [] for variant in variants}
+    notes = dict.fromkeys(variants, "")
+    for variant, (batched, _) in variants.items():
+        try:
+            batched(*(segment[:2] for segment in segments))
+        except Exception as error:  # report and go on: one broken variant must not hide others
+            notes[variant] = f"error: {type(error).__name__}: {error}"
+    for repeat in range(repeats):
+        live = [variant for variant in variants if not notes[variant].startswith("error")]
+        shift = repeat % max(len(live), 1)
+        for variant in live[shift:] + live[:shift]:
+            batched, options = variants[variant]
+            try:
+                start = time.perf_counter()
+                outcomes = batched(*segments, **options)
+                timings[variant].append((time.perf_counter() - start) / n_trials)
+            except Exception as error:
+                notes[variant] = f"error: {type(error).__name__}: {error}"
+                continue
+            failures = sum(isinstance(outcome, Exception) for outcome in outcomes)
+            notes[variant] = f"{failures} trials failed" if failures else ""
+    return {
+        variant: (
+            float("nan")
+            if notes[variant].startswith("error")
+            else statistics.median(timings[variant]),
+            notes[variant],
+        )
+        for variant in variants
+    }
 
 
 def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
@@ -405,12 +482,29 @@ def main(argv: list[str] | None = None) -> int:
                 if label not in data_sets:
                     data_sets[label] = build_data(kind, label, rng, n_pool)
                 data = data_sets[label]
-                median, n_calls, note = time_method(bare, data, seconds, min_calls, max_calls)
-                held, _, held_note = time_method(checked, data, seconds, min_calls, max_calls)
-                api, _, api_note = time_method(public, data, seconds, min_calls, max_calls)
+                timed = time_variants(
+                    {"estimator": bare, "checked": checked, "public": public},
+                    data,
+                    seconds,
+                    min_calls,
+                    max_calls,
+                )
+                alone, held, api = timed["estimator"], timed["checked"], timed["public"]
+                note = alone.note or held.note or api.note
                 target = _target(kind, name, data.label)
-                note = note or held_note or api_note
-                rows.append((kind, name, data.label, n_calls, median, held, api, target, note))
+                rows.append(
+                    (
+                        kind,
+                        name,
+                        data.label,
+                        alone.calls,
+                        alone.seconds,
+                        held.seconds,
+                        api.seconds,
+                        target,
+                        note,
+                    )
+                )
 
     baseline: dict[tuple[str, str, str], float] = {}
     if not args.no_baseline:
@@ -430,25 +524,29 @@ def main(argv: list[str] | None = None) -> int:
         "fit_joint_center, the checked call after the artefact screen (jointbench.screen, "
         f"artefacts='refuse'); '{old}': the public call of that commit (Nov 22's by default, "
         "before the checks and the screen), checked out in a git worktree and timed the same "
-        "way in a subprocess on the same trials. On a shared machine only ratios within one run "
-        "are comparable.\n"
+        "way in a subprocess on the same trials. The three calls of a method are timed after "
+        "an untimed first call each (imports, compiling kernels), in alternating blocks of the "
+        "same distinct trials ('calls' per variant), so that their ratios share the machine's "
+        "load. On a shared machine only ratios within one run are comparable.\n"
     )
     print(
         "| kind | method | data (markers x frames) | calls | estimator | target | pass "
-        f"| checked | checked / estimator | ≤ {MAX_CHECK_RATIO}× | public call | {old} |"
+        f"| checked | checked / estimator | ≤ {MAX_CHECK_RATIO}× | public call "
+        f"| public / estimator | ≤ {MAX_CHECK_RATIO}× | {old} |"
     )
-    print("|---|---|---|---:|---:|---:|:---:|---:|---:|:---:|---:|---:|")
+    print("|---|---|---|---:|---:|---:|:---:|---:|---:|:---:|---:|---:|:---:|---:|")
     failed = False
     for kind, name, label, n_calls, median, held, api, target, note in rows:
         verdict = _verdict(median, target, note)
-        ratio = held / median
+        ratio, public_ratio = held / median, api / median
         cheap = _verdict(ratio, MAX_CHECK_RATIO, note)
-        failed = failed or verdict in ("error", "FAIL") or cheap == "FAIL"
+        public_cheap = _verdict(public_ratio, MAX_CHECK_RATIO, note)
+        failed = failed or verdict in ("error", "FAIL") or "FAIL" in (cheap, public_cheap)
         target_text = "—" if target is None else f"≤ {_format_seconds(target)}"
         line = (
             f"| {kind} | {name} | {label} | {n_calls} | {_format_seconds(median)} | "
             f"{target_text} | {verdict} | {_format_seconds(held)} | {ratio:.2f}× | {cheap} | "
-            f"{_format_seconds(api)} | "
+            f"{_format_seconds(api)} | {public_ratio:.2f}× | {public_cheap} | "
             f"{_format_seconds(baseline.get((kind, name, label), float('nan')))} |"
         )
         print(line + (f" {note}" if note else ""))
@@ -458,7 +556,8 @@ def main(argv: list[str] | None = None) -> int:
         "\nMany trials at once: median over repeats of the call's wall-clock time divided by its "
         "trials; 'estimator' is the bare many-trial form the estimate jobs run and time (the "
         "target applies to it; a method without its own is fitted trial by trial), 'checked' the "
-        "registry's checked form with every trial's input checks and support verdict; "
+        "registry's checked form with every trial's input checks and support verdict, the "
+        "variants called in turn in every repeat; "
         "'speed-up' = one-trial estimator median above / batched estimator. The baseline had no "
         "many-trial form: its column repeats its one-trial public call.\n"
     )
@@ -467,20 +566,22 @@ def main(argv: list[str] | None = None) -> int:
         f"| checked | checked / estimator | ≤ {MAX_CHECK_RATIO}× | from fitted poses | {old} |"
     )
     print("|---|---|---|---:|---:|---:|---:|:---:|---:|---:|:---:|---:|---:|")
-    pose_labels = set()
+    # Per data set, the largest batch a pose-based method was timed with, and its repeats.
+    pose_labels: dict[tuple[str, str], tuple[int, int]] = {}
     for kind, name, label in one_trial:
         target = BATCHED_TARGETS.get((kind, name, label))
         n_trials = _BATCH_SIZE.get(label, 8) if target else 8
         n_trials = max(4, n_trials // (8 if args.quick else 1))
         repeats = 3 if args.quick or target is None else 7
         data = data_by_kind[kind][label]
-        per_trial, note = time_batched(kind, name, data, n_trials, repeats, checked=False)
-        checked, checked_note = time_batched(kind, name, data, n_trials, repeats, checked=True)
-        posed, _ = time_batched(
-            kind, name, data, n_trials, repeats, checked=False, shared_poses=True
-        )
+        timed = time_batched(kind, name, data, n_trials, repeats)
+        per_trial, note = timed["estimator"]
+        checked, checked_note = timed["checked"]
+        posed, _ = timed.get("from fitted poses", (float("nan"), ""))
         if np.isfinite(posed):
-            pose_labels.add((kind, label, n_trials, repeats))
+            pose_labels[(kind, label)] = max(
+                pose_labels.get((kind, label), (0, 0)), (n_trials, repeats)
+            )
         verdict = _verdict(per_trial, target, note)
         ratio = checked / per_trial
         cheap = _verdict(ratio, MAX_CHECK_RATIO, note or checked_note)
@@ -499,9 +600,9 @@ def main(argv: list[str] | None = None) -> int:
             "beforehand, as the hip study's estimate jobs read them from its poses job. That fit, "
             "shared by every pose-based method, costs per trial:\n"
         )
-        for kind, label, n_trials, repeats in sorted(pose_labels):
+        for (kind, label), (n_trials, repeats) in sorted(pose_labels.items()):
             seconds_per_trial = time_pose_fit(data_by_kind[kind][label], n_trials, repeats)
-            print(f"- {label}: {_format_seconds(seconds_per_trial)} (both segments' poses)")
+            print(f"- {kind}, {label}: {_format_seconds(seconds_per_trial)} (both segments' poses)")
     return 1 if failed and args.strict else 0
 
 

@@ -1,0 +1,133 @@
+"""How the estimator benchmark times its calls: every variant of a method (alone, checked,
+public) is timed the same way, in the same time windows, after an untimed warm-up."""
+
+import sys
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+
+import estimators as bench
+
+
+def _data(n_trials: int = 4) -> bench.DataSet:
+    return bench.DataSet("center", "3 x 120", [(index,) for index in range(n_trials)])
+
+
+def _recording(name: str, calls: list, *, first_call_seconds: float = 0.0):
+    """A fit that records ``(name, trial)`` per call; its first call (the warm-up) sleeps."""
+
+    def fit(trial):
+        if first_call_seconds and not any(called == name for called, _ in calls):
+            time.sleep(first_call_seconds)
+        calls.append((name, trial))
+        return SimpleNamespace(converged=True)
+
+    return fit
+
+
+def test_a_slow_warm_up_does_not_eat_the_timing_budget():
+    # A first call that compiles kernels for longer than the budget must still leave the
+    # variant its full number of timed calls, as every other method gets.
+    calls: list = []
+    fits = {"estimator": _recording("estimator", calls, first_call_seconds=0.3)}
+    timed = bench.time_variants(fits, _data(), seconds=0.1, min_calls=2, max_calls=40)
+    assert timed["estimator"].calls == 40
+
+
+def test_variants_are_timed_in_alternating_blocks_on_the_same_trials():
+    calls: list = []
+    names = ("estimator", "checked", "public")
+    fits = {name: _recording(name, calls) for name in names}
+    timed = bench.time_variants(fits, _data(4), seconds=10.0, min_calls=2, max_calls=24)
+    assert [timed[name].calls for name in names] == [24, 24, 24]
+    timed_calls = calls[len(names) :]  # after one warm-up call each
+    # Each variant's calls come in blocks of the data set's trials, and the blocks of all
+    # variants alternate, so that a change of the machine's load falls on all of them alike.
+    blocks = [timed_calls[start : start + 4] for start in range(0, len(timed_calls), 4)]
+    order = [block[0][0] for block in blocks]
+    assert all(len({name for name, _ in block}) == 1 for block in blocks)
+    assert all([trial for _, trial in block] == [0, 1, 2, 3] for block in blocks)
+    assert all(set(order[start : start + 3]) == set(names) for start in range(0, len(order), 3))
+    assert order[:3] != order[3:6]  # the order rotates, so no variant always runs first
+
+
+def test_a_failing_variant_is_reported_and_the_others_are_still_timed():
+    calls: list = []
+
+    def broken(trial):
+        raise RuntimeError("cannot fit")
+
+    fits = {"estimator": _recording("estimator", calls), "checked": broken}
+    timed = bench.time_variants(fits, _data(), seconds=10.0, min_calls=2, max_calls=8)
+    assert timed["estimator"].calls == 8
+    assert timed["checked"].note == "error: RuntimeError: cannot fit"
+    assert timed["checked"].seconds != timed["checked"].seconds  # NaN
+
+
+def test_the_budget_bounds_a_slow_variant_but_never_below_min_calls():
+    calls: list = []
+
+    def slow(trial):
+        time.sleep(0.02)
+        return SimpleNamespace(converged=True)
+
+    fits = {"estimator": _recording("estimator", calls), "slow": slow}
+    timed = bench.time_variants(fits, _data(2), seconds=0.05, min_calls=3, max_calls=400)
+    assert 3 <= timed["slow"].calls < 400
+    assert timed["slow"].seconds == pytest.approx(0.02, rel=0.5)
+
+
+def test_a_fit_that_does_not_converge_is_noted():
+    def unconverged(trial):
+        return SimpleNamespace(converged=False)
+
+    timed = bench.time_variants({"estimator": unconverged}, _data(), 10.0, 2, 4)
+    assert timed["estimator"].note == "some trials did not converge"
+
+
+def test_batched_variants_alternate_and_a_failing_one_does_not_hide_the_other(monkeypatch):
+    calls: list = []
+
+    def many(kind, name, *, checked):
+        label = "checked" if checked else "estimator"
+
+        def batched(markers, **options):
+            calls.append((label, len(markers)))
+            if checked and len(markers) > 2:
+                raise RuntimeError("broken checks")
+            return [SimpleNamespace(converged=True)] * len(markers)
+
+        return batched
+
+    monkeypatch.setattr(bench.registry, "many", many)
+    monkeypatch.setattr(bench, "pose_segments", lambda batched: None)
+    data = bench.DataSet("center", "3 x 120", [(bench.np.zeros((4, 3, 3)),) for _ in range(3)])
+    timed = bench.time_batched("center", "LS", data, n_trials=6, repeats=4)
+    assert calls[:2] == [("estimator", 2), ("checked", 2)]  # untimed first calls
+    assert timed["checked"][1] == "error: RuntimeError: broken checks"
+    assert timed["checked"][0] != timed["checked"][0]  # NaN
+    assert timed["estimator"][1] == "" and timed["estimator"][0] >= 0
+    assert [label for label, size in calls[2:]] == ["estimator", "checked"] + ["estimator"] * 3
+    assert "from fitted poses" not in timed
+
+
+def test_batched_variants_rotate_their_order(monkeypatch):
+    calls: list = []
+
+    def many(kind, name, *, checked):
+        def batched(markers, **options):
+            calls.append("checked" if checked else "estimator")
+            return [SimpleNamespace(converged=True)] * len(markers)
+
+        return batched
+
+    monkeypatch.setattr(bench.registry, "many", many)
+    monkeypatch.setattr(bench, "pose_segments", lambda batched: None)
+    data = bench.DataSet("center", "3 x 120", [(bench.np.zeros((4, 3, 3)),) for _ in range(3)])
+    bench.time_batched("center", "LS", data, n_trials=6, repeats=4)
+    rounds = [calls[start : start + 2] for start in range(2, len(calls), 2)]
+    assert rounds == [["estimator", "checked"], ["checked", "estimator"]] * 2
