@@ -186,7 +186,7 @@ def test_every_case_is_pinned_and_the_cases_are_varied():
     assert any("error" in found for found in arrays)
     assert any(found.get("swaps") for found in arrays)
     kinds = {a[0] for found in arrays for a in found.get("artefacts", [])}
-    assert kinds == {"jump", "rigidity"}
+    assert kinds == {"jump", "rigidity", "swap"}
     assert any(case["refuse"] is None for case in pinned.values())
 
 

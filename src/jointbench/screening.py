@@ -6,28 +6,37 @@ artefact of a few mm. A sample is flagged when its residual exceeds ``residual_f
 the lower quartile of the cluster's residuals and ``min_residual_mm``. The residuals are first
 taken from the cluster's most typical frame (which a minority of broken frames cannot distort,
 as they would a mean), then from the mean shape of the samples not flagged, until the flags settle.
-A label swap is an event at a frame: the frames it flags are explained by exchanging two labels,
-and :func:`find_swaps` reports the runs of frames carrying the pair one way round, so a message
-names where the labelling changes and both sides can be kept. None of this depends on the order
-of the frames. A step of one marker is flagged when it differs from both neighbouring steps by
-more than ``jump_factor`` times the median such difference and ``min_jump_mm``
-(:func:`find_jumps`), which needs the frames in time order: it is the only check of markers
-outside a cluster, and in a cluster it counts only where no rigidity break explains it (a swap
-of two markers of an isosceles triangle keeps the shape).
+A swap in a cluster of a few mm moves the residuals less than soft-tissue artefact of a body
+segment does, so a scale-free test looks for swaps too (:func:`find_exchanges`): a frame is
+swapped when its inter-marker distances depart from the cluster's typical ones far beyond the
+trial's own noise and exchanging two labels brings them back to it (thresholds from a noise
+model, :class:`ArtefactRules`). A label swap is an event at a frame: the frames it flags are
+explained by exchanging two labels, and :func:`find_swaps` reports the runs of frames carrying
+the pair one way round, so a message names where the labelling changes and both sides can be
+kept. None of this depends on the order of the frames. A step of one marker is flagged when it
+differs from both neighbouring steps by more than ``jump_factor`` times the median such
+difference and ``min_jump_mm`` (:func:`find_jumps`), which needs the frames in time order: it
+is the only check of markers outside a cluster, and in a cluster it counts only where no
+rigidity break or swapped frame explains it (a swap of two markers of an isosceles triangle
+keeps the shape).
 
 :func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen`;
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
 need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
 a complete cluster whose residuals a bound keeps below ``min_residual_mm``
-(:func:`surely_rigid`, at most one pose fit) it skips the iterated mean shape.
+(:func:`surely_rigid`, at most one pose fit) and in which the distance test finds no swap it
+skips the iterated mean shape.
 """
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import combinations, pairwise
 
 import numpy as np
+from scipy.special import chdtri
 
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import best_rotation
@@ -39,6 +48,7 @@ __all__ = [
     "Screening",
     "Swap",
     "find_artefacts",
+    "find_exchanges",
     "find_jumps",
     "find_rigidity_breaks",
     "find_swaps",
@@ -177,9 +187,38 @@ def _most_typical(clusters: np.ndarray) -> int:
     """The index of the frame of ``clusters`` ``(n_frames, n, 3)`` [mm] whose largest
     inter-marker distance deviation from that distance's median over the frames is least (the
     first, on a tie). A compiled kernel (:mod:`jointbench.numerics.compiled`)."""
+    distances = _pair_distances(clusters)
+    return _nearest(distances, _medians(distances))
+
+
+@kernel
+def _medians(values: np.ndarray) -> np.ndarray:
+    """The median of each row of ``values`` ``(n_rows, n)``. A compiled kernel."""
+    medians = np.empty(values.shape[0])
+    for row in range(values.shape[0]):
+        medians[row] = np.median(values[row])
+    return medians
+
+
+@kernel
+def _nearest(distances: np.ndarray, medians: np.ndarray) -> int:
+    """The frame of ``distances`` ``(n_pairs, n_frames)`` [mm] whose largest departure from
+    ``medians`` ``(n_pairs,)`` [mm] is least (the first, on a tie). A compiled kernel."""
+    n_pairs, n_frames = distances.shape
+    deviation = np.zeros(n_frames)
+    for pair in range(n_pairs):
+        for f in range(n_frames):
+            deviation[f] = max(deviation[f], abs(distances[pair, f] - medians[pair]))
+    return int(np.argmin(deviation))
+
+
+@kernel
+def _pair_distances(clusters: np.ndarray) -> np.ndarray:
+    """The inter-marker distances ``(n_pairs, n_frames)`` [mm] of ``clusters``
+    ``(n_frames, n, 3)`` [mm], the pairs ``(a, b)``, ``a < b``, in the order of
+    ``itertools.combinations``. A compiled kernel."""
     n_frames, n_markers = clusters.shape[0], clusters.shape[1]
-    n_pairs = n_markers * (n_markers - 1) // 2
-    distances = np.empty((n_pairs, n_frames))
+    distances = np.empty((n_markers * (n_markers - 1) // 2, n_frames))
     pair = 0
     for a in range(n_markers):
         for b in range(a + 1, n_markers):
@@ -189,12 +228,7 @@ def _most_typical(clusters: np.ndarray) -> int:
                 dz = clusters[f, a, 2] - clusters[f, b, 2]
                 distances[pair, f] = np.sqrt(dx * dx + dy * dy + dz * dz)
             pair += 1
-    deviation = np.zeros(n_frames)
-    for pair in range(n_pairs):
-        median = np.median(distances[pair])
-        for f in range(n_frames):
-            deviation[f] = max(deviation[f], abs(distances[pair, f] - median))
-    return int(np.argmin(deviation))
+    return distances
 
 
 def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
@@ -261,12 +295,47 @@ class Numbering:
 
 @dataclass(frozen=True)
 class ArtefactRules:
-    """When a sample or a step is far above the trial's own level (module docstring)."""
+    """When a sample or a step is far above the trial's own level (module docstring).
+
+    The rigidity and jump levels are set so that soft-tissue artefact of body segments (a few
+    mm, smooth) is not flagged, which leaves a swap in a cluster of a few mm unseen. The swap
+    test (:func:`find_exchanges`) is scale-free and specific instead. Its noise model: each
+    inter-marker distance of a frame departs from the cluster's typical one by noise of one
+    standard deviation ``s`` for every pair, ``s`` the trial's own (1.4826 times the median
+    absolute departure over all frames and pairs, the frames first relabelled to one
+    labelling, so that a swap cannot lift it however many frames it holds), so that a frame's
+    misfit ``chi2`` (its squared departures summed over the ``P = n (n - 1) / 2`` pairs, over
+    ``s^2``) follows about a chi-square law with ``P`` degrees of freedom. A frame is swapped
+    when
+
+    * its ``chi2`` exceeds the level the law exceeds with probability ``swap_far_probability``:
+      1e-12, beyond any trial's length, with room for tails heavier than Gaussian noise's, as
+      soft-tissue artefact's are (59 for 3 markers, 116 for 8); and
+    * exchanging two labels brings it within the level exceeded with probability
+      ``swap_near_probability``: 1e-6, so that a swapped frame is missed about once in a
+      million (31 for 3 markers, 79 for 8).
+
+    Only an exchange that moves the typical distances by ``sqrt(far) + sqrt(near)`` times ``s``
+    or more is tried (13.2 for 3 markers, 19.7 for 8): then every frame it holds clears the
+    far level unless its noise exceeds the near one, so a swap is found as whole runs of
+    frames, not in fragments. A smaller exchange, down to the base of an isosceles triangle
+    which keeps the shape, is one that deformation or noise can mimic, and is left to the jump
+    check. Smooth deformation rarely departs far from the trial's own level, and where it does,
+    no such exchange brings it back.
+
+    The noise level is taken only from ``swap_min_frames`` complete frames or more (20): from
+    a handful, the median of each distance is one of the few frames itself and the level comes
+    out too low, so that noisy frames of a clean trial pass the far level. A shorter trial is
+    left to the rigidity and jump checks.
+    """
 
     residual_factor: float = 15.0
     min_residual_mm: float = 5.0
     jump_factor: float = 20.0
     min_jump_mm: float = 20.0
+    swap_far_probability: float = 1e-12
+    swap_near_probability: float = 1e-6
+    swap_min_frames: int = 20
 
 
 _RULES = ArtefactRules()  # the default, made once: a clean trial's screen takes microseconds
@@ -274,17 +343,26 @@ _RULES = ArtefactRules()  # the default, made once: a clean trial's screen takes
 
 @dataclass(frozen=True)
 class Artefact:
-    """One flagged sample: ``kind`` ``"jump"`` or ``"rigidity"``, ``size_mm`` the step or the
-    residual, ``level_mm`` the threshold it crossed."""
+    """One flagged sample: ``kind`` ``"jump"``, ``"rigidity"`` or ``"swap"``, ``size_mm`` the
+    step, the residual or (a swap) the frame's inter-marker distance misfit, ``level_mm`` the
+    threshold it crossed; for a swap, ``partner`` the marker whose label it carries."""
 
     kind: str
     label: str
     frame: int
     size_mm: float
     level_mm: float
+    partner: str = ""
 
     def describe(self, frames: Numbering) -> str:
         """One line, naming the frame as ``frames`` does."""
+        if self.kind == "swap":
+            return (
+                f"markers {self.label} and {self.partner} exchange labels at "
+                f"{frames.name(self.frame)} (the cluster's inter-marker distances depart "
+                f"{self.size_mm:.1f} mm from their typical values, threshold "
+                f"{self.level_mm:.1f} mm, and fit them with the two labels exchanged)"
+            )
         what = "jumps" if self.kind == "jump" else "leaves its cluster's rigid shape by"
         return (
             f"marker {self.label} {what} {self.size_mm:.1f} mm at {frames.name(self.frame)} "
@@ -418,17 +496,22 @@ def find_rigidity_breaks(
     # The level is at least min_residual_mm, so no residual below it needs the quartile.
     if not np.fmax.reduce(residuals, axis=None) > rules.min_residual_mm:
         return []
-    # The lower quartile, not the median: a swap held by half the frames displaces more than
-    # half the samples (the pose fit spreads it), which would lift a median above them.
-    typical = _lower_quartile(kernel_array(residuals))
-    if not np.isfinite(typical):
-        return []
-    level = max(rules.min_residual_mm, rules.residual_factor * typical)
+    level = _rigidity_level(residuals, rules)
     frame, marker = np.nonzero(residuals > level)
     return [
         Artefact("rigidity", labels[m], int(f), float(residuals[f, m]), level)
         for f, m in zip(frame, marker, strict=True)
     ]
+
+
+def _rigidity_level(residuals: np.ndarray, rules: ArtefactRules) -> float:
+    """The level [mm] above which :func:`find_rigidity_breaks` flags a residual of
+    ``residuals`` ``(n_frames, n)`` [mm]: ``residual_factor`` times their lower quartile, at
+    least ``min_residual_mm``."""
+    # The lower quartile, not the median: a swap held by half the frames displaces more than
+    # half the samples (the pose fit spreads it), which would lift a median above them.
+    typical = _lower_quartile(kernel_array(residuals))
+    return max(rules.min_residual_mm, rules.residual_factor * typical)
 
 
 @kernel
@@ -452,32 +535,276 @@ def _lower_quartile(values: np.ndarray) -> float:
     return low + (high - low) * gamma
 
 
+def find_exchanges(
+    markers: np.ndarray, labels: tuple[str, ...], rules: ArtefactRules
+) -> list[Artefact]:
+    """Frames whose shape is far from the cluster's and is the cluster's with two labels
+    exchanged: two ``"swap"`` artefacts for each, one per marker, naming the other as
+    ``partner``.
+
+    ``markers`` ``(n_frames, n, 3)`` [mm]; only the frames showing every marker are judged (a
+    frame missing one is left to the rigidity check), and only where there are at least
+    ``rules.swap_min_frames`` of them; fewer than three markers have no shape. The test
+    compares each frame's inter-marker distances, which fix its shape up to congruence without
+    a pose fit, with the cluster's typical ones in units of the trial's own noise, as labelled
+    and with each pair of labels exchanged (:class:`ArtefactRules`, :func:`_exchange_test`);
+    it does not depend on the cluster's size or on the frames' order.
+    """
+    if len(labels) < 3:
+        return []
+    far, near = _exchange_levels(len(labels), rules)
+    exchange, misfit, level = _exchange_test(
+        kernel_array(markers), far, near, rules.swap_min_frames
+    )
+    swapped = np.flatnonzero(exchange >= 0)
+    if swapped.size == 0:
+        return []
+    pairs = list(combinations(range(len(labels)), 2))
+    found = []
+    for frame in swapped:
+        frame, size = int(frame), float(misfit[frame])
+        i, j = pairs[exchange[frame]]
+        found.append(Artefact("swap", labels[i], frame, size, level, labels[j]))
+        found.append(Artefact("swap", labels[j], frame, size, level, labels[i]))
+    return found
+
+
+@functools.cache
+def _exchange_levels(n_markers: int, rules: ArtefactRules) -> tuple[float, float]:
+    """The levels of a frame's distance misfit ``chi2`` (:class:`ArtefactRules`) for a cluster
+    of ``n_markers``: above the first it is far from the trial's noise, within the second an
+    exchange of labels explains it; chi-square quantiles with one degree of freedom per pair."""
+    n_pairs = n_markers * (n_markers - 1) // 2
+    return (
+        float(chdtri(n_pairs, rules.swap_far_probability)),
+        float(chdtri(n_pairs, rules.swap_near_probability)),
+    )
+
+
+@kernel
+def _exchange_test(
+    markers: np.ndarray, far: float, near: float, min_frames: int
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The distance test of :func:`find_exchanges` on the frames of ``markers``
+    ``(n_frames, n >= 3, 3)`` [mm] that show every marker, where there are ``min_frames`` of
+    them or more, with the levels ``far`` and ``near`` of ``chi2`` (:func:`_exchange_levels`).
+
+    Returns per frame the exchange that explains it (the index of the pair of labels, in the
+    order of ``itertools.combinations``; -1 for none, and in a frame not judged), its distance
+    misfit [mm] (the norm of its distances' departures from the typical ones; NaN in a frame
+    not judged) and the misfit's level [mm] (``sqrt(far)`` times the noise; NaN if no frame is
+    judged). The typical distances and the noise come from :func:`_typical_distances`,
+    relabelling the frames only by the exchanges that the anchor frame and the labelling-free
+    noise of :func:`_anchor_frame` show distinct (:func:`_distinct_exchanges`): relabelling by
+    an exchange that noise can mimic would blur them. A compiled kernel.
+    """
+    n_frames = markers.shape[0]
+    exchange = np.full(n_frames, -1)
+    misfit = np.full(n_frames, np.nan)
+    complete = np.empty(n_frames, dtype=np.int64)
+    count = 0
+    for f in range(n_frames):
+        seen = True
+        for m in range(markers.shape[1]):
+            for i in range(3):
+                seen = seen and np.isfinite(markers[f, m, i])
+        if seen:
+            complete[count] = f
+            count += 1
+    if count < max(min_frames, 1):
+        return exchange, misfit, np.nan
+    clusters = markers if count == n_frames else markers[complete[:count]]
+    distances = _pair_distances(clusters)
+    moved = _relabelled_pairs(clusters.shape[1])
+    anchor, noise = _anchor_frame(distances)
+    typical = distances[:, anchor].copy()
+    allowed = _distinct_exchanges(moved, typical, noise, far, near)
+    allowed[0] = True
+    reference, noise = _typical_distances(distances, moved, typical, allowed)
+    distinct = _distinct_exchanges(moved, reference, noise, far, near)
+    far_sq, near_sq = far * noise**2, near * noise**2
+    for k in range(count):
+        as_labelled = _misfit_sq(distances, k, moved, 0, reference)
+        misfit[complete[k]] = np.sqrt(as_labelled)
+        if not as_labelled > far_sq:
+            continue
+        best, best_misfit = -1, near_sq
+        for e in range(1, moved.shape[0]):
+            if not distinct[e]:
+                continue
+            exchanged = _misfit_sq(distances, k, moved, e, reference)
+            if exchanged <= best_misfit:
+                best, best_misfit = e - 1, exchanged
+        exchange[complete[k]] = best
+    return exchange, misfit, noise * np.sqrt(far)
+
+
+@kernel
+def _anchor_frame(distances: np.ndarray) -> tuple[int, float]:
+    """A frame of ``distances`` ``(n_pairs, n_frames)`` [mm] to relabel the others by, and the
+    noise of one distance [mm], both without regard to labels: each frame's distances sorted
+    (which no exchange of labels changes), the frame whose largest departure from the sorted
+    distances' medians is least, and 1.4826 times the median absolute departure. However many
+    frames a swap holds, neither moves. A compiled kernel."""
+    n_pairs, n_frames = distances.shape
+    ranked = distances.copy()
+    for f in range(n_frames):
+        # Insertion sort: a frame has few pairs, and this allocates nothing.
+        for p in range(1, n_pairs):
+            value, q = ranked[p, f], p
+            while q > 0 and ranked[q - 1, f] > value:
+                ranked[q, f] = ranked[q - 1, f]
+                q -= 1
+            ranked[q, f] = value
+    medians = _medians(ranked)
+    anchor = _nearest(ranked, medians)
+    for p in range(n_pairs):
+        for f in range(n_frames):
+            ranked[p, f] = abs(ranked[p, f] - medians[p])
+    return anchor, 1.482602218505602 * np.median(ranked)
+
+
+@kernel
+def _typical_distances(
+    distances: np.ndarray, moved: np.ndarray, typical: np.ndarray, allowed: np.ndarray
+) -> tuple[np.ndarray, float]:
+    """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
+    ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
+    each frame first relabelled by the exchange (a row of ``moved``, :func:`_relabelled_pairs`,
+    that ``allowed`` allows) or none that matches the ``typical`` frame's distances best, so
+    that they are one labelling's however many frames hold the other (half, say, where plain
+    medians would fall between the two), in the labelling most frames hold; and 1.4826 times
+    the median absolute departure from them over all frames and pairs, Gaussian noise's
+    standard deviation. A compiled kernel."""
+    n_pairs, n_frames = distances.shape
+    # An exchange can match the typical frame better than the labels as they are only where
+    # the frame departs from it by half the exchange's own size or more (triangle inequality).
+    least = np.inf
+    for e in range(1, moved.shape[0]):
+        if allowed[e]:
+            least = min(least, _misfit_sq(typical.reshape(n_pairs, 1), 0, moved, e, typical))
+    aligned = distances.copy()
+    held = np.zeros(moved.shape[0], dtype=np.int64)
+    for f in range(n_frames):
+        best = 0
+        if 4.0 * _misfit_sq(distances, f, moved, 0, typical) >= least:
+            best_misfit = np.inf
+            for e in range(moved.shape[0]):
+                if allowed[e]:
+                    misfit = _misfit_sq(distances, f, moved, e, typical)
+                    if misfit < best_misfit:
+                        best, best_misfit = e, misfit
+            for p in range(n_pairs):
+                aligned[p, f] = distances[moved[best, p], f]
+        held[best] += 1
+    median = _medians(aligned)
+    for p in range(n_pairs):
+        for f in range(n_frames):
+            aligned[p, f] = abs(aligned[p, f] - median[p])
+    # The median absolute departure of Gaussian noise is 0.6745 of its standard deviation; a
+    # floor far below any real noise keeps exact data from dividing by zero.
+    noise = max(1.482602218505602 * np.median(aligned), 1e-9 * median.max())
+    # In the labelling most frames hold, so that the swapped side is the one with fewer frames.
+    most = np.argmax(held)
+    reference = np.empty(n_pairs)
+    for p in range(n_pairs):
+        reference[p] = median[moved[most, p]]
+    return reference, noise
+
+
+@kernel
+def _distinct_exchanges(
+    moved: np.ndarray, reference: np.ndarray, noise: float, far: float, near: float
+) -> np.ndarray:
+    """Which exchanges (rows of ``moved``, :func:`_relabelled_pairs`) move the typical
+    distances ``reference`` ``(n_pairs,)`` [mm] by more than ``sqrt(far) + sqrt(near)`` times
+    the ``noise`` [mm]: then every frame an exchange holds clears the far level unless its
+    own noise exceeds the near one (triangle inequality), so that its frames form whole runs.
+    A smaller exchange (an isosceles triangle's base) is one that deformation or noise can
+    mimic. Row 0 (no exchange) is not one. A compiled kernel."""
+    distinct = np.zeros(moved.shape[0], dtype=np.bool_)
+    separation_sq = (np.sqrt(far) + np.sqrt(near)) ** 2 * noise**2
+    for e in range(1, moved.shape[0]):
+        distinct[e] = _misfit_sq(reference.reshape(reference.size, 1), 0, moved, e, reference) > (
+            separation_sq
+        )
+    return distinct
+
+
+@kernel
+def _misfit_sq(
+    distances: np.ndarray, f: int, moved: np.ndarray, e: int, reference: np.ndarray
+) -> float:
+    """The squared departure [mm^2] of frame ``f``'s ``distances`` ``(n_pairs, n_frames)``
+    relabelled by row ``e`` of ``moved`` (:func:`_relabelled_pairs`) from ``reference``
+    ``(n_pairs,)``. A compiled kernel."""
+    total = 0.0
+    for p in range(reference.size):
+        total += (distances[moved[e, p], f] - reference[p]) ** 2
+    return total
+
+
+@kernel
+def _relabelled_pairs(n_markers: int) -> np.ndarray:
+    """``(1 + n_pairs, n_pairs)``: row 0 the pairs of markers as they are, row ``1 + e`` the
+    pair whose distance pair ``p`` takes when the labels of pair ``e`` are exchanged; pairs in
+    the order of ``itertools.combinations``. A compiled kernel."""
+    index = np.empty((n_markers, n_markers), dtype=np.int64)
+    n_pairs = 0
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            index[a, b] = index[b, a] = n_pairs
+            n_pairs += 1
+    moved = np.empty((1 + n_pairs, n_pairs), dtype=np.int64)
+    for p in range(n_pairs):
+        moved[0, p] = p
+    e = 0
+    for i in range(n_markers):
+        for j in range(i + 1, n_markers):
+            e += 1
+            p = 0
+            for a in range(n_markers):
+                for b in range(a + 1, n_markers):
+                    first = j if a == i else i if a == j else a
+                    second = j if b == i else i if b == j else b
+                    moved[e, p] = index[first, second]
+                    p += 1
+    return moved
+
+
 def find_swaps(
     shape: np.ndarray,
     markers: np.ndarray,
     flagged: np.ndarray,
     labels: tuple[str, ...],
     level_mm: float,
+    exchanged: Sequence[Artefact] = (),
 ) -> list[Swap]:
     """Runs of frames in which exchanging two markers' labels fits the cluster's ``shape``.
 
     ``markers`` ``(n_frames, n, 3)`` [mm] the cluster, ``flagged`` ``(n_frames, n)`` its
     rigidity breaks, ``level_mm`` their threshold. A frame whose two flagged markers, exchanged,
     fit ``shape`` within ``level_mm`` belongs to that pair's swap; frames where either marker
-    is missing do not interrupt a run.
+    is missing do not interrupt a run. A frame that the distance test found swapped
+    (``exchanged``, :func:`find_exchanges`) belongs to the swap of the pair it names and to no
+    other pair's, which in a cluster of a few mm ``level_mm`` cannot tell apart.
     """
+    named: dict[int, set[str]] = {a.frame: {a.label, a.partner} for a in exchanged}
     swaps = []
     for i, j in combinations(range(len(labels)), 2):
         both = flagged[:, i] & flagged[:, j]
-        if not both.any():
-            continue
-        rows = np.flatnonzero(both)
-        exchanged = markers[rows].copy()
-        exchanged[:, [i, j]] = exchanged[:, [j, i]]
-        rotation, translation = fit_poses(shape, exchanged)
-        fits = np.nanmax(residuals(shape, rotation, translation, exchanged), axis=1) <= level_mm
         state = np.zeros(len(markers), dtype=bool)
-        state[rows[fits]] = True
+        if both.any():
+            rows = np.flatnonzero(both)
+            exchanged_rows = markers[rows].copy()
+            exchanged_rows[:, [i, j]] = exchanged_rows[:, [j, i]]
+            rotation, translation = fit_poses(shape, exchanged_rows)
+            misfit = residuals(shape, rotation, translation, exchanged_rows)
+            state[rows[np.nanmax(misfit, axis=1) <= level_mm]] = True
+        for frame, pair in named.items():
+            state[frame] = pair == {labels[i], labels[j]}
+        if not state.any():
+            continue
         seen = np.flatnonzero(np.isfinite(markers[:, [i, j]]).all(axis=(1, 2)))
         # Runs of swapped frames among the frames showing both markers.
         changes = np.flatnonzero(np.diff(state[seen].astype(int))) + 1
@@ -491,8 +818,9 @@ def find_swaps(
 
 @dataclass(frozen=True, eq=False)
 class Screening:
-    """What :func:`screen` found in one marker set: flagged ``artefacts`` (rigidity breaks of
-    a cluster of >= 3 markers, or jumps of fewer) and the ``swaps`` explaining some of them.
+    """What :func:`screen` found in one marker set: flagged ``artefacts`` (rigidity breaks and
+    swapped frames of a cluster of >= 3 markers, jumps of any) and the ``swaps`` explaining
+    some of them.
     A cluster's fit is kept for :class:`Segment`: ``shape`` ``(n, 3)`` [mm], its ``rotation``
     ``(n_frames, 3, 3)``, ``translation`` ``(n_frames, 3)`` and ``residuals`` ``(n_frames, n)``
     [mm]; ``None`` for fewer than three markers."""
@@ -512,14 +840,18 @@ def screen(
     rules: ArtefactRules | None = None,
 ) -> Screening:
     """Artefacts of one marker set ``(n_frames, n, 3)`` [mm] (module docstring): rigidity
-    breaks and swaps of a cluster of >= 3 markers, jumps of fewer. ``source`` names the data
-    in messages. Frame order matters only to the jumps."""
+    breaks, swapped frames and swaps of a cluster of >= 3 markers, jumps of fewer. ``source``
+    names the data in messages. Frame order matters only to the jumps."""
     rules = rules or _RULES
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
+    exchanged = find_exchanges(markers, labels, rules)
     # First judged against one typical frame, which the broken frames cannot distort; then the
-    # mean shape is refitted on the samples not flagged, until the flags settle.
-    shape = typical_shape(markers, labels, source)
+    # mean shape is refitted on the samples neither flagged nor swapped, until the flags settle.
+    # The typical frame is one the swaps do not hold, so that both checks judge by one side.
+    unswapped = np.ones(len(markers), dtype=bool)
+    unswapped[[a.frame for a in exchanged]] = False
+    shape = typical_shape(markers[unswapped] if exchanged else markers, labels, source)
     breaks: list[Artefact] | None = None
     for _ in range(5):
         rotation, translation = fit_poses(shape, markers)
@@ -529,28 +861,32 @@ def screen(
             break
         breaks = found
         clean = markers.copy()
-        for artefact in breaks:
+        for artefact in [*breaks, *exchanged]:
             clean[artefact.frame, labels.index(artefact.label)] = np.nan
         shape = mean_shape(clean, labels, source)
     else:
         rotation, translation = fit_poses(shape, markers)
         misfit = residuals(shape, rotation, translation, markers)
+    # A swapped sample that also breaks rigidity is flagged once, as the break.
+    broken = {(a.label, a.frame) for a in breaks}
+    flags = [*breaks, *(a for a in exchanged if (a.label, a.frame) not in broken)]
     swaps: list[Swap] = []
-    if breaks:
+    if flags:
         flagged = np.zeros(misfit.shape, dtype=bool)
-        for artefact in breaks:
+        for artefact in flags:
             flagged[artefact.frame, labels.index(artefact.label)] = True
-        swaps = find_swaps(shape, markers, flagged, labels, breaks[0].level_mm)
-    # A jump that a rigidity break explains adds nothing, and would spoil the frame on its
+        level = breaks[0].level_mm if breaks else _rigidity_level(misfit, rules)
+        swaps = find_swaps(shape, markers, flagged, labels, level, exchanged)
+    # A jump that a flagged sample explains adds nothing, and would spoil the frame on its
     # other side; a jump without one is a swap that keeps the shape (two markers of an
     # isosceles triangle), which only time order shows.
-    broken = {(a.label, a.frame) for a in breaks}
+    explained = {(a.label, a.frame) for a in flags}
     jumps = [
         jump
         for jump in find_jumps(markers, labels, rules)
-        if not {(jump.label, row) for row in jump.rows()} & broken
+        if not {(jump.label, row) for row in jump.rows()} & explained
     ]
-    artefacts = sorted([*jumps, *breaks], key=lambda a: (a.frame, a.label))
+    artefacts = sorted([*jumps, *flags], key=lambda a: (a.frame, a.label))
     return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, misfit)
 
 
@@ -561,8 +897,9 @@ def find_artefacts(
     rules: ArtefactRules | None = None,
 ) -> tuple[tuple[Artefact, ...], tuple[Swap, ...]]:
     """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
-    [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears needs
-    only the jump check, anything else gets the whole screen. A cluster the marker-frame
+    [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears and
+    in which :func:`find_exchanges` finds no swap needs only the jump check, anything else
+    gets the whole screen. A cluster the marker-frame
     bounds clear costs one compiled call (:func:`_screen_sums`), which finds what the bound
     and the jump check need together; the jumps are located only where a step exceeds
     ``min_jump_mm``."""
@@ -571,7 +908,7 @@ def find_artefacts(
         return tuple(find_jumps(markers, labels, rules)), ()
     markers = kernel_array(markers)
     rigid, largest_jump = _rigid_and_largest_jump(markers, rules)
-    if not rigid:
+    if not rigid or find_exchanges(markers, labels, rules):
         found = screen(markers, labels, source, rules)
         return found.artefacts, found.swaps
     if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm

@@ -87,8 +87,8 @@ class Segment:
     mean shape in technical coordinates; ``rotation`` ``(n_frames, 3, 3)`` and ``translation``
     ``(n_frames, 3)`` [mm] the technical frame's pose in every frame (NaN where fewer than three
     markers are seen); ``residuals`` ``(n_frames, n)`` [mm] each marker's distance from its
-    fitted position (NaN where missing); ``artefacts`` the flagged rigidity breaks and ``swaps``
-    the label swaps that explain some of them (:func:`screen`).
+    fitted position (NaN where missing); ``artefacts`` the flagged rigidity breaks, swapped
+    frames and jumps, and ``swaps`` the label swaps that explain some of them (:func:`screen`).
     """
 
     labels: tuple[str, ...]
