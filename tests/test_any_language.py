@@ -20,6 +20,7 @@ from jointbench.resultfiles.interchange import (
     write_dataset_csv,
 )
 from jointbench.resultfiles.parquet import write_dataset
+from jointbench.resultfiles.schema import check_estimates
 from jointbench.simulate import Trials
 
 
@@ -97,6 +98,30 @@ def test_an_estimates_csv_without_status_is_refused(tmp_path):
     )
     with pytest.raises(ValueError, match="missing column 'status'"):
         read_estimates_csv(path, dataset, tmp_path / "out.parquet")
+
+
+def test_a_condition_whose_every_trial_failed_is_read_as_failed_trials(tmp_path):
+    """NaN, NA or nothing in every row: CSV gives such a column no type of its own, yet the
+    estimate is a number column, so the file is collected as the failures it reports."""
+    dataset, _ = _dataset(tmp_path)
+    source = _estimates_csv(
+        tmp_path, "0,nan,nan,nan,false,0,1e-5,error: singular\n1,NA,,-nan,0,0,1e-5,\n"
+    )
+    read_estimates_csv(source, dataset, tmp_path / "out.parquet")
+    table = pq.read_table(tmp_path / "out.parquet")
+    keys = ["marker_set", "rom_deg", "noise_mm"]
+    check_estimates(table, kind="center", condition_keys=keys, method="LS-C")
+    frame = table.to_pandas()
+    assert frame[["center_x", "center_y", "center_z"]].isna().all(axis=None)
+    assert not frame["converged"].any() and frame["status"].tolist() == ["error: singular", ""]
+
+
+def test_an_estimates_csv_without_rows_is_refused(tmp_path):
+    dataset, _ = _dataset(tmp_path)
+    source = _estimates_csv(tmp_path, "")
+    with pytest.raises(ValueError, match="no rows; the dataset has 2 trials") as error:
+        read_estimates_csv(source, dataset, tmp_path / "out.parquet")
+    assert str(source) in str(error.value)
 
 
 def _overlay(tmp_path, **cmc) -> str:
