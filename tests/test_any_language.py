@@ -180,6 +180,9 @@ def test_external_rules_of_a_study_not_in_the_run_are_ignored(tmp_path):
 
 
 def test_the_readme_template_is_the_file_the_workflow_ships():
+    """The template and the worked example's rule, as the README quotes them in full."""
     readme = (ROOT / "README.md").read_text()
-    for path in ("workflow/rules/estimators/centroid.smk", "workflow/external/centroid.py"):
+    quoted = ("centroid.smk", "lm_sphere.smk")
+    shipped = ["workflow/external/centroid.py", *(f"workflow/rules/estimators/{n}" for n in quoted)]
+    for path in shipped:
         assert (ROOT / path).read_text().strip() in readme, f"{path} differs from the README"
