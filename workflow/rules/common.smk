@@ -93,6 +93,18 @@ def estimates_files(study, methods=None):
     )
 
 
+def listed_estimates_files(wildcards):
+    """Every estimates file of the estimator ``wildcards.method`` of ``wildcards.study``; an
+    estimator the study does not list is named with the list, not as missing files."""
+    listed = jb_config.estimator_names(config, wildcards.study)
+    if wildcards.method not in listed:
+        raise ValueError(
+            f"{wildcards.method!r} is not listed under studies.{wildcards.study} "
+            f"({', '.join(listed)}): list it under estimators or external_estimators"
+        )
+    return estimates_files(wildcards.study, [wildcards.method])
+
+
 POSES = "results/poses/{study}/{condition}.parquet"
 
 
