@@ -100,6 +100,18 @@ def test_an_estimates_csv_without_status_is_refused(tmp_path):
         read_estimates_csv(path, dataset, tmp_path / "out.parquet")
 
 
+def test_an_estimates_csv_giving_a_column_twice_is_refused_by_name(tmp_path):
+    """Two centre_x columns: which one would be scored is for nobody to guess."""
+    dataset, _ = _dataset(tmp_path)
+    path = tmp_path / "LS-C" / "c.csv"
+    path.parent.mkdir()
+    header = "trial,center_x,center_y,center_z,converged,iterations,seconds,status,center_x\n"
+    path.write_text(header + "0,1,2,3,1,0,0,ok,9\n1,1,2,3,1,0,0,ok,9\n")
+    with pytest.raises(ValueError, match="column 'center_x' appears more than once") as error:
+        read_estimates_csv(path, dataset, tmp_path / "out.parquet")
+    assert str(path) in str(error.value)
+
+
 def test_a_condition_whose_every_trial_failed_is_read_as_failed_trials(tmp_path):
     """NaN, NA or nothing in every row: CSV gives such a column no type of its own, yet the
     estimate is a number column, so the file is collected as the failures it reports."""

@@ -68,13 +68,18 @@ def read_estimates_csv(
     """Write the estimates CSV at ``path`` as an estimates file at ``output``: its columns, with
     the condition of ``dataset`` and the method (the name of ``path``'s folder) in every row.
 
-    ``ValueError`` naming ``path`` when it cannot be read as CSV, has no rows or lacks a required
-    column; the estimate columns and every value are checked when the file is collected.
+    ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice, has no
+    rows or lacks a required column; the estimate columns and every value are checked when the
+    file is collected.
     """
     try:
         table = pacsv.read_csv(path)
     except (pa.ArrowInvalid, OSError) as error:
         raise ValueError(f"{path}: cannot be read as CSV ({error})") from None
+    names = table.column_names
+    repeated = next((name for name in names if names.count(name) > 1), None)
+    if repeated is not None:
+        raise ValueError(f"{path}: column {repeated!r} appears more than once")
     if not table.num_rows:
         trials = len(read_trial_numbers(dataset))
         raise ValueError(f"{path}: no rows; the dataset has {trials} trials, one row each")
