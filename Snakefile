@@ -67,6 +67,9 @@ for _rules in sorted(
     include: _rules
 
 
+check_external_rules()
+
+
 include: "workflow/rules/render.smk"
 include: "workflow/rules/check.smk"
 include: "workflow/rules/verdicts.smk"

@@ -20,6 +20,7 @@ from jointbench.resultfiles.interchange import (
     write_dataset_csv,
 )
 from jointbench.resultfiles.parquet import write_dataset
+from jointbench.resultfiles.schema import check_estimates
 from jointbench.simulate import Trials
 
 
@@ -99,6 +100,42 @@ def test_an_estimates_csv_without_status_is_refused(tmp_path):
         read_estimates_csv(path, dataset, tmp_path / "out.parquet")
 
 
+def test_an_estimates_csv_giving_a_column_twice_is_refused_by_name(tmp_path):
+    """Two centre_x columns: which one would be scored is for nobody to guess."""
+    dataset, _ = _dataset(tmp_path)
+    path = tmp_path / "LS-C" / "c.csv"
+    path.parent.mkdir()
+    header = "trial,center_x,center_y,center_z,converged,iterations,seconds,status,center_x\n"
+    path.write_text(header + "0,1,2,3,1,0,0,ok,9\n1,1,2,3,1,0,0,ok,9\n")
+    with pytest.raises(ValueError, match="column 'center_x' appears more than once") as error:
+        read_estimates_csv(path, dataset, tmp_path / "out.parquet")
+    assert str(path) in str(error.value)
+
+
+def test_a_condition_whose_every_trial_failed_is_read_as_failed_trials(tmp_path):
+    """NaN, NA or nothing in every row: CSV gives such a column no type of its own, yet the
+    estimate is a number column, so the file is collected as the failures it reports."""
+    dataset, _ = _dataset(tmp_path)
+    source = _estimates_csv(
+        tmp_path, "0,nan,nan,nan,false,0,1e-5,error: singular\n1,NA,,-nan,0,0,1e-5,\n"
+    )
+    read_estimates_csv(source, dataset, tmp_path / "out.parquet")
+    table = pq.read_table(tmp_path / "out.parquet")
+    keys = ["marker_set", "rom_deg", "noise_mm"]
+    check_estimates(table, kind="center", condition_keys=keys, method="LS-C")
+    frame = table.to_pandas()
+    assert frame[["center_x", "center_y", "center_z"]].isna().all(axis=None)
+    assert not frame["converged"].any() and frame["status"].tolist() == ["error: singular", ""]
+
+
+def test_an_estimates_csv_without_rows_is_refused(tmp_path):
+    dataset, _ = _dataset(tmp_path)
+    source = _estimates_csv(tmp_path, "")
+    with pytest.raises(ValueError, match="no rows; the dataset has 2 trials") as error:
+        read_estimates_csv(source, dataset, tmp_path / "out.parquet")
+    assert str(source) in str(error.value)
+
+
 def _overlay(tmp_path, **cmc) -> str:
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}
@@ -155,6 +192,9 @@ def test_external_rules_of_a_study_not_in_the_run_are_ignored(tmp_path):
 
 
 def test_the_readme_template_is_the_file_the_workflow_ships():
+    """The template and the worked example's rule, as the README quotes them in full."""
     readme = (ROOT / "README.md").read_text()
-    for path in ("workflow/rules/estimators/centroid.smk", "workflow/external/centroid.py"):
+    quoted = ("centroid.smk", "lm_sphere.smk")
+    shipped = ["workflow/external/centroid.py", *(f"workflow/rules/estimators/{n}" for n in quoted)]
+    for path in shipped:
         assert (ROOT / path).read_text().strip() in readme, f"{path} differs from the README"

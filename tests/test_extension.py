@@ -120,6 +120,28 @@ def test_external_name_of_a_builtin_is_rejected(tmp_path):
     assert "'NM'" in message and "built-in" in message, message[-2000:]
 
 
+@pytest.mark.pipeline
+def test_an_external_estimator_without_a_rule_is_named_before_any_job(tmp_path):
+    """A misspelt name, or a rule file not yet written: the run stops naming the study and
+    the estimator, not a CSV of the interchange rules it never meant to write."""
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["LS_C"])
+    run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet", dry_run=True)
+    assert run.returncode != 0
+    message = run.stdout + run.stderr
+    assert "studies.cmc.external_estimators: no rule writes the estimates of 'LS_C'" in message
+    assert "MissingInputException" not in message, message[-2000:]
+
+
+@pytest.mark.pipeline
+def test_the_summary_of_an_estimator_the_study_does_not_list_names_the_list(tmp_path):
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"])
+    run = snakemake(tmp_path, overlay, "results/summaries/cmc/LS-C.csv", dry_run=True)
+    assert run.returncode != 0
+    message = run.stdout + run.stderr
+    assert "'LS-C' is not listed under studies.cmc (LS, centroid)" in message, message[-2000:]
+    assert "MissingInputException" not in message
+
+
 # ------------------------------------------------------------------------ without Snakemake
 
 

@@ -8,12 +8,19 @@ tolerances, one recorded deviation) and ``toy.yaml`` (the config overlay naming 
 
 from __future__ import annotations
 
+import shutil
+import subprocess
+
 import pandas as pd
 import pytest
+from workflow_copy import ROOT, SNAKEMAKE, copy_workflow
 
 pytestmark = pytest.mark.pipeline
 
 FILES = ("toy_study.py", "paper_t.yaml", "toy.yaml")
+# The README's way to run the example from a clone's root, its overlay and its command.
+README_OVERLAY = "extensions: [tests/data/fourth_study/toy_study.py]"
+README_COMMAND = "snakemake -j2 --configfile tests/data/fourth_study/toy.yaml fourth.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -52,3 +59,18 @@ def test_its_figure_is_in_the_report(fourth_study_run, tmp_path):
     html = (run.workdir / "results" / "report.html").read_text(errors="replace")
     for name in ("paper_t_errors.png", "published_comparison.html", "extended_toy.png"):
         assert name in html, f"{name} missing from the report"
+
+
+def test_the_readmes_command_runs_the_example_from_a_clones_root(tmp_path):
+    """A path under ``extensions`` is the working directory's, not the listing file's: the
+    README's overlay names the module by its path from the root, and its command plans."""
+    readme = (ROOT / "README.md").read_text()
+    assert README_OVERLAY in readme and README_COMMAND in readme
+    copy_workflow(tmp_path)
+    example = tmp_path / "tests" / "data" / "fourth_study"
+    shutil.copytree(ROOT / "tests" / "data" / "fourth_study", example)
+    (tmp_path / "fourth.yaml").write_text(README_OVERLAY + "\n")
+    command = [str(SNAKEMAKE), *README_COMMAND.split()[1:], "--dry-run"]
+    run = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "estimate_toy" in run.stdout and "render_toy" in run.stdout

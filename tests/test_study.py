@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -18,6 +19,7 @@ from jointbench.estimators.results import CenterResult
 from jointbench.resultfiles.parquet import read_dataset, write_dataset
 from jointbench.resultfiles.schema import check_estimates
 from jointbench.running import run
+from jointbench.running.collected import scored_estimates
 from jointbench.running.run import estimate, simulate_condition
 from jointbench.simulate import Trials
 
@@ -210,6 +212,22 @@ def test_schema_check_names_the_column():
         check_estimates(frame.assign(converged=["yes"]), kind="center", condition_keys=keys)
     with pytest.raises(ValueError, match="'method' must be 'NM'"):
         check_estimates(frame, kind="center", condition_keys=keys, method="NM")
+
+
+@pytest.mark.parametrize("column, value", [("seconds", -0.5), ("iterations", -3)])
+def test_a_negative_time_or_iteration_count_is_refused_naming_the_trial(column, value):
+    """A file cannot claim less than no time or no work: the extended ranking shows each
+    method's mean time per trial beside its error."""
+    row = dict(marker_set="M", rom_deg=5, noise_mm=1.0, method="NM", center_x=0.0, center_y=0.0)
+    row |= dict(center_z=0.0, converged=True, iterations=0, seconds=0.0, status="ok")
+    frame = pd.DataFrame([{**row, "trial": 0}, {**row, "trial": 1, column: value}])
+    truth = {"center": [0.0, 0.0, 0.0]}
+    unmeasured = frame.assign(seconds=np.nan, iterations=0)
+    scored = scored_estimates(unmeasured, kind="center", truth=truth, source="x")
+    assert (scored["error_mm"] == 0).all()
+    message = f"x: trial 1: column '{column}' is {value!r}, below 0 (1 such rows)"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        scored_estimates(frame, kind="center", truth=truth, source="x")
 
 
 def test_check_estimates_reads_arrow_tables_and_names_a_column_of_mixed_values():

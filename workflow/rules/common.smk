@@ -47,6 +47,23 @@ EXTERNAL_ESTIMATORS = sorted(
 )
 
 
+def check_external_rules():
+    """Stop, naming the study and the estimator, when no rule writes the estimates of an
+    external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
+    (a misspelt name, a rule file not yet written), not at a missing CSV later."""
+    writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
+    for study in STUDIES:
+        for name in jb_config.estimator_names(config, study, source="external"):
+            parquet = estimates_files(study, [name])[0]
+            files = (parquet, parquet.removesuffix(".parquet") + ".csv")
+            if not any(writer.is_producer(f) for writer in writers for f in files):
+                raise ValueError(
+                    f"config: studies.{study}.external_estimators: no rule writes the "
+                    f"estimates of {name!r} ({files[0]} or .csv); its rule goes in "
+                    "workflow/rules/estimators/ (README, 'Adding an estimator')"
+                )
+
+
 def _alternatives(names):
     """A regex matching exactly one of ``names`` (never matches when the list is empty)."""
     return "|".join(re.escape(n) for n in names) or "(?!)"
@@ -74,6 +91,18 @@ def estimates_files(study, methods=None):
         method=methods,
         condition=condition_ids(study),
     )
+
+
+def listed_estimates_files(wildcards):
+    """Every estimates file of the estimator ``wildcards.method`` of ``wildcards.study``; an
+    estimator the study does not list is named with the list, not as missing files."""
+    listed = jb_config.estimator_names(config, wildcards.study)
+    if wildcards.method not in listed:
+        raise ValueError(
+            f"{wildcards.method!r} is not listed under studies.{wildcards.study} "
+            f"({', '.join(listed)}): list it under estimators or external_estimators"
+        )
+    return estimates_files(wildcards.study, [wildcards.method])
 
 
 POSES = "results/poses/{study}/{condition}.parquet"

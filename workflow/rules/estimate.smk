@@ -126,7 +126,7 @@ rule summarise_estimator:
     """One estimator's errors per condition, its files scored against their datasets as collect
     scores them."""
     input:
-        estimates=lambda w: estimates_files(w.study, [w.method]),
+        estimates=listed_estimates_files,
         datasets=lambda w: [
             dataset_file(w.study, c) for c in jb_config.conditions(config, w.study)
         ],

@@ -33,7 +33,7 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
-from jointbench.resultfiles.parquet import read_metadata, write_table
+from jointbench.resultfiles.parquet import read_metadata, read_trial_numbers, write_table
 
 __all__ = ["DATASET_COLUMNS", "ESTIMATE_ROW_COLUMNS", "read_estimates_csv", "write_dataset_csv"]
 
@@ -68,13 +68,22 @@ def read_estimates_csv(
     """Write the estimates CSV at ``path`` as an estimates file at ``output``: its columns, with
     the condition of ``dataset`` and the method (the name of ``path``'s folder) in every row.
 
-    ``ValueError`` naming ``path`` when it cannot be read as CSV or lacks a required column; the
-    estimate columns and every value are checked when the file is collected.
+    ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice, has no
+    rows or lacks a required column; the estimate columns and every value are checked when the
+    file is collected.
     """
     try:
         table = pacsv.read_csv(path)
     except (pa.ArrowInvalid, OSError) as error:
         raise ValueError(f"{path}: cannot be read as CSV ({error})") from None
+    names = table.column_names
+    repeated = next((name for name in names if names.count(name) > 1), None)
+    if repeated is not None:
+        raise ValueError(f"{path}: column {repeated!r} appears more than once")
+    if not table.num_rows:
+        trials = len(read_trial_numbers(dataset))
+        raise ValueError(f"{path}: no rows; the dataset has {trials} trials, one row each")
+    table = _untyped_as_numbers(table)
     missing = [name for name in ESTIMATE_ROW_COLUMNS if name not in table.column_names]
     if missing:
         raise ValueError(
@@ -91,6 +100,16 @@ def read_estimates_csv(
     added["method"] = pa.array([Path(path).parent.name] * table.num_rows, pa.string())
     columns = {**added, **{name: table.column(name) for name in table.column_names}}
     write_table(pa.table(columns), output, provenance)
+
+
+def _untyped_as_numbers(table: pa.Table) -> pa.Table:
+    """Every column but ``status`` that is missing in every row, which CSV leaves without a
+    type, as floats: the estimate of a condition whose every trial failed is NaN throughout,
+    and still a number."""
+    for index, field in enumerate(table.schema):
+        if pa.types.is_null(field.type) and field.name != "status":
+            table = table.set_column(index, field.name, table.column(index).cast(pa.float64()))
+    return table
 
 
 def _booleans(table: pa.Table, path: str | Path) -> pa.Array:

@@ -7,7 +7,8 @@ is collected, so a wrong or missing column fails with its name rather than as a 
 invented trial or condition cannot change a ranking unnoticed. A file's errors are the
 benchmark's to compute (:mod:`jointbench.running.scoring`): a file may leave them out, and
 :func:`check_scores` stops the run when it gives ones that disagree; :func:`check_claimed_estimates`
-refuses a trial that claims success without a finite estimate.
+refuses a trial that claims success without a finite estimate, :func:`check_not_negative` a
+negative time or iteration count.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ __all__ = [
     "check_against_dataset",
     "check_claimed_estimates",
     "check_estimates",
+    "check_not_negative",
     "check_scores",
     "required_columns",
 ]
@@ -251,3 +253,20 @@ def check_claimed_estimates(
             f"{ERROR_COLUMN[kind]}={float(error[row])!r}); {bad.size} such rows. A trial "
             "without an estimate is a failure: converged=False and the reason in 'status'"
         )
+
+
+def check_not_negative(
+    table: pd.DataFrame, columns: Sequence[str] = ("seconds", "iterations"), *, source: str
+) -> None:
+    """Raise ``ValueError`` naming ``source``, the trial and the column when one of
+    ``columns`` (a time, a count of iterations) is below 0: no fit takes less than no time or
+    work, and the extended ranking shows each method's mean time. NaN is not measured."""
+    for column in columns:
+        values = np.asarray(table[column], dtype=float)
+        negative = np.flatnonzero(values < 0)
+        if negative.size:
+            row = int(negative[0])
+            raise ValueError(
+                f"{source}: trial {int(table['trial'].iloc[row])}: column {column!r} is "
+                f"{table[column].iloc[row].item()!r}, below 0 ({negative.size} such rows)"
+            )

@@ -26,6 +26,7 @@ from jointbench.resultfiles.schema import (
     check_against_dataset,
     check_claimed_estimates,
     check_estimates,
+    check_not_negative,
     check_scores,
 )
 from jointbench.running.scoring import ERROR_COLUMN, proximal_at_frame0, score_columns
@@ -49,9 +50,10 @@ def scored_estimates(
     each row's proximal markers at frame 0 in a two-segment study.
 
     ``ValueError`` naming ``source`` and the trial when the file claims success without a
-    finite estimate (:func:`check_claimed_estimates`), or gives a score that disagrees
-    (:func:`check_scores`).
+    finite estimate (:func:`check_claimed_estimates`), gives a score that disagrees
+    (:func:`check_scores`) or a negative time or iteration count (:func:`check_not_negative`).
     """
+    check_not_negative(frame, source=source)
     scores = score_columns(kind, frame, truth, proximal_frame0)
     check_claimed_estimates(frame, kind, scores[ERROR_COLUMN[kind]], source=source)
     check_scores(frame, scores, source=source)
