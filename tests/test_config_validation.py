@@ -242,6 +242,20 @@ def test_a_disabled_study_may_list_no_estimator(config):
     study_config.check_config(good)
 
 
+@pytest.mark.parametrize("study", ["cmc", "hinge", "hip"])
+def test_a_study_of_external_estimators_only_is_refused_before_any_job(config, study):
+    # Its papers' figures, tables and checks compare its built-in estimators: with none, the
+    # default run would fail in them (an empty figure, a claim divided by no method) after the
+    # external estimators had run.
+    bad = changed(config, study, ("estimators",), [])
+    bad["studies"][study]["external_estimators"] = ["mine"]
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(bad)
+    message = str(error.value)
+    assert message.startswith(f"config: studies.{study}.estimators: empty"), message
+    assert "external_estimators" in message and "'mine'" in message, message
+
+
 def test_a_condition_some_listed_estimator_can_fit_is_run(config):
     """Three frames: the pose-based estimators fit them, the sphere fits do not (their rows
     fail, each saying so); only a condition no listed estimator fits is refused."""

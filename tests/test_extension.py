@@ -104,7 +104,7 @@ def test_wrong_column_fails_naming_it(tmp_path):
     shipped = (ROOT / CENTROID_SCRIPT).read_text()
     assert '"center_z"' in shipped
     wrong = shipped.replace('"center_z"', '"centre_z"')
-    overlay = user_clone(tmp_path, estimators=[], external=["centroid"], centroid_script=wrong)
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"], centroid_script=wrong)
     run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet")
     assert run.returncode != 0
     assert "missing column 'center_z'" in run.stdout + run.stderr

@@ -356,7 +356,7 @@ def test_an_external_estimator_that_lies_stops_collect(tmp_path, lie, message):
     shipped = (ROOT / CENTROID_SCRIPT).read_text()
     script = shipped.replace("pd.DataFrame(rows)", f"pd.DataFrame({lie})")
     assert script != shipped
-    config = cmc_clone(tmp_path, estimators=[], external=["centroid"], centroid_script=script)
+    config = cmc_clone(tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script)
     run = run_snakemake(tmp_path, "results/collected/cmc.parquet", *config)
     assert run.returncode != 0
     named = (

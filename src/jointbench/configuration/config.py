@@ -179,10 +179,19 @@ def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
 def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     known = list(dict.fromkeys(m for kind in spec.kinds for m in registry.methods(kind)))
     builtin = list(settings.get("estimators", []))
-    if settings.get("enabled", True) and not builtin and not settings.get("external_estimators"):
+    external = list(settings.get("external_estimators", []))
+    if settings.get("enabled", True) and not builtin:
+        if not external:
+            raise ValueError(
+                f"{where}.estimators: empty, and no external_estimators: the study would run no "
+                f"estimator; list some ({', '.join(known)}) or set enabled: false"
+            )
+        # Its papers' figures, tables and checks compare the built-in estimators; without one
+        # they would fail after the external estimators had run.
         raise ValueError(
-            f"{where}.estimators: empty, and no external_estimators: the study would run no "
-            f"estimator; list some ({', '.join(known)}) or set enabled: false"
+            f"{where}.estimators: empty: external_estimators ({', '.join(map(repr, external))}) "
+            "are ranked beside the study's built-in estimators, whose comparisons its papers' "
+            f"figures, tables and checks make; list at least one ({', '.join(known)})"
         )
     for name in builtin:
         if name not in known:
