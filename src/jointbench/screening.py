@@ -195,9 +195,86 @@ def _most_typical(clusters: np.ndarray) -> int:
 def _medians(values: np.ndarray) -> np.ndarray:
     """The median of each row of ``values`` ``(n_rows, n)``. A compiled kernel."""
     medians = np.empty(values.shape[0])
+    row_copy = np.empty(values.shape[1])
     for row in range(values.shape[0]):
-        medians[row] = np.median(values[row])
+        row_copy[:] = values[row]
+        medians[row] = _median_in_place(row_copy)
     return medians
+
+
+@kernel
+def _median_in_place(values: np.ndarray) -> float:
+    """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
+    ``(a + b) / 2`` of the middle two. It is found as Numba's ``np.median`` finds it, whose
+    every step :func:`_select` repeats, so that it is the same number for any values, even
+    NaN, which leave no order; ``np.median`` would first copy them. A compiled kernel."""
+    n = values.size
+    if n == 0:
+        return np.nan
+    k = (n >> 1) - 1
+    if n & 1:
+        return _select(values, k + 1, 0, n - 1)
+    # The two middle values together: partition until one of them is in place, then select
+    # the other on its side.
+    low, high = 0, n - 1
+    while True:
+        i = _partition(values, low, high)
+        if i < k:
+            low = i + 1
+        elif i > k + 1:
+            high = i - 1
+        elif i == k:
+            _select(values, k + 1, i + 1, high)
+            break
+        else:
+            _select(values, k, low, i - 1)
+            break
+    return (values[k] + values[k + 1]) / 2
+
+
+@kernel
+def _select(values: np.ndarray, k: int, low: int, high: int) -> float:
+    """The ``k``-th smallest of ``values[low : high + 1]`` (Hoare's quickselect), which end
+    partitioned about it. A compiled kernel."""
+    i = _partition(values, low, high)
+    while i != k:
+        if i < k:
+            low = i + 1
+        else:
+            high = i - 1
+        i = _partition(values, low, high)
+    return values[k]
+
+
+@kernel
+def _partition(values: np.ndarray, low: int, high: int) -> int:
+    """Partition ``values[low : high + 1]`` about the median of its first, middle and last
+    value, and return where that pivot ends: before it none greater, after it none less. A
+    compiled kernel."""
+    mid = (low + high) >> 1
+    # The swaps of Numba's partition, step for step (its pivots do well on sorted and uniform
+    # values).
+    if values[mid] < values[low]:
+        values[low], values[mid] = values[mid], values[low]
+    if values[high] < values[mid]:
+        values[high], values[mid] = values[mid], values[high]
+    if values[mid] < values[low]:
+        values[low], values[mid] = values[mid], values[low]
+    pivot = values[mid]
+    values[high], values[mid] = values[mid], values[high]
+    i, j = low, high - 1
+    while True:
+        while i < high and values[i] < pivot:
+            i += 1
+        while j >= low and pivot < values[j]:
+            j -= 1
+        if i >= j:
+            break
+        values[i], values[j] = values[j], values[i]
+        i += 1
+        j -= 1
+    values[i], values[high] = values[high], values[i]
+    return i
 
 
 @kernel
@@ -601,53 +678,58 @@ def _exchange_test(
     n_frames = markers.shape[0]
     exchange = np.full(n_frames, -1)
     misfit = np.full(n_frames, np.nan)
-    complete = np.empty(n_frames, dtype=np.int64)
-    count = 0
-    for f in range(n_frames):
-        seen = True
-        for m in range(markers.shape[1]):
-            for i in range(3):
-                seen = seen and np.isfinite(markers[f, m, i])
-        if seen:
-            complete[count] = f
-            count += 1
-    if count < max(min_frames, 1):
+    complete = _complete_frames(markers)
+    if complete.size < max(min_frames, 1):
         return exchange, misfit, np.nan
-    clusters = markers if count == n_frames else markers[complete[:count]]
-    distances = _pair_distances(clusters)
-    moved = _relabelled_pairs(clusters.shape[1])
-    anchor, noise = _anchor_frame(distances)
+    distances = _pair_distances(markers if complete.size == n_frames else markers[complete])
+    moved = _relabelled_pairs(markers.shape[1])
+    # One buffer of the distances' shape holds in turn the anchor's sorted distances, the
+    # aligned ones and their departures, which each median selection reorders in place.
+    work = np.empty_like(distances)
+    anchor, noise = _anchor_frame(distances, work)
     typical = distances[:, anchor].copy()
     allowed = _distinct_exchanges(moved, typical, noise, far, near)
     allowed[0] = True
-    reference, noise = _typical_distances(distances, moved, typical, allowed)
+    reference, noise = _typical_distances(distances, moved, typical, allowed, work)
     distinct = _distinct_exchanges(moved, reference, noise, far, near)
-    far_sq, near_sq = far * noise**2, near * noise**2
-    for k in range(count):
-        as_labelled = _misfit_sq(distances, k, moved, 0, reference)
-        misfit[complete[k]] = np.sqrt(as_labelled)
-        if not as_labelled > far_sq:
-            continue
-        best, best_misfit = -1, near_sq
-        for e in range(1, moved.shape[0]):
-            if not distinct[e]:
-                continue
-            exchanged = _misfit_sq(distances, k, moved, e, reference)
-            if exchanged <= best_misfit:
-                best, best_misfit = e - 1, exchanged
-        exchange[complete[k]] = best
+    found, misfit_sq = _exchanges(
+        distances, moved, reference, distinct, far * noise**2, near * noise**2
+    )
+    for k in range(complete.size):
+        exchange[complete[k]] = found[k]
+        misfit[complete[k]] = np.sqrt(misfit_sq[k])
     return exchange, misfit, noise * np.sqrt(far)
 
 
 @kernel
-def _anchor_frame(distances: np.ndarray) -> tuple[int, float]:
+def _complete_frames(markers: np.ndarray) -> np.ndarray:
+    """The indices of the frames of ``markers`` ``(n_frames, n, 3)`` [mm] whose coordinates
+    are all finite. A compiled kernel."""
+    complete = np.empty(markers.shape[0], dtype=np.int64)
+    count = 0
+    for f in range(markers.shape[0]):
+        # x - x is 0 for a finite x and NaN for any other, so the sum is 0 only in a complete
+        # frame, without a branch per coordinate.
+        total = 0.0
+        for m in range(markers.shape[1]):
+            for i in range(3):
+                total += markers[f, m, i] - markers[f, m, i]
+        if total == 0.0:
+            complete[count] = f
+            count += 1
+    return complete[:count]
+
+
+@kernel
+def _anchor_frame(distances: np.ndarray, ranked: np.ndarray) -> tuple[int, float]:
     """A frame of ``distances`` ``(n_pairs, n_frames)`` [mm] to relabel the others by, and the
     noise of one distance [mm], both without regard to labels: each frame's distances sorted
     (which no exchange of labels changes), the frame whose largest departure from the sorted
     distances' medians is least, and 1.4826 times the median absolute departure. However many
-    frames a swap holds, neither moves. A compiled kernel."""
+    frames a swap holds, neither moves. ``ranked``, of the shape of ``distances``, is
+    overwritten. A compiled kernel."""
     n_pairs, n_frames = distances.shape
-    ranked = distances.copy()
+    ranked[:] = distances
     for f in range(n_frames):
         # Insertion sort: a frame has few pairs, and this allocates nothing.
         for p in range(1, n_pairs):
@@ -661,12 +743,16 @@ def _anchor_frame(distances: np.ndarray) -> tuple[int, float]:
     for p in range(n_pairs):
         for f in range(n_frames):
             ranked[p, f] = abs(ranked[p, f] - medians[p])
-    return anchor, 1.482602218505602 * np.median(ranked)
+    return anchor, 1.482602218505602 * _median_in_place(ranked.reshape(ranked.size))
 
 
 @kernel
 def _typical_distances(
-    distances: np.ndarray, moved: np.ndarray, typical: np.ndarray, allowed: np.ndarray
+    distances: np.ndarray,
+    moved: np.ndarray,
+    typical: np.ndarray,
+    allowed: np.ndarray,
+    aligned: np.ndarray,
 ) -> tuple[np.ndarray, float]:
     """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
     ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
@@ -675,35 +761,49 @@ def _typical_distances(
     that they are one labelling's however many frames hold the other (half, say, where plain
     medians would fall between the two), in the labelling most frames hold; and 1.4826 times
     the median absolute departure from them over all frames and pairs, Gaussian noise's
-    standard deviation. A compiled kernel."""
+    standard deviation. ``aligned``, of the shape of ``distances``, is overwritten. A compiled
+    kernel."""
     n_pairs, n_frames = distances.shape
+    aligned[:] = distances
+    held = np.zeros(moved.shape[0], dtype=np.int64)
     # An exchange can match the typical frame better than the labels as they are only where
     # the frame departs from it by half the exchange's own size or more (triangle inequality).
+    # Without an allowed exchange (least infinite) no frame is relabelled, not even one whose
+    # departure overflows: none but the labels as they are is tried.
     least = np.inf
+    sizes_sq = _exchange_sizes_sq(moved, typical)
     for e in range(1, moved.shape[0]):
         if allowed[e]:
-            least = min(least, _misfit_sq(typical.reshape(n_pairs, 1), 0, moved, e, typical))
-    aligned = distances.copy()
-    held = np.zeros(moved.shape[0], dtype=np.int64)
-    for f in range(n_frames):
-        best = 0
-        if 4.0 * _misfit_sq(distances, f, moved, 0, typical) >= least:
-            best_misfit = np.inf
-            for e in range(moved.shape[0]):
-                if allowed[e]:
-                    misfit = _misfit_sq(distances, f, moved, e, typical)
-                    if misfit < best_misfit:
-                        best, best_misfit = e, misfit
+            least = min(least, sizes_sq[e])
+    if least < np.inf:
+        as_labelled = np.empty(n_frames)
+        _misfits_sq(distances, np.arange(n_frames), moved, 0, typical, as_labelled)
+        candidates = np.flatnonzero(4.0 * as_labelled >= least)
+        best = np.zeros(candidates.size, dtype=np.int64)
+        best_misfit = np.full(candidates.size, np.inf)
+        misfit = np.empty(candidates.size)
+        for e in range(moved.shape[0]):
+            if allowed[e]:
+                _misfits_sq(distances, candidates, moved, e, typical, misfit)
+                for k in range(candidates.size):
+                    if misfit[k] < best_misfit[k]:
+                        best[k], best_misfit[k] = e, misfit[k]
+        for k in range(candidates.size):
             for p in range(n_pairs):
-                aligned[p, f] = distances[moved[best, p], f]
-        held[best] += 1
+                aligned[p, candidates[k]] = distances[moved[best[k], p], candidates[k]]
+            held[best[k]] += 1
+        held[0] += n_frames - candidates.size
+    else:
+        held[0] = n_frames
     median = _medians(aligned)
     for p in range(n_pairs):
         for f in range(n_frames):
             aligned[p, f] = abs(aligned[p, f] - median[p])
     # The median absolute departure of Gaussian noise is 0.6745 of its standard deviation; a
     # floor far below any real noise keeps exact data from dividing by zero.
-    noise = max(1.482602218505602 * np.median(aligned), 1e-9 * median.max())
+    noise = max(
+        1.482602218505602 * _median_in_place(aligned.reshape(aligned.size)), 1e-9 * median.max()
+    )
     # In the labelling most frames hold, so that the swapped side is the one with fewer frames.
     most = np.argmax(held)
     reference = np.empty(n_pairs)
@@ -722,26 +822,76 @@ def _distinct_exchanges(
     own noise exceeds the near one (triangle inequality), so that its frames form whole runs.
     A smaller exchange (an isosceles triangle's base) is one that deformation or noise can
     mimic. Row 0 (no exchange) is not one. A compiled kernel."""
-    distinct = np.zeros(moved.shape[0], dtype=np.bool_)
     separation_sq = (np.sqrt(far) + np.sqrt(near)) ** 2 * noise**2
-    for e in range(1, moved.shape[0]):
-        distinct[e] = _misfit_sq(reference.reshape(reference.size, 1), 0, moved, e, reference) > (
-            separation_sq
-        )
+    distinct = _exchange_sizes_sq(moved, reference) > separation_sq
+    distinct[0] = False
     return distinct
 
 
 @kernel
-def _misfit_sq(
-    distances: np.ndarray, f: int, moved: np.ndarray, e: int, reference: np.ndarray
-) -> float:
-    """The squared departure [mm^2] of frame ``f``'s ``distances`` ``(n_pairs, n_frames)``
-    relabelled by row ``e`` of ``moved`` (:func:`_relabelled_pairs`) from ``reference``
-    ``(n_pairs,)``. A compiled kernel."""
-    total = 0.0
-    for p in range(reference.size):
-        total += (distances[moved[e, p], f] - reference[p]) ** 2
-    return total
+def _exchanges(
+    distances: np.ndarray,
+    moved: np.ndarray,
+    reference: np.ndarray,
+    distinct: np.ndarray,
+    far_sq: float,
+    near_sq: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame of ``distances`` ``(n_pairs, n_frames)`` [mm], the exchange that explains it
+    and its squared misfit [mm^2] from ``reference`` ``(n_pairs,)`` as labelled: for a frame
+    whose misfit exceeds ``far_sq``, the first of the ``distinct`` exchanges (rows of
+    ``moved``, :func:`_relabelled_pairs`) with the least misfit, if that is within
+    ``near_sq`` (as the index of its pair, one less than its row), else -1. A compiled
+    kernel."""
+    n_frames = distances.shape[1]
+    as_labelled = np.empty(n_frames)
+    _misfits_sq(distances, np.arange(n_frames), moved, 0, reference, as_labelled)
+    found = np.full(n_frames, -1)
+    beyond = np.flatnonzero(as_labelled > far_sq)
+    best = np.full(beyond.size, -1)
+    best_misfit = np.full(beyond.size, near_sq)
+    exchanged = np.empty(beyond.size)
+    for e in range(1, moved.shape[0]):
+        if distinct[e]:
+            _misfits_sq(distances, beyond, moved, e, reference, exchanged)
+            for k in range(beyond.size):
+                if exchanged[k] <= best_misfit[k]:
+                    best[k], best_misfit[k] = e - 1, exchanged[k]
+    found[beyond] = best
+    return found, as_labelled
+
+
+@kernel
+def _exchange_sizes_sq(moved: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """``(1 + n_pairs,)``: how far [mm^2] each exchange (row of ``moved``,
+    :func:`_relabelled_pairs`) moves the distances ``reference`` ``(n_pairs,)`` [mm], squared:
+    the misfit (:func:`_misfits_sq`) of ``reference`` relabelled, as a frame of its own. A
+    compiled kernel."""
+    sizes_sq = np.empty(moved.shape[0])
+    frame = reference.reshape(reference.size, 1)
+    for e in range(moved.shape[0]):
+        _misfits_sq(frame, np.zeros(1, dtype=np.int64), moved, e, reference, sizes_sq[e : e + 1])
+    return sizes_sq
+
+
+@kernel
+def _misfits_sq(
+    distances: np.ndarray,
+    frames: np.ndarray,
+    moved: np.ndarray,
+    e: int,
+    reference: np.ndarray,
+    misfit_sq: np.ndarray,
+) -> None:
+    """Into ``misfit_sq`` ``(n,)``: the squared departure [mm^2] of the distances of each of
+    the ``frames`` ``(n,)`` of ``distances`` ``(n_pairs, n_frames)``, relabelled by row ``e``
+    of ``moved`` (:func:`_relabelled_pairs`), from ``reference`` ``(n_pairs,)``. One call for
+    many frames: a call per frame would cost more than its sum. A compiled kernel."""
+    for k in range(frames.size):
+        total = 0.0
+        for p in range(reference.size):
+            total += (distances[moved[e, p], frames[k]] - reference[p]) ** 2
+        misfit_sq[k] = total
 
 
 @kernel
