@@ -205,12 +205,71 @@ def _medians(values: np.ndarray) -> np.ndarray:
 @kernel
 def _median_in_place(values: np.ndarray) -> float:
     """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
-    ``(a + b) / 2`` of the middle two. It is found as Numba's ``np.median`` finds it, whose
-    every step :func:`_select` repeats, so that it is the same number for any values, even
-    NaN, which leave no order; ``np.median`` would first copy them. A compiled kernel."""
+    ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values without NaN
+    have one order, in which any selection finds the same numbers, and :func:`_select_sweeping`
+    is the fast one. NaN leave no order: values with one are taken as Numba's ``np.median``
+    takes them (:func:`_quickselect_median`), so that the median is the number it gives. A
+    compiled kernel."""
     n = values.size
     if n == 0:
         return np.nan
+    unordered = False
+    for value in values:
+        unordered |= value != value
+    if unordered:
+        return _quickselect_median(values)
+    upper = _select_sweeping(values, n >> 1)
+    if n & 1:
+        return upper
+    # The middle value below is the greatest of those the selection left before the other.
+    lower = values[0]
+    for index in range(1, n >> 1):
+        lower = max(lower, values[index])
+    return (lower + upper) / 2
+
+
+@kernel
+def _select_sweeping(values: np.ndarray, k: int) -> float:
+    """The ``k``-th smallest of ``values`` ``(n,)``, which hold no NaN, reordering them so that
+    none before it is greater and none after it is less. Each round sweeps the range left
+    about the median of its first, middle and last value: those less than it first, then
+    those equal, each comparison added to a count rather than branched on, for in measured
+    values it is true as often as not, and a mispredicted branch costs more than the sweep. A
+    compiled kernel."""
+    low, high = 0, values.size
+    while True:
+        first, middle, last = values[low], values[(low + high) >> 1], values[high - 1]
+        pivot = max(min(first, middle), min(max(first, middle), last))
+        less = _sweep(values, low, high, pivot, False)
+        if k < less:
+            high = less
+            continue
+        # The pivot is one of the values, so the range shrinks in either case.
+        equal = _sweep(values, less, high, pivot, True)
+        if k < equal:
+            return pivot
+        low = equal
+
+
+@kernel
+def _sweep(values: np.ndarray, low: int, high: int, pivot: float, or_equal: bool) -> int:
+    """Move the values of ``values[low:high]`` less than ``pivot`` (or not greater, if
+    ``or_equal``) before the others, and return where the others start. A compiled kernel."""
+    start = low
+    for index in range(low, high):
+        value = values[index]
+        values[index] = values[start]
+        values[start] = value
+        start += (value <= pivot) if or_equal else (value < pivot)
+    return start
+
+
+@kernel
+def _quickselect_median(values: np.ndarray) -> float:
+    """The median of ``values`` ``(n >= 1,)``, reordering them, found step for step as Numba's
+    ``np.median`` finds it (:func:`_select`), which decides even where NaN leave no order. A
+    compiled kernel."""
+    n = values.size
     k = (n >> 1) - 1
     if n & 1:
         return _select(values, k + 1, 0, n - 1)
@@ -683,14 +742,27 @@ def _exchange_test(
         return exchange, misfit, np.nan
     distances = _pair_distances(markers if complete.size == n_frames else markers[complete])
     moved = _relabelled_pairs(markers.shape[1])
-    # One buffer of the distances' shape holds in turn the anchor's sorted distances, the
-    # aligned ones and their departures, which each median selection reorders in place.
+    # One buffer of the distances' shape holds in turn their departures, the anchor's sorted
+    # distances and the aligned ones, which each median selection reorders in place.
     work = np.empty_like(distances)
-    anchor, noise = _anchor_frame(distances, work)
+    medians = _medians(distances)
+    spread = _median_departure(distances, medians, work)
+    if _ranked_alike(distances):
+        # Sorting each frame's distances then moves whole rows, which changes no row's median,
+        # no frame's largest departure and not the set of departures: the anchor and its noise
+        # are the labelled distances' own.
+        anchor, noise = _nearest(distances, medians), spread
+    else:
+        anchor, noise = _anchor_frame(distances, work)
     typical = distances[:, anchor].copy()
     allowed = _distinct_exchanges(moved, typical, noise, far, near)
     allowed[0] = True
-    reference, noise = _typical_distances(distances, moved, typical, allowed, work)
+    candidates = _candidates(distances, moved, typical, allowed)
+    if candidates.size:
+        reference, noise = _typical_distances(distances, moved, typical, allowed, candidates, work)
+    else:
+        # No frame can be relabelled: the typical distances are the labelled ones' medians.
+        reference, noise = medians, max(spread, 1e-9 * medians.max())
     distinct = _distinct_exchanges(moved, reference, noise, far, near)
     found, misfit_sq = _exchanges(
         distances, moved, reference, distinct, far * noise**2, near * noise**2
@@ -739,11 +811,53 @@ def _anchor_frame(distances: np.ndarray, ranked: np.ndarray) -> tuple[int, float
                 q -= 1
             ranked[q, f] = value
     medians = _medians(ranked)
-    anchor = _nearest(ranked, medians)
-    for p in range(n_pairs):
-        for f in range(n_frames):
-            ranked[p, f] = abs(ranked[p, f] - medians[p])
-    return anchor, 1.482602218505602 * _median_in_place(ranked.reshape(ranked.size))
+    return _nearest(ranked, medians), _median_departure(ranked, medians, ranked)
+
+
+@kernel
+def _ranked_alike(distances: np.ndarray) -> bool:
+    """Whether the ``distances`` ``(n_pairs, n_frames)`` [mm] are all finite and rank alike in
+    every frame: in the order that sorts the first frame's, every frame's are sorted (ties in
+    either order). A compiled kernel."""
+    n_pairs, n_frames = distances.shape
+    order = np.argsort(distances[:, 0].copy())
+    for f in range(n_frames):
+        for r in range(n_pairs):
+            value = distances[order[r], f]
+            if not np.isfinite(value) or (r > 0 and distances[order[r - 1], f] > value):
+                return False
+    return True
+
+
+@kernel
+def _median_departure(values: np.ndarray, medians: np.ndarray, departures: np.ndarray) -> float:
+    """1.4826 times the median absolute departure [mm] of ``values`` ``(n_rows, n)`` [mm] from
+    their rows' ``medians`` ``(n_rows,)``, over all rows: Gaussian noise's standard deviation,
+    whose median absolute departure is 0.6745 of it. ``departures``, of the shape of
+    ``values`` (or ``values`` itself), is overwritten. A compiled kernel."""
+    for p in range(values.shape[0]):
+        for f in range(values.shape[1]):
+            departures[p, f] = abs(values[p, f] - medians[p])
+    return 1.482602218505602 * _median_in_place(departures.reshape(departures.size))
+
+
+@kernel
+def _candidates(
+    distances: np.ndarray, moved: np.ndarray, typical: np.ndarray, allowed: np.ndarray
+) -> np.ndarray:
+    """The frames of ``distances`` ``(n_pairs, n_frames)`` [mm] that an exchange (a row of
+    ``moved``, :func:`_relabelled_pairs`, that ``allowed`` allows) may match to the
+    ``typical`` frame's distances ``(n_pairs,)`` better than the labels as they are: those
+    departing from it by half the exchange's own size or more (triangle inequality). Without
+    an allowed exchange, none but a frame whose departure overflows. A compiled kernel."""
+    least = np.inf
+    sizes_sq = _exchange_sizes_sq(moved, typical)
+    for e in range(1, moved.shape[0]):
+        if allowed[e]:
+            least = min(least, sizes_sq[e])
+    as_labelled = np.empty(distances.shape[1])
+    _misfits_sq(distances, np.arange(distances.shape[1]), moved, 0, typical, as_labelled)
+    return np.flatnonzero(4.0 * as_labelled >= least)
 
 
 @kernel
@@ -752,6 +866,7 @@ def _typical_distances(
     moved: np.ndarray,
     typical: np.ndarray,
     allowed: np.ndarray,
+    candidates: np.ndarray,
     aligned: np.ndarray,
 ) -> tuple[np.ndarray, float]:
     """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
@@ -759,51 +874,30 @@ def _typical_distances(
     each frame first relabelled by the exchange (a row of ``moved``, :func:`_relabelled_pairs`,
     that ``allowed`` allows) or none that matches the ``typical`` frame's distances best, so
     that they are one labelling's however many frames hold the other (half, say, where plain
-    medians would fall between the two), in the labelling most frames hold; and 1.4826 times
-    the median absolute departure from them over all frames and pairs, Gaussian noise's
-    standard deviation. ``aligned``, of the shape of ``distances``, is overwritten. A compiled
-    kernel."""
+    medians would fall between the two), in the labelling most frames hold; and the median
+    departure from them (:func:`_median_departure`). Only the ``candidates``
+    (:func:`_candidates`) can be relabelled. ``aligned``, of the shape of ``distances``, is
+    overwritten. A compiled kernel."""
     n_pairs, n_frames = distances.shape
     aligned[:] = distances
-    held = np.zeros(moved.shape[0], dtype=np.int64)
-    # An exchange can match the typical frame better than the labels as they are only where
-    # the frame departs from it by half the exchange's own size or more (triangle inequality).
-    # Without an allowed exchange (least infinite) no frame is relabelled, not even one whose
-    # departure overflows: none but the labels as they are is tried.
-    least = np.inf
-    sizes_sq = _exchange_sizes_sq(moved, typical)
-    for e in range(1, moved.shape[0]):
+    best = np.zeros(candidates.size, dtype=np.int64)
+    best_misfit = np.full(candidates.size, np.inf)
+    misfit = np.empty(candidates.size)
+    for e in range(moved.shape[0]):
         if allowed[e]:
-            least = min(least, sizes_sq[e])
-    if least < np.inf:
-        as_labelled = np.empty(n_frames)
-        _misfits_sq(distances, np.arange(n_frames), moved, 0, typical, as_labelled)
-        candidates = np.flatnonzero(4.0 * as_labelled >= least)
-        best = np.zeros(candidates.size, dtype=np.int64)
-        best_misfit = np.full(candidates.size, np.inf)
-        misfit = np.empty(candidates.size)
-        for e in range(moved.shape[0]):
-            if allowed[e]:
-                _misfits_sq(distances, candidates, moved, e, typical, misfit)
-                for k in range(candidates.size):
-                    if misfit[k] < best_misfit[k]:
-                        best[k], best_misfit[k] = e, misfit[k]
-        for k in range(candidates.size):
-            for p in range(n_pairs):
-                aligned[p, candidates[k]] = distances[moved[best[k], p], candidates[k]]
-            held[best[k]] += 1
-        held[0] += n_frames - candidates.size
-    else:
-        held[0] = n_frames
+            _misfits_sq(distances, candidates, moved, e, typical, misfit)
+            for k in range(candidates.size):
+                if misfit[k] < best_misfit[k]:
+                    best[k], best_misfit[k] = e, misfit[k]
+    held = np.zeros(moved.shape[0], dtype=np.int64)
+    held[0] = n_frames - candidates.size
+    for k in range(candidates.size):
+        for p in range(n_pairs):
+            aligned[p, candidates[k]] = distances[moved[best[k], p], candidates[k]]
+        held[best[k]] += 1
     median = _medians(aligned)
-    for p in range(n_pairs):
-        for f in range(n_frames):
-            aligned[p, f] = abs(aligned[p, f] - median[p])
-    # The median absolute departure of Gaussian noise is 0.6745 of its standard deviation; a
-    # floor far below any real noise keeps exact data from dividing by zero.
-    noise = max(
-        1.482602218505602 * _median_in_place(aligned.reshape(aligned.size)), 1e-9 * median.max()
-    )
+    # A floor far below any real noise keeps exact data from dividing by zero.
+    noise = max(_median_departure(aligned, median, aligned), 1e-9 * median.max())
     # In the labelling most frames hold, so that the swapped side is the one with fewer frames.
     most = np.argmax(held)
     reference = np.empty(n_pairs)
