@@ -7,9 +7,10 @@ artefacts from nothing else. The cases are clusters of 3-8 markers and 2-5000 fr
 noise-free, small (sides of a few micrometres) and large (metres), far from the origin, with
 frames missing a coordinate (down to fewer complete frames than ``swap_min_frames``), with a
 swap of every pair of 3 and 4 markers in windows at the start, inside and at the end, with
-several swaps, and isosceles clusters whose base exchange keeps the shape. A faster test must
-find the same, bit for bit (NaN equal to NaN). ``python tests/test_screening_exchanges_pinned.py``
-rewrites the file, for a deliberate change of the test only.
+several swaps, with a spike, and isosceles clusters whose base exchange keeps the shape. A
+faster test must find the same, bit for bit (NaN equal to NaN).
+``python tests/test_screening_exchanges_pinned.py`` rewrites the file, for a deliberate change
+of the test only.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 from itertools import combinations
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 from test_screening_swaps import _moving, _small_body, _swapped
@@ -101,6 +103,16 @@ def cases() -> dict[str, np.ndarray]:
         found[f"isosceles noise-free {n_markers}"] = _swapped(
             _moving(rng, _isosceles(n_markers), 80, 0.0), 0, 1, 20, 80
         )
+    for n_markers in (3, 4):
+        # Sides 8, 20 and 21 mm (and 32, 35 and 52 mm): exchanging markers 0 and 1 moves the
+        # distances by more than noise can, and marker 2 leaving along the triangle's axis for
+        # three frames makes them candidates for it, ranks kept.
+        body = np.array([[-4.0, 0.0, 0.0], [4.0, 0.0, 0.0], [-2.5625, 19.948, 0.0]])
+        body = np.vstack([body, [[10.0, -30.0, 10.0]]])[:n_markers]
+        markers = _moving(np.random.default_rng([8, n_markers]), body, 120, 0.05)
+        axis = markers[30:33, 2] - markers[30:33, :2].mean(axis=1)
+        markers[30:33, 2] += 1.5 * axis / np.linalg.norm(axis, axis=1, keepdims=True)
+        found[f"spike {n_markers}"] = markers
     return found
 
 
@@ -152,3 +164,25 @@ def _write() -> None:
 
 if __name__ == "__main__":
     _write()
+
+
+def test_the_medians_are_those_numbas_median_finds():
+    """The in-place selection gives the number Numba's ``np.median`` gives, bit for bit: for
+    odd and even counts, ties, infinities and NaN (which leave no order, so that the number
+    depends on how it is found), and none."""
+    numba_median = numba.njit(lambda values: np.median(values))
+    rng = np.random.default_rng(11)
+    for n in (*range(0, 12), 99, 100, 1000, 1001):
+        for kind in ("normal", "ties", "sorted", "infinite", "nan"):
+            values = rng.normal(size=n)
+            if kind == "ties":
+                values = np.round(values)
+            elif kind == "sorted":
+                values = np.sort(values)
+            elif kind in ("infinite", "nan") and n:
+                spoilt = rng.integers(n, size=max(1, n // 3))
+                values[spoilt] = np.inf if kind == "infinite" else np.nan
+                values[spoilt[::2]] *= -1
+            want = numba_median(values.copy())
+            got = screening._median_in_place(values.copy())
+            assert np.array_equal(got, want, equal_nan=True), (n, kind, got, want)
