@@ -233,35 +233,33 @@ def _select_sweeping(values: np.ndarray, k: int) -> float:
     """The ``k``-th smallest of ``values`` ``(n,)``, which hold no NaN, reordering them so that
     none before it is greater and none after it is less. Each round sweeps the range left
     about the median of its first, middle and last value: those less than it first, then
-    those equal, each comparison added to a count rather than branched on, for in measured
-    values it is true as often as not, and a mispredicted branch costs more than the sweep. A
-    compiled kernel."""
+    those equal. A sweep adds each comparison to a count rather than branching on it, for in
+    measured values it is true as often as not, and a mispredicted branch costs more than the
+    sweep; it is written out twice, as a kernel call per sweep would cost more than a short
+    sweep. A compiled kernel."""
     low, high = 0, values.size
     while True:
         first, middle, last = values[low], values[(low + high) >> 1], values[high - 1]
         pivot = max(min(first, middle), min(max(first, middle), last))
-        less = _sweep(values, low, high, pivot, False)
+        less = low
+        for index in range(low, high):
+            value = values[index]
+            values[index] = values[less]
+            values[less] = value
+            less += value < pivot
         if k < less:
             high = less
             continue
         # The pivot is one of the values, so the range shrinks in either case.
-        equal = _sweep(values, less, high, pivot, True)
+        equal = less
+        for index in range(less, high):
+            value = values[index]
+            values[index] = values[equal]
+            values[equal] = value
+            equal += value <= pivot
         if k < equal:
             return pivot
         low = equal
-
-
-@kernel
-def _sweep(values: np.ndarray, low: int, high: int, pivot: float, or_equal: bool) -> int:
-    """Move the values of ``values[low:high]`` less than ``pivot`` (or not greater, if
-    ``or_equal``) before the others, and return where the others start. A compiled kernel."""
-    start = low
-    for index in range(low, high):
-        value = values[index]
-        values[index] = values[start]
-        values[start] = value
-        start += (value <= pivot) if or_equal else (value < pivot)
-    return start
 
 
 @kernel
