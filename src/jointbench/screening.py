@@ -195,9 +195,144 @@ def _most_typical(clusters: np.ndarray) -> int:
 def _medians(values: np.ndarray) -> np.ndarray:
     """The median of each row of ``values`` ``(n_rows, n)``. A compiled kernel."""
     medians = np.empty(values.shape[0])
+    row_copy = np.empty(values.shape[1])
     for row in range(values.shape[0]):
-        medians[row] = np.median(values[row])
+        row_copy[:] = values[row]
+        medians[row] = _median_in_place(row_copy)
     return medians
+
+
+@kernel
+def _median_in_place(values: np.ndarray) -> float:
+    """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
+    ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values without NaN
+    have one order, in which any selection finds the same numbers: from some hundreds of
+    values on, :func:`_select_sweeping` is the fastest (measured; below, branches mispredict
+    too rarely to matter). NaN leave no order: values with one are taken as Numba's
+    ``np.median`` takes them (:func:`_quickselect_median`), so that the median is the number
+    it gives. A compiled kernel."""
+    n = values.size
+    if n == 0:
+        return np.nan
+    if n < 512:
+        return _quickselect_median(values)
+    for value in values:
+        if value != value:
+            return _quickselect_median(values)
+    upper = _select_sweeping(values, n >> 1)
+    if n & 1:
+        return upper
+    # The middle value below is the greatest of those the selection left before the other.
+    lower = values[0]
+    for index in range(1, n >> 1):
+        lower = max(lower, values[index])
+    return (lower + upper) / 2
+
+
+@kernel
+def _select_sweeping(values: np.ndarray, k: int) -> float:
+    """The ``k``-th smallest of ``values`` ``(n,)``, which hold no NaN, reordering them so that
+    none before it is greater and none after it is less. Each round sweeps the range left
+    about the median of its first, middle and last value: those less than it first, then
+    those equal. A sweep adds each comparison to a count rather than branching on it, for in
+    measured values it is true as often as not, and a mispredicted branch costs more than the
+    sweep; it is written out twice, as a kernel call per sweep would cost more than a short
+    sweep. A compiled kernel."""
+    low, high = 0, values.size
+    while True:
+        first, middle, last = values[low], values[(low + high) >> 1], values[high - 1]
+        pivot = max(min(first, middle), min(max(first, middle), last))
+        less = low
+        for index in range(low, high):
+            value = values[index]
+            values[index] = values[less]
+            values[less] = value
+            less += value < pivot
+        if k < less:
+            high = less
+            continue
+        # The pivot is one of the values, so the range shrinks in either case.
+        equal = less
+        for index in range(less, high):
+            value = values[index]
+            values[index] = values[equal]
+            values[equal] = value
+            equal += value <= pivot
+        if k < equal:
+            return pivot
+        low = equal
+
+
+@kernel
+def _quickselect_median(values: np.ndarray) -> float:
+    """The median of ``values`` ``(n >= 1,)``, reordering them, found step for step as Numba's
+    ``np.median`` finds it (:func:`_select`), which decides even where NaN leave no order. A
+    compiled kernel."""
+    n = values.size
+    k = (n >> 1) - 1
+    if n & 1:
+        return _select(values, k + 1, 0, n - 1)
+    # The two middle values together: partition until one of them is in place, then select
+    # the other on its side.
+    low, high = 0, n - 1
+    while True:
+        i = _partition(values, low, high)
+        if i < k:
+            low = i + 1
+        elif i > k + 1:
+            high = i - 1
+        elif i == k:
+            _select(values, k + 1, i + 1, high)
+            break
+        else:
+            _select(values, k, low, i - 1)
+            break
+    return (values[k] + values[k + 1]) / 2
+
+
+@kernel
+def _select(values: np.ndarray, k: int, low: int, high: int) -> float:
+    """The ``k``-th smallest of ``values[low : high + 1]`` (Hoare's quickselect), which end
+    partitioned about it. A compiled kernel."""
+    i = _partition(values, low, high)
+    while i != k:
+        if i < k:
+            low = i + 1
+        else:
+            high = i - 1
+        i = _partition(values, low, high)
+    return values[k]
+
+
+@kernel
+def _partition(values: np.ndarray, low: int, high: int) -> int:
+    """Partition ``values[low : high + 1]`` about the median of its first, middle and last
+    value, and return where that pivot ends: before it none greater, after it none less. A
+    compiled kernel."""
+    mid = (low + high) >> 1
+    # The swaps of Numba's partition, step for step (its pivots do well on sorted and uniform
+    # values).
+    if values[mid] < values[low]:
+        values[low], values[mid] = values[mid], values[low]
+    if values[high] < values[mid]:
+        values[high], values[mid] = values[mid], values[high]
+    if values[mid] < values[low]:
+        values[low], values[mid] = values[mid], values[low]
+    pivot = values[mid]
+    values[high], values[mid] = values[mid], values[high]
+    i, j = low, high - 1
+    while True:
+        while i < high and values[i] < pivot:
+            i += 1
+        while j >= low and pivot < values[j]:
+            j -= 1
+        if i >= j:
+            break
+        values[i], values[j] = values[j], values[i]
+        i += 1
+        j -= 1
+    values[i], values[high] = values[high], values[i]
+    return i
 
 
 @kernel
@@ -601,53 +736,71 @@ def _exchange_test(
     n_frames = markers.shape[0]
     exchange = np.full(n_frames, -1)
     misfit = np.full(n_frames, np.nan)
-    complete = np.empty(n_frames, dtype=np.int64)
-    count = 0
-    for f in range(n_frames):
-        seen = True
-        for m in range(markers.shape[1]):
-            for i in range(3):
-                seen = seen and np.isfinite(markers[f, m, i])
-        if seen:
-            complete[count] = f
-            count += 1
-    if count < max(min_frames, 1):
+    complete = _complete_frames(markers)
+    if complete.size < max(min_frames, 1):
         return exchange, misfit, np.nan
-    clusters = markers if count == n_frames else markers[complete[:count]]
-    distances = _pair_distances(clusters)
-    moved = _relabelled_pairs(clusters.shape[1])
-    anchor, noise = _anchor_frame(distances)
+    distances = _pair_distances(markers if complete.size == n_frames else markers[complete])
+    moved = _relabelled_pairs(markers.shape[1])
+    # One buffer of the distances' shape holds in turn their departures, the anchor's sorted
+    # distances and the aligned ones, which each median selection reorders in place.
+    work = np.empty_like(distances)
+    medians = _medians(distances)
+    spread = _median_departure(distances, medians, work)
+    if _ranked_alike(distances):
+        # Sorting each frame's distances then moves whole rows, which changes no row's median,
+        # no frame's largest departure and not the set of departures: the anchor and its noise
+        # are the labelled distances' own.
+        anchor, noise = _nearest(distances, medians), spread
+    else:
+        anchor, noise = _anchor_frame(distances, work)
     typical = distances[:, anchor].copy()
     allowed = _distinct_exchanges(moved, typical, noise, far, near)
     allowed[0] = True
-    reference, noise = _typical_distances(distances, moved, typical, allowed)
+    candidates = _candidates(distances, moved, typical, allowed)
+    if candidates.size:
+        reference, noise = _typical_distances(distances, moved, typical, allowed, candidates, work)
+    else:
+        # No frame can be relabelled: the typical distances are the labelled ones' medians.
+        reference, noise = medians, max(spread, 1e-9 * medians.max())
     distinct = _distinct_exchanges(moved, reference, noise, far, near)
-    far_sq, near_sq = far * noise**2, near * noise**2
-    for k in range(count):
-        as_labelled = _misfit_sq(distances, k, moved, 0, reference)
-        misfit[complete[k]] = np.sqrt(as_labelled)
-        if not as_labelled > far_sq:
-            continue
-        best, best_misfit = -1, near_sq
-        for e in range(1, moved.shape[0]):
-            if not distinct[e]:
-                continue
-            exchanged = _misfit_sq(distances, k, moved, e, reference)
-            if exchanged <= best_misfit:
-                best, best_misfit = e - 1, exchanged
-        exchange[complete[k]] = best
+    found, misfit_sq = _exchanges(
+        distances, moved, reference, distinct, far * noise**2, near * noise**2
+    )
+    for k in range(complete.size):
+        exchange[complete[k]] = found[k]
+        misfit[complete[k]] = np.sqrt(misfit_sq[k])
     return exchange, misfit, noise * np.sqrt(far)
 
 
 @kernel
-def _anchor_frame(distances: np.ndarray) -> tuple[int, float]:
+def _complete_frames(markers: np.ndarray) -> np.ndarray:
+    """The indices of the frames of ``markers`` ``(n_frames, n, 3)`` [mm] whose coordinates
+    are all finite. A compiled kernel."""
+    complete = np.empty(markers.shape[0], dtype=np.int64)
+    count = 0
+    for f in range(markers.shape[0]):
+        # x - x is 0 for a finite x and NaN for any other, so the sum is 0 only in a complete
+        # frame, without a branch per coordinate.
+        total = 0.0
+        for m in range(markers.shape[1]):
+            for i in range(3):
+                total += markers[f, m, i] - markers[f, m, i]
+        if total == 0.0:
+            complete[count] = f
+            count += 1
+    return complete[:count]
+
+
+@kernel
+def _anchor_frame(distances: np.ndarray, ranked: np.ndarray) -> tuple[int, float]:
     """A frame of ``distances`` ``(n_pairs, n_frames)`` [mm] to relabel the others by, and the
     noise of one distance [mm], both without regard to labels: each frame's distances sorted
     (which no exchange of labels changes), the frame whose largest departure from the sorted
     distances' medians is least, and 1.4826 times the median absolute departure. However many
-    frames a swap holds, neither moves. A compiled kernel."""
+    frames a swap holds, neither moves. ``ranked``, of the shape of ``distances``, is
+    overwritten. A compiled kernel."""
     n_pairs, n_frames = distances.shape
-    ranked = distances.copy()
+    ranked[:] = distances
     for f in range(n_frames):
         # Insertion sort: a frame has few pairs, and this allocates nothing.
         for p in range(1, n_pairs):
@@ -657,53 +810,93 @@ def _anchor_frame(distances: np.ndarray) -> tuple[int, float]:
                 q -= 1
             ranked[q, f] = value
     medians = _medians(ranked)
-    anchor = _nearest(ranked, medians)
-    for p in range(n_pairs):
-        for f in range(n_frames):
-            ranked[p, f] = abs(ranked[p, f] - medians[p])
-    return anchor, 1.482602218505602 * np.median(ranked)
+    return _nearest(ranked, medians), _median_departure(ranked, medians, ranked)
+
+
+@kernel
+def _ranked_alike(distances: np.ndarray) -> bool:
+    """Whether the ``distances`` ``(n_pairs, n_frames)`` [mm] are all finite and rank alike in
+    every frame: in the order that sorts the first frame's, every frame's are sorted (ties in
+    either order). A compiled kernel."""
+    n_pairs, n_frames = distances.shape
+    order = np.argsort(distances[:, 0].copy())
+    for f in range(n_frames):
+        for r in range(n_pairs):
+            value = distances[order[r], f]
+            if not np.isfinite(value) or (r > 0 and distances[order[r - 1], f] > value):
+                return False
+    return True
+
+
+@kernel
+def _median_departure(values: np.ndarray, medians: np.ndarray, departures: np.ndarray) -> float:
+    """1.4826 times the median absolute departure [mm] of ``values`` ``(n_rows, n)`` [mm] from
+    their rows' ``medians`` ``(n_rows,)``, over all rows: Gaussian noise's standard deviation,
+    whose median absolute departure is 0.6745 of it. ``departures``, of the shape of
+    ``values`` (or ``values`` itself), is overwritten. A compiled kernel."""
+    for p in range(values.shape[0]):
+        for f in range(values.shape[1]):
+            departures[p, f] = abs(values[p, f] - medians[p])
+    return 1.482602218505602 * _median_in_place(departures.reshape(departures.size))
+
+
+@kernel
+def _candidates(
+    distances: np.ndarray, moved: np.ndarray, typical: np.ndarray, allowed: np.ndarray
+) -> np.ndarray:
+    """The frames of ``distances`` ``(n_pairs, n_frames)`` [mm] that an exchange (a row of
+    ``moved``, :func:`_relabelled_pairs`, that ``allowed`` allows) may match to the
+    ``typical`` frame's distances ``(n_pairs,)`` better than the labels as they are: those
+    departing from it by half the exchange's own size or more (triangle inequality). Without
+    an allowed exchange, none but a frame whose departure overflows. A compiled kernel."""
+    least = np.inf
+    sizes_sq = _exchange_sizes_sq(moved, typical)
+    for e in range(1, moved.shape[0]):
+        if allowed[e]:
+            least = min(least, sizes_sq[e])
+    as_labelled = np.empty(distances.shape[1])
+    _misfits_sq(distances, np.arange(distances.shape[1]), moved, 0, typical, as_labelled)
+    return np.flatnonzero(4.0 * as_labelled >= least)
 
 
 @kernel
 def _typical_distances(
-    distances: np.ndarray, moved: np.ndarray, typical: np.ndarray, allowed: np.ndarray
+    distances: np.ndarray,
+    moved: np.ndarray,
+    typical: np.ndarray,
+    allowed: np.ndarray,
+    candidates: np.ndarray,
+    aligned: np.ndarray,
 ) -> tuple[np.ndarray, float]:
     """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
     ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
     each frame first relabelled by the exchange (a row of ``moved``, :func:`_relabelled_pairs`,
     that ``allowed`` allows) or none that matches the ``typical`` frame's distances best, so
     that they are one labelling's however many frames hold the other (half, say, where plain
-    medians would fall between the two), in the labelling most frames hold; and 1.4826 times
-    the median absolute departure from them over all frames and pairs, Gaussian noise's
-    standard deviation. A compiled kernel."""
+    medians would fall between the two), in the labelling most frames hold; and the median
+    departure from them (:func:`_median_departure`). Only the ``candidates``
+    (:func:`_candidates`) can be relabelled. ``aligned``, of the shape of ``distances``, is
+    overwritten. A compiled kernel."""
     n_pairs, n_frames = distances.shape
-    # An exchange can match the typical frame better than the labels as they are only where
-    # the frame departs from it by half the exchange's own size or more (triangle inequality).
-    least = np.inf
-    for e in range(1, moved.shape[0]):
+    aligned[:] = distances
+    best = np.zeros(candidates.size, dtype=np.int64)
+    best_misfit = np.full(candidates.size, np.inf)
+    misfit = np.empty(candidates.size)
+    for e in range(moved.shape[0]):
         if allowed[e]:
-            least = min(least, _misfit_sq(typical.reshape(n_pairs, 1), 0, moved, e, typical))
-    aligned = distances.copy()
+            _misfits_sq(distances, candidates, moved, e, typical, misfit)
+            for k in range(candidates.size):
+                if misfit[k] < best_misfit[k]:
+                    best[k], best_misfit[k] = e, misfit[k]
     held = np.zeros(moved.shape[0], dtype=np.int64)
-    for f in range(n_frames):
-        best = 0
-        if 4.0 * _misfit_sq(distances, f, moved, 0, typical) >= least:
-            best_misfit = np.inf
-            for e in range(moved.shape[0]):
-                if allowed[e]:
-                    misfit = _misfit_sq(distances, f, moved, e, typical)
-                    if misfit < best_misfit:
-                        best, best_misfit = e, misfit
-            for p in range(n_pairs):
-                aligned[p, f] = distances[moved[best, p], f]
-        held[best] += 1
+    held[0] = n_frames - candidates.size
+    for k in range(candidates.size):
+        for p in range(n_pairs):
+            aligned[p, candidates[k]] = distances[moved[best[k], p], candidates[k]]
+        held[best[k]] += 1
     median = _medians(aligned)
-    for p in range(n_pairs):
-        for f in range(n_frames):
-            aligned[p, f] = abs(aligned[p, f] - median[p])
-    # The median absolute departure of Gaussian noise is 0.6745 of its standard deviation; a
-    # floor far below any real noise keeps exact data from dividing by zero.
-    noise = max(1.482602218505602 * np.median(aligned), 1e-9 * median.max())
+    # A floor far below any real noise keeps exact data from dividing by zero.
+    noise = max(_median_departure(aligned, median, aligned), 1e-9 * median.max())
     # In the labelling most frames hold, so that the swapped side is the one with fewer frames.
     most = np.argmax(held)
     reference = np.empty(n_pairs)
@@ -722,26 +915,76 @@ def _distinct_exchanges(
     own noise exceeds the near one (triangle inequality), so that its frames form whole runs.
     A smaller exchange (an isosceles triangle's base) is one that deformation or noise can
     mimic. Row 0 (no exchange) is not one. A compiled kernel."""
-    distinct = np.zeros(moved.shape[0], dtype=np.bool_)
     separation_sq = (np.sqrt(far) + np.sqrt(near)) ** 2 * noise**2
-    for e in range(1, moved.shape[0]):
-        distinct[e] = _misfit_sq(reference.reshape(reference.size, 1), 0, moved, e, reference) > (
-            separation_sq
-        )
+    distinct = _exchange_sizes_sq(moved, reference) > separation_sq
+    distinct[0] = False
     return distinct
 
 
 @kernel
-def _misfit_sq(
-    distances: np.ndarray, f: int, moved: np.ndarray, e: int, reference: np.ndarray
-) -> float:
-    """The squared departure [mm^2] of frame ``f``'s ``distances`` ``(n_pairs, n_frames)``
-    relabelled by row ``e`` of ``moved`` (:func:`_relabelled_pairs`) from ``reference``
-    ``(n_pairs,)``. A compiled kernel."""
-    total = 0.0
-    for p in range(reference.size):
-        total += (distances[moved[e, p], f] - reference[p]) ** 2
-    return total
+def _exchanges(
+    distances: np.ndarray,
+    moved: np.ndarray,
+    reference: np.ndarray,
+    distinct: np.ndarray,
+    far_sq: float,
+    near_sq: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame of ``distances`` ``(n_pairs, n_frames)`` [mm], the exchange that explains it
+    and its squared misfit [mm^2] from ``reference`` ``(n_pairs,)`` as labelled: for a frame
+    whose misfit exceeds ``far_sq``, the first of the ``distinct`` exchanges (rows of
+    ``moved``, :func:`_relabelled_pairs`) with the least misfit, if that is within
+    ``near_sq`` (as the index of its pair, one less than its row), else -1. A compiled
+    kernel."""
+    n_frames = distances.shape[1]
+    as_labelled = np.empty(n_frames)
+    _misfits_sq(distances, np.arange(n_frames), moved, 0, reference, as_labelled)
+    found = np.full(n_frames, -1)
+    beyond = np.flatnonzero(as_labelled > far_sq)
+    best = np.full(beyond.size, -1)
+    best_misfit = np.full(beyond.size, near_sq)
+    exchanged = np.empty(beyond.size)
+    for e in range(1, moved.shape[0]):
+        if distinct[e]:
+            _misfits_sq(distances, beyond, moved, e, reference, exchanged)
+            for k in range(beyond.size):
+                if exchanged[k] <= best_misfit[k]:
+                    best[k], best_misfit[k] = e - 1, exchanged[k]
+    found[beyond] = best
+    return found, as_labelled
+
+
+@kernel
+def _exchange_sizes_sq(moved: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """``(1 + n_pairs,)``: how far [mm^2] each exchange (row of ``moved``,
+    :func:`_relabelled_pairs`) moves the distances ``reference`` ``(n_pairs,)`` [mm], squared:
+    the misfit (:func:`_misfits_sq`) of ``reference`` relabelled, as a frame of its own. A
+    compiled kernel."""
+    sizes_sq = np.empty(moved.shape[0])
+    frame = reference.reshape(reference.size, 1)
+    for e in range(moved.shape[0]):
+        _misfits_sq(frame, np.zeros(1, dtype=np.int64), moved, e, reference, sizes_sq[e : e + 1])
+    return sizes_sq
+
+
+@kernel
+def _misfits_sq(
+    distances: np.ndarray,
+    frames: np.ndarray,
+    moved: np.ndarray,
+    e: int,
+    reference: np.ndarray,
+    misfit_sq: np.ndarray,
+) -> None:
+    """Into ``misfit_sq`` ``(n,)``: the squared departure [mm^2] of the distances of each of
+    the ``frames`` ``(n,)`` of ``distances`` ``(n_pairs, n_frames)``, relabelled by row ``e``
+    of ``moved`` (:func:`_relabelled_pairs`), from ``reference`` ``(n_pairs,)``. One call for
+    many frames: a call per frame would cost more than its sum. A compiled kernel."""
+    for k in range(frames.size):
+        total = 0.0
+        for p in range(reference.size):
+            total += (distances[moved[e, p], frames[k]] - reference[p]) ** 2
+        misfit_sq[k] = total
 
 
 @kernel
