@@ -28,6 +28,7 @@ RUN_SIDE = (
     "estimate",
     "collect",
     "summarise",
+    "blind_dataset",
     "dataset_csv",
     "estimates_from_csv",
 )

@@ -26,13 +26,13 @@ to the search. After it stops, two restarts (:func:`restart_points`) test the mi
 when one ends lower, the answer is kept (it is what the method finds) but marked
 ``converged=False`` with a status that names the restart and both costs.
 
-Input: a dataset file
----------------------
-Parquet, long format, one row per (segment, trial, frame, marker) with columns
-``segment, trial, frame, marker, x, y, z`` [mm]. The schema metadata key ``jointbench`` holds
-JSON with ``study``, ``condition`` (grid values, e.g. ``{"marker_set": "M", "rom_deg": 5,
-"noise_mm": 1.0}``), ``truth`` and ``parameters``. The truth is the benchmark's, to score the
-estimates with; an estimator has no use for it, and this one does not read it.
+Input: a blind dataset file
+---------------------------
+Parquet (``results/blind/{study}/{condition}.parquet``), long format, one row per (segment,
+trial, frame, marker) with columns ``segment, trial, frame, marker, x, y, z`` [mm]. The schema
+metadata key ``jointbench`` holds JSON with ``study``, ``condition`` (grid values, e.g.
+``{"marker_set": "M", "rom_deg": 5, "noise_mm": 1.0}``) and ``shapes``; the truth, which the
+benchmark scores the estimates with, is not in the file.
 Centre studies have one segment, ``moving``: its markers in the reference segment's frame.
 
 Output: an estimates file

@@ -50,18 +50,35 @@ EXTERNAL_ESTIMATORS = sorted(
 def check_external_rules():
     """Stop, naming the study and the estimator, when no rule writes the estimates of an
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
-    (a misspelt name, a rule file not yet written), not at a missing CSV later."""
+    (a misspelt name, a rule file not yet written), not at a missing CSV later; and when its
+    rule reads a full dataset file, whose truth only the benchmark may read."""
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
             parquet = estimates_files(study, [name])[0]
             files = (parquet, parquet.removesuffix(".parquet") + ".csv")
-            if not any(writer.is_producer(f) for writer in writers for f in files):
+            producers = [w for w in writers if any(w.is_producer(f) for f in files)]
+            if not producers:
                 raise ValueError(
                     f"config: studies.{study}.external_estimators: no rule writes the "
                     f"estimates of {name!r} ({files[0]} or .csv); its rule goes in "
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
+            for producer in producers:
+                _check_blind(producer, name)
+
+
+def _check_blind(producer, name):
+    """Stop when ``producer``, the rule of external estimator ``name``, reads a full dataset
+    file."""
+    full = [f for f in map(str, producer.input) if f.startswith("results/datasets/")]
+    if full:
+        raise ValueError(
+            f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which holds the "
+            "truth the benchmark scores with: an external estimator reads the blind file "
+            "results/blind/{study}/{condition}.parquet, or the markers CSV "
+            "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
+        )
 
 
 def _alternatives(names):

@@ -1,12 +1,31 @@
-# Plain text for estimators in any language (jointbench.resultfiles.interchange): a condition's
-# markers as CSV for a program to read, and the estimates CSV it writes turned into an estimates
-# file.
-# Both rules serve every study, and run only for a file some rule asks for.
+# What an estimator outside the package is given (README, "Adding an estimator"): a
+# condition's blind dataset file, its markers and grid values without the truth
+# (jointbench.resultfiles.parquet.write_blind_dataset); the same markers as CSV for a program to
+# read (jointbench.resultfiles.interchange); and the estimates CSV it writes turned into an
+# estimates file. The full dataset, truth and all, is read by the built-in estimate jobs and
+# by the benchmark's scoring only. Each rule serves every study, and runs only for a file some
+# rule asks for.
+
+
+rule blind_dataset:
+    input:
+        "results/datasets/{study}/{condition}.parquet",
+    output:
+        "results/blind/{study}/{condition}.parquet",
+    log:
+        "results/logs/blind/{study}/{condition}.log",
+    localrule: True
+    conda:
+        "../envs/jointbench.yaml"
+    params:
+        code=script_code("blind_dataset"),
+    script:
+        "../scripts/blind_dataset.py"
 
 
 rule dataset_csv:
     input:
-        "results/datasets/{study}/{condition}.parquet",
+        rules.blind_dataset.output[0],
     output:
         "results/interchange/{study}/{condition}.csv",
     log:
@@ -23,7 +42,7 @@ rule dataset_csv:
 rule estimates_from_csv:
     input:
         estimates="results/estimates/{study}/{method}/{condition}.csv",
-        dataset="results/datasets/{study}/{condition}.parquet",
+        dataset=rules.blind_dataset.output[0],
     output:
         "results/estimates/{study}/{method}/{condition}.parquet",
     log:

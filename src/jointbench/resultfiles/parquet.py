@@ -6,6 +6,11 @@ ground truth, generator parameters and each segment's array shape are JSON in th
 metadata under the key ``jointbench``. Trials are written in blocks, one row group per segment
 and block, so a condition is read back a block of trials at a time (:func:`iter_dataset`) and
 memory does not grow with the number of trials.
+
+A blind dataset file (:func:`write_blind_dataset`) is what an estimator outside the package is
+given: the same rows, read by the same functions, with metadata reduced to :data:`BLIND_KEYS`
+(its truth reads as ``None``, its parameters as empty); the benchmark alone scores, and
+:func:`read_truth` refuses such a file.
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = [
+    "BLIND_KEYS",
     "iter_dataset",
     "read_dataset",
     "read_metadata",
@@ -36,7 +42,9 @@ __all__ = [
     "read_provenance",
     "read_table",
     "read_trial_numbers",
+    "read_truth",
     "rows_table",
+    "write_blind_dataset",
     "write_dataset",
     "write_dataset_blocks",
     "write_poses_blocks",
@@ -265,6 +273,52 @@ def _dataset_metadata(trials: Trials, n_trials: int, study, condition, provenanc
     }
 
 
+#: The metadata a blind dataset keeps, each public or read off its rows: the study's name, the
+#: condition's grid values (the public protocol of the cell, as the file name lists them), each
+#: segment's array shape (the trials, frames and markers its rows hold), and ``blind`` (true).
+#: Left out: the truth, and every generator parameter, since the protocol's constants (the
+#: centre, the joint's position, the markers' positions relative to it) place the truth.
+BLIND_KEYS = ("study", "condition", "shapes", "blind")
+
+
+@_names_unreadable_file
+def write_blind_dataset(
+    dataset: str | Path, output: str | Path, provenance: Mapping[str, object] | None = None
+) -> None:
+    """Copy the rows of the dataset file ``dataset`` to ``output``, row group by row group, with
+    only the :data:`BLIND_KEYS` of its metadata and ``provenance`` (what made the copy, which
+    must hold no protocol value: see :data:`BLIND_KEYS`)."""
+    source = pq.ParquetFile(dataset)
+    metadata = read_metadata(dataset)
+    blind = {
+        "study": metadata["study"],
+        "condition": metadata["condition"],
+        "shapes": {name: list(shape) for name, shape in _shapes(dataset, metadata).items()},
+        "blind": True,
+        "provenance": dict(provenance or {}),
+    }
+    # Every key of the source's metadata goes, Arrow's copy of the schema among them.
+    schema = source.schema_arrow.with_metadata({_META_KEY: json.dumps(blind).encode()})
+    Path(output).parent.mkdir(parents=True, exist_ok=True)
+    with pq.ParquetWriter(output, schema) as writer:
+        for group in range(source.num_row_groups):
+            table = source.read_row_group(group).replace_schema_metadata(schema.metadata)
+            writer.write_table(table)
+
+
+@_names_unreadable_file
+def read_truth(path: str | Path) -> dict:
+    """The ground truth of a dataset file, to score estimates against; ``ValueError`` naming
+    the file for a blind one (:func:`write_blind_dataset`), which has none."""
+    metadata = read_metadata(path)
+    if metadata.get("blind") or "truth" not in metadata:
+        raise ValueError(
+            f"{path} is a blind dataset file: it holds no truth, and estimates are scored "
+            "against the condition's full dataset file (results/datasets/)"
+        )
+    return metadata["truth"]
+
+
 @_names_unreadable_file
 def read_metadata(path: str | Path) -> dict:
     """The ``jointbench`` metadata of a dataset file."""
@@ -368,7 +422,8 @@ def iter_dataset(
 ) -> Iterator[tuple[int, Trials]]:
     """A dataset file as ``(first_trial, Trials)`` blocks of consecutive trials.
 
-    Only one block is in memory at a time; its trials are numbered from 0 within the block.
+    Only one block is in memory at a time; its trials are numbered from 0 within the block. A
+    blind file's trials have truth ``None`` and no parameters.
     """
     metadata = read_metadata(path)
     shapes = _shapes(path, metadata)
@@ -389,20 +444,27 @@ def iter_dataset(
         segments = _block(path, dataset, shapes, offsets, first, count)
         yield (
             first,
-            Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"]),
+            Trials(
+                segments=segments,
+                truth=metadata.get("truth"),
+                parameters=metadata.get("parameters", {}),
+            ),
         )
 
 
 @_names_unreadable_file
 def read_dataset(path: str | Path) -> tuple[Trials, dict]:
-    """Read a dataset file back into :class:`Trials` and its metadata."""
+    """Read a dataset file back into :class:`Trials` and its metadata (a blind file's trials:
+    truth ``None``, no parameters)."""
     metadata = read_metadata(path)
     shapes = _shapes(path, metadata)
     segments = {name: np.empty(shape) for name, shape in shapes.items()}
     for first, block in iter_dataset(path):
         for name, markers in block.segments.items():
             segments[name][first : first + markers.shape[0]] = markers
-    trials = Trials(segments=segments, truth=metadata["truth"], parameters=metadata["parameters"])
+    trials = Trials(
+        segments=segments, truth=metadata.get("truth"), parameters=metadata.get("parameters", {})
+    )
     return trials, metadata
 
 

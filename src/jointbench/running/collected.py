@@ -20,6 +20,7 @@ from jointbench.resultfiles.parquet import (
     read_provenance,
     read_table,
     read_trial_numbers,
+    read_truth,
     write_table,
 )
 from jointbench.resultfiles.schema import (
@@ -119,17 +120,17 @@ def _datasets(datasets: Sequence[str | Path], segments: Sequence[str]) -> dict[s
     of each trial (:func:`jointbench.running.scoring.proximal_at_frame0`), else ``None``."""
     out = {}
     for path in datasets:
-        metadata = read_metadata(path)
+        metadata, truth = read_metadata(path), read_truth(path)
         trials = read_trial_numbers(path)
         frame0 = None
-        if PROXIMAL_TRUTH in metadata["truth"]:
+        if PROXIMAL_TRUTH in truth:
             frame0 = np.concatenate(
                 [proximal_at_frame0(block.segments, segments) for _, block in iter_dataset(path)]
             )[np.argsort(trials)]
         out[Path(path).stem] = {
             "trials": np.sort(trials),
             "condition": metadata["condition"],
-            "truth": metadata["truth"],
+            "truth": truth,
             "proximal_frame0": frame0,
         }
     return out

@@ -252,7 +252,12 @@ def score_columns(
     dataset's ``truth``. NaN where an estimate is missing; a finite estimate has a finite
     error, however far out. A joint centre's scores relative to the proximal markers need
     ``proximal_frame0`` ``(n, k, 3)`` [mm], each row's proximal markers as recorded at frame 0
-    (:func:`proximal_at_frame0`), and the truth's (:data:`PROXIMAL_TRUTH`): NaN without them."""
+    (:func:`proximal_at_frame0`), and the truth's (:data:`PROXIMAL_TRUTH`): NaN without them.
+    ``ValueError`` when ``truth`` is ``None`` (trials of a blind dataset file)."""
+    if truth is None:
+        raise ValueError(
+            "no truth to score against: trials read from a blind dataset file are not scored"
+        )
     # A negative variance or a NaN estimate is a NaN score, not a warning in a job's log.
     with np.errstate(invalid="ignore", over="ignore"):
         if kind == "joint_center":

@@ -57,11 +57,12 @@ class Trials:
     ``"proximal"`` and ``"distal"`` (world frame) for two-segment studies. ``truth`` holds the
     JSON-serialisable ground truth shared by all trials (``"center"``, and optionally
     :data:`PROXIMAL_TRUTH` or :data:`RADII_TRUTH`; or ``"axis_point"`` and
-    ``"axis_direction"``), ``parameters`` the generator settings for provenance.
+    ``"axis_direction"``), ``None`` when read from a blind dataset file, which an estimator
+    outside the package is given; ``parameters`` the generator settings for provenance.
     """
 
     segments: dict[str, np.ndarray]
-    truth: dict[str, list[float]]
+    truth: dict[str, list[float]] | None
     parameters: dict[str, object] = field(default_factory=dict)
 
     @property

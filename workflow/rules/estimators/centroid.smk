@@ -1,11 +1,13 @@
 # centroid: the smallest external estimator, a template to copy (README, "Adding an estimator").
 # It serves every centre study that lists it under external_estimators, and runs nowhere else.
+# Like every external estimator it reads the condition's blind dataset file: the markers and the
+# condition's grid values, not the truth, which only the benchmark reads to score.
 
 
 rule estimate_centroid:
     """centroid: the mean of every marker position of a trial (a template, not a method)."""
     input:
-        "results/datasets/{study}/{condition}.parquet",
+        "results/blind/{study}/{condition}.parquet",
     output:
         "results/estimates/{study}/centroid/{condition}.parquet",
     log:

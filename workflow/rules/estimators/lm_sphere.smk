@@ -12,7 +12,7 @@ for _study in studies_listing("LM"):
             # own code, not the programs its shell command runs).
             script=Path(workflow.basedir, "workflow", "external", "lm_sphere.py"),
             datasets=expand(
-                "results/datasets/{study}/{condition}.parquet",
+                "results/blind/{study}/{condition}.parquet",
                 study=_study,
                 condition=condition_ids(_study),
             ),

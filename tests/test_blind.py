@@ -1,0 +1,275 @@
+"""External estimators are blind: the file they read holds the markers and the condition's grid
+values, never the truth nor a generator parameter that places it; only the benchmark scores.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import json
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+import yaml
+from workflow_copy import ROOT, copy_workflow, run_snakemake
+
+from jointbench.configuration.config import estimator_names
+from jointbench.configuration.studies import get_study, method_kind
+from jointbench.resultfiles.interchange import read_estimates_csv, write_dataset_csv
+from jointbench.resultfiles.parquet import (
+    BLIND_KEYS,
+    read_dataset,
+    read_metadata,
+    read_truth,
+    write_blind_dataset,
+    write_dataset,
+)
+from jointbench.running.collected import collect
+from jointbench.running.run import estimate, simulate_condition
+from jointbench.running.scoring import ESTIMATE_COLUMNS, score_columns
+
+CONFIG = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+
+
+def _config(study: str, trials: int = 2) -> dict:
+    config = json.loads(json.dumps(CONFIG))
+    config["studies"][study]["trials"] = trials
+    return config
+
+
+def _first_condition(study: str) -> dict:
+    """The first cell of the study's default grid."""
+    grid = CONFIG["studies"][study]["grid"]
+    return {key: values[0] for key, values in grid.items()}
+
+
+def _numbers(value) -> list[float]:
+    """Every number in a JSON value, depth first."""
+    if isinstance(value, dict):
+        return [n for item in value.values() for n in _numbers(item)]
+    if isinstance(value, list):
+        return [n for item in value for n in _numbers(item)]
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return []
+    return [float(value)]
+
+
+def _write(tmp_path, study: str):
+    """A simulated condition of ``study`` written as its dataset file and its blind file."""
+    config = _config(study)
+    condition = _first_condition(study)
+    dataset = tmp_path / "datasets" / study / "c.parquet"
+    blind = tmp_path / "blind" / study / "c.parquet"
+    trials = simulate_condition(config, study, condition)
+    write_dataset(dataset, trials, study=study, condition=condition, provenance={"x": 1})
+    write_blind_dataset(dataset, blind, provenance={"rule": "blind_dataset"})
+    return dataset, blind, trials
+
+
+STUDIES = ("cmc", "hinge", "hip", "hip_sta")
+
+
+@pytest.mark.parametrize("study", STUDIES)
+def test_a_blind_file_holds_the_markers_and_nothing_that_places_the_truth(tmp_path, study):
+    dataset, blind, trials = _write(tmp_path, study)
+    read, metadata = read_dataset(blind)
+    for name, markers in trials.segments.items():
+        assert np.array_equal(read.segments[name], markers)
+    assert read.truth is None and read.parameters == {}
+    assert set(metadata) == {*BLIND_KEYS, "provenance"}
+    assert metadata["condition"] == read_metadata(dataset)["condition"]
+    # The footer holds the blind metadata and Arrow's copy of the schema, which holds it again.
+    footer = pq.ParquetFile(blind).metadata.metadata
+    assert set(footer) == {b"jointbench", b"ARROW:schema"}
+    arrow = pa.ipc.read_schema(pa.py_buffer(base64.b64decode(footer[b"ARROW:schema"])))
+    assert arrow.metadata == {b"jointbench": footer[b"jointbench"]}
+    text = footer[b"jointbench"].decode()
+    for word in ("truth", "parameters", "center", "axis", "joint_mm", "markers_mm"):
+        assert word not in text
+    # No number of the truth or of the parameters is stored, but the grid values and shapes.
+    public = set(_numbers(metadata["condition"])) | set(_numbers(metadata["shapes"]))
+    secret = set(_numbers(trials.truth)) | set(_numbers(trials.parameters))
+    assert not (secret - public) & set(_numbers(json.loads(text)))
+
+
+@pytest.mark.parametrize("study", STUDIES)
+def test_the_csv_of_a_blind_file_is_the_csv_of_its_dataset(tmp_path, study):
+    dataset, blind, _ = _write(tmp_path, study)
+    write_dataset_csv(dataset, tmp_path / "full.csv")
+    write_dataset_csv(blind, tmp_path / "blind.csv")
+    assert (tmp_path / "full.csv").read_bytes() == (tmp_path / "blind.csv").read_bytes()
+
+
+def test_an_estimates_csv_is_read_against_the_blind_file(tmp_path):
+    _, blind, _ = _write(tmp_path, "cmc")
+    source = tmp_path / "LS-C" / "c.csv"
+    source.parent.mkdir()
+    header = "trial,center_x,center_y,center_z,converged,iterations,seconds,status\n"
+    source.write_text(header + "0,1,2,3,true,0,0,ok\n1,1,2,3,true,0,0,ok\n")
+    read_estimates_csv(source, blind, tmp_path / "out.parquet")
+    frame = pd.read_parquet(tmp_path / "out.parquet")
+    assert set(_first_condition("cmc").items()) <= set(frame.iloc[0].to_dict().items())
+
+
+def test_the_benchmark_refuses_to_score_against_a_blind_file(tmp_path):
+    dataset, blind, trials = _write(tmp_path, "cmc")
+    assert read_truth(dataset) == trials.truth
+    with pytest.raises(ValueError, match="blind") as error:
+        read_truth(blind)
+    assert str(blind) in str(error.value)
+    estimates = {"center_x": [0.0], "center_y": [0.0], "center_z": [0.0]}
+    with pytest.raises(ValueError, match="blind"):
+        score_columns("center", estimates, None)
+    path = tmp_path / "estimates" / "cmc" / "LS" / "c.parquet"
+    path.parent.mkdir(parents=True)
+    frame = pd.DataFrame(
+        {
+            **{k: [v, v] for k, v in _first_condition("cmc").items()},
+            "trial": [0, 1],
+            "method": "LS",
+            **{c: [0.0, 0.0] for c in ("center_x", "center_y", "center_z")},
+            "converged": True,
+            "iterations": 0,
+            "seconds": 0.0,
+            "status": "ok",
+        }
+    )
+    frame.to_parquet(path, index=False)
+    with pytest.raises(ValueError, match="blind"):
+        collect("cmc", [path], str(tmp_path / "collected.parquet"), [blind])
+
+
+def _shifted(value):
+    """A JSON value with every number moved by 37."""
+    if isinstance(value, dict):
+        return {key: _shifted(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_shifted(item) for item in value]
+    return value + 37.0
+
+
+@pytest.mark.parametrize("study", STUDIES)
+def test_built_in_estimates_do_not_depend_on_the_truth(study):
+    """The built-in estimate jobs read the full dataset to score and diagnose; every built-in
+    estimator's estimate is the same whatever truth the file holds."""
+    config = _config(study)
+    condition = _first_condition(study)
+    trials = simulate_condition(config, study, condition)
+    moved = dataclasses.replace(trials, truth=_shifted(trials.truth))
+    spec = get_study(study)
+    for method in estimator_names(config, study, source="builtin"):
+        kind = method_kind(spec, method)
+        columns = [*ESTIMATE_COLUMNS[kind], "converged", "iterations", "status"]
+        ours = estimate(study, method, trials, condition)[columns]
+        other = estimate(study, method, moved, condition)[columns]
+        pd.testing.assert_frame_equal(ours, other)
+
+
+# An external rule that tries to read the truth from everything it is given: every key-value
+# metadata of its input, every file beside it, every config value its script sees. Where it
+# finds a centre it returns it; otherwise it returns the markers' centroid.
+ORACLE = '''
+import json
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+dataset, estimates = snakemake.input[0], snakemake.output[0]
+
+
+def centres(value):
+    """Every three-number list under a key that names a centre, anywhere in a JSON value."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            if key in ("center", "center_mm", "joint_mm", "axis_point") and len(item) == 3:
+                yield [float(x) for x in item]
+            yield from centres(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from centres(item)
+
+
+found = []
+sources = dict(pq.read_schema(dataset).metadata or {})
+sources.update(pq.ParquetFile(dataset).metadata.metadata or {})
+for raw in sources.values():
+    try:
+        found += centres(json.loads(raw))
+    except ValueError:
+        pass
+for sidecar in Path(dataset).parent.iterdir():
+    if sidecar.suffix in (".json", ".yaml", ".txt"):
+        found += centres(json.loads(sidecar.read_text()))
+found += centres(dict(snakemake.config))
+meta = json.loads(pq.read_schema(dataset).metadata[b"jointbench"])
+rows = []
+for trial, markers in pd.read_parquet(dataset).groupby("trial"):
+    center = found[0] if found else markers[["x", "y", "z"]].to_numpy().mean(axis=0)
+    rows.append(
+        {
+            **meta["condition"],
+            "trial": trial,
+            "method": "oracle",
+            "center_x": center[0],
+            "center_y": center[1],
+            "center_z": center[2],
+            "converged": True,
+            "iterations": 0,
+            "seconds": 0.0,
+            "status": "ok",
+        }
+    )
+pd.DataFrame(rows).to_parquet(estimates, index=False)
+'''
+
+
+@pytest.mark.pipeline
+def test_an_oracle_rule_finds_no_truth_and_ranks_as_the_centroid(tmp_path):
+    """The oracle's rule is the shipped template's with its own script: it reads what every
+    external rule is given and ranks where the centroid, which it falls back to, ranks."""
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    (rules / "oracle.smk").write_text(
+        template.replace("estimate_centroid", "estimate_oracle").replace("centroid", "oracle")
+    )
+    (tmp_path / "workflow" / "external" / "oracle.py").write_text(ORACLE)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid", "oracle"])
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    collected = pd.read_parquet(tmp_path / "results" / "collected" / "cmc.parquet")
+    error = collected.set_index(["method", "trial"])["error_mm"]
+    assert (error["oracle"] > 1.0).all(), error["oracle"]
+    np.testing.assert_array_equal(error["oracle"].to_numpy(), error["centroid"].to_numpy())
+
+
+def _cmc_only(tmp_path, **cmc) -> str:
+    defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}
+    studies["cmc"] = {
+        "trials": 2,
+        "grid": {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]},
+        **cmc,
+    }
+    overlay = tmp_path / "overlay.yaml"
+    overlay.write_text(yaml.safe_dump({"studies": studies}))
+    return str(overlay)
+
+
+@pytest.mark.pipeline
+def test_an_external_rule_given_the_full_dataset_stops_the_run_before_any_job(tmp_path):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    assert "results/blind/{study}/{condition}.parquet" in template
+    (rules / "centroid.smk").write_text(template.replace("results/blind/", "results/datasets/"))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    message = "rule estimate_centroid (external estimator 'centroid') reads results/datasets/"
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
