@@ -58,7 +58,7 @@ import numpy as np
 import jointbench
 from jointbench import geometry
 from jointbench.estimators import registry
-from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.simulate.noise import isotropic_noise
 
 # Targets [s], by (kind, method, data label); ``None`` label applies to every data set.

@@ -110,7 +110,7 @@ def test_rigid_poses_of_many_trials_equal_each_trial_alone():
 
 
 def test_shared_poses_give_the_same_answers():
-    from jointbench.estimators.twosegment import trial_poses
+    from jointbench.estimators.segment_poses import trial_poses
 
     trials = _trials("hip", 1)
     segments = {name: trials.segments[name] for name in ("proximal", "distal")}

@@ -220,9 +220,9 @@ def assessed(monkeypatch):
     given = []
     assess_many = support.assess_many
 
-    def recording(kind, arrays):
+    def recording(kind, arrays, **keywords):
         given.append(arrays)
-        return assess_many(kind, arrays)
+        return assess_many(kind, arrays, **keywords)
 
     monkeypatch.setattr(support, "assess_many", recording)
     return given

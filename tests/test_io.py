@@ -14,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from jointbench.configuration.config import load_config
-from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, trial_poses
 from jointbench.resultfiles import parquet
 from jointbench.resultfiles.parquet import (
     iter_dataset,

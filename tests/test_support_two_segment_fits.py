@@ -1,31 +1,24 @@
-"""The two-segment verdict's rigid-body fits (:func:`jointbench.estimators.support._clusters`):
-poses fitted to frame 0, one re-estimation of the body-fixed coordinates, poses fitted again,
-and the residual, scatter, inertia and coordinate sums of those poses. Seeded trials cover
-noisy, noise-free, static, nearly collinear and non-rigid clusters and relative rotations near
-pi.
+"""The two-segment verdict's rigid-body fits (:func:`jointbench.estimators.support._clusters`)
+are the converged poses the pose-based estimators fit
+(:func:`jointbench.estimators.segment_poses.trial_poses`), read, not refitted. Seeded trials
+cover noisy, noise-free, static, nearly collinear and non-rigid clusters and relative rotations
+near pi.
 
-Two guards: the fits agree with a plain NumPy fit (SVD rotations) to rounding where the
-rotations are well determined, and they equal, to 1e-12 relative, the numbers pinned in
-``tests/snapshots/two_segment_fits.npz`` when it was written (the rotations by their sums over
-the frames, plain and weighted by the frame's index, which any change of a frame's rotation
-moves). ``python tests/test_support_two_segment_fits.py`` rewrites the file, for a deliberate
-change of the fits only.
+Guards: the numbers the verdict takes from the poses (residual, scatter, inertia, largest
+coordinate) equal a plain NumPy computation from the same poses; a verdict given the poses an
+estimator fitted equals the one that fits them itself, and poses fitted to other markers are
+not used; poses that cannot be fitted are reported as such, not raised.
 """
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 import pytest
 from rigs import apply_pose, two_segments
 
 from jointbench.estimators import support
+from jointbench.estimators.segment_poses import trial_poses
 from jointbench.geometry import rotation_matrix, unit
-from jointbench.numerics.compiled import kernel_array
-from jointbench.numerics.poses import POSE_TOL_MM
-
-PINNED = Path(__file__).parent / "snapshots" / "two_segment_fits.npz"
 
 
 def _near_pi(seed: int, n_frames: int, noise_mm: float) -> tuple[np.ndarray, np.ndarray]:
@@ -90,142 +83,107 @@ def two_segment_cases() -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 CASES = two_segment_cases()
+NAMES = ("proximal", "distal")
 
 
-def _kabsch(cross: np.ndarray) -> np.ndarray:
-    """Proper rotations maximising ``trace(R' H)`` of ``cross`` ``(..., 3, 3)``, by the SVD."""
-    u, _, vt = np.linalg.svd(cross)
-    sign = np.sign(np.linalg.det(u @ vt))
-    return u @ (np.stack([np.ones_like(sign), np.ones_like(sign), sign], -1)[..., None] * vt)
+def _poses(arrays: tuple[np.ndarray, ...]) -> dict:
+    """One trial's converged poses of both segments, as an estimator fits them."""
+    (fitted,) = trial_poses(
+        {name: [a] for name, a in zip(NAMES, arrays, strict=True)}, min_frames=2
+    )
+    return fitted
 
 
-def _reference(frames: np.ndarray) -> tuple:
-    """The fits of one trial's ``frames`` ``(N, n, 3)`` [mm] in plain NumPy: ``rotation``
-    ``(N, 3, 3)``, ``residual_ss``, ``scatter`` [mm^2], ``inertia_inv`` ``(3, 3)`` [mm^-2],
-    ``weakest`` and ``largest`` [mm]."""
+def _reference(frames: np.ndarray, rotation: np.ndarray, body: np.ndarray) -> tuple:
+    """The fit's numbers of one segment's ``frames`` ``(N, n, 3)`` [mm] under its poses
+    ``rotation`` ``(N, 3, 3)`` of ``body`` ``(n, 3)`` [mm], in plain NumPy: ``residual_ss``,
+    ``scatter`` [mm^2], ``inertia_inv`` ``(3, 3)`` [mm^-2], ``weakest`` and ``largest`` [mm]."""
     centred = frames - frames.mean(axis=1, keepdims=True)
-
-    def poses(body):
-        u = body - body.mean(axis=0)
-        return u, _kabsch(np.einsum("fmi,mj->fij", centred, u))
-
-    body = frames[0]
-    u, rotation = poses(body)
-    local = np.einsum("fmi,fij->mj", centred, rotation) / len(frames)
-    updated = frames[0].mean(axis=0) + local @ rotation[0].T
-    if np.abs(updated - body).max() >= POSE_TOL_MM:
-        u, rotation = poses(updated)
+    u = body - body.mean(axis=0)
     residual_ss = np.sum((centred - np.einsum("fij,mj->fmi", rotation, u)) ** 2)
     inertia_inv = np.linalg.inv(np.sum(u**2) * np.eye(3) - u.T @ u)
     weakest = np.linalg.eigvalsh(inertia_inv)[2]
-    return rotation, residual_ss, np.sum(centred**2), inertia_inv, weakest, np.abs(frames).max()
+    return residual_ss, np.sum(centred**2), inertia_inv, weakest, np.abs(frames).max()
 
 
-def _fitted(case: str) -> list[support._Clusters]:
-    """The fits of each segment of ``case`` whose clusters define poses."""
-    return [
-        support._clusters(markers[None])
-        for markers in CASES[case]
-        if support._poses_defined(markers[None])
-    ]
-
-
-def _pinned_numbers(fitted: support._Clusters) -> np.ndarray:
-    """The fit's numbers as pinned: residual, non-rigid share, weakest variance, largest
-    coordinate and the inverse inertia ``(13,)``."""
-    scalars = [fitted.residual_ss, fitted.nonrigid_share, fitted.weakest_variance, fitted.largest]
-    return np.concatenate([*scalars, fitted.inertia_inv.ravel()])
-
-
-def _rotation_sums(rotation: np.ndarray) -> np.ndarray:
-    """``rotation`` ``(1, N, 3, 3)`` summed over its frames, plain and weighted by the frame's
-    index over ``N`` ``(2, 3, 3)``: a frame's rotation cannot change without moving them."""
-    frames = rotation[0]
-    weights = np.arange(1, len(frames) + 1) / len(frames)
-    return np.stack([frames.sum(axis=0), np.einsum("k,kij->ij", weights, frames)])
-
-
-def _assert_pinned(found: np.ndarray, pinned: np.ndarray) -> None:
-    """``found`` equals ``pinned`` to 1e-12 relative, or 1e-12 of the column's largest value
-    where a value is near zero."""
-    assert found.shape == pinned.shape
-    scale = np.max(np.abs(pinned), axis=0, keepdims=True, initial=0.0)
-    off = np.abs(found - pinned) > 1e-12 * np.maximum(np.abs(pinned), scale)
-    assert not off.any(), f"{off.sum()} numbers moved, first at {np.argwhere(off)[0]}"
-
-
-@pytest.fixture(scope="module")
-def pinned() -> dict[str, np.ndarray]:
-    with np.load(PINNED) as stored:
-        return dict(stored)
-
-
-@pytest.mark.parametrize("case", [c for c in CASES if not c.startswith("nearly-collinear")])
-def test_the_fits_are_numpys_to_rounding(case):
-    """Nearly collinear clusters are left out: their rotations about the line are ill
-    determined, so Horn's method and the SVD may differ far beyond rounding."""
-    for markers in CASES[case]:
-        if not support._poses_defined(markers[None]):
-            continue
-        fitted = support._clusters(markers[None])
-        rotation, residual_ss, scatter, inertia_inv, weakest, largest = _reference(markers)
-        np.testing.assert_allclose(fitted.rotation[0], rotation, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(fitted.residual_ss[0], residual_ss, rtol=0, atol=1e-14 * scatter)
-        np.testing.assert_allclose(fitted.inertia_inv[0], inertia_inv, rtol=1e-12)
-        np.testing.assert_allclose(fitted.weakest_variance[0], weakest, rtol=1e-12)
-        assert fitted.largest[0] == largest
+def _defined(arrays: tuple[np.ndarray, ...]) -> bool:
+    return all(support._poses_defined(a[None]) for a in arrays)
 
 
 @pytest.mark.parametrize("case", list(CASES))
-def test_the_fits_are_the_pinned_fits(case, pinned):
-    fitted = _fitted(case)
-    numbers = np.array([_pinned_numbers(f) for f in fitted]).reshape(-1, 13)
-    _assert_pinned(numbers, pinned[f"{case}/numbers"])
-    rotations = np.array([_rotation_sums(f.rotation) for f in fitted]).reshape(-1, 18)
-    _assert_pinned(rotations, pinned[f"{case}/rotations"])
+def test_the_fits_are_the_poses_numbers(case):
+    arrays = CASES[case]
+    if not _defined(arrays):
+        pytest.skip("no pose: judged without one")
+    poses = _poses(arrays)
+    for name, frames in zip(NAMES, arrays, strict=True):
+        pose = poses[name]
+        fitted = support._clusters(frames[None], [pose])
+        residual_ss, scatter, inertia_inv, weakest, largest = _reference(
+            frames, pose.rotation, pose.body
+        )
+        np.testing.assert_array_equal(fitted.rotation[0], pose.rotation)
+        np.testing.assert_allclose(fitted.residual_ss[0], residual_ss, rtol=0, atol=1e-12 * scatter)
+        np.testing.assert_allclose(
+            fitted.inertia_inv[0], inertia_inv, rtol=0, atol=1e-10 * np.abs(inertia_inv).max()
+        )
+        np.testing.assert_allclose(fitted.weakest_variance[0], weakest, rtol=1e-10)
+        assert fitted.largest[0] == largest
+        dof = 3 * (frames.shape[1] - 2) * (len(frames) - 1)
+        share = (fitted.residual_ss[0] / dof) / (
+            scatter / (3 * (frames.shape[1] - 1) * len(frames))
+        )
+        np.testing.assert_allclose(fitted.nonrigid_share[0], share, rtol=1e-10)
 
 
-def test_trials_fitted_together_are_fitted_as_each_alone():
-    """A batch of trials of one shape, some with frames whose rotation Horn's method leaves to
-    the SVD (collinear clusters), gives each trial the fit it has alone."""
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_verdict_given_the_poses_is_the_verdict_that_fits_them(case):
+    arrays = CASES[case]
+    own = support.assess("joint_center", arrays)
+    given = support.assess("joint_center", arrays, poses=_poses(arrays))
+    assert given.warnings == own.warnings
+    assert given.diagnostics == own.diagnostics
+
+
+def test_the_verdict_reads_the_poses_it_is_given():
+    """Poses of a joint that turns given for markers of one that does not: the verdict judges
+    the poses' rotation (so it reads them, and the caller must give the markers' own)."""
+    still = two_segments(150, relative="none")
+    turning = two_segments(150, relative="ball")
+    assert support.assess("joint_center", still).warnings
+    assert not support.assess("joint_center", still, poses=_poses(turning)).warnings
+
+
+def test_a_pose_fit_that_fails_is_reported_not_raised():
+    arrays = CASES["ball/0.5/0"]
+    error = ValueError("distal (body-fixed coordinates): the markers are collinear")
+    verdict = support.assess("joint_center", arrays, poses=error)
+    assert verdict.diagnostics["assessed"] is False
+    assert "the pose fit failed (distal (body-fixed coordinates)" in verdict.warnings[0]
+
+
+def test_trials_judged_together_are_judged_as_each_alone():
+    """A batch of trials of one shape, some failing their pose fit, gives each trial the
+    verdict it has alone."""
     group = [
         arrays
         for arrays in CASES.values()
-        if {a.shape for a in arrays} == {(150, 3, 3)}
-        and all(support._poses_defined(a[None]) for a in arrays)
+        if {a.shape for a in arrays} == {(150, 3, 3)} and _defined(arrays)
     ]
-    for index in range(2):
-        stacked = np.stack([arrays[index] for arrays in group])
-        together = support._clusters(stacked)
-        for trial, arrays in enumerate(group):
-            alone = support._clusters(arrays[index][None])
-            for field in ("rotation", "residual_ss", "inertia_inv", "largest", "nonrigid_share"):
-                np.testing.assert_array_equal(
-                    getattr(together, field)[trial], getattr(alone, field)[0]
-                )
+    stacked = tuple(np.stack(arrays) for arrays in zip(*group, strict=True))
+    poses = [_poses(arrays) for arrays in group]
+    poses[1] = ValueError("distal: the pose fit failed on purpose")
+    together = support.assess_many("joint_center", stacked, poses=poses)
+    for trial, arrays in enumerate(group):
+        alone = support.assess("joint_center", arrays, poses=poses[trial])
+        assert together[trial].warnings == alone.warnings
+        assert together[trial].diagnostics == alone.diagnostics
 
 
-def test_the_cases_include_frames_horn_leaves_to_the_svd():
-    """Some cases' clusters have frames whose rotation Horn's method leaves to the SVD, so the
-    tests above hold there too."""
-    settled = [
-        support._cluster_fits(kernel_array(markers[None]), POSE_TOL_MM)[0][0]
-        for arrays in CASES.values()
-        for markers in arrays
-        if support._poses_defined(markers[None])
-    ]
-    assert not all(settled)
-
-
-def _write() -> None:
-    stored = {}
-    for case in CASES:
-        fitted = _fitted(case)
-        stored[f"{case}/numbers"] = np.array([_pinned_numbers(f) for f in fitted]).reshape(-1, 13)
-        sums = [_rotation_sums(f.rotation) for f in fitted]
-        stored[f"{case}/rotations"] = np.array(sums).reshape(-1, 18)
-    np.savez_compressed(PINNED, **stored)
-
-
-if __name__ == "__main__":
-    _write()
+def test_markers_that_do_not_move_get_a_verdict():
+    """Still markers with too few of them for a pose: judged without one, not divided by zero."""
+    proximal, distal = two_segments(20)
+    still = np.broadcast_to(distal[:1, :2], (20, 2, 3)).copy()
+    verdict = support.assess("joint_center", (proximal, still))
+    assert verdict.diagnostics["assessed"] is False
+    assert any("range of motion too small" in warning for warning in verdict.warnings)

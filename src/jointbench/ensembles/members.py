@@ -20,7 +20,7 @@ import pandas as pd
 from jointbench.comparison.published import comparison_rows, load_published
 from jointbench.configuration.config import conditions, estimator_names
 from jointbench.configuration.studies import get_study
-from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, trial_poses
 from jointbench.papers import Inputs, papers_of_study
 from jointbench.running.collected import require_results
 from jointbench.running.run import estimate_table, methods_sharing_poses, simulate_condition

@@ -17,8 +17,8 @@ from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import many, register, register_many
 from jointbench.estimators.results import CenterResult
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, trial_poses
 from jointbench.estimators.sphere import _check_point, _prepared_fits, fit_ls
-from jointbench.estimators.twosegment import POSE_MIN_FRAMES, trial_poses
 from jointbench.estimators.validation import (
     check_markers,
     check_moves,

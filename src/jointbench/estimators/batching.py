@@ -51,11 +51,12 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     that, when the whole call fails numerically, returns per trial the outcome it has alone.
 
     ``poses=`` (a list with one entry per trial, see
-    :func:`jointbench.estimators.twosegment.trial_poses`) is split with the trials.
+    :func:`jointbench.estimators.segment_poses.trial_poses`) is split with the trials.
     """
 
     @functools.wraps(batched)
     def run(*segments: object, **options: object) -> list:
+        _check_one_pose_per_trial(segments, options.get("poses"))
         try:
             return batched(*segments, **options)
         except NUMERICAL_FAILURES as error:
@@ -78,3 +79,13 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
         return each_alone(alone, n_trials)
 
     return run
+
+
+def _check_one_pose_per_trial(segments: tuple, poses: list | None) -> None:
+    """``ValueError`` unless ``poses`` (when given) has one entry per trial of ``segments``:
+    a trial must not be fitted with another trial's poses."""
+    if poses is None or not segments:
+        return
+    n_trials = len(segments[0])
+    if len(poses) != n_trials:
+        raise ValueError(f"poses: {len(poses)} entries for {n_trials} trials; give one per trial")

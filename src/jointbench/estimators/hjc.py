@@ -88,10 +88,9 @@ from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import JointCenterResult
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses
 from jointbench.estimators.twosegment import (
-    POSE_MIN_FRAMES,
     PoseStack,
-    SegmentPoses,
     batched,
     batched_all,
     each_trial,

@@ -34,6 +34,7 @@ makes it so.
 from __future__ import annotations
 
 import functools
+import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -41,7 +42,8 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench.estimators import support, validation
-from jointbench.estimators.batching import each_alone
+from jointbench.estimators.batching import each_alone, one_trial
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.registries import Registry
 
 __all__ = [
@@ -107,17 +109,30 @@ class Claims:
 
 @dataclass
 class _Entry:
-    """A registered method: its one-trial function, checked and not, its checked form for input
-    that passed the input checks (:func:`get_for_valid`), its claims, its figure style and its own
-    many-trial form (``None`` until stated, or for none)."""
+    """A registered method of ``kind``: its one-trial function ``fn``, its claims, its figure
+    style and its own many-trial form (``None`` until stated, or for none); derived from
+    those, the function's signature and its checked forms, for any input (``checked``) and for
+    input that passed the input checks (``valid``, :func:`get_for_valid`)."""
 
+    kind: str
     name: str
     fn: Callable
-    checked: Callable
-    valid: Callable
     claims: Claims
     style: Mapping[str, str]
     many: Callable[..., list] | None = None
+    signature: inspect.Signature = field(init=False)
+    checked: Callable = field(init=False)
+    valid: Callable = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.signature = inspect.signature(self.fn)
+        self.valid = functools.partial(_fit_valid, self)
+
+        @functools.wraps(self.fn)
+        def checked(*arrays: object, **options: object):
+            return _fit_valid(self, validation.check_input(self.kind, arrays), **options)
+
+        self.checked = checked
 
 
 _REGISTRY: dict[str, Registry[_Entry]] = {
@@ -130,22 +145,60 @@ def _check_kind(kind: str) -> None:
         raise ValueError(f"unknown estimator kind {kind!r}; choose one of {', '.join(KINDS)}")
 
 
-def _checked(kind: str, fn: Callable) -> Callable:
-    """``fn`` with the input checks before, and its self-check and the support verdict after,
-    each fit."""
+def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
+    """``entry``'s method on ``clean``, arrays that passed the input checks, then its
+    self-check and the support verdict. A pose-based method of two segments has the segments'
+    poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
+    one-trial function is) and for the verdict."""
+    names = _pose_names(entry, len(clean))
+    if names is None or not _binds(entry, clean, options):
+        result = entry.fn(*clean, **options)
+        verdict = support.assess(entry.kind, clean)
+    else:
+        (poses,) = _shared_poses(names, tuple([array] for array in clean))
+        result = one_trial(entry.many, *clean, poses=[poses], **options)
+        verdict = support.assess(entry.kind, clean, poses=poses)
+    return support.annotate(_self_checked(entry.fn, result, clean, options), verdict)
 
-    @functools.wraps(fn)
-    def checked(*arrays: object, **options: object):
-        return _fit_valid(kind, fn, validation.check_input(kind, arrays), **options)
 
-    return checked
+def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
+    """The segments whose poses ``entry``'s fit and the support verdict can share: those of
+    its pose-based many-trial form, when the verdict reads poses (two segments); else None."""
+    if n_segments < 2 or entry.many is None:
+        return None
+    return pose_segments(entry.many)
 
 
-def _fit_valid(kind: str, fn: Callable, clean: tuple[np.ndarray, ...], **options: object):
-    """``fn`` on ``clean``, arrays that passed the input checks, then its self-check and the
-    support verdict."""
-    result = _self_checked(fn, fn(*clean, **options), clean, options)
-    return support.annotate(result, support.assess(kind, clean))
+def _binds(entry: _Entry, arrays: tuple, options: dict) -> bool:
+    """Whether ``entry``'s one-trial function takes ``arrays`` and ``options``: where it does
+    not, calling it raises the ``TypeError`` a caller should see."""
+    try:
+        entry.signature.bind(*arrays, **options)
+    except TypeError:
+        return False
+    return True
+
+
+def _shared_poses(names: tuple[str, ...], segments: tuple) -> list:
+    """Per trial of ``segments`` (in ``names`` order, each ``(T, N, n, 3)`` or a list of
+    trials), its poses as every pose-based method fits them, or its ``ValueError``."""
+    return trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
+
+
+def _fitted_to(poses: list | None, trials: list[int], stacked: tuple[np.ndarray, ...]):
+    """``poses`` of the ``trials`` whose checked arrays are ``stacked`` ``(k, N, n, 3)`` each,
+    when every one was fitted to those very arrays; else ``None``, and the verdict fits its
+    own (poses a caller passed may belong to other markers)."""
+    if poses is None:
+        return None
+    chosen = [poses[trial] for trial in trials]
+    for row, trial_poses_ in enumerate(chosen):
+        if not isinstance(trial_poses_, dict) or len(trial_poses_) != len(stacked):
+            return None
+        for pose, array in zip(trial_poses_.values(), stacked, strict=True):
+            if not np.array_equal(pose.markers, array[row]):
+                return None
+    return chosen
 
 
 def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
@@ -169,17 +222,20 @@ def _self_checked_many(fn: Callable, results: list, stacked: tuple, options: dic
     return check_many(results, *stacked, **{k: v for k, v in options.items() if k != "poses"})
 
 
-def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., list]:
-    """A many-trial form (``raw(*segments, **options)`` over ``(n_trials, ...)`` arrays,
-    returning per trial a result or the exception) with the checks of :func:`_checked` per
-    trial: the input checks of all trials in one pass
+def _checked_many(entry: _Entry) -> Callable[..., list]:
+    """``entry``'s many-trial form (``many(*segments, **options)`` over ``(n_trials, ...)``
+    arrays, returning per trial a result or the exception) with the checks of its checked
+    one-trial form per trial: the input checks of all trials in one pass
     (:func:`jointbench.estimators.validation.check_input_many`) and the support verdict of all
-    trials in one call."""
+    trials in one call, reading the poses the fit read where it is pose-based."""
 
-    @functools.wraps(raw)
+    @functools.wraps(entry.many)
     def checked_many(*segments: object, **options: object) -> list:
-        outcomes = list(raw(*segments, **options))
-        checked = validation.check_input_many(kind, segments, len(outcomes))
+        names = _pose_names(entry, len(segments))
+        if names is not None and options.get("poses") is None:
+            options["poses"] = _shared_poses(names, segments)
+        outcomes = list(entry.many(*segments, **options))
+        checked = validation.check_input_many(entry.kind, segments, len(outcomes))
         fitted = []
         for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
             # As for one trial: the input checks come first and their error wins.
@@ -189,8 +245,9 @@ def _checked_many(kind: str, raw: Callable, raw_fn: Callable) -> Callable[..., l
                 fitted.append(trial)
         if fitted:
             stacked = checked.stacked(fitted)
-            results = _self_checked_many(raw_fn, [outcomes[t] for t in fitted], stacked, options)
-            verdicts = support.assess_many(kind, stacked)
+            results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
+            poses = _fitted_to(options.get("poses"), fitted, stacked) if names else None
+            verdicts = support.assess_many(entry.kind, stacked, poses=poses)
             for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
                 outcomes[trial] = support.annotate(result, verdict)
         return outcomes
@@ -228,8 +285,7 @@ def register(
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
-        valid = functools.partial(_fit_valid, kind, fn)
-        _REGISTRY[kind].register(_Entry(name, fn, _checked(kind, fn), valid, stated, style, many))
+        _REGISTRY[kind].register(_Entry(kind, name, fn, stated, style, many))
         return fn
 
     return decorate
@@ -281,7 +337,7 @@ def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:
     entry = _entry(kind, name)
     if entry.many is None:
         return _trial_by_trial(entry.checked if checked else entry.fn)
-    return _checked_many(kind, entry.many, entry.fn) if checked else entry.many
+    return _checked_many(entry) if checked else entry.many
 
 
 def has_own_many(kind: str, name: str) -> bool:

@@ -59,8 +59,10 @@ then its projections on the two candidate hinge planes below):
   hinges and static clusters.
 
 Two segments (``joint_center``: both clusters in the world) are judged from their rigid-body
-poses, the poses of :func:`jointbench.numerics.poses.rigid_poses` after one re-estimation of the
-body-fixed coordinates: ``s^2 = RSS / (3 (n - 2)(N - 1))`` pooled over the clusters; with
+poses, the converged poses of :func:`jointbench.estimators.segment_poses.trial_poses` that the
+pose-based estimators fit (a checked call fits them once, for the estimator and the verdict;
+a trial whose poses cannot be fitted is judged without them):
+``s^2 = RSS / (3 (n - 2)(N - 1))`` pooled over the clusters; with
 ``w_k`` the distal segment's rotation vector relative to the proximal one about their mean and
 ``S`` its noise covariance (``s^2 K^-1`` with ``K = sum_i (|u_i|^2 I - u_i u_i')`` the inertia of
 the centred body-fixed markers, Pennec & Thirion's pose covariance, plus the proximal
@@ -85,11 +87,12 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.results import with_fields
+from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.poses import POSE_TOL_MM, _horn_rotations, best_rotation
-from jointbench.numerics.small import inertia, inertia_into, symmetric_eigen_into
+from jointbench.numerics.poses import best_rotation
+from jointbench.numerics.small import inertia_into, symmetric_eigen_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
@@ -187,137 +190,58 @@ def _first_frame_spread(markers: np.ndarray) -> np.ndarray:
 
 
 @kernel
-def _centred(
-    frames: np.ndarray, centred: np.ndarray, squared: np.ndarray, first_mean: np.ndarray
-) -> None:
-    """Each point set of ``frames`` ``(N, n, 3)`` [mm] (a trial's frames, or one body) about
-    its centroid: writes ``centred`` ``(N, n, 3)`` [mm], the summed squared centred coordinates
-    ``squared`` ``(N,)`` [mm^2] and the first set's centroid ``first_mean`` ``(3,)`` [mm]. A
-    compiled kernel."""
-    n_frames, n_markers, _ = frames.shape
-    for f in range(n_frames):
-        frame_sq = 0.0
+def _scatter_and_largest(
+    markers: np.ndarray, body: np.ndarray, inertia_inv: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per trial of ``markers`` ``(T, N, n, 3)`` [mm] with body-fixed coordinates ``body``
+    ``(T, n, 3)`` [mm]: writes the inverse of the centred body's inertia
+    ``K = sum_m (|u_m|^2 I - u_m u_m')`` into ``inertia_inv`` ``(T, 3, 3)`` [mm^-2]; returns the
+    markers' scatter about each frame's centroid [mm^2], the largest eigenvalue of ``K^-1``
+    [mm^-2] and the largest absolute coordinate [mm], ``(T,)`` each. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    scatter = np.zeros(n_trials)
+    weakest = np.empty(n_trials)
+    largest = np.zeros(n_trials)
+    centred = np.empty((n_markers, 3))
+    tensor = np.empty((3, 3))
+    for t in range(n_trials):
+        for f in range(n_frames):
+            for i in range(3):
+                mean = 0.0
+                for m in range(n_markers):
+                    mean += markers[t, f, m, i]
+                    largest[t] = max(largest[t], abs(markers[t, f, m, i]))
+                mean /= n_markers
+                for m in range(n_markers):
+                    scatter[t] += (markers[t, f, m, i] - mean) ** 2
         for i in range(3):
             mean = 0.0
             for m in range(n_markers):
-                mean += frames[f, m, i]
+                mean += body[t, m, i]
             mean /= n_markers
-            if f == 0:
-                first_mean[i] = mean
             for m in range(n_markers):
-                centred[f, m, i] = frames[f, m, i] - mean
-                frame_sq += centred[f, m, i] ** 2
-        squared[f] = frame_sq
+                centred[m, i] = body[t, m, i] - mean
+        inertia_into(centred, tensor)
+        inertia_inv[t] = np.linalg.inv(tensor)
+        weakest[t] = np.linalg.eigvalsh(inertia_inv[t])[2]
+    return scatter, weakest, largest
 
 
-@kernel
-def _cross_covariances(
-    centred: np.ndarray,
-    squared: np.ndarray,
-    body: np.ndarray,
-    u: np.ndarray,
-    cross: np.ndarray,
-    bound: np.ndarray,
-) -> None:
-    """Per frame of one trial's centred markers ``centred`` ``(N, n, 3)`` [mm] with summed
-    squares ``squared`` ``(N,)`` [mm^2]: writes the centred body-fixed coordinates ``u``
-    ``(n, 3)`` [mm] of ``body`` ``(n, 3)``, the cross-covariances ``sum_m c_m u_m'`` into
-    ``cross`` ``(N, 3, 3)`` [mm^2] and half the summed squared lengths of the two centred
-    clusters into ``bound`` ``(N,)`` [mm^2] (an upper bound of the best rotation's
-    ``trace(R' H)``). A compiled kernel."""
-    n_frames, n_markers, _ = centred.shape
-    body_sq = np.empty(1)
-    _centred(body.reshape((1, n_markers, 3)), u.reshape((1, n_markers, 3)), body_sq, np.empty(3))
-    cross[:] = 0.0
-    for f in range(n_frames):
-        for m in range(n_markers):
-            for i in range(3):
-                for j in range(3):
-                    cross[f, i, j] += centred[f, m, i] * u[m, j]
-        bound[f] = 0.5 * (squared[f] + body_sq[0])
+#: The pose arrays :class:`_Clusters` stacks from each trial's :class:`SegmentPoses`.
+POSE_ARRAYS = ("rotation", "body")
 
 
-@kernel
-def _reestimated_body(
-    centred: np.ndarray,
-    rotation: np.ndarray,
-    first_mean: np.ndarray,
-    body: np.ndarray,
-    tol_mm: float,
-) -> bool:
-    """One step of paper C eq. 5 for one trial: the mean over frames of the back-transformed
-    centred markers ``centred`` ``(N, n, 3)`` [mm] under the poses ``rotation`` ``(N, 3, 3)``
-    fitted to ``body`` ``(n, 3)`` [mm], anchored at frame 0 (centroid ``first_mean`` ``(3,)``
-    [mm]). Overwrites ``body`` and returns True where that moves a coordinate by ``tol_mm`` or
-    more; else leaves ``body`` as it is (as :func:`jointbench.numerics.poses.rigid_poses` keeps
-    it) and returns False. A compiled kernel."""
-    n_frames, n_markers, _ = centred.shape
-    local = np.zeros((n_markers, 3))
-    for f in range(n_frames):
-        for i in range(3):
-            for m in range(n_markers):
-                for j in range(3):
-                    local[m, j] += rotation[f, i, j] * centred[f, m, i]
-    updated = np.empty((n_markers, 3))
-    change = 0.0
-    for m in range(n_markers):
-        for i in range(3):
-            value = first_mean[i]
-            for j in range(3):
-                value += rotation[0, i, j] * local[m, j] / n_frames
-            updated[m, i] = value
-            change = max(change, abs(value - body[m, i]))
-    if change < tol_mm:
-        return False
-    body[:] = updated
-    return True
-
-
-@kernel
-def _fit_numbers(
-    frames: np.ndarray,
-    centred: np.ndarray,
-    rotation: np.ndarray,
-    u: np.ndarray,
-    inertia_inv: np.ndarray,
-) -> tuple[float, float, float, float]:
-    """For one trial's ``frames`` ``(N, n, 3)`` [mm], centred ``centred`` ``(N, n, 3)``, with
-    poses ``rotation`` ``(N, 3, 3)`` of the centred body ``u`` ``(n, 3)`` [mm]: writes the
-    inverse of the body's inertia ``K = sum_m (|u_m|^2 I - u_m u_m')`` into ``inertia_inv``
-    ``(3, 3)`` [mm^-2]; returns the rigid fit's residual sum of squares and the markers'
-    scatter about each frame's centroid [mm^2], the largest eigenvalue of ``K^-1`` [mm^-2] and
-    the largest absolute coordinate [mm]. A compiled kernel."""
-    n_frames, n_markers, _ = frames.shape
-    scatter, largest, residual_ss = 0.0, 0.0, 0.0
-    for f in range(n_frames):
-        for i in range(3):
-            for m in range(n_markers):
-                scatter += centred[f, m, i] ** 2
-                largest = max(largest, abs(frames[f, m, i]))
-        for m in range(n_markers):
-            for i in range(3):
-                fitted = 0.0
-                for j in range(3):
-                    fitted += rotation[f, i, j] * u[m, j]
-                residual_ss += (centred[f, m, i] - fitted) ** 2
-    inertia_inv[:] = np.linalg.inv(inertia(u))
-    return residual_ss, scatter, np.linalg.eigvalsh(inertia_inv)[2], largest
-
-
-def _clusters(markers: np.ndarray) -> _Clusters:
-    """Rigid-body fits of ``(T, N, n, 3)`` clusters, all trials in one call: the poses of
-    :func:`jointbench.numerics.poses.rigid_poses` after one re-estimation of the body-fixed
-    coordinates, fitted by :func:`_cluster_fits`; a trial with a frame whose rotation Horn's
-    method leaves to the SVD (nearly collinear markers) is fitted by :func:`_trial_fits`."""
+def _clusters(markers: np.ndarray, poses: list[SegmentPoses]) -> _Clusters:
+    """The rigid-body fits of one segment's markers ``(T, N, n, 3)`` [mm] in ``T`` trials from
+    their converged poses ``poses`` (one :class:`SegmentPoses` per trial, fitted to those
+    markers)."""
     _, n_frames, n_markers, _ = markers.shape
-    markers = kernel_array(markers)
-    # One re-estimation of the body-fixed coordinates leaves them within ~s / sqrt(N) of the
-    # converged ones: plenty for a verdict, at a quarter of the cost of a converged fit.
-    settled, *numbers = _cluster_fits(markers, POSE_TOL_MM)
-    for t in np.flatnonzero(~settled):
-        for part, value in zip(numbers, _trial_fits(markers[t], POSE_TOL_MM), strict=True):
-            part[t] = value
-    rotation, residual_ss, scatter, inertia_inv, weakest, largest = numbers
+    rotation, body = (np.stack([getattr(pose, name) for pose in poses]) for name in POSE_ARRAYS)
+    residual_ss = np.array([pose.residual_ss for pose in poses])
+    inertia_inv = np.empty((len(poses), 3, 3))
+    scatter, weakest, largest = _scatter_and_largest(
+        kernel_array(markers), kernel_array(body), inertia_inv
+    )
     dof = 3 * (n_markers - 2) * (n_frames - 1)
     return _Clusters(
         rotation=rotation,
@@ -328,76 +252,6 @@ def _clusters(markers: np.ndarray) -> _Clusters:
         dof=dof,
         nonrigid_share=(residual_ss / dof) / (scatter / (3 * (n_markers - 1) * n_frames)),
     )
-
-
-def _trial_fits(frames: np.ndarray, tol_mm: float) -> tuple:
-    """:func:`_cluster_fits`'s numbers of one trial's ``frames`` ``(N, n, 3)`` [mm] by the same
-    steps, each rotation by :func:`jointbench.numerics.poses.best_rotation` (the SVD where
-    Horn's method cannot settle it): ``rotation`` ``(N, 3, 3)``, ``residual_ss``, ``scatter``,
-    ``inertia_inv`` ``(3, 3)``, ``weakest`` and ``largest``."""
-    n_frames, n_markers, _ = frames.shape
-    centred = np.empty_like(frames)
-    squared = np.empty(n_frames)
-    first_mean = np.empty(3)
-    _centred(frames, centred, squared, first_mean)
-    body = frames[0].copy()
-    u = np.empty((n_markers, 3))
-    cross = np.empty((n_frames, 3, 3))
-    bound = np.empty(n_frames)
-    _cross_covariances(centred, squared, body, u, cross, bound)
-    rotation = best_rotation(cross, bound=bound)
-    if _reestimated_body(centred, rotation, first_mean, body, tol_mm):
-        _cross_covariances(centred, squared, body, u, cross, bound)
-        rotation = best_rotation(cross, bound=bound)
-    inertia_inv = np.empty((3, 3))
-    residual_ss, scatter, weakest, largest = _fit_numbers(frames, centred, rotation, u, inertia_inv)
-    return rotation, residual_ss, scatter, inertia_inv, weakest, largest
-
-
-@kernel
-def _cluster_fits(markers: np.ndarray, tol_mm: float) -> tuple[np.ndarray, ...]:
-    """The rigid-body fits of ``markers`` ``(T, N, n, 3)`` [mm], trial by trial: poses fitted
-    to frame 0 (:func:`_cross_covariances`, Horn's rotations), the body-fixed coordinates
-    re-estimated from them (:func:`_reestimated_body`, ``tol_mm``) and, where they moved,
-    poses fitted again; then :func:`_fit_numbers` of the last poses. Returns per trial whether
-    Horn's method settled every rotation ``(T,)`` (where it did not, the trial's other numbers
-    are not computed: they need the SVD, see :func:`_trial_fits`), then the rotations
-    ``(T, N, 3, 3)``, the residual sums of squares and scatters ``(T,)`` [mm^2], the inverse
-    inertias ``(T, 3, 3)`` [mm^-2] and their largest eigenvalues ``(T,)``, and the largest
-    absolute coordinates ``(T,)`` [mm]. A compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    settled = np.ones(n_trials, dtype=np.bool_)
-    rotation = np.empty((n_trials, n_frames, 3, 3))
-    residual_ss = np.empty(n_trials)
-    scatter = np.empty(n_trials)
-    inertia_inv = np.empty((n_trials, 3, 3))
-    weakest = np.empty(n_trials)
-    largest = np.empty(n_trials)
-    centred = np.empty((n_frames, n_markers, 3))
-    squared = np.empty(n_frames)
-    first_mean = np.empty(3)
-    body = np.empty((n_markers, 3))
-    u = np.empty((n_markers, 3))
-    cross = np.empty((n_frames, 3, 3))
-    bound = np.empty(n_frames)
-    unsettled = np.empty(n_frames, dtype=np.bool_)
-    for t in range(n_trials):
-        _centred(markers[t], centred, squared, first_mean)
-        body[:] = markers[t, 0]
-        # The poses fitted to frame 0 stand where the re-estimated body did not move.
-        for stage in range(2):
-            _cross_covariances(centred, squared, body, u, cross, bound)
-            _horn_rotations(cross, bound, rotation[t], unsettled)
-            if unsettled.any():
-                settled[t] = False
-                break
-            if stage == 1 or not _reestimated_body(centred, rotation[t], first_mean, body, tol_mm):
-                break
-        if settled[t]:
-            residual_ss[t], scatter[t], weakest[t], largest[t] = _fit_numbers(
-                markers[t], centred, rotation[t], u, inertia_inv[t]
-            )
-    return settled, rotation, residual_ss, scatter, inertia_inv, weakest, largest
 
 
 #: The columns of :func:`_one_segment_numbers`, per trial: the rigid residual per coordinate
@@ -1036,17 +890,50 @@ def _rotation_test(
     return _Rotation(rms, p_any, second, p_second)
 
 
-def assess_many(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
+def assess_many(
+    kind: str, arrays: tuple[np.ndarray, ...], *, poses: list | None = None
+) -> list[Support]:
     """:func:`assess` for ``T`` trials at once: ``arrays`` as there with a leading trial axis,
-    ``(T, N, n, 3)`` each; one :class:`Support` per trial."""
+    ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
+    per trial."""
     n_trials = arrays[0].shape[0]
     if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
         return _one_segment(kind, arrays[0])
     if not all(_poses_defined(array) for array in arrays):
         if n_trials > 1:
-            return [assess(kind, tuple(array[t] for array in arrays)) for t in range(n_trials)]
+            return [
+                assess(
+                    kind,
+                    tuple(array[t] for array in arrays),
+                    poses=None if poses is None else poses[t],
+                )
+                for t in range(n_trials)
+            ]
         return [_without_poses(tuple(array[0] for array in arrays), "no 3 non-collinear markers")]
-    return _two_segments(kind, arrays)
+    if poses is None:
+        poses = _fitted_poses(kind, arrays)
+    verdicts: list = [None] * n_trials
+    fitted = []
+    for t, trial in enumerate(poses):
+        if isinstance(trial, Exception):
+            one = tuple(array[t] for array in arrays)
+            verdicts[t] = _without_poses(one, f"the pose fit failed ({trial})")
+        else:
+            fitted.append(t)
+    if fitted:
+        if len(fitted) < n_trials:
+            arrays = tuple(array[fitted] for array in arrays)
+        judged = _two_segments(kind, arrays, [poses[t] for t in fitted])
+        for t, verdict in zip(fitted, judged, strict=True):
+            verdicts[t] = verdict
+    return verdicts
+
+
+def _fitted_poses(kind: str, arrays: tuple[np.ndarray, ...]) -> list:
+    """Per trial of ``arrays`` ``(T, N, n, 3)`` each, the poses of every segment (a dict by
+    the names of :data:`jointbench.estimators.validation.ARRAY_NAMES`), or the ``ValueError``
+    of a trial whose poses cannot be fitted; all trials in one call."""
+    return trial_poses(dict(zip(ARRAY_NAMES[kind], arrays, strict=True)), min_frames=2)
 
 
 def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
@@ -1082,12 +969,16 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     return verdicts
 
 
-def _two_segments(kind: str, arrays: tuple[np.ndarray, ...]) -> list[Support]:
+def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) -> list[Support]:
     """The verdicts on two segments' markers ``(T, N, n >= 3, 3)`` each, in the world frame,
-    from their rigid-body poses (module docstring, "two segments")."""
+    from their rigid-body poses ``poses`` (per trial, a :class:`SegmentPoses` by segment name;
+    module docstring, "two segments")."""
     n_trials = arrays[0].shape[0]
     names = ARRAY_NAMES[kind]
-    clusters = [_clusters(array) for array in arrays]
+    clusters = [
+        _clusters(array, [trial[name] for trial in poses])
+        for name, array in zip(names, arrays, strict=True)
+    ]
     # functools.reduce, not sum or np.maximum.reduce: one cluster needs no arithmetic, and these
     # small array operations are most of the verdict's cost outside the compiled passes.
     dof = sum(cluster.dof for cluster in clusters)
@@ -1155,7 +1046,9 @@ def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
     centred = markers - markers.mean(axis=0)
     scatter = np.einsum("kpi,kpj->pij", centred, centred)
     rss_line = float(np.maximum(np.linalg.eigvalsh(scatter)[:, :2], 0.0).sum())
-    share = rss_sphere / float(np.sum(centred * centred))
+    total_ss = float(np.sum(centred * centred))
+    # Markers that do not move have no scatter for a fit to leave unexplained.
+    share = rss_sphere / total_ss if total_ss > 0.0 else 0.0
     sphere_dof = n_frames * n_markers - 3 - n_markers
     line_dof = 2 * n_markers * (n_frames - 2)
     rounding = (ROUNDING * float(np.abs(markers).max())) ** 2 * n_frames * n_markers
@@ -1235,15 +1128,21 @@ def _verdict(kind, names, rigidity, variance, tests) -> Support:
     )
 
 
-def assess(kind: str, arrays: tuple[np.ndarray, ...]) -> Support:
+def assess(
+    kind: str, arrays: tuple[np.ndarray, ...], *, poses: dict | Exception | None = None
+) -> Support:
     """Judge whether the checked marker ``arrays`` of an estimator ``kind`` support an answer.
 
     ``arrays`` is ``(markers,)`` for ``center``/``axis`` (reference frame) and
     ``(proximal, distal)`` for ``joint_center`` (world frame); see the module docstring.
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
-    are not assessed (``diagnostics["assessed"]`` is False).
+    are not assessed (``diagnostics["assessed"]`` is False). ``poses``: the two segments'
+    poses (:func:`jointbench.estimators.segment_poses.trial_poses`, one trial's entry) an
+    estimator already fitted to these arrays, or the error it met fitting them; ``None`` fits
+    them here. One segment needs none.
     """
-    return assess_many(kind, tuple(np.asarray(array)[None] for array in arrays))[0]
+    stacked = tuple(np.asarray(array)[None] for array in arrays)
+    return assess_many(kind, stacked, poses=None if poses is None else [poses])[0]
 
 
 def annotate(result, support: Support):

@@ -37,27 +37,19 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
 
 from jointbench.declared import NonNegative
-from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, isolated, one_trial
+from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
-from jointbench.estimators.validation import (
-    check_markers,
-    check_not_collinear,
-    check_same_frames,
-)
-from jointbench.numerics.poses import rigid_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
 from jointbench.numerics.rank import negligible
 
 __all__ = [
-    "POSE_MIN_FRAMES",
     "PoseStack",
-    "SegmentPoses",
     "batched",
     "batched_all",
     "eigen_solution",
@@ -65,137 +57,10 @@ __all__ = [
     "fit_sara_two_segment",
     "fit_score",
     "fit_score_center",
-    "pose_segments",
-    "stored_segment_poses",
     "trial_outcomes",
-    "trial_poses",
 ]
 
-#: Fewest frames a pose-based method accepts: every one of them needs the same, so their
-#: poses can be fitted once and shared.
-POSE_MIN_FRAMES = 3
-
-
-@dataclass(frozen=True)
-class SegmentPoses:
-    """One segment's pose in every frame (body frame = world at frame 0).
-
-    ``markers`` ``(N, n_markers, 3)`` [mm] the checked input, ``rotation`` ``(N, 3, 3)``,
-    ``translation`` ``(N, 3)`` [mm], ``body`` ``(n_markers, 3)`` [mm] the estimated body-fixed
-    marker coordinates, ``residual_ss`` the sum of squared marker residuals [mm^2] and ``dof``
-    its degrees of freedom, ``3 (n_markers - 2) (N - 1)``: ``3 n N`` coordinates less ``6 N``
-    pose parameters and ``3 n`` body coordinates, plus the 6 of the
-    gauge (the body frame is pinned to frame 0).
-    """
-
-    markers: np.ndarray
-    rotation: np.ndarray
-    translation: np.ndarray
-    body: np.ndarray
-    residual_ss: float
-    dof: int
-
-
-def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
-    check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
-    # R_f b_p for every frame and marker as one (3N, 3) @ (3, P) product.
-    turned = (rotation.reshape(-1, 3) @ body.T).reshape(len(rotation), 3, -1)
-    residual = markers - np.swapaxes(turned, 1, 2) - translation[:, None, :]
-    residual_ss = float(np.sum(residual * residual))
-    return stored_segment_poses(markers, rotation, translation, body, residual_ss)
-
-
-def stored_segment_poses(
-    markers: np.ndarray,
-    rotation: np.ndarray,
-    translation: np.ndarray,
-    body: np.ndarray,
-    residual_ss: float,
-) -> SegmentPoses:
-    """A segment's poses rebuilt from what a pose fit stored (see :class:`SegmentPoses` for the
-    shapes), with the markers they were fitted to."""
-    n_frames, n_markers, _ = markers.shape
-    return SegmentPoses(
-        markers=markers,
-        rotation=rotation,
-        translation=translation,
-        body=body,
-        residual_ss=float(residual_ss),
-        dof=3 * (n_markers - 2) * (n_frames - 1),
-    )
-
-
 Outcome = TypeVar("Outcome")
-
-
-def trial_poses(
-    segments: dict[str, np.ndarray], *, min_frames: int
-) -> list[dict[str, SegmentPoses] | ValueError]:
-    """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
-    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials.
-
-    Per trial, each segment's markers are checked (at least ``min_frames`` frames and 3
-    markers, not collinear at frame 0), two segments must share frames, and the body-fixed
-    coordinates the fit estimates must not be collinear; a trial that fails a check carries
-    its ``ValueError``. Every segment's poses are fitted for all trials in one call of
-    :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
-    ``batched`` form of every pose-based method.
-    """
-    names = list(segments)
-    arrays = {
-        name: markers if isinstance(markers, list) else np.asarray(markers)
-        for name, markers in segments.items()
-    }
-    n_trials = len(arrays[names[0]])
-    outcomes: list = [None] * n_trials
-    checked: dict[int, list[np.ndarray]] = {}
-    for trial in range(n_trials):
-        try:
-            checked[trial] = [
-                check_markers(arrays[name][trial], min_frames=min_frames, min_markers=3, name=name)
-                for name in names
-            ]
-            if len(names) == 2:
-                check_same_frames(*checked[trial])
-            for name, markers in zip(names, checked[trial], strict=True):
-                check_not_collinear(markers[:1], name=name)
-        except ValueError as error:
-            outcomes[trial] = error
-            checked.pop(trial, None)
-    good = list(checked)
-    stacked = [
-        np.stack([checked[trial][index] for trial in good]) if good else None
-        for index in range(len(names))
-    ]
-    fitted = [_fitted_poses(markers) if good else [] for markers in stacked]
-    for row, trial in enumerate(good):
-        try:
-            outcomes[trial] = {
-                name: _segment_poses(stacked[index][row], *_parts(fitted[index][row]), name=name)
-                for index, name in enumerate(names)
-            }
-        except ValueError as error:
-            outcomes[trial] = error
-    return outcomes
-
-
-def _fitted_poses(markers: np.ndarray) -> list:
-    """Per trial of ``markers`` ``(T, N, P, 3)`` its :func:`rigid_poses` parts, all trials in
-    one call; when that call fails numerically, each trial alone, a failing trial's error in
-    place of its parts."""
-    try:
-        return list(zip(*rigid_poses(markers), strict=True))
-    except NUMERICAL_FAILURES:
-        return each_alone(
-            lambda t: tuple(part[0] for part in rigid_poses(markers[t : t + 1])), len(markers)
-        )
-
-
-def _parts(fitted: tuple | Exception) -> tuple:
-    """A trial's pose parts, or its numerical failure raised."""
-    if isinstance(fitted, Exception):
-        raise fitted
-    return fitted
 
 
 def each_trial(
@@ -566,13 +431,6 @@ def batched_all(
 
     run.pose_segments = names
     return isolated(run)
-
-
-def pose_segments(many: Callable) -> tuple[str, ...] | None:
-    """The segments whose poses (from :func:`trial_poses`) the many-trial form ``many`` (see
-    :func:`jointbench.estimators.registry.many`) accepts as ``poses=``, or ``None`` when it is
-    not pose-based."""
-    return getattr(many, "pose_segments", None)
 
 
 def _ignoring_noise(finish: Callable[..., list]) -> Callable[..., list]:

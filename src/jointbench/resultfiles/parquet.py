@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from jointbench.estimators.twosegment import SegmentPoses, stored_segment_poses
+from jointbench.estimators.segment_poses import SegmentPoses, stored_segment_poses
 from jointbench.invocation import snakemake_command
 from jointbench.simulate import Trials
 
@@ -621,7 +621,7 @@ def write_poses_blocks(
     provenance: Mapping[str, object] | None = None,
 ) -> None:
     """Write the pose fits of a condition's trials (from
-    :func:`jointbench.estimators.twosegment.trial_poses`), given as consecutive ``blocks``, to
+    :func:`jointbench.estimators.segment_poses.trial_poses`), given as consecutive ``blocks``, to
     ``path``: one row per trial, one row group per block, so they are read back a block at a
     time (:func:`read_poses`). ``shapes`` are the dataset's, ``(n_trials, n_frames,
     n_markers, 3)`` per segment fitted. Values are stored exactly (float64)."""

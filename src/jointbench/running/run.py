@@ -22,7 +22,7 @@ from jointbench.configuration.config import estimator_names, parse_condition_id
 from jointbench.configuration.seeds import trial_rng
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
-from jointbench.estimators.twosegment import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_metadata,
@@ -122,7 +122,7 @@ def _warm_up(many, segments, trials: Trials, options, poses=None) -> float:
 
 def methods_sharing_poses(config: Mapping, study: str) -> list[str]:
     """The study's built-in estimators that share one pose fit per trial: its pose-based ones
-    (see :func:`jointbench.estimators.twosegment.pose_segments`) when there are two or more.
+    (see :func:`jointbench.estimators.segment_poses.pose_segments`) when there are two or more.
 
     Their estimate jobs read the poses that one job fitted (:func:`run_poses_files`) instead of
     each fitting them again; a single pose-based method fits its own.
@@ -258,7 +258,7 @@ def run_poses_files(
     provenance: Mapping[str, object] | None = None,
 ) -> None:
     """Fit the poses of every trial of each dataset file once (paper C §5, see
-    :func:`jointbench.estimators.twosegment.trial_poses`), writing the poses file of the same
+    :func:`jointbench.estimators.segment_poses.trial_poses`), writing the poses file of the same
     condition for the pose-based estimators to share."""
     spec = get_study(study)
     start = time.perf_counter()

@@ -1,0 +1,165 @@
+"""A checked call of a pose-based two-segment method fits the segments' poses once, for the fit
+and for the support verdict (:func:`jointbench.estimators.registry.get`, ``many``), and answers
+exactly as the method and the verdict each fitting their own: every field of every result,
+every error, one trial or many, with poses passed by the caller or not.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from rigs import two_segments
+
+from jointbench.estimators import registry, support, validation
+from jointbench.estimators.segment_poses import pose_segments, trial_poses
+
+KIND = "joint_center"
+POSE_BASED = [
+    name
+    for name in registry.methods(KIND)
+    if registry.has_own_many(KIND, name)
+    and pose_segments(registry.many(KIND, name, checked=False)) is not None
+]
+
+
+def _noisy(arrays, noise_mm: float, seed: int):
+    rng = np.random.default_rng(seed)
+    return tuple(a + rng.normal(scale=noise_mm, size=a.shape) for a in arrays)
+
+
+def _cases() -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Two-segment trials a user meets: good, noise-free, hinged, still, too short, collinear,
+    non-rigid, with a third segment-length of frames."""
+    ball = two_segments(60)
+    proximal, distal = ball
+    collinear = distal.copy()
+    collinear[:, 2] = 2.0 * distal[:, 1] - distal[:, 0]
+    return {
+        "ball-noisy": _noisy(ball, 0.5, 0),
+        "ball-noise-free": ball,
+        "hinge-noisy": _noisy(two_segments(60, relative="hinge"), 0.3, 1),
+        "still": _noisy(two_segments(60, relative="none"), 0.3, 2),
+        "two-frames": (proximal[:2], distal[:2]),
+        "collinear-distal": (proximal, collinear),
+        "non-rigid-distal": _noisy(
+            (proximal, distal + np.random.default_rng(3).normal(scale=40.0, size=distal.shape)),
+            0.3,
+            4,
+        ),
+    }
+
+
+CASES = _cases()
+
+
+def _separately(name: str, arrays, **options):
+    """The method and the verdict each fitting their own poses: the composition before the
+    poses were shared."""
+    fn = registry.get(KIND, name, checked=False)
+    clean = validation.check_input(KIND, arrays)
+    result = registry._self_checked(fn, fn(*clean, **options), clean, options)
+    return support.annotate(result, support.assess(KIND, clean))
+
+
+def _outcome(call):
+    try:
+        return call()
+    except (ValueError, TypeError) as error:
+        return error
+
+
+def _assert_same(found, expected) -> None:
+    if isinstance(expected, Exception):
+        assert type(found) is type(expected) and str(found) == str(expected), (found, expected)
+        return
+    assert not isinstance(found, Exception), found
+    for field in dataclasses.fields(expected):
+        np.testing.assert_equal(getattr(found, field.name), getattr(expected, field.name))
+
+
+def test_the_pose_based_methods_are_found():
+    assert {"SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0"} <= set(POSE_BASED)
+
+
+@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_one_checked_trial_answers_as_fitting_twice(name, case):
+    arrays = CASES[case]
+    found = _outcome(lambda: registry.get(KIND, name)(*arrays))
+    _assert_same(found, _outcome(lambda: _separately(name, arrays)))
+
+
+@pytest.mark.parametrize("name", ["gauss-markov", "gauss-markov-frame0"])
+def test_options_reach_the_fit_as_before(name):
+    arrays = CASES["ball-noisy"]
+    options = {"noise_mm": 0.5, "max_iterations": 3, "tol_mm": 1e-9}
+    found = registry.get(KIND, name)(*arrays, **options)
+    _assert_same(found, _separately(name, arrays, **options))
+
+
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_an_option_the_method_does_not_take_is_a_type_error(name):
+    with pytest.raises(TypeError, match="bogus"):
+        registry.get(KIND, name)(*CASES["ball-noisy"], bogus=1)
+
+
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_the_verdict_reads_the_fits_poses(name, monkeypatch):
+    """The verdict of a checked call does not fit poses of its own."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the verdict fitted its own poses")
+
+    monkeypatch.setattr(support, "_fitted_poses", refuse)
+    result = registry.get(KIND, name)(*CASES["ball-noisy"])
+    assert result.diagnostics["support_assessed"] is True
+    results = registry.many(KIND, name)(*(np.stack([a, a]) for a in CASES["hinge-noisy"]))
+    assert all(r.diagnostics["support_assessed"] is True for r in results)
+
+
+def _batch(names: list[str]) -> tuple[np.ndarray, ...]:
+    return tuple(np.stack(arrays) for arrays in zip(*(CASES[n] for n in names), strict=True))
+
+
+BATCH = ["ball-noisy", "ball-noise-free", "hinge-noisy", "still", "collinear-distal"]
+
+
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_many_checked_trials_answer_as_each_fitting_twice(name):
+    outcomes = registry.many(KIND, name)(*_batch(BATCH))
+    for case, found in zip(BATCH, outcomes, strict=True):
+        _assert_same(found, _outcome(lambda case=case: _separately(name, CASES[case])))
+
+
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_poses_a_caller_passes_are_used_for_their_own_markers_only(name):
+    """Poses of other markers (a caller's mistake) are not read by the verdict; poses of the
+    same markers give the answer the call gives without them."""
+    segments = _batch(BATCH)
+    names = pose_segments(registry.many(KIND, name, checked=False))
+    own = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+    without = registry.many(KIND, name)(*segments)
+    with_own = registry.many(KIND, name)(*segments, poses=own)
+    for found, expected in zip(with_own, without, strict=True):
+        _assert_same(found, expected)
+    others = own[::-1]  # each trial given another trial's poses
+    mixed = registry.many(KIND, name)(*segments, poses=others)
+    for case, found in zip(BATCH, mixed, strict=True):
+        if isinstance(found, Exception):
+            continue
+        alone = support.assess(KIND, CASES[case])
+        assert found.diagnostics["support_assessed"] == alone.diagnostics["assessed"]
+        for key, value in alone.diagnostics.items():
+            assert found.diagnostics[f"support_{key}"] == pytest.approx(value, rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("name", POSE_BASED)
+@pytest.mark.parametrize("checked", [True, False])
+def test_poses_for_another_number_of_trials_are_refused(name, checked):
+    segments = _batch(BATCH)
+    names = pose_segments(registry.many(KIND, name, checked=False))
+    poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+    with pytest.raises(ValueError, match="poses: 4 entries for 5 trials"):
+        registry.many(KIND, name, checked=checked)(*segments, poses=poses[:4])
