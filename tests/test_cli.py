@@ -298,3 +298,131 @@ def test_a_configs_missing_extension_is_named(tmp_path):
     (workdir / "toy_study.py").unlink()
     done = _cli(workdir, "snapshot", "--configfile", "toy.yaml")
     assert done.returncode == 2 and "extensions: 'toy_study.py' is not a file" in done.stderr
+
+
+def _help(capsys, command: str) -> str:
+    with pytest.raises(SystemExit) as exit_:
+        main([command, "--help"])
+    assert exit_.value.code == 0
+    return " ".join(capsys.readouterr().out.split())
+
+
+def test_fit_snapshot_and_readme_take_the_same_configfile_option(capsys):
+    texts = {command: _help(capsys, command) for command in ("fit", "snapshot", "readme")}
+    option = "--configfile CONFIGFILE a config over config/config.yaml"
+    for command, text in texts.items():
+        assert option in text, command
+    described = {text[text.index(option) :].split(" --", 1)[0] for text in texts.values()}
+    assert len(described) == 1
+
+
+def test_fit_runs_an_extension_estimator_of_the_config(tmp_path):
+    workdir = _toy_run(tmp_path)
+    markers, _ = sphere_markers()
+    long_table(markers).to_csv(workdir / "markers.csv", index=False)
+    arguments = ("fit", "markers.csv", "--configfile", "toy.yaml", "--format", "csv")
+    done = _cli(workdir, *arguments, "--method", "toy-centroid")
+    assert done.returncode == 0, done.stderr
+    row = csv_rows(done.stdout).iloc[0]
+    assert row["method"] == "toy-centroid" and row["frames"] == 60
+    mean = markers.reshape(-1, 3).mean(axis=0)
+    np.testing.assert_allclose(row[["x_mm", "y_mm", "z_mm"]].to_numpy(float), mean, atol=1e-9)
+    # `all` is every method of the kind the run knows: the built-ins and the extension's.
+    every = _cli(workdir, *arguments, "--method", "all")
+    assert every.returncode == 0, every.stderr
+    known = [*jointbench.methods("center"), "toy-centroid"]
+    assert csv_rows(every.stdout)["method"].tolist() == known
+    # Without the config the name is unknown.
+    bare = _cli(workdir, "fit", "markers.csv", "--method", "toy-centroid")
+    assert bare.returncode == 2 and "unknown center method 'toy-centroid'" in bare.stderr
+
+
+def test_an_unknown_method_is_named_before_the_file_is_read(tmp_path, capsys):
+    absent = tmp_path / "absent.csv"
+    code, _, err = run(capsys, "fit", str(absent), "--method", "NMM")
+    assert code == 2 and "no such file" not in err
+    known = ", ".join(jointbench.methods("center"))
+    assert f"--method: unknown center method 'NMM'; known: {known}" in err
+    code, _, err = run(capsys, "fit", str(absent), "--kind", "axis", "--method", "NM")
+    assert code == 2 and f"known: {', '.join(jointbench.methods('axis'))}" in err
+
+
+def test_an_unknown_method_lists_the_configs_extension_estimators(tmp_path):
+    workdir = _toy_run(tmp_path)
+    done = _cli(workdir, "fit", "absent.csv", "--configfile", "toy.yaml", "--method", "toy")
+    assert done.returncode == 2 and "no such file" not in done.stderr
+    known = ", ".join([*jointbench.methods("center"), "toy-centroid"])
+    assert f"unknown center method 'toy'; known: {known}" in done.stderr
+
+
+def _overlay(workdir, extension_source: str, **config) -> str:
+    """An overlay config listing one extension, ``extension.py`` holding
+    ``extension_source``, beside the keys of ``config``; returns the overlay's name."""
+    (workdir / "extension.py").write_text(extension_source)
+    (workdir / "overlay.yaml").write_text(json.dumps({"extensions": ["extension.py"], **config}))
+    return "overlay.yaml"
+
+
+@pytest.mark.parametrize("command", ["fit", "snapshot"])
+def test_a_config_typo_is_named_before_any_extension_is_imported(
+    tmp_path, monkeypatch, capsys, command
+):
+    workdir = _toy_run(tmp_path)
+    monkeypatch.chdir(workdir)
+    overlay = _overlay(
+        workdir,
+        'raise RuntimeError("imported")\n',
+        studies={"cmc": {"trails": 3}},
+    )
+    arguments = ["markers.csv"] if command == "fit" else []
+    code, _, err = run(capsys, command, *arguments, "--configfile", overlay)
+    assert code == 2
+    assert "config error at studies/cmc: Additional properties" in err
+    assert "'trails' was unexpected" in err
+
+
+BROKEN_EXTENSIONS = {
+    "import": (
+        "import numpy as np\n\nimport jointbench_no_such_module\n",
+        "line 3: ModuleNotFoundError: No module named 'jointbench_no_such_module'",
+    ),
+    "estimator": (
+        "from jointbench.estimators import register\n\n\n"
+        '@register("center", "NM")\ndef fit(markers):\n    return None\n',
+        "line 4: ValueError: center estimator 'NM' is already registered",
+    ),
+    "study": (
+        "import dataclasses\n\nfrom jointbench.configuration.studies import get_study\n\n"
+        'STUDY = dataclasses.replace(get_study("cmc"))\n',
+        "cannot be registered: ValueError: a different study named 'cmc' is already registered",
+    ),
+}
+
+
+@pytest.mark.parametrize("broken", BROKEN_EXTENSIONS)
+def test_an_extension_that_fails_to_import_or_register_is_named(
+    tmp_path, monkeypatch, capsys, broken
+):
+    workdir = _toy_run(tmp_path)
+    monkeypatch.chdir(workdir)
+    source, reason = BROKEN_EXTENSIONS[broken]
+    overlay = _overlay(workdir, source)
+    # Twice: a module that failed is not kept as if it had been loaded.
+    for _ in range(2):
+        code, _, err = run(capsys, "fit", "markers.csv", "--configfile", overlay)
+        assert code == 2
+        assert f"config error at extensions: 'extension.py' ({workdir / 'extension.py'})" in err
+        assert reason in err
+
+
+def test_fit_reads_a_configfile_over_the_run_folders_config(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    markers, _ = sphere_markers()
+    long_table(markers).to_csv(tmp_path / "markers.csv", index=False)
+    (tmp_path / "mine.yaml").write_text("extensions: []\n")
+    code, _, err = run(capsys, "fit", "markers.csv", "--configfile", "mine.yaml")
+    assert code == 2
+    assert f"config/config.yaml: no such file in {tmp_path}" in err
+    # Without --configfile no config is read: a recording is fitted in any folder.
+    code, out, _ = run(capsys, "fit", "markers.csv", "--format", "csv")
+    assert code == 0 and csv_rows(out).iloc[0]["method"] == "NM"

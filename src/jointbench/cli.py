@@ -55,7 +55,8 @@ class _Formatter(argparse.RawDescriptionHelpFormatter):
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
-        if action.default not in (None, argparse.SUPPRESS) and "%(default)" not in text:
+        # An empty default (a repeatable option's) says nothing worth a line.
+        if action.default not in (None, argparse.SUPPRESS, []) and "%(default)" not in text:
             text += " (default: %(default)s)"
         return text
 
@@ -81,7 +82,15 @@ def _method_list() -> str:
 
 def _open_run(args: argparse.Namespace) -> None:
     """The run's config, as the workflow opens it: the repository's config and each
-    ``--configfile`` over it, extensions loaded (relative to the working directory)."""
+    ``--configfile`` over it, checked against the schema, then extensions loaded (relative to
+    the working directory) and the rest checked."""
+    if not DEFAULT_CONFIG.is_file():
+        # Said in full: `fit` is often run outside the run's folder, where this is not obvious.
+        raise ValueError(
+            f"{DEFAULT_CONFIG}: no such file in {Path.cwd()}; the run's config, which each "
+            "--configfile updates as snakemake's does, is read from the folder the run is in: "
+            "run jointbench there"
+        )
     open_config(read_configs([DEFAULT_CONFIG, *args.configfile]))
 
 
@@ -255,7 +264,24 @@ def _fit_all(prepared, names: list[str], args: argparse.Namespace) -> list:
     return fits
 
 
+def _method_names(kind: str, method: str) -> list[str]:
+    """The methods ``--method`` names for ``kind``: every registered one for ``all`` (the
+    built-ins and those of the extensions loaded); an unknown name is a ``ValueError`` listing
+    the known ones."""
+    if method == "all":
+        return list(jointbench.methods(kind))
+    try:
+        get(kind, method)
+    except ValueError as error:
+        raise ValueError(f"--method: {error}") from None
+    return [method]
+
+
 def _fit(args: argparse.Namespace) -> int:
+    # The config and the method name first: a mistake in either stops before the file is read.
+    if args.configfile:
+        _open_run(args)
+    names = _method_names(args.kind, args.method)
     recording = read(args.file)
     moving = _labels(args.moving)
     reference = _labels(args.reference)
@@ -273,8 +299,7 @@ def _fit(args: argparse.Namespace) -> int:
             frames=args.frames,
             artefacts=args.artefacts,
         )
-        names = jointbench.methods(args.kind) if args.method == "all" else [args.method]
-        fits = _fit_all(prepared, list(names), args)
+        fits = _fit_all(prepared, names, args)
     for warning in caught:
         print(f"jointbench: warning: {warning.message}", file=sys.stderr)
     done = [fitted for fitted in fits if not isinstance(fitted, _Failed)]
@@ -322,17 +347,22 @@ def _write_world(path: Path, fits: list) -> None:
     print(f"wrote the world trajectory per frame to {path}", file=sys.stderr)
 
 
-def _run_options(parser: argparse.ArgumentParser) -> None:
-    """The options of a command reading a run: its results folder and its configs."""
-    parser.add_argument("--results", type=Path, default=Path("results"))
+def _config_option(parser: argparse.ArgumentParser) -> None:
+    """``--configfile``: the configs of a run, opened by :func:`_open_run`."""
     parser.add_argument(
         "--configfile",
         type=Path,
         action="append",
         default=[],
-        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (its extensions "
-        "are loaded); may be repeated",
+        help=f"a config over {DEFAULT_CONFIG}, as snakemake's --configfile (checked, then its "
+        "extensions are loaded); may be repeated",
     )
+
+
+def _run_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a command reading a run: its results folder and its configs."""
+    parser.add_argument("--results", type=Path, default=Path("results"))
+    _config_option(parser)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -362,6 +392,8 @@ def _parser() -> argparse.ArgumentParser:
             "mm). The answer is in the technical frame of the --reference markers (origin at "
             "their centroid, x from the first towards the second, z normal to the first three)."
             " Without --reference, the markers are taken as already in the reference frame."
+            " With --configfile, the estimators of the run's extensions are fitted too, by name"
+            " or with 'all' (the list below is of the built-in ones)."
         ),
         epilog=_method_list(),
         formatter_class=_Formatter,
@@ -378,10 +410,12 @@ def _parser() -> argparse.ArgumentParser:
     fit.add_argument(
         "--method",
         default=None,
-        help="a method name (see below) or 'all' (a method that cannot fit the data gets a "
-        "failed status; exit code 2 only if all fail); default per kind",
+        help="a method name (see below; with --configfile, its extensions' too) or 'all' (a "
+        "method that cannot fit the data gets a failed status; exit code 2 only if all fail); "
+        "default per kind",
     )
     fit.add_argument("--format", choices=FORMATS, default="table")
+    _config_option(fit)
     fit.add_argument(
         "--artefacts",
         choices=ARTEFACT_POLICIES,

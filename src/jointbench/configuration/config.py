@@ -69,6 +69,11 @@ def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCH
     """Raise ``ValueError`` when ``config`` does not match the JSON schema, or names a study
     that is not registered."""
     validate_against(config, schema_path, "config")
+    _check_studies_registered(config)
+
+
+def _check_studies_registered(config: Mapping) -> None:
+    """Raise ``ValueError`` naming the studies of ``config`` that no module registered."""
     unknown = sorted(set(config["studies"]) - set(registered_studies()))
     if unknown:
         raise ValueError(
@@ -84,12 +89,16 @@ def load_config(path: str | Path) -> dict:
 
 
 def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
-    """What a run starts from, in the workflow and on the command line alike: ``config`` with
-    its extensions loaded (relative to ``base``) and registered, then checked against its
-    schema and the registries (:func:`validate_config`, :func:`check_config`; ``ValueError``
-    naming the key). Returns ``config``."""
+    """What a run starts from, in the workflow and on the command line alike: ``config``
+    checked against its schema (:func:`validate_against`), its extensions loaded (relative to
+    ``base``) and registered, then checked against the registries (the studies it names, and
+    :func:`check_config`); ``ValueError`` naming the key, or the extension's file. Returns
+    ``config``."""
+    # The schema first: a misspelt key is named as such, not hidden behind an extension's import
+    # error, and no extension is imported from a config that is not the one meant.
+    validate_against(config, SCHEMA_PATH, "config")
     load_extensions(config, base)
-    validate_config(config)
+    _check_studies_registered(config)
     check_config(config)
     return config
 

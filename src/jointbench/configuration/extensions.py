@@ -1,6 +1,7 @@
-"""Extensions: a study or paper outside the package, a module listed under ``extensions`` in the
-config, imported and its ``Study`` and ``Paper`` values registered. The Snakemake process and the
-command line load them when they open a run's config
+"""Extensions: a study, paper or estimator outside the package, a module listed under
+``extensions`` in the config, imported and its ``Study`` and ``Paper`` values registered (an
+estimator registers itself on import, ``@register``). The Snakemake process and the command line
+load them when they open a run's config
 (:func:`jointbench.configuration.config.open_config`), every job when it starts
 (:func:`jointbench.jobs.job`).
 """
@@ -9,8 +10,10 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+import traceback
 from collections.abc import Mapping
 from pathlib import Path
+from types import ModuleType
 
 from jointbench.configuration.studies import register_study
 from jointbench.simulate import Study
@@ -33,17 +36,48 @@ def _register(value: object) -> None:
 
 def load_extensions(config: Mapping, base: str | Path = ".") -> None:
     """Import every file under ``extensions`` and register the ``Study`` and ``Paper`` values
-    it defines. Importing the same file again is a no-op."""
+    it defines. Importing the same file again is a no-op. A file that is missing, fails to
+    import or defines a value that cannot be registered raises ``ValueError`` naming the file
+    and the key that lists it; a file that failed is not kept as loaded."""
     for entry in config.get("extensions", []):
         path = (Path(base) / entry).resolve()
+        where = f"config error at extensions: {entry!r} ({path})"
         if not path.is_file():
             raise ValueError(f"config error at extensions: {entry!r} is not a file ({path})")
         name = f"jointbench_extension_{path.stem}"
         module = sys.modules.get(name)
         if module is None or Path(module.__file__).resolve() != path:
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            spec.loader.exec_module(module)
-        for value in vars(module).values():
-            _register(value)
+            module = _imported(name, path, where)
+        try:
+            for value in vars(module).values():
+                _register(value)
+        except ValueError as error:
+            raise ValueError(f"{where}: cannot be registered: {_reason(error, path)}") from error
+
+
+def _imported(name: str, path: Path, where: str) -> ModuleType:
+    """The module ``name`` executed from ``path``, in ``sys.modules`` only if it ran to its end;
+    whatever it raises, as ``ValueError`` starting with ``where``."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    # Registered first: dataclasses look their module up while a class is being made.
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as error:
+        # Any exception: an extension is a user's code, and what it raises is named as theirs.
+        del sys.modules[name]
+        raise ValueError(f"{where}: cannot be imported: {_reason(error, path)}") from error
+    return module
+
+
+def _reason(error: BaseException, path: Path) -> str:
+    """``error``'s type and message, after the last line of ``path`` it passed through (a
+    syntax error names its own line)."""
+    lines = [
+        line
+        for frame, line in traceback.walk_tb(error.__traceback__)
+        if Path(frame.f_code.co_filename) == path
+    ]
+    where = f"line {lines[-1]}: " if lines and not isinstance(error, SyntaxError) else ""
+    return f"{where}{type(error).__name__}: {error}"
