@@ -181,7 +181,11 @@ _CENTER_MISTAKES = {
     ),
     "non-numeric value": (
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,two,3,true,0,0,ok"]),
-        "column 'center_y' must be numeric",
+        "column 'center_y' must be numeric, got large_string; the row of trial 1 holds 'two'",
+    ),
+    "trial a word": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "one,1,2,3,true,0,0,ok"]),
+        "column 'trial' must be integer, got large_string; the row holds 'one'",
     ),
     "bad converged": (
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,maybe,0,0,ok"]),

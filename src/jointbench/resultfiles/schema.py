@@ -147,6 +147,7 @@ def check_estimates(
         if not accepts(columns[column].type):
             raise ValueError(
                 f"{source}: column {column!r} must be {description}, got {columns[column].type}"
+                + _first_word(columns[column], None if column == "trial" else columns["trial"])
             )
     if columns["trial"].null_count:
         raise ValueError(f"{source}: column 'trial' has missing values")
@@ -157,6 +158,22 @@ def check_estimates(
             raise ValueError(
                 f"{source}: column 'method' must be {method!r} in every row, got {listed}"
             )
+
+
+def _first_word(column: pa.Array | pa.ChunkedArray, trials) -> str:
+    """For a text column that should hold numbers, where it first holds a word that is none
+    (``"two"``, ``"1,5"``): what a CSV's author looks for. Empty for any other column."""
+    if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
+        return ""
+    for row, value in enumerate(column.to_pylist()):
+        try:
+            float(value)
+        except (TypeError, ValueError):
+            if value is None:
+                continue
+            trial = "" if trials is None else f" of trial {trials[row].as_py()!r}"
+            return f"; the row{trial} holds {value!r}"
+    return ""
 
 
 def _arrow_column(table, column: str, source: str) -> pa.Array | pa.ChunkedArray:
