@@ -4,6 +4,7 @@ others, and the README's template as the file the workflow ships."""
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 
@@ -19,8 +20,9 @@ from jointbench.resultfiles.interchange import (
     read_estimates_csv,
     write_dataset_csv,
 )
-from jointbench.resultfiles.parquet import write_dataset
+from jointbench.resultfiles.parquet import read_source, write_dataset, write_table
 from jointbench.resultfiles.schema import check_estimates
+from jointbench.running.collected import collect, summarise_estimates
 from jointbench.simulate import Trials
 
 
@@ -136,6 +138,228 @@ def test_an_estimates_csv_without_rows_is_refused(tmp_path):
     assert str(source) in str(error.value)
 
 
+# ------------------------------- a contestant's mistakes, named in the CSV the contestant wrote
+
+_ROW_HEADER = "trial,center_x,center_y,center_z,converged,iterations,seconds,status"
+_GOOD_ROWS = ("0,1.5,2,3,true,3,1e-5,ok", "1,1,2.5,3,true,4,1e-5,ok")
+# Each deliberate mistake: the CSV's text (header and rows) and what the refusal must name.
+_CENTER_MISTAKES = {
+    "cut in a row": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2"]),
+        "cannot be read as CSV",
+    ),
+    "cut after a row": ("\n".join([_ROW_HEADER, _GOOD_ROWS[0]]), "missing trials: 1"),
+    "missing column": (
+        "trial,center_x,center_y,converged,iterations,seconds,status\n"
+        "0,1,2,true,0,0,ok\n1,1,2,true,0,0,ok\n",
+        "missing column 'center_z'",
+    ),
+    "missing status": (
+        "trial,center_x,center_y,center_z,converged,iterations,seconds\n0,1,2,3,1,0,0\n",
+        "missing column 'status'",
+    ),
+    "extra trial": (
+        "\n".join([_ROW_HEADER, *_GOOD_ROWS, "2,1,2,3,true,0,0,ok"]),
+        "trials not in the dataset: 2",
+    ),
+    "missing trial": ("\n".join([_ROW_HEADER, _GOOD_ROWS[1]]), "missing trials: 0"),
+    "duplicate trial": (
+        "\n".join([_ROW_HEADER, *_GOOD_ROWS, _GOOD_ROWS[1]]),
+        "trials listed more than once: 1",
+    ),
+    "trial not a whole number": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1.5,1,2,3,true,0,0,ok"]),
+        "column 'trial' must be integer",
+    ),
+    "wrong condition value": (
+        "\n".join([f"{_ROW_HEADER},rom_deg", *(f"{row},999" for row in _GOOD_ROWS)]),
+        "column 'rom_deg' must be the dataset's 5 in every row, got 999",
+    ),
+    "wrong method": (
+        "\n".join([f"{_ROW_HEADER},method", *(f"{row},LS" for row in _GOOD_ROWS)]),
+        "column 'method' must be 'LS-C' in every row, got ['LS']",
+    ),
+    "non-numeric value": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,two,3,true,0,0,ok"]),
+        "column 'center_y' must be numeric, got large_string; the row of trial 1 holds 'two'",
+    ),
+    "trial a word": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "one,1,2,3,true,0,0,ok"]),
+        "column 'trial' must be integer, got large_string; the row holds 'one'",
+    ),
+    "bad converged": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,maybe,0,0,ok"]),
+        "'converged' must hold true/false or 1/0",
+    ),
+    "claims ok with a NaN estimate": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,2,3,true,0,0,ok"]),
+        "method 'LS-C', trial 1: converged=True, status 'ok', but the estimate is not finite",
+    ),
+    "negative error": (
+        "\n".join([f"{_ROW_HEADER},error_mm", f"{_GOOD_ROWS[0]},-1", f"{_GOOD_ROWS[1]},0.5"]),
+        "trial 0: column 'error_mm' is -1.0",
+    ),
+    "negative seconds": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,0,-0.5,ok"]),
+        "trial 1: column 'seconds' is -0.5, below 0",
+    ),
+}
+
+
+def _hip_dataset(tmp_path):
+    """A two-segment condition of the ``hip`` study, two trials, the true centre (1, 2, 3)."""
+    rng = np.random.default_rng(11)
+    trials = Trials(
+        segments={name: rng.normal(size=(2, 5, 3, 3)) * 10 for name in ("proximal", "distal")},
+        truth={"center": [1.0, 2.0, 3.0]},
+    )
+    path = tmp_path / "n_frames-5.parquet"
+    write_dataset(path, trials, study="hip", condition={"n_frames": 5})
+    return path
+
+
+_COV_HEADER = f"{_ROW_HEADER},cov_xx,cov_xy,cov_xz,cov_yy,cov_yz,cov_zz"
+_GOOD_COV = ("4,1,0,3,0.5,2", "2,0,0,2,0,2")
+_HIP_MISTAKES = {
+    "asymmetric covariance": (
+        "\n".join(
+            [
+                f"{_COV_HEADER},cov_yx",
+                f"{_GOOD_ROWS[0]},{_GOOD_COV[0]},1",
+                f"{_GOOD_ROWS[1]},{_GOOD_COV[1]},0.25",
+            ]
+        ),
+        "method 'GM-C', trial 1: column 'cov_yx' is 0.25, but 'cov_xy', which it mirrors, is 0.0",
+    ),
+    "covariance not positive semi-definite": (
+        "\n".join([_COV_HEADER, f"{_GOOD_ROWS[0]},{_GOOD_COV[0]}", f"{_GOOD_ROWS[1]},1,2,0,1,0,1"]),
+        "method 'GM-C', trial 1: the predicted covariance in columns cov_xx, cov_xy, cov_xz, "
+        "cov_yy, cov_yz, cov_zz is not positive semi-definite: its eigenvalues are -1, 1, 3",
+    ),
+    "NaN covariance entry in an ok row": (
+        "\n".join(
+            [_COV_HEADER, f"{_GOOD_ROWS[0]},4,1,0,3,nan,2", f"{_GOOD_ROWS[1]},{_GOOD_COV[1]}"]
+        ),
+        "method 'GM-C', trial 0: converged=True, status 'ok', but column 'cov_yz' is nan",
+    ),
+    "infinite covariance in an ok row": (
+        "\n".join(
+            [_COV_HEADER, f"{_GOOD_ROWS[0]},{_GOOD_COV[0]}", f"{_GOOD_ROWS[1]},inf,0,0,2,0,2"]
+        ),
+        "method 'GM-C', trial 1: converged=True, status 'ok', but column 'cov_xx' is inf",
+    ),
+    "covariance column missing": (
+        "\n".join(
+            [
+                _COV_HEADER.removesuffix(",cov_zz"),
+                f"{_GOOD_ROWS[0]},4,1,0,3,0.5",
+                f"{_GOOD_ROWS[1]},2,0,0,2,0",
+            ]
+        ),
+        "column 'cov_zz' is missing, but 'cov_xx' is given",
+    ),
+    "proximal covariance not positive semi-definite": (
+        "\n".join(
+            [
+                f"{_ROW_HEADER},proximal_center_x,proximal_center_y,proximal_center_z,"
+                + ",".join(f"proximal_cov_{e}" for e in ("xx", "xy", "xz", "yy", "yz", "zz")),
+                f"{_GOOD_ROWS[0]},1,2,3,{_GOOD_COV[0]}",
+                f"{_GOOD_ROWS[1]},1,2,3,-1,0,0,2,0,2",
+            ]
+        ),
+        "method 'GM-C', trial 1: the predicted covariance in columns proximal_cov_xx",
+    ),
+}
+
+
+def _contestant(tmp_path, study: str, method: str, text: str):
+    """The estimates CSV ``text`` of ``method`` for the one condition of a ``study`` (``cmc``
+    or ``hip``) written where the workflow asks for it, converted as the workflow converts it,
+    then collected; the CSV's path, the dataset's and the converted file's."""
+    dataset = _dataset(tmp_path)[0] if study == "cmc" else _hip_dataset(tmp_path)
+    csv = tmp_path / "estimates" / study / method / f"{dataset.stem}.csv"
+    csv.parent.mkdir(parents=True)
+    csv.write_text(text)
+    converted = csv.with_suffix(".parquet")
+    read_estimates_csv(csv, dataset, converted)
+    collect(study, [converted], str(tmp_path / "collected.parquet"), [dataset])
+    return csv, dataset, converted
+
+
+@pytest.mark.parametrize(
+    ("study", "method", "mistake"),
+    [
+        *(("cmc", "LS-C", name) for name in _CENTER_MISTAKES),
+        *(("hip", "GM-C", name) for name in _HIP_MISTAKES),
+    ],
+    ids=[*_CENTER_MISTAKES, *_HIP_MISTAKES],
+)
+def test_a_contestants_mistake_is_named_in_the_csv_it_wrote(tmp_path, study, method, mistake):
+    """Converted and collected as the workflow does it: whichever step refuses the file, the
+    message names the CSV the program wrote, which its author can correct, not the
+    intermediate estimates file made from it, and what is wrong there."""
+    text, message = {**_CENTER_MISTAKES, **_HIP_MISTAKES}[mistake]
+    csv = tmp_path / "estimates" / study / method
+    with pytest.raises(ValueError, match=re.escape(message)) as error:
+        _contestant(tmp_path, study, method, text)
+    assert str(error.value).startswith(f"{csv}{os.sep}"), str(error.value)
+    assert ".csv" in str(error.value).split(":")[0] and ".parquet:" not in str(error.value)
+    assert not (tmp_path / "collected.parquet").exists()
+
+
+def test_a_good_contestant_is_collected_with_its_predicted_covariance(tmp_path):
+    """Mirror entries equal to theirs, a failed trial carrying NaN: collected and scored."""
+    text = "\n".join(
+        [
+            f"{_COV_HEADER},cov_yx,cov_zx,cov_zy",
+            f"{_GOOD_ROWS[0]},{_GOOD_COV[0]},1,0,0.5",
+            "1,nan,nan,nan,false,9,1e-5,error: singular,nan,nan,nan,nan,nan,nan,nan,nan,nan",
+        ]
+    )
+    csv, _, converted = _contestant(tmp_path, "hip", "GM-C", text)
+    assert read_source(converted) == str(csv)
+    collected = pd.read_parquet(tmp_path / "collected.parquet")
+    assert collected["converged"].tolist() == [True, False]
+    assert collected.loc[0, "sqrt_trace_cov_mm"] == pytest.approx(3.0)
+    assert np.isnan(collected.loc[1, "sqrt_trace_cov_mm"])
+
+
+def test_the_summary_names_the_csv_too(tmp_path):
+    """An estimator's summary, made apart from collect, checks the same and names the CSV."""
+    text, message = _CENTER_MISTAKES["missing trial"]
+    with pytest.raises(ValueError):
+        _contestant(tmp_path, "cmc", "LS-C", text)
+    csv = next((tmp_path / "estimates").rglob("*.csv"))
+    dataset = tmp_path / f"{csv.stem}.parquet"
+    with pytest.raises(ValueError, match=re.escape(f"{csv}: {message}")):
+        summarise_estimates("cmc", [str(csv.with_suffix(".parquet"))], "s.csv", [dataset])
+
+
+def test_a_file_written_as_parquet_is_named_itself(tmp_path):
+    """An estimator that writes its estimates file itself converts nothing: the file is the
+    source, and it is what a refusal names."""
+    dataset, _ = _dataset(tmp_path)
+    path = tmp_path / "estimates" / "cmc" / "LS-P" / f"{dataset.stem}.parquet"
+    frame = pd.DataFrame(
+        {
+            "marker_set": "M",
+            "rom_deg": 5,
+            "noise_mm": 1.0,
+            "trial": [1],
+            "method": "LS-P",
+            **{c: [1.0] for c in ("center_x", "center_y", "center_z")},
+            "converged": True,
+            "iterations": 0,
+            "seconds": 0.0,
+            "status": "ok",
+        }
+    )
+    write_table(frame, path)
+    assert read_source(path) == str(path)
+    with pytest.raises(ValueError, match=re.escape(f"{path}: missing trials: 0")):
+        collect("cmc", [path], str(tmp_path / "collected.parquet"), [dataset])
+
+
 def _overlay(tmp_path, **cmc) -> str:
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}
@@ -166,6 +390,27 @@ def test_the_c_estimator_runs_as_a_rule_and_equals_the_built_in_ls(tmp_path):
     assert gap.max() < 1e-9, gap
     # Scored by the benchmark, from the estimate: the same error as the built-in LS.
     assert np.allclose(theirs["error_mm"], ours["error_mm"], rtol=0, atol=1e-9)
+
+
+@pytest.mark.pipeline
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) on this machine")
+def test_the_workflow_names_the_csv_a_c_program_got_wrong(tmp_path):
+    """The C example edited to report -1 iterations: collect stops, naming the CSV the program
+    wrote, which is what its author can open, and the trial and column."""
+    copy_workflow(tmp_path)
+    program = tmp_path / "workflow" / "external" / "ls_sphere.c"
+    shipped = program.read_text()
+    program.write_text(shipped.replace(",true,0,%.9g,ok", ",true,-1,%.9g,ok"))
+    assert program.read_text() != shipped
+    overlay = _overlay(tmp_path, estimators=["LS"], external_estimators=["LS-C"])
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
+    assert run.returncode != 0
+    named = re.compile(
+        r"results/estimates/cmc/LS-C/marker_set-M__rom_deg-15__noise_mm-[0-9.]+\.csv: "
+        r"trial 0: column 'iterations' is -1, below 0"
+    )
+    assert named.search(run.stdout + run.stderr), (run.stdout + run.stderr)[-3000:]
+    assert not (tmp_path / "results" / "collected" / "cmc.parquet").exists()
 
 
 @pytest.mark.pipeline

@@ -16,10 +16,11 @@ written with the digits that read back to the same double.
 
 Estimates CSV (:func:`read_estimates_csv`), one header line, one row per trial: ``trial``, the
 estimate columns of the study's kind (``center_x, center_y, center_z``; or ``point_*`` and
-``direction_*``; optionally ``cov_*``), ``converged`` (``true``/``false`` or ``1``/``0``),
+``direction_*``; for a joint centre optionally ``cov_*``, and ``cov_yx``, ``cov_zx``,
+``cov_zy`` equal to their mirrors), ``converged`` (``true``/``false`` or ``1``/``0``),
 ``iterations``, ``seconds`` and ``status``. The condition's columns and ``method`` are added
 from the dataset and the file's folder; the result is then checked and collected like any
-estimates file.
+estimates file, and the estimates file records the CSV's path, which its refusals name.
 """
 
 from __future__ import annotations
@@ -70,7 +71,8 @@ def read_estimates_csv(
 
     ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice, has no
     rows or lacks a required column; the estimate columns and every value are checked when the
-    file is collected.
+    file is collected, and a refusal then names ``path`` too, which ``output`` records
+    (:func:`jointbench.resultfiles.parquet.read_source`): the file its author can correct.
     """
     try:
         table = pacsv.read_csv(path)
@@ -99,7 +101,7 @@ def read_estimates_csv(
     added = {key: pa.array([value] * table.num_rows) for key, value in condition.items()}
     added["method"] = pa.array([Path(path).parent.name] * table.num_rows, pa.string())
     columns = {**added, **{name: table.column(name) for name in table.column_names}}
-    write_table(pa.table(columns), output, provenance)
+    write_table(pa.table(columns), output, provenance, source=path)
 
 
 def _untyped_as_numbers(table: pa.Table) -> pa.Table:

@@ -40,6 +40,7 @@ __all__ = [
     "read_metadata",
     "read_poses",
     "read_provenance",
+    "read_source",
     "read_table",
     "read_trial_numbers",
     "read_truth",
@@ -54,6 +55,9 @@ __all__ = [
 _META_KEY = b"jointbench"
 _PROVENANCE_KEY = b"jointbench.provenance"
 _POSES_KEY = b"jointbench.poses"
+# The file an estimates file was converted from (an estimates CSV): what its author wrote and
+# can correct, and so what a refusal of its rows names.
+_SOURCE_KEY = b"jointbench.source"
 # Per segment, the arrays a pose fit stores per trial, by the shape of one of them.
 _POSE_ARRAYS = {
     "rotation": lambda n_frames, n_markers: (n_frames, 3, 3),
@@ -487,14 +491,27 @@ def write_table(
     table: pa.Table | pd.DataFrame,
     path: str | Path,
     provenance: Mapping[str, object] | None = None,
+    source: str | Path | None = None,
 ) -> None:
     """Write a results table (Arrow or pandas) to parquet, creating the directory, with its
-    provenance (what produced it: see :func:`read_provenance`) in the file's metadata."""
+    provenance (what produced it: see :func:`read_provenance`) in the file's metadata, and
+    ``source``, the file it was converted from (see :func:`read_source`), when given."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     if not isinstance(table, pa.Table):
         table = pa.Table.from_pandas(table, preserve_index=False)
     metadata = {**(table.schema.metadata or {}), _PROVENANCE_KEY: json.dumps(provenance or {})}
+    if source is not None:
+        metadata[_SOURCE_KEY] = str(source).encode()
     pq.write_table(table.replace_schema_metadata(metadata), path)
+
+
+@_names_unreadable_file
+def read_source(path: str | Path) -> str:
+    """The file a refusal of the results table at ``path`` names: the file it was converted
+    from, as :func:`write_table` recorded it (an external estimator's estimates CSV), else
+    ``path`` itself (a file an estimator wrote as parquet)."""
+    metadata = pq.read_schema(path).metadata or {}
+    return metadata[_SOURCE_KEY].decode() if _SOURCE_KEY in metadata else str(path)
 
 
 def rows_table(rows: Sequence[Mapping[str, object]]) -> pa.Table:

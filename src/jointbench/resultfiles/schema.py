@@ -8,7 +8,8 @@ invented trial or condition cannot change a ranking unnoticed. A file's errors a
 benchmark's to compute (:mod:`jointbench.running.scoring`): a file may leave them out, and
 :func:`check_scores` stops the run when it gives ones that disagree; :func:`check_claimed_estimates`
 refuses a trial that claims success without a finite estimate, :func:`check_not_negative` a
-negative time or iteration count.
+negative time or iteration count, and :func:`check_covariances` a predicted covariance that is
+not one (given in part, asymmetric, or with a negative variance in some direction).
 """
 
 from __future__ import annotations
@@ -22,11 +23,13 @@ import pyarrow as pa
 
 from jointbench.running.scoring import (
     COVARIANCE_COLUMNS,
+    COVARIANCE_MIRRORS,
     ERROR_COLUMN,
     ESTIMATE_COLUMNS,
     PROXIMAL_COLUMNS,
     RADIUS_COLUMN,
     SCORE_COLUMNS,
+    covariance_from_entries,
 )
 
 if TYPE_CHECKING:
@@ -34,12 +37,15 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COMMON_COLUMNS",
+    "COVARIANCE_PSD_TOL",
+    "COVARIANCE_RTOL",
     "KIND_COLUMNS",
     "OPTIONAL_COLUMNS",
     "SCORE_ATOL",
     "SCORE_RTOL",
     "check_against_dataset",
     "check_claimed_estimates",
+    "check_covariances",
     "check_estimates",
     "check_not_negative",
     "check_scores",
@@ -67,6 +73,15 @@ COMMON_COLUMNS = {
     "seconds": _NUMBER,
     "status": _TEXT,
 }
+#: Per kind, the prefixes of the predicted covariances [mm²] its files may give: a joint
+#: centre's own (``cov_*``) and, relative to the proximal markers, ``proximal_cov_*``
+#: (:data:`PROXIMAL_COLUMNS`).
+_COVARIANCE_PREFIXES = {"joint_center": ("", "proximal_")}
+#: Per kind, the mirror entries (below the diagonal) its files may give beside the six.
+_MIRROR_COLUMNS = {
+    kind: tuple(f"{prefix}{name}" for prefix in prefixes for name in COVARIANCE_MIRRORS)
+    for kind, prefixes in _COVARIANCE_PREFIXES.items()
+}
 #: Per kind, the estimate columns every file must carry.
 KIND_COLUMNS = {kind: dict.fromkeys(columns, _NUMBER) for kind, columns in ESTIMATE_COLUMNS.items()}
 #: Per kind, the columns a file may carry and the benchmark computes itself (see
@@ -78,6 +93,7 @@ OPTIONAL_COLUMNS = {
             *columns,
             *((*COVARIANCE_COLUMNS, *PROXIMAL_COLUMNS) if kind == "joint_center" else ()),
             *((RADIUS_COLUMN,) if kind == "center" else ()),
+            *_MIRROR_COLUMNS.get(kind, ()),
         ],
         _NUMBER,
     )
@@ -87,6 +103,12 @@ OPTIONAL_COLUMNS = {
 #: this absolute one in the column's own unit: rounding, not a different number.
 SCORE_RTOL = 1e-6
 SCORE_ATOL = 1e-6
+#: A mirror entry (``cov_yx``) agrees with the entry it mirrors when they differ by no more than
+#: this share of the matrix's largest entry: rounding, not an asymmetric matrix.
+COVARIANCE_RTOL = 1e-9
+#: A predicted covariance is positive semi-definite when its smallest eigenvalue is no lower
+#: than minus this share of its largest: rounding, not a negative variance.
+COVARIANCE_PSD_TOL = 1e-9
 
 
 def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tuple]:
@@ -125,6 +147,7 @@ def check_estimates(
         if not accepts(columns[column].type):
             raise ValueError(
                 f"{source}: column {column!r} must be {description}, got {columns[column].type}"
+                + _first_word(columns[column], None if column == "trial" else columns["trial"])
             )
     if columns["trial"].null_count:
         raise ValueError(f"{source}: column 'trial' has missing values")
@@ -135,6 +158,22 @@ def check_estimates(
             raise ValueError(
                 f"{source}: column 'method' must be {method!r} in every row, got {listed}"
             )
+
+
+def _first_word(column: pa.Array | pa.ChunkedArray, trials) -> str:
+    """For a text column that should hold numbers, where it first holds a word that is none
+    (``"two"``, ``"1,5"``): what a CSV's author looks for. Empty for any other column."""
+    if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
+        return ""
+    for row, value in enumerate(column.to_pylist()):
+        try:
+            float(value)
+        except (TypeError, ValueError):
+            if value is None:
+                continue
+            trial = "" if trials is None else f" of trial {trials[row].as_py()!r}"
+            return f"; the row{trial} holds {value!r}"
+    return ""
 
 
 def _arrow_column(table, column: str, source: str) -> pa.Array | pa.ChunkedArray:
@@ -235,9 +274,7 @@ def check_claimed_estimates(
     success (``converged`` true or ``status`` "ok") without a finite estimate and a finite
     ``error`` ``(n,)`` (the benchmark's, e.g. NaN for an axis direction of zero length): a
     failed trial says it failed, so that it is counted as one."""
-    claimed = np.asarray(table["converged"], dtype=bool) | (
-        np.asarray(table["status"], dtype=object) == "ok"
-    )
+    claimed = _claims_success(table)
     estimates = np.column_stack([np.asarray(table[c], dtype=float) for c in ESTIMATE_COLUMNS[kind]])
     finite = np.isfinite(estimates).all(axis=1) & np.isfinite(error)
     bad = np.flatnonzero(claimed & ~finite)
@@ -247,11 +284,119 @@ def check_claimed_estimates(
             f"{c}={float(v)!r}" for c, v in zip(ESTIMATE_COLUMNS[kind], estimates[row], strict=True)
         )
         raise ValueError(
-            f"{source}: method {table['method'].iloc[row]!r}, trial "
-            f"{int(table['trial'].iloc[row])}: converged={bool(table['converged'].iloc[row])}, "
-            f"status {table['status'].iloc[row]!r}, but the estimate is not finite ({values}; "
+            f"{_where(table, row, source)}: {_claim(table, row)}, but the estimate is not "
+            f"finite ({values}; "
             f"{ERROR_COLUMN[kind]}={float(error[row])!r}); {bad.size} such rows. A trial "
             "without an estimate is a failure: converged=False and the reason in 'status'"
+        )
+
+
+def _claims_success(table: pd.DataFrame) -> np.ndarray:
+    """``(n,)``: whether each row claims success, ``converged`` true or ``status`` "ok"."""
+    return np.asarray(table["converged"], dtype=bool) | (
+        np.asarray(table["status"], dtype=object) == "ok"
+    )
+
+
+def _where(table: pd.DataFrame, row: int, source: str) -> str:
+    """The file, method and trial of a row (its position in ``table``), for a message."""
+    return f"{source}: method {table['method'].iloc[row]!r}, trial {int(table['trial'].iloc[row])}"
+
+
+def _claim(table: pd.DataFrame, row: int) -> str:
+    """What a row claims, for a message."""
+    return f"converged={bool(table['converged'].iloc[row])}, status {table['status'].iloc[row]!r}"
+
+
+def check_covariances(table: pd.DataFrame, kind: str, *, source: str = "estimates") -> None:
+    """Raise ``ValueError`` naming ``source``, the method, the trial and the column when a
+    predicted covariance [mm²] of ``table`` (an estimates file of ``kind`` checked by
+    :func:`check_estimates`: a joint centre's ``cov_*`` and ``proximal_cov_*``) is not one.
+
+    Refused: a file giving some of a covariance's six entries (:data:`COVARIANCE_COLUMNS`) but
+    not all; a row that claims success (as in :func:`check_claimed_estimates`) with some entries
+    finite and others not (NaN in all of them: the method predicts none for that trial); and in
+    every row whose entries are all finite, which is scored whatever it claims, a mirror entry
+    (``cov_yx``, ``cov_zx``, ``cov_zy``, optional) that differs from the entry it mirrors by more
+    than :data:`COVARIANCE_RTOL` of the matrix's largest entry, or a smallest eigenvalue below
+    minus :data:`COVARIANCE_PSD_TOL` times the largest. A row that claims failure may carry NaN.
+    """
+    for prefix in _COVARIANCE_PREFIXES.get(kind, ()):
+        names = [f"{prefix}{name}" for name in COVARIANCE_COLUMNS]
+        mirrors = {f"{prefix}{m}": f"{prefix}{entry}" for m, entry in COVARIANCE_MIRRORS.items()}
+        given = [name for name in (*names, *mirrors) if name in table]
+        if not given:
+            continue
+        absent = [name for name in names if name not in table]
+        if absent:
+            raise ValueError(
+                f"{source}: column {absent[0]!r} is missing, but {given[0]!r} is given: a "
+                f"predicted covariance gives all six entries, {', '.join(names)}"
+            )
+        entries = {name: np.asarray(table[name], dtype=float) for name in given}
+        full = _check_given_in_full(table, entries, source)
+        matrices = covariance_from_entries(
+            {name.removeprefix(prefix): entries[name] for name in names}, len(table)
+        )
+        _check_mirrors(table, entries, mirrors, matrices, full, source)
+        _check_semi_definite(table, matrices, full, names, source)
+
+
+def _check_given_in_full(table: pd.DataFrame, entries: Mapping[str, np.ndarray], source: str):
+    """``(n,)``: which rows give every one of a covariance's ``entries`` (column -> ``(n,)``)
+    finite; ``ValueError`` for a row that claims success and gives some of them only."""
+    values = np.column_stack(list(entries.values()))
+    finite = np.isfinite(values)
+    partial = _claims_success(table) & ~finite.all(axis=1) & ~np.isnan(values).all(axis=1)
+    if partial.any():
+        row = int(np.argmax(partial))
+        column = int(np.argmin(finite[row]))
+        given = ", ".join(name for name, ok in zip(entries, finite[row], strict=True) if ok)
+        raise ValueError(
+            f"{_where(table, row, source)}: {_claim(table, row)}, but column "
+            f"{list(entries)[column]!r} is {float(values[row, column])!r} while {given} "
+            f"{'is' if finite[row].sum() == 1 else 'are'} finite ({np.count_nonzero(partial)} "
+            "such rows): a predicted covariance is finite in every entry, or NaN in every "
+            "entry when the method predicts none"
+        )
+    return finite.all(axis=1)
+
+
+def _check_mirrors(table, entries, mirrors: Mapping[str, str], matrices, full, source: str):
+    """``ValueError`` for a row of ``full`` (``(n,)``, the rows given in full) whose mirror
+    entry differs from the entry it mirrors by more than :data:`COVARIANCE_RTOL` of the largest
+    entry of its matrix (``matrices`` ``(n, 3, 3)``)."""
+    scale = np.abs(matrices).max(axis=(1, 2))
+    for mirror, entry in mirrors.items():
+        if mirror not in entries:
+            continue
+        apart = full & (np.abs(entries[mirror] - entries[entry]) > COVARIANCE_RTOL * scale)
+        if apart.any():
+            row = int(np.argmax(apart))
+            raise ValueError(
+                f"{_where(table, row, source)}: column {mirror!r} is "
+                f"{float(entries[mirror][row])!r}, but {entry!r}, which it mirrors, is "
+                f"{float(entries[entry][row])!r} ({np.count_nonzero(apart)} such rows): a "
+                "covariance is symmetric; give the mirror equal to its entry, or leave it out"
+            )
+
+
+def _check_semi_definite(table, matrices, full, names: Sequence[str], source: str) -> None:
+    """``ValueError`` for a row of ``full`` whose matrix (``matrices`` ``(n, 3, 3)``, of the
+    columns ``names``) has a smallest eigenvalue below minus :data:`COVARIANCE_PSD_TOL` times
+    its largest."""
+    rows = np.flatnonzero(full)
+    eigenvalues = np.linalg.eigvalsh(matrices[rows])  # ascending, (k, 3)
+    negative = eigenvalues[:, 0] < -COVARIANCE_PSD_TOL * eigenvalues[:, -1]
+    if negative.any():
+        first = int(np.argmax(negative))
+        row = int(rows[first])
+        shown = ", ".join(f"{float(value):.6g}" for value in eigenvalues[first])
+        raise ValueError(
+            f"{_where(table, row, source)}: the predicted covariance in columns "
+            f"{', '.join(names)} is not positive semi-definite: its eigenvalues are {shown} "
+            f"[mm²], the smallest below -{COVARIANCE_PSD_TOL:g} times the largest "
+            f"({np.count_nonzero(negative)} such rows); no direction has a negative variance"
         )
 
 

@@ -18,6 +18,7 @@ from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_metadata,
     read_provenance,
+    read_source,
     read_table,
     read_trial_numbers,
     read_truth,
@@ -26,6 +27,7 @@ from jointbench.resultfiles.parquet import (
 from jointbench.resultfiles.schema import (
     check_against_dataset,
     check_claimed_estimates,
+    check_covariances,
     check_estimates,
     check_not_negative,
     check_scores,
@@ -52,9 +54,11 @@ def scored_estimates(
 
     ``ValueError`` naming ``source`` and the trial when the file claims success without a
     finite estimate (:func:`check_claimed_estimates`), gives a score that disagrees
-    (:func:`check_scores`) or a negative time or iteration count (:func:`check_not_negative`).
+    (:func:`check_scores`), a negative time or iteration count (:func:`check_not_negative`) or
+    a predicted covariance that is not one (:func:`check_covariances`).
     """
     check_not_negative(frame, source=source)
+    check_covariances(frame, kind, source=source)
     scores = score_columns(kind, frame, truth, proximal_frame0)
     check_claimed_estimates(frame, kind, scores[ERROR_COLUMN[kind]], source=source)
     check_scores(frame, scores, source=source)
@@ -95,10 +99,15 @@ def _reasons(rows: pd.DataFrame, most: int = 3) -> str:
     return "; ".join(f"{count} × {reason!r}" for reason, count in counts.items()) or "none"
 
 
-def _scored_file(path, spec: Study, dataset: Mapping, source: str) -> pd.DataFrame:
-    """One estimates file of study ``spec`` read, its schema checked, held to its ``dataset``
-    (``trials``, ``condition`` and ``truth`` of its condition's dataset file) and scored as
-    its method's kind."""
+def _scored_file(path, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFrame:
+    """One estimates file of study ``spec`` read, its schema checked, held to its dataset (of
+    ``datasets``, :func:`_datasets`: the ``trials``, ``condition`` and ``truth`` of its
+    condition's dataset file) and scored as its method's kind.
+
+    Its refusals name the file its estimator wrote (:func:`read_source`): an external
+    estimator's CSV, which it was converted from, else the file itself."""
+    source = read_source(path)
+    dataset = _dataset_of(path, datasets, source)
     frame = read_table(path)
     method = Path(path).parent.name
     kind = method_kind(spec, method)
@@ -136,9 +145,9 @@ def _datasets(datasets: Sequence[str | Path], segments: Sequence[str]) -> dict[s
     return out
 
 
-def _dataset_of(path, datasets: Mapping[str, dict]) -> dict:
+def _dataset_of(path, datasets: Mapping[str, dict], source: str) -> dict:
     if Path(path).stem not in datasets:
-        raise ValueError(f"{path}: no dataset file of condition {Path(path).stem!r}")
+        raise ValueError(f"{source}: no dataset file of condition {Path(path).stem!r}")
     return datasets[Path(path).stem]
 
 
@@ -163,8 +172,7 @@ def collect(
     estimators: dict[str, dict] = {}
     for path in paths:
         estimators.setdefault(Path(path).parent.name, read_provenance(path))
-        dataset = _dataset_of(path, expected)
-        frames.append(_scored_file(path, spec, dataset, str(path)))
+        frames.append(_scored_file(path, spec, expected))
     collected = pd.concat(frames, ignore_index=True)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
     require_results(collected, study, output)
@@ -180,7 +188,7 @@ def summarise_estimates(
     spec = get_study(study)
     expected = _datasets(datasets, spec.segments)
     estimates = pd.concat(
-        [_scored_file(path, spec, _dataset_of(path, expected), str(path)) for path in paths],
+        [_scored_file(path, spec, expected) for path in paths],
         ignore_index=True,
     )
     summarise(estimates, study).to_csv(output, index=False)

@@ -22,6 +22,7 @@ from jointbench.simulate import PROXIMAL_TRUTH, RADII_TRUTH
 __all__ = [
     "CHI2_3DOF_95",
     "COVARIANCE_COLUMNS",
+    "COVARIANCE_MIRRORS",
     "ERROR_COLUMN",
     "ESTIMATE_COLUMNS",
     "PROXIMAL_COLUMNS",
@@ -76,6 +77,10 @@ _COVARIANCE_ENTRIES = {
 #: The six distinct entries of a joint-centre method's predicted 3×3 covariance [mm²]: NaN, or
 #: absent from a file, when the method predicts none.
 COVARIANCE_COLUMNS = tuple(_COVARIANCE_ENTRIES)
+#: The entries below the diagonal a file may give besides :data:`COVARIANCE_COLUMNS`, each with
+#: the entry it mirrors: a covariance is symmetric, so they must equal it (scoring reads the
+#: upper triangle only).
+COVARIANCE_MIRRORS = {"cov_yx": "cov_xy", "cov_zx": "cov_xz", "cov_zy": "cov_yz"}
 
 #: A centre's optional estimate column: the mean of its fitted marker radii [mm], for a method
 #: that fits one radius per marker (the sphere fits); NaN, or absent from a file, otherwise.
