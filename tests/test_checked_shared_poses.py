@@ -163,3 +163,53 @@ def test_poses_for_another_number_of_trials_are_refused(name, checked):
     poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
     with pytest.raises(ValueError, match="poses: 4 entries for 5 trials"):
         registry.many(KIND, name, checked=checked)(*segments, poses=poses[:4])
+
+
+def _unshared_many(name: str, segments: tuple, **options) -> list:
+    """The many-trial composition before the poses were shared: the method's many-trial form
+    fitting its own poses, then per trial the input checks (whose error wins) and the verdict
+    fitting its own."""
+    fn = registry.get(KIND, name, checked=False)
+    outcomes = list(registry.many(KIND, name, checked=False)(*segments, **options))
+    checked = validation.check_input_many(KIND, segments, len(outcomes))
+    for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
+        if error is not None:
+            outcomes[trial] = error
+        elif not isinstance(outcome, Exception):
+            arrays = checked.arrays(trial)
+            result = registry._self_checked(fn, outcome, arrays, options)
+            outcomes[trial] = support.annotate(result, support.assess(KIND, arrays))
+    return outcomes
+
+
+def _assert_same_outcomes(found, expected) -> None:
+    if isinstance(expected, Exception) or isinstance(found, Exception):
+        _assert_same(found, expected)
+        return
+    assert len(found) == len(expected)
+    for one, other in zip(found, expected, strict=True):
+        _assert_same(one, other)
+
+
+def _not_one_batch() -> dict[str, tuple]:
+    """Segments whose poses cannot be fitted as one batch: a third marker array, and trials of
+    other lengths given as lists."""
+    proximal, distal = CASES["ball-noisy"]
+    return {
+        "three-arrays": (np.stack([proximal] * 2), np.stack([distal] * 2), np.stack([distal] * 2)),
+        "trials-of-other-lengths": ([proximal, proximal[:-5]], [distal, distal[:-5]]),
+    }
+
+
+NOT_ONE_BATCH = _not_one_batch()
+
+
+@pytest.mark.parametrize("options", [{}, {"noise_mm": -1.0}], ids=["", "bad-option"])
+@pytest.mark.parametrize("case", list(NOT_ONE_BATCH))
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_segments_that_are_not_one_batch_answer_as_fitting_twice(name, case, options):
+    """Where the poses cannot be fitted as one batch, the checked call answers (per trial or
+    for the whole call) as the method fitting its own poses does."""
+    segments = NOT_ONE_BATCH[case]
+    found = _outcome(lambda: registry.many(KIND, name)(*segments, **options))
+    _assert_same_outcomes(found, _outcome(lambda: _unshared_many(name, segments, **options)))

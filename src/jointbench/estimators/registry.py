@@ -42,7 +42,7 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench.estimators import support, validation
-from jointbench.estimators.batching import each_alone, one_trial
+from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, one_trial
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.registries import Registry
 
@@ -151,11 +151,14 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
     one-trial function is) and for the verdict."""
     names = _pose_names(entry, len(clean))
-    if names is None or not _binds(entry, clean, options):
+    shared = None
+    if names is not None and _binds(entry, clean, options):
+        shared = _shared_poses(names, tuple([array] for array in clean))
+    if shared is None:
         result = entry.fn(*clean, **options)
         verdict = support.assess(entry.kind, clean)
     else:
-        (poses,) = _shared_poses(names, tuple([array] for array in clean))
+        (poses,) = shared
         result = one_trial(entry.many, *clean, poses=[poses], **options)
         verdict = support.assess(entry.kind, clean, poses=poses)
     return support.annotate(_self_checked(entry.fn, result, clean, options), verdict)
@@ -179,10 +182,18 @@ def _binds(entry: _Entry, arrays: tuple, options: dict) -> bool:
     return True
 
 
-def _shared_poses(names: tuple[str, ...], segments: tuple) -> list:
+def _shared_poses(names: tuple[str, ...], segments: tuple) -> list | None:
     """Per trial of ``segments`` (in ``names`` order, each ``(T, N, n, 3)`` or a list of
-    trials), its poses as every pose-based method fits them, or its ``ValueError``."""
-    return trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
+    trials), its poses as every pose-based method fits them, or its ``ValueError``; ``None``
+    when they cannot be fitted as one batch (another number of arrays, trials of other
+    shapes)."""
+    try:
+        return trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
+    except NUMERICAL_FAILURES:
+        # The many-trial form fits them inside :func:`batching.isolated`, which answers for
+        # such a failure in its own way (each trial alone, or the call's error): sharing
+        # nothing leaves that answer to it, as when it fits alone.
+        return None
 
 
 def _fitted_to(poses: list | None, trials: list[int], stacked: tuple[np.ndarray, ...]):
@@ -232,8 +243,11 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
     @functools.wraps(entry.many)
     def checked_many(*segments: object, **options: object) -> list:
         names = _pose_names(entry, len(segments))
+        shared = None
         if names is not None and options.get("poses") is None:
-            options["poses"] = _shared_poses(names, segments)
+            shared = _shared_poses(names, segments)
+        if shared is not None:
+            options["poses"] = shared
         outcomes = list(entry.many(*segments, **options))
         checked = validation.check_input_many(entry.kind, segments, len(outcomes))
         fitted = []
