@@ -213,3 +213,28 @@ def test_segments_that_are_not_one_batch_answer_as_fitting_twice(name, case, opt
     segments = NOT_ONE_BATCH[case]
     found = _outcome(lambda: registry.many(KIND, name)(*segments, **options))
     _assert_same_outcomes(found, _outcome(lambda: _unshared_many(name, segments, **options)))
+
+
+def _other_entries(own: list) -> dict[str, object]:
+    """What a caller may pass for one trial's poses that is none: the poses of a one-segment
+    fit, nothing, one segment's poses alone, another error than the fit's."""
+    proximal = own[2]["proximal"]
+    (one_segment,) = trial_poses({"markers": [proximal.markers]}, min_frames=3)
+    return {
+        "one-segment": (one_segment, "the segments markers"),
+        "nothing": (None, "NoneType"),
+        "one-segment-alone": (proximal, "SegmentPoses"),
+        "another-error": (FloatingPointError("overflow"), "FloatingPointError"),
+    }
+
+
+@pytest.mark.parametrize("entry", ["one-segment", "nothing", "one-segment-alone", "another-error"])
+@pytest.mark.parametrize("checked", [True, False])
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_poses_that_are_not_a_trials_poses_are_refused_naming_the_trial(name, checked, entry):
+    segments = _batch(BATCH)
+    names = pose_segments(registry.many(KIND, name, checked=False))
+    poses = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+    poses[2], held = _other_entries(poses)[entry]
+    with pytest.raises(ValueError, match=rf"^poses: trial 2 holds {held}; give per trial"):
+        registry.many(KIND, name, checked=checked)(*segments, poses=poses)

@@ -51,12 +51,15 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     that, when the whole call fails numerically, returns per trial the outcome it has alone.
 
     ``poses=`` (a list with one entry per trial, see
-    :func:`jointbench.estimators.segment_poses.trial_poses`) is split with the trials.
+    :func:`jointbench.estimators.segment_poses.trial_poses`) is split with the trials; a list
+    of another length, or an entry that is neither the poses of ``batched``'s segments (its
+    ``pose_segments``) nor a ``ValueError``, is refused.
     """
+    names = getattr(batched, "pose_segments", None)
 
     @functools.wraps(batched)
     def run(*segments: object, **options: object) -> list:
-        _check_one_pose_per_trial(segments, options.get("poses"))
+        _check_one_pose_per_trial(segments, options.get("poses"), names)
         try:
             return batched(*segments, **options)
         except NUMERICAL_FAILURES as error:
@@ -81,11 +84,30 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     return run
 
 
-def _check_one_pose_per_trial(segments: tuple, poses: list | None) -> None:
-    """``ValueError`` unless ``poses`` (when given) has one entry per trial of ``segments``:
-    a trial must not be fitted with another trial's poses."""
+def _check_one_pose_per_trial(
+    segments: tuple, poses: list | None, names: tuple[str, ...] | None
+) -> None:
+    """``ValueError`` unless ``poses`` (when given) has one entry per trial of ``segments``,
+    each the poses of the segments ``names`` (a dict by name) or the ``ValueError`` of their
+    fit: a trial must not be fitted with another trial's poses, and an entry of another kind
+    (another method's segments, ``None``) would fail the fit with no word of why."""
     if poses is None or not segments:
         return
     n_trials = len(segments[0])
     if len(poses) != n_trials:
         raise ValueError(f"poses: {len(poses)} entries for {n_trials} trials; give one per trial")
+    if names is None:
+        return
+    for trial, entry in enumerate(poses):
+        if isinstance(entry, ValueError):
+            continue
+        if not isinstance(entry, dict):
+            held = type(entry).__name__
+        elif set(entry) != set(names):
+            held = f"the segments {', '.join(map(str, entry))}"
+        else:
+            continue
+        raise ValueError(
+            f"poses: trial {trial} holds {held}; give per trial the poses of "
+            f"{', '.join(names)} as trial_poses fits them, or the ValueError of their fit"
+        )
