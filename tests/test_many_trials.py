@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from rigs import DISTAL, JOINT, apply_pose
+from rigs import DISTAL, JOINT, apply_pose, two_segments
 
 import jointbench
 from jointbench.estimators import registry
-from jointbench.estimators.results import CenterResult
+from jointbench.estimators.results import CenterResult, JointCenterResult
 from jointbench.geometry import rotation_matrix
 from jointbench.registries import Registry
 
@@ -100,3 +100,50 @@ def test_every_method_has_both_forms_and_nothing_attached(kind):
         for checked in (True, False):
             assert callable(registry.many(kind, name, checked=checked))
             assert not hasattr(registry.get(kind, name, checked=checked), "batched"), name
+
+
+@pytest.fixture
+def two_segment_newcomer():
+    """A per-trial joint centre estimator without a many-trial form: the midpoint of the
+    clusters' centroids."""
+
+    def midpoint(proximal, distal):
+        both = np.concatenate([np.asarray(proximal), np.asarray(distal)], axis=1)
+        return JointCenterResult(
+            center=both.reshape(-1, 3).mean(axis=0),
+            covariance=None,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="midpoint",
+        )
+
+    registry.register("joint_center", "midpoint")(midpoint)
+    yield "midpoint"
+    registry.unregister("joint_center", "midpoint")
+
+
+@pytest.mark.parametrize("distal_trials", [2, 4])
+@pytest.mark.parametrize("checked", [True, False])
+@pytest.mark.parametrize("name", [*registry.methods("joint_center"), "midpoint"])
+def test_segments_holding_other_numbers_of_trials_are_refused(
+    name, checked, distal_trials, two_segment_newcomer
+):
+    """A distal trial too many would be left out unsaid, one too few fail with an IndexError."""
+    proximal, distal = two_segments(30)
+    segments = (np.stack([proximal] * 3), np.stack([distal] * distal_trials))
+    with pytest.raises(
+        ValueError,
+        match=rf"^proximal holds 3 trials, distal {distal_trials}: give every segment the same",
+    ):
+        registry.many("joint_center", name, checked=checked)(*segments)
+
+
+@pytest.mark.parametrize("checked", [True, False])
+def test_arrays_of_other_numbers_of_trials_are_named_by_position_past_the_segments(checked):
+    proximal, distal = two_segments(30)
+    segments = (np.stack([proximal] * 3), np.stack([distal] * 3), np.stack([distal] * 2))
+    with pytest.raises(
+        ValueError, match=r"^marker array 1 holds 3 trials, marker array 2 3, marker array 3 2:"
+    ):
+        registry.many("joint_center", "SCoRE", checked=checked)(*segments)

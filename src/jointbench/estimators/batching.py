@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["NUMERICAL_FAILURES", "each_alone", "isolated", "one_trial"]
+__all__ = ["NUMERICAL_FAILURES", "check_same_trials", "each_alone", "isolated", "one_trial"]
 
 #: What a fit raises when a trial's values defeat it (``LinAlgError`` is a ``ValueError``);
 #: anything else is a bug and propagates.
@@ -46,6 +46,25 @@ def each_alone(fit_one: Callable[[int], object], n_trials: int) -> list:
     return outcomes
 
 
+def check_same_trials(segments: tuple, names: tuple[str, ...]) -> None:
+    """``ValueError`` unless the marker arrays ``segments`` (each ``(n_trials, ...)`` or a list
+    of trials, named ``names`` in order) hold the same number of trials: a segment's extra
+    trials would be left out unsaid, or fail an index. Arrays of no length are left to the
+    input checks, which name them."""
+    try:
+        counts = [len(segment) for segment in segments]
+    except TypeError:
+        return
+    if len(set(counts)) < 2:
+        return
+    if len(names) != len(segments):
+        names = tuple(f"marker array {index + 1}" for index in range(len(segments)))
+    others = ", ".join(f"{name} {count}" for name, count in zip(names[1:], counts[1:], strict=True))
+    raise ValueError(
+        f"{names[0]} holds {counts[0]} trials, {others}: give every segment the same trials"
+    )
+
+
 def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     """``batched(*segments, **options)`` (segments ``(n_trials, ...)``, one outcome per trial)
     that, when the whole call fails numerically, returns per trial the outcome it has alone.
@@ -59,6 +78,8 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
 
     @functools.wraps(batched)
     def run(*segments: object, **options: object) -> list:
+        if names is not None:
+            check_same_trials(segments, names)
         _check_one_pose_per_trial(segments, options.get("poses"), names)
         try:
             return batched(*segments, **options)

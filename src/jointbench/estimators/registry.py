@@ -42,7 +42,12 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench.estimators import support, validation
-from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone, one_trial
+from jointbench.estimators.batching import (
+    NUMERICAL_FAILURES,
+    check_same_trials,
+    each_alone,
+    one_trial,
+)
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.registries import Registry
 
@@ -350,7 +355,9 @@ def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:
     of :func:`get` per trial or, ``checked=False``, without; every method has one."""
     entry = _entry(kind, name)
     if entry.many is None:
-        return _trial_by_trial(entry.checked if checked else entry.fn)
+        return _trial_by_trial(
+            entry.checked if checked else entry.fn, validation.ARRAY_NAMES[entry.kind]
+        )
     return _checked_many(entry) if checked else entry.many
 
 
@@ -359,12 +366,13 @@ def has_own_many(kind: str, name: str) -> bool:
     return _entry(kind, name).many is not None
 
 
-def _trial_by_trial(fn: Callable) -> Callable[..., list]:
-    """The many-trial form of a method without its own: ``fn`` on each trial, a numerical
-    failure kept as that trial's outcome."""
+def _trial_by_trial(fn: Callable, names: tuple[str, ...]) -> Callable[..., list]:
+    """The many-trial form of a method without its own: ``fn`` on each trial of the segments
+    ``names``, a numerical failure kept as that trial's outcome."""
 
     @functools.wraps(fn)
     def each(*segments: object, **options: object) -> list:
+        check_same_trials(segments, names)
         arrays = [np.asarray(segment) for segment in segments]
         return each_alone(lambda t: fn(*(array[t] for array in arrays), **options), len(arrays[0]))
 

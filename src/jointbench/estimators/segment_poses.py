@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.estimators.batching import NUMERICAL_FAILURES, each_alone
+from jointbench.estimators.batching import NUMERICAL_FAILURES, check_same_trials, each_alone
 from jointbench.estimators.validation import (
     check_markers,
     check_not_collinear,
@@ -88,7 +88,8 @@ def trial_poses(
     segments: dict[str, np.ndarray], *, min_frames: int
 ) -> list[dict[str, SegmentPoses] | ValueError]:
     """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
-    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials.
+    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials; every
+    segment holds the same trials (``ValueError`` otherwise).
 
     Per trial, each segment's markers are checked (at least ``min_frames`` frames and 3
     markers, not collinear at frame 0), two segments must share frames, and the body-fixed
@@ -98,6 +99,7 @@ def trial_poses(
     ``batched`` form of every pose-based method.
     """
     names = list(segments)
+    check_same_trials(tuple(segments.values()), tuple(names))
     arrays = {
         name: markers if isinstance(markers, list) else np.asarray(markers)
         for name, markers in segments.items()
