@@ -54,6 +54,45 @@ def _cases() -> dict[str, tuple[np.ndarray, np.ndarray]]:
 CASES = _cases()
 
 
+def _with_sample(markers: np.ndarray, value: float) -> np.ndarray:
+    changed = markers.copy()
+    changed[7, 1] = value
+    return changed
+
+
+def _user_input() -> dict[str, tuple]:
+    """The noisy ball trial as users hand it over: nested lists, float32, integers, masked
+    arrays, gaps as NaN or zeros, a segment a frame short, three or two frames, coordinates
+    near 1e8 mm or offset by 1e6 mm, near 1e200 (the pose fit overflows), nearly collinear
+    distal markers."""
+    proximal, distal = CASES["ball-noisy"]
+    nearly = distal.copy()
+    nearly[:, 2] = 2.0 * distal[:, 1] - distal[:, 0] + 1e-3
+    masked = np.ma.masked_array(distal, mask=np.zeros(distal.shape, dtype=bool))
+    gap = np.ma.masked_array(distal, mask=np.isnan(_with_sample(distal, np.nan)))
+    return {
+        "lists": (proximal.tolist(), distal.tolist()),
+        "float32": (proximal.astype(np.float32), distal.astype(np.float32)),
+        "integers": (np.rint(proximal).astype(int), np.rint(distal).astype(np.int32)),
+        "masked-nothing": (proximal, masked),
+        "masked-gap": (proximal, gap),
+        "nan-gap": (proximal, _with_sample(distal, np.nan)),
+        "zero-gap": (_with_sample(proximal, 0.0), distal),
+        "distal-a-frame-short": (proximal, distal[:-1]),
+        "three-frames": (proximal[:3], distal[:3]),
+        "two-frames-as-lists": (proximal[:2].tolist(), distal[:2].tolist()),
+        "near-1e8": (proximal + 1e8, distal + 1e8),
+        "offset-1e6": (proximal + 1e6, distal - 1e6),
+        "near-1e200": (proximal * 1e197, distal * 1e197),
+        "nearly-collinear-distal": (proximal, nearly),
+    }
+
+
+USER_INPUT = _user_input()
+
+ONE_TRIAL = {**CASES, **USER_INPUT}
+
+
 def _separately(name: str, arrays, **options):
     """The method and the verdict each fitting their own poses: the composition before the
     poses were shared."""
@@ -83,10 +122,11 @@ def test_the_pose_based_methods_are_found():
     assert {"SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0"} <= set(POSE_BASED)
 
 
-@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+@pytest.mark.parametrize("case", list(ONE_TRIAL))
 @pytest.mark.parametrize("name", POSE_BASED)
 def test_one_checked_trial_answers_as_fitting_twice(name, case):
-    arrays = CASES[case]
+    arrays = ONE_TRIAL[case]
     found = _outcome(lambda: registry.get(KIND, name)(*arrays))
     _assert_same(found, _outcome(lambda: _separately(name, arrays)))
 
@@ -238,3 +278,18 @@ def test_poses_that_are_not_a_trials_poses_are_refused_naming_the_trial(name, ch
     poses[2], held = _other_entries(poses)[entry]
     with pytest.raises(ValueError, match=rf"^poses: trial 2 holds {held}; give per trial"):
         registry.many(KIND, name, checked=checked)(*segments, poses=poses)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_a_batch_of_user_input_answers_as_fitting_twice(name):
+    """Trials of one shape as a list per segment, some refused by the input checks, one that
+    overflows the pose fit: per trial, the answer of fitting twice, alone or in the batch."""
+    same_shape = [
+        case for case, (proximal, _) in USER_INPUT.items() if np.shape(proximal) == (60, 3, 3)
+    ]
+    segments = tuple([USER_INPUT[case][index] for case in same_shape] for index in range(2))
+    outcomes = registry.many(KIND, name)(*segments)
+    _assert_same_outcomes(outcomes, _unshared_many(name, segments))
+    for case, found in zip(same_shape, outcomes, strict=True):
+        _assert_same(found, _outcome(lambda case=case: _separately(name, USER_INPUT[case])))
