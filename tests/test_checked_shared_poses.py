@@ -293,3 +293,21 @@ def test_a_batch_of_user_input_answers_as_fitting_twice(name):
     _assert_same_outcomes(outcomes, _unshared_many(name, segments))
     for case, found in zip(same_shape, outcomes, strict=True):
         _assert_same(found, _outcome(lambda case=case: _separately(name, USER_INPUT[case])))
+
+
+@pytest.mark.parametrize("checked", [True, False])
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_trials_of_other_lengths_are_refused_naming_them(name, checked):
+    """Trials of one call are fitted as one batch: a trial of other length that passes the
+    checks is named, with the length of the first; one the checks refuse is that trial's
+    error alone."""
+    proximal, distal = CASES["ball-noisy"]
+    segments = ([proximal, proximal[:2], proximal[:-5]], [distal, distal[:2], distal[:-5]])
+    with pytest.raises(
+        ValueError,
+        match=r"^proximal of trial 2 has 55 frames and 3 markers, of trial 0 60 and 3: the "
+        r"trials of one call share their numbers of frames and markers",
+    ):
+        registry.many(KIND, name, checked=checked)(*segments)
+    outcomes = registry.many(KIND, name, checked=checked)(*(s[:2] for s in segments))
+    assert "has 2 frames; this method needs at least 3" in str(outcomes[1])

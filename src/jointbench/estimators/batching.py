@@ -84,7 +84,12 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
         try:
             return batched(*segments, **options)
         except NUMERICAL_FAILURES as error:
-            arrays = [np.asarray(segment) for segment in segments]
+            try:
+                arrays = [np.asarray(segment) for segment in segments]
+            except ValueError:
+                # Trials of other shapes are no array to split: the call's error stands (the
+                # pose fit of many trials names such trials).
+                raise error from None
             n_trials = arrays[0].shape[0] if arrays and arrays[0].ndim else 0
             if n_trials == 0:
                 raise

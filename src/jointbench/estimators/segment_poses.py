@@ -94,7 +94,8 @@ def trial_poses(
     Per trial, each segment's markers are checked (at least ``min_frames`` frames and 3
     markers, not collinear at frame 0), two segments must share frames, and the body-fixed
     coordinates the fit estimates must not be collinear; a trial that fails a check carries
-    its ``ValueError``. Every segment's poses are fitted for all trials in one call of
+    its ``ValueError``. The trials that pass must share their shapes (``ValueError`` naming
+    the first that does not): every segment's poses are fitted for all trials in one call of
     :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
     ``batched`` form of every pose-based method.
     """
@@ -121,6 +122,7 @@ def trial_poses(
             outcomes[trial] = error
             checked.pop(trial, None)
     good = list(checked)
+    _check_one_shape(names, checked)
     stacked = [
         np.stack([checked[trial][index] for trial in good]) if good else None
         for index in range(len(names))
@@ -135,6 +137,23 @@ def trial_poses(
         except ValueError as error:
             outcomes[trial] = error
     return outcomes
+
+
+def _check_one_shape(names: list[str], checked: dict[int, list[np.ndarray]]) -> None:
+    """``ValueError`` naming the first trial of ``checked`` (per trial, its checked arrays in
+    ``names`` order) shaped otherwise than the first: the trials are fitted as one batch."""
+    if not checked:
+        return
+    first, *others = checked
+    for trial in others:
+        for name, array, first_array in zip(names, checked[trial], checked[first], strict=True):
+            if array.shape != first_array.shape:
+                raise ValueError(
+                    f"{name} of trial {trial} has {array.shape[0]} frames and "
+                    f"{array.shape[1]} markers, of trial {first} {first_array.shape[0]} and "
+                    f"{first_array.shape[1]}: the trials of one call share their numbers of "
+                    "frames and markers; fit the others in a call of their own"
+                )
 
 
 def _fitted_poses(markers: np.ndarray) -> list:
