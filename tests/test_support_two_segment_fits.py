@@ -187,3 +187,14 @@ def test_markers_that_do_not_move_get_a_verdict():
     verdict = support.assess("joint_center", (proximal, still))
     assert verdict.diagnostics["assessed"] is False
     assert any("range of motion too small" in warning for warning in verdict.warnings)
+
+
+def test_poses_that_are_not_the_segments_poses_are_refused():
+    """Poses of a one-segment fit, or of another number of trials, are named, not indexed."""
+    arrays = CASES["ball/0.5/0"]
+    (one_segment,) = trial_poses({"markers": [arrays[1]]}, min_frames=3)
+    with pytest.raises(ValueError, match=r"^poses: trial 0 holds the segments markers; give"):
+        support.assess("joint_center", arrays, poses=one_segment)
+    stacked = tuple(np.stack([array] * 2) for array in arrays)
+    with pytest.raises(ValueError, match=r"^poses: 1 entries for 2 trials; give one per trial"):
+        support.assess_many("joint_center", stacked, poses=[_poses(arrays)])

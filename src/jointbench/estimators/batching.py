@@ -15,7 +15,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["NUMERICAL_FAILURES", "check_same_trials", "each_alone", "isolated", "one_trial"]
+__all__ = [
+    "NUMERICAL_FAILURES",
+    "check_poses",
+    "check_same_trials",
+    "each_alone",
+    "isolated",
+    "one_trial",
+]
 
 #: What a fit raises when a trial's values defeat it (``LinAlgError`` is a ``ValueError``);
 #: anything else is a bug and propagates.
@@ -80,7 +87,7 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     def run(*segments: object, **options: object) -> list:
         if names is not None:
             check_same_trials(segments, names)
-        _check_one_pose_per_trial(segments, options.get("poses"), names)
+        check_poses(segments, options.get("poses"), names)
         try:
             return batched(*segments, **options)
         except NUMERICAL_FAILURES as error:
@@ -110,9 +117,7 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     return run
 
 
-def _check_one_pose_per_trial(
-    segments: tuple, poses: list | None, names: tuple[str, ...] | None
-) -> None:
+def check_poses(segments: tuple, poses: list | None, names: tuple[str, ...] | None) -> None:
     """``ValueError`` unless ``poses`` (when given) has one entry per trial of ``segments``,
     each the poses of the segments ``names`` (a dict by name) or the ``ValueError`` of their
     fit: a trial must not be fitted with another trial's poses, and an entry of another kind

@@ -86,6 +86,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jointbench.estimators.batching import check_poses
 from jointbench.estimators.results import with_fields
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
@@ -899,6 +900,8 @@ def assess_many(
     n_trials = arrays[0].shape[0]
     if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
         return _one_segment(kind, arrays[0])
+    if len(arrays) > 1:
+        check_poses(arrays, poses, ARRAY_NAMES[kind])
     if not all(_poses_defined(array) for array in arrays):
         if n_trials > 1:
             return [
@@ -1138,8 +1141,9 @@ def assess(
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
     are not assessed (``diagnostics["assessed"]`` is False). ``poses``: the two segments'
     poses (:func:`jointbench.estimators.segment_poses.trial_poses`, one trial's entry) an
-    estimator already fitted to these arrays, or the error it met fitting them; ``None`` fits
-    them here. One segment needs none.
+    estimator already fitted to these arrays, or the ``ValueError`` it met fitting them
+    (anything else is refused with a ``ValueError``); ``None`` fits them here. One segment
+    needs none.
     """
     stacked = tuple(np.asarray(array)[None] for array in arrays)
     return assess_many(kind, stacked, poses=None if poses is None else [poses])[0]
