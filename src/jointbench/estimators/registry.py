@@ -16,12 +16,15 @@ result after it. A newly registered estimator gets both without code of its own.
 
 Every method has a one-trial and a many-trial form, each checked or not (:func:`get`,
 :func:`many`). The many-trial form ``many(*segments, **options) -> list`` takes each marker
-array with a leading trials axis, ``(n_trials, n_frames, n_markers, 3)``, and returns per trial
-what the one-trial function returns, or the numerical failure (``ValueError``,
-``FloatingPointError``) it raises. A method states its own many-trial form at registration
-(``register(..., many=...)``, or :func:`register_many` where the module defines it after the
-one-trial function); a method without one, such as a newcomer's per-trial function, gets the
-one-trial function called trial by trial.
+array with a leading trials axis, ``(n_trials, n_frames, n_markers, 3)`` (every segment the
+same trials: a ``ValueError`` names each count otherwise), and returns per trial what the
+one-trial function returns, or the numerical failure (``ValueError``, ``FloatingPointError``)
+it raises. A pose-based method also takes ``poses=``, one entry per trial of
+:func:`jointbench.estimators.segment_poses.trial_poses`, and fits the trials that pass its
+checks as one batch, so they share their numbers of frames and markers. A method states its
+own many-trial form at registration (``register(..., many=...)``, or :func:`register_many`
+where the module defines it after the one-trial function); a method without one, such as a
+newcomer's per-trial function, gets the one-trial function called trial by trial.
 
 At registration an estimator states its :class:`Claims`: the fewest frames it fits, how
 closely it recovers a noise-free answer and under which transformations of the data its answer
