@@ -203,6 +203,28 @@ _CENTER_MISTAKES = {
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,0,-0.5,ok"]),
         "trial 1: column 'seconds' is -0.5, below 0",
     ),
+    # An empty cell says neither success nor failure: the row would be scored as neither.
+    "converged left empty": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2.5,3,,4,1e-5,ok"]),
+        "column 'converged' is empty in the row of trial 1 (1 such rows)",
+    ),
+    "converged left empty in a failed row": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,nan,nan,,4,1e-5,"]),
+        "column 'converged' is empty in the row of trial 1 (1 such rows)",
+    ),
+    "converged empty in every row": (
+        "\n".join([_ROW_HEADER, "0,1,2,3,,0,0,ok", "1,1,2,3,,0,0,ok"]),
+        "column 'converged' is empty in the row of trial 0 (2 such rows)",
+    ),
+    "converged 1/0 with a gap": (
+        "\n".join([_ROW_HEADER, "0,1,2,3,1,0,0,ok", "1,1,2,3,,0,0,ok"]),
+        "column 'converged' is empty in the row of trial 1 (1 such rows)",
+    ),
+    # An axis study's score in a centre's file: not computed for it, so never checked.
+    "another kind's score": (
+        "\n".join([f"{_ROW_HEADER},error_deg", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
+        "column 'error_deg' is a score the benchmark computes for axis estimates",
+    ),
 }
 
 
@@ -268,6 +290,12 @@ _HIP_MISTAKES = {
             ]
         ),
         "method 'GM-C', trial 1: the predicted covariance in columns proximal_cov_xx",
+    ),
+    # A centre's score in a joint centre's file: a study running both kinds (hip_sta) would
+    # collect it beside the benchmark's own.
+    "a centre's score": (
+        "\n".join([f"{_ROW_HEADER},radius_error_mm", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
+        "column 'radius_error_mm' is a score the benchmark computes for center estimates",
     ),
 }
 

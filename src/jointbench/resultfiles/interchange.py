@@ -105,22 +105,24 @@ def read_estimates_csv(
 
 
 def _untyped_as_numbers(table: pa.Table) -> pa.Table:
-    """Every column but ``status`` that is missing in every row, which CSV leaves without a
-    type, as floats: the estimate of a condition whose every trial failed is NaN throughout,
-    and still a number."""
+    """Every column but ``status`` and ``converged`` that is missing in every row, which CSV
+    leaves without a type, as floats: the estimate of a condition whose every trial failed is
+    NaN throughout, and still a number."""
     for index, field in enumerate(table.schema):
-        if pa.types.is_null(field.type) and field.name != "status":
+        if pa.types.is_null(field.type) and field.name not in ("status", "converged"):
             table = table.set_column(index, field.name, table.column(index).cast(pa.float64()))
     return table
 
 
 def _booleans(table: pa.Table, path: str | Path) -> pa.Array:
-    """``converged`` as booleans, from ``true``/``false`` or ``1``/``0``."""
+    """``converged`` as booleans, from ``true``/``false`` or ``1``/``0``; an empty cell stays
+    missing, for the estimates check to name its trial."""
     column = table.column("converged")
+    if pa.types.is_null(column.type):
+        return column.cast(pa.bool_())
     if pa.types.is_boolean(column.type):
         return column
     if pa.types.is_integer(column.type):
-        values = column.to_numpy()
-        if np.isin(values, (0, 1)).all():
-            return pa.array(values == 1)
+        if np.isin(column.drop_null().to_numpy(), (0, 1)).all():
+            return pc.equal(column, 1)
     raise ValueError(f"{path}: column 'converged' must hold true/false or 1/0, got {column.type}")
