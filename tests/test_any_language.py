@@ -196,6 +196,10 @@ _CENTER_MISTAKES = {
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,two,3,true,0,0,ok"]),
         "column 'center_y' must be numeric, got large_string; the row of trial 1 holds 'two'",
     ),
+    "iterations left empty": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,,0,ok"]),
+        "column 'iterations' must be integer, got double; the row of trial 1 holds nothing",
+    ),
     "trial a word": (
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "one,1,2,3,true,0,0,ok"]),
         "column 'trial' must be integer, got large_string; the row holds 'one'",

@@ -156,7 +156,9 @@ def check_estimates(
         if not accepts(columns[column].type):
             raise ValueError(
                 f"{source}: column {column!r} must be {description}, got {columns[column].type}"
-                + _first_word(columns[column], None if column == "trial" else columns["trial"])
+                + _first_offender(
+                    columns[column], None if column == "trial" else columns["trial"], description
+                )
             )
     if columns["trial"].null_count:
         raise ValueError(f"{source}: column 'trial' has missing values")
@@ -196,19 +198,36 @@ def _check_converged_given(converged, trials, source: str) -> None:
     )
 
 
+def _first_offender(column: pa.Array | pa.ChunkedArray, trials, description: str) -> str:
+    """Where a column of the wrong type first holds what makes it so: what a CSV's author looks
+    for. A text column that should hold numbers: its first word that is none (``"two"``,
+    ``"1,5"``); a float column that should hold integers: its first value that is no whole
+    number, or nothing (an empty cell). Empty for any other column."""
+    if pa.types.is_string(column.type) or pa.types.is_large_string(column.type):
+        return _first_word(column, trials)
+    if description == "integer" and pa.types.is_floating(column.type):
+        for row, value in enumerate(column.to_pylist()):
+            if value is None or not float(value).is_integer():
+                held = "nothing" if value is None or math.isnan(value) else repr(value)
+                return f"; the row{_of_trial(trials, row)} holds {held}"
+    return ""
+
+
+def _of_trial(trials, row: int) -> str:
+    """`` of trial N`` for row ``row`` of the ``trials`` column, or nothing without one."""
+    return "" if trials is None else f" of trial {trials[row].as_py()!r}"
+
+
 def _first_word(column: pa.Array | pa.ChunkedArray, trials) -> str:
     """For a text column that should hold numbers, where it first holds a word that is none
-    (``"two"``, ``"1,5"``): what a CSV's author looks for. Empty for any other column."""
-    if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
-        return ""
+    (``"two"``, ``"1,5"``)."""
     for row, value in enumerate(column.to_pylist()):
         try:
             float(value)
         except (TypeError, ValueError):
             if value is None:
                 continue
-            trial = "" if trials is None else f" of trial {trials[row].as_py()!r}"
-            return f"; the row{trial} holds {value!r}"
+            return f"; the row{_of_trial(trials, row)} holds {value!r}"
     return ""
 
 
