@@ -138,6 +138,19 @@ def test_an_estimates_csv_without_rows_is_refused(tmp_path):
     assert str(source) in str(error.value)
 
 
+def test_an_estimates_csv_not_in_utf8_is_refused_by_name(tmp_path):
+    """A status written in a legacy encoding (Latin-1 'échec'): text in a results file is
+    UTF-8, and the refusal names the CSV and the trial rather than a byte offset alone."""
+    dataset, _ = _dataset(tmp_path)
+    source = _estimates_csv(tmp_path, "0,1.5,2,3,true,0,1e-5,ok\n")
+    with open(source, "ab") as stream:
+        stream.write("1,nan,nan,nan,false,0,1e-5,échec\n".encode("latin-1"))
+    message = "column 'status' is not UTF-8 text in the row of trial 1"
+    with pytest.raises(ValueError, match=re.escape(message)) as error:
+        read_estimates_csv(source, dataset, tmp_path / "out.parquet")
+    assert str(error.value).startswith(f"{source}: "), str(error.value)
+
+
 # ------------------------------- a contestant's mistakes, named in the CSV the contestant wrote
 
 _ROW_HEADER = "trial,center_x,center_y,center_z,converged,iterations,seconds,status"
@@ -183,6 +196,10 @@ _CENTER_MISTAKES = {
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,two,3,true,0,0,ok"]),
         "column 'center_y' must be numeric, got large_string; the row of trial 1 holds 'two'",
     ),
+    "iterations left empty": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,,0,ok"]),
+        "column 'iterations' must be integer, got double; the row of trial 1 holds nothing",
+    ),
     "trial a word": (
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "one,1,2,3,true,0,0,ok"]),
         "column 'trial' must be integer, got large_string; the row holds 'one'",
@@ -202,6 +219,33 @@ _CENTER_MISTAKES = {
     "negative seconds": (
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,0,-0.5,ok"]),
         "trial 1: column 'seconds' is -0.5, below 0",
+    ),
+    # A comma ending every line, as a loop printing "value," writes: a column without a name.
+    "trailing comma": (
+        "\n".join([f"{_ROW_HEADER},", *(f"{row}," for row in _GOOD_ROWS)]),
+        "column 9 has no name (a comma ending the header line?)",
+    ),
+    # An empty cell says neither success nor failure: the row would be scored as neither.
+    "converged left empty": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2.5,3,,4,1e-5,ok"]),
+        "column 'converged' is empty in the row of trial 1 (1 such rows)",
+    ),
+    "converged left empty in a failed row": (
+        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,nan,nan,,4,1e-5,"]),
+        "column 'converged' is empty in the row of trial 1 (1 such rows)",
+    ),
+    "converged empty in every row": (
+        "\n".join([_ROW_HEADER, "0,1,2,3,,0,0,ok", "1,1,2,3,,0,0,ok"]),
+        "column 'converged' is empty in the row of trial 0 (2 such rows)",
+    ),
+    "converged 1/0 with a gap": (
+        "\n".join([_ROW_HEADER, "0,1,2,3,1,0,0,ok", "1,1,2,3,,0,0,ok"]),
+        "column 'converged' is empty in the row of trial 1 (1 such rows)",
+    ),
+    # An axis study's score in a centre's file: not computed for it, so never checked.
+    "another kind's score": (
+        "\n".join([f"{_ROW_HEADER},error_deg", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
+        "column 'error_deg' is a score the benchmark computes for axis estimates",
     ),
 }
 
@@ -268,6 +312,12 @@ _HIP_MISTAKES = {
             ]
         ),
         "method 'GM-C', trial 1: the predicted covariance in columns proximal_cov_xx",
+    ),
+    # A centre's score in a joint centre's file: a study running both kinds (hip_sta) would
+    # collect it beside the benchmark's own.
+    "a centre's score": (
+        "\n".join([f"{_ROW_HEADER},radius_error_mm", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
+        "column 'radius_error_mm' is a score the benchmark computes for center estimates",
     ),
 }
 

@@ -262,12 +262,23 @@ def _cmc_only(tmp_path, **cmc) -> str:
 
 
 @pytest.mark.pipeline
-def test_an_external_rule_given_the_full_dataset_stops_the_run_before_any_job(tmp_path):
+@pytest.mark.parametrize(
+    "full",
+    [
+        '"results/datasets/',
+        '"./results/datasets/',
+        '"results/blind/../datasets/',
+        'str(Path(workflow.basedir)) + "/results/datasets/',
+    ],
+    ids=["as-is", "dot-slash", "dot-dot", "absolute"],
+)
+def test_an_external_rule_given_the_full_dataset_stops_the_run_before_any_job(tmp_path, full):
+    """However the rule spells the dataset file's path: Snakemake finds the file by it."""
     copy_workflow(tmp_path)
     rules = tmp_path / "workflow" / "rules" / "estimators"
     template = (rules / "centroid.smk").read_text()
-    assert "results/blind/{study}/{condition}.parquet" in template
-    (rules / "centroid.smk").write_text(template.replace("results/blind/", "results/datasets/"))
+    assert '"results/blind/{study}/{condition}.parquet"' in template
+    (rules / "centroid.smk").write_text(template.replace('"results/blind/', full))
     overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
     run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
     assert run.returncode != 0

@@ -7,7 +7,7 @@ import logging
 import pandas as pd
 import pytest
 
-from jointbench import console, report
+from jointbench import console, invocation, report
 from jointbench.figures.paper_c import calibration_status
 from jointbench.papers import paper_c
 
@@ -24,6 +24,26 @@ from jointbench.papers import paper_c
 )
 def test_the_report_path_is_read_from_the_command_line(argv, path):
     assert report.report_path(argv) == path
+
+
+@pytest.mark.parametrize(
+    ("argv", "command"),
+    [
+        (None, "snakemake -j2 --report results/report.html"),
+        (["-j2"], "snakemake --jobs 2 --report results/report.html"),
+        (
+            ["study_cmc", "-j2", "--configfile", "my.yaml", "more.yaml"],
+            "snakemake --configfile my.yaml more.yaml --jobs 2 --report results/report.html",
+        ),
+    ],
+)
+def test_a_run_closes_with_the_report_command_of_its_own_config(argv, command):
+    """The report of a run over an overlay is made with that overlay: without it Snakemake
+    looks for the default config's outputs, which that run did not make."""
+    environ = {}
+    if argv is not None:
+        invocation.record(argv, environ)
+    assert f"The report: {command}, then open" in report.closing_lines(environ)
 
 
 def test_finishing_titles_the_report_and_starts_it_at_the_top(tmp_path):

@@ -250,3 +250,18 @@ def test_check_estimates_reads_arrow_tables_and_names_a_column_of_mixed_values()
     missing_trial = table.set_column(3, "trial", pa.array([None], pa.int64()))
     with pytest.raises(ValueError, match="column 'trial' has missing values"):
         check_estimates(missing_trial, kind="center", condition_keys=keys)
+
+
+def test_an_estimates_file_without_a_convergence_verdict_is_refused_naming_the_trial():
+    """A row whose ``converged`` is missing claims neither success nor failure; a file an
+    estimator writes as parquet is held to that as an estimates CSV is."""
+    keys = ("marker_set", "rom_deg", "noise_mm")
+    row = dict(marker_set="M", rom_deg=5, noise_mm=1.0, method="LS-P", center_x=0.0)
+    row |= dict(center_y=0.0, center_z=0.0, iterations=1, seconds=0.1, status="ok")
+    frame = pd.DataFrame([{**row, "trial": 0, "converged": True}, {**row, "trial": 1}])
+    message = "x: column 'converged' is empty in the row of trial 1 (1 such rows)"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        check_estimates(frame, kind="center", condition_keys=keys, source="x")
+    unanswered = frame.assign(converged=None)
+    with pytest.raises(ValueError, match=re.escape(message.replace("1 (1", "0 (2"))):
+        check_estimates(unanswered, kind="center", condition_keys=keys, source="x")

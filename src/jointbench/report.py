@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from jointbench import machine
+from jointbench import invocation, machine
 from jointbench.comparison.snapshot import reproduction_counts
 from jointbench.configuration import config as jb_config
 from jointbench.configuration.studies import get_study
@@ -142,6 +142,8 @@ def write_captions(tables: Mapping[str, str], outputs: Sequence[str], config: Ma
 
 #: The report's name: its browser tab and the landing page's title.
 REPORT_TITLE = "jointbench: functional joint centre and axis estimators, benchmarked"
+#: The report file the closing lines and the README name.
+REPORT_FILE = "results/report.html"
 
 
 def output_label(name: str) -> str:
@@ -457,10 +459,13 @@ def report_path(argv: Sequence[str]) -> str | None:
     return str(Path(directory or ".", path))
 
 
-def closing_lines() -> str:
-    """What a successful run prints last: where the results are and how to make the report."""
+def closing_lines(environ: Mapping[str, str] = os.environ) -> str:
+    """What a successful run prints last: where the results are and how to make the report,
+    with the options of the run (:func:`jointbench.invocation.snakemake_command`, as recorded
+    in ``environ``), whose config decides which outputs the report shows."""
+    command = invocation.snakemake_command("--report", REPORT_FILE, environ=environ)
     return (
         "Done. Figures in results/figures/, tables in results/tables/ (what each file holds: "
         "results/README.md).\n"
-        "The report: snakemake --report results/report.html, then open results/report.html."
+        f"The report: {command}, then open {REPORT_FILE}."
     )

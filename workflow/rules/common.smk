@@ -1,5 +1,6 @@
 # Helpers shared by the rules: config checks, the study and paper registries, file lists.
 import functools
+import os
 import re
 import sys
 from pathlib import Path
@@ -70,8 +71,10 @@ def check_external_rules():
 
 def _check_blind(producer, name):
     """Stop when ``producer``, the rule of external estimator ``name``, reads a full dataset
-    file."""
-    full = [f for f in map(str, producer.input) if f.startswith("results/datasets/")]
+    file, however its path is spelt."""
+    full = [
+        f for f in map(_as_matched, producer.input) if f.startswith("results/datasets/")
+    ]
     if full:
         raise ValueError(
             f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which holds the "
@@ -79,6 +82,15 @@ def _check_blind(producer, name):
             "results/blind/{study}/{condition}.parquet, or the markers CSV "
             "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
         )
+
+
+def _as_matched(path):
+    """``path`` as Snakemake matches it against outputs, to find what writes it (relative to
+    the working directory when it lies in it, without ``./`` or ``..``)."""
+    path = os.path.normpath(path)
+    if os.path.isabs(path) and Path(path).is_relative_to(Path.cwd()):
+        path = os.path.relpath(path)
+    return Path(path).as_posix()
 
 
 def _alternatives(names):

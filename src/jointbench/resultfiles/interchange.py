@@ -69,9 +69,10 @@ def read_estimates_csv(
     """Write the estimates CSV at ``path`` as an estimates file at ``output``: its columns, with
     the condition of ``dataset`` and the method (the name of ``path``'s folder) in every row.
 
-    ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice, has no
-    rows or lacks a required column; the estimate columns and every value are checked when the
-    file is collected, and a refusal then names ``path`` too, which ``output`` records
+    ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice or one
+    without a name, has no rows, lacks a required column or holds a status that is not UTF-8;
+    the estimate columns and every value are checked when the file is collected, and a refusal
+    then names ``path`` too, which ``output`` records
     (:func:`jointbench.resultfiles.parquet.read_source`): the file its author can correct.
     """
     try:
@@ -82,6 +83,11 @@ def read_estimates_csv(
     repeated = next((name for name in names if names.count(name) > 1), None)
     if repeated is not None:
         raise ValueError(f"{path}: column {repeated!r} appears more than once")
+    unnamed = next((index for index, name in enumerate(names) if not name.strip()), None)
+    if unnamed is not None:
+        raise ValueError(
+            f"{path}: column {unnamed + 1} has no name (a comma ending the header line?)"
+        )
     if not table.num_rows:
         trials = len(read_trial_numbers(dataset))
         raise ValueError(f"{path}: no rows; the dataset has {trials} trials, one row each")
@@ -95,7 +101,7 @@ def read_estimates_csv(
     table = table.set_column(
         table.schema.get_field_index("converged"), "converged", _booleans(table, path)
     )
-    status = table.column("status").cast(pa.string()).fill_null("")
+    status = _text(table, "status", path).fill_null("")
     table = table.set_column(table.schema.get_field_index("status"), "status", status)
     condition = read_metadata(dataset)["condition"]
     added = {key: pa.array([value] * table.num_rows) for key, value in condition.items()}
@@ -105,22 +111,43 @@ def read_estimates_csv(
 
 
 def _untyped_as_numbers(table: pa.Table) -> pa.Table:
-    """Every column but ``status`` that is missing in every row, which CSV leaves without a
-    type, as floats: the estimate of a condition whose every trial failed is NaN throughout,
-    and still a number."""
+    """Every column but ``status`` and ``converged`` that is missing in every row, which CSV
+    leaves without a type, as floats: the estimate of a condition whose every trial failed is
+    NaN throughout, and still a number."""
     for index, field in enumerate(table.schema):
-        if pa.types.is_null(field.type) and field.name != "status":
+        if pa.types.is_null(field.type) and field.name not in ("status", "converged"):
             table = table.set_column(index, field.name, table.column(index).cast(pa.float64()))
     return table
 
 
+def _text(table: pa.Table, name: str, path: str | Path) -> pa.ChunkedArray:
+    """Column ``name`` as text; ``ValueError`` naming ``path`` and the first trial whose value
+    is not UTF-8 (CSV keeps such a column as bytes)."""
+    column = table.column(name)
+    if pa.types.is_binary(column.type) or pa.types.is_large_binary(column.type):
+        for row, value in enumerate(column.to_pylist()):
+            if value is None:
+                continue
+            try:
+                value.decode()
+            except UnicodeDecodeError:
+                trial = table.column("trial")[row].as_py()
+                raise ValueError(
+                    f"{path}: column {name!r} is not UTF-8 text in the row of trial {trial!r} "
+                    f"({value!r}): write the file in UTF-8"
+                ) from None
+    return column.cast(pa.string())
+
+
 def _booleans(table: pa.Table, path: str | Path) -> pa.Array:
-    """``converged`` as booleans, from ``true``/``false`` or ``1``/``0``."""
+    """``converged`` as booleans, from ``true``/``false`` or ``1``/``0``; an empty cell stays
+    missing, for the estimates check to name its trial."""
     column = table.column("converged")
+    if pa.types.is_null(column.type):
+        return column.cast(pa.bool_())
     if pa.types.is_boolean(column.type):
         return column
     if pa.types.is_integer(column.type):
-        values = column.to_numpy()
-        if np.isin(values, (0, 1)).all():
-            return pa.array(values == 1)
+        if np.isin(column.drop_null().to_numpy(), (0, 1)).all():
+            return pc.equal(column, 1)
     raise ValueError(f"{path}: column 'converged' must hold true/false or 1/0, got {column.type}")

@@ -53,13 +53,14 @@ __all__ = [
 ]
 
 # column -> predicate on the column's Arrow type, and what the predicate means for the message.
-# Booleans count as numbers, as in NumPy; a column of nothing but missing values as text.
+# Booleans count as numbers, as in NumPy; a column of nothing but missing values as text, and
+# as booleans, for the check of missing values to name its first row.
 _NUMBER = (
     lambda t: pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t),
     "numeric",
 )
 _INTEGER = (pa.types.is_integer, "integer")
-_BOOL = (pa.types.is_boolean, "boolean")
+_BOOL = (lambda t: pa.types.is_boolean(t) or pa.types.is_null(t), "boolean")
 _TEXT = (
     lambda t: pa.types.is_string(t) or pa.types.is_large_string(t) or pa.types.is_null(t),
     "text",
@@ -99,6 +100,12 @@ OPTIONAL_COLUMNS = {
     )
     for kind, columns in SCORE_COLUMNS.items()
 }
+#: Per score column, the kinds whose files the benchmark computes it for: a file of another
+#: kind may not give it, since nothing would check it (:func:`check_estimates`).
+_SCORED_FOR = {
+    column: tuple(kind for kind, columns in SCORE_COLUMNS.items() if column in columns)
+    for column in dict.fromkeys(c for columns in SCORE_COLUMNS.values() for c in columns)
+}
 #: A reported score agrees with the benchmark's when equal to this relative tolerance, or
 #: this absolute one in the column's own unit: rounding, not a different number.
 SCORE_RTOL = 1e-6
@@ -131,12 +138,14 @@ def check_estimates(
     source: str = "estimates",
 ) -> None:
     """Raise ``ValueError`` naming the first missing or mistyped column of an estimates table
-    (a score column, :data:`OPTIONAL_COLUMNS`, may be absent, but not of another type).
+    (a score column, :data:`OPTIONAL_COLUMNS`, may be absent, but not of another type), a score
+    the benchmark computes for other kinds only, and the first trial with no ``converged``.
 
     ``table`` is an Arrow table or a pandas data frame; a column's type is its Arrow type (a
     frame's columns are converted as parquet would store them).
     """
     names = table.column_names if isinstance(table, pa.Table) else list(table.columns)
+    _check_no_foreign_scores(names, kind, source)
     columns = {}
     required = required_columns(kind, condition_keys)
     optional = {c: check for c, check in OPTIONAL_COLUMNS[kind].items() if c in names}
@@ -147,10 +156,13 @@ def check_estimates(
         if not accepts(columns[column].type):
             raise ValueError(
                 f"{source}: column {column!r} must be {description}, got {columns[column].type}"
-                + _first_word(columns[column], None if column == "trial" else columns["trial"])
+                + _first_offender(
+                    columns[column], None if column == "trial" else columns["trial"], description
+                )
             )
     if columns["trial"].null_count:
         raise ValueError(f"{source}: column 'trial' has missing values")
+    _check_converged_given(columns["converged"], columns["trial"], source)
     if method is not None and len(table):
         found = set(columns["method"].to_pylist())
         if found != {method}:
@@ -160,19 +172,62 @@ def check_estimates(
             )
 
 
+def _check_no_foreign_scores(names: Sequence[str], kind: str, source: str) -> None:
+    """``ValueError`` naming ``source`` and the column when a file of ``kind`` gives a score
+    the benchmark computes for other kinds only: it is neither computed nor checked for this
+    file, so a study running both kinds would collect it beside the benchmark's own."""
+    for column in names:
+        kinds = _SCORED_FOR.get(column, (kind,))
+        if kind not in kinds:
+            raise ValueError(
+                f"{source}: column {column!r} is a score the benchmark computes for "
+                f"{' and '.join(kinds)} estimates, not for {kind} ones: leave it out"
+            )
+
+
+def _check_converged_given(converged, trials, source: str) -> None:
+    """``ValueError`` naming ``source`` and the first trial whose ``converged`` is missing: such
+    a row claims neither success nor failure, and would be counted as neither."""
+    if not converged.null_count:
+        return
+    row = converged.to_pylist().index(None)
+    raise ValueError(
+        f"{source}: column 'converged' is empty in the row of trial {trials[row].as_py()!r} "
+        f"({converged.null_count} such rows): each row says whether its method converged, "
+        "true or false (1 or 0)"
+    )
+
+
+def _first_offender(column: pa.Array | pa.ChunkedArray, trials, description: str) -> str:
+    """Where a column of the wrong type first holds what makes it so: what a CSV's author looks
+    for. A text column that should hold numbers: its first word that is none (``"two"``,
+    ``"1,5"``); a float column that should hold integers: its first value that is no whole
+    number, or nothing (an empty cell). Empty for any other column."""
+    if pa.types.is_string(column.type) or pa.types.is_large_string(column.type):
+        return _first_word(column, trials)
+    if description == "integer" and pa.types.is_floating(column.type):
+        for row, value in enumerate(column.to_pylist()):
+            if value is None or not float(value).is_integer():
+                held = "nothing" if value is None or math.isnan(value) else repr(value)
+                return f"; the row{_of_trial(trials, row)} holds {held}"
+    return ""
+
+
+def _of_trial(trials, row: int) -> str:
+    """`` of trial N`` for row ``row`` of the ``trials`` column, or nothing without one."""
+    return "" if trials is None else f" of trial {trials[row].as_py()!r}"
+
+
 def _first_word(column: pa.Array | pa.ChunkedArray, trials) -> str:
     """For a text column that should hold numbers, where it first holds a word that is none
-    (``"two"``, ``"1,5"``): what a CSV's author looks for. Empty for any other column."""
-    if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
-        return ""
+    (``"two"``, ``"1,5"``)."""
     for row, value in enumerate(column.to_pylist()):
         try:
             float(value)
         except (TypeError, ValueError):
             if value is None:
                 continue
-            trial = "" if trials is None else f" of trial {trials[row].as_py()!r}"
-            return f"; the row{trial} holds {value!r}"
+            return f"; the row{_of_trial(trials, row)} holds {value!r}"
     return ""
 
 
