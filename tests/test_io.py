@@ -221,6 +221,26 @@ def test_poses_of_another_dataset_are_refused_naming_the_file(tmp_path):
         parquet.read_poses(dataset, 0, trials.segments)
 
 
+@pytest.mark.parametrize("other", ["trials-reversed", "distal-moved", "proximal-noisier"])
+def test_poses_of_other_markers_of_the_same_shapes_are_refused(tmp_path, other):
+    """A poses file of another dataset whose shapes match (another seed, say): the poses do not
+    leave the residual they were stored with on these markers."""
+    _, _, trials, dataset = _hip_dataset(tmp_path, 3)
+    poses = tmp_path / "poses" / dataset.name
+    run.run_poses_files("hip", [str(dataset)], [str(poses)])
+    segments = {k: v.copy() for k, v in trials.segments.items()}
+    if other == "trials-reversed":
+        segments = {k: v[::-1].copy() for k, v in segments.items()}
+    elif other == "distal-moved":
+        segments["distal"][1] += np.array([0.0, 0.0, 5.0])  # one trial's frames, rigidly
+        segments["distal"][1, 3:] += np.array([1.0, 0.0, 0.0])
+    else:
+        rng = np.random.default_rng(0)
+        segments["proximal"][2] += rng.normal(scale=0.5, size=segments["proximal"][2].shape)
+    with pytest.raises(ValueError, match=f"{re.escape(str(poses))}: the poses of trial"):
+        parquet.read_poses(poses, 0, segments)
+
+
 def test_only_a_study_with_two_pose_based_methods_shares_poses():
     config = load_config(Path(__file__).resolve().parents[1] / "config" / "config.yaml")
     assert run.methods_sharing_poses(config, "hip") == config["studies"]["hip"]["estimators"]

@@ -672,6 +672,38 @@ def _poses_shapes(path: str | Path) -> dict[str, tuple[int, ...]]:
 
 
 @_names_unreadable_file
+def _check_fitted_to(
+    path: str | Path,
+    name: str,
+    trials: np.ndarray,
+    markers: np.ndarray,
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    body: np.ndarray,
+    residual_ss: np.ndarray,
+) -> None:
+    """``ValueError`` naming ``path``, segment ``name`` and the first of ``trials`` whose
+    stored poses (``rotation`` ``(T, N, 3, 3)``, ``translation`` ``(T, N, 3)`` [mm], ``body``
+    ``(T, n, 3)`` [mm]) do not leave on ``markers`` ``(T, N, n, 3)`` [mm] the residual sum of
+    squares they were stored with, ``residual_ss`` ``(T,)`` [mm^2]: poses of other markers of
+    the same shapes (another seed's dataset, say), which the shapes alone cannot tell."""
+    turned = np.einsum("tfij,tmj->tfmi", rotation, body) + translation[:, :, None, :]
+    found = np.sum((markers - turned) ** 2, axis=(1, 2, 3))
+    # Rounding of coordinates of this size, summed over every coordinate, bounds what a
+    # recomputation of the same poses may move the sum by.
+    scale = np.max(np.abs(markers), axis=(1, 2, 3), initial=0.0)
+    rounding = markers[0].size * (1e-10 * scale) ** 2
+    off = np.abs(found - residual_ss) > 1e-6 * residual_ss + rounding
+    if off.any():
+        first = int(np.argmax(off))
+        raise ValueError(
+            f"{path}: the poses of trial {trials[first]}, segment {name!r}, leave a residual "
+            f"of {found[first]:.6g} mm^2 on the dataset's markers, not the "
+            f"{residual_ss[first]:.6g} mm^2 they were stored with: they were fitted to other "
+            "markers (a poses file of another dataset)"
+        )
+
+
 def read_poses(
     path: str | Path, first_trial: int, segments: Mapping[str, np.ndarray]
 ) -> list[TrialPoses]:
@@ -711,6 +743,13 @@ def read_poses(
     }
     residuals = {name: _to_numpy(rows.column(f"{name}/residual_ss")) for name in segments}
     errors = rows.column("error").to_pylist()
+    fitted = np.array([error is None for error in errors])
+    for name, markers in segments.items():
+        parts = [arrays[name, field][fitted] for field in _POSE_ARRAYS]
+        trials_fitted = np.flatnonzero(fitted) + first_trial
+        _check_fitted_to(
+            path, name, trials_fitted, markers[fitted], *parts, residuals[name][fitted]
+        )
     return [
         ValueError(error)
         if error is not None
