@@ -221,6 +221,23 @@ def test_poses_of_another_dataset_are_refused_naming_the_file(tmp_path):
         parquet.read_poses(dataset, 0, trials.segments)
 
 
+@pytest.mark.parametrize("damage", ["cut in half", "middle overwritten"])
+def test_a_damaged_poses_file_is_named_with_the_command_that_regenerates_it(tmp_path, damage):
+    _, _, trials, dataset = _hip_dataset(tmp_path, 3)
+    poses = tmp_path / "poses" / dataset.name
+    run.run_poses_files("hip", [str(dataset)], [str(poses)])
+    data = poses.read_bytes()
+    middle = len(data) // 2
+    if damage == "cut in half":
+        poses.write_bytes(data[:middle])
+    else:
+        poses.write_bytes(data[:100] + b"\xff" * (middle - 100) + data[middle:])
+    with pytest.raises(ValueError) as error:
+        parquet.read_poses(poses, 0, trials.segments)
+    assert str(error.value).startswith(f"{poses}: cannot be read as parquet")
+    assert f"--forcerun {poses}" in str(error.value)
+
+
 @pytest.mark.parametrize("other", ["trials-reversed", "distal-moved", "proximal-noisier"])
 def test_poses_of_other_markers_of_the_same_shapes_are_refused(tmp_path, other):
     """A poses file of another dataset whose shapes match (another seed, say): the poses do not

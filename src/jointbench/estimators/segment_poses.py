@@ -25,6 +25,7 @@ from jointbench.numerics.poses import rigid_poses
 __all__ = [
     "POSE_MIN_FRAMES",
     "SegmentPoses",
+    "pose_residuals",
     "pose_segments",
     "stored_segment_poses",
     "trial_poses",
@@ -57,11 +58,24 @@ class SegmentPoses:
 
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
-    # R_f b_p for every frame and marker as one (3N, 3) @ (3, P) product.
-    turned = (rotation.reshape(-1, 3) @ body.T).reshape(len(rotation), 3, -1)
-    residual = markers - np.swapaxes(turned, 1, 2) - translation[:, None, :]
+    residual = pose_residuals(markers, rotation, translation, body)
     residual_ss = float(np.sum(residual * residual))
     return stored_segment_poses(markers, rotation, translation, body, residual_ss)
+
+
+def pose_residuals(
+    markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
+) -> np.ndarray:
+    """``markers - (R_f b_m + t_f)`` ``(..., N, n, 3)`` [mm]: what the poses ``rotation``
+    ``(..., N, 3, 3)`` and ``translation`` ``(..., N, 3)`` [mm] of the body-fixed coordinates
+    ``body`` ``(..., n, 3)`` [mm] leave of ``markers`` ``(..., N, n, 3)``; leading axes are
+    trials."""
+    *lead, n_frames, _, _ = rotation.shape
+    # R_f b_m for every frame and marker as one (3N, 3) @ (3, n) product per trial.
+    turned = (rotation.reshape(*lead, -1, 3) @ np.swapaxes(body, -1, -2)).reshape(
+        *lead, n_frames, 3, -1
+    )
+    return markers - np.swapaxes(turned, -1, -2) - translation[..., None, :]
 
 
 def stored_segment_poses(

@@ -228,16 +228,13 @@ def _scatter_and_largest(
     return scatter, weakest, largest
 
 
-#: The pose arrays :class:`_Clusters` stacks from each trial's :class:`SegmentPoses`.
-POSE_ARRAYS = ("rotation", "body")
-
-
 def _clusters(markers: np.ndarray, poses: list[SegmentPoses]) -> _Clusters:
     """The rigid-body fits of one segment's markers ``(T, N, n, 3)`` [mm] in ``T`` trials from
     their converged poses ``poses`` (one :class:`SegmentPoses` per trial, fitted to those
     markers)."""
     _, n_frames, n_markers, _ = markers.shape
-    rotation, body = (np.stack([getattr(pose, name) for pose in poses]) for name in POSE_ARRAYS)
+    rotation = np.stack([pose.rotation for pose in poses])
+    body = np.stack([pose.body for pose in poses])
     residual_ss = np.array([pose.residual_ss for pose in poses])
     inertia_inv = np.empty((len(poses), 3, 3))
     scatter, weakest, largest = _scatter_and_largest(

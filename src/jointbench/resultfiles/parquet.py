@@ -26,7 +26,11 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from jointbench.estimators.segment_poses import SegmentPoses, stored_segment_poses
+from jointbench.estimators.segment_poses import (
+    SegmentPoses,
+    pose_residuals,
+    stored_segment_poses,
+)
 from jointbench.invocation import snakemake_command
 from jointbench.simulate import Trials
 
@@ -671,24 +675,21 @@ def _poses_shapes(path: str | Path) -> dict[str, tuple[int, ...]]:
     return {name: tuple(shape) for name, shape in shapes.items()}
 
 
-@_names_unreadable_file
 def _check_fitted_to(
     path: str | Path,
     name: str,
     trials: np.ndarray,
     markers: np.ndarray,
-    rotation: np.ndarray,
-    translation: np.ndarray,
-    body: np.ndarray,
+    poses: tuple[np.ndarray, np.ndarray, np.ndarray],
     residual_ss: np.ndarray,
 ) -> None:
     """``ValueError`` naming ``path``, segment ``name`` and the first of ``trials`` whose
-    stored poses (``rotation`` ``(T, N, 3, 3)``, ``translation`` ``(T, N, 3)`` [mm], ``body``
-    ``(T, n, 3)`` [mm]) do not leave on ``markers`` ``(T, N, n, 3)`` [mm] the residual sum of
-    squares they were stored with, ``residual_ss`` ``(T,)`` [mm^2]: poses of other markers of
-    the same shapes (another seed's dataset, say), which the shapes alone cannot tell."""
-    turned = np.einsum("tfij,tmj->tfmi", rotation, body) + translation[:, :, None, :]
-    found = np.sum((markers - turned) ** 2, axis=(1, 2, 3))
+    stored ``poses`` (``rotation``, ``translation``, ``body`` with a leading trial axis, see
+    :func:`jointbench.estimators.segment_poses.pose_residuals`) do not leave on ``markers``
+    ``(T, N, n, 3)`` [mm] the residual sum of squares they were stored with, ``residual_ss``
+    ``(T,)`` [mm^2]: poses of other markers of the same shapes (another seed's dataset, say),
+    which the shapes alone cannot tell."""
+    found = np.sum(pose_residuals(markers, *poses) ** 2, axis=(1, 2, 3))
     # Rounding of coordinates of this size, summed over every coordinate, bounds what a
     # recomputation of the same poses may move the sum by.
     scale = np.max(np.abs(markers), axis=(1, 2, 3), initial=0.0)
@@ -704,6 +705,7 @@ def _check_fitted_to(
         )
 
 
+@_names_unreadable_file
 def read_poses(
     path: str | Path, first_trial: int, segments: Mapping[str, np.ndarray]
 ) -> list[TrialPoses]:
@@ -745,11 +747,9 @@ def read_poses(
     errors = rows.column("error").to_pylist()
     fitted = np.array([error is None for error in errors])
     for name, markers in segments.items():
-        parts = [arrays[name, field][fitted] for field in _POSE_ARRAYS]
+        parts = tuple(arrays[name, field][fitted] for field in _POSE_ARRAYS)
         trials_fitted = np.flatnonzero(fitted) + first_trial
-        _check_fitted_to(
-            path, name, trials_fitted, markers[fitted], *parts, residuals[name][fitted]
-        )
+        _check_fitted_to(path, name, trials_fitted, markers[fitted], parts, residuals[name][fitted])
     return [
         ValueError(error)
         if error is not None
