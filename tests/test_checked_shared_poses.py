@@ -174,9 +174,9 @@ def test_many_checked_trials_answer_as_each_fitting_twice(name):
 
 
 @pytest.mark.parametrize("name", POSE_BASED)
-def test_poses_a_caller_passes_are_used_for_their_own_markers_only(name):
-    """Poses of other markers (a caller's mistake) are not read by the verdict; poses of the
-    same markers give the answer the call gives without them."""
+def test_poses_of_the_very_markers_give_the_answer_of_none(name):
+    """Poses a caller fitted to the call's own markers give the answer the call gives without
+    them, every field of every trial."""
     segments = _batch(BATCH)
     names = pose_segments(registry.many(KIND, name, checked=False))
     own = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
@@ -184,15 +184,41 @@ def test_poses_a_caller_passes_are_used_for_their_own_markers_only(name):
     with_own = registry.many(KIND, name)(*segments, poses=own)
     for found, expected in zip(with_own, without, strict=True):
         _assert_same(found, expected)
-    others = own[::-1]  # each trial given another trial's poses
-    mixed = registry.many(KIND, name)(*segments, poses=others)
-    for case, found in zip(BATCH, mixed, strict=True):
-        if isinstance(found, Exception):
-            continue
-        alone = support.assess(KIND, CASES[case])
-        assert found.diagnostics["support_assessed"] == alone.diagnostics["assessed"]
-        for key, value in alone.diagnostics.items():
-            assert found.diagnostics[f"support_{key}"] == pytest.approx(value, rel=1e-9, abs=1e-12)
+
+
+FITTED = ["ball-noisy", "ball-noise-free", "hinge-noisy", "still"]
+
+
+def _misfitted(segments: tuple, names: tuple) -> dict[str, tuple[list, str]]:
+    """Poses a caller may pass that were not fitted to the call's ``segments``, with the trial
+    and segment the refusal must name: the trials' poses in reverse order, one trial's poses
+    fitted to its markers moved by a millimetre, and one trial's last segment's poses taken
+    from another trial."""
+    own = trial_poses(dict(zip(names, segments, strict=True)), min_frames=3)
+    moved = segments[-1].copy()
+    moved[2] += 1.0
+    edited = trial_poses(dict(zip(names, (*segments[:-1], moved), strict=True)), min_frames=3)
+    swapped = list(own)
+    swapped[2] = {**own[2], names[-1]: own[0][names[-1]]}
+    return {
+        "reversed": (own[::-1], f"trial 0's {names[0]}"),
+        "moved-markers": ([*own[:2], edited[2], *own[3:]], f"trial 2's {names[-1]}"),
+        "one-segment-swapped": (swapped, f"trial 2's {names[-1]}"),
+    }
+
+
+@pytest.mark.parametrize("case", ["reversed", "moved-markers", "one-segment-swapped"])
+@pytest.mark.parametrize("checked", [True, False])
+@pytest.mark.parametrize("name", POSE_BASED)
+def test_poses_fitted_to_other_markers_are_refused_naming_trial_and_segment(name, checked, case):
+    """A trial fitted with poses of other markers (another trial's, or its own before an edit)
+    would give a confident answer about the wrong data: the call is refused, checked or not,
+    naming the first such trial and segment."""
+    segments = _batch(FITTED)
+    names = pose_segments(registry.many(KIND, name, checked=False))
+    poses, named = _misfitted(segments, names)[case]
+    with pytest.raises(ValueError, match=rf"^poses: {named} poses were not fitted to"):
+        registry.many(KIND, name, checked=checked)(*segments, poses=poses)
 
 
 @pytest.mark.parametrize("name", POSE_BASED)

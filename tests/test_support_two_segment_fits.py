@@ -145,13 +145,22 @@ def test_a_verdict_given_the_poses_is_the_verdict_that_fits_them(case):
     assert given.diagnostics == own.diagnostics
 
 
-def test_the_verdict_reads_the_poses_it_is_given():
-    """Poses of a joint that turns given for markers of one that does not: the verdict judges
-    the poses' rotation (so it reads them, and the caller must give the markers' own)."""
+def test_the_verdict_reads_the_poses_it_is_given(monkeypatch):
+    """Given the markers' own poses the verdict reads them and fits none of its own; poses of
+    other markers (a joint that turns, for markers of one that does not) are refused, as they
+    would judge motion the markers do not have."""
     still = two_segments(150, relative="none")
     turning = two_segments(150, relative="ball")
-    assert support.assess("joint_center", still).warnings
-    assert not support.assess("joint_center", still, poses=_poses(turning)).warnings
+    expected = support.assess("joint_center", still)
+    own = _poses(still)
+
+    def no_fit(*_):
+        raise AssertionError("the verdict fitted poses of its own")
+
+    monkeypatch.setattr(support, "_fitted_poses", no_fit)
+    assert support.assess("joint_center", still, poses=own) == expected
+    with pytest.raises(ValueError, match=r"^poses: trial 0's distal poses were not fitted to"):
+        support.assess("joint_center", still, poses=_poses(turning))
 
 
 def test_a_pose_fit_that_fails_is_reported_not_raised():

@@ -119,9 +119,11 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
 
 def check_poses(segments: tuple, poses: list | None, names: tuple[str, ...] | None) -> None:
     """``ValueError`` unless ``poses`` (when given) has one entry per trial of ``segments``,
-    each the poses of the segments ``names`` (a dict by name) or the ``ValueError`` of their
-    fit: a trial must not be fitted with another trial's poses, and an entry of another kind
-    (another method's segments, ``None``) would fail the fit with no word of why."""
+    each the poses of the segments ``names`` (a dict by name) fitted to that trial's markers,
+    or the ``ValueError`` of their fit: a trial fitted with another trial's poses, or with
+    poses of its markers before an edit, would answer confidently about other data, and an
+    entry of another kind (another method's segments, ``None``) would fail the fit with no
+    word of why."""
     if poses is None or not segments:
         return
     n_trials = len(segments[0])
@@ -142,3 +144,24 @@ def check_poses(segments: tuple, poses: list | None, names: tuple[str, ...] | No
             f"poses: trial {trial} holds {held}; give per trial the poses of "
             f"{', '.join(names)} as trial_poses fits them, or the ValueError of their fit"
         )
+    for trial, entry in enumerate(poses):
+        if isinstance(entry, ValueError):
+            continue
+        for name, segment in zip(names, segments, strict=True):
+            if not _fitted_to_markers(entry[name], segment[trial]):
+                raise ValueError(
+                    f"poses: trial {trial}'s {name} poses were not fitted to its {name} "
+                    "markers (another trial's, or these markers before an edit); give per "
+                    "trial the poses trial_poses fits to the markers of this call"
+                )
+
+
+def _fitted_to_markers(pose: object, markers: object) -> bool:
+    """Whether ``pose`` (a segment's poses) holds ``markers`` as the markers it was fitted to,
+    to the bit; markers that are no array of numbers are left to the input checks."""
+    try:
+        given = np.asarray(markers, dtype=float)
+    except (TypeError, ValueError):
+        return True
+    fitted = getattr(pose, "markers", None)
+    return isinstance(fitted, np.ndarray) and np.array_equal(fitted, given)

@@ -204,20 +204,14 @@ def _shared_poses(names: tuple[str, ...], segments: tuple) -> list | None:
         return None
 
 
-def _fitted_to(poses: list | None, trials: list[int], stacked: tuple[np.ndarray, ...]):
-    """``poses`` of the ``trials`` whose checked arrays are ``stacked`` ``(k, N, n, 3)`` each,
-    when every one was fitted to those very arrays; else ``None``, and the verdict fits its
-    own (poses a caller passed may belong to other markers)."""
+def _fitted_to(poses: list | None, trials: list[int]) -> list | None:
+    """``poses`` of the ``trials`` the fit answered, for the verdict (the fit's input checks,
+    :func:`jointbench.estimators.batching.check_poses`, refused poses of other markers); else
+    ``None``, and the verdict fits its own."""
     if poses is None:
         return None
     chosen = [poses[trial] for trial in trials]
-    for row, trial_poses_ in enumerate(chosen):
-        if not isinstance(trial_poses_, dict) or len(trial_poses_) != len(stacked):
-            return None
-        for pose, array in zip(trial_poses_.values(), stacked, strict=True):
-            if not np.array_equal(pose.markers, array[row]):
-                return None
-    return chosen
+    return chosen if all(isinstance(trial_poses_, dict) for trial_poses_ in chosen) else None
 
 
 def _self_checked(fn: Callable, result, arrays: tuple, options: dict):
@@ -268,7 +262,7 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
         if fitted:
             stacked = checked.stacked(fitted)
             results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
-            poses = _fitted_to(options.get("poses"), fitted, stacked) if names else None
+            poses = _fitted_to(options.get("poses"), fitted) if names else None
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
             for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
                 outcomes[trial] = support.annotate(result, verdict)
