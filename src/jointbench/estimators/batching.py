@@ -149,10 +149,11 @@ def check_poses(segments: tuple, poses: list | None, names: tuple[str, ...] | No
             continue
         for name, segment in zip(names, segments, strict=True):
             if not _fitted_to_markers(entry[name], segment[trial]):
+                markers = name if name == "markers" else f"{name} markers"
                 raise ValueError(
-                    f"poses: trial {trial}'s {name} poses were not fitted to its {name} "
-                    "markers (another trial's, or these markers before an edit); give per "
-                    "trial the poses trial_poses fits to the markers of this call"
+                    f"poses: trial {trial}'s {name} poses were not fitted to the trial's "
+                    f"{markers} (they are another trial's, or of these markers before an "
+                    "edit); give per trial the poses trial_poses fits to the markers of this call"
                 )
 
 
