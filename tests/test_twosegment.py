@@ -245,3 +245,19 @@ def test_degenerate_trial_in_a_stack_fails_alone(method):
         answer = "point" if method.startswith("SARA") else "center"
         np.testing.assert_array_equal(getattr(outcomes[index], answer), getattr(alone, answer))
         assert outcomes[index].diagnostics == alone.diagnostics
+
+
+@pytest.mark.parametrize("checked", [True, False])
+@pytest.mark.parametrize(("kind", "name"), [("center", "SCoRE"), ("axis", "SARA")])
+def test_one_segment_poses_of_other_trials_are_refused(kind, name, checked):
+    """The one-segment pose-based methods refuse poses fitted to other trials' markers, as the
+    two-segment ones do, instead of answering about the other trials' motion."""
+    from jointbench.estimators import registry
+    from jointbench.estimators.segment_poses import trial_poses
+
+    markers = np.stack([_noisy(one_segment(hinge=kind == "axis"), seed) for seed in range(3)])
+    poses = trial_poses({"markers": markers}, min_frames=3)
+    many = registry.many(kind, name, checked=checked)
+    assert [r.center if kind == "center" else r.direction for r in many(markers, poses=poses)]
+    with pytest.raises(ValueError, match=r"^poses: trial 0's markers poses were not fitted"):
+        many(markers, poses=poses[::-1])
