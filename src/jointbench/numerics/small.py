@@ -157,7 +157,7 @@ def _jacobi(a: np.ndarray, vectors: np.ndarray) -> None:
 def _jacobi3(a: np.ndarray, v: np.ndarray) -> None:
     """:func:`_jacobi` of a ``(3, 3)`` matrix, its entries and the rotations' in local
     variables: the same operations in the same order, so the same bits, without the loads and
-    stores through arrays that make the general loop cost twice as much. The verdict of
+    stores through arrays that slow the general loop down. The verdict of
     :mod:`jointbench.estimators.support` decomposes about ten such matrices per trial. A
     compiled kernel."""
     a00, a01, a02, a10, a11, a12, a20, a21, a22 = (
