@@ -579,3 +579,39 @@ def test_is_stopped_away_from_its_minimum_is_restarted():
     assert result.cost <= raw.cost
     if raw.cost > result.cost + 1e-4:
         assert result.status.startswith("restarted: ")
+
+
+def _same_value(found, expected, name: str) -> None:
+    """Two results' fields (``name``) equal: numbers to 1e-9 relative (a batch's array
+    operations may round otherwise than one trial's), dicts entry by entry, anything else
+    exactly."""
+    if isinstance(expected, np.ndarray | float):
+        np.testing.assert_allclose(found, expected, rtol=1e-9, atol=1e-12, err_msg=name)
+    elif isinstance(expected, dict):
+        assert found.keys() == expected.keys(), name
+        for key, value in expected.items():
+            _same_value(found[key], value, f"{name}[{key}]")
+    else:
+        assert found == expected, name
+
+
+@pytest.mark.parametrize("checked", [False, True])
+@pytest.mark.parametrize(("kind", "method"), CASES, ids=IDS)
+def test_the_many_trial_form_answers_as_the_one_trial_function(kind, method, checked):
+    """Each trial of a many-trial call gets what the one-trial function gives it: a method's
+    own many-trial form (a newcomer's too) is held to the function it stands for, checked or
+    not, on noisy, noise-free and unsupported trials together."""
+    trials = [noisy(kind, seed=1), clean(kind), noisy(kind, sd_mm=0.2, seed=2), _sliding(kind)]
+    one = registry.get(kind, method, checked=checked)
+    outcomes = registry.many(kind, method, checked=checked)(
+        *(np.stack(arrays) for arrays in zip(*trials, strict=True))
+    )
+    assert len(outcomes) == len(trials)
+    for arrays, found in zip(trials, outcomes, strict=True):
+        try:
+            expected = one(*arrays)
+        except ValueError as error:
+            assert type(found) is type(error) and str(found) == str(error)
+            continue
+        assert type(found) is type(expected), (found, expected)
+        _same_value(vars(found), vars(expected), "result")
