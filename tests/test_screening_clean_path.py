@@ -185,9 +185,10 @@ def test_the_clean_screen_kernel_computes_what_its_source_says():
 
 
 def _aligned_medians(distances, moved, typical, allowed, candidates):
-    """What :func:`screening._typical_distances` finds, in NumPy: each candidate frame
-    relabelled by the allowed exchange nearest ``typical`` (the first on a tie), the rows'
-    medians in the labelling most frames hold, and 1.4826 times the median departure."""
+    """What :func:`screening._nearest_exchanges` and :func:`screening._aligned_typical` find,
+    in NumPy: each candidate frame relabelled by the allowed exchange nearest ``typical`` (the
+    first on a tie), the rows' medians in the labelling most frames hold, and 1.4826 times
+    the median departure."""
     aligned = distances.copy()
     held = np.zeros(len(moved), dtype=int)
     held[0] = distances.shape[1] - candidates.size
@@ -200,38 +201,60 @@ def _aligned_medians(distances, moved, typical, allowed, candidates):
         aligned[:, frame] = distances[moved[best], frame]
         held[best] += 1
     median = np.median(aligned, axis=1)
-    noise = max(
-        1.482602218505602 * np.median(np.abs(aligned - median[:, None])), 1e-9 * max(median)
-    )
+    departure = np.median(np.abs(aligned - median[:, None]))
+    noise = max(1.482602218505602 * departure, 1e-9 * max(median))
     return median[moved[np.argmax(held)]], noise
 
 
 def test_the_typical_distances_are_the_aligned_frames_medians():
-    """With no frame, one frame or many frames relabelled: the medians and noise given for the
-    labelled frames stand only where no candidate is relabelled."""
+    """With no frame, one frame or many frames relabelled: the exchange each candidate takes
+    and the medians and noise of the frames so aligned, which are the labelled frames' own
+    where no exchange is taken, and where one is the clean path does not stop short."""
     rng = np.random.default_rng(5)
     for n_markers in (3, 4, 5):
         body = _body(rng, n_markers, "large")
         moved = screening._relabelled_pairs(n_markers)
         allowed = np.ones(len(moved), dtype=bool)
+        far, near = screening._exchange_levels(n_markers, RULES)
         for n_swapped in (0, 1, 2, 7, 30):
             markers = _moving(rng, body, 60, 0.5)
             markers[:n_swapped, [0, 1]] = markers[:n_swapped, [1, 0]]
             distances = screening._pair_distances(markers)
-            medians = screening._medians(distances)
-            spread = screening._median_departure(distances, medians, np.empty_like(distances))
             typical = distances[:, -1].copy()
             candidates = np.arange(distances.shape[1])
-            reference, noise = screening._typical_distances(
-                distances,
-                moved,
-                typical,
-                allowed,
-                candidates,
-                medians,
-                spread,
-                np.empty_like(distances),
+            best = screening._nearest_exchanges(distances, moved, typical, allowed, candidates)
+            assert (best > 0).sum() == n_swapped
+            reference, noise = screening._aligned_typical(
+                distances, moved, candidates, best, np.empty_like(distances)
             )
             want = _aligned_medians(distances, moved, typical, allowed, candidates)
             np.testing.assert_allclose(reference, want[0], rtol=1e-12)
             np.testing.assert_allclose(noise, want[1], rtol=1e-12)
+            medians = screening._medians(distances)
+            verdict = screening._judge_frames(distances, medians, n_markers, far, near, True)
+            whole = screening._judge_frames(distances, medians, n_markers, far, near, False)
+            np.testing.assert_array_equal(verdict[0], whole[0])
+            assert (whole[0] >= 0).sum() == n_swapped
+
+
+def test_the_far_count_clears_only_what_the_noise_clears():
+    """:func:`screening._within_far` clears a trial only where every frame is within the far
+    level of the noise the whole test takes (where no frame is relabelled), and, with an odd
+    number of departures, wherever it is by a hair."""
+    rng = np.random.default_rng(17)
+    for n_markers, n_frames in ((3, 61), (3, 40), (4, 35), (5, 41)):
+        for shape in SHAPES:
+            markers = _moving(rng, _body(rng, n_markers, shape), n_frames, 0.5)
+            distances = screening._pair_distances(markers)
+            medians = screening._medians(distances)
+            work = np.empty_like(distances)
+            spread = screening._median_departure(distances, medians, work)
+            noise = max(spread, 1e-9 * medians.max())
+            largest = screening._largest_departure_sq(distances, medians)
+            edge = largest / noise**2  # the far level at which the farthest frame sits
+            for factor in (0.5, 0.999, 1.001, 2.0):
+                far = edge * factor
+                cleared = screening._within_far(distances, medians, far)
+                assert not cleared or largest <= far * noise**2
+                if distances.size % 2:
+                    assert cleared == (factor > 1.0)

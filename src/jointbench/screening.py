@@ -728,7 +728,7 @@ def _exchange_test(
     order of ``itertools.combinations``; -1 for none, and in a frame not judged), its distance
     misfit [mm] (the norm of its distances' departures from the typical ones; NaN in a frame
     not judged) and the misfit's level [mm] (``sqrt(far)`` times the noise; NaN if no frame is
-    judged). The typical distances and the noise come from :func:`_typical_distances`,
+    judged). The typical distances and the noise come from :func:`_aligned_typical`,
     relabelling the frames only by the exchanges that the anchor frame and the labelling-free
     noise of :func:`_anchor_frame` show distinct (:func:`_distinct_exchanges`): relabelling by
     an exchange that noise can mimic would blur them. A compiled kernel.
@@ -741,7 +741,7 @@ def _exchange_test(
         return exchange, misfit, np.nan
     distances = _pair_distances(markers if complete.size == n_frames else markers[complete])
     found, misfit_sq, noise = _judge_frames(
-        distances, _medians(distances), markers.shape[1], far, near
+        distances, _medians(distances), markers.shape[1], far, near, False
     )
     for k in range(complete.size):
         exchange[complete[k]] = found[k]
@@ -751,19 +751,28 @@ def _exchange_test(
 
 @kernel
 def _judge_frames(
-    distances: np.ndarray, medians: np.ndarray, n_markers: int, far: float, near: float
+    distances: np.ndarray,
+    medians: np.ndarray,
+    n_markers: int,
+    far: float,
+    near: float,
+    verdict: bool,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """:func:`_exchange_test` on the inter-marker distances ``(n_pairs, n_frames)`` [mm]
     (:func:`_pair_distances`) of the frames it judges, of a cluster of ``n_markers``, and
     their rows' ``medians`` ``(n_pairs,)`` [mm] (:func:`_medians`): per frame the exchange
     (-1 for none) and the squared distance misfit [mm^2], and the noise of one distance [mm].
-    A compiled kernel."""
+    With ``verdict``, only whether any frame has an exchange counts: where no frame is
+    relabelled and :func:`_within_far` shows every frame within the far level, no frame has
+    one, and the misfits and the noise are left NaN. A compiled kernel."""
+    n_frames = distances.shape[1]
     moved = _relabelled_pairs(n_markers)
     # One buffer of the distances' shape holds in turn their departures, the anchor's sorted
     # distances and the aligned ones, which each median selection reorders in place.
     work = np.empty_like(distances)
-    spread = _median_departure(distances, medians, work)
-    if _ranked_alike(distances):
+    ranked = _ranked_alike(distances)
+    spread = _median_departure(distances, medians, work) if ranked else np.nan
+    if ranked:
         # Sorting each frame's distances then moves whole rows, which changes no row's median,
         # no frame's largest departure and not the set of departures: the anchor and its noise
         # are the labelled distances' own.
@@ -774,14 +783,65 @@ def _judge_frames(
     allowed = _distinct_exchanges(moved, typical, noise, far, near)
     allowed[0] = True
     candidates = _candidates(distances, moved, typical, allowed)
-    reference, noise = _typical_distances(
-        distances, moved, typical, allowed, candidates, medians, spread, work
-    )
+    best = _nearest_exchanges(distances, moved, typical, allowed, candidates)
+    if best.any():
+        reference, noise = _aligned_typical(distances, moved, candidates, best, work)
+    elif verdict and _within_far(distances, medians, far):
+        return np.full(n_frames, -1), np.full(n_frames, np.nan), np.nan
+    else:
+        # No frame is relabelled: the aligned distances are the labelled ones.
+        if not ranked:
+            spread = _median_departure(distances, medians, work)
+        # A floor far below any real noise keeps exact data from dividing by zero.
+        reference, noise = medians, max(spread, 1e-9 * medians.max())
     distinct = _distinct_exchanges(moved, reference, noise, far, near)
     found, misfit_sq = _exchanges(
         distances, moved, reference, distinct, far * noise**2, near * noise**2
     )
     return found, misfit_sq, noise
+
+
+@kernel
+def _within_far(distances: np.ndarray, medians: np.ndarray, far: float) -> bool:
+    """Whether a count shows that no frame of ``distances`` ``(n_pairs, n_frames)`` [mm]
+    departs from their rows' ``medians`` ``m`` ``(n_pairs,)`` [mm] beyond the far level
+    (``chi2 > far``) of the noise that :func:`_judge_frames` takes from them where no frame
+    is relabelled, without selecting that noise's median; ``False`` means not shown. A
+    compiled kernel.
+
+    That noise is at least ``1.4826 q``, ``q`` the median of the ``N`` departures
+    ``|d_pf - m_p|``, and a frame is beyond the level when ``|d_f - m|^2 > far noise^2``.
+    With ``L = sqrt(max |d_f - m|^2 / far) / 1.4826`` (and margins): when at most
+    ``(N - 1) // 2`` departures are below ``L``, the lower of the middle ones, and so ``q``,
+    is at least ``L``, and ``far noise^2 >= max |d_f - m|^2``. The squared departures are
+    summed as :func:`_misfits_sq` sums them, so that the largest is the one it finds; the
+    margins (relative 1e-6, absolute 1e-150 mm) exceed the rounding of the products, and a
+    NaN or an infinity fails the count."""
+    level = np.sqrt(_largest_departure_sq(distances, medians) / far) / 1.482602218505602
+    level = level * (1.0 + 1e-6) + 1e-150
+    if not level < np.inf:
+        return False
+    below = 0
+    for p in range(distances.shape[0]):
+        for f in range(distances.shape[1]):
+            below += abs(distances[p, f] - medians[p]) < level
+    return below <= (distances.size - 1) // 2
+
+
+@kernel
+def _largest_departure_sq(distances: np.ndarray, medians: np.ndarray) -> float:
+    """The largest squared departure ``|d_f - m|^2`` [mm^2] of a frame of ``distances``
+    ``(n_pairs, n_frames)`` [mm] from ``medians`` ``(n_pairs,)`` [mm], summed over the pairs
+    in :func:`_misfits_sq`'s order; NaN if any is. A compiled kernel."""
+    largest = 0.0
+    for f in range(distances.shape[1]):
+        total = 0.0
+        for p in range(distances.shape[0]):
+            total += (distances[p, f] - medians[p]) ** 2
+        if np.isnan(total):
+            return np.nan
+        largest = max(largest, total)
+    return largest
 
 
 @kernel
@@ -872,27 +932,18 @@ def _candidates(
 
 
 @kernel
-def _typical_distances(
+def _nearest_exchanges(
     distances: np.ndarray,
     moved: np.ndarray,
     typical: np.ndarray,
     allowed: np.ndarray,
     candidates: np.ndarray,
-    medians: np.ndarray,
-    spread: float,
-    aligned: np.ndarray,
-) -> tuple[np.ndarray, float]:
-    """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
-    ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
-    each frame first relabelled by the exchange (a row of ``moved``, :func:`_relabelled_pairs`,
-    that ``allowed`` allows) or none that matches the ``typical`` frame's distances best, so
-    that they are one labelling's however many frames hold the other (half, say, where plain
-    medians would fall between the two), in the labelling most frames hold; and the median
-    departure from them (:func:`_median_departure`). Only the ``candidates``
-    (:func:`_candidates`) can be relabelled. Where none is, the distances' rows' ``medians``
-    ``(n_pairs,)`` [mm] and their median departure ``spread`` [mm] are those of the aligned
-    ones. ``aligned``, of the shape of ``distances``, is overwritten. A compiled kernel."""
-    n_pairs, n_frames = distances.shape
+) -> np.ndarray:
+    """Per frame of the ``candidates`` (:func:`_candidates`) of ``distances``
+    ``(n_pairs, n_frames)`` [mm], the exchange (a row of ``moved``,
+    :func:`_relabelled_pairs`, that ``allowed`` allows, 0 for none) that matches the
+    ``typical`` frame's distances ``(n_pairs,)`` best, the first on a tie. A compiled
+    kernel."""
     best = np.zeros(candidates.size, dtype=np.int64)
     best_misfit = np.full(candidates.size, np.inf)
     misfit = np.empty(candidates.size)
@@ -902,9 +953,25 @@ def _typical_distances(
             for k in range(candidates.size):
                 if misfit[k] < best_misfit[k]:
                     best[k], best_misfit[k] = e, misfit[k]
-    # A floor far below any real noise keeps exact data from dividing by zero.
-    if not best.any():
-        return medians, max(spread, 1e-9 * medians.max())
+    return best
+
+
+@kernel
+def _aligned_typical(
+    distances: np.ndarray,
+    moved: np.ndarray,
+    candidates: np.ndarray,
+    best: np.ndarray,
+    aligned: np.ndarray,
+) -> tuple[np.ndarray, float]:
+    """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
+    ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
+    each of the ``candidates`` first relabelled by its ``best`` exchange (a row of ``moved``,
+    :func:`_nearest_exchanges`), so that they are one labelling's however many frames hold
+    the other (half, say, where plain medians would fall between the two), in the labelling
+    most frames hold; and the median departure from them (:func:`_median_departure`).
+    ``aligned``, of the shape of ``distances``, is overwritten. A compiled kernel."""
+    n_pairs, n_frames = distances.shape
     aligned[:] = distances
     held = np.zeros(moved.shape[0], dtype=np.int64)
     held[0] = n_frames - candidates.size
@@ -913,6 +980,7 @@ def _typical_distances(
             aligned[p, candidates[k]] = distances[moved[best[k], p], candidates[k]]
         held[best[k]] += 1
     median = _medians(aligned)
+    # A floor far below any real noise keeps exact data from dividing by zero.
     noise = max(_median_departure(aligned, median, aligned), 1e-9 * median.max())
     # In the labelling most frames hold, so that the swapped side is the one with fewer frames.
     most = np.argmax(held)
@@ -1248,7 +1316,7 @@ def _clean_screen(
     if n_frames >= max(min_frames, 1) and not _surely_unexchanged(
         distances, medians, n_markers, far, near
     ):
-        exchanged = (_judge_frames(distances, medians, n_markers, far, near)[0] >= 0).any()
+        exchanged = (_judge_frames(distances, medians, n_markers, far, near, True)[0] >= 0).any()
     return typical, first <= limit and second <= limit, largest_jump, exchanged
 
 
@@ -1271,7 +1339,7 @@ def _surely_unexchanged(
        test's anchor is a frame ``a``, and a frame is a candidate only when
        ``2 |d_f - d_a| >= s_e(d_a)`` for an exchange ``e`` it allows (:func:`_candidates`);
        with ``6 U < S``, ``2 |d_f - d_a| <= 4 U < S - 2 U <= s_e(d_a)`` for every ``e``, so
-       there is none, and the reference distances are ``m`` (:func:`_typical_distances`).
+       there is none, and the reference distances are ``m`` (:func:`_judge_frames`).
     2. A frame is swapped by ``e`` only when ``e`` is distinct, ``s_e(m) > (sqrt(far) +
        sqrt(near)) noise``, and ``|P_e d_f - m| <= sqrt(near) noise`` (:func:`_exchanges`).
        As ``|P_e d_f - m| >= s_e(m) - |d_f - m|``, that needs ``|d_f - m| >= s_e(m) -
@@ -1280,19 +1348,11 @@ def _surely_unexchanged(
     The margins (relative 1e-6, absolute 1e-150 mm) exceed the rounding of the few sums of
     squares on either side, underflow included; NaN or overflow fails the bound.
     """
-    moved = _relabelled_pairs(n_markers)
-    n_pairs, n_frames = distances.shape
-    largest_sq = 0.0
-    for f in range(n_frames):
-        total = 0.0
-        for p in range(n_pairs):
-            total += (distances[p, f] - medians[p]) ** 2
-        if np.isnan(total):
-            return False
-        largest_sq = max(largest_sq, total)
-    sizes_sq = _exchange_sizes_sq(moved, medians)
+    sizes_sq = _exchange_sizes_sq(_relabelled_pairs(n_markers), medians)
+    if sizes_sq.size < 2:
+        return False  # no exchange to bound
     least = np.sqrt(np.min(sizes_sq[1:]))
-    largest = np.sqrt(largest_sq) * (1.0 + 1e-6) + 1e-150
+    largest = np.sqrt(_largest_departure_sq(distances, medians)) * (1.0 + 1e-6) + 1e-150
     ratio = np.sqrt(far) / (np.sqrt(far) + np.sqrt(near))
     return 6.0 * largest < least and largest < ratio * least
 
