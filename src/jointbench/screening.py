@@ -25,7 +25,10 @@ keeps the shape).
 need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
 a complete cluster whose residuals a bound keeps below ``min_residual_mm``
 (:func:`surely_rigid`, at most one pose fit) and in which the distance test finds no swap it
-skips the iterated mean shape.
+skips the iterated mean shape. Such a clean cluster costs one compiled call
+(:func:`_clean_screen`): the typical frame, the rigidity bound, the largest step and the
+distance test's verdict share one set of inter-marker distances, and two bounds skip the steps
+of the distance test that they show cannot flag a frame.
 """
 
 from __future__ import annotations
