@@ -1049,9 +1049,9 @@ def _exchange_sizes_sq(moved: np.ndarray, reference: np.ndarray) -> np.ndarray:
     the misfit (:func:`_misfits_sq`) of ``reference`` relabelled, as a frame of its own. A
     compiled kernel."""
     sizes_sq = np.empty(moved.shape[0])
-    frame = reference.reshape(reference.size, 1)
+    frame, first = reference.reshape(reference.size, 1), np.zeros(1, dtype=np.int64)
     for e in range(moved.shape[0]):
-        _misfits_sq(frame, np.zeros(1, dtype=np.int64), moved, e, reference, sizes_sq[e : e + 1])
+        _misfits_sq(frame, first, moved, e, reference, sizes_sq[e : e + 1])
     return sizes_sq
 
 
