@@ -261,3 +261,15 @@ def test_the_far_count_clears_only_what_the_noise_clears():
                 assert not cleared or largest <= far * noise**2
                 if distances.size % 2:
                     assert cleared == (factor > 1.0)
+
+
+@pytest.mark.parametrize("scale", [0.0, 1e-160, 1e-3, 1e150, 1e156])
+def test_extreme_scales_find_what_the_whole_screen_finds(scale):
+    """Clusters shrunk to a point, to where squares underflow, and grown to where they
+    overflow: the same findings, or the same error, with a swapped run and without."""
+    rng = np.random.default_rng(23)
+    for kind in ("clean", "swap run"):
+        markers = _spoilt(rng, _moving(rng, _body(rng, 4, "large"), 60, 0.5), kind) * scale
+        assert _found(screening.find_artefacts, markers) == _found(screening.screen, markers)
+        if np.isfinite(markers).all():
+            _check_verdict(markers)

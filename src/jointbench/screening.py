@@ -1285,8 +1285,8 @@ def _fitted_clears(markers: np.ndarray, typical: int, cleared: bool, limit: floa
 def _screen_sums(markers: np.ndarray, limit: float) -> tuple[int, bool, float]:
     """What :func:`surely_rigid` and the jump check need of the cluster ``markers``
     ``(n_frames, n >= 3, 3)`` [mm] before a pose fit: :func:`_clean_screen`'s first three
-    answers, without the distance test (which needs more frames than any trial has). A
-    compiled kernel."""
+    answers, without the distance test (asked for more frames than there are). A compiled
+    kernel."""
     typical, cleared, largest_jump, _ = _clean_screen(
         markers, limit, 0.0, 0.0, markers.shape[0] + 1
     )
