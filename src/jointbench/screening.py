@@ -25,7 +25,10 @@ keeps the shape).
 need only what it finds, not the cluster's fit: :func:`find_artefacts` gives the same, and for
 a complete cluster whose residuals a bound keeps below ``min_residual_mm``
 (:func:`surely_rigid`, at most one pose fit) and in which the distance test finds no swap it
-skips the iterated mean shape.
+skips the iterated mean shape. Such a clean cluster costs one compiled call
+(:func:`_clean_screen`): the typical frame, the rigidity bound, the largest step and the
+distance test's verdict share one set of inter-marker distances, and two bounds skip the steps
+of the distance test that they show cannot flag a frame.
 """
 
 from __future__ import annotations
@@ -728,7 +731,7 @@ def _exchange_test(
     order of ``itertools.combinations``; -1 for none, and in a frame not judged), its distance
     misfit [mm] (the norm of its distances' departures from the typical ones; NaN in a frame
     not judged) and the misfit's level [mm] (``sqrt(far)`` times the noise; NaN if no frame is
-    judged). The typical distances and the noise come from :func:`_typical_distances`,
+    judged). The typical distances and the noise come from :func:`_aligned_typical`,
     relabelling the frames only by the exchanges that the anchor frame and the labelling-free
     noise of :func:`_anchor_frame` show distinct (:func:`_distinct_exchanges`): relabelling by
     an exchange that noise can mimic would blur them. A compiled kernel.
@@ -740,13 +743,39 @@ def _exchange_test(
     if complete.size < max(min_frames, 1):
         return exchange, misfit, np.nan
     distances = _pair_distances(markers if complete.size == n_frames else markers[complete])
-    moved = _relabelled_pairs(markers.shape[1])
+    found, misfit_sq, noise = _judge_frames(
+        distances, _medians(distances), markers.shape[1], far, near, False
+    )
+    for k in range(complete.size):
+        exchange[complete[k]] = found[k]
+        misfit[complete[k]] = np.sqrt(misfit_sq[k])
+    return exchange, misfit, noise * np.sqrt(far)
+
+
+@kernel
+def _judge_frames(
+    distances: np.ndarray,
+    medians: np.ndarray,
+    n_markers: int,
+    far: float,
+    near: float,
+    verdict: bool,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """:func:`_exchange_test` on the inter-marker distances ``(n_pairs, n_frames)`` [mm]
+    (:func:`_pair_distances`) of the frames it judges, of a cluster of ``n_markers``, and
+    their rows' ``medians`` ``(n_pairs,)`` [mm] (:func:`_medians`): per frame the exchange
+    (-1 for none) and the squared distance misfit [mm^2], and the noise of one distance [mm].
+    With ``verdict``, only whether any frame has an exchange counts: where no frame is
+    relabelled and :func:`_within_far` shows every frame within the far level, no frame has
+    one, and the misfits and the noise are left NaN. A compiled kernel."""
+    n_frames = distances.shape[1]
+    moved = _relabelled_pairs(n_markers)
     # One buffer of the distances' shape holds in turn their departures, the anchor's sorted
     # distances and the aligned ones, which each median selection reorders in place.
     work = np.empty_like(distances)
-    medians = _medians(distances)
-    spread = _median_departure(distances, medians, work)
-    if _ranked_alike(distances):
+    ranked = _ranked_alike(distances)
+    spread = _median_departure(distances, medians, work) if ranked else np.nan
+    if ranked:
         # Sorting each frame's distances then moves whole rows, which changes no row's median,
         # no frame's largest departure and not the set of departures: the anchor and its noise
         # are the labelled distances' own.
@@ -757,19 +786,65 @@ def _exchange_test(
     allowed = _distinct_exchanges(moved, typical, noise, far, near)
     allowed[0] = True
     candidates = _candidates(distances, moved, typical, allowed)
-    if candidates.size:
-        reference, noise = _typical_distances(distances, moved, typical, allowed, candidates, work)
+    best = _nearest_exchanges(distances, moved, typical, allowed, candidates)
+    if best.any():
+        reference, noise = _aligned_typical(distances, moved, candidates, best, work)
+    elif verdict and _within_far(distances, medians, far):
+        return np.full(n_frames, -1), np.full(n_frames, np.nan), np.nan
     else:
-        # No frame can be relabelled: the typical distances are the labelled ones' medians.
+        # No frame is relabelled: the aligned distances are the labelled ones.
+        if not ranked:
+            spread = _median_departure(distances, medians, work)
+        # A floor far below any real noise keeps exact data from dividing by zero.
         reference, noise = medians, max(spread, 1e-9 * medians.max())
     distinct = _distinct_exchanges(moved, reference, noise, far, near)
     found, misfit_sq = _exchanges(
         distances, moved, reference, distinct, far * noise**2, near * noise**2
     )
-    for k in range(complete.size):
-        exchange[complete[k]] = found[k]
-        misfit[complete[k]] = np.sqrt(misfit_sq[k])
-    return exchange, misfit, noise * np.sqrt(far)
+    return found, misfit_sq, noise
+
+
+@kernel
+def _within_far(distances: np.ndarray, medians: np.ndarray, far: float) -> bool:
+    """Whether a count shows that no frame of ``distances`` ``(n_pairs, n_frames)`` [mm]
+    departs from their rows' ``medians`` ``m`` ``(n_pairs,)`` [mm] beyond the far level
+    (``chi2 > far``) of the noise that :func:`_judge_frames` takes from them where no frame
+    is relabelled, without selecting that noise's median; ``False`` means not shown. A
+    compiled kernel.
+
+    That noise is at least ``1.4826 q``, ``q`` the median of the ``N`` departures
+    ``|d_pf - m_p|``, and a frame is beyond the level when ``|d_f - m|^2 > far noise^2``.
+    With ``L = sqrt(max |d_f - m|^2 / far) / 1.4826`` (and margins): when at most
+    ``(N - 1) // 2`` departures are below ``L``, the lower of the middle ones, and so ``q``,
+    is at least ``L``, and ``far noise^2 >= max |d_f - m|^2``. The squared departures are
+    summed as :func:`_misfits_sq` sums them, so that the largest is the one it finds; the
+    margins (relative 1e-6, absolute 1e-150 mm) exceed the rounding of the products, and a
+    NaN or an infinity fails the count."""
+    level = np.sqrt(_largest_departure_sq(distances, medians) / far) / 1.482602218505602
+    level = level * (1.0 + 1e-6) + 1e-150
+    if not level < np.inf:
+        return False
+    below = 0
+    for p in range(distances.shape[0]):
+        for f in range(distances.shape[1]):
+            below += abs(distances[p, f] - medians[p]) < level
+    return below <= (distances.size - 1) // 2
+
+
+@kernel
+def _largest_departure_sq(distances: np.ndarray, medians: np.ndarray) -> float:
+    """The largest squared departure ``|d_f - m|^2`` [mm^2] of a frame of ``distances``
+    ``(n_pairs, n_frames)`` [mm] from ``medians`` ``(n_pairs,)`` [mm], summed over the pairs
+    in :func:`_misfits_sq`'s order; NaN if any is. A compiled kernel."""
+    largest = 0.0
+    for f in range(distances.shape[1]):
+        total = 0.0
+        for p in range(distances.shape[0]):
+            total += (distances[p, f] - medians[p]) ** 2
+        if np.isnan(total):
+            return np.nan
+        largest = max(largest, total)
+    return largest
 
 
 @kernel
@@ -860,25 +935,18 @@ def _candidates(
 
 
 @kernel
-def _typical_distances(
+def _nearest_exchanges(
     distances: np.ndarray,
     moved: np.ndarray,
     typical: np.ndarray,
     allowed: np.ndarray,
     candidates: np.ndarray,
-    aligned: np.ndarray,
-) -> tuple[np.ndarray, float]:
-    """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
-    ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
-    each frame first relabelled by the exchange (a row of ``moved``, :func:`_relabelled_pairs`,
-    that ``allowed`` allows) or none that matches the ``typical`` frame's distances best, so
-    that they are one labelling's however many frames hold the other (half, say, where plain
-    medians would fall between the two), in the labelling most frames hold; and the median
-    departure from them (:func:`_median_departure`). Only the ``candidates``
-    (:func:`_candidates`) can be relabelled. ``aligned``, of the shape of ``distances``, is
-    overwritten. A compiled kernel."""
-    n_pairs, n_frames = distances.shape
-    aligned[:] = distances
+) -> np.ndarray:
+    """Per frame of the ``candidates`` (:func:`_candidates`) of ``distances``
+    ``(n_pairs, n_frames)`` [mm], the exchange (a row of ``moved``,
+    :func:`_relabelled_pairs`, that ``allowed`` allows, 0 for none) that matches the
+    ``typical`` frame's distances ``(n_pairs,)`` best, the first on a tie. A compiled
+    kernel."""
     best = np.zeros(candidates.size, dtype=np.int64)
     best_misfit = np.full(candidates.size, np.inf)
     misfit = np.empty(candidates.size)
@@ -888,6 +956,26 @@ def _typical_distances(
             for k in range(candidates.size):
                 if misfit[k] < best_misfit[k]:
                     best[k], best_misfit[k] = e, misfit[k]
+    return best
+
+
+@kernel
+def _aligned_typical(
+    distances: np.ndarray,
+    moved: np.ndarray,
+    candidates: np.ndarray,
+    best: np.ndarray,
+    aligned: np.ndarray,
+) -> tuple[np.ndarray, float]:
+    """The typical inter-marker distances ``(n_pairs,)`` [mm] of ``distances``
+    ``(n_pairs, n_frames)`` and the noise of one distance [mm]: the medians over the frames,
+    each of the ``candidates`` first relabelled by its ``best`` exchange (a row of ``moved``,
+    :func:`_nearest_exchanges`), so that they are one labelling's however many frames hold
+    the other (half, say, where plain medians would fall between the two), in the labelling
+    most frames hold; and the median departure from them (:func:`_median_departure`).
+    ``aligned``, of the shape of ``distances``, is overwritten. A compiled kernel."""
+    n_pairs, n_frames = distances.shape
+    aligned[:] = distances
     held = np.zeros(moved.shape[0], dtype=np.int64)
     held[0] = n_frames - candidates.size
     for k in range(candidates.size):
@@ -961,9 +1049,9 @@ def _exchange_sizes_sq(moved: np.ndarray, reference: np.ndarray) -> np.ndarray:
     the misfit (:func:`_misfits_sq`) of ``reference`` relabelled, as a frame of its own. A
     compiled kernel."""
     sizes_sq = np.empty(moved.shape[0])
-    frame = reference.reshape(reference.size, 1)
+    frame, first = reference.reshape(reference.size, 1), np.zeros(1, dtype=np.int64)
     for e in range(moved.shape[0]):
-        _misfits_sq(frame, np.zeros(1, dtype=np.int64), moved, e, reference, sizes_sq[e : e + 1])
+        _misfits_sq(frame, first, moved, e, reference, sizes_sq[e : e + 1])
     return sizes_sq
 
 
@@ -1142,16 +1230,20 @@ def find_artefacts(
     """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
     [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears and
     in which :func:`find_exchanges` finds no swap needs only the jump check, anything else
-    gets the whole screen. A cluster the marker-frame
-    bounds clear costs one compiled call (:func:`_screen_sums`), which finds what the bound
-    and the jump check need together; the jumps are located only where a step exceeds
+    gets the whole screen. A cluster the marker-frame bounds clear costs one compiled call
+    (:func:`_clean_screen`), which finds what the bound, the distance test's verdict and the
+    jump check need together; the jumps are located only where a step exceeds
     ``min_jump_mm``."""
     rules = rules or _RULES
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules)), ()
     markers = kernel_array(markers)
-    rigid, largest_jump = _rigid_and_largest_jump(markers, rules)
-    if not rigid or find_exchanges(markers, labels, rules):
+    limit = _rigid_limit(rules)
+    far, near = _exchange_levels(len(labels), rules)
+    typical, cleared, largest_jump, exchanged = _clean_screen(
+        markers, limit, far, near, rules.swap_min_frames
+    )
+    if exchanged or not _fitted_clears(markers, typical, cleared, limit):
         found = screen(markers, labels, source, rules)
         return found.artefacts, found.swaps
     if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm
@@ -1168,37 +1260,104 @@ def surely_rigid(
     is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
     first. It does not show that the screen's mean shape converges (where it does not, the
     screen raises)."""
-    return _rigid_and_largest_jump(kernel_array(markers), rules)[0]
+    markers, limit = kernel_array(markers), _rigid_limit(rules)
+    typical, cleared, _ = _screen_sums(markers, limit)
+    return _fitted_clears(markers, typical, cleared, limit)
 
 
-def _rigid_and_largest_jump(markers: np.ndarray, rules: ArtefactRules) -> tuple[bool, float]:
+def _rigid_limit(rules: ArtefactRules) -> float:
+    """The bound [mm] that :func:`surely_rigid` holds the residuals' bounds to:
+    ``min_residual_mm`` less a margin for rounding."""
+    return rules.min_residual_mm / (1.0 + 1e-9)
+
+
+def _fitted_clears(markers: np.ndarray, typical: int, cleared: bool, limit: float) -> bool:
     """:func:`surely_rigid`'s decision on ``markers`` ``(n_frames, n >= 3, 3)`` [mm] (a kernel
-    array) and their largest step size [mm] of :func:`find_jumps`: one compiled call where
-    the marker-frame bounds clear the cluster, a pose fit more where only the fitted ones do."""
-    limit = rules.min_residual_mm / (1.0 + 1e-9)  # a margin for rounding
-    typical, cleared, largest_jump = _screen_sums(markers, limit)
+    array), given what :func:`_screen_sums` found (its ``typical`` frame and whether the
+    marker-frame bounds ``cleared`` it): those, else the fitted bounds (a pose fit) where
+    there is a typical frame to fit."""
     if not cleared and typical >= 0:
         cleared = all(bound <= limit for bound in _rigid_misfits(markers, typical, True))
-    return cleared, largest_jump
+    return cleared
 
 
 @kernel
 def _screen_sums(markers: np.ndarray, limit: float) -> tuple[int, bool, float]:
+    """What :func:`surely_rigid` and the jump check need of the cluster ``markers``
+    ``(n_frames, n >= 3, 3)`` [mm] before a pose fit: :func:`_clean_screen`'s first three
+    answers, without the distance test (asked for more frames than there are). A compiled
+    kernel."""
+    typical, cleared, largest_jump, _ = _clean_screen(
+        markers, limit, 0.0, 0.0, markers.shape[0] + 1
+    )
+    return typical, cleared, largest_jump
+
+
+@kernel
+def _clean_screen(
+    markers: np.ndarray, limit: float, far: float, near: float, min_frames: int
+) -> tuple[int, bool, float, bool]:
     """What :func:`find_artefacts` needs of the cluster ``markers`` ``(n_frames, n >= 3, 3)``
     [mm] before a pose fit: its typical frame (:func:`typical_shape`'s; -1 where a sample is
     missing, which leaves no bound to try), whether the marker-frame bounds of
-    :func:`_rigid_misfits` are at most ``limit`` [mm], and the largest step size [mm] of
-    :func:`find_jumps` (-inf if none; NaN where a sample is missing). A compiled kernel."""
-    for f in range(markers.shape[0]):
-        for m in range(markers.shape[1]):
-            for i in range(3):
-                if not np.isfinite(markers[f, m, i]):
-                    return -1, False, np.nan  # the whole screen finds the jumps
-    typical = _most_typical(markers)  # every frame complete
-    first, second = _frame_misfits(markers, typical)
+    :func:`_rigid_misfits` are at most ``limit`` [mm], the largest step size [mm] of
+    :func:`find_jumps` (-inf if none; NaN where a sample is missing) and whether the distance
+    test of :func:`_exchange_test` (levels ``far``, ``near``, at least ``min_frames`` frames)
+    finds a swapped frame (``False`` where a sample is missing, as the whole screen then
+    runs). The inter-marker distances and their medians serve both the typical frame and the
+    distance test, and where :func:`_surely_unexchanged` shows that the test finds nothing it
+    is not run. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
+    if _complete_frames(markers).size < n_frames:
+        return -1, False, np.nan, False  # the whole screen finds the jumps
+    distances = _pair_distances(markers)
+    medians = _medians(distances)
+    typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
+    first, second = _frame_misfits(markers, typical)
     largest_jump = _jump_sizes(markers, np.empty((max(n_frames - 3, 0), n_markers)))
-    return typical, first <= limit and second <= limit, largest_jump
+    exchanged = False
+    if n_frames >= max(min_frames, 1) and not _surely_unexchanged(
+        distances, medians, n_markers, far, near
+    ):
+        exchanged = (_judge_frames(distances, medians, n_markers, far, near, True)[0] >= 0).any()
+    return typical, first <= limit and second <= limit, largest_jump, exchanged
+
+
+@kernel
+def _surely_unexchanged(
+    distances: np.ndarray, medians: np.ndarray, n_markers: int, far: float, near: float
+) -> bool:
+    """Whether a bound shows that :func:`_judge_frames` finds no exchange in any frame of
+    ``distances`` ``(n_pairs, n_frames)`` [mm], with their rows' ``medians`` ``m``
+    ``(n_pairs,)`` [mm], levels ``far`` and ``near``; ``False`` means not shown. A compiled
+    kernel.
+
+    Notation: ``d_f`` a frame's distances, ``P_e`` the exchange ``e >= 1`` (a permutation of
+    the pairs, :func:`_relabelled_pairs`: ``|P_e x| = |x|``), ``s_e(x) = |P_e x - x|``, ``U``
+    the largest ``|d_f - m|``, ``S`` the least ``s_e(m)``, ``r = sqrt(far) / (sqrt(far) +
+    sqrt(near))``. The bound is ``6 U < S`` and ``U < r S``.
+
+    1. For any frames ``a``, ``f``: ``|d_f - d_a| <= 2 U`` and ``s_e(d_a) >= s_e(m) - 2 U``
+       (``P_e d_a - d_a`` differs from ``P_e m - m`` by ``P_e (d_a - m) - (d_a - m)``). The
+       test's anchor is a frame ``a``, and a frame is a candidate only when
+       ``2 |d_f - d_a| >= s_e(d_a)`` for an exchange ``e`` it allows (:func:`_candidates`);
+       with ``6 U < S``, ``2 |d_f - d_a| <= 4 U < S - 2 U <= s_e(d_a)`` for every ``e``, so
+       there is none, and the reference distances are ``m`` (:func:`_judge_frames`).
+    2. A frame is swapped by ``e`` only when ``e`` is distinct, ``s_e(m) > (sqrt(far) +
+       sqrt(near)) noise``, and ``|P_e d_f - m| <= sqrt(near) noise`` (:func:`_exchanges`).
+       As ``|P_e d_f - m| >= s_e(m) - |d_f - m|``, that needs ``|d_f - m| >= s_e(m) -
+       sqrt(near) noise > r s_e(m) >= r S``, which ``U < r S`` rules out.
+
+    The margins (relative 1e-6, absolute 1e-150 mm) exceed the rounding of the few sums of
+    squares on either side, underflow included; NaN or overflow fails the bound.
+    """
+    sizes_sq = _exchange_sizes_sq(_relabelled_pairs(n_markers), medians)
+    if sizes_sq.size < 2:
+        return False  # no exchange to bound
+    least = np.sqrt(np.min(sizes_sq[1:]))
+    largest = np.sqrt(_largest_departure_sq(distances, medians)) * (1.0 + 1e-6) + 1e-150
+    ratio = np.sqrt(far) / (np.sqrt(far) + np.sqrt(near))
+    return 6.0 * largest < least and largest < ratio * least
 
 
 def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
