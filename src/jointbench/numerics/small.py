@@ -195,37 +195,19 @@ def _jacobi3(a: np.ndarray, v: np.ndarray) -> None:
         # Columns p and q, then rows p and q, then the eigenvectors' columns, as in _jacobi.
         if a01 != 0.0:
             c, s = _rotation(a00, a11, a01)
-            a00, a01 = _turned(a00, a01, c, s)
-            a10, a11 = _turned(a10, a11, c, s)
-            a20, a21 = _turned(a20, a21, c, s)
-            a00, a10 = _turned(a00, a10, c, s)
-            a01, a11 = _turned(a01, a11, c, s)
-            a02, a12 = _turned(a02, a12, c, s)
-            v00, v01 = _turned(v00, v01, c, s)
-            v10, v11 = _turned(v10, v11, c, s)
-            v20, v21 = _turned(v20, v21, c, s)
+            a00, a01, a10, a11, a20, a21 = _turned3(a00, a01, a10, a11, a20, a21, c, s)
+            a00, a10, a01, a11, a02, a12 = _turned3(a00, a10, a01, a11, a02, a12, c, s)
+            v00, v01, v10, v11, v20, v21 = _turned3(v00, v01, v10, v11, v20, v21, c, s)
         if a02 != 0.0:
             c, s = _rotation(a00, a22, a02)
-            a00, a02 = _turned(a00, a02, c, s)
-            a10, a12 = _turned(a10, a12, c, s)
-            a20, a22 = _turned(a20, a22, c, s)
-            a00, a20 = _turned(a00, a20, c, s)
-            a01, a21 = _turned(a01, a21, c, s)
-            a02, a22 = _turned(a02, a22, c, s)
-            v00, v02 = _turned(v00, v02, c, s)
-            v10, v12 = _turned(v10, v12, c, s)
-            v20, v22 = _turned(v20, v22, c, s)
+            a00, a02, a10, a12, a20, a22 = _turned3(a00, a02, a10, a12, a20, a22, c, s)
+            a00, a20, a01, a21, a02, a22 = _turned3(a00, a20, a01, a21, a02, a22, c, s)
+            v00, v02, v10, v12, v20, v22 = _turned3(v00, v02, v10, v12, v20, v22, c, s)
         if a12 != 0.0:
             c, s = _rotation(a11, a22, a12)
-            a01, a02 = _turned(a01, a02, c, s)
-            a11, a12 = _turned(a11, a12, c, s)
-            a21, a22 = _turned(a21, a22, c, s)
-            a10, a20 = _turned(a10, a20, c, s)
-            a11, a21 = _turned(a11, a21, c, s)
-            a12, a22 = _turned(a12, a22, c, s)
-            v01, v02 = _turned(v01, v02, c, s)
-            v11, v12 = _turned(v11, v12, c, s)
-            v21, v22 = _turned(v21, v22, c, s)
+            a01, a02, a11, a12, a21, a22 = _turned3(a01, a02, a11, a12, a21, a22, c, s)
+            a10, a20, a11, a21, a12, a22 = _turned3(a10, a20, a11, a21, a12, a22, c, s)
+            v01, v02, v11, v12, v21, v22 = _turned3(v01, v02, v11, v12, v21, v22, c, s)
     a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2] = a00, a01, a02, a10, a11, a12
     a[2, 0], a[2, 1], a[2, 2] = a20, a21, a22
     v[0, 0], v[0, 1], v[0, 2], v[1, 0], v[1, 1], v[1, 2] = v00, v01, v02, v10, v11, v12
@@ -243,6 +225,18 @@ def _rotation(app: float, aqq: float, apq: float) -> tuple[float, float]:
         t = (1.0 if tau >= 0.0 else -1.0) / (abs(tau) + np.sqrt(1.0 + tau * tau))
     c = 1.0 / np.sqrt(1.0 + t * t)
     return c, t * c
+
+
+@kernel
+def _turned3(
+    x0: float, y0: float, x1: float, y1: float, x2: float, y2: float, c: float, s: float
+) -> tuple[float, float, float, float, float, float]:
+    """:func:`_turned` of three pairs ``(x_k, y_k)``: a column, row or eigenvector pair of a
+    3 x 3 matrix after a rotation. A compiled kernel."""
+    x0, y0 = _turned(x0, y0, c, s)
+    x1, y1 = _turned(x1, y1, c, s)
+    x2, y2 = _turned(x2, y2, c, s)
+    return x0, y0, x1, y1, x2, y2
 
 
 @kernel
