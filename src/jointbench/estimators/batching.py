@@ -6,27 +6,108 @@ near 1e200, say) fails the call for every trial. :func:`isolated` turns that int
 trial's own outcome: the batch is redone one trial at a time, each trial through the same
 batched form (whose one-trial batch equals the one-trial function), and a trial that still
 fails carries its exception. A batch without a failure pays nothing.
+
+A trial's outcome may also be a ``ValueError`` that is no numerical failure but a mistake in
+the method's code (:func:`numerical_failure` tells them apart): a many-trial form returns it
+like any other, as the input checks may yet replace it with their own error, and the estimate
+jobs stop on it (:func:`mistakes_named`) rather than record a failed trial.
 """
 
 from __future__ import annotations
 
+import contextlib
+import dis
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
 __all__ = [
     "NUMERICAL_FAILURES",
+    "ProgrammingError",
     "check_poses",
     "check_same_trials",
     "each_alone",
+    "failed_trial",
     "isolated",
+    "mistakes_named",
+    "numerical_failure",
     "one_trial",
 ]
 
-#: What a fit raises when a trial's values defeat it (``LinAlgError`` is a ``ValueError``);
-#: anything else is a bug and propagates.
+#: The types of what a fit raises when a trial's values defeat it (``LinAlgError`` is a
+#: ``ValueError``); anything else is a bug and propagates, and so is a ``ValueError`` of these
+#: that :func:`numerical_failure` does not pass.
 NUMERICAL_FAILURES = (ValueError, FloatingPointError)
+
+_RAISE_STATEMENT = dis.opmap["RAISE_VARARGS"]
+
+
+class ProgrammingError(RuntimeError):
+    """A fit stopped by a mistake in its code, not by its trial's data."""
+
+
+def numerical_failure(error: BaseException) -> bool:
+    """Whether ``error`` is a trial's numerical failure: a ``LinAlgError`` or a
+    ``FloatingPointError``, or a ``ValueError`` raised by a ``raise`` statement (a method, or
+    a library it calls, saying why the data defeat it) or never raised at all (an outcome
+    made as such). A ``ValueError`` that the interpreter or NumPy raise inside an expression
+    (arrays that do not broadcast, an unpacking of the wrong length, a reshape to the wrong
+    size) is a mistake in the code, as a ``TypeError`` is."""
+    if isinstance(error, (np.linalg.LinAlgError, FloatingPointError)):
+        return True
+    if not isinstance(error, ValueError):
+        return False
+    innermost = _innermost(error)
+    if innermost is None:
+        return True
+    return innermost.tb_frame.f_code.co_code[innermost.tb_lasti] == _RAISE_STATEMENT
+
+
+def _innermost(error: BaseException):
+    """The traceback entry where ``error`` was raised, or ``None`` if it never was."""
+    entry = error.__traceback__
+    while entry is not None and entry.tb_next is not None:
+        entry = entry.tb_next
+    return entry
+
+
+@contextlib.contextmanager
+def mistakes_named(label: str) -> Iterator[None]:
+    """Prefix ``label`` to a :class:`ProgrammingError` raised inside, and turn a ``ValueError``
+    raised inside that is no :func:`numerical_failure` into one."""
+    try:
+        yield
+    except ProgrammingError as error:
+        raise ProgrammingError(f"{label}: {error}") from error.__cause__
+    except ValueError as error:
+        if numerical_failure(error):
+            raise
+        raise ProgrammingError(f"{label}: {_mistake(error)}") from error
+
+
+def failed_trial(error: BaseException) -> BaseException:
+    """``error``, a trial's outcome, when it is a :func:`numerical_failure`; otherwise a
+    :class:`ProgrammingError` that says so, raised from it (not a ``ValueError``, which a
+    caller might take for the trial's failure once more)."""
+    if isinstance(error, ValueError) and not numerical_failure(error):
+        raise ProgrammingError(_mistake(error)) from error
+    if not isinstance(error, NUMERICAL_FAILURES):
+        raise error
+    return error
+
+
+def _mistake(error: BaseException) -> str:
+    """``error`` and where it was raised, as a programming error."""
+    innermost = _innermost(error)
+    where = ""
+    if innermost is not None:
+        code = innermost.tb_frame.f_code
+        where = f" (at {code.co_filename}:{innermost.tb_lineno}, in {code.co_name})"
+    return (
+        f"{type(error).__name__}: {error}{where}: a programming error, not a failure of the "
+        "trial's data (a method that cannot fit a trial raises a ValueError saying why)"
+    )
 
 
 def one_trial(fit_trials: Callable[..., list], *segments: object, **options: object):

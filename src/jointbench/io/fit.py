@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointbench.estimators.batching import failed_trial
 from jointbench.estimators.registry import KINDS, get, many
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -163,8 +164,12 @@ def _estimate_vector(kind: str, result) -> np.ndarray:
 
 
 def _bootstrap_row(kind: str, refit, estimate: np.ndarray) -> np.ndarray | None:
-    """What a refit contributes to the bootstrap; ``None`` when it failed or did not converge."""
-    if isinstance(refit, Exception) or not refit.converged:
+    """What a refit contributes to the bootstrap; ``None`` when it failed or did not converge
+    (a mistake in the method's code is raised, not counted as a failed refit)."""
+    if isinstance(refit, Exception):
+        failed_trial(refit)
+        return None
+    if not refit.converged:
         return None
     if kind == "axis":
         return _axis_crossing(refit.direction, refit.point, estimate)

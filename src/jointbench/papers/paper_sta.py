@@ -19,6 +19,7 @@ import pandas as pd
 
 from jointbench.comparison.tolerance import binomial_interval
 from jointbench.estimators import registry
+from jointbench.estimators.batching import failed_trial
 from jointbench.figures.common import method_style, pyplot
 from jointbench.figures.extended import extended_table, mean_ranks
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
@@ -74,12 +75,7 @@ def bootstrap_covariances(trials: Trials, n_trials: int, n_resamples: int) -> np
         def refits(indices: np.ndarray, proximal=proximal, distal=distal) -> list:
             rows = np.concatenate([np.zeros((len(indices), 1), dtype=int), indices + 1], axis=1)
             results = fit(proximal[rows], distal[rows])
-            return [
-                None
-                if isinstance(r, Exception) or not r.converged
-                else np.asarray(r.center, dtype=float)
-                for r in results
-            ]
+            return [_refit_center(result) for result in results]
 
         try:
             boot = bootstrap(refits, len(proximal) - 1, n_resamples=n_resamples, seed=trial)
@@ -87,6 +83,15 @@ def bootstrap_covariances(trials: Trials, n_trials: int, n_resamples: int) -> np
             continue
         out[trial] = boot.covariance()
     return out
+
+
+def _refit_center(result) -> np.ndarray | None:
+    """A bootstrap refit's centre (3,) [mm]; ``None`` when it failed or did not converge (a
+    mistake in the method's code is raised, not counted as a failed refit)."""
+    if isinstance(result, Exception):
+        failed_trial(result)
+        return None
+    return np.asarray(result.center, dtype=float) if result.converged else None
 
 
 def _coverage_row(method: str, sta_mm: float, mahalanobis_sq, sqrt_trace, error) -> dict:

@@ -15,13 +15,13 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
 import pyarrow as pa
 
 from jointbench.configuration.config import estimator_names, parse_condition_id
 from jointbench.configuration.seeds import trial_rng
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
+from jointbench.estimators.batching import failed_trial, mistakes_named
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.resultfiles.parquet import (
     iter_dataset,
@@ -72,20 +72,14 @@ def simulate_condition(
     return spec.simulate(condition, protocol, rngs)
 
 
-# What an estimator raises when one trial's data defeat it (bad geometry, a singular system,
-# an overflow); such a trial becomes a failed row. Anything else (TypeError, KeyError, …) is a
-# bug in the estimator or its options and stops the run. LinAlgError is a ValueError; it is
-# listed for the reader.
-NUMERICAL_FAILURES = (ValueError, np.linalg.LinAlgError, FloatingPointError)
-
-
 def _outcome(result) -> tuple[object, str, bool, int]:
-    """Row fields of one fit's result, or of the exception a many-trial form returned for a trial;
-    an exception that is not a numerical failure is raised."""
-    if isinstance(result, NUMERICAL_FAILURES):
-        return None, f"error: {type(result).__name__}: {result}", False, 0
+    """Row fields of one fit's result, or of the exception a many-trial form returned for a
+    trial: a trial its data defeat (bad geometry, a singular system, an overflow:
+    :func:`jointbench.estimators.batching.numerical_failure`) is a failed row; any other
+    exception is a bug in the estimator or its options, and is raised."""
     if isinstance(result, BaseException):
-        raise result
+        failed_trial(result)
+        return None, f"error: {type(result).__name__}: {result}", False, 0
     return result, str(result.status), bool(result.converged), int(result.iterations)
 
 
@@ -180,16 +174,17 @@ def estimate_table(
     if poses is not None and pose_segments(many) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = spec.diagnostics.get(method)
-    if warm_up:
-        log.info(
-            "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
-            "not counted in any trial's seconds",
-            study,
-            method,
-            first_trial,
-            _warm_up(many, segments, trials, options or {}, poses),
-        )
-    fitted = _fit_trials(many, segments, trials, options or {}, poses)
+    with mistakes_named(f"{study} {method}"):
+        if warm_up:
+            log.info(
+                "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
+                "not counted in any trial's seconds",
+                study,
+                method,
+                first_trial,
+                _warm_up(many, segments, trials, options or {}, poses),
+            )
+        fitted = _fit_trials(many, segments, trials, options or {}, poses)
     extras = [{}] * trials.n_trials
     if diagnose:
         arrays = tuple(trials.segments[name] for name in segments)
