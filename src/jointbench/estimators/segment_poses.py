@@ -5,12 +5,16 @@ two-segment support verdict (:mod:`jointbench.estimators.support`) read the same
 :func:`jointbench.numerics.poses.rigid_poses` (paper C §5), with the body frame equal to the
 world at frame 0. :func:`trial_poses` fits them for all trials at once and checks what a pose
 needs, so a caller can fit them once and pass them to each method (``poses=``) and to the verdict.
+Poses cannot be altered after their fit: their arrays are read-only, and poses rebuilt with
+other parts than those that leave their residual on their markers are refused
+(:class:`SegmentPoses`).
 """
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -24,16 +28,32 @@ from jointbench.numerics.poses import rigid_poses
 
 __all__ = [
     "POSE_MIN_FRAMES",
+    "AlteredPoses",
     "SegmentPoses",
     "pose_residuals",
     "pose_segments",
-    "stored_segment_poses",
+    "residual_differs",
     "trial_poses",
 ]
 
 #: Fewest frames a pose-based method accepts: every one of them needs the same, so their
 #: poses can be fitted once and shared.
 POSE_MIN_FRAMES = 3
+
+
+#: The arrays of :class:`SegmentPoses`, in field order.
+_POSE_ARRAYS = ("markers", "rotation", "translation", "body")
+
+
+class AlteredPoses(ValueError):
+    """Poses whose rotation, translation and body-fixed coordinates leave on their markers a
+    residual sum of squares ``found`` [mm^2] other than the ``stored`` one they were fitted
+    with (see :func:`residual_differs`)."""
+
+    def __init__(self, message: str, *, found: float, stored: float) -> None:
+        super().__init__(message)
+        self.found = found
+        self.stored = stored
 
 
 @dataclass(frozen=True)
@@ -46,21 +66,150 @@ class SegmentPoses:
     its degrees of freedom, ``3 (n_markers - 2) (N - 1)``: ``3 n N`` coordinates less ``6 N``
     pose parameters and ``3 n`` body coordinates, plus the 6 of the
     gauge (the body frame is pinned to frame 0).
+
+    The poses cannot be altered after their fit. Built, they refuse (``ValueError``) arrays
+    shaped otherwise than their markers ask, a ``dof`` other than theirs, and a rotation,
+    translation and body that leave on the markers another residual than ``residual_ss``
+    beyond rounding (:class:`AlteredPoses`): poses edited and rebuilt, by hand or with
+    ``dataclasses.replace``. ``residual_ss`` and ``dof`` left ``None`` (a fresh fit) are
+    computed. The arrays are read-only and their own: one a caller could still write is
+    copied first, and the caller's array is left as it was. Not caught: poses forged together
+    with the residual they leave, which only a re-fit of the markers would tell.
     """
 
     markers: np.ndarray
     rotation: np.ndarray
     translation: np.ndarray
     body: np.ndarray
-    residual_ss: float
-    dof: int
+    residual_ss: float | None = None
+    dof: int | None = None
+
+    def __post_init__(self) -> None:
+        arrays = {name: _owned_read_only(name, getattr(self, name)) for name in _POSE_ARRAYS}
+        what = _check_pose_shapes(**arrays)
+        n_frames, n_markers, _ = arrays["markers"].shape
+        dof = 3 * (n_markers - 2) * (n_frames - 1)
+        if self.dof is not None and self.dof != dof:
+            raise ValueError(
+                f"{what}: dof is {self.dof}, not the {dof} their shapes give "
+                "(3 (n_markers - 2) (n_frames - 1))"
+            )
+        residual = pose_residuals(**arrays)
+        found = float(np.sum(residual * residual))
+        residual_ss = (
+            found
+            if self.residual_ss is None
+            else _checked_residual(what, found, self.residual_ss, arrays["markers"])
+        )
+        for name, array in arrays.items():
+            object.__setattr__(self, name, array)
+        object.__setattr__(self, "residual_ss", residual_ss)
+        object.__setattr__(self, "dof", dof)
+
+    def __reduce__(self) -> tuple:
+        # A copy or an unpickled pose is built, and so checked and read-only, as any other.
+        return (type(self), tuple(getattr(self, f.name) for f in fields(self)))
+
+
+# The arrays this module fitted or stacked and made read-only, by id: no caller holds them, so
+# poses built of views of them need not copy them; a caller may hold, and write, any other.
+_OWN_ARRAYS: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
+
+
+def _memory_chain(array: np.ndarray) -> list[object]:
+    """``array``, the array whose memory it views, and so on down to the owner of the memory
+    (an array, or another object holding a buffer)."""
+    chain = [array]
+    while isinstance(chain[-1], np.ndarray) and chain[-1].base is not None:
+        chain.append(chain[-1].base)
+    return chain
+
+
+def _owned_read_only(name: str, array: object) -> np.ndarray:
+    """Pose array ``name`` as read-only ``float64`` no one else can write: a view of ``array``
+    when its memory is this module's own (:func:`_read_only_own`), else of a read-only copy,
+    so a caller's array is neither made read-only nor able to change the poses. A view, so
+    that turning its flag back to writeable fails."""
+    try:
+        array = np.asarray(array, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"segment poses: {name} is no array of numbers ({error})") from None
+    owner = _memory_chain(array)[-1]
+    if _OWN_ARRAYS.get(id(owner)) is not owner:
+        array = array.copy()
+        array.setflags(write=False)
+    view = array.view()
+    view.setflags(write=False)
+    return view
+
+
+def _read_only_own(array: np.ndarray) -> np.ndarray:
+    """``array``, of this module's own making and held by no caller, read-only with the arrays
+    whose memory it views, and known as the module's own: :class:`SegmentPoses` built of
+    views of it need not copy them."""
+    chain = _memory_chain(array)
+    for held in chain:
+        held.setflags(write=False)
+    _OWN_ARRAYS[id(chain[-1])] = chain[-1]
+    return array
+
+
+def _check_pose_shapes(
+    markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
+) -> str:
+    """``ValueError`` unless the pose arrays are shaped as ``markers`` ``(N, n, 3)``, ``n >= 3``,
+    asks (see :class:`SegmentPoses`); else what the poses are, for the errors that follow."""
+    if markers.ndim != 3 or markers.shape[0] < 1 or markers.shape[1] < 3 or markers.shape[2] != 3:
+        raise ValueError(
+            f"segment poses: markers is shaped {markers.shape}, not (n_frames, n_markers, 3) "
+            "with at least 1 frame and 3 markers"
+        )
+    n_frames, n_markers, _ = markers.shape
+    what = f"poses of a segment of {n_frames} frames and {n_markers} markers"
+    wanted = {
+        "rotation": (rotation, (n_frames, 3, 3)),
+        "translation": (translation, (n_frames, 3)),
+        "body": (body, (n_markers, 3)),
+    }
+    for name, (array, shape) in wanted.items():
+        if array.shape != shape:
+            raise ValueError(f"{what}: {name} is shaped {array.shape}, not {shape}")
+    return what
+
+
+def residual_differs(found: np.ndarray, stored: np.ndarray, markers: np.ndarray) -> np.ndarray:
+    """Whether residual sums of squares ``found`` ``(...)`` [mm^2], recomputed from poses of
+    ``markers`` ``(..., N, n, 3)`` [mm], differ from the ``stored`` ``(...)`` [mm^2] they were
+    fitted with by more than a recomputation of the same poses can move them; a NaN differs."""
+    # Rounding of coordinates of this size, summed over every coordinate, bounds what a
+    # recomputation of the same poses may move the sum by.
+    scale = np.max(np.abs(markers), axis=(-3, -2, -1), initial=0.0)
+    rounding = np.prod(markers.shape[-3:]) * (1e-10 * scale) ** 2
+    return ~(np.abs(found - stored) <= 1e-6 * stored + rounding)
+
+
+def _checked_residual(what: str, found: float, stored: object, markers: np.ndarray) -> float:
+    """``stored`` [mm^2], the residual sum of squares poses that leave ``found`` [mm^2] on
+    ``markers`` were fitted with; :class:`AlteredPoses` when it is another beyond rounding,
+    ``ValueError`` when it is no number."""
+    try:
+        stored = float(stored)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}: residual_ss is {stored!r}, not a number [mm^2]") from None
+    if residual_differs(found, stored, markers):
+        raise AlteredPoses(
+            f"{what}: rotation/translation/body leave a residual of {found:.6g} mm^2 on their "
+            f"markers, not the {stored:.6g} mm^2 they were fitted with: they were altered "
+            "after their fit",
+            found=found,
+            stored=stored,
+        )
+    return stored
 
 
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
-    residual = pose_residuals(markers, rotation, translation, body)
-    residual_ss = float(np.sum(residual * residual))
-    return stored_segment_poses(markers, rotation, translation, body, residual_ss)
+    return SegmentPoses(markers, rotation, translation, body)
 
 
 def pose_residuals(
@@ -76,26 +225,6 @@ def pose_residuals(
         *lead, n_frames, 3, -1
     )
     return markers - np.swapaxes(turned, -1, -2) - translation[..., None, :]
-
-
-def stored_segment_poses(
-    markers: np.ndarray,
-    rotation: np.ndarray,
-    translation: np.ndarray,
-    body: np.ndarray,
-    residual_ss: float,
-) -> SegmentPoses:
-    """A segment's poses rebuilt from what a pose fit stored (see :class:`SegmentPoses` for the
-    shapes), with the markers they were fitted to."""
-    n_frames, n_markers, _ = markers.shape
-    return SegmentPoses(
-        markers=markers,
-        rotation=rotation,
-        translation=translation,
-        body=body,
-        residual_ss=float(residual_ss),
-        dof=3 * (n_markers - 2) * (n_frames - 1),
-    )
 
 
 def trial_poses(
@@ -142,6 +271,8 @@ def trial_poses(
         for index in range(len(names))
     ]
     fitted = [_fitted_poses(markers) if good else [] for markers in stacked]
+    # Read-only once fitted, not before: the fit's kernels would copy a read-only input.
+    stacked = [markers if markers is None else _read_only_own(markers) for markers in stacked]
     for row, trial in enumerate(good):
         try:
             outcomes[trial] = {
@@ -175,11 +306,18 @@ def _fitted_poses(markers: np.ndarray) -> list:
     one call; when that call fails numerically, each trial alone, a failing trial's error in
     place of its parts."""
     try:
-        return list(zip(*rigid_poses(markers), strict=True))
+        return list(zip(*_read_only_poses(markers), strict=True))
     except NUMERICAL_FAILURES:
         return each_alone(
-            lambda t: tuple(part[0] for part in rigid_poses(markers[t : t + 1])), len(markers)
+            lambda t: tuple(part[0] for part in _read_only_poses(markers[t : t + 1])),
+            len(markers),
         )
+
+
+def _read_only_poses(markers: np.ndarray) -> tuple[np.ndarray, ...]:
+    """:func:`rigid_poses` of ``markers`` ``(T, N, P, 3)``, read-only: the parts of the
+    :class:`SegmentPoses` built of them, which then need not copy them."""
+    return tuple(_read_only_own(part) for part in rigid_poses(markers))
 
 
 def _parts(fitted: tuple | Exception) -> tuple:
