@@ -217,3 +217,26 @@ def test_poses_of_no_numbers_are_refused():
         dataclasses.replace(pose, body="coordinates")
     with pytest.raises(ValueError, match="residual_ss is 'small', not a number"):
         dataclasses.replace(pose, residual_ss="small")
+
+
+def test_fresh_poses_that_leave_no_finite_residual_are_refused():
+    """Poses given without their residual, whose residual is then computed, must leave a
+    number on their markers: a gap in the markers leaves none."""
+    pose = _fitted()[0]["distal"]
+    markers = pose.markers.copy()
+    markers[9, 1] = np.nan
+    with pytest.raises(ValueError, match="leave a residual of nan mm\\^2 on their markers"):
+        SegmentPoses(markers, pose.rotation, pose.translation, pose.body)
+
+
+@pytest.mark.parametrize("stored", [np.inf, -np.inf, np.nan])
+def test_a_stored_residual_that_is_no_finite_number_is_refused(stored):
+    pose = _fitted()[0]["distal"]
+    with pytest.raises(ValueError, match=f"not the {stored} mm\\^2 they were fitted with"):
+        dataclasses.replace(pose, residual_ss=stored)
+
+
+def test_a_dof_that_is_no_number_is_refused():
+    pose = _fitted()[0]["distal"]
+    with pytest.raises(ValueError, match="dof is \\[177 177\\], not the 177"):
+        dataclasses.replace(pose, dof=np.array([177, 177]))

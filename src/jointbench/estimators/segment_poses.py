@@ -70,11 +70,13 @@ class SegmentPoses:
     The poses cannot be altered after their fit. Built, they refuse (``ValueError``) arrays
     shaped otherwise than their markers ask, a ``dof`` other than theirs, and a rotation,
     translation and body that leave on the markers another residual than ``residual_ss``
-    beyond rounding (:class:`AlteredPoses`): poses edited and rebuilt, by hand or with
-    ``dataclasses.replace``. ``residual_ss`` and ``dof`` left ``None`` (a fresh fit) are
-    computed. The arrays are read-only and their own: one a caller could still write is
-    copied first, and the caller's array is left as it was. Not caught: poses forged together
-    with the residual they leave, which only a re-fit of the markers would tell.
+    (:class:`AlteredPoses`, beyond the allowance of :func:`residual_differs`): poses edited
+    and rebuilt, by hand or with ``dataclasses.replace``. ``residual_ss`` and ``dof`` left
+    ``None`` (a fresh fit) are computed. The arrays are read-only and their own: one a caller
+    could still write is copied first, and the caller's array is left as it was. Not caught:
+    poses forged together with the residual they leave, which only a re-fit of the markers
+    would tell, and edits too small to move the residual beyond the allowance (at the fit's
+    minimum it moves with their square: a turn of about 1e-5 rad of one frame of 60).
     """
 
     markers: np.ndarray
@@ -89,18 +91,22 @@ class SegmentPoses:
         what = _check_pose_shapes(**arrays)
         n_frames, n_markers, _ = arrays["markers"].shape
         dof = 3 * (n_markers - 2) * (n_frames - 1)
-        if self.dof is not None and self.dof != dof:
+        if self.dof is not None and (np.ndim(self.dof) != 0 or self.dof != dof):
             raise ValueError(
                 f"{what}: dof is {self.dof}, not the {dof} their shapes give "
                 "(3 (n_markers - 2) (n_frames - 1))"
             )
         residual = pose_residuals(**arrays)
         found = float(np.sum(residual * residual))
-        residual_ss = (
-            found
-            if self.residual_ss is None
-            else _checked_residual(what, found, self.residual_ss, arrays["markers"])
-        )
+        if self.residual_ss is not None:
+            residual_ss = _checked_residual(what, found, self.residual_ss, arrays["markers"])
+        elif np.isfinite(found):
+            residual_ss = found
+        else:
+            raise ValueError(
+                f"{what}: rotation/translation/body leave a residual of {found} mm^2 on their "
+                "markers: markers and poses must be finite numbers"
+            )
         for name, array in arrays.items():
             object.__setattr__(self, name, array)
         object.__setattr__(self, "residual_ss", residual_ss)
@@ -180,12 +186,14 @@ def _check_pose_shapes(
 def residual_differs(found: np.ndarray, stored: np.ndarray, markers: np.ndarray) -> np.ndarray:
     """Whether residual sums of squares ``found`` ``(...)`` [mm^2], recomputed from poses of
     ``markers`` ``(..., N, n, 3)`` [mm], differ from the ``stored`` ``(...)`` [mm^2] they were
-    fitted with by more than a recomputation of the same poses can move them; a NaN differs."""
+    fitted with by more than a recomputation of the same poses can move them; a stored sum
+    that is no finite number differs."""
     # Rounding of coordinates of this size, summed over every coordinate, bounds what a
     # recomputation of the same poses may move the sum by.
     scale = np.max(np.abs(markers), axis=(-3, -2, -1), initial=0.0)
     rounding = np.prod(markers.shape[-3:]) * (1e-10 * scale) ** 2
-    return ~(np.abs(found - stored) <= 1e-6 * stored + rounding)
+    # An infinite stored sum would make the relative allowance infinite.
+    return ~np.isfinite(stored) | ~(np.abs(found - stored) <= 1e-6 * stored + rounding)
 
 
 def _checked_residual(what: str, found: float, stored: object, markers: np.ndarray) -> float:
