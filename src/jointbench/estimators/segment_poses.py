@@ -12,7 +12,6 @@ other parts than those that leave their residual on their markers are refused
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, fields
 
@@ -72,11 +71,11 @@ class SegmentPoses:
     translation and body that leave on the markers another residual than ``residual_ss``
     (:class:`AlteredPoses`, beyond the allowance of :func:`residual_differs`): poses edited
     and rebuilt, by hand or with ``dataclasses.replace``. ``residual_ss`` and ``dof`` left
-    ``None`` (a fresh fit) are computed. The arrays are read-only and their own: one a caller
-    could still write is copied first, and the caller's array is left as it was. Not caught:
+    ``None`` (a fresh fit) are computed. The arrays are read-only copies of their own, so
+    a caller's array is left as it was and cannot change them. Not caught:
     poses forged together with the residual they leave, which only a re-fit of the markers
     would tell, and edits too small to move the residual beyond the allowance (at the fit's
-    minimum it moves with their square: a turn of about 1e-5 rad of one frame of 60).
+    minimum the residual moves with the square of an edit).
     """
 
     markers: np.ndarray
@@ -117,47 +116,18 @@ class SegmentPoses:
         return (type(self), tuple(getattr(self, f.name) for f in fields(self)))
 
 
-# The arrays this module fitted or stacked and made read-only, by id: no caller holds them, so
-# poses built of views of them need not copy them; a caller may hold, and write, any other.
-_OWN_ARRAYS: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
-
-
-def _memory_chain(array: np.ndarray) -> list[object]:
-    """``array``, the array whose memory it views, and so on down to the owner of the memory
-    (an array, or another object holding a buffer)."""
-    chain = [array]
-    while isinstance(chain[-1], np.ndarray) and chain[-1].base is not None:
-        chain.append(chain[-1].base)
-    return chain
-
-
 def _owned_read_only(name: str, array: object) -> np.ndarray:
-    """Pose array ``name`` as read-only ``float64`` no one else can write: a view of ``array``
-    when its memory is this module's own (:func:`_read_only_own`), else of a read-only copy,
-    so a caller's array is neither made read-only nor able to change the poses. A view, so
-    that turning its flag back to writeable fails."""
+    """Pose array ``name`` as a read-only ``float64`` copy no one else can write: a caller's
+    array is neither made read-only nor able to change the poses afterwards. A read-only view
+    of the copy, so that turning its flag back to writeable fails."""
     try:
-        array = np.asarray(array, dtype=float)
+        copy = np.array(array, dtype=float)
     except (TypeError, ValueError) as error:
         raise ValueError(f"segment poses: {name} is no array of numbers ({error})") from None
-    owner = _memory_chain(array)[-1]
-    if _OWN_ARRAYS.get(id(owner)) is not owner:
-        array = array.copy()
-        array.setflags(write=False)
-    view = array.view()
+    copy.setflags(write=False)
+    view = copy.view()
     view.setflags(write=False)
     return view
-
-
-def _read_only_own(array: np.ndarray) -> np.ndarray:
-    """``array``, of this module's own making and held by no caller, read-only with the arrays
-    whose memory it views, and known as the module's own: :class:`SegmentPoses` built of
-    views of it need not copy them."""
-    chain = _memory_chain(array)
-    for held in chain:
-        held.setflags(write=False)
-    _OWN_ARRAYS[id(chain[-1])] = chain[-1]
-    return array
 
 
 def _check_pose_shapes(
@@ -279,8 +249,6 @@ def trial_poses(
         for index in range(len(names))
     ]
     fitted = [_fitted_poses(markers) if good else [] for markers in stacked]
-    # Read-only once fitted, not before: the fit's kernels would copy a read-only input.
-    stacked = [markers if markers is None else _read_only_own(markers) for markers in stacked]
     for row, trial in enumerate(good):
         try:
             outcomes[trial] = {
@@ -314,18 +282,11 @@ def _fitted_poses(markers: np.ndarray) -> list:
     one call; when that call fails numerically, each trial alone, a failing trial's error in
     place of its parts."""
     try:
-        return list(zip(*_read_only_poses(markers), strict=True))
+        return list(zip(*rigid_poses(markers), strict=True))
     except NUMERICAL_FAILURES:
         return each_alone(
-            lambda t: tuple(part[0] for part in _read_only_poses(markers[t : t + 1])),
-            len(markers),
+            lambda t: tuple(part[0] for part in rigid_poses(markers[t : t + 1])), len(markers)
         )
-
-
-def _read_only_poses(markers: np.ndarray) -> tuple[np.ndarray, ...]:
-    """:func:`rigid_poses` of ``markers`` ``(T, N, P, 3)``, read-only: the parts of the
-    :class:`SegmentPoses` built of them, which then need not copy them."""
-    return tuple(_read_only_own(part) for part in rigid_poses(markers))
 
 
 def _parts(fitted: tuple | Exception) -> tuple:
