@@ -5,12 +5,15 @@ two-segment support verdict (:mod:`jointbench.estimators.support`) read the same
 :func:`jointbench.numerics.poses.rigid_poses` (paper C §5), with the body frame equal to the
 world at frame 0. :func:`trial_poses` fits them for all trials at once and checks what a pose
 needs, so a caller can fit them once and pass them to each method (``poses=``) and to the verdict.
+Poses cannot be altered after their fit: their arrays are read-only, and poses rebuilt with
+other parts than those that leave their residual on their markers are refused
+(:class:`SegmentPoses`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -24,16 +27,32 @@ from jointbench.numerics.poses import rigid_poses
 
 __all__ = [
     "POSE_MIN_FRAMES",
+    "AlteredPoses",
     "SegmentPoses",
     "pose_residuals",
     "pose_segments",
-    "stored_segment_poses",
+    "residual_differs",
     "trial_poses",
 ]
 
 #: Fewest frames a pose-based method accepts: every one of them needs the same, so their
 #: poses can be fitted once and shared.
 POSE_MIN_FRAMES = 3
+
+
+#: The arrays of :class:`SegmentPoses`, in field order.
+_POSE_ARRAYS = ("markers", "rotation", "translation", "body")
+
+
+class AlteredPoses(ValueError):
+    """Poses whose rotation, translation and body-fixed coordinates leave on their markers a
+    residual sum of squares ``found`` [mm^2] other than the ``stored`` one they were fitted
+    with (see :func:`residual_differs`)."""
+
+    def __init__(self, message: str, *, found: float, stored: float) -> None:
+        super().__init__(message)
+        self.found = found
+        self.stored = stored
 
 
 @dataclass(frozen=True)
@@ -46,21 +65,129 @@ class SegmentPoses:
     its degrees of freedom, ``3 (n_markers - 2) (N - 1)``: ``3 n N`` coordinates less ``6 N``
     pose parameters and ``3 n`` body coordinates, plus the 6 of the
     gauge (the body frame is pinned to frame 0).
+
+    The poses cannot be altered after their fit. Built, they refuse (``ValueError``) arrays
+    shaped otherwise than their markers ask, a ``dof`` other than theirs, and a rotation,
+    translation and body that leave on the markers another residual than ``residual_ss``
+    (:class:`AlteredPoses`, beyond the allowance of :func:`residual_differs`): poses edited
+    and rebuilt, by hand or with ``dataclasses.replace``. ``residual_ss`` and ``dof`` left
+    ``None`` (a fresh fit) are computed. The arrays are read-only copies of their own, so
+    a caller's array is left as it was and cannot change them. Not caught:
+    poses forged together with the residual they leave, which only a re-fit of the markers
+    would tell, and edits too small to move the residual beyond the allowance (at the fit's
+    minimum the residual moves with the square of an edit).
     """
 
     markers: np.ndarray
     rotation: np.ndarray
     translation: np.ndarray
     body: np.ndarray
-    residual_ss: float
-    dof: int
+    residual_ss: float | None = None
+    dof: int | None = None
+
+    def __post_init__(self) -> None:
+        arrays = {name: _owned_read_only(name, getattr(self, name)) for name in _POSE_ARRAYS}
+        what = _check_pose_shapes(**arrays)
+        n_frames, n_markers, _ = arrays["markers"].shape
+        dof = 3 * (n_markers - 2) * (n_frames - 1)
+        if self.dof is not None and (np.ndim(self.dof) != 0 or self.dof != dof):
+            raise ValueError(
+                f"{what}: dof is {self.dof}, not the {dof} their shapes give "
+                "(3 (n_markers - 2) (n_frames - 1))"
+            )
+        residual = pose_residuals(**arrays)
+        found = float(np.sum(residual * residual))
+        if self.residual_ss is not None:
+            residual_ss = _checked_residual(what, found, self.residual_ss, arrays["markers"])
+        elif np.isfinite(found):
+            residual_ss = found
+        else:
+            raise ValueError(
+                f"{what}: rotation/translation/body leave a residual of {found} mm^2 on their "
+                "markers: markers and poses must be finite numbers"
+            )
+        for name, array in arrays.items():
+            object.__setattr__(self, name, array)
+        object.__setattr__(self, "residual_ss", residual_ss)
+        object.__setattr__(self, "dof", dof)
+
+    def __reduce__(self) -> tuple:
+        # A copy or an unpickled pose is built, and so checked and read-only, as any other.
+        return (type(self), tuple(getattr(self, f.name) for f in fields(self)))
+
+
+def _owned_read_only(name: str, array: object) -> np.ndarray:
+    """Pose array ``name`` as a read-only ``float64`` copy no one else can write: a caller's
+    array is neither made read-only nor able to change the poses afterwards. A read-only view
+    of the copy, so that turning its flag back to writeable fails."""
+    try:
+        copy = np.array(array, dtype=float)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"segment poses: {name} is no array of numbers ({error})") from None
+    copy.setflags(write=False)
+    view = copy.view()
+    view.setflags(write=False)
+    return view
+
+
+def _check_pose_shapes(
+    markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
+) -> str:
+    """``ValueError`` unless the pose arrays are shaped as ``markers`` ``(N, n, 3)``, ``n >= 3``,
+    asks (see :class:`SegmentPoses`); else what the poses are, for the errors that follow."""
+    if markers.ndim != 3 or markers.shape[0] < 1 or markers.shape[1] < 3 or markers.shape[2] != 3:
+        raise ValueError(
+            f"segment poses: markers is shaped {markers.shape}, not (n_frames, n_markers, 3) "
+            "with at least 1 frame and 3 markers"
+        )
+    n_frames, n_markers, _ = markers.shape
+    what = f"poses of a segment of {n_frames} frames and {n_markers} markers"
+    wanted = {
+        "rotation": (rotation, (n_frames, 3, 3)),
+        "translation": (translation, (n_frames, 3)),
+        "body": (body, (n_markers, 3)),
+    }
+    for name, (array, shape) in wanted.items():
+        if array.shape != shape:
+            raise ValueError(f"{what}: {name} is shaped {array.shape}, not {shape}")
+    return what
+
+
+def residual_differs(found: np.ndarray, stored: np.ndarray, markers: np.ndarray) -> np.ndarray:
+    """Whether residual sums of squares ``found`` ``(...)`` [mm^2], recomputed from poses of
+    ``markers`` ``(..., N, n, 3)`` [mm], differ from the ``stored`` ``(...)`` [mm^2] they were
+    fitted with by more than a recomputation of the same poses can move them; a stored sum
+    that is no finite number differs."""
+    # Rounding of coordinates of this size, summed over every coordinate, bounds what a
+    # recomputation of the same poses may move the sum by.
+    scale = np.max(np.abs(markers), axis=(-3, -2, -1), initial=0.0)
+    rounding = np.prod(markers.shape[-3:]) * (1e-10 * scale) ** 2
+    # An infinite stored sum would make the relative allowance infinite.
+    return ~np.isfinite(stored) | ~(np.abs(found - stored) <= 1e-6 * stored + rounding)
+
+
+def _checked_residual(what: str, found: float, stored: object, markers: np.ndarray) -> float:
+    """``stored`` [mm^2], the residual sum of squares poses that leave ``found`` [mm^2] on
+    ``markers`` were fitted with; :class:`AlteredPoses` when it is another beyond rounding,
+    ``ValueError`` when it is no number."""
+    try:
+        stored = float(stored)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}: residual_ss is {stored!r}, not a number [mm^2]") from None
+    if residual_differs(found, stored, markers):
+        raise AlteredPoses(
+            f"{what}: rotation/translation/body leave a residual of {found:.6g} mm^2 on their "
+            f"markers, not the {stored:.6g} mm^2 they were fitted with: they were altered "
+            "after their fit",
+            found=found,
+            stored=stored,
+        )
+    return stored
 
 
 def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
-    residual = pose_residuals(markers, rotation, translation, body)
-    residual_ss = float(np.sum(residual * residual))
-    return stored_segment_poses(markers, rotation, translation, body, residual_ss)
+    return SegmentPoses(markers, rotation, translation, body)
 
 
 def pose_residuals(
@@ -76,26 +203,6 @@ def pose_residuals(
         *lead, n_frames, 3, -1
     )
     return markers - np.swapaxes(turned, -1, -2) - translation[..., None, :]
-
-
-def stored_segment_poses(
-    markers: np.ndarray,
-    rotation: np.ndarray,
-    translation: np.ndarray,
-    body: np.ndarray,
-    residual_ss: float,
-) -> SegmentPoses:
-    """A segment's poses rebuilt from what a pose fit stored (see :class:`SegmentPoses` for the
-    shapes), with the markers they were fitted to."""
-    n_frames, n_markers, _ = markers.shape
-    return SegmentPoses(
-        markers=markers,
-        rotation=rotation,
-        translation=translation,
-        body=body,
-        residual_ss=float(residual_ss),
-        dof=3 * (n_markers - 2) * (n_frames - 1),
-    )
 
 
 def trial_poses(

@@ -26,11 +26,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from jointbench.estimators.segment_poses import (
-    SegmentPoses,
-    pose_residuals,
-    stored_segment_poses,
-)
+from jointbench.estimators.segment_poses import AlteredPoses, SegmentPoses
 from jointbench.invocation import snakemake_command
 from jointbench.simulate import Trials
 
@@ -675,34 +671,28 @@ def _poses_shapes(path: str | Path) -> dict[str, tuple[int, ...]]:
     return {name: tuple(shape) for name, shape in shapes.items()}
 
 
-def _check_fitted_to(
+def _stored_poses(
     path: str | Path,
+    trial: int,
     name: str,
-    trials: np.ndarray,
     markers: np.ndarray,
-    poses: tuple[np.ndarray, np.ndarray, np.ndarray],
-    residual_ss: np.ndarray,
-) -> None:
-    """``ValueError`` naming ``path``, segment ``name`` and the first of ``trials`` whose
-    stored ``poses`` (``rotation``, ``translation``, ``body`` with a leading trial axis, see
-    :func:`jointbench.estimators.segment_poses.pose_residuals`) do not leave on ``markers``
-    ``(T, N, n, 3)`` [mm] the residual sum of squares they were stored with, ``residual_ss``
-    ``(T,)`` [mm^2]: poses of other markers of the same shapes (another seed's dataset, say),
-    which the shapes alone cannot tell."""
-    found = np.sum(pose_residuals(markers, *poses) ** 2, axis=(1, 2, 3))
-    # Rounding of coordinates of this size, summed over every coordinate, bounds what a
-    # recomputation of the same poses may move the sum by.
-    scale = np.max(np.abs(markers), axis=(1, 2, 3), initial=0.0)
-    rounding = markers[0].size * (1e-10 * scale) ** 2
-    off = np.abs(found - residual_ss) > 1e-6 * residual_ss + rounding
-    if off.any():
-        first = int(np.argmax(off))
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray],
+    residual_ss: float,
+) -> SegmentPoses:
+    """Segment ``name``'s poses of ``trial`` from their stored ``parts`` (``rotation``,
+    ``translation``, ``body``) and residual sum of squares ``residual_ss`` [mm^2] on the
+    dataset's ``markers`` ``(N, n, 3)`` [mm]; ``ValueError`` naming ``path``, the trial and the
+    segment when they do not leave that residual on these markers: poses of other markers of
+    the same shapes (another seed's dataset, say), which the shapes alone cannot tell."""
+    try:
+        return SegmentPoses(markers, *parts, residual_ss=residual_ss)
+    except AlteredPoses as error:
         raise ValueError(
-            f"{path}: the poses of trial {trials[first]}, segment {name!r}, leave a residual "
-            f"of {found[first]:.6g} mm^2 on the dataset's markers, not the "
-            f"{residual_ss[first]:.6g} mm^2 they were stored with: they were fitted to other "
+            f"{path}: the poses of trial {trial}, segment {name!r}, leave a residual "
+            f"of {error.found:.6g} mm^2 on the dataset's markers, not the "
+            f"{error.stored:.6g} mm^2 they were stored with: they were fitted to other "
             "markers (a poses file of another dataset)"
-        )
+        ) from error
 
 
 @_names_unreadable_file
@@ -745,18 +735,16 @@ def read_poses(
     }
     residuals = {name: _to_numpy(rows.column(f"{name}/residual_ss")) for name in segments}
     errors = rows.column("error").to_pylist()
-    fitted = np.array([error is None for error in errors])
-    for name, markers in segments.items():
-        parts = tuple(arrays[name, field][fitted] for field in _POSE_ARRAYS)
-        trials_fitted = np.flatnonzero(fitted) + first_trial
-        _check_fitted_to(path, name, trials_fitted, markers[fitted], parts, residuals[name][fitted])
     return [
         ValueError(error)
         if error is not None
         else {
-            name: stored_segment_poses(
+            name: _stored_poses(
+                path,
+                first_trial + trial,
+                name,
                 markers[trial],
-                *(arrays[name, field][trial] for field in _POSE_ARRAYS),
+                tuple(arrays[name, field][trial] for field in _POSE_ARRAYS),
                 residuals[name][trial],
             )
             for name, markers in segments.items()
