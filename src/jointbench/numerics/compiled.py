@@ -4,7 +4,11 @@ A kernel is a plain Python function over NumPy arrays and scalars that calls no 
 of the package but other kernels: loops a stack of small problems through, where NumPy would
 pay its per-call overhead on every tiny array. :func:`kernel` compiles it on its first call, so
 a process that never calls it never pays for importing and starting Numba. The machine code is
-cached beside the source file and rebuilt when that file changes. The Python source stays the
+cached beside the source file and rebuilt when anything compiled into it changes: Numba itself
+checks only the kernel's own file, so each kernel's cache entry is named by a digest of its
+source, of the kernels it calls (theirs in turn) and of the constants it reads
+(:meth:`_Kernel.digest`), and an edit in another module gets an entry of its own instead of
+the old machine code. The Python source stays the
 specification: it runs as written (slowly) through ``kernel.__wrapped__``, and it counts in
 the code fingerprint (:mod:`jointbench.fingerprint`) of every job that can import it.
 """
@@ -12,6 +16,8 @@ the code fingerprint (:mod:`jointbench.fingerprint`) of every job that can impor
 from __future__ import annotations
 
 import functools
+import hashlib
+import inspect
 import types
 from collections.abc import Callable
 
@@ -26,6 +32,7 @@ class _Kernel:
     def __init__(self, function: Callable) -> None:
         functools.update_wrapper(self, function)
         self._compiled: Callable | None = None
+        self._digest: str | None = None
 
     def __call__(self, *args):
         return self.compiled()(*args)
@@ -40,21 +47,78 @@ class _Kernel:
             # calls those from compiled code, not the Python objects around them.
             called = {
                 name: value.compiled()
-                for name in function.__code__.co_names
+                for name in _global_names(function.__code__)
                 if isinstance(value := function.__globals__.get(name), _Kernel)
             }
-            if called:
-                function = types.FunctionType(
-                    function.__code__,
-                    {**function.__globals__, **called},
-                    function.__name__,
-                    function.__defaults__,
-                    function.__closure__,
-                )
+            function = types.FunctionType(
+                function.__code__,
+                {**function.__globals__, **called},
+                function.__name__,
+                function.__defaults__,
+                function.__closure__,
+            )
+            # Numba names a cache entry by the function's qualified name and rebuilds it only
+            # when the function's own file changes; the digest in the name gives every version
+            # of what is compiled in an entry of its own.
+            function.__qualname__ = f"{self.__wrapped__.__qualname__}.{self.digest()}"
             # error_model="numpy": a float division by zero gives inf or nan, as NumPy's does,
             # instead of raising.
             self._compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(function)
         return self._compiled
+
+    def digest(self) -> str:
+        """A digest of everything compiled into the kernel: its source, the digests of the
+        kernels it calls and the values of the other globals it names (Numba freezes numbers,
+        strings, tuples and arrays into the machine code)."""
+        if self._digest is None:
+            function = self.__wrapped__
+            parts = [_source(function), repr(function.__defaults__)]
+            for name in sorted(_global_names(function.__code__)):
+                if name in function.__globals__:
+                    parts.append(f"{name}={_value_digest(function.__globals__[name])}")
+            self._digest = hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
+        return self._digest
+
+
+def _source(function: Callable) -> str:
+    """``function``'s source text; its bytecode and constants where the source is not at hand
+    (a function made by ``exec``)."""
+    try:
+        return inspect.getsource(function)
+    except (OSError, TypeError):
+        code = function.__code__
+        constants = [c for c in code.co_consts if not isinstance(c, types.CodeType)]
+        return f"{code.co_code.hex()} {constants!r}"
+
+
+def _global_names(code: types.CodeType) -> set[str]:
+    """The names ``code`` and the code nested in it (comprehensions, inner functions) look up
+    as globals or attributes: a superset of the globals it reads."""
+    names = set(code.co_names)
+    for constant in code.co_consts:
+        if isinstance(constant, types.CodeType):
+            names |= _global_names(constant)
+    return names
+
+
+def _value_digest(value: object) -> str:
+    """What of a global ``value`` a kernel's machine code can depend on, as text: a kernel's
+    digest, a constant's value, a module's or a function's name."""
+    if isinstance(value, _Kernel):
+        return value.digest()
+    if isinstance(value, np.ndarray):
+        content = hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest()
+        return f"array({value.dtype}, {value.shape}, {content})"
+    if isinstance(value, tuple):
+        return "(" + ", ".join(_value_digest(item) for item in value) + ")"
+    if value is None or isinstance(value, (bool, int, float, complex, str, bytes, np.generic)):
+        return repr(value)
+    if isinstance(value, types.ModuleType):
+        return f"module {value.__name__}"
+    # Functions, classes and other objects: by name (their repr may hold an address).
+    return f"{type(value).__qualname__} {getattr(value, '__module__', '')}." + getattr(
+        value, "__qualname__", ""
+    )
 
 
 def kernel_array(array: object, dtype: type = float) -> np.ndarray:

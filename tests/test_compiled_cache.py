@@ -1,0 +1,114 @@
+"""A kernel's cached machine code is rebuilt whenever anything compiled into it changes.
+
+Numba caches a kernel's machine code beside its source and rebuilds it when that file changes.
+What it compiles in from elsewhere, a kernel it calls or a constant it reads from another
+module, is not part of that check: edited there, a process would run the old code while every
+job that depends on it reruns. Each test builds two modules, runs a kernel in a fresh process
+(compiling and caching it), edits the other module, keeping the kernel's own file as it was,
+and runs it again in a fresh process.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+CALLER = """
+from jointbench.numerics.compiled import kernel
+from callee import SCALE, helper
+
+
+@kernel
+def outer(x):
+    return helper(x) + SCALE
+"""
+
+CALLEE = """
+from jointbench.numerics.compiled import kernel
+
+SCALE = {scale}
+
+
+@kernel
+def helper(x):
+    return {factor} * x
+"""
+
+DEEP = """
+from jointbench.numerics.compiled import kernel
+from callee import helper
+
+
+@kernel
+def middle(x):
+    return helper(x)
+"""
+
+DEEPER = """
+from jointbench.numerics.compiled import kernel
+from deep import middle
+
+
+@kernel
+def outer(x):
+    return middle(x) + 0.0
+"""
+
+
+def _run(folder: Path, module: str) -> float:
+    # A fresh process each time, with Numba's cache beside the sources: what a new job meets.
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(folder), str(SRC)])}
+    env["PYTHONDONTWRITEBYTECODE"] = "1"  # a same-second edit of the same size
+    env.pop("NUMBA_CACHE_DIR", None)
+    env.pop("NUMBA_DISABLE_JIT", None)
+    code = f"from {module} import outer; print(outer(3.0))"
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
+    return float(out.stdout)
+
+
+def _write(path: Path, text: str) -> None:
+    path.write_text(text)
+
+
+@pytest.mark.parametrize(
+    ("before", "after", "expected"),
+    [
+        ({"scale": 0.0, "factor": 2.0}, {"scale": 0.0, "factor": 5.0}, (6.0, 15.0)),
+        ({"scale": 0.0, "factor": 2.0}, {"scale": 1.0, "factor": 2.0}, (6.0, 7.0)),
+    ],
+    ids=["a called kernel", "a constant of another module"],
+)
+def test_an_edit_of_what_a_kernel_compiles_in_rebuilds_it(tmp_path, before, after, expected):
+    _write(tmp_path / "caller.py", CALLER)
+    _write(tmp_path / "callee.py", CALLEE.format(**before))
+    assert _run(tmp_path, "caller") == expected[0]
+    assert _run(tmp_path, "caller") == expected[0]  # from the cache
+    _write(tmp_path / "callee.py", CALLEE.format(**after))
+    assert _run(tmp_path, "caller") == expected[1]
+
+
+def test_an_edit_two_calls_away_rebuilds_the_kernel(tmp_path):
+    _write(tmp_path / "callee.py", CALLEE.format(scale=0.0, factor=2.0))
+    _write(tmp_path / "deep.py", DEEP)
+    _write(tmp_path / "deeper.py", DEEPER)
+    assert _run(tmp_path, "deeper") == 6.0
+    _write(tmp_path / "callee.py", CALLEE.format(scale=0.0, factor=7.0))
+    assert _run(tmp_path, "deeper") == 21.0
+
+
+def test_an_unchanged_kernel_is_loaded_from_the_cache(tmp_path):
+    _write(tmp_path / "caller.py", CALLER)
+    _write(tmp_path / "callee.py", CALLEE.format(scale=0.0, factor=2.0))
+    _run(tmp_path, "caller")
+    cached = sorted(p.name for p in (tmp_path / "__pycache__").glob("*.nbi"))
+    _run(tmp_path, "caller")
+    assert sorted(p.name for p in (tmp_path / "__pycache__").glob("*.nbi")) == cached
+    assert any(name.startswith("caller.outer") for name in cached), cached
