@@ -173,17 +173,44 @@ def test_extended_table_ranks_any_method_and_survives_failures():
         {
             "NM": [1.0, 2.0],
             "IS": [1.0002, 2.0],  # equal to 3 significant digits: ties with NM
-            "my method": [0.5, np.nan],  # one failed trial: mean over the other
+            "my method": [0.5, np.nan],  # one failed trial: its mean is over the other
             "broken": [np.nan, np.nan],
         }
     )
     paper_a = ("A", get_paper("paper_a").methods)
     table = extended.extended_table(collected, "cmc", paper_a).set_index("method")
-    assert table.loc["my method", "rank"] == 1 and table.loc["my method", "best"]
+    assert table.loc["NM", "rank"] == table.loc["IS", "rank"] == 1
+    assert table.loc["NM", "best"] and table.loc["IS", "best"]
+    # Best on the trial it answered, but it gave up on the other: ranked after every method
+    # that answered both, not first.
+    assert table.loc["my method", "rank"] == 3 and not table.loc["my method", "best"]
     assert table.loc["my method", "failed"] == 1
-    assert table.loc["NM", "rank"] == table.loc["IS", "rank"] == 2
     assert table.loc["broken", "rank"] == 4 and not table.loc["broken", "best"]
     assert table.loc["NM", "source"] == "paper A" and table.loc["my method", "source"] == "added"
+
+
+def test_giving_up_on_hard_trials_does_not_win():
+    # A contestant that answers only the trial it gets right and reports the others as failed.
+    collected = _results(
+        {
+            "LS": [9.0, 9.5, 8.5],
+            "quitter": [1.0, np.nan, np.nan],
+            "careful": [9.0, 9.5, np.nan],
+            "never": [np.nan, np.nan, np.nan],
+            "overflowing": [np.inf, np.inf, np.inf],
+        }
+    )
+    table = extended.extended_table(collected, "cmc").set_index("method")
+    assert table["rank"].to_dict() == {
+        "LS": 1,
+        "overflowing": 2,
+        "careful": 3,
+        "quitter": 4,
+        "never": 5,
+    }
+    assert table.loc[table["best"]].index.tolist() == ["LS"]
+    ranks = extended.mean_ranks(extended.extended_table(collected, "cmc")).set_index("method")
+    assert ranks.loc["LS", "best_alone"] == 1 and ranks.loc["quitter", "best_in"] == 0
 
 
 def test_extended_outputs_for_an_axis_study(tmp_path):

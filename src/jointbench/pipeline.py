@@ -130,10 +130,12 @@ def _render_extended(study: str, frame: pd.DataFrame, outputs, config: Mapping, 
     table = extended.extended_table(frame, study, paper)
     methods = list(extended.mean_ranks(table)["method"])
     note = (
-        f"{extended.origin_note(study, methods, paper, config)} rank: 1 = lowest mean error of "
-        f"the condition (means equal to {extended.TIE_DIGITS} significant digits share a rank; a "
-        "method without a finite error ranks last); best: rank 1 with a finite mean. Means and "
-        "medians leave out failed trials (no finite error), counted in failed."
+        f"{extended.origin_note(study, methods, paper, config)} rank: within the condition, "
+        "fewest failed trials first, then lowest mean error (means equal to "
+        f"{extended.TIE_DIGITS} significant digits share a rank; a method without a finite error "
+        "ranks last among those with as many failures); best: rank 1 with a finite mean. Means "
+        "and medians leave out failed trials (no finite error), counted in failed, so a method "
+        "that gives up on hard trials is not ranked on a mean over the easy ones."
     )
     write_tables(
         table,

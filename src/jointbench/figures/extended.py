@@ -68,11 +68,13 @@ def extended_table(
 
     Columns: the study's condition keys, ``method``, ``source`` (``"paper A"`` or ``"added"``),
     then :func:`summarise`'s ``trials, converged, failed, mean_error_<unit>,
-    median_error_<unit>, mean_seconds``, then ``rank`` (1 = lowest mean error in the condition;
-    means equal to :data:`TIE_DIGITS` significant digits tie and share the lower rank; a method
-    with no finite error ranks last) and ``best`` (rank 1 with a finite error). Means leave out
-    failed trials (NaN errors), so read ``rank`` together with ``failed``. Rows are sorted by
-    condition, then rank.
+    median_error_<unit>, mean_seconds``, then ``rank`` and ``best`` (rank 1 with a finite
+    error). Within a condition a method ranks by its failed trials first, fewer first, then by
+    its mean error, lower first: means leave out failed trials (NaN errors), so a method that
+    answered fewer trials is not compared on a mean over other trials, and cannot win by giving
+    up on the hard ones. Means equal to :data:`TIE_DIGITS` significant digits tie and share the
+    lower rank; a method with no finite error ranks last among those with as many failures.
+    Rows are sorted by condition, then rank.
     """
     keys = list(get_study(study).grid_keys)
     mean = _mean_column(study)
@@ -85,12 +87,25 @@ def extended_table(
     )
     # Rank on 3 significant digits: methods that reach the same minimum (IS and LM do) differ
     # by rounding noise, which must not decide a rank.
-    table["_key"] = table[mean].map(lambda value: float(f"{value:.{TIE_DIGITS}g}"))
-    by_condition = table.groupby(keys, observed=True, sort=False)["_key"]
-    table["rank"] = by_condition.rank(method="min", na_option="bottom").astype(int)
-    table["best"] = table["_key"].eq(by_condition.transform("min"))
-    table = table.drop(columns="_key")
+    rounded = table[mean].map(lambda value: float(f"{value:.{TIE_DIGITS}g}")).to_numpy()
+    failed = table["failed"].to_numpy()
+    ranks = np.zeros(len(table), dtype=int)
+    for rows in table.groupby(keys, observed=True, sort=False).indices.values():
+        ranks[rows] = _ranks(failed[rows], rounded[rows])
+    table["rank"] = ranks
+    table["best"] = table["rank"].eq(1) & np.isfinite(rounded)
     return table.sort_values([*keys, "rank", "method"], kind="stable", ignore_index=True)
+
+
+def _ranks(failed: np.ndarray, mean: np.ndarray) -> np.ndarray:
+    """Ranks ``(n,)`` of the methods of one condition by their failed trials, then their
+    rounded mean error (``(n,)`` each; a NaN mean, every trial failed, after any number), ties
+    sharing the lower rank."""
+    keys = [
+        (int(count), bool(np.isnan(value)), 0.0 if np.isnan(value) else float(value))
+        for count, value in zip(failed, mean, strict=True)
+    ]
+    return np.array([1 + sum(other < key for other in keys) for key in keys])
 
 
 def mean_ranks(table: pd.DataFrame) -> pd.DataFrame:
