@@ -186,7 +186,7 @@ _CENTER_MISTAKES = {
     ),
     "wrong condition value": (
         "\n".join([f"{_ROW_HEADER},rom_deg", *(f"{row},999" for row in _GOOD_ROWS)]),
-        "column 'rom_deg' must be the dataset's 5 in every row, got 999",
+        "column 'rom_deg' must be the dataset's 5 (int) in every row, got 999 (int)",
     ),
     "wrong method": (
         "\n".join([f"{_ROW_HEADER},method", *(f"{row},LS" for row in _GOOD_ROWS)]),
