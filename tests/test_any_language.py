@@ -17,6 +17,7 @@ from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench.resultfiles.interchange import (
     DATASET_COLUMNS,
+    check_dataset_csv,
     read_estimates_csv,
     write_dataset_csv,
 )
@@ -52,6 +53,50 @@ def test_the_dataset_csv_holds_every_sample_to_the_last_bit(tmp_path):
         rows = frame[frame["segment"] == name].sort_values(["trial", "frame", "marker"])
         assert np.array_equal(rows[["x", "y", "z"]].to_numpy(), markers.reshape(-1, 3))
     assert "center" not in (tmp_path / "markers.csv").read_text()  # the truth stays out
+
+
+def _cut_at_a_lines_end(text: str) -> str:
+    """The first three quarters of ``text``'s lines, the last one whole: of two trials, the
+    second keeps about half its frames, still enough for a fit."""
+    lines = text.splitlines(keepends=True)
+    return "".join(lines[: 3 * len(lines) // 4])
+
+
+@pytest.mark.parametrize(
+    ("cut", "ending"),
+    [
+        (_cut_at_a_lines_end, "ending with a newline;"),
+        (lambda text: text[: len(text) // 2], "ends without one"),
+        (lambda text: text[:-1], "ends without one"),
+        (lambda text: "", "0 lines ending with a newline;"),
+    ],
+    ids=["at a line's end", "inside a line", "its last newline", "to nothing"],
+)
+def test_a_markers_csv_cut_short_is_refused_by_name(tmp_path, cut, ending):
+    """A program given a cut file fits the frames that are left and reports success: the
+    file is checked before its estimates are used, wherever the cut falls."""
+    path, _ = _dataset(tmp_path, segments=("proximal", "distal"))
+    markers = tmp_path / "markers.csv"
+    write_dataset_csv(path, markers)
+    check_dataset_csv(markers, path)
+    left = cut(markers.read_text())
+    markers.write_text(left)
+    with pytest.raises(ValueError) as error:
+        check_dataset_csv(markers, path)
+    message = str(error.value)
+    assert message.startswith(f"{markers}: {left.count(chr(10))} lines ending with a newline")
+    assert f"the markers CSV of {path} has 61 (a header and one per marker sample)" in message
+    assert ending in message and "cut short" in message and "--forcerun" in message
+
+
+def test_a_markers_csv_grown_by_a_line_is_refused(tmp_path):
+    path, _ = _dataset(tmp_path)
+    markers = tmp_path / "markers.csv"
+    write_dataset_csv(path, markers)
+    with open(markers, "a") as stream:
+        stream.write("1,moving,4,2,0,0,0\n")
+    with pytest.raises(ValueError, match=re.escape(f"{markers}: 32 lines ending with a newline;")):
+        check_dataset_csv(markers, path)
 
 
 def _estimates_csv(tmp_path, body: str):
@@ -186,7 +231,7 @@ _CENTER_MISTAKES = {
     ),
     "wrong condition value": (
         "\n".join([f"{_ROW_HEADER},rom_deg", *(f"{row},999" for row in _GOOD_ROWS)]),
-        "column 'rom_deg' must be the dataset's 5 in every row, got 999",
+        "column 'rom_deg' must be the dataset's 5 (int) in every row, got 999 (int)",
     ),
     "wrong method": (
         "\n".join([f"{_ROW_HEADER},method", *(f"{row},LS" for row in _GOOD_ROWS)]),
@@ -461,6 +506,25 @@ def test_the_workflow_names_the_csv_a_c_program_got_wrong(tmp_path):
     )
     assert named.search(run.stdout + run.stderr), (run.stdout + run.stderr)[-3000:]
     assert not (tmp_path / "results" / "collected" / "cmc.parquet").exists()
+
+
+@pytest.mark.pipeline
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) on this machine")
+def test_the_workflow_refuses_estimates_made_from_a_cut_markers_csv(tmp_path):
+    """The markers CSV cut after it was written, at a line's end: the C program fits the
+    frames left and reports success; its estimates are refused, naming the cut file."""
+    copy_workflow(tmp_path)
+    overlay = _overlay(tmp_path, estimators=["LS"], external_estimators=["LS-C"])
+    target = "results/collected/cmc.parquet"
+    run = run_snakemake(tmp_path, target, "--configfile", overlay)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    name = "results/interchange/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.csv"
+    markers = tmp_path / name
+    markers.write_text(_cut_at_a_lines_end(markers.read_text()))
+    run = run_snakemake(tmp_path, target, "--configfile", overlay)
+    assert run.returncode != 0
+    named = re.compile(rf"{re.escape(name)}: [0-9]+ lines ending with a newline; the markers CSV")
+    assert named.search(run.stdout + run.stderr), (run.stdout + run.stderr)[-3000:]
 
 
 @pytest.mark.pipeline

@@ -161,7 +161,7 @@ LIES = {
     ),
     "invented condition": (
         lambda f: f.assign(rom_deg=999),
-        "column 'rom_deg' must be the dataset's 5 in every row, got 999",
+        "column 'rom_deg' must be the dataset's 5 (int) in every row, got 999 (int)",
     ),
     "no rows": (lambda f: f.iloc[:0], "no rows; the dataset has 2 trials (0, 1)"),
 }
@@ -188,7 +188,9 @@ def test_five_and_five_point_zero_are_one_condition_value(tmp_path, estimates_an
 def test_a_text_condition_value_is_not_the_number(tmp_path, estimates_and_dataset):
     estimates, dataset = estimates_and_dataset
     rewrite(estimates, lambda f: f.assign(rom_deg="5"))
-    with pytest.raises(ValueError, match="column 'rom_deg' must be the dataset's 5"):
+    # The text '5' and the number 5 print alike: the message shows which is which.
+    message = "column 'rom_deg' must be the dataset's 5 (int) in every row, got '5' (str)"
+    with pytest.raises(ValueError, match=re.escape(message)):
         collect("cmc", [estimates], str(tmp_path / "c.parquet"), datasets=[dataset])
 
 

@@ -48,6 +48,86 @@ def test_truncated_trc_is_refused(tmp_path):
     assert read(path).first_frame == 18
 
 
+def _trc(tmp_path, frames: int = 4) -> tuple:
+    """A TRC file of ``frames`` frames of markers A and B, B occluded in frame 1 (its fields
+    empty, the row whole), as its text and the path it is written to."""
+    text = "PathFileType\t4\t(X/Y/Z)\tcut.trc\n"
+    text += f"DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\n100\t100\t{frames}\t2\tmm\n"
+    text += "Frame#\tTime\tA\t\t\tB\t\t\n\t\tX1\tY1\tZ1\tX2\tY2\tZ2\n"
+    for i in range(frames):
+        b = "\t\t" if i == 1 else f"{i}.5\t1.5\t2.5"
+        text += f"{i + 1}\t{i / 100}\t{i}.0\t1.0\t2.0\t{b}\n"
+    return text, tmp_path / "cut.trc"
+
+
+def _long_csv(tmp_path) -> tuple:
+    """A long CSV of 3 frames of markers A and B, B's z in frame 1 empty (the row whole)."""
+    rows = [
+        f"{f},{m},{f}.5,1.5,{'' if (f, m) == (1, 'B') else '2.5'}" for f in range(3) for m in "AB"
+    ]
+    return "frame,marker,x,y,z\n" + "\n".join(rows) + "\n", tmp_path / "cut.csv"
+
+
+_TRC_HEADER = "8 (Frame#, Time and X, Y, Z of 2 markers)"
+_CSV_HEADER = "5 (frame, marker, x, y, z)"
+
+
+@pytest.mark.parametrize(
+    ("written", "start", "kept", "fields", "line", "header"),
+    [
+        (_trc, "4\t0.03\t", "4\t0.03\t3.0\t1.0\t2", 5, 9, _TRC_HEADER),
+        (_trc, "4\t0.03\t", "4\t0.03\t3.0\t1.0\t2.0\t3.5", 6, 9, _TRC_HEADER),
+        (_trc, "4\t0.03\t", "4", 1, 9, _TRC_HEADER),
+        (_long_csv, "2,B,", "2,B,2.5,1.5", 4, 7, _CSV_HEADER),
+        (_long_csv, "2,B,", "2,B,2.5", 3, 7, _CSV_HEADER),
+        (_long_csv, "2,B,", "2,B", 2, 7, _CSV_HEADER),
+        (_long_csv, "2,B,", "2", 1, 7, _CSV_HEADER),
+    ],
+    ids=["trc in A's z", "trc after B's x", "trc after Frame#", *("csv",) * 4],
+)
+def test_a_file_cut_inside_its_last_line_is_refused_naming_the_line(
+    tmp_path, written, start, kept, fields, line, header
+):
+    """The cut line once read as a frame with gaps (a TRC's NumFrames counts it), or as a
+    marker named by what was left of its label."""
+    text, path = written(tmp_path)
+    path.write_text(text[: text.index(start)] + kept)
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value) == (
+        f"{path}: line {line} has {fields} fields, but the header has {header}; the file ends "
+        "inside this line: it was cut short; a gap is an empty field, not a missing one"
+    )
+
+
+@pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
+def test_an_empty_field_is_a_gap(tmp_path, written):
+    text, path = written(tmp_path)
+    path.write_text(text)
+    recording = read(path)
+    assert recording.gaps() == {"A": 0, "B": 1}
+    assert np.isnan(recording.markers[1, 1]).all() and not np.isnan(recording.markers[2]).any()
+
+
+@pytest.mark.parametrize(
+    ("written", "row", "short", "line"),
+    [
+        (_trc, "3\t0.02\t2.0\t1.0\t2.0\t2.5\t1.5\t2.5\n", "3\t0.02\t2.0\n", 8),
+        (_long_csv, "1,A,1.5,1.5,2.5\n", "1,A,1.5\n", 4),
+    ],
+    ids=["trc", "csv"],
+)
+def test_a_row_missing_fields_inside_the_file_is_refused(tmp_path, written, row, short, line):
+    text, path = written(tmp_path)
+    assert row in text
+    path.write_text(text.replace(row, short))
+    with pytest.raises(ValueError) as error:
+        read(path)
+    message = str(error.value)
+    assert message.startswith(f"{path}: line {line} has 3 fields, but the header has")
+    assert "cut short" not in message
+
+
 def test_header_only_csv_is_one_line(tmp_path, capsys):
     path = tmp_path / "empty.csv"
     path.write_text("frame,marker,x,y,z\n")

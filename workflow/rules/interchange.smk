@@ -43,6 +43,8 @@ rule estimates_from_csv:
     input:
         estimates="results/estimates/{study}/{method}/{condition}.csv",
         dataset=rules.blind_dataset.output[0],
+        # The markers the program was given, checked whole before its estimates are used.
+        markers=rules.dataset_csv.output[0],
     output:
         "results/estimates/{study}/{method}/{condition}.parquet",
     log:

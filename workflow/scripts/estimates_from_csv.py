@@ -1,7 +1,8 @@
 from jointbench import jobs
-from jointbench.resultfiles.interchange import read_estimates_csv
+from jointbench.resultfiles.interchange import check_dataset_csv, read_estimates_csv
 
 with jobs.job(snakemake):
+    check_dataset_csv(snakemake.input.markers, snakemake.input.dataset)
     read_estimates_csv(
         snakemake.input.estimates,
         snakemake.input.dataset,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import struct
 from pathlib import Path
 
@@ -118,7 +119,8 @@ def read_trc(path: str | Path) -> Recording:
     """A TRC file (OpenSim / Motion Analysis): header keys ``DataRate``, ``Units``,
     ``NumFrames``, ``NumMarkers``, then ``Frame#  Time  label  …`` with one ``X Y Z`` triple per
     label; empty fields are gaps. The rows must be the ``NumFrames`` consecutive frames the
-    header promises; row 0 is the first row's ``Frame#``."""
+    header promises, each with every field of the header (a line cut short is refused, naming
+    it); row 0 is the first row's ``Frame#``."""
     path = _check_file(path)
     lines = path.read_text(errors="replace").splitlines()
     if len(lines) < 6:
@@ -129,9 +131,16 @@ def read_trc(path: str | Path) -> Recording:
         raise ValueError(f"{path}: TRC header has no 'Units' (line 2 keys: {keys})")
     names = [name.strip() for name in lines[3].split("\t")[2:]]
     labels = [name for name in names if name]
-    rows = [line.split("\t") for line in lines[5:] if line.strip()]
-    numbers = _trc_frame_numbers(rows, header, len(labels), path)
     width = 2 + 3 * len(labels)
+    # Data start on line 6; a blank line is no frame.
+    data = [(number, line) for number, line in enumerate(lines[5:], 6) if line.strip()]
+    for number, line in data:
+        fields = line.count("\t") + 1
+        if fields < width:
+            columns = f"Frame#, Time and X, Y, Z of {len(labels)} markers"
+            raise _short_row(path, number, fields, width, columns, number == len(lines))
+    rows = [line.split("\t") for _, line in data]
+    numbers = _trc_frame_numbers(rows, header, len(labels), path)
     markers = np.full((len(rows), len(labels) * 3), np.nan)
     for i, row in enumerate(rows):
         fields = row[2:width]
@@ -149,6 +158,28 @@ def read_trc(path: str | Path) -> Recording:
     rate = header.get("DataRate")
     rate_hz = float(rate) if rate else None
     return Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+
+
+def _short_row(
+    path: Path, line: int, found: int, expected: int, columns: str, last: bool
+) -> ValueError:
+    """The refusal of line ``line`` (1-based) of ``path``, which has ``found`` fields where its
+    header has ``expected`` (``columns``); ``last`` when it is the file's last line. A gap is
+    an empty field between separators: a row missing fields is a line cut short or written
+    wrong, and reading it as a gap would hide that."""
+    cut = last and not _ends_with_newline(path)
+    return ValueError(
+        f"{path}: line {line} has {found} fields, but the header has {expected} ({columns})"
+        + ("; the file ends inside this line: it was cut short" if cut else "")
+        + "; a gap is an empty field, not a missing one"
+    )
+
+
+def _ends_with_newline(path: Path) -> bool:
+    """Whether the file's last byte ends a line (``\\n``, or ``\\r`` of an old Mac file)."""
+    with path.open("rb") as file:
+        file.seek(max(0, path.stat().st_size - 1))
+        return file.read(1) in (b"\n", b"\r")
 
 
 def _trc_frame_numbers(rows: list[list[str]], header: dict, n_labels: int, path: Path) -> list:
@@ -182,7 +213,9 @@ def read_csv(path: str | Path) -> Recording:
     ``frame`` holds integer frame numbers; row 0 of the recording is the smallest. A sample
     absent from the file is a gap, and so is a frame absent for every marker (it stays a frame
     of missing samples, so the frames keep their numbers and spacing); a (frame, marker) pair
-    given twice is an error.
+    given twice is an error. An empty field is a gap too; a row with fewer fields than the
+    header (a line cut short) is refused, naming it. The file declares no frame count, so a
+    file cut at a line's end reads as a shorter recording.
     """
     path = _check_file(path)
     try:
@@ -194,6 +227,10 @@ def read_csv(path: str | Path) -> Recording:
         raise ValueError(f"{path}: missing columns {sorted(missing)}")
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
+    # pandas reads the fields a row lacks as empty, and so as gaps; such a row leaves the last
+    # column empty, and only then is the file read again to find it.
+    if table[table.columns[-1]].isna().any():
+        _check_csv_fields(path, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
     table["marker"] = table["marker"].astype(str)
     twice = table.duplicated(["frame", "marker"], keep=False)
@@ -219,6 +256,18 @@ def read_csv(path: str | Path) -> Recording:
         float
     )
     return Recording(tuple(labels), markers, None, str(path), first_frame)
+
+
+def _check_csv_fields(path: Path, header: list[str]) -> None:
+    """``ValueError`` naming the first line of ``path`` with fewer fields than ``header``."""
+    with path.open(newline="", errors="replace") as file:
+        records = csv.reader(file)
+        next(records)
+        for record in records:
+            if record and len(record) < len(header):
+                line = records.line_num
+                last = file.read(1) == ""
+                raise _short_row(path, line, len(record), len(header), ", ".join(header), last)
 
 
 def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:

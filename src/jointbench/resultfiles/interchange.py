@@ -12,7 +12,10 @@ by trial, segment (as in the dataset), frame and marker::
 ``trial``, ``frame`` and ``marker`` count from 0; ``segment`` is ``moving`` for one-segment
 studies, ``proximal`` and ``distal`` for two-segment ones, plus any segment a study derives
 for another kind of estimator (``thigh_in_pelvis`` in ``hip_sta``); ``x``, ``y``, ``z`` in mm,
-written with the digits that read back to the same double.
+written with the digits that read back to the same double. The file ends with a newline; before
+the program's estimates are used, the file is checked to hold its header and one line per sample
+of the dataset (:func:`check_dataset_csv`), so that a file cut short after it was written, at a
+line's end or inside one, cannot pass for a complete one.
 
 Estimates CSV (:func:`read_estimates_csv`), one header line, one row per trial: ``trial``, the
 estimate columns of the study's kind (``center_x, center_y, center_z``; or ``point_*`` and
@@ -34,9 +37,21 @@ import pyarrow.compute as pc
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
-from jointbench.resultfiles.parquet import read_metadata, read_trial_numbers, write_table
+from jointbench.invocation import snakemake_command
+from jointbench.resultfiles.parquet import (
+    read_metadata,
+    read_row_count,
+    read_trial_numbers,
+    write_table,
+)
 
-__all__ = ["DATASET_COLUMNS", "ESTIMATE_ROW_COLUMNS", "read_estimates_csv", "write_dataset_csv"]
+__all__ = [
+    "DATASET_COLUMNS",
+    "ESTIMATE_ROW_COLUMNS",
+    "check_dataset_csv",
+    "read_estimates_csv",
+    "write_dataset_csv",
+]
 
 #: The columns of a dataset's CSV form, in order.
 DATASET_COLUMNS = ("trial", "segment", "frame", "marker", "x", "y", "z")
@@ -61,6 +76,40 @@ def write_dataset_csv(dataset: str | Path, output: str | Path) -> None:
         stream.write((",".join(DATASET_COLUMNS) + "\n").encode())
         options = pacsv.WriteOptions(include_header=False, quoting_style="none")
         pacsv.write_csv(table, stream, options)
+
+
+def check_dataset_csv(path: str | Path, dataset: str | Path) -> None:
+    """``ValueError`` naming ``path`` unless it holds as many lines as :func:`write_dataset_csv`
+    writes for ``dataset``: the header and one per row of the dataset file, each ending with a
+    newline.
+
+    Any cut of the file removes at least its final newline, so a file cut short, at a line's
+    end or inside one, has fewer newlines than that, and the estimates a program made from it
+    are refused.
+    """
+    expected = read_row_count(dataset) + 1
+    found, last = _newlines(path)
+    if found == expected and last == b"\n":
+        return
+    ending = "" if last in (b"", b"\n") else f", and its last line {found + 1} ends without one"
+    raise ValueError(
+        f"{path}: {found} lines ending with a newline{ending}; the markers CSV of {dataset} has "
+        f"{expected} (a header and one per marker sample): the file was cut short or changed "
+        "after it was written, and a program that read it saw other markers than the "
+        "dataset's. Regenerate it and what depends on it with: "
+        + snakemake_command("--forcerun", str(path))
+    )
+
+
+def _newlines(path: str | Path, chunk_bytes: int = 2**20) -> tuple[int, bytes]:
+    """The number of newlines in the file at ``path`` and its last byte (``b""`` when empty),
+    read a chunk of ``chunk_bytes`` at a time: the file may be far larger than memory."""
+    count, last = 0, b""
+    with open(path, "rb") as stream:
+        while chunk := stream.read(chunk_bytes):
+            count += chunk.count(b"\n")
+            last = chunk[-1:]
+    return count, last
 
 
 def read_estimates_csv(

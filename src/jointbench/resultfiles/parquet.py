@@ -40,6 +40,7 @@ __all__ = [
     "read_metadata",
     "read_poses",
     "read_provenance",
+    "read_row_count",
     "read_source",
     "read_table",
     "read_trial_numbers",
@@ -477,6 +478,13 @@ def read_trial_numbers(path: str | Path) -> np.ndarray:
     """The trial numbers of a dataset file, ``0 .. n_trials - 1``."""
     shapes = _shapes(path, read_metadata(path))
     return np.arange(next(iter(shapes.values()))[0])
+
+
+@_names_unreadable_file
+def read_row_count(path: str | Path) -> int:
+    """The number of rows of a parquet file (of a dataset file: its marker samples, one per
+    segment, trial, frame and marker), from its footer, without reading them."""
+    return pq.ParquetFile(path).metadata.num_rows
 
 
 @_names_unreadable_file

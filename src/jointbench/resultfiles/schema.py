@@ -272,12 +272,18 @@ def check_against_dataset(
     for key, value in condition.items():
         column = table[key]
         values = column.to_pylist() if isinstance(column, pa.ChunkedArray) else column.tolist()
-        wrong = sorted({str(v) for v in values if not _same_value(v, value)})
+        wrong = sorted({_typed(v) for v in values if not _same_value(v, value)})
         if wrong:
             raise ValueError(
-                f"{source}: column {key!r} must be the dataset's {value!r} in every row, "
+                f"{source}: column {key!r} must be the dataset's {_typed(value)} in every row, "
                 f"got {', '.join(wrong)}"
             )
+
+
+def _typed(value: object) -> str:
+    """``value`` as its repr and type, ``'15' (str)`` or ``15 (int)``: the text 15 and the
+    number 15 print alike, and telling them apart is the point of the message."""
+    return f"{value!r} ({type(value).__name__})"
 
 
 def _same_value(found: object, expected: object) -> bool:
