@@ -87,7 +87,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.batching import check_poses
-from jointbench.estimators.results import with_fields
+from jointbench.estimators.results import with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
@@ -1169,10 +1169,5 @@ def assess(
 def annotate(result, support: Support):
     """``result`` with the support warnings appended to its ``status`` and the numbers in its
     ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
-    status = result.status
-    if support.warnings:
-        words = "; ".join(f"warning: {warning}" for warning in support.warnings)
-        status = words if status == "ok" else f"{status}; {words}"
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
-    diagnostics = {**result.diagnostics, **numbers}
-    return with_fields(result, status=status, diagnostics=diagnostics)
+    return with_warnings(result, support.warnings, numbers)
