@@ -195,6 +195,17 @@ def test_warned_artefacts_are_in_the_result_not_only_a_python_warning(kind):
     assert warned.converged == ignored.converged
 
 
+def test_a_broken_frame_is_blamed_on_the_marker_that_leaves_the_shape_most():
+    """One corrupt sample pulls the frame's pose fit, so every marker of the frame may cross the
+    level: the message names the one that departs most, not the first column."""
+    markers = prepare(rig_recording(artefact_mm=1.0), "center", DIST, PROX).arrays[0].copy()
+    markers[-1, 2, 2] /= 10.0  # a cut last sample: 268 read as 26
+    found = jointbench.screen(markers)["markers"].artefacts
+    assert len({a.label for a in found if a.frame == len(markers) - 1}) > 1
+    with pytest.raises(ValueError, match=r"^marker markers\[:, 2\] leaves its cluster"):
+        jointbench.fit_center(markers, method="LS")
+
+
 def test_array_fit_of_one_marker_refuses_its_jump():
     markers = rig_recording(artefact_mm=1.0)
     moving = prepare(markers, "center", DIST, PROX).arrays[0][:, :1].copy()
