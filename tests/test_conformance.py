@@ -141,7 +141,7 @@ BAD_INPUT = {
     ),
     "zero-gap": (
         lambda kind: _planted(kind, 0.0),
-        r"{name} has a sample at exactly \(0, 0, 0\) at marker 1, frame 7 .* mark gaps as NaN",
+        r"{name} has a sample at exactly \(0, 0, 0\) at marker 1, frame 7 .* if these are gaps",
     ),
     "sliding": (_sliding, r"do not rotate"),
 }

@@ -251,6 +251,41 @@ def test_array_fits_screen_like_files():
     assert jointbench.fit_joint_center(clean[:, :3], clean[:, 3:]).status == "ok"
 
 
+@pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
+def test_warned_artefacts_are_in_the_result_not_only_a_python_warning(kind):
+    """A result read or saved without its Python warnings still says the data held artefacts."""
+    markers = swapped(rig_recording(artefact_mm=1.0), 150, "P1", "P2").markers
+    arrays = (markers[:, :3], markers[:, 3:]) if kind == "joint_center" else (markers[:, :3],)
+    fit = {
+        "center": jointbench.fit_center,
+        "axis": jointbench.fit_axis,
+        "joint_center": jointbench.fit_joint_center,
+    }[kind]
+    name = "proximal" if kind == "joint_center" else "markers"
+    with pytest.warns(UserWarning, match="artefacts in the data") as caught:
+        warned = fit(*arrays, artefacts="warn")
+    said = str(caught[0].message)
+    assert f"warning: {said}" in warned.status
+    assert f"markers {name}[:, 0] and {name}[:, 1] exchange labels at frame 150" in warned.status
+    found = warned.diagnostics["artefacts"]
+    assert found and min(a["frame"] for a in found) == 150
+    assert all(a["label"].startswith(f"{name}[:, ") for a in found)
+    ignored = fit(*arrays, artefacts="ignore")
+    assert "artefacts" not in ignored.status and "artefacts" not in ignored.diagnostics
+    assert warned.converged == ignored.converged
+
+
+def test_a_broken_frame_is_blamed_on_the_marker_that_leaves_the_shape_most():
+    """One corrupt sample pulls the frame's pose fit, so every marker of the frame may cross the
+    level: the message names the one that departs most, not the first column."""
+    markers = prepare(rig_recording(artefact_mm=1.0), "center", DIST, PROX).arrays[0].copy()
+    markers[-1, 2, 2] /= 10.0  # a cut last sample: 268 read as 26
+    found = jointbench.screen(markers)["markers"].artefacts
+    assert len({a.label for a in found if a.frame == len(markers) - 1}) > 1
+    with pytest.raises(ValueError, match=r"^marker markers\[:, 2\] leaves its cluster"):
+        jointbench.fit_center(markers, method="LS")
+
+
 def test_array_fit_of_one_marker_refuses_its_jump():
     markers = rig_recording(artefact_mm=1.0)
     moving = prepare(markers, "center", DIST, PROX).arrays[0][:, :1].copy()

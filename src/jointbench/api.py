@@ -16,19 +16,29 @@ Before the fit, the arrays are screened for artefacts as a recording is
 (:func:`screen`, :func:`jointbench.screening.screen`): a label swap, a marker that falls off
 (a cluster of >= 3 markers leaving its rigid shape in some frames) or a jump of a marker outside
 a cluster. By default (``artefacts="refuse"``) the fit raises ``ValueError`` naming the markers
-(``distal[:, 1]``: array, column) and the frame (row); ``"warn"`` fits and warns;
-``"ignore"`` skips the screen, for data known to be clean.
+(``distal[:, 1]``: array, column) and the frame (row); ``"warn"`` fits, warns, and writes
+the same words into the result's ``status`` (``"warning: artefacts in the data: ..."``) and the
+artefacts into ``diagnostics["artefacts"]`` (one dict per flagged sample: ``kind``, ``label``,
+``frame``, ``size_mm``, ``level_mm``, ``partner``), so a result read or saved without the
+Python warning still carries them; ``"ignore"`` skips the screen, for data known to be clean:
+nothing is looked for, so nothing is reported.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import warnings
 
 import numpy as np
 
 from jointbench.estimators import registry
-from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
+from jointbench.estimators.results import (
+    AxisResult,
+    CenterResult,
+    JointCenterResult,
+    with_warnings,
+)
 from jointbench.estimators.validation import check_input
 from jointbench.screening import (
     ArtefactRules,
@@ -120,26 +130,37 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
         return fit(check_input(kind, arrays), **options)
     # The input checks come first, so bad input gets their message, not the screen's.
     clean = check_input(kind, arrays)
-    _screen_valid(kind, clean, artefacts)
-    return registry.get_for_valid(kind, method)(clean, **options)
+    found = _screen_valid(kind, clean, artefacts)
+    result = registry.get_for_valid(kind, method)(clean, **options)
+    if not found:
+        return result
+    flagged = [dataclasses.asdict(a) for screening in found.values() for a in screening.artefacts]
+    return with_warnings(result, (_warned(found),), {"artefacts": flagged})
 
 
-def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> None:
+def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> dict[str, Screening]:
     """Refuse or warn (``artefacts``) what the screen finds in ``clean``, the checked inputs of
-    a ``kind`` fit. Only the artefacts are needed, not the clusters' fits a Screening keeps."""
+    a ``kind`` fit; returns the screenings that found artefacts (``{}`` when none did). Only
+    the artefacts are needed, not the clusters' fits a Screening keeps."""
     found = {}
     for name, markers in zip(_NAMES[kind], clean, strict=True):
         flagged, swaps = find_artefacts(markers, _column_labels(name, markers.shape[1]), name)
         if flagged:  # swaps come only with the artefacts they explain
             found[name] = Screening(flagged, swaps)
     if not found:
-        return
-    message = describe_screening(found)
+        return found
     if artefacts == "refuse":
         raise ValueError(
-            f"{message}. Pass artefacts='warn' or 'ignore' to fit the data as they are"
+            f"{describe_screening(found)}. Pass artefacts='warn' or 'ignore' to fit the data "
+            "as they are"
         )
-    warnings.warn(f"artefacts in the data: {message}", stacklevel=4)
+    warnings.warn(_warned(found), stacklevel=4)
+    return found
+
+
+def _warned(found: dict[str, Screening]) -> str:
+    """The warning, in Python and in a result's ``status``, for the artefacts ``found``."""
+    return f"artefacts in the data: {describe_screening(found)}"
 
 
 def fit_center(

@@ -543,9 +543,12 @@ class Swap:
 
 
 def summarise(artefacts: list[Artefact], swaps: list[Swap], frames: Numbering) -> str:
-    """The swaps in full, else the first artefact; then how many flagged samples, over which
-    frames and markers."""
-    lines = [swap.describe(frames) for swap in swaps] or [artefacts[0].describe(frames)]
+    """The swaps in full, else the first flagged frame's largest artefact; then how many
+    flagged samples, over which frames and markers."""
+    # One corrupt sample pulls its frame's pose fit, so the frame's other markers may cross
+    # the level too, by less: the largest departure names the marker to look at.
+    first = min(artefacts, key=lambda a: (a.frame, -a.size_mm))
+    lines = [swap.describe(frames) for swap in swaps] or [first.describe(frames)]
     text = "; ".join(lines)
     if len(artefacts) > 1:
         rows = [a.frame for a in artefacts]

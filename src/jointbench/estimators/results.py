@@ -6,7 +6,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["AxisResult", "CenterResult", "JointCenterResult", "frozen_rows", "with_fields"]
+__all__ = [
+    "AxisResult",
+    "CenterResult",
+    "JointCenterResult",
+    "frozen_rows",
+    "with_fields",
+    "with_warnings",
+]
 
 
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
@@ -105,3 +112,14 @@ def with_fields(result, **changes):
     copy = object.__new__(type(result))
     copy.__dict__.update(result.__dict__, **changes)
     return copy
+
+
+def with_warnings(result, warnings: tuple[str, ...], diagnostics: dict):
+    """``result`` with ``warnings`` appended to its ``status``, each as ``"warning: ..."`` (in
+    place of ``"ok"``, after any other status), and ``diagnostics`` added to its diagnostics;
+    ``converged`` is left as the method set it."""
+    status = result.status
+    if warnings:
+        words = "; ".join(f"warning: {warning}" for warning in warnings)
+        status = words if status == "ok" else f"{status}; {words}"
+    return with_fields(result, status=status, diagnostics={**result.diagnostics, **diagnostics})

@@ -87,7 +87,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.batching import check_poses
-from jointbench.estimators.results import with_fields
+from jointbench.estimators.results import with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
@@ -98,6 +98,7 @@ from jointbench.numerics.spheres import ls_system, solve_ls_system
 
 __all__ = [
     "CENTRE_KINDS",
+    "MAX_DISTANCE_MARKERS",
     "MAX_NONRIGID_SHARE",
     "ROTATION_ALPHA",
     "ROUNDING",
@@ -131,6 +132,13 @@ _MAX_POSE_SD_RAD = 0.5
 
 # In noise-free data, a rotation below this is rounding (a noise-free hinge leaves ~5e-10 rad).
 _ROUNDING_ROTATION_RAD = 1e-8
+
+#: The most markers of one segment whose pairwise distances the one-segment verdict compares.
+#: Its distance Gram matrix has a row per pair, ``n (n - 1) / 2``, and its eigen-decomposition
+#: costs about ``n^6``: 20 markers take under a second, 40 a minute, 120 (an array of 120
+#: frames of 4 markers passed as ``(markers, frames, 3)``) hours. A larger cluster is judged as
+#: one without a pose (:func:`_without_poses`), and its status says what was not tested.
+MAX_DISTANCE_MARKERS = 20
 
 _LABELS = {"markers": "markers", "proximal": "proximal markers", "distal": "distal markers"}
 
@@ -896,6 +904,13 @@ def assess_many(
     per trial."""
     n_trials = arrays[0].shape[0]
     if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
+        n_markers = arrays[0].shape[2]
+        if n_markers > MAX_DISTANCE_MARKERS:
+            reason = (
+                f"{n_markers} markers, more than the {MAX_DISTANCE_MARKERS} whose pairwise "
+                "distances the rigidity test compares"
+            )
+            return [_without_poses((trial,), reason, has_pose=True) for trial in arrays[0]]
         return _one_segment(kind, arrays[0])
     if len(arrays) > 1:
         check_poses(arrays, poses, ARRAY_NAMES[kind])
@@ -1018,9 +1033,12 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     ]
 
 
-def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
+def _without_poses(
+    arrays: tuple[np.ndarray, ...], reason: str, *, has_pose: bool = False
+) -> Support:
     """The verdict on one trial whose markers give no rigid-body pose (``reason``): fewer
-    than three markers, or collinear ones. What the positions alone can show is tested on the
+    than three markers, or collinear ones; or (``has_pose``) whose markers the rigidity test
+    cannot take (``reason`` says why). What the positions alone can show is tested on the
     moving markers ``arrays[-1]`` ``(N, P, 3)``, fitted with the concentric spheres every centre
     and axis model implies (a marker turning about an axis moves on a sphere about any of its
     points; LS, closed form):
@@ -1033,8 +1051,8 @@ def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
       ``(RSS_line / (2 P (N - 2))) / s^2`` is F-distributed near 1 when every marker moves on a
       line (no rotation), and large for an arc resolved above the noise.
 
-    Rigidity between markers, and rotation about more than one axis, cannot be tested without
-    a pose: the status always says so.
+    Rigidity between markers, and rotation about more than one axis, are not tested here: the
+    status always says so.
     """
     from scipy.special import fdtrc
 
@@ -1059,9 +1077,10 @@ def _without_poses(arrays: tuple[np.ndarray, ...], reason: str) -> Support:
             fdtrc(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
         )
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
+    why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
-        f"not verified: {reason}, so no rigid-body pose: whether the markers are one rigid "
-        "body and rotate about more than one axis was not tested"
+        f"not verified: {why}: whether the markers are one rigid body and rotate about more "
+        "than one axis was not tested"
     ]
     if share >= MAX_NONRIGID_SHARE:
         warnings.append(
@@ -1136,7 +1155,8 @@ def assess(
     ``arrays`` is ``(markers,)`` for ``center``/``axis`` (reference frame) and
     ``(proximal, distal)`` for ``joint_center`` (world frame); see the module docstring.
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
-    are not assessed (``diagnostics["assessed"]`` is False). ``poses``: the two segments'
+    are not assessed (``diagnostics["assessed"]`` is False); nor is one segment of more than
+    :data:`MAX_DISTANCE_MARKERS` markers. ``poses``: the two segments'
     poses (:func:`jointbench.estimators.segment_poses.trial_poses`, one trial's entry) an
     estimator already fitted to these arrays, or the ``ValueError`` it met fitting them
     (anything else is refused with a ``ValueError``); ``None`` fits them here. One segment
@@ -1149,10 +1169,5 @@ def assess(
 def annotate(result, support: Support):
     """``result`` with the support warnings appended to its ``status`` and the numbers in its
     ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
-    status = result.status
-    if support.warnings:
-        words = "; ".join(f"warning: {warning}" for warning in support.warnings)
-        status = words if status == "ok" else f"{status}; {words}"
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
-    diagnostics = {**result.diagnostics, **numbers}
-    return with_fields(result, status=status, diagnostics=diagnostics)
+    return with_warnings(result, support.warnings, numbers)

@@ -32,7 +32,12 @@ __all__ = [
 #: The marker arrays each estimator kind takes, in order.
 ARRAY_NAMES = {"center": ("markers",), "axis": ("markers",), "joint_center": ("proximal", "distal")}
 
-_GAP_ADVICE = "mark gaps as NaN and drop those frames before fitting"
+# What to do with the frames of a gap, however it is stored: the fits take complete frames
+# only, and a Recording reads NaN, inf and (0, 0, 0) as gaps and leaves their frames out.
+_GAP_ADVICE = (
+    "drop those frames before fitting, or fit a jointbench.io.Recording, which leaves out "
+    "frames with gaps"
+)
 
 # A trajectory counts as a straight line when its second principal spread is below this
 # fraction of its first; the same relative level at which check_not_collinear calls markers
@@ -146,8 +151,8 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         frame, marker = _first_sample(at_origin)
         raise ValueError(
             f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
-            f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; "
-            f"{_GAP_ADVICE}"
+            f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; if these "
+            f"are gaps, {_GAP_ADVICE} (it reads (0, 0, 0) as a gap)"
         )
     if failure == _STILL:
         raise ValueError(f"{name} do not move: every marker stays at one point in every frame")

@@ -1,0 +1,74 @@
+"""One segment with more markers than the rigidity test compares: judged without it, promptly,
+and the status says what was not tested.
+
+The one-segment verdict's pairwise-distance test costs about ``n^6`` in the marker count, so an
+array of many markers (e.g. 120 frames of 4 markers passed as ``(markers, frames, 3)``) must
+not reach it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import jointbench
+from jointbench.estimators import support
+from jointbench.geometry import rotation_matrix
+
+CENTRE = np.array([20.0, -25.0, -30.0])
+
+
+def _ball(n_markers: int, n_frames: int, seed: int = 0) -> np.ndarray:
+    """Noisy markers ``(n_frames, n_markers, 3)`` [mm] of a rigid cluster turning about
+    CENTRE about three axes."""
+    rng = np.random.default_rng(seed)
+    body = rng.normal(scale=60.0, size=(n_markers, 3))
+    t = np.linspace(0.0, 2.0 * np.pi, n_frames)
+    rotvec = np.stack([0.5 * np.cos(t), 0.5 * np.sin(2.0 * t), 0.25 * np.sin(t)], -1)
+    markers = CENTRE + np.einsum("fij,mj->fmi", rotation_matrix(rotvec), body)
+    return markers + rng.normal(scale=0.3, size=markers.shape)
+
+
+def _refuse_the_distance_test(monkeypatch) -> None:
+    """Make the pairwise-distance kernel fail the test if it is reached."""
+
+    def reached(*_):
+        raise AssertionError("the pairwise-distance test ran on a cluster it cannot take")
+
+    monkeypatch.setattr(support, "_one_segment_numbers", reached)
+
+
+@pytest.mark.parametrize(
+    ("n_markers", "n_frames"), [(support.MAX_DISTANCE_MARKERS + 1, 60), (120, 4)]
+)
+def test_a_large_cluster_skips_the_distance_test_and_says_so(monkeypatch, n_markers, n_frames):
+    _refuse_the_distance_test(monkeypatch)
+    verdict = support.assess("center", (_ball(n_markers, n_frames),))
+    assert verdict.diagnostics["assessed"] is False
+    first = verdict.warnings[0]
+    assert first.startswith(f"not verified: {n_markers} markers, more than the ")
+    assert f"{support.MAX_DISTANCE_MARKERS} whose pairwise distances" in first
+    assert "whether the markers are one rigid body and rotate about more than one axis" in first
+    # The markers do have a pose: the status must not claim otherwise.
+    assert "no rigid-body pose" not in first
+
+
+def test_a_batch_of_large_clusters_is_judged_trial_by_trial(monkeypatch):
+    _refuse_the_distance_test(monkeypatch)
+    trials = np.stack([_ball(30, 20, seed) for seed in range(2)])
+    verdicts = support.assess_many("axis", (trials,))
+    assert [v.diagnostics["assessed"] for v in verdicts] == [False, False]
+    for verdict, trial in zip(verdicts, trials, strict=True):
+        assert verdict == support.assess("axis", (trial,))
+
+
+def test_a_cluster_at_the_limit_is_still_fully_assessed():
+    verdict = support.assess("center", (_ball(support.MAX_DISTANCE_MARKERS, 30),))
+    assert verdict.diagnostics["assessed"] is True and verdict.warnings == ()
+
+
+def test_the_public_fit_of_a_large_cluster_returns_with_the_warning(monkeypatch):
+    _refuse_the_distance_test(monkeypatch)
+    result = jointbench.fit_center(_ball(40, 60), method="LS", artefacts="ignore")
+    assert result.status.startswith("warning: not verified: 40 markers")
+    assert np.linalg.norm(result.center - CENTRE) < 1.0
