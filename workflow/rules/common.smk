@@ -56,8 +56,10 @@ def check_external_rules():
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
-            parquet = estimates_files(study, [name])[0]
-            files = (parquet, parquet.removesuffix(".parquet") + ".csv")
+            parquets = estimates_files(study, [name])
+            files = [
+                f for p in parquets for f in (p, p.removesuffix(".parquet") + ".csv")
+            ]
             producers = [w for w in writers if any(w.is_producer(f) for f in files)]
             if not producers:
                 raise ValueError(
@@ -66,22 +68,25 @@ def check_external_rules():
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
             for producer in producers:
-                _check_blind(producer, name)
+                _check_blind(producer, name, files)
 
 
-def _check_blind(producer, name):
+def _check_blind(producer, name, files):
     """Stop when ``producer``, the rule of external estimator ``name``, reads a full dataset
-    file, however its path is spelt."""
-    full = [
-        f for f in map(_as_matched, producer.input) if f.startswith("results/datasets/")
-    ]
-    if full:
-        raise ValueError(
-            f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which holds the "
-            "truth the benchmark scores with: an external estimator reads the blind file "
-            "results/blind/{study}/{condition}.parquet, or the markers CSV "
-            "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
-        )
+    file, however its path is spelt, in a job writing one of ``files`` (estimates files): its
+    inputs are read as that job's, input functions called with the job's wildcards."""
+    for file in filter(producer.is_producer, files):
+        inputs = producer.expand_input(producer.get_wildcards(file))[0]
+        full = [
+            f for f in map(_as_matched, inputs) if f.startswith("results/datasets/")
+        ]
+        if full:
+            raise ValueError(
+                f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which "
+                "holds the truth the benchmark scores with: an external estimator reads the "
+                "blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
+                "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
+            )
 
 
 def _as_matched(path):
