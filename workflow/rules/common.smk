@@ -392,4 +392,10 @@ def track_sources():
     the job even when its time stamp is older than the job's outputs (a copy keeping times, a
     backup restored)."""
     for producer in workflow.rules:
+        # Snakemake would let the digest replace a rule's own parameter of that name.
+        if "sources" in producer.params.keys():
+            raise ValueError(
+                f"rule {producer.name} has a parameter named 'sources', a name the workflow "
+                "gives the digest of each job's source files; rename the rule's parameter"
+            )
         producer.set_params(sources=rule_sources(producer))
