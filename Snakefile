@@ -74,3 +74,7 @@ include: "workflow/rules/render.smk"
 include: "workflow/rules/check.smk"
 include: "workflow/rules/verdicts.smk"
 include: "workflow/rules/sensitivity.smk"
+
+
+# Last, once every rule exists: each job's sources hashed into its parameters.
+track_sources()

@@ -284,3 +284,56 @@ def test_an_external_rule_given_the_full_dataset_stops_the_run_before_any_job(tm
     assert run.returncode != 0
     message = "rule estimate_centroid (external estimator 'centroid') reads results/datasets/"
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+# The template's input given as a function of the job's wildcards, as legitimate Snakemake.
+_BLIND_INPUT = '"results/blind/{study}/{condition}.parquet",'
+_INPUT_FUNCTION = 'lambda w: f"results/{folder}/{{w.study}}/{{w.condition}}.parquet",'
+
+
+@pytest.mark.pipeline
+def test_an_external_rule_reading_the_blind_file_through_an_input_function_runs(tmp_path):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    assert _BLIND_INPUT in template
+    blind = _INPUT_FUNCTION.format(folder="blind")
+    (rules / "centroid.smk").write_text(template.replace(_BLIND_INPUT, blind))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "estimate_centroid" in run.stdout
+
+
+@pytest.mark.pipeline
+def test_an_external_rule_given_the_full_dataset_by_an_input_function_stops_the_run(tmp_path):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    full = _INPUT_FUNCTION.format(folder="datasets")
+    (rules / "centroid.smk").write_text(template.replace(_BLIND_INPUT, full))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    message = (
+        "rule estimate_centroid (external estimator 'centroid') reads "
+        "results/datasets/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet"
+    )
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+@pytest.mark.pipeline
+def test_a_rule_parameter_named_like_the_source_digest_is_refused_by_rule(tmp_path):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    conda = '    conda:\n        "../../envs/jointbench.yaml"\n'
+    assert conda in template
+    (rules / "centroid.smk").write_text(
+        template.replace(conda, conda + "    params:\n        sources=1,\n")
+    )
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    message = "rule estimate_centroid has a parameter named 'sources', a name the workflow"
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]

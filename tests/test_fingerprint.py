@@ -8,13 +8,20 @@ Snakemake on the real workflow.
 from __future__ import annotations
 
 import importlib
+import os
 import textwrap
 from pathlib import Path
 
 import pytest
 
 from jointbench import fingerprint
-from jointbench.fingerprint import code_fingerprint, dependency_versions, module_closure
+from jointbench.fingerprint import (
+    MISSING,
+    code_fingerprint,
+    dependency_versions,
+    module_closure,
+    source_digests,
+)
 
 PACKAGE = "jbfp_pkg"
 
@@ -206,3 +213,35 @@ def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):
         fingerprint, "dependency_versions", lambda package: {**versions, "numpy": "0.0.1"}
     )
     assert code_fingerprint(script) != before
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "edited", "changes"),
+    [
+        ("paper.yaml", "published: 8.0\n", "published: 80.0\n", True),
+        ("fit.c", "int main(void) { return 0; }\n", "int main(void) { return 1; }\n", True),
+        ("fit.py", "x = 1\n", "x = 2\n", True),
+        ("fit.py", '"""Fit."""\nx = 1\n', '"""Fit a sphere."""\n\nx = 1  # one\n', False),
+    ],
+    ids=["data", "C source", "Python code", "Python docstring and layout"],
+)
+def test_a_source_digest_follows_the_content_not_the_time_stamp(
+    tmp_path, name, text, edited, changes
+):
+    path = tmp_path / name
+    path.write_text(text)
+    before = source_digests([path])
+    path.write_text(edited)
+    # Dated before the first version, as a copy keeping time stamps can leave it.
+    os.utime(path, ns=(0, 0))
+    assert (source_digests([path]) != before) is changes
+
+
+def test_a_missing_source_and_a_folder_have_digests(tmp_path):
+    folder = tmp_path / "overlays"
+    folder.mkdir()
+    (folder / "a.yaml").write_text("a: 1\n")
+    before = source_digests([folder, tmp_path / "absent.yaml"])
+    assert before[str(tmp_path / "absent.yaml")] == MISSING
+    (folder / "a.yaml").write_text("a: 2\n")
+    assert source_digests([folder])[str(folder)] != before[str(folder)]

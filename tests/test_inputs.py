@@ -3,6 +3,7 @@ and scored by the benchmark, not by themselves, corrupt intermediate files named
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import shlex
@@ -20,6 +21,7 @@ from jointbench.configuration import config as study_config
 from jointbench.estimators import registry
 from jointbench.estimators.results import CenterResult
 from jointbench.figures import extended
+from jointbench.papers import get_paper
 from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_dataset,
@@ -489,6 +491,31 @@ def test_nothing_is_rendered_or_judged_from_trials_that_all_failed(
         pipeline.render_study("cmc", {}, str(path), [], {}, config)
     with pytest.raises(ValueError, match=re.escape(f"{path}: {message}")):
         pipeline.comparison({"cmc": str(path)}, config)
+
+
+@pytest.mark.parametrize(
+    ("lines", "message"),
+    [
+        (190, "no entry for A5, A6, A7, A8, A9, A10, A11, A12, A13, which the paper measures"),
+        (197, "not valid YAML"),
+    ],
+    ids=["cut at an entry", "cut inside an entry"],
+)
+def test_a_published_values_file_cut_short_is_refused_by_name(
+    tmp_path, monkeypatch, config, estimates_and_dataset, lines, message
+):
+    estimates, _ = estimates_and_dataset
+    nm = pd.read_parquet(estimates)
+    collected = tmp_path / "collected.parquet"
+    write_table(pd.concat([nm, nm.assign(method="BC")]), collected)
+    paper = get_paper("paper_a")
+    cut = tmp_path / "paper_a.yaml"
+    cut.write_text("".join(paper.published.read_text().splitlines(keepends=True)[:lines]))
+    monkeypatch.setattr(
+        pipeline, "papers_of_study", lambda study: [dataclasses.replace(paper, published=cut)]
+    )
+    with pytest.raises(ValueError, match=re.escape(f"published values {cut}: {message}")):
+        pipeline.comparison({"cmc": str(collected)}, config)
 
 
 def test_a_joint_centre_is_scored_with_its_covariance_in_a_table_or_a_mapping():

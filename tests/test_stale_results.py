@@ -8,7 +8,10 @@ below applies one kind of edit a user makes: to library code, to the workflow's 
 rules, to data files jobs read, to the config. It then asks ``snakemake --dry-run`` what it would
 run, and holds that to the jobs the edit must rerun (``reruns``) and to jobs it must leave alone
 (``spares``), and puts the file back as it was. A new kind of edit is one more ``Edit`` in
-``EDITS`` (or entry in ``CONFIG_EDITS``).
+``EDITS`` (or entry in ``CONFIG_EDITS``). An edit marked ``backdated`` leaves the edited file
+older than every result, as a copy that keeps time stamps does (``cp -p``, ``rsync -a``,
+``tar x``): only its content can tell it changed. One with ``targets`` asks about those files,
+made first in a copy of the run, instead of the default target.
 
 Every job loads the extension modules, so the modules an extension imports count for every job
 of a run that lists it: there, a paper's or a figure's edit reruns every job.
@@ -20,6 +23,7 @@ there as JSON (``benchmarks/stale_results.py`` prints them as a table).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import os
 import re
@@ -47,6 +51,8 @@ class Edit:
     reruns: frozenset[str] = field(default_factory=frozenset)
     spares: frozenset[str] = field(default_factory=frozenset)
     scenario: str = "builtin"
+    backdated: bool = False
+    targets: tuple[str, ...] = ()
 
     def apply(self, text: str) -> str:
         if not self.old:
@@ -64,6 +70,15 @@ NOTHING = _jobs()
 EVERY_ESTIMATE = _jobs("estimate_cmc", "estimate_hinge", "estimate_hip")
 SIMULATIONS = _jobs("simulate_cmc", "simulate_hinge", "simulate_hip")
 DATA_JOBS = EVERY_ESTIMATE | SIMULATIONS | _jobs("estimate_cmc_LM", "poses_hip")
+
+LM_PROGRAM = Edit(
+    "an external estimator's program (LM)",
+    "workflow/external/lm_sphere.py",
+    "",
+    "\n_EDITED = 1.0\n",
+    reruns=_jobs("estimate_cmc_LM", "collect[study=cmc]", "render_cmc"),
+    spares=_jobs("estimate_cmc", "simulate_cmc", "estimate_hinge"),
+)
 
 EDITS = (
     # -- library code: every construct counts, wherever the job can import it from ------------
@@ -202,14 +217,7 @@ EDITS = (
         reruns=_jobs("render_cmc", "render_hinge", "render_hip"),
         spares=DATA_JOBS,
     ),
-    Edit(
-        "an external estimator's program (LM)",
-        "workflow/external/lm_sphere.py",
-        "",
-        "\n_EDITED = 1.0\n",
-        reruns=_jobs("estimate_cmc_LM", "collect[study=cmc]", "render_cmc"),
-        spares=_jobs("estimate_cmc", "simulate_cmc", "estimate_hinge"),
-    ),
+    LM_PROGRAM,
     Edit(
         "an external rule's command line",
         "workflow/rules/estimators/lm_sphere.smk",
@@ -259,6 +267,47 @@ EDITS = (
         reruns=_jobs("render_toy", "check_published"),
         spares=_jobs("simulate_toy", "estimate_toy", "collect"),
         scenario="extension",
+    ),
+    # -- the same data files replaced by a copy dated before every result ----------------------
+    Edit(
+        "a published value, dated before the results (paper A)",
+        f"{PKG}/papers/paper_a.yaml",
+        "  published: 8.0\n",
+        "  published: 80.0\n",
+        reruns=_jobs("render_cmc", "check_published", "report_captions"),
+        spares=DATA_JOBS | _jobs("collect", "render_hinge"),
+        backdated=True,
+    ),
+    dataclasses.replace(
+        LM_PROGRAM, kind=f"{LM_PROGRAM.kind}, dated before the results", backdated=True
+    ),
+    Edit(
+        "an external estimator's script, dated before the results (centroid)",
+        "workflow/external/centroid.py",
+        "",
+        "\n_EDITED = 1.0\n",
+        reruns=_jobs("estimate_centroid[condition=marker_set-M__rom_deg-5__noise_mm-1.0]"),
+        spares=_jobs("blind_dataset", "simulate_cmc"),
+        backdated=True,
+        targets=("results/estimates/cmc/centroid/marker_set-M__rom_deg-5__noise_mm-1.0.parquet",),
+    ),
+    Edit(
+        "an external estimator's C source, dated before the results (LS-C)",
+        "workflow/external/ls_sphere.c",
+        "",
+        "\n/* edited */ static const int EDITED = 1;\n",
+        reruns=_jobs("compile_ls_sphere"),
+        backdated=True,
+        targets=("results/bin/ls_sphere",),
+    ),
+    Edit(
+        "a named protocol's overlay, dated before the results",
+        "config/variants/hinge_anatomical_knee.yaml",
+        "[45, 20, -210]",
+        "[45, 20, -200]",
+        reruns=_jobs("sensitivity_member_hinge[member=anatomical-knee]"),
+        backdated=True,
+        targets=("results/sensitivity/hinge/anatomical-knee.csv",),
     ),
 )
 
@@ -350,8 +399,8 @@ def extension(fourth_study_run) -> FinishedRun:
     return fourth_study_run
 
 
-def _dry_run(finished_run: FinishedRun) -> set[str]:
-    run = finished_run.snakemake("--dry-run")
+def _dry_run(finished_run: FinishedRun, *targets: str) -> set[str]:
+    run = finished_run.snakemake(*targets, "--dry-run")
     assert run.returncode == 0, run.stdout[-4000:] + run.stderr[-4000:]
     if os.environ.get("JOINTBENCH_MUTATION_DEBUG"):
         print(run.stdout[-3000:], run.stderr[-3000:])
@@ -367,8 +416,13 @@ def _report(kind: str, jobs: set[str]) -> None:
         path.write_text(json.dumps(report, indent=1))
 
 
-def _edited(workdir: Path, path: str, text: str):
-    """Write ``text`` to ``path``; return a function that restores the file and its time."""
+#: A time stamp older than every result: 1 January 2000.
+LONG_AGO_NS = 946_684_800 * 10**9
+
+
+def _edited(workdir: Path, path: str, text: str, backdated: bool = False):
+    """Write ``text`` to ``path`` (dated :data:`LONG_AGO_NS` if ``backdated``); return a
+    function that restores the file and its time."""
     target = workdir / path
     original, stat = target.read_text(), target.stat()
 
@@ -377,6 +431,8 @@ def _edited(workdir: Path, path: str, text: str):
         os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
 
     target.write_text(text)
+    if backdated:
+        os.utime(target, ns=(LONG_AGO_NS, LONG_AGO_NS))
     return restore
 
 
@@ -400,12 +456,18 @@ SHARED_RUN = {"builtin": "reduced_run", "extension": "fourth_study_run"}
         for e in EDITS
     ],
 )
-def test_an_edit_reruns_what_it_can_change_and_nothing_else(request, edit):
+def test_an_edit_reruns_what_it_can_change_and_nothing_else(request, tmp_path, edit):
     finished_run = request.getfixturevalue(edit.scenario)
+    if edit.targets:
+        # Made in a copy: the shared run stays as finished. The targets' jobs record the copy's
+        # own files, so the copy is up to date for them.
+        finished_run = finished_run.copy(tmp_path / "run")
+        made = finished_run.snakemake(*edit.targets)
+        assert made.returncode == 0, made.stderr[-4000:]
     text = (finished_run.workdir / edit.path).read_text()
-    restore = _edited(finished_run.workdir, edit.path, edit.apply(text))
+    restore = _edited(finished_run.workdir, edit.path, edit.apply(text), edit.backdated)
     try:
-        jobs = _dry_run(finished_run)
+        jobs = _dry_run(finished_run, *edit.targets)
     finally:
         restore()
     _check(edit.kind, jobs, edit.reruns, edit.spares)

@@ -7,8 +7,13 @@ found by reading import statements, never by following objects at run time. The 
 conservative by construction: a module counts if an import of it is written anywhere that can
 run, whether or not the job calls into it. What is hashed is each file's syntax tree without
 docstrings, so a change to what code does reruns its jobs, and a docstring, a comment or
-formatting does not. The versions of Python and of the package's dependencies count too. Data
-files a job reads (published values) are its rule's inputs.
+formatting does not. The versions of Python and of the package's dependencies count too.
+
+Files a job reads that no job writes (published values, an external estimator's program or
+script, a config overlay) are its sources: Snakemake judges an input by its time stamp, which a
+copy that keeps times (``cp -p``, ``rsync -a``, ``tar x``) can set back. Each job is therefore
+also given a parameter ``sources``, the digest of every such file's content
+(:func:`source_digests`): a Python file by its syntax tree as above, any other file byte for byte.
 
 What a module can import:
 
@@ -40,7 +45,7 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-__all__ = ["code_fingerprint", "dependency_versions", "module_closure"]
+__all__ = ["MISSING", "code_fingerprint", "dependency_versions", "module_closure", "source_digests"]
 
 #: Calls that import a module named by a string at run time.
 _DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__"})
@@ -276,3 +281,35 @@ def code_fingerprint(*roots: str | Path, package: str = "jointbench") -> str:
     for name, path in module_closure(*roots, package=package).items():
         digest.update(name.encode() + _source_digest(path))
     return digest.hexdigest()[:16]
+
+
+#: The digest of a source that does not exist: Snakemake names the missing input itself.
+MISSING = "missing"
+
+
+def _file_digest(path: Path) -> str:
+    """What ``path`` holds: a Python file's code (:func:`_source_digest`; its bytes when it does
+    not parse), any other file's bytes, a folder's files and their names."""
+    if path.is_dir():
+        digest = hashlib.sha256()
+        for member in sorted(p for p in path.rglob("*") if p.is_file()):
+            digest.update(member.relative_to(path).as_posix().encode())
+            digest.update(_file_digest(member).encode())
+        return digest.hexdigest()[:16]
+    data = path.read_bytes()
+    if path.suffix == ".py":
+        try:
+            return _digest_of(data.decode("utf-8")).hex()[:16]
+        except (SyntaxError, UnicodeDecodeError, ValueError):
+            pass
+    return hashlib.sha256(data).hexdigest()[:16]
+
+
+def source_digests(paths: Iterable[str | Path]) -> dict[str, str]:
+    """The digest of each file of ``paths`` (16 hex digits, :data:`MISSING` for a file that does
+    not exist), by path as given: equal digests mean the same content, whatever the files' time
+    stamps."""
+    return {
+        str(path): _file_digest(Path(path)) if Path(path).exists() else MISSING
+        for path in sorted(set(map(str, paths)))
+    }

@@ -81,7 +81,11 @@ def render_study(
     by_condition = {Path(path).stem: read_dataset(path) for path in datasets}
     for key, names in paper_outputs.items():
         paper = get_paper(key)
-        inputs = Inputs(collected=frame, published=load_published(paper.published), config=config)
+        inputs = Inputs(
+            collected=frame,
+            published=load_published(paper.published, paper.declares),
+            config=config,
+        )
         for name in names:
             output = paper.output(name)
             drawn = [by_condition[condition_id(c)] for c in output.conditions]
@@ -157,7 +161,7 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
         frame = read_table(path)
         require_results(frame, study, path, _methods_compared(study))
         for paper in papers_of_study(study):
-            document = load_published(paper.published)
+            document = load_published(paper.published, paper.declares)
             inputs = Inputs(collected=frame, published=document, config=config)
             rows = comparison_rows(document, paper.measure(inputs))
             frames.append(enforce_design(rows, document, config))

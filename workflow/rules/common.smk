@@ -9,7 +9,7 @@ from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
 from jointbench.figures.common import study_title
-from jointbench.fingerprint import code_fingerprint
+from jointbench.fingerprint import code_fingerprint, source_digests
 from jointbench.running import run as jb_run
 from jointbench.papers import papers_of_study
 from jointbench.configuration import config as jb_config
@@ -56,8 +56,10 @@ def check_external_rules():
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
-            parquet = estimates_files(study, [name])[0]
-            files = (parquet, parquet.removesuffix(".parquet") + ".csv")
+            parquets = estimates_files(study, [name])
+            files = [
+                f for p in parquets for f in (p, p.removesuffix(".parquet") + ".csv")
+            ]
             producers = [w for w in writers if any(w.is_producer(f) for f in files)]
             if not producers:
                 raise ValueError(
@@ -66,22 +68,25 @@ def check_external_rules():
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
             for producer in producers:
-                _check_blind(producer, name)
+                _check_blind(producer, name, files)
 
 
-def _check_blind(producer, name):
+def _check_blind(producer, name, files):
     """Stop when ``producer``, the rule of external estimator ``name``, reads a full dataset
-    file, however its path is spelt."""
-    full = [
-        f for f in map(_as_matched, producer.input) if f.startswith("results/datasets/")
-    ]
-    if full:
-        raise ValueError(
-            f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which holds the "
-            "truth the benchmark scores with: an external estimator reads the blind file "
-            "results/blind/{study}/{condition}.parquet, or the markers CSV "
-            "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
-        )
+    file, however its path is spelt, in a job writing one of ``files`` (estimates files): its
+    inputs are read as that job's, input functions called with the job's wildcards."""
+    for file in filter(producer.is_producer, files):
+        inputs = producer.expand_input(producer.get_wildcards(file))[0]
+        full = [
+            f for f in map(_as_matched, inputs) if f.startswith("results/datasets/")
+        ]
+        if full:
+            raise ValueError(
+                f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which "
+                "holds the truth the benchmark scores with: an external estimator reads the "
+                "blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
+                "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
+            )
 
 
 def _as_matched(path):
@@ -278,7 +283,8 @@ def all_targets():
 # whose parameters changed. `code` is the fingerprint of its workflow script, the extension
 # modules every job loads and every module of jointbench they can import (jointbench.fingerprint:
 # read from import statements, docstrings and comments left out). `settings` holds the config
-# values the job reads. Files a job reads are its inputs.
+# values the job reads. Files a job reads are its inputs; those no job writes are also hashed by
+# content into a third parameter, `sources` (track_sources).
 SCRIPTS = Path(workflow.basedir, "workflow", "scripts")
 EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
 
@@ -350,3 +356,46 @@ def render_files(study):
 
 # Every output the report shows (``report_entries``), computed once.
 REPORT_ENTRIES = report_entries()
+
+
+# Where jobs write: an input elsewhere is a source (a published-values file, an external
+# program, a config overlay), which no job remakes.
+RESULTS = "results/"
+
+
+def is_source(path):
+    """Whether the input ``path`` is a source file rather than a job's result."""
+    return not _as_matched(path).startswith(RESULTS)
+
+
+def rule_sources(producer):
+    """The parameter function giving each job of ``producer`` (a rule) the digests of its
+    sources, its source inputs and the file its ``script`` directive runs, by path
+    (jointbench.fingerprint.source_digests). It takes only the wildcards, as Snakemake compares
+    only such parameters between runs."""
+
+    def sources(wildcards):
+        inputs = producer.expand_input(dict(wildcards.items()))[0]
+        files = [_as_matched(f) for f in inputs if is_source(f)]
+        if producer.script:
+            program = os.path.join(
+                producer.basedir.get_path_or_uri(secret_free=True), producer.script
+            )
+            files.append(_as_matched(program))
+        return source_digests(files)
+
+    return sources
+
+
+def track_sources():
+    """Give each rule the parameter ``sources``, so that a source whose content changed reruns
+    the job even when its time stamp is older than the job's outputs (a copy keeping times, a
+    backup restored)."""
+    for producer in workflow.rules:
+        # Snakemake would let the digest replace a rule's own parameter of that name.
+        if "sources" in producer.params.keys():
+            raise ValueError(
+                f"rule {producer.name} has a parameter named 'sources', a name the workflow "
+                "gives the digest of each job's source files; rename the rule's parameter"
+            )
+        producer.set_params(sources=rule_sources(producer))

@@ -13,11 +13,12 @@ them.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from importlib import resources
 from pathlib import Path
 
 import pandas as pd
+import yaml
 
 from jointbench.comparison.tolerance import describe, evaluate, is_compared
 from jointbench.configuration.config import read_yaml, validate_against
@@ -78,10 +79,22 @@ NOT_IN_RUN = "not measured in this run (method, condition or study not run)"
 _SCHEMA = resources.files("jointbench.schemas").joinpath("published.schema.yaml")
 
 
-def load_published(path: str | Path) -> dict:
-    """A paper's published-values document, schema-checked (``ValueError`` naming the file)."""
-    document = read_yaml(Path(path).read_text())
+def load_published(path: str | Path, declares: Iterable[str] = ()) -> dict:
+    """A paper's published-values document, schema-checked and holding an entry for each id of
+    ``declares`` (:attr:`jointbench.papers.base.Paper.declares`): ``ValueError`` naming the file
+    otherwise, and the missing ids."""
+    try:
+        document = read_yaml(Path(path).read_text())
+    except yaml.YAMLError as error:
+        raise ValueError(f"published values {path}: not valid YAML ({error})") from error
     validate_against(document, _SCHEMA, f"published values {path}")
+    listed = {entry["id"] for entry in [*document.get("values", []), *document["claims"]]}
+    missing = [i for i in declares if i not in listed]
+    if missing:
+        raise ValueError(
+            f"published values {path}: no entry for {', '.join(missing)}, which the paper "
+            "measures; is the file cut short? Restore it from the repository"
+        )
     return document
 
 

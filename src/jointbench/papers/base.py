@@ -112,7 +112,10 @@ class FrontPart:
 class Paper:
     """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names;
     ``also_measures`` names the study's estimators beyond ``methods`` that ``measure`` reads
-    (beside the paper's own, never in its place); ``front_page`` gives what the paper adds to
+    (beside the paper's own, never in its place); ``declares`` the ids of the published values
+    and claims ``measure`` computes from the results whatever the grid, which its published
+    values must therefore all list (a file cut short is refused, not read as fewer claims);
+    ``front_page`` gives what the paper adds to
     the report's landing page (:class:`FrontPart`) from the run's tables by name (those of
     its outputs absent from a run are absent from the mapping)."""
 
@@ -126,6 +129,7 @@ class Paper:
     published: Path
     measure: Callable[[Inputs], Mapping[str, Measured]]
     also_measures: tuple[str, ...] = ()
+    declares: tuple[str, ...] = ()
     front_page: Callable[[Mapping[str, pd.DataFrame]], FrontPart] | None = None
 
     def __post_init__(self) -> None:

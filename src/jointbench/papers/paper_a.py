@@ -525,6 +525,7 @@ PAPER = Paper(
     methods=METHODS,
     published=Path(__file__).with_name("paper_a.yaml"),
     measure=measure,
+    declares=tuple(f"A{number}" for number in range(1, 14)),  # claims A1–A13
     outputs=(
         Output(
             "paper_a_fig4",

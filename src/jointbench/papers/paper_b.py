@@ -324,6 +324,7 @@ PAPER = Paper(
     methods=METHODS,
     published=Path(__file__).with_name("paper_b.yaml"),
     measure=measure,
+    declares=tuple(_CLAIMS),
     outputs=(
         Output(
             "paper_b_table1",

@@ -327,6 +327,7 @@ PAPER = Paper(
     methods=("gauss-markov", "analytic"),
     published=Path(__file__).with_name("paper_c.yaml"),
     measure=measure,
+    declares=tuple(_CLAIMS),
     also_measures=(FRAME0,),
     front_page=_front_page,
     outputs=(

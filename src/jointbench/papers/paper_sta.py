@@ -363,6 +363,7 @@ PAPER = Paper(
     also_measures=MEASURED[2:],
     published=Path(__file__).with_name("paper_sta.yaml"),
     measure=measure,
+    declares=tuple(_CLAIMS),
     outputs=(
         Output(
             "paper_sta_errors",
