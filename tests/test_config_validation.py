@@ -361,3 +361,41 @@ def test_yaml_is_read_as_the_safe_loader_reads_it():
         assert study_config.read_yaml(text) == yaml.safe_load(text)
     with pytest.raises(yaml.YAMLError):
         study_config.read_yaml("!!python/object/apply:os.system ['true']")
+
+
+@pytest.mark.parametrize(
+    ("overlay", "words"),
+    [
+        (None, ["sensitivity.named.mine", "no such file"]),
+        ("- a list\n", ["sensitivity.named.mine", "not a mapping"]),
+        ("studies: {hinge: {protocol: {kneee: {noise_sd_mm: 2.0}}}}\n", ["named.mine", "kneee"]),
+        ("studies: {cmc: {trials: 0}}\n", ["sensitivity.named.mine", "studies/cmc/trials"]),
+        ("studis: {}\n", ["sensitivity.named.mine", "studis"]),
+    ],
+    ids=["missing", "not a mapping", "misspelt joint", "bad value", "misspelt key"],
+)
+def test_a_named_protocols_overlay_is_checked_naming_its_key(config, tmp_path, overlay, words):
+    path = tmp_path / "mine.yaml"
+    if overlay is not None:
+        path.write_text(overlay)
+    new = copy.deepcopy(config)
+    new["sensitivity"] = {"named": {"mine": str(path)}}
+    with pytest.raises(ValueError) as raised:
+        study_config.named_overlays(new)
+    for word in words:
+        assert word in str(raised.value), str(raised.value)
+
+
+def test_the_shipped_named_protocols_pass(config):
+    overlays = study_config.named_overlays(config, ROOT)
+    assert set(overlays) == set(config["sensitivity"]["named"])
+
+
+def test_a_missing_overlay_stops_the_workflow_before_any_job_naming_it(tmp_path):
+    folder = copy_workflow(tmp_path)
+    overlay = tmp_path / "overlay.yaml"
+    overlay.write_text("sensitivity: {named: {gone: config/variants/gone.yaml}}\n")
+    result = run_snakemake(folder, "-n", "--configfile", str(overlay))
+    assert result.returncode != 0
+    assert "sensitivity.named.gone" in result.stdout + result.stderr
+    assert "no such file" in result.stdout + result.stderr

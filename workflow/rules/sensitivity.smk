@@ -13,10 +13,7 @@ SENSITIVITY_MEMBERS = {
     study: member_names(
         study,
         int(SENSITIVITY.get("draws", 1)),
-        {
-            n: jb_config.read_yaml(Path(p).read_text())
-            for n, p in SENSITIVITY_NAMED.items()
-        },
+        jb_config.named_overlays(config),
     )
     for study in SENSITIVITY_STUDIES
 }

@@ -103,6 +103,35 @@ def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
     return config
 
 
+def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping]:
+    """The config overlay of each named protocol of ``config["sensitivity"]["named"]`` (name ->
+    YAML file, relative to ``base``), by name; ``ValueError`` naming the key and the file when
+    one is missing, is no mapping, or makes with ``config`` a config that would not run
+    (:func:`validate_against`, :func:`check_config`). The workflow reads them when it starts,
+    whatever its target, so a mistake in one stops it before any job instead of after the main
+    run."""
+    overlays = {}
+    for name, path in dict(config.get("sensitivity", {}).get("named", {})).items():
+        where = f"config error at sensitivity.named.{name} ({path})"
+        file = Path(base) / path
+        if not file.is_file():
+            raise ValueError(f"{where}: no such file")
+        try:
+            document = read_yaml(file.read_text())
+        except yaml.YAMLError as error:
+            raise ValueError(f"{where}: not valid YAML ({error})") from None
+        if not isinstance(document, Mapping):
+            raise ValueError(f"{where}: not a mapping of config keys to values")
+        merged = _merged(config, document)
+        try:
+            validate_against(merged, SCHEMA_PATH, "config")
+            check_config(merged)
+        except ValueError as error:
+            raise ValueError(f"{where}: {error}") from None
+        overlays[name] = document
+    return overlays
+
+
 def read_configs(paths: Sequence[str | Path]) -> dict:
     """The config of YAML files read in order, each updating the ones before as Snakemake's
     ``--configfile`` does: a mapping merged key by key, any other value replaced."""
