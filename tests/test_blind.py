@@ -337,3 +337,45 @@ def test_a_rule_parameter_named_like_the_source_digest_is_refused_by_rule(tmp_pa
     assert run.returncode != 0
     message = "rule estimate_centroid has a parameter named 'sources', a name the workflow"
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+_LEAK_RULE = """
+
+rule leak_truth:
+    input:
+        "results/datasets/{study}/{condition}.parquet",
+    output:
+        "results/leak/{study}/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+
+
+rule pass_it_on:
+    input:
+        "results/leak/{study}/{condition}.parquet",
+    output:
+        "results/relay/{study}/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+"""
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("hops", [1, 2])
+def test_a_rule_upstream_of_an_external_estimator_may_not_read_the_truth(tmp_path, hops):
+    """Laundering: a rule of the user's reads the full dataset and writes a file of its own,
+    which the estimator's rule reads (directly, or through one more rule)."""
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    folder = "leak" if hops == 1 else "relay"
+    laundered = f'"results/{folder}/{{study}}/{{condition}}.parquet",'
+    (rules / "centroid.smk").write_text(template.replace(_BLIND_INPUT, laundered) + _LEAK_RULE)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    chain = "rule leak_truth, which feeds rule estimate_centroid"
+    if hops == 2:
+        chain = "rule leak_truth, which feeds rule pass_it_on, which feeds rule estimate_centroid"
+    message = f"{chain} (external estimator 'centroid') reads results/datasets/"
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]

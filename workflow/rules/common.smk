@@ -71,22 +71,41 @@ def check_external_rules():
                 _check_blind(producer, name, files)
 
 
-def _check_blind(producer, name, files):
-    """Stop when ``producer``, the rule of external estimator ``name``, reads a full dataset
-    file, however its path is spelt, in a job writing one of ``files`` (estimates files): its
-    inputs are read as that job's, input functions called with the job's wildcards."""
+def _check_blind(producer, name, files, via=()):
+    """Stop when ``producer``, the rule of external estimator ``name`` or a rule of its own
+    upstream (``via``: the rules it feeds, down to the estimator's), reads a full dataset
+    file, however its path is spelt, in a job writing one of ``files``: its inputs are read
+    as that job's, input functions called with the job's wildcards. A rule upstream that is
+    not the package's own (:func:`_package_rule`) is followed in turn, so that no rule of the
+    user's can hand the estimator what it read from the truth."""
     for file in filter(producer.is_producer, files):
-        inputs = producer.expand_input(producer.get_wildcards(file))[0]
-        full = [
-            f for f in map(_as_matched, inputs) if f.startswith("results/datasets/")
+        inputs = [
+            _as_matched(f)
+            for f in producer.expand_input(producer.get_wildcards(file))[0]
         ]
+        full = [f for f in inputs if f.startswith("results/datasets/")]
         if full:
+            chain = "".join(f", which feeds rule {rule}" for rule in via)
             raise ValueError(
-                f"rule {producer.name} (external estimator {name!r}) reads {full[0]}, which "
-                "holds the truth the benchmark scores with: an external estimator reads the "
-                "blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
+                f"rule {producer.name}{chain} (external estimator {name!r}) reads {full[0]}, "
+                "which holds the truth the benchmark scores with: an external estimator reads "
+                "the blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
+        for upstream in workflow.rules:
+            made = [f for f in inputs if upstream.is_producer(f)]
+            if made and not _package_rule(upstream) and upstream.name not in via:
+                if upstream is not producer:
+                    _check_blind(upstream, name, made, (producer.name, *via))
+
+
+def _package_rule(rule):
+    """Whether ``rule`` is one of the workflow's own (the Snakefile's, or of a file directly
+    in workflow/rules/), which read the truth only to write what an estimator may read.
+    """
+    folder = Path(rule.snakefile).resolve().parent
+    rules = Path(workflow.basedir, "workflow", "rules").resolve()
+    return folder in (rules, Path(workflow.basedir).resolve())
 
 
 def _as_matched(path):
