@@ -93,10 +93,11 @@ def _check_blind(producer, name, files, via=()):
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
         for upstream in workflow.rules:
+            if upstream is producer or upstream.name in via or _package_rule(upstream):
+                continue
             made = [f for f in inputs if upstream.is_producer(f)]
-            if made and not _package_rule(upstream) and upstream.name not in via:
-                if upstream is not producer:
-                    _check_blind(upstream, name, made, (producer.name, *via))
+            if made:
+                _check_blind(upstream, name, made, (producer.name, *via))
 
 
 def _package_rule(rule):
