@@ -20,6 +20,13 @@ more non-collinear markers), each first order in the noise:
 * A second axis. For a centre (:data:`CENTRE_KINDS`) the rotation must also span a second
   axis, since rotation about one axis leaves the centre undetermined along it; tested the same
   way against "a hinge plus noise".
+* One axis. For an axis, the same test resolving rotation about a second axis is not enough to
+  refuse one (paper B studies hinges with a smaller AA rotation on top), but when
+  :data:`MAX_OFF_AXIS_SHARE` of the rotation or more is about axes other than its principal one
+  no single axis describes the motion, and whatever axis a method returns is a compromise that
+  depends on its cost. The share is measured on the rotations themselves, which holds at any
+  range and wherever the markers sit: the rotation vectors about their mean pose, less their
+  noise, split between the principal axis and the others by their scatter's eigenvalues.
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -100,6 +107,7 @@ __all__ = [
     "CENTRE_KINDS",
     "MAX_DISTANCE_MARKERS",
     "MAX_NONRIGID_SHARE",
+    "MAX_OFF_AXIS_SHARE",
     "ROTATION_ALPHA",
     "ROUNDING",
     "Support",
@@ -118,6 +126,19 @@ MAX_NONRIGID_SHARE = 0.25
 
 #: The kinds whose answer is a centre, which rotation about a single axis leaves undetermined.
 CENTRE_KINDS = ("center", "joint_center")
+
+#: An axis is not the motion's when this share of the rotation's sum of squares about the mean
+#: pose, or more, is about axes other than its principal one (and that rotation is resolved):
+#: the same quarter as :data:`MAX_NONRIGID_SHARE`, the part no single axis explains. Paper B's
+#: motions (every FE angle with every AA angle, AA ``ratio`` times FE) leave
+#: ``ratio^2 / (1 + ratio^2)`` off the FE axis, 0.2 at ratio 0.5 and 0.33 at 0.7; its Table 1
+#: has the combined cost within 10 deg at 0.5 (FE 30 and 60 deg) and every cost 17 to 81 deg
+#: off at 0.7.
+MAX_OFF_AXIS_SHARE = 0.25
+
+# The frames, evenly spaced, whose poses measure that share: a share of a smooth motion's
+# rotation needs no more, and it keeps the pose fits of a long recording cheap.
+_SHARE_FRAMES = 240
 
 #: A rigid-body residual (RMS per coordinate) below this fraction of the largest coordinate is
 #: rounding, not noise: the data are treated as noise-free. Rounding leaves ~1e-16 of the
@@ -747,7 +768,8 @@ def _rotation_spreads(
     moving_inertia_inv: np.ndarray,
     reference: np.ndarray,
     reference_inertia_inv: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, bool]:
+    variance: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
     """The rotations ``moving`` ``(T, N, 3, 3)`` relative to ``reference`` (the same shape,
     or no frames for the identity) about their mean, against their noise. A compiled kernel.
 
@@ -757,13 +779,16 @@ def _rotation_spreads(
     frames; the noise covariance per unit variance is ``moving_inertia_inv`` plus, with a
     reference, ``M' reference_inertia_inv M`` (``(T, 3, 3)`` each). Returns the ascending
     eigenvalues of ``sum_k w_k w_k'`` [rad^2] and of the same sum whitened by the covariance
-    (``z_k = L' w_k``, ``L L'`` its inverse), ``(T, 3)`` each; and whether some rotation is
+    (``z_k = L' w_k``, ``L L'`` its inverse), ``(T, 3)`` each; those of the rotation's own
+    scatter, ``sum_k w_k w_k'`` less its noise ``(N - 1) variance C`` (``variance`` ``(T,)``
+    [mm^2], ``C`` the covariance per unit variance), ``(T, 3)``; and whether some rotation is
     within 1e-4 of pi, where that rotation vector does not hold.
     """
     n_trials, n_frames, _, _ = moving.shape
     with_reference = reference.shape[1] > 0
     raw = np.empty((n_trials, 3))
     spread = np.empty((n_trials, 3))
+    rotation_only = np.empty((n_trials, 3))
     relative = np.empty((n_frames, 3, 3))
     vectors = np.empty((n_frames, 3))
     gram = np.empty((3, 3))
@@ -825,28 +850,93 @@ def _rotation_spreads(
         white = whitening.T @ gram @ whitening
         raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
         spread[t] = np.maximum(np.linalg.eigvalsh(white), 0.0)
-    return raw, spread, near_pi
+        noise = (n_frames - 1) * variance[t] * covariance
+        rotation_only[t] = np.maximum(np.linalg.eigvalsh(gram - noise), 0.0)
+    return raw, spread, rotation_only, near_pi
 
 
 def _spreads_near_pi(
-    moving: _Clusters, reference: _Clusters | None
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_rotation_spreads` ``(raw, spread)`` through
+    relative: np.ndarray, covariance: np.ndarray, variance: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_rotation_spreads` ``(raw, spread, rotation_only)`` of the relative rotations
+    ``relative`` ``(T, N, 3, 3)`` whose noise covariance about their mean ``M`` is ``variance``
+    ``(T,)`` times ``covariance(M)`` ``(T, 3, 3)``, through
     :func:`jointbench.geometry.rotation_vector`, which holds near pi too."""
-    relative = moving.rotation
-    covariance = moving.inertia_inv
-    if reference is not None:
-        relative = np.swapaxes(reference.rotation, -1, -2) @ relative
+    n_frames = relative.shape[1]
     mean = best_rotation(relative.mean(axis=1))
-    if reference is not None:
-        covariance = covariance + np.swapaxes(mean, -1, -2) @ reference.inertia_inv @ mean
+    covariance = covariance(mean)
     deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
     deviation = deviation - deviation.mean(axis=1, keepdims=True)
     mu, basis = np.linalg.eigh(covariance)
     whitened = deviation @ (basis / np.sqrt(mu)[:, None, :])
     gram = np.swapaxes(deviation, 1, 2) @ deviation
     white = np.swapaxes(whitened, 1, 2) @ whitened
-    return np.maximum(np.linalg.eigvalsh(gram), 0.0), np.maximum(np.linalg.eigvalsh(white), 0.0)
+    rotation_only = gram - (n_frames - 1) * variance[:, None, None] * covariance
+    return tuple(
+        np.maximum(np.linalg.eigvalsh(matrix), 0.0) for matrix in (gram, white, rotation_only)
+    )
+
+
+def _spreads(
+    moving: np.ndarray,
+    moving_inertia_inv: np.ndarray,
+    reference: _Clusters | None,
+    variance: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_rotation_spreads` ``(raw, spread, rotation_only)`` of the rotations ``moving``
+    ``(T, N, 3, 3)`` with inverse inertia ``moving_inertia_inv`` ``(T, 3, 3)`` [mm^-2],
+    relative to ``reference``'s (or the identity), and their residual ``variance`` ``(T,)``
+    [mm^2]; near pi through :func:`_spreads_near_pi`."""
+    if reference is None:
+        no_frames = np.empty((moving.shape[0], 0, 3, 3))
+        arguments = (moving, moving_inertia_inv, no_frames, moving_inertia_inv)
+    else:
+        arguments = (moving, moving_inertia_inv, reference.rotation, reference.inertia_inv)
+    *spreads, near_pi = _rotation_spreads(*arguments, variance)
+    if not near_pi:
+        return tuple(spreads)
+    if reference is None:
+        return _spreads_near_pi(moving, lambda mean: moving_inertia_inv, variance)
+    relative = np.swapaxes(reference.rotation, -1, -2) @ moving
+    return _spreads_near_pi(
+        relative,
+        lambda mean: moving_inertia_inv + np.swapaxes(mean, -1, -2) @ reference.inertia_inv @ mean,
+        variance,
+    )
+
+
+class _AxisShare(NamedTuple):
+    share: np.ndarray  # (T,) share of the rotation's sum of squares off its principal axis
+    principal_rms_rad: np.ndarray  # (T,) RMS rotation about the principal axis
+    off_rms_rad: np.ndarray  # (T,) RMS rotation about the two other axes
+
+
+def _sampled_frames(n_frames: int) -> slice:
+    """At most :data:`_SHARE_FRAMES` evenly spaced frames of ``n_frames``."""
+    return slice(None, None, -(-n_frames // _SHARE_FRAMES))
+
+
+def _one_segment_axis_shares(markers: np.ndarray, variance: np.ndarray) -> _AxisShare:
+    """How much of the rotation of one segment's markers ``(T, N, n, 3)`` [mm] in the reference
+    frame is about its principal axis, from the rotations that carry frame 0's centred shape
+    onto each sampled frame's (:func:`_sampled_frames`); ``variance`` ``(T,)`` [mm^2] is the
+    rigid residual per coordinate. The rotation vectors about their mean, which hold at any
+    angle (unlike the one-segment pass's linearised rotations), less their noise
+    (:func:`_rotation_spreads`), have three eigenvalues: the principal axis's and the two
+    others'."""
+    sampled = markers[:, _sampled_frames(markers.shape[1])]
+    centred = sampled - sampled.mean(axis=2, keepdims=True)
+    first = centred[:, 0]
+    rotations = best_rotation(np.swapaxes(centred, -1, -2) @ first[:, None])
+    second_moment = np.swapaxes(first, -1, -2) @ first
+    trace = np.trace(second_moment, axis1=-2, axis2=-1)
+    inertia = trace[:, None, None] * np.eye(3) - second_moment
+    _, _, values = _spreads(rotations, np.linalg.inv(inertia), None, variance)
+    off = values[:, 0] + values[:, 1]
+    total = off + values[:, 2]
+    share = np.divide(off, total, out=np.zeros_like(total), where=total > 0.0)
+    n_frames = rotations.shape[1]
+    return _AxisShare(share, np.sqrt(values[:, 2] / n_frames), np.sqrt(off / n_frames))
 
 
 def _rotation_test(
@@ -858,18 +948,11 @@ def _rotation_test(
 ) -> _Rotation:
     """The rotation of ``moving`` relative to ``reference`` (or the identity) against noise,
     per trial; ``variance`` ``(T,)`` [mm^2], ``exact`` ``(T,)`` where it is rounding only."""
-    if reference is None:
-        no_frames = np.empty((moving.rotation.shape[0], 0, 3, 3))
-        arguments = (moving.rotation, moving.inertia_inv, no_frames, moving.inertia_inv)
-    else:
-        arguments = (moving.rotation, moving.inertia_inv, reference.rotation, reference.inertia_inv)
     # Eigenvalues of the Gram matrices of the rotation vectors about the mean pose, raw and
     # whitened by their noise covariance (per unit variance: under "no rotation" each
     # coordinate of each frame is noise of variance s^2); ascending, rounding's negative zeros
     # clipped.
-    raw, spread, near_pi = _rotation_spreads(*arguments)
-    if near_pi:
-        raw, spread = _spreads_near_pi(moving, reference)
+    raw, spread, _ = _spreads(moving.rotation, moving.inertia_inv, reference, variance)
     n_frames = moving.rotation.shape[1]
     rms = np.sqrt(raw.sum(axis=1) / n_frames)
     second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
@@ -953,35 +1036,67 @@ def _fitted_poses(kind: str, arrays: tuple[np.ndarray, ...]) -> list:
 
 def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     """The verdicts on one segment's markers ``(T, N, n >= 3, 3)`` in the reference frame, from
-    one compiled call (module docstring, "one segment")."""
+    one compiled call (module docstring, "one segment"), and for an axis the rotations of the
+    trials that rotate about more than one axis (:func:`_one_segment_axis_shares`)."""
     from scipy.special import fdtrc
 
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
     p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
-    verdicts = []
-    for t, row in enumerate(numbers.tolist()):
-        variance, share, weakest, collinear = row[:4]
-        if collinear:
-            verdicts.append(_without_poses((markers[t],), "no 3 non-collinear markers"))
-        elif weakest > _MAX_POSE_SD_RAD and share < MAX_NONRIGID_SHARE:
-            verdicts.append(
-                _without_poses(
-                    (markers[t],),
-                    "nearly collinear markers (their pose is determined to "
-                    f"{math.degrees(weakest):.2g} deg about their line)",
-                )
-            )
-        else:
-            # The hinge is given the candidate axis that explains the data better.
-            p_any, p_least_moving, p_rotation_axis = p_values[t]
-            if p_rotation_axis > p_least_moving:
-                tests = (row[5], p_any, row[11], p_rotation_axis)
-            else:
-                tests = (row[5], p_any, row[8], p_least_moving)
-            rigidity = [(share, math.sqrt(3.0 * variance))]
-            verdicts.append(_verdict(kind, ("markers",), rigidity, variance, tests))
-    return verdicts
+    rows = numbers.tolist()
+    no_pose = [_no_pose_reason(row) for row in rows]
+    # The hinge is given the candidate axis that explains the data better.
+    tests = [
+        (row[5], p[0], row[11], p[2]) if p[2] > p[1] else (row[5], p[0], row[8], p[1])
+        for row, p in zip(rows, p_values, strict=True)
+    ]
+    # Rotation off the main axis that is resolved: how much of the rotation is it?
+    resolved = [
+        reason is None and test[3] < ROTATION_ALPHA
+        for reason, test in zip(no_pose, tests, strict=True)
+    ]
+    shares = _axis_share_rows(
+        kind,
+        resolved,
+        lambda wanted: _one_segment_axis_shares(markers[wanted], numbers[wanted, 0]),
+    )
+    return [
+        _without_poses((markers[t],), no_pose[t])
+        if no_pose[t] is not None
+        else _verdict(
+            kind,
+            ("markers",),
+            [(row[1], math.sqrt(3.0 * row[0]))],
+            row[0],
+            tests[t],
+            shares.get(t),
+        )
+        for t, row in enumerate(rows)
+    ]
+
+
+def _no_pose_reason(row: list[float]) -> str | None:
+    """Why a trial's :func:`_one_segment_numbers` ``row`` gives no pose, or ``None``."""
+    _, share, weakest, collinear = row[:4]
+    if collinear:
+        return "no 3 non-collinear markers"
+    if weakest > _MAX_POSE_SD_RAD and share < MAX_NONRIGID_SHARE:
+        return (
+            "nearly collinear markers (their pose is determined to "
+            f"{math.degrees(weakest):.2g} deg about their line)"
+        )
+    return None
+
+
+def _axis_share_rows(kind: str, wanted: list[bool], shares) -> dict[int, tuple[float, ...]]:
+    """For an axis ``kind``, the :class:`_AxisShare` rows by trial of the trials ``wanted`` (a
+    resolved rotation about more than one axis), from ``shares(indices)``; nothing for a
+    centre, which that rotation determines."""
+    indices = [t for t, want in enumerate(wanted) if want]
+    if kind in CENTRE_KINDS or not indices:
+        return {}
+    found = shares(np.array(indices))
+    return dict(zip(indices, zip(*(column.tolist() for column in found), strict=True), strict=True))
 
 
 def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) -> list[Support]:
@@ -1104,11 +1219,13 @@ def _without_poses(
     )
 
 
-def _verdict(kind, names, rigidity, variance, tests) -> Support:
+def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
     [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
-    off the main axis."""
+    off the main axis; ``axis_share``, for an axis whose rotation off the main axis is
+    resolved, an :class:`_AxisShare` row (share, RMS rotation about the principal axis and
+    about the others [rad])."""
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
@@ -1133,18 +1250,26 @@ def _verdict(kind, names, rigidity, variance, tests) -> Support:
             f"resolved above the rigid-body residual of {residual_mm:.3g} mm, "
             f"p = {p_second:.2g})"
         )
-    return Support(
-        tuple(warnings),
-        {
-            "assessed": True,
-            "rigid_residual_mm": residual_mm,
-            "nonrigid_share": float(max(share for share, _ in rigidity)),
-            "rotation_rms_deg": rms_deg,
-            "rotation_p_value": p_any,
-            "off_axis_rotation_rms_deg": second_rms_deg,
-            "off_axis_p_value": p_second,
-        },
-    )
+    elif not warnings and axis_share is not None and axis_share[0] >= MAX_OFF_AXIS_SHARE:
+        share, principal_rad, off_rad = axis_share
+        warnings.append(
+            f"rotation about more than one axis: {100 * share:.0f}% of the rotation is about "
+            f"axes other than its principal one ({math.degrees(off_rad):.3g} deg RMS against "
+            f"{math.degrees(principal_rad):.3g} deg about it, p = {p_second:.2g}); an axis "
+            "fitted to it is a compromise the motion does not define"
+        )
+    numbers = {
+        "assessed": True,
+        "rigid_residual_mm": residual_mm,
+        "nonrigid_share": float(max(share for share, _ in rigidity)),
+        "rotation_rms_deg": rms_deg,
+        "rotation_p_value": p_any,
+        "off_axis_rotation_rms_deg": second_rms_deg,
+        "off_axis_p_value": p_second,
+    }
+    if axis_share is not None:
+        numbers["off_principal_axis_share"] = float(axis_share[0])
+    return Support(tuple(warnings), numbers)
 
 
 def assess(
