@@ -911,27 +911,59 @@ class _AxisShare(NamedTuple):
     off_rms_rad: np.ndarray  # (T,) RMS rotation about the two other axes
 
 
-def _sampled_frames(n_frames: int) -> slice:
-    """At most :data:`_SHARE_FRAMES` evenly spaced frames of ``n_frames``."""
-    return slice(None, None, -(-n_frames // _SHARE_FRAMES))
+def _frame_step(n_frames: int) -> int:
+    """The step between the frames, evenly spaced, that sample ``n_frames`` with at most
+    :data:`_SHARE_FRAMES`."""
+    return -(-n_frames // _SHARE_FRAMES)
+
+
+@kernel
+def _onto_first_frame(markers: np.ndarray, step: int) -> tuple[np.ndarray, np.ndarray]:
+    """For every ``step``-th frame of ``markers`` ``(T, N, n, 3)`` [mm], the cross-covariance
+    ``sum_m c_m u_m'`` ``(T, F, 3, 3)`` [mm^2] of its centred markers ``c`` with frame 0's
+    ``u``, whose best rotation carries frame 0's shape onto that frame's; and the inverse of
+    ``u``'s inertia ``sum_m (|u_m|^2 I - u_m u_m')`` ``(T, 3, 3)`` [mm^-2], the covariance per
+    unit variance of those rotations' noise. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    n_sampled = (n_frames + step - 1) // step
+    cross = np.empty((n_trials, n_sampled, 3, 3))
+    inertia_inv = np.empty((n_trials, 3, 3))
+    first = np.empty((n_markers, 3))
+    centred = np.empty((n_markers, 3))
+    tensor = np.empty((3, 3))
+    for t in range(n_trials):
+        for s in range(n_sampled):
+            for i in range(3):
+                mean = 0.0
+                for m in range(n_markers):
+                    mean += markers[t, s * step, m, i]
+                mean /= n_markers
+                for m in range(n_markers):
+                    centred[m, i] = markers[t, s * step, m, i] - mean
+            if s == 0:
+                first[:] = centred
+            for i in range(3):
+                for j in range(3):
+                    value = 0.0
+                    for m in range(n_markers):
+                        value += centred[m, i] * first[m, j]
+                    cross[t, s, i, j] = value
+        inertia_into(first, tensor)
+        inertia_inv[t] = np.linalg.inv(tensor)
+    return cross, inertia_inv
 
 
 def _one_segment_axis_shares(markers: np.ndarray, variance: np.ndarray) -> _AxisShare:
     """How much of the rotation of one segment's markers ``(T, N, n, 3)`` [mm] in the reference
     frame is about its principal axis, from the rotations that carry frame 0's centred shape
-    onto each sampled frame's (:func:`_sampled_frames`); ``variance`` ``(T,)`` [mm^2] is the
-    rigid residual per coordinate. The rotation vectors about their mean, which hold at any
-    angle (unlike the one-segment pass's linearised rotations), less their noise
-    (:func:`_rotation_spreads`), have three eigenvalues: the principal axis's and the two
-    others'."""
-    sampled = markers[:, _sampled_frames(markers.shape[1])]
-    centred = sampled - sampled.mean(axis=2, keepdims=True)
-    first = centred[:, 0]
-    rotations = best_rotation(np.swapaxes(centred, -1, -2) @ first[:, None])
-    second_moment = np.swapaxes(first, -1, -2) @ first
-    trace = np.trace(second_moment, axis1=-2, axis2=-1)
-    inertia = trace[:, None, None] * np.eye(3) - second_moment
-    _, _, values = _spreads(rotations, np.linalg.inv(inertia), None, variance)
+    onto each sampled frame's (:func:`_frame_step`, :func:`_onto_first_frame`); ``variance``
+    ``(T,)`` [mm^2] is the rigid residual per coordinate. The rotation vectors about their
+    mean, which hold at any angle (unlike the one-segment pass's linearised rotations), less
+    their noise (:func:`_rotation_spreads`), have three eigenvalues: the principal axis's and
+    the two others'."""
+    cross, inertia_inv = _onto_first_frame(kernel_array(markers), _frame_step(markers.shape[1]))
+    rotations = best_rotation(cross)
+    _, _, values = _spreads(rotations, inertia_inv, None, variance)
     off = values[:, 0] + values[:, 1]
     total = off + values[:, 2]
     share = np.divide(off, total, out=np.zeros_like(total), where=total > 0.0)
