@@ -14,6 +14,7 @@ from rigs import two_segments
 
 from jointbench.estimators import registry
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
+from jointbench.numerics.poses import fit_rigid_poses
 from jointbench.resultfiles import parquet
 
 FIELDS = ("markers", "rotation", "translation", "body")
@@ -188,6 +189,45 @@ def test_a_poses_array_cannot_be_made_writeable_again(tmp_path, made, field):
         array.flags.writeable = True
 
 
+@pytest.mark.parametrize("made", ["fitted", "read", "by hand"])
+@pytest.mark.parametrize("field", FIELDS)
+def test_no_array_under_a_poses_array_can_be_made_writeable(tmp_path, made, field):
+    """Not the array's ``base`` either, through which an edit would reach the poses."""
+    array = getattr(_three_ways(tmp_path)[made], field)
+    kept = array.copy()
+    under = array.base
+    while isinstance(under, np.ndarray):
+        with pytest.raises(ValueError, match="WRITEABLE"):
+            under.setflags(write=True)
+        under = under.base
+    np.testing.assert_array_equal(array, kept)
+
+
+def _in_another_body_frame(pose: SegmentPoses, turn: float, shift: np.ndarray) -> SegmentPoses:
+    """The same motion with the body frame turned by ``turn`` [rad] about z and moved by
+    ``shift`` [mm]: rotation ``R Q'``, body ``Q b + v``, translation ``t - R Q' v``, which
+    leave the same residual on the markers."""
+    c, s = np.cos(turn), np.sin(turn)
+    q = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    rotation = pose.rotation @ q.T
+    return dataclasses.replace(
+        pose,
+        rotation=rotation,
+        body=pose.body @ q.T + shift,
+        translation=pose.translation - rotation @ shift,
+    )
+
+
+@pytest.mark.parametrize("segment", ["proximal", "distal"])
+@pytest.mark.parametrize(("turn", "shift"), [(0.4, (30.0, -20.0, 10.0)), (0.0, (0.0, 0.0, 1e-3))])
+def test_poses_in_another_body_frame_are_refused(segment, turn, shift):
+    """Paper C's fits read the body-fixed coordinates, and answered 17 to 59 mm away in
+    another body frame, with status "ok"."""
+    pose = _fitted()[0][segment]
+    with pytest.raises(ValueError, match="not the world at frame 0"):
+        _in_another_body_frame(pose, turn, np.array(shift))
+
+
 @pytest.mark.parametrize("how", ["deepcopy", "pickle"])
 def test_copied_poses_are_checked_and_read_only(how):
     pose = _fitted()[0]["distal"]
@@ -240,3 +280,20 @@ def test_a_dof_that_is_no_number_is_refused():
     pose = _fitted()[0]["distal"]
     with pytest.raises(ValueError, match="dof is \\[177 177\\], not the 177"):
         dataclasses.replace(pose, dof=np.array([177, 177]))
+
+
+@pytest.mark.parametrize("max_iterations", [1, 2, 5])
+def test_a_pose_fit_stopped_by_its_iteration_limit_is_anchored_at_frame_0(max_iterations):
+    """Its last poses are fitted to a body that was still moving: they are put in the body
+    frame that is the world at frame 0, with the residual they leave unchanged."""
+    segments = _segments(n_trials=3)
+    fit = fit_rigid_poses(segments["distal"], max_iterations=max_iterations, tol_mm=0.0)
+    assert np.all(fit.iterations == max_iterations)
+    np.testing.assert_allclose(
+        fit.rotation[:, 0], np.broadcast_to(np.eye(3), (3, 3, 3)), atol=1e-12
+    )
+    np.testing.assert_allclose(fit.translation[:, 0], 0.0, atol=1e-9)
+    for trial in range(3):
+        SegmentPoses(
+            segments["distal"][trial], fit.rotation[trial], fit.translation[trial], fit.body[trial]
+        )

@@ -6,8 +6,8 @@ two-segment support verdict (:mod:`jointbench.estimators.support`) read the same
 world at frame 0. :func:`trial_poses` fits them for all trials at once and checks what a pose
 needs, so a caller can fit them once and pass them to each method (``poses=``) and to the verdict.
 Poses cannot be altered after their fit: their arrays are read-only, and poses rebuilt with
-other parts than those that leave their residual on their markers are refused
-(:class:`SegmentPoses`).
+other parts than those that leave their residual on their markers, or in another body frame,
+are refused (:class:`SegmentPoses`).
 """
 
 from __future__ import annotations
@@ -70,12 +70,15 @@ class SegmentPoses:
     shaped otherwise than their markers ask, a ``dof`` other than theirs, and a rotation,
     translation and body that leave on the markers another residual than ``residual_ss``
     (:class:`AlteredPoses`, beyond the allowance of :func:`residual_differs`): poses edited
-    and rebuilt, by hand or with ``dataclasses.replace``. ``residual_ss`` and ``dof`` left
+    and rebuilt, by hand or with ``dataclasses.replace``; and a frame-0 pose other than the
+    identity (the same motion in another body frame, which leaves the same residual but moves
+    the answers of the methods that read body-fixed coordinates). ``residual_ss`` and ``dof`` left
     ``None`` (a fresh fit) are computed. The arrays are read-only copies of their own, so
     a caller's array is left as it was and cannot change them. Not caught:
     poses forged together with the residual they leave, which only a re-fit of the markers
-    would tell, and edits too small to move the residual beyond the allowance (at the fit's
-    minimum the residual moves with the square of an edit).
+    would tell, edits too small to move the residual beyond the allowance (at the fit's
+    minimum the residual moves with the square of an edit), and Python's own ways round a
+    frozen dataclass (``object.__setattr__``, ``__dict__``, a subclass that skips the checks).
     """
 
     markers: np.ndarray
@@ -106,6 +109,7 @@ class SegmentPoses:
                 f"{what}: rotation/translation/body leave a residual of {found} mm^2 on their "
                 "markers: markers and poses must be finite numbers"
             )
+        _check_gauge(what, arrays["rotation"][0], arrays["translation"][0], arrays["markers"])
         for name, array in arrays.items():
             object.__setattr__(self, name, array)
         object.__setattr__(self, "residual_ss", residual_ss)
@@ -117,17 +121,16 @@ class SegmentPoses:
 
 
 def _owned_read_only(name: str, array: object) -> np.ndarray:
-    """Pose array ``name`` as a read-only ``float64`` copy no one else can write: a caller's
-    array is neither made read-only nor able to change the poses afterwards. A read-only view
-    of the copy, so that turning its flag back to writeable fails."""
+    """Pose array ``name`` as a read-only ``float64`` copy no one can write: a caller's array
+    is neither made read-only nor able to change the poses afterwards, and neither the copy
+    nor its ``base`` can be made writeable."""
     try:
         copy = np.array(array, dtype=float)
     except (TypeError, ValueError) as error:
         raise ValueError(f"segment poses: {name} is no array of numbers ({error})") from None
-    copy.setflags(write=False)
-    view = copy.view()
-    view.setflags(write=False)
-    return view
+    # Over an immutable buffer: an array that owns its memory, or a view of one, can be made
+    # writeable again through itself or its ``base``.
+    return np.frombuffer(copy.tobytes(), dtype=float).reshape(copy.shape)
 
 
 def _check_pose_shapes(
@@ -151,6 +154,25 @@ def _check_pose_shapes(
         if array.shape != shape:
             raise ValueError(f"{what}: {name} is shaped {array.shape}, not {shape}")
     return what
+
+
+def _check_gauge(
+    what: str, first_rotation: np.ndarray, first_translation: np.ndarray, markers: np.ndarray
+) -> None:
+    """``ValueError`` unless frame 0's pose, ``first_rotation`` ``(3, 3)`` and
+    ``first_translation`` ``(3,)`` [mm], is the identity to rounding: the body frame is the
+    world at frame 0. Poses in another body frame leave the same residual on the markers, but
+    the methods that read body-fixed coordinates (the hip joint centre's fits) answer in it."""
+    scale = float(np.max(np.abs(markers), initial=0.0))
+    turned = float(np.max(np.abs(first_rotation - np.eye(3))))
+    moved = float(np.max(np.abs(first_translation)))
+    # The fit anchors its poses at frame 0 (jointbench.numerics.poses), which leaves rounding.
+    if not (turned <= 1e-9 and moved <= 1e-9 * max(scale, 1.0)):
+        raise ValueError(
+            f"{what}: the body frame is not the world at frame 0 (rotation[0] differs from the "
+            f"identity by {turned:.3g}, translation[0] is {moved:.3g} mm): poses in another "
+            "body frame are not the fitted ones"
+        )
 
 
 def residual_differs(found: np.ndarray, stored: np.ndarray, markers: np.ndarray) -> np.ndarray:

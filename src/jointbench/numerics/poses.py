@@ -343,4 +343,20 @@ def _rigid_poses_block(markers: np.ndarray, max_iterations: int, tol_mm: float) 
     # t = mean(y) - R mean(body), every frame's rotation applied as one product per trial.
     turned = rotation.reshape(n_trials, n_frames * 3, 3) @ body.mean(axis=1)[:, :, None]
     translation = target_mean - turned.reshape(n_trials, n_frames, 3)
-    return PoseFit(rotation, translation, body, iterations, change)
+    return PoseFit(*_anchored_at_frame_0(rotation, translation, body), iterations, change)
+
+
+def _anchored_at_frame_0(
+    rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The same poses ``rotation`` ``(T, N, 3, 3)``, ``translation`` ``(T, N, 3)`` [mm] of the
+    body-fixed coordinates ``body`` ``(T, n, 3)`` [mm] in the body frame that is the world at
+    frame 0: ``R_f R_0'``, ``t_f - R_f R_0' t_0`` and ``R_0 b + t_0``, which leave the same
+    residual. The alternation anchors its last body at frame 0 but fits the last poses to it,
+    so frame 0's pose is the identity only as far as the body had stopped changing, which a
+    fit stopped by its iteration limit need not have."""
+    first_rotation, first_translation = rotation[:, :1], translation[:, :1]
+    anchored = rotation @ np.swapaxes(first_rotation, -1, -2)
+    moved = translation - (anchored @ first_translation[..., None])[..., 0]
+    placed = body @ np.swapaxes(first_rotation[:, 0], -1, -2) + first_translation
+    return anchored, moved, placed
