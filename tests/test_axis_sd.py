@@ -80,6 +80,9 @@ def test_the_warning_states_the_sd_and_the_limit():
         "warning: axis not determined by the radial cost: its direction's SD is 31.4 deg "
         "(above 10 deg)"
     )
+    # One decimal: three significant digits would print 10.04 as "10", above 10.
+    just_above = precision.annotate(checked("planar", hinge(0, 60.0)), 10.4, "the planar cost")
+    assert "its direction's SD is 10.4 deg (above 10 deg)" in just_above.status
     unbounded = precision.annotate(checked("planar", hinge(0, 60.0)), math.inf, "the radial cost")
     assert "SD is unbounded (above 10 deg)" in unbounded.status
 
@@ -160,6 +163,16 @@ def test_the_sd_moves_with_a_rigid_transform_and_ignores_marker_and_frame_order(
     assert shuffled == pytest.approx(sd, rel=1e-9)
 
 
+def test_saras_sd_moves_with_a_rigid_transform_and_ignores_marker_and_frame_order():
+    markers = hinge(2, 30.0, noise=0.5)
+    sd = checked("SARA", markers).diagnostics["axis_sd_deg"]
+    rotation = rotation_about_axis(np.array([0.3, -1.0, 2.0]) / np.linalg.norm([0.3, -1, 2]), 2.0)
+    order = np.random.default_rng(5).permutation(len(markers) - 1) + 1
+    moved = markers @ rotation.T + np.array([-40.0, 900.0, 12.0])
+    for changed in (moved, markers[:, ::-1], markers[np.r_[0, order]]):
+        assert checked("SARA", changed).diagnostics["axis_sd_deg"] == pytest.approx(sd, rel=1e-6)
+
+
 # Noise-limited pure hinges: (arc [deg], noise [mm], markers, frames).
 CALIBRATION = [
     (5.0, 0.3, 4, 120),
@@ -221,8 +234,9 @@ def test_the_radial_sd_is_conservative_by_at_most_a_stated_factor(case):
 
 
 def test_the_many_trial_form_gives_each_trial_its_outcome_alone():
-    trials = np.stack([hinge(0, 2.0), hinge(1, 30.0, noise=1.0), hinge(3, 5.0)])
-    for method in LEAST_SQUARES:
+    repeated = np.concatenate([hinge(1, 60.0)[:5]] * 24)
+    trials = np.stack([hinge(0, 2.0), hinge(1, 30.0, noise=1.0), hinge(3, 5.0), repeated])
+    for method in jointbench.methods("axis"):
         together = registry.many("axis", method)(trials)
         for trial, outcome in zip(trials, together, strict=True):
             alone = checked(method, trial)

@@ -777,12 +777,12 @@ def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndar
     combined cost both. Parameters: the direction (2) and, for the radial and combined costs,
     the axis's position normal to it (2): the search holds ``m`` at the NM centre, but that is
     fitted to the same markers and is no better determined off the axis than the cylinders'
-    axis is, so the direction's SD must allow for it (with ``m`` held, a 2 degree arc's radial
-    minimum looks sharp to a few tenths of a degree and lies 40 degrees off). The axis is
+    axis is, so the direction's SD must allow for it (with ``m`` held, one 2 degree arc's
+    radial minimum looks sharp to 0.14 degrees and lies 40 degrees off). The axis is
     taken through the foot nearest the markers' centroid (where ``m`` lies along the axis does
     not change the costs; about a far ``m`` a tilt would also shift the axis at the markers).
 
-    The Hessians are analytic (:func:`_planar_hessian`, :func:`_radial_hessian`): a central
+    The Hessians are analytic (:func:`_planar_hessian`, :func:`_radial_derivatives`): a central
     difference needs a step well inside the arc (on a 2 degree arc the cost departs from its
     quadratic by several percent at 1e-3 rad) while the tilt and shift of the axis that the
     arc leaves nearly free curve the cost 1e-5 as much as the others, which rounding hides at
