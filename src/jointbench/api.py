@@ -10,7 +10,11 @@ Every method is reached through the registry, which holds it to the same rules:
   resolved above the rigid-body residual, or (for a centre) rotation about a single axis — give
   a result whose ``status`` starts with or carries ``"warning: ..."``, with the numbers in
   ``diagnostics["support_..."]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
-  the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer.
+  the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer;
+* an axis whose direction the method's own cost leaves undetermined (the SD of the direction
+  that the cost's curvature and residuals imply, ``diagnostics["axis_sd_deg"]``, above
+  :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`) gets a warning in ``status`` the
+  same way (see :mod:`jointbench.estimators.precision`).
 
 Before the fit, the arrays are screened for artefacts as a recording is
 (:func:`screen`, :func:`jointbench.screening.screen`): a label swap, a marker that falls off

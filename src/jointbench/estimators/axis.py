@@ -73,6 +73,12 @@ Where the costs are degenerate:
   centre lands 1.1 m away and whose combined search ends 12 degrees off, the true axis costing
   zero).
 
+The checked call (:func:`jointbench.estimators.registry.get`, ``jointbench.fit_axis``) adds
+the SD of the direction that each cost implies, ``diagnostics["axis_sd_deg"]``, and warns when
+it is above :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`
+(:func:`_direction_sd_deg`): on a short arc the radial cost can leave the axis undetermined
+while the rotation is resolved.
+
 Returned ``direction`` is a unit vector with a canonical sign: its largest-magnitude component
 is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_between_lines_deg`).
 """
@@ -88,7 +94,7 @@ from typing import Literal
 import numpy as np
 
 from jointbench.declared import Count, Point, Positive
-from jointbench.estimators import selfcheck
+from jointbench.estimators import precision, selfcheck
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import many, register
 from jointbench.estimators.results import AxisResult
@@ -700,12 +706,132 @@ def _judged(result, costs, trial, run, parameterisation, fatol) -> AxisResult:
     )
 
 
+# The residuals each cost sums per marker sample (:func:`_direction_sd_deg`).
+_RESIDUAL_SETS = {"planar": 1, "radial": 1, "combined": 2}
+
+
+def _planar_hessian(scatter: np.ndarray, direction: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """The Hessian ``(2, 2)`` [mm^2/rad^2] of ``f_p = n' S n`` in the tangent angles ``a`` of
+    ``n(a) = (n + E a) / |n + E a|`` at ``a = 0``: ``2 (E' S E - (n' S n) I)``, ``S`` the
+    scatter ``(3, 3)`` [mm^2], ``E`` the basis ``(3, 2)``. Exact at any ``n``; at the minimum
+    it is the curvature left above the noise's own share of ``S``, which a Gauss–Newton
+    ``2 E' S E`` would count as signal."""
+    return 2.0 * (basis.T @ scatter @ basis - float(direction @ scatter @ direction) * np.eye(2))
+
+
+def _outer_sum(factor: np.ndarray, unit: np.ndarray) -> np.ndarray:
+    """``sum factor u u'`` ``(2, 2)`` over samples: ``factor`` of any shape, ``unit`` the
+    samples' ``u`` ``(factor.size, 2)``."""
+    return (factor.reshape(-1, 1) * unit).T @ unit
+
+
+def _tangential_sum(factor: np.ndarray, unit: np.ndarray) -> np.ndarray:
+    """``sum factor (I - u u')`` ``(2, 2)`` over samples (as :func:`_outer_sum`)."""
+    return float(factor.sum()) * np.eye(2) - _outer_sum(factor, unit)
+
+
+def _radial_derivatives(
+    markers: np.ndarray, foot: np.ndarray, direction: np.ndarray, basis: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The radial cost (radii profiled out) at the axis through ``foot`` (3,) [mm] along
+    ``direction`` (3,), for ``markers`` ``(N, P, 3)`` [mm], with its gradient ``(4,)`` and
+    exact Hessian ``(4, 4)`` in the tangent angles ``a`` [rad] of :func:`_planar_hessian` and
+    the axis's shift ``b`` [mm] along ``basis`` ``E`` ``(3, 2)``: ``(gradient, hessian,
+    cost)``.
+
+    A sample's offset ``w = v - m`` has ``c = n . w`` along the axis and ``x = E' w`` across it,
+    its distance being ``d = |x|``. At ``a = b = 0``: ``dd/da = -c x / d``,
+    ``dd/db = -x / d``; ``d2d/da2 = (c^2 I - x x') / d - c^2 x x' / d^3``,
+    ``d2d/dadb = c (I / d - x x' / d^3)``, ``d2d/db2 = I / d - x x' / d^3``. With the radii
+    profiled, a residual is ``rho = d - mean_k d`` of its marker, the gradient of ``sum rho^2``
+    is ``2 sum rho grad(d)`` and its Hessian ``2 sum grad(rho) grad(rho)' + 2 sum rho d2d``
+    (the radii's own derivatives sum to zero against ``rho``). A marker on the axis
+    (``d = 0``), where the cost has no derivative, gives a Hessian that is not finite."""
+    offsets = markers - foot
+    along = offsets @ direction
+    across = offsets @ basis
+    with np.errstate(divide="ignore", invalid="ignore"):
+        distance = np.linalg.norm(across, axis=-1)
+        unit = across / distance[..., None]
+        gradient = np.concatenate([-along[..., None] * unit, -unit], axis=-1)
+        residual = distance - distance.mean(axis=0)
+        weight = residual / distance
+    unit = unit.reshape(-1, 2)
+    bb = _tangential_sum(weight, unit)
+    ab = _tangential_sum(weight * along, unit)
+    aa = _tangential_sum(weight * along**2, unit) - _outer_sum(residual * distance, unit)
+    centred = (gradient - gradient.mean(axis=0)).reshape(-1, 4)
+    hessian = 2.0 * centred.T @ centred
+    hessian += 2.0 * np.block([[aa, ab], [ab, bb]])
+    gradient = 2.0 * residual.reshape(-1) @ gradient.reshape(-1, 4)
+    return gradient, hessian, float(np.sum(residual**2))
+
+
+def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str):
+    """The SD [deg] of the axis ``direction`` (3,) through ``point`` (3,) [mm] implied by
+    ``method``'s cost on ``markers`` ``(N, P, 3)`` [mm] (:mod:`jointbench.estimators.precision`).
+
+    Residuals, on the distinct frames ``N_d``: the planar cost's ``n . u`` of every sample
+    (``P N_d``, less the ``P`` centroids the offsets ``u`` are taken from), the radial cost's
+    distance less its marker's radius (``P N_d``, less the ``P`` radii profiled out), the
+    combined cost both. Parameters: the direction (2) and, for the radial and combined costs,
+    the axis's position normal to it (2): the search holds ``m`` at the NM centre, but that is
+    fitted to the same markers and is no better determined off the axis than the cylinders'
+    axis is, so the direction's SD must allow for it (with ``m`` held, one 2 degree arc's
+    radial minimum looks sharp to 0.14 degrees and lies 40 degrees off). The axis is
+    taken through the foot nearest the markers' centroid (where ``m`` lies along the axis does
+    not change the costs; about a far ``m`` a tilt would also shift the axis at the markers).
+
+    The Hessians are analytic (:func:`_planar_hessian`, :func:`_radial_derivatives`): a central
+    difference needs a step well inside the arc (on a 2 degree arc the cost departs from its
+    quadratic by several percent at 1e-3 rad) while the tilt and shift of the axis that the
+    arc leaves nearly free curve the cost 1e-5 as much as the others, which rounding hides at
+    any step that small.
+    """
+    markers = precision.distinct_frames(markers)
+    n_frames, n_markers = markers.shape[:2]
+    foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
+    basis = precision.tangent_basis(direction)
+    n_params = 2 if method == "planar" else 4
+    gradient, hessian, cost = np.zeros(n_params), np.zeros((n_params, n_params)), 0.0
+    if method != "radial":
+        scatter = AxisCosts(markers, foot).scatter[0]
+        gradient[:2] = 2.0 * basis.T @ scatter @ direction
+        hessian[:2, :2] = _planar_hessian(scatter, direction, basis)
+        cost = float(direction @ scatter @ direction)
+    if method != "planar":
+        radial = _radial_derivatives(markers, foot, direction, basis)
+        gradient, hessian, cost = gradient + radial[0], hessian + radial[1], cost + radial[2]
+    dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
+    return precision.direction_sd_deg(gradient, hessian, cost, dof)
+
+
+def _precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
+    """Each of ``results`` (one method's answers for the trials of ``markers``
+    ``(T, N, P, 3)`` [mm] or a list of trials) with its direction's SD and, above
+    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`, a warning."""
+    return [
+        precision.annotate(
+            result,
+            _direction_sd_deg(
+                np.asarray(array, dtype=float),
+                np.asarray(result.point),
+                np.asarray(result.direction),
+                result.method,
+            ),
+            f"the {result.method} cost",
+        )
+        for result, array in zip(results, markers, strict=True)
+    ]
+
+
 def _make(method: str, summary: str) -> Callable[..., AxisResult]:
     fit = _entry(_fit, method)
     fit.__name__ = fit.__qualname__ = f"fit_{method}"
     fit.__doc__ = summary + _DOC
     fit.self_check = _self_check
     fit.self_check_many = _self_check_many
+    fit.precision_many = _precision_many
     return fit
 
 

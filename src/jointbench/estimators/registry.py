@@ -11,7 +11,9 @@ Kinds:
 :func:`get` returns the estimator wrapped in the checks every estimator of its kind is held
 to: the input checks of :func:`jointbench.estimators.validation.check_input` before the fit,
 and the support verdict of :func:`jointbench.estimators.support.assess` written into the
-result after it. A newly registered estimator gets both without code of its own.
+result after it; a method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a
+statement of its answer's precision (:mod:`jointbench.estimators.precision`) has them applied
+in between. A newly registered estimator gets both without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
 Every method has a one-trial and a many-trial form, each checked or not (:func:`get`,
@@ -155,7 +157,8 @@ def _check_kind(kind: str) -> None:
 
 def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     """``entry``'s method on ``clean``, arrays that passed the input checks, then its
-    self-check and the support verdict. A pose-based method of two segments has the segments'
+    self-check, the precision its cost implies and the support verdict. A pose-based method
+    of two segments has the segments'
     poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
     one-trial function is) and for the verdict."""
     names = _pose_names(entry, len(clean))
@@ -169,7 +172,9 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
         (poses,) = shared
         result = one_trial(entry.many, *clean, poses=[poses], **options)
         verdict = support.assess(entry.kind, clean, poses=poses)
-    return support.annotate(_self_checked(entry.fn, result, clean, options), verdict)
+    result = _self_checked(entry.fn, result, clean, options)
+    (result,) = _precision_checked(entry.fn, [result], tuple(array[None] for array in clean))
+    return support.annotate(result, verdict)
 
 
 def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
@@ -235,6 +240,14 @@ def _self_checked_many(fn: Callable, results: list, stacked: tuple, options: dic
     return check_many(results, *stacked, **{k: v for k, v in options.items() if k != "poses"})
 
 
+def _precision_checked(fn: Callable, results: list, stacked: tuple) -> list:
+    """``results`` of the trials of ``stacked`` ``(T, N, n, 3)`` each with the precision of
+    their answers that ``fn``'s own cost implies, where it states one
+    (``fn.precision_many``, :mod:`jointbench.estimators.precision`)."""
+    check = getattr(fn, "precision_many", None)
+    return results if check is None else check(results, *stacked)
+
+
 def _checked_many(entry: _Entry) -> Callable[..., list]:
     """``entry``'s many-trial form (``many(*segments, **options)`` over ``(n_trials, ...)``
     arrays, returning per trial a result or the exception) with the checks of its checked
@@ -262,6 +275,7 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
         if fitted:
             stacked = checked.stacked(fitted)
             results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
+            results = _precision_checked(entry.fn, results, stacked)
             poses = _fitted_to(options.get("poses"), fitted) if names else None
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
             for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
@@ -373,7 +387,9 @@ def _trial_by_trial(fn: Callable, names: tuple[str, ...]) -> Callable[..., list]
         arrays = [np.asarray(segment) for segment in segments]
         return each_alone(lambda t: fn(*(array[t] for array in arrays), **options), len(arrays[0]))
 
-    each.__dict__.pop("self_check", None)  # the checked form applies it, once
+    # The checked form applies them, once.
+    each.__dict__.pop("self_check", None)
+    each.__dict__.pop("precision_many", None)
     return each
 
 

@@ -36,12 +36,14 @@ reference segment's frame, so the reference pose is exactly the identity (``R1 =
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from typing import TypeVar
 
 import numpy as np
 
 from jointbench.declared import NonNegative
+from jointbench.estimators import precision
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
@@ -269,7 +271,8 @@ def _score_center(poses: PoseStack) -> list[CenterResult | ValueError]:
 
 def _sara_solve(r1, t1, r2, t2, origin: np.ndarray):
     """SARA's axis directions ``n1``, ``n2`` (unit) and points ``p1``, ``p2`` [mm], each
-    ``(T, 3)``, the eigenvalue ratio ``(T,)`` and the per-trial rank errors.
+    ``(T, 3)``, the normal matrices' eigenvalues ``(T, 6)`` (ascending) and eigenvectors
+    ``(T, 6, 6)`` (columns) and the per-trial rank errors.
 
     Both body frames coincide with the world at frame 0. The point is the minimum-norm
     least-squares solution about ``origin`` ``(T, 3)`` [mm] with the axis direction dropped, so
@@ -287,15 +290,13 @@ def _sara_solve(r1, t1, r2, t2, origin: np.ndarray):
     axis = vectors[:, :, 0]
     point = eigen_solution(vectors[:, :, 1:], values[:, 1:], rhs)
     n1, n2 = axis[:, :3], axis[:, 3:]
-    # A trial without relative rotation has a zero second eigenvalue; its error is returned.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = values[:, 0] / values[:, 1]
     return (
         n1 / np.linalg.norm(n1, axis=1, keepdims=True),
         n2 / np.linalg.norm(n2, axis=1, keepdims=True),
         point[:, :3] + origin,
         point[:, 3:] + origin,
-        ratio,
+        values,
+        vectors,
         errors,
     )
 
@@ -318,23 +319,40 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     returned in the reference frame, ``p1`` its point nearest the moving markers' centroid at
     frame 0 (for a noise-free hinge). ``radii`` are the markers' mean distances from the axis
     [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
-    normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out.
+    normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out;
+    ``diagnostics["eigenvalues"]`` ``(6,)`` and ``["eigenvectors"]`` ``(6, 6)`` (columns) are
+    that matrix's, from which the checked call states the direction's SD (:func:`_sara_sd_deg`).
     """
     return one_trial(_sara_trials, markers)
 
 
 def _sara(poses: PoseStack) -> list[AxisResult | ValueError]:
     origin = poses.body.mean(axis=1)
-    n1, n2, p1, p2, ratio, errors = _sara_solve(
+    n1, n2, p1, p2, values, vectors, errors = _sara_solve(
         None, None, poses.rotation, poses.translation, origin
     )
     radii = _mean_distance_to_axis(poses.markers, p1, n1)
-    return _sara_results(errors, p1, n1, radii, ratio, direction_moving=n2, point_moving=p2)
+    # The eigen-problem is kept for the checked call's precision (:func:`_sara_sd_deg`).
+    return _sara_results(
+        errors,
+        p1,
+        n1,
+        radii,
+        values,
+        direction_moving=n2,
+        point_moving=p2,
+        eigenvalues=values,
+        eigenvectors=vectors,
+    )
 
 
-def _sara_results(errors, point, direction, radii, ratio, **versions) -> list:
+def _sara_results(errors, point, direction, radii, values, **versions) -> list:
     """Per trial its rank error or its SARA :class:`AxisResult`, from the stacks ``(T, ...)``
-    of the answer and of the ``versions`` the diagnostics carry (with ``ratio``)."""
+    of the answer and of the ``versions`` the diagnostics carry (with ``ratio``, of the
+    eigenvalues ``values`` ``(T, 6)``)."""
+    # A trial without relative rotation has a zero second eigenvalue; its error is returned.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = values[:, 0] / values[:, 1]
     return trial_outcomes(
         errors,
         lambda t: AxisResult(
@@ -353,6 +371,62 @@ def _sara_results(errors, point, direction, radii, ratio, **versions) -> list:
     )
 
 
+def _sara_sd_deg(values: np.ndarray, vectors: np.ndarray, n_frames: int, n_distinct: int):
+    """The SD [deg] of SARA's one-segment direction ``n1`` implied by its eigen-problem
+    (:mod:`jointbench.estimators.precision`): the normal matrix ``M = A'A`` ``(6, 6)`` of
+    ``n_frames`` frames, ``n_distinct`` of them distinct, by its ascending eigenvalues ``values``
+    ``(6,)`` and eigenvectors ``vectors`` ``(6, 6)`` (columns).
+
+    Noise in a frame's rotation ``R_k`` moves ``A v`` (``v = [n1; n2]`` the null vector) by
+    ``e_k = n1 x dw_k``, ``dw_k`` the rotation's error; to first order the null vector moves by
+    ``dv = -sum_j v_j (v_j' A' e) / (lambda_j - lambda_0)`` over the other eigenvectors, so with
+    ``e`` of variance ``tau^2`` per component ``cov(dv) = tau^2 sum_j lambda_j v_j v_j' /
+    (lambda_j - lambda_0)^2``: the eigenvalue gap above the smallest, the noise's own share of
+    ``M``, sets the precision, as ``S - lambda I`` does for the planar cost. ``e_k`` is normal
+    to ``n1`` (its component along ``n1`` moves ``v`` only along ``[n1; -n2]``, which leaves
+    the direction of ``n1`` as it is), so ``tau^2 = lambda_0 / (2 N - 4)``: two components a
+    frame, less the four of ``v`` they fit. Repeated frames scale ``M`` and ``lambda_0`` alike;
+    the covariance is scaled by ``n_frames / n_distinct`` to the distinct frames'. ``inf``
+    where no gap separates the smallest eigenvalue or ``2 N - 4 < 1``.
+    """
+    dof = 2 * n_frames - 4
+    gaps = values[1:] - values[0]
+    if dof < 1 or not np.all(gaps > 0.0):
+        return math.inf
+    others = vectors[:, 1:]
+    tau_sq = max(float(values[0]), 0.0) / dof
+    covariance = tau_sq * (others * (values[1:] / gaps**2)) @ others.T
+    covariance *= n_frames / n_distinct
+    # n1 is the null vector's first half, normalised: its tangent moves as that half does.
+    half = vectors[:3, 0]
+    length = float(np.linalg.norm(half))
+    basis = precision.tangent_basis(half / length)
+    tangent = basis.T @ covariance[:3, :3] @ basis / length**2
+    return math.degrees(math.sqrt(max(float(np.trace(tangent)), 0.0)))
+
+
+def _sara_precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
+    """Each of SARA's one-segment ``results`` (the trials of ``markers`` ``(T, N, P, 3)``
+    [mm]) with its direction's SD from its eigen-problem (:func:`_sara_sd_deg`) and, above
+    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`, a warning."""
+    return [
+        precision.annotate(
+            result,
+            _sara_sd_deg(
+                np.asarray(result.diagnostics["eigenvalues"]),
+                np.asarray(result.diagnostics["eigenvectors"]),
+                len(trial),
+                len(precision.distinct_frames(np.asarray(trial, dtype=float))),
+            ),
+            "SARA's eigen-problem",
+        )
+        for result, trial in zip(results, markers, strict=True)
+    ]
+
+
+fit_sara.precision_many = _sara_precision_many
+
+
 def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult:
     """SARA for two segments moving in the world ``(n_frames >= 3, n_markers >= 3, 3)`` [mm].
 
@@ -368,7 +442,7 @@ def fit_sara_two_segment(proximal: np.ndarray, distal: np.ndarray) -> AxisResult
 
 def _sara_two_segment(prox: PoseStack, dist: PoseStack) -> list[AxisResult | ValueError]:
     r1, t1, r2, t2 = prox.rotation, prox.translation, dist.rotation, dist.translation
-    n1, n2, p1, p2, ratio, errors = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=1))
+    n1, n2, p1, p2, values, _, errors = _sara_solve(r1, t1, r2, t2, dist.body.mean(axis=1))
     direction = _applied(r1[:, :1], n1)[:, 0] + _applied(r2[:, :1], n2)[:, 0]
     direction /= np.linalg.norm(direction, axis=1, keepdims=True)
     at_frame0 = _applied(r1[:, :1], p1)[:, 0], _applied(r2[:, :1], p2)[:, 0]
@@ -380,7 +454,7 @@ def _sara_two_segment(prox: PoseStack, dist: PoseStack) -> list[AxisResult | Val
         point,
         direction,
         radii,
-        ratio,
+        values,
         direction_proximal=n1,
         point_proximal=p1,
         direction_distal=n2,

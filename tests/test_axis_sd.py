@@ -1,0 +1,252 @@
+"""The axis methods' statement of how precisely their own cost determines the direction
+(:mod:`jointbench.estimators.precision`): its calibration on pure hinges, the cases whose cost
+leaves the axis undetermined, and its invariances."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import jointbench
+from jointbench.estimators import axis, precision, registry
+from jointbench.geometry import angle_between_lines_deg, rotation_about_axis
+
+CENTRE = np.array([20.0, -25.0, -30.0])
+LOCAL = np.array([[40.0, 10, 5], [10, 50, -10], [-5, 15, 60], [30, -20, 40]])
+Z = np.array([0.0, 0.0, 1.0])
+LEAST_SQUARES = ("planar", "radial", "combined")
+
+
+def hinge(seed: int, arc_deg: float, *, noise=0.3, n_frames=120, n_markers=4) -> np.ndarray:
+    """Markers ``(n_frames, n_markers, 3)`` [mm] of a pure hinge about z through CENTRE, the
+    angle running linearly over ``arc_deg``, with isotropic noise ``noise`` [mm]."""
+    angles = np.radians(np.linspace(0.0, arc_deg, n_frames))
+    rotations = rotation_about_axis(Z, angles)
+    markers = CENTRE + np.einsum("fij,mj->fmi", rotations, LOCAL[:n_markers])
+    return markers + np.random.default_rng(seed).normal(scale=noise, size=markers.shape)
+
+
+def checked(method: str, markers: np.ndarray):
+    return registry.get("axis", method)(markers)
+
+
+def error_deg(result) -> float:
+    return float(angle_between_lines_deg(np.asarray(result.direction), Z))
+
+
+@pytest.mark.parametrize(
+    ("arc_deg", "seed"), [(2.0, 0), (2.0, 1), (5.0, 0)], ids=["2deg-s0", "2deg-s1", "5deg-s0"]
+)
+def test_a_small_arc_whose_radial_answer_is_tens_of_degrees_off_is_warned_about(arc_deg, seed):
+    result = jointbench.fit_axis(hinge(seed, arc_deg), method="radial")
+    assert error_deg(result) > 10.0  # the case: the radial answer is far off
+    assert result.diagnostics["axis_sd_deg"] > precision.MAX_AXIS_SD_DEG
+    assert "warning: axis not determined by the radial cost" in result.status
+    assert result.converged  # left as the method set it
+
+
+def test_five_frames_repeated_do_not_count_as_120_and_the_radial_answer_is_warned_about():
+    markers = np.concatenate([hinge(1, 60.0)[:5]] * 24)
+    result = jointbench.fit_axis(markers, method="radial")
+    assert error_deg(result) > 80.0
+    assert result.diagnostics["axis_sd_deg"] > precision.MAX_AXIS_SD_DEG
+    assert "axis not determined by the radial cost: " in result.status
+    # The distinct frames alone give the same statement.
+    alone = axis._direction_sd_deg(markers[:5], result.point, result.direction, "radial")
+    assert result.diagnostics["axis_sd_deg"] == pytest.approx(alone, rel=1e-9)
+
+
+@pytest.mark.parametrize("method", jointbench.methods("axis"))
+def test_a_thirty_degree_hinge_with_1mm_noise_is_not_warned_about(method):
+    result = jointbench.fit_axis(hinge(0, 30.0, noise=1.0), method=method)
+    assert result.status == "ok"
+    assert 0.0 < result.diagnostics["axis_sd_deg"] < 5.0
+
+
+@pytest.mark.parametrize("method", jointbench.methods("axis"))
+def test_noise_free_data_give_an_sd_of_about_zero(method):
+    with np.errstate(all="raise"):
+        result = checked(method, hinge(0, 60.0, noise=0.0))
+    assert result.status == "ok"
+    # Rounding, and for SARA the pose fit's own: the SD of 0.3 mm noise is 0.1-1 degree.
+    assert 0.0 <= result.diagnostics["axis_sd_deg"] < 1e-4
+
+
+def test_the_warning_states_the_sd_and_the_limit():
+    result = precision.annotate(checked("planar", hinge(0, 60.0)), 31.4, "the radial cost")
+    assert result.status == (
+        "warning: axis not determined by the radial cost: its direction's SD is 31.4 deg "
+        "(above 10 deg)"
+    )
+    # One decimal: three significant digits would print 10.04 as "10", above 10.
+    just_above = precision.annotate(checked("planar", hinge(0, 60.0)), 10.4, "the planar cost")
+    assert "its direction's SD is 10.4 deg (above 10 deg)" in just_above.status
+    unbounded = precision.annotate(checked("planar", hinge(0, 60.0)), math.inf, "the radial cost")
+    assert "SD is unbounded (above 10 deg)" in unbounded.status
+
+
+def _numerical_hessian(markers, foot, direction, basis, step=1e-4):
+    """The radial cost's Hessian in (tangent angles, shift) by central differences of
+    :class:`axis.AxisCosts` (on a long arc, where such a step exists)."""
+
+    def cost(params):
+        n = direction + basis @ params[:2]
+        return float(
+            axis.AxisCosts(markers, foot + basis @ params[2:]).radial(n / np.linalg.norm(n))
+        )
+
+    unit = np.eye(4) * step
+    return np.array(
+        [
+            [
+                (
+                    cost(unit[i] + unit[j])
+                    - cost(unit[i] - unit[j])
+                    - cost(unit[j] - unit[i])
+                    + cost(-unit[i] - unit[j])
+                )
+                / (4 * step**2)
+                for j in range(4)
+            ]
+            for i in range(4)
+        ]
+    )
+
+
+def test_the_analytic_hessians_match_the_costs_central_differences():
+    markers = hinge(0, 60.0)
+    direction = np.array([0.05, -0.03, 1.0]) / np.linalg.norm([0.05, -0.03, 1.0])
+    foot = CENTRE + np.array([0.4, -0.2, 20.0])
+    basis = precision.tangent_basis(direction)
+    gradient, hessian, cost = axis._radial_derivatives(markers, foot, direction, basis)
+    assert cost == pytest.approx(float(axis.AxisCosts(markers, foot).radial(direction)), rel=1e-12)
+    expected = _numerical_hessian(markers, foot, direction, basis)
+    assert np.abs(hessian - expected).max() < 1e-5 * np.abs(hessian).max()
+    scatter = axis.AxisCosts(markers, foot).scatter[0]
+    planar = axis._planar_hessian(scatter, direction, basis)
+    step = 1e-4
+
+    def planar_cost(a):
+        n = direction + basis @ a
+        return float(n @ scatter @ n / (n @ n))
+
+    e1, e2 = np.eye(2) * step
+    second = (planar_cost(e1) - 2 * planar_cost(0 * e1) + planar_cost(-e1)) / step**2
+    mixed = (planar_cost(e1 + e2) - planar_cost(e1 - e2) - planar_cost(e2 - e1)) / (4 * step**2)
+    mixed += planar_cost(-e1 - e2) / (4 * step**2)
+    assert planar[0, 0] == pytest.approx(second, rel=1e-5)
+    assert planar[0, 1] == pytest.approx(mixed, rel=1e-4, abs=1e-6 * abs(planar).max())
+    assert np.linalg.norm(gradient) > 0  # off the minimum: the step is not zero
+
+
+@pytest.mark.parametrize("method", LEAST_SQUARES)
+def test_the_sd_moves_with_a_rigid_transform_and_ignores_marker_and_frame_order(method):
+    markers = hinge(2, 30.0, noise=0.5)
+    result = checked(method, markers)
+    sd = result.diagnostics["axis_sd_deg"]
+    rotation = rotation_about_axis(np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1, 2, -0.5]), 1.1)
+    moved = markers @ rotation.T + np.array([300.0, -150.0, 80.0])
+    order = np.random.default_rng(4).permutation(len(markers) - 1) + 1
+    for changed in (moved, markers[:, ::-1], markers[np.r_[0, order]]):
+        other = checked(method, changed)
+        # The answers agree to the search's tolerance (1e-4 rad), and so do their SDs.
+        assert other.diagnostics["axis_sd_deg"] == pytest.approx(sd, rel=2e-2)
+    # At the same answer the statement is the same to rounding.
+    point, direction = np.asarray(result.point), np.asarray(result.direction)
+    same = axis._direction_sd_deg(
+        moved, rotation @ point + [300.0, -150.0, 80.0], rotation @ direction, method
+    )
+    assert same == pytest.approx(sd, rel=1e-6)
+    shuffled = axis._direction_sd_deg(markers[np.r_[0, order]][:, ::-1], point, direction, method)
+    assert shuffled == pytest.approx(sd, rel=1e-9)
+
+
+def test_saras_sd_moves_with_a_rigid_transform_and_ignores_marker_and_frame_order():
+    markers = hinge(2, 30.0, noise=0.5)
+    sd = checked("SARA", markers).diagnostics["axis_sd_deg"]
+    rotation = rotation_about_axis(np.array([0.3, -1.0, 2.0]) / np.linalg.norm([0.3, -1, 2]), 2.0)
+    order = np.random.default_rng(5).permutation(len(markers) - 1) + 1
+    moved = markers @ rotation.T + np.array([-40.0, 900.0, 12.0])
+    for changed in (moved, markers[:, ::-1], markers[np.r_[0, order]]):
+        assert checked("SARA", changed).diagnostics["axis_sd_deg"] == pytest.approx(sd, rel=1e-6)
+
+
+# Noise-limited pure hinges: (arc [deg], noise [mm], markers, frames).
+CALIBRATION = [
+    (5.0, 0.3, 4, 120),
+    (20.0, 1.0, 4, 120),
+    (30.0, 0.3, 4, 120),
+    (60.0, 1.0, 3, 20),
+    (45.0, 1.0, 4, 60),
+    (60.0, 0.3, 4, 200),
+]
+# Over 40 seeds the RMS reported SD over the RMS error measured 0.96-1.23 for planar and
+# combined and 0.89-1.27 for SARA on these; the test allows a factor 1.5 either way. Below
+# them the errors outgrow the linearisation: on a 2 degree arc (0.3 mm, 4 x 120) the ratio is
+# 0.73 (planar), 0.85 (combined), 0.57 (SARA); on 10 degrees with 1 mm and 3 x 200, 0.88,
+# 0.69, 0.42.
+FACTOR = 1.5
+
+
+def _ratio(method: str, case: tuple, **options) -> float:
+    """RMS reported SD over RMS angular error of ``method`` on 40 seeds of ``case``."""
+    arc_deg, noise, n_markers, n_frames = case
+    fit = registry.many("axis", method)
+    trials = np.stack(
+        [
+            hinge(seed, arc_deg, noise=noise, n_frames=n_frames, n_markers=n_markers)
+            for seed in range(40)
+        ]
+    )
+    results = fit(trials, **options)
+    errors = [error_deg(result) for result in results]
+    sds = [result.diagnostics["axis_sd_deg"] for result in results]
+    return math.sqrt(np.mean(np.square(sds)) / np.mean(np.square(errors)))
+
+
+@pytest.mark.parametrize("method", ["planar", "combined", "SARA"])
+@pytest.mark.parametrize(
+    "case", CALIBRATION, ids=[f"{c[0]:g}deg-{c[1]:g}mm-{c[2]}x{c[3]}" for c in CALIBRATION]
+)
+def test_the_sd_agrees_with_the_rms_error_over_seeds(method, case):
+    assert 1 / FACTOR < _ratio(method, case) < FACTOR
+
+
+# Radial with 3 markers x 20 frames leaves the axis and its position unbounded in a few seeds.
+RADIAL_CALIBRATION = [case for case in CALIBRATION[1:] if case[3] > 20]
+
+
+@pytest.mark.parametrize(
+    "case",
+    RADIAL_CALIBRATION,
+    ids=[f"{c[0]:g}deg-{c[1]:g}mm-{c[2]}x{c[3]}" for c in RADIAL_CALIBRATION],
+)
+def test_the_radial_sd_is_conservative_by_at_most_a_stated_factor(case):
+    """The radial SD leaves the axis's position free; with the point held at the true centre
+    the answer can be better than that on long arcs: the ratio measured 0.89 (20 degrees,
+    1 mm) to 1.92 (30 degrees, 0.3 mm), and a factor 1/1.5-2.5 is allowed. With the default
+    point (the NM centre) a third of such trials can end at another minimum 80-90 degrees off,
+    as sharp as the true one: no statement of the cost's curvature sees that (module notes of
+    :mod:`jointbench.estimators.precision`)."""
+    assert 1 / FACTOR < _ratio("radial", case, point=CENTRE) < 2.5
+
+
+def test_the_many_trial_form_gives_each_trial_its_outcome_alone():
+    repeated = np.concatenate([hinge(1, 60.0)[:5]] * 24)
+    trials = np.stack([hinge(0, 2.0), hinge(1, 30.0, noise=1.0), hinge(3, 5.0), repeated])
+    for method in jointbench.methods("axis"):
+        together = registry.many("axis", method)(trials)
+        for trial, outcome in zip(trials, together, strict=True):
+            alone = checked(method, trial)
+            assert outcome.status == alone.status
+            assert outcome.diagnostics["axis_sd_deg"] == pytest.approx(
+                alone.diagnostics["axis_sd_deg"], rel=1e-9
+            )
+
+
+def test_the_simulated_studies_bare_functions_carry_no_sd():
+    result = registry.get("axis", "radial", checked=False)(hinge(0, 2.0))
+    assert "axis_sd_deg" not in result.diagnostics
+    assert result.status == "ok"
