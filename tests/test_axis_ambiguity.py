@@ -123,6 +123,19 @@ def test_the_statement_moves_with_a_rigid_transform():
     assert angle_between_lines_deg(np.array(b["direction"]), rotation @ a["direction"]) < 0.02
 
 
+def test_frames_repeated_exactly_do_not_tell_the_two_minima_apart():
+    markers = hinge(18, 30.0)
+    once = registry.get("axis", "radial")(markers)
+    five_times = registry.get("axis", "radial")(np.concatenate([markers] * 5))
+    assert AMBIGUOUS in five_times.status
+    a, b = once.diagnostics["other_minimum"], five_times.diagnostics["other_minimum"]
+    assert type(b["angle_deg"]) is float
+    assert (b["difference"], b["se"]) == (
+        pytest.approx(a["difference"], rel=1e-9),
+        pytest.approx(a["se"], rel=1e-9),
+    )
+
+
 def test_the_statistic_tells_a_uniformly_worse_fit_apart_and_an_equal_one_not():
     answer = np.random.default_rng(0).chisquare(1, size=(4, 120)) * 0.09
     difference, se = precision.ambiguity(answer, answer + 0.01)

@@ -738,7 +738,7 @@ def _ambiguity_checked(
     squares = _sample_squares(
         np.asarray(result.point), np.stack([result.direction, direction]), markers, result.method
     )
-    other = {"direction": np.asarray(direction).tolist(), "cost": cost, "angle_deg": angle}
+    other = {"direction": np.asarray(direction).tolist(), "cost": cost, "angle_deg": float(angle)}
     return precision.annotate_ambiguity(
         result, other, *precision.ambiguity(*squares), f"the {result.method} cost"
     )
