@@ -77,7 +77,13 @@ The checked call (:func:`jointbench.estimators.registry.get`, ``jointbench.fit_a
 the SD of the direction that each cost implies, ``diagnostics["axis_sd_deg"]``, and warns when
 it is above :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`
 (:func:`_direction_sd_deg`): on a short arc the radial cost can leave the axis undetermined
-while the rotation is resolved.
+while the rotation is resolved. Its self-check also compares the two minima it has, the ten
+starts' and the restart's: more than
+:data:`jointbench.estimators.precision.AMBIGUOUS_APART_DEG` apart, the other is stated in
+``diagnostics["other_minimum"]`` and, where the data cannot tell the two fits apart, the
+direction is said to be ambiguous (:func:`_ambiguity_checked`; the radial cost's second
+minimum, which the SD cannot see). The other ten starts' minima are not compared: the
+registered function keeps only their costs, and the studies' results must not change.
 
 Returned ``direction`` is a unit vector with a canonical sign: its largest-magnitude component
 is positive (angular errors are sign-free, :func:`jointbench.geometry.angle_between_lines_deg`).
@@ -513,12 +519,18 @@ def _fit_many(
     ]
 
 
+def _run_direction(params: object, parameterisation: str) -> np.ndarray:
+    """The unit direction (3,), canonical sign, of a search's final parameters (2 angles [rad]
+    or an unnormalised 3-vector)."""
+    raw = angles_to_direction(*params) if parameterisation == "angles" else np.array(params)
+    return canonical_sign(raw)
+
+
 def _result(array, trial, costs, runs, method, parameterisation) -> AxisResult:
     """The winning start's axis of one trial, with its diagnostics."""
     winner = min(range(len(runs)), key=lambda i: runs[i][1])
     x_best, f_best, converged, iterations, evaluations = runs[winner]
-    raw = angles_to_direction(*x_best) if parameterisation == "angles" else np.array(x_best)
-    direction = canonical_sign(raw)
+    direction = _run_direction(x_best, parameterisation)
     m = costs.point[trial]
     radii = costs.radial_distances(direction, trial).mean(axis=1)
     centroid = array.reshape(-1, 3).mean(axis=0)
@@ -687,23 +699,69 @@ def _self_check_many(
 
 
 def _judged(result, costs, trial, run, parameterisation, fatol) -> AxisResult:
-    """``result`` of ``trial`` judged against the ``run`` of its restart (:func:`_self_check`)."""
+    """``result`` of ``trial`` judged against the ``run`` of its restart (:func:`_self_check`),
+    then against the other of the two minima where they lie far apart
+    (:func:`_ambiguity_checked`)."""
     restart_cost = float(run[0][1])
+    array = costs.trial_markers(trial)
     if not restart_cost < result.cost - fatol:
-        return selfcheck.held(
+        judged = selfcheck.held(
             result,
             f"a restart from the planar-cost eigenvector reached {restart_cost:.6g}, not below "
             f"the answer's {result.cost:.6g} by more than fatol = {fatol:g}",
         )
-    array = costs.trial_markers(trial)
-    better = _result(array, trial, costs, run, result.method, parameterisation)
-    angle = angle_between_lines_deg(better.direction, result.direction)
-    return selfcheck.restarted(
-        result,
-        better,
-        "the planar-cost eigenvector",
-        f"{angle:.3g} deg from the ten starts' axis, which is replaced",
+        other = (_run_direction(run[0][0], parameterisation), restart_cost)
+    else:
+        better = _result(array, trial, costs, run, result.method, parameterisation)
+        angle = angle_between_lines_deg(better.direction, result.direction)
+        judged = selfcheck.restarted(
+            result,
+            better,
+            "the planar-cost eigenvector",
+            f"{angle:.3g} deg from the ten starts' axis, which is replaced",
+        )
+        other = (np.asarray(result.direction), result.cost)
+    return _ambiguity_checked(judged, array, *other)
+
+
+def _ambiguity_checked(
+    result: AxisResult, markers: np.ndarray, direction: np.ndarray, cost: float
+) -> AxisResult:
+    """``result`` for ``markers`` ``(N, P, 3)`` [mm] judged against another minimum of its
+    cost, at ``direction`` (3,) with ``cost`` [mm^2]: unchanged within
+    :data:`jointbench.estimators.precision.AMBIGUOUS_APART_DEG` of the answer (the same
+    minimum), else with the other minimum in its diagnostics and, where the data cannot tell
+    the two fits apart (:func:`jointbench.estimators.precision.ambiguity`), a warning."""
+    angle = angle_between_lines_deg(direction, result.direction)
+    if not angle > precision.AMBIGUOUS_APART_DEG:
+        return result
+    squares = _sample_squares(
+        np.asarray(result.point), np.stack([result.direction, direction]), markers, result.method
     )
+    other = {"direction": np.asarray(direction).tolist(), "cost": cost, "angle_deg": float(angle)}
+    return precision.annotate_ambiguity(
+        result, other, *precision.ambiguity(*squares), f"the {result.method} cost"
+    )
+
+
+def _sample_squares(
+    point: np.ndarray, directions: np.ndarray, markers: np.ndarray, method: str
+) -> np.ndarray:
+    """Each distinct marker sample's squared residuals under ``method``'s cost (summed where
+    the cost has two, the combined one), for each axis through ``point`` (3,) [mm] along
+    ``directions`` ``(k, 3)``: ``(k, P, N_d)`` [mm^2] for ``markers`` ``(N, P, 3)`` [mm].
+    Frames repeated exactly carry no new noise
+    (:func:`jointbench.estimators.precision.distinct_frames`)."""
+    markers = precision.distinct_frames(markers)
+    costs = AxisCosts(markers, point)
+    squares = np.zeros((len(directions), *costs.trial_markers(0).shape[1::-1]))
+    if method != "planar":
+        distances = costs.radial_distances(directions)
+        squares += (distances - distances.mean(axis=-1, keepdims=True)) ** 2
+    if method != "radial":
+        offsets = markers - markers.mean(axis=0)
+        squares += np.einsum("npi,ki->kpn", offsets, directions) ** 2
+    return squares
 
 
 # The residuals each cost sums per marker sample (:func:`_direction_sd_deg`).

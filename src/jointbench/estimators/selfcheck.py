@@ -12,6 +12,9 @@ which costs less than the fit itself. The outcome is written into the result:
   tolerance: the search had stopped in a local minimum. The lower point, searched to the same
   tolerances, is returned, with ``status`` starting ``"restarted: "`` and naming both costs,
   so that a user never reads "ok" about a point that was not the least found;
+* where the answer and the other minimum seen (the restart's, or the answer it replaced) are
+  far apart and the data cannot tell their fits apart, a warning that the answer is ambiguous
+  (the axis methods, :func:`jointbench.estimators.precision.annotate_ambiguity`);
 * a check that fails without a better point to offer (a fixed point that is not one) sets
   ``converged=False`` and says so in ``status``.
 
