@@ -141,6 +141,13 @@ def test_an_empty_last_field_of_the_last_line_is_a_gap_when_the_line_ends(tmp_pa
     assert np.isnan(recording.markers[-1, 1, 2]) and recording.gaps()["B"] == 2
 
 
+def test_a_trc_file_of_blank_lines_after_its_header_is_refused(tmp_path):
+    text, path = _trc(tmp_path)
+    path.write_text("".join(text.splitlines(keepends=True)[:5]) + "\n\n")
+    with pytest.raises(ValueError, match="no frames: the TRC header is followed by blank lines"):
+        read(path)
+
+
 @pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
 def test_an_empty_field_is_a_gap(tmp_path, written):
     text, path = written(tmp_path)

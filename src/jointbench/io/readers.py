@@ -135,6 +135,8 @@ def read_trc(path: str | Path) -> Recording:
     width = 2 + 3 * len(labels)
     # Data start on line 6; a blank line is no frame.
     data = [(number, line) for number, line in enumerate(lines[5:], 6) if line.strip()]
+    if not data:
+        raise ValueError(f"{path}: no frames: the TRC header is followed by blank lines only")
     for number, line in data:
         fields = line.count("\t") + 1
         if fields < width:
