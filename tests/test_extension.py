@@ -213,6 +213,43 @@ def test_giving_up_on_hard_trials_does_not_win():
     assert ranks.loc["LS", "best_alone"] == 1 and ranks.loc["quitter", "best_in"] == 0
 
 
+def test_at_equal_failures_the_methods_are_compared_on_the_trials_they_all_answered():
+    # Trial 9 is hard. "honest" failed one easy trial by accident; "quitter", worse on every
+    # trial it answers, reports the hard one as failed. Over the trials each answered, the
+    # quitter's mean (3.0) would beat the honest one's (6.2).
+    collected = _results(
+        {
+            "honest": [2.0] * 8 + [np.nan, 40.0],
+            "quitter": [3.0] * 9 + [np.nan],
+            "steady": [2.5] * 9 + [41.0],
+        }
+    )
+    table = extended.extended_table(collected, "cmc").set_index("method")
+    assert table["rank"].to_dict() == {"steady": 1, "honest": 2, "quitter": 3}
+    assert table["common_trials"].to_dict() == {"steady": 10, "honest": 8, "quitter": 8}
+    assert table.loc["honest", "common_mean_error_mm"] == 2.0
+    assert table.loc["quitter", "common_mean_error_mm"] == 3.0
+    assert table.loc["quitter", "mean_error_mm"] == 3.0  # its own mean is still shown
+
+
+def test_a_method_failing_more_trials_does_not_change_how_the_others_rank():
+    before = {"A": [1.0, 1.0, 10.0], "B": [2.0, 2.0, 2.0]}
+    # Answers only the trial A does best on: the others' common trials stay all three.
+    after = {**before, "C": [0.5, np.nan, np.nan]}
+    for methods in (before, after):
+        table = extended.extended_table(_results(methods), "cmc").set_index("method")
+        assert table.loc["B", "rank"] == 1 and table.loc["A", "rank"] == 2
+    assert table.loc["C", "rank"] == 3
+
+
+def test_methods_with_no_trial_in_common_are_ranked_by_their_own_means_and_say_so():
+    collected = _results({"early": [1.0, np.nan], "late": [np.nan, 5.0]})
+    table = extended.extended_table(collected, "cmc").set_index("method")
+    assert table["rank"].to_dict() == {"early": 1, "late": 2}
+    assert table["common_trials"].to_dict() == {"early": 0, "late": 0}
+    assert table.loc["late", "common_mean_error_mm"] == table.loc["late", "mean_error_mm"] == 5.0
+
+
 def test_extended_outputs_for_an_axis_study(tmp_path):
     collected = _results({"combined": [2.0, 3.0], "SARA": [1.0, 1.5], "user": [4.0, 5.0]}, "hinge")
     table = extended.extended_table(collected, "hinge")

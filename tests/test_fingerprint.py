@@ -18,6 +18,7 @@ from jointbench import fingerprint
 from jointbench.fingerprint import (
     MISSING,
     code_fingerprint,
+    data_closure,
     dependency_versions,
     module_closure,
     source_digests,
@@ -44,8 +45,10 @@ FILES = {
         """Shared code."""
         import functools
         from dataclasses import dataclass, field
+        from pathlib import Path
 
         SCALE = 2.0
+        LIMITS = Path(__file__).with_name("limits.yaml")
         LAYOUT = ((1.0, 2.0), (3.0, 4.0))
 
 
@@ -86,8 +89,13 @@ FILES = {
         """,
     "unused.py": """
         def never_imported():
-            return 0
+            return "unused.yaml"
         """,
+    "limits.yaml": "low: 1\n",
+    "unused.yaml": "low: 1\n",
+    "sub/table.csv": "a,b\n1,2\n",
+    "limits.yaml~": "low: 1\n",
+    "__pycache__/core.nbi": "cache\n",
     "lazy.py": """
         lazy_value = 1
         """,
@@ -157,7 +165,7 @@ TEXT_ONLY = [
     ("core.py", '"""A model."""', '"""A model, with more words."""'),
     ("core.py", "# a comment", "# another comment"),
     ("core.py", "SCALE = 2.0", "\n\nSCALE = (\n    2.0\n)"),
-    ("unused.py", "return 0", "return 1"),  # no import of it can run
+    ("unused.py", "return", "return 1 or"),  # no import of it can run
     ("typing_only.py", "pass", "x = 1"),  # imported only for type checkers
 ]
 
@@ -169,6 +177,44 @@ def test_docstrings_comments_layout_and_unreachable_modules_do_not_count(package
     assert old in text
     (package / path).write_text(text.replace(old, new))
     assert _fingerprint(package) == before
+
+
+DATA = [
+    ("limits.yaml", True),  # named by a module the script imports
+    ("sub/table.csv", True),  # named by no module: counts with its package, which is imported
+    ("unused.yaml", False),  # named only by a module no import of which can run
+    ("limits.yaml~", False),  # an editor's backup
+    ("__pycache__/core.nbi", False),  # a cache
+]
+
+
+@pytest.mark.parametrize("path, changes", DATA, ids=[d[0] for d in DATA])
+def test_an_edit_of_package_data_changes_the_fingerprint_of_the_jobs_that_read_it(
+    package, path, changes
+):
+    before = _fingerprint(package)
+    (package / path).write_text((package / path).read_text() + "high: 2\n")
+    # Dated before the first version, as a copy keeping time stamps can leave it.
+    os.utime(package / path, ns=(0, 0))
+    assert (_fingerprint(package) != before) is changes
+
+
+def test_a_data_file_counts_where_a_module_that_names_it_counts(package):
+    script = package.parent.parent / "script.py"
+    assert set(data_closure(script, package=PACKAGE)) == {"limits.yaml", "sub/table.csv"}
+    script.write_text(SCRIPT + f"from {PACKAGE} import unused\n")
+    assert "unused.yaml" in data_closure(script, package=PACKAGE)
+
+
+def test_every_workflow_job_counts_the_schemas_it_reads():
+    """The published values' schema counts for the jobs that compare published values, not for
+    the data jobs, which read only the config's."""
+    scripts = Path(__file__).resolve().parents[1] / "workflow" / "scripts"
+    simulate = set(data_closure(scripts / "simulate.py"))
+    assert "schemas/config.schema.yaml" in simulate
+    assert "schemas/published.schema.yaml" not in simulate
+    check = set(data_closure(scripts / "check_published.py"))
+    assert {"schemas/published.schema.yaml", "papers/paper_b.yaml"} <= check
 
 
 def test_lazy_names_count_only_where_the_package_object_is_imported(package):

@@ -100,6 +100,54 @@ def test_a_file_cut_inside_its_last_line_is_refused_naming_the_line(
     )
 
 
+_SEPARATOR = {_trc: "\t", _long_csv: ","}
+
+
+@pytest.mark.parametrize(
+    ("written", "line", "name"), [(_trc, 9, "Z of B"), (_long_csv, 7, "z")], ids=["trc", "csv"]
+)
+def test_a_file_cut_right_after_a_separator_of_its_last_line_is_refused(
+    tmp_path, written, line, name
+):
+    """The cut line keeps every field, its last one empty: it once read as a gap in the last
+    sample."""
+    text, path = written(tmp_path)
+    body = text.rstrip("\n")
+    path.write_text(body[: body.rfind(_SEPARATOR[written]) + 1])
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value) == (
+        f"{path}: line {line} leaves its last field ({name}) empty, which other rows fill, and "
+        "the file ends inside this line, right after a separator: it was cut short; if the "
+        "field is a gap, end the line with a newline"
+    )
+
+
+@pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
+def test_a_whole_file_without_a_final_newline_reads(tmp_path, written):
+    text, path = written(tmp_path)
+    path.write_text(text)
+    whole = read(path).markers
+    path.write_text(text.rstrip("\n"))
+    np.testing.assert_array_equal(read(path).markers, whole)
+
+
+@pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
+def test_an_empty_last_field_of_the_last_line_is_a_gap_when_the_line_ends(tmp_path, written):
+    text, path = written(tmp_path)
+    body = text.rstrip("\n")
+    path.write_text(body[: body.rfind(_SEPARATOR[written]) + 1] + "\n")
+    recording = read(path)
+    assert np.isnan(recording.markers[-1, 1, 2]) and recording.gaps()["B"] == 2
+
+
+def test_a_trc_file_of_blank_lines_after_its_header_is_refused(tmp_path):
+    text, path = _trc(tmp_path)
+    path.write_text("".join(text.splitlines(keepends=True)[:5]) + "\n\n")
+    with pytest.raises(ValueError, match="no frames: the TRC header is followed by blank lines"):
+        read(path)
+
+
 @pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
 def test_an_empty_field_is_a_gap(tmp_path, written):
     text, path = written(tmp_path)

@@ -278,6 +278,23 @@ EDITS = (
         spares=DATA_JOBS | _jobs("collect", "render_hinge"),
         backdated=True,
     ),
+    Edit(
+        "the published values' schema, dated before the results",
+        f"{PKG}/schemas/published.schema.yaml",
+        "abs: {type: number, minimum: 0}",
+        "abs: {type: number, minimum: 1000}",
+        reruns=_jobs("check_published", "render_cmc", "render_hinge", "report_captions"),
+        spares=DATA_JOBS | _jobs("collect"),
+        backdated=True,
+    ),
+    Edit(
+        "the config's schema, dated before the results",
+        f"{PKG}/schemas/config.schema.yaml",
+        "trials:\n          type: integer\n          minimum: 1",
+        "trials:\n          type: integer\n          minimum: 2",
+        reruns=SIMULATIONS | EVERY_ESTIMATE | _jobs("check_published"),
+        backdated=True,
+    ),
     dataclasses.replace(
         LM_PROGRAM, kind=f"{LM_PROGRAM.kind}, dated before the results", backdated=True
     ),

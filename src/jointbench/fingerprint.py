@@ -29,6 +29,16 @@ What a module can import:
 * in a module that calls ``submodules("jointbench.<package>")`` (:mod:`jointbench.registries`:
   the study and paper registries import every module of their package), every module of that
   package.
+
+The package's data files (its schemas, published values: every file in its folders that is not
+a Python module, caches and editors' leftovers aside) count like its modules, byte for byte. A
+data file counts for a job when a module the job can import names it: a string constant whose
+last path component is the file's name (``files("jointbench.schemas").joinpath(
+"published.schema.yaml")``, ``Path(__file__).with_name("paper_b.yaml")``). A data file that no
+module names (read by a name built at run time, or not read at all) counts wherever the package
+whose folder holds it counts: a job that can import that package's modules can read it. Data
+files the caller tracks as inputs of exactly the jobs that read them are left out
+(:func:`code_fingerprint`'s ``inputs``): the workflow does so with the papers' published values.
 """
 
 from __future__ import annotations
@@ -43,9 +53,16 @@ import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
-__all__ = ["MISSING", "code_fingerprint", "dependency_versions", "module_closure", "source_digests"]
+__all__ = [
+    "MISSING",
+    "code_fingerprint",
+    "data_closure",
+    "dependency_versions",
+    "module_closure",
+    "source_digests",
+]
 
 #: Calls that import a module named by a string at run time.
 _DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__"})
@@ -78,6 +95,39 @@ class _Package:
         if path is None or path.name != "__init__.py":
             return []
         return [f"{package}.{m.name}" for m in pkgutil.iter_modules([str(path.parent)])]
+
+    def sources(self) -> list[Path]:
+        """Every Python file of the package, its subpackages' included."""
+        return sorted(p for p in self.root.rglob("*.py") if _is_kept(p, self.root))
+
+    def data(self) -> dict[str, Path]:
+        """Every data file of the package (any file that is not Python code), by its path
+        relative to the package's folder."""
+        found = (p for p in self.root.rglob("*") if p.is_file() and p.suffix not in _CODE)
+        return {
+            p.relative_to(self.root).as_posix(): p for p in sorted(found) if _is_kept(p, self.root)
+        }
+
+    def owner(self, path: Path) -> str:
+        """The package whose folder holds ``path``: the nearest folder up with an
+        ``__init__.py``, the package itself at the latest."""
+        folder = path.parent
+        while folder != self.root and not (folder / "__init__.py").is_file():
+            folder = folder.parent
+        return ".".join([self.name, *folder.relative_to(self.root).parts])
+
+
+#: Suffixes of the package's code and of its compiled copies: not data.
+_CODE = frozenset({".py", ".pyc", ".pyo"})
+
+
+def _is_kept(path: Path, root: Path) -> bool:
+    """Whether ``path`` under ``root`` belongs to the package: Python's and Numba's caches
+    (``__pycache__``), hidden files and editors' backups (``name~``) do not."""
+    parts = path.relative_to(root).parts
+    return not (
+        "__pycache__" in parts or any(p.startswith(".") for p in parts) or path.name.endswith("~")
+    )
 
 
 def _package(name: str) -> _Package:
@@ -240,6 +290,52 @@ def module_closure(*roots: str | Path, package: str = "jointbench") -> dict[str,
     return _closure(_package(package), [Path(r) for r in roots])
 
 
+@cache
+def _named(text: str, names: frozenset[str]) -> frozenset[str]:
+    """Those of the file ``names`` that the code ``text`` names: the last path component of
+    one of its string constants (docstrings and comments left out)."""
+    # Most modules name no data file: a text search spares parsing them.
+    candidates = {name for name in names if name in text}
+    if not candidates:
+        return frozenset()
+    strings = (
+        node.value
+        for node in _runs(_parsed(text))
+        if isinstance(node, ast.Constant) and isinstance(node.value, str)
+    )
+    return frozenset(candidates & {PurePosixPath(value).name for value in strings})
+
+
+def _names(paths: Iterable[Path], names: frozenset[str]) -> frozenset[str]:
+    """Those of the file ``names`` that the Python files ``paths`` name."""
+    return frozenset().union(*(_named(_read(path), names) for path in paths))
+
+
+def _data_closure(
+    package: _Package, roots: list[Path], modules: dict[str, Path]
+) -> dict[str, Path]:
+    """The data files of ``package`` that a job running ``roots``, which can import
+    ``modules``, can read (see the module's docstring), by path relative to the package."""
+    data = package.data()
+    names = frozenset(path.name for path in data.values())
+    named_here = _names([*roots, *modules.values()], names)
+    named_anywhere = named_here | _names(package.sources(), names)
+    return {
+        name: path
+        for name, path in data.items()
+        if path.name in named_here
+        or (path.name not in named_anywhere and package.owner(path) in modules)
+    }
+
+
+def data_closure(*roots: str | Path, package: str = "jointbench") -> dict[str, Path]:
+    """The data files of ``package`` that the Python files ``roots`` can read through the
+    modules they can import, by path relative to the package's folder."""
+    found = _package(package)
+    paths = [Path(r) for r in roots]
+    return _data_closure(found, paths, _closure(found, paths))
+
+
 def _source_digest(path: Path) -> bytes:
     """What the code of ``path`` does: its syntax tree without docstrings, line numbers or
     comments."""
@@ -270,16 +366,30 @@ def dependency_versions(package: str = "jointbench") -> dict[str, str]:
     return versions
 
 
-def code_fingerprint(*roots: str | Path, package: str = "jointbench") -> str:
+def code_fingerprint(
+    *roots: str | Path, package: str = "jointbench", inputs: Iterable[str | Path] = ()
+) -> str:
     """A short hash of the Python files ``roots`` (a job's script, the extension modules it
-    loads), of every module of ``package`` they can import and of the versions of its
-    dependencies (:func:`dependency_versions`). Equal fingerprints mean the same code ran."""
+    loads), of every module of ``package`` they can import, of every data file of ``package``
+    those can read (:func:`data_closure`) and of the versions of its dependencies
+    (:func:`dependency_versions`). Equal fingerprints mean the same code ran on the same
+    package data.
+
+    ``inputs``: data files of the package that the caller tracks as inputs of the very jobs that
+    read them (the papers' published values), left out here: a job's code can reach every
+    paper's, and one paper's values must not rerun the jobs of another's study."""
+    found, paths = _package(package), [Path(r) for r in roots]
+    modules = _closure(found, paths)
+    tracked = {Path(path).resolve() for path in inputs}
     digest = hashlib.sha256()
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
-    for root in sorted(Path(r).resolve() for r in roots):
+    for root in sorted(path.resolve() for path in paths):
         digest.update(root.name.encode() + _source_digest(root))
-    for name, path in module_closure(*roots, package=package).items():
+    for name, path in modules.items():
         digest.update(name.encode() + _source_digest(path))
+    for name, path in _data_closure(found, paths, modules).items():
+        if path.resolve() not in tracked:
+            digest.update(name.encode() + _file_digest(path).encode())
     return digest.hexdigest()[:16]
 
 

@@ -135,11 +135,15 @@ def _render_extended(study: str, frame: pd.DataFrame, outputs, config: Mapping, 
     methods = list(extended.mean_ranks(table)["method"])
     note = (
         f"{extended.origin_note(study, methods, paper, config)} rank: within the condition, "
-        "fewest failed trials first, then lowest mean error (means equal to "
+        "fewest failed trials first, then lowest common mean error: the mean over the "
+        "common_trials that every method with as many failed trials answered, so that those "
+        "methods are compared on identical trials and one that gives up on hard trials does "
+        "not win on the easy ones (means equal to "
         f"{extended.TIE_DIGITS} significant digits share a rank; a method without a finite error "
-        "ranks last among those with as many failures); best: rank 1 with a finite mean. Means "
-        "and medians leave out failed trials (no finite error), counted in failed, so a method "
-        "that gives up on hard trials is not ranked on a mean over the easy ones."
+        "ranks last among those with as many failures; where such methods have no trial in "
+        "common, common_trials is 0 and each one's own mean ranks it); best: rank 1 with a "
+        "finite mean. Means and medians leave out failed trials (no finite error), counted in "
+        "failed."
     )
     write_tables(
         table,

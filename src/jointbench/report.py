@@ -44,9 +44,11 @@ __all__ = [
 
 
 EXTENDED_TABLE_CAPTION = (
-    "Every {kind_name} estimator of the {study} study ({methods}), ranked by mean error in "
-    "each condition on identical trials: mean and median error, trials converged and failed, "
-    "rank. The note under the table says which are the paper's methods and which were added."
+    "Every {kind_name} estimator of the {study} study ({methods}), ranked in each condition "
+    "by failed trials, then by mean error over the trials that every method with as many "
+    "failures answered (identical trials; each method's own mean where they share none): mean "
+    "and median error, trials converged and failed, the common trials and their mean, rank. "
+    "The note under the table says which are the paper's methods and which were added."
 )
 EXTENDED_FIGURE_CAPTION = (
     "Mean error of every estimator of the {study} study in every condition (log colour "

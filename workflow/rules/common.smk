@@ -11,7 +11,7 @@ from jointbench import invocation, pipeline, report as jb_report
 from jointbench.figures.common import study_title
 from jointbench.fingerprint import code_fingerprint, source_digests
 from jointbench.running import run as jb_run
-from jointbench.papers import papers_of_study
+from jointbench.papers import get_paper, paper_names, papers_of_study
 from jointbench.configuration import config as jb_config
 
 validate(config, str(jb_config.SCHEMA_PATH))
@@ -301,18 +301,22 @@ def all_targets():
 
 # Provenance: every job that runs library code gets two parameters, and Snakemake reruns a job
 # whose parameters changed. `code` is the fingerprint of its workflow script, the extension
-# modules every job loads and every module of jointbench they can import (jointbench.fingerprint:
-# read from import statements, docstrings and comments left out). `settings` holds the config
-# values the job reads. Files a job reads are its inputs; those no job writes are also hashed by
-# content into a third parameter, `sources` (track_sources).
+# modules every job loads, every module of jointbench they can import and the package data
+# those can read, schemas included (jointbench.fingerprint: read from import statements,
+# docstrings and comments left out). `settings` holds the config values the job reads. Files a
+# job reads are its inputs; those no job writes are also hashed by content into a third
+# parameter, `sources` (track_sources).
 SCRIPTS = Path(workflow.basedir, "workflow", "scripts")
 EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
+# Every paper's published values: the inputs of the jobs of its own study (published_files),
+# left out of the code so that one paper's values rerun only those.
+PUBLISHED = [get_paper(name).published for name in paper_names()]
 
 
 @functools.cache
 def script_code(script):
     """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
-    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS)
+    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=PUBLISHED)
 
 
 def study_settings(study, *keys):

@@ -68,13 +68,16 @@ def extended_table(
 
     Columns: the study's condition keys, ``method``, ``source`` (``"paper A"`` or ``"added"``),
     then :func:`summarise`'s ``trials, converged, failed, mean_error_<unit>,
-    median_error_<unit>, mean_seconds``, then ``rank`` and ``best`` (rank 1 with a finite
-    error). Within a condition a method ranks by its failed trials first, fewer first, then by
-    its mean error, lower first: means leave out failed trials (NaN errors), so a method that
-    answered fewer trials is not compared on a mean over other trials, and cannot win by giving
-    up on the hard ones. Means equal to :data:`TIE_DIGITS` significant digits tie and share the
-    lower rank; a method with no finite error ranks last among those with as many failures.
-    Rows are sorted by condition, then rank.
+    median_error_<unit>, mean_seconds``, then ``common_trials``, ``common_mean_error_<unit>``,
+    ``rank`` and ``best`` (rank 1 with a finite error). Within a condition a method ranks by
+    its failed trials first, fewer first, then by its mean error over the trials that every
+    method with as many failed trials answered (``common_trials`` of them;
+    :func:`_common_means`), lower first: methods are compared on identical trials, so one that
+    gives up on the hard ones cannot win on the easy ones, and the mean over the trials a method
+    answered (``mean_error``) is shown but does not rank. Where those methods have no trial in
+    common (``common_trials`` 0), each one's own mean decides. Means equal to
+    :data:`TIE_DIGITS` significant digits tie and share the lower rank; a method with no finite
+    error ranks last among those with as many failures. Rows are sorted by condition, then rank.
     """
     keys = list(get_study(study).grid_keys)
     mean = _mean_column(study)
@@ -85,22 +88,66 @@ def extended_table(
         "source",
         np.where(table["method"].isin(methods), f"paper {letter}", "added"),
     )
-    # Rank on 3 significant digits: methods that reach the same minimum (IS and LM do) differ
-    # by rounding noise, which must not decide a rank.
-    rounded = table[mean].map(lambda value: float(f"{value:.{TIE_DIGITS}g}")).to_numpy()
+    # One row of errors per (condition, method), one column per trial, in the summary's order.
+    error = ERROR_COLUMN[get_study(study).kind]
+    errors = (
+        collected.set_index([*keys, "method", "trial"])[error]
+        .unstack("trial")
+        .reindex(pd.MultiIndex.from_frame(table[[*keys, "method"]]))
+        .to_numpy(float)
+    )
     failed = table["failed"].to_numpy()
+    own = table[mean].to_numpy(float)
+    common_mean = np.full(len(table), np.nan)
+    common_trials = np.zeros(len(table), dtype=int)
     ranks = np.zeros(len(table), dtype=int)
     for rows in table.groupby(keys, observed=True, sort=False).indices.values():
-        ranks[rows] = _ranks(failed[rows], rounded[rows])
+        common_mean[rows], common_trials[rows] = _common_means(
+            errors[rows], failed[rows], own[rows]
+        )
+        ranks[rows] = _ranks(failed[rows], _rounded(common_mean[rows]))
+    table["common_trials"] = common_trials
+    table[f"common_{mean}"] = common_mean
     table["rank"] = ranks
-    table["best"] = table["rank"].eq(1) & np.isfinite(rounded)
+    table["best"] = table["rank"].eq(1) & np.isfinite(common_mean)
     return table.sort_values([*keys, "rank", "method"], kind="stable", ignore_index=True)
+
+
+def _rounded(values: np.ndarray) -> np.ndarray:
+    """``values`` ``(n,)`` to :data:`TIE_DIGITS` significant digits: methods that reach the same
+    minimum (IS and LM do) differ by rounding noise, which must not decide a rank."""
+    return np.array([float(f"{value:.{TIE_DIGITS}g}") for value in values])
+
+
+def _common_means(
+    errors: np.ndarray, failed: np.ndarray, own: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The errors the methods of one condition are ranked by, once their failed trials tie.
+
+    ``errors`` ``(n, trials)``, one row per method (NaN: the trial failed, or the method has no
+    row for it); ``failed`` ``(n,)`` their failed trials; ``own`` ``(n,)`` each one's mean over
+    the trials it answered. Returns each method's mean error over the trials that every method
+    with as many failed trials answered ``(n,)``, and how many those are ``(n,)``. Only methods
+    with equal failures are compared on the mean, so only they need common trials: a method
+    that fails more does not narrow the trials the others are compared on. Where they have none
+    (count 0), each one's ``own`` mean stands in.
+    """
+    answered = ~np.isnan(errors)
+    means = own.astype(float)
+    counts = np.zeros(len(errors), dtype=int)
+    for count in np.unique(failed):
+        group = failed == count
+        common = answered[group].all(axis=0)
+        counts[group] = int(common.sum())
+        if common.any():
+            means[group] = errors[group][:, common].mean(axis=1)
+    return means, counts
 
 
 def _ranks(failed: np.ndarray, mean: np.ndarray) -> np.ndarray:
     """Ranks ``(n,)`` of the methods of one condition by their failed trials, then their
-    rounded mean error (``(n,)`` each; a NaN mean, every trial failed, after any number), ties
-    sharing the lower rank."""
+    rounded mean error over common trials (``(n,)`` each; a NaN mean, every trial failed, after
+    any number), ties sharing the lower rank."""
     keys = [
         (int(count), bool(np.isnan(value)), 0.0 if np.isnan(value) else float(value))
         for count, value in zip(failed, mean, strict=True)

@@ -120,7 +120,8 @@ def read_trc(path: str | Path) -> Recording:
     ``NumFrames``, ``NumMarkers``, then ``Frame#  Time  label  …`` with one ``X Y Z`` triple per
     label; empty fields are gaps. The rows must be the ``NumFrames`` consecutive frames the
     header promises, each with every field of the header (a line cut short is refused, naming
-    it); row 0 is the first row's ``Frame#``."""
+    it, and so is a last line the file ends inside with its last field empty where other rows
+    fill it: cut right after a separator); row 0 is the first row's ``Frame#``."""
     path = _check_file(path)
     lines = path.read_text(errors="replace").splitlines()
     if len(lines) < 6:
@@ -134,12 +135,17 @@ def read_trc(path: str | Path) -> Recording:
     width = 2 + 3 * len(labels)
     # Data start on line 6; a blank line is no frame.
     data = [(number, line) for number, line in enumerate(lines[5:], 6) if line.strip()]
+    if not data:
+        raise ValueError(f"{path}: no frames: the TRC header is followed by blank lines only")
     for number, line in data:
         fields = line.count("\t") + 1
         if fields < width:
             columns = f"Frame#, Time and X, Y, Z of {len(labels)} markers"
             raise _short_row(path, number, fields, width, columns, number == len(lines))
     rows = [line.split("\t") for _, line in data]
+    if data[-1][0] == len(lines):
+        last_field = [row[width - 1] for row in rows]
+        _check_cut_after_separator(path, len(lines), last_field, f"Z of {labels[-1]}")
     numbers = _trc_frame_numbers(rows, header, len(labels), path)
     markers = np.full((len(rows), len(labels) * 3), np.nan)
     for i, row in enumerate(rows):
@@ -172,6 +178,21 @@ def _short_row(
         f"{path}: line {line} has {found} fields, but the header has {expected} ({columns})"
         + ("; the file ends inside this line: it was cut short" if cut else "")
         + "; a gap is an empty field, not a missing one"
+    )
+
+
+def _check_cut_after_separator(path: Path, line: int, column: list[str], name: str) -> None:
+    """``ValueError`` when ``path`` ends inside its last line, ``line`` (1-based; no newline
+    follows it), and that line leaves its last field (``name``) empty where another row has a
+    value: the file was cut right after a separator, and reading the field as a gap would hide
+    that. ``column``: that field's text in every row, the last line's last."""
+    *others, last = column
+    if last.strip() or not any(text.strip() for text in others) or _ends_with_newline(path):
+        return
+    raise ValueError(
+        f"{path}: line {line} leaves its last field ({name}) empty, which other rows fill, and "
+        "the file ends inside this line, right after a separator: it was cut short; if the "
+        "field is a gap, end the line with a newline"
     )
 
 
@@ -214,8 +235,9 @@ def read_csv(path: str | Path) -> Recording:
     absent from the file is a gap, and so is a frame absent for every marker (it stays a frame
     of missing samples, so the frames keep their numbers and spacing); a (frame, marker) pair
     given twice is an error. An empty field is a gap too; a row with fewer fields than the
-    header (a line cut short) is refused, naming it. The file declares no frame count, so a
-    file cut at a line's end reads as a shorter recording.
+    header (a line cut short) is refused, naming it, and so is a last line the file ends inside
+    with its last field empty where other rows fill it (cut right after a separator). The file
+    declares no frame count, so a file cut at a line's end reads as a shorter recording.
     """
     path = _check_file(path)
     try:
@@ -227,8 +249,9 @@ def read_csv(path: str | Path) -> Recording:
         raise ValueError(f"{path}: missing columns {sorted(missing)}")
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
-    # pandas reads the fields a row lacks as empty, and so as gaps; such a row leaves the last
-    # column empty, and only then is the file read again to find it.
+    # pandas reads the fields a row lacks as empty, and so as gaps, and so is a line cut right
+    # after its last separator; either leaves the last column empty, and only then is the file
+    # read again to find it.
     if table[table.columns[-1]].isna().any():
         _check_csv_fields(path, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
@@ -259,7 +282,10 @@ def read_csv(path: str | Path) -> Recording:
 
 
 def _check_csv_fields(path: Path, header: list[str]) -> None:
-    """``ValueError`` naming the first line of ``path`` with fewer fields than ``header``."""
+    """``ValueError`` naming the first line of ``path`` with fewer fields than ``header``, or
+    its last line when the file ends inside it right after a separator
+    (:func:`_check_cut_after_separator`)."""
+    last_field = []
     with path.open(newline="", errors="replace") as file:
         records = csv.reader(file)
         next(records)
@@ -268,6 +294,11 @@ def _check_csv_fields(path: Path, header: list[str]) -> None:
                 line = records.line_num
                 last = file.read(1) == ""
                 raise _short_row(path, line, len(record), len(header), ", ".join(header), last)
+            if record:
+                last_field.append(record[len(header) - 1])
+        line = records.line_num
+    if last_field:
+        _check_cut_after_separator(path, line, last_field, header[-1])
 
 
 def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
