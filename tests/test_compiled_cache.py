@@ -1,11 +1,12 @@
 """A kernel's cached machine code is rebuilt whenever anything compiled into it changes.
 
 Numba caches a kernel's machine code beside its source and rebuilds it when that file changes.
-What it compiles in from elsewhere, a kernel it calls or a constant it reads from another
-module, is not part of that check: edited there, a process would run the old code while every
-job that depends on it reruns. Each test builds two modules, runs a kernel in a fresh process
-(compiling and caching it), edits the other module, keeping the kernel's own file as it was,
-and runs it again in a fresh process.
+What it compiles in from elsewhere, a kernel or a function of ``numba.njit`` or
+``register_jitable`` it calls or a constant it reads from another module (by name or as
+``module.NAME``), is not part of that check: edited there, a process would run the old code
+while every job that depends on it reruns. Each test builds two modules, runs a kernel in a
+fresh process (compiling and caching it), edits the other module, keeping the kernel's own file
+as it was, and runs it again in a fresh process.
 """
 
 from __future__ import annotations
@@ -61,6 +62,29 @@ def outer(x):
 """
 
 
+ATTRIBUTE_CALLER = """
+import callee
+from jointbench.numerics.compiled import kernel
+
+
+@kernel
+def outer(x):
+    return callee.helper(x) + callee.SCALE
+"""
+
+NUMBA_CALLEE = """
+import numba
+from numba.extending import register_jitable
+
+SCALE = {scale}
+
+
+@{decorator}
+def helper(x):
+    return {factor} * x
+"""
+
+
 def _run(folder: Path, module: str) -> float:
     # A fresh process each time, with Numba's cache beside the sources: what a new job meets.
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(folder), str(SRC)])}
@@ -93,6 +117,32 @@ def test_an_edit_of_what_a_kernel_compiles_in_rebuilds_it(tmp_path, before, afte
     assert _run(tmp_path, "caller") == expected[0]  # from the cache
     _write(tmp_path / "callee.py", CALLEE.format(**after))
     assert _run(tmp_path, "caller") == expected[1]
+
+
+@pytest.mark.parametrize(
+    ("caller", "decorator", "after", "expected"),
+    [
+        (CALLER, "numba.njit(cache=True)", {"scale": 0.0, "factor": 5.0}, 15.0),
+        (CALLER, "register_jitable", {"scale": 0.0, "factor": 5.0}, 15.0),
+        (ATTRIBUTE_CALLER, "numba.njit", {"scale": 1.0, "factor": 2.0}, 7.0),
+        (ATTRIBUTE_CALLER, "numba.njit", {"scale": 0.0, "factor": 5.0}, 15.0),
+    ],
+    ids=[
+        "a helper of numba.njit",
+        "a helper of register_jitable",
+        "a constant read as module.NAME",
+        "a helper called as module.name",
+    ],
+)
+def test_an_edit_of_a_numba_function_or_a_module_attribute_rebuilds_it(
+    tmp_path, caller, decorator, after, expected
+):
+    _write(tmp_path / "caller.py", caller)
+    _write(tmp_path / "callee.py", NUMBA_CALLEE.format(decorator=decorator, scale=0.0, factor=2.0))
+    assert _run(tmp_path, "caller") == 6.0
+    assert _run(tmp_path, "caller") == 6.0  # from the cache
+    _write(tmp_path / "callee.py", NUMBA_CALLEE.format(decorator=decorator, **after))
+    assert _run(tmp_path, "caller") == expected
 
 
 def test_an_edit_two_calls_away_rebuilds_the_kernel(tmp_path):

@@ -19,6 +19,7 @@ from workflow_copy import SNAKEMAKE, run_snakemake
 from jointbench import invocation, pipeline
 from jointbench.configuration import config as study_config
 from jointbench.estimators import registry
+from jointbench.estimators.batching import ProgrammingError
 from jointbench.estimators.results import CenterResult
 from jointbench.figures import extended
 from jointbench.papers import get_paper
@@ -89,8 +90,9 @@ def test_numerical_failure_becomes_a_failed_row(cmc_trials, raising_estimator, e
 )
 def test_programming_error_stops_the_run(cmc_trials, raising_estimator, error):
     condition, trials = cmc_trials
-    with pytest.raises(type(error)):
+    with pytest.raises(ProgrammingError, match="cmc raises: ") as raised:
         estimate("cmc", raising_estimator(error), trials, condition)
+    assert raised.value.__cause__ is error
 
 
 @pytest.fixture
@@ -118,13 +120,13 @@ def test_a_batched_programming_error_stops_the_run(cmc_trials, batched_estimator
     condition, trials = cmc_trials
     ok = CenterResult(center=np.zeros(3), converged=True, iterations=1, status="ok", method="b")
     name = batched_estimator([ok, TypeError("unsupported operand")])
-    with pytest.raises(TypeError, match="unsupported operand"):
+    with pytest.raises(ProgrammingError, match="cmc batched-outcomes: TypeError: unsupported"):
         estimate("cmc", name, trials, condition)
 
 
 def test_an_option_the_estimator_does_not_take_stops_the_run(cmc_trials):
     condition, trials = cmc_trials
-    with pytest.raises(TypeError, match="tolerance"):
+    with pytest.raises(ProgrammingError, match=r"cmc NM: TypeError: .*'tolerance'"):
         estimate("cmc", "NM", trials, condition, {"tolerance": 1e-3})
 
 

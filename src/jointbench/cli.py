@@ -244,7 +244,10 @@ class _Failed:
 
 
 def _fit_all(prepared, names: list[str], args: argparse.Namespace) -> list:
-    """Each method's fit; with several methods, one that raises becomes a :class:`_Failed`."""
+    """Each method's fit; with several methods, one that raises a ``ValueError`` (the input
+    checks', or a failure the method states) becomes a :class:`_Failed`. A mistake in a
+    method's code is a :class:`~jointbench.estimators.batching.ProgrammingError`, which stops
+    the command whatever the methods."""
     fits = []
     for name in names:
         try:

@@ -7,20 +7,28 @@ trial's own outcome: the batch is redone one trial at a time, each trial through
 batched form (whose one-trial batch equals the one-trial function), and a trial that still
 fails carries its exception. A batch without a failure pays nothing.
 
-A trial's outcome may also be a ``ValueError`` that is no numerical failure but a mistake in
-the method's code (:func:`numerical_failure` tells them apart): a many-trial form returns it
-like any other, as the input checks may yet replace it with their own error, and the estimate
-jobs stop on it (:func:`mistakes_named`) rather than record a failed trial.
+A trial's outcome may also be a ``ValueError`` that is no failure the method states but a
+mistake in its code (:func:`numerical_failure` is the one rule that tells them apart): a
+many-trial form returns it like any other, as the input checks may yet replace it with their
+own error. Every place that runs an estimator (the estimate jobs, a recording's fit and its
+bootstrap refits, the ``hip_sta`` bootstrap) applies the rule the same way: a stated failure is
+the trial's (:func:`failed_trial`), and anything else, returned or raised, stops the caller as a
+:class:`ProgrammingError` naming the study or recording, the method and the line
+(:func:`mistakes_named`).
 """
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import dis
 import functools
+import linecache
 from collections.abc import Callable, Iterator
 
 import numpy as np
+
+from jointbench.owncode import own_code
 
 __all__ = [
     "NUMERICAL_FAILURES",
@@ -36,11 +44,18 @@ __all__ = [
 ]
 
 #: The types of what a fit raises when a trial's values defeat it (``LinAlgError`` is a
-#: ``ValueError``); anything else is a bug and propagates, and so is a ``ValueError`` of these
-#: that :func:`numerical_failure` does not pass.
+#: ``ValueError``), which a many-trial form keeps as the trial's outcome; whether one is a failed
+#: trial or a mistake in the code is :func:`numerical_failure`'s to say.
 NUMERICAL_FAILURES = (ValueError, FloatingPointError)
 
 _RAISE_STATEMENT = dis.opmap["RAISE_VARARGS"]
+
+#: NumPy's checks of a linear-algebra call's dimensions: the ``LinAlgError`` they raise says
+#: how the function was called (a matrix that is not square), not what the values did.
+_DIMENSION_CHECKS = frozenset({"_assert_2d", "_assert_stacked_2d", "_assert_stacked_square"})
+
+#: What stops a job for the machine's sake, neither the data's nor the code's: raised as it is.
+_ENVIRONMENT_ERRORS = (MemoryError, OSError)
 
 
 class ProgrammingError(RuntimeError):
@@ -48,20 +63,38 @@ class ProgrammingError(RuntimeError):
 
 
 def numerical_failure(error: BaseException) -> bool:
-    """Whether ``error`` is a trial's numerical failure: a ``LinAlgError`` or a
-    ``FloatingPointError``, or a ``ValueError`` raised by a ``raise`` statement (a method, or
-    a library it calls, saying why the data defeat it) or never raised at all (an outcome
-    made as such). A ``ValueError`` that the interpreter or NumPy raise inside an expression
-    (arrays that do not broadcast, an unpacking of the wrong length, a reshape to the wrong
-    size) is a mistake in the code, as a ``TypeError`` is."""
-    if isinstance(error, (np.linalg.LinAlgError, FloatingPointError)):
+    """Whether ``error`` is a trial's failure that the method states, the one rule by which a
+    fit's exception is a failed trial (the run goes on) rather than a programming error (the job
+    stops, :func:`failed_trial`, :func:`mistakes_named`).
+
+    A failure is stated when it is
+
+    * a ``FloatingPointError``, or a ``LinAlgError`` from anywhere (a singular system, an
+      eigen-decomposition that does not converge) but NumPy's checks of the dimensions it was
+      called with;
+    * a ``ValueError`` raised by a ``raise`` statement of the method's own code: the package,
+      or any file outside the standard library and the installed third-party packages (a
+      user's extension). A ``raise`` in a Numba-compiled function counts as written (Numba
+      reports the line); a ``ValueError`` never raised at all is an outcome made as such.
+
+    Any other exception is a mistake in the code: a ``TypeError`` or an ``IndexError``, and a
+    ``ValueError`` that the interpreter, C code or a library raises (arrays that do not
+    broadcast, an unpacking of the wrong length, ``np.stack`` of other shapes, the domain error
+    of ``math.sqrt``, SciPy's ``brentq`` finding no change of sign). A library cannot say
+    whether its error is the data's or the caller's: a method whose data can make a library
+    call fail catches that error and raises a ``ValueError`` saying why.
+    """
+    if isinstance(error, np.linalg.LinAlgError):
+        innermost = _innermost(error)
+        return innermost is None or innermost.tb_frame.f_code.co_name not in _DIMENSION_CHECKS
+    if isinstance(error, FloatingPointError):
         return True
     if not isinstance(error, ValueError):
         return False
     innermost = _innermost(error)
     if innermost is None:
         return True
-    return innermost.tb_frame.f_code.co_code[innermost.tb_lasti] == _RAISE_STATEMENT
+    return own_code(innermost.tb_frame.f_code.co_filename) and _at_raise_statement(innermost)
 
 
 def _innermost(error: BaseException):
@@ -72,15 +105,40 @@ def _innermost(error: BaseException):
     return entry
 
 
+def _at_raise_statement(entry) -> bool:
+    """Whether the traceback ``entry`` stopped at a ``raise`` statement."""
+    if entry.tb_lasti > 0:
+        return entry.tb_frame.f_code.co_code[entry.tb_lasti] == _RAISE_STATEMENT
+    # A frame that ran no bytecode is compiled code's (Numba gives the line a kernel raised at
+    # a frame of its own): the statement is read from the source.
+    filename = entry.tb_frame.f_code.co_filename
+    return entry.tb_lineno in _raise_lines(filename, "".join(linecache.getlines(filename)))
+
+
+@functools.lru_cache(maxsize=64)
+def _raise_lines(filename: str, source: str) -> frozenset[int]:
+    """The lines of ``source`` (the text of ``filename``) where a ``raise`` statement starts."""
+    try:
+        tree = ast.parse(source, filename)
+    except (SyntaxError, ValueError):
+        return frozenset()
+    return frozenset(node.lineno for node in ast.walk(tree) if isinstance(node, ast.Raise))
+
+
 @contextlib.contextmanager
 def mistakes_named(label: str) -> Iterator[None]:
-    """Prefix ``label`` to a :class:`ProgrammingError` raised inside, and turn a ``ValueError``
-    raised inside that is no :func:`numerical_failure` into one."""
+    """Turn an exception raised inside that is no :func:`numerical_failure` into a
+    :class:`ProgrammingError` naming ``label`` (the study and the method, or the recording and
+    the method) and where the method went wrong; a :class:`ProgrammingError` raised inside gets
+    ``label`` in front. A numerical failure, and an error of the machine (``MemoryError``,
+    ``OSError``), are raised as they are."""
     try:
         yield
     except ProgrammingError as error:
         raise ProgrammingError(f"{label}: {error}") from error.__cause__
-    except ValueError as error:
+    except _ENVIRONMENT_ERRORS:
+        raise
+    except Exception as error:
         if numerical_failure(error):
             raise
         raise ProgrammingError(f"{label}: {_mistake(error)}") from error
@@ -90,24 +148,36 @@ def failed_trial(error: BaseException) -> BaseException:
     """``error``, a trial's outcome, when it is a :func:`numerical_failure`; otherwise a
     :class:`ProgrammingError` that says so, raised from it (not a ``ValueError``, which a
     caller might take for the trial's failure once more)."""
-    if isinstance(error, ValueError) and not numerical_failure(error):
-        raise ProgrammingError(_mistake(error)) from error
-    if not isinstance(error, NUMERICAL_FAILURES):
-        raise error
-    return error
+    if numerical_failure(error):
+        return error
+    raise ProgrammingError(_mistake(error)) from error
 
 
 def _mistake(error: BaseException) -> str:
-    """``error`` and where it was raised, as a programming error."""
-    innermost = _innermost(error)
-    where = ""
-    if innermost is not None:
-        code = innermost.tb_frame.f_code
-        where = f" (at {code.co_filename}:{innermost.tb_lineno}, in {code.co_name})"
+    """``error`` as a programming error: where in the method's own code it went wrong (the
+    innermost such frame) and, when a library raised it, where."""
+    entries = []
+    entry = error.__traceback__
+    while entry is not None:
+        entries.append(entry)
+        entry = entry.tb_next
+    own = [entry for entry in entries if own_code(entry.tb_frame.f_code.co_filename)]
+    where = [_place("at", own[-1])] if own else []
+    if entries and (not own or own[-1] is not entries[-1]):
+        where.append(_place("raised in", entries[-1]))
+    said = f" ({', '.join(where)})" if where else ""
     return (
-        f"{type(error).__name__}: {error}{where}: a programming error, not a failure of the "
-        "trial's data (a method that cannot fit a trial raises a ValueError saying why)"
+        f"{type(error).__name__}: {error}{said}: a programming error, not a failure of the "
+        "trial's data. A method that cannot fit a trial raises a ValueError saying why; where "
+        "the data can make a library call fail, catch its error and raise a ValueError that "
+        "says why"
     )
+
+
+def _place(preposition: str, entry) -> str:
+    """``preposition file:line, in function`` of a traceback entry."""
+    code = entry.tb_frame.f_code
+    return f"{preposition} {code.co_filename}:{entry.tb_lineno}, in {code.co_name}"
 
 
 def one_trial(fit_trials: Callable[..., list], *segments: object, **options: object):

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.estimators.batching import failed_trial
+from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
 from jointbench.estimators.registry import KINDS, get, many
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -243,6 +243,8 @@ class Prepared:
         try:
             return get(self.kind, method)(*arrays, **options)
         except ValueError as error:
+            if not numerical_failure(error):
+                raise  # a mistake in the method: :meth:`fit` names it as one
             raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
 
     def refits(self, method: str, rows: list[np.ndarray], options: dict) -> list:
@@ -263,27 +265,33 @@ class Prepared:
         seed: int = 0,
         **options: object,
     ) -> RecordingFit:
-        """One method's :class:`RecordingFit` (parameters as in :func:`fit`)."""
+        """One method's :class:`RecordingFit` (parameters as in :func:`fit`).
+
+        A mistake in the method's code, in the fit or a bootstrap refit, raises a
+        :class:`~jointbench.estimators.batching.ProgrammingError` naming the recording, the
+        method and the line (:func:`~jointbench.estimators.batching.numerical_failure`).
+        """
         kind = self.kind
         method = method or DEFAULT_METHODS[kind]
         rows = self.rows(np.arange(self.usable.size))
-        result = self.solve(method, rows, options)
+        with mistakes_named(f"{self.recording.source}: {kind} {method}"):
+            result = self.solve(method, rows, options)
+            boot = None
+            if n_bootstrap:
+                estimate = _estimate_vector(kind, result)
+
+                def statistic(indices: np.ndarray) -> list[np.ndarray | None]:
+                    outcomes = self.refits(method, [self.rows(i) for i in indices], options)
+                    return [_bootstrap_row(kind, refit, estimate) for refit in outcomes]
+
+                boot = bootstrap(
+                    statistic,
+                    self.usable.size,
+                    n_resamples=n_bootstrap,
+                    block_length=block_length,
+                    seed=seed,
+                )
         anchor = int(rows[0]) if kind == "joint_center" else None
-        boot = None
-        if n_bootstrap:
-            estimate = _estimate_vector(kind, result)
-
-            def statistic(indices: np.ndarray) -> list[np.ndarray | None]:
-                outcomes = self.refits(method, [self.rows(i) for i in indices], options)
-                return [_bootstrap_row(kind, refit, estimate) for refit in outcomes]
-
-            boot = bootstrap(
-                statistic,
-                self.usable.size,
-                n_resamples=n_bootstrap,
-                block_length=block_length,
-                seed=seed,
-            )
         offset = self.recording.first_frame
         return RecordingFit(
             kind=kind,

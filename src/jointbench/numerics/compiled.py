@@ -6,9 +6,10 @@ pay its per-call overhead on every tiny array. :func:`kernel` compiles it on its
 a process that never calls it never pays for importing and starting Numba. The machine code is
 cached beside the source file and rebuilt when anything compiled into it changes: Numba itself
 checks only the kernel's own file, so each kernel's cache entry is named by a digest of its
-source, of the kernels it calls (theirs in turn) and of the constants it reads
-(:meth:`_Kernel.digest`), and an edit in another module gets an entry of its own instead of
-the old machine code. The Python source stays the
+source, of the functions it calls (other kernels, functions of ``numba.njit`` or
+``register_jitable``: their source and what they read in turn) and of the constants it reads,
+by name or as a module's attribute (``module.NAME``) (:meth:`_Kernel.digest`), and an edit in
+another module gets an entry of its own instead of the old machine code. The Python source stays the
 specification: it runs as written (slowly) through ``kernel.__wrapped__``, and it counts in
 the code fingerprint (:mod:`jointbench.fingerprint`) of every job that can import it.
 """
@@ -22,6 +23,8 @@ import types
 from collections.abc import Callable
 
 import numpy as np
+
+from jointbench.owncode import own_code
 
 __all__ = ["kernel", "kernel_array"]
 
@@ -67,17 +70,22 @@ class _Kernel:
         return self._compiled
 
     def digest(self) -> str:
-        """A digest of everything compiled into the kernel: its source, the digests of the
-        kernels it calls and the values of the other globals it names (Numba freezes numbers,
-        strings, tuples and arrays into the machine code)."""
+        """A digest of everything compiled into the kernel (:func:`_code_digest`)."""
         if self._digest is None:
-            function = self.__wrapped__
-            parts = [_source(function), repr(function.__defaults__)]
-            for name in sorted(_global_names(function.__code__)):
-                if name in function.__globals__:
-                    parts.append(f"{name}={_value_digest(function.__globals__[name])}")
-            self._digest = hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
+            self._digest = _code_digest(self.__wrapped__, set())
         return self._digest
+
+
+def _code_digest(function: types.FunctionType, seen: set[int]) -> str:
+    """A digest of what of ``function`` Numba compiles in: its source and defaults, and what
+    each global it names holds (:func:`_value_digest`). ``seen`` holds the ids of the functions
+    and namespaces being digested, which a recursive reference meets again."""
+    names = _global_names(function.__code__)
+    parts = [_source(function), repr(function.__defaults__)]
+    for name in sorted(names):
+        if name in function.__globals__:
+            parts.append(f"{name}={_value_digest(function.__globals__[name], names, seen)}")
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
 def _source(function: Callable) -> str:
@@ -101,24 +109,46 @@ def _global_names(code: types.CodeType) -> set[str]:
     return names
 
 
-def _value_digest(value: object) -> str:
-    """What of a global ``value`` a kernel's machine code can depend on, as text: a kernel's
-    digest, a constant's value, a module's or a function's name."""
+def _value_digest(value: object, names: set[str], seen: set[int]) -> str:
+    """What of a global ``value`` a kernel's machine code can depend on, as text, for a kernel
+    that names ``names`` (as globals or attributes): a kernel's digest; the code digest of a
+    function of the package's or the user's own that Numba compiles in (a dispatcher of
+    ``numba.njit``, a function of ``register_jitable``); a constant's value; for a module or a
+    class, what its attributes among ``names`` hold (``module.NAME``); else a name."""
     if isinstance(value, _Kernel):
         return value.digest()
     if isinstance(value, np.ndarray):
         content = hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest()
         return f"array({value.dtype}, {value.shape}, {content})"
     if isinstance(value, tuple):
-        return "(" + ", ".join(_value_digest(item) for item in value) + ")"
+        return "(" + ", ".join(_value_digest(item, names, seen) for item in value) + ")"
     if value is None or isinstance(value, (bool, int, float, complex, str, bytes, np.generic)):
         return repr(value)
-    if isinstance(value, types.ModuleType):
-        return f"module {value.__name__}"
-    # Functions, classes and other objects: by name (their repr may hold an address).
-    return f"{type(value).__qualname__} {getattr(value, '__module__', '')}." + getattr(
-        value, "__qualname__", ""
+    named = f"{type(value).__qualname__} {getattr(value, '__module__', '')}." + str(
+        getattr(value, "__qualname__", getattr(value, "__name__", ""))
     )
+    if id(value) in seen:
+        return named  # met again inside itself: digested where it was met first
+    function = _python_function(value)
+    if function is not None and own_code(function.__code__.co_filename):
+        return _code_digest(function, seen | {id(value)})
+    if isinstance(value, (types.ModuleType, type)):
+        # Read through the namespace's dictionary: a module's lazy names are not imported.
+        attributes = vars(value)
+        held = [
+            f"{name}={_value_digest(attributes[name], names, seen | {id(value)})}"
+            for name in sorted(names & attributes.keys())
+        ]
+        return f"{named} {{{', '.join(held)}}}"
+    # Other objects by name (their repr may hold an address).
+    return named
+
+
+def _python_function(value: object) -> types.FunctionType | None:
+    """The Python function behind ``value``: itself, or the ``py_func`` a Numba dispatcher
+    compiles; ``None`` for anything else."""
+    function = getattr(value, "py_func", value)
+    return function if isinstance(function, types.FunctionType) else None
 
 
 def kernel_array(array: object, dtype: type = float) -> np.ndarray:

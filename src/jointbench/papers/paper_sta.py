@@ -19,7 +19,7 @@ import pandas as pd
 
 from jointbench.comparison.tolerance import binomial_interval
 from jointbench.estimators import registry
-from jointbench.estimators.batching import failed_trial
+from jointbench.estimators.batching import failed_trial, mistakes_named
 from jointbench.figures.common import method_style, pyplot
 from jointbench.figures.extended import extended_table, mean_ranks
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
@@ -78,7 +78,8 @@ def bootstrap_covariances(trials: Trials, n_trials: int, n_resamples: int) -> np
             return [_refit_center(result) for result in results]
 
         try:
-            boot = bootstrap(refits, len(proximal) - 1, n_resamples=n_resamples, seed=trial)
+            with mistakes_named(f"{STUDY} {BOOTSTRAP_METHOD} bootstrap of trial {trial}"):
+                boot = bootstrap(refits, len(proximal) - 1, n_resamples=n_resamples, seed=trial)
         except ValueError:
             continue
         out[trial] = boot.covariance()

@@ -74,9 +74,10 @@ def simulate_condition(
 
 def _outcome(result) -> tuple[object, str, bool, int]:
     """Row fields of one fit's result, or of the exception a many-trial form returned for a
-    trial: a trial its data defeat (bad geometry, a singular system, an overflow:
+    trial: a failure the method states (bad geometry, a singular system, an overflow:
     :func:`jointbench.estimators.batching.numerical_failure`) is a failed row; any other
-    exception is a bug in the estimator or its options, and is raised."""
+    exception is a bug in the estimator or its options, raised as a
+    :class:`~jointbench.estimators.batching.ProgrammingError`."""
     if isinstance(result, BaseException):
         failed_trial(result)
         return None, f"error: {type(result).__name__}: {result}", False, 0
@@ -185,10 +186,10 @@ def estimate_table(
                 _warm_up(many, segments, trials, options or {}, poses),
             )
         fitted = _fit_trials(many, segments, trials, options or {}, poses)
-    extras = [{}] * trials.n_trials
-    if diagnose:
-        arrays = tuple(trials.segments[name] for name in segments)
-        extras = diagnose(arrays, [row[0] for row in fitted], trials.truth)
+        extras = [{}] * trials.n_trials
+        if diagnose:
+            arrays = tuple(trials.segments[name] for name in segments)
+            extras = diagnose(arrays, [row[0] for row in fitted], trials.truth)
     frame0 = proximal_at_frame0(trials.segments, spec.segments)
     rows = []
     for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
