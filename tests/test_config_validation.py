@@ -314,6 +314,45 @@ def test_missing_grid_key_is_named(config):
         study_config.check_config(bad)
 
 
+def _listed_otherwise(settings: dict) -> dict:
+    """A study's ``settings`` with its keys, its grid's and its estimators' options listed in
+    reverse order."""
+    reordered = {key: settings[key] for key in reversed(settings)}
+    reordered["grid"] = dict(reversed(settings["grid"].items()))
+    if "options" in settings:
+        options = settings["options"]
+        reordered["options"] = {m: dict(reversed(options[m].items())) for m in reversed(options)}
+    return reordered
+
+
+def test_a_study_opens_in_one_order_however_its_keys_are_listed(config):
+    """The jobs' parameters carry the studies' settings, whose repr follows the key order."""
+    options = {"BC": {"tol_x": 1e-3, "tol_fun": 1e-3}, "NM": {}}
+    listed = changed(config, "cmc", ("options",), options)
+    study_config.open_config(listed)
+    reordered = copy.deepcopy(listed)
+    for study, settings in listed["studies"].items():
+        reordered["studies"][study] = _listed_otherwise(settings)
+        assert repr(reordered["studies"][study]) != repr(settings)
+    study_config.open_config(reordered)
+    for study, settings in reordered["studies"].items():
+        assert repr(settings) == repr(listed["studies"][study])
+        # The grid in the study's own order, which names and orders its conditions.
+        assert tuple(settings["grid"]) == get_study(study).grid_keys
+        assert study_config.conditions(reordered, study) == study_config.conditions(config, study)
+
+
+def test_a_lists_order_and_the_protocols_are_kept(config):
+    """A grid key's values order the conditions; a paper lists added marker sets as given."""
+    values = config["studies"]["cmc"]["grid"]["rom_deg"]
+    listed = changed(config, "cmc", ("grid", "rom_deg"), values[::-1])
+    protocol = dict(reversed(config["studies"]["cmc"]["protocol"].items()))
+    listed["studies"]["cmc"]["protocol"] = protocol
+    study_config.open_config(listed)
+    assert listed["studies"]["cmc"]["grid"]["rom_deg"] == values[::-1]
+    assert list(listed["studies"]["cmc"]["protocol"]) == list(protocol)
+
+
 def test_a_marker_set_added_by_the_protocol_may_be_used(config):
     """Choices come from the protocol: a config that defines a marker set can grid over it."""
     protocol = {"directions": {"X": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}}

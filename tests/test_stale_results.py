@@ -379,6 +379,50 @@ CONFIG_EDITS = (
 )
 
 
+def _reordered(path: str):
+    """An edit that lists the mapping at ``path`` in reverse key order, values unchanged."""
+
+    def change(config: dict) -> None:
+        *parents, last = path.split(".")
+        node = config
+        for key in parents:
+            node = node[key]
+        node[last] = dict(reversed(node[last].items()))
+
+    return change
+
+
+def _both(*changes: Callable[[dict], None]) -> Callable[[dict], None]:
+    def change(config: dict) -> None:
+        for one in changes:
+            one(config)
+
+    return change
+
+
+# No job reads meaning into a key's place: a grid's conditions, their names and their order
+# follow the study's own key order, the other keys are looked up by name. A reorder alone
+# changes no result. Written as listed, not sorted, so that the order reaches the workflow.
+ORDER_EDITS = (
+    _config_edit(
+        "the grids' keys reordered",
+        _both(_reordered("studies.cmc.grid"), _reordered("studies.hinge.grid")),
+        NOTHING,
+    ),
+    _config_edit(
+        "a study's settings reordered",
+        _both(_reordered("studies.cmc"), _reordered("studies.hip")),
+        NOTHING,
+    ),
+    _config_edit(
+        "the grid's keys reordered and a value added",
+        _both(_reordered("studies.cmc.grid"), _set("studies.cmc.grid.noise_mm", [1.0, 2.0])),
+        {"simulate_cmc", "collect[study=cmc]"},
+        {"simulate_hinge"},
+    ),
+)
+
+
 # -- the finished run, and what a dry run schedules ---------------------------------------------
 
 
@@ -513,3 +557,23 @@ def test_the_dry_run_parser_reads_rules_and_wildcards():
         "localrule check_published:\n    input: b\nrule all:\n"
     )
     assert scheduled(output) == {"estimate_cmc", "estimate_cmc[method=BC]", "check_published"}
+
+
+@pytest.mark.parametrize(
+    "kind, change, reruns, spares", ORDER_EDITS, ids=[c[0] for c in ORDER_EDITS]
+)
+def test_a_reordered_config_reruns_only_what_its_values_change(
+    builtin, kind, change, reruns, spares
+):
+    finished_run = builtin
+    # The overlay in the order its file lists it, so that the edit's order is the only change.
+    config = yaml.safe_load((finished_run.workdir / OVERLAY).read_text())
+    change(config)
+    restore = _edited(finished_run.workdir, OVERLAY, yaml.safe_dump(config, sort_keys=False))
+    try:
+        jobs = _dry_run(finished_run)
+    finally:
+        restore()
+    if not reruns:
+        assert not jobs, f"{kind}: reran {sorted(jobs)}, which the edit cannot change"
+    _check(kind, jobs, reruns, spares)

@@ -25,7 +25,11 @@ the same words into the result's ``status`` (``"warning: artefacts in the data: 
 artefacts into ``diagnostics["artefacts"]`` (one dict per flagged sample: ``kind``, ``label``,
 ``frame``, ``size_mm``, ``level_mm``, ``partner``), so a result read or saved without the
 Python warning still carries them; ``"ignore"`` skips the screen, for data known to be clean:
-nothing is looked for, so nothing is reported.
+nothing is looked for, so nothing is reported. An array of more than
+:data:`jointbench.screening.MAX_EXCHANGE_MARKERS` markers is screened without the label-exchange
+test; its result's ``status`` then says ``"warning: not verified in markers: ..."`` and
+``diagnostics["artefacts_untested"]`` holds the same words (``diagnostics["artefacts"]`` the
+samples flagged by the checks that ran).
 """
 
 from __future__ import annotations
@@ -48,6 +52,7 @@ from jointbench.screening import (
     ArtefactRules,
     Numbering,
     Screening,
+    exchanges_untested,
     find_artefacts,
     summarise,
 )
@@ -136,10 +141,25 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
     clean = check_input(kind, arrays)
     found = _screen_valid(kind, clean, artefacts)
     result = registry.get_for_valid(kind, method)(clean, **options)
-    if not found:
+    untested = _untested(kind, clean)
+    if not found and not untested:
         return result
     flagged = [dataclasses.asdict(a) for screening in found.values() for a in screening.artefacts]
-    return with_warnings(result, (_warned(found),), {"artefacts": flagged})
+    diagnostics: dict = {"artefacts": flagged}
+    if untested:
+        diagnostics["artefacts_untested"] = list(untested)
+    warned = (_warned(found),) if found else ()
+    return with_warnings(result, (*warned, *untested), diagnostics)
+
+
+def _untested(kind: str, clean: tuple[np.ndarray, ...]) -> tuple[str, ...]:
+    """What the screen did not test in each of ``clean``, the checked inputs ``(n_frames, n,
+    3)`` of a ``kind`` fit, in words (:func:`jointbench.screening.exchanges_untested`)."""
+    return tuple(
+        f"not verified in {name}: {why}"
+        for name, markers in zip(_NAMES[kind], clean, strict=True)
+        if (why := exchanges_untested(markers.shape[1]))
+    )
 
 
 def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> dict[str, Screening]:

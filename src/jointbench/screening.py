@@ -10,15 +10,16 @@ A swap in a cluster of a few mm moves the residuals less than soft-tissue artefa
 segment does, so a scale-free test looks for swaps too (:func:`find_exchanges`): a frame is
 swapped when its inter-marker distances depart from the cluster's typical ones far beyond the
 trial's own noise and exchanging two labels brings them back to it (thresholds from a noise
-model, :class:`ArtefactRules`). A label swap is an event at a frame: the frames it flags are
-explained by exchanging two labels, and :func:`find_swaps` reports the runs of frames carrying
-the pair one way round, so a message names where the labelling changes and both sides can be
-kept. None of this depends on the order of the frames. A step of one marker is flagged when it
-differs from both neighbouring steps by more than ``jump_factor`` times the median such
-difference and ``min_jump_mm`` (:func:`find_jumps`), which needs the frames in time order: it
-is the only check of markers outside a cluster, and in a cluster it counts only where no
-rigidity break or swapped frame explains it (a swap of two markers of an isosceles triangle
-keeps the shape).
+model, :class:`ArtefactRules`); in a cluster of more than :data:`MAX_EXCHANGE_MARKERS`, whose
+cost it cannot bear, it is not run, and the screen says so (:func:`exchanges_untested`). A
+label swap is an event at a frame: the frames it flags are explained by exchanging two labels,
+and :func:`find_swaps` reports the runs of frames carrying the pair one way round, so a message
+names where the labelling changes and both sides can be kept. None of this depends on the
+order of the frames. A step of one marker is flagged when it differs from both neighbouring
+steps by more than ``jump_factor`` times the median such difference and ``min_jump_mm``
+(:func:`find_jumps`), which needs the frames in time order: it is the only check of markers
+outside a cluster, and in a cluster it counts only where no rigidity break or swapped frame
+explains it (a swap of two markers of an isosceles triangle keeps the shape).
 
 :func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen`;
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
@@ -45,11 +46,13 @@ from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import best_rotation
 
 __all__ = [
+    "MAX_EXCHANGE_MARKERS",
     "Artefact",
     "ArtefactRules",
     "Numbering",
     "Screening",
     "Swap",
+    "exchanges_untested",
     "find_artefacts",
     "find_exchanges",
     "find_jumps",
@@ -67,6 +70,29 @@ __all__ = [
 
 _MAX_ITERATIONS = 200
 _TOL_MM = 1e-10
+
+#: The most markers of a cluster whose label exchanges the screen tests (:func:`find_exchanges`).
+#: The test tries every exchange of two labels on every pair of markers of every frame judged:
+#: its cost grows as the fourth power of the marker count times the frames, and its table of
+#: exchanges as the fourth power (measured, 120 frames: 8 markers take under a millisecond, 20
+#: a few, 40 some tens, 120 from 10 to 20 s and 400 MB). A larger cluster (a whole-body marker set
+#: passed as one segment, or a ``(markers, frames, 3)`` array passed transposed) is screened for
+#: rigidity breaks and jumps only, which cost about the marker count times the frames, and the
+#: screen says what it did not test (:func:`exchanges_untested`).
+MAX_EXCHANGE_MARKERS = 20
+
+
+def exchanges_untested(n_markers: int) -> str:
+    """Why the screen of a cluster of ``n_markers`` does not test label exchanges, in words;
+    ``""`` when it does (at most :data:`MAX_EXCHANGE_MARKERS`, or too few markers for a
+    shape)."""
+    if n_markers <= MAX_EXCHANGE_MARKERS:
+        return ""
+    return (
+        f"{n_markers} markers, more than the {MAX_EXCHANGE_MARKERS} whose label exchanges the "
+        "artefact screen tests: whether two markers exchange labels in some frames was not "
+        "tested (rigidity breaks and jumps were)"
+    )
 
 
 def fit_poses(shape: np.ndarray, markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1157,7 +1183,8 @@ class Screening:
     some of them.
     A cluster's fit is kept for :class:`Segment`: ``shape`` ``(n, 3)`` [mm], its ``rotation``
     ``(n_frames, 3, 3)``, ``translation`` ``(n_frames, 3)`` and ``residuals`` ``(n_frames, n)``
-    [mm]; ``None`` for fewer than three markers."""
+    [mm]; ``None`` for fewer than three markers. ``untested`` says in words which check did
+    not run (:func:`exchanges_untested`), ``""`` when every one did."""
 
     artefacts: tuple[Artefact, ...]
     swaps: tuple[Swap, ...] = ()
@@ -1165,6 +1192,7 @@ class Screening:
     rotation: np.ndarray | None = None
     translation: np.ndarray | None = None
     residuals: np.ndarray | None = None
+    untested: str = ""
 
 
 def screen(
@@ -1175,11 +1203,14 @@ def screen(
 ) -> Screening:
     """Artefacts of one marker set ``(n_frames, n, 3)`` [mm] (module docstring): rigidity
     breaks, swapped frames and swaps of a cluster of >= 3 markers, jumps of fewer. ``source``
-    names the data in messages. Frame order matters only to the jumps."""
+    names the data in messages. Frame order matters only to the jumps. A cluster of more than
+    :data:`MAX_EXCHANGE_MARKERS` is not tested for label exchanges, and its ``untested`` says
+    so."""
     rules = rules or _RULES
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
-    exchanged = find_exchanges(markers, labels, rules)
+    untested = exchanges_untested(len(labels))
+    exchanged = [] if untested else find_exchanges(markers, labels, rules)
     # First judged against one typical frame, which the broken frames cannot distort; then the
     # mean shape is refitted on the samples neither flagged nor swapped, until the flags settle.
     # The typical frame is one the swaps do not hold, so that both checks judge by one side.
@@ -1221,7 +1252,7 @@ def screen(
         if not {(jump.label, row) for row in jump.rows()} & explained
     ]
     artefacts = sorted([*jumps, *flags], key=lambda a: (a.frame, a.label))
-    return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, misfit)
+    return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, misfit, untested)
 
 
 def find_artefacts(
@@ -1236,16 +1267,17 @@ def find_artefacts(
     gets the whole screen. A cluster the marker-frame bounds clear costs one compiled call
     (:func:`_clean_screen`), which finds what the bound, the distance test's verdict and the
     jump check need together; the jumps are located only where a step exceeds
-    ``min_jump_mm``."""
+    ``min_jump_mm``. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
+    label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
     rules = rules or _RULES
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules)), ()
     markers = kernel_array(markers)
     limit = _rigid_limit(rules)
     far, near = _exchange_levels(len(labels), rules)
-    typical, cleared, largest_jump, exchanged = _clean_screen(
-        markers, limit, far, near, rules.swap_min_frames
-    )
+    # Asked for more frames than there are, the distance test does not run.
+    min_frames = markers.shape[0] + 1 if exchanges_untested(len(labels)) else rules.swap_min_frames
+    typical, cleared, largest_jump, exchanged = _clean_screen(markers, limit, far, near, min_frames)
     if exchanged or not _fitted_clears(markers, typical, cleared, limit):
         found = screen(markers, labels, source, rules)
         return found.artefacts, found.swaps

@@ -27,6 +27,7 @@ __all__ = [
     "estimator_names",
     "load_config",
     "open_config",
+    "ordered_settings",
     "parse_condition_id",
     "read_configs",
     "read_yaml",
@@ -93,14 +94,39 @@ def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
     checked against its schema (:func:`validate_against`), its extensions loaded (relative to
     ``base``) and registered, then checked against the registries (the studies it names, and
     :func:`check_config`); ``ValueError`` naming the key, or the extension's file. Returns
-    ``config``."""
+    ``config``, each study's settings now listed in one order (:func:`ordered_settings`)."""
     # The schema first: a misspelt key is named as such, not hidden behind an extension's import
     # error, and no extension is imported from a config that is not the one meant.
     validate_against(config, SCHEMA_PATH, "config")
     load_extensions(config, base)
     _check_studies_registered(config)
     check_config(config)
+    for study, settings in config["studies"].items():
+        config["studies"][study] = ordered_settings(get_study(study), settings)
     return config
+
+
+def ordered_settings(spec: Study, settings: Mapping) -> dict:
+    """A study's checked ``settings`` listed in one order, whichever order the config lists
+    their keys in: sorted, the grid's in the study's own order, ``spec.grid_keys``, and each
+    estimator's options sorted by estimator and by option; lists as listed.
+
+    No job reads meaning into these keys' places: the grid's conditions, their names and their
+    order follow the study's key order (:func:`conditions`), an estimator's options are keyword
+    arguments, and the other keys are looked up by name. The jobs' parameters carry these
+    mappings, so a run opens its config so ordered (:func:`open_config`): however the keys are
+    listed, the parameters are the same and a reorder reruns no job. A list's order is kept
+    (the grid values' orders the conditions), and so is the protocol's, whose added marker sets
+    a paper lists in the order given."""
+    ordered = {key: settings[key] for key in sorted(settings)}
+    ordered["grid"] = {key: settings["grid"][key] for key in spec.grid_keys}
+    if "options" in settings:
+        options = settings["options"]
+        ordered["options"] = {
+            method: {name: options[method][name] for name in sorted(options[method])}
+            for method in sorted(options)
+        }
+    return ordered
 
 
 def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping]:

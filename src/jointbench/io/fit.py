@@ -30,6 +30,7 @@ import numpy as np
 
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
 from jointbench.estimators.registry import KINDS, get, many
+from jointbench.estimators.results import with_warnings
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap, find_jumps, summarise
@@ -212,7 +213,8 @@ class Prepared:
 
     ``arrays`` the estimator's inputs over all frames of the recording, in the reference
     technical frame; ``usable`` the frame rows that may enter a fit; ``found`` the artefacts
-    and ``swaps`` the label swaps among them.
+    and ``swaps`` the label swaps among them; ``untested`` what the segments' screens did not
+    test, in words, which every result's ``status`` carries.
     """
 
     kind: str
@@ -225,6 +227,7 @@ class Prepared:
     found: tuple[Artefact, ...]
     artefacts: str
     swaps: tuple[Swap, ...] = ()
+    untested: tuple[str, ...] = ()
 
     def rows(self, indices: np.ndarray) -> np.ndarray:
         """Recording rows of ``usable[indices]``, the anchor frame first for two segments."""
@@ -241,11 +244,14 @@ class Prepared:
         # the support verdict. Their artefact screen ran in prepare, over the whole recording.
         arrays = (a[rows] for a in self.arrays)
         try:
-            return get(self.kind, method)(*arrays, **options)
+            result = get(self.kind, method)(*arrays, **options)
         except ValueError as error:
             if not numerical_failure(error):
                 raise  # a mistake in the method: :meth:`fit` names it as one
             raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
+        if not self.untested:
+            return result
+        return with_warnings(result, self.untested, {"artefacts_untested": list(self.untested)})
 
     def refits(self, method: str, rows: list[np.ndarray], options: dict) -> list:
         """Results (or ``ValueError``) on many row sets, as one batch where the method can.
@@ -391,6 +397,11 @@ def prepare(
         found=tuple(found),
         artefacts=artefacts,
         swaps=tuple(swaps),
+        untested=tuple(
+            f"not verified in the {role} segment: {segment.untested}"
+            for role, segment in (("reference", ref), ("moving", mov))
+            if segment is not None and segment.untested
+        ),
     )
 
 

@@ -88,7 +88,8 @@ class Segment:
     ``(n_frames, 3)`` [mm] the technical frame's pose in every frame (NaN where fewer than three
     markers are seen); ``residuals`` ``(n_frames, n)`` [mm] each marker's distance from its
     fitted position (NaN where missing); ``artefacts`` the flagged rigidity breaks, swapped
-    frames and jumps, and ``swaps`` the label swaps that explain some of them (:func:`screen`).
+    frames and jumps, and ``swaps`` the label swaps that explain some of them (:func:`screen`);
+    ``untested`` what the screen did not test, in words (``""`` when it tested everything).
     """
 
     labels: tuple[str, ...]
@@ -98,6 +99,7 @@ class Segment:
     residuals: np.ndarray
     artefacts: tuple[Artefact, ...]
     swaps: tuple[Swap, ...] = ()
+    untested: str = ""
 
     @classmethod
     def fit(
@@ -131,6 +133,7 @@ class Segment:
             screening.residuals,
             screening.artefacts,
             screening.swaps,
+            screening.untested,
         )
 
     def local(self, markers: np.ndarray) -> np.ndarray:
