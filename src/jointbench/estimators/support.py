@@ -200,6 +200,20 @@ def _poses_defined(markers: np.ndarray) -> bool:
 
 
 @kernel
+def _centred_into(points: np.ndarray, centred: np.ndarray) -> None:
+    """``points`` ``(n, 3)`` less their centroid, written into ``centred`` ``(n, 3)``. A
+    compiled kernel."""
+    n_points = points.shape[0]
+    for i in range(3):
+        mean = 0.0
+        for m in range(n_points):
+            mean += points[m, i]
+        mean /= n_points
+        for m in range(n_points):
+            centred[m, i] = points[m, i] - mean
+
+
+@kernel
 def _first_frame_spread(markers: np.ndarray) -> np.ndarray:
     """Per trial of ``markers`` ``(T, N, n, 3)``: whether the centred frame-0 cluster's second
     singular value exceeds 1e-6 of its first (not collinear). A compiled kernel."""
@@ -207,13 +221,7 @@ def _first_frame_spread(markers: np.ndarray) -> np.ndarray:
     spread = np.empty(n_trials, dtype=np.bool_)
     centred = np.empty((n_markers, 3))
     for t in range(n_trials):
-        for i in range(3):
-            mean = 0.0
-            for m in range(n_markers):
-                mean += markers[t, 0, m, i]
-            mean /= n_markers
-            for m in range(n_markers):
-                centred[m, i] = markers[t, 0, m, i] - mean
+        _centred_into(markers[t, 0], centred)
         singular = np.linalg.svd(centred)[1]
         spread[t] = singular[1] > 1e-6 * singular[0]
     return spread
@@ -933,13 +941,7 @@ def _onto_first_frame(markers: np.ndarray, step: int) -> tuple[np.ndarray, np.nd
     tensor = np.empty((3, 3))
     for t in range(n_trials):
         for s in range(n_sampled):
-            for i in range(3):
-                mean = 0.0
-                for m in range(n_markers):
-                    mean += markers[t, s * step, m, i]
-                mean /= n_markers
-                for m in range(n_markers):
-                    centred[m, i] = markers[t, s * step, m, i] - mean
+            _centred_into(markers[t, s * step], centred)
             if s == 0:
                 first[:] = centred
             for i in range(3):
