@@ -65,7 +65,11 @@ def _assert_same(batched, single) -> None:
 
 
 def _assert_close(a, b, name) -> None:
-    if isinstance(b, str | bool | int) or b is None:
+    if isinstance(b, dict):
+        assert a.keys() == b.keys(), name
+        for key in b:
+            _assert_close(a[key], b[key], f"{name}.{key}")
+    elif isinstance(b, str | bool | int) or b is None:
         assert a == b, name
     else:
         np.testing.assert_allclose(
