@@ -472,10 +472,12 @@ def random_hinge(rng: np.random.Generator, n_frames: int = 150):
     return np.einsum("fij,pj->fpi", rotation, body - point) + point, axis, point
 
 
-# Hinges (seeds of random_hinge) on which the ten-start searches stop in a local minimum: radial
-# on 2, 11 and 69 (90, 89 and 89 degrees off), combined on 11 and 69 (78 and 8.5 degrees off);
-# 5 is an ordinary one.
+# Hinges (seeds of random_hinge) among which the ten-start searches of radial and combined stop
+# in a local minimum on some machines; 5 is an ordinary one. Which seeds trap a search depends on
+# the last bits of the arithmetic (the BLAS kernels a processor gets), so the test of the
+# restart below scans a range of seeds instead of naming one.
 HINGE_SEEDS = (2, 5, 11, 69)
+TRAP_SCAN_SEEDS = range(80)
 
 
 @pytest.mark.parametrize("seed", HINGE_SEEDS)
@@ -491,13 +493,26 @@ def test_noise_free_hinges_at_any_orientation_are_recovered_or_flagged(method, s
     assert angle <= recovery, (angle, result.status)
 
 
-def test_a_trapped_axis_search_says_it_restarted():
-    markers, axis, _ = random_hinge(np.random.default_rng(11))
-    raw = registry.get("axis", "combined", checked=False)(markers)
-    assert angle_between_lines_deg(raw.direction, axis) > 5.0  # the ten starts are trapped
-    result = jointbench.fit_axis(markers, method="combined")
-    assert result.status.startswith("restarted: the search stopped in a local minimum")
-    assert result.cost < raw.cost and result.diagnostics["local_minimum_cost"] == raw.cost
+@pytest.mark.parametrize("method", ["radial", "combined"])
+def test_a_trapped_axis_search_says_it_restarted(method):
+    """Every search of the scan that its ten starts leave in a local minimum (more than 5 deg
+    off the hinge) is restarted by the checked call, which says so and keeps the lower cost;
+    the scan must meet such a search, or it tests nothing."""
+    trapped = 0
+    for seed in TRAP_SCAN_SEEDS:
+        markers, axis, _ = random_hinge(np.random.default_rng(seed))
+        raw = registry.get("axis", method, checked=False)(markers)
+        if angle_between_lines_deg(raw.direction, axis) <= 5.0:
+            continue
+        trapped += 1
+        result = jointbench.fit_axis(markers, method=method)
+        assert result.status.startswith("restarted: the search stopped in a local minimum"), (
+            seed,
+            result.status,
+        )
+        assert result.cost < raw.cost, seed
+        assert result.diagnostics["local_minimum_cost"] == raw.cost, seed
+    assert trapped > 0, f"no {method} search of the scan was trapped"
 
 
 def _one_segment_methods():

@@ -160,7 +160,48 @@ def test_every_trial_is_decided_as_pinned(pinned):
         assert found["warnings"] == expected["warnings"], (index, found, expected)
         assert found["diagnostics"].keys() == expected["diagnostics"].keys(), index
         for key, value in expected["diagnostics"].items():
-            assert _same(found["diagnostics"][key], value, key), (index, key, found, expected)
+            if _same(found["diagnostics"][key], value, key):
+                continue
+            spread = _rounding_spread(kind, arrays, key, found["diagnostics"][key])
+            assert abs(found["diagnostics"][key] - value) <= 10.0 * spread, (
+                index,
+                key,
+                spread,
+                found,
+                expected,
+            )
+
+
+# Relative size of the input perturbations that measure how far rounding alone moves a number.
+_ROUNDING_PROBE = 1e-14
+
+
+def _rounding_spread(kind: str, arrays: tuple[np.ndarray, ...], key: str, value: float) -> float:
+    """How far perturbing the trial's coordinates in their last bits (relative
+    :data:`_ROUNDING_PROBE`, a few dozen ulps) moves the verdict's number ``key`` from ``value``:
+    the largest move over a few draws. Most numbers move at rounding level, but a fit stopped by
+    its iteration limit (a nearly collinear cluster's spin about its line, say) leaves numbers
+    that rounding moves in their fifth digit, and the processor's own arithmetic (which BLAS
+    kernels it gets) moves them as much; those are pinned to what rounding determines."""
+    rng = np.random.default_rng(0)
+    moves = []
+    for _ in range(6):
+        nudged = tuple(a * (1.0 + _ROUNDING_PROBE * rng.standard_normal(a.shape)) for a in arrays)
+        moves.append(abs(support.assess(kind, nudged).diagnostics[key] - value))
+    return max(moves)
+
+
+def test_rounding_spread_is_tiny_for_a_well_conditioned_trial():
+    """The allowance above is no blanket tolerance: on an ordinary trial (the first that is
+    assessed with no warning) rounding moves the numbers by about 1e-12 of their size."""
+    kind, arrays = next(
+        (kind, arrays)
+        for kind, arrays in TRIALS
+        if (verdict := support.assess(kind, arrays)).diagnostics.get("assessed")
+        and not verdict.warnings
+    )
+    value = support.assess(kind, arrays).diagnostics["rotation_rms_deg"]
+    assert _rounding_spread(kind, arrays, "rotation_rms_deg", value) <= 1e-10 * value
 
 
 @pytest.mark.parametrize("kind", ["center", "joint_center"])
