@@ -414,6 +414,8 @@ ORDER_EDITS = (
         _both(_reordered("studies.cmc"), _reordered("studies.hip")),
         NOTHING,
     ),
+    # The studies' order: the order of the report's sections is the registry's, not this.
+    _config_edit("the studies reordered", _reordered("studies"), NOTHING),
     _config_edit(
         "the grid's keys reordered and a value added",
         _both(_reordered("studies.cmc.grid"), _set("studies.cmc.grid.noise_mm", [1.0, 2.0])),

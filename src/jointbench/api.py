@@ -14,7 +14,12 @@ Every method is reached through the registry, which holds it to the same rules:
 * an axis whose direction the method's own cost leaves undetermined (the SD of the direction
   that the cost's curvature and residuals imply, ``diagnostics["axis_sd_deg"]``, above
   :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`) gets a warning in ``status`` the
-  same way (see :mod:`jointbench.estimators.precision`).
+  same way (see :mod:`jointbench.estimators.precision`);
+* a mistake in a method's code (a ``TypeError``, an ``IndexError``, arrays that do not
+  broadcast: any error but a failure the method states with a ``ValueError`` of its own, a
+  ``LinAlgError`` or a ``FloatingPointError``) raises
+  :class:`~jointbench.estimators.batching.ProgrammingError` naming the method and the line, as
+  in the estimate jobs (:func:`jointbench.estimators.batching.numerical_failure`).
 
 Before the fit, the arrays are screened for artefacts as a recording is
 (:func:`screen`, :func:`jointbench.screening.screen`): a label swap, a marker that falls off
@@ -36,11 +41,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 import warnings
 
 import numpy as np
 
 from jointbench.estimators import registry
+from jointbench.estimators.batching import mistakes_named
 from jointbench.estimators.results import (
     AxisResult,
     CenterResult,
@@ -136,11 +143,11 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
         raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
     if artefacts == "ignore":
         fit = registry.get_for_valid(kind, method)  # an unknown method is named first, as ever
-        return fit(check_input(kind, arrays), **options)
+        return _called(fit, kind, method, check_input(kind, arrays), options)
     # The input checks come first, so bad input gets their message, not the screen's.
     clean = check_input(kind, arrays)
     found = _screen_valid(kind, clean, artefacts)
-    result = registry.get_for_valid(kind, method)(clean, **options)
+    result = _called(registry.get_for_valid(kind, method), kind, method, clean, options)
     untested = _untested(kind, clean)
     if not found and not untested:
         return result
@@ -150,6 +157,21 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
         diagnostics["artefacts_untested"] = list(untested)
     warned = (_warned(found),) if found else ()
     return with_warnings(result, (*warned, *untested), diagnostics)
+
+
+def _called(fit, kind: str, method: str, clean: tuple[np.ndarray, ...], options: dict):
+    """``fit``, the checked form of the ``kind`` method ``method``, on ``clean`` with
+    ``options``, holding it to the estimate jobs' rule
+    (:func:`jointbench.estimators.batching.numerical_failure`): a failure the method states
+    reaches the caller as it is, any other error inside it is a ``ProgrammingError`` naming the
+    method and the line. An option the method does not take is the caller's ``TypeError``, so
+    it is raised before the call."""
+    try:
+        inspect.signature(registry.get(kind, method, checked=False)).bind(*clean, **options)
+    except TypeError as error:
+        raise TypeError(f"{kind} method {method}: {error}") from None
+    with mistakes_named(f"{kind} method {method}"):
+        return fit(clean, **options)
 
 
 def _untested(kind: str, clean: tuple[np.ndarray, ...]) -> tuple[str, ...]:

@@ -83,7 +83,7 @@ def render_study(
         paper = get_paper(key)
         inputs = Inputs(
             collected=frame,
-            published=load_published(paper.published, paper.declares),
+            published=load_published(paper.published, paper.declares, paper.tables),
             config=config,
         )
         for name in names:
@@ -165,7 +165,7 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
         frame = read_table(path)
         require_results(frame, study, path, _methods_compared(study))
         for paper in papers_of_study(study):
-            document = load_published(paper.published, paper.declares)
+            document = load_published(paper.published, paper.declares, paper.tables)
             inputs = Inputs(collected=frame, published=document, config=config)
             rows = comparison_rows(document, paper.measure(inputs))
             frames.append(enforce_design(rows, document, config))

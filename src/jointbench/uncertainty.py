@@ -68,12 +68,15 @@ def bootstrap(
     n_resamples: int = 200,
     block_length: int | None = None,
     seed: int = 0,
+    label: str | None = None,
 ) -> Bootstrap:
     """Moving-block bootstrap over ``n_frames`` frames.
 
     ``statistic`` receives the frame indices of every resample, ``(n_resamples, n_frames)``,
     all at once (so an estimator can refit them as one batch) and returns one ``(d,)`` row per
     resample, or ``None`` where the refit cannot support an answer; those count as failed.
+    ``label`` names what is refitted (the recording or study, and the method), in front of the
+    ``ValueError`` raised when more than half the refits fail.
     """
     if int(n_resamples) < 2:
         raise ValueError(f"n_resamples must be >= 2, got {n_resamples}")
@@ -87,8 +90,9 @@ def bootstrap(
     samples = np.array([np.full(width, np.nan) if row is None else row for row in rows], float)
     n_failed = int(np.sum(~np.isfinite(samples).all(axis=1)))
     if n_failed > len(rows) // 2:
+        named = f"{label}: " if label else ""
         raise ValueError(
-            f"bootstrap: {n_failed} of {len(rows)} refits failed; the frames cannot support an "
-            "interval (too few frames or too little motion per block)"
+            f"{named}bootstrap: {n_failed} of {len(rows)} refits failed; the frames cannot "
+            "support an interval (too few frames or too little motion per block)"
         )
     return Bootstrap(samples, block_length, n_failed)

@@ -16,12 +16,16 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 import yaml
 
 from jointbench.comparison.tolerance import describe, evaluate, is_compared
 from jointbench.configuration.config import read_yaml, validate_against
+
+if TYPE_CHECKING:  # the papers import this module
+    from jointbench.papers.base import PublishedTable
 
 __all__ = [
     "COLUMNS",
@@ -79,10 +83,13 @@ NOT_IN_RUN = "not measured in this run (method, condition or study not run)"
 _SCHEMA = resources.files("jointbench.schemas").joinpath("published.schema.yaml")
 
 
-def load_published(path: str | Path, declares: Iterable[str] = ()) -> dict:
+def load_published(
+    path: str | Path, declares: Iterable[str] = (), tables: Iterable[PublishedTable] = ()
+) -> dict:
     """A paper's published-values document, schema-checked and holding an entry for each id of
-    ``declares`` (:attr:`jointbench.papers.base.Paper.declares`): ``ValueError`` naming the file
-    otherwise, and the missing ids."""
+    ``declares`` (:attr:`jointbench.papers.base.Paper.declares`) and each cell of ``tables``
+    (:attr:`jointbench.papers.base.Paper.tables`): ``ValueError`` naming the file otherwise,
+    and the missing ids (for a table, the paper, the table and its missing cells)."""
     try:
         document = read_yaml(Path(path).read_text())
     except yaml.YAMLError as error:
@@ -95,6 +102,14 @@ def load_published(path: str | Path, declares: Iterable[str] = ()) -> dict:
             f"published values {path}: no entry for {', '.join(missing)}, which the paper "
             "measures; is the file cut short? Restore it from the repository"
         )
+    for table in tables:
+        absent = [cell for cell in table.cells if cell not in listed]
+        if absent:
+            raise ValueError(
+                f"published values {path}: paper {document['paper']} {table.source} has no "
+                f"value for {len(absent)} of its {len(table.cells)} cells: {', '.join(absent)}; "
+                "is the file cut short? Restore it from the repository"
+            )
     return document
 
 

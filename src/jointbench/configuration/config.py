@@ -94,15 +94,22 @@ def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
     checked against its schema (:func:`validate_against`), its extensions loaded (relative to
     ``base``) and registered, then checked against the registries (the studies it names, and
     :func:`check_config`); ``ValueError`` naming the key, or the extension's file. Returns
-    ``config``, each study's settings now listed in one order (:func:`ordered_settings`)."""
+    ``config``, its studies now listed in the registry's order (:func:`study_names`) and each
+    study's settings in one order (:func:`ordered_settings`)."""
     # The schema first: a misspelt key is named as such, not hidden behind an extension's import
     # error, and no extension is imported from a config that is not the one meant.
     validate_against(config, SCHEMA_PATH, "config")
     load_extensions(config, base)
     _check_studies_registered(config)
     check_config(config)
-    for study, settings in config["studies"].items():
-        config["studies"][study] = ordered_settings(get_study(study), settings)
+    # Jobs' parameters list the studies (a job's settings of every study): in one order,
+    # whatever order the config gives them, a reorder reruns nothing.
+    listed = config["studies"]
+    config["studies"] = {
+        study: ordered_settings(get_study(study), listed[study])
+        for study in registered_studies()
+        if study in listed
+    }
     return config
 
 
@@ -343,7 +350,11 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
 
 
 def study_names(config: Mapping) -> list[str]:
-    """Studies switched on in the config, in config order."""
+    """Studies switched on in the config, in the study registry's order, which a run opens its
+    config in (:func:`open_config`): the package's studies in the order of their simulator
+    modules' names, then those of the extensions in the order the config lists the extensions.
+    It orders the report's sections and the comparison's rows; the order in which the config
+    lists the studies means nothing."""
     return [name for name, study in config["studies"].items() if study.get("enabled", True)]
 
 

@@ -124,7 +124,7 @@ def judge(config: Mapping, study: str, collected: pd.DataFrame, label: str) -> p
     frames = []
     for paper in papers_of_study(study):
         require_results(collected, study, label, paper.methods)
-        document = load_published(paper.published, paper.declares)
+        document = load_published(paper.published, paper.declares, paper.tables)
         inputs = Inputs(collected=collected, published=document, config=config)
         frames.append(comparison_rows(document, paper.measure(inputs)))
     return pd.concat(frames, ignore_index=True)

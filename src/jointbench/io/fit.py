@@ -280,7 +280,8 @@ class Prepared:
         kind = self.kind
         method = method or DEFAULT_METHODS[kind]
         rows = self.rows(np.arange(self.usable.size))
-        with mistakes_named(f"{self.recording.source}: {kind} {method}"):
+        label = f"{self.recording.source}: {kind} {method}"
+        with mistakes_named(label):
             result = self.solve(method, rows, options)
             boot = None
             if n_bootstrap:
@@ -296,6 +297,7 @@ class Prepared:
                     n_resamples=n_bootstrap,
                     block_length=block_length,
                     seed=seed,
+                    label=label,
                 )
         anchor = int(rows[0]) if kind == "joint_center" else None
         offset = self.recording.first_frame

@@ -8,7 +8,8 @@ function that measures every published value and claim from the collected result
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+import itertools
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -23,6 +24,7 @@ __all__ = [
     "Measured",
     "Output",
     "Paper",
+    "PublishedTable",
     "Table",
 ]
 
@@ -109,6 +111,32 @@ class FrontPart:
 
 
 @dataclass(frozen=True)
+class PublishedTable:
+    """A table of the paper whose cells are published values: ``source`` names it as its
+    entries' ``source`` does (``"Table 1"``), ``cells`` the ids of its cells. They come from the
+    paper's own rows and columns, not from its published-values file, so a cell deleted from
+    the file is found missing (:func:`jointbench.comparison.published.load_published`) instead
+    of leaving one comparison fewer."""
+
+    source: str
+    cells: tuple[str, ...]
+
+    @classmethod
+    def grid(
+        cls,
+        source: str,
+        cell_id: Callable[..., str],
+        *axes: Iterable[object],
+        empty: Collection[tuple] = (),
+    ) -> PublishedTable:
+        """The table whose cells are every combination of ``axes`` (its rows' and columns'
+        labels, as printed) but those ``empty`` (left blank in the paper); ``cell_id(*labels)``
+        is a cell's id."""
+        labels = (key for key in itertools.product(*axes) if key not in empty)
+        return cls(source, tuple(cell_id(*key) for key in labels))
+
+
+@dataclass(frozen=True)
 class Paper:
     """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names;
     ``also_measures`` names the study's estimators beyond ``methods`` that ``measure`` reads
@@ -117,7 +145,9 @@ class Paper:
     values must therefore all list (a file cut short is refused, not read as fewer claims);
     ``front_page`` gives what the paper adds to
     the report's landing page (:class:`FrontPart`) from the run's tables by name (those of
-    its outputs absent from a run are absent from the mapping)."""
+    its outputs absent from a run are absent from the mapping); ``tables`` its tables of
+    published values (:class:`PublishedTable`), each of whose cells its published values must
+    list."""
 
     key: str
     letter: str
@@ -131,6 +161,7 @@ class Paper:
     also_measures: tuple[str, ...] = ()
     declares: tuple[str, ...] = ()
     front_page: Callable[[Mapping[str, pd.DataFrame]], FrontPart] | None = None
+    tables: tuple[PublishedTable, ...] = ()
 
     def __post_init__(self) -> None:
         names = [o.name for o in self.outputs]

@@ -15,7 +15,7 @@ import pandas as pd
 from jointbench.comparison.tolerance import wilson_interval
 from jointbench.configuration.studies import get_study
 from jointbench.figures import paper_a as draw
-from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
+from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
 from jointbench.papers.common import claims_headline, claims_output
 from jointbench.resultfiles.formatting import number
 from jointbench.simulate.cmc import marker_positions
@@ -526,6 +526,12 @@ PAPER = Paper(
     published=Path(__file__).with_name("paper_a.yaml"),
     measure=measure,
     declares=tuple(f"A{number}" for number in range(1, 14)),  # claims A1–A13
+    tables=(
+        # Table 1's rows: the marker sets (each cell the set's three distances); Table 2's
+        # columns: the five methods, as printed.
+        PublishedTable.grid("Table 1", "A-T1-{}".format, ("M", "H")),
+        PublishedTable.grid("Table 2", "A-T2-{}".format, METHODS),
+    ),
     outputs=(
         Output(
             "paper_a_fig4",

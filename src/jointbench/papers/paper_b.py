@@ -15,7 +15,7 @@ import pandas as pd
 from jointbench.api import fit_axis
 from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
-from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
+from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
 from jointbench.papers.common import claims_headline, claims_output
 from jointbench.resultfiles.formatting import number
 
@@ -30,6 +30,9 @@ FIG2_CONDITIONS = (
     {"protocol": "knee", "fe_rom_deg": 30, "aa_ratio": 0.5},
 )
 _CELL_PREFIX = "B-T1-"
+#: Table 1 as printed: rows protocol × cost, columns FE RoM [deg] × AA/FE ratio.
+TABLE1_ROWS = (("knee", "mcp"), METHODS)
+TABLE1_COLUMNS = ((30, 60, 90), (0.1, 0.3, 0.5, 0.7))
 
 
 def _means(collected: pd.DataFrame) -> pd.DataFrame:
@@ -325,6 +328,7 @@ PAPER = Paper(
     published=Path(__file__).with_name("paper_b.yaml"),
     measure=measure,
     declares=tuple(_CLAIMS),
+    tables=(PublishedTable.grid("Table 1", _cell_id, *TABLE1_ROWS, *TABLE1_COLUMNS),),
     outputs=(
         Output(
             "paper_b_table1",

@@ -78,8 +78,11 @@ def bootstrap_covariances(trials: Trials, n_trials: int, n_resamples: int) -> np
             return [_refit_center(result) for result in results]
 
         try:
+            label = f"{STUDY} {BOOTSTRAP_METHOD} trial {trial}"
             with mistakes_named(f"{STUDY} {BOOTSTRAP_METHOD} bootstrap of trial {trial}"):
-                boot = bootstrap(refits, len(proximal) - 1, n_resamples=n_resamples, seed=trial)
+                boot = bootstrap(
+                    refits, len(proximal) - 1, n_resamples=n_resamples, seed=trial, label=label
+                )
         except ValueError:
             continue
         out[trial] = boot.covariance()
