@@ -16,6 +16,8 @@ from itertools import combinations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from jointbench import screening
 from jointbench.geometry import rotation_matrix
@@ -273,3 +275,94 @@ def test_extreme_scales_find_what_the_whole_screen_finds(scale):
         assert _found(screening.find_artefacts, markers) == _found(screening.screen, markers)
         if np.isfinite(markers).all():
             _check_verdict(markers)
+
+
+def _reference_clean_screen(markers, limit, far, near, min_frames):
+    """What :func:`screening._clean_screen` finds, composed as it was first written: the
+    frames counted, the distances, medians and typical frame, the marker-frame bounds, the
+    step sizes stored and their largest taken, the bound of
+    :func:`screening._surely_unexchanged` and the distance test's verdict, each kernel
+    finding what it needs itself."""
+    n_frames, n_markers, _ = markers.shape
+    if screening._complete_frames(markers).size < n_frames:
+        return -1, False, np.nan, False
+    distances = screening._pair_distances(markers)
+    medians = screening._medians(distances)
+    typical = screening._nearest(distances, medians)
+    first, second = screening._frame_misfits(markers, typical)
+    size = np.empty((max(n_frames - 3, 0), n_markers))
+    largest_jump = screening._jump_sizes(markers, size)
+    exchanged = False
+    if n_frames >= max(min_frames, 1) and not screening._surely_unexchanged(
+        distances, medians, n_markers, far, near
+    ):
+        found = screening._judge_frames(distances, medians, n_markers, far, near, True)[0]
+        exchanged = bool((found >= 0).any())
+    return typical, first <= limit and second <= limit, largest_jump, exchanged
+
+
+_TRIALS = st.tuples(
+    st.integers(0, 2**32 - 1),
+    st.integers(3, 6),
+    st.sampled_from((2, 3, 4, 5, 19, 20, 21, 60, 121)),
+    st.sampled_from(SHAPES),
+    st.sampled_from((0.0, 0.05, 0.5, 3.0)),
+    st.sampled_from(KINDS),
+)
+
+
+def _trial(drawn) -> np.ndarray:
+    """A seeded trial ``(n_frames, n, 3)`` [mm] of the drawn size, shape, noise and kind."""
+    seed, n_markers, n_frames, shape, noise, kind = drawn
+    rng = np.random.default_rng(seed)
+    return _spoilt(rng, _moving(rng, _body(rng, n_markers, shape), n_frames, noise), kind)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_TRIALS, st.sampled_from((0, 1, 20, 10**6)))
+def test_the_clean_screen_is_its_first_formulation(drawn, min_frames):
+    """The one compiled call, which shares the distances' finiteness, the exchanges, the
+    largest departure and the typical frame between its steps and keeps only the largest
+    step, finds what its steps found each for itself, bit for bit."""
+    markers = _trial(drawn)
+    far, near = screening._exchange_levels(markers.shape[1], RULES)
+    inputs = (markers, LIMIT, far, near, min_frames)
+    np.testing.assert_equal(screening._clean_screen(*inputs), _reference_clean_screen(*inputs))
+
+
+@settings(max_examples=200, deadline=None)
+@given(_TRIALS)
+def test_find_artefacts_finds_what_the_whole_screen_finds_on_drawn_trials(drawn):
+    """Clean and corrupted clusters drawn at random: the same artefacts and swaps, or the
+    same error."""
+    markers = _trial(drawn)
+    assert _found(screening.find_artefacts, markers) == _found(screening.screen, markers)
+
+
+_VALUES = st.sampled_from((0.0, 1.0, -2.5, 1e-160, 1e155, -1e200, np.nan, np.inf, -np.inf))
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(0, 7),
+    st.integers(2, 5),
+    st.lists(st.tuples(st.integers(0, 10**6), _VALUES), max_size=4),
+)
+def test_the_largest_step_and_the_distances_flag_are_those_stored(seed, n_frames, n, odd):
+    """On finite, huge, tiny, NaN and infinite coordinates, 0 to 7 frames: the largest step
+    kept alone is the largest of those :func:`screening._jump_sizes` stores, and the
+    distances' finiteness flag is true exactly where every distance is finite, which it is
+    only where every coordinate is."""
+    rng = np.random.default_rng(seed)
+    markers = rng.normal(scale=50.0, size=(n_frames, n, 3))
+    for where, value in odd:
+        if markers.size:
+            markers.flat[where % markers.size] = value
+    size = np.empty((max(n_frames - 3, 0), n))
+    with np.errstate(all="ignore"):
+        assert screening._largest_jump(markers) == screening._jump_sizes(markers, size)
+        distances, finite = screening._finite_pair_distances(markers)
+    np.testing.assert_array_equal(distances, screening._pair_distances(markers))
+    assert finite == bool(np.isfinite(distances).all())
+    assert not finite or np.isfinite(markers).all()

@@ -381,8 +381,19 @@ def _pair_distances(clusters: np.ndarray) -> np.ndarray:
     """The inter-marker distances ``(n_pairs, n_frames)`` [mm] of ``clusters``
     ``(n_frames, n, 3)`` [mm], the pairs ``(a, b)``, ``a < b``, in the order of
     ``itertools.combinations``. A compiled kernel."""
+    return _finite_pair_distances(clusters)[0]
+
+
+@kernel
+def _finite_pair_distances(clusters: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The distances of :func:`_pair_distances` and whether they are all finite. Where they
+    are, so is every coordinate of ``clusters`` ``(n_frames, n >= 2, 3)`` [mm]: a NaN or an
+    infinite coordinate makes every distance of its marker NaN or infinite. Not the converse:
+    finite coordinates of 1e155 mm or more overflow the squares. A compiled kernel."""
     n_frames, n_markers = clusters.shape[0], clusters.shape[1]
     distances = np.empty((n_markers * (n_markers - 1) // 2, n_frames))
+    # One flag and-ed over all distances, not a branch per distance: the test costs a cycle.
+    finite = True
     pair = 0
     for a in range(n_markers):
         for b in range(a + 1, n_markers):
@@ -390,9 +401,11 @@ def _pair_distances(clusters: np.ndarray) -> np.ndarray:
                 dx = clusters[f, a, 0] - clusters[f, b, 0]
                 dy = clusters[f, a, 1] - clusters[f, b, 1]
                 dz = clusters[f, a, 2] - clusters[f, b, 2]
-                distances[pair, f] = np.sqrt(dx * dx + dy * dy + dz * dz)
+                distance = np.sqrt(dx * dx + dy * dy + dz * dz)
+                distances[pair, f] = distance
+                finite &= distance < np.inf
             pair += 1
-    return distances
+    return distances, finite
 
 
 def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
@@ -630,6 +643,25 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
 
 
 @kernel
+def _largest_jump(markers: np.ndarray) -> float:
+    """The largest step size [mm] of :func:`find_jumps` of ``markers`` ``(n_frames, n, 3)``,
+    as :func:`_jump_sizes` returns it (-inf if all are NaN or there are none), without
+    storing the sizes: the largest squared change and one root, for a root is monotone and
+    correctly rounded, so that the root of the largest is the largest root. A compiled
+    kernel."""
+    largest_sq = -np.inf
+    for m in range(markers.shape[1] if markers.shape[0] > 3 else 0):
+        back = _step_change_sq(markers, 2, m)
+        for k in range(markers.shape[0] - 3):
+            ahead = _step_change_sq(markers, k + 3, m)
+            change_sq = _lesser(back, ahead)
+            if change_sq > largest_sq:  # never for NaN
+                largest_sq = change_sq
+            back = ahead
+    return np.sqrt(largest_sq) if largest_sq >= 0.0 else largest_sq
+
+
+@kernel
 def _step_change_sq(markers: np.ndarray, k: int, m: int) -> float:
     """``|s_k - s_(k-1)|^2`` [mm^2] of marker ``m`` of ``markers`` ``(n_frames, n, 3)`` at frame
     ``2 <= k < n_frames``, ``s_k = x_k - x_(k-1)``: the squared change of :func:`find_jumps`
@@ -797,8 +829,28 @@ def _judge_frames(
     With ``verdict``, only whether any frame has an exchange counts: where no frame is
     relabelled and :func:`_within_far` shows every frame within the far level, no frame has
     one, and the misfits and the noise are left NaN. A compiled kernel."""
+    largest_sq = _largest_departure_sq(distances, medians) if verdict else np.nan
+    return _judged(
+        distances, medians, _relabelled_pairs(n_markers), -1, largest_sq, far, near, verdict
+    )
+
+
+@kernel
+def _judged(
+    distances: np.ndarray,
+    medians: np.ndarray,
+    moved: np.ndarray,
+    nearest: int,
+    largest_sq: float,
+    far: float,
+    near: float,
+    verdict: bool,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """:func:`_judge_frames`, given what its caller may have found already: ``moved``
+    (:func:`_relabelled_pairs` of the cluster), ``nearest`` (:func:`_nearest` of
+    ``distances`` and ``medians``; -1 if not found) and, with ``verdict``,
+    ``largest_sq`` (:func:`_largest_departure_sq` of them). A compiled kernel."""
     n_frames = distances.shape[1]
-    moved = _relabelled_pairs(n_markers)
     # One buffer of the distances' shape holds in turn their departures, the anchor's sorted
     # distances and the aligned ones, which each median selection reorders in place.
     work = np.empty_like(distances)
@@ -808,7 +860,8 @@ def _judge_frames(
         # Sorting each frame's distances then moves whole rows, which changes no row's median,
         # no frame's largest departure and not the set of departures: the anchor and its noise
         # are the labelled distances' own.
-        anchor, noise = _nearest(distances, medians), spread
+        anchor = nearest if nearest >= 0 else _nearest(distances, medians)
+        noise = spread
     else:
         anchor, noise = _anchor_frame(distances, work)
     typical = distances[:, anchor].copy()
@@ -818,7 +871,7 @@ def _judge_frames(
     best = _nearest_exchanges(distances, moved, typical, allowed, candidates)
     if best.any():
         reference, noise = _aligned_typical(distances, moved, candidates, best, work)
-    elif verdict and _within_far(distances, medians, far):
+    elif verdict and _within_far_of(distances, medians, far, largest_sq):
         return np.full(n_frames, -1), np.full(n_frames, np.nan), np.nan
     else:
         # No frame is relabelled: the aligned distances are the labelled ones.
@@ -849,7 +902,16 @@ def _within_far(distances: np.ndarray, medians: np.ndarray, far: float) -> bool:
     summed as :func:`_misfits_sq` sums them, so that the largest is the one it finds; the
     margins (relative 1e-6, absolute 1e-150 mm) exceed the rounding of the products, and a
     NaN or an infinity fails the count."""
-    level = np.sqrt(_largest_departure_sq(distances, medians) / far) / 1.482602218505602
+    return _within_far_of(distances, medians, far, _largest_departure_sq(distances, medians))
+
+
+@kernel
+def _within_far_of(
+    distances: np.ndarray, medians: np.ndarray, far: float, largest_sq: float
+) -> bool:
+    """:func:`_within_far`, given ``largest_sq``, :func:`_largest_departure_sq` of
+    ``distances`` and ``medians``. A compiled kernel."""
+    level = np.sqrt(largest_sq / far) / 1.482602218505602
     level = level * (1.0 + 1e-6) + 1e-150
     if not level < np.inf:
         return False
@@ -1269,14 +1331,15 @@ def find_artefacts(
     jump check need together; the jumps are located only where a step exceeds
     ``min_jump_mm``. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
     label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
-    rules = rules or _RULES
     if len(labels) < 3:
-        return tuple(find_jumps(markers, labels, rules)), ()
+        return tuple(find_jumps(markers, labels, rules or _RULES)), ()
+    # Looked up before the default is filled in: None hashes faster than the rules.
+    limit, far, near, min_frames = _clean_levels(len(labels), rules)
+    rules = rules or _RULES
     markers = kernel_array(markers)
-    limit = _rigid_limit(rules)
-    far, near = _exchange_levels(len(labels), rules)
     # Asked for more frames than there are, the distance test does not run.
-    min_frames = markers.shape[0] + 1 if exchanges_untested(len(labels)) else rules.swap_min_frames
+    if min_frames is None:
+        min_frames = markers.shape[0] + 1
     typical, cleared, largest_jump, exchanged = _clean_screen(markers, limit, far, near, min_frames)
     if exchanged or not _fitted_clears(markers, typical, cleared, limit):
         found = screen(markers, labels, source, rules)
@@ -1298,6 +1361,20 @@ def surely_rigid(
     markers, limit = kernel_array(markers), _rigid_limit(rules)
     typical, cleared, _ = _screen_sums(markers, limit)
     return _fitted_clears(markers, typical, cleared, limit)
+
+
+@functools.cache
+def _clean_levels(
+    n_markers: int, rules: ArtefactRules | None
+) -> tuple[float, float, float, int | None]:
+    """What :func:`_clean_screen` takes of ``rules`` (``None``: the default) for a cluster of
+    ``n_markers``, found once per cluster size: :func:`_rigid_limit`, the levels of
+    :func:`_exchange_levels` and the least number of frames the distance test judges
+    (``None`` where it does not run, :func:`exchanges_untested`)."""
+    rules = rules or _RULES
+    far, near = _exchange_levels(n_markers, rules)
+    min_frames = None if exchanges_untested(n_markers) else rules.swap_min_frames
+    return _rigid_limit(rules), far, near, min_frames
 
 
 def _rigid_limit(rules: ArtefactRules) -> float:
@@ -1341,20 +1418,25 @@ def _clean_screen(
     finds a swapped frame (``False`` where a sample is missing, as the whole screen then
     runs). The inter-marker distances and their medians serve both the typical frame and the
     distance test, and where :func:`_surely_unexchanged` shows that the test finds nothing it
-    is not run. A compiled kernel."""
+    is not run. The bound and the test share the exchanges and the largest departure, and the
+    test's anchor is the typical frame wherever it is the labelled distances' own. A compiled
+    kernel."""
     n_frames, n_markers, _ = markers.shape
-    if _complete_frames(markers).size < n_frames:
+    distances, finite = _finite_pair_distances(markers)
+    # Finite distances show every coordinate finite; else the frames are counted.
+    if not finite and _complete_frames(markers).size < n_frames:
         return -1, False, np.nan, False  # the whole screen finds the jumps
-    distances = _pair_distances(markers)
     medians = _medians(distances)
     typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
     first, second = _frame_misfits(markers, typical)
-    largest_jump = _jump_sizes(markers, np.empty((max(n_frames - 3, 0), n_markers)))
+    largest_jump = _largest_jump(markers)
     exchanged = False
-    if n_frames >= max(min_frames, 1) and not _surely_unexchanged(
-        distances, medians, n_markers, far, near
-    ):
-        exchanged = (_judge_frames(distances, medians, n_markers, far, near, True)[0] >= 0).any()
+    if n_frames >= max(min_frames, 1):
+        moved = _relabelled_pairs(n_markers)
+        largest_sq = _largest_departure_sq(distances, medians)
+        if not _unexchanged_by_bound(moved, medians, largest_sq, far, near):
+            found = _judged(distances, medians, moved, typical, largest_sq, far, near, True)[0]
+            exchanged = (found >= 0).any()
     return typical, first <= limit and second <= limit, largest_jump, exchanged
 
 
@@ -1386,11 +1468,23 @@ def _surely_unexchanged(
     The margins (relative 1e-6, absolute 1e-150 mm) exceed the rounding of the few sums of
     squares on either side, underflow included; NaN or overflow fails the bound.
     """
-    sizes_sq = _exchange_sizes_sq(_relabelled_pairs(n_markers), medians)
+    return _unexchanged_by_bound(
+        _relabelled_pairs(n_markers), medians, _largest_departure_sq(distances, medians), far, near
+    )
+
+
+@kernel
+def _unexchanged_by_bound(
+    moved: np.ndarray, medians: np.ndarray, largest_sq: float, far: float, near: float
+) -> bool:
+    """:func:`_surely_unexchanged`, given ``moved`` (:func:`_relabelled_pairs` of the cluster)
+    and ``largest_sq`` (:func:`_largest_departure_sq` of the distances and ``medians``). A
+    compiled kernel."""
+    sizes_sq = _exchange_sizes_sq(moved, medians)
     if sizes_sq.size < 2:
         return False  # no exchange to bound
     least = np.sqrt(np.min(sizes_sq[1:]))
-    largest = np.sqrt(_largest_departure_sq(distances, medians)) * (1.0 + 1e-6) + 1e-150
+    largest = np.sqrt(largest_sq) * (1.0 + 1e-6) + 1e-150
     ratio = np.sqrt(far) / (np.sqrt(far) + np.sqrt(near))
     return 6.0 * largest < least and largest < ratio * least
 
