@@ -1072,11 +1072,9 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     """The verdicts on one segment's markers ``(T, N, n >= 3, 3)`` in the reference frame, from
     one compiled call (module docstring, "one segment"), and for an axis the rotations of the
     trials that rotate about more than one axis (:func:`_one_segment_axis_shares`)."""
-    from scipy.special import fdtrc
-
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
-    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
+    p_values = _fdtrc()(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
     rows = numbers.tolist()
     no_pose = [_no_pose_reason(row) for row in rows]
     # The hinge is given the candidate axis that explains the data better.
@@ -1084,22 +1082,25 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         (row[5], p[0], row[11], p[2]) if p[2] > p[1] else (row[5], p[0], row[8], p[1])
         for row, p in zip(rows, p_values, strict=True)
     ]
-    # Rotation off the main axis that is resolved: how much of the rotation is it?
-    resolved = [
-        reason is None and test[3] < ROTATION_ALPHA
-        for reason, test in zip(no_pose, tests, strict=True)
-    ]
-    shares = _axis_share_rows(
-        kind,
-        resolved,
-        lambda wanted: _one_segment_axis_shares(markers[wanted], numbers[wanted, 0]),
-    )
+    # Rotation off the main axis that is resolved: how much of the rotation is it? (A centre
+    # needs no share: _axis_share_rows has none for it.)
+    shares: dict[int, tuple[float, ...]] = {}
+    if kind not in CENTRE_KINDS:
+        resolved = [
+            reason is None and test[3] < ROTATION_ALPHA
+            for reason, test in zip(no_pose, tests, strict=True)
+        ]
+        shares = _axis_share_rows(
+            kind,
+            resolved,
+            lambda wanted: _one_segment_axis_shares(markers[wanted], numbers[wanted, 0]),
+        )
     return [
         _without_poses((markers[t],), no_pose[t])
         if no_pose[t] is not None
         else _verdict(
             kind,
-            ("markers",),
+            _MARKERS,
             [(row[1], math.sqrt(3.0 * row[0]))],
             row[0],
             tests[t],
@@ -1107,6 +1108,22 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         )
         for t, row in enumerate(rows)
     ]
+
+
+# The array names of a one-segment verdict.
+_MARKERS = ("markers",)
+
+
+@functools.cache
+def _fdtrc():
+    """``scipy.special.fdtrc(d1, d2, x)``, the F survival function (scipy.stats would import
+    far more), imported on the first verdict: only a user's checked call assesses support, and
+    the simulated studies' estimate jobs would pay a third of a second each for
+    scipy.special. Held after that: an import statement per verdict costs a share of a
+    one-trial check."""
+    from scipy.special import fdtrc
+
+    return fdtrc
 
 
 def _no_pose_reason(row: list[float]) -> str | None:
@@ -1253,6 +1270,16 @@ def _without_poses(
     )
 
 
+def _not_rigid(name: str, share: float, residual: float) -> str:
+    """The warning on the markers of array ``name`` that leave ``share`` of their scatter about
+    their centroid unexplained by a rigid-body fit, with its RMS 3-D residual [mm]."""
+    return (
+        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
+        f"{100 * share:.0f}% of their scatter about their centroid "
+        f"unexplained (residual {residual:.3g} mm)"
+    )
+
+
 def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
@@ -1263,13 +1290,21 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
-    warnings = [
-        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
-        f"{100 * share:.0f}% of their scatter about their centroid "
-        f"unexplained (residual {residual:.3g} mm)"
-        for name, (share, residual) in zip(names, rigidity, strict=True)
-        if share >= MAX_NONRIGID_SHARE
-    ]
+    if len(rigidity) == 1:
+        # One segment's (every one-segment verdict): no generators for one entry.
+        ((largest_share, residual),) = rigidity
+        warnings = (
+            [_not_rigid(names[0], largest_share, residual)]
+            if largest_share >= MAX_NONRIGID_SHARE
+            else []
+        )
+    else:
+        warnings = [
+            _not_rigid(name, share, residual)
+            for name, (share, residual) in zip(names, rigidity, strict=True)
+            if share >= MAX_NONRIGID_SHARE
+        ]
+        largest_share = max(share for share, _ in rigidity)
     # A rotation test on markers that keep no shape would only restate that.
     if not warnings and p_any >= ROTATION_ALPHA:
         warnings.append(
@@ -1295,7 +1330,7 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
-        "nonrigid_share": float(max(share for share, _ in rigidity)),
+        "nonrigid_share": float(largest_share),
         "rotation_rms_deg": rms_deg,
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,
@@ -1328,5 +1363,29 @@ def assess(
 def annotate(result, support: Support):
     """``result`` with the support warnings appended to its ``status`` and the numbers in its
     ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
-    numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
+    prefixed = _PREFIXED
+    numbers = {
+        prefixed[key] if key in prefixed else f"support_{key}": value
+        for key, value in support.diagnostics.items()
+    }
     return with_warnings(result, support.warnings, numbers)
+
+
+# The diagnostics' names in a result (annotate), formatted once: a verdict has a few.
+_PREFIXED = {
+    key: f"support_{key}"
+    for key in (
+        "assessed",
+        "rigid_residual_mm",
+        "nonrigid_share",
+        "rotation_rms_deg",
+        "rotation_p_value",
+        "off_axis_rotation_rms_deg",
+        "off_axis_p_value",
+        "off_principal_axis_share",
+        "reason",
+        "sphere_residual_share",
+        "sphere_residual_mm",
+        "straight_line_p_value",
+    )
+}
