@@ -350,45 +350,49 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             right[k] = q
             k += 1
     terms = (left, right, np.empty(left.shape[0]))
+    # Work arrays of one shape share an allocation, taken apart by their first index: a few
+    # allocations in place of some thirty, a measurable share of a one-trial call. (The BLAS
+    # products' operands below keep allocations of their own.)
+    by_pair = np.empty((9, n_pairs))
+    pair_squares = np.empty((6, n_pairs, n_pairs))
+    by_marker = np.empty((3, n_markers, 3))
+    marker_squares = np.empty((4, n_markers, n_markers))
+    per_marker = np.empty((2, n_markers))
+    small = np.empty((4, 3))
+    small_squares = np.empty((2, 3, 3))
     # Three sets of distances: the cluster's own (set 0), and those of its projections on the
     # planes normal to the two candidate hinge axes (sets 1 and 2).
     planes = np.empty((3, 2, 3))
-    first_d = np.empty((3, n_pairs))
-    sum_d = np.empty(n_pairs)
-    scatter_d = np.empty((3, n_pairs, n_pairs))
-    mean_sq = np.empty((3, n_pairs))
-    residual = np.empty(3)
-    rank = np.empty(3)
-    off_axis = np.empty(2)
+    first_d = by_pair[0:3]
+    sum_d = by_pair[3]
+    scatter_d = pair_squares[0:3]
+    mean_sq = by_pair[4:7]
+    residual = small[0]
+    rank = small[1]
+    off_axis = small[2]
     flat = np.zeros(2, dtype=np.bool_)
-    first_c = np.empty((n_markers, 3))
-    centred = np.empty((n_markers, 3))
-    sum_e = np.empty((n_markers, 3))
-    pooled = np.empty((3, 3))
+    first_c = by_marker[0]
+    centred = by_marker[1]
+    sum_e = by_marker[2]
+    pooled = small_squares[0]
+    vectors3 = small_squares[1]
     inverse = np.empty((3, 3))
     root = np.empty((3, 3))
-    sum_w = np.empty(3)
+    sum_w = small[3]
     outer_w = np.empty((3, 3))
     whitened = np.empty((3, 3))
     axes = np.empty((2, 3))
     values3 = np.empty(3)
     principal = np.empty(3)
-    vectors3 = np.empty((3, 3))
     work3 = np.empty((3, 3))
-    mean_d = np.empty(n_pairs)
-    squared = np.empty((n_markers, n_markers))
-    row_sums = np.empty(n_markers)
-    gram = np.empty((n_markers, n_markers))
-    mu = np.empty(n_markers)
-    vectors_n = np.empty((n_markers, n_markers))
-    work_n = np.empty((n_markers, n_markers))
-    scratch = (
-        squared,
-        np.empty((n_pairs, n_pairs)),
-        np.empty(n_pairs),
-        np.empty((n_pairs, n_pairs)),
-        np.empty((n_pairs, n_pairs)),
-    )
+    mean_d = by_pair[7]
+    squared = marker_squares[0]
+    row_sums = per_marker[0]
+    gram = marker_squares[1]
+    mu = per_marker[1]
+    vectors_n = marker_squares[2]
+    work_n = marker_squares[3]
+    scratch = (squared, pair_squares[3], by_pair[8], pair_squares[4], pair_squares[5])
     for t in range(n_trials):
         trial = markers[t]
         sum_e[:] = 0.0
