@@ -390,3 +390,24 @@ def test_the_line_check_decides_as_the_eigenvalues_do_near_its_threshold():
     expected = [validation._STRAIGHT if straight(trial) else 0 for trial in batch]
     np.testing.assert_array_equal(failures, expected)
     assert 0 < np.count_nonzero(failures) < len(batch) // 2
+
+
+def test_a_kernel_is_compiled_on_its_first_call_and_then_called_directly(monkeypatch):
+    """Compiled on the first call, not before; later calls reach the compiled dispatcher
+    without asking for it again (a checked fit calls several kernels of microseconds)."""
+    from jointbench.numerics.compiled import kernel
+
+    def twice(x):
+        return 2.0 * x
+
+    doubled = kernel(twice)
+    assert doubled._compiled is None
+    asked = []
+    compiled = type(doubled).compiled
+    monkeypatch.setattr(
+        type(doubled), "compiled", lambda self: asked.append(self) or compiled(self)
+    )
+    assert doubled(1.5) == 3.0
+    assert asked == [doubled] and doubled._compiled is not None
+    assert doubled(2.5) == 5.0 and doubled(np.float64(0.5)) == 1.0
+    assert asked == [doubled]

@@ -173,7 +173,9 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
         result = one_trial(entry.many, *clean, poses=[poses], **options)
         verdict = support.assess(entry.kind, clean, poses=poses)
     result = _self_checked(entry.fn, result, clean, options)
-    (result,) = _precision_checked(entry.fn, [result], tuple(array[None] for array in clean))
+    if hasattr(entry.fn, "precision_many"):
+        # The trial as a batch of one, only for a method that states its precision.
+        (result,) = _precision_checked(entry.fn, [result], tuple(array[None] for array in clean))
     return support.annotate(result, verdict)
 
 
@@ -233,6 +235,8 @@ def _self_checked_many(fn: Callable, results: list, stacked: tuple, options: dic
     ``(T, N, n, 3)`` each: all trials in one call where the method has ``self_check_many``."""
     check_many = getattr(fn, "self_check_many", None)
     if check_many is None:
+        if not hasattr(fn, "self_check"):
+            return results  # no self-check: not even each trial's arrays are needed
         return [
             _self_checked(fn, result, tuple(array[t] for array in stacked), options)
             for t, result in enumerate(results)

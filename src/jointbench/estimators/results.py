@@ -109,6 +109,11 @@ def with_fields(result, **changes):
     if not changes.keys() <= result.__dataclass_fields__.keys():
         unknown = sorted(changes.keys() - result.__dataclass_fields__.keys())
         raise ValueError(f"{type(result).__name__} has no field {unknown[0]!r}")
+    return _replaced(result, changes)
+
+
+def _replaced(result, changes: dict):
+    """:func:`with_fields` of ``changes`` that are known to name fields holding no array."""
     copy = object.__new__(type(result))
     copy.__dict__.update(result.__dict__, **changes)
     return copy
@@ -122,4 +127,6 @@ def with_warnings(result, warnings: tuple[str, ...], diagnostics: dict):
     if warnings:
         words = "; ".join(f"warning: {warning}" for warning in warnings)
         status = words if status == "ok" else f"{status}; {words}"
-    return with_fields(result, status=status, diagnostics={**result.diagnostics, **diagnostics})
+    # Fields every result has: with_fields's check of the names is not needed.
+    merged = {**result.diagnostics, **diagnostics}
+    return _replaced(result, {"status": status, "diagnostics": merged})

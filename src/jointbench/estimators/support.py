@@ -350,45 +350,49 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             right[k] = q
             k += 1
     terms = (left, right, np.empty(left.shape[0]))
+    # Work arrays of one shape share an allocation, taken apart by their first index: a few
+    # allocations in place of some thirty, a measurable share of a one-trial call. (The BLAS
+    # products' operands below keep allocations of their own.)
+    by_pair = np.empty((9, n_pairs))
+    pair_squares = np.empty((6, n_pairs, n_pairs))
+    by_marker = np.empty((3, n_markers, 3))
+    marker_squares = np.empty((4, n_markers, n_markers))
+    per_marker = np.empty((2, n_markers))
+    small = np.empty((4, 3))
+    small_squares = np.empty((2, 3, 3))
     # Three sets of distances: the cluster's own (set 0), and those of its projections on the
     # planes normal to the two candidate hinge axes (sets 1 and 2).
     planes = np.empty((3, 2, 3))
-    first_d = np.empty((3, n_pairs))
-    sum_d = np.empty(n_pairs)
-    scatter_d = np.empty((3, n_pairs, n_pairs))
-    mean_sq = np.empty((3, n_pairs))
-    residual = np.empty(3)
-    rank = np.empty(3)
-    off_axis = np.empty(2)
+    first_d = by_pair[0:3]
+    sum_d = by_pair[3]
+    scatter_d = pair_squares[0:3]
+    mean_sq = by_pair[4:7]
+    residual = small[0]
+    rank = small[1]
+    off_axis = small[2]
     flat = np.zeros(2, dtype=np.bool_)
-    first_c = np.empty((n_markers, 3))
-    centred = np.empty((n_markers, 3))
-    sum_e = np.empty((n_markers, 3))
-    pooled = np.empty((3, 3))
+    first_c = by_marker[0]
+    centred = by_marker[1]
+    sum_e = by_marker[2]
+    pooled = small_squares[0]
+    vectors3 = small_squares[1]
     inverse = np.empty((3, 3))
     root = np.empty((3, 3))
-    sum_w = np.empty(3)
+    sum_w = small[3]
     outer_w = np.empty((3, 3))
     whitened = np.empty((3, 3))
     axes = np.empty((2, 3))
     values3 = np.empty(3)
     principal = np.empty(3)
-    vectors3 = np.empty((3, 3))
     work3 = np.empty((3, 3))
-    mean_d = np.empty(n_pairs)
-    squared = np.empty((n_markers, n_markers))
-    row_sums = np.empty(n_markers)
-    gram = np.empty((n_markers, n_markers))
-    mu = np.empty(n_markers)
-    vectors_n = np.empty((n_markers, n_markers))
-    work_n = np.empty((n_markers, n_markers))
-    scratch = (
-        squared,
-        np.empty((n_pairs, n_pairs)),
-        np.empty(n_pairs),
-        np.empty((n_pairs, n_pairs)),
-        np.empty((n_pairs, n_pairs)),
-    )
+    mean_d = by_pair[7]
+    squared = marker_squares[0]
+    row_sums = per_marker[0]
+    gram = marker_squares[1]
+    mu = per_marker[1]
+    vectors_n = marker_squares[2]
+    work_n = marker_squares[3]
+    scratch = (squared, pair_squares[3], by_pair[8], pair_squares[4], pair_squares[5])
     for t in range(n_trials):
         trial = markers[t]
         sum_e[:] = 0.0
@@ -1072,11 +1076,9 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     """The verdicts on one segment's markers ``(T, N, n >= 3, 3)`` in the reference frame, from
     one compiled call (module docstring, "one segment"), and for an axis the rotations of the
     trials that rotate about more than one axis (:func:`_one_segment_axis_shares`)."""
-    from scipy.special import fdtrc
-
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
-    p_values = fdtrc(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
+    p_values = _fdtrc()(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
     rows = numbers.tolist()
     no_pose = [_no_pose_reason(row) for row in rows]
     # The hinge is given the candidate axis that explains the data better.
@@ -1084,22 +1086,25 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         (row[5], p[0], row[11], p[2]) if p[2] > p[1] else (row[5], p[0], row[8], p[1])
         for row, p in zip(rows, p_values, strict=True)
     ]
-    # Rotation off the main axis that is resolved: how much of the rotation is it?
-    resolved = [
-        reason is None and test[3] < ROTATION_ALPHA
-        for reason, test in zip(no_pose, tests, strict=True)
-    ]
-    shares = _axis_share_rows(
-        kind,
-        resolved,
-        lambda wanted: _one_segment_axis_shares(markers[wanted], numbers[wanted, 0]),
-    )
+    # Rotation off the main axis that is resolved: how much of the rotation is it? (A centre
+    # needs no share: _axis_share_rows has none for it.)
+    shares: dict[int, tuple[float, ...]] = {}
+    if kind not in CENTRE_KINDS:
+        resolved = [
+            reason is None and test[3] < ROTATION_ALPHA
+            for reason, test in zip(no_pose, tests, strict=True)
+        ]
+        shares = _axis_share_rows(
+            kind,
+            resolved,
+            lambda wanted: _one_segment_axis_shares(markers[wanted], numbers[wanted, 0]),
+        )
     return [
         _without_poses((markers[t],), no_pose[t])
         if no_pose[t] is not None
         else _verdict(
             kind,
-            ("markers",),
+            _MARKERS,
             [(row[1], math.sqrt(3.0 * row[0]))],
             row[0],
             tests[t],
@@ -1107,6 +1112,22 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         )
         for t, row in enumerate(rows)
     ]
+
+
+# The array names of a one-segment verdict.
+_MARKERS = ("markers",)
+
+
+@functools.cache
+def _fdtrc():
+    """``scipy.special.fdtrc(d1, d2, x)``, the F survival function (scipy.stats would import
+    far more), imported on the first verdict: only a user's checked call assesses support, and
+    the simulated studies' estimate jobs would pay a third of a second each for
+    scipy.special. Held after that: an import statement per verdict costs a share of a
+    one-trial check."""
+    from scipy.special import fdtrc
+
+    return fdtrc
 
 
 def _no_pose_reason(row: list[float]) -> str | None:
@@ -1253,6 +1274,16 @@ def _without_poses(
     )
 
 
+def _not_rigid(name: str, share: float, residual: float) -> str:
+    """The warning on the markers of array ``name`` that leave ``share`` of their scatter about
+    their centroid unexplained by a rigid-body fit, with its RMS 3-D residual [mm]."""
+    return (
+        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
+        f"{100 * share:.0f}% of their scatter about their centroid "
+        f"unexplained (residual {residual:.3g} mm)"
+    )
+
+
 def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
@@ -1263,13 +1294,21 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
-    warnings = [
-        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
-        f"{100 * share:.0f}% of their scatter about their centroid "
-        f"unexplained (residual {residual:.3g} mm)"
-        for name, (share, residual) in zip(names, rigidity, strict=True)
-        if share >= MAX_NONRIGID_SHARE
-    ]
+    if len(rigidity) == 1:
+        # One segment's (every one-segment verdict): no generators for one entry.
+        ((largest_share, residual),) = rigidity
+        warnings = (
+            [_not_rigid(names[0], largest_share, residual)]
+            if largest_share >= MAX_NONRIGID_SHARE
+            else []
+        )
+    else:
+        warnings = [
+            _not_rigid(name, share, residual)
+            for name, (share, residual) in zip(names, rigidity, strict=True)
+            if share >= MAX_NONRIGID_SHARE
+        ]
+        largest_share = max(share for share, _ in rigidity)
     # A rotation test on markers that keep no shape would only restate that.
     if not warnings and p_any >= ROTATION_ALPHA:
         warnings.append(
@@ -1295,7 +1334,7 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
-        "nonrigid_share": float(max(share for share, _ in rigidity)),
+        "nonrigid_share": float(largest_share),
         "rotation_rms_deg": rms_deg,
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,
@@ -1328,5 +1367,29 @@ def assess(
 def annotate(result, support: Support):
     """``result`` with the support warnings appended to its ``status`` and the numbers in its
     ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
-    numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
+    prefixed = _PREFIXED
+    numbers = {
+        prefixed[key] if key in prefixed else f"support_{key}": value
+        for key, value in support.diagnostics.items()
+    }
     return with_warnings(result, support.warnings, numbers)
+
+
+# The diagnostics' names in a result (annotate), formatted once: a verdict has a few.
+_PREFIXED = {
+    key: f"support_{key}"
+    for key in (
+        "assessed",
+        "rigid_residual_mm",
+        "nonrigid_share",
+        "rotation_rms_deg",
+        "rotation_p_value",
+        "off_axis_rotation_rms_deg",
+        "off_axis_p_value",
+        "off_principal_axis_share",
+        "reason",
+        "sphere_residual_share",
+        "sphere_residual_mm",
+        "straight_line_p_value",
+    )
+}
