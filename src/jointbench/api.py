@@ -41,13 +41,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import inspect
 import warnings
 
 import numpy as np
 
 from jointbench.estimators import registry
-from jointbench.estimators.batching import mistakes_named
+from jointbench.estimators.batching import ProgrammingError, mistakes_named
 from jointbench.estimators.results import (
     AxisResult,
     CenterResult,
@@ -164,14 +163,17 @@ def _called(fit, kind: str, method: str, clean: tuple[np.ndarray, ...], options:
     ``options``, holding it to the estimate jobs' rule
     (:func:`jointbench.estimators.batching.numerical_failure`): a failure the method states
     reaches the caller as it is, any other error inside it is a ``ProgrammingError`` naming the
-    method and the line. An option the method does not take is the caller's ``TypeError``, so
-    it is raised before the call."""
+    method and the line. An option the method does not take is the caller's ``TypeError``: the
+    signature is consulted only once the call has failed, so a fit that succeeds pays nothing
+    for it."""
     try:
-        inspect.signature(registry.get(kind, method, checked=False)).bind(*clean, **options)
-    except TypeError as error:
-        raise TypeError(f"{kind} method {method}: {error}") from None
-    with mistakes_named(f"{kind} method {method}"):
-        return fit(clean, **options)
+        with mistakes_named(f"{kind} method {method}"):
+            return fit(clean, **options)
+    except ProgrammingError as error:
+        unbound = registry.binding_error(kind, method, clean, options)
+        if isinstance(error.__cause__, TypeError) and unbound is not None:
+            raise TypeError(f"{kind} method {method}: {unbound}") from None
+        raise
 
 
 def _untested(kind: str, clean: tuple[np.ndarray, ...]) -> tuple[str, ...]:

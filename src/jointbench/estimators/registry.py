@@ -60,6 +60,7 @@ __all__ = [
     "INVARIANCES",
     "KINDS",
     "Claims",
+    "binding_error",
     "claims",
     "get",
     "has_own_many",
@@ -190,11 +191,23 @@ def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
 def _binds(entry: _Entry, arrays: tuple, options: dict) -> bool:
     """Whether ``entry``'s one-trial function takes ``arrays`` and ``options``: where it does
     not, calling it raises the ``TypeError`` a caller should see."""
+    return _binding_error(entry, arrays, options) is None
+
+
+def _binding_error(entry: _Entry, arrays: tuple, options: dict) -> TypeError | None:
+    """The ``TypeError`` of calling ``entry``'s one-trial function with ``arrays`` and
+    ``options`` that its signature alone gives, or ``None`` where it takes them."""
     try:
         entry.signature.bind(*arrays, **options)
-    except TypeError:
-        return False
-    return True
+    except TypeError as error:
+        return error
+    return None
+
+
+def binding_error(kind: str, name: str, arrays: tuple, options: dict) -> TypeError | None:
+    """:func:`_binding_error` of the estimator ``name`` of ``kind``: what its signature says
+    of a call with ``arrays`` and ``options`` (``None``: it takes them)."""
+    return _binding_error(_entry(kind, name), arrays, options)
 
 
 def _shared_poses(names: tuple[str, ...], segments: tuple) -> list | None:
