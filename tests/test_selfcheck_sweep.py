@@ -21,7 +21,7 @@ import pytest
 from test_conformance import random_hinge
 
 from jointbench.estimators import registry
-from jointbench.geometry import rotation_matrix, unit
+from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
 
 PINNED = Path(__file__).parent / "data" / "selfcheck_sweep.json"
 CENTER_METHODS = ("IS", "BC", "MA")
@@ -152,19 +152,66 @@ def test_the_sweep_holds_every_decision():
     assert set(_pinned()) == set(CASES)
 
 
+def _same(found: object, pinned: object) -> bool:
+    """Equal, numbers to :data:`TOLERANCE` (relative above 1): the last bits of a sum differ
+    between processors (the BLAS kernels each gets), so a pinned number holds to rounding."""
+    if isinstance(pinned, dict):
+        return (
+            isinstance(found, dict)
+            and found.keys() == pinned.keys()
+            and all(_same(found[key], value) for key, value in pinned.items())
+        )
+    if isinstance(pinned, list):
+        return (
+            isinstance(found, list)
+            and len(found) == len(pinned)
+            and all(_same(a, b) for a, b in zip(found, pinned, strict=True))
+        )
+    if isinstance(pinned, float) and not isinstance(found, bool):
+        return isinstance(found, (int, float)) and (
+            abs(found - pinned) <= TOLERANCE * max(1.0, abs(pinned))
+        )
+    return found == pinned
+
+
 def _assert_as_pinned(outcome: dict, pinned: dict) -> None:
     assert _decision(outcome) == _decision(pinned)
     assert outcome["status"] == pinned["status"]
-    assert outcome["evidence"] == pinned["evidence"]
+    assert _same(outcome["evidence"], pinned["evidence"]), (outcome["evidence"], pinned)
     assert outcome["converged"] == pinned["converged"]
     np.testing.assert_allclose(outcome["answer"], pinned["answer"], rtol=0, atol=TOLERANCE)
-    assert abs(outcome["cost"] - pinned["cost"]) <= TOLERANCE * max(1.0, abs(pinned["cost"]))
-    assert outcome["local_minimum_cost"] == pinned["local_minimum_cost"]
+    assert _same(outcome["cost"], pinned["cost"])
+    assert _same(outcome["local_minimum_cost"], pinned["local_minimum_cost"])
+
+
+def _noise_free_hinge(name: str) -> bool:
+    """Whether case ``name`` is a noise-free hinge (:func:`random_hinge`), whose search ends at
+    a cost of rounding's size: whether its ten starts are trapped there, and the numbers its
+    status prints, depend on the last bits of the arithmetic, which differ between processors
+    (the BLAS kernels each gets). Those cases are held to what must hold on any processor."""
+    return name.split("-")[1] == "hinge"
+
+
+def _assert_as_any_processor_gives(name: str, outcome: dict) -> None:
+    """A noise-free hinge's self-check restarts a search that ended away from the hinge and
+    keeps one that found it; either way the answer is the hinge's axis to the method's claimed
+    recovery."""
+    kind, method, markers, options, _ = CASES[name]
+    axis = random_hinge(np.random.default_rng(int(name.rsplit("-", 1)[1])))[1]
+    raw = registry.get(kind, method, checked=False)(markers, **options)
+    trapped = angle_between_lines_deg(raw.direction, axis) > 5.0
+    assert _decision(outcome) == ("restarted" if trapped else "held"), outcome["status"]
+    assert outcome["converged"]
+    recovery = registry.claims(kind, method).recovery
+    assert np.radians(angle_between_lines_deg(outcome["answer"], axis)) <= recovery, outcome
 
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_a_self_check_decides_and_returns_what_it_did(name):
-    _assert_as_pinned(_outcome(*CASES[name]), _pinned()[name])
+    if _noise_free_hinge(name):
+        _assert_as_any_processor_gives(name, _outcome(*CASES[name]))
+    else:
+        _assert_as_pinned(_outcome(*CASES[name]), _pinned()[name])
 
 
 def _many_groups() -> dict[tuple, list[str]]:
@@ -186,9 +233,9 @@ def test_the_many_trial_self_check_gives_each_trial_its_own_outcome(names):
     fit = fits[0][0]
     markers = np.stack([CASES[name][2] for name in names])
     checked = fit.self_check_many([result for _, result in fits], markers, **options)
-    pinned = _pinned()
+    # Each trial's outcome is its own: what the one-trial self-check gives it.
     for name, result in zip(names, checked, strict=True):
-        _assert_as_pinned(_summary(kind, result), pinned[name])
+        _assert_as_pinned(_summary(kind, result), _outcome(*CASES[name]))
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["--pin"]:
