@@ -109,9 +109,21 @@ def tangent_basis(direction: np.ndarray) -> np.ndarray:
     # Crossed with the coordinate axis it is least aligned with, so the product is never small.
     helper = np.zeros(3)
     helper[np.argmin(np.abs(direction))] = 1.0
-    first = np.cross(direction, helper)
+    first = _cross(direction, helper)
     first /= np.linalg.norm(first)
-    return np.stack([first, np.cross(direction, first)], axis=1)
+    basis = np.empty((3, 2))
+    basis[:, 0] = first
+    basis[:, 1] = _cross(direction, first)
+    return basis
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` of two vectors (3,), each component ``a_i b_j - a_j b_i`` as ``np.cross``
+    computes it (so equal to it bit for bit), without its broadcasting's cost, which is most
+    of a checked axis call's statement of precision on a short trial."""
+    a0, a1, a2 = np.asarray(a, dtype=float).tolist()
+    b0, b1, b2 = np.asarray(b, dtype=float).tolist()
+    return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0))
 
 
 def direction_sd_deg(gradient: np.ndarray, hessian: np.ndarray, cost: float, dof: int) -> float:
@@ -148,8 +160,10 @@ def distinct_frames(markers: np.ndarray) -> np.ndarray:
     # Equal frames have equal keys, so frames whose keys all differ are all distinct: the usual
     # case needs one sort of N numbers, not of N whole frames (several times the cost of the
     # rest of the statement on 5000 frames).
-    keys = flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1]))
-    if len(np.unique(keys)) == len(keys):
+    keys = np.sort(flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1])))
+    # Sorted keys all differ when no two neighbours are equal; NaN keys (an overflow), which
+    # sort last and equal nothing, are left to the frames' own comparison.
+    if not (keys[1:] == keys[:-1]).any() and not (len(keys) and math.isnan(keys[-1])):
         return markers
     distinct = np.unique(flat, axis=0)
     return distinct.reshape(len(distinct), *markers.shape[1:])
