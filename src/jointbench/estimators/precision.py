@@ -106,23 +106,27 @@ _TOLD_APART_Z = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 def tangent_basis(direction: np.ndarray) -> np.ndarray:
     """An orthonormal basis ``(3, 2)`` of the plane normal to the unit ``direction`` (3,)."""
-    # Crossed with the coordinate axis it is least aligned with, so the product is never small.
-    helper = np.zeros(3)
-    helper[np.argmin(np.abs(direction))] = 1.0
-    first = _cross(direction, helper)
-    first /= np.linalg.norm(first)
+    values = np.asarray(direction, dtype=float).tolist()
+    # Crossed with the coordinate axis it is least aligned with, so the product is never small
+    # (the first such axis, as np.argmin takes it).
+    helper = [0.0, 0.0, 0.0]
+    helper[min(range(3), key=lambda i: abs(values[i]))] = 1.0
+    first = _cross(values, helper)
+    # As np.linalg.norm takes a vector's length, without its checks.
+    first /= math.sqrt(first.dot(first))
     basis = np.empty((3, 2))
     basis[:, 0] = first
-    basis[:, 1] = _cross(direction, first)
+    basis[:, 1] = _cross(values, first.tolist())
     return basis
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a x b`` of two vectors (3,), each component ``a_i b_j - a_j b_i`` as ``np.cross``
-    computes it (so equal to it bit for bit), without its broadcasting's cost, which is most
-    of a checked axis call's statement of precision on a short trial."""
-    a0, a1, a2 = np.asarray(a, dtype=float).tolist()
-    b0, b1, b2 = np.asarray(b, dtype=float).tolist()
+def _cross(a: list[float], b: list[float]) -> np.ndarray:
+    """``a x b`` ``(3,)`` of two vectors given as 3 floats, each component ``a_i b_j - a_j b_i``
+    as ``np.cross`` computes it (so equal to it bit for bit), without the cost of its
+    broadcasting, which was most of a checked axis call's statement of precision on a short
+    trial."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
     return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0))
 
 
