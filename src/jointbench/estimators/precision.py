@@ -136,16 +136,18 @@ def direction_sd_deg(gradient: np.ndarray, hessian: np.ndarray, cost: float, dof
     other ``k - 2`` parameters (positions, in any unit) free; ``cost`` its value, ``dof`` its
     residuals less its fitted parameters (module docstring). ``inf`` when ``dof < 1`` or ``H``
     is not positive definite (the cost does not rise in every direction from the answer)."""
-    if dof < 1 or not np.all(np.isfinite(hessian)) or not np.all(np.isfinite(gradient)):
+    # The arrays' own methods: np.all, np.diag and np.outer would cost a quarter of the rest.
+    hessian, gradient = np.asarray(hessian, dtype=float), np.asarray(gradient, dtype=float)
+    if dof < 1 or not np.isfinite(hessian).all() or not np.isfinite(gradient).all():
         return math.inf
     # Positive definiteness does not depend on the parameters' units; the Cholesky factor of
     # the matrix scaled to a unit diagonal tells it where an eigenvalue would be lost to them.
-    diagonal = np.diag(hessian)
-    if not np.all(diagonal > 0.0):
+    diagonal = hessian.diagonal()
+    if not (diagonal > 0.0).all():
         return math.inf
     scale = 1.0 / np.sqrt(diagonal)
     try:
-        np.linalg.cholesky(hessian * np.outer(scale, scale))
+        np.linalg.cholesky(hessian * (scale[:, None] * scale))
     except np.linalg.LinAlgError:
         return math.inf
     inverse = np.linalg.inv(hessian)
