@@ -101,3 +101,42 @@ def test_the_planar_cost_states_its_other_minimum_where_its_ten_starts_are_cut_s
     assert result.status.startswith("restarted: ")
     assert other["angle_deg"] > precision.AMBIGUOUS_APART_DEG
     assert float(angle_between_lines_deg(np.asarray(result.direction), axis_direction)) < 1.0
+
+
+def _distinct_as_np_unique(markers: np.ndarray) -> np.ndarray:
+    """distinct_frames as it first was: the keys' count of distinct values by np.unique."""
+    flat = markers.reshape(len(markers), -1)
+    keys = flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1]))
+    if len(np.unique(keys)) == len(keys):
+        return markers
+    distinct = np.unique(flat, axis=0)
+    return distinct.reshape(len(distinct), *markers.shape[1:])
+
+
+def _overflowing(n_frames: int) -> np.ndarray:
+    """Frames whose keys overflow to NaN (inf - inf), one a frame, all frames distinct."""
+    frames = np.zeros((n_frames, 3, 3))
+    frames[:, 0, 0] = 1.7e308
+    frames[:, 0, 1] = -1.7e308
+    frames[:, 2, 2] = np.arange(n_frames)
+    return frames
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the keys of the overflowing frames
+@pytest.mark.parametrize(
+    "markers",
+    [
+        hinge(0, 30.0),
+        np.concatenate([hinge(1, 30.0)[:7]] * 3),
+        np.concatenate([hinge(2, 30.0), hinge(2, 30.0)[[5]]]),
+        hinge(3, 30.0)[:1],
+        _overflowing(1),
+        _overflowing(2),
+        _overflowing(5),
+    ],
+    ids=["distinct", "repeated", "one-repeat", "one-frame", "one-nan", "two-nans", "five-nans"],
+)
+def test_the_distinct_frames_are_those_np_unique_of_the_keys_tells(markers):
+    np.testing.assert_array_equal(
+        precision.distinct_frames(markers), _distinct_as_np_unique(markers)
+    )

@@ -167,9 +167,9 @@ def distinct_frames(markers: np.ndarray) -> np.ndarray:
     # case needs one sort of N numbers, not of N whole frames (several times the cost of the
     # rest of the statement on 5000 frames).
     keys = np.sort(flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1])))
-    # Sorted keys all differ when no two neighbours are equal; NaN keys (an overflow), which
-    # sort last and equal nothing, are left to the frames' own comparison.
-    if not (keys[1:] == keys[:-1]).any() and not (len(keys) and math.isnan(keys[-1])):
+    # Sorted keys all differ when no two neighbours are equal, as np.unique counts them: NaN
+    # keys (an overflow), which sort last, count as one value.
+    if not (keys[1:] == keys[:-1]).any() and not (len(keys) > 1 and math.isnan(keys[-2])):
         return markers
     distinct = np.unique(flat, axis=0)
     return distinct.reshape(len(distinct), *markers.shape[1:])
