@@ -732,6 +732,8 @@ def _ambiguity_checked(
     :data:`jointbench.estimators.precision.AMBIGUOUS_APART_DEG` of the answer (the same
     minimum), else with the other minimum in its diagnostics and, where the data cannot tell
     the two fits apart (:func:`jointbench.estimators.precision.ambiguity`), a warning."""
+    if _surely_within(direction, result.direction, _APART_COSINE):
+        return result
     angle = angle_between_lines_deg(direction, result.direction)
     if not angle > precision.AMBIGUOUS_APART_DEG:
         return result
@@ -742,6 +744,25 @@ def _ambiguity_checked(
     return precision.annotate_ambiguity(
         result, other, *precision.ambiguity(*squares), f"the {result.method} cost"
     )
+
+
+# Lines whose cosine is at least this are within AMBIGUOUS_APART_DEG of each other whatever
+# the rounding of either (half a degree inside it, a margin of 4e-3 in the cosine).
+_APART_COSINE = math.cos(math.radians(precision.AMBIGUOUS_APART_DEG - 0.5))
+
+
+def _surely_within(a: np.ndarray, b: np.ndarray, cosine: float) -> bool:
+    """Whether the lines along ``a`` and ``b`` (3,), of any non-zero length, are at an angle
+    whose cosine is at least ``cosine``: the usual answer of the self-check's comparison of its
+    two minima, told in a few float operations where
+    :func:`jointbench.geometry.angle_between_lines_deg` costs a tenth of a millisecond; False
+    where that is not certain (the angle is then measured)."""
+    a0, a1, a2 = np.asarray(a, dtype=float).tolist()
+    b0, b1, b2 = np.asarray(b, dtype=float).tolist()
+    dot = a0 * b0 + a1 * b1 + a2 * b2
+    squares = (a0 * a0 + a1 * a1 + a2 * a2) * (b0 * b0 + b1 * b1 + b2 * b2)
+    # NaN, a zero vector or an overflow fails the comparisons: not certain.
+    return 0.0 < squares < math.inf and dot * dot >= cosine * cosine * squares
 
 
 def _sample_squares(
@@ -848,16 +869,18 @@ def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndar
     """
     markers = precision.distinct_frames(markers)
     n_frames, n_markers = markers.shape[:2]
-    foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
     basis = precision.tangent_basis(direction)
     n_params = 2 if method == "planar" else 4
     gradient, hessian, cost = np.zeros(n_params), np.zeros((n_params, n_params)), 0.0
     if method != "radial":
-        scatter = AxisCosts(markers, foot).scatter[0]
+        # S does not depend on the axis's point: the planar cost needs no foot, whose centroid
+        # of every sample costs more than S itself on a long trial.
+        scatter = _scatters(kernel_array(markers[None]))[0]
         gradient[:2] = 2.0 * basis.T @ scatter @ direction
         hessian[:2, :2] = _planar_hessian(scatter, direction, basis)
         cost = float(direction @ scatter @ direction)
     if method != "planar":
+        foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
         radial = _radial_derivatives(markers, foot, direction, basis)
         gradient, hessian, cost = gradient + radial[0], hessian + radial[1], cost + radial[2]
     dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params

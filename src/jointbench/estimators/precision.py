@@ -106,12 +106,28 @@ _TOLD_APART_Z = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 def tangent_basis(direction: np.ndarray) -> np.ndarray:
     """An orthonormal basis ``(3, 2)`` of the plane normal to the unit ``direction`` (3,)."""
-    # Crossed with the coordinate axis it is least aligned with, so the product is never small.
-    helper = np.zeros(3)
-    helper[np.argmin(np.abs(direction))] = 1.0
-    first = np.cross(direction, helper)
-    first /= np.linalg.norm(first)
-    return np.stack([first, np.cross(direction, first)], axis=1)
+    values = np.asarray(direction, dtype=float).tolist()
+    # Crossed with the coordinate axis it is least aligned with, so the product is never small
+    # (the first such axis, as np.argmin takes it).
+    helper = [0.0, 0.0, 0.0]
+    helper[min(range(3), key=lambda i: abs(values[i]))] = 1.0
+    first = _cross(values, helper)
+    # As np.linalg.norm takes a vector's length, without its checks.
+    first /= math.sqrt(first.dot(first))
+    basis = np.empty((3, 2))
+    basis[:, 0] = first
+    basis[:, 1] = _cross(values, first.tolist())
+    return basis
+
+
+def _cross(a: list[float], b: list[float]) -> np.ndarray:
+    """``a x b`` ``(3,)`` of two vectors given as 3 floats, each component ``a_i b_j - a_j b_i``
+    as ``np.cross`` computes it (so equal to it bit for bit), without the cost of its
+    broadcasting, which was most of a checked axis call's statement of precision on a short
+    trial."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0))
 
 
 def direction_sd_deg(gradient: np.ndarray, hessian: np.ndarray, cost: float, dof: int) -> float:
@@ -120,16 +136,18 @@ def direction_sd_deg(gradient: np.ndarray, hessian: np.ndarray, cost: float, dof
     other ``k - 2`` parameters (positions, in any unit) free; ``cost`` its value, ``dof`` its
     residuals less its fitted parameters (module docstring). ``inf`` when ``dof < 1`` or ``H``
     is not positive definite (the cost does not rise in every direction from the answer)."""
-    if dof < 1 or not np.all(np.isfinite(hessian)) or not np.all(np.isfinite(gradient)):
+    # The arrays' own methods: np.all, np.diag and np.outer would cost a quarter of the rest.
+    hessian, gradient = np.asarray(hessian, dtype=float), np.asarray(gradient, dtype=float)
+    if dof < 1 or not np.isfinite(hessian).all() or not np.isfinite(gradient).all():
         return math.inf
     # Positive definiteness does not depend on the parameters' units; the Cholesky factor of
     # the matrix scaled to a unit diagonal tells it where an eigenvalue would be lost to them.
-    diagonal = np.diag(hessian)
-    if not np.all(diagonal > 0.0):
+    diagonal = hessian.diagonal()
+    if not (diagonal > 0.0).all():
         return math.inf
     scale = 1.0 / np.sqrt(diagonal)
     try:
-        np.linalg.cholesky(hessian * np.outer(scale, scale))
+        np.linalg.cholesky(hessian * (scale[:, None] * scale))
     except np.linalg.LinAlgError:
         return math.inf
     inverse = np.linalg.inv(hessian)
@@ -148,8 +166,10 @@ def distinct_frames(markers: np.ndarray) -> np.ndarray:
     # Equal frames have equal keys, so frames whose keys all differ are all distinct: the usual
     # case needs one sort of N numbers, not of N whole frames (several times the cost of the
     # rest of the statement on 5000 frames).
-    keys = flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1]))
-    if len(np.unique(keys)) == len(keys):
+    keys = np.sort(flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1])))
+    # Sorted keys all differ when no two neighbours are equal, as np.unique counts them: NaN
+    # keys (an overflow), which sort last, count as one value.
+    if not (keys[1:] == keys[:-1]).any() and not (len(keys) > 1 and math.isnan(keys[-2])):
         return markers
     distinct = np.unique(flat, axis=0)
     return distinct.reshape(len(distinct), *markers.shape[1:])

@@ -391,7 +391,7 @@ def _sara_sd_deg(values: np.ndarray, vectors: np.ndarray, n_frames: int, n_disti
     """
     dof = 2 * n_frames - 4
     gaps = values[1:] - values[0]
-    if dof < 1 or not np.all(gaps > 0.0):
+    if dof < 1 or not (gaps > 0.0).all():
         return math.inf
     others = vectors[:, 1:]
     tau_sq = max(float(values[0]), 0.0) / dof
