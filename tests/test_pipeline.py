@@ -211,7 +211,8 @@ def test_the_readmes_recovery_steps_finish_a_run_killed_mid_job(tmp_path):
         grid={"marker_set": ["M"], "rom_deg": [5], "noise_mm": [1.0]},
         estimators=["NM", "LS"],
     )
-    for study in ("hinge", "hip"):
+    # One small study is enough to kill a run mid-job; the others would only lengthen it.
+    for study in config["studies"].keys() - {"cmc"}:
         config["studies"][study]["enabled"] = False
     # The user's own config, so that the README's commands need no --configfile.
     (workdir / "config" / "config.yaml").write_text(yaml.safe_dump(config))
