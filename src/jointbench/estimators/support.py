@@ -1104,7 +1104,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         if no_pose[t] is not None
         else _verdict(
             kind,
-            _MARKERS,
+            ("markers",),
             [(row[1], math.sqrt(3.0 * row[0]))],
             row[0],
             tests[t],
@@ -1112,10 +1112,6 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         )
         for t, row in enumerate(rows)
     ]
-
-
-# The array names of a one-segment verdict.
-_MARKERS = ("markers",)
 
 
 @functools.cache
@@ -1274,16 +1270,6 @@ def _without_poses(
     )
 
 
-def _not_rigid(name: str, share: float, residual: float) -> str:
-    """The warning on the markers of array ``name`` that leave ``share`` of their scatter about
-    their centroid unexplained by a rigid-body fit, with its RMS 3-D residual [mm]."""
-    return (
-        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
-        f"{100 * share:.0f}% of their scatter about their centroid "
-        f"unexplained (residual {residual:.3g} mm)"
-    )
-
-
 def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
@@ -1294,21 +1280,13 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
-    if len(rigidity) == 1:
-        # One segment's (every one-segment verdict): no generators for one entry.
-        ((largest_share, residual),) = rigidity
-        warnings = (
-            [_not_rigid(names[0], largest_share, residual)]
-            if largest_share >= MAX_NONRIGID_SHARE
-            else []
-        )
-    else:
-        warnings = [
-            _not_rigid(name, share, residual)
-            for name, (share, residual) in zip(names, rigidity, strict=True)
-            if share >= MAX_NONRIGID_SHARE
-        ]
-        largest_share = max(share for share, _ in rigidity)
+    warnings = [
+        f"the {_LABELS[name]} are not one rigid body: the best rigid-body fit leaves "
+        f"{100 * share:.0f}% of their scatter about their centroid "
+        f"unexplained (residual {residual:.3g} mm)"
+        for name, (share, residual) in zip(names, rigidity, strict=True)
+        if share >= MAX_NONRIGID_SHARE
+    ]
     # A rotation test on markers that keep no shape would only restate that.
     if not warnings and p_any >= ROTATION_ALPHA:
         warnings.append(
@@ -1334,7 +1312,7 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
-        "nonrigid_share": float(largest_share),
+        "nonrigid_share": float(max(share for share, _ in rigidity)),
         "rotation_rms_deg": rms_deg,
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,
@@ -1367,29 +1345,5 @@ def assess(
 def annotate(result, support: Support):
     """``result`` with the support warnings appended to its ``status`` and the numbers in its
     ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
-    prefixed = _PREFIXED
-    numbers = {
-        prefixed[key] if key in prefixed else f"support_{key}": value
-        for key, value in support.diagnostics.items()
-    }
+    numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
     return with_warnings(result, support.warnings, numbers)
-
-
-# The diagnostics' names in a result (annotate), formatted once: a verdict has a few.
-_PREFIXED = {
-    key: f"support_{key}"
-    for key in (
-        "assessed",
-        "rigid_residual_mm",
-        "nonrigid_share",
-        "rotation_rms_deg",
-        "rotation_p_value",
-        "off_axis_rotation_rms_deg",
-        "off_axis_p_value",
-        "off_principal_axis_share",
-        "reason",
-        "sphere_residual_share",
-        "sphere_residual_mm",
-        "straight_line_p_value",
-    )
-}
