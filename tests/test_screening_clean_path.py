@@ -349,19 +349,16 @@ _VALUES = st.sampled_from((0.0, 1.0, -2.5, 1e-160, 1e155, -1e200, np.nan, np.inf
     st.integers(2, 5),
     st.lists(st.tuples(st.integers(0, 10**6), _VALUES), max_size=4),
 )
-def test_the_largest_step_and_the_distances_flag_are_those_stored(seed, n_frames, n, odd):
-    """On finite, huge, tiny, NaN and infinite coordinates, 0 to 7 frames: the largest step
-    kept alone is the largest of those :func:`screening._jump_sizes` stores, and the
-    distances' finiteness flag is true exactly where every distance is finite, which it is
-    only where every coordinate is."""
+def test_the_distances_flag_is_true_exactly_where_every_distance_is_finite(seed, n_frames, n, odd):
+    """On finite, huge, tiny, NaN and infinite coordinates, 0 to 7 frames: the distances'
+    finiteness flag is true exactly where every distance is finite, which it is only where
+    every coordinate is."""
     rng = np.random.default_rng(seed)
     markers = rng.normal(scale=50.0, size=(n_frames, n, 3))
     for where, value in odd:
         if markers.size:
             markers.flat[where % markers.size] = value
-    size = np.empty((max(n_frames - 3, 0), n))
     with np.errstate(all="ignore"):
-        assert screening._largest_jump(markers) == screening._jump_sizes(markers, size)
         distances, finite = screening._finite_pair_distances(markers)
     np.testing.assert_array_equal(distances, screening._pair_distances(markers))
     assert finite == bool(np.isfinite(distances).all())

@@ -643,25 +643,6 @@ def _jump_sizes(markers: np.ndarray, size: np.ndarray) -> float:
 
 
 @kernel
-def _largest_jump(markers: np.ndarray) -> float:
-    """The largest step size [mm] of :func:`find_jumps` of ``markers`` ``(n_frames, n, 3)``,
-    as :func:`_jump_sizes` returns it (-inf if all are NaN or there are none), without
-    storing the sizes: the largest squared change and one root, for a root is monotone and
-    correctly rounded, so that the root of the largest is the largest root. A compiled
-    kernel."""
-    largest_sq = -np.inf
-    for m in range(markers.shape[1] if markers.shape[0] > 3 else 0):
-        back = _step_change_sq(markers, 2, m)
-        for k in range(markers.shape[0] - 3):
-            ahead = _step_change_sq(markers, k + 3, m)
-            change_sq = _lesser(back, ahead)
-            if change_sq > largest_sq:  # never for NaN
-                largest_sq = change_sq
-            back = ahead
-    return np.sqrt(largest_sq) if largest_sq >= 0.0 else largest_sq
-
-
-@kernel
 def _step_change_sq(markers: np.ndarray, k: int, m: int) -> float:
     """``|s_k - s_(k-1)|^2`` [mm^2] of marker ``m`` of ``markers`` ``(n_frames, n, 3)`` at frame
     ``2 <= k < n_frames``, ``s_k = x_k - x_(k-1)``: the squared change of :func:`find_jumps`
@@ -1429,7 +1410,7 @@ def _clean_screen(
     medians = _medians(distances)
     typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
     first, second = _frame_misfits(markers, typical)
-    largest_jump = _largest_jump(markers)
+    largest_jump = _jump_sizes(markers, np.empty((max(n_frames - 3, 0), n_markers)))
     exchanged = False
     if n_frames >= max(min_frames, 1):
         moved = _relabelled_pairs(n_markers)
