@@ -8,7 +8,10 @@ Snakemake on the real workflow.
 from __future__ import annotations
 
 import importlib
+import json
 import os
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -291,3 +294,103 @@ def test_a_missing_source_and_a_folder_have_digests(tmp_path):
     assert before[str(tmp_path / "absent.yaml")] == MISSING
     (folder / "a.yaml").write_text("a: 2\n")
     assert source_digests([folder])[str(folder)] != before[str(folder)]
+
+
+# The store of parsed summaries (``JOINTBENCH_CACHE``): each Snakemake process reads it instead
+# of parsing the package again. Each case runs fresh processes, as Snakemake does, so that
+# nothing comes from one process's memory.
+_PRINT_FINGERPRINT = (
+    "import sys; from jointbench.fingerprint import code_fingerprint; "
+    "print(code_fingerprint(sys.argv[1], package=sys.argv[2]))"
+)
+
+
+def _fingerprint_in_a_new_process(package: Path, store: Path | str) -> str:
+    environment = {
+        **os.environ,
+        "JOINTBENCH_CACHE": str(store),
+        "PYTHONPATH": os.pathsep.join(
+            [str(package.parent), str(Path(fingerprint.__file__).parents[1])]
+        ),
+    }
+    script = package.parent.parent / "script.py"
+    done = subprocess.run(
+        [sys.executable, "-c", _PRINT_FINGERPRINT, str(script), PACKAGE],
+        capture_output=True,
+        text=True,
+        env=environment,
+        check=True,
+    )
+    return done.stdout.strip()
+
+
+def _entries(store: Path) -> list[Path]:
+    return sorted(store.rglob("*.json"))
+
+
+def test_a_stored_summary_gives_the_fingerprint_parsing_gives(package, tmp_path):
+    store = tmp_path / "store"
+    parsed = _fingerprint_in_a_new_process(package, "off")
+    assert _fingerprint_in_a_new_process(package, store) == parsed  # writes the store
+    written = _entries(store)
+    assert written and not list(store.rglob("*.tmp"))
+    assert _fingerprint_in_a_new_process(package, store) == parsed  # reads it
+    assert _entries(store) == written
+    # What the second process used was the store: a summary altered there counts instead.
+    for entry in written:
+        stored = json.loads(entry.read_text())
+        stored["digest"] = "0" * 64 if stored["digest"] != "0" * 64 else "1" * 64
+        entry.write_text(json.dumps(stored))
+    assert _fingerprint_in_a_new_process(package, store) != parsed
+
+
+@pytest.mark.parametrize("path, old, new", CHANGES[:3] + CHANGES[-3:], ids=lambda c: str(c)[:20])
+def test_an_edit_is_seen_through_a_warm_store(package, tmp_path, path, old, new):
+    store = tmp_path / "store"
+    before = _fingerprint_in_a_new_process(package, store)
+    (package / path).write_text((package / path).read_text().replace(old, new))
+    after = _fingerprint_in_a_new_process(package, store)
+    assert after != before
+    assert after == _fingerprint_in_a_new_process(package, "off")
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        b"",
+        b"{",
+        b'{"digest": "00"}',
+        b"\x00\xff",
+        b'{"digest": 1, "imports": 2, "dynamic_calls": 3, "every": 4, "strings": 5}',
+        b'{"digest": "xyz", "imports": [], "dynamic_calls": false, "every": [], "strings": []}',
+        b'{"digest": "' + b"0" * 64 + b'", "imports": [["from", 1]], "dynamic_calls": false, '
+        b'"every": [], "strings": []}',
+    ],
+    ids=["empty", "cut", "missing keys", "not text", "wrong types", "not hex", "short import"],
+)
+def test_a_damaged_store_entry_is_parsed_again(package, tmp_path, damage):
+    store = tmp_path / "store"
+    parsed = _fingerprint_in_a_new_process(package, store)
+    for entry in _entries(store):
+        entry.write_bytes(damage)
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+
+
+def test_a_store_that_cannot_be_written_only_costs_time(package, tmp_path):
+    blocked = tmp_path / "a file, not a folder"
+    blocked.write_text("")
+    assert _fingerprint_in_a_new_process(package, blocked) == _fingerprint_in_a_new_process(
+        package, "off"
+    )
+
+
+def test_the_store_is_kept_apart_per_python_and_per_version_of_the_rules(monkeypatch, tmp_path):
+    monkeypatch.setenv("JOINTBENCH_CACHE", str(tmp_path))
+    here = fingerprint._store()
+    assert here.parent == tmp_path / "fingerprint"
+    monkeypatch.setattr(fingerprint.sys, "version", sys.version + " (another build)")
+    fingerprint._namespace.cache_clear()
+    try:
+        assert fingerprint._store() != here
+    finally:
+        fingerprint._namespace.cache_clear()

@@ -39,6 +39,11 @@ module names (read by a name built at run time, or not read at all) counts where
 whose folder holds it counts: a job that can import that package's modules can read it. Data
 files the caller tracks as inputs of exactly the jobs that read them are left out
 (:func:`code_fingerprint`'s ``inputs``): the workflow does so with the papers' published values.
+
+What is read of each file's syntax tree is stored by the hash of its text (``$JOINTBENCH_CACHE``,
+by default ``~/.cache/jointbench``; ``off`` stores nothing), so that a new process does not
+parse the package again: an entry is found only for the same text, parsed by the same Python
+under the same version of this module, and one that cannot be read is parsed again.
 """
 
 from __future__ import annotations
@@ -47,9 +52,13 @@ import ast
 import hashlib
 import importlib.metadata
 import importlib.util
+import json
+import os
 import pkgutil
 import platform
 import re
+import sys
+import tempfile
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
@@ -167,23 +176,64 @@ def _is_type_checking(test: ast.expr) -> bool:
     return name == "TYPE_CHECKING"
 
 
-def _absolute(node: ast.ImportFrom, module: str, is_package: bool) -> str:
-    """The module a ``from … import`` names, relative imports resolved against ``module``."""
-    if not node.level:
-        return node.module or ""
+def _absolute(level: int, source: str, module: str, is_package: bool) -> str:
+    """The module a ``from … import`` of ``source`` at ``level`` names, relative imports
+    resolved against ``module``."""
+    if not level:
+        return source
     parts = module.split(".")
     base = parts if is_package else parts[:-1]
-    base = base[: len(base) - node.level + 1]
-    return ".".join([*base, *([node.module] if node.module else [])])
+    base = base[: len(base) - level + 1]
+    return ".".join([*base, *([source] if source else [])])
 
 
 def _read(path: Path) -> str:
     return path.read_text(encoding="utf-8")
 
 
-# A workflow fingerprints dozens of jobs whose modules overlap: each text is parsed once, and a
-# file edited while a process runs is parsed again.
-@cache
+@dataclass(frozen=True)
+class _Summary:
+    """What the fingerprint needs of one Python text, all read from its syntax tree without
+    docstrings: ``digest``, the hex SHA-256 of the tree's dump (what the code does);
+    ``imports``, its ``import`` statements as ``["import", name, has_alias]`` and its
+    ``from … import`` statements as ``["from", level, module, names]``; ``dynamic_calls``,
+    whether it imports by a name built at run time; ``every``, the packages it imports every
+    module of; ``strings``, its string constants (all in nodes that can run)."""
+
+    digest: str
+    imports: tuple[tuple, ...]
+    dynamic_calls: bool
+    every: frozenset[str]
+    strings: frozenset[str]
+
+
+def _summarised(text: str) -> _Summary:
+    """The :class:`_Summary` of ``text``, parsed once."""
+    tree = _parsed(text)
+    imports: list[tuple] = []
+    strings: set[str] = set()
+    every: set[str] = set()
+    dynamic_calls = False
+    for node in _runs(tree):
+        if isinstance(node, ast.Import):
+            imports.extend(("import", a.name, a.asname is not None) for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            names = tuple(alias.name for alias in node.names)
+            imports.append(("from", node.level, node.module or "", names))
+        elif isinstance(node, ast.Call):
+            function = node.func
+            name = function.attr if isinstance(function, ast.Attribute) else function
+            dynamic_calls |= getattr(name, "id", name) in _DYNAMIC_IMPORTS
+            if getattr(name, "id", name) == _EVERY_MODULE and node.args:
+                first = node.args[0]
+                if isinstance(first, ast.Constant) and isinstance(first.value, str):
+                    every.add(first.value)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            strings.add(node.value)
+    digest = hashlib.sha256(ast.dump(tree).encode()).hexdigest()
+    return _Summary(digest, tuple(imports), dynamic_calls, frozenset(every), frozenset(strings))
+
+
 def _parsed(text: str) -> ast.Module:
     """The syntax tree of ``text`` without docstrings: they document, they do not run."""
     tree = ast.parse(text)
@@ -205,41 +255,128 @@ def _has_docstring(body: list[ast.stmt]) -> bool:
     )
 
 
+# Every Snakemake process fingerprints its jobs anew, and parsing the package's modules is most
+# of a dry run's time. A summary is a pure function of the text, of this module's code and of
+# the Python that parsed it (syntax trees differ between versions), so it is stored under the
+# hash of all three: an edited file, an edited rule of this module or another Python can only
+# miss the store, never read a summary of something else.
+def _store() -> Path | None:
+    """The folder of stored summaries: ``$JOINTBENCH_CACHE`` or the user's cache folder, one
+    subfolder per Python and per version of this module; ``None`` when it is switched off
+    (``JOINTBENCH_CACHE=off``)."""
+    setting = os.environ.get("JOINTBENCH_CACHE")
+    if setting == "off":
+        return None
+    base = Path(setting) if setting else _user_cache() / "jointbench"
+    return base / "fingerprint" / _namespace()
+
+
+def _user_cache() -> Path:
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+
+
+@cache
+def _namespace() -> str:
+    own = Path(__file__).read_bytes()
+    return hashlib.sha256(sys.version.encode() + b"\0" + own).hexdigest()[:16]
+
+
+@cache
+def _summary(text: str) -> _Summary:
+    """The :class:`_Summary` of ``text``: from the store when it holds one, else parsed (and
+    stored; a store that cannot be written or read is only slower)."""
+    store = _store()
+    if store is None:
+        return _summarised(text)
+    entry = store / f"{hashlib.sha256(text.encode()).hexdigest()}.json"
+    try:
+        return _from_json(json.loads(entry.read_text(encoding="utf-8")))
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    summary = _summarised(text)
+    _write_atomically(entry, json.dumps(_to_json(summary)))
+    return summary
+
+
+def _to_json(summary: _Summary) -> dict:
+    return {
+        "digest": summary.digest,
+        "imports": [list(entry) for entry in summary.imports],
+        "dynamic_calls": summary.dynamic_calls,
+        "every": sorted(summary.every),
+        "strings": sorted(summary.strings),
+    }
+
+
+def _from_json(stored: dict) -> _Summary:
+    """The summary :func:`_to_json` stored; ``ValueError`` for an entry that is not one (cut
+    short, or written by hand)."""
+    digest = stored["digest"]
+    if not isinstance(digest, str) or len(bytes.fromhex(digest)) != hashlib.sha256().digest_size:
+        raise ValueError("not a SHA-256 digest")
+    return _Summary(
+        digest,
+        tuple(_import_from_json(entry) for entry in stored["imports"]),
+        _typed(stored["dynamic_calls"], bool),
+        frozenset(_typed(s, str) for s in stored["every"]),
+        frozenset(_typed(s, str) for s in stored["strings"]),
+    )
+
+
+def _import_from_json(entry: list) -> tuple:
+    match entry:
+        case ["import", str(name), bool(has_alias)]:
+            return ("import", name, has_alias)
+        case ["from", int(level), str(module), list(names)]:
+            return ("from", level, module, tuple(_typed(n, str) for n in names))
+    raise ValueError(f"not an import: {entry!r}")
+
+
+def _typed(value, kind: type):
+    if not isinstance(value, kind):
+        raise ValueError(f"{value!r} is no {kind.__name__}")
+    return value
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` by renaming a finished temporary file, so that a process
+    reading it meanwhile sees the whole entry or none; give up quietly if the folder cannot
+    be written."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(
+            "w", encoding="utf-8", dir=path.parent, suffix=".tmp", delete=False
+        ) as handle:
+            handle.write(text)
+        os.replace(handle.name, path)
+    except OSError:
+        return
+
+
 def _imports(path: Path, module: str) -> _Imports:
     return _imports_of(_read(path), module, path.name == "__init__.py")
 
 
 @cache
 def _imports_of(text: str, module: str, is_package: bool) -> _Imports:
+    summary = _summary(text)
     whole: set[str] = set()
     named: set[tuple[str, str]] = set()
-    strings: set[str] = set()
-    every: set[str] = set()
-    dynamic_calls = False
-    for node in _runs(_parsed(text)):
-        if isinstance(node, ast.Import):
-            for alias in node.names:
-                # ``import a.b`` binds ``a``; ``import a.b as c`` binds only ``a.b``.
-                whole.add(alias.name if alias.asname else alias.name.split(".")[0])
-                whole.add(alias.name)
-        elif isinstance(node, ast.ImportFrom):
-            source = _absolute(node, module, is_package)
-            named.update((source, alias.name) for alias in node.names)
-        elif isinstance(node, ast.Call):
-            function = node.func
-            name = function.attr if isinstance(function, ast.Attribute) else function
-            dynamic_calls |= getattr(name, "id", name) in _DYNAMIC_IMPORTS
-            if getattr(name, "id", name) == _EVERY_MODULE and node.args:
-                first = node.args[0]
-                if isinstance(first, ast.Constant) and isinstance(first.value, str):
-                    every.add(first.value)
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
-            strings.add(node.value)
+    for entry in summary.imports:
+        if entry[0] == "import":
+            _, name, has_alias = entry
+            # ``import a.b`` binds ``a``; ``import a.b as c`` binds only ``a.b``.
+            whole.add(name if has_alias else name.split(".")[0])
+            whole.add(name)
+        else:
+            _, level, source_module, names = entry
+            source = _absolute(level, source_module, module, is_package)
+            named.update((source, name) for name in names)
     return _Imports(
         frozenset(whole),
         frozenset(named),
-        frozenset(strings if dynamic_calls else ()),
-        frozenset(every),
+        summary.strings if summary.dynamic_calls else frozenset(),
+        summary.every,
     )
 
 
@@ -254,18 +391,20 @@ def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
     # (module, whole): ``whole`` when the module object itself is imported, not only run as
     # the parent package of a submodule.
     stack: list[tuple[str, bool]] = []
+    # Asked about the same names thousands of times; the folder does not change meanwhile.
+    file_of = cache(package.file)
 
     def follow(imports: _Imports, followed_dynamic: bool) -> None:
         stack.extend((m, True) for m in imports.whole)
         for source, name in imports.named:
             submodule = f"{source}.{name}"
-            if package.file(submodule) is not None:
+            if file_of(submodule) is not None:
                 stack.append((submodule, True))
                 stack.append((source, False))
             else:
                 stack.append((source, True))
         if followed_dynamic:
-            stack.extend((m, True) for m in imports.dynamic if package.file(m) is not None)
+            stack.extend((m, True) for m in imports.dynamic if file_of(m) is not None)
         # Run whenever the file runs, however it was imported.
         stack.extend((m, True) for p in imports.every for m in package.modules(p))
 
@@ -274,7 +413,7 @@ def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
     visited: set[tuple[str, bool]] = set()
     while stack:
         module, whole = stack.pop()
-        path = package.file(module)
+        path = file_of(module)
         if path is None or (module, whole) in visited or (module, True) in visited:
             continue
         visited.add((module, whole))
@@ -298,12 +437,7 @@ def _named(text: str, names: frozenset[str]) -> frozenset[str]:
     candidates = {name for name in names if name in text}
     if not candidates:
         return frozenset()
-    strings = (
-        node.value
-        for node in _runs(_parsed(text))
-        if isinstance(node, ast.Constant) and isinstance(node.value, str)
-    )
-    return frozenset(candidates & {PurePosixPath(value).name for value in strings})
+    return frozenset(candidates & {PurePosixPath(value).name for value in _summary(text).strings})
 
 
 def _names(paths: Iterable[Path], names: frozenset[str]) -> frozenset[str]:
@@ -342,19 +476,26 @@ def _source_digest(path: Path) -> bytes:
     return _digest_of(_read(path))
 
 
-@cache
 def _digest_of(text: str) -> bytes:
-    return hashlib.sha256(ast.dump(_parsed(text)).encode()).digest()
+    return bytes.fromhex(_summary(text).digest)
 
 
 def dependency_versions(package: str = "jointbench") -> dict[str, str]:
     """The installed version of Python and of every distribution ``package`` requires (its
     run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too."""
-    versions = {"python": platform.python_version()}
+    return {"python": platform.python_version(), **dict(_installed_versions(package))}
+
+
+# Reading the installed distributions' metadata costs more than a job's whole fingerprint, and a
+# Snakemake process fingerprints every rule: it is read once per process, which no upgrade can
+# happen inside.
+@cache
+def _installed_versions(package: str) -> tuple[tuple[str, str], ...]:
     try:
         requirements = importlib.metadata.requires(package) or []
     except importlib.metadata.PackageNotFoundError:  # modules on the path, not installed
         requirements = []
+    versions = {}
     for requirement in requirements:
         if "extra ==" in requirement:
             continue
@@ -363,7 +504,7 @@ def dependency_versions(package: str = "jointbench") -> dict[str, str]:
             versions[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
             versions[name] = "not installed"
-    return versions
+    return tuple(versions.items())
 
 
 def code_fingerprint(
