@@ -26,6 +26,13 @@ import yaml
 from workflow_copy import ROOT, FinishedRun, finish_run
 
 FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
+#: A second extension, and its study's settings: one condition, one trial, one method.
+SECOND_STUDY = ROOT / "tests" / "data" / "second_study.py"
+SECOND_SETTINGS = {
+    "trials": 1,
+    "grid": {"marker_set": ["M"], "rom_deg": [45], "noise_mm": [0.5]},
+    "estimators": ["NM"],
+}
 # The fixtures below: each names its run's pytest-xdist group.
 SHARED_RUNS = frozenset({"reduced_run", "fourth_study_run"})
 
@@ -76,8 +83,14 @@ def reduced_run(tmp_path_factory) -> FinishedRun:
 
 @pytest.fixture(scope="session")
 def fourth_study_run(tmp_path_factory) -> FinishedRun:
-    """The fourth study of ``tests/data/fourth_study`` alone, its module loaded as an
-    extension, finished. Read only: write into a copy."""
-    files = tuple(FOURTH_STUDY / name for name in ("toy_study.py", "paper_t.yaml"))
+    """The fourth study of ``tests/data/fourth_study`` without the built-in studies, its
+    module loaded as an extension beside a second (``tests/data/second_study.py``), finished.
+    Read only: write into a copy."""
+    files = (*(FOURTH_STUDY / name for name in ("toy_study.py", "paper_t.yaml")), SECOND_STUDY)
+    overlay = _load("fourth_study/toy.yaml")
+    # Two extensions, each with a study: the order the config lists them in must rerun nothing
+    # (test_stale_results.py). The second's study is one job of each kind.
+    overlay["extensions"].append(SECOND_STUDY.name)
+    overlay["studies"]["second"] = SECOND_SETTINGS
     workdir = tmp_path_factory.mktemp("fourth_study_run")
-    yield from _shared(finish_run(workdir, _load("fourth_study/toy.yaml"), files))
+    yield from _shared(finish_run(workdir, overlay, files))

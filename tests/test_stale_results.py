@@ -3,7 +3,8 @@
 Two finished runs the session shares (``tests/conftest.py``) are edited, each in a work tree with
 its own copy of the package, which its jobs import (``PYTHONPATH``): the reduced grid of the
 three built-in studies with the external LM rule (``builtin``), and the fourth study from
-``tests/data/fourth_study`` alone, its module loaded as an extension (``extension``). Each case
+``tests/data/fourth_study`` without them, its module loaded as an extension beside a second,
+``tests/data/second_study.py`` (``extension``). Each case
 below applies one kind of edit a user makes: to library code, to the workflow's scripts and
 rules, to data files jobs read, to the config. It then asks ``snakemake --dry-run`` what it would
 run, and holds that to the jobs the edit must rerun (``reruns``) and to jobs it must leave alone
@@ -329,8 +330,23 @@ EDITS = (
 )
 
 
-def _config_edit(kind: str, change: Callable[[dict], None], reruns, spares=NOTHING):
-    return (kind, change, frozenset(reruns), frozenset(spares))
+# The shared run each scenario edits, by fixture: a case asks for it by name, so it joins the
+# run's group itself (tests/conftest.py).
+SHARED_RUN = {"builtin": "reduced_run", "extension": "fourth_study_run"}
+
+
+def _config_edit(
+    kind: str, change: Callable[[dict], None], reruns, spares=NOTHING, scenario="builtin"
+):
+    return pytest.param(
+        kind,
+        change,
+        frozenset(reruns),
+        frozenset(spares),
+        scenario,
+        id=kind,
+        marks=pytest.mark.xdist_group(SHARED_RUN[scenario]),
+    )
 
 
 def _set(path: str, value):
@@ -340,6 +356,16 @@ def _set(path: str, value):
         for key in parents:
             node = node.setdefault(key, {})
         node[last] = value
+
+    return change
+
+
+def _without_extension(entry: str, study: str) -> Callable[[dict], None]:
+    """An edit that drops ``entry`` from the extensions and its ``study`` from the studies."""
+
+    def change(config: dict) -> None:
+        config["extensions"].remove(entry)
+        del config["studies"][study]
 
     return change
 
@@ -376,18 +402,29 @@ CONFIG_EDITS = (
         {"collect[study=cmc]", "render_cmc", "check_published"},
         {"simulate_cmc", "estimate_cmc"},
     ),
+    # Every job loads every extension: one fewer reruns the jobs of the study left.
+    _config_edit(
+        "an extension removed",
+        _without_extension("second_study.py", "second"),
+        {"simulate_toy", "estimate_toy[method=NM]", "render_toy", "check_published"},
+        scenario="extension",
+    ),
 )
 
 
 def _reordered(path: str):
-    """An edit that lists the mapping at ``path`` in reverse key order, values unchanged."""
+    """An edit that lists the mapping at ``path`` in reverse key order, or the list there in
+    reverse order, values unchanged."""
 
     def change(config: dict) -> None:
         *parents, last = path.split(".")
         node = config
         for key in parents:
             node = node[key]
-        node[last] = dict(reversed(node[last].items()))
+        listed = node[last]
+        node[last] = (
+            list(reversed(listed)) if isinstance(listed, list) else dict(reversed(listed.items()))
+        )
 
     return change
 
@@ -416,6 +453,10 @@ ORDER_EDITS = (
     ),
     # The studies' order: the order of the report's sections is the registry's, not this.
     _config_edit("the studies reordered", _reordered("studies"), NOTHING),
+    # The extensions' order: their studies' is the registry's, by file name, not this.
+    _config_edit(
+        "the extensions reordered", _reordered("extensions"), NOTHING, scenario="extension"
+    ),
     _config_edit(
         "the grid's keys reordered and a value added",
         _both(_reordered("studies.cmc.grid"), _set("studies.cmc.grid.noise_mm", [1.0, 2.0])),
@@ -507,11 +548,6 @@ def _check(kind: str, jobs: set[str], reruns, spares) -> None:
     assert not wasted, f"{kind}: reran {wasted}, which the edit cannot change"
 
 
-# The shared run each scenario edits, by fixture: a case asks for it by name, so it joins the
-# run's group itself (tests/conftest.py).
-SHARED_RUN = {"builtin": "reduced_run", "extension": "fourth_study_run"}
-
-
 @pytest.mark.parametrize(
     "edit",
     [
@@ -536,13 +572,11 @@ def test_an_edit_reruns_what_it_can_change_and_nothing_else(request, tmp_path, e
     _check(edit.kind, jobs, edit.reruns, edit.spares)
 
 
-@pytest.mark.parametrize(
-    "kind, change, reruns, spares", CONFIG_EDITS, ids=[c[0] for c in CONFIG_EDITS]
-)
+@pytest.mark.parametrize("kind, change, reruns, spares, scenario", CONFIG_EDITS)
 def test_a_config_edit_reruns_what_it_can_change_and_nothing_else(
-    builtin, kind, change, reruns, spares
+    request, kind, change, reruns, spares, scenario
 ):
-    finished_run = builtin
+    finished_run = request.getfixturevalue(scenario)
     config = copy.deepcopy(finished_run.overlay)
     change(config)
     restore = _edited(finished_run.workdir, OVERLAY, yaml.safe_dump(config))
@@ -561,13 +595,11 @@ def test_the_dry_run_parser_reads_rules_and_wildcards():
     assert scheduled(output) == {"estimate_cmc", "estimate_cmc[method=BC]", "check_published"}
 
 
-@pytest.mark.parametrize(
-    "kind, change, reruns, spares", ORDER_EDITS, ids=[c[0] for c in ORDER_EDITS]
-)
+@pytest.mark.parametrize("kind, change, reruns, spares, scenario", ORDER_EDITS)
 def test_a_reordered_config_reruns_only_what_its_values_change(
-    builtin, kind, change, reruns, spares
+    request, kind, change, reruns, spares, scenario
 ):
-    finished_run = builtin
+    finished_run = request.getfixturevalue(scenario)
     # The overlay in the order its file lists it, so that the edit's order is the only change.
     config = yaml.safe_load((finished_run.workdir / OVERLAY).read_text())
     change(config)

@@ -13,7 +13,8 @@ them.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import math
+from collections.abc import Iterable, Mapping, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -88,14 +89,16 @@ def load_published(
 ) -> dict:
     """A paper's published-values document, schema-checked and holding an entry for each id of
     ``declares`` (:attr:`jointbench.papers.base.Paper.declares`) and each cell of ``tables``
-    (:attr:`jointbench.papers.base.Paper.tables`): ``ValueError`` naming the file otherwise,
-    and the missing ids (for a table, the paper, the table and its missing cells)."""
+    (:attr:`jointbench.papers.base.Paper.tables`), each cell one number or, for a table whose
+    cells list several (:attr:`~jointbench.papers.base.PublishedTable.lists`), a list of that
+    many: ``ValueError`` naming the file otherwise, and the missing ids (for a table, the
+    paper, the table and its missing cells, or the cell and the position in it)."""
     try:
         document = read_yaml(Path(path).read_text())
     except yaml.YAMLError as error:
         raise ValueError(f"published values {path}: not valid YAML ({error})") from error
     validate_against(document, _SCHEMA, f"published values {path}")
-    listed = {entry["id"] for entry in [*document.get("values", []), *document["claims"]]}
+    listed = {entry["id"]: entry for entry in [*document.get("values", []), *document["claims"]]}
     missing = [i for i in declares if i not in listed]
     if missing:
         raise ValueError(
@@ -110,7 +113,39 @@ def load_published(
                 f"value for {len(absent)} of its {len(table.cells)} cells: {', '.join(absent)}; "
                 "is the file cut short? Restore it from the repository"
             )
+        for cell in table.cells:
+            wrong = _misshapen_cell(listed[cell]["published"], table.lists)
+            if wrong:
+                raise ValueError(
+                    f"published values {path}: paper {document['paper']} {table.source} cell "
+                    f"{cell}: {wrong}; restore it from the repository"
+                )
     return document
+
+
+def _is_number(value: object) -> bool:
+    # YAML reads true/false as booleans, which Python counts as integers.
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _misshapen_cell(published: object, lists: Sequence[str] = ()) -> str | None:
+    """What is wrong with a table cell's ``published`` value, in words naming the position, or
+    None: with ``lists`` (the labels of the numbers the cell lists, in order) it must be a list
+    of that many numbers, without, one number."""
+    if not lists:
+        return None if _is_number(published) else f"{published!r} is not a number"
+    labels = ", ".join(lists)
+    if not isinstance(published, list):
+        return f"{published!r} is not a list of its {len(lists)} numbers ({labels})"
+    count = f"lists {len(published)} values where the paper prints {len(lists)} ({labels})"
+    for position, value in enumerate(published, start=1):
+        if position > len(lists):
+            return f"{count}: an extra value at position {position} ({value!r})"
+        if not _is_number(value):
+            return f"position {position} ({lists[position - 1]}) holds {value!r}, not a number"
+    if len(published) < len(lists):
+        return f"{count}: nothing at position {len(published) + 1}"
+    return None
 
 
 def _published_text(value: object) -> str:

@@ -352,9 +352,10 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
 def study_names(config: Mapping) -> list[str]:
     """Studies switched on in the config, in the study registry's order, which a run opens its
     config in (:func:`open_config`): the package's studies in the order of their simulator
-    modules' names, then those of the extensions in the order the config lists the extensions.
-    It orders the report's sections and the comparison's rows; the order in which the config
-    lists the studies means nothing."""
+    modules' names, then those of the extensions in the order of their files' names
+    (:func:`~jointbench.configuration.extensions.in_load_order`). It orders the report's sections
+    and the comparison's rows; the order in which the config lists the studies, or the
+    extensions, means nothing."""
     return [name for name, study in config["studies"].items() if study.get("enabled", True)]
 
 

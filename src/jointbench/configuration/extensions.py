@@ -11,14 +11,14 @@ from __future__ import annotations
 import importlib.util
 import sys
 import traceback
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 
 from jointbench.configuration.studies import register_study
 from jointbench.simulate import Study
 
-__all__ = ["load_extensions"]
+__all__ = ["in_load_order", "load_extensions"]
 
 
 def _register(value: object) -> None:
@@ -36,11 +36,11 @@ def _register(value: object) -> None:
 
 def load_extensions(config: Mapping, base: str | Path = ".") -> None:
     """Import every file under ``extensions`` and register the ``Study`` and ``Paper`` values
-    it defines. Importing the same file again is a no-op. A file that is missing, fails to
-    import or defines a value that cannot be registered raises ``ValueError`` naming the file
-    and the key that lists it; a file that failed is not kept as loaded."""
-    for entry in config.get("extensions", []):
-        path = (Path(base) / entry).resolve()
+    it defines, the files in the order of their names (:func:`in_load_order`). Importing the
+    same file again is a no-op. A file that is missing, fails to import or defines a value that
+    cannot be registered raises ``ValueError`` naming the file and the key that lists it; a file
+    that failed is not kept as loaded."""
+    for entry, path in in_load_order(config.get("extensions", []), base):
         where = f"config error at extensions: {entry!r} ({path})"
         if not path.is_file():
             raise ValueError(f"config error at extensions: {entry!r} is not a file ({path})")
@@ -53,6 +53,18 @@ def load_extensions(config: Mapping, base: str | Path = ".") -> None:
                 _register(value)
         except ValueError as error:
             raise ValueError(f"{where}: cannot be registered: {_reason(error, path)}") from error
+
+
+def in_load_order(entries: Sequence[str], base: str | Path = ".") -> list[tuple[str, Path]]:
+    """Each of the config's ``entries`` under ``extensions`` with its file (relative to
+    ``base``), in the order of the files' names, then of their paths.
+
+    What a file registers joins the registries in the order the files load, and the studies'
+    order reaches the jobs' parameters (every study's settings): loaded in the order the config
+    lists them, a reorder of the list would rerun jobs though no result changes. Built-in
+    studies are in the order of their modules' names too."""
+    files = [(entry, (Path(base) / entry).resolve()) for entry in entries]
+    return sorted(files, key=lambda file: (file[1].name, str(file[1])))
 
 
 def _imported(name: str, path: Path, where: str) -> ModuleType:

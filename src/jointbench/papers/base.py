@@ -113,13 +113,17 @@ class FrontPart:
 @dataclass(frozen=True)
 class PublishedTable:
     """A table of the paper whose cells are published values: ``source`` names it as its
-    entries' ``source`` does (``"Table 1"``), ``cells`` the ids of its cells. They come from the
-    paper's own rows and columns, not from its published-values file, so a cell deleted from
-    the file is found missing (:func:`jointbench.comparison.published.load_published`) instead
-    of leaving one comparison fewer."""
+    entries' ``source`` does (``"Table 1"``), ``cells`` the ids of its cells, ``lists`` the
+    labels, in order, of the numbers each cell lists (a printed row's columns kept in one entry:
+    paper A's marker set and its three distances), none when each cell is one number. They
+    come from the paper's own rows and columns, not from its published-values file, so a cell
+    deleted from the file, or a number deleted from a cell, is found missing
+    (:func:`jointbench.comparison.published.load_published`) instead of leaving one comparison
+    fewer or a shorter list."""
 
     source: str
     cells: tuple[str, ...]
+    lists: tuple[str, ...] = ()
 
     @classmethod
     def grid(
@@ -128,12 +132,13 @@ class PublishedTable:
         cell_id: Callable[..., str],
         *axes: Iterable[object],
         empty: Collection[tuple] = (),
+        lists: tuple[str, ...] = (),
     ) -> PublishedTable:
         """The table whose cells are every combination of ``axes`` (its rows' and columns'
         labels, as printed) but those ``empty`` (left blank in the paper); ``cell_id(*labels)``
-        is a cell's id."""
+        is a cell's id; each cell lists the numbers labelled ``lists``, or is one number."""
         labels = (key for key in itertools.product(*axes) if key not in empty)
-        return cls(source, tuple(cell_id(*key) for key in labels))
+        return cls(source, tuple(cell_id(*key) for key in labels), lists)
 
 
 @dataclass(frozen=True)

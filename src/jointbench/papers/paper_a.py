@@ -527,9 +527,11 @@ PAPER = Paper(
     measure=measure,
     declares=tuple(f"A{number}" for number in range(1, 14)),  # claims A1–A13
     tables=(
-        # Table 1's rows: the marker sets (each cell the set's three distances); Table 2's
-        # columns: the five methods, as printed.
-        PublishedTable.grid("Table 1", "A-T1-{}".format, ("M", "H")),
+        # Table 1's rows: the marker sets, each cell the set's row of three distances under
+        # "Marker number 1 2 3"; Table 2's columns: the five methods, as printed.
+        PublishedTable.grid(
+            "Table 1", "A-T1-{}".format, ("M", "H"), lists=("marker 1", "marker 2", "marker 3")
+        ),
         PublishedTable.grid("Table 2", "A-T2-{}".format, METHODS),
     ),
     outputs=(

@@ -1,0 +1,11 @@
+"""A second extension beside the toy study of ``fourth_study/``: a study of its own, the thumb
+CMC simulation under another name, so that a run lists two extensions, each with a study, whose
+order in the config must reach no job (``tests/test_stale_results.py``)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jointbench.simulate.cmc as cmc
+
+STUDY = dataclasses.replace(cmc.STUDY, name="second", title="a second extension's study")
