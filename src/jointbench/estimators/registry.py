@@ -46,6 +46,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from jointbench import declared
 from jointbench.estimators import support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
@@ -66,6 +67,7 @@ __all__ = [
     "has_own_many",
     "many",
     "methods",
+    "option_error",
     "register",
     "register_many",
     "styles",
@@ -208,6 +210,29 @@ def binding_error(kind: str, name: str, arrays: tuple, options: dict) -> TypeErr
     """:func:`_binding_error` of the estimator ``name`` of ``kind``: what its signature says
     of a call with ``arrays`` and ``options`` (``None``: it takes them)."""
     return _binding_error(_entry(kind, name), arrays, options)
+
+
+def option_error(kind: str, name: str, options: Mapping[str, object]) -> ValueError | None:
+    """A ``ValueError`` naming the first of ``options`` that is not what the estimator ``name``
+    of ``kind`` declares for it (its parameter's annotation, :mod:`jointbench.declared`), the
+    value and what is declared; ``None`` when each fits, or is not declared (no annotation, an
+    option it does not take, ``**options``, annotations that cannot be read).
+
+    For a caller whose call of the method failed: the annotations are read then, not on every
+    call."""
+    try:
+        accepted = declared.keyword_types(_entry(kind, name).fn, len(validation.ARRAY_NAMES[kind]))
+    except NameError:
+        return None  # the config check names annotations it cannot read; here the failure stands
+    for option, value in options.items():
+        annotation = (accepted or {}).get(option, inspect.Parameter.empty)
+        if annotation is inspect.Parameter.empty:
+            continue
+        try:
+            declared.check(value, annotation, (option,))
+        except declared.DeclarationError as error:
+            return ValueError(f"option {error} (as {name} declares it)")
+    return None
 
 
 def _shared_poses(names: tuple[str, ...], segments: tuple) -> list | None:

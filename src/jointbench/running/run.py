@@ -175,7 +175,8 @@ def estimate_table(
     if poses is not None and pose_segments(many) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = spec.diagnostics.get(method)
-    with mistakes_named(f"{study} {method}"):
+    options = options or {}
+    with mistakes_named(f"{study} {method}", lambda: registry.option_error(kind, method, options)):
         if warm_up:
             log.info(
                 "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
@@ -183,9 +184,9 @@ def estimate_table(
                 study,
                 method,
                 first_trial,
-                _warm_up(many, segments, trials, options or {}, poses),
+                _warm_up(many, segments, trials, options, poses),
             )
-        fitted = _fit_trials(many, segments, trials, options or {}, poses)
+        fitted = _fit_trials(many, segments, trials, options, poses)
         extras = [{}] * trials.n_trials
         if diagnose:
             arrays = tuple(trials.segments[name] for name in segments)
