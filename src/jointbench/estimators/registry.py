@@ -46,7 +46,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from jointbench import declared
+from jointbench import declared, owncode
 from jointbench.estimators import support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
@@ -358,6 +358,9 @@ def register(
         if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
         _REGISTRY[kind].register(_Entry(kind, name, fn, stated, style, many))
+        owncode.claim(fn)
+        if many is not None:
+            owncode.claim(many)
         return fn
 
     return decorate
@@ -371,6 +374,7 @@ def register_many(kind: str, name: str, many: Callable[..., list]) -> Callable[.
     if entry.many is not None:
         raise ValueError(f"{kind} estimator {name!r} already has a many-trial form")
     entry.many = many
+    owncode.claim(many)
     return many
 
 
