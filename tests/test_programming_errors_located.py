@@ -16,13 +16,16 @@ import site
 import sys
 import textwrap
 
+import numpy as np
 import pytest
 from test_cli import sphere_markers
 
 import jointbench as jb
 from jointbench import owncode
-from jointbench.estimators import registry
+from jointbench.estimators import registry, sphere
 from jointbench.estimators.batching import ProgrammingError
+from jointbench.estimators.results import CenterResult
+from jointbench.numerics.compiled import kernel
 
 INSTALLED = "installed_estimator"
 
@@ -83,10 +86,15 @@ def _line(function, text: str) -> int:
     return first + next(i for i, line in enumerate(lines) if text in line)
 
 
-def test_an_installed_methods_bug_is_located_in_its_own_code(installed):
+def _mistake_of(method: str) -> str:
+    """The message of the programming error that fitting ``method`` raises."""
     with pytest.raises(ProgrammingError) as raised:
-        jb.fit_center(sphere_markers()[0], "installed-bug")
-    message = str(raised.value)
+        jb.fit_center(sphere_markers()[0], method)
+    return str(raised.value)
+
+
+def test_an_installed_methods_bug_is_located_in_its_own_code(installed):
+    message = _mistake_of("installed-bug")
     where = f"at {installed.__file__}:{_line(installed._stacked, 'np.stack')}, in _stacked"
     assert where in message, message
 
@@ -95,3 +103,37 @@ def test_an_installed_methods_stated_failure_is_the_datas(installed):
     with pytest.raises(ValueError, match=r"^the installed method finds no sphere$") as raised:
         jb.fit_center(sphere_markers()[0], "installed-refusal")
     assert not isinstance(raised.value, ProgrammingError)
+
+
+@kernel
+def _summed(a, b):
+    total = np.zeros(3)
+    total += a + b  # the bug: a and b of other lengths
+    return total
+
+
+def _calls_the_kernel(markers: np.ndarray) -> CenterResult:
+    flat = np.ascontiguousarray(markers.reshape(-1, 3))
+    _summed(flat, flat[:2])
+    return sphere.fit_ls(markers)
+
+
+@pytest.fixture
+def kernel_caller():
+    registry.register("center", "kernel-bug", min_frames=4)(_calls_the_kernel)
+    yield
+    registry.unregister("center", "kernel-bug")
+
+
+def test_a_bug_inside_a_compiled_kernel_names_the_kernel_and_its_call(kernel_caller):
+    message = _mistake_of("kernel-bug")
+    call = f"at {__file__}:{_line(_calls_the_kernel, '_summed(')}, in _calls_the_kernel"
+    assert call in message, message
+    assert "compiled.py" not in message, message  # not the wrapper that calls the machine code
+    assert f"kernel {__name__}._summed" in message, message
+    assert "_summed.__wrapped__" in message, message
+    # As the message says: the Python form raises at the kernel's line.
+    markers = sphere_markers()[0].reshape(-1, 3)
+    with pytest.raises(ValueError, match="broadcast") as again:
+        _summed.__wrapped__(markers, markers[:2])
+    assert again.traceback[-1].lineno + 1 == _line(_summed.__wrapped__, "total += a + b")
