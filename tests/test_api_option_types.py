@@ -2,10 +2,11 @@
 
 A public fit call (``fit_center``, ``fit_axis``, ``fit_joint_center``, a recording's fit) and
 the estimate of a study hold an option the method declares (:mod:`jointbench.declared`) to its
-annotation once the method has failed on it: a value that is not what the method declares is a
-``ValueError`` naming the option, the value, what the method declares and the method, as the
-config check names it before a run. An option that fits its annotation and still makes the
-method fail stays the method's :class:`~jointbench.estimators.batching.ProgrammingError`.
+annotation before the fit: a value that is not what the method declares is a ``ValueError``
+naming the option, the value, what the method declares and the method, as the config check
+names it before a run (tests/test_api_option_values.py: values that would not crash it). An
+option that fits its annotation and still makes the method fail stays the method's
+:class:`~jointbench.estimators.batching.ProgrammingError`.
 """
 
 from __future__ import annotations

@@ -127,39 +127,24 @@ def _raise_lines(filename: str, source: str) -> frozenset[int]:
 
 
 @contextlib.contextmanager
-def mistakes_named(
-    label: str, callers: Callable[[], ValueError | None] | None = None
-) -> Iterator[None]:
+def mistakes_named(label: str) -> Iterator[None]:
     """Turn an exception raised inside that is no :func:`numerical_failure` into a
     :class:`ProgrammingError` naming ``label`` (the study and the method, or the recording and
     the method) and where the method went wrong; a :class:`ProgrammingError` raised inside gets
     ``label`` in front. A numerical failure, and an error of the machine (``MemoryError``,
-    ``OSError``), are raised as they are.
-
-    ``callers()``, asked only once the method has failed so, says whether the caller's input
-    was at fault (an option that is not what the method declares,
-    :func:`jointbench.estimators.registry.option_error`): its ``ValueError`` is raised with
-    ``label`` in front instead, a caller's mistake not being the method's bug."""
+    ``OSError``), are raised as they are. An option that is not what the method declares is
+    refused before the method runs (:func:`jointbench.estimators.registry.check_options`), so
+    what fails inside is the method's."""
     try:
         yield
     except ProgrammingError as error:
-        _raise_callers(label, callers)
         raise ProgrammingError(f"{label}: {error}") from error.__cause__
     except _ENVIRONMENT_ERRORS:
         raise
     except Exception as error:
         if numerical_failure(error):
             raise
-        _raise_callers(label, callers)
         raise ProgrammingError(f"{label}: {_mistake(error)}") from error
-
-
-def _raise_callers(label: str, callers: Callable[[], ValueError | None] | None) -> None:
-    """Raise the caller's mistake that ``callers()`` finds, with ``label`` in front; return
-    when there is none."""
-    found = None if callers is None else callers()
-    if found is not None:
-        raise ValueError(f"{label}: {found}") from None
 
 
 def failed_trial(error: BaseException) -> BaseException:

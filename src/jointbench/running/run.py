@@ -176,7 +176,9 @@ def estimate_table(
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = spec.diagnostics.get(method)
     options = options or {}
-    with mistakes_named(f"{study} {method}", lambda: registry.option_error(kind, method, options)):
+    # Before the warm-up: a direct call's options have passed no config check.
+    registry.check_options(kind, method, options, f"{study} {method}")
+    with mistakes_named(f"{study} {method}"):
         if warm_up:
             log.info(
                 "%s %s: warm-up fit of trial %d in %.3f s (compilation, first-call imports), "
