@@ -36,12 +36,12 @@ def test_refits_that_fail_are_counted_and_too_many_refuse():
     def statistic(resamples):
         return [None if rows[0] % 3 == 0 else np.array([rows.mean()]) for rows in resamples]
 
-    result = bootstrap(statistic, 50, n_resamples=40, block_length=5, seed=1)
+    result = bootstrap(statistic, 50, n_resamples=40, block_length=5, seed=1, label="a mean")
     assert 0 < result.n_failed < 40
     assert np.isnan(result.samples).any(axis=1).sum() == result.n_failed
 
     with pytest.raises(ValueError, match="refits failed"):
-        bootstrap(lambda resamples: [None] * len(resamples), 50, n_resamples=10)
+        bootstrap(lambda resamples: [None] * len(resamples), 50, n_resamples=10, label="nothing")
 
 
 def test_mean_of_white_noise_has_the_textbook_spread():
@@ -51,6 +51,7 @@ def test_mean_of_white_noise_has_the_textbook_spread():
         400,
         n_resamples=400,
         seed=2,
+        label="a mean",
     )
     spread = float(np.sqrt(result.covariance()[0, 0]))
     assert 0.8 < spread / (1.0 / np.sqrt(400)) < 1.2

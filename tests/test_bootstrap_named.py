@@ -27,3 +27,18 @@ def test_a_recordings_bootstrap_names_the_recording_and_the_method(registered):
     message = str(raised.value)
     assert message.startswith(f"{prepared.recording.source}: center {NAME}: bootstrap: "), message
     assert np.isfinite(prepared.fit("LS", n_bootstrap=20, seed=0).bootstrap.covariance()).all()
+
+
+def test_a_bootstrap_without_a_label_is_refused_before_it_refits():
+    refitted = []
+
+    def statistic(resamples):
+        refitted.append(len(resamples))
+        return [None] * len(resamples)
+
+    with pytest.raises(TypeError, match="label"):
+        bootstrap(statistic, 50, n_resamples=10)
+    for label in ("", "  ", None):
+        with pytest.raises(ValueError, match="label must name what is refitted"):
+            bootstrap(statistic, 50, n_resamples=10, label=label)
+    assert not refitted

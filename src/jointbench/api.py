@@ -163,9 +163,13 @@ def _called(fit, kind: str, method: str, clean: tuple[np.ndarray, ...], options:
     ``options``, holding it to the estimate jobs' rule
     (:func:`jointbench.estimators.batching.numerical_failure`): a failure the method states
     reaches the caller as it is, any other error inside it is a ``ProgrammingError`` naming the
-    method and the line. An option the method does not take is the caller's ``TypeError``: the
-    signature is consulted only once the call has failed, so a fit that succeeds pays nothing
-    for it."""
+    method and the line. An option that is not what the method declares for it is the
+    caller's ``ValueError``, refused before the fit
+    (:func:`jointbench.estimators.registry.check_options`); one the method does not take, the
+    caller's ``TypeError``, its signature consulted only once the call has failed, so a fit
+    that succeeds pays nothing for it."""
+    if options:  # a call with none, the common one, pays nothing for the check
+        registry.check_options(kind, method, options, f"{kind} method {method}")
     try:
         with mistakes_named(f"{kind} method {method}"):
             return fit(clean, **options)

@@ -68,7 +68,7 @@ def bootstrap(
     n_resamples: int = 200,
     block_length: int | None = None,
     seed: int = 0,
-    label: str | None = None,
+    label: str,
 ) -> Bootstrap:
     """Moving-block bootstrap over ``n_frames`` frames.
 
@@ -76,8 +76,12 @@ def bootstrap(
     all at once (so an estimator can refit them as one batch) and returns one ``(d,)`` row per
     resample, or ``None`` where the refit cannot support an answer; those count as failed.
     ``label`` names what is refitted (the recording or study, and the method), in front of the
-    ``ValueError`` raised when more than half the refits fail.
+    ``ValueError`` raised when more than half the refits fail. It is required, and refused when
+    blank, before any refit: ``statistic`` is any callable, so nothing else can say what it
+    refits, and of several bootstraps an unnamed refusal would not say which one failed.
     """
+    if not isinstance(label, str) or not label.strip():
+        raise ValueError(f"bootstrap: label must name what is refitted, got {label!r}")
     if int(n_resamples) < 2:
         raise ValueError(f"n_resamples must be >= 2, got {n_resamples}")
     block_length = default_block_length(n_frames) if block_length is None else int(block_length)
@@ -90,9 +94,8 @@ def bootstrap(
     samples = np.array([np.full(width, np.nan) if row is None else row for row in rows], float)
     n_failed = int(np.sum(~np.isfinite(samples).all(axis=1)))
     if n_failed > len(rows) // 2:
-        named = f"{label}: " if label else ""
         raise ValueError(
-            f"{named}bootstrap: {n_failed} of {len(rows)} refits failed; the frames cannot "
+            f"{label}: bootstrap: {n_failed} of {len(rows)} refits failed; the frames cannot "
             "support an interval (too few frames or too little motion per block)"
         )
     return Bootstrap(samples, block_length, n_failed)

@@ -28,6 +28,7 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
+from jointbench.numerics.compiled import kernel_called
 from jointbench.owncode import own_code
 
 __all__ = [
@@ -131,7 +132,9 @@ def mistakes_named(label: str) -> Iterator[None]:
     :class:`ProgrammingError` naming ``label`` (the study and the method, or the recording and
     the method) and where the method went wrong; a :class:`ProgrammingError` raised inside gets
     ``label`` in front. A numerical failure, and an error of the machine (``MemoryError``,
-    ``OSError``), are raised as they are."""
+    ``OSError``), are raised as they are. An option that is not what the method declares is
+    refused before the method runs (:func:`jointbench.estimators.registry.check_options`), so
+    what fails inside is the method's."""
     try:
         yield
     except ProgrammingError as error:
@@ -155,22 +158,49 @@ def failed_trial(error: BaseException) -> BaseException:
 
 def _mistake(error: BaseException) -> str:
     """``error`` as a programming error: where in the method's own code it went wrong (the
-    innermost such frame) and, when a library raised it, where."""
+    innermost such frame) and, when a library raised it, where; when compiled code of a kernel
+    raised it, which kernel (:func:`_inside_kernel`)."""
     entries = []
     entry = error.__traceback__
     while entry is not None:
         entries.append(entry)
         entry = entry.tb_next
-    own = [entry for entry in entries if own_code(entry.tb_frame.f_code.co_filename)]
+    calls = [kernel_called(entry.tb_frame) for entry in entries]
+    # A kernel's wrapper is no line of the method: the kernel's call in the method is.
+    own = [
+        entry
+        for entry, call in zip(entries, calls, strict=True)
+        if call is None and own_code(entry.tb_frame.f_code.co_filename)
+    ]
     where = [_place("at", own[-1])] if own else []
-    if entries and (not own or own[-1] is not entries[-1]):
+    if entries and (not own or own[-1] is not entries[-1]) and calls[-1] is None:
         where.append(_place("raised in", entries[-1]))
+    kernel = _inside_kernel(entries, calls, own)
+    if kernel is not None:
+        where.append(kernel)
     said = f" ({', '.join(where)})" if where else ""
     return (
         f"{type(error).__name__}: {error}{said}: a programming error, not a failure of the "
         "trial's data. A method that cannot fit a trial raises a ValueError saying why; where "
         "the data can make a library call fail, catch its error and raise a ValueError that "
         "says why"
+    )
+
+
+def _inside_kernel(entries: list, calls: list, own: list) -> str | None:
+    """Words for the compiled kernel the error was raised in, whose lines no traceback reaches
+    (Numba runs them as machine code): the last kernel called (``calls``, per traceback entry
+    of ``entries``) when no line of ``own`` code ran after its call; ``None`` otherwise."""
+    called = [index for index, call in enumerate(calls) if call is not None]
+    if not called or (own and entries.index(own[-1]) > called[-1]):
+        return None
+    kernel = calls[called[-1]]
+    name = f"{kernel.__module__}.{kernel.__qualname__}"
+    code = kernel.__wrapped__.__code__
+    return (
+        f"inside the Numba-compiled kernel {name} ({code.co_filename}:{code.co_firstlineno}), "
+        "whose lines a traceback does not reach: its Python source is its specification, and "
+        f"{kernel.__qualname__}.__wrapped__ called with the same arguments raises at the line"
     )
 
 

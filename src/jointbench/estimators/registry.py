@@ -46,6 +46,7 @@ from types import MappingProxyType
 
 import numpy as np
 
+from jointbench import declared, owncode
 from jointbench.estimators import support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
@@ -61,6 +62,7 @@ __all__ = [
     "KINDS",
     "Claims",
     "binding_error",
+    "check_options",
     "claims",
     "get",
     "has_own_many",
@@ -210,6 +212,69 @@ def binding_error(kind: str, name: str, arrays: tuple, options: dict) -> TypeErr
     return _binding_error(_entry(kind, name), arrays, options)
 
 
+def check_options(kind: str, name: str, options: Mapping[str, object], label: str) -> None:
+    """Refuse, before the fit, the first of ``options`` that is not what the estimator ``name``
+    of ``kind`` declares for it (its parameter's annotation, :mod:`jointbench.declared`): a
+    ``ValueError`` with ``label`` in front naming the option, the value, what is declared and
+    the method, as the config check refuses it before a run. An option the method does not
+    declare (no annotation, one it does not take, ``**options``, annotations that cannot be
+    read) is left to the method."""
+    fn = _entry(kind, name).fn
+    n_arrays = len(validation.ARRAY_NAMES[kind])
+    for option, value in options.items():
+        # Whether a number, text or flag fits is remembered by its type and value (1, 1.0 and
+        # True are equal but not alike); a list or an array is checked each time.
+        if type(value) in _SCALARS and _scalar_fits(fn, n_arrays, option, type(value), value):
+            continue
+        refused = _refusal(fn, n_arrays, option, value)
+        if refused is not None:
+            raise ValueError(f"{label}: option {refused} (as {name} declares it)")
+
+
+#: Types of the option values whose outcome :func:`check_options` remembers.
+_SCALARS = frozenset({int, float, bool, str, type(None)})
+
+
+def _refusal(fn: Callable, n_arrays: int, option: str, value: object) -> str | None:
+    """Why ``value`` is not what ``fn`` declares for ``option`` (:func:`_declared_options`);
+    ``None`` when it is, or nothing is declared."""
+    annotation = _declared_options(fn, n_arrays).get(option, inspect.Parameter.empty)
+    if annotation is inspect.Parameter.empty:
+        return None
+    try:
+        declared.check(value, annotation, (option,))
+    except declared.DeclarationError as error:
+        return str(error)
+    return None
+
+
+@functools.lru_cache(maxsize=1024)
+def _scalar_fits(fn: Callable, n_arrays: int, option: str, _type: type, value: object) -> bool:
+    """Whether :func:`_refusal` finds nothing against ``value``, a scalar of type ``_type``,
+    remembered: right after a fit the check's many small calls run cold (several microseconds),
+    and a call with options should cost next to nothing."""
+    return _refusal(fn, n_arrays, option, value) is None
+
+
+@functools.cache
+def _declared_options(fn: Callable, n_arrays: int) -> Mapping[str, object]:
+    """The annotation of each keyword option of ``fn`` that has one, after its ``n_arrays``
+    marker arrays; none for a function taking ``**options`` or whose annotations cannot be read
+    (the config check names those). Read once per registered function: a call with options
+    then pays a look-up, not ``inspect.signature`` and ``typing.get_type_hints``."""
+    try:
+        accepted = declared.keyword_types(fn, n_arrays)
+    except NameError:
+        return MappingProxyType({})
+    return MappingProxyType(
+        {
+            option: annotation
+            for option, annotation in (accepted or {}).items()
+            if annotation is not inspect.Parameter.empty
+        }
+    )
+
+
 def _shared_poses(names: tuple[str, ...], segments: tuple) -> list | None:
     """Per trial of ``segments`` (in ``names`` order, each ``(T, N, n, 3)`` or a list of
     trials), its poses as every pose-based method fits them, or its ``ValueError``; ``None``
@@ -333,6 +398,9 @@ def register(
         if name in _REGISTRY[kind].names():
             raise ValueError(f"{kind} estimator {name!r} is already registered")
         _REGISTRY[kind].register(_Entry(kind, name, fn, stated, style, many))
+        owncode.claim(fn)
+        if many is not None:
+            owncode.claim(many)
         return fn
 
     return decorate
@@ -346,6 +414,7 @@ def register_many(kind: str, name: str, many: Callable[..., list]) -> Callable[.
     if entry.many is not None:
         raise ValueError(f"{kind} estimator {name!r} already has a many-trial form")
     entry.many = many
+    owncode.claim(many)
     return many
 
 

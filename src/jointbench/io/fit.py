@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
-from jointbench.estimators.registry import KINDS, get, many
+from jointbench.estimators.registry import KINDS, check_options, get, many
 from jointbench.estimators.results import with_warnings
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -275,12 +275,15 @@ class Prepared:
 
         A mistake in the method's code, in the fit or a bootstrap refit, raises a
         :class:`~jointbench.estimators.batching.ProgrammingError` naming the recording, the
-        method and the line (:func:`~jointbench.estimators.batching.numerical_failure`).
+        method and the line (:func:`~jointbench.estimators.batching.numerical_failure`); an
+        option that is not what the method declares for it, a ``ValueError`` naming it before
+        the fit (:func:`~jointbench.estimators.registry.check_options`).
         """
         kind = self.kind
         method = method or DEFAULT_METHODS[kind]
-        rows = self.rows(np.arange(self.usable.size))
         label = f"{self.recording.source}: {kind} {method}"
+        check_options(kind, method, options, label)
+        rows = self.rows(np.arange(self.usable.size))
         with mistakes_named(label):
             result = self.solve(method, rows, options)
             boot = None

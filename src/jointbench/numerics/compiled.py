@@ -26,7 +26,7 @@ import numpy as np
 
 from jointbench.owncode import own_code
 
-__all__ = ["kernel", "kernel_array"]
+__all__ = ["kernel", "kernel_array", "kernel_called"]
 
 
 class _Kernel:
@@ -79,6 +79,19 @@ class _Kernel:
         if self._digest is None:
             self._digest = _code_digest(self.__wrapped__, set())
         return self._digest
+
+
+#: The code of a kernel's call and compilation: a traceback through a kernel shows these frames
+#: of the wrapper, never the kernel's own lines, which run as machine code.
+_CALL_CODES = frozenset({_Kernel.__call__.__code__, _Kernel.compiled.__code__})
+
+
+def kernel_called(frame: types.FrameType) -> _Kernel | None:
+    """The kernel whose call (or compilation) ``frame``, a traceback's frame, runs; ``None``
+    for a frame of anything else."""
+    if frame.f_code not in _CALL_CODES:
+        return None
+    return frame.f_locals.get("self")
 
 
 def _code_digest(function: types.FunctionType, seen: set[int]) -> str:

@@ -175,6 +175,9 @@ def estimate_table(
     if poses is not None and pose_segments(many) != spec.segments:
         raise ValueError(f"{study} {method}: not a pose-based method; it takes no fitted poses")
     diagnose = spec.diagnostics.get(method)
+    options = options or {}
+    # Before the warm-up: a direct call's options have passed no config check.
+    registry.check_options(kind, method, options, f"{study} {method}")
     with mistakes_named(f"{study} {method}"):
         if warm_up:
             log.info(
@@ -183,9 +186,9 @@ def estimate_table(
                 study,
                 method,
                 first_trial,
-                _warm_up(many, segments, trials, options or {}, poses),
+                _warm_up(many, segments, trials, options, poses),
             )
-        fitted = _fit_trials(many, segments, trials, options or {}, poses)
+        fitted = _fit_trials(many, segments, trials, options, poses)
         extras = [{}] * trials.n_trials
         if diagnose:
             arrays = tuple(trials.segments[name] for name in segments)
