@@ -363,3 +363,16 @@ def test_the_distances_flag_is_true_exactly_where_every_distance_is_finite(seed,
     np.testing.assert_array_equal(distances, screening._pair_distances(markers))
     assert finite == bool(np.isfinite(distances).all())
     assert not finite or np.isfinite(markers).all()
+
+
+def test_a_sweep_over_many_rules_keeps_a_bounded_memo_of_their_levels():
+    """A sensitivity study screens with a new set of rules per step; the levels remembered per
+    cluster size and rules must not grow with every one of them."""
+    rng = np.random.default_rng(0)
+    markers = rng.normal(size=(40, 3, 3)) * 0.1 + np.array([[0, 0, 0], [30, 0, 0], [0, 30, 0]])
+    for step in range(600):
+        rules = screening.ArtefactRules(swap_far_probability=1e-12 * (1 + step))
+        screening.find_artefacts(markers, ("a", "b", "c"), "sweep", rules)
+        screening.screen(markers, ("a", "b", "c"), "sweep", rules)
+    assert screening._clean_levels.cache_info().currsize <= 256
+    assert screening._exchange_levels.cache_info().currsize <= 256

@@ -749,7 +749,8 @@ def find_exchanges(
     return found
 
 
-@functools.cache
+# Bounded: a sweep over the rules (a sensitivity study) makes a new set per step.
+@functools.lru_cache(maxsize=256)
 def _exchange_levels(n_markers: int, rules: ArtefactRules) -> tuple[float, float]:
     """The levels of a frame's distance misfit ``chi2`` (:class:`ArtefactRules`) for a cluster
     of ``n_markers``: above the first it is far from the trial's noise, within the second an
@@ -1344,7 +1345,7 @@ def surely_rigid(
     return _fitted_clears(markers, typical, cleared, limit)
 
 
-@functools.cache
+@functools.lru_cache(maxsize=256)  # bounded as _exchange_levels is
 def _clean_levels(
     n_markers: int, rules: ArtefactRules | None
 ) -> tuple[float, float, float, int | None]:
