@@ -4,6 +4,7 @@ swaps as events, frame order in exclude mode, screening of arrays, and the CLI's
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -121,6 +122,45 @@ def test_a_file_cut_right_after_a_separator_of_its_last_line_is_refused(
         "the file ends inside this line, right after a separator: it was cut short; if the "
         "field is a gap, end the line with a newline"
     )
+
+
+def _three_decimals(text: str) -> str:
+    """``text`` with every coordinate written to three decimals, as most exporters write them."""
+    return re.sub(r"(?<![\d.])(\d+)\.(\d)(?![\d.])", r"\g<1>.\g<2>25", text)
+
+
+@pytest.mark.parametrize("kept", [4, 3, 2, 1], ids=["2.52", "2.5", "2.", "2"])
+@pytest.mark.parametrize(
+    ("written", "line", "name"), [(_trc, 9, "Z of B"), (_long_csv, 7, "z")], ids=["trc", "csv"]
+)
+def test_a_file_cut_inside_its_last_number_is_refused(tmp_path, written, line, name, kept):
+    """The cut number once read as another value: 2.5 or 2 for the 2.525 written."""
+    text, path = written(tmp_path)
+    body = _three_decimals(text).rstrip("\n")
+    assert body.endswith("2.525")
+    path.write_text(body[: len(body) - 5 + kept])
+    left = body[len(body) - 5 : len(body) - 5 + kept]
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value) == (
+        f"{path}: line {line} ends its last field ({name}) with {left!r}, "
+        f"{max(kept - 2, 0)} decimals where every other row writes 3, and the file ends inside "
+        "this line: it was cut short inside a number; if the value is whole, end the line with "
+        "a newline"
+    )
+    path.write_text(body[: len(body) - 5 + kept] + "\n")
+    assert read(path).markers[-1, 1, 2] == float(left)
+
+
+@pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
+def test_a_last_number_without_a_newline_reads_where_the_rows_write_any_decimals(tmp_path, written):
+    """A writer that drops trailing zeros (``%g``) leaves no format to tell a cut by."""
+    text, path = written(tmp_path)
+    body = _three_decimals(text).rstrip("\n")
+    varied = body.replace("2.525\n", "2.5\n", 1)  # the last field of an earlier row
+    assert varied != body
+    path.write_text(varied[:-2])
+    assert read(path).markers[-1, 1, 2] == 2.5
 
 
 @pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])

@@ -145,7 +145,7 @@ def read_trc(path: str | Path) -> Recording:
     rows = [line.split("\t") for _, line in data]
     if data[-1][0] == len(lines):
         last_field = [row[width - 1] for row in rows]
-        _check_cut_after_separator(path, len(lines), last_field, f"Z of {labels[-1]}")
+        _check_last_field(path, len(lines), last_field, f"Z of {labels[-1]}")
     numbers = _trc_frame_numbers(rows, header, len(labels), path)
     markers = np.full((len(rows), len(labels) * 3), np.nan)
     for i, row in enumerate(rows):
@@ -179,6 +179,50 @@ def _short_row(
         + ("; the file ends inside this line: it was cut short" if cut else "")
         + "; a gap is an empty field, not a missing one"
     )
+
+
+def _check_last_field(path: Path, line: int, column: list[str], name: str) -> None:
+    """``ValueError`` when ``path`` ends inside its last line, ``line`` (1-based), and the
+    line's last field (``name``; ``column``, its text in every row) shows the cut: empty
+    (:func:`_check_cut_after_separator`) or a number shorter than the others
+    (:func:`_check_cut_inside_number`)."""
+    _check_cut_after_separator(path, line, column, name)
+    _check_cut_inside_number(path, line, column, name)
+
+
+def _check_cut_inside_number(path: Path, line: int, column: list[str], name: str) -> None:
+    """``ValueError`` when ``path`` ends inside its last line, ``line`` (1-based; no newline
+    follows it), and that line's last field (``name``) has fewer decimals than every other row
+    writes in it: the file was cut inside the number, which reads as another value (``12.3``
+    of ``12.345``). ``column``: that field's text in every row, the last line's last. A writer
+    whose decimals vary from row to row, or that writes exponents, leaves nothing to tell a cut
+    by, and the field is read as it is."""
+    *others, last = (text.strip() for text in column)
+    written = {_decimals(text) for text in others if text}
+    found = _decimals(last)
+    if len(written) != 1 or None in written or found is None or _ends_with_newline(path):
+        return
+    (decimals,) = written
+    if found >= decimals:
+        return
+    raise ValueError(
+        f"{path}: line {line} ends its last field ({name}) with {last!r}, {found} decimals where "
+        f"every other row writes {decimals}, and the file ends inside this line: it was cut "
+        "short inside a number; if the value is whole, end the line with a newline"
+    )
+
+
+def _decimals(text: str) -> int | None:
+    """The digits written after the decimal point of the number ``text``; ``None`` for an
+    empty field, an exponent form or no number."""
+    if not text or "e" in text.lower():
+        return None
+    try:
+        float(text)
+    except ValueError:
+        return None
+    _, point, fraction = text.partition(".")
+    return len(fraction) if point else 0
 
 
 def _check_cut_after_separator(path: Path, line: int, column: list[str], name: str) -> None:
@@ -250,9 +294,9 @@ def read_csv(path: str | Path) -> Recording:
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
     # pandas reads the fields a row lacks as empty, and so as gaps, and so is a line cut right
-    # after its last separator; either leaves the last column empty, and only then is the file
-    # read again to find it.
-    if table[table.columns[-1]].isna().any():
+    # after its last separator; either leaves the last column empty. A cut inside the last
+    # number leaves no line end. Only then is the file read again to find it.
+    if table[table.columns[-1]].isna().any() or not _ends_with_newline(path):
         _check_csv_fields(path, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
     table["marker"] = table["marker"].astype(str)
@@ -298,7 +342,7 @@ def _check_csv_fields(path: Path, header: list[str]) -> None:
                 last_field.append(record[len(header) - 1])
         line = records.line_num
     if last_field:
-        _check_cut_after_separator(path, line, last_field, header[-1])
+        _check_last_field(path, line, last_field, header[-1])
 
 
 def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
