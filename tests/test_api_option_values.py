@@ -152,3 +152,20 @@ def test_an_extensions_declared_option_is_checked_before_its_fit(registered):
     assert not given  # refused before the fit
     assert _center(NAME, scale=2.0, label=[1, "undeclared"]).converged
     assert given == [2.0]
+
+
+def test_a_zero_tolerance_of_the_axis_search_is_the_tightest_not_a_refusal(config):
+    """The simplex never stops below 10 ulp, so 0 is a meaningful request: the public call and
+    the config check both take it."""
+    rng = np.random.default_rng(3)
+    local = np.array([[20.0, 5.0, 0.0], [25.0, -5.0, 10.0], [30.0, 0.0, -10.0]])
+    turns = [
+        np.array([[np.cos(a), np.sin(a), 0.0], [-np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+        for a in np.linspace(0.0, 1.5, 40)
+    ]
+    markers = np.stack([local @ turn for turn in turns]) + rng.normal(scale=0.01, size=(40, 3, 3))
+    result = jb.fit_axis(markers, method="planar", xatol=0.0, fatol=0.0)
+    assert abs(abs(result.direction[2]) - 1.0) < 1e-3
+    changed = copy.deepcopy(config)
+    changed["studies"]["hinge"]["options"] = {"planar": {"xatol": 0.0, "fatol": 0.0}}
+    study_config.check_config(changed)

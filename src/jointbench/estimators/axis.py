@@ -99,7 +99,7 @@ from typing import Literal
 
 import numpy as np
 
-from jointbench.declared import Count, Point, Positive
+from jointbench.declared import Count, NonNegative, Point
 from jointbench.estimators import precision, selfcheck
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import many, register
@@ -598,7 +598,8 @@ _DOC = """
         Search over azimuth/elevation, or over an unnormalised 3-vector (see the module notes).
     xatol, fatol, max_iter, max_fev
         Nelder–Mead stopping rules; defaults are ``fminsearch``'s (1e-4, 1e-4, 200 per
-        parameter, 200 per parameter).
+        parameter, 200 per parameter). A tolerance of 0 asks for the tightest the arithmetic
+        allows (:func:`jointbench.numerics.simplex.nelder_mead` never stops below 10 ulp).
 
     Returns
     -------
@@ -629,8 +630,8 @@ def _entry(solve: Callable, method: str) -> Callable:
         *,
         point: Point | None = None,
         parameterisation: Parameterisation = "angles",
-        xatol: Positive = XATOL,
-        fatol: Positive = FATOL,
+        xatol: NonNegative = XATOL,
+        fatol: NonNegative = FATOL,
         max_iter: Count | None = None,
         max_fev: Count | None = None,
     ):
