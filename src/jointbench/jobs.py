@@ -15,6 +15,7 @@ process does, so the rules and the jobs see the same registries.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import importlib.metadata
 import logging
 from collections.abc import Iterator
@@ -22,7 +23,7 @@ from pathlib import Path
 
 from jointbench.configuration.extensions import load_extensions
 
-__all__ = ["job", "provenance"]
+__all__ = ["job", "provenance", "require_declared"]
 
 # The package's logger: every module's messages (``getLogger(__name__)``) reach the job's log
 # through it.
@@ -41,6 +42,7 @@ def job(snakemake) -> Iterator[None]:
         handlers.append(handler)
         log.addHandler(handler)
     log.setLevel(logging.INFO)
+    running = _RUNNING.set((snakemake.rule, _declared_inputs(snakemake.input)))
     try:
         load_extensions(snakemake.config)
         log.info(
@@ -55,9 +57,43 @@ def job(snakemake) -> Iterator[None]:
         log.exception("rule %s failed", snakemake.rule)
         raise
     finally:
+        _RUNNING.reset(running)
         for handler in handlers:
             log.removeHandler(handler)
             handler.close()
+
+
+#: The rule of the job running in this process and the files it declares as inputs, resolved;
+#: ``None`` outside a job.
+_RUNNING: contextvars.ContextVar[tuple[str, frozenset[Path]] | None] = contextvars.ContextVar(
+    "running_job", default=None
+)
+
+
+def _declared_inputs(inputs) -> frozenset[Path]:
+    """Every file of a job's ``snakemake.input``, resolved (a named input may be a list)."""
+    flat = (
+        path for entry in inputs for path in ([entry] if isinstance(entry, str | Path) else entry)
+    )
+    return frozenset(Path(path).resolve() for path in flat)
+
+
+def require_declared(path: str | Path, what: str) -> None:
+    """``ValueError`` when the workflow job running in this process reads ``path`` (``what`` it
+    holds) without declaring it as an input. The code fingerprint leaves such files to the
+    inputs of the jobs that read them (the papers' published values, so that one paper's
+    values rerun only its study's jobs): read undeclared, an edit of the file would rerun
+    nothing and leave the job's results stale. Outside a job, nothing is required."""
+    running = _RUNNING.get()
+    if running is None:
+        return
+    rule, declared = running
+    if Path(path).resolve() not in declared:
+        raise ValueError(
+            f"rule {rule} reads {what} {path} but does not declare it as an input: an edit of "
+            "the file would not rerun the job; add it to the rule's input "
+            "(published_files in workflow/rules/common.smk)"
+        )
 
 
 def provenance(snakemake) -> dict[str, object]:

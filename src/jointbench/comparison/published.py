@@ -24,6 +24,7 @@ import yaml
 
 from jointbench.comparison.tolerance import describe, evaluate, is_compared
 from jointbench.configuration.config import read_yaml, validate_against
+from jointbench.jobs import require_declared
 
 if TYPE_CHECKING:  # the papers import this module
     from jointbench.papers.base import PublishedTable
@@ -92,7 +93,10 @@ def load_published(
     (:attr:`jointbench.papers.base.Paper.tables`), each cell one number or, for a table whose
     cells list several (:attr:`~jointbench.papers.base.PublishedTable.lists`), a list of that
     many: ``ValueError`` naming the file otherwise, and the missing ids (for a table, the
-    paper, the table and its missing cells, or the cell and the position in it)."""
+    paper, the table and its missing cells, or the cell and the position in it). Read by a
+    workflow job, ``path`` must be one of its declared inputs
+    (:func:`jointbench.jobs.require_declared`)."""
+    require_declared(path, "published values")
     try:
         document = read_yaml(Path(path).read_text())
     except yaml.YAMLError as error:
