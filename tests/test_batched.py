@@ -128,9 +128,17 @@ def test_shared_poses_give_the_same_answers():
 
 def test_bad_options_fail_every_trial_as_one_trial_does():
     trials = _trials("hip", 1)
-    many = registry.many("joint_center", "gauss-markov")
-    outcomes = many(trials.segments["proximal"], trials.segments["distal"], noise_mm=-1.0)
+    segments = (trials.segments["proximal"], trials.segments["distal"])
+    # The method's own refusal; the checked form refuses the call before the fit, as the
+    # checked one-trial form does (tests/test_checked_option_values.py).
+    many = registry.many("joint_center", "gauss-markov", checked=False)
+    outcomes = many(*segments, noise_mm=-1.0)
     assert all(isinstance(o, ValueError) and "noise_mm" in str(o) for o in outcomes)
+    with pytest.raises(ValueError, match="noise_mm") as whole_call:
+        registry.many("joint_center", "gauss-markov")(*segments, noise_mm=-1.0)
+    with pytest.raises(ValueError) as one_trial:
+        registry.get("joint_center", "gauss-markov")(*(s[0] for s in segments), noise_mm=-1.0)
+    assert str(whole_call.value) == str(one_trial.value)
 
 
 @pytest.mark.parametrize(("study", "method"), [("cmc", "LS"), ("hip", "gauss-markov")])

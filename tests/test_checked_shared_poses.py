@@ -275,10 +275,16 @@ NOT_ONE_BATCH = _not_one_batch()
 @pytest.mark.parametrize("name", POSE_BASED)
 def test_segments_that_are_not_one_batch_answer_as_fitting_twice(name, case, options):
     """Where the poses cannot be fitted as one batch, the checked call answers (per trial or
-    for the whole call) as the method fitting its own poses does."""
+    for the whole call) as the method fitting its own poses does, after the options' check."""
     segments = NOT_ONE_BATCH[case]
     found = _outcome(lambda: registry.many(KIND, name)(*segments, **options))
-    _assert_same_outcomes(found, _outcome(lambda: _unshared_many(name, segments, **options)))
+    _assert_same_outcomes(found, _outcome(lambda: _options_then_unshared(name, segments, options)))
+
+
+def _options_then_unshared(name: str, segments: tuple, options: dict) -> list:
+    """:func:`_unshared_many` after the options' check of every checked form."""
+    registry.check_options(KIND, name, options, f"{KIND} method {name}")
+    return _unshared_many(name, segments, **options)
 
 
 def _other_entries(own: list) -> dict[str, object]:

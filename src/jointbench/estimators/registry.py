@@ -9,11 +9,12 @@ Kinds:
   markers in the world frame.
 
 :func:`get` returns the estimator wrapped in the checks every estimator of its kind is held
-to: the input checks of :func:`jointbench.estimators.validation.check_input` before the fit,
-and the support verdict of :func:`jointbench.estimators.support.assess` written into the
-result after it; a method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a
-statement of its answer's precision (:mod:`jointbench.estimators.precision`) has them applied
-in between. A newly registered estimator gets both without code of its own.
+to: the input checks of :func:`jointbench.estimators.validation.check_input` and, for a call
+with options, the option checks of :func:`check_options` before the fit, and the support
+verdict of :func:`jointbench.estimators.support.assess` written into the result after it; a
+method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a statement of its
+answer's precision (:mod:`jointbench.estimators.precision`) has them applied in between. A
+newly registered estimator gets them all without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
 Every method has a one-trial and a many-trial form, each checked or not (:func:`get`,
@@ -124,8 +125,10 @@ class Claims:
 class _Entry:
     """A registered method of ``kind``: its one-trial function ``fn``, its claims, its figure
     style and its own many-trial form (``None`` until stated, or for none); derived from
-    those, the function's signature and its checked forms, for any input (``checked``) and for
-    input that passed the input checks (``valid``, :func:`get_for_valid`)."""
+    those, the function's signature and its checked forms: for any input and options
+    (``checked``), for any input and options its caller checked (``inputs_checked``: each
+    trial of :func:`many`, which checks the options once for all trials), and for input and
+    options that passed their checks (``valid``, :func:`get_for_valid`)."""
 
     kind: str
     name: str
@@ -135,6 +138,7 @@ class _Entry:
     many: Callable[..., list] | None = None
     signature: inspect.Signature = field(init=False)
     checked: Callable = field(init=False)
+    inputs_checked: Callable = field(init=False)
     valid: Callable = field(init=False)
 
     def __post_init__(self) -> None:
@@ -143,9 +147,17 @@ class _Entry:
 
         @functools.wraps(self.fn)
         def checked(*arrays: object, **options: object):
+            clean = validation.check_input(self.kind, arrays)
+            if options:  # a call without options, the common one, pays nothing for the check
+                _check_entry_options(self, options)
+            return _fit_valid(self, clean, **options)
+
+        @functools.wraps(self.fn)
+        def inputs_checked(*arrays: object, **options: object):
             return _fit_valid(self, validation.check_input(self.kind, arrays), **options)
 
         self.checked = checked
+        self.inputs_checked = inputs_checked
 
 
 _REGISTRY: dict[str, Registry[_Entry]] = {
@@ -218,8 +230,21 @@ def check_options(kind: str, name: str, options: Mapping[str, object], label: st
     ``ValueError`` with ``label`` in front naming the option, the value, what is declared and
     the method, as the config check refuses it before a run. An option the method does not
     declare (no annotation, one it does not take, ``**options``, annotations that cannot be
-    read) is left to the method."""
-    fn = _entry(kind, name).fn
+    read) is left to the method. The checked forms of :func:`get` and :func:`many` call it,
+    labelled ``"{kind} method {name}"``, as the public fit functions do."""
+    _check_declared(_entry(kind, name).fn, kind, name, options, label)
+
+
+def _check_entry_options(entry: _Entry, options: Mapping[str, object]) -> None:
+    """:func:`check_options` of a call of ``entry``'s checked forms, labelled as a public fit
+    call labels it (:func:`jointbench.api.fit_center`)."""
+    _check_declared(entry.fn, entry.kind, entry.name, options, f"{entry.kind} method {entry.name}")
+
+
+def _check_declared(
+    fn: Callable, kind: str, name: str, options: Mapping[str, object], label: str
+) -> None:
+    """:func:`check_options` of ``fn``, the one-trial function of the method ``name``."""
     n_arrays = len(validation.ARRAY_NAMES[kind])
     for option, value in options.items():
         # Whether a number, text or flag fits is remembered by its type and value (1, 1.0 and
@@ -335,10 +360,13 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
     arrays, returning per trial a result or the exception) with the checks of its checked
     one-trial form per trial: the input checks of all trials in one pass
     (:func:`jointbench.estimators.validation.check_input_many`) and the support verdict of all
-    trials in one call, reading the poses the fit read where it is pose-based."""
+    trials in one call, reading the poses the fit read where it is pose-based. Its options
+    are checked before the fit, once for all trials (:func:`check_options`)."""
 
     @functools.wraps(entry.many)
     def checked_many(*segments: object, **options: object) -> list:
+        if options:  # a call without options, the common one, pays nothing for the check
+            _check_entry_options(entry, options)
         names = _pose_names(entry, len(segments))
         shared = None
         if names is not None and options.get("poses") is None:
@@ -433,8 +461,11 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
     """The one-trial estimator ``name`` of ``kind`` with its checks; ``ValueError`` listing the
     known names otherwise.
 
-    ``checked=False`` gives the registered function itself: for the simulated studies, whose
-    data are valid by construction and whose timings must be the estimator's alone.
+    The checked form refuses, before the fit, an option that is not what the method declares
+    for it (:func:`check_options`, labelled ``"{kind} method {name}"``). ``checked=False``
+    gives the registered function itself: for the simulated studies, whose data are valid by
+    construction, whose options passed the config check and whose timings must be the
+    estimator's alone.
     """
     entry = _entry(kind, name)
     return entry.checked if checked else entry.fn
@@ -442,20 +473,36 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
 
 def get_for_valid(kind: str, name: str) -> Callable:
     """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
-    already passed :func:`jointbench.estimators.validation.check_input`, whose checks it does
-    not repeat: for a caller that ran them itself."""
+    already passed :func:`jointbench.estimators.validation.check_input`, and options that
+    passed :func:`check_options`, whose checks it does not repeat: for a caller that ran them
+    itself, with its own label."""
     return _entry(kind, name).valid
 
 
 def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:
     """The many-trial form of estimator ``name`` of ``kind`` (module docstring), with the checks
-    of :func:`get` per trial or, ``checked=False``, without; every method has one."""
+    of :func:`get` per trial (its options checked once, before any trial is fitted) or,
+    ``checked=False``, without; every method has one."""
     entry = _entry(kind, name)
-    if entry.many is None:
-        return _trial_by_trial(
-            entry.checked if checked else entry.fn, validation.ARRAY_NAMES[entry.kind]
-        )
-    return _checked_many(entry) if checked else entry.many
+    if entry.many is not None:
+        return _checked_many(entry) if checked else entry.many
+    each = _trial_by_trial(
+        entry.inputs_checked if checked else entry.fn, validation.ARRAY_NAMES[entry.kind]
+    )
+    return _options_checked(entry, each) if checked else each
+
+
+def _options_checked(entry: _Entry, each: Callable[..., list]) -> Callable[..., list]:
+    """``each``, a many-trial form of ``entry`` fitting trial by trial, refusing options that
+    are not what ``entry`` declares before any trial (not as every trial's failure)."""
+
+    @functools.wraps(each)
+    def checked(*segments: object, **options: object) -> list:
+        if options:  # a call without options, the common one, pays nothing for the check
+            _check_entry_options(entry, options)
+        return each(*segments, **options)
+
+    return checked
 
 
 def has_own_many(kind: str, name: str) -> bool:

@@ -29,8 +29,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
-from jointbench.estimators.registry import KINDS, check_options, get, many
+from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
 from jointbench.estimators.results import with_warnings
+from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap, find_jumps, summarise
@@ -239,12 +240,14 @@ class Prepared:
         return np.concatenate([[anchor], np.delete(rows, first)])
 
     def solve(self, method: str, rows: np.ndarray, options: dict):
-        """The estimator's result on the recording ``rows``."""
+        """The estimator's result on the recording ``rows``, with ``options`` that passed
+        :func:`~jointbench.estimators.registry.check_options` (:meth:`fit` checks them)."""
         # The checked estimator, as the public fit functions call it: every input check and
-        # the support verdict. Their artefact screen ran in prepare, over the whole recording.
-        arrays = (a[rows] for a in self.arrays)
+        # the support verdict. Their artefact screen ran in prepare, over the whole recording;
+        # the options' check in fit, with the recording's label, so it is not repeated here.
+        arrays = tuple(a[rows] for a in self.arrays)
         try:
-            result = get(self.kind, method)(*arrays, **options)
+            result = get_for_valid(self.kind, method)(check_input(self.kind, arrays), **options)
         except ValueError as error:
             if not numerical_failure(error):
                 raise  # a mistake in the method: :meth:`fit` names it as one
