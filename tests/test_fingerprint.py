@@ -13,6 +13,7 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
 import pytest
@@ -306,6 +307,11 @@ _PRINT_FINGERPRINT = (
 
 
 def _fingerprint_in_a_new_process(package: Path, store: Path | str) -> str:
+    return _in_a_new_process(package, store, _PRINT_FINGERPRINT)
+
+
+def _new_process(package: Path, store: Path | str, code: str, *args: str):
+    """The environment and command of a new process running ``code`` on the test's script."""
     environment = {
         **os.environ,
         "JOINTBENCH_CACHE": str(store),
@@ -314,13 +320,13 @@ def _fingerprint_in_a_new_process(package: Path, store: Path | str) -> str:
         ),
     }
     script = package.parent.parent / "script.py"
-    done = subprocess.run(
-        [sys.executable, "-c", _PRINT_FINGERPRINT, str(script), PACKAGE],
-        capture_output=True,
-        text=True,
-        env=environment,
-        check=True,
-    )
+    return environment, [sys.executable, "-c", code, str(script), PACKAGE, *args]
+
+
+def _in_a_new_process(package: Path, store: Path | str, code: str, *args: str) -> str:
+    """What a new process running ``code`` prints (:func:`_new_process`)."""
+    environment, command = _new_process(package, store, code, *args)
+    done = subprocess.run(command, capture_output=True, text=True, env=environment, check=True)
     return done.stdout.strip()
 
 
@@ -394,3 +400,138 @@ def test_the_store_is_kept_apart_per_python_and_per_version_of_the_rules(monkeyp
         assert fingerprint._store() != here
     finally:
         fingerprint._namespace.cache_clear()
+
+
+# The store's housekeeping: once a day the first process prunes it. What it removes is found
+# again by parsing, so every case checks that the fingerprint stays the one parsing gives.
+_DAY = 24 * 3600
+
+
+def _aged(path: Path, seconds: float) -> Path:
+    """``path`` with its time stamps set ``seconds`` into the past."""
+    then = time.time() - seconds
+    os.utime(path, (then, then))
+    return path
+
+
+def _warm(package: Path, store: Path) -> tuple[str, Path]:
+    """The fingerprint parsing gives, and the namespace folder of a store warmed by a process
+    whose daily prune is due again in the next."""
+    parsed = _fingerprint_in_a_new_process(package, "off")
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+    (namespace,) = (store / "fingerprint").iterdir()
+    _aged(namespace / fingerprint._STAMP, 2 * _DAY)
+    return parsed, namespace
+
+
+def test_a_killed_writers_temporary_file_is_removed_once_stale(package, tmp_path):
+    store = tmp_path / "store"
+    parsed, namespace = _warm(package, store)
+    stale = namespace / "tmpk1ll3d_0.tmp"
+    stale.write_text('{"dig')
+    _aged(stale, 3600)
+    fresh = namespace / "tmpwr1t1ng.tmp"
+    fresh.write_text('{"dig')
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+    assert not stale.exists()
+    assert fresh.exists()  # another process may be writing it
+
+
+def test_the_store_is_pruned_at_most_once_a_day(package, tmp_path):
+    store = tmp_path / "store"
+    parsed, namespace = _warm(package, store)
+    assert _fingerprint_in_a_new_process(package, store) == parsed  # prunes
+    stale = namespace / "tmpk1ll3d_0.tmp"
+    stale.write_text("")
+    _aged(stale, 3600)
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+    assert stale.exists()  # left to the next day's prune
+
+
+def test_the_namespaces_of_other_versions_unused_for_a_month_are_removed(package, tmp_path):
+    store = tmp_path / "store"
+    parsed, namespace = _warm(package, store)
+    folders = {}
+    for name, age in (("0123456789abcdef", 40), ("fedcba9876543210", 20), ("notes", 40)):
+        folder = store / "fingerprint" / name
+        folder.mkdir()
+        (folder / f"{'a' * 64}.json").write_text("{}")
+        folders[name] = _aged(folder, age * _DAY)
+    _aged(namespace, 40 * _DAY)  # the current one is used now
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+    assert not folders["0123456789abcdef"].exists()
+    assert folders["fedcba9876543210"].exists()  # used within the month
+    assert folders["notes"].exists()  # not the store's own
+    assert namespace.exists() and time.time() - namespace.stat().st_mtime < _DAY
+
+
+def test_entries_unused_for_a_month_are_removed_and_used_ones_kept(package, tmp_path):
+    store = tmp_path / "store"
+    parsed, namespace = _warm(package, store)
+    used = _entries(store)
+    for entry in used:
+        _aged(entry, 2 * _DAY)
+    unused = namespace / f"{'b' * 64}.json"
+    unused.write_text(used[0].read_text())
+    _aged(unused, 40 * _DAY)
+    other = namespace / "notes.json"
+    other.write_text("{}")
+    _aged(other, 40 * _DAY)
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+    assert not unused.exists()
+    assert other.exists()  # not an entry
+    # An entry read is marked as used: its time stamp is renewed, at most once a day.
+    assert _entries(store) == sorted([*used, other])
+    assert all(time.time() - entry.stat().st_mtime < _DAY for entry in used)
+    # Unused for a month, they are removed before they are read: what they say does not count.
+    for entry in used:
+        stored = json.loads(entry.read_text())
+        entry.write_text(json.dumps({**stored, "digest": "0" * 64}))
+        _aged(entry, 40 * _DAY)
+    _aged(namespace / fingerprint._STAMP, 2 * _DAY)
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+    assert _entries(store) == sorted([*used, other])
+
+
+_FINGERPRINT_AS_ANOTHER_PROCESS_PRUNES = """
+import shutil, sys
+from jointbench import fingerprint
+read = fingerprint._read_entry
+
+def pruned_meanwhile(entry):
+    # Another process removes the folder, or the entry, right before this one reads it.
+    if sys.argv[3] == "folder":
+        shutil.rmtree(entry.parent, ignore_errors=True)
+    else:
+        entry.unlink(missing_ok=True)
+    return read(entry)
+
+fingerprint._read_entry = pruned_meanwhile
+print(fingerprint.code_fingerprint(sys.argv[1], package=sys.argv[2]))
+"""
+
+
+@pytest.mark.parametrize("what", ["folder", "entry"])
+def test_a_prune_by_another_process_meanwhile_only_costs_time(package, tmp_path, what):
+    store = tmp_path / "store"
+    parsed, _ = _warm(package, store)
+    done = _in_a_new_process(package, store, _FINGERPRINT_AS_ANOTHER_PROCESS_PRUNES, what)
+    assert done == parsed
+    assert _fingerprint_in_a_new_process(package, store) == parsed
+
+
+def test_processes_starting_at_once_get_the_fingerprint(package, tmp_path):
+    """Two Snakemake jobs starting together: each may prune what the other reads or writes."""
+    store = tmp_path / "store"
+    parsed, namespace = _warm(package, store)
+    for entry in [*_entries(store), namespace]:
+        _aged(entry, 40 * _DAY)  # everything due for removal
+    _aged(namespace / fingerprint._STAMP, 2 * _DAY)
+    environment, command = _new_process(package, store, _PRINT_FINGERPRINT)
+    running = [
+        subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=environment)
+        for _ in range(4)
+    ]
+    assert [process.communicate()[0].strip() for process in running] == [parsed] * 4
+    assert all(process.returncode == 0 for process in running)
+    assert _fingerprint_in_a_new_process(package, store) == parsed

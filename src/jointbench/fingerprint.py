@@ -44,6 +44,18 @@ What is read of each file's syntax tree is stored by the hash of its text (``$JO
 by default ``~/.cache/jointbench``; ``off`` stores nothing), so that a new process does not
 parse the package again: an entry is found only for the same text, parsed by the same Python
 under the same version of this module, and one that cannot be read is parsed again.
+
+The store keeps itself tidy, best-effort and never at the cost of a right fingerprint: what it
+removes is only parsed again. Once a day (a stamp file, ``.pruned``, in the folder of the
+current Python and version of this module, says when it was last done) the first process to use
+the store removes, in that folder, the temporary files of writers killed before they finished
+(older than ten minutes: a fresh one may still be being written) and the entries no process
+read for 30 days; and, beside it, the folders of other Pythons and versions of this module not
+used for 30 days (by their time stamp, which that daily pass renews, as writing an entry does).
+A process marks an entry it reads as used by renewing its time stamp, at most once a day per
+entry, so a warm store costs a process one ``stat`` more than before. A store that cannot be
+written is not pruned; one that another process prunes meanwhile, two jobs starting at once,
+only misses what that process removed.
 """
 
 from __future__ import annotations
@@ -57,8 +69,10 @@ import os
 import pkgutil
 import platform
 import re
+import shutil
 import sys
 import tempfile
+import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
@@ -288,14 +302,128 @@ def _summary(text: str) -> _Summary:
     store = _store()
     if store is None:
         return _summarised(text)
+    _kept_tidy(store)
     entry = store / f"{hashlib.sha256(text.encode()).hexdigest()}.json"
     try:
-        return _from_json(json.loads(entry.read_text(encoding="utf-8")))
+        return _from_json(json.loads(_read_entry(entry)))
     except (OSError, ValueError, KeyError, TypeError):
         pass
     summary = _summarised(text)
     _write_atomically(entry, json.dumps(_to_json(summary)))
     return summary
+
+
+# The store's housekeeping (module docstring). Every removal is of something that is only
+# parsed again when missed, and every failure to remove is ignored, so no race between
+# processes and no folder that cannot be written changes a fingerprint.
+
+#: Seconds: a temporary file older than this was left by a writer that was killed; the
+#: renewal of a read entry's time stamp and the pruning of the store are each due once a
+#: day; an entry or another version's folder unused for 30 days is removed.
+_STALE_TEMPORARY = 10 * 60
+_DAY = 24 * 3600
+_UNUSED = 30 * _DAY
+
+#: The stamp file in the namespace folder whose time stamp is that of the last pruning.
+_STAMP = ".pruned"
+
+#: Names of what the store itself writes, the only files and folders it removes: a namespace
+#: (:func:`_namespace`), an entry (:func:`_summary`) and a temporary file of
+#: :func:`_write_atomically` (``tempfile``'s ``tmp`` prefix and random letters).
+_NAMESPACE_NAME = re.compile(r"[0-9a-f]{16}")
+_ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.json")
+_TEMPORARY_NAME = re.compile(r"tmp\w+\.tmp")
+
+
+def _read_entry(entry: Path) -> str:
+    """The text of the stored ``entry``, which is marked as used (its time stamp renewed)
+    when it was last marked more than a day ago: the daily pruning keeps what was read within
+    :data:`_UNUSED`."""
+    with entry.open(encoding="utf-8") as handle:
+        text = handle.read()
+        marked = os.fstat(handle.fileno()).st_mtime
+    if time.time() - marked > _DAY:
+        _touch(entry)
+    return text
+
+
+@cache
+def _kept_tidy(store: Path) -> None:
+    """Prune ``store``, the namespace folder in use, and its siblings (module docstring), when
+    its stamp says the last pruning was a day ago or more; once per process at most."""
+    stamp = store / _STAMP
+    now = time.time()
+    try:
+        if now - stamp.stat().st_mtime < _DAY:
+            return
+    except OSError:
+        pass  # never pruned, or the stamp cannot be read: try
+    try:
+        store.mkdir(parents=True, exist_ok=True)
+        # Stamped first, so that a process starting meanwhile mostly leaves it to this one (if
+        # both prune, each only finds some files already gone); the folder's own time stamp
+        # says when this version was last used.
+        stamp.touch()
+        os.utime(store)
+    except OSError:
+        return  # a store that cannot be written: nothing could be removed either
+    _prune(store, now)
+
+
+def _prune(store: Path, now: float) -> None:
+    """Remove, as of ``now`` [s since the epoch], the stale temporary files and the unused
+    entries of ``store`` and the unused namespace folders beside it."""
+    for found in _listed(store):
+        if _TEMPORARY_NAME.fullmatch(found.name):
+            age = _STALE_TEMPORARY
+        elif _ENTRY_NAME.fullmatch(found.name):
+            age = _UNUSED
+        else:
+            continue
+        if _older(found, now - age, folder=False):
+            _remove(found)
+    for found in _listed(store.parent):
+        if (
+            found.name != store.name
+            and _NAMESPACE_NAME.fullmatch(found.name)
+            and _older(found, now - _UNUSED, folder=True)
+        ):
+            shutil.rmtree(found.path, ignore_errors=True)
+
+
+def _listed(folder: Path) -> list[os.DirEntry]:
+    """The entries of ``folder``; none when it cannot be listed (gone meanwhile)."""
+    try:
+        with os.scandir(folder) as entries:
+            return list(entries)
+    except OSError:
+        return []
+
+
+def _older(found: os.DirEntry, then: float, *, folder: bool) -> bool:
+    """Whether ``found`` is a file (``folder``: a folder; never a link) last modified before
+    ``then``; ``False`` when it is gone or cannot be read."""
+    try:
+        kind = (
+            found.is_dir(follow_symlinks=False) if folder else found.is_file(follow_symlinks=False)
+        )
+        return kind and found.stat(follow_symlinks=False).st_mtime < then
+    except OSError:
+        return False
+
+
+def _remove(found: os.DirEntry) -> None:
+    try:
+        os.unlink(found.path)
+    except OSError:
+        pass  # removed by another process meanwhile, or not ours to remove
+
+
+def _touch(path: Path) -> None:
+    try:
+        os.utime(path)
+    except OSError:
+        pass  # a store that cannot be written keeps its time stamps
 
 
 def _to_json(summary: _Summary) -> dict:
