@@ -535,3 +535,180 @@ def test_processes_starting_at_once_get_the_fingerprint(package, tmp_path):
     assert [process.communicate()[0].strip() for process in running] == [parsed] * 4
     assert all(process.returncode == 0 for process in running)
     assert _fingerprint_in_a_new_process(package, store) == parsed
+
+
+# A lab's own modules that an extension imports: beside it, in a package on PYTHONPATH, installed
+# in editable mode. Each case runs fresh processes, with the paths and import hooks a job has.
+_LAB = {
+    "ext/mine.py": """
+        import json
+
+        import numpy as np
+        from helper import centre
+        from labpkg.core import scale
+        from labpkg.loader import load
+        import labedit
+        import labhook.tools
+
+        from jointbench.estimators.results import CenterResult
+        """,
+    "ext/helper.py": """
+        from helper2 import offset
+
+        def centre(m):
+            return m.mean(axis=0) + offset()
+        """,
+    "ext/helper2.py": """
+        import jointbench.uncertainty
+
+        def offset():
+            return 0.0
+        """,
+    "ext/unrelated.py": """
+        x = 1
+        """,
+    "lab/labpkg/__init__.py": "",
+    "lab/labpkg/core.py": """
+        from . import units
+
+        def scale(x):
+            return x * units.MM
+        """,
+    "lab/labpkg/units.py": """
+        MM = 1.0
+        """,
+    "lab/labpkg/unused.py": """
+        x = 1
+        """,
+    # Imports by name at run time: a constant name, and a name built on a package's.
+    "lab/labpkg/loader.py": """
+        import importlib
+
+        PLUGIN = importlib.import_module("labplug")
+
+
+        def load(name):
+            return importlib.import_module(f"labpkg.methods.{{name}}")
+        """,
+    "lab/labplug.py": """
+        PLUGGED = 1
+        """,
+    "lab/labpkg/methods/__init__.py": "",
+    "lab/labpkg/methods/sphere.py": """
+        def fit(m):
+            return m
+        """,
+    # ``pip install -e`` of a lab library: a path added by a .pth file (the legacy form) ...
+    "editable/labedit/__init__.py": """
+        GAIN = 1.0
+        """,
+    "site/__editable__.labedit-0.1.pth": "{root}/editable\n",
+    # ... and setuptools' import hook, which maps the name to the source folder.
+    "hooked/labhook/__init__.py": "",
+    "hooked/labhook/tools.py": """
+        TOOL = 1.0
+        """,
+    "site/__editable__.labhook-0.1.pth": "import __editable___labhook_finder; "
+    "__editable___labhook_finder.install()\n",
+    "site/__editable___labhook_finder.py": """
+        import importlib.util
+        import sys
+
+        MAPPING = {{"labhook": "{root}/hooked/labhook"}}
+
+
+        class Finder:
+            @classmethod
+            def find_spec(cls, fullname, path=None, target=None):
+                if fullname in MAPPING:
+                    init = MAPPING[fullname] + "/__init__.py"
+                    return importlib.util.spec_from_file_location(
+                        fullname, init, submodule_search_locations=[MAPPING[fullname]]
+                    )
+                return None
+
+
+        def install():
+            sys.meta_path.append(Finder)
+        """,
+}
+
+# Prints the fingerprint of a script and the extension, and the files read for it (JSON).
+_LAB_FINGERPRINT = """
+import json, site, sys
+site.addsitedir(sys.argv[3])
+from jointbench import fingerprint
+read, files = fingerprint._read, []
+
+def recorded(path):
+    files.append(str(path))
+    return read(path)
+
+fingerprint._read = recorded
+code = fingerprint.code_fingerprint(sys.argv[1], sys.argv[2])
+print(json.dumps({"code": code, "read": files}))
+"""
+
+
+@pytest.fixture
+def lab(tmp_path) -> Path:
+    for name, text in _LAB.items():
+        path = tmp_path / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(textwrap.dedent(text.format(root=tmp_path)).lstrip())
+    (tmp_path / "script.py").write_text("from jointbench.estimators import register\n")
+    return tmp_path
+
+
+def _lab_fingerprint(lab: Path) -> dict:
+    environment = {
+        **os.environ,
+        "JOINTBENCH_CACHE": str(lab / "store"),
+        "PYTHONPATH": os.pathsep.join(
+            [str(lab / "lab"), str(Path(fingerprint.__file__).parents[1])]
+        ),
+    }
+    command = [
+        sys.executable,
+        "-c",
+        _LAB_FINGERPRINT,
+        str(lab / "script.py"),
+        str(lab / "ext/mine.py"),
+        str(lab / "site"),
+    ]
+    done = subprocess.run(command, capture_output=True, text=True, env=environment, check=True)
+    return json.loads(done.stdout)
+
+
+LAB_EDITS = [
+    ("ext/helper.py", True),  # beside the extension
+    ("ext/helper2.py", True),  # imported by that helper
+    ("lab/labpkg/core.py", True),  # a package on PYTHONPATH
+    ("lab/labpkg/units.py", True),  # by a relative import in it
+    ("lab/labplug.py", True),  # imported by a constant name at run time
+    ("lab/labpkg/methods/sphere.py", True),  # by a name built on its package's
+    ("editable/labedit/__init__.py", True),  # installed in editable mode, by a .pth path
+    ("hooked/labhook/tools.py", True),  # installed in editable mode, by an import hook
+    ("ext/unrelated.py", False),
+    ("lab/labpkg/unused.py", False),
+]
+
+
+@pytest.mark.parametrize("path, changes", LAB_EDITS, ids=[e[0] for e in LAB_EDITS])
+def test_an_edit_of_a_lab_module_an_extension_imports_changes_the_fingerprint(lab, path, changes):
+    before = _lab_fingerprint(lab)["code"]
+    (lab / path).write_text((lab / path).read_text() + "\n_EDITED = 2\n")
+    assert (_lab_fingerprint(lab)["code"] != before) is changes
+
+
+def test_the_standard_library_and_installed_distributions_are_not_read(lab):
+    import sysconfig
+
+    read = [Path(p).resolve() for p in _lab_fingerprint(lab)["read"]]
+    assert (lab / "ext/helper2.py").resolve() in read
+    # What a lab's module imports of the package counts, as what the extension imports does.
+    assert Path(fingerprint.__file__).with_name("uncertainty.py").resolve() in read
+    installed = [
+        Path(sysconfig.get_paths()[key]).resolve() for key in ("stdlib", "purelib", "platlib")
+    ]
+    assert not [p for p in read if any(p.is_relative_to(folder) for folder in installed)]

@@ -21,14 +21,29 @@ What a module can import:
   (those under ``if TYPE_CHECKING:`` never run and do not count), with the parent packages of
   what it names;
 * in a module that imports by name at run time (``importlib.import_module``,
-  ``importlib.resources.files``), every string constant that names a module of the package.
-  A package's ``__init__`` of that kind (PEP 562 lazy names) is followed that far only where
-  the package object itself is imported (``import jointbench``, ``from jointbench import
-  fit_center``): importing one of its submodules runs the ``__init__`` but cannot reach its
-  lazy names;
+  ``importlib.resources.files``), every string constant that names a module of the package,
+  and every module of a package whose name, dot included, starts a string constant (the
+  constant part of a name built at run time, ``import_module(f"lab.methods.{name}")``); a
+  name taken whole from data (a config value) cannot be known. A package's ``__init__`` of
+  that kind (PEP 562 lazy names) is followed that far only where the package object itself
+  is imported (``import jointbench``, ``from jointbench import fit_center``): importing one
+  of its submodules runs the ``__init__`` but cannot reach its lazy names;
 * in a module that calls ``submodules("jointbench.<package>")`` (:mod:`jointbench.registries`:
   the study and paper registries import every module of their package), every module of that
   package.
+
+A job's files (its script, the extensions it loads) can also import modules of the user's own,
+neither the standard library's nor an installed distribution's: a helper beside an extension, a
+lab's package on ``PYTHONPATH``, one installed in editable mode (``pip install -e``: its version
+does not change when it is edited). Those are followed by the same rules, transitively, and
+hashed by their syntax trees like the package's modules, with every module of the package and
+data file they can reach in turn (:func:`own_closure`). A module name is looked up as an import
+in that file would (beside the file first, then ``sys.path`` and the import system's finders,
+an editable install's hook among them) without running anything; a module found in the folders
+of the standard library or of installed distributions is not read (Python's version, and the
+package's dependencies' versions, stand for it; the version of a distribution the package does
+not depend on is not recorded). A module imported only by a name taken whole from data must be
+listed under ``extensions`` itself to count.
 
 The package's data files (its schemas, published values: every file in its folders that is not
 a Python module, caches and editors' leftovers aside) count like its modules, byte for byte. A
@@ -76,7 +91,12 @@ import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
+from importlib.machinery import PathFinder
 from pathlib import Path, PurePosixPath
+from typing import Protocol
+
+# The folders whose modules are not a user's own: the rule the kernels' cache digest reads too.
+from jointbench.owncode import _library_roots
 
 __all__ = [
     "MISSING",
@@ -84,6 +104,7 @@ __all__ = [
     "data_closure",
     "dependency_versions",
     "module_closure",
+    "own_closure",
     "source_digests",
 ]
 
@@ -92,6 +113,14 @@ _DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__
 #: The call that lists every module of a package for its caller to import
 #: (:func:`jointbench.registries.submodules`).
 _EVERY_MODULE = "submodules"
+
+
+class _Modules(Protocol):
+    """Where the modules a closure follows are: the file of one, the modules of a package."""
+
+    def file(self, module: str) -> Path | None: ...
+
+    def modules(self, package: str) -> list[str]: ...
 
 
 @dataclass(frozen=True)
@@ -158,6 +187,70 @@ def _package(name: str) -> _Package:
     if spec is None or not spec.submodule_search_locations:
         raise ValueError(f"{name!r} is not an importable package")
     return _Package(name, Path(next(iter(spec.submodule_search_locations))))
+
+
+@dataclass(frozen=True)
+class _OwnModules:
+    """A user's own modules, as an import in a file of ``folder`` finds them: Python source
+    files beside that file first, then on ``sys.path`` or through the import system's finders
+    (an editable install's among them). A module of the standard library or of an installed
+    distribution is none (Python's and the distributions' versions stand for it), nor one of
+    the package ``tracked`` (its own closure follows those)."""
+
+    folder: Path
+    tracked: str
+
+    def file(self, module: str) -> Path | None:
+        """The source file of ``module`` (a package's ``__init__.py``), or ``None``."""
+        path, _ = self._found(module)
+        if path is None or path.suffix != ".py" or not path.is_file():
+            return None
+        return None if os.path.realpath(path).startswith(_library_roots()) else path
+
+    def modules(self, package: str) -> list[str]:
+        """The modules of ``package``, if it is a package: its files decide which count."""
+        _, folders = self._found(package)
+        return [f"{package}.{m.name}" for m in pkgutil.iter_modules([str(f) for f in folders])]
+
+    def _found(self, module: str) -> tuple[Path | None, tuple[Path, ...]]:
+        """The file of ``module`` (``None`` for a namespace package or none found) and, for a
+        package, its folders; the top-level name is looked up as an import would, without
+        running any of the modules."""
+        top, *rest = module.split(".")
+        if (
+            not _is_module_name(module)
+            or top in sys.stdlib_module_names
+            or top == self.tracked.split(".")[0]
+        ):
+            return None, ()
+        spec = PathFinder.find_spec(top, [str(self.folder)])
+        try:
+            spec = spec or importlib.util.find_spec(top)
+        except (ImportError, ValueError):  # a module in ``sys.modules`` without a spec
+            return None, ()
+        if spec is None:
+            return None, ()
+        path = Path(spec.origin) if spec.has_location and spec.origin else None
+        folders = tuple(Path(f) for f in spec.submodule_search_locations or ())
+        for name in rest:
+            path, folders = _submodule(folders, name)
+        return path, folders
+
+
+def _submodule(folders: tuple[Path, ...], name: str) -> tuple[Path | None, tuple[Path, ...]]:
+    """The file and folders of the submodule ``name`` of a package in ``folders``, as
+    :meth:`_OwnModules._found` gives them."""
+    for folder in folders:
+        package = folder / name
+        if (package / "__init__.py").is_file():
+            return package / "__init__.py", (package,)
+        if package.with_suffix(".py").is_file():
+            return package.with_suffix(".py"), ()
+    return None, tuple(f / name for f in folders if (f / name).is_dir())
+
+
+def _is_module_name(text: str) -> bool:
+    return all(part.isidentifier() for part in text.split("."))
 
 
 @dataclass(frozen=True)
@@ -513,7 +606,7 @@ def _parents(module: str) -> list[str]:
     return [".".join(parts[:i]) for i in range(1, len(parts))]
 
 
-def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
+def _closure(package: _Modules, roots: Iterable[Path]) -> dict[str, Path]:
     """Modules of ``package`` the files ``roots`` can import (see the module's docstring)."""
     found: dict[str, Path] = {}
     # (module, whole): ``whole`` when the module object itself is imported, not only run as
@@ -532,7 +625,13 @@ def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
             else:
                 stack.append((source, True))
         if followed_dynamic:
-            stack.extend((m, True) for m in imports.dynamic if file_of(m) is not None)
+            for name in imports.dynamic:
+                if file_of(name) is not None:
+                    stack.append((name, True))
+                elif name.endswith(".") and _is_module_name(name[:-1]):
+                    # The constant part of a name built at run time (f"lab.methods.{name}"):
+                    # any module of that package.
+                    stack.extend((m, True) for m in package.modules(name[:-1]))
         # Run whenever the file runs, however it was imported.
         stack.extend((m, True) for p in imports.every for m in package.modules(p))
 
@@ -548,13 +647,28 @@ def _closure(package: _Package, roots: Iterable[Path]) -> dict[str, Path]:
         found[module] = path
         stack.extend((parent, False) for parent in _parents(module))
         is_package = path.name == "__init__.py"
-        follow(_imports(path, module), followed_dynamic=whole or not is_package)
+        try:
+            imports = _imports(path, module)
+        except (SyntaxError, UnicodeDecodeError, ValueError):
+            continue  # cannot run, so imports nothing; its digest is its bytes
+        follow(imports, followed_dynamic=whole or not is_package)
     return dict(sorted(found.items()))
 
 
 def module_closure(*roots: str | Path, package: str = "jointbench") -> dict[str, Path]:
     """The modules of ``package`` that the Python files ``roots`` can import, by name."""
     return _closure(_package(package), [Path(r) for r in roots])
+
+
+def own_closure(*roots: str | Path, package: str = "jointbench") -> list[tuple[str, Path]]:
+    """The user's own modules (neither the standard library's, nor an installed distribution's,
+    nor of ``package``) that the Python files ``roots`` can import, each found as an import in
+    its root would find it (beside the root first), by name and file: two roots may reach two
+    modules of one name."""
+    found: set[tuple[str, Path]] = set()
+    for root in map(Path, roots):
+        found.update(_closure(_OwnModules(root.resolve().parent, package), [root]).items())
+    return sorted(found)
 
 
 @cache
@@ -641,22 +755,28 @@ def code_fingerprint(
     """A short hash of the Python files ``roots`` (a job's script, the extension modules it
     loads), of every module of ``package`` they can import, of every data file of ``package``
     those can read (:func:`data_closure`) and of the versions of its dependencies
-    (:func:`dependency_versions`). Equal fingerprints mean the same code ran on the same
-    package data.
+    (:func:`dependency_versions`), and of the user's own modules they can import, outside the
+    standard library, installed distributions and ``package`` (:func:`own_closure`), with every
+    module of ``package`` and data file those can reach in turn. Equal fingerprints mean the
+    same code ran on the same package data.
 
     ``inputs``: data files of the package that the caller tracks as inputs of the very jobs that
     read them (the papers' published values), left out here: a job's code can reach every
     paper's, and one paper's values must not rerun the jobs of another's study."""
     found, paths = _package(package), [Path(r) for r in roots]
-    modules = _closure(found, paths)
+    own = own_closure(*paths, package=package)
+    reached = [*paths, *(path for _, path in own)]
+    modules = _closure(found, reached)
     tracked = {Path(path).resolve() for path in inputs}
     digest = hashlib.sha256()
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for root in sorted(path.resolve() for path in paths):
         digest.update(root.name.encode() + _source_digest(root))
+    for name, path in own:
+        digest.update(name.encode() + _file_digest(path).encode())
     for name, path in modules.items():
         digest.update(name.encode() + _source_digest(path))
-    for name, path in _data_closure(found, paths, modules).items():
+    for name, path in _data_closure(found, reached, modules).items():
         if path.resolve() not in tracked:
             digest.update(name.encode() + _file_digest(path).encode())
     return digest.hexdigest()[:16]
