@@ -28,6 +28,8 @@ from workflow_copy import ROOT, FinishedRun, finish_run
 FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
 #: A second extension, and its study's settings: one condition, one trial, one method.
 SECOND_STUDY = ROOT / "tests" / "data" / "second_study.py"
+#: A module of the user's own that the second extension imports: on the jobs' PYTHONPATH.
+SECOND_HELPER = ROOT / "tests" / "data" / "second_helper.py"
 SECOND_SETTINGS = {
     "trials": 1,
     "grid": {"marker_set": ["M"], "rom_deg": [45], "noise_mm": [0.5]},
@@ -93,4 +95,4 @@ def fourth_study_run(tmp_path_factory) -> FinishedRun:
     overlay["extensions"].append(SECOND_STUDY.name)
     overlay["studies"]["second"] = SECOND_SETTINGS
     workdir = tmp_path_factory.mktemp("fourth_study_run")
-    yield from _shared(finish_run(workdir, overlay, files))
+    yield from _shared(finish_run(workdir, overlay, files, (SECOND_HELPER,)))

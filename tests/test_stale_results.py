@@ -243,6 +243,15 @@ EDITS = (
         reruns=_jobs("simulate_toy", "estimate_toy[method=toy-centroid]", "render_toy"),
         scenario="extension",
     ),
+    # Not listed under extensions: found on PYTHONPATH, beside the package.
+    Edit(
+        "a module of the user's own an extension imports",
+        "src/second_helper.py",
+        "",
+        "\n_EDITED = 1\n",
+        reruns=_jobs("simulate_second", "simulate_toy", "render_toy"),
+        scenario="extension",
+    ),
     Edit(
         "a figure module an extension imports",
         f"{PKG}/figures/common.py",

@@ -99,9 +99,16 @@ class FinishedRun:
         return FinishedRun(destination, self.overlay)
 
 
-def finish_run(workdir: Path, overlay: dict, extension_files: tuple[Path, ...] = ()) -> FinishedRun:
+def finish_run(
+    workdir: Path,
+    overlay: dict,
+    extension_files: tuple[Path, ...] = (),
+    library_files: tuple[Path, ...] = (),
+) -> FinishedRun:
     """Run ``overlay`` to the end in ``workdir``, with a copy of the package and the files of
-    an extension; the run must then have nothing left to do."""
+    an extension, and ``library_files`` (modules of the user's own that an extension imports)
+    beside the package, on the jobs' ``PYTHONPATH``; the run must then have nothing left to
+    do."""
     shutil.copy(ROOT / "Snakefile", workdir / "Snakefile")
     for folder in ("workflow", "config"):
         shutil.copytree(ROOT / folder, workdir / folder)
@@ -109,6 +116,8 @@ def finish_run(workdir: Path, overlay: dict, extension_files: tuple[Path, ...] =
     shutil.copytree(ROOT / "src", workdir / "src", ignore=shutil.ignore_patterns("*.egg-info"))
     for path in extension_files:
         shutil.copy2(path, workdir / path.name)
+    for path in library_files:
+        shutil.copy2(path, workdir / "src" / path.name)
     (workdir / OVERLAY).write_text(yaml.safe_dump(overlay))
     run = FinishedRun(workdir, overlay)
     done = run.snakemake()
