@@ -16,7 +16,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 import yaml
-from workflow_copy import ROOT, copy_workflow, run_snakemake
+from workflow_copy import ROOT
 
 from jointbench.configuration.studies import get_study
 from jointbench.resultfiles.interchange import read_estimates_csv, write_dataset_csv
@@ -358,90 +358,3 @@ def test_an_external_answer_without_its_placements_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"external estimator.*placements") as error:
         collect("cmc", [path], str(tmp_path / "collected.parquet"), [dataset])
     assert str(path) in str(error.value)
-
-
-def _cmc_only(tmp_path, **cmc) -> str:
-    studies = {name: {"enabled": False} for name in CONFIG["studies"] if name != "cmc"}
-    studies["cmc"] = {
-        "trials": 3,
-        "grid": {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]},
-        **cmc,
-    }
-    overlay = tmp_path / "overlay.yaml"
-    overlay.write_text(yaml.safe_dump({"studies": studies}))
-    return str(overlay)
-
-
-# A cheat in the workflow: the centroid template's rule running a script that answers the cmc
-# protocol's centre, read from the package as any program in its environment can.
-CHEAT = """
-import json
-
-import pandas as pd
-import pyarrow.parquet as pq
-
-from jointbench.simulate.cmc import CmcProtocol
-
-dataset, estimates = snakemake.input[0], snakemake.output[0]
-meta = json.loads(pq.read_schema(dataset).metadata[b"jointbench"])
-centre = CmcProtocol().center_mm
-rows = [
-    {
-        **meta["condition"],
-        "trial": trial,
-        "method": "cheat",
-        "center_x": centre[0],
-        "center_y": centre[1],
-        "center_z": centre[2],
-        "converged": True,
-        "iterations": 0,
-        "seconds": 0.0,
-        "status": "ok",
-    }
-    for trial in sorted(pd.read_parquet(dataset)["trial"].unique())
-]
-pd.DataFrame(rows).to_parquet(estimates, index=False)
-"""
-
-
-@pytest.mark.pipeline
-def test_a_cheat_in_the_workflow_ranks_last(tmp_path):
-    copy_workflow(tmp_path)
-    rules = tmp_path / "workflow" / "rules" / "estimators"
-    template = (rules / "centroid.smk").read_text()
-    (rules / "cheat.smk").write_text(
-        template.replace("estimate_centroid", "estimate_cheat").replace("centroid", "cheat")
-    )
-    (tmp_path / "workflow" / "external" / "cheat.py").write_text(CHEAT)
-    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["cheat", "LM"])
-    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
-    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
-    collected = pd.read_parquet(tmp_path / "results" / "collected" / "cmc.parquet")
-    error = collected.set_index(["method", "trial"])["error_mm"]
-    assert (error["cheat"] > 20.0).all(), error["cheat"]
-    # LM answers in the coordinates it read: its errors are those of a sphere fit.
-    assert (error["LM"] < 5.0).all(), error["LM"]
-    assert error["cheat"].min() > error.drop(index="cheat").max()
-
-
-@pytest.mark.pipeline
-def test_an_external_rule_reading_the_placements_stops_the_run(tmp_path):
-    copy_workflow(tmp_path)
-    rules = tmp_path / "workflow" / "rules" / "estimators"
-    template = (rules / "centroid.smk").read_text()
-    blind = '"results/blind/{study}/{condition}.parquet",'
-    assert blind in template
-    (rules / "centroid.smk").write_text(
-        template.replace(
-            blind, blind + '\n        "results/placements/{study}/{condition}.parquet",'
-        )
-    )
-    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
-    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
-    assert run.returncode != 0
-    message = (
-        "rule estimate_centroid (external estimator 'centroid') reads "
-        "results/placements/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet, which holds "
-        "the placement of each trial"
-    )
-    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
