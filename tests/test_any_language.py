@@ -24,6 +24,7 @@ from jointbench.resultfiles.interchange import (
 from jointbench.resultfiles.parquet import read_source, write_dataset, write_table
 from jointbench.resultfiles.schema import check_estimates
 from jointbench.running.collected import collect, summarise_estimates
+from jointbench.running.placement import dataset_placements, write_placements
 from jointbench.simulate import Trials
 
 
@@ -377,7 +378,10 @@ def _contestant(tmp_path, study: str, method: str, text: str):
     csv.write_text(text)
     converted = csv.with_suffix(".parquet")
     read_estimates_csv(csv, dataset, converted)
-    collect(study, [converted], str(tmp_path / "collected.parquet"), [dataset])
+    # Its blind copy's placements: the answers are mapped back with them before scoring.
+    placements = tmp_path / "placements" / dataset.name
+    write_placements(placements, dataset_placements(dataset, base_seed=1))
+    collect(study, [converted], str(tmp_path / "collected.parquet"), [dataset], None, [placements])
     return csv, dataset, converted
 
 

@@ -28,6 +28,7 @@ from jointbench.resultfiles.parquet import (
     write_dataset,
 )
 from jointbench.running.collected import collect
+from jointbench.running.placement import dataset_placements
 from jointbench.running.run import estimate, simulate_condition
 from jointbench.running.scoring import ESTIMATE_COLUMNS, score_columns
 
@@ -65,8 +66,17 @@ def _write(tmp_path, study: str):
     blind = tmp_path / "blind" / study / "c.parquet"
     trials = simulate_condition(config, study, condition)
     write_dataset(dataset, trials, study=study, condition=condition, provenance={"x": 1})
-    write_blind_dataset(dataset, blind, provenance={"rule": "blind_dataset"})
+    placements = dataset_placements(dataset, CONFIG["base_seed"])
+    write_blind_dataset(dataset, blind, placements, provenance={"rule": "blind_dataset"})
     return dataset, blind, trials
+
+
+def _unplaced(blind, markers):
+    """``markers`` ``(n_trials, n_frames, n_markers, 3)`` of the blind file ``blind`` moved
+    back by each trial's placement."""
+    placements = dataset_placements(blind, CONFIG["base_seed"])
+    offsets = markers - placements.translations[:, None, None, :]
+    return np.einsum("nji,nfmj->nfmi", placements.rotations, offsets)
 
 
 STUDIES = ("cmc", "hinge", "hip", "hip_sta")
@@ -77,7 +87,7 @@ def test_a_blind_file_holds_the_markers_and_nothing_that_places_the_truth(tmp_pa
     dataset, blind, trials = _write(tmp_path, study)
     read, metadata = read_dataset(blind)
     for name, markers in trials.segments.items():
-        assert np.array_equal(read.segments[name], markers)
+        np.testing.assert_allclose(_unplaced(blind, read.segments[name]), markers, atol=1e-9)
     assert read.truth is None and read.parameters == {}
     assert set(metadata) == {*BLIND_KEYS, "provenance"}
     assert metadata["condition"] == read_metadata(dataset)["condition"]
@@ -96,11 +106,18 @@ def test_a_blind_file_holds_the_markers_and_nothing_that_places_the_truth(tmp_pa
 
 
 @pytest.mark.parametrize("study", STUDIES)
-def test_the_csv_of_a_blind_file_is_the_csv_of_its_dataset(tmp_path, study):
-    dataset, blind, _ = _write(tmp_path, study)
-    write_dataset_csv(dataset, tmp_path / "full.csv")
+def test_the_csv_of_a_blind_file_is_the_csv_of_its_placed_markers(tmp_path, study):
+    """The CSV holds the blind file's markers, as a dataset file of the same markers gives
+    them: nothing of the metadata."""
+    _, blind, trials = _write(tmp_path, study)
+    placed, _ = read_dataset(blind)
+    same = tmp_path / "placed.parquet"
+    write_dataset(
+        same, dataclasses.replace(trials, segments=placed.segments), study=study, condition={}
+    )
+    write_dataset_csv(same, tmp_path / "placed.csv")
     write_dataset_csv(blind, tmp_path / "blind.csv")
-    assert (tmp_path / "full.csv").read_bytes() == (tmp_path / "blind.csv").read_bytes()
+    assert (tmp_path / "placed.csv").read_bytes() == (tmp_path / "blind.csv").read_bytes()
 
 
 def test_an_estimates_csv_is_read_against_the_blind_file(tmp_path):
@@ -228,24 +245,74 @@ pd.DataFrame(rows).to_parquet(estimates, index=False)
 '''
 
 
+def _collected_with(tmp_path, name: str, script: str, external: list[str]) -> pd.Series:
+    """The cmc errors by method and trial of a run with an external rule ``name``, the shipped
+    template's with its own ``script``, beside LS and the ``external`` estimators listed."""
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    (rules / f"{name}.smk").write_text(
+        template.replace("estimate_centroid", f"estimate_{name}").replace("centroid", name)
+    )
+    (tmp_path / "workflow" / "external" / f"{name}.py").write_text(script)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=external)
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    collected = pd.read_parquet(tmp_path / "results" / "collected" / "cmc.parquet")
+    return collected.set_index(["method", "trial"])["error_mm"]
+
+
 @pytest.mark.pipeline
 def test_an_oracle_rule_finds_no_truth_and_ranks_as_the_centroid(tmp_path):
     """The oracle's rule is the shipped template's with its own script: it reads what every
     external rule is given and ranks where the centroid, which it falls back to, ranks."""
-    copy_workflow(tmp_path)
-    rules = tmp_path / "workflow" / "rules" / "estimators"
-    template = (rules / "centroid.smk").read_text()
-    (rules / "oracle.smk").write_text(
-        template.replace("estimate_centroid", "estimate_oracle").replace("centroid", "oracle")
-    )
-    (tmp_path / "workflow" / "external" / "oracle.py").write_text(ORACLE)
-    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid", "oracle"])
-    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
-    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
-    collected = pd.read_parquet(tmp_path / "results" / "collected" / "cmc.parquet")
-    error = collected.set_index(["method", "trial"])["error_mm"]
+    error = _collected_with(tmp_path, "oracle", ORACLE, ["centroid", "oracle"])
     assert (error["oracle"] > 1.0).all(), error["oracle"]
-    np.testing.assert_array_equal(error["oracle"].to_numpy(), error["centroid"].to_numpy())
+    # Both mapped back from the same placements: equal to rounding.
+    np.testing.assert_allclose(error["oracle"], error["centroid"], rtol=0, atol=1e-9)
+
+
+# A cheat: a script that answers the cmc protocol's centre, the truth of every trial, read from
+# the package as any program in the workflow's environment can.
+CHEAT = """
+import json
+
+import pandas as pd
+import pyarrow.parquet as pq
+
+from jointbench.simulate.cmc import CmcProtocol
+
+dataset, estimates = snakemake.input[0], snakemake.output[0]
+meta = json.loads(pq.read_schema(dataset).metadata[b"jointbench"])
+centre = CmcProtocol().center_mm
+rows = [
+    {
+        **meta["condition"],
+        "trial": trial,
+        "method": "cheat",
+        "center_x": centre[0],
+        "center_y": centre[1],
+        "center_z": centre[2],
+        "converged": True,
+        "iterations": 0,
+        "seconds": 0.0,
+        "status": "ok",
+    }
+    for trial in sorted(pd.read_parquet(dataset)["trial"].unique())
+]
+pd.DataFrame(rows).to_parquet(estimates, index=False)
+"""
+
+
+@pytest.mark.pipeline
+def test_a_rule_answering_the_protocols_centre_ranks_last(tmp_path):
+    """Every trial of a study has the same truth, but each is placed anew in the blind copy and
+    the answers are mapped back: the constant is scored where a random placement moved it."""
+    error = _collected_with(tmp_path, "cheat", CHEAT, ["cheat", "LM"])
+    assert (error["cheat"] > 20.0).all(), error["cheat"]
+    # LM answers in the coordinates it read: its errors are those of a sphere fit.
+    assert (error["LM"] < 5.0).all(), error["LM"]
+    assert error["cheat"].min() > error.drop(index="cheat").max()
 
 
 def _cmc_only(tmp_path, **cmc) -> str:
@@ -306,18 +373,27 @@ def test_an_external_rule_reading_the_blind_file_through_an_input_function_runs(
 
 
 @pytest.mark.pipeline
-def test_an_external_rule_given_the_full_dataset_by_an_input_function_stops_the_run(tmp_path):
+@pytest.mark.parametrize(
+    ("folder", "held"),
+    [("datasets", "the truth"), ("placements", "the placement of each trial of a blind copy")],
+)
+def test_an_external_rule_given_the_benchmarks_file_by_an_input_function_stops_the_run(
+    tmp_path, folder, held
+):
+    """The full dataset holds the truth; the placements map the answers back, and a program
+    given them could move a constant answer into each trial's placed frame."""
     copy_workflow(tmp_path)
     rules = tmp_path / "workflow" / "rules" / "estimators"
     template = (rules / "centroid.smk").read_text()
-    full = _INPUT_FUNCTION.format(folder="datasets")
-    (rules / "centroid.smk").write_text(template.replace(_BLIND_INPUT, full))
+    (rules / "centroid.smk").write_text(
+        template.replace(_BLIND_INPUT, _INPUT_FUNCTION.format(folder=folder))
+    )
     overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
     run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
     assert run.returncode != 0
     message = (
         "rule estimate_centroid (external estimator 'centroid') reads "
-        "results/datasets/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet"
+        f"results/{folder}/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet, which holds {held}"
     )
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
 

@@ -34,6 +34,7 @@ from jointbench.resultfiles.parquet import (
 )
 from jointbench.resultfiles.schema import check_against_dataset
 from jointbench.running.collected import collect
+from jointbench.running.placement import dataset_placements, write_placements
 from jointbench.running.run import estimate, simulate_condition
 from jointbench.running.scoring import score_columns
 
@@ -399,7 +400,12 @@ def test_a_file_without_errors_is_ranked_by_its_true_error(tmp_path, estimates_a
     write_table(
         nm.assign(method="far", center_x=nm["center_x"] + 50.0).drop(columns="error_mm"), far
     )
-    collected = collect("cmc", [estimates, far], str(tmp_path / "c.parquet"), datasets=[dataset])
+    # An estimator outside the package: its answers are mapped back from its blind copy's frame.
+    placements = tmp_path / "placements" / dataset.name
+    write_placements(placements, dataset_placements(dataset, base_seed=1))
+    collected = collect(
+        "cmc", [estimates, far], str(tmp_path / "c.parquet"), [dataset], placements=[placements]
+    )
     truth = np.asarray(read_metadata(dataset)["truth"]["center"])
     rows = collected[collected["method"] == "far"]
     expected = np.linalg.norm(rows[["center_x", "center_y", "center_z"]].to_numpy() - truth, axis=1)

@@ -387,6 +387,13 @@ CONFIG_EDITS = (
         {"simulate_hinge", "estimate_hinge"},
     ),
     _config_edit("base_seed", _set("base_seed", 1), SIMULATIONS, set()),
+    # The blind copies an external estimator reads, and so its answers and their scores.
+    _config_edit(
+        "the blind copies' placement",
+        _set("blind_placement.translation_mm", 250.0),
+        {"blind_dataset", "estimate_cmc_LM", "collect[study=cmc]"},
+        {"simulate_cmc", "estimate_cmc", "estimate_hinge", "simulate_hip", "estimate_hip"},
+    ),
     _config_edit(
         "protocol field",
         _set("studies.cmc.protocol.spiral_turns", 3.0),

@@ -52,7 +52,8 @@ def check_external_rules():
     """Stop, naming the study and the estimator, when no rule writes the estimates of an
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
     (a misspelt name, a rule file not yet written), not at a missing CSV later; and when its
-    rule reads a full dataset file, whose truth only the benchmark may read."""
+    rule reads a full dataset file, whose truth only the benchmark may read, or the
+    placements of the blind copies (:data:`UNSEEN`)."""
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
@@ -71,11 +72,22 @@ def check_external_rules():
                 _check_blind(producer, name, files)
 
 
+# What no rule of an external estimator may read, by folder: what each holds.
+UNSEEN = {
+    "results/datasets/": "the truth the benchmark scores with",
+    "results/placements/": (
+        "the placement of each trial of a blind copy, which the benchmark maps an external "
+        "estimator's answers back with"
+    ),
+}
+
+
 def _check_blind(producer, name, files, via=()):
     """Stop when ``producer``, the rule of external estimator ``name`` or a rule of its own
     upstream (``via``: the rules it feeds, down to the estimator's), reads a full dataset
-    file, however its path is spelt, in a job writing one of ``files``: its inputs are read
-    as that job's, input functions called with the job's wildcards. A rule upstream that is
+    file or a blind copy's placements (:data:`UNSEEN`), however its path is spelt, in a job
+    writing one of ``files``: its inputs are read as that job's, input functions called with
+    the job's wildcards. A rule upstream that is
     not the package's own (:func:`_package_rule`) is followed in turn, so that no rule of the
     user's can hand the estimator what it read from the truth."""
     for file in filter(producer.is_producer, files):
@@ -83,12 +95,18 @@ def _check_blind(producer, name, files, via=()):
             _as_matched(f)
             for f in producer.expand_input(producer.get_wildcards(file))[0]
         ]
-        full = [f for f in inputs if f.startswith("results/datasets/")]
-        if full:
+        secret = [
+            (f, held)
+            for f in inputs
+            for folder, held in UNSEEN.items()
+            if f.startswith(folder)
+        ]
+        if secret:
             chain = "".join(f", which feeds rule {rule}" for rule in via)
+            file, held = secret[0]
             raise ValueError(
-                f"rule {producer.name}{chain} (external estimator {name!r}) reads {full[0]}, "
-                "which holds the truth the benchmark scores with: an external estimator reads "
+                f"rule {producer.name}{chain} (external estimator {name!r}) reads {file}, "
+                f"which holds {held}: an external estimator reads "
                 "the blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
@@ -132,8 +150,22 @@ def condition_ids(study):
     return [jb_config.condition_id(c) for c in jb_config.conditions(config, study)]
 
 
+# Where the blind copy of a condition's dataset records the placement of each of its trials.
+PLACEMENTS = "results/placements/{study}/{condition}.parquet"
+
+
 def dataset_file(study, condition):
     return f"results/datasets/{study}/{jb_config.condition_id(condition)}.parquet"
+
+
+def placements_files(study, methods):
+    """The placements of the blind copies of every condition of ``study``, which map the
+    answers of an external estimator among ``methods`` back to the datasets' frame (none
+    without one)."""
+    external = jb_config.estimator_names(config, study, source="external")
+    if not set(methods) & set(external):
+        return []
+    return expand(PLACEMENTS, study=study, condition=condition_ids(study))
 
 
 def estimates_files(study, methods=None):

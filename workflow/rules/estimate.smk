@@ -130,6 +130,7 @@ rule summarise_estimator:
         datasets=lambda w: [
             dataset_file(w.study, c) for c in jb_config.conditions(config, w.study)
         ],
+        placements=lambda w: placements_files(w.study, [w.method]),
     output:
         "results/summaries/{study}/{method}.csv",
     log:
@@ -147,13 +148,18 @@ rule summarise_estimator:
 
 rule collect:
     """All estimates of a study in one table, each file's schema checked first, each held to
-    its condition's dataset (same trials, each once, same condition values) and scored against
-    its truth."""
+    its condition's dataset (same trials, each once, same condition values), an external
+    estimator's mapped back from its blind copies' placements, and scored against its truth.
+    """
     input:
         estimates=lambda w: estimates_files(w.study),
         datasets=lambda w: [
             dataset_file(w.study, c) for c in jb_config.conditions(config, w.study)
         ],
+        # An external estimator answers in its blind copies' frames: mapped back with these.
+        placements=lambda w: placements_files(
+            w.study, jb_config.estimator_names(config, w.study)
+        ),
     output:
         "results/collected/{study}.parquet",
     log:

@@ -8,4 +8,5 @@ with jobs.job(snakemake):
         snakemake.output[0],
         datasets=snakemake.input.datasets,
         provenance=jobs.provenance(snakemake),
+        placements=snakemake.input.placements,
     )

@@ -7,4 +7,5 @@ with jobs.job(snakemake):
         snakemake.input.estimates,
         snakemake.output[0],
         datasets=snakemake.input.datasets,
+        placements=snakemake.input.placements,
     )

@@ -3,6 +3,8 @@
 A C, R, Julia or awk program reads the CSV form of a dataset and writes its estimates as CSV; the
 workflow converts both ways (``workflow/rules/interchange.smk``), so the program needs no Parquet
 reader and no wrapper. The truth is not in the CSV: the benchmark scores the estimates itself.
+The CSV is made from the blind file, each trial placed anew (:mod:`jointbench.running.placement`),
+and a program answers in its coordinates; the answers are mapped back before scoring.
 
 Dataset CSV (:func:`write_dataset_csv`), one header line, then one row per marker sample ordered
 by trial, segment (as in the dataset), frame and marker::

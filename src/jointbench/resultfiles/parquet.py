@@ -8,9 +8,9 @@ and block, so a condition is read back a block of trials at a time (:func:`iter_
 memory does not grow with the number of trials.
 
 A blind dataset file (:func:`write_blind_dataset`) is what an estimator outside the package is
-given: the same rows, read by the same functions, with metadata reduced to :data:`BLIND_KEYS`
-(its truth reads as ``None``, its parameters as empty); the benchmark alone scores, and
-:func:`read_truth` refuses such a file.
+given: the same rows, each trial placed anew by a rigid motion of its own, read by the same
+functions, with metadata reduced to :data:`BLIND_KEYS` (its truth reads as ``None``, its
+parameters as empty); the benchmark alone scores, and :func:`read_truth` refuses such a file.
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ from jointbench.simulate import Trials
 
 if TYPE_CHECKING:
     import pandas as pd
+
+    from jointbench.running.placement import Placements
 
 __all__ = [
     "BLIND_KEYS",
@@ -288,11 +290,21 @@ BLIND_KEYS = ("study", "condition", "shapes", "blind")
 
 @_names_unreadable_file
 def write_blind_dataset(
-    dataset: str | Path, output: str | Path, provenance: Mapping[str, object] | None = None
+    dataset: str | Path,
+    output: str | Path,
+    placements: Placements,
+    provenance: Mapping[str, object] | None = None,
 ) -> None:
-    """Copy the rows of the dataset file ``dataset`` to ``output``, row group by row group, with
-    only the :data:`BLIND_KEYS` of its metadata and ``provenance`` (what made the copy, which
-    must hold no protocol value: see :data:`BLIND_KEYS`)."""
+    """Copy the rows of the dataset file ``dataset`` to ``output``, row group by row group, each
+    trial's markers placed anew, with only the :data:`BLIND_KEYS` of its metadata and
+    ``provenance`` (what made the copy, which must hold no protocol value: see
+    :data:`BLIND_KEYS`).
+
+    ``placements`` (:class:`jointbench.running.placement.Placements`): every marker of every
+    segment of a trial is written as ``R x + p`` with its trial's rotation ``R`` and
+    translation ``p`` [mm], so that no constant answer matches the truth; ``ValueError``
+    naming the file for a trial without one. The placements are not written to
+    the copy."""
     source = pq.ParquetFile(dataset)
     metadata = read_metadata(dataset)
     blind = {
@@ -307,8 +319,22 @@ def write_blind_dataset(
     Path(output).parent.mkdir(parents=True, exist_ok=True)
     with pq.ParquetWriter(output, schema) as writer:
         for group in range(source.num_row_groups):
-            table = source.read_row_group(group).replace_schema_metadata(schema.metadata)
-            writer.write_table(table)
+            table = _placed_rows(source.read_row_group(group), placements, dataset)
+            writer.write_table(table.replace_schema_metadata(schema.metadata))
+
+
+def _placed_rows(table: pa.Table, placements: Placements, dataset) -> pa.Table:
+    """Dataset rows with ``x, y, z`` [mm] moved by their trial's placement: ``R x + p``."""
+    try:
+        rotations, translations = placements.rows(_to_numpy(table.column("trial")))
+    except ValueError as error:
+        raise ValueError(f"{dataset}: {error}") from None
+    xyz = np.column_stack([_to_numpy(table.column(axis)) for axis in "xyz"])
+    placed = np.einsum("nij,nj->ni", rotations, xyz) + translations
+    for column, axis in enumerate("xyz"):
+        at = table.schema.get_field_index(axis)
+        table = table.set_column(at, axis, _from_numpy(placed[:, column]))
+    return table
 
 
 @_names_unreadable_file

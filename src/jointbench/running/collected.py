@@ -2,7 +2,9 @@
 
 Both score every estimates file themselves (:func:`scored_estimates`): the errors a ranking is
 made of are computed here from each row's estimate and the truth in its condition's dataset,
-for built-in and external estimators alike.
+for built-in and external estimators alike. An external estimator answers in the frame of the
+blind copy it read, each trial placed anew (:mod:`jointbench.running.placement`): its answers
+are mapped back to the dataset's frame here, before anything checks or scores them.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from jointbench.configuration.studies import get_study, method_kind
+from jointbench.estimators import registry
 from jointbench.resultfiles.parquet import (
     iter_dataset,
     read_metadata,
@@ -32,11 +35,18 @@ from jointbench.resultfiles.schema import (
     check_not_negative,
     check_scores,
 )
+from jointbench.running.placement import Placements, read_placements, unplaced_estimates
 from jointbench.running.scoring import ERROR_COLUMN, proximal_at_frame0, score_columns
 from jointbench.running.summary import summarise
 from jointbench.simulate import PROXIMAL_TRUTH, Study
 
-__all__ = ["collect", "require_results", "scored_estimates", "summarise_estimates"]
+__all__ = [
+    "collect",
+    "is_external",
+    "require_results",
+    "scored_estimates",
+    "summarise_estimates",
+]
 
 
 def scored_estimates(
@@ -101,8 +111,9 @@ def _reasons(rows: pd.DataFrame, most: int = 3) -> str:
 
 def _scored_file(path, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFrame:
     """One estimates file of study ``spec`` read, its schema checked, held to its dataset (of
-    ``datasets``, :func:`_datasets`: the ``trials``, ``condition`` and ``truth`` of its
-    condition's dataset file) and scored as its method's kind.
+    ``datasets``, :func:`_datasets`: the ``trials``, ``condition``, ``truth`` and
+    ``placements`` of its condition's dataset file), mapped back to the dataset's frame when
+    its estimator is external (:func:`_unplaced`) and scored as its method's kind.
 
     Its refusals name the file its estimator wrote (:func:`read_source`): an external
     estimator's CSV, which it was converted from, else the file itself."""
@@ -115,6 +126,8 @@ def _scored_file(path, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFram
     check_against_dataset(
         frame, trials=dataset["trials"], condition=dataset["condition"], source=source
     )
+    if is_external(spec, method):
+        frame = _unplaced(frame, kind, dataset["placements"], method, source)
     frame0 = dataset["proximal_frame0"]
     if frame0 is not None:
         frame0 = frame0[np.searchsorted(dataset["trials"], frame["trial"].to_numpy())]
@@ -123,10 +136,47 @@ def _scored_file(path, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFram
     )
 
 
-def _datasets(datasets: Sequence[str | Path], segments: Sequence[str]) -> dict[str, dict]:
-    """Per condition (a dataset file's stem): its trial numbers (sorted), condition, truth and,
-    when its truth scores a centre relative to the proximal markers, those markers at frame 0
-    of each trial (:func:`jointbench.running.scoring.proximal_at_frame0`), else ``None``."""
+def is_external(spec: Study, method: str) -> bool:
+    """Whether ``method`` is an estimator outside the package, run by a rule of its own on the
+    blind copies: no kind of ``spec`` registers the name (the config refuses an external
+    estimator named as a registered one, and a built-in one that is not)."""
+    return not any(method in registry.methods(kind) for kind in spec.kinds)
+
+
+def _unplaced(
+    frame: pd.DataFrame, kind: str, placements: Placements | None, method: str, source: str
+) -> pd.DataFrame:
+    """An external estimator's ``frame``, given in each trial's placed frame, mapped back to
+    the dataset's (:func:`jointbench.running.placement.unplaced_estimates`). Times, counts
+    and covariances are checked first, as written, which a refusal quotes (mapping sets each
+    mirror equal to its entry). ``ValueError`` naming ``source`` without the condition's
+    ``placements``."""
+    if placements is None:
+        raise ValueError(
+            f"{source}: {method!r} is an external estimator, which answers in the frame of the "
+            "blind copy it read, each trial placed anew; its condition's placements file "
+            "(results/placements/) was not given, so its answers cannot be mapped back to be "
+            "scored"
+        )
+    check_not_negative(frame, source=source)
+    check_covariances(frame, kind, source=source)
+    try:
+        return unplaced_estimates(frame, kind, placements)
+    except ValueError as error:
+        raise ValueError(f"{source}: {error}") from None
+
+
+def _datasets(
+    datasets: Sequence[str | Path],
+    segments: Sequence[str],
+    placements: Sequence[str | Path] = (),
+) -> dict[str, dict]:
+    """Per condition (a dataset file's stem): its trial numbers (sorted), condition, truth,
+    the placements of its blind copy (from the file of ``placements`` of the same stem, else
+    ``None``) and, when its truth scores a centre relative to the proximal markers, those
+    markers at frame 0 of each trial (:func:`jointbench.running.scoring.proximal_at_frame0`),
+    else ``None``."""
+    placed = {Path(path).stem: path for path in placements}
     out = {}
     for path in datasets:
         metadata, truth = read_metadata(path), read_truth(path)
@@ -136,11 +186,13 @@ def _datasets(datasets: Sequence[str | Path], segments: Sequence[str]) -> dict[s
             frame0 = np.concatenate(
                 [proximal_at_frame0(block.segments, segments) for _, block in iter_dataset(path)]
             )[np.argsort(trials)]
-        out[Path(path).stem] = {
+        stem = Path(path).stem
+        out[stem] = {
             "trials": np.sort(trials),
             "condition": metadata["condition"],
             "truth": truth,
             "proximal_frame0": frame0,
+            "placements": read_placements(placed[stem]) if stem in placed else None,
         }
     return out
 
@@ -157,17 +209,21 @@ def collect(
     output: str,
     datasets: Sequence[str | Path],
     provenance: Mapping[str, object] | None = None,
+    placements: Sequence[str | Path] = (),
 ) -> pd.DataFrame:
     """Concatenate a study's estimates files after checking each one's schema, holding it to
-    the dataset file of its condition (same trials, each once, same condition values) and
-    scoring it against that dataset's truth (:func:`scored_estimates`); refuse a study with no
-    finite error at all (:func:`require_results`).
+    the dataset file of its condition (same trials, each once, same condition values), mapping
+    an external estimator's answers back from its blind copy's placements (``placements``: a
+    placements file per condition, named as its dataset file; required for every condition
+    an external estimator answered) and scoring it against that dataset's truth
+    (:func:`scored_estimates`); refuse a study with no finite error at all
+    (:func:`require_results`).
 
     The collected file's provenance adds, per estimator, the provenance of its estimates files
     (an external estimator's files have none)."""
     spec = get_study(study)
     # Each dataset is read once, whatever the number of estimators.
-    expected = _datasets(datasets, spec.segments)
+    expected = _datasets(datasets, spec.segments, placements)
     frames = []
     estimators: dict[str, dict] = {}
     for path in paths:
@@ -181,12 +237,17 @@ def collect(
 
 
 def summarise_estimates(
-    study: str, paths: Sequence[str], output: str, datasets: Sequence[str | Path]
+    study: str,
+    paths: Sequence[str],
+    output: str,
+    datasets: Sequence[str | Path],
+    placements: Sequence[str | Path] = (),
 ) -> None:
     """One estimator's mean and median error per condition, from its estimates files scored
-    against their conditions' ``datasets`` as :func:`collect` scores them."""
+    against their conditions' ``datasets`` (an external estimator's mapped back by the
+    ``placements``) as :func:`collect` scores them."""
     spec = get_study(study)
-    expected = _datasets(datasets, spec.segments)
+    expected = _datasets(datasets, spec.segments, placements)
     estimates = pd.concat(
         [_scored_file(path, spec, expected) for path in paths],
         ignore_index=True,
