@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import csv
+import io
+import math
+import re
 import struct
 from pathlib import Path
 
@@ -33,6 +36,23 @@ def _check_file(path: str | Path) -> Path:
     if not path.is_file():
         raise ValueError(f"{path}: is a directory, not a marker file")
     return path
+
+
+def _read_text(path: Path) -> str:
+    """The text of ``path`` decoded as UTF-8 (a byte-order mark dropped); ``ValueError`` naming
+    the line and the byte that is not UTF-8. No other encoding is guessed: a Latin-1 or
+    Windows-1252 label read as UTF-8 with replacement characters would be a label nobody can
+    type, and one read as Latin-1 from a Windows-1252 file would be another marker's name."""
+    content = path.read_bytes()
+    try:
+        return content.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        line = content.count(b"\n", 0, error.start) + 1
+        raise ValueError(
+            f"{path}: line {line}: byte 0x{content[error.start]:02x} (byte {error.start} of the "
+            "file) is not UTF-8 text; save the file as UTF-8 (from Latin-1: "
+            "iconv -f latin1 -t utf-8)"
+        ) from None
 
 
 def read(path: str | Path) -> Recording:
@@ -121,17 +141,18 @@ def read_trc(path: str | Path) -> Recording:
     label; empty fields are gaps. The rows must be the ``NumFrames`` consecutive frames the
     header promises, each with every field of the header (a line cut short is refused, naming
     it, and so is a last line the file ends inside with its last field empty where other rows
-    fill it: cut right after a separator); row 0 is the first row's ``Frame#``."""
+    fill it: cut right after a separator); row 0 is the first row's ``Frame#``. Labels sit at
+    fixed columns (:func:`_trc_labels`) and no row may write past the labelled markers
+    (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`)."""
     path = _check_file(path)
-    lines = path.read_text(errors="replace").splitlines()
+    lines = _read_text(path).splitlines()
     if len(lines) < 6:
         raise ValueError(f"{path}: too short for a TRC file (needs 5 header lines and data)")
     keys, values = lines[1].split("\t"), lines[2].split("\t")
     header = {key.strip(): value.strip() for key, value in zip(keys, values, strict=False)}
     if "Units" not in header:
         raise ValueError(f"{path}: TRC header has no 'Units' (line 2 keys: {keys})")
-    names = [name.strip() for name in lines[3].split("\t")[2:]]
-    labels = [name for name in names if name]
+    labels = _trc_labels(lines[3], path)
     width = 2 + 3 * len(labels)
     # Data start on line 6; a blank line is no frame.
     data = [(number, line) for number, line in enumerate(lines[5:], 6) if line.strip()]
@@ -143,10 +164,13 @@ def read_trc(path: str | Path) -> Recording:
             columns = f"Frame#, Time and X, Y, Z of {len(labels)} markers"
             raise _short_row(path, number, fields, width, columns, number == len(lines))
     rows = [line.split("\t") for _, line in data]
+    _check_unlabelled_fields(lines[4].split("\t"), width, path, 5)
+    for (number, _), row in zip(data, rows, strict=True):
+        _check_unlabelled_fields(row, width, path, number)
     if data[-1][0] == len(lines):
         last_field = [row[width - 1] for row in rows]
         _check_last_field(path, len(lines), last_field, f"Z of {labels[-1]}")
-    numbers = _trc_frame_numbers(rows, header, len(labels), path)
+    numbers = _trc_frame_numbers(rows, [n for n, _ in data], header, len(labels), path)
     markers = np.full((len(rows), len(labels) * 3), np.nan)
     for i, row in enumerate(rows):
         fields = row[2:width]
@@ -161,9 +185,66 @@ def read_trc(path: str | Path) -> Recording:
                         "a number"
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * _to_mm(header["Units"], path)
-    rate = header.get("DataRate")
-    rate_hz = float(rate) if rate else None
+    rate_hz = _trc_rate(header.get("DataRate", ""), path)
     return Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+
+
+def _trc_labels(line: str, path: Path) -> list[str]:
+    """The marker labels of a TRC file's line 4, ``Frame#  Time  label  …`` (tab-separated).
+
+    Marker ``k`` (0-based) owns columns ``3 + 3k`` to ``5 + 3k`` (1-based), its label in the
+    first; empty cells after the last label are allowed. ``ValueError`` naming the column for
+    a label off that boundary, or for an empty cell where a marker's label must be: either
+    would pair the labels that follow with another marker's coordinates."""
+    names = [name.strip() for name in line.split("\t")[2:]]
+    for i, name in enumerate(names):
+        if name and i % 3:
+            raise ValueError(
+                f"{path}: line 4, column {i + 3}: label {name!r} is not at a marker's first "
+                "column; a TRC file's labels sit at columns 3, 6, 9, ... (one per X, Y, Z)"
+            )
+    named = [i for i, name in enumerate(names) if name]
+    if not named:
+        raise ValueError(f"{path}: line 4 names no marker (labels from column 3 on)")
+    labels = names[: named[-1] + 1 : 3]
+    for k, label in enumerate(labels):
+        if not label:
+            raise ValueError(
+                f"{path}: line 4, column {3 * k + 3}: marker {k + 1} has no label (an empty "
+                "cell where its label must be); every marker's X, Y, Z must be named"
+            )
+    return labels
+
+
+def _check_unlabelled_fields(row: list[str], width: int, path: Path, line: int) -> None:
+    """``ValueError`` naming line ``line`` (1-based) of ``path`` and the column when ``row``
+    (its tab-separated fields) writes anything past the ``width`` columns that ``Frame#``,
+    ``Time`` and the labelled markers' X, Y, Z explain: a marker without a label, whose data
+    would otherwise be cut off unseen. Empty fields past them are allowed."""
+    extra = [i for i, text in enumerate(row[width:], width) if text.strip()]
+    if extra:
+        column = extra[0] + 1
+        raise ValueError(
+            f"{path}: line {line}, column {column}: {row[extra[0]].strip()!r} belongs to marker "
+            f"{(column - 3) // 3 + 1}, but line 4 labels {(width - 2) // 3} markers "
+            f"(columns 1 to {width}); label every marker, or remove its columns"
+        )
+
+
+def _trc_rate(text: str, path: Path) -> float | None:
+    """The header's ``DataRate`` [Hz], ``None`` when it is empty or absent; ``ValueError``
+    naming line 3 when it is not a finite number."""
+    if not text:
+        return None
+    try:
+        rate = float(text)
+    except ValueError:
+        rate = math.nan
+    if not math.isfinite(rate):
+        raise ValueError(
+            f"{path}: line 3, field DataRate: {text!r} is not a frame rate (frames per second)"
+        )
+    return rate
 
 
 def _short_row(
@@ -247,12 +328,15 @@ def _ends_with_newline(path: Path) -> bool:
         return file.read(1) in (b"\n", b"\r")
 
 
-def _trc_frame_numbers(rows: list[list[str]], header: dict, n_labels: int, path: Path) -> list:
-    """The ``Frame#`` of every row; ``ValueError`` when they are not consecutive integers or
-    not the frames and markers the header promises."""
+def _trc_frame_numbers(
+    rows: list[list[str]], lines: list[int], header: dict, n_labels: int, path: Path
+) -> list:
+    """The ``Frame#`` of every row (``lines``: each row's 1-based line in the file);
+    ``ValueError`` when they are not consecutive integers or not the frames and markers the
+    header promises."""
     promised = {key: header.get(key, "") for key in ("NumFrames", "NumMarkers")}
     for key, found in (("NumFrames", len(rows)), ("NumMarkers", n_labels)):
-        if promised[key].isdigit() and int(promised[key]) != found:
+        if re.fullmatch(r"[0-9]+", promised[key]) and int(promised[key]) != found:
             raise ValueError(
                 f"{path}: the TRC header promises {key} {promised[key]} but the file has {found}"
             )
@@ -260,9 +344,9 @@ def _trc_frame_numbers(rows: list[list[str]], header: dict, n_labels: int, path:
     for i, row in enumerate(rows):
         try:
             numbers.append(int(float(row[0])))
-        except ValueError:
+        except (ValueError, OverflowError):
             raise ValueError(
-                f"{path}: data line {i + 1}: Frame# {row[0]!r} is not a frame number"
+                f"{path}: line {lines[i]}, field Frame#: {row[0]!r} is not a frame number"
             ) from None
         if i and numbers[i] != numbers[i - 1] + 1:
             raise ValueError(
@@ -282,12 +366,23 @@ def read_csv(path: str | Path) -> Recording:
     header (a line cut short) is refused, naming it, and so is a last line the file ends inside
     with its last field empty where other rows fill it (cut right after a separator). The file
     declares no frame count, so a file cut at a line's end reads as a shorter recording.
+    ``marker`` is text exactly as written (``01``, ``NA``); an empty one is refused, naming
+    its line. The file is UTF-8 (:func:`_read_text`).
     """
     path = _check_file(path)
+    text = _read_text(path)
     try:
-        table = pd.read_csv(path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
-        raise ValueError(f"{path}: not a readable CSV file ({error})") from None
+        # The marker column is text as written: no type inference ("01" stays "01") and no
+        # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
+        table = pd.read_csv(
+            io.StringIO(text),
+            dtype={"marker": str},
+            keep_default_na=False,
+            na_values={column: _NA_TEXT for column in ("frame", "x", "y", "z")},
+        )
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as error:
+        # pandas ends some of its messages with a newline; the refusal is one line.
+        raise ValueError(f"{path}: not a readable CSV file ({str(error).strip()})") from None
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
         raise ValueError(f"{path}: missing columns {sorted(missing)}")
@@ -299,7 +394,10 @@ def read_csv(path: str | Path) -> Recording:
     if table[table.columns[-1]].isna().any() or not _ends_with_newline(path):
         _check_csv_fields(path, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
-    table["marker"] = table["marker"].astype(str)
+    empty = (table["marker"] == "").to_numpy()
+    if empty.any():
+        line, _ = _csv_line(path, int(np.argmax(empty)), "marker")
+        raise ValueError(f"{path}: {line}, field marker: empty; every sample needs a marker")
     twice = table.duplicated(["frame", "marker"], keep=False)
     if twice.any():
         first = table[twice].iloc[0]
@@ -345,15 +443,45 @@ def _check_csv_fields(path: Path, header: list[str]) -> None:
         _check_last_field(path, line, last_field, header[-1])
 
 
+# pandas' default missing-value words (``read_csv``'s ``na_values``), kept for the numeric
+# columns when the marker column is read without them.
+_NA_TEXT = (
+    "", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN",
+    "<NA>", "N/A", "NA", "NULL", "NaN", "None", "n/a", "nan", "null",
+)  # fmt: skip
+
+# Frame numbers beyond this are not integers a float64 holds exactly, far past any recording.
+_MAX_FRAME = 2**53
+
+
+def _csv_line(path: Path, row: int, column: str) -> tuple[str, str]:
+    """Where data row ``row`` (0-based, as pandas counts it: blank and whitespace-only lines
+    skipped) is in ``path``, ``"line 7"`` (1-based), and the text written in its field
+    ``column``; for messages only, so the file is read again."""
+    with path.open(newline="", encoding="utf-8-sig") as file:
+        records = csv.reader(file)
+        written = (r for r in records if r and (len(r) > 1 or r[0].strip()))
+        header = next(written, [])
+        index = header.index(column) if column in header else len(header)
+        for seen, record in enumerate(written):
+            if seen == row:
+                text = record[index] if index < len(record) else ""
+                return f"line {records.line_num}", text
+    return f"data row {row + 1}", ""  # not reached: pandas read that row
+
+
 def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
-    """The ``frame`` column as integers; ``ValueError`` naming a value that is not one, or a
-    range of numbers so much wider than the frames present that it is not frame numbers."""
+    """The ``frame`` column as integers; ``ValueError`` naming the line of a value that is not
+    one (or lies beyond +-2**53), or a range of numbers so much wider than the frames present
+    that it is not frame numbers."""
     values = pd.to_numeric(frames, errors="coerce").to_numpy(float)
-    bad = ~np.isfinite(values) | (values != np.round(values))
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(values) | (values != np.round(values)) | (np.abs(values) > _MAX_FRAME)
     if bad.any():
+        line, text = _csv_line(path, int(np.argmax(bad)), "frame")
         raise ValueError(
-            f"{path}: frame {frames.iloc[int(np.argmax(bad))]!r} (data row "
-            f"{int(np.argmax(bad)) + 1}) is not an integer frame number"
+            f"{path}: {line}, field frame: {text!r} is not an integer frame number "
+            f"(within +-{_MAX_FRAME})"
         )
     numbers = values.astype(np.int64)
     span, present = int(numbers.max() - numbers.min()) + 1, len(np.unique(numbers))
@@ -367,4 +495,4 @@ def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
 
 def _natural(label: str) -> tuple:
     """Sort key placing ``"2"`` before ``"10"`` (marker names written as integers)."""
-    return (0, int(label), "") if label.lstrip("-").isdigit() else (1, 0, label)
+    return (0, int(label), label) if re.fullmatch(r"-?[0-9]+", label) else (1, 0, label)
