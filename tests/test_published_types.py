@@ -72,8 +72,12 @@ def _set_tolerance(*keys_and_value):
 BAD = [
     ("paper_a", "A9", _set("published", "8.0 mm"), "published", "'8.0 mm' is not a number"),
     ("paper_a", "A9", _set("published", "8"), "published", "'8' is not a number"),
-    ("paper_a", "A9", _set("published", True), "published", "True is not a number"),
-    ("paper_a", "A9", _set("published", None), "published", "None is not a number"),
+    ("paper_a", "A9", _set("published", True), "published", "True is neither a number"),
+    ("paper_a", "A9", _set("published", None), "published", "None is neither a number"),
+    # shown beside a bound, published is the paper's numbers or words, not YAML's true or null
+    ("paper_a", "A6", _set("published", True), "published", "True is neither a number"),
+    ("paper_a", "A12", _set("published", None), "published", "None is neither a number"),
+    ("paper_a", "A11", _set("published", {"LS": 10.9, "NM": False}), "published", "False is"),
     ("paper_a", "A9", _set("published", [8.0, "x"]), "published", "position 2"),
     ("paper_a", "A9", _set("published", []), "published", "an empty list"),
     ("paper_a", "A9", _set("published", float("nan")), "published", "nan is not a number"),

@@ -42,8 +42,32 @@ def _is_integer(value: object) -> bool:
 def entry_problem(entry: Mapping) -> tuple[str, str] | None:
     """``(key, what is wrong)`` with the first value of a schema-checked published-values
     ``entry`` that its tolerance cannot read as the module doc says, or None; ``key`` is its
-    dotted path in the entry (``published``, ``tolerance.all[1].published``)."""
+    dotted path in the entry (``published``, ``tolerance.all[1].published``). Wherever it is
+    only shown, ``published`` is the paper's numbers or words, never YAML's true, false or
+    null."""
+    shown = _shown_problem(entry["published"])
+    if shown:
+        return "published", shown
     return _tolerance_problem(entry["tolerance"], entry["published"], "published", "tolerance")
+
+
+def _shown_problem(value: object) -> str | None:
+    """A boolean or null in ``value`` (a number, text, or lists and mappings of them), which
+    no paper prints: a value lost or mistyped in the file."""
+    if isinstance(value, list):
+        items = value
+    elif isinstance(value, Mapping):
+        items = list(value.values())
+    else:
+        items = [value]
+    for item in items:
+        if isinstance(item, bool) or item is None:
+            return f"{item!r} is neither a number nor the paper's words"
+        if isinstance(item, list | Mapping):
+            problem = _shown_problem(item)
+            if problem:
+                return problem
+    return None
 
 
 def _tolerance_problem(
