@@ -8,6 +8,7 @@ from snakemake.utils import min_version
 
 from jointbench import console
 from jointbench import report as jb_report
+from jointbench.configuration import config as jb_config
 
 min_version("8.20")
 
@@ -33,6 +34,11 @@ if _REPORT:
 
 onsuccess:
     print(jb_report.closing_lines(), file=sys.stderr)
+
+
+# The project's own schema check before Snakemake's (workflow/rules/common.smk), whose error
+# leads with a dump of the schema: a mistake, a misspelt study first, is named in one line.
+jb_config.check_schema(config)
 
 
 include: "workflow/rules/common.smk"

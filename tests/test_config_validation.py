@@ -204,6 +204,47 @@ BAD = [
     ),
     # A study that runs nothing.
     ("hip", ("estimators",), [], ["studies.hip.estimators: empty, and no external_estimators"]),
+    # Bounds from what the papers simulate and from geometry (jointbench.configuration.bounds).
+    ("hinge", ("grid", "aa_ratio"), [0.3, 50], ["studies.hinge.grid.aa_ratio: 50", "< 1"]),
+    ("hinge", ("grid", "aa_ratio"), [1.0], ["studies.hinge.grid.aa_ratio: 1.0", "< 1"]),
+    (
+        "hip",
+        ("protocol",),
+        {"proximal_markers_mm": [[0, 0, 500], [50, 0, 500], [100, 0, 500]]},
+        ["studies.hip.protocol.proximal_markers_mm", "collinear (on one line)"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"distal_markers_mm": [[80, 20, -500], [80, 20, -500], [-30, -90, -530]]},
+        ["studies.hip.protocol.distal_markers_mm", "markers 1 and 2 coincide"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"proximal_markers_mm": [[0, 0, 500], [100, 0, 500], [50, 1, 500]]},
+        ["studies.hip.protocol.proximal_markers_mm", "nearly collinear", "noise_mm (1.7 mm)"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"swing_deg": 0, "cross_swing_deg": 0, "twist_deg": 0},
+        ["studies.hip.protocol", "swing_deg, cross_swing_deg, twist_deg", "at least 2 of the axes"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"cross_swing_deg": 0, "twist_deg": 0},
+        ["studies.hip.protocol", "swing_deg, cross_swing_deg, twist_deg", "only swing_deg"],
+    ),
+    ("hip", ("protocol",), {"swing_hz": -0.75}, ["studies.hip.protocol.swing_hz: -0.75", "> 0"]),
+    ("hip", ("protocol",), {"twist_hz": 0}, ["studies.hip.protocol.twist_hz: 0", "> 0"]),
+    (
+        "hip",
+        ("protocol",),
+        {"cross_swing_hz": 45.0},
+        ["studies.hip.protocol.cross_swing_hz: 45.0", "< 30 Hz", "half the frame rate"],
+    ),
     # A study of two kinds: names and options of both are checked, each against its own kind.
     (
         "hip_sta",
@@ -312,6 +353,51 @@ def test_missing_grid_key_is_named(config):
     del bad["studies"]["cmc"]["grid"]["noise_mm"]
     with pytest.raises(ValueError, match=r"studies\.cmc\.grid\.noise_mm: missing"):
         study_config.check_config(bad)
+
+
+def _overlaid(config, overlay: dict) -> dict:
+    merged = copy.deepcopy(config)
+    update_config(merged, overlay)
+    return merged
+
+
+def test_a_misspelt_study_is_named_unknown_before_its_missing_keys(config):
+    """An overlay meant for cmc's trials, under a misspelt name, is a study of no grid: the
+    mistake is the name, which the message says with the known ones."""
+    bad = _overlaid(config, {"studies": {"cmx": {"trials": 5}}})
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config(bad)
+    message = str(raised.value)
+    assert "unknown studies ['cmx']" in message, message
+    assert all(name in message for name in study_names()), message
+    assert "required property" not in message, message
+
+
+def test_a_study_an_extension_may_register_is_named_beside_its_schema_error(config, tmp_path):
+    """With extensions listed, a study not built in may be theirs, and no extension is imported
+    from a config that fails the schema: the schema's error is given, naming the study as not
+    built in."""
+    bad = _overlaid(config, {"studies": {"cmx": {"trials": 5}}, "extensions": ["mine.py"]})
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config(bad, tmp_path)
+    message = str(raised.value)
+    for words in ("studies/cmx", "'grid' is a required property", "'cmx' is not a built-in"):
+        assert words in message, message
+
+
+@pytest.mark.pipeline
+def test_dry_run_names_a_misspelt_study_in_one_line(tmp_path):
+    """The project's own check runs before Snakemake's schema validation, whose error leads
+    with a dump of the schema."""
+    copy_workflow(tmp_path)
+    overlay = tmp_path / "bad.yaml"
+    overlay.write_text(yaml.safe_dump({"studies": {"cmx": {"trials": 5}}}))
+    run = run_snakemake(tmp_path, "--configfile", str(overlay), "--dry-run", timeout=300)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    assert "config error at studies: unknown studies ['cmx']" in message, message[-2000:]
+    assert "$schema" not in message and "required property" not in message, message[-3000:]
+    assert not (tmp_path / "results").exists()
 
 
 def _listed_otherwise(settings: dict) -> dict:

@@ -13,7 +13,6 @@ them.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Mapping, Sequence
 from importlib import resources
 from pathlib import Path
@@ -22,6 +21,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 import yaml
 
+from jointbench.comparison.published_types import entry_problem, is_number
 from jointbench.comparison.tolerance import describe, evaluate, is_compared
 from jointbench.configuration.config import read_yaml, validate_against
 from jointbench.jobs import require_declared
@@ -82,6 +82,9 @@ NOT_APPLICABLE = "not applicable"
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"
 OFF_DESIGN = "not enforced: this run's grid or trial count differs from the paper's design"
 NOT_IN_RUN = "not measured in this run (method, condition or study not run)"
+#: How the reason of an entry whose tolerance could not be evaluated starts: a failure of the
+#: check (:func:`unexplained`), which no recorded deviation explains.
+CANNOT_EVALUATE = "cannot evaluate: "
 _SCHEMA = resources.files("jointbench.schemas").joinpath("published.schema.yaml")
 
 
@@ -93,7 +96,9 @@ def load_published(
     (:attr:`jointbench.papers.base.Paper.tables`), each cell one number or, for a table whose
     cells list several (:attr:`~jointbench.papers.base.PublishedTable.lists`), a list of that
     many: ``ValueError`` naming the file otherwise, and the missing ids (for a table, the
-    paper, the table and its missing cells, or the cell and the position in it). Read by a
+    paper, the table and its missing cells, or the cell and the position in it). Every entry's
+    values are those its tolerance reads (:mod:`jointbench.comparison.published_types`):
+    ``ValueError`` naming the file, the paper, the entry and the key otherwise. Read by a
     workflow job, ``path`` must be one of its declared inputs
     (:func:`jointbench.jobs.require_declared`)."""
     require_declared(path, "published values")
@@ -124,12 +129,25 @@ def load_published(
                     f"published values {path}: paper {document['paper']} {table.source} cell "
                     f"{cell}: {wrong}; restore it from the repository"
                 )
+    # After the tables: a cell's value is named by its table and position there.
+    _check_types(document, path)
     return document
 
 
-def _is_number(value: object) -> bool:
-    # YAML reads true/false as booleans, which Python counts as integers.
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+def _check_types(document: Mapping, path: str | Path) -> None:
+    """``ValueError`` naming the file, the paper, the entry and the key of the first value of
+    ``document`` that its tolerance cannot read (:func:`entry_problem`)."""
+    entries = [("value", e) for e in document.get("values", [])]
+    entries += [("claim", e) for e in document["claims"]]
+    for kind, entry in entries:
+        problem = entry_problem(entry)
+        if problem:
+            key, what = problem
+            raise ValueError(
+                f"published values {path}: paper {document['paper']} {kind} {entry['id']} "
+                f"{key}: {what}; write it as its tolerance "
+                f"({describe(entry['tolerance'])}) reads it, from the paper"
+            )
 
 
 def _misshapen_cell(published: object, lists: Sequence[str] = ()) -> str | None:
@@ -137,7 +155,7 @@ def _misshapen_cell(published: object, lists: Sequence[str] = ()) -> str | None:
     None: with ``lists`` (the labels of the numbers the cell lists, in order) it must be a list
     of that many numbers, without, one number."""
     if not lists:
-        return None if _is_number(published) else f"{published!r} is not a number"
+        return None if is_number(published) else f"{published!r} is not a number"
     labels = ", ".join(lists)
     if not isinstance(published, list):
         return f"{published!r} is not a list of its {len(lists)} numbers ({labels})"
@@ -145,7 +163,7 @@ def _misshapen_cell(published: object, lists: Sequence[str] = ()) -> str | None:
     for position, value in enumerate(published, start=1):
         if position > len(lists):
             return f"{count}: an extra value at position {position} ({value!r})"
-        if not _is_number(value):
+        if not is_number(value):
             return f"position {position} ({lists[position - 1]}) holds {value!r}, not a number"
     if len(published) < len(lists):
         return f"{count}: nothing at position {len(published) + 1}"
@@ -174,8 +192,14 @@ def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
         return NOT_APPLICABLE, "", entry.get("not_applicable", NOT_IN_RUN)
     try:
         verdict = evaluate(tolerance, entry["published"], measured.value)
-    except ValueError as error:
-        return NOT_APPLICABLE, "", f"cannot evaluate: {error}"
+    except KeyError as error:
+        # A compound measurement without the part an ``all`` tolerance reads.
+        return "not reproduced", "", f"{CANNOT_EVALUATE}the measurement has no {error}"
+    except (ValueError, TypeError) as error:
+        # Not a verdict this run may pass on: the file's values are typed when it is read
+        # (load_published), so what is left is a measurement of another shape, whatever its
+        # recorded deviation says.
+        return "not reproduced", "", f"{CANNOT_EVALUATE}{error}"
     if verdict.holds:
         return "reproduced", verdict.margin_text, ""
     return "not reproduced", verdict.margin_text, entry.get("deviation", UNEXPLAINED)
@@ -236,10 +260,11 @@ def reader_order(comparison: pd.DataFrame) -> pd.DataFrame:
 
 
 def unexplained(comparison: pd.DataFrame) -> pd.DataFrame:
-    """Rows that did not reproduce and carry no recorded deviation."""
-    return comparison[
-        (comparison["status"] == "not reproduced") & (comparison["reason"] == UNEXPLAINED)
-    ]
+    """Rows that did not reproduce and carry no recorded deviation, or could not be evaluated
+    (whatever deviation they record)."""
+    reason = comparison["reason"].astype(str)
+    failing = (reason == UNEXPLAINED) | reason.str.startswith(CANNOT_EVALUATE)
+    return comparison[(comparison["status"] == "not reproduced") & failing]
 
 
 def matches_design(config: Mapping, document: Mapping) -> bool:
@@ -262,26 +287,31 @@ def enforce_design(comparison: pd.DataFrame, document: Mapping, config: Mapping)
     """Mark unexplained deviations of a study run off the paper's design as not enforced.
 
     A reduced run (fewer trials, part of the grid) still tabulates every comparison, but its
-    statistics cannot be held to the published values.
+    statistics cannot be held to the published values; nor can the entries its grid measures
+    only in part (fewer noise levels than published counts), which could not be evaluated:
+    their reason keeps why.
     """
     if matches_design(config, document):
         return comparison
     comparison = comparison.copy()
     comparison.loc[comparison["reason"] == UNEXPLAINED, "reason"] = OFF_DESIGN
+    partial = comparison["reason"].astype(str).str.startswith(CANNOT_EVALUATE)
+    comparison.loc[partial, "reason"] = OFF_DESIGN + "; " + comparison.loc[partial, "reason"]
     return comparison
 
 
 def failure_message(comparison: pd.DataFrame) -> str | None:
-    """The error naming every value that no longer reproduces without a recorded reason."""
+    """The error naming every value that no longer reproduces without a recorded reason, and
+    every value that could not be evaluated, with why."""
     missing = unexplained(comparison)
     if missing.empty:
         return None
     lines = [
         f"  {r.study} {r.id}: published {r.published}, reproduced {r.reproduced} "
-        f"(margin {r.margin})"
+        + (f"({r.reason})" if r.reason.startswith(CANNOT_EVALUATE) else f"(margin {r.margin})")
         for r in missing.itertuples()
     ]
     return (
-        f"{len(missing)} published value(s) no longer reproduce and have no recorded "
-        "deviation in the paper's published values:\n" + "\n".join(lines)
+        f"{len(missing)} published value(s) no longer reproduce without a recorded deviation "
+        "in the paper's published values, or cannot be evaluated:\n" + "\n".join(lines)
     )

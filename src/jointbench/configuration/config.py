@@ -13,6 +13,7 @@ import numpy as np
 import yaml
 
 from jointbench import declared
+from jointbench.configuration.bounds import study_problem
 from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
@@ -22,6 +23,7 @@ from jointbench.simulate import Study
 __all__ = [
     "MAX_TRIALS",
     "check_config",
+    "check_schema",
     "condition_id",
     "conditions",
     "estimator_names",
@@ -73,9 +75,42 @@ def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCH
     _check_studies_registered(config)
 
 
+def check_schema(config: Mapping) -> None:
+    """``config`` against its schema (:func:`validate_against`), a study not registered named
+    first: an overlay's misspelt study (``studies: {cmx: {trials: 5}}``) is a study without a
+    grid to the schema, but the mistake is its name. With ``extensions`` listed, a study may be
+    theirs, and none is imported from a config that fails the schema: the schema's error is
+    given, saying which studies are not built in. ``ValueError`` in one line naming the key.
+
+    The workflow runs it before Snakemake's own validation, whose error leads with a dump of
+    the schema; :func:`open_config` runs it first."""
+    studies = config.get("studies")
+    if not isinstance(studies, Mapping):
+        validate_against(config, SCHEMA_PATH, "config")
+        return
+    if not config.get("extensions"):
+        _check_studies_registered(config)
+        validate_against(config, SCHEMA_PATH, "config")
+        return
+    try:
+        validate_against(config, SCHEMA_PATH, "config")
+    except ValueError as error:
+        unknown = _unknown_studies(config)
+        if not unknown:
+            raise
+        raise ValueError(
+            f"{error} ({', '.join(map(repr, unknown))} is not a built-in study: built in are "
+            f"{', '.join(registered_studies())}; another must come from the extensions)"
+        ) from None
+
+
+def _unknown_studies(config: Mapping) -> list[str]:
+    return sorted(set(config["studies"]) - set(registered_studies()))
+
+
 def _check_studies_registered(config: Mapping) -> None:
     """Raise ``ValueError`` naming the studies of ``config`` that no module registered."""
-    unknown = sorted(set(config["studies"]) - set(registered_studies()))
+    unknown = _unknown_studies(config)
     if unknown:
         raise ValueError(
             f"config error at studies: unknown studies {unknown}; registered studies are "
@@ -98,7 +133,7 @@ def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
     study's settings in one order (:func:`ordered_settings`)."""
     # The schema first: a misspelt key is named as such, not hidden behind an extension's import
     # error, and no extension is imported from a config that is not the one meant.
-    validate_against(config, SCHEMA_PATH, "config")
+    check_schema(config)
     load_extensions(config, base)
     _check_studies_registered(config)
     check_config(config)
@@ -193,9 +228,10 @@ def _merged(base: Mapping, update: Mapping) -> dict:
 def check_config(config: Mapping) -> None:
     """Raise ``ValueError`` naming the key and its allowed values for what the schema cannot
     see: a run of no study, the trial count's bound, protocol fields, grid keys and values,
-    estimator names and their options (each against the type and range its annotation
-    declares, see :mod:`jointbench.declared`), a study with no estimator, and a condition whose
-    trials are too short for every estimator listed.
+    the bounds a study's own declarations do not state
+    (:mod:`jointbench.configuration.bounds`), estimator names and their options (each against
+    the type and range its annotation declares, see :mod:`jointbench.declared`), a study with
+    no estimator, and a condition whose trials are too short for every estimator listed.
 
     Run on a config that passed :func:`validate_config`, before any job, so that a mistake
     stops the workflow instead of turning into failed rows or numpy errors later.
@@ -213,6 +249,9 @@ def check_config(config: Mapping) -> None:
             raise ValueError(f"{where}.trials: {trials!r} is not an integer in [1, {MAX_TRIALS}]")
         protocol = _protocol(spec, settings.get("protocol"), where)
         _check_grid(spec, settings["grid"], protocol, where)
+        problem = study_problem(study, settings, protocol)
+        if problem:
+            raise ValueError(f"{where}.{problem[0]}: {problem[1]}")
         _check_estimators(spec, settings, where)
         _check_frames(spec, settings, protocol, where)
 

@@ -1,0 +1,151 @@
+"""What each kind of tolerance reads in a published-values entry, checked when the file is read.
+
+The schema (``published.schema.yaml``) allows any ``published`` value, because what it must be
+depends on the tolerance (:mod:`jointbench.comparison.tolerance`):
+
+* ``abs``, ``rel``, ``max_abs_rel`` compare the measurement with it: a real number, or a
+  non-empty list of them (elementwise);
+* ``factor`` divides by it: positive real numbers;
+* ``binomial95`` reads it as success counts (integers >= 0) out of ``of_n`` trials (integers
+  >= 1, one for every count or one for all), no count above its ``of_n``;
+* the bounds (``at_least``, ``at_most``, ``greater_than``, ``less_than``, ``range``) carry their
+  own finite numbers, a range two increasing ones, and show the published value as the paper's
+  words: there it may be text;
+* ``all`` checks each part, a part's own ``published`` in place of the entry's;
+* ``shown_only`` compares nothing.
+
+A value the comparison would misread (``true`` as 1, ``"8"`` as 8) or could not read
+(``"8.0 mm"``) is thus refused before any verdict, not turned into one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+__all__ = ["entry_problem", "is_number"]
+
+_REFERENCE = ("abs", "rel", "max_abs_rel")
+_BOUNDS = ("at_least", "at_most", "greater_than", "less_than")
+
+
+def is_number(value: object) -> bool:
+    """A finite real number as YAML gives it: not a bool (YAML's true/false, which Python counts
+    as integers), not a string, not NaN or infinite."""
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _is_integer(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def entry_problem(entry: Mapping) -> tuple[str, str] | None:
+    """``(key, what is wrong)`` with the first value of a schema-checked published-values
+    ``entry`` that its tolerance cannot read as the module doc says, or None; ``key`` is its
+    dotted path in the entry (``published``, ``tolerance.all[1].published``). Wherever it is
+    only shown, ``published`` is the paper's numbers or words, never YAML's true, false or
+    null."""
+    shown = _shown_problem(entry["published"])
+    if shown:
+        return "published", shown
+    return _tolerance_problem(entry["tolerance"], entry["published"], "published", "tolerance")
+
+
+def _shown_problem(value: object) -> str | None:
+    """A boolean or null in ``value`` (a number, text, or lists and mappings of them), which
+    no paper prints: a value lost or mistyped in the file."""
+    if isinstance(value, list):
+        items = value
+    elif isinstance(value, Mapping):
+        items = list(value.values())
+    else:
+        items = [value]
+    for item in items:
+        if isinstance(item, bool) or item is None:
+            return f"{item!r} is neither a number nor the paper's words"
+        if isinstance(item, list | Mapping):
+            problem = _shown_problem(item)
+            if problem:
+                return problem
+    return None
+
+
+def _tolerance_problem(
+    tolerance: Mapping, published: object, published_key: str, key: str
+) -> tuple[str, str] | None:
+    (kind,) = [k for k in tolerance if k not in ("of", "published")]
+    spec = tolerance[kind]
+    if kind == "all":
+        for index, part in enumerate(spec):
+            where = f"{key}.all[{index}]"
+            own = "published" in part
+            problem = _tolerance_problem(
+                part,
+                part["published"] if own else published,
+                f"{where}.published" if own else published_key,
+                where,
+            )
+            if problem:
+                return problem
+        return None
+    if kind in _REFERENCE or kind == "factor":
+        problem = _numbers_problem(published, positive=kind == "factor")
+        return (published_key, problem) if problem else None
+    if kind in _BOUNDS:
+        problem = _numbers_problem(spec)
+        return (f"{key}.{kind}", problem) if problem else None
+    if kind == "range":
+        problem = _range_problem(spec)
+        return (f"{key}.range", problem) if problem else None
+    if kind == "binomial95":
+        return _binomial_problem(spec["of_n"], published, published_key, f"{key}.binomial95.of_n")
+    return None  # shown_only
+
+
+def _numbers_problem(value: object, positive: bool = False) -> str | None:
+    """What keeps ``value`` from being a real number (above zero with ``positive``) or a
+    non-empty list of them, in words naming the position; None if nothing."""
+    wanted = "a number > 0" if positive else "a number"
+    if isinstance(value, list):
+        if not value:
+            return f"an empty list: give {wanted} or a list of them"
+        for position, item in enumerate(value, start=1):
+            if not is_number(item) or (positive and item <= 0):
+                return f"position {position} holds {item!r}, not {wanted}"
+        return None
+    if not is_number(value) or (positive and value <= 0):
+        return f"{value!r} is not {wanted}"
+    return None
+
+
+def _range_problem(spec: object) -> str | None:
+    low, high = spec  # the schema gives two numbers
+    if is_number(low) and is_number(high) and low < high:
+        return None
+    return f"{spec!r} is not two increasing finite numbers [low, high]"
+
+
+def _binomial_problem(
+    of_n: object, published: object, published_key: str, of_n_key: str
+) -> tuple[str, str] | None:
+    """The first of: a number of trials that is not an integer >= 1; a published count that is
+    not an integer >= 0; a list of counts whose length differs from a list of ``of_n``; a count
+    above its number of trials."""
+    trials = of_n if isinstance(of_n, list) else [of_n]
+    for n in trials:
+        if not _is_integer(n) or n < 1:
+            return of_n_key, f"{n!r} is not an integer >= 1 (a number of trials)"
+    counts = published if isinstance(published, list) else [published]
+    if not counts:
+        return published_key, "an empty list: give the published count(s)"
+    for count in counts:
+        if not _is_integer(count) or count < 0:
+            return published_key, f"{count!r} is not a count (an integer >= 0)"
+    if len(trials) not in (1, len(counts)):
+        return published_key, (
+            f"{len(counts)} counts for {len(trials)} numbers of trials in {of_n_key}"
+        )
+    for count, n in zip(counts, trials * len(counts) if len(trials) == 1 else trials, strict=True):
+        if count > n:
+            return published_key, f"{count} of {n} trials: more successes than trials"
+    return None

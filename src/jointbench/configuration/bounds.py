@@ -1,0 +1,117 @@
+"""Bounds on a study's config that its own declarations do not state, each with its reason.
+
+The studies declare their grid values' types and ranges (:class:`jointbench.simulate.GridValues`)
+and their protocol fields' (:mod:`jointbench.declared`); what lies within those and still makes
+no experiment is refused here, before any job, by :func:`study_problem` (called by
+:func:`jointbench.configuration.config.check_config`). Each bound comes from what the papers
+simulate or from geometry, and none refuses a value the papers' own grids use
+(``tests/test_config_validation.py`` runs the shipped configs through them).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+__all__ = ["AA_RATIO_BELOW", "study_problem"]
+
+#: The hinge study's AA/FE ratio is below 1. The estimators find the flexion–extension axis,
+#: the motion's principal axis only while abduction–adduction is the smaller rotation: a share
+#: ``ratio^2 / (1 + ratio^2)`` of the rotation lies off the FE axis (0.33 at paper B's largest
+#: ratio, 0.7), half at ratio 1, where FE and AA are equal and no axis is the motion's, and
+#: most above it (at 50, abduction of 50 times the flexion). Paper B's grid is 0.1 to 0.7.
+AA_RATIO_BELOW = 1.0
+
+#: The hip rig's pendulum rotations (distal relative to proximal, about x, y, z): paper C's rig
+#: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
+#: the recording is a hinge's, whose centre lies anywhere on its axis.
+HIP_ROTATIONS = ("swing_deg", "cross_swing_deg", "twist_deg")
+HIP_FEWEST_AXES = 2
+#: Their frequencies [Hz]: a rotation happens at a frequency above 0 (a rotation that does not
+#: happen has amplitude 0) and below half the frame rate, beyond which the frames cannot show it
+#: (the sampling theorem: it would be recorded as a slower motion than the one configured).
+HIP_FREQUENCIES = ("swing_hz", "cross_swing_hz", "twist_hz")
+#: The hip rig's marker clusters, each fitted as one rigid body.
+HIP_CLUSTERS = ("proximal_markers_mm", "distal_markers_mm")
+
+
+def study_problem(study: str, settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """``(key, what is wrong and why)`` for the first value of a study's checked ``settings``
+    (``key`` below ``studies.<study>``, e.g. ``grid.aa_ratio``) or its ``protocol`` that a bound
+    of this module refuses; None for a study without such bounds or within them."""
+    check = _CHECKS.get(study)
+    return check(settings, protocol) if check else None
+
+
+def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    for ratio in settings["grid"]["aa_ratio"]:
+        if not ratio < AA_RATIO_BELOW:
+            return "grid.aa_ratio", (
+                f"{ratio!r} is not < {AA_RATIO_BELOW:g}: at a ratio of 1 or more "
+                "abduction-adduction is as large as the flexion-extension whose axis the "
+                "estimators find, so that axis is not the motion's (paper B: 0.1 to 0.7)"
+            )
+    return None
+
+
+def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    for name in HIP_CLUSTERS:
+        problem = cluster_problem(getattr(protocol, name), protocol.noise_mm)
+        if problem:
+            return f"protocol.{name}", problem
+    moving = [name for name in HIP_ROTATIONS if getattr(protocol, name) != 0]
+    if len(moving) < HIP_FEWEST_AXES:
+        which = f"only {', '.join(moving)}" if moving else "none"
+        return f"protocol.{', '.join(HIP_ROTATIONS)}", (
+            f"{which} non-zero: the rig must rotate about at least {HIP_FEWEST_AXES} of the axes "
+            "(paper C: the second segment 'moved around at least 2 of the axes'); about one, its "
+            "centre lies anywhere on that axis"
+        )
+    nyquist = protocol.fps / 2
+    for name in HIP_FREQUENCIES:
+        value = getattr(protocol, name)
+        if not 0 < value < nyquist:
+            return f"protocol.{name}", (
+                f"{value!r} is not > 0 and < {nyquist:g} Hz (half the frame rate, fps "
+                f"{protocol.fps:g}): a rotation has a positive frequency (set its amplitude to "
+                "0 for none), and the frames cannot show one at half the frame rate or faster"
+            )
+    return None
+
+
+def cluster_problem(markers_mm: Sequence[Sequence[float]], noise_mm: float) -> str | None:
+    """What keeps ``markers_mm`` (``(n, 3)`` [mm], ``n >= 3``) from giving a rigid body's pose,
+    or None: two markers in one place, or markers on one line, or so near one that their RMS
+    distance from their best-fit line is no more than the marker noise ``noise_mm`` (the RMS
+    length of a marker's error): the rotation about that line is then unresolved (an error of a
+    radian or more), and every pose fit of the cluster with it."""
+    markers = np.asarray(markers_mm, dtype=float)
+    for (i, a), (j, b) in itertools.combinations(enumerate(markers, start=1), 2):
+        if np.array_equal(a, b):
+            return f"markers {i} and {j} coincide: a rigid body's pose needs 3 distinct markers"
+    centred = markers - markers.mean(axis=0)
+    singular = np.linalg.svd(centred, compute_uv=False)
+    # The singular values beyond the first measure the spread off the principal line.
+    off_line = float(np.sqrt(np.sum(singular[1:] ** 2) / len(markers)))
+    unresolved = "so the rotation about that line, and the cluster's pose, cannot be resolved"
+    # Relative to the cluster's size: markers on one line leave rounding error off it.
+    if off_line <= _ROUNDING * singular[0]:
+        return f"the markers are collinear (on one line), {unresolved}"
+    if off_line <= noise_mm:
+        return (
+            f"the markers are nearly collinear: their RMS distance from their common line is "
+            f"{off_line:.3g} mm, not above the marker noise noise_mm ({noise_mm:g} mm), "
+            + unresolved
+        )
+    return None
+
+
+_ROUNDING = 1e-9
+
+
+_CHECKS: dict[str, Callable[[Mapping, object], tuple[str, str] | None]] = {
+    "hinge": _hinge,
+    "hip": _hip,
+}
