@@ -12,8 +12,8 @@ Every method is reached through the registry, which holds it to the same rules:
   ``diagnostics["support_..."]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
   the meaning the method's paper gives it. ``status == "ok"`` says that the data support an
   answer (they resolve a rotation) and that the method found its minimum, not that the answer
-  is accurate: on a ball joint swung 5 deg with 2 mm noise, LS, MA and SCoRE centres 67-100 mm
-  from the truth are ``"ok"``. How well the data determine the answer is in the precision
+  is accurate: on a ball joint swung 5 deg with 2 mm noise, LS, MA and SCoRE centres more than
+  60 mm from the truth are ``"ok"``. How well the data determine the answer is in the precision
   diagnostics where a method states them (an axis's ``diagnostics["axis_sd_deg"]``, below; a
   covariance where the result has one, e.g. Gauss–Markov's), or in a recording's bootstrap
   (:func:`jointbench.fit`);
