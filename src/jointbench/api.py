@@ -10,7 +10,19 @@ Every method is reached through the registry, which holds it to the same rules:
   resolved above the rigid-body residual, or (for a centre) rotation about a single axis — give
   a result whose ``status`` starts with or carries ``"warning: ..."``, with the numbers in
   ``diagnostics["support_..."]`` (see :mod:`jointbench.estimators.support`). ``converged`` keeps
-  the meaning the method's paper gives it, so check ``status == "ok"`` for a clean answer;
+  the meaning the method's paper gives it. ``status == "ok"`` says that the data support an
+  answer (they resolve a rotation) and that the method found its minimum, not that the answer
+  is accurate: on a ball joint swung 5 deg with 2 mm noise, LS, MA and SCoRE centres more than
+  60 mm from the truth are ``"ok"``. How well the data determine the answer is in the precision
+  diagnostics where a method states them (an axis's ``diagnostics["axis_sd_deg"]``, below; a
+  covariance where the result has one, e.g. Gauss–Markov's), or in a recording's bootstrap
+  (:func:`jointbench.fit`);
+* an array with more markers than frames may be a ``(markers, frames, 3)`` array passed
+  transposed: with fewer frames than the method takes
+  (:func:`jointbench.estimators.registry.claims`' ``min_frames``) it is refused with a
+  ``ValueError`` saying so; otherwise it is fitted and ``status`` carries ``"warning: ... may be
+  (markers, frames, 3); it must be (frames, markers, 3)"`` (``diagnostics["maybe_transposed"]``
+  the same words). Nothing is transposed for the caller: the shape may be meant;
 * an axis whose direction the method's own cost leaves undetermined (the SD of the direction
   that the cost's curvature and residuals imply, ``diagnostics["axis_sd_deg"]``, above
   :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`) gets a warning in ``status`` the
@@ -53,11 +65,12 @@ from jointbench.estimators.results import (
     JointCenterResult,
     with_warnings,
 )
-from jointbench.estimators.validation import check_input
+from jointbench.estimators.validation import check_input, check_markers
 from jointbench.screening import (
     ArtefactRules,
     Numbering,
     Screening,
+    checked_rules,
     exchanges_untested,
     find_artefacts,
     summarise,
@@ -89,10 +102,13 @@ def screen(
     Parameters
     ----------
     segments : (n_frames, n_markers, 3) arrays [mm], complete (no NaN), e.g. ``markers`` or
-        ``proximal, distal``.
+        ``proximal, distal``. Each is held to the fits' checks of one array
+        (:func:`jointbench.estimators.validation.check_markers`: shape, real numbers, no NaN,
+        inf or ``(0, 0, 0)`` sample): a ``ValueError`` names the array and the problem.
     names : a name per array (default ``markers``, or ``proximal``, ``distal`` for two); the
         markers are labelled ``name[:, column]`` and frames are rows.
-    rules : thresholds (:class:`jointbench.io.ArtefactRules`).
+    rules : thresholds (:class:`jointbench.io.ArtefactRules`), or ``None`` for the default;
+        anything else is a ``ValueError``.
 
     Returns
     -------
@@ -102,9 +118,11 @@ def screen(
     names = names or (("markers",) if len(segments) == 1 else ("proximal", "distal"))
     if len(names) != len(segments):
         raise ValueError(f"{len(segments)} arrays but {len(names)} names {list(names)}")
+    rules = checked_rules(rules)
+    # Every array is checked before any is screened, with the fits' own checks of one array.
+    checked = [check_markers(array, name=name) for name, array in zip(names, segments, strict=True)]
     found = {}
-    for name, markers in zip(names, segments, strict=True):
-        markers = np.asarray(markers, dtype=float)
+    for name, markers in zip(names, checked, strict=True):
         labels = _column_labels(name, markers.shape[1])
         found[name] = screen_markers(markers, labels, name, rules)
     return found
@@ -142,20 +160,52 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
         raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
     if artefacts == "ignore":
         fit = registry.get_for_valid(kind, method)  # an unknown method is named first, as ever
-        return _called(fit, kind, method, check_input(kind, arrays), options)
-    # The input checks come first, so bad input gets their message, not the screen's.
-    clean = check_input(kind, arrays)
+        clean = check_input(kind, arrays)
+    else:
+        # The input checks come first, so bad input gets their message, not the screen's.
+        clean = check_input(kind, arrays)
+        fit = registry.get_for_valid(kind, method)
+    transposed = _maybe_transposed(kind, clean, registry.claims(kind, method).min_frames)
+    if artefacts == "ignore":
+        result = _called(fit, kind, method, clean, options)
+        if not transposed:
+            return result
+        return with_warnings(result, transposed, {"maybe_transposed": list(transposed)})
     found = _screen_valid(kind, clean, artefacts)
-    result = _called(registry.get_for_valid(kind, method), kind, method, clean, options)
+    result = _called(fit, kind, method, clean, options)
     untested = _untested(kind, clean)
-    if not found and not untested:
+    if not found and not untested and not transposed:
         return result
     flagged = [dataclasses.asdict(a) for screening in found.values() for a in screening.artefacts]
     diagnostics: dict = {"artefacts": flagged}
     if untested:
         diagnostics["artefacts_untested"] = list(untested)
+    if transposed:
+        diagnostics["maybe_transposed"] = list(transposed)
     warned = (_warned(found),) if found else ()
-    return with_warnings(result, (*warned, *untested), diagnostics)
+    return with_warnings(result, (*transposed, *warned, *untested), diagnostics)
+
+
+def _maybe_transposed(kind: str, clean: tuple[np.ndarray, ...], min_frames: int) -> tuple[str, ...]:
+    """What the shapes of ``clean``, the checked inputs ``(n_frames, n, 3)`` of a ``kind`` fit,
+    suggest: an array with more markers than frames may have been passed as ``(markers, frames,
+    3)``. A segment carries a handful of markers over many frames, so the shape is named, not
+    changed: a ``ValueError`` when it also has fewer frames than the method takes
+    (``min_frames``), where the method would refuse it without the hint; otherwise its words
+    (one per such array, ``()`` for none) for the result's ``status``."""
+    words = []
+    for name, markers in zip(_NAMES[kind], clean, strict=True):
+        n_frames, n_markers, _ = markers.shape
+        if n_markers <= n_frames:
+            continue
+        shape = (
+            f"{name} has {n_markers} markers over {n_frames} frames: the array may be "
+            "(markers, frames, 3); it must be (frames, markers, 3)"
+        )
+        if n_frames < min_frames:
+            raise ValueError(f"{shape}, and this method needs at least {min_frames} frames")
+        words.append(shape)
+    return tuple(words)
 
 
 def _called(fit, kind: str, method: str, clean: tuple[np.ndarray, ...], options: dict):

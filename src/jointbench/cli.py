@@ -40,6 +40,7 @@ from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
 from jointbench.report import readme_headlines
+from jointbench.uncertainty import check_resampling
 
 #: The config every run starts from (the Snakefile's ``configfile``), relative to the run's
 #: directory.
@@ -280,11 +281,28 @@ def _method_names(kind: str, method: str) -> list[str]:
     return [method]
 
 
+def _check_bootstrap_options(args: argparse.Namespace) -> None:
+    """Refuse ``--bootstrap``, ``--block-length`` or ``--seed`` values no recording could take,
+    naming the option: a ``ValueError`` from every method of ``--method all`` would otherwise
+    be one failed row per method. A block longer than the frames is refused once they are
+    known (:meth:`jointbench.io.Prepared.fit`)."""
+    check_resampling(
+        args.block_length or 1,  # the frames are not known yet: any block length fits
+        args.bootstrap,
+        args.block_length,
+        args.seed,
+        names=("--bootstrap", "--block-length", "--seed"),
+        zero_is_none=True,
+    )
+
+
 def _fit(args: argparse.Namespace) -> int:
-    # The config and the method name first: a mistake in either stops before the file is read.
+    # The config, the method name and the bootstrap's options first: a mistake in any stops
+    # before the file is read.
     if args.configfile:
         _open_run(args)
     names = _method_names(args.kind, args.method)
+    _check_bootstrap_options(args)
     recording = read(args.file)
     moving = _labels(args.moving)
     reference = _labels(args.reference)

@@ -518,6 +518,20 @@ class ArtefactRules:
 _RULES = ArtefactRules()  # the default, made once: a clean trial's screen takes microseconds
 
 
+def checked_rules(rules: object) -> ArtefactRules:
+    """``rules``, or the default for ``None``; ``ValueError`` for anything but an
+    :class:`ArtefactRules` (a dict of thresholds would otherwise be taken for the default when
+    empty, and fail deep inside when not)."""
+    if rules is None:
+        return _RULES
+    if not isinstance(rules, ArtefactRules):
+        raise ValueError(
+            f"rules must be an ArtefactRules (jointbench.io.ArtefactRules(min_jump_mm=...)) or "
+            f"None for the default, got {rules!r}"
+        )
+    return rules
+
+
 @dataclass(frozen=True)
 class Artefact:
     """One flagged sample: ``kind`` ``"jump"``, ``"rigidity"`` or ``"swap"``, ``size_mm`` the
@@ -1249,8 +1263,14 @@ def screen(
     breaks, swapped frames and swaps of a cluster of >= 3 markers, jumps of fewer. ``source``
     names the data in messages. Frame order matters only to the jumps. A cluster of more than
     :data:`MAX_EXCHANGE_MARKERS` is not tested for label exchanges, and its ``untested`` says
-    so."""
-    rules = rules or _RULES
+    so. ``rules`` other than :class:`ArtefactRules` or ``None``, or ``markers`` not shaped
+    ``(n_frames, len(labels), 3)``, raise ``ValueError``."""
+    rules = checked_rules(rules)
+    if np.ndim(markers) != 3 or np.shape(markers)[1:] != (len(labels), 3):
+        raise ValueError(
+            f"{source}: markers must be shaped (n_frames, {len(labels)} labels, 3), got shape "
+            f"{np.shape(markers)}"
+        )
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
     untested = exchanges_untested(len(labels))

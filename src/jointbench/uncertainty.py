@@ -13,12 +13,34 @@ is a common compromise between that and having enough distinct blocks.
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
 
-__all__ = ["Bootstrap", "block_indices", "bootstrap", "default_block_length"]
+from jointbench.declared import Count, Range, check
+
+__all__ = [
+    "RESAMPLING",
+    "Bootstrap",
+    "block_indices",
+    "bootstrap",
+    "check_level",
+    "check_resampling",
+    "default_block_length",
+]
+
+#: The names of a bootstrap's arguments (resamples, block length, seed) in its refusals.
+RESAMPLING = ("n_resamples", "block_length", "seed")
+
+# What a block length and a seed must be (jointbench.declared): a fractional value would be
+# truncated and a negative seed is refused by NumPy deep inside the refits, blamed on them.
+_BLOCK_LENGTH = Count | None
+_SEED = Annotated[int, Range(0)]
+_NONE_OR_MORE = Annotated[int, Range(0)]
 
 
 def default_block_length(n_frames: int) -> int:
@@ -56,9 +78,54 @@ class Bootstrap:
         return np.atleast_2d(np.cov(self.valid, rowvar=False))
 
     def interval(self, level: float = 0.95) -> np.ndarray:
-        """Percentile interval ``(2, d)``: lower and upper bounds holding ``level`` of refits."""
+        """Percentile interval ``(2, d)``: lower and upper bounds holding ``level`` of refits,
+        ``level`` in (0, 1)."""
+        level = check_level(level)
         tail = 100.0 * (1.0 - level) / 2.0
         return np.percentile(self.valid, [tail, 100.0 - tail], axis=0)
+
+
+def check_level(level: object) -> float:
+    """``level``, the share of refits an interval holds, as a float; ``ValueError`` unless it
+    is a number strictly between 0 and 1 (95 is not 0.95, and a negative one would swap the
+    bounds)."""
+    if (
+        isinstance(level, bool | np.bool_)
+        or not isinstance(level, numbers.Real)
+        or not (math.isfinite(level) and 0.0 < level < 1.0)
+    ):
+        raise ValueError(f"level must be a number in (0, 1), e.g. 0.95, got {level!r}")
+    return float(level)
+
+
+def check_resampling(
+    n_frames: int,
+    n_resamples: object,
+    block_length: object,
+    seed: object,
+    *,
+    names: tuple[str, str, str] = RESAMPLING,
+    zero_is_none: bool = False,
+) -> tuple[int, int]:
+    """The number of resamples and the block length [frames] of a bootstrap over ``n_frames``
+    frames, checked before any refit: ``n_resamples`` an integer >= 2 (or 0, none, with
+    ``zero_is_none``), ``block_length`` an integer in [1, ``n_frames``] or ``None`` (the
+    default, :func:`default_block_length`), ``seed`` an integer >= 0. A ``ValueError`` names
+    the first that is not by its entry of ``names``; a bool or a whole float is not an
+    integer, nor is text."""
+    resamples_name, block_name, seed_name = names
+    check(n_resamples, _NONE_OR_MORE, (resamples_name,))
+    if n_resamples < 2 and not (zero_is_none and n_resamples == 0):
+        none = "0 (none) or " if zero_is_none else ""
+        raise ValueError(f"{resamples_name}: must be {none}an integer >= 2, got {n_resamples!r}")
+    check(block_length, _BLOCK_LENGTH, (block_name,))
+    if block_length is not None and block_length > n_frames:
+        raise ValueError(
+            f"{block_name}: must be at most the {n_frames} frames resampled, got {block_length}"
+        )
+    check(seed, _SEED, (seed_name,))
+    length = default_block_length(n_frames) if block_length is None else int(block_length)
+    return int(n_resamples), length
 
 
 def bootstrap(
@@ -76,19 +143,17 @@ def bootstrap(
     all at once (so an estimator can refit them as one batch) and returns one ``(d,)`` row per
     resample, or ``None`` where the refit cannot support an answer; those count as failed.
     ``label`` names what is refitted (the recording or study, and the method), in front of the
-    ``ValueError`` raised when more than half the refits fail. It is required, and refused when
+    ``ValueError`` raised when more than half the refits fail. ``n_resamples``,
+    ``block_length`` and ``seed`` are refused as :func:`check_resampling` says, before any
+    refit. It is required, and refused when
     blank, before any refit: ``statistic`` is any callable, so nothing else can say what it
     refits, and of several bootstraps an unnamed refusal would not say which one failed.
     """
     if not isinstance(label, str) or not label.strip():
         raise ValueError(f"bootstrap: label must name what is refitted, got {label!r}")
-    if int(n_resamples) < 2:
-        raise ValueError(f"n_resamples must be >= 2, got {n_resamples}")
-    block_length = default_block_length(n_frames) if block_length is None else int(block_length)
+    n_resamples, block_length = check_resampling(n_frames, n_resamples, block_length, seed)
     rng = np.random.default_rng(seed)
-    indices = np.stack(
-        [block_indices(n_frames, block_length, rng) for _ in range(int(n_resamples))]
-    )
+    indices = np.stack([block_indices(n_frames, block_length, rng) for _ in range(n_resamples)])
     rows = list(statistic(indices))
     width = next((len(row) for row in rows if row is not None), 1)
     samples = np.array([np.full(width, np.nan) if row is None else row for row in rows], float)

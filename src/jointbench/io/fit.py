@@ -23,6 +23,7 @@ labelling is right).
 
 from __future__ import annotations
 
+import numbers
 import warnings
 from dataclasses import dataclass, field
 
@@ -36,7 +37,8 @@ from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap, find_jumps, summarise
 from jointbench.numerics.poses import best_rotation
-from jointbench.uncertainty import Bootstrap, bootstrap
+from jointbench.screening import checked_rules
+from jointbench.uncertainty import Bootstrap, bootstrap, check_level, check_resampling
 
 __all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]
 
@@ -84,9 +86,11 @@ class RecordingFit:
         return self.reference.world(self.estimate()[-3:])
 
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
-        """Axis: the angle [deg] from the estimate holding ``level`` of the refit directions."""
+        """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
+        directions."""
         if self.kind != "axis" or self.bootstrap is None:
             raise ValueError("only an axis fit with a bootstrap has a direction cone")
+        level = check_level(level)
         angles = angle_between_lines_deg(self.bootstrap.valid[:, :3], self.result.direction)
         return float(np.quantile(angles, level))
 
@@ -280,12 +284,26 @@ class Prepared:
         :class:`~jointbench.estimators.batching.ProgrammingError` naming the recording, the
         method and the line (:func:`~jointbench.estimators.batching.numerical_failure`); an
         option that is not what the method declares for it, a ``ValueError`` naming it before
-        the fit (:func:`~jointbench.estimators.registry.check_options`).
+        the fit (:func:`~jointbench.estimators.registry.check_options`); a bootstrap argument
+        that is not what :func:`~jointbench.uncertainty.check_resampling` asks, a ``ValueError``
+        naming it, also before the fit. ``method=None`` is the kind's default; any other value
+        must name a method (``""`` does not).
         """
         kind = self.kind
-        method = method or DEFAULT_METHODS[kind]
+        method = DEFAULT_METHODS[kind] if method is None else method
         label = f"{self.recording.source}: {kind} {method}"
-        check_options(kind, method, options, label)
+        check_options(kind, method, options, label)  # an unknown method is named here
+        try:
+            check_resampling(
+                self.usable.size,
+                n_bootstrap,
+                block_length,
+                seed,
+                names=("n_bootstrap", "block_length", "seed"),
+                zero_is_none=True,
+            )
+        except ValueError as error:
+            raise ValueError(f"{label}: {error}") from None
         rows = self.rows(np.arange(self.usable.size))
         with mistakes_named(label):
             result = self.solve(method, rows, options)
@@ -322,6 +340,23 @@ class Prepared:
         )
 
 
+def _checked_frames(frames: object) -> slice | str:
+    """``frames`` when it is what :func:`fit` documents (``"start:stop"`` or a slice of rows
+    whose bounds are integers or ``None``); otherwise a ``ValueError`` naming it, where a
+    tuple would fail deep inside with an ``AttributeError``."""
+    if isinstance(frames, str):
+        return frames
+    if isinstance(frames, slice) and all(
+        bound is None or (isinstance(bound, numbers.Integral) and not isinstance(bound, bool))
+        for bound in (frames.start, frames.stop, frames.step)
+    ):
+        return frames
+    raise ValueError(
+        f"frames must be 'start:stop' (the file's frame numbers) or a slice of rows with "
+        f"integer bounds, got {frames!r}"
+    )
+
+
 def prepare(
     recording: Recording,
     kind: str,
@@ -339,9 +374,9 @@ def prepare(
         raise ValueError(
             f"artefacts must be one of {', '.join(ARTEFACT_POLICIES)}, got {artefacts!r}"
         )
-    rules = rules or ArtefactRules()
+    rules = checked_rules(rules)
     if frames is not None:
-        recording = recording.frames(frames)
+        recording = recording.frames(_checked_frames(frames))
     moving_index = recording.index(moving)
     segments: list[Segment] = []
     ref = None
@@ -438,15 +473,21 @@ def fit(
         reference labels define the technical frame of the answer. Without ``reference`` the
         moving markers are taken as already expressed in the reference frame (not for
         ``joint_center``, which needs both segments).
-    method : a name of ``jointbench.methods(kind)``; default :data:`DEFAULT_METHODS`.
-    frames : ``"start:stop"`` in the file's frame numbers (stop excluded), or a slice of rows.
-        The refusal of a label swap names the ranges that keep either side of it.
+    method : a name of ``jointbench.methods(kind)``; ``None`` (the default) is
+        :data:`DEFAULT_METHODS`' (``""`` names no method and is refused).
+    frames : ``"start:stop"`` in the file's frame numbers (stop excluded), or a slice of rows
+        with integer bounds; anything else is a ``ValueError``. The refusal of a label swap
+        names the ranges that keep either side of it.
     artefacts : ``"refuse"`` (``ValueError`` naming markers and frame) or ``"exclude"`` (leave
         out, with a warning, the frames that break the shape most frames share; the same
         frames whatever their order).
-    rules : thresholds of the artefact detection (:class:`ArtefactRules`).
+    rules : thresholds of the artefact detection (:class:`ArtefactRules`), ``None`` for the
+        default.
     n_bootstrap, block_length, seed : moving-block bootstrap (:mod:`jointbench.uncertainty`);
-        0 resamples means none. The refits are conditional on the reference's mean shape.
+        0 resamples means none, otherwise at least 2; a block of 1 to all the frames fitted
+        (``None``: ``ceil(sqrt(n))``); a seed >= 0. Each an integer (not a bool, a float or
+        text), refused with a ``ValueError`` naming it before the fit. The refits are
+        conditional on the reference's mean shape.
     options : passed to the estimator.
 
     To fit several methods on one preparation, use :func:`prepare` and :meth:`Prepared.fit`.
