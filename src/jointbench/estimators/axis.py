@@ -77,8 +77,11 @@ The checked call (:func:`jointbench.estimators.registry.get`, ``jointbench.fit_a
 the SD of the direction that each cost implies, ``diagnostics["axis_sd_deg"]``, and warns when
 it is above :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`
 (:func:`_direction_sd_deg`): on a short arc the radial cost can leave the axis undetermined
-while the rotation is resolved. Its self-check also compares the two minima it has, the ten
-starts' and the restart's: more than
+while the rotation is resolved. For the planar cost, whose answer is an eigenvector, it also
+warns where the eigen-gap is within the noise's own share of the scatter: the first-order SD
+then leaves out the larger part of the error
+(:func:`jointbench.estimators.precision.annotate_validity`). Its self-check also compares the
+two minima it has, the ten starts' and the restart's: more than
 :data:`jointbench.estimators.precision.AMBIGUOUS_APART_DEG` apart, the other is stated in
 ``diagnostics["other_minimum"]`` and, where the data cannot tell the two fits apart, the
 direction is said to be ambiguous (:func:`_ambiguity_checked`; the radial cost's second
@@ -848,6 +851,21 @@ def _radial_derivatives(
 
 
 def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str):
+    """The SD [deg] of :func:`_direction_precision`."""
+    return _direction_precision(markers, point, direction, method)[0]
+
+
+def _planar_gap(scatter: np.ndarray, direction: np.ndarray, basis: np.ndarray) -> float:
+    """The planar eigen-problem's gap [mm^2] above the answer ``direction`` (3,): the smallest
+    eigenvalue of ``E' S E - (n' S n) I``, half :func:`_planar_hessian` (``S`` ``(3, 3)``
+    [mm^2], ``E`` ``(3, 2)``); at the minimum, the smaller of ``S``'s two other eigenvalues
+    less the answer's."""
+    return precision.smaller_eigenvalue(0.5 * _planar_hessian(scatter, direction, basis))
+
+
+def _direction_precision(
+    markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str
+) -> tuple[float, tuple[float, float] | None]:
     """The SD [deg] of the axis ``direction`` (3,) through ``point`` (3,) [mm] implied by
     ``method``'s cost on ``markers`` ``(N, P, 3)`` [mm] (:mod:`jointbench.estimators.precision`).
 
@@ -867,6 +885,11 @@ def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndar
     quadratic by several percent at 1e-3 rad) while the tilt and shift of the axis that the
     arc leaves nearly free curve the cost 1e-5 as much as the others, which rounding hides at
     any step that small.
+
+    Also, for the planar cost, whose answer is an eigenvector of ``S``, the noise's share of
+    its eigen-problem and its gap ``(n' S n, gap)`` [mm^2] (:func:`_planar_gap`), which tell
+    whether the first-order SD holds (:func:`jointbench.estimators.precision.annotate_validity`);
+    ``None`` for the others, whose radial term curves the cost on its own.
     """
     markers = precision.distinct_frames(markers)
     n_frames, n_markers = markers.shape[:2]
@@ -885,24 +908,32 @@ def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndar
         radial = _radial_derivatives(markers, foot, direction, basis)
         gradient, hessian, cost = gradient + radial[0], hessian + radial[1], cost + radial[2]
     dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
-    return precision.direction_sd_deg(gradient, hessian, cost, dof)
+    sd = precision.direction_sd_deg(gradient, hessian, cost, dof)
+    if method != "planar":
+        return sd, None
+    return sd, (cost, _planar_gap(scatter, direction, basis))
+
+
+def _annotated(result: AxisResult, markers: np.ndarray) -> AxisResult:
+    """``result`` for ``markers`` ``(N, P, 3)`` [mm] with its direction's SD
+    (:func:`_direction_precision`) and, where the first-order SD does not hold, the planar
+    eigen-problem's warning."""
+    sd, eigen = _direction_precision(
+        markers, np.asarray(result.point), np.asarray(result.direction), result.method
+    )
+    annotated = precision.annotate(result, sd, f"the {result.method} cost")
+    if eigen is None:
+        return annotated
+    return precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
 
 
 def _precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
     """Each of ``results`` (one method's answers for the trials of ``markers``
-    ``(T, N, P, 3)`` [mm] or a list of trials) with its direction's SD and, above
-    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`, a warning."""
+    ``(T, N, P, 3)`` [mm] or a list of trials) with its direction's SD, above
+    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, and for the planar
+    cost the warning where the SD does not hold (:func:`_annotated`)."""
     return [
-        precision.annotate(
-            result,
-            _direction_sd_deg(
-                np.asarray(array, dtype=float),
-                np.asarray(result.point),
-                np.asarray(result.direction),
-                result.method,
-            ),
-            f"the {result.method} cost",
-        )
+        _annotated(result, np.asarray(array, dtype=float))
         for result, array in zip(results, markers, strict=True)
     ]
 

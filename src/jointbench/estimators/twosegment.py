@@ -405,21 +405,67 @@ def _sara_sd_deg(values: np.ndarray, vectors: np.ndarray, n_frames: int, n_disti
     return math.degrees(math.sqrt(max(float(np.trace(tangent)), 0.0)))
 
 
+def _sara_validity(values: np.ndarray, vectors: np.ndarray, shape: np.ndarray):
+    """What tells whether SARA's first-order SD holds (:mod:`jointbench.estimators.precision`):
+    ``(share, gap, bias_deg)``, the noise's share of the normal matrix in the tangent direction
+    most exposed to it, the matrix's smallest eigenvalue gap (both in its unit) and the pull
+    [deg] the noise's anisotropy gives the null vector, for the ascending eigenvalues
+    ``values`` ``(6,)`` and eigenvectors ``vectors`` ``(6, 6)`` (columns) of the trial whose
+    cluster has the ``shape`` ``(P, 3)`` [mm] (its markers at frame 0).
+
+    A pose's rotation error ``dw`` has the covariance ``s^2 K^-1`` (Pennec & Thirion 1997;
+    ``K = sum_i (|b_i|^2 I - b_i b_i')`` the inertia of the centred cluster), so along a unit
+    direction ``t`` of the axis ``|t x dw|^2`` adds ``s^2 q(t)``, ``q(t) = tr K^-1 - t' K^-1 t``,
+    to the matrix per frame: ``lambda_0`` is ``N s^2 q(n)`` along the answer ``n``, and in the
+    tangent direction the noise reaches most the share is ``lambda_0 q_max / q(n)``, ``q_max``
+    the largest ``q`` normal to ``n``. The same noise is not isotropic: its expected share has
+    the cross terms ``N s^2 E' K^-1 n`` between the answer and its tangent basis ``E``, which
+    move the null vector by ``lambda_0 |E' K^-1 n| / (q(n) gap)`` [rad] whatever the noise's
+    draw: a bias, which the SD, a statement of the scatter about it, does not include. For an
+    isotropic cluster ``q`` is the same in every direction and both reduce to the planar
+    cost's: the share ``lambda_0`` and no bias."""
+    gap = float(values[1] - values[0])
+    centred = shape - shape.mean(axis=0)
+    inertia = float(np.sum(centred * centred)) * np.eye(3) - centred.T @ centred
+    half = vectors[:3, 0]
+    direction = half / float(np.linalg.norm(half))
+    try:
+        compliance = np.linalg.inv(inertia)
+    except np.linalg.LinAlgError:
+        return math.inf, gap, math.inf
+    basis = precision.tangent_basis(direction)
+    trace = float(np.trace(compliance))
+    most = trace - precision.smaller_eigenvalue(basis.T @ compliance @ basis)
+    along = trace - float(direction @ compliance @ direction)
+    if not (along > 0.0 and gap > 0.0):
+        return math.inf, gap, math.inf
+    noise = max(float(values[0]), 0.0) / along  # N s^2
+    pull = noise * float(np.linalg.norm(basis.T @ compliance @ direction)) / gap
+    return noise * most, gap, math.degrees(pull)
+
+
+def _sara_annotated(result: AxisResult, trial: np.ndarray) -> AxisResult:
+    """SARA's one-segment ``result`` for the markers ``trial`` ``(N, P, 3)`` [mm] with its
+    direction's SD (:func:`_sara_sd_deg`), above
+    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, and where the noise's
+    share reaches the eigen-gap or its anisotropy pulls the axis by more than the SD
+    (:func:`_sara_validity`) the warning that the SD does not hold
+    (:func:`jointbench.estimators.precision.annotate_validity`)."""
+    values = np.asarray(result.diagnostics["eigenvalues"])
+    vectors = np.asarray(result.diagnostics["eigenvectors"])
+    sd = _sara_sd_deg(values, vectors, len(trial), len(precision.distinct_frames(trial)))
+    annotated = precision.annotate(result, sd, "SARA's eigen-problem")
+    share, gap, bias_deg = _sara_validity(values, vectors, trial[0])
+    return precision.annotate_validity(
+        annotated, share, gap, "SARA's normal matrix", bias_deg=bias_deg
+    )
+
+
 def _sara_precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
     """Each of SARA's one-segment ``results`` (the trials of ``markers`` ``(T, N, P, 3)``
-    [mm]) with its direction's SD from its eigen-problem (:func:`_sara_sd_deg`) and, above
-    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`, a warning."""
+    [mm]) annotated by :func:`_sara_annotated`."""
     return [
-        precision.annotate(
-            result,
-            _sara_sd_deg(
-                np.asarray(result.diagnostics["eigenvalues"]),
-                np.asarray(result.diagnostics["eigenvectors"]),
-                len(trial),
-                len(precision.distinct_frames(np.asarray(trial, dtype=float))),
-            ),
-            "SARA's eigen-problem",
-        )
+        _sara_annotated(result, np.asarray(trial, dtype=float))
         for result, trial in zip(results, markers, strict=True)
     ]
 
