@@ -398,6 +398,36 @@ def test_an_external_rule_given_the_benchmarks_file_by_an_input_function_stops_t
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
 
 
+# Files under results/ other than the blind copies, each of which gives the truth away: an
+# estimates file holds each answer and its error (six answers and their distances trilaterate
+# the centre), the collected results the same for every method, the poses the unplaced frame.
+_PEEKS = {
+    "estimates": 'lambda w: f"results/estimates/{w.study}/LS/{w.condition}.parquet",',
+    "collected": '"results/collected/{study}.parquet",',
+    "poses": '"results/poses/{study}/{condition}.parquet",',
+}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("peek", sorted(_PEEKS))
+def test_an_external_rule_reading_any_other_file_of_the_benchmark_stops_the_run(tmp_path, peek):
+    """What an external rule may read under results/ is listed (the blind copies), not what it
+    may not: a file of scores names the truth as surely as the dataset."""
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    template = (rules / "centroid.smk").read_text()
+    assert _BLIND_INPUT in template
+    (rules / "centroid.smk").write_text(
+        template.replace(_BLIND_INPUT, _BLIND_INPUT + "\n            " + _PEEKS[peek])
+    )
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    message = f"rule estimate_centroid (external estimator 'centroid') reads results/{peek}/cmc"
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "which holds what the benchmark made from the truth" in run.stdout + run.stderr
+
+
 @pytest.mark.pipeline
 def test_a_rule_parameter_named_like_the_source_digest_is_refused_by_rule(tmp_path):
     copy_workflow(tmp_path)

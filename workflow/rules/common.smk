@@ -52,8 +52,7 @@ def check_external_rules():
     """Stop, naming the study and the estimator, when no rule writes the estimates of an
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
     (a misspelt name, a rule file not yet written), not at a missing CSV later; and when its
-    rule reads a full dataset file, whose truth only the benchmark may read, or the
-    placements of the blind copies (:data:`UNSEEN`)."""
+    rule reads a file of results/ other than the blind copies (:func:`_check_blind`)."""
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
@@ -72,7 +71,13 @@ def check_external_rules():
                 _check_blind(producer, name, files)
 
 
-# What no rule of an external estimator may read, by folder: what each holds.
+# The only files the benchmark writes under results/ that a rule of an external estimator may
+# read: the blind copies and their CSV form. Anything else there was made from the truth, from
+# the unplaced datasets or from scores (an estimates file holds each answer and its error, from
+# which the truth follows), so it is refused by default rather than listed as forbidden.
+READABLE = ("results/blind/", "results/interchange/")
+
+# Why a refused file may not be read, by folder; any other folder of results/ gets the default.
 UNSEEN = {
     "results/datasets/": "the truth the benchmark scores with",
     "results/placements/": (
@@ -80,27 +85,46 @@ UNSEEN = {
         "estimator's answers back with"
     ),
 }
+_UNSEEN_DEFAULT = (
+    "what the benchmark made from the truth, the unplaced datasets or the scores (an "
+    "estimates file holds each answer and its error)"
+)
+
+
+def _unreadable(path, users):
+    """Why a rule of an external estimator may not read ``path`` (as matched), or None: a file
+    under results/ that is neither a blind copy nor written by one of ``users``, the rules of
+    the user's (which are checked in turn)."""
+    if not path.startswith("results/") or path.startswith(READABLE):
+        return None
+    if any(other.is_producer(path) for other in users):
+        return None
+    return next(
+        (held for folder, held in UNSEEN.items() if path.startswith(folder)),
+        _UNSEEN_DEFAULT,
+    )
 
 
 def _check_blind(producer, name, files, via=()):
     """Stop when ``producer``, the rule of external estimator ``name`` or a rule of its own
-    upstream (``via``: the rules it feeds, down to the estimator's), reads a full dataset
-    file or a blind copy's placements (:data:`UNSEEN`), however its path is spelt, in a job
-    writing one of ``files``: its inputs are read as that job's, input functions called with
-    the job's wildcards. A rule upstream that is
-    not the package's own (:func:`_package_rule`) is followed in turn, so that no rule of the
-    user's can hand the estimator what it read from the truth."""
+    upstream (``via``: the rules it feeds, down to the estimator's), reads a file under
+    results/ other than a blind copy (:data:`READABLE`) that no rule of the user's writes,
+    however its path is spelt, in a job writing one of ``files``: its inputs are read as that
+    job's, input functions called with the job's wildcards. A rule upstream that is not the
+    package's own (:func:`_package_rule`) is followed in turn, so that no rule of the user's
+    can hand the estimator what it read from the truth."""
+    users = [
+        other
+        for other in workflow.rules
+        if other is not producer and other.name not in via and not _package_rule(other)
+    ]
     for file in filter(producer.is_producer, files):
         inputs = [
             _as_matched(f)
             for f in producer.expand_input(producer.get_wildcards(file))[0]
         ]
-        secret = [
-            (f, held)
-            for f in inputs
-            for folder, held in UNSEEN.items()
-            if f.startswith(folder)
-        ]
+        reasons = [(f, _unreadable(f, users)) for f in inputs]
+        secret = [(f, held) for f, held in reasons if held is not None]
         if secret:
             chain = "".join(f", which feeds rule {rule}" for rule in via)
             file, held = secret[0]
