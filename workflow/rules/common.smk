@@ -52,7 +52,7 @@ def check_external_rules():
     """Stop, naming the study and the estimator, when no rule writes the estimates of an
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
     (a misspelt name, a rule file not yet written), not at a missing CSV later; and when its
-    rule reads a file of results/ other than the blind copies (:func:`_check_blind`)."""
+    rule reads a file of results/ other than the blind copies (see _check_blind)."""
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
@@ -92,7 +92,7 @@ _UNSEEN_DEFAULT = (
 
 
 def _unreadable(path, users):
-    """Why a rule of an external estimator may not read ``path`` (as matched), or None: a file
+    """Why the rules of an external estimator may not read ``path`` (as matched), or None; a file
     under results/ that is neither a blind copy nor written by one of ``users``, the rules of
     the user's (which are checked in turn)."""
     if not path.startswith("results/") or path.startswith(READABLE):
