@@ -80,7 +80,9 @@ it is above :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`
 while the rotation is resolved. For the planar cost, whose answer is an eigenvector, it also
 warns where the eigen-gap is within the noise's own share of the scatter: the first-order SD
 then leaves out the larger part of the error
-(:func:`jointbench.estimators.precision.annotate_validity`). Its self-check also compares the
+(:func:`jointbench.estimators.precision.annotate_validity`); for the radial cost, it compares
+the answer with the planar eigenvector, an estimate of the same hinge's axis
+(:func:`jointbench.estimators.precision.annotate_agreement`). Its self-check also compares the
 two minima it has, the ten starts' and the restart's: more than
 :data:`jointbench.estimators.precision.AMBIGUOUS_APART_DEG` apart, the other is stated in
 ``diagnostics["other_minimum"]`` and, where the data cannot tell the two fits apart, the
@@ -922,9 +924,23 @@ def _annotated(result: AxisResult, markers: np.ndarray) -> AxisResult:
         markers, np.asarray(result.point), np.asarray(result.direction), result.method
     )
     annotated = precision.annotate(result, sd, f"the {result.method} cost")
+    if result.method == "radial":
+        return _checked_against_planar(annotated, markers)
     if eigen is None:
         return annotated
     return precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
+
+
+def _checked_against_planar(result: AxisResult, markers: np.ndarray) -> AxisResult:
+    """The radial ``result`` for ``markers`` ``(N, P, 3)`` [mm] compared with the planar
+    cost's closed-form answer, the eigenvector it carries, and warned about where the two are
+    further apart than their SDs allow
+    (:func:`jointbench.estimators.precision.annotate_agreement`)."""
+    planar = np.asarray(result.diagnostics["eigenvector"])
+    planar_sd = _direction_sd_deg(markers, np.asarray(result.point), planar, "planar")
+    return precision.annotate_agreement(
+        result, planar, planar_sd, "the radial cost", "the planar cost's eigenvector"
+    )
 
 
 def _precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
