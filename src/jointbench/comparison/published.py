@@ -21,13 +21,13 @@ from typing import TYPE_CHECKING
 import pandas as pd
 import yaml
 
-from jointbench.comparison.published_types import entry_problem, is_number
+from jointbench.comparison.published_types import entry_problem, is_number, length_problem
 from jointbench.comparison.tolerance import describe, evaluate, is_compared
 from jointbench.configuration.config import read_yaml, validate_against
 from jointbench.jobs import require_declared
 
 if TYPE_CHECKING:  # the papers import this module
-    from jointbench.papers.base import PublishedTable
+    from jointbench.papers.base import PerLevel, PublishedTable
 
 __all__ = [
     "COLUMNS",
@@ -89,7 +89,9 @@ _SCHEMA = resources.files("jointbench.schemas").joinpath("published.schema.yaml"
 
 
 def load_published(
-    path: str | Path, declares: Iterable[str] = (), tables: Iterable[PublishedTable] = ()
+    path: str | Path,
+    declares: Iterable[str | PerLevel] = (),
+    tables: Iterable[PublishedTable] = (),
 ) -> dict:
     """A paper's published-values document, schema-checked and holding an entry for each id of
     ``declares`` (:attr:`jointbench.papers.base.Paper.declares`) and each cell of ``tables``
@@ -97,8 +99,11 @@ def load_published(
     cells list several (:attr:`~jointbench.papers.base.PublishedTable.lists`), a list of that
     many: ``ValueError`` naming the file otherwise, and the missing ids (for a table, the
     paper, the table and its missing cells, or the cell and the position in it). Every entry's
-    values are those its tolerance reads (:mod:`jointbench.comparison.published_types`):
-    ``ValueError`` naming the file, the paper, the entry and the key otherwise. Read by a
+    values are those its tolerance reads (:mod:`jointbench.comparison.published_types`), and
+    a declared entry's lists are as long as its check's measurement (one value per level of a
+    :class:`~jointbench.papers.base.PerLevel`; no list the tolerance compares in an entry
+    declared by its id alone): ``ValueError`` naming the file, the paper, the entry and the key
+    otherwise, with how many values the check needs and why. Read by a
     workflow job, ``path`` must be one of its declared inputs
     (:func:`jointbench.jobs.require_declared`)."""
     require_declared(path, "published values")
@@ -108,7 +113,8 @@ def load_published(
         raise ValueError(f"published values {path}: not valid YAML ({error})") from error
     validate_against(document, _SCHEMA, f"published values {path}")
     listed = {entry["id"]: entry for entry in [*document.get("values", []), *document["claims"]]}
-    missing = [i for i in declares if i not in listed]
+    declares = tuple(declares)
+    missing = [i for i in map(_declared_id, declares) if i not in listed]
     if missing:
         raise ValueError(
             f"published values {path}: no entry for {', '.join(missing)}, which the paper "
@@ -131,15 +137,50 @@ def load_published(
                 )
     # After the tables: a cell's value is named by its table and position there.
     _check_types(document, path)
+    # After the types: a list's length is read once its values are known to be numbers.
+    _check_lengths(document, path, declares)
     return document
+
+
+def _declared_id(declared: str | PerLevel) -> str:
+    return declared if isinstance(declared, str) else declared.entry
+
+
+def _entries(document: Mapping) -> list[tuple[str, Mapping]]:
+    """``(kind, entry)`` of each published value and claim of ``document``, in its order."""
+    return [("value", e) for e in document.get("values", [])] + [
+        ("claim", e) for e in document["claims"]
+    ]
+
+
+def _check_lengths(document: Mapping, path: str | Path, declares: Sequence) -> None:
+    """``ValueError`` naming the file, the paper, the entry and the key of the first list of a
+    declared entry whose length is not the number of values its check measures
+    (:func:`length_problem`), saying how many it needs and why."""
+    by_id = {_declared_id(d): d for d in declares}
+    grid = document["design"]["grid"]
+    for kind, entry in _entries(document):
+        declared = by_id.get(entry["id"])
+        if declared is None:
+            continue  # a table's cell (held to its table) or a file read without its paper
+        if isinstance(declared, str):
+            problem, fix = length_problem(entry, None), ""
+        else:
+            levels = declared.levels_in(grid)
+            problem = length_problem(entry, len(levels), declared.needs(grid))
+            fix = "; restore it from the repository"
+        if problem:
+            key, what = problem
+            raise ValueError(
+                f"published values {path}: paper {document['paper']} {kind} {entry['id']} "
+                f"{key}: {what}{fix}"
+            )
 
 
 def _check_types(document: Mapping, path: str | Path) -> None:
     """``ValueError`` naming the file, the paper, the entry and the key of the first value of
     ``document`` that its tolerance cannot read (:func:`entry_problem`)."""
-    entries = [("value", e) for e in document.get("values", [])]
-    entries += [("claim", e) for e in document["claims"]]
-    for kind, entry in entries:
+    for kind, entry in _entries(document):
         problem = entry_problem(entry)
         if problem:
             key, what = problem
@@ -212,9 +253,7 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     without one is not applicable in this run.
     """
     rows = []
-    entries = [("value", e) for e in document.get("values", [])]
-    entries += [("claim", e) for e in document["claims"]]
-    for kind, entry in entries:
+    for kind, entry in _entries(document):
         measured = measurements.get(entry["id"])
         status, margin, reason = _verdict(entry, measured)
         rows.append(

@@ -15,15 +15,17 @@ depends on the tolerance (:mod:`jointbench.comparison.tolerance`):
 * ``shown_only`` compares nothing.
 
 A value the comparison would misread (``true`` as 1, ``"8"`` as 8) or could not read
-(``"8.0 mm"``) is thus refused before any verdict, not turned into one.
+(``"8.0 mm"``) is thus refused before any verdict, not turned into one; so is a list of
+another length than its check measures (:func:`length_problem`, one value per level of the
+paper's :class:`~jointbench.papers.base.PerLevel`), which a run could only fail to compare.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
-__all__ = ["entry_problem", "is_number"]
+__all__ = ["entry_problem", "is_number", "length_problem"]
 
 _REFERENCE = ("abs", "rel", "max_abs_rel")
 _BOUNDS = ("at_least", "at_most", "greater_than", "less_than")
@@ -70,24 +72,40 @@ def _shown_problem(value: object) -> str | None:
     return None
 
 
+def _leaves(
+    tolerance: Mapping, published: object, published_key: str, key: str
+) -> Iterator[tuple[str, object, object, str, str]]:
+    """``(kind, spec, published, published_key, key)`` of each tolerance that compares:
+    ``tolerance`` itself, or each part of an ``all``, a part's own ``published`` in place of
+    the entry's."""
+    (kind,) = [k for k in tolerance if k not in ("of", "published")]
+    if kind != "all":
+        yield kind, tolerance[kind], published, published_key, key
+        return
+    for index, part in enumerate(tolerance[kind]):
+        where = f"{key}.all[{index}]"
+        own = "published" in part
+        yield from _leaves(
+            part,
+            part["published"] if own else published,
+            f"{where}.published" if own else published_key,
+            where,
+        )
+
+
 def _tolerance_problem(
     tolerance: Mapping, published: object, published_key: str, key: str
 ) -> tuple[str, str] | None:
-    (kind,) = [k for k in tolerance if k not in ("of", "published")]
-    spec = tolerance[kind]
-    if kind == "all":
-        for index, part in enumerate(spec):
-            where = f"{key}.all[{index}]"
-            own = "published" in part
-            problem = _tolerance_problem(
-                part,
-                part["published"] if own else published,
-                f"{where}.published" if own else published_key,
-                where,
-            )
-            if problem:
-                return problem
-        return None
+    for kind, spec, value, value_key, where in _leaves(tolerance, published, published_key, key):
+        problem = _leaf_problem(kind, spec, value, value_key, where)
+        if problem:
+            return problem
+    return None
+
+
+def _leaf_problem(
+    kind: str, spec: object, published: object, published_key: str, key: str
+) -> tuple[str, str] | None:
     if kind in _REFERENCE or kind == "factor":
         problem = _numbers_problem(published, positive=kind == "factor")
         return (published_key, problem) if problem else None
@@ -100,6 +118,55 @@ def _tolerance_problem(
     if kind == "binomial95":
         return _binomial_problem(spec["of_n"], published, published_key, f"{key}.binomial95.of_n")
     return None  # shown_only
+
+
+def _compared_lists(entry: Mapping) -> list[tuple[str, list]]:
+    """``(key, list)`` of each list in a schema-checked published-values ``entry`` that its
+    tolerance holds a measurement to element by element: the published value where the
+    tolerance compares it (``abs``, ``rel``, ``max_abs_rel``, ``factor``, ``binomial95``'s
+    counts), a bound's value, ``binomial95``'s ``of_n``. Not a published list only shown
+    beside a bound (paper C's eight v), nor a range's or ``max_abs_rel``'s pair."""
+    found = []
+    for kind, spec, published, published_key, key in _leaves(
+        entry["tolerance"], entry["published"], "published", "tolerance"
+    ):
+        if kind in (*_REFERENCE, "factor", "binomial95"):
+            found.append((published_key, published))
+        if kind in _BOUNDS:
+            found.append((f"{key}.{kind}", spec))
+        if kind == "binomial95":
+            found.append((f"{key}.binomial95.of_n", spec["of_n"]))
+    unique = dict(found)  # an ``all``'s parts may read the same published list
+    return [(key, value) for key, value in unique.items() if isinstance(value, list)]
+
+
+def length_problem(entry: Mapping, count: int | None, needs: str = "") -> tuple[str, str] | None:
+    """``(key, what is wrong)`` with the first list of a typed ``entry`` (one
+    :func:`entry_problem` passes) whose length is not ``count``, the number of values its check
+    measures (``needs`` says how many and why, in words), or None. Its published list counts
+    even where only shown: one number per value measured. With ``count`` None the paper
+    declares no such number, so any list the tolerance compares (:func:`_compared_lists`) is
+    refused: nothing says how long it must be."""
+    lists = _compared_lists(entry)
+    if count is None:
+        if lists:
+            return lists[0][0], (
+                "a list, where the paper declares no levels its check measures at, so its "
+                "length cannot be held to the measurement's; write one number, or declare "
+                "the entry per level in the paper (PerLevel)"
+            )
+        return None
+    published = entry["published"]
+    if isinstance(published, list) and "published" not in dict(lists):
+        problem = _numbers_problem(published)
+        if problem:
+            return "published", f"{problem} (its check needs {needs})"
+        lists.insert(0, ("published", published))
+    for key, value in lists:
+        if len(value) != count:
+            values = f"{len(value)} value{'s' if len(value) != 1 else ''}"
+            return key, f"{values} where its check needs {needs}"
+    return None
 
 
 def _numbers_problem(value: object, positive: bool = False) -> str | None:

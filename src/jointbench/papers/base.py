@@ -16,6 +16,7 @@ from typing import Literal
 
 import pandas as pd
 
+from jointbench.resultfiles.formatting import words
 from jointbench.simulate import Trials
 
 __all__ = [
@@ -24,6 +25,7 @@ __all__ = [
     "Measured",
     "Output",
     "Paper",
+    "PerLevel",
     "PublishedTable",
     "Table",
 ]
@@ -142,12 +144,51 @@ class PublishedTable:
 
 
 @dataclass(frozen=True)
+class PerLevel:
+    """A published value or claim whose check measures one value per level of the grid key
+    ``axis``, in order: those of ``levels`` (the levels the paper's sentence names, which the
+    check selects), or with none every level of the paper's design grid (``design: grid`` of
+    its published values), which the check groups by. ``of`` says what is measured at each,
+    in words ("BC's converged trials at the M set and the smallest RoM"). Declared by the
+    paper (:attr:`Paper.declares`), it is the one place the check and the file's lists take
+    their length from: a list in the entry of any other length is refused when the file is
+    read (:func:`jointbench.comparison.published.load_published`), not when a full run
+    finally compares it."""
+
+    entry: str
+    axis: str
+    of: str
+    levels: tuple[float, ...] = ()
+
+    def levels_in(self, design_grid: Mapping[str, Sequence]) -> tuple:
+        """The levels the check measures at, given the paper's design grid."""
+        if self.levels:
+            return self.levels
+        if self.axis not in design_grid:
+            raise ValueError(
+                f"{self.entry} is measured per {self.axis}, which the paper's design grid "
+                f"lacks (it has {', '.join(design_grid)})"
+            )
+        return tuple(design_grid[self.axis])
+
+    def needs(self, design_grid: Mapping[str, Sequence]) -> str:
+        """How many values the check measures and why, in words: ``3, one per noise (mm)
+        level of the paper's design (0.5, 1.0, 2.0) for …``."""
+        levels = self.levels_in(design_grid)
+        named = "the sentence names" if self.levels else "of the paper's design"
+        shown = ", ".join(map(str, levels))
+        return f"{len(levels)}, one per {words(self.axis)} level {named} ({shown}) for {self.of}"
+
+
+@dataclass(frozen=True)
 class Paper:
     """One reproduced paper (see the module doc). ``key`` prefixes its outputs' names;
     ``also_measures`` names the study's estimators beyond ``methods`` that ``measure`` reads
     (beside the paper's own, never in its place); ``declares`` the ids of the published values
     and claims ``measure`` computes from the results whatever the grid, which its published
-    values must therefore all list (a file cut short is refused, not read as fewer claims);
+    values must therefore all list (a file cut short is refused, not read as fewer claims),
+    each a :class:`PerLevel` where its check measures one value per level (an id alone: the
+    entry's tolerance reads no list);
     ``front_page`` gives what the paper adds to
     the report's landing page (:class:`FrontPart`) from the run's tables by name (those of
     its outputs absent from a run are absent from the mapping); ``tables`` its tables of
@@ -164,7 +205,7 @@ class Paper:
     published: Path
     measure: Callable[[Inputs], Mapping[str, Measured]]
     also_measures: tuple[str, ...] = ()
-    declares: tuple[str, ...] = ()
+    declares: tuple[str | PerLevel, ...] = ()
     front_page: Callable[[Mapping[str, pd.DataFrame]], FrontPart] | None = None
     tables: tuple[PublishedTable, ...] = ()
 
