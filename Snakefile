@@ -65,7 +65,9 @@ include: "workflow/rules/estimate.smk"
 include: "workflow/rules/interchange.smk"
 
 
-# Estimators outside the package: each file here holds the rule of one external estimator.
+# Estimators outside the package: each file here holds the rule of one external estimator. Every
+# one defined while these are read is the user's, whatever folder a file they include is in.
+_PACKAGE_RULES = rule_names()
 for _rules in sorted(
     Path(workflow.basedir, "workflow", "rules", "estimators").glob("*.smk")
 ):
@@ -73,13 +75,17 @@ for _rules in sorted(
     include: _rules
 
 
-check_external_rules()
+USER_RULES = rule_names() - _PACKAGE_RULES
 
 
 include: "workflow/rules/render.smk"
 include: "workflow/rules/check.smk"
 include: "workflow/rules/verdicts.smk"
 include: "workflow/rules/sensitivity.smk"
+
+
+# Once every rule of the package's exists, each of which a rule of the user's may not imitate.
+check_external_rules(USER_RULES)
 
 
 # Last, once every rule exists: each job's sources hashed into its parameters.

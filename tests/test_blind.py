@@ -485,3 +485,83 @@ def test_a_rule_upstream_of_an_external_estimator_may_not_read_the_truth(tmp_pat
         chain = "rule leak_truth, which feeds rule pass_it_on, which feeds rule estimate_centroid"
     message = f"{chain} (external estimator 'centroid') reads results/datasets/"
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+def _refused(tmp_path, rules: str, estimator_input: str, message: str) -> None:
+    """A dry run with ``rules`` added to the centroid's file and its input replaced by
+    ``estimator_input`` stops before any job, printing ``message``."""
+    folder = tmp_path / "workflow" / "rules" / "estimators"
+    template = (folder / "centroid.smk").read_text()
+    assert _BLIND_INPUT in template
+    (folder / "centroid.smk").write_text(template.replace(_BLIND_INPUT, estimator_input) + rules)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+_DATASET = "results/datasets/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet"
+
+# A rule of the user's that claims to write the datasets, which the package's rule still writes.
+_DECOY = """
+
+ruleorder: simulate_cmc > decoy
+
+
+rule decoy:
+    output:
+        "results/datasets/{study}/{condition}.parquet",
+    shell:
+        "touch {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_a_path_of_the_benchmarks_stops_the_run(tmp_path):
+    """A decoy: the file would count as the user's own, and so readable."""
+    copy_workflow(tmp_path)
+    dataset = '"results/datasets/{study}/{condition}.parquet",'
+    message = (
+        "rule decoy writes results/datasets/{study}/{condition}.parquet, which rule "
+        "simulate_cmc of the benchmark writes"
+    )
+    _refused(tmp_path, _DECOY, dataset, message)
+
+
+# A rule file in the package's folder, included by the user's: by its folder it would pass for
+# the benchmark's own, and the copy it writes under results/blind/ for a blind one.
+_COPY = """
+rule copy_truth:
+    input:
+        "results/datasets/{study}/{condition}.parquet",
+    output:
+        "results/blind/prep/{study}/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_file_in_the_packages_folder_is_still_the_users(tmp_path):
+    copy_workflow(tmp_path)
+    (tmp_path / "workflow" / "rules" / "prep.smk").write_text(_COPY)
+    prepared = '"results/blind/prep/{study}/{condition}.parquet",'
+    message = (
+        "rule copy_truth writes results/blind/prep/{study}/{condition}.parquet, under "
+        "results/blind/"
+    )
+    _refused(tmp_path, '\n\ninclude: "../prep.smk"\n', prepared, message)
+
+
+@pytest.mark.pipeline
+def test_an_external_rule_reading_through_a_symbolic_link_stops_the_run(tmp_path):
+    copy_workflow(tmp_path)
+    (tmp_path / "results" / "blind").mkdir(parents=True)
+    (tmp_path / "results" / "blind" / "truth").symlink_to("../datasets")
+    linked = '"results/blind/truth/{study}/{condition}.parquet",'
+    message = (
+        "rule estimate_centroid (external estimator 'centroid') reads "
+        "results/blind/truth/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet, which holds "
+        "whatever the symbolic link results/blind/truth leads to"
+    )
+    _refused(tmp_path, "", linked, message)

@@ -712,3 +712,15 @@ def test_the_standard_library_and_installed_distributions_are_not_read(lab):
         Path(sysconfig.get_paths()[key]).resolve() for key in ("stdlib", "purelib", "platlib")
     ]
     assert not [p for p in read if any(p.is_relative_to(folder) for folder in installed)]
+
+
+def test_a_python_sources_digests_follow_its_own_imports(tmp_path):
+    """An external estimator's script is a source: a module of the user's it imports, beside
+    it, changes what it does as surely as its own lines."""
+    script = tmp_path / "estimate.py"
+    script.write_text("from helper import SHIFT\n\nprint(SHIFT)\n")
+    helper = tmp_path / "helper.py"
+    helper.write_text("SHIFT = 1\n")
+    before = source_digests([script])
+    helper.write_text("SHIFT = 2\n")
+    assert source_digests([script]) != before

@@ -806,9 +806,24 @@ def _file_digest(path: Path) -> str:
 
 def source_digests(paths: Iterable[str | Path]) -> dict[str, str]:
     """The digest of each file of ``paths`` (16 hex digits, :data:`MISSING` for a file that does
-    not exist), by path as given: equal digests mean the same content, whatever the files' time
-    stamps."""
+    not exist), by path as given, and of each of the user's own modules a Python file among
+    them can import (:func:`own_closure`, by path as found): equal digests mean the same
+    content, whatever the files' time stamps."""
+    given = sorted(set(map(str, paths)))
     return {
         str(path): _file_digest(Path(path)) if Path(path).exists() else MISSING
-        for path in sorted(set(map(str, paths)))
+        for path in sorted({*given, *_own_imports(given)})
     }
+
+
+def _own_imports(paths: Iterable[str]) -> list[str]:
+    """The user's own modules the existing Python files of ``paths`` can import: an external
+    estimator's script runs them as surely as its own lines."""
+    scripts = [path for path in paths if path.endswith(".py") and Path(path).is_file()]
+    # Relative to the working directory when inside it, as the workflow names its sources: a
+    # project moved elsewhere keeps its digests' keys.
+    here = Path.cwd()
+    return [
+        os.path.relpath(module) if module.is_relative_to(here) else str(module)
+        for _, module in own_closure(*scripts)
+    ]

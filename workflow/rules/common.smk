@@ -1,10 +1,12 @@
 # Helpers shared by the rules: config checks, the study and paper registries, file lists.
 import functools
+import itertools
 import os
 import re
 import sys
 from pathlib import Path
 
+from snakemake.io import WILDCARD_REGEX
 from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
@@ -48,11 +50,27 @@ EXTERNAL_ESTIMATORS = sorted(
 )
 
 
-def check_external_rules():
+def rule_names():
+    """The names of the rules defined so far: those before the user's rule files are
+    included are the package's own, whatever folder a file of the user's lies in."""
+    return {r.name for r in workflow.rules}
+
+
+def check_external_rules(user_rules):
     """Stop, naming the study and the estimator, when no rule writes the estimates of an
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
-    (a misspelt name, a rule file not yet written), not at a missing CSV later; and when its
-    rule reads a file of results/ other than the blind copies (see _check_blind)."""
+    (a misspelt name, a rule file not yet written), not at a missing CSV later; when a rule
+    of the user's (``user_rules``, by name) can write a file of the benchmark's (see
+    _check_user_outputs); and when its rule reads a file of results/ other than the blind
+    copies (see _check_blind)."""
+    users = [r for r in workflow.rules if r.name in user_rules]
+    # estimates_from_csv writes an external estimator's estimates, which its rule may write too.
+    package = [
+        r
+        for r in workflow.rules
+        if r.name not in user_rules and r.name != "estimates_from_csv"
+    ]
+    _check_user_outputs(users, package)
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
@@ -68,7 +86,7 @@ def check_external_rules():
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
             for producer in producers:
-                _check_blind(producer, name, files)
+                _check_blind(producer, name, files, users)
 
 
 # The only files the benchmark writes under results/ that a rule of an external estimator may
@@ -94,8 +112,13 @@ _UNSEEN_DEFAULT = (
 def _unreadable(path, users):
     """Why the rules of an external estimator may not read ``path`` (as matched), or None; a file
     under results/ that is neither a blind copy nor written by one of ``users``, the rules of
-    the user's (which are checked in turn)."""
-    if not path.startswith("results/") or path.startswith(READABLE):
+    the user's (which are checked in turn; none can write a file of the benchmark's)."""
+    if not path.startswith("results/"):
+        return None
+    link = _linked(path)
+    if link is not None:
+        return f"whatever the symbolic link {link} leads to"
+    if path.startswith(READABLE):
         return None
     if any(other.is_producer(path) for other in users):
         return None
@@ -105,19 +128,27 @@ def _unreadable(path, users):
     )
 
 
-def _check_blind(producer, name, files, via=()):
+def _linked(path):
+    """The first symbolic link among the existing folders and file of ``path`` below results/
+    (results/ itself may be a link to a larger disk), or None: a link there can make a blind
+    path open the truth."""
+    parts = Path(path).parts
+    for end in range(2, len(parts) + 1):
+        here = Path(*parts[:end])
+        if here.is_symlink():
+            return here.as_posix()
+    return None
+
+
+def _check_blind(producer, name, files, everyone, via=()):
     """Stop when ``producer``, the rule of external estimator ``name`` or a rule of its own
     upstream (``via``: the rules it feeds, down to the estimator's), reads a file under
-    results/ other than a blind copy (:data:`READABLE`) that no rule of the user's writes,
-    however its path is spelt, in a job writing one of ``files``: its inputs are read as that
-    job's, input functions called with the job's wildcards. A rule upstream that is not the
-    package's own (:func:`_package_rule`) is followed in turn, so that no rule of the user's
-    can hand the estimator what it read from the truth."""
-    users = [
-        other
-        for other in workflow.rules
-        if other is not producer and other.name not in via and not _package_rule(other)
-    ]
+    results/ other than a blind copy (:data:`READABLE`) that no rule of the user's
+    (``everyone``) writes, or any file there by way of a symbolic link, however its path is
+    spelt, in a job writing one of ``files``: its inputs are read as that job's, input
+    functions called with the job's wildcards. A rule of the user's upstream is followed in
+    turn, so that none can hand the estimator what it read from the truth."""
+    users = [r for r in everyone if r is not producer and r.name not in via]
     for file in filter(producer.is_producer, files):
         inputs = [
             _as_matched(f)
@@ -134,21 +165,143 @@ def _check_blind(producer, name, files, via=()):
                 "the blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
-        for upstream in workflow.rules:
-            if upstream is producer or upstream.name in via or _package_rule(upstream):
-                continue
+        for upstream in users:
             made = [f for f in inputs if upstream.is_producer(f)]
             if made:
-                _check_blind(upstream, name, made, (producer.name, *via))
+                _check_blind(upstream, name, made, everyone, (producer.name, *via))
 
 
-def _package_rule(rule):
-    """Whether ``rule`` is one of the workflow's own (the Snakefile's, or of a file directly
-    in workflow/rules/), which read the truth only to write what an estimator may read.
+# Where only the package's rules write: the blind copies and their CSV form, which an external
+# estimator trusts.
+BENCHMARK_ONLY = ("results/blind/", "results/interchange/")
+
+
+def _check_user_outputs(users, package):
+    """Stop when one of the rules ``users`` can write a file under BENCHMARK_ONLY or a file
+    one of ``package`` can write, naming both. Whichever Snakemake chose to run, a file the
+    user's rule claims would pass for the user's own, readable, or replace the benchmark's.
+    A wildcard is taken to match anything unless it lists its names, so no overlap is missed.
     """
-    folder = Path(rule.snakefile).resolve().parent
-    rules = Path(workflow.basedir, "workflow", "rules").resolve()
-    return folder in (rules, Path(workflow.basedir).resolve())
+    theirs = [(other, f, _patterns_of(f)) for other in package for f in _written(other)]
+    for user in users:
+        for written in _written(user):
+            mine = _patterns_of(written)
+            inside = [
+                f for f in BENCHMARK_ONLY if _overlap(mine, _patterns_of(f"{f}{{x}}"))
+            ]
+            held = next(iter(inside), None)
+            if held is not None:
+                raise ValueError(
+                    f"rule {user.name} writes {_shown(written)}, under {held}"
+                    ": only the benchmark writes there, and an external estimator reads "
+                    "what it writes there as blind (README, 'Adding an estimator')"
+                )
+            for other, path, patterns in theirs:
+                if _overlap(mine, patterns):
+                    raise ValueError(
+                        f"rule {user.name} writes {_shown(written)}, which rule "
+                        f"{other.name} of the benchmark writes ({_shown(path)})"
+                        ": a rule of yours writes files of its own, in a folder of its own"
+                    )
+
+
+def _written(producer):
+    """The files ``producer`` writes, logs included, as matched patterns (their wildcards'
+    constraints inline); an output folder stands for everything inside it too."""
+    found = [_as_matched(str(f)) for f in producer.log]
+    for output in producer.output:
+        path = _as_matched(str(output))
+        found.append(path)
+        if output.is_directory:
+            found.append(f"{path}/{{inside}}")
+    return found
+
+
+def _shown(path):
+    """The pattern ``path`` as written in a rule: its wildcards without their constraints."""
+    return WILDCARD_REGEX.sub(lambda m: f"{{{m.group('name')}}}", path)
+
+
+# A wildcard of a pattern, as one item: any text of one character or more.
+_WILDCARD = None
+
+
+@functools.cache
+def _patterns_of(path):
+    """``path`` as tuples of its characters, each wildcard as _WILDCARD or, where its
+    constraint lists the names it takes (as the package's do), each of those in turn."""
+    patterns = [()]
+    for literal, constraint in _wildcard_pieces(path):
+        names = _listed(constraint)
+        ends = [(_WILDCARD,)] if names is None else [tuple(n) for n in names]
+        if constraint is False:
+            ends = [()]
+        patterns = [(*p, *literal, *end) for p in patterns for end in ends]
+    return tuple(patterns)
+
+
+def _wildcard_pieces(path):
+    """``(text, constraint)`` pieces of the file pattern ``path``: the text up to a wildcard
+    and that wildcard's constraint (None without one), the last piece's False (no wildcard).
+    """
+    pieces, start = [], 0
+    for found in WILDCARD_REGEX.finditer(path):
+        pieces.append((path[start : found.start()], found.group("constraint")))
+        start = found.end()
+    return [*pieces, (path[start:], False)]
+
+
+def _listed(constraint):
+    """The names a wildcard constraint allows when it lists them (``a|b\\-c``, as
+    :func:`_alternatives` writes, none for its pattern matching nothing), or None when it is
+    any other pattern."""
+    if constraint == _alternatives([]):
+        return []
+    if not constraint:
+        return None
+    names = [re.sub(r"\\(.)", r"\1", n) for n in re.split(r"(?<!\\)\|", constraint)]
+    if "|".join(re.escape(n) for n in names) != constraint:
+        return None
+    return names
+
+
+def _overlap(first, second):
+    """Whether some path matches one pattern of each of :func:`_patterns_of`'s tuples."""
+    return any(_meet(a, b) for a in first for b in second if _may_meet(a, b))
+
+
+def _may_meet(first, second):
+    """Whether the texts before the first wildcard and after the last agree: most pairs of
+    patterns differ there, and matching them item by item costs far more."""
+    ahead = zip(first, second)
+    behind = zip(reversed(first), reversed(second))
+    return all(
+        a == b or _WILDCARD in (a, b)
+        for pairs in (ahead, behind)
+        for a, b in itertools.takewhile(lambda ab: _WILDCARD not in ab, pairs)
+    )
+
+
+@functools.cache
+def _meet(first, second):
+    """Whether some path matches both patterns (tuples of characters and wildcards)."""
+
+    @functools.cache
+    def match(i, j):
+        a = first[i] if i < len(first) else ""
+        b = second[j] if j < len(second) else ""
+        if a == "" and b == "":
+            return True
+        # A wildcard takes a character of the other pattern's, and then ends or goes on.
+        if a is _WILDCARD and b is _WILDCARD:
+            return match(i + 1, j + 1) or match(i, j + 1) or match(i + 1, j)
+        if a is _WILDCARD:
+            return b != "" and (match(i + 1, j + 1) or match(i, j + 1))
+        if b is _WILDCARD:
+            return a != "" and (match(i + 1, j + 1) or match(i + 1, j))
+        return a != "" and a == b and match(i + 1, j + 1)
+
+    return match(0, 0)
 
 
 def _as_matched(path):
