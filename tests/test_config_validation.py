@@ -269,6 +269,28 @@ def test_mistake_names_key_and_allowed_values(config, study, path, value, words)
         assert word in str(error.value), str(error.value)
 
 
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])
+def test_a_blind_placement_translation_out_of_its_bounds_is_refused(config, value):
+    """NaN and inf pass the schema (no comparison with NaN is true) and failed inside jobs;
+    1e30 mm rounds a centre at (10, 20, 30) to 0 on its way back; 1e-12 mm leaves a truth at the
+    origin where a contestant answering the origin finds it."""
+    bad = copy.deepcopy(config)
+    bad["blind_placement"] = {"translation_mm": value}
+    study_config.check_schema(bad)  # the schema alone lets it through
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(bad)
+    message = str(error.value)
+    assert message.startswith("config: blind_placement.translation_mm: "), message
+    assert repr(value) in message and "[100, 100000] mm" in message, message
+
+
+@pytest.mark.parametrize("value", [100, 250.0, 500.0, 1e5])
+def test_a_blind_placement_translation_within_its_bounds_passes(config, value):
+    good = copy.deepcopy(config)
+    good["blind_placement"] = {"translation_mm": value}
+    study_config.check_config(good)
+
+
 def test_a_run_of_no_study_is_refused_in_one_line(config):
     bad = copy.deepcopy(config)
     for settings in bad["studies"].values():

@@ -15,7 +15,19 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["AA_RATIO_BELOW", "study_problem"]
+__all__ = ["AA_RATIO_BELOW", "TRANSLATION_MM_RANGE", "study_problem", "translation_problem"]
+
+#: ``blind_placement.translation_mm`` [mm], the half-side of the cube each trial of a blind copy
+#: is translated within (:mod:`jointbench.running.placement`), lies in ``[low, high]``, finite.
+#: Low: the rotation turns the data about the origin, so a truth at the origin (the knee's axis
+#: passes through it) moves by the translation alone and a contestant answering it scores the
+#: translation's length; at 100 mm that averages about 96 mm and is below 10 mm (an error the
+#: estimators make at the studies' 0.5-2 mm marker noise) in one trial in 2000
+#: (``(pi / 6) 0.1^3``), so no constant answer ranks near an estimator.
+#: High: the answers are mapped back by ``R^T (c' - p)``, whose rounding is about 1e-16
+#: times the translation; at 1e5 mm (100 m) that is 1e-11 mm, a hundredth of the 1e-9 mm the
+#: mapped-back answers are held to, while 1e30 mm leaves nothing of a centre at (10, 20, 30).
+TRANSLATION_MM_RANGE = (100.0, 1e5)
 
 #: The hinge study's AA/FE ratio is below 1. The estimators find the flexion–extension axis,
 #: the motion's principal axis only while abduction–adduction is the smaller rotation: a share
@@ -43,6 +55,21 @@ def study_problem(study: str, settings: Mapping, protocol: object) -> tuple[str,
     of this module refuses; None for a study without such bounds or within them."""
     check = _CHECKS.get(study)
     return check(settings, protocol) if check else None
+
+
+def translation_problem(value: float) -> str | None:
+    """What keeps ``value`` from being a ``blind_placement.translation_mm`` within
+    :data:`TRANSLATION_MM_RANGE` (NaN and inf, which the schema's bound lets through, included),
+    in words giving the reason; None if nothing."""
+    low, high = TRANSLATION_MM_RANGE
+    if low <= value <= high:  # False for NaN
+        return None
+    return (
+        f"{value!r} is not a finite number in [{low:g}, {high:g}] mm: below {low:g} mm a "
+        "contestant answering a constant (the truth, or the origin) scores near no error; "
+        f"above {high:g} mm the rounding of the placed coordinates no longer maps an answer "
+        "back to within 1e-9 mm"
+    )
 
 
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
