@@ -68,6 +68,7 @@ def _set_tolerance(*keys_and_value):
 
 
 _MAR = "tolerance.max_abs_rel"
+_B, _B_ABS = "B-T1-knee-planar-30-0.3", "tolerance.all[1].abs"
 
 #: (paper, entry, edit, the key the error names, words it gives): each a value the comparison
 #: would misread or could not read.
@@ -143,20 +144,8 @@ BAD = [
     ("paper_a", "A5", _set_tolerance("all", 0, "rel", float("inf")), "tolerance.all[0].rel", "inf"),
     ("paper_c", "C2", _set_tolerance("factor", float("inf")), "tolerance.factor", "inf"),
     ("paper_c", "C2", _set_tolerance("factor", float("nan")), "tolerance.factor", "nan"),
-    (
-        "paper_b",
-        "B-T1-knee-planar-30-0.3",
-        _set_tolerance("all", 1, "abs", float("nan")),
-        "tolerance.all[1].abs",
-        "nan is not a finite number > 0",
-    ),
-    (
-        "paper_b",
-        "B-T1-knee-planar-30-0.3",
-        _set_tolerance("all", 1, "abs", 0),
-        "tolerance.all[1].abs",
-        "0 is not a finite number > 0",
-    ),
+    ("paper_b", _B, _set_tolerance("all", 1, "abs", float("nan")), _B_ABS, "nan is not a finite"),
+    ("paper_b", _B, _set_tolerance("all", 1, "abs", 0), _B_ABS, "0 is not a finite number > 0"),
 ]
 
 
