@@ -5,7 +5,9 @@ and their protocol fields' (:mod:`jointbench.declared`); what lies within those 
 no experiment is refused here, before any job, by :func:`study_problem` (called by
 :func:`jointbench.configuration.config.check_config`). Each bound comes from what the papers
 simulate or from geometry, and none refuses a value the papers' own grids use
-(``tests/test_config_validation.py`` runs the shipped configs through them).
+(``tests/test_config_validation.py`` runs the shipped configs through them). The blind copies'
+``blind_placement.translation_mm``, which the schema bounds only from below, is bounded here
+too (:func:`translation_problem`).
 """
 
 from __future__ import annotations
