@@ -18,6 +18,7 @@ import pytest
 import yaml
 from workflow_copy import ROOT
 
+from jointbench.configuration.bounds import TRANSLATION_MM_RANGE
 from jointbench.configuration.studies import get_study
 from jointbench.resultfiles.interchange import read_estimates_csv, write_dataset_csv
 from jointbench.resultfiles.parquet import (
@@ -141,6 +142,33 @@ def test_the_default_translation_is_the_configs_and_the_schemas():
     assert schema["properties"]["blind_placement"]["default"] == {"translation_mm": default}
 
 
+@pytest.mark.parametrize("translation_mm", TRANSLATION_MM_RANGE)
+def test_a_centre_placed_and_mapped_back_keeps_its_coordinates_at_the_bounds(translation_mm):
+    """The rounding of ``R c + p`` and ``R^T (c' - p)`` grows with the translation: at the largest
+    the config accepts, a centre at (10, 20, 30) comes back within the 1e-9 mm the results are
+    compared at (at 1e30 mm it came back as 0)."""
+    n = 200
+    placements = draw_placements(SEED, "x", {"k": 1}, range(n), translation_mm)
+    centre = np.array([10.0, 20.0, 30.0])
+    placed = np.einsum("nij,j->ni", placements.rotations, centre) + placements.translations
+    assert np.abs(placements.translations).max() > 0.8 * translation_mm
+    columns = ESTIMATE_COLUMNS["center"]
+    frame = pd.DataFrame({"trial": np.arange(n), **dict(zip(columns, placed.T, strict=True))})
+    back = unplaced_estimates(frame, "center", placements)
+    np.testing.assert_allclose(
+        back[list(columns)].to_numpy(float),
+        np.broadcast_to(centre, (n, 3)),
+        rtol=0,
+        atol=1e-9,
+    )
+
+
+@pytest.mark.parametrize("translation_mm", [float("nan"), float("inf"), 1e30, 1e-12, 0.0])
+def test_a_translation_out_of_its_bounds_draws_no_placement(translation_mm):
+    with pytest.raises(ValueError, match=r"^translation_mm: .* is not a finite number in"):
+        draw_placements(SEED, "x", {"k": 1}, range(3), translation_mm)
+
+
 def test_placements_are_proper_rotations_reproducible_and_differ_by_trial():
     condition = _condition("cmc")
     one = draw_placements(SEED, "cmc", condition, range(50), TRANSLATION_MM)
@@ -215,11 +243,13 @@ def _forward(kind: str, answers: dict, placements: Placements) -> dict:
     return out
 
 
+@pytest.mark.parametrize("translation_mm", [TRANSLATION_MM, TRANSLATION_MM_RANGE[1]])
 @pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
-def test_mapping_back_undoes_the_placement_exactly(kind):
+def test_mapping_back_undoes_the_placement_exactly(kind, translation_mm):
+    """At the default translation and at the largest the config accepts."""
     n = 40
     rng = np.random.default_rng(7)
-    placements = draw_placements(SEED, "x", {"k": 1}, range(n), TRANSLATION_MM)
+    placements = draw_placements(SEED, "x", {"k": 1}, range(n), translation_mm)
     answers = {c: rng.normal(0, 100, n) for c in ESTIMATE_COLUMNS[kind]}
     if kind == "joint_center":
         for prefix in ("", "proximal_"):

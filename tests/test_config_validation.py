@@ -12,6 +12,7 @@ import inspect
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from snakemake.utils import update_config
@@ -245,6 +246,69 @@ BAD = [
         {"cross_swing_hz": 45.0},
         ["studies.hip.protocol.cross_swing_hz: 45.0", "< 30 Hz", "half the frame rate"],
     ),
+    # A rotation configured yet not seen beside the noise does not count as moving.
+    (
+        "hip",
+        ("protocol",),
+        {"cross_swing_deg": 1e-9, "twist_deg": 0},
+        [
+            "studies.hip.protocol.swing_deg, cross_swing_deg, twist_deg",
+            "only swing_deg moving",
+            "cross_swing_deg 9.25e-09 mm",
+            "noise_mm (1.7 mm)",
+        ],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"cross_swing_rise_s": 1e9, "twist_deg": 0},
+        [
+            "studies.hip.protocol.swing_deg, cross_swing_deg, twist_deg",
+            "only swing_deg moving",
+            "cross_swing_rise_s",
+        ],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"swing_hz": 1e-9, "twist_deg": 0},
+        [
+            "studies.hip.protocol.swing_deg, cross_swing_deg, twist_deg",
+            "only cross_swing_deg",
+            "swing_deg 2.59e-12 mm",
+        ],
+    ),
+    # The skin-marker hip study's clusters and sway frequencies, bounded as the rig's.
+    (
+        "hip_sta",
+        ("protocol",),
+        {"thigh_markers_mm": [[40, -95, -150], [40, -95, -250], [40, -95, -350]]},
+        ["studies.hip_sta.protocol.thigh_markers_mm", "collinear (on one line)"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"pelvis_markers_mm": [[52.8, -33.6, 72], [52.8, -33.6, 72], [-107.2, 41.4, 85]]},
+        ["studies.hip_sta.protocol.pelvis_markers_mm", "markers 1 and 2 coincide"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"thigh_markers_mm": [[0, -90, -150], [0, -90, -350], [1, -90, -250]]},
+        ["studies.hip_sta.protocol.thigh_markers_mm", "nearly collinear", "noise_mm (1.7 mm)"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"pelvis_sway_hz": [0.13, 40.0, 0.17]},
+        ["studies.hip_sta.protocol.pelvis_sway_hz: 40.0", "< 25 Hz", "half the frame rate"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"pelvis_sway_hz": [0.0, 0.21, 0.17]},
+        ["studies.hip_sta.protocol.pelvis_sway_hz: 0.0", "> 0"],
+    ),
     # A study of two kinds: names and options of both are checked, each against its own kind.
     (
         "hip_sta",
@@ -267,6 +331,28 @@ def test_mistake_names_key_and_allowed_values(config, study, path, value, words)
         study_config.check_config(changed(config, study, path, value))
     for word in words:
         assert word in str(error.value), str(error.value)
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])
+def test_a_blind_placement_translation_out_of_its_bounds_is_refused(config, value):
+    """NaN and inf pass the schema (no comparison with NaN is true) and failed inside jobs;
+    1e30 mm rounds a centre at (10, 20, 30) to 0 on its way back; 1e-12 mm leaves a truth at the
+    origin where a contestant answering the origin finds it."""
+    bad = copy.deepcopy(config)
+    bad["blind_placement"] = {"translation_mm": value}
+    study_config.check_schema(bad)  # the schema alone lets it through
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(bad)
+    message = str(error.value)
+    assert message.startswith("config: blind_placement.translation_mm: "), message
+    assert repr(value) in message and "[100, 100000] mm" in message, message
+
+
+@pytest.mark.parametrize("value", [100, 250.0, 500.0, 1e5])
+def test_a_blind_placement_translation_within_its_bounds_passes(config, value):
+    good = copy.deepcopy(config)
+    good["blind_placement"] = {"translation_mm": value}
+    study_config.check_config(good)
 
 
 def test_a_run_of_no_study_is_refused_in_one_line(config):
@@ -524,3 +610,14 @@ def test_a_missing_overlay_stops_the_workflow_before_any_job_naming_it(tmp_path)
     assert result.returncode != 0
     assert "sensitivity.named.gone" in result.stdout + result.stderr
     assert "no such file" in result.stdout + result.stderr
+
+
+def test_a_rotations_largest_turn_is_the_chord_at_the_farthest_marker_from_its_axis():
+    from jointbench.configuration.bounds import largest_turn_mm
+
+    markers = [[0.0, 0.0, -500.0], [100.0, 0.0, -400.0]]
+    rotation = [[0.0, 0.0, 0.0], [np.pi / 2, -0.1, 2 * np.pi], [-0.2, 0.0, 0.0]]
+    turns = largest_turn_mm(rotation, markers)
+    # About x: 500 mm from it, a quarter turn; about y: 500 mm, 0.1 rad; about z: 100 mm, a
+    # full turn, which passed a half turn on its way, the farthest a turn moves a marker.
+    np.testing.assert_allclose(turns, [2 * 500 * np.sin(np.pi / 4), 2 * 500 * np.sin(0.05), 200.0])

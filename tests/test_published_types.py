@@ -67,6 +67,9 @@ def _set_tolerance(*keys_and_value):
     return change
 
 
+_MAR = "tolerance.max_abs_rel"
+_B, _B_ABS = "B-T1-knee-planar-30-0.3", "tolerance.all[1].abs"
+
 #: (paper, entry, edit, the key the error names, words it gives): each a value the comparison
 #: would misread or could not read.
 BAD = [
@@ -133,6 +136,16 @@ BAD = [
         "tolerance.all[1].at_most",
         "nan",
     ),
+    # the tolerance's own width: finite and above zero, which the schema's minimum cannot say
+    ("paper_a", "A9", _set_tolerance("max_abs_rel", [float("nan"), 0.25]), _MAR, "nan"),
+    ("paper_a", "A9", _set_tolerance("max_abs_rel", [2.0, float("inf")]), _MAR, "inf"),
+    ("paper_a", "A9", _set_tolerance("max_abs_rel", [0.0, 0.25]), _MAR, "0.0 is not a finite"),
+    ("paper_a", "A5", _set_tolerance("all", 0, "rel", float("nan")), "tolerance.all[0].rel", "nan"),
+    ("paper_a", "A5", _set_tolerance("all", 0, "rel", float("inf")), "tolerance.all[0].rel", "inf"),
+    ("paper_c", "C2", _set_tolerance("factor", float("inf")), "tolerance.factor", "inf"),
+    ("paper_c", "C2", _set_tolerance("factor", float("nan")), "tolerance.factor", "nan"),
+    ("paper_b", _B, _set_tolerance("all", 1, "abs", float("nan")), _B_ABS, "nan is not a finite"),
+    ("paper_b", _B, _set_tolerance("all", 1, "abs", 0), _B_ABS, "0 is not a finite number > 0"),
 ]
 
 

@@ -90,6 +90,24 @@ def test_a_trc_frame_number_that_is_no_number_names_the_line(tmp_path):
     _refused(path, "line 8", "Frame#", "'x'")
 
 
+@pytest.mark.parametrize("frame", ["1.5", "nan", "inf"])
+def test_a_trc_frame_number_that_is_no_whole_number_names_the_line(tmp_path, frame):
+    """Frame numbers 1.5, 2.5 ... were truncated to 1, 2 ... and read as consecutive frames."""
+    path = _trc(tmp_path, "A\t\t", 1)
+    lines = open(path).read().splitlines()
+    for i in range(5, 9):  # the data lines 6 to 9: frames 1.5 (or nan, inf), 2.5, 3.5, 4.5
+        lines[i] = f"{frame if i == 5 else i - 3.5}\t" + lines[i].split("\t", 1)[1]
+    open(path, "w").write("\n".join(lines) + "\n")
+    _refused(path, "line 6", "Frame#", f"'{frame}'", "whole number")
+
+
+def test_a_trc_frame_number_written_with_a_zero_fraction_reads(tmp_path):
+    path = _trc(tmp_path, "A\t\t", 1)
+    text = open(path).read().replace("\n1\t0.0\t", "\n1.0\t0.0\t")
+    open(path, "w").write(text.replace("\n2\t0.01\t", "\n2.0\t0.01\t"))
+    assert read(path).select("A").shape[0] == 4
+
+
 def test_a_trc_frame_count_that_is_no_count_is_not_checked(tmp_path):
     path = _trc(tmp_path, "A\t\t", 1, num_markers="1\u00b2")
     assert read(path).labels == ("A",)

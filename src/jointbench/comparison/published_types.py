@@ -6,6 +6,8 @@ depends on the tolerance (:mod:`jointbench.comparison.tolerance`):
 * ``abs``, ``rel``, ``max_abs_rel`` compare the measurement with it: a real number, or a
   non-empty list of them (elementwise);
 * ``factor`` divides by it: positive real numbers;
+* the width these four carry (``abs``, ``rel``, ``factor``, both of ``max_abs_rel``) is a
+  finite number above zero;
 * ``binomial95`` reads it as success counts (integers >= 0) out of ``of_n`` trials (integers
   >= 1, one for every count or one for all), no count above its ``of_n``;
 * the bounds (``at_least``, ``at_most``, ``greater_than``, ``less_than``, ``range``) carry their
@@ -107,6 +109,9 @@ def _leaf_problem(
     kind: str, spec: object, published: object, published_key: str, key: str
 ) -> tuple[str, str] | None:
     if kind in _REFERENCE or kind == "factor":
+        own = _width_problem(spec)
+        if own:
+            return f"{key}.{kind}", own
         problem = _numbers_problem(published, positive=kind == "factor")
         return (published_key, problem) if problem else None
     if kind in _BOUNDS:
@@ -182,6 +187,18 @@ def _numbers_problem(value: object, positive: bool = False) -> str | None:
         return None
     if not is_number(value) or (positive and value <= 0):
         return f"{value!r} is not {wanted}"
+    return None
+
+
+def _width_problem(spec: object) -> str | None:
+    """What keeps the tolerance's own number(s) (``abs``, ``rel``, ``factor``, the pair of
+    ``max_abs_rel``) from being finite and above zero, or None. The schema's ``minimum`` lets
+    NaN through (no comparison with NaN is true), and inf or NaN would pass or fail every
+    measurement whatever it is; a width of 0 asks a simulation to equal the paper's rounded
+    number exactly."""
+    for item in spec if isinstance(spec, list) else [spec]:
+        if not is_number(item) or item <= 0:
+            return f"{item!r} is not a finite number > 0 (the tolerance's width)"
     return None
 
 

@@ -5,7 +5,9 @@ and their protocol fields' (:mod:`jointbench.declared`); what lies within those 
 no experiment is refused here, before any job, by :func:`study_problem` (called by
 :func:`jointbench.configuration.config.check_config`). Each bound comes from what the papers
 simulate or from geometry, and none refuses a value the papers' own grids use
-(``tests/test_config_validation.py`` runs the shipped configs through them).
+(``tests/test_config_validation.py`` runs the shipped configs through them). The blind copies'
+``blind_placement.translation_mm``, which the schema bounds only from below, is bounded here
+too (:func:`translation_problem`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,21 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["AA_RATIO_BELOW", "study_problem"]
+from jointbench.simulate.hip import distal_rotation
+
+__all__ = ["AA_RATIO_BELOW", "TRANSLATION_MM_RANGE", "study_problem", "translation_problem"]
+
+#: ``blind_placement.translation_mm`` [mm], the half-side of the cube each trial of a blind copy
+#: is translated within (:mod:`jointbench.running.placement`), lies in ``[low, high]``, finite.
+#: Low: the rotation turns the data about the origin, so a truth at the origin (the knee's axis
+#: passes through it) moves by the translation alone and a contestant answering it scores the
+#: translation's length; at 100 mm that averages about 96 mm and is below 10 mm (an error the
+#: estimators make at the studies' 0.5-2 mm marker noise) in one trial in 2000
+#: (``(pi / 6) 0.1^3``), so no constant answer ranks near an estimator.
+#: High: the answers are mapped back by ``R^T (c' - p)``, whose rounding is about 1e-16
+#: times the translation; at 1e5 mm (100 m) that is 1e-11 mm, a hundredth of the 1e-9 mm the
+#: mapped-back answers are held to, while 1e30 mm leaves nothing of a centre at (10, 20, 30).
+TRANSLATION_MM_RANGE = (100.0, 1e5)
 
 #: The hinge study's AA/FE ratio is below 1. The estimators find the flexion–extension axis,
 #: the motion's principal axis only while abduction–adduction is the smaller rotation: a share
@@ -26,15 +42,27 @@ AA_RATIO_BELOW = 1.0
 
 #: The hip rig's pendulum rotations (distal relative to proximal, about x, y, z): paper C's rig
 #: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
-#: the recording is a hinge's, whose centre lies anywhere on its axis.
+#: the recording is a hinge's, whose centre lies anywhere on its axis. A rotation counts as
+#: moving when, somewhere in the recording (``n_frames`` at ``fps``), it alone turns a distal
+#: marker further than the marker noise ``noise_mm`` (the RMS length of a marker's error): one
+#: that moves none further is not seen in any frame beside the noise. This one rule covers each
+#: way a rotation can be configured yet not happen: an amplitude of 1e-9°, a frequency whose
+#: swing has barely started when the recording ends (1e-9 Hz), or a cross swing whose build-up
+#: time (1e9 s) is so much longer than the recording that it never develops. Half a cycle of a
+#: slow swing still counts: it turns the markers as far as a full one.
 HIP_ROTATIONS = ("swing_deg", "cross_swing_deg", "twist_deg")
 HIP_FEWEST_AXES = 2
-#: Their frequencies [Hz]: a rotation happens at a frequency above 0 (a rotation that does not
-#: happen has amplitude 0) and below half the frame rate, beyond which the frames cannot show it
-#: (the sampling theorem: it would be recorded as a slower motion than the one configured).
+#: Frequencies [Hz] of a study's periodic motions: a motion happens at a frequency above 0 (one
+#: that does not happen has amplitude 0) and below half the frame rate, beyond which the frames
+#: cannot show it (the sampling theorem: it would be recorded as a slower motion than the one
+#: configured). The hip rig's pendulum rotations; the skin-marker study's pelvis sway, one per
+#: world axis.
 HIP_FREQUENCIES = ("swing_hz", "cross_swing_hz", "twist_hz")
-#: The hip rig's marker clusters, each fitted as one rigid body.
+HIP_STA_FREQUENCIES = ("pelvis_sway_hz",)
+#: Marker clusters, each fitted as one rigid body (:func:`cluster_problem`): the hip rig's, and
+#: the skin-marker study's pelvis and thigh.
 HIP_CLUSTERS = ("proximal_markers_mm", "distal_markers_mm")
+HIP_STA_CLUSTERS = ("pelvis_markers_mm", "thigh_markers_mm")
 
 
 def study_problem(study: str, settings: Mapping, protocol: object) -> tuple[str, str] | None:
@@ -43,6 +71,21 @@ def study_problem(study: str, settings: Mapping, protocol: object) -> tuple[str,
     of this module refuses; None for a study without such bounds or within them."""
     check = _CHECKS.get(study)
     return check(settings, protocol) if check else None
+
+
+def translation_problem(value: float) -> str | None:
+    """What keeps ``value`` from being a ``blind_placement.translation_mm`` within
+    :data:`TRANSLATION_MM_RANGE` (NaN and inf, which the schema's bound lets through, included),
+    in words giving the reason; None if nothing."""
+    low, high = TRANSLATION_MM_RANGE
+    if low <= value <= high:  # False for NaN
+        return None
+    return (
+        f"{value!r} is not a finite number in [{low:g}, {high:g}] mm: below {low:g} mm a "
+        "contestant answering a constant (the truth, or the origin) scores near no error; "
+        f"above {high:g} mm the rounding of the placed coordinates no longer maps an answer "
+        "back to within 1e-9 mm"
+    )
 
 
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
@@ -57,28 +100,88 @@ def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    for name in HIP_CLUSTERS:
+    return (
+        _clusters_problem(protocol, HIP_CLUSTERS)
+        or _rotations_problem(protocol)
+        or _frequencies_problem(protocol, HIP_FREQUENCIES)
+    )
+
+
+def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    return _clusters_problem(protocol, HIP_STA_CLUSTERS) or _frequencies_problem(
+        protocol, HIP_STA_FREQUENCIES
+    )
+
+
+def _clusters_problem(protocol: object, names: Sequence[str]) -> tuple[str, str] | None:
+    """The first of the clusters ``names`` (protocol fields) that :func:`cluster_problem`
+    refuses at the protocol's ``noise_mm``."""
+    for name in names:
         problem = cluster_problem(getattr(protocol, name), protocol.noise_mm)
         if problem:
             return f"protocol.{name}", problem
-    moving = [name for name in HIP_ROTATIONS if getattr(protocol, name) != 0]
-    if len(moving) < HIP_FEWEST_AXES:
-        which = f"only {', '.join(moving)}" if moving else "none"
-        return f"protocol.{', '.join(HIP_ROTATIONS)}", (
-            f"{which} non-zero: the rig must rotate about at least {HIP_FEWEST_AXES} of the axes "
-            "(paper C: the second segment 'moved around at least 2 of the axes'); about one, its "
-            "centre lies anywhere on that axis"
-        )
-    nyquist = protocol.fps / 2
-    for name in HIP_FREQUENCIES:
-        value = getattr(protocol, name)
-        if not 0 < value < nyquist:
-            return f"protocol.{name}", (
-                f"{value!r} is not > 0 and < {nyquist:g} Hz (half the frame rate, fps "
-                f"{protocol.fps:g}): a rotation has a positive frequency (set its amplitude to "
-                "0 for none), and the frames cannot show one at half the frame rate or faster"
-            )
     return None
+
+
+def _frequencies_problem(protocol: object, names: Sequence[str]) -> tuple[str, str] | None:
+    """The first of the frequencies ``names`` (protocol fields, each a number or one per axis)
+    not above 0 and below half the protocol's frame rate."""
+    nyquist = protocol.fps / 2
+    for name in names:
+        value = getattr(protocol, name)
+        per_axis = isinstance(value, Sequence)
+        for part in value if per_axis else [value]:
+            if not 0 < part < nyquist:
+                shown = f"{part!r} (of {list(value)!r})" if per_axis else f"{part!r}"
+                return f"protocol.{name}", (
+                    f"{shown} is not > 0 and < {nyquist:g} Hz (half the frame rate, fps "
+                    f"{protocol.fps:g}): a motion has a positive frequency (set its amplitude "
+                    "to 0 for none), and the frames cannot show one at half the frame rate or "
+                    "faster"
+                )
+    return None
+
+
+def _rotations_problem(protocol: object) -> tuple[str, str] | None:
+    """Fewer than :data:`HIP_FEWEST_AXES` of the hip rig's rotations moving
+    (:func:`largest_turn_mm`), in words naming those configured that do not move and why."""
+    t = np.arange(protocol.n_frames) / protocol.fps
+    turns = largest_turn_mm(distal_rotation(protocol, t), protocol.distal_markers_mm)
+    moving = [name for name, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > 0]
+    # Without noise, a turn is still lost below the rounding of the markers' coordinates.
+    floor = max(protocol.noise_mm, _ROUNDING * np.abs(protocol.distal_markers_mm).max())
+    seen = [n for n, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > floor]
+    if len(seen) >= HIP_FEWEST_AXES:
+        return None
+    which = f"only {', '.join(seen)}" if seen else "none"
+    unseen = [name for name in moving if name not in seen]
+    detail = ""
+    if unseen:
+        turned = ", ".join(f"{n} {turns[HIP_ROTATIONS.index(n)]:.3g} mm" for n in unseen)
+        detail = (
+            f"; the largest turn of a distal marker over the recording ({protocol.n_frames} "
+            f"frames at {protocol.fps:g} fps), {turned}, is not above the marker noise "
+            f"noise_mm ({protocol.noise_mm:g} mm): too small an amplitude, too slow a frequency "
+            "or (the cross swing) too long a rise, cross_swing_rise_s, to be seen"
+        )
+    return f"protocol.{', '.join(HIP_ROTATIONS)}", (
+        f"{which} moving: the rig must rotate about at least {HIP_FEWEST_AXES} of the axes "
+        "(paper C: the second segment 'moved around at least 2 of the axes'); about one, its "
+        f"centre lies anywhere on that axis{detail}"
+    )
+
+
+def largest_turn_mm(rotation: np.ndarray, markers_mm: Sequence[Sequence[float]]) -> np.ndarray:
+    """``(3,)`` [mm]: for each component ``k`` of the rotation vectors ``rotation`` ``(n, 3)``
+    [rad] (about axis ``k`` through the joint), the farthest any of ``markers_mm`` ``(m, 3)``
+    (relative to the joint) is turned by that component alone in any of the ``n`` poses: the
+    chord ``2 r sin(|angle| / 2)`` at the marker's distance ``r`` from the axis, the angle
+    capped at a half turn."""
+    markers = np.asarray(markers_mm, dtype=float)
+    angles = np.minimum(np.abs(np.asarray(rotation, dtype=float)).max(axis=0), np.pi)
+    # Distance from axis k: the marker's length with its k-th coordinate left out.
+    radii = np.sqrt(np.sum(markers**2, axis=1)[:, None] - markers**2).max(axis=0)
+    return 2.0 * radii * np.sin(angles / 2.0)
 
 
 def cluster_problem(markers_mm: Sequence[Sequence[float]], noise_mm: float) -> str | None:
@@ -114,4 +217,5 @@ _ROUNDING = 1e-9
 _CHECKS: dict[str, Callable[[Mapping, object], tuple[str, str] | None]] = {
     "hinge": _hinge,
     "hip": _hip,
+    "hip_sta": _hip_sta,
 }

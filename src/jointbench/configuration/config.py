@@ -13,7 +13,7 @@ import numpy as np
 import yaml
 
 from jointbench import declared
-from jointbench.configuration.bounds import study_problem
+from jointbench.configuration.bounds import study_problem, translation_problem
 from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
@@ -227,8 +227,9 @@ def _merged(base: Mapping, update: Mapping) -> dict:
 
 def check_config(config: Mapping) -> None:
     """Raise ``ValueError`` naming the key and its allowed values for what the schema cannot
-    see: a run of no study, the trial count's bound, protocol fields, grid keys and values,
-    the bounds a study's own declarations do not state
+    see: a run of no study, the blind copies' translation
+    (:func:`~jointbench.configuration.bounds.translation_problem`), the trial count's bound,
+    protocol fields, grid keys and values, the bounds a study's own declarations do not state
     (:mod:`jointbench.configuration.bounds`), estimator names and their options (each against
     the type and range its annotation declares, see :mod:`jointbench.declared`), a study with
     no estimator, and a condition whose trials are too short for every estimator listed.
@@ -241,6 +242,11 @@ def check_config(config: Mapping) -> None:
             "config: studies: every study has enabled: false, so there is nothing to run; "
             "enable at least one"
         )
+    placement = config.get("blind_placement", {})
+    if "translation_mm" in placement:
+        problem = translation_problem(placement["translation_mm"])
+        if problem:
+            raise ValueError(f"config: blind_placement.translation_mm: {problem}")
     for study, settings in config["studies"].items():
         spec = get_study(study)
         where = f"config: studies.{study}"

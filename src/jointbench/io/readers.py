@@ -328,6 +328,19 @@ def _ends_with_newline(path: Path) -> bool:
         return file.read(1) in (b"\n", b"\r")
 
 
+def _whole_number(text: str) -> int | None:
+    """The integer ``text`` writes (``7``, or ``7.0`` as some writers give a frame number), or
+    None: a frame number of ``1.5`` truncated to 1 would read a file whose frames are not what
+    it says as if they were."""
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    if not value.is_integer():  # NaN, inf and fractions alike
+        return None
+    return int(value)
+
+
 def _trc_frame_numbers(
     rows: list[list[str]], lines: list[int], header: dict, n_labels: int, path: Path
 ) -> list:
@@ -342,12 +355,13 @@ def _trc_frame_numbers(
             )
     numbers = []
     for i, row in enumerate(rows):
-        try:
-            numbers.append(int(float(row[0])))
-        except (ValueError, OverflowError):
+        number = _whole_number(row[0])
+        if number is None:
             raise ValueError(
-                f"{path}: line {lines[i]}, field Frame#: {row[0]!r} is not a frame number"
-            ) from None
+                f"{path}: line {lines[i]}, field Frame#: {row[0]!r} is not a frame number "
+                "(a whole number)"
+            )
+        numbers.append(number)
         if i and numbers[i] != numbers[i - 1] + 1:
             raise ValueError(
                 f"{path}: frame {numbers[i]} follows frame {numbers[i - 1]}; a TRC file's frames "

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from jointbench.configuration.bounds import translation_problem
 from jointbench.configuration.seeds import trial_seed
 from jointbench.resultfiles.parquet import (
     read_metadata,
@@ -54,7 +55,8 @@ __all__ = [
 #: Half-side [mm] of the cube each trial's translation is drawn from when the config sets
 #: none (``blind_placement.translation_mm``): lab coordinates run to metres, and a joint a few
 #: hundred millimetres from wherever the constant answer lies makes that answer's error
-#: hundreds of millimetres, while the coordinates stay of the size a lab records.
+#: hundreds of millimetres, while the coordinates stay of the size a lab records. The config's
+#: value is bounded by :data:`jointbench.configuration.bounds.TRANSLATION_MM_RANGE`.
 DEFAULT_TRANSLATION_MM = 500.0
 
 # A stream of its own beside the simulation's, which draws from the trial's seed alone: the
@@ -138,8 +140,9 @@ def draw_placements(
     (:func:`jointbench.configuration.seeds.trial_seed`) in a stream of its own: a rotation
     uniform on SO(3) (a unit quaternion of four standard normals, uniform on the 3-sphere) and
     a translation uniform in ``[-translation_mm, translation_mm]^3`` [mm]."""
-    if not translation_mm > 0:
-        raise ValueError(f"translation_mm must be above 0, got {translation_mm!r}")
+    problem = translation_problem(translation_mm)
+    if problem:
+        raise ValueError(f"translation_mm: {problem}")
     trials = np.sort(np.asarray(trials, dtype=np.int64))
     rotations = np.empty((len(trials), 3, 3))
     translations = np.empty((len(trials), 3))

@@ -68,6 +68,7 @@ __all__ = [
     "PRIOR",
     "STUDY",
     "HipProtocol",
+    "distal_rotation",
     "marker_layout",
     "nominal_recording",
     "paper_c_checks",
@@ -186,6 +187,20 @@ def _from_rest(amplitude: np.ndarray, hz: np.ndarray, t: np.ndarray) -> np.ndarr
     return np.asarray(amplitude) * (1.0 - np.cos(2.0 * np.pi * np.asarray(hz) * t[:, None])) / 2.0
 
 
+def distal_rotation(protocol: HipProtocol, t: np.ndarray) -> np.ndarray:
+    """The distal segment's rotation vector relative to the proximal one ``(len(t), 3)`` [rad]
+    (proximal frame) at times ``t`` [s]: the main swing about ``x``, the cross swing about
+    ``y``, the twist about ``z`` (see the module docstring)."""
+    swing = np.radians(protocol.swing_deg) * (np.cos(2.0 * np.pi * protocol.swing_hz * t) - 1.0)
+    cross = (
+        np.radians(protocol.cross_swing_deg)
+        * (1.0 - np.exp(-t / protocol.cross_swing_rise_s))
+        * np.sin(2.0 * np.pi * protocol.cross_swing_hz * t)
+    )
+    twist = _from_rest(np.radians([protocol.twist_deg]), np.array([protocol.twist_hz]), t)[:, 0]
+    return np.stack([swing, cross, twist], axis=-1)
+
+
 def nominal_recording(protocol: HipProtocol) -> tuple[np.ndarray, np.ndarray]:
     """Noise-free proximal and distal markers ``(n_frames, n, 3)`` [mm] of the whole recording
     (world frame; frame 0 equals :func:`marker_layout`)."""
@@ -202,15 +217,7 @@ def nominal_recording(protocol: HipProtocol) -> tuple[np.ndarray, np.ndarray]:
     grip = proximal_body.mean(axis=0)
     d0 = grip + wander - r0 @ grip
 
-    # Distal pose relative to the proximal segment: swing, cross swing, twist.
-    swing = np.radians(protocol.swing_deg) * (np.cos(2.0 * np.pi * protocol.swing_hz * t) - 1.0)
-    cross = (
-        np.radians(protocol.cross_swing_deg)
-        * (1.0 - np.exp(-t / protocol.cross_swing_rise_s))
-        * np.sin(2.0 * np.pi * protocol.cross_swing_hz * t)
-    )
-    twist = _from_rest(np.radians([protocol.twist_deg]), np.array([protocol.twist_hz]), t)[:, 0]
-    r1 = r0 @ rotation_matrix(np.stack([swing, cross, twist], axis=-1))
+    r1 = r0 @ rotation_matrix(distal_rotation(protocol, t))
     # Ball joint: the joint's world position is shared, R0 c + d0 = R1 c + d1.
     d1 = r0 @ joint + d0 - r1 @ joint
 
