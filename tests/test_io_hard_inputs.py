@@ -188,6 +188,47 @@ def test_a_trc_file_of_blank_lines_after_its_header_is_refused(tmp_path):
         read(path)
 
 
+def _renumbered(text: str, first: str, start: int = 1) -> str:
+    """``text`` of :func:`_trc` with its rows numbered from ``start``, the first row's number
+    written as ``first``."""
+    lines = text.splitlines(keepends=True)
+    for i in range(5, len(lines)):
+        number = first if i == 5 else str(start + i - 5)
+        lines[i] = number + lines[i][lines[i].index("\t") :]
+    return "".join(lines)
+
+
+@pytest.mark.parametrize(
+    ("first", "start"),
+    [("-1", -1), ("\u0661", 1), ("+1", 1), ("1e0", 1), ("1_0", 10), ("0x1", 1), ("", 1)],
+    ids=["negative", "arabic-indic digit", "plus sign", "exponent", "underscore", "hex", "empty"],
+)
+def test_a_frame_number_not_written_in_ascii_digits_is_refused_naming_the_line(
+    tmp_path, first, start
+):
+    text, path = _trc(tmp_path)
+    path.write_text(_renumbered(text, first, start), encoding="utf-8")
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value).startswith(
+        f"{path}: line 6, field Frame#: {first!r} is not a frame number"
+    ), error.value
+
+
+@pytest.mark.parametrize("first", ["1", "1.0", " 1"])
+def test_a_frame_number_of_ascii_digits_reads(tmp_path, first):
+    """Digits, as some writers give them a ``.0`` or pad them with spaces."""
+    text, path = _trc(tmp_path)
+    path.write_text(_renumbered(text, first))
+    assert read(path).first_frame == 1
+
+
+def test_frame_zero_is_a_frame_number(tmp_path):
+    text, path = _trc(tmp_path)
+    path.write_text(_renumbered(text, "0", 0))
+    assert read(path).first_frame == 0
+
+
 @pytest.mark.parametrize("written", [_trc, _long_csv], ids=["trc", "csv"])
 def test_an_empty_field_is_a_gap(tmp_path, written):
     text, path = written(tmp_path)

@@ -329,16 +329,17 @@ def _ends_with_newline(path: Path) -> bool:
 
 
 def _whole_number(text: str) -> int | None:
-    """The integer ``text`` writes (``7``, or ``7.0`` as some writers give a frame number), or
-    None: a frame number of ``1.5`` truncated to 1 would read a file whose frames are not what
-    it says as if they were."""
-    try:
-        value = float(text)
-    except ValueError:
-        return None
-    if not value.is_integer():  # NaN, inf and fractions alike
-        return None
-    return int(value)
+    """The frame number ``text`` writes in ASCII digits (``7``, or ``7.0`` as some writers give
+    one, spaces around it ignored), or None. What Python's ``float`` reads besides is refused: a
+    sign (no frame is numbered below 0), an exponent, an underscore, a digit of another script
+    (``"\u0661"`` reads as 1), and ``1.5``, whose truncation to 1 would read a file whose frames
+    are not what it says as if they were."""
+    match = _FRAME_NUMBER.fullmatch(text.strip(" "))
+    return int(match.group(1)) if match else None
+
+
+#: A frame number: ASCII digits, optionally a point and zeros.
+_FRAME_NUMBER = re.compile(r"([0-9]+)(?:\.0*)?", re.ASCII)
 
 
 def _trc_frame_numbers(
@@ -359,7 +360,7 @@ def _trc_frame_numbers(
         if number is None:
             raise ValueError(
                 f"{path}: line {lines[i]}, field Frame#: {row[0]!r} is not a frame number "
-                "(a whole number)"
+                "(a whole number >= 0 in ASCII digits)"
             )
         numbers.append(number)
         if i and numbers[i] != numbers[i - 1] + 1:
