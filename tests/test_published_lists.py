@@ -19,7 +19,7 @@ import yaml
 from jointbench.comparison.published import load_published
 from jointbench.figures.paper_a import FIG4_STATED
 from jointbench.papers import get_paper, paper_a, paper_names
-from jointbench.papers.base import PerLevel
+from jointbench.papers.base import Inputs, PerLevel
 
 EXTENSION_PAPERS = sorted(Path(__file__).parent.glob("data/*/paper_*.yaml"))
 
@@ -82,8 +82,24 @@ def _cases(table):
 #: (entry, change, the key the error names, words it gives): a list of another length than
 #: the entry's check measures, whichever list of the entry it is.
 WRONG_LENGTH = [
-    ("A2", _edit("A2", "published", [30, 16]), "published", "2 values"),
-    ("A2", _edit("A2", "published", [30, 16, 9, 4]), "published", "4 values"),
+    (
+        "A2",
+        _both(
+            _edit("A2", "published", [30, 16]),
+            _edit("A2", "tolerance", "binomial95", "of_n", [30] * 2),
+        ),
+        "published",
+        "2 values",
+    ),
+    (
+        "A2",
+        _both(
+            _edit("A2", "published", [30, 16, 9, 4]),
+            _edit("A2", "tolerance", "binomial95", "of_n", [30] * 4),
+        ),
+        "published",
+        "4 values",
+    ),
     (
         "A7",
         _both(
@@ -135,6 +151,55 @@ def test_the_count_follows_the_design_not_a_second_number(tmp_path):
 
     message, _ = _refused(tmp_path, "paper_a", two_levels)
     assert "claim A2 published: 3 values" in message and "needs 2" in message, message
+
+
+#: (entry, change, the key the error names): one value where the entry's check measures one per
+#: level, which the comparison would hold every level to, or a single range (one interval for
+#: every level).
+SINGLE = [
+    (
+        "A2",
+        _both(_edit("A2", "published", 30), _edit("A2", "tolerance", "binomial95", "of_n", 30)),
+        "published",
+    ),
+    ("A2", _edit("A2", "tolerance", "binomial95", "of_n", 30), "tolerance.binomial95.of_n"),
+    ("A7", _edit("A7", "tolerance", "binomial95", "of_n", 55), "tolerance.binomial95.of_n"),
+    (
+        "A7",
+        _both(_edit("A7", "published", 42), _edit("A7", "tolerance", "binomial95", "of_n", 55)),
+        "published",
+    ),
+    ("A3", _edit("A3", "tolerance", "greater_than", 25), "tolerance.greater_than"),
+    ("A3", _edit("A3", "published", 25), "published"),
+    ("A3", _edit("A3", "tolerance", {"range": [25, 60]}), "tolerance.range"),
+]
+
+
+@_cases([(entry, change, key, "") for entry, change, key in SINGLE])
+def test_one_value_where_the_check_measures_one_per_level_is_refused(
+    tmp_path, entry_id, change, key, words
+):
+    message, _ = _refused(tmp_path, "paper_a", change)
+    per = _per_level(entry_id)
+    levels = per.levels or tuple(_document("paper_a")["design"]["grid"][per.axis])
+    assert f"paper A claim {entry_id} {key}: " in message, message
+    assert "a single" in message and f"needs {len(levels)}" in message, message
+    assert f"({', '.join(map(str, levels))})" in message, message
+
+
+#: (change of the design grid, the key the error names, words it gives): a design grid whose
+#: levels a check measures at is a non-empty list for each key.
+DESIGN = [
+    (lambda grid: grid.update(noise_mm=1.0), "design/grid/noise_mm", "is not of type 'array'"),
+    (lambda grid: grid.update(noise_mm=[]), "design/grid/noise_mm", "should be non-empty"),
+    (lambda grid: grid.pop("noise_mm"), "design.grid.noise_mm", "missing"),
+]
+
+
+@pytest.mark.parametrize(("change", "key", "words"), DESIGN, ids=["scalar", "empty", "missing"])
+def test_the_design_grid_a_check_measures_at_is_a_list_per_key(tmp_path, change, key, words):
+    message, _ = _refused(tmp_path, "paper_a", lambda document: change(document["design"]["grid"]))
+    assert key in message and words in message, message
 
 
 #: (entry, change, key, words): malformed lists of an entry measured per level, refused by the
@@ -226,22 +291,55 @@ def test_a3_is_measured_where_fig4_draws_it():
     assert _per_level("A3").levels == tuple(c["noise_mm"] for c in conditions)
 
 
+def _bc_rows(noise_levels, converged=lambda noise, trial: trial < 2) -> pd.DataFrame:
+    """BC's rows at the M set and 5° RoM, three trials at each of ``noise_levels``."""
+    return pd.DataFrame(
+        [
+            {
+                "method": "BC",
+                "marker_set": "M",
+                "rom_deg": 5,
+                "noise_mm": noise,
+                "trial": trial,
+                "converged": converged(noise, trial),
+                "error_mm": 1.0,
+            }
+            for noise in noise_levels
+            for trial in range(3)
+        ]
+    )
+
+
+def _measured_a2(collected: pd.DataFrame):
+    published = load_published(get_paper("paper_a").published)
+    inputs = Inputs(collected=collected, published=published, config={"studies": {}})
+    return paper_a.measure(inputs).get("A2")
+
+
+def test_a2_counts_at_the_declared_levels_whatever_else_the_run_has():
+    """A run with a noise level beyond the design's: A2 counts at the design's three, in their
+    order, not at the four the run has."""
+    design = _document("paper_a")["design"]["grid"]["noise_mm"]
+
+    def converged(noise, trial):
+        return noise in design and trial <= design.index(noise)
+
+    measured = _measured_a2(_bc_rows([4.0, *design], converged))
+    assert measured.value == {"count": [1, 2, 3], "trials": [3, 3, 3]}
+
+
+def test_a2_is_not_measured_when_the_run_lacks_a_declared_level():
+    """Three noise levels, one not the design's: three counts, one at the wrong level, would be
+    compared with the paper's three; the claim is left unmeasured instead."""
+    design = _document("paper_a")["design"]["grid"]["noise_mm"]
+    assert _measured_a2(_bc_rows([*design[:2], 4.0])) is None
+    assert _measured_a2(_bc_rows(design)) is not None
+
+
 def test_a2_counts_at_each_level_its_declaration_names():
-    """A2's check gives one count per noise level of the run, the levels its declaration
-    names: on the paper's design, as many as the published list holds."""
-    design = _document("paper_a")["design"]["grid"]
-    rows = [
-        {
-            "method": "BC",
-            "marker_set": "M",
-            "rom_deg": 5,
-            "noise_mm": noise,
-            "trial": trial,
-            "converged": trial < 2,
-        }
-        for noise in design[_per_level("A2").axis]
-        for trial in range(3)
-    ]
-    measured = paper_a._a2(pd.DataFrame(rows), None)
+    """A2's check gives one count per noise level its declaration names: on the paper's
+    design, as many as the published list holds."""
+    design = _document("paper_a")["design"]["grid"][_per_level("A2").axis]
+    measured = _measured_a2(_bc_rows(design))
     assert measured.value["count"] == [2, 2, 2]
     assert len(measured.value["count"]) == len(_entry(_document("paper_a"), "A2")["published"])

@@ -26,6 +26,7 @@ from jointbench.comparison.published import (
     load_published,
     unexplained,
 )
+from jointbench.comparison.published_types import MIN_RELATIVE_WIDTH
 from jointbench.papers import Measured, get_paper, paper_names
 
 
@@ -149,10 +150,24 @@ BAD = [
 ]
 
 
+#: (paper, entry, edit, the key the error names, words it gives): a tolerance so narrow that only
+#: the paper's rounded number itself, or a measurement within rounding of it, passes: below
+#: ``MIN_RELATIVE_WIDTH`` (1e-9) of the published value, or a factor below 1 + 1e-9.
+NARROW = [
+    ("paper_c", "C2", _set_tolerance("factor", 1), "tolerance.factor", "1 is not >= 1 + 1e-09"),
+    ("paper_c", "C2", _set_tolerance("factor", 1 + 1e-12), "tolerance.factor", ">= 1 + 1e-09"),
+    ("paper_c", "C2", _set_tolerance("factor", 0.5), "tolerance.factor", "0.5 is not >= 1 + "),
+    ("paper_b", _B, _set_tolerance("all", 1, "abs", 5e-8), _B_ABS, "1e-09 x 76.1"),
+    ("paper_a", "A9", _set_tolerance("max_abs_rel", [1e-12, 0.25]), _MAR, "1e-09 x 8.0"),
+    ("paper_a", "A9", _set_tolerance("max_abs_rel", [2.0, 1e-12]), _MAR, "1e-12 is not >= 1e-09"),
+    ("paper_a", "A5", _set_tolerance("all", 0, "rel", 1e-12), "tolerance.all[0].rel", "1e-09"),
+]
+
+
 @pytest.mark.parametrize(
     ("name", "entry_id", "change", "key", "words"),
-    BAD,
-    ids=[f"{entry}-{key}-{words}" for _, entry, _, key, words in BAD],
+    [*BAD, *NARROW],
+    ids=[f"{entry}-{key}-{words}" for _, entry, _, key, words in [*BAD, *NARROW]],
 )
 def test_a_value_its_tolerance_cannot_read_is_refused_naming_where(
     tmp_path, name, entry_id, change, key, words
@@ -165,6 +180,16 @@ def test_a_value_its_tolerance_cannot_read_is_refused_naming_where(
     for part in (str(path), f"paper {paper.letter}", entry_id, f"{key}:", words):
         assert part in message, message
     assert "\n" not in message, message
+
+
+def test_a_width_at_the_floor_loads(tmp_path):
+    """The floor itself is allowed: 1e-9 of the published 76.1, a factor of 1 + 1e-9."""
+    for name, entry_id, change in [
+        ("paper_b", _B, _set_tolerance("all", 1, "abs", MIN_RELATIVE_WIDTH * 76.1)),
+        ("paper_c", "C2", _set_tolerance("factor", 1 + MIN_RELATIVE_WIDTH)),
+    ]:
+        paper = get_paper(name)
+        load_published(_written(tmp_path, name, entry_id, change), paper.declares, paper.tables)
 
 
 @pytest.mark.parametrize("name", paper_names())

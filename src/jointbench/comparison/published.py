@@ -165,6 +165,12 @@ def _check_lengths(document: Mapping, path: str | Path, declares: Sequence) -> N
             continue  # a table's cell (held to its table) or a file read without its paper
         if isinstance(declared, str):
             problem, fix = length_problem(entry, None), ""
+        elif not declared.levels and declared.axis not in grid:
+            raise ValueError(
+                f"published values {path}: paper {document['paper']} {kind} {entry['id']} is "
+                f"measured per {declared.axis}, but design.grid.{declared.axis} is missing "
+                f"(design.grid has {', '.join(grid)}); list the paper's levels there"
+            )
         else:
             levels = declared.levels_in(grid)
             problem = length_problem(entry, len(levels), declared.needs(grid))

@@ -7,7 +7,8 @@ depends on the tolerance (:mod:`jointbench.comparison.tolerance`):
   non-empty list of them (elementwise);
 * ``factor`` divides by it: positive real numbers;
 * the width these four carry (``abs``, ``rel``, ``factor``, both of ``max_abs_rel``) is a
-  finite number above zero;
+  finite number above zero, and no narrower than :data:`MIN_RELATIVE_WIDTH` of the published
+  value (a factor at least ``1 + MIN_RELATIVE_WIDTH``);
 * ``binomial95`` reads it as success counts (integers >= 0) out of ``of_n`` trials (integers
   >= 1, one for every count or one for all), no count above its ``of_n``;
 * the bounds (``at_least``, ``at_most``, ``greater_than``, ``less_than``, ``range``) carry their
@@ -19,7 +20,8 @@ depends on the tolerance (:mod:`jointbench.comparison.tolerance`):
 A value the comparison would misread (``true`` as 1, ``"8"`` as 8) or could not read
 (``"8.0 mm"``) is thus refused before any verdict, not turned into one; so is a list of
 another length than its check measures (:func:`length_problem`, one value per level of the
-paper's :class:`~jointbench.papers.base.PerLevel`), which a run could only fail to compare.
+paper's :class:`~jointbench.papers.base.PerLevel`), which a run could only fail to compare, and
+a single value or range there, which it would hold every level to.
 """
 
 from __future__ import annotations
@@ -27,8 +29,15 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Mapping
 
-__all__ = ["entry_problem", "is_number", "length_problem"]
+__all__ = ["MIN_RELATIVE_WIDTH", "entry_problem", "is_number", "length_problem"]
 
+#: The narrowest width a tolerance may have, relative to what it compares: a factor at least
+#: ``1 + MIN_RELATIVE_WIDTH``, a relative width at least this, an absolute one at least this
+#: times the largest published value it applies to. Narrower, a check passes only a measurement
+#: equal to the paper's rounded number to within the rounding of a double (about 1e-16 of it,
+#: which arithmetic on the measurement accumulates far beyond): no simulation can be held to
+#: that, so such a width is a mistake in the file (a 0 typed for 0.5, a factor of 1).
+MIN_RELATIVE_WIDTH = 1e-9
 _REFERENCE = ("abs", "rel", "max_abs_rel")
 _BOUNDS = ("at_least", "at_most", "greater_than", "less_than")
 
@@ -113,7 +122,10 @@ def _leaf_problem(
         if own:
             return f"{key}.{kind}", own
         problem = _numbers_problem(published, positive=kind == "factor")
-        return (published_key, problem) if problem else None
+        if problem:
+            return published_key, problem
+        narrow = _narrow_problem(kind, spec, published)
+        return (f"{key}.{kind}", narrow) if narrow else None
     if kind in _BOUNDS:
         problem = _numbers_problem(spec)
         return (f"{key}.{kind}", problem) if problem else None
@@ -125,11 +137,11 @@ def _leaf_problem(
     return None  # shown_only
 
 
-def _compared_lists(entry: Mapping) -> list[tuple[str, list]]:
-    """``(key, list)`` of each list in a schema-checked published-values ``entry`` that its
-    tolerance holds a measurement to element by element: the published value where the
-    tolerance compares it (``abs``, ``rel``, ``max_abs_rel``, ``factor``, ``binomial95``'s
-    counts), a bound's value, ``binomial95``'s ``of_n``. Not a published list only shown
+def _compared_values(entry: Mapping) -> list[tuple[str, object]]:
+    """``(key, value)`` of each number or list of a schema-checked published-values ``entry``
+    that its tolerance holds a measurement to element by element: the published value where
+    the tolerance compares it (``abs``, ``rel``, ``max_abs_rel``, ``factor``, ``binomial95``'s
+    counts), a bound's value, ``binomial95``'s ``of_n``. Not a published value only shown
     beside a bound (paper C's eight v), nor a range's or ``max_abs_rel``'s pair."""
     found = []
     for kind, spec, published, published_key, key in _leaves(
@@ -141,19 +153,20 @@ def _compared_lists(entry: Mapping) -> list[tuple[str, list]]:
             found.append((f"{key}.{kind}", spec))
         if kind == "binomial95":
             found.append((f"{key}.binomial95.of_n", spec["of_n"]))
-    unique = dict(found)  # an ``all``'s parts may read the same published list
-    return [(key, value) for key, value in unique.items() if isinstance(value, list)]
+    return list(dict(found).items())  # an ``all``'s parts may read the same published value
 
 
 def length_problem(entry: Mapping, count: int | None, needs: str = "") -> tuple[str, str] | None:
-    """``(key, what is wrong)`` with the first list of a typed ``entry`` (one
-    :func:`entry_problem` passes) whose length is not ``count``, the number of values its check
-    measures (``needs`` says how many and why, in words), or None. Its published list counts
-    even where only shown: one number per value measured. With ``count`` None the paper
-    declares no such number, so any list the tolerance compares (:func:`_compared_lists`) is
-    refused: nothing says how long it must be."""
-    lists = _compared_lists(entry)
+    """``(key, what is wrong)`` with the first value of a typed ``entry`` (one
+    :func:`entry_problem` passes) that is not a list of ``count`` values, the number its check
+    measures (``needs`` says how many and why, in words), or None: a list of another length, a
+    single value (which the comparison would hold every level to), a ``range`` (one interval
+    for every level). Its published value counts even where only shown: one number per value
+    measured. With ``count`` None the paper declares no such number, so any list the tolerance
+    compares (:func:`_compared_values`) is refused: nothing says how long it must be."""
+    compared = _compared_values(entry)
     if count is None:
+        lists = [(key, value) for key, value in compared if isinstance(value, list)]
         if lists:
             return lists[0][0], (
                 "a list, where the paper declares no levels its check measures at, so its "
@@ -161,13 +174,22 @@ def length_problem(entry: Mapping, count: int | None, needs: str = "") -> tuple[
                 "the entry per level in the paper (PerLevel)"
             )
         return None
+    for kind, spec, _, _, key in _leaves(entry["tolerance"], None, "", "tolerance"):
+        if kind == "range":
+            return f"{key}.range", (
+                f"a single range {spec!r} where its check needs {needs}: a range holds every "
+                "level to one interval; bound each level with at_least and at_most lists"
+            )
     published = entry["published"]
-    if isinstance(published, list) and "published" not in dict(lists):
-        problem = _numbers_problem(published)
-        if problem:
-            return "published", f"{problem} (its check needs {needs})"
-        lists.insert(0, ("published", published))
-    for key, value in lists:
+    if "published" not in dict(compared):
+        if isinstance(published, list):
+            problem = _numbers_problem(published)
+            if problem:
+                return "published", f"{problem} (its check needs {needs})"
+        compared.insert(0, ("published", published))
+    for key, value in compared:
+        if not isinstance(value, list):
+            return key, f"a single value, {value!r}, where its check needs {needs}"
         if len(value) != count:
             values = f"{len(value)} value{'s' if len(value) != 1 else ''}"
             return key, f"{values} where its check needs {needs}"
@@ -200,6 +222,37 @@ def _width_problem(spec: object) -> str | None:
         if not is_number(item) or item <= 0:
             return f"{item!r} is not a finite number > 0 (the tolerance's width)"
     return None
+
+
+def _narrow_problem(kind: str, spec: object, published: object) -> str | None:
+    """What makes a width (one :func:`_width_problem` passes) of tolerance ``kind`` narrower
+    than :data:`MIN_RELATIVE_WIDTH` allows, or None: a factor below ``1 + MIN_RELATIVE_WIDTH``,
+    a relative width (``rel``, ``max_abs_rel``'s second) below ``MIN_RELATIVE_WIDTH``, an
+    absolute one (``abs``, ``max_abs_rel``'s first) below ``MIN_RELATIVE_WIDTH`` times the
+    largest magnitude of ``published`` (numbers, checked), the values it is applied to."""
+    if kind == "factor":
+        if spec >= 1 + MIN_RELATIVE_WIDTH:
+            return None
+        return (
+            f"{spec!r} is not >= 1 + {MIN_RELATIVE_WIDTH:g}: a factor of 1 passes only a "
+            "measurement equal to the published value, a factor below 1 none"
+        )
+    largest = max(
+        abs(value) for value in (published if isinstance(published, list) else [published])
+    )
+    widths = {"abs": [(spec, True)], "rel": [(spec, False)]}.get(kind)
+    for width, absolute in widths or [(spec[0], True), (spec[1], False)]:
+        if absolute and width < MIN_RELATIVE_WIDTH * largest:
+            return (
+                f"{width!r} is narrower than {MIN_RELATIVE_WIDTH:g} x {largest!r}, the largest "
+                f"published value it applies to: {_EXACT}"
+            )
+        if not absolute and width < MIN_RELATIVE_WIDTH:
+            return f"{width!r} is not >= {MIN_RELATIVE_WIDTH:g} (a relative width): {_EXACT}"
+    return None
+
+
+_EXACT = "a width that narrow passes only the published number itself, to rounding"
 
 
 def _range_problem(spec: object) -> str | None:

@@ -6,6 +6,7 @@ Each measurement returns the quantity its published entry's typed tolerance comp
 
 from __future__ import annotations
 
+import functools
 import itertools
 from pathlib import Path
 
@@ -118,7 +119,10 @@ def _a1(collected, means):
     )
 
 
-def _a2(collected, means):
+def _a2(collected, means, levels):
+    """BC's converged trials at the M set and the smallest RoM, counted at each of ``levels``
+    (:data:`A2_LEVELS`' in the paper's design, in their order); ``ValueError`` when the run
+    lacks one: counts at other levels would be compared with the paper's as if they were its."""
     bc = collected[
         (collected["method"] == "BC")
         & (collected["marker_set"] == "M")
@@ -126,8 +130,12 @@ def _a2(collected, means):
     ]
     if bc.empty:
         raise ValueError("BC is not in this run")
+    converged = bc.groupby(A2_LEVELS.axis)["converged"].sum()
+    missing = [level for level in levels if level not in converged.index]
+    if missing:
+        raise ValueError(f"BC is not in this run at {A2_LEVELS.axis} {missing}")
     n_trials = collected["trial"].nunique()
-    counts = bc.groupby(A2_LEVELS.axis)["converged"].sum().sort_index().astype(int).tolist()
+    counts = [int(converged[level]) for level in levels]
     value = {"count": counts, "trials": [n_trials] * len(counts)}
     return Measured(value, f"{counts} of {n_trials}")
 
@@ -411,7 +419,6 @@ def _a13(collected, means):
 
 _CLAIMS = {
     "A1": _a1,
-    "A2": _a2,
     "A3": _a3,
     "A4": _a4,
     "A5": _a5,
@@ -484,7 +491,10 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
         out["A12"] = _fastest(collected, inputs.published)
     except KeyError:
         pass
-    for key, claim in _CLAIMS.items():
+    # A2 counts at the levels of the paper's design its published counts belong to.
+    a2_levels = A2_LEVELS.levels_in(inputs.published["design"]["grid"])
+    claims = {**_CLAIMS, "A2": functools.partial(_a2, levels=a2_levels)}
+    for key, claim in claims.items():
         try:
             out[key] = claim(collected, means)
         except (KeyError, IndexError, ValueError):
