@@ -258,6 +258,18 @@ BAD = [
             "noise_mm (1.7 mm)",
         ],
     ),
+    # Without noise, a rotation turning no marker by HIP_RESOLUTION_MM (0.01 mm) is not seen.
+    (
+        "hip",
+        ("protocol",),
+        {"noise_mm": 0.0, "cross_swing_deg": 5e-4, "twist_deg": 0},
+        [
+            "studies.hip.protocol.swing_deg, cross_swing_deg, twist_deg",
+            "only swing_deg moving",
+            "cross_swing_deg 0.00",
+            "HIP_RESOLUTION_MM (0.01 mm)",
+        ],
+    ),
     (
         "hip",
         ("protocol",),
@@ -621,3 +633,10 @@ def test_a_rotations_largest_turn_is_the_chord_at_the_farthest_marker_from_its_a
     # About x: 500 mm from it, a quarter turn; about y: 500 mm, 0.1 rad; about z: 100 mm, a
     # full turn, which passed a half turn on its way, the farthest a turn moves a marker.
     np.testing.assert_allclose(turns, [2 * 500 * np.sin(np.pi / 4), 2 * 500 * np.sin(0.05), 200.0])
+
+
+def test_a_noise_free_rotation_turning_a_marker_beyond_the_resolution_counts(config):
+    """At noise_mm 0 the floor is HIP_RESOLUTION_MM: a cross swing turning the farthest distal
+    marker by about 0.02 mm moves, one by 0.005 mm does not (the case in BAD)."""
+    quiet = {"noise_mm": 0.0, "cross_swing_deg": 2e-3, "twist_deg": 0}
+    study_config.check_config(changed(config, "hip", ("protocol",), quiet))

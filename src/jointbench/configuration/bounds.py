@@ -19,7 +19,13 @@ import numpy as np
 
 from jointbench.simulate.hip import distal_rotation
 
-__all__ = ["AA_RATIO_BELOW", "TRANSLATION_MM_RANGE", "study_problem", "translation_problem"]
+__all__ = [
+    "AA_RATIO_BELOW",
+    "HIP_RESOLUTION_MM",
+    "TRANSLATION_MM_RANGE",
+    "study_problem",
+    "translation_problem",
+]
 
 #: ``blind_placement.translation_mm`` [mm], the half-side of the cube each trial of a blind copy
 #: is translated within (:mod:`jointbench.running.placement`), lies in ``[low, high]``, finite.
@@ -44,14 +50,21 @@ AA_RATIO_BELOW = 1.0
 #: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
 #: the recording is a hinge's, whose centre lies anywhere on its axis. A rotation counts as
 #: moving when, somewhere in the recording (``n_frames`` at ``fps``), it alone turns a distal
-#: marker further than the marker noise ``noise_mm`` (the RMS length of a marker's error): one
-#: that moves none further is not seen in any frame beside the noise. This one rule covers each
+#: marker further than the marker noise ``noise_mm`` (the RMS length of a marker's error), and
+#: than :data:`HIP_RESOLUTION_MM` whatever the noise: one that moves none further is not seen in
+#: any frame beside the noise, or without noise in any recording. This one rule covers each
 #: way a rotation can be configured yet not happen: an amplitude of 1e-9°, a frequency whose
 #: swing has barely started when the recording ends (1e-9 Hz), or a cross swing whose build-up
 #: time (1e9 s) is so much longer than the recording that it never develops. Half a cycle of a
 #: slow swing still counts: it turns the markers as far as a full one.
 HIP_ROTATIONS = ("swing_deg", "cross_swing_deg", "twist_deg")
 HIP_FEWEST_AXES = 2
+#: [mm] The least turn of a distal marker that counts a hip rig rotation as moving, whatever
+#: the noise: with ``noise_mm`` 0 the noise no longer sets a floor, and a rotation turning no
+#: marker by a hundredth of a millimetre (a tenth of what optical motion capture resolves) is no
+#: motion a recording of the rig could show; the estimators would read it from the rounding of
+#: the simulated coordinates alone.
+HIP_RESOLUTION_MM = 0.01
 #: Frequencies [Hz] of a study's periodic motions: a motion happens at a frequency above 0 (one
 #: that does not happen has amplitude 0) and below half the frame rate, beyond which the frames
 #: cannot show it (the sampling theorem: it would be recorded as a slower motion than the one
@@ -148,8 +161,7 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
     t = np.arange(protocol.n_frames) / protocol.fps
     turns = largest_turn_mm(distal_rotation(protocol, t), protocol.distal_markers_mm)
     moving = [name for name, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > 0]
-    # Without noise, a turn is still lost below the rounding of the markers' coordinates.
-    floor = max(protocol.noise_mm, _ROUNDING * np.abs(protocol.distal_markers_mm).max())
+    floor, floor_words = _turn_floor(protocol)
     seen = [n for n, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > floor]
     if len(seen) >= HIP_FEWEST_AXES:
         return None
@@ -160,14 +172,32 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
         turned = ", ".join(f"{n} {turns[HIP_ROTATIONS.index(n)]:.3g} mm" for n in unseen)
         detail = (
             f"; the largest turn of a distal marker over the recording ({protocol.n_frames} "
-            f"frames at {protocol.fps:g} fps), {turned}, is not above the marker noise "
-            f"noise_mm ({protocol.noise_mm:g} mm): too small an amplitude, too slow a frequency "
-            "or (the cross swing) too long a rise, cross_swing_rise_s, to be seen"
+            f"frames at {protocol.fps:g} fps), {turned}, is not above {floor_words}: "
+            "too small an amplitude, too slow a frequency or (the cross swing) too long a rise, "
+            "cross_swing_rise_s, to be seen"
         )
     return f"protocol.{', '.join(HIP_ROTATIONS)}", (
         f"{which} moving: the rig must rotate about at least {HIP_FEWEST_AXES} of the axes "
         "(paper C: the second segment 'moved around at least 2 of the axes'); about one, its "
         f"centre lies anywhere on that axis{detail}"
+    )
+
+
+def _turn_floor(protocol: object) -> tuple[float, str]:
+    """``(floor [mm], it in words)``: the turn of a distal marker a hip rig rotation must exceed
+    to be seen, the largest of the marker noise, :data:`HIP_RESOLUTION_MM` (which sets it
+    without noise) and the rounding of the markers' coordinates (which passes it only for
+    markers ten kilometres from the joint)."""
+    rounding = _ROUNDING * float(np.abs(protocol.distal_markers_mm).max())
+    return max(
+        (protocol.noise_mm, f"the marker noise noise_mm ({protocol.noise_mm:g} mm)"),
+        (
+            HIP_RESOLUTION_MM,
+            f"HIP_RESOLUTION_MM ({HIP_RESOLUTION_MM:g} mm), the least turn a recording "
+            f"resolves (noise_mm is {protocol.noise_mm:g} mm)",
+        ),
+        (rounding, f"the rounding of the markers' coordinates ({rounding:.3g} mm)"),
+        key=lambda candidate: candidate[0],
     )
 
 
