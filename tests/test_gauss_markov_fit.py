@@ -127,12 +127,31 @@ def test_a_centre_that_moves_in_a_segment_is_warned(method):
     assert _warned(result), result.status
     assert result.diagnostics["chi2_p"] < ROTATION_ALPHA
     assert "F = " in result.status and "dof" in result.status and "p = " in result.status
+    assert "above what the noise allows" in result.status
     given = jb.fit_joint_center(proximal, distal, method=method, noise_mm=0.5)
     assert _warned(given) and "chi^2 = " in given.status, given.status
     # The answer and its convergence stay the method's own.
     bare = registry.get("joint_center", method, checked=False)(proximal, distal)
     np.testing.assert_array_equal(result.center, bare.center)
     assert result.converged == bare.converged
+
+
+@pytest.mark.parametrize("method", GM)
+def test_a_cluster_that_deforms_is_warned_below(method):
+    """Markers that move on their segment without moving its pose (the distal cluster breathes
+    about its centroid by 3 %, some 3 mm): the rigid-body residuals hold more than the noise
+    that reaches the centre, and the F ratio falls far below 1; a given noise_mm four times
+    the data's likewise leaves the chi^2 far below its dof."""
+    proximal, distal = _trials(method, "isotropic", trials=1, frames=200, seed=9)
+    proximal, distal = proximal[0], distal[0]
+    centroid = distal.mean(axis=1, keepdims=True)
+    breathing = 1.0 + 0.03 * np.sin(np.linspace(0.0, 20.0, 200))[:, None, None]
+    deformed = centroid + breathing * (distal - centroid)
+    result = jb.fit_joint_center(proximal, deformed, method=method)
+    assert _warned(result) and "markers that move on their segment" in result.status
+    assert result.diagnostics["chi2"] < result.diagnostics["chi2_dof"]
+    given = jb.fit_joint_center(proximal, distal, method=method, noise_mm=2.0)
+    assert _warned(given) and "noise_mm is larger than the data's noise" in given.status
 
 
 def test_frame0_pose_errors_are_warned_for_paper_c_and_named():

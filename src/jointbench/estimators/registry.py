@@ -13,7 +13,9 @@ to: the input checks of :func:`jointbench.estimators.validation.check_input` and
 with options, the option checks of :func:`check_options` before the fit, and the support
 verdict of :func:`jointbench.estimators.support.assess` written into the result after it; a
 method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a statement of its
-answer's precision (:mod:`jointbench.estimators.precision`) has them applied in between. A
+answer's precision (:mod:`jointbench.estimators.precision`; the Gauss–Markov fits test their
+model instead, on the poses the call fitted, :mod:`jointbench.estimators.hjc`) has them applied
+in between. A
 newly registered estimator gets them all without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
