@@ -105,10 +105,12 @@ estimate), ``chi2_inflation`` (``g``); NaN when the residuals are at rounding le
 each model holds (``tests/test_gauss_markov_fit.py``, 30 frames, 1500 trials per case) 10
 of 12000 were rejected (0-2 per 1500, Gaussian or isotropic errors, noise given or
 estimated); without the inflation the chi^2's variance under the isotropic errors was 1.55
-times its assumed ``2 dof``. What the test cannot see: an error that moves the centre the
-same way in both segments, such as the part of the frame-0 pose errors common to the two
-segments, or skin motion that moves a cluster rigidly with the joint angles (it passes for
-another centre).
+times its assumed ``2 dof``. On paper C's rig and the skin-marker study none of 2640 trials
+in which the model holds was warned, and 88 % of the answers more than 4 Mahalanobis SD or
+10 mm off were (21 % before, by the support verdict). What the test cannot see: an error
+that moves the centre the same way in both segments, such as the part of the frame-0 pose
+errors common to the two segments, or skin motion that moves a cluster rigidly with the joint
+angles (it passes for another centre).
 
 Degenerate motion. Before anything is solved, the analytic normal matrix ``sum M'M`` must have
 rank 3: an eigenvalue below ``1e-12`` of the largest (relative rotation off the main axis below
@@ -888,7 +890,9 @@ def fit_gauss_markov(
         ``cost`` the Gauss–Markov chi^2 ``sum_t r_t' W_y,t^-1 r_t``. ``diagnostics``:
         ``noise_mm`` used and its ``noise_source``, ``analytic_center``, ``rcond`` of the
         analytic normal matrix, ``chi2`` and ``chi2_dof`` (``3 (N - 1) - 3``; chi2/dof near 1
-        when the noise model fits).
+        when the noise model fits). A checked call (:func:`jointbench.estimators.registry.get`,
+        :func:`jointbench.fit_joint_center`) tests the model on them (module docstring, "Model
+        test"): ``chi2_p``, ``noise_kurtosis``, ``chi2_inflation`` and, rejected, a warning.
     """
     return _gauss_markov(
         proximal,
