@@ -94,11 +94,12 @@ ONE_TRIAL = {**CASES, **USER_INPUT}
 
 
 def _separately(name: str, arrays, **options):
-    """The method and the verdict each fitting their own poses: the composition before the
-    poses were shared."""
+    """The method, its own check (the Gauss–Markov model test) and the verdict each fitting
+    their own poses: the composition before the poses were shared."""
     fn = registry.get(KIND, name, checked=False)
     clean = validation.check_input(KIND, arrays)
     result = registry._self_checked(fn, fn(*clean, **options), clean, options)
+    (result,) = registry._precision_checked(fn, [result], tuple(a[None] for a in clean), None)
     return support.annotate(result, support.assess(KIND, clean))
 
 
@@ -233,8 +234,8 @@ def test_poses_for_another_number_of_trials_are_refused(name, checked):
 
 def _unshared_many(name: str, segments: tuple, **options) -> list:
     """The many-trial composition before the poses were shared: the method's many-trial form
-    fitting its own poses, then per trial the input checks (whose error wins) and the verdict
-    fitting its own."""
+    fitting its own poses, then per trial the input checks (whose error wins), the method's
+    own check and the verdict, each fitting its own."""
     fn = registry.get(KIND, name, checked=False)
     outcomes = list(registry.many(KIND, name, checked=False)(*segments, **options))
     checked = validation.check_input_many(KIND, segments, len(outcomes))
@@ -244,6 +245,8 @@ def _unshared_many(name: str, segments: tuple, **options) -> list:
         elif not isinstance(outcome, Exception):
             arrays = checked.arrays(trial)
             result = registry._self_checked(fn, outcome, arrays, options)
+            stacked = tuple(array[None] for array in arrays)
+            (result,) = registry._precision_checked(fn, [result], stacked, None)
             outcomes[trial] = support.annotate(result, support.assess(KIND, arrays))
     return outcomes
 

@@ -13,7 +13,9 @@ to: the input checks of :func:`jointbench.estimators.validation.check_input` and
 with options, the option checks of :func:`check_options` before the fit, and the support
 verdict of :func:`jointbench.estimators.support.assess` written into the result after it; a
 method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a statement of its
-answer's precision (:mod:`jointbench.estimators.precision`) has them applied in between. A
+answer's precision (:mod:`jointbench.estimators.precision`; the Gauss–Markov fits test their
+model instead, on the poses the call fitted, :mod:`jointbench.estimators.hjc`) has them applied
+in between. A
 newly registered estimator gets them all without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
@@ -190,7 +192,8 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     result = _self_checked(entry.fn, result, clean, options)
     if hasattr(entry.fn, "precision_many"):
         # The trial as a batch of one, only for a method that states its precision.
-        (result,) = _precision_checked(entry.fn, [result], tuple(array[None] for array in clean))
+        stacked = tuple(array[None] for array in clean)
+        (result,) = _precision_checked(entry.fn, [result], stacked, _fitted_to(shared, [0]))
     return support.annotate(result, verdict)
 
 
@@ -347,12 +350,19 @@ def _self_checked_many(fn: Callable, results: list, stacked: tuple, options: dic
     return check_many(results, *stacked, **{k: v for k, v in options.items() if k != "poses"})
 
 
-def _precision_checked(fn: Callable, results: list, stacked: tuple) -> list:
+def _precision_checked(fn: Callable, results: list, stacked: tuple, poses: list | None) -> list:
     """``results`` of the trials of ``stacked`` ``(T, N, n, 3)`` each with the precision of
     their answers that ``fn``'s own cost implies, where it states one
-    (``fn.precision_many``, :mod:`jointbench.estimators.precision`)."""
+    (``fn.precision_many``, :mod:`jointbench.estimators.precision`), or the test of its model
+    (the Gauss–Markov fits, :mod:`jointbench.estimators.hjc`). A check that reads poses
+    (:func:`jointbench.estimators.segment_poses.pose_segments`) is given ``poses``, those the
+    fit read (per trial, or ``None`` where the call shared none)."""
     check = getattr(fn, "precision_many", None)
-    return results if check is None else check(results, *stacked)
+    if check is None:
+        return results
+    if pose_segments(check) is None:
+        return check(results, *stacked)
+    return check(results, *stacked, poses=poses)
 
 
 def _checked_many(entry: _Entry) -> Callable[..., list]:
@@ -385,8 +395,8 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
         if fitted:
             stacked = checked.stacked(fitted)
             results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
-            results = _precision_checked(entry.fn, results, stacked)
             poses = _fitted_to(options.get("poses"), fitted) if names else None
+            results = _precision_checked(entry.fn, results, stacked, poses)
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
             for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
                 outcomes[trial] = support.annotate(result, verdict)

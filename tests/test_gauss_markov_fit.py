@@ -1,0 +1,210 @@
+"""The Gauss–Markov model test of the two hip-joint-centre fits (``gauss-markov``,
+``gauss-markov-frame0``): a warning when the data do not fit paper C's model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from rigs import two_segments
+from scipy import stats
+
+import jointbench as jb
+from jointbench.estimators import hjc, registry
+from jointbench.estimators.segment_poses import trial_poses
+from jointbench.estimators.support import ROTATION_ALPHA
+from jointbench.geometry import rotation_matrix
+from jointbench.simulate.noise import isotropic_noise
+
+GM = ("gauss-markov", "gauss-markov-frame0")
+TRIALS = 1500
+FRAMES = 30
+NOT_FIT = "the Gauss–Markov model does not fit the data"
+
+
+def _gaussian(rng, shape, sd):
+    """Gaussian marker errors of RMS length ``sd`` [mm] (per-coordinate SD ``sd / sqrt(3)``)."""
+    return rng.normal(0.0, sd / np.sqrt(3.0), size=(*shape, 3))
+
+
+NOISES = {"gaussian": _gaussian, "isotropic": isotropic_noise}
+
+
+def _trials(method, noise, *, trials=TRIALS, frames=FRAMES, sd=0.5, seed=0):
+    """Noisy trials ``(T, N, 3, 3)`` of the ball-joint rig in which ``method``'s model holds:
+    for paper C's ``gauss-markov``, frame 0 without noise (its poses are exact)."""
+    proximal, distal = two_segments(frames)
+    rng = np.random.default_rng(seed)
+    draw = NOISES[noise]
+    segments = []
+    for clean in (proximal, distal):
+        noisy = clean + np.stack([draw(rng, clean.shape[:2], sd) for _ in range(trials)])
+        if method == "gauss-markov":
+            noisy[:, 0] = clean[0]
+        segments.append(noisy)
+    return segments
+
+
+def _checked_many(method, proximal, distal, **options):
+    outcomes = registry.many("joint_center", method)(proximal, distal, **options)
+    assert all(isinstance(o, jb.JointCenterResult) for o in outcomes), outcomes[:1]
+    return outcomes
+
+
+def _warned(result) -> bool:
+    return NOT_FIT in result.status
+
+
+@pytest.fixture(scope="module", params=[(m, n) for m in GM for n in NOISES])
+def correct_model(request):
+    """``(method, noise, results)`` on trials where the model holds, the noise estimated from
+    the data (the F form) and given (the chi^2 form), from one fit of the poses."""
+    method, noise = request.param
+    proximal, distal = _trials(method, noise, seed=17)
+    poses = trial_poses({"proximal": proximal, "distal": distal}, min_frames=3)
+    results = {
+        form: _checked_many(method, proximal, distal, poses=poses, **options)
+        for form, options in (("F", {}), ("chi2", {"noise_mm": 0.5}))
+    }
+    return method, noise, results
+
+
+@pytest.mark.parametrize("form", ["F", "chi2"])
+def test_correct_model_false_alarms_at_the_nominal_rate(correct_model, form):
+    """Where the model holds, the p-values are uniform: the share below 1 % (15 expected
+    among 1500, SD 3.9) lies within Binomial(1500, 0.01)'s central 99.9 %, and the warnings
+    (1.5 expected at ROTATION_ALPHA) are at most 9 (Poisson(1.5) exceeds 9 with probability
+    2e-5)."""
+    method, noise, results = correct_model
+    results = results[form]
+    p = np.array([r.diagnostics["chi2_p"] for r in results])
+    assert np.all((p >= 0) & (p <= 1))
+    low, high = stats.binom(len(p), 0.01).ppf([0.0005, 0.9995])
+    assert low <= np.sum(p < 0.01) <= high, (method, noise, np.sum(p < 0.01))
+    warned = sum(_warned(r) for r in results)
+    assert warned == np.sum(p < ROTATION_ALPHA) <= 9, (method, noise, warned)
+    assert all(r.converged for r in results)
+
+
+def test_chi2_variance_matches_its_calibration(correct_model):
+    """With the noise given, the chi^2 varies as its Satterthwaite calibration says, ``2 dof``
+    times the inflation, within 20 % (the sample variance of 1500 trials has a standard error
+    of about 5 %), where a test blind to the kurtosis (inflation 1) is 50 % off under the
+    isotropic errors."""
+    _, noise, results = correct_model
+    chi2 = np.array([r.diagnostics["chi2"] for r in results["chi2"]])
+    dof = results["chi2"][0].diagnostics["chi2_dof"]
+    inflation = np.array([r.diagnostics["chi2_inflation"] for r in results["chi2"]])
+    assert np.mean(chi2) / dof == pytest.approx(1.0, abs=0.02)
+    assert np.var(chi2) / np.mean(2 * dof * inflation) == pytest.approx(1.0, abs=0.2)
+    blind = np.var(chi2) / (2 * dof)
+    if noise == "isotropic":
+        assert blind > 1.35, blind
+    else:
+        assert np.median(inflation) < 1.05 and blind == pytest.approx(1.0, abs=0.2)
+
+
+def test_kurtosis_estimated_from_the_rigid_fit_residuals(correct_model):
+    """Per-coordinate excess kurtosis: 0 for Gaussian errors, 2.4 for paper A's isotropic
+    errors (normal magnitude along a uniform direction: E[x^4] = 3 sd^4 / 5, var = sd^2 / 3)."""
+    _, noise, results = correct_model
+    kurtosis = np.array([r.diagnostics["noise_kurtosis"] for r in results["F"]])
+    expected = {"gaussian": 0.0, "isotropic": 2.4}[noise]
+    assert np.mean(kurtosis) == pytest.approx(expected, abs=0.3)
+    inflation = np.array([r.diagnostics["chi2_inflation"] for r in results["F"]])
+    assert np.all(inflation >= 1.0)
+    if noise == "isotropic":
+        assert np.median(inflation) > 1.2
+
+
+@pytest.mark.parametrize("method", GM)
+def test_a_centre_that_moves_in_a_segment_is_warned(method):
+    """A joint that is no ball joint: the centre slides 4 mm in the distal segment."""
+    proximal, distal = two_segments(200)
+    slide = 4.0 * np.sin(np.linspace(0.0, 9.0, 200))[:, None, None] * np.array([1.0, 0.5, 0.0])
+    rng = np.random.default_rng(3)
+    proximal = proximal + isotropic_noise(rng, proximal.shape[:2], 0.5)
+    distal = distal + slide + isotropic_noise(rng, distal.shape[:2], 0.5)
+    result = jb.fit_joint_center(proximal, distal, method=method)
+    assert _warned(result), result.status
+    assert result.diagnostics["chi2_p"] < ROTATION_ALPHA
+    assert "F = " in result.status and "dof" in result.status and "p = " in result.status
+    assert "above what the noise allows" in result.status
+    given = jb.fit_joint_center(proximal, distal, method=method, noise_mm=0.5)
+    assert _warned(given) and "chi^2 = " in given.status, given.status
+    # The answer and its convergence stay the method's own.
+    bare = registry.get("joint_center", method, checked=False)(proximal, distal)
+    np.testing.assert_array_equal(result.center, bare.center)
+    assert result.converged == bare.converged
+
+
+@pytest.mark.parametrize("method", GM)
+def test_a_cluster_that_deforms_is_warned_below(method):
+    """Markers that move on their segment without moving its pose (the distal cluster breathes
+    about its centroid by 3 %, some 3 mm): the rigid-body residuals hold more than the noise
+    that reaches the centre, and the F ratio falls far below 1; a given noise_mm four times
+    the data's likewise leaves the chi^2 far below its dof."""
+    proximal, distal = _trials(method, "isotropic", trials=1, frames=200, seed=9)
+    proximal, distal = proximal[0], distal[0]
+    centroid = distal.mean(axis=1, keepdims=True)
+    breathing = 1.0 + 0.03 * np.sin(np.linspace(0.0, 20.0, 200))[:, None, None]
+    deformed = centroid + breathing * (distal - centroid)
+    result = jb.fit_joint_center(proximal, deformed, method=method)
+    assert _warned(result) and "markers that move on their segment" in result.status
+    assert result.diagnostics["chi2"] < result.diagnostics["chi2_dof"]
+    given = jb.fit_joint_center(proximal, distal, method=method, noise_mm=2.0)
+    assert _warned(given) and "noise_mm is larger than the data's noise" in given.status
+
+
+def test_frame0_pose_errors_are_warned_for_paper_c_and_named():
+    """Large errors of the frame-0 poses break paper C's model (exact frame-0 poses), not the
+    frame-0 extension's."""
+    proximal, distal = _trials("gauss-markov-frame0", "isotropic", trials=1, frames=200, seed=5)
+    proximal, distal = proximal[0].copy(), distal[0].copy()
+    proximal[0] += np.array([[2.0, -1.0, 0.5], [-1.5, 0.0, 1.0], [0.0, 1.5, -2.0]])
+    paper = jb.fit_joint_center(proximal, distal, method="gauss-markov")
+    assert _warned(paper), paper.status
+    assert "gauss-markov-frame0 also models the errors of the frame-0 poses" in paper.status
+
+
+@pytest.mark.parametrize("method", GM)
+@pytest.mark.parametrize("noise_mm", [None, 0.0, 0.5])
+def test_noise_free_data_are_not_warned(method, noise_mm):
+    proximal, distal = two_segments()
+    options = {} if noise_mm is None else {"noise_mm": noise_mm}
+    result = jb.fit_joint_center(proximal, distal, method=method, **options)
+    assert result.status == "ok", result.status
+    assert "chi2_p" in result.diagnostics
+
+
+@pytest.mark.parametrize("method", GM)
+def test_batched_and_one_trial_checked_calls_agree(method):
+    proximal, distal = _trials(method, "isotropic", trials=4, frames=100, seed=11)
+    distal = distal.copy()
+    distal[1] += 3.0 * np.sin(np.linspace(0.0, 7.0, 100))[:, None, None]  # a moving centre
+    batched = _checked_many(method, proximal, distal)
+    one = [
+        registry.get("joint_center", method)(p, d) for p, d in zip(proximal, distal, strict=True)
+    ]
+    assert _warned(batched[1])
+    for a, b in zip(batched, one, strict=True):
+        assert a.status == b.status
+        for key in ("chi2_p", "noise_kurtosis", "chi2_inflation"):
+            assert a.diagnostics[key] == pytest.approx(b.diagnostics[key], rel=1e-9)
+
+
+def test_the_inflation_from_spread_frames_is_the_all_frames_one(monkeypatch):
+    """On a long trial the kurtosis's share of the chi^2's variance is averaged over
+    hjc._MOMENT_FRAMES evenly spaced frames: within 0.5 % of all frames' on poses drawn at
+    random in every frame (1000 frames; a smooth motion gives it closer)."""
+    rng = np.random.default_rng(5)
+    proximal, distal = _trials("gauss-markov-frame0", "isotropic", trials=1, frames=1000, seed=2)
+    poses = trial_poses({"proximal": proximal, "distal": distal}, min_frames=3)[0]
+    segments = (poses["proximal"], poses["distal"])
+    rotations = tuple(rotation_matrix(rng.normal(size=(999, 3))) for _ in segments)
+    bodies = tuple(p.body for p in segments)
+    centre = bodies[0].mean(axis=0) + np.array([0.0, 0.0, -400.0])
+    spread = hjc._constraint_moments(rotations, bodies, (centre, centre))
+    monkeypatch.setattr(hjc, "_MOMENT_FRAMES", 10**9)
+    every = hjc._constraint_moments(rotations, bodies, (centre, centre))
+    assert spread == pytest.approx(every, rel=0.005)
+    assert spread != every
