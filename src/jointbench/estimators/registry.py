@@ -48,7 +48,7 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench import declared, owncode
-from jointbench.estimators import support, validation
+from jointbench.estimators import centre_precision, support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
     check_same_trials,
@@ -191,7 +191,10 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     if hasattr(entry.fn, "precision_many"):
         # The trial as a batch of one, only for a method that states its precision.
         (result,) = _precision_checked(entry.fn, [result], tuple(array[None] for array in clean))
-    return support.annotate(result, verdict)
+    result = support.annotate(result, verdict)
+    if entry.kind == "center":
+        (result,) = centre_precision.annotate_many([result], clean[0][None], [verdict])
+    return result
 
 
 def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
@@ -388,8 +391,11 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
             results = _precision_checked(entry.fn, results, stacked)
             poses = _fitted_to(options.get("poses"), fitted) if names else None
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
-            for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
-                outcomes[trial] = support.annotate(result, verdict)
+            results = list(map(support.annotate, results, verdicts))
+            if entry.kind == "center":
+                results = centre_precision.annotate_many(results, stacked[0], verdicts)
+            for trial, result in zip(fitted, results, strict=True):
+                outcomes[trial] = result
         return outcomes
 
     return checked_many
