@@ -28,7 +28,7 @@ def _numbers(markers: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """``(SD, chi2, step)`` of ``centre`` on ``markers`` with the support verdict's noise."""
     verdict = support.assess("center", (markers,))
     variance = verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
-    return centre_precision._statistics(markers[None], centre[None], np.array([variance]))[0, :3]
+    return centre_precision._statistics(markers[None], centre[None], np.array([variance]))[0][:3]
 
 
 def test_noise_free_cap_is_exact_and_not_warned():

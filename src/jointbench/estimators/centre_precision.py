@@ -224,16 +224,15 @@ def _chi2_3_sf(x: float) -> float:
     return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
 
 
-def _statistics(markers: np.ndarray, centres: np.ndarray, variances: np.ndarray) -> np.ndarray:
-    """:func:`centre_statistics` with each trial's repeated frames counted once."""
-    rows = centre_statistics(kernel_array(markers), centres, variances)
-    if not rows[:, _REPEATS].any():
-        return rows
-    for t in np.flatnonzero(rows[:, _REPEATS]):
-        distinct = distinct_frames(markers[t])
-        rows[t] = centre_statistics(
-            kernel_array(distinct[None]), centres[t : t + 1], variances[t : t + 1]
-        )[0]
+def _statistics(markers: np.ndarray, centres: np.ndarray, variances: np.ndarray) -> list:
+    """:func:`centre_statistics` with each trial's repeated frames counted once, as lists."""
+    rows = centre_statistics(kernel_array(markers), centres, variances).tolist()
+    for t, row in enumerate(rows):
+        if row[_REPEATS]:
+            distinct = distinct_frames(markers[t])
+            rows[t] = centre_statistics(
+                kernel_array(distinct[None]), centres[t : t + 1], variances[t : t + 1]
+            )[0].tolist()
     return rows
 
 
@@ -293,10 +292,9 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         return annotated
     if len(checked) < len(results):
         markers = markers[checked]
-    rows = _statistics(markers, np.array(centres), np.square(residuals) / 3.0)
-    for t, residual_mm, (sd, chi2, step, _, share) in zip(
-        checked, residuals, rows.tolist(), strict=True
-    ):
+    variances = np.array(residuals) ** 2 / 3.0
+    rows = _statistics(markers, np.array(centres), variances)
+    for t, residual_mm, (sd, chi2, step, _, share) in zip(checked, residuals, rows, strict=True):
         numbers = {
             "center_sd_mm": sd,
             "center_sd_noise_share": share,
