@@ -219,3 +219,20 @@ def test_every_centre_method_states_its_precision(method):
     result = registry.get("center", method)(_cap(np.random.default_rng(12), 30.0, 0.5))
     assert set(_KEYS) <= result.diagnostics.keys()
     assert result.diagnostics["center_sd_mm"] < 1.0
+
+
+def test_a_marker_at_the_centre_carries_no_direction():
+    """A virtual marker at the joint centre (common in a lab's C3D files) moves by noise alone:
+    its direction from the centre is noise, and it neither spoils nor sharpens the numbers."""
+    rng = np.random.default_rng(13)
+    markers = _cap(rng, 20.0, 0.5)
+    at_centre = CENTRE + rng.normal(scale=0.5, size=(len(markers), 1, 3))
+    with_virtual = np.concatenate([markers, at_centre], axis=1)
+    variance = np.array([0.25])
+    plain = centre_statistics(markers[None].copy(), CENTRE[None], variance)[0]
+    extra = centre_statistics(with_virtual[None].copy(), CENTRE[None], variance)[0]
+    np.testing.assert_allclose(extra[:3], plain[:3], rtol=1e-12)
+    exact = np.concatenate([markers, np.broadcast_to(CENTRE, (len(markers), 1, 3))], axis=1)
+    np.testing.assert_allclose(
+        centre_statistics(exact[None].copy(), CENTRE[None], variance)[0, :3], plain[:3], rtol=1e-12
+    )

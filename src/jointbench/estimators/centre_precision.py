@@ -83,6 +83,10 @@ MAX_SD_NOISE_SHARE = 0.2
 #: of bias paper A documents for its methods on small caps.
 MIN_REJECTED_STEP_MM = 5.0
 
+# A marker within this many noise SDs of the answer (a virtual marker at the joint, say) has a
+# direction from it that is noise, and is left out.
+_NEAR_SDS = 3.0
+
 # Columns of centre_statistics' rows.
 _SD, _CHI2, _STEP, _REPEATS, _SHARE = 0, 1, 2, 3, 4
 
@@ -131,7 +135,7 @@ def centre_statistics(
                 # Equal frames have equal keys (weights that no two coordinates share).
                 keys[k] += wx * x + wy * y + wz * z
                 d = math.sqrt(x * x + y * y + z * z)
-                inverse = 1.0 / d
+                inverse = 1.0 / d if d > 0.0 else 0.0
                 u0, u1, u2 = x * inverse, y * inverse, z * inverse
                 sum_d += d
                 sum_u[0] += u0
@@ -147,6 +151,8 @@ def centre_statistics(
                 sum_uu[1, 2] += u1 * u2
                 sum_uu[2, 2] += u2 * u2
             radius = sum_d / n_frames
+            if not radius * radius > _NEAR_SDS**2 * s2:
+                continue  # its direction from the answer is noise: no information on it
             norm2 = 0.0
             for i in range(3):
                 score[i] += sum_du[i] - radius * sum_u[i]
