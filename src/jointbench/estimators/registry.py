@@ -50,7 +50,7 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench import declared, owncode
-from jointbench.estimators import support, validation
+from jointbench.estimators import centre_precision, support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
     check_same_trials,
@@ -194,7 +194,10 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
         # The trial as a batch of one, only for a method that states its precision.
         stacked = tuple(array[None] for array in clean)
         (result,) = _precision_checked(entry.fn, [result], stacked, _fitted_to(shared, [0]))
-    return support.annotate(result, verdict)
+    result = support.annotate(result, verdict)
+    if entry.kind == "center":
+        (result,) = centre_precision.annotate_many([result], clean[0][None], [verdict])
+    return result
 
 
 def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
@@ -398,8 +401,11 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
             poses = _fitted_to(options.get("poses"), fitted) if names else None
             results = _precision_checked(entry.fn, results, stacked, poses)
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
-            for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
-                outcomes[trial] = support.annotate(result, verdict)
+            results = list(map(support.annotate, results, verdicts))
+            if entry.kind == "center":
+                results = centre_precision.annotate_many(results, stacked[0], verdicts)
+            for trial, result in zip(fitted, results, strict=True):
+                outcomes[trial] = result
         return outcomes
 
     return checked_many

@@ -1,0 +1,238 @@
+"""The centre's precision and score test on every checked centre call
+(:mod:`jointbench.estimators.centre_precision`): known answers, calibration at the true centre,
+honest SDs, invariances, repeated frames, and answers it must not pass as found, a method that
+lies about its centre among them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_checked_centre_calls import BODY, CENTRE, _trial
+
+from jointbench.estimators import centre_precision, registry, support
+from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM, centre_statistics
+from jointbench.estimators.results import CenterResult
+from jointbench.geometry import rotation_matrix
+
+_KEYS = ("center_sd_mm", "center_score_chi2", "center_score_p_value", "center_step_mm")
+
+
+def _cap(rng, rom_deg, noise_mm, *, hinge=False, body=BODY) -> np.ndarray:
+    """:func:`test_checked_centre_calls._trial` of 120 frames."""
+    return _trial(rng, rom_deg, noise_mm, hinge=hinge, n_frames=120, body=body)
+
+
+def _numbers(markers: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """``(SD, chi2, step)`` of ``centre`` on ``markers`` with the support verdict's noise."""
+    verdict = support.assess("center", (markers,))
+    variance = verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
+    return centre_precision._statistics(markers[None], centre[None], np.array([variance]))[0][:3]
+
+
+def test_noise_free_cap_is_exact_and_not_warned():
+    markers = _cap(np.random.default_rng(0), 20.0, 0.0)
+    result = registry.get("center", "NM")(markers)
+    assert result.status == "ok"
+    assert result.diagnostics["center_sd_mm"] < 1e-9
+    assert result.diagnostics["center_step_mm"] < 1e-9
+
+
+def test_a_centre_off_the_spheres_is_found_by_its_offset():
+    """Noise-free data: the step from an answer moved by ``delta`` is ``|delta|`` to first
+    order, whatever the direction, and the SD stays at rounding level."""
+    markers = _cap(np.random.default_rng(0), 30.0, 0.0)
+    rows = centre_statistics(
+        markers[None].copy(), (CENTRE + np.array([0.01, -0.02, 0.005]))[None], np.array([1e-4])
+    )
+    assert rows[0, 2] == pytest.approx(math.hypot(0.01, 0.02, 0.005), rel=1e-2)
+
+
+def test_score_test_is_calibrated_at_the_true_centre():
+    """Rao's score test at the true centre rejects at its nominal level: chi-square with 3
+    degrees of freedom (300 trials per cap; binomial bounds far from a miscalibrated test's)."""
+    rng = np.random.default_rng(5)
+    for rom_deg in (30.0, 10.0):
+        p_values = [
+            centre_precision._chi2_3_sf(_numbers(_cap(rng, rom_deg, 1.0), CENTRE)[1])
+            for _ in range(300)
+        ]
+        share = np.mean(np.array(p_values) < 0.05)
+        assert 0.02 < share < 0.10, (rom_deg, share)
+
+
+def _grid_outcomes(method: str) -> list[tuple[object, float]]:
+    """``(outcome, error [mm])`` of ``method``'s checked many-trial call on caps of 3 to 20
+    degrees with 0.5 to 1.5 mm noise, markers near the centre (paper A's M set distances) and
+    far from it, 40 trials each: where the SD holds and where it does not."""
+    near = np.array([[2.7, 4.1, 13.0], [0.0, 2.9, 28.9], [-4.6, 3.1, 15.1]])
+    rng = np.random.default_rng(7)
+    found = []
+    for body in (near, BODY):
+        for rom_deg, noise_mm in ((20.0, 1.0), (12.0, 1.0), (7.0, 0.5), (4.0, 1.0), (3.0, 1.5)):
+            trials = np.stack([_cap(rng, rom_deg, noise_mm, body=body) for _ in range(40)])
+            for outcome in registry.many("center", method)(trials):
+                found.append((outcome, float(np.linalg.norm(outcome.center - CENTRE))))
+    return found
+
+
+@pytest.mark.parametrize("method", ["NM", "BC"])
+def test_an_ok_centre_is_within_four_sds(method):
+    """Among the answers a checked call passes as "ok", the error is beyond 4 SDs along the
+    least determined direction about as rarely as the SD says (chi-square with 3 degrees of
+    freedom beyond 16: 0.1%); among those whose noise share is too large for the SD to hold,
+    it is not (without the share's warning, those would pass as "ok")."""
+    found = _grid_outcomes(method)
+    passed = [(o, e) for o, e in found if o.status == "ok"]
+    beyond = [e > 4.0 * o.diagnostics["center_sd_mm"] for o, e in passed]
+    assert len(passed) > 100
+    assert np.mean(beyond) <= 0.01, np.mean(beyond)
+    shared = [
+        (o, e)
+        for o, e in found
+        if o.diagnostics.get("center_sd_noise_share", 0) >= centre_precision.MAX_SD_NOISE_SHARE
+        and math.isfinite(o.diagnostics["center_sd_mm"])
+    ]
+    assert np.mean([e > 4.0 * o.diagnostics["center_sd_mm"] for o, e in shared]) > 0.03
+
+
+def test_a_biased_answer_is_not_passed_as_the_centre():
+    """Paper A's LS sphere fit on a 10 degree cap with 1 mm noise lies tens of millimetres from
+    the centre, biased the same way every time: its checked call now says so."""
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        result = registry.get("center", "LS")(_cap(rng, 10.0, 1.0))
+        assert np.linalg.norm(result.center - CENTRE) > 10.0
+        assert "not the markers' common centre of rotation" in result.status
+        assert result.diagnostics["center_step_mm"] > 10.0
+
+
+def test_a_method_that_lies_about_its_centre_is_caught():
+    """A newcomer's method that returns a centre 20 mm away from the one it fitted, with
+    status "ok", is warned about by the checked call, one trial and many."""
+    name = "lying-centre"
+
+    @registry.register("center", name, recovery=None, invariances={})
+    def lying(markers, *, max_iterations: int = 200):
+        honest = registry.get("center", "NM")(markers)
+        return CenterResult(
+            center=honest.center + np.array([20.0, 0.0, 0.0]),
+            converged=True,
+            iterations=honest.iterations,
+            status="ok",
+            method=name,
+        )
+
+    try:
+        rng = np.random.default_rng(2)
+        trials = np.stack([_cap(rng, 30.0, 1.0) for _ in range(3)])
+        for outcome in [
+            registry.get("center", name)(trials[0]),
+            *registry.many("center", name)(trials),
+        ]:
+            assert "not the markers' common centre of rotation" in outcome.status
+            # First order in the offset: 20 mm of 60 to 90 mm radii is not small.
+            assert 10.0 < outcome.diagnostics["center_step_mm"] < 25.0
+    finally:
+        registry.unregister("center", name)
+
+
+def test_rigid_motions_marker_order_and_frame_order_leave_the_numbers():
+    """The statistics of an answer, for a given noise level (the support verdict's estimate of
+    it is tested for its own invariances)."""
+    rng = np.random.default_rng(4)
+    markers = _cap(rng, 15.0, 1.0)
+    centre = CENTRE + np.array([1.0, 2.0, -1.5])
+
+    def numbers(markers, centre):
+        return centre_statistics(markers[None].copy(), centre[None], np.array([0.4]))[0, :3]
+
+    reference = numbers(markers, centre)
+    turn = rotation_matrix(np.array([0.3, -1.1, 0.7]))
+    shift = np.array([500.0, -250.0, 1000.0])
+    moved = numbers(markers @ turn.T + shift, turn @ centre + shift)
+    reordered = numbers(markers[rng.permutation(len(markers))][:, [2, 0, 3, 1]], centre)
+    np.testing.assert_allclose(moved, reference, rtol=1e-7)
+    np.testing.assert_allclose(reordered, reference, rtol=1e-9)
+
+
+def test_repeated_frames_carry_no_new_information():
+    """Each frame given four times (a gap filled by holding a value does that) is the same
+    data: the SD must not shrink by half, nor the score test sharpen."""
+    markers = _cap(np.random.default_rng(6), 10.0, 1.0)
+    result = registry.get("center", "NM")(markers)
+    repeated = registry.get("center", "NM")(np.repeat(markers, 4, axis=0))
+    # Equal but for the support verdict's noise estimate, whose degrees of freedom count the
+    # repeated frames (a fraction of a percent here); counted four times, the SD would halve.
+    for key in ("center_sd_mm", "center_score_chi2", "center_step_mm"):
+        assert repeated.diagnostics[key] == pytest.approx(result.diagnostics[key], rel=1e-2)
+
+
+def test_a_cap_within_the_noise_is_not_determined():
+    """A 3 degree cap with 1 mm noise: the rotation is resolved (the support verdict passes
+    it) but the data hold the centre to tens of millimetres, which the status says."""
+    rng = np.random.default_rng(8)
+    seen = 0
+    for _ in range(10):
+        markers = _cap(rng, 3.0, 1.0)
+        result = registry.get("center", "NM")(markers)
+        if support.assess("center", (markers,)).warnings:
+            continue
+        seen += 1
+        numbers = result.diagnostics
+        assert (
+            numbers["center_sd_mm"] > MAX_CENTER_SD_MM
+            or numbers["center_sd_noise_share"] >= centre_precision.MAX_SD_NOISE_SHARE
+        )
+        assert "not determined by the data" in result.status
+    assert seen >= 5
+
+
+def test_a_hinge_is_warned_once():
+    """A hinge fixes no centre along its axis: along it the directions vary by noise alone, so
+    the SD does not hold (or is unbounded), and the support verdict's warning says why; the
+    precision adds no second warning about the same thing."""
+    result = registry.get("center", "NM")(_cap(np.random.default_rng(9), 40.0, 0.5, hinge=True))
+    assert result.diagnostics["center_sd_noise_share"] >= 1.0
+    assert result.status.count("warning:") == 1
+    assert "rotation about a single axis" in result.status
+
+
+def test_unassessed_and_failed_answers_say_why_they_are_not_checked():
+    markers = _cap(np.random.default_rng(10), 30.0, 0.5)[:, :2]
+    result = registry.get("center", "NM")(markers)
+    assert "did not assess" in result.diagnostics["center_precision_not_checked"]
+    assert "center_sd_mm" not in result.diagnostics
+    full = _cap(np.random.default_rng(1), 30.0, 0.5)
+    failed = CenterResult(
+        center=np.full(3, np.nan), converged=False, iterations=0, status="failed", method="NM"
+    )
+    (annotated,) = centre_precision.annotate_many(
+        [failed], full[None], [support.assess("center", (full,))]
+    )
+    assert annotated.diagnostics["center_precision_not_checked"] == "the answer is not finite"
+
+
+@pytest.mark.parametrize("method", ["LS", "NM", "BC", "IS", "MA", "SCoRE"])
+def test_every_centre_method_states_its_precision(method):
+    result = registry.get("center", method)(_cap(np.random.default_rng(12), 30.0, 0.5))
+    assert set(_KEYS) <= result.diagnostics.keys()
+    assert result.diagnostics["center_sd_mm"] < 1.0
+
+
+def test_a_marker_at_the_centre_carries_no_direction():
+    """A virtual marker at the joint centre (common in a lab's C3D files) moves by noise alone:
+    its direction from the centre is noise, and it neither spoils nor sharpens the numbers."""
+    rng = np.random.default_rng(13)
+    markers = _cap(rng, 20.0, 0.5)
+    at_centre = CENTRE + rng.normal(scale=0.5, size=(len(markers), 1, 3))
+    with_virtual = np.concatenate([markers, at_centre], axis=1)
+    variance = np.array([0.25])
+    plain = centre_statistics(markers[None].copy(), CENTRE[None], variance)[0]
+    extra = centre_statistics(with_virtual[None].copy(), CENTRE[None], variance)[0]
+    np.testing.assert_allclose(extra[:3], plain[:3], rtol=1e-12)
+    exact = np.concatenate([markers, np.broadcast_to(CENTRE, (len(markers), 1, 3))], axis=1)
+    np.testing.assert_allclose(
+        centre_statistics(exact[None].copy(), CENTRE[None], variance)[0, :3], plain[:3], rtol=1e-12
+    )
