@@ -565,3 +565,34 @@ def test_an_external_rule_reading_through_a_symbolic_link_stops_the_run(tmp_path
         "whatever the symbolic link results/blind/truth leads to"
     )
     _refused(tmp_path, "", linked, message)
+
+
+# A rule file's code runs in the workflow's namespace: these try to pass copy_truth (which
+# writes under results/blind/) for a rule of the benchmark's, by adding its name to every set
+# of rule names in reach, by rebinding each to one that holds it, and by rebinding the
+# function that lists the rules.
+_PASS_FOR_THE_BENCHMARKS = {
+    "add": """
+for _value in list(globals().values()):
+    if isinstance(_value, set) and "simulate_cmc" in _value:
+        _value.add("copy_truth")
+""",
+    "rebind": """
+for _key, _value in list(globals().items()):
+    if isinstance(_value, (set, frozenset)) and "simulate_cmc" in _value:
+        globals()[_key] = _value | {"copy_truth"}
+rule_names = lambda: set()
+""",
+}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("how", sorted(_PASS_FOR_THE_BENCHMARKS))
+def test_a_rule_file_cannot_pass_its_rule_for_the_benchmarks(tmp_path, how):
+    copy_workflow(tmp_path)
+    prepared = '"results/blind/prep/{study}/{condition}.parquet",'
+    message = (
+        "rule copy_truth writes results/blind/prep/{study}/{condition}.parquet, under "
+        "results/blind/"
+    )
+    _refused(tmp_path, _COPY + _PASS_FOR_THE_BENCHMARKS[how], prepared, message)

@@ -50,10 +50,17 @@ EXTERNAL_ESTIMATORS = sorted(
 )
 
 
-def rule_names():
-    """The names of the rules defined so far: those before the user's rule files are
-    included are the package's own, whatever folder a file of the user's lies in."""
-    return {r.name for r in workflow.rules}
+def include_user_rules(folder):
+    """Include every rule file of ``folder``, the user's, and return the names of the rules
+    they define (those of a file they include too, whatever its folder). The names of the
+    package's rules, defined before, are held in this call alone: a rule file's code runs in
+    the workflow's namespace, where it could change or rebind a set of names kept there.
+    """
+    load, rules = workflow.include, workflow.rules
+    package = frozenset(r.name for r in rules)
+    for path in sorted(Path(folder).glob("*.smk")):
+        load(path)
+    return frozenset(r.name for r in rules) - package
 
 
 def check_external_rules(user_rules):
