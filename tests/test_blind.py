@@ -696,3 +696,22 @@ def test_an_external_rule_reaching_the_truth_by_its_real_path_stops_the_run(tmp_
         f"which holds {held}"
     )
     _refused(tmp_path, "", estimator_input, message)
+
+
+# A rule of the user's whose output folder is the working directory: it holds results/ and so
+# every file of the benchmark's, which Snakemake would clear before running it.
+_EVERYTHING = """
+
+rule everything:
+    output:
+        directory("."),
+    shell:
+        "true"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_the_folder_that_holds_results_stops_the_run(tmp_path):
+    copy_workflow(tmp_path)
+    message = "rule everything writes {inside}, under results/blind/"
+    _refused(tmp_path, _EVERYTHING, _BLIND_INPUT, message)

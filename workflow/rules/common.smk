@@ -246,7 +246,8 @@ def _written(producer):
         path = _judged(str(output))
         found.append(path)
         if output.is_directory:
-            found.append(f"{path}/{{inside}}")
+            # Joined as a path: the working directory (.) holds every path, none spelt with ./
+            found.append(Path(path, "{inside}").as_posix())
     return found
 
 
