@@ -65,17 +65,12 @@ include: "workflow/rules/estimate.smk"
 include: "workflow/rules/interchange.smk"
 
 
-# Estimators outside the package: each file here holds the rule of one external estimator. Every
-# one defined while these are read is the user's, whatever folder a file they include is in.
-_PACKAGE_RULES = rule_names()
-for _rules in sorted(
-    Path(workflow.basedir, "workflow", "rules", "estimators").glob("*.smk")
-):
-
-    include: _rules
-
-
-USER_RULES = rule_names() - _PACKAGE_RULES
+# Estimators outside the package: each file of this folder holds the rule of one external
+# estimator. Every rule defined while these are read is the user's, whatever folder a file they
+# include is in.
+USER_RULES = include_user_rules(
+    Path(workflow.basedir, "workflow", "rules", "estimators")
+)
 
 
 include: "workflow/rules/render.smk"

@@ -565,3 +565,153 @@ def test_an_external_rule_reading_through_a_symbolic_link_stops_the_run(tmp_path
         "whatever the symbolic link results/blind/truth leads to"
     )
     _refused(tmp_path, "", linked, message)
+
+
+# A rule file's code runs in the workflow's namespace: these try to pass copy_truth (which
+# writes under results/blind/) for a rule of the benchmark's, by adding its name to every set
+# of rule names in reach, by rebinding each to one that holds it, and by rebinding the
+# function that lists the rules.
+_PASS_FOR_THE_BENCHMARKS = {
+    "add": """
+for _value in list(globals().values()):
+    if isinstance(_value, set) and "simulate_cmc" in _value:
+        _value.add("copy_truth")
+""",
+    "rebind": """
+for _key, _value in list(globals().items()):
+    if isinstance(_value, (set, frozenset)) and "simulate_cmc" in _value:
+        globals()[_key] = _value | {"copy_truth"}
+rule_names = lambda: set()
+""",
+}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("how", sorted(_PASS_FOR_THE_BENCHMARKS))
+def test_a_rule_file_cannot_pass_its_rule_for_the_benchmarks(tmp_path, how):
+    copy_workflow(tmp_path)
+    prepared = '"results/blind/prep/{study}/{condition}.parquet",'
+    message = (
+        "rule copy_truth writes results/blind/prep/{study}/{condition}.parquet, under "
+        "results/blind/"
+    )
+    _refused(tmp_path, _COPY + _PASS_FOR_THE_BENCHMARKS[how], prepared, message)
+
+
+# A rule of the user's claiming a file of the benchmark's (the collected results of a study)
+# through a wildcard that may match nothing.
+_EMPTY_SUFFIX = """
+
+ruleorder: collect > decoy
+
+
+rule decoy:
+    input:
+        "results/blind/{study}/marker_set-M__rom_deg-15__noise_mm-1.0.parquet",
+    output:
+        "results/collected/{study}{suffix,.*}.parquet",
+    shell:
+        "cp {input} {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_a_path_of_the_benchmarks_through_an_empty_wildcard_stops_the_run(
+    tmp_path,
+):
+    copy_workflow(tmp_path)
+    message = (
+        "rule decoy writes results/collected/{study}{suffix}.parquet, which rule collect of "
+        "the benchmark writes"
+    )
+    _refused(tmp_path, _EMPTY_SUFFIX, _BLIND_INPUT, message)
+
+
+# A rule of the user's writing under results/blind/ by its output, log or benchmark file,
+# however the path is spelt: the process's own link to the working directory, a link at the
+# top of the repository (``shortcut``, to results/), a folder of its own and back.
+_SNEAK = """
+
+rule sneak:
+    input:
+        "results/blind/{{study}}/{{condition}}.parquet",
+    output:
+        "{output}",
+    log:
+        "{log}",
+    benchmark:
+        "{benchmark}"
+    shell:
+        "cp {{input}} {{output}}"
+"""
+_MINE = "results/mine/{study}/{condition}"
+_SNEAKS = {
+    "output-proc": "/proc/self/cwd/results/blind/x/{study}/{condition}",
+    "log-proc": "/proc/self/cwd/results/blind/x/{study}/{condition}",
+    "benchmark": "results/blind/x/{study}/{condition}",
+    "benchmark-link": "shortcut/blind/x/{study}/{condition}",
+    "log-dot-dot": "results/mine/../blind/x/{study}/{condition}",
+}
+_ENDINGS = {"output": ".parquet", "log": ".log", "benchmark": ".tsv"}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("sneak", sorted(_SNEAKS))
+def test_a_user_rule_writing_under_the_blind_copies_by_any_path_stops_the_run(tmp_path, sneak):
+    copy_workflow(tmp_path)
+    (tmp_path / "shortcut").symlink_to("results")
+    where = sneak.split("-")[0]
+    paths = {kind: _MINE + ending for kind, ending in _ENDINGS.items()}
+    paths[where] = _SNEAKS[sneak] + _ENDINGS[where]
+    message = (
+        f"rule sneak writes results/blind/x/{{study}}/{{condition}}{_ENDINGS[where]}, "
+        "under results/blind/"
+    )
+    _refused(tmp_path, _SNEAK.format(**paths), _BLIND_INPUT, message)
+
+
+# An external rule's input reaching the truth by its real path: the process's own link to the
+# working directory, a link at the top of the repository, or a folder holding results/ whole.
+_PROC = "/proc/self/cwd/" + _DATASET
+_SHORTCUT = _DATASET.replace("results/", "shortcut/", 1)
+_REACHES = {
+    "proc": ('"/proc/self/cwd/results/datasets/{study}/{condition}.parquet",', _PROC),
+    "link": ('"shortcut/datasets/{study}/{condition}.parquet",', _SHORTCUT),
+    "dot": ('".",', "."),
+    "root": ("str(Path(workflow.basedir)),", "."),
+    "results": ('"results",', "results"),
+}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("reach", sorted(_REACHES))
+def test_an_external_rule_reaching_the_truth_by_its_real_path_stops_the_run(tmp_path, reach):
+    copy_workflow(tmp_path)
+    (tmp_path / "shortcut").symlink_to("results")
+    estimator_input, spelt = _REACHES[reach]
+    real = "" if spelt in (".", "results") else f" (its real path {_DATASET})"
+    held = "the truth" if real else "results/, and so the truth"
+    message = (
+        f"rule estimate_centroid (external estimator 'centroid') reads {spelt}{real}, "
+        f"which holds {held}"
+    )
+    _refused(tmp_path, "", estimator_input, message)
+
+
+# A rule of the user's whose output folder is the working directory: it holds results/ and so
+# every file of the benchmark's, which Snakemake would clear before running it.
+_EVERYTHING = """
+
+rule everything:
+    output:
+        directory("."),
+    shell:
+        "true"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_the_folder_that_holds_results_stops_the_run(tmp_path):
+    copy_workflow(tmp_path)
+    message = "rule everything writes {inside}, under results/blind/"
+    _refused(tmp_path, _EVERYTHING, _BLIND_INPUT, message)

@@ -50,10 +50,17 @@ EXTERNAL_ESTIMATORS = sorted(
 )
 
 
-def rule_names():
-    """The names of the rules defined so far: those before the user's rule files are
-    included are the package's own, whatever folder a file of the user's lies in."""
-    return {r.name for r in workflow.rules}
+def include_user_rules(folder):
+    """Include every rule file of ``folder``, the user's, and return the names of the rules
+    they define (those of a file they include too, whatever its folder). The names of the
+    package's rules, defined before, are held in this call alone: a rule file's code runs in
+    the workflow's namespace, where it could change or rebind a set of names kept there.
+    """
+    load, rules = workflow.include, workflow.rules
+    package = frozenset(r.name for r in rules)
+    for path in sorted(Path(folder).glob("*.smk")):
+        load(path)
+    return frozenset(r.name for r in rules) - package
 
 
 def check_external_rules(user_rules):
@@ -110,14 +117,14 @@ _UNSEEN_DEFAULT = (
 
 
 def _unreadable(path, users):
-    """Why the rules of an external estimator may not read ``path`` (as matched), or None; a file
-    under results/ that is neither a blind copy nor written by one of ``users``, the rules of
-    the user's (which are checked in turn; none can write a file of the benchmark's)."""
+    """Why the rules of an external estimator may not read ``path`` (as judged, see _judged),
+    or None; a folder holding results/, or a file under results/ that is neither a blind copy
+    nor written by one of ``users``, the rules of the user's (which are checked in turn; none
+    can write a file of the benchmark's)."""
+    if _holds_results(path):
+        return "results/, and so the truth and every file the benchmark made from it"
     if not path.startswith("results/"):
         return None
-    link = _linked(path)
-    if link is not None:
-        return f"whatever the symbolic link {link} leads to"
     if path.startswith(READABLE):
         return None
     if any(other.is_producer(path) for other in users):
@@ -128,43 +135,67 @@ def _unreadable(path, users):
     )
 
 
+def _holds_results(path):
+    """Whether ``path`` is results/ or a folder holding it (``.``, the repository)."""
+    real = Path(os.path.realpath(path))
+    folders = (os.path.abspath("results"), os.path.realpath("results"))
+    return any(Path(folder).is_relative_to(real) for folder in folders)
+
+
 def _linked(path):
-    """The first symbolic link among the existing folders and file of ``path`` below results/
-    (results/ itself may be a link to a larger disk), or None: a link there can make a blind
-    path open the truth."""
+    """What ``path`` (as matched) holds by way of the first symbolic link among its existing
+    folders and file below results/ (results/ itself may be a link to a larger disk), or None:
+    a link there can make a blind path open the truth, or lead out of results/."""
+    if not path.startswith("results/"):
+        return None
     parts = Path(path).parts
     for end in range(2, len(parts) + 1):
         here = Path(*parts[:end])
         if here.is_symlink():
-            return here.as_posix()
+            return f"whatever the symbolic link {here.as_posix()} leads to"
     return None
+
+
+def _refusal(path, users):
+    """``(shown, held)``: ``path`` (as matched) as a refusal names it, with its real path where
+    that differs, and what it holds that the rules of an external estimator may not read (see
+    _linked, _unreadable); or None when they may read it."""
+    link = _linked(path)
+    if link is not None:
+        return path, link
+    real = _judged(path)
+    held = _unreadable(real, users)
+    if held is None:
+        return None
+    return (path if real == path else f"{path} (its real path {real})"), held
 
 
 def _check_blind(producer, name, files, everyone, via=()):
     """Stop when ``producer``, the rule of external estimator ``name`` or a rule of its own
     upstream (``via``: the rules it feeds, down to the estimator's), reads a file under
     results/ other than a blind copy (:data:`READABLE`) that no rule of the user's
-    (``everyone``) writes, or any file there by way of a symbolic link, however its path is
-    spelt, in a job writing one of ``files``: its inputs are read as that job's, input
-    functions called with the job's wildcards. A rule of the user's upstream is followed in
-    turn, so that none can hand the estimator what it read from the truth."""
+    (``everyone``) writes, a folder holding results/, or any file there by way of a symbolic
+    link below results/, in a job writing one of ``files``: each input is judged by its real
+    path, however it is spelt, and read as that job's, input functions called with the job's
+    wildcards. A rule of the user's upstream is followed in turn, so that none can hand the
+    estimator what it read from the truth."""
     users = [r for r in everyone if r is not producer and r.name not in via]
     for file in filter(producer.is_producer, files):
-        inputs = [
+        spelt = [
             _as_matched(f)
             for f in producer.expand_input(producer.get_wildcards(file))[0]
         ]
-        reasons = [(f, _unreadable(f, users)) for f in inputs]
-        secret = [(f, held) for f, held in reasons if held is not None]
-        if secret:
+        refused = [r for r in (_refusal(f, users) for f in spelt) if r is not None]
+        if refused:
             chain = "".join(f", which feeds rule {rule}" for rule in via)
-            file, held = secret[0]
+            file, held = refused[0]
             raise ValueError(
                 f"rule {producer.name}{chain} (external estimator {name!r}) reads {file}, "
                 f"which holds {held}: an external estimator reads "
                 "the blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
+        inputs = [_judged(f) for f in spelt]
         for upstream in users:
             made = [f for f in inputs if upstream.is_producer(f)]
             if made:
@@ -206,14 +237,17 @@ def _check_user_outputs(users, package):
 
 
 def _written(producer):
-    """The files ``producer`` writes, logs included, as matched patterns (their wildcards'
-    constraints inline); an output folder stands for everything inside it too."""
-    found = [_as_matched(str(f)) for f in producer.log]
+    """The files ``producer`` writes, logs and benchmark file included, as patterns judged by
+    their real paths (see _judged; their wildcards' constraints inline); an output folder
+    stands for everything inside it too."""
+    extra = [producer.log, [producer.benchmark] if producer.benchmark else []]
+    found = [_judged(str(f)) for f in itertools.chain(*extra)]
     for output in producer.output:
-        path = _as_matched(str(output))
+        path = _judged(str(output))
         found.append(path)
         if output.is_directory:
-            found.append(f"{path}/{{inside}}")
+            # Joined as a path: the working directory (.) holds every path, none spelt with ./
+            found.append(Path(path, "{inside}").as_posix())
     return found
 
 
@@ -229,11 +263,14 @@ _WILDCARD = None
 @functools.cache
 def _patterns_of(path):
     """``path`` as tuples of its characters, each wildcard as _WILDCARD or, where its
-    constraint lists the names it takes (as the package's do), each of those in turn."""
+    constraint lists the names it takes (as the package's do), each of those in turn; one
+    whose constraint matches the empty text (``{x,.*}``) also as nothing."""
     patterns = [()]
     for literal, constraint in _wildcard_pieces(path):
         names = _listed(constraint)
         ends = [(_WILDCARD,)] if names is None else [tuple(n) for n in names]
+        if names is None and constraint and re.fullmatch(constraint, ""):
+            ends.append(())
         if constraint is False:
             ends = [()]
         patterns = [(*p, *literal, *end) for p in patterns for end in ends]
@@ -311,6 +348,23 @@ def _as_matched(path):
     if os.path.isabs(path) and Path(path).is_relative_to(Path.cwd()):
         path = os.path.relpath(path)
     return Path(path).as_posix()
+
+
+def _judged(path):
+    """``path`` as the checks judge it: by its real path (links followed, then ``..``, so that
+    /proc/self/cwd/results/ or a link to it is results/), as under results/ when it lies in
+    results/'s real folder (results/ may be a link to a larger disk), else relative to the
+    working directory when it lies in it, else absolute; a pattern's wildcards are kept.
+    """
+    real = Path(os.path.realpath(path))
+    folders = (
+        (Path(os.path.realpath("results")), Path("results")),
+        (Path.cwd(), Path()),
+    )
+    for folder, named in folders:
+        if real.is_relative_to(folder):
+            return (named / real.relative_to(folder)).as_posix()
+    return real.as_posix()
 
 
 def _alternatives(names):
