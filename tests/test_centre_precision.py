@@ -15,6 +15,7 @@ from jointbench.estimators import centre_precision, registry, support
 from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM, centre_statistics
 from jointbench.estimators.results import CenterResult
 from jointbench.geometry import rotation_matrix
+from jointbench.simulate import cmc
 
 _KEYS = ("center_sd_mm", "center_score_chi2", "center_score_p_value", "center_step_mm")
 
@@ -212,6 +213,19 @@ def test_unassessed_and_failed_answers_say_why_they_are_not_checked():
         [failed], full[None], [support.assess("center", (full,))]
     )
     assert annotated.diagnostics["center_precision_not_checked"] == "the answer is not finite"
+    assert annotated.status == "failed"
+    claimed = CenterResult(
+        center=np.full(3, np.nan), converged=True, iterations=3, status="ok", method="NM"
+    )
+    (annotated,) = centre_precision.annotate_many(
+        [claimed], full[None], [support.assess("center", (full,))]
+    )
+    assert annotated.status == "warning: the answer is not finite: no centre was found"
+    column = CenterResult(
+        center=np.zeros((3, 1)), converged=True, iterations=1, status="ok", method="column"
+    )
+    with pytest.raises(ValueError, match=r"method column: its centre has shape \(3, 1\)"):
+        centre_precision.annotate_many([column], full[None], [support.assess("center", (full,))])
 
 
 @pytest.mark.parametrize("method", ["LS", "NM", "BC", "IS", "MA", "SCoRE"])
@@ -233,6 +247,38 @@ def test_a_marker_at_the_centre_carries_no_direction():
     extra = centre_statistics(with_virtual[None].copy(), CENTRE[None], variance)[0]
     np.testing.assert_allclose(extra[:3], plain[:3], rtol=1e-12)
     exact = np.concatenate([markers, np.broadcast_to(CENTRE, (len(markers), 1, 3))], axis=1)
+    # An answer 2 mm from it (a biased method's): the marker's direction is then constant.
+    off = (CENTRE + np.array([2.0, 0.0, 0.0]))[None]
+    np.testing.assert_allclose(
+        centre_statistics(exact[None].copy(), off, variance)[0, :3],
+        centre_statistics(markers[None].copy(), off, variance)[0, :3],
+        rtol=1e-12,
+    )
     np.testing.assert_allclose(
         centre_statistics(exact[None].copy(), CENTRE[None], variance)[0, :3], plain[:3], rtol=1e-12
     )
+
+
+def test_an_answer_among_the_markers_is_caught_at_its_distance():
+    """The markers' centroid, 18 mm from the centre of paper A's M set on a 3 degree cap with
+    0.1 mm noise: the first-order step from it is 4 mm, under the 5 mm a method's bias is
+    allowed, but Gauss–Newton iterations from it end at the spheres' centre 18-20 mm away, and
+    the spheres about the centroid leave residuals many times the noise."""
+    protocol = cmc.CmcProtocol(n_frames=30)
+    condition = {"marker_set": "M", "rom_deg": 3, "noise_mm": 0.1}
+    for seed in range(3):
+        trial = cmc.simulate(condition, protocol, [np.random.default_rng(seed)])
+        markers = trial.segments["moving"][0]
+        error = np.linalg.norm(markers.reshape(-1, 3).mean(axis=0) - trial.truth["center"])
+        verdict = support.assess("center", (markers,))
+        centroid = CenterResult(
+            center=markers.reshape(-1, 3).mean(axis=0),
+            converged=True,
+            iterations=0,
+            status="ok",
+            method="centroid",
+        )
+        (result,) = centre_precision.annotate_many([centroid], markers[None], [verdict])
+        assert "not the markers' common centre of rotation" in result.status
+        assert result.diagnostics["center_step_mm"] == pytest.approx(error, rel=0.25)
+        assert result.diagnostics["center_fit_p_value"] < 1e-3

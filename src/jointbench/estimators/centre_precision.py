@@ -31,17 +31,34 @@ profiled out):
   :data:`MAX_SD_NOISE_SHARE` the SD is reported but said not to hold.
 * The score ``g = sum_kp e_kp (u_kp - mean_k u_kp)`` is ``-F_s delta`` to first order for an
   answer ``delta`` from the spheres' common centre, and has covariance ``s^2 F`` at that
-  centre: ``g' F^-1 g / s^2`` is chi-square with 3 degrees of freedom there (Rao's score test),
-  and ``|F_s^-1 g|`` (``center_step_mm``) estimates how far the answer is from it.
+  centre: ``g' F^-1 g / s^2`` is chi-square with 3 degrees of freedom there (Rao's score test,
+  ``center_score_chi2``). ``|F_s^-1 g|`` estimates how far the answer is from that centre, to
+  first order only: from an answer among the markers (their centroid, say) it can read a few
+  millimetres where the centre is twenty away. Where the test rejects, ``center_step_mm`` is
+  instead the distance to where Gauss–Newton iterations from the answer end, if the spheres
+  fit better there.
+* Lack of fit: the radial residuals' sum of squares over ``s^2``, on ``P (N - 1)`` degrees of
+  freedom, is what the noise alone leaves about the spheres' centre; its ratio to them
+  (``center_fit_ratio``) is tested one-sided against the ratio's spread, which counts the
+  noise's kurtosis (paper A's isotropic errors have heavy tails) and the noise estimate's own
+  uncertainty (``center_fit_p_value``). Unlike the score it is not local: an answer far from
+  the centre leaves residuals the noise cannot explain wherever it lies. The excess over the
+  noise is what an answer at least ``center_offset_mm`` from the centre leaves (the offset
+  along the best determined direction that explains it).
+
+A marker whose directions from the answer do not spread significantly beyond their noise (a
+virtual marker at the joint, or one within the noise of the answer) carries nothing on it and
+is left out of all of these.
 
 A warning is added when the data cannot support the answer this way: the SD above
 :data:`MAX_CENTER_SD_MM`, or not a statement of precision (both only where the support
-verdict has not already refused the data), or the score test rejecting at
-:data:`jointbench.estimators.support.ROTATION_ALPHA` with the common centre more than
-:data:`MIN_REJECTED_STEP_MM` away (a method's own documented bias of a few millimetres is a
-property of the method, not a failure to find the centre). The noise ``s^2`` is the support
-verdict's rigid-body residual, which does not depend on the answer.
-Frames repeated exactly carry no new noise and are counted once
+verdict has not already refused the data), or the score test or the lack of fit rejecting at
+:data:`jointbench.estimators.support.ROTATION_ALPHA` with the answer more than
+:data:`MIN_REJECTED_STEP_MM` from the common centre (a method's own documented bias of a few
+millimetres is a property of the method, not a failure to find the centre). The noise ``s^2``
+is the support verdict's rigid-body residual, which does not depend on the answer; it is one
+level for every marker, so markers of unequal noise make the SD an understatement. Frames
+repeated exactly carry no new noise and are counted once
 (:func:`jointbench.estimators.precision.distinct_frames`). ``converged`` and the answer are
 left as the method set them; the simulated studies call the methods without this check.
 """
@@ -49,6 +66,7 @@ left as the method set them; the simulated studies call the methods without this
 from __future__ import annotations
 
 import math
+import statistics
 
 import numpy as np
 
@@ -83,115 +101,211 @@ MAX_SD_NOISE_SHARE = 0.2
 #: of bias paper A documents for its methods on small caps.
 MIN_REJECTED_STEP_MM = 5.0
 
-# A marker within this many noise SDs of the answer (a virtual marker at the joint, say) has a
-# direction from it that is noise, and is left out.
-_NEAR_SDS = 3.0
-
 # Columns of centre_statistics' rows.
-_SD, _CHI2, _STEP, _REPEATS, _SHARE = 0, 1, 2, 3, 4
+_SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
+_TOWARDS = slice(8, 11)  # the Gauss–Newton step towards the spheres' centre [mm]
+
+# The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
+# exceed their noise by, in standard errors, to count, and the lack of fit's rejection level.
+_Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
+
+# Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
+_REFINE_ITERATIONS = 20
 
 
 @kernel
 def centre_statistics(
     markers: np.ndarray, centres: np.ndarray, variances: np.ndarray
 ) -> np.ndarray:
-    """Per trial ``(SD [mm], score chi-square, step [mm], repeats)`` ``(T, 4)`` of the answers
+    """Per trial ``(SD [mm], score chi-square, step [mm], repeats, noise share, lack-of-fit
+    ratio, its z, offset [mm], Gauss–Newton step (3,) [mm])`` ``(T, 11)`` of the answers
     ``centres`` ``(T, 3)`` [mm] to the markers ``(T, N, n, 3)`` [mm], with noise
-    ``variances`` ``(T,)`` [mm^2] per coordinate (module docstring); ``inf`` SD and step where
-    the corrected information is not positive definite. ``repeats`` is 1 where two frames of
-    the trial may be equal (their numbers then count that frame twice), else 0. One pass over
-    the samples per marker: ``F_p = sum u u' - N m m'`` and ``g_p = sum d u - N r m`` with
-    ``m`` the mean direction and ``r`` the mean distance. A compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    out = np.empty((n_trials, 5))
-    noisy = np.empty((3, 3))
-    info = np.empty((3, 3))
-    signal = np.empty((3, 3))
-    score = np.empty(3)
-    sum_u, sum_du, sum_uu = np.empty(3), np.empty(3), np.empty((3, 3))
-    values, vectors, work = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
-    keys = np.empty(n_frames)
+    ``variances`` ``(T,)`` [mm^2] per coordinate (module docstring). Where the score test
+    rejects, the step is the distance to where Gauss–Newton iterations from the answer end, at
+    a centre about which the spheres fit better (:func:`_refine`); else the first-order step.
+    A compiled kernel."""
+    n_trials = markers.shape[0]
+    out = np.empty((n_trials, 11))
     for t in range(n_trials):
-        info[:] = 0.0
-        signal[:] = 0.0
-        noisy[:] = 0.0
-        score[:] = 0.0
-        keys[:] = 0.0
-        s2 = variances[t]
-        for p in range(n_markers):
-            sum_u[:] = 0.0
-            sum_du[:] = 0.0
-            sum_uu[:] = 0.0
-            sum_d = 0.0
-            wx, wy, wz = (
-                math.sqrt(3.0 * p + 2.0),
-                math.sqrt(3.0 * p + 3.0),
-                math.sqrt(3.0 * p + 4.0),
-            )
-            for k in range(n_frames):
-                x = markers[t, k, p, 0] - centres[t, 0]
-                y = markers[t, k, p, 1] - centres[t, 1]
-                z = markers[t, k, p, 2] - centres[t, 2]
-                # Equal frames have equal keys (weights that no two coordinates share).
-                keys[k] += wx * x + wy * y + wz * z
-                d = math.sqrt(x * x + y * y + z * z)
-                inverse = 1.0 / d if d > 0.0 else 0.0
-                u0, u1, u2 = x * inverse, y * inverse, z * inverse
-                sum_d += d
-                sum_u[0] += u0
-                sum_u[1] += u1
-                sum_u[2] += u2
-                sum_du[0] += x
-                sum_du[1] += y
-                sum_du[2] += z
-                sum_uu[0, 0] += u0 * u0
-                sum_uu[0, 1] += u0 * u1
-                sum_uu[0, 2] += u0 * u2
-                sum_uu[1, 1] += u1 * u1
-                sum_uu[1, 2] += u1 * u2
-                sum_uu[2, 2] += u2 * u2
-            radius = sum_d / n_frames
-            if not radius * radius > _NEAR_SDS**2 * s2:
-                continue  # its direction from the answer is noise: no information on it
-            norm2 = 0.0
-            for i in range(3):
-                score[i] += sum_du[i] - radius * sum_u[i]
-                norm2 += sum_u[i] ** 2
-            # The tangential noise of the directions, about the marker's mean direction.
-            noise = (n_frames - 1) * s2 / radius**2
-            for i in range(3):
-                for j in range(i, 3):
-                    moment = sum_uu[i, j] - sum_u[i] * sum_u[j] / n_frames
-                    tangential = (1.0 if i == j else 0.0) - sum_u[i] * sum_u[j] / norm2
-                    info[i, j] += moment
-                    signal[i, j] += moment - noise * tangential
-                    noisy[i, j] += noise * tangential
-        keys.sort()
-        out[t, _REPEATS] = 0.0
-        for k in range(n_frames - 1):
-            if not keys[k + 1] != keys[k]:
-                out[t, _REPEATS] = 1.0
-        out[t, _CHI2] = _quadratic_inverse(info, score, values, vectors, work) / s2
-        symmetric_eigen_into(signal, values, vectors, work)
-        if not values[0] > 1e-12 * abs(values[2]):
-            out[t, _SD] = np.inf
-            out[t, _STEP] = np.inf
-            out[t, _SHARE] = np.inf
-            continue
-        share = 0.0
-        for i in range(3):
-            for j in range(3):
-                share += vectors[i, 0] * _upper(noisy, i, j) * vectors[j, 0]
-        out[t, _SHARE] = share / values[0]
-        out[t, _SD] = math.sqrt(s2 / values[0])
-        step2 = 0.0
-        for i in range(3):
-            along = 0.0
-            for j in range(3):
-                along += vectors[j, i] * score[j]
-            step2 += (along / values[i]) ** 2
-        out[t, _STEP] = math.sqrt(step2)
+        _row_at(markers[t], centres[t], variances[t], out[t])
+        if out[t, _CHI2] > _CHI2_ALPHA:
+            _refine(markers[t], centres[t], variances[t], out[t])
     return out
+
+
+@kernel
+def _refine(markers: np.ndarray, answer: np.ndarray, s2: float, row: np.ndarray) -> None:
+    """``row``'s step made the distance from ``answer`` ``(3,)`` [mm] to where Gauss–Newton
+    iterations on the spheres' radial residuals end (at most :data:`_REFINE_ITERATIONS`),
+    where the spheres fit better there: the first-order step is exact only near the centre,
+    and an answer far from it (among the markers, say) can have a small one. A compiled
+    kernel."""
+    centre = answer + row[_TOWARDS]
+    there = np.empty_like(row)
+    for _ in range(_REFINE_ITERATIONS):
+        _row_at(markers, centre, s2, there)
+        move = there[_TOWARDS]
+        if not np.isfinite(move).all():
+            return
+        centre += move
+        if math.sqrt((move**2).sum()) < 1e-9 * (1.0 + math.sqrt((centre**2).sum())):
+            break
+    _row_at(markers, centre, s2, there)
+    if there[_FIT_RATIO] < row[_FIT_RATIO]:
+        row[_STEP] = math.sqrt(((centre - answer) ** 2).sum())
+
+
+@kernel
+def _row_at(markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray) -> None:
+    """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
+    the markers ``(N, n, 3)`` [mm] with noise ``s2`` [mm^2] per coordinate, into ``row``
+    ``(11,)``; ``inf`` SD, step and share where the corrected information is not positive
+    definite. ``repeats`` is 1 where two frames may be equal (their numbers then count that
+    frame twice), else 0. A marker whose directions from the answer do not spread beyond their
+    noise (one at the answer, a virtual marker at the joint, say) carries nothing on it and is
+    left out. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
+    # of freedom each: beyond this factor of that spread the marker has a signal.
+    beyond_noise = 1.0 + _Z_ALPHA / math.sqrt(max(n_frames - 1, 1))
+    noisy, info, signal = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
+    score, sum_u, sum_du, sum_uu = np.zeros(3), np.empty(3), np.empty(3), np.empty((3, 3))
+    values, vectors, work = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
+    keys, distances = np.zeros(n_frames), np.empty(n_frames)
+    squares, fourths, kept = 0.0, 0.0, 0
+    for p in range(n_markers):
+        radius = _marker_sums(markers[:, p], centre, p, keys, distances, sum_u, sum_du, sum_uu)
+        noise = (n_frames - 1) * s2 / radius**2 if radius > 0.0 else np.inf
+        spread = sum_uu[0, 0] + sum_uu[1, 1] + sum_uu[2, 2]
+        norm2 = sum_u[0] ** 2 + sum_u[1] ** 2 + sum_u[2] ** 2
+        if not spread - norm2 / n_frames > 2.0 * noise * beyond_noise:
+            continue
+        kept += 1
+        for k in range(n_frames):
+            e2 = (distances[k] - radius) ** 2
+            squares += e2
+            fourths += e2 * e2
+        for i in range(3):
+            score[i] += sum_du[i] - radius * sum_u[i]
+        for i in range(3):
+            for j in range(i, 3):
+                moment = sum_uu[i, j] - sum_u[i] * sum_u[j] / n_frames
+                # The tangential noise of the directions, about the mean direction.
+                tangential = (1.0 if i == j else 0.0) - sum_u[i] * sum_u[j] / norm2
+                info[i, j] += moment
+                signal[i, j] += moment - noise * tangential
+                noisy[i, j] += noise * tangential
+    row[_REPEATS] = _repeats(keys)
+    row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
+    _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
+    symmetric_eigen_into(signal, values, vectors, work)
+    largest = values[2] if values[2] > 0.0 else np.nan
+    row[_OFFSET] = math.sqrt(max(squares - kept * (n_frames - 1) * s2, 0.0) / largest)
+    if not values[0] > 1e-12 * abs(values[2]):
+        row[_SD] = np.inf
+        row[_STEP] = np.inf
+        row[_SHARE] = np.inf
+        return
+    share = 0.0
+    for i in range(3):
+        for j in range(3):
+            share += vectors[i, 0] * _upper(noisy, i, j) * vectors[j, 0]
+    row[_SHARE] = share / values[0]
+    row[_SD] = math.sqrt(s2 / values[0])
+    step2 = 0.0
+    for i in range(3):
+        along = 0.0
+        for j in range(3):
+            along += vectors[j, i] * score[j]
+        step2 += (along / values[i]) ** 2
+    row[_STEP] = math.sqrt(step2)
+
+
+@kernel
+def _marker_sums(
+    track: np.ndarray,
+    centre: np.ndarray,
+    p: int,
+    keys: np.ndarray,
+    distances: np.ndarray,
+    sum_u: np.ndarray,
+    sum_du: np.ndarray,
+    sum_uu: np.ndarray,
+) -> float:
+    """One marker's sums over its ``track`` ``(N, 3)`` [mm] about ``centre`` ``(3,)``: its
+    ``distances`` ``(N,)``, the sums of its unit directions ``u``, of ``d u`` and of ``u u'``
+    (upper triangle), and its share of each frame's key (``p`` its index); returns its mean
+    distance ``r``. ``F_p = sum u u' - N m m'`` and ``g_p = sum d u - N r m`` follow, ``m``
+    the mean direction. A compiled kernel."""
+    n_frames = track.shape[0]
+    sum_u[:] = 0.0
+    sum_du[:] = 0.0
+    sum_uu[:] = 0.0
+    # Equal frames have equal keys: weights that no two coordinates of a frame share.
+    wx, wy, wz = math.sqrt(3.0 * p + 2.0), math.sqrt(3.0 * p + 3.0), math.sqrt(3.0 * p + 4.0)
+    sum_d = 0.0
+    for k in range(n_frames):
+        x = track[k, 0] - centre[0]
+        y = track[k, 1] - centre[1]
+        z = track[k, 2] - centre[2]
+        keys[k] += wx * x + wy * y + wz * z
+        d = math.sqrt(x * x + y * y + z * z)
+        distances[k] = d
+        inverse = 1.0 / d if d > 0.0 else 0.0
+        u0, u1, u2 = x * inverse, y * inverse, z * inverse
+        sum_d += d
+        sum_u[0] += u0
+        sum_u[1] += u1
+        sum_u[2] += u2
+        sum_du[0] += x
+        sum_du[1] += y
+        sum_du[2] += z
+        sum_uu[0, 0] += u0 * u0
+        sum_uu[0, 1] += u0 * u1
+        sum_uu[0, 2] += u0 * u2
+        sum_uu[1, 1] += u1 * u1
+        sum_uu[1, 2] += u1 * u2
+        sum_uu[2, 2] += u2 * u2
+    return sum_d / n_frames
+
+
+@kernel
+def _repeats(keys: np.ndarray) -> float:
+    """1 where two of the frames' ``keys`` ``(N,)`` are equal (sorted in place), else 0. A
+    compiled kernel."""
+    keys.sort()
+    for k in range(keys.shape[0] - 1):
+        if not keys[k + 1] != keys[k]:
+            return 1.0
+    return 0.0
+
+
+@kernel
+def _lack_of_fit(
+    row: np.ndarray,
+    squares: float,
+    fourths: float,
+    kept: int,
+    n_frames: int,
+    n_markers: int,
+    s2: float,
+) -> None:
+    """The lack of fit of the concentric spheres about an answer into ``row``: the radial
+    residuals' sum of ``squares`` (and of ``fourths`` powers) over the ``kept`` markers'
+    ``kept (N - 1)`` degrees of freedom, as a ratio to the rigid-body noise ``s2``, and its z:
+    the ratio's spread counts the noise's kurtosis, read off the residuals (floored at a
+    normal one's), and the noise estimate's own, from the rigid fit's ``(3 n - 6)(N - 1)``
+    degrees of freedom. A compiled kernel."""
+    dof = kept * (n_frames - 1)
+    if dof < 1:
+        row[_FIT_RATIO] = np.nan
+        row[_FIT_Z] = np.nan
+        return
+    ratio = squares / (dof * s2)
+    kurtosis = max(kept * n_frames * fourths / squares**2 - 3.0, 0.0) if squares > 0 else 0.0
+    rigid_dof = max(3 * n_markers - 6, 3) * (n_frames - 1)
+    row[_FIT_RATIO] = ratio
+    row[_FIT_Z] = (ratio - 1.0) / math.sqrt((2.0 + kurtosis) * (1.0 / dof + 1.0 / rigid_dof))
 
 
 @kernel
@@ -202,21 +316,31 @@ def _upper(matrix: np.ndarray, i: int, j: int) -> float:
 
 
 @kernel
-def _quadratic_inverse(
-    matrix: np.ndarray, vector: np.ndarray, values: np.ndarray, vectors: np.ndarray, work
+def _solved(
+    matrix: np.ndarray,
+    vector: np.ndarray,
+    solution: np.ndarray,
+    values: np.ndarray,
+    vectors: np.ndarray,
+    work: np.ndarray,
 ) -> float:
-    """``v' M^-1 v`` of the symmetric ``matrix`` ``M`` ``(3, 3)`` and ``vector`` ``v`` ``(3,)``,
-    ``inf`` where ``M`` is singular to rounding, with ``values``, ``vectors``, ``work`` as
-    scratch. A compiled kernel."""
+    """``v' M^-1 v`` of the symmetric ``matrix`` ``M`` ``(3, 3)`` (upper triangle) and
+    ``vector`` ``v`` ``(3,)``, with ``M^-1 v`` written into ``solution`` ``(3,)``; NaN where
+    ``M`` is singular to rounding. ``values``, ``vectors``, ``work`` are scratch. A
+    compiled kernel."""
     symmetric_eigen_into(matrix, values, vectors, work)
     if not values[0] > 1e-12 * abs(values[2]):
-        return np.inf
+        solution[:] = np.nan
+        return np.nan
     total = 0.0
+    solution[:] = 0.0
     for i in range(3):
         along = 0.0
         for j in range(3):
             along += vectors[j, i] * vector[j]
         total += along * along / values[i]
+        for j in range(3):
+            solution[j] += vectors[j, i] * along / values[i]
     return total
 
 
@@ -228,6 +352,20 @@ def _chi2_3_sf(x: float) -> float:
     if math.isinf(x):
         return 0.0
     return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
+
+
+def _chi2_3_isf(alpha: float) -> float:
+    """The chi-square value with 3 degrees of freedom whose upper tail is ``alpha``, by
+    bisection of :func:`_chi2_3_sf` (once, at import)."""
+    low, high = 0.0, 1e3
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if _chi2_3_sf(middle) > alpha else (low, middle)
+    return high
+
+
+# The score test's rejection level as a chi-square value.
+_CHI2_ALPHA = _chi2_3_isf(ROTATION_ALPHA)
 
 
 def _statistics(markers: np.ndarray, centres: np.ndarray, variances: np.ndarray) -> list:
@@ -246,7 +384,6 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
     """The warnings of one answer's ``numbers`` (the diagnostics of :func:`annotate_many`),
     the precision's only where the support verdict ``supported`` the data."""
     sd, share = numbers["center_sd_mm"], numbers["center_sd_noise_share"]
-    step, p = numbers["center_step_mm"], numbers["center_score_p_value"]
     warnings = []
     if supported and not sd <= MAX_CENTER_SD_MM:
         size = "is unbounded" if math.isinf(sd) else f"is {sd:.3g} mm"
@@ -262,11 +399,23 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
             f"directions from it (below {100 * MAX_SD_NOISE_SHARE:g}% its SD of {sd:.3g} mm "
             "would hold)"
         )
-    if p < ROTATION_ALPHA and step > MIN_REJECTED_STEP_MM and math.isfinite(step):
-        warnings.append(
-            f"the answer is not the markers' common centre of rotation: the spheres they move "
-            f"on are centred {step:.3g} mm from it (score test chi^2 = "
+    reasons = []
+    step, p = numbers["center_step_mm"], numbers["center_score_p_value"]
+    if p < ROTATION_ALPHA and MIN_REJECTED_STEP_MM < step < math.inf:
+        reasons.append(
+            f"the spheres they move on are centred {step:.3g} mm from it (score test chi^2 = "
             f"{numbers['center_score_chi2']:.3g}, p = {p:.2g})"
+        )
+    offset, p_fit = numbers["center_offset_mm"], numbers["center_fit_p_value"]
+    if p_fit < ROTATION_ALPHA and offset > MIN_REJECTED_STEP_MM:
+        reasons.append(
+            f"spheres about it leave radial residuals {numbers['center_fit_ratio']:.3g} times "
+            f"the rigid-body noise's variance, as an answer {offset:.3g} mm or more from "
+            f"their centre would (p = {p_fit:.2g})"
+        )
+    if reasons:
+        warnings.append(
+            "the answer is not the markers' common centre of rotation: " + "; and ".join(reasons)
         )
     return tuple(warnings)
 
@@ -282,13 +431,21 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
     annotated = list(results)
     checked, centres, residuals = [], [], []
     for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
+        if result.center.shape != (3,):
+            raise ValueError(
+                f"center method {result.method}: its centre has shape {result.center.shape}, "
+                "not (3,)"
+            )
         centre = result.center.tolist()
-        reason = None
+        if not all(map(math.isfinite, centre)):
+            reason = "the answer is not finite"
+            # A method that says it converged on it is contradicted; a failure says so itself.
+            warnings = (f"{reason}: no centre was found",) if result.converged else ()
+            notes = {"center_precision_not_checked": reason}
+            annotated[t] = with_warnings(result, warnings, notes)
+            continue
         if not verdict.diagnostics.get("assessed", False):
             reason = "the support verdict did not assess the data (no rigid-body residual)"
-        elif not all(map(math.isfinite, centre)):
-            reason = "the answer is not finite"
-        if reason is not None:
             annotated[t] = with_warnings(result, (), {"center_precision_not_checked": reason})
             continue
         checked.append(t)
@@ -300,13 +457,17 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         markers = markers[checked]
     variances = np.array(residuals) ** 2 / 3.0
     rows = _statistics(markers, np.array(centres), variances)
-    for t, residual_mm, (sd, chi2, step, _, share) in zip(checked, residuals, rows, strict=True):
+    for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
+        sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]
         numbers = {
             "center_sd_mm": sd,
             "center_sd_noise_share": share,
             "center_score_chi2": chi2,
             "center_score_p_value": _chi2_3_sf(chi2),
             "center_step_mm": step,
+            "center_fit_ratio": fit_ratio,
+            "center_fit_p_value": 0.5 * math.erfc(fit_z / math.sqrt(2.0)),
+            "center_offset_mm": offset,
         }
         warnings = _warnings(numbers, residual_mm, not verdicts[t].warnings)
         annotated[t] = with_warnings(results[t], warnings, numbers)
