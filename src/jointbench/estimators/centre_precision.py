@@ -103,7 +103,8 @@ MIN_REJECTED_STEP_MM = 5.0
 
 # Columns of centre_statistics' rows.
 _SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
-_TOWARDS = slice(8, 11)  # the Gauss–Newton step towards the spheres' centre [mm]
+# The step towards the spheres' centre [mm] (F_s^-1 g; F^-1 g where F_s is not definite).
+_TOWARDS = slice(8, 11)
 
 # The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
 # exceed their noise by, in standard errors, to count, and the lack of fit's rejection level.
@@ -111,6 +112,8 @@ _Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
 _REFINE_ITERATIONS = 20
+# ... until they move it less than this share of its distance from the answer.
+_REFINED_TO = 1e-3
 
 
 @kernel
@@ -148,7 +151,7 @@ def _refine(markers: np.ndarray, answer: np.ndarray, s2: float, row: np.ndarray)
         if not np.isfinite(move).all():
             return
         centre += move
-        if math.sqrt((move**2).sum()) < 1e-9 * (1.0 + math.sqrt((centre**2).sum())):
+        if math.sqrt((move**2).sum()) < _REFINED_TO * math.sqrt(((centre - answer) ** 2).sum()):
             break
     _row_at(markers, centre, s2, there)
     if there[_FIT_RATIO] < row[_FIT_RATIO]:
@@ -212,13 +215,17 @@ def _row_at(markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray)
             share += vectors[i, 0] * _upper(noisy, i, j) * vectors[j, 0]
     row[_SHARE] = share / values[0]
     row[_SD] = math.sqrt(s2 / values[0])
-    step2 = 0.0
+    # The step with the information corrected for the directions' noise: Gauss-Newton's own
+    # (F^-1 g) is shortened by that noise as a regression on noisy regressors is.
+    towards = row[_TOWARDS]
+    towards[:] = 0.0
     for i in range(3):
         along = 0.0
         for j in range(3):
             along += vectors[j, i] * score[j]
-        step2 += (along / values[i]) ** 2
-    row[_STEP] = math.sqrt(step2)
+        for j in range(3):
+            towards[j] += vectors[j, i] * along / values[i]
+    row[_STEP] = math.sqrt(towards[0] ** 2 + towards[1] ** 2 + towards[2] ** 2)
 
 
 @kernel
