@@ -502,15 +502,16 @@ def test_nothing_is_rendered_or_judged_from_trials_that_all_failed(
 
 
 @pytest.mark.parametrize(
-    ("lines", "message"),
+    ("after_a5", "message"),
     [
-        (190, "no entry for A5, A6, A7, A8, A9, A10, A11, A12, A13, which the paper measures"),
-        (197, "not valid YAML"),
+        (0, "no entry for A5, A6, A7, A8, A9, A10, A11, A12, A13, which the paper measures"),
+        # Inside A5's criterion, a quoted text that the cut leaves open.
+        (7, "not valid YAML"),
     ],
     ids=["cut at an entry", "cut inside an entry"],
 )
 def test_a_published_values_file_cut_short_is_refused_by_name(
-    tmp_path, monkeypatch, config, estimates_and_dataset, lines, message
+    tmp_path, monkeypatch, config, estimates_and_dataset, after_a5, message
 ):
     estimates, _ = estimates_and_dataset
     nm = pd.read_parquet(estimates)
@@ -518,7 +519,8 @@ def test_a_published_values_file_cut_short_is_refused_by_name(
     write_table(pd.concat([nm, nm.assign(method="BC")]), collected)
     paper = get_paper("paper_a")
     cut = tmp_path / "paper_a.yaml"
-    cut.write_text("".join(paper.published.read_text().splitlines(keepends=True)[:lines]))
+    lines = paper.published.read_text().splitlines(keepends=True)
+    cut.write_text("".join(lines[: lines.index("- id: A5\n") + after_a5]))
     monkeypatch.setattr(
         pipeline, "papers_of_study", lambda study: [dataclasses.replace(paper, published=cut)]
     )
