@@ -13,8 +13,10 @@ to: the input checks of :func:`jointbench.estimators.validation.check_input` and
 with options, the option checks of :func:`check_options` before the fit, and the support
 verdict of :func:`jointbench.estimators.support.assess` written into the result after it; a
 method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a statement of its
-answer's precision (:mod:`jointbench.estimators.precision`) has them applied in between. A
-newly registered estimator gets them all without code of its own.
+answer's precision (:mod:`jointbench.estimators.precision`) has them applied in between, and
+every axis answer is compared with the principal axis of the segment's rotations
+(:func:`jointbench.estimators.precision.annotate_motion_axis`). A newly registered estimator
+gets them all without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
 Every method has a one-trial and a many-trial form, each checked or not (:func:`get`,
@@ -48,7 +50,7 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench import declared, owncode
-from jointbench.estimators import support, validation
+from jointbench.estimators import precision, support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
     check_same_trials,
@@ -191,7 +193,7 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     if hasattr(entry.fn, "precision_many"):
         # The trial as a batch of one, only for a method that states its precision.
         (result,) = _precision_checked(entry.fn, [result], tuple(array[None] for array in clean))
-    return support.annotate(result, verdict)
+    return support.annotate(_motion_axis_checked(entry.kind, result, verdict), verdict)
 
 
 def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
@@ -355,6 +357,17 @@ def _precision_checked(fn: Callable, results: list, stacked: tuple) -> list:
     return results if check is None else check(results, *stacked)
 
 
+def _motion_axis_checked(kind: str, result, verdict: support.Support):
+    """An axis ``result`` compared with the principal axis of the segment's rotations that
+    its support ``verdict`` took from the data
+    (:func:`jointbench.estimators.precision.annotate_motion_axis`), whatever the method; a
+    centre's ``result`` as it is."""
+    if kind != "axis":
+        return result
+    why = verdict.diagnostics.get("reason", "")
+    return precision.annotate_motion_axis(result, verdict.motion_axis, why)
+
+
 def _checked_many(entry: _Entry) -> Callable[..., list]:
     """``entry``'s many-trial form (``many(*segments, **options)`` over ``(n_trials, ...)``
     arrays, returning per trial a result or the exception) with the checks of its checked
@@ -389,6 +402,7 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
             poses = _fitted_to(options.get("poses"), fitted) if names else None
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
             for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
+                result = _motion_axis_checked(entry.kind, result, verdict)
                 outcomes[trial] = support.annotate(result, verdict)
         return outcomes
 
