@@ -785,7 +785,7 @@ def _rotation_spreads(
     reference: np.ndarray,
     reference_inertia_inv: np.ndarray,
     variance: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
     """The rotations ``moving`` ``(T, N, 3, 3)`` relative to ``reference`` (the same shape,
     or no frames for the identity) about their mean, against their noise. A compiled kernel.
 
@@ -797,14 +797,17 @@ def _rotation_spreads(
     eigenvalues of ``sum_k w_k w_k'`` [rad^2] and of the same sum whitened by the covariance
     (``z_k = L' w_k``, ``L L'`` its inverse), ``(T, 3)`` each; those of the rotation's own
     scatter, ``sum_k w_k w_k'`` less its noise ``(N - 1) variance C`` (``variance`` ``(T,)``
-    [mm^2], ``C`` the covariance per unit variance), ``(T, 3)``; and whether some rotation is
-    within 1e-4 of pi, where that rotation vector does not hold.
+    [mm^2], ``C`` the covariance per unit variance), ``(T, 3)``; that scatter itself
+    ``(T, 3, 3)`` [rad^2] and ``M`` ``(T, 3, 3)``; and whether some rotation is within 1e-4 of
+    pi, where that rotation vector does not hold.
     """
     n_trials, n_frames, _, _ = moving.shape
     with_reference = reference.shape[1] > 0
     raw = np.empty((n_trials, 3))
     spread = np.empty((n_trials, 3))
     rotation_only = np.empty((n_trials, 3))
+    own = np.empty((n_trials, 3, 3))
+    means = np.empty((n_trials, 3, 3))
     relative = np.empty((n_frames, 3, 3))
     vectors = np.empty((n_frames, 3))
     gram = np.empty((3, 3))
@@ -829,6 +832,7 @@ def _rotation_spreads(
         if np.linalg.det(u) * np.linalg.det(vt) < 0.0:
             u[:, 2] = -u[:, 2]
         nearest = u @ vt
+        means[t] = nearest
         covariance = moving_inertia_inv[t].copy()
         if with_reference:
             covariance += nearest.T @ reference_inertia_inv[t] @ nearest
@@ -866,38 +870,30 @@ def _rotation_spreads(
         white = whitening.T @ gram @ whitening
         raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
         spread[t] = np.maximum(np.linalg.eigvalsh(white), 0.0)
-        noise = (n_frames - 1) * variance[t] * covariance
-        rotation_only[t] = np.maximum(np.linalg.eigvalsh(gram - noise), 0.0)
-    return raw, spread, rotation_only, near_pi
-
-
-def _deviations(relative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The mean ``M`` ``(T, 3, 3)`` of the rotations ``relative`` ``(T, N, 3, 3)`` (the rotation
-    nearest their mean) and the rotation vectors of ``M' relative`` centred over the frames
-    ``(T, N, 3)`` [rad], through :func:`jointbench.geometry.rotation_vector`, which holds near
-    pi too."""
-    mean = best_rotation(relative.mean(axis=1))
-    deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
-    return mean, deviation - deviation.mean(axis=1, keepdims=True)
+        own[t] = gram - (n_frames - 1) * variance[t] * covariance
+        rotation_only[t] = np.maximum(np.linalg.eigvalsh(own[t]), 0.0)
+    return raw, spread, rotation_only, own, means, near_pi
 
 
 def _spreads_near_pi(
     relative: np.ndarray, covariance: np.ndarray, variance: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_rotation_spreads` ``(raw, spread, rotation_only)`` of the relative rotations
-    ``relative`` ``(T, N, 3, 3)`` whose noise covariance about their mean ``M`` is ``variance``
-    ``(T,)`` times ``covariance(M)`` ``(T, 3, 3)``, through :func:`_deviations`."""
+) -> tuple[np.ndarray, ...]:
+    """:func:`_rotation_spreads` ``(raw, spread, rotation_only, own, mean)`` of the relative
+    rotations ``relative`` ``(T, N, 3, 3)`` whose noise covariance about their mean ``M`` is
+    ``variance`` ``(T,)`` times ``covariance(M)`` ``(T, 3, 3)``, through
+    :func:`jointbench.geometry.rotation_vector`, which holds near pi too."""
     n_frames = relative.shape[1]
-    mean, deviation = _deviations(relative)
+    mean = best_rotation(relative.mean(axis=1))
     covariance = covariance(mean)
+    deviation = rotation_vector(np.swapaxes(mean, -1, -2)[:, None] @ relative)
+    deviation = deviation - deviation.mean(axis=1, keepdims=True)
     mu, basis = np.linalg.eigh(covariance)
     whitened = deviation @ (basis / np.sqrt(mu)[:, None, :])
     gram = np.swapaxes(deviation, 1, 2) @ deviation
     white = np.swapaxes(whitened, 1, 2) @ whitened
-    rotation_only = gram - (n_frames - 1) * variance[:, None, None] * covariance
-    return tuple(
-        np.maximum(np.linalg.eigvalsh(matrix), 0.0) for matrix in (gram, white, rotation_only)
-    )
+    own = gram - (n_frames - 1) * variance[:, None, None] * covariance
+    values = tuple(np.maximum(np.linalg.eigvalsh(matrix), 0.0) for matrix in (gram, white, own))
+    return (*values, own, mean)
 
 
 def _spreads(
@@ -905,8 +901,9 @@ def _spreads(
     moving_inertia_inv: np.ndarray,
     reference: _Clusters | None,
     variance: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_rotation_spreads` ``(raw, spread, rotation_only)`` of the rotations ``moving``
+) -> tuple[np.ndarray, ...]:
+    """:func:`_rotation_spreads` ``(raw, spread, rotation_only, own, mean)`` of the rotations
+    ``moving``
     ``(T, N, 3, 3)`` with inverse inertia ``moving_inertia_inv`` ``(T, 3, 3)`` [mm^-2],
     relative to ``reference``'s (or the identity), and their residual ``variance`` ``(T,)``
     [mm^2]; near pi through :func:`_spreads_near_pi`."""
@@ -970,29 +967,37 @@ def _onto_first_frame(markers: np.ndarray, step: int) -> tuple[np.ndarray, np.nd
     return cross, inertia_inv
 
 
-def _sampled_rotations(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The rotations ``(T, F, 3, 3)`` that carry frame 0's centred shape of one segment's
-    markers ``(T, N, n, 3)`` [mm] onto each sampled frame's (:func:`_frame_step`,
-    :func:`_onto_first_frame`), and the inverse of frame 0's inertia ``(T, 3, 3)`` [mm^-2],
-    their noise covariance per unit variance."""
+class _OneSegmentRotations(NamedTuple):
+    """The rotations of one segment's sampled frames about their mean pose, per trial."""
+
+    values: np.ndarray  # (T, 3) ascending eigenvalues of ``own`` (negative ones clipped) [rad^2]
+    own: np.ndarray  # (T, 3, 3) their rotation vectors' scatter less its noise [rad^2]
+    mean: np.ndarray  # (T, 3, 3) the mean pose M
+    noise: np.ndarray  # (T, 3, 3) each rotation vector's noise covariance s^2 K^-1 [rad^2]
+    n_frames: int  # the frames sampled
+
+
+def _one_segment_rotations(markers: np.ndarray, variance: np.ndarray) -> _OneSegmentRotations:
+    """The rotations that carry frame 0's centred shape of one segment's markers
+    ``(T, N, n, 3)`` [mm] in the reference frame onto each sampled frame's
+    (:func:`_frame_step`, :func:`_onto_first_frame`), about their mean pose: their rotation
+    vectors, which hold at any angle (unlike the one-segment pass's linearised rotations),
+    less their noise (:func:`_rotation_spreads`); ``variance`` ``(T,)`` [mm^2] is the rigid
+    residual per coordinate."""
     cross, inertia_inv = _onto_first_frame(kernel_array(markers), _frame_step(markers.shape[1]))
-    return best_rotation(cross), inertia_inv
+    rotations = best_rotation(cross)
+    _, _, values, own, mean = _spreads(rotations, inertia_inv, None, variance)
+    noise = variance[:, None, None] * inertia_inv
+    return _OneSegmentRotations(values, own, mean, noise, rotations.shape[1])
 
 
-def _one_segment_axis_shares(
-    rotations: np.ndarray, inertia_inv: np.ndarray, variance: np.ndarray
-) -> _AxisShare:
-    """How much of the rotation of one segment's markers in the reference frame is about its
-    principal axis, from their :func:`_sampled_rotations` ``rotations`` ``(T, F, 3, 3)`` and
-    ``inertia_inv`` ``(T, 3, 3)`` [mm^-2]; ``variance`` ``(T,)`` [mm^2] is the rigid residual
-    per coordinate. The rotation vectors about their mean, which hold at any angle (unlike the
-    one-segment pass's linearised rotations), less their noise (:func:`_rotation_spreads`),
-    have three eigenvalues: the principal axis's and the two others'."""
-    _, _, values = _spreads(rotations, inertia_inv, None, variance)
+def _one_segment_axis_shares(values: np.ndarray, n_frames: int) -> _AxisShare:
+    """How much of the rotation of one segment is about its principal axis, from the
+    eigenvalues ``values`` ``(T, 3)`` [rad^2] of its :func:`_one_segment_rotations` over
+    ``n_frames``: the principal axis's and the two others'."""
     off = values[:, 0] + values[:, 1]
     total = off + values[:, 2]
     share = np.divide(off, total, out=np.zeros_like(total), where=total > 0.0)
-    n_frames = rotations.shape[1]
     return _AxisShare(share, np.sqrt(values[:, 2] / n_frames), np.sqrt(off / n_frames))
 
 
@@ -1009,51 +1014,69 @@ class MotionAxis(NamedTuple):
     noise_share: float
 
 
-def _motion_axes(
-    rotations: np.ndarray, inertia_inv: np.ndarray, variance: np.ndarray
-) -> list[MotionAxis]:
-    """The :class:`MotionAxis` of each trial from its :func:`_sampled_rotations`
-    ``rotations`` ``(T, F, 3, 3)`` and ``inertia_inv`` ``(T, 3, 3)`` [mm^-2], with the rigid
-    residual per coordinate ``variance`` ``(T,)`` [mm^2].
+def _motion_axes(rotations: _OneSegmentRotations) -> list[MotionAxis]:
+    """The :class:`MotionAxis` of each trial from its :func:`_one_segment_rotations`.
 
-    The rotation vectors ``w_k`` of ``M' R_k`` about the mean pose ``M`` (:func:`_deviations`)
-    each carry noise of covariance ``S = s^2 K^-1`` (the module docstring's pose covariance),
-    so their scatter less the noise's, ``A = sum_k w_k w_k' - (F - 1) S``, is the rotation's
-    own; its principal eigenvector ``h`` (eigenvalue ``l``), carried into the markers' frame by
-    ``M``, is the axis. Noise moves ``h`` towards each other eigenvector ``e_j``
-    (eigenvalue ``l_j``) by ``e_j' dA h / (l - l_j)``, whose variance over the cross terms of
-    the signal and the noise and the noise's own square is
-    ``l_j S_hh + l S_jj + (F - 1)(S_jj S_hh + S_jh^2)``: ``sd_deg`` is the root of the two
-    directions' sum. ``noise_share`` is ``(F - 1) S_jj / (l - l_j)``, the larger of the two:
-    where the noise's own share reaches the gap the eigenvector is no longer a small
-    perturbation of the axis (as for the planar scatter,
-    :mod:`jointbench.estimators.precision`). On paper B's hinges (1 mm, 40 seeds a condition)
-    the axes' RMS error matched the median SD stated within a factor of 1.3 wherever the
-    share was below 1."""
-    n_frames = rotations.shape[1]
-    mean, deviation = _deviations(rotations)
-    noise = np.maximum(variance, 0.0)[:, None, None] * inertia_inv
-    scatter = np.swapaxes(deviation, 1, 2) @ deviation - (n_frames - 1) * noise
-    values, vectors = np.linalg.eigh(scatter)
-    values = np.maximum(values, 0.0)
-    # The noise in the scatter's eigenbasis: S_jj, S_hh and S_jh, h the last eigenvector.
-    basis_noise = np.swapaxes(vectors, 1, 2) @ noise @ vectors
-    top, others = values[:, 2:], values[:, :2]
-    gap = top - others
-    normal = np.stack([basis_noise[:, 0, 0], basis_noise[:, 1, 1]], axis=1)
-    along = basis_noise[:, 2, 2][:, None]
-    mixed = basis_noise[:, :2, 2]
-    moved = others * along + top * normal + (n_frames - 1) * (normal * along + mixed**2)
-    # A gap that is not positive leaves the eigenvector anywhere in its plane.
-    positive = gap > 0.0
-    safe_gap = np.where(positive, gap, 1.0)
-    share = np.where(positive, (n_frames - 1) * normal / safe_gap, np.inf).max(axis=1)
-    sd_deg = np.degrees(np.sqrt(np.where(positive, moved / safe_gap**2, np.inf).sum(axis=1)))
-    directions = (mean @ vectors[:, :, 2:])[..., 0]
+    The rotation vectors ``w_k`` of ``M' R_k`` about the mean pose ``M`` each carry noise of
+    covariance ``S = s^2 K^-1`` (the module docstring's pose covariance), so their scatter less
+    the noise's, ``A = sum_k w_k w_k' - (F - 1) S``, is the rotation's own; its principal
+    eigenvector ``h`` (eigenvalue ``l``), carried into the markers' frame by ``M``, is the
+    axis. Noise moves ``h`` towards each other eigenvector ``e_j`` (eigenvalue ``l_j``) by
+    ``e_j' dA h / (l - l_j)``, whose variance over the cross terms of the signal and the noise
+    and the noise's own square is ``l_j S_hh + l S_jj + (F - 1)(S_jj S_hh + S_jh^2)``:
+    ``sd_deg`` is the root of the two directions' sum. ``noise_share`` is
+    ``(F - 1) S_jj / (l - l_j)``, the larger of the two: where the noise's own share reaches
+    the gap the eigenvector is no longer a small perturbation of the axis (as for the planar
+    scatter, :mod:`jointbench.estimators.precision`). On paper B's hinges (1 mm, 40 seeds a
+    condition) the axes' RMS error matched the median SD stated within a factor of 1.3
+    wherever the share was below 1."""
+    directions, sd_deg, share = _motion_axis_numbers(
+        rotations.own, rotations.mean, rotations.noise, rotations.n_frames
+    )
     return [
-        MotionAxis(direction, float(sd), float(noise_share))
-        for direction, sd, noise_share in zip(directions, sd_deg, share, strict=True)
+        MotionAxis(direction, sd, noise_share)
+        for direction, sd, noise_share in zip(
+            directions, sd_deg.tolist(), share.tolist(), strict=True
+        )
     ]
+
+
+@kernel
+def _motion_axis_numbers(
+    own: np.ndarray, mean: np.ndarray, noise: np.ndarray, n_frames: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_motion_axes`'s numbers from the rotations' own scatter ``own``, mean pose
+    ``mean`` and per-frame noise ``noise`` ``(T, 3, 3)`` each over ``n_frames``: the axes
+    ``(T, 3)``, their SDs [deg] and noise shares ``(T,)``. A compiled kernel: a one-trial
+    check pays microseconds, not the tens that small array operations cost."""
+    n_trials = own.shape[0]
+    directions = np.empty((n_trials, 3))
+    sd_deg = np.empty(n_trials)
+    share = np.empty(n_trials)
+    for t in range(n_trials):
+        values, vectors = np.linalg.eigh(own[t])
+        # The noise in the scatter's eigenbasis: S_jj, S_hh and S_jh, h the last eigenvector.
+        basis_noise = vectors.T @ noise[t] @ vectors
+        top = max(values[2], 0.0)
+        along = basis_noise[2, 2]
+        variance = 0.0
+        largest = 0.0
+        for j in range(2):
+            gap = top - max(values[j], 0.0)
+            normal = basis_noise[j, j]
+            # A gap that is not positive leaves the eigenvector anywhere in its plane.
+            if gap <= 0.0:
+                variance = np.inf
+                largest = np.inf
+                continue
+            moved = max(values[j], 0.0) * along + top * normal
+            moved += (n_frames - 1) * (normal * along + basis_noise[j, 2] ** 2)
+            variance += moved / gap**2
+            largest = max(largest, (n_frames - 1) * normal / gap)
+        sd_deg[t] = np.degrees(np.sqrt(variance))
+        share[t] = largest
+        directions[t] = mean[t] @ vectors[:, 2]
+    return directions, sd_deg, share
 
 
 def _rotation_test(
@@ -1069,7 +1092,7 @@ def _rotation_test(
     # whitened by their noise covariance (per unit variance: under "no rotation" each
     # coordinate of each frame is noise of variance s^2); ascending, rounding's negative zeros
     # clipped.
-    raw, spread, _ = _spreads(moving.rotation, moving.inertia_inv, reference, variance)
+    raw, spread, *_ = _spreads(moving.rotation, moving.inertia_inv, reference, variance)
     n_frames = moving.rotation.shape[1]
     rms = np.sqrt(raw.sum(axis=1) / n_frames)
     second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
@@ -1171,9 +1194,8 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     axes: dict[int, MotionAxis] = {}
     posed = [t for t, reason in enumerate(no_pose) if reason is None]
     if kind not in CENTRE_KINDS and posed:
-        rotations, inertia_inv = _sampled_rotations(markers[posed])
-        variance = numbers[posed, 0]
-        axes = dict(zip(posed, _motion_axes(rotations, inertia_inv, variance), strict=True))
+        rotations = _one_segment_rotations(markers[posed], numbers[posed, 0])
+        axes = dict(zip(posed, _motion_axes(rotations), strict=True))
         at = {t: i for i, t in enumerate(posed)}
         shares = _axis_share_rows(
             kind,
@@ -1182,7 +1204,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
                 for reason, test in zip(no_pose, tests, strict=True)
             ],
             lambda wanted: _one_segment_axis_shares(
-                *(part[[at[t] for t in wanted]] for part in (rotations, inertia_inv, variance))
+                rotations.values[[at[t] for t in wanted]], rotations.n_frames
             ),
         )
     return [
