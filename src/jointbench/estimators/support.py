@@ -27,6 +27,9 @@ more non-collinear markers), each first order in the noise:
   depends on its cost. The share is measured on the rotations themselves, which holds at any
   range and wherever the markers sit: the rotation vectors about their mean pose, less their
   noise, split between the principal axis and the others by their scatter's eigenvalues.
+  The principal axis itself, with its SD from the rotations' noise, is the motion's own axis
+  (:class:`MotionAxis`), which the verdict on one segment carries for the registry to compare
+  every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`).
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -903,10 +906,9 @@ def _spreads(
     variance: np.ndarray,
 ) -> tuple[np.ndarray, ...]:
     """:func:`_rotation_spreads` ``(raw, spread, rotation_only, own, mean)`` of the rotations
-    ``moving``
-    ``(T, N, 3, 3)`` with inverse inertia ``moving_inertia_inv`` ``(T, 3, 3)`` [mm^-2],
-    relative to ``reference``'s (or the identity), and their residual ``variance`` ``(T,)``
-    [mm^2]; near pi through :func:`_spreads_near_pi`."""
+    ``moving`` ``(T, N, 3, 3)`` with inverse inertia ``moving_inertia_inv`` ``(T, 3, 3)``
+    [mm^-2], relative to ``reference``'s (or the identity), and their residual ``variance``
+    ``(T,)`` [mm^2]; near pi through :func:`_spreads_near_pi`."""
     if reference is None:
         no_frames = np.empty((moving.shape[0], 0, 3, 3))
         arguments = (moving, moving_inertia_inv, no_frames, moving_inertia_inv)
