@@ -68,28 +68,34 @@ def test_pure_hinges_answers_near_the_axis_are_not_warned_about(method, axis):
     trials = np.stack(
         [hinge(seed, arc, noise=0.5) @ tilt.T for seed in range(10) for arc in (10, 30)]
     )
+    n_near = 0
     for result in registry.many("axis", method)(trials):
         if angle_between_lines_deg(np.asarray(result.direction), axis) <= 5.0:
+            n_near += 1
             assert NOT_THE_MOTIONS not in result.status
         assert "not_checked" not in check(result)
         found = np.array(check(result)["principal_axis"])
         assert angle_between_lines_deg(found, axis) < 4.0 * check(result)["principal_axis_sd_deg"]
+    assert n_near >= 15  # of 20: the radial cost's second minimum takes the others
 
 
-@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize(
     ("protocol", "rom_deg", "ratio"),
     [("knee", 10, 0.3), ("knee", 30, 0.5), ("mcp", 30, 0.1), ("knee", 90, 0.5), ("mcp", 60, 0.3)],
 )
-def test_paper_bs_near_hinges_answers_near_the_axis_are_not_warned_about(
-    method, protocol, rom_deg, ratio
-):
+def test_paper_bs_near_hinges_answers_near_the_axis_are_not_warned_about(protocol, rom_deg, ratio):
     """On the hinge study's motions (abduction a fraction of flexion), every answer within 5
-    degrees of the flexion axis passes; those further off are what the warning is for."""
-    truth = np.array([1.0, 0.0, 0.0])
-    for result in registry.many("axis", method)(paper_b_trials(protocol, rom_deg, ratio, 15)):
-        if angle_between_lines_deg(np.asarray(result.direction), truth) <= 5.0:
-            assert NOT_THE_MOTIONS not in result.status
+    degrees of the flexion axis passes, whatever its method; those further off (the planar
+    and radial answers of the knee at AA 0.3 or 0.5 times FE, 10 degrees or more off) are
+    what the warning is for."""
+    trials = paper_b_trials(protocol, rom_deg, ratio, 15)
+    near = []
+    for method in METHODS:
+        for result in registry.many("axis", method)(trials):
+            if angle_between_lines_deg(np.asarray(result.direction), [1.0, 0.0, 0.0]) <= 5.0:
+                near.append(result)
+    assert len(near) >= 15  # SARA's answers, and others' where they are right
+    assert not [result.status for result in near if NOT_THE_MOTIONS in result.status]
 
 
 def test_the_principal_axis_sd_agrees_with_its_rms_error_over_seeds():
