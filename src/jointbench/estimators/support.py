@@ -1198,17 +1198,9 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     if kind not in CENTRE_KINDS and posed:
         rotations = _one_segment_rotations(markers[posed], numbers[posed, 0])
         axes = dict(zip(posed, _motion_axes(rotations), strict=True))
-        at = {t: i for i, t in enumerate(posed)}
-        shares = _axis_share_rows(
-            kind,
-            [
-                reason is None and test[3] < ROTATION_ALPHA
-                for reason, test in zip(no_pose, tests, strict=True)
-            ],
-            lambda wanted: _one_segment_axis_shares(
-                rotations.values[[at[t] for t in wanted]], rotations.n_frames
-            ),
-        )
+        found = _one_segment_axis_shares(rotations.values, rotations.n_frames)
+        by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
+        shares = {t: share for t, share in by_trial if tests[t][3] < ROTATION_ALPHA}
     return [
         _without_poses((markers[t],), no_pose[t])
         if no_pose[t] is not None
@@ -1247,17 +1239,6 @@ def _no_pose_reason(row: list[float]) -> str | None:
             f"{math.degrees(weakest):.2g} deg about their line)"
         )
     return None
-
-
-def _axis_share_rows(kind: str, wanted: list[bool], shares) -> dict[int, tuple[float, ...]]:
-    """For an axis ``kind``, the :class:`_AxisShare` rows by trial of the trials ``wanted`` (a
-    resolved rotation about more than one axis), from ``shares(indices)``; nothing for a
-    centre, which that rotation determines."""
-    indices = [t for t, want in enumerate(wanted) if want]
-    if kind in CENTRE_KINDS or not indices:
-        return {}
-    found = shares(np.array(indices))
-    return dict(zip(indices, zip(*(column.tolist() for column in found), strict=True), strict=True))
 
 
 def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) -> list[Support]:
