@@ -107,6 +107,24 @@ quantile at :data:`jointbench.estimators.support.ROTATION_ALPHA` the radial cost
 to determine the axis (:func:`annotate_agreement`);
 ``tests/test_axis_sd_validity.py`` counts what it catches and what it passes.
 
+What none of these sees: an answer whose own cost is sharp and agrees with itself, but which
+is not the motion's axis. Paper B's planar cost, on a near-hinge whose abduction is a fraction
+of its flexion, finds the direction the markers move least along, and on short arcs that can
+be tens of degrees from the flexion axis with an SD of a few (knee, 5 degrees of flexion, AA 0.3
+times it, 1 mm: answers about 75 degrees off with SDs under 3). The registry therefore compares
+every checked axis answer, whatever its method, with a reference taken from the data alone:
+the principal axis of the segment's rotations about their mean pose, with its own SD from the
+pose noise (:class:`jointbench.estimators.support.MotionAxis`). Their angle over both SDs
+combined is a test of "both are the motion's axis"; beyond the one-sided normal quantile at
+:data:`jointbench.estimators.support.ROTATION_ALPHA`, and beyond
+:data:`MOTION_AXIS_BAND_DEG`, the answer is said not to be the motion's axis
+(:func:`annotate_motion_axis`). The band keeps an answer the study would count as right from
+being warned about for a precise difference: on the real knee trial the planar answer is 1.6
+degrees from the principal axis, 14 times the SDs combined. Where the reference is not
+determined (the noise's share of the rotations' scatter reaches its eigen-gap, or its SD is
+above :data:`MAX_AXIS_SD_DEG`) nothing is compared, and the result says why.
+``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
+
 The simulated studies call the registered functions without this check, as they do without the
 self-check, so their results are the papers' methods alone.
 """
@@ -119,15 +137,17 @@ import statistics
 import numpy as np
 
 from jointbench.estimators.results import with_warnings
-from jointbench.estimators.support import ROTATION_ALPHA
+from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
 
 __all__ = [
     "AMBIGUOUS_APART_DEG",
     "MAX_AXIS_SD_DEG",
+    "MOTION_AXIS_BAND_DEG",
     "ambiguity",
     "annotate",
     "annotate_agreement",
     "annotate_ambiguity",
+    "annotate_motion_axis",
     "annotate_validity",
     "direction_sd_deg",
     "distinct_frames",
@@ -146,6 +166,11 @@ MAX_AXIS_SD_DEG = 10.0
 #: (:data:`MAX_AXIS_SD_DEG`), and below the 65-90 degrees the radial cost's second minimum lies
 #: from the true axis (module docstring).
 AMBIGUOUS_APART_DEG = 30.0
+
+#: An answer further than this [deg] from the principal axis of the segment's rotations, and
+#: significantly so, is not the motion's axis (:func:`annotate_motion_axis`): paper B's
+#: tighter accuracy band (claims B2, B3), within which an answer counts as the axis.
+MOTION_AXIS_BAND_DEG = 5.0
 
 # The one-sided normal quantile that a cost difference must exceed, in standard errors, to be
 # told from noise (module docstring).
@@ -353,3 +378,53 @@ def annotate_agreement(
         "z": float(z),
     }
     return with_warnings(result, warnings, {"cross_check": record})
+
+
+def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str = ""):
+    """``result`` with ``diagnostics["motion_axis_check"]``: the answer compared with the
+    principal axis of the segment's rotations ``reference``
+    (:class:`jointbench.estimators.support.MotionAxis`, taken from the data alone by the
+    support verdict; module docstring). It records ``principal_axis`` (3,),
+    ``principal_axis_sd_deg`` and ``principal_axis_noise_share``, and ``angle_deg``, the
+    angle between the answer and that axis [deg], and ``z``, that angle over
+    ``sqrt(sd^2 + principal_sd^2)`` (``sd`` the result's ``axis_sd_deg``, 0 where the method
+    states none). Where the angle is above :data:`MOTION_AXIS_BAND_DEG` and ``z`` above
+    ``_TOLD_APART_Z``, a warning that the answer is not the motion's axis. Where the reference
+    is not determined (its noise share not below 1, its SD above :data:`MAX_AXIS_SD_DEG`), or
+    is ``None`` (the data gave no pose: ``unavailable`` says why), nothing is compared and
+    ``not_checked`` says why. ``converged`` and the answer are left as the method set them."""
+    if reference is None:
+        why = f"no principal axis of the segment's rotations: {unavailable or 'no pose'}"
+        return with_warnings(result, (), {"motion_axis_check": {"not_checked": why}})
+    record = {
+        "principal_axis": np.asarray(reference.direction, dtype=float).tolist(),
+        "principal_axis_sd_deg": float(reference.sd_deg),
+        "principal_axis_noise_share": float(reference.noise_share),
+    }
+    # NaN fails the comparisons and leaves the reference undetermined: it tells nothing.
+    if not reference.noise_share < 1.0:
+        record["not_checked"] = (
+            "the principal axis of the segment's rotations is not determined: the noise's "
+            f"share of their scatter is {reference.noise_share:.3g} of its eigen-gap (not below 1)"
+        )
+    elif not reference.sd_deg <= MAX_AXIS_SD_DEG:
+        record["not_checked"] = (
+            "the principal axis of the segment's rotations is not determined: its SD is "
+            f"{reference.sd_deg:.1f} deg (above {MAX_AXIS_SD_DEG:g} deg)"
+        )
+    if "not_checked" in record:
+        return with_warnings(result, (), {"motion_axis_check": record})
+    angle_deg = line_angle_deg(result.direction, reference.direction)
+    sd_deg = result.diagnostics.get("axis_sd_deg", 0.0)
+    scale = math.hypot(sd_deg, reference.sd_deg)
+    z = angle_deg / scale if scale > 0.0 else math.inf
+    record.update({"angle_deg": angle_deg, "z": float(z)})
+    warnings = ()
+    if angle_deg > MOTION_AXIS_BAND_DEG and z > _TOLD_APART_Z:
+        warnings = (
+            f"axis not the motion's: the answer lies {angle_deg:.0f} deg from the principal "
+            f"axis of the segment's rotations, {z:.2f} times their first-order SDs combined "
+            f"({sd_deg:.1f} and {reference.sd_deg:.1f} deg), above {_TOLD_APART_Z:.2f} at "
+            f"{ROTATION_ALPHA:g}",
+        )
+    return with_warnings(result, warnings, {"motion_axis_check": record})

@@ -15,7 +15,10 @@ verdict of :func:`jointbench.estimators.support.assess` written into the result 
 method with a self-check (:mod:`jointbench.estimators.selfcheck`) or a statement of its
 answer's precision (:mod:`jointbench.estimators.precision`; the Gauss–Markov fits test their
 model instead, on the poses the call fitted, :mod:`jointbench.estimators.hjc`) has them applied
-in between. A
+in between, and every answer is held to what the data say of its kind whatever the method:
+an axis compared with the principal axis of the segment's rotations
+(:func:`jointbench.estimators.precision.annotate_motion_axis`), a centre's precision and
+whether it is the markers' common centre (:mod:`jointbench.estimators.centre_precision`). A
 newly registered estimator gets them all without code of its own.
 :func:`register` returns the function itself, unwrapped, for direct and internal use.
 
@@ -50,7 +53,7 @@ from types import MappingProxyType
 import numpy as np
 
 from jointbench import declared, owncode
-from jointbench.estimators import centre_precision, support, validation
+from jointbench.estimators import centre_precision, precision, support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
     check_same_trials,
@@ -190,14 +193,11 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
         result = one_trial(entry.many, *clean, poses=[poses], **options)
         verdict = support.assess(entry.kind, clean, poses=poses)
     result = _self_checked(entry.fn, result, clean, options)
+    stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
     if hasattr(entry.fn, "precision_many"):
-        # The trial as a batch of one, only for a method that states its precision.
-        stacked = tuple(array[None] for array in clean)
         (result,) = _precision_checked(entry.fn, [result], stacked, _fitted_to(shared, [0]))
-    result = support.annotate(result, verdict)
-    if entry.kind == "center":
-        (result,) = centre_precision.annotate_many([result], clean[0][None], [verdict])
-    return result
+    (result,) = _answers_checked(entry.kind, [result], stacked, [verdict])
+    return support.annotate(result, verdict)
 
 
 def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
@@ -368,6 +368,25 @@ def _precision_checked(fn: Callable, results: list, stacked: tuple, poses: list 
     return check(results, *stacked, poses=poses)
 
 
+def _answers_checked(kind: str, results: list, stacked: tuple, verdicts: list) -> list:
+    """``results`` of the trials of ``stacked`` ``(T, ...)`` held to what the data say of their
+    kind, whatever the method, given their support ``verdicts``: an axis compared with the
+    principal axis of the segment's rotations that its verdict took from the data
+    (:func:`jointbench.estimators.precision.annotate_motion_axis`), a centre's precision and
+    whether it is the markers' common centre
+    (:func:`jointbench.estimators.centre_precision.annotate_many`); a joint centre as it is."""
+    if kind == "axis":
+        return [
+            precision.annotate_motion_axis(
+                result, verdict.motion_axis, verdict.diagnostics.get("reason", "")
+            )
+            for result, verdict in zip(results, verdicts, strict=True)
+        ]
+    if kind == "center":
+        return centre_precision.annotate_many(results, stacked[0], verdicts)
+    return results
+
+
 def _checked_many(entry: _Entry) -> Callable[..., list]:
     """``entry``'s many-trial form (``many(*segments, **options)`` over ``(n_trials, ...)``
     arrays, returning per trial a result or the exception) with the checks of its checked
@@ -401,11 +420,9 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
             poses = _fitted_to(options.get("poses"), fitted) if names else None
             results = _precision_checked(entry.fn, results, stacked, poses)
             verdicts = support.assess_many(entry.kind, stacked, poses=poses)
-            results = list(map(support.annotate, results, verdicts))
-            if entry.kind == "center":
-                results = centre_precision.annotate_many(results, stacked[0], verdicts)
-            for trial, result in zip(fitted, results, strict=True):
-                outcomes[trial] = result
+            results = _answers_checked(entry.kind, results, stacked, verdicts)
+            for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
+                outcomes[trial] = support.annotate(result, verdict)
         return outcomes
 
     return checked_many
