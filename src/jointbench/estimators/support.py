@@ -1009,11 +1009,14 @@ class MotionAxis(NamedTuple):
     compared with: ``direction`` the unit axis ``(3,)`` in the markers' frame, ``sd_deg`` its
     first-order SD [deg] and ``noise_share`` the larger, over the two directions normal to it,
     of the rotation noise's share of the rotations' scatter over its eigen-gap (from 1 up, the
-    axis is not determined by the motion)."""
+    axis is not determined by the motion) and ``pose_sd_deg`` the largest SD of one pose's
+    rotation [deg], about the cluster's weakest axis (where it is large, a thin cluster's, the
+    first-order noise model behind the other two does not hold)."""
 
     direction: np.ndarray
     sd_deg: float
     noise_share: float
+    pose_sd_deg: float
 
 
 def _motion_axes(rotations: _OneSegmentRotations) -> list[MotionAxis]:
@@ -1035,10 +1038,11 @@ def _motion_axes(rotations: _OneSegmentRotations) -> list[MotionAxis]:
     directions, sd_deg, share = _motion_axis_numbers(
         rotations.own, rotations.mean, rotations.noise, rotations.n_frames
     )
+    pose_sd_deg = np.degrees(np.sqrt(np.linalg.eigvalsh(rotations.noise)[:, -1]))
     return [
-        MotionAxis(direction, sd, noise_share)
-        for direction, sd, noise_share in zip(
-            directions, sd_deg.tolist(), share.tolist(), strict=True
+        MotionAxis(direction, sd, noise_share, pose_sd)
+        for direction, sd, noise_share, pose_sd in zip(
+            directions, sd_deg.tolist(), share.tolist(), pose_sd_deg.tolist(), strict=True
         )
     ]
 
