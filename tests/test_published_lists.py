@@ -193,10 +193,20 @@ DESIGN = [
     (lambda grid: grid.update(noise_mm=1.0), "design/grid/noise_mm", "is not of type 'array'"),
     (lambda grid: grid.update(noise_mm=[]), "design/grid/noise_mm", "should be non-empty"),
     (lambda grid: grid.pop("noise_mm"), "design.grid.noise_mm", "missing"),
+    # A per-level list's values are matched to the levels in order: a reordered, repeated or
+    # unreadable level would compare one level's count with another's.
+    (lambda grid: grid.update(noise_mm=[2.0, 1.0, 0.5]), "design.grid.noise_mm", "ascending"),
+    (lambda grid: grid.update(noise_mm=[0.5, 0.5, 2.0]), "design.grid.noise_mm", "ascending"),
+    (lambda grid: grid.update(noise_mm=[0.5, float("nan"), 2.0]), "design.grid.noise_mm", "nan"),
+    (lambda grid: grid.update(noise_mm=["0.5", "1.0", "2.0"]), "design.grid.noise_mm", "'0.5'"),
 ]
 
 
-@pytest.mark.parametrize(("change", "key", "words"), DESIGN, ids=["scalar", "empty", "missing"])
+@pytest.mark.parametrize(
+    ("change", "key", "words"),
+    DESIGN,
+    ids=["scalar", "empty", "missing", "reordered", "repeated", "nan", "text"],
+)
 def test_the_design_grid_a_check_measures_at_is_a_list_per_key(tmp_path, change, key, words):
     message, _ = _refused(tmp_path, "paper_a", lambda document: change(document["design"]["grid"]))
     assert key in message and words in message, message

@@ -13,6 +13,7 @@ them.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable, Mapping, Sequence
 from importlib import resources
 from pathlib import Path
@@ -135,11 +136,47 @@ def load_published(
                     f"published values {path}: paper {document['paper']} {table.source} cell "
                     f"{cell}: {wrong}; restore it from the repository"
                 )
+    _check_design_levels(document, path)
     # After the tables: a cell's value is named by its table and position there.
     _check_types(document, path)
     # After the types: a list's length is read once its values are known to be numbers.
     _check_lengths(document, path, declares)
     return document
+
+
+def _check_design_levels(document: Mapping, path: str | Path) -> None:
+    """``ValueError`` naming the file and the key of the first ``design.grid`` list whose
+    levels cannot be told apart in order: a per-level check's values are matched to its axis's
+    levels as listed, so numbers must be finite and strictly ascending, and names distinct
+    words, not numbers written as text."""
+    for key, levels in document["design"]["grid"].items():
+        problem = _levels_problem(levels)
+        if problem:
+            raise ValueError(
+                f"published values {path}: paper {document['paper']} design.grid.{key}: "
+                f"{problem}; list the paper's levels there, from the paper"
+            )
+
+
+def _levels_problem(levels: Sequence) -> str | None:
+    """Why ``levels`` (one ``design.grid`` list) cannot be matched in order, or ``None``."""
+    if all(isinstance(v, int | float) and not isinstance(v, bool) for v in levels):
+        if not all(map(is_number, levels)):
+            return f"{levels} holds a level that is not a finite number"
+        if any(b <= a for a, b in itertools.pairwise(levels)):
+            return f"{levels} is not in ascending order without repeats"
+        return None
+    for level in levels:
+        if not isinstance(level, str):
+            return f"{level!r} is neither a number nor a name"
+        try:
+            float(level)
+        except ValueError:
+            continue
+        return f"{level!r} is a number written as text"
+    if len(set(levels)) < len(levels):
+        return f"{levels} repeats a level"
+    return None
 
 
 def _declared_id(declared: str | PerLevel) -> str:
