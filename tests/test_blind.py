@@ -715,3 +715,80 @@ def test_a_user_rule_writing_the_folder_that_holds_results_stops_the_run(tmp_pat
     copy_workflow(tmp_path)
     message = "rule everything writes {inside}, under results/blind/"
     _refused(tmp_path, _EVERYTHING, _BLIND_INPUT, message)
+
+
+# A file of the user's, written by a rule that reads the truth, spelt the way Snakemake matches
+# it but not as the checks judge it: an absolute path, a folder reached through "..", or the
+# estimator's own rule in another job (an input function choosing by a wildcard).
+_LAUNDERED = {
+    "absolute path": (
+        'os.path.abspath("mine") + "/{study}/{condition}.parquet",',
+        """
+
+rule stage_truth:
+    input:
+        "results/datasets/{study}/{condition}.parquet",
+    output:
+        os.path.abspath("mine") + "/{study}/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+""",
+        "rule stage_truth, which feeds rule estimate_centroid",
+    ),
+    "a wildcard taking ..": (
+        '"results/mine/../blind/{study}/{condition}.parquet",',
+        """
+
+rule write_over_blind:
+    input:
+        "results/datasets/{study}/{condition}.parquet",
+    output:
+        "results/mine/{x}/{study}/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+""",
+        "rule write_over_blind, which feeds rule estimate_centroid",
+    ),
+}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("spelling", sorted(_LAUNDERED))
+def test_a_truth_reading_rule_upstream_is_found_however_the_path_is_spelt(tmp_path, spelling):
+    copy_workflow(tmp_path)
+    estimator_input, rules, chain = _LAUNDERED[spelling]
+    message = f"{chain} (external estimator 'centroid') reads results/datasets/"
+    _refused(tmp_path, rules, estimator_input, message)
+
+
+_OWN_UPSTREAM = """
+
+
+def _centroid_or_truth(wildcards):
+    if wildcards.folder == "results/estimates":
+        return f"mine/{wildcards.study}/centroid/{wildcards.condition}.parquet"
+    return f"results/datasets/{wildcards.study}/{wildcards.condition}.parquet"
+
+
+rule estimate_centroid:
+    input:
+        _centroid_or_truth,
+    output:
+        "{folder,results/estimates|mine}/{study}/centroid/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_an_estimators_rule_that_is_its_own_upstream_is_followed(tmp_path):
+    """The estimator's rule, in a job writing a file of the user's, reads the truth and feeds
+    itself in the job writing the estimates."""
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    (rules / "centroid.smk").write_text(_OWN_UPSTREAM)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
+    assert run.returncode != 0
+    message = "rule estimate_centroid, which feeds rule estimate_centroid (external estimator"
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]

@@ -170,21 +170,24 @@ def _refusal(path, users):
     return (path if real == path else f"{path} (its real path {real})"), held
 
 
-def _check_blind(producer, name, files, everyone, via=()):
+def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
     """Stop when ``producer``, the rule of external estimator ``name`` or a rule of its own
     upstream (``via``: the rules it feeds, down to the estimator's), reads a file under
     results/ other than a blind copy (:data:`READABLE`) that no rule of the user's
     (``everyone``) writes, a folder holding results/, or any file there by way of a symbolic
     link below results/, in a job writing one of ``files``: each input is judged by its real
     path, however it is spelt, and read as that job's, input functions called with the job's
-    wildcards. A rule of the user's upstream is followed in turn, so that none can hand the
-    estimator what it read from the truth."""
-    users = [r for r in everyone if r is not producer and r.name not in via]
+    wildcards. A rule of the user's upstream (the estimator's own rule too, in another job) is
+    followed in turn, found by the path as written (as Snakemake finds it), as normalised and
+    by its real path, so that none can hand the estimator what it read from the truth;
+    ``seen`` holds the (rule, file) pairs already followed."""
+    users = [r for r in everyone if r is not producer]
     for file in filter(producer.is_producer, files):
-        spelt = [
-            _as_matched(f)
-            for f in producer.expand_input(producer.get_wildcards(file))[0]
-        ]
+        if (producer.name, file) in seen:
+            continue
+        seen = seen | {(producer.name, file)}
+        raw = [str(f) for f in producer.expand_input(producer.get_wildcards(file))[0]]
+        spelt = [_as_matched(f) for f in raw]
         refused = [r for r in (_refusal(f, users) for f in spelt) if r is not None]
         if refused:
             chain = "".join(f", which feeds rule {rule}" for rule in via)
@@ -195,11 +198,16 @@ def _check_blind(producer, name, files, everyone, via=()):
                 "the blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
-        inputs = [_judged(f) for f in spelt]
-        for upstream in users:
-            made = [f for f in inputs if upstream.is_producer(f)]
+        for upstream in everyone:
+            made = [
+                f
+                for f in dict.fromkeys([*raw, *spelt, *map(_judged, spelt)])
+                if upstream.is_producer(f)
+            ]
             if made:
-                _check_blind(upstream, name, made, everyone, (producer.name, *via))
+                _check_blind(
+                    upstream, name, made, everyone, (producer.name, *via), seen
+                )
 
 
 # Where only the package's rules write: the blind copies and their CSV form, which an external
