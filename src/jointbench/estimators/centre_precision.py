@@ -57,7 +57,8 @@ verdict has not already refused the data), or the score test or the lack of fit 
 :data:`MIN_REJECTED_STEP_MM` from the common centre (a method's own documented bias of a few
 millimetres is a property of the method, not a failure to find the centre). The noise ``s^2``
 is the support verdict's rigid-body residual, which does not depend on the answer; it is one
-level for every marker, so markers of unequal noise make the SD an understatement. Frames
+level for every marker, so a marker much noisier than the others biases a geometric fit by more
+than the SD, a statement of scatter, says. Frames
 repeated exactly carry no new noise and are counted once
 (:func:`jointbench.estimators.precision.distinct_frames`). ``converged`` and the answer are
 left as the method set them; the simulated studies call the methods without this check.
@@ -96,9 +97,9 @@ MAX_CENTER_SD_MM = 10.0
 #: (``tests/test_centre_precision.py`` counts them on both sides).
 MAX_SD_NOISE_SHARE = 0.2
 
-#: The score test's rejection is reported only when the spheres' common centre is at least this
-#: far [mm] from the answer: half of :data:`MAX_CENTER_SD_MM`, well above the few millimetres
-#: of bias paper A documents for its methods on small caps.
+#: The score test's or the lack of fit's rejection is reported only when the spheres' common
+#: centre is at least this far [mm] from the answer: half of :data:`MAX_CENTER_SD_MM`, well
+#: above the few millimetres of bias paper A documents for its methods on small caps.
 MIN_REJECTED_STEP_MM = 5.0
 
 # Columns of centre_statistics' rows.
@@ -107,7 +108,7 @@ _SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
 _TOWARDS = slice(8, 11)
 
 # The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
-# exceed their noise by, in standard errors, to count, and the lack of fit's rejection level.
+# exceed their noise by, in standard errors, for the marker to count.
 _Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
