@@ -108,6 +108,27 @@ def test_a_trc_frame_number_written_with_a_zero_fraction_reads(tmp_path):
     assert read(path).select("A").shape[0] == 4
 
 
+@pytest.mark.parametrize(
+    ("old", "new", "line", "after", "previous"),
+    [
+        ("\n3\t0.02\t", "\n2\t0.02\t", 8, "frame 2 follows frame 2", 7),
+        ("\n4\t0.03\t", "\n1\t0.03\t", 9, "frame 1 follows frame 3", 8),
+        ("\n3\t0.02\t", "\n\n \n2\t0.02\t", 10, "frame 2 follows frame 2", 7),
+    ],
+    ids=["repeated", "backwards", "after blank lines"],
+)
+def test_a_trc_frame_out_of_order_names_its_line_and_the_line_before(
+    tmp_path, old, new, line, after, previous
+):
+    """The line is the file's (blank lines counted), so a frame written twice is found by it."""
+    path = _trc(tmp_path, "A\t\t", 1)
+    text = open(path).read()
+    assert old in text
+    open(path, "w").write(text.replace(old, new))
+    message = _refused(path, f"line {line}, field Frame#: {after} (line {previous})")
+    assert message.endswith("a TRC file's frames must be consecutive"), message
+
+
 def test_a_trc_frame_count_that_is_no_count_is_not_checked(tmp_path):
     path = _trc(tmp_path, "A\t\t", 1, num_markers="1\u00b2")
     assert read(path).labels == ("A",)

@@ -346,8 +346,9 @@ def _trc_frame_numbers(
     rows: list[list[str]], lines: list[int], header: dict, n_labels: int, path: Path
 ) -> list:
     """The ``Frame#`` of every row (``lines``: each row's 1-based line in the file);
-    ``ValueError`` when they are not consecutive integers or not the frames and markers the
-    header promises."""
+    ``ValueError`` when they are not consecutive integers, naming the line of the first one
+    that is not (and of the row before it, blank lines between them being no rows), or not the
+    frames and markers the header promises."""
     promised = {key: header.get(key, "") for key in ("NumFrames", "NumMarkers")}
     for key, found in (("NumFrames", len(rows)), ("NumMarkers", n_labels)):
         if re.fullmatch(r"[0-9]+", promised[key]) and int(promised[key]) != found:
@@ -365,8 +366,8 @@ def _trc_frame_numbers(
         numbers.append(number)
         if i and numbers[i] != numbers[i - 1] + 1:
             raise ValueError(
-                f"{path}: frame {numbers[i]} follows frame {numbers[i - 1]}; a TRC file's frames "
-                "must be consecutive"
+                f"{path}: line {lines[i]}, field Frame#: frame {numbers[i]} follows frame "
+                f"{numbers[i - 1]} (line {lines[i - 1]}); a TRC file's frames must be consecutive"
             )
     return numbers
 
