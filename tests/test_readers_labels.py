@@ -201,6 +201,46 @@ def test_a_csv_frame_number_beyond_any_recording_is_refused_naming_the_line(tmp_
         _refused(path, "line 6", "frame", repr(frame))
 
 
+@pytest.mark.parametrize(
+    "frame",
+    ["+1", "-0", "-1", "1e0", "1E2", "1_0", "\u0661", "\uff11", "0x1", "1.5", "NA", ""],
+    ids=[
+        "plus sign",
+        "minus zero",
+        "negative",
+        "exponent",
+        "capital exponent",
+        "underscore",
+        "arabic-indic digit",
+        "fullwidth digit",
+        "hex",
+        "fraction",
+        "NA",
+        "empty",
+    ],
+)
+def test_a_csv_frame_number_not_written_in_ascii_digits_is_refused_as_in_a_trc(tmp_path, frame):
+    """The rule and the words of a TRC's Frame#: pandas reads ``+1``, ``1e0`` and ``1_0`` as
+    numbers, and would take ``-0`` for frame 0."""
+    path = _csv(tmp_path, ["A", "A", "A"], ["0", frame, "2"])
+    message = _refused(path)
+    assert message == (
+        f"{path}: line 3, field frame: {frame!r} is not a frame number (a whole number >= 0 in "
+        "ASCII digits)"
+    )
+
+
+@pytest.mark.parametrize("frame", ["1", "1.0", "1.", " 1", "01"])
+def test_a_csv_frame_number_of_ascii_digits_reads(tmp_path, frame):
+    recording = read(_csv(tmp_path, ["A", "A", "A"], ["0", frame, "2"]))
+    assert recording.first_frame == 0 and recording.n_frames == 3
+    np.testing.assert_array_equal(recording.select("A")[1, 0], [1, 2, 3])
+
+
+def test_a_csv_frame_written_twice_in_two_ways_is_one_frame_given_twice(tmp_path):
+    _refused(_csv(tmp_path, ["A", "A"], ["1", "1.0"]), "frame 1, marker A has 2 rows")
+
+
 def test_a_csv_file_not_in_utf8_is_refused_naming_line_and_byte(tmp_path):
     path = _csv(tmp_path, ["A", "G\u00fcn\u00f6u"])
     text = open(path, encoding="utf-8").read()

@@ -342,6 +342,15 @@ def _whole_number(text: str) -> int | None:
 _FRAME_NUMBER = re.compile(r"([0-9]+)(?:\.0*)?", re.ASCII)
 
 
+def _not_a_frame_number(path: Path, where: str, field: str, text: str) -> ValueError:
+    """The refusal of ``text``, written in field ``field`` at ``where`` (``"line 7"``) of
+    ``path``, which :func:`_whole_number` does not read as a frame number."""
+    return ValueError(
+        f"{path}: {where}, field {field}: {text!r} is not a frame number (a whole number >= 0 "
+        "in ASCII digits)"
+    )
+
+
 def _trc_frame_numbers(
     rows: list[list[str]], lines: list[int], header: dict, n_labels: int, path: Path
 ) -> list:
@@ -359,10 +368,7 @@ def _trc_frame_numbers(
     for i, row in enumerate(rows):
         number = _whole_number(row[0])
         if number is None:
-            raise ValueError(
-                f"{path}: line {lines[i]}, field Frame#: {row[0]!r} is not a frame number "
-                "(a whole number >= 0 in ASCII digits)"
-            )
+            raise _not_a_frame_number(path, f"line {lines[i]}", "Frame#", row[0])
         numbers.append(number)
         if i and numbers[i] != numbers[i - 1] + 1:
             raise ValueError(
@@ -375,10 +381,12 @@ def _trc_frame_numbers(
 def read_csv(path: str | Path) -> Recording:
     """The long CSV ``frame,marker,x,y,z`` [mm], one row per sample, rows in any order.
 
-    ``frame`` holds integer frame numbers; row 0 of the recording is the smallest. A sample
-    absent from the file is a gap, and so is a frame absent for every marker (it stays a frame
-    of missing samples, so the frames keep their numbers and spacing); a (frame, marker) pair
-    given twice is an error. An empty field is a gap too; a row with fewer fields than the
+    ``frame`` holds frame numbers as a TRC's ``Frame#`` does (:func:`_whole_number`: ASCII
+    digits, ``7.0`` read as 7, no sign or exponent; another is refused, naming its line); row 0
+    of the recording is the smallest. A sample absent from the file is a gap, and so is a frame
+    absent for every marker (it stays a frame of missing samples, so the frames keep their
+    numbers and spacing); a (frame, marker) pair given twice (``7`` and ``7.0`` are one frame)
+    is an error. An empty field is a gap too; a row with fewer fields than the
     header (a line cut short) is refused, naming it, and so is a last line the file ends inside
     with its last field empty where other rows fill it (cut right after a separator). The file
     declares no frame count, so a file cut at a line's end reads as a shorter recording.
@@ -390,9 +398,11 @@ def read_csv(path: str | Path) -> Recording:
     try:
         # The marker column is text as written: no type inference ("01" stays "01") and no
         # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
+        # The frame column is text too, for the frame-number rule: pandas reads "+7", "7e0"
+        # and "7_0" as 7, and "-0" as 0.
         table = pd.read_csv(
             io.StringIO(text),
-            dtype={"marker": str},
+            dtype={"marker": str, "frame": str},
             keep_default_na=False,
             na_values={column: _NA_TEXT for column in ("frame", "x", "y", "z")},
         )
@@ -410,6 +420,7 @@ def read_csv(path: str | Path) -> Recording:
     if table[table.columns[-1]].isna().any() or not _ends_with_newline(path):
         _check_csv_fields(path, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
+    table["frame"] = numbers  # "7" and "7.0" are one frame
     empty = (table["marker"] == "").to_numpy()
     if empty.any():
         line, _ = _csv_line(path, int(np.argmax(empty)), "marker")
@@ -487,19 +498,27 @@ def _csv_line(path: Path, row: int, column: str) -> tuple[str, str]:
 
 
 def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
-    """The ``frame`` column as integers; ``ValueError`` naming the line of a value that is not
-    one (or lies beyond +-2**53), or a range of numbers so much wider than the frames present
-    that it is not frame numbers."""
-    values = pd.to_numeric(frames, errors="coerce").to_numpy(float)
-    with np.errstate(invalid="ignore"):
-        bad = ~np.isfinite(values) | (values != np.round(values)) | (np.abs(values) > _MAX_FRAME)
+    """The ``frame`` column (n,), its text as written (a missing-value word NaN), as frame
+    numbers (n,) int64 by the TRC's rule (:func:`_whole_number`); ``ValueError`` naming the
+    line of a value that is not one (or lies beyond 2**53), or a range of numbers so much wider
+    than the frames present that it is not frame numbers."""
+    # Each distinct text is read once: a long file writes every frame number once per marker.
+    codes, texts = pd.factorize(frames)
+    read = [_whole_number(text) for text in texts]
+    # -1 marks a text that is no frame number; it is also the value for code -1 (NaN, a
+    # missing-value word), which indexes the last element.
+    known = [-1 if n is None or n > _MAX_FRAME else n for n in read]
+    numbers = np.array([*known, -1], dtype=np.int64)[codes]
+    bad = numbers < 0
     if bad.any():
-        line, text = _csv_line(path, int(np.argmax(bad)), "frame")
+        row = int(np.argmax(bad))
+        line, text = _csv_line(path, row, "frame")
+        if codes[row] < 0 or read[codes[row]] is None:
+            raise _not_a_frame_number(path, line, "frame", text)
         raise ValueError(
-            f"{path}: {line}, field frame: {text!r} is not an integer frame number "
-            f"(within +-{_MAX_FRAME})"
+            f"{path}: {line}, field frame: {text!r} is beyond any recording (frame numbers up "
+            f"to {_MAX_FRAME})"
         )
-    numbers = values.astype(np.int64)
     span, present = int(numbers.max() - numbers.min()) + 1, len(np.unique(numbers))
     if span > 100 * present + 1000:
         raise ValueError(
