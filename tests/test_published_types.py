@@ -12,11 +12,14 @@ the check instead of passing as "not applicable".
 
 from __future__ import annotations
 
+from decimal import Decimal
 from pathlib import Path
 
 import pandas as pd
 import pytest
 import yaml
+from hypothesis import given
+from hypothesis import strategies as st
 
 from jointbench.comparison.published import (
     NOT_APPLICABLE,
@@ -26,7 +29,7 @@ from jointbench.comparison.published import (
     load_published,
     unexplained,
 )
-from jointbench.comparison.published_types import MIN_RELATIVE_WIDTH
+from jointbench.comparison.published_types import MIN_RELATIVE_WIDTH, entry_problem
 from jointbench.papers import Measured, get_paper, paper_names
 
 
@@ -190,6 +193,48 @@ def test_a_width_at_the_floor_loads(tmp_path):
     ]:
         paper = get_paper(name)
         load_published(_written(tmp_path, name, entry_id, change), paper.declares, paper.tables)
+
+
+def _written_floor(published: float) -> float:
+    """:data:`MIN_RELATIVE_WIDTH` of ``published`` worked out in decimals and read back as a
+    file gives it (the double nearest ``1.23456e-07`` for 123.456), not the product of the two
+    doubles, which may round one unit of the last place above it."""
+    return float(Decimal(repr(MIN_RELATIVE_WIDTH)) * Decimal(repr(published)))
+
+
+def _abs_problem(width: float, published: object, kind: str):
+    tolerance = {"abs": width} if kind == "abs" else {"max_abs_rel": [width, 0.25]}
+    return entry_problem({"published": published, "tolerance": tolerance})
+
+
+@pytest.mark.parametrize("kind", ["abs", "max_abs_rel"])
+@pytest.mark.parametrize("published", [1e-3, 1.0, 123.456, 1e6, 7.7, 12.3])
+def test_an_absolute_width_at_the_floor_is_allowed_at_any_magnitude(published, kind):
+    """At the floor as written and as computed, for the value alone, negated, or the largest of
+    a list; a millionth narrower is refused, so the floor still holds."""
+    for value in (published, -published, [published / 3, published]):
+        for width in (_written_floor(published), MIN_RELATIVE_WIDTH * published):
+            assert _abs_problem(width, value, kind) is None, (value, width)
+        problem = _abs_problem(_written_floor(published) * (1 - 1e-6), value, kind)
+        assert problem is not None and "is narrower than 1e-09 x" in problem[1], problem
+
+
+@given(published=st.floats(min_value=1e-6, max_value=1e9))
+def test_an_absolute_width_written_at_the_floor_of_any_published_value_is_allowed(published):
+    assert _abs_problem(_written_floor(published), published, "abs") is None
+
+
+@pytest.mark.parametrize(
+    ("tolerance", "below"),
+    [
+        ({"rel": 1e-9}, {"rel": 1e-9 * (1 - 1e-6)}),
+        ({"factor": 1.000000001}, {"factor": 1.0000000009}),
+    ],
+    ids=["rel", "factor"],
+)
+def test_a_relative_width_or_factor_written_at_the_floor_is_allowed(tolerance, below):
+    assert entry_problem({"published": 123.456, "tolerance": tolerance}) is None
+    assert entry_problem({"published": 123.456, "tolerance": below}) is not None
 
 
 @pytest.mark.parametrize("name", paper_names())

@@ -27,6 +27,7 @@ a single value or range there, which it would hold every level to.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterator, Mapping
 
 __all__ = ["MIN_RELATIVE_WIDTH", "entry_problem", "is_number", "length_problem"]
@@ -38,6 +39,12 @@ __all__ = ["MIN_RELATIVE_WIDTH", "entry_problem", "is_number", "length_problem"]
 #: which arithmetic on the measurement accumulates far beyond): no simulation can be held to
 #: that, so such a width is a mistake in the file (a 0 typed for 0.5, a factor of 1).
 MIN_RELATIVE_WIDTH = 1e-9
+#: The share by which a width may fall short of its floor and still be at it: a floor written
+#: as a decimal (1.23456e-07 for 1e-9 of 123.456, 3e-09 of 3) reads as the double nearest it,
+#: which can lie a unit or two of the last place (about 2e-16 of it) below the double product
+#: ``MIN_RELATIVE_WIDTH * published`` it is held to. A few of those units, far below any
+#: width's meaning.
+_ROUNDING = 8 * sys.float_info.epsilon
 _REFERENCE = ("abs", "rel", "max_abs_rel")
 _BOUNDS = ("at_least", "at_most", "greater_than", "less_than")
 
@@ -229,9 +236,10 @@ def _narrow_problem(kind: str, spec: object, published: object) -> str | None:
     than :data:`MIN_RELATIVE_WIDTH` allows, or None: a factor below ``1 + MIN_RELATIVE_WIDTH``,
     a relative width (``rel``, ``max_abs_rel``'s second) below ``MIN_RELATIVE_WIDTH``, an
     absolute one (``abs``, ``max_abs_rel``'s first) below ``MIN_RELATIVE_WIDTH`` times the
-    largest magnitude of ``published`` (numbers, checked), the values it is applied to."""
+    largest magnitude of ``published`` (numbers, checked), the values it is applied to; below
+    by more than rounding (:func:`_below`), so a floor written as a decimal is at it."""
     if kind == "factor":
-        if spec >= 1 + MIN_RELATIVE_WIDTH:
+        if not _below(spec, 1 + MIN_RELATIVE_WIDTH):
             return None
         return (
             f"{spec!r} is not >= 1 + {MIN_RELATIVE_WIDTH:g}: a factor of 1 passes only a "
@@ -242,17 +250,23 @@ def _narrow_problem(kind: str, spec: object, published: object) -> str | None:
     )
     widths = {"abs": [(spec, True)], "rel": [(spec, False)]}.get(kind)
     for width, absolute in widths or [(spec[0], True), (spec[1], False)]:
-        if absolute and width < MIN_RELATIVE_WIDTH * largest:
+        if absolute and _below(width, MIN_RELATIVE_WIDTH * largest):
             return (
                 f"{width!r} is narrower than {MIN_RELATIVE_WIDTH:g} x {largest!r}, the largest "
                 f"published value it applies to: {_EXACT}"
             )
-        if not absolute and width < MIN_RELATIVE_WIDTH:
+        if not absolute and _below(width, MIN_RELATIVE_WIDTH):
             return f"{width!r} is not >= {MIN_RELATIVE_WIDTH:g} (a relative width): {_EXACT}"
     return None
 
 
 _EXACT = "a width that narrow passes only the published number itself, to rounding"
+
+
+def _below(width: float, floor: float) -> bool:
+    """Whether ``width`` falls short of ``floor`` (both > 0) by more than the rounding of
+    writing one as a decimal (:data:`_ROUNDING` of it)."""
+    return width < floor * (1 - _ROUNDING)
 
 
 def _range_problem(spec: object) -> str | None:
