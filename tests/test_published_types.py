@@ -121,6 +121,15 @@ BAD = [
     ("paper_a", "A2", _set("published", [31, 16, 9]), "published", "31 of 30"),
     ("paper_a", "A2", _set("published", "30, 16, 9"), "published", "'30, 16, 9'"),
     ("paper_a", "A7", _set("published", [42, 17, 3]), "published", "3 counts for 2"),
+    # one count (one for all is of_n's, not the count's) for a list of numbers of trials
+    (
+        "paper_a",
+        "A7",
+        _set("published", 42),
+        "published",
+        "one count, 42, for 2 numbers of trials in tolerance.binomial95.of_n",
+    ),
+    ("paper_a", "A7", _set("published", [42]), "published", "1 count for 2 numbers of trials"),
     ("paper_a", "A7", _set("published", [42, 91]), "published", "91 of 90"),
     # bounds: finite numbers; a range two increasing numbers
     ("paper_c", "C3", _set_tolerance("range", [3.46, 1.94]), "tolerance.range", "increasing"),

@@ -280,8 +280,9 @@ def _binomial_problem(
     of_n: object, published: object, published_key: str, of_n_key: str
 ) -> tuple[str, str] | None:
     """The first of: a number of trials that is not an integer >= 1; a published count that is
-    not an integer >= 0; a list of counts whose length differs from a list of ``of_n``; a count
-    above its number of trials."""
+    not an integer >= 0; counts (one, or a list) other in number than a list of ``of_n`` (one
+    number of trials serves every count, one count no list of them); a count above its number
+    of trials."""
     trials = of_n if isinstance(of_n, list) else [of_n]
     for n in trials:
         if not _is_integer(n) or n < 1:
@@ -293,9 +294,12 @@ def _binomial_problem(
         if not _is_integer(count) or count < 0:
             return published_key, f"{count!r} is not a count (an integer >= 0)"
     if len(trials) not in (1, len(counts)):
-        return published_key, (
-            f"{len(counts)} counts for {len(trials)} numbers of trials in {of_n_key}"
+        given = (
+            f"{len(counts)} count{'s' if len(counts) != 1 else ''}"
+            if isinstance(published, list)
+            else f"one count, {published!r},"
         )
+        return published_key, f"{given} for {len(trials)} numbers of trials in {of_n_key}"
     for count, n in zip(counts, trials * len(counts) if len(trials) == 1 else trials, strict=True):
         if count > n:
             return published_key, f"{count} of {n} trials: more successes than trials"
