@@ -845,3 +845,43 @@ def test_a_user_rule_writing_outside_results_stops_the_run_before_any_job(tmp_pa
     mine = _MINE + "".join(f"-{{{name}}}" for name in extra)
     paths = {other: mine + ending for other, ending in _ENDINGS.items()}
     _refused(tmp_path, _SNEAK.format(**{**paths, kind: written}), _BLIND_INPUT, message)
+
+
+# A rule of the user's whose output's wildcard is given a value climbing out of results/ by an
+# input of the user's: its pattern lies under results/, the job's file in config/.
+_CLIMB = """
+
+rule climb:
+    output:
+        "results/mine/{x}.yaml",
+    shell:
+        "touch {output}"
+
+
+rule ask:
+    input:
+        "results/mine/../../config/x.yaml",
+    output:
+        "results/mine/asked.txt",
+    shell:
+        "touch {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_job_of_a_user_rule_whose_wildcard_climbs_out_of_results_stops_before_any_job(
+    tmp_path,
+):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    (rules / "centroid.smk").write_text((rules / "centroid.smk").read_text() + _CLIMB)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "results/mine/asked.txt", "--configfile", overlay)
+    assert run.returncode != 0
+    message = (
+        "rule climb (workflow/rules/estimators/centroid.smk) writes its output "
+        "results/mine/../../config/x.yaml (its real path config/x.yaml), outside results/"
+    )
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+    assert not (tmp_path / "config" / "x.yaml").exists()
+    assert not (tmp_path / "results" / "mine").exists()

@@ -6,7 +6,7 @@ import re
 import sys
 from pathlib import Path
 
-from snakemake.io import WILDCARD_REGEX
+from snakemake.io import WILDCARD_REGEX, apply_wildcards
 from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
@@ -247,25 +247,49 @@ def _check_user_outputs(users, package):
 
 
 def _check_user_folders(users):
-    """Stop when one of the rules ``users`` can write a file outside RESULTS (an output, log
-    or benchmark file, judged by its real path: ``..``, an absolute path, a symbolic link
-    below results/), naming the rule, its rule file and the path as written and real. A job of
-    the benchmark's, or the next run, reads what lies there (the configuration, the package's
-    code and workflow) as the benchmark's own. Checked after _check_user_outputs, whose
-    message is the more telling for a file both refuse."""
+    """Stop when one of the rules ``users`` can write a file outside RESULTS (see
+    _refuse_outside). Checked after _check_user_outputs, whose message is the more telling for
+    a file both refuse."""
     for user in users:
-        for kind, written in _declared(user):
-            real = _judged(written)
-            if not any(p[: len(RESULTS)] != tuple(RESULTS) for p in _patterns_of(real)):
-                continue
-            shown = _shown(written)
-            if _shown(real) != shown:
-                shown = f"{shown} (its real path {_shown(real)})"
-            raise ValueError(
-                f"rule {user.name} ({_as_matched(str(user.snakefile))}) writes its {kind} "
-                f"{shown}, outside {RESULTS}: a rule of yours writes its files under "
-                f"{RESULTS}, in a folder of its own (README, 'Adding an estimator')"
-            )
+        _refuse_outside(user, _declared(user))
+
+
+def _refuse_outside(producer, files):
+    """Stop when one of ``files``, ``(kind, path)`` of the files ``producer`` (a rule of the
+    user's) writes, as patterns or as one job's paths, can lie outside RESULTS, judged by its
+    real path (``..``, an absolute path, a symbolic link below results/), naming the rule, its
+    rule file and the path as written and real. A job of the benchmark's, or the next run,
+    reads what lies there (the configuration, the package's code and workflow) as the
+    benchmark's own."""
+    for kind, written in files:
+        real = _judged(written)
+        if not any(p[: len(RESULTS)] != tuple(RESULTS) for p in _patterns_of(real)):
+            continue
+        shown = _shown(written)
+        if _shown(real) != shown:
+            shown = f"{shown} (its real path {_shown(real)})"
+        raise ValueError(
+            f"rule {producer.name} ({_as_matched(str(producer.snakefile))}) writes its {kind} "
+            f"{shown}, outside {RESULTS}: a rule of yours writes its files under "
+            f"{RESULTS}, in a folder of its own (README, 'Adding an estimator')"
+        )
+
+
+def _kept_in_results(producer, parameter):
+    """``parameter``, a parameter function of ``producer`` (a rule of the user's) taking the
+    wildcards, first stopping when a file of the job lies outside RESULTS (see
+    _refuse_outside): a wildcard's value may climb out of results/ (``results/mine/{x}.yaml``
+    asked for as ``results/mine/../../config/x.yaml``), which the patterns checked at load do
+    not show. Snakemake evaluates every job's parameters as it plans the jobs, before any
+    runs."""
+
+    def checked(wildcards):
+        values = dict(wildcards.items())
+        files = [(kind, apply_wildcards(f, values)) for kind, f in _declared(producer)]
+        _refuse_outside(producer, files)
+        return parameter(wildcards)
+
+    return checked
 
 
 def _declared(producer):
@@ -709,10 +733,12 @@ def rule_sources(producer):
     return sources
 
 
-def track_sources():
+def track_sources(user_rules):
     """Give each rule the parameter ``sources``, so that a source whose content changed reruns
     the job even when its time stamp is older than the job's outputs (a copy keeping times, a
-    backup restored)."""
+    backup restored). For a rule of the user's (``user_rules``, by name) it also checks the
+    job's files (see _kept_in_results): a parameter of its own would rerun every job of the
+    user's already made."""
     for producer in workflow.rules:
         # Snakemake would let the digest replace a rule's own parameter of that name.
         if "sources" in producer.params.keys():
@@ -720,4 +746,7 @@ def track_sources():
                 f"rule {producer.name} has a parameter named 'sources', a name the workflow "
                 "gives the digest of each job's source files; rename the rule's parameter"
             )
-        producer.set_params(sources=rule_sources(producer))
+        sources = rule_sources(producer)
+        if producer.name in user_rules:
+            sources = _kept_in_results(producer, sources)
+        producer.set_params(sources=sources)
