@@ -83,5 +83,6 @@ include: "workflow/rules/sensitivity.smk"
 check_external_rules(USER_RULES)
 
 
-# Last, once every rule exists: each job's sources hashed into its parameters.
-track_sources()
+# Last, once every rule exists: each job's sources hashed into its parameters, and the files of
+# each job of the user's checked as Snakemake plans it.
+track_sources(USER_RULES)

@@ -7,6 +7,8 @@ from __future__ import annotations
 import base64
 import dataclasses
 import json
+import os
+import re
 
 import numpy as np
 import pandas as pd
@@ -190,6 +192,7 @@ def test_built_in_estimates_do_not_depend_on_the_truth(study):
 # finds a centre it returns it; otherwise it returns the markers' centroid.
 ORACLE = '''
 import json
+import os
 from pathlib import Path
 
 import pandas as pd
@@ -276,6 +279,7 @@ def test_an_oracle_rule_finds_no_truth_and_ranks_as_the_centroid(tmp_path):
 # the package as any program in the workflow's environment can.
 CHEAT = """
 import json
+import os
 
 import pandas as pd
 import pyarrow.parquet as pq
@@ -498,6 +502,8 @@ def _refused(tmp_path, rules: str, estimator_input: str, message: str) -> None:
     run = run_snakemake(tmp_path, "--dry-run", "--configfile", overlay)
     assert run.returncode != 0
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+    # Refused while the workflow loads: no job was planned, let alone run.
+    assert "Building DAG of jobs" not in run.stdout + run.stderr
 
 
 _DATASET = "results/datasets/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet"
@@ -722,14 +728,14 @@ def test_a_user_rule_writing_the_folder_that_holds_results_stops_the_run(tmp_pat
 # estimator's own rule in another job (an input function choosing by a wildcard).
 _LAUNDERED = {
     "absolute path": (
-        'os.path.abspath("mine") + "/{study}/{condition}.parquet",',
+        'os.path.abspath("results/mine") + "/{study}/{condition}.parquet",',
         """
 
 rule stage_truth:
     input:
         "results/datasets/{study}/{condition}.parquet",
     output:
-        os.path.abspath("mine") + "/{study}/{condition}.parquet",
+        os.path.abspath("results/mine") + "/{study}/{condition}.parquet",
     shell:
         "cp {input} {output}"
 """,
@@ -766,7 +772,7 @@ _OWN_UPSTREAM = """
 
 def _centroid_or_truth(wildcards):
     if wildcards.folder == "results/estimates":
-        return f"mine/{wildcards.study}/centroid/{wildcards.condition}.parquet"
+        return f"results/mine/{wildcards.study}/centroid/{wildcards.condition}.parquet"
     return f"results/datasets/{wildcards.study}/{wildcards.condition}.parquet"
 
 
@@ -774,7 +780,7 @@ rule estimate_centroid:
     input:
         _centroid_or_truth,
     output:
-        "{folder,results/estimates|mine}/{study}/centroid/{condition}.parquet",
+        "{folder,results/estimates|results/mine}/{study}/centroid/{condition}.parquet",
     shell:
         "cp {input} {output}"
 """
@@ -792,3 +798,90 @@ def test_an_estimators_rule_that_is_its_own_upstream_is_followed(tmp_path):
     assert run.returncode != 0
     message = "rule estimate_centroid, which feeds rule estimate_centroid (external estimator"
     assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+# A rule of the user's writing outside results/, by its output, log or benchmark file: over the
+# configuration, the package's code, or anything a later job or run reads. (kind of file, its
+# path as written, its real path relative to the working directory, or None for one outside it,
+# which the test finds)
+_OUTSIDE = {
+    "config": ("output", "config/x/{study}/{condition}.yaml", "config/x/{study}/{condition}.yaml"),
+    "parent": ("output", "../outside/{study}/{condition}.txt", None),
+    "absolute": ("log", "/tmp/jointbench-outside/{study}/{condition}.log", None),
+    "dot-dot": ("benchmark", "results/../src/{study}/{condition}.py", "src/{study}/{condition}.py"),
+    "link": (
+        "output",
+        "results/linked/{study}/{condition}.yaml",
+        "config/{study}/{condition}.yaml",
+    ),
+    "a wildcard's names": (
+        "output",
+        "{where,results/mine|config}/{study}/{condition}.yaml",
+        "{where}/{study}/{condition}.yaml",
+    ),
+}
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("outside", sorted(_OUTSIDE))
+def test_a_user_rule_writing_outside_results_stops_the_run_before_any_job(tmp_path, outside):
+    """However the path is spelt: each is judged by its real path, a link inside results/ to
+    the configuration too."""
+    copy_workflow(tmp_path)
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "linked").symlink_to("../config")
+    kind, written, real = _OUTSIDE[outside]
+    real = real or os.path.realpath(tmp_path / written)
+    # As written, the wildcards without their constraints.
+    as_written = re.sub(r"\{(\w+),[^}]*\}", r"{\1}", written)
+    shown = as_written if real == as_written else f"{as_written} (its real path {real})"
+    message = (
+        f"rule sneak (workflow/rules/estimators/centroid.smk) writes its {kind} {shown}, "
+        "outside results/"
+    )
+    # The rule's other files, in a folder of its own, with the same wildcards (as Snakemake
+    # requires).
+    extra = [n for n in re.findall(r"\{(\w+)", written) if n not in ("study", "condition")]
+    mine = _MINE + "".join(f"-{{{name}}}" for name in extra)
+    paths = {other: mine + ending for other, ending in _ENDINGS.items()}
+    _refused(tmp_path, _SNEAK.format(**{**paths, kind: written}), _BLIND_INPUT, message)
+
+
+# A rule of the user's whose output's wildcard is given a value climbing out of results/ by an
+# input of the user's: its pattern lies under results/, the job's file in config/.
+_CLIMB = """
+
+rule climb:
+    output:
+        "results/mine/{x}.yaml",
+    shell:
+        "touch {output}"
+
+
+rule ask:
+    input:
+        "results/mine/../../config/x.yaml",
+    output:
+        "results/mine/asked.txt",
+    shell:
+        "touch {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_job_of_a_user_rule_whose_wildcard_climbs_out_of_results_stops_before_any_job(
+    tmp_path,
+):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators"
+    (rules / "centroid.smk").write_text((rules / "centroid.smk").read_text() + _CLIMB)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "results/mine/asked.txt", "--configfile", overlay)
+    assert run.returncode != 0
+    message = (
+        "rule climb (workflow/rules/estimators/centroid.smk) writes its output "
+        "results/mine/../../config/x.yaml (its real path config/x.yaml), outside results/"
+    )
+    assert message in run.stdout + run.stderr, run.stdout[-3000:] + run.stderr[-3000:]
+    assert not (tmp_path / "config" / "x.yaml").exists()
+    assert not (tmp_path / "results" / "mine").exists()

@@ -6,7 +6,7 @@ import re
 import sys
 from pathlib import Path
 
-from snakemake.io import WILDCARD_REGEX
+from snakemake.io import WILDCARD_REGEX, apply_wildcards
 from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
@@ -68,8 +68,8 @@ def check_external_rules(user_rules):
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
     (a misspelt name, a rule file not yet written), not at a missing CSV later; when a rule
     of the user's (``user_rules``, by name) can write a file of the benchmark's (see
-    _check_user_outputs); and when its rule reads a file of results/ other than the blind
-    copies (see _check_blind)."""
+    _check_user_outputs) or a file outside results/ (see _check_user_folders); and when its
+    rule reads a file of results/ other than the blind copies (see _check_blind)."""
     users = [r for r in workflow.rules if r.name in user_rules]
     # estimates_from_csv writes an external estimator's estimates, which its rule may write too.
     package = [
@@ -78,6 +78,7 @@ def check_external_rules(user_rules):
         if r.name not in user_rules and r.name != "estimates_from_csv"
     ]
     _check_user_outputs(users, package)
+    _check_user_folders(users)
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
         for name in jb_config.estimator_names(config, study, source="external"):
@@ -120,14 +121,16 @@ def _unreadable(path, users):
     """Why the rules of an external estimator may not read ``path`` (as judged, see _judged),
     or None; a folder holding results/, or a file under results/ that is neither a blind copy
     nor written by one of ``users``, the rules of the user's (which are checked in turn; none
-    can write a file of the benchmark's)."""
+    can write a file of the benchmark's), whether their output is spelt relative to the
+    working directory or absolute."""
     if _holds_results(path):
         return "results/, and so the truth and every file the benchmark made from it"
     if not path.startswith("results/"):
         return None
     if path.startswith(READABLE):
         return None
-    if any(other.is_producer(path) for other in users):
+    spellings = (path, os.path.abspath(path))
+    if any(other.is_producer(f) for other in users for f in spellings):
         return None
     return next(
         (held for folder, held in UNSEEN.items() if path.startswith(folder)),
@@ -181,14 +184,13 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
     followed in turn, found by the path as written (as Snakemake finds it), as normalised and
     by its real path, so that none can hand the estimator what it read from the truth;
     ``seen`` holds the (rule, file) pairs already followed."""
-    users = [r for r in everyone if r is not producer]
     for file in filter(producer.is_producer, files):
         if (producer.name, file) in seen:
             continue
         seen = seen | {(producer.name, file)}
         raw = [str(f) for f in producer.expand_input(producer.get_wildcards(file))[0]]
         spelt = [_as_matched(f) for f in raw]
-        refused = [r for r in (_refusal(f, users) for f in spelt) if r is not None]
+        refused = [r for r in (_refusal(f, everyone) for f in spelt) if r is not None]
         if refused:
             chain = "".join(f", which feeds rule {rule}" for rule in via)
             file, held = refused[0]
@@ -244,19 +246,68 @@ def _check_user_outputs(users, package):
                     )
 
 
+def _check_user_folders(users):
+    """Stop when one of the rules ``users`` can write a file outside RESULTS (see
+    _refuse_outside). Checked after _check_user_outputs, whose message is the more telling for
+    a file both refuse."""
+    for user in users:
+        _refuse_outside(user, _declared(user))
+
+
+def _refuse_outside(producer, files):
+    """Stop when one of ``files``, ``(kind, path)`` of the files ``producer`` (a rule of the
+    user's) writes, as patterns or as one job's paths, can lie outside RESULTS, judged by its
+    real path (``..``, an absolute path, a symbolic link below results/), naming the rule, its
+    rule file and the path as written and real. A job of the benchmark's, or the next run,
+    reads what lies there (the configuration, the package's code and workflow) as the
+    benchmark's own."""
+    for kind, written in files:
+        real = _judged(written)
+        if not any(p[: len(RESULTS)] != tuple(RESULTS) for p in _patterns_of(real)):
+            continue
+        shown = _shown(written)
+        if _shown(real) != shown:
+            shown = f"{shown} (its real path {_shown(real)})"
+        raise ValueError(
+            f"rule {producer.name} ({_as_matched(str(producer.snakefile))}) writes its {kind} "
+            f"{shown}, outside {RESULTS}: a rule of yours writes its files under "
+            f"{RESULTS}, in a folder of its own (README, 'Adding an estimator')"
+        )
+
+
+def _kept_in_results(producer, parameter):
+    """``parameter``, a parameter function of ``producer`` (a rule of the user's) taking the
+    wildcards, first stopping when a file of the job lies outside RESULTS (see
+    _refuse_outside): a wildcard's value may climb out of results/ (``results/mine/{x}.yaml``
+    asked for as ``results/mine/../../config/x.yaml``), which the patterns checked at load do
+    not show. Snakemake evaluates every job's parameters as it plans the jobs, before any
+    runs."""
+
+    def checked(wildcards):
+        values = dict(wildcards.items())
+        files = [(kind, apply_wildcards(f, values)) for kind, f in _declared(producer)]
+        _refuse_outside(producer, files)
+        return parameter(wildcards)
+
+    return checked
+
+
+def _declared(producer):
+    """``(kind, path)`` of every file ``producer`` writes, as written: each output, log file
+    and its benchmark file."""
+    benchmark = [producer.benchmark] if producer.benchmark else []
+    kinds = {"output": producer.output, "log": producer.log, "benchmark": benchmark}
+    return [(kind, str(f)) for kind, files in kinds.items() for f in files]
+
+
 def _written(producer):
     """The files ``producer`` writes, logs and benchmark file included, as patterns judged by
     their real paths (see _judged; their wildcards' constraints inline); an output folder
     stands for everything inside it too."""
-    extra = [producer.log, [producer.benchmark] if producer.benchmark else []]
-    found = [_judged(str(f)) for f in itertools.chain(*extra)]
-    for output in producer.output:
-        path = _judged(str(output))
-        found.append(path)
-        if output.is_directory:
-            # Joined as a path: the working directory (.) holds every path, none spelt with ./
-            found.append(Path(path, "{inside}").as_posix())
-    return found
+    found = [_judged(path) for _, path in _declared(producer)]
+    folders = [_judged(str(f)) for f in producer.output if f.is_directory]
+    # Joined as a path: the working directory (.) holds every path, none spelt with ./
+    return [*found, *(Path(path, "{inside}").as_posix() for path in folders)]
 
 
 def _shown(path):
@@ -682,10 +733,12 @@ def rule_sources(producer):
     return sources
 
 
-def track_sources():
+def track_sources(user_rules):
     """Give each rule the parameter ``sources``, so that a source whose content changed reruns
     the job even when its time stamp is older than the job's outputs (a copy keeping times, a
-    backup restored)."""
+    backup restored). For a rule of the user's (``user_rules``, by name) it also checks the
+    job's files (see _kept_in_results): a parameter of its own would rerun every job of the
+    user's already made."""
     for producer in workflow.rules:
         # Snakemake would let the digest replace a rule's own parameter of that name.
         if "sources" in producer.params.keys():
@@ -693,4 +746,7 @@ def track_sources():
                 f"rule {producer.name} has a parameter named 'sources', a name the workflow "
                 "gives the digest of each job's source files; rename the rule's parameter"
             )
-        producer.set_params(sources=rule_sources(producer))
+        sources = rule_sources(producer)
+        if producer.name in user_rules:
+            sources = _kept_in_results(producer, sources)
+        producer.set_params(sources=sources)
