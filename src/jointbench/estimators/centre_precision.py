@@ -113,8 +113,10 @@ _Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
 _REFINE_ITERATIONS = 20
-# ... until they move it less than this share of its distance from the answer.
-_REFINED_TO = 1e-3
+# ... until they move it less than this share of its distance from the answer: the distance is
+# reported to three significant figures and compared with MIN_REJECTED_STEP_MM, and the
+# iterations converge linearly, so what is left after such a move is a fraction of it.
+_REFINED_TO = 1e-2
 
 
 @kernel
@@ -129,7 +131,7 @@ def centre_statistics(
     a centre about which the spheres fit better (:func:`_refine`); else the first-order step.
     ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
     else 0. A compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
+    n_trials, n_frames = markers.shape[:2]
     out = np.empty((n_trials, 11))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
@@ -175,15 +177,25 @@ def _refine(
     move = np.empty(3)
     for _ in range(_REFINE_ITERATIONS):
         _step_at(markers, centre, s2, move, scratch)
-        if not np.isfinite(move).all():
+        if not (math.isfinite(move[0]) and math.isfinite(move[1]) and math.isfinite(move[2])):
             return
         centre += move
-        if math.sqrt((move**2).sum()) < _REFINED_TO * math.sqrt(((centre - answer) ** 2).sum()):
+        if _length(move[0], move[1], move[2]) < _REFINED_TO * _length(
+            centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2]
+        ):
             break
+    n_frames, n_markers, _ = markers.shape
+    squares, fourths, kept = _sums_at(markers, centre, s2, scratch)
     there = np.empty_like(row)
-    _row_at(markers, centre, s2, there, scratch)
+    _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
     if there[_FIT_RATIO] < row[_FIT_RATIO]:
-        row[_STEP] = math.sqrt(((centre - answer) ** 2).sum())
+        row[_STEP] = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
+
+
+@kernel
+def _length(x: float, y: float, z: float) -> float:
+    """The length of the vector ``(x, y, z)``. A compiled kernel."""
+    return math.sqrt(x * x + y * y + z * z)
 
 
 @kernel
@@ -243,7 +255,7 @@ def _corrected_step(score: np.ndarray, values: np.ndarray, vectors: np.ndarray, 
             along += vectors[j, i] * score[j]
         for j in range(3):
             towards[j] += vectors[j, i] * along / values[i]
-    return math.sqrt(towards[0] ** 2 + towards[1] ** 2 + towards[2] ** 2)
+    return _length(towards[0], towards[1], towards[2])
 
 
 @kernel
@@ -535,7 +547,7 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         return annotated
     if len(checked) < len(results):
         markers = markers[checked]
-    variances = np.array(residuals) ** 2 / 3.0
+    variances = np.array([residual * residual / 3.0 for residual in residuals])
     rows = _statistics(markers, np.array(centres), variances)
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
         sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]
