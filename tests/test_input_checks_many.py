@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from rigs import DISTAL, JOINT, apply_pose, two_segments
 
 from jointbench.estimators import registry, support, validation
@@ -242,3 +244,23 @@ def test_only_the_trials_that_passed_reach_the_verdict(assessed):
     registry.many("center", "LS")(markers)
     (arrays,) = assessed
     np.testing.assert_array_equal(arrays[0], markers[[0, 2]])
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    frame=st.integers(0, N_FRAMES - 1),
+    marker=st.integers(0, 2),
+    axis=st.integers(0, 2),
+    value=st.sampled_from([np.nan, np.inf, -np.inf]),
+    magnitude=st.sampled_from([1e-300, 1.0, 1e200, 1e305]),
+)
+def test_one_non_finite_coordinate_anywhere_is_refused_at_any_magnitude(
+    frame, marker, axis, value, magnitude
+):
+    """Every coordinate is read, whatever the others' size: finite values up to the largest
+    double do not hide a NaN or an infinity, nor pass for one."""
+    trial = _moving(7) * magnitude / 100.0
+    validation.check_markers(trial)  # the finite trial passes the sample checks
+    trial[frame, marker, axis] = value
+    with pytest.raises(ValueError, match=f"NaN or inf at marker {marker}, frame {frame} "):
+        validation.check_markers(trial)

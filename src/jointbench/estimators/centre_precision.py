@@ -113,8 +113,10 @@ _Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
 _REFINE_ITERATIONS = 20
-# ... until they move it less than this share of its distance from the answer.
-_REFINED_TO = 1e-3
+# ... until they move it less than this share of its distance from the answer: the distance is
+# reported to three significant figures and compared with MIN_REJECTED_STEP_MM, and the
+# iterations converge linearly, so what is left after such a move is a fraction of it.
+_REFINED_TO = 1e-2
 
 
 @kernel
@@ -127,58 +129,96 @@ def centre_statistics(
     ``variances`` ``(T,)`` [mm^2] per coordinate (module docstring). Where the score test
     rejects, the step is the distance to where Gauss–Newton iterations from the answer end, at
     a centre about which the spheres fit better (:func:`_refine`); else the first-order step.
-    A compiled kernel."""
-    n_trials = markers.shape[0]
+    ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
+    else 0. A compiled kernel."""
+    n_trials, n_frames = markers.shape[:2]
     out = np.empty((n_trials, 11))
+    scratch = _scratch_for(n_frames)
+    keys = np.empty(n_frames)
     for t in range(n_trials):
-        _row_at(markers[t], centres[t], variances[t], out[t])
+        _row_at(markers[t], centres[t], variances[t], out[t], scratch)
+        out[t, _REPEATS] = _repeats(markers[t], keys)
         if out[t, _CHI2] > _CHI2_ALPHA:
-            _refine(markers[t], centres[t], variances[t], out[t])
+            _refine(markers[t], centres[t], variances[t], out[t], scratch)
     return out
 
 
 @kernel
-def _refine(markers: np.ndarray, answer: np.ndarray, s2: float, row: np.ndarray) -> None:
-    """``row``'s step made the distance from ``answer`` ``(3,)`` [mm] to where Gauss–Newton
-    iterations on the spheres' radial residuals end (at most :data:`_REFINE_ITERATIONS`),
-    where the spheres fit better there: the first-order step is exact only near the centre,
-    and an answer far from it (among the markers, say) can have a small one. A compiled
-    kernel."""
-    centre = answer + row[_TOWARDS]
-    there = np.empty_like(row)
-    for _ in range(_REFINE_ITERATIONS):
-        _row_at(markers, centre, s2, there)
-        move = there[_TOWARDS]
-        if not np.isfinite(move).all():
-            return
-        centre += move
-        if math.sqrt((move**2).sum()) < _REFINED_TO * math.sqrt(((centre - answer) ** 2).sum()):
-            break
-    _row_at(markers, centre, s2, there)
-    if there[_FIT_RATIO] < row[_FIT_RATIO]:
-        row[_STEP] = math.sqrt(((centre - answer) ** 2).sum())
+def _scratch_for(n_frames: int) -> tuple:
+    """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames, allocated once
+    per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
+    sum_uu)``. A compiled kernel."""
+    return (
+        np.empty((3, 3)),
+        np.empty((3, 3)),
+        np.empty((3, 3)),
+        np.empty(3),
+        np.empty(3),
+        np.empty((3, 3)),
+        np.empty((3, 3)),
+        np.empty(n_frames),
+        np.empty(3),
+        np.empty(3),
+        np.empty((3, 3)),
+    )
 
 
 @kernel
-def _row_at(markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray) -> None:
-    """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
-    the markers ``(N, n, 3)`` [mm] with noise ``s2`` [mm^2] per coordinate, into ``row``
-    ``(11,)``; ``inf`` SD, step and share where the corrected information is not positive
-    definite. ``repeats`` is 1 where two frames may be equal (their numbers then count that
-    frame twice), else 0. A marker whose directions from the answer do not spread beyond their
-    noise (one at the answer, a virtual marker at the joint, say) carries nothing on it and is
-    left out. A compiled kernel."""
+def _refine(
+    markers: np.ndarray, answer: np.ndarray, s2: float, row: np.ndarray, scratch: tuple
+) -> None:
+    """``row``'s step made the distance from ``answer`` ``(3,)`` [mm] to where Gauss–Newton
+    iterations on the spheres' radial residuals end (at most :data:`_REFINE_ITERATIONS`),
+    where the spheres fit better there: the first-order step is exact only near the centre,
+    and an answer far from it (among the markers, say) can have a small one. Each iteration
+    takes :func:`_row_at`'s step (:func:`_step_at`) without the rest of its numbers. A
+    compiled kernel."""
+    centre = answer + row[_TOWARDS]
+    move = np.empty(3)
+    for _ in range(_REFINE_ITERATIONS):
+        _step_at(markers, centre, s2, move, scratch)
+        if not (math.isfinite(move[0]) and math.isfinite(move[1]) and math.isfinite(move[2])):
+            return
+        centre += move
+        if _length(move[0], move[1], move[2]) < _REFINED_TO * _length(
+            centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2]
+        ):
+            break
+    n_frames, n_markers, _ = markers.shape
+    squares, fourths, kept = _sums_at(markers, centre, s2, scratch)
+    there = np.empty_like(row)
+    _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
+    if there[_FIT_RATIO] < row[_FIT_RATIO]:
+        row[_STEP] = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
+
+
+@kernel
+def _length(x: float, y: float, z: float) -> float:
+    """The length of the vector ``(x, y, z)``. A compiled kernel."""
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@kernel
+def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple) -> tuple:
+    """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers ``(N, n, 3)``
+    [mm] with noise ``s2`` [mm^2] per coordinate, into ``scratch`` (:func:`_scratch_for`): the
+    information ``F``, its part ``F_s`` beyond the directions' noise and that noise's part
+    ``F - F_s`` (upper triangles), the score ``g``; returns the radial residuals' sum of
+    squares and of fourth powers and the markers kept. A marker whose directions from the
+    answer do not spread beyond their noise (one at the answer, a virtual marker at the joint,
+    say) carries nothing on it and is left out. A compiled kernel."""
+    info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch
     n_frames, n_markers, _ = markers.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
     # of freedom each: beyond this factor of that spread the marker has a signal.
     beyond_noise = 1.0 + _Z_ALPHA / math.sqrt(max(n_frames - 1, 1))
-    noisy, info, signal = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
-    score, sum_u, sum_du, sum_uu = np.zeros(3), np.empty(3), np.empty(3), np.empty((3, 3))
-    values, vectors, work = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
-    keys, distances = np.zeros(n_frames), np.empty(n_frames)
+    info[:] = 0.0
+    signal[:] = 0.0
+    noisy[:] = 0.0
+    score[:] = 0.0
     squares, fourths, kept = 0.0, 0.0, 0
     for p in range(n_markers):
-        radius = _marker_sums(markers[:, p], centre, p, keys, distances, sum_u, sum_du, sum_uu)
+        radius = _marker_sums(markers[:, p], centre, distances, sum_u, sum_du, sum_uu)
         noise = (n_frames - 1) * s2 / radius**2 if radius > 0.0 else np.inf
         spread = sum_uu[0, 0] + sum_uu[1, 1] + sum_uu[2, 2]
         norm2 = sum_u[0] ** 2 + sum_u[1] ** 2 + sum_u[2] ** 2
@@ -199,7 +239,52 @@ def _row_at(markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray)
                 info[i, j] += moment
                 signal[i, j] += moment - noise * tangential
                 noisy[i, j] += noise * tangential
-    row[_REPEATS] = _repeats(keys)
+    return squares, fourths, kept
+
+
+@kernel
+def _corrected_step(score: np.ndarray, values: np.ndarray, vectors: np.ndarray, towards) -> float:
+    """The step ``F_s^-1 g`` towards the spheres' centre into ``towards`` ``(3,)`` [mm], given
+    the score ``g`` and the eigen-decomposition ``values``, ``vectors`` of ``F_s``; returns its
+    length. Gauss-Newton's own step (``F^-1 g``) is shortened by the directions' noise as a
+    regression on noisy regressors is. A compiled kernel."""
+    towards[:] = 0.0
+    for i in range(3):
+        along = 0.0
+        for j in range(3):
+            along += vectors[j, i] * score[j]
+        for j in range(3):
+            towards[j] += vectors[j, i] * along / values[i]
+    return _length(towards[0], towards[1], towards[2])
+
+
+@kernel
+def _step_at(
+    markers: np.ndarray, centre: np.ndarray, s2: float, towards: np.ndarray, scratch: tuple
+) -> None:
+    """:func:`_row_at`'s step towards the spheres' centre from ``centre`` ``(3,)`` [mm] alone,
+    into ``towards`` ``(3,)``: ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not positive
+    definite (NaN where neither is). A compiled kernel."""
+    info, signal, _, score, values, vectors, work = scratch[:7]
+    _sums_at(markers, centre, s2, scratch)
+    symmetric_eigen_into(signal, values, vectors, work)
+    if values[0] > 1e-12 * abs(values[2]):
+        _corrected_step(score, values, vectors, towards)
+    else:
+        _solved(info, score, towards, values, vectors, work)
+
+
+@kernel
+def _row_at(
+    markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray, scratch: tuple
+) -> None:
+    """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
+    the markers ``(N, n, 3)`` [mm] with noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`),
+    into ``row`` ``(11,)`` but for ``repeats``; ``inf`` SD, step and share where the corrected
+    information is not positive definite. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    info, signal, noisy, score, values, vectors, work = scratch[:7]
+    squares, fourths, kept = _sums_at(markers, centre, s2, scratch)
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
     _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
     symmetric_eigen_into(signal, values, vectors, work)
@@ -216,25 +301,13 @@ def _row_at(markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray)
             share += vectors[i, 0] * _upper(noisy, i, j) * vectors[j, 0]
     row[_SHARE] = share / values[0]
     row[_SD] = math.sqrt(s2 / values[0])
-    # The step with the information corrected for the directions' noise: Gauss-Newton's own
-    # (F^-1 g) is shortened by that noise as a regression on noisy regressors is.
-    towards = row[_TOWARDS]
-    towards[:] = 0.0
-    for i in range(3):
-        along = 0.0
-        for j in range(3):
-            along += vectors[j, i] * score[j]
-        for j in range(3):
-            towards[j] += vectors[j, i] * along / values[i]
-    row[_STEP] = math.sqrt(towards[0] ** 2 + towards[1] ** 2 + towards[2] ** 2)
+    row[_STEP] = _corrected_step(score, values, vectors, row[_TOWARDS])
 
 
 @kernel
 def _marker_sums(
     track: np.ndarray,
     centre: np.ndarray,
-    p: int,
-    keys: np.ndarray,
     distances: np.ndarray,
     sum_u: np.ndarray,
     sum_du: np.ndarray,
@@ -242,47 +315,58 @@ def _marker_sums(
 ) -> float:
     """One marker's sums over its ``track`` ``(N, 3)`` [mm] about ``centre`` ``(3,)``: its
     ``distances`` ``(N,)``, the sums of its unit directions ``u``, of ``d u`` and of ``u u'``
-    (upper triangle), and its share of each frame's key (``p`` its index); returns its mean
-    distance ``r``. ``F_p = sum u u' - N m m'`` and ``g_p = sum d u - N r m`` follow, ``m``
-    the mean direction. A compiled kernel."""
+    (upper triangle); returns its mean distance ``r``. ``F_p = sum u u' - N m m'`` and
+    ``g_p = sum d u - N r m`` follow, ``m`` the mean direction. A compiled kernel."""
     n_frames = track.shape[0]
-    sum_u[:] = 0.0
-    sum_du[:] = 0.0
-    sum_uu[:] = 0.0
-    # Equal frames have equal keys: weights that no two coordinates of a frame share.
-    wx, wy, wz = math.sqrt(3.0 * p + 2.0), math.sqrt(3.0 * p + 3.0), math.sqrt(3.0 * p + 4.0)
+    cx, cy, cz = centre[0], centre[1], centre[2]
+    # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers.
     sum_d = 0.0
+    su0 = su1 = su2 = 0.0
+    sd0 = sd1 = sd2 = 0.0
+    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
     for k in range(n_frames):
-        x = track[k, 0] - centre[0]
-        y = track[k, 1] - centre[1]
-        z = track[k, 2] - centre[2]
-        keys[k] += wx * x + wy * y + wz * z
+        x = track[k, 0] - cx
+        y = track[k, 1] - cy
+        z = track[k, 2] - cz
         d = math.sqrt(x * x + y * y + z * z)
         distances[k] = d
         inverse = 1.0 / d if d > 0.0 else 0.0
         u0, u1, u2 = x * inverse, y * inverse, z * inverse
         sum_d += d
-        sum_u[0] += u0
-        sum_u[1] += u1
-        sum_u[2] += u2
-        sum_du[0] += x
-        sum_du[1] += y
-        sum_du[2] += z
-        sum_uu[0, 0] += u0 * u0
-        sum_uu[0, 1] += u0 * u1
-        sum_uu[0, 2] += u0 * u2
-        sum_uu[1, 1] += u1 * u1
-        sum_uu[1, 2] += u1 * u2
-        sum_uu[2, 2] += u2 * u2
+        su0 += u0
+        su1 += u1
+        su2 += u2
+        sd0 += x
+        sd1 += y
+        sd2 += z
+        s00 += u0 * u0
+        s01 += u0 * u1
+        s02 += u0 * u2
+        s11 += u1 * u1
+        s12 += u1 * u2
+        s22 += u2 * u2
+    sum_u[0], sum_u[1], sum_u[2] = su0, su1, su2
+    sum_du[0], sum_du[1], sum_du[2] = sd0, sd1, sd2
+    sum_uu[0, 0], sum_uu[0, 1], sum_uu[0, 2] = s00, s01, s02
+    sum_uu[1, 1], sum_uu[1, 2], sum_uu[2, 2] = s11, s12, s22
     return sum_d / n_frames
 
 
 @kernel
-def _repeats(keys: np.ndarray) -> float:
-    """1 where two of the frames' ``keys`` ``(N,)`` are equal (sorted in place), else 0. A
-    compiled kernel."""
+def _repeats(markers: np.ndarray, keys: np.ndarray) -> float:
+    """1 where two frames of ``markers`` ``(N, n, 3)`` may be equal, else 0: equal frames have
+    equal keys ``(N,)`` (scratch), sums of the coordinates with weights that no two of a
+    frame's coordinates share. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    for k in range(n_frames):
+        key = 0.0
+        for p in range(n_markers):
+            for i in range(3):
+                key += weights[3 * p + i] * markers[k, p, i]
+        keys[k] = key
     keys.sort()
-    for k in range(keys.shape[0] - 1):
+    for k in range(n_frames - 1):
         if not keys[k + 1] != keys[k]:
             return 1.0
     return 0.0
@@ -463,7 +547,7 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         return annotated
     if len(checked) < len(results):
         markers = markers[checked]
-    variances = np.array(residuals) ** 2 / 3.0
+    variances = np.array([residual * residual / 3.0 for residual in residuals])
     rows = _statistics(markers, np.array(centres), variances)
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
         sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]

@@ -8,7 +8,6 @@ call :func:`check_markers` with their own minimum numbers of frames and markers.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -201,15 +200,17 @@ def _first_failures(
         trial = markers[t]
         failure = 0
         if checks & _SAMPLES:
-            all_finite = True
-            any_origin = False
+            # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so
+            # the sum of those is 0 exactly when every coordinate is finite.
+            probe = 0.0
+            origins = 0
             for f in range(n_frames):
                 for m in range(n_markers):
                     x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
-                    all_finite = (
-                        all_finite and math.isfinite(x) and math.isfinite(y) and math.isfinite(z)
-                    )
-                    any_origin = any_origin or (x == 0.0 and y == 0.0 and z == 0.0)
+                    probe += x * 0.0 + y * 0.0 + z * 0.0
+                    origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
+            all_finite = probe == 0.0
+            any_origin = origins > 0
             if not all_finite:
                 failure = _NOT_FINITE
             elif any_origin:
@@ -234,11 +235,22 @@ def _first_failures(
                     for f in range(n_frames):
                         total += trial[f, p, i]
                     mean[i] = total / n_frames
-                scatter[:] = 0.0
+                # The sums in locals, which the compiler keeps in registers.
+                s00 = s01 = s02 = s11 = s12 = s22 = 0.0
                 for f in range(n_frames):
-                    for i in range(3):
-                        for j in range(3):
-                            scatter[i, j] += (trial[f, p, i] - mean[i]) * (trial[f, p, j] - mean[j])
+                    u0 = trial[f, p, 0] - mean[0]
+                    u1 = trial[f, p, 1] - mean[1]
+                    u2 = trial[f, p, 2] - mean[2]
+                    s00 += u0 * u0
+                    s01 += u0 * u1
+                    s02 += u0 * u2
+                    s11 += u1 * u1
+                    s12 += u1 * u2
+                    s22 += u2 * u2
+                scatter[0, 0], scatter[1, 1], scatter[2, 2] = s00, s11, s22
+                scatter[0, 1] = scatter[1, 0] = s01
+                scatter[0, 2] = scatter[2, 0] = s02
+                scatter[1, 2] = scatter[2, 1] = s12
                 trace = scatter[0, 0] + scatter[1, 1] + scatter[2, 2]
                 minors = (
                     (scatter[0, 0] * scatter[1, 1] - scatter[0, 1] * scatter[0, 1])
