@@ -235,16 +235,16 @@ def _medians(values: np.ndarray) -> np.ndarray:
 def _median_in_place(values: np.ndarray) -> float:
     """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
     ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values without NaN
-    have one order, in which any selection finds the same numbers: from some hundreds of
-    values on, :func:`_select_sweeping` is the fastest (measured; below, branches mispredict
-    too rarely to matter). NaN leave no order: values with one are taken as Numba's
-    ``np.median`` takes them (:func:`_quickselect_median`), so that the median is the number
-    it gives. A compiled kernel."""
+    have one order, in which any selection finds the same numbers: :func:`_select_sweeping`
+    is the fastest at every count (measured on values new to each call, as a trial's are: 0.36
+    against 1.25 us for 120 values, 0.95 against 3.6 for 360; the same values over and over
+    let the branch predictor learn a quickselect's branches and hide its cost). NaN leave no
+    order: values with one are taken as Numba's ``np.median`` takes them
+    (:func:`_quickselect_median`), so that the median is the number it gives. A compiled
+    kernel."""
     n = values.size
     if n == 0:
         return np.nan
-    if n < 512:
-        return _quickselect_median(values)
     for value in values:
         if value != value:
             return _quickselect_median(values)
