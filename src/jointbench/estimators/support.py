@@ -1215,7 +1215,8 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             row[0],
             tests[t],
             shares.get(t),
-        )._replace(motion_axis=axes.get(t))
+            axes.get(t),
+        )
         for t, row in enumerate(rows)
     ]
 
@@ -1365,13 +1366,13 @@ def _without_poses(
     )
 
 
-def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support:
+def _verdict(kind, names, rigidity, variance, tests, axis_share=None, motion_axis=None) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
     [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
     off the main axis; ``axis_share``, for an axis whose rotation off the main axis is
     resolved, an :class:`_AxisShare` row (share, RMS rotation about the principal axis and
-    about the others [rad])."""
+    about the others [rad]); ``motion_axis`` the :class:`MotionAxis` the verdict carries."""
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
@@ -1415,7 +1416,7 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     }
     if axis_share is not None:
         numbers["off_principal_axis_share"] = float(axis_share[0])
-    return Support(tuple(warnings), numbers)
+    return Support(tuple(warnings), numbers, motion_axis)
 
 
 def assess(
