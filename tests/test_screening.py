@@ -17,6 +17,7 @@ import pytest
 import jointbench
 from jointbench import screening
 from jointbench.geometry import rotation_matrix
+from jointbench.numerics.poses import _horn_rotations
 
 RULES = screening.ArtefactRules()
 
@@ -372,6 +373,68 @@ def test_kernels_compute_what_their_source_says():
         screening._spread(local, 3), screening._spread.__wrapped__(local, 3), rtol=1e-12
     )
     assert screening._most_typical(complete) == screening._most_typical.__wrapped__(complete)
+
+
+def _mean_shape_fit_by_fit(markers, labels, most=screening._MAX_ITERATIONS):
+    """The mean shape as one pose fit per iteration from Python (:func:`screening.fit_poses`,
+    whose rotations an unsettled Horn fit leaves to the SVD), and its last change [mm]."""
+    shape = screening.typical_shape(markers, labels, "m")
+    change = np.nan
+    for _ in range(most):
+        rotation, translation = screening.fit_poses(shape, markers)
+        new = np.empty_like(shape)
+        screening._mean_local(rotation, translation, markers, new)
+        change = float(np.max(np.abs(new - shape)))
+        shape = new
+        if change < screening._TOL_MM * max(1.0, float(np.abs(shape).max())):
+            return shape, change
+    return None, change
+
+
+def _unsettled_cluster(rng):
+    """A cluster with gaps in which some frames show three collinear markers, whose rotation
+    Horn's method leaves to the SVD."""
+    markers = _cluster(rng, n_markers=4, n_frames=60)
+    markers[10:14, 3] = np.nan
+    markers[20:23, 0] = np.nan
+    for f in (20, 21, 22):
+        markers[f, 3] = 0.5 * (markers[f, 1] + markers[f, 2])
+    return markers
+
+
+@pytest.mark.parametrize("case", ["clean", "gaps", "unsettled", "large"])
+def test_the_mean_shape_is_its_fit_by_fit_iteration(case, monkeypatch):
+    """The compiled iterations of the mean shape give the shape, bit for bit, and the error
+    that fitting each iteration's poses from Python gives, where Horn's method settles every
+    frame and where it leaves some to the SVD."""
+    rng = np.random.default_rng(23)
+    if case == "unsettled":
+        markers = _unsettled_cluster(rng)
+        cross = np.empty((60, 3, 3))
+        shape = markers[0].copy()
+        screening._pose_sums(shape, markers, cross, np.empty((60, 2, 3)), np.empty(60))
+        unsettled = np.empty(60, dtype=bool)
+        _horn_rotations(cross, np.full(60, np.inf), np.empty((60, 3, 3)), unsettled)
+        assert unsettled.any()
+    else:
+        markers = _cluster(rng, n_markers=5 if case == "large" else 3, n_frames=200)
+        if case == "gaps":
+            markers[40:50, 1] = np.nan
+            markers[70, :2] = np.nan
+        if case == "large":
+            markers = markers * 1e4
+    labels = _labels(markers.shape[1])
+    want, _ = _mean_shape_fit_by_fit(markers, labels)
+    assert np.array_equal(screening.mean_shape(markers, labels, "m"), want)
+    # Cut short, both fail alike, naming the last change.
+    _, change = _mean_shape_fit_by_fit(markers, labels, most=2)
+    monkeypatch.setattr(screening, "_MAX_ITERATIONS", 2)
+    with pytest.raises(ValueError, match=re.escape(f"(last change {change:.3g} mm)")):
+        screening.mean_shape(markers, labels, "m")
+    steps = screening._mean_shape_steps(
+        screening.typical_shape(markers, labels, "m"), markers, 200, screening._TOL_MM
+    )
+    assert steps[3] is (case != "unsettled")
 
 
 @pytest.mark.parametrize("artefacts", ["refuse", "warn", "ignore"])

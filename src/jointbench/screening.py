@@ -43,7 +43,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.poses import best_rotation
+from jointbench.numerics.poses import _horn_rotations, best_rotation
 
 __all__ = [
     "MAX_EXCHANGE_MARKERS",
@@ -412,18 +412,107 @@ def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.
     """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
     in the frame of its most typical complete frame (the caller fixes the frame)."""
     shape = typical_shape(markers, labels, source)
-    for _ in range(_MAX_ITERATIONS):
-        rotation, translation = fit_poses(shape, markers)
-        new = np.empty_like(shape)
-        _mean_local(rotation, translation, kernel_array(markers), new)
-        change = float(np.max(np.abs(new - shape)))
-        shape = new
-        if change < _TOL_MM * max(1.0, float(np.abs(shape).max())):
+    markers = kernel_array(markers)
+    done = 0
+    while done < _MAX_ITERATIONS:
+        # Compiled iterations, a few microseconds each where a pose fit from Python costs
+        # tens, until the shape settles or a frame's rotation needs the SVD
+        # (:func:`fit_poses`), which that iteration then takes here.
+        shape, steps, change, settled = _mean_shape_steps(
+            shape, markers, _MAX_ITERATIONS - done, _TOL_MM
+        )
+        done += steps
+        if settled:
             return shape
+        if done < _MAX_ITERATIONS:
+            rotation, translation = fit_poses(shape, markers)
+            shape, change, settled = _mean_step(rotation, translation, markers, shape, _TOL_MM)
+            done += 1
+            if settled:
+                return shape
     raise ValueError(
         f"{source}: the mean shape of {', '.join(labels)} did not converge in "
         f"{_MAX_ITERATIONS} iterations (last change {change:.3g} mm)"
     )
+
+
+@kernel
+def _mean_shape_steps(
+    shape: np.ndarray, markers: np.ndarray, most: int, tolerance: float
+) -> tuple[np.ndarray, int, float, bool]:
+    """Up to ``most`` iterations of :func:`mean_shape` from ``shape`` ``(n, 3)`` [mm] on
+    ``markers`` ``(n_frames, n, 3)`` [mm], each pose fit as :func:`fit_poses` fits it where
+    Horn's method settles every frame it poses (:func:`jointbench.numerics.poses._horn_rotations`,
+    :func:`_needs_svd`): the shape, the iterations done, the last change [mm] (NaN if none)
+    and whether the shape settled (:func:`_mean_step`). They stop before an iteration in
+    which a frame needs the SVD, for the caller to take. A compiled kernel."""
+    n_frames = markers.shape[0]
+    cross = np.empty((n_frames, 3, 3))
+    centroids = np.empty((n_frames, 2, 3))
+    bound = np.empty(n_frames)
+    rotation = np.empty((n_frames, 3, 3))
+    unsettled = np.empty(n_frames, dtype=np.bool_)
+    translation = np.empty((n_frames, 3))
+    change = np.nan
+    for step in range(most):
+        _pose_sums(shape, markers, cross, centroids, bound)
+        _horn_rotations(cross, bound, rotation, unsettled)
+        if _needs_svd(unsettled, cross, centroids):
+            return shape, step, change, False
+        _translations(rotation, centroids, translation)
+        shape, change, settled = _mean_step(rotation, translation, markers, shape, tolerance)
+        if settled:
+            return shape, step + 1, change, True
+    return shape, most, change, False
+
+
+@kernel
+def _needs_svd(unsettled: np.ndarray, cross: np.ndarray, centroids: np.ndarray) -> bool:
+    """Whether :func:`fit_poses` would take the SVD's rotation of a frame that Horn's method
+    left ``unsettled`` ``(n_frames,)``: one it poses (finite ``centroids`` ``(n_frames, 2,
+    3)``); of a frame of fewer than three markers :func:`_translations` keeps NaN, whatever
+    the SVD of its ``cross`` ``(n_frames, 3, 3)`` gives, but one not finite would stop the
+    SVD with an error, which the SVD is left to raise. A compiled kernel."""
+    for f in range(unsettled.size):
+        if unsettled[f]:
+            if np.isfinite(centroids[f, 0, 0]) or not np.isfinite(cross[f]).all():
+                return True
+    return False
+
+
+@kernel
+def _mean_step(
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    markers: np.ndarray,
+    shape: np.ndarray,
+    tolerance: float,
+) -> tuple[np.ndarray, float, bool]:
+    """One iteration of :func:`mean_shape` from ``shape`` ``(n, 3)`` [mm], given the poses
+    ``(rotation, translation)`` of ``markers`` ``(n_frames, n, 3)`` [mm] fitted to it: the
+    mean of the markers in those poses (:func:`_mean_local`), its largest change from
+    ``shape`` [mm] (NaN if any is) and whether that change is below ``tolerance`` times the
+    largest coordinate, or 1 mm if that is less (a NaN coordinate counts as less). A compiled
+    kernel."""
+    new = np.empty_like(shape)
+    _mean_local(rotation, translation, markers, new)
+    change = _largest_magnitude(new, shape)
+    size = _largest_magnitude(new, np.zeros_like(new))
+    return new, change, change < tolerance * (size if size > 1.0 else 1.0)
+
+
+@kernel
+def _largest_magnitude(values: np.ndarray, less: np.ndarray) -> float:
+    """``np.max(np.abs(values - less))`` of two arrays ``(n, 3)``: NaN if any difference is.
+    A compiled kernel."""
+    largest = 0.0
+    for m in range(values.shape[0]):
+        for i in range(3):
+            difference = abs(values[m, i] - less[m, i])
+            if difference != difference:
+                return np.nan
+            largest = max(largest, difference)
+    return largest
 
 
 @kernel
