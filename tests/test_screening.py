@@ -85,6 +85,38 @@ def test_gaps_at_the_start_end_or_middle_are_no_artefact(rows):
     assert not screening.surely_rigid(markers, _labels(4), "m", RULES)
 
 
+@pytest.mark.parametrize("broken", [False, True])
+def test_the_whole_screen_reuses_the_fitted_bounds_typical_frame_and_pose_fit(monkeypatch, broken):
+    """Where the marker-frame bounds do not clear a complete cluster and the distance test
+    finds no swap, the whole screen starts from the typical frame and pose fit the fitted
+    bounds found, and from no swapped frame: it finds what it finds on its own without
+    looking for them again."""
+    markers = _cluster(np.random.default_rng(24), n_markers=4, noise_mm=1.5)
+    if broken:
+        markers[60:66, 2] += [0.0, 150.0, 0.0]
+    labels = _labels(4)
+    typical, cleared, _ = screening._screen_sums(markers, screening._rigid_limit(RULES))
+    assert typical >= 0 and not cleared
+    whole = screening.screen(markers, labels, "m")
+    assert bool(whole.artefacts) == broken
+    calls = []
+
+    def recorded(name, function):
+        def call(*arguments):
+            calls.append(name)
+            return function(*arguments)
+
+        return call
+
+    for name in ("find_exchanges", "typical_shape", "mean_shape", "fit_poses"):
+        monkeypatch.setattr(screening, name, recorded(name, getattr(screening, name)))
+    assert _outcome(*screening.find_artefacts(markers, labels, "m")) == _outcome(
+        whole.artefacts, whole.swaps
+    )
+    # One pose fit of the typical frame, for the bounds, then straight to the mean shape.
+    assert calls[:2] == ["fit_poses", "mean_shape"] and "find_exchanges" not in calls
+
+
 @pytest.mark.parametrize("noise_mm", [0.0, 0.3, 0.6])
 def test_clean_clusters_are_cleared_by_the_bound(noise_mm):
     markers = _cluster(np.random.default_rng(4), noise_mm=noise_mm)

@@ -1362,18 +1362,41 @@ def screen(
         )
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
-    untested = exchanges_untested(len(labels))
-    exchanged = [] if untested else find_exchanges(markers, labels, rules)
+    exchanged = [] if exchanges_untested(len(labels)) else find_exchanges(markers, labels, rules)
     # First judged against one typical frame, which the broken frames cannot distort; then the
     # mean shape is refitted on the samples neither flagged nor swapped, until the flags settle.
     # The typical frame is one the swaps do not hold, so that both checks judge by one side.
     unswapped = np.ones(len(markers), dtype=bool)
     unswapped[[a.frame for a in exchanged]] = False
     shape = typical_shape(markers[unswapped] if exchanged else markers, labels, source)
+    return _screened(markers, labels, source, rules, exchanged, shape, _posed(shape, markers))
+
+
+def _posed(shape: np.ndarray, markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``shape`` ``(n, 3)`` [mm] in its best pose in every frame of ``markers``
+    ``(n_frames, n, 3)`` [mm] (:func:`fit_poses`), and each marker's residual ``(n_frames, n)``
+    [mm] (:func:`residuals`)."""
+    rotation, translation = fit_poses(shape, markers)
+    return rotation, translation, residuals(shape, rotation, translation, markers)
+
+
+def _screened(
+    markers: np.ndarray,
+    labels: tuple[str, ...],
+    source: str,
+    rules: ArtefactRules,
+    exchanged: list[Artefact],
+    shape: np.ndarray,
+    posed: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> Screening:
+    """:func:`screen` of a cluster of >= 3 ``markers`` ``(n_frames, n, 3)`` [mm] from its
+    swapped frames ``exchanged`` (:func:`find_exchanges`), its typical frame ``shape``
+    (:func:`typical_shape`, of the frames the swaps do not hold) and that shape's
+    :func:`_posed` fit ``posed``: the iterated mean shape and all that follows."""
+    untested = exchanges_untested(len(labels))
     breaks: list[Artefact] | None = None
     for _ in range(5):
-        rotation, translation = fit_poses(shape, markers)
-        misfit = residuals(shape, rotation, translation, markers)
+        rotation, translation, misfit = posed
         found = find_rigidity_breaks(misfit, labels, rules)
         if found == breaks:
             break
@@ -1382,9 +1405,9 @@ def screen(
         for artefact in [*breaks, *exchanged]:
             clean[artefact.frame, labels.index(artefact.label)] = np.nan
         shape = mean_shape(clean, labels, source)
+        posed = _posed(shape, markers)
     else:
-        rotation, translation = fit_poses(shape, markers)
-        misfit = residuals(shape, rotation, translation, markers)
+        rotation, translation, misfit = posed
     # A swapped sample that also breaks rigidity is flagged once, as the break.
     broken = {(a.label, a.frame) for a in breaks}
     flags = [*breaks, *(a for a in exchanged if (a.label, a.frame) not in broken)]
@@ -1420,7 +1443,9 @@ def find_artefacts(
     gets the whole screen. A cluster the marker-frame bounds clear costs one compiled call
     (:func:`_clean_screen`), which finds what the bound, the distance test's verdict and the
     jump check need together; the jumps are located only where a step exceeds
-    ``min_jump_mm``. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
+    ``min_jump_mm``. Where the whole screen runs on a complete cluster without a swapped
+    frame, it starts from the typical frame and pose fit of the fitted bounds, which are its
+    own first. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
     label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules or _RULES)), ()
@@ -1432,8 +1457,19 @@ def find_artefacts(
     if min_frames is None:
         min_frames = markers.shape[0] + 1
     typical, cleared, largest_jump, exchanged = _clean_screen(markers, limit, far, near, min_frames)
-    if exchanged or not _fitted_clears(markers, typical, cleared, limit):
-        found = screen(markers, labels, source, rules)
+    posed = None
+    if not (exchanged or cleared) and typical >= 0:
+        # The fitted bounds' pose fit is the whole screen's first, from the same typical frame
+        # (every frame is complete), and serves it too.
+        shape = markers[typical].copy()
+        posed = _posed(shape, markers)
+        cleared = all(bound <= limit for bound in _fitted_misfits(markers, typical, posed))
+    if exchanged or not cleared:
+        if posed is None:
+            found = screen(markers, labels, source, rules)
+        else:
+            # No swapped frame: the distance test found none, or did not run, as in the screen.
+            found = _screened(markers, labels, source, rules, [], shape, posed)
         return found.artefacts, found.swaps
     if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm
         return (), ()
@@ -1612,12 +1648,19 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
     """
     if not fitted:
         return _frame_misfits(markers, typical)
-    rotation, translation = fit_poses(markers[typical], markers)
-    largest = float(residuals(markers[typical], rotation, translation, markers).max())
+    return _fitted_misfits(markers, typical, _posed(markers[typical], markers))
+
+
+def _fitted_misfits(
+    markers: np.ndarray, typical: int, posed: tuple[np.ndarray, np.ndarray, np.ndarray]
+) -> tuple[float, float]:
+    """The bounds [mm] of :func:`_rigid_misfits` with ``fitted``, given ``posed``, the
+    typical frame's :func:`_posed` fit to ``markers`` ``(n_frames, n >= 3, 3)`` [mm]."""
+    rotation, translation, misfit = posed
     local = np.empty_like(markers)
     _fitted_local(rotation, translation, markers, local)
     highest, mean, rms, _ = _spread(local, typical)
-    return largest, _per_marker(markers.shape[1]) * (highest + mean + rms)
+    return float(misfit.max()), _per_marker(markers.shape[1]) * (highest + mean + rms)
 
 
 @kernel
