@@ -108,13 +108,13 @@ def test_the_whole_screen_reuses_the_fitted_bounds_typical_frame_and_pose_fit(mo
 
         return call
 
-    for name in ("find_exchanges", "typical_shape", "mean_shape", "fit_poses"):
+    for name in ("find_exchanges", "typical_shape", "mean_shape", "_posed"):
         monkeypatch.setattr(screening, name, recorded(name, getattr(screening, name)))
     assert _outcome(*screening.find_artefacts(markers, labels, "m")) == _outcome(
         whole.artefacts, whole.swaps
     )
     # One pose fit of the typical frame, for the bounds, then straight to the mean shape.
-    assert calls[:2] == ["fit_poses", "mean_shape"] and "find_exchanges" not in calls
+    assert calls[:2] == ["_posed", "mean_shape"] and "find_exchanges" not in calls
 
 
 @pytest.mark.parametrize("noise_mm", [0.0, 0.3, 0.6])
@@ -432,6 +432,27 @@ def _unsettled_cluster(rng):
     for f in (20, 21, 22):
         markers[f, 3] = 0.5 * (markers[f, 1] + markers[f, 2])
     return markers
+
+
+@pytest.mark.parametrize("case", ["clean", "gaps", "unsettled"])
+def test_a_shapes_poses_and_residuals_are_those_of_the_pose_fit(case):
+    """One compiled call poses a shape and finds its residuals, bit for bit as the pose fit
+    and the residuals do, where Horn's method settles every frame it poses (frames of fewer
+    than three markers it does not pose); where a frame needs the SVD, the pose fit runs."""
+    rng = np.random.default_rng(25)
+    if case == "unsettled":
+        markers = _unsettled_cluster(rng)
+    else:
+        markers = _cluster(rng, n_markers=4, n_frames=80)
+        if case == "gaps":
+            markers[10:20, 1:3] = np.nan
+            markers[30, :3] = np.nan
+    shape = screening.typical_shape(markers, _labels(4), "m")
+    rotation, translation = screening.fit_poses(shape, markers)
+    want = (rotation, translation, screening.residuals(shape, rotation, translation, markers))
+    got = screening._posed(shape, markers)
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(got, want, strict=True))
+    assert screening._posed_by_horn(shape, markers)[3] is (case != "unsettled")
 
 
 @pytest.mark.parametrize("case", ["clean", "gaps", "unsettled", "large"])

@@ -447,23 +447,38 @@ def _mean_shape_steps(
     and whether the shape settled (:func:`_mean_step`). They stop before an iteration in
     which a frame needs the SVD, for the caller to take. A compiled kernel."""
     n_frames = markers.shape[0]
-    cross = np.empty((n_frames, 3, 3))
-    centroids = np.empty((n_frames, 2, 3))
-    bound = np.empty(n_frames)
     rotation = np.empty((n_frames, 3, 3))
-    unsettled = np.empty(n_frames, dtype=np.bool_)
     translation = np.empty((n_frames, 3))
     change = np.nan
     for step in range(most):
-        _pose_sums(shape, markers, cross, centroids, bound)
-        _horn_rotations(cross, bound, rotation, unsettled)
-        if _needs_svd(unsettled, cross, centroids):
+        if not _horn_poses(shape, markers, rotation, translation):
             return shape, step, change, False
-        _translations(rotation, centroids, translation)
         shape, change, settled = _mean_step(rotation, translation, markers, shape, tolerance)
         if settled:
             return shape, step + 1, change, True
     return shape, most, change, False
+
+
+@kernel
+def _horn_poses(
+    shape: np.ndarray, markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray
+) -> bool:
+    """:func:`fit_poses` of ``shape`` ``(n, 3)`` [mm] onto ``markers`` ``(n_frames, n, 3)``
+    [mm], written into ``rotation`` ``(n_frames, 3, 3)`` and ``translation`` ``(n_frames,
+    3)``, where Horn's method settles every frame it poses
+    (:func:`jointbench.numerics.poses._horn_rotations`): then ``True``; ``False`` where a frame
+    needs the SVD (:func:`_needs_svd`), leaving both unfinished. A compiled kernel."""
+    n_frames = markers.shape[0]
+    cross = np.empty((n_frames, 3, 3))
+    centroids = np.empty((n_frames, 2, 3))
+    bound = np.empty(n_frames)
+    unsettled = np.empty(n_frames, dtype=np.bool_)
+    _pose_sums(shape, markers, cross, centroids, bound)
+    _horn_rotations(cross, bound, rotation, unsettled)
+    if _needs_svd(unsettled, cross, centroids):
+        return False
+    _translations(rotation, centroids, translation)
+    return True
 
 
 @kernel
@@ -1376,8 +1391,29 @@ def _posed(shape: np.ndarray, markers: np.ndarray) -> tuple[np.ndarray, np.ndarr
     """``shape`` ``(n, 3)`` [mm] in its best pose in every frame of ``markers``
     ``(n_frames, n, 3)`` [mm] (:func:`fit_poses`), and each marker's residual ``(n_frames, n)``
     [mm] (:func:`residuals`)."""
+    shape, markers = kernel_array(shape), kernel_array(markers)
+    posed = _posed_by_horn(shape, markers)
+    if posed[3]:
+        return posed[:3]
     rotation, translation = fit_poses(shape, markers)
     return rotation, translation, residuals(shape, rotation, translation, markers)
+
+
+@kernel
+def _posed_by_horn(
+    shape: np.ndarray, markers: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """:func:`_posed` in one compiled call where Horn's method settles every frame it poses
+    (:func:`_horn_poses`), and whether it did; where it did not, the arrays are unfinished. A
+    compiled kernel."""
+    n_frames, n_markers = markers.shape[0], markers.shape[1]
+    rotation = np.empty((n_frames, 3, 3))
+    translation = np.empty((n_frames, 3))
+    distance = np.empty((n_frames, n_markers))
+    settled = _horn_poses(shape, markers, rotation, translation)
+    if settled:
+        _residuals(shape, rotation, translation, markers, distance)
+    return rotation, translation, distance, settled
 
 
 def _screened(
