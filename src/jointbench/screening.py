@@ -201,7 +201,7 @@ def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> 
     seen = np.isfinite(markers[..., 0]).any(axis=0)
     if not seen.all():
         raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
-    complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
+    complete = _complete_frames(kernel_array(markers))
     if complete.size == 0:
         raise ValueError(
             f"{source}: markers {', '.join(labels)} are never all visible in one frame; "
@@ -1320,8 +1320,7 @@ def find_swaps(
             rows = np.flatnonzero(both)
             exchanged_rows = markers[rows].copy()
             exchanged_rows[:, [i, j]] = exchanged_rows[:, [j, i]]
-            rotation, translation = fit_poses(shape, exchanged_rows)
-            misfit = residuals(shape, rotation, translation, exchanged_rows)
+            misfit = _posed(shape, exchanged_rows)[2]
             state[rows[np.nanmax(misfit, axis=1) <= level_mm]] = True
         for frame, pair in named.items():
             state[frame] = pair == {labels[i], labels[j]}
