@@ -17,6 +17,7 @@ import pytest
 import jointbench
 from jointbench import screening
 from jointbench.geometry import rotation_matrix
+from jointbench.numerics.poses import _horn_rotations
 
 RULES = screening.ArtefactRules()
 
@@ -82,6 +83,38 @@ def test_gaps_at_the_start_end_or_middle_are_no_artefact(rows):
     markers[rows, 1] = np.nan
     assert _same_as_screen(markers) == ((), ())
     assert not screening.surely_rigid(markers, _labels(4), "m", RULES)
+
+
+@pytest.mark.parametrize("broken", [False, True])
+def test_the_whole_screen_reuses_the_fitted_bounds_typical_frame_and_pose_fit(monkeypatch, broken):
+    """Where the marker-frame bounds do not clear a complete cluster and the distance test
+    finds no swap, the whole screen starts from the typical frame and pose fit the fitted
+    bounds found, and from no swapped frame: it finds what it finds on its own without
+    looking for them again."""
+    markers = _cluster(np.random.default_rng(24), n_markers=4, noise_mm=1.5)
+    if broken:
+        markers[60:66, 2] += [0.0, 150.0, 0.0]
+    labels = _labels(4)
+    typical, cleared, _ = screening._screen_sums(markers, screening._rigid_limit(RULES))
+    assert typical >= 0 and not cleared
+    whole = screening.screen(markers, labels, "m")
+    assert bool(whole.artefacts) == broken
+    calls = []
+
+    def recorded(name, function):
+        def call(*arguments):
+            calls.append(name)
+            return function(*arguments)
+
+        return call
+
+    for name in ("find_exchanges", "typical_shape", "mean_shape", "_posed"):
+        monkeypatch.setattr(screening, name, recorded(name, getattr(screening, name)))
+    assert _outcome(*screening.find_artefacts(markers, labels, "m")) == _outcome(
+        whole.artefacts, whole.swaps
+    )
+    # One pose fit of the typical frame, for the bounds, then straight to the mean shape.
+    assert calls[:2] == ["_posed", "mean_shape"] and "find_exchanges" not in calls
 
 
 @pytest.mark.parametrize("noise_mm", [0.0, 0.3, 0.6])
@@ -372,6 +405,89 @@ def test_kernels_compute_what_their_source_says():
         screening._spread(local, 3), screening._spread.__wrapped__(local, 3), rtol=1e-12
     )
     assert screening._most_typical(complete) == screening._most_typical.__wrapped__(complete)
+
+
+def _mean_shape_fit_by_fit(markers, labels, most=screening._MAX_ITERATIONS):
+    """The mean shape as one pose fit per iteration from Python (:func:`screening.fit_poses`,
+    whose rotations an unsettled Horn fit leaves to the SVD), and its last change [mm]."""
+    shape = screening.typical_shape(markers, labels, "m")
+    change = np.nan
+    for _ in range(most):
+        rotation, translation = screening.fit_poses(shape, markers)
+        new = np.empty_like(shape)
+        screening._mean_local(rotation, translation, markers, new)
+        change = float(np.max(np.abs(new - shape)))
+        shape = new
+        if change < screening._TOL_MM * max(1.0, float(np.abs(shape).max())):
+            return shape, change
+    return None, change
+
+
+def _unsettled_cluster(rng):
+    """A cluster with gaps in which some frames show three collinear markers, whose rotation
+    Horn's method leaves to the SVD."""
+    markers = _cluster(rng, n_markers=4, n_frames=60)
+    markers[10:14, 3] = np.nan
+    markers[20:23, 0] = np.nan
+    for f in (20, 21, 22):
+        markers[f, 3] = 0.5 * (markers[f, 1] + markers[f, 2])
+    return markers
+
+
+@pytest.mark.parametrize("case", ["clean", "gaps", "unsettled"])
+def test_a_shapes_poses_and_residuals_are_those_of_the_pose_fit(case):
+    """One compiled call poses a shape and finds its residuals, bit for bit as the pose fit
+    and the residuals do, where Horn's method settles every frame it poses (frames of fewer
+    than three markers it does not pose); where a frame needs the SVD, the pose fit runs."""
+    rng = np.random.default_rng(25)
+    if case == "unsettled":
+        markers = _unsettled_cluster(rng)
+    else:
+        markers = _cluster(rng, n_markers=4, n_frames=80)
+        if case == "gaps":
+            markers[10:20, 1:3] = np.nan
+            markers[30, :3] = np.nan
+    shape = screening.typical_shape(markers, _labels(4), "m")
+    rotation, translation = screening.fit_poses(shape, markers)
+    want = (rotation, translation, screening.residuals(shape, rotation, translation, markers))
+    got = screening._posed(shape, markers)
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(got, want, strict=True))
+    assert screening._posed_by_horn(shape, markers)[3] is (case != "unsettled")
+
+
+@pytest.mark.parametrize("case", ["clean", "gaps", "unsettled", "large"])
+def test_the_mean_shape_is_its_fit_by_fit_iteration(case, monkeypatch):
+    """The compiled iterations of the mean shape give the shape, bit for bit, and the error
+    that fitting each iteration's poses from Python gives, where Horn's method settles every
+    frame and where it leaves some to the SVD."""
+    rng = np.random.default_rng(23)
+    if case == "unsettled":
+        markers = _unsettled_cluster(rng)
+        cross = np.empty((60, 3, 3))
+        shape = markers[0].copy()
+        screening._pose_sums(shape, markers, cross, np.empty((60, 2, 3)), np.empty(60))
+        unsettled = np.empty(60, dtype=bool)
+        _horn_rotations(cross, np.full(60, np.inf), np.empty((60, 3, 3)), unsettled)
+        assert unsettled.any()
+    else:
+        markers = _cluster(rng, n_markers=5 if case == "large" else 3, n_frames=200)
+        if case == "gaps":
+            markers[40:50, 1] = np.nan
+            markers[70, :2] = np.nan
+        if case == "large":
+            markers = markers * 1e4
+    labels = _labels(markers.shape[1])
+    want, _ = _mean_shape_fit_by_fit(markers, labels)
+    assert np.array_equal(screening.mean_shape(markers, labels, "m"), want)
+    # Cut short, both fail alike, naming the last change.
+    _, change = _mean_shape_fit_by_fit(markers, labels, most=2)
+    monkeypatch.setattr(screening, "_MAX_ITERATIONS", 2)
+    with pytest.raises(ValueError, match=re.escape(f"(last change {change:.3g} mm)")):
+        screening.mean_shape(markers, labels, "m")
+    steps = screening._mean_shape_steps(
+        screening.typical_shape(markers, labels, "m"), markers, 200, screening._TOL_MM
+    )
+    assert steps[3] is (case != "unsettled")
 
 
 @pytest.mark.parametrize("artefacts", ["refuse", "warn", "ignore"])

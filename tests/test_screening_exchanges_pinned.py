@@ -172,11 +172,13 @@ def test_the_medians_are_those_numbas_median_finds():
     depends on how it is found), and none."""
     numba_median = numba.njit(lambda values: np.median(values))
     rng = np.random.default_rng(11)
-    for n in (*range(0, 12), 99, 100, 1000, 1001):
-        for kind in ("normal", "ties", "sorted", "infinite", "nan"):
+    for n in (*range(0, 12), 99, 100, 119, 120, 360, 1000, 1001):
+        for kind in ("normal", "ties", "equal", "sorted", "infinite", "nan"):
             values = rng.normal(size=n)
             if kind == "ties":
                 values = np.round(values)
+            elif kind == "equal":
+                values = np.full(n, 2.5)
             elif kind == "sorted":
                 values = np.sort(values)
             elif kind in ("infinite", "nan") and n:

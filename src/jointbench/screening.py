@@ -43,7 +43,7 @@ import numpy as np
 from scipy.special import chdtri
 
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.poses import best_rotation
+from jointbench.numerics.poses import _horn_rotations, best_rotation
 
 __all__ = [
     "MAX_EXCHANGE_MARKERS",
@@ -201,7 +201,7 @@ def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> 
     seen = np.isfinite(markers[..., 0]).any(axis=0)
     if not seen.all():
         raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
-    complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
+    complete = _complete_frames(kernel_array(markers))
     if complete.size == 0:
         raise ValueError(
             f"{source}: markers {', '.join(labels)} are never all visible in one frame; "
@@ -235,16 +235,16 @@ def _medians(values: np.ndarray) -> np.ndarray:
 def _median_in_place(values: np.ndarray) -> float:
     """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
     ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values without NaN
-    have one order, in which any selection finds the same numbers: from some hundreds of
-    values on, :func:`_select_sweeping` is the fastest (measured; below, branches mispredict
-    too rarely to matter). NaN leave no order: values with one are taken as Numba's
-    ``np.median`` takes them (:func:`_quickselect_median`), so that the median is the number
-    it gives. A compiled kernel."""
+    have one order, in which any selection finds the same numbers: :func:`_select_sweeping`
+    is the fastest at every count (measured on values new to each call, as a trial's are: 0.36
+    against 1.25 us for 120 values, 0.95 against 3.6 for 360; the same values over and over
+    let the branch predictor learn a quickselect's branches and hide its cost). NaN leave no
+    order: values with one are taken as Numba's ``np.median`` takes them
+    (:func:`_quickselect_median`), so that the median is the number it gives. A compiled
+    kernel."""
     n = values.size
     if n == 0:
         return np.nan
-    if n < 512:
-        return _quickselect_median(values)
     for value in values:
         if value != value:
             return _quickselect_median(values)
@@ -412,18 +412,122 @@ def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.
     """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
     in the frame of its most typical complete frame (the caller fixes the frame)."""
     shape = typical_shape(markers, labels, source)
-    for _ in range(_MAX_ITERATIONS):
-        rotation, translation = fit_poses(shape, markers)
-        new = np.empty_like(shape)
-        _mean_local(rotation, translation, kernel_array(markers), new)
-        change = float(np.max(np.abs(new - shape)))
-        shape = new
-        if change < _TOL_MM * max(1.0, float(np.abs(shape).max())):
+    markers = kernel_array(markers)
+    done = 0
+    while done < _MAX_ITERATIONS:
+        # Compiled iterations, a few microseconds each where a pose fit from Python costs
+        # tens, until the shape settles or a frame's rotation needs the SVD
+        # (:func:`fit_poses`), which that iteration then takes here.
+        shape, steps, change, settled = _mean_shape_steps(
+            shape, markers, _MAX_ITERATIONS - done, _TOL_MM
+        )
+        done += steps
+        if settled:
             return shape
+        if done < _MAX_ITERATIONS:
+            rotation, translation = fit_poses(shape, markers)
+            shape, change, settled = _mean_step(rotation, translation, markers, shape, _TOL_MM)
+            done += 1
+            if settled:
+                return shape
     raise ValueError(
         f"{source}: the mean shape of {', '.join(labels)} did not converge in "
         f"{_MAX_ITERATIONS} iterations (last change {change:.3g} mm)"
     )
+
+
+@kernel
+def _mean_shape_steps(
+    shape: np.ndarray, markers: np.ndarray, most: int, tolerance: float
+) -> tuple[np.ndarray, int, float, bool]:
+    """Up to ``most`` iterations of :func:`mean_shape` from ``shape`` ``(n, 3)`` [mm] on
+    ``markers`` ``(n_frames, n, 3)`` [mm], each pose fit as :func:`fit_poses` fits it where
+    Horn's method settles every frame it poses (:func:`jointbench.numerics.poses._horn_rotations`,
+    :func:`_needs_svd`): the shape, the iterations done, the last change [mm] (NaN if none)
+    and whether the shape settled (:func:`_mean_step`). They stop before an iteration in
+    which a frame needs the SVD, for the caller to take. A compiled kernel."""
+    n_frames = markers.shape[0]
+    rotation = np.empty((n_frames, 3, 3))
+    translation = np.empty((n_frames, 3))
+    change = np.nan
+    for step in range(most):
+        if not _horn_poses(shape, markers, rotation, translation):
+            return shape, step, change, False
+        shape, change, settled = _mean_step(rotation, translation, markers, shape, tolerance)
+        if settled:
+            return shape, step + 1, change, True
+    return shape, most, change, False
+
+
+@kernel
+def _horn_poses(
+    shape: np.ndarray, markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray
+) -> bool:
+    """:func:`fit_poses` of ``shape`` ``(n, 3)`` [mm] onto ``markers`` ``(n_frames, n, 3)``
+    [mm], written into ``rotation`` ``(n_frames, 3, 3)`` and ``translation`` ``(n_frames,
+    3)``, where Horn's method settles every frame it poses
+    (:func:`jointbench.numerics.poses._horn_rotations`): then ``True``; ``False`` where a frame
+    needs the SVD (:func:`_needs_svd`), leaving both unfinished. A compiled kernel."""
+    n_frames = markers.shape[0]
+    cross = np.empty((n_frames, 3, 3))
+    centroids = np.empty((n_frames, 2, 3))
+    bound = np.empty(n_frames)
+    unsettled = np.empty(n_frames, dtype=np.bool_)
+    _pose_sums(shape, markers, cross, centroids, bound)
+    _horn_rotations(cross, bound, rotation, unsettled)
+    if _needs_svd(unsettled, cross, centroids):
+        return False
+    _translations(rotation, centroids, translation)
+    return True
+
+
+@kernel
+def _needs_svd(unsettled: np.ndarray, cross: np.ndarray, centroids: np.ndarray) -> bool:
+    """Whether :func:`fit_poses` would take the SVD's rotation of a frame that Horn's method
+    left ``unsettled`` ``(n_frames,)``: one it poses (finite ``centroids`` ``(n_frames, 2,
+    3)``); of a frame of fewer than three markers :func:`_translations` keeps NaN, whatever
+    the SVD of its ``cross`` ``(n_frames, 3, 3)`` gives, but one not finite would stop the
+    SVD with an error, which the SVD is left to raise. A compiled kernel."""
+    for f in range(unsettled.size):
+        if unsettled[f]:
+            if np.isfinite(centroids[f, 0, 0]) or not np.isfinite(cross[f]).all():
+                return True
+    return False
+
+
+@kernel
+def _mean_step(
+    rotation: np.ndarray,
+    translation: np.ndarray,
+    markers: np.ndarray,
+    shape: np.ndarray,
+    tolerance: float,
+) -> tuple[np.ndarray, float, bool]:
+    """One iteration of :func:`mean_shape` from ``shape`` ``(n, 3)`` [mm], given the poses
+    ``(rotation, translation)`` of ``markers`` ``(n_frames, n, 3)`` [mm] fitted to it: the
+    mean of the markers in those poses (:func:`_mean_local`), its largest change from
+    ``shape`` [mm] (NaN if any is) and whether that change is below ``tolerance`` times the
+    largest coordinate, or 1 mm if that is less (a NaN coordinate counts as less). A compiled
+    kernel."""
+    new = np.empty_like(shape)
+    _mean_local(rotation, translation, markers, new)
+    change = _largest_magnitude(new, shape)
+    size = _largest_magnitude(new, np.zeros_like(new))
+    return new, change, change < tolerance * (size if size > 1.0 else 1.0)
+
+
+@kernel
+def _largest_magnitude(values: np.ndarray, less: np.ndarray) -> float:
+    """``np.max(np.abs(values - less))`` of two arrays ``(n, 3)``: NaN if any difference is.
+    A compiled kernel."""
+    largest = 0.0
+    for m in range(values.shape[0]):
+        for i in range(3):
+            difference = abs(values[m, i] - less[m, i])
+            if difference != difference:
+                return np.nan
+            largest = max(largest, difference)
+    return largest
 
 
 @kernel
@@ -1216,8 +1320,7 @@ def find_swaps(
             rows = np.flatnonzero(both)
             exchanged_rows = markers[rows].copy()
             exchanged_rows[:, [i, j]] = exchanged_rows[:, [j, i]]
-            rotation, translation = fit_poses(shape, exchanged_rows)
-            misfit = residuals(shape, rotation, translation, exchanged_rows)
+            misfit = _posed(shape, exchanged_rows)[2]
             state[rows[np.nanmax(misfit, axis=1) <= level_mm]] = True
         for frame, pair in named.items():
             state[frame] = pair == {labels[i], labels[j]}
@@ -1273,18 +1376,62 @@ def screen(
         )
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
-    untested = exchanges_untested(len(labels))
-    exchanged = [] if untested else find_exchanges(markers, labels, rules)
+    exchanged = [] if exchanges_untested(len(labels)) else find_exchanges(markers, labels, rules)
     # First judged against one typical frame, which the broken frames cannot distort; then the
     # mean shape is refitted on the samples neither flagged nor swapped, until the flags settle.
     # The typical frame is one the swaps do not hold, so that both checks judge by one side.
     unswapped = np.ones(len(markers), dtype=bool)
     unswapped[[a.frame for a in exchanged]] = False
     shape = typical_shape(markers[unswapped] if exchanged else markers, labels, source)
+    return _screened(markers, labels, source, rules, exchanged, shape, _posed(shape, markers))
+
+
+def _posed(shape: np.ndarray, markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``shape`` ``(n, 3)`` [mm] in its best pose in every frame of ``markers``
+    ``(n_frames, n, 3)`` [mm] (:func:`fit_poses`), and each marker's residual ``(n_frames, n)``
+    [mm] (:func:`residuals`)."""
+    shape, markers = kernel_array(shape), kernel_array(markers)
+    posed = _posed_by_horn(shape, markers)
+    if posed[3]:
+        return posed[:3]
+    rotation, translation = fit_poses(shape, markers)
+    return rotation, translation, residuals(shape, rotation, translation, markers)
+
+
+@kernel
+def _posed_by_horn(
+    shape: np.ndarray, markers: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """:func:`_posed` in one compiled call where Horn's method settles every frame it poses
+    (:func:`_horn_poses`), and whether it did; where it did not, the arrays are unfinished. A
+    compiled kernel."""
+    n_frames, n_markers = markers.shape[0], markers.shape[1]
+    rotation = np.empty((n_frames, 3, 3))
+    translation = np.empty((n_frames, 3))
+    distance = np.empty((n_frames, n_markers))
+    settled = _horn_poses(shape, markers, rotation, translation)
+    if settled:
+        _residuals(shape, rotation, translation, markers, distance)
+    return rotation, translation, distance, settled
+
+
+def _screened(
+    markers: np.ndarray,
+    labels: tuple[str, ...],
+    source: str,
+    rules: ArtefactRules,
+    exchanged: list[Artefact],
+    shape: np.ndarray,
+    posed: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> Screening:
+    """:func:`screen` of a cluster of >= 3 ``markers`` ``(n_frames, n, 3)`` [mm] from its
+    swapped frames ``exchanged`` (:func:`find_exchanges`), its typical frame ``shape``
+    (:func:`typical_shape`, of the frames the swaps do not hold) and that shape's
+    :func:`_posed` fit ``posed``: the iterated mean shape and all that follows."""
+    untested = exchanges_untested(len(labels))
     breaks: list[Artefact] | None = None
     for _ in range(5):
-        rotation, translation = fit_poses(shape, markers)
-        misfit = residuals(shape, rotation, translation, markers)
+        rotation, translation, misfit = posed
         found = find_rigidity_breaks(misfit, labels, rules)
         if found == breaks:
             break
@@ -1293,9 +1440,9 @@ def screen(
         for artefact in [*breaks, *exchanged]:
             clean[artefact.frame, labels.index(artefact.label)] = np.nan
         shape = mean_shape(clean, labels, source)
+        posed = _posed(shape, markers)
     else:
-        rotation, translation = fit_poses(shape, markers)
-        misfit = residuals(shape, rotation, translation, markers)
+        rotation, translation, misfit = posed
     # A swapped sample that also breaks rigidity is flagged once, as the break.
     broken = {(a.label, a.frame) for a in breaks}
     flags = [*breaks, *(a for a in exchanged if (a.label, a.frame) not in broken)]
@@ -1331,7 +1478,9 @@ def find_artefacts(
     gets the whole screen. A cluster the marker-frame bounds clear costs one compiled call
     (:func:`_clean_screen`), which finds what the bound, the distance test's verdict and the
     jump check need together; the jumps are located only where a step exceeds
-    ``min_jump_mm``. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
+    ``min_jump_mm``. Where the whole screen runs on a complete cluster without a swapped
+    frame, it starts from the typical frame and pose fit of the fitted bounds, which are its
+    own first. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
     label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules or _RULES)), ()
@@ -1343,8 +1492,19 @@ def find_artefacts(
     if min_frames is None:
         min_frames = markers.shape[0] + 1
     typical, cleared, largest_jump, exchanged = _clean_screen(markers, limit, far, near, min_frames)
-    if exchanged or not _fitted_clears(markers, typical, cleared, limit):
-        found = screen(markers, labels, source, rules)
+    posed = None
+    if not (exchanged or cleared) and typical >= 0:
+        # The fitted bounds' pose fit is the whole screen's first, from the same typical frame
+        # (every frame is complete), and serves it too.
+        shape = markers[typical].copy()
+        posed = _posed(shape, markers)
+        cleared = all(bound <= limit for bound in _fitted_misfits(markers, typical, posed))
+    if exchanged or not cleared:
+        if posed is None:
+            found = screen(markers, labels, source, rules)
+        else:
+            # No swapped frame: the distance test found none, or did not run, as in the screen.
+            found = _screened(markers, labels, source, rules, [], shape, posed)
         return found.artefacts, found.swaps
     if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm
         return (), ()
@@ -1523,12 +1683,19 @@ def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[flo
     """
     if not fitted:
         return _frame_misfits(markers, typical)
-    rotation, translation = fit_poses(markers[typical], markers)
-    largest = float(residuals(markers[typical], rotation, translation, markers).max())
+    return _fitted_misfits(markers, typical, _posed(markers[typical], markers))
+
+
+def _fitted_misfits(
+    markers: np.ndarray, typical: int, posed: tuple[np.ndarray, np.ndarray, np.ndarray]
+) -> tuple[float, float]:
+    """The bounds [mm] of :func:`_rigid_misfits` with ``fitted``, given ``posed``, the
+    typical frame's :func:`_posed` fit to ``markers`` ``(n_frames, n >= 3, 3)`` [mm]."""
+    rotation, translation, misfit = posed
     local = np.empty_like(markers)
     _fitted_local(rotation, translation, markers, local)
     highest, mean, rms, _ = _spread(local, typical)
-    return largest, _per_marker(markers.shape[1]) * (highest + mean + rms)
+    return float(misfit.max()), _per_marker(markers.shape[1]) * (highest + mean + rms)
 
 
 @kernel

@@ -459,9 +459,15 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             w11 += w1 * w1
             w12 += w1 * w2
             w22 += w2 * w2
-            for p in range(n_pairs):
-                for i in range(3):
-                    differences[p, i, f] = centred[pair_a[p], i] - centred[pair_b[p], i]
+            # The pairs by their markers, not through pair_a and pair_b: two loads less per
+            # difference, in the loop that costs the most.
+            p = 0
+            for a in range(n_markers):
+                for b in range(a + 1, n_markers):
+                    differences[p, 0, f] = centred[a, 0] - centred[b, 0]
+                    differences[p, 1, f] = centred[a, 1] - centred[b, 1]
+                    differences[p, 2, f] = centred[a, 2] - centred[b, 2]
+                    p += 1
         pooled[0, 0], pooled[0, 1], pooled[0, 2] = e00, e01, e02
         pooled[1, 1], pooled[1, 2], pooled[2, 2] = e11, e12, e22
         sum_w[0], sum_w[1], sum_w[2] = w_sum0, w_sum1, w_sum2
@@ -1215,7 +1221,8 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             row[0],
             tests[t],
             shares.get(t),
-        )._replace(motion_axis=axes.get(t))
+            axes.get(t),
+        )
         for t, row in enumerate(rows)
     ]
 
@@ -1365,13 +1372,13 @@ def _without_poses(
     )
 
 
-def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support:
+def _verdict(kind, names, rigidity, variance, tests, axis_share=None, motion_axis=None) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
     [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
     off the main axis; ``axis_share``, for an axis whose rotation off the main axis is
     resolved, an :class:`_AxisShare` row (share, RMS rotation about the principal axis and
-    about the others [rad])."""
+    about the others [rad]); ``motion_axis`` the :class:`MotionAxis` the verdict carries."""
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
@@ -1415,7 +1422,7 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None) -> Support
     }
     if axis_share is not None:
         numbers["off_principal_axis_share"] = float(axis_share[0])
-    return Support(tuple(warnings), numbers)
+    return Support(tuple(warnings), numbers, motion_axis)
 
 
 def assess(
