@@ -114,6 +114,7 @@ from jointbench.estimators.validation import check_markers, check_moves, prepare
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.simplex import FATOL, XATOL, lockstep
+from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
     "DODECAHEDRON_STARTS",
@@ -362,23 +363,16 @@ def _scatters(markers: np.ndarray) -> np.ndarray:
                 for i in range(3):
                     centroid[p, i] += markers[t, k, p, i]
         centroid /= n_frames
-        # The sums in locals, which the compiler keeps in registers, in the same order.
-        s00 = s01 = s02 = s11 = s12 = s22 = 0.0
+        sums = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         for k in range(n_frames):
             for p in range(n_markers):
-                u0 = markers[t, k, p, 0] - centroid[p, 0]
-                u1 = markers[t, k, p, 1] - centroid[p, 1]
-                u2 = markers[t, k, p, 2] - centroid[p, 2]
-                s00 += u0 * u0
-                s01 += u0 * u1
-                s02 += u0 * u2
-                s11 += u1 * u1
-                s12 += u1 * u2
-                s22 += u2 * u2
-        scatter[t, 0, 0], scatter[t, 1, 1], scatter[t, 2, 2] = s00, s11, s22
-        scatter[t, 0, 1] = scatter[t, 1, 0] = s01
-        scatter[t, 0, 2] = scatter[t, 2, 0] = s02
-        scatter[t, 1, 2] = scatter[t, 2, 1] = s12
+                sums = add_outer(
+                    sums,
+                    markers[t, k, p, 0] - centroid[p, 0],
+                    markers[t, k, p, 1] - centroid[p, 1],
+                    markers[t, k, p, 2] - centroid[p, 2],
+                )
+        symmetric_into(sums, scatter[t])
     return scatter
 
 

@@ -75,7 +75,7 @@ from jointbench.estimators.precision import distinct_frames
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, Support
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.small import symmetric_eigen_into
+from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric_into
 
 __all__ = [
     "MAX_CENTER_SD_MM",
@@ -323,7 +323,7 @@ def _marker_sums(
     sum_d = 0.0
     su0 = su1 = su2 = 0.0
     sd0 = sd1 = sd2 = 0.0
-    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
+    outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for k in range(n_frames):
         x = track[k, 0] - cx
         y = track[k, 1] - cy
@@ -339,16 +339,10 @@ def _marker_sums(
         sd0 += x
         sd1 += y
         sd2 += z
-        s00 += u0 * u0
-        s01 += u0 * u1
-        s02 += u0 * u2
-        s11 += u1 * u1
-        s12 += u1 * u2
-        s22 += u2 * u2
+        outer = add_outer(outer, u0, u1, u2)
     sum_u[0], sum_u[1], sum_u[2] = su0, su1, su2
     sum_du[0], sum_du[1], sum_du[2] = sd0, sd1, sd2
-    sum_uu[0, 0], sum_uu[0, 1], sum_uu[0, 2] = s00, s01, s02
-    sum_uu[1, 1], sum_uu[1, 2], sum_uu[2, 2] = s11, s12, s22
+    symmetric_into(outer, sum_uu)
     return sum_d / n_frames
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
     "ARRAY_NAMES",
@@ -235,22 +236,15 @@ def _first_failures(
                     for f in range(n_frames):
                         total += trial[f, p, i]
                     mean[i] = total / n_frames
-                # The sums in locals, which the compiler keeps in registers.
-                s00 = s01 = s02 = s11 = s12 = s22 = 0.0
+                sums = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
                 for f in range(n_frames):
-                    u0 = trial[f, p, 0] - mean[0]
-                    u1 = trial[f, p, 1] - mean[1]
-                    u2 = trial[f, p, 2] - mean[2]
-                    s00 += u0 * u0
-                    s01 += u0 * u1
-                    s02 += u0 * u2
-                    s11 += u1 * u1
-                    s12 += u1 * u2
-                    s22 += u2 * u2
-                scatter[0, 0], scatter[1, 1], scatter[2, 2] = s00, s11, s22
-                scatter[0, 1] = scatter[1, 0] = s01
-                scatter[0, 2] = scatter[2, 0] = s02
-                scatter[1, 2] = scatter[2, 1] = s12
+                    sums = add_outer(
+                        sums,
+                        trial[f, p, 0] - mean[0],
+                        trial[f, p, 1] - mean[1],
+                        trial[f, p, 2] - mean[2],
+                    )
+                symmetric_into(sums, scatter)
                 trace = scatter[0, 0] + scatter[1, 1] + scatter[2, 2]
                 minors = (
                     (scatter[0, 0] * scatter[1, 1] - scatter[0, 1] * scatter[0, 1])

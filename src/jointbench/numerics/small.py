@@ -12,12 +12,14 @@ import numpy as np
 from jointbench.numerics.compiled import kernel
 
 __all__ = [
+    "add_outer",
     "inertia",
     "inertia_into",
     "inverse3",
     "rotated3",
     "symmetric_eigen",
     "symmetric_eigen_into",
+    "symmetric_into",
 ]
 
 
@@ -268,3 +270,31 @@ def inertia_into(points: np.ndarray, tensor: np.ndarray) -> None:
             for m in range(points.shape[0]):
                 value -= points[m, i] * points[m, j]
             tensor[i, j] = value
+
+
+@kernel
+def add_outer(sums: tuple, u0: float, u1: float, u2: float) -> tuple:
+    """``sums``, the upper triangle ``(s00, s01, s02, s11, s12, s22)`` of a sum of outer
+    products, with ``u u'`` of ``u = (u0, u1, u2)`` added. A compiled kernel: a loop that
+    carries the six sums as a tuple keeps them in registers, where sums into an array's entries
+    are stored and loaded again on every pass."""
+    s00, s01, s02, s11, s12, s22 = sums
+    return (
+        s00 + u0 * u0,
+        s01 + u0 * u1,
+        s02 + u0 * u2,
+        s11 + u1 * u1,
+        s12 + u1 * u2,
+        s22 + u2 * u2,
+    )
+
+
+@kernel
+def symmetric_into(sums: tuple, matrix: np.ndarray) -> None:
+    """The symmetric ``matrix`` ``(3, 3)`` whose upper triangle is ``sums`` (as
+    :func:`add_outer` orders it), both triangles written. A compiled kernel."""
+    s00, s01, s02, s11, s12, s22 = sums
+    matrix[0, 0], matrix[1, 1], matrix[2, 2] = s00, s11, s22
+    matrix[0, 1] = matrix[1, 0] = s01
+    matrix[0, 2] = matrix[2, 0] = s02
+    matrix[1, 2] = matrix[2, 1] = s12
