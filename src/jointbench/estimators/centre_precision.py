@@ -113,10 +113,8 @@ _Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
 _REFINE_ITERATIONS = 20
-# ... until they move it less than this share of its distance from the answer: the distance is
-# reported to three significant figures and compared with MIN_REJECTED_STEP_MM, and the
-# iterations converge linearly, so what is left after such a move is a fraction of it.
-_REFINED_TO = 1e-2
+# ... until they move it less than this share of its distance from the answer.
+_REFINED_TO = 1e-3
 
 
 @kernel
@@ -135,9 +133,10 @@ def centre_statistics(
     out = np.empty((n_trials, 11))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
+    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * markers.shape[2]))
     for t in range(n_trials):
         _row_at(markers[t], centres[t], variances[t], out[t], scratch)
-        out[t, _REPEATS] = _repeats(markers[t], keys)
+        out[t, _REPEATS] = _repeats(markers[t], weights, keys)
         if out[t, _CHI2] > _CHI2_ALPHA:
             _refine(markers[t], centres[t], variances[t], out[t], scratch)
     return out
@@ -243,11 +242,14 @@ def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple)
 
 
 @kernel
-def _corrected_step(score: np.ndarray, values: np.ndarray, vectors: np.ndarray, towards) -> float:
+def _corrected_step(
+    score: np.ndarray, values: np.ndarray, vectors: np.ndarray, towards: np.ndarray
+) -> float:
     """The step ``F_s^-1 g`` towards the spheres' centre into ``towards`` ``(3,)`` [mm], given
-    the score ``g`` and the eigen-decomposition ``values``, ``vectors`` of ``F_s``; returns its
-    length. Gauss-Newton's own step (``F^-1 g``) is shortened by the directions' noise as a
-    regression on noisy regressors is. A compiled kernel."""
+    the score ``g`` ``(3,)`` [mm] and the eigen-decomposition ``values`` ``(3,)``, ``vectors``
+    ``(3, 3)`` of ``F_s``; returns its length [mm]. Gauss–Newton's own step (``F^-1 g``) is
+    shortened by the directions' noise as a regression on noisy regressors is. A compiled
+    kernel."""
     towards[:] = 0.0
     for i in range(3):
         along = 0.0
@@ -268,7 +270,7 @@ def _step_at(
     info, signal, _, score, values, vectors, work = scratch[:7]
     _sums_at(markers, centre, s2, scratch)
     symmetric_eigen_into(signal, values, vectors, work)
-    if values[0] > 1e-12 * abs(values[2]):
+    if _definite(values):
         _corrected_step(score, values, vectors, towards)
     else:
         _solved(info, score, towards, values, vectors, work)
@@ -290,7 +292,7 @@ def _row_at(
     symmetric_eigen_into(signal, values, vectors, work)
     largest = values[2] if values[2] > 0.0 else np.nan
     row[_OFFSET] = math.sqrt(max(squares - kept * (n_frames - 1) * s2, 0.0) / largest)
-    if not values[0] > 1e-12 * abs(values[2]):
+    if not _definite(values):
         row[_SD] = np.inf
         row[_STEP] = np.inf
         row[_SHARE] = np.inf
@@ -347,12 +349,11 @@ def _marker_sums(
 
 
 @kernel
-def _repeats(markers: np.ndarray, keys: np.ndarray) -> float:
+def _repeats(markers: np.ndarray, weights: np.ndarray, keys: np.ndarray) -> float:
     """1 where two frames of ``markers`` ``(N, n, 3)`` may be equal, else 0: equal frames have
-    equal keys ``(N,)`` (scratch), sums of the coordinates with weights that no two of a
-    frame's coordinates share. A compiled kernel."""
+    equal keys ``(N,)`` (scratch), sums of the coordinates with the ``weights`` ``(3 n,)``, of
+    which no two of a frame's coordinates share one. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
-    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
     for k in range(n_frames):
         key = 0.0
         for p in range(n_markers):
@@ -395,6 +396,13 @@ def _lack_of_fit(
 
 
 @kernel
+def _definite(values: np.ndarray) -> bool:
+    """Whether the ascending eigenvalues ``values`` ``(3,)`` are those of a positive definite
+    matrix, to rounding: the smallest above 1e-12 of the largest. A compiled kernel."""
+    return values[0] > 1e-12 * abs(values[2])
+
+
+@kernel
 def _upper(matrix: np.ndarray, i: int, j: int) -> float:
     """Entry ``(i, j)`` of the symmetric ``matrix`` of which only the upper triangle is
     written. A compiled kernel."""
@@ -415,7 +423,7 @@ def _solved(
     ``M`` is singular to rounding. ``values``, ``vectors``, ``work`` are scratch. A
     compiled kernel."""
     symmetric_eigen_into(matrix, values, vectors, work)
-    if not values[0] > 1e-12 * abs(values[2]):
+    if not _definite(values):
         solution[:] = np.nan
         return np.nan
     total = 0.0
@@ -541,7 +549,7 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         return annotated
     if len(checked) < len(results):
         markers = markers[checked]
-    variances = np.array([residual * residual / 3.0 for residual in residuals])
+    variances = np.array(residuals) ** 2 / 3.0
     rows = _statistics(markers, np.array(centres), variances)
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
         sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]
