@@ -140,6 +140,8 @@ import numpy as np
 
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
+from jointbench.numerics.compiled import kernel_array
+from jointbench.numerics.small import tangent_basis_into
 
 __all__ = [
     "AMBIGUOUS_APART_DEG",
@@ -190,18 +192,10 @@ _TOLD_APART_Z = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 
 def tangent_basis(direction: np.ndarray) -> np.ndarray:
-    """An orthonormal basis ``(3, 2)`` of the plane normal to the unit ``direction`` (3,)."""
-    values = np.asarray(direction, dtype=float).tolist()
-    # Crossed with the coordinate axis it is least aligned with, so the product is never small
-    # (the first such axis, as np.argmin takes it).
-    helper = [0.0, 0.0, 0.0]
-    helper[min(range(3), key=lambda i: abs(values[i]))] = 1.0
-    first = _cross(values, helper)
-    # As np.linalg.norm takes a vector's length, without its checks.
-    first /= math.sqrt(first.dot(first))
+    """An orthonormal basis ``(3, 2)`` of the plane normal to the unit ``direction`` (3,)
+    (:func:`jointbench.numerics.small.tangent_basis_into`)."""
     basis = np.empty((3, 2))
-    basis[:, 0] = first
-    basis[:, 1] = _cross(values, first.tolist())
+    tangent_basis_into(kernel_array(direction), basis)
     return basis
 
 

@@ -48,9 +48,9 @@ from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
-from jointbench.numerics.compiled import kernel
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.rank import negligible
-from jointbench.numerics.small import inertia_into
+from jointbench.numerics.small import inertia_into, tangent_basis_into
 
 __all__ = [
     "PoseStack",
@@ -373,7 +373,8 @@ def _sara_results(errors, point, direction, radii, values, **versions) -> list:
     )
 
 
-def _sara_sd_deg(values: np.ndarray, vectors: np.ndarray, n_frames: int, n_distinct: int):
+@kernel
+def _sara_sd_deg(values: np.ndarray, vectors: np.ndarray, n_frames: int, n_distinct: int) -> float:
     """The SD [deg] of SARA's one-segment direction ``n1`` implied by its eigen-problem
     (:mod:`jointbench.estimators.precision`): the normal matrix ``M = A'A`` ``(6, 6)`` of
     ``n_frames`` frames, ``n_distinct`` of them distinct, by its ascending eigenvalues ``values``
@@ -389,12 +390,35 @@ def _sara_sd_deg(values: np.ndarray, vectors: np.ndarray, n_frames: int, n_disti
     the direction of ``n1`` as it is), so ``tau^2 = lambda_0 / (2 N - 4)``: two components a
     frame, less the four of ``v`` they fit. Repeated frames scale ``M`` and ``lambda_0`` alike;
     the covariance is scaled by ``n_frames / n_distinct`` to the distinct frames'. ``inf``
-    where no gap separates the smallest eigenvalue or ``2 N - 4 < 1``.
+    where no gap separates the smallest eigenvalue or ``2 N - 4 < 1``. A compiled kernel, as
+    :func:`_sara_validity` is: in NumPy, their products of 3 x 3 matrices cost a checked SARA
+    call on a short trial more than its fit's own eigen-problem.
     """
-    return _sara_numbers(values, vectors, n_frames, n_distinct, np.zeros((1, 3)))[0]
+    dof = 2 * n_frames - 4
+    if dof < 1 or not (values[1:] - values[0] > 0.0).all():
+        return math.inf
+    tau_sq = max(values[0], 0.0) / dof
+    # The 3 x 3 block of the covariance tau^2 sum_j lambda_j v_j v_j' / (lambda_j - lambda_0)^2.
+    block = np.zeros((3, 3))
+    for j in range(1, 6):
+        weight = values[j] / (values[j] - values[0]) ** 2
+        for i in range(3):
+            for k in range(3):
+                block[i, k] += vectors[i, j] * weight * vectors[k, j]
+    block *= tau_sq * n_frames / n_distinct
+    # n1 is the null vector's first half, normalised: its tangent moves as that half does.
+    half = vectors[:3, 0].copy()
+    length = math.sqrt(half[0] ** 2 + half[1] ** 2 + half[2] ** 2)
+    basis = np.empty((3, 2))
+    tangent_basis_into(half / length, basis)
+    tangent = 0.0
+    for c in range(2):
+        tangent += _bilinear(basis[:, c], block, basis[:, c])
+    return math.degrees(math.sqrt(max(tangent / length**2, 0.0)))
 
 
-def _sara_validity(values: np.ndarray, vectors: np.ndarray, shape: np.ndarray):
+@kernel
+def _sara_validity(values: np.ndarray, vectors: np.ndarray, shape: np.ndarray) -> tuple:
     """What tells whether SARA's first-order SD holds (:mod:`jointbench.estimators.precision`):
     ``(share, gap, bias_deg)``, the noise's share of the normal matrix in the tangent direction
     most exposed to it, the matrix's smallest eigenvalue gap (both in its unit) and the pull
@@ -412,102 +436,50 @@ def _sara_validity(values: np.ndarray, vectors: np.ndarray, shape: np.ndarray):
     move the null vector by ``lambda_0 |E' K^-1 n| / (q(n) gap)`` [rad] whatever the noise's
     draw: a bias, which the SD, a statement of the scatter about it, does not include. For an
     isotropic cluster ``q`` is the same in every direction and both reduce to the planar
-    cost's: the share ``lambda_0`` and no bias."""
-    return _sara_numbers(values, vectors, 3, 3, shape)[1:]
-
-
-@kernel
-def _sara_numbers(
-    values: np.ndarray, vectors: np.ndarray, n_frames: int, n_distinct: int, shape: np.ndarray
-) -> tuple:
-    """:func:`_sara_sd_deg` and :func:`_sara_validity` in one: ``(sd_deg, share, gap,
-    bias_deg)`` of the eigen-problem ``values`` ``(6,)``, ``vectors`` ``(6, 6)`` of
-    ``n_frames`` frames, ``n_distinct`` distinct, of the cluster ``shape`` ``(P, 3)`` [mm].
-    Quantities in the plane normal to the answer ``n`` are taken without a basis of it: for a
-    symmetric ``C``, the trace there is ``tr C - n'Cn``, the determinant ``n' adj(C) n`` and
-    the length of ``E'Cn`` is ``sqrt(|Cn|^2 - (n'Cn)^2)``. A compiled kernel: a checked SARA
-    call on a short trial spent more on these 3 x 3 products in NumPy than on its fit."""
-    half = vectors[:3, 0]
-    length = math.sqrt(half[0] ** 2 + half[1] ** 2 + half[2] ** 2)
-    n = half / length
+    cost's: the share ``lambda_0`` and no bias. A compiled kernel."""
     gap = values[1] - values[0]
-    sd_deg = math.inf
-    dof = 2 * n_frames - 4
-    if dof >= 1 and (values[1:] - values[0] > 0.0).all():
-        # The 3 x 3 block of tau^2 sum_j lambda_j v_j v_j' / (lambda_j - lambda_0)^2.
-        tau_sq = max(values[0], 0.0) / dof * n_frames / n_distinct
-        block = np.zeros((3, 3))
-        for j in range(1, 6):
-            weight = tau_sq * values[j] / (values[j] - values[0]) ** 2
-            for i in range(3):
-                for k in range(3):
-                    block[i, k] += weight * vectors[i, j] * vectors[k, j]
-        tangent = _trace_normal_to(block, n) / length**2
-        sd_deg = math.degrees(math.sqrt(max(tangent, 0.0)))
     centred = shape - shape.sum(axis=0) / shape.shape[0]
-    compliance = np.empty((3, 3))
-    inertia_into(centred, compliance)
-    if not _invert3(compliance):
-        return sd_deg, math.inf, gap, math.inf
+    inertia = np.empty((3, 3))
+    inertia_into(centred, inertia)
+    try:
+        compliance = np.linalg.inv(inertia)
+    except Exception:  # singular: LAPACK's verdict, as NumPy's inverse gives it
+        return math.inf, gap, math.inf
+    half = vectors[:3, 0].copy()
+    direction = half / math.sqrt(half[0] ** 2 + half[1] ** 2 + half[2] ** 2)
+    basis = np.empty((3, 2))
+    tangent_basis_into(direction, basis)
     trace = compliance[0, 0] + compliance[1, 1] + compliance[2, 2]
-    normal = _trace_normal_to(compliance, n)
-    # The smaller eigenvalue of C in the plane normal to n, from its trace and determinant.
-    determinant = _adjugate_form(compliance, n)
-    most = trace - (0.5 * normal - math.sqrt(max(0.25 * normal**2 - determinant, 0.0)))
-    along = normal
+    # The smaller eigenvalue of the compliance in the plane normal to the axis, as
+    # jointbench.estimators.precision.smaller_eigenvalue takes it.
+    a = _bilinear(basis[:, 0], compliance, basis[:, 0])
+    b = _bilinear(basis[:, 0], compliance, basis[:, 1])
+    d = _bilinear(basis[:, 1], compliance, basis[:, 1])
+    most = trace - (0.5 * (a + d) - math.hypot(0.5 * (a - d), b))
+    along = trace - _bilinear(direction, compliance, direction)
     if not (along > 0.0 and gap > 0.0):
-        return sd_deg, math.inf, gap, math.inf
+        return math.inf, gap, math.inf
     noise = max(values[0], 0.0) / along  # N s^2
-    cn = compliance @ n
-    ncn = n @ cn
-    pull = noise * math.sqrt(max(cn @ cn - ncn * ncn, 0.0)) / gap
-    return sd_deg, noise * most, gap, math.degrees(pull)
+    pull = (
+        noise
+        * math.hypot(
+            _bilinear(basis[:, 0], compliance, direction),
+            _bilinear(basis[:, 1], compliance, direction),
+        )
+        / gap
+    )
+    return noise * most, gap, math.degrees(pull)
 
 
 @kernel
-def _trace_normal_to(matrix: np.ndarray, n: np.ndarray) -> float:
-    """The trace of the symmetric ``matrix`` ``(3, 3)`` in the plane normal to the unit ``n``
-    ``(3,)``: ``tr M - n'Mn``. A compiled kernel."""
-    total = matrix[0, 0] + matrix[1, 1] + matrix[2, 2]
-    for i in range(3):
-        for j in range(3):
-            total -= n[i] * matrix[i, j] * n[j]
-    return total
-
-
-@kernel
-def _adjugate_form(matrix: np.ndarray, n: np.ndarray) -> float:
-    """``n' adj(M) n`` of the symmetric ``matrix`` ``M`` ``(3, 3)`` and ``n`` ``(3,)``: for a
-    unit ``n``, the determinant of ``M`` in the plane normal to it. A compiled kernel."""
+def _bilinear(u: np.ndarray, matrix: np.ndarray, v: np.ndarray) -> float:
+    """``u' M v`` of the vectors ``u``, ``v`` ``(3,)`` and the ``matrix`` ``M`` ``(3, 3)``. A
+    compiled kernel."""
     total = 0.0
     for i in range(3):
         for j in range(3):
-            i1, i2 = (j + 1) % 3, (j + 2) % 3
-            j1, j2 = (i + 1) % 3, (i + 2) % 3
-            # The cofactor of entry (j, i) is the (i, j) entry of the adjugate.
-            cofactor = matrix[i1, j1] * matrix[i2, j2] - matrix[i1, j2] * matrix[i2, j1]
-            total += n[i] * cofactor * n[j]
+            total += u[i] * matrix[i, j] * v[j]
     return total
-
-
-@kernel
-def _invert3(matrix: np.ndarray) -> bool:
-    """``matrix`` ``(3, 3)`` replaced by its inverse (adjugate over determinant); False, and
-    ``matrix`` left as it is, where it is singular. A compiled kernel."""
-    a = matrix.copy()
-    determinant = (
-        a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
-        - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-        + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
-    )
-    if determinant == 0.0 or not math.isfinite(determinant):
-        return False
-    for i in range(3):
-        for j in range(3):
-            j1, j2 = (j + 1) % 3, (j + 2) % 3
-            i1, i2 = (i + 1) % 3, (i + 2) % 3
-            matrix[i, j] = (a[j1, i1] * a[j2, i2] - a[j1, i2] * a[j2, i1]) / determinant
-    return True
 
 
 def _sara_annotated(result: AxisResult, trial: np.ndarray) -> AxisResult:
@@ -519,9 +491,9 @@ def _sara_annotated(result: AxisResult, trial: np.ndarray) -> AxisResult:
     (:func:`jointbench.estimators.precision.annotate_validity`)."""
     values = np.asarray(result.diagnostics["eigenvalues"], dtype=float)
     vectors = np.asarray(result.diagnostics["eigenvectors"], dtype=float)
-    n_distinct = len(precision.distinct_frames(trial))
-    sd, share, gap, bias_deg = _sara_numbers(values, vectors, len(trial), n_distinct, trial[0])
+    sd = _sara_sd_deg(values, vectors, len(trial), len(precision.distinct_frames(trial)))
     annotated = precision.annotate(result, sd, "SARA's eigen-problem")
+    share, gap, bias_deg = _sara_validity(values, vectors, kernel_array(trial[0]))
     return precision.annotate_validity(
         annotated, share, gap, "SARA's normal matrix", bias_deg=bias_deg
     )

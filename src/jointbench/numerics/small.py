@@ -7,6 +7,8 @@ eigen-decomposition of one small symmetric matrix inside a compiled kernel.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from jointbench.numerics.compiled import kernel
@@ -20,6 +22,7 @@ __all__ = [
     "symmetric_eigen",
     "symmetric_eigen_into",
     "symmetric_into",
+    "tangent_basis_into",
 ]
 
 
@@ -298,3 +301,28 @@ def symmetric_into(sums: tuple, matrix: np.ndarray) -> None:
     matrix[0, 1] = matrix[1, 0] = s01
     matrix[0, 2] = matrix[2, 0] = s02
     matrix[1, 2] = matrix[2, 1] = s12
+
+
+@kernel
+def tangent_basis_into(direction: np.ndarray, basis: np.ndarray) -> None:
+    """An orthonormal basis of the plane normal to the unit ``direction`` ``(3,)`` into the
+    columns of ``basis`` ``(3, 2)``: ``direction`` crossed with the coordinate axis it is least
+    aligned with (the first such axis, as ``np.argmin`` takes it), so that the product is never
+    small, normalised; then ``direction`` crossed with that. Each product is formed as
+    ``np.cross`` forms it. A compiled kernel."""
+    n0, n1, n2 = direction[0], direction[1], direction[2]
+    least = 0
+    if abs(n1) < abs(n0):
+        least = 1
+    if abs(n2) < abs(direction[least]):
+        least = 2
+    h0, h1, h2 = (
+        (1.0 if least == 0 else 0.0),
+        (1.0 if least == 1 else 0.0),
+        (1.0 if least == 2 else 0.0),
+    )
+    f0, f1, f2 = n1 * h2 - n2 * h1, n2 * h0 - n0 * h2, n0 * h1 - n1 * h0
+    length = math.sqrt(f0 * f0 + f1 * f1 + f2 * f2)
+    f0, f1, f2 = f0 / length, f1 / length, f2 / length
+    basis[0, 0], basis[1, 0], basis[2, 0] = f0, f1, f2
+    basis[0, 1], basis[1, 1], basis[2, 1] = n1 * f2 - n2 * f1, n2 * f0 - n0 * f2, n0 * f1 - n1 * f0
