@@ -317,7 +317,7 @@ def _marker_sums(
 ) -> float:
     """One marker's sums over its ``track`` ``(N, 3)`` [mm] about ``centre`` ``(3,)``: its
     ``distances`` ``(N,)``, the sums of its unit directions ``u``, of ``d u`` and of ``u u'``
-    (upper triangle); returns its mean distance ``r``. ``F_p = sum u u' - N m m'`` and
+    (both triangles); returns its mean distance ``r``. ``F_p = sum u u' - N m m'`` and
     ``g_p = sum d u - N r m`` follow, ``m`` the mean direction. A compiled kernel."""
     n_frames = track.shape[0]
     cx, cy, cz = centre[0], centre[1], centre[2]
