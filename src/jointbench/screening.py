@@ -236,9 +236,9 @@ def _median_in_place(values: np.ndarray) -> float:
     """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
     ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values without NaN
     have one order, in which any selection finds the same numbers: :func:`_select_sweeping`
-    is the fastest at every count (measured on values new to each call, as a trial's are: 0.36
-    against 1.25 us for 120 values, 0.95 against 3.6 for 360; the same values over and over
-    let the branch predictor learn a quickselect's branches and hide its cost). NaN leave no
+    is the fastest at every count, measured on values new to each call, as a trial's are (the
+    same values over and over let the branch predictor learn a quickselect's branches and hide
+    their cost). NaN leave no
     order: values with one are taken as Numba's ``np.median`` takes them
     (:func:`_quickselect_median`), so that the median is the number it gives. A compiled
     kernel."""
