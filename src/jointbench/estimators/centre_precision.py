@@ -48,7 +48,15 @@ profiled out):
 
 A marker whose directions from the answer do not spread significantly beyond their noise (a
 virtual marker at the joint, or one within the noise of the answer) carries nothing on it and
-is left out of all of these.
+is left out of all of these. One that does but lies within three noise SDs of the answer (a
+virtual marker at the joint, placed where an earlier estimate put it) has directions so noisy
+(``s / r`` of a third or more) that the first-order correction, whose left-out terms are of
+relative size ``s^2 / r^2``, misjudges their noise; where other markers lie beyond, the SD and
+the noise share are those of the markers beyond, since with it a centre the others fix well
+read as undetermined. The score test, the lack of fit and the step keep it, and a marker
+further out is kept in everything: a marker near an answer far from the centre is what they
+must see (on paper A's grid, leaving out markers within ten noise SDs passed five answers more
+than 10 mm off as ``ok``).
 
 A warning is added when the data cannot support the answer this way: the SD above
 :data:`MAX_CENTER_SD_MM`, or not a statement of precision (both only where the support
@@ -111,6 +119,10 @@ _TOWARDS = slice(8, 11)
 # exceed their noise by, in standard errors, for the marker to count.
 _Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
+# Within this many noise SDs of the answer a marker's directions are noisy beyond the
+# first-order correction's reach (module docstring).
+_CLEAR_RADIUS = 3.0
+
 # Gauss–Newton iterations from an answer the score test rejects towards the spheres' centre.
 _REFINE_ITERATIONS = 20
 # ... until they move it less than this share of its distance from the answer.
@@ -146,7 +158,7 @@ def centre_statistics(
 def _scratch_for(n_frames: int) -> tuple:
     """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames, allocated once
     per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
-    sum_uu)``. A compiled kernel."""
+    sum_uu, stated, stated_noise)``. A compiled kernel."""
     return (
         np.empty((3, 3)),
         np.empty((3, 3)),
@@ -158,6 +170,8 @@ def _scratch_for(n_frames: int) -> tuple:
         np.empty(n_frames),
         np.empty(3),
         np.empty(3),
+        np.empty((3, 3)),
+        np.empty((3, 3)),
         np.empty((3, 3)),
     )
 
@@ -184,7 +198,7 @@ def _refine(
         ):
             break
     n_frames, n_markers, _ = markers.shape
-    squares, fourths, kept = _sums_at(markers, centre, s2, scratch)
+    squares, fourths, kept, _ = _sums_at(markers, centre, s2, scratch)
     there = np.empty_like(row)
     _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
     if there[_FIT_RATIO] < row[_FIT_RATIO]:
@@ -202,11 +216,14 @@ def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple)
     """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers ``(N, n, 3)``
     [mm] with noise ``s2`` [mm^2] per coordinate, into ``scratch`` (:func:`_scratch_for`): the
     information ``F``, its part ``F_s`` beyond the directions' noise and that noise's part
-    ``F - F_s`` (upper triangles), the score ``g``; returns the radial residuals' sum of
-    squares and of fourth powers and the markers kept. A marker whose directions from the
+    ``F - F_s`` (upper triangles), the score ``g``, and the parts of ``F_s`` and ``F - F_s``
+    from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns the radial residuals' sum
+    of squares and of fourth powers, the markers kept, and whether only some of those lie that
+    far. A marker whose directions from the
     answer do not spread beyond their noise (one at the answer, a virtual marker at the joint,
     say) carries nothing on it and is left out. A compiled kernel."""
-    info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch
+    info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch[:11]
+    stated, stated_noise = scratch[11:]
     n_frames, n_markers, _ = markers.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
     # of freedom each: beyond this factor of that spread the marker has a signal.
@@ -215,7 +232,9 @@ def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple)
     signal[:] = 0.0
     noisy[:] = 0.0
     score[:] = 0.0
-    squares, fourths, kept = 0.0, 0.0, 0
+    stated[:] = 0.0
+    stated_noise[:] = 0.0
+    squares, fourths, kept, clear = 0.0, 0.0, 0, 0
     for p in range(n_markers):
         radius = _marker_sums(markers[:, p], centre, distances, sum_u, sum_du, sum_uu)
         noise = (n_frames - 1) * s2 / radius**2 if radius > 0.0 else np.inf
@@ -224,6 +243,8 @@ def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple)
         if not spread - norm2 / n_frames > 2.0 * noise * beyond_noise:
             continue
         kept += 1
+        far = radius >= _CLEAR_RADIUS * math.sqrt(s2)
+        clear += far
         for k in range(n_frames):
             e2 = (distances[k] - radius) ** 2
             squares += e2
@@ -238,7 +259,10 @@ def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple)
                 info[i, j] += moment
                 signal[i, j] += moment - noise * tangential
                 noisy[i, j] += noise * tangential
-    return squares, fourths, kept
+                if far:
+                    stated[i, j] += moment - noise * tangential
+                    stated_noise[i, j] += noise * tangential
+    return squares, fourths, kept, 0 < clear < kept
 
 
 @kernel
@@ -286,15 +310,23 @@ def _row_at(
     information is not positive definite. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     info, signal, noisy, score, values, vectors, work = scratch[:7]
-    squares, fourths, kept = _sums_at(markers, centre, s2, scratch)
+    squares, fourths, kept, mixed = _sums_at(markers, centre, s2, scratch)
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
     _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
     symmetric_eigen_into(signal, values, vectors, work)
     largest = values[2] if values[2] > 0.0 else np.nan
     row[_OFFSET] = math.sqrt(max(squares - kept * (n_frames - 1) * s2, 0.0) / largest)
     if not _definite(values):
-        row[_SD] = np.inf
         row[_STEP] = np.inf
+    else:
+        row[_STEP] = _corrected_step(score, values, vectors, row[_TOWARDS])
+    if mixed:
+        # The statement of precision from the markers clear of the answer, where some are
+        # (module docstring): the score, the lack of fit and the step keep every marker.
+        signal, noisy = scratch[11:]
+        symmetric_eigen_into(signal, values, vectors, work)
+    if not _definite(values):
+        row[_SD] = np.inf
         row[_SHARE] = np.inf
         return
     share = 0.0
@@ -303,7 +335,6 @@ def _row_at(
             share += vectors[i, 0] * _upper(noisy, i, j) * vectors[j, 0]
     row[_SHARE] = share / values[0]
     row[_SD] = math.sqrt(s2 / values[0])
-    row[_STEP] = _corrected_step(score, values, vectors, row[_TOWARDS])
 
 
 @kernel
