@@ -930,12 +930,12 @@ def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndar
     return _direction_precision(markers, point, direction, method)[0]
 
 
-def _planar_gap(scatter: np.ndarray, direction: np.ndarray, basis: np.ndarray) -> float:
-    """The planar eigen-problem's gap [mm^2] above the answer ``direction`` (3,): the smallest
-    eigenvalue of ``E' S E - (n' S n) I``, half :func:`_planar_hessian` (``S`` ``(3, 3)``
-    [mm^2], ``E`` ``(3, 2)``); at the minimum, the smaller of ``S``'s two other eigenvalues
-    less the answer's."""
-    return precision.smaller_eigenvalue(0.5 * _planar_hessian(scatter, direction, basis))
+def _planar_gap(planar_hessian: np.ndarray) -> float:
+    """The planar eigen-problem's gap [mm^2] above the answer ``n``: the smallest eigenvalue of
+    ``E' S E - (n' S n) I``, half the ``planar_hessian`` ``(2, 2)`` [mm^2/rad^2] that
+    :func:`_planar_hessian` gives at ``n``; at the minimum, the smaller of ``S``'s two other
+    eigenvalues less the answer's."""
+    return precision.smaller_eigenvalue(0.5 * planar_hessian)
 
 
 def _direction_precision(
@@ -986,7 +986,7 @@ def _direction_precision(
     sd = precision.direction_sd_deg(gradient, hessian, cost, dof)
     if method != "planar":
         return sd, None
-    return sd, (cost, _planar_gap(scatter, direction, basis))
+    return sd, (cost, _planar_gap(hessian))
 
 
 def _annotated(result: AxisResult, markers: np.ndarray) -> AxisResult:
