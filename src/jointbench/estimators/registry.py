@@ -401,7 +401,9 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
     one-trial form per trial: the input checks of all trials in one pass
     (:func:`jointbench.estimators.validation.check_input_many`) and the support verdict of all
     trials in one call, reading the poses the fit read where it is pose-based. Its options
-    are checked before the fit, once for all trials (:func:`check_options`)."""
+    are checked before the fit, once for all trials (:func:`check_options`). As for one trial,
+    the stages share the sums over the frames that more than one of them reads
+    (:mod:`jointbench.numerics.reuse`)."""
 
     @functools.wraps(entry.many)
     def checked_many(*segments: object, **options: object) -> list:
