@@ -105,17 +105,17 @@ def test_the_planar_cost_states_its_other_minimum_where_its_ten_starts_are_cut_s
 
 
 def _distinct_as_np_unique(markers: np.ndarray) -> np.ndarray:
-    """distinct_frames as it first was: the keys' count of distinct values by np.unique."""
+    """distinct_frames by np.unique of the whole frames: ``markers`` itself when they are all
+    distinct."""
     flat = markers.reshape(len(markers), -1)
-    keys = flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1]))
-    if len(np.unique(keys)) == len(keys):
-        return markers
     distinct = np.unique(flat, axis=0)
+    if len(distinct) == len(markers):
+        return markers
     return distinct.reshape(len(distinct), *markers.shape[1:])
 
 
 def _overflowing(n_frames: int) -> np.ndarray:
-    """Frames whose keys overflow to NaN (inf - inf), one a frame, all frames distinct."""
+    """Frames whose sums of coordinates overflow (inf - inf), all distinct."""
     frames = np.zeros((n_frames, 3, 3))
     frames[:, 0, 0] = 1.7e308
     frames[:, 0, 1] = -1.7e308
@@ -123,7 +123,18 @@ def _overflowing(n_frames: int) -> np.ndarray:
     return frames
 
 
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the keys of the overflowing frames
+def _colliding() -> np.ndarray:
+    """Two distinct frames whose weighted sums with the square roots of 2, 3, ... are equal
+    (the keys by which frames were once told apart), and a third."""
+    for scale in np.linspace(1.0, 2.0, 1000):
+        a, b = math.sqrt(3.0) * scale, math.sqrt(2.0) * scale
+        if a * math.sqrt(2.0) == b * math.sqrt(3.0) and a != b:
+            frames = np.zeros((3, 1, 3))
+            frames[0, 0, 0], frames[1, 0, 1], frames[2, 0, 2] = a, b, 1.0
+            return frames
+    raise AssertionError("no colliding frames found")
+
+
 @pytest.mark.parametrize(
     "markers",
     [
@@ -134,10 +145,23 @@ def _overflowing(n_frames: int) -> np.ndarray:
         _overflowing(1),
         _overflowing(2),
         _overflowing(5),
+        _colliding(),
+        np.stack([np.zeros((2, 3)), np.full((2, 3), -0.0), np.ones((2, 3))]),
     ],
-    ids=["distinct", "repeated", "one-repeat", "one-frame", "one-nan", "two-nans", "five-nans"],
+    ids=[
+        "distinct",
+        "repeated",
+        "one-repeat",
+        "one-frame",
+        "one-overflow",
+        "two-overflows",
+        "five-overflows",
+        "colliding-sums",
+        "signed-zeros",
+    ],
 )
-def test_the_distinct_frames_are_those_np_unique_of_the_keys_tells(markers):
-    np.testing.assert_array_equal(
-        precision.distinct_frames(markers), _distinct_as_np_unique(markers)
-    )
+def test_the_distinct_frames_are_those_np_unique_tells(markers):
+    distinct = precision.distinct_frames(markers)
+    expected = _distinct_as_np_unique(markers)
+    np.testing.assert_array_equal(distinct, expected)
+    assert (distinct is markers) == (expected is markers)

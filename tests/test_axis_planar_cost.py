@@ -11,6 +11,7 @@ from test_compiled import _hinge_markers
 
 from jointbench.estimators import axis
 from jointbench.geometry import unit
+from jointbench.numerics.simplex import lockstep
 
 
 def _einsum_costs(costs: axis.AxisCosts, directions: np.ndarray, trials: np.ndarray):
@@ -39,13 +40,18 @@ def test_directions_from_angles_are_the_stacked_formula():
     np.testing.assert_array_equal(axis.angles_to_directions(params), expected)
 
 
+def _hinges_costs(rng: np.random.Generator, n_trials: int):
+    """The costs of ``n_trials`` hinges at a random scale, and each trial's planar minimum."""
+    markers = _hinge_markers(rng, n_trials) * rng.uniform(0.1, 100.0)
+    costs = axis.AxisCosts(markers, rng.normal(size=(n_trials, 3)))
+    return costs, np.linalg.eigh(costs.scatter)[1][:, :, 0]
+
+
 @pytest.mark.parametrize("seed", range(5))
 def test_planar_costs_are_the_einsum_sums_to_the_last_bit(seed):
     rng = np.random.default_rng(seed)
-    markers = _hinge_markers(rng, 4) * rng.uniform(0.1, 100.0)
-    costs = axis.AxisCosts(markers, rng.normal(size=(4, 3)))
+    costs, eigenvectors = _hinges_costs(rng, 4)
     # Unit directions, near-eigenvectors of S (the planar minima) and unnormalised ones.
-    eigenvectors = np.linalg.eigh(costs.scatter)[1][:, :, 0]
     directions = np.concatenate(
         [
             unit(rng.normal(size=(200, 3))),
@@ -86,3 +92,33 @@ def test_the_costs_refuse_trials_that_are_not_indices(cost):
     directions = unit(rng.normal(size=(3, 3)))
     with pytest.raises(ValueError, match="integer indices"):
         getattr(costs, cost)(directions, np.array([0.9, 1.0, 2.0]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_compiled_planar_restarts_take_the_paths_the_search_cost_gives(seed):
+    costs, eigenvectors = _hinges_costs(np.random.default_rng(seed), 5)
+    # Eigenvectors (the self-check's starts), a direction anywhere, and a pole.
+    starts = np.array(
+        [axis.direction_to_angles(v) for v in eigenvectors[:3]]
+        + [axis.direction_to_angles(unit(np.random.default_rng(seed).normal(size=3)))]
+        + [(0.0, np.pi / 2)]
+    )
+    for limits in (
+        {},
+        {"xatol": 0.0, "fatol": 0.0},
+        {"max_iter": 3},
+        {"max_fev": 5, "xatol": 1e-2},
+    ):
+        expected = lockstep(costs.search_cost("planar", "angles"), starts, **limits)
+        assert repr(axis._planar_restarts(costs.scatter, starts, **limits)) == repr(expected)
+
+
+def test_the_compiled_directions_are_those_from_angles_to_the_last_bit():
+    # The restarts' sines and cosines are the C library's: NumPy's must be the same.
+    params = np.random.default_rng(9).uniform(-4.0, 4.0, size=(20000, 2))
+    params[:5] = [(0.0, 0.0), (np.pi, -np.pi / 2), (1e-300, 1e-300), (-0.0, 4.0), (3.0, -0.0)]
+    expected = axis.angles_to_directions(params)
+    direction = np.empty(3)
+    for (azimuth, elevation), row in zip(params.tolist(), expected, strict=True):
+        axis.direction_into(azimuth, elevation, direction)
+        np.testing.assert_array_equal(direction, row)

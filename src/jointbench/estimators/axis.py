@@ -113,7 +113,8 @@ from jointbench.estimators.sphere import fit_nm  # noqa: F401 (registers NM, use
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.simplex import FATOL, XATOL, lockstep
+from jointbench.numerics.reuse import remembered
+from jointbench.numerics.simplex import FATOL, XATOL, SimplexResult, advance, lockstep, started
 from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
@@ -123,10 +124,12 @@ __all__ = [
     "angles_to_direction",
     "angles_to_directions",
     "canonical_sign",
+    "direction_into",
     "direction_to_angles",
     "fit_combined",
     "fit_planar",
     "fit_radial",
+    "trial_scatter",
 ]
 
 _GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
@@ -192,7 +195,8 @@ class AxisCosts:
 
     Parameters
     ----------
-    markers : (n_frames, n_markers, 3) or (n_trials, n_frames, n_markers, 3) [mm], validated.
+    markers : (n_frames, n_markers, 3) or (n_trials, n_frames, n_markers, 3) [mm], validated,
+        or a list of trials of equal shape; each trial's ``S`` is :func:`trial_scatter`'s.
     point : (3,) or (n_trials, 3) [mm], the point ``m`` on each trial's axis (used by the
         radial cost only).
 
@@ -204,13 +208,18 @@ class AxisCosts:
     search over many trials follows the path it follows alone.
     """
 
-    def __init__(self, markers: np.ndarray, point: np.ndarray) -> None:
-        markers = np.asarray(markers, dtype=float)
+    def __init__(self, markers: np.ndarray | list[np.ndarray], point: np.ndarray) -> None:
         point = np.asarray(point, dtype=float)
-        if markers.ndim == 3:
-            markers, point = markers[None], point[None]
+        if isinstance(markers, list):
+            trials = [np.asarray(trial, dtype=float) for trial in markers]
+            markers = np.stack(trials)
+        else:
+            markers = np.asarray(markers, dtype=float)
+            if markers.ndim == 3:
+                markers, point = markers[None], point[None]
+            trials = list(markers)
         _, n_frames, n_markers, _ = markers.shape
-        self.scatter = _scatters(kernel_array(markers))
+        self.scatter = np.stack([trial_scatter(trial) for trial in trials])
         self.point = point
         self._markers = markers
         self._shape = (n_markers, n_frames)
@@ -345,6 +354,21 @@ def _of_parameters(
         return value
 
     return cost_vector
+
+
+def trial_scatter(markers: np.ndarray) -> np.ndarray:
+    """Paper B's ``S`` ``(3, 3)`` [mm^2] of one trial's ``markers`` ``(N, P, 3)`` [mm]
+    (:func:`_scatters`), read-only: computed once per array in a checked call, whose fit,
+    self-check and statement of precision all read it
+    (:func:`jointbench.numerics.reuse.remembered`)."""
+    return remembered("planar scatter", markers, _scatter_of)
+
+
+def _scatter_of(markers: np.ndarray) -> np.ndarray:
+    """:func:`_scatters` of one trial ``(N, P, 3)`` [mm], read-only ``(3, 3)`` [mm^2]."""
+    scatter = _scatters(kernel_array(markers[None]))[0]
+    scatter.setflags(write=False)
+    return scatter
 
 
 @kernel
@@ -505,7 +529,7 @@ def _fit_many(
 ) -> list[AxisResult]:
     """The axis of each validated trial (``arrays`` of equal shape ``(N, P, 3)``, ``points``
     ``m`` (3,)): the ten starts of every trial searched together, each on its own path."""
-    costs = AxisCosts(np.stack(arrays), np.stack(points))
+    costs = AxisCosts(arrays, np.stack(points))
     starts = _starts(parameterisation)
     n_starts = len(starts)
     runs = lockstep(
@@ -686,7 +710,7 @@ def _self_check_many(
     del point  # each result's point is the one searched with
     method = results[0].method
     costs = AxisCosts(
-        markers if isinstance(markers, np.ndarray) else np.stack(markers),
+        markers if isinstance(markers, np.ndarray) else list(markers),
         np.stack([np.asarray(result.point) for result in results]),
     )
     eigenvectors = [np.asarray(result.diagnostics["eigenvector"]) for result in results]
@@ -695,18 +719,62 @@ def _self_check_many(
         if parameterisation == "angles"
         else np.stack(eigenvectors)
     )
-    runs = lockstep(
-        costs.search_cost(method, parameterisation),
-        starts,
-        xatol=xatol,
-        fatol=fatol,
-        max_iter=max_iter,
-        max_fev=max_fev,
-    )
+    limits = {"xatol": xatol, "fatol": fatol, "max_iter": max_iter, "max_fev": max_fev}
+    if method == "planar" and parameterisation == "angles":
+        runs = _planar_restarts(costs.scatter, starts, **limits)
+    else:
+        runs = lockstep(costs.search_cost(method, parameterisation), starts, **limits)
     return [
         _judged(result, costs, trial, runs[trial : trial + 1], parameterisation, fatol)
         for trial, result in enumerate(results)
     ]
+
+
+def _planar_restarts(scatter: np.ndarray, starts: np.ndarray, **limits) -> list[SimplexResult]:
+    """The searches of the planar cost over angles from ``starts`` ``(T, 2)`` [rad], search
+    ``t`` with the scatter ``scatter[t]`` ``(T, 3, 3)`` [mm^2], under the stopping rules
+    ``limits`` of :func:`jointbench.numerics.simplex.lockstep`: what ``lockstep`` gives them
+    with :meth:`AxisCosts.search_cost`, in one compiled call (:func:`_planar_angle_searches`)
+    instead of a call of the cost from Python per round."""
+    searches = started(starts, **limits)
+    _planar_angle_searches(kernel_array(scatter), tuple(searches), np.empty(len(searches.points)))
+    return searches.results()
+
+
+@kernel
+def _planar_angle_searches(scatter: np.ndarray, searches: tuple, costs: np.ndarray) -> None:
+    """Runs the ``searches`` of :func:`jointbench.numerics.simplex.started` over azimuth and
+    elevation [rad] to their end, search ``r`` on the planar cost ``n' S n`` of
+    ``S = scatter[r]`` ``(R, 3, 3)`` [mm^2]; ``costs`` ``(R (n + 1),)`` is scratch. A compiled
+    kernel: each direction is :func:`angles_to_directions`'s (:func:`direction_into`) and its
+    cost :func:`_planar_costs`'s, by the same operations in the same order."""
+    points, owners = searches[-2], searches[-1]
+    direction = np.empty(3)
+    while True:
+        # Each round takes the costs of the points asked for last (none at the start).
+        count = advance(*searches, costs)
+        if count == 0:
+            return
+        for k in range(count):
+            direction_into(points[k, 0], points[k, 1], direction)
+            s = scatter[owners[k]]
+            total = 0.0
+            for i in range(3):
+                for j in range(3):
+                    total += direction[i] * s[i, j] * direction[j]
+            costs[k] = total
+
+
+@kernel
+def direction_into(azimuth: float, elevation: float, direction: np.ndarray) -> None:
+    """:func:`angles_to_direction` of ``azimuth`` and ``elevation`` [rad] written into
+    ``direction`` (3,), inside a compiled kernel: the sines and cosines are the C library's,
+    which NumPy's are where it has no vectorised ones of its own
+    (``tests/test_axis_planar_cost.py`` holds them to NumPy's)."""
+    c = math.cos(elevation)
+    direction[0] = c * math.cos(azimuth)
+    direction[1] = c * math.sin(azimuth)
+    direction[2] = math.sin(elevation)
 
 
 def _judged(result, costs, trial, run, parameterisation, fatol) -> AxisResult:
@@ -862,12 +930,12 @@ def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndar
     return _direction_precision(markers, point, direction, method)[0]
 
 
-def _planar_gap(scatter: np.ndarray, direction: np.ndarray, basis: np.ndarray) -> float:
-    """The planar eigen-problem's gap [mm^2] above the answer ``direction`` (3,): the smallest
-    eigenvalue of ``E' S E - (n' S n) I``, half :func:`_planar_hessian` (``S`` ``(3, 3)``
-    [mm^2], ``E`` ``(3, 2)``); at the minimum, the smaller of ``S``'s two other eigenvalues
-    less the answer's."""
-    return precision.smaller_eigenvalue(0.5 * _planar_hessian(scatter, direction, basis))
+def _planar_gap(planar_hessian: np.ndarray) -> float:
+    """The planar eigen-problem's gap [mm^2] above the answer ``n``: the smallest eigenvalue of
+    ``E' S E - (n' S n) I``, half the ``planar_hessian`` ``(2, 2)`` [mm^2/rad^2] that
+    :func:`_planar_hessian` gives at ``n``; at the minimum, the smaller of ``S``'s two other
+    eigenvalues less the answer's."""
+    return precision.smaller_eigenvalue(0.5 * planar_hessian)
 
 
 def _direction_precision(
@@ -906,7 +974,7 @@ def _direction_precision(
     if method != "radial":
         # S does not depend on the axis's point: the planar cost needs no foot, whose centroid
         # of every sample costs more than S itself on a long trial.
-        scatter = _scatters(kernel_array(markers[None]))[0]
+        scatter = trial_scatter(markers)
         gradient[:2] = 2.0 * basis.T @ scatter @ direction
         hessian[:2, :2] = _planar_hessian(scatter, direction, basis)
         cost = float(direction @ scatter @ direction)
@@ -918,7 +986,7 @@ def _direction_precision(
     sd = precision.direction_sd_deg(gradient, hessian, cost, dof)
     if method != "planar":
         return sd, None
-    return sd, (cost, _planar_gap(scatter, direction, basis))
+    return sd, (cost, _planar_gap(hessian))
 
 
 def _annotated(result: AxisResult, markers: np.ndarray) -> AxisResult:

@@ -140,7 +140,7 @@ import numpy as np
 
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
-from jointbench.numerics.compiled import kernel_array
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import tangent_basis_into
 
 __all__ = [
@@ -247,18 +247,56 @@ def smaller_eigenvalue(matrix: np.ndarray) -> float:
 def distinct_frames(markers: np.ndarray) -> np.ndarray:
     """The frames of ``markers`` ``(N, P, 3)`` that differ from every other, once each
     ``(N_distinct, P, 3)``: ``markers`` itself when no two frames are equal, else the distinct
-    frames in lexicographic order (module docstring)."""
+    frames in lexicographic order (module docstring). Frames are equal when every coordinate
+    is, as ``np.unique`` compares them (``-0.0`` equals ``0.0``)."""
     flat = markers.reshape(len(markers), -1)
-    # Equal frames have equal keys, so frames whose keys all differ are all distinct: the usual
-    # case needs one sort of N numbers, not of N whole frames (several times the cost of the
-    # rest of the statement on 5000 frames).
-    keys = np.sort(flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1])))
-    # Sorted keys all differ when no two neighbours are equal, as np.unique counts them: NaN
-    # keys (an overflow), which sort last, count as one value.
-    if not (keys[1:] == keys[:-1]).any() and not (len(keys) > 1 and math.isnan(keys[-2])):
+    if _rows_all_differ(kernel_array(flat)):
         return markers
     distinct = np.unique(flat, axis=0)
     return distinct.reshape(len(distinct), *markers.shape[1:])
+
+
+@kernel
+def _rows_all_differ(rows: np.ndarray) -> bool:
+    """Whether no two of ``rows`` ``(N, K)`` are equal coordinate by coordinate (``==``). A
+    compiled kernel: each row is hashed once into an open-addressed table and compared only
+    with the rows of its own hash, where a sort of whole rows, or of one number per row, costs
+    several times the rest of a statement of precision on a long trial. The hash is of each
+    coordinate's bits with ``-0.0`` read as ``0.0``, so equal rows hash alike."""
+    n_rows, width = rows.shape
+    size = 2
+    while size < 2 * n_rows:
+        size *= 2
+    table = np.full(size, -1, dtype=np.int64)
+    bits = rows.view(np.uint64)
+    negative_zero = np.uint64(1) << np.uint64(63)
+    # A multiplier per coordinate: the products are independent, where one running product
+    # would chain a multiplication's latency through every coordinate.
+    factors = np.empty(width, dtype=np.uint64)
+    for j in range(width):
+        factors[j] = np.uint64(0x9E3779B97F4A7C15) * np.uint64(2 * j + 1)
+    for r in range(n_rows):
+        mixed = np.uint64(0)
+        for j in range(width):
+            b = bits[r, j]
+            if b == negative_zero:
+                b = np.uint64(0)
+            mixed += b * factors[j]
+        mixed ^= mixed >> np.uint64(29)
+        mixed *= np.uint64(0xBF58476D1CE4E5B9)
+        slot = np.int64((mixed >> np.uint64(32)) & np.uint64(size - 1))
+        while table[slot] >= 0:
+            other = table[slot]
+            same = True
+            for j in range(width):
+                if not rows[r, j] == rows[other, j]:
+                    same = False
+                    break
+            if same:
+                return False
+            slot = (slot + 1) & (size - 1)
+        table[slot] = r
+    return True
 
 
 def annotate(result, sd_deg: float, cost_name: str):

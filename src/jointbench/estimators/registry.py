@@ -61,6 +61,7 @@ from jointbench.estimators.batching import (
     one_trial,
 )
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.numerics import reuse
 from jointbench.registries import Registry
 
 __all__ = [
@@ -180,7 +181,14 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     self-check, the precision its cost implies and the support verdict. A pose-based method
     of two segments has the segments'
     poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
-    one-trial function is) and for the verdict."""
+    one-trial function is) and for the verdict. The stages share the sums over the frames
+    that more than one of them reads (:mod:`jointbench.numerics.reuse`)."""
+    with reuse.one_call():
+        return _stages(entry, clean, options)
+
+
+def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
+    """The stages of :func:`_fit_valid`."""
     names = _pose_names(entry, len(clean))
     shared = None
     if names is not None and _binds(entry, clean, options):
@@ -393,39 +401,48 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
     one-trial form per trial: the input checks of all trials in one pass
     (:func:`jointbench.estimators.validation.check_input_many`) and the support verdict of all
     trials in one call, reading the poses the fit read where it is pose-based. Its options
-    are checked before the fit, once for all trials (:func:`check_options`)."""
+    are checked before the fit, once for all trials (:func:`check_options`). As for one trial,
+    the stages share the sums over the frames that more than one of them reads
+    (:mod:`jointbench.numerics.reuse`)."""
 
     @functools.wraps(entry.many)
     def checked_many(*segments: object, **options: object) -> list:
         if options:  # a call without options, the common one, pays nothing for the check
             _check_entry_options(entry, options)
-        names = _pose_names(entry, len(segments))
-        shared = None
-        if names is not None and options.get("poses") is None:
-            shared = _shared_poses(names, segments)
-        if shared is not None:
-            options["poses"] = shared
-        outcomes = list(entry.many(*segments, **options))
-        checked = validation.check_input_many(entry.kind, segments, len(outcomes))
-        fitted = []
-        for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
-            # As for one trial: the input checks come first and their error wins.
-            if error is not None:
-                outcomes[trial] = error
-            elif not isinstance(outcome, Exception):
-                fitted.append(trial)
-        if fitted:
-            stacked = checked.stacked(fitted)
-            results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
-            poses = _fitted_to(options.get("poses"), fitted) if names else None
-            results = _precision_checked(entry.fn, results, stacked, poses)
-            verdicts = support.assess_many(entry.kind, stacked, poses=poses)
-            results = _answers_checked(entry.kind, results, stacked, verdicts)
-            for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
-                outcomes[trial] = support.annotate(result, verdict)
-        return outcomes
+        with reuse.one_call():
+            return _many_stages(entry, segments, options)
 
     return checked_many
+
+
+def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
+    """The stages of :func:`_checked_many`'s call of ``entry`` on ``segments``, after the
+    check of its ``options``."""
+    names = _pose_names(entry, len(segments))
+    shared = None
+    if names is not None and options.get("poses") is None:
+        shared = _shared_poses(names, segments)
+    if shared is not None:
+        options["poses"] = shared
+    outcomes = list(entry.many(*segments, **options))
+    checked = validation.check_input_many(entry.kind, segments, len(outcomes))
+    fitted = []
+    for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
+        # As for one trial: the input checks come first and their error wins.
+        if error is not None:
+            outcomes[trial] = error
+        elif not isinstance(outcome, Exception):
+            fitted.append(trial)
+    if fitted:
+        stacked = checked.stacked(fitted)
+        results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
+        poses = _fitted_to(options.get("poses"), fitted) if names else None
+        results = _precision_checked(entry.fn, results, stacked, poses)
+        verdicts = support.assess_many(entry.kind, stacked, poses=poses)
+        results = _answers_checked(entry.kind, results, stacked, verdicts)
+        for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
+            outcomes[trial] = support.annotate(result, verdict)
+    return outcomes
 
 
 def register(

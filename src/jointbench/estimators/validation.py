@@ -196,46 +196,51 @@ def _first_failures(
     n_trials, n_frames, n_markers, _ = markers.shape
     scatter = np.empty((3, 3))
     mean = np.empty(3)
+    totals = np.empty((n_markers, 3))
+    moves, lines = checks & _MOVES, checks & _LINES
     first_failure = 0
     for t in range(n_trials):
         trial = markers[t]
         failure = 0
+        # One pass over the samples for the checks of each sample, the motion from frame 0 and
+        # each trajectory's sum (for its mean): each is what its own pass would give, and a
+        # check is read only where the checks before it passed.
+        # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so the
+        # sum of those is 0 exactly when every coordinate is finite.
+        probe = 0.0
+        origins = 0
+        spread = 0.0  # frame by frame, in memory order
+        totals[:] = 0.0
+        for f in range(n_frames):
+            for m in range(n_markers):
+                x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
+                probe += x * 0.0 + y * 0.0 + z * 0.0
+                origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
+                if moves and f > 0:
+                    spread = max(spread, abs(x - trial[0, m, 0]))
+                    spread = max(spread, abs(y - trial[0, m, 1]))
+                    spread = max(spread, abs(z - trial[0, m, 2]))
+                if lines:
+                    totals[m, 0] += x
+                    totals[m, 1] += y
+                    totals[m, 2] += z
         if checks & _SAMPLES:
-            # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so
-            # the sum of those is 0 exactly when every coordinate is finite.
-            probe = 0.0
-            origins = 0
-            for f in range(n_frames):
-                for m in range(n_markers):
-                    x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
-                    probe += x * 0.0 + y * 0.0 + z * 0.0
-                    origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
-            all_finite = probe == 0.0
-            any_origin = origins > 0
-            if not all_finite:
+            if not probe == 0.0:
                 failure = _NOT_FINITE
-            elif any_origin:
+            elif origins > 0:
                 failure = _AT_ORIGIN
-        if failure == 0 and checks & _MOVES:
+        if failure == 0 and moves:
             first = 0.0
             for m in range(n_markers):
                 for i in range(3):
                     first = max(first, abs(trial[0, m, i]))
-            spread = 0.0  # frame by frame, in memory order
-            for f in range(1, n_frames):
-                for m in range(n_markers):
-                    for i in range(3):
-                        spread = max(spread, abs(trial[f, m, i] - trial[0, m, i]))
             if spread <= move_tol_mm * max(1.0, first):
                 failure = _STILL
-        if failure == 0 and checks & _LINES and n_frames >= 3:
+        if failure == 0 and lines and n_frames >= 3:
             every = True
             for p in range(n_markers):
                 for i in range(3):
-                    total = 0.0
-                    for f in range(n_frames):
-                        total += trial[f, p, i]
-                    mean[i] = total / n_frames
+                    mean[i] = totals[p, i] / n_frames
                 sums = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
                 for f in range(n_frames):
                     sums = add_outer(

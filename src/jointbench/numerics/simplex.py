@@ -8,7 +8,9 @@ and evaluates the pending points of all of them in one call of the cost; :func:`
 that search on a batch of one. The bookkeeping of the simplices is a compiled kernel
 (:mod:`jointbench.numerics.compiled`), so a single search pays no per-operation array overhead
 and many searches no per-search Python loop; the cost stays a Python callable over a batch of
-points.
+points. A cost that is itself a compiled kernel can drive the same searches from compiled code
+(:func:`started`, :func:`advance`), without a round trip to Python per round: the searches
+then take the paths :func:`lockstep` gives them with that cost.
 """
 
 from __future__ import annotations
@@ -27,8 +29,10 @@ __all__ = [
     "FMINSEARCH_OPTIONS",
     "XATOL",
     "SimplexResult",
+    "advance",
     "lockstep",
     "nelder_mead",
+    "started",
     "stop_status",
 ]
 
@@ -100,12 +104,11 @@ def lockstep(
     ``max_fev`` evaluations (default ``200 * n`` each) are used up (not converged). As in
     ``fminsearch``, the limits are checked between iterations: an iteration that has started
     finishes, so a shrink may take the evaluations past ``max_fev``. NaN costs are ordered as
-    Python's ``sorted`` and ``bisect`` order them (see :func:`_advance`).
+    Python's ``sorted`` and ``bisect`` order them (see :func:`advance`).
 
     Raises ``ValueError`` when ``batch_cost`` returns other than one cost per point.
     """
-    starts = np.array(starts, dtype=float, ndmin=2)
-    searches = _Searches.create(starts, _limits(starts.shape[1], max_iter, max_fev), (xatol, fatol))
+    searches = started(starts, xatol=xatol, fatol=fatol, max_iter=max_iter, max_fev=max_fev)
     count = searches.advance(np.empty(0))
     while count:
         points, owners = searches.points[:count].copy(), searches.owners[:count].copy()
@@ -119,6 +122,21 @@ def lockstep(
     return searches.results()
 
 
+def started(
+    starts: Sequence[Sequence[float]] | np.ndarray,
+    *,
+    xatol: float = XATOL,
+    fatol: float = FATOL,
+    max_iter: int | None = None,
+    max_fev: int | None = None,
+) -> _Searches:
+    """The searches of :func:`lockstep` from each row of ``starts`` ``(R, n)``, not yet
+    advanced: for a compiled cost, a kernel drives them with :func:`advance` as
+    :func:`lockstep` does from Python, and :meth:`_Searches.results` reads their outcome."""
+    starts = np.array(starts, dtype=float, ndmin=2)
+    return _Searches.create(starts, _limits(starts.shape[1], max_iter, max_fev), (xatol, fatol))
+
+
 def stop_status(result: SimplexResult, max_fev: int) -> str:
     """``"ok"`` for a converged search, else which of the limits it reached."""
     if result.converged:
@@ -128,12 +146,12 @@ def stop_status(result: SimplexResult, max_fev: int) -> str:
     return "Maximum number of iterations has been exceeded."
 
 
-# What the costs a search is sent next belong to (its phase in :func:`_advance`).
+# What the costs a search is sent next belong to (its phase in :func:`advance`).
 _START, _VERTICES, _REFLECTED, _EXPANDED, _OUTSIDE, _INSIDE, _SHRUNK, _DONE = range(8)
 
 
 class _Searches(NamedTuple):
-    """The state of ``R`` searches over ``n`` parameters, as the arrays :func:`_advance` updates:
+    """The state of ``R`` searches over ``n`` parameters, as the arrays :func:`advance` updates:
     ``phase`` ``(R,)``; ``simplex`` ``(R, n + 1, n)`` and ``values`` ``(R, n + 1)``, sorted by
     cost; ``moves`` ``(R, 3, n)``: centroid of the best ``n`` vertices, reflected point, probe
     (expansion or contraction); ``f_reflected`` ``(R,)``; ``counts`` ``(R, 2)``: iterations,
@@ -174,7 +192,7 @@ class _Searches(NamedTuple):
     def advance(self, costs: np.ndarray) -> int:
         """Send every running search the ``costs`` of the points it asked for last; returns the
         number of points asked for now (0 when all have stopped)."""
-        return _advance(*self, costs)
+        return advance(*self, costs)
 
     def results(self) -> list[SimplexResult]:
         """Every search's :class:`SimplexResult`."""
@@ -194,7 +212,7 @@ class _Searches(NamedTuple):
 
 
 @kernel
-def _advance(
+def advance(
     phase: np.ndarray,
     simplex: np.ndarray,
     values: np.ndarray,

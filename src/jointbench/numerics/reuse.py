@@ -1,0 +1,57 @@
+"""Values of a trial's frames that several stages of one checked call read, computed once.
+
+A checked call (:func:`jointbench.estimators.registry.get` and ``many``) runs a method's fit,
+its self-check and its statement of precision on the same arrays, and each stage may need the
+same sum over every frame (paper B's scatter ``S``, for the axis methods): on a long trial that
+sum costs more than the arithmetic of the check that reads it. Inside :func:`one_call` the
+first stage to compute such a value for an array keeps it and the later stages read it back
+(:func:`remembered`); outside one, every value is computed where it is asked for, so a stage
+returns the same numbers either way.
+
+An array is known by its memory: its address, shape, strides and dtype, so the view of a trial
+that another stage takes of the same batch finds the value. The scope holds every array it has
+seen, so no memory it knows can be freed and reused by another array while it lasts; the
+stages of a call read their input and never write to it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
+from typing import TypeVar
+
+import numpy as np
+
+__all__ = ["one_call", "remembered"]
+
+_Value = TypeVar("_Value")
+
+# Per scope: by (name, address, shape, strides, dtype), the array and its value. A context
+# variable, so that each thread (and each task) has scopes of its own.
+_KEPT: ContextVar[dict | None] = ContextVar("jointbench_reuse", default=None)
+
+
+@contextlib.contextmanager
+def one_call() -> Iterator[None]:
+    """The scope of one checked call: values remembered inside it are forgotten at its end. A
+    scope opened inside another starts empty and the outer one's values return with it."""
+    token = _KEPT.set({})
+    try:
+        yield
+    finally:
+        _KEPT.reset(token)
+
+
+def remembered(name: str, array: np.ndarray, compute: Callable[[np.ndarray], _Value]) -> _Value:
+    """``compute(array)``, or inside :func:`one_call` the value ``name`` already computed for
+    an array of the same memory. The value is shared by every stage that asks: ``compute``
+    returns one that no caller writes to (a read-only array)."""
+    kept = _KEPT.get()
+    if kept is None:
+        return compute(array)
+    key = (name, array.__array_interface__["data"][0], array.shape, array.strides, array.dtype)
+    found = kept.get(key)
+    if found is None:
+        found = kept[key] = (array, compute(array))
+    return found[1]
