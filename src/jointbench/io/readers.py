@@ -428,9 +428,11 @@ def read_csv(path: str | Path) -> Recording:
     twice = table.duplicated(["frame", "marker"], keep=False)
     if twice.any():
         first = table[twice].iloc[0]
+        same = (numbers == numbers[first.name]) & (table["marker"] == first["marker"]).to_numpy()
         raise ValueError(
             f"{path}: frame {numbers[first.name]}, marker {first['marker']} has "
-            f"{int(twice.sum())} rows for the same (frame, marker); each sample must appear once"
+            f"{int(same.sum())} rows for the same (frame, marker); each sample must appear once"
+            f" ({int(twice.sum())} rows in all repeat a sample)"
         )
     first_frame = int(numbers.min())
     labels = sorted(table["marker"].unique(), key=_natural)

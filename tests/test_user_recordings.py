@@ -1,0 +1,103 @@
+"""A researcher's own recordings, as the README's "Your own recordings" promises to read them:
+files derived from a trial (units, frames written twice, samples given twice, ranges past the
+end) are read as they are or refused naming the file, never fitted as something else."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from rigs import two_segments
+from test_io_recordings import write_c3d
+
+import jointbench
+from jointbench.io import Recording, read
+
+LABELS = ["P1", "P2", "P3", "D1", "D2", "D3"]
+
+
+def rig_markers(n_frames: int = 120) -> np.ndarray:
+    """The two-segment rig's markers ``(n_frames, 6, 3)`` [mm], a body about a metre across."""
+    proximal, distal = two_segments(n_frames)
+    return np.concatenate([proximal, distal], axis=1)
+
+
+def fit_rig(recording: Recording) -> jointbench.io.RecordingFit:
+    """The rig's distal centre in the proximal segment's frame."""
+    return jointbench.fit(recording, "center", "D1,D2,D3", "P1,P2,P3")
+
+
+def write_long_csv(path, labels, markers, first_frame: int = 0):
+    """Markers ``(n_frames, n, 3)`` [mm] as the long CSV ``frame,marker,x,y,z``."""
+    rows = ["frame,marker,x,y,z"]
+    for i, frame in enumerate(markers):
+        for label, (x, y, z) in zip(labels, frame, strict=True):
+            rows.append(f"{first_frame + i},{label},{float(x)!r},{float(y)!r},{float(z)!r}")
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_a_sample_given_twice_is_counted_as_its_own_rows(tmp_path):
+    # Two samples are each given twice: the message names the first and says it has two rows,
+    # not the four rows of both.
+    path = write_long_csv(tmp_path / "twice.csv", LABELS, rig_markers(20), first_frame=100)
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines + lines[1:3]))
+    with pytest.raises(ValueError, match=r"twice\.csv: frame 100, marker P1 has 2 rows"):
+        read(path)
+
+
+def test_frames_past_the_recording_name_the_file():
+    recording = Recording(tuple(LABELS), rig_markers(50), 100.0, "trial.c3d", 100)
+    with pytest.raises(ValueError, match=r"^trial\.c3d: frames '100:1100' do not fit"):
+        jointbench.fit(recording, "center", "D1,D2,D3", "P1,P2,P3", frames="100:1100")
+
+
+@pytest.mark.parametrize("suffix", ["c3d", "csv"])
+def test_metres_under_a_millimetre_unit_are_refused(tmp_path, suffix):
+    # A body a metre across written in metres under "mm" is a body a millimetre across, whose
+    # markers stand closer than any two markers can; every centre on it passed as "ok".
+    markers = rig_markers() / 1000.0
+    path = tmp_path / f"metres.{suffix}"
+    if suffix == "c3d":
+        write_c3d(path, LABELS, markers, units="mm")
+    else:
+        write_long_csv(path, LABELS, markers)
+    with pytest.raises(
+        ValueError, match=r"metres\.\w+: markers P1, P2, P3 lie 0\.194 mm .*metres written"
+    ):
+        fit_rig(read(path))
+
+
+def test_millimetres_under_a_metre_unit_are_refused(tmp_path):
+    path = write_c3d(tmp_path / "km.c3d", LABELS, rig_markers(), units="m")
+    with pytest.raises(
+        ValueError, match=r"km\.c3d: markers P1, P2, P3 lie 1\.94e\+05 mm .*POINT:UNITS"
+    ):
+        fit_rig(read(path))
+
+
+def test_the_same_trial_in_metres_under_a_metre_unit_is_read(tmp_path):
+    markers = rig_markers()
+    path = write_c3d(tmp_path / "rig.c3d", LABELS, markers / 1000.0, units="m")
+    recording = read(path)
+    np.testing.assert_allclose(recording.markers, markers, atol=1e-3)
+    assert fit_rig(recording).result.converged
+
+
+def test_a_small_cluster_in_millimetres_is_read(tmp_path):
+    # A finger's markers, a few mm apart, are markers, not metres.
+    markers = rig_markers() / 60.0
+    path = write_c3d(tmp_path / "finger.c3d", LABELS, markers, units="mm")
+    assert fit_rig(read(path)).result.converged
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="every frame written twice is read as twice the frames: the covariance and the "
+    "bootstrap claim twice the data",
+)
+def test_every_frame_written_twice_is_refused(tmp_path):
+    markers = np.repeat(rig_markers(60), 2, axis=0)
+    path = write_c3d(tmp_path / "twice.c3d", LABELS, markers)
+    with pytest.raises(ValueError, match=r"twice\.c3d: frames? 2 .*same"):
+        read(path)
