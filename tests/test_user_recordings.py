@@ -91,13 +91,23 @@ def test_a_small_cluster_in_millimetres_is_read(tmp_path):
     assert fit_rig(read(path)).result.converged
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="every frame written twice is read as twice the frames: the covariance and the "
-    "bootstrap claim twice the data",
-)
-def test_every_frame_written_twice_is_refused(tmp_path):
+@pytest.mark.parametrize("suffix", ["c3d", "csv"])
+def test_every_frame_written_twice_is_refused(tmp_path, suffix):
+    # A frame written twice counts its noise twice: Gauss-Markov's covariance and the
+    # bootstrap's interval on the knee trial so written claimed twice the data.
     markers = np.repeat(rig_markers(60), 2, axis=0)
-    path = write_c3d(tmp_path / "twice.c3d", LABELS, markers)
-    with pytest.raises(ValueError, match=r"twice\.c3d: frames? 2 .*same"):
+    path = tmp_path / f"twice.{suffix}"
+    if suffix == "c3d":
+        write_c3d(path, LABELS, markers)
+    else:
+        write_long_csv(path, LABELS, markers, first_frame=1)
+    message = r"twice\.\w+: frame 2 (\(0\.02 s\) )?repeats frame 1 .*in all 6 markers; 60 frames"
+    with pytest.raises(ValueError, match=message):
         read(path)
+
+
+def test_frames_that_miss_every_marker_are_no_repeats(tmp_path):
+    markers = rig_markers(60)
+    markers[20:30] = np.nan
+    path = write_c3d(tmp_path / "gap.c3d", LABELS, markers)
+    assert read(path).gaps()["P1"] == 10

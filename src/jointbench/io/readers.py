@@ -94,8 +94,10 @@ def read_c3d(path: str | Path) -> Recording:
     rate = float(c3d["header"]["points"]["frame_rate"])
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
-    return Recording(
-        tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
+    return _no_repeated_frames(
+        Recording(
+            tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
+        )
     )
 
 
@@ -186,7 +188,9 @@ def read_trc(path: str | Path) -> Recording:
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * _to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
-    return Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+    return _no_repeated_frames(
+        Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+    )
 
 
 def _trc_labels(line: str, path: Path) -> list[str]:
@@ -449,7 +453,29 @@ def read_csv(path: str | Path) -> Recording:
     markers[numbers - first_frame, table["marker"].map(column).to_numpy()] = coordinates.to_numpy(
         float
     )
-    return Recording(tuple(labels), markers, None, str(path), first_frame)
+    return _no_repeated_frames(Recording(tuple(labels), markers, None, str(path), first_frame))
+
+
+def _no_repeated_frames(recording: Recording) -> Recording:
+    """``recording``; ``ValueError`` naming the file and the first frame that repeats the frame
+    before it to the last bit in every marker, three or more of them seen. Measured positions
+    carry noise, so such a frame was written twice (a recording upsampled by repetition, an
+    export that doubled its rows): read as it is, its noise would count twice, and every
+    covariance and bootstrap interval would claim data the trial does not hold."""
+    markers = recording.markers
+    later, earlier = markers[1:], markers[:-1]
+    same = ((later == earlier) | (np.isnan(later) & np.isnan(earlier))).all(axis=(1, 2))
+    seen = np.isfinite(later[..., 0]).sum(axis=1)
+    repeats = np.flatnonzero(same & (seen >= 3))
+    if repeats.size == 0:
+        return recording
+    row = int(repeats[0]) + 1
+    raise ValueError(
+        f"{recording.source}: {recording.when(row)} repeats {recording.when(row - 1)} to the "
+        f"last bit in all {int(seen[row - 1])} markers; {repeats.size} frames in all repeat the "
+        "one before them: frames written twice, whose noise would count twice; remove the "
+        "repeated frames"
+    )
 
 
 def _check_csv_fields(path: Path, header: list[str]) -> None:
