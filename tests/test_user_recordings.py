@@ -4,10 +4,13 @@ end) are read as they are or refused naming the file, never fitted as something 
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from rigs import two_segments
-from test_io_recordings import write_c3d
+from test_io_recordings import KNEE, write_c3d
 
 import jointbench
 from jointbench.io import Recording, read
@@ -111,3 +114,19 @@ def test_frames_that_miss_every_marker_are_no_repeats(tmp_path):
     markers[20:30] = np.nan
     path = write_c3d(tmp_path / "gap.c3d", LABELS, markers)
     assert read(path).gaps()["P1"] == 10
+
+
+def test_output_cut_off_by_its_reader_is_no_error():
+    # `jointbench inspect trial.c3d | head` closes the pipe once it has its lines: that is the
+    # reader's choice, not a failure of jointbench to report as one.
+    code = "import sys; from jointbench.cli import main; sys.exit(main(sys.argv[1:]))"
+    process = subprocess.Popen(
+        [sys.executable, "-c", code, "inspect", str(KNEE)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    process.stdout.close()  # before the interpreter has started: every write meets a closed pipe
+    error = process.stderr.read()
+    assert process.wait(timeout=60) == 1, error
+    assert error == ""
