@@ -13,6 +13,7 @@ from rigs import two_segments
 from test_io_recordings import KNEE, write_c3d
 
 import jointbench
+from jointbench.cli import main
 from jointbench.io import Recording, read
 
 LABELS = ["P1", "P2", "P3", "D1", "D2", "D3"]
@@ -130,3 +131,13 @@ def test_output_cut_off_by_its_reader_is_no_error():
     error = process.stderr.read()
     assert process.wait(timeout=60) == 1, error
     assert error == ""
+
+
+def test_the_table_counts_frames_in_whole_numbers_beside_a_failed_method(capsys):
+    # MA and SCoRE need three moving markers; their rows have no frame counts, which turned the
+    # others' 922 into 922.0000.
+    argv = ["fit", str(KNEE), "--moving", "RLEG1", "--reference", "RTHI1,RTHI2,RTHI3,RGT"]
+    assert main([*argv, "--method", "all"]) == 0
+    rows = capsys.readouterr().out.splitlines()
+    nm = next(row for row in rows if row.split()[0] == "NM")
+    assert nm.split()[-2:] == ["922", "0"]

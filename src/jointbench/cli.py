@@ -336,6 +336,9 @@ def _fit(args: argparse.Namespace) -> int:
         print(json.dumps([fitted.to_dict() for fitted in fits], indent=2))
         return code
     table = pd.DataFrame([_row(fitted) for fitted in fits])
+    # A failed method's row has no counts; the others' stay whole numbers beside it.
+    counts = [column for column in ("frames", "gap_frames") if column in table]
+    table[counts] = table[counts].astype("Int64")
     if args.format == "csv":
         print(table.to_csv(index=False, float_format="%.9g"), end="")
         return code
