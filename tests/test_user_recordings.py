@@ -172,3 +172,16 @@ def test_an_array_in_metres_is_not_an_ok_centre():
     except ValueError as error:
         status = f"refused: {error}"
     assert status != "ok"
+
+
+def test_a_header_with_spaces_is_refused_showing_the_names_it_has(tmp_path):
+    # "frame, marker, x, y, z" names " marker": the message shows it, so the space is seen.
+    path = write_long_csv(tmp_path / "spaces.csv", LABELS, rig_markers(5))
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("frame, marker, x, y, z\n" + "".join(lines[1:]))
+    message = (
+        r"spaces\.csv: missing columns \['marker', 'x', 'y', 'z'\]; "
+        r"the header names \['frame', ' marker'"
+    )
+    with pytest.raises(ValueError, match=message):
+        read(path)

@@ -415,7 +415,10 @@ def read_csv(path: str | Path) -> Recording:
         raise ValueError(f"{path}: not a readable CSV file ({str(error).strip()})") from None
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
-        raise ValueError(f"{path}: missing columns {sorted(missing)}")
+        # The names as written: a space or another separator is what tells them apart.
+        raise ValueError(
+            f"{path}: missing columns {sorted(missing)}; the header names {list(table.columns)}"
+        )
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
     # pandas reads the fields a row lacks as empty, and so as gaps, and so is a line cut right
