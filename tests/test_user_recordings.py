@@ -185,3 +185,16 @@ def test_a_header_with_spaces_is_refused_showing_the_names_it_has(tmp_path):
     )
     with pytest.raises(ValueError, match=message):
         read(path)
+
+
+def test_repeats_that_coarse_coordinates_make_by_chance_are_read(tmp_path):
+    # Written to 0.1 mm, a subject standing still repeats a frame now and then by chance; the
+    # file's other frames show that resolution, as a frame written twice cannot.
+    rng = np.random.default_rng(2)
+    markers = rig_markers(200)
+    markers[:100] = markers[0]
+    markers = np.round(markers + rng.normal(scale=0.02, size=markers.shape), 1)
+    later, earlier = markers[1:], markers[:-1]
+    assert (later == earlier).all(axis=(1, 2)).any()  # the chance repeats this test is about
+    path = write_long_csv(tmp_path / "coarse.csv", LABELS, markers)
+    assert read(path).n_frames == 200

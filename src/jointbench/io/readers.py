@@ -464,13 +464,20 @@ def _no_repeated_frames(recording: Recording) -> Recording:
     before it to the last bit in every marker, three or more of them seen. Measured positions
     carry noise, so such a frame was written twice (a recording upsampled by repetition, an
     export that doubled its rows): read as it is, its noise would count twice, and every
-    covariance and bootstrap interval would claim data the trial does not hold."""
+    covariance and bootstrap interval would claim data the trial does not hold. Where the
+    file's coordinates are coarse for its motion (an integer C3D, a TRC of one decimal), so
+    that elsewhere more than :data:`_CHANCE_REPEATS` of them repeat the frame before, a still
+    subject repeats frames by chance, and nothing is refused."""
     markers = recording.markers
     later, earlier = markers[1:], markers[:-1]
-    same = ((later == earlier) | (np.isnan(later) & np.isnan(earlier))).all(axis=(1, 2))
+    equal = later == earlier
+    same = (equal | (np.isnan(later) & np.isnan(earlier))).all(axis=(1, 2))
     seen = np.isfinite(later[..., 0]).sum(axis=1)
     repeats = np.flatnonzero(same & (seen >= 3))
     if repeats.size == 0:
+        return recording
+    others = ~same[:, None, None] & np.isfinite(later) & np.isfinite(earlier)
+    if others.any() and equal[others].mean() > _CHANCE_REPEATS:
         return recording
     row = int(repeats[0]) + 1
     raise ValueError(
@@ -479,6 +486,12 @@ def _no_repeated_frames(recording: Recording) -> Recording:
         "one before them: frames written twice, whose noise would count twice; remove the "
         "repeated frames"
     )
+
+
+#: The share of coordinates equal to the frame before's, over the frames that do not repeat,
+#: above which a file's resolution lets a still subject repeat a frame by chance (the knee
+#: trial's float coordinates: 0.13 %).
+_CHANCE_REPEATS = 0.01
 
 
 def _check_csv_fields(path: Path, header: list[str]) -> None:
