@@ -198,3 +198,10 @@ def test_repeats_that_coarse_coordinates_make_by_chance_are_read(tmp_path):
     assert (later == earlier).all(axis=(1, 2)).any()  # the chance repeats this test is about
     path = write_long_csv(tmp_path / "coarse.csv", LABELS, markers)
     assert read(path).n_frames == 200
+
+
+def test_frames_showing_one_marker_of_a_segment_say_nothing_of_its_size():
+    markers = rig_markers(200)
+    markers[:120, 1:3] = np.nan  # P1 alone: no distance between two markers
+    recording = Recording(tuple(LABELS), markers, 100.0, "occluded.c3d")
+    assert fit_rig(recording).n_gap_frames == 120

@@ -70,15 +70,17 @@ _SPAN_FRAMES = 200
 
 
 def segment_span(markers: np.ndarray) -> float:
-    """The typical size of a cluster ``(n_frames, n, 3)`` [mm]: the median over frames of the
-    largest distance between two markers seen in the frame (NaN where no frame sees two)."""
-    rows = np.unique(np.linspace(0, len(markers) - 1, min(len(markers), _SPAN_FRAMES)).astype(int))
-    sample = markers[rows]
-    distances = np.linalg.norm(sample[:, :, None] - sample[:, None, :], axis=-1)
-    seen = np.isfinite(distances).any(axis=(1, 2))
-    if not seen.any():
+    """The typical size of a cluster ``(n_frames, n, 3)`` [mm]: the median, over the frames
+    that see two of its markers or more, of the largest distance between two of them (NaN
+    where no frame does)."""
+    pairs = np.isfinite(markers[..., 0]).sum(axis=1) >= 2
+    sample = markers[pairs]
+    rows = np.linspace(0, len(sample) - 1, min(len(sample), _SPAN_FRAMES)).astype(int)
+    if rows.size == 0:
         return float("nan")
-    return float(np.median(np.nanmax(distances[seen], axis=(1, 2))))
+    sample = sample[np.unique(rows)]
+    distances = np.linalg.norm(sample[:, :, None] - sample[:, None, :], axis=-1)
+    return float(np.median(np.nanmax(distances, axis=(1, 2))))
 
 
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
