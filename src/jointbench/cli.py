@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import sys
 import warnings
@@ -335,6 +336,9 @@ def _fit(args: argparse.Namespace) -> int:
         print(json.dumps([fitted.to_dict() for fitted in fits], indent=2))
         return code
     table = pd.DataFrame([_row(fitted) for fitted in fits])
+    # A failed method's row has no counts; the others' stay whole numbers beside it.
+    counts = [column for column in ("frames", "gap_frames") if column in table]
+    table[counts] = table[counts].astype("Int64")
     if args.format == "csv":
         print(table.to_csv(index=False, float_format="%.9g"), end="")
         return code
@@ -490,7 +494,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "fit" and args.method is None:
         args.method = DEFAULT_METHODS[args.kind]
     try:
-        return args.run(args)
+        code = args.run(args)
+        sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
+        return code
+    except BrokenPipeError:
+        # The reader of the output closed it (`| head`): it has what it wanted, and no error
+        # is to be reported. What is still buffered goes nowhere, or it would fail at exit.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except (ValueError, OSError) as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2

@@ -94,8 +94,10 @@ def read_c3d(path: str | Path) -> Recording:
     rate = float(c3d["header"]["points"]["frame_rate"])
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
-    return Recording(
-        tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
+    return _no_repeated_frames(
+        Recording(
+            tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
+        )
     )
 
 
@@ -186,7 +188,9 @@ def read_trc(path: str | Path) -> Recording:
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * _to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
-    return Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+    return _no_repeated_frames(
+        Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+    )
 
 
 def _trc_labels(line: str, path: Path) -> list[str]:
@@ -411,7 +415,10 @@ def read_csv(path: str | Path) -> Recording:
         raise ValueError(f"{path}: not a readable CSV file ({str(error).strip()})") from None
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
-        raise ValueError(f"{path}: missing columns {sorted(missing)}")
+        # The names as written: a space or another separator is what tells them apart.
+        raise ValueError(
+            f"{path}: missing columns {sorted(missing)}; the header names {list(table.columns)}"
+        )
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
     # pandas reads the fields a row lacks as empty, and so as gaps, and so is a line cut right
@@ -428,9 +435,11 @@ def read_csv(path: str | Path) -> Recording:
     twice = table.duplicated(["frame", "marker"], keep=False)
     if twice.any():
         first = table[twice].iloc[0]
+        same = (numbers == numbers[first.name]) & (table["marker"] == first["marker"]).to_numpy()
         raise ValueError(
             f"{path}: frame {numbers[first.name]}, marker {first['marker']} has "
-            f"{int(twice.sum())} rows for the same (frame, marker); each sample must appear once"
+            f"{int(same.sum())} rows for the same (frame, marker); each sample must appear once"
+            f" ({int(twice.sum())} rows in all repeat a sample)"
         )
     first_frame = int(numbers.min())
     labels = sorted(table["marker"].unique(), key=_natural)
@@ -447,7 +456,42 @@ def read_csv(path: str | Path) -> Recording:
     markers[numbers - first_frame, table["marker"].map(column).to_numpy()] = coordinates.to_numpy(
         float
     )
-    return Recording(tuple(labels), markers, None, str(path), first_frame)
+    return _no_repeated_frames(Recording(tuple(labels), markers, None, str(path), first_frame))
+
+
+def _no_repeated_frames(recording: Recording) -> Recording:
+    """``recording``; ``ValueError`` naming the file and the first frame that repeats the frame
+    before it to the last bit in every marker, three or more of them seen. Measured positions
+    carry noise, so such a frame was written twice (a recording upsampled by repetition, an
+    export that doubled its rows): read as it is, its noise would count twice, and every
+    covariance and bootstrap interval would claim data the trial does not hold. Where the
+    file's coordinates are coarse for its motion (an integer C3D, a TRC of one decimal), so
+    that elsewhere more than :data:`_CHANCE_REPEATS` of them repeat the frame before, a still
+    subject repeats frames by chance, and nothing is refused."""
+    markers = recording.markers
+    later, earlier = markers[1:], markers[:-1]
+    equal = later == earlier
+    same = (equal | (np.isnan(later) & np.isnan(earlier))).all(axis=(1, 2))
+    seen = np.isfinite(later[..., 0]).sum(axis=1)
+    repeats = np.flatnonzero(same & (seen >= 3))
+    if repeats.size == 0:
+        return recording
+    others = ~same[:, None, None] & np.isfinite(later) & np.isfinite(earlier)
+    if others.any() and equal[others].mean() > _CHANCE_REPEATS:
+        return recording
+    row = int(repeats[0]) + 1
+    raise ValueError(
+        f"{recording.source}: {recording.when(row)} repeats {recording.when(row - 1)} to the "
+        f"last bit in all {int(seen[row - 1])} markers; {repeats.size} frames in all repeat the "
+        "one before them: frames written twice, whose noise would count twice; remove the "
+        "repeated frames"
+    )
+
+
+#: The share of coordinates equal to the frame before's, over the frames that do not repeat,
+#: above which a file's resolution lets a still subject repeat a frame by chance (the knee
+#: trial's float coordinates: 0.13 %).
+_CHANCE_REPEATS = 0.01
 
 
 def _check_csv_fields(path: Path, header: list[str]) -> None:

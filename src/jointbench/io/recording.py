@@ -121,7 +121,10 @@ class Recording:
         """The recording restricted to ``frames``: ``"start:stop"`` in the file's frame numbers
         (stop excluded), or a ``slice`` of rows (steps other than 1 are refused)."""
         if isinstance(frames, str):
-            frames = parse_frames(frames, self.n_frames, self.first_frame)
+            try:
+                frames = parse_frames(frames, self.n_frames, self.first_frame)
+            except ValueError as error:
+                raise ValueError(f"{self.source}: {error}") from None
         start, stop, step = frames.indices(self.n_frames)
         if step != 1:
             raise ValueError(f"{self.source}: a frame range takes consecutive frames, got {frames}")
