@@ -14,6 +14,7 @@ from test_io_recordings import KNEE, write_c3d
 
 import jointbench
 from jointbench.cli import main
+from jointbench.estimators import registry
 from jointbench.io import Recording, read
 
 LABELS = ["P1", "P2", "P3", "D1", "D2", "D3"]
@@ -67,7 +68,8 @@ def test_metres_under_a_millimetre_unit_are_refused(tmp_path, suffix):
     else:
         write_long_csv(path, LABELS, markers)
     with pytest.raises(
-        ValueError, match=r"metres\.\w+: markers P1, P2, P3 lie 0\.194 mm .*metres written"
+        ValueError,
+        match=r"metres\.\w+: markers P1, P2, P3 lie 0\.194 mm .*metres read as millimetres",
     ):
         fit_rig(read(path))
 
@@ -159,19 +161,32 @@ def test_a_marker_unseen_in_the_chosen_frames_is_named_with_them():
         )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the fit functions take arrays in any unit: markers in metres, 0.2 mm apart as mm, "
-    "get an ok centre; the check of a segment's size is the readers' (jointbench.io.segments)",
-)
-def test_an_array_in_metres_is_not_an_ok_centre():
-    _, distal = two_segments(200, proximal_moves=False)  # already in the proximal frame
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+def test_arrays_in_another_unit_are_refused_by_every_fit(scale):
+    """Markers in metres (or micrometres) given to the fit functions, which take millimetres:
+    every kind, one trial and many, refuses them naming the array, not an ok answer at a
+    thousandth (or a thousand times) of its size."""
+    proximal, distal = two_segments(200, proximal_moves=False)
     markers = distal + np.random.default_rng(1).normal(scale=0.5, size=distal.shape)
-    try:
-        status = jointbench.fit_center(markers / 1000.0, method="NM").status
-    except ValueError as error:
-        status = f"refused: {error}"
-    assert status != "ok"
+    unit = "metres read as millimetres" if scale < 1 else "millimetres read as metres"
+    for fit in (jointbench.fit_center, jointbench.fit_axis):
+        with pytest.raises(ValueError, match=f"markers lie .* mm apart .*{unit}"):
+            fit(markers * scale, method="NM" if fit is jointbench.fit_center else "planar")
+    with pytest.raises(ValueError, match=f"proximal lie .*{unit}"):
+        jointbench.fit_joint_center(proximal * scale, distal, method="SCoRE")
+    batch = np.stack([markers, markers * scale])
+    first, second = registry.many("center", "LS")(batch)
+    assert not isinstance(first, Exception)
+    assert isinstance(second, ValueError) and unit in str(second)
+
+
+def test_a_cluster_a_few_millimetres_across_is_fitted():
+    """The size check leaves real small clusters alone: markers 3 mm apart on a finger."""
+    _, distal = two_segments(200, proximal_moves=False)
+    small = distal - distal.mean(axis=(0, 1))
+    small = small * (3.0 / np.ptp(small[0], axis=0).max())
+    result = jointbench.fit_center(small + 50.0, method="NM", artefacts="ignore")
+    assert np.all(np.isfinite(result.center))
 
 
 def test_a_header_with_spaces_is_refused_showing_the_names_it_has(tmp_path):

@@ -8,6 +8,7 @@ call :func:`check_markers` with their own minimum numbers of frames and markers.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -18,6 +19,8 @@ from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
     "ARRAY_NAMES",
+    "MAX_SPAN_MM",
+    "MIN_SPAN_MM",
     "CheckedTrials",
     "check_input",
     "check_input_many",
@@ -26,7 +29,11 @@ __all__ = [
     "check_not_collinear",
     "check_rotates",
     "check_same_frames",
+    "check_span",
+    "cluster_span",
     "prepare_trials",
+    "span_problem",
+    "typical_span",
 ]
 
 #: The marker arrays each estimator kind takes, in order.
@@ -57,6 +64,16 @@ _CURVED_MINORS = 3e3 * _LINE_RATIO
 _MOVE_TOL_MM = 1e-9
 
 _FLOAT64 = np.dtype(np.float64)
+
+#: A cluster's markers lie further apart than this [mm] (:func:`typical_span`): a marker is a few
+#: millimetres across, so two cannot sit closer, and a cluster this small is one measured in
+#: another unit (metres read as millimetres).
+MIN_SPAN_MM = 1.0
+#: ... and closer than this [mm]: no body segment is 10 m long (millimetres read as metres).
+MAX_SPAN_MM = 10_000.0
+# Frames the check of a cluster's size reads at most, evenly spaced: a median of this many
+# tells a unit a thousand times off at any gap or glitch a check before it lets through.
+_SPAN_FRAMES = 25
 
 
 def _real_array(markers: object, name: str) -> np.ndarray:
@@ -272,6 +289,76 @@ def _first_failures(
     return first_failure
 
 
+@kernel
+def typical_span(markers: np.ndarray, n_sampled: int) -> float:
+    """The typical size [mm] of a cluster ``markers`` ``(n_frames, n, 3)`` [mm]: the median,
+    over at most ``n_sampled`` evenly spaced frames that show two of its markers or more (a
+    marker with a NaN coordinate is not shown), of the largest distance between two of them;
+    NaN where none does. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    stride = max(1, -(-n_frames // max(n_sampled, 1)))
+    spans = np.empty(n_frames // stride + 1)
+    seen = 0
+    for f in range(0, n_frames, stride):
+        largest = -1.0
+        for a in range(n_markers):
+            for b in range(a + 1, n_markers):
+                dx = markers[f, a, 0] - markers[f, b, 0]
+                dy = markers[f, a, 1] - markers[f, b, 1]
+                dz = markers[f, a, 2] - markers[f, b, 2]
+                squared = dx * dx + dy * dy + dz * dz
+                if squared > largest:  # False for a NaN: a pair not shown
+                    largest = squared
+        if largest >= 0.0:
+            spans[seen] = math.sqrt(largest)
+            seen += 1
+    if seen == 0:
+        return np.nan
+    return np.median(spans[:seen])
+
+
+@kernel
+def _typical_spans(markers: np.ndarray, n_sampled: int) -> np.ndarray:
+    """:func:`typical_span` of each trial of ``markers`` ``(n_trials, n_frames, n, 3)`` [mm],
+    ``(n_trials,)``. A compiled kernel."""
+    spans = np.empty(markers.shape[0])
+    for t in range(markers.shape[0]):
+        spans[t] = typical_span(markers[t], n_sampled)
+    return spans
+
+
+def cluster_span(markers: np.ndarray) -> float:
+    """:func:`typical_span` of the markers ``(n_frames, n, 3)`` [mm] over the frames the checks
+    read."""
+    return typical_span(kernel_array(markers), _SPAN_FRAMES)
+
+
+def span_problem(span_mm: float) -> str | None:
+    """What a cluster of typical size ``span_mm`` [mm] (:func:`typical_span`) says about its
+    unit, or ``None`` where its size is a body's (or unknown): a cluster smaller than a marker
+    or larger than a body was measured in another unit than millimetres."""
+    if not math.isfinite(span_mm) or MIN_SPAN_MM <= span_mm <= MAX_SPAN_MM:
+        return None
+    if span_mm < MIN_SPAN_MM:
+        return "less than a marker's own size: metres read as millimetres?"
+    return "more than any body segment: millimetres read as metres?"
+
+
+def check_span(markers: np.ndarray, *, name: str = "markers") -> None:
+    """Raise ``ValueError`` when the markers ``(n_frames, n, 3)``, which are millimetres, lie
+    closer together than a marker's own size or further apart than a body segment's
+    (:func:`typical_span`, :func:`span_problem`): an answer in another unit would pass every
+    check, which are built for millimetres, at a thousandth of its size, or fail them for the
+    wrong reason."""
+    span = cluster_span(markers)
+    problem = span_problem(span)
+    if problem is not None:
+        raise ValueError(
+            f"{name} lie {span:.3g} mm apart (the farthest two, median over the frames), "
+            f"{problem} Marker positions are millimetres"
+        )
+
+
 def check_moves(
     markers: np.ndarray, *, name: str = "markers", tol_mm: float = _MOVE_TOL_MM
 ) -> None:
@@ -335,12 +422,15 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
             check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
         )
         check_same_frames(*checked)
+        for array, name in zip(checked, names, strict=True):
+            check_span(array, name=name)
         return checked
     # One pass of the kernel for the checks of check_markers, check_moves and check_rotates,
     # in their order (the counts of frames and markers: at least one, as the array is not empty).
     name = names[0]
     array = _shaped(arrays[0], name)
     _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES))
+    check_span(array, name=name)
     return (array,)
 
 
@@ -396,6 +486,8 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
         for array in batch:
             if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures):
                 passes &= failures == 0
+            spans = _typical_spans(kernel_array(array), _SPAN_FRAMES)
+            passes &= ~((spans < MIN_SPAN_MM) | (spans > MAX_SPAN_MM))
     except np.linalg.LinAlgError:
         # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
         # their own error for it, and the others pass or fail alone.

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from jointbench.estimators.validation import cluster_span, span_problem
 from jointbench.screening import (
     Artefact,
     ArtefactRules,
@@ -61,47 +62,21 @@ __all__ = [
 ]
 
 
-#: A rigid segment's markers lie further apart than this [mm]: a marker is a few mm across.
-MIN_SEGMENT_SPAN_MM = 1.0
-#: ... and closer than this [mm]: no body segment is 10 m long.
-MAX_SEGMENT_SPAN_MM = 10_000.0
-#: Frames whose spans the check of a segment's size looks at (evenly spaced): it is a median.
-_SPAN_FRAMES = 200
-
-
-def segment_span(markers: np.ndarray) -> float:
-    """The typical size of a cluster ``(n_frames, n, 3)`` [mm]: the median, over the frames
-    that see two of its markers or more, of the largest distance between two of them (NaN
-    where no frame does)."""
-    pairs = np.isfinite(markers[..., 0]).sum(axis=1) >= 2
-    sample = markers[pairs]
-    rows = np.linspace(0, len(sample) - 1, min(len(sample), _SPAN_FRAMES)).astype(int)
-    if rows.size == 0:
-        return float("nan")
-    sample = sample[np.unique(rows)]
-    distances = np.linalg.norm(sample[:, :, None] - sample[:, None, :], axis=-1)
-    return float(np.median(np.nanmax(distances, axis=(1, 2))))
-
-
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
     """``ValueError`` naming the file and the markers when the cluster ``(n_frames, n, 3)``
-    [mm] is smaller than a marker or larger than a body (:func:`segment_span`): coordinates
-    in another unit than the file states, whose every answer would be off by a factor of 1000
-    and pass the checks, which are built for millimetres, or fail them for the wrong reason."""
-    span = segment_span(markers)
-    if MIN_SEGMENT_SPAN_MM <= span <= MAX_SEGMENT_SPAN_MM or not np.isfinite(span):
+    [mm] is smaller than a marker or larger than a body
+    (:func:`jointbench.estimators.validation.span_problem`): coordinates in another unit than
+    the file states, whose every answer would be off by a factor of 1000 and pass the checks,
+    which are built for millimetres, or fail them for the wrong reason."""
+    span = cluster_span(markers)
+    problem = span_problem(span)
+    if problem is None:
         return
-    small = span < MIN_SEGMENT_SPAN_MM
-    size, guess = (
-        ("less than a marker's own size", "metres written under a millimetre unit")
-        if small
-        else ("more than any body segment", "millimetres written under a metre unit")
-    )
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the farthest "
-        f"two, median over the frames), {size}: the coordinates are not in the unit the file "
-        f"states ({recording.units!r}, read as mm); {guess}? Correct the file's unit (C3D "
-        "POINT:UNITS, TRC Units; a CSV is in mm)"
+        f"two, median over the frames), {problem} The coordinates are not in the unit the file "
+        f"states ({recording.units!r}, read as mm); correct the file's unit (C3D POINT:UNITS, "
+        "TRC Units; a CSV is in mm)"
     )
 
 
