@@ -794,6 +794,7 @@ def _rotation_spreads(
     reference: np.ndarray,
     reference_inertia_inv: np.ndarray,
     variance: np.ndarray,
+    tested: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
     """The rotations ``moving`` ``(T, N, 3, 3)`` relative to ``reference`` (the same shape,
     or no frames for the identity) about their mean, against their noise. A compiled kernel.
@@ -808,7 +809,8 @@ def _rotation_spreads(
     scatter, ``sum_k w_k w_k'`` less its noise ``(N - 1) variance C`` (``variance`` ``(T,)``
     [mm^2], ``C`` the covariance per unit variance), ``(T, 3)``; that scatter itself
     ``(T, 3, 3)`` [rad^2] and ``M`` ``(T, 3, 3)``; and whether some rotation is within 1e-4 of
-    pi, where that rotation vector does not hold.
+    pi, where that rotation vector does not hold. Without ``tested`` the first two, which
+    only the rotation tests read, are left NaN.
     """
     n_trials, n_frames, _, _ = moving.shape
     with_reference = reference.shape[1] > 0
@@ -871,6 +873,11 @@ def _rotation_spreads(
             for i in range(3):
                 for j in range(3):
                     gram[i, j] += (vectors[f, i] - centre[i]) * (vectors[f, j] - centre[j])
+        own[t] = gram - (n_frames - 1) * variance[t] * covariance
+        rotation_only[t] = np.maximum(np.linalg.eigvalsh(own[t]), 0.0)
+        if not tested:
+            raw[t] = spread[t] = np.nan
+            continue
         # L = V diag(mu)^-1/2 from the covariance's own eigenvectors, not the Cholesky factor
         # of its inverse: with nearly collinear markers the covariance's inverse is rounding
         # in one direction and need not come out positive definite.
@@ -879,8 +886,6 @@ def _rotation_spreads(
         white = whitening.T @ gram @ whitening
         raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
         spread[t] = np.maximum(np.linalg.eigvalsh(white), 0.0)
-        own[t] = gram - (n_frames - 1) * variance[t] * covariance
-        rotation_only[t] = np.maximum(np.linalg.eigvalsh(own[t]), 0.0)
     return raw, spread, rotation_only, own, means, near_pi
 
 
@@ -1049,7 +1054,12 @@ def _sampled_axis_numbers(markers: np.ndarray, step: int, variance: np.ndarray) 
         return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
     no_frames = np.empty((n_trials, 0, 3, 3))
     _, _, values, own, mean, near_pi = _rotation_spreads(
-        rotation.reshape((n_trials, n_sampled, 3, 3)), inertia_inv, no_frames, inertia_inv, variance
+        rotation.reshape((n_trials, n_sampled, 3, 3)),
+        inertia_inv,
+        no_frames,
+        inertia_inv,
+        variance,
+        False,
     )
     if near_pi:
         return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
