@@ -130,6 +130,10 @@ def test_many_trials_are_judged_each_as_alone():
         assert verdict.diagnostics == pytest.approx(alone.diagnostics, rel=1e-12, abs=1e-15)
 
 
+#: The numbers of a MotionAxis besides its direction, in the order _step_by_step gives them.
+MOTION_NUMBERS = ("sd_deg", "noise_share", "pose_sd_deg")
+
+
 def _step_by_step(markers: np.ndarray, variance: np.ndarray) -> list[np.ndarray]:
     """The motion axes and shares of one segment's trials ``(T, N, n, 3)`` taken a NumPy step
     at a time from their sampled rotations: the way the one-call kernel must match."""
@@ -183,6 +187,3 @@ def test_the_motion_axis_in_one_call_is_the_step_by_step_one(make, in_one_call):
     ]
     for got, want in zip(found, expected, strict=True):
         np.testing.assert_array_equal(got, want)
-
-
-MOTION_NUMBERS = ("sd_deg", "noise_share", "pose_sd_deg")
