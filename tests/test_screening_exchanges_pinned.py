@@ -169,13 +169,17 @@ if __name__ == "__main__":
 def test_the_medians_are_those_numbas_median_finds():
     """The in-place selection gives the number Numba's ``np.median`` gives, bit for bit: for
     odd and even counts, ties, infinities and NaN (which leave no order, so that the number
-    depends on how it is found), and none."""
+    depends on how it is found), and none; from ``_BAND_MIN_VALUES`` up also where the sample
+    of every 8th value misses the middle (``"strided"``, the whole selection's answer)."""
     numba_median = numba.njit(lambda values: np.median(values))
     rng = np.random.default_rng(11)
-    for n in (*range(0, 12), 99, 100, 119, 120, 360, 1000, 1001):
-        for kind in ("normal", "ties", "equal", "sorted", "infinite", "nan"):
+    band = screening._BAND_MIN_VALUES
+    for n in (*range(0, 12), 99, 100, 119, 120, 360, 1000, 1001, band - 1, band, 5000, 15001):
+        for kind in ("normal", "ties", "equal", "sorted", "infinite", "nan", "strided"):
             values = rng.normal(size=n)
-            if kind == "ties":
+            if kind == "strided":
+                values[::8] = -1e9
+            elif kind == "ties":
                 values = np.round(values)
             elif kind == "equal":
                 values = np.full(n, 2.5)

@@ -128,3 +128,62 @@ def test_many_trials_are_judged_each_as_alone():
         alone = support.assess("axis", (trial,))
         assert verdict.warnings == alone.warnings
         assert verdict.diagnostics == pytest.approx(alone.diagnostics, rel=1e-12, abs=1e-15)
+
+
+#: The numbers of a MotionAxis besides its direction, in the order _step_by_step gives them.
+MOTION_NUMBERS = ("sd_deg", "noise_share", "pose_sd_deg")
+
+
+def _step_by_step(markers: np.ndarray, variance: np.ndarray) -> list[np.ndarray]:
+    """The motion axes and shares of one segment's trials ``(T, N, n, 3)`` taken a NumPy step
+    at a time from their sampled rotations: the way the one-call kernel must match."""
+    rotations = support._one_segment_rotations(markers, variance)
+    directions, sd_deg, noise_share = support._motion_axis_numbers(
+        rotations.own, rotations.mean, rotations.noise, rotations.n_frames
+    )
+    values = rotations.values
+    off = values[:, 0] + values[:, 1]
+    total = off + values[:, 2]
+    return [
+        directions,
+        sd_deg,
+        noise_share,
+        np.degrees(np.sqrt(np.linalg.eigvalsh(rotations.noise)[:, -1])),
+        np.divide(off, total, out=np.zeros_like(total), where=total > 0.0),
+        np.sqrt(values[:, 2] / rotations.n_frames),
+        np.sqrt(off / rotations.n_frames),
+    ]
+
+
+def _at_pi(noise_mm: float) -> np.ndarray:
+    """Two thirds of the frames at rest and a third turned by pi about z: the mean pose is the
+    rest, a third of the rotations are pi from it."""
+    angles = np.where(np.arange(90) < 60, 0.0, np.pi)
+    return _moved(np.outer(angles, [0.0, 0.0, 1.0]), noise_mm)
+
+
+@pytest.mark.parametrize(
+    ("make", "in_one_call"),
+    [
+        (lambda: _moved(_hinge(), 0.5), True),
+        (lambda: _moved(_ball(), 0.5), True),
+        (lambda: _moved(_ball(n_frames=1200), 1.0), True),
+        (lambda: _moved(_hinge(arc_deg=0.01), 0.0), True),
+        (lambda: _at_pi(0.0), False),
+    ],
+    ids=["hinge", "ball", "sampled", "noise-free", "at-pi"],
+)
+def test_the_motion_axis_in_one_call_is_the_step_by_step_one(make, in_one_call):
+    markers = np.stack([make(), make()[::-1].copy()])
+    variance = np.array([0.25, 1e-30])
+    step = support._frame_step(markers.shape[1])
+    assert support._sampled_axis_numbers(markers, step, variance)[0] == in_one_call
+    axes, shares = support._one_segment_axes(markers, variance)
+    expected = _step_by_step(markers, variance)
+    found = [
+        np.array([axis.direction for axis in axes]),
+        *(np.array([getattr(axis, name) for axis in axes]) for name in MOTION_NUMBERS),
+        *shares,
+    ]
+    for got, want in zip(found, expected, strict=True):
+        np.testing.assert_array_equal(got, want)

@@ -233,18 +233,23 @@ def _medians(values: np.ndarray) -> np.ndarray:
 
 @kernel
 def _median_in_place(values: np.ndarray) -> float:
-    """The median of ``values`` ``(n,)``, NaN if empty, reordering them: the middle value, or
-    ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values without NaN
-    have one order, in which any selection finds the same numbers: :func:`_select_sweeping`
-    is the fastest at every count, measured on values new to each call, as a trial's are (the
-    same values over and over let the branch predictor learn a quickselect's branches and hide
-    their cost). NaN leave no
-    order: values with one are taken as Numba's ``np.median`` takes them
+    """The median of ``values`` ``(n,)``, NaN if empty, perhaps reordering them: the middle
+    value, or ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values
+    without NaN have one order, in which any selection finds the same numbers:
+    :func:`_select_sweeping` is the fastest at every count, measured on values new to each
+    call, as a trial's are (the same values over and over let the branch predictor learn a
+    quickselect's branches and hide their cost); from :data:`_BAND_MIN_VALUES` values up it
+    first tries the band about the median that a sample brackets (:func:`_median_by_band`).
+    NaN leave no order: values with one are taken as Numba's ``np.median`` takes them
     (:func:`_quickselect_median`), so that the median is the number it gives. A compiled
     kernel."""
     n = values.size
     if n == 0:
         return np.nan
+    if n >= _BAND_MIN_VALUES:
+        found, median = _median_by_band(values)
+        if found:
+            return median
     for value in values:
         if value != value:
             return _quickselect_median(values)
@@ -256,6 +261,68 @@ def _median_in_place(values: np.ndarray) -> float:
     for index in range(1, n >> 1):
         lower = max(lower, values[index])
     return (lower + upper) / 2
+
+
+# From this many values up, a median is first looked for in the band a sample brackets
+# (:func:`_median_by_band`): below it the sample's own selections cost what they save.
+_BAND_MIN_VALUES = 2048
+
+
+@kernel
+def _median_by_band(values: np.ndarray) -> tuple[bool, float]:
+    """The median of ``values`` ``(n >= 2,)`` as :func:`_median_in_place` gives it, found among
+    the values of a band about it, which are copied out, leaving ``values`` as they are; and
+    whether it was: ``(False, NaN)`` where a value is NaN or the band misses the middle.
+
+    Every 8th value is a sample; the band holds the values between the sample's order
+    statistics three of their standard deviations below and above the middle's rank, so that
+    it nearly always holds the middle (one or two) values and a small share of the others.
+    One pass counts the values below the band and copies the band's out: the middle values
+    are the band's own order statistics (with ``c`` values below the band, the ``k``-th
+    smallest of all is the ``(k - c)``-th of the band, when the band has more than ``k - c``
+    values), which :func:`_select_sweeping` selects as from all of them. The same order
+    statistics are the same numbers, so the median is too. A compiled kernel."""
+    n = values.size
+    k = n >> 1
+    n_sample = (n + 7) // 8
+    sample = np.empty(n_sample)
+    for s in range(n_sample):
+        sample[s] = values[8 * s]
+        if sample[s] != sample[s]:
+            return False, np.nan
+    centre = (k * n_sample) // n
+    half = int(3.0 * np.sqrt(n_sample)) + 2
+    low_rank = max(centre - half, 0)
+    high_rank = min(centre + half, n_sample - 1)
+    low = _select_sweeping(sample, low_rank)
+    # The selection left every value after low_rank at or above low.
+    high = low
+    if high_rank > low_rank:
+        high = _select_sweeping(sample[low_rank + 1 :], high_rank - low_rank - 1)
+    band = np.empty(n)
+    below = within = above = 0
+    for index in range(n):
+        value = values[index]
+        below += value < low
+        above += value > high
+        band[within] = value
+        within += (value >= low) & (value <= high)
+    # A NaN is none of the three.
+    if below + within + above != n:
+        return False, np.nan
+    # Both middle values (one for an odd count) must be in the band.
+    if not (below + 1 - (n & 1) <= k < below + within):
+        return False, np.nan
+    rank = k - below
+    in_band = band[:within]
+    upper = _select_sweeping(in_band, rank)
+    if n & 1:
+        return True, upper
+    # The middle value below is the greatest of those the selection left before the other.
+    lower = in_band[0]
+    for index in range(1, rank):
+        lower = max(lower, in_band[index])
+    return True, (lower + upper) / 2
 
 
 @kernel

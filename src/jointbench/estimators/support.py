@@ -111,7 +111,7 @@ from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
-from jointbench.numerics.poses import best_rotation
+from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.small import inertia_into, symmetric_eigen_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 
@@ -816,6 +816,7 @@ def _rotation_spreads(
     reference: np.ndarray,
     reference_inertia_inv: np.ndarray,
     variance: np.ndarray,
+    tested: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
     """The rotations ``moving`` ``(T, N, 3, 3)`` relative to ``reference`` (the same shape,
     or no frames for the identity) about their mean, against their noise. A compiled kernel.
@@ -830,7 +831,8 @@ def _rotation_spreads(
     scatter, ``sum_k w_k w_k'`` less its noise ``(N - 1) variance C`` (``variance`` ``(T,)``
     [mm^2], ``C`` the covariance per unit variance), ``(T, 3)``; that scatter itself
     ``(T, 3, 3)`` [rad^2] and ``M`` ``(T, 3, 3)``; and whether some rotation is within 1e-4 of
-    pi, where that rotation vector does not hold.
+    pi, where that rotation vector does not hold. Without ``tested`` the first two, which
+    only the rotation tests read, are left NaN.
     """
     n_trials, n_frames, _, _ = moving.shape
     with_reference = reference.shape[1] > 0
@@ -893,6 +895,11 @@ def _rotation_spreads(
             for i in range(3):
                 for j in range(3):
                     gram[i, j] += (vectors[f, i] - centre[i]) * (vectors[f, j] - centre[j])
+        own[t] = gram - (n_frames - 1) * variance[t] * covariance
+        rotation_only[t] = np.maximum(np.linalg.eigvalsh(own[t]), 0.0)
+        if not tested:
+            raw[t] = spread[t] = np.nan
+            continue
         # L = V diag(mu)^-1/2 from the covariance's own eigenvectors, not the Cholesky factor
         # of its inverse: with nearly collinear markers the covariance's inverse is rounding
         # in one direction and need not come out positive definite.
@@ -901,8 +908,6 @@ def _rotation_spreads(
         white = whitening.T @ gram @ whitening
         raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
         spread[t] = np.maximum(np.linalg.eigvalsh(white), 0.0)
-        own[t] = gram - (n_frames - 1) * variance[t] * covariance
-        rotation_only[t] = np.maximum(np.linalg.eigvalsh(own[t]), 0.0)
     return raw, spread, rotation_only, own, means, near_pi
 
 
@@ -1059,7 +1064,8 @@ def _one_segment_rotations(markers: np.ndarray, variance: np.ndarray) -> _OneSeg
     (:func:`_frame_step`, :func:`_onto_central_frame`), about their mean pose: their rotation
     vectors, which hold at any angle (unlike the one-segment pass's linearised rotations),
     less their noise (:func:`_rotation_spreads`); ``variance`` ``(T,)`` [mm^2] is the rigid
-    residual per coordinate.
+    residual per coordinate. The whole way, for the trials :func:`_sampled_axis_numbers`
+    leaves to it.
 
     The central frame's noise is common to every rotation and, to first order, turns them
     all alike, which leaves their scatter's eigenvalues and the axis in the markers' frame as
@@ -1077,19 +1083,104 @@ def _one_segment_rotations(markers: np.ndarray, variance: np.ndarray) -> _OneSeg
     return _OneSegmentRotations(values, own, mean, noise, rotations.shape[1])
 
 
-def _one_segment_axis_shares(values: np.ndarray, n_frames: int) -> _AxisShare:
-    """How much of the rotation of one segment is about its principal axis, from the
-    eigenvalues ``values`` ``(T, 3)`` [rad^2] of its :func:`_one_segment_rotations` over
-    ``n_frames``: the principal axis's and the two others'."""
-    off = values[:, 0] + values[:, 1]
-    total = off + values[:, 2]
-    share = np.divide(off, total, out=np.zeros_like(total), where=total > 0.0)
-    return _AxisShare(share, np.sqrt(values[:, 2] / n_frames), np.sqrt(off / n_frames))
+def _one_segment_axes(
+    markers: np.ndarray, variance: np.ndarray
+) -> tuple[list[MotionAxis], _AxisShare]:
+    """The :class:`MotionAxis` of each trial of one segment's markers ``(T, N, n, 3)`` [mm] in
+    the reference frame, and how much of its rotation is about that axis
+    (:func:`_axis_numbers`), from the rotations of :func:`_one_segment_rotations`;
+    ``variance`` ``(T,)`` [mm^2] is the rigid residual per coordinate. One compiled call
+    (:func:`_sampled_axis_numbers`) where every sampled frame's rotation is Horn's and none is
+    near pi from the mean pose; otherwise the rotations' own way, through the SVD and
+    :func:`jointbench.geometry.rotation_vector`, which give the same numbers where both hold."""
+    variance = kernel_array(variance)
+    fused, *numbers = _sampled_axis_numbers(
+        kernel_array(markers), _frame_step(markers.shape[1]), variance
+    )
+    if not fused:
+        rotations = _one_segment_rotations(markers, variance)
+        numbers = _axis_numbers(
+            rotations.values, rotations.own, rotations.mean, rotations.noise, rotations.n_frames
+        )
+    directions, sd_deg, noise_share, pose_sd_deg, *shares = numbers
+    axes = [
+        MotionAxis(direction, sd, share, pose_sd)
+        for direction, sd, share, pose_sd in zip(
+            directions, sd_deg.tolist(), noise_share.tolist(), pose_sd_deg.tolist(), strict=True
+        )
+    ]
+    return axes, _AxisShare(*shares)
+
+
+@kernel
+def _sampled_axis_numbers(markers: np.ndarray, step: int, variance: np.ndarray) -> tuple:
+    """:func:`_axis_numbers` of the rotations of :func:`_one_segment_rotations` of ``markers``
+    ``(T, N, n, 3)`` [mm], sampled every ``step`` frames, with the rigid residual ``variance``
+    ``(T,)`` [mm^2], preceded by whether they hold: ``False`` (and empty arrays) where Horn's
+    method leaves a sampled frame's rotation to the SVD or one is within 1e-4 of pi from the
+    mean pose (:func:`jointbench.numerics.poses.best_rotation`, :func:`_spreads`), which the
+    caller then takes the whole way. A compiled kernel: the same kernels in one call, where
+    the glue between them cost a one-trial check as much as their work."""
+    cross, inertia_inv = _onto_central_frame(markers, step)
+    n_trials, n_sampled = cross.shape[0], cross.shape[1]
+    flat = cross.reshape((n_trials * n_sampled, 3, 3))
+    rotation = np.empty_like(flat)
+    unsettled = np.empty(flat.shape[0], dtype=np.bool_)
+    _horn_rotations(flat, np.full(flat.shape[0], np.inf), rotation, unsettled)
+    empty = np.empty(0)
+    if unsettled.any():
+        return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
+    no_frames = np.empty((n_trials, 0, 3, 3))
+    _, _, values, own, mean, near_pi = _rotation_spreads(
+        rotation.reshape((n_trials, n_sampled, 3, 3)),
+        inertia_inv,
+        no_frames,
+        inertia_inv,
+        variance,
+        False,
+    )
+    if near_pi:
+        return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
+    noise = np.empty_like(inertia_inv)
+    for t in range(n_trials):
+        noise[t] = variance[t] * inertia_inv[t]
+    directions, sd_deg, share, pose_sd_deg, off_share, principal, off = _axis_numbers(
+        values, own, mean, noise, n_sampled
+    )
+    return True, directions, sd_deg, share, pose_sd_deg, off_share, principal, off
+
+
+@kernel
+def _axis_numbers(
+    values: np.ndarray, own: np.ndarray, mean: np.ndarray, noise: np.ndarray, n_frames: int
+) -> tuple:
+    """Per trial, from the eigenvalues ``values`` ``(T, 3)`` [rad^2] of the rotations' own
+    scatter ``own``, their mean pose ``mean`` and each one's noise ``noise`` ``(T, 3, 3)``
+    over ``n_frames`` (:class:`_OneSegmentRotations`): the :class:`MotionAxis` numbers of
+    :func:`_motion_axis_numbers` (axes ``(T, 3)``, their SDs [deg], noise shares), the largest
+    SD [deg] of one pose's rotation (the noise's largest eigenvalue), and the three columns of
+    :class:`_AxisShare`: the share of the rotation's sum of squares off the principal axis
+    and the RMS rotations [rad] about it and about the two others, ``(T,)`` each. A compiled
+    kernel."""
+    directions, sd_deg, share = _motion_axis_numbers(own, mean, noise, n_frames)
+    n_trials = values.shape[0]
+    pose_sd_deg = np.empty(n_trials)
+    off_share = np.empty(n_trials)
+    principal = np.empty(n_trials)
+    off_rms = np.empty(n_trials)
+    for t in range(n_trials):
+        pose_sd_deg[t] = np.degrees(np.sqrt(np.linalg.eigvalsh(noise[t])[2]))
+        off = values[t, 0] + values[t, 1]
+        total = off + values[t, 2]
+        off_share[t] = off / total if total > 0.0 else 0.0
+        principal[t] = np.sqrt(values[t, 2] / n_frames)
+        off_rms[t] = np.sqrt(off / n_frames)
+    return directions, sd_deg, share, pose_sd_deg, off_share, principal, off_rms
 
 
 class MotionAxis(NamedTuple):
     """The principal axis of one segment's rotations about their mean pose
-    (:func:`_motion_axes`), the motion's own axis, which any answer of an axis method can be
+    (:func:`_one_segment_axes`), the motion's own axis, which any answer of an axis method can be
     compared with: ``direction`` the unit axis ``(3,)`` in the markers' frame, ``sd_deg`` its
     first-order SD [deg] and ``noise_share`` the larger, over the two directions normal to it,
     of the rotation noise's share of the rotations' scatter over its eigen-gap (from 1 up, the
@@ -1103,8 +1194,15 @@ class MotionAxis(NamedTuple):
     pose_sd_deg: float
 
 
-def _motion_axes(rotations: _OneSegmentRotations) -> list[MotionAxis]:
-    """The :class:`MotionAxis` of each trial from its :func:`_one_segment_rotations`.
+@kernel
+def _motion_axis_numbers(
+    own: np.ndarray, mean: np.ndarray, noise: np.ndarray, n_frames: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The :class:`MotionAxis` numbers from the rotations' own scatter ``own``, mean pose
+    ``mean`` and per-frame noise ``noise`` ``(T, 3, 3)`` each over ``n_frames``
+    (:func:`_one_segment_rotations`): the axes ``(T, 3)``, their SDs [deg] and noise shares
+    ``(T,)``. A compiled kernel: a one-trial check pays microseconds, not the tens that small
+    array operations cost.
 
     The rotation vectors ``w_k`` of ``M' R_k`` about the mean pose ``M`` each carry noise of
     covariance ``S = s^2 K^-1`` (the module docstring's pose covariance), so their scatter less
@@ -1119,26 +1217,6 @@ def _motion_axes(rotations: _OneSegmentRotations) -> list[MotionAxis]:
     scatter, :mod:`jointbench.estimators.precision`). On paper B's hinges (1 mm, 40 seeds a
     condition) the axes' RMS error matched the median SD stated within a factor of 1.3
     wherever the share was below 1."""
-    directions, sd_deg, share = _motion_axis_numbers(
-        rotations.own, rotations.mean, rotations.noise, rotations.n_frames
-    )
-    pose_sd_deg = np.degrees(np.sqrt(np.linalg.eigvalsh(rotations.noise)[:, -1]))
-    return [
-        MotionAxis(direction, sd, noise_share, pose_sd)
-        for direction, sd, noise_share, pose_sd in zip(
-            directions, sd_deg.tolist(), share.tolist(), pose_sd_deg.tolist(), strict=True
-        )
-    ]
-
-
-@kernel
-def _motion_axis_numbers(
-    own: np.ndarray, mean: np.ndarray, noise: np.ndarray, n_frames: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_motion_axes`'s numbers from the rotations' own scatter ``own``, mean pose
-    ``mean`` and per-frame noise ``noise`` ``(T, 3, 3)`` each over ``n_frames``: the axes
-    ``(T, 3)``, their SDs [deg] and noise shares ``(T,)``. A compiled kernel: a one-trial
-    check pays microseconds, not the tens that small array operations cost."""
     n_trials = own.shape[0]
     directions = np.empty((n_trials, 3))
     sd_deg = np.empty(n_trials)
@@ -1267,7 +1345,7 @@ def _fitted_poses(kind: str, arrays: tuple[np.ndarray, ...]) -> list:
 def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     """The verdicts on one segment's markers ``(T, N, n >= 3, 3)`` in the reference frame, from
     one compiled call (module docstring, "one segment"), and for an axis the rotations of the
-    trials that rotate about more than one axis (:func:`_one_segment_axis_shares`)."""
+    trials that rotate about more than one axis (:func:`_one_segment_axes`)."""
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
     p_values = _fdtrc()(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
@@ -1284,9 +1362,8 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     axes: dict[int, MotionAxis] = {}
     posed = [t for t, reason in enumerate(no_pose) if reason is None]
     if kind not in CENTRE_KINDS and posed:
-        rotations = _one_segment_rotations(markers[posed], numbers[posed, 0])
-        axes = dict(zip(posed, _motion_axes(rotations), strict=True))
-        found = _one_segment_axis_shares(rotations.values, rotations.n_frames)
+        found_axes, found = _one_segment_axes(markers[posed], numbers[posed, 0])
+        axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
         shares = {t: share for t, share in by_trial if tests[t][3] < ROTATION_ALPHA}
     return [

@@ -482,29 +482,51 @@ def _bilinear(u: np.ndarray, matrix: np.ndarray, v: np.ndarray) -> float:
     return total
 
 
-def _sara_annotated(result: AxisResult, trial: np.ndarray) -> AxisResult:
-    """SARA's one-segment ``result`` for the markers ``trial`` ``(N, P, 3)`` [mm] with its
-    direction's SD (:func:`_sara_sd_deg`), above
-    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, and where the noise's
-    share reaches the eigen-gap or its anisotropy pulls the axis by more than the SD
-    (:func:`_sara_validity`) the warning that the SD does not hold
+def _sara_annotated(result: AxisResult, sd_deg: float, share: float, gap: float, bias_deg: float):
+    """SARA's one-segment ``result`` with its direction's SD ``sd_deg`` (:func:`_sara_sd_deg`),
+    above :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, and where the
+    noise's ``share`` reaches the eigen-``gap`` or its anisotropy pulls the axis by more than
+    the SD (``bias_deg``, :func:`_sara_validity`) the warning that the SD does not hold
     (:func:`jointbench.estimators.precision.annotate_validity`)."""
-    values = np.asarray(result.diagnostics["eigenvalues"], dtype=float)
-    vectors = np.asarray(result.diagnostics["eigenvectors"], dtype=float)
-    sd = _sara_sd_deg(values, vectors, len(trial), len(precision.distinct_frames(trial)))
-    annotated = precision.annotate(result, sd, "SARA's eigen-problem")
-    share, gap, bias_deg = _sara_validity(values, vectors, kernel_array(trial[0]))
+    annotated = precision.annotate(result, sd_deg, "SARA's eigen-problem")
     return precision.annotate_validity(
         annotated, share, gap, "SARA's normal matrix", bias_deg=bias_deg
     )
 
 
+@kernel
+def _sara_precision_numbers(
+    values: np.ndarray, vectors: np.ndarray, n_distinct: np.ndarray, markers: np.ndarray
+) -> np.ndarray:
+    """Per trial, :func:`_sara_sd_deg` and :func:`_sara_validity` of its eigenvalues ``values``
+    ``(T, 6)`` and eigenvectors ``vectors`` ``(T, 6, 6)``, for its markers ``(T, N, P, 3)``
+    [mm], ``n_distinct`` ``(T,)`` of whose frames are distinct: ``(T, 4)``, the SD [deg], the
+    noise's share, the eigen-gap and the pull [deg]. A compiled kernel: one call for a batch,
+    where two per trial cost a checked call more than their arithmetic."""
+    numbers = np.empty((values.shape[0], 4))
+    for t in range(values.shape[0]):
+        numbers[t, 0] = _sara_sd_deg(values[t], vectors[t], markers.shape[1], n_distinct[t])
+        numbers[t, 1], numbers[t, 2], numbers[t, 3] = _sara_validity(
+            values[t], vectors[t], markers[t, 0]
+        )
+    return numbers
+
+
 def _sara_precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
     """Each of SARA's one-segment ``results`` (the trials of ``markers`` ``(T, N, P, 3)``
-    [mm]) annotated by :func:`_sara_annotated`."""
+    [mm]) annotated by :func:`_sara_annotated` with the numbers of its eigen-problem
+    (:func:`_sara_precision_numbers`)."""
+    if not results:
+        return []
+    markers = kernel_array(markers)
+    numbers = _sara_precision_numbers(
+        np.array([result.diagnostics["eigenvalues"] for result in results], dtype=float),
+        np.array([result.diagnostics["eigenvectors"] for result in results], dtype=float),
+        np.array([len(precision.distinct_frames(trial)) for trial in markers]),
+        markers,
+    )
     return [
-        _sara_annotated(result, np.asarray(trial, dtype=float))
-        for result, trial in zip(results, markers, strict=True)
+        _sara_annotated(result, *row) for result, row in zip(results, numbers.tolist(), strict=True)
     ]
 
 
