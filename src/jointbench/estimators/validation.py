@@ -336,8 +336,10 @@ def cluster_span(markers: np.ndarray) -> float:
 def span_problem(span_mm: float) -> str | None:
     """What a cluster of typical size ``span_mm`` [mm] (:func:`typical_span`) says about its
     unit, or ``None`` where its size is a body's (or unknown): a cluster smaller than a marker
-    or larger than a body was measured in another unit than millimetres."""
-    if not math.isfinite(span_mm) or MIN_SPAN_MM <= span_mm <= MAX_SPAN_MM:
+    or larger than a body was measured in another unit than millimetres. Markers at one point
+    (a size of 0) are one marker given several times, not a unit, and are left to the checks
+    of the markers a method needs."""
+    if not (math.isfinite(span_mm) and span_mm > 0.0) or MIN_SPAN_MM <= span_mm <= MAX_SPAN_MM:
         return None
     if span_mm < MIN_SPAN_MM:
         return "less than a marker's own size: metres read as millimetres?"
@@ -487,7 +489,7 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
             if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures):
                 passes &= failures == 0
             spans = _typical_spans(kernel_array(array), _SPAN_FRAMES)
-            passes &= ~((spans < MIN_SPAN_MM) | (spans > MAX_SPAN_MM))
+            passes &= ~(((spans > 0.0) & (spans < MIN_SPAN_MM)) | (spans > MAX_SPAN_MM))
     except np.linalg.LinAlgError:
         # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
         # their own error for it, and the others pass or fail alone.
