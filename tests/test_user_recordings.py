@@ -145,11 +145,6 @@ def test_the_table_counts_frames_in_whole_numbers_beside_a_failed_method(capsys)
     assert nm.split()[-2:] == ["922", "0"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a marker unseen in the --frames range is said to be never visible, though the file "
-    "shows it elsewhere; the message is raised in jointbench.screening",
-)
 def test_a_marker_unseen_in_the_chosen_frames_is_named_with_them():
     knee = read(KNEE)
     markers = knee.markers.copy()

@@ -62,6 +62,21 @@ __all__ = [
 ]
 
 
+def _check_seen(recording: Recording, index: list[int]) -> None:
+    """``ValueError`` naming the file, the marker and the frames read when a marker of the
+    columns ``index`` shows in none of them: a range of frames (``--frames``) can leave out
+    every frame a marker shows in, where "never visible" would read as the whole file's."""
+    seen = np.isfinite(recording.markers[:, index, 0]).any(axis=0)
+    if seen.all():
+        return
+    label = recording.labels[index[int(np.argmin(seen))]]
+    numbering = recording.numbering
+    raise ValueError(
+        f"{recording.source}: marker {label} is never visible in frames "
+        f"{numbering.number(0)} to {numbering.number(recording.n_frames - 1)} (the frames read)"
+    )
+
+
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
     """``ValueError`` naming the file and the markers when the cluster ``(n_frames, n, 3)``
     [mm] is smaller than a marker or larger than a body
@@ -136,6 +151,7 @@ class Segment:
             raise ValueError(
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
+        _check_seen(recording, index)
         check_span(recording.markers[:, index], labels, recording)
         screening = screen(recording.markers[:, index], labels, recording.source, rules)
         shape, rotation, translation = screening.shape, screening.rotation, screening.translation
