@@ -215,3 +215,23 @@ def test_frames_showing_one_marker_of_a_segment_say_nothing_of_its_size():
     markers[:120, 1:3] = np.nan  # P1 alone: no distance between two markers
     recording = Recording(tuple(LABELS), markers, 100.0, "occluded.c3d")
     assert fit_rig(recording).n_gap_frames == 120
+
+
+def test_a_centre_on_skin_markers_does_not_claim_a_noise_only_precision():
+    """The real knee trial with the trochanter marker hidden for 500 frames: NM's centre moves
+    by 18 mm from the whole trial's, yet its SD from the rigid-body noise reads under a
+    millimetre. The spheres the markers move on fit them twice worse than that noise even
+    about their own centre (skin), and the status says the precision does not hold."""
+    knee = read(KNEE)
+    markers = knee.markers.copy()
+    markers[200:700, knee.index("RGT")] = np.nan
+    recording = Recording(knee.labels, markers, knee.rate_hz, knee.source, knee.first_frame)
+    fitted = jointbench.fit(
+        recording,
+        "center",
+        "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH",
+        "RTHI1,RTHI2,RTHI3,RGT",
+        method="NM",
+    )
+    assert "precision not determined" in fitted.result.status, fitted.result.status
+    assert fitted.result.diagnostics["center_spheres_fit_ratio"] > 1.5

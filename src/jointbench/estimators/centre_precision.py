@@ -59,14 +59,21 @@ must see (on paper A's grid, leaving out markers within ten noise SDs passed fiv
 than 10 mm off as ``ok``).
 
 A warning is added when the data cannot support the answer this way: the SD above
-:data:`MAX_CENTER_SD_MM`, or not a statement of precision (both only where the support
+:data:`MAX_CENTER_SD_MM`, or not a statement of precision (the noise share above, or the
+lack of fit rejecting even about the spheres' own centre: where Gauss–Newton iterations from
+the answer end, or the answer where the score test passes it; both only where the support
 verdict has not already refused the data), or the score test or the lack of fit rejecting at
 :data:`jointbench.estimators.support.ROTATION_ALPHA` with the answer more than
 :data:`MIN_REJECTED_STEP_MM` from the common centre (a method's own documented bias of a few
 millimetres is a property of the method, not a failure to find the centre). The noise ``s^2``
 is the support verdict's rigid-body residual, which does not depend on the answer; it is one
 level for every marker, so a marker much noisier than the others biases a geometric fit by more
-than the SD, a statement of scatter, says. Frames
+than the SD, a statement of scatter, says. Markers that move on their segment (skin, a
+plate sliding on it) can keep their shape, so that the rigid-body residual sees only the
+noise, while their distances from any centre change: the spheres then fit worse than that
+noise about every centre, the SD from it understates the answer's error many times over
+(``tests/test_centre_precision.py``'s sliding plate), and only a resampling of the frames (a
+bootstrap) states it. Frames
 repeated exactly carry no new noise and are counted once
 (:func:`jointbench.estimators.precision.distinct_frames`). ``converged`` and the answer are
 left as the method set them; the simulated studies call the methods without this check.
@@ -81,7 +88,7 @@ import numpy as np
 
 from jointbench.estimators.precision import distinct_frames
 from jointbench.estimators.results import with_warnings
-from jointbench.estimators.support import ROTATION_ALPHA, Support
+from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric_into
 
@@ -114,6 +121,9 @@ MIN_REJECTED_STEP_MM = 5.0
 _SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
 # The step towards the spheres' centre [mm] (F_s^-1 g; F^-1 g where F_s is not definite).
 _TOWARDS = slice(8, 11)
+# The lack of fit's ratio and z about the spheres' centre: where Gauss-Newton iterations from
+# the answer end if the spheres fit better there, else about the answer.
+_SPHERES_RATIO, _SPHERES_Z = 11, 12
 
 # The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
 # exceed their noise by, in standard errors, for the marker to count.
@@ -134,7 +144,8 @@ def centre_statistics(
     markers: np.ndarray, centres: np.ndarray, variances: np.ndarray
 ) -> np.ndarray:
     """Per trial ``(SD [mm], score chi-square, step [mm], repeats, noise share, lack-of-fit
-    ratio, its z, offset [mm], Gauss–Newton step (3,) [mm])`` ``(T, 11)`` of the answers
+    ratio, its z, offset [mm], Gauss–Newton step (3,) [mm], the lack of fit's ratio and z about
+    the spheres' centre)`` ``(T, 13)`` of the answers
     ``centres`` ``(T, 3)`` [mm] to the markers ``(T, N, n, 3)`` [mm], with noise
     ``variances`` ``(T,)`` [mm^2] per coordinate (module docstring). Where the score test
     rejects, the step is the distance to where Gauss–Newton iterations from the answer end, at
@@ -142,7 +153,7 @@ def centre_statistics(
     ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
     else 0. A compiled kernel."""
     n_trials, n_frames = markers.shape[:2]
-    out = np.empty((n_trials, 11))
+    out = np.empty((n_trials, 13))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
     weights = np.sqrt(np.arange(2.0, 2.0 + 3 * markers.shape[2]))
@@ -151,7 +162,23 @@ def centre_statistics(
         out[t, _REPEATS] = _repeats(markers[t], weights, keys)
         if out[t, _CHI2] > _CHI2_ALPHA:
             _refine(markers[t], centres[t], variances[t], out[t], scratch)
+        if _noise_free(markers[t], variances[t]):
+            # Rounding measured against rounding: nothing for the spheres' fit to fail.
+            out[t, _SPHERES_Z] = np.nan
     return out
+
+
+@kernel
+def _noise_free(markers: np.ndarray, s2: float) -> bool:
+    """Whether the noise ``s2`` [mm^2] per coordinate of the markers ``(N, n, 3)`` [mm] is
+    rounding, as the support verdict judges it (:data:`ROUNDING` of the largest coordinate).
+    A compiled kernel."""
+    largest = 0.0
+    for k in range(markers.shape[0]):
+        for p in range(markers.shape[1]):
+            for i in range(3):
+                largest = max(largest, abs(markers[k, p, i]))
+    return s2 <= (ROUNDING * largest) ** 2
 
 
 @kernel
@@ -203,6 +230,8 @@ def _refine(
     _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
     if there[_FIT_RATIO] < row[_FIT_RATIO]:
         row[_STEP] = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
+        row[_SPHERES_RATIO] = there[_FIT_RATIO]
+        row[_SPHERES_Z] = there[_FIT_Z]
 
 
 @kernel
@@ -306,13 +335,15 @@ def _row_at(
 ) -> None:
     """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
     the markers ``(N, n, 3)`` [mm] with noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`),
-    into ``row`` ``(11,)`` but for ``repeats``; ``inf`` SD, step and share where the corrected
+    into ``row`` ``(13,)`` but for ``repeats``; ``inf`` SD, step and share where the corrected
     information is not positive definite. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     info, signal, noisy, score, values, vectors, work = scratch[:7]
     squares, fourths, kept, mixed = _sums_at(markers, centre, s2, scratch)
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
     _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
+    row[_SPHERES_RATIO] = row[_FIT_RATIO]
+    row[_SPHERES_Z] = row[_FIT_Z]
     symmetric_eigen_into(signal, values, vectors, work)
     largest = values[2] if values[2] > 0.0 else np.nan
     row[_OFFSET] = math.sqrt(max(squares - kept * (n_frames - 1) * s2, 0.0) / largest)
@@ -524,6 +555,15 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
             f"directions from it (below {100 * MAX_SD_NOISE_SHARE:g}% its SD of {sd:.3g} mm "
             "would hold)"
         )
+    elif supported and numbers["center_spheres_fit_p_value"] < ROTATION_ALPHA:
+        warnings.append(
+            f"centre's precision not determined by the data: even about their own centre the "
+            f"spheres leave radial residuals {numbers['center_spheres_fit_ratio']:.3g} times "
+            f"the rigid-body noise's variance (p = "
+            f"{numbers['center_spheres_fit_p_value']:.2g}): the markers do not keep their "
+            f"distances from any centre (skin, or markers moving on their segment), which an SD "
+            f"of {sd:.3g} mm from that noise does not count; a bootstrap interval does"
+        )
     reasons = []
     step, p = numbers["center_step_mm"], numbers["center_score_p_value"]
     if p < ROTATION_ALPHA and MIN_REJECTED_STEP_MM < step < math.inf:
@@ -593,6 +633,8 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
             "center_fit_ratio": fit_ratio,
             "center_fit_p_value": 0.5 * math.erfc(fit_z / math.sqrt(2.0)),
             "center_offset_mm": offset,
+            "center_spheres_fit_ratio": row[_SPHERES_RATIO],
+            "center_spheres_fit_p_value": 0.5 * math.erfc(row[_SPHERES_Z] / math.sqrt(2.0)),
         }
         warnings = _warnings(numbers, residual_mm, not verdicts[t].warnings)
         annotated[t] = with_warnings(results[t], warnings, numbers)
