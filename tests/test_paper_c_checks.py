@@ -125,6 +125,7 @@ def test_c5_fails_when_one_trial_needs_5_iterations(
     rows = gauss_markov_rows.copy()
     rows.loc[rows.index[3], "pose_iterations_distal"] = iterations
     rows.loc[rows.index[3], "pose_change_mm_distal"] = change_mm
+    rows.loc[rows.index[3], "pose_converged_distal"] = change_mm < 1e-12
     assert _c5(rows)["status"] == status
 
 

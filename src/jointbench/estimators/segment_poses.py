@@ -23,7 +23,7 @@ from jointbench.estimators.validation import (
     check_not_collinear,
     check_same_frames,
 )
-from jointbench.numerics.poses import rigid_poses
+from jointbench.numerics import poses as pose_fit
 
 __all__ = [
     "POSE_MIN_FRAMES",
@@ -87,6 +87,8 @@ class SegmentPoses:
     body: np.ndarray
     residual_ss: float | None = None
     dof: int | None = None
+    iterations: int | None = None
+    change_mm: float | None = None
 
     def __post_init__(self) -> None:
         arrays = {name: _owned_read_only(name, getattr(self, name)) for name in _POSE_ARRAYS}
@@ -110,10 +112,20 @@ class SegmentPoses:
                 "markers: markers and poses must be finite numbers"
             )
         _check_gauge(what, arrays["rotation"][0], arrays["translation"][0], arrays["markers"])
+        _check_fit_end(what, self.iterations, self.change_mm)
         for name, array in arrays.items():
             object.__setattr__(self, name, array)
         object.__setattr__(self, "residual_ss", residual_ss)
         object.__setattr__(self, "dof", dof)
+
+    @property
+    def converged(self) -> bool | None:
+        """Whether the alternation that fitted these poses had converged (its last change of
+        the body-fixed coordinates under :func:`jointbench.numerics.poses.change_limit`), or
+        ``None`` for poses whose fit did not record how it ended."""
+        if self.change_mm is None:
+            return None
+        return bool(self.change_mm < pose_fit.change_limit(self.markers[None])[0])
 
     def __reduce__(self) -> tuple:
         # A copy or an unpickled pose is built, and so checked and read-only, as any other.
@@ -175,6 +187,24 @@ def _check_gauge(
         )
 
 
+def _check_fit_end(what: str, iterations: object, change_mm: object) -> None:
+    """``ValueError`` unless ``iterations`` and ``change_mm`` are both ``None`` or both given,
+    a count >= 1 and a change >= 0 [mm]."""
+    if iterations is None and change_mm is None:
+        return
+    if (
+        isinstance(iterations, bool)
+        or not isinstance(iterations, (int, np.integer))
+        or iterations < 1
+        or not isinstance(change_mm, (float, np.floating))
+        or not change_mm >= 0.0
+    ):
+        raise ValueError(
+            f"{what}: iterations {iterations!r} and change_mm {change_mm!r} must be both None "
+            "or a count >= 1 and a change >= 0 [mm] (how the pose fit ended)"
+        )
+
+
 def residual_differs(found: np.ndarray, stored: np.ndarray, markers: np.ndarray) -> np.ndarray:
     """Whether residual sums of squares ``found`` ``(...)`` [mm^2], recomputed from poses of
     ``markers`` ``(..., N, n, 3)`` [mm], differ from the ``stored`` ``(...)`` [mm^2] they were
@@ -207,9 +237,18 @@ def _checked_residual(what: str, found: float, stored: object, markers: np.ndarr
     return stored
 
 
-def _segment_poses(markers, rotation, translation, body, *, name: str) -> SegmentPoses:
+def _segment_poses(
+    markers, rotation, translation, body, iterations, change_mm, *, name: str
+) -> SegmentPoses:
     check_not_collinear(body[None], name=f"{name} (body-fixed coordinates)")
-    return SegmentPoses(markers, rotation, translation, body)
+    return SegmentPoses(
+        markers,
+        rotation,
+        translation,
+        body,
+        iterations=int(iterations),
+        change_mm=float(change_mm),
+    )
 
 
 def pose_residuals(
@@ -300,14 +339,16 @@ def _check_one_shape(names: list[str], checked: dict[int, list[np.ndarray]]) -> 
 
 
 def _fitted_poses(markers: np.ndarray) -> list:
-    """Per trial of ``markers`` ``(T, N, P, 3)`` its :func:`rigid_poses` parts, all trials in
-    one call; when that call fails numerically, each trial alone, a failing trial's error in
-    place of its parts."""
+    """Per trial of ``markers`` ``(T, N, P, 3)`` its
+    :func:`~jointbench.numerics.poses.fit_rigid_poses` parts (poses,
+    body-fixed coordinates, iterations and last change), all trials in one call; when that call
+    fails numerically, each trial alone, a failing trial's error in place of its parts."""
     try:
-        return list(zip(*rigid_poses(markers), strict=True))
+        return list(zip(*pose_fit.fit_rigid_poses(markers)[:5], strict=True))
     except NUMERICAL_FAILURES:
         return each_alone(
-            lambda t: tuple(part[0] for part in rigid_poses(markers[t : t + 1])), len(markers)
+            lambda t: tuple(part[0] for part in pose_fit.fit_rigid_poses(markers[t : t + 1])[:5]),
+            len(markers),
         )
 
 

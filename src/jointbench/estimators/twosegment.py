@@ -28,6 +28,12 @@ relative rotation off the axis of less than about 1e-6 rad, a thousand times bel
 with micrometre noise resolve -- and raises ``ValueError``. Merely ill-conditioned motion is
 solved as it is: its poor answer is what a benchmark should see.
 
+Poses the alternation did not bring to its fixed point (it stops after
+:data:`jointbench.numerics.poses.POSE_MAX_ITERATIONS` re-estimations) are not the
+least-squares poses, and an answer from them moves with the starting frame: every pose-based
+method's result on them reads ``converged=False`` and says which segment's fit stopped where
+(:func:`batched_all`).
+
 One-segment use (``center`` "SCoRE", ``axis`` "SARA"): the markers are already in the
 reference segment's frame, so the reference pose is exactly the identity (``R1 = I``,
 ``t1 = 0``) and the answer is ``c1`` (or the axis ``n1``, ``p1``), in the reference frame.
@@ -46,7 +52,12 @@ from jointbench.declared import NonNegative
 from jointbench.estimators import precision
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register, register_many
-from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
+from jointbench.estimators.results import (
+    AxisResult,
+    CenterResult,
+    JointCenterResult,
+    with_fields,
+)
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.rank import negligible
@@ -607,10 +618,40 @@ def batched_all(
         if poses is None:
             segments_by_name = dict(zip(names, segments, strict=True))
             poses = trial_poses(segments_by_name, min_frames=POSE_MIN_FRAMES)
-        return finish_all(poses, **options)
+        outcomes = finish_all(poses, **options)
+        return [
+            _with_pose_fit_end(outcome, fitted, names)
+            for outcome, fitted in zip(outcomes, poses, strict=True)
+        ]
 
     run.pose_segments = names
     return isolated(run)
+
+
+def _with_pose_fit_end(outcome, poses, names: tuple[str, ...]):
+    """``outcome`` (a result, or a trial's ``ValueError``) with ``converged=False`` and its
+    status led by what stopped, where a segment's poses ``poses`` (by name) did not
+    converge; else as it was."""
+    if isinstance(outcome, BaseException) or not isinstance(poses, dict):
+        return outcome
+    stopped = [
+        f"the {'' if name == 'markers' else name + ' '}markers' pose fit stopped after "
+        f"{poses[name].iterations} re-estimations of their body-fixed coordinates, the last "
+        f"moving them {poses[name].change_mm:.3g} mm"
+        for name in names
+        if poses[name].converged is False
+    ]
+    if not stopped:
+        return outcome
+    reason = (
+        "did not converge: "
+        + "; ".join(stopped)
+        + " (paper C §5's alternation): the poses are not the least-squares ones"
+    )
+    # The method's own stop, if any, joins the same "did not converge" sentence.
+    own = outcome.status.removeprefix("did not converge: ")
+    status = reason if own == "ok" else f"{reason}; {own}"
+    return with_fields(outcome, converged=False, status=status)
 
 
 def _ignoring_noise(finish: Callable[..., list]) -> Callable[..., list]:

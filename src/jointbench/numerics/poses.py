@@ -18,6 +18,7 @@ __all__ = [
     "POSE_TOL_MM",
     "PoseFit",
     "best_rotation",
+    "change_limit",
     "fit_rigid_poses",
     "rigid_fit",
     "rigid_poses",
@@ -25,9 +26,16 @@ __all__ = [
 
 #: The alternation of :func:`fit_rigid_poses` stops once no body-fixed coordinate changes by
 #: this much [mm]: 15 significant digits of coordinates of order 1000 mm (paper C §5's "15
-#: decimals of precision"), or after this many re-estimations.
+#: decimals of precision"), or after this many re-estimations. The paper's rig converges in
+#: under 5; a cluster that is thin or small against its noise converges at a slower linear
+#: rate, and a fit stopped short leaves poses that depend on the starting frame, which the
+#: pose-based methods then report (:mod:`jointbench.estimators.twosegment`).
 POSE_TOL_MM = 1e-12
-POSE_MAX_ITERATIONS = 20
+POSE_MAX_ITERATIONS = 100
+
+#: Units in the last place of the largest coordinate that a change of the body-fixed
+#: coordinates can be from rounding alone (see :func:`change_limit`).
+_ROUNDING_ULPS = 4
 
 # Frames per block of a many-trial pose fit.
 _BLOCK_FRAMES = 65536
@@ -225,7 +233,8 @@ class PoseFit(NamedTuple):
     ``rotation`` (..., n_frames, 3, 3), ``translation`` (..., n_frames, 3) [mm], ``body``
     (..., n_markers, 3) [mm]; ``iterations`` (...) the re-estimations of the body-fixed
     coordinates (eq. 5) made, ``change_mm`` (...) the largest change of a body-fixed
-    coordinate in the last of them [mm]: below the tolerance when it converged.
+    coordinate in the last of them [mm], ``converged`` (...) whether that was below
+    :func:`change_limit`.
     """
 
     rotation: np.ndarray
@@ -233,6 +242,18 @@ class PoseFit(NamedTuple):
     body: np.ndarray
     iterations: np.ndarray
     change_mm: np.ndarray
+    converged: np.ndarray
+
+
+def change_limit(markers: np.ndarray, tol_mm: float = POSE_TOL_MM) -> np.ndarray:
+    """The change of the body-fixed coordinates ``(T,)`` [mm] below which the alternation of
+    :func:`fit_rigid_poses` on trials ``markers`` ``(T, N, n, 3)`` [mm] has converged: ``tol_mm``,
+    or :data:`_ROUNDING_ULPS` units in the last place of the trial's largest coordinate where
+    that is more. Coordinates far from the origin (a laboratory whose origin lies metres away)
+    round every change to a multiple of their last place, so a fixed ``tol_mm`` below it could
+    never be reached."""
+    largest = np.abs(markers).max(axis=(1, 2, 3))
+    return np.maximum(tol_mm, _ROUNDING_ULPS * np.spacing(largest))
 
 
 def rigid_poses(
@@ -251,7 +272,8 @@ def fit_rigid_poses(
     Follows paper C §5: start from the body-fixed coordinates equal to the first frame,
     fit the pose of every frame by SVD, re-estimate the body-fixed coordinates as the mean
     of the back-transformed measurements (paper C eq. 5) and repeat until they change by less
-    than ``tol_mm``, at most ``max_iterations`` times. The body-fixed frame coincides with the
+    than :func:`change_limit` (``tol_mm``, or rounding for coordinates far from the origin),
+    at most ``max_iterations`` times. The body-fixed frame coincides with the
     world at frame 0 (``R[0] = I``, ``t[0] = 0``).
 
     Leading axes are independent trials, fitted together: each stops iterating when its own
@@ -313,6 +335,7 @@ def _rigid_poses_block(markers: np.ndarray, max_iterations: int, tol_mm: float) 
         return fitted, body_mean
 
     body = markers[:, 0].copy()
+    limit = change_limit(markers, tol_mm)
     active = np.ones(n_trials, dtype=bool)
     iterations = np.zeros(n_trials, dtype=int)
     change = np.full(n_trials, np.nan)
@@ -331,7 +354,7 @@ def _rigid_poses_block(markers: np.ndarray, max_iterations: int, tol_mm: float) 
         new_body = mean_local @ np.swapaxes(first, 1, 2) + first_translation[:, None, :]
         change[trials] = np.max(np.abs(new_body - body[take]), axis=(1, 2))
         iterations[trials] += 1
-        converged = change[trials] < tol_mm
+        converged = change[trials] < limit[trials]
         # A converged trial keeps the coordinates its poses were just fitted to (within
         # ``tol_mm`` of the fixed point) while the others iterate on, so a trial's answer does
         # not depend on its batch.
@@ -343,7 +366,9 @@ def _rigid_poses_block(markers: np.ndarray, max_iterations: int, tol_mm: float) 
     # t = mean(y) - R mean(body), every frame's rotation applied as one product per trial.
     turned = rotation.reshape(n_trials, n_frames * 3, 3) @ body.mean(axis=1)[:, :, None]
     translation = target_mean - turned.reshape(n_trials, n_frames, 3)
-    return PoseFit(*_anchored_at_frame_0(rotation, translation, body), iterations, change)
+    return PoseFit(
+        *_anchored_at_frame_0(rotation, translation, body), iterations, change, change < limit
+    )
 
 
 def _anchored_at_frame_0(

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from jointbench.figures import paper_c as draw
-from jointbench.numerics.poses import POSE_MAX_ITERATIONS, POSE_TOL_MM
+from jointbench.numerics.poses import POSE_MAX_ITERATIONS
 from jointbench.papers.base import (
     FrontPart,
     Inputs,
@@ -159,12 +159,12 @@ def _c4(ours, rows, collected):
 def converged_after(rows: pd.DataFrame) -> pd.DataFrame:
     """Per trial (rows of ``rows``) and segment (columns ``proximal``, ``distal``), the
     iterations of the pose alternation after which the body-fixed coordinates had converged:
-    one fewer than it made when the last changed them by less than ``POSE_TOL_MM`` (that one
+    one fewer than it made when the last changed them by less than the fit's limit (that one
     confirmed it), else all it made."""
     out = {}
     for segment in ("proximal", "distal"):
         made = rows[f"pose_iterations_{segment}"].astype(float)
-        confirmed = rows[f"pose_change_mm_{segment}"] < POSE_TOL_MM
+        confirmed = rows[f"pose_converged_{segment}"].astype(bool)
         out[segment] = made.where(~confirmed, made - 1)
     return pd.DataFrame(out, index=rows.index)
 
@@ -181,7 +181,7 @@ def _c5(ours, rows, collected):
     stopped = int((counts.to_numpy() >= POSE_MAX_ITERATIONS).sum())
     return Measured(
         largest,
-        f"iterations to converge (change below {POSE_TOL_MM:g} mm in the next), per trial and "
+        "iterations to converge (change below the fit's limit in the next), per trial and "
         f"segment over every Nt: {shown}; largest {largest}"
         + (f"; {stopped} stopped at {POSE_MAX_ITERATIONS} unconverged" if stopped else ""),
     )

@@ -85,11 +85,12 @@ EXACT_FRAME0_COLUMNS = {
     "mahalanobis_sq": "exact_frame0_mahalanobis_sq",
 }
 #: How paper C's alternation of SVD poses and body-fixed coordinates (§5, eq. 5) ended, per
-#: segment: the re-estimations made and the last one's largest change [mm].
+#: segment: the re-estimations made, the last one's largest change [mm] and whether that was
+#: below the fit's limit (:func:`~jointbench.numerics.poses.change_limit`).
 POSE_FIT_COLUMNS = tuple(
     f"pose_{what}_{segment}"
     for segment in ("proximal", "distal")
-    for what in ("iterations", "change_mm")
+    for what in ("iterations", "change_mm", "converged")
 )
 
 
@@ -314,6 +315,7 @@ def paper_c_checks(arguments, results: Sequence, truth: Mapping) -> list[dict[st
         for fit, segment in zip(fits, ("proximal", "distal"), strict=True):
             row[f"pose_iterations_{segment}"] = int(fit.iterations[trial])
             row[f"pose_change_mm_{segment}"] = float(fit.change_mm[trial])
+            row[f"pose_converged_{segment}"] = bool(fit.converged[trial])
         if isinstance(control, BaseException):
             failed_trial(control)  # a bug is raised; a stated failure leaves no control
             control = None
