@@ -42,3 +42,22 @@ def test_a_bootstrap_without_a_label_is_refused_before_it_refits():
         with pytest.raises(ValueError, match="label must name what is refitted"):
             bootstrap(statistic, 50, n_resamples=10, label=label)
     assert not refitted
+
+
+def test_a_refused_bootstrap_says_why_its_refits_failed():
+    """Refits that cannot answer give their reasons; the refusal counts each kind and quotes
+    the commonest, not a guess at the cause."""
+
+    def statistic(indices):
+        return [
+            "did not converge: the markers' pose fit stopped after 100 re-estimations"
+            if row % 3
+            else (np.zeros(3) if row % 2 else "failed: too few frames")
+            for row in range(len(indices))
+        ]
+
+    with pytest.raises(ValueError) as raised:
+        bootstrap(statistic, 40, n_resamples=12, label="trial SCoRE")
+    message = str(raised.value)
+    assert message.startswith("trial SCoRE: bootstrap: 10 of 12 refits failed (8 did not "), message
+    assert "2 failed; e.g. did not converge: the markers' pose fit stopped after 100" in message

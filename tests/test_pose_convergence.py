@@ -209,3 +209,4 @@ def test_poses_keep_how_their_fit_ended_and_refuse_half_a_record(thigh):
         with pytest.raises(ValueError, match="must be both None or a count >= 1"):
             dataclasses.replace(pose, iterations=iterations, change_mm=change_mm)
     assert dataclasses.replace(pose, change_mm=1e-6).converged is False
+    assert dataclasses.replace(pose, change_mm=0).converged is True

@@ -9,6 +9,7 @@ poses file the pipeline's pose-based estimators share, or refitted by a recordin
 from __future__ import annotations
 
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
 from test_support_sweep import TRIALS as SWEEP
 
@@ -18,6 +19,7 @@ from jointbench.estimators.segment_poses import trial_poses
 from jointbench.io.recording import Recording
 from jointbench.numerics.poses import fit_rigid_poses
 from jointbench.resultfiles.parquet import read_poses, write_poses_blocks
+from jointbench.simulate.hip_sta import thigh_in_pelvis_frame
 
 TWO_SEGMENTS = [arrays for kind, arrays in SWEEP if kind == "joint_center"]
 
@@ -84,3 +86,30 @@ def test_a_bootstrap_on_poses_that_do_not_converge_names_the_pose_fit():
         assert "pose fit" in str(error), str(error)
     else:
         assert not fitted.result.converged
+
+
+def test_a_poses_file_that_does_not_say_how_its_fits_ended_is_refused(stopped, tmp_path):
+    proximal, distal = stopped
+    segments = {"proximal": proximal[None], "distal": distal[None]}
+    path = tmp_path / "poses.parquet"
+    write_poses_blocks(
+        path,
+        [trial_poses(segments, min_frames=3)],
+        shapes={k: v.shape for k, v in segments.items()},
+    )
+    table = pq.read_table(path)
+    pq.write_table(table.drop_columns(["distal/iterations"]), path)
+    with pytest.raises(ValueError, match="has no column 'distal/iterations': it does not say"):
+        read_poses(path, 0, segments)
+
+
+def test_the_simulated_pelvis_frame_refuses_pelvis_poses_that_did_not_converge(stopped):
+    proximal, distal = stopped
+    with pytest.raises(ValueError, match="hip_sta trial 0: the proximal markers' pose fit stopped"):
+        thigh_in_pelvis_frame(proximal[None], distal[None])
+    settled = _settled_trial()
+    assert thigh_in_pelvis_frame(settled[0][None], settled[1][None]).shape == settled[1][None].shape
+
+
+def _settled_trial() -> tuple[np.ndarray, np.ndarray]:
+    return next(arrays for arrays in TWO_SEGMENTS if fit_rigid_poses(arrays[0]).converged)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Annotated
@@ -141,9 +142,10 @@ def bootstrap(
 
     ``statistic`` receives the frame indices of every resample, ``(n_resamples, n_frames)``,
     all at once (so an estimator can refit them as one batch) and returns one ``(d,)`` row per
-    resample, or ``None`` where the refit cannot support an answer; those count as failed.
-    ``label`` names what is refitted (the recording or study, and the method), in front of the
-    ``ValueError`` raised when more than half the refits fail. ``n_resamples``,
+    resample, or where the refit cannot support an answer why (a ``str``) or ``None``; those
+    count as failed. ``label`` names what is refitted (the recording or study, and the method),
+    in front of the ``ValueError`` raised when more than half the refits fail, which says how
+    often each reason came and quotes the commonest. ``n_resamples``,
     ``block_length`` and ``seed`` are refused as :func:`check_resampling` says, before any
     refit. It is required, and refused when
     blank, before any refit: ``statistic`` is any callable, so nothing else can say what it
@@ -155,12 +157,33 @@ def bootstrap(
     rng = np.random.default_rng(seed)
     indices = np.stack([block_indices(n_frames, block_length, rng) for _ in range(n_resamples)])
     rows = list(statistic(indices))
-    width = next((len(row) for row in rows if row is not None), 1)
-    samples = np.array([np.full(width, np.nan) if row is None else row for row in rows], float)
-    n_failed = int(np.sum(~np.isfinite(samples).all(axis=1)))
+    width = next((len(row) for row in rows if _is_row(row)), 1)
+    samples = np.array([row if _is_row(row) else np.full(width, np.nan) for row in rows], float)
+    failed = ~np.isfinite(samples).all(axis=1)
+    n_failed = int(np.sum(failed))
     if n_failed > len(rows) // 2:
+        reasons = [row if isinstance(row, str) else None for row in rows]
         raise ValueError(
-            f"{label}: bootstrap: {n_failed} of {len(rows)} refits failed; the frames cannot "
-            "support an interval (too few frames or too little motion per block)"
+            f"{label}: bootstrap: {n_failed} of {len(rows)} refits failed"
+            f"{_failures(np.asarray(reasons, dtype=object)[failed].tolist())}; the frames "
+            "cannot support an interval"
         )
     return Bootstrap(samples, block_length, n_failed)
+
+
+def _is_row(row: object) -> bool:
+    return row is not None and not isinstance(row, str)
+
+
+def _failures(reasons: list[str | None]) -> str:
+    """How often each kind of failure came among failed refits' ``reasons`` (their text up to
+    the first colon, ``None`` for a row that was no number), and the commonest in full."""
+    kinds = Counter(
+        "no answer" if reason is None else reason.split(":")[0].strip() for reason in reasons
+    )
+    commonest, _ = kinds.most_common(1)[0]
+    example = next(
+        (r for r in reasons if r is not None and r.split(":")[0].strip() == commonest), None
+    )
+    counted = ", ".join(f"{count} {kind}" for kind, count in kinds.most_common())
+    return f" ({counted}" + ("" if example is None else f"; e.g. {example}") + ")"

@@ -17,14 +17,19 @@ from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import many, register, register_many
 from jointbench.estimators.results import CenterResult
-from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, trial_poses
+from jointbench.estimators.segment_poses import (
+    POSE_MIN_FRAMES,
+    stopped_fit,
+    trial_poses,
+    with_stopped_fits,
+)
 from jointbench.estimators.sphere import _check_point, _prepared_fits, fit_ls
 from jointbench.estimators.validation import (
     check_markers,
     check_moves,
     check_not_collinear,
 )
-from jointbench.numerics.poses import rigid_poses
+from jointbench.numerics.poses import fit_rigid_poses, rigid_poses
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
 
 __all__ = ["amplitude", "fit_ma"]
@@ -119,7 +124,8 @@ def fit_ma(markers: np.ndarray, start: Point | None = None) -> CenterResult:
     Returns
     -------
     CenterResult with ``center`` (3,) [mm], ``radii=None``, ``cost`` the amplitude at ``p*``
-    [mm], ``converged`` the optimiser's success, ``iterations`` its iteration count;
+    [mm], ``converged`` the optimiser's success (and the pose fit's: poses whose alternation
+    stopped short say so, as every pose-based method's do), ``iterations`` its iteration count;
     ``diagnostics["body_point"]`` is ``p*`` in the body frame of
     :func:`jointbench.numerics.poses.rigid_poses` (its position at frame 0; a list [mm]), with
     ``diagnostics["function_evaluations"]``.
@@ -180,15 +186,21 @@ def _ma_fits(arrays: list[np.ndarray], starts: list[np.ndarray]) -> list[CenterR
     ``starts`` (each ``(3,)`` [mm]), the searches advanced together
     (:func:`jointbench.numerics.simplex.lockstep`), each on its own path."""
     # Each trial's poses are those of its own call (the pose fit is per trial).
-    rotations, translations = _mean_anchored(*rigid_poses(np.stack(arrays))[:2])
+    poses = fit_rigid_poses(np.stack(arrays))
+    rotations, translations = _mean_anchored(poses.rotation, poses.translation)
     searches = lockstep(
         lambda points, owners: _amplitudes(points, rotations, translations, owners),
         np.stack(starts),
         **FMINSEARCH_OPTIONS,
     )
     return [
-        _ma_result(search, rotation, translation)
-        for search, rotation, translation in zip(searches, rotations, translations, strict=True)
+        with_stopped_fits(
+            _ma_result(search, rotations[trial], translations[trial]),
+            []
+            if poses.converged[trial]
+            else [stopped_fit("markers", poses.iterations[trial], poses.change_mm[trial])],
+        )
+        for trial, search in enumerate(searches)
     ]
 
 

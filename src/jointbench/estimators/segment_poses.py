@@ -18,6 +18,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from jointbench.estimators.batching import NUMERICAL_FAILURES, check_same_trials, each_alone
+from jointbench.estimators.results import with_fields
 from jointbench.estimators.validation import (
     check_markers,
     check_not_collinear,
@@ -32,7 +33,9 @@ __all__ = [
     "pose_residuals",
     "pose_segments",
     "residual_differs",
+    "stopped_fit",
     "trial_poses",
+    "with_stopped_fits",
 ]
 
 #: Fewest frames a pose-based method accepts: every one of them needs the same, so their
@@ -196,7 +199,8 @@ def _check_fit_end(what: str, iterations: object, change_mm: object) -> None:
         isinstance(iterations, bool)
         or not isinstance(iterations, (int, np.integer))
         or iterations < 1
-        or not isinstance(change_mm, (float, np.floating))
+        or isinstance(change_mm, bool)
+        or not isinstance(change_mm, (int, float, np.integer, np.floating))
         or not change_mm >= 0.0
     ):
         raise ValueError(
@@ -357,6 +361,34 @@ def _parts(fitted: tuple | Exception) -> tuple:
     if isinstance(fitted, Exception):
         raise fitted
     return fitted
+
+
+def stopped_fit(name: str, iterations: int, change_mm: float) -> str:
+    """What a result says of segment ``name``'s pose fit (``"markers"``, ``"proximal"``,
+    ``"distal"``) that stopped after ``iterations`` re-estimations of the body-fixed
+    coordinates, the last moving them ``change_mm`` [mm]."""
+    whose = "the markers'" if name == "markers" else f"the {name} markers'"
+    return (
+        f"{whose} pose fit stopped after {iterations} re-estimations of their body-fixed "
+        f"coordinates, the last moving them {change_mm:.3g} mm"
+    )
+
+
+def with_stopped_fits(result, stopped: list[str]):
+    """``result`` with ``converged=False`` and its status led by the ``stopped`` pose fits
+    (:func:`stopped_fit`): poses that are not the least-squares ones, on which an answer moves
+    with the starting frame. ``result`` as it was when none stopped."""
+    if not stopped:
+        return result
+    reason = (
+        "did not converge: "
+        + "; ".join(stopped)
+        + " (paper C §5's alternation): the poses are not the least-squares ones"
+    )
+    # The method's own stop, if any, joins the same "did not converge" sentence.
+    own = result.status.removeprefix("did not converge: ")
+    status = reason if own == "ok" else f"{reason}; {own}"
+    return with_fields(result, converged=False, status=status)
 
 
 def pose_segments(many: Callable) -> tuple[str, ...] | None:

@@ -78,9 +78,10 @@ then its projections on the two candidate hinge planes below):
   hinges and static clusters.
 
 Two segments (``joint_center``: both clusters in the world) are judged from their rigid-body
-poses, the converged poses of :func:`jointbench.estimators.segment_poses.trial_poses` that the
-pose-based estimators fit (a checked call fits them once, for the estimator and the verdict;
-a trial whose poses cannot be fitted is judged without them):
+poses, those of :func:`jointbench.estimators.segment_poses.trial_poses` that the pose-based
+estimators fit (a checked call fits them once, for the estimator and the verdict; a trial
+whose poses cannot be fitted is judged without them; poses whose fit stopped before
+converging are judged as they are, and the estimator's result says they stopped):
 ``s^2 = RSS / (3 (n - 2)(N - 1))`` pooled over the clusters; with
 ``w_k`` the distal segment's rotation vector relative to the proximal one about their mean and
 ``S`` its noise covariance (``s^2 K^-1`` with ``K = sum_i (|u_i|^2 I - u_i u_i')`` the inertia of
@@ -283,8 +284,7 @@ def _scatter_and_largest(
 
 def _clusters(markers: np.ndarray, poses: list[SegmentPoses]) -> _Clusters:
     """The rigid-body fits of one segment's markers ``(T, N, n, 3)`` [mm] in ``T`` trials from
-    their converged poses ``poses`` (one :class:`SegmentPoses` per trial, fitted to those
-    markers)."""
+    their poses ``poses`` (one :class:`SegmentPoses` per trial, fitted to those markers)."""
     _, n_frames, n_markers, _ = markers.shape
     rotation = np.stack([pose.rotation for pose in poses])
     body = np.stack([pose.body for pose in poses])

@@ -52,13 +52,14 @@ from jointbench.declared import NonNegative
 from jointbench.estimators import precision
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import register, register_many
-from jointbench.estimators.results import (
-    AxisResult,
-    CenterResult,
-    JointCenterResult,
-    with_fields,
+from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
+from jointbench.estimators.segment_poses import (
+    POSE_MIN_FRAMES,
+    SegmentPoses,
+    stopped_fit,
+    trial_poses,
+    with_stopped_fits,
 )
-from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.rank import negligible
 from jointbench.numerics.small import inertia_into, tangent_basis_into
@@ -631,27 +632,15 @@ def batched_all(
 def _with_pose_fit_end(outcome, poses, names: tuple[str, ...]):
     """``outcome`` (a result, or a trial's ``ValueError``) with ``converged=False`` and its
     status led by what stopped, where a segment's poses ``poses`` (by name) did not
-    converge; else as it was."""
+    converge (:func:`~jointbench.estimators.segment_poses.with_stopped_fits`)."""
     if isinstance(outcome, BaseException) or not isinstance(poses, dict):
         return outcome
     stopped = [
-        f"the {'' if name == 'markers' else name + ' '}markers' pose fit stopped after "
-        f"{poses[name].iterations} re-estimations of their body-fixed coordinates, the last "
-        f"moving them {poses[name].change_mm:.3g} mm"
+        stopped_fit(name, poses[name].iterations, poses[name].change_mm)
         for name in names
         if poses[name].converged is False
     ]
-    if not stopped:
-        return outcome
-    reason = (
-        "did not converge: "
-        + "; ".join(stopped)
-        + " (paper C §5's alternation): the poses are not the least-squares ones"
-    )
-    # The method's own stop, if any, joins the same "did not converge" sentence.
-    own = outcome.status.removeprefix("did not converge: ")
-    status = reason if own == "ok" else f"{reason}; {own}"
-    return with_fields(outcome, converged=False, status=status)
+    return with_stopped_fits(outcome, stopped)
 
 
 def _ignoring_noise(finish: Callable[..., list]) -> Callable[..., list]:

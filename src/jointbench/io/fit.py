@@ -169,14 +169,14 @@ def _estimate_vector(kind: str, result) -> np.ndarray:
     return np.asarray(result.center, dtype=float)
 
 
-def _bootstrap_row(kind: str, refit, estimate: np.ndarray) -> np.ndarray | None:
-    """What a refit contributes to the bootstrap; ``None`` when it failed or did not converge
+def _bootstrap_row(kind: str, refit, estimate: np.ndarray) -> np.ndarray | str:
+    """What a refit contributes to the bootstrap; why not, when it failed or did not converge
     (a mistake in the method's code is raised, not counted as a failed refit)."""
     if isinstance(refit, Exception):
         failed_trial(refit)
-        return None
+        return f"failed: {refit}"
     if not refit.converged:
-        return None
+        return refit.status
     if kind == "axis":
         return _axis_crossing(refit.direction, refit.point, estimate)
     return np.asarray(refit.center, dtype=float)

@@ -661,7 +661,16 @@ def _poses_block(
         columns[f"{name}/residual_ss"] = _from_numpy(
             np.array([np.nan if poses is None else poses.residual_ss for poses in fitted])
         )
+        # How each fit ended, so that poses read back say whether they converged as the fit
+        # did: 0 and NaN where nothing is recorded (a failed trial, poses built by hand).
+        ended = [(0, np.nan) if p is None or p.iterations is None else _fit_end(p) for p in fitted]
+        columns[f"{name}/iterations"] = _from_numpy(np.array([i for i, _ in ended], dtype=np.int64))
+        columns[f"{name}/change_mm"] = _from_numpy(np.array([c for _, c in ended], dtype=float))
     return pa.table(columns)
+
+
+def _fit_end(poses: SegmentPoses) -> tuple[int, float]:
+    return int(poses.iterations), float(poses.change_mm)
 
 
 def write_poses_blocks(
@@ -712,14 +721,19 @@ def _stored_poses(
     markers: np.ndarray,
     parts: tuple[np.ndarray, np.ndarray, np.ndarray],
     residual_ss: float,
+    fit_end: tuple[int, float],
 ) -> SegmentPoses:
     """Segment ``name``'s poses of ``trial`` from their stored ``parts`` (``rotation``,
     ``translation``, ``body``) and residual sum of squares ``residual_ss`` [mm^2] on the
     dataset's ``markers`` ``(N, n, 3)`` [mm]; ``ValueError`` naming ``path``, the trial and the
     segment when they do not leave that residual on these markers: poses of other markers of
-    the same shapes (another seed's dataset, say), which the shapes alone cannot tell."""
+    the same shapes (another seed's dataset, say), which the shapes alone cannot tell.
+    ``fit_end`` is how the fit ended, its iterations and last change [mm] (0 and NaN: not
+    recorded)."""
+    iterations, change_mm = fit_end
+    recorded = {} if iterations == 0 else {"iterations": iterations, "change_mm": change_mm}
     try:
-        return SegmentPoses(markers, *parts, residual_ss=residual_ss)
+        return SegmentPoses(markers, *parts, residual_ss=residual_ss, **recorded)
     except AlteredPoses as error:
         raise ValueError(
             f"{path}: the poses of trial {trial}, segment {name!r}, leave a residual "
@@ -768,6 +782,24 @@ def read_poses(
         for field, shape_of in _POSE_ARRAYS.items()
     }
     residuals = {name: _to_numpy(rows.column(f"{name}/residual_ss")) for name in segments}
+    missing = [
+        f"{name}/{field}"
+        for name in segments
+        for field in ("iterations", "change_mm")
+        if f"{name}/{field}" not in rows.column_names
+    ]
+    if missing:
+        raise ValueError(
+            f"{path}: has no column {missing[0]!r}: it does not say how its pose fits ended "
+            "(a file from an older jointbench); delete it and run again to refit"
+        )
+    ends = {
+        name: (
+            _to_numpy(rows.column(f"{name}/iterations")).tolist(),
+            _to_numpy(rows.column(f"{name}/change_mm")).tolist(),
+        )
+        for name in segments
+    }
     errors = rows.column("error").to_pylist()
     return [
         ValueError(error)
@@ -780,6 +812,7 @@ def read_poses(
                 markers[trial],
                 tuple(arrays[name, field][trial] for field in _POSE_ARRAYS),
                 residuals[name][trial],
+                (ends[name][0][trial], ends[name][1][trial]),
             )
             for name, markers in segments.items()
         }

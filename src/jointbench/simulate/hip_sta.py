@@ -97,8 +97,9 @@ import numpy as np
 
 from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
 from jointbench.declared import check_fields as check_declared
+from jointbench.estimators.segment_poses import stopped_fit
 from jointbench.geometry import rotation_matrix, skew
-from jointbench.numerics.poses import rigid_poses
+from jointbench.numerics.poses import fit_rigid_poses
 from jointbench.screening import to_local
 from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.hip import _jsonable, _triple, _triples
@@ -304,15 +305,26 @@ def thigh_in_pelvis_frame(pelvis: np.ndarray, thigh: np.ndarray) -> np.ndarray:
     """Thigh markers ``(n_trials, n_frames, n, 3)`` [mm] in the pelvis frame, as a lab gives them
     to a one-segment centre method: per trial, the pelvis cluster's pose in every frame is
     fitted from its recorded markers ``(n_trials, n_frames, 4, 3)`` (paper C §5,
-    :func:`~jointbench.numerics.poses.rigid_poses`: the frame coincides with the world at frame
+    :func:`~jointbench.numerics.poses.fit_rigid_poses`: the frame coincides with the world at frame
     0), and the thigh markers are carried into it.
 
     Any other pelvis-fixed frame differs from this one by a constant rigid motion, to which
     the centre methods are invariant; this one makes the true centre the same point,
     ``joint_mm``, as in the two-segment methods' frame-0 body frames. The pelvis markers'
-    noise and artefact go into the frame, as they do in the lab.
+    noise and artefact go into the frame, as they do in the lab. A pelvis pose fit that stops
+    before converging (a protocol whose pelvis cluster is thin or small against its noise)
+    is refused, naming the trial: the frame, and every answer in it, would depend on the first
+    frame.
     """
-    rotation, translation, _ = rigid_poses(pelvis)
+    fit = fit_rigid_poses(pelvis)
+    if not fit.converged.all():
+        trial = int(np.flatnonzero(~fit.converged)[0])
+        stopped = stopped_fit("proximal", fit.iterations[trial], fit.change_mm[trial])
+        raise ValueError(
+            f"hip_sta trial {trial}: {stopped} (the pelvis frame the thigh markers are given "
+            "in): the protocol's pelvis cluster does not determine its poses"
+        )
+    rotation, translation = fit.rotation, fit.translation
     return np.stack(
         [
             to_local(r, t, markers)
