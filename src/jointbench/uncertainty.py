@@ -178,12 +178,12 @@ def _is_row(row: object) -> bool:
 def _failures(reasons: list[str | None]) -> str:
     """How often each kind of failure came among failed refits' ``reasons`` (their text up to
     the first colon, ``None`` for a row that was no number), and the commonest in full."""
-    kinds = Counter(
-        "no answer" if reason is None else reason.split(":")[0].strip() for reason in reasons
-    )
-    commonest, _ = kinds.most_common(1)[0]
+    kinds = ["no answer" if reason is None else reason.split(":")[0].strip() for reason in reasons]
+    counts = Counter(kinds)
+    commonest, _ = counts.most_common(1)[0]
     example = next(
-        (r for r in reasons if r is not None and r.split(":")[0].strip() == commonest), None
+        (r for r, kind in zip(reasons, kinds, strict=True) if r is not None and kind == commonest),
+        None,
     )
-    counted = ", ".join(f"{count} {kind}" for kind, count in kinds.most_common())
+    counted = ", ".join(f"{count} {kind}" for kind, count in counts.most_common())
     return f" ({counted}" + ("" if example is None else f"; e.g. {example}") + ")"
