@@ -134,10 +134,13 @@ def test_many_trials_are_judged_each_as_alone():
 MOTION_NUMBERS = ("sd_deg", "noise_share", "pose_sd_deg")
 
 
-def _step_by_step(markers: np.ndarray, variance: np.ndarray) -> list[np.ndarray]:
+def _step_by_step(
+    markers: np.ndarray, variance: np.ndarray, central: np.ndarray
+) -> list[np.ndarray]:
     """The motion axes and shares of one segment's trials ``(T, N, n, 3)`` taken a NumPy step
-    at a time from their sampled rotations: the way the one-call kernel must match."""
-    rotations = support._one_segment_rotations(markers, variance)
+    at a time from their sampled rotations from the ``central`` frames ``(T,)``: the way the
+    one-call kernel must match."""
+    rotations = support._one_segment_rotations(markers, variance, central)
     directions, sd_deg, noise_share = support._motion_axis_numbers(
         rotations.own, rotations.mean, rotations.noise, rotations.n_frames
     )
@@ -177,9 +180,10 @@ def test_the_motion_axis_in_one_call_is_the_step_by_step_one(make, in_one_call):
     markers = np.stack([make(), make()[::-1].copy()])
     variance = np.array([0.25, 1e-30])
     step = support._frame_step(markers.shape[1])
-    assert support._sampled_axis_numbers(markers, step, variance)[0] == in_one_call
-    axes, shares = support._one_segment_axes(markers, variance)
-    expected = _step_by_step(markers, variance)
+    central = support._one_segment_numbers(markers, support._FLEX)[:, support._CENTRAL_FRAME]
+    assert support._sampled_axis_numbers(markers, step, variance, central)[0] == in_one_call
+    axes, shares = support._one_segment_axes(markers, variance, central)
+    expected = _step_by_step(markers, variance, central)
     found = [
         np.array([axis.direction for axis in axes]),
         *(np.array([getattr(axis, name) for axis in axes]) for name in MOTION_NUMBERS),
@@ -187,3 +191,25 @@ def test_the_motion_axis_in_one_call_is_the_step_by_step_one(make, in_one_call):
     ]
     for got, want in zip(found, expected, strict=True):
         np.testing.assert_array_equal(got, want)
+
+
+def _nearest_mean_frame(markers: np.ndarray) -> int:
+    """The frame of ``markers`` ``(N, n, 3)`` whose centred markers are nearest (sum of squares)
+    the markers' mean centred positions, in NumPy: the rule the verdict's central frame follows."""
+    centred = markers - markers.mean(axis=1, keepdims=True)
+    return int(np.argmin(((centred - centred.mean(axis=0)) ** 2).sum(axis=(1, 2))))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [lambda: _moved(_hinge(), 0.5), lambda: _moved(_ball(n_frames=1200), 1.0)],
+    ids=["hinge", "sampled"],
+)
+def test_the_central_frame_comes_from_the_verdicts_pass_over_the_frames(make):
+    markers = make()
+    order = np.random.default_rng(3).permutation(markers.shape[0])
+    trials = np.stack([markers, markers[order]])
+    central = support._one_segment_numbers(trials, support._FLEX)[:, support._CENTRAL_FRAME]
+    assert central[0] == _nearest_mean_frame(markers)
+    # The same frame of the motion, wherever the frames' order puts it.
+    assert order[int(central[1])] == int(central[0])

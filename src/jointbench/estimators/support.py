@@ -325,7 +325,10 @@ _ONE_SEGMENT_COLUMNS = (
     "rotation_axis_rms_rad",
     "rotation_axis_f",
     "rotation_axis_dof",
+    "central_frame",
 )
+# The column of the frame whose centred markers are nearest their mean positions.
+_CENTRAL_FRAME = _ONE_SEGMENT_COLUMNS.index("central_frame")
 
 # A mode of a distance Gram matrix this much weaker than the strongest is a flex of a (nearly)
 # flat or collinear cluster, which moves no distance to first order: it is not counted as shape.
@@ -449,16 +452,19 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                 mean_c[m, i] /= n_frames
         inertia_into(mean_c, work3)
         _inverse_and_root(work3, inverse, root, (values3, vectors3, whitened))
-        # Second pass: the markers' displacements e from their mean positions, and the
-        # rotations about those, linearised.
+        # Second pass: the markers' displacements e from their mean positions, the rotations
+        # about those, linearised, and the frame nearest those positions (the first of equals).
+        nearest = np.inf
         for f in range(n_frames):
             moment0 = 0.0
             moment1 = 0.0
             moment2 = 0.0
+            distance = 0.0
             for m in range(n_markers):
                 e0 = positions[f, m, 0] - mean_c[m, 0]
                 e1 = positions[f, m, 1] - mean_c[m, 1]
                 e2 = positions[f, m, 2] - mean_c[m, 2]
+                distance += e0 * e0 + e1 * e1 + e2 * e2
                 e00 += e0 * e0
                 e01 += e0 * e1
                 e02 += e0 * e2
@@ -468,6 +474,9 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                 moment0 += mean_c[m, 1] * e2 - mean_c[m, 2] * e1
                 moment1 += mean_c[m, 2] * e0 - mean_c[m, 0] * e2
                 moment2 += mean_c[m, 0] * e1 - mean_c[m, 1] * e0
+            if distance < nearest:
+                nearest = distance
+                out[t, _CENTRAL_FRAME] = f
             w0 = inverse[0, 0] * moment0 + inverse[0, 1] * moment1 + inverse[0, 2] * moment2
             w1 = inverse[1, 0] * moment0 + inverse[1, 1] * moment1 + inverse[1, 2] * moment2
             w2 = inverse[2, 0] * moment0 + inverse[2, 1] * moment1 + inverse[2, 2] * moment2
@@ -973,11 +982,15 @@ def _frame_step(n_frames: int) -> int:
 
 
 @kernel
-def _onto_central_frame(markers: np.ndarray, step: int) -> tuple[np.ndarray, np.ndarray]:
+def _onto_central_frame(
+    markers: np.ndarray, step: int, central: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """For every ``step``-th frame of ``markers`` ``(T, N, n, 3)`` [mm], the cross-covariance
     ``(T, F, 3, 3)`` [mm^2] of its centred markers with those ``u`` of the trial's central
-    frame (:func:`_central_frame_into`), whose best rotation carries the central frame's shape
-    onto that frame's (:func:`_cross_into`); and the inverse of ``u``'s inertia
+    frame ``central`` ``(T,)`` (an index; :func:`_one_segment_numbers` gives the frame nearest
+    the markers' mean positions: a rigid shape near the mean pose, and the same frame in any
+    order of the frames), whose best rotation carries the central frame's shape onto that
+    frame's (:func:`_cross_into`); and the inverse of ``u``'s inertia
     ``sum_m (|u_m|^2 I - u_m u_m')`` ``(T, 3, 3)`` [mm^-2], the covariance per unit variance
     of those rotations' noise. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
@@ -986,49 +999,11 @@ def _onto_central_frame(markers: np.ndarray, step: int) -> tuple[np.ndarray, np.
     shape = np.empty((n_markers, 3))
     tensor = np.empty((3, 3))
     for t in range(n_trials):
-        _central_frame_into(markers[t], shape)
+        _centred_into(markers[t, int(central[t])], shape)
         _cross_into(markers[t], step, shape, cross[t])
         inertia_into(shape, tensor)
         inertia_inv[t] = np.linalg.inv(tensor)
     return cross, inertia_inv
-
-
-@kernel
-def _central_frame_into(markers: np.ndarray, shape: np.ndarray) -> None:
-    """The centred markers ``(n, 3)`` [mm] of the frame of ``markers`` ``(N, n, 3)`` [mm]
-    nearest (sum of squares) their mean positions over all frames, into ``shape``: a rigid
-    shape near the mean pose, and the same frame in any order of the frames. An exact tie,
-    which noise leaves no chance of, is between copies of one rigid shape in noise-free data
-    and goes to the first. A compiled kernel."""
-    n_frames, n_markers, _ = markers.shape
-    # The mean positions, in shape until the frame is chosen.
-    shape[:] = 0.0
-    for f in range(n_frames):
-        for i in range(3):
-            centroid = _coordinate_mean(markers[f], i)
-            for m in range(n_markers):
-                shape[m, i] += (markers[f, m, i] - centroid) / n_frames
-    nearest = np.inf
-    central = 0
-    for f in range(n_frames):
-        distance = 0.0
-        for i in range(3):
-            centroid = _coordinate_mean(markers[f], i)
-            for m in range(n_markers):
-                distance += (markers[f, m, i] - centroid - shape[m, i]) ** 2
-        if distance < nearest:
-            nearest = distance
-            central = f
-    _centred_into(markers[central], shape)
-
-
-@kernel
-def _coordinate_mean(points: np.ndarray, i: int) -> float:
-    """The mean of coordinate ``i`` of ``points`` ``(n, 3)`` [mm]. A compiled kernel."""
-    total = 0.0
-    for m in range(points.shape[0]):
-        total += points[m, i]
-    return total / points.shape[0]
 
 
 @kernel
@@ -1058,9 +1033,12 @@ class _OneSegmentRotations(NamedTuple):
     n_frames: int  # the frames sampled
 
 
-def _one_segment_rotations(markers: np.ndarray, variance: np.ndarray) -> _OneSegmentRotations:
-    """The rotations that carry the central frame's centred shape of one segment's markers
-    ``(T, N, n, 3)`` [mm] in the reference frame onto each sampled frame's
+def _one_segment_rotations(
+    markers: np.ndarray, variance: np.ndarray, central: np.ndarray
+) -> _OneSegmentRotations:
+    """The rotations that carry the ``central`` frame's (``(T,)``, :func:`_onto_central_frame`)
+    centred shape of one segment's markers ``(T, N, n, 3)`` [mm] in the reference frame onto
+    each sampled frame's
     (:func:`_frame_step`, :func:`_onto_central_frame`), about their mean pose: their rotation
     vectors, which hold at any angle (unlike the one-segment pass's linearised rotations),
     less their noise (:func:`_rotation_spreads`); ``variance`` ``(T,)`` [mm^2] is the rigid
@@ -1076,7 +1054,9 @@ def _one_segment_rotations(markers: np.ndarray, variance: np.ndarray) -> _OneSeg
     frame carried back by its pose and averaged) gave the same shares on the sweep's axis
     trials and a motion axis closer by 4 degrees (median, mostly thin clusters), at a second
     pose fit per frame: a third more for the verdict on an axis."""
-    cross, inertia_inv = _onto_central_frame(kernel_array(markers), _frame_step(markers.shape[1]))
+    cross, inertia_inv = _onto_central_frame(
+        kernel_array(markers), _frame_step(markers.shape[1]), central
+    )
     rotations = best_rotation(cross)
     _, _, values, own, mean = _spreads(rotations, inertia_inv, None, variance)
     noise = variance[:, None, None] * inertia_inv
@@ -1084,21 +1064,23 @@ def _one_segment_rotations(markers: np.ndarray, variance: np.ndarray) -> _OneSeg
 
 
 def _one_segment_axes(
-    markers: np.ndarray, variance: np.ndarray
+    markers: np.ndarray, variance: np.ndarray, central: np.ndarray
 ) -> tuple[list[MotionAxis], _AxisShare]:
     """The :class:`MotionAxis` of each trial of one segment's markers ``(T, N, n, 3)`` [mm] in
     the reference frame, and how much of its rotation is about that axis
     (:func:`_axis_numbers`), from the rotations of :func:`_one_segment_rotations`;
-    ``variance`` ``(T,)`` [mm^2] is the rigid residual per coordinate. One compiled call
+    ``variance`` ``(T,)`` [mm^2] is the rigid residual per coordinate and ``central`` ``(T,)``
+    the frame the rotations start from (:func:`_onto_central_frame`). One compiled call
     (:func:`_sampled_axis_numbers`) where every sampled frame's rotation is Horn's and none is
     near pi from the mean pose; otherwise the rotations' own way, through the SVD and
     :func:`jointbench.geometry.rotation_vector`, which give the same numbers where both hold."""
     variance = kernel_array(variance)
+    central = kernel_array(central)
     fused, *numbers = _sampled_axis_numbers(
-        kernel_array(markers), _frame_step(markers.shape[1]), variance
+        kernel_array(markers), _frame_step(markers.shape[1]), variance, central
     )
     if not fused:
-        rotations = _one_segment_rotations(markers, variance)
+        rotations = _one_segment_rotations(markers, variance, central)
         numbers = _axis_numbers(
             rotations.values, rotations.own, rotations.mean, rotations.noise, rotations.n_frames
         )
@@ -1113,15 +1095,18 @@ def _one_segment_axes(
 
 
 @kernel
-def _sampled_axis_numbers(markers: np.ndarray, step: int, variance: np.ndarray) -> tuple:
+def _sampled_axis_numbers(
+    markers: np.ndarray, step: int, variance: np.ndarray, central: np.ndarray
+) -> tuple:
     """:func:`_axis_numbers` of the rotations of :func:`_one_segment_rotations` of ``markers``
-    ``(T, N, n, 3)`` [mm], sampled every ``step`` frames, with the rigid residual ``variance``
-    ``(T,)`` [mm^2], preceded by whether they hold: ``False`` (and empty arrays) where Horn's
-    method leaves a sampled frame's rotation to the SVD or one is within 1e-4 of pi from the
-    mean pose (:func:`jointbench.numerics.poses.best_rotation`, :func:`_spreads`), which the
-    caller then takes the whole way. A compiled kernel: the same kernels in one call, where
+    ``(T, N, n, 3)`` [mm], sampled every ``step`` frames from the ``central`` frames ``(T,)``,
+    with the rigid residual ``variance`` ``(T,)`` [mm^2], preceded by whether they hold:
+    ``False`` (and empty arrays) where Horn's method leaves a sampled frame's rotation to the
+    SVD or one is within 1e-4 of pi from the mean pose
+    (:func:`jointbench.numerics.poses.best_rotation`, :func:`_spreads`), which the caller then
+    takes the whole way. A compiled kernel: the same kernels in one call, where
     the glue between them cost a one-trial check as much as their work."""
-    cross, inertia_inv = _onto_central_frame(markers, step)
+    cross, inertia_inv = _onto_central_frame(markers, step, central)
     n_trials, n_sampled = cross.shape[0], cross.shape[1]
     flat = cross.reshape((n_trials * n_sampled, 3, 3))
     rotation = np.empty_like(flat)
@@ -1362,7 +1347,9 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     axes: dict[int, MotionAxis] = {}
     posed = [t for t, reason in enumerate(no_pose) if reason is None]
     if kind not in CENTRE_KINDS and posed:
-        found_axes, found = _one_segment_axes(markers[posed], numbers[posed, 0])
+        found_axes, found = _one_segment_axes(
+            markers[posed], numbers[posed, 0], numbers[posed, _CENTRAL_FRAME]
+        )
         axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
         shares = {t: share for t, share in by_trial if tests[t][3] < ROTATION_ALPHA}
