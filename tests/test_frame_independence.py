@@ -1,0 +1,193 @@
+"""A fit on frames whose noise is not independent says so.
+
+Every p-value of the support verdict and every SD a method states counts each frame's noise as
+new. Frames interpolated (gap filling, resampling), low-pass filtered, or markers sliding on
+the skin share their errors from frame to frame, and a fit on them would state precision it
+does not have: on noisy frames interpolated tenfold, the centre fits' answers lay a median 4.5
+of their SDs off, each read ``ok``. The support verdict now reads the lag-1 autocorrelation of
+the markers' pair distances, which the rigid motion leaves alone
+(:data:`jointbench.estimators.support.MAX_FRAME_CORRELATION`). Here: it warns on interpolated,
+filtered and sliding-marker data and on the real knee trial, for every method; it never warns
+on noise independent in each frame, nor on noise-free data; and its numbers are the NumPy ones.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.signal import butter, filtfilt
+
+import jointbench
+from jointbench.estimators import support
+from jointbench.geometry import rotation_matrix, unit
+
+WARNING = "the frames are not independent"
+KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
+FIT = {
+    "center": jointbench.fit_center,
+    "axis": jointbench.fit_axis,
+    "joint_center": jointbench.fit_joint_center,
+}
+
+
+def _body(rng: np.random.Generator) -> np.ndarray:
+    """Four body-fixed markers ``(4, 3)`` [mm] about 150 mm from the joint at the origin."""
+    return rng.normal(scale=20.0, size=(4, 3)) + np.array([150.0, 0.0, 30.0])
+
+
+def _swing(n_frames: int, hinge: bool = False) -> np.ndarray:
+    """Rotation vectors ``(N, 3)`` [rad]: a 30 degree circumduction, or a 60 degree hinge."""
+    t = np.linspace(0.0, 1.0, n_frames)
+    if hinge:
+        return np.outer(np.radians(30.0) * np.sin(2.0 * np.pi * t), [0.0, 0.0, 1.0])
+    rom = np.radians(30.0)
+    phase = 2.0 * np.pi * t
+    return np.column_stack([rom * np.cos(phase), 0.3 * rom * np.sin(phase), rom * np.sin(phase)])
+
+
+def _moved(body: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    return np.einsum("kij,pj->kpi", rotation_matrix(vectors), body)
+
+
+def _interpolated(markers: np.ndarray, factor: int) -> np.ndarray:
+    """``markers`` ``(N, n, 3)`` linearly interpolated ``factor`` times between frames, as gap
+    filling and resampling do."""
+    n_frames = markers.shape[0]
+    at = np.linspace(0.0, n_frames - 1.0, (n_frames - 1) * factor + 1)
+    below = np.minimum(at.astype(int), n_frames - 2)
+    share = (at - below)[:, None, None]
+    return markers[below] * (1.0 - share) + markers[below + 1] * share
+
+
+def _noisy(rng: np.random.Generator, shape: tuple, noise_mm: float) -> np.ndarray:
+    return rng.normal(scale=noise_mm / np.sqrt(3.0), size=shape)
+
+
+def _kind_trial(kind: str, rng: np.random.Generator, n_frames: int, noise) -> tuple:
+    """One trial of ``kind`` over ``n_frames`` frames with ``noise(shape)`` added to every
+    segment."""
+    if kind == "joint_center":
+        lifted = np.array([0.0, 0.0, 400.0])
+        proximal = _moved(_body(rng), 0.2 * _swing(n_frames)[:, ::-1]) + lifted
+        turning = rotation_matrix(0.2 * _swing(n_frames)[:, ::-1])
+        distal = np.einsum("kij,kpj->kpi", turning, _moved(_body(rng), _swing(n_frames)))
+        distal = distal + lifted
+        return proximal + noise(proximal.shape), distal + noise(distal.shape)
+    markers = _moved(_body(rng), _swing(n_frames, hinge=kind == "axis"))
+    return (markers + noise(markers.shape),)
+
+
+def _fits(kind: str, arrays: tuple) -> dict[str, object]:
+    return {method: FIT[kind](*arrays, method=method) for method in jointbench.methods(kind)}
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_noise_independent_in_each_frame_is_never_warned_about(kind):
+    rng = np.random.default_rng(20261205)
+    checked = 0
+    for n_frames in (8, 30, 120, 1000):
+        for _ in range(30):
+            arrays = _kind_trial(kind, rng, n_frames, lambda shape: _noisy(rng, shape, 0.5))
+            verdict = support.assess(kind, arrays)
+            assert not any(WARNING in warning for warning in verdict.caveats)
+            assert abs(verdict.diagnostics["frame_correlation"]) < 0.5
+            checked += 1
+    assert checked == 120
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_noise_free_frames_have_no_correlation_to_read(kind):
+    arrays = _kind_trial(kind, np.random.default_rng(1), 200, np.zeros)
+    verdict = support.assess(kind, arrays)
+    assert np.isnan(verdict.diagnostics["frame_correlation"])
+    assert not any(WARNING in warning for warning in verdict.caveats)
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_every_method_says_so_on_frames_interpolated_tenfold(kind):
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        arrays = _kind_trial(kind, rng, 30, lambda shape: _noisy(rng, shape, 0.5))
+        arrays = tuple(_interpolated(array, 10) for array in arrays)
+        for method, result in _fits(kind, arrays).items():
+            assert WARNING in result.status, method
+            # Thirty frames of noise, interpolated: about thirty independent ones.
+            assert 10.0 < result.diagnostics["support_independent_frames"] < 60.0, method
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_every_method_says_so_on_low_pass_filtered_frames(kind):
+    rng = np.random.default_rng(8)
+    # 6 Hz at 100 frames a second, forwards and backwards: a motion laboratory's usual filter.
+    b, a = butter(2, 6.0 / 50.0)
+
+    def filtered(shape: tuple) -> np.ndarray:
+        return filtfilt(b, a, _noisy(rng, shape, 1.0), axis=0)
+
+    arrays = _kind_trial(kind, rng, 500, filtered)
+    for method, result in _fits(kind, arrays).items():
+        assert WARNING in result.status, method
+
+
+def test_a_marker_sliding_with_the_flexion_is_warned_about():
+    # One marker slides 10 mm as the hinge flexes: a smooth change in its distances that the
+    # rigidity test takes for noise, and that left SARA 45 degrees off with an SD near 1.
+    rng = np.random.default_rng(1)
+    n_frames = 60
+    flexion = np.radians(30.0) * np.sin(np.linspace(0.0, np.pi, n_frames))
+    body = _body(rng)[None].repeat(n_frames, axis=0)
+    body[:, 0] += (flexion / flexion.max())[:, None] * 10.0 * unit(rng.normal(size=3))
+    turned = rotation_matrix(np.outer(flexion, [0.0, 0.0, 1.0]))
+    markers = np.einsum("kij,kpj->kpi", turned, body) + _noisy(rng, body.shape, 0.5)
+    for method, result in _fits("axis", (markers,)).items():
+        assert WARNING in result.status, method
+
+
+def test_the_real_knee_trial_is_warned_about_naming_the_segment():
+    recording = jointbench.read(KNEE)
+
+    def segment(labels: list[str]) -> np.ndarray:
+        return recording.markers[:, [recording.labels.index(label) for label in labels]]
+
+    thigh = segment(["RTHI1", "RTHI2", "RTHI3", "RGT"])
+    shank = segment(["RLEG1", "RLEG2", "RLEG3", "RATT"])
+    kept = np.isfinite(thigh).all(axis=(1, 2)) & np.isfinite(shank).all(axis=(1, 2))
+    for method, result in _fits("joint_center", (thigh[kept], shank[kept])).items():
+        assert "the frames are not independent: the proximal markers' distances" in result.status
+        assert result.diagnostics["support_frame_correlation"] > 0.99, method
+
+
+def test_the_check_reads_the_frames_order():
+    """Shuffled, interpolated frames no longer show their correlation: the check reads the
+    sequence, as no other part of the verdict does (the README says so)."""
+    rng = np.random.default_rng(9)
+    (markers,) = _kind_trial("center", rng, 30, lambda shape: _noisy(rng, shape, 0.5))
+    markers = _interpolated(markers, 10)
+    assert any(WARNING in w for w in support.assess("center", (markers,)).caveats)
+    shuffled = markers[rng.permutation(markers.shape[0])]
+    assert not any(WARNING in w for w in support.assess("center", (shuffled,)).caveats)
+
+
+def _numpy_correlation(markers: np.ndarray) -> float:
+    """The pooled lag-1 autocorrelation of the pair distances of ``markers`` ``(N, n, 3)``."""
+    a, b = np.triu_indices(markers.shape[1], 1)
+    distances = np.linalg.norm(markers[:, a] - markers[:, b], axis=-1)
+    deviations = distances - distances.mean(axis=0)
+    return float(np.sum(deviations[1:] * deviations[:-1]) / np.sum(deviations**2))
+
+
+@pytest.mark.parametrize("n_markers", [3, 4, 7])
+def test_both_passes_compute_the_numpy_correlation(n_markers):
+    rng = np.random.default_rng(n_markers)
+    trials = []
+    for n_frames, factor in ((100, 1), (34, 3)):
+        body = rng.normal(scale=30.0, size=(n_markers, 3))
+        markers = _moved(body, _swing(n_frames)) + _noisy(rng, (n_frames, n_markers, 3), 0.5)
+        trials.append(_interpolated(markers, factor))
+    stacked = np.stack(trials)
+    expected = [_numpy_correlation(markers) for markers in trials]
+    one_segment = support._one_segment_numbers(stacked, support._FLEX)
+    np.testing.assert_allclose(one_segment[:, support._FRAME_CORRELATION], expected, rtol=1e-12)
+    np.testing.assert_allclose(support._frame_correlations(stacked), expected, rtol=1e-12)
