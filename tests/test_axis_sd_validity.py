@@ -247,5 +247,7 @@ def test_the_comparison_states_its_numbers_and_leaves_a_warned_sd_alone():
 
 def test_the_real_knee_trials_radial_answer_agrees_with_the_planar_cost():
     fitted = prepare(read(KNEE), "axis", SHANK, THIGH).fit("radial").result
-    assert fitted.status == "ok"
+    # Skin markers share their errors from frame to frame, which is all the status says.
+    assert fitted.status.startswith("warning: the frames are not independent")
+    assert fitted.status.count("warning:") == 1
     assert fitted.diagnostics["cross_check"]["z"] < 1.0

@@ -16,7 +16,10 @@ Every method is reached through the registry, which holds it to the same rules:
   60 mm from the truth are ``"ok"``. How well the data determine the answer is in the precision
   diagnostics where a method states them (an axis's ``diagnostics["axis_sd_deg"]``, below; a
   covariance where the result has one, e.g. Gauss–Markov's), or in a recording's bootstrap
-  (:func:`jointbench.fit`);
+  (:func:`jointbench.fit`). Those SDs, covariances and the support verdict's p-values count
+  each frame's noise as independent: frames that are not (interpolated, filtered, skin markers)
+  are said so in ``status`` (``"warning: the frames are not independent: ..."``), with about
+  how many independent frames they hold in ``diagnostics["support_independent_frames"]``;
 * an array with more markers than frames may be a ``(markers, frames, 3)`` array passed
   transposed: with fewer frames than the method takes
   (:func:`jointbench.estimators.registry.claims`' ``min_frames``) it is refused with a

@@ -33,6 +33,17 @@ more non-collinear markers), each first order in the noise:
   The principal axis itself, with its SD from the rotations' noise, is the motion's own axis
   (:class:`MotionAxis`), which the verdict on one segment carries for the registry to compare
   every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`).
+* Independent frames. Every test above, and every SD or covariance a method states, counts
+  each frame's noise as new. The markers' pair distances, which the rigid motion leaves alone,
+  then vary independently from frame to frame, and their lag-1 autocorrelation pooled over the
+  pairs, ``r = sum_p sum_k d_pk d_p(k+1) / sum_p sum_k d_pk^2`` (``d`` each pair's deviations
+  from its mean, in the frames' order), is about normal with variance ``1 / N`` or less. Where
+  it reaches :data:`MAX_FRAME_CORRELATION` and is resolved at :data:`ROTATION_ALPHA`, the
+  frames are reported as not independent, holding about ``N (1 - r) / (1 + r)`` independent
+  ones: frames interpolated, filtered or resampled, and markers moving on the skin or sliding
+  on their segment, share their errors from frame to frame. This one test reads the frames'
+  order, being about their sequence: shuffled frames hide it. Of two segments, the one whose
+  distances are the more correlated is reported; noise-free data have no correlation to read.
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -102,6 +113,7 @@ from __future__ import annotations
 import functools
 import math
 import operator
+import statistics
 from typing import NamedTuple
 
 import numpy as np
@@ -165,6 +177,18 @@ ROUNDING = 1e-12
 # legitimate condition; three collinear markers with 0.3 mm noise reach 46 degrees.
 _MAX_POSE_SD_RAD = 0.5
 
+#: The frames are "not independent" when the markers' distances keep this share of their
+#: deviation from one frame to the next (their lag-1 autocorrelation, module docstring) and the
+#: autocorrelation is resolved at :data:`ROTATION_ALPHA`: noise that keeps a share ``r`` of
+#: itself from frame to frame leaves about ``(1 - r) / (1 + r)`` of the frames independent,
+#: three fifths at this share, and an SD that counts every frame understates the scatter by a
+#: factor of ``sqrt((1 + r) / (1 - r))``, 1.29 here: more than the 1.1 that
+#: :data:`jointbench.estimators.centre_precision.MAX_SD_NOISE_SHARE` allows a first-order SD.
+MAX_FRAME_CORRELATION = 0.25
+
+# The one-sided normal quantile at ROTATION_ALPHA.
+Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
+
 # In noise-free data, a rotation below this is rounding (a noise-free hinge leaves ~5e-10 rad).
 _ROUNDING_ROTATION_RAD = 1e-8
 
@@ -188,11 +212,15 @@ class Support(NamedTuple):
     ``off_axis_rotation_rms_deg`` and ``off_axis_p_value`` the same for rotation about all but
     the dominant axis); for one segment's markers judged for an axis from their poses,
     ``motion_axis``, the principal axis of the segment's rotations (:class:`MotionAxis`), else
-    ``None``."""
+    ``None``; and ``caveats``, warnings that qualify every number of the fit without saying
+    the data cannot support an answer (frames that are not independent), which the status
+    carries after the warnings and the checks of an answer's precision do not read as a
+    refusal."""
 
     warnings: tuple[str, ...]
     diagnostics: dict
     motion_axis: MotionAxis | None = None
+    caveats: tuple[str, ...] = ()
 
 
 class _Clusters(NamedTuple):
@@ -326,9 +354,12 @@ _ONE_SEGMENT_COLUMNS = (
     "rotation_axis_f",
     "rotation_axis_dof",
     "central_frame",
+    "frame_correlation",
 )
 # The column of the frame whose centred markers are nearest their mean positions.
 _CENTRAL_FRAME = _ONE_SEGMENT_COLUMNS.index("central_frame")
+# The column of the distances' lag-1 autocorrelation (:func:`_lag_correlation`).
+_FRAME_CORRELATION = _ONE_SEGMENT_COLUMNS.index("frame_correlation")
 
 # A mode of a distance Gram matrix this much weaker than the strongest is a flex of a (nearly)
 # flat or collinear cluster, which moves no distance to first order: it is not counted as shape.
@@ -495,6 +526,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             dx, dy, dz = differences[p, 0], differences[p, 1], differences[p, 2]
             for f in range(n_frames):
                 lengths[p, f] = np.sqrt(dx[f] * dx[f] + dy[f] * dy[f] + dz[f] * dz[f])
+        out[t, _FRAME_CORRELATION] = _lag_correlation(lengths, n_pairs, largest)
         _distance_moments(lengths, first_d[0], sum_d, scatter_d[0], mean_sq[0], terms)
         # The cluster's own distance residual, from its mean distances and again from its mean
         # squared distances less their noise (6 s^2 per pair), and the residual per degree of
@@ -658,6 +690,61 @@ def _inverse_and_root(
                 if values[k] > 1e-12 * values[2]:
                     inverse[i, j] += vectors[i, k] * vectors[j, k] / values[k]
                     root[i, j] += vectors[i, k] * vectors[j, k] * np.sqrt(values[k])
+
+
+@kernel
+def _lag_correlation(lengths: np.ndarray, n_pairs: int, largest: float) -> float:
+    """The lag-1 autocorrelation of the distances ``lengths[:n_pairs]`` ``(P, N)`` [mm] in the
+    frames' order, pooled over the pairs: ``sum_p sum_k d_pk d_p(k+1) / sum_p sum_k d_pk^2``,
+    ``d`` the deviations from each pair's mean; NaN where they are rounding (a variance per
+    pair within twice the :data:`ROUNDING` of the ``largest`` coordinate [mm] squared, what
+    noise of that size per coordinate would give), whose pattern from frame to frame says
+    nothing of the noise. A compiled kernel."""
+    n_frames = lengths.shape[1]
+    lagged = 0.0
+    squares = 0.0
+    for p in range(n_pairs):
+        mean = 0.0
+        for f in range(n_frames):
+            mean += lengths[p, f]
+        mean /= n_frames
+        previous = lengths[p, 0] - mean
+        squares += previous * previous
+        for f in range(1, n_frames):
+            current = lengths[p, f] - mean
+            lagged += previous * current
+            squares += current * current
+            previous = current
+    if squares <= 2.0 * (ROUNDING * largest) ** 2 * n_pairs * (n_frames - 1):
+        return np.nan
+    return lagged / squares
+
+
+@kernel
+def _frame_correlations(markers: np.ndarray) -> np.ndarray:
+    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the lag-1 autocorrelation of
+    its marker-pair distances (:func:`_lag_correlation`) ``(T,)``. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    n_pairs = n_markers * (n_markers - 1) // 2
+    lengths = np.empty((n_pairs, n_frames))
+    out = np.empty(n_trials)
+    for t in range(n_trials):
+        largest = 0.0
+        for f in range(n_frames):
+            for m in range(n_markers):
+                for i in range(3):
+                    largest = max(largest, abs(markers[t, f, m, i]))
+        p = 0
+        for a in range(n_markers):
+            for b in range(a + 1, n_markers):
+                for f in range(n_frames):
+                    dx = markers[t, f, a, 0] - markers[t, f, b, 0]
+                    dy = markers[t, f, a, 1] - markers[t, f, b, 1]
+                    dz = markers[t, f, a, 2] - markers[t, f, b, 2]
+                    lengths[p, f] = math.sqrt(dx * dx + dy * dy + dz * dz)
+                p += 1
+        out[t] = _lag_correlation(lengths, n_pairs, largest)
+    return out
 
 
 @kernel
@@ -1333,7 +1420,8 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     trials that rotate about more than one axis (:func:`_one_segment_axes`)."""
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
-    p_values = _fdtrc()(numbers[:, 7::3], numbers[:, 4:5], numbers[:, 6::3]).tolist()
+    tested = numbers[:, 5:14]  # (RMS, F ratio, dof) of each of the three tests
+    p_values = _fdtrc()(tested[:, 2::3], numbers[:, 4:5], tested[:, 1::3]).tolist()
     rows = numbers.tolist()
     no_pose = [_no_pose_reason(row) for row in rows]
     # The hinge is given the candidate axis that explains the data better.
@@ -1364,6 +1452,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             tests[t],
             shares.get(t),
             axes.get(t),
+            frames=_frames(row[_FRAME_CORRELATION], "markers", markers[t]),
         )
         for t, row in enumerate(rows)
     ]
@@ -1410,6 +1499,7 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     variance = functools.reduce(operator.add, [cluster.residual_ss for cluster in clusters]) / dof
     largest = functools.reduce(np.maximum, [cluster.largest for cluster in clusters])
     exact = variance <= (ROUNDING * largest) ** 2
+    frames = _segments_frames(names, arrays)
     reference = clusters[0] if kind == "joint_center" else None
     rotation = _rotation_test(clusters[-1], reference, variance, dof, exact)
     # A rotation about the cluster's weakest axis worse determined than this (noise s over the
@@ -1438,9 +1528,75 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
                 rotation.second_rms_rad[t],
                 rotation.p_second[t],
             ),
+            frames=frames[t],
         )
         for t in range(n_trials)
     ]
+
+
+class _Frames(NamedTuple):
+    """How independent a trial's frames are: the lag-1 autocorrelation of a segment's
+    marker-pair distances (NaN where they are rounding), over how many frames, which
+    segment's (the name of :data:`jointbench.estimators.validation.ARRAY_NAMES`), and where
+    the frames are not independent, about how many independent ones they hold."""
+
+    correlation: float
+    n_frames: int
+    name: str
+    independent: float = math.nan
+
+    def dependent(self) -> bool:
+        """Whether the correlation reaches :data:`MAX_FRAME_CORRELATION` and is resolved at
+        :data:`ROTATION_ALPHA` (under independent noise it is about normal with variance
+        ``1 / N``, less for pairs that share a marker)."""
+        r = self.correlation
+        return r >= MAX_FRAME_CORRELATION and r * math.sqrt(self.n_frames - 1) >= Z_ALPHA
+
+
+def _frames(correlation: float, name: str, markers: np.ndarray) -> _Frames:
+    """The :class:`_Frames` of the segment ``name`` whose markers ``(N, n, 3)`` [mm] have the
+    distances' lag-1 ``correlation``, counting their independent frames where they are not
+    independent (:func:`_independent_frames`; only then, at a cost a one-trial check would
+    otherwise pay)."""
+    frames = _Frames(correlation, markers.shape[0], name)
+    if frames.dependent():
+        return frames._replace(independent=_independent_frames(markers))
+    return frames
+
+
+def _independent_frames(markers: np.ndarray) -> float:
+    """About how many independent frames the markers ``(N, n, 3)`` [mm] hold: ``N / tau``,
+    ``tau = 1 + 2 sum_k rho_k`` the integrated autocorrelation time of their pair distances
+    (``rho_k`` pooled over the pairs as :func:`_lag_correlation` pools ``rho_1``), summed by
+    Geyer's initial monotone sequence: the lags' pairs ``rho_2m + rho_2m+1`` while they are
+    positive, each at most the one before. Noise that keeps a share ``r`` of itself from frame
+    to frame gives ``tau = (1 + r) / (1 - r)``; frames interpolated ``m`` times, about ``m``."""
+    a, b = np.triu_indices(markers.shape[1], 1)
+    deviations = np.linalg.norm(markers[:, a] - markers[:, b], axis=-1)
+    deviations = deviations - deviations.mean(axis=0)
+    n_frames = deviations.shape[0]
+    spectrum = np.fft.rfft(deviations, n=2 * n_frames, axis=0)
+    covariance = np.fft.irfft(spectrum * spectrum.conj(), n=2 * n_frames, axis=0)[:n_frames]
+    pooled = covariance.sum(axis=1)
+    correlation = pooled / pooled[0]
+    pairs = correlation[: n_frames - n_frames % 2].reshape(-1, 2).sum(axis=1)
+    ends = np.flatnonzero(pairs <= 0.0)
+    pairs = np.minimum.accumulate(pairs[: ends[0] if ends.size else pairs.size])
+    tau = max(2.0 * float(pairs.sum()) - 1.0, 1.0)
+    return n_frames / tau
+
+
+def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[_Frames]:
+    """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
+    the :class:`_Frames` of the segment whose distances are the more correlated, of those whose
+    distances are not rounding (:func:`_lag_correlation`)."""
+    correlations = np.stack([_frame_correlations(kernel_array(array)) for array in arrays])
+    found = []
+    for t, column in enumerate(correlations.T.tolist()):
+        known = [(r, k) for k, r in enumerate(column) if math.isfinite(r)]
+        r, k = max(known) if known else (math.nan, len(names) - 1)
+        found.append(_frames(r, names[k], arrays[k][t]))
+    return found
 
 
 def _without_poses(
@@ -1514,13 +1670,16 @@ def _without_poses(
     )
 
 
-def _verdict(kind, names, rigidity, variance, tests, axis_share=None, motion_axis=None) -> Support:
+def _verdict(
+    kind, names, rigidity, variance, tests, axis_share=None, motion_axis=None, *, frames
+) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
     [mm^2] and ``tests`` the RMS rotation [rad] and p-value of any rotation, then of rotation
     off the main axis; ``axis_share``, for an axis whose rotation off the main axis is
     resolved, an :class:`_AxisShare` row (share, RMS rotation about the principal axis and
-    about the others [rad]); ``motion_axis`` the :class:`MotionAxis` the verdict carries."""
+    about the others [rad]); ``motion_axis`` the :class:`MotionAxis` the verdict carries;
+    ``frames`` how independent the frames are (:class:`_Frames`)."""
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
@@ -1553,6 +1712,17 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None, motion_axi
             f"{math.degrees(principal_rad):.3g} deg about it, p = {p_second:.2g}); an axis "
             "fitted to it is a compromise the motion does not define"
         )
+    caveats = []
+    if frames.dependent():
+        caveats.append(
+            f"the frames are not independent: the {_LABELS[frames.name]}' distances change "
+            f"smoothly from frame to frame (lag-1 autocorrelation {frames.correlation:.3g} over "
+            f"{frames.n_frames} frames, near 0 for noise independent in each frame), as "
+            "filtered, interpolated or resampled frames and markers moving on the skin make "
+            f"them: every p-value and SD of this fit counts {frames.n_frames} independent "
+            f"frames where there are about {frames.independent:.2g} (a recording's moving-block "
+            "bootstrap, n_bootstrap, over blocks longer than the correlation does not)"
+        )
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
@@ -1561,10 +1731,13 @@ def _verdict(kind, names, rigidity, variance, tests, axis_share=None, motion_axi
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,
         "off_axis_p_value": p_second,
+        "frame_correlation": frames.correlation,
     }
+    if frames.dependent():
+        numbers["independent_frames"] = frames.independent
     if axis_share is not None:
         numbers["off_principal_axis_share"] = float(axis_share[0])
-    return Support(tuple(warnings), numbers, motion_axis)
+    return Support(tuple(warnings), numbers, motion_axis, tuple(caveats))
 
 
 def assess(
@@ -1587,7 +1760,8 @@ def assess(
 
 
 def annotate(result, support: Support):
-    """``result`` with the support warnings appended to its ``status`` and the numbers in its
-    ``diagnostics`` under ``support_<name>``; ``converged`` is left as the method set it."""
+    """``result`` with the support warnings, then its caveats, appended to its ``status`` and
+    the numbers in its ``diagnostics`` under ``support_<name>``; ``converged`` is left as the
+    method set it."""
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
-    return with_warnings(result, support.warnings, numbers)
+    return with_warnings(result, support.warnings + support.caveats, numbers)
