@@ -101,7 +101,7 @@ def test_noise_independent_in_each_frame_is_never_warned_about(kind):
 def test_noise_free_frames_have_no_correlation_to_read(kind):
     arrays = _kind_trial(kind, np.random.default_rng(1), 200, np.zeros)
     verdict = support.assess(kind, arrays)
-    assert np.isnan(verdict.diagnostics["frame_correlation"])
+    assert "frame_correlation" not in verdict.diagnostics
     assert not any(WARNING in warning for warning in verdict.caveats)
 
 
@@ -191,3 +191,26 @@ def test_both_passes_compute_the_numpy_correlation(n_markers):
     one_segment = support._one_segment_numbers(stacked, support._FLEX)
     np.testing.assert_allclose(one_segment[:, support._FRAME_CORRELATION], expected, rtol=1e-12)
     np.testing.assert_allclose(support._frame_correlations(stacked), expected, rtol=1e-12)
+
+
+def test_two_markers_that_give_no_pose_are_read_from_their_distance():
+    """Two markers give no pose, but their distance holds whatever the motion: the verdict
+    reads it, and says so of interpolated frames, not of independent noise."""
+    rng = np.random.default_rng(11)
+    for factor, warned in ((1, False), (10, True)):
+        for _ in range(10):
+            markers = _moved(_body(rng)[:2], _swing(40))
+            markers = _interpolated(markers + _noisy(rng, markers.shape, 0.5), factor)
+            result = jointbench.fit_center(markers, method="LS")
+            assert (WARNING in result.status) == warned, result.status
+            assert np.isfinite(result.diagnostics["support_frame_correlation"])
+
+
+def test_a_single_marker_has_no_distance_to_read():
+    """One marker keeps no distance a rigid motion leaves alone: nothing is read (the README
+    says so), rather than reading the misfit of a model."""
+    rng = np.random.default_rng(12)
+    markers = _interpolated(_moved(_body(rng)[:1], _swing(40)) + _noisy(rng, (40, 1, 3), 0.5), 10)
+    result = jointbench.fit_center(markers, method="LS")
+    assert WARNING not in result.status
+    assert "support_frame_correlation" not in result.diagnostics
