@@ -43,7 +43,8 @@ more non-collinear markers), each first order in the noise:
   ones: frames interpolated, filtered or resampled, and markers moving on the skin or sliding
   on their segment, share their errors from frame to frame. This one test reads the frames'
   order, being about their sequence: shuffled frames hide it. Of two segments, the one whose
-  distances are the more correlated is reported; noise-free data have no correlation to read.
+  distances are the more correlated is reported; markers that give no pose are read the same
+  way (the moving ones); a single marker and noise-free data have no correlation to read.
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -114,6 +115,7 @@ import functools
 import math
 import operator
 import statistics
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -1452,7 +1454,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             tests[t],
             shares.get(t),
             axes.get(t),
-            frames=_frames(row[_FRAME_CORRELATION], "markers", markers[t]),
+            frames=_segment_frames(row[_FRAME_CORRELATION], "markers", markers[t]),
         )
         for t, row in enumerate(rows)
     ]
@@ -1535,14 +1537,13 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
 
 
 class _Frames(NamedTuple):
-    """How independent a trial's frames are: the lag-1 autocorrelation of a segment's
-    marker-pair distances (NaN where they are rounding), over how many frames, which
-    segment's (the name of :data:`jointbench.estimators.validation.ARRAY_NAMES`), and where
-    the frames are not independent, about how many independent ones they hold."""
+    """How independent a trial's frames are: the lag-1 autocorrelation of the distances
+    ``what`` names (NaN where they are rounding), over how many frames, and where the frames
+    are not independent, about how many independent ones they hold."""
 
     correlation: float
     n_frames: int
-    name: str
+    what: str
     independent: float = math.nan
 
     def dependent(self) -> bool:
@@ -1552,28 +1553,59 @@ class _Frames(NamedTuple):
         r = self.correlation
         return r >= MAX_FRAME_CORRELATION and r * math.sqrt(self.n_frames - 1) >= Z_ALPHA
 
+    def caveats(self) -> tuple[str, ...]:
+        """The verdict's caveat where the frames are not independent, else none."""
+        if not self.dependent():
+            return ()
+        return (
+            f"the frames are not independent: the {self.what} change smoothly from frame to "
+            f"frame (lag-1 autocorrelation {self.correlation:.3g} over {self.n_frames} frames, "
+            "near 0 for noise independent in each frame), as filtered, interpolated or "
+            "resampled frames and markers moving on the skin make them: every p-value and SD "
+            f"of this fit counts {self.n_frames} independent frames where there are about "
+            f"{self.independent:.2g} (a recording's moving-block bootstrap, n_bootstrap, over "
+            "blocks longer than the correlation does not)",
+        )
 
-def _frames(correlation: float, name: str, markers: np.ndarray) -> _Frames:
+    def numbers(self) -> dict[str, float]:
+        """The verdict's numbers: the correlation where it was read, and where the frames are
+        not independent, about how many independent ones they hold."""
+        if math.isnan(self.correlation):
+            return {}
+        if not self.dependent():
+            return {"frame_correlation": self.correlation}
+        return {"frame_correlation": self.correlation, "independent_frames": self.independent}
+
+
+def _segment_frames(correlation: float, name: str, markers: np.ndarray) -> _Frames:
     """The :class:`_Frames` of the segment ``name`` whose markers ``(N, n, 3)`` [mm] have the
-    distances' lag-1 ``correlation``, counting their independent frames where they are not
-    independent (:func:`_independent_frames`; only then, at a cost a one-trial check would
-    otherwise pay)."""
-    frames = _Frames(correlation, markers.shape[0], name)
+    pair distances' lag-1 ``correlation``."""
+    frames = _Frames(correlation, markers.shape[0], f"{_LABELS[name]}' distances")
+
+    def distances() -> np.ndarray:
+        a, b = np.triu_indices(markers.shape[1], 1)
+        return np.linalg.norm(markers[:, a] - markers[:, b], axis=-1)
+
+    return _counted(frames, distances)
+
+
+def _counted(frames: _Frames, distances: Callable[[], np.ndarray]) -> _Frames:
+    """``frames`` with their independent frames counted from the ``distances()`` ``(N, K)``
+    [mm] their correlation was read from (:func:`_independent_frames`), where they are not
+    independent: only then, at a cost a one-trial check would otherwise pay."""
     if frames.dependent():
-        return frames._replace(independent=_independent_frames(markers))
+        return frames._replace(independent=_independent_frames(distances()))
     return frames
 
 
-def _independent_frames(markers: np.ndarray) -> float:
-    """About how many independent frames the markers ``(N, n, 3)`` [mm] hold: ``N / tau``,
-    ``tau = 1 + 2 sum_k rho_k`` the integrated autocorrelation time of their pair distances
-    (``rho_k`` pooled over the pairs as :func:`_lag_correlation` pools ``rho_1``), summed by
+def _independent_frames(distances: np.ndarray) -> float:
+    """About how many independent frames the ``distances`` ``(N, K)`` [mm] (K of them per
+    frame) hold: ``N / tau``, ``tau = 1 + 2 sum_k rho_k`` their integrated autocorrelation time
+    (``rho_k`` pooled over the ``K`` as :func:`_lag_correlation` pools ``rho_1``), summed by
     Geyer's initial monotone sequence: the lags' pairs ``rho_2m + rho_2m+1`` while they are
     positive, each at most the one before. Noise that keeps a share ``r`` of itself from frame
     to frame gives ``tau = (1 + r) / (1 - r)``; frames interpolated ``m`` times, about ``m``."""
-    a, b = np.triu_indices(markers.shape[1], 1)
-    deviations = np.linalg.norm(markers[:, a] - markers[:, b], axis=-1)
-    deviations = deviations - deviations.mean(axis=0)
+    deviations = distances - distances.mean(axis=0)
     n_frames = deviations.shape[0]
     spectrum = np.fft.rfft(deviations, n=2 * n_frames, axis=0)
     covariance = np.fft.irfft(spectrum * spectrum.conj(), n=2 * n_frames, axis=0)[:n_frames]
@@ -1595,7 +1627,7 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
     for t, column in enumerate(correlations.T.tolist()):
         known = [(r, k) for k, r in enumerate(column) if math.isfinite(r)]
         r, k = max(known) if known else (math.nan, len(names) - 1)
-        found.append(_frames(r, names[k], arrays[k][t]))
+        found.append(_segment_frames(r, names[k], arrays[k][t]))
     return found
 
 
@@ -1643,6 +1675,9 @@ def _without_poses(
             fdtrc(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
         )
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
+    # Pair distances hold whatever the motion; a single marker's hold nothing to read.
+    (correlation,) = _frame_correlations(kernel_array(markers[None]))
+    frames = _segment_frames(correlation, "distal" if len(arrays) > 1 else "markers", markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
@@ -1666,7 +1701,9 @@ def _without_poses(
             "sphere_residual_share": share,
             "sphere_residual_mm": residual_mm,
             "straight_line_p_value": p_line,
+            **frames.numbers(),
         },
+        caveats=frames.caveats(),
     )
 
 
@@ -1712,17 +1749,6 @@ def _verdict(
             f"{math.degrees(principal_rad):.3g} deg about it, p = {p_second:.2g}); an axis "
             "fitted to it is a compromise the motion does not define"
         )
-    caveats = []
-    if frames.dependent():
-        caveats.append(
-            f"the frames are not independent: the {_LABELS[frames.name]}' distances change "
-            f"smoothly from frame to frame (lag-1 autocorrelation {frames.correlation:.3g} over "
-            f"{frames.n_frames} frames, near 0 for noise independent in each frame), as "
-            "filtered, interpolated or resampled frames and markers moving on the skin make "
-            f"them: every p-value and SD of this fit counts {frames.n_frames} independent "
-            f"frames where there are about {frames.independent:.2g} (a recording's moving-block "
-            "bootstrap, n_bootstrap, over blocks longer than the correlation does not)"
-        )
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
@@ -1731,13 +1757,11 @@ def _verdict(
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,
         "off_axis_p_value": p_second,
-        "frame_correlation": frames.correlation,
+        **frames.numbers(),
     }
-    if frames.dependent():
-        numbers["independent_frames"] = frames.independent
     if axis_share is not None:
         numbers["off_principal_axis_share"] = float(axis_share[0])
-    return Support(tuple(warnings), numbers, motion_axis, tuple(caveats))
+    return Support(tuple(warnings), numbers, motion_axis, frames.caveats())
 
 
 def assess(
