@@ -214,3 +214,22 @@ def test_a_single_marker_has_no_distance_to_read():
     result = jointbench.fit_center(markers, method="LS")
     assert WARNING not in result.status
     assert "support_frame_correlation" not in result.diagnostics
+
+
+def test_a_bootstrap_over_blocks_shorter_than_the_correlation_says_so():
+    """On the knee trial the default blocks (the root of the frames) are shorter than the
+    distances' correlation, so the bootstrap shares the SDs' fault: the status says so, naming
+    a block length that spans it; blocks that long give no such warning."""
+    prepared = jointbench.prepare(
+        jointbench.read(KNEE), "center", "RLEG1,RLEG2,RLEG3,RATT", "RTHI1,RTHI2,RTHI3,RGT"
+    )
+    short = prepared.fit("NM", n_bootstrap=20)
+    independent = short.result.diagnostics["support_independent_frames"]
+    span = int(np.ceil(short.frames_used.size / independent))
+    assert short.bootstrap.block_length < span
+    assert f"the bootstrap's blocks of {short.bootstrap.block_length} frames" in short.result.status
+    assert f"block_length (--block-length) of {span} frames or more" in short.result.status
+    long = prepared.fit("NM", n_bootstrap=20, block_length=span)
+    assert "the bootstrap's blocks" not in long.result.status
+    plain = prepared.fit("NM")
+    assert "the bootstrap's blocks" not in plain.result.status
