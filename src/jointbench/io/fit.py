@@ -23,6 +23,7 @@ labelling is right).
 
 from __future__ import annotations
 
+import math
 import numbers
 import warnings
 from dataclasses import dataclass, field
@@ -323,6 +324,7 @@ class Prepared:
                     seed=seed,
                     label=label,
                 )
+                result = _blocks_checked(result, boot, self.usable.size)
         anchor = int(rows[0]) if kind == "joint_center" else None
         offset = self.recording.first_frame
         return RecordingFit(
@@ -338,6 +340,31 @@ class Prepared:
             reference=self.reference,
             first_frame=offset,
         )
+
+
+def _blocks_checked(result, boot: Bootstrap, n_frames: int):
+    """``result`` with a warning where ``boot``'s blocks are shorter than the frames one
+    independent frame spans: the ``n_frames`` fitted over the independent frames the support
+    verdict counted (``diagnostics["support_independent_frames"]``, given only where the frames
+    are not independent). Resampled in shorter blocks, the refits scatter as if the frames were
+    more independent than they are, and the interval understates the scatter as the SDs do."""
+    independent = result.diagnostics.get("support_independent_frames")
+    if independent is None:
+        return result
+    span = math.ceil(n_frames / independent)
+    if boot.block_length >= span:
+        return result
+    remedy = (
+        f"pass block_length (--block-length) of {span} frames or more"
+        if span <= n_frames
+        else f"no block of these {n_frames} frames spans it"
+    )
+    warning = (
+        f"the bootstrap's blocks of {boot.block_length} frames are shorter than the {span} "
+        "frames each independent one spans (the frames are not independent, above): its "
+        f"interval understates the scatter as the SDs do; {remedy}"
+    )
+    return with_warnings(result, (warning,), {"bootstrap_block_span_frames": span})
 
 
 def _checked_frames(frames: object) -> slice | str:
