@@ -3,16 +3,19 @@
 Every p-value of the support verdict and every SD a method states counts each frame's noise as
 new. Frames interpolated (gap filling, resampling), low-pass filtered, or markers sliding on
 the skin share their errors from frame to frame, and a fit on them would state precision it
-does not have: on noisy frames interpolated tenfold, the centre fits' answers lay a median 4.5
-of their SDs off, each read ``ok``. The support verdict now reads the lag-1 autocorrelation of
-the markers' pair distances, which the rigid motion leaves alone
-(:data:`jointbench.estimators.support.MAX_FRAME_CORRELATION`). Here: it warns on interpolated,
-filtered and sliding-marker data and on the real knee trial, for every method; it never warns
-on noise independent in each frame, nor on noise-free data; and its numbers are the NumPy ones.
+does not have: on noisy frames interpolated tenfold, the centre fits' answers lie a median 6
+of their SDs off (``benchmarks/frame_independence.py``). The support verdict reads how the
+means of the markers' pair distances, which the rigid motion leaves alone, vary over blocks of
+frames (:data:`jointbench.estimators.support.MIN_VARIANCE_RATIO`). Here: it warns on
+interpolated, filtered, gap-filled, sliding-marker and slowly drifting data and on the real
+knee trial, for every method; it does not warn on noise independent in each frame, nor on
+noise-free data; its numbers are the NumPy ones; and a recording's bootstrap over blocks too
+short for the correlation says so.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -155,8 +158,9 @@ def test_the_real_knee_trial_is_warned_about_naming_the_segment():
     shank = segment(["RLEG1", "RLEG2", "RLEG3", "RATT"])
     kept = np.isfinite(thigh).all(axis=(1, 2)) & np.isfinite(shank).all(axis=(1, 2))
     for method, result in _fits("joint_center", (thigh[kept], shank[kept])).items():
-        assert "the frames are not independent: the proximal markers' distances" in result.status
-        assert result.diagnostics["support_frame_correlation"] > 0.99, method
+        named = re.search(r"the means of the (proximal|distal) markers' distances", result.status)
+        assert named is not None, method
+        assert result.diagnostics["support_frame_correlation"] > 0.98, method
 
 
 def test_the_check_reads_the_frames_order():
@@ -189,8 +193,9 @@ def test_both_passes_compute_the_numpy_correlation(n_markers):
     stacked = np.stack(trials)
     expected = [_numpy_correlation(markers) for markers in trials]
     one_segment = support._one_segment_numbers(stacked, support._FLEX)
-    np.testing.assert_allclose(one_segment[:, support._FRAME_CORRELATION], expected, rtol=1e-12)
-    np.testing.assert_allclose(support._frame_correlations(stacked), expected, rtol=1e-12)
+    from_numbers = one_segment[:, support._DEPENDENCE]
+    np.testing.assert_allclose(from_numbers[:, 0], expected, rtol=1e-12)
+    np.testing.assert_allclose(support._frame_correlations(stacked), from_numbers, rtol=1e-12)
 
 
 def test_two_markers_that_give_no_pose_are_read_from_their_distance():
@@ -233,3 +238,71 @@ def test_a_bootstrap_over_blocks_shorter_than_the_correlation_says_so():
     assert "the bootstrap's blocks" not in long.result.status
     plain = prepared.fit("NM")
     assert "the bootstrap's blocks" not in plain.result.status
+
+
+def drifting(rng: np.random.Generator, n_frames: int, drift_mm: float) -> np.ndarray:
+    """A circumduction ``(N, 4, 3)`` [mm] whose markers each drift ``drift_mm`` in a direction of
+    their own, three slow cycles over the trial, under 0.3 mm of noise per coordinate."""
+    t = np.linspace(0.0, 1.0, n_frames)
+    markers = _moved(_body(rng), _swing(n_frames))
+    drift = np.stack(
+        [
+            np.outer(np.sin(2.0 * np.pi * (3.0 * t + rng.random())), rng.normal(size=3))
+            for _ in range(markers.shape[1])
+        ],
+        axis=1,
+    )
+    return markers + drift_mm * drift + rng.normal(scale=0.3, size=markers.shape)
+
+
+def test_a_small_slow_drift_under_the_noise_is_warned_about():
+    """Markers that drift 0.25 mm slowly under 0.3 mm of noise hardly correlate from one frame
+    to the next, but their means over many frames vary far more than independent frames'
+    would: left unsaid, NM's centres lay a median 4-6 of their SDs off, many reading ``ok``."""
+    rng = np.random.default_rng(21)
+    for _ in range(10):
+        result = jointbench.fit_center(drifting(rng, 3000, 0.25), method="NM")
+        assert WARNING in result.status
+
+
+def test_two_long_gaps_filled_by_straight_lines_are_warned_about():
+    """One marker's two gaps of 100 frames each, filled linearly as capture software does, in
+    1000 frames of 0.5 mm noise."""
+    rng = np.random.default_rng(22)
+    for _ in range(5):
+        markers = _moved(_body(rng), _swing(1000)) + _noisy(rng, (1000, 4, 3), 0.5)
+        for start in (200, 600):
+            stop = start + 101
+            share = np.linspace(0.0, 1.0, stop - start + 1)[:, None]
+            markers[start : stop + 1, 0] = (1 - share) * markers[start, 0] + share * markers[
+                stop, 0
+            ]
+        assert WARNING in jointbench.fit_center(markers, method="LS").status
+
+
+def independent_alarms(
+    rng: np.random.Generator, n_markers: int, n_frames: int, n_trials: int, spread_mm: float
+) -> int:
+    """How many of ``n_trials`` trials of one cluster of ``n_markers`` markers (spread
+    ``spread_mm`` across their line, 80 mm along it) under noise independent in each frame
+    (0.3 mm per coordinate) the check finds not independent. In half of them only one marker is
+    noisy: the cluster that pools least."""
+    body = np.outer(np.linspace(-40.0, 40.0, n_markers), unit(rng.normal(size=3)))
+    body = body + rng.normal(scale=spread_mm, size=body.shape) + 100.0
+    clean = _moved(body, _swing(n_frames))
+    noise = rng.normal(scale=0.3, size=(n_trials, n_frames, n_markers, 3))
+    noise[: n_trials // 2, :, 1:] = 0.0
+    dependence = support._frame_correlations(clean[None] + noise)
+    return int(np.sum(dependence[:, 3] >= 1.0))
+
+
+@pytest.mark.parametrize("n_markers", [3, 4, 8])
+def test_independent_noise_raises_no_alarm_in_many_trials(n_markers):
+    """The check's own numbers over 4,650 trials of independent noise per marker count, from
+    16 to 2,000 frames, nearly collinear markers included. At the verdict's level, 1e-3, some 5
+    alarms would be allowed; the variance ratios pooled over pairs that share their noise vary
+    less than one pair's, and the lengths share the level, so there are fewer."""
+    rng = np.random.default_rng(n_markers)
+    frames_and_trials = ((16, 1500), (40, 1500), (150, 1500), (2000, 150))
+    alarms = sum(independent_alarms(rng, n_markers, n, k, 0.5) for n, k in frames_and_trials)
+    assert alarms <= 2

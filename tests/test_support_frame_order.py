@@ -28,7 +28,14 @@ from jointbench.geometry import unit
 
 _NUMBER = re.compile(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
 # The verdict's numbers that read the frames' order: whether the frames are independent.
-SEQUENCE_NUMBERS = frozenset({"frame_correlation", "independent_frames"})
+SEQUENCE_NUMBERS = frozenset(
+    {
+        "frame_correlation",
+        "frame_variance_ratio",
+        "frame_variance_ratio_block",
+        "independent_frames",
+    }
+)
 
 
 def _near_boundaries() -> list[np.ndarray]:
