@@ -35,16 +35,25 @@ more non-collinear markers), each first order in the noise:
   every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`).
 * Independent frames. Every test above, and every SD or covariance a method states, counts
   each frame's noise as new. The markers' pair distances, which the rigid motion leaves alone,
-  then vary independently from frame to frame, and their lag-1 autocorrelation pooled over the
-  pairs, ``r = sum_p sum_k d_pk d_p(k+1) / sum_p sum_k d_pk^2`` (``d`` each pair's deviations
-  from its mean, in the frames' order), is about normal with variance ``1 / N`` or less. Where
-  it reaches :data:`MAX_FRAME_CORRELATION` and is resolved at :data:`ROTATION_ALPHA`, the
-  frames are reported as not independent, holding about ``N (1 - r) / (1 + r)`` independent
-  ones: frames interpolated, filtered or resampled, and markers moving on the skin or sliding
-  on their segment, share their errors from frame to frame. This one test reads the frames'
-  order, being about their sequence: shuffled frames hide it. Of two segments, the one whose
-  distances are the more correlated is reported; markers that give no pose are read the same
-  way (the moving ones); a single marker and noise-free data have no correlation to read.
+  then vary independently from frame to frame, and the mean of ``L`` consecutive frames'
+  deviations (``d``, from each pair's mean, in the frames' order) varies as ``1 / L`` of one
+  frame's. The ratio of the two, ``V_L = L var(block means) / var(d)`` pooled over the pairs,
+  is then near 1 at every ``L``, with ``(B - 1) V_L`` about chi-square with ``B - 1`` degrees
+  of freedom over ``B`` blocks (pooled over pairs, less spread than one pair's); errors shared over
+  ``m`` frames raise it towards the correlation time ``tau``, the factor by which the mean's
+  variance exceeds independent frames'. It is taken at ``L = 2, 4, 8, ...`` while at least
+  :data:`MIN_BLOCKS` blocks remain, each against its chi-square quantile (Wilson and
+  Hilferty's) at :data:`ROTATION_ALPHA` shared among the lengths. Where some ``V_L`` is
+  resolved and at least :data:`MIN_VARIANCE_RATIO`, the frames are reported as not
+  independent, holding about ``N / tau`` independent ones (``tau`` summed from the distances'
+  autocorrelations, :func:`_independent_frames`): frames interpolated, filtered or resampled,
+  and markers moving on the skin or sliding on their segment, share their errors from frame to
+  frame, and a slow drift too small to correlate neighbouring frames still moves the means of
+  long blocks. The lag-1 autocorrelation is reported beside it. This one test reads the
+  frames' order, being about their sequence: shuffled frames hide it. Of two segments, the one
+  whose block means vary the more is reported; markers that give no pose are read the same
+  way (the moving ones); a single marker, noise-free data and fewer than ``2 MIN_BLOCKS``
+  frames have nothing to read.
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -115,7 +124,6 @@ import functools
 import math
 import operator
 import statistics
-from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -179,17 +187,27 @@ ROUNDING = 1e-12
 # legitimate condition; three collinear markers with 0.3 mm noise reach 46 degrees.
 _MAX_POSE_SD_RAD = 0.5
 
-#: The frames are "not independent" when the markers' distances keep this share of their
-#: deviation from one frame to the next (their lag-1 autocorrelation, module docstring) and the
-#: autocorrelation is resolved at :data:`ROTATION_ALPHA`: noise that keeps a share ``r`` of
-#: itself from frame to frame leaves about ``(1 - r) / (1 + r)`` of the frames independent,
-#: three fifths at this share, and an SD that counts every frame understates the scatter by a
-#: factor of ``sqrt((1 + r) / (1 - r))``, 1.29 here: more than the 1.1 that
-#: :data:`jointbench.estimators.centre_precision.MAX_SD_NOISE_SHARE` allows a first-order SD.
-MAX_FRAME_CORRELATION = 0.25
+#: The frames are "not independent" when the means of the markers' distances over blocks of
+#: frames vary this many times as much as those of independent frames would (module
+#: docstring), resolved at :data:`ROTATION_ALPHA`: an SD that counts every frame then
+#: understates the scatter by ``sqrt(1.5) = 1.22`` times or more, above the 1.1 times
+#: (``sqrt(1 + 0.2)``) that :data:`jointbench.estimators.centre_precision.MAX_SD_NOISE_SHARE`,
+#: a noise share of 0.2, lets a first-order SD understate it.
+MIN_VARIANCE_RATIO = 1.5
+
+#: A block length is tested only where it leaves at least this many blocks: the variance of
+#: fewer means is itself too uncertain (a chi-square of 7 degrees of freedom or fewer), so
+#: fewer than twice as many frames are not read.
+MIN_BLOCKS = 8
 
 # The one-sided normal quantile at ROTATION_ALPHA.
 Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
+
+# The one-sided normal quantiles at ROTATION_ALPHA shared among k = 1, 2, ... tests (Bonferroni):
+# a recording tests one block length per doubling, some twenty at most.
+_Z_SHARED = np.array(
+    [statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA / k) for k in range(1, 65)]
+)
 
 # In noise-free data, a rotation below this is rounding (a noise-free hinge leaves ~5e-10 rad).
 _ROUNDING_ROTATION_RAD = 1e-8
@@ -339,7 +357,10 @@ def _clusters(markers: np.ndarray, poses: list[SegmentPoses]) -> _Clusters:
 #: [mm^2], the non-rigid share, the pose's SD about the weakest axis [rad], 1.0 for a collinear
 #: mean shape and the residual's degrees of freedom; then per test (any rotation; off the hinge
 #: about each candidate axis) the RMS rotation [rad], the F ratio and its numerator's degrees
-#: of freedom.
+#: of freedom; the frame nearest the markers' mean positions (the motion axis's reference);
+#: and how the frames depend on each other (:func:`_frame_dependence`: the lag-1
+#: autocorrelation, the variance ratio furthest beyond independent frames', its block length
+#: [frames] and that excess).
 _ONE_SEGMENT_COLUMNS = (
     "variance",
     "nonrigid_share",
@@ -357,11 +378,17 @@ _ONE_SEGMENT_COLUMNS = (
     "rotation_axis_dof",
     "central_frame",
     "frame_correlation",
+    "variance_ratio",
+    "variance_ratio_block",
+    "variance_ratio_excess",
 )
 # The column of the frame whose centred markers are nearest their mean positions.
 _CENTRAL_FRAME = _ONE_SEGMENT_COLUMNS.index("central_frame")
-# The column of the distances' lag-1 autocorrelation (:func:`_lag_correlation`).
-_FRAME_CORRELATION = _ONE_SEGMENT_COLUMNS.index("frame_correlation")
+# The columns of the frames' dependence (:func:`_frame_dependence`).
+_DEPENDENCE = slice(
+    _ONE_SEGMENT_COLUMNS.index("frame_correlation"),
+    _ONE_SEGMENT_COLUMNS.index("variance_ratio_excess") + 1,
+)
 
 # A mode of a distance Gram matrix this much weaker than the strongest is a flex of a (nearly)
 # flat or collinear cluster, which moves no distance to first order: it is not counted as shape.
@@ -528,7 +555,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
             dx, dy, dz = differences[p, 0], differences[p, 1], differences[p, 2]
             for f in range(n_frames):
                 lengths[p, f] = np.sqrt(dx[f] * dx[f] + dy[f] * dy[f] + dz[f] * dz[f])
-        out[t, _FRAME_CORRELATION] = _lag_correlation(lengths, n_pairs, largest)
+        _frame_dependence(lengths, n_pairs, largest, out[t, _DEPENDENCE])
         _distance_moments(lengths, first_d[0], sum_d, scatter_d[0], mean_sq[0], terms)
         # The cluster's own distance residual, from its mean distances and again from its mean
         # squared distances less their noise (6 s^2 per pair), and the residual per degree of
@@ -695,14 +722,25 @@ def _inverse_and_root(
 
 
 @kernel
-def _lag_correlation(lengths: np.ndarray, n_pairs: int, largest: float) -> float:
-    """The lag-1 autocorrelation of the distances ``lengths[:n_pairs]`` ``(P, N)`` [mm] in the
-    frames' order, pooled over the pairs: ``sum_p sum_k d_pk d_p(k+1) / sum_p sum_k d_pk^2``,
-    ``d`` the deviations from each pair's mean; NaN where they are rounding (a variance per
-    pair within twice the :data:`ROUNDING` of the ``largest`` coordinate [mm] squared, what
-    noise of that size per coordinate would give), whose pattern from frame to frame says
-    nothing of the noise. A compiled kernel."""
+def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np.ndarray) -> None:
+    """How the distances ``lengths[:n_pairs]`` ``(P, N)`` [mm] depend on each other from frame
+    to frame (module docstring, "independent frames"), into ``out`` ``(4,)``: their lag-1
+    autocorrelation pooled over the pairs, ``sum_p sum_k d_pk d_p(k+1) / sum_p sum_k d_pk^2``
+    (``d`` the deviations from each pair's mean); the variance ratio ``V_L`` that is furthest
+    beyond what independent frames allow, and its block length ``L`` [frames]; and that
+    excess, ``V_L`` over the larger of its chi-square quantile and
+    :data:`MIN_VARIANCE_RATIO` (at least 1 where the frames are not independent; 0 where no
+    block length is tested). All NaN where the distances are rounding (a variance per pair
+    within twice the :data:`ROUNDING` of the ``largest`` coordinate [mm] squared, what noise
+    of that size per coordinate would give), whose pattern says nothing of the noise. A
+    compiled kernel."""
     n_frames = lengths.shape[1]
+    n_levels = 0
+    while n_frames >> (n_levels + 1) >= MIN_BLOCKS:
+        n_levels += 1
+    # Per block length, the pairs' block sums' sum of squares about their mean.
+    level_squares = np.zeros(max(n_levels, 1))
+    sums = np.empty(n_frames)
     lagged = 0.0
     squares = 0.0
     for p in range(n_pairs):
@@ -712,40 +750,88 @@ def _lag_correlation(lengths: np.ndarray, n_pairs: int, largest: float) -> float
         mean /= n_frames
         previous = lengths[p, 0] - mean
         squares += previous * previous
+        sums[0] = previous
         for f in range(1, n_frames):
             current = lengths[p, f] - mean
             lagged += previous * current
             squares += current * current
+            sums[f] = current
             previous = current
+        # Each level's block sums are the sums of the last level's pairs of blocks (a frame
+        # left over at the end of a level is left out of the longer blocks).
+        count = n_frames
+        for level in range(n_levels):
+            count //= 2
+            total = 0.0
+            for b in range(count):
+                sums[b] = sums[2 * b] + sums[2 * b + 1]
+                total += sums[b]
+            centre = total / count
+            for b in range(count):
+                level_squares[level] += (sums[b] - centre) ** 2
     if squares <= 2.0 * (ROUNDING * largest) ** 2 * n_pairs * (n_frames - 1):
-        return np.nan
-    return lagged / squares
+        out[:] = np.nan
+        return
+    out[0] = lagged / squares
+    out[1] = out[2] = np.nan
+    out[3] = 0.0
+    z = _Z_SHARED[min(n_levels, _Z_SHARED.shape[0]) - 1] if n_levels else 0.0
+    per_frame = squares / (n_frames - 1)
+    for level in range(n_levels):
+        length = 2 << level
+        dof = (n_frames // length) - 1
+        # V_L = L var(block means) / var(d) = var(block sums) / (L var(d)).
+        ratio = level_squares[level] / dof / (length * per_frame)
+        # Wilson and Hilferty's chi-square quantile, per degree of freedom.
+        spread = 2.0 / (9.0 * dof)
+        quantile = (1.0 - spread + z * math.sqrt(spread)) ** 3
+        excess = ratio / max(quantile, MIN_VARIANCE_RATIO)
+        if excess > out[3] or level == 0:
+            out[1], out[2], out[3] = ratio, length, excess
+
+
+@kernel
+def _pair_distances_into(markers: np.ndarray, lengths: np.ndarray) -> None:
+    """The distances ``(P, N)`` [mm] of every pair of the markers ``(N, n, 3)`` [mm] into
+    ``lengths``, pairs in the order ``(0, 1), (0, 2), ..., (1, 2), ...``. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    p = 0
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            for f in range(n_frames):
+                dx = markers[f, a, 0] - markers[f, b, 0]
+                dy = markers[f, a, 1] - markers[f, b, 1]
+                dz = markers[f, a, 2] - markers[f, b, 2]
+                lengths[p, f] = math.sqrt(dx * dx + dy * dy + dz * dz)
+            p += 1
+
+
+@kernel
+def _pair_distances(markers: np.ndarray) -> np.ndarray:
+    """The distances ``(N, P)`` [mm] of every pair of the markers ``(N, n, 3)`` [mm]
+    (:func:`_pair_distances_into`). A compiled kernel."""
+    n_markers = markers.shape[1]
+    lengths = np.empty((n_markers * (n_markers - 1) // 2, markers.shape[0]))
+    _pair_distances_into(markers, lengths)
+    return lengths.T.copy()
 
 
 @kernel
 def _frame_correlations(markers: np.ndarray) -> np.ndarray:
-    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the lag-1 autocorrelation of
-    its marker-pair distances (:func:`_lag_correlation`) ``(T,)``. A compiled kernel."""
+    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], how its marker-pair distances
+    depend on each other from frame to frame (:func:`_frame_dependence`) ``(T, 4)``. A
+    compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
-    n_pairs = n_markers * (n_markers - 1) // 2
-    lengths = np.empty((n_pairs, n_frames))
-    out = np.empty(n_trials)
+    lengths = np.empty((n_markers * (n_markers - 1) // 2, n_frames))
+    out = np.empty((n_trials, 4))
     for t in range(n_trials):
         largest = 0.0
         for f in range(n_frames):
             for m in range(n_markers):
                 for i in range(3):
                     largest = max(largest, abs(markers[t, f, m, i]))
-        p = 0
-        for a in range(n_markers):
-            for b in range(a + 1, n_markers):
-                for f in range(n_frames):
-                    dx = markers[t, f, a, 0] - markers[t, f, b, 0]
-                    dy = markers[t, f, a, 1] - markers[t, f, b, 1]
-                    dz = markers[t, f, a, 2] - markers[t, f, b, 2]
-                    lengths[p, f] = math.sqrt(dx * dx + dy * dy + dz * dz)
-                p += 1
-        out[t] = _lag_correlation(lengths, n_pairs, largest)
+        _pair_distances_into(markers[t], lengths)
+        _frame_dependence(lengths, lengths.shape[0], largest, out[t])
     return out
 
 
@@ -1454,7 +1540,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             tests[t],
             shares.get(t),
             axes.get(t),
-            frames=_segment_frames(row[_FRAME_CORRELATION], "markers", markers[t]),
+            frames=_segment_frames(numbers[t, _DEPENDENCE], "markers", markers[t]),
         )
         for t, row in enumerate(rows)
     ]
@@ -1537,74 +1623,82 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
 
 
 class _Frames(NamedTuple):
-    """How independent a trial's frames are: the lag-1 autocorrelation of the distances
-    ``what`` names (NaN where they are rounding), over how many frames, and where the frames
-    are not independent, about how many independent ones they hold."""
+    """How the frames of a trial depend on each other (:func:`_frame_dependence`), read from
+    the distances ``what`` names: their lag-1 autocorrelation, the variance ratio furthest
+    beyond what independent frames allow, its block length [frames] and that excess (NaN
+    where the distances are rounding); over how many frames; and where the frames are not
+    independent, about how many independent ones they hold."""
 
     correlation: float
+    ratio: float
+    block: float
+    excess: float
     n_frames: int
     what: str
     independent: float = math.nan
 
     def dependent(self) -> bool:
-        """Whether the correlation reaches :data:`MAX_FRAME_CORRELATION` and is resolved at
-        :data:`ROTATION_ALPHA` (under independent noise it is about normal with variance
-        ``1 / N``, less for pairs that share a marker)."""
-        r = self.correlation
-        return r >= MAX_FRAME_CORRELATION and r * math.sqrt(self.n_frames - 1) >= Z_ALPHA
+        """Whether some block length's variance ratio is resolved and reaches
+        :data:`MIN_VARIANCE_RATIO`."""
+        return self.excess >= 1.0
 
     def caveats(self) -> tuple[str, ...]:
         """The verdict's caveat where the frames are not independent, else none."""
         if not self.dependent():
             return ()
         return (
-            f"the frames are not independent: the {self.what} change smoothly from frame to "
-            f"frame (lag-1 autocorrelation {self.correlation:.3g} over {self.n_frames} frames, "
-            "near 0 for noise independent in each frame), as filtered, interpolated or "
-            "resampled frames and markers moving on the skin make them: every p-value and SD "
-            f"of this fit counts {self.n_frames} independent frames where there are about "
-            f"{self.independent:.2g} (a recording's moving-block bootstrap, n_bootstrap, over "
-            "blocks longer than the correlation does not)",
+            f"the frames are not independent: the means of the {self.what} over blocks of "
+            f"{self.block:.0f} frames vary {self.ratio:.3g} times as much as independent frames' "
+            f"would (lag-1 autocorrelation {self.correlation:.2f}), as filtered, interpolated or "
+            "resampled frames and markers moving on the skin make them: every p-value and SD of "
+            f"this fit counts {self.n_frames} independent frames where there are about "
+            f"{_count(self.independent)} (a recording's moving-block bootstrap, n_bootstrap or "
+            "--bootstrap, over blocks that span one independent frame does not)",
         )
 
     def numbers(self) -> dict[str, float]:
-        """The verdict's numbers: the correlation where it was read, and where the frames are
-        not independent, about how many independent ones they hold."""
+        """The verdict's numbers: the lag-1 autocorrelation and the variance ratio with its
+        block length where they were read, and where the frames are not independent, about
+        how many independent ones they hold."""
         if math.isnan(self.correlation):
             return {}
-        if not self.dependent():
-            return {"frame_correlation": self.correlation}
-        return {"frame_correlation": self.correlation, "independent_frames": self.independent}
+        numbers = {"frame_correlation": self.correlation}
+        if not math.isnan(self.ratio):
+            numbers["frame_variance_ratio"] = self.ratio
+            numbers["frame_variance_ratio_block"] = self.block
+        if self.dependent():
+            numbers["independent_frames"] = self.independent
+        return numbers
 
 
-def _segment_frames(correlation: float, name: str, markers: np.ndarray) -> _Frames:
+def _count(value: float) -> str:
+    """``value`` as a count in prose: whole above 10, two figures below."""
+    return f"{value:.0f}" if value >= 10.0 else f"{value:.2g}"
+
+
+def _segment_frames(dependence: np.ndarray, name: str, markers: np.ndarray) -> _Frames:
     """The :class:`_Frames` of the segment ``name`` whose markers ``(N, n, 3)`` [mm] have the
-    pair distances' lag-1 ``correlation``."""
-    frames = _Frames(correlation, markers.shape[0], f"{_LABELS[name]}' distances")
-
-    def distances() -> np.ndarray:
-        a, b = np.triu_indices(markers.shape[1], 1)
-        return np.linalg.norm(markers[:, a] - markers[:, b], axis=-1)
-
-    return _counted(frames, distances)
-
-
-def _counted(frames: _Frames, distances: Callable[[], np.ndarray]) -> _Frames:
-    """``frames`` with their independent frames counted from the ``distances()`` ``(N, K)``
-    [mm] their correlation was read from (:func:`_independent_frames`), where they are not
-    independent: only then, at a cost a one-trial check would otherwise pay."""
+    pair distances' ``dependence`` ``(4,)`` (:func:`_frame_dependence`), counting their
+    independent frames where they are not independent (:func:`_independent_frames`; only
+    then, at a cost a one-trial check would otherwise pay)."""
+    correlation, ratio, block, excess = map(float, dependence)
+    frames = _Frames(
+        correlation, ratio, block, excess, markers.shape[0], f"{_LABELS[name]}' distances"
+    )
     if frames.dependent():
-        return frames._replace(independent=_independent_frames(distances()))
+        return frames._replace(independent=_independent_frames(_pair_distances(markers)))
     return frames
 
 
 def _independent_frames(distances: np.ndarray) -> float:
     """About how many independent frames the ``distances`` ``(N, K)`` [mm] (K of them per
     frame) hold: ``N / tau``, ``tau = 1 + 2 sum_k rho_k`` their integrated autocorrelation time
-    (``rho_k`` pooled over the ``K`` as :func:`_lag_correlation` pools ``rho_1``), summed by
+    (``rho_k`` pooled over the ``K`` as :func:`_frame_dependence` pools ``rho_1``), summed by
     Geyer's initial monotone sequence: the lags' pairs ``rho_2m + rho_2m+1`` while they are
-    positive, each at most the one before. Noise that keeps a share ``r`` of itself from frame
-    to frame gives ``tau = (1 + r) / (1 - r)``; frames interpolated ``m`` times, about ``m``."""
+    positive, each at most the one before. ``N / tau`` independent frames of the same variance
+    have the mean's variance that these do: noise that keeps a share ``r`` of itself from frame
+    to frame gives ``tau = (1 + r) / (1 - r)``, and noisy frames interpolated linearly ``m``
+    times about ``1.5 m`` (the interpolated frames vary less than the noise they come from)."""
     deviations = distances - distances.mean(axis=0)
     n_frames = deviations.shape[0]
     spectrum = np.fft.rfft(deviations, n=2 * n_frames, axis=0)
@@ -1620,14 +1714,14 @@ def _independent_frames(distances: np.ndarray) -> float:
 
 def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[_Frames]:
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
-    the :class:`_Frames` of the segment whose distances are the more correlated, of those whose
-    distances are not rounding (:func:`_lag_correlation`)."""
-    correlations = np.stack([_frame_correlations(kernel_array(array)) for array in arrays])
+    the :class:`_Frames` of the segment whose frames are the further from independent, of those
+    whose distances are not rounding (:func:`_frame_dependence`)."""
+    dependence = [_frame_correlations(kernel_array(array)) for array in arrays]
     found = []
-    for t, column in enumerate(correlations.T.tolist()):
-        known = [(r, k) for k, r in enumerate(column) if math.isfinite(r)]
-        r, k = max(known) if known else (math.nan, len(names) - 1)
-        found.append(_segment_frames(r, names[k], arrays[k][t]))
+    for t in range(arrays[0].shape[0]):
+        read = [k for k in range(len(arrays)) if math.isfinite(dependence[k][t, 0])]
+        k = max(read, key=lambda k: dependence[k][t, 3]) if read else len(arrays) - 1
+        found.append(_segment_frames(dependence[k][t], names[k], arrays[k][t]))
     return found
 
 
@@ -1676,8 +1770,8 @@ def _without_poses(
         )
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
-    (correlation,) = _frame_correlations(kernel_array(markers[None]))
-    frames = _segment_frames(correlation, "distal" if len(arrays) > 1 else "markers", markers)
+    (dependence,) = _frame_correlations(kernel_array(markers[None]))
+    frames = _segment_frames(dependence, "distal" if len(arrays) > 1 else "markers", markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
