@@ -137,6 +137,7 @@ from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.small import inertia_into, symmetric_eigen_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
+from jointbench.screening import _pair_distances
 
 __all__ = [
     "CENTRE_KINDS",
@@ -791,38 +792,11 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
 
 
 @kernel
-def _pair_distances_into(markers: np.ndarray, lengths: np.ndarray) -> None:
-    """The distances ``(P, N)`` [mm] of every pair of the markers ``(N, n, 3)`` [mm] into
-    ``lengths``, pairs in the order ``(0, 1), (0, 2), ..., (1, 2), ...``. A compiled kernel."""
-    n_frames, n_markers, _ = markers.shape
-    p = 0
-    for a in range(n_markers):
-        for b in range(a + 1, n_markers):
-            for f in range(n_frames):
-                dx = markers[f, a, 0] - markers[f, b, 0]
-                dy = markers[f, a, 1] - markers[f, b, 1]
-                dz = markers[f, a, 2] - markers[f, b, 2]
-                lengths[p, f] = math.sqrt(dx * dx + dy * dy + dz * dz)
-            p += 1
-
-
-@kernel
-def _pair_distances(markers: np.ndarray) -> np.ndarray:
-    """The distances ``(N, P)`` [mm] of every pair of the markers ``(N, n, 3)`` [mm]
-    (:func:`_pair_distances_into`). A compiled kernel."""
-    n_markers = markers.shape[1]
-    lengths = np.empty((n_markers * (n_markers - 1) // 2, markers.shape[0]))
-    _pair_distances_into(markers, lengths)
-    return lengths.T.copy()
-
-
-@kernel
 def _frame_correlations(markers: np.ndarray) -> np.ndarray:
     """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], how its marker-pair distances
     depend on each other from frame to frame (:func:`_frame_dependence`) ``(T, 4)``. A
     compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
-    lengths = np.empty((n_markers * (n_markers - 1) // 2, n_frames))
     out = np.empty((n_trials, 4))
     for t in range(n_trials):
         largest = 0.0
@@ -830,7 +804,7 @@ def _frame_correlations(markers: np.ndarray) -> np.ndarray:
             for m in range(n_markers):
                 for i in range(3):
                     largest = max(largest, abs(markers[t, f, m, i]))
-        _pair_distances_into(markers[t], lengths)
+        lengths = _pair_distances(markers[t])
         _frame_dependence(lengths, lengths.shape[0], largest, out[t])
     return out
 
@@ -1686,7 +1660,7 @@ def _segment_frames(dependence: np.ndarray, name: str, markers: np.ndarray) -> _
         correlation, ratio, block, excess, markers.shape[0], f"{_LABELS[name]}' distances"
     )
     if frames.dependent():
-        return frames._replace(independent=_independent_frames(_pair_distances(markers)))
+        return frames._replace(independent=_independent_frames(_pair_distances(markers).T))
     return frames
 
 
