@@ -15,7 +15,9 @@ short for the correlation says so.
 
 from __future__ import annotations
 
+import math
 import re
+import statistics
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +27,7 @@ from scipy.signal import butter, filtfilt
 import jointbench
 from jointbench.estimators import support
 from jointbench.geometry import rotation_matrix, unit
+from jointbench.io.fit import BLOCK_SPANS
 
 WARNING = "the frames are not independent"
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
@@ -174,16 +177,37 @@ def test_the_check_reads_the_frames_order():
     assert not any(WARNING in w for w in support.assess("center", (shuffled,)).caveats)
 
 
-def _numpy_correlation(markers: np.ndarray) -> float:
-    """The pooled lag-1 autocorrelation of the pair distances of ``markers`` ``(N, n, 3)``."""
+def _numpy_dependence(markers: np.ndarray) -> list[float]:
+    """The numbers of :func:`jointbench.estimators.support._frame_dependence` for ``markers``
+    ``(N, n, 3)`` [mm], written out in NumPy from the module docstring: the pooled lag-1
+    autocorrelation of the pair distances, then per block length ``L = 2, 4, ...`` (at least
+    8 blocks) the variance ratio over its quantile, keeping the largest excess."""
     a, b = np.triu_indices(markers.shape[1], 1)
     distances = np.linalg.norm(markers[:, a] - markers[:, b], axis=-1)
     deviations = distances - distances.mean(axis=0)
-    return float(np.sum(deviations[1:] * deviations[:-1]) / np.sum(deviations**2))
+    n_frames = deviations.shape[0]
+    correlation = float(np.sum(deviations[1:] * deviations[:-1]) / np.sum(deviations**2))
+    lengths = [2**k for k in range(1, 40) if n_frames // 2**k >= support.MIN_BLOCKS]
+    z = statistics.NormalDist().inv_cdf(1.0 - support.ROTATION_ALPHA / len(lengths))
+    per_frame = np.sum(deviations**2) / (n_frames - 1)
+    best = [math.nan, math.nan, -1.0]
+    for length in lengths:
+        n_blocks = n_frames // length
+        kept = deviations[: n_blocks * length].reshape(n_blocks, length, -1)
+        sums = kept.sum(axis=1)
+        ratio = np.sum((sums - sums.mean(axis=0)) ** 2) / (n_blocks - 1) / (length * per_frame)
+        weights = np.sum(kept**2, axis=(1, 2))
+        dof = max(weights.sum() ** 2 / np.sum(weights**2) - 1.0, 1.0)
+        spread = 2.0 / (9.0 * dof)
+        quantile = (1.0 - spread + z * math.sqrt(spread)) ** 3
+        excess = ratio / max(quantile, support.MIN_VARIANCE_RATIO)
+        if excess > best[2]:
+            best = [ratio, float(length), excess]
+    return [correlation, *best]
 
 
 @pytest.mark.parametrize("n_markers", [3, 4, 7])
-def test_both_passes_compute_the_numpy_correlation(n_markers):
+def test_both_passes_compute_the_numbers_written_out_in_numpy(n_markers):
     rng = np.random.default_rng(n_markers)
     trials = []
     for n_frames, factor in ((100, 1), (34, 3)):
@@ -191,11 +215,10 @@ def test_both_passes_compute_the_numpy_correlation(n_markers):
         markers = _moved(body, _swing(n_frames)) + _noisy(rng, (n_frames, n_markers, 3), 0.5)
         trials.append(_interpolated(markers, factor))
     stacked = np.stack(trials)
-    expected = [_numpy_correlation(markers) for markers in trials]
+    expected = [_numpy_dependence(markers) for markers in trials]
     one_segment = support._one_segment_numbers(stacked, support._FLEX)
-    from_numbers = one_segment[:, support._DEPENDENCE]
-    np.testing.assert_allclose(from_numbers[:, 0], expected, rtol=1e-12)
-    np.testing.assert_allclose(support._frame_correlations(stacked), from_numbers, rtol=1e-12)
+    np.testing.assert_allclose(one_segment[:, support._DEPENDENCE], expected, rtol=1e-9)
+    np.testing.assert_allclose(support._frame_correlations(stacked), expected, rtol=1e-9)
 
 
 def test_two_markers_that_give_no_pose_are_read_from_their_distance():
@@ -222,15 +245,15 @@ def test_a_single_marker_has_no_distance_to_read():
 
 
 def test_a_bootstrap_over_blocks_shorter_than_the_correlation_says_so():
-    """On the knee trial the default blocks (the root of the frames) are shorter than the
-    distances' correlation, so the bootstrap shares the SDs' fault: the status says so, naming
-    a block length that spans it; blocks that long give no such warning."""
+    """On the knee trial the default blocks (the root of the frames) are shorter than three
+    times the frames one independent frame spans, so the bootstrap shares some of the SDs'
+    fault: the status says so, naming a block length that long; such blocks give no warning."""
     prepared = jointbench.prepare(
         jointbench.read(KNEE), "center", "RLEG1,RLEG2,RLEG3,RATT", "RTHI1,RTHI2,RTHI3,RGT"
     )
     short = prepared.fit("NM", n_bootstrap=20)
     independent = short.result.diagnostics["support_independent_frames"]
-    span = int(np.ceil(short.frames_used.size / independent))
+    span = int(np.ceil(BLOCK_SPANS * short.frames_used.size / independent))
     assert short.bootstrap.block_length < span
     assert f"the bootstrap's blocks of {short.bootstrap.block_length} frames" in short.result.status
     assert f"block_length (--block-length) of {span} frames or more" in short.result.status
@@ -306,3 +329,36 @@ def test_independent_noise_raises_no_alarm_in_many_trials(n_markers):
     frames_and_trials = ((16, 1500), (40, 1500), (150, 1500), (2000, 150))
     alarms = sum(independent_alarms(rng, n_markers, n, k, 0.5) for n, k in frames_and_trials)
     assert alarms <= 2
+
+
+def test_a_burst_of_noise_on_one_marker_is_not_read_as_dependent_frames():
+    """Noise independent in each frame but loud on one marker for 20 frames: a few blocks
+    carry the variance, so the block means vary more than a chi-square of one degree per block
+    allows, though no frame shares its noise with another. The degrees of freedom count it
+    (Satterthwaite's); without them a quarter of these trials read as dependent."""
+    rng = np.random.default_rng(23)
+    trials = []
+    for _ in range(400):
+        markers = _moved(_body(rng), _swing(1000)) + rng.normal(scale=0.1, size=(1000, 4, 3))
+        start = rng.integers(0, 980)
+        markers[start : start + 20, 1] += rng.normal(scale=3.0, size=(20, 3))
+        trials.append(markers)
+    dependence = support._frame_correlations(np.stack(trials))
+    assert np.sum(dependence[:, 3] >= 1.0) <= 1
+
+
+def test_the_independent_frames_of_noise_carried_over_from_frame_to_frame():
+    """Noise that keeps a share r of itself from one frame to the next holds about
+    N (1 - r) / (1 + r) independent frames."""
+    rng = np.random.default_rng(24)
+    n_frames = 5000
+    clean = _moved(_body(rng), _swing(n_frames))
+    for share in (0.5, 0.9):
+        fresh = rng.normal(scale=0.3, size=clean.shape) * np.sqrt(1.0 - share**2)
+        noise = np.empty_like(fresh)
+        noise[0] = rng.normal(scale=0.3, size=fresh.shape[1:])
+        for frame in range(1, n_frames):
+            noise[frame] = share * noise[frame - 1] + fresh[frame]
+        verdict = support.assess("center", (clean + noise,))
+        expected = n_frames * (1.0 - share) / (1.0 + share)
+        assert verdict.diagnostics["independent_frames"] == pytest.approx(expected, rel=0.15)
