@@ -38,22 +38,25 @@ more non-collinear markers), each first order in the noise:
   then vary independently from frame to frame, and the mean of ``L`` consecutive frames'
   deviations (``d``, from each pair's mean, in the frames' order) varies as ``1 / L`` of one
   frame's. The ratio of the two, ``V_L = L var(block means) / var(d)`` pooled over the pairs,
-  is then near 1 at every ``L``, with ``(B - 1) V_L`` about chi-square with ``B - 1`` degrees
-  of freedom over ``B`` blocks (pooled over pairs, less spread than one pair's); errors shared over
-  ``m`` frames raise it towards the correlation time ``tau``, the factor by which the mean's
-  variance exceeds independent frames'. It is taken at ``L = 2, 4, 8, ...`` while at least
-  :data:`MIN_BLOCKS` blocks remain, each against its chi-square quantile (Wilson and
-  Hilferty's) at :data:`ROTATION_ALPHA` shared among the lengths. Where some ``V_L`` is
-  resolved and at least :data:`MIN_VARIANCE_RATIO`, the frames are reported as not
-  independent, holding about ``N / tau`` independent ones (``tau`` summed from the distances'
-  autocorrelations, :func:`_independent_frames`): frames interpolated, filtered or resampled,
-  and markers moving on the skin or sliding on their segment, share their errors from frame to
-  frame, and a slow drift too small to correlate neighbouring frames still moves the means of
-  long blocks. The lag-1 autocorrelation is reported beside it. This one test reads the
-  frames' order, being about their sequence: shuffled frames hide it. Of two segments, the one
-  whose block means vary the more is reported; markers that give no pose are read the same
-  way (the moving ones); a single marker, noise-free data and fewer than ``2 MIN_BLOCKS``
-  frames have nothing to read.
+  is then near 1 at every ``L``; over ``B`` blocks of noise of one variance, ``(B - 1) V_L``
+  is about chi-square with ``B - 1`` degrees of freedom for one pair, and pooled over pairs
+  spreads less. Errors shared over ``m`` frames raise it towards the correlation time
+  ``tau``, the factor by which the mean's variance exceeds independent frames'. It is taken at
+  ``L = 2, 4, 8, ...`` while at least :data:`MIN_BLOCKS` blocks remain, each against its
+  chi-square quantile (Wilson and Hilferty's, with Satterthwaite's degrees of freedom, fewer
+  where a few blocks carry the noise) at :data:`ROTATION_ALPHA` shared among the lengths.
+  Where some ``V_L`` is resolved and at least :data:`MIN_VARIANCE_RATIO`, the frames are
+  reported as not independent, holding about ``N / tau`` independent ones (``tau`` summed
+  from the distances' autocorrelations, :func:`_independent_frames`): frames interpolated,
+  filtered or resampled, and markers moving on the skin or sliding on their segment, share
+  their errors from frame to frame, and a slow drift too small to correlate neighbouring
+  frames still moves the means of long blocks. The lag-1 autocorrelation is reported beside
+  it. This one test reads the frames' order, being about their sequence: shuffled frames hide
+  it. Of two segments, the one further from independent frames is reported; markers that give
+  no pose are read the same way (the moving ones). What it cannot see: a single marker, and
+  errors every marker of a segment shares (a rigid wobble, or a smoothed reference segment's
+  pose carried into the moving markers' coordinates), which keep the distances; nor
+  noise-free data. Below ``4 MIN_BLOCKS`` frames no ratio can reach its quantile.
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -205,9 +208,10 @@ MIN_BLOCKS = 8
 Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # The one-sided normal quantiles at ROTATION_ALPHA shared among k = 1, 2, ... tests (Bonferroni):
-# a recording tests one block length per doubling, some twenty at most.
+# a recording tests one block length per doubling of its frames past 2 MIN_BLOCKS, so these
+# serve up to 2^36 frames.
 _Z_SHARED = np.array(
-    [statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA / k) for k in range(1, 65)]
+    [statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA / k) for k in range(1, 33)]
 )
 
 # In noise-free data, a rotation below this is rounding (a noise-free hinge leaves ~5e-10 rad).
@@ -731,17 +735,23 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
     beyond what independent frames allow, and its block length ``L`` [frames]; and that
     excess, ``V_L`` over the larger of its chi-square quantile and
     :data:`MIN_VARIANCE_RATIO` (at least 1 where the frames are not independent; 0 where no
-    block length is tested). All NaN where the distances are rounding (a variance per pair
-    within twice the :data:`ROUNDING` of the ``largest`` coordinate [mm] squared, what noise
-    of that size per coordinate would give), whose pattern says nothing of the noise. A
-    compiled kernel."""
+    block length is tested). The quantile's degrees of freedom are Satterthwaite's,
+    ``(sum_b W_b)^2 / sum_b W_b^2 - 1`` with ``W_b`` block ``b``'s sum of squared deviations
+    over the pairs: ``B - 1`` where the noise keeps one variance, fewer where a few blocks
+    carry it (a burst of noise on one marker), whose variance ratio then spreads the wider.
+    All NaN where the distances are rounding (a variance per pair within twice the
+    :data:`ROUNDING` of the ``largest`` coordinate [mm] squared, what noise of that size per
+    coordinate would give), whose pattern says nothing of the noise. A compiled kernel."""
     n_frames = lengths.shape[1]
     n_levels = 0
     while n_frames >> (n_levels + 1) >= MIN_BLOCKS:
         n_levels += 1
-    # Per block length, the pairs' block sums' sum of squares about their mean.
+    # Per block length, the pairs' block sums' sum of squares about their mean, and per block
+    # the pairs' sum of squared deviations (W_b).
     level_squares = np.zeros(max(n_levels, 1))
+    block_weights = np.zeros((max(n_levels, 1), n_frames // 2))
     sums = np.empty(n_frames)
+    weights = np.empty(n_frames)
     lagged = 0.0
     squares = 0.0
     for p in range(n_pairs):
@@ -752,11 +762,13 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
         previous = lengths[p, 0] - mean
         squares += previous * previous
         sums[0] = previous
+        weights[0] = previous * previous
         for f in range(1, n_frames):
             current = lengths[p, f] - mean
             lagged += previous * current
             squares += current * current
             sums[f] = current
+            weights[f] = current * current
             previous = current
         # Each level's block sums are the sums of the last level's pairs of blocks (a frame
         # left over at the end of a level is left out of the longer blocks).
@@ -766,6 +778,8 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
             total = 0.0
             for b in range(count):
                 sums[b] = sums[2 * b] + sums[2 * b + 1]
+                weights[b] = weights[2 * b] + weights[2 * b + 1]
+                block_weights[level, b] += weights[b]
                 total += sums[b]
             centre = total / count
             for b in range(count):
@@ -780,13 +794,21 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
     per_frame = squares / (n_frames - 1)
     for level in range(n_levels):
         length = 2 << level
-        dof = (n_frames // length) - 1
+        n_blocks = n_frames // length
         # V_L = L var(block means) / var(d) = var(block sums) / (L var(d)).
-        ratio = level_squares[level] / dof / (length * per_frame)
+        ratio = level_squares[level] / (n_blocks - 1) / (length * per_frame)
+        total = 0.0
+        total_squares = 0.0
+        for b in range(n_blocks):
+            total += block_weights[level, b]
+            total_squares += block_weights[level, b] ** 2
+        dof = max(total * total / total_squares - 1.0, 1.0) if total_squares > 0.0 else 1.0
         # Wilson and Hilferty's chi-square quantile, per degree of freedom.
         spread = 2.0 / (9.0 * dof)
         quantile = (1.0 - spread + z * math.sqrt(spread)) ** 3
         excess = ratio / max(quantile, MIN_VARIANCE_RATIO)
+        # The first length's numbers stand until another's excess is larger, so that a trial
+        # whose ratios all fall short still reports one.
         if excess > out[3] or level == 0:
             out[1], out[2], out[3] = ratio, length, excess
 
@@ -1624,10 +1646,11 @@ class _Frames(NamedTuple):
             f"the frames are not independent: the means of the {self.what} over blocks of "
             f"{self.block:.0f} frames vary {self.ratio:.3g} times as much as independent frames' "
             f"would (lag-1 autocorrelation {self.correlation:.2f}), as filtered, interpolated or "
-            "resampled frames and markers moving on the skin make them: every p-value and SD of "
-            f"this fit counts {self.n_frames} independent frames where there are about "
-            f"{_count(self.independent)} (a recording's moving-block bootstrap, n_bootstrap or "
-            "--bootstrap, over blocks that span one independent frame does not)",
+            "resampled frames, markers moving on the skin and slow drifts make them: every "
+            f"p-value and SD of this fit counts {self.n_frames} independent frames where there "
+            f"are about {_count(self.independent)} (a recording's moving-block bootstrap, "
+            "n_bootstrap or --bootstrap, over blocks of three times the frames one of those "
+            "spans or more understates the scatter far less)",
         )
 
     def numbers(self) -> dict[str, float]:
@@ -1688,15 +1711,19 @@ def _independent_frames(distances: np.ndarray) -> float:
 
 def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[_Frames]:
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
-    the :class:`_Frames` of the segment whose frames are the further from independent, of those
-    whose distances are not rounding (:func:`_frame_dependence`)."""
+    the :class:`_Frames` of the segment whose frames are the further from independent (the
+    larger excess of :func:`_frame_dependence`), of those whose distances are not rounding."""
     dependence = [_frame_correlations(kernel_array(array)) for array in arrays]
-    found = []
+    frames = []
     for t in range(arrays[0].shape[0]):
-        read = [k for k in range(len(arrays)) if math.isfinite(dependence[k][t, 0])]
-        k = max(read, key=lambda k: dependence[k][t, 3]) if read else len(arrays) - 1
-        found.append(_segment_frames(dependence[k][t], names[k], arrays[k][t]))
-    return found
+        readable = [k for k in range(len(arrays)) if math.isfinite(dependence[k][t, 0])]
+        worst = (
+            max(readable, key=lambda segment: dependence[segment][t, 3])
+            if readable
+            else len(arrays) - 1
+        )
+        frames.append(_segment_frames(dependence[worst][t], names[worst], arrays[worst][t]))
+    return frames
 
 
 def _without_poses(
