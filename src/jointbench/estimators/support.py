@@ -746,12 +746,11 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
     n_levels = 0
     while n_frames >> (n_levels + 1) >= MIN_BLOCKS:
         n_levels += 1
-    # Per block length, the pairs' block sums' sum of squares about their mean, and per block
-    # the pairs' sum of squared deviations (W_b).
+    # Per block length, the pairs' block sums' sum of squares about their mean; per frame, the
+    # pairs' squared deviations, whose block sums are the W_b.
     level_squares = np.zeros(max(n_levels, 1))
-    block_weights = np.zeros((max(n_levels, 1), n_frames // 2))
     sums = np.empty(n_frames)
-    weights = np.empty(n_frames)
+    weights = np.zeros(n_frames)
     lagged = 0.0
     squares = 0.0
     for p in range(n_pairs):
@@ -762,13 +761,13 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
         previous = lengths[p, 0] - mean
         squares += previous * previous
         sums[0] = previous
-        weights[0] = previous * previous
+        weights[0] += previous * previous
         for f in range(1, n_frames):
             current = lengths[p, f] - mean
             lagged += previous * current
             squares += current * current
             sums[f] = current
-            weights[f] = current * current
+            weights[f] += current * current
             previous = current
         # Each level's block sums are the sums of the last level's pairs of blocks (a frame
         # left over at the end of a level is left out of the longer blocks).
@@ -778,8 +777,6 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
             total = 0.0
             for b in range(count):
                 sums[b] = sums[2 * b] + sums[2 * b + 1]
-                weights[b] = weights[2 * b] + weights[2 * b + 1]
-                block_weights[level, b] += weights[b]
                 total += sums[b]
             centre = total / count
             for b in range(count):
@@ -792,16 +789,19 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
     out[3] = 0.0
     z = _Z_SHARED[min(n_levels, _Z_SHARED.shape[0]) - 1] if n_levels else 0.0
     per_frame = squares / (n_frames - 1)
+    count = n_frames
     for level in range(n_levels):
         length = 2 << level
-        n_blocks = n_frames // length
+        count //= 2
+        n_blocks = count
         # V_L = L var(block means) / var(d) = var(block sums) / (L var(d)).
         ratio = level_squares[level] / (n_blocks - 1) / (length * per_frame)
         total = 0.0
         total_squares = 0.0
         for b in range(n_blocks):
-            total += block_weights[level, b]
-            total_squares += block_weights[level, b] ** 2
+            weights[b] = weights[2 * b] + weights[2 * b + 1]
+            total += weights[b]
+            total_squares += weights[b] ** 2
         dof = max(total * total / total_squares - 1.0, 1.0) if total_squares > 0.0 else 1.0
         # Wilson and Hilferty's chi-square quantile, per degree of freedom.
         spread = 2.0 / (9.0 * dof)
