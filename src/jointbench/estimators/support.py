@@ -1536,7 +1536,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             tests[t],
             shares.get(t),
             axes.get(t),
-            frames=_segment_frames(numbers[t, _DEPENDENCE], "markers", markers[t]),
+            frames=_segment_frames(row[_DEPENDENCE], "markers", markers[t]),
         )
         for t, row in enumerate(rows)
     ]
@@ -1620,17 +1620,18 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
 
 class _Frames(NamedTuple):
     """How the frames of a trial depend on each other (:func:`_frame_dependence`), read from
-    the distances ``what`` names: their lag-1 autocorrelation, the variance ratio furthest
-    beyond what independent frames allow, its block length [frames] and that excess (NaN
-    where the distances are rounding); over how many frames; and where the frames are not
-    independent, about how many independent ones they hold."""
+    the pair distances of the segment ``name``
+    (:data:`jointbench.estimators.validation.ARRAY_NAMES`): their lag-1 autocorrelation, the
+    variance ratio furthest beyond what independent frames allow, its block length [frames]
+    and that excess (NaN where the distances are rounding); over how many frames; and where
+    the frames are not independent, about how many independent ones they hold."""
 
     correlation: float
     ratio: float
     block: float
     excess: float
     n_frames: int
-    what: str
+    name: str
     independent: float = math.nan
 
     def dependent(self) -> bool:
@@ -1643,7 +1644,8 @@ class _Frames(NamedTuple):
         if not self.dependent():
             return ()
         return (
-            f"the frames are not independent: the means of the {self.what} over blocks of "
+            f"the frames are not independent: the means of the {_LABELS[self.name]}' distances "
+            "over blocks of "
             f"{self.block:.0f} frames vary {self.ratio:.3g} times as much as independent frames' "
             f"would (lag-1 autocorrelation {self.correlation:.2f}), as filtered, interpolated or "
             "resampled frames, markers moving on the skin and slow drifts make them: every "
@@ -1673,18 +1675,17 @@ def _count(value: float) -> str:
     return f"{value:.0f}" if value >= 10.0 else f"{value:.2g}"
 
 
-def _segment_frames(dependence: np.ndarray, name: str, markers: np.ndarray) -> _Frames:
+def _segment_frames(dependence: list[float], name: str, markers: np.ndarray) -> _Frames:
     """The :class:`_Frames` of the segment ``name`` whose markers ``(N, n, 3)`` [mm] have the
-    pair distances' ``dependence`` ``(4,)`` (:func:`_frame_dependence`), counting their
-    independent frames where they are not independent (:func:`_independent_frames`; only
-    then, at a cost a one-trial check would otherwise pay)."""
-    correlation, ratio, block, excess = map(float, dependence)
-    frames = _Frames(
-        correlation, ratio, block, excess, markers.shape[0], f"{_LABELS[name]}' distances"
-    )
-    if frames.dependent():
-        return frames._replace(independent=_independent_frames(_pair_distances(markers).T))
-    return frames
+    pair distances' ``dependence`` (the four numbers of :func:`_frame_dependence`), counting
+    their independent frames where they are not independent (:func:`_independent_frames`;
+    only then, at a cost a one-trial check would otherwise pay)."""
+    correlation, ratio, block, excess = dependence
+    n_frames = markers.shape[0]
+    if not excess >= 1.0:
+        return _Frames(correlation, ratio, block, excess, n_frames, name)
+    independent = _independent_frames(_pair_distances(markers).T)
+    return _Frames(correlation, ratio, block, excess, n_frames, name, independent)
 
 
 def _independent_frames(distances: np.ndarray) -> float:
@@ -1722,7 +1723,9 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
             if readable
             else len(arrays) - 1
         )
-        frames.append(_segment_frames(dependence[worst][t], names[worst], arrays[worst][t]))
+        frames.append(
+            _segment_frames(dependence[worst][t].tolist(), names[worst], arrays[worst][t])
+        )
     return frames
 
 
@@ -1772,7 +1775,8 @@ def _without_poses(
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
     (dependence,) = _frame_correlations(kernel_array(markers[None]))
-    frames = _segment_frames(dependence, "distal" if len(arrays) > 1 else "markers", markers)
+    name = "distal" if len(arrays) > 1 else "markers"
+    frames = _segment_frames(dependence.tolist(), name, markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
