@@ -82,12 +82,13 @@ left as the method set them; the simulated studies call the methods without this
 from __future__ import annotations
 
 import math
+import statistics
 
 import numpy as np
 
 from jointbench.estimators.precision import distinct_frames
 from jointbench.estimators.results import with_warnings
-from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Z_ALPHA, Support
+from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric_into
 
@@ -123,6 +124,10 @@ _TOWARDS = slice(8, 11)
 # The lack of fit's ratio and z about the spheres' centre: where Gauss-Newton iterations from
 # the answer end if the spheres fit better there, else about the answer.
 _SPHERES_RATIO, _SPHERES_Z = 11, 12
+
+# The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
+# exceed their noise by, in standard errors, for the marker to count.
+_Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
 
 # Within this many noise SDs of the answer a marker's directions are noisy beyond the
 # first-order correction's reach (module docstring).
@@ -250,9 +255,8 @@ def _sums_at(markers: np.ndarray, centre: np.ndarray, s2: float, scratch: tuple)
     stated, stated_noise = scratch[11:]
     n_frames, n_markers, _ = markers.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
-    # of freedom each: beyond this factor of that spread (Z_ALPHA standard errors, the one-sided
-    # normal quantile at ROTATION_ALPHA) the marker has a signal.
-    beyond_noise = 1.0 + Z_ALPHA / math.sqrt(max(n_frames - 1, 1))
+    # of freedom each: beyond this factor of that spread the marker has a signal.
+    beyond_noise = 1.0 + _Z_ALPHA / math.sqrt(max(n_frames - 1, 1))
     info[:] = 0.0
     signal[:] = 0.0
     noisy[:] = 0.0

@@ -204,9 +204,6 @@ MIN_VARIANCE_RATIO = 1.5
 #: fewer than twice as many frames are not read.
 MIN_BLOCKS = 8
 
-# The one-sided normal quantile at ROTATION_ALPHA.
-Z_ALPHA = statistics.NormalDist().inv_cdf(1.0 - ROTATION_ALPHA)
-
 # The one-sided normal quantiles at ROTATION_ALPHA shared among k = 1, 2, ... tests (Bonferroni):
 # a recording tests one block length per doubling of its frames past 2 MIN_BLOCKS, so these
 # serve up to 2^36 frames.
