@@ -147,6 +147,8 @@ __all__ = [
     "MAX_DISTANCE_MARKERS",
     "MAX_NONRIGID_SHARE",
     "MAX_OFF_AXIS_SHARE",
+    "MIN_BLOCKS",
+    "MIN_VARIANCE_RATIO",
     "ROTATION_ALPHA",
     "ROUNDING",
     "MotionAxis",

@@ -41,6 +41,18 @@ from jointbench.numerics.poses import best_rotation
 from jointbench.screening import checked_rules
 from jointbench.uncertainty import Bootstrap, bootstrap, check_level, check_resampling
 
+__all__ = [
+    "ARTEFACT_POLICIES",
+    "BLOCK_SPANS",
+    "DEFAULT_METHODS",
+    "Prepared",
+    "RecordingFit",
+    "fit",
+    "prepare",
+]
+
+ARTEFACT_POLICIES = ("refuse", "exclude")
+
 #: A moving-block bootstrap's blocks should span this many times the frames one independent
 #: frame spans (the frames over ``support_independent_frames``): for noise that keeps a share
 #: of itself from frame to frame, the bootstrap's variance of a mean, the autocorrelations'
@@ -48,9 +60,6 @@ from jointbench.uncertainty import Bootstrap, bootstrap, check_level, check_resa
 #: and some 84 % over three.
 BLOCK_SPANS = 3
 
-__all__ = ["ARTEFACT_POLICIES", "DEFAULT_METHODS", "Prepared", "RecordingFit", "fit", "prepare"]
-
-ARTEFACT_POLICIES = ("refuse", "exclude")
 DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
 
 
