@@ -94,13 +94,23 @@ ONE_TRIAL = {**CASES, **USER_INPUT}
 
 
 def _separately(name: str, arrays, **options):
-    """The method, its own check (the Gauss–Markov model test) and the verdict each fitting
-    their own poses: the composition before the poses were shared."""
+    """The method, its own check (the Gauss–Markov model test), the verdict and the check of
+    the answer against it each fitting their own poses: the composition before the poses were
+    shared."""
     fn = registry.get(KIND, name, checked=False)
     clean = validation.check_input(KIND, arrays)
-    result = registry._self_checked(fn, fn(*clean, **options), clean, options)
-    (result,) = registry._precision_checked(fn, [result], tuple(a[None] for a in clean), None)
-    return support.annotate(result, support.assess(KIND, clean))
+    return _checked_alone(fn, fn(*clean, **options), clean, options)
+
+
+def _checked_alone(fn, result, arrays: tuple, options: dict):
+    """``result`` of ``fn`` on one trial's checked ``arrays`` after the method's own check, the
+    verdict and the check of the answer against it, each fitting its own poses."""
+    result = registry._self_checked(fn, result, arrays, options)
+    stacked = tuple(array[None] for array in arrays)
+    (result,) = registry._precision_checked(fn, [result], stacked, None)
+    verdict = support.assess(KIND, arrays)
+    (result,) = registry._answers_checked(KIND, [result], stacked, [verdict])
+    return support.annotate(result, verdict)
 
 
 def _outcome(call):
@@ -235,7 +245,7 @@ def test_poses_for_another_number_of_trials_are_refused(name, checked):
 def _unshared_many(name: str, segments: tuple, **options) -> list:
     """The many-trial composition before the poses were shared: the method's many-trial form
     fitting its own poses, then per trial the input checks (whose error wins), the method's
-    own check and the verdict, each fitting its own."""
+    own check, the verdict and the answer's check, each fitting its own."""
     fn = registry.get(KIND, name, checked=False)
     outcomes = list(registry.many(KIND, name, checked=False)(*segments, **options))
     checked = validation.check_input_many(KIND, segments, len(outcomes))
@@ -243,11 +253,7 @@ def _unshared_many(name: str, segments: tuple, **options) -> list:
         if error is not None:
             outcomes[trial] = error
         elif not isinstance(outcome, Exception):
-            arrays = checked.arrays(trial)
-            result = registry._self_checked(fn, outcome, arrays, options)
-            stacked = tuple(array[None] for array in arrays)
-            (result,) = registry._precision_checked(fn, [result], stacked, None)
-            outcomes[trial] = support.annotate(result, support.assess(KIND, arrays))
+            outcomes[trial] = _checked_alone(fn, outcome, checked.arrays(trial), options)
     return outcomes
 
 

@@ -86,6 +86,7 @@ import statistics
 
 import numpy as np
 
+from jointbench.estimators.pose_noise import bias_mm
 from jointbench.estimators.precision import distinct_frames
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
@@ -96,6 +97,7 @@ __all__ = [
     "MAX_CENTER_SD_MM",
     "MAX_SD_NOISE_SHARE",
     "MIN_REJECTED_STEP_MM",
+    "annotate_joint_centres",
     "annotate_many",
     "centre_statistics",
 ]
@@ -639,3 +641,51 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         warnings = _warnings(numbers, residual_mm, not verdicts[t].warnings)
         annotated[t] = with_warnings(results[t], warnings, numbers)
     return annotated
+
+
+def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
+    """Joint-centre ``results`` with what the noise in their two segments' poses does to a
+    least-squares centre (:mod:`jointbench.estimators.pose_noise`), given each trial's support
+    verdict ``verdicts``: ``diagnostics["center_pose_noise_share"]``, the noise's share of the
+    information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
+    how far it pulled the answer (both ``inf`` where the noise is as large as the rotation
+    that fixes the centre). A warning is added where the verdict has not already refused the
+    data and either the share reaches :data:`MAX_SD_NOISE_SHARE` (the answer then keeps at most
+    five sixths of the joint's offset from the markers along that direction, tens of
+    millimetres where the joint lies a few hundred from its markers, wherever the answer
+    happens to fall) or the pull reaches :data:`MIN_REJECTED_STEP_MM` (a few millimetres
+    from the joint by its method's own bias is the method's property; further is not where the
+    motion puts the joint). A result without a finite centre, or whose verdict carries no pose
+    noise (no poses, or markers too nearly collinear for their noise model), is returned as it
+    is."""
+    annotated = list(results)
+    for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
+        noise = verdict.pose_noise
+        if noise is None or not np.isfinite(result.center).all():
+            continue
+        pull = float(np.linalg.norm(bias_mm(noise, np.asarray(result.center))))
+        numbers = {"center_pose_noise_share": noise.share, "center_pose_noise_pull_mm": pull}
+        warnings = ()
+        if not verdict.warnings and (
+            noise.share >= MAX_SD_NOISE_SHARE or pull >= MIN_REJECTED_STEP_MM
+        ):
+            warnings = (_pulled_by_pose_noise(noise.share, pull),)
+        annotated[t] = with_warnings(result, warnings, numbers)
+    return annotated
+
+
+def _pulled_by_pose_noise(share: float, pull: float) -> str:
+    """The warning for a joint centre whose poses' noise takes ``share`` of the information
+    along its least determined direction and pulled it ``pull`` [mm]."""
+    if math.isinf(share):
+        return (
+            "the noise in the poses is as large as the rotation off the main axis that fixes "
+            "the joint centre: a least-squares centre is pulled towards the markers by more "
+            "than the data can bound"
+        )
+    return (
+        f"the noise in the poses pulls a least-squares joint centre towards the markers, "
+        f"about {pull:.3g} mm here (it keeps {100 / (1 + share):.0f}% of the joint's offset from "
+        "them along its least determined direction): too little rotation off the main axis "
+        "for that noise"
+    )

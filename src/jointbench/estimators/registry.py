@@ -382,7 +382,9 @@ def _answers_checked(kind: str, results: list, stacked: tuple, verdicts: list) -
     principal axis of the segment's rotations that its verdict took from the data
     (:func:`jointbench.estimators.precision.annotate_motion_axis`), a centre's precision and
     whether it is the markers' common centre
-    (:func:`jointbench.estimators.centre_precision.annotate_many`); a joint centre as it is."""
+    (:func:`jointbench.estimators.centre_precision.annotate_many`), and how far the noise in
+    a joint centre's poses pulls it
+    (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`)."""
     if kind == "axis":
         return [
             precision.annotate_motion_axis(
@@ -392,7 +394,7 @@ def _answers_checked(kind: str, results: list, stacked: tuple, verdicts: list) -
         ]
     if kind == "center":
         return centre_precision.annotate_many(results, stacked[0], verdicts)
-    return results
+    return centre_precision.annotate_joint_centres(results, verdicts)
 
 
 def _checked_many(entry: _Entry) -> Callable[..., list]:

@@ -132,6 +132,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.batching import check_poses
+from jointbench.estimators.pose_noise import PoseNoise, pose_noise
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
@@ -239,12 +240,15 @@ class Support(NamedTuple):
     ``None``; and ``caveats``, warnings that qualify every number of the fit without saying
     the data cannot support an answer (frames that are not independent), which the status
     carries after the warnings and the checks of an answer's precision do not read as a
-    refusal."""
+    refusal; for two segments' poses judged for a joint centre, ``pose_noise``, what their
+    noise does to a least-squares centre (:class:`jointbench.estimators.pose_noise.PoseNoise`),
+    which the registry holds every joint-centre answer to, else ``None``."""
 
     warnings: tuple[str, ...]
     diagnostics: dict
     motion_axis: MotionAxis | None = None
     caveats: tuple[str, ...] = ()
+    pose_noise: PoseNoise | None = None
 
 
 class _Clusters(NamedTuple):
@@ -253,6 +257,7 @@ class _Clusters(NamedTuple):
     rotation: np.ndarray  # (T, N, 3, 3)
     inertia_inv: np.ndarray  # (T, 3, 3) [mm^-2]
     weakest_variance: np.ndarray  # (T,) largest eigenvalue of inertia_inv [mm^-2]
+    centroid: np.ndarray  # (T, 3) of the body-fixed markers [mm]
     residual_ss: np.ndarray  # (T,) [mm^2]
     largest: np.ndarray  # (T,) largest absolute coordinate [mm]
     dof: int
@@ -350,6 +355,7 @@ def _clusters(markers: np.ndarray, poses: list[SegmentPoses]) -> _Clusters:
         rotation=rotation,
         inertia_inv=inertia_inv,
         weakest_variance=weakest,
+        centroid=body.mean(axis=1),
         residual_ss=residual_ss,
         largest=largest,
         dof=dof,
@@ -1591,6 +1597,7 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     weakest = np.sqrt(
         functools.reduce(np.maximum, [c.weakest_variance for c in clusters]) * variance
     )
+    noise = _centre_pose_noise(clusters, variance) if kind == "joint_center" else None
     return [
         _without_poses(
             tuple(array[t] for array in arrays),
@@ -1612,9 +1619,24 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
                 rotation.p_second[t],
             ),
             frames=frames[t],
+            pose_noise=None if noise is None else noise[t],
         )
         for t in range(n_trials)
     ]
+
+
+def _centre_pose_noise(clusters: list[_Clusters], variance: np.ndarray) -> list[PoseNoise]:
+    """Per trial, what the noise in the proximal and distal ``clusters``' poses (pooled
+    residual per coordinate ``variance`` ``(T,)`` [mm^2]) does to a least-squares joint centre
+    (:func:`jointbench.estimators.pose_noise.pose_noise`)."""
+    proximal, distal = clusters
+    return pose_noise(
+        proximal.rotation,
+        distal.rotation,
+        (proximal.inertia_inv, distal.inertia_inv),
+        np.stack([proximal.centroid, distal.centroid], axis=1),
+        variance,
+    )
 
 
 class _Frames(NamedTuple):
@@ -1806,7 +1828,16 @@ def _without_poses(
 
 
 def _verdict(
-    kind, names, rigidity, variance, tests, axis_share=None, motion_axis=None, *, frames
+    kind,
+    names,
+    rigidity,
+    variance,
+    tests,
+    axis_share=None,
+    motion_axis=None,
+    *,
+    frames,
+    pose_noise=None,
 ) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
@@ -1814,7 +1845,8 @@ def _verdict(
     off the main axis; ``axis_share``, for an axis whose rotation off the main axis is
     resolved, an :class:`_AxisShare` row (share, RMS rotation about the principal axis and
     about the others [rad]); ``motion_axis`` the :class:`MotionAxis` the verdict carries;
-    ``frames`` how independent the frames are (:class:`_Frames`)."""
+    ``frames`` how independent the frames are (:class:`_Frames`); ``pose_noise`` the
+    :class:`PoseNoise` it carries for a joint centre."""
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
@@ -1859,7 +1891,7 @@ def _verdict(
     }
     if axis_share is not None:
         numbers["off_principal_axis_share"] = float(axis_share[0])
-    return Support(tuple(warnings), numbers, motion_axis, frames.caveats())
+    return Support(tuple(warnings), numbers, motion_axis, frames.caveats(), pose_noise)
 
 
 def assess(

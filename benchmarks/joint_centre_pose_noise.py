@@ -1,0 +1,170 @@
+"""Measure the joint-centre check of the poses' noise, as the README quotes it.
+
+Usage::
+
+    python benchmarks/joint_centre_pose_noise.py [--geometries 20] [--draws 100]
+
+Prints, with the current code (``jointbench.fit_joint_center``, every joint-centre method):
+
+* hips (``tests/test_pose_noise.py``'s generator, 60 frames, 0.5 mm noise) swung in five
+  ways, one noise draw for each of ``--geometries`` marker geometries: per method, how many
+  answers the pull warns about, how many read ``ok`` without that warning (as before the
+  check) and with it, and how many of each lie more than 10 mm off;
+* thigh clusters of three markers 1, 3 and 5 mm off a 50 mm line on a 30 degree two-axis swing:
+  the same counts for SCoRE and the analytic centre;
+* the pull against the mean error of SCoRE over ``--draws`` noise draws, three geometries of
+  three near-hinges;
+* paper C's hip rig (``jointbench.simulate.hip``, at 150 and 1200 frames) and the skin-marker
+  hip study (``jointbench.simulate.hip_sta``) at each of their motions, ranges and artefacts:
+  the same counts over 10 trials each (the studies' own calls run without checks);
+* the real knee trial (``data/functional-trials/right_knee.c3d``): each method's status,
+  share and pull.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import itertools
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import jointbench
+from jointbench.estimators import support
+from jointbench.estimators.pose_noise import bias_mm
+from jointbench.simulate import hip, hip_sta
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from test_pose_noise import _PULLED, CENTRE, _hip, _noisy, _thin_thigh
+
+KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
+MOTIONS = {
+    "nearly a hinge (6 %)": {"ratio": 0.06},
+    "3 deg two-axis swing": {"ratio": 1.0, "rom_deg": 3.0},
+    "second rotation 15 %": {"ratio": 0.15},
+    "second rotation 30 %": {"ratio": 0.3},
+    "30 deg two-axis swing": {"ratio": 1.0},
+}
+
+
+def _only_pulled(status: str) -> bool:
+    """Whether ``status`` would read ``ok`` but for the pull's warning."""
+    parts = [part for part in status.split("; ") if _PULLED not in part]
+    return len(parts) < len(status.split("; ")) and not parts
+
+
+def _count(label: str, trials: list[tuple], methods: tuple[str, ...], centre=CENTRE) -> None:
+    """Per method, how many of ``trials`` read ``ok`` now and would without the pull's
+    warning, and how many of each lie more than 10 mm from ``centre``."""
+    counts: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    for segments in trials:
+        for method in methods:
+            result = jointbench.fit_joint_center(*segments, method=method)
+            off = bool(np.linalg.norm(result.center - centre) > 10.0)
+            before = result.status == "ok" or _only_pulled(result.status)
+            tally = counts[method]
+            tally["pulled"] += _PULLED in result.status
+            tally["ok before"] += before
+            tally["ok before, >10 mm off"] += before and off
+            tally["ok"] += result.status == "ok"
+            tally["ok, >10 mm off"] += result.status == "ok" and off
+    for method, tally in counts.items():
+        words = ", ".join(f"{key} {value}" for key, value in tally.items())
+        print(f"{label:44s} {method:20s} of {len(trials)}: {words}")
+
+
+def hips(n_geometries: int) -> None:
+    for label, motion in MOTIONS.items():
+        trials = [
+            _noisy(_hip(geometry, **motion), 1000 + geometry) for geometry in range(n_geometries)
+        ]
+        _count(label, trials, jointbench.methods("joint_center"))
+
+
+def thin(n_geometries: int) -> None:
+    for off_line_mm in (1.0, 3.0, 5.0):
+        trials = []
+        for geometry in range(n_geometries):
+            rng = np.random.default_rng(geometry)
+            proximal, distal = _hip(geometry, ratio=1.0)
+            line = rng.normal(size=3)
+            line /= np.linalg.norm(line)
+            body = np.outer([-25.0, 0.0, 25.0], line) + rng.normal(scale=off_line_mm, size=(3, 3))
+            trials.append(_noisy((proximal, _thin_thigh(distal, body)), 2000 + geometry))
+        _count(f"thin thigh, {off_line_mm:g} mm off line", trials, ("SCoRE", "analytic"))
+
+
+def pull_against_error(n_draws: int) -> None:
+    for ratio, geometry in itertools.product((0.06, 0.15, 0.3), range(3)):
+        clean = _hip(geometry, ratio=ratio)
+        errors, pulls = [], []
+        for seed in range(n_draws):
+            segments = _noisy(clean, seed)
+            verdict = support.assess("joint_center", segments)
+            answer = jointbench.fit_joint_center(*segments, method="SCoRE").center
+            errors.append(answer - CENTRE)
+            pulls.append(bias_mm(verdict.pose_noise, answer))
+        errors, pulls = np.array(errors), np.array(pulls)
+        bounded = np.isfinite(pulls).all(axis=1)
+        error, pull = errors.mean(axis=0), pulls[bounded].mean(axis=0)
+        print(
+            f"ratio {ratio:4.2f} geometry {geometry}: SCoRE's mean error {np.round(error, 1)} "
+            f"(|.| {np.linalg.norm(error):.1f} mm), mean pull {np.round(pull, 1)} "
+            f"(|.| {np.linalg.norm(pull):.1f} mm; unbounded in {n_draws - bounded.sum()} of "
+            f"{n_draws} draws)"
+        )
+
+
+def _pulled_in(label: str, trials) -> None:
+    """:func:`_count` on a study's simulated ``trials``."""
+    pairs = zip(trials.segments["proximal"], trials.segments["distal"], strict=True)
+    centre = np.array(trials.truth["center"])
+    _count(label, list(pairs), jointbench.methods("joint_center"), centre)
+
+
+def studies() -> None:
+    rngs = lambda: [np.random.default_rng(seed) for seed in range(10)]  # noqa: E731
+    for n_frames in (150, 1200):
+        trials = hip.simulate({"n_frames": n_frames}, hip.HipProtocol(), rngs())
+        _pulled_in(f"paper C's rig, {n_frames} frames", trials)
+    for motion, rom_deg, sta_mm in itertools.product(
+        ("star_arc", "circumduction"), (20.0, 45.0), (0.0, 30.0)
+    ):
+        condition = {"motion": motion, "rom_deg": rom_deg, "sta_mm": sta_mm}
+        trials = hip_sta.simulate(condition, hip_sta.HipStaProtocol(), rngs())
+        _pulled_in(f"skin markers, {motion} {rom_deg:g} deg, artefact {sta_mm:g} mm", trials)
+
+
+def knee() -> None:
+    recording = jointbench.read(KNEE)
+    prepared = jointbench.prepare(
+        recording, "joint_center", "RLEG1,RLEG2,RLEG3,RATT", "RTHI1,RTHI2,RTHI3,RGT"
+    )
+    for method in jointbench.methods("joint_center"):
+        result = prepared.fit(method).result
+        print(
+            f"knee {method:20s} share {result.diagnostics.get('center_pose_noise_share'):.3f} "
+            f"pull {result.diagnostics.get('center_pose_noise_pull_mm'):.1f} mm, "
+            f"status {result.status[:90]!r}"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--geometries", type=int, default=20)
+    parser.add_argument("--draws", type=int, default=100)
+    args = parser.parse_args(argv)
+    warnings.simplefilter("ignore")
+    hips(args.geometries)
+    thin(args.geometries)
+    pull_against_error(args.draws)
+    studies()
+    knee()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
