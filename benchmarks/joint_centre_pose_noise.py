@@ -12,6 +12,8 @@ Prints, with the current code (``jointbench.fit_joint_center``, every joint-cent
   check) and with it, and how many of each lie more than 10 mm off;
 * thigh clusters of three markers 1, 3 and 5 mm off a 50 mm line on a 30 degree two-axis swing:
   the same counts for SCoRE and the analytic centre;
+* a noisy pelvis with a nearly noise-free thigh, the other way round, and noise larger along
+  one direction of the world than across it: the same counts for SCoRE and the analytic centre;
 * the pull against the mean error of SCoRE over ``--draws`` noise draws, three geometries of
   three near-hinges;
 * paper C's hip rig (``jointbench.simulate.hip``, at 150 and 1200 frames) and the skin-marker
@@ -33,12 +35,10 @@ from pathlib import Path
 import numpy as np
 
 import jointbench
-from jointbench.estimators import support
-from jointbench.estimators.pose_noise import bias_mm
 from jointbench.simulate import hip, hip_sta
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_pose_noise import _PULLED, CENTRE, _hip, _noisy, _thin_thigh
+from test_pose_noise import _PULLED, CENTRE, _hip, _noisy, _thin_thigh, errors_and_pulls
 
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
 MOTIONS = {
@@ -84,6 +84,23 @@ def hips(n_geometries: int) -> None:
         _count(label, trials, jointbench.methods("joint_center"))
 
 
+def unequal_and_anisotropic(n_geometries: int) -> None:
+    """A noisy wide pelvis with a nearly noise-free compact thigh on a 30 degree two-axis swing
+    (answers the poses' noise pooled over both segments would pull), a noise-free pelvis with a
+    noisy compact thigh and a second rotation of 30 %, and noise larger along z than across."""
+    cases = {
+        "pelvis 3 mm, thigh 0.1 mm": ({"ratio": 1.0, "spreads_mm": (60.0, 8.0)}, (3.0, 0.1)),
+        "pelvis 0 mm, thigh 1 mm": ({"ratio": 0.3, "spreads_mm": (60.0, 10.0)}, (0.0, 1.0)),
+        "noise (0.25, 0.25, 2) mm": ({"ratio": 1.0}, ((0.25, 0.25, 2.0),) * 2),
+    }
+    for label, (motion, noise_mm) in cases.items():
+        trials = [
+            _noisy(_hip(geometry, **motion), 3000 + geometry, noise_mm)
+            for geometry in range(n_geometries)
+        ]
+        _count(label, trials, ("SCoRE", "analytic"))
+
+
 def thin(n_geometries: int) -> None:
     for off_line_mm in (1.0, 3.0, 5.0):
         trials = []
@@ -99,15 +116,7 @@ def thin(n_geometries: int) -> None:
 
 def pull_against_error(n_draws: int) -> None:
     for ratio, geometry in itertools.product((0.06, 0.15, 0.3), range(3)):
-        clean = _hip(geometry, ratio=ratio)
-        errors, pulls = [], []
-        for seed in range(n_draws):
-            segments = _noisy(clean, seed)
-            verdict = support.assess("joint_center", segments)
-            answer = jointbench.fit_joint_center(*segments, method="SCoRE").center
-            errors.append(answer - CENTRE)
-            pulls.append(bias_mm(verdict.pose_noise, answer))
-        errors, pulls = np.array(errors), np.array(pulls)
+        errors, pulls = errors_and_pulls(_hip(geometry, ratio=ratio), n_draws)
         bounded = np.isfinite(pulls).all(axis=1)
         error, pull = errors.mean(axis=0), pulls[bounded].mean(axis=0)
         print(
@@ -160,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("ignore")
     hips(args.geometries)
     thin(args.geometries)
+    unequal_and_anisotropic(args.geometries)
     pull_against_error(args.draws)
     studies()
     knee()

@@ -95,6 +95,8 @@ from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric
 
 __all__ = [
     "MAX_CENTER_SD_MM",
+    "MAX_POSE_NOISE_PULL_MM",
+    "MAX_POSE_NOISE_SHARE",
     "MAX_SD_NOISE_SHARE",
     "MIN_REJECTED_STEP_MM",
     "annotate_joint_centres",
@@ -118,6 +120,19 @@ MAX_SD_NOISE_SHARE = 0.2
 #: centre is at least this far [mm] from the answer: half of :data:`MAX_CENTER_SD_MM`, well
 #: above the few millimetres of bias paper A documents for its methods on small caps.
 MIN_REJECTED_STEP_MM = 5.0
+
+#: A joint centre whose poses' noise has this ratio, or more, to the noise-free information
+#: along the centre's least determined direction (:mod:`jointbench.estimators.pose_noise`) is
+#: not where the motion puts the joint: the answer keeps ``1 / (1 + ratio)`` of the joint's
+#: offset from the markers along that direction, at most five sixths here, tens of
+#: millimetres short where the joint lies a few hundred from its markers, and no single
+#: answer shows by how much (its pull is read at the answer, which the noise has moved).
+MAX_POSE_NOISE_SHARE = 0.2
+
+#: ... or whose answer the noise pulled this far [mm] or more: the step a centre's score test
+#: must exceed (:data:`MIN_REJECTED_STEP_MM`), since a method's own bias of a few millimetres
+#: is a property of the method.
+MAX_POSE_NOISE_PULL_MM = MIN_REJECTED_STEP_MM
 
 # Columns of centre_statistics' rows.
 _SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
@@ -646,18 +661,14 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
 def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     """Joint-centre ``results`` with what the noise in their two segments' poses does to a
     least-squares centre (:mod:`jointbench.estimators.pose_noise`), given each trial's support
-    verdict ``verdicts``: ``diagnostics["center_pose_noise_share"]``, the noise's share of the
-    information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
-    how far it pulled the answer (both ``inf`` where the noise is as large as the rotation
-    that fixes the centre). A warning is added where the verdict has not already refused the
-    data and either the share reaches :data:`MAX_SD_NOISE_SHARE` (the answer then keeps at most
-    five sixths of the joint's offset from the markers along that direction, tens of
-    millimetres where the joint lies a few hundred from its markers, wherever the answer
-    happens to fall) or the pull reaches :data:`MIN_REJECTED_STEP_MM` (a few millimetres
-    from the joint by its method's own bias is the method's property; further is not where the
-    motion puts the joint). A result without a finite centre, or whose verdict carries no pose
-    noise (no poses, or markers too nearly collinear for their noise model), is returned as it
-    is."""
+    verdict ``verdicts``: ``diagnostics["center_pose_noise_share"]``, the ratio of the noise's
+    information to the noise-free information along the least determined direction, and
+    ``["center_pose_noise_pull_mm"]``, how far the noise pulled the answer (both ``inf``
+    where the noise is as large as the rotation that fixes the centre). A warning is added
+    where the verdict has not already refused the data and the ratio reaches
+    :data:`MAX_POSE_NOISE_SHARE` or the pull :data:`MAX_POSE_NOISE_PULL_MM`. A result without
+    a finite centre, or whose verdict carries no pose noise (no poses, or markers too nearly
+    collinear for their noise model), is returned as it is."""
     annotated = list(results)
     for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
         noise = verdict.pose_noise
@@ -667,7 +678,7 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
         numbers = {"center_pose_noise_share": noise.share, "center_pose_noise_pull_mm": pull}
         warnings = ()
         if not verdict.warnings and (
-            noise.share >= MAX_SD_NOISE_SHARE or pull >= MIN_REJECTED_STEP_MM
+            noise.share >= MAX_POSE_NOISE_SHARE or pull >= MAX_POSE_NOISE_PULL_MM
         ):
             warnings = (_pulled_by_pose_noise(noise.share, pull),)
         annotated[t] = with_warnings(result, warnings, numbers)
@@ -675,8 +686,9 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
 
 
 def _pulled_by_pose_noise(share: float, pull: float) -> str:
-    """The warning for a joint centre whose poses' noise takes ``share`` of the information
-    along its least determined direction and pulled it ``pull`` [mm]."""
+    """The warning for a joint centre whose poses' noise has the ratio ``share`` to the
+    noise-free information along its least determined direction and pulled it ``pull``
+    [mm]."""
     if math.isinf(share):
         return (
             "the noise in the poses is as large as the rotation off the main axis that fixes "

@@ -132,7 +132,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.batching import check_poses
-from jointbench.estimators.pose_noise import PoseNoise, pose_noise
+from jointbench.estimators.pose_noise import PoseNoise, Segment, pose_noise
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
@@ -257,7 +257,7 @@ class _Clusters(NamedTuple):
     rotation: np.ndarray  # (T, N, 3, 3)
     inertia_inv: np.ndarray  # (T, 3, 3) [mm^-2]
     weakest_variance: np.ndarray  # (T,) largest eigenvalue of inertia_inv [mm^-2]
-    centroid: np.ndarray  # (T, 3) of the body-fixed markers [mm]
+    body: np.ndarray  # (T, n, 3) body-fixed markers [mm]
     residual_ss: np.ndarray  # (T,) [mm^2]
     largest: np.ndarray  # (T,) largest absolute coordinate [mm]
     dof: int
@@ -355,7 +355,7 @@ def _clusters(markers: np.ndarray, poses: list[SegmentPoses]) -> _Clusters:
         rotation=rotation,
         inertia_inv=inertia_inv,
         weakest_variance=weakest,
-        centroid=body.mean(axis=1),
+        body=body,
         residual_ss=residual_ss,
         largest=largest,
         dof=dof,
@@ -1597,7 +1597,7 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     weakest = np.sqrt(
         functools.reduce(np.maximum, [c.weakest_variance for c in clusters]) * variance
     )
-    noise = _centre_pose_noise(clusters, variance) if kind == "joint_center" else None
+    noise = _centre_pose_noise(clusters) if kind == "joint_center" else None
     return [
         _without_poses(
             tuple(array[t] for array in arrays),
@@ -1625,17 +1625,12 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     ]
 
 
-def _centre_pose_noise(clusters: list[_Clusters], variance: np.ndarray) -> list[PoseNoise]:
-    """Per trial, what the noise in the proximal and distal ``clusters``' poses (pooled
-    residual per coordinate ``variance`` ``(T,)`` [mm^2]) does to a least-squares joint centre
-    (:func:`jointbench.estimators.pose_noise.pose_noise`)."""
-    proximal, distal = clusters
+def _centre_pose_noise(clusters: list[_Clusters]) -> list[PoseNoise]:
+    """Per trial, what the noise in the proximal and distal ``clusters``' poses does to a
+    least-squares joint centre (:func:`jointbench.estimators.pose_noise.pose_noise`), each
+    segment with its own noise."""
     return pose_noise(
-        proximal.rotation,
-        distal.rotation,
-        (proximal.inertia_inv, distal.inertia_inv),
-        np.stack([proximal.centroid, distal.centroid], axis=1),
-        variance,
+        *(Segment(c.rotation, c.body, c.inertia_inv, c.residual_ss / c.dof) for c in clusters)
     )
 
 
