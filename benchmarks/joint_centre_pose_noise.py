@@ -77,6 +77,7 @@ def _count(label: str, trials: list[tuple], methods: tuple[str, ...], centre=CEN
 
 
 def hips(n_geometries: int) -> None:
+    """The counts on hips swung in each of :data:`MOTIONS`, 0.5 mm noise."""
     for label, motion in MOTIONS.items():
         trials = [
             _noisy(_hip(geometry, **motion), 1000 + geometry) for geometry in range(n_geometries)
@@ -102,6 +103,7 @@ def unequal_and_anisotropic(n_geometries: int) -> None:
 
 
 def thin(n_geometries: int) -> None:
+    """The counts with three thigh markers 1, 3 and 5 mm off a 50 mm line."""
     for off_line_mm in (1.0, 3.0, 5.0):
         trials = []
         for geometry in range(n_geometries):
@@ -115,6 +117,7 @@ def thin(n_geometries: int) -> None:
 
 
 def pull_against_error(n_draws: int) -> None:
+    """SCoRE's mean error and the mean pull at its answers over ``n_draws`` noise draws."""
     for ratio, geometry in itertools.product((0.06, 0.15, 0.3), range(3)):
         errors, pulls = errors_and_pulls(_hip(geometry, ratio=ratio), n_draws)
         bounded = np.isfinite(pulls).all(axis=1)
@@ -134,20 +137,26 @@ def _pulled_in(label: str, trials) -> None:
     _count(label, list(pairs), jointbench.methods("joint_center"), centre)
 
 
+def _rngs() -> list[np.random.Generator]:
+    """The generators of 10 trials of a study's condition."""
+    return [np.random.default_rng(seed) for seed in range(10)]
+
+
 def studies() -> None:
-    rngs = lambda: [np.random.default_rng(seed) for seed in range(10)]  # noqa: E731
+    """The counts on paper C's rig and the skin-marker hip study's conditions."""
     for n_frames in (150, 1200):
-        trials = hip.simulate({"n_frames": n_frames}, hip.HipProtocol(), rngs())
+        trials = hip.simulate({"n_frames": n_frames}, hip.HipProtocol(), _rngs())
         _pulled_in(f"paper C's rig, {n_frames} frames", trials)
     for motion, rom_deg, sta_mm in itertools.product(
         ("star_arc", "circumduction"), (20.0, 45.0), (0.0, 30.0)
     ):
         condition = {"motion": motion, "rom_deg": rom_deg, "sta_mm": sta_mm}
-        trials = hip_sta.simulate(condition, hip_sta.HipStaProtocol(), rngs())
+        trials = hip_sta.simulate(condition, hip_sta.HipStaProtocol(), _rngs())
         _pulled_in(f"skin markers, {motion} {rom_deg:g} deg, artefact {sta_mm:g} mm", trials)
 
 
 def knee() -> None:
+    """Each joint-centre method's share, pull and status on the real knee trial."""
     recording = jointbench.read(KNEE)
     prepared = jointbench.prepare(
         recording, "joint_center", "RLEG1,RLEG2,RLEG3,RATT", "RTHI1,RTHI2,RTHI3,RGT"

@@ -11,7 +11,7 @@ import pytest
 
 import jointbench
 from jointbench.estimators import centre_precision, support
-from jointbench.estimators.pose_noise import Segment, bias_mm, pose_noise
+from jointbench.estimators.pose_noise import NoisyPoses, pose_noise, pull_mm
 from jointbench.estimators.results import JointCenterResult
 from jointbench.geometry import rotation_about_axis, rotation_matrix
 
@@ -78,7 +78,7 @@ def errors_and_pulls(clean: tuple, n_draws: int) -> tuple[np.ndarray, np.ndarray
         verdict = support.assess("joint_center", segments)
         answer = jointbench.fit_joint_center(*segments, method="SCoRE").center
         errors.append(answer - CENTRE)
-        pulls.append(bias_mm(verdict.pose_noise, answer))
+        pulls.append(pull_mm(verdict.pose_noise, answer))
     return np.array(errors), np.array(pulls)
 
 
@@ -234,12 +234,12 @@ def test_noise_that_takes_the_whole_rotation_off_the_axis_leaves_no_bound():
         "tmi,tmj->tij", centred, centred
     )
     segments = [
-        Segment(rotation, body, np.linalg.inv(inertia), np.array([25.0]))
+        NoisyPoses(rotation, body, np.linalg.inv(inertia), np.array([25.0]))
         for rotation in (np.broadcast_to(np.eye(3), distal.shape), distal)
     ]
     (noise,) = pose_noise(*segments)
     assert np.isinf(noise.share)
-    assert np.isinf(bias_mm(noise, np.array([0.0, 0.0, 50.0]))).all()
+    assert np.isinf(pull_mm(noise, np.array([0.0, 0.0, 50.0]))).all()
     verdict = support.Support((), {}, pose_noise=noise)
     result = JointCenterResult(
         converged=True, iterations=1, status="ok", method="test", center=np.zeros(3)

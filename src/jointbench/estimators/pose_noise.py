@@ -4,16 +4,16 @@ A joint centre from two segments (SCoRE, the analytic centre, the Gauss–Markov
 by the relative rotations: a point ``a_p`` in the proximal segment and ``a_d`` in the distal
 one, offsets from each cluster's centroid in its body frame, with
 ``R_p a_p + t_p = R_d a_d + t_d`` in every frame. Stacked over the ``N`` frames this is the
-least-squares problem ``A x = b`` of :mod:`jointbench.estimators.twosegment`, whose normal
+least-squares problem ``A x = b`` of :mod:`jointbench.numerics.joint_system`, whose normal
 matrix ``M = [[N I, -S], [-S', N I]]`` (``S = sum_k Q_k``, ``Q_k = R_p' R_d`` the relative
 rotation) has, on nearly hinged motion, one eigenvalue that only the rotation off the hinge
 keeps from zero: along the hinge axis in both frames.
 
 The rotations are noisy: to first order ``R_k = R0_k exp([e_k]x)`` with ``e_k`` of covariance
-``Sigma = s^2 K^-1`` in the body frame (``K = sum_m (|u_m|^2 I - u_m u_m')`` the inertia of
-the centred body-fixed markers ``u_m``, Pennec & Thirion's pose covariance, ``s^2`` the
-rigid-body residual per coordinate). Each segment has its own ``s^2``, from its own
-residuals: the noisier segment's poses are the noisier ones. The noise is taken to be the
+``Sigma = s^2 K^-1`` in the body frame, the pose covariance the support verdict tests the
+rotation against (:mod:`jointbench.estimators.support`, "two segments"). Each segment has its
+own ``s^2``, from its own rigid-body residuals: the noisier segment's poses are the noisier
+ones. The noise is taken to be the
 same in every direction of the world, which the residuals of three or four markers cannot
 tell apart from the geometry of their cluster (a camera's larger noise along its depth is a
 limit the README measures). Frame 0's poses are the identity by construction (the body frame
@@ -59,7 +59,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["PoseNoise", "Segment", "bias_mm", "pose_noise"]
+from jointbench.numerics.joint_system import normal_matrix
+
+__all__ = ["NoisyPoses", "PoseNoise", "pose_noise", "pull_mm"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,11 +69,11 @@ class PoseNoise:
     """What the noise in one trial's two segment poses does to a least-squares joint centre:
     ``operator`` ``(6, 6)``, ``(M + B)^-1 B``, maps an answer's offsets from the proximal and
     distal clusters' centroids ``(a_p, a_d)`` [mm] (body frames, which are the world's at
-    frame 0) to how far the noise pulled it, ``(delta_p, delta_d)`` [mm] (``inf`` where
-    ``share`` is); ``centroids`` ``(2, 3)`` [mm] those centroids; ``share`` the ratio of the
-    noise's information to the noise-free information along the least determined direction
-    (module docstring). Equal to another with the same numbers, so that verdicts carrying one
-    compare as values."""
+    frame 0) to how far the noise pulled those points [mm] (``inf`` where ``share`` is);
+    ``centroids`` ``(2, 3)`` [mm] those centroids; ``share`` the ratio of the noise's
+    information to the noise-free information along the least determined direction (module
+    docstring). Equal to another with the same numbers, so that verdicts carrying one compare
+    as values."""
 
     operator: np.ndarray
     centroids: np.ndarray
@@ -87,7 +89,7 @@ class PoseNoise:
         )
 
 
-class Segment(NamedTuple):
+class NoisyPoses(NamedTuple):
     """One segment's poses in ``T`` trials, as the pull reads them: ``rotation``
     ``(T, N, 3, 3)``, the body-fixed markers ``body`` ``(T, n, 3)`` [mm], the inverse of their
     centred inertia ``inertia_inv`` ``(T, 3, 3)`` [mm^-2] and the rigid-body residual per
@@ -99,34 +101,40 @@ class Segment(NamedTuple):
     variance: np.ndarray
 
 
-def _shrinkage(segment: Segment) -> np.ndarray:
+def _shrinkage(poses: NoisyPoses) -> np.ndarray:
     """``G = (Sigma - tr(Sigma) I) / 2`` ``(T, 3, 3)`` [rad^2] with ``Sigma = s^2 K^-1`` the
     covariance of a pose's rotation in the body frame (module docstring)."""
-    sigma = segment.variance[:, None, None] * segment.inertia_inv
+    sigma = poses.variance[:, None, None] * poses.inertia_inv
     trace = np.trace(sigma, axis1=1, axis2=2)
     return (sigma - trace[:, None, None] * np.eye(3)) / 2.0
 
 
-def pose_noise(proximal: Segment, distal: Segment) -> list[PoseNoise]:
+def pose_noise(proximal: NoisyPoses, distal: NoisyPoses) -> list[PoseNoise]:
     """Per trial, the :class:`PoseNoise` of the ``proximal`` and ``distal`` segments' poses
     (module docstring: ``M``, ``B`` and the share)."""
     n_frames = proximal.rotation.shape[1]
-    relative = np.einsum("tkji,tkjl->til", proximal.rotation, distal.rotation)
-    relative_t = relative.transpose(0, 2, 1)
+    relative_sum = np.einsum("tkji,tkjl->til", proximal.rotation, distal.rotation)
     g_p, g_d = _shrinkage(proximal), _shrinkage(distal)
-    pull = np.block([[n_frames * g_p, relative @ g_d], [relative_t @ g_p, n_frames * g_d]])
-    frames_eye = n_frames * np.broadcast_to(np.eye(3), relative.shape)
-    normal = np.block([[frames_eye, -relative], [-relative_t, frames_eye]])
-    corrected = normal + pull
-    values, vectors = np.linalg.eigh((corrected + corrected.transpose(0, 2, 1)) / 2.0)
+    attenuation = np.block(
+        [
+            [n_frames * g_p, relative_sum @ g_d],
+            [np.swapaxes(relative_sum, 1, 2) @ g_p, n_frames * g_d],
+        ]
+    )
+    corrected = normal_matrix(relative_sum, n_frames) + attenuation
+    # M + B is not symmetric; the information along a direction v is v' (M + B) v, which only
+    # its symmetric part carries.
+    values, vectors = np.linalg.eigh((corrected + np.swapaxes(corrected, 1, 2)) / 2.0)
     least, direction = values[:, 0], vectors[:, :, 0]
-    noise = -np.einsum("ti,tij,tj->t", direction, pull, direction)
+    noise_information = -np.einsum("ti,tij,tj->t", direction, attenuation, direction)
+    # No noise-free information left along v: the noise took it all, and no share or pull is
+    # finite (nor is M + B safely solvable there).
     determined = least > 0.0
     share = np.full(least.shape, np.inf)
-    share[determined] = noise[determined] / least[determined]
-    operator = np.full_like(pull, np.inf)
+    share[determined] = noise_information[determined] / least[determined]
+    operator = np.full_like(attenuation, np.inf)
     if determined.any():
-        operator[determined] = np.linalg.solve(corrected[determined], pull[determined])
+        operator[determined] = np.linalg.solve(corrected[determined], attenuation[determined])
     centroids = np.stack([proximal.body.mean(axis=1), distal.body.mean(axis=1)], axis=1)
     return [
         PoseNoise(operator[t], centroids[t], float(share[t]))
@@ -134,13 +142,13 @@ def pose_noise(proximal: Segment, distal: Segment) -> list[PoseNoise]:
     ]
 
 
-def bias_mm(noise: PoseNoise, centre: np.ndarray) -> np.ndarray:
+def pull_mm(noise: PoseNoise, centre: np.ndarray) -> np.ndarray:
     """How far ``(3,)`` [mm] the noise in the poses pulled a joint centre answered at
-    ``centre`` ``(3,)`` [mm] (body frames shared at frame 0): the mean of the proximal and
-    distal parts, the world position at frame 0 of the two points. ``inf`` where ``noise``'s
-    share is."""
+    ``centre`` ``(3,)`` [mm] (body frames shared at frame 0): the mean of the pulls of its
+    proximal and distal points, the world position at frame 0 of the two. ``inf`` where
+    ``noise``'s share is."""
     if np.isinf(noise.share):
         return np.full(3, np.inf)
     offsets = (centre - noise.centroids).reshape(6)
-    delta = noise.operator @ offsets
-    return (delta[:3] + delta[3:]) / 2.0
+    pulled = noise.operator @ offsets
+    return (pulled[:3] + pulled[3:]) / 2.0

@@ -394,7 +394,9 @@ def _answers_checked(kind: str, results: list, stacked: tuple, verdicts: list) -
         ]
     if kind == "center":
         return centre_precision.annotate_many(results, stacked[0], verdicts)
-    return centre_precision.annotate_joint_centres(results, verdicts)
+    if kind == "joint_center":
+        return centre_precision.annotate_joint_centres(results, verdicts)
+    return results
 
 
 def _checked_many(entry: _Entry) -> Callable[..., list]:

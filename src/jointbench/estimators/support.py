@@ -132,7 +132,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jointbench.estimators.batching import check_poses
-from jointbench.estimators.pose_noise import PoseNoise, Segment, pose_noise
+from jointbench.estimators.pose_noise import NoisyPoses, PoseNoise, pose_noise
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES
@@ -262,6 +262,11 @@ class _Clusters(NamedTuple):
     largest: np.ndarray  # (T,) largest absolute coordinate [mm]
     dof: int
     nonrigid_share: np.ndarray  # (T,) s^2 / v, see the module docstring
+
+    @property
+    def variance(self) -> np.ndarray:
+        """``(T,)`` the rigid-body residual per coordinate, ``s^2`` [mm^2]."""
+        return self.residual_ss / self.dof
 
 
 def _poses_defined(markers: np.ndarray) -> bool:
@@ -1610,7 +1615,7 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
         else _verdict(
             kind,
             names,
-            [(c.nonrigid_share[t], np.sqrt(3.0 * c.residual_ss[t] / c.dof)) for c in clusters],
+            [(c.nonrigid_share[t], np.sqrt(3.0 * c.variance[t])) for c in clusters],
             float(variance[t]),
             (
                 rotation.rms_rad[t],
@@ -1630,7 +1635,7 @@ def _centre_pose_noise(clusters: list[_Clusters]) -> list[PoseNoise]:
     least-squares joint centre (:func:`jointbench.estimators.pose_noise.pose_noise`), each
     segment with its own noise."""
     return pose_noise(
-        *(Segment(c.rotation, c.body, c.inertia_inv, c.residual_ss / c.dof) for c in clusters)
+        *(NoisyPoses(c.rotation, c.body, c.inertia_inv, c.variance) for c in clusters)
     )
 
 

@@ -61,6 +61,7 @@ from jointbench.estimators.segment_poses import (
     with_stopped_fits,
 )
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.joint_system import stacked_normal_equations
 from jointbench.numerics.rank import negligible
 from jointbench.numerics.small import inertia_into, tangent_basis_into
 
@@ -117,31 +118,6 @@ class PoseStack:
 
     def __init__(self, poses: list[SegmentPoses]) -> None:
         self.poses = poses
-
-
-def stacked_normal_equations(
-    r1: np.ndarray | None, t1: np.ndarray | None, r2: np.ndarray, t2: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per trial, ``A'A`` ``(T, 6, 6)`` and ``A'b`` ``(T, 6)`` of ``A = [R1, -R2]`` stacked over
-    the frames and ``b = t2 - t1``, for rotations ``(T, N, 3, 3)`` and translations
-    ``(T, N, 3)`` [mm].
-
-    ``r1 = t1 = None`` means the identity reference pose (one-segment data).
-    """
-    n_trials, n_frames = r2.shape[:2]
-    rhs = t2 if t1 is None else t2 - t1
-    normal = np.empty((n_trials, 6, 6))
-    normal[:, :3, :3] = normal[:, 3:, 3:] = n_frames * np.eye(3)
-    if r1 is None:
-        s = r2.sum(axis=1)
-        g1 = rhs.sum(axis=1)
-    else:
-        s = np.einsum("tfji,tfjk->tik", r1, r2)
-        g1 = np.einsum("tfji,tfj->ti", r1, rhs)
-    normal[:, :3, 3:] = -s
-    normal[:, 3:, :3] = -np.swapaxes(s, 1, 2)
-    g2 = -np.einsum("tfji,tfj->ti", r2, rhs)
-    return normal, np.concatenate([g1, g2], axis=1)
 
 
 def _eigen(
