@@ -14,6 +14,8 @@ Prints, with the current code (``jointbench.fit_joint_center``, every joint-cent
   the same counts for SCoRE and the analytic centre;
 * a noisy pelvis with a nearly noise-free thigh, the other way round, and noise larger along
   one direction of the world than across it: the same counts for SCoRE and the analytic centre;
+* the support verdict on pure hinges whose segments carry unequal noise: how often it resolves
+  a second axis of rotation (at its level, a thousandth);
 * the pull against the mean error of SCoRE over ``--draws`` noise draws, three geometries of
   three near-hinges;
 * paper C's hip rig (``jointbench.simulate.hip``, at 150 and 1200 frames) and the skin-marker
@@ -35,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 import jointbench
+from jointbench.estimators import support
 from jointbench.simulate import hip, hip_sta
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -100,6 +103,25 @@ def unequal_and_anisotropic(n_geometries: int) -> None:
             for geometry in range(n_geometries)
         ]
         _count(label, trials, ("SCoRE", "analytic"))
+
+
+def hinge_calibration() -> None:
+    """How often the support verdict resolves a second axis on a pure hinge whose two segments
+    carry unequal noise (and equal, for comparison): 10 geometries x 20 noise draws each."""
+    cases = {
+        "0.2 and 1 mm": ((40.0, 20.0), (0.2, 1.0)),
+        "1 mm compact, 0.1 mm wide": ((15.0, 60.0), (1.0, 0.1)),
+        "0.1 mm wide, 1 mm compact": ((60.0, 15.0), (0.1, 1.0)),
+        "0.5 and 0.5 mm": ((40.0, 20.0), (0.5, 0.5)),
+    }
+    for label, (spreads_mm, noise_mm) in cases.items():
+        resolved = 0
+        for geometry in range(10):
+            clean = _hip(geometry, ratio=0.0, spreads_mm=spreads_mm)
+            for seed in range(20):
+                verdict = support.assess("joint_center", _noisy(clean, seed, noise_mm))
+                resolved += verdict.diagnostics["off_axis_p_value"] < support.ROTATION_ALPHA
+        print(f"pure hinge, noise {label:28s} second axis resolved in {resolved} of 200")
 
 
 def thin(n_geometries: int) -> None:
@@ -179,6 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     hips(args.geometries)
     thin(args.geometries)
     unequal_and_anisotropic(args.geometries)
+    hinge_calibration()
     pull_against_error(args.draws)
     studies()
     knee()
