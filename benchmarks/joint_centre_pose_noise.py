@@ -37,11 +37,18 @@ from pathlib import Path
 import numpy as np
 
 import jointbench
-from jointbench.estimators import support
 from jointbench.simulate import hip, hip_sta
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_pose_noise import _PULLED, CENTRE, _hip, _noisy, _thin_thigh, errors_and_pulls
+from test_pose_noise import (
+    _PULLED,
+    CENTRE,
+    _hip,
+    _noisy,
+    _thin_thigh,
+    errors_and_pulls,
+    second_axes_resolved,
+)
 
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
 MOTIONS = {
@@ -115,12 +122,7 @@ def hinge_calibration() -> None:
         "0.5 and 0.5 mm": ((40.0, 20.0), (0.5, 0.5)),
     }
     for label, (spreads_mm, noise_mm) in cases.items():
-        resolved = 0
-        for geometry in range(10):
-            clean = _hip(geometry, ratio=0.0, spreads_mm=spreads_mm)
-            for seed in range(20):
-                verdict = support.assess("joint_center", _noisy(clean, seed, noise_mm))
-                resolved += verdict.diagnostics["off_axis_p_value"] < support.ROTATION_ALPHA
+        resolved = second_axes_resolved(spreads_mm, noise_mm, 20)
         print(f"pure hinge, noise {label:28s} second axis resolved in {resolved} of 200")
 
 

@@ -65,6 +65,19 @@ def _noisy(segments: tuple, seed: int, noise_mm=0.5) -> tuple:
     )
 
 
+def second_axes_resolved(spreads_mm: tuple, noise_mm: tuple, n_draws: int) -> int:
+    """On pure hinges (:func:`_hip` of 10 geometries, markers scattered by ``spreads_mm``,
+    ``n_draws`` draws of noise ``noise_mm`` each), how many times the support verdict resolves
+    rotation off the hinge at its level."""
+    resolved = 0
+    for geometry in range(10):
+        clean = _hip(geometry, ratio=0.0, spreads_mm=spreads_mm)
+        for seed in range(n_draws):
+            verdict = support.assess("joint_center", _noisy(clean, seed, noise_mm))
+            resolved += verdict.diagnostics["off_axis_p_value"] < support.ROTATION_ALPHA
+    return resolved
+
+
 def _status(segments: tuple, method: str):
     return jointbench.fit_joint_center(*segments, method=method)
 

@@ -230,13 +230,8 @@ def test_a_pure_hinge_with_unequal_noise_resolves_no_second_axis():
     verdict's level, a thousandth, in at most 3 of 100 trials each. With the pooled noise
     charged to both poses it was resolved in most of them (85 to 182 of 200), passing a hinge
     as fixing a joint centre."""
-    from test_pose_noise import _hip, _noisy
+    from test_pose_noise import second_axes_resolved
 
     for spreads_mm, noise_mm in (((40.0, 20.0), (0.2, 1.0)), ((15.0, 60.0), (1.0, 0.1))):
-        resolved = 0
-        for geometry in range(10):
-            clean = _hip(geometry, ratio=0.0, spreads_mm=spreads_mm)
-            for seed in range(10):
-                verdict = support.assess("joint_center", _noisy(clean, seed, noise_mm))
-                resolved += verdict.diagnostics["off_axis_p_value"] < support.ROTATION_ALPHA
+        resolved = second_axes_resolved(spreads_mm, noise_mm, 10)
         assert resolved <= 3, (spreads_mm, noise_mm, resolved)
