@@ -213,7 +213,7 @@ def test_a_compact_cluster_is_not_charged_with_its_noisier_neighbours_noise():
     """A compact pelvis cluster (markers 8 mm about their centre) with 0.1 mm noise beside a
     wide thigh cluster with 3 mm, swung 30 deg about two axes: the rotation off the main axis
     is resolved in every one of 48 trials. With the pooled noise charged to both poses, the
-    compact cluster's rotation noise read 30 times too large, and 12 were refused as rotating
+    compact cluster's rotation SD read some 20 times too large, and 12 were refused as rotating
     about a single axis."""
     from test_pose_noise import _hip, _noisy
 
@@ -227,9 +227,10 @@ def test_a_compact_cluster_is_not_charged_with_its_noisier_neighbours_noise():
 def test_a_pure_hinge_with_unequal_noise_resolves_no_second_axis():
     """A pure hinge between two segments whose noise differs (0.2 and 1 mm, or 1 mm on a
     compact cluster beside 0.1 mm on a wide one): the rotation off the hinge is resolved at the
-    verdict's level, a thousandth, in at most 3 of 100 trials each. With the pooled noise
-    charged to both poses it was resolved in most of them (85 to 182 of 200), passing a hinge
-    as fixing a joint centre."""
+    verdict's level, a thousandth, in at most 3 of 100 trials each, near the 1 in 200 this
+    generator gives with equal noise. With the
+    pooled noise charged to both poses it was resolved in most of them (85 to 182 of 200),
+    passing a hinge as fixing a joint centre."""
     from test_pose_noise import second_axes_resolved
 
     for spreads_mm, noise_mm in (((40.0, 20.0), (0.2, 1.0)), ((15.0, 60.0), (1.0, 0.1))):

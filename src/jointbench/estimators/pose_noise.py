@@ -12,8 +12,8 @@ keeps from zero: along the hinge axis in both frames.
 The rotations are noisy: to first order ``R_k = R0_k exp([e_k]x)`` with ``e_k`` of covariance
 ``Sigma = s^2 K^-1`` in the body frame, the pose covariance the support verdict tests the
 rotation against (:mod:`jointbench.estimators.support`, "two segments"). Each segment's
-``s^2`` is its own rigid-body residual where the two segments' residuals differ beyond their
-sampling noise, as the verdict takes it: the noisier segment's poses are the noisier ones.
+``s^2`` is its own rigid-body residual, as the verdict takes it: the noisier segment's poses
+are the noisier ones.
 The noise is taken to be the same in every direction of the world, which the residuals of
 three or four markers cannot tell apart from the geometry of their cluster (a camera's
 larger noise along its depth is a limit the README measures). Frame 0's poses are the

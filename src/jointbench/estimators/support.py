@@ -111,9 +111,11 @@ converging are judged as they are, and the estimator's result says they stopped)
 ``S`` its noise covariance (``s_c^2 K^-1`` with ``K = sum_i (|u_i|^2 I - u_i u_i')`` the inertia
 of the centred body-fixed markers, Pennec & Thirion's pose covariance, and ``s_c^2`` the
 cluster's own residual per coordinate, plus the proximal cluster's term mapped into the distal
-frame: a compact cluster beside a noisier one is no noisier for it), ``sum_k w_k' S^-1 w_k /
-(3 (N - 1))``, with ``S`` read as a multiple of the pooled ``s^2``, is F-distributed with
-``(3 (N - 1), dof)`` degrees of freedom when the segment does not rotate;
+frame: a compact cluster is no noisier for a noisier neighbour, nor that one less noisy),
+``sum_k w_k' S^-1 w_k / (3 (N - 1))``, with ``S`` read as a multiple of the pooled ``s^2``, is
+about F-distributed with ``(3 (N - 1), dof)`` degrees of freedom when the segment does not
+rotate (where one segment's noise dominates ``S``, its own degrees of freedom, fewer, are the
+truer denominator's);
 the two smaller eigenvalues of the whitened scatter ``sum_k z_k z_k'`` (``z_k = S^-1/2 w_k``)
 are tested the same way with ``(2 (N - 1), dof)``.
 
@@ -1596,18 +1598,12 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     largest = functools.reduce(np.maximum, [cluster.largest for cluster in clusters])
     exact = variance <= (ROUNDING * largest) ** 2
     frames = _segments_frames(names, arrays)
-    if kind == "joint_center":
-        # The F-tests divide by the pooled s^2, but each segment's poses carry their own noise:
-        # a compact cluster beside a noisier one is not as noisy as the pooled s^2 would make
-        # it.
-        noise_variances = _noise_variances(clusters, variance)
-        weighted = [
-            _with_noise(cluster, own, variance)
-            for cluster, own in zip(clusters, noise_variances, strict=True)
-        ]
-        reference = weighted[0]
-    else:
-        weighted, reference = clusters, None
+    # The F-tests divide by the pooled s^2, but each segment's poses carry their own noise:
+    # charged with the pooled s^2, a compact cluster beside a noisier one reads far noisier than
+    # it is and the noisier one less noisy, and a pure hinge then passes as rotating about a
+    # second axis.
+    weighted = [_with_own_noise(cluster, variance) for cluster in clusters]
+    reference = weighted[0] if kind == "joint_center" else None
     rotation = _rotation_test(weighted[-1], reference, variance, dof, exact)
     # A rotation about the cluster's weakest axis worse determined than this (noise s over the
     # markers' spread about that axis) leaves the pose to the noise (nearly collinear markers):
@@ -1615,7 +1611,7 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     weakest = np.sqrt(
         functools.reduce(np.maximum, [c.weakest_variance for c in weighted]) * variance
     )
-    noise = _centre_pose_noise(clusters, noise_variances) if kind == "joint_center" else None
+    noise = _centre_pose_noise(clusters) if kind == "joint_center" else None
     return [
         _without_poses(
             tuple(array[t] for array in arrays),
@@ -1643,48 +1639,24 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
     ]
 
 
-def _noise_variances(clusters: list[_Clusters], pooled: np.ndarray) -> list[np.ndarray]:
-    """Per cluster of two, the residual per coordinate ``(T,)`` [mm^2] its poses' noise is
-    taken at: its own where the two clusters' residuals differ beyond their sampling noise
-    (their ratio outside its two-sided F quantiles at :data:`ROTATION_ALPHA`; markers on skin
-    beside a plate, a camera nearer one segment), else the ``pooled`` one, which a few
-    frames' residuals estimate far better than either alone."""
-    # fdtri (the F quantile) from scipy.special, imported here as _rotation_test does fdtrc.
-    from scipy.special import fdtri
-
-    first, second = clusters
-    ratio = np.divide(
-        first.variance,
-        second.variance,
-        out=np.where(first.variance > 0.0, np.inf, 1.0),
-        where=second.variance > 0.0,
-    )
-    low, high = fdtri(first.dof, second.dof, [ROTATION_ALPHA / 2.0, 1.0 - ROTATION_ALPHA / 2.0])
-    differ = (ratio < low) | (ratio > high)
-    return [np.where(differ, cluster.variance, pooled) for cluster in clusters]
-
-
-def _with_noise(cluster: _Clusters, variance: np.ndarray, pooled: np.ndarray) -> _Clusters:
-    """``cluster`` with its inverse inertia (and its largest eigenvalue) scaled by the
-    residual ``variance`` ``(T,)`` [mm^2] its poses' noise is taken at over the ``pooled`` one,
-    so that ``pooled`` times it is the covariance ``s^2 K^-1`` of its poses' rotations;
-    unscaled where the pooled residual is zero."""
-    weight = np.divide(variance, pooled, out=np.ones_like(pooled), where=pooled > 0.0)
+def _with_own_noise(cluster: _Clusters, pooled: np.ndarray) -> _Clusters:
+    """``cluster`` with its inverse inertia (and its largest eigenvalue) scaled by its own
+    rigid-body residual over the ``pooled`` one ``(T,)`` [mm^2], so that ``pooled`` times it is
+    the covariance ``s^2 K^-1`` of its poses' rotations with its own ``s^2``; unscaled where
+    the pooled residual is zero."""
+    weight = np.divide(cluster.variance, pooled, out=np.ones_like(pooled), where=pooled > 0.0)
     return cluster._replace(
         inertia_inv=cluster.inertia_inv * weight[:, None, None],
         weakest_variance=cluster.weakest_variance * weight,
     )
 
 
-def _centre_pose_noise(clusters: list[_Clusters], variances: list[np.ndarray]) -> list[PoseNoise]:
-    """Per trial, what the noise in the proximal and distal ``clusters``' poses, at the
-    residuals ``variances`` ``(T,)`` [mm^2] each (:func:`_noise_variances`), does to a
-    least-squares joint centre (:func:`jointbench.estimators.pose_noise.pose_noise`)."""
+def _centre_pose_noise(clusters: list[_Clusters]) -> list[PoseNoise]:
+    """Per trial, what the noise in the proximal and distal ``clusters``' poses, each at its own
+    residual, does to a least-squares joint centre
+    (:func:`jointbench.estimators.pose_noise.pose_noise`)."""
     return pose_noise(
-        *(
-            NoisyPoses(c.rotation, c.body, c.inertia_inv, variance)
-            for c, variance in zip(clusters, variances, strict=True)
-        )
+        *(NoisyPoses(c.rotation, c.body, c.inertia_inv, c.variance) for c in clusters)
     )
 
 
