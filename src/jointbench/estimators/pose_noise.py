@@ -13,13 +13,13 @@ The rotations are noisy: to first order ``R_k = R0_k exp([e_k]x)`` with ``e_k`` 
 ``Sigma = s^2 K^-1`` in the body frame, the pose covariance the support verdict tests the
 rotation against (:mod:`jointbench.estimators.support`, "two segments"). Each segment's
 ``s^2`` is its own rigid-body residual, as the verdict takes it: the noisier segment's poses
-are the noisier ones.
-The noise is taken to be the same in every direction of the world, which the residuals of
-three or four markers cannot tell apart from the geometry of their cluster (a camera's
-larger noise along its depth is a limit the README measures). Frame 0's poses are the
-identity by construction (the body frame is the world's there), which moves frame 0's error
-into every other frame's pose: a rotation of the body frames shared by all frames, which
-moves no centre. Relative to it frame 0 is as noisy as the others, and every frame counts.
+are the noisier ones. The noise is taken to be the same in every direction of the world,
+which the residuals of three or four markers cannot tell apart from the geometry of their
+cluster (a camera's larger noise along its depth is a limit the README measures). Frame 0's
+poses are the identity by construction (the body frame is the world's there), which moves
+frame 0's error into every other frame's pose: a rotation of the body frames shared by all
+frames, which moves no centre. Relative to it frame 0 is as noisy as the others, and every
+frame counts.
 
 Noise in a regressor is not noise in an answer: ``E[exp([e]x)] = I + G`` with
 ``G = (Sigma - tr(Sigma) I) / 2``, so the noise shrinks the mean relative rotation towards no
