@@ -45,10 +45,13 @@ def test_a_planar_answer_far_off_on_a_small_arc_is_warned_about():
     assert found["principal_axis_noise_share"] < 1.0
     assert found["principal_axis_sd_deg"] < precision.MAX_AXIS_SD_DEG
     assert angle_between_lines_deg(np.array(found["principal_axis"]), np.array([1, 0, 0])) < 5
-    assert result.status == (
+    # Held within 5 degrees of it, not 30: the markers leave the planar cost's model of a
+    # fixed axis (tests/test_axis_misfit.py).
+    assert found["band_deg"] == precision.MISFIT_BAND_DEG
+    assert result.status.startswith(
         f"warning: {NOT_THE_MOTIONS}: the answer lies {found['angle_deg']:.0f} deg from the "
-        f"principal axis of the segment's rotations, beyond 30 deg by {found['z']:.2f} times "
-        f"that axis's SD of {found['principal_axis_sd_deg']:.2g} deg (above 3.09 at 0.001)"
+        f"principal axis of the segment's rotations, beyond 5 deg by {found['z']:.2f} times "
+        f"that axis's SD of {found['principal_axis_sd_deg']:.2g} deg (above 3.09 at 0.001); "
     )
     assert result.converged  # left as the method set it
     bare = registry.get("axis", "planar", checked=False)(markers)

@@ -120,7 +120,7 @@ def test_the_analytic_hessians_match_the_costs_central_differences():
     direction = np.array([0.05, -0.03, 1.0]) / np.linalg.norm([0.05, -0.03, 1.0])
     foot = CENTRE + np.array([0.4, -0.2, 20.0])
     basis = precision.tangent_basis(direction)
-    gradient, hessian, cost = axis._radial_derivatives(markers, foot, direction, basis)
+    gradient, hessian, cost, _ = axis._radial_derivatives(markers, foot, direction, basis)
     assert cost == pytest.approx(float(axis.AxisCosts(markers, foot).radial(direction)), rel=1e-12)
     expected = _numerical_hessian(markers, foot, direction, basis)
     assert np.abs(hessian - expected).max() < 1e-5 * np.abs(hessian).max()

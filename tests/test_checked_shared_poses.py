@@ -107,8 +107,8 @@ def _checked_alone(fn, result, arrays: tuple, options: dict):
     verdict and the check of the answer against it, each fitting its own poses."""
     result = registry._self_checked(fn, result, arrays, options)
     stacked = tuple(array[None] for array in arrays)
-    (result,) = registry._precision_checked(fn, [result], stacked, None)
     verdict = support.assess(KIND, arrays)
+    (result,) = registry._precision_checked(fn, [result], stacked, None, [verdict])
     (result,) = registry._answers_checked(KIND, [result], stacked, [verdict])
     return support.annotate(result, verdict)
 

@@ -100,7 +100,7 @@ import functools
 import math
 import typing
 from collections.abc import Callable
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 
@@ -110,6 +110,7 @@ from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.registry import many, register
 from jointbench.estimators.results import AxisResult
 from jointbench.estimators.sphere import fit_nm  # noqa: F401 (registers NM, used below)
+from jointbench.estimators.support import Support
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.numerics.compiled import kernel, kernel_array
@@ -398,6 +399,34 @@ def _scatters(markers: np.ndarray) -> np.ndarray:
                 )
         symmetric_into(sums, scatter[t])
     return scatter
+
+
+@kernel
+def _height_fourths(markers: np.ndarray, direction: np.ndarray) -> float:
+    """``sum_p sum_k (n . u)^4`` [mm^4] of one trial's ``markers`` ``(N, P, 3)`` [mm] along
+    the unit ``direction`` ``n`` (3,), ``u`` a marker's offset from its trajectory centroid:
+    the planar residuals' fourth powers. A compiled kernel (the offsets as NumPy arrays cost
+    most of a long trial's statement of precision)."""
+    n_frames, n_markers, _ = markers.shape
+    total = 0.0
+    for p in range(n_markers):
+        mean = 0.0
+        for k in range(n_frames):
+            mean += (
+                markers[k, p, 0] * direction[0]
+                + markers[k, p, 1] * direction[1]
+                + markers[k, p, 2] * direction[2]
+            )
+        mean /= n_frames
+        for k in range(n_frames):
+            height = (
+                markers[k, p, 0] * direction[0]
+                + markers[k, p, 1] * direction[1]
+                + markers[k, p, 2] * direction[2]
+                - mean
+            )
+            total += height**4
+    return total
 
 
 @kernel
@@ -890,12 +919,12 @@ def _tangential_sum(factor: np.ndarray, unit: np.ndarray) -> np.ndarray:
 
 def _radial_derivatives(
     markers: np.ndarray, foot: np.ndarray, direction: np.ndarray, basis: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, float]:
+) -> tuple[np.ndarray, np.ndarray, float, float]:
     """The radial cost (radii profiled out) at the axis through ``foot`` (3,) [mm] along
     ``direction`` (3,), for ``markers`` ``(N, P, 3)`` [mm], with its gradient ``(4,)`` and
     exact Hessian ``(4, 4)`` in the tangent angles ``a`` [rad] of :func:`_planar_hessian` and
-    the axis's shift ``b`` [mm] along ``basis`` ``E`` ``(3, 2)``: ``(gradient, hessian,
-    cost)``.
+    the axis's shift ``b`` [mm] along ``basis`` ``E`` ``(3, 2)``, and its residuals' fourth
+    powers summed: ``(gradient, hessian, cost, fourths)``.
 
     A sample's offset ``w = v - m`` has ``c = n . w`` along the axis and ``x = E' w`` across it,
     its distance being ``d = |x|``. At ``a = b = 0``: ``dd/da = -c x / d``,
@@ -922,7 +951,8 @@ def _radial_derivatives(
     hessian = 2.0 * centred.T @ centred
     hessian += 2.0 * np.block([[aa, ab], [ab, bb]])
     gradient = 2.0 * residual.reshape(-1) @ gradient.reshape(-1, 4)
-    return gradient, hessian, float(np.sum(residual**2))
+    squares = np.square(residual)
+    return gradient, hessian, float(np.sum(squares)), float(np.sum(np.square(squares)))
 
 
 def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str):
@@ -936,6 +966,45 @@ def _planar_gap(planar_hessian: np.ndarray) -> float:
     :func:`_planar_hessian` gives at ``n``; at the minimum, the smaller of ``S``'s two other
     eigenvalues less the answer's."""
     return precision.smaller_eigenvalue(0.5 * planar_hessian)
+
+
+class _CostAt(NamedTuple):
+    """A method's cost at an axis, with what its statements of precision read
+    (:func:`_cost_at`)."""
+
+    gradient: np.ndarray  # (k,): the direction's two tangent angles [rad], then the shift [mm]
+    hessian: np.ndarray  # (k, k)
+    cost: float  # [mm^2]
+    fourths: float  # the residuals' fourth powers summed [mm^4]
+    n_residuals: int
+    dof: int  # residuals less the centroids or radii they are taken from, less parameters
+
+
+def _cost_at(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str) -> _CostAt:
+    """``method``'s cost at the axis through ``point`` (3,) [mm] along ``direction`` (3,) on the
+    distinct frames ``markers`` ``(N_d, P, 3)`` [mm], with its analytic gradient and Hessian
+    (:func:`_direction_precision`)."""
+    n_frames, n_markers = markers.shape[:2]
+    basis = precision.tangent_basis(direction)
+    n_params = 2 if method == "planar" else 4
+    gradient, hessian = np.zeros(n_params), np.zeros((n_params, n_params))
+    cost, fourths = 0.0, 0.0
+    if method != "radial":
+        # S does not depend on the axis's point: the planar cost needs no foot, whose centroid
+        # of every sample costs more than S itself on a long trial.
+        scatter = trial_scatter(markers)
+        gradient[:2] = 2.0 * basis.T @ scatter @ direction
+        hessian[:2, :2] = _planar_hessian(scatter, direction, basis)
+        cost = float(direction @ scatter @ direction)
+        fourths = _height_fourths(kernel_array(markers), kernel_array(direction))
+    if method != "planar":
+        foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
+        radial = _radial_derivatives(markers, foot, direction, basis)
+        gradient, hessian = gradient + radial[0], hessian + radial[1]
+        cost, fourths = cost + radial[2], fourths + radial[3]
+    n_residuals = _RESIDUAL_SETS[method] * n_markers * n_frames
+    dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
+    return _CostAt(gradient, hessian, cost, fourths, n_residuals, dof)
 
 
 def _direction_precision(
@@ -966,42 +1035,50 @@ def _direction_precision(
     whether the first-order SD holds (:func:`jointbench.estimators.precision.annotate_validity`);
     ``None`` for the others, whose radial term curves the cost on its own.
     """
-    markers = precision.distinct_frames(markers)
-    n_frames, n_markers = markers.shape[:2]
-    basis = precision.tangent_basis(direction)
-    n_params = 2 if method == "planar" else 4
-    gradient, hessian, cost = np.zeros(n_params), np.zeros((n_params, n_params)), 0.0
-    if method != "radial":
-        # S does not depend on the axis's point: the planar cost needs no foot, whose centroid
-        # of every sample costs more than S itself on a long trial.
-        scatter = trial_scatter(markers)
-        gradient[:2] = 2.0 * basis.T @ scatter @ direction
-        hessian[:2, :2] = _planar_hessian(scatter, direction, basis)
-        cost = float(direction @ scatter @ direction)
-    if method != "planar":
-        foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
-        radial = _radial_derivatives(markers, foot, direction, basis)
-        gradient, hessian, cost = gradient + radial[0], hessian + radial[1], cost + radial[2]
-    dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
-    sd = precision.direction_sd_deg(gradient, hessian, cost, dof)
-    if method != "planar":
+    return _precision_of(_cost_at(precision.distinct_frames(markers), point, direction, method))
+
+
+def _precision_of(at: _CostAt) -> tuple[float, tuple[float, float] | None]:
+    """:func:`_direction_precision` of a cost ``at`` an axis."""
+    sd = precision.direction_sd_deg(at.gradient, at.hessian, at.cost, at.dof)
+    if len(at.gradient) > 2:  # a radial term, which curves the cost on its own
         return sd, None
-    return sd, (cost, _planar_gap(hessian))
+    return sd, (at.cost, _planar_gap(at.hessian))
 
 
-def _annotated(result: AxisResult, markers: np.ndarray) -> AxisResult:
+def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> AxisResult:
     """``result`` for ``markers`` ``(N, P, 3)`` [mm] with its direction's SD
-    (:func:`_direction_precision`) and, where the first-order SD does not hold, the planar
-    eigen-problem's warning."""
-    sd, eigen = _direction_precision(
-        markers, np.asarray(result.point), np.asarray(result.direction), result.method
-    )
-    annotated = precision.annotate(result, sd, f"the {result.method} cost")
+    (:func:`_direction_precision`), where the first-order SD does not hold the planar
+    eigen-problem's warning, and its cost's misfit against the support ``verdict``'s
+    rigid-body noise (:func:`jointbench.estimators.precision.misfit`)."""
+    markers = precision.distinct_frames(markers)
+    at = _cost_at(markers, np.asarray(result.point), np.asarray(result.direction), result.method)
+    sd, eigen = _precision_of(at)
+    cost_name = f"the {result.method} cost"
+    annotated = precision.annotate(result, sd, cost_name)
     if result.method == "radial":
-        return _checked_against_planar(annotated, markers)
-    if eigen is None:
-        return annotated
-    return precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
+        annotated = _checked_against_planar(annotated, markers)
+    elif eigen is not None:
+        annotated = precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
+    return _misfit_annotated(annotated, at, markers.shape[:2], verdict)
+
+
+def _misfit_annotated(
+    result: AxisResult, at: _CostAt, shape: tuple[int, int], verdict: Support
+) -> AxisResult:
+    """``result`` with its cost's misfit ``at`` its axis against the rigid-body noise of the
+    support ``verdict`` on markers of ``shape`` ``(N_d, P)``
+    (:func:`jointbench.estimators.precision.misfit`), which the comparison with the motion's
+    axis reads (:func:`jointbench.estimators.precision.annotate_motion_axis`)."""
+    if not verdict.diagnostics.get("assessed", False):
+        why = "the support verdict did not assess the data (no rigid-body residual)"
+        return precision.annotate_misfit(result, None, why)
+    noise = verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
+    n_frames, n_markers = shape
+    found = precision.misfit(
+        *at, noise_variance=noise, noise_dof=precision.rigid_dof(n_markers, n_frames)
+    )
+    return precision.annotate_misfit(result, found)
 
 
 def _checked_against_planar(result: AxisResult, markers: np.ndarray) -> AxisResult:
@@ -1016,14 +1093,17 @@ def _checked_against_planar(result: AxisResult, markers: np.ndarray) -> AxisResu
     )
 
 
-def _precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
+def _precision_many(
+    results: list[AxisResult], markers: np.ndarray, *, verdicts: list[Support]
+) -> list[AxisResult]:
     """Each of ``results`` (one method's answers for the trials of ``markers``
     ``(T, N, P, 3)`` [mm] or a list of trials) with its direction's SD, above
-    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, and for the planar
-    cost the warning where the SD does not hold (:func:`_annotated`)."""
+    :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, for the planar
+    cost the warning where the SD does not hold, and its cost's misfit against the rigid-body
+    noise of the trial's support verdict in ``verdicts`` (:func:`_annotated`)."""
     return [
-        _annotated(result, np.asarray(array, dtype=float))
-        for result, array in zip(results, markers, strict=True)
+        _annotated(result, np.asarray(array, dtype=float), verdict)
+        for result, array, verdict in zip(results, markers, verdicts, strict=True)
     ]
 
 

@@ -862,12 +862,14 @@ def _model_warning(
 
 
 def _model_tested_many(
-    results: list[JointCenterResult], proximal, distal, *, poses=None
+    results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
 ) -> list[JointCenterResult]:
     """Each of ``results`` (the trials of ``proximal``, ``distal`` ``(T, N, n, 3)`` [mm]) with
     :func:`_model_test` on ``poses``, the poses its checked call fitted (one
     :func:`~jointbench.estimators.segment_poses.trial_poses` entry per trial), or where that
-    call shared none, on poses fitted here."""
+    call shared none, on poses fitted here. The support ``verdicts`` are not read: the test
+    holds the fit to the residuals of those poses' own rigid-body fits."""
+    del verdicts
     if poses is None:
         poses = trial_poses({"proximal": proximal, "distal": distal}, min_frames=POSE_MIN_FRAMES)
     return [

@@ -203,7 +203,8 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
     result = _self_checked(entry.fn, result, clean, options)
     stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
     if hasattr(entry.fn, "precision_many"):
-        (result,) = _precision_checked(entry.fn, [result], stacked, _fitted_to(shared, [0]))
+        poses = _fitted_to(shared, [0])
+        (result,) = _precision_checked(entry.fn, [result], stacked, poses, [verdict])
     (result,) = _answers_checked(entry.kind, [result], stacked, [verdict])
     return support.annotate(result, verdict)
 
@@ -361,19 +362,22 @@ def _self_checked_many(fn: Callable, results: list, stacked: tuple, options: dic
     return check_many(results, *stacked, **{k: v for k, v in options.items() if k != "poses"})
 
 
-def _precision_checked(fn: Callable, results: list, stacked: tuple, poses: list | None) -> list:
+def _precision_checked(
+    fn: Callable, results: list, stacked: tuple, poses: list | None, verdicts: list
+) -> list:
     """``results`` of the trials of ``stacked`` ``(T, N, n, 3)`` each with the precision of
     their answers that ``fn``'s own cost implies, where it states one
     (``fn.precision_many``, :mod:`jointbench.estimators.precision`), or the test of its model
-    (the Gauss–Markov fits, :mod:`jointbench.estimators.hjc`). A check that reads poses
-    (:func:`jointbench.estimators.segment_poses.pose_segments`) is given ``poses``, those the
-    fit read (per trial, or ``None`` where the call shared none)."""
+    (the Gauss–Markov fits, :mod:`jointbench.estimators.hjc`), given the trials' support
+    ``verdicts``, whose rigid-body noise a cost's residuals are held to. A check that reads
+    poses (:func:`jointbench.estimators.segment_poses.pose_segments`) is given ``poses``,
+    those the fit read (per trial, or ``None`` where the call shared none)."""
     check = getattr(fn, "precision_many", None)
     if check is None:
         return results
     if pose_segments(check) is None:
-        return check(results, *stacked)
-    return check(results, *stacked, poses=poses)
+        return check(results, *stacked, verdicts=verdicts)
+    return check(results, *stacked, verdicts=verdicts, poses=poses)
 
 
 def _answers_checked(kind: str, results: list, stacked: tuple, verdicts: list) -> list:
@@ -441,8 +445,8 @@ def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
         stacked = checked.stacked(fitted)
         results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
         poses = _fitted_to(options.get("poses"), fitted) if names else None
-        results = _precision_checked(entry.fn, results, stacked, poses)
         verdicts = support.assess_many(entry.kind, stacked, poses=poses)
+        results = _precision_checked(entry.fn, results, stacked, poses, verdicts)
         results = _answers_checked(entry.kind, results, stacked, verdicts)
         for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
             outcomes[trial] = support.annotate(result, verdict)

@@ -500,10 +500,14 @@ def _sara_precision_numbers(
     return numbers
 
 
-def _sara_precision_many(results: list[AxisResult], markers: np.ndarray) -> list[AxisResult]:
+def _sara_precision_many(
+    results: list[AxisResult], markers: np.ndarray, *, verdicts
+) -> list[AxisResult]:
     """Each of SARA's one-segment ``results`` (the trials of ``markers`` ``(T, N, P, 3)``
     [mm]) annotated by :func:`_sara_annotated` with the numbers of its eigen-problem
-    (:func:`_sara_precision_numbers`)."""
+    (:func:`_sara_precision_numbers`). The support ``verdicts`` are not read: the
+    eigen-problem states its own noise."""
+    del verdicts
     if not results:
         return []
     markers = kernel_array(markers)
