@@ -100,7 +100,7 @@ import functools
 import math
 import typing
 from collections.abc import Callable
-from typing import Literal, NamedTuple
+from typing import Literal
 
 import numpy as np
 
@@ -968,19 +968,9 @@ def _planar_gap(planar_hessian: np.ndarray) -> float:
     return precision.smaller_eigenvalue(0.5 * planar_hessian)
 
 
-class _CostAt(NamedTuple):
-    """A method's cost at an axis, with what its statements of precision read
-    (:func:`_cost_at`)."""
-
-    gradient: np.ndarray  # (k,): the direction's two tangent angles [rad], then the shift [mm]
-    hessian: np.ndarray  # (k, k)
-    cost: float  # [mm^2]
-    fourths: float  # the residuals' fourth powers summed [mm^4]
-    n_residuals: int
-    dof: int  # residuals less the centroids or radii they are taken from, less parameters
-
-
-def _cost_at(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str) -> _CostAt:
+def _cost_at(
+    markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str
+) -> precision.CostAt:
     """``method``'s cost at the axis through ``point`` (3,) [mm] along ``direction`` (3,) on the
     distinct frames ``markers`` ``(N_d, P, 3)`` [mm], with its analytic gradient and Hessian
     (:func:`_direction_precision`)."""
@@ -1004,7 +994,7 @@ def _cost_at(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, meth
         cost, fourths = cost + radial[2], fourths + radial[3]
     n_residuals = _RESIDUAL_SETS[method] * n_markers * n_frames
     dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
-    return _CostAt(gradient, hessian, cost, fourths, n_residuals, dof)
+    return precision.CostAt(gradient, hessian, cost, fourths, n_residuals, dof)
 
 
 def _direction_precision(
@@ -1035,13 +1025,14 @@ def _direction_precision(
     whether the first-order SD holds (:func:`jointbench.estimators.precision.annotate_validity`);
     ``None`` for the others, whose radial term curves the cost on its own.
     """
-    return _precision_of(_cost_at(precision.distinct_frames(markers), point, direction, method))
+    at = _cost_at(precision.distinct_frames(markers), point, direction, method)
+    return _precision_of(at, method)
 
 
-def _precision_of(at: _CostAt) -> tuple[float, tuple[float, float] | None]:
-    """:func:`_direction_precision` of a cost ``at`` an axis."""
+def _precision_of(at: precision.CostAt, method: str) -> tuple[float, tuple[float, float] | None]:
+    """:func:`_direction_precision` of ``method``'s cost ``at`` an axis."""
     sd = precision.direction_sd_deg(at.gradient, at.hessian, at.cost, at.dof)
-    if len(at.gradient) > 2:  # a radial term, which curves the cost on its own
+    if method != "planar":
         return sd, None
     return sd, (at.cost, _planar_gap(at.hessian))
 
@@ -1053,7 +1044,7 @@ def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> Axi
     rigid-body noise (:func:`jointbench.estimators.precision.misfit`)."""
     markers = precision.distinct_frames(markers)
     at = _cost_at(markers, np.asarray(result.point), np.asarray(result.direction), result.method)
-    sd, eigen = _precision_of(at)
+    sd, eigen = _precision_of(at, result.method)
     cost_name = f"the {result.method} cost"
     annotated = precision.annotate(result, sd, cost_name)
     if result.method == "radial":
@@ -1064,7 +1055,7 @@ def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> Axi
 
 
 def _misfit_annotated(
-    result: AxisResult, at: _CostAt, shape: tuple[int, int], verdict: Support
+    result: AxisResult, at: precision.CostAt, shape: tuple[int, int], verdict: Support
 ) -> AxisResult:
     """``result`` with its cost's misfit ``at`` its axis against the rigid-body noise of the
     support ``verdict`` on markers of ``shape`` ``(N_d, P)``
@@ -1075,9 +1066,7 @@ def _misfit_annotated(
         return precision.annotate_misfit(result, None, why)
     noise = verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
     n_frames, n_markers = shape
-    found = precision.misfit(
-        *at, noise_variance=noise, noise_dof=precision.rigid_dof(n_markers, n_frames)
-    )
+    found = precision.misfit(at, noise, precision.rigid_dof(n_markers, n_frames))
     return precision.annotate_misfit(result, found)
 
 

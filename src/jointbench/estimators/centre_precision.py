@@ -87,7 +87,7 @@ import statistics
 import numpy as np
 
 from jointbench.estimators.pose_noise import pull_mm
-from jointbench.estimators.precision import distinct_frames, lack_of_fit_z, rigid_dof
+from jointbench.estimators.precision import distinct_frames, rigid_dof
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
 from jointbench.numerics.compiled import kernel, kernel_array
@@ -471,10 +471,10 @@ def _lack_of_fit(
         row[_FIT_Z] = np.nan
         return
     ratio = squares / (dof * s2)
+    kurtosis = max(kept * n_frames * fourths / squares**2 - 3.0, 0.0) if squares > 0 else 0.0
+    noise_dof = rigid_dof(n_markers, n_frames)
     row[_FIT_RATIO] = ratio
-    row[_FIT_Z] = lack_of_fit_z(
-        ratio, squares, fourths, kept * n_frames, dof, rigid_dof(n_markers, n_frames)
-    )
+    row[_FIT_Z] = (ratio - 1.0) / math.sqrt((2.0 + kurtosis) * (1.0 / dof + 1.0 / noise_dof))
 
 
 @kernel
