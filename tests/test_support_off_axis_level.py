@@ -17,6 +17,7 @@ import pytest
 from test_pose_noise import _hip, _noisy
 
 from jointbench.estimators import support
+from jointbench.estimators.segment_poses import trial_poses
 
 
 def _off_axis_p_values(n_frames: int, n_markers: int) -> np.ndarray:
@@ -42,3 +43,26 @@ def test_a_pure_hinge_is_passed_as_two_axes_at_the_verdicts_level(n_frames, n_ma
     p_values = _off_axis_p_values(n_frames, n_markers)
     assert np.sum(p_values < support.ROTATION_ALPHA) <= 2, np.sort(p_values)[:5]
     assert 35 <= np.sum(p_values < 0.5) <= 65, np.median(p_values)
+
+
+@pytest.mark.parametrize("ratio", [0.0, 0.3])
+def test_the_way_near_pi_reads_a_hinge_as_the_compiled_pass_does(ratio):
+    """Away from pi the rotations' own way (:func:`support._spreads_near_pi`, which holds near
+    pi too) gives the compiled pass's numbers, the hinge's residual among them, to rounding."""
+    proximal, distal = _noisy(tuple(s[:, :3] for s in _hip(2, ratio=ratio, n_frames=300)), 1)
+    poses = trial_poses({"proximal": proximal[None], "distal": distal[None]}, min_frames=2)[0]
+    reference, moving = (
+        support._clusters(a[None], [poses[n]])
+        for a, n in ((proximal, "proximal"), (distal, "distal"))
+    )
+    variance = (reference.residual_ss + moving.residual_ss) / (reference.dof + moving.dof)
+    compiled = support._rotation_spreads(
+        moving.rotation, moving.inertia_inv, reference.rotation, reference.inertia_inv, variance
+    )
+    relative = np.swapaxes(reference.rotation, -1, -2) @ moving.rotation
+    own_way = support._spreads_near_pi(
+        relative, moving.inertia_inv, reference.inertia_inv, variance
+    )
+    assert not compiled[-1]
+    for found, expected in zip(own_way, compiled[:5], strict=True):
+        np.testing.assert_allclose(found, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
