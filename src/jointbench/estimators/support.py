@@ -1020,7 +1020,9 @@ _B12 = 691.0 / 1307674368000.0
 # brings it about a thousand times closer to its least: from the principal axis one step leaves
 # a pure hinge's within 1e-2 of a chi-square unit, two leave that of a second rotation of 30 %
 # of the flexion (12 times its noise) within 0.02. A circumduction, far from any hinge, settles
-# slowly, but its residual stays hundreds of times its noise.
+# slowly, but its residual stays hundreds of times its noise. A small swing of nearly collinear
+# clusters settles slowly too, where the mean pose's noise is the truer and is read instead
+# (:func:`_rotation_spreads`).
 _HINGE_STEPS = 3
 
 
