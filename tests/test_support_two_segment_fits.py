@@ -227,7 +227,7 @@ def test_a_compact_cluster_is_not_charged_with_its_noisier_neighbours_noise():
 def test_a_pure_hinge_with_unequal_noise_resolves_no_second_axis():
     """A pure hinge between two segments whose noise differs (0.2 and 1 mm, or 1 mm on a
     compact cluster beside 0.1 mm on a wide one): the rotation off the hinge is resolved at the
-    verdict's level, a thousandth, in at most 3 of 100 trials each, near the 1 in 200 this
+    verdict's level, a thousandth, in at most 3 of 100 trials each, near the none in 200 this
     generator gives with equal noise. With the
     pooled noise charged to both poses it was resolved in most of them (85 to 182 of 200),
     passing a hinge as fixing a joint centre."""
