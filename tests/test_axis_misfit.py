@@ -20,6 +20,7 @@ import jointbench
 from jointbench.estimators import axis, precision, registry, support
 from jointbench.estimators.results import AxisResult, with_warnings
 from jointbench.geometry import angle_between_lines_deg, rotation_matrix
+from jointbench.numerics.poses import best_rotation
 
 Z = np.array([0.0, 0.0, 1.0])
 MISFIT = "since the markers leave"
@@ -52,6 +53,32 @@ def wobbling_hinge(
     return markers + rng.normal(scale=noise, size=markers.shape)
 
 
+def hinge_in_a_noisy_reference(
+    seed: int, *, arc_deg: float = 10.0, noise: float = 1.0, n_frames: int = 300
+) -> np.ndarray:
+    """Markers ``(n_frames, 4, 3)`` [mm] of a pure hinge about z (4 markers about 150 mm out
+    along x) beside a reference cluster of 3 markers 20 mm about a point 120 mm along z, both
+    moving in the world with noise ``noise`` [mm], the moving markers expressed in the
+    reference cluster's frame fitted frame by frame, as a recording's are: the reference's pose
+    noise moves the whole moving cluster from frame to frame."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.0, n_frames)
+    hinge_turn = rotation_matrix(np.outer(np.radians(arc_deg) * np.sin(2.0 * np.pi * t), Z))
+    moving = rng.normal(scale=20.0, size=(4, 3)) + np.array([150.0, 0.0, 0.0])
+    reference = rng.normal(scale=20.0, size=(3, 3)) + np.array([0.0, 0.0, 120.0])
+    swing = np.radians(10.0) * np.column_stack([np.sin(8 * t), np.sin(4 * t), np.sin(2.5 * t)])
+    world = rotation_matrix(swing)
+    origin = 30.0 * np.column_stack([np.sin(3 * t), np.sin(2 * t), t])
+    seen_reference = np.einsum("kij,pj->kpi", world, reference) + origin[:, None]
+    seen_moving = np.einsum("kij,kjl,pl->kpi", world, hinge_turn, moving) + origin[:, None]
+    seen_reference += rng.normal(scale=noise, size=seen_reference.shape)
+    seen_moving += rng.normal(scale=noise, size=seen_moving.shape)
+    centred = reference - reference.mean(axis=0)
+    seen_centre = seen_reference.mean(axis=1, keepdims=True)
+    turns = best_rotation(np.einsum("kpi,pj->kij", seen_reference - seen_centre, centred))
+    return np.einsum("kji,kpj->kpi", turns, seen_moving - seen_centre) + reference.mean(axis=0)
+
+
 def error_deg(result) -> float:
     return float(angle_between_lines_deg(np.asarray(result.direction), Z))
 
@@ -75,7 +102,7 @@ def test_a_wobbling_hinges_answers_far_off_are_warned_about(method, ratio):
         assert result.diagnostics["motion_axis_check"]["band_deg"] == precision.MISFIT_BAND_DEG
 
 
-def test_the_warning_states_the_misfit_and_its_bound():
+def test_the_warning_states_the_misfit_and_its_scale():
     markers = wobbling_hinge(1, 0.1)
     result = jointbench.fit_axis(markers, method="planar")
     assert error_deg(result) > 30.0  # the case: an SD of 2 degrees
@@ -84,23 +111,26 @@ def test_the_warning_states_the_misfit_and_its_bound():
         f"warning: axis not the motion's: the answer lies {found['angle_deg']:.0f} deg from the "
         f"principal axis of the segment's rotations, beyond 5 deg by {found['z']:.2f} times that "
         f"axis's SD of {found['principal_axis_sd_deg']:.2g} deg (above 3.09 at 0.001); 5 deg, not "
-        f"30, {MISFIT} the planar cost's model of a fixed axis by more than their noise (its "
-        f"residuals' variance {misfit['ratio']:.3g} times the rigid-body noise's, p = "
-        f"{misfit['p_value']:.2g}; a misfit that size can tilt its answer by "
-        f"{misfit['tilt_scale_deg']:.0f} deg)"
+        f"30, {MISFIT} the planar cost's model of a fixed axis by more than their rigid-body "
+        f"noise (its residuals' variance {misfit['ratio']:.3g} times that noise's, p = "
+        f"{misfit['p_value']:.2g}: the whole cluster moves off the model, by a wobble or by a "
+        "reference segment's pose noise carried into its frame; a misfit that size can tilt "
+        f"its answer by {misfit['tilt_scale_deg']:.0f} deg)"
     )
     assert result.converged  # left as the method set it
     bare = registry.get("axis", "planar", checked=False)(markers)
     np.testing.assert_array_equal(result.direction, bare.direction)
 
 
-def test_only_an_answer_its_cost_cannot_vouch_for_is_held_to_the_narrow_band():
-    """A newcomer's method states no misfit: the 30 degree band holds for it."""
-    reference = support.MotionAxis(Z, 0.5, 0.01, 0.1)
-    tilted = np.array([np.sin(np.radians(12.0)), 0.0, np.cos(np.radians(12.0))])
-    answer = AxisResult(
+# A misfit that leaves an answer unsupported by its cost.
+UNSUPPORTED = {"ratio": 4.0, "p_value": 1e-9, "tilt_scale_deg": 25.0}
+
+
+def planar_answer(direction: np.ndarray) -> AxisResult:
+    """An ``ok`` planar answer along ``direction`` (3,) with no diagnostics."""
+    return AxisResult(
         point=np.zeros(3),
-        direction=tilted,
+        direction=direction,
         radii=np.ones(3),
         converged=True,
         iterations=1,
@@ -109,10 +139,16 @@ def test_only_an_answer_its_cost_cannot_vouch_for_is_held_to_the_narrow_band():
         cost=1.0,
         diagnostics={},
     )
+
+
+def test_only_an_answer_its_cost_cannot_vouch_for_is_held_to_the_narrow_band():
+    """A newcomer's method states no misfit: the 30 degree band holds for it."""
+    reference = support.MotionAxis(Z, 0.5, 0.01, 0.1)
+    tilted = np.array([np.sin(np.radians(12.0)), 0.0, np.cos(np.radians(12.0))])
+    answer = planar_answer(tilted)
     assert precision.annotate_motion_axis(answer, reference).status == "ok"
-    unsupported = {"ratio": 4.0, "p_value": 1e-9, "tilt_scale_deg": 25.0}
-    supported = {**unsupported, "tilt_scale_deg": 9.0}
-    for misfit, warned in ((unsupported, True), (supported, False)):
+    supported = {**UNSUPPORTED, "tilt_scale_deg": 9.0}
+    for misfit, warned in ((UNSUPPORTED, True), (supported, False)):
         noted = with_warnings(answer, (), {"axis_misfit": misfit})
         status = precision.annotate_motion_axis(noted, reference).status
         assert (MISFIT in status) is warned, status
@@ -123,19 +159,8 @@ def test_an_answer_nothing_checks_says_so():
     share of the rotations' scatter reaches its eigen-gap): paper B's MCP, FE 10 degrees, AA 0.5
     times it, has planar answers 80 degrees off with SDs of 3."""
     undetermined = support.MotionAxis(Z, 12.0, 1.5, 0.1)
-    answer = AxisResult(
-        point=np.zeros(3),
-        direction=Z,
-        radii=np.ones(3),
-        converged=True,
-        iterations=1,
-        status="ok",
-        method="planar",
-        cost=1.0,
-        diagnostics={},
-    )
-    unsupported = {"ratio": 4.0, "p_value": 1e-9, "tilt_scale_deg": 25.0}
-    noted = with_warnings(answer, (), {"axis_misfit": unsupported})
+    answer = planar_answer(Z)
+    noted = with_warnings(answer, (), {"axis_misfit": UNSUPPORTED})
     status = precision.annotate_motion_axis(noted, undetermined).status
     assert status.startswith("warning: axis not determined: the markers leave the planar cost's")
     assert status.endswith(
@@ -160,7 +185,10 @@ def test_pure_hinges_fit_their_model_at_the_tests_level(method):
     for markers in trials:
         result = registry.get("axis", method)(markers)
         misfit = result.diagnostics["axis_misfit"]
-        rejected += misfit["p_value"] < support.ROTATION_ALPHA
+        # Not checked where the cost does not rise in every direction (the radial cost on a
+        # short arc): its SD is then said to be unbounded.
+        assert "p_value" in misfit or "axis not determined by" in result.status
+        rejected += misfit.get("p_value", 1.0) < support.ROTATION_ALPHA
         assert MISFIT not in result.status
         assert result.diagnostics["motion_axis_check"].get("band_deg", 30.0) == 30.0
     assert rejected <= 1

@@ -412,21 +412,18 @@ def _height_fourths(markers: np.ndarray, direction: np.ndarray) -> float:
     for p in range(n_markers):
         mean = 0.0
         for k in range(n_frames):
-            mean += (
-                markers[k, p, 0] * direction[0]
-                + markers[k, p, 1] * direction[1]
-                + markers[k, p, 2] * direction[2]
-            )
+            mean += _height(markers[k, p], direction)
         mean /= n_frames
         for k in range(n_frames):
-            height = (
-                markers[k, p, 0] * direction[0]
-                + markers[k, p, 1] * direction[1]
-                + markers[k, p, 2] * direction[2]
-                - mean
-            )
-            total += height**4
+            total += (_height(markers[k, p], direction) - mean) ** 4
     return total
+
+
+@kernel
+def _height(point: np.ndarray, direction: np.ndarray) -> float:
+    """``n . x`` [mm] of a ``point`` ``x`` (3,) [mm] along ``direction`` ``n`` (3,). A compiled
+    kernel."""
+    return point[0] * direction[0] + point[1] * direction[1] + point[2] * direction[2]
 
 
 @kernel
@@ -1067,6 +1064,9 @@ def _misfit_annotated(
     noise = verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
     n_frames, n_markers = shape
     found = precision.misfit(at, noise, precision.rigid_dof(n_markers, n_frames))
+    if found is None:
+        why = "the cost does not rise in every direction from the answer, or has no residuals"
+        return precision.annotate_misfit(result, None, why)
     return precision.annotate_misfit(result, found)
 
 

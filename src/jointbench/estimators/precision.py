@@ -133,27 +133,31 @@ What the band lets through: motion the cost does not model. A hinge with an inde
 about another axis of a tenth of its arc (0.5 mm noise) leaves the planar and combined answers
 up to 30 degrees off with SDs of one or two, inside the band: the SD counts the wobble's share
 of the residuals as independent noise, where it moves every marker of a frame together and
-changes slowly over the frames. Whether the markers move as the cost's model says is a test
-of its residuals against the rigid-body noise, which does not depend on any axis
-(:func:`misfit`): their variance at the cost's minimum, ``f / dof``, over the support verdict's
-``s^2`` is F-distributed where they are the noise alone, both degrees of freedom scaled by
-``2 / (2 + kurtosis)`` for heavy-tailed noise. How far such a misfit moves the answer the data
-cannot say: a misfit ``r`` moves the parameters by ``-(J'J)^-1 J' r``, and the part of ``r``
-that does so, in the span of ``J``, is the part the fit absorbs and leaves no residual of.
+changes slowly over the frames. Whether the markers move as the cost's model says is a test of
+its residuals against the rigid-body noise, which does not depend on any axis (:func:`misfit`):
+their variance at the cost's minimum, ``f / dof``, over the support verdict's ``s^2`` is
+F-distributed where they are the noise alone, both degrees of freedom scaled by ``2 / (2 +
+kurtosis)`` for heavy-tailed noise (the kurtosis read off the residuals, misfit and all: a
+misfit in a few frames widens its own test's spread). How far such a misfit moves the answer the
+data cannot say: a misfit ``r`` moves the parameters by ``-(J'J)^-1 J' r``, and the part of
+``r`` that does so, in the span of ``J``, is the part the fit absorbs and leaves no residual of.
 What is measured is the rest, the excess ``e = f - dof s^2``; a misfit of that size along the
 least determined direction would tilt the answer by ``sqrt(e lambda)``, ``lambda`` the largest
 eigenvalue of the direction's block of ``(J'J)^-1 = (H / 2)^-1``: a scale, not a bound. A
-structured misfit can be absorbed far beyond it (a wobble about the axis normal to the arc's
-plane: 20 degrees off with a scale of 5), and one unlike the wobble far below it (paper B's
-coupled abduction: scales of 30 to 40 degrees, answers within 5). Where the test rejects and
-the scale is above :data:`MAX_AXIS_SD_DEG`, the cost is said not to vouch for its answer
+structured misfit can be absorbed far beyond it (a wobble about the axis normal to both the
+hinge and the markers' direction from it: 20 degrees off with a scale of 5), and one unlike
+the wobble far below it (paper B's coupled abduction: scales of 30 to 40 degrees, answers
+within 5). Where the test rejects and the
+scale is above :data:`MAX_AXIS_SD_DEG`, the cost is said not to vouch for its answer
 (:func:`unsupported_by_its_cost`), and the principal axis, which a wobble about a fixed hinge
 tilts little (its eigen-gap is the rotations' own spread, where the planar cost's is the arcs'
 sagitta), is held to a narrower band, :data:`MISFIT_BAND_DEG`; where that axis is not
-determined, the answer is said to be checked by nothing. A slow random drift of the wobble
-tilts the principal axis too, and a marker sliding on its segment moves the rigid-body
-residual with it, so neither is seen. ``tests/test_axis_misfit.py`` and
-``benchmarks/axis_misfit.py`` count what it catches and what it passes.
+determined, the answer is said to be checked by nothing. A slow random drift of the wobble tilts
+the principal axis too, and a marker sliding on its segment moves the rigid-body residual with
+it, so neither is seen; a reference segment's pose noise, carried into its frame with the
+moving markers, moves the whole cluster as a wobble does and is read as misfit too.
+``tests/test_axis_misfit.py`` and ``benchmarks/axis_misfit.py`` count what it catches and what
+it passes.
 
 The simulated studies call the registered functions without this check, as they do without the
 self-check, so their results are the papers' methods alone.
@@ -287,7 +291,7 @@ class Misfit(NamedTuple):
     tilt_scale_deg: float  # [deg]: not a bound (module docstring)
 
 
-def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit:
+def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit | None:
     """A least-squares cost's lack of fit against the rigid-body noise, and the tilt a misfit of
     its size can give the answer (module docstring): the cost ``at`` the answer against the
     noise ``noise_variance`` [mm^2] per coordinate on ``noise_dof`` degrees of freedom.
@@ -297,13 +301,14 @@ def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit:
     ``2 / (2 + kurtosis)`` (Satterthwaite's), the excess kurtosis read off the residuals and
     floored at a normal one's, so that heavy-tailed noise is not taken for misfit. The tilt
     scale is ``sqrt(e lambda)``: ``e`` the cost at its minimum less the noise's share
-    ``dof s^2``, ``lambda`` the largest eigenvalue of the direction's block of ``(H / 2)^-1``;
-    ``inf`` where ``H`` is not positive definite."""
+    ``dof s^2``, ``lambda`` the largest eigenvalue of the direction's block of ``(H / 2)^-1``.
+    ``None`` where ``H`` is not positive definite (the cost has no minimum to measure at) or
+    the residuals have no degrees of freedom."""
     from scipy.special import fdtrc  # only a user's checked call reads it
 
     minimum = _at_minimum(at.gradient, at.hessian, at.cost)
     if minimum is None or at.dof < 1:
-        return Misfit(math.nan, math.nan, math.inf)
+        return None
     inverse, least = minimum
     variance = least / at.dof
     if noise_variance > 0.0:
@@ -369,9 +374,10 @@ def _misfit_words(method: str, misfit: Mapping[str, float]) -> str:
     """What an answer's ``misfit`` (:func:`misfit`) says, in words, for a warning."""
     return (
         f"the markers leave the {method} cost's model of a fixed axis by more than their "
-        f"noise (its residuals' variance {misfit['ratio']:.3g} times the rigid-body noise's, "
-        f"p = {misfit['p_value']:.2g}; a misfit that size can tilt its answer by "
-        f"{misfit['tilt_scale_deg']:.0f} deg)"
+        f"rigid-body noise (its residuals' variance {misfit['ratio']:.3g} times that noise's, "
+        f"p = {misfit['p_value']:.2g}: the whole cluster moves off the model, by a wobble or by "
+        "a reference segment's pose noise carried into its frame; a misfit that size can tilt "
+        f"its answer by {misfit['tilt_scale_deg']:.0f} deg)"
     )
 
 

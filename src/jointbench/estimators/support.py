@@ -1326,14 +1326,38 @@ def _rotation_spreads(
         raw[t] = np.maximum(np.linalg.eigvalsh(gram), 0.0)
         white_values = np.maximum(np.linalg.eigvalsh(white), 0.0)
         sums[t, 0] = white_values.sum()
-        # A hinge is read against the noise of the mean pose or of each frame's own, whichever
-        # leaves it less: each frame's holds where its rotation is well above its noise (a wide
-        # hinge), the mean pose's where the noise turns the frames more than the motion does
-        # (the plug-in Jacobian of a nearly collinear cluster's frame, turned by its noise,
-        # leaks the noise about its line into the directions it fixes).
-        _frame_noise_into(vectors, moving_inertia_inv[t], reference_noise, noise)
-        sums[t, 1] = min(white_values[0] + white_values[1], _hinge_residual(vectors, noise))
+        sums[t, 1] = _hinge_left(
+            white_values[0] + white_values[1],
+            vectors,
+            moving_inertia_inv[t],
+            reference_noise,
+            noise,
+        )
     return raw, sums, rotation_only, own, means, near_pi
+
+
+@kernel
+def _hinge_left(
+    at_mean_pose: float,
+    vectors: np.ndarray,
+    moving_noise: np.ndarray,
+    reference_noise: np.ndarray,
+    noise: np.ndarray,
+) -> float:
+    """What a hinge leaves unexplained of the rotation vectors ``vectors`` ``(N, 3)`` [rad]
+    [mm^2 per unit variance]: read against each frame's own noise (:func:`_frame_noise_into`
+    of ``moving_noise`` and ``reference_noise`` ``(3, 3)``, into the scratch ``noise``
+    ``(N, 6)``; :func:`_hinge_residual`) or, ``at_mean_pose``, against the mean pose's,
+    whichever leaves it less. Each frame's holds where its rotation is well above its noise
+    (a wide hinge), the mean pose's where the noise turns the frames more than the motion does
+    (the plug-in Jacobian of a nearly collinear cluster's frame, turned by its noise, leaks
+    the noise about its line into the directions it fixes). The mean pose's where each frame's
+    is NaN (a frame's noise not positive definite). A compiled kernel."""
+    _frame_noise_into(vectors, moving_noise, reference_noise, noise)
+    per_frame = _hinge_residual(vectors, noise)
+    if not per_frame < at_mean_pose:  # NaN compares false: the mean pose's then
+        return at_mean_pose
+    return per_frame
 
 
 def _spreads_near_pi(
@@ -1368,9 +1392,13 @@ def _spreads_near_pi(
     sums[:, 0] = white.sum(axis=1)
     noise = np.empty((n_frames, 6))
     for t in range(n_trials):
-        one = kernel_array(vectors[t])
-        _frame_noise_into(one, kernel_array(moving_noise[t]), kernel_array(at_mean[t]), noise)
-        sums[t, 1] = min(white[t, 0] + white[t, 1], _hinge_residual(one, noise))
+        sums[t, 1] = _hinge_left(
+            white[t, 0] + white[t, 1],
+            kernel_array(vectors[t]),
+            kernel_array(moving_noise[t]),
+            kernel_array(at_mean[t]),
+            noise,
+        )
     return raw, sums, values, own, mean
 
 
@@ -1695,7 +1723,7 @@ def _rotation_test(
         dof,
         np.stack([sums[:, 0] / any_dof, sums[:, 1] / max(off_axis, 1)]) / noise,
     )
-    if off_axis == 0:
+    if off_axis <= 0:
         p_second = np.ones_like(p_second)
     # Noise-free data: a rotation above rounding is resolved, and rotation about other axes is
     # judged against the main one (the F-test would compare rounding with rounding).
