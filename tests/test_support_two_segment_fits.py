@@ -236,3 +236,17 @@ def test_a_pure_hinge_with_unequal_noise_resolves_no_second_axis():
     for spreads_mm, noise_mm in (((40.0, 20.0), (0.2, 1.0)), ((15.0, 60.0), (1.0, 0.1))):
         resolved = second_axes_resolved(spreads_mm, noise_mm, 10)
         assert resolved <= 3, (spreads_mm, noise_mm, resolved)
+
+
+@pytest.mark.parametrize(
+    ("kind", "names"), [("axis", ("markers",)), ("joint_center", ("proximal", "distal"))]
+)
+def test_markers_with_a_gap_are_refused_naming_the_sample(kind, names):
+    """The verdict is a public function: a gap (NaN) is refused naming the array, the marker
+    and the frame, not met as an error of the linear algebra."""
+    rng = np.random.default_rng(0)
+    arrays = tuple(rng.normal(scale=30.0, size=(20, 3, 3)) for _ in names)
+    arrays[-1][7, 1, 2] = np.nan
+    with pytest.raises(ValueError, match=rf"^{names[-1]}.*NaN") as raised:
+        support.assess(kind, arrays)
+    assert "frame 7" in str(raised.value), raised.value

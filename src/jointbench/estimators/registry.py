@@ -193,15 +193,14 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
     shared = None
     if names is not None and _binds(entry, clean, options):
         shared = _shared_poses(names, tuple([array] for array in clean))
+    stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
     if shared is None:
         result = entry.fn(*clean, **options)
-        verdict = support.assess(entry.kind, clean)
     else:
-        (poses,) = shared
-        result = one_trial(entry.many, *clean, poses=[poses], **options)
-        verdict = support.assess(entry.kind, clean, poses=poses)
+        result = one_trial(entry.many, *clean, poses=shared, **options)
+    # Its arrays passed the input checks: the verdict's own check of them is not repeated.
+    (verdict,) = support.assess_many(entry.kind, stacked, poses=shared)
     result = _self_checked(entry.fn, result, clean, options)
-    stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
     if hasattr(entry.fn, "precision_many"):
         poses = _fitted_to(shared, [0])
         (result,) = _precision_checked(entry.fn, [result], stacked, poses, [verdict])

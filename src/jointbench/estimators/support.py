@@ -152,7 +152,7 @@ from jointbench.estimators.batching import check_poses
 from jointbench.estimators.pose_noise import NoisyPoses, PoseNoise, pose_noise
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
-from jointbench.estimators.validation import ARRAY_NAMES
+from jointbench.estimators.validation import ARRAY_NAMES, check_markers
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import _horn_rotations, best_rotation
@@ -2194,10 +2194,13 @@ def _verdict(
 def assess(
     kind: str, arrays: tuple[np.ndarray, ...], *, poses: dict | Exception | None = None
 ) -> Support:
-    """Judge whether the checked marker ``arrays`` of an estimator ``kind`` support an answer.
+    """Judge whether the marker ``arrays`` of an estimator ``kind`` support an answer.
 
     ``arrays`` is ``(markers,)`` for ``center``/``axis`` (reference frame) and
-    ``(proximal, distal)`` for ``joint_center`` (world frame); see the module docstring.
+    ``(proximal, distal)`` for ``joint_center`` (world frame); see the module docstring. Each
+    is refused with a ``ValueError`` naming it, the marker and the frame where it is not a
+    ``(frames, markers, 3)`` array of finite samples
+    (:func:`jointbench.estimators.validation.check_markers`).
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
     are not assessed (``diagnostics["assessed"]`` is False); nor is one segment of more than
     :data:`MAX_DISTANCE_MARKERS` markers. ``poses``: the two segments'
@@ -2206,7 +2209,15 @@ def assess(
     (anything else is refused with a ``ValueError``); ``None`` fits them here. One segment
     needs none.
     """
-    stacked = tuple(np.asarray(array)[None] for array in arrays)
+    names = ARRAY_NAMES[kind]
+    if len(arrays) != len(names):
+        raise ValueError(
+            f"{kind} data are {len(names)} marker arrays ({', '.join(names)}), got {len(arrays)}"
+        )
+    checked = tuple(
+        check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
+    )
+    stacked = tuple(array[None] for array in checked)
     return assess_many(kind, stacked, poses=None if poses is None else [poses])[0]
 
 
