@@ -991,7 +991,7 @@ def _cost_at(
         cost, fourths = cost + radial[2], fourths + radial[3]
     n_residuals = _RESIDUAL_SETS[method] * n_markers * n_frames
     dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
-    return precision.CostAt(gradient, hessian, cost, fourths, n_residuals, dof)
+    return precision.cost_at(gradient, hessian, cost, fourths, n_residuals, dof)
 
 
 def _direction_precision(
@@ -1028,7 +1028,7 @@ def _direction_precision(
 
 def _precision_of(at: precision.CostAt, method: str) -> tuple[float, tuple[float, float] | None]:
     """:func:`_direction_precision` of ``method``'s cost ``at`` an axis."""
-    sd = precision.direction_sd_deg(at.gradient, at.hessian, at.cost, at.dof)
+    sd = precision.direction_sd_deg(at)
     if method != "planar":
         return sd, None
     return sd, (at.cost, _planar_gap(at.hessian))

@@ -192,6 +192,7 @@ __all__ = [
     "annotate_misfit",
     "annotate_motion_axis",
     "annotate_validity",
+    "cost_at",
     "direction_sd_deg",
     "distinct_frames",
     "line_angle_deg",
@@ -258,18 +259,16 @@ def _cross(a: list[float], b: list[float]) -> np.ndarray:
     return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0))
 
 
-def direction_sd_deg(gradient: np.ndarray, hessian: np.ndarray, cost: float, dof: int) -> float:
-    """The SD of a direction [deg] from a least-squares cost's ``gradient`` ``(k,)`` and
-    ``hessian`` ``(k, k)`` at the answer, the direction's two tangent angles [rad] first, the
-    other ``k - 2`` parameters (positions, in any unit) free; ``cost`` its value, ``dof`` its
-    residuals less its fitted parameters (module docstring). ``inf`` when ``dof < 1`` or ``H``
-    is not positive definite (the cost does not rise in every direction from the answer)."""
-    minimum = _at_minimum(gradient, hessian, cost) if dof >= 1 else None
-    if minimum is None:
+def direction_sd_deg(at: CostAt) -> float:
+    """The SD of a direction [deg] from a least-squares cost ``at`` the answer
+    (:func:`cost_at`), the direction's two tangent angles [rad] first among its parameters,
+    the others (positions, in any unit) free (module docstring). ``inf`` when the residuals
+    have no degrees of freedom or ``H`` is not positive definite (the cost does not rise in
+    every direction from the answer)."""
+    if at.inverse is None or at.dof < 1:
         return math.inf
-    inverse, least = minimum
-    step = -inverse @ np.asarray(gradient, dtype=float)
-    covariance = 2.0 * (least / dof) * inverse
+    step = -at.inverse @ at.gradient
+    covariance = 2.0 * (at.least / at.dof) * at.inverse
     variance = float(np.trace(covariance[:2, :2])) + float(step[:2] @ step[:2])
     return math.degrees(math.sqrt(max(variance, 0.0)))
 
@@ -306,10 +305,9 @@ def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit | None:
     the residuals have no degrees of freedom."""
     from scipy.special import fdtrc  # only a user's checked call reads it
 
-    minimum = _at_minimum(at.gradient, at.hessian, at.cost)
-    if minimum is None or at.dof < 1:
+    if at.inverse is None or at.dof < 1:
         return None
-    inverse, least = minimum
+    inverse, least = at.inverse, at.least
     variance = least / at.dof
     if noise_variance > 0.0:
         ratio = variance / noise_variance
@@ -325,7 +323,7 @@ def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit | None:
 
 class CostAt(NamedTuple):
     """A least-squares axis cost at an answer, as :func:`direction_sd_deg` and :func:`misfit`
-    read it."""
+    read it (:func:`cost_at`)."""
 
     gradient: np.ndarray  # (k,): the direction's two tangent angles [rad] first
     hessian: np.ndarray  # (k, k)
@@ -333,17 +331,36 @@ class CostAt(NamedTuple):
     fourths: float  # the residuals' fourth powers summed [mm^4]
     n_residuals: int
     dof: int  # residuals less the centroids or radii they are taken from, less parameters
+    inverse: np.ndarray | None  # (k, k) H^-1; None where H is not positive definite
+    least: float  # the cost at the minimum a Newton step reaches [mm^2]; NaN without inverse
 
 
-def _at_minimum(
-    gradient: np.ndarray, hessian: np.ndarray, cost: float
-) -> tuple[np.ndarray, float] | None:
-    """``(H^-1, f - g' H^-1 g / 2)`` of a cost ``f`` with ``gradient`` ``g`` and ``hessian``
-    ``H``: the inverse and the cost at the minimum a Newton step reaches, not below zero;
-    ``None`` where ``H`` is not positive definite or either is not finite."""
+def cost_at(
+    gradient: np.ndarray,
+    hessian: np.ndarray,
+    cost: float,
+    fourths: float,
+    n_residuals: int,
+    dof: int,
+) -> CostAt:
+    """The :class:`CostAt` of a least-squares cost with ``gradient`` ``g`` ``(k,)`` and
+    ``hessian`` ``H`` ``(k, k)`` at the answer, its value ``cost`` [mm^2], its residuals'
+    summed ``fourths`` powers [mm^4], their number ``n_residuals`` and its ``dof``: with
+    ``H^-1`` and ``f - g' H^-1 g / 2``, the cost at the minimum a Newton step reaches (not below
+    zero), where ``H`` is positive definite and both are finite."""
     # The arrays' own methods: np.all, np.diag and np.outer would cost a quarter of the rest.
     hessian, gradient = np.asarray(hessian, dtype=float), np.asarray(gradient, dtype=float)
-    if not np.isfinite(hessian).all() or not np.isfinite(gradient).all():
+    inverse = _positive_definite_inverse(hessian) if np.isfinite(gradient).all() else None
+    if inverse is None:
+        return CostAt(gradient, hessian, cost, fourths, n_residuals, dof, None, math.nan)
+    least = max(cost - 0.5 * float(gradient @ inverse @ gradient), 0.0)
+    return CostAt(gradient, hessian, cost, fourths, n_residuals, dof, inverse, least)
+
+
+def _positive_definite_inverse(hessian: np.ndarray) -> np.ndarray | None:
+    """``hessian``'s inverse ``(k, k)``, or ``None`` where it is not finite or not positive
+    definite."""
+    if not np.isfinite(hessian).all():
         return None
     # Positive definiteness does not depend on the parameters' units; the Cholesky factor of
     # the matrix scaled to a unit diagonal tells it where an eigenvalue would be lost to them.
@@ -355,8 +372,7 @@ def _at_minimum(
         np.linalg.cholesky(hessian * (scale[:, None] * scale))
     except np.linalg.LinAlgError:
         return None
-    inverse = np.linalg.inv(hessian)
-    return inverse, max(cost - 0.5 * float(gradient @ inverse @ gradient), 0.0)
+    return np.linalg.inv(hessian)
 
 
 def annotate_misfit(result, found: Misfit | None, why: str = ""):
