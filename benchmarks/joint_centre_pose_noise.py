@@ -1,4 +1,5 @@
-"""Measure the joint-centre check of the poses' noise, as the README quotes it.
+"""Measure the joint-centre checks of the poses' noise and of the centre's SD, as the README
+quotes them.
 
 Usage::
 
@@ -8,8 +9,9 @@ Prints, with the current code (``jointbench.fit_joint_center``, every joint-cent
 
 * hips (``tests/test_pose_noise.py``'s generator, 60 frames, 0.5 mm noise) swung in five
   ways, one noise draw for each of ``--geometries`` marker geometries: per method, how many
-  answers the pull warns about, how many read ``ok`` without that warning (as before the
-  check) and with it, and how many of each lie more than 10 mm off;
+  answers the pull warns about and how many the SD says are undetermined, how many read
+  ``ok`` without those two warnings (as before the checks) and with them, and how many of
+  each lie more than 10 mm off;
 * thigh clusters of three markers 1, 3 and 5 mm off a 50 mm line on a 30 degree two-axis swing:
   the same counts for SCoRE and the analytic centre;
 * a noisy pelvis with a nearly noise-free thigh, the other way round, and noise larger along
@@ -22,7 +24,7 @@ Prints, with the current code (``jointbench.fit_joint_center``, every joint-cent
   hip study (``jointbench.simulate.hip_sta``) at each of their motions, ranges and artefacts:
   the same counts over 10 trials each (the studies' own calls run without checks);
 * the real knee trial (``data/functional-trials/right_knee.c3d``): each method's status,
-  share and pull.
+  share, pull and SD.
 """
 
 from __future__ import annotations
@@ -50,6 +52,9 @@ from test_pose_noise import (
     second_axes_resolved,
 )
 
+# The SD's warning (jointbench.estimators.centre_precision.annotate_joint_centres).
+_UNDETERMINED = "centre not determined by the data"
+
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
 MOTIONS = {
     "nearly a hinge (6 %)": {"ratio": 0.06},
@@ -60,23 +65,26 @@ MOTIONS = {
 }
 
 
-def _only_pulled(status: str) -> bool:
-    """Whether ``status`` would read ``ok`` but for the pull's warning."""
-    parts = [part for part in status.split("; ") if _PULLED not in part]
+def _only_checked(status: str) -> bool:
+    """Whether ``status`` would read ``ok`` but for the warnings of the pull and the SD."""
+    parts = [
+        part for part in status.split("; ") if _PULLED not in part and _UNDETERMINED not in part
+    ]
     return len(parts) < len(status.split("; ")) and not parts
 
 
 def _count(label: str, trials: list[tuple], methods: tuple[str, ...], centre=CENTRE) -> None:
-    """Per method, how many of ``trials`` read ``ok`` now and would without the pull's
-    warning, and how many of each lie more than 10 mm from ``centre``."""
+    """Per method, how many of ``trials`` read ``ok`` now and would without the warnings of
+    the pull and the SD, and how many of each lie more than 10 mm from ``centre``."""
     counts: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
     for segments in trials:
         for method in methods:
             result = jointbench.fit_joint_center(*segments, method=method)
             off = bool(np.linalg.norm(result.center - centre) > 10.0)
-            before = result.status == "ok" or _only_pulled(result.status)
+            before = result.status == "ok" or _only_checked(result.status)
             tally = counts[method]
             tally["pulled"] += _PULLED in result.status
+            tally["undetermined"] += _UNDETERMINED in result.status
             tally["ok before"] += before
             tally["ok before, >10 mm off"] += before and off
             tally["ok"] += result.status == "ok"
@@ -183,7 +191,7 @@ def studies() -> None:
 
 
 def knee() -> None:
-    """Each joint-centre method's share, pull and status on the real knee trial."""
+    """Each joint-centre method's share, pull, SD and status on the real knee trial."""
     recording = jointbench.read(KNEE)
     prepared = jointbench.prepare(
         recording, "joint_center", "RLEG1,RLEG2,RLEG3,RATT", "RTHI1,RTHI2,RTHI3,RGT"
@@ -193,7 +201,8 @@ def knee() -> None:
         print(
             f"knee {method:20s} share {result.diagnostics.get('center_pose_noise_share'):.3f} "
             f"pull {result.diagnostics.get('center_pose_noise_pull_mm'):.1f} mm, "
-            f"status {result.status[:90]!r}"
+            f"SD {result.diagnostics.get('center_sd_mm'):.3g} mm, "
+            f"undetermined {_UNDETERMINED in result.status}, status {result.status[:90]!r}"
         )
 
 

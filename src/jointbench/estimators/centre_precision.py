@@ -562,12 +562,7 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
     sd, share = numbers["center_sd_mm"], numbers["center_sd_noise_share"]
     warnings = []
     if supported and not sd <= MAX_CENTER_SD_MM:
-        size = "is unbounded" if math.isinf(sd) else f"is {sd:.3g} mm"
-        warnings.append(
-            f"centre not determined by the data: its SD along the least determined direction "
-            f"{size} (above {MAX_CENTER_SD_MM:g} mm, from the rigid-body residual of "
-            f"{residual_mm:.3g} mm)"
-        )
+        warnings.append(_undetermined(sd, f"the rigid-body residual of {residual_mm:.3g} mm"))
     elif supported and not share < MAX_SD_NOISE_SHARE:
         warnings.append(
             f"centre's precision not determined by the data: along its least determined "
@@ -662,30 +657,73 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
 
 
 def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
-    """Joint-centre ``results`` with what the noise in their two segments' poses does to a
-    least-squares centre (:mod:`jointbench.estimators.pose_noise`), given each trial's support
-    verdict ``verdicts``: ``diagnostics["center_pose_noise_share"]``, the ratio of the noise's
-    information to the noise-free information along the least determined direction, and
-    ``["center_pose_noise_pull_mm"]``, how far the noise pulled the answer (both ``inf``
-    where the noise is as large as the rotation that fixes the centre). A warning is added
-    where the verdict has not already refused the data and the ratio reaches
-    :data:`MAX_POSE_NOISE_SHARE` or the pull :data:`MAX_POSE_NOISE_PULL_MM`. A result without
-    a finite centre, or whose verdict carries no pose noise (no poses, or markers too nearly
-    collinear for their noise model), is returned as it is."""
+    """Joint-centre ``results`` with their precision and what the noise in their two segments'
+    poses does to a least-squares centre (:mod:`jointbench.estimators.pose_noise`), given each
+    trial's support verdict ``verdicts``.
+
+    * ``diagnostics["center_sd_mm"]``, the SD along the least determined direction of the
+      covariance the result states (the Gauss–Markov fits' own, or the one its method's
+      precision added: ``["center_covariance_mm2"]``), and above :data:`MAX_CENTER_SD_MM` the
+      warning that the data do not determine the centre, as for a centre of rotation;
+    * ``["center_pose_noise_share"]``, the ratio of the noise's information to the noise-free
+      information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
+      how far the noise pulled the answer (both ``inf`` where the noise is as large as the
+      rotation that fixes the centre), and where the ratio reaches
+      :data:`MAX_POSE_NOISE_SHARE` or the pull :data:`MAX_POSE_NOISE_PULL_MM` a warning.
+
+    No warning is added where the verdict has already refused the data. A result without a
+    finite centre is returned as it is; one that states no covariance gets no SD, and one
+    whose verdict carries no pose noise (no poses, or markers too nearly collinear for their
+    noise model) no pull."""
     annotated = list(results)
     for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
-        noise = verdict.pose_noise
-        if noise is None or not np.isfinite(result.center).all():
+        if not np.isfinite(result.center).all():
             continue
-        pull = float(np.linalg.norm(pull_mm(noise, np.asarray(result.center))))
-        numbers = {"center_pose_noise_share": noise.share, "center_pose_noise_pull_mm": pull}
-        warnings = ()
-        if not verdict.warnings and (
-            noise.share >= MAX_POSE_NOISE_SHARE or pull >= MAX_POSE_NOISE_PULL_MM
-        ):
-            warnings = (_pulled_by_pose_noise(noise.share, pull),)
-        annotated[t] = with_warnings(result, warnings, numbers)
+        numbers, warnings = {}, []
+        covariance = _stated_covariance(result)
+        if covariance is not None:
+            sd = _largest_sd(covariance)
+            numbers["center_sd_mm"] = sd
+            if not sd <= MAX_CENTER_SD_MM:
+                warnings.append(_undetermined(sd, "the noise of both segments' poses"))
+        noise = verdict.pose_noise
+        if noise is not None:
+            pull = float(np.linalg.norm(pull_mm(noise, np.asarray(result.center))))
+            numbers["center_pose_noise_share"] = noise.share
+            numbers["center_pose_noise_pull_mm"] = pull
+            if noise.share >= MAX_POSE_NOISE_SHARE or pull >= MAX_POSE_NOISE_PULL_MM:
+                warnings.append(_pulled_by_pose_noise(noise.share, pull))
+        if numbers:
+            kept = () if verdict.warnings else tuple(warnings)
+            annotated[t] = with_warnings(result, kept, numbers)
     return annotated
+
+
+def _stated_covariance(result) -> np.ndarray | None:
+    """The covariance ``(3, 3)`` [mm^2] a joint-centre ``result`` states of its centre: its own
+    (the Gauss–Markov fits'), or the one its method's precision added, or ``None``."""
+    if result.covariance is not None:
+        return np.asarray(result.covariance, dtype=float)
+    stated = result.diagnostics.get("center_covariance_mm2")
+    return None if stated is None else np.asarray(stated, dtype=float)
+
+
+def _largest_sd(covariance: np.ndarray) -> float:
+    """The SD [mm] along the least determined direction of ``covariance`` ``(3, 3)`` [mm^2];
+    ``inf`` where it is not finite."""
+    if not np.isfinite(covariance).all():
+        return math.inf
+    return math.sqrt(max(float(np.linalg.eigvalsh(covariance)[-1]), 0.0))
+
+
+def _undetermined(sd: float, source: str) -> str:
+    """The warning for a centre whose SD along its least determined direction is ``sd`` [mm],
+    above :data:`MAX_CENTER_SD_MM`, from the noise ``source`` names."""
+    size = "is unbounded" if math.isinf(sd) else f"is {sd:.3g} mm"
+    return (
+        f"centre not determined by the data: its SD along the least determined direction "
+        f"{size} (above {MAX_CENTER_SD_MM:g} mm, from {source})"
+    )
 
 
 def _pulled_by_pose_noise(share: float, pull: float) -> str:

@@ -131,13 +131,20 @@ from scipy import special
 
 from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated, one_trial
+from jointbench.estimators.pose_noise import (
+    analytic_covariance,
+    centre_covariance,
+    lever_factors,
+    point_covariance,
+    point_covariance_at,
+)
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import JointCenterResult, with_warnings
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
+    each_on_poses,
     pose_residuals,
-    trial_poses,
 )
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING
 from jointbench.estimators.twosegment import (
@@ -197,28 +204,6 @@ def _per_coordinate_variance(
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
     """``s^2`` [mm^2]: the segments' rigid-body residual sum of squares over its dof."""
     return sum(p.residual_ss for p in segments) / sum(p.dof for p in segments)
-
-
-def _lever_factors(body: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """Centroid ``m``, inverse "inertia" ``K^-1`` and count ``n`` of body-fixed markers."""
-    mean = body.mean(axis=0)
-    u = body - mean
-    inertia = np.sum(u * u) * np.eye(3) - u.T @ u
-    return mean, np.linalg.inv(inertia), body.shape[0]
-
-
-def point_covariance(point: np.ndarray, body: np.ndarray) -> np.ndarray:
-    """``A(c) / s^2``: covariance, per unit marker variance, of the world position of the body
-    point ``c`` predicted by an LS pose fit of the markers ``body`` ``(n, 3)`` in the frame
-    where the pose is the identity (``R A R'`` for any other pose ``R``)."""
-    return _point_covariance(point, *_lever_factors(body))
-
-
-def _point_covariance(point, mean, inertia_inv, n) -> np.ndarray:
-    """``A(c) / s^2`` for points ``(..., 3)`` [mm] of segments with lever factors ``mean``
-    ``(..., 3)``, ``inertia_inv`` ``(..., 3, 3)`` and ``n`` markers: ``(..., 3, 3)``."""
-    lever = skew(np.asarray(point, dtype=float) - mean)
-    return lever @ inertia_inv @ np.swapaxes(lever, -1, -2) + np.eye(3) / n
 
 
 def constraint_covariance(
@@ -346,8 +331,8 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
         y=y,
         r0=prox.rotation[1:],
         r1=dist.rotation[1:],
-        lever0=_lever_factors(prox.body),
-        lever1=_lever_factors(dist.body),
+        lever0=lever_factors(prox.body),
+        lever1=lever_factors(dist.body),
         analytic_center=analytic_center,
         variance=variance,
         diagnostics={
@@ -397,8 +382,8 @@ class _Stacked:
         """``A_0(c0)``, ``A_1(c1)`` per unit variance of ``trials`` ``(t,)``: ``(t, 3, 3)``."""
         (mean0, inverse0, n0), (mean1, inverse1, n1) = self.levers
         return (
-            _point_covariance(c0, mean0[trials], inverse0[trials], n0),
-            _point_covariance(c1, mean1[trials], inverse1[trials], n1),
+            point_covariance_at(c0, mean0[trials], inverse0[trials], n0),
+            point_covariance_at(c1, mean1[trials], inverse1[trials], n1),
         )
 
 
@@ -660,7 +645,7 @@ def _marker_gains(points: np.ndarray, body: np.ndarray) -> np.ndarray:
     ``(..., 3)`` [mm]: the error of ``p`` as a least-squares pose fit of the markers ``body``
     ``(n, 3)`` [mm] places it, per unit error of marker ``i`` (``m``, ``u_i``, ``K`` as in
     ``A(c)``; ``sum_i B_pi B_pi' = A(p) / s^2``). At ``p = x_j`` it is the fit's hat matrix."""
-    mean, inertia_inv, n = _lever_factors(body)
+    mean, inertia_inv, n = lever_factors(body)
     lever = skew(np.asarray(points, dtype=float) - mean)[..., None, :, :]
     return np.eye(3) / n - lever @ inertia_inv @ skew(body - mean)
 
@@ -698,9 +683,7 @@ def _constraint_moments(rotations, bodies, points) -> float:
     and marker. On a long trial it is taken over :data:`_MOMENT_FRAMES` frames and scaled."""
     n_steps = len(rotations[0])
     chosen = _spread_frames(n_steps, _MOMENT_FRAMES)
-    covariances = [
-        _point_covariance(c, *_lever_factors(b)) for c, b in zip(points, bodies, strict=True)
-    ]
+    covariances = [point_covariance(c, b) for c, b in zip(points, bodies, strict=True)]
     relative = np.swapaxes(rotations[0][chosen], -1, -2) @ rotations[1][chosen]
     others = (
         rotated3(relative, covariances[1]),
@@ -865,20 +848,41 @@ def _model_tested_many(
     results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
 ) -> list[JointCenterResult]:
     """Each of ``results`` (the trials of ``proximal``, ``distal`` ``(T, N, n, 3)`` [mm]) with
-    :func:`_model_test` on ``poses``, the poses its checked call fitted (one
-    :func:`~jointbench.estimators.segment_poses.trial_poses` entry per trial), or where that
-    call shared none, on poses fitted here. The support ``verdicts`` are not read: the test
-    holds the fit to the residuals of those poses' own rigid-body fits."""
+    :func:`_model_test` on the poses it was fitted to
+    (:func:`~jointbench.estimators.segment_poses.each_on_poses`). The support ``verdicts`` are
+    not read: the test holds the fit to the residuals of those poses' own rigid-body fits."""
     del verdicts
-    if poses is None:
-        poses = trial_poses({"proximal": proximal, "distal": distal}, min_frames=POSE_MIN_FRAMES)
-    return [
-        _model_test(result, (trial["proximal"], trial["distal"]))
-        for result, trial in zip(results, poses, strict=True)
-    ]
+    return each_on_poses(
+        lambda result, *segments: _model_test(result, segments), results, proximal, distal, poses
+    )
 
 
 _model_tested_many.pose_segments = ("proximal", "distal")
+
+
+def _analytic_scattered(
+    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+) -> JointCenterResult:
+    """The analytic ``result`` with the covariance of its centre on the poses it was fitted to
+    (:func:`jointbench.estimators.pose_noise.analytic_covariance`),
+    ``diagnostics["center_covariance_mm2"]``."""
+    covariance = centre_covariance(
+        analytic_covariance, proximal, distal, (result.center, result.center)
+    )
+    return with_warnings(result, (), {"center_covariance_mm2": covariance.tolist()})
+
+
+def _analytic_scattered_many(
+    results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
+) -> list[JointCenterResult]:
+    """:func:`_analytic_scattered` of each of ``results`` (the trials of ``proximal``,
+    ``distal`` ``(T, N, n, 3)`` [mm]). The support ``verdicts`` are not read: each segment's
+    noise is its poses' own."""
+    del verdicts
+    return each_on_poses(_analytic_scattered, results, proximal, distal, poses)
+
+
+_analytic_scattered_many.pose_segments = ("proximal", "distal")
 
 
 def _gauss_markov(
@@ -1022,6 +1026,7 @@ _gauss_markov_trials = {frame0: _batched_gauss_markov(frame0) for frame0 in (Fal
 register_many("joint_center", "analytic", _analytic_trials)
 register_many("joint_center", "gauss-markov", _gauss_markov_trials[False])
 register_many("joint_center", "gauss-markov-frame0", _gauss_markov_trials[True])
+fit_analytic.precision_many = _analytic_scattered_many
 fit_gauss_markov.precision_many = _model_tested_many
 fit_gauss_markov_frame0.precision_many = _model_tested_many
 

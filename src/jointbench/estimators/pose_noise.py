@@ -50,6 +50,32 @@ the rotation that fixes the centre along ``v`` and has taken all of it (the shar
 The expansion is second order: where the noise takes most of the rotation off the hinge
 (nearly hinged motion, or few frames) the pull overstates the mean error.
 ``tests/test_pose_noise.py`` compares the pull with SCoRE's mean error over noise draws.
+
+Scatter of a linear least-squares centre. The noise also scatters an answer about where it
+pulls it; to first order the analytic centre (paper C's eq. 9) and SCoRE are linear in the
+noise, and their covariance follows from the model of paper C's frame-0 extension
+(:mod:`jointbench.estimators.hjc`, "Frame 0"): the joint's point in each segment's body frame,
+as that frame is placed at frame 0, is the true centre ``c`` plus an error ``delta_a`` of
+covariance ``A_a`` (the frame-0 fit's error at the joint, :func:`point_covariance`, times that
+segment's own rigid-body residual variance ``s_a^2``), and each later frame's pose places it
+with an independent error of the same covariance. With ``Q_t = R_p(t)' R_d(t)`` the relative
+rotations of frames ``t >= 1``, ``S = sum_t Q_t`` and ``n`` those frames:
+
+* the analytic centre's error is ``N^-1 sum_t [(I - Q_t') (delta_p + e_pt) + (I - Q_t)
+  (delta_d + e_dt)]`` with ``N = sum_t (2 I - Q_t - Q_t')``: the frame-0 errors enter every
+  frame alike, through ``D_p = n I - S'`` and ``D_d = n I - S``, and dominate the later frames'
+  on a long trial (:func:`analytic_covariance`);
+* SCoRE's answer, the midpoint ``(c_p + c_d) / 2`` of its two points (frame 0 included, whose
+  poses are the identity), has error ``P (x^ - x) + (delta_p + delta_d) / 2`` with ``[P_p,
+  P_d] = [I, I] M^-1 / 2`` and ``M`` its normal matrix: frame ``t`` adds ``(P_p - P_d Q_t')
+  e_pt - (P_p Q_t - P_d) e_dt``, frame 0 ``(I/2 - E) delta_p + (I/2 + E) delta_d`` with ``E =
+  P_p - P_d`` (:func:`score_covariance`).
+
+Every sum over the frames is one of ``S`` and ``sum_t Q_t' A Q_t`` or ``sum_t Q_t A Q_t'``,
+which the second moments ``sum_t vec(Q_t) vec(Q_t)'`` (9 x 9) give for any ``A``. What it does not
+hold: the pull above (second order), noise larger along one direction than across it, and
+markers that move on their segment. ``tests/test_joint_centre_scatter.py`` holds the covariances
+to the answers' scatter over noise draws.
 """
 
 from __future__ import annotations
@@ -59,9 +85,21 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jointbench.numerics.compiled import kernel
 from jointbench.numerics.joint_system import normal_matrix
 
-__all__ = ["NoisyPoses", "PoseNoise", "pose_noise", "pull_mm"]
+__all__ = [
+    "NoisyPoses",
+    "PoseNoise",
+    "analytic_covariance",
+    "centre_covariance",
+    "lever_factors",
+    "point_covariance",
+    "point_covariance_at",
+    "pose_noise",
+    "pull_mm",
+    "score_covariance",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,3 +190,163 @@ def pull_mm(noise: PoseNoise, centre: np.ndarray) -> np.ndarray:
     offsets = (centre - noise.centroids).reshape(6)
     pulled = noise.operator @ offsets
     return (pulled[:3] + pulled[3:]) / 2.0
+
+
+@kernel
+def lever_factors(body: np.ndarray) -> tuple:
+    """Centroid ``m`` ``(3,)`` [mm], inverse "inertia" ``K^-1`` ``(3, 3)`` [mm^-2] and count
+    ``n`` of body-fixed markers ``body`` ``(n, 3)`` [mm], ``K = sum_i (|u_i|^2 I - u_i u_i')``
+    with ``u_i`` the markers about ``m``. A compiled kernel."""
+    n = body.shape[0]
+    mean = np.zeros(3)
+    for p in range(n):
+        mean += body[p]
+    mean /= n
+    inertia = np.zeros((3, 3))
+    for p in range(n):
+        u = body[p] - mean
+        square = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]
+        for i in range(3):
+            inertia[i, i] += square
+            for j in range(3):
+                inertia[i, j] -= u[i] * u[j]
+    return mean, np.linalg.inv(inertia), n
+
+
+def point_covariance(point: np.ndarray, body: np.ndarray) -> np.ndarray:
+    """``A(c) / s^2``: covariance, per unit marker variance, of the world position of the body
+    point ``c`` ``(3,)`` [mm] predicted by an LS pose fit of the markers ``body`` ``(n, 3)``
+    [mm] in the frame where the pose is the identity (``R A R'`` for any other pose ``R``)."""
+    mean, inertia_inv, n = lever_factors(np.asarray(body, dtype=float))
+    point = np.asarray(point, dtype=float).reshape(1, 3)
+    return point_covariance_at(point, mean[None], inertia_inv[None], n)[0]
+
+
+@kernel
+def point_covariance_at(
+    points: np.ndarray, means: np.ndarray, inertia_invs: np.ndarray, n: int
+) -> np.ndarray:
+    """``A(c) / s^2 = [c - m]x K^-1 [c - m]x' + I / n`` ``(T, 3, 3)`` for points ``c`` ``(T,
+    3)`` [mm] of segments with lever factors (:func:`lever_factors`) ``means`` ``(T, 3)``,
+    ``inertia_invs`` ``(T, 3, 3)`` and ``n`` markers. A compiled kernel."""
+    out = np.empty((points.shape[0], 3, 3))
+    lever = np.zeros((3, 3))
+    for t in range(points.shape[0]):
+        v = points[t] - means[t]
+        lever[0, 1], lever[0, 2], lever[1, 2] = -v[2], v[1], -v[0]
+        lever[1, 0], lever[2, 0], lever[2, 1] = v[2], -v[1], v[0]
+        for i in range(3):
+            for j in range(3):
+                value = 1.0 / n if i == j else 0.0
+                for k in range(3):
+                    for m in range(3):
+                        value += lever[i, k] * inertia_invs[t, k, m] * lever[j, m]
+                out[t, i, j] = value
+    return out
+
+
+@kernel
+def _turns(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> tuple:
+    """The sums over frames ``t >= 1`` that a linear centre's covariance reads (module
+    docstring), of the relative rotations ``relative`` (:func:`_relative_rows`: ``(n, 9)``,
+    each ``Q_t`` by rows, and their sum ``(9,)``) and the point covariances ``a_p``, ``a_d``
+    ``(3, 3)`` [mm^2]: ``n``, ``S = sum_t Q_t`` ``(3, 3)``, ``sum_t Q_t' A_p Q_t`` and ``sum_t
+    Q_t A_d Q_t'`` ``(3, 3)`` [mm^2], the last two read off the 9 x 9 second moments of the
+    rotations, ``T[3 k + i, 3 l + j] = sum_t Q_t[k, i] Q_t[l, j]``. A compiled kernel."""
+    rows, total = relative
+    second = rows.T @ rows
+    turned_p = np.zeros((3, 3))
+    turned_d = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            for k in range(3):
+                for m in range(3):
+                    turned_p[i, j] += a_p[k, m] * second[3 * k + i, 3 * m + j]
+                    turned_d[i, j] += a_d[k, m] * second[3 * i + k, 3 * j + m]
+    return rows.shape[0], total.copy().reshape(3, 3), turned_p, turned_d
+
+
+@kernel
+def _relative_rows(proximal: np.ndarray, distal: np.ndarray) -> tuple:
+    """The relative rotations ``Q_t = R_p(t)' R_d(t)`` of frames ``t >= 1`` of the rotations
+    ``proximal`` and ``distal`` ``(N, 3, 3)``, each by rows, ``(N - 1, 9)``, and their sum
+    ``(9,)``. A compiled kernel: NumPy's product of a stack of 3 x 3 matrices, and its sum over
+    the frames, cost a checked call more than the sums that read them."""
+    n_frames = proximal.shape[0]
+    rows = np.empty((n_frames - 1, 9))
+    total = np.zeros(9)
+    for f in range(1, n_frames):
+        for i in range(3):
+            for j in range(3):
+                value = 0.0
+                for k in range(3):
+                    value += proximal[f, k, i] * distal[f, k, j]
+                rows[f - 1, 3 * i + j] = value
+                total[3 * i + j] += value
+    return rows, total
+
+
+@kernel
+def analytic_covariance(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> np.ndarray:
+    """The covariance ``(3, 3)`` [mm^2] of the analytic centre (paper C's eq. 9) on frames whose
+    relative rotations ``Q_t = R_p' R_d`` of frames ``t >= 1`` are ``relative``
+    (:func:`_relative_rows`), given the point covariances ``a_p``, ``a_d`` ``(3, 3)`` [mm^2]
+    of the proximal and distal poses at the centre (module docstring, "Scatter"). A compiled
+    kernel."""
+    n, total, turned_p, turned_d = _turns(relative, a_p, a_d)
+    identity = n * np.eye(3)
+    d_p, d_d = identity - total.T, identity - total
+    frames_p = n * a_p - total.T @ a_p - a_p @ total + turned_p
+    frames_d = n * a_d - total @ a_d - a_d @ total.T + turned_d
+    spread = d_p @ a_p @ d_p.T + frames_p + d_d @ a_d @ d_d.T + frames_d
+    inverse = np.linalg.inv(d_p + d_d)
+    return _symmetric(inverse @ spread @ inverse.T)
+
+
+@kernel
+def score_covariance(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> np.ndarray:
+    """The covariance ``(3, 3)`` [mm^2] of SCoRE's joint centre, the midpoint of its two points,
+    on frames whose relative rotations of frames ``t >= 1`` are ``relative``
+    (:func:`_relative_rows`; frame 0's is the identity), given the point covariances ``a_p``,
+    ``a_d`` ``(3, 3)`` [mm^2] of the proximal and distal poses at SCoRE's point in each
+    (module docstring, "Scatter"). A compiled kernel."""
+    n, total, turned_p, turned_d = _turns(relative, a_p, a_d)
+    # SCoRE's normal matrix over all n + 1 frames (joint_system.normal_matrix), frame 0's
+    # relative rotation the identity.
+    normal = (n + 1.0) * np.eye(6)
+    normal[:3, 3:] = -(np.eye(3) + total)
+    normal[3:, :3] = -(np.eye(3) + total.T)
+    inverse = np.linalg.inv(normal)
+    g_p = np.ascontiguousarray(0.5 * (inverse[:3, :3] + inverse[3:, :3]))
+    g_d = np.ascontiguousarray(0.5 * (inverse[:3, 3:] + inverse[3:, 3:]))
+    frames = (
+        n * (g_p @ a_p @ g_p.T + g_d @ a_d @ g_d.T)
+        - g_p @ (a_p @ total + total @ a_d) @ g_d.T
+        - g_d @ (total.T @ a_p + a_d @ total.T) @ g_p.T
+        + g_d @ turned_p @ g_d.T
+        + g_p @ turned_d @ g_p.T
+    )
+    half, shift = 0.5 * np.eye(3), g_p - g_d
+    frame0 = (half - shift) @ a_p @ (half - shift).T + (half + shift) @ a_d @ (half + shift).T
+    return _symmetric(frames + frame0)
+
+
+def centre_covariance(covariance, proximal, distal, points: tuple) -> np.ndarray:
+    """``covariance(relative, a_p, a_d)`` (:func:`analytic_covariance` or
+    :func:`score_covariance`) ``(3, 3)`` [mm^2] of a centre answered on the poses ``proximal``
+    and ``distal`` (:class:`~jointbench.estimators.segment_poses.SegmentPoses`), whose point
+    in each segment is ``points`` (two ``(3,)`` [mm], body frames): each segment's point
+    covariance scaled by its own rigid-body residual variance, as the pull takes it."""
+    relative = _relative_rows(proximal.rotation, distal.rotation)
+    a_p, a_d = (
+        poses.residual_ss / poses.dof * point_covariance(point, poses.body)
+        for poses, point in zip((proximal, distal), points, strict=True)
+    )
+    return covariance(relative, a_p, a_d)
+
+
+@kernel
+def _symmetric(matrix: np.ndarray) -> np.ndarray:
+    """The symmetric part of ``matrix`` ``(3, 3)``: a covariance rounded in its products. A
+    compiled kernel."""
+    return 0.5 * (matrix + matrix.T)

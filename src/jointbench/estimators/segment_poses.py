@@ -30,6 +30,7 @@ __all__ = [
     "POSE_MIN_FRAMES",
     "AlteredPoses",
     "SegmentPoses",
+    "each_on_poses",
     "pose_residuals",
     "pose_segments",
     "residual_differs",
@@ -396,3 +397,16 @@ def pose_segments(many: Callable) -> tuple[str, ...] | None:
     :func:`jointbench.estimators.registry.many`) accepts as ``poses=``, or ``None`` when it is
     not pose-based."""
     return getattr(many, "pose_segments", None)
+
+
+def each_on_poses(check: Callable, results: list, proximal, distal, poses: list | None) -> list:
+    """``check(result, proximal_poses, distal_poses)`` of each of a two-segment method's
+    ``results`` (the trials of ``proximal``, ``distal`` ``(T, N, n, 3)`` [mm]), on ``poses``,
+    those its checked call fitted (one :func:`trial_poses` entry per trial), or where that
+    call shared none on poses fitted here."""
+    if poses is None:
+        poses = trial_poses({"proximal": proximal, "distal": distal}, min_frames=POSE_MIN_FRAMES)
+    return [
+        check(result, trial["proximal"], trial["distal"])
+        for result, trial in zip(results, poses, strict=True)
+    ]

@@ -51,11 +51,18 @@ import numpy as np
 from jointbench.declared import NonNegative
 from jointbench.estimators import precision
 from jointbench.estimators.batching import isolated, one_trial
+from jointbench.estimators.pose_noise import centre_covariance, score_covariance
 from jointbench.estimators.registry import register, register_many
-from jointbench.estimators.results import AxisResult, CenterResult, JointCenterResult
+from jointbench.estimators.results import (
+    AxisResult,
+    CenterResult,
+    JointCenterResult,
+    with_warnings,
+)
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
+    each_on_poses,
     stopped_fit,
     trial_poses,
     with_stopped_fits,
@@ -229,6 +236,31 @@ def _score_joint(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | V
             },
         ),
     )
+
+
+def _score_scattered(
+    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+) -> JointCenterResult:
+    """SCoRE's joint-centre ``result`` with the covariance of its centre on the poses it was
+    fitted to (:func:`jointbench.estimators.pose_noise.score_covariance`),
+    ``diagnostics["center_covariance_mm2"]``."""
+    points = (result.diagnostics["center_proximal"], result.diagnostics["center_distal"])
+    covariance = centre_covariance(score_covariance, proximal, distal, points)
+    return with_warnings(result, (), {"center_covariance_mm2": covariance.tolist()})
+
+
+def _score_scattered_many(
+    results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
+) -> list[JointCenterResult]:
+    """:func:`_score_scattered` of each of ``results`` (the trials of ``proximal``, ``distal``
+    ``(T, N, n, 3)`` [mm]). The support ``verdicts`` are not read: each segment's noise is its
+    poses' own."""
+    del verdicts
+    return each_on_poses(_score_scattered, results, proximal, distal, poses)
+
+
+_score_scattered_many.pose_segments = ("proximal", "distal")
+fit_score.precision_many = _score_scattered_many
 
 
 @register("center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")
