@@ -174,6 +174,27 @@ def test_fit_knee_axis_with_bootstrap(capsys):
     assert row["frames"] == 922 and 0.0 < row["boot_cone95_deg"] < 30.0
 
 
+def test_every_row_states_the_answer_s_sd(capsys):
+    """A table or CSV row states each answer's SD, as the Python call does: ``sd_mm`` for a
+    centre or joint centre (the analytic centre's included, which has no covariance of its
+    own), ``sd_deg`` for an axis."""
+    for kind, moving, key, column in (
+        ("joint_center", SHANK, "center_sd_mm", "sd_mm"),
+        ("center", SHANK, "center_sd_mm", "sd_mm"),
+        ("axis", SHANK, "axis_sd_deg", "sd_deg"),
+    ):
+        method = {"joint_center": "analytic", "center": "NM", "axis": "planar"}[kind]
+        code, out, _ = run(
+            capsys, "fit", str(KNEE), "--kind", kind, "--reference", THIGH, "--moving", moving,
+            "--method", method, "--format", "csv",
+        )  # fmt: skip
+        assert code == 0
+        recording = jointbench.read(KNEE)
+        prepared = jointbench.prepare(recording, kind, moving, THIGH)
+        stated = prepared.fit(method).result.diagnostics[key]
+        assert csv_rows(out).iloc[0][column] == pytest.approx(stated, rel=1e-6)
+
+
 def test_world_trajectory_on_request(tmp_path, capsys):
     path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording().markers)
     world = tmp_path / "world.csv"

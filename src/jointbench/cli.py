@@ -210,6 +210,12 @@ def _row(fitted) -> dict:
         row.update(zip(("point_x_mm", "point_y_mm", "point_z_mm"), result.point, strict=True))
     else:
         row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
+    # The precision the checked call stated, where it stated one.
+    sd_key, column = (
+        ("axis_sd_deg", "sd_deg") if fitted.kind == "axis" else ("center_sd_mm", "sd_mm")
+    )
+    if sd_key in result.diagnostics:
+        row[column] = float(result.diagnostics[sd_key])
     covariance = getattr(result, "covariance", None)
     if covariance is not None:
         row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(covariance)))
