@@ -17,7 +17,8 @@ error, and the largest SD those answers stated:
 * a hinge's axis with four markers 5 mm from it, scattered by 3 mm, 1 mm noise;
 * a hinge's axis on arcs of 5 and 10 degrees (the radial cost);
 * a hip joint centre (``tests/test_pose_noise.py``'s hips on a 30 degree two-axis swing) with
-  one thigh marker sliding 5 and 10 mm over the 60 frames.
+  three thigh markers 3 mm off a 50 mm line (20 geometries, five times ``--seeds`` draws in
+  all), and with one thigh marker sliding 5 and 10 mm over the 60 frames.
 
 Each trial draws its geometry and noise from its seed; 0.5 mm noise where no other is named.
 """
@@ -36,7 +37,7 @@ import jointbench
 from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_pose_noise import CENTRE, _hip, _noisy
+from test_pose_noise import CENTRE, _hip, _noisy, _thin_thigh
 
 # An answer this far from the truth is far [mm, deg].
 FAR = 10.0
@@ -89,6 +90,16 @@ def _sliding_hip(seed: int, slide_mm: float) -> tuple:
     distal = distal.copy()
     distal[:, 0] += np.linspace(0.0, 1.0, len(distal))[:, None] * slide_mm * direction
     return proximal, distal
+
+
+def _thin_hip(geometry: int, draw: int, off_line_mm: float) -> tuple:
+    """``tests/test_pose_noise.py``'s hip on a 30 degree two-axis swing with three thigh
+    markers ``off_line_mm`` off a 50 mm line, 0.5 mm noise of draw ``draw``."""
+    rng = np.random.default_rng(geometry)
+    proximal, distal = _hip(geometry, ratio=1.0)
+    line = unit(rng.normal(size=3))
+    body = np.outer([-25.0, 0.0, 25.0], line) + rng.normal(scale=off_line_mm, size=(3, 3))
+    return _noisy((proximal, _thin_thigh(distal, body)), 100_000 * geometry + draw)
 
 
 def _report(label: str, method: str, outcomes: Iterable[tuple[object, float]], sd_key: str):
@@ -164,6 +175,13 @@ def axes(seeds: range) -> None:
 
 
 def joint_centres(seeds: range) -> None:
+    thin = [_thin_hip(seed % 20, seed // 20, 3.0) for seed in range(5 * len(seeds))]
+    for method in ("SCoRE", "analytic"):
+        outcomes = []
+        for proximal, distal in thin:
+            result = jointbench.fit_joint_center(proximal, distal, method=method)
+            outcomes.append((result, float(np.linalg.norm(result.center - CENTRE))))
+        _report("hip, three thigh markers 3 mm off a line", method, outcomes, "center_sd_mm")
     for slide_mm in (5.0, 10.0):
         trials = [_sliding_hip(seed, slide_mm) for seed in seeds]
         for method in jointbench.methods("joint_center"):

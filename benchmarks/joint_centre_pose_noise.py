@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import collections
 import itertools
+import math
 import sys
 import warnings
 from pathlib import Path
@@ -75,8 +76,10 @@ def _only_checked(status: str) -> bool:
 
 def _count(label: str, trials: list[tuple], methods: tuple[str, ...], centre=CENTRE) -> None:
     """Per method, how many of ``trials`` read ``ok`` now and would without the warnings of
-    the pull and the SD, and how many of each lie more than 10 mm from ``centre``."""
+    the pull and the SD, how many of each lie more than 10 mm from ``centre``, and the
+    largest SD stated."""
     counts: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    largest_sd: dict[str, float] = collections.defaultdict(float)
     for segments in trials:
         for method in methods:
             result = jointbench.fit_joint_center(*segments, method=method)
@@ -85,12 +88,15 @@ def _count(label: str, trials: list[tuple], methods: tuple[str, ...], centre=CEN
             tally = counts[method]
             tally["pulled"] += _PULLED in result.status
             tally["undetermined"] += _UNDETERMINED in result.status
+            sd = result.diagnostics.get("center_sd_mm", math.nan)
+            largest_sd[method] = max(largest_sd[method], sd)
             tally["ok before"] += before
             tally["ok before, >10 mm off"] += before and off
             tally["ok"] += result.status == "ok"
             tally["ok, >10 mm off"] += result.status == "ok" and off
     for method, tally in counts.items():
         words = ", ".join(f"{key} {value}" for key, value in tally.items())
+        words += f", largest SD {largest_sd[method]:.3g} mm"
         print(f"{label:44s} {method:20s} of {len(trials)}: {words}")
 
 

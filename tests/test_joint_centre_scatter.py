@@ -12,7 +12,8 @@ import pytest
 from test_pose_noise import CENTRE, _hip, _noisy
 
 import jointbench
-from jointbench.estimators import pose_noise
+from jointbench.estimators import centre_precision, pose_noise, support
+from jointbench.estimators.results import JointCenterResult
 from jointbench.geometry import rotation_matrix
 from jointbench.simulate import hip
 
@@ -187,3 +188,22 @@ def test_the_covariances_hold_in_their_linear_model(n_frames):
         stated = formula(relative, a_p, a_d)
         scatter = errors.T @ errors / len(errors)
         np.testing.assert_allclose(scatter, stated, atol=0.05 * np.abs(stated).max())
+
+
+def test_a_covariance_with_no_positive_variance_is_not_an_sd():
+    """A covariance whose every variance is negative (no covariance of an answer) gives no SD
+    but a NaN and the warning that the centre is not determined; a stated one is named as the
+    method's."""
+    result = JointCenterResult(
+        center=np.zeros(3),
+        covariance=-np.eye(3),
+        converged=True,
+        iterations=1,
+        status="ok",
+        method="made-up",
+    )
+    verdict = support.assess("joint_center", _noisy(_hip(3, ratio=1.0), 1))
+    (checked,) = centre_precision.annotate_joint_centres([result], [verdict])
+    assert np.isnan(checked.diagnostics["center_sd_mm"])
+    assert "SD along the least determined direction is not a number" in checked.status
+    assert "from the covariance its method states" in checked.status

@@ -680,12 +680,13 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
         if not np.isfinite(result.center).all():
             continue
         numbers, warnings = {}, []
-        covariance = _stated_covariance(result)
-        if covariance is not None:
+        stated = _stated_covariance(result)
+        if stated is not None:
+            covariance, source = stated
             sd = _largest_sd(covariance)
             numbers["center_sd_mm"] = sd
             if not sd <= MAX_CENTER_SD_MM:
-                warnings.append(_undetermined(sd, "the noise of both segments' poses"))
+                warnings.append(_undetermined(sd, source))
         noise = verdict.pose_noise
         if noise is not None:
             pull = float(np.linalg.norm(pull_mm(noise, np.asarray(result.center))))
@@ -699,27 +700,35 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     return annotated
 
 
-def _stated_covariance(result) -> np.ndarray | None:
-    """The covariance ``(3, 3)`` [mm^2] a joint-centre ``result`` states of its centre: its own
-    (the Gauss–Markov fits'), or the one its method's precision added, or ``None``."""
+def _stated_covariance(result) -> tuple[np.ndarray, str] | None:
+    """The covariance ``(3, 3)`` [mm^2] a joint-centre ``result`` states of its centre, and
+    where it comes from: its own (the Gauss–Markov fits'), or the one its method's precision
+    added from each segment's pose noise; ``None`` for neither."""
     if result.covariance is not None:
-        return np.asarray(result.covariance, dtype=float)
-    stated = result.diagnostics.get("center_covariance_mm2")
-    return None if stated is None else np.asarray(stated, dtype=float)
+        return np.asarray(result.covariance, dtype=float), "the covariance its method states"
+    added = result.diagnostics.get("center_covariance_mm2")
+    if added is None:
+        return None
+    return np.asarray(added, dtype=float), "the noise of both segments' poses"
 
 
 def _largest_sd(covariance: np.ndarray) -> float:
-    """The SD [mm] along the least determined direction of ``covariance`` ``(3, 3)`` [mm^2];
-    ``inf`` where it is not finite."""
+    """The SD [mm] along the least determined direction of ``covariance`` ``(3, 3)`` [mm^2]:
+    ``inf`` where it is not finite, NaN where no direction has a positive variance (no
+    covariance of an answer with noise)."""
     if not np.isfinite(covariance).all():
         return math.inf
-    return math.sqrt(max(float(np.linalg.eigvalsh(covariance)[-1]), 0.0))
+    largest = float(np.linalg.eigvalsh(covariance)[-1])
+    return math.sqrt(largest) if largest >= 0.0 else math.nan
 
 
 def _undetermined(sd: float, source: str) -> str:
     """The warning for a centre whose SD along its least determined direction is ``sd`` [mm],
     above :data:`MAX_CENTER_SD_MM`, from the noise ``source`` names."""
-    size = "is unbounded" if math.isinf(sd) else f"is {sd:.3g} mm"
+    if math.isnan(sd):
+        size = "is not a number"
+    else:
+        size = "is unbounded" if math.isinf(sd) else f"is {sd:.3g} mm"
     return (
         f"centre not determined by the data: its SD along the least determined direction "
         f"{size} (above {MAX_CENTER_SD_MM:g} mm, from {source})"

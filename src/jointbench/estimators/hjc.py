@@ -143,8 +143,8 @@ from jointbench.estimators.results import JointCenterResult, with_warnings
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
-    each_on_poses,
     pose_residuals,
+    precision_on_poses,
 )
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING
 from jointbench.estimators.twosegment import (
@@ -736,12 +736,15 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     return (fourth / variance**2 - gaussian) / excess, gaussian
 
 
-def _model_test(result: JointCenterResult, segments) -> JointCenterResult:
+def _model_test(
+    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+) -> JointCenterResult:
     """``result`` of ``gauss-markov`` or ``gauss-markov-frame0`` with the test of its model
-    on the poses ``segments`` (proximal, distal :class:`SegmentPoses`) it was fitted to
+    on the poses ``proximal`` and ``distal`` it was fitted to
     (module docstring, "Model test"): ``chi2_p``, ``noise_kurtosis`` and ``chi2_inflation`` in
     its diagnostics (NaN where there is nothing to test), and below
     :data:`jointbench.estimators.support.ROTATION_ALPHA` a warning."""
+    segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
     largest = max(float(np.max(np.abs(p.markers))) for p in segments)
@@ -844,22 +847,6 @@ def _model_warning(
     return words
 
 
-def _model_tested_many(
-    results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
-) -> list[JointCenterResult]:
-    """Each of ``results`` (the trials of ``proximal``, ``distal`` ``(T, N, n, 3)`` [mm]) with
-    :func:`_model_test` on the poses it was fitted to
-    (:func:`~jointbench.estimators.segment_poses.each_on_poses`). The support ``verdicts`` are
-    not read: the test holds the fit to the residuals of those poses' own rigid-body fits."""
-    del verdicts
-    return each_on_poses(
-        lambda result, *segments: _model_test(result, segments), results, proximal, distal, poses
-    )
-
-
-_model_tested_many.pose_segments = ("proximal", "distal")
-
-
 def _analytic_scattered(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
 ) -> JointCenterResult:
@@ -870,19 +857,6 @@ def _analytic_scattered(
         analytic_covariance, proximal, distal, (result.center, result.center)
     )
     return with_warnings(result, (), {"center_covariance_mm2": covariance.tolist()})
-
-
-def _analytic_scattered_many(
-    results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
-) -> list[JointCenterResult]:
-    """:func:`_analytic_scattered` of each of ``results`` (the trials of ``proximal``,
-    ``distal`` ``(T, N, n, 3)`` [mm]). The support ``verdicts`` are not read: each segment's
-    noise is its poses' own."""
-    del verdicts
-    return each_on_poses(_analytic_scattered, results, proximal, distal, poses)
-
-
-_analytic_scattered_many.pose_segments = ("proximal", "distal")
 
 
 def _gauss_markov(
@@ -1026,9 +1000,9 @@ _gauss_markov_trials = {frame0: _batched_gauss_markov(frame0) for frame0 in (Fal
 register_many("joint_center", "analytic", _analytic_trials)
 register_many("joint_center", "gauss-markov", _gauss_markov_trials[False])
 register_many("joint_center", "gauss-markov-frame0", _gauss_markov_trials[True])
-fit_analytic.precision_many = _analytic_scattered_many
-fit_gauss_markov.precision_many = _model_tested_many
-fit_gauss_markov_frame0.precision_many = _model_tested_many
+fit_analytic.precision_many = precision_on_poses(_analytic_scattered)
+fit_gauss_markov.precision_many = precision_on_poses(_model_test)
+fit_gauss_markov_frame0.precision_many = fit_gauss_markov.precision_many
 
 
 def align_to_markers(

@@ -80,13 +80,17 @@ to the answers' scatter over noise draws.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from jointbench.numerics.compiled import kernel
 from jointbench.numerics.joint_system import normal_matrix
+
+if TYPE_CHECKING:
+    from jointbench.estimators.segment_poses import SegmentPoses
 
 __all__ = [
     "NoisyPoses",
@@ -311,12 +315,8 @@ def score_covariance(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> np.nd
     ``a_d`` ``(3, 3)`` [mm^2] of the proximal and distal poses at SCoRE's point in each
     (module docstring, "Scatter"). A compiled kernel."""
     n, total, turned_p, turned_d = _turns(relative, a_p, a_d)
-    # SCoRE's normal matrix over all n + 1 frames (joint_system.normal_matrix), frame 0's
-    # relative rotation the identity.
-    normal = (n + 1.0) * np.eye(6)
-    normal[:3, 3:] = -(np.eye(3) + total)
-    normal[3:, :3] = -(np.eye(3) + total.T)
-    inverse = np.linalg.inv(normal)
+    # SCoRE's normal matrix is over all n + 1 frames, frame 0's relative rotation the identity.
+    inverse = np.linalg.inv(normal_matrix((np.eye(3) + total).reshape(1, 3, 3), n + 1)[0])
     g_p = np.ascontiguousarray(0.5 * (inverse[:3, :3] + inverse[3:, :3]))
     g_d = np.ascontiguousarray(0.5 * (inverse[:3, 3:] + inverse[3:, 3:]))
     frames = (
@@ -331,18 +331,22 @@ def score_covariance(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> np.nd
     return _symmetric(frames + frame0)
 
 
-def centre_covariance(covariance, proximal, distal, points: tuple) -> np.ndarray:
-    """``covariance(relative, a_p, a_d)`` (:func:`analytic_covariance` or
-    :func:`score_covariance`) ``(3, 3)`` [mm^2] of a centre answered on the poses ``proximal``
-    and ``distal`` (:class:`~jointbench.estimators.segment_poses.SegmentPoses`), whose point
-    in each segment is ``points`` (two ``(3,)`` [mm], body frames): each segment's point
-    covariance scaled by its own rigid-body residual variance, as the pull takes it."""
+def centre_covariance(
+    formula: Callable[[tuple, np.ndarray, np.ndarray], np.ndarray],
+    proximal: SegmentPoses,
+    distal: SegmentPoses,
+    points: tuple,
+) -> np.ndarray:
+    """The covariance ``(3, 3)`` [mm^2] that ``formula`` (:func:`analytic_covariance` or
+    :func:`score_covariance`) gives a centre answered on the poses ``proximal`` and ``distal``,
+    whose point in each segment is ``points`` (two ``(3,)`` [mm], body frames): each segment's
+    point covariance scaled by its own rigid-body residual variance, as the pull takes it."""
     relative = _relative_rows(proximal.rotation, distal.rotation)
     a_p, a_d = (
-        poses.residual_ss / poses.dof * point_covariance(point, poses.body)
+        poses.variance * point_covariance(point, poses.body)
         for poses, point in zip((proximal, distal), points, strict=True)
     )
-    return covariance(relative, a_p, a_d)
+    return formula(relative, a_p, a_d)
 
 
 @kernel

@@ -30,9 +30,9 @@ __all__ = [
     "POSE_MIN_FRAMES",
     "AlteredPoses",
     "SegmentPoses",
-    "each_on_poses",
     "pose_residuals",
     "pose_segments",
+    "precision_on_poses",
     "residual_differs",
     "stopped_fit",
     "trial_poses",
@@ -121,6 +121,11 @@ class SegmentPoses:
             object.__setattr__(self, name, array)
         object.__setattr__(self, "residual_ss", residual_ss)
         object.__setattr__(self, "dof", dof)
+
+    @property
+    def variance(self) -> float:
+        """The rigid-body residual per coordinate, ``s^2 = residual_ss / dof`` [mm^2]."""
+        return self.residual_ss / self.dof
 
     @property
     def converged(self) -> bool | None:
@@ -399,14 +404,22 @@ def pose_segments(many: Callable) -> tuple[str, ...] | None:
     return getattr(many, "pose_segments", None)
 
 
-def each_on_poses(check: Callable, results: list, proximal, distal, poses: list | None) -> list:
-    """``check(result, proximal_poses, distal_poses)`` of each of a two-segment method's
-    ``results`` (the trials of ``proximal``, ``distal`` ``(T, N, n, 3)`` [mm]), on ``poses``,
-    those its checked call fitted (one :func:`trial_poses` entry per trial), or where that
-    call shared none on poses fitted here."""
-    if poses is None:
-        poses = trial_poses({"proximal": proximal, "distal": distal}, min_frames=POSE_MIN_FRAMES)
-    return [
-        check(result, trial["proximal"], trial["distal"])
-        for result, trial in zip(results, poses, strict=True)
-    ]
+def precision_on_poses(check: Callable) -> Callable[..., list]:
+    """A two-segment method's ``precision_many`` that gives each of its results
+    ``check(result, proximal_poses, distal_poses)``, on the poses its checked call fitted (one
+    :func:`trial_poses` entry per trial in ``poses``), or where that call shared none on poses
+    fitted here. The support ``verdicts`` are not read: each check holds the result to those
+    poses' own rigid-body fits."""
+
+    def precision_many(results: list, proximal, distal, *, verdicts, poses=None) -> list:
+        del verdicts
+        if poses is None:
+            segments = {"proximal": proximal, "distal": distal}
+            poses = trial_poses(segments, min_frames=POSE_MIN_FRAMES)
+        return [
+            check(result, trial["proximal"], trial["distal"])
+            for result, trial in zip(results, poses, strict=True)
+        ]
+
+    precision_many.pose_segments = ("proximal", "distal")
+    return precision_many

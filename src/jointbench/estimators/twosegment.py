@@ -62,7 +62,7 @@ from jointbench.estimators.results import (
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
-    each_on_poses,
+    precision_on_poses,
     stopped_fit,
     trial_poses,
     with_stopped_fits,
@@ -249,18 +249,7 @@ def _score_scattered(
     return with_warnings(result, (), {"center_covariance_mm2": covariance.tolist()})
 
 
-def _score_scattered_many(
-    results: list[JointCenterResult], proximal, distal, *, verdicts, poses=None
-) -> list[JointCenterResult]:
-    """:func:`_score_scattered` of each of ``results`` (the trials of ``proximal``, ``distal``
-    ``(T, N, n, 3)`` [mm]). The support ``verdicts`` are not read: each segment's noise is its
-    poses' own."""
-    del verdicts
-    return each_on_poses(_score_scattered, results, proximal, distal, poses)
-
-
-_score_scattered_many.pose_segments = ("proximal", "distal")
-fit_score.precision_many = _score_scattered_many
+fit_score.precision_many = precision_on_poses(_score_scattered)
 
 
 @register("center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")

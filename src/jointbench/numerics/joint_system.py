@@ -13,16 +13,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from jointbench.numerics.compiled import kernel
+
 __all__ = ["normal_matrix", "stacked_normal_equations"]
 
 
+@kernel
 def normal_matrix(relative_sum: np.ndarray, n_frames: int) -> np.ndarray:
     """``A'A`` ``(T, 6, 6)`` from the sum of the relative rotations ``S`` ``(T, 3, 3)`` over
-    ``n_frames`` frames."""
-    normal = np.empty((relative_sum.shape[0], 6, 6))
-    normal[:, :3, :3] = normal[:, 3:, 3:] = n_frames * np.eye(3)
-    normal[:, :3, 3:] = -relative_sum
-    normal[:, 3:, :3] = -np.swapaxes(relative_sum, 1, 2)
+    ``n_frames`` frames. A compiled kernel, which the covariance of SCoRE's answer calls
+    (:func:`jointbench.estimators.pose_noise.score_covariance`)."""
+    normal = np.zeros((relative_sum.shape[0], 6, 6))
+    for t in range(relative_sum.shape[0]):
+        for i in range(3):
+            normal[t, i, i] = normal[t, 3 + i, 3 + i] = n_frames
+            for j in range(3):
+                normal[t, i, 3 + j] = normal[t, 3 + j, i] = -relative_sum[t, i, j]
     return normal
 
 
