@@ -1,0 +1,121 @@
+"""Centre estimators against literal transcriptions of their definitions on noisy data, and
+their stopping rules and self-checks at the limits those set.
+
+Noise-free data give every exact method the true centre, whatever the weighting of its cost
+(and send NM down its singular-scatter path), so they cannot tell a method from a neighbour
+of it: these tests use noisy data, where each definition has an answer of its own.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import scipy.linalg
+from test_center_estimators import CENTER, M_SET, moving_markers, spiral_rotations
+
+from jointbench.estimators import amplitude, sphere
+from jointbench.estimators.amplitude import fit_ma
+from jointbench.estimators.sphere import fit_bc, fit_is, fit_ls, fit_nm
+from jointbench.simulate.noise import isotropic_noise
+
+
+def _noisy_cap(seed: int, rom_deg: float = 25.0, noise_mm: float = 0.5) -> np.ndarray:
+    """Paper A's M set on a circumduction, far from the origin, with isotropic noise."""
+    markers = moving_markers(spiral_rotations(rom_deg), M_SET, CENTER) + 300.0
+    return markers + isotropic_noise(np.random.default_rng(seed), markers.shape[:2], noise_mm)
+
+
+def _nm_by_the_generalised_eigenproblem(markers: np.ndarray):
+    """Paper A eqs. 13-25 as printed (radii with the sign the fit's docstring corrects),
+    solved by ``scipy.linalg.eig(S, C)`` on the data centred and scaled to unit RMS: the centre
+    [mm], the radii [mm] and the least admissible ``lambda = u' S u`` with ``u' C u = 1``."""
+    n_frames, n_markers, _ = markers.shape
+    rows = markers.reshape(-1, 3)
+    origin = rows.mean(axis=0)
+    scale = np.sqrt(np.mean(np.sum((rows - origin) ** 2, axis=1)))
+    scaled = (markers - origin) / scale
+    design = np.zeros((n_markers * n_frames, 4 + n_markers))
+    for p in range(n_markers):
+        block = slice(p * n_frames, (p + 1) * n_frames)
+        design[block, 0] = np.sum(scaled[:, p] ** 2, axis=1)
+        design[block, 1:4] = scaled[:, p]
+        design[block, 4 + p] = 1.0
+    scatter = design.T @ design
+    constraint = np.zeros((4 + n_markers, 4 + n_markers))
+    constraint[1:4, 1:4] = n_markers * np.eye(3)
+    constraint[0, 4:] = constraint[4:, 0] = -2.0
+    values, vectors = scipy.linalg.eig(scatter, constraint)
+    best = None
+    for value, vector in zip(values, vectors.T, strict=True):
+        vector = np.real(vector)
+        norm = vector @ constraint @ vector
+        if not (np.isfinite(value) and norm > 0.0):
+            continue
+        u = vector / np.sqrt(norm)
+        cost = u @ scatter @ u
+        if best is None or cost < best[0]:
+            best = (cost, u)
+    cost, u = best
+    a, bcd, e = u[0], u[1:4], u[4:]
+    centre = bcd / (-2.0 * a)
+    radii = np.sqrt(centre @ centre - e / a)
+    return origin + scale * centre, scale * radii, cost
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_nm_is_the_least_admissible_generalised_eigenvector(seed):
+    """NM's centre, radii and cost are paper A's eigenproblem ``S u = lambda C u`` solved
+    directly (the fit whitens it instead). Three markers, so that the constraint's ``P I``
+    block weighs the centre's terms against the markers' constants."""
+    markers = _noisy_cap(seed)
+    centre, radii, cost = _nm_by_the_generalised_eigenproblem(markers)
+    result = fit_nm(markers)
+    np.testing.assert_allclose(result.center, centre, atol=1e-6)
+    np.testing.assert_allclose(result.radii, radii, rtol=1e-8)
+    assert result.cost == pytest.approx(cost, rel=1e-6)
+
+
+@pytest.mark.parametrize("fit", [fit_ls, fit_bc])
+def test_ls_and_bc_cost_is_f2_at_their_centre(fit):
+    """``cost`` is paper A's eq. 4, ``sum_p sum_k (|v - c|^2 - r_p^2)^2`` with the radii
+    profiled out (``r_p^2`` the mean squared distance), evaluated literally."""
+    markers = _noisy_cap(seed=3)
+    result = fit(markers)
+    squared = np.sum((markers - result.center) ** 2, axis=-1)
+    expected = np.sum((squared - squared.mean(axis=0)) ** 2)
+    assert result.cost == pytest.approx(expected, rel=1e-9)
+    np.testing.assert_allclose(result.radii, np.sqrt(squared.mean(axis=0)), rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("module", "fit"), [(sphere, fit_is), (amplitude, fit_ma)], ids=["IS", "MA"]
+)
+def test_a_search_stopped_by_its_iteration_limit_is_not_converged(monkeypatch, module, fit):
+    """With fminsearch's iteration limit lowered to 5 the simplex cannot meet its tolerances:
+    the answer must say it stopped at the limit, not claim convergence."""
+    limits = {**module.FMINSEARCH_OPTIONS, "max_iter": 5}
+    monkeypatch.setattr(module, "FMINSEARCH_OPTIONS", limits)
+    markers = _noisy_cap(seed=4)
+    result = fit(markers, start=CENTER + 300.0 + np.array([20.0, -10.0, 15.0]))
+    assert result.iterations == 5
+    assert not result.converged
+    assert result.status == "Maximum number of iterations has been exceeded."
+
+
+def test_bc_self_check_fails_an_answer_a_few_tolerances_from_its_fixed_point():
+    """BC's self-check takes one more of Halvorsen's updates from the returned centre; an
+    answer moved 5 tol_x off the fixed point comes back by about that much, more than tol_x
+    (and less than ten times it), so it must fail while the answer itself holds."""
+    markers = _noisy_cap(seed=5)
+    result = fit_bc(markers)
+    assert result.converged, result.status
+    held = fit_bc.self_check(result, markers)
+    assert held.converged and held.status == "ok"
+    moved = dataclasses.replace(result, center=result.center + np.array([5e-4, 0.0, 0.0]))
+    checked = fit_bc.self_check(moved, markers)
+    assert not checked.converged
+    assert checked.status.startswith("self-check failed: not BC's fixed point")
+    step = float(checked.diagnostics["self_check"].split("by ")[1].split(" mm")[0])
+    assert 1e-4 < step < 1e-3
