@@ -119,3 +119,12 @@ def test_bc_self_check_fails_an_answer_a_few_tolerances_from_its_fixed_point():
     assert checked.status.startswith("self-check failed: not BC's fixed point")
     step = float(checked.diagnostics["self_check"].split("by ")[1].split(" mm")[0])
     assert 1e-4 < step < 1e-3
+
+
+def test_amplitude_is_the_summed_sides_of_the_trajectorys_bounding_box():
+    """Identity rotations and translations ``k (1, 2, 3)`` mm over 5 frames move every point
+    along a box of sides 4, 8 and 12 mm: amplitude 24 mm wherever the point is."""
+    rotation = np.repeat(np.eye(3)[None], 5, axis=0)
+    translation = np.arange(5.0)[:, None] * np.array([1.0, 2.0, 3.0])
+    for point in ([0.0, 0.0, 0.0], [10.0, -3.0, 7.0]):
+        assert amplitude.amplitude(rotation, translation, np.array(point)) == pytest.approx(24.0)
