@@ -128,3 +128,80 @@ def test_amplitude_is_the_summed_sides_of_the_trajectorys_bounding_box():
     translation = np.arange(5.0)[:, None] * np.array([1.0, 2.0, 3.0])
     for point in ([0.0, 0.0, 0.0], [10.0, -3.0, 7.0]):
         assert amplitude.amplitude(rotation, translation, np.array(point)) == pytest.approx(24.0)
+
+
+def _halvorsen(markers: np.ndarray, tol_x: float, tol_fun: float, max_iterations: int = 600):
+    """Halvorsen's iteration as :func:`fit_bc` documents it, written out with the sums over
+    frames: the centre, the updates made and whether both tests were met."""
+    means = markers.mean(axis=0)
+    centred = markers - means
+    a_matrix = 2.0 * np.einsum("kpi,kpj->ij", centred, centred) / len(markers)
+    squares = np.sum(markers**2, axis=-1)
+    b_vector = np.einsum("kpi,kp->i", centred, squares - squares.mean(axis=0)) / len(markers)
+
+    def variance(centre):
+        u2 = np.sum((markers - centre) ** 2, axis=-1)
+        mean_u2 = u2.mean(axis=0)
+        return np.mean(np.sum((u2 - mean_u2) ** 2, axis=0) / (4.0 * mean_u2 * len(markers)))
+
+    centre = np.linalg.solve(a_matrix, b_vector)
+    sigma2 = variance(centre)
+    for iteration in range(1, max_iterations + 1):
+        compensation = 2.0 * sigma2 * np.sum(means - centre, axis=0)
+        updated = np.linalg.solve(a_matrix, b_vector - compensation)
+        updated_sigma2 = variance(updated)
+        step, change = np.max(np.abs(updated - centre)), abs(updated_sigma2 - sigma2)
+        centre, sigma2 = updated, updated_sigma2
+        if step <= tol_x and change <= tol_fun:
+            return centre, iteration, True
+    return centre, max_iterations, False
+
+
+@pytest.mark.parametrize(
+    ("tol_x", "tol_fun"), [(1e-4, 1e-4), (1e3, 1e-4), (1e-4, 1e3)], ids=["both", "fun", "x"]
+)
+def test_bc_follows_halvorsens_iteration_update_by_update(tol_x, tol_fun):
+    """On a 15 degree cap with 1 mm noise BC takes tens of updates: it must stop at the update
+    the written-out iteration stops at, under either test alone and under both."""
+    markers = moving_markers(spiral_rotations(15.0), M_SET, CENTER) + 300.0
+    markers = markers + isotropic_noise(np.random.default_rng(8), markers.shape[:2], 1.0)
+    centre, iterations, converged = _halvorsen(markers, tol_x, tol_fun)
+    result = fit_bc(markers, tol_x=tol_x, tol_fun=tol_fun)
+    assert iterations > 3
+    assert (result.iterations, result.converged) == (iterations, converged)
+    np.testing.assert_allclose(result.center, centre, atol=1e-6)
+
+
+def test_is_radii_are_the_mean_distances_from_its_centre():
+    markers = _noisy_cap(seed=6)
+    result = fit_is(markers)
+    distances = np.linalg.norm(markers - result.center, axis=-1)
+    np.testing.assert_allclose(result.radii, distances.mean(axis=0), rtol=1e-12)
+
+
+def test_is_self_check_restarts_from_a_neighbour_a_few_tol_fun_below_the_answer():
+    """An IS answer whose f1 lies 5 TolFun above the lower of its neighbours' (the LS and NM
+    centres; more than fminsearch's TolFun, less than ten times it) is restarted."""
+    markers = _noisy_cap(seed=7)
+    neighbours = [fit_ls(markers).center, fit_nm(markers).center]
+    costs = [sphere.geometric_cost(markers, point) for point in neighbours]
+    nearest, least = neighbours[int(np.argmin(costs))], min(costs)
+    target = least + 5e-4
+    outward = np.array([1.0, 0.0, 0.0])
+    low, high = 0.0, 1.0
+    while sphere.geometric_cost(markers, nearest + high * outward) < target:
+        high *= 2.0
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        if sphere.geometric_cost(markers, nearest + middle * outward) < target:
+            low = middle
+        else:
+            high = middle
+    centre = nearest + high * outward
+    answer = dataclasses.replace(
+        fit_is(markers), center=centre, cost=sphere.geometric_cost(markers, centre)
+    )
+    assert 1e-4 < answer.cost - least < 1e-3
+    checked = fit_is.self_check(answer, markers)
+    assert checked.status.startswith("restarted: ")
+    assert checked.cost < answer.cost
