@@ -46,6 +46,21 @@ def test_centre_sd_and_noise_share_are_those_of_the_formulas(seed, rom_deg):
     assert result.diagnostics["center_sd_noise_share"] == pytest.approx(share, rel=1e-9)
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_centre_fit_ratio_is_the_radial_residuals_over_their_degrees_of_freedom(seed):
+    """``center_fit_ratio`` is ``sum e^2 / (P (N - 1) s^2)``: the radial residuals
+    ``e = |x - c| - r_p`` about the answer, ``r_p`` each marker's mean distance (one per marker
+    profiled out of its ``N`` residuals)."""
+    markers = _noisy_cap(seed)
+    result = jointbench.fit_center(markers, method="IS")
+    s2 = result.diagnostics["support_rigid_residual_mm"] ** 2 / 3.0
+    distances = np.linalg.norm(markers - np.asarray(result.center), axis=-1)
+    squares = np.sum((distances - distances.mean(axis=0)) ** 2)
+    n_frames, n_markers = distances.shape
+    expected = squares / (n_markers * (n_frames - 1) * s2)
+    assert result.diagnostics["center_fit_ratio"] == pytest.approx(expected, rel=1e-9)
+
+
 def test_centre_sd_matches_the_scatter_of_the_answers_over_seeds():
     """Over 200 seeds of paper A's M set on a 25 degree cap with 0.5 mm noise, the geometric
     fit's error along the least determined direction (the noise-free scatter's least

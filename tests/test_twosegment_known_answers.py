@@ -43,3 +43,14 @@ def test_sara_sd_is_unchanged_by_repeating_every_frame():
     once = checked("SARA", markers).diagnostics["axis_sd_deg"]
     repeated = checked("SARA", np.repeat(markers, 5, axis=0)).diagnostics["axis_sd_deg"]
     assert repeated == pytest.approx(once, rel=0.03)
+
+
+def test_sara_radii_are_each_markers_mean_distance_from_the_axis():
+    markers = hinge(4, 60.0, noise=0.3)
+    result = fit_sara(markers)
+    direction, point = np.asarray(result.direction), np.asarray(result.point)
+    offsets = markers - point
+    across = offsets - np.einsum("fpi,i->fp", offsets, direction)[..., None] * direction
+    np.testing.assert_allclose(
+        result.radii, np.linalg.norm(across, axis=-1).mean(axis=0), rtol=1e-9
+    )
