@@ -5,6 +5,7 @@ of freedom and the foot of the markers' centroid on the axis."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -12,7 +13,7 @@ import pytest
 from scipy.special import fdtrc
 from test_axis_sd import checked, hinge
 
-from jointbench.estimators import precision
+from jointbench.estimators import axis, precision
 from jointbench.geometry import rotation_matrix
 from jointbench.numerics.poses import fit_rigid_poses
 
@@ -88,6 +89,11 @@ def test_misfit_does_not_credit_light_tailed_residuals_with_extra_degrees_of_fre
     ratio = (at.least / at.dof) / noise_variance
     assert found.ratio == pytest.approx(ratio, rel=1e-12)
     assert found.p_value == pytest.approx(fdtrc(398, noise_dof, ratio), rel=1e-9)
+    # The tilt scale: the cost's excess over the noise's share on its dof, ``f - dof s^2``,
+    # along the direction block of (H / 2)^-1 (the identity here).
+    excess = at.least - 398 * noise_variance
+    assert excess > 0.0
+    assert found.tilt_scale_deg == pytest.approx(math.degrees(math.sqrt(excess)), rel=1e-12)
 
 
 def test_rigid_dof_is_the_mean_rigid_body_residual_over_the_noise_variance():
@@ -107,3 +113,21 @@ def test_rigid_dof_is_the_mean_rigid_body_residual_over_the_noise_variance():
     residual_ss = np.sum((markers - fitted) ** 2, axis=(1, 2, 3))
     dof = precision.rigid_dof(n_markers, n_frames)
     assert np.mean(residual_ss) / sigma**2 == pytest.approx(dof, rel=0.03)
+
+
+def test_planar_self_check_replaces_an_answer_a_few_fatol_above_the_eigenvector():
+    """An answer tilted from the scatter's least eigenvector towards the next one until its
+    planar cost is 5 fatol above the least eigenvalue (``l0 + (l1 - l0) sin^2 t``): more than
+    fatol, less than ten times it, so the restart from the eigenvector must replace it."""
+    markers = hinge(seed=2, arc_deg=40.0)
+    result = axis.fit_planar(markers)
+    offsets = markers - markers.mean(axis=0)
+    values, vectors = np.linalg.eigh(np.einsum("kpi,kpj->ij", offsets, offsets))
+    tilt = math.asin(math.sqrt(5.0 * axis.FATOL / (values[1] - values[0])))
+    direction = math.cos(tilt) * vectors[:, 0] + math.sin(tilt) * vectors[:, 1]
+    cost = float(direction @ np.einsum("kpi,kpj->ij", offsets, offsets) @ direction)
+    assert cost - values[0] == pytest.approx(5.0 * axis.FATOL, rel=1e-6)
+    tilted = dataclasses.replace(result, direction=direction, cost=cost)
+    checked = axis.fit_planar.self_check(tilted, markers)
+    assert checked.status.startswith("restarted: ")
+    assert checked.cost == pytest.approx(values[0], abs=axis.FATOL)
