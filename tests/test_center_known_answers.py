@@ -205,3 +205,10 @@ def test_is_self_check_restarts_from_a_neighbour_a_few_tol_fun_below_the_answer(
     checked = fit_is.self_check(answer, markers)
     assert checked.status.startswith("restarted: ")
     assert checked.cost < answer.cost
+
+
+def test_mean_sq_radii_are_the_mean_squared_distances_from_the_centre():
+    markers = _noisy_cap(seed=8)
+    centre = CENTER + 300.0 + np.array([1.0, -2.0, 0.5])
+    expected = np.mean(np.sum((markers - centre) ** 2, axis=-1), axis=0)
+    np.testing.assert_allclose(sphere.mean_sq_radii(markers, centre), expected, rtol=1e-12)
