@@ -18,6 +18,8 @@ from test_center_estimators import CENTER, M_SET, moving_markers, spiral_rotatio
 from jointbench.estimators import amplitude, sphere
 from jointbench.estimators.amplitude import fit_ma
 from jointbench.estimators.sphere import fit_bc, fit_is, fit_ls, fit_nm
+from jointbench.estimators.twosegment import fit_score_center
+from jointbench.numerics.poses import rigid_poses
 from jointbench.simulate.noise import isotropic_noise
 
 
@@ -212,3 +214,17 @@ def test_mean_sq_radii_are_the_mean_squared_distances_from_the_centre():
     centre = CENTER + 300.0 + np.array([1.0, -2.0, 0.5])
     expected = np.mean(np.sum((markers - centre) ** 2, axis=-1), axis=0)
     np.testing.assert_allclose(sphere.mean_sq_radii(markers, centre), expected, rtol=1e-12)
+
+
+def test_ma_self_check_restarts_from_a_neighbour_a_few_tol_fun_below_the_answer():
+    """An MA answer whose amplitude lies 5 TolFun above the least of its neighbours' (the LS,
+    NM and SCoRE centres, each the body point whose trajectory has that mean) is restarted."""
+    markers = _noisy_cap(seed=9)
+    rotation, translation = amplitude._mean_anchored(*rigid_poses(markers)[:2])
+    neighbours = [fit_ls(markers).center, fit_nm(markers).center]
+    neighbours.append(fit_score_center(markers).center)
+    least = min(amplitude.amplitude(rotation, translation, point) for point in neighbours)
+    answer = dataclasses.replace(fit_ma(markers), cost=least + 5e-4)
+    checked = fit_ma.self_check(answer, markers)
+    assert checked.status.startswith("restarted: ")
+    assert checked.cost < answer.cost
