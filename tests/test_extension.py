@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -143,6 +146,51 @@ def test_the_summary_of_an_estimator_the_study_does_not_list_names_the_list(tmp_
 
 
 # ------------------------------------------------------------------------ without Snakemake
+
+
+def _readme_builtin_example() -> tuple[str, dict]:
+    """The README's "Built in: one function": its estimator's code and the config listing it."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("### Built in: one function") : readme.index("### Any language")]
+    code = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
+    listing = re.search(r"```yaml\n(.*?)```", section, re.DOTALL).group(1)
+    return code, yaml.safe_load(listing)
+
+
+@pytest.mark.pipeline
+def test_the_readme_builtin_example_plans_beside_the_shipped_template(tmp_path):
+    """Followed as written, the README's built-in estimator is listed and planned: its name is
+    not one a shipped external rule (the centroid template) writes under, which would stop
+    the run before any job."""
+    code, listing = _readme_builtin_example()
+    (tmp_path / "readme_estimator.py").write_text(code)
+    cmc = listing["studies"]["cmc"]
+    overlay = user_clone(tmp_path, estimators=cmc["estimators"], external=[])
+    config = yaml.safe_load(overlay.read_text())
+    config["extensions"] = ["readme_estimator.py"]
+    config["studies"]["cmc"]["options"] = cmc["options"]
+    overlay.write_text(yaml.safe_dump(config))
+    run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet", dry_run=True)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    added = next(name for name in cmc["estimators"] if name not in {"NM", "LS", "BC", "MA", "IS"})
+    assert f"results/estimates/cmc/{added}/" in run.stdout
+
+
+def test_the_readme_builtin_example_passes_the_style_checks(tmp_path):
+    """Copied into src/jointbench/estimators/, the README's example passes tests/test_lint.py's
+    ruff checks as it stands."""
+    code, _ = _readme_builtin_example()
+    module = tmp_path / "readme_estimator.py"
+    module.write_text(code)
+    ruff = Path(sys.executable).with_name("ruff")
+    for command in (["check"], ["format", "--check"]):
+        result = subprocess.run(
+            [str(ruff), *command, "--config", str(ROOT / "pyproject.toml"), str(module)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
 
 
 def _results(methods: dict[str, list[float]], study: str = "cmc") -> pd.DataFrame:
