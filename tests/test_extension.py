@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import re
 import subprocess
 import sys
 from pathlib import Path
@@ -20,7 +19,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
-from workflow_copy import ROOT, copy_workflow, run_snakemake
+from workflow_copy import ROOT, copy_workflow, readme_builtin_example, run_snakemake
 
 from jointbench import pipeline
 from jointbench.figures import extended
@@ -148,21 +147,12 @@ def test_the_summary_of_an_estimator_the_study_does_not_list_names_the_list(tmp_
 # ------------------------------------------------------------------------ without Snakemake
 
 
-def _readme_builtin_example() -> tuple[str, dict]:
-    """The README's "Built in: one function": its estimator's code and the config listing it."""
-    readme = (ROOT / "README.md").read_text()
-    section = readme[readme.index("### Built in: one function") : readme.index("### Any language")]
-    code = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
-    listing = re.search(r"```yaml\n(.*?)```", section, re.DOTALL).group(1)
-    return code, yaml.safe_load(listing)
-
-
 @pytest.mark.pipeline
 def test_the_readme_builtin_example_plans_beside_the_shipped_template(tmp_path):
     """Followed as written, the README's built-in estimator is listed and planned: its name is
     not one a shipped external rule (the centroid template) writes under, which would stop
     the run before any job."""
-    code, listing = _readme_builtin_example()
+    code, listing = readme_builtin_example()
     (tmp_path / "readme_estimator.py").write_text(code)
     cmc = listing["studies"]["cmc"]
     overlay = user_clone(tmp_path, estimators=cmc["estimators"], external=[])
@@ -179,7 +169,7 @@ def test_the_readme_builtin_example_plans_beside_the_shipped_template(tmp_path):
 def test_the_readme_builtin_example_passes_the_style_checks(tmp_path):
     """Copied into src/jointbench/estimators/, the README's example passes tests/test_lint.py's
     ruff checks as it stands."""
-    code, _ = _readme_builtin_example()
+    code, _ = readme_builtin_example()
     module = tmp_path / "readme_estimator.py"
     module.write_text(code)
     ruff = Path(sys.executable).with_name("ruff")
