@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +20,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
-from workflow_copy import ROOT, copy_workflow, run_snakemake
+from workflow_copy import ROOT, copy_workflow, readme_builtin_example, run_snakemake
 
 from jointbench import pipeline
 from jointbench.figures import extended
@@ -143,6 +146,67 @@ def test_the_summary_of_an_estimator_the_study_does_not_list_names_the_list(tmp_
 
 
 # ------------------------------------------------------------------------ without Snakemake
+
+
+@pytest.mark.pipeline
+def test_the_readme_builtin_example_plans_beside_the_shipped_template(tmp_path):
+    """Followed as written, the README's built-in estimator is listed and planned: its name is
+    not one a shipped external rule (the centroid template) writes under, which would stop
+    the run before any job."""
+    code, listing = readme_builtin_example()
+    (tmp_path / "readme_estimator.py").write_text(code)
+    cmc = listing["studies"]["cmc"]
+    overlay = user_clone(tmp_path, estimators=cmc["estimators"], external=[])
+    config = yaml.safe_load(overlay.read_text())
+    config["extensions"] = ["readme_estimator.py"]
+    config["studies"]["cmc"]["options"] = cmc["options"]
+    overlay.write_text(yaml.safe_dump(config))
+    run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet", dry_run=True)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    added = next(name for name in cmc["estimators"] if name not in {"NM", "LS", "BC", "MA", "IS"})
+    assert f"results/estimates/cmc/{added}/" in run.stdout
+
+
+@pytest.mark.pipeline
+def test_a_builtin_named_as_a_rule_files_estimator_is_named_as_such(tmp_path):
+    """A built-in estimator listed under the name a shipped rule file writes under (the
+    centroid template's), though nothing lists that rule's estimator: the run stops naming the
+    name, the study's list and both rules, not as a rule of the user's writing the
+    benchmark's files."""
+    code, _ = readme_builtin_example()
+    registered = re.search(r'@register\("center", "([^"]+)"\)', code).group(1)
+    (tmp_path / "clashing.py").write_text(code.replace(f'"{registered}"', '"centroid"'))
+    overlay = user_clone(tmp_path, estimators=["LS", "centroid"], external=[])
+    config = yaml.safe_load(overlay.read_text())
+    config["extensions"] = ["clashing.py"]
+    overlay.write_text(yaml.safe_dump(config))
+    run = snakemake(tmp_path, overlay, "results/collected/cmc.parquet", dry_run=True)
+    assert run.returncode != 0
+    message = run.stdout + run.stderr
+    expected = (
+        "rule estimate_centroid writes the estimates of 'centroid' in study cmc "
+        "(results/estimates/{study}/centroid/{condition}.parquet), an estimator "
+        "studies.cmc.estimators lists as built in, run by rule estimate_cmc: "
+        "a built-in estimator and a rule file's take different names"
+    )
+    assert expected in message, message[-3000:]
+
+
+def test_the_readme_builtin_example_passes_the_style_checks(tmp_path):
+    """Copied into src/jointbench/estimators/, the README's example passes tests/test_lint.py's
+    ruff checks as it stands."""
+    code, _ = readme_builtin_example()
+    module = tmp_path / "readme_estimator.py"
+    module.write_text(code)
+    ruff = Path(sys.executable).with_name("ruff")
+    for command in (["check"], ["format", "--check"]):
+        result = subprocess.run(
+            [str(ruff), *command, "--config", str(ROOT / "pyproject.toml"), str(module)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
 
 
 def _results(methods: dict[str, list[float]], study: str = "cmc") -> pd.DataFrame:

@@ -40,6 +40,19 @@ def test_every_output_is_produced(reduced_run):
             assert path.stat().st_size > 200, f"results/{name} is nearly empty"
 
 
+def test_results_readme_describes_every_folder_a_run_writes(reduced_run):
+    """results/README.md, the layout the README points to, names every folder a run writes
+    under results/, and in its row of poses every study that has them."""
+    layout = (ROOT / "results" / "README.md").read_text()
+    results = reduced_run.workdir / "results"
+    folders = sorted(path.name for path in results.iterdir() if path.is_dir())
+    missing = [folder for folder in folders if f"| `{folder}/" not in layout]
+    assert not missing, f"results/README.md does not describe {missing}"
+    poses = next(line for line in layout.splitlines() if line.startswith("| `poses/"))
+    unnamed = [p.name for p in sorted((results / "poses").iterdir()) if f"`{p.name}`" not in poses]
+    assert not unnamed, f"results/README.md's poses row does not name {unnamed}"
+
+
 def test_second_run_has_nothing_to_do(reduced_run):
     second = reduced_run.dry_run
     assert second.returncode == 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -27,6 +28,16 @@ def load_benchmark(name: str):
     sys.modules[f"benchmarks_{name}"] = module
     spec.loader.exec_module(module)
     return module
+
+
+def readme_builtin_example() -> tuple[str, dict]:
+    """The README's "Built in: one function": its estimator's code, as a user copies it into
+    the package, and the config that lists it."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("### Built in: one function") : readme.index("### Any language")]
+    code = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
+    listing = re.search(r"```yaml\n(.*?)```", section, re.DOTALL).group(1)
+    return code, yaml.safe_load(listing)
 
 
 def copy_workflow(destination: Path) -> Path:

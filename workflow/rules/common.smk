@@ -239,11 +239,31 @@ def _check_user_outputs(users, package):
                 )
             for other, path, patterns in theirs:
                 if _overlap(mine, patterns):
+                    _refuse_a_builtins_name(user, written, mine, other)
                     raise ValueError(
                         f"rule {user.name} writes {_shown(written)}, which rule "
                         f"{other.name} of the benchmark writes ({_shown(path)})"
                         ": a rule of yours writes files of its own, in a folder of its own"
                     )
+
+
+def _refuse_a_builtins_name(user, written, mine, other):
+    """Stop, naming the estimator, when ``written`` (as patterns ``mine``), a file the rule
+    ``user`` writes and the rule ``other`` of the benchmark writes too, is an estimates file of
+    a built-in estimator this run lists: the rule file's estimator has the built-in's name,
+    whether or not a study lists it, which the user fixes by renaming one of them."""
+    for study in STUDIES:
+        for name in jb_config.estimator_names(config, study, source="builtin"):
+            files = estimates_files(study, [name])
+            if any(_overlap(mine, _patterns_of(_judged(f))) for f in files):
+                raise ValueError(
+                    f"rule {user.name} writes the estimates of {name!r} in study {study} "
+                    f"({_shown(written)}), an estimator studies.{study}.estimators lists as "
+                    f"built in, run by rule {other.name}"
+                    # Apart: Snakemake's linter reads "rule" and a colon on one line as a rule.
+                    ": a built-in estimator and a rule file's take different names (README, "
+                    "'Adding an estimator')"
+                )
 
 
 def _check_user_folders(users):
