@@ -174,7 +174,7 @@ def test_a_builtin_named_as_a_rule_files_estimator_is_named_as_such(tmp_path):
     name, the study's list and both rules, not as a rule of the user's writing the
     benchmark's files."""
     code, _ = readme_builtin_example()
-    registered = re.search(r'@register\("center", "([^"]+)"\)', code).group(1)
+    registered = re.search(r'@register\("center", "([^"]+)"', code).group(1)
     (tmp_path / "clashing.py").write_text(code.replace(f'"{registered}"', '"centroid"'))
     overlay = user_clone(tmp_path, estimators=["LS", "centroid"], external=[])
     config = yaml.safe_load(overlay.read_text())
