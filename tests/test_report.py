@@ -29,26 +29,19 @@ def test_the_report_path_is_read_from_the_command_line(argv, path):
 
 # What `snakemake --dry-run` prints when it has jobs to do: the job stats, once before the jobs
 # and once after them.
-DRY_RUN = """Building DAG of jobs...
-Job stats:
+JOB_STATS = """Job stats:
 job                count
 ---------------  -------
 render_cmc             1
 check_published        1
 all                    1
 total                  3
-
-rule render_cmc:
-    input: results/collected/cmc.parquet
-Job stats:
-job                count
----------------  -------
-render_cmc             1
-check_published        1
-all                    1
-total                  3
-This was a dry-run (flag -n). The order of jobs does not reflect the order of execution.
 """
+DRY_RUN = (
+    f"Building DAG of jobs...\n{JOB_STATS}\nrule render_cmc:\n"
+    f"    input: results/collected/cmc.parquet\n{JOB_STATS}"
+    "This was a dry-run (flag -n). The order of jobs does not reflect the order of execution.\n"
+)
 UP_TO_DATE = "Building DAG of jobs...\nNothing to be done (all requested files are present).\n"
 
 
