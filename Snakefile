@@ -24,11 +24,13 @@ report: "results/report/workflow.rst"
 # chatter (jointbench.console); the log under .snakemake/log/ keeps everything.
 console.install(logger)
 
-# `snakemake --report FILE`: once Snakemake has written the report, it gets the benchmark's name
-# as its tab title and a style that starts the landing page at the top of the window
-# (jointbench.report.finish_report; tests/test_report_browser.py looks at it in Chromium).
+# `snakemake --report FILE`: refused while a run would redo a job, whose old results it would
+# show (jointbench.report.check_current); once Snakemake has written the report, it gets the
+# benchmark's name as its tab title and a style that starts the landing page at the top of the
+# window (jointbench.report.finish_report; tests/test_report_browser.py looks at it in Chromium).
 _REPORT = jb_report.report_path(sys.argv)
 if _REPORT:
+    jb_report.check_current(sys.argv)
     atexit.register(jb_report.finish_report, _REPORT)
 
 

@@ -302,9 +302,37 @@ def test_snapshot_loads_the_configs_extensions(tmp_path):
     assert done.returncode == 0, done.stderr
     snapshot = pd.read_csv(workdir / "summary.csv")
     assert set(snapshot["study"]) == {"toy"} and set(snapshot["method"]) == {"toy-centroid"}
-    # Without the extension the study is unknown, and the error says so.
+    # Without the extension's config the run is the default one, whose studies this folder
+    # has not collected: the error names their files, and the toy study's is not read.
     bare = _cli(workdir, "snapshot", "--output", "summary.csv")
-    assert bare.returncode == 2 and "unknown study 'toy'" in bare.stderr
+    assert bare.returncode == 2 and "results/collected/cmc.parquet" in bare.stderr
+    assert "toy" not in bare.stderr
+
+
+def test_snapshot_pins_the_runs_studies_and_no_other(tmp_path):
+    workdir = _toy_run(tmp_path)
+    collected = workdir / "results" / "collected"
+    # Left by an earlier run: toy.yaml switches cmc off, so these are no result of this run's.
+    pd.DataFrame(
+        {
+            "marker_set": ["M", "M"],
+            "rom_deg": [5, 5],
+            "noise_mm": [1.0, 1.0],
+            "trial": [0, 1],
+            "method": ["LS", "LS"],
+            "error_mm": [1.0, 2.0],
+            "converged": [True, True],
+            "seconds": [0.1, 0.1],
+        }
+    ).to_parquet(collected / "cmc.parquet")
+    done = _cli(workdir, "snapshot", "--configfile", "toy.yaml", "--output", "summary.csv")
+    assert done.returncode == 0, done.stderr
+    assert set(pd.read_csv(workdir / "summary.csv")["study"]) == {"toy"}
+    # A study of the run that has not been collected is named, not left out of the snapshot.
+    (collected / "toy.parquet").unlink()
+    missing = _cli(workdir, "snapshot", "--configfile", "toy.yaml", "--output", "summary.csv")
+    assert missing.returncode == 2, missing.stderr
+    assert "results/collected/toy.parquet: no such file" in missing.stderr
 
 
 def test_readme_names_an_extensions_paper(tmp_path):

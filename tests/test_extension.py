@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -20,7 +21,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
-from workflow_copy import ROOT, copy_workflow, readme_builtin_example, run_snakemake
+from workflow_copy import ROOT, SNAKEMAKE, copy_workflow, readme_builtin_example, run_snakemake
 
 from jointbench import pipeline
 from jointbench.figures import extended
@@ -133,6 +134,48 @@ def test_an_external_estimator_without_a_rule_is_named_before_any_job(tmp_path):
     message = run.stdout + run.stderr
     assert "studies.cmc.external_estimators: no rule writes the estimates of 'LS_C'" in message
     assert "MissingInputException" not in message, message[-2000:]
+
+
+@pytest.mark.pipeline
+def test_a_crashing_estimator_fails_alone_and_the_run_finishes_the_rest(tmp_path):
+    """A user's program that crashes on one condition fails that job, named, and the run with
+    it; every job that does not need its file still runs and keeps what it made. Run as a
+    clone runs, with the repository's default profile, one job at a time, the crash first."""
+    shipped = (ROOT / CENTROID_SCRIPT).read_text()
+    crashed = "marker_set-M__rom_deg-15__noise_mm-1.0"
+    crashing = f'if "{crashed}" in estimates:\n    raise RuntimeError("centroid crashed")\n'
+    script = shipped.replace("rows = []\n", f"{crashing}rows = []\n", 1)
+    assert script != shipped
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script)
+    shutil.copytree(ROOT / "profiles", tmp_path / "profiles")
+    run = subprocess.run(
+        [
+            str(SNAKEMAKE),
+            "results/collected/cmc.parquet",
+            "results/summaries/cmc/LS.csv",
+            "--prioritize",
+            f"results/estimates/cmc/centroid/{crashed}.parquet",
+            "-j1",
+            "--directory",
+            str(tmp_path),
+            "-s",
+            str(tmp_path / "Snakefile"),
+            "--configfile",
+            str(overlay),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    assert "Error in rule estimate_centroid" in message and "centroid crashed" in message
+    # The crash is the estimator's own: the other condition's answers and every built-in
+    # estimator's results are made and kept, and nothing is collected without it.
+    estimates = tmp_path / "results" / "estimates" / "cmc"
+    assert (estimates / "centroid" / "marker_set-M__rom_deg-5__noise_mm-1.0.parquet").is_file()
+    assert (tmp_path / "results" / "summaries" / "cmc" / "LS.csv").is_file(), message[-3000:]
+    assert not (tmp_path / "results" / "collected" / "cmc.parquet").exists()
 
 
 @pytest.mark.pipeline

@@ -19,7 +19,10 @@ from jointbench.figures.common import (
     method_styles,
     save_figure,
 )
+from jointbench.papers import paper_b as papers_b
+from jointbench.papers.base import Inputs
 from jointbench.resultfiles.tables import markdown_table
+from jointbench.running import run
 
 PAPER_A_SECONDS = {"MA": 1.2, "LS": 0.0056, "IS": 0.079, "BC": 0.12, "NM": 0.00076}
 
@@ -406,6 +409,24 @@ def test_paper_a_fig3_lists_an_estimate_far_off_and_marks_its_bar():
 def test_paper_b_figures_run():
     assert _drawn(paper_b.fig5(_hinge()))
     assert _drawn(paper_b.fig2(_fig2_examples()))
+
+
+def test_fig2_draws_the_collected_answers_of_a_valid_protocol_whatever_its_steps():
+    """At 0.5 mm of noise (a protocol the config check takes) the knee's 90° grid motion moves
+    a marker 29 mm in one frame, which a recording's screening reads as a jump: Fig 2 draws
+    the answers the estimate jobs made and the ranking holds, not a screened fit again."""
+    config = {"base_seed": 1, "studies": {"hinge": {"trials": 3}}}
+    config["studies"]["hinge"]["protocol"] = {"knee": {"noise_sd_mm": 0.5}}
+    datasets, frames = [], []
+    for condition in papers_b.FIG2_CONDITIONS:
+        trials = run.simulate_condition(config, "hinge", condition)
+        datasets.append((trials, {"truth": trials.truth}))
+        frames += [run.estimate("hinge", m, trials, condition) for m in papers_b.METHODS]
+    collected = pd.concat(frames, ignore_index=True)
+    inputs = Inputs(collected=collected, published={}, config=config, datasets=datasets)
+    fig = papers_b.PAPER.output("paper_b_fig2").render(inputs)
+    assert _drawn(fig)
+    plt.close(fig)
 
 
 def test_fig2_trial_is_the_median_by_combined_error():

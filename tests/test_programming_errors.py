@@ -202,6 +202,39 @@ def test_a_bug_in_a_newcomer_stops_the_job_naming_it(registered, bug):
     _assert_named(str(raised.value), f"cmc {NAME}")
 
 
+def _answered(center):
+    """A method answering ``center`` for every trial, whatever its shape."""
+
+    def answering(markers: np.ndarray) -> CenterResult:
+        return CenterResult(center=center, converged=True, iterations=1, status="ok", method=NAME)
+
+    return answering
+
+
+#: A centre is three coordinates: an answer of another shape is the method's bug, which no
+#: score, rank or row can be made of.
+WRONG_SHAPES = {
+    "two coordinates": np.zeros(2),
+    "four coordinates": np.zeros(4),
+    "a row of three": np.zeros((1, 3)),
+    "a number": 0.0,
+}
+
+
+@pytest.mark.parametrize("shape", sorted(WRONG_SHAPES))
+def test_an_answer_of_the_wrong_shape_stops_the_job_naming_the_method(shape):
+    registry.register("center", NAME, min_frames=4)(_answered(WRONG_SHAPES[shape]))
+    try:
+        with pytest.raises(ProgrammingError) as raised:
+            run.estimate("cmc", NAME, _trials(), CONDITION)
+    finally:
+        registry.unregister("center", NAME)
+    message = str(raised.value)
+    assert "programming error" in message and f"cmc {NAME}" in message, message
+    shown = np.shape(WRONG_SHAPES[shape])
+    assert f"center of shape {shown}, not (3,)" in message, message
+
+
 @pytest.mark.parametrize("unstated", sorted(UNSTATED))
 def test_a_library_error_the_method_does_not_state_stops_the_job_saying_how_to_state_it(
     registered, unstated

@@ -31,6 +31,7 @@ from jointbench.comparison.snapshot import (
     update_readme,
 )
 from jointbench.comparison.tolerance import describe
+from jointbench.configuration.config import study_names
 from jointbench.papers import Inputs, get_paper, paper_labels, paper_names
 from jointbench.papers import paper_b as paper_b_module
 from jointbench.resultfiles.tables import for_people
@@ -88,7 +89,9 @@ def test_statuses_are_known(comparison):
 
 @needs_results
 def test_results_match_the_regression_snapshot():
-    problems = compare_snapshot(snapshot_table(RESULTS / "collected"), pd.read_csv(SNAPSHOT))
+    studies = study_names(yaml.safe_load((ROOT / "config" / "config.yaml").read_text()))
+    current = snapshot_table(RESULTS / "collected", studies)
+    problems = compare_snapshot(current, pd.read_csv(SNAPSHOT))
     assert not problems, (
         "results moved from tests/snapshots/summary.csv (after an intended change run "
         "`jointbench snapshot` and commit it):\n" + "\n".join(problems[:40])

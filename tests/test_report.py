@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import subprocess
 
 import pandas as pd
 import pytest
@@ -24,6 +25,75 @@ from jointbench.papers import paper_c
 )
 def test_the_report_path_is_read_from_the_command_line(argv, path):
     assert report.report_path(argv) == path
+
+
+# What `snakemake --dry-run` prints when it has jobs to do: the job stats, once before the jobs
+# and once after them.
+JOB_STATS = """Job stats:
+job                count
+---------------  -------
+render_cmc             1
+check_published        1
+all                    1
+total                  3
+"""
+DRY_RUN = (
+    f"Building DAG of jobs...\n{JOB_STATS}\nrule render_cmc:\n"
+    f"    input: results/collected/cmc.parquet\n{JOB_STATS}"
+    "This was a dry-run (flag -n). The order of jobs does not reflect the order of execution.\n"
+)
+UP_TO_DATE = "Building DAG of jobs...\nNothing to be done (all requested files are present).\n"
+
+
+def test_a_dry_runs_jobs_are_read_by_rule():
+    assert report.pending_jobs(DRY_RUN) == {"render_cmc": 1, "check_published": 1}
+    assert report.pending_jobs(UP_TO_DATE) == {}
+
+
+def _dry_run(stdout: str, returncode: int = 0, stderr: str = ""):
+    """A stand-in for ``subprocess.run`` answering as a dry run would, and the commands it
+    was given."""
+    commands = []
+
+    def run(command, **_):
+        commands.append(command)
+        return subprocess.CompletedProcess(command, returncode, stdout, stderr)
+
+    return run, commands
+
+
+ARGV = ["/venv/bin/snakemake", "--report", "r.html", "--configfile", "my.yaml", "-j2"]
+
+
+def test_a_report_of_up_to_date_results_goes_ahead():
+    run, commands = _dry_run(UP_TO_DATE)
+    assert report.check_current(ARGV, run) is None
+    # The same program on the same config and workflow, without the report.
+    (command,) = commands
+    assert command[1:] == [
+        "/venv/bin/snakemake",
+        "--dry-run",
+        "--configfile",
+        "my.yaml",
+        "--jobs",
+        "2",
+    ]
+
+
+def test_a_report_of_results_a_run_would_redo_is_refused_naming_the_jobs_and_the_command():
+    run, _ = _dry_run(DRY_RUN)
+    with pytest.raises(ValueError) as refused:
+        report.check_current(ARGV, run)
+    message = str(refused.value)
+    assert "not up to date" in message
+    assert "would redo 2 jobs: render_cmc (1), check_published (1)" in message
+    assert "`snakemake --configfile my.yaml --jobs 2` first" in message
+
+
+def test_a_dry_run_that_fails_stops_the_report_with_its_error():
+    run, _ = _dry_run("", returncode=1, stderr="config: studies.cmc.trials: must be ...")
+    with pytest.raises(ValueError, match=r"config: studies\.cmc\.trials"):
+        report.check_current(ARGV, run)
 
 
 @pytest.mark.parametrize(

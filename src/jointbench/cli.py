@@ -15,6 +15,7 @@ import os
 import re
 import sys
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,7 +35,7 @@ from jointbench.comparison.snapshot import (
     snapshot_table,
     update_readme,
 )
-from jointbench.configuration.config import open_config, read_configs
+from jointbench.configuration.config import open_config, read_configs, study_names
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
@@ -82,10 +83,10 @@ def _method_list() -> str:
     return "\n".join(lines)
 
 
-def _open_run(args: argparse.Namespace) -> None:
+def _open_run(args: argparse.Namespace) -> Mapping:
     """The run's config, as the workflow opens it: the repository's config and each
     ``--configfile`` over it, checked against the schema, then extensions loaded (relative to
-    the working directory) and the rest checked."""
+    the working directory) and the rest checked; returns it."""
     if not DEFAULT_CONFIG.is_file():
         # Said in full: `fit` is often run outside the run's folder, where this is not obvious.
         raise ValueError(
@@ -93,15 +94,12 @@ def _open_run(args: argparse.Namespace) -> None:
             "--configfile updates as snakemake's does, is read from the folder the run is in: "
             "run jointbench there"
         )
-    open_config(read_configs([DEFAULT_CONFIG, *args.configfile]))
+    return open_config(read_configs([DEFAULT_CONFIG, *args.configfile]))
 
 
 def _snapshot(args: argparse.Namespace) -> int:
-    _open_run(args)
-    table = snapshot_table(args.results / "collected")
-    if table.empty:
-        print(f"no collected results under {args.results}; run `snakemake -j2` first")
-        return 1
+    config = _open_run(args)
+    table = snapshot_table(args.results / "collected", study_names(config))
     args.output.parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(args.output, index=False, float_format="%.12g")
     print(f"wrote {len(table)} values to {args.output}")

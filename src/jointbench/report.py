@@ -10,7 +10,10 @@ import importlib.metadata
 import os
 import platform
 import re
-from collections.abc import Collection, Mapping, Sequence
+import shlex
+import subprocess
+import sys
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 
 import pandas as pd
@@ -28,6 +31,7 @@ __all__ = [
     "GLOSSARY",
     "REPORT_TITLE",
     "caption_text",
+    "check_current",
     "closing_lines",
     "findings",
     "finish_report",
@@ -36,6 +40,7 @@ __all__ = [
     "output_page",
     "output_title",
     "paper_output",
+    "pending_jobs",
     "run_metadata",
     "write_captions",
     "write_front_page",
@@ -459,6 +464,50 @@ def report_path(argv: Sequence[str]) -> str | None:
         return None
     directory = _option(argv, ["--directory", "-d"], ".")
     return str(Path(directory or ".", path))
+
+
+def pending_jobs(dry_run_output: str) -> dict[str, int]:
+    """How many jobs of each rule a Snakemake dry run's output lists in its first "Job stats"
+    table, the default target's rule (``all``) and the total left out; empty when it has
+    nothing to do."""
+    _, found, table = dry_run_output.partition("Job stats:")
+    counts = {}
+    # A header, its underline, then one "rule count" row per rule down to the total.
+    for line in table.splitlines()[3:] if found else []:
+        row = re.fullmatch(r"(\S+)\s+(\d+)", line.strip())
+        if row is None or row.group(1) == "total":
+            break
+        counts[row.group(1)] = int(row.group(2))
+    counts.pop("all", None)
+    return counts
+
+
+def check_current(
+    argv: Sequence[str], run: Callable[..., subprocess.CompletedProcess] = subprocess.run
+) -> None:
+    """Stop a ``snakemake --report`` command line (``argv``, ``sys.argv``) whose run's results
+    are not up to date with the code, config and data that make them: a report of them would
+    show what an edit, or a run that failed, left behind. A dry run of the run's default
+    target, by the same program and interpreter with the options that choose the workflow and
+    its config (:func:`jointbench.invocation.workflow_options`), says what a run would redo;
+    ``ValueError`` naming those jobs and the command that redoes them."""
+    options = invocation.workflow_options(argv[1:])
+    done = run([sys.executable, argv[0], "--dry-run", *options], capture_output=True, text=True)
+    if done.returncode != 0:
+        raise ValueError(
+            "snakemake --report: the dry run that checks the results are up to date failed:\n"
+            + (done.stdout + done.stderr).strip()[-3000:]
+        )
+    pending = pending_jobs(done.stdout)
+    if pending:
+        jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+        total = sum(pending.values())
+        raise ValueError(
+            "snakemake --report: the results are not up to date with the code, config and "
+            f"data that make them; a run would redo {total} job{'s' * (total != 1)}: {jobs}. "
+            "A report now would show results that no longer follow from them: run "
+            f"`snakemake {shlex.join(options)}` first, then the report"
+        )
 
 
 def closing_lines(environ: Mapping[str, str] = os.environ) -> str:

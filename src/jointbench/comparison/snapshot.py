@@ -12,7 +12,7 @@ change, regenerate it with ``jointbench snapshot`` (after ``snakemake -j2``) and
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -56,15 +56,25 @@ def _block_span(text: str, block: str, readme) -> tuple[int, int]:
     return text.index(start) + len(start), text.index(end)
 
 
-def snapshot_table(collected_dir: str | Path) -> pd.DataFrame:
+def snapshot_table(collected_dir: str | Path, studies: Iterable[str]) -> pd.DataFrame:
     """Mean and median error over the converged trials, and the converged count, per study,
-    condition and method, in long form.
+    condition and method, in long form, of the collected results of ``studies`` (a run's,
+    :func:`jointbench.configuration.config.study_names`), in the order of their names. A file
+    in ``collected_dir`` of another study was left by another run and is no result of this
+    one's; a study of the run without its file is a ``ValueError`` naming the file.
 
     Columns: study, condition, method, statistic, value.
     """
+    paths = {study: Path(collected_dir) / f"{study}.parquet" for study in sorted(studies)}
+    missing = [str(path) for path in paths.values() if not path.is_file()]
+    if missing:
+        raise ValueError(
+            f"{', '.join(missing)}: no such file; the run has not collected "
+            f"{'these studies' if len(missing) > 1 else 'this study'}: run `snakemake -j2` "
+            "with the same --configfile first"
+        )
     rows = []
-    for path in sorted(Path(collected_dir).glob("*.parquet")):
-        study = path.stem
+    for study, path in paths.items():
         collected = pd.read_parquet(path)
         error = ERROR_COLUMN[get_study(study).kind]
         collected[error] = collected[error].where(collected["converged"].astype(bool))

@@ -611,11 +611,6 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
     annotated = list(results)
     checked, centres, residuals = [], [], []
     for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
-        if result.center.shape != (3,):
-            raise ValueError(
-                f"center method {result.method}: its centre has shape {result.center.shape}, "
-                "not (3,)"
-            )
         centre = result.center.tolist()
         if not all(map(math.isfinite, centre)):
             reason = "the answer is not finite"

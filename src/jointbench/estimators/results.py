@@ -33,6 +33,17 @@ def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
     return array
 
 
+def _frozen_shaped(owner: str, name: str, value: np.ndarray | None, shape: tuple[int, ...]):
+    """:func:`_frozen_array` of ``value``, the field ``name`` of a result ``owner`` whose
+    documented shape is ``shape``. An answer of another shape is a mistake of the method
+    that made it, of which no score or row can be made: a ``TypeError`` (never a trial's
+    stated failure) naming both shapes."""
+    array = _frozen_array(value)
+    if array is not None and array.shape != shape:
+        raise TypeError(f"{owner}: {name} of shape {array.shape}, not {shape}")
+    return array
+
+
 def frozen_rows(array: np.ndarray) -> list[np.ndarray]:
     """The rows of a read-only float64 copy of ``array`` ``(n, ...)``: many results' fields
     from one copy instead of one per result."""
@@ -63,7 +74,9 @@ class CenterResult(_Result):
     radii: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "center", _frozen_array(self.center))
+        object.__setattr__(
+            self, "center", _frozen_shaped("CenterResult", "center", self.center, (3,))
+        )
         object.__setattr__(self, "radii", _frozen_array(self.radii))
 
 
@@ -79,8 +92,9 @@ class AxisResult(_Result):
     radii: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "point", _frozen_array(self.point))
-        object.__setattr__(self, "direction", _frozen_array(self.direction))
+        object.__setattr__(self, "point", _frozen_shaped("AxisResult", "point", self.point, (3,)))
+        direction = _frozen_shaped("AxisResult", "direction", self.direction, (3,))
+        object.__setattr__(self, "direction", direction)
         object.__setattr__(self, "radii", _frozen_array(self.radii))
 
 
@@ -95,8 +109,10 @@ class JointCenterResult(_Result):
     covariance: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "center", _frozen_array(self.center))
-        object.__setattr__(self, "covariance", _frozen_array(self.covariance))
+        center = _frozen_shaped("JointCenterResult", "center", self.center, (3,))
+        object.__setattr__(self, "center", center)
+        covariance = _frozen_shaped("JointCenterResult", "covariance", self.covariance, (3, 3))
+        object.__setattr__(self, "covariance", covariance)
 
 
 def with_fields(result, **changes):

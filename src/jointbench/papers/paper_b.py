@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.api import fit_axis
 from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
@@ -303,12 +302,28 @@ def _fig5(inputs: Inputs):
     return draw.fig5(inputs.collected, _table1_cells(inputs))
 
 
+def _collected_answers(collected: pd.DataFrame, condition, trial: int) -> dict:
+    """``{method: (point, direction)}`` [mm, unit]: the answer of each of :data:`METHODS` for
+    ``trial`` of ``condition`` as collected, which it is scored and ranked by. Not fitted
+    again through the public call, which screens the markers as a recording's: a fast trial's
+    grid motion steps farther in one frame than its jump test allows a marker."""
+    rows = collected[collected["trial"] == trial]
+    for key, value in condition.items():
+        rows = rows[rows[key] == value]
+    answers = {}
+    for method in METHODS:
+        (row,) = rows[rows["method"] == method].itertuples(index=False)
+        point = np.array([row.point_x, row.point_y, row.point_z])
+        answers[method] = (point, np.array([row.direction_x, row.direction_y, row.direction_z]))
+    return answers
+
+
 def _fig2(inputs: Inputs):
     examples = []
     for condition, (trials, metadata) in zip(FIG2_CONDITIONS, inputs.datasets, strict=True):
         trial = draw.choose_fig2_trial(inputs.collected, condition)
         markers = trials.segments["moving"][trial]
-        fits = {method: fit_axis(markers, method) for method in METHODS}
+        fits = _collected_answers(inputs.collected, condition, trial)
         title = (
             f"{draw.protocol_name(condition['protocol'])}, FE RoM {condition['fe_rom_deg']}°, "
             f"AA/FE {condition['aa_ratio']}, trial {trial}"
