@@ -12,6 +12,7 @@ from rigs import JOINT, PROXIMAL
 from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
 
 import jointbench
+from jointbench import cli
 from jointbench.cli import main
 from jointbench.geometry import rotation_matrix
 
@@ -212,9 +213,12 @@ def test_world_trajectory_on_request(tmp_path, capsys):
     np.testing.assert_allclose(distance, np.broadcast_to(distance[0], distance.shape), atol=2e-3)
 
 
-def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys):
+def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys, monkeypatch):
     """`jointbench readme` fills the README's verdicts block from results/tables/verdicts.csv
-    (and the protocol shares beside them when results/tables/sensitivity.csv exists)."""
+    (and the protocol shares beside them when results/tables/sensitivity.csv exists) while the
+    run's `verdicts` target has nothing to redo; where it has, it leaves the block as it was,
+    names the jobs and exits 1 (tests/test_verdicts.py makes an edit for it)."""
+    monkeypatch.setattr(cli, "_verdicts_pending", lambda args: {"verdicts_member_cmc": 1})
     tables = tmp_path / "results" / "tables"
     tables.mkdir(parents=True)
     pd.DataFrame({"paper": ["A"], "entry": ["claim"], "status": ["reproduced"]}).to_csv(
@@ -241,6 +245,10 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
         "<!-- verdicts-summary:start -->\ntyped\n<!-- verdicts-summary:end -->\n"
     )
     arguments = ("readme", "--results", str(tmp_path / "results"), "--readme", str(readme))
+    code, _, err = run(capsys, *arguments)
+    assert code == 1 and "typed" in readme.read_text()
+    assert "`snakemake -j2 verdicts` would redo verdicts_member_cmc (1): run it first" in err
+    monkeypatch.setattr(cli, "_verdicts_pending", lambda args: {})
     code, out, _ = run(capsys, *arguments)
     assert code == 0 and "verdicts over seeds updated" in out
     text = readme.read_text()

@@ -41,7 +41,7 @@ from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
-from jointbench.report import readme_headlines
+from jointbench.report import dry_run_pending, readme_headlines
 from jointbench.uncertainty import check_resampling
 
 #: The config every run starts from (the Snakefile's ``configfile``), relative to the run's
@@ -146,12 +146,32 @@ def _readme(args: argparse.Namespace) -> int:
             "(`snakemake -j2 verdicts` writes it)"
         )
         return 0
+    pending = _verdicts_pending(args)
+    if pending:
+        jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+        print(
+            f"jointbench: {args.readme}: verdicts over seeds left as they are: {verdicts_path} "
+            "is not up to date with the code, config and data that make it (`snakemake -j2` "
+            f"does not remake it); `snakemake -j2 verdicts` would redo {jobs}: run it first",
+            file=sys.stderr,
+        )
+        return 1
     protocols_path = args.results / PROTOCOL_SHARES
     protocols = pd.read_csv(protocols_path) if protocols_path.is_file() else None
     summary = standout_summary(pd.read_csv(verdicts_path), protocols)
     changed = update_readme(args.readme, summary, VERDICTS_BLOCK)
     print(f"{args.readme}: verdicts over seeds {'updated' if changed else 'already current'}")
     return 0
+
+
+def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
+    """The jobs of each rule that the run's ``verdicts`` target would redo: a dry run of it by
+    the ``snakemake`` beside this interpreter, in the run's folder, with the command's config
+    files."""
+    snakemake = Path(sys.executable).with_name("snakemake")
+    configs = [option for path in args.configfile for option in ("--configfile", str(path))]
+    command = [str(snakemake), "verdicts", "--dry-run", *configs]
+    return dry_run_pending(command, "jointbench readme")
 
 
 def _inspect(args: argparse.Namespace) -> int:

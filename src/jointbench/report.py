@@ -482,6 +482,23 @@ def pending_jobs(dry_run_output: str) -> dict[str, int]:
     return counts
 
 
+def dry_run_pending(
+    command: Sequence[str],
+    what: str,
+    run: Callable[..., subprocess.CompletedProcess] = subprocess.run,
+) -> dict[str, int]:
+    """:func:`pending_jobs` of the Snakemake dry run ``command``, which ``what`` (the command
+    asking) runs to learn whether the results it reads are up to date; ``ValueError`` with the
+    dry run's output where it fails."""
+    done = run(list(command), capture_output=True, text=True)
+    if done.returncode != 0:
+        raise ValueError(
+            f"{what}: the dry run that checks the results are up to date failed:\n"
+            + (done.stdout + done.stderr).strip()[-3000:]
+        )
+    return pending_jobs(done.stdout)
+
+
 def check_current(
     argv: Sequence[str], run: Callable[..., subprocess.CompletedProcess] = subprocess.run
 ) -> None:
@@ -492,13 +509,8 @@ def check_current(
     its config (:func:`jointbench.invocation.workflow_options`), says what a run would redo;
     ``ValueError`` naming those jobs and the command that redoes them."""
     options = invocation.workflow_options(argv[1:])
-    done = run([sys.executable, argv[0], "--dry-run", *options], capture_output=True, text=True)
-    if done.returncode != 0:
-        raise ValueError(
-            "snakemake --report: the dry run that checks the results are up to date failed:\n"
-            + (done.stdout + done.stderr).strip()[-3000:]
-        )
-    pending = pending_jobs(done.stdout)
+    command = [sys.executable, argv[0], "--dry-run", *options]
+    pending = dry_run_pending(command, "snakemake --report", run)
     if pending:
         jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
         total = sum(pending.values())
