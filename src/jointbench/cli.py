@@ -166,9 +166,14 @@ def _readme(args: argparse.Namespace) -> int:
 
 def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
     """The jobs of each rule that the run's ``verdicts`` target would redo: a dry run of it by
-    the ``snakemake`` beside this interpreter, in the run's folder, with the command's config
-    files."""
+    the ``snakemake`` beside this interpreter, in the run's folder (the working directory),
+    with the command's config files; ``ValueError`` where there is no such ``snakemake``."""
     snakemake = Path(sys.executable).with_name("snakemake")
+    if not snakemake.is_file():
+        raise ValueError(
+            f"no {snakemake}: jointbench readme asks the run's snakemake whether "
+            "results/tables/verdicts.csv is up to date; install the project's environment"
+        )
     configs = [option for path in args.configfile for option in ("--configfile", str(path))]
     command = [str(snakemake), "verdicts", "--dry-run", *configs]
     return dry_run_pending(command, "jointbench readme")
