@@ -429,6 +429,22 @@ def test_fig2_draws_the_collected_answers_of_a_valid_protocol_whatever_its_steps
     plt.close(fig)
 
 
+def test_fig2_draws_the_methods_the_study_lists():
+    """A hinge study listing only some of paper B's costs (here the combined one) draws those
+    in Fig 2, as before it drew the collected answers."""
+    config = {"base_seed": 1, "studies": {"hinge": {"trials": 3}}}
+    datasets, frames = [], []
+    for condition in papers_b.FIG2_CONDITIONS:
+        trials = run.simulate_condition(config, "hinge", condition)
+        datasets.append((trials, {"truth": trials.truth}))
+        frames.append(run.estimate("hinge", "combined", trials, condition))
+    collected = pd.concat(frames, ignore_index=True)
+    inputs = Inputs(collected=collected, published={}, config=config, datasets=datasets)
+    fig = papers_b.PAPER.output("paper_b_fig2").render(inputs)
+    assert _drawn(fig)
+    plt.close(fig)
+
+
 def test_fig2_trial_is_the_median_by_combined_error():
     collected = _hinge()
     cell = (collected["protocol"] == "knee") & (collected["fe_rom_deg"] == 30)

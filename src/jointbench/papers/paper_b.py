@@ -303,16 +303,19 @@ def _fig5(inputs: Inputs):
 
 
 def _collected_answers(collected: pd.DataFrame, condition, trial: int) -> dict:
-    """``{method: (point, direction)}`` [mm, unit]: the answer of each of :data:`METHODS` for
-    ``trial`` of ``condition`` as collected, which it is scored and ranked by. Not fitted
-    again through the public call, which screens the markers as a recording's: a fast trial's
-    grid motion steps farther in one frame than its jump test allows a marker."""
+    """``{method: (point, direction)}`` [mm, unit]: the answer of each of :data:`METHODS` the
+    study collected for ``trial`` of ``condition``, which it is scored and ranked by. Not
+    fitted again through the public call, which screens the markers as a recording's: a fast
+    trial's grid motion steps farther in one frame than its jump test allows a marker."""
     rows = collected[collected["trial"] == trial]
     for key, value in condition.items():
         rows = rows[rows[key] == value]
     answers = {}
     for method in METHODS:
-        (row,) = rows[rows["method"] == method].itertuples(index=False)
+        found = list(rows[rows["method"] == method].itertuples(index=False))
+        if not found:
+            continue  # a method the study does not list
+        (row,) = found
         point = np.array([row.point_x, row.point_y, row.point_z])
         answers[method] = (point, np.array([row.direction_x, row.direction_y, row.direction_z]))
     return answers
