@@ -248,6 +248,7 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
     code, _, err = run(capsys, *arguments)
     assert code == 1 and "typed" in readme.read_text()
     assert "`snakemake -j2 verdicts` would redo verdicts_member_cmc (1): run it first" in err
+
     monkeypatch.setattr(cli, "_verdicts_pending", lambda args: {})
     code, out, _ = run(capsys, *arguments)
     assert code == 0 and "verdicts over seeds updated" in out
@@ -260,6 +261,19 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
     )
     code, _, _ = run(capsys, *arguments)
     assert "| seed-dependent | 16 of 20 |" in readme.read_text()
+
+
+def test_readme_asks_about_the_verdicts_with_every_config_file(monkeypatch):
+    """Snakemake keeps the last of several ``--configfile`` options: the dry run that asks
+    whether the verdicts are current, and the command the refusal names, give all of a run's
+    config files to one."""
+    asked = []
+    monkeypatch.setattr(cli, "dry_run_pending", lambda command, what: asked.append(command))
+    args = cli._parser().parse_args(["readme", "--configfile", "a.yaml", "--configfile", "b.yaml"])
+    cli._verdicts_pending(args)
+    assert asked[0][1:] == ["verdicts", "--dry-run", "--configfile", "a.yaml", "b.yaml"]
+    command = "snakemake -j2 verdicts --configfile a.yaml b.yaml"
+    assert cli._verdicts_command(args) == command
 
 
 def _toy_run(tmp_path):

@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import re
+import shlex
 import sys
 import warnings
 from collections.abc import Mapping
@@ -152,7 +153,7 @@ def _readme(args: argparse.Namespace) -> int:
         print(
             f"jointbench: {args.readme}: verdicts over seeds left as they are: {verdicts_path} "
             "is not up to date with the code, config and data that make it (`snakemake -j2` "
-            f"does not remake it); `snakemake -j2 verdicts` would redo {jobs}: run it first",
+            f"does not remake it); `{_verdicts_command(args)}` would redo {jobs}: run it first",
             file=sys.stderr,
         )
         return 1
@@ -162,6 +163,17 @@ def _readme(args: argparse.Namespace) -> int:
     changed = update_readme(args.readme, summary, VERDICTS_BLOCK)
     print(f"{args.readme}: verdicts over seeds {'updated' if changed else 'already current'}")
     return 0
+
+
+def _config_options(args: argparse.Namespace) -> list[str]:
+    """The command's config files as one ``--configfile`` option, as Snakemake takes them: it
+    keeps the last of several such options."""
+    return ["--configfile", *map(str, args.configfile)] if args.configfile else []
+
+
+def _verdicts_command(args: argparse.Namespace) -> str:
+    """The command that remakes the run's verdicts over seeds."""
+    return shlex.join(["snakemake", "-j2", "verdicts", *_config_options(args)])
 
 
 def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
@@ -174,8 +186,7 @@ def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
             f"no {snakemake}: jointbench readme asks the run's snakemake whether "
             "results/tables/verdicts.csv is up to date; install the project's environment"
         )
-    configs = [option for path in args.configfile for option in ("--configfile", str(path))]
-    command = [str(snakemake), "verdicts", "--dry-run", *configs]
+    command = [str(snakemake), "verdicts", "--dry-run", *_config_options(args)]
     return dry_run_pending(command, "jointbench readme")
 
 
