@@ -68,16 +68,45 @@ ARGV = ["/venv/bin/snakemake", "--report", "r.html", "--configfile", "my.yaml", 
 def test_a_report_of_up_to_date_results_goes_ahead():
     run, commands = _dry_run(UP_TO_DATE)
     assert report.check_current(ARGV, run) is None
-    # The same program on the same config and workflow, without the report.
-    (command,) = commands
-    assert command[1:] == [
-        "/venv/bin/snakemake",
-        "--dry-run",
-        "--configfile",
-        "my.yaml",
-        "--jobs",
-        "2",
-    ]
+    # The same program on the same config and workflow, without the report: a dry run, then
+    # the summary that says whether a file of the run is missing.
+    dry, summary = commands
+    options = ["--configfile", "my.yaml", "--jobs", "2"]
+    assert dry[1:] == ["/venv/bin/snakemake", "--dry-run", *options]
+    assert summary[1:] == ["/venv/bin/snakemake", "--summary", *options]
+
+
+# What `snakemake --summary` prints after a failed job, whose outputs Snakemake removed: the
+# run's own plan has nothing to redo while the collected file made from them is present.
+SUMMARY = (
+    "output_file\tdate\trule\tlog-file(s)\tstatus\tplan\n"
+    "results/collected/cmc.parquet\tSat Dec  5 07:44:32 2026\tcollect\tlog\tok\tno update\n"
+    "results/estimates/cmc/LM/a.parquet\t-\testimate_cmc_LM\tlog\tmissing\tno update\n"
+)
+
+
+def test_a_report_with_files_a_failed_job_left_missing_is_refused_naming_them():
+    """After a job failed, Snakemake's next run has nothing to do while the files made from its
+    removed outputs are present; the report is refused, naming the files and the command that
+    makes them again."""
+    answers = iter([UP_TO_DATE, SUMMARY])
+
+    def run(command, **_):
+        return subprocess.CompletedProcess(command, 0, next(answers), "")
+
+    with pytest.raises(ValueError) as refused:
+        report.check_current(ARGV, run)
+    message = str(refused.value)
+    assert "1 file of the run is missing (results/estimates/cmc/LM/a.parquet)" in message
+    assert "`snakemake --forcerun estimate_cmc_LM --configfile my.yaml --jobs 2` first" in message
+
+
+def test_a_report_asked_of_python_m_snakemake_asks_it_the_same_way():
+    """``python -m snakemake --report`` has the package's ``__main__`` as its first word, which
+    does not run as a script: the checks start ``-m snakemake`` too."""
+    run, commands = _dry_run(UP_TO_DATE)
+    report.check_current(["/venv/lib/snakemake/__main__.py", "--report"], run)
+    assert all(command[1:3] == ["-m", "snakemake"] for command in commands)
 
 
 def test_a_report_of_results_a_run_would_redo_is_refused_naming_the_jobs_and_the_command():

@@ -504,13 +504,16 @@ def check_current(
 ) -> None:
     """Stop a ``snakemake --report`` command line (``argv``, ``sys.argv``) whose run's results
     are not up to date with the code, config and data that make them: a report of them would
-    show what an edit, or a run that failed, left behind. A dry run of the run's default
-    target, by the same program and interpreter with the options that choose the workflow and
-    its config (:func:`jointbench.invocation.workflow_options`), says what a run would redo;
-    ``ValueError`` naming those jobs and the command that redoes them."""
+    show what an edit, or a run that failed, left behind. By the same program and interpreter
+    with the options that choose the workflow and its config
+    (:func:`jointbench.invocation.workflow_options`): a dry run of the run's default target
+    says what a run would redo, and its summary which files of the run are missing, such as
+    a failed job's outputs, which Snakemake removes and does not remake while the files made
+    from them are present. ``ValueError`` naming those jobs or files and the command that
+    redoes them."""
     options = invocation.workflow_options(argv[1:])
-    command = [sys.executable, argv[0], "--dry-run", *options]
-    pending = dry_run_pending(command, "snakemake --report", run)
+    program = _snakemake_program(argv[0])
+    pending = dry_run_pending([*program, "--dry-run", *options], "snakemake --report", run)
     if pending:
         jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
         total = sum(pending.values())
@@ -520,6 +523,48 @@ def check_current(
             "A report now would show results that no longer follow from them: run "
             f"`snakemake {shlex.join(options)}` first, then the report"
         )
+    missing = missing_outputs(_checked_output([*program, "--summary", *options], run))
+    if missing:
+        rules = sorted(set(missing.values()))
+        files = ", ".join(list(missing)[:5]) + (", ..." if len(missing) > 5 else "")
+        raise ValueError(
+            f"snakemake --report: {len(missing)} file{'s' * (len(missing) != 1)} of the run "
+            f"{'are' if len(missing) != 1 else 'is'} missing ({files}), such as a failed job's "
+            "outputs, which Snakemake removed and does not remake while the files made from "
+            "them are present: a report now would show what those files held before. Run "
+            f"`snakemake {shlex.join(['--forcerun', *rules, *options])}` first, then the report"
+        )
+
+
+def _snakemake_program(first: str) -> list[str]:
+    """How to start the Snakemake a command line's first word ``first`` started: its script
+    by this interpreter, or ``-m snakemake`` where it was the package's ``__main__``, which
+    does not run as a script."""
+    if Path(first).name == "__main__.py":
+        return [sys.executable, "-m", "snakemake"]
+    return [sys.executable, first]
+
+
+def _checked_output(command: list[str], run: Callable[..., subprocess.CompletedProcess]) -> str:
+    """The standard output of ``command``; ``ValueError`` with its output where it fails."""
+    done = run(command, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise ValueError(
+            "snakemake --report: the summary that checks the results are present failed:\n"
+            + (done.stdout + done.stderr).strip()[-3000:]
+        )
+    return done.stdout
+
+
+def missing_outputs(summary: str) -> dict[str, str]:
+    """``{file: rule}`` of the rows of a ``snakemake --summary`` table (tab-separated: file,
+    date, rule, logs, status, plan) whose status is ``missing``."""
+    missing = {}
+    for line in summary.splitlines():
+        fields = line.split("\t")
+        if len(fields) >= 5 and fields[4] == "missing":
+            missing[fields[0]] = fields[2]
+    return missing
 
 
 def closing_lines(environ: Mapping[str, str] = os.environ) -> str:
