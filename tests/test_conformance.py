@@ -17,6 +17,7 @@ An estimator registered later is held to all of this without a line added here.
 from __future__ import annotations
 
 import functools
+import re
 
 import numpy as np
 import pytest
@@ -368,9 +369,12 @@ def test_a_new_estimator_gets_the_checks_without_code_of_its_own(naive_estimator
 def readme_estimator():
     """The README's built-in example ("Built in: one function"), registered as it is written."""
     code, _ = readme_builtin_example()
-    before = set(jointbench.methods("center"))
+    name = re.search(r'@register\("center", "([^"]+)"', code).group(1)
+    if name in jointbench.methods("center"):
+        # Copied into the package, as the README says: held to the suite as registered there.
+        yield name
+        return
     exec(compile(code, "README.md", "exec"), {})
-    (name,) = set(jointbench.methods("center")) - before
     yield name
     registry.unregister("center", name)
 
