@@ -38,6 +38,10 @@ onsuccess:
     print(jb_report.closing_lines(), file=sys.stderr)
 
 
+onerror:
+    print(jb_report.failure_lines(log), file=sys.stderr)
+
+
 # The project's own schema check before Snakemake's (workflow/rules/common.smk), whose error
 # leads with a dump of the schema: a mistake, a misspelt study first, is named in one line.
 jb_config.check_schema(config)

@@ -170,6 +170,10 @@ def test_a_crashing_estimator_fails_alone_and_the_run_finishes_the_rest(tmp_path
     message = run.stdout + run.stderr
     assert run.returncode != 0
     assert "Error in rule estimate_centroid" in message and "centroid crashed" in message
+    # Its last lines name the failed job, its log and the command that redoes it once mended.
+    failure = f"estimate_centroid: results/logs/estimate/cmc/centroid/{crashed}.log"
+    assert failure in message.split("jointbench: 1 job failed:")[-1], message[-3000:]
+    assert "--forcerun estimate_centroid`" in message
     # The crash is the estimator's own: the other condition's answers and every built-in
     # estimator's results are made and kept, and nothing is collected without it.
     estimates = tmp_path / "results" / "estimates" / "cmc"

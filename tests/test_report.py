@@ -210,3 +210,31 @@ def test_the_console_shows_one_line_per_job_and_drops_the_chatter():
     assert console.job_line(job) == "estimate cmc: NM on 18 conditions"
     target = _record(None, event="job_info", rule_msg=None, rule_name="all", output=[])
     assert not console.shown(target)
+
+
+# The block a Snakemake log holds for a failed job, as a run's log file keeps it.
+FAILED_LOG = (
+    "[Sat Dec  5 08:24:10 2026]\n"
+    "Error in rule estimate_centroid:\n"
+    "    message: None\n"
+    "    jobid: 2\n"
+    "    input: results/blind/cmc/a.parquet\n"
+    "    output: results/estimates/cmc/centroid/a.parquet\n"
+    "    log: results/logs/estimate/cmc/centroid/a.log (check log file(s) for error details)\n"
+    "Execute 1 jobs...\n"
+)
+
+
+def test_a_failed_run_ends_naming_each_failed_job_and_the_command_that_redoes_it(tmp_path):
+    """A run with keep-going ends long after its first error: its last lines name each failed
+    job's rule and log, and the forcerun that remakes their removed outputs once mended."""
+    log = tmp_path / "run.log"
+    log.write_text(FAILED_LOG * 2)
+    environ = {invocation.ENVIRONMENT_VARIABLE: "-j2 --configfile my.yaml"}
+    lines = report.failure_lines([log], environ)
+    assert "2 jobs failed" in lines
+    assert "estimate_centroid: results/logs/estimate/cmc/centroid/a.log" in lines
+    assert "`snakemake -j2 --configfile my.yaml --forcerun estimate_centroid`" in lines
+    log.write_text("Execute 1 jobs...\n")
+    assert report.failure_lines(log, environ) == ""
+    assert report.failure_lines(tmp_path / "absent.log", environ) == ""

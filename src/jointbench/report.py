@@ -567,6 +567,36 @@ def missing_outputs(summary: str) -> dict[str, str]:
     return missing
 
 
+def failure_lines(
+    logs: Path | str | Sequence[Path | str], environ: Mapping[str, str] = os.environ
+) -> str:
+    """What a run that failed prints last, read from its Snakemake ``logs`` (a file, or the
+    list of them Snakemake's ``onerror`` gives): each failed
+    job's rule and log (a run that keeps going reports its first error far above its end),
+    and the command, with the options of the run recorded in ``environ``, that remakes their
+    outputs and everything after them once the cause is mended: Snakemake removed those
+    outputs, and a plain run may find nothing to do while files made from them earlier are
+    present. Empty where the logs name no failed job (or are not there)."""
+    paths = [Path(logs)] if isinstance(logs, str | Path) else [Path(log) for log in logs]
+    text = "".join(path.read_text(errors="replace") for path in paths if path.is_file())
+    failed = [
+        (rule, re.search(r"^ {4}log: (\S+)", block, flags=re.M))
+        for rule, block in re.findall(r"^Error in rule (\S+):\n((?: {4}.*\n?)*)", text, re.M)
+    ]
+    if not failed:
+        return ""
+    lines = [f"jointbench: {len(failed)} job{'s' * (len(failed) != 1)} failed:"]
+    lines += [f"  {rule}: {found.group(1) if found else 'no log'}" for rule, found in failed]
+    rules = sorted({rule for rule, _ in failed})
+    command = invocation.snakemake_command("--forcerun", *rules, environ=environ)
+    lines.append(
+        "The other jobs' results are kept. Snakemake removed the failed jobs' outputs: once "
+        f"the cause is mended, `{command}` makes them and everything after them again (a "
+        "plain run may find nothing to do while the files made from them earlier are present)."
+    )
+    return "\n".join(lines)
+
+
 def closing_lines(environ: Mapping[str, str] = os.environ) -> str:
     """What a successful run prints last: where the results are and how to make the report,
     with the options of the run (:func:`jointbench.invocation.snakemake_command`, as recorded
