@@ -411,38 +411,35 @@ def test_paper_b_figures_run():
     assert _drawn(paper_b.fig2(_fig2_examples()))
 
 
+def _fig2_of_a_run(config: dict, methods) -> bool:
+    """Whether paper B's Fig 2 draws from a hinge run of ``config`` whose estimate jobs made
+    the answers of ``methods`` on Fig 2's conditions."""
+    datasets, frames = [], []
+    for condition in papers_b.FIG2_CONDITIONS:
+        trials = run.simulate_condition(config, "hinge", condition)
+        datasets.append((trials, {"truth": trials.truth}))
+        frames += [run.estimate("hinge", m, trials, condition) for m in methods]
+    collected = pd.concat(frames, ignore_index=True)
+    inputs = Inputs(collected=collected, published={}, config=config, datasets=datasets)
+    fig = papers_b.PAPER.output("paper_b_fig2").render(inputs)
+    drawn = _drawn(fig)
+    plt.close(fig)
+    return drawn
+
+
 def test_fig2_draws_the_collected_answers_of_a_valid_protocol_whatever_its_steps():
     """At 0.5 mm of noise (a protocol the config check takes) the knee's 90° grid motion moves
     a marker 29 mm in one frame, which a recording's screening reads as a jump: Fig 2 draws
     the answers the estimate jobs made and the ranking holds, not a screened fit again."""
     config = {"base_seed": 1, "studies": {"hinge": {"trials": 3}}}
     config["studies"]["hinge"]["protocol"] = {"knee": {"noise_sd_mm": 0.5}}
-    datasets, frames = [], []
-    for condition in papers_b.FIG2_CONDITIONS:
-        trials = run.simulate_condition(config, "hinge", condition)
-        datasets.append((trials, {"truth": trials.truth}))
-        frames += [run.estimate("hinge", m, trials, condition) for m in papers_b.METHODS]
-    collected = pd.concat(frames, ignore_index=True)
-    inputs = Inputs(collected=collected, published={}, config=config, datasets=datasets)
-    fig = papers_b.PAPER.output("paper_b_fig2").render(inputs)
-    assert _drawn(fig)
-    plt.close(fig)
+    assert _fig2_of_a_run(config, papers_b.METHODS)
 
 
 def test_fig2_draws_the_methods_the_study_lists():
     """A hinge study listing only some of paper B's costs (here the combined one) draws those
     in Fig 2, as before it drew the collected answers."""
-    config = {"base_seed": 1, "studies": {"hinge": {"trials": 3}}}
-    datasets, frames = [], []
-    for condition in papers_b.FIG2_CONDITIONS:
-        trials = run.simulate_condition(config, "hinge", condition)
-        datasets.append((trials, {"truth": trials.truth}))
-        frames.append(run.estimate("hinge", "combined", trials, condition))
-    collected = pd.concat(frames, ignore_index=True)
-    inputs = Inputs(collected=collected, published={}, config=config, datasets=datasets)
-    fig = papers_b.PAPER.output("paper_b_fig2").render(inputs)
-    assert _drawn(fig)
-    plt.close(fig)
+    assert _fig2_of_a_run({"base_seed": 1, "studies": {"hinge": {"trials": 3}}}, ["combined"])
 
 
 def test_fig2_trial_is_the_median_by_combined_error():
