@@ -257,6 +257,42 @@ def test_a_row_missing_fields_inside_the_file_is_refused(tmp_path, written, row,
     assert "cut short" not in message
 
 
+def _with_trailing_separators(text: str, extra: str) -> str:
+    """``text``, a long CSV, with ``extra`` after every data row (the header left as it is)."""
+    header, *rows = text.splitlines()
+    return "\n".join([header, *(row + extra for row in rows)]) + "\n"
+
+
+@pytest.mark.parametrize("extra", [",", ",,"])
+def test_csv_rows_ending_in_separators_the_header_lacks_read_as_the_header_says(tmp_path, extra):
+    """Spreadsheets end each row with a separator; pandas once took the rows' first field for an
+    index and read the marker names as frame numbers."""
+    text, path = _long_csv(tmp_path)
+    path.write_text(text)
+    expected = read(path).markers
+    path.write_text(_with_trailing_separators(text, extra))
+    recording = read(path)
+    assert recording.labels == ("A", "B") and recording.first_frame == 0
+    np.testing.assert_array_equal(recording.markers, expected)
+
+
+@pytest.mark.parametrize(("extra", "column", "text"), [(",7", 6, "7"), (",,0.5", 7, "0.5")])
+def test_a_csv_value_past_the_headers_columns_is_refused_naming_line_and_column(
+    tmp_path, extra, column, text
+):
+    """The values written past the named columns once shifted every column by one (decimal
+    commas, say: ``1,5`` for 1.5) or were dropped unseen."""
+    written, path = _long_csv(tmp_path)
+    path.write_text(_with_trailing_separators(written, extra))
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value) == (
+        f"{path}: line 2, column {column}: {text!r} lies past the header's 5 columns (frame, "
+        "marker, x, y, z); name its column in the header, or remove it (a decimal comma "
+        "splits a number in two: write 1.5, not 1,5)"
+    )
+
+
 def test_header_only_csv_is_one_line(tmp_path, capsys):
     path = tmp_path / "empty.csv"
     path.write_text("frame,marker,x,y,z\n")

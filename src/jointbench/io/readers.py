@@ -7,6 +7,7 @@ import io
 import math
 import re
 import struct
+import warnings
 from pathlib import Path
 
 import ezc3d
@@ -403,16 +404,29 @@ def read_csv(path: str | Path) -> Recording:
         # The marker column is text as written: no type inference ("01" stays "01") and no
         # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
         # The frame column is text too, for the frame-number rule: pandas reads "+7", "7e0"
-        # and "7_0" as 7, and "-0" as 0.
-        table = pd.read_csv(
-            io.StringIO(text),
-            dtype={"marker": str, "frame": str},
-            keep_default_na=False,
-            na_values={column: _NA_TEXT for column in ("frame", "x", "y", "z")},
-        )
+        # and "7_0" as 7, and "-0" as 0. Rows longer than the header would otherwise have
+        # their first fields taken for an index, shifting every column; without one, pandas
+        # drops the fields past the header and warns (of empty ones too), and those that are not
+        # empty are named.
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", pd.errors.ParserWarning)
+            table = pd.read_csv(
+                io.StringIO(text),
+                dtype={"marker": str, "frame": str},
+                keep_default_na=False,
+                na_values={column: _NA_TEXT for column in ("frame", "x", "y", "z")},
+                index_col=False,
+            )
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as error:
         # pandas ends some of its messages with a newline; the refusal is one line.
         raise ValueError(f"{path}: not a readable CSV file ({str(error).strip()})") from None
+    for warning in caught:
+        if issubclass(warning.category, pd.errors.ParserWarning):
+            _check_csv_extra_fields(path, list(table.columns))  # an empty field loses nothing
+        else:
+            warnings.warn_explicit(
+                warning.message, warning.category, warning.filename, warning.lineno
+            )
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
         # The names as written: a space or another separator is what tells them apart.
@@ -512,6 +526,25 @@ def _check_csv_fields(path: Path, header: list[str]) -> None:
         line = records.line_num
     if last_field:
         _check_last_field(path, line, last_field, header[-1])
+
+
+def _check_csv_extra_fields(path: Path, header: list[str]) -> None:
+    """``ValueError`` naming the first line and column of ``path`` that writes a value past the
+    ``header``'s columns: a column without a name, or a number split in two by a decimal comma,
+    which pandas would drop unseen. Empty fields past them (a separator ending each row) are
+    allowed."""
+    with path.open(newline="", encoding="utf-8-sig") as file:
+        records = csv.reader(file)
+        next(records)
+        for record in records:
+            extra = [i for i, text in enumerate(record[len(header) :], len(header)) if text.strip()]
+            if extra:
+                raise ValueError(
+                    f"{path}: line {records.line_num}, column {extra[0] + 1}: "
+                    f"{record[extra[0]].strip()!r} lies past the header's {len(header)} columns "
+                    f"({', '.join(header)}); name its column in the header, or remove it (a "
+                    "decimal comma splits a number in two: write 1.5, not 1,5)"
+                )
 
 
 # pandas' default missing-value words (``read_csv``'s ``na_values``), kept for the numeric
