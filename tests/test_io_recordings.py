@@ -154,6 +154,25 @@ def test_unknown_label_lists_the_file_labels():
         rig_recording(10).select("P1,RASI")
 
 
+def test_a_label_written_with_another_case_spaces_or_a_subject_prefix_is_named():
+    """Labels are matched as written; one that differs only so is shown as the file writes it,
+    where the list of labels hides a trailing space."""
+    markers = rig_recording(10).markers
+    recording = Recording(("Sub01:P1", "p2", "P3 ", "D1", "D2", "D3"), markers, 100.0, "t.csv")
+    with pytest.raises(ValueError) as error:
+        recording.select("P1,P2,P3,D1")
+    assert str(error.value).endswith(
+        "; the file writes 'Sub01:P1' for 'P1', 'p2' for 'P2', 'P3 ' for 'P3' (labels are "
+        "matched as written: case, spaces and a subject prefix count)"
+    )
+
+
+def test_a_label_with_no_near_match_has_no_suggestion():
+    with pytest.raises(ValueError) as error:
+        rig_recording(10).select("P1,RASI")
+    assert "the file writes" not in str(error.value)
+
+
 # --- known answers in the reference segment's technical frame -------------------------------
 
 

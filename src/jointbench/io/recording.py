@@ -24,6 +24,30 @@ def _as_missing(markers: np.ndarray) -> np.ndarray:
     return markers
 
 
+def _bare(label: str) -> str:
+    """``label`` without a subject prefix (``Sub01:``), surrounding spaces or case."""
+    return label.rsplit(":", 1)[-1].strip().casefold()
+
+
+def _near_labels(asked: list[str], labels: tuple[str, ...]) -> str:
+    """For a refusal of the ``asked`` labels, the ``labels`` of the file that differ from them
+    only by case, spaces or a subject prefix, as the file writes them (a trailing space does not
+    show in a list of labels); ``""`` when there are none. They are named, not taken: two
+    markers may differ only so."""
+    pairs = [
+        f"{label!r} for {name!r}"
+        for name in asked
+        for label in labels
+        if _bare(label) == _bare(name)
+    ]
+    if not pairs:
+        return ""
+    return (
+        f"; the file writes {', '.join(pairs)} (labels are matched as written: case, spaces "
+        "and a subject prefix count)"
+    )
+
+
 def parse_frames(text: str, n_frames: int, first_frame: int = 0) -> slice:
     """``"start:stop"`` in the file's frame numbers (stop excluded, either side may be empty)
     -> the ``slice`` of rows of a recording of ``n_frames`` whose row 0 is ``first_frame``."""
@@ -107,7 +131,7 @@ class Recording:
         if unknown:
             raise ValueError(
                 f"{self.source}: no marker labelled {', '.join(map(repr, unknown))}; "
-                f"labels in the file: {', '.join(self.labels)}"
+                f"labels in the file: {', '.join(self.labels)}{_near_labels(unknown, self.labels)}"
             )
         if len(set(labels)) != len(labels):
             raise ValueError(f"{self.source}: a label is named twice in {list(labels)}")
