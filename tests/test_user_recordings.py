@@ -235,3 +235,47 @@ def test_a_centre_on_skin_markers_does_not_claim_a_noise_only_precision():
     )
     assert "precision not determined" in fitted.result.status, fitted.result.status
     assert fitted.result.diagnostics["center_spheres_fit_ratio"] > 1.5
+
+
+def _thigh_marker_on_a_line(offset_mm: float) -> Recording:
+    """The knee trial with RTHI3 moved onto the line from RTHI1 to RTHI2, ``offset_mm`` off it,
+    with 0.5 mm of noise of its own: the thigh's markers RTHI1, RTHI2, RTHI3 nearly on one
+    line, as markers set along a thigh's long axis can be."""
+    knee = read(KNEE)
+    markers = knee.markers.copy()
+    first, second, third = knee.index("RTHI1,RTHI2,RTHI3")
+    line = markers[:, second] - markers[:, first]
+    across = np.cross(line, [0.0, 0.0, 1.0])
+    across /= np.linalg.norm(across, axis=1, keepdims=True)
+    on_line = 0.3 * markers[:, first] + 0.7 * markers[:, second] + offset_mm * across
+    noise = np.random.default_rng(0).normal(scale=0.5, size=on_line.shape)
+    markers[:, third] = on_line + noise
+    return Recording(knee.labels, markers, knee.rate_hz, knee.source, knee.first_frame)
+
+
+@pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
+@pytest.mark.parametrize("offset_mm", [0.0, 2.0])
+def test_a_reference_whose_pose_the_noise_turns_about_its_line_is_refused(kind, offset_mm):
+    """Three reference markers within the noise of one line leave the rotation of their frame
+    about it to the noise: the knee's axis then came out along that line, the status silent
+    about it."""
+    recording = _thigh_marker_on_a_line(offset_mm)
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, kind, "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH", "RTHI1,RTHI2,RTHI3")
+    message = str(error.value)
+    assert message.startswith(
+        f"{KNEE}: reference markers RTHI1, RTHI2, RTHI3 are nearly collinear: their frame's "
+        "rotation about their line is determined to "
+    ), message
+    assert "add a marker off their line to the reference" in message
+
+
+def test_a_reference_with_a_marker_clear_of_the_line_is_fitted():
+    """10 mm off the line, the thigh's frame is determined to some 14 degrees: fitted."""
+    fitted = jointbench.fit(
+        _thigh_marker_on_a_line(10.0),
+        "axis",
+        "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH",
+        "RTHI1,RTHI2,RTHI3",
+    )
+    assert fitted.result.converged

@@ -165,6 +165,7 @@ __all__ = [
     "MAX_DISTANCE_MARKERS",
     "MAX_NONRIGID_SHARE",
     "MAX_OFF_AXIS_SHARE",
+    "MAX_POSE_SD_RAD",
     "MIN_BLOCKS",
     "MIN_VARIANCE_RATIO",
     "ROTATION_ALPHA",
@@ -205,11 +206,11 @@ _SHARE_FRAMES = 240
 #: coordinates; the pose fits and the sums above it amplify that by a few orders.
 ROUNDING = 1e-12
 
-# A pose whose rotation about the cluster's weakest axis has a noise SD above this [rad], about
-# 29 degrees, is left to the noise: first-order error theory no longer describes it. Paper A's
-# smallest marker set (M) with its largest noise (2 mm) reaches 13 degrees and is a studied,
-# legitimate condition; three collinear markers with 0.3 mm noise reach 46 degrees.
-_MAX_POSE_SD_RAD = 0.5
+#: A pose whose rotation about the cluster's weakest axis has a noise SD above this [rad], about
+#: 29 degrees, is left to the noise: first-order error theory no longer describes it. Paper A's
+#: smallest marker set (M) with its largest noise (2 mm) reaches 13 degrees and is a studied,
+#: legitimate condition; three collinear markers with 0.3 mm noise reach 46 degrees.
+MAX_POSE_SD_RAD = 0.5
 
 #: The frames are "not independent" when the means of the markers' distances over blocks of
 #: frames vary this many times as much as those of independent frames would (module
@@ -1849,7 +1850,7 @@ def _no_pose_reason(row: list[float]) -> str | None:
     _, share, weakest, collinear = row[:4]
     if collinear:
         return "no 3 non-collinear markers"
-    if weakest > _MAX_POSE_SD_RAD and share < MAX_NONRIGID_SHARE:
+    if weakest > MAX_POSE_SD_RAD and share < MAX_NONRIGID_SHARE:
         return (
             "nearly collinear markers (their pose is determined to "
             f"{math.degrees(weakest):.2g} deg about their line)"
@@ -1895,7 +1896,7 @@ def _two_segments(kind: str, arrays: tuple[np.ndarray, ...], poses: list[dict]) 
             " deg about their line)",
         )
         # Markers that keep no shape are reported as such (_verdict), collinear or not.
-        if weakest[t] > _MAX_POSE_SD_RAD
+        if weakest[t] > MAX_POSE_SD_RAD
         and all(cluster.nonrigid_share[t] < MAX_NONRIGID_SHARE for cluster in clusters)
         else _verdict(
             kind,

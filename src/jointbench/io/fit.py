@@ -36,7 +36,15 @@ from jointbench.estimators.results import with_warnings
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
-from jointbench.io.segments import Artefact, ArtefactRules, Segment, Swap, find_jumps, summarise
+from jointbench.io.segments import (
+    Artefact,
+    ArtefactRules,
+    Segment,
+    Swap,
+    check_pose_determined,
+    find_jumps,
+    summarise,
+)
 from jointbench.numerics.poses import best_rotation
 from jointbench.screening import checked_rules
 from jointbench.uncertainty import Bootstrap, bootstrap, check_level, check_resampling
@@ -426,6 +434,7 @@ def prepare(
     ref = None
     if reference is not None:
         ref = Segment.fit(recording, reference, rules)
+        check_pose_determined(ref, recording.source)
         overlap = set(ref.labels) & {recording.labels[i] for i in moving_index}
         if overlap:
             raise ValueError(

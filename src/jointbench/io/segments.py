@@ -16,12 +16,15 @@ Artefacts are found by :func:`jointbench.screening.screen` (one home for files a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from jointbench.estimators.support import MAX_POSE_SD_RAD
 from jointbench.estimators.validation import cluster_span, span_problem
+from jointbench.numerics.small import inertia
 from jointbench.screening import (
     Artefact,
     ArtefactRules,
@@ -49,6 +52,7 @@ __all__ = [
     "Screening",
     "Segment",
     "Swap",
+    "check_pose_determined",
     "find_jumps",
     "find_rigidity_breaks",
     "find_swaps",
@@ -92,6 +96,26 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
         f"two, median over the frames), {problem} The coordinates are not in the unit the file "
         f"states ({recording.units!r}, read as mm); correct the file's unit (C3D POINT:UNITS, "
         "TRC Units; a CSV is in mm)"
+    )
+
+
+def check_pose_determined(segment: Segment, source: str) -> None:
+    """``ValueError`` naming the file and the markers of the reference ``segment`` when the
+    noise leaves the rotation of their frame about the axis they fix worst to chance
+    (:meth:`Segment.weakest_rotation_sd` above
+    :data:`~jointbench.estimators.support.MAX_POSE_SD_RAD`): nearly collinear markers, whose
+    frame turns about their line from frame to frame with the noise, and carries every answer
+    expressed in it along. The exact collinearity :func:`technical_frame` refuses is the limit
+    of this."""
+    sd, noise, spread = segment.weakest_rotation_sd()
+    if not sd > MAX_POSE_SD_RAD:
+        return
+    raise ValueError(
+        f"{source}: reference markers {', '.join(segment.labels)} are nearly collinear: their "
+        f"frame's rotation about their line is determined to {math.degrees(sd):.2g} deg (the "
+        f"rigid fit's noise of {noise:.2g} mm against their RMS distance of {spread:.2g} mm from "
+        f"the line), more than {math.degrees(MAX_POSE_SD_RAD):.0f} deg, and every answer in "
+        "that frame turns with it; add a marker off their line to the reference"
     )
 
 
@@ -171,6 +195,23 @@ class Segment:
             screening.swaps,
             screening.untested,
         )
+
+    def weakest_rotation_sd(self) -> tuple[float, float, float]:
+        """How well the markers fix their frame's rotation about the axis they fix worst (their
+        line, for nearly collinear ones), to first order: the SD of that rotation [rad], the
+        rigid fit's noise per coordinate [mm] (its residuals over their ``3 n - 6`` degrees of
+        freedom in each frame with a pose) and the markers' RMS distance from that axis
+        through their centroid [mm] (the noise over ``sqrt(n)`` times it is the SD)."""
+        seen = np.isfinite(self.residuals)
+        posed = np.isfinite(self.rotation[:, 0, 0])
+        dof = 3 * int(seen[posed].sum()) - 6 * int(posed.sum())
+        noise = math.sqrt(np.nansum(self.residuals[posed] ** 2) / dof) if dof > 0 else math.nan
+        # The smallest principal moment of the centred shape: sum over the markers of their
+        # squared distances from the axis through the centroid that they fix worst.
+        moment = float(np.linalg.eigvalsh(inertia(self.shape - self.shape.mean(axis=0)))[0])
+        spread = math.sqrt(max(moment, 0.0) / len(self.labels))
+        sd = noise / math.sqrt(moment) if moment > 0.0 else math.inf
+        return sd, noise, spread
 
     def local(self, markers: np.ndarray) -> np.ndarray:
         """World markers ``(n_frames, m, 3)`` in this segment's technical frame, per frame."""
