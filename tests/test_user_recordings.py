@@ -279,3 +279,44 @@ def test_a_reference_with_a_marker_clear_of_the_line_is_fitted():
         "RTHI1,RTHI2,RTHI3",
     )
     assert fitted.result.converged
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the unit check knows only a factor of 1000 (a cluster under 1 mm or over 10 m): "
+    "millimetres under a 'cm' unit make the thigh 3.2 m across, which passes; the fit then "
+    "refuses a 'jump' (the knee's motion, 10 times over), and with artefacts='exclude' "
+    "gives a centre 10 times too far with no word of the unit",
+)
+def test_millimetres_under_a_centimetre_unit_are_refused_naming_the_unit():
+    knee = read(KNEE)
+    recording = Recording(
+        knee.labels, knee.markers * 10.0, knee.rate_hz, knee.source, knee.first_frame, "cm"
+    )
+    with pytest.raises(ValueError, match=r"not in the unit the file states \('cm'"):
+        jointbench.fit(
+            recording,
+            "center",
+            "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH",
+            "RTHI1,RTHI2,RTHI3,RGT",
+            method="NM",
+            artefacts="exclude",
+        )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="below 4 * MIN_BLOCKS = 32 frames the frame-independence test cannot run, and the "
+    "status does not say it was not run: on frames 901 to 922 of the knee trial (lag-1 "
+    "autocorrelation 0.98 over the whole trial) the axis reads 'ok' with an SD of 1.3 deg, "
+    "13 deg from the whole trial's axis; frames 1 to 22 read 'ok' 4.5 deg from it",
+)
+def test_a_fit_too_short_for_the_independence_test_says_it_was_not_tested():
+    fitted = jointbench.fit(
+        read(KNEE),
+        "axis",
+        "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH",
+        "RTHI1,RTHI2,RTHI3,RGT",
+        frames="1000:1022",
+    )
+    assert "independent" in fitted.result.status, fitted.result.status
