@@ -36,6 +36,26 @@ def test_truncated_c3d_is_refused_naming_what_the_header_promised(tmp_path, cut)
     assert f"{complete} complete frames" in str(error.value)
 
 
+@pytest.mark.parametrize(
+    ("cut", "where"),
+    [
+        (300, "its 512-byte header block"),
+        (1024, "its parameters, before the frames its header places at byte 10240"),
+        (9000, "its parameters, before the frames its header places at byte 10240"),
+    ],
+)
+def test_a_c3d_file_cut_before_its_frames_is_refused_as_truncated(tmp_path, cut, where):
+    """ezc3d's own message for these ("The format is not standard. If you want to ignore this
+    error, set ignoreBadFormatting to true") named neither the cut nor a remedy."""
+    path = tmp_path / "cut.c3d"
+    path.write_bytes(KNEE.read_bytes()[:cut])
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value) == (
+        f"{path}: truncated C3D file: it ends after {cut} bytes, inside {where}"
+    )
+
+
 def test_truncated_trc_is_refused(tmp_path):
     header = "PathFileType\t4\t(X/Y/Z)\tcut.trc\n"
     header += "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\n100\t100\t5\t1\tmm\n"

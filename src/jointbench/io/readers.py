@@ -78,6 +78,7 @@ def read_c3d(path: str | Path) -> Recording:
     try:
         c3d = ezc3d.c3d(str(path))
     except Exception as error:  # ezc3d raises bare RuntimeError/IOError for any bad file
+        _check_c3d_reaches_frames(path)
         raise ValueError(f"{path}: not a readable C3D file ({error})") from None
     _check_c3d_size(c3d, path)
     point = c3d["parameters"]["POINT"]
@@ -111,14 +112,7 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     512-byte block. Each frame holds, per point, x, y, z and a residual word, then the analog
     samples, each value a float32 (``POINT:SCALE`` < 0) or an int16.
     """
-    with path.open("rb") as file:
-        block = file.read(512)
-        file.seek(max(0, (block[0] - 1) * 512 + 3))
-        processor = file.read(1)
-    # Intel (84) and DEC (85) store integers little-endian, MIPS (86) big-endian.
-    order = ">" if processor == bytes([86]) else "<"
-    n_points, n_analog, first, last = struct.unpack(order + "4H", block[2:10])
-    (data_block,) = struct.unpack(order + "H", block[16:18])
+    n_points, n_analog, first, last, data_block = _c3d_header(path)
     if last == 0xFFFF:  # a long file: the header cannot hold its last frame
         return
     frames = last - first + 1
@@ -136,6 +130,45 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
         f"({start + frames * frame_bytes} bytes), but the file has {size} bytes: "
         f"{complete} complete frames"
     )
+
+
+def _c3d_header(path: Path) -> tuple[int, int, int, int, int]:
+    """The words of a C3D file's header block that say how long it is: the number of points,
+    of analog samples per frame, the first and last frame, and the 512-byte block (1-based)
+    where the frames start. The byte order is the parameter section's processor's; a file cut
+    before it is read as Intel's, the commonest."""
+    with path.open("rb") as file:
+        block = file.read(512)
+        file.seek(max(0, (block[0] - 1) * 512 + 3))
+        processor = file.read(1)
+    # Intel (84) and DEC (85) store integers little-endian, MIPS (86) big-endian.
+    order = ">" if processor == bytes([86]) else "<"
+    n_points, n_analog, first, last = struct.unpack(order + "4H", block[2:10])
+    (data_block,) = struct.unpack(order + "H", block[16:18])
+    return n_points, n_analog, first, last, data_block
+
+
+def _check_c3d_reaches_frames(path: Path) -> None:
+    """``ValueError`` when ``path``, a file ezc3d cannot read, ends before the frames its
+    header block places (or inside that block): a file cut short, which ezc3d reports as
+    malformed parameters or a bad processor type. A file whose second byte is not the 0x50
+    every C3D header starts with is no C3D file, cut or not, and is left to ezc3d's message."""
+    with path.open("rb") as file:
+        key = file.read(2)[1:]
+    if key != b"\x50":
+        return
+    size = path.stat().st_size
+    if size < 512:
+        raise ValueError(
+            f"{path}: truncated C3D file: it ends after {size} bytes, inside its 512-byte "
+            "header block"
+        )
+    start = (_c3d_header(path)[-1] - 1) * 512
+    if size < start:
+        raise ValueError(
+            f"{path}: truncated C3D file: it ends after {size} bytes, inside its parameters, "
+            f"before the frames its header places at byte {start}"
+        )
 
 
 def read_trc(path: str | Path) -> Recording:
