@@ -13,7 +13,7 @@ from jointbench.io import Recording, prepare, read
 from jointbench.io.segments import technical_frame
 from jointbench.running.scoring import CHI2_3DOF_95
 from jointbench.simulate.hip import marker_layout
-from jointbench.uncertainty import block_indices, bootstrap
+from jointbench.uncertainty import BATCH_FRAMES, block_indices, bootstrap, default_block_length
 
 HIP = ("P1", "P2", "P3", "D1", "D2", "D3")
 
@@ -42,6 +42,24 @@ def test_refits_that_fail_are_counted_and_too_many_refuse():
 
     with pytest.raises(ValueError, match="refits failed"):
         bootstrap(lambda resamples: [None] * len(resamples), 50, n_resamples=10, label="nothing")
+
+
+def test_refits_are_asked_for_in_batches_of_bounded_size():
+    """The refits of a long recording once came in one batch of every resample: 200 of a
+    100,000-frame trial held some 12 GB. The batches keep the resamples and their order."""
+    n_frames = BATCH_FRAMES // 4
+    sizes = []
+
+    def statistic(resamples):
+        sizes.append(resamples.size)
+        return [np.array([rows.mean()]) for rows in resamples]
+
+    result = bootstrap(statistic, n_frames, n_resamples=10, seed=3, label="a mean")
+    assert max(sizes) <= BATCH_FRAMES and sum(sizes) == 10 * n_frames
+    rng = np.random.default_rng(3)
+    length = default_block_length(n_frames)
+    expected = [block_indices(n_frames, length, rng).mean() for _ in range(10)]
+    np.testing.assert_array_equal(result.samples[:, 0], expected)
 
 
 def test_mean_of_white_noise_has_the_textbook_spread():

@@ -25,6 +25,7 @@ import numpy as np
 from jointbench.declared import Count, Range, check
 
 __all__ = [
+    "BATCH_FRAMES",
     "RESAMPLING",
     "Bootstrap",
     "block_indices",
@@ -129,6 +130,12 @@ def check_resampling(
     return int(n_resamples), length
 
 
+#: The frames, over all its resamples, that one call of a bootstrap's statistic refits at most:
+#: a recording's refits hold some 600 bytes per frame (an axis on twelve markers), so 1.2 GB,
+#: where 200 resamples of a 100,000-frame trial in one batch held 12 GB.
+BATCH_FRAMES = 2_000_000
+
+
 def bootstrap(
     statistic: Callable[[np.ndarray], Sequence[np.ndarray | None]],
     n_frames: int,
@@ -140,11 +147,13 @@ def bootstrap(
 ) -> Bootstrap:
     """Moving-block bootstrap over ``n_frames`` frames.
 
-    ``statistic`` receives the frame indices of every resample, ``(n_resamples, n_frames)``,
-    all at once (so an estimator can refit them as one batch) and returns one ``(d,)`` row per
-    resample, or where the refit cannot support an answer why (a ``str``) or ``None``; those
-    count as failed. ``label`` names what is refitted (the recording or study, and the method),
-    in front of the ``ValueError`` raised when more than half the refits fail, which says how
+    ``statistic`` receives the frame indices of the resamples, ``(k, n_frames)``, in order, in
+    batches of as many as hold :data:`BATCH_FRAMES` frames in all (at least one: an estimator
+    can refit a batch at once, in memory that does not grow with the recording's length times
+    ``n_resamples``), and returns one ``(d,)`` row per resample, or where the refit cannot
+    support an answer why (a ``str``) or ``None``; those count as failed. ``label`` names what
+    is refitted (the recording or study, and the method), in front of the ``ValueError`` raised
+    when more than half the refits fail, which says how
     often each reason came and quotes the commonest. ``n_resamples``,
     ``block_length`` and ``seed`` are refused as :func:`check_resampling` says, before any
     refit. It is required, and refused when
@@ -155,8 +164,13 @@ def bootstrap(
         raise ValueError(f"bootstrap: label must name what is refitted, got {label!r}")
     n_resamples, block_length = check_resampling(n_frames, n_resamples, block_length, seed)
     rng = np.random.default_rng(seed)
-    indices = np.stack([block_indices(n_frames, block_length, rng) for _ in range(n_resamples)])
-    rows = list(statistic(indices))
+    per_batch = max(1, BATCH_FRAMES // n_frames)
+    rows = []
+    for start in range(0, n_resamples, per_batch):
+        count = min(per_batch, n_resamples - start)
+        rows += statistic(
+            np.stack([block_indices(n_frames, block_length, rng) for _ in range(count)])
+        )
     width = next((len(row) for row in rows if _is_row(row)), 1)
     samples = np.array([row if _is_row(row) else np.full(width, np.nan) for row in rows], float)
     failed = ~np.isfinite(samples).all(axis=1)
