@@ -230,6 +230,18 @@ def test_a_csv_frame_number_not_written_in_ascii_digits_is_refused_as_in_a_trc(t
     )
 
 
+def test_a_csv_header_repeated_among_the_rows_is_named_as_such(tmp_path):
+    """Two exports joined end to end repeat the header: it once read as a frame number that is
+    no number, which left the reader to find out why."""
+    path = _csv(tmp_path, ["A", "A", "A"], ["0", "1", "2"])
+    lines = open(path).read().splitlines(keepends=True)
+    open(path, "w").write("".join(lines[:3] + lines[:1] + lines[3:]))
+    assert _refused(path) == (
+        f"{path}: line 4 repeats the header (frame,marker,x,y,z): files joined end to end? "
+        "Remove the line, and read each recording from a file of its own"
+    )
+
+
 @pytest.mark.parametrize("frame", ["1", "1.0", "1.", " 1", "01"])
 def test_a_csv_frame_number_of_ascii_digits_reads(tmp_path, frame):
     recording = read(_csv(tmp_path, ["A", "A", "A"], ["0", frame, "2"]))

@@ -610,8 +610,9 @@ def _csv_line(path: Path, row: int, column: str) -> tuple[str, str]:
 def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
     """The ``frame`` column (n,), its text as written (a missing-value word NaN), as frame
     numbers (n,) int64 by the TRC's rule (:func:`_whole_number`); ``ValueError`` naming the
-    line of a value that is not one (or lies beyond 2**53), or a range of numbers so much wider
-    than the frames present that it is not frame numbers."""
+    line of a value that is not one (or lies beyond 2**53; the header's own ``frame``, repeated
+    where files were joined, is named as such), or a range of numbers so much wider than the
+    frames present that it is not frame numbers."""
     # Each distinct text is read once: a long file writes every frame number once per marker.
     codes, texts = pd.factorize(frames)
     read = [_whole_number(text) for text in texts]
@@ -623,6 +624,13 @@ def _csv_frame_numbers(frames: pd.Series, path: Path) -> np.ndarray:
     if bad.any():
         row = int(np.argmax(bad))
         line, text = _csv_line(path, row, "frame")
+        if text.strip() == "frame":
+            with path.open(encoding="utf-8-sig") as file:
+                header = file.readline().strip()
+            raise ValueError(
+                f"{path}: {line} repeats the header ({header}): files joined end to end? Remove "
+                "the line, and read each recording from a file of its own"
+            )
         if codes[row] < 0 or read[codes[row]] is None:
             raise _not_a_frame_number(path, line, "frame", text)
         raise ValueError(
