@@ -228,6 +228,19 @@ def test_gaps_are_left_out_and_counted(tmp_path, stored_as):
     np.testing.assert_allclose(in_memory.fit("NM").result.center, truth, atol=1e-8)
 
 
+def test_too_few_frames_left_by_gaps_say_how_many_the_gaps_took():
+    """The method's own refusal counts the frames it was given, not the file's: "markers has 3
+    frames" of a 200-frame trial read as a mistake until the gaps were counted."""
+    markers = rig_recording().markers.copy()
+    markers[3:, 4] = np.nan  # moving marker D2, seen in the first three frames only
+    with pytest.raises(ValueError) as error:
+        prepare(Recording(PROX + DIST, markers, 100.0, "g.c3d"), "axis", DIST, PROX).fit()
+    assert str(error.value).endswith(
+        "markers has 3 frames; this method needs at least 4 (3 of the 200 frames read enter "
+        "the fit: 197 lack a marker it needs)"
+    )
+
+
 def test_a_marker_never_seen_is_named(tmp_path):
     markers = rig_recording().markers.copy()
     markers[:, 4] = 0.0

@@ -268,6 +268,20 @@ class Prepared:
         first = int(np.flatnonzero(rows == anchor)[0])
         return np.concatenate([[anchor], np.delete(rows, first)])
 
+    def _left_out(self) -> str:
+        """For a refusal, how many of the recording's frames enter the fit and why the others
+        do not (``""`` when all do): a method counts the frames it is given, which gaps and
+        artefacts can make far fewer than the file's."""
+        n_frames = self.recording.n_frames
+        if self.usable.size == n_frames:
+            return ""
+        excluded = n_frames - self.usable.size - self.n_gap_frames
+        why = [f"{self.n_gap_frames} lack a marker it needs"] if self.n_gap_frames else []
+        why += [f"{excluded} hold artefacts left out"] if excluded else []
+        return (
+            f" ({self.usable.size} of the {n_frames} frames read enter the fit: {', '.join(why)})"
+        )
+
     def solve(self, method: str, rows: np.ndarray, options: dict):
         """The estimator's result on the recording ``rows``, with ``options`` that passed
         :func:`~jointbench.estimators.registry.check_options` (:meth:`fit` checks them)."""
@@ -280,7 +294,9 @@ class Prepared:
         except ValueError as error:
             if not numerical_failure(error):
                 raise  # a mistake in the method: :meth:`fit` names it as one
-            raise ValueError(f"{self.recording.source}: {self.kind} {method}: {error}") from None
+            raise ValueError(
+                f"{self.recording.source}: {self.kind} {method}: {error}{self._left_out()}"
+            ) from None
         if not self.untested:
             return result
         return with_warnings(result, self.untested, {"artefacts_untested": list(self.untested)})
