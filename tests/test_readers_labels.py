@@ -75,6 +75,19 @@ def test_trailing_empty_fields_of_a_trc_file_read(tmp_path):
     np.testing.assert_array_equal(recording.select("B")[0, 0], [100.0, 101.0, 102.0])
 
 
+def test_a_trc_file_whose_data_start_on_line_5_is_refused(tmp_path):
+    """Without the X1 Y1 Z1 line, the first frame once read as those names and was lost, where
+    no NumFrames counts the frames."""
+    lines = open(_trc(tmp_path, "A\t\t\tB\t\t", 2)).read().splitlines()
+    lines[2] = "100\t100\t\tmm"
+    path = tmp_path / "t.trc"
+    path.write_text("\n".join(lines[:4] + lines[5:]) + "\n")
+    assert _refused(str(path)) == (
+        f"{path}: line 5 holds frame 1, where a TRC file names each marker's X, Y and Z (its "
+        "Frame# and Time fields empty); read as those names, the frame would be lost"
+    )
+
+
 def test_a_trc_file_naming_no_marker_is_refused(tmp_path):
     _refused(_trc(tmp_path, "\t\t", 1), "line 4", "no marker")
 

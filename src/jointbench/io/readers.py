@@ -177,7 +177,8 @@ def read_trc(path: str | Path) -> Recording:
     label; empty fields are gaps. The rows must be the ``NumFrames`` consecutive frames the
     header promises, each with every field of the header (a line cut short is refused, naming
     it, and so is a last line the file ends inside with its last field empty where other rows
-    fill it: cut right after a separator); row 0 is the first row's ``Frame#``. Labels sit at
+    fill it: cut right after a separator), and so is a frame on line 5, where the ``X1 Y1 Z1``
+    names belong (:func:`_check_names_line`); row 0 is the first row's ``Frame#``. Labels sit at
     fixed columns (:func:`_trc_labels`) and no row may write past the labelled markers
     (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`)."""
     path = _check_file(path)
@@ -200,6 +201,7 @@ def read_trc(path: str | Path) -> Recording:
             columns = f"Frame#, Time and X, Y, Z of {len(labels)} markers"
             raise _short_row(path, number, fields, width, columns, number == len(lines))
     rows = [line.split("\t") for _, line in data]
+    _check_names_line(lines[4].split("\t"), path)
     _check_unlabelled_fields(lines[4].split("\t"), width, path, 5)
     for (number, _), row in zip(data, rows, strict=True):
         _check_unlabelled_fields(row, width, path, number)
@@ -252,6 +254,19 @@ def _trc_labels(line: str, path: Path) -> list[str]:
                 "cell where its label must be); every marker's X, Y, Z must be named"
             )
     return labels
+
+
+def _check_names_line(row: list[str], path: Path) -> None:
+    """``ValueError`` when line 5 of the TRC file ``path`` (its tab-separated fields ``row``),
+    where each marker's ``X1 Y1 Z1`` are named, holds a frame instead: a file written without
+    that line, whose first frame would be read as the names and lost."""
+    number = _whole_number(row[0])
+    if number is None:
+        return
+    raise ValueError(
+        f"{path}: line 5 holds frame {number}, where a TRC file names each marker's X, Y and Z "
+        "(its Frame# and Time fields empty); read as those names, the frame would be lost"
+    )
 
 
 def _check_unlabelled_fields(row: list[str], width: int, path: Path, line: int) -> None:
