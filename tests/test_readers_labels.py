@@ -92,8 +92,19 @@ def test_a_trc_file_naming_no_marker_is_refused(tmp_path):
     _refused(_trc(tmp_path, "\t\t", 1), "line 4", "no marker")
 
 
-def test_a_trc_data_rate_that_is_no_number_is_refused(tmp_path):
-    _refused(_trc(tmp_path, "A\t\t", 1, rate="abc"), "line 3", "DataRate", "'abc'")
+@pytest.mark.parametrize("rate", ["abc", "0", "-100"])
+def test_a_trc_data_rate_that_is_no_number_is_refused(tmp_path, rate):
+    """0 and -100 once were refused without the line and the field."""
+    _refused(_trc(tmp_path, "A\t\t", 1, rate=rate), "line 3", "DataRate", repr(rate))
+
+
+def test_a_number_written_with_a_decimal_comma_is_named_as_such(tmp_path):
+    path = _trc(tmp_path, "A\t\t", 1)
+    lines = open(path).read().splitlines()
+    fields = lines[5].split("\t")
+    lines[5] = "\t".join([*fields[:2], "0,5", *fields[3:]])
+    open(path, "w").write("\n".join(lines) + "\n")
+    assert _refused(path).endswith("'0,5' is not a number (a decimal comma? write 0.5)")
 
 
 def test_a_trc_frame_number_that_is_no_number_names_the_line(tmp_path):

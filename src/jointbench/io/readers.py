@@ -220,7 +220,7 @@ def read_trc(path: str | Path) -> Recording:
                 except ValueError:
                     raise ValueError(
                         f"{path}: frame {numbers[i]}, marker {labels[j // 3]}: {text!r} is not "
-                        "a number"
+                        f"a number{_decimal_comma(text)}"
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * _to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
@@ -284,16 +284,28 @@ def _check_unlabelled_fields(row: list[str], width: int, path: Path, line: int) 
         )
 
 
+def _decimal_comma(text: str) -> str:
+    """For the refusal of ``text`` as a number, what it reads as with its comma a decimal point
+    (``" (a decimal comma? write 0.5)"``), or ``""``."""
+    if "," not in text:
+        return ""
+    try:
+        float(text.strip().replace(",", "."))
+    except ValueError:
+        return ""
+    return f" (a decimal comma? write {text.strip().replace(',', '.')})"
+
+
 def _trc_rate(text: str, path: Path) -> float | None:
     """The header's ``DataRate`` [Hz], ``None`` when it is empty or absent; ``ValueError``
-    naming line 3 when it is not a finite number."""
+    naming line 3 when it is not a positive finite number."""
     if not text:
         return None
     try:
         rate = float(text)
     except ValueError:
         rate = math.nan
-    if not math.isfinite(rate):
+    if not (math.isfinite(rate) and rate > 0):
         raise ValueError(
             f"{path}: line 3, field DataRate: {text!r} is not a frame rate (frames per second)"
         )
@@ -511,9 +523,10 @@ def read_csv(path: str | Path) -> Recording:
     bad = coordinates.isna().to_numpy() & table[["x", "y", "z"]].notna().to_numpy()
     if bad.any():
         row, axis = np.argwhere(bad)[0]
+        text = table[["x", "y", "z"]].iloc[row, axis]
         raise ValueError(
             f"{path}: frame {numbers[row]}, marker {table['marker'].iloc[row]}: "
-            f"{'xyz'[axis]} = {table[['x', 'y', 'z']].iloc[row, axis]!r} is not a number"
+            f"{'xyz'[axis]} = {text!r} is not a number{_decimal_comma(str(text))}"
         )
     markers[numbers - first_frame, table["marker"].map(column).to_numpy()] = coordinates.to_numpy(
         float
