@@ -10,8 +10,9 @@ frames coincide; it is taken at the *anchor* frame, the frame whose relative ori
 two segments is nearest their mean relative orientation (chordal mean), which no reordering of
 the frames changes. It is moved to the front before the estimator is called.
 
-Gaps: a frame enters a fit only when the reference pose is defined (>= 3 reference markers) and
-every moving marker is visible (two-segment methods: every marker of both segments); the others
+Gaps: a frame enters a fit only when the reference pose is defined (>= 3 reference markers, not
+so nearly collinear that the noise turns the pose about their line: :meth:`Segment.determined`)
+and every moving marker is visible (two-segment methods: every marker of both segments); the others
 are left out and counted. Artefacts (label swaps, markers falling off;
 :func:`jointbench.screening.screen`) are refused with a message naming the markers and frame --
 for a swap, the frame where the labels change and the frames on each side, which ``frames``
@@ -451,6 +452,7 @@ def prepare(
     if reference is not None:
         ref = Segment.fit(recording, reference, rules)
         check_pose_determined(ref, recording.source)
+        ref = ref.determined()
         overlap = set(ref.labels) & {recording.labels[i] for i in moving_index}
         if overlap:
             raise ValueError(

@@ -16,6 +16,7 @@ Artefacts are found by :func:`jointbench.screening.screen` (one home for files a
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -212,6 +213,34 @@ class Segment:
         spread = math.sqrt(max(moment, 0.0) / len(self.labels))
         sd = noise / math.sqrt(moment) if moment > 0.0 else math.inf
         return sd, noise, spread
+
+    def posed_to_chance(self) -> np.ndarray:
+        """Frames ``(n_frames,)`` bool whose pose the markers seen in them leave to the noise:
+        a rotation SD above :data:`~jointbench.estimators.support.MAX_POSE_SD_RAD` about the
+        axis those markers of the mean shape fix worst, at the rigid fit's noise
+        (:meth:`weakest_rotation_sd`). A marker off the line of the others, missing, leaves
+        them so."""
+        _, noise, _ = self.weakest_rotation_sd()
+        posed = np.isfinite(self.rotation[:, 0, 0])
+        patterns, inverse = np.unique(np.isfinite(self.residuals), axis=0, return_inverse=True)
+        loose = np.zeros(len(patterns), dtype=bool)
+        for k, seen in enumerate(patterns):
+            if seen.sum() >= 3:
+                shown = self.shape[seen] - self.shape[seen].mean(axis=0)
+                moment = float(np.linalg.eigvalsh(inertia(shown))[0])
+                loose[k] = not noise < MAX_POSE_SD_RAD * math.sqrt(max(moment, 0.0))
+        return posed & loose[inverse.reshape(-1)]
+
+    def determined(self) -> Segment:
+        """This segment with no pose (NaN) in the frames :meth:`posed_to_chance` finds, as
+        where fewer than three markers are seen: those frames then count as gaps."""
+        loose = self.posed_to_chance()
+        if not loose.any():
+            return self
+        rotation, translation = self.rotation.copy(), self.translation.copy()
+        rotation[loose] = np.nan
+        translation[loose] = np.nan
+        return dataclasses.replace(self, rotation=rotation, translation=translation)
 
     def local(self, markers: np.ndarray) -> np.ndarray:
         """World markers ``(n_frames, m, 3)`` in this segment's technical frame, per frame."""
