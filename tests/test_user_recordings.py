@@ -290,14 +290,36 @@ def test_frames_whose_seen_reference_markers_leave_its_pose_to_the_noise_are_gap
     markers = recording.markers.copy()
     markers[200 : 200 + hidden, recording.index("RGT")] = np.nan
     gapped = Recording(recording.labels, markers, recording.rate_hz, "rgt.c3d", 100)
-    shank, thigh = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH", "RTHI1,RTHI2,RTHI3,RGT"
+    # RGT first: the first three labels, which set the technical frame's axes, span a plane.
+    shank, thigh = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH", "RGT,RTHI1,RTHI2,RTHI3"
     whole = jointbench.fit(recording, "center", shank, thigh, method="NM")
     fitted = jointbench.fit(gapped, "center", shank, thigh, method="NM")
     assert fitted.n_gap_frames == hidden
     assert not set(range(300, 300 + hidden)) & set(fitted.frames_used)
-    # In the lab, where the thigh's technical frame (from the nearly collinear RTHI1, RTHI2,
-    # RTHI3 of the mean shape, which the hidden samples move) does not enter.
-    assert np.linalg.norm(fitted.world()[500] - whole.world()[500]) < 1.0
+    assert np.linalg.norm(fitted.result.center - whole.result.center) < 1.0
+
+
+def test_a_reference_frame_set_by_three_markers_within_the_noise_of_a_line_is_refused():
+    """RGT fixes the thigh's pose, but its first three labels set the frame's axes from the
+    mean shape: with RTHI3 on the line of RTHI1 and RTHI2 they turned about it with the frames
+    fitted (hiding RGT in 50 frames moved the centre 40 mm in that frame)."""
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(
+            _thigh_marker_on_a_line(0.0),
+            "center",
+            "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH",
+            "RTHI1,RTHI2,RTHI3,RGT",
+            method="NM",
+        )
+    message = str(error.value)
+    assert message.startswith(
+        f"{KNEE}: the reference's first three markers RTHI1, RTHI2, RTHI3 set its frame's axes, "
+        "but RTHI3 lies "
+    ), message
+    assert message.endswith(
+        "mm, within the noise: the axes would be the noise's; name first three that span a "
+        "plane (RGT lies farthest from that line)"
+    ), message
 
 
 @pytest.mark.xfail(

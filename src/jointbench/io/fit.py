@@ -42,6 +42,7 @@ from jointbench.io.segments import (
     ArtefactRules,
     Segment,
     Swap,
+    check_axes_determined,
     check_pose_determined,
     find_jumps,
     summarise,
@@ -452,6 +453,7 @@ def prepare(
     if reference is not None:
         ref = Segment.fit(recording, reference, rules)
         check_pose_determined(ref, recording.source)
+        check_axes_determined(ref, recording.source)
         ref = ref.determined()
         overlap = set(ref.labels) & {recording.labels[i] for i in moving_index}
         if overlap:

@@ -53,6 +53,7 @@ __all__ = [
     "Screening",
     "Segment",
     "Swap",
+    "check_axes_determined",
     "check_pose_determined",
     "find_jumps",
     "find_rigidity_breaks",
@@ -117,6 +118,31 @@ def check_pose_determined(segment: Segment, source: str) -> None:
         f"rigid fit's noise of {noise:.2g} mm against their RMS distance of {spread:.2g} mm from "
         f"the line), more than {math.degrees(MAX_POSE_SD_RAD):.0f} deg, and every answer in "
         "that frame turns with it; add a marker off their line to the reference"
+    )
+
+
+def check_axes_determined(segment: Segment, source: str) -> None:
+    """``ValueError`` naming the file and the markers when the first three labels of the
+    reference ``segment``, which set its technical frame's axes (:func:`technical_frame`), lie
+    within the rigid fit's noise of one line (the third's distance from the line of the first
+    two, in the mean shape, under the noise per coordinate of
+    :meth:`Segment.weakest_rotation_sd`): the other markers may fix the pose, but the axes
+    then turn about that line with the frames fitted, and every answer in them. The exact
+    collinearity :func:`technical_frame` refuses is the limit of this."""
+    first, second = segment.shape[:2]
+    along = (second - first) / np.linalg.norm(second - first)
+    offsets = segment.shape - first
+    distances = np.linalg.norm(offsets - np.outer(offsets @ along, along), axis=1)
+    _, noise, _ = segment.weakest_rotation_sd()
+    if not distances[2] < noise:
+        return
+    a, b, c = segment.labels[:3]
+    farthest = segment.labels[int(np.argmax(distances))]
+    raise ValueError(
+        f"{source}: the reference's first three markers {a}, {b}, {c} set its frame's axes, but "
+        f"{c} lies {distances[2]:.2g} mm from the line from {a} to {b}, less than the rigid "
+        f"fit's noise of {noise:.2g} mm, within the noise: the axes would be the noise's; name "
+        f"first three that span a plane ({farthest} lies farthest from that line)"
     )
 
 
