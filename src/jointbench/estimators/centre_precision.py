@@ -657,9 +657,9 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     trial's support verdict ``verdicts``.
 
     * ``diagnostics["center_sd_mm"]``, the SD along the least determined direction of the
-      covariance the result states (the Gauss–Markov fits' own, or the one its method's
-      precision added: ``["center_covariance_mm2"]``), and above :data:`MAX_CENTER_SD_MM` the
-      warning that the data do not determine the centre, as for a centre of rotation;
+      covariance the result states of its answer's scatter (:func:`_stated_covariance`), and
+      above :data:`MAX_CENTER_SD_MM` the warning that the data do not determine the centre,
+      as for a centre of rotation;
     * ``["center_pose_noise_share"]``, the ratio of the noise's information to the noise-free
       information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
       how far the noise pulled the answer (both ``inf`` where the noise is as large as the
@@ -696,15 +696,23 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
 
 
 def _stated_covariance(result) -> tuple[np.ndarray, str] | None:
-    """The covariance ``(3, 3)`` [mm^2] a joint-centre ``result`` states of its centre, and
-    where it comes from: its own (the Gauss–Markov fits'), or the one its method's precision
-    added from each segment's pose noise; ``None`` for neither."""
+    """The covariance ``(3, 3)`` [mm^2] a joint-centre ``result`` states of its centre's
+    scatter, and where it comes from: ``diagnostics["center_covariance_mm2"]`` where the
+    method states one there (SCoRE's and the analytic centre's from each segment's pose
+    noise, paper C's Gauss–Markov fit's with the frame-0 poses' errors, which its own
+    covariance is conditional on), else its own covariance (``gauss-markov-frame0``'s);
+    ``None`` for neither."""
+    added = result.diagnostics.get("center_covariance_mm2")
+    if added is not None:
+        source = (
+            "the noise of both segments' poses"
+            if result.covariance is None
+            else "its method's covariance with the frame-0 poses' errors added"
+        )
+        return np.asarray(added, dtype=float), source
     if result.covariance is not None:
         return np.asarray(result.covariance, dtype=float), "the covariance its method states"
-    added = result.diagnostics.get("center_covariance_mm2")
-    if added is None:
-        return None
-    return np.asarray(added, dtype=float), "the noise of both segments' poses"
+    return None
 
 
 def _largest_sd(covariance: np.ndarray) -> float:

@@ -65,9 +65,15 @@ segment's frame as placed at frame 0); data ``R0 c0 - R1 c1 = d1 - d0`` for ``t 
 covariance ``W_y,t`` as above; and the frame-0 placement errors as pseudo-measurements
 ``c0 - c = 0`` and ``c1 - c = 0`` with covariances ``A_0(c0)``, ``A_1(c1)`` (the frame-0 fit's
 error at the joint). This is the generalised least-squares solution with the full,
-correlated ``W_y``; its ``W_c`` covers the true centre. Its diagnostics carry ``c0`` and its
-covariance, the centre relative to the proximal markers (what a pelvis frame built from them
-needs), which is not limited by the frame-0 error.
+correlated ``W_y``; its ``W_c`` covers the true centre. Paper C's own answer has the same
+frame-0 errors in its data: with ``H = sum_t M_t' W_t^-1 M_t`` its information and ``F_a =
+sum_t M_t' W_t^-1 R_a(t)``, its error is ``H^-1 [sum_t M_t' W_t^-1 (R_0 e_0t - R_1 e_1t) +
+F_0 delta_0 - F_1 delta_1]``, so its covariance is ``s^2 (H^-1 + H^-1 (F_0 A_0 F_0' + F_1 A_1
+F_1') H^-1)``, ``W_c`` plus what the frame-0 errors add: ``gauss-markov`` states it in
+``diagnostics["center_covariance_mm2"]`` and keeps the paper's ``W_c`` as its covariance.
+The frame-0 extension's diagnostics carry ``c0`` and its covariance, the centre relative to
+the proximal markers (what a pelvis frame built from them needs), which is not limited by the
+frame-0 error.
 
 Model test. Both fits' chi^2 ``sum_t r_t' W_y,t^-1 r_t / s^2`` (plus, for the frame-0
 extension, its two pseudo-measurements) has ``dof = 3 (N - 1) - 3`` degrees of freedom: when
@@ -544,15 +550,32 @@ def _chi2(system: _Stacked, done: _Iterated, frame0: bool) -> np.ndarray:
     return chi2
 
 
+def _frame0_information(system: _Stacked, done: _Iterated) -> np.ndarray:
+    """``F_0 A_0(c) F_0' + F_1 A_1(c) F_1'`` ``(T, 3, 3)`` per unit variance, with ``F_a =
+    sum_t M_t' W_t^-1 R_a(t)``, at paper C's answers ``c`` of a stack: what the frame-0
+    poses' errors add to the information's inverse on both sides (module docstring, "Frame
+    0"); NaN for a trial stopped before any iteration completed."""
+    if "weights" not in done.kept:
+        return np.full((len(done.state), 3, 3), np.nan)
+    weighted = done.kept["weights"] @ system.m
+    a0, a1 = system.point_covariances(np.arange(len(done.state)), done.state, done.state)
+    added = np.zeros((len(done.state), 3, 3))
+    for rotations, at_joint in ((system.r0, a0), (system.r1, a1)):
+        gain = _summed_products(weighted, rotations)
+        added += gain @ at_joint @ np.swapaxes(gain, -1, -2)
+    return added
+
+
 def _iterated_stack(trials: list[_Prepared], *, frame0: bool, max_iterations, tol_mm):
-    """Iterate a stack of trials with the same frames; returns the iteration and the chi^2."""
+    """Iterate a stack of trials with the same frames; returns the iteration, the chi^2 and,
+    for paper C's model, what the frame-0 poses' errors add (:func:`_frame0_information`)."""
     system = _Stacked.of(trials)
     start = np.stack([trial.analytic_center for trial in trials])
     if frame0:
         done = _relinearise(_update_frame0(system), np.tile(start, 3), int(max_iterations), tol_mm)
-    else:
-        done = _relinearise(_update_single(system), start, int(max_iterations), tol_mm)
-    return done, _chi2(system, done, frame0)
+        return done, _chi2(system, done, frame0), None
+    done = _relinearise(_update_single(system), start, int(max_iterations), tol_mm)
+    return done, _chi2(system, done, frame0), _frame0_information(system, done)
 
 
 def _gauss_markov_results(
@@ -578,24 +601,34 @@ def _gauss_markov_results(
         for first in range(0, len(indices), per_chunk):
             chunk = indices[first : first + per_chunk]
             trials = [outcomes[index] for index in chunk]
-            done, chi2 = _iterated_stack(
+            done, chi2, frame0_added = _iterated_stack(
                 trials, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm
             )
             for row, index in enumerate(chunk):
-                outcomes[index] = _result(trials[row], done, row, chi2[row], method, frame0, tol_mm)
+                added = None if frame0_added is None else frame0_added[row]
+                outcomes[index] = _result(trials[row], done, row, chi2[row], method, added, tol_mm)
     return outcomes
 
 
 def _result(
-    trial: _Prepared, done: _Iterated, row: int, chi2: float, method: str, frame0: bool, tol_mm
+    trial: _Prepared,
+    done: _Iterated,
+    row: int,
+    chi2: float,
+    method: str,
+    frame0_added: np.ndarray | None,
+    tol_mm,
 ) -> JointCenterResult:
-    """One trial's result from its row of a stack's iteration."""
+    """One trial's result from its row of a stack's iteration; ``frame0_added`` ``(3, 3)``,
+    what the frame-0 poses' errors add to paper C's model (:func:`_frame0_information`), or
+    ``None`` for the frame-0 model, which holds them."""
+    frame0 = frame0_added is None
     diagnostics = dict(trial.diagnostics)
     try:
         if row in done.errors:
             raise np.linalg.LinAlgError(done.errors[row])
-        covariance_all = trial.variance * np.linalg.inv(done.information[row])
-        covariance_all = 0.5 * (covariance_all + covariance_all.T)
+        unit_covariance = np.linalg.inv(done.information[row])
+        covariance_all = trial.variance * 0.5 * (unit_covariance + unit_covariance.T)
     except np.linalg.LinAlgError as error:
         return JointCenterResult(
             center=trial.analytic_center,
@@ -608,6 +641,12 @@ def _result(
         )
     state = done.state[row]
     covariance = covariance_all[:3, :3]
+    if not frame0:
+        # s^2 (H^-1 + H^-1 (F_0 A_0 F_0' + F_1 A_1 F_1') H^-1), H the information: W_c is
+        # conditional on the frame-0 poses, whose errors every frame shares (module
+        # docstring, "Frame 0").
+        unit = unit_covariance + unit_covariance @ frame0_added @ unit_covariance
+        diagnostics["center_covariance_mm2"] = (trial.variance * 0.5 * (unit + unit.T)).tolist()
     if frame0:
         diagnostics["proximal_body"] = trial.proximal_body.tolist()
         diagnostics["center_proximal"] = state[3:6].tolist()
@@ -906,9 +945,12 @@ def fit_gauss_markov(
         ``cost`` the Gauss–Markov chi^2 ``sum_t r_t' W_y,t^-1 r_t``. ``diagnostics``:
         ``noise_mm`` used and its ``noise_source``, ``analytic_center``, ``rcond`` of the
         analytic normal matrix, ``chi2`` and ``chi2_dof`` (``3 (N - 1) - 3``; chi2/dof near 1
-        when the noise model fits). A checked call (:func:`jointbench.estimators.registry.get`,
-        :func:`jointbench.fit_joint_center`) tests the model on them (module docstring, "Model
-        test"): ``chi2_p``, ``noise_kurtosis``, ``chi2_inflation`` and, rejected, a warning.
+        when the noise model fits), ``center_covariance_mm2``, ``W_c`` with the frame-0 poses'
+        errors added (module docstring, "Frame 0"), the covariance of the centre in the true
+        world frame at frame 0 and the one its checked call holds the answer to. A checked
+        call (:func:`jointbench.estimators.registry.get`, :func:`jointbench.fit_joint_center`)
+        tests the model on them (module docstring, "Model test"): ``chi2_p``,
+        ``noise_kurtosis``, ``chi2_inflation`` and, rejected, a warning.
     """
     return _gauss_markov(
         proximal,
