@@ -324,6 +324,10 @@ def test_snapshot_loads_the_configs_extensions(tmp_path):
     assert done.returncode == 0, done.stderr
     snapshot = pd.read_csv(workdir / "summary.csv")
     assert set(snapshot["study"]) == {"toy"} and set(snapshot["method"]) == {"toy-centroid"}
+    # A folder with no workflow has no run to ask whether its results are current: said.
+    assert "not checked whether results is up to date: it is not the results/ of a workflow" in (
+        done.stderr
+    )
     # Without the extension's config the run is the default one, whose studies this folder
     # has not collected: the error names their files, and the toy study's is not read.
     bare = _cli(workdir, "snapshot", "--output", "summary.csv")

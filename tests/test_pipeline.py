@@ -7,6 +7,7 @@ import re
 import shlex
 import signal
 import subprocess
+import sys
 import time
 
 import pandas as pd
@@ -141,6 +142,55 @@ def test_a_report_of_results_an_edit_made_stale_is_refused(reduced_run, tmp_path
     assert not (tmp_path / "report.html").exists()
     assert "not up to date" in message and "render_cmc" in message, message[-3000:]
     assert f"--configfile {reduced_run.workdir / 'overlay.yaml'}" in message, message[-3000:]
+
+
+def _jointbench(run, *argv: str) -> subprocess.CompletedProcess:
+    """``jointbench *argv`` in ``run``'s folder, on its copy of the package."""
+    code = "import sys; from jointbench.cli import main; sys.exit(main(sys.argv[1:]))"
+    environment = {**os.environ, "PYTHONPATH": str(run.workdir / "src")}
+    return subprocess.run(
+        [sys.executable, "-c", code, *argv],
+        cwd=run.workdir,
+        capture_output=True,
+        text=True,
+        env=environment,
+    )
+
+
+def test_a_snapshot_or_readme_of_results_an_edit_made_stale_is_refused(reduced_run, tmp_path):
+    """`jointbench snapshot` and `jointbench readme` read the run's results: while they are up
+    to date both write; after an edit they have not been remade after (the figures' script),
+    both stop before writing anything, naming the jobs `snakemake -j2` would redo."""
+    readme = tmp_path / "README.md"
+    readme.write_text("<!-- reproduction-summary:start -->\n<!-- reproduction-summary:end -->\n")
+    snapshot = ("snapshot", "--configfile", "overlay.yaml", "--output", str(tmp_path / "a.csv"))
+    rewrite = ("readme", "--configfile", "overlay.yaml", "--readme", str(readme))
+    current = [_jointbench(reduced_run, *snapshot), _jointbench(reduced_run, *rewrite)]
+    assert [done.returncode for done in current] == [0, 0], [d.stderr for d in current]
+    assert (tmp_path / "a.csv").is_file() and _summary_block(readme)
+    readme.write_text("<!-- reproduction-summary:start -->\n<!-- reproduction-summary:end -->\n")
+    script = reduced_run.workdir / "workflow" / "scripts" / "render.py"
+    original, stat = script.read_text(), script.stat()
+    script.write_text(original + '\nlog_note = "rendered"\n')
+    try:
+        stale = [
+            _jointbench(reduced_run, *snapshot[:-1], str(tmp_path / "b.csv")),
+            _jointbench(reduced_run, *rewrite),
+        ]
+    finally:
+        script.write_text(original)
+        os.utime(script, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    for done in stale:
+        assert done.returncode == 1, done.stderr
+        assert "is not up to date" in done.stderr and "render_cmc (1)" in done.stderr
+        assert "`snakemake -j2 --configfile overlay.yaml` would redo" in done.stderr
+    assert not (tmp_path / "b.csv").exists()
+    assert not _summary_block(readme)
+
+
+def _summary_block(readme) -> str:
+    """What the README's reproduction-summary block holds."""
+    return readme.read_text().partition("summary:start -->")[2].partition("<!--")[0].strip()
 
 
 def test_every_rule_writes_its_log(reduced_run):

@@ -100,6 +100,8 @@ def _open_run(args: argparse.Namespace) -> Mapping:
 
 def _snapshot(args: argparse.Namespace) -> int:
     config = _open_run(args)
+    if _stale(args, "snapshot"):
+        return 1
     table = snapshot_table(args.results / "collected", study_names(config))
     args.output.parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(args.output, index=False, float_format="%.12g")
@@ -119,6 +121,8 @@ def _readme(args: argparse.Namespace) -> int:
     if not args.readme.is_file():
         raise ValueError(f"{args.readme}: no such file")
     _open_run(args)
+    if _stale(args, "readme"):
+        return 1
     comparison = pd.read_csv(comparison_path)
     blocks = {
         "summary": (
@@ -177,17 +181,61 @@ def _verdicts_command(args: argparse.Namespace) -> str:
 
 
 def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
-    """The jobs of each rule that the run's ``verdicts`` target would redo: a dry run of it by
-    the ``snakemake`` beside this interpreter, in the run's folder (the working directory),
-    with the command's config files; ``ValueError`` where there is no such ``snakemake``."""
+    """The jobs of each rule that the run's ``verdicts`` target would redo
+    (:func:`_pending`)."""
+    return _pending(args, ["verdicts"], "jointbench readme")
+
+
+def _default_pending(args: argparse.Namespace, command: str) -> dict[str, int]:
+    """The jobs of each rule that the run's default target, ``snakemake -j2``, would redo
+    (:func:`_pending`), which jointbench ``command`` asks."""
+    return _pending(args, [], f"jointbench {command}")
+
+
+def _pending(args: argparse.Namespace, targets: list[str], what: str) -> dict[str, int]:
+    """The jobs of each rule that a run of ``targets`` would redo: a dry run by the
+    ``snakemake`` beside this interpreter, in the run's folder (the working directory), with
+    the command's config files, which ``what`` asks; ``ValueError`` where there is no such
+    ``snakemake``."""
     snakemake = Path(sys.executable).with_name("snakemake")
     if not snakemake.is_file():
         raise ValueError(
-            f"no {snakemake}: jointbench readme asks the run's snakemake whether "
-            "results/tables/verdicts.csv is up to date; install the project's environment"
+            f"no {snakemake}: {what} asks the run's snakemake whether the results it reads "
+            "are up to date; install the project's environment"
         )
-    command = [str(snakemake), "verdicts", "--dry-run", *_config_options(args)]
-    return dry_run_pending(command, "jointbench readme")
+    return dry_run_pending([str(snakemake), *targets, "--dry-run", *_config_options(args)], what)
+
+
+#: The files Snakemake reads the workflow from, in the folder it runs in, without ``-s``.
+_SNAKEFILES = ("Snakefile", "snakefile", "workflow/Snakefile", "workflow/snakefile")
+
+
+def _stale(args: argparse.Namespace, command: str) -> bool:
+    """Whether the results jointbench ``command`` reads are not up to date with the code,
+    config and data that make them, as the dry run of the run's default target says; if so,
+    it says which jobs would be redone and by what command. Results that are not the
+    ``results/`` of a workflow in the working directory cannot be asked about: that is said,
+    and they count as current."""
+    workdir = Path.cwd()
+    ours = args.results.resolve() == (workdir / "results").resolve()
+    if not (ours and any((workdir / name).is_file() for name in _SNAKEFILES)):
+        print(
+            f"jointbench {command}: not checked whether {args.results} is up to date: it is "
+            f"not the results/ of a workflow in {workdir}",
+            file=sys.stderr,
+        )
+        return False
+    pending = _default_pending(args, command)
+    if not pending:
+        return False
+    jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+    rerun = shlex.join(["snakemake", "-j2", *_config_options(args)])
+    print(
+        f"jointbench {command}: {args.results} is not up to date with the code, config and "
+        f"data that make it; `{rerun}` would redo {jobs}: run it first",
+        file=sys.stderr,
+    )
+    return True
 
 
 def _inspect(args: argparse.Namespace) -> int:
