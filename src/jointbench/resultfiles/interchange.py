@@ -23,9 +23,11 @@ Estimates CSV (:func:`read_estimates_csv`), one header line, one row per trial: 
 estimate columns of the study's kind (``center_x, center_y, center_z``; or ``point_*`` and
 ``direction_*``; for a joint centre optionally ``cov_*``, and ``cov_yx``, ``cov_zx``,
 ``cov_zy`` equal to their mirrors), ``converged`` (``true``/``false`` or ``1``/``0``),
-``iterations``, ``seconds`` and ``status``. The condition's columns and ``method`` are added
-from the dataset and the file's folder; the result is then checked and collected like any
-estimates file, and the estimates file records the CSV's path, which its refusals name.
+``iterations``, ``seconds`` and ``status``, every line ending with a newline (a file cut
+inside its last value would otherwise read as a finished one). The condition's columns and
+``method`` are added from the dataset and the file's folder; the result is then checked and
+collected like any estimates file, and the estimates file records the CSV's path, which its
+refusals name.
 """
 
 from __future__ import annotations
@@ -121,9 +123,9 @@ def read_estimates_csv(
     the condition of ``dataset`` and the method (the name of ``path``'s folder) in every row.
 
     ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice or one
-    without a name, has no rows, lacks a required column or holds a status that is not UTF-8;
-    the estimate columns and every value are checked when the file is collected, and a refusal
-    then names ``path`` too, which ``output`` records
+    without a name, does not end with a newline, has no rows, lacks a required column or holds
+    a status that is not UTF-8; the estimate columns and every value are checked when the file
+    is collected, and a refusal then names ``path`` too, which ``output`` records
     (:func:`jointbench.resultfiles.parquet.read_source`): the file its author can correct.
     """
     try:
@@ -139,6 +141,7 @@ def read_estimates_csv(
         raise ValueError(
             f"{path}: column {unnamed + 1} has no name (a comma ending the header line?)"
         )
+    _check_ends_with_newline(path)
     if not table.num_rows:
         trials = len(read_trial_numbers(dataset))
         raise ValueError(f"{path}: no rows; the dataset has {trials} trials, one row each")
@@ -159,6 +162,20 @@ def read_estimates_csv(
     added["method"] = pa.array([Path(path).parent.name] * table.num_rows, pa.string())
     columns = {**added, **{name: table.column(name) for name in table.column_names}}
     write_table(pa.table(columns), output, provenance, source=path)
+
+
+def _check_ends_with_newline(path: str | Path) -> None:
+    """``ValueError`` naming ``path`` unless its last line ends with a newline: a file whose
+    writer stopped inside its last value (``3.25`` cut to ``3.2``) still reads as CSV, and only
+    the missing newline tells it from a finished one."""
+    found, last = _newlines(path)
+    if last in (b"", b"\n"):
+        return
+    raise ValueError(
+        f"{path}: line {found + 1}, the last, ends without a newline: the file was cut short "
+        "or its writer did not finish it, and its last value may be cut; a finished estimates "
+        "CSV ends every line, the last one too, with a newline"
+    )
 
 
 def _untyped_as_numbers(table: pa.Table) -> pa.Table:
