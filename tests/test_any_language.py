@@ -433,6 +433,27 @@ def test_a_good_contestant_is_collected_with_its_predicted_covariance(tmp_path):
     assert np.isnan(collected.loc[1, "sqrt_trace_cov_mm"])
 
 
+def test_a_column_two_files_give_as_other_kinds_of_value_is_refused_naming_both(tmp_path):
+    """A column of the contestant's own beside one of the same name another estimator gives
+    (LM's ``f1_mm2``), text in one file and numbers in the other: the collected table cannot
+    hold both, and the refusal names the column and both files, not Arrow's conversion."""
+    dataset, _ = _dataset(tmp_path)
+    placements = tmp_path / "placements" / dataset.name
+    write_placements(placements, dataset_placements(dataset, base_seed=1))
+    converted = []
+    for method, value in (("LM-C", "1.5"), ("MY-C", "small")):
+        csv = tmp_path / "estimates" / "cmc" / method / f"{dataset.stem}.csv"
+        csv.parent.mkdir(parents=True)
+        csv.write_text(_lines([f"{_ROW_HEADER},f1_mm2", *(f"{row},{value}" for row in _GOOD_ROWS)]))
+        read_estimates_csv(csv, dataset, csv.with_suffix(".parquet"))
+        converted.append(csv.with_suffix(".parquet"))
+    first, second = (path.with_suffix(".csv") for path in converted)
+    message = f"{second}: column 'f1_mm2' holds text, but {first} gives it numbers"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        collect("cmc", converted, str(tmp_path / "c.parquet"), [dataset], None, [placements])
+    assert not (tmp_path / "c.parquet").exists()
+
+
 def test_the_summary_names_the_csv_too(tmp_path):
     """An estimator's summary, made apart from collect, checks the same and names the CSV."""
     text, message = _CENTER_MISTAKES["missing trial"]

@@ -136,6 +136,44 @@ def _scored_file(path, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFram
     )
 
 
+def _scored_files(paths, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFrame:
+    """The estimates files at ``paths`` scored (:func:`_scored_file`) in one table.
+
+    ``ValueError`` naming the column and both files when two of them give a column with other
+    kinds of value (text in one, numbers in the other: a column of an estimator's own named as
+    another's), which one table cannot hold; a column missing in every row of a file gives
+    none."""
+    frames, kinds = [], {}
+    for path in paths:
+        frame = _scored_file(path, spec, datasets)
+        source = read_source(path)
+        for column in frame.columns:
+            kind = _value_kind(frame[column])
+            if kind is None:
+                continue
+            first_kind, first_source = kinds.setdefault(column, (kind, source))
+            if kind != first_kind:
+                raise ValueError(
+                    f"{source}: column {column!r} holds {kind}, but {first_source} gives it "
+                    f"{first_kind}: a column of the collected results holds one kind of value; "
+                    "give it the same kind in every file, or another name"
+                )
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True)
+
+
+def _value_kind(column: pd.Series) -> str | None:
+    """What a column holds, ``numbers``, ``booleans`` or ``text`` (else pandas' name for it),
+    ``None`` when every value is missing."""
+    values = column.dropna()
+    if values.empty:
+        return None
+    kind = pd.api.types.infer_dtype(values, skipna=True)
+    if kind in ("integer", "floating", "mixed-integer-float", "decimal"):
+        return "numbers"
+    return {"boolean": "booleans", "string": "text"}.get(kind, kind)
+
+
 def is_external(spec: Study, method: str) -> bool:
     """Whether ``method`` is an estimator outside the package, run by a rule of its own on the
     blind copies: no kind of ``spec`` registers the name (the config refuses an external
@@ -224,12 +262,10 @@ def collect(
     spec = get_study(study)
     # Each dataset is read once, whatever the number of estimators.
     expected = _datasets(datasets, spec.segments, placements)
-    frames = []
     estimators: dict[str, dict] = {}
     for path in paths:
         estimators.setdefault(Path(path).parent.name, read_provenance(path))
-        frames.append(_scored_file(path, spec, expected))
-    collected = pd.concat(frames, ignore_index=True)
+    collected = _scored_files(paths, spec, expected)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
     require_results(collected, study, output)
     write_table(collected, output, {**(provenance or {}), "estimators": estimators})
@@ -248,8 +284,4 @@ def summarise_estimates(
     ``placements``) as :func:`collect` scores them."""
     spec = get_study(study)
     expected = _datasets(datasets, spec.segments, placements)
-    estimates = pd.concat(
-        [_scored_file(path, spec, expected) for path in paths],
-        ignore_index=True,
-    )
-    summarise(estimates, study).to_csv(output, index=False)
+    summarise(_scored_files(paths, spec, expected), study).to_csv(output, index=False)
