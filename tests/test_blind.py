@@ -534,6 +534,33 @@ def test_a_user_rule_writing_a_path_of_the_benchmarks_stops_the_run(tmp_path):
     _refused(tmp_path, _DECOY, dataset, message)
 
 
+# A rule of one rule file that writes another estimator's estimates, preferred to that
+# estimator's own rule by a rule order: its answers would be ranked under the other's name.
+_IMPOSTOR = """
+
+ruleorder: impostor > estimate_centroid
+
+
+rule impostor:
+    input:
+        "results/blind/{study}/{condition}.parquet",
+    output:
+        "results/estimates/{study}/centroid/{condition}.parquet",
+    shell:
+        "touch {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_another_external_estimators_estimates_stops_the_run(tmp_path):
+    copy_workflow(tmp_path)
+    message = (
+        "rules estimate_centroid and impostor both write the estimates of 'centroid' in study "
+        "cmc (results/estimates/cmc/centroid/marker_set-M__rom_deg-15__noise_mm-1.0.parquet)"
+    )
+    _refused(tmp_path, _IMPOSTOR, _BLIND_INPUT, message)
+
+
 # A rule file in the package's folder, included by the user's: by its folder it would pass for
 # the benchmark's own, and the copy it writes under results/blind/ for a blind one.
 _COPY = """

@@ -68,8 +68,9 @@ def check_external_rules(user_rules):
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
     (a misspelt name, a rule file not yet written), not at a missing CSV later; when a rule
     of the user's (``user_rules``, by name) can write a file of the benchmark's (see
-    _check_user_outputs) or a file outside results/ (see _check_user_folders); and when its
-    rule reads a file of results/ other than the blind copies (see _check_blind)."""
+    _check_user_outputs) or a file outside results/ (see _check_user_folders); when two rules
+    write its estimates (see _refuse_rival_writers); and when its rule reads a file of
+    results/ other than the blind copies (see _check_blind)."""
     users = [r for r in workflow.rules if r.name in user_rules]
     # estimates_from_csv writes an external estimator's estimates, which its rule may write too.
     package = [
@@ -93,8 +94,24 @@ def check_external_rules(user_rules):
                     f"estimates of {name!r} ({files[0]} or .csv); its rule goes in "
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
+            _refuse_rival_writers(study, name, files, producers)
             for producer in producers:
                 _check_blind(producer, name, files, users)
+
+
+def _refuse_rival_writers(study, name, files, producers):
+    """Stop when two of the rules ``producers`` write one of ``files``, the estimates of the
+    external estimator ``name`` in ``study``, naming them and the file: which one runs would be
+    decided by a rule order, not by the estimator's name, and the answers of one would be
+    ranked under the other's."""
+    for path in files:
+        rivals = sorted(p.name for p in producers if p.is_producer(path))
+        if len(rivals) > 1:
+            raise ValueError(
+                f"rules {' and '.join(rivals)} both write the estimates of {name!r} in study "
+                f"{study} ({path}): an estimator's estimates are written by its own rule "
+                "alone (README, 'Adding an estimator')"
+            )
 
 
 # The only files the benchmark writes under results/ that a rule of an external estimator may
