@@ -100,6 +100,23 @@ def test_a_markers_csv_grown_by_a_line_is_refused(tmp_path):
         check_dataset_csv(markers, path)
 
 
+def test_a_markers_csv_changed_in_place_is_refused_naming_the_line(tmp_path):
+    """A program that rewrites the markers CSV it read (normalising it, or spoiling it for the
+    estimators that read it after): as many lines, other markers. The estimates of every
+    program that read it are refused, naming the file and the first line that differs."""
+    path, _ = _dataset(tmp_path)
+    markers = tmp_path / "markers.csv"
+    write_dataset_csv(path, markers)
+    lines = markers.read_text().splitlines(keepends=True)
+    fields = lines[5].split(",")
+    fields[4] = "0"  # one sample's x, every line still in place
+    lines[5] = ",".join(fields)
+    markers.write_text("".join(lines))
+    with pytest.raises(ValueError, match=re.escape(f"{markers}: line 6 is not the line")) as error:
+        check_dataset_csv(markers, path)
+    assert "--forcerun" in str(error.value)
+
+
 def _estimates_csv(tmp_path, body: str):
     folder = tmp_path / "estimates" / "LS-C"
     folder.mkdir(parents=True)
