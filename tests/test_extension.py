@@ -377,6 +377,19 @@ def test_extended_outputs_for_an_axis_study(tmp_path):
     assert Path(outputs["png"]).stat().st_size > 10_000
 
 
+def test_the_ranking_says_what_the_benchmark_does_not_check_of_an_external_estimator():
+    """An external estimator's seconds are its program's own report, and its program may open
+    files its rule does not declare (the full dataset, by its path) and rank first on the
+    truth: neither is checked, so the ranking that lists one says so."""
+    paper = ("A", ("LS",))
+    config = {"studies": {"cmc": {"external_estimators": ["mine"]}}}
+    note = extended.origin_note("cmc", ["LS", "mine"], paper, config)
+    assert "external estimator's seconds are as its program reports them" in note, note
+    assert "checks the files its rule declares, not those its program opens" in note, note
+    alone = extended.origin_note("cmc", ["LS"], paper, {"studies": {"cmc": {}}})
+    assert "its program" not in alone, alone
+
+
 def _lm_script():
     path = ROOT / "workflow" / "external" / "lm_sphere.py"
     spec = importlib.util.spec_from_file_location("lm_sphere", path)
