@@ -248,9 +248,9 @@ pd.DataFrame(rows).to_parquet(estimates, index=False)
 '''
 
 
-def _collected_with(tmp_path, name: str, script: str, external: list[str]) -> pd.Series:
-    """The cmc errors by method and trial of a run with an external rule ``name``, the shipped
-    template's with its own ``script``, beside LS and the ``external`` estimators listed."""
+def _run_with(tmp_path, name: str, script: str, external: list[str]):
+    """The run collecting cmc with an external rule ``name``, the shipped template's with its
+    own ``script``, beside LS and the ``external`` estimators listed."""
     copy_workflow(tmp_path)
     rules = tmp_path / "workflow" / "rules" / "estimators"
     template = (rules / "centroid.smk").read_text()
@@ -259,7 +259,12 @@ def _collected_with(tmp_path, name: str, script: str, external: list[str]) -> pd
     )
     (tmp_path / "workflow" / "external" / f"{name}.py").write_text(script)
     overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=external)
-    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
+    return run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
+
+
+def _collected_with(tmp_path, name: str, script: str, external: list[str]) -> pd.Series:
+    """The cmc errors by method and trial of a run with :func:`_run_with`."""
+    run = _run_with(tmp_path, name, script, external)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     collected = pd.read_parquet(tmp_path / "results" / "collected" / "cmc.parquet")
     return collected.set_index(["method", "trial"])["error_mm"]
@@ -317,6 +322,45 @@ def test_a_rule_answering_the_protocols_centre_ranks_last(tmp_path):
     # LM answers in the coordinates it read: its errors are those of a sphere fit.
     assert (error["LM"] < 5.0).all(), error["LM"]
     assert error["cheat"].min() > error.drop(index="cheat").max()
+
+
+# A cheat by paths its rule does not declare: the program opens the full dataset beside the
+# blind copy it was given, and the copy's placements, and answers the truth as placed.
+PEEK = """
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+
+blind, estimates = Path(snakemake.input[0]), snakemake.output[0]
+full = blind.parent.parent.parent / "datasets" / blind.parent.name / blind.name
+truth = np.asarray(json.loads(pq.read_schema(full).metadata[b"jointbench"])["truth"]["center"])
+placed = pd.read_parquet(str(full).replace("datasets", "placements")).set_index("trial")
+rotations = placed[[f"r{i}{j}" for i in range(3) for j in range(3)]].to_numpy().reshape(-1, 3, 3)
+centres = rotations @ truth + placed[["p_x", "p_y", "p_z"]].to_numpy()
+answers = pd.DataFrame(centres, columns=["center_x", "center_y", "center_z"])
+answers.insert(0, "trial", placed.index.to_numpy())
+condition = json.loads(pq.read_schema(blind).metadata[b"jointbench"])["condition"]
+answers = answers.assign(**condition, method="peek", converged=True, iterations=0, seconds=0.0)
+answers.assign(status="ok").to_parquet(estimates, index=False)
+"""
+
+
+@pytest.mark.pipeline
+@pytest.mark.xfail(
+    strict=True,
+    raises=AssertionError,
+    reason="Only the files a rule declares are checked: a program that opens "
+    "results/datasets/ and results/placements/ by path (beside its blind input) answers the "
+    "truth, its run succeeds and the extended ranking shows it best with an error of about "
+    "1e-14 mm on 1 mm noise; the ranking's note says what is not checked, but the score stands.",
+)
+def test_a_program_opening_the_truth_by_a_path_its_rule_does_not_declare_is_stopped(tmp_path):
+    run = _run_with(tmp_path, "peek", PEEK, ["centroid", "peek"])
+    assert run.returncode != 0, "the run succeeded with the truth read by an undeclared path"
+    assert "results/datasets/" in run.stdout + run.stderr
 
 
 def _cmc_only(tmp_path, **cmc) -> str:
