@@ -244,6 +244,12 @@ _CENTER_MISTAKES = {
         "0,1,2,true,0,0,ok\n1,1,2,true,0,0,ok\n",
         "missing column 'center_z'",
     ),
+    # Semicolons, as a spreadsheet set to a decimal comma writes: one column, named by the
+    # whole header, and the message says so rather than that "trial" is missing alone.
+    "semicolons": (
+        _lines(row.replace(",", ";") for row in [_ROW_HEADER, *_GOOD_ROWS]),
+        "missing column 'trial': the header is one column, 'trial;center_x;center_y;",
+    ),
     "missing status": (
         "trial,center_x,center_y,center_z,converged,iterations,seconds\n0,1,2,3,1,0,0\n",
         "missing column 'status'",

@@ -183,6 +183,11 @@ def read_estimates_csv(
         raise ValueError(f"{path}: no rows; the dataset has {trials} trials, one row each")
     table = _untyped_as_numbers(table)
     missing = [name for name in ESTIMATE_ROW_COLUMNS if name not in table.column_names]
+    if len(table.column_names) == 1 and missing:
+        raise ValueError(
+            f"{path}: missing column {missing[0]!r}: the header is one column, "
+            f"{table.column_names[0]!r}; an estimates CSV separates its columns with commas"
+        )
     if missing:
         raise ValueError(
             f"{path}: missing column {missing[0]!r}; an estimates CSV has "
