@@ -403,15 +403,6 @@ answers.columns = ["trial", "center_x", "center_y", "center_z"]
 
 
 @pytest.mark.pipeline
-@_NOT_CHECKED(
-    reason="Nothing checks that a blind copy (results/blind/) is still what blind_dataset wrote "
-    "when the estimates made from it are collected: a program that rewrites its blind input in "
-    "place (20 mm noise added) makes every external estimator that reads it after fit other "
-    "markers than the built-in ones (LM went from 0.45 mm, first, to 21.9 mm, last of the "
-    "honest ones; the CSV made from it after the change passes its check, being made from it), "
-    "and the run succeeds. The blind file's digest, recorded with its placements when it is "
-    "written and compared by collect, would name it.",
-)
 def test_a_program_rewriting_its_blind_input_in_place_stops_the_run_naming_the_file(tmp_path):
     """Run first (one job at a time, its file prioritised), the spoiler changes the markers
     the centroid reads after it: the run stops, naming the blind file."""

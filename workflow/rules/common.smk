@@ -479,6 +479,8 @@ def condition_ids(study):
 
 # Where the blind copy of a condition's dataset records the placement of each of its trials.
 PLACEMENTS = "results/placements/{study}/{condition}.parquet"
+# A condition's blind copy, what an external estimator reads (workflow/rules/interchange.smk).
+BLIND = "results/blind/{study}/{condition}.parquet"
 
 
 def dataset_file(study, condition):
@@ -489,10 +491,22 @@ def placements_files(study, methods):
     """The placements of the blind copies of every condition of ``study``, which map the
     answers of an external estimator among ``methods`` back to the datasets' frame (none
     without one)."""
+    return _for_external(PLACEMENTS, study, methods)
+
+
+def blind_files(study, methods):
+    """The blind copies of every condition of ``study`` that an external estimator among
+    ``methods`` reads (none without one)."""
+    return _for_external(BLIND, study, methods)
+
+
+def _for_external(pattern, study, methods):
+    """``pattern``'s file of every condition of ``study`` when ``methods`` include an external
+    estimator, else none."""
     external = jb_config.estimator_names(config, study, source="external")
     if not set(methods) & set(external):
         return []
-    return expand(PLACEMENTS, study=study, condition=condition_ids(study))
+    return expand(pattern, study=study, condition=condition_ids(study))
 
 
 def estimates_files(study, methods=None):

@@ -18,6 +18,7 @@ import pandas as pd
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
 from jointbench.resultfiles.parquet import (
+    check_blind_copy,
     iter_dataset,
     read_metadata,
     read_provenance,
@@ -226,6 +227,7 @@ def _datasets(
             )[np.argsort(trials)]
         stem = Path(path).stem
         out[stem] = {
+            "path": path,
             "trials": np.sort(trials),
             "condition": metadata["condition"],
             "truth": truth,
@@ -233,6 +235,20 @@ def _datasets(
             "placements": read_placements(placed[stem]) if stem in placed else None,
         }
     return out
+
+
+def _check_blind_copies(blinds: Sequence[str | Path], datasets: Mapping[str, dict]) -> None:
+    """Each blind copy of ``blinds`` held to what was written from its condition's dataset and
+    placements (of ``datasets``, :func:`_datasets`): ``ValueError`` naming the copy when it
+    changed, or when its placements were not given and it cannot be checked."""
+    for blind in blinds:
+        dataset = _dataset_of(blind, datasets, str(blind))
+        if dataset["placements"] is None:
+            raise ValueError(
+                f"{blind}: its placements file (results/placements/) was not given, so the "
+                "blind copy cannot be held to what was written from its dataset"
+            )
+        check_blind_copy(blind, dataset["path"], dataset["placements"])
 
 
 def _dataset_of(path, datasets: Mapping[str, dict], source: str) -> dict:
@@ -248,6 +264,7 @@ def collect(
     datasets: Sequence[str | Path],
     provenance: Mapping[str, object] | None = None,
     placements: Sequence[str | Path] = (),
+    blinds: Sequence[str | Path] = (),
 ) -> pd.DataFrame:
     """Concatenate a study's estimates files after checking each one's schema, holding it to
     the dataset file of its condition (same trials, each once, same condition values), mapping
@@ -255,13 +272,17 @@ def collect(
     placements file per condition, named as its dataset file; required for every condition
     an external estimator answered) and scoring it against that dataset's truth
     (:func:`scored_estimates`); refuse a study with no finite error at all
-    (:func:`require_results`).
+    (:func:`require_results`), and a blind copy of ``blinds`` (named as its dataset file) that
+    is no longer what was written from its dataset and placements
+    (:func:`jointbench.resultfiles.parquet.check_blind_copy`): the external estimators that
+    read it may have fit other markers.
 
     The collected file's provenance adds, per estimator, the provenance of its estimates files
     (an external estimator's files have none)."""
     spec = get_study(study)
     # Each dataset is read once, whatever the number of estimators.
     expected = _datasets(datasets, spec.segments, placements)
+    _check_blind_copies(blinds, expected)
     estimators: dict[str, dict] = {}
     for path in paths:
         estimators.setdefault(Path(path).parent.name, read_provenance(path))
