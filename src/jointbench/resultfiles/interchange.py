@@ -112,15 +112,18 @@ def check_dataset_csv(path: str | Path, dataset: str | Path) -> None:
     difference = _first_difference(path, dataset)
     if difference is not None:
         number, held, written = difference
+        # The blind copy may be the file that changed (rewritten by a program that read it
+        # after the CSV was made): writing it anew writes the CSV anew too.
         raise ValueError(
             f"{path}: line {number} is not the line the markers CSV of {dataset} has there "
-            f"({held!r} where it has {written!r}): the file was " + _changed(path)
+            f"({held!r} where it has {written!r}): the CSV or the blind copy it was made from "
+            "was " + _changed(dataset)
         )
 
 
 def _changed(path: str | Path) -> str:
-    """How a refusal of the markers CSV at ``path`` ends: what the change means, and the
-    command that writes the file anew with everything made from it."""
+    """How a refusal of a markers CSV ends: what the change means, and the command that writes
+    the file at ``path`` anew with everything made from it."""
     return (
         "changed after it was written, and a program that read it saw other markers than the "
         "dataset's. Regenerate it and what depends on it with: "
