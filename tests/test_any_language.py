@@ -100,6 +100,26 @@ def test_a_markers_csv_grown_by_a_line_is_refused(tmp_path):
         check_dataset_csv(markers, path)
 
 
+def test_a_markers_csv_changed_in_place_is_refused_naming_the_line(tmp_path):
+    """A program that rewrites the markers CSV it read (normalising it, or spoiling it for the
+    estimators that read it after): as many lines, other markers. The estimates of every
+    program that read it are refused, naming the file and the first line that differs."""
+    path, _ = _dataset(tmp_path)
+    markers = tmp_path / "markers.csv"
+    write_dataset_csv(path, markers)
+    lines = markers.read_text().splitlines(keepends=True)
+    fields = lines[5].split(",")
+    fields[4] = "0"  # one sample's x, every line still in place
+    lines[5] = ",".join(fields)
+    markers.write_text("".join(lines))
+    with pytest.raises(ValueError, match=re.escape(f"{markers}: line 6 is not the line")) as error:
+        check_dataset_csv(markers, path)
+    # Either file may have changed (the blind copy, rewritten by a program that read it after
+    # the CSV was made): the command writes both anew, the blind copy first.
+    assert "the CSV or the blind copy it was made from was changed" in str(error.value)
+    assert f"--forcerun {path}" in str(error.value)
+
+
 def _estimates_csv(tmp_path, body: str):
     folder = tmp_path / "estimates" / "LS-C"
     folder.mkdir(parents=True)
@@ -201,96 +221,116 @@ def test_an_estimates_csv_not_in_utf8_is_refused_by_name(tmp_path):
 
 _ROW_HEADER = "trial,center_x,center_y,center_z,converged,iterations,seconds,status"
 _GOOD_ROWS = ("0,1.5,2,3,true,3,1e-5,ok", "1,1,2.5,3,true,4,1e-5,ok")
+
+
+def _lines(rows) -> str:
+    """The text of a CSV whose ``rows`` (header first) each end with a newline, as a program
+    printing one line per row writes it."""
+    return "".join(f"{row}\n" for row in rows)
+
+
 # Each deliberate mistake: the CSV's text (header and rows) and what the refusal must name.
 _CENTER_MISTAKES = {
     "cut in a row": (
         "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2"]),
         "cannot be read as CSV",
     ),
-    "cut after a row": ("\n".join([_ROW_HEADER, _GOOD_ROWS[0]]), "missing trials: 1"),
+    "cut after a row": (_lines([_ROW_HEADER, _GOOD_ROWS[0]]), "missing trials: 1"),
+    # The writer stopped inside its last row's last value: 3.25 would be read as 3.2.
+    "cut inside the last value": (
+        "trial,converged,iterations,seconds,status,center_x,center_y,center_z\n"
+        "0,true,3,1e-5,ok,1.5,2,3.25\n1,true,4,1e-5,ok,1,2.5,3.2",
+        "line 3, the last, ends without a newline",
+    ),
     "missing column": (
         "trial,center_x,center_y,converged,iterations,seconds,status\n"
         "0,1,2,true,0,0,ok\n1,1,2,true,0,0,ok\n",
         "missing column 'center_z'",
+    ),
+    # Semicolons, as a spreadsheet set to a decimal comma writes: one column, named by the
+    # whole header, and the message says so rather than that "trial" is missing alone.
+    "semicolons": (
+        _lines(row.replace(",", ";") for row in [_ROW_HEADER, *_GOOD_ROWS]),
+        "missing column 'trial': the header is one column, 'trial;center_x;center_y;",
     ),
     "missing status": (
         "trial,center_x,center_y,center_z,converged,iterations,seconds\n0,1,2,3,1,0,0\n",
         "missing column 'status'",
     ),
     "extra trial": (
-        "\n".join([_ROW_HEADER, *_GOOD_ROWS, "2,1,2,3,true,0,0,ok"]),
+        _lines([_ROW_HEADER, *_GOOD_ROWS, "2,1,2,3,true,0,0,ok"]),
         "trials not in the dataset: 2",
     ),
-    "missing trial": ("\n".join([_ROW_HEADER, _GOOD_ROWS[1]]), "missing trials: 0"),
+    "missing trial": (_lines([_ROW_HEADER, _GOOD_ROWS[1]]), "missing trials: 0"),
     "duplicate trial": (
-        "\n".join([_ROW_HEADER, *_GOOD_ROWS, _GOOD_ROWS[1]]),
+        _lines([_ROW_HEADER, *_GOOD_ROWS, _GOOD_ROWS[1]]),
         "trials listed more than once: 1",
     ),
     "trial not a whole number": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1.5,1,2,3,true,0,0,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1.5,1,2,3,true,0,0,ok"]),
         "column 'trial' must be integer",
     ),
     "wrong condition value": (
-        "\n".join([f"{_ROW_HEADER},rom_deg", *(f"{row},999" for row in _GOOD_ROWS)]),
+        _lines([f"{_ROW_HEADER},rom_deg", *(f"{row},999" for row in _GOOD_ROWS)]),
         "column 'rom_deg' must be the dataset's 5 (int) in every row, got 999 (int)",
     ),
     "wrong method": (
-        "\n".join([f"{_ROW_HEADER},method", *(f"{row},LS" for row in _GOOD_ROWS)]),
+        _lines([f"{_ROW_HEADER},method", *(f"{row},LS" for row in _GOOD_ROWS)]),
         "column 'method' must be 'LS-C' in every row, got ['LS']",
     ),
     "non-numeric value": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,two,3,true,0,0,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,1,two,3,true,0,0,ok"]),
         "column 'center_y' must be numeric, got large_string; the row of trial 1 holds 'two'",
     ),
     "iterations left empty": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,,0,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,,0,ok"]),
         "column 'iterations' must be integer, got double; the row of trial 1 holds nothing",
     ),
     "trial a word": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "one,1,2,3,true,0,0,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "one,1,2,3,true,0,0,ok"]),
         "column 'trial' must be integer, got large_string; the row holds 'one'",
     ),
     "bad converged": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,maybe,0,0,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,maybe,0,0,ok"]),
         "'converged' must hold true/false or 1/0",
     ),
     "claims ok with a NaN estimate": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,2,3,true,0,0,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,2,3,true,0,0,ok"]),
         "method 'LS-C', trial 1: converged=True, status 'ok', but the estimate is not finite",
     ),
     "negative error": (
-        "\n".join([f"{_ROW_HEADER},error_mm", f"{_GOOD_ROWS[0]},-1", f"{_GOOD_ROWS[1]},0.5"]),
+        _lines([f"{_ROW_HEADER},error_mm", f"{_GOOD_ROWS[0]},-1", f"{_GOOD_ROWS[1]},0.5"]),
         "trial 0: column 'error_mm' is -1.0",
     ),
     "negative seconds": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,0,-0.5,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2,3,true,0,-0.5,ok"]),
         "trial 1: column 'seconds' is -0.5, below 0",
     ),
     # A comma ending every line, as a loop printing "value," writes: a column without a name.
     "trailing comma": (
-        "\n".join([f"{_ROW_HEADER},", *(f"{row}," for row in _GOOD_ROWS)]),
+        _lines([f"{_ROW_HEADER},", *(f"{row}," for row in _GOOD_ROWS)]),
         "column 9 has no name (a comma ending the header line?)",
     ),
     # An empty cell says neither success nor failure: the row would be scored as neither.
     "converged left empty": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2.5,3,,4,1e-5,ok"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,1,2.5,3,,4,1e-5,ok"]),
         "column 'converged' is empty in the row of trial 1 (1 such rows)",
     ),
     "converged left empty in a failed row": (
-        "\n".join([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,nan,nan,,4,1e-5,"]),
+        _lines([_ROW_HEADER, _GOOD_ROWS[0], "1,nan,nan,nan,,4,1e-5,"]),
         "column 'converged' is empty in the row of trial 1 (1 such rows)",
     ),
     "converged empty in every row": (
-        "\n".join([_ROW_HEADER, "0,1,2,3,,0,0,ok", "1,1,2,3,,0,0,ok"]),
+        _lines([_ROW_HEADER, "0,1,2,3,,0,0,ok", "1,1,2,3,,0,0,ok"]),
         "column 'converged' is empty in the row of trial 0 (2 such rows)",
     ),
     "converged 1/0 with a gap": (
-        "\n".join([_ROW_HEADER, "0,1,2,3,1,0,0,ok", "1,1,2,3,,0,0,ok"]),
+        _lines([_ROW_HEADER, "0,1,2,3,1,0,0,ok", "1,1,2,3,,0,0,ok"]),
         "column 'converged' is empty in the row of trial 1 (1 such rows)",
     ),
     # An axis study's score in a centre's file: not computed for it, so never checked.
     "another kind's score": (
-        "\n".join([f"{_ROW_HEADER},error_deg", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
+        _lines([f"{_ROW_HEADER},error_deg", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
         "column 'error_deg' is a score the benchmark computes for axis estimates",
     ),
 }
@@ -312,7 +352,7 @@ _COV_HEADER = f"{_ROW_HEADER},cov_xx,cov_xy,cov_xz,cov_yy,cov_yz,cov_zz"
 _GOOD_COV = ("4,1,0,3,0.5,2", "2,0,0,2,0,2")
 _HIP_MISTAKES = {
     "asymmetric covariance": (
-        "\n".join(
+        _lines(
             [
                 f"{_COV_HEADER},cov_yx",
                 f"{_GOOD_ROWS[0]},{_GOOD_COV[0]},1",
@@ -322,24 +362,20 @@ _HIP_MISTAKES = {
         "method 'GM-C', trial 1: column 'cov_yx' is 0.25, but 'cov_xy', which it mirrors, is 0.0",
     ),
     "covariance not positive semi-definite": (
-        "\n".join([_COV_HEADER, f"{_GOOD_ROWS[0]},{_GOOD_COV[0]}", f"{_GOOD_ROWS[1]},1,2,0,1,0,1"]),
+        _lines([_COV_HEADER, f"{_GOOD_ROWS[0]},{_GOOD_COV[0]}", f"{_GOOD_ROWS[1]},1,2,0,1,0,1"]),
         "method 'GM-C', trial 1: the predicted covariance in columns cov_xx, cov_xy, cov_xz, "
         "cov_yy, cov_yz, cov_zz is not positive semi-definite: its eigenvalues are -1, 1, 3",
     ),
     "NaN covariance entry in an ok row": (
-        "\n".join(
-            [_COV_HEADER, f"{_GOOD_ROWS[0]},4,1,0,3,nan,2", f"{_GOOD_ROWS[1]},{_GOOD_COV[1]}"]
-        ),
+        _lines([_COV_HEADER, f"{_GOOD_ROWS[0]},4,1,0,3,nan,2", f"{_GOOD_ROWS[1]},{_GOOD_COV[1]}"]),
         "method 'GM-C', trial 0: converged=True, status 'ok', but column 'cov_yz' is nan",
     ),
     "infinite covariance in an ok row": (
-        "\n".join(
-            [_COV_HEADER, f"{_GOOD_ROWS[0]},{_GOOD_COV[0]}", f"{_GOOD_ROWS[1]},inf,0,0,2,0,2"]
-        ),
+        _lines([_COV_HEADER, f"{_GOOD_ROWS[0]},{_GOOD_COV[0]}", f"{_GOOD_ROWS[1]},inf,0,0,2,0,2"]),
         "method 'GM-C', trial 1: converged=True, status 'ok', but column 'cov_xx' is inf",
     ),
     "covariance column missing": (
-        "\n".join(
+        _lines(
             [
                 _COV_HEADER.removesuffix(",cov_zz"),
                 f"{_GOOD_ROWS[0]},4,1,0,3,0.5",
@@ -349,7 +385,7 @@ _HIP_MISTAKES = {
         "column 'cov_zz' is missing, but 'cov_xx' is given",
     ),
     "proximal covariance not positive semi-definite": (
-        "\n".join(
+        _lines(
             [
                 f"{_ROW_HEADER},proximal_center_x,proximal_center_y,proximal_center_z,"
                 + ",".join(f"proximal_cov_{e}" for e in ("xx", "xy", "xz", "yy", "yz", "zz")),
@@ -362,7 +398,7 @@ _HIP_MISTAKES = {
     # A centre's score in a joint centre's file: a study running both kinds (hip_sta) would
     # collect it beside the benchmark's own.
     "a centre's score": (
-        "\n".join([f"{_ROW_HEADER},radius_error_mm", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
+        _lines([f"{_ROW_HEADER},radius_error_mm", f"{_GOOD_ROWS[0]},0", f"{_GOOD_ROWS[1]},0"]),
         "column 'radius_error_mm' is a score the benchmark computes for center estimates",
     ),
 }
@@ -408,7 +444,7 @@ def test_a_contestants_mistake_is_named_in_the_csv_it_wrote(tmp_path, study, met
 
 def test_a_good_contestant_is_collected_with_its_predicted_covariance(tmp_path):
     """Mirror entries equal to theirs, a failed trial carrying NaN: collected and scored."""
-    text = "\n".join(
+    text = _lines(
         [
             f"{_COV_HEADER},cov_yx,cov_zx,cov_zy",
             f"{_GOOD_ROWS[0]},{_GOOD_COV[0]},1,0,0.5",
@@ -421,6 +457,27 @@ def test_a_good_contestant_is_collected_with_its_predicted_covariance(tmp_path):
     assert collected["converged"].tolist() == [True, False]
     assert collected.loc[0, "sqrt_trace_cov_mm"] == pytest.approx(3.0)
     assert np.isnan(collected.loc[1, "sqrt_trace_cov_mm"])
+
+
+def test_a_column_two_files_give_as_other_kinds_of_value_is_refused_naming_both(tmp_path):
+    """A column of the contestant's own beside one of the same name another estimator gives
+    (LM's ``f1_mm2``), text in one file and numbers in the other: the collected table cannot
+    hold both, and the refusal names the column and both files, not Arrow's conversion."""
+    dataset, _ = _dataset(tmp_path)
+    placements = tmp_path / "placements" / dataset.name
+    write_placements(placements, dataset_placements(dataset, base_seed=1))
+    converted = []
+    for method, value in (("LM-C", "1.5"), ("MY-C", "small")):
+        csv = tmp_path / "estimates" / "cmc" / method / f"{dataset.stem}.csv"
+        csv.parent.mkdir(parents=True)
+        csv.write_text(_lines([f"{_ROW_HEADER},f1_mm2", *(f"{row},{value}" for row in _GOOD_ROWS)]))
+        read_estimates_csv(csv, dataset, csv.with_suffix(".parquet"))
+        converted.append(csv.with_suffix(".parquet"))
+    first, second = (path.with_suffix(".csv") for path in converted)
+    message = f"{second}: column 'f1_mm2' holds text, but {first} gives it numbers"
+    with pytest.raises(ValueError, match=re.escape(message)):
+        collect("cmc", converted, str(tmp_path / "c.parquet"), [dataset], None, [placements])
+    assert not (tmp_path / "c.parquet").exists()
 
 
 def test_the_summary_names_the_csv_too(tmp_path):

@@ -7,12 +7,14 @@ that answers in the coordinates of the data it reads scores as on the unplaced d
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
@@ -22,6 +24,7 @@ from jointbench.configuration.bounds import TRANSLATION_MM_RANGE
 from jointbench.configuration.studies import get_study
 from jointbench.resultfiles.interchange import read_estimates_csv, write_dataset_csv
 from jointbench.resultfiles.parquet import (
+    check_blind_copy,
     read_dataset,
     read_table,
     write_blind_dataset,
@@ -200,6 +203,24 @@ def test_the_blind_copy_holds_each_trial_placed_and_every_segment_moved_alike(tm
         )
         np.testing.assert_allclose(back, markers, rtol=0, atol=1e-9)
         assert np.abs(read.segments[name] - markers).max() > 10.0
+
+
+def test_a_blind_copy_changed_after_it_was_written_is_refused_naming_the_trial(tmp_path):
+    """The blind copy every external estimator reads, rewritten in place by one of them: as
+    written it passes, changed in one sample it is refused, naming the file and the trial."""
+    dataset, blind, placed, _ = _blind_condition(tmp_path, "hip", trials=3)
+    placements = read_placements(placed)
+    check_blind_copy(blind, dataset, placements)
+    table = pq.read_table(blind)
+    x = table.column("x").to_numpy().copy()
+    row = table.num_rows - 1
+    x[row] += 1e-9
+    pq.write_table(table.set_column(table.schema.get_field_index("x"), "x", pa.array(x)), blind)
+    trial = table.column("trial")[row].as_py()
+    message = f"{blind}: trial {trial}: column 'x' is not what the blind copy of {dataset} holds"
+    with pytest.raises(ValueError, match=re.escape(message)) as error:
+        check_blind_copy(blind, dataset, placements)
+    assert "--forcerun" in str(error.value)
 
 
 def test_the_placements_are_not_in_the_blind_copy_nor_its_csv(tmp_path):

@@ -238,3 +238,32 @@ def test_a_failed_run_ends_naming_each_failed_job_and_the_command_that_redoes_it
     log.write_text("Execute 1 jobs...\n")
     assert report.failure_lines(log, environ) == ""
     assert report.failure_lines(tmp_path / "absent.log", environ) == ""
+
+
+# The block a Snakemake log holds for a job whose program exited 0 without writing its output
+# (an external estimator that printed its answer to stderr, or nothing): no "Error in rule".
+MISSING_OUTPUT_LOG = (
+    'MissingOutputException in rule estimate_quiet in file "/w/workflow/rules/estimators/'
+    'quiet.smk", line 1:\n'
+    "Job 11  completed successfully, but some output files are missing. Missing files after 5 "
+    "seconds. This might be due to filesystem latency. If that is the case, consider to "
+    "increase the wait time with --latency-wait:\n"
+    "results/estimates/cmc/quiet/a.csv (missing locally, parent dir contents: )\n"
+    "Select jobs to execute...\n"
+)
+
+
+def test_a_job_that_wrote_no_output_is_counted_and_named_among_the_failed(tmp_path):
+    """A program that exits 0 without its output fails its job as surely as one that exits
+    non-zero: the last lines count it, name its rule and the file it did not write, and the
+    forcerun names its rule too."""
+    log = tmp_path / "run.log"
+    log.write_text(FAILED_LOG + MISSING_OUTPUT_LOG)
+    environ = {invocation.ENVIRONMENT_VARIABLE: "-j2"}
+    lines = report.failure_lines([log], environ)
+    assert "2 jobs failed" in lines, lines
+    assert "estimate_centroid: results/logs/estimate/cmc/centroid/a.log" in lines
+    assert "estimate_quiet: wrote no results/estimates/cmc/quiet/a.csv" in lines, lines
+    assert "--forcerun estimate_centroid estimate_quiet`" in lines, lines
+    log.write_text(MISSING_OUTPUT_LOG)
+    assert "1 job failed:\n  estimate_quiet: wrote no " in report.failure_lines(log, environ)

@@ -48,12 +48,13 @@ def copy_workflow(destination: Path) -> Path:
     return destination
 
 
-def run_snakemake(workdir: Path, *arguments: str, timeout: int = 900):
-    """Run ``snakemake -j2`` on the copy in ``workdir`` with extra arguments (targets first)."""
+def run_snakemake(workdir: Path, *arguments: str, timeout: int = 900, jobs: int = 2):
+    """Run ``snakemake -j2`` (``jobs`` at a time) on the copy in ``workdir`` with extra
+    arguments (targets first)."""
     command = [
         str(SNAKEMAKE),
         *arguments,
-        "-j2",
+        f"-j{jobs}",
         "--directory",
         str(workdir),
         "-s",

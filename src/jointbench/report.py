@@ -572,21 +572,19 @@ def failure_lines(
 ) -> str:
     """What a run that failed prints last, read from its Snakemake ``logs`` (a file, or the
     list of them Snakemake's ``onerror`` gives): each failed
-    job's rule and log (a run that keeps going reports its first error far above its end),
+    job's rule and log, or the files it did not write when its program exited 0 without them
+    (a run that keeps going reports its first error far above its end),
     and the command, with the options of the run recorded in ``environ``, that remakes their
     outputs and everything after them once the cause is mended: Snakemake removed those
     outputs, and a plain run may find nothing to do while files made from them earlier are
     present. Empty where the logs name no failed job (or are not there)."""
     paths = [Path(logs)] if isinstance(logs, str | Path) else [Path(log) for log in logs]
     text = "".join(path.read_text(errors="replace") for path in paths if path.is_file())
-    failed = [
-        (rule, re.search(r"^ {4}log: (\S+)", block, flags=re.M))
-        for rule, block in re.findall(r"^Error in rule (\S+):\n((?: {4}.*\n?)*)", text, re.M)
-    ]
+    failed = _errors(text) + _missing_outputs(text)
     if not failed:
         return ""
     lines = [f"jointbench: {len(failed)} job{'s' * (len(failed) != 1)} failed:"]
-    lines += [f"  {rule}: {found.group(1) if found else 'no log'}" for rule, found in failed]
+    lines += [f"  {rule}: {where}" for rule, where in failed]
     rules = sorted({rule for rule, _ in failed})
     command = invocation.snakemake_command("--forcerun", *rules, environ=environ)
     lines.append(
@@ -595,6 +593,32 @@ def failure_lines(
         "plain run may find nothing to do while the files made from them earlier are present)."
     )
     return "\n".join(lines)
+
+
+def _errors(text: str) -> list[tuple[str, str]]:
+    """Each job of a Snakemake log ``text`` that failed with an ``Error in rule`` block (its
+    program exited non-zero, or its script raised), as its rule and its log (``no log``)."""
+    failed = []
+    for rule, block in re.findall(r"^Error in rule (\S+):\n((?: {4}.*\n?)*)", text, re.M):
+        found = re.search(r"^ {4}log: (\S+)", block, flags=re.M)
+        failed.append((rule, found.group(1) if found else "no log"))
+    return failed
+
+
+def _missing_outputs(text: str) -> list[tuple[str, str]]:
+    """Each job of a Snakemake log ``text`` whose program exited 0 without writing its outputs,
+    as its rule and the files it did not write: Snakemake fails such a job with a
+    ``MissingOutputException`` block, not the ``Error in rule`` block of a job that exited
+    non-zero, yet the job failed all the same."""
+    blocks = re.findall(
+        r"^MissingOutputException in rule (\S+) in file .*\n.*\n((?:.* \(missing locally.*\n?)*)",
+        text,
+        re.M,
+    )
+    return [
+        (rule, "wrote no " + ", ".join(re.findall(r"^(.*) \(missing locally", files, re.M)))
+        for rule, files in blocks
+    ]
 
 
 def closing_lines(environ: Mapping[str, str] = os.environ) -> str:

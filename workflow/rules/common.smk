@@ -68,8 +68,9 @@ def check_external_rules(user_rules):
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
     (a misspelt name, a rule file not yet written), not at a missing CSV later; when a rule
     of the user's (``user_rules``, by name) can write a file of the benchmark's (see
-    _check_user_outputs) or a file outside results/ (see _check_user_folders); and when its
-    rule reads a file of results/ other than the blind copies (see _check_blind)."""
+    _check_user_outputs) or a file outside results/ (see _check_user_folders); when two rules
+    write its estimates (see _refuse_rival_writers); and when its rule reads a file of
+    results/ other than the blind copies (see _check_blind)."""
     users = [r for r in workflow.rules if r.name in user_rules]
     # estimates_from_csv writes an external estimator's estimates, which its rule may write too.
     package = [
@@ -93,8 +94,24 @@ def check_external_rules(user_rules):
                     f"estimates of {name!r} ({files[0]} or .csv); its rule goes in "
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
+            _refuse_rival_writers(study, name, files, producers)
             for producer in producers:
                 _check_blind(producer, name, files, users)
+
+
+def _refuse_rival_writers(study, name, files, producers):
+    """Stop when two of the rules ``producers`` write one of ``files``, the estimates of the
+    external estimator ``name`` in ``study``, naming them and the file: which one runs would be
+    decided by a rule order, not by the estimator's name, and the answers of one would be
+    ranked under the other's."""
+    for path in files:
+        rivals = sorted(p.name for p in producers if p.is_producer(path))
+        if len(rivals) > 1:
+            raise ValueError(
+                f"rules {' and '.join(rivals)} both write the estimates of {name!r} in study "
+                f"{study} ({path}): an estimator's estimates are written by its own rule "
+                "alone (README, 'Adding an estimator')"
+            )
 
 
 # The only files the benchmark writes under results/ that a rule of an external estimator may
@@ -462,6 +479,8 @@ def condition_ids(study):
 
 # Where the blind copy of a condition's dataset records the placement of each of its trials.
 PLACEMENTS = "results/placements/{study}/{condition}.parquet"
+# A condition's blind copy, what an external estimator reads (workflow/rules/interchange.smk).
+BLIND = "results/blind/{study}/{condition}.parquet"
 
 
 def dataset_file(study, condition):
@@ -472,10 +491,22 @@ def placements_files(study, methods):
     """The placements of the blind copies of every condition of ``study``, which map the
     answers of an external estimator among ``methods`` back to the datasets' frame (none
     without one)."""
+    return _for_external(PLACEMENTS, study, methods)
+
+
+def blind_files(study, methods):
+    """The blind copies of every condition of ``study`` that an external estimator among
+    ``methods`` reads (none without one)."""
+    return _for_external(BLIND, study, methods)
+
+
+def _for_external(pattern, study, methods):
+    """``pattern``'s file of every condition of ``study`` when ``methods`` include an external
+    estimator, else none."""
     external = jb_config.estimator_names(config, study, source="external")
     if not set(methods) & set(external):
         return []
-    return expand(PLACEMENTS, study=study, condition=condition_ids(study))
+    return expand(pattern, study=study, condition=condition_ids(study))
 
 
 def estimates_files(study, methods=None):

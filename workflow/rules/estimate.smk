@@ -160,6 +160,10 @@ rule collect:
         placements=lambda w: placements_files(
             w.study, jb_config.estimator_names(config, w.study)
         ),
+        # Held to what was written from the datasets: an external program may rewrite its own.
+        blinds=lambda w: blind_files(
+            w.study, jb_config.estimator_names(config, w.study)
+        ),
     output:
         "results/collected/{study}.parquet",
     log:

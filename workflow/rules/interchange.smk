@@ -12,7 +12,7 @@ rule blind_dataset:
     input:
         "results/datasets/{study}/{condition}.parquet",
     output:
-        blind="results/blind/{study}/{condition}.parquet",
+        blind=BLIND,
         # Kept apart from the copy: only the package's rules read it (_check_blind).
         placements=PLACEMENTS,
     log:

@@ -9,4 +9,5 @@ with jobs.job(snakemake):
         datasets=snakemake.input.datasets,
         provenance=jobs.provenance(snakemake),
         placements=snakemake.input.placements,
+        blinds=snakemake.input.blinds,
     )

@@ -213,7 +213,8 @@ def origin_note(
     config: Mapping | None = None,
 ) -> str:
     """A sentence naming the paper's methods and the additions among ``methods``, the external
-    ones (written by rules of their own, ``external_estimators`` in ``config``) separately."""
+    ones (written by rules of their own, ``external_estimators`` in ``config``) separately,
+    and, when there are external ones, what the benchmark does not check of them."""
     letter, paper_methods = paper
     external = set()
     if config is not None and study in config.get("studies", {}):
@@ -224,6 +225,13 @@ def origin_note(
     parts = [f"Paper {letter}'s methods: {', '.join(ours) or 'none'}." if letter else ""]
     parts.append(f"Added, built in: {', '.join(added) or 'none'}.")
     parts.append(f"Added, external (a rule of their own): {', '.join(outside) or 'none'}.")
+    if outside:
+        # Neither is checked: a reader of the ranking is told so where the methods are listed.
+        parts.append(
+            "An external estimator's seconds are as its program reports them, and the "
+            "benchmark checks the files its rule declares, not those its program opens "
+            "(README, 'Adding an estimator')."
+        )
     return " ".join(p for p in parts if p)
 
 

@@ -16,22 +16,27 @@ studies, ``proximal`` and ``distal`` for two-segment ones, plus any segment a st
 for another kind of estimator (``thigh_in_pelvis`` in ``hip_sta``); ``x``, ``y``, ``z`` in mm,
 written with the digits that read back to the same double. The file ends with a newline; before
 the program's estimates are used, the file is checked to hold its header and one line per sample
-of the dataset (:func:`check_dataset_csv`), so that a file cut short after it was written, at a
-line's end or inside one, cannot pass for a complete one.
+of the dataset, each as written (:func:`check_dataset_csv`), so that a file cut short after it was
+written, at a line's end or inside one, cannot pass for a complete one, nor one a program
+rewrote in place for the markers the others read.
 
 Estimates CSV (:func:`read_estimates_csv`), one header line, one row per trial: ``trial``, the
 estimate columns of the study's kind (``center_x, center_y, center_z``; or ``point_*`` and
 ``direction_*``; for a joint centre optionally ``cov_*``, and ``cov_yx``, ``cov_zx``,
 ``cov_zy`` equal to their mirrors), ``converged`` (``true``/``false`` or ``1``/``0``),
-``iterations``, ``seconds`` and ``status``. The condition's columns and ``method`` are added
-from the dataset and the file's folder; the result is then checked and collected like any
-estimates file, and the estimates file records the CSV's path, which its refusals name.
+``iterations``, ``seconds`` and ``status``, every line ending with a newline (a file cut
+inside its last value would otherwise read as a finished one). The condition's columns and
+``method`` are added from the dataset and the file's folder; the result is then checked and
+collected like any estimates file, and the estimates file records the CSV's path, which its
+refusals name.
 """
 
 from __future__ import annotations
 
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 import pyarrow as pa
@@ -64,6 +69,13 @@ ESTIMATE_ROW_COLUMNS = ("trial", "converged", "iterations", "seconds", "status")
 
 def write_dataset_csv(dataset: str | Path, output: str | Path) -> None:
     """Write the markers of a dataset file as CSV (see the module docstring)."""
+    Path(output).parent.mkdir(parents=True, exist_ok=True)
+    with open(output, "wb") as stream:
+        _write_csv(dataset, stream)
+
+
+def _write_csv(dataset: str | Path, stream: BinaryIO) -> None:
+    """The CSV of :func:`write_dataset_csv` written to the binary ``stream``."""
     table = pq.read_table(dataset, columns=list(DATASET_COLUMNS))
     segment = table.column("segment").cast(pa.string())
     table = table.set_column(table.schema.get_field_index("segment"), "segment", segment)
@@ -72,35 +84,64 @@ def write_dataset_csv(dataset: str | Path, output: str | Path) -> None:
     table = table.append_column("segment_rank", pc.index_in(segment, value_set=first_seen))
     order.insert(1, ("segment_rank", "ascending"))
     table = table.sort_by(order).drop_columns(["segment_rank"])
-    Path(output).parent.mkdir(parents=True, exist_ok=True)
     # Arrow quotes a header it writes; a plain one is easier for a C or awk reader.
-    with open(output, "wb") as stream:
-        stream.write((",".join(DATASET_COLUMNS) + "\n").encode())
-        options = pacsv.WriteOptions(include_header=False, quoting_style="none")
-        pacsv.write_csv(table, stream, options)
+    stream.write((",".join(DATASET_COLUMNS) + "\n").encode())
+    options = pacsv.WriteOptions(include_header=False, quoting_style="none")
+    pacsv.write_csv(table, stream, options)
 
 
 def check_dataset_csv(path: str | Path, dataset: str | Path) -> None:
-    """``ValueError`` naming ``path`` unless it holds as many lines as :func:`write_dataset_csv`
-    writes for ``dataset``: the header and one per row of the dataset file, each ending with a
-    newline.
+    """``ValueError`` naming ``path`` unless it is the CSV :func:`write_dataset_csv` writes for
+    ``dataset``: first its lines are counted, the header and one per row of the dataset file,
+    each ending with a newline, then each is compared with the one written anew.
 
     Any cut of the file removes at least its final newline, so a file cut short, at a line's
-    end or inside one, has fewer newlines than that, and the estimates a program made from it
-    are refused.
+    end or inside one, has fewer newlines than that; a file rewritten in place (by a program
+    that read it, before the others that read it did) keeps its count but not its lines. The
+    estimates a program made from either are refused, naming the first line that differs.
     """
     expected = read_row_count(dataset) + 1
     found, last = _newlines(path)
-    if found == expected and last == b"\n":
-        return
-    ending = "" if last in (b"", b"\n") else f", and its last line {found + 1} ends without one"
-    raise ValueError(
-        f"{path}: {found} lines ending with a newline{ending}; the markers CSV of {dataset} has "
-        f"{expected} (a header and one per marker sample): the file was cut short or changed "
-        "after it was written, and a program that read it saw other markers than the "
+    if found != expected or last != b"\n":
+        ending = "" if last in (b"", b"\n") else f", and its last line {found + 1} ends without one"
+        raise ValueError(
+            f"{path}: {found} lines ending with a newline{ending}; the markers CSV of {dataset} "
+            f"has {expected} (a header and one per marker sample): the file was cut short or "
+            + _changed(path)
+        )
+    difference = _first_difference(path, dataset)
+    if difference is not None:
+        number, held, written = difference
+        # The blind copy may be the file that changed (rewritten by a program that read it
+        # after the CSV was made): writing it anew writes the CSV anew too.
+        raise ValueError(
+            f"{path}: line {number} is not the line the markers CSV of {dataset} has there "
+            f"({held!r} where it has {written!r}): the CSV or the blind copy it was made from "
+            "was " + _changed(dataset)
+        )
+
+
+def _changed(path: str | Path) -> str:
+    """How a refusal of a markers CSV ends: what the change means, and the command that writes
+    the file at ``path`` anew with everything made from it."""
+    return (
+        "changed after it was written, and a program that read it saw other markers than the "
         "dataset's. Regenerate it and what depends on it with: "
         + snakemake_command("--forcerun", str(path))
     )
+
+
+def _first_difference(path: str | Path, dataset: str | Path) -> tuple[int, str, str] | None:
+    """The number of the first line of the file at ``path`` that differs from the CSV of
+    ``dataset`` written anew, with both lines; ``None`` when none does. Written to a temporary
+    file and read a line at a time: the CSV may be far larger than memory."""
+    with tempfile.TemporaryFile() as written, open(path, "rb") as held:
+        _write_csv(dataset, written)
+        written.seek(0)
+        for number, (mine, theirs) in enumerate(zip(held, written, strict=False), start=1):
+            if mine != theirs:
+                return number, mine.decode(errors="replace"), theirs.decode(errors="replace")
+    return None
 
 
 def _newlines(path: str | Path, chunk_bytes: int = 2**20) -> tuple[int, bytes]:
@@ -121,9 +162,9 @@ def read_estimates_csv(
     the condition of ``dataset`` and the method (the name of ``path``'s folder) in every row.
 
     ``ValueError`` naming ``path`` when it cannot be read as CSV, gives a column twice or one
-    without a name, has no rows, lacks a required column or holds a status that is not UTF-8;
-    the estimate columns and every value are checked when the file is collected, and a refusal
-    then names ``path`` too, which ``output`` records
+    without a name, does not end with a newline, has no rows, lacks a required column or holds
+    a status that is not UTF-8; the estimate columns and every value are checked when the file
+    is collected, and a refusal then names ``path`` too, which ``output`` records
     (:func:`jointbench.resultfiles.parquet.read_source`): the file its author can correct.
     """
     try:
@@ -139,11 +180,17 @@ def read_estimates_csv(
         raise ValueError(
             f"{path}: column {unnamed + 1} has no name (a comma ending the header line?)"
         )
+    _check_ends_with_newline(path)
     if not table.num_rows:
         trials = len(read_trial_numbers(dataset))
         raise ValueError(f"{path}: no rows; the dataset has {trials} trials, one row each")
     table = _untyped_as_numbers(table)
     missing = [name for name in ESTIMATE_ROW_COLUMNS if name not in table.column_names]
+    if len(table.column_names) == 1 and missing:
+        raise ValueError(
+            f"{path}: missing column {missing[0]!r}: the header is one column, "
+            f"{table.column_names[0]!r}; an estimates CSV separates its columns with commas"
+        )
     if missing:
         raise ValueError(
             f"{path}: missing column {missing[0]!r}; an estimates CSV has "
@@ -159,6 +206,20 @@ def read_estimates_csv(
     added["method"] = pa.array([Path(path).parent.name] * table.num_rows, pa.string())
     columns = {**added, **{name: table.column(name) for name in table.column_names}}
     write_table(pa.table(columns), output, provenance, source=path)
+
+
+def _check_ends_with_newline(path: str | Path) -> None:
+    """``ValueError`` naming ``path`` unless its last line ends with a newline: a file whose
+    writer stopped inside its last value (``3.25`` cut to ``3.2``) still reads as CSV, and only
+    the missing newline tells it from a finished one."""
+    found, last = _newlines(path)
+    if last in (b"", b"\n"):
+        return
+    raise ValueError(
+        f"{path}: line {found + 1}, the last, ends without a newline: the file was cut short "
+        "or its writer did not finish it, and its last value may be cut; a finished estimates "
+        "CSV ends every line, the last one too, with a newline"
+    )
 
 
 def _untyped_as_numbers(table: pa.Table) -> pa.Table:

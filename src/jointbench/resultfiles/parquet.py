@@ -305,7 +305,6 @@ def write_blind_dataset(
     translation ``p`` [mm], so that no constant answer matches the truth; ``ValueError``
     naming the file for a trial without one. The placements are not written to
     the copy."""
-    source = pq.ParquetFile(dataset)
     metadata = read_metadata(dataset)
     blind = {
         "study": metadata["study"],
@@ -315,12 +314,70 @@ def write_blind_dataset(
         "provenance": dict(provenance or {}),
     }
     # Every key of the source's metadata goes, Arrow's copy of the schema among them.
-    schema = source.schema_arrow.with_metadata({_META_KEY: json.dumps(blind).encode()})
+    schema = pq.read_schema(dataset).with_metadata({_META_KEY: json.dumps(blind).encode()})
     Path(output).parent.mkdir(parents=True, exist_ok=True)
     with pq.ParquetWriter(output, schema) as writer:
-        for group in range(source.num_row_groups):
-            table = _placed_rows(source.read_row_group(group), placements, dataset)
+        for table in _blind_rows(dataset, placements):
             writer.write_table(table.replace_schema_metadata(schema.metadata))
+
+
+def _blind_rows(dataset: str | Path, placements: Placements) -> Iterator[pa.Table]:
+    """The rows of the blind copy of the dataset file ``dataset``, a row group of it at a time
+    (the copy never holds the whole file in memory), each trial's markers placed."""
+    source = pq.ParquetFile(dataset)
+    for group in range(source.num_row_groups):
+        yield _placed_rows(source.read_row_group(group), placements, dataset)
+
+
+def check_blind_copy(blind: str | Path, dataset: str | Path, placements: Placements) -> None:
+    """``ValueError`` naming ``blind``, the first trial and column that differ, unless its rows
+    are those :func:`write_blind_dataset` wrote from ``dataset`` and ``placements``: a program
+    that rewrote the copy it was given in place (cleaning it, or spoiling it) made every
+    external estimator that read it after fit other markers than the built-in ones, which read
+    the dataset itself. Read a row group of the dataset at a time, as it was written."""
+    held = pq.ParquetFile(blind)
+    if held.metadata.num_rows != read_row_count(dataset):
+        raise ValueError(
+            f"{blind}: {held.metadata.num_rows} rows, where the blind copy of {dataset} has "
+            f"{read_row_count(dataset)}: " + _blind_changed(blind)
+        )
+    found = held.iter_batches(batch_size=2**16)
+    pending = pa.Table.from_batches([], schema=held.schema_arrow)
+    for expected in _blind_rows(dataset, placements):
+        while pending.num_rows < expected.num_rows:
+            pending = pa.concat_tables([pending, pa.Table.from_batches([next(found)])])
+        _compare_rows(pending.slice(0, expected.num_rows), expected, blind, dataset)
+        pending = pending.slice(expected.num_rows)
+
+
+def _compare_rows(found: pa.Table, expected: pa.Table, blind, dataset) -> None:
+    """``ValueError`` naming ``blind``, the trial and the column of the first row where
+    ``found`` (rows of the blind copy) differs from ``expected`` (those it was written with);
+    a missing marker (NaN) in both is no difference."""
+    for name in expected.column_names:
+        mine = found.column(name).to_numpy(zero_copy_only=False)
+        theirs = expected.column(name).to_numpy(zero_copy_only=False)
+        same = mine == theirs
+        if same.dtype == bool and theirs.dtype.kind == "f" and mine.dtype.kind == "f":
+            same |= np.isnan(mine) & np.isnan(theirs)
+        if np.all(same):
+            continue
+        row = int(np.argmin(same))
+        raise ValueError(
+            f"{blind}: trial {expected.column('trial')[row].as_py()}: column {name!r} is not "
+            f"what the blind copy of {dataset} holds ({found.column(name)[row].as_py()!r} "
+            f"where it has {expected.column(name)[row].as_py()!r}): " + _blind_changed(blind)
+        )
+
+
+def _blind_changed(blind: str | Path) -> str:
+    """How a refusal of the changed blind copy ``blind`` ends: what the change means, and the
+    command that writes it anew with everything made from it."""
+    return (
+        "the file was changed after it was written, and every external estimator that read it "
+        "after the change fit other markers than the dataset's. Regenerate it and what depends "
+        "on it with: " + snakemake_command("--forcerun", str(blind))
+    )
 
 
 def _placed_rows(table: pa.Table, placements: Placements, dataset) -> pa.Table:

@@ -18,6 +18,7 @@ import pandas as pd
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
 from jointbench.resultfiles.parquet import (
+    check_blind_copy,
     iter_dataset,
     read_metadata,
     read_provenance,
@@ -136,6 +137,44 @@ def _scored_file(path, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFram
     )
 
 
+def _scored_files(paths, spec: Study, datasets: Mapping[str, dict]) -> pd.DataFrame:
+    """The estimates files at ``paths`` scored (:func:`_scored_file`) in one table.
+
+    ``ValueError`` naming the column and both files when two of them give a column with other
+    kinds of value (text in one, numbers in the other: a column of an estimator's own named as
+    another's), which one table cannot hold; a column missing in every row of a file gives
+    none."""
+    frames, kinds = [], {}
+    for path in paths:
+        frame = _scored_file(path, spec, datasets)
+        source = read_source(path)
+        for column in frame.columns:
+            kind = _value_kind(frame[column])
+            if kind is None:
+                continue
+            first_kind, first_source = kinds.setdefault(column, (kind, source))
+            if kind != first_kind:
+                raise ValueError(
+                    f"{source}: column {column!r} holds {kind}, but {first_source} gives it "
+                    f"{first_kind}: a column of the collected results holds one kind of value; "
+                    "give it the same kind in every file, or another name"
+                )
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True)
+
+
+def _value_kind(column: pd.Series) -> str | None:
+    """What a column holds, ``numbers``, ``booleans`` or ``text`` (else pandas' name for it),
+    ``None`` when every value is missing."""
+    values = column.dropna()
+    if values.empty:
+        return None
+    kind = pd.api.types.infer_dtype(values, skipna=True)
+    if kind in ("integer", "floating", "mixed-integer-float", "decimal"):
+        return "numbers"
+    return {"boolean": "booleans", "string": "text"}.get(kind, kind)
+
+
 def is_external(spec: Study, method: str) -> bool:
     """Whether ``method`` is an estimator outside the package, run by a rule of its own on the
     blind copies: no kind of ``spec`` registers the name (the config refuses an external
@@ -188,6 +227,7 @@ def _datasets(
             )[np.argsort(trials)]
         stem = Path(path).stem
         out[stem] = {
+            "path": path,
             "trials": np.sort(trials),
             "condition": metadata["condition"],
             "truth": truth,
@@ -195,6 +235,20 @@ def _datasets(
             "placements": read_placements(placed[stem]) if stem in placed else None,
         }
     return out
+
+
+def _check_blind_copies(blinds: Sequence[str | Path], datasets: Mapping[str, dict]) -> None:
+    """Each blind copy of ``blinds`` held to what was written from its condition's dataset and
+    placements (of ``datasets``, :func:`_datasets`): ``ValueError`` naming the copy when it
+    changed, or when its placements were not given and it cannot be checked."""
+    for blind in blinds:
+        dataset = _dataset_of(blind, datasets, str(blind))
+        if dataset["placements"] is None:
+            raise ValueError(
+                f"{blind}: its placements file (results/placements/) was not given, so the "
+                "blind copy cannot be held to what was written from its dataset"
+            )
+        check_blind_copy(blind, dataset["path"], dataset["placements"])
 
 
 def _dataset_of(path, datasets: Mapping[str, dict], source: str) -> dict:
@@ -210,6 +264,7 @@ def collect(
     datasets: Sequence[str | Path],
     provenance: Mapping[str, object] | None = None,
     placements: Sequence[str | Path] = (),
+    blinds: Sequence[str | Path] = (),
 ) -> pd.DataFrame:
     """Concatenate a study's estimates files after checking each one's schema, holding it to
     the dataset file of its condition (same trials, each once, same condition values), mapping
@@ -217,19 +272,21 @@ def collect(
     placements file per condition, named as its dataset file; required for every condition
     an external estimator answered) and scoring it against that dataset's truth
     (:func:`scored_estimates`); refuse a study with no finite error at all
-    (:func:`require_results`).
+    (:func:`require_results`), and a blind copy of ``blinds`` (named as its dataset file) that
+    is no longer what was written from its dataset and placements
+    (:func:`jointbench.resultfiles.parquet.check_blind_copy`): the external estimators that
+    read it may have fit other markers.
 
     The collected file's provenance adds, per estimator, the provenance of its estimates files
     (an external estimator's files have none)."""
     spec = get_study(study)
     # Each dataset is read once, whatever the number of estimators.
     expected = _datasets(datasets, spec.segments, placements)
-    frames = []
+    _check_blind_copies(blinds, expected)
     estimators: dict[str, dict] = {}
     for path in paths:
         estimators.setdefault(Path(path).parent.name, read_provenance(path))
-        frames.append(_scored_file(path, spec, expected))
-    collected = pd.concat(frames, ignore_index=True)
+    collected = _scored_files(paths, spec, expected)
     collected = collected.sort_values([*spec.grid_keys, "method", "trial"], kind="stable")
     require_results(collected, study, output)
     write_table(collected, output, {**(provenance or {}), "estimators": estimators})
@@ -248,8 +305,4 @@ def summarise_estimates(
     ``placements``) as :func:`collect` scores them."""
     spec = get_study(study)
     expected = _datasets(datasets, spec.segments, placements)
-    estimates = pd.concat(
-        [_scored_file(path, spec, expected) for path in paths],
-        ignore_index=True,
-    )
-    summarise(estimates, study).to_csv(output, index=False)
+    summarise(_scored_files(paths, spec, expected), study).to_csv(output, index=False)
