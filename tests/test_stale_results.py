@@ -729,3 +729,28 @@ def test_a_job_whose_code_changed_after_planning_is_not_left_current(reduced_run
     # Refusing the job, or recording what it ran, both leave it to be made again.
     if made.returncode == 0:
         assert "render_cmc" in _dry_run(run, target), "results of unrecorded code left current"
+
+
+# Python takes a module's cached bytecode as current by the source's size and modification
+# second: an edit keeping both reruns the job (the fingerprint reads the source), which must then
+# run the edited code, not the old bytecode.
+def test_an_edit_that_keeps_size_and_time_reruns_on_the_edited_code(
+    reduced_run, tmp_path, monkeypatch
+):
+    run = reduced_run.copy(tmp_path / "run")
+    # Bytecode written as a user's Python writes it.
+    monkeypatch.delenv("PYTHONDONTWRITEBYTECODE", raising=False)
+    target = "results/tables/paper_b_claims.csv"
+    made = run.snakemake(target, "--forcerun", "render_hinge")
+    assert made.returncode == 0, made.stderr[-4000:]
+    module = run.workdir / PKG / "papers" / "paper_b.py"
+    old, new = "low['mean'].max():.1f}", "low['mean'].max():.2f}"
+    stat = module.stat()
+    module.write_text(module.read_text().replace(old, new, 1))
+    os.utime(module, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert module.stat().st_size == stat.st_size
+    assert "render_hinge" in _dry_run(run, target)
+    made = run.snakemake(target)
+    assert made.returncode == 0, made.stderr[-4000:]
+    claims = (run.workdir / target).read_text()
+    assert re.search(r"ratio 0\.1: max \d+\.\d\d°", claims), "the old code ran"
