@@ -85,17 +85,21 @@ def helper(x):
 """
 
 
-def _run(folder: Path, module: str) -> float:
-    # A fresh process each time, with Numba's cache beside the sources: what a new job meets.
+def _python(folder: Path, code: str) -> float:
+    """What ``code`` prints, run in a fresh process with Numba's cache beside the sources in
+    ``folder``: what a new job meets."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(folder), str(SRC)])}
     env["PYTHONDONTWRITEBYTECODE"] = "1"  # a same-second edit of the same size
     env.pop("NUMBA_CACHE_DIR", None)
     env.pop("NUMBA_DISABLE_JIT", None)
-    code = f"from {module} import outer; print(outer(3.0))"
     out = subprocess.run(
         [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
     )
     return float(out.stdout)
+
+
+def _run(folder: Path, module: str) -> float:
+    return _python(folder, f"from {module} import outer; print(outer(3.0))")
 
 
 def _write(path: Path, text: str) -> None:
@@ -162,3 +166,24 @@ def test_an_unchanged_kernel_is_loaded_from_the_cache(tmp_path):
     _run(tmp_path, "caller")
     assert sorted(p.name for p in (tmp_path / "__pycache__").glob("*.nbi")) == cached
     assert any(name.startswith("caller.outer") for name in cached), cached
+
+
+EDITED_AFTER_IMPORT = """
+import callee
+
+with open(callee.__file__) as handle:
+    text = handle.read()
+with open(callee.__file__, "w") as handle:
+    handle.write(text.replace("return 2.0 * x", "return 5.0 * x"))
+print(callee.helper(3.0))
+"""
+
+
+def test_a_kernel_edited_after_its_module_was_imported_caches_the_code_that_ran(tmp_path):
+    # A job imports the package, then compiles each kernel on its first call, seconds later: an
+    # edit saved meanwhile must not file the machine code of the code as imported under the
+    # edited source, where every later process would load it.
+    _write(tmp_path / "callee.py", CALLEE.format(scale=0.0, factor=2.0))
+    assert _python(tmp_path, EDITED_AFTER_IMPORT) == 6.0  # the code the process imported
+    _write(tmp_path / "caller.py", "from callee import helper as outer\n")
+    assert _run(tmp_path, "caller") == 15.0  # the code the file now holds

@@ -21,6 +21,7 @@ import pytest
 from jointbench import fingerprint
 from jointbench.fingerprint import (
     MISSING,
+    check_bytecode_by_content,
     code_fingerprint,
     data_closure,
     dependency_versions,
@@ -295,6 +296,32 @@ def test_a_missing_source_and_a_folder_have_digests(tmp_path):
     assert before[str(tmp_path / "absent.yaml")] == MISSING
     (folder / "a.yaml").write_text("a: 2\n")
     assert source_digests([folder])[str(folder)] != before[str(folder)]
+
+
+def _imported_value(folder: Path) -> str:
+    """``lab.VALUE`` as a new process imports it from ``folder``, writing bytecode as Python
+    does by default."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPATH"] = str(folder)
+    code = "import lab; print(lab.VALUE)"
+    ran = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert ran.returncode == 0, ran.stderr
+    return ran.stdout.strip()
+
+
+def test_an_edit_that_keeps_size_and_time_is_imported_once_the_bytecode_is_checked(tmp_path):
+    module = tmp_path / "lab.py"
+    module.write_text("VALUE = 1.0\n")
+    assert _imported_value(tmp_path) == "1.0"  # its bytecode cached, by size and time
+    stat = module.stat()
+    module.write_text("VALUE = 2.0\n")
+    os.utime(module, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert _imported_value(tmp_path) == "1.0"  # what Python does alone: the old bytecode
+    check_bytecode_by_content(module)
+    assert _imported_value(tmp_path) == "2.0"
+    module.write_text("VALUE = 3.0\n")
+    os.utime(module, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert _imported_value(tmp_path) == "3.0"  # and it stays checked by content
 
 
 # The store of parsed summaries (``JOINTBENCH_CACHE``): each Snakemake process reads it instead

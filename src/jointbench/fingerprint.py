@@ -83,6 +83,7 @@ import json
 import os
 import pkgutil
 import platform
+import py_compile
 import re
 import shutil
 import sys
@@ -100,6 +101,7 @@ from jointbench.owncode import _library_roots
 
 __all__ = [
     "MISSING",
+    "check_bytecode_by_content",
     "code_fingerprint",
     "data_closure",
     "dependency_versions",
@@ -827,3 +829,41 @@ def _own_imports(paths: Iterable[str]) -> list[str]:
         os.path.relpath(module) if module.is_relative_to(here) else str(module)
         for _, module in own_closure(*scripts)
     ]
+
+
+# Python takes a module's cached bytecode (``__pycache__``) as current while the source keeps its
+# size and its modification time to the second: an edit that keeps both (a same-second rewrite,
+# a copy that keeps time stamps) changes the fingerprint, which reads the source, and reruns the
+# job, which would run the old bytecode. A cache checked by the source's hash instead
+# (PEP 552) is compiled anew whenever the content differs, and stays checked by hash when Python
+# rewrites it.
+
+#: The flags of a bytecode cache that Python checks against the source's hash.
+_CHECKED_HASH = 0b11
+
+
+def check_bytecode_by_content(*roots: str | Path, package: str = "jointbench") -> None:
+    """Make every cached bytecode of ``package``'s modules, of the Python files ``roots`` (the
+    extensions) and of the user's own modules they import (:func:`own_closure`) one that Python
+    checks against its source's content: compiled now from the source as it is. A module
+    without a cache, or a cache that cannot be written, is left as it is."""
+    paths = [*_package(package).sources(), *map(Path, roots)]
+    paths += [path for _, path in own_closure(*roots, package=package)]
+    for path in paths:
+        cached = Path(importlib.util.cache_from_source(str(path)))
+        try:
+            with cached.open("rb") as handle:
+                flags = int.from_bytes(handle.read(8)[4:], "little")
+        except OSError:
+            continue  # none yet: the next run, before any job, checks the one Python writes
+        if flags == _CHECKED_HASH:
+            continue
+        try:
+            py_compile.compile(
+                str(path),
+                cfile=str(cached),
+                doraise=True,
+                invalidation_mode=py_compile.PycInvalidationMode.CHECKED_HASH,
+            )
+        except (OSError, py_compile.PyCompileError):
+            continue  # a folder that cannot be written, or code that does not compile

@@ -11,7 +11,11 @@ from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
 from jointbench.figures.common import study_title
-from jointbench.fingerprint import code_fingerprint, source_digests
+from jointbench.fingerprint import (
+    check_bytecode_by_content,
+    code_fingerprint,
+    source_digests,
+)
 from jointbench.running import run as jb_run
 from jointbench.papers import get_paper, paper_names, papers_of_study
 from jointbench.configuration import config as jb_config
@@ -681,6 +685,9 @@ def all_targets():
 # parameter, `sources` (track_sources).
 SCRIPTS = Path(workflow.basedir, "workflow", "scripts")
 EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
+# Python takes a module's cached bytecode as current by the source's size and time, which an edit
+# can keep: every cache is made one checked by the source's content, before any job runs.
+check_bytecode_by_content(*EXTENSIONS)
 # Every paper's published values: the inputs of the jobs of its own study (published_files),
 # left out of the code so that one paper's values rerun only those.
 PUBLISHED = [get_paper(name).published for name in paper_names()]

@@ -6,8 +6,10 @@ pay its per-call overhead on every tiny array. :func:`kernel` compiles it on its
 a process that never calls it never pays for importing and starting Numba. The machine code is
 cached beside the source file and rebuilt when anything compiled into it changes: Numba itself
 checks only the kernel's own file, so each kernel's cache entry is named by a digest of its
-source, of the functions it calls (other kernels, functions of ``numba.njit`` or
-``register_jitable``: their source and what they read in turn) and of the constants it reads,
+code as the process loaded it (its bytecode, what Numba compiles: never the file, which an
+edit saved after the import may already hold), of the functions it calls (other kernels,
+functions of ``numba.njit`` or ``register_jitable``: their code and what they read in turn)
+and of the constants it reads,
 by name or as a module's attribute (``module.NAME``) (:meth:`_Kernel.digest`), and an edit in
 another module gets an entry of its own instead of the old machine code. The Python source stays the
 specification: it runs as written (slowly) through ``kernel.__wrapped__``, and it counts in
@@ -18,7 +20,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import inspect
 import types
 from collections.abc import Callable
 
@@ -95,26 +96,37 @@ def kernel_called(frame: types.FrameType) -> _Kernel | None:
 
 
 def _code_digest(function: types.FunctionType, seen: set[int]) -> str:
-    """A digest of what of ``function`` Numba compiles in: its source and defaults, and what
+    """A digest of what of ``function`` Numba compiles in: its code and defaults, and what
     each global it names holds (:func:`_value_digest`). ``seen`` holds the ids of the functions
     and namespaces being digested, which a recursive reference meets again."""
     names = _global_names(function.__code__)
-    parts = [_source(function), repr(function.__defaults__)]
+    # The code as loaded, which Numba compiles: the file may hold an edit saved since.
+    parts = [_code_text(function.__code__), repr(function.__defaults__)]
     for name in sorted(names):
         if name in function.__globals__:
             parts.append(f"{name}={_value_digest(function.__globals__[name], names, seen)}")
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
-def _source(function: Callable) -> str:
-    """``function``'s source text; its bytecode and constants where the source is not at hand
-    (a function made by ``exec``)."""
-    try:
-        return inspect.getsource(function)
-    except (OSError, TypeError):
-        code = function.__code__
-        constants = [c for c in code.co_consts if not isinstance(c, types.CodeType)]
-        return f"{code.co_code.hex()} {constants!r}"
+def _code_text(code: types.CodeType) -> str:
+    """The bytecode, names and constants of ``code`` and of the code nested in it
+    (comprehensions, inner functions), as text; line numbers left out, as they change no
+    machine code."""
+    constants = [_constant_text(c) for c in code.co_consts]
+    return (
+        f"{code.co_code.hex()} {code.co_names} {code.co_varnames} {code.co_freevars} "
+        f"{code.co_cellvars} [{', '.join(constants)}]"
+    )
+
+
+def _constant_text(constant: object) -> str:
+    """A constant of a code object as text, the same in every process: a set's members sorted,
+    as string hashing orders them differently in each."""
+    if isinstance(constant, types.CodeType):
+        return _code_text(constant)
+    if isinstance(constant, frozenset):
+        return f"frozenset({sorted(map(repr, constant))})"
+    return repr(constant)
 
 
 def _global_names(code: types.CodeType) -> set[str]:
