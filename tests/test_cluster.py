@@ -182,3 +182,16 @@ def test_scaling_reduces_the_grid_from_the_chosen_factor():
     base = scaling.study_config("cmc")["trials"]
     assert [s.trials for s in scales] == [base, 10 * base, 100 * base]
     assert scales[0].grid is None and scales[2].grid == scaling.reduced_grid("cmc")
+
+
+def test_the_reduced_config_shrinks_every_study_of_the_config():
+    # A study it leaves out runs its full grid and trials in the cluster check and in
+    # scaling.py's reduced factors: most of the jobs, and an error for that study.
+    full = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["studies"]
+    reduced = yaml.safe_load(scaling.REDUCED.read_text())["studies"]
+    for study, block in full.items():
+        grid = scaling.reduced_grid(study)
+        assert reduced[study]["trials"] < block["trials"], study
+        assert scaling.Scale(1, 1, grid).conditions({}) < scaling.Scale(1, 1, None).conditions(
+            block["grid"]
+        ), study
