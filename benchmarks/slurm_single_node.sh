@@ -23,7 +23,8 @@ CONFIGFILE=$ROOT/benchmarks/reduced.yaml
 # The grain meant for a cluster: many small jobs rather than one per study and estimator.
 CLUSTER_GRAIN=$ROOT/config/variants/per_condition.yaml
 SLURM_CONF=/etc/slurm/slurm.conf
-STATE=$WORK/slurm
+# The daemons' state, spool and logs: a folder of their own, not one of the runs' workflow copies.
+STATE=$WORK/daemons
 NODE=$(hostname -s)
 
 STARTED_PIDS=()

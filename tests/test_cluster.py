@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -195,3 +196,27 @@ def test_the_reduced_config_shrinks_every_study_of_the_config():
         assert scaling.Scale(1, 1, grid).conditions({}) < scaling.Scale(1, 1, None).conditions(
             block["grid"]
         ), study
+
+
+def test_the_cluster_check_keeps_the_daemons_files_out_of_both_runs(tmp_path):
+    # Sourced, the script only defines its steps; copying stands in for each run, so this
+    # prints where each run's workflow copy goes and where the daemons keep state and logs.
+    script = ROOT / "benchmarks" / "slurm_single_node.sh"
+    program = (
+        f"source {script}\n"
+        'echo "daemons $STATE"\n'
+        'copy_workflow() { echo "run $1"; exit 0; }\n'
+        "(run_local)\n"
+        "(run_slurm)\n"
+    )
+    environment = {**os.environ, "SLURM_CHECK_DIR": str(tmp_path)}
+    printed = subprocess.run(
+        ["bash", "-c", program], env=environment, capture_output=True, text=True, timeout=30
+    )
+    assert printed.returncode == 0, printed.stderr
+    folders = [line.split(" ", 1) for line in printed.stdout.splitlines()]
+    (daemons,) = [Path(path) for kind, path in folders if kind == "daemons"]
+    runs = [Path(path) for kind, path in folders if kind == "run"]
+    assert len(runs) == 2 and runs[0] != runs[1], printed.stdout
+    for run in runs:
+        assert not daemons.is_relative_to(run) and not run.is_relative_to(daemons), run
