@@ -567,6 +567,16 @@ def missing_outputs(summary: str) -> dict[str, str]:
     return missing
 
 
+def _failed_job_logs(block: str) -> str:
+    """The logs Snakemake names in the error ``block`` of a failed job, as it lists them: the
+    rule's, and on a cluster the cluster job's own after it (the one that says a job was killed
+    for its memory or time); "no log" where it names none."""
+    found = re.search(
+        r"^ {4}log: (.+?)(?: \(check log file\(s\) for error details\))?$", block, re.M
+    )
+    return found.group(1) if found else "no log"
+
+
 def failure_lines(
     logs: Path | str | Sequence[Path | str], environ: Mapping[str, str] = os.environ
 ) -> str:
@@ -580,13 +590,13 @@ def failure_lines(
     paths = [Path(logs)] if isinstance(logs, str | Path) else [Path(log) for log in logs]
     text = "".join(path.read_text(errors="replace") for path in paths if path.is_file())
     failed = [
-        (rule, re.search(r"^ {4}log: (\S+)", block, flags=re.M))
+        (rule, _failed_job_logs(block))
         for rule, block in re.findall(r"^Error in rule (\S+):\n((?: {4}.*\n?)*)", text, re.M)
     ]
     if not failed:
         return ""
     lines = [f"jointbench: {len(failed)} job{'s' * (len(failed) != 1)} failed:"]
-    lines += [f"  {rule}: {found.group(1) if found else 'no log'}" for rule, found in failed]
+    lines += [f"  {rule}: {logs}" for rule, logs in failed]
     rules = sorted({rule for rule, _ in failed})
     command = invocation.snakemake_command("--forcerun", *rules, environ=environ)
     lines.append(
