@@ -193,11 +193,12 @@ stop_everything() {
 
 # ---- the two runs -------------------------------------------------------------------------------
 
-# A fresh copy of what a user clones, so both runs start from an empty results/.
+# A fresh copy of what a user clones, so both runs start from an empty results/. profiles/ too:
+# Snakemake applies profiles/default (keep-going) beside --profile profiles/slurm.
 copy_workflow() {
     local destination=$1
     mkdir -p "$destination"
-    cp -r "$ROOT/Snakefile" "$ROOT/workflow" "$ROOT/config" "$destination/"
+    cp -r "$ROOT/Snakefile" "$ROOT/workflow" "$ROOT/config" "$ROOT/profiles" "$destination/"
 }
 
 run_local() {
