@@ -23,7 +23,8 @@ CONFIGFILE=$ROOT/benchmarks/reduced.yaml
 # The grain meant for a cluster: many small jobs rather than one per study and estimator.
 CLUSTER_GRAIN=$ROOT/config/variants/per_condition.yaml
 SLURM_CONF=/etc/slurm/slurm.conf
-STATE=$WORK/slurm
+# The daemons' state, spool and logs: a folder of their own, not one of the runs' workflow copies.
+STATE=$WORK/daemons
 NODE=$(hostname -s)
 
 STARTED_PIDS=()
@@ -192,11 +193,12 @@ stop_everything() {
 
 # ---- the two runs -------------------------------------------------------------------------------
 
-# A fresh copy of what a user clones, so both runs start from an empty results/.
+# A fresh copy of what a user clones, so both runs start from an empty results/. profiles/ too:
+# Snakemake applies profiles/default (keep-going) beside --profile profiles/slurm.
 copy_workflow() {
     local destination=$1
     mkdir -p "$destination"
-    cp -r "$ROOT/Snakefile" "$ROOT/workflow" "$ROOT/config" "$destination/"
+    cp -r "$ROOT/Snakefile" "$ROOT/workflow" "$ROOT/config" "$ROOT/profiles" "$destination/"
 }
 
 run_local() {

@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -182,3 +183,57 @@ def test_scaling_reduces_the_grid_from_the_chosen_factor():
     base = scaling.study_config("cmc")["trials"]
     assert [s.trials for s in scales] == [base, 10 * base, 100 * base]
     assert scales[0].grid is None and scales[2].grid == scaling.reduced_grid("cmc")
+
+
+def test_the_reduced_config_shrinks_every_study_of_the_config():
+    # A study it leaves out runs its full grid and trials in the cluster check and in
+    # scaling.py's reduced factors: most of the jobs, and an error for that study.
+    full = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["studies"]
+    reduced = yaml.safe_load(scaling.REDUCED.read_text())["studies"]
+    for study, block in full.items():
+        grid = scaling.reduced_grid(study)
+        assert reduced[study]["trials"] < block["trials"], study
+        assert scaling.Scale(1, 1, grid).conditions({}) < scaling.Scale(1, 1, None).conditions(
+            block["grid"]
+        ), study
+
+
+def _cluster_check_steps(program: str, work) -> str:
+    """What ``program`` prints, run by bash after sourcing benchmarks/slurm_single_node.sh
+    (sourced, the script only defines its steps) with ``work`` as its work folder."""
+    script = ROOT / "benchmarks" / "slurm_single_node.sh"
+    environment = {**os.environ, "SLURM_CHECK_DIR": str(work)}
+    printed = subprocess.run(
+        ["bash", "-c", f"source {script}\n{program}"],
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert printed.returncode == 0, printed.stderr
+    return printed.stdout
+
+
+def test_the_cluster_check_keeps_the_daemons_files_out_of_both_runs(tmp_path):
+    # Copying stands in for each run: this prints where each run's workflow copy goes and
+    # where the daemons keep state and logs.
+    printed = _cluster_check_steps(
+        'echo "daemons $STATE"\n'
+        'copy_workflow() { echo "run $1"; exit 0; }\n'
+        "(run_local)\n"
+        "(run_slurm)\n",
+        tmp_path,
+    )
+    folders = [line.split(" ", 1) for line in printed.splitlines()]
+    (daemons,) = [Path(path) for kind, path in folders if kind == "daemons"]
+    runs = [Path(path) for kind, path in folders if kind == "run"]
+    assert len(runs) == 2 and runs[0] != runs[1], printed
+    for run in runs:
+        assert not daemons.is_relative_to(run) and not run.is_relative_to(daemons), run
+
+
+def test_the_cluster_check_runs_copies_with_the_repositorys_own_profile(tmp_path):
+    # Snakemake applies profiles/default (keep-going: a failed job fails alone) under
+    # --profile profiles/slurm too: a copy without it is not the run a user's clone makes.
+    _cluster_check_steps(f"copy_workflow {tmp_path / 'run'}", tmp_path)
+    assert (tmp_path / "run" / "profiles" / "default" / "config.yaml").is_file()

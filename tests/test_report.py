@@ -267,3 +267,17 @@ def test_a_job_that_wrote_no_output_is_counted_and_named_among_the_failed(tmp_pa
     assert "--forcerun estimate_centroid estimate_quiet`" in lines, lines
     log.write_text(MISSING_OUTPUT_LOG)
     assert "1 job failed:\n  estimate_quiet: wrote no " in report.failure_lines(log, environ)
+
+
+def test_a_failed_cluster_job_is_named_with_its_rules_log_and_the_cluster_jobs_own(tmp_path):
+    """Through the SLURM executor a failed job has two logs, the rule's and the cluster job's
+    (where a job killed for its memory or time says so): both are named, as Snakemake lists them."""
+    slurm_log = "/w/.snakemake/slurm_logs/rule_estimate_cmc_LM/25.log"
+    log = tmp_path / "run.log"
+    log.write_text(
+        FAILED_LOG.replace("estimate_centroid", "estimate_cmc_LM").replace(
+            "centroid/a.log (", f"LM.log, {slurm_log} ("
+        )
+    )
+    lines = report.failure_lines(log, {}).splitlines()
+    assert f"  estimate_cmc_LM: results/logs/estimate/cmc/LM.log, {slurm_log}" in lines

@@ -567,6 +567,16 @@ def missing_outputs(summary: str) -> dict[str, str]:
     return missing
 
 
+def _failed_job_logs(block: str) -> str:
+    """The logs Snakemake names in the error ``block`` of a failed job, as it lists them: the
+    rule's, and on a cluster the cluster job's own after it (the one that says a job was killed
+    for its memory or time); "no log" where it names none."""
+    found = re.search(
+        r"^ {4}log: (.+?)(?: \(check log file\(s\) for error details\))?$", block, re.M
+    )
+    return found.group(1) if found else "no log"
+
+
 def failure_lines(
     logs: Path | str | Sequence[Path | str], environ: Mapping[str, str] = os.environ
 ) -> str:
@@ -597,12 +607,12 @@ def failure_lines(
 
 def _errors(text: str) -> list[tuple[str, str]]:
     """Each job of a Snakemake log ``text`` that failed with an ``Error in rule`` block (its
-    program exited non-zero, or its script raised), as its rule and its log (``no log``)."""
-    failed = []
-    for rule, block in re.findall(r"^Error in rule (\S+):\n((?: {4}.*\n?)*)", text, re.M):
-        found = re.search(r"^ {4}log: (\S+)", block, flags=re.M)
-        failed.append((rule, found.group(1) if found else "no log"))
-    return failed
+    program exited non-zero, or its script raised), as its rule and its logs
+    (:func:`_failed_job_logs`)."""
+    return [
+        (rule, _failed_job_logs(block))
+        for rule, block in re.findall(r"^Error in rule (\S+):\n((?: {4}.*\n?)*)", text, re.M)
+    ]
 
 
 def _missing_outputs(text: str) -> list[tuple[str, str]]:
