@@ -115,9 +115,10 @@ def test_verdicts_target_runs_the_ensemble_and_is_never_stale(tmp_path):
 @pytest.mark.pipeline
 def test_the_readme_is_not_rewritten_from_verdicts_an_edit_made_stale(tmp_path):
     """`jointbench readme` rewrites the README's verdicts over seeds from
-    results/tables/verdicts.csv while the `verdicts` target is up to date; after an
-    estimator's edit, which `snakemake -j2` does not carry into that table, it refuses, naming
-    the table, and leaves the block as it was."""
+    results/tables/verdicts.csv while the `verdicts` target is up to date. After an
+    estimator's edit it refuses, naming the jobs `snakemake -j2` would redo; once that has
+    run, it still refuses the verdicts, which `snakemake -j2` does not carry into that table,
+    naming the table, and leaves their block as it was."""
     workdir = copy_workflow(tmp_path)
     shutil.copytree(ROOT / "src", workdir / "src", ignore=shutil.ignore_patterns("*.egg-info"))
     environment = {**os.environ, "PYTHONPATH": str(workdir / "src")}
@@ -125,6 +126,7 @@ def test_the_readme_is_not_rewritten_from_verdicts_an_edit_made_stale(tmp_path):
     made = subprocess.run(
         [
             str(SNAKEMAKE),
+            "all",
             "verdicts",
             "-j2",
             "--workflow-profile",
@@ -142,10 +144,8 @@ def test_the_readme_is_not_rewritten_from_verdicts_an_edit_made_stale(tmp_path):
         env=environment,
     )
     assert made.returncode == 0, made.stderr[-4000:]
-    # What the command reads besides: the default run's comparison, and a README to rewrite.
-    comparison = {"paper": ["A"], "entry": ["value"], "status": ["reproduced"]}
-    tables = workdir / "results" / "tables"
-    pd.DataFrame(comparison).to_csv(tables / "published_comparison.csv", index=False)
+    # The default target too: the command refuses results it would redo. And a README to
+    # rewrite.
     blocks = ("reproduction-summary", VERDICTS_BLOCK)
     readme = workdir / "README.md"
     readme.write_text("".join(f"<!-- {b}:start -->\n<!-- {b}:end -->\n" for b in blocks))
@@ -161,6 +161,22 @@ def test_the_readme_is_not_rewritten_from_verdicts_an_edit_made_stale(tmp_path):
     edited = text.replace("change <= tol_fun:", "change <= 2 * tol_fun:", 1)
     assert edited != text
     sphere.write_text(edited)
+    rewritten = subprocess.run(
+        command, cwd=workdir, capture_output=True, text=True, env=environment
+    )
+    assert rewritten.returncode != 0, rewritten.stdout
+    # First the results the default target makes: `snakemake -j2` redoes the estimates.
+    assert "is not up to date" in rewritten.stderr and "estimate_cmc (" in rewritten.stderr
+    assert "Verdicts over" not in readme.read_text()
+    remade = subprocess.run(
+        [str(SNAKEMAKE), "-j2", "--workflow-profile", "none", "--configfile", reduced],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=environment,
+    )
+    assert remade.returncode == 0, remade.stderr[-4000:]
     rewritten = subprocess.run(
         command, cwd=workdir, capture_output=True, text=True, env=environment
     )
