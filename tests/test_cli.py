@@ -251,7 +251,17 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
     assert code == 1 and "typed" in readme.read_text()
     assert "`snakemake -j2 verdicts` would redo verdicts_member_cmc (1): run it first" in err
 
+    # Nothing to redo, but a failed job's outputs missing, which no run remakes while the
+    # verdicts made from them are present: refused too, naming them and the command.
     monkeypatch.setattr(cli, "_verdicts_pending", lambda args: {})
+    missing = {"results/verdicts/cmc/3.parquet": "verdicts_member_cmc"}
+    monkeypatch.setattr(cli, "_verdicts_missing", lambda args: missing)
+    code, _, err = run(capsys, *arguments)
+    assert code == 1 and "typed" in readme.read_text()
+    assert "1 file of the run is missing (results/verdicts/cmc/3.parquet)" in err
+    assert "`snakemake -j2 verdicts --forcerun verdicts_member_cmc` first" in err
+
+    monkeypatch.setattr(cli, "_verdicts_missing", lambda args: {})
     code, out, _ = run(capsys, *arguments)
     assert code == 0 and "verdicts over seeds updated" in out
     text = readme.read_text()
@@ -276,6 +286,9 @@ def test_readme_asks_about_the_verdicts_with_every_config_file(monkeypatch):
     assert asked[0][1:] == ["verdicts", "--dry-run", "--configfile", "a.yaml", "b.yaml"]
     command = "snakemake -j2 verdicts --configfile a.yaml b.yaml"
     assert cli._verdicts_command(args) == command
+    monkeypatch.setattr(cli, "run_missing_outputs", lambda command, what: asked.append(command))
+    cli._verdicts_missing(args)
+    assert asked[1][1:] == ["verdicts", "--summary", "--configfile", "a.yaml", "b.yaml"]
 
 
 def _toy_run(tmp_path):

@@ -166,6 +166,19 @@ def _readme(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 1
+    missing = _verdicts_missing(args)
+    if missing:
+        rules = sorted(set(missing.values()))
+        rerun = shlex.join(
+            ["snakemake", "-j2", "verdicts", "--forcerun", *rules, *_config_options(args)]
+        )
+        print(
+            f"jointbench: {args.readme}: verdicts over seeds left as they are: "
+            f"{missing_files_named(missing)}, such as a failed job's outputs, which a run "
+            f"does not remake while the verdicts made from them are present: run `{rerun}` first",
+            file=sys.stderr,
+        )
+        return 1
     protocols_path = args.results / PROTOCOL_SHARES
     protocols = pd.read_csv(protocols_path) if protocols_path.is_file() else None
     summary = standout_summary(pd.read_csv(verdicts_path), protocols)
@@ -191,6 +204,12 @@ def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
     return _pending(args, ["verdicts"], "jointbench readme")
 
 
+def _verdicts_missing(args: argparse.Namespace) -> dict[str, str]:
+    """The files of the run's ``verdicts`` target that are missing though a run would not
+    remake them (:func:`_missing`)."""
+    return _missing(args, ["verdicts"], "jointbench readme")
+
+
 def _default_pending(args: argparse.Namespace, command: str) -> dict[str, int]:
     """The jobs of each rule that the run's default target, ``snakemake -j2``, would redo
     (:func:`_pending`), which jointbench ``command`` asks."""
@@ -206,11 +225,11 @@ def _pending(args: argparse.Namespace, targets: list[str], what: str) -> dict[st
     return dry_run_pending([snakemake, *targets, "--dry-run", *_config_options(args)], what)
 
 
-def _missing(args: argparse.Namespace, what: str) -> dict[str, str]:
-    """``{file: rule}`` of the run's files that are missing though a run would not remake
-    them, a failed job's outputs (:func:`jointbench.report.run_missing_outputs`), by the
-    ``snakemake`` beside this interpreter, which ``what`` asks."""
-    summary = [_run_snakemake(what), "--summary", *_config_options(args)]
+def _missing(args: argparse.Namespace, targets: list[str], what: str) -> dict[str, str]:
+    """``{file: rule}`` of the files of a run of ``targets`` that are missing though it would
+    not remake them, a failed job's outputs (:func:`jointbench.report.run_missing_outputs`),
+    by the ``snakemake`` beside this interpreter, which ``what`` asks."""
+    summary = [_run_snakemake(what), *targets, "--summary", *_config_options(args)]
     return run_missing_outputs(summary, what)
 
 
@@ -263,7 +282,7 @@ def _incomplete(args: argparse.Namespace, command: str) -> bool:
     """Whether files of the run that jointbench ``command`` reads are missing though a run
     would not remake them (:func:`_missing`): the results made from them are from before the
     job that failed. If so, it names them and the command that makes them again."""
-    missing = _missing(args, f"jointbench {command}")
+    missing = _missing(args, [], f"jointbench {command}")
     if not missing:
         return False
     rules = sorted(set(missing.values()))
