@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import argparse
 import io
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -249,7 +251,17 @@ def test_readme_writes_the_verdicts_over_seeds_from_the_results(tmp_path, capsys
     assert code == 1 and "typed" in readme.read_text()
     assert "`snakemake -j2 verdicts` would redo verdicts_member_cmc (1): run it first" in err
 
+    # Nothing to redo, but a failed job's outputs missing, which no run remakes while the
+    # verdicts made from them are present: refused too, naming them and the command.
     monkeypatch.setattr(cli, "_verdicts_pending", lambda args: {})
+    missing = {"results/verdicts/cmc/3.parquet": "verdicts_member_cmc"}
+    monkeypatch.setattr(cli, "_verdicts_missing", lambda args: missing)
+    code, _, err = run(capsys, *arguments)
+    assert code == 1 and "typed" in readme.read_text()
+    assert "1 file of the run is missing (results/verdicts/cmc/3.parquet)" in err
+    assert "`snakemake -j2 verdicts --forcerun verdicts_member_cmc` first" in err
+
+    monkeypatch.setattr(cli, "_verdicts_missing", lambda args: {})
     code, out, _ = run(capsys, *arguments)
     assert code == 0 and "verdicts over seeds updated" in out
     text = readme.read_text()
@@ -274,6 +286,9 @@ def test_readme_asks_about_the_verdicts_with_every_config_file(monkeypatch):
     assert asked[0][1:] == ["verdicts", "--dry-run", "--configfile", "a.yaml", "b.yaml"]
     command = "snakemake -j2 verdicts --configfile a.yaml b.yaml"
     assert cli._verdicts_command(args) == command
+    monkeypatch.setattr(cli, "run_missing_outputs", lambda command, what: asked.append(command))
+    cli._verdicts_missing(args)
+    assert asked[1][1:] == ["verdicts", "--summary", "--configfile", "a.yaml", "b.yaml"]
 
 
 def _toy_run(tmp_path):
@@ -501,3 +516,36 @@ def test_fit_reads_a_configfile_over_the_run_folders_config(tmp_path, monkeypatc
     # Without --configfile no config is read: a recording is fitted in any folder.
     code, out, _ = run(capsys, "fit", "markers.csv", "--format", "csv")
     assert code == 0 and csv_rows(out).iloc[0]["method"] == "NM"
+
+
+# A workflow whose second rule is made from its first: a run in which the first failed, under
+# keep-going, leaves the second's file from before and the first's removed.
+_TWO_RULES = """\
+rule all:
+    input: "results/b.txt"
+rule b:
+    input: "results/a.txt"
+    output: "results/b.txt"
+    shell: "cp {input} {output}"
+rule a:
+    output: "results/a.txt"
+    shell: "echo a > {output}"
+"""
+
+
+def test_results_a_failed_job_left_missing_are_stale(tmp_path, monkeypatch, capsys):
+    """Snakemake does not remake a failed job's removed outputs while the files made from them
+    are present, so its dry run has nothing to redo: the results still are not current, and
+    the files missing are named with the command that makes them again."""
+    (tmp_path / "Snakefile").write_text(_TWO_RULES)
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "b.txt").write_text("a\n")
+    monkeypatch.chdir(tmp_path)
+    args = argparse.Namespace(results=Path("results"), configfile=[])
+    assert cli._stale(args, "snapshot")
+    message = capsys.readouterr().err
+    assert "1 file of the run is missing (results/a.txt)" in message
+    assert "`snakemake -j2 --forcerun a`" in message
+    (tmp_path / "results" / "a.txt").write_text("a\n")
+    (tmp_path / "results" / "b.txt").touch()
+    assert not cli._stale(args, "snapshot")

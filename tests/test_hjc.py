@@ -15,6 +15,7 @@ from jointbench.estimators.hjc import (
     fit_gauss_markov,
     point_covariance,
 )
+from jointbench.estimators.segment_poses import trial_poses
 from jointbench.geometry import rotation_matrix, skew
 from jointbench.numerics.poses import rigid_poses
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
@@ -326,3 +327,47 @@ def test_a_singular_gauss_markov_system_is_a_result_not_a_crash(monkeypatch, fra
         assert not result.converged and result.covariance is None
         assert result.status == "singular Gauss–Markov information matrix (Singular matrix)"
         np.testing.assert_array_equal(result.center, single.diagnostics["analytic_center"])
+
+
+def _frame0_covariance(proximal, distal, center, variance):
+    """``s^2 (H^-1 + H^-1 (F_0 A_0 F_0' + F_1 A_1 F_1') H^-1)`` [mm^2] of paper C's centre with
+    every term at ``center`` (``hjc`` module docstring, "Frame 0"), from the segments' poses."""
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    rotations, at_joint = [], []
+    for segment in (poses["proximal"], poses["distal"]):
+        offsets = segment.body - segment.body.mean(axis=0)
+        inertia = np.sum(offsets**2) * np.eye(3) - offsets.T @ offsets
+        lever = skew(center - segment.body.mean(axis=0))
+        at_joint.append(lever @ np.linalg.inv(inertia) @ lever.T + np.eye(3) / len(offsets))
+        rotations.append(segment.rotation[1:])
+    inverses = np.linalg.inv(
+        sum(r @ a @ np.swapaxes(r, 1, 2) for r, a in zip(rotations, at_joint, strict=True))
+    )
+    m = rotations[0] - rotations[1]
+    unit = np.linalg.inv(np.einsum("tki,tkl,tlj->ij", m, inverses, m))
+    added = sum(
+        gain @ a @ gain.T
+        for gain, a in zip(
+            (np.einsum("tki,tkl,tlj->ij", m, inverses, r) for r in rotations),
+            at_joint,
+            strict=True,
+        )
+    )
+    return variance * (unit + unit @ added @ unit)
+
+
+def test_a_fit_stopped_early_states_its_covariance_at_one_centre():
+    """Stopped at its iteration cap, paper C's fit states W_c at the centre its last weights
+    were formed at; the covariance with the frame-0 errors added takes the frame-0 fits' error
+    at the joint there too, not at the centre the last step moved to."""
+    proximal, distal = _noisy(two_segments(150)[0], 9), _noisy(two_segments(150)[1], 10)
+    result = fit_gauss_markov(proximal, distal, max_iterations=1)
+    assert not result.converged
+    start = np.asarray(result.diagnostics["analytic_center"])
+    variance = result.diagnostics["noise_mm"] ** 2 / 3.0
+    expected = _frame0_covariance(proximal, distal, start, variance)
+    stated = np.asarray(result.diagnostics["center_covariance_mm2"])
+    np.testing.assert_allclose(stated, expected, rtol=1e-8)
+    converged = fit_gauss_markov(proximal, distal)
+    at_answer = _frame0_covariance(proximal, distal, converged.center, variance)
+    np.testing.assert_allclose(converged.diagnostics["center_covariance_mm2"], at_answer, rtol=1e-6)

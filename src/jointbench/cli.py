@@ -42,7 +42,12 @@ from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
-from jointbench.report import dry_run_pending, readme_headlines
+from jointbench.report import (
+    dry_run_pending,
+    missing_files_named,
+    readme_headlines,
+    run_missing_outputs,
+)
 from jointbench.uncertainty import check_resampling
 
 #: The config every run starts from (the Snakefile's ``configfile``), relative to the run's
@@ -161,6 +166,19 @@ def _readme(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 1
+    missing = _verdicts_missing(args)
+    if missing:
+        rules = sorted(set(missing.values()))
+        rerun = shlex.join(
+            ["snakemake", "-j2", "verdicts", "--forcerun", *rules, *_config_options(args)]
+        )
+        print(
+            f"jointbench: {args.readme}: verdicts over seeds left as they are: "
+            f"{missing_files_named(missing)}, such as a failed job's outputs, which a run "
+            f"does not remake while the verdicts made from them are present: run `{rerun}` first",
+            file=sys.stderr,
+        )
+        return 1
     protocols_path = args.results / PROTOCOL_SHARES
     protocols = pd.read_csv(protocols_path) if protocols_path.is_file() else None
     summary = standout_summary(pd.read_csv(verdicts_path), protocols)
@@ -186,6 +204,12 @@ def _verdicts_pending(args: argparse.Namespace) -> dict[str, int]:
     return _pending(args, ["verdicts"], "jointbench readme")
 
 
+def _verdicts_missing(args: argparse.Namespace) -> dict[str, str]:
+    """The files of the run's ``verdicts`` target that are missing though a run would not
+    remake them (:func:`_missing`)."""
+    return _missing(args, ["verdicts"], "jointbench readme")
+
+
 def _default_pending(args: argparse.Namespace, command: str) -> dict[str, int]:
     """The jobs of each rule that the run's default target, ``snakemake -j2``, would redo
     (:func:`_pending`), which jointbench ``command`` asks."""
@@ -197,13 +221,28 @@ def _pending(args: argparse.Namespace, targets: list[str], what: str) -> dict[st
     ``snakemake`` beside this interpreter, in the run's folder (the working directory), with
     the command's config files, which ``what`` asks; ``ValueError`` where there is no such
     ``snakemake``."""
+    snakemake = _run_snakemake(what)
+    return dry_run_pending([snakemake, *targets, "--dry-run", *_config_options(args)], what)
+
+
+def _missing(args: argparse.Namespace, targets: list[str], what: str) -> dict[str, str]:
+    """``{file: rule}`` of the files of a run of ``targets`` that are missing though it would
+    not remake them, a failed job's outputs (:func:`jointbench.report.run_missing_outputs`),
+    by the ``snakemake`` beside this interpreter, which ``what`` asks."""
+    summary = [_run_snakemake(what), *targets, "--summary", *_config_options(args)]
+    return run_missing_outputs(summary, what)
+
+
+def _run_snakemake(what: str) -> str:
+    """The ``snakemake`` beside this interpreter, which ``what`` asks about the run's results;
+    ``ValueError`` where there is none."""
     snakemake = Path(sys.executable).with_name("snakemake")
     if not snakemake.is_file():
         raise ValueError(
             f"no {snakemake}: {what} asks the run's snakemake whether the results it reads "
             "are up to date; install the project's environment"
         )
-    return dry_run_pending([str(snakemake), *targets, "--dry-run", *_config_options(args)], what)
+    return str(snakemake)
 
 
 #: The files Snakemake reads the workflow from, in the folder it runs in, without ``-s``.
@@ -212,8 +251,9 @@ _SNAKEFILES = ("Snakefile", "snakefile", "workflow/Snakefile", "workflow/snakefi
 
 def _stale(args: argparse.Namespace, command: str) -> bool:
     """Whether the results jointbench ``command`` reads are not up to date with the code,
-    config and data that make them, as the dry run of the run's default target says; if so,
-    it says which jobs would be redone and by what command. Results that are not the
+    config and data that make them, as the dry run of the run's default target says, or miss
+    files a failed job left out (:func:`_incomplete`); if so, it says which jobs would be
+    redone or which files are missing, and by what command. Results that are not the
     ``results/`` of a workflow in the working directory cannot be asked about: that is said,
     and they count as current."""
     workdir = Path.cwd()
@@ -227,12 +267,30 @@ def _stale(args: argparse.Namespace, command: str) -> bool:
         return False
     pending = _default_pending(args, command)
     if not pending:
-        return False
+        return _incomplete(args, command)
     jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
     rerun = shlex.join(["snakemake", "-j2", *_config_options(args)])
     print(
         f"jointbench {command}: {args.results} is not up to date with the code, config and "
         f"data that make it; `{rerun}` would redo {jobs}: run it first",
+        file=sys.stderr,
+    )
+    return True
+
+
+def _incomplete(args: argparse.Namespace, command: str) -> bool:
+    """Whether files of the run that jointbench ``command`` reads are missing though a run
+    would not remake them (:func:`_missing`): the results made from them are from before the
+    job that failed. If so, it names them and the command that makes them again."""
+    missing = _missing(args, [], f"jointbench {command}")
+    if not missing:
+        return False
+    rules = sorted(set(missing.values()))
+    rerun = shlex.join(["snakemake", "-j2", "--forcerun", *rules, *_config_options(args)])
+    print(
+        f"jointbench {command}: {missing_files_named(missing)}, such as a failed job's "
+        "outputs, which a run does not remake while the files made from them are present: "
+        f"{args.results} holds what was made before; run `{rerun}` first",
         file=sys.stderr,
     )
     return True

@@ -523,13 +523,11 @@ def check_current(
             "A report now would show results that no longer follow from them: run "
             f"`snakemake {shlex.join(options)}` first, then the report"
         )
-    missing = missing_outputs(_checked_output([*program, "--summary", *options], run))
+    missing = run_missing_outputs([*program, "--summary", *options], "snakemake --report", run)
     if missing:
         rules = sorted(set(missing.values()))
-        files = ", ".join(list(missing)[:5]) + (", ..." if len(missing) > 5 else "")
         raise ValueError(
-            f"snakemake --report: {len(missing)} file{'s' * (len(missing) != 1)} of the run "
-            f"{'are' if len(missing) != 1 else 'is'} missing ({files}), such as a failed job's "
+            f"snakemake --report: {missing_files_named(missing)}, such as a failed job's "
             "outputs, which Snakemake removed and does not remake while the files made from "
             "them are present: a report now would show what those files held before. Run "
             f"`snakemake {shlex.join(['--forcerun', *rules, *options])}` first, then the report"
@@ -545,15 +543,30 @@ def _snakemake_program(first: str) -> list[str]:
     return [sys.executable, first]
 
 
-def _checked_output(command: list[str], run: Callable[..., subprocess.CompletedProcess]) -> str:
-    """The standard output of ``command``; ``ValueError`` with its output where it fails."""
-    done = run(command, capture_output=True, text=True)
+def run_missing_outputs(
+    command: Sequence[str],
+    what: str,
+    run: Callable[..., subprocess.CompletedProcess] = subprocess.run,
+) -> dict[str, str]:
+    """:func:`missing_outputs` of the ``snakemake --summary`` ``command``, which ``what`` (the
+    command asking) runs to learn whether the files of the run are present: a failed job's
+    outputs, which Snakemake removes, are not remade, nor listed by a dry run, while the files
+    made from them are present. ``ValueError`` with the summary's output where it fails."""
+    done = run(list(command), capture_output=True, text=True)
     if done.returncode != 0:
         raise ValueError(
-            "snakemake --report: the summary that checks the results are present failed:\n"
+            f"{what}: the summary that checks the results are present failed:\n"
             + (done.stdout + done.stderr).strip()[-3000:]
         )
-    return done.stdout
+    return missing_outputs(done.stdout)
+
+
+def missing_files_named(missing: dict[str, str]) -> str:
+    """How many of the run's files ``missing`` (:func:`missing_outputs`) names and the first
+    five of them, as a refusal says it."""
+    files = ", ".join(list(missing)[:5]) + (", ..." if len(missing) > 5 else "")
+    are = "are" if len(missing) != 1 else "is"
+    return f"{len(missing)} file{'s' * (len(missing) != 1)} of the run {are} missing ({files})"
 
 
 def missing_outputs(summary: str) -> dict[str, str]:

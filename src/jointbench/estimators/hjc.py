@@ -425,18 +425,16 @@ def _update_single(system: _Stacked):
 
     def update(trials: np.ndarray, centers: np.ndarray):
         m, y = system.m[trials], system.y[trials]
-        weights = _weights(
-            system.r0[trials],
-            system.r1[trials],
-            *system.point_covariances(trials, centers, centers),
-        )
+        at_joint = system.point_covariances(trials, centers, centers)
+        weights = _weights(system.r0[trials], system.r1[trials], *at_joint)
         weighted = weights @ m
         information = _summed_products(m, weighted)
         # Solved for the correction from the residuals, which keeps full precision when the
         # residuals are tiny (noise-free data) however large the coordinates.
         residual = y - _applied(m, centers)
         correction = _solve(information, _projected(weighted, residual))
-        return correction, np.linalg.norm(correction, axis=1), information, {"weights": weights}
+        kept = {"weights": weights, "a0": at_joint[0], "a1": at_joint[1]}
+        return correction, np.linalg.norm(correction, axis=1), information, kept
 
     return update
 
@@ -552,15 +550,15 @@ def _chi2(system: _Stacked, done: _Iterated, frame0: bool) -> np.ndarray:
 
 def _frame0_information(system: _Stacked, done: _Iterated) -> np.ndarray:
     """``F_0 A_0(c) F_0' + F_1 A_1(c) F_1'`` ``(T, 3, 3)`` per unit variance, with ``F_a =
-    sum_t M_t' W_t^-1 R_a(t)``, at paper C's answers ``c`` of a stack: what the frame-0
-    poses' errors add to the information's inverse on both sides (module docstring, "Frame
-    0"); NaN for a trial stopped before any iteration completed."""
+    sum_t M_t' W_t^-1 R_a(t)``, at the centres ``c`` of a stack's last iteration, where its
+    information and so ``W_c`` were formed (paper C's answers, once converged): what the
+    frame-0 poses' errors add to the information's inverse on both sides (module docstring,
+    "Frame 0"); NaN for a trial stopped before any iteration completed."""
     if "weights" not in done.kept:
         return np.full((len(done.state), 3, 3), np.nan)
     weighted = done.kept["weights"] @ system.m
-    a0, a1 = system.point_covariances(np.arange(len(done.state)), done.state, done.state)
     added = np.zeros((len(done.state), 3, 3))
-    for rotations, at_joint in ((system.r0, a0), (system.r1, a1)):
+    for rotations, at_joint in ((system.r0, done.kept["a0"]), (system.r1, done.kept["a1"])):
         gain = _summed_products(weighted, rotations)
         added += gain @ at_joint @ np.swapaxes(gain, -1, -2)
     return added
