@@ -71,8 +71,8 @@ def _check_planned_code(snakemake) -> None:
     script, the run's extensions and the package now. A file saved while the run goes on would
     otherwise run unrecorded under the planned fingerprint, and once reverted the results it
     made would read as current. A job whose rule states no fingerprint is not checked."""
-    params = getattr(snakemake, "params", None)
-    planned = None if params is None else dict(params.items()).get("code")
+    params = dict(snakemake.params.items())
+    planned = params.get("code")
     if planned is None:
         return
     # Imported here: the fingerprint reads the papers' registry, which imports this module.
