@@ -45,7 +45,6 @@ def job(snakemake) -> Iterator[None]:
     running = _RUNNING.set((snakemake.rule, _declared_inputs(snakemake.input)))
     try:
         load_extensions(snakemake.config)
-        _check_planned_code(snakemake)
         log.info(
             "rule %s: %d input(s) -> %d output(s)",
             snakemake.rule,
@@ -62,42 +61,6 @@ def job(snakemake) -> Iterator[None]:
         for handler in handlers:
             log.removeHandler(handler)
             handler.close()
-
-
-def _check_planned_code(snakemake) -> None:
-    """``ValueError`` naming the rule when the code this job runs is not the code Snakemake
-    planned it on: the fingerprint its rule computed when the run started
-    (``params.code``, ``script_code`` in ``workflow/rules/common.smk``) against the one of its
-    script, the run's extensions and the package now. A file saved while the run goes on would
-    otherwise run unrecorded under the planned fingerprint, and once reverted the results it
-    made would read as current. A job whose rule states no fingerprint is not checked."""
-    params = dict(snakemake.params.items())
-    planned = params.get("code")
-    if planned is None:
-        return
-    # Imported here: the fingerprint reads the papers' registry, which imports this module.
-    from jointbench.fingerprint import code_fingerprint
-    from jointbench.papers import get_paper, paper_names
-
-    script = _script()
-    extensions = [Path(entry).resolve() for entry in snakemake.config.get("extensions", [])]
-    published = [get_paper(name).published for name in paper_names()]
-    now = code_fingerprint(script, *extensions, inputs=published)
-    if now != planned:
-        raise ValueError(
-            f"rule {snakemake.rule}: the code changed after the run planned this job (its "
-            f"fingerprint was {planned}, it is {now} now): a file of the package, a script or an "
-            "extension was saved while the run went on, and the job would run code that no "
-            "record names; run snakemake again, which plans on the code as it is"
-        )
-
-
-def _script() -> Path:
-    """The workflow script this process runs. Snakemake runs a copy of it with its preamble
-    added, whose source is not the script's, and sets ``__file__`` to the script's own path."""
-    import __main__
-
-    return Path(__main__.__file__)
 
 
 #: The rule of the job running in this process and the files it declares as inputs, resolved;
