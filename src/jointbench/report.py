@@ -490,13 +490,23 @@ def dry_run_pending(
     """:func:`pending_jobs` of the Snakemake dry run ``command``, which ``what`` (the command
     asking) runs to learn whether the results it reads are up to date; ``ValueError`` with the
     dry run's output where it fails."""
+    return pending_jobs(
+        _output(command, what, "the dry run that checks the results are up to date", run)
+    )
+
+
+def _output(
+    command: Sequence[str],
+    what: str,
+    asked: str,
+    run: Callable[..., subprocess.CompletedProcess],
+) -> str:
+    """The standard output of the Snakemake ``command``, ``asked`` by ``what`` (the command
+    asking); ``ValueError`` naming both, with the command's output, where it fails."""
     done = run(list(command), capture_output=True, text=True)
     if done.returncode != 0:
-        raise ValueError(
-            f"{what}: the dry run that checks the results are up to date failed:\n"
-            + (done.stdout + done.stderr).strip()[-3000:]
-        )
-    return pending_jobs(done.stdout)
+        raise ValueError(f"{what}: {asked} failed:\n" + (done.stdout + done.stderr).strip()[-3000:])
+    return done.stdout
 
 
 def check_current(
@@ -552,13 +562,9 @@ def run_missing_outputs(
     command asking) runs to learn whether the files of the run are present: a failed job's
     outputs, which Snakemake removes, are not remade, nor listed by a dry run, while the files
     made from them are present. ``ValueError`` with the summary's output where it fails."""
-    done = run(list(command), capture_output=True, text=True)
-    if done.returncode != 0:
-        raise ValueError(
-            f"{what}: the summary that checks the results are present failed:\n"
-            + (done.stdout + done.stderr).strip()[-3000:]
-        )
-    return missing_outputs(done.stdout)
+    return missing_outputs(
+        _output(command, what, "the summary that checks the results are present", run)
+    )
 
 
 def missing_files_named(missing: dict[str, str]) -> str:
