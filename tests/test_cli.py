@@ -198,6 +198,33 @@ def test_every_row_states_the_answer_s_sd(capsys):
         assert csv_rows(out).iloc[0][column] == pytest.approx(stated, rel=1e-6)
 
 
+def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
+    """``sqrt_trace_cov_mm`` is the root of the trace of the covariance a joint centre states of
+    its scatter, ``center_sd_mm``'s: for ``gauss-markov`` paper C's ``W_c`` with the frame-0
+    poses' errors added, several times the ``W_c`` alone that is conditional on them; for the
+    analytic centre, which has no covariance of its own, the one from both segments' poses. The
+    table names where each comes from."""
+    recording = jointbench.read(KNEE)
+    prepared = jointbench.prepare(recording, "joint_center", SHANK.split(","), THIGH.split(","))
+    arguments = ["fit", str(KNEE), "--kind", "joint_center", "--reference", THIGH]
+    arguments += ["--moving", SHANK, "--method"]
+    for method, source in (
+        ("gauss-markov", "its method's covariance with the frame-0 poses' errors added"),
+        ("analytic", "the noise of both segments' poses"),
+    ):
+        result = prepared.fit(method).result
+        stated = np.asarray(result.diagnostics["center_covariance_mm2"])
+        code, out, _ = run(capsys, *arguments, method, "--format", "csv")
+        assert code == 0
+        row = csv_rows(out).iloc[0]
+        assert row["sqrt_trace_cov_mm"] == pytest.approx(np.sqrt(np.trace(stated)), rel=1e-6)
+        if result.covariance is not None:
+            assert row["sqrt_trace_cov_mm"] > 2.0 * np.sqrt(np.trace(result.covariance))
+        code, out, _ = run(capsys, *arguments, method)
+        assert code == 0
+        assert f"sqrt_trace_cov_mm: {method}: from {source}" in out
+
+
 def test_world_trajectory_on_request(tmp_path, capsys):
     path = write_c3d(tmp_path / "rig.c3d", PROX + DIST, rig_recording().markers)
     world = tmp_path / "world.csv"
