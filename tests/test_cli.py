@@ -576,3 +576,15 @@ def test_results_a_failed_job_left_missing_are_stale(tmp_path, monkeypatch, caps
     (tmp_path / "results" / "a.txt").write_text("a\n")
     (tmp_path / "results" / "b.txt").touch()
     assert not cli._stale(args, "snapshot")
+
+
+def test_results_a_run_would_redo_are_stale_naming_its_jobs(tmp_path, monkeypatch, capsys):
+    """Where the run's dry run has jobs to do, the command says which, by rule and count, and
+    the command that does them."""
+    (tmp_path / "Snakefile").write_text(_TWO_RULES)
+    (tmp_path / "results").mkdir()
+    monkeypatch.chdir(tmp_path)
+    args = argparse.Namespace(results=Path("results"), configfile=[])
+    assert cli._stale(args, "snapshot")
+    message = capsys.readouterr().err
+    assert "`snakemake -j2` would redo a (1), b (1): run it first" in message

@@ -50,6 +50,11 @@ def test_a_dry_runs_jobs_are_read_by_rule():
     assert report.pending_jobs(UP_TO_DATE) == {}
 
 
+def test_pending_jobs_are_named_by_rule_and_count():
+    """One way of naming a dry run's jobs, for every command that refuses stale results."""
+    assert report.jobs_named(report.pending_jobs(DRY_RUN)) == "render_cmc (1), check_published (1)"
+
+
 def _dry_run(stdout: str, returncode: int = 0, stderr: str = ""):
     """A stand-in for ``subprocess.run`` answering as a dry run would, and the commands it
     was given."""

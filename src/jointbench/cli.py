@@ -45,6 +45,7 @@ from jointbench.io.fit import CENTER_IS
 from jointbench.papers import paper_labels
 from jointbench.report import (
     dry_run_pending,
+    jobs_named,
     missing_files_named,
     readme_headlines,
     run_missing_outputs,
@@ -159,7 +160,7 @@ def _readme(args: argparse.Namespace) -> int:
         return 0
     pending = _verdicts_pending(args)
     if pending:
-        jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+        jobs = jobs_named(pending)
         print(
             f"jointbench: {args.readme}: verdicts over seeds left as they are: {verdicts_path} "
             "is not up to date with the code, config and data that make it (`snakemake -j2` "
@@ -269,7 +270,7 @@ def _stale(args: argparse.Namespace, command: str) -> bool:
     pending = _default_pending(args, command)
     if not pending:
         return _incomplete(args, command)
-    jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+    jobs = jobs_named(pending)
     rerun = shlex.join(["snakemake", "-j2", *_config_options(args)])
     print(
         f"jointbench {command}: {args.results} is not up to date with the code, config and "

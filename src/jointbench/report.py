@@ -36,6 +36,7 @@ __all__ = [
     "findings",
     "finish_report",
     "front_intro",
+    "jobs_named",
     "output_label",
     "output_page",
     "output_title",
@@ -482,6 +483,12 @@ def pending_jobs(dry_run_output: str) -> dict[str, int]:
     return counts
 
 
+def jobs_named(pending: Mapping[str, int]) -> str:
+    """The jobs ``pending`` (:func:`pending_jobs`) as a refusal names them: ``rule (count)``,
+    comma-separated, in the dry run's order."""
+    return ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+
+
 def dry_run_pending(
     command: Sequence[str],
     what: str,
@@ -525,7 +532,7 @@ def check_current(
     program = _snakemake_program(argv[0])
     pending = dry_run_pending([*program, "--dry-run", *options], "snakemake --report", run)
     if pending:
-        jobs = ", ".join(f"{rule} ({count})" for rule, count in pending.items())
+        jobs = jobs_named(pending)
         total = sum(pending.values())
         raise ValueError(
             "snakemake --report: the results are not up to date with the code, config and "
