@@ -33,10 +33,11 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from workflow_copy import ROOT, SNAKEMAKE, copy_workflow
+
 PROBE = ROOT / "benchmarks" / "probe"
 REDUCED = ROOT / "benchmarks" / "reduced.yaml"
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 SCHEDULER = "snakemake (scheduler)"
 
 
@@ -100,18 +101,17 @@ def scales(
     ]
 
 
-def copy_workflow(destination: Path) -> Path:
-    """What a user clones (Snakefile, workflow/, config/), with an empty results/."""
+def workflow_clone(folder: Path) -> Path:
+    """What a user clones, its profiles/ included, in the new folder ``folder``/workflow, with
+    an empty results/: Snakemake applies profiles/default there, as in a clone."""
+    destination = folder / "workflow"
     destination.mkdir(parents=True)
-    shutil.copy(ROOT / "Snakefile", destination / "Snakefile")
-    shutil.copytree(ROOT / "workflow", destination / "workflow")
-    shutil.copytree(ROOT / "config", destination / "config")
-    return destination
+    return copy_workflow(destination, profiles=True)
 
 
 def run_scale(study: str, scale: Scale, folder: Path, jobs: int) -> tuple[float, list[dict]]:
     """Run the study at one scale in ``folder``; its wall time and every process's record."""
-    workdir = copy_workflow(folder / "workflow")
+    workdir = workflow_clone(folder)
     overrides = {"trials": scale.trials, **({"grid": scale.grid} if scale.grid else {})}
     configfile = folder / "scale.yaml"
     configfile.write_text(yaml.safe_dump({"studies": {study: overrides}}))

@@ -178,6 +178,18 @@ def test_scaling_growth_is_relative_to_the_first_factor():
     assert growth.loc["estimate_cmc", ("cpu_ratio", 10)] == 2.5
 
 
+def test_scaling_runs_copies_with_the_repositorys_own_profile(tmp_path):
+    # As the cluster check's runs: Snakemake applies profiles/default (keep-going) in a clone,
+    # and a copy without it is not the run whose cost the benchmark states.
+    workdir = scaling.workflow_clone(tmp_path / "x1")
+    assert workdir.parent == tmp_path / "x1"
+    for path in ("Snakefile", "config/config.yaml"):
+        assert (workdir / path).is_file(), path
+    assert (workdir / "workflow" / "rules").is_dir()
+    assert (workdir / "profiles" / "default" / "config.yaml").is_file()
+    assert not (workdir / "results").exists()
+
+
 def test_scaling_reduces_the_grid_from_the_chosen_factor():
     scales = scaling.scales("cmc", [1, 10, 100], reduce_from=100)
     base = scaling.study_config("cmc")["trials"]

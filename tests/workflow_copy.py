@@ -40,11 +40,14 @@ def readme_builtin_example() -> tuple[str, dict]:
     return code, yaml.safe_load(listing)
 
 
-def copy_workflow(destination: Path) -> Path:
-    """Copy the files a user clones (Snakefile, workflow/, config/); results/ starts empty."""
+def copy_workflow(destination: Path, *, profiles: bool = False) -> Path:
+    """Copy the files a user clones (Snakefile, workflow/, config/, and with ``profiles``
+    profiles/) into the folder ``destination``; results/ starts empty. Snakemake applies
+    profiles/default wherever the copy holds it; the end-to-end tests run without it, which
+    would hide each job's rule and wildcards."""
     shutil.copy(ROOT / "Snakefile", destination / "Snakefile")
-    shutil.copytree(ROOT / "workflow", destination / "workflow")
-    shutil.copytree(ROOT / "config", destination / "config")
+    for folder in ("workflow", "config", *(["profiles"] if profiles else [])):
+        shutil.copytree(ROOT / folder, destination / folder)
     return destination
 
 
