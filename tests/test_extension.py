@@ -10,7 +10,6 @@ from __future__ import annotations
 import importlib.util
 import json
 import re
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -40,11 +39,12 @@ def user_clone(
     estimators: list[str],
     external: list[str],
     centroid_script: str | None = None,
+    profiles: bool = False,
 ) -> Path:
     """The workflow as a user clones it (with the shipped centroid template, its script
-    replaced by ``centroid_script`` if given) and a cmc-only overlay config; returns the
-    overlay's path."""
-    copy_workflow(destination)
+    replaced by ``centroid_script`` if given, and with ``profiles`` its profiles/) and a
+    cmc-only overlay config; returns the overlay's path."""
+    copy_workflow(destination, profiles=profiles)
     if centroid_script is not None:
         (destination / CENTROID_SCRIPT).write_text(centroid_script)
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
@@ -146,8 +146,9 @@ def test_a_crashing_estimator_fails_alone_and_the_run_finishes_the_rest(tmp_path
     crashing = f'if "{crashed}" in estimates:\n    raise RuntimeError("centroid crashed")\n'
     script = shipped.replace("rows = []\n", f"{crashing}rows = []\n", 1)
     assert script != shipped
-    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script)
-    shutil.copytree(ROOT / "profiles", tmp_path / "profiles")
+    overlay = user_clone(
+        tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script, profiles=True
+    )
     run = subprocess.run(
         [
             str(SNAKEMAKE),
