@@ -203,7 +203,7 @@ def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
     its scatter, ``center_sd_mm``'s: for ``gauss-markov`` paper C's ``W_c`` with the frame-0
     poses' errors added, several times the ``W_c`` alone that is conditional on them; for the
     analytic centre, which has no covariance of its own, the one from both segments' poses. The
-    table names where each comes from."""
+    table names where each comes from, and JSON gives the covariance and its source."""
     recording = jointbench.read(KNEE)
     prepared = jointbench.prepare(recording, "joint_center", SHANK.split(","), THIGH.split(","))
     arguments = ["fit", str(KNEE), "--kind", "joint_center", "--reference", THIGH]
@@ -223,6 +223,11 @@ def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
         code, out, _ = run(capsys, *arguments, method)
         assert code == 0
         assert f"sqrt_trace_cov_mm: {method}: from {source}" in out
+        code, out, _ = run(capsys, *arguments, method, "--format", "json")
+        assert code == 0
+        (fitted,) = json.loads(out)
+        np.testing.assert_allclose(fitted["center_covariance_mm2"], stated, rtol=1e-9)
+        assert fitted["center_covariance_is"] == source
 
 
 def test_world_trajectory_on_request(tmp_path, capsys):

@@ -38,7 +38,6 @@ from jointbench.comparison.snapshot import (
 )
 from jointbench.configuration.config import open_config, read_configs, study_names
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
-from jointbench.estimators.centre_precision import _stated_covariance
 from jointbench.estimators.registry import KINDS, get
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
@@ -358,7 +357,7 @@ def _row(fitted) -> dict:
     )
     if sd_key in result.diagnostics:
         row[column] = float(result.diagnostics[sd_key])
-    stated = _stated(fitted)
+    stated = fitted.stated_covariance()
     if stated is not None:
         row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(stated[0])))
     if fitted.bootstrap is not None:
@@ -376,16 +375,6 @@ def _row(fitted) -> dict:
         gap_frames=fitted.n_gap_frames,
     )
     return row
-
-
-def _stated(fitted) -> tuple[np.ndarray, str] | None:
-    """The covariance ``(3, 3)`` [mm^2] a joint centre's fit states of its answer's scatter, the
-    one ``center_sd_mm`` is read from, and where it comes from; ``None`` for another kind or
-    none stated. For paper C's ``gauss-markov`` its own ``covariance`` (``W_c``) is conditional
-    on the frame-0 poses and several times smaller than its answers' scatter."""
-    if fitted.kind != "joint_center":
-        return None
-    return _stated_covariance(fitted.result)
 
 
 @dataclass(frozen=True)
@@ -515,7 +504,7 @@ def _fit(args: argparse.Namespace) -> int:
     if done[0].anchor_frame is not None:
         print(f"anchor frame (both body frames coincide): {done[0].anchor_frame}")
     for fitted in done:
-        stated = _stated(fitted)
+        stated = fitted.stated_covariance()
         if stated is not None:
             print(f"sqrt_trace_cov_mm: {fitted.method}: from {stated[1]}")
     return code

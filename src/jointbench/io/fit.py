@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
+from jointbench.estimators.centre_precision import _stated_covariance
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import MIN_BLOCKS
@@ -113,6 +114,17 @@ class RecordingFit:
             raise ValueError("no reference segment: the result is already in the data's frame")
         return self.reference.world(self.estimate()[-3:])
 
+    def stated_covariance(self) -> tuple[np.ndarray, str] | None:
+        """A joint centre's covariance ``(3, 3)`` [mm^2] of its answer's scatter, the one its
+        ``diagnostics["center_sd_mm"]`` is read from, and where it comes from
+        (:func:`jointbench.estimators.centre_precision._stated_covariance`); ``None`` for
+        another kind, or where the method states none. For paper C's ``gauss-markov`` it is not
+        ``result.covariance``: that, ``W_c``, is conditional on the frame-0 poses and several
+        times smaller than the answers' scatter."""
+        if self.kind != "joint_center":
+            return None
+        return _stated_covariance(self.result)
+
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
         """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
         directions."""
@@ -134,6 +146,10 @@ class RecordingFit:
         covariance = getattr(self.result, "covariance", None)
         if covariance is not None:
             out["covariance_mm2"] = np.asarray(covariance).tolist()
+        stated = self.stated_covariance()
+        if stated is not None:
+            out["center_covariance_mm2"] = stated[0].tolist()
+            out["center_covariance_is"] = stated[1]
         out.update(
             converged=bool(self.result.converged),
             status=self.result.status,
