@@ -102,6 +102,7 @@ __all__ = [
     "annotate_joint_centres",
     "annotate_many",
     "centre_statistics",
+    "stated_covariance",
 ]
 
 #: A centre whose SD along its least determined direction is above this [mm] is "not
@@ -657,7 +658,7 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     trial's support verdict ``verdicts``.
 
     * ``diagnostics["center_sd_mm"]``, the SD along the least determined direction of the
-      covariance the result states of its answer's scatter (:func:`_stated_covariance`), and
+      covariance the result states of its answer's scatter (:func:`stated_covariance`), and
       above :data:`MAX_CENTER_SD_MM` the warning that the data do not determine the centre,
       as for a centre of rotation;
     * ``["center_pose_noise_share"]``, the ratio of the noise's information to the noise-free
@@ -675,7 +676,7 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
         if not np.isfinite(result.center).all():
             continue
         numbers, warnings = {}, []
-        stated = _stated_covariance(result)
+        stated = stated_covariance(result)
         if stated is not None:
             covariance, source = stated
             sd = _largest_sd(covariance)
@@ -695,7 +696,7 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     return annotated
 
 
-def _stated_covariance(result) -> tuple[np.ndarray, str] | None:
+def stated_covariance(result) -> tuple[np.ndarray, str] | None:
     """The covariance ``(3, 3)`` [mm^2] a joint-centre ``result`` states of its centre's
     scatter, and where it comes from: ``diagnostics["center_covariance_mm2"]`` where the
     method states one there (SCoRE's and the analytic centre's from each segment's pose

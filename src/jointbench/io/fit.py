@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
-from jointbench.estimators.centre_precision import _stated_covariance
+from jointbench.estimators.centre_precision import stated_covariance
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.support import MIN_BLOCKS
@@ -117,13 +117,13 @@ class RecordingFit:
     def stated_covariance(self) -> tuple[np.ndarray, str] | None:
         """A joint centre's covariance ``(3, 3)`` [mm^2] of its answer's scatter, the one its
         ``diagnostics["center_sd_mm"]`` is read from, and where it comes from
-        (:func:`jointbench.estimators.centre_precision._stated_covariance`); ``None`` for
+        (:func:`jointbench.estimators.centre_precision.stated_covariance`); ``None`` for
         another kind, or where the method states none. For paper C's ``gauss-markov`` it is not
         ``result.covariance``: that, ``W_c``, is conditional on the frame-0 poses and several
         times smaller than the answers' scatter."""
         if self.kind != "joint_center":
             return None
-        return _stated_covariance(self.result)
+        return stated_covariance(self.result)
 
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
         """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
