@@ -85,7 +85,8 @@ MAX_SPAN_MM = 1_500.0
 #: The markers of two segments that meet at a joint lie closer together than this [mm]: each
 #: lies within its own segment's extent of the joint (:data:`MAX_SPAN_MM`). It catches the
 #: factor of 10 where each cluster is small (plates of 100 mm read 1 m) but the two lie far
-#: apart (a thigh's and a shank's, 0.5 m and more: 5 m read in centimetres).
+#: apart (a thigh's and a shank's plates, their markers more than 300 mm apart: 3 m read in
+#: centimetres).
 MAX_JOINED_SPAN_MM = 2 * MAX_SPAN_MM
 #: What :data:`MAX_SPAN_MM` bounds, and :data:`MAX_JOINED_SPAN_MM`, in messages.
 ONE_SEGMENT = "the markers of any one human body segment span"
