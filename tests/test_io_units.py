@@ -13,7 +13,7 @@ from test_user_recordings import write_long_csv
 
 import jointbench
 from jointbench.estimators.validation import MAX_JOINED_SPAN_MM, MAX_SPAN_MM
-from jointbench.io import Recording, read
+from jointbench.io import Recording, prepare, read
 from jointbench.io.units import UNIT_TO_MM, unit_hint
 from jointbench.simulate import cmc, hinge
 
@@ -105,6 +105,7 @@ UNDER_A_MARKER = "less than a marker's own size (1 mm)"
             "millimetres (a cluster 317 mm across)",
         ),
     ],
+    ids=["mm-under-cm", "cm-under-m", "mm-under-m", "m-under-mm"],
 )
 def test_numbers_in_another_unit_are_refused_naming_the_unit_they_look_like(
     tmp_path, knee_legs, suffixes, scale, units, span, bound, hint
@@ -269,4 +270,54 @@ def test_a_recording_built_in_memory_states_millimetres():
 def test_a_unit_written_out_is_named_as_its_symbol_is():
     assert unit_hint(3.17e5, " Meters", MAX_SPAN_MM) == (
         "its numbers look like millimetres read as metres (a cluster 317 mm across)"
+    )
+
+
+#: Clusters of the knee trial: thorax, pelvis, right thigh, shank, foot, upper arm, forearm.
+SEGMENTS = {
+    "thorax": "C7,T10,SUP,STR,LA,RA",
+    "pelvis": "LPSIS,RPSIS,LASIS,RASIS",
+    "thigh": THIGH,
+    "shank": SHANK,
+    "foot": "RCAL,RMFH5,RMFH1,RTT2",
+    "arm": "RAMR1,RARM2,RARM3",
+    "forearm": "RFARM1,RFARM2,RFARM3,RUS,RRS",
+}
+#: The pairs a joint joins, reference first, and the first markers whose span is refused under
+#: 'cm': the reference's, the moving segment's where the reference (the upper arm, 95 mm)
+#: passes for one, and both together where the moving markers are two (the wrist's, 71 mm).
+JOINED = [
+    ("pelvis", "thigh", "LPSIS, RPSIS, LASIS, RASIS lie 2.59e+03"),
+    ("thigh", "shank", "RTHI1, RTHI2, RTHI3, RGT lie 3.17e+03"),
+    ("shank", "foot", "RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie 3.41e+03"),
+    ("thorax", "arm", "C7, T10, SUP, STR, LA, RA lie 3.36e+03"),
+    ("arm", "forearm", "RFARM1, RFARM2, RFARM3, RUS, RRS lie 1.89e+03"),
+    ("arm", "RUS,RRS", "RAMR1, RARM2, RARM3, RUS, RRS lie 3.83e+03"),
+]
+
+
+# The foot's markers leave its shape in 12 frames of the trial, which are left out with a warning.
+@pytest.mark.filterwarnings("ignore:.*right_knee.c3d. left out 12 frames with artefacts")
+@pytest.mark.parametrize(
+    ("reference", "moving", "refused"), JOINED, ids=[f"{r}-{m}" for r, m, _ in JOINED]
+)
+def test_every_joint_of_the_knee_trial_under_centimetres_is_refused(reference, moving, refused):
+    """Millimetres under 'cm': every segment of the trial but the upper arm spans more than
+    one segment can, and the upper arm with the wrist's markers more than two joined can."""
+    knee = read(KNEE)
+    mm = prepare(
+        knee, "center", SEGMENTS.get(moving, moving), SEGMENTS[reference], artefacts="exclude"
+    )
+    assert mm.usable.size > 0
+    cm = Recording(
+        knee.labels, knee.markers * 10.0, knee.rate_hz, knee.source, knee.first_frame, "cm"
+    )
+    with pytest.raises(ValueError) as error:
+        prepare(
+            cm, "center", SEGMENTS.get(moving, moving), SEGMENTS[reference], artefacts="exclude"
+        )
+    assert str(error.value).startswith(f"{KNEE}: markers {refused} mm apart"), str(error.value)
+    assert (
+        "states ('cm', read as mm): its numbers look like millimetres read as centimetres"
+        in str(error.value)
     )
