@@ -322,13 +322,6 @@ def test_a_reference_frame_set_by_three_markers_within_the_noise_of_a_line_is_re
     ), message
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the unit check knows only a factor of 1000 (a cluster under 1 mm or over 10 m): "
-    "millimetres under a 'cm' unit make the thigh 3.2 m across, which passes; the fit then "
-    "refuses a 'jump' (the knee's motion, 10 times over), and with artefacts='exclude' "
-    "gives a centre 10 times too far with no word of the unit",
-)
 def test_millimetres_under_a_centimetre_unit_are_refused_naming_the_unit():
     knee = read(KNEE)
     recording = Recording(

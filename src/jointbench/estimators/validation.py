@@ -19,8 +19,11 @@ from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
     "ARRAY_NAMES",
+    "MAX_JOINED_SPAN_MM",
     "MAX_SPAN_MM",
     "MIN_SPAN_MM",
+    "ONE_SEGMENT",
+    "TWO_SEGMENTS",
     "CheckedTrials",
     "check_input",
     "check_input_many",
@@ -32,6 +35,7 @@ __all__ = [
     "check_span",
     "cluster_span",
     "prepare_trials",
+    "span_bound",
     "span_problem",
     "typical_span",
 ]
@@ -69,10 +73,27 @@ _FLOAT64 = np.dtype(np.float64)
 #: millimetres across, so two cannot sit closer, and a cluster this small is one measured in
 #: another unit (metres read as millimetres).
 MIN_SPAN_MM = 1.0
-#: ... and closer than this [mm]: no body segment is 10 m long (millimetres read as metres).
-MAX_SPAN_MM = 10_000.0
+#: ... and closer than this [mm]: no rigid cluster on one human body segment spans more.
+#: Segment lengths scale with stature H (Winter, *Biomechanics and Motor Control of Human
+#: Movement*, after Drillis and Contini): the longest segment that carries a cluster, the head,
+#: arms and trunk, runs from the vertex (1.0 H) to the greater trochanter (0.530 H), 0.47 H:
+#: 1.28 m in the tallest person measured (2.72 m); a thigh is 0.245 H, a pelvis 0.191 H wide.
+#: 1.5 m leaves room for markers on wands off the skin. A cluster in millimetres read as
+#: centimetres is 10 times its size: a thigh (about 320 mm) reads 3.2 m and is refused, a
+#: cluster under 150 mm (a thumb's, 11 to 40 mm) reads as a real one and cannot be told.
+MAX_SPAN_MM = 1_500.0
+#: The markers of two segments that meet at a joint lie closer together than this [mm]: each
+#: lies within its own segment's extent of the joint (:data:`MAX_SPAN_MM`). It catches the
+#: factor of 10 where each cluster is small (plates of 100 mm read 1 m) but the two lie far
+#: apart (a thigh's and a shank's plates, their markers more than 300 mm apart: 3 m read in
+#: centimetres).
+MAX_JOINED_SPAN_MM = 2 * MAX_SPAN_MM
+#: What :data:`MAX_SPAN_MM` bounds, and :data:`MAX_JOINED_SPAN_MM`, in messages.
+ONE_SEGMENT = "the markers of any one human body segment span"
+TWO_SEGMENTS = "the markers of two human body segments joined at a joint span"
+
 # Frames the check of a cluster's size reads at most, evenly spaced: a median of this many
-# tells a unit a thousand times off at any gap or glitch a check before it lets through.
+# tells a unit 10 or 1000 times off at any gap or glitch a check before it lets through.
 _SPAN_FRAMES = 25
 
 
@@ -339,11 +360,25 @@ def span_problem(span_mm: float) -> str | None:
     or larger than a body was measured in another unit than millimetres. Markers at one point
     (a size of 0) are one marker given several times, not a unit, and are left to the checks
     of the markers a method needs."""
-    if not (math.isfinite(span_mm) and span_mm > 0.0) or MIN_SPAN_MM <= span_mm <= MAX_SPAN_MM:
+    bound = span_bound(span_mm, MAX_SPAN_MM, ONE_SEGMENT)
+    if bound is None:
         return None
     if span_mm < MIN_SPAN_MM:
-        return "less than a marker's own size: metres read as millimetres?"
-    return "more than any body segment: millimetres read as metres?"
+        return f"{bound}: metres read as millimetres?"
+    return f"{bound}: millimetres read as metres?"
+
+
+def span_bound(span_mm: float, largest_mm: float, largest: str) -> str | None:
+    """Which bound a cluster of typical size ``span_mm`` [mm] (:func:`typical_span`) breaks, in
+    words: smaller than a marker (:data:`MIN_SPAN_MM`), or larger than ``largest_mm``, what
+    ``largest`` can span (:data:`MAX_SPAN_MM` for :data:`ONE_SEGMENT`,
+    :data:`MAX_JOINED_SPAN_MM` for :data:`TWO_SEGMENTS`); ``None`` where it breaks neither, or
+    is unknown, or 0 (one marker given several times, which is no unit's doing)."""
+    if not (math.isfinite(span_mm) and span_mm > 0.0) or MIN_SPAN_MM <= span_mm <= largest_mm:
+        return None
+    if span_mm < MIN_SPAN_MM:
+        return f"less than a marker's own size ({MIN_SPAN_MM:g} mm)"
+    return f"more than {largest} ({largest_mm:g} mm)"
 
 
 def check_span(markers: np.ndarray, *, name: str = "markers") -> None:

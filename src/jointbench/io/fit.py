@@ -45,7 +45,9 @@ from jointbench.io.segments import (
     Segment,
     Swap,
     check_axes_determined,
+    check_joined_span,
     check_pose_determined,
+    check_span,
     find_jumps,
     summarise,
 )
@@ -508,6 +510,11 @@ def prepare(
     if kind == "joint_center" or len(moving_index) >= 3:
         mov = Segment.fit(recording, moving, rules)
         segments.append(mov)
+    moving_labels = tuple(recording.labels[i] for i in moving_index)
+    if mov is None:
+        check_span(recording.markers[:, moving_index], moving_labels, recording)
+    if ref is not None:
+        check_joined_span(ref.labels, moving_labels, recording)
     found, swaps = _artefacts(recording, segments, [] if mov else moving_index, rules)
     if found and artefacts == "refuse":
         keep = ""

@@ -15,19 +15,9 @@ import numpy as np
 import pandas as pd
 
 from jointbench.io.recording import Recording
+from jointbench.io.units import UNIT_TO_MM, to_mm
 
 __all__ = ["UNIT_TO_MM", "read", "read_c3d", "read_csv", "read_trc"]
-
-UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "meters": 1000.0, "millimeters": 1.0}
-
-
-def _to_mm(unit: str, path: Path) -> float:
-    key = unit.strip().lower()
-    if key not in UNIT_TO_MM:
-        raise ValueError(
-            f"{path}: unknown point unit {unit!r}; known: {', '.join(sorted(UNIT_TO_MM))}"
-        )
-    return UNIT_TO_MM[key]
 
 
 def _check_file(path: str | Path) -> Path:
@@ -89,7 +79,7 @@ def read_c3d(path: str | Path) -> Recording:
     points = c3d["data"]["points"]
     labels = [label.strip() for label in labels[: points.shape[1]]]
     units = point["UNITS"]["value"][0] if "UNITS" in point and point["UNITS"]["value"] else "mm"
-    markers = np.transpose(points[:3], (2, 1, 0)) * _to_mm(units, path)
+    markers = np.transpose(points[:3], (2, 1, 0)) * to_mm(units, path)
     residuals = c3d["data"]["meta_points"]["residuals"]
     if residuals.size:
         markers[np.transpose(residuals[0]) < 0] = np.nan
@@ -222,7 +212,7 @@ def read_trc(path: str | Path) -> Recording:
                         f"{path}: frame {numbers[i]}, marker {labels[j // 3]}: {text!r} is not "
                         f"a number{_decimal_comma(text)}"
                     ) from None
-    markers = markers.reshape(len(rows), len(labels), 3) * _to_mm(header["Units"], path)
+    markers = markers.reshape(len(rows), len(labels), 3) * to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
     return _no_repeated_frames(
         Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])

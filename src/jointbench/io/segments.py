@@ -24,7 +24,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from jointbench.estimators.support import MAX_POSE_SD_RAD
-from jointbench.estimators.validation import cluster_span, span_problem
+from jointbench.estimators.validation import (
+    MAX_JOINED_SPAN_MM,
+    MAX_SPAN_MM,
+    ONE_SEGMENT,
+    TWO_SEGMENTS,
+    cluster_span,
+    span_bound,
+)
+from jointbench.io.units import unit_hint
 from jointbench.numerics.small import inertia
 from jointbench.screening import (
     Artefact,
@@ -54,7 +62,9 @@ __all__ = [
     "Segment",
     "Swap",
     "check_axes_determined",
+    "check_joined_span",
     "check_pose_determined",
+    "check_span",
     "find_jumps",
     "find_rigidity_breaks",
     "find_swaps",
@@ -84,20 +94,50 @@ def _check_seen(recording: Recording, index: list[int]) -> None:
 
 
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
-    """``ValueError`` naming the file and the markers when the cluster ``(n_frames, n, 3)``
-    [mm] is smaller than a marker or larger than a body
-    (:func:`jointbench.estimators.validation.span_problem`): coordinates in another unit than
-    the file states, whose every answer would be off by a factor of 1000 and pass the checks,
-    which are built for millimetres, or fail them for the wrong reason."""
+    """``ValueError`` naming the file, its unit and the markers when the cluster
+    ``(n_frames, n, 3)`` [mm] of one segment is smaller than a marker or larger than the
+    markers of a human body segment can span
+    (:func:`~jointbench.estimators.validation.span_bound`,
+    :data:`~jointbench.estimators.validation.MAX_SPAN_MM`): coordinates in another unit than
+    the file states, whose every answer would be off by a factor of 10 to 1000 and pass the
+    checks, which are built for millimetres, or fail them for the wrong reason."""
+    _check_unit(markers, labels, recording, MAX_SPAN_MM, ONE_SEGMENT)
+
+
+def check_joined_span(
+    reference: tuple[str, ...], moving: tuple[str, ...], recording: Recording
+) -> None:
+    """``ValueError`` as :func:`check_span`'s when the markers of the ``reference`` segment
+    and the ``moving`` ones, which turn about a joint between them, lie further apart than
+    two joined human body segments' can
+    (:data:`~jointbench.estimators.validation.MAX_JOINED_SPAN_MM`): clusters each small
+    enough to pass for a segment in the wrong unit, but too far from each other."""
+    labels = reference + moving
+    markers = recording.markers[:, recording.index(labels)]
+    _check_unit(markers, labels, recording, MAX_JOINED_SPAN_MM, TWO_SEGMENTS)
+
+
+def _check_unit(
+    markers: np.ndarray,
+    labels: tuple[str, ...],
+    recording: Recording,
+    largest_mm: float,
+    largest: str,
+) -> None:
+    """``ValueError`` naming the file, the unit it states and, in the units that fit
+    (:func:`~jointbench.io.units.unit_hint`), the size its numbers make, when the typical span
+    of ``markers`` ``(n_frames, n, 3)`` [mm] (:func:`cluster_span`) of ``labels`` is under a
+    marker's size or over ``largest_mm``, what ``largest`` can span."""
     span = cluster_span(markers)
-    problem = span_problem(span)
-    if problem is None:
+    bound = span_bound(span, largest_mm, largest)
+    if bound is None:
         return
+    hint = unit_hint(span, recording.units, largest_mm)
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the farthest "
-        f"two, median over the frames), {problem} The coordinates are not in the unit the file "
-        f"states ({recording.units!r}, read as mm); correct the file's unit (C3D POINT:UNITS, "
-        "TRC Units; a CSV is in mm)"
+        f"two, median over the frames), {bound}. The coordinates are not in the unit the file "
+        f"states ({recording.units!r}, read as mm){': ' + hint if hint else ''}; correct the "
+        "file's unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
     )
 
 
