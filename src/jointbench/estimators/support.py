@@ -242,8 +242,9 @@ MIN_TESTED_FRAMES = 4 * MIN_BLOCKS
 DEPENDENT_CORRELATION = (MIN_VARIANCE_RATIO - 1.0) / (MIN_VARIANCE_RATIO + 1.0)
 
 # A lag-1 autocorrelation is "clearly below" DEPENDENT_CORRELATION when it is below it by this
-# many of the SDs that independent frames give it: the one-sided normal quantile at 5 %, so
-# that frames whose correlation is just at the bound are cleared in about one trial in twenty.
+# many of the SDs that independent frames give it: the one-sided normal quantile at 5 %. A
+# short series' correlation reads low (by about (1 + 3 r) / N), so frames just at the bound are
+# cleared more often than that: 1 to 20 in 100 trials of 22 frames (README).
 _Z_CLEARED = statistics.NormalDist().inv_cdf(0.95)
 
 # The one-sided normal quantiles at ROTATION_ALPHA shared among k = 1, 2, ... tests (Bonferroni):
@@ -2094,8 +2095,9 @@ class Untested(NamedTuple):
     (:func:`_correlation_sd`). Every SD and p-value of the fit counts each frame as
     independent, and a short stretch of a recording, whose consecutive frames share their skin
     motion and their filter's smoothing, seldom is (22 frames of the knee trial: 0.87).
-    Frames that are (simulated, resampled) mostly read well below it, and are not named; nor
-    are noise-free distances, which have no correlation to read."""
+    Independent frames (simulated, resampled) are cleared where their correlation can show it:
+    most 22-frame trials of six-marker clusters, fewer of three, whose correlation spreads
+    more (README). Noise-free distances have no correlation to read, and are not named."""
 
     name: str
     n_frames: int
