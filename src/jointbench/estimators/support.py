@@ -2112,9 +2112,9 @@ class Untested(NamedTuple):
             f"{_LABELS[self.name]}' distances, {self.correlation:.2f}, is not clearly below "
             f"{DEPENDENT_CORRELATION:.2g} (below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs "
             "for independent frames under it), at which an SD that counts every frame as "
-            "independent understates the scatter by 1.22 times: its SDs and p-values count each "
-            "frame as independent, which consecutive frames of a recording seldom are: fit a "
-            "longer stretch"
+            f"independent understates the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times: "
+            "its SDs and p-values count each frame as independent, which consecutive frames of a "
+            "recording seldom are: fit a longer stretch"
         )
 
     def numbers(self) -> dict[str, float]:
@@ -2136,7 +2136,7 @@ def _untested(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[Un
     read = [
         (name, array, _frame_correlations(kernel_array(array))[:, 0])
         for name, array in zip(names, arrays, strict=True)
-        if array.shape[2] >= 2 and n_frames >= 2
+        if array.shape[2] >= 2 and n_frames >= 2  # a pair's distance over two frames at least
     ]
     found: list[Untested | None] = []
     for t in range(n_trials):
