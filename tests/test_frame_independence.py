@@ -362,3 +362,91 @@ def test_the_independent_frames_of_noise_carried_over_from_frame_to_frame():
         verdict = support.assess("center", (clean + noise,))
         expected = n_frames * (1.0 - share) / (1.0 + share)
         assert verdict.diagnostics["independent_frames"] == pytest.approx(expected, rel=0.15)
+
+
+UNTESTED = "the frames' independence was not tested"
+
+
+def _cluster_trial(
+    kind: str, rng: np.random.Generator, n_frames: int, n_markers: int, share: float
+) -> tuple:
+    """One trial of ``kind`` over ``n_frames`` frames, its segments of ``n_markers`` markers
+    each, under 0.5 mm of noise that keeps ``share`` of itself from frame to frame (0:
+    independent in each frame)."""
+
+    def noise(shape: tuple) -> np.ndarray:
+        fresh = _noisy(rng, shape, 0.5)
+        carried = fresh.copy()
+        for frame in range(1, shape[0]):
+            carried[frame] = share * carried[frame - 1] + math.sqrt(1.0 - share**2) * fresh[frame]
+        return carried
+
+    body = rng.normal(scale=30.0, size=(n_markers, 3)) + np.array([150.0, 0.0, 30.0])
+    if kind == "joint_center":
+        lifted = np.array([0.0, 0.0, 400.0])
+        proximal = _moved(body[::-1] - 300.0, 0.2 * _swing(n_frames)[:, ::-1]) + lifted
+        turning = rotation_matrix(0.2 * _swing(n_frames)[:, ::-1])
+        distal = np.einsum("kij,kpj->kpi", turning, _moved(body, _swing(n_frames))) + lifted
+        return proximal + noise(proximal.shape), distal + noise(distal.shape)
+    markers = _moved(body, _swing(n_frames, hinge=kind == "axis"))
+    return (markers + noise(markers.shape),)
+
+
+def _untested_count(kind: str, n_frames: int, n_markers: int, share: float, n_trials: int) -> int:
+    """In how many of ``n_trials`` trials (:func:`_cluster_trial`) the verdict says that the
+    frames' independence was not tested."""
+    rng = np.random.default_rng(n_frames * 100 + n_markers)
+    return sum(
+        support.assess(kind, _cluster_trial(kind, rng, n_frames, n_markers, share)).untested
+        is not None
+        for _ in range(n_trials)
+    )
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_a_short_fit_of_frames_that_carry_their_noise_over_says_it_was_not_tested(kind):
+    """Below 32 frames no variance ratio can be tested; noise keeping half of itself from
+    frame to frame (SDs understated 1.7 times) is said so in every trial, by the public fit
+    as by the verdict."""
+    assert _untested_count(kind, 22, 4, 0.5, 40) == 40
+    assert _untested_count(kind, 10, 3, 0.5, 40) >= 38
+    arrays = _cluster_trial(kind, np.random.default_rng(5), 22, 4, 0.5)
+    result = FIT[kind](*arrays)
+    assert UNTESTED in result.status
+    assert result.diagnostics["frames_independence_untested"] == 22
+    bound = result.diagnostics["frames_independence_bound"]
+    assert bound < support.DEPENDENT_CORRELATION == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_short_fits_of_independent_frames_are_cleared_where_their_correlation_shows_it(kind):
+    """Independent frames are cleared where their lag-1 autocorrelation is below 0.2 by 1.64
+    of its SDs. For clusters of six markers, whose pooled correlation spreads little, most are,
+    and most frames at the bound (noise keeping a fifth of itself) are not; three markers'
+    correlation can barely be told from 0.2 in 22 frames, and fewer are, but still more than
+    at the bound."""
+    assert _untested_count(kind, 22, 6, 0.0, 100) <= 20
+    assert _untested_count(kind, 22, 6, 0.2, 100) >= 70
+    assert _untested_count(kind, 22, 3, 0.0, 100) <= _untested_count(kind, 22, 3, 0.2, 100) - 20
+    rng = np.random.default_rng(8)
+    cleared = [
+        arrays
+        for arrays in (_cluster_trial(kind, rng, 22, 6, 0.0) for _ in range(10))
+        if support.assess(kind, arrays).untested is None
+    ]
+    result = FIT[kind](*cleared[0])
+    assert UNTESTED not in result.status
+    assert "frames_independence_untested" not in result.diagnostics
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_from_32_frames_the_verdict_tests_the_frames_itself(kind):
+    assert support.MIN_TESTED_FRAMES == 32
+    assert _untested_count(kind, 32, 4, 0.9, 20) == 0
+    assert _untested_count(kind, 31, 4, 0.9, 20) == 20
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_short_noise_free_frames_have_no_correlation_to_call_untested(kind):
+    arrays = _kind_trial(kind, np.random.default_rng(1), 20, np.zeros)
+    assert support.assess(kind, arrays).untested is None

@@ -16,6 +16,7 @@ import jointbench
 from jointbench.cli import main
 from jointbench.estimators import registry
 from jointbench.io import Recording, read
+from jointbench.io.fit import DEFAULT_METHODS
 
 LABELS = ["P1", "P2", "P3", "D1", "D2", "D3"]
 
@@ -361,3 +362,56 @@ def test_a_fit_too_short_for_the_independence_test_says_it_was_not_tested():
         frames="990:1022",
     )
     assert "frames_independence_untested" not in longer.result.diagnostics
+
+
+KNEE_LEG = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
+KNEE_THIGH = "RTHI1,RTHI2,RTHI3,RGT"
+UNTESTED = "the frames' independence was not tested"
+ARRAY_FITS = {
+    "center": jointbench.fit_center,
+    "axis": jointbench.fit_axis,
+    "joint_center": jointbench.fit_joint_center,
+}
+
+
+def knee_arrays(kind: str, frames: str) -> tuple[np.ndarray, ...]:
+    """The knee trial's ``frames`` as the array API takes them: the leg's markers in the
+    thigh's technical frame (``center``, ``axis``), or the thigh's and the leg's in the world
+    (``joint_center``), ``(N, n, 3)`` [mm] each."""
+    if kind == "joint_center":
+        recording = read(KNEE).frames(frames)
+        return tuple(
+            recording.markers[:, recording.index(labels)] for labels in (KNEE_THIGH, KNEE_LEG)
+        )
+    prepared = jointbench.prepare(read(KNEE), kind, KNEE_LEG, KNEE_THIGH, frames=frames)
+    return tuple(array[prepared.usable] for array in prepared.arrays)
+
+
+@pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
+def test_the_array_api_on_too_few_frames_of_the_knee_says_their_independence_was_not_tested(
+    kind,
+):
+    """The same 22 frames passed as arrays: the public fit functions and the checked
+    many-trial form say what a recording's fit says, where they read ``ok`` with SDs that
+    count each of the 22 frames as independent."""
+    fit = ARRAY_FITS[kind]
+    arrays = knee_arrays(kind, "1000:1022")
+    assert all(array.shape[0] == 22 and np.isfinite(array).all() for array in arrays)
+    result = fit(*arrays)
+    assert UNTESTED in result.status, result.status
+    assert result.diagnostics["frames_independence_untested"] == 22
+    assert result.diagnostics["support_frame_correlation"] > 0.5
+    later = knee_arrays(kind, "500:522")
+    stacked = (np.stack(pair) for pair in zip(arrays, later, strict=True))
+    method = DEFAULT_METHODS[kind]
+    for outcome in registry.many(kind, method)(*stacked):
+        assert UNTESTED in outcome.status, outcome.status
+        assert outcome.diagnostics["frames_independence_untested"] == 22
+
+
+@pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
+def test_the_array_api_on_enough_frames_to_test_leaves_the_test_to_the_verdict(kind):
+    fit = ARRAY_FITS[kind]
+    result = fit(*knee_arrays(kind, "990:1022"))
+    assert UNTESTED not in result.status
+    assert "frames_independence_untested" not in result.diagnostics

@@ -19,7 +19,13 @@ Every method is reached through the registry, which holds it to the same rules:
   (:func:`jointbench.fit`). Those SDs, covariances and the support verdict's p-values count
   each frame's noise as independent: frames that are not (interpolated, filtered, skin markers)
   are said so in ``status`` (``"warning: the frames are not independent: ..."``), with about
-  how many independent frames they hold in ``diagnostics["support_independent_frames"]``;
+  how many independent frames they hold in ``diagnostics["support_independent_frames"]``.
+  Fewer than :data:`jointbench.estimators.support.MIN_TESTED_FRAMES` frames are too few for
+  that test: unless their lag-1 autocorrelation is clearly below
+  :data:`jointbench.estimators.support.DEPENDENT_CORRELATION`, ``status`` says
+  ``"warning: the frames' independence was not tested: ..."`` and
+  ``diagnostics["frames_independence_untested"]`` holds the frames
+  (:class:`jointbench.estimators.support.Untested`);
 * an array with more markers than frames may be a ``(markers, frames, 3)`` array passed
   transposed: with fewer frames than the method takes
   (:func:`jointbench.estimators.registry.claims`' ``min_frames``) it is refused with a

@@ -56,7 +56,10 @@ more non-collinear markers), each first order in the noise:
   no pose are read the same way (the moving ones). What it cannot see: a single marker, and
   errors every marker of a segment shares (a rigid wobble, or a smoothed reference segment's
   pose carried into the moving markers' coordinates), which keep the distances; nor
-  noise-free data. Below ``4 MIN_BLOCKS`` frames no ratio can reach its quantile.
+  noise-free data. Below ``4 MIN_BLOCKS`` frames (:data:`MIN_TESTED_FRAMES`) no ratio can
+  reach its quantile, and the test is not made; the lag-1 autocorrelation still is, and where
+  it is not clearly below :data:`DEPENDENT_CORRELATION` the verdict says that the frames'
+  independence was not tested (:class:`Untested`).
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -162,16 +165,19 @@ from jointbench.screening import _pair_distances
 
 __all__ = [
     "CENTRE_KINDS",
+    "DEPENDENT_CORRELATION",
     "MAX_DISTANCE_MARKERS",
     "MAX_NONRIGID_SHARE",
     "MAX_OFF_AXIS_SHARE",
     "MAX_POSE_SD_RAD",
     "MIN_BLOCKS",
+    "MIN_TESTED_FRAMES",
     "MIN_VARIANCE_RATIO",
     "ROTATION_ALPHA",
     "ROUNDING",
     "MotionAxis",
     "Support",
+    "Untested",
     "annotate",
     "assess",
     "assess_many",
@@ -225,6 +231,22 @@ MIN_VARIANCE_RATIO = 1.5
 #: fewer than twice as many frames are not read.
 MIN_BLOCKS = 8
 
+#: The fewest frames whose independence the verdict can test: below four times its fewest
+#: blocks no variance ratio can reach its quantile (module docstring, "independent frames").
+MIN_TESTED_FRAMES = 4 * MIN_BLOCKS
+
+#: The lag-1 autocorrelation ``r`` at which noise that keeps that share of itself from frame to
+#: frame reaches :data:`MIN_VARIANCE_RATIO` (its correlation time ``(1 + r) / (1 - r)``): 0.2.
+#: Below :data:`MIN_TESTED_FRAMES` frames the verdict says their independence was not tested
+#: unless their lag-1 autocorrelation is clearly below it (:class:`Untested`).
+DEPENDENT_CORRELATION = (MIN_VARIANCE_RATIO - 1.0) / (MIN_VARIANCE_RATIO + 1.0)
+
+# A lag-1 autocorrelation is "clearly below" DEPENDENT_CORRELATION when it is below it by this
+# many of the SDs that independent frames give it: the one-sided normal quantile at 5 %. A
+# short series' correlation reads low (by about (1 + 3 r) / N), so frames just at the bound are
+# cleared more often than that: 1 to 20 in 100 trials of 22 frames (README).
+_Z_CLEARED = statistics.NormalDist().inv_cdf(0.95)
+
 # The one-sided normal quantiles at ROTATION_ALPHA shared among k = 1, 2, ... tests (Bonferroni):
 # a recording tests one block length per doubling of its frames past 2 MIN_BLOCKS, so these
 # serve up to 2^36 frames.
@@ -260,13 +282,19 @@ class Support(NamedTuple):
     carries after the warnings and the checks of an answer's precision do not read as a
     refusal; for two segments' poses judged for a joint centre, ``pose_noise``, what their
     noise does to a least-squares centre (:class:`jointbench.estimators.pose_noise.PoseNoise`),
-    which the registry holds every joint-centre answer to, else ``None``."""
+    which the registry holds every joint-centre answer to, else ``None``; and ``untested``,
+    for a trial of fewer than :data:`MIN_TESTED_FRAMES` frames whose lag-1 autocorrelation is
+    not clearly below :data:`DEPENDENT_CORRELATION`, that the frames' independence was not
+    tested (:class:`Untested`), else ``None``. The status carries it after the caveats, as one
+    of them: a warning (the status is no longer ``ok``) that the other checks do not read as
+    a refusal."""
 
     warnings: tuple[str, ...]
     diagnostics: dict
     motion_axis: MotionAxis | None = None
     caveats: tuple[str, ...] = ()
     pose_noise: PoseNoise | None = None
+    untested: Untested | None = None
 
 
 class _Clusters(NamedTuple):
@@ -1740,6 +1768,16 @@ def assess_many(
     """:func:`assess` for ``T`` trials at once: ``arrays`` as there with a leading trial axis,
     ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
     per trial."""
+    verdicts = _judged(kind, arrays, poses)
+    untested = _untested(ARRAY_NAMES[kind], arrays)
+    return [
+        verdict if found is None else verdict._replace(untested=found)
+        for verdict, found in zip(verdicts, untested, strict=True)
+    ]
+
+
+def _judged(kind: str, arrays: tuple[np.ndarray, ...], poses: list | None) -> list[Support]:
+    """The verdicts of :func:`assess_many` but for what too few frames leave untested."""
     n_trials = arrays[0].shape[0]
     if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
         n_markers = arrays[0].shape[2]
@@ -2048,6 +2086,89 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
     return frames
 
 
+class Untested(NamedTuple):
+    """Frames too few for the verdict to test their independence (fewer than
+    :data:`MIN_TESTED_FRAMES`), whose pair distances' lag-1 autocorrelation (pooled as
+    :func:`_frame_dependence` pools it), read from the segment ``name``, is not clearly below
+    :data:`DEPENDENT_CORRELATION`: at or above ``bound``, that correlation less
+    :data:`_Z_CLEARED` of the SDs ``n_frames`` independent frames would give it
+    (:func:`_correlation_sd`). Every SD and p-value of the fit counts each frame as
+    independent, and a short stretch of a recording, whose consecutive frames share their skin
+    motion and their filter's smoothing, seldom is (22 frames of the knee trial: 0.87).
+    Independent frames (simulated, resampled) are cleared where their correlation can show it:
+    most 22-frame trials of six-marker clusters, fewer of three, whose correlation spreads
+    more (README). Noise-free distances have no correlation to read, and are not named."""
+
+    name: str
+    n_frames: int
+    correlation: float
+    bound: float
+
+    def words(self) -> str:
+        """The status's words."""
+        return (
+            f"the frames' independence was not tested: the test needs {MIN_TESTED_FRAMES} "
+            f"frames and this fit has {self.n_frames}; the lag-1 autocorrelation of the "
+            f"{_LABELS[self.name]}' distances, {self.correlation:.2f}, is not clearly below "
+            f"{DEPENDENT_CORRELATION:.2g} (below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs "
+            "for independent frames under it), at which an SD that counts every frame as "
+            f"independent understates the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times: "
+            "its SDs and p-values count each frame as independent, which consecutive frames of a "
+            "recording seldom are: fit a longer stretch"
+        )
+
+    def numbers(self) -> dict[str, float]:
+        """The diagnostics: the frames fitted and the bound their correlation did not clear."""
+        return {
+            "frames_independence_untested": self.n_frames,
+            "frames_independence_bound": self.bound,
+        }
+
+
+def _untested(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[Untested | None]:
+    """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
+    the :class:`Untested` of the segment whose lag-1 autocorrelation is the furthest above its
+    bound, where ``N`` is below :data:`MIN_TESTED_FRAMES`; ``None`` where no segment's is at
+    or above its bound (or none is read: noise-free distances, fewer than two markers)."""
+    n_trials, n_frames = arrays[0].shape[:2]
+    if n_frames >= MIN_TESTED_FRAMES:
+        return [None] * n_trials
+    read = [
+        (name, array, _frame_correlations(kernel_array(array))[:, 0])
+        for name, array in zip(names, arrays, strict=True)
+        if array.shape[2] >= 2 and n_frames >= 2  # a pair's distance over two frames at least
+    ]
+    found: list[Untested | None] = []
+    for t in range(n_trials):
+        worst = None
+        for name, array, correlations in read:
+            correlation = float(correlations[t])
+            if not math.isfinite(correlation):
+                continue
+            sd = _correlation_sd(_pair_distances(array[t]))
+            bound = DEPENDENT_CORRELATION - _Z_CLEARED * sd
+            if correlation >= bound and (
+                worst is None or correlation - bound > worst.correlation - worst.bound
+            ):
+                worst = Untested(name, n_frames, correlation, bound)
+        found.append(worst)
+    return found
+
+
+def _correlation_sd(distances: np.ndarray) -> float:
+    """The SD of the lag-1 autocorrelation pooled over the pair ``distances`` ``(P, N)`` [mm]
+    (:func:`_frame_dependence`) that ``N`` independent frames of their covariance ``C``
+    ``(P, P)`` [mm^2] give it: ``sqrt(N - 1) |C|_F / (N tr C)``. The pooled products of
+    neighbouring frames' deviations sum ``N - 1`` terms of variance ``|C|_F^2`` (pairs that
+    share a marker share its noise), over the pooled squares, ``N tr C``: ``1 / sqrt(N)`` for
+    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each."""
+    deviations = distances - distances.mean(axis=1, keepdims=True)
+    n_frames = deviations.shape[1]
+    covariance = deviations @ deviations.T / n_frames
+    spread = math.sqrt(n_frames - 1) * float(np.linalg.norm(covariance))
+    return spread / (n_frames * float(np.trace(covariance)))
+
+
 def _without_poses(
     arrays: tuple[np.ndarray, ...], reason: str, *, has_pose: bool = False
 ) -> Support:
@@ -2223,8 +2344,13 @@ def assess(
 
 
 def annotate(result, support: Support):
-    """``result`` with the support warnings, then its caveats, appended to its ``status`` and
-    the numbers in its ``diagnostics`` under ``support_<name>``; ``converged`` is left as the
-    method set it."""
+    """``result`` with the support warnings, then its caveats and what too few frames left
+    untested (:class:`Untested`), appended to its ``status``, and the numbers in its
+    ``diagnostics`` under ``support_<name>`` (the untested frames' under their own names);
+    ``converged`` is left as the method set it."""
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
-    return with_warnings(result, support.warnings + support.caveats, numbers)
+    words = support.warnings + support.caveats
+    if support.untested is not None:
+        words += (support.untested.words(),)
+        numbers.update(support.untested.numbers())
+    return with_warnings(result, words, numbers)

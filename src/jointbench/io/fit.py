@@ -35,7 +35,6 @@ from jointbench.estimators.batching import failed_trial, mistakes_named, numeric
 from jointbench.estimators.centre_precision import stated_covariance
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
 from jointbench.estimators.results import with_warnings
-from jointbench.estimators.support import MIN_BLOCKS
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -368,7 +367,7 @@ class Prepared:
             raise ValueError(f"{label}: {error}") from None
         rows = self.rows(np.arange(self.usable.size))
         with mistakes_named(label):
-            result = _independence_untested(self.solve(method, rows, options), rows.size)
+            result = self.solve(method, rows, options)
             boot = None
             if n_bootstrap:
                 estimate = _estimate_vector(kind, result)
@@ -401,29 +400,6 @@ class Prepared:
             reference=self.reference,
             first_frame=offset,
         )
-
-
-#: The fewest frames whose independence the support verdict can test: below four times its
-#: fewest blocks no variance ratio can reach its quantile (:mod:`jointbench.estimators.support`).
-MIN_TESTED_FRAMES = 4 * MIN_BLOCKS
-
-
-def _independence_untested(result: object, n_frames: int) -> object:
-    """``result`` of a fit of a recording's ``n_frames`` frames with a warning where they are
-    too few for the support verdict to test whether they are independent
-    (:data:`MIN_TESTED_FRAMES`): its SDs and p-values count every frame as independent, and a
-    short stretch of a recording, whose consecutive frames share their skin motion and their
-    filter's smoothing, seldom is (``tests/test_user_recordings.py``)."""
-    if n_frames >= MIN_TESTED_FRAMES:
-        return result
-    correlation = result.diagnostics.get("support_frame_correlation")
-    seen = "" if correlation is None else f" (their lag-1 autocorrelation: {correlation:.2f})"
-    warning = (
-        f"the frames' independence was not tested: the test needs {MIN_TESTED_FRAMES} frames "
-        f"and this fit has {n_frames}{seen}; its SDs and p-values count each frame as "
-        "independent, which consecutive frames of a recording seldom are: fit a longer stretch"
-    )
-    return with_warnings(result, (warning,), {"frames_independence_untested": n_frames})
 
 
 def _blocks_checked(result: object, boot: Bootstrap, n_frames: int) -> object:
