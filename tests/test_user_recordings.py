@@ -409,9 +409,33 @@ def test_the_array_api_on_too_few_frames_of_the_knee_says_their_independence_was
         assert outcome.diagnostics["frames_independence_untested"] == 22
 
 
+UNCONFIRMED = "the frames' dependence test did not reject their independence"
+
+
 @pytest.mark.parametrize("kind", ["center", "axis", "joint_center"])
-def test_the_array_api_on_enough_frames_to_test_leaves_the_test_to_the_verdict(kind):
-    fit = ARRAY_FITS[kind]
-    result = fit(*knee_arrays(kind, "990:1022"))
-    assert UNTESTED not in result.status
-    assert "frames_independence_untested" not in result.diagnostics
+@pytest.mark.parametrize("frames", ["990:1022", "700:748"])
+def test_knee_frames_the_block_test_does_not_reject_say_their_lag_1_autocorrelation(kind, frames):
+    """Frames 990 to 1021 of the knee trial (lag-1 autocorrelation 0.92) gave an axis reading
+    ``ok`` with an SD of 0.43 degrees, and frames 700 to 747 (0.86 to 0.89) read no caveat
+    for any kind: 32 and 48 frames leave the block test little power. The array API, its
+    many-trial form and a recording's fit say that the test did not reject the frames'
+    independence but their lag-1 autocorrelation is not clearly below 0.2."""
+    n_frames = int(frames.split(":")[1]) - int(frames.split(":")[0])
+    arrays = knee_arrays(kind, frames)
+    outcomes = [ARRAY_FITS[kind](*arrays)]
+    outcomes += registry.many(kind, DEFAULT_METHODS[kind])(*(array[None] for array in arrays))
+    outcomes.append(jointbench.fit(read(KNEE), kind, KNEE_LEG, KNEE_THIGH, frames=frames).result)
+    unconfirmed = 0
+    for result in outcomes:
+        assert UNTESTED not in result.status
+        assert "frames_independence_untested" not in result.diagnostics
+        # The block test rejects some of these (the thigh's 48 array frames, for a joint
+        # centre): its caveat then stands alone.
+        if "the frames are not independent" in result.status:
+            assert UNCONFIRMED not in result.status
+            continue
+        assert UNCONFIRMED in result.status, result.status
+        assert result.diagnostics["frames_independence_unconfirmed"] == n_frames
+        assert result.diagnostics["support_frame_correlation"] > 0.8
+        unconfirmed += 1
+    assert unconfirmed >= (3 if frames == "990:1022" else 1)

@@ -20,11 +20,14 @@ Every method is reached through the registry, which holds it to the same rules:
   each frame's noise as independent: frames that are not (interpolated, filtered, skin markers)
   are said so in ``status`` (``"warning: the frames are not independent: ..."``), with about
   how many independent frames they hold in ``diagnostics["support_independent_frames"]``.
-  Fewer than :data:`jointbench.estimators.support.MIN_TESTED_FRAMES` frames are too few for
-  that test: unless their lag-1 autocorrelation is clearly below
-  :data:`jointbench.estimators.support.DEPENDENT_CORRELATION`, ``status`` says
-  ``"warning: the frames' independence was not tested: ..."`` and
-  ``diagnostics["frames_independence_untested"]`` holds the frames
+  Where that test does not say so, its lag-1 autocorrelation is read too: unless it is
+  clearly below :data:`jointbench.estimators.support.DEPENDENT_CORRELATION`, ``status``
+  says, for fewer than :data:`jointbench.estimators.support.MIN_TESTED_FRAMES` frames (too
+  few for the test), ``"warning: the frames' independence was not tested: ..."`` with the
+  frames in ``diagnostics["frames_independence_untested"]``, and for more (a few dozen leave
+  the test little power) ``"warning: the frames' dependence test did not reject their
+  independence over N frames, but ..."`` with the frames in
+  ``diagnostics["frames_independence_unconfirmed"]``
   (:class:`jointbench.estimators.support.Untested`);
 * an array with more markers than frames may be a ``(markers, frames, 3)`` array passed
   transposed: with fewer frames than the method takes

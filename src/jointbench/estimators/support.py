@@ -57,9 +57,12 @@ more non-collinear markers), each first order in the noise:
   errors every marker of a segment shares (a rigid wobble, or a smoothed reference segment's
   pose carried into the moving markers' coordinates), which keep the distances; nor
   noise-free data. Below ``4 MIN_BLOCKS`` frames (:data:`MIN_TESTED_FRAMES`) no ratio can
-  reach its quantile, and the test is not made; the lag-1 autocorrelation still is, and where
-  it is not clearly below :data:`DEPENDENT_CORRELATION` the verdict says that the frames'
-  independence was not tested (:class:`Untested`).
+  reach its quantile, and the test is not made; above, few blocks leave it little power: over
+  32 frames the ratios must reach 2.7 over 16 blocks of 2 frames or 3.8 over 8 of 4, above
+  the 1.9 and 3.4 of noise keeping 0.87 of itself from frame to frame (``tau`` 14). Wherever
+  the test does not find the frames not independent, too few to test or not, the lag-1
+  autocorrelation is read too, and where it is not clearly below
+  :data:`DEPENDENT_CORRELATION` the verdict says so (:class:`Untested`).
 
 Noise-free data (a residual at rounding level, :data:`ROUNDING`) leave nothing to test
 against: a rotation above 1e-8 rad RMS is resolved, and rotation about a second axis is when
@@ -237,8 +240,9 @@ MIN_TESTED_FRAMES = 4 * MIN_BLOCKS
 
 #: The lag-1 autocorrelation ``r`` at which noise that keeps that share of itself from frame to
 #: frame reaches :data:`MIN_VARIANCE_RATIO` (its correlation time ``(1 + r) / (1 - r)``): 0.2.
-#: Below :data:`MIN_TESTED_FRAMES` frames the verdict says their independence was not tested
-#: unless their lag-1 autocorrelation is clearly below it (:class:`Untested`).
+#: Where the block test does not find the frames not independent (too few to test, or the test
+#: did not reject them) the verdict says so unless their lag-1 autocorrelation is clearly below
+#: it (:class:`Untested`).
 DEPENDENT_CORRELATION = (MIN_VARIANCE_RATIO - 1.0) / (MIN_VARIANCE_RATIO + 1.0)
 
 # A lag-1 autocorrelation is "clearly below" DEPENDENT_CORRELATION when it is below it by this
@@ -283,11 +287,11 @@ class Support(NamedTuple):
     refusal; for two segments' poses judged for a joint centre, ``pose_noise``, what their
     noise does to a least-squares centre (:class:`jointbench.estimators.pose_noise.PoseNoise`),
     which the registry holds every joint-centre answer to, else ``None``; and ``untested``,
-    for a trial of fewer than :data:`MIN_TESTED_FRAMES` frames whose lag-1 autocorrelation is
-    not clearly below :data:`DEPENDENT_CORRELATION`, that the frames' independence was not
-    tested (:class:`Untested`), else ``None``. The status carries it after the caveats, as one
-    of them: a warning (the status is no longer ``ok``) that the other checks do not read as
-    a refusal."""
+    for a trial without the caveat (too few frames to test, or the test did not reject them)
+    whose lag-1 autocorrelation is not clearly below :data:`DEPENDENT_CORRELATION`, that the
+    frames' independence was not established (:class:`Untested`), else ``None``. The status
+    carries it after the caveats, as one of them: a warning (the status is no longer ``ok``)
+    that the other checks do not read as a refusal."""
 
     warnings: tuple[str, ...]
     diagnostics: dict
@@ -1769,7 +1773,7 @@ def assess_many(
     ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
     per trial."""
     verdicts = _judged(kind, arrays, poses)
-    untested = _untested(ARRAY_NAMES[kind], arrays)
+    untested = _untested(ARRAY_NAMES[kind], arrays, [not verdict.caveats for verdict in verdicts])
     return [
         verdict if found is None else verdict._replace(untested=found)
         for verdict, found in zip(verdicts, untested, strict=True)
@@ -1777,7 +1781,8 @@ def assess_many(
 
 
 def _judged(kind: str, arrays: tuple[np.ndarray, ...], poses: list | None) -> list[Support]:
-    """The verdicts of :func:`assess_many` but for what too few frames leave untested."""
+    """The verdicts of :func:`assess_many` but for what the frames' lag-1 autocorrelation
+    says where the block test does not (:class:`Untested`)."""
     n_trials = arrays[0].shape[0]
     if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
         n_markers = arrays[0].shape[2]
@@ -2087,28 +2092,48 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
 
 
 class Untested(NamedTuple):
-    """Frames too few for the verdict to test their independence (fewer than
-    :data:`MIN_TESTED_FRAMES`), whose pair distances' lag-1 autocorrelation (pooled as
-    :func:`_frame_dependence` pools it), read from the segment ``name``, is not clearly below
-    :data:`DEPENDENT_CORRELATION`: at or above ``bound``, that correlation less
-    :data:`_Z_CLEARED` of the SDs ``n_frames`` independent frames would give it
-    (:func:`_correlation_sd`). Every SD and p-value of the fit counts each frame as
-    independent, and a short stretch of a recording, whose consecutive frames share their skin
-    motion and their filter's smoothing, seldom is (22 frames of the knee trial: 0.87).
-    Independent frames (simulated, resampled) are cleared where their correlation can show it:
-    most 22-frame trials of six-marker clusters, fewer of three, whose correlation spreads
-    more (README). Noise-free distances have no correlation to read, and are not named."""
+    """Frames whose independence the verdict did not establish: too few to test
+    (:data:`MIN_TESTED_FRAMES`) or tested without the block test rejecting it, whose pair
+    distances' lag-1 autocorrelation (pooled as :func:`_frame_dependence` pools it), read from
+    the segment ``name``, is not clearly below :data:`DEPENDENT_CORRELATION`: at or above
+    ``bound``, that correlation less :data:`_Z_CLEARED` of the SDs ``n_frames`` independent
+    frames would give it (:func:`_correlation_sd`). Every SD and p-value of the fit counts each
+    frame as independent, and a short stretch of a recording, whose consecutive frames share
+    their skin motion and their filter's smoothing, seldom is (22 frames of the knee trial:
+    0.87; 32: 0.92, where the block test did not reject them).
+
+    One rule at every length, the lag-1 statement beside the block test, rather than a length
+    below which it applies: where the block test is weak (tens of frames) the statement is
+    what flags correlated frames, and where it is strong the statement costs independent
+    frames little, its margin under the bound, about ``0.2 - 1.64 / sqrt(P N)`` for ``P``
+    pairs, growing against the correlation's own spread, ``1 / sqrt(P N)``, as the frames
+    grow: of 100 trials of independent noise on four markers, 32 frames read it in some, 500
+    in none (README). Independent frames (simulated, resampled) are cleared where their
+    correlation can show it: most 22-frame trials of six-marker clusters, fewer of three,
+    whose correlation spreads more. Noise-free distances have no correlation to read, and
+    are not named."""
 
     name: str
     n_frames: int
     correlation: float
     bound: float
 
+    @property
+    def tested(self) -> bool:
+        """Whether the block test was made (and did not reject the frames' independence)."""
+        return self.n_frames >= MIN_TESTED_FRAMES
+
     def words(self) -> str:
         """The status's words."""
+        found = (
+            "the frames' dependence test did not reject their independence over "
+            f"{self.n_frames} frames, but"
+            if self.tested
+            else f"the frames' independence was not tested: the test needs {MIN_TESTED_FRAMES} "
+            f"frames and this fit has {self.n_frames};"
+        )
         return (
-            f"the frames' independence was not tested: the test needs {MIN_TESTED_FRAMES} "
-            f"frames and this fit has {self.n_frames}; the lag-1 autocorrelation of the "
+            f"{found} the lag-1 autocorrelation of the "
             f"{_LABELS[self.name]}' distances, {self.correlation:.2f}, is not clearly below "
             f"{DEPENDENT_CORRELATION:.2g} (below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs "
             "for independent frames under it), at which an SD that counts every frame as "
@@ -2118,40 +2143,49 @@ class Untested(NamedTuple):
         )
 
     def numbers(self) -> dict[str, float]:
-        """The diagnostics: the frames fitted and the bound their correlation did not clear."""
+        """The diagnostics: the frames fitted, under ``frames_independence_untested`` where
+        they were too few to test and ``frames_independence_unconfirmed`` where the test did
+        not reject them, and the bound their correlation did not clear."""
+        key = "unconfirmed" if self.tested else "untested"
         return {
-            "frames_independence_untested": self.n_frames,
+            f"frames_independence_{key}": self.n_frames,
             "frames_independence_bound": self.bound,
         }
 
 
-def _untested(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[Untested | None]:
+def _untested(
+    names: tuple[str, ...], arrays: tuple[np.ndarray, ...], unflagged: list[bool]
+) -> list[Untested | None]:
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
     the :class:`Untested` of the segment whose lag-1 autocorrelation is the furthest above its
-    bound, where ``N`` is below :data:`MIN_TESTED_FRAMES`; ``None`` where no segment's is at
-    or above its bound (or none is read: noise-free distances, fewer than two markers)."""
+    bound, where the trial is ``unflagged`` (its verdict carries no caveat of frames that are not
+    independent); ``None`` where it is not, or no segment's correlation is at or above its
+    bound (or none is read: noise-free distances, fewer than two markers or frames)."""
     n_trials, n_frames = arrays[0].shape[:2]
-    if n_frames >= MIN_TESTED_FRAMES:
-        return [None] * n_trials
+    found: list[Untested | None] = [None] * n_trials
+    trials = np.flatnonzero(unflagged)
+    if not trials.size or n_frames < 2:  # a pair's distance over two frames at least
+        return found
+    # The trials the caveat closed are not read: most of a long correlated recording's.
+    chosen = tuple(array if trials.size == n_trials else array[trials] for array in arrays)
     read = [
         (name, array, _frame_correlations(kernel_array(array))[:, 0])
-        for name, array in zip(names, arrays, strict=True)
-        if array.shape[2] >= 2 and n_frames >= 2  # a pair's distance over two frames at least
+        for name, array in zip(names, chosen, strict=True)
+        if array.shape[2] >= 2
     ]
-    found: list[Untested | None] = []
-    for t in range(n_trials):
+    for row, t in enumerate(trials):
         worst = None
         for name, array, correlations in read:
-            correlation = float(correlations[t])
+            correlation = float(correlations[row])
             if not math.isfinite(correlation):
                 continue
-            sd = _correlation_sd(_pair_distances(array[t]))
+            sd = _correlation_sd(_pair_distances(array[row]))
             bound = DEPENDENT_CORRELATION - _Z_CLEARED * sd
             if correlation >= bound and (
                 worst is None or correlation - bound > worst.correlation - worst.bound
             ):
                 worst = Untested(name, n_frames, correlation, bound)
-        found.append(worst)
+        found[t] = worst
     return found
 
 
@@ -2344,9 +2378,10 @@ def assess(
 
 
 def annotate(result, support: Support):
-    """``result`` with the support warnings, then its caveats and what too few frames left
-    untested (:class:`Untested`), appended to its ``status``, and the numbers in its
-    ``diagnostics`` under ``support_<name>`` (the untested frames' under their own names);
+    """``result`` with the support warnings, then its caveats or, where it has none, what the
+    frames' lag-1 autocorrelation says (:class:`Untested`), appended to its ``status``, and the
+    numbers in its ``diagnostics`` under ``support_<name>`` (the lag-1 statement's under their
+    own names);
     ``converged`` is left as the method set it."""
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
     words = support.warnings + support.caveats
