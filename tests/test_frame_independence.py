@@ -514,3 +514,25 @@ def test_independent_frames_seldom_read_the_lag_1_statement_and_long_ones_never(
 def test_short_noise_free_frames_have_no_correlation_to_call_untested(kind):
     arrays = _kind_trial(kind, np.random.default_rng(1), 20, np.zeros)
     assert support.assess(kind, arrays).untested is None
+
+
+def test_the_correlation_sd_is_that_of_the_distances_covariance():
+    """``sqrt(N - 1) |C|_F / (N tr C)`` of the pair distances' covariance ``C``, compiled and
+    as written; NaN where no distance varies."""
+    rng = np.random.default_rng(4)
+    for n_frames, n_markers in ((2, 2), (5, 3), (32, 4), (300, 6)):
+        markers = rng.normal(scale=30.0, size=(3, n_frames, n_markers, 3))
+        expected = []
+        for trial in markers:
+            pairs = [(a, b) for a in range(n_markers) for b in range(a + 1, n_markers)]
+            distances = np.array(
+                [np.linalg.norm(trial[:, a] - trial[:, b], axis=1) for a, b in pairs]
+            )
+            covariance = np.cov(distances, bias=True).reshape(len(pairs), len(pairs))
+            spread = math.sqrt(n_frames - 1) * np.linalg.norm(covariance)
+            expected.append(spread / (n_frames * np.trace(covariance)))
+        for function in (support._correlation_sds, support._correlation_sds.__wrapped__):
+            np.testing.assert_allclose(function(markers), expected, rtol=1e-12)
+    # Two frames, whose mean is exact: the deviations are zero, not rounding.
+    still = np.repeat(rng.normal(size=(1, 1, 4, 3)), 2, axis=1)
+    assert np.isnan(support._correlation_sds(still)).all()

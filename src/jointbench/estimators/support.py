@@ -2097,7 +2097,7 @@ class Untested(NamedTuple):
     distances' lag-1 autocorrelation (pooled as :func:`_frame_dependence` pools it), read from
     the segment ``name``, is not clearly below :data:`DEPENDENT_CORRELATION`: at or above
     ``bound``, that correlation less :data:`_Z_CLEARED` of the SDs ``n_frames`` independent
-    frames would give it (:func:`_correlation_sd`). Every SD and p-value of the fit counts each
+    frames would give it (:func:`_correlation_sds`). Every SD and p-value of the fit counts each
     frame as independent, and a short stretch of a recording, whose consecutive frames share
     their skin motion and their filter's smoothing, seldom is (22 frames of the knee trial:
     0.87; 32: 0.92, where the block test did not reject them).
@@ -2168,19 +2168,18 @@ def _untested(
         return found
     # The trials the caveat closed are not read: most of a long correlated recording's.
     chosen = tuple(array if trials.size == n_trials else array[trials] for array in arrays)
-    read = [
-        (name, array, _frame_correlations(kernel_array(array))[:, 0])
-        for name, array in zip(names, chosen, strict=True)
-        if array.shape[2] >= 2
-    ]
+    read = []
+    for name, array in zip(names, chosen, strict=True):
+        if array.shape[2] >= 2:
+            ready = kernel_array(array)
+            read.append((name, _frame_correlations(ready)[:, 0], _correlation_sds(ready)))
     for row, t in enumerate(trials):
         worst = None
-        for name, array, correlations in read:
+        for name, correlations, sds in read:
             correlation = float(correlations[row])
             if not math.isfinite(correlation):
                 continue
-            sd = _correlation_sd(_pair_distances(array[row]))
-            bound = DEPENDENT_CORRELATION - _Z_CLEARED * sd
+            bound = DEPENDENT_CORRELATION - _Z_CLEARED * float(sds[row])
             if correlation >= bound and (
                 worst is None or correlation - bound > worst.correlation - worst.bound
             ):
@@ -2189,18 +2188,43 @@ def _untested(
     return found
 
 
-def _correlation_sd(distances: np.ndarray) -> float:
-    """The SD of the lag-1 autocorrelation pooled over the pair ``distances`` ``(P, N)`` [mm]
-    (:func:`_frame_dependence`) that ``N`` independent frames of their covariance ``C``
-    ``(P, P)`` [mm^2] give it: ``sqrt(N - 1) |C|_F / (N tr C)``. The pooled products of
+@kernel
+def _correlation_sds(markers: np.ndarray) -> np.ndarray:
+    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the SD of the lag-1
+    autocorrelation pooled over its pair distances ``(P, N)`` [mm] (:func:`_frame_dependence`)
+    that ``N`` independent frames of their covariance ``C`` ``(P, P)`` [mm^2] give it:
+    ``sqrt(N - 1) |C|_F / (N tr C)`` (NaN where every deviation is zero). The pooled products of
     neighbouring frames' deviations sum ``N - 1`` terms of variance ``|C|_F^2`` (pairs that
     share a marker share its noise), over the pooled squares, ``N tr C``: ``1 / sqrt(N)`` for
-    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each."""
-    deviations = distances - distances.mean(axis=1, keepdims=True)
-    n_frames = deviations.shape[1]
-    covariance = deviations @ deviations.T / n_frames
-    spread = math.sqrt(n_frames - 1) * float(np.linalg.norm(covariance))
-    return spread / (n_frames * float(np.trace(covariance)))
+    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each. A compiled kernel:
+    every checked fit reads it, where NumPy's calls on these small arrays cost tens of
+    microseconds."""
+    n_trials, n_frames = markers.shape[0], markers.shape[1]
+    out = np.empty(n_trials)
+    for t in range(n_trials):
+        deviations = _pair_distances(markers[t])
+        n_pairs = deviations.shape[0]
+        for p in range(n_pairs):
+            mean = 0.0
+            for f in range(n_frames):
+                mean += deviations[p, f]
+            mean /= n_frames
+            for f in range(n_frames):
+                deviations[p, f] -= mean
+        trace = 0.0
+        frobenius = 0.0
+        for p in range(n_pairs):
+            for q in range(p, n_pairs):
+                product = 0.0
+                for f in range(n_frames):
+                    product += deviations[p, f] * deviations[q, f]
+                # C is symmetric: an entry off the diagonal stands twice in |C|_F^2.
+                frobenius += (1.0 if p == q else 2.0) * product * product
+                if p == q:
+                    trace += product
+        # Both sums are of products over the frames, N times C's entries: their ratio holds.
+        out[t] = np.sqrt((n_frames - 1) * frobenius) / (n_frames * trace) if trace > 0.0 else np.nan
+    return out
 
 
 def _without_poses(
