@@ -2102,16 +2102,18 @@ class Untested(NamedTuple):
     their skin motion and their filter's smoothing, seldom is (22 frames of the knee trial:
     0.87; 32: 0.92, where the block test did not reject them).
 
-    One rule at every length, the lag-1 statement beside the block test, rather than a length
-    below which it applies: where the block test is weak (tens of frames) the statement is
-    what flags correlated frames, and where it is strong the statement costs independent
-    frames little, its margin under the bound, about ``0.2 - 1.64 / sqrt(P N)`` for ``P``
-    pairs, growing against the correlation's own spread, ``1 / sqrt(P N)``, as the frames
-    grow: of 100 trials of independent noise on four markers, 32 frames read it in some, 500
-    in none (README). Independent frames (simulated, resampled) are cleared where their
-    correlation can show it: most 22-frame trials of six-marker clusters, fewer of three,
-    whose correlation spreads more. Noise-free distances have no correlation to read, and
-    are not named."""
+    One rule at every length, the lag-1 statement wherever the block test gives no caveat,
+    rather than a length below which it applies: where the block test is weak (tens of
+    frames; at 120 frames it names noise keeping half of itself from frame to frame in a
+    fraction of trials) the statement is what flags correlated frames, and where it is strong
+    the statement costs independent frames little. Their correlation scatters about 0 by
+    ``sd``, about ``1 / sqrt(P N)`` for ``P`` pairs of their own noise, so the bound
+    ``0.2 - 1.64 sd`` stands ``0.2 / sd - 1.64`` of those SDs above it, a margin that grows
+    as ``sqrt(N)``: of 100 trials of independent noise on four markers, 12 to 29 read the
+    statement at 32 frames, at most 1 at 120 and none at 500 (README). Independent frames
+    (simulated, resampled) are cleared where their correlation can show it: most 22-frame
+    trials of six-marker clusters, fewer of three, whose correlation spreads more.
+    Noise-free distances have no correlation to read, and are not named."""
 
     name: str
     n_frames: int
