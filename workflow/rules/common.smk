@@ -14,6 +14,7 @@ from jointbench.figures.common import study_title
 from jointbench.fingerprint import (
     check_bytecode_by_content,
     code_fingerprint,
+    data_names,
     source_digests,
 )
 from jointbench.running import run as jb_run
@@ -689,14 +690,35 @@ EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
 # can keep: every cache is made one checked by the source's content, before any job runs.
 check_bytecode_by_content(*EXTENSIONS)
 # Every paper's published values: the inputs of the jobs of its own study (published_files),
-# left out of the code so that one paper's values rerun only those.
+# left out of the code so that one paper's values rerun only those; named as files of the
+# package, which each job is given (`code_inputs`, plan_code_checks) to check its code with.
 PUBLISHED = [get_paper(name).published for name in paper_names()]
+CODE_INPUTS = data_names(PUBLISHED)
 
 
 @functools.cache
 def script_code(script):
     """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
-    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=PUBLISHED)
+    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS)
+
+
+def plan_code_checks():
+    """Give each rule with a code fingerprint (``code``, script_code) the parameter
+    ``code_inputs``: with it, the job computes the fingerprint again from the arguments
+    script_code used, its script and the run's extensions being its own, and refuses to run
+    code other than the planned (jointbench.jobs.check_planned_code)."""
+    for producer in workflow.rules:
+        names = producer.params.keys()
+        if "code" not in names:
+            continue
+        # Snakemake would let this replace a rule's own parameter of that name.
+        if "code_inputs" in names:
+            raise ValueError(
+                f"rule {producer.name} has a parameter named 'code_inputs', a name the "
+                "workflow gives the data files left out of each job's code fingerprint; rename "
+                "the rule's parameter"
+            )
+        producer.set_params(code_inputs=CODE_INPUTS)
 
 
 def study_settings(study, *keys):
