@@ -3,9 +3,10 @@
 Snakemake fingerprints each job's code when it plans the run (``params.code``,
 ``script_code`` in ``workflow/rules/common.smk``) and the job records that fingerprint. A file
 saved meanwhile would run under it unrecorded, so the job computes the fingerprint again from
-the same arguments (its script, the run's extensions, ``params.code_inputs``) once its modules
-are loaded, and refuses to run code other than the planned. ``tests/test_stale_results.py``
-does the same through Snakemake.
+the same arguments (its script, the run's extensions, the data files ``params.code_plan``
+names) once its modules are loaded, and refuses to run code other than the planned, naming
+the versions that differ from the planned ones (``params.code_plan``'s too).
+``tests/test_stale_results.py`` does the same through Snakemake.
 """
 
 from __future__ import annotations
@@ -36,15 +37,17 @@ def script(tmp_path, monkeypatch) -> Path:
     return path
 
 
-def _job(code: str, config: dict | None = None) -> SimpleNamespace:
-    """What a workflow script is given as ``snakemake``, for a rule planned on ``code``."""
+def _job(code: str, config: dict | None = None, versions: dict | None = None) -> SimpleNamespace:
+    """What a workflow script is given as ``snakemake``, for a rule planned on ``code`` under
+    ``versions`` (by default those of this process)."""
+    plan = {"inputs": CODE_INPUTS, "versions": versions or fingerprint.dependency_versions()}
     return SimpleNamespace(
         rule="render_cmc",
         input=[],
         output=[],
         log=[],
         config=config or {},
-        params=SimpleNamespace(code=code, code_inputs=CODE_INPUTS),
+        params=SimpleNamespace(code=code, code_plan=plan),
     )
 
 
@@ -110,10 +113,25 @@ def test_numbas_jit_switched_off_is_part_of_the_fingerprint(monkeypatch, value, 
     assert ("numba_jit" in fingerprint.dependency_versions()) is counts
 
 
-def test_a_job_planned_with_the_jit_and_run_without_it_is_refused(script, monkeypatch):
+def test_a_job_planned_with_the_jit_and_run_without_it_is_refused_naming_it(script, monkeypatch):
     monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
-    planned = code_fingerprint(script, inputs=CODE_INPUTS)
+    job = _job(code_fingerprint(script, inputs=CODE_INPUTS))
     monkeypatch.setenv("NUMBA_DISABLE_JIT", "1")
-    with pytest.raises(ValueError, match="rule render_cmc: the code changed"):
-        with jobs.job(_job(planned)):
+    with pytest.raises(ValueError, match="rule render_cmc: the code changed") as error:
+        with jobs.job(job):
             pytest.fail("the job ran code other than the planned")
+    assert "numba_jit: on when planned, disabled here" in str(error.value)
+
+
+def test_a_job_planned_under_other_versions_is_refused_naming_them(script):
+    """A job run in another environment than Snakemake's (a conda environment of its own)
+    records the versions Snakemake planned it under, not those it ran."""
+    versions = fingerprint.dependency_versions()
+    planned = {**versions, "numpy": "1.0.0"}
+    job = _job(code_fingerprint(script, inputs=CODE_INPUTS) + "0", versions=planned)
+    with pytest.raises(ValueError, match="rule render_cmc: the code changed") as error:
+        with jobs.job(job):
+            pytest.fail("the job ran code other than the planned")
+    message = str(error.value)
+    assert f"numpy: 1.0.0 when planned, {versions['numpy']} here" in message
+    assert "python:" not in message

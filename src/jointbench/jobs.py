@@ -28,7 +28,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from jointbench.configuration.extensions import load_extensions
-from jointbench.fingerprint import code_fingerprint
+from jointbench.fingerprint import code_fingerprint, dependency_versions
 
 __all__ = ["check_planned_code", "job", "provenance", "require_declared"]
 
@@ -79,25 +79,55 @@ def check_planned_code(snakemake) -> None:
     planned it on: the fingerprint its rule computed when the run started (``params.code``,
     ``script_code`` in ``workflow/rules/common.smk``) against the one computed now from the same
     arguments, the job's script, the run's extensions and the data files left out of the code
-    (``params.code_inputs``). A file saved while the run goes on would otherwise run under the
-    planned fingerprint, and once reverted the results it made would read as current. A job
-    whose rule states no fingerprint (a rule of the user's) is not checked."""
+    (``params.code_plan["inputs"]``). A file saved while the run goes on would otherwise run
+    under the planned fingerprint, and once reverted the results it made would read as current;
+    a job in an environment of its own (a conda environment) would record the versions of the
+    Snakemake process's, which the message names where they differ
+    (``params.code_plan["versions"]``). A job whose rule states no fingerprint (a rule of the
+    user's) is not checked."""
     params = getattr(snakemake, "params", None)
     planned = getattr(params, "code", None)
     if planned is None:
         return
+    plan = params.code_plan
     script = Path(sys.modules["__main__"].__file__)
     extensions = [Path(entry).resolve() for entry in snakemake.config.get("extensions", [])]
-    now = code_fingerprint(script, *extensions, inputs=params.code_inputs)
+    now = code_fingerprint(script, *extensions, inputs=plan["inputs"])
     if now != planned:
         raise ValueError(
             f"rule {snakemake.rule}: the code changed after the run planned this job (its "
-            f"fingerprint was {planned}, it is {now} now): a module of the package, the script "
-            f"{script.name}, an extension or a module of your own was saved while the run went "
-            "on, or the versions of Python, its packages or Numba's compiler setting "
-            "(NUMBA_DISABLE_JIT) differ; the job would run code that no record names. Run "
-            "snakemake again: it plans on the code as it is"
+            f"fingerprint was {planned}, it is {now} now) and would run unrecorded: "
+            + _why_changed(plan["versions"], dependency_versions(), script.name)
         )
+
+
+def _why_changed(planned: dict[str, str], now: dict[str, str], script: str) -> str:
+    """What changed a job's fingerprint, running ``script``, since the planning, and what to
+    do: the versions that differ between ``planned`` and ``now`` (:func:`_changed_versions`),
+    else a file saved meanwhile."""
+    versions = _changed_versions(planned, now)
+    if versions:
+        return (
+            f"{versions} (this job's environment against Snakemake's); run snakemake from an "
+            "environment with the versions its jobs run"
+        )
+    return (
+        f"a module of the package, the script {script}, an extension or a module of your own "
+        "was saved while the run went on; run snakemake again, which plans on the code as it is"
+    )
+
+
+def _changed_versions(planned: dict[str, str], now: dict[str, str]) -> str:
+    """The entries of :func:`jointbench.fingerprint.dependency_versions` that differ between
+    ``planned`` and ``now``, as ``name: planned when planned, now here`` (``numba_jit`` is
+    there only when the compiler is off: ``on`` otherwise); empty when none does."""
+    unset = {"numba_jit": "on"}
+    names = sorted(name for name in {*planned, *now} if planned.get(name) != now.get(name))
+    return "; ".join(
+        f"{name}: {planned.get(name, unset.get(name))} when planned, "
+        f"{now.get(name, unset.get(name))} here"
+        for name in names
+    )
 
 
 #: The rule of the job running in this process and the files it declares as inputs, resolved;
