@@ -135,3 +135,25 @@ def test_a_job_planned_under_other_versions_is_refused_naming_them(script):
     message = str(error.value)
     assert f"numpy: 1.0.0 when planned, {versions['numpy']} here" in message
     assert "python:" not in message
+
+
+@pytest.mark.parametrize(
+    "setting, environment, counts",
+    [
+        ("disable_jit: 1\n", None, True),
+        ("disable_jit: 1\n", "0", False),
+        ("other: 1\n", None, False),
+    ],
+    ids=["the file", "the variable over the file", "another key"],
+)
+def test_numbas_config_file_switches_the_jit_off_as_numba_reads_it(
+    tmp_path, monkeypatch, setting, environment, counts
+):
+    """Numba also reads ``.numba_config.yaml`` of the working directory, keys without the
+    ``NUMBA_`` prefix; its environment variable wins."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    if environment is not None:
+        monkeypatch.setenv("NUMBA_DISABLE_JIT", environment)
+    (tmp_path / ".numba_config.yaml").write_text(setting)
+    assert fingerprint.numba_jit_disabled() is counts
