@@ -90,5 +90,7 @@ check_external_rules(USER_RULES)
 
 
 # Last, once every rule exists: each job's sources hashed into its parameters, and the files of
-# each job of the user's checked as Snakemake plans it.
+# each job of the user's checked as Snakemake plans it; each job given what it checks its code
+# against the planned fingerprint with.
 track_sources(USER_RULES)
+plan_code_checks()

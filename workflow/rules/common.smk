@@ -14,6 +14,8 @@ from jointbench.figures.common import study_title
 from jointbench.fingerprint import (
     check_bytecode_by_content,
     code_fingerprint,
+    data_names,
+    dependency_versions,
     source_digests,
 )
 from jointbench.running import run as jb_run
@@ -689,14 +691,39 @@ EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
 # can keep: every cache is made one checked by the source's content, before any job runs.
 check_bytecode_by_content(*EXTENSIONS)
 # Every paper's published values: the inputs of the jobs of its own study (published_files),
-# left out of the code so that one paper's values rerun only those.
+# left out of the code so that one paper's values rerun only those; named as files of the
+# package, which each job is given (`code_plan`, plan_code_checks) to check its code with.
 PUBLISHED = [get_paper(name).published for name in paper_names()]
+CODE_INPUTS = data_names(PUBLISHED)
+# What every job checks its code against the planned fingerprint with, besides its script and
+# the run's extensions: the files left out of it, and the versions it was computed under (a job
+# of a conda environment of its own names those that differ).
+CODE_PLAN = {"inputs": CODE_INPUTS, "versions": dependency_versions()}
 
 
 @functools.cache
 def script_code(script):
     """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
-    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=PUBLISHED)
+    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS)
+
+
+def plan_code_checks():
+    """Give each rule with a code fingerprint (``code``, script_code) the parameter
+    ``code_plan`` (CODE_PLAN): with it, the job computes the fingerprint again from the
+    arguments script_code used, its script and the run's extensions being its own, and refuses
+    to run code other than the planned (jointbench.jobs.check_planned_code)."""
+    for producer in workflow.rules:
+        names = producer.params.keys()
+        if "code" not in names:
+            continue
+        # Snakemake would let this replace a rule's own parameter of that name.
+        if "code_plan" in names:
+            raise ValueError(
+                f"rule {producer.name} has a parameter named 'code_plan', a name the "
+                "workflow gives what each job checks its code fingerprint with; rename the "
+                "rule's parameter"
+            )
+        producer.set_params(code_plan=CODE_PLAN)
 
 
 def study_settings(study, *keys):
