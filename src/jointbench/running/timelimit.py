@@ -19,6 +19,7 @@ from __future__ import annotations
 import ctypes
 import math
 import os
+import select
 import signal
 import sys
 import time
@@ -97,8 +98,19 @@ class _Group:
                 self.status = -ended.si_status if killed else ended.si_status
 
     def wait(self, within_s: float) -> bool:
-        """Whether the leader ends within ``within_s`` [s]."""
-        return self._until(lambda: self.status is not None, within_s)
+        """Whether the leader ends within ``within_s`` [s]: woken as it ends where the system
+        gives a process a file descriptor (Linux), so that a job of milliseconds is not held
+        for a polling interval; polled elsewhere."""
+        try:
+            ends = os.pidfd_open(self.leader)
+        except (AttributeError, OSError):
+            return self._until(lambda: self.status is not None, within_s)
+        try:
+            select.select([ends], [], [], within_s)
+        finally:
+            os.close(ends)
+        self.reap()
+        return self.status is not None
 
     def ended(self, within_s: float) -> bool:
         """Whether the whole group ends within ``within_s`` [s]."""
