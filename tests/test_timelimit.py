@@ -147,6 +147,30 @@ def test_the_limited_shell_stopped_from_outside_stops_its_group(tmp_path):
     assert not alive(program)
 
 
+def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
+    """Snakemake killed with SIGKILL: the limited shell it started stops the program rather
+    than leave it running without a limit."""
+    written = tmp_path / "pids"
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = "60"
+    # A stand-in for Snakemake: a shell that starts the limited shell and waits for it.
+    command = f"echo $$ > {written}; {FOREVER}"
+    run = subprocess.Popen(
+        ["bash", "-c", f"{timelimit.LIMITED_SHELL} -c '{command}'; exit $?"], env=environ
+    )
+    deadline = time.monotonic() + 20
+    while not (written.exists() and written.read_text().strip()):
+        assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+    run.kill()
+    run.wait()
+    (program,) = pids(written)
+    deadline = time.monotonic() + timelimit.GRACE_S + 5
+    while alive(program):
+        assert time.monotonic() < deadline, "the program runs on after the run was killed"
+        time.sleep(0.05)
+
+
 @pytest.mark.parametrize("limit", [None, "0", "-1", "ten", "nan", "inf", "1e9"])
 def test_the_limited_shell_runs_nothing_without_a_limit(limit, tmp_path):
     ran = tmp_path / "ran"

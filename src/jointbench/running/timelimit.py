@@ -45,6 +45,8 @@ _POLL_S = 0.05
 _KILLED_S = 2.0
 # prctl(2)'s option that makes a process the reaper of its descendants' orphans.
 _PR_SET_CHILD_SUBREAPER = 36
+# prctl(2)'s option that sends this process a signal when its parent ends.
+_PR_SET_PDEATHSIG = 1
 
 
 class Interrupted(Exception):
@@ -68,16 +70,32 @@ def group_alive(group: int) -> bool:
     return True
 
 
+def _prctl(option: int, value: int) -> None:
+    """prctl(2) where there is one (Linux); elsewhere nothing."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(option, value, 0, 0, 0)
+
+
 def _adopt_orphans() -> None:
     """Make this process the reaper of its descendants' orphans (Linux), so that a child the
     program leaves behind is reaped here once stopped, rather than by a PID 1 that may never
-    reap it (a container's), its zombie keeping the group alive. Elsewhere a no-op."""
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0)
+    reap it (a container's), its zombie keeping the group alive."""
+    _prctl(_PR_SET_CHILD_SUBREAPER, 1)
+
+
+def _end_with_the_run() -> None:
+    """Be told with SIGTERM when the process that started this one (Snakemake) ends (Linux):
+    a run killed with SIGKILL then stops the command here rather than leave it running
+    without a limit. This process stays in the run's process group, which Ctrl-C and a
+    closed terminal signal, and passes those on (:func:`main`)."""
+    parent = os.getppid()
+    _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() != parent:  # it ended before it could tell
+        raise Interrupted(signal.SIGTERM)
 
 
 class _Group:
-    """The process group of a command started in a session of its own, ``leader`` its pid;
+    """The process group of a command started in a group of its own, ``leader`` its pid;
     ``status`` the leader's exit status once reaped (negative: the signal that ended it)."""
 
     def __init__(self, leader: int):
@@ -147,14 +165,14 @@ def _signal_group(group: int, signum: int) -> None:
 
 
 def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -> int | None:
-    """Run ``argv`` in a session and process group of its own for at most ``limit_s`` [s]:
+    """Run ``argv`` in a process group of its own for at most ``limit_s`` [s]:
     its exit status (negative: the signal that ended it), or None when the limit stopped it
     (``_Group.stop``). A process of the group still running when the command ends (a child it
     left behind) is stopped too: nothing of the job outlives it. Stopped from outside
     (:class:`Interrupted`), it stops the group before passing that on. This process becomes
     the reaper of the command's orphans (``_adopt_orphans``)."""
     _adopt_orphans()
-    group = _Group(os.posix_spawnp(argv[0], list(argv), os.environ, setsid=True))
+    group = _Group(os.posix_spawnp(argv[0], list(argv), os.environ, setpgroup=0))
     try:
         ended = group.wait(limit_s)
     except BaseException:
@@ -263,6 +281,7 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
         signal.signal(signum, _interrupt)
     try:
+        _end_with_the_run()
         status = run_limited(["bash", "-c", BASH_PREFIX + argv[1]], limit)
     except Interrupted as stopped:
         return 128 + stopped.signum
