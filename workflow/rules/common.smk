@@ -856,7 +856,8 @@ def limit_user_jobs(user_rules):
     Snakemake, which no limit can stop without stopping the run: it is refused, naming the rule.
     """
     for producer in workflow.rules:
-        if producer.name not in user_rules:
+        # A rule without a command (a target of the user's) runs nothing to limit.
+        if producer.name not in user_rules or producer.norun:
             continue
         if producer.is_run:
             raise ValueError(

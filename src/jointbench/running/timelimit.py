@@ -50,7 +50,8 @@ _PR_SET_PDEATHSIG = 1
 
 
 class Interrupted(Exception):
-    """The limited shell was itself told to stop (Ctrl-C, or Snakemake cancelling the job)."""
+    """The limited shell was itself told to stop: Ctrl-C, a closed terminal, Snakemake
+    cancelling the job, or the run's end (:func:`_end_with_the_run`)."""
 
     def __init__(self, signum: int):
         super().__init__(f"signal {signum}")
