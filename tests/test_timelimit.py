@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -66,12 +67,14 @@ def test_a_program_ended_by_a_signal_of_its_own_says_which():
     assert status == -signal.SIGSEGV
 
 
-def with_child(tmp_path: Path, program: str) -> tuple[int | None, float, bool]:
-    """``program`` (bash, ``{child}`` standing for a child it starts in the background and
-    whose pid it writes) run under the limit: its status, its seconds and whether the child
-    still runs."""
+def with_child(
+    tmp_path: Path, program: str, child: str = FOREVER
+) -> tuple[int | None, float, bool]:
+    """``program`` (bash, ``{child}`` standing for ``child`` started in the background, its
+    pid written) run under the limit: its status, its seconds and whether the child still
+    runs."""
     written = tmp_path / "pids"
-    child = f"{FOREVER} & echo $! > {written}"
+    child = f"{child} & echo $! > {written}"
     status, seconds = timed(["bash", "-c", program.format(child=child)])
     (pid,) = pids(written)
     return status, seconds, alive(pid)
@@ -105,6 +108,33 @@ def test_a_child_that_ignores_sigterm_after_its_parent_ended_is_killed(tmp_path)
     status, _, running = with_child(tmp_path, f"(trap '' TERM; {{child}}; wait); {FOREVER}")
     assert status is None
     assert not running
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+@pytest.mark.parametrize(
+    # Half a second for the child to have left the group before its parent ends.
+    ("program", "stopped"),
+    [("{child}; sleep 0.5", False), (f"{{child}}; {FOREVER}", True)],
+)
+def test_a_child_that_leaves_the_group_is_stopped_when_its_parent_has_ended(
+    tmp_path, program, stopped
+):
+    """A daemon: the child starts a session of its own, out of the group the limit stops;
+    once the program has ended by itself or been stopped, the child is stopped too."""
+    status, _, running = with_child(tmp_path, program, child=f"setsid {FOREVER}")
+    assert status == (None if stopped else 0)
+    assert not running
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_path):
+    """Two removes: a child in a session of its own starts its own child in another."""
+    written = tmp_path / "pids"
+    inner = f"setsid {FOREVER} & echo $! > {written}; {FOREVER}"
+    status, _ = timed(["bash", "-c", f"setsid bash -c '{inner}' & sleep 0.5"])
+    assert status == 0
+    (grandchild,) = pids(written)
+    assert not alive(grandchild)
 
 
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:

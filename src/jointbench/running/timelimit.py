@@ -16,6 +16,7 @@ the limit and the key to raise (:func:`expired_message`).
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import math
 import os
@@ -24,6 +25,7 @@ import signal
 import sys
 import time
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 #: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
 KEY = "jobs.external_time_limit_s"
@@ -43,6 +45,8 @@ BASH_PREFIX = "set -euo pipefail; "
 # How often a stopped group is looked at [s], and how long a killed one is waited for [s].
 _POLL_S = 0.05
 _KILLED_S = 2.0
+# How many rounds of processes that left the command's group are stopped at most.
+_STRAY_ROUNDS = 5
 # prctl(2)'s option that makes a process the reaper of its descendants' orphans.
 _PR_SET_CHILD_SUBREAPER = 36
 # prctl(2)'s option that sends this process a signal when its parent ends.
@@ -181,10 +185,36 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
         raise
     if not ended:
         group.stop(grace_s)
+        _stop_strays(grace_s)
         return None
     if not group.ended(0):
         group.stop(grace_s)
+    _stop_strays(grace_s)
     return group.status
+
+
+def _children() -> list[int]:
+    """The pids of this process's children (Linux's ``/proc``; none known elsewhere)."""
+    found = []
+    for task in Path("/proc/self/task").glob("*/children"):
+        with contextlib.suppress(OSError):
+            found += [int(pid) for pid in task.read_text().split()]
+    return found
+
+
+def _stop_strays(grace_s: float) -> None:
+    """Stop, group by group, what is left of the command after its own group ended: a
+    process that left the group (``setsid``, a daemon that detached) and whose parent in it
+    has ended is this process's child (``_adopt_orphans``), and so, once that one is
+    stopped, is a child that left its group in turn; a few rounds, as one that cannot end
+    (a read of a dead disk) is past any signal's reach."""
+    for _ in range(_STRAY_ROUNDS):
+        strays = _children()
+        if not strays:
+            return
+        for stray in strays:
+            with contextlib.suppress(ProcessLookupError):
+                _Group(os.getpgid(stray)).stop(grace_s)
 
 
 #: The longest limit [s], a week: a cluster's longest partitions allow about that, and a longer
