@@ -568,8 +568,7 @@ def test_a_c_program_that_never_ends_is_stopped_with_the_child_it_forked(tmp_pat
     """The C example edited to ignore SIGTERM, fork a child that ignores it too and wait for
     ever: with no Python of its own, each of its jobs is stopped at the limit, the child with
     it, and fails naming the rule and the condition; the built-in LS's results are kept."""
-    copy_workflow(tmp_path)
-    shutil.copytree(ROOT / "profiles", tmp_path / "profiles")
+    copy_workflow(tmp_path, profiles=True)
     program = tmp_path / "workflow" / "external" / "ls_sphere.c"
     shipped = program.read_text()
     start = "int main(int argc, char **argv) {\n"

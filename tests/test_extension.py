@@ -204,11 +204,12 @@ def test_an_estimator_that_never_ends_is_stopped_and_named(tmp_path):
     hang = 'open(estimates + ".pid", "w").write(str(os.getpid()))\ntime.sleep(240)\n'
     script = shipped.replace("rows = []\n", f"import os\n{hang}rows = []\n", 1)
     assert script != shipped
-    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script)
+    overlay = user_clone(
+        tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script, profiles=True
+    )
     config = yaml.safe_load(overlay.read_text())
     config["jobs"] = {"external_time_limit_s": 3}
     overlay.write_text(yaml.safe_dump(config))
-    shutil.copytree(ROOT / "profiles", tmp_path / "profiles")
     run = run_snakemake(
         tmp_path,
         "results/collected/cmc.parquet",
