@@ -321,3 +321,25 @@ def test_every_joint_of_the_knee_trial_under_centimetres_is_refused(reference, m
         "states ('cm', read as mm): its numbers look like millimetres read as centimetres"
         in str(error.value)
     )
+
+
+def test_a_whole_body_in_millimetres_is_refused_as_no_one_segment_not_as_a_unit():
+    """Every marker of the knee trial (``jointbench fit``'s default moving ones) spans the body,
+    1.66 m: in
+    no unit a file can state is that one segment's cluster, so the unit, which is right, is not
+    what the refusal blames; the markers chosen are."""
+    knee = read(KNEE).frames("100:400")
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(knee, "center", ",".join(knee.labels), method="NM")
+    message = str(error.value)
+    assert f"{KNEE}: markers HV, OCC" in message
+    assert "lie 1.66e+03 mm apart" in message
+    assert "not in the unit the file states" not in message
+    assert "correct the file's unit" not in message
+    assert message.endswith(
+        "more than the markers of any one human body segment span (1500 mm), in the unit the "
+        "file states ('mm', read as mm), and in no unit of millimetres, centimetres, metres "
+        "are its numbers a body's markers: they are not the markers of one human body "
+        "segment, or are in a unit no file states; choose one segment's markers (moving, "
+        "reference; --moving, --reference)"
+    )
