@@ -753,14 +753,17 @@ _NUMBA_CONFIG_FILE = Path(".numba_config.yaml")
 
 def numba_jit_disabled() -> bool:
     """Whether Numba runs the kernels as Python: ``NUMBA_DISABLE_JIT``, or ``disable_jit`` in
-    ``.numba_config.yaml``, a non-zero integer, as Numba reads them (a value that is no integer
-    leaves the compiler on). The kernels' results differ from the compiled code's in the last
-    bits, so a run without the compiler is another run. Read at every call: the setting is the
-    environment's now, not when the process started."""
+    ``.numba_config.yaml`` (a key in any case), a non-zero integer, as Numba reads them (a
+    value that is no integer leaves the compiler on). The kernels' results differ from the
+    compiled code's in the last bits, so a run without the compiler is another run. Read at
+    every call: the setting is the environment's now, not when the process started."""
     value = os.environ.get(_NUMBA_DISABLE_JIT)
     if value is None and _NUMBA_CONFIG_FILE.is_file():
         settings = yaml.safe_load(_NUMBA_CONFIG_FILE.read_text(encoding="utf-8"))
-        value = settings.get("disable_jit") if isinstance(settings, dict) else None
+        if isinstance(settings, dict):
+            # Numba reads each key in upper case, so the last of one name wins.
+            upper = {str(key).upper(): setting for key, setting in settings.items()}
+            value = upper.get("DISABLE_JIT")
     try:
         return value is not None and int(value) != 0
     except (TypeError, ValueError):
