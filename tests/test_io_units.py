@@ -343,3 +343,30 @@ def test_a_whole_body_in_millimetres_is_refused_as_no_one_segment_not_as_a_unit(
         "segment, or are in a unit no file states; choose one segment's markers (moving, "
         "reference; --moving, --reference)"
     )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "MAX_SPAN_MM bounds every cluster as a human body segment's, the reference's too: four "
+        "markers on a treadmill's frame 2 m by 0.8 m in millimetres (2.15 m apart), fitted "
+        "while the bound was 10 m, are refused as no segment's; telling a reference that "
+        "stays still in the lab from a segment's cluster, and bounding it as such, is a "
+        "change of the unit check's design"
+    ),
+)
+def test_a_treadmill_fixed_reference_in_millimetres_is_fitted():
+    knee = read(KNEE).frames("100:400")
+    corners = np.array([[-500.0, -300.0, 0.0], [1500.0, -300.0, 0.0], [-500.0, 500.0, 0.0]])
+    corners = np.vstack([corners, [1500.0, 500.0, 0.0]])
+    still = corners + np.random.default_rng(0).normal(scale=0.3, size=(len(knee.markers), 4, 3))
+    recording = Recording(
+        (*knee.labels, "TM1", "TM2", "TM3", "TM4"),
+        np.concatenate([knee.markers, still], axis=1),
+        knee.rate_hz,
+        "treadmill.c3d",
+        knee.first_frame,
+        "mm",
+    )
+    fitted = jointbench.fit(recording, "center", SHANK, "TM1,TM2,TM3,TM4", artefacts="exclude")
+    assert np.isfinite(fitted.estimate()).all()
