@@ -250,6 +250,20 @@ def test_an_array_api_cluster_too_large_for_a_body_is_refused(knee_legs):
         jointbench.fit_center(thigh, method="NM", artefacts="ignore")
 
 
+def test_an_array_api_cluster_ten_times_a_segment_is_not_said_to_be_a_thousand(knee_legs):
+    """A thigh's millimetres taken for centimetres (10 times, 3.2 m) is not named as taken for
+    metres: the array fits state no unit, so either misreading, or more than one segment's
+    markers, is named."""
+    thigh = knee_legs[1][:, :4] * 10.0
+    with pytest.raises(ValueError) as error:
+        jointbench.fit_center(thigh, method="NM", artefacts="ignore")
+    assert "millimetres read as metres?" not in str(error.value)
+    assert (
+        "(1500 mm): millimetres read as centimetres or metres, or the markers of more than "
+        "one segment?"
+    ) in str(error.value)
+
+
 def test_a_unit_the_table_does_not_know_gives_no_hint():
     assert unit_hint(3170.0, "inch", MAX_SPAN_MM) == ""
 
