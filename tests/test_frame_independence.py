@@ -482,3 +482,16 @@ def test_frames_that_carry_most_of_their_noise_over_are_not_ok_just_past_the_bou
     or said untested, in 31 frames; one frame more must not let it pass unsaid."""
     assert _unsupported_count(kind, support.MIN_TESTED_FRAMES - 1, 0.9, 20) == 20
     assert _unsupported_count(kind, support.MIN_TESTED_FRAMES, 0.9, 20) >= 18
+
+
+@pytest.mark.parametrize("kind", ["center", "axis"])
+def test_a_short_fit_of_one_marker_says_its_frames_independence_was_not_tested(kind):
+    """One marker of the knee trial in the lab's frame, over 22 frames: no pair of markers
+    has a distance whose lag-1 autocorrelation could clear the frames, so nothing tests them,
+    and the status says so."""
+    knee = jointbench.read(KNEE)
+    fitted = jointbench.fit(
+        knee, kind, "RLM", method="LS" if kind == "center" else "planar", frames="700:722"
+    )
+    assert UNTESTED in fitted.result.status
+    assert fitted.result.diagnostics["frames_independence_untested"] == 22
