@@ -803,12 +803,24 @@ def code_fingerprint(*roots: str | Path, package: str = PACKAGE, inputs: Iterabl
     ``inputs``: data files of the package that the caller tracks as inputs of the very jobs that
     read them (the papers' published values), left out here, by their paths relative to the
     package's folder (:func:`data_names`): a job's code can reach every paper's, and one
-    paper's values must not rerun the jobs of another's study."""
+    paper's values must not rerun the jobs of another's study. ``ValueError`` naming any that
+    is no data file of the package by that path."""
     found, paths = _package(package), [Path(r) for r in roots]
+    tracked = frozenset(inputs)
+    # A file named otherwise (by its own path, as these once were) would leave nothing out.
+    unknown = sorted(
+        name
+        for name in tracked
+        if PurePosixPath(name).is_absolute() or not (found.root / name).is_file()
+    )
+    if unknown:
+        raise ValueError(
+            f"inputs {', '.join(map(repr, unknown))}: no data file of the package {package} "
+            "by its path relative to the package's folder (data_names)"
+        )
     own = own_closure(*paths, package=package)
     reached = [*paths, *(path for _, path in own)]
     modules = _closure(found, reached)
-    tracked = frozenset(inputs)
     digest = hashlib.sha256()
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for root in sorted(path.resolve() for path in paths):
