@@ -574,3 +574,14 @@ def test_lm_says_when_a_restart_finds_a_lower_minimum():
     off = centre + np.array([30.0, 0.0, 0.0])
     doubt = lm.self_check(markers, off, lm.profiled_f1(markers, off))
     assert doubt is not None and doubt.startswith("local minimum: a restart from")
+
+
+def test_a_run_of_no_study_with_a_paper_writes_an_empty_comparison(tmp_path):
+    """A run of studies of the user's own, none with a paper, has no published value to
+    check: the comparison's tables are written empty, with their columns, not a crash."""
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    outputs = {suffix: str(tmp_path / f"published_comparison.{suffix}") for suffix in ("csv", "md")}
+    table = pipeline.check_published({}, outputs, config)
+    assert table.empty
+    assert list(pd.read_csv(outputs["csv"]).columns) == list(table.columns)
+    assert "status" in table.columns

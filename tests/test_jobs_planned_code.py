@@ -143,14 +143,17 @@ def test_a_job_planned_under_other_versions_is_refused_naming_them(script):
         ("disable_jit: 1\n", None, True),
         ("disable_jit: 1\n", "0", False),
         ("other: 1\n", None, False),
+        ("DISABLE_JIT: 1\n", None, True),
+        ("disable_jit: 1\nDisable_Jit: 0\n", None, False),
     ],
-    ids=["the file", "the variable over the file", "another key"],
+    ids=["the file", "the variable over the file", "another key", "upper case", "the last key"],
 )
 def test_numbas_config_file_switches_the_jit_off_as_numba_reads_it(
     tmp_path, monkeypatch, setting, environment, counts
 ):
     """Numba also reads ``.numba_config.yaml`` of the working directory, keys without the
-    ``NUMBA_`` prefix; its environment variable wins."""
+    ``NUMBA_`` prefix in any case (the last of one name counts); its environment variable
+    wins."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
     if environment is not None:

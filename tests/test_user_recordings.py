@@ -164,7 +164,9 @@ def test_arrays_in_another_unit_are_refused_by_every_fit(scale):
     thousandth (or a thousand times) of its size."""
     proximal, distal = two_segments(200, proximal_moves=False)
     markers = distal + np.random.default_rng(1).normal(scale=0.5, size=distal.shape)
-    unit = "metres read as millimetres" if scale < 1 else "millimetres read as metres"
+    unit = (
+        "metres read as millimetres" if scale < 1 else "millimetres read as centimetres or metres"
+    )
     for fit in (jointbench.fit_center, jointbench.fit_axis):
         with pytest.raises(ValueError, match=f"markers lie .* mm apart .*{unit}"):
             fit(markers * scale, method="NM" if fit is jointbench.fit_center else "planar")

@@ -753,14 +753,17 @@ _NUMBA_CONFIG_FILE = Path(".numba_config.yaml")
 
 def numba_jit_disabled() -> bool:
     """Whether Numba runs the kernels as Python: ``NUMBA_DISABLE_JIT``, or ``disable_jit`` in
-    ``.numba_config.yaml``, a non-zero integer, as Numba reads them (a value that is no integer
-    leaves the compiler on). The kernels' results differ from the compiled code's in the last
-    bits, so a run without the compiler is another run. Read at every call: the setting is the
-    environment's now, not when the process started."""
+    ``.numba_config.yaml`` (a key in any case), a non-zero integer, as Numba reads them (a
+    value that is no integer leaves the compiler on). The kernels' results differ from the
+    compiled code's in the last bits, so a run without the compiler is another run. Read at
+    every call: the setting is the environment's now, not when the process started."""
     value = os.environ.get(_NUMBA_DISABLE_JIT)
     if value is None and _NUMBA_CONFIG_FILE.is_file():
         settings = yaml.safe_load(_NUMBA_CONFIG_FILE.read_text(encoding="utf-8"))
-        value = settings.get("disable_jit") if isinstance(settings, dict) else None
+        if isinstance(settings, dict):
+            # Numba reads each key in upper case, so the last of one name wins.
+            upper = {str(key).upper(): setting for key, setting in settings.items()}
+            value = upper.get("DISABLE_JIT")
     try:
         return value is not None and int(value) != 0
     except (TypeError, ValueError):
@@ -800,12 +803,24 @@ def code_fingerprint(*roots: str | Path, package: str = PACKAGE, inputs: Iterabl
     ``inputs``: data files of the package that the caller tracks as inputs of the very jobs that
     read them (the papers' published values), left out here, by their paths relative to the
     package's folder (:func:`data_names`): a job's code can reach every paper's, and one
-    paper's values must not rerun the jobs of another's study."""
+    paper's values must not rerun the jobs of another's study. ``ValueError`` naming any that
+    is no data file of the package by that path."""
     found, paths = _package(package), [Path(r) for r in roots]
+    tracked = frozenset(inputs)
+    # A file named otherwise (by its own path, as these once were) would leave nothing out.
+    unknown = sorted(
+        name
+        for name in tracked
+        if PurePosixPath(name).is_absolute() or not (found.root / name).is_file()
+    )
+    if unknown:
+        raise ValueError(
+            f"inputs {', '.join(map(repr, unknown))}: no data file of the package {package} "
+            "by its path relative to the package's folder (data_names)"
+        )
     own = own_closure(*paths, package=package)
     reached = [*paths, *(path for _, path in own)]
     modules = _closure(found, reached)
-    tracked = frozenset(inputs)
     digest = hashlib.sha256()
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for root in sorted(path.resolve() for path in paths):

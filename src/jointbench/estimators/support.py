@@ -2097,7 +2097,9 @@ class Untested(NamedTuple):
     motion and their filter's smoothing, seldom is (22 frames of the knee trial: 0.87).
     Independent frames (simulated, resampled) are cleared where their correlation can show it:
     most 22-frame trials of six-marker clusters, fewer of three, whose correlation spreads
-    more (README). Noise-free distances have no correlation to read, and are not named."""
+    more (README). Noise-free distances have no correlation to read, and are not named;
+    segments of one marker each have none either, and are (``correlation`` and ``bound`` NaN:
+    nothing clears them)."""
 
     name: str
     n_frames: int
@@ -2106,15 +2108,24 @@ class Untested(NamedTuple):
 
     def words(self) -> str:
         """The status's words."""
+        if math.isnan(self.correlation):
+            read = (
+                "no segment has two markers, whose distance's lag-1 autocorrelation could "
+                "clear them"
+            )
+        else:
+            read = (
+                f"the lag-1 autocorrelation of the {_LABELS[self.name]}' distances, "
+                f"{self.correlation:.2f}, is not clearly below {DEPENDENT_CORRELATION:.2g} "
+                f"(below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs for independent frames "
+                "under it), at which an SD that counts every frame as independent understates "
+                f"the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times"
+            )
         return (
             f"the frames' independence was not tested: the test needs {MIN_TESTED_FRAMES} "
-            f"frames and this fit has {self.n_frames}; the lag-1 autocorrelation of the "
-            f"{_LABELS[self.name]}' distances, {self.correlation:.2f}, is not clearly below "
-            f"{DEPENDENT_CORRELATION:.2g} (below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs "
-            "for independent frames under it), at which an SD that counts every frame as "
-            f"independent understates the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times: "
-            "its SDs and p-values count each frame as independent, which consecutive frames of a "
-            "recording seldom are: fit a longer stretch"
+            f"frames and this fit has {self.n_frames}; {read}: its SDs and p-values count each "
+            "frame as independent, which consecutive frames of a recording seldom are: fit a "
+            "longer stretch"
         )
 
     def numbers(self) -> dict[str, float]:
@@ -2129,7 +2140,9 @@ def _untested(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[Un
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
     the :class:`Untested` of the segment whose lag-1 autocorrelation is the furthest above its
     bound, where ``N`` is below :data:`MIN_TESTED_FRAMES`; ``None`` where no segment's is at
-    or above its bound (or none is read: noise-free distances, fewer than two markers)."""
+    or above its bound (or noise-free distances leave none to read). Where no segment has two
+    markers, no correlation can clear the frames: an :class:`Untested` whose ``correlation``
+    and ``bound`` are NaN."""
     n_trials, n_frames = arrays[0].shape[:2]
     if n_frames >= MIN_TESTED_FRAMES:
         return [None] * n_trials
@@ -2138,6 +2151,8 @@ def _untested(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> list[Un
         for name, array in zip(names, arrays, strict=True)
         if array.shape[2] >= 2 and n_frames >= 2  # a pair's distance over two frames at least
     ]
+    if not read:
+        return [Untested(names[0], n_frames, math.nan, math.nan)] * n_trials
     found: list[Untested | None] = []
     for t in range(n_trials):
         worst = None
