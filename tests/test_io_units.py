@@ -14,7 +14,7 @@ from test_user_recordings import write_long_csv
 import jointbench
 from jointbench.estimators.validation import MAX_JOINED_SPAN_MM, MAX_SPAN_MM
 from jointbench.io import Recording, prepare, read
-from jointbench.io.units import UNIT_TO_MM, unit_hint
+from jointbench.io.units import UNIT_TO_MM, to_mm, unit_hint
 from jointbench.simulate import cmc, hinge
 
 THIGH = "RTHI1,RTHI2,RTHI3,RGT"
@@ -384,3 +384,25 @@ def test_a_treadmill_fixed_reference_in_millimetres_is_fitted():
     )
     fitted = jointbench.fit(recording, "center", SHANK, "TM1,TM2,TM3,TM4", artefacts="exclude")
     assert np.isfinite(fitted.estimate()).all()
+
+
+@pytest.mark.parametrize(
+    ("spelled", "size_mm"),
+    [
+        ("Millimetres", 1.0),
+        ("millimeter", 1.0),
+        ("centimeters", 10.0),
+        ("Centimetre", 10.0),
+        ("metres", 1000.0),
+        ("Meter", 1000.0),
+    ],
+)
+def test_a_unit_spelled_out_in_either_spelling_is_read_as_its_symbol(spelled, size_mm):
+    """Files state units spelled out as well as by symbol, in British and American spelling,
+    singular or plural: each is the unit its symbol is."""
+    assert to_mm(spelled, "trial.trc") == size_mm
+
+
+def test_a_unit_no_spelling_names_is_refused_naming_the_file_and_the_known_units():
+    with pytest.raises(ValueError, match=r"trial\.trc: unknown point unit 'inches'; known: "):
+        to_mm("inches", "trial.trc")
