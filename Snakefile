@@ -89,6 +89,12 @@ include: "workflow/rules/sensitivity.smk"
 check_external_rules(USER_RULES)
 
 
+# Every job of the user's runs under the run's time limit (jobs.external_time_limit_s).
+limit_user_jobs(USER_RULES)
+
+
 # Last, once every rule exists: each job's sources hashed into its parameters, and the files of
-# each job of the user's checked as Snakemake plans it.
+# each job of the user's checked as Snakemake plans it; each job given what it checks its code
+# against the planned fingerprint with.
 track_sources(USER_RULES)
+plan_code_checks()

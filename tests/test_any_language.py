@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -546,6 +547,49 @@ def test_the_c_estimator_runs_as_a_rule_and_equals_the_built_in_ls(tmp_path):
     assert gap.max() < 1e-9, gap
     # Scored by the benchmark, from the estimate: the same error as the built-in LS.
     assert np.allclose(theirs["error_mm"], ours["error_mm"], rtol=0, atol=1e-9)
+
+
+def _running(program: Path) -> list[int]:
+    """The pids of the processes running the executable ``program`` (an absolute path)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            executable = os.readlink(entry / "exe")
+        except OSError:  # not a process, one that ended, or another user's
+            continue
+        if executable == str(program):
+            found.append(int(entry.name))
+    return found
+
+
+@pytest.mark.pipeline
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) on this machine")
+def test_a_c_program_that_never_ends_is_stopped_with_the_child_it_forked(tmp_path):
+    """The C example edited to ignore SIGTERM, fork a child that ignores it too and wait for
+    ever: with no Python of its own, each of its jobs is stopped at the limit, the child with
+    it, and fails naming the rule and the condition; the built-in LS's results are kept."""
+    copy_workflow(tmp_path, profiles=True)
+    program = tmp_path / "workflow" / "external" / "ls_sphere.c"
+    shipped = program.read_text()
+    start = "int main(int argc, char **argv) {\n"
+    hang = f"{start}    signal(SIGTERM, SIG_IGN);\n    fork();\n    for (;;) pause();\n"
+    posix = "#define _POSIX_C_SOURCE 200809L\n#include <signal.h>\n#include <unistd.h>\n"
+    program.write_text(posix + shipped.replace(start, hang, 1))
+    overlay = _overlay(tmp_path, estimators=["LS"], external_estimators=["LS-C"])
+    config = yaml.safe_load(Path(overlay).read_text())
+    config["jobs"] = {"external_time_limit_s": 3}
+    Path(overlay).write_text(yaml.safe_dump(config))
+    targets = ["results/collected/cmc.parquet", "results/summaries/cmc/LS.csv"]
+    run = run_snakemake(tmp_path, *targets, "--configfile", overlay, timeout=300)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    for noise in ("0.0", "1.0"):
+        assert (
+            f"rule estimate_LS_C (study=cmc, condition=marker_set-M__rom_deg-15__noise_mm-{noise})"
+            ": its program ran past the time limit of 3 s"
+        ) in message, message[-3000:]
+    assert _running(tmp_path / "results" / "bin" / "ls_sphere") == []
+    assert (tmp_path / "results" / "summaries" / "cmc" / "LS.csv").is_file(), message[-3000:]
 
 
 @pytest.mark.pipeline

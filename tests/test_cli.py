@@ -199,11 +199,13 @@ def test_every_row_states_the_answer_s_sd(capsys):
 
 
 def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
-    """``sqrt_trace_cov_mm`` is the root of the trace of the covariance a joint centre states of
-    its scatter, ``center_sd_mm``'s: for ``gauss-markov`` paper C's ``W_c`` with the frame-0
-    poses' errors added, several times the ``W_c`` alone that is conditional on them; for the
-    analytic centre, which has no covariance of its own, the one from both segments' poses. The
-    table names where each comes from, and JSON gives the covariance and its source."""
+    """``sqrt_trace_center_cov_mm`` is the root of the trace of the covariance a joint centre
+    states of its scatter, ``center_sd_mm``'s: for ``gauss-markov`` paper C's ``W_c`` with the
+    frame-0 poses' errors added, several times the ``W_c`` alone that is conditional on them;
+    for the analytic centre, which has no covariance of its own, the one from both segments'
+    poses. ``sqrt_trace_cov_mm`` is the method's own, as the pipeline's scores name it (paper C's
+    ``W_c``; none for the analytic centre), so that one name means one thing. The table names
+    where the stated one comes from, and JSON gives both covariances and the source."""
     recording = jointbench.read(KNEE)
     prepared = jointbench.prepare(recording, "joint_center", SHANK.split(","), THIGH.split(","))
     arguments = ["fit", str(KNEE), "--kind", "joint_center", "--reference", THIGH]
@@ -217,12 +219,16 @@ def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
         code, out, _ = run(capsys, *arguments, method, "--format", "csv")
         assert code == 0
         row = csv_rows(out).iloc[0]
-        assert row["sqrt_trace_cov_mm"] == pytest.approx(np.sqrt(np.trace(stated)), rel=1e-6)
-        if result.covariance is not None:
-            assert row["sqrt_trace_cov_mm"] > 2.0 * np.sqrt(np.trace(result.covariance))
+        assert row["sqrt_trace_center_cov_mm"] == pytest.approx(np.sqrt(np.trace(stated)), rel=1e-6)
+        if result.covariance is None:
+            assert "sqrt_trace_cov_mm" not in row or np.isnan(row["sqrt_trace_cov_mm"])
+        else:
+            own = np.sqrt(np.trace(result.covariance))
+            assert row["sqrt_trace_cov_mm"] == pytest.approx(own, rel=1e-6)
+            assert row["sqrt_trace_center_cov_mm"] > 2.0 * own
         code, out, _ = run(capsys, *arguments, method)
         assert code == 0
-        assert f"sqrt_trace_cov_mm: {method}: from {source}" in out
+        assert f"sqrt_trace_center_cov_mm: {method}: from {source}" in out
         code, out, _ = run(capsys, *arguments, method, "--format", "json")
         assert code == 0
         (fitted,) = json.loads(out)

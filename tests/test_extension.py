@@ -26,6 +26,7 @@ from jointbench import pipeline
 from jointbench.figures import extended
 from jointbench.papers import get_paper
 from jointbench.resultfiles.schema import check_estimates
+from jointbench.running import timelimit
 from jointbench.running.collected import scored_estimates
 
 # The minimal external estimator of the README's "Adding an estimator", shipped as a template
@@ -63,6 +64,14 @@ def user_clone(
 def snakemake(workdir: Path, overlay: Path, *targets: str, dry_run: bool = False):
     arguments = [*targets, "--configfile", str(overlay), *(["--dry-run"] if dry_run else [])]
     return run_snakemake(workdir, *arguments, timeout=300)
+
+
+def refusal(workdir: Path, overlay: Path) -> str:
+    """What a run of the collected cmc results says as it stops before any job."""
+    run = snakemake(workdir, overlay, "results/collected/cmc.parquet")
+    assert run.returncode != 0
+    assert not (workdir / "results").exists(), "a job ran"
+    return run.stdout + run.stderr
 
 
 @pytest.mark.pipeline
@@ -184,27 +193,109 @@ def test_a_crashing_estimator_fails_alone_and_the_run_finishes_the_rest(tmp_path
 
 
 @pytest.mark.pipeline
-@pytest.mark.xfail(
-    strict=True,
-    raises=subprocess.TimeoutExpired,
-    reason="An external estimator's job runs without a time limit: Snakemake sets none on a "
-    "local job, and neither the workflow, its rules nor profiles/default do, so a program that "
-    "never ends (a loop that does not converge, a read of a pipe nobody writes) holds the run "
-    "forever; nothing names it, and the other estimators' results are never collected.",
-)
 def test_an_estimator_that_never_ends_is_stopped_and_named(tmp_path):
-    """A user's program that hangs on every condition: the run must end, failing its jobs by
-    name, rather than wait on it for ever (the test gives it a minute and a half)."""
+    """A user's program that hangs on every condition, under a limit of seconds: each of its
+    jobs fails at the limit, named with its condition, the limit and the key to raise, its
+    program stopped; every built-in estimator's results are made and kept, and the closing
+    summary names the failed jobs. Run as a clone runs, with the default profile."""
     shipped = (ROOT / CENTROID_SCRIPT).read_text()
-    # Bounded, so that the program the timed-out run leaves behind ends by itself.
-    script = shipped.replace("rows = []\n", "time.sleep(240)\nrows = []\n", 1)
+    # The program's pid, to see that it was stopped; bounded, so that a program the run left
+    # behind ends by itself.
+    hang = 'open(estimates + ".pid", "w").write(str(os.getpid()))\ntime.sleep(240)\n'
+    script = shipped.replace("rows = []\n", f"import os\n{hang}rows = []\n", 1)
     assert script != shipped
-    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script)
-    run = run_snakemake(
-        tmp_path, "results/collected/cmc.parquet", "--configfile", str(overlay), timeout=90
+    overlay = user_clone(
+        tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script, profiles=True
     )
+    config = yaml.safe_load(overlay.read_text())
+    config["jobs"] = {"external_time_limit_s": 3}
+    overlay.write_text(yaml.safe_dump(config))
+    run = run_snakemake(
+        tmp_path,
+        "results/collected/cmc.parquet",
+        "results/summaries/cmc/LS.csv",
+        "--configfile",
+        str(overlay),
+        timeout=200,
+    )
+    message = run.stdout + run.stderr
     assert run.returncode != 0
-    assert "estimate_centroid" in run.stdout + run.stderr
+    conditions = ["marker_set-M__rom_deg-5__noise_mm-1.0", "marker_set-M__rom_deg-15__noise_mm-1.0"]
+    for condition in conditions:
+        expected = (
+            f"rule estimate_centroid (study=cmc, condition={condition}): its program ran past "
+            "the time limit of 3 s for a job of an external estimator and was stopped"
+        )
+        assert expected in message, message[-4000:]
+    assert "raise jobs.external_time_limit_s in the config" in message
+    summary = message.split("jointbench: 2 jobs failed:")[-1]
+    for condition in conditions:
+        assert f"estimate_centroid: results/logs/estimate/cmc/centroid/{condition}.log" in summary
+    estimates = tmp_path / "results" / "estimates" / "cmc" / "centroid"
+    for condition in conditions:
+        pid = int((estimates / f"{condition}.parquet.pid").read_text())
+        assert not Path(f"/proc/{pid}").exists(), f"{condition}: its program still runs"
+    assert (tmp_path / "results" / "summaries" / "cmc" / "LS.csv").is_file(), message[-3000:]
+    assert not (tmp_path / "results" / "collected" / "cmc.parquet").exists()
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("limit", [-1, float("nan")])
+def test_a_time_limit_that_is_no_limit_stops_the_run_before_any_job(limit, tmp_path):
+    """Refused by the schema (-1) or by the limit's own check (NaN, which the schema's bound
+    lets through): either way the run stops as it loads, naming the key."""
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"])
+    config = yaml.safe_load(overlay.read_text())
+    config["jobs"] = {"external_time_limit_s": limit}
+    overlay.write_text(yaml.safe_dump(config))
+    message = refusal(tmp_path, overlay)
+    assert re.search(r"jobs[./]external_time_limit_s", message), message[-2000:]
+
+
+@pytest.mark.pipeline
+def test_an_external_job_runs_by_the_limited_shell_with_a_cluster_runtime_above_the_limit(
+    tmp_path,
+):
+    """Whatever runtime the profile and the command line give it, a job of the user's gets one
+    just above the limit, so that on a cluster the limit stops it first; the built-in jobs
+    keep theirs and Snakemake's own shell."""
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"])
+    run = snakemake(
+        tmp_path,
+        overlay,
+        "results/collected/cmc.parquet",
+        "--default-resources",
+        "runtime=15",
+        "--set-resources",
+        "estimate_centroid:runtime=1",
+        dry_run=True,
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    resources = dict(
+        re.findall(r"^rule (\S+):\n(?: {4}.*\n)*? {4}resources: (.*)$", run.stdout, re.M)
+    )
+    minutes = timelimit.runtime_minutes(3600)
+    assert f"runtime={minutes}," in resources["estimate_centroid"], resources
+    assert f"shell_exec='{timelimit.LIMITED_SHELL}'" in resources["estimate_centroid"]
+    assert (
+        "runtime=15" in resources["estimate_cmc"] and "shell_exec" not in resources["estimate_cmc"]
+    )
+
+
+@pytest.mark.pipeline
+def test_a_rule_of_the_users_with_a_run_block_is_refused_before_any_job(tmp_path):
+    """Code in a run: block runs inside Snakemake, where no time limit can stop it."""
+    overlay = user_clone(tmp_path, estimators=["LS"], external=["centroid"])
+    rule_file = tmp_path / "workflow" / "rules" / "estimators" / "centroid.smk"
+    shipped = rule_file.read_text()
+    script = '    script:\n        "../../external/centroid.py"\n'
+    assert script in shipped
+    rule_file.write_text(shipped.replace(script, "    run:\n        pass\n"))
+    message = refusal(tmp_path, overlay)
+    assert (
+        "rule estimate_centroid runs its code in a run: block, inside Snakemake, where the "
+        "time limit of an external estimator's job (jobs.external_time_limit_s) cannot stop it"
+    ) in message, message[-2000:]
 
 
 @pytest.mark.pipeline
@@ -483,3 +574,14 @@ def test_lm_says_when_a_restart_finds_a_lower_minimum():
     off = centre + np.array([30.0, 0.0, 0.0])
     doubt = lm.self_check(markers, off, lm.profiled_f1(markers, off))
     assert doubt is not None and doubt.startswith("local minimum: a restart from")
+
+
+def test_a_run_of_no_study_with_a_paper_writes_an_empty_comparison(tmp_path):
+    """A run of studies of the user's own, none with a paper, has no published value to
+    check: the comparison's tables are written empty, with their columns, not a crash."""
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    outputs = {suffix: str(tmp_path / f"published_comparison.{suffix}") for suffix in ("csv", "md")}
+    table = pipeline.check_published({}, outputs, config)
+    assert table.empty
+    assert list(pd.read_csv(outputs["csv"]).columns) == list(table.columns)
+    assert "status" in table.columns

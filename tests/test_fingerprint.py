@@ -751,3 +751,15 @@ def test_a_python_sources_digests_follow_its_own_imports(tmp_path):
     before = source_digests([script])
     helper.write_text("SHIFT = 2\n")
     assert source_digests([script]) != before
+
+
+def test_inputs_left_out_of_the_code_must_be_named_as_the_packages_data_files():
+    """The files left out of the code are named by their paths in the package (data_names):
+    a path given as a file's own (absolute) would leave nothing out, and is refused naming it."""
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "render.py"
+    published = Path(fingerprint.__file__).parent / "papers" / "paper_a.yaml"
+    assert code_fingerprint(script, inputs=["papers/paper_a.yaml"]) != code_fingerprint(script)
+    with pytest.raises(ValueError, match=r"paper_a\.yaml.* no data file of the package"):
+        code_fingerprint(script, inputs=[str(published)])
+    with pytest.raises(ValueError, match=r"'papers/paper_z\.yaml'.* no data file of the package"):
+        code_fingerprint(script, inputs=["papers/paper_z.yaml"])

@@ -536,3 +536,36 @@ def test_the_correlation_sd_is_that_of_the_distances_covariance():
     # Two frames, whose mean is exact: the deviations are zero, not rounding.
     still = np.repeat(rng.normal(size=(1, 1, 4, 3)), 2, axis=1)
     assert np.isnan(support._correlation_sds(still)).all()
+
+
+def _unsupported_count(kind: str, n_frames: int, share: float, n_trials: int) -> int:
+    """In how many of ``n_trials`` trials of four markers a segment (:func:`_cluster_trial`)
+    the verdict says that the frames are not independent or that it did not test them."""
+    rng = np.random.default_rng(n_frames)
+    count = 0
+    for _ in range(n_trials):
+        verdict = support.assess(kind, _cluster_trial(kind, rng, n_frames, 4, share))
+        dependent = any("the frames are not independent" in words for words in verdict.caveats)
+        count += dependent or verdict.untested is not None
+    return count
+
+
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_frames_that_carry_most_of_their_noise_over_are_not_ok_just_past_the_bound(kind):
+    """Noise keeping 0.9 of itself from frame to frame (SDs understated 4.4 times) is said so,
+    or said untested, in 31 frames; one frame more must not let it pass unsaid."""
+    assert _unsupported_count(kind, support.MIN_TESTED_FRAMES - 1, 0.9, 20) == 20
+    assert _unsupported_count(kind, support.MIN_TESTED_FRAMES, 0.9, 20) >= 18
+
+
+@pytest.mark.parametrize("kind", ["center", "axis"])
+def test_a_short_fit_of_one_marker_says_its_frames_independence_was_not_tested(kind):
+    """One marker of the knee trial in the lab's frame, over 22 frames: no pair of markers
+    has a distance whose lag-1 autocorrelation could clear the frames, so nothing tests them,
+    and the status says so."""
+    knee = jointbench.read(KNEE)
+    fitted = jointbench.fit(
+        knee, kind, "RLM", method="LS" if kind == "center" else "planar", frames="700:722"
+    )
+    assert UNTESTED in fitted.result.status
+    assert fitted.result.diagnostics["frames_independence_untested"] == 22

@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -109,3 +110,21 @@ def test_no_function_local_imports_of_the_package():
                     if _imports_the_package(inner):
                         offenders.append(f"{path.relative_to(ROOT)}:{inner.lineno}")
     assert not offenders, offenders
+
+
+def test_every_file_the_package_holds_besides_its_modules_is_installed_with_it():
+    """A file of the package that is not a module (a schema, a paper's values, the limited
+    shell of the external estimators' jobs) reaches an install that is not editable only if
+    ``pyproject.toml``'s package data names it."""
+    package = ROOT / "src" / "jointbench"
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+        "package-data"
+    ]["jointbench"]
+    tracked = subprocess.run(
+        ["git", "ls-files", "-z", "src/jointbench"], cwd=ROOT, capture_output=True, check=True
+    ).stdout.decode()
+    files = [ROOT / name for name in tracked.split("\0") if name]
+    others = [path.relative_to(package) for path in files if path.suffix != ".py"]
+    assert others, "no file besides the modules: the listing is wrong"
+    missing = [str(path) for path in others if not any(path.match(pattern) for pattern in declared)]
+    assert not missing, f"not in [tool.setuptools.package-data]: {missing}"

@@ -703,12 +703,6 @@ if ".snakemake" in sys.argv[0] and Path({marker!r}).exists():
 """
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a job runs whatever its modules hold when it starts, and records the fingerprint "
-    "Snakemake computed when it planned the run (params.code): an edit saved meanwhile runs "
-    "unrecorded, and once reverted the dry run calls the job's results current",
-)
 def test_a_job_whose_code_changed_after_planning_is_not_left_current(reduced_run, tmp_path):
     run = reduced_run.copy(tmp_path / "run")
     module = run.workdir / PKG / "papers" / "paper_a.py"
@@ -726,9 +720,14 @@ def test_a_job_whose_code_changed_after_planning_is_not_left_current(reduced_run
     ran = module.read_text()
     module.write_text(planned)  # the edit reverted: the code the run was planned on
     assert ran != planned
-    # Refusing the job, or recording what it ran, both leave it to be made again.
-    if made.returncode == 0:
-        assert "render_cmc" in _dry_run(run, target), "results of unrecorded code left current"
+    # The job refuses to run code it was not planned on, as a failed job the run's closing
+    # lines name, and is left to be made again.
+    assert made.returncode != 0
+    log = (run.workdir / "results" / "logs" / "render" / "cmc.log").read_text()
+    assert "rule render_cmc: the code changed after the run planned this job" in log, log
+    assert "jointbench: 1 job failed:\n  render_cmc: " in made.stderr, made.stderr[-3000:]
+    assert "render_cmc" in _dry_run(run, target), "results of unrecorded code left current"
+    assert (run.workdir / "results" / "collected" / "cmc.parquet").is_file(), "inputs lost"
 
 
 # Python takes a module's cached bytecode as current by the source's size and modification

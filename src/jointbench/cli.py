@@ -357,9 +357,14 @@ def _row(fitted) -> dict:
     )
     if sd_key in result.diagnostics:
         row[column] = float(result.diagnostics[sd_key])
+    # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
+    # for gauss-markov), and the one the SD is read from under the name of its diagnostic.
+    covariance = getattr(result, "covariance", None)
+    if covariance is not None:
+        row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(covariance)))
     stated = fitted.stated_covariance()
     if stated is not None:
-        row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(stated[0])))
+        row["sqrt_trace_center_cov_mm"] = float(np.sqrt(np.trace(stated[0])))
     if fitted.bootstrap is not None:
         if fitted.kind == "axis":
             row["boot_cone95_deg"] = fitted.bootstrap_cone_deg()
@@ -506,7 +511,7 @@ def _fit(args: argparse.Namespace) -> int:
     for fitted in done:
         stated = fitted.stated_covariance()
         if stated is not None:
-            print(f"sqrt_trace_cov_mm: {fitted.method}: from {stated[1]}")
+            print(f"sqrt_trace_center_cov_mm: {fitted.method}: from {stated[1]}")
     return code
 
 

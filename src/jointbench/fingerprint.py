@@ -96,6 +96,8 @@ from importlib.machinery import PathFinder
 from pathlib import Path, PurePosixPath
 from typing import Protocol
 
+import yaml
+
 # The folders whose modules are not a user's own: the rule the kernels' cache digest reads too.
 from jointbench.owncode import _library_roots
 
@@ -104,11 +106,19 @@ __all__ = [
     "check_bytecode_by_content",
     "code_fingerprint",
     "data_closure",
+    "data_names",
     "dependency_versions",
     "module_closure",
+    "numba_jit_disabled",
     "own_closure",
     "source_digests",
 ]
+
+#: The package whose code is fingerprinted by default: this module's own. Not written as a
+#: string: this module imports by name at run time, so a string naming the package would put
+#: its lazy names (PEP 562) in the fingerprint of every job, all of which import this module
+#: (:mod:`jointbench.jobs` checks the planned fingerprint with it).
+PACKAGE = __name__.partition(".")[0]
 
 #: Calls that import a module named by a string at run time.
 _DYNAMIC_IMPORTS = frozenset({"import_module", "files", "find_spec", "__import__"})
@@ -376,7 +386,7 @@ def _store() -> Path | None:
     setting = os.environ.get("JOINTBENCH_CACHE")
     if setting == "off":
         return None
-    base = Path(setting) if setting else _user_cache() / "jointbench"
+    base = Path(setting) if setting else _user_cache() / PACKAGE
     return base / "fingerprint" / _namespace()
 
 
@@ -657,12 +667,12 @@ def _closure(package: _Modules, roots: Iterable[Path]) -> dict[str, Path]:
     return dict(sorted(found.items()))
 
 
-def module_closure(*roots: str | Path, package: str = "jointbench") -> dict[str, Path]:
+def module_closure(*roots: str | Path, package: str = PACKAGE) -> dict[str, Path]:
     """The modules of ``package`` that the Python files ``roots`` can import, by name."""
     return _closure(_package(package), [Path(r) for r in roots])
 
 
-def own_closure(*roots: str | Path, package: str = "jointbench") -> list[tuple[str, Path]]:
+def own_closure(*roots: str | Path, package: str = PACKAGE) -> list[tuple[str, Path]]:
     """The user's own modules (neither the standard library's, nor an installed distribution's,
     nor of ``package``) that the Python files ``roots`` can import, each found as an import in
     its root would find it (beside the root first), by name and file: two roots may reach two
@@ -706,7 +716,7 @@ def _data_closure(
     }
 
 
-def data_closure(*roots: str | Path, package: str = "jointbench") -> dict[str, Path]:
+def data_closure(*roots: str | Path, package: str = PACKAGE) -> dict[str, Path]:
     """The data files of ``package`` that the Python files ``roots`` can read through the
     modules they can import, by path relative to the package's folder."""
     found = _package(package)
@@ -724,10 +734,40 @@ def _digest_of(text: str) -> bytes:
     return bytes.fromhex(_summary(text).digest)
 
 
-def dependency_versions(package: str = "jointbench") -> dict[str, str]:
+def dependency_versions(package: str = PACKAGE) -> dict[str, str]:
     """The installed version of Python and of every distribution ``package`` requires (its
-    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too."""
-    return {"python": platform.python_version(), **dict(_installed_versions(package))}
+    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too.
+    With Numba's compiler switched off (:func:`numba_jit_disabled`), also ``numba_jit``:
+    ``"disabled"``."""
+    versions = {"python": platform.python_version(), **dict(_installed_versions(package))}
+    if numba_jit_disabled():
+        versions["numba_jit"] = "disabled"
+    return versions
+
+
+#: Numba's switch of its compiler: an environment variable, or the key of its config file in the
+#: working directory without the prefix (the variable wins).
+_NUMBA_DISABLE_JIT = "NUMBA_DISABLE_JIT"
+_NUMBA_CONFIG_FILE = Path(".numba_config.yaml")
+
+
+def numba_jit_disabled() -> bool:
+    """Whether Numba runs the kernels as Python: ``NUMBA_DISABLE_JIT``, or ``disable_jit`` in
+    ``.numba_config.yaml`` (a key in any case), a non-zero integer, as Numba reads them (a
+    value that is no integer leaves the compiler on). The kernels' results differ from the
+    compiled code's in the last bits, so a run without the compiler is another run. Read at
+    every call: the setting is the environment's now, not when the process started."""
+    value = os.environ.get(_NUMBA_DISABLE_JIT)
+    if value is None and _NUMBA_CONFIG_FILE.is_file():
+        settings = yaml.safe_load(_NUMBA_CONFIG_FILE.read_text(encoding="utf-8"))
+        if isinstance(settings, dict):
+            # Numba reads each key in upper case, so the last of one name wins.
+            upper = {str(key).upper(): setting for key, setting in settings.items()}
+            value = upper.get("DISABLE_JIT")
+    try:
+        return value is not None and int(value) != 0
+    except (TypeError, ValueError):
+        return False
 
 
 # Reading the installed distributions' metadata costs more than a job's whole fingerprint, and a
@@ -751,9 +791,7 @@ def _installed_versions(package: str) -> tuple[tuple[str, str], ...]:
     return tuple(versions.items())
 
 
-def code_fingerprint(
-    *roots: str | Path, package: str = "jointbench", inputs: Iterable[str | Path] = ()
-) -> str:
+def code_fingerprint(*roots: str | Path, package: str = PACKAGE, inputs: Iterable[str] = ()) -> str:
     """A short hash of the Python files ``roots`` (a job's script, the extension modules it
     loads), of every module of ``package`` they can import, of every data file of ``package``
     those can read (:func:`data_closure`) and of the versions of its dependencies
@@ -763,13 +801,26 @@ def code_fingerprint(
     same code ran on the same package data.
 
     ``inputs``: data files of the package that the caller tracks as inputs of the very jobs that
-    read them (the papers' published values), left out here: a job's code can reach every
-    paper's, and one paper's values must not rerun the jobs of another's study."""
+    read them (the papers' published values), left out here, by their paths relative to the
+    package's folder (:func:`data_names`): a job's code can reach every paper's, and one
+    paper's values must not rerun the jobs of another's study. ``ValueError`` naming any that
+    is no data file of the package by that path."""
     found, paths = _package(package), [Path(r) for r in roots]
+    tracked = frozenset(inputs)
+    # A file named otherwise (by its own path, as these once were) would leave nothing out.
+    unknown = sorted(
+        name
+        for name in tracked
+        if PurePosixPath(name).is_absolute() or not (found.root / name).is_file()
+    )
+    if unknown:
+        raise ValueError(
+            f"inputs {', '.join(map(repr, unknown))}: no data file of the package {package} "
+            "by its path relative to the package's folder (data_names)"
+        )
     own = own_closure(*paths, package=package)
     reached = [*paths, *(path for _, path in own)]
     modules = _closure(found, reached)
-    tracked = {Path(path).resolve() for path in inputs}
     digest = hashlib.sha256()
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for root in sorted(path.resolve() for path in paths):
@@ -779,9 +830,21 @@ def code_fingerprint(
     for name, path in modules.items():
         digest.update(name.encode() + _source_digest(path))
     for name, path in _data_closure(found, reached, modules).items():
-        if path.resolve() not in tracked:
+        if name not in tracked:
             digest.update(name.encode() + _file_digest(path).encode())
     return digest.hexdigest()[:16]
+
+
+def data_names(paths: Iterable[str | Path], package: str = PACKAGE) -> list[str]:
+    """Those of the files ``paths`` that are data files of ``package``, each by its path
+    relative to the package's folder (as :func:`data_closure` names it), in order: how
+    :func:`code_fingerprint` is told which to leave out, the same wherever the package is
+    imported from. A file outside the package is none: no fingerprint reads it."""
+    root = _package(package).root.resolve()
+    resolved = (Path(path).resolve() for path in paths)
+    return sorted(
+        path.relative_to(root).as_posix() for path in resolved if path.is_relative_to(root)
+    )
 
 
 #: The digest of a source that does not exist: Snakemake names the missing input itself.
@@ -842,7 +905,7 @@ def _own_imports(paths: Iterable[str]) -> list[str]:
 _CHECKED_HASH = 0b11
 
 
-def check_bytecode_by_content(*roots: str | Path, package: str = "jointbench") -> None:
+def check_bytecode_by_content(*roots: str | Path, package: str = PACKAGE) -> None:
     """Make every cached bytecode of ``package``'s modules, of the Python files ``roots`` (the
     extensions) and of the user's own modules they import (:func:`own_closure`) one that Python
     checks against its source's content: compiled now from the source as it is. A module

@@ -10,6 +10,11 @@ loads only what its own work needs.
 Every job loads the run's extensions (a study or paper outside the package, listed under
 ``extensions`` in the config; :mod:`jointbench.configuration.extensions`), as the Snakemake
 process does, so the rules and the jobs see the same registries.
+
+Every job then runs only the code the run planned it on (:func:`check_planned_code`): the
+fingerprint it records is the one Snakemake computed when it planned the run, and a file saved
+since would otherwise run unrecorded under it. What this module imports counts in every job's
+fingerprint, so that is the fingerprint's module and nothing of the papers or the studies.
 """
 
 from __future__ import annotations
@@ -18,12 +23,14 @@ import contextlib
 import contextvars
 import importlib.metadata
 import logging
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 from jointbench.configuration.extensions import load_extensions
+from jointbench.fingerprint import code_fingerprint, dependency_versions
 
-__all__ = ["job", "provenance", "require_declared"]
+__all__ = ["check_planned_code", "job", "provenance", "require_declared"]
 
 # The package's logger: every module's messages (``getLogger(__name__)``) reach the job's log
 # through it.
@@ -32,8 +39,9 @@ log = logging.getLogger("jointbench")
 
 @contextlib.contextmanager
 def job(snakemake) -> Iterator[None]:
-    """Run one Snakemake job's work: extensions loaded, messages and any error written to the
-    job's log (the file Snakemake points to when the job fails)."""
+    """Run one Snakemake job's work: extensions loaded, the code checked against the planned
+    (:func:`check_planned_code`), messages and any error written to the job's log (the file
+    Snakemake points to when the job fails)."""
     handlers = []
     for path in list(snakemake.log):
         Path(path).parent.mkdir(parents=True, exist_ok=True)
@@ -45,6 +53,9 @@ def job(snakemake) -> Iterator[None]:
     running = _RUNNING.set((snakemake.rule, _declared_inputs(snakemake.input)))
     try:
         load_extensions(snakemake.config)
+        # Once the script's and the extensions' modules are loaded: an edit saved after this
+        # check is not what the job runs (every module of the package imports at module level).
+        check_planned_code(snakemake)
         log.info(
             "rule %s: %d input(s) -> %d output(s)",
             snakemake.rule,
@@ -61,6 +72,62 @@ def job(snakemake) -> Iterator[None]:
         for handler in handlers:
             log.removeHandler(handler)
             handler.close()
+
+
+def check_planned_code(snakemake) -> None:
+    """``ValueError`` naming the rule when the code this job runs is not the code Snakemake
+    planned it on: the fingerprint its rule computed when the run started (``params.code``,
+    ``script_code`` in ``workflow/rules/common.smk``) against the one computed now from the same
+    arguments, the job's script, the run's extensions and the data files left out of the code
+    (``params.code_plan["inputs"]``). A file saved while the run goes on would otherwise run
+    under the planned fingerprint, and once reverted the results it made would read as current;
+    a job in an environment of its own (a conda environment) would record the versions of the
+    Snakemake process's, which the message names where they differ
+    (``params.code_plan["versions"]``). A job whose rule states no fingerprint (a rule of the
+    user's) is not checked."""
+    params = getattr(snakemake, "params", None)
+    planned = getattr(params, "code", None)
+    if planned is None:
+        return
+    plan = params.code_plan
+    script = Path(sys.modules["__main__"].__file__)
+    extensions = [Path(entry).resolve() for entry in snakemake.config.get("extensions", [])]
+    now = code_fingerprint(script, *extensions, inputs=plan["inputs"])
+    if now != planned:
+        raise ValueError(
+            f"rule {snakemake.rule}: the code changed after the run planned this job (its "
+            f"fingerprint was {planned}, it is {now} now) and would run unrecorded: "
+            + _why_changed(plan["versions"], dependency_versions(), script.name)
+        )
+
+
+def _why_changed(planned: dict[str, str], now: dict[str, str], script: str) -> str:
+    """What changed a job's fingerprint, running ``script``, since the planning, and what to
+    do: the versions that differ between ``planned`` and ``now`` (:func:`_changed_versions`),
+    else a file saved meanwhile."""
+    versions = _changed_versions(planned, now)
+    if versions:
+        return (
+            f"{versions} (this job's environment against Snakemake's); run snakemake from an "
+            "environment with the versions its jobs run"
+        )
+    return (
+        f"a module of the package, the script {script}, an extension or a module of your own "
+        "was saved while the run went on; run snakemake again, which plans on the code as it is"
+    )
+
+
+def _changed_versions(planned: dict[str, str], now: dict[str, str]) -> str:
+    """The entries of :func:`jointbench.fingerprint.dependency_versions` that differ between
+    ``planned`` and ``now``, as ``name: planned when planned, now here`` (``numba_jit`` is
+    there only when the compiler is off: ``on`` otherwise); empty when none does."""
+    unset = {"numba_jit": "on"}
+    names = sorted(name for name in {*planned, *now} if planned.get(name) != now.get(name))
+    return "; ".join(
+        f"{name}: {planned.get(name, unset.get(name))} when planned, "
+        f"{now.get(name, unset.get(name))} here"
+        for name in names
+    )
 
 
 #: The rule of the job running in this process and the files it declares as inputs, resolved;

@@ -18,6 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from jointbench.comparison.published import (
+    COLUMNS,
     comparison_rows,
     enforce_design,
     failure_message,
@@ -169,7 +170,8 @@ def comparison(collected: Mapping[str, str], config: Mapping) -> pd.DataFrame:
             inputs = Inputs(collected=frame, published=document, config=config)
             rows = comparison_rows(document, paper.measure(inputs))
             frames.append(enforce_design(rows, document, config))
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    # A run of no study with a paper has no row, but the columns every reader of it reads.
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=COLUMNS)
 
 
 def check_published(collected: Mapping[str, str], outputs, config: Mapping) -> pd.DataFrame:

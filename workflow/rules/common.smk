@@ -3,7 +3,9 @@ import functools
 import itertools
 import os
 import re
+import subprocess
 import sys
+import time
 from pathlib import Path
 
 from snakemake.io import WILDCARD_REGEX, apply_wildcards
@@ -14,9 +16,12 @@ from jointbench.figures.common import study_title
 from jointbench.fingerprint import (
     check_bytecode_by_content,
     code_fingerprint,
+    data_names,
+    dependency_versions,
     source_digests,
 )
 from jointbench.running import run as jb_run
+from jointbench.running import timelimit
 from jointbench.papers import get_paper, paper_names, papers_of_study
 from jointbench.configuration import config as jb_config
 
@@ -42,6 +47,13 @@ def studies_listing(estimator):
         for study in STUDIES
         if estimator in jb_config.estimator_names(config, study, source="external")
     ]
+
+
+# Every job of an external estimator runs under one time limit (limit_user_jobs): the shell it
+# is run by (jointbench/running/limited_shell) reads it, and the interpreter it runs on, here.
+TIME_LIMIT_S = timelimit.configured_limit(config)
+os.environ[timelimit.LIMIT_VARIABLE] = repr(TIME_LIMIT_S)
+os.environ[timelimit.PYTHON_VARIABLE] = PYTHON
 
 
 # Every external estimator of this run's studies.
@@ -689,14 +701,39 @@ EXTENSIONS = [Path(entry).resolve() for entry in config.get("extensions", [])]
 # can keep: every cache is made one checked by the source's content, before any job runs.
 check_bytecode_by_content(*EXTENSIONS)
 # Every paper's published values: the inputs of the jobs of its own study (published_files),
-# left out of the code so that one paper's values rerun only those.
+# left out of the code so that one paper's values rerun only those; named as files of the
+# package, which each job is given (`code_plan`, plan_code_checks) to check its code with.
 PUBLISHED = [get_paper(name).published for name in paper_names()]
+CODE_INPUTS = data_names(PUBLISHED)
+# What every job checks its code against the planned fingerprint with, besides its script and
+# the run's extensions: the files left out of it, and the versions it was computed under (a job
+# of a conda environment of its own names those that differ).
+CODE_PLAN = {"inputs": CODE_INPUTS, "versions": dependency_versions()}
 
 
 @functools.cache
 def script_code(script):
     """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
-    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=PUBLISHED)
+    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS)
+
+
+def plan_code_checks():
+    """Give each rule with a code fingerprint (``code``, script_code) the parameter
+    ``code_plan`` (CODE_PLAN): with it, the job computes the fingerprint again from the
+    arguments script_code used, its script and the run's extensions being its own, and refuses
+    to run code other than the planned (jointbench.jobs.check_planned_code)."""
+    for producer in workflow.rules:
+        names = producer.params.keys()
+        if "code" not in names:
+            continue
+        # Snakemake would let this replace a rule's own parameter of that name.
+        if "code_plan" in names:
+            raise ValueError(
+                f"rule {producer.name} has a parameter named 'code_plan', a name the "
+                "workflow gives what each job checks its code fingerprint with; rename the "
+                "rule's parameter"
+            )
+        producer.set_params(code_plan=CODE_PLAN)
 
 
 def study_settings(study, *keys):
@@ -808,3 +845,68 @@ def track_sources(user_rules):
         if producer.name in user_rules:
             sources = _kept_in_results(producer, sources)
         producer.set_params(sources=sources)
+
+
+def limit_user_jobs(user_rules):
+    """Give every job of the rules of the user's (``user_rules``, by name) the run's time limit,
+    whatever its program's language: Snakemake runs its ``shell:`` or ``script:`` command with
+    the limited shell (resource ``shell_exec``, jointbench.running.timelimit), a cluster gives
+    it a ``runtime`` just above the limit, so that the limit stops it first, naming the rule,
+    and a job the limit stopped fails with an error saying so. A ``run:`` block runs inside
+    Snakemake, which no limit can stop without stopping the run: it is refused, naming the rule.
+    """
+    for producer in workflow.rules:
+        # A rule without a command (a target of the user's) runs nothing to limit.
+        if producer.name not in user_rules or producer.norun:
+            continue
+        if producer.is_run:
+            raise ValueError(
+                f"rule {producer.name} runs its code in a run"
+                # Apart: Snakemake's linter reads "rule" and a colon on one line as a rule.
+                ": block, inside Snakemake, where the "
+                f"time limit of an external estimator's job ({timelimit.KEY}) cannot stop it: "
+                "put the code in a script: or a shell: command (README, 'Adding an estimator')"
+            )
+        producer.resources["shell_exec"] = _ShellPath(timelimit.LIMITED_SHELL)
+        producer.resources["runtime"] = timelimit.runtime_minutes(TIME_LIMIT_S)
+        producer.run_func = _limited(producer.run_func, producer.name)
+
+
+def _limited(run, name):
+    """The run function ``run`` of rule ``name``, whose job, when the limited shell reports
+    that the time limit stopped its command, fails with an error naming the rule, the job's
+    wildcards, the limit and the key to raise, not a bare exit status."""
+
+    @functools.wraps(run)
+    def limited(input, output, params, wildcards, *rest):
+        start = time.monotonic()
+        try:
+            return run(input, output, params, wildcards, *rest)
+        except subprocess.CalledProcessError as error:
+            # The status alone is not the limit's: a program may exit with it by itself.
+            stopped = time.monotonic() - start >= TIME_LIMIT_S
+            if error.returncode != timelimit.EXPIRED or not stopped:
+                raise
+            named = dict(wildcards.items())
+            raise TimeLimitExceeded(
+                timelimit.expired_message(name, named, TIME_LIMIT_S)
+            ) from None
+
+    return limited
+
+
+class TimeLimitExceeded(Exception):
+    """A job of an external estimator stopped at the run's time limit."""
+
+
+class _ShellPath(str):
+    """The path of a shell, as the resource ``shell_exec`` takes it: Snakemake (9.27) writes
+    that resource into the preamble of a ``script:`` job as Python code, unquoted, so it is
+    formatted as a Python string there; pickled (the script's ``snakemake.resources``) and
+    used as a path, it is the plain path."""
+
+    def __format__(self, spec):
+        return format(repr(str(self)), spec)
+
+    def __reduce__(self):
+        return str, (str(self),)

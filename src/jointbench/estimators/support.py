@@ -2113,7 +2113,9 @@ class Untested(NamedTuple):
     statement at 32 frames, at most 1 at 120 and none at 500 (README). Independent frames
     (simulated, resampled) are cleared where their correlation can show it: most 22-frame
     trials of six-marker clusters, fewer of three, whose correlation spreads more.
-    Noise-free distances have no correlation to read, and are not named."""
+    Noise-free distances have no correlation to read, and are not named; fewer frames than
+    the test needs whose segments have one marker each have none either, and are
+    (``correlation`` and ``bound`` NaN: nothing clears them)."""
 
     name: str
     n_frames: int
@@ -2134,14 +2136,22 @@ class Untested(NamedTuple):
             else f"the frames' independence was not tested: the test needs {MIN_TESTED_FRAMES} "
             f"frames and this fit has {self.n_frames};"
         )
+        if math.isnan(self.correlation):
+            read = (
+                "no segment has two markers, whose distance's lag-1 autocorrelation could "
+                "clear them"
+            )
+        else:
+            read = (
+                f"the lag-1 autocorrelation of the {_LABELS[self.name]}' distances, "
+                f"{self.correlation:.2f}, is not clearly below {DEPENDENT_CORRELATION:.2g} "
+                f"(below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs for independent frames "
+                "under it), at which an SD that counts every frame as independent understates "
+                f"the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times"
+            )
         return (
-            f"{found} the lag-1 autocorrelation of the "
-            f"{_LABELS[self.name]}' distances, {self.correlation:.2f}, is not clearly below "
-            f"{DEPENDENT_CORRELATION:.2g} (below {self.bound:.2f}, {_Z_CLEARED:.3g} of its SDs "
-            "for independent frames under it), at which an SD that counts every frame as "
-            f"independent understates the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times: "
-            "its SDs and p-values count each frame as independent, which consecutive frames of a "
-            "recording seldom are: fit a longer stretch"
+            f"{found} {read}: its SDs and p-values count each frame as independent, which "
+            "consecutive frames of a recording seldom are: fit a longer stretch"
         )
 
     def numbers(self) -> dict[str, float]:
@@ -2162,19 +2172,28 @@ def _untested(
     the :class:`Untested` of the segment whose lag-1 autocorrelation is the furthest above its
     bound, where the trial is ``unflagged`` (its verdict carries no caveat of frames that are not
     independent); ``None`` where it is not, or no segment's correlation is at or above its
-    bound (or none is read: noise-free distances, fewer than two markers or frames)."""
+    bound (or noise-free distances leave none to read). Where no segment has two markers (or
+    there are fewer than two frames), no correlation can clear the frames: below
+    :data:`MIN_TESTED_FRAMES` frames an :class:`Untested` whose ``correlation`` and ``bound``
+    are NaN; from them on ``None``, the block test having had no distances either (a single
+    marker's blind spot, which the README names)."""
     n_trials, n_frames = arrays[0].shape[:2]
     found: list[Untested | None] = [None] * n_trials
     trials = np.flatnonzero(unflagged)
-    if not trials.size or n_frames < 2:  # a pair's distance over two frames at least
+    if not trials.size:
         return found
     # The trials the caveat closed are not read: most of a long correlated recording's.
     chosen = tuple(array if trials.size == n_trials else array[trials] for array in arrays)
     read = []
     for name, array in zip(names, chosen, strict=True):
-        if array.shape[2] >= 2:
+        if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
             ready = kernel_array(array)
             read.append((name, _frame_correlations(ready)[:, 0], _correlation_sds(ready)))
+    if not read:
+        if n_frames < MIN_TESTED_FRAMES:
+            for t in trials:
+                found[t] = Untested(names[0], n_frames, math.nan, math.nan)
+        return found
     for row, t in enumerate(trials):
         worst = None
         for name, correlations, sds in read:

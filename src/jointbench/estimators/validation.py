@@ -359,13 +359,18 @@ def span_problem(span_mm: float) -> str | None:
     unit, or ``None`` where its size is a body's (or unknown): a cluster smaller than a marker
     or larger than a body was measured in another unit than millimetres. Markers at one point
     (a size of 0) are one marker given several times, not a unit, and are left to the checks
-    of the markers a method needs."""
+    of the markers a method needs. An array states no unit, and millimetres taken for
+    centimetres or for metres both make a cluster too large, as the markers of more than one
+    segment (a whole body's) do: a cluster too large is named as any of the three."""
     bound = span_bound(span_mm, MAX_SPAN_MM, ONE_SEGMENT)
     if bound is None:
         return None
     if span_mm < MIN_SPAN_MM:
         return f"{bound}: metres read as millimetres?"
-    return f"{bound}: millimetres read as metres?"
+    return (
+        f"{bound}: millimetres read as centimetres or metres, or the markers of more than one "
+        "segment?"
+    )
 
 
 def span_bound(span_mm: float, largest_mm: float, largest: str) -> str | None:

@@ -32,7 +32,7 @@ from jointbench.estimators.validation import (
     cluster_span,
     span_bound,
 )
-from jointbench.io.units import unit_hint
+from jointbench.io.units import fitting_units, unit_hint
 from jointbench.numerics.small import inertia
 from jointbench.screening import (
     Artefact,
@@ -101,7 +101,7 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
     :data:`~jointbench.estimators.validation.MAX_SPAN_MM`): coordinates in another unit than
     the file states, whose every answer would be off by a factor of 10 to 1000 and pass the
     checks, which are built for millimetres, or fail them for the wrong reason."""
-    _check_unit(markers, labels, recording, MAX_SPAN_MM, ONE_SEGMENT)
+    _check_unit(markers, labels, recording, MAX_SPAN_MM, ONE_SEGMENT, "one human body segment")
 
 
 def check_joined_span(
@@ -114,7 +114,14 @@ def check_joined_span(
     enough to pass for a segment in the wrong unit, but too far from each other."""
     labels = reference + moving
     markers = recording.markers[:, recording.index(labels)]
-    _check_unit(markers, labels, recording, MAX_JOINED_SPAN_MM, TWO_SEGMENTS)
+    _check_unit(
+        markers,
+        labels,
+        recording,
+        MAX_JOINED_SPAN_MM,
+        TWO_SEGMENTS,
+        "two human body segments joined at a joint",
+    )
 
 
 def _check_unit(
@@ -123,16 +130,27 @@ def _check_unit(
     recording: Recording,
     largest_mm: float,
     largest: str,
+    whose: str,
 ) -> None:
     """``ValueError`` naming the file, the unit it states and, in the units that fit
     (:func:`~jointbench.io.units.unit_hint`), the size its numbers make, when the typical span
     of ``markers`` ``(n_frames, n, 3)`` [mm] (:func:`cluster_span`) of ``labels`` is under a
-    marker's size or over ``largest_mm``, what ``largest`` can span."""
+    marker's size or over ``largest_mm``, what ``largest`` can span. Over it in every unit,
+    they are not the markers of ``whose`` (a whole body's, say) or in no unit a file states,
+    and the message says so rather than blame the unit the file states."""
     span = cluster_span(markers)
     bound = span_bound(span, largest_mm, largest)
     if bound is None:
         return
     hint = unit_hint(span, recording.units, largest_mm)
+    if span > largest_mm and fitting_units(span, recording.units, largest_mm) == {}:
+        raise ValueError(
+            f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the "
+            f"farthest two, median over the frames), {bound}, in the unit the file states "
+            f"({recording.units!r}, read as mm), and {hint}: they are not the markers of "
+            f"{whose}, or are in a unit no file states; choose one segment's markers (moving, "
+            "reference; --moving, --reference)"
+        )
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the farthest "
         f"two, median over the frames), {bound}. The coordinates are not in the unit the file "

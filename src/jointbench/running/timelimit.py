@@ -1,0 +1,326 @@
+"""The time limit of an external estimator's job: its program, whatever its language, runs in a
+process group of its own and is stopped, the whole group with it, once the run's limit
+(``jobs.external_time_limit_s``) has passed.
+
+Snakemake sets no time limit on a local job, so the workflow gives every rule of the user's the
+resource ``shell_exec`` (workflow/rules/common.smk): Snakemake then runs the job's command,
+``shell:`` or ``script:``, as ``limited_shell -c COMMAND`` (the file beside this one), which
+runs this file with the project's interpreter. It reads the limit from the environment the
+workflow sets when it loads, so that every job of a run has the same, and it imports nothing
+but the standard library: it starts before the user's program, for every job.
+
+Run as a program it exits with the command's status, or :data:`EXPIRED` when the limit
+stopped it; the workflow turns that status into an error naming the rule, the job's wildcards,
+the limit and the key to raise (:func:`expired_message`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import math
+import os
+import select
+import signal
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+#: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
+KEY = "jobs.external_time_limit_s"
+#: The environment variables the workflow sets when it loads: the limit [s] and the interpreter
+#: that runs this file (``limited_shell``).
+LIMIT_VARIABLE = "JOINTBENCH_TIME_LIMIT_S"
+PYTHON_VARIABLE = "JOINTBENCH_PYTHON"
+#: The shell ``shell_exec`` names, beside this file.
+LIMITED_SHELL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "limited_shell")
+#: The exit status of a command the limit stopped (GNU ``timeout``'s).
+EXPIRED = 124
+#: Seconds a stopped group has between SIGTERM (to write what it must, or clean up) and SIGKILL.
+GRACE_S = 5.0
+#: Snakemake's own prefix of a bash command, which it gives only a shell named ``bash``: the
+#: command of a limited job fails at its first failing step, as every other job's does.
+BASH_PREFIX = "set -euo pipefail; "
+# How often a stopped group is looked at [s], and how long a killed one is waited for [s].
+_POLL_S = 0.05
+_KILLED_S = 2.0
+# How many rounds of processes that left the command's group are stopped at most.
+_STRAY_ROUNDS = 5
+# prctl(2)'s option that makes a process the reaper of its descendants' orphans.
+_PR_SET_CHILD_SUBREAPER = 36
+# prctl(2)'s option that sends this process a signal when its parent ends.
+_PR_SET_PDEATHSIG = 1
+
+
+class Interrupted(Exception):
+    """The limited shell was itself told to stop: Ctrl-C, a closed terminal, Snakemake
+    cancelling the job, or the run's end (:func:`_end_with_the_run`)."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"signal {signum}")
+        self.signum = signum
+
+
+def group_alive(group: int) -> bool:
+    """Whether any process is left in the process group ``group`` (a zombie counts until its
+    parent reaps it: :func:`run_limited` reaps the group's)."""
+    try:
+        os.killpg(group, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        # A process of the group that is no longer ours (it changed its user): still there.
+        return True
+    return True
+
+
+def _prctl(option: int, value: int) -> None:
+    """prctl(2) where there is one (Linux); elsewhere nothing."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(option, value, 0, 0, 0)
+
+
+def _adopt_orphans() -> None:
+    """Make this process the reaper of its descendants' orphans (Linux), so that a child the
+    program leaves behind is reaped here once stopped, rather than by a PID 1 that may never
+    reap it (a container's), its zombie keeping the group alive."""
+    _prctl(_PR_SET_CHILD_SUBREAPER, 1)
+
+
+def _end_with_the_run() -> None:
+    """Be told with SIGTERM when the process that started this one (Snakemake) ends (Linux):
+    a run killed with SIGKILL then stops the command here rather than leave it running
+    without a limit. This process stays in the run's process group, which Ctrl-C and a
+    closed terminal signal, and passes those on (:func:`main`)."""
+    parent = os.getppid()
+    _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() != parent:  # it ended before it could tell
+        raise Interrupted(signal.SIGTERM)
+
+
+class _Group:
+    """The process group of a command started in a group of its own, ``leader`` its pid;
+    ``status`` the leader's exit status once reaped (negative: the signal that ended it)."""
+
+    def __init__(self, leader: int):
+        self.leader = leader
+        self.status: int | None = None
+
+    def reap(self) -> None:
+        """Reap every ended process of the group that is this process's child."""
+        while True:
+            try:
+                ended = os.waitid(os.P_PGID, self.leader, os.WEXITED | os.WNOHANG)
+            except ChildProcessError:
+                return
+            if ended is None:
+                return
+            if ended.si_pid == self.leader:
+                killed = ended.si_code in (os.CLD_KILLED, os.CLD_DUMPED)
+                self.status = -ended.si_status if killed else ended.si_status
+
+    def wait(self, within_s: float) -> bool:
+        """Whether the leader ends within ``within_s`` [s]: woken as it ends where the system
+        gives a process a file descriptor (Linux), so that a job of milliseconds is not held
+        for a polling interval; polled elsewhere."""
+        try:
+            ends = os.pidfd_open(self.leader)
+        except (AttributeError, OSError):
+            return self._until(lambda: self.status is not None, within_s)
+        try:
+            select.select([ends], [], [], within_s)
+        finally:
+            os.close(ends)
+        self.reap()
+        return self.status is not None
+
+    def ended(self, within_s: float) -> bool:
+        """Whether the whole group ends within ``within_s`` [s]."""
+        return self._until(lambda: not group_alive(self.leader), within_s)
+
+    def _until(self, done, within_s: float) -> bool:
+        deadline = time.monotonic() + within_s
+        while True:
+            self.reap()
+            if done():
+                return True
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(_POLL_S)
+
+    def stop(self, grace_s: float) -> None:
+        """Stop every process of the group: SIGTERM, up to ``grace_s`` [s] for the group to
+        end, then SIGKILL to whatever is left, a process that ignores SIGTERM or a child the
+        leader left behind."""
+        _signal_group(self.leader, signal.SIGTERM)
+        if self.ended(grace_s):
+            return
+        _signal_group(self.leader, signal.SIGKILL)
+        # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
+        # disk) is past any signal's reach, and the job ends without it.
+        self.ended(_KILLED_S)
+
+
+def _signal_group(group: int, signum: int) -> None:
+    try:
+        os.killpg(group, signum)
+    except ProcessLookupError:
+        pass
+
+
+def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -> int | None:
+    """Run ``argv`` in a process group of its own for at most ``limit_s`` [s]:
+    its exit status (negative: the signal that ended it), or None when the limit stopped it
+    (``_Group.stop``). A process of the group still running when the command ends (a child it
+    left behind) is stopped too: nothing of the job outlives it. Stopped from outside
+    (:class:`Interrupted`), it stops the group before passing that on. This process becomes
+    the reaper of the command's orphans (``_adopt_orphans``)."""
+    _adopt_orphans()
+    group = _Group(os.posix_spawnp(argv[0], list(argv), os.environ, setpgroup=0))
+    try:
+        ended = group.wait(limit_s)
+    except BaseException:
+        group.stop(grace_s)
+        raise
+    if not ended:
+        group.stop(grace_s)
+        _stop_strays(grace_s)
+        return None
+    if not group.ended(0):
+        group.stop(grace_s)
+    _stop_strays(grace_s)
+    return group.status
+
+
+def _children() -> list[int]:
+    """The pids of this process's children (Linux's ``/proc``; none known elsewhere)."""
+    found = []
+    for task in Path("/proc/self/task").glob("*/children"):
+        with contextlib.suppress(OSError):
+            found += [int(pid) for pid in task.read_text().split()]
+    return found
+
+
+def _stop_strays(grace_s: float) -> None:
+    """Stop, group by group, what is left of the command after its own group ended: a
+    process that left the group (``setsid``, a daemon that detached) and whose parent in it
+    has ended is this process's child (``_adopt_orphans``), and so, once that one is
+    stopped, is a child that left its group in turn; a few rounds, as one that cannot end
+    (a read of a dead disk) is past any signal's reach."""
+    for _ in range(_STRAY_ROUNDS):
+        strays = _children()
+        if not strays:
+            return
+        for stray in strays:
+            with contextlib.suppress(ProcessLookupError):
+                _Group(os.getpgid(stray)).stop(grace_s)
+
+
+#: The longest limit [s], a week: a cluster's longest partitions allow about that, and a longer
+#: one holds a run that never ends for as good as ever.
+MAX_LIMIT_S = 7 * 24 * 3600.0
+
+
+def limit_problem(value: object) -> str | None:
+    """What keeps ``value`` from being a limit [s]: not a number (a bool is none), not finite,
+    not above 0 or above :data:`MAX_LIMIT_S`, in words; None if nothing."""
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if number and 0 < value <= MAX_LIMIT_S:  # False for NaN
+        return None
+    return (
+        f"{value!r} is not a number of seconds in (0, {MAX_LIMIT_S:g}]: every job of an "
+        "external estimator is stopped at it, and none may run without a limit"
+    )
+
+
+def configured_limit(config: Mapping) -> float:
+    """The limit [s] ``config`` sets under :data:`KEY` (the schema's default, which the
+    workflow's validation fills in, where the files set none); ``ValueError`` naming the key
+    when it is no limit (:func:`limit_problem`), which the workflow raises as it loads,
+    before any job."""
+    section, key = KEY.split(".")
+    value = config.get(section, {}).get(key)
+    problem = limit_problem(value)
+    if problem:
+        raise ValueError(f"config: {KEY}: {problem}")
+    return float(value)
+
+
+def limit_from(environ: Mapping[str, str]) -> float:
+    """The limit [s] the workflow put in ``environ``, or ``ValueError`` saying it is not
+    there or not a positive finite number: a job never runs without one."""
+    text = environ.get(LIMIT_VARIABLE)
+    if text is None:
+        raise ValueError(
+            f"{LIMIT_VARIABLE} is not set: the workflow sets it from {KEY} when it loads"
+        )
+    try:
+        limit = float(text)
+    except ValueError:
+        limit = math.nan
+    problem = limit_problem(limit)
+    if problem:
+        raise ValueError(f"{LIMIT_VARIABLE}={text!r}: {problem}")
+    return limit
+
+
+def _seconds(value: float) -> str:
+    return f"{value:g} s"
+
+
+def stopped_line(limit_s: float) -> str:
+    """What the limited shell says on its stderr when the limit stopped its command."""
+    return (
+        f"jointbench: the job's program ran past the time limit of {_seconds(limit_s)} ({KEY}): "
+        f"its process group was stopped (SIGTERM, then SIGKILL after {_seconds(GRACE_S)})"
+    )
+
+
+def expired_message(rule: str, wildcards: Mapping[str, str], limit_s: float) -> str:
+    """The error of a job of ``rule`` (its ``wildcards``, by name) that the limit stopped,
+    naming the limit and the key that raises it."""
+    job = ", ".join(f"{name}={value}" for name, value in wildcards.items())
+    return (
+        f"rule {rule}{f' ({job})' if job else ''}: its program ran past the time limit of "
+        f"{_seconds(limit_s)} for a job of an external estimator and was stopped, its whole "
+        f"process group with it; if it needs longer, raise {KEY} in the config"
+    )
+
+
+def runtime_minutes(limit_s: float) -> int:
+    """The ``runtime`` [min] a cluster gives a job limited to ``limit_s`` [s]: the limit, the
+    grace of a stopped group and a minute for Snakemake to start on the node, so that the
+    limit, which names the job and the key, stops a program before the cluster's does."""
+    return math.ceil((limit_s + GRACE_S) / 60) + 1
+
+
+def _interrupt(signum: int, _frame: object) -> None:
+    raise Interrupted(signum)
+
+
+def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
+    """``limited_shell -c COMMAND``: COMMAND run by bash under the limit in ``environ``."""
+    if len(argv) != 2 or argv[0] != "-c":
+        print(f"usage: {LIMITED_SHELL} -c COMMAND (got {list(argv)!r})", file=sys.stderr)
+        return 2
+    try:
+        limit = limit_from(environ)
+    except ValueError as error:
+        print(f"jointbench: {error}", file=sys.stderr)
+        return 2
+    for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+        signal.signal(signum, _interrupt)
+    try:
+        _end_with_the_run()
+        status = run_limited(["bash", "-c", BASH_PREFIX + argv[1]], limit)
+    except Interrupted as stopped:
+        return 128 + stopped.signum
+    if status is None:
+        print(stopped_line(limit), file=sys.stderr)
+        return EXPIRED
+    return 128 - status if status < 0 else status
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

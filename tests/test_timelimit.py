@@ -1,0 +1,266 @@
+"""The time limit of an external estimator's job (jointbench.running.timelimit): a program past
+it is stopped with its whole process group, whatever it does to stay; one within it runs as it
+would without; the limit is checked before any job.
+
+The end-to-end case, a user's program that never ends in a run, is in tests/test_extension.py.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from snakemake.utils import validate
+from workflow_copy import ROOT
+
+from jointbench.configuration import config as jb_config
+from jointbench.running import timelimit
+
+# Long enough for bash to start and write a pid file on a loaded machine, short for the tests.
+LIMIT_S = 1.5
+GRACE_S = 0.5
+# A program that outlives its test by far: past the deadlines below, it was not stopped.
+FOREVER = "sleep 300"
+
+
+def alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie waiting for its parent to reap it has ended)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
+
+
+def pids(path: Path) -> list[int]:
+    return [int(line) for line in path.read_text().split()]
+
+
+def timed(argv: list[str], limit_s: float = LIMIT_S) -> tuple[int | None, float]:
+    start = time.monotonic()
+    status = timelimit.run_limited(argv, limit_s, GRACE_S)
+    return status, time.monotonic() - start
+
+
+def test_a_program_past_the_limit_is_stopped_at_it():
+    status, seconds = timed(["bash", "-c", FOREVER])
+    assert status is None
+    assert LIMIT_S <= seconds < LIMIT_S + GRACE_S
+
+
+def test_a_program_that_ends_just_under_the_limit_keeps_its_status():
+    status, seconds = timed(["bash", "-c", "sleep 1.0; exit 3"])
+    assert status == 3
+    assert 1.0 <= seconds < LIMIT_S
+
+
+def test_a_program_ended_by_a_signal_of_its_own_says_which():
+    status, _ = timed(["bash", "-c", "kill -SEGV $$"])
+    assert status == -signal.SIGSEGV
+
+
+def with_child(
+    tmp_path: Path, program: str, child: str = FOREVER
+) -> tuple[int | None, float, bool]:
+    """``program`` (bash, ``{child}`` standing for ``child`` started in the background, its
+    pid written) run under the limit: its status, its seconds and whether the child still
+    runs."""
+    written = tmp_path / "pids"
+    child = f"{child} & echo $! > {written}"
+    status, seconds = timed(["bash", "-c", program.format(child=child)])
+    (pid,) = pids(written)
+    return status, seconds, alive(pid)
+
+
+def test_a_child_that_keeps_running_is_stopped_with_its_parent(tmp_path):
+    """Parent and child both past the limit: the group goes, the child with it."""
+    status, _, running = with_child(tmp_path, f"{{child}}; {FOREVER}")
+    assert status is None
+    assert not running
+
+
+def test_a_child_left_behind_by_a_program_that_ended_is_stopped(tmp_path):
+    """The program ends at once and leaves a child running: the job does not end with part of
+    it still running, outside any limit."""
+    status, seconds, running = with_child(tmp_path, "{child}")
+    assert status == 0
+    assert seconds < LIMIT_S
+    assert not running
+
+
+def test_a_program_that_ignores_sigterm_is_killed_after_the_grace(tmp_path):
+    status, seconds, running = with_child(tmp_path, "trap '' TERM; {child}; wait")
+    assert status is None
+    assert LIMIT_S + GRACE_S <= seconds < LIMIT_S + GRACE_S + 1.0
+    assert not running
+
+
+def test_a_child_that_ignores_sigterm_after_its_parent_ended_is_killed(tmp_path):
+    """The parent ends on SIGTERM, its child ignores it: SIGKILL still reaches the child."""
+    status, _, running = with_child(tmp_path, f"(trap '' TERM; {{child}}; wait); {FOREVER}")
+    assert status is None
+    assert not running
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+@pytest.mark.parametrize(
+    # Half a second for the child to have left the group before its parent ends.
+    ("program", "stopped"),
+    [("{child}; sleep 0.5", False), (f"{{child}}; {FOREVER}", True)],
+)
+def test_a_child_that_leaves_the_group_is_stopped_when_its_parent_has_ended(
+    tmp_path, program, stopped
+):
+    """A daemon: the child starts a session of its own, out of the group the limit stops;
+    once the program has ended by itself or been stopped, the child is stopped too."""
+    status, _, running = with_child(tmp_path, program, child=f"setsid {FOREVER}")
+    assert status == (None if stopped else 0)
+    assert not running
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_path):
+    """Two removes: a child in a session of its own starts its own child in another."""
+    written = tmp_path / "pids"
+    inner = f"setsid {FOREVER} & echo $! > {written}; {FOREVER}"
+    status, _ = timed(["bash", "-c", f"setsid bash -c '{inner}' & sleep 0.5"])
+    assert status == 0
+    (grandchild,) = pids(written)
+    assert not alive(grandchild)
+
+
+def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
+    """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ.pop(timelimit.LIMIT_VARIABLE, None)
+    if limit is not None:
+        environ[timelimit.LIMIT_VARIABLE] = limit
+    return subprocess.Popen(
+        [timelimit.LIMITED_SHELL, "-c", command], env=environ, text=True, **popen
+    )
+
+
+def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does():
+    """bash, and Snakemake's prefix for it: a failing step of a pipe fails the command."""
+    shell = limited_shell("echo ok; false | true; echo not reached", "10", stdout=subprocess.PIPE)
+    out, _ = shell.communicate(timeout=30)
+    assert out == "ok\n"
+    assert shell.returncode == 1
+
+
+def test_the_limited_shell_stops_its_command_and_says_so():
+    shell = limited_shell(FOREVER, "1", stderr=subprocess.PIPE)
+    _, err = shell.communicate(timeout=30)
+    assert shell.returncode == timelimit.EXPIRED
+    assert "ran past the time limit of 1 s (jobs.external_time_limit_s)" in err
+
+
+def test_the_limited_shell_stopped_from_outside_stops_its_group(tmp_path):
+    """Ctrl-C, or Snakemake cancelling the job: the program does not run on without it."""
+    written = tmp_path / "pids"
+    shell = limited_shell(f"echo $$ > {written}; {FOREVER}", "60")
+    deadline = time.monotonic() + 20
+    while not (written.exists() and written.read_text().strip()):
+        assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+    shell.send_signal(signal.SIGTERM)
+    assert shell.wait(timeout=30) == 128 + signal.SIGTERM
+    (program,) = pids(written)
+    assert not alive(program)
+
+
+def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
+    """Snakemake killed with SIGKILL: the limited shell it started stops the program rather
+    than leave it running without a limit."""
+    written = tmp_path / "pids"
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = "60"
+    # A stand-in for Snakemake: a shell that starts the limited shell and waits for it.
+    command = f"echo $$ > {written}; {FOREVER}"
+    run = subprocess.Popen(
+        ["bash", "-c", f"{timelimit.LIMITED_SHELL} -c '{command}'; exit $?"], env=environ
+    )
+    deadline = time.monotonic() + 20
+    while not (written.exists() and written.read_text().strip()):
+        assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+    run.kill()
+    run.wait()
+    (program,) = pids(written)
+    deadline = time.monotonic() + timelimit.GRACE_S + 5
+    while alive(program):
+        assert time.monotonic() < deadline, "the program runs on after the run was killed"
+        time.sleep(0.05)
+
+
+@pytest.mark.parametrize("limit", [None, "0", "-1", "ten", "nan", "inf", "1e9"])
+def test_the_limited_shell_runs_nothing_without_a_limit(limit, tmp_path):
+    ran = tmp_path / "ran"
+    shell = limited_shell(f"touch {ran}", limit, stderr=subprocess.PIPE)
+    _, err = shell.communicate(timeout=30)
+    assert shell.returncode == 2
+    assert timelimit.LIMIT_VARIABLE in err
+    assert not ran.exists()
+
+
+def test_the_expired_message_names_the_rule_the_job_the_limit_and_the_key():
+    wildcards = {"study": "cmc", "condition": "marker_set-M__rom_deg-5__noise_mm-1.0"}
+    message = timelimit.expired_message("estimate_centroid", wildcards, 2.5)
+    assert message.startswith(
+        "rule estimate_centroid (study=cmc, condition=marker_set-M__rom_deg-5__noise_mm-1.0): "
+    )
+    assert "time limit of 2.5 s" in message
+    assert message.endswith("raise jobs.external_time_limit_s in the config")
+
+
+@pytest.mark.parametrize("limit_s", [1.0, 59.0, 3600.0, timelimit.MAX_LIMIT_S])
+def test_a_clusters_runtime_outlasts_the_limit_and_its_grace(limit_s):
+    """SLURM kills a job past its runtime without naming the limit: the limit comes first."""
+    minutes = timelimit.runtime_minutes(limit_s)
+    assert isinstance(minutes, int)
+    assert minutes * 60 >= limit_s + timelimit.GRACE_S + 60
+
+
+# ----------------------------------------------------------------------------- the config
+
+
+def config_with_limit(value: object) -> dict:
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    config.setdefault("jobs", {})["external_time_limit_s"] = value
+    return config
+
+
+def checked_limit(config: dict) -> float:
+    """The limit of ``config`` as the workflow takes it as it loads: the schema (whose defaults
+    Snakemake's validation fills in), then the limit's own check."""
+    jb_config.check_schema(config)
+    validate(config, str(jb_config.SCHEMA_PATH))
+    return timelimit.configured_limit(config)
+
+
+def test_the_shipped_config_and_the_schema_agree_on_the_default():
+    shipped = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    assert checked_limit(shipped) == 3600
+    del shipped["jobs"]
+    assert checked_limit(shipped) == 3600
+
+
+@pytest.mark.parametrize(
+    "value", [0, -1, -0.5, "30", "ten", True, None, math.nan, math.inf, 1e9, [30]]
+)
+def test_a_limit_that_is_no_positive_number_of_seconds_stops_the_run_naming_the_key(value):
+    with pytest.raises(ValueError, match=r"jobs[./]external_time_limit_s"):
+        checked_limit(config_with_limit(value))
+
+
+@pytest.mark.parametrize("value", [0.5, 3, 3600, timelimit.MAX_LIMIT_S])
+def test_a_positive_limit_up_to_a_week_is_taken(value):
+    assert checked_limit(config_with_limit(value)) == value
