@@ -7,10 +7,17 @@ the same arguments (its script, the run's extensions, the data files ``params.co
 names) once its modules are loaded, and refuses to run code other than the planned, naming
 the versions that differ from the planned ones (``params.code_plan``'s too).
 ``tests/test_stale_results.py`` does the same through Snakemake.
+
+On a cluster the node runs each job through a Snakemake that reads the workflow again, so its
+``params.code`` is the code as the node found it, not as the run planned it: the submitting
+Snakemake hands its plan down in the environment (``jobs.PLANNED_CODE_VARIABLE``), which the
+job checks against instead.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -34,6 +41,8 @@ def script(tmp_path, monkeypatch) -> Path:
     path = tmp_path / "render.py"
     shutil.copy(SCRIPTS / "render.py", path)
     monkeypatch.setitem(sys.modules, "__main__", SimpleNamespace(__file__=str(path)))
+    # A plan handed down by a Snakemake that started this test process is not this test's.
+    monkeypatch.delenv(jobs.PLANNED_CODE_VARIABLE, raising=False)
     return path
 
 
@@ -66,6 +75,60 @@ def test_a_job_whose_script_changed_after_planning_is_refused_naming_the_rule(sc
     message = str(error.value)
     assert message.startswith("rule render_cmc: the code changed after the run planned this job")
     assert planned in message and code_fingerprint(script, inputs=CODE_INPUTS) in message
+
+
+def test_a_job_planned_anew_by_its_node_is_checked_against_the_runs_plan(script, monkeypatch):
+    """A file saved after the run planned the job but before the node read the workflow again:
+    the node's ``params.code`` is the edited code's, which the job runs; the plan handed down
+    by the submitting Snakemake is not, and the job is refused."""
+    planned = code_fingerprint(script, inputs=CODE_INPUTS)
+    script.write_text(script.read_text() + "\nEDITED = 1\n")
+    on_node = code_fingerprint(script, inputs=CODE_INPUTS)
+    monkeypatch.setenv(jobs.PLANNED_CODE_VARIABLE, "{}")
+    jobs.publish_planned_code({"render_cmc": planned, "collect": "0123456789abcdef"})
+    with pytest.raises(ValueError) as error, jobs.job(_job(on_node)):
+        pytest.fail("the job ran code other than the run planned")
+    message = str(error.value)
+    assert message.startswith("rule render_cmc: the code changed after the run planned this job")
+    assert f"its fingerprint was {planned}, it is {on_node} now" in message
+
+
+def test_a_job_runs_and_records_the_runs_plan_when_its_node_found_the_same_code(
+    script, monkeypatch
+):
+    """The plan handed down names the code the job runs: it runs, and its files record that
+    fingerprint, whatever the node's reading of the workflow found."""
+    planned = code_fingerprint(script, inputs=CODE_INPUTS)
+    monkeypatch.setenv(jobs.PLANNED_CODE_VARIABLE, json.dumps({"render_cmc": planned}))
+    snakemake = _job("fedcba9876543210")
+    snakemake.wildcards = {}
+    with jobs.job(snakemake):
+        recorded = jobs.provenance(snakemake)["code"]
+    assert recorded == planned
+
+
+def test_a_rule_the_handed_down_plan_does_not_name_is_checked_against_its_own(script, monkeypatch):
+    """A plan from another workflow's Snakemake (a job that starts one of its own) names other
+    rules: the job's own ``params.code`` is its plan."""
+    monkeypatch.setenv(jobs.PLANNED_CODE_VARIABLE, json.dumps({"other": "0123456789abcdef"}))
+    ran = False
+    with jobs.job(_job(code_fingerprint(script, inputs=CODE_INPUTS))):
+        ran = True
+    assert ran
+
+
+@pytest.mark.parametrize("text", ["[1, 2]", "render_cmc=0123"])
+def test_a_plan_handed_down_that_is_not_a_mapping_of_rules_is_named(script, monkeypatch, text):
+    monkeypatch.setenv(jobs.PLANNED_CODE_VARIABLE, text)
+    with pytest.raises(ValueError, match=jobs.PLANNED_CODE_VARIABLE):
+        with jobs.job(_job(code_fingerprint(script, inputs=CODE_INPUTS))):
+            pytest.fail("the job ran on a plan it could not read")
+
+
+def test_publishing_the_plan_leaves_it_in_this_process_environment(monkeypatch):
+    monkeypatch.setenv(jobs.PLANNED_CODE_VARIABLE, "{}")
+    jobs.publish_planned_code({"collect": "0123456789abcdef"})
+    assert json.loads(os.environ[jobs.PLANNED_CODE_VARIABLE]) == {"collect": "0123456789abcdef"}
 
 
 def test_a_job_of_an_extension_the_run_did_not_plan_on_is_refused(script, tmp_path):

@@ -13,8 +13,11 @@ process does, so the rules and the jobs see the same registries.
 
 Every job then runs only the code the run planned it on (:func:`check_planned_code`): the
 fingerprint it records is the one Snakemake computed when it planned the run, and a file saved
-since would otherwise run unrecorded under it. What this module imports counts in every job's
-fingerprint, so that is the fingerprint's module and nothing of the papers or the studies.
+since would otherwise run unrecorded under it. On a cluster the node reads the workflow again
+before it runs a job, so the run's plan reaches the job through the environment
+(:func:`publish_planned_code`) rather than through its parameters. What this module imports
+counts in every job's fingerprint, so that is the fingerprint's module and nothing of the
+papers or the studies.
 """
 
 from __future__ import annotations
@@ -22,7 +25,9 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import importlib.metadata
+import json
 import logging
+import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,7 +35,18 @@ from pathlib import Path
 from jointbench.configuration.extensions import load_extensions
 from jointbench.fingerprint import code_fingerprint, dependency_versions
 
-__all__ = ["check_planned_code", "job", "provenance", "require_declared"]
+__all__ = [
+    "PLANNED_CODE_VARIABLE",
+    "check_planned_code",
+    "job",
+    "provenance",
+    "publish_planned_code",
+    "require_declared",
+]
+
+#: The environment variable through which the Snakemake that plans a run hands each rule's code
+#: fingerprint down to its jobs: a JSON object, rule name -> fingerprint.
+PLANNED_CODE_VARIABLE = "JOINTBENCH_PLANNED_CODE"
 
 # The package's logger: every module's messages (``getLogger(__name__)``) reach the job's log
 # through it.
@@ -84,12 +100,13 @@ def check_planned_code(snakemake) -> None:
     a job in an environment of its own (a conda environment) would record the versions of the
     Snakemake process's, which the message names where they differ
     (``params.code_plan["versions"]``). A job whose rule states no fingerprint (a rule of the
-    user's) is not checked."""
-    params = getattr(snakemake, "params", None)
-    planned = getattr(params, "code", None)
+    user's) is not checked. The planned fingerprint is the one handed down in the environment
+    where there is one (:func:`_planned_code`): a node reading the workflow again computes
+    ``params.code`` from the code as it finds it."""
+    planned = _planned_code(snakemake)
     if planned is None:
         return
-    plan = params.code_plan
+    plan = snakemake.params.code_plan
     script = Path(sys.modules["__main__"].__file__)
     extensions = [Path(entry).resolve() for entry in snakemake.config.get("extensions", [])]
     now = code_fingerprint(script, *extensions, inputs=plan["inputs"])
@@ -99,6 +116,41 @@ def check_planned_code(snakemake) -> None:
             f"fingerprint was {planned}, it is {now} now) and would run unrecorded: "
             + _why_changed(plan["versions"], dependency_versions(), script.name)
         )
+
+
+def publish_planned_code(codes: dict[str, str]) -> None:
+    """Hand ``codes`` (rule name -> the code fingerprint the run planned its jobs on) down to
+    every job this process starts, through the environment (:data:`PLANNED_CODE_VARIABLE`):
+    a job on a cluster node runs in a Snakemake that reads the workflow again, whose own
+    ``params.code`` would be the code as the node finds it. Called by the Snakemake that plans
+    the run, not by the one a node starts (``plan_code_checks`` in
+    ``workflow/rules/common.smk``)."""
+    os.environ[PLANNED_CODE_VARIABLE] = json.dumps(codes, sort_keys=True)
+
+
+def _planned_code(snakemake) -> str | None:
+    """The code fingerprint the run planned ``snakemake``'s job on: the one handed down in the
+    environment for its rule (:func:`publish_planned_code`), else its ``params.code`` (a job
+    started without the plan: a cluster whose jobs do not inherit the environment, a rule the
+    plan does not name); ``None`` for a rule that states none. ``ValueError`` naming the
+    variable when it holds anything but a JSON object."""
+    params = getattr(snakemake, "params", None)
+    own = getattr(params, "code", None)
+    if own is None:
+        return None
+    text = os.environ.get(PLANNED_CODE_VARIABLE)
+    if text is None:
+        return own
+    try:
+        codes = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{PLANNED_CODE_VARIABLE} is not JSON ({error}): {text[:80]!r}") from None
+    if not isinstance(codes, dict):
+        raise ValueError(
+            f"{PLANNED_CODE_VARIABLE} holds {type(codes).__name__}, not an object of rule "
+            f"names and fingerprints: {text[:80]!r}"
+        )
+    return codes.get(snakemake.rule, own)
 
 
 def _why_changed(planned: dict[str, str], now: dict[str, str], script: str) -> str:
@@ -165,12 +217,13 @@ def require_declared(path: str | Path, what: str) -> None:
 
 def provenance(snakemake) -> dict[str, object]:
     """What a job's files record of how they were made: the package version, the rule, the
-    fingerprint of the code it ran, and the config values its study depends on."""
+    fingerprint of the code it ran (the planned one, :func:`check_planned_code`), and the
+    config values its study depends on."""
     study = getattr(snakemake.params, "study", None) or snakemake.wildcards.get("study")
     settings = snakemake.config.get("studies", {}).get(study, {}) if study else {}
     return {
         "jointbench": importlib.metadata.version("jointbench"),
         "rule": snakemake.rule,
-        "code": getattr(snakemake.params, "code", ""),
+        "code": _planned_code(snakemake) or "",
         "config": {"base_seed": snakemake.config.get("base_seed"), "study": settings},
     }

@@ -12,6 +12,7 @@ from snakemake.io import WILDCARD_REGEX, apply_wildcards
 from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
+from jointbench import jobs as jb_jobs
 from jointbench.figures.common import study_title
 from jointbench.fingerprint import (
     check_bytecode_by_content,
@@ -721,7 +722,10 @@ def plan_code_checks():
     """Give each rule with a code fingerprint (``code``, script_code) the parameter
     ``code_plan`` (CODE_PLAN): with it, the job computes the fingerprint again from the
     arguments script_code used, its script and the run's extensions being its own, and refuses
-    to run code other than the planned (jointbench.jobs.check_planned_code)."""
+    to run code other than the planned (jointbench.jobs.check_planned_code). The Snakemake
+    that plans the run hands every rule's fingerprint down to the jobs it starts: a cluster
+    node reads the workflow again, and its ``code`` is the code as it is then."""
+    planned = {}
     for producer in workflow.rules:
         names = producer.params.keys()
         if "code" not in names:
@@ -734,6 +738,9 @@ def plan_code_checks():
                 "rule's parameter"
             )
         producer.set_params(code_plan=CODE_PLAN)
+        planned[producer.name] = producer.params.code
+    if not workflow.remote_exec:
+        jb_jobs.publish_planned_code(planned)
 
 
 def study_settings(study, *keys):
