@@ -4,10 +4,22 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+import numpy as np
+import pandas as pd
+
 from jointbench.comparison.published import NOT_APPLICABLE, claims_rows, status_legend
 from jointbench.papers.base import Inputs, Measured, Output, Table
 
-__all__ = ["claims_headline", "claims_output"]
+__all__ = ["claims_headline", "claims_output", "one_step_changes"]
+
+
+def one_step_changes(table: pd.DataFrame) -> np.ndarray:
+    """The changes from each column of ``table`` to the next (rows: lines of the grid, columns:
+    one key's levels in order), flattened: only those between two cells the run measured, as a
+    step to or from a cell it did not is no step of a trend. Empty when there is none (one
+    level, or no line with two measured levels): a share of it would be no measurement."""
+    steps = np.diff(table.to_numpy(dtype=float), axis=1).ravel()
+    return steps[np.isfinite(steps)]
 
 
 def claims_headline(tables: Mapping) -> str:

@@ -25,7 +25,7 @@ from jointbench.papers.base import (
     PublishedTable,
     Table,
 )
-from jointbench.papers.common import claims_headline, claims_output
+from jointbench.papers.common import claims_headline, claims_output, one_step_changes
 from jointbench.resultfiles.formatting import number
 from jointbench.simulate.cmc import marker_positions
 
@@ -104,12 +104,9 @@ def _a1(collected, means):
         by_rom = part.pivot_table(
             index=["marker_set", "noise_mm"], columns="rom_deg", values="mean_error_mm"
         )
-        steps = np.concatenate(
-            [
-                (np.diff(by_noise.to_numpy(), axis=1) > 0).ravel(),
-                (np.diff(by_rom.to_numpy(), axis=1) < 0).ravel(),
-            ]
-        )
+        steps = np.concatenate([one_step_changes(by_noise) > 0, one_step_changes(by_rom) < 0])
+        if not steps.size:
+            raise ValueError(f"A1 needs two noise levels or two RoMs measured for {method}")
         shares[method] = float(np.mean(steps))
     weakest = min(shares, key=shares.get)
     text = ", ".join(f"{m} {shares[m]:.0%}" for m in METHODS if m in shares)
@@ -143,7 +140,10 @@ def _a2(collected, means, levels):
 def _a3(collected, means):
     cell = means[(means["marker_set"] == "M") & (means["rom_deg"] == means["rom_deg"].min())]
     lowest = cell.groupby(A3_LEVELS.axis)["mean_error_mm"].min()
-    values = [float(lowest.get(level, np.nan)) for level in A3_LEVELS.levels]
+    missing = [level for level in A3_LEVELS.levels if not np.isfinite(lowest.get(level, np.nan))]
+    if missing:
+        raise ValueError(f"A3: no mean error at the M set's smallest RoM at noise {missing} mm")
+    values = [float(lowest[level]) for level in A3_LEVELS.levels]
     rows = draw.bc_converged(collected)
     rows = rows[(rows["marker_set"] == "M") & (rows["rom_deg"] == rows["rom_deg"].min())]
     ls = rows.loc[rows["method"] == "LS", "error_mm"]
@@ -152,12 +152,13 @@ def _a3(collected, means):
         f"{value:.1f} mm ({level} mm)"
         for value, level in zip(values, A3_LEVELS.levels, strict=True)
     )
-    return Measured(
-        values,
-        f"lowest mean {lowest_text}; LS's largest "
-        f"error in a BC-converged trial {ls.max():.1f} mm; NM at 1.0 mm: mean "
-        f"{nm.mean():.1f} mm, median {nm.median():.1f} mm",
-    )
+    # The notes on LS and NM are left out where this run has none of their trials.
+    notes = [f"lowest mean {lowest_text}"]
+    if not ls.empty:
+        notes.append(f"LS's largest error in a BC-converged trial {ls.max():.1f} mm")
+    if not nm.empty:
+        notes.append(f"NM at 1.0 mm: mean {nm.mean():.1f} mm, median {nm.median():.1f} mm")
+    return Measured(values, "; ".join(notes))
 
 
 def _a4(collected, means):
@@ -332,7 +333,9 @@ def _a9(collected, means):
         & (means["noise_mm"] == 1.0)
         & (means["method"] == "LS")
     ]
-    value = float(cell["mean_error_mm"].iloc[0]) if len(cell) else np.nan
+    if cell.empty or not np.isfinite(cell["mean_error_mm"].iloc[0]):
+        raise ValueError("A9: no LS mean at the H set, 15° and 1.0 mm in this run")
+    value = float(cell["mean_error_mm"].iloc[0])
     return Measured(value, f"{value:.1f} mm")
 
 

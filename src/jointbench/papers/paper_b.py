@@ -15,7 +15,7 @@ import pandas as pd
 from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
-from jointbench.papers.common import claims_headline, claims_output
+from jointbench.papers.common import claims_headline, claims_output, one_step_changes
 from jointbench.resultfiles.formatting import number
 
 __all__ = ["PAPER", "measure"]
@@ -42,13 +42,12 @@ def _b1(means):
     wide = means.pivot_table(
         index=["protocol", "method", "fe_rom_deg"], columns="aa_ratio", values="mean"
     )
-    if wide.shape[1] < 2:
-        raise ValueError(f"B1 needs two AA/FE ratios or more; this run has {list(wide.columns)}")
-    steps = np.diff(wide.to_numpy(), axis=1)
-    # A step between a cell this run measured and one it did not is no step of the trend.
-    steps = steps[np.isfinite(steps)]
+    steps = one_step_changes(wide)
     if not steps.size:
-        raise ValueError("B1: no line of the grid has two measured AA/FE ratios")
+        raise ValueError(
+            f"B1 needs two measured AA/FE ratios on a line of the grid; this run has ratios "
+            f"{list(wide.columns)}"
+        )
     share = float(np.mean(steps > 0))
     return Measured(share, f"error grows in {share:.0%} of one-step ratio increases")
 
@@ -79,8 +78,10 @@ def _b3(means):
     combined = means[means["method"] == "combined"]
     upto_03 = combined[combined["aa_ratio"] <= 0.3]
     at_05 = combined[(combined["aa_ratio"] == 0.5) & combined["fe_rom_deg"].isin([30, 60])]
-    if at_05.empty:
-        raise ValueError("no combined cell at ratio 0.5, FE 30° or 60°")
+    if upto_03.empty or at_05.empty:
+        raise ValueError(
+            "B3 needs combined cells at a ratio up to 0.3 and at ratio 0.5 with FE 30° or 60°"
+        )
     wrong = int((upto_03["mean"] >= 5).sum() + (at_05["mean"] >= 10).sum())
     text = (
         f"ratio ≤ 0.3: max {upto_03['mean'].max():.1f}°; "
@@ -93,6 +94,10 @@ def _b4(means):
     low = means[means["aa_ratio"] <= 0.3].pivot_table(
         index=["protocol", "fe_rom_deg", "aa_ratio"], columns="method", values="mean"
     )
+    # A cell one of the two costs was not run in compares nothing.
+    low = low[["radial", "combined"]].dropna()
+    if low.empty:
+        raise ValueError("B4 needs radial and combined cells at a ratio up to 0.3")
     holds = low["radial"] > low["combined"]
     return Measured(
         int((~holds).sum()), f"radial > combined in {int(holds.sum())} of {len(holds)} cells"
@@ -103,7 +108,9 @@ def _b5(means):
     wide = means.pivot_table(
         index=["method", "fe_rom_deg", "aa_ratio"], columns="protocol", values="mean"
     )
-    gap = (wide["knee"] - wide["mcp"]).abs()
+    gap = (wide["knee"] - wide["mcp"]).abs().dropna()
+    if gap.empty:
+        raise ValueError("B5 needs a (cost, FE RoM, ratio) cell run at both the knee and the MCP")
     method, fe, ratio = gap.idxmax()
     return Measured(
         float(gap.max()),

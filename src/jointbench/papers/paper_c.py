@@ -60,10 +60,15 @@ FALL_FROM, FALL_TO = 75, 1200
 
 
 def _c1(ours, rows, collected):
-    series = ours.set_index("n_frames")["median_sqrt_trace_cov_mm"].sort_index()
+    series = ours.set_index("n_frames")["median_sqrt_trace_cov_mm"].sort_index().dropna()
+    if not {FALL_FROM, FALL_TO} <= set(series.index):
+        raise ValueError(
+            f"C1 needs sqrt(tr Wc) at Nt = {FALL_FROM} and {FALL_TO}; this run has "
+            f"{list(series.index)}"
+        )
     values = series.to_numpy()
     steps = np.diff(values) < 0
-    fall = float(series.get(FALL_FROM, np.nan) / series.get(FALL_TO, np.nan))
+    fall = float(series[FALL_FROM] / series[FALL_TO])
     text = (
         f"{values[0]:.3g} mm at Nt={series.index[0]} to {values[-1]:.3g} mm; falls at "
         f"{int(steps.sum())} of {len(steps)} steps; {fall:.1f}× from Nt = {FALL_FROM} to "
@@ -204,13 +209,16 @@ def published_table1(published) -> pd.DataFrame:
 def _table1_values(ours: pd.DataFrame) -> dict[str, Measured]:
     out = {}
     for row in ours.itertuples():
-        out[f"{_ROW_PREFIX}sqrt_trace_cov_mm-{row.n_frames}"] = Measured(
-            float(row.median_sqrt_trace_cov_mm), f"{row.median_sqrt_trace_cov_mm:.3g}"
-        )
-        # Paper C's v used the 1200-frame estimate as reference, so ours is set beside it.
-        out[f"{_ROW_PREFIX}validation_index-{row.n_frames}"] = Measured(
-            float(row.mean_v_paper_reference), f"{row.mean_v_paper_reference:.3g}"
-        )
+        # Paper C's v used the 1200-frame estimate as reference, so ours is set beside it; it
+        # has none at the run's longest Nt (the reference itself), nor a cell without trials.
+        for column, value in (
+            ("sqrt_trace_cov_mm", row.median_sqrt_trace_cov_mm),
+            ("validation_index", row.mean_v_paper_reference),
+        ):
+            if np.isfinite(value):
+                out[f"{_ROW_PREFIX}{column}-{row.n_frames}"] = Measured(
+                    float(value), f"{value:.3g}"
+                )
     return out
 
 

@@ -298,7 +298,11 @@ def _s2(means):
 def _paired_share(means, level: str, better, worse, what: str):
     wide = means.unstack(level)
     wide = wide[wide.index.get_level_values("sta_mm") > 0]
-    wins = wide[better] < wide[worse]
+    # A cell run at only one of the two levels compares nothing.
+    pairs = wide[[better, worse]].dropna()
+    if pairs.empty:
+        raise ValueError(f"no cell with STA > 0 at both {better} and {worse} in this run")
+    wins = pairs[better] < pairs[worse]
     return Measured(
         float(wins.mean()),
         f"{what} in {int(wins.sum())} of {len(wins)} cells (method × other factors, STA > 0)",
