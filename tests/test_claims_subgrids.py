@@ -13,12 +13,14 @@ import math
 import re
 import warnings
 
+import numpy as np
 import pandas as pd
 import pytest
 from test_claims import A_METHODS, C_FRAMES, paper_a_world, paper_b_world, paper_c_world
 
 from jointbench.comparison.published import load_published
-from jointbench.papers import Inputs, get_paper
+from jointbench.papers import Inputs, Measured, get_paper
+from jointbench.papers.common import measured_claims
 from jointbench.papers.paper_sta import MEASURED
 
 PAPERS = {"A": "paper_a", "B": "paper_b", "C": "paper_c", "S": "paper_sta"}
@@ -180,3 +182,26 @@ def test_the_full_grid_measures_every_claim_it_holds_data_for(documents, worlds,
     measured = _measured_cleanly(PAPERS[letter], documents[letter], worlds[letter], "full")
     claims = [c["id"] for c in documents[letter]["claims"]]
     assert [c for c in claims if c in measured] == FULL[letter]
+
+
+def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
+    """The one loop every paper runs its claims through: a claim whose data are absent (it
+    raises, or its value is not finite) is not measured; numpy arithmetic on nothing is a
+    mistake of the check, raised with the claim's id, never a number."""
+
+    def nan_share(_):
+        return Measured(float("nan"), "nan")
+
+    def empty_mean(_):
+        return Measured(float(np.mean(np.array([]))), "mean of nothing")
+
+    def absent(_):
+        raise KeyError("radial")
+
+    claims = {"X1": lambda n: Measured(n, f"{n}"), "X2": nan_share, "X3": absent}
+    measured = measured_claims(claims, 2.0)
+    assert list(measured) == ["X1"] and measured["X1"].value == 2.0
+    nested = {"X4": lambda _: Measured({"share": [1.0, float("inf")]}, "inf")}
+    assert measured_claims(nested, 0) == {}
+    with pytest.raises(RuntimeError, match=r"claim X5: Mean of empty slice"):
+        measured_claims({"X5": empty_mean}, 0)

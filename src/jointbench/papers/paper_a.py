@@ -25,7 +25,12 @@ from jointbench.papers.base import (
     PublishedTable,
     Table,
 )
-from jointbench.papers.common import claims_headline, claims_output, one_step_changes
+from jointbench.papers.common import (
+    claims_headline,
+    claims_output,
+    measured_claims,
+    one_step_changes,
+)
 from jointbench.resultfiles.formatting import number
 from jointbench.simulate.cmc import marker_positions
 
@@ -497,11 +502,7 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
     # A2 counts at the levels of the paper's design its published counts belong to.
     a2_levels = A2_LEVELS.levels_in(inputs.published["design"]["grid"])
     claims = {**_CLAIMS, "A2": functools.partial(_a2, levels=a2_levels)}
-    for key, claim in claims.items():
-        try:
-            out[key] = claim(collected, means)
-        except (KeyError, IndexError, ValueError):
-            continue
+    out.update(measured_claims(claims, collected, means))
     return out
 
 

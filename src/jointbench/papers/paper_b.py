@@ -15,7 +15,12 @@ import pandas as pd
 from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
-from jointbench.papers.common import claims_headline, claims_output, one_step_changes
+from jointbench.papers.common import (
+    claims_headline,
+    claims_output,
+    measured_claims,
+    one_step_changes,
+)
 from jointbench.resultfiles.formatting import number
 
 __all__ = ["PAPER", "measure"]
@@ -176,11 +181,7 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
     """Every Table 1 cell and claim of paper B, measured from the collected hinge results."""
     means = _means(inputs.collected)
     out = _cells(means, inputs.published)
-    for key, claim in _CLAIMS.items():
-        try:
-            out[key] = claim(means)
-        except (KeyError, IndexError, ValueError):
-            continue
+    out.update(measured_claims(_CLAIMS, means))
     return out
 
 

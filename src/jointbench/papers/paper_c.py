@@ -22,7 +22,7 @@ from jointbench.papers.base import (
     PublishedTable,
     Table,
 )
-from jointbench.papers.common import claims_headline, claims_output
+from jointbench.papers.common import claims_headline, claims_output, measured_claims
 from jointbench.resultfiles.formatting import number
 from jointbench.running.scoring import covariance_from_entries
 from jointbench.simulate.hip import POSE_FIT_COLUMNS
@@ -229,11 +229,7 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
     ours = draw.per_frames(inputs.collected)
     rows = inputs.collected[inputs.collected["method"] == draw.METHOD]
     out = _table1_values(ours)
-    for key, claim in _CLAIMS.items():
-        try:
-            out[key] = claim(ours, rows, inputs.collected)
-        except (KeyError, IndexError, ValueError):
-            continue
+    out.update(measured_claims(_CLAIMS, ours, rows, inputs.collected))
     return out
 
 

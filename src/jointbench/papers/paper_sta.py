@@ -23,7 +23,7 @@ from jointbench.estimators.batching import failed_trial, mistakes_named
 from jointbench.figures.common import method_style, pyplot
 from jointbench.figures.extended import extended_table, mean_ranks
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
-from jointbench.papers.common import claims_output
+from jointbench.papers.common import claims_output, measured_claims
 from jointbench.running.scoring import CHI2_3DOF_95, score_columns
 from jointbench.simulate import Trials
 from jointbench.uncertainty import bootstrap
@@ -351,13 +351,7 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
     """Every finding of ``paper_sta.yaml`` that this run's grid can measure, over the
     :data:`MEASURED` methods."""
     means = _means(inputs.collected[inputs.collected["method"].isin(MEASURED)])
-    out = {}
-    for key, claim in _CLAIMS.items():
-        try:
-            out[key] = claim(means)
-        except (KeyError, IndexError, ValueError, StopIteration):
-            continue
-    return out
+    return measured_claims(_CLAIMS, means)
 
 
 PAPER = Paper(
