@@ -205,3 +205,18 @@ def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
     assert measured_claims(nested, 0) == {}
     with pytest.raises(RuntimeError, match=r"claim X5: Mean of empty slice"):
         measured_claims({"X5": empty_mean}, 0)
+
+
+@pytest.mark.parametrize("frames", [(8, 75), (16, 150), (75, 600)])
+def test_paper_c_reads_nothing_against_another_reference_than_1200_frames(documents, frames):
+    """C2 is the accuracy at Nt = 1200, and v (C3, Table 1's row) is against each trial's
+    1200-frame estimate: a run whose longest sequence is shorter measures neither."""
+    world = paper_c_world(trials=20)
+    collected = world[world["n_frames"].isin(frames)]
+    measured = _measured_cleanly("paper_c", documents["C"], collected, f"n_frames={frames}")
+    assert not {"C2", "C3"} & set(measured)
+    assert not [key for key in measured if "validation_index" in key]
+    assert f"C-T1-sqrt_trace_cov_mm-{frames[0]}" in measured
+    with_reference = world[world["n_frames"].isin((*frames, 1200))]
+    measured = _measured_cleanly("paper_c", documents["C"], with_reference, "with 1200")
+    assert {"C2", "C3", f"C-T1-validation_index-{frames[0]}"} <= set(measured)

@@ -57,6 +57,16 @@ FRAME0 = "gauss-markov-frame0"
 # growing angular range the paper names. A fall within the geometric midpoint of the two,
 # sqrt(15.2 / 4) = 1.949, is closer to the paper's shape than to the count law.
 FALL_FROM, FALL_TO = 75, 1200
+#: The paper's longest sequence (20 s): C2's accuracy is read there, and its v (Table 1, C3) is
+#: against each trial's estimate from it; a run without it measures neither.
+REFERENCE_NT = 1200
+
+
+def _require_reference(n_frames: pd.Series, what: str) -> None:
+    """``ValueError`` naming ``what`` unless the run's longest Nt is :data:`REFERENCE_NT`."""
+    if n_frames.empty or n_frames.max() != REFERENCE_NT:
+        longest = "none" if n_frames.empty else int(n_frames.max())
+        raise ValueError(f"{what} needs Nt = {REFERENCE_NT}; this run's longest is {longest}")
 
 
 def _c1(ours, rows, collected):
@@ -85,6 +95,7 @@ def _longest(method_rows: pd.DataFrame) -> pd.Series:
 def _c2(ours, rows, collected):
     # Paper C's 0.20 mm is sqrt(tr Wc) conditional on the frame-0 poses: the uncertainty of
     # the centre in the body frame, i.e. relative to the markers that place it.
+    _require_reference(ours["n_frames"], "C2")
     longest = _longest(ours)
     value = float(longest["rms_error_proximal_mm"])
     text = (
@@ -119,6 +130,7 @@ def v_against_longest(rows: pd.DataFrame) -> pd.Series:
 
 
 def _c3(ours, rows, collected):
+    _require_reference(rows["n_frames"], "C3")
     shorter = rows[rows["n_frames"] < rows["n_frames"].max()]
     if shorter.empty:
         raise ValueError("no Nt below the longest in this run")
@@ -207,16 +219,17 @@ def published_table1(published) -> pd.DataFrame:
 
 
 def _table1_values(ours: pd.DataFrame) -> dict[str, Measured]:
+    # Paper C's v used the 1200-frame estimate as reference, so ours is set beside it only
+    # against the same reference; it has none at the reference itself, nor a cell without trials.
+    columns = {"sqrt_trace_cov_mm": "median_sqrt_trace_cov_mm"}
+    if not ours.empty and ours["n_frames"].max() == REFERENCE_NT:
+        columns["validation_index"] = "mean_v_paper_reference"
     out = {}
-    for row in ours.itertuples():
-        # Paper C's v used the 1200-frame estimate as reference, so ours is set beside it; it
-        # has none at the run's longest Nt (the reference itself), nor a cell without trials.
-        for column, value in (
-            ("sqrt_trace_cov_mm", row.median_sqrt_trace_cov_mm),
-            ("validation_index", row.mean_v_paper_reference),
-        ):
+    for row in ours.to_dict("records"):
+        for cell, column in columns.items():
+            value = row[column]
             if np.isfinite(value):
-                out[f"{_ROW_PREFIX}{column}-{row.n_frames}"] = Measured(
+                out[f"{_ROW_PREFIX}{cell}-{row['n_frames']}"] = Measured(
                     float(value), f"{value:.3g}"
                 )
     return out
