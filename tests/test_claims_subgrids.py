@@ -220,3 +220,15 @@ def test_paper_c_reads_nothing_against_another_reference_than_1200_frames(docume
     with_reference = world[world["n_frames"].isin((*frames, 1200))]
     measured = _measured_cleanly("paper_c", documents["C"], with_reference, "with 1200")
     assert {"C2", "C3", f"C-T1-validation_index-{frames[0]}"} <= set(measured)
+
+
+@pytest.mark.parametrize(
+    ("ratios", "claim"), [((0.1,), "B4"), ((0.3, 0.5), "B4"), ((0.1, 0.5), "B3")]
+)
+def test_b3_and_b4_need_both_lowest_ratios(documents, ratios, claim):
+    """B4 speaks of the two lowest ratios, 0.1 and 0.3, and B3 of every ratio up to 0.3: a run
+    without one of them has not tested the sentence."""
+    world = paper_b_world(documents)
+    collected = world[world["aa_ratio"].isin(ratios)]
+    measured = _measured_cleanly("paper_b", documents["B"], collected, f"aa_ratio={ratios}")
+    assert claim not in measured
