@@ -209,10 +209,10 @@ EDITS = (
         reruns=SIMULATIONS | EVERY_ESTIMATE,
     ),
     Edit(
-        "a claim's measure (paper B B2)",
+        "a claim's measure (paper B B5)",
         f"{PKG}/papers/paper_b.py",
-        "max {low['mean'].max():.1f}°; other ratios",
-        "max {low['mean'].max():.2f}°; other ratios",
+        "difference {gap.max():.2f}°",
+        "difference {gap.max():.3f}°",
         reruns=_jobs("render_hinge", "check_published", "report_captions"),
         spares=DATA_JOBS | _jobs("collect"),
     ),
@@ -743,7 +743,7 @@ def test_an_edit_that_keeps_size_and_time_reruns_on_the_edited_code(
     made = run.snakemake(target, "--forcerun", "render_hinge")
     assert made.returncode == 0, made.stderr[-4000:]
     module = run.workdir / PKG / "papers" / "paper_b.py"
-    old, new = "low['mean'].max():.1f}", "low['mean'].max():.2f}"
+    old, new = "gap.max():.2f}°", "gap.max():.3f}°"
     stat = module.stat()
     module.write_text(module.read_text().replace(old, new, 1))
     os.utime(module, ns=(stat.st_atime_ns, stat.st_mtime_ns))
@@ -752,4 +752,4 @@ def test_an_edit_that_keeps_size_and_time_reruns_on_the_edited_code(
     made = run.snakemake(target)
     assert made.returncode == 0, made.stderr[-4000:]
     claims = (run.workdir / target).read_text()
-    assert re.search(r"ratio 0\.1: max \d+\.\d\d°", claims), "the old code ran"
+    assert re.search(r"knee–MCP difference \d+\.\d\d\d°", claims), "the old code ran"
