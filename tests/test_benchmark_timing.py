@@ -10,6 +10,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 
+import check_stages
 import estimators as bench
 
 
@@ -131,3 +132,15 @@ def test_batched_variants_rotate_their_order(monkeypatch):
     bench.time_batched("center", "LS", data, n_trials=6, repeats=4)
     rounds = [calls[start : start + 2] for start in range(2, len(calls), 2)]
     assert rounds == [["estimator", "checked"], ["checked", "estimator"]] * 2
+
+
+def test_the_check_stages_table_times_every_stage_of_each_method(capsys):
+    # The stages are the checks' own functions: a renamed or moved one fails here, not in a
+    # benchmark run that is rarely made.
+    assert check_stages.main(["--methods", "LS", "NM", "--calls", "2"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ")]
+    assert rows[0].split(" | ")[1:-1] == [*check_stages.STAGES, "checked / estimator"]
+    for method, row in zip(["LS", "NM"], rows[1:], strict=True):
+        cells = row.strip("| ").split(" | ")
+        assert cells[0] == method
+        assert all(float(cell.rstrip("×")) > 0.0 for cell in cells[1:])

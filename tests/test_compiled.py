@@ -81,7 +81,10 @@ def test_input_check_kernels(sample):
     for function in (validation._first_failures, validation._first_failures.__wrapped__):
         failures = np.full(len(batch), -1, dtype=np.int8)
         checks = validation._SAMPLES | validation._MOVES | validation._LINES
-        first = function(batch, checks, 1e-9, failures)
+        # The probe for non-finite samples multiplies them by zero: NumPy's scalars warn of
+        # inf * 0 where the compiled code, with the same answer, does not.
+        with np.errstate(invalid="ignore"):
+            first = function(batch, checks, 1e-9, failures)
         assert first == failures[np.flatnonzero(failures)[0]] if failures.any() else first == 0
         runs.append(failures)
     np.testing.assert_array_equal(*runs)

@@ -197,8 +197,11 @@ _PAGE_STYLE = (
 
 def _caption_html(rst: str) -> str:
     from docutils.core import publish_parts
+    from docutils.writers import get_writer_class
 
-    return publish_parts(rst, writer_name="html")["body"]
+    # A writer object, which every docutils Snakemake admits takes: its name as ``writer_name``
+    # is deprecated from 0.22 on, and as ``writer`` is refused before it.
+    return publish_parts(rst, writer=get_writer_class("html")())["body"]
 
 
 def _body(table_html: str) -> str:
