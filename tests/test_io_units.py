@@ -5,6 +5,8 @@ a knee's, are read and fitted in every reader."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from rigs import two_segments
@@ -12,6 +14,7 @@ from test_io_recordings import KNEE, write_c3d
 from test_user_recordings import write_long_csv
 
 import jointbench
+from jointbench.cli import main
 from jointbench.estimators.validation import MAX_JOINED_SPAN_MM, MAX_SPAN_MM
 from jointbench.io import Recording, prepare, read
 from jointbench.io.units import UNIT_TO_MM, to_mm, unit_hint
@@ -68,41 +71,41 @@ UNDER_A_MARKER = "less than a marker's own size (1 mm)"
 @pytest.mark.parametrize(
     ("suffixes", "scale", "units", "span", "bound", "hint"),
     [
-        # The thigh reads 3.2 m across: no segment's markers span that; in mm, it is a thigh.
+        # The shank reads 3.4 m across: no segment's markers span that; in mm, it is a shank.
         (
             ("c3d", "trc"),
             1.0,
             "cm",
-            "3.17e+03",
+            "3.41e+03",
             ONE_SEGMENT,
-            "millimetres read as centimetres (a cluster 317 mm across)",
+            "millimetres read as centimetres (a cluster 341 mm across)",
         ),
-        # 31.7 read in metres is a thigh's 317 mm in cm, or a thumb's 31.7 mm in mm: both named.
+        # 34.1 read in metres is a shank's 341 mm in cm, or a thumb's 34.1 mm in mm: both named.
         (
             ("c3d", "trc"),
             0.1,
             "m",
-            "3.17e+04",
+            "3.41e+04",
             ONE_SEGMENT,
-            "millimetres read as metres (a cluster 31.7 mm across) or centimetres read as "
-            "metres (a cluster 317 mm across)",
+            "millimetres read as metres (a cluster 34.1 mm across) or centimetres read as "
+            "metres (a cluster 341 mm across)",
         ),
         (
             ("c3d", "trc"),
             1.0,
             "m",
-            "3.17e+05",
+            "3.41e+05",
             ONE_SEGMENT,
-            "millimetres read as metres (a cluster 317 mm across)",
+            "millimetres read as metres (a cluster 341 mm across)",
         ),
         (
             ("c3d", "trc", "csv"),
             0.001,
             "mm",
-            "0.317",
+            "0.341",
             UNDER_A_MARKER,
-            "centimetres read as millimetres (a cluster 3.17 mm across) or metres read as "
-            "millimetres (a cluster 317 mm across)",
+            "centimetres read as millimetres (a cluster 3.41 mm across) or metres read as "
+            "millimetres (a cluster 341 mm across)",
         ),
     ],
     ids=["mm-under-cm", "cm-under-m", "mm-under-m", "m-under-mm"],
@@ -112,17 +115,18 @@ def test_numbers_in_another_unit_are_refused_naming_the_unit_they_look_like(
 ):
     """The knee's thigh and shank written as ``scale`` times their millimetres under ``units``,
     by every reader that states that unit: refused naming the file, the unit it states, the
-    thigh's markers and span, and the units in which its numbers are a body's."""
+    shank's markers and span (the moving markers, which tell the unit before the reference),
+    and the units in which its numbers are a body's."""
     labels, markers = knee_legs
     for suffix in suffixes:
         path = write(tmp_path / f"knee.{suffix}", labels, markers * scale, units)
         with pytest.raises(ValueError) as error:
             fit_knee(read(path))
         assert str(error.value) == (
-            f"{path}: markers RTHI1, RTHI2, RTHI3, RGT lie {span} mm apart (the farthest two, "
-            f"median over the frames), {bound}. The coordinates are not in the unit the file "
-            f"states ({units!r}, read as mm): its numbers look like {hint}; correct the file's "
-            "unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
+            f"{path}: markers RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie {span} mm apart (the "
+            f"farthest two, median over the frames), {bound}. The coordinates are not in the "
+            f"unit the file states ({units!r}, read as mm): its numbers look like {hint}; "
+            "correct the file's unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
         )
 
 
@@ -298,12 +302,13 @@ SEGMENTS = {
     "forearm": "RFARM1,RFARM2,RFARM3,RUS,RRS",
 }
 #: The pairs a joint joins, reference first, and the first markers whose span is refused under
-#: 'cm': the reference's, the moving segment's where the reference (the upper arm, 95 mm)
-#: passes for one, and both together where the moving markers are two (the wrist's, 71 mm).
+#: 'cm': the moving segment's, which tell the unit first, the reference's where the moving
+#: segment (the upper arm, 95 mm) passes for one, and both together where the moving markers
+#: are two (the wrist's, 71 mm) and the reference (the upper arm) passes.
 JOINED = [
-    ("pelvis", "thigh", "LPSIS, RPSIS, LASIS, RASIS lie 2.59e+03"),
-    ("thigh", "shank", "RTHI1, RTHI2, RTHI3, RGT lie 3.17e+03"),
-    ("shank", "foot", "RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie 3.41e+03"),
+    ("pelvis", "thigh", "RTHI1, RTHI2, RTHI3, RGT lie 3.17e+03"),
+    ("thigh", "shank", "RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie 3.41e+03"),
+    ("shank", "foot", "RCAL, RMFH5, RMFH1, RTT2 lie 2.33e+03"),
     ("thorax", "arm", "C7, T10, SUP, STR, LA, RA lie 3.36e+03"),
     ("arm", "forearm", "RFARM1, RFARM2, RFARM3, RUS, RRS lie 1.89e+03"),
     ("arm", "RUS,RRS", "RAMR1, RARM2, RARM3, RUS, RRS lie 3.83e+03"),
@@ -359,16 +364,29 @@ def test_a_whole_body_in_millimetres_is_refused_as_no_one_segment_not_as_a_unit(
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "MAX_SPAN_MM bounds every cluster as a human body segment's, the reference's too: four "
-        "markers on a treadmill's frame 2 m by 0.8 m in millimetres (2.15 m apart), fitted "
-        "while the bound was 10 m, are refused as no segment's; telling a reference that "
-        "stays still in the lab from a segment's cluster, and bounding it as such, is a "
-        "change of the unit check's design"
-    ),
+#: A treadmill's frame, 2 m by 0.8 m, in the knee trial's lab [mm]: its four corners.
+TREADMILL = np.array(
+    [[-500.0, -300.0, 0.0], [1500.0, -300.0, 0.0], [-500.0, 500.0, 0.0], [1500.0, 500.0, 0.0]]
 )
+TM = "TM1,TM2,TM3,TM4"
+
+
+def with_treadmill(knee, corners=TREADMILL, *, noise_mm=0.3, scale=1.0, units="mm", moves=0.0):
+    """The ``knee`` recording with the ``corners`` ``(4, 3)`` [mm] as markers TM1 to TM4, seen
+    with ``noise_mm`` of noise and displaced by ``moves`` (``(n_frames, 1, 3)`` [mm], or 0),
+    every marker written as ``scale`` times its millimetres under ``units``."""
+    rng = np.random.default_rng(0)
+    still = corners + moves + rng.normal(scale=noise_mm, size=(len(knee.markers), 4, 3))
+    return Recording(
+        (*knee.labels, *TM.split(",")),
+        np.concatenate([knee.markers, still], axis=1) * scale,
+        knee.rate_hz,
+        "treadmill.c3d",
+        knee.first_frame,
+        units,
+    )
+
+
 def test_a_treadmill_fixed_reference_in_millimetres_is_fitted():
     knee = read(KNEE).frames("100:400")
     corners = np.array([[-500.0, -300.0, 0.0], [1500.0, -300.0, 0.0], [-500.0, 500.0, 0.0]])
@@ -384,6 +402,158 @@ def test_a_treadmill_fixed_reference_in_millimetres_is_fitted():
     )
     fitted = jointbench.fit(recording, "center", SHANK, "TM1,TM2,TM3,TM4", artefacts="exclude")
     assert np.isfinite(fitted.estimate()).all()
+
+
+@pytest.mark.parametrize(("units", "code"), [("mm", 0), ("cm", 2)])
+def test_jointbench_fit_takes_a_treadmill_reference_from_a_file(tmp_path, capsys, units, code):
+    """The command line passes the reference as the recordings API does: in millimetres the
+    treadmill is fitted; under 'cm' the shank tells the unit."""
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    path = write_c3d(tmp_path / "treadmill.c3d", recording.labels, recording.markers, units=units)
+    argv = ["fit", "center", str(path), "--moving", SHANK, "--reference", TM, "--method", "NM"]
+    assert main([*argv, "--artefacts", "exclude", "--format", "csv"]) == code
+    _, err = capsys.readouterr()
+    if code:
+        assert f"{path}: markers RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie 3.41e+03 mm" in err
+
+
+def test_an_axis_about_a_still_reference_is_fitted_and_a_joint_centre_is_not():
+    """The treadmill is the frame of a centre or an axis; a joint centre's reference is the
+    proximal body segment of the joint, bounded as one, and refused as a ValueError."""
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    fitted = jointbench.fit(recording, "axis", SHANK, TM, method="planar", artefacts="exclude")
+    assert np.isfinite(fitted.estimate()).all()
+    with pytest.raises(ValueError, match=rf"{re.escape(ONE_SEGMENT)}.*: they are not the markers "):
+        jointbench.fit(recording, "joint_center", SHANK, TM, artefacts="exclude")
+
+
+def test_a_still_reference_with_gaps_is_fitted_and_its_gaps_counted():
+    """Gaps, as NaN or as (0, 0, 0), do not make markers move: frames where fewer than three
+    of the treadmill's markers are seen are gaps of the fit."""
+    knee = read(KNEE).frames("100:400")
+    whole = jointbench.fit(with_treadmill(knee), "center", SHANK, TM, artefacts="exclude")
+    recording = with_treadmill(knee)
+    markers = recording.markers.copy()
+    tm1, tm2, tm3 = recording.index("TM1,TM2,TM3")
+    markers[10:21, tm1] = np.nan
+    markers[15:31, tm2] = 0.0
+    markers[200:260, tm3] = np.nan
+    gappy = Recording(recording.labels, markers, knee.rate_hz, "treadmill.c3d", knee.first_frame)
+    fitted = jointbench.fit(gappy, "center", SHANK, TM, artefacts="exclude")
+    assert np.isfinite(fitted.estimate()).all()
+    assert fitted.n_gap_frames == whole.n_gap_frames + 6  # frames 15 to 20: TM1 and TM2 unseen
+
+
+def test_a_still_reference_across_the_lab_from_the_subject_is_fitted():
+    """A wand frame 300 mm across on the floor 4 m from the treadmill's: with the shank it spans
+    more than two joined segments can, and within one capture volume."""
+    knee = read(KNEE).frames("100:400")
+    wand = TREADMILL * [0.15, 0.375, 0.0] + [4500.0, 0.0, 0.0]
+    recording = with_treadmill(knee, wand)
+    joined = recording.select(f"{SHANK},{TM}")
+    assert np.ptp(joined.reshape(-1, 3), axis=0).max() > MAX_JOINED_SPAN_MM
+    fitted = jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    assert np.isfinite(fitted.estimate()).all()
+
+
+@pytest.mark.parametrize(
+    ("scale", "units", "span", "hint"),
+    [
+        (0.001, "mm", "0.341", "or metres read as millimetres (a cluster 341 mm across)"),
+        (10.0, "cm", "3.41e+03", "millimetres read as centimetres (a cluster 341 mm across)"),
+        (1000.0, "m", "3.41e+05", "millimetres read as metres (a cluster 341 mm across)"),
+    ],
+    ids=["m-under-mm", "mm-under-cm", "mm-under-m"],
+)
+def test_a_still_reference_in_another_unit_is_caught_from_the_moving_markers(
+    scale, units, span, hint
+):
+    """The treadmill's size in another unit is a capture volume's (2 mm, 21 m) or no longer
+    still (its noise read 1000 times): the shank, which moves, tells the unit, and is named."""
+    recording = with_treadmill(read(KNEE).frames("100:400"), scale=scale, units=units)
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie {span} mm apart"
+    ), message
+    assert f"{hint}; correct the file's unit" in message
+
+
+def test_a_still_reference_is_bounded_by_a_capture_volume():
+    """A lab-defined "world" cluster, exact in every frame, in millimetres under 'm' with one
+    moving marker, whose size tells no unit: 2 km is no capture volume's; 2 m or 21 m is, and
+    both are named."""
+    recording = with_treadmill(read(KNEE).frames("100:400"), noise_mm=0.0, scale=1000.0, units="m")
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", "RATT", TM, artefacts="exclude")
+    assert str(error.value) == (
+        "treadmill.c3d: markers TM1, TM2, TM3, TM4 lie 2.15e+06 mm apart (the farthest two, "
+        "median over the frames), more than the markers of one optical capture volume span "
+        "(100000 mm). The coordinates are not in the unit the file states ('m', read as mm): "
+        "its numbers look like millimetres read as metres (a cluster 2.15e+03 mm across) or "
+        "centimetres read as metres (a cluster 2.15e+04 mm across); "
+        "correct the file's unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
+    )
+
+
+def pelvis_sway(knee):
+    """The pelvis's (the ASISs' midpoint's) displacement from its median ``(n_frames, 1, 3)``
+    [mm]: markers on a harness or a frame the subject carries move so."""
+    pelvis = knee.select("LASIS,RASIS").mean(axis=1, keepdims=True)
+    return pelvis - np.median(pelvis, axis=0)
+
+
+def test_a_wide_reference_that_moves_with_the_subject_is_bounded_as_a_segment():
+    knee = read(KNEE).frames("100:400")
+    recording = with_treadmill(knee, moves=pelvis_sway(knee))
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    message = str(error.value)
+    assert message.startswith("treadmill.c3d: markers TM1, TM2, TM3, TM4 lie 2.15e+03 mm apart")
+    assert re.search(
+        r"more than the markers of any one human body segment span \(1500 mm\), and they move "
+        r"in the lab: TM\d lies \d\.\d+ mm from its median position in frame \d+ \(\S+ s\), "
+        r"more than the 5 mm a reference fixed in the lab stays within",
+        message,
+    ), message
+    assert message.endswith(
+        "they are not the markers of one human body segment, or are in a "
+        "unit no file states; choose one segment's markers (moving, reference; --moving, "
+        "--reference)"
+    )
+
+
+def test_lab_markers_with_a_body_marker_among_them_are_bounded_as_a_segment():
+    """The head's vertex named among three of the treadmill's markers: it moves, and is named."""
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    with pytest.raises(ValueError, match=r"and they move in the lab: HV lies \d+(\.\d+)? mm"):
+        jointbench.fit(recording, "center", SHANK, "TM1,TM2,TM3,HV", artefacts="exclude")
+
+
+def test_a_reference_of_two_still_markers_is_no_segment():
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    with pytest.raises(ValueError, match=r"a segment needs at least three markers, got \['TM1'"):
+        jointbench.fit(recording, "center", SHANK, "TM1,TM2", artefacts="exclude")
+
+
+def test_a_still_reference_bumped_once_is_refused_naming_the_bump_and_fitted_without_it():
+    """Knocked 20 mm along the belt in ten frames and back: refused as no still reference,
+    naming a marker and a frame of the bump; over the frames before it, fitted."""
+    knee = read(KNEE).frames("100:400")
+    bump = np.zeros((len(knee.markers), 1, 3))
+    bump[150:160] = [20.0, 0.0, 0.0]
+    recording = with_treadmill(knee, moves=bump)
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    found = re.search(
+        r"TM\d lies (\d+(?:\.\d+)?) mm from its median position in frame (\d+)", str(error.value)
+    )
+    assert found, str(error.value)
+    assert 18.0 < float(found[1]) < 22.0
+    assert 250 <= int(found[2]) < 260
+    before = jointbench.fit(recording, "center", SHANK, TM, frames="100:250", artefacts="exclude")
+    assert np.isfinite(before.estimate()).all()
 
 
 @pytest.mark.parametrize(

@@ -70,7 +70,7 @@ def test_metres_under_a_millimetre_unit_are_refused(tmp_path, suffix):
         write_long_csv(path, LABELS, markers)
     with pytest.raises(
         ValueError,
-        match=r"metres\.\w+: markers P1, P2, P3 lie 0\.194 mm .*metres read as millimetres",
+        match=r"metres\.\w+: markers D1, D2, D3 lie 0\.185 mm .*metres read as millimetres",
     ):
         fit_rig(read(path))
 
@@ -78,7 +78,7 @@ def test_metres_under_a_millimetre_unit_are_refused(tmp_path, suffix):
 def test_millimetres_under_a_metre_unit_are_refused(tmp_path):
     path = write_c3d(tmp_path / "km.c3d", LABELS, rig_markers(), units="m")
     with pytest.raises(
-        ValueError, match=r"km\.c3d: markers P1, P2, P3 lie 1\.94e\+05 mm .*POINT:UNITS"
+        ValueError, match=r"km\.c3d: markers D1, D2, D3 lie 1\.85e\+05 mm .*POINT:UNITS"
     ):
         fit_rig(read(path))
 

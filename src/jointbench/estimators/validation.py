@@ -19,6 +19,8 @@ from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
     "ARRAY_NAMES",
+    "CAPTURE_VOLUME",
+    "MAX_CAPTURE_SPAN_MM",
     "MAX_JOINED_SPAN_MM",
     "MAX_SPAN_MM",
     "MIN_SPAN_MM",
@@ -88,9 +90,18 @@ MAX_SPAN_MM = 1_500.0
 #: apart (a thigh's and a shank's plates, their markers more than 300 mm apart: 3 m read in
 #: centimetres).
 MAX_JOINED_SPAN_MM = 2 * MAX_SPAN_MM
-#: What :data:`MAX_SPAN_MM` bounds, and :data:`MAX_JOINED_SPAN_MM`, in messages.
+#: A reference fixed in the lab (a treadmill's frame, a force plate, a wand frame, a lab-fixed
+#: "world" cluster) is no body segment, and may span metres: its markers, and the moving ones
+#: with them, lie closer together than this [mm], what one optical capture volume spans. The
+#: largest, built for sprints and team sports, are some tens of metres long; 100 m bounds them
+#: with room and still refuses millimetres read as metres (a treadmill 2 m across reads 2 km).
+#: Millimetres read as centimetres (20 m) it lets through: the moving markers tell that unit.
+MAX_CAPTURE_SPAN_MM = 100_000.0
+#: What :data:`MAX_SPAN_MM` bounds, :data:`MAX_JOINED_SPAN_MM` and
+#: :data:`MAX_CAPTURE_SPAN_MM`, in messages.
 ONE_SEGMENT = "the markers of any one human body segment span"
 TWO_SEGMENTS = "the markers of two human body segments joined at a joint span"
+CAPTURE_VOLUME = "the markers of one optical capture volume span"
 
 # Frames the check of a cluster's size reads at most, evenly spaced: a median of this many
 # tells a unit 10 or 1000 times off at any gap or glitch a check before it lets through.
@@ -377,7 +388,8 @@ def span_bound(span_mm: float, largest_mm: float, largest: str) -> str | None:
     """Which bound a cluster of typical size ``span_mm`` [mm] (:func:`typical_span`) breaks, in
     words: smaller than a marker (:data:`MIN_SPAN_MM`), or larger than ``largest_mm``, what
     ``largest`` can span (:data:`MAX_SPAN_MM` for :data:`ONE_SEGMENT`,
-    :data:`MAX_JOINED_SPAN_MM` for :data:`TWO_SEGMENTS`); ``None`` where it breaks neither, or
+    :data:`MAX_JOINED_SPAN_MM` for :data:`TWO_SEGMENTS`, :data:`MAX_CAPTURE_SPAN_MM` for
+    :data:`CAPTURE_VOLUME`); ``None`` where it breaks neither, or
     is unknown, or 0 (one marker given several times, which is no unit's doing)."""
     if not (math.isfinite(span_mm) and span_mm > 0.0) or MIN_SPAN_MM <= span_mm <= largest_mm:
         return None

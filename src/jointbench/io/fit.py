@@ -58,6 +58,7 @@ __all__ = [
     "ARTEFACT_POLICIES",
     "BLOCK_SPANS",
     "DEFAULT_METHODS",
+    "LAB_FIXED_KINDS",
     "Prepared",
     "RecordingFit",
     "fit",
@@ -74,6 +75,12 @@ ARTEFACT_POLICIES = ("refuse", "exclude")
 BLOCK_SPANS = 3
 
 DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
+
+#: The kinds whose reference is only the frame of the answer, which may be fixed in the lab (a
+#: treadmill, a force plate) and is then bounded by a capture volume rather than a segment
+#: (:func:`~jointbench.io.segments.check_reference_span`); a ``joint_center``'s is the
+#: proximal body segment of the joint.
+LAB_FIXED_KINDS = ("center", "axis")
 
 
 @dataclass(frozen=True, eq=False)
@@ -466,10 +473,15 @@ def prepare(
     if frames is not None:
         recording = recording.frames(_checked_frames(frames))
     moving_index = recording.index(moving)
+    moving_labels = tuple(recording.labels[i] for i in moving_index)
+    # The moving markers tell the file's unit first: a reference may be fixed in the lab, where
+    # its size, and how still it stays, are no segment's.
+    check_span(recording.markers[:, moving_index], moving_labels, recording)
+    may_be_still = kind in LAB_FIXED_KINDS
     segments: list[Segment] = []
     ref = None
     if reference is not None:
-        ref = Segment.fit(recording, reference, rules)
+        ref = Segment.fit(recording, reference, rules, may_be_still=may_be_still)
         check_pose_determined(ref, recording.source)
         check_axes_determined(ref, recording.source)
         ref = ref.determined()
@@ -486,11 +498,8 @@ def prepare(
     if kind == "joint_center" or len(moving_index) >= 3:
         mov = Segment.fit(recording, moving, rules)
         segments.append(mov)
-    moving_labels = tuple(recording.labels[i] for i in moving_index)
-    if mov is None:
-        check_span(recording.markers[:, moving_index], moving_labels, recording)
     if ref is not None:
-        check_joined_span(ref.labels, moving_labels, recording)
+        check_joined_span(ref.labels, moving_labels, recording, may_be_still=may_be_still)
     found, swaps = _artefacts(recording, segments, [] if mov else moving_index, rules)
     if found and artefacts == "refuse":
         keep = ""

@@ -19,12 +19,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from jointbench.estimators.support import MAX_POSE_SD_RAD
 from jointbench.estimators.validation import (
+    CAPTURE_VOLUME,
+    MAX_CAPTURE_SPAN_MM,
     MAX_JOINED_SPAN_MM,
     MAX_SPAN_MM,
     ONE_SEGMENT,
@@ -55,6 +57,7 @@ if TYPE_CHECKING:
     from jointbench.io.recording import Recording
 
 __all__ = [
+    "LAB_FIXED_MM",
     "Artefact",
     "ArtefactRules",
     "Numbering",
@@ -64,11 +67,13 @@ __all__ = [
     "check_axes_determined",
     "check_joined_span",
     "check_pose_determined",
+    "check_reference_span",
     "check_span",
     "find_jumps",
     "find_rigidity_breaks",
     "find_swaps",
     "fit_poses",
+    "lab_motion",
     "mean_shape",
     "screen",
     "summarise",
@@ -93,6 +98,65 @@ def _check_seen(recording: Recording, index: list[int]) -> None:
     )
 
 
+#: A reference stays still in the lab when each of its markers stays within this distance [mm]
+#: of its own median position over the frames it is seen in (:func:`lab_motion`). An optical
+#: system reconstructs a marker fixed in the lab with noise well under a millimetre, so 5 mm
+#: leaves a fixed marker room over a trial of any length, while a body segment's markers
+#: seldom stay so still while a joint moves (a standing subject's pelvis sways further). A cluster
+#: measured in another unit moves 10 or 1000 times as far: a segment read 10 times its size
+#: is taken as still only if it moved under 0.5 mm.
+LAB_FIXED_MM = 5.0
+
+
+class _Bound(NamedTuple):
+    """What markers may span: ``largest_mm`` [mm], what spans that in words (``largest``, as
+    :func:`~jointbench.estimators.validation.span_bound` takes it), whose markers they are not
+    when no unit makes them fit (``whose``), and, for a reference bounded as a segment because
+    it moves in the lab, where it moves (``moves``; ``""`` otherwise)."""
+
+    largest_mm: float
+    largest: str
+    whose: str
+    moves: str = ""
+
+
+#: The bounds of a segment's markers (moving, or a reference that moves), and of two joined.
+_ONE_SEGMENT = _Bound(MAX_SPAN_MM, ONE_SEGMENT, "one human body segment")
+_TWO_SEGMENTS = _Bound(
+    MAX_JOINED_SPAN_MM, TWO_SEGMENTS, "two human body segments joined at a joint"
+)
+#: ... and of a reference that stays still in the lab, alone or with the moving markers.
+_CAPTURE_VOLUME = _Bound(MAX_CAPTURE_SPAN_MM, CAPTURE_VOLUME, "one optical capture volume")
+
+
+def lab_motion(markers: np.ndarray) -> tuple[float, int, int]:
+    """How far the markers ``(n_frames, n, 3)`` [mm], each seen in some frame, move in the lab:
+    the largest distance [mm] of a marker from its own median position over the frames it is
+    seen in (NaN where missing), with that marker's column and that frame's row. The median,
+    not the mean, so that a bump in a few frames counts at its full size wherever it falls."""
+    distances = np.linalg.norm(markers - np.nanmedian(markers, axis=0), axis=-1)
+    row, column = np.unravel_index(np.argmax(np.nan_to_num(distances, nan=-1.0)), distances.shape)
+    return float(distances[row, column]), int(column), int(row)
+
+
+def _reference_bounds(recording: Recording, labels: tuple[str, ...]) -> tuple[_Bound, _Bound]:
+    """The bounds of the markers ``labels``, each seen in some frame, of a reference that may
+    be fixed in the lab (the frame of a one-segment fit, not the proximal segment of a joint),
+    alone and with the moving markers: a capture volume's where they stay still in the lab
+    (:data:`LAB_FIXED_MM`); otherwise a body segment's and two joined segments', saying where
+    they move."""
+    moved, column, row = lab_motion(recording.markers[:, recording.index(labels)])
+    if moved <= LAB_FIXED_MM:
+        return _CAPTURE_VOLUME, _CAPTURE_VOLUME
+    moves = (
+        f", and they move in the lab: {labels[column]} lies {moved:.3g} mm from its median "
+        f"position in {recording.when(row)}, more than the {LAB_FIXED_MM:g} mm a reference "
+        "fixed in the lab stays within (one bumped in some frames is fitted over frames that "
+        "leave them out, --frames)"
+    )
+    return _ONE_SEGMENT._replace(moves=moves), _TWO_SEGMENTS
+
+
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
     """``ValueError`` naming the file, its unit and the markers when the cluster
     ``(n_frames, n, 3)`` [mm] of one segment is smaller than a marker or larger than the
@@ -101,59 +165,65 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
     :data:`~jointbench.estimators.validation.MAX_SPAN_MM`): coordinates in another unit than
     the file states, whose every answer would be off by a factor of 10 to 1000 and pass the
     checks, which are built for millimetres, or fail them for the wrong reason."""
-    _check_unit(markers, labels, recording, MAX_SPAN_MM, ONE_SEGMENT, "one human body segment")
+    _check_unit(markers, labels, recording, _ONE_SEGMENT)
+
+
+def check_reference_span(labels: tuple[str, ...], recording: Recording) -> None:
+    """:func:`check_span` for the markers ``labels``, each seen in some frame, of a reference
+    that may be fixed in the lab (the frame of a ``center`` or ``axis`` fit): while they stay
+    still in it (:data:`LAB_FIXED_MM`) they are bounded by a capture volume
+    (:data:`~jointbench.estimators.validation.MAX_CAPTURE_SPAN_MM`), not a segment, and the
+    file's unit is told by the moving markers."""
+    bound, _ = _reference_bounds(recording, labels)
+    _check_unit(recording.markers[:, recording.index(labels)], labels, recording, bound)
 
 
 def check_joined_span(
-    reference: tuple[str, ...], moving: tuple[str, ...], recording: Recording
+    reference: tuple[str, ...],
+    moving: tuple[str, ...],
+    recording: Recording,
+    *,
+    may_be_still: bool = False,
 ) -> None:
     """``ValueError`` as :func:`check_span`'s when the markers of the ``reference`` segment
     and the ``moving`` ones, which turn about a joint between them, lie further apart than
     two joined human body segments' can
     (:data:`~jointbench.estimators.validation.MAX_JOINED_SPAN_MM`): clusters each small
-    enough to pass for a segment in the wrong unit, but too far from each other."""
+    enough to pass for a segment in the wrong unit, but too far from each other. Where the
+    reference may be fixed in the lab and is (:func:`check_reference_span`), both lie within
+    one capture volume."""
+    bound = _reference_bounds(recording, reference)[1] if may_be_still else _TWO_SEGMENTS
     labels = reference + moving
-    markers = recording.markers[:, recording.index(labels)]
-    _check_unit(
-        markers,
-        labels,
-        recording,
-        MAX_JOINED_SPAN_MM,
-        TWO_SEGMENTS,
-        "two human body segments joined at a joint",
-    )
+    _check_unit(recording.markers[:, recording.index(labels)], labels, recording, bound)
 
 
 def _check_unit(
-    markers: np.ndarray,
-    labels: tuple[str, ...],
-    recording: Recording,
-    largest_mm: float,
-    largest: str,
-    whose: str,
+    markers: np.ndarray, labels: tuple[str, ...], recording: Recording, bound: _Bound
 ) -> None:
     """``ValueError`` naming the file, the unit it states and, in the units that fit
     (:func:`~jointbench.io.units.unit_hint`), the size its numbers make, when the typical span
     of ``markers`` ``(n_frames, n, 3)`` [mm] (:func:`cluster_span`) of ``labels`` is under a
-    marker's size or over ``largest_mm``, what ``largest`` can span. Over it in every unit,
-    they are not the markers of ``whose`` (a whole body's, say) or in no unit a file states,
-    and the message says so rather than blame the unit the file states."""
+    marker's size or over ``bound``. Over it in every unit, they are not the markers of
+    ``bound.whose`` (a whole body's, say) or in no unit a file states, and the message says so
+    rather than blame the unit the file states."""
     span = cluster_span(markers)
-    bound = span_bound(span, largest_mm, largest)
-    if bound is None:
+    broken = span_bound(span, bound.largest_mm, bound.largest)
+    if broken is None:
         return
-    hint = unit_hint(span, recording.units, largest_mm)
-    if span > largest_mm and fitting_units(span, recording.units, largest_mm) == {}:
+    if span > bound.largest_mm:
+        broken += bound.moves
+    hint = unit_hint(span, recording.units, bound.largest_mm)
+    if span > bound.largest_mm and fitting_units(span, recording.units, bound.largest_mm) == {}:
         raise ValueError(
             f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the "
-            f"farthest two, median over the frames), {bound}, in the unit the file states "
+            f"farthest two, median over the frames), {broken}, in the unit the file states "
             f"({recording.units!r}, read as mm), and {hint}: they are not the markers of "
-            f"{whose}, or are in a unit no file states; choose one segment's markers (moving, "
-            "reference; --moving, --reference)"
+            f"{bound.whose}, or are in a unit no file states; choose one segment's markers "
+            "(moving, reference; --moving, --reference)"
         )
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the farthest "
-        f"two, median over the frames), {bound}. The coordinates are not in the unit the file "
+        f"two, median over the frames), {broken}. The coordinates are not in the unit the file "
         f"states ({recording.units!r}, read as mm){': ' + hint if hint else ''}; correct the "
         "file's unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
     )
@@ -250,9 +320,13 @@ class Segment:
         recording: Recording,
         labels: str | list[str] | tuple[str, ...],
         rules: ArtefactRules | None = None,
+        *,
+        may_be_still: bool = False,
     ) -> Segment:
         """Fit the segment (:func:`screen`); frames whose samples break rigidity do not shape
-        the mean."""
+        the mean. Its markers' span is bounded as a body segment's (:func:`check_span`), or,
+        where it is a reference that may be fixed in the lab (``may_be_still``), by a capture
+        volume while they stay still (:func:`check_reference_span`)."""
         rules = rules or ArtefactRules()
         index = recording.index(labels)
         labels = tuple(recording.labels[i] for i in index)
@@ -261,7 +335,10 @@ class Segment:
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
         _check_seen(recording, index)
-        check_span(recording.markers[:, index], labels, recording)
+        if may_be_still:
+            check_reference_span(labels, recording)
+        else:
+            check_span(recording.markers[:, index], labels, recording)
         screening = screen(recording.markers[:, index], labels, recording.source, rules)
         shape, rotation, translation = screening.shape, screening.rotation, screening.translation
         # World x = R (A q + o) + t for technical coordinates q: pose (R A, R o + t).
