@@ -35,7 +35,7 @@ from test_claims import (
 
 from jointbench.comparison.published import load_published
 from jointbench.papers import Inputs, Measured, get_paper
-from jointbench.papers.common import measured_claims
+from jointbench.papers.common import NotMeasured, measured_claims
 from jointbench.papers.paper_sta import MEASURED
 
 PAPERS = {"A": "paper_a", "B": "paper_b", "C": "paper_c", "S": "paper_sta"}
@@ -229,8 +229,9 @@ def test_the_full_grid_measures_every_claim_it_holds_data_for(documents, worlds,
 
 def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
     """The one loop every paper runs its claims through: a claim whose data are absent (it
-    raises, or its value is not finite) is not measured; numpy arithmetic on nothing is a
-    mistake of the check, raised with the claim's id, never a number."""
+    raises NotMeasured, or its value is not finite) is not measured; anything else it raises,
+    and numpy arithmetic on nothing, is a mistake of the check, raised with the claim's id,
+    never a number nor "not measured"."""
 
     def nan_share(_):
         return Measured(float("nan"), "nan")
@@ -239,6 +240,9 @@ def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
         return Measured(float(np.mean(np.array([]))), "mean of nothing")
 
     def absent(_):
+        raise NotMeasured("this run has no method radial")
+
+    def misread(_):
         raise KeyError("radial")
 
     claims = {"X1": lambda n: Measured(n, f"{n}"), "X2": nan_share, "X3": absent}
@@ -248,6 +252,9 @@ def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
     assert measured_claims(nested, 0) == {}
     with pytest.raises(RuntimeError, match=r"claim X5: Mean of empty slice"):
         measured_claims({"X5": empty_mean}, 0)
+    with pytest.raises(RuntimeError, match=r"claim X6: KeyError: 'radial'") as raised:
+        measured_claims({"X6": misread}, 0)
+    assert isinstance(raised.value.__cause__, KeyError)
 
 
 @pytest.mark.parametrize("frames", [(8, 75), (16, 150), (75, 600)])
