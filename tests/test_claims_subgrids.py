@@ -4,14 +4,21 @@ A run's grid may hold one or two levels of a key, leave a method out or run one 
 Each claim then either measures what its sentence speaks of, or raises so that it reads "not
 measured in this run": never a NaN in its text, a verdict drawn from an empty selection, or a
 numpy/pandas RuntimeWarning.
+
+``tests/snapshots/subgrid_claims.json`` holds, for every sub-grid, the claims measured on it
+when it was written: a change to how claims select their data must measure the same ones.
+``python tests/test_claims_subgrids.py`` rewrites the file, for a deliberate change of what a
+claim needs only.
 """
 
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -28,15 +35,20 @@ from test_claims import (
 
 from jointbench.comparison.published import load_published
 from jointbench.papers import Inputs, Measured, get_paper
-from jointbench.papers.common import measured_claims
+from jointbench.papers.common import NotMeasured, measured_claims
 from jointbench.papers.paper_sta import MEASURED
 
 PAPERS = {"A": "paper_a", "B": "paper_b", "C": "paper_c", "S": "paper_sta"}
+PINNED = Path(__file__).parent / "snapshots" / "subgrid_claims.json"
+
+
+def _documents() -> dict:
+    return {letter: load_published(get_paper(PAPERS[letter]).published) for letter in PAPERS}
 
 
 @pytest.fixture(scope="module")
 def documents():
-    return {letter: load_published(get_paper(PAPERS[letter]).published) for letter in PAPERS}
+    return _documents()
 
 
 #: Each paper's synthetic grid: its keys' levels, and its methods.
@@ -150,8 +162,7 @@ def paper_sta_world(trials: int = 3) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-@pytest.fixture(scope="module")
-def worlds(documents):
+def _worlds(documents) -> dict:
     return {
         "A": _timed(paper_a_world(), A_SPEEDS),
         "B": paper_b_world(documents),
@@ -160,18 +171,42 @@ def worlds(documents):
     }
 
 
-@pytest.mark.parametrize(
-    ("letter", "what", "how"),
-    [case for letter in GRIDS for case in _subgrids(letter)],
-    ids=lambda part: str(part),
-)
+@pytest.fixture(scope="module")
+def worlds(documents):
+    return _worlds(documents)
+
+
+SUBGRIDS = [case for letter in GRIDS for case in _subgrids(letter)]
+
+
+def _case_name(letter: str, what: str, how) -> str:
+    return f"{letter} {what}={how}"
+
+
+def _claims_measured(documents, worlds, letter: str, what: str, how) -> list[str]:
+    """The ids of the claims measured on the sub-grid, in the published file's order."""
+    collected = _restricted(worlds[letter], what, how)
+    measured = _measured_cleanly(PAPERS[letter], documents[letter], collected, f"{what}={how}")
+    return [c["id"] for c in documents[letter]["claims"] if c["id"] in measured]
+
+
+@pytest.fixture(scope="module")
+def pinned():
+    return json.loads(PINNED.read_text())
+
+
+def test_the_pinned_claims_name_every_subgrid(pinned):
+    assert set(pinned) == {_case_name(*case) for case in SUBGRIDS}
+
+
+@pytest.mark.parametrize(("letter", "what", "how"), SUBGRIDS, ids=lambda part: str(part))
 def test_every_claim_on_every_subgrid_is_measured_or_not_in_this_run(
-    documents, worlds, letter, what, how
+    documents, worlds, pinned, letter, what, how
 ):
     """Every measurement on the sub-grid is finite, says no NaN and counts out of something;
-    the rest are left out (not measured in this run)."""
-    collected = _restricted(worlds[letter], what, how)
-    _measured_cleanly(PAPERS[letter], documents[letter], collected, f"{what}={how}")
+    the rest are left out (not measured in this run): the same claims as pinned."""
+    found = _claims_measured(documents, worlds, letter, what, how)
+    assert found == pinned[_case_name(letter, what, how)]
 
 
 #: The claims each full synthetic grid measures (A13 reads fitted radii,
@@ -194,8 +229,9 @@ def test_the_full_grid_measures_every_claim_it_holds_data_for(documents, worlds,
 
 def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
     """The one loop every paper runs its claims through: a claim whose data are absent (it
-    raises, or its value is not finite) is not measured; numpy arithmetic on nothing is a
-    mistake of the check, raised with the claim's id, never a number."""
+    raises NotMeasured, or its value is not finite) is not measured; anything else it raises,
+    and numpy arithmetic on nothing, is a mistake of the check, raised with the claim's id,
+    never a number nor "not measured"."""
 
     def nan_share(_):
         return Measured(float("nan"), "nan")
@@ -204,6 +240,9 @@ def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
         return Measured(float(np.mean(np.array([]))), "mean of nothing")
 
     def absent(_):
+        raise NotMeasured("this run has no method radial")
+
+    def misread(_):
         raise KeyError("radial")
 
     claims = {"X1": lambda n: Measured(n, f"{n}"), "X2": nan_share, "X3": absent}
@@ -213,6 +252,9 @@ def test_a_claim_without_its_data_is_left_out_and_a_warning_is_an_error():
     assert measured_claims(nested, 0) == {}
     with pytest.raises(RuntimeError, match=r"claim X5: Mean of empty slice"):
         measured_claims({"X5": empty_mean}, 0)
+    with pytest.raises(RuntimeError, match=r"claim X6: KeyError: 'radial'") as raised:
+        measured_claims({"X6": misread}, 0)
+    assert isinstance(raised.value.__cause__, KeyError)
 
 
 @pytest.mark.parametrize("frames", [(8, 75), (16, 150), (75, 600)])
@@ -240,3 +282,18 @@ def test_b3_and_b4_need_both_lowest_ratios(documents, ratios, claim):
     collected = world[world["aa_ratio"].isin(ratios)]
     measured = _measured_cleanly("paper_b", documents["B"], collected, f"aa_ratio={ratios}")
     assert claim not in measured
+
+
+def _write() -> None:
+    # A case to a line: the file stays small and a change shows case by case.
+    documents = _documents()
+    worlds = _worlds(documents)
+    lines = [
+        f"{json.dumps(_case_name(*case))}: {json.dumps(_claims_measured(documents, worlds, *case))}"
+        for case in SUBGRIDS
+    ]
+    PINNED.write_text("{\n" + ",\n".join(lines) + "\n}\n")
+
+
+if __name__ == "__main__":
+    _write()

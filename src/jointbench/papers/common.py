@@ -1,11 +1,12 @@
-"""Pieces every paper uses: its claims table as an output, and that table's headline."""
+"""Pieces every paper uses: its claims table as an output, that table's headline, and the loop
+its claims are measured through, with the selections by which a claim says what a run lacks."""
 
 from __future__ import annotations
 
 import math
 import numbers
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -13,7 +14,15 @@ import pandas as pd
 from jointbench.comparison.published import NOT_APPLICABLE, claims_rows, status_legend
 from jointbench.papers.base import Inputs, Measured, Output, Table
 
-__all__ = ["claims_headline", "claims_output", "measured_claims", "one_step_changes"]
+__all__ = [
+    "NotMeasured",
+    "at_levels",
+    "claims_headline",
+    "claims_output",
+    "measured_claims",
+    "one_step_changes",
+    "with_columns",
+]
 
 
 def one_step_changes(table: pd.DataFrame) -> np.ndarray:
@@ -25,9 +34,33 @@ def one_step_changes(table: pd.DataFrame) -> np.ndarray:
     return steps[np.isfinite(steps)]
 
 
-#: What a claim check raises when the run lacks the data its sentence speaks of (a method, a
-#: level of the grid, a recorded column): the claim is then not measured in this run.
-NOT_IN_THIS_RUN = (KeyError, IndexError, ValueError, StopIteration)
+class NotMeasured(Exception):
+    """What a claim check raises when the run lacks the data its sentence speaks of (a method,
+    a level of the grid, a recorded column), saying which: the claim is then not measured in
+    this run. Nothing else is: a ``KeyError``, ``IndexError``, ``ValueError`` or
+    ``StopIteration`` from elsewhere in a check is its mistake (:func:`measured_claims`)."""
+
+
+def with_columns(table: pd.DataFrame, names: Sequence, what: str) -> pd.DataFrame:
+    """``table``'s columns ``names``, in that order; :class:`NotMeasured` naming those this run
+    lacks, each a ``what`` (``"method"``, ``"protocol"``, ``"recorded column"``)."""
+    missing = [name for name in names if name not in table.columns]
+    if missing:
+        raise NotMeasured(f"this run has no {what} {', '.join(map(str, missing))}")
+    return table[list(names)]
+
+
+def at_levels(data: pd.DataFrame | pd.Series, **levels: object) -> pd.DataFrame | pd.Series:
+    """The rows of ``data`` (indexed by a MultiIndex) at ``levels`` (level name to value), those
+    levels dropped from the index; :class:`NotMeasured` naming them when no row of this run is
+    at all of them. A name that is no level of the index is a mistake: ``KeyError``."""
+    at = np.ones(len(data.index), dtype=bool)
+    for name, value in levels.items():
+        at &= np.asarray(data.index.get_level_values(name) == value)
+    if not at.any():
+        shown = ", ".join(f"{name} {value}" for name, value in levels.items())
+        raise NotMeasured(f"this run has no cell at {shown}")
+    return data.xs(tuple(levels.values()), level=list(levels))
 
 
 def _finite(value: object) -> bool:
@@ -45,20 +78,24 @@ def measured_claims(
 ) -> dict[str, Measured]:
     """Each claim of ``claims`` (id to check) measured from ``data``, the arguments every check
     takes, by id; those this run cannot measure left out (not measured in this run): a check
-    that raises one of :data:`NOT_IN_THIS_RUN`, or whose value is not finite (a mean or share
-    of cells the run lacks). A numpy or pandas ``RuntimeWarning`` (a mean of nothing, a
-    division by zero) is a check that did not guard its selection: ``RuntimeError`` naming the
-    claim, so the mistake is mended rather than a number printed from it."""
+    that raises :class:`NotMeasured`, or whose value is not finite (a mean or share of cells
+    the run lacks). Any other exception of a check is its mistake, and so is a numpy or pandas
+    ``RuntimeWarning`` (a mean of nothing, a division by zero: a selection it did not guard):
+    ``RuntimeError`` naming the claim, chained to it, so the mistake is mended rather than read
+    as a run without the claim's data or a number printed from it."""
     out = {}
     for key, claim in claims.items():
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", RuntimeWarning)
                 measured = claim(*data)
-        except NOT_IN_THIS_RUN:
+        except NotMeasured:
             continue
         except RuntimeWarning as warning:
             raise RuntimeError(f"claim {key}: {warning}") from warning
+        except Exception as error:
+            # Any exception: whatever a check raises but NotMeasured is a mistake in it.
+            raise RuntimeError(f"claim {key}: {type(error).__name__}: {error}") from error
         if _finite(measured.value):
             out[key] = measured
     return out

@@ -26,10 +26,13 @@ from jointbench.papers.base import (
     Table,
 )
 from jointbench.papers.common import (
+    NotMeasured,
+    at_levels,
     claims_headline,
     claims_output,
     measured_claims,
     one_step_changes,
+    with_columns,
 )
 from jointbench.resultfiles.formatting import number
 from jointbench.simulate.cmc import marker_positions
@@ -54,8 +57,11 @@ A3_LEVELS = PerLevel(
 A7_LEVELS = PerLevel("A7", "rom_deg", "IS's local minima at the M set", (5, 15))
 
 
-def _wide(means: pd.DataFrame) -> pd.DataFrame:
-    return means.pivot_table(index=CONDITION, columns="method", values="mean_error_mm")
+def _wide(means: pd.DataFrame, methods=METHODS) -> pd.DataFrame:
+    """Mean error per condition (rows) of each of ``methods`` (columns); :class:`NotMeasured`
+    naming those this run lacks."""
+    wide = means.pivot_table(index=CONDITION, columns="method", values="mean_error_mm")
+    return with_columns(wide, methods, "method")
 
 
 def _trial_errors(collected: pd.DataFrame, methods=METHODS) -> dict[tuple, pd.DataFrame]:
@@ -111,8 +117,10 @@ def _a1(collected, means):
         )
         steps = np.concatenate([one_step_changes(by_noise) > 0, one_step_changes(by_rom) < 0])
         if not steps.size:
-            raise ValueError(f"A1 needs two noise levels or two RoMs measured for {method}")
+            raise NotMeasured(f"A1 needs two noise levels or two RoMs measured for {method}")
         shares[method] = float(np.mean(steps))
+    if not shares:
+        raise NotMeasured("A1 needs a method of paper A; this run has none")
     weakest = min(shares, key=shares.get)
     text = ", ".join(f"{m} {shares[m]:.0%}" for m in METHODS if m in shares)
     return Measured(
@@ -131,11 +139,11 @@ def _a2(collected, means, levels):
         & (collected["rom_deg"] == collected["rom_deg"].min())
     ]
     if bc.empty:
-        raise ValueError("BC is not in this run")
+        raise NotMeasured("BC is not in this run")
     converged = bc.groupby(A2_LEVELS.axis)["converged"].sum()
     missing = [level for level in levels if level not in converged.index]
     if missing:
-        raise ValueError(f"BC is not in this run at {A2_LEVELS.axis} {missing}")
+        raise NotMeasured(f"BC is not in this run at {A2_LEVELS.axis} {missing}")
     n_trials = collected["trial"].nunique()
     counts = [int(converged[level]) for level in levels]
     value = {"count": counts, "trials": [n_trials] * len(counts)}
@@ -147,7 +155,7 @@ def _a3(collected, means):
     lowest = cell.groupby(A3_LEVELS.axis)["mean_error_mm"].min()
     missing = [level for level in A3_LEVELS.levels if not np.isfinite(lowest.get(level, np.nan))]
     if missing:
-        raise ValueError(f"A3: no mean error at the M set's smallest RoM at noise {missing} mm")
+        raise NotMeasured(f"A3: no mean error at the M set's smallest RoM at noise {missing} mm")
     values = [float(lowest[level]) for level in A3_LEVELS.levels]
     rows = draw.bc_converged(collected)
     rows = rows[(rows["marker_set"] == "M") & (rows["rom_deg"] == rows["rom_deg"].min())]
@@ -167,7 +175,7 @@ def _a3(collected, means):
 
 
 def _a4(collected, means):
-    wide = _wide(means)
+    wide = _wide(means, SPHERE_FITS)
     trials = _trial_errors(collected, SPHERE_FITS)
     others = [m for m in SPHERE_FITS if m != "LS"]
     smallest = wide.index.get_level_values("rom_deg").min()
@@ -203,7 +211,9 @@ def _a4(collected, means):
     # i.e. there LS's excess shrinks beyond the noise at one noise step or more.
     at_exception = [c for c in exception if c in trials]
     if len(at_exception) < 2:
-        raise ValueError("the exception needs two noise levels or more at the M set's smallest RoM")
+        raise NotMeasured(
+            "A4's exception needs two noise levels or more at the M set's smallest RoM"
+        )
     excess_there = {
         c: _excess(trials[c], "LS", _best_other(trials[c], others)) for c in at_exception
     }
@@ -244,13 +254,13 @@ def _best_other(trials: pd.DataFrame, others) -> str:
 def _a5(collected, means):
     wide = _wide(means)
     others = wide[[m for m in METHODS if m != "MA"]].min(axis=1)
-    excess_h = float((wide["MA"] - others).xs("H", level="marker_set").max())
+    excess_h = float(at_levels(wide["MA"] - others, marker_set="H").max())
     # "Compared well to the four sphere-fitting solutions": MA's mean lies within their range.
-    m_set = wide.xs("M", level="marker_set")
+    m_set = at_levels(wide, marker_set="M")
     spheres = m_set[list(SPHERE_FITS)]
     inside = (m_set["MA"] >= spheres.min(axis=1)) & (m_set["MA"] <= spheres.max(axis=1))
     below_ls = m_set["MA"] < m_set["LS"]
-    ratio_m = float((wide["MA"] / others).xs("M", level="marker_set").median())
+    ratio_m = float(at_levels(wide["MA"] / others, marker_set="M").median())
     return Measured(
         {"h_excess_mm": excess_h, "m_share_within_sphere_fits": float(inside.mean())},
         f"H: up to {excess_h:.1f} mm worse than the best other; M: within the range of the four "
@@ -262,7 +272,7 @@ def _a5(collected, means):
 
 def _a6(collected, means):
     trials = _trial_errors(collected)
-    lowest = {c: str(t[list(METHODS)].mean().idxmin()) for c, t in trials.items()}
+    lowest = {c: str(with_columns(t, METHODS, "method").mean().idxmin()) for c, t in trials.items()}
     wins = [c for c, best in lowest.items() if best == "IS"]
     n = len(trials)
     share = len(wins) / n
@@ -284,7 +294,7 @@ def _a6(collected, means):
 
 def _a7(collected, means):
     if "local_minimum" not in collected.columns:
-        raise ValueError("local minima not recorded")
+        raise NotMeasured("local minima not recorded in this run")
     low, high = A7_LEVELS.levels
     # The paper counts at 5° among the BC-converged trials, at 15° among all trials.
     converged = draw.bc_converged(collected)
@@ -293,7 +303,7 @@ def _a7(collected, means):
     all_m = (collected["method"] == "IS") & (collected["marker_set"] == "M")
     at_high = collected[all_m & (collected[A7_LEVELS.axis] == high)]
     if at_low.empty or at_high.empty:
-        raise ValueError(f"IS at the M set is not in this run at both {low}° and {high}°")
+        raise NotMeasured(f"IS at the M set is not in this run at both {low}° and {high}°")
     counts = [int(at_low["local_minimum"].sum()), int(at_high["local_minimum"].sum())]
     sizes = [len(at_low), len(at_high)]
     return Measured(
@@ -317,7 +327,7 @@ def _a8(collected, means):
     complete = means.groupby(CONDITION)["n_trials"].min() == n_trials
     converged = gap.loc[complete[complete].index]
     if converged.empty:
-        raise ValueError("no condition in which BC converged in every trial")
+        raise NotMeasured("no condition in which BC converged in every trial")
     share, largest = float(np.mean(converged < 0.5)), float(converged.max())
     where = gap.idxmax()
     text = (
@@ -339,14 +349,14 @@ def _a9(collected, means):
         & (means["method"] == "LS")
     ]
     if cell.empty or not np.isfinite(cell["mean_error_mm"].iloc[0]):
-        raise ValueError("A9: no LS mean at the H set, 15° and 1.0 mm in this run")
+        raise NotMeasured("A9: no LS mean at the H set, 15° and 1.0 mm in this run")
     value = float(cell["mean_error_mm"].iloc[0])
     return Measured(value, f"{value:.1f} mm")
 
 
 def _a10(collected, means):
     wide = _wide(means)
-    by_cell = wide.xs("H", level="marker_set") / wide.xs("M", level="marker_set")
+    by_cell = at_levels(wide, marker_set="H") / at_levels(wide, marker_set="M")
     ratio = by_cell.median()
     better_h, worse_h = ("IS", "BC", "NM"), ("LS", "MA")
     wrong = sum(ratio[m] >= 1 for m in better_h) + sum(ratio[m] <= 1 for m in worse_h)
@@ -359,7 +369,7 @@ def _a10(collected, means):
 def example_ordering_share(collected: pd.DataFrame) -> tuple[int, int]:
     """``(k, n)``: of the ``n`` trials at Fig 3's condition in which BC converged and every
     paper method has an error, the ``k`` in which LS errs most and NM least, the ordering of
-    paper A's Fig 3 example."""
+    paper A's Fig 3 example; :class:`NotMeasured` when the run has no such trial."""
     rows = draw.bc_converged(collected)
     for key, value in FIG3_CONDITION.items():
         rows = rows[rows[key] == value]
@@ -368,7 +378,7 @@ def example_ordering_share(collected: pd.DataFrame) -> tuple[int, int]:
     )
     errors = errors.dropna()
     if errors.empty or not {"LS", "NM"} <= set(errors.columns):
-        raise ValueError(f"no trial at paper A's Fig 3 condition {FIG3_CONDITION}")
+        raise NotMeasured(f"no trial at paper A's Fig 3 condition {FIG3_CONDITION}")
     example = (errors.idxmax(axis=1) == "LS") & (errors.idxmin(axis=1) == "NM")
     return int(example.sum()), len(example)
 
@@ -392,12 +402,12 @@ def _a11(collected, means):
 def radius_errors(collected: pd.DataFrame, methods=("LS", "NM")) -> pd.DataFrame:
     """Mean signed radius error [mm] (``radius_error_mm``: fitted less true, negative for an
     underestimate) per condition (rows, :data:`CONDITION`) and method (columns), over the
-    trials that fitted radii."""
+    trials that fitted radii; :class:`NotMeasured` when the run fitted none of one of
+    ``methods``."""
+    with_columns(collected, ["radius_error_mm"], "recorded column")
     rows = collected[collected["method"].isin(methods)]
     errors = rows.pivot_table(index=CONDITION, columns="method", values="radius_error_mm")
-    if errors.empty or not set(methods) <= set(errors.columns):
-        raise KeyError(f"no fitted radii of {', '.join(methods)} in this run")
-    return errors[list(methods)]
+    return with_columns(errors, methods, "method with fitted radii")
 
 
 def _a13(collected, means):
@@ -405,7 +415,7 @@ def _a13(collected, means):
     roms = errors.index.get_level_values("rom_deg")
     smallest, largest = roms.min(), roms.max()
     if smallest == largest:
-        raise ValueError("one RoM in this run: reduced RoM cannot be told from the others")
+        raise NotMeasured("one RoM in this run: reduced RoM cannot be told from the others")
     small, large = errors.xs(smallest, level="rom_deg"), errors.xs(largest, level="rom_deg")
     holds = (
         (small["LS"] < 0)
@@ -452,8 +462,15 @@ def _marker_distances(config) -> dict[str, Measured]:
     return out
 
 
+def _our_times(collected: pd.DataFrame, published: dict) -> pd.DataFrame:
+    """Table 2 of our times per trial by method (:func:`jointbench.figures.paper_a.table2`);
+    :class:`NotMeasured` when the run recorded no times."""
+    with_columns(collected, ["seconds"], "recorded column")
+    return draw.table2(collected, _published_seconds(published)).set_index("method")
+
+
 def _timings(collected: pd.DataFrame, published: dict) -> dict[str, Measured]:
-    ours = draw.table2(collected, _published_seconds(published)).set_index("method")
+    ours = _our_times(collected, published)
     return {
         # The paper's value is a mean, so ours is too; the words compare medians (robust).
         f"A-T2-{method}": Measured(
@@ -468,9 +485,9 @@ def _fastest(collected: pd.DataFrame, means: pd.DataFrame, published: dict) -> M
     """Claim A12: how many of the other methods are at least as fast as NM by median time per
     trial over the BC-converged trials (:func:`jointbench.figures.paper_a.table2`); ``means``
     unread, as every claim check is given them."""
-    ours = draw.table2(collected, _published_seconds(published)).set_index("method")
+    ours = _our_times(collected, published)
     if "NM" not in ours.index or len(ours) < 2:
-        raise KeyError("NM and at least one other method are needed to rank speed")
+        raise NotMeasured("NM and at least one other method are needed to rank speed")
     medians = ours["median_s"].sort_values(kind="stable")
     others = medians.drop("NM")
     as_fast = int((others <= medians["NM"]).sum())
@@ -497,8 +514,8 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
     out = _marker_distances(inputs.config)
     try:
         out.update(_timings(collected, inputs.published))
-    except KeyError:
-        pass  # no times recorded in this run
+    except NotMeasured:
+        pass  # no times recorded in this run: Table 2 is not measured
     # A2 counts at the levels of the paper's design its published counts belong to.
     a2_levels = A2_LEVELS.levels_in(inputs.published["design"]["grid"])
     claims = {

@@ -16,10 +16,12 @@ from jointbench.comparison.published import comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
 from jointbench.papers.common import (
+    NotMeasured,
     claims_headline,
     claims_output,
     measured_claims,
     one_step_changes,
+    with_columns,
 )
 from jointbench.resultfiles.formatting import number
 
@@ -49,7 +51,7 @@ def _b1(means):
     )
     steps = one_step_changes(wide)
     if not steps.size:
-        raise ValueError(
+        raise NotMeasured(
             f"B1 needs two measured AA/FE ratios on a line of the grid; this run has ratios "
             f"{list(wide.columns)}"
         )
@@ -64,12 +66,12 @@ B2_RATIO = LOW_RATIOS[0]
 
 
 def _at_low_ratios(cells: pd.DataFrame, claim: str) -> pd.DataFrame:
-    """The rows of ``cells`` (of :func:`_means`) at :data:`LOW_RATIOS`; ``ValueError`` naming
-    ``claim`` when the run lacks one of them, whose sentence it then has not tested."""
+    """The rows of ``cells`` (of :func:`_means`) at :data:`LOW_RATIOS`; :class:`NotMeasured`
+    naming ``claim`` when the run lacks one of them, whose sentence it then has not tested."""
     low = cells[np.isclose(cells["aa_ratio"].to_numpy()[:, None], LOW_RATIOS).any(axis=1)]
     missing = [r for r in LOW_RATIOS if not np.isclose(low["aa_ratio"], r).any()]
     if missing:
-        raise ValueError(f"{claim} speaks of the ratios {LOW_RATIOS}; this run lacks {missing}")
+        raise NotMeasured(f"{claim} speaks of the ratios {LOW_RATIOS}; this run lacks {missing}")
     return low
 
 
@@ -79,7 +81,7 @@ def _b2(means):
     low, rest = planar[at_ratio], planar[~at_ratio]
     # "Only at 0.1" speaks of 0.1 and of every other ratio: both must have been run.
     if low.empty or rest.empty:
-        raise ValueError(
+        raise NotMeasured(
             f"B2 needs planar cells at ratio {B2_RATIO:g} and at another ratio; this run has "
             f"ratios {sorted(planar['aa_ratio'].unique())}"
         )
@@ -96,7 +98,7 @@ def _b3(means):
     upto_03 = _at_low_ratios(combined, "B3")
     at_05 = combined[(combined["aa_ratio"] == 0.5) & combined["fe_rom_deg"].isin([30, 60])]
     if at_05.empty:
-        raise ValueError("B3 needs a combined cell at ratio 0.5 with FE 30° or 60°")
+        raise NotMeasured("B3 needs a combined cell at ratio 0.5 with FE 30° or 60°")
     wrong = int((upto_03["mean"] >= 5).sum() + (at_05["mean"] >= 10).sum())
     text = (
         f"ratio ≤ 0.3: max {upto_03['mean'].max():.1f}°; "
@@ -110,9 +112,9 @@ def _b4(means):
         index=["protocol", "fe_rom_deg", "aa_ratio"], columns="method", values="mean"
     )
     # A cell one of the two costs was not run in compares nothing.
-    low = low[["radial", "combined"]].dropna()
+    low = with_columns(low, ("radial", "combined"), "method").dropna()
     if low.empty:
-        raise ValueError("B4 needs radial and combined cells at a ratio up to 0.3")
+        raise NotMeasured("B4 needs radial and combined cells at a ratio up to 0.3")
     holds = low["radial"] > low["combined"]
     return Measured(
         int((~holds).sum()), f"radial > combined in {int(holds.sum())} of {len(holds)} cells"
@@ -123,9 +125,10 @@ def _b5(means):
     wide = means.pivot_table(
         index=["method", "fe_rom_deg", "aa_ratio"], columns="protocol", values="mean"
     )
+    wide = with_columns(wide, ("knee", "mcp"), "protocol")
     gap = (wide["knee"] - wide["mcp"]).abs().dropna()
     if gap.empty:
-        raise ValueError("B5 needs a (cost, FE RoM, ratio) cell run at both the knee and the MCP")
+        raise NotMeasured("B5 needs a (cost, FE RoM, ratio) cell run at both the knee and the MCP")
     method, fe, ratio = gap.idxmax()
     return Measured(
         float(gap.max()),
@@ -144,7 +147,7 @@ def _b6(means):
                 crossings.append((*key, r1, after))
                 jumps += after > 50
     if not crossings:
-        raise ValueError("no mean error crosses 20° in this run")
+        raise NotMeasured("no mean error crosses 20° in this run")
     share = jumps / len(crossings)
     short = [f"{p} {m} FE {fe}° ratio {r:g}: {a:.1f}°" for p, m, fe, r, a in crossings if a <= 50]
     return Measured(

@@ -22,7 +22,13 @@ from jointbench.papers.base import (
     PublishedTable,
     Table,
 )
-from jointbench.papers.common import claims_headline, claims_output, measured_claims
+from jointbench.papers.common import (
+    NotMeasured,
+    claims_headline,
+    claims_output,
+    measured_claims,
+    with_columns,
+)
 from jointbench.resultfiles.formatting import number
 from jointbench.running.scoring import covariance_from_entries
 from jointbench.simulate.hip import POSE_FIT_COLUMNS
@@ -63,16 +69,16 @@ REFERENCE_NT = 1200
 
 
 def _require_reference(n_frames: pd.Series, what: str) -> None:
-    """``ValueError`` naming ``what`` unless the run's longest Nt is :data:`REFERENCE_NT`."""
+    """:class:`NotMeasured` naming ``what`` unless the run's longest Nt is :data:`REFERENCE_NT`."""
     if n_frames.empty or n_frames.max() != REFERENCE_NT:
         longest = "none" if n_frames.empty else int(n_frames.max())
-        raise ValueError(f"{what} needs Nt = {REFERENCE_NT}; this run's longest is {longest}")
+        raise NotMeasured(f"{what} needs Nt = {REFERENCE_NT}; this run's longest is {longest}")
 
 
 def _c1(ours, rows, collected):
     series = ours.set_index("n_frames")["median_sqrt_trace_cov_mm"].sort_index().dropna()
     if not {FALL_FROM, FALL_TO} <= set(series.index):
-        raise ValueError(
+        raise NotMeasured(
             f"C1 needs sqrt(tr Wc) at Nt = {FALL_FROM} and {FALL_TO}; this run has "
             f"{list(series.index)}"
         )
@@ -133,7 +139,7 @@ def _c3(ours, rows, collected):
     _require_reference(rows["n_frames"], "C3")
     shorter = rows[rows["n_frames"] < rows["n_frames"].max()]
     if shorter.empty:
-        raise ValueError("no Nt below the longest in this run")
+        raise NotMeasured("C3 needs an Nt below the longest; this run has none")
     v = v_against_longest(rows).loc[shorter.index]
     # E[v²] = k² when the true covariance is k² times the predicted one (any error shape):
     # the RMS of v estimates k, each Nt weighted equally as the paper's eight rows are.
@@ -151,7 +157,7 @@ def _c4(ours, rows, collected):
     band = ours[ours["n_frames"] >= 75]
     values = band["mean_validation_index"]
     if values.empty:
-        raise ValueError("no Nt ≥ 75 in this run")
+        raise NotMeasured("C4 needs an Nt ≥ 75; this run has none")
     text = ", ".join(f"Nt={n}: {v:.2f}" for n, v in zip(band["n_frames"], values, strict=True))
     squares = (
         rows[rows["n_frames"] >= 75]
@@ -187,11 +193,10 @@ def converged_after(rows: pd.DataFrame) -> pd.DataFrame:
 
 
 def _c5(ours, rows, collected):
-    if not set(POSE_FIT_COLUMNS) <= set(rows.columns):
-        raise KeyError("no pose fits recorded in this run")
+    with_columns(rows, POSE_FIT_COLUMNS, "recorded column")
     counts = converged_after(rows.dropna(subset=list(POSE_FIT_COLUMNS)))
     if counts.empty:
-        raise ValueError("no trial with a pose fit in this run")
+        raise NotMeasured("no trial with a pose fit in this run")
     largest = int(counts.to_numpy().max())
     tally = counts.stack().astype(int).value_counts().sort_index()
     shown = ", ".join(f"{n}: {k}" for n, k in tally.items())

@@ -23,7 +23,13 @@ from jointbench.estimators.batching import failed_trial, mistakes_named
 from jointbench.figures.common import method_style, pyplot
 from jointbench.figures.extended import extended_table, mean_ranks
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
-from jointbench.papers.common import claims_output, measured_claims
+from jointbench.papers.common import (
+    NotMeasured,
+    at_levels,
+    claims_output,
+    measured_claims,
+    with_columns,
+)
 from jointbench.running.scoring import CHI2_3DOF_95, score_columns
 from jointbench.simulate import Trials
 from jointbench.uncertainty import bootstrap
@@ -280,15 +286,16 @@ def _means(collected: pd.DataFrame) -> pd.Series:
 
 def _s1(means):
     # Ehrig et al. (2006): most techniques within 3 mm at a range of 45°, under white noise.
-    cell = means.xs((45.0, 0.0), level=["rom_deg", "sta_mm"])
+    cell = at_levels(means, rom_deg=45.0, sta_mm=0.0)
     share = float(np.mean(cell <= 3.0))
     text = ", ".join(f"{m}/{mo}: {v:.2f} mm" for (m, mo), v in cell.items())
     return Measured(share, f"share of methods and motions within 3 mm: {share:.2f} ({text})")
 
 
 def _s2(means):
-    score = float(means[("SCoRE", "star_arc", 20.0, 0.0)])
-    stoddart = float(means[("gauss-markov", "star_arc", 20.0, 0.0)])
+    cell = {"motion": "star_arc", "rom_deg": 20.0, "sta_mm": 0.0}
+    score = float(at_levels(means, method="SCoRE", **cell).item())
+    stoddart = float(at_levels(means, method="gauss-markov", **cell).item())
     return Measured(
         {"SCoRE_mm": score, "SCoRE_minus_stoddart_mm": score - stoddart},
         f"SCoRE {score:.2f} mm, Gauss–Markov (Stoddart) {stoddart:.2f} mm, star-arc 20°, no STA",
@@ -299,9 +306,9 @@ def _paired_share(means, level: str, better, worse, what: str):
     wide = means.unstack(level)
     wide = wide[wide.index.get_level_values("sta_mm") > 0]
     # A cell run at only one of the two levels compares nothing.
-    pairs = wide[[better, worse]].dropna()
+    pairs = with_columns(wide, (better, worse), level).dropna()
     if pairs.empty:
-        raise ValueError(f"no cell with STA > 0 at both {better} and {worse} in this run")
+        raise NotMeasured(f"no cell with STA > 0 at both {better} and {worse} in this run")
     wins = pairs[better] < pairs[worse]
     return Measured(
         float(wins.mean()),
@@ -320,9 +327,11 @@ def _s4(means):
 
 
 def _s6(means):
-    levels = sorted(means.index.get_level_values("sta_mm").unique())
-    lowest = next(level for level in levels if level > 0)
-    ratio = means.xs(lowest, level="sta_mm") / means.xs(0.0, level="sta_mm")
+    above = sorted(level for level in means.index.get_level_values("sta_mm").unique() if level > 0)
+    if not above:
+        raise NotMeasured("S6 needs an STA amplitude above 0 mm; this run has none")
+    lowest = above[0]
+    ratio = at_levels(means, sta_mm=lowest) / at_levels(means, sta_mm=0.0)
     return Measured(
         float(ratio.min()),
         f"mean error at {lowest:g} mm STA / without STA: {ratio.min():.1f}–{ratio.max():.1f}×",
@@ -330,8 +339,10 @@ def _s6(means):
 
 
 def _s7(means):
-    cell = means.xs(("star_arc", 20.0), level=["motion", "rom_deg"])
-    top = cell.xs(cell.index.get_level_values("sta_mm").max(), level="sta_mm").sort_values()
+    cell = at_levels(means, motion="star_arc", rom_deg=20.0)
+    top = at_levels(cell, sta_mm=cell.index.get_level_values("sta_mm").max()).sort_values()
+    if "SCoRE" not in top.index:
+        raise NotMeasured("S7 ranks SCoRE; this run has no SCoRE at the star-arc, 20°")
     rank = int(list(top.index).index("SCoRE")) + 1
     text = ", ".join(f"{m} {v:.1f} mm" for m, v in top.items())
     return Measured(rank, f"SCoRE ranks {rank} of {len(top)}: {text}")
