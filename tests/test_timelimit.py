@@ -137,6 +137,22 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
     assert not alive(grandchild)
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_children_that_left_the_group_and_ignore_sigterm_share_one_grace(tmp_path):
+    """A program that leaves several daemons behind, each in a session of its own and each
+    ignoring SIGTERM: they are stopped together, one grace for all, not one grace each (8
+    daemons would hold the job 8 graces past its end, and a hundred, minutes)."""
+    written = tmp_path / "pids"
+    daemon = f"setsid bash -c 'trap \"\" TERM; echo $$ >> {written}; {FOREVER}' &"
+    # Half a second for the daemons to have left the group before the program ends.
+    status, seconds = timed(["bash", "-c", f"{daemon * 8} sleep 0.5"])
+    assert status == 0
+    daemons = pids(written)
+    assert len(daemons) == 8
+    assert not any(alive(pid) for pid in daemons)
+    assert seconds < 0.5 + GRACE_S + 1.0
+
+
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
@@ -175,6 +191,22 @@ def test_the_limited_shell_stopped_from_outside_stops_its_group(tmp_path):
     assert shell.wait(timeout=30) == 128 + signal.SIGTERM
     (program,) = pids(written)
     assert not alive(program)
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_the_limited_shell_stopped_from_outside_stops_a_child_that_left_the_group(tmp_path):
+    """Ctrl-C, Snakemake cancelling the job or the run killed: a daemon the program started
+    in a session of its own, adopted once the program is stopped, does not run on either."""
+    written = tmp_path / "pids"
+    shell = limited_shell(f"setsid {FOREVER} & echo $! > {written}; {FOREVER}", "60")
+    deadline = time.monotonic() + 20
+    while not (written.exists() and written.read_text().strip()):
+        assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+    shell.send_signal(signal.SIGTERM)
+    assert shell.wait(timeout=30) == 128 + signal.SIGTERM
+    (daemon,) = pids(written)
+    assert not alive(daemon)
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
