@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import os
+import pty
+import select
 import shutil
 import signal
 import subprocess
@@ -231,6 +233,49 @@ def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
     while alive(program):
         assert time.monotonic() < deadline, "the program runs on after the run was killed"
         time.sleep(0.05)
+
+
+def on_a_terminal(command: str, limit: str) -> tuple[int, float, str]:
+    """The limited shell run as a run started from a terminal starts it, in the terminal's
+    foreground process group: its exit status, its seconds and what it wrote there."""
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = limit
+    start = time.monotonic()
+    pid, terminal = pty.fork()
+    if pid == 0:  # the child: a session of its own, the terminal its controlling one
+        try:
+            os.execve(timelimit.LIMITED_SHELL, [timelimit.LIMITED_SHELL, "-c", command], environ)
+        finally:
+            os._exit(127)
+    written = b""
+    while True:
+        select.select([terminal], [], [], 60)
+        try:
+            chunk = os.read(terminal, 4096)
+        except OSError:  # the terminal closed: every process on it ended
+            break
+        if not chunk:
+            break
+        written += chunk
+    _, status = os.waitpid(pid, 0)
+    os.close(terminal)
+    return os.waitstatus_to_exitcode(status), time.monotonic() - start, written.decode()
+
+
+def test_a_program_that_sets_the_terminal_runs_as_it_would_without_the_limit():
+    """A program of its own process group, as the limit puts it, is out of the terminal's
+    foreground: setting the terminal (stty, a pager, a prompt) would stop it (SIGTTOU) until
+    the limit, which would then name a program that had not run as running too long."""
+    status, seconds, written = on_a_terminal("stty -echo; stty echo; echo set", "20")
+    assert (status, written.split()) == (0, ["set"])
+    assert seconds < 10
+
+
+def test_a_program_that_reads_the_terminal_fails_at_once_rather_than_at_the_limit():
+    """Reading the terminal (SIGTTIN) would stop it until the limit too: the read fails."""
+    status, seconds, written = on_a_terminal("read answer; echo answered", "20")
+    assert status == 1 and "answered" not in written
+    assert seconds < 10
 
 
 @pytest.mark.parametrize("limit", [None, "0", "-1", "ten", "nan", "inf", "1e9"])

@@ -330,6 +330,12 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
         return 2
     for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
         signal.signal(signum, _interrupt)
+    # The command's group of its own is out of the terminal's foreground: the stops that
+    # brings (setting the terminal, reading it) would hold a program until the limit and have
+    # it named as running too long. Ignored, as the command inherits, they are not made: the
+    # terminal is set as from the foreground, and a read of it fails.
+    for signum in (signal.SIGTTOU, signal.SIGTTIN):
+        signal.signal(signum, signal.SIG_IGN)
     try:
         _end_with_the_run()
         status = run_limited(["bash", "-c", BASH_PREFIX + argv[1]], limit)
