@@ -197,7 +197,8 @@ def test_an_estimator_that_never_ends_is_stopped_and_named(tmp_path):
     """A user's program that hangs on every condition, under a limit of seconds: each of its
     jobs fails at the limit, named with its condition, the limit and the key to raise, its
     program stopped; every built-in estimator's results are made and kept, and the closing
-    summary names the failed jobs. Run as a clone runs, with the default profile."""
+    summary names the failed jobs and their logs, which say the limit stopped them. Run as a
+    clone runs, with the default profile."""
     shipped = (ROOT / CENTROID_SCRIPT).read_text()
     # The program's pid, to see that it was stopped; bounded, so that a program the run left
     # behind ends by itself.
@@ -230,7 +231,12 @@ def test_an_estimator_that_never_ends_is_stopped_and_named(tmp_path):
     assert "raise jobs.external_time_limit_s in the config" in message
     summary = message.split("jointbench: 2 jobs failed:")[-1]
     for condition in conditions:
-        assert f"estimate_centroid: results/logs/estimate/cmc/centroid/{condition}.log" in summary
+        log = f"results/logs/estimate/cmc/centroid/{condition}.log"
+        assert f"estimate_centroid: {log}" in summary
+        # The log the summary names says why: in a long run the error is printed far above.
+        assert f"condition={condition}): its program ran past the time limit of 3 s" in (
+            (tmp_path / log).read_text()
+        )
     estimates = tmp_path / "results" / "estimates" / "cmc" / "centroid"
     for condition in conditions:
         pid = int((estimates / f"{condition}.parquet.pid").read_text())

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import os
+import pty
+import select
 import shutil
 import signal
 import subprocess
@@ -137,6 +139,22 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
     assert not alive(grandchild)
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_children_that_left_the_group_and_ignore_sigterm_share_one_grace(tmp_path):
+    """A program that leaves several daemons behind, each in a session of its own and each
+    ignoring SIGTERM: they are stopped together, one grace for all, not one grace each (8
+    daemons would hold the job 8 graces past its end, and a hundred, minutes)."""
+    written = tmp_path / "pids"
+    daemon = f"setsid bash -c 'trap \"\" TERM; echo $$ >> {written}; {FOREVER}' &"
+    # Half a second for the daemons to have left the group before the program ends.
+    status, seconds = timed(["bash", "-c", f"{daemon * 8} sleep 0.5"])
+    assert status == 0
+    daemons = pids(written)
+    assert len(daemons) == 8
+    assert not any(alive(pid) for pid in daemons)
+    assert seconds < 0.5 + GRACE_S + 1.0
+
+
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
@@ -177,6 +195,22 @@ def test_the_limited_shell_stopped_from_outside_stops_its_group(tmp_path):
     assert not alive(program)
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_the_limited_shell_stopped_from_outside_stops_a_child_that_left_the_group(tmp_path):
+    """Ctrl-C, Snakemake cancelling the job or the run killed: a daemon the program started
+    in a session of its own, adopted once the program is stopped, does not run on either."""
+    written = tmp_path / "pids"
+    shell = limited_shell(f"setsid {FOREVER} & echo $! > {written}; {FOREVER}", "60")
+    deadline = time.monotonic() + 20
+    while not (written.exists() and written.read_text().strip()):
+        assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+    shell.send_signal(signal.SIGTERM)
+    assert shell.wait(timeout=30) == 128 + signal.SIGTERM
+    (daemon,) = pids(written)
+    assert not alive(daemon)
+
+
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
     """Snakemake killed with SIGKILL: the limited shell it started stops the program rather
     than leave it running without a limit."""
@@ -199,6 +233,49 @@ def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
     while alive(program):
         assert time.monotonic() < deadline, "the program runs on after the run was killed"
         time.sleep(0.05)
+
+
+def on_a_terminal(command: str, limit: str) -> tuple[int, float, str]:
+    """The limited shell run as a run started from a terminal starts it, in the terminal's
+    foreground process group: its exit status, its seconds and what it wrote there."""
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = limit
+    start = time.monotonic()
+    pid, terminal = pty.fork()
+    if pid == 0:  # the child: a session of its own, the terminal its controlling one
+        try:
+            os.execve(timelimit.LIMITED_SHELL, [timelimit.LIMITED_SHELL, "-c", command], environ)
+        finally:
+            os._exit(127)
+    written = b""
+    while True:
+        select.select([terminal], [], [], 60)
+        try:
+            chunk = os.read(terminal, 4096)
+        except OSError:  # the terminal closed: every process on it ended
+            break
+        if not chunk:
+            break
+        written += chunk
+    _, status = os.waitpid(pid, 0)
+    os.close(terminal)
+    return os.waitstatus_to_exitcode(status), time.monotonic() - start, written.decode()
+
+
+def test_a_program_that_sets_the_terminal_runs_as_it_would_without_the_limit():
+    """A program of its own process group, as the limit puts it, is out of the terminal's
+    foreground: setting the terminal (stty, a pager, a prompt) would stop it (SIGTTOU) until
+    the limit, which would then name a program that had not run as running too long."""
+    status, seconds, written = on_a_terminal("stty -echo; stty echo; echo set", "20")
+    assert (status, written.split()) == (0, ["set"])
+    assert seconds < 10
+
+
+def test_a_program_that_reads_the_terminal_fails_at_once_rather_than_at_the_limit():
+    """Reading the terminal (SIGTTIN) would stop it until the limit too: the read fails."""
+    status, seconds, written = on_a_terminal("read answer; echo answered", "20")
+    assert status == 1 and "answered" not in written
+    assert seconds < 10
 
 
 @pytest.mark.parametrize("limit", [None, "0", "-1", "ten", "nan", "inf", "1e9"])

@@ -882,24 +882,35 @@ def limit_user_jobs(user_rules):
 def _limited(run, name):
     """The run function ``run`` of rule ``name``, whose job, when the limited shell reports
     that the time limit stopped its command, fails with an error naming the rule, the job's
-    wildcards, the limit and the key to raise, not a bare exit status."""
+    wildcards, the limit and the key to raise, not a bare exit status. The error is written
+    to the job's logs too: the run's closing summary names those, and in a long run the error
+    itself is printed far above it."""
 
     @functools.wraps(run)
-    def limited(input, output, params, wildcards, *rest):
+    def limited(input, output, params, wildcards, threads, resources, log, *rest):
         start = time.monotonic()
         try:
-            return run(input, output, params, wildcards, *rest)
+            return run(input, output, params, wildcards, threads, resources, log, *rest)
         except subprocess.CalledProcessError as error:
             # The status alone is not the limit's: a program may exit with it by itself.
             stopped = time.monotonic() - start >= TIME_LIMIT_S
             if error.returncode != timelimit.EXPIRED or not stopped:
                 raise
             named = dict(wildcards.items())
-            raise TimeLimitExceeded(
-                timelimit.expired_message(name, named, TIME_LIMIT_S)
-            ) from None
+            message = timelimit.expired_message(name, named, TIME_LIMIT_S)
+            _append_to_logs(log, message)
+            raise TimeLimitExceeded(message) from None
 
     return limited
+
+
+def _append_to_logs(logs, line):
+    """Append ``line`` to each of a job's log files ``logs`` (Snakemake's list of them), after
+    whatever its program wrote there."""
+    for path in logs:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "a") as log:
+            print(line, file=log)
 
 
 class TimeLimitExceeded(Exception):

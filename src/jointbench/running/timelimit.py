@@ -127,39 +127,59 @@ class _Group:
         try:
             ends = os.pidfd_open(self.leader)
         except (AttributeError, OSError):
-            return self._until(lambda: self.status is not None, within_s)
+            return _until(self._leader_reaped, within_s)
         try:
             select.select([ends], [], [], within_s)
         finally:
             os.close(ends)
+        return self._leader_reaped()
+
+    def _leader_reaped(self) -> bool:
         self.reap()
         return self.status is not None
 
     def ended(self, within_s: float) -> bool:
         """Whether the whole group ends within ``within_s`` [s]."""
-        return self._until(lambda: not group_alive(self.leader), within_s)
+        return _all_ended([self], within_s)
 
-    def _until(self, done, within_s: float) -> bool:
-        deadline = time.monotonic() + within_s
-        while True:
-            self.reap()
-            if done():
-                return True
-            if time.monotonic() >= deadline:
-                return False
-            time.sleep(_POLL_S)
 
-    def stop(self, grace_s: float) -> None:
-        """Stop every process of the group: SIGTERM, up to ``grace_s`` [s] for the group to
-        end, then SIGKILL to whatever is left, a process that ignores SIGTERM or a child the
-        leader left behind."""
-        _signal_group(self.leader, signal.SIGTERM)
-        if self.ended(grace_s):
-            return
-        _signal_group(self.leader, signal.SIGKILL)
-        # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
-        # disk) is past any signal's reach, and the job ends without it.
-        self.ended(_KILLED_S)
+def _until(done, within_s: float) -> bool:
+    """Whether ``done()`` is true within ``within_s`` [s], asked every :data:`_POLL_S`."""
+    deadline = time.monotonic() + within_s
+    while True:
+        if done():
+            return True
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(_POLL_S)
+
+
+def _all_ended(groups: Sequence[_Group], within_s: float) -> bool:
+    """Whether every process of ``groups`` ends within ``within_s`` [s], each group's ended
+    processes that are this process's children reaped as they end."""
+
+    def ended() -> bool:
+        for group in groups:
+            group.reap()
+        return not any(group_alive(group.leader) for group in groups)
+
+    return _until(ended, within_s)
+
+
+def _stop_groups(groups: Sequence[_Group], grace_s: float) -> None:
+    """Stop every process of ``groups`` at once: SIGTERM to each, up to ``grace_s`` [s] for
+    them all to end, then SIGKILL to whatever is left, a process that ignores SIGTERM or a
+    child a leader left behind. One grace for all: groups stopped one after another would
+    hold the job a grace for each that ignores SIGTERM."""
+    for group in groups:
+        _signal_group(group.leader, signal.SIGTERM)
+    if _all_ended(groups, grace_s):
+        return
+    for group in groups:
+        _signal_group(group.leader, signal.SIGKILL)
+    # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
+    # disk) is past any signal's reach, and the job ends without it.
+    _all_ended(groups, _KILLED_S)
 
 
 def _signal_group(group: int, signum: int) -> None:
@@ -171,26 +191,20 @@ def _signal_group(group: int, signum: int) -> None:
 
 def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -> int | None:
     """Run ``argv`` in a process group of its own for at most ``limit_s`` [s]:
-    its exit status (negative: the signal that ended it), or None when the limit stopped it
-    (``_Group.stop``). A process of the group still running when the command ends (a child it
-    left behind) is stopped too: nothing of the job outlives it. Stopped from outside
-    (:class:`Interrupted`), it stops the group before passing that on. This process becomes
-    the reaper of the command's orphans (``_adopt_orphans``)."""
+    its exit status (negative: the signal that ended it), or None when the limit stopped it.
+    Whatever of it is still running when it ends, is stopped or is stopped from outside
+    (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_what_is_left`): nothing
+    of the job outlives it. This process becomes the reaper of the command's orphans
+    (``_adopt_orphans``)."""
     _adopt_orphans()
     group = _Group(os.posix_spawnp(argv[0], list(argv), os.environ, setpgroup=0))
     try:
         ended = group.wait(limit_s)
     except BaseException:
-        group.stop(grace_s)
+        _stop_what_is_left(group, grace_s)
         raise
-    if not ended:
-        group.stop(grace_s)
-        _stop_strays(grace_s)
-        return None
-    if not group.ended(0):
-        group.stop(grace_s)
-    _stop_strays(grace_s)
-    return group.status
+    _stop_what_is_left(group, grace_s)
+    return group.status if ended else None
 
 
 def _children() -> list[int]:
@@ -202,19 +216,24 @@ def _children() -> list[int]:
     return found
 
 
-def _stop_strays(grace_s: float) -> None:
-    """Stop, group by group, what is left of the command after its own group ended: a
-    process that left the group (``setsid``, a daemon that detached) and whose parent in it
-    has ended is this process's child (``_adopt_orphans``), and so, once that one is
-    stopped, is a child that left its group in turn; a few rounds, as one that cannot end
-    (a read of a dead disk) is past any signal's reach."""
+def _stop_what_is_left(group: _Group, grace_s: float) -> None:
+    """Stop what is left of the command started as ``group``: its group's processes, and the
+    processes that left it (``setsid``, a daemon that detached) whose parent there has ended,
+    which are this process's children (``_adopt_orphans``), all at once
+    (:func:`_stop_groups`); then, round by round, the children that stopping those left
+    (a child that left its group in turn). A few rounds, as one that cannot end (a read of
+    a dead disk) is past any signal's reach."""
+    groups = [] if group.ended(0) else [group]
     for _ in range(_STRAY_ROUNDS):
-        strays = _children()
-        if not strays:
-            return
-        for stray in strays:
+        strays = set()
+        for child in _children():
             with contextlib.suppress(ProcessLookupError):
-                _Group(os.getpgid(stray)).stop(grace_s)
+                strays.add(os.getpgid(child))
+        groups += [_Group(leader) for leader in sorted(strays - {group.leader})]
+        if not groups:
+            return
+        _stop_groups(groups, grace_s)
+        groups = []
 
 
 #: The longest limit [s], a week: a cluster's longest partitions allow about that, and a longer
@@ -311,6 +330,12 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
         return 2
     for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
         signal.signal(signum, _interrupt)
+    # The command's group of its own is out of the terminal's foreground: the stops that
+    # brings (setting the terminal, reading it) would hold a program until the limit and have
+    # it named as running too long. Ignored, as the command inherits, they are not made: the
+    # terminal is set as from the foreground, and a read of it fails.
+    for signum in (signal.SIGTTOU, signal.SIGTTIN):
+        signal.signal(signum, signal.SIG_IGN)
     try:
         _end_with_the_run()
         status = run_limited(["bash", "-c", BASH_PREFIX + argv[1]], limit)
