@@ -128,3 +128,14 @@ def test_every_file_the_package_holds_besides_its_modules_is_installed_with_it()
     assert others, "no file besides the modules: the listing is wrong"
     missing = [str(path) for path in others if not any(path.match(pattern) for pattern in declared)]
     assert not missing, f"not in [tool.setuptools.package-data]: {missing}"
+
+
+def test_the_build_backend_required_reads_the_project_table_as_written():
+    """An SPDX string as ``license`` (PEP 639) is read by setuptools 77 on; an older one the
+    build system admits refuses the whole table, and ``pip install .`` with it fails."""
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    (requirement,) = pyproject["build-system"]["requires"]
+    name, floor = requirement.split(">=")
+    assert name == "setuptools"
+    if isinstance(pyproject["project"]["license"], str):
+        assert tuple(map(int, floor.split("."))) >= (77,)
