@@ -663,11 +663,12 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
     # say, have none): the score test alone speaks elsewhere.
     sds = numbers["center_step_sds"] if supported and not warnings else math.nan
     if MIN_REJECTED_STEP_MM < step < math.inf and (p < ROTATION_ALPHA or sds >= MAX_STEP_SDS):
-        in_sds = f", {sds:.2g} of its SDs" if math.isfinite(sds) else ""
+        test = f"score test chi^2 = {numbers['center_score_chi2']:.3g}, p = {p:.2g}"
         reasons.append(
-            f"the spheres they move on are centred {step:.3g} mm from it{in_sds} (score test "
-            f"chi^2 = {numbers['center_score_chi2']:.3g}, p = {p:.2g}): an error beside the "
-            "scatter its SD states"
+            f"the spheres they move on are centred {step:.3g} mm from it, {sds:.2g} of its SDs "
+            f"({test}): an error beside the scatter its SD states"
+            if math.isfinite(sds)
+            else f"the spheres they move on are centred {step:.3g} mm from it ({test})"
         )
     offset, p_fit = numbers["center_offset_mm"], numbers["center_fit_p_value"]
     if p_fit < ROTATION_ALPHA and offset > MIN_REJECTED_STEP_MM:
