@@ -130,3 +130,17 @@ def test_centre_fit_p_value_floors_the_residuals_kurtosis_at_a_normal_ones():
     z = (ratio - 1.0) / math.sqrt(2.0 * (1.0 / dof + 1.0 / noise_dof))
     expected = 0.5 * math.erfc(z / math.sqrt(2.0))
     assert result.diagnostics["center_fit_p_value"] == pytest.approx(expected, rel=1e-9)
+
+
+def test_centre_step_in_sds_is_its_mahalanobis_distance_to_the_geometric_fit():
+    """LS on a 15 degree cap with 1 mm noise: ``center_step_mm`` is the distance to the spheres'
+    own centre (IS's answer, by the simplex) and ``center_step_sds`` that distance in the
+    answer's SDs, ``sqrt(d' F_s d / s^2)`` with ``F_s`` about the answer."""
+    markers = _noisy_cap(4, rom_deg=15.0, noise_mm=1.0)
+    result = jointbench.fit_center(markers, method="LS")
+    centre = np.asarray(result.center)
+    step = centre - np.asarray(jointbench.fit_center(markers, method="IS").center)
+    s2 = result.diagnostics["support_rigid_residual_mm"] ** 2 / 3.0
+    sds = math.sqrt(step @ _corrected_information(markers, centre, s2) @ step / s2)
+    assert result.diagnostics["center_step_mm"] == pytest.approx(np.linalg.norm(step), rel=1e-2)
+    assert result.diagnostics["center_step_sds"] == pytest.approx(sds, rel=1e-2)
