@@ -174,6 +174,18 @@ def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does():
     assert shell.returncode == 1
 
 
+@pytest.mark.skipif(shutil.which("perl") is None, reason="no perl on this machine")
+def test_a_writer_whose_reader_has_gone_ends_as_under_snakemakes_bash():
+    """A program's Python ignores SIGPIPE, and a program it starts inherits that where nothing
+    restores it: a writer that does not check its writes (Perl's print, C's printf) piped into
+    ``head`` then spins until the limit, and is named as running too long, where Snakemake's
+    own shell ends it with SIGPIPE at once."""
+    writer = "perl -e '$| = 1; print qq(y\\n) while 1' | head -n 1"
+    shell = limited_shell(writer, "20", stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    out, err = shell.communicate(timeout=60)
+    assert (shell.returncode, out, err) == (128 + signal.SIGPIPE, "y\n", "")
+
+
 def test_the_limited_shell_stops_its_command_and_says_so():
     shell = limited_shell(FOREVER, "1", stderr=subprocess.PIPE)
     _, err = shell.communicate(timeout=30)
