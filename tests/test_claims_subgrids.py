@@ -138,6 +138,16 @@ def test_b2_needs_ratio_0_1(documents):
     assert "B2" not in measured
 
 
+def test_a10_reads_the_cells_both_marker_sets_have_and_names_the_others(documents):
+    """One noise level and one trial: at the M set and 5 degrees BC converged in no trial, so
+    that cell has no mean and no H/M ratio; A10 is measured over the cells that have one, and
+    its text names the range without any rather than print a NaN for it."""
+    world = _timed(paper_a_world(), A_SPEEDS)
+    sub = world[(world["noise_mm"] == 1.0) & (world["trial"] < 1)]
+    measured = _measured_cleanly("paper_a", documents["A"], sub, "noise_mm=[1.0], trials=1")
+    assert measured["A10"].text.endswith("; no cell with a mean at both sets at 5°")
+
+
 def paper_sta_world(trials: int = 3) -> pd.DataFrame:
     """Collected hip_sta rows of the measured methods: an error that grows with the STA and
     falls with the range, lower on the star-arc, SCoRE second best."""

@@ -174,6 +174,18 @@ def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does():
     assert shell.returncode == 1
 
 
+@pytest.mark.skipif(shutil.which("perl") is None, reason="no perl on this machine")
+def test_a_writer_whose_reader_has_gone_ends_as_under_snakemakes_bash():
+    """A program's Python ignores SIGPIPE, and a program it starts inherits that where nothing
+    restores it: a writer that does not check its writes (Perl's print, C's printf) piped into
+    ``head`` then spins until the limit, and is named as running too long, where Snakemake's
+    own shell ends it with SIGPIPE at once."""
+    writer = "perl -e '$| = 1; print qq(y\\n) while 1' | head -n 1"
+    shell = limited_shell(writer, "20", stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    out, err = shell.communicate(timeout=60)
+    assert (shell.returncode, out, err) == (128 + signal.SIGPIPE, "y\n", "")
+
+
 def test_the_limited_shell_stops_its_command_and_says_so():
     shell = limited_shell(FOREVER, "1", stderr=subprocess.PIPE)
     _, err = shell.communicate(timeout=30)
@@ -181,34 +193,37 @@ def test_the_limited_shell_stops_its_command_and_says_so():
     assert "ran past the time limit of 1 s (jobs.external_time_limit_s)" in err
 
 
-def test_the_limited_shell_stopped_from_outside_stops_its_group(tmp_path):
-    """Ctrl-C, or Snakemake cancelling the job: the program does not run on without it."""
-    written = tmp_path / "pids"
-    shell = limited_shell(f"echo $$ > {written}; {FOREVER}", "60")
+def started(written: Path) -> None:
+    """Wait until the command has written its pid file ``written``: it has started."""
     deadline = time.monotonic() + 20
     while not (written.exists() and written.read_text().strip()):
         assert time.monotonic() < deadline, "the command never started"
         time.sleep(0.05)
-    shell.send_signal(signal.SIGTERM)
-    assert shell.wait(timeout=30) == 128 + signal.SIGTERM
-    (program,) = pids(written)
-    assert not alive(program)
 
 
-@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
-def test_the_limited_shell_stopped_from_outside_stops_a_child_that_left_the_group(tmp_path):
-    """Ctrl-C, Snakemake cancelling the job or the run killed: a daemon the program started
-    in a session of its own, adopted once the program is stopped, does not run on either."""
+@pytest.mark.parametrize(
+    "command",
+    [
+        # The program itself.
+        f"echo $$ > {{written}}; {FOREVER}",
+        # A daemon the program started in a session of its own, adopted once it is stopped.
+        pytest.param(
+            f"setsid {FOREVER} & echo $! > {{written}}; {FOREVER}",
+            marks=pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid"),
+        ),
+    ],
+    ids=["its-group", "a-child-that-left-the-group"],
+)
+def test_the_limited_shell_stopped_from_outside_stops_what_it_ran(command, tmp_path):
+    """Ctrl-C, Snakemake cancelling the job or the run killed: neither the program nor a
+    daemon it left runs on without the job."""
     written = tmp_path / "pids"
-    shell = limited_shell(f"setsid {FOREVER} & echo $! > {written}; {FOREVER}", "60")
-    deadline = time.monotonic() + 20
-    while not (written.exists() and written.read_text().strip()):
-        assert time.monotonic() < deadline, "the command never started"
-        time.sleep(0.05)
+    shell = limited_shell(command.format(written=written), "60")
+    started(written)
     shell.send_signal(signal.SIGTERM)
     assert shell.wait(timeout=30) == 128 + signal.SIGTERM
-    (daemon,) = pids(written)
-    assert not alive(daemon)
+    (process,) = pids(written)
+    assert not alive(process)
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
@@ -222,10 +237,7 @@ def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
     run = subprocess.Popen(
         ["bash", "-c", f"{timelimit.LIMITED_SHELL} -c '{command}'; exit $?"], env=environ
     )
-    deadline = time.monotonic() + 20
-    while not (written.exists() and written.read_text().strip()):
-        assert time.monotonic() < deadline, "the command never started"
-        time.sleep(0.05)
+    started(written)
     run.kill()
     run.wait()
     (program,) = pids(written)

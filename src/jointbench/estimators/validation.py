@@ -95,7 +95,9 @@ MAX_JOINED_SPAN_MM = 2 * MAX_SPAN_MM
 #: with them, lie closer together than this [mm], what one optical capture volume spans. The
 #: largest, built for sprints and team sports, are some tens of metres long; 100 m bounds them
 #: with room and still refuses millimetres read as metres (a treadmill 2 m across reads 2 km).
-#: Millimetres read as centimetres (20 m) it lets through: the moving markers tell that unit.
+#: Millimetres read as centimetres (20 m) it lets through: the moving markers tell that unit
+#: only where their cluster spans over a tenth of :data:`MAX_SPAN_MM`; a more compact one
+#: passes read 10 times its size, and so does the answer (``tests/test_io_units.py``, xfail).
 MAX_CAPTURE_SPAN_MM = 100_000.0
 #: What :data:`MAX_SPAN_MM` bounds, :data:`MAX_JOINED_SPAN_MM` and
 #: :data:`MAX_CAPTURE_SPAN_MM`, in messages.

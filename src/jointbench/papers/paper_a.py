@@ -357,13 +357,23 @@ def _a9(collected, means):
 def _a10(collected, means):
     wide = _wide(means)
     by_cell = at_levels(wide, marker_set="H") / at_levels(wide, marker_set="M")
+    # A (RoM, noise) cell with no mean at one set (BC converged in none of its trials there)
+    # has no ratio: the medians are over the cells that have one, and the ranges without any
+    # are named, not printed as NaN.
     ratio = by_cell.median()
+    unmeasured = [m for m in METHODS if not np.isfinite(ratio[m])]
+    if unmeasured:
+        raise NotMeasured(
+            f"no (RoM, noise) cell has a mean of {', '.join(unmeasured)} at both marker sets"
+        )
     better_h, worse_h = ("IS", "BC", "NM"), ("LS", "MA")
     wrong = sum(ratio[m] >= 1 for m in better_h) + sum(ratio[m] <= 1 for m in worse_h)
     text = ", ".join(f"{m} {ratio[m]:.2f}" for m in METHODS)
     ls = by_cell["LS"].groupby(level="rom_deg").median()
-    by_rom = ", ".join(f"{rom:g}° {value:.2f}" for rom, value in ls.items())
-    return Measured(int(wrong), f"median H/M error ratio: {text}; LS by RoM: {by_rom}")
+    by_rom = ", ".join(f"{rom:g}° {value:.2f}" for rom, value in ls.dropna().items())
+    missing = ", ".join(f"{rom:g}°" for rom, value in ls.items() if not np.isfinite(value))
+    none_at = f"; no cell with a mean at both sets at {missing}" if missing else ""
+    return Measured(int(wrong), f"median H/M error ratio: {text}; LS by RoM: {by_rom}{none_at}")
 
 
 def example_ordering_share(collected: pd.DataFrame) -> tuple[int, int]:

@@ -47,6 +47,10 @@ _POLL_S = 0.05
 _KILLED_S = 2.0
 # How many rounds of processes that left the command's group are stopped at most.
 _STRAY_ROUNDS = 5
+# The signals Python ignores for itself, which a command would inherit ignored: a writer to a
+# pipe whose reader has gone would fail its writes rather than end, and one that does not check
+# them would spin until the limit. Restored, as subprocess and a shell do.
+_RESTORED_SIGNALS = (signal.SIGPIPE, signal.SIGXFSZ)
 # prctl(2)'s option that makes a process the reaper of its descendants' orphans.
 _PR_SET_CHILD_SUBREAPER = 36
 # prctl(2)'s option that sends this process a signal when its parent ends.
@@ -197,7 +201,10 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     of the job outlives it. This process becomes the reaper of the command's orphans
     (``_adopt_orphans``)."""
     _adopt_orphans()
-    group = _Group(os.posix_spawnp(argv[0], list(argv), os.environ, setpgroup=0))
+    spawned = os.posix_spawnp(
+        argv[0], list(argv), os.environ, setpgroup=0, setsigdef=_RESTORED_SIGNALS
+    )
+    group = _Group(spawned)
     try:
         ended = group.wait(limit_s)
     except BaseException:
