@@ -123,39 +123,11 @@ to be the motion's axis (:func:`annotate_motion_axis`) only beyond
 :data:`MOTION_AXIS_BAND_DEG` from it, significantly in the reference's SD (the one-sided
 normal quantile at :data:`jointbench.estimators.support.ROTATION_ALPHA`): another axis, not a
 compromise of this motion's. The answer's own stated SD plays no part, since a method could
-state any. Where the reference is not determined (a pose's rotation SD is above
-:data:`MAX_REFERENCE_POSE_SD_DEG`, where the first-order pose noise behind the next two
-understates a thin cluster's; the noise's share of the rotations' scatter reaches its
-eigen-gap; or its SD is above :data:`MAX_AXIS_SD_DEG`) nothing is compared, and the result
-says why. ``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
-
-Where the pose noise is beyond first order about the answer's own axis, nothing checks the
-answer at all. Every axis method reads the segment's rotation about the axis it reports: the
-trajectory costs through the markers' arcs about it, SARA through the poses' rotations. A
-pose's rotation noise about a unit direction ``d`` is ``s^2 d' K^-1 d`` (Pennec & Thirion
-1997), first order in the noise over the cluster's extent about ``d``; beyond
-:data:`MAX_REFERENCE_POSE_SD_DEG` about the answer's axis (:func:`pose_sd_about_deg`) the
-noise is not small against the lever that turns rotation about that axis into marker motion,
-so the answer's first-order SD is not a statement of precision, and the anisotropic noise can
-itself put an eigenvector answer there (the pull above, beyond its first order). The principal
-axis is then not compared either (its pose SD about the weakest axis is at least as large), so
-the result says the precision is not determined and nothing checks the answer
-(:func:`annotate_motion_axis`). About any axis the markers' own lever is at least the
-cluster's (``sum_i r_i^2 = d' K d + n D^2``, ``D`` the centroid's distance from the axis: the
-parallel-axis theorem), so the rule is conservative: a compact cluster far from its axis is
-called unchecked although its trajectory answers' SDs may hold. On four markers about 5 mm
-from a hinge's axis, scattered by 3 mm, on a 30 degree arc with 1 mm noise
-(``benchmarks/blind_spots.py``, 60 seeds, four methods) 25 answers read ``ok`` without it
-(19 combined, 4 SARA, 2 radial), 13 of them 12-83 degrees off with SDs under 10; the pose SD
-about the answers was 4.8-36 degrees and none reads ``ok`` with it (the 12 within 10 degrees
-of the axis, within 1.6 of their SDs, are called unchecked too). On three markers 2 mm off a
-40 mm line 60-100 mm from the axis (20 degrees, 0.5 mm, 10 seeds) the planar and combined
-answers, within 11 degrees, have pose SDs of 1-3.4 degrees about them and keep their checks
-and status, while the radial and SARA answers 33-90 degrees off, along the line (10-23
-degrees about them), are said to be unchecked. On paper B's knee and MCP (FE 5-90 degrees,
-AA 0.1-0.7 times it, 1 mm, 10 trials a condition, 1600 answers), the calibration hinges of
-``tests/test_axis_sd.py`` (960), the pure hinges of ``tests/test_axis_motion_check.py`` (80)
-and the real knee trial no status changed: no pose SD there was above 3.3 degrees.
+state any. Where the reference is not determined (the noise's share of the rotations' scatter
+reaches its eigen-gap, its SD is above :data:`MAX_AXIS_SD_DEG`, or a pose's rotation SD is
+above :data:`MAX_REFERENCE_POSE_SD_DEG`, where the first-order pose noise behind both
+understates a thin cluster's) nothing is compared, and the result says why.
+``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
 
 What the band lets through: motion the cost does not model. A hinge with an independent wobble
 about another axis of a tenth of its arc (0.5 mm noise) leaves the planar and combined answers
@@ -225,7 +197,6 @@ __all__ = [
     "distinct_frames",
     "line_angle_deg",
     "misfit",
-    "pose_sd_about_deg",
     "rigid_dof",
     "smaller_eigenvalue",
     "tangent_basis",
@@ -262,8 +233,7 @@ MISFIT_BAND_DEG = 5.0
 #: The motion's axis is compared only where no pose's rotation SD is above this [deg]: beyond
 #: it (a thin or nearly collinear cluster) the first-order pose noise ``s^2 K^-1`` understates
 #: the rotation noise about the cluster's weak axis, and the principal axis can lie along
-#: that axis with a small stated SD. An answer about whose own axis a pose's rotation SD is
-#: above it is checked by nothing, its first-order SD included (:func:`annotate_motion_axis`).
+#: that axis with a small stated SD.
 MAX_REFERENCE_POSE_SD_DEG = 5.0
 
 # The one-sided normal quantile that a cost difference must exceed, in standard errors, to be
@@ -624,25 +594,6 @@ def annotate_agreement(
     return with_warnings(result, warnings, {"cross_check": record})
 
 
-def pose_sd_about_deg(reference: MotionAxis, direction: np.ndarray) -> float:
-    """The SD [deg] of one pose's rotation about ``direction`` (3,), any non-zero length, in
-    the markers' frame: ``sqrt(d' S d)``, ``S`` the pose noise ``reference.pose_noise`` ``(3,
-    3)`` [rad^2] (:class:`jointbench.estimators.support.MotionAxis`), ``d`` the unit direction
-    (module docstring); ``reference.pose_sd_deg``, the largest about any axis, where ``S`` is
-    not known."""
-    if reference.pose_noise is None:
-        return float(reference.pose_sd_deg)
-    # Floats, not array products: these cost a checked call several microseconds each.
-    x, y, z = np.asarray(direction, dtype=float).tolist()
-    (sxx, sxy, sxz), (syx, syy, syz), (szx, szy, szz) = np.asarray(
-        reference.pose_noise, dtype=float
-    ).tolist()
-    form = x * (sxx * x + sxy * y + sxz * z) + y * (syx * x + syy * y + syz * z)
-    form += z * (szx * x + szy * y + szz * z)
-    variance = form / (x * x + y * y + z * z)
-    return math.degrees(math.sqrt(max(variance, 0.0)))
-
-
 def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str = ""):
     """``result`` with ``diagnostics["motion_axis_check"]``: the answer compared with the
     principal axis of the segment's rotations ``reference``
@@ -653,14 +604,11 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
     angle is beyond :data:`MOTION_AXIS_BAND_DEG` in the reference's SDs. Where ``z`` is above
     ``_TOLD_APART_Z``, a warning that the answer is not the motion's axis. The answer's own
     stated SD plays no part: the question is whether it is an axis of this motion at all, and
-    a method could state any SD. Where the reference is not determined (a pose's SD above
-    :data:`MAX_REFERENCE_POSE_SD_DEG`, its noise share not below 1, its SD above
-    :data:`MAX_AXIS_SD_DEG`), or is ``None`` (the data gave no pose: ``unavailable`` says
-    why), nothing is compared and ``not_checked`` says why. Where a reference is given and the
-    answer is finite, ``pose_sd_about_answer_deg`` is a pose's rotation SD about the answer's
-    axis (:func:`pose_sd_about_deg`); above :data:`MAX_REFERENCE_POSE_SD_DEG` a warning says
-    the precision is not determined and nothing checks the answer (module docstring).
-    ``converged`` and the answer are left as the method set them."""
+    a method could state any SD. Where the reference is not determined (its noise share not
+    below 1, its SD above :data:`MAX_AXIS_SD_DEG`, a pose's SD above
+    :data:`MAX_REFERENCE_POSE_SD_DEG`), or is ``None`` (the data gave no pose: ``unavailable``
+    says why), nothing is compared and ``not_checked`` says why. ``converged`` and the answer
+    are left as the method set them."""
     if reference is None:
         why = f"no principal axis of the segment's rotations: {unavailable or 'no pose'}"
         return with_warnings(result, (), {"motion_axis_check": {"not_checked": why}})
@@ -671,15 +619,8 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
         "pose_sd_deg": float(reference.pose_sd_deg),
     }
     undetermined = "the principal axis of the segment's rotations is not determined"
-    # NaN fails the comparisons and leaves the reference undetermined: it tells nothing. The
-    # pose noise comes first: the share and the SD are first-order numbers built on it.
-    if not reference.pose_sd_deg <= MAX_REFERENCE_POSE_SD_DEG:
-        record["not_checked"] = (
-            f"{undetermined}: a pose's rotation SD is {reference.pose_sd_deg:.1f} deg about the "
-            f"cluster's weakest axis (above {MAX_REFERENCE_POSE_SD_DEG:g} deg), where its noise "
-            "is not first order"
-        )
-    elif not reference.noise_share < 1.0:
+    # NaN fails the comparisons and leaves the reference undetermined: it tells nothing.
+    if not reference.noise_share < 1.0:
         record["not_checked"] = (
             f"{undetermined}: the noise's share of their scatter is "
             f"{reference.noise_share:.3g} of its eigen-gap (not below 1)"
@@ -688,6 +629,12 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
         record["not_checked"] = (
             f"{undetermined}: its SD is {reference.sd_deg:.1f} deg (above {MAX_AXIS_SD_DEG:g} deg)"
         )
+    elif not reference.pose_sd_deg <= MAX_REFERENCE_POSE_SD_DEG:
+        record["not_checked"] = (
+            f"{undetermined}: a pose's rotation SD is {reference.pose_sd_deg:.1f} deg about the "
+            f"cluster's weakest axis (above {MAX_REFERENCE_POSE_SD_DEG:g} deg), where its noise "
+            "is not first order"
+        )
     warnings = ()
     misfit = result.diagnostics.get("axis_misfit", {})
     unsupported = unsupported_by_its_cost(misfit)
@@ -695,23 +642,11 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
         record["not_checked"] = "the answer is not finite"
         # A method that says it converged on it is contradicted; a failure says so itself.
         warnings = ("the answer is not finite: no axis was found",) if result.converged else ()
-        return with_warnings(result, warnings, {"motion_axis_check": record})
-    about_answer_deg = pose_sd_about_deg(reference, result.direction)
-    record["pose_sd_about_answer_deg"] = about_answer_deg
-    if "not_checked" in record and unsupported:
+    elif "not_checked" in record and unsupported:
         # Neither the answer's own cost nor the reference vouches for it.
         warnings = (
             f"axis not determined: {_misfit_words(result.method, misfit)}, and "
             f"{record['not_checked']}, so nothing checks the answer",
-        )
-    elif not about_answer_deg <= MAX_REFERENCE_POSE_SD_DEG:
-        # Implies the reference is not compared: no axis has a larger pose SD than the weakest.
-        warnings = (
-            f"precision not determined: a pose's rotation about the answer's axis is known to "
-            f"{about_answer_deg:.1f} deg (above {MAX_REFERENCE_POSE_SD_DEG:g} deg), where the "
-            "markers' noise is not first order and can itself put an axis there; neither the "
-            "answer's first-order SD nor the principal axis of the segment's rotations holds, "
-            "so nothing checks the answer",
         )
     if "not_checked" in record:
         return with_warnings(result, warnings, {"motion_axis_check": record})

@@ -1574,16 +1574,11 @@ def _one_segment_axes(
         numbers = _axis_numbers(
             rotations.values, rotations.own, rotations.mean, rotations.noise, rotations.n_frames
         )
-    directions, sd_deg, noise_share, pose_sd_deg, pose_noise, *shares = numbers
+    directions, sd_deg, noise_share, pose_sd_deg, *shares = numbers
     axes = [
-        MotionAxis(direction, sd, share, pose_sd, noise)
-        for direction, sd, share, pose_sd, noise in zip(
-            directions,
-            sd_deg.tolist(),
-            noise_share.tolist(),
-            pose_sd_deg.tolist(),
-            pose_noise,
-            strict=True,
+        MotionAxis(direction, sd, share, pose_sd)
+        for direction, sd, share, pose_sd in zip(
+            directions, sd_deg.tolist(), noise_share.tolist(), pose_sd_deg.tolist(), strict=True
         )
     ]
     return axes, _AxisShare(*shares)
@@ -1608,19 +1603,8 @@ def _sampled_axis_numbers(
     unsettled = np.empty(flat.shape[0], dtype=np.bool_)
     _horn_rotations(flat, np.full(flat.shape[0], np.inf), rotation, unsettled)
     empty = np.empty(0)
-    none_hold = (
-        False,
-        np.empty((0, 3)),
-        empty,
-        empty,
-        empty,
-        np.empty((0, 3, 3)),
-        empty,
-        empty,
-        empty,
-    )
     if unsettled.any():
-        return none_hold
+        return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
     no_frames = np.empty((n_trials, 0, 3, 3))
     _, _, values, own, mean, near_pi = _rotation_spreads(
         rotation.reshape((n_trials, n_sampled, 3, 3)),
@@ -1631,14 +1615,14 @@ def _sampled_axis_numbers(
         False,
     )
     if near_pi:
-        return none_hold
+        return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
     noise = np.empty_like(inertia_inv)
     for t in range(n_trials):
         noise[t] = variance[t] * inertia_inv[t]
-    directions, sd_deg, share, pose_sd_deg, pose_noise, off_share, principal, off = _axis_numbers(
+    directions, sd_deg, share, pose_sd_deg, off_share, principal, off = _axis_numbers(
         values, own, mean, noise, n_sampled
     )
-    return True, directions, sd_deg, share, pose_sd_deg, pose_noise, off_share, principal, off
+    return True, directions, sd_deg, share, pose_sd_deg, off_share, principal, off
 
 
 @kernel
@@ -1649,27 +1633,24 @@ def _axis_numbers(
     scatter ``own``, their mean pose ``mean`` and each one's noise ``noise`` ``(T, 3, 3)``
     over ``n_frames`` (:class:`_OneSegmentRotations`): the :class:`MotionAxis` numbers of
     :func:`_motion_axis_numbers` (axes ``(T, 3)``, their SDs [deg], noise shares), the largest
-    SD [deg] of one pose's rotation (the noise's largest eigenvalue), that noise carried into
-    the markers' frame by the mean pose, ``M S M'`` ``(T, 3, 3)`` [rad^2], and the three columns of
+    SD [deg] of one pose's rotation (the noise's largest eigenvalue), and the three columns of
     :class:`_AxisShare`: the share of the rotation's sum of squares off the principal axis
     and the RMS rotations [rad] about it and about the two others, ``(T,)`` each. A compiled
     kernel."""
     directions, sd_deg, share = _motion_axis_numbers(own, mean, noise, n_frames)
     n_trials = values.shape[0]
     pose_sd_deg = np.empty(n_trials)
-    pose_noise = np.empty((n_trials, 3, 3))
     off_share = np.empty(n_trials)
     principal = np.empty(n_trials)
     off_rms = np.empty(n_trials)
     for t in range(n_trials):
         pose_sd_deg[t] = np.degrees(np.sqrt(np.linalg.eigvalsh(noise[t])[2]))
-        pose_noise[t] = mean[t] @ noise[t] @ mean[t].T
         off = values[t, 0] + values[t, 1]
         total = off + values[t, 2]
         off_share[t] = off / total if total > 0.0 else 0.0
         principal[t] = np.sqrt(values[t, 2] / n_frames)
         off_rms[t] = np.sqrt(off / n_frames)
-    return directions, sd_deg, share, pose_sd_deg, pose_noise, off_share, principal, off_rms
+    return directions, sd_deg, share, pose_sd_deg, off_share, principal, off_rms
 
 
 class MotionAxis(NamedTuple):
@@ -1678,17 +1659,14 @@ class MotionAxis(NamedTuple):
     compared with: ``direction`` the unit axis ``(3,)`` in the markers' frame, ``sd_deg`` its
     first-order SD [deg] and ``noise_share`` the larger, over the two directions normal to it,
     of the rotation noise's share of the rotations' scatter over its eigen-gap (from 1 up, the
-    axis is not determined by the motion), ``pose_sd_deg`` the largest SD of one pose's
+    axis is not determined by the motion) and ``pose_sd_deg`` the largest SD of one pose's
     rotation [deg], about the cluster's weakest axis (where it is large, a thin cluster's, the
-    first-order noise model behind the other two does not hold), and ``pose_noise`` that
-    rotation noise's covariance ``(3, 3)`` [rad^2] in the markers' frame, which gives its SD
-    about any axis (``None`` where not known: ``pose_sd_deg`` bounds it)."""
+    first-order noise model behind the other two does not hold)."""
 
     direction: np.ndarray
     sd_deg: float
     noise_share: float
     pose_sd_deg: float
-    pose_noise: np.ndarray | None = None
 
 
 @kernel
