@@ -369,6 +369,9 @@ TREADMILL = np.array(
     [[-500.0, -300.0, 0.0], [1500.0, -300.0, 0.0], [-500.0, 500.0, 0.0], [1500.0, 500.0, 0.0]]
 )
 TM = "TM1,TM2,TM3,TM4"
+#: The user's statement that the reference is fixed in the lab, which alone lets a still one be
+#: bounded by a capture volume.
+LAB_FIXED = {"lab_fixed_reference": True}
 
 
 def with_treadmill(knee, corners=TREADMILL, *, noise_mm=0.3, scale=1.0, units="mm", moves=0.0):
@@ -400,7 +403,9 @@ def test_a_treadmill_fixed_reference_in_millimetres_is_fitted():
         knee.first_frame,
         "mm",
     )
-    fitted = jointbench.fit(recording, "center", SHANK, "TM1,TM2,TM3,TM4", artefacts="exclude")
+    fitted = jointbench.fit(
+        recording, "center", SHANK, "TM1,TM2,TM3,TM4", artefacts="exclude", **LAB_FIXED
+    )
     assert np.isfinite(fitted.estimate()).all()
 
 
@@ -411,6 +416,7 @@ def test_jointbench_fit_takes_a_treadmill_reference_from_a_file(tmp_path, capsys
     recording = with_treadmill(read(KNEE).frames("100:400"))
     path = write_c3d(tmp_path / "treadmill.c3d", recording.labels, recording.markers, units=units)
     argv = ["fit", "center", str(path), "--moving", SHANK, "--reference", TM, "--method", "NM"]
+    argv += ["--lab-fixed-reference"]
     assert main([*argv, "--artefacts", "exclude", "--format", "csv"]) == code
     _, err = capsys.readouterr()
     if code:
@@ -421,17 +427,111 @@ def test_an_axis_about_a_still_reference_is_fitted_and_a_joint_centre_is_not():
     """The treadmill is the frame of a centre or an axis; a joint centre's reference is the
     proximal body segment of the joint, bounded as one, and refused as a ValueError."""
     recording = with_treadmill(read(KNEE).frames("100:400"))
-    fitted = jointbench.fit(recording, "axis", SHANK, TM, method="planar", artefacts="exclude")
+    fitted = jointbench.fit(
+        recording, "axis", SHANK, TM, method="planar", artefacts="exclude", **LAB_FIXED
+    )
     assert np.isfinite(fitted.estimate()).all()
     with pytest.raises(ValueError, match=rf"{re.escape(ONE_SEGMENT)}.*: they are not the markers "):
         jointbench.fit(recording, "joint_center", SHANK, TM, artefacts="exclude")
+
+
+#: What the refusal of a still reference wider than a segment, not stated fixed in the lab, says.
+NOT_STATED = (
+    "and they stay still in the lab, every marker within 5 mm of its median position: a "
+    "reference fixed in the lab is bounded by what one optical capture volume spans where it is "
+    "stated so (lab_fixed_reference=True, --lab-fixed-reference)"
+)
+
+
+def test_a_still_treadmill_not_stated_fixed_in_the_lab_is_bounded_as_a_segment_naming_the_option():
+    """Without the user's word the treadmill's size is a segment's too large: refused as at
+    5547d95, and the refusal says the markers are still and names the option."""
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers TM1, TM2, TM3, TM4 lie 2.15e+03 mm apart (the farthest two, "
+        f"median over the frames), {ONE_SEGMENT}, {NOT_STATED}, in the unit the file states"
+    ), message
+
+
+def test_jointbench_fit_names_its_option_for_a_still_treadmill_not_stated_fixed(tmp_path, capsys):
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    path = write_c3d(tmp_path / "treadmill.c3d", recording.labels, recording.markers)
+    argv = ["fit", "center", str(path), "--moving", SHANK, "--reference", TM, "--method", "NM"]
+    assert main([*argv, "--artefacts", "exclude", "--format", "csv"]) == 2
+    _, err = capsys.readouterr()
+    assert f"{path}: markers TM1, TM2, TM3, TM4 lie 2.15e+03 mm apart" in err
+    assert NOT_STATED in err
+
+
+def test_a_still_reference_far_from_the_subject_not_stated_fixed_names_the_option():
+    """A wand frame 300 mm across, 4 m from the treadmill's: a segment's size, but with the
+    shank it spans more than two joined segments; the refusal names the option."""
+    wand = TREADMILL * [0.15, 0.375, 0.0] + [4500.0, 0.0, 0.0]
+    recording = with_treadmill(read(KNEE).frames("100:400"), wand)
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers TM1, TM2, TM3, TM4, {SHANK.replace(',', ', ')} lie 3.95e+03 mm"
+    ), message
+    assert f"({MAX_JOINED_SPAN_MM:g} mm), {NOT_STATED}" in message, message
+
+
+def test_a_wide_reference_that_moves_not_stated_fixed_is_refused_as_no_segment():
+    """Not stated fixed, a wide reference that moves is refused as at 5547d95, without naming
+    the option (it would not hold) or the motion (nothing claimed it still)."""
+    knee = read(KNEE).frames("100:400")
+    recording = with_treadmill(knee, moves=pelvis_sway(knee))
+    with pytest.raises(ValueError) as error:
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    message = str(error.value)
+    assert f"{ONE_SEGMENT}, in the unit the file states ('mm', read as mm)" in message, message
+    assert "lab_fixed_reference" not in message
+
+
+def test_a_joint_centre_takes_no_lab_fixed_reference():
+    """A joint centre's reference is the proximal body segment of the joint, never the lab's."""
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    with pytest.raises(ValueError, match=r"^lab_fixed_reference \(--lab-fixed-reference\) is "):
+        jointbench.fit(recording, "joint_center", SHANK, THIGH, artefacts="exclude", **LAB_FIXED)
+
+
+@pytest.mark.parametrize(
+    ("reference", "stated", "named"),
+    [
+        (None, True, "needs a reference"),
+        (TM, "yes", "must be True or False, got 'yes'"),
+        (TM, 1, "must be True or False, got 1"),
+    ],
+)
+def test_a_lab_fixed_reference_needs_a_reference_and_a_bool(reference, stated, named):
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    with pytest.raises(
+        ValueError, match=rf"^lab_fixed_reference \(--lab-fixed-reference\) {named}"
+    ):
+        jointbench.fit(
+            recording, "center", SHANK, reference, artefacts="exclude", lab_fixed_reference=stated
+        )
+
+
+def test_a_small_reference_stated_fixed_that_moves_is_bounded_as_a_segment():
+    """The statement widens a bound only: a thigh stated fixed in the lab moves, and being a
+    segment's size, is fitted as one."""
+    recording = with_treadmill(read(KNEE).frames("100:400"))
+    fitted = jointbench.fit(recording, "center", SHANK, THIGH, artefacts="exclude", **LAB_FIXED)
+    assert np.isfinite(fitted.estimate()).all()
 
 
 def test_a_still_reference_with_gaps_is_fitted_and_its_gaps_counted():
     """Gaps, as NaN or as (0, 0, 0), do not make markers move: frames where fewer than three
     of the treadmill's markers are seen are gaps of the fit."""
     knee = read(KNEE).frames("100:400")
-    whole = jointbench.fit(with_treadmill(knee), "center", SHANK, TM, artefacts="exclude")
+    whole = jointbench.fit(
+        with_treadmill(knee), "center", SHANK, TM, artefacts="exclude", **LAB_FIXED
+    )
     recording = with_treadmill(knee)
     markers = recording.markers.copy()
     tm1, tm2, tm3 = recording.index("TM1,TM2,TM3")
@@ -439,7 +539,7 @@ def test_a_still_reference_with_gaps_is_fitted_and_its_gaps_counted():
     markers[15:31, tm2] = 0.0
     markers[200:260, tm3] = np.nan
     gappy = Recording(recording.labels, markers, knee.rate_hz, "treadmill.c3d", knee.first_frame)
-    fitted = jointbench.fit(gappy, "center", SHANK, TM, artefacts="exclude")
+    fitted = jointbench.fit(gappy, "center", SHANK, TM, artefacts="exclude", **LAB_FIXED)
     assert np.isfinite(fitted.estimate()).all()
     assert fitted.n_gap_frames == whole.n_gap_frames + 6  # frames 15 to 20: TM1 and TM2 unseen
 
@@ -452,7 +552,7 @@ def test_a_still_reference_across_the_lab_from_the_subject_is_fitted():
     recording = with_treadmill(knee, wand)
     joined = recording.select(f"{SHANK},{TM}")
     assert np.ptp(joined.reshape(-1, 3), axis=0).max() > MAX_JOINED_SPAN_MM
-    fitted = jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+    fitted = jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude", **LAB_FIXED)
     assert np.isfinite(fitted.estimate()).all()
 
 
@@ -472,7 +572,7 @@ def test_a_still_reference_in_another_unit_is_caught_from_the_moving_markers(
     still (its noise read 1000 times): the shank, which moves, tells the unit, and is named."""
     recording = with_treadmill(read(KNEE).frames("100:400"), scale=scale, units=units)
     with pytest.raises(ValueError) as error:
-        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude", **LAB_FIXED)
     message = str(error.value)
     assert message.startswith(
         f"treadmill.c3d: markers RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie {span} mm apart"
@@ -480,16 +580,6 @@ def test_a_still_reference_in_another_unit_is_caught_from_the_moving_markers(
     assert f"{hint}; correct the file's unit" in message
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "a still reference is bounded by a capture volume and the moving markers tell the unit "
-        "only where their own cluster, read 10 times its size, breaks a segment's bound: a "
-        "shank plate 119 mm across reads 1.19 m under 'cm' and passes, so the centre comes "
-        "out 10 times off (bounded as a segment's, the wand was refused); telling this unit "
-        "needs a sign other than the clusters' sizes"
-    ),
-)
 def test_a_still_reference_in_centimetres_with_a_compact_moving_cluster_is_refused():
     """A wand frame 300 mm by 300 mm fixed in the lab, seen with 0.1 mm of noise, and a
     three-marker shank plate, in millimetres under 'cm': refused as a wrong unit."""
@@ -507,7 +597,7 @@ def test_a_still_reference_is_bounded_by_a_capture_volume():
     both are named."""
     recording = with_treadmill(read(KNEE).frames("100:400"), noise_mm=0.0, scale=1000.0, units="m")
     with pytest.raises(ValueError) as error:
-        jointbench.fit(recording, "center", "RATT", TM, artefacts="exclude")
+        jointbench.fit(recording, "center", "RATT", TM, artefacts="exclude", **LAB_FIXED)
     assert str(error.value) == (
         "treadmill.c3d: markers TM1, TM2, TM3, TM4 lie 2.15e+06 mm apart (the farthest two, "
         "median over the frames), more than the markers of one optical capture volume span "
@@ -529,7 +619,7 @@ def test_a_wide_reference_that_moves_with_the_subject_is_bounded_as_a_segment():
     knee = read(KNEE).frames("100:400")
     recording = with_treadmill(knee, moves=pelvis_sway(knee))
     with pytest.raises(ValueError) as error:
-        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude", **LAB_FIXED)
     message = str(error.value)
     assert message.startswith("treadmill.c3d: markers TM1, TM2, TM3, TM4 lie 2.15e+03 mm apart")
     assert re.search(
@@ -549,13 +639,15 @@ def test_lab_markers_with_a_body_marker_among_them_are_bounded_as_a_segment():
     """The head's vertex named among three of the treadmill's markers: it moves, and is named."""
     recording = with_treadmill(read(KNEE).frames("100:400"))
     with pytest.raises(ValueError, match=r"and they move in the lab: HV lies \d+(\.\d+)? mm"):
-        jointbench.fit(recording, "center", SHANK, "TM1,TM2,TM3,HV", artefacts="exclude")
+        jointbench.fit(
+            recording, "center", SHANK, "TM1,TM2,TM3,HV", artefacts="exclude", **LAB_FIXED
+        )
 
 
 def test_a_reference_of_two_still_markers_is_no_segment():
     recording = with_treadmill(read(KNEE).frames("100:400"))
     with pytest.raises(ValueError, match=r"a segment needs at least three markers, got \['TM1'"):
-        jointbench.fit(recording, "center", SHANK, "TM1,TM2", artefacts="exclude")
+        jointbench.fit(recording, "center", SHANK, "TM1,TM2", artefacts="exclude", **LAB_FIXED)
 
 
 def test_a_still_reference_bumped_once_is_refused_naming_the_bump_and_fitted_without_it():
@@ -566,14 +658,16 @@ def test_a_still_reference_bumped_once_is_refused_naming_the_bump_and_fitted_wit
     bump[150:160] = [20.0, 0.0, 0.0]
     recording = with_treadmill(knee, moves=bump)
     with pytest.raises(ValueError) as error:
-        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude")
+        jointbench.fit(recording, "center", SHANK, TM, artefacts="exclude", **LAB_FIXED)
     found = re.search(
         r"TM\d lies (\d+(?:\.\d+)?) mm from its median position in frame (\d+)", str(error.value)
     )
     assert found, str(error.value)
     assert 18.0 < float(found[1]) < 22.0
     assert 250 <= int(found[2]) < 260
-    before = jointbench.fit(recording, "center", SHANK, TM, frames="100:250", artefacts="exclude")
+    before = jointbench.fit(
+        recording, "center", SHANK, TM, frames="100:250", artefacts="exclude", **LAB_FIXED
+    )
     assert np.isfinite(before.estimate()).all()
 
 

@@ -39,8 +39,10 @@ from jointbench.comparison.snapshot import (
 from jointbench.configuration.config import open_config, read_configs, study_names
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
+from jointbench.estimators.validation import MAX_SPAN_MM
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
+from jointbench.io.segments import LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
 from jointbench.report import (
     dry_run_pending,
@@ -472,6 +474,7 @@ def _fit(args: argparse.Namespace) -> int:
             reference,
             frames=args.frames,
             artefacts=args.artefacts,
+            lab_fixed_reference=args.lab_fixed_reference,
         )
         fits = _fit_all(prepared, names, args)
     for warning in caught:
@@ -603,6 +606,14 @@ def _parser() -> argparse.ArgumentParser:
         default="refuse",
         help="label swaps / markers falling off: refuse with a message, or leave out the frames "
         "that break the shape most frames share",
+    )
+    fit.add_argument(
+        LAB_FIXED_FLAG,
+        action="store_true",
+        help="the --reference markers are fixed in the lab (a treadmill's frame, a force plate; "
+        f"center and axis only): while they stay within {LAB_FIXED_MM:g} mm of their median "
+        "positions they are bounded by a capture volume, not by a body segment's "
+        f"{MAX_SPAN_MM / 1000:g} m",
     )
     fit.add_argument(
         "--bootstrap", type=int, default=0, help="moving-block bootstrap resamples (0: none)"

@@ -39,6 +39,8 @@ from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
 from jointbench.io.segments import (
+    LAB_FIXED_FLAG,
+    LAB_FIXED_KEYWORD,
     Artefact,
     ArtefactRules,
     Segment,
@@ -77,9 +79,9 @@ BLOCK_SPANS = 3
 DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-markov"}
 
 #: The kinds whose reference is only the frame of the answer, which may be fixed in the lab (a
-#: treadmill, a force plate) and is then bounded by a capture volume rather than a segment
-#: (:func:`~jointbench.io.segments.check_reference_span`); a ``joint_center``'s is the
-#: proximal body segment of the joint.
+#: treadmill, a force plate) and, stated so by the user and still, is then bounded by a capture
+#: volume rather than a segment (:func:`~jointbench.io.segments.check_reference_span`); a
+#: ``joint_center``'s is the proximal body segment of the joint.
 LAB_FIXED_KINDS = ("center", "axis")
 
 
@@ -452,6 +454,28 @@ def _checked_frames(frames: object) -> slice | str:
     )
 
 
+def _check_lab_fixed(lab_fixed_reference: object, kind: str, reference: object) -> None:
+    """``ValueError`` naming the option when ``lab_fixed_reference`` is not a bool, or states
+    fixed in the lab a reference that is none (no ``reference``) or a body segment (a
+    ``joint_center``'s proximal one): stated so, a still reference is bounded by a capture
+    volume rather than a segment, and no other cluster may be."""
+    option = f"{LAB_FIXED_KEYWORD} ({LAB_FIXED_FLAG})"
+    if not isinstance(lab_fixed_reference, bool):
+        raise ValueError(f"{option} must be True or False, got {lab_fixed_reference!r}")
+    if not lab_fixed_reference:
+        return
+    if kind not in LAB_FIXED_KINDS:
+        raise ValueError(
+            f"{option} is for the reference of a {' or '.join(LAB_FIXED_KINDS)} fit: a {kind}'s "
+            "reference is the proximal body segment of the joint, bounded as one"
+        )
+    if reference is None:
+        raise ValueError(
+            f"{option} needs a reference (--reference): without one the moving markers are "
+            "taken as already in the reference frame"
+        )
+
+
 def prepare(
     recording: Recording,
     kind: str,
@@ -461,10 +485,12 @@ def prepare(
     frames: slice | str | None = None,
     artefacts: str = "refuse",
     rules: ArtefactRules | None = None,
+    lab_fixed_reference: bool = False,
 ) -> Prepared:
     """Segments, gaps and artefacts of a recording for one kind of fit (see :func:`fit`)."""
     if kind not in KINDS:
         raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
+    _check_lab_fixed(lab_fixed_reference, kind, reference)
     if artefacts not in ARTEFACT_POLICIES:
         raise ValueError(
             f"artefacts must be one of {', '.join(ARTEFACT_POLICIES)}, got {artefacts!r}"
@@ -477,11 +503,12 @@ def prepare(
     # The moving markers tell the file's unit first: a reference may be fixed in the lab, where
     # its size, and how still it stays, are no segment's.
     check_span(recording.markers[:, moving_index], moving_labels, recording)
-    may_be_still = kind in LAB_FIXED_KINDS
+    # None: the reference is a body segment, and no statement is asked of it.
+    stated_lab_fixed = lab_fixed_reference if kind in LAB_FIXED_KINDS else None
     segments: list[Segment] = []
     ref = None
     if reference is not None:
-        ref = Segment.fit(recording, reference, rules, may_be_still=may_be_still)
+        ref = Segment.fit(recording, reference, rules, stated_lab_fixed=stated_lab_fixed)
         check_pose_determined(ref, recording.source)
         check_axes_determined(ref, recording.source)
         ref = ref.determined()
@@ -499,7 +526,7 @@ def prepare(
         mov = Segment.fit(recording, moving, rules)
         segments.append(mov)
     if ref is not None:
-        check_joined_span(ref.labels, moving_labels, recording, may_be_still=may_be_still)
+        check_joined_span(ref.labels, moving_labels, recording, stated_lab_fixed=stated_lab_fixed)
     found, swaps = _artefacts(recording, segments, [] if mov else moving_index, rules)
     if found and artefacts == "refuse":
         keep = ""
@@ -563,6 +590,7 @@ def fit(
     frames: slice | str | None = None,
     artefacts: str = "refuse",
     rules: ArtefactRules | None = None,
+    lab_fixed_reference: bool = False,
     n_bootstrap: int = 0,
     block_length: int | None = None,
     seed: int = 0,
@@ -588,6 +616,15 @@ def fit(
         frames whatever their order).
     rules : thresholds of the artefact detection (:class:`ArtefactRules`), ``None`` for the
         default.
+    lab_fixed_reference : ``True`` states that the ``reference`` markers are fixed in the lab
+        (a treadmill's frame, a force plate, a wand frame; ``center`` and ``axis`` only,
+        anything but a bool is refused): where they also stay still
+        (:data:`~jointbench.io.segments.LAB_FIXED_MM`) they are bounded, alone and with the
+        moving markers, by a capture volume rather than a body segment; where they move, the
+        refusal of their span names the marker, how far and the frame. Without it a reference
+        is bounded as a segment, and a still one too wide says so and names this option. A
+        still reference's size tells no unit: stated fixed, a unit 10 times off is caught only
+        by the moving markers.
     n_bootstrap, block_length, seed : moving-block bootstrap (:mod:`jointbench.uncertainty`);
         0 resamples means none, otherwise at least 2; a block of 1 to all the frames fitted
         (``None``: ``ceil(sqrt(n))``); a seed >= 0. Each an integer (not a bool, a float or
@@ -598,7 +635,14 @@ def fit(
     To fit several methods on one preparation, use :func:`prepare` and :meth:`Prepared.fit`.
     """
     prepared = prepare(
-        recording, kind, moving, reference, frames=frames, artefacts=artefacts, rules=rules
+        recording,
+        kind,
+        moving,
+        reference,
+        frames=frames,
+        artefacts=artefacts,
+        rules=rules,
+        lab_fixed_reference=lab_fixed_reference,
     )
     return prepared.fit(
         method, n_bootstrap=n_bootstrap, block_length=block_length, seed=seed, **options

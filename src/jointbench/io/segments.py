@@ -57,6 +57,8 @@ if TYPE_CHECKING:
     from jointbench.io.recording import Recording
 
 __all__ = [
+    "LAB_FIXED_FLAG",
+    "LAB_FIXED_KEYWORD",
     "LAB_FIXED_MM",
     "Artefact",
     "ArtefactRules",
@@ -111,22 +113,29 @@ LAB_FIXED_MM = 5.0
 class _Bound(NamedTuple):
     """What markers may span: ``largest_mm`` [mm], what spans that in words (``largest``, as
     :func:`~jointbench.estimators.validation.span_bound` takes it), whose markers they are not
-    when no unit makes them fit (``whose``), and, for a reference bounded as a segment because
-    it moves in the lab, where it moves (``moves``; ``""`` otherwise)."""
+    when no unit makes them fit (``whose``), and, for a reference bounded as a segment, why it
+    was not bounded by a capture volume (``why_not_lab``: it moves in the lab though stated
+    fixed in it, or it stays still but was not stated so; ``""`` otherwise)."""
 
     largest_mm: float
     largest: str
     whose: str
-    moves: str = ""
+    why_not_lab: str = ""
 
 
-#: The bounds of a segment's markers (moving, or a reference that moves), and of two joined.
+#: The bounds of a segment's markers (moving, or a reference not fixed in the lab), and of two
+#: joined.
 _ONE_SEGMENT = _Bound(MAX_SPAN_MM, ONE_SEGMENT, "one human body segment")
 _TWO_SEGMENTS = _Bound(
     MAX_JOINED_SPAN_MM, TWO_SEGMENTS, "two human body segments joined at a joint"
 )
-#: ... and of a reference that stays still in the lab, alone or with the moving markers.
+#: ... and of a reference stated fixed in the lab that stays still, alone or with the moving
+#: markers.
 _CAPTURE_VOLUME = _Bound(MAX_CAPTURE_SPAN_MM, CAPTURE_VOLUME, "one optical capture volume")
+#: The option by which a user states a reference fixed in the lab: the keyword of
+#: :func:`jointbench.fit` and :func:`jointbench.prepare`, and the flag of ``jointbench fit``.
+LAB_FIXED_KEYWORD = "lab_fixed_reference"
+LAB_FIXED_FLAG = "--lab-fixed-reference"
 
 
 def lab_motion(markers: np.ndarray) -> tuple[float, int, int]:
@@ -139,22 +148,40 @@ def lab_motion(markers: np.ndarray) -> tuple[float, int, int]:
     return float(distances[row, column]), int(column), int(row)
 
 
-def _reference_bounds(recording: Recording, labels: tuple[str, ...]) -> tuple[_Bound, _Bound]:
+def _reference_bounds(
+    recording: Recording, labels: tuple[str, ...], stated_lab_fixed: bool
+) -> tuple[_Bound, _Bound]:
     """The bounds of the markers ``labels``, each seen in some frame, of a reference that may
     be fixed in the lab (the frame of a one-segment fit, not the proximal segment of a joint),
-    alone and with the moving markers: a capture volume's where they stay still in the lab
-    (:data:`LAB_FIXED_MM`); otherwise a body segment's and two joined segments', saying where
-    they move."""
+    alone and with the moving markers: a capture volume's where the user states it fixed in
+    the lab (``stated_lab_fixed``) and its markers stay still in it (:data:`LAB_FIXED_MM`);
+    otherwise a body segment's and two joined segments', saying why not a capture volume's
+    where that is what the reference looks like or was said to be. The statement is needed: a
+    still reference's size tells no unit, and a moving cluster too compact to tell it either
+    would let a reference in the wrong unit through."""
     moved, column, row = lab_motion(recording.markers[:, recording.index(labels)])
-    if moved <= LAB_FIXED_MM:
+    still = moved <= LAB_FIXED_MM
+    if still and stated_lab_fixed:
         return _CAPTURE_VOLUME, _CAPTURE_VOLUME
+    if still:
+        unstated = (
+            f", and they stay still in the lab, every marker within {LAB_FIXED_MM:g} mm of its "
+            "median position: a reference fixed in the lab is bounded by what one optical "
+            f"capture volume spans where it is stated so ({LAB_FIXED_KEYWORD}=True, "
+            f"{LAB_FIXED_FLAG})"
+        )
+        return _ONE_SEGMENT._replace(why_not_lab=unstated), _TWO_SEGMENTS._replace(
+            why_not_lab=unstated
+        )
+    if not stated_lab_fixed:
+        return _ONE_SEGMENT, _TWO_SEGMENTS
     moves = (
         f", and they move in the lab: {labels[column]} lies {moved:.3g} mm from its median "
         f"position in {recording.when(row)}, more than the {LAB_FIXED_MM:g} mm a reference "
         "fixed in the lab stays within (one bumped in some frames is fitted over frames that "
         "leave them out, --frames)"
     )
-    return _ONE_SEGMENT._replace(moves=moves), _TWO_SEGMENTS
+    return _ONE_SEGMENT._replace(why_not_lab=moves), _TWO_SEGMENTS
 
 
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
@@ -168,13 +195,16 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
     _check_unit(markers, labels, recording, _ONE_SEGMENT)
 
 
-def check_reference_span(labels: tuple[str, ...], recording: Recording) -> None:
+def check_reference_span(
+    labels: tuple[str, ...], recording: Recording, *, stated_lab_fixed: bool
+) -> None:
     """:func:`check_span` for the markers ``labels``, each seen in some frame, of a reference
-    that may be fixed in the lab (the frame of a ``center`` or ``axis`` fit): while they stay
-    still in it (:data:`LAB_FIXED_MM`) they are bounded by a capture volume
+    that may be fixed in the lab (the frame of a ``center`` or ``axis`` fit): where the user
+    states it is (``stated_lab_fixed``) and they stay still in it (:data:`LAB_FIXED_MM`) they
+    are bounded by a capture volume
     (:data:`~jointbench.estimators.validation.MAX_CAPTURE_SPAN_MM`), not a segment, and the
-    file's unit is told by the moving markers."""
-    bound, _ = _reference_bounds(recording, labels)
+    file's unit is told by the moving markers (:func:`_reference_bounds`)."""
+    bound, _ = _reference_bounds(recording, labels, stated_lab_fixed)
     _check_unit(recording.markers[:, recording.index(labels)], labels, recording, bound)
 
 
@@ -183,16 +213,20 @@ def check_joined_span(
     moving: tuple[str, ...],
     recording: Recording,
     *,
-    may_be_still: bool = False,
+    stated_lab_fixed: bool | None = None,
 ) -> None:
     """``ValueError`` as :func:`check_span`'s when the markers of the ``reference`` segment
     and the ``moving`` ones, which turn about a joint between them, lie further apart than
     two joined human body segments' can
     (:data:`~jointbench.estimators.validation.MAX_JOINED_SPAN_MM`): clusters each small
-    enough to pass for a segment in the wrong unit, but too far from each other. Where the
-    reference may be fixed in the lab and is (:func:`check_reference_span`), both lie within
-    one capture volume."""
-    bound = _reference_bounds(recording, reference)[1] if may_be_still else _TWO_SEGMENTS
+    enough to pass for a segment in the wrong unit, but too far from each other. A reference
+    that may be fixed in the lab (``stated_lab_fixed`` not ``None``) and is stated and found so
+    (:func:`check_reference_span`) lies with them within one capture volume."""
+    bound = (
+        _TWO_SEGMENTS
+        if stated_lab_fixed is None
+        else _reference_bounds(recording, reference, stated_lab_fixed)[1]
+    )
     labels = reference + moving
     _check_unit(recording.markers[:, recording.index(labels)], labels, recording, bound)
 
@@ -211,7 +245,7 @@ def _check_unit(
     if broken is None:
         return
     if span > bound.largest_mm:
-        broken += bound.moves
+        broken += bound.why_not_lab
     hint = unit_hint(span, recording.units, bound.largest_mm)
     if span > bound.largest_mm and fitting_units(span, recording.units, bound.largest_mm) == {}:
         raise ValueError(
@@ -321,12 +355,13 @@ class Segment:
         labels: str | list[str] | tuple[str, ...],
         rules: ArtefactRules | None = None,
         *,
-        may_be_still: bool = False,
+        stated_lab_fixed: bool | None = None,
     ) -> Segment:
         """Fit the segment (:func:`screen`); frames whose samples break rigidity do not shape
         the mean. Its markers' span is bounded as a body segment's (:func:`check_span`), or,
-        where it is a reference that may be fixed in the lab (``may_be_still``), by a capture
-        volume while they stay still (:func:`check_reference_span`)."""
+        where it is a reference that may be fixed in the lab (``stated_lab_fixed`` not
+        ``None``: whether the user states it is), by a capture volume where it is stated so
+        and they stay still (:func:`check_reference_span`)."""
         rules = rules or ArtefactRules()
         index = recording.index(labels)
         labels = tuple(recording.labels[i] for i in index)
@@ -335,8 +370,8 @@ class Segment:
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
         _check_seen(recording, index)
-        if may_be_still:
-            check_reference_span(labels, recording)
+        if stated_lab_fixed is not None:
+            check_reference_span(labels, recording, stated_lab_fixed=stated_lab_fixed)
         else:
             check_span(recording.markers[:, index], labels, recording)
         screening = screen(recording.markers[:, index], labels, recording.source, rules)
