@@ -43,7 +43,7 @@ from test_pose_noise import CENTRE, _hip, _noisy, _thin_thigh
 FAR = 10.0
 
 
-def _swing(rng: np.random.Generator, distance_mm: float, rom_deg: float, noise_mm) -> tuple:
+def swing(rng: np.random.Generator, distance_mm: float, rom_deg: float, noise_mm) -> tuple:
     """Four markers ``distance_mm`` from a centre, scattered by up to 20 mm, swung about two
     axes by ``rom_deg`` over 120 frames: markers ``(120, 4, 3)`` [mm] with normal noise of SD
     ``noise_mm`` (a number or one per axis) and the centre ``(3,)`` [mm]."""
@@ -136,7 +136,7 @@ def centres(seeds: range) -> None:
 
     _cases(
         seeds,
-        lambda rng: _swing(rng, 500.0, 10.0, 0.5),
+        lambda rng: swing(rng, 500.0, 10.0, 0.5),
         fit,
         error,
         ("LS", "NM", "BC", "IS"),
@@ -145,7 +145,7 @@ def centres(seeds: range) -> None:
     )
     _cases(
         seeds,
-        lambda rng: _swing(rng, 60.0, 10.0, (0.1, 0.1, 2.0)),
+        lambda rng: swing(rng, 60.0, 10.0, (0.1, 0.1, 2.0)),
         fit,
         error,
         ("LS", "NM", "BC", "IS"),

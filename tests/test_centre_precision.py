@@ -6,6 +6,8 @@ lies about its centre among them."""
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +18,9 @@ from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM, centre_stat
 from jointbench.estimators.results import CenterResult
 from jointbench.geometry import rotation_matrix
 from jointbench.simulate import cmc
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import blind_spots
 
 _KEYS = ("center_sd_mm", "center_score_chi2", "center_score_p_value", "center_step_mm")
 
@@ -110,22 +115,11 @@ def test_a_biased_answer_is_not_passed_as_the_centre():
 
 
 def _far_swing(rng) -> np.ndarray:
-    """Four markers 500 mm from ``CENTRE`` in a random direction, scattered by 20 mm, swung by
-    up to 10 degrees about two axes (and 3 about a third) over 120 frames, with 0.5 mm noise
-    (``benchmarks/blind_spots.py``'s first case): ``(120, 4, 3)`` [mm]."""
-    direction = rng.normal(size=3)
-    body = 500.0 * direction / np.linalg.norm(direction) + rng.normal(scale=20.0, size=(4, 3))
-    t = np.linspace(0.0, 1.0, 120)
-    phase = rng.uniform(0.0, 2.0 * np.pi, 3)
-    angles = np.column_stack(
-        [
-            np.sin(2 * np.pi * t + phase[0]),
-            np.sin(2 * np.pi * 1.37 * t + phase[1]),
-            0.3 * np.sin(2 * np.pi * 0.71 * t + phase[2]),
-        ]
-    )
-    markers = np.einsum("kij,pj->kpi", rotation_matrix(np.radians(10.0) * angles), body)
-    return markers + CENTRE + rng.normal(scale=0.5, size=markers.shape)
+    """``benchmarks/blind_spots.py``'s first case about ``CENTRE``: four markers 500 mm out,
+    scattered by 20 mm, swung by up to 10 degrees about two axes (and 3 about a third) over 120
+    frames, with 0.5 mm noise: ``(120, 4, 3)`` [mm]."""
+    markers, centre = blind_spots.swing(rng, 500.0, 10.0, 0.5)
+    return markers - centre + CENTRE
 
 
 def test_a_bias_the_score_test_passes_is_not_passed_as_the_centre():
