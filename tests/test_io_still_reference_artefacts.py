@@ -164,6 +164,20 @@ def test_a_swap_in_a_still_reference_is_refused_as_a_swap_naming_its_frames(
     assert "move in the lab" not in message
 
 
+def test_a_swap_over_half_a_still_reference_s_trial_is_named_as_a_swap(treadmill):
+    """TM1 and TM2 exchanged from frame 240 to the end, 160 of the 300 frames: the frames
+    before it break the shape most frames share. Their residuals of some 2 m are the swap's,
+    not the rigid fit's noise, which would call the treadmill's markers collinear."""
+    recording = swapped(treadmill, slice(140, None))
+    with pytest.raises(ValueError) as error:
+        fit_still(recording, artefacts="refuse")
+    assert str(error.value).startswith(
+        "treadmill.c3d: markers TM1 and TM2 exchange labels at frame 240 (2.40 s); "
+    ), str(error.value)
+    fitted, _ = fit_still(recording)
+    np.testing.assert_array_equal(fitted.frames_used, np.arange(240, 400))
+
+
 def test_a_swap_in_a_still_reference_is_left_out_when_excluded(treadmill):
     fitted, warned = fit_still(swapped(treadmill, slice(150, 160)))
     assert {a.frame for a in fitted.excluded} == set(range(150, 160))

@@ -402,9 +402,11 @@ class Segment:
         line, for nearly collinear ones), to first order: the SD of that rotation [rad], the
         rigid fit's noise per coordinate [mm] (its residuals over their ``3 n - 6`` degrees of
         freedom in each frame with a pose) and the markers' RMS distance from that axis
-        through their centroid [mm] (the noise over ``sqrt(n)`` times it is the SD)."""
+        through their centroid [mm] (the noise over ``sqrt(n)`` times it is the SD). The frames
+        its artefacts spoil do not count: a swap's or a bump's residuals are not noise."""
         seen = np.isfinite(self.residuals)
         posed = np.isfinite(self.rotation[:, 0, 0])
+        posed &= ~flagged_frames(self.artefacts, len(posed))
         dof = 3 * int(seen[posed].sum()) - 6 * int(posed.sum())
         noise = math.sqrt(np.nansum(self.residuals[posed] ** 2) / dof) if dof > 0 else math.nan
         # The smallest principal moment of the centred shape: sum over the markers of their
