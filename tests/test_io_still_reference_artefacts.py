@@ -16,7 +16,8 @@ from test_io_units import LAB_FIXED, SHANK, TM, TREADMILL, with_treadmill
 
 import jointbench
 from jointbench.cli import main
-from jointbench.io import Recording, prepare, read
+from jointbench.estimators.validation import MAX_JOINED_SPAN_MM, MAX_SPAN_MM
+from jointbench.io import Artefact, Recording, prepare, read
 from jointbench.io import segments as segments_module
 
 #: The treadmill's corners as markers placed by hand on its frame: a few mm off a rectangle
@@ -261,3 +262,24 @@ def test_prepare_bounds_each_cluster_once(monkeypatch, treadmill, kind):
     prepare(treadmill, kind, SHANK, reference, artefacts="exclude", **options)
     assert [markers.shape[1] for markers in spans] == [6, 4, 10]
     assert len(motions) == (1 if kind == "center" else 0)
+
+
+def test_a_marker_seen_only_in_spoilt_frames_shows_no_stillness(treadmill):
+    """TM4 seen only in frames 100 to 109, each spoilt by a bump of TM1: no frame shows TM4
+    still, so the reference is not taken as still from the others' frames (all frames are
+    measured, the bump among them) and is bounded as a segment, naming the bump."""
+
+    def edit(markers, column):
+        markers[10:, column("TM4")] = np.nan
+        markers[:10, column("TM1")] += [50.0, 0.0, 0.0]
+
+    recording = edited(treadmill, edit)
+    spoilt = tuple(Artefact("rigidity", "TM1", row, 50.0, 5.0) for row in range(10))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        alone, joined = segments_module._reference_bounds(
+            recording, tuple(TM.split(",")), spoilt, True
+        )
+    assert alone.largest_mm == MAX_SPAN_MM
+    assert "they move in the lab: TM1 lies 50" in alone.why_not_lab
+    assert joined.largest_mm == MAX_JOINED_SPAN_MM
