@@ -125,7 +125,8 @@ def _undeclared(lacks: Mapping[str, tuple], declared: Mapping[str, Sequence]) ->
         if key == RECORDED_COLUMN:
             continue
         if key not in declared:
-            wrong.append(f"{key}, no key the paper declares ({', '.join(declared) or 'none'})")
+            keys = ", ".join(declared) or "none given"
+            wrong.append(f"{key}, no key the paper declares ({keys})")
             continue
         what = "methods" if key == "method" else f"{key} levels"
         shown = ", ".join(map(repr, declared[key]))
