@@ -14,7 +14,8 @@ them.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -34,6 +35,7 @@ __all__ = [
     "COLUMNS",
     "NOT_APPLICABLE",
     "STATUSES",
+    "Measurements",
     "claims_rows",
     "comparison_rows",
     "enforce_design",
@@ -83,10 +85,45 @@ NOT_APPLICABLE = "not applicable"
 UNEXPLAINED = "UNEXPLAINED: no deviation recorded in the paper's published values"
 OFF_DESIGN = "not enforced: this run's grid or trial count differs from the paper's design"
 NOT_IN_RUN = "not measured in this run (method, condition or study not run)"
+#: How the reason of an entry starts when the paper said why this run could not measure it.
+NOT_IN_RUN_BECAUSE = "not measured in this run: "
 #: How the reason of an entry whose tolerance could not be evaluated starts: a failure of the
 #: check (:func:`unexplained`), which no recorded deviation explains.
 CANNOT_EVALUATE = "cannot evaluate: "
 _SCHEMA = resources.files("jointbench.schemas").joinpath("published.schema.yaml")
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements(Mapping):
+    """A paper's measurements of one run (:attr:`jointbench.papers.base.Paper.measure`): a
+    mapping of entry id to :class:`~jointbench.papers.base.Measured` holding only what the run
+    measured, and ``not_measured``, why each claim it could not measure was not (what the run
+    lacks, in the words of the check: "this run has no method BC"), which the comparison shows
+    as that entry's reason. Equal to any mapping of the same measurements."""
+
+    measured: Mapping[str, object]
+    not_measured: Mapping[str, str] = field(default_factory=dict)
+
+    def __getitem__(self, entry_id: str) -> object:
+        return self.measured[entry_id]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.measured)
+
+    def __len__(self) -> int:
+        return len(self.measured)
+
+    def with_values(self, values: Mapping[str, object]) -> Measurements:
+        """These measurements with ``values`` (published values measured outside the claims'
+        loop, by id) beside them."""
+        return Measurements({**values, **self.measured}, self.not_measured)
+
+
+def _not_in_run(measurements: Mapping, entry_id: str) -> str:
+    """Why ``measurements`` hold nothing for ``entry_id``: the reason the paper gave, else
+    that the run did not measure it."""
+    why = measurements.not_measured if isinstance(measurements, Measurements) else {}
+    return NOT_IN_RUN_BECAUSE + why[entry_id] if entry_id in why else NOT_IN_RUN
 
 
 def load_published(
@@ -267,13 +304,14 @@ def _value_criterion(entry: Mapping) -> str:
     return f"reproduced value {describe(entry['tolerance'])} of the published"
 
 
-def _verdict(entry: Mapping, measured) -> tuple[str, str, str]:
-    """``(status, margin, reason)`` of one entry given its measurement (or None)."""
+def _verdict(entry: Mapping, measured, not_in_run: str) -> tuple[str, str, str]:
+    """``(status, margin, reason)`` of one entry given its measurement (or None, and then
+    ``not_in_run``, why the run did not measure it)."""
     tolerance = entry["tolerance"]
     if not is_compared(tolerance):
         return NOT_APPLICABLE, "", entry.get("not_applicable", entry["tolerance_reason"])
     if measured is None:
-        return NOT_APPLICABLE, "", entry.get("not_applicable", NOT_IN_RUN)
+        return NOT_APPLICABLE, "", entry.get("not_applicable", not_in_run)
     try:
         verdict = evaluate(tolerance, entry["published"], measured.value)
     except KeyError as error:
@@ -293,12 +331,12 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     """One row per published value and claim of ``document`` (columns :data:`COLUMNS`).
 
     ``measurements`` maps entry ids to :class:`~jointbench.papers.base.Measured`; an entry
-    without one is not applicable in this run.
+    without one is not applicable in this run, for the reason :class:`Measurements` give.
     """
     rows = []
     for kind, entry in _entries(document):
         measured = measurements.get(entry["id"])
-        status, margin, reason = _verdict(entry, measured)
+        status, margin, reason = _verdict(entry, measured, _not_in_run(measurements, entry["id"]))
         rows.append(
             {
                 "paper": document["paper"],
@@ -320,11 +358,15 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
 
 
 def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
-    """The claims of ``document`` with what we measured (columns :data:`CLAIM_COLUMNS`)."""
+    """The claims of ``document`` with what we measured (columns :data:`CLAIM_COLUMNS`); a
+    claim not measured says why in place of the reproduced value."""
     rows = comparison_rows({**document, "values": []}, measurements)
     rows["claim"] = rows["quantity"]
     missing = rows["reproduced"] == ""
-    rows.loc[missing, "reproduced"] = "cannot evaluate: " + NOT_IN_RUN
+    rows.loc[missing, "reproduced"] = [
+        CANNOT_EVALUATE + _not_in_run(measurements, entry_id)
+        for entry_id in rows.loc[missing, "id"]
+    ]
     return rows[CLAIM_COLUMNS]
 
 

@@ -1,5 +1,6 @@
 """Pieces every paper uses: its claims table as an output, that table's headline, and the loop
-its claims are measured through, with the selections by which a claim says what a run lacks."""
+its claims are measured through, with the selections by which a claim says what a run lacks and
+what the paper declares a run may hold, which tells a run's lack from a check's mistake."""
 
 from __future__ import annotations
 
@@ -7,14 +8,22 @@ import math
 import numbers
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from jointbench.comparison.published import NOT_APPLICABLE, claims_rows, status_legend
-from jointbench.papers.base import Inputs, Measured, Output, Table
+from jointbench.comparison.published import (
+    NOT_APPLICABLE,
+    Measurements,
+    claims_rows,
+    status_legend,
+)
+from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 
 __all__ = [
+    "RECORDED_COLUMN",
+    "Declared",
     "NotMeasured",
     "at_levels",
     "claims_headline",
@@ -34,19 +43,39 @@ def one_step_changes(table: pd.DataFrame) -> np.ndarray:
     return steps[np.isfinite(steps)]
 
 
+#: The key of a selection of recorded columns: the one kind of lack :func:`measured_claims`
+#: does not hold to the paper's declarations, as no one place lists every column a study may
+#: record (its diagnostics add their own).
+RECORDED_COLUMN = "recorded column"
+
+
 class NotMeasured(Exception):
     """What a claim check raises when the run lacks the data its sentence speaks of (a method,
     a level of the grid, a recorded column), saying which: the claim is then not measured in
-    this run. Nothing else is: a ``KeyError``, ``IndexError``, ``ValueError`` or
-    ``StopIteration`` from elsewhere in a check is its mistake (:func:`measured_claims`)."""
+    this run, for that reason. Nothing else is: a ``KeyError``, ``IndexError``, ``ValueError``
+    or ``StopIteration`` from elsewhere in a check is its mistake (:func:`measured_claims`).
+
+    ``lacks`` (by :func:`with_columns` and :func:`at_levels`) maps each key the selection asked
+    by (``"method"``, a grid key, :data:`RECORDED_COLUMN`) to the values it found the run
+    without; :func:`measured_claims` holds them to what the paper declares (:class:`Declared`).
+    """
+
+    def __init__(self, reason: str, lacks: Mapping[str, tuple] | None = None) -> None:
+        super().__init__(reason)
+        self.lacks = dict(lacks or {})
 
 
-def with_columns(table: pd.DataFrame, names: Sequence, what: str) -> pd.DataFrame:
-    """``table``'s columns ``names``, in that order; :class:`NotMeasured` naming those this run
-    lacks, each a ``what`` (``"method"``, ``"protocol"``, ``"recorded column"``)."""
-    missing = [name for name in names if name not in table.columns]
+def with_columns(
+    table: pd.DataFrame, names: Sequence, key: str, what: str | None = None
+) -> pd.DataFrame:
+    """``table``'s columns ``names``, in that order, each a value of ``key`` (``"method"``, a
+    grid key such as ``"protocol"``, or :data:`RECORDED_COLUMN`); :class:`NotMeasured` naming
+    those this run lacks, each a ``what`` (``key`` unless given: "method with fitted radii")."""
+    missing = tuple(name for name in names if name not in table.columns)
     if missing:
-        raise NotMeasured(f"this run has no {what} {', '.join(map(str, missing))}")
+        raise NotMeasured(
+            f"this run has no {what or key} {', '.join(map(str, missing))}", {key: missing}
+        )
     return table[list(names)]
 
 
@@ -59,8 +88,54 @@ def at_levels(data: pd.DataFrame | pd.Series, **levels: object) -> pd.DataFrame 
         at &= np.asarray(data.index.get_level_values(name) == value)
     if not at.any():
         shown = ", ".join(f"{name} {value}" for name, value in levels.items())
-        raise NotMeasured(f"this run has no cell at {shown}")
+        lacks = {name: (value,) for name, value in levels.items()}
+        raise NotMeasured(f"this run has no cell at {shown}", lacks)
     return data.xs(tuple(levels.values()), level=list(levels))
+
+
+@dataclass(frozen=True)
+class Declared:
+    """What a run of ``paper`` may hold for its claims to ask for, by key: ``"method"`` the
+    paper's methods and those it also measures (:attr:`~jointbench.papers.base.Paper.methods`,
+    :attr:`~jointbench.papers.base.Paper.also_measures`), each key of its design grid
+    (``design.grid`` of ``published``, its published values) the levels listed there. Read only
+    when a selection finds the run without something."""
+
+    paper: Paper
+    published: Mapping
+
+    def values(self) -> dict[str, tuple]:
+        """The declared values by key."""
+        grid = {key: tuple(levels) for key, levels in self.published["design"]["grid"].items()}
+        return {**grid, "method": (*self.paper.methods, *self.paper.also_measures)}
+
+
+def _is_one_of(value: object, declared: Sequence) -> bool:
+    # bool is an int to Python but never a method or a level: True is no 1.
+    return not isinstance(value, bool) and any(value == level for level in declared)
+
+
+def _undeclared(lacks: Mapping[str, tuple], declared: Mapping[str, Sequence]) -> list[str]:
+    """The parts of a selection's ``lacks`` (:attr:`NotMeasured.lacks`) that no run could hold,
+    given the ``declared`` values by key (:meth:`Declared.values`), in words: a key none of
+    them is (but :data:`RECORDED_COLUMN`), a value none of its key's is (misspelt, of another
+    type, or a level the design grid does not list)."""
+    wrong = []
+    for key, values in lacks.items():
+        if key == RECORDED_COLUMN:
+            continue
+        if key not in declared:
+            keys = ", ".join(declared) or "none given"
+            wrong.append(f"{key}, no key the paper declares ({keys})")
+            continue
+        what = "methods" if key == "method" else f"{key} levels"
+        shown = ", ".join(map(repr, declared[key]))
+        wrong += [
+            f"{key} {value!r}, none of the paper's {what} ({shown})"
+            for value in values
+            if not _is_one_of(value, declared[key])
+        ]
+    return wrong
 
 
 def _finite(value: object) -> bool:
@@ -74,22 +149,32 @@ def _finite(value: object) -> bool:
 
 
 def measured_claims(
-    claims: Mapping[str, Callable[..., Measured]], *data: object
-) -> dict[str, Measured]:
+    claims: Mapping[str, Callable[..., Measured]],
+    *data: object,
+    declared: Declared | None = None,
+) -> Measurements:
     """Each claim of ``claims`` (id to check) measured from ``data``, the arguments every check
-    takes, by id; those this run cannot measure left out (not measured in this run): a check
-    that raises :class:`NotMeasured`, or whose value is not finite (a mean or share of cells
-    the run lacks). Any other exception of a check is its mistake, and so is a numpy or pandas
-    ``RuntimeWarning`` (a mean of nothing, a division by zero: a selection it did not guard):
-    ``RuntimeError`` naming the claim, chained to it, so the mistake is mended rather than read
-    as a run without the claim's data or a number printed from it."""
-    out = {}
+    takes, by id; those this run cannot measure left out (not measured in this run), with why
+    (:attr:`~jointbench.comparison.published.Measurements.not_measured`): a check that raises
+    :class:`NotMeasured` (its reason), or whose value is not finite (a mean or share of cells
+    the run lacks).
+
+    A selection's lack is the run's only where ``declared`` (the paper's :class:`Declared`;
+    without it, nothing) holds what it asked for: a method or level no run of the paper could
+    hold is a misspelt or mistyped one (:func:`_undeclared`). That, any other exception of a
+    check, and a numpy or pandas ``RuntimeWarning`` (a mean of nothing, a division by zero: a
+    selection it did not guard) are mistakes of the check: ``RuntimeError`` naming the claim,
+    chained to it, so the mistake is mended rather than read as a run without the claim's data
+    or a number printed from it."""
+    out, not_measured = {}, {}
     for key, claim in claims.items():
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", RuntimeWarning)
                 measured = claim(*data)
-        except NotMeasured:
+        except NotMeasured as lack:
+            _require_declared(key, lack, declared)
+            not_measured[key] = str(lack)
             continue
         except RuntimeWarning as warning:
             raise RuntimeError(f"claim {key}: {warning}") from warning
@@ -98,7 +183,22 @@ def measured_claims(
             raise RuntimeError(f"claim {key}: {type(error).__name__}: {error}") from error
         if _finite(measured.value):
             out[key] = measured
-    return out
+        else:
+            not_measured[key] = "its value is not finite (a mean or share of cells it lacks)"
+    return Measurements(out, not_measured)
+
+
+def _require_declared(claim: str, lack: NotMeasured, declared: Declared | None) -> None:
+    """``RuntimeError`` naming ``claim`` and what of ``lack`` no run could hold, chained to it;
+    nothing when the run's lack is one the paper declares."""
+    if not lack.lacks:
+        return
+    wrong = _undeclared(lack.lacks, {} if declared is None else declared.values())
+    if wrong:
+        raise RuntimeError(
+            f"claim {claim}: asks for {'; '.join(wrong)}: a mistake of the check, not a run "
+            f"without it ({lack})"
+        ) from lack
 
 
 def claims_headline(tables: Mapping) -> str:

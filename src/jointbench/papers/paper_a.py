@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.published import Measurements
 from jointbench.comparison.tolerance import wilson_interval
 from jointbench.configuration.studies import get_study
 from jointbench.figures import paper_a as draw
@@ -26,6 +27,8 @@ from jointbench.papers.base import (
     Table,
 )
 from jointbench.papers.common import (
+    RECORDED_COLUMN,
+    Declared,
     NotMeasured,
     at_levels,
     claims_headline,
@@ -414,10 +417,10 @@ def radius_errors(collected: pd.DataFrame, methods=("LS", "NM")) -> pd.DataFrame
     underestimate) per condition (rows, :data:`CONDITION`) and method (columns), over the
     trials that fitted radii; :class:`NotMeasured` when the run fitted none of one of
     ``methods``."""
-    with_columns(collected, ["radius_error_mm"], "recorded column")
+    with_columns(collected, ["radius_error_mm"], RECORDED_COLUMN)
     rows = collected[collected["method"].isin(methods)]
     errors = rows.pivot_table(index=CONDITION, columns="method", values="radius_error_mm")
-    return with_columns(errors, methods, "method with fitted radii")
+    return with_columns(errors, methods, "method", "method with fitted radii")
 
 
 def _a13(collected, means):
@@ -475,7 +478,7 @@ def _marker_distances(config) -> dict[str, Measured]:
 def _our_times(collected: pd.DataFrame, published: dict) -> pd.DataFrame:
     """Table 2 of our times per trial by method (:func:`jointbench.figures.paper_a.table2`);
     :class:`NotMeasured` when the run recorded no times."""
-    with_columns(collected, ["seconds"], "recorded column")
+    with_columns(collected, ["seconds"], RECORDED_COLUMN)
     return draw.table2(collected, _published_seconds(published)).set_index("method")
 
 
@@ -513,11 +516,11 @@ def _published_seconds(published) -> dict[str, float]:
     }
 
 
-def measure(inputs: Inputs) -> dict[str, Measured]:
+def measure(inputs: Inputs) -> Measurements:
     """Every published value and claim of paper A, measured from the collected cmc results.
 
     A claim whose data are absent from the run (a method switched off, a condition not in the
-    grid) is left out, and so is reported as not applicable.
+    grid) is left out, and so is reported as not applicable, saying which were absent.
     """
     collected = inputs.collected
     means = draw.condition_means(collected)
@@ -533,8 +536,8 @@ def measure(inputs: Inputs) -> dict[str, Measured]:
         "A2": functools.partial(_a2, levels=a2_levels),
         "A12": functools.partial(_fastest, published=inputs.published),
     }
-    out.update(measured_claims(claims, collected, means))
-    return out
+    declared = Declared(PAPER, inputs.published)
+    return measured_claims(claims, collected, means, declared=declared).with_values(out)
 
 
 def _fig4(inputs: Inputs):

@@ -12,10 +12,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench.comparison.published import comparison_rows
+from jointbench.comparison.published import Measurements, comparison_rows
 from jointbench.figures import paper_b as draw
 from jointbench.papers.base import Inputs, Measured, Output, Paper, PublishedTable, Table
 from jointbench.papers.common import (
+    Declared,
     NotMeasured,
     claims_headline,
     claims_output,
@@ -190,12 +191,11 @@ def _cells(means: pd.DataFrame, published=None) -> dict[str, Measured]:
     return out
 
 
-def measure(inputs: Inputs) -> dict[str, Measured]:
+def measure(inputs: Inputs) -> Measurements:
     """Every Table 1 cell and claim of paper B, measured from the collected hinge results."""
     means = _means(inputs.collected)
-    out = _cells(means, inputs.published)
-    out.update(measured_claims(_CLAIMS, means))
-    return out
+    claims = measured_claims(_CLAIMS, means, declared=Declared(PAPER, inputs.published))
+    return claims.with_values(_cells(means, inputs.published))
 
 
 def _table1_cells(inputs: Inputs) -> pd.DataFrame:

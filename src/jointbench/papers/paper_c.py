@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.published import Measurements
 from jointbench.figures import paper_c as draw
 from jointbench.numerics.poses import POSE_MAX_ITERATIONS
 from jointbench.papers.base import (
@@ -23,6 +24,8 @@ from jointbench.papers.base import (
     Table,
 )
 from jointbench.papers.common import (
+    RECORDED_COLUMN,
+    Declared,
     NotMeasured,
     claims_headline,
     claims_output,
@@ -193,7 +196,7 @@ def converged_after(rows: pd.DataFrame) -> pd.DataFrame:
 
 
 def _c5(ours, rows, collected):
-    with_columns(rows, POSE_FIT_COLUMNS, "recorded column")
+    with_columns(rows, POSE_FIT_COLUMNS, RECORDED_COLUMN)
     counts = converged_after(rows.dropna(subset=list(POSE_FIT_COLUMNS)))
     if counts.empty:
         raise NotMeasured("no trial with a pose fit in this run")
@@ -240,15 +243,15 @@ def _table1_values(ours: pd.DataFrame) -> dict[str, Measured]:
     return out
 
 
-def measure(inputs: Inputs) -> dict[str, Measured]:
+def measure(inputs: Inputs) -> Measurements:
     """Every Table 1 value and claim of paper C, measured from the collected hip results."""
     if draw.METHOD not in set(inputs.collected["method"]):
-        return {}
+        return Measurements({}, dict.fromkeys(_CLAIMS, f"this run has no method {draw.METHOD}"))
     ours = draw.per_frames(inputs.collected)
     rows = inputs.collected[inputs.collected["method"] == draw.METHOD]
-    out = _table1_values(ours)
-    out.update(measured_claims(_CLAIMS, ours, rows, inputs.collected))
-    return out
+    declared = Declared(PAPER, inputs.published)
+    claims = measured_claims(_CLAIMS, ours, rows, inputs.collected, declared=declared)
+    return claims.with_values(_table1_values(ours))
 
 
 def _table1(inputs: Inputs) -> Table:

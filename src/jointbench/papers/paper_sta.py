@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from jointbench.comparison.published import Measurements
 from jointbench.comparison.tolerance import binomial_interval
 from jointbench.estimators import registry
 from jointbench.estimators.batching import failed_trial, mistakes_named
@@ -24,6 +25,7 @@ from jointbench.figures.common import method_style, pyplot
 from jointbench.figures.extended import extended_table, mean_ranks
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
 from jointbench.papers.common import (
+    Declared,
     NotMeasured,
     at_levels,
     claims_output,
@@ -358,11 +360,11 @@ _CLAIMS = {"S1": _s1, "S2": _s2, "S3": _s3, "S4": _s4, "S6": _s6, "S7": _s7}
 MEASURED = ("SCoRE", "gauss-markov", "gauss-markov-frame0", "analytic")
 
 
-def measure(inputs: Inputs) -> dict[str, Measured]:
+def measure(inputs: Inputs) -> Measurements:
     """Every finding of ``paper_sta.yaml`` that this run's grid can measure, over the
     :data:`MEASURED` methods."""
     means = _means(inputs.collected[inputs.collected["method"].isin(MEASURED)])
-    return measured_claims(_CLAIMS, means)
+    return measured_claims(_CLAIMS, means, declared=Declared(PAPER, inputs.published))
 
 
 PAPER = Paper(
