@@ -143,7 +143,7 @@ def planar_answer(direction: np.ndarray) -> AxisResult:
 
 def test_only_an_answer_its_cost_cannot_vouch_for_is_held_to_the_narrow_band():
     """A newcomer's method states no misfit: the 30 degree band holds for it."""
-    reference = support.MotionAxis(Z, 0.5, 0.01, 0.1)
+    reference = support.MotionAxis(Z, 0.5, 0.01, 0.1, 0.1)
     tilted = np.array([np.sin(np.radians(12.0)), 0.0, np.cos(np.radians(12.0))])
     answer = planar_answer(tilted)
     assert precision.annotate_motion_axis(answer, reference).status == "ok"
@@ -158,7 +158,7 @@ def test_an_answer_nothing_checks_says_so():
     """Its cost cannot vouch for it and the principal axis is not determined (the noise's
     share of the rotations' scatter reaches its eigen-gap): paper B's MCP, FE 10 degrees, AA 0.5
     times it, has planar answers 80 degrees off with SDs of 3."""
-    undetermined = support.MotionAxis(Z, 12.0, 1.5, 0.1)
+    undetermined = support.MotionAxis(Z, 12.0, 1.5, 0.1, 0.1)
     answer = planar_answer(Z)
     noted = with_warnings(answer, (), {"axis_misfit": UNSUPPORTED})
     status = precision.annotate_motion_axis(noted, undetermined).status

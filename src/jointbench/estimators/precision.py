@@ -129,6 +129,31 @@ above :data:`MAX_REFERENCE_POSE_SD_DEG`, where the first-order pose noise behind
 understates a thin cluster's) nothing is compared, and the result says why.
 ``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
 
+What every SD above rests on: markers that read the segment's rotation to first order. A
+method reads the rotation through the markers, the trajectory costs through each marker's arc,
+whose radius is its distance ``r`` from the axis, SARA through the poses and translations they
+give, and a marker with noise ``s`` per coordinate reads a frame's rotation to ``s / r``. A
+marker's arc is a circle whose centre and normal are the axis, so one marker that reads the
+rotation to first order can fix the axis line; where ``s / r`` is above
+:data:`MAX_REFERENCE_POSE_SD_DEG`, the bound on a frame's rotation noise beyond which it is
+not first order, for every marker, none can, and the costs' residuals about a line that near
+the markers are not linear in their noise. ``r`` is read from the data alone, not from the
+answer's line, which a wrong answer places where it lies and so would vouch for itself: a
+marker's lever, how far it travels over how much the poses say the segment turns, both net of
+their noise (:class:`jointbench.estimators.support.MotionAxis`, ``arc_rotation_sd_deg``).
+Where the marker with the longest lever reads a frame's rotation worse than that bound, the
+result says its precision is not determined, whatever the method
+(:func:`annotate_motion_axis`). Two markers were asked for first (the line as the meet of the
+planes through each marker normal to its travel), which took ``ok`` from correct answers of
+clusters with one long lever and the rest on the axis (markers on a knee's joint line and one
+on the ankle). The same bound on the pose noise about the answer's axis, from the cluster's
+inertia, called compact plates far from a hinge undetermined although each marker's arc about
+it has a long lever. Where the poses' rotation is itself mostly noise (a cluster a few
+millimetres across against a millimetre of noise) it reads larger than the motion and the
+levers shorter: the rule then errs towards saying not determined.
+``tests/test_axis_motion_check.py`` holds the near-axis case, the compact plate and the
+joint-line markers.
+
 What the band lets through: motion the cost does not model. A hinge with an independent wobble
 about another axis of a tenth of its arc (0.5 mm noise) leaves the planar and combined answers
 up to 30 degrees off with SDs of one or two, inside the band: the SD counts the wobble's share
@@ -233,7 +258,8 @@ MISFIT_BAND_DEG = 5.0
 #: The motion's axis is compared only where no pose's rotation SD is above this [deg]: beyond
 #: it (a thin or nearly collinear cluster) the first-order pose noise ``s^2 K^-1`` understates
 #: the rotation noise about the cluster's weak axis, and the principal axis can lie along
-#: that axis with a small stated SD.
+#: that axis with a small stated SD. An answer's precision is not determined where no marker
+#: reads a frame's rotation through its arc within it (module docstring).
 MAX_REFERENCE_POSE_SD_DEG = 5.0
 
 # The one-sided normal quantile that a cost difference must exceed, in standard errors, to be
@@ -607,8 +633,12 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
     a method could state any SD. Where the reference is not determined (its noise share not
     below 1, its SD above :data:`MAX_AXIS_SD_DEG`, a pose's SD above
     :data:`MAX_REFERENCE_POSE_SD_DEG`), or is ``None`` (the data gave no pose: ``unavailable``
-    says why), nothing is compared and ``not_checked`` says why. ``converged`` and the answer
-    are left as the method set them."""
+    says why), nothing is compared and ``not_checked`` says why. Where a reference is given
+    and the answer is finite, ``arc_rotation_sd_deg`` is the SD of a frame's rotation as the
+    marker with the longest lever reads it through its arc; above
+    :data:`MAX_REFERENCE_POSE_SD_DEG`, a warning that the precision is not determined (module
+    docstring), unless the answer is already said to be checked by nothing. ``converged`` and
+    the answer are left as the method set them."""
     if reference is None:
         why = f"no principal axis of the segment's rotations: {unavailable or 'no pose'}"
         return with_warnings(result, (), {"motion_axis_check": {"not_checked": why}})
@@ -648,6 +678,18 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
             f"axis not determined: {_misfit_words(result.method, misfit)}, and "
             f"{record['not_checked']}, so nothing checks the answer",
         )
+    else:
+        arc_sd_deg = float(reference.arc_rotation_sd_deg)
+        record["arc_rotation_sd_deg"] = arc_sd_deg
+        # NaN fails the comparison and is warned about: it tells nothing either.
+        if not arc_sd_deg <= MAX_REFERENCE_POSE_SD_DEG:
+            warnings = (
+                f"precision not determined: no marker travels far enough for the rotation "
+                f"the poses show to read it within {MAX_REFERENCE_POSE_SD_DEG:g} deg a frame "
+                f"(the one with the longest lever reads it to {arc_sd_deg:.1f} deg): they lie "
+                "too near the axis for their noise to be first order, so no SD stated of an "
+                "axis holds, whatever line the answer claims",
+            )
     if "not_checked" in record:
         return with_warnings(result, warnings, {"motion_axis_check": record})
     band = MISFIT_BAND_DEG if unsupported else MOTION_AXIS_BAND_DEG

@@ -1575,13 +1575,59 @@ def _one_segment_axes(
             rotations.values, rotations.own, rotations.mean, rotations.noise, rotations.n_frames
         )
     directions, sd_deg, noise_share, pose_sd_deg, *shares = numbers
+    axis_share = _AxisShare(*shares)
+    arc_sd_deg = _arc_rotation_sd_deg(
+        kernel_array(markers), variance, axis_share.principal_rms_rad, axis_share.off_rms_rad
+    )
     axes = [
-        MotionAxis(direction, sd, share, pose_sd)
-        for direction, sd, share, pose_sd in zip(
-            directions, sd_deg.tolist(), noise_share.tolist(), pose_sd_deg.tolist(), strict=True
+        MotionAxis(direction, sd, share, pose_sd, arc_sd)
+        for direction, sd, share, pose_sd, arc_sd in zip(
+            directions,
+            sd_deg.tolist(),
+            noise_share.tolist(),
+            pose_sd_deg.tolist(),
+            arc_sd_deg.tolist(),
+            strict=True,
         )
     ]
-    return axes, _AxisShare(*shares)
+    return axes, axis_share
+
+
+@kernel
+def _arc_rotation_sd_deg(
+    markers: np.ndarray, variance: np.ndarray, principal_rms: np.ndarray, off_rms: np.ndarray
+) -> np.ndarray:
+    """Per trial, the SD [deg] of one frame's rotation as the arc of the marker with the
+    longest lever reads it, from one segment's markers ``(T, N, n, 3)`` [mm] alone
+    (:class:`MotionAxis`): ``s / L``, ``s^2`` the rigid residual ``variance`` ``(T,)``
+    [mm^2] and a marker's lever ``L`` its travel (its positions' RMS distance from their mean,
+    net of the noise's ``3 s^2 (N - 1) / N`` in the square) over the rotation the poses measure
+    (the RMS rotation about the principal axis and the two others, ``principal_rms`` and
+    ``off_rms`` ``(T,)`` [rad], net of their noise). ``inf`` where every marker's travel
+    is within its noise. A compiled kernel."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    sd_deg = np.empty(n_trials)
+    travel = np.empty(n_markers)
+    for t in range(n_trials):
+        noise = 3.0 * variance[t] * (n_frames - 1) / n_frames
+        for i in range(n_markers):
+            squares = 0.0
+            for c in range(3):
+                mean = 0.0
+                for k in range(n_frames):
+                    mean += markers[t, k, i, c]
+                mean /= n_frames
+                for k in range(n_frames):
+                    squares += (markers[t, k, i, c] - mean) ** 2
+            travel[i] = squares / n_frames - noise
+        longest = travel.max()
+        rotation_sq = principal_rms[t] ** 2 + off_rms[t] ** 2
+        # L^2 = travel / rotation_sq, so s / L = s * rotation / sqrt(travel).
+        if longest <= 0.0:
+            sd_deg[t] = np.inf
+        else:
+            sd_deg[t] = np.degrees(np.sqrt(variance[t] * rotation_sq / longest))
+    return sd_deg
 
 
 @kernel
@@ -1661,12 +1707,19 @@ class MotionAxis(NamedTuple):
     of the rotation noise's share of the rotations' scatter over its eigen-gap (from 1 up, the
     axis is not determined by the motion) and ``pose_sd_deg`` the largest SD of one pose's
     rotation [deg], about the cluster's weakest axis (where it is large, a thin cluster's, the
-    first-order noise model behind the other two does not hold)."""
+    first-order noise model behind the other two does not hold), and ``arc_rotation_sd_deg``
+    the SD [deg] of one frame's rotation as the arc of the marker with the longest lever
+    reads it: ``s / L``, a marker's lever ``L`` how far it travels against how much the
+    poses say the segment turns, both net of their noise (:func:`_arc_rotation_sd_deg`). A
+    marker at a distance ``r`` from the axis travels ``r`` times the rotation, so ``L`` is
+    that distance read from the data, whatever line an answer claims
+    (:func:`jointbench.estimators.precision.annotate_motion_axis`)."""
 
     direction: np.ndarray
     sd_deg: float
     noise_share: float
     pose_sd_deg: float
+    arc_rotation_sd_deg: float
 
 
 @kernel
