@@ -150,6 +150,8 @@ def test_a_declared_method_or_level_the_run_lacks_is_not_measured_saying_which(
     measured = _measure(letter, documents, world[kept(world)])
     assert claim not in measured
     assert named in measured.not_measured[claim]
+    # Each reason is read in the claims table: numbers as written, not numpy's reprs.
+    assert not [why for why in measured.not_measured.values() if "np." in why]
 
 
 def _paper_a_without_bc(documents, worlds) -> Inputs:
@@ -210,3 +212,38 @@ def test_the_selections_say_what_the_run_lacks_by_key():
     with pytest.raises(NotMeasured) as raised:
         at_levels(table, marker_set="M", rom_deg=15)
     assert raised.value.lacks == {"marker_set": ("M",), "rom_deg": (15,)}
+
+
+def test_a_reason_lists_the_run_s_levels_as_the_config_writes_them(documents, worlds):
+    """Paper B's grid at ratios 0.3 and 0.5 (the reduced run's): B2's reason, which the claims
+    table and the published comparison show, lists them as numbers, not numpy's reprs."""
+    world = worlds["B"]
+    measured = _measure("B", documents, world[world["aa_ratio"].isin([0.3, 0.5])])
+    assert measured.not_measured["B2"].endswith("this run has ratios [0.3, 0.5]")
+
+
+def test_a_claim_no_run_of_ours_measures_says_why_not_that_this_run_did_not(documents, worlds):
+    """S5 (Begon et al.'s protocol and STA model, none of our conditions): its claims-table row
+    gives the paper's reason, not "not measured in this run", which a fuller run would mend."""
+    inputs = Inputs(
+        collected=worlds["S"],
+        published=load_published(paper_sta.PAPER.published),
+        config={"studies": {}},
+    )
+    row = paper_sta.PAPER.output("paper_sta_claims").render(inputs).frame.set_index("id").loc["S5"]
+    assert row["status"] == NOT_APPLICABLE
+    assert row["reason"].startswith("Begon et al. drew their noise")
+    assert row["reproduced"] == "cannot evaluate: " + row["reason"]
+
+
+def test_a_claim_shown_only_that_this_run_did_not_measure_says_what_it_lacks(documents, worlds):
+    """A12 (the order of speeds, shown beside the paper's) on a run that recorded no times."""
+    inputs = Inputs(
+        collected=worlds["A"].drop(columns="seconds"),
+        published=documents["A"],
+        config={"studies": {}},
+    )
+    row = paper_a.PAPER.output("paper_a_claims").render(inputs).frame.set_index("id").loc["A12"]
+    assert row["reproduced"] == (
+        "cannot evaluate: not measured in this run: this run has no recorded column seconds"
+    )

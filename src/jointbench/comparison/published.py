@@ -359,12 +359,15 @@ def comparison_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
 
 def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
     """The claims of ``document`` with what we measured (columns :data:`CLAIM_COLUMNS`); a
-    claim not measured says why in place of the reproduced value."""
+    claim not measured says why in place of the reproduced value: why no run of ours measures
+    it (the entry's ``not_applicable``), else what this run lacks."""
     rows = comparison_rows({**document, "values": []}, measurements)
     rows["claim"] = rows["quantity"]
     missing = rows["reproduced"] == ""
+    claims = {entry["id"]: entry for entry in document["claims"]}
     rows.loc[missing, "reproduced"] = [
-        CANNOT_EVALUATE + _not_in_run(measurements, entry_id)
+        CANNOT_EVALUATE
+        + claims[entry_id].get("not_applicable", _not_in_run(measurements, entry_id))
         for entry_id in rows.loc[missing, "id"]
     ]
     return rows[CLAIM_COLUMNS]

@@ -84,7 +84,7 @@ def _b2(means):
     if low.empty or rest.empty:
         raise NotMeasured(
             f"B2 needs planar cells at ratio {B2_RATIO:g} and at another ratio; this run has "
-            f"ratios {sorted(planar['aa_ratio'].unique())}"
+            f"ratios {sorted(planar['aa_ratio'].unique().tolist())}"
         )
     wrong = int((low["mean"] >= 5).sum() + (rest["mean"] < 5).sum())
     text = (
