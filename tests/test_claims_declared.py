@@ -171,7 +171,22 @@ def test_the_claims_table_of_a_run_without_bc_names_bc(documents, worlds):
         assert row["status"] == NOT_APPLICABLE, claim
         assert row["reason"] == "not measured in this run: this run has no method BC", claim
         assert row["reproduced"] == "cannot evaluate: " + row["reason"], claim
-    assert table.loc["A2", "reason"] == "not measured in this run: BC is not in this run"
+    assert (
+        table.loc["A2", "reason"] == "not measured in this run: BC is not in this run at the M set"
+    )
+
+
+def test_a2_at_a_run_lacking_its_noise_levels_names_them_not_bc(documents, worlds):
+    """BC ran: what A2 lacks is the levels it counts at, and its reason says which."""
+    world = worlds["A"]
+    axis = paper_a.A2_LEVELS.axis
+    kept = sorted(world[axis].unique())[1:2]
+    measured = _measure("A", documents, world[world[axis].isin(kept)])
+    design = documents["A"]["design"]["grid"]
+    lacking = [level for level in paper_a.A2_LEVELS.levels_in(design) if level not in kept]
+    assert lacking
+    shown = ", ".join(map(str, lacking))
+    assert measured.not_measured["A2"] == f"this run has no {axis} {shown} for BC at the M set"
 
 
 def test_the_published_comparison_of_a_run_without_bc_names_bc(documents, worlds):

@@ -142,11 +142,12 @@ def _a2(collected, means, levels):
         & (collected["rom_deg"] == collected["rom_deg"].min())
     ]
     if bc.empty:
-        raise NotMeasured("BC is not in this run")
+        raise NotMeasured("BC is not in this run at the M set")
     converged = bc.groupby(A2_LEVELS.axis)["converged"].sum()
     missing = [level for level in levels if level not in converged.index]
     if missing:
-        raise NotMeasured(f"BC is not in this run at {A2_LEVELS.axis} {missing}")
+        shown = ", ".join(map(str, missing))
+        raise NotMeasured(f"this run has no {A2_LEVELS.axis} {shown} for BC at the M set")
     n_trials = collected["trial"].nunique()
     counts = [int(converged[level]) for level in levels]
     value = {"count": counts, "trials": [n_trials] * len(counts)}
