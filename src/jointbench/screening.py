@@ -59,6 +59,7 @@ __all__ = [
     "find_rigidity_breaks",
     "find_swaps",
     "fit_poses",
+    "flagged_frames",
     "mean_shape",
     "residuals",
     "screen",
@@ -764,6 +765,15 @@ class Swap:
             f"{' and back at '.join(frames.name(row) for row in changes)}; frames {sides} are "
             "each labelled one consistent way and the data cannot tell which is right"
         )
+
+
+def flagged_frames(artefacts: Sequence[Artefact], n_frames: int) -> np.ndarray:
+    """Which of ``n_frames`` rows ``(n_frames,)`` bool the ``artefacts`` spoil
+    (:meth:`Artefact.rows`): the frames that excluding them leaves out."""
+    flagged = np.zeros(n_frames, dtype=bool)
+    for artefact in artefacts:
+        flagged[[row for row in artefact.rows() if row >= 0]] = True
+    return flagged
 
 
 def summarise(artefacts: list[Artefact], swaps: list[Swap], frames: Numbering) -> str:

@@ -53,7 +53,7 @@ from jointbench.io.segments import (
     summarise,
 )
 from jointbench.numerics.poses import best_rotation
-from jointbench.screening import checked_rules
+from jointbench.screening import checked_rules, flagged_frames
 from jointbench.uncertainty import Bootstrap, bootstrap, check_level, check_resampling
 
 __all__ = [
@@ -80,7 +80,7 @@ DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-ma
 
 #: The kinds whose reference is only the frame of the answer, which may be fixed in the lab (a
 #: treadmill, a force plate) and, stated so by the user and still, is then bounded by a capture
-#: volume rather than a segment (:func:`~jointbench.io.segments.check_reference_span`); a
+#: volume rather than a segment (:meth:`~jointbench.io.segments.Segment.fit`); a
 #: ``joint_center``'s is the proximal body segment of the joint.
 LAB_FIXED_KINDS = ("center", "axis")
 
@@ -490,6 +490,8 @@ def prepare(
     """Segments, gaps and artefacts of a recording for one kind of fit (see :func:`fit`)."""
     if kind not in KINDS:
         raise ValueError(f"unknown kind {kind!r}; choose one of {', '.join(KINDS)}")
+    if kind == "joint_center" and reference is None:
+        raise ValueError("joint_center needs a reference segment (the proximal markers)")
     _check_lab_fixed(lab_fixed_reference, kind, reference)
     if artefacts not in ARTEFACT_POLICIES:
         raise ValueError(
@@ -500,9 +502,14 @@ def prepare(
         recording = recording.frames(_checked_frames(frames))
     moving_index = recording.index(moving)
     moving_labels = tuple(recording.labels[i] for i in moving_index)
-    # The moving markers tell the file's unit first: a reference may be fixed in the lab, where
-    # its size, and how still it stays, are no segment's.
-    check_span(recording.markers[:, moving_index], moving_labels, recording)
+    # The moving markers tell the file's unit first, their span checked once, by their
+    # segment's fit where they form one: a reference may be fixed in the lab, where its size,
+    # and how still it stays, are no segment's.
+    mov = None
+    if kind == "joint_center" or len(moving_index) >= 3:
+        mov = Segment.fit(recording, moving, rules)
+    else:
+        check_span(recording.markers[:, moving_index], moving_labels, recording)
     # None: the reference is a body segment, and no statement is asked of it.
     stated_lab_fixed = lab_fixed_reference if kind in LAB_FIXED_KINDS else None
     segments: list[Segment] = []
@@ -519,14 +526,10 @@ def prepare(
                 "and the moving segment"
             )
         segments.append(ref)
-    elif kind == "joint_center":
-        raise ValueError("joint_center needs a reference segment (the proximal markers)")
-    mov = None
-    if kind == "joint_center" or len(moving_index) >= 3:
-        mov = Segment.fit(recording, moving, rules)
+    if mov is not None:
         segments.append(mov)
     if ref is not None:
-        check_joined_span(ref.labels, moving_labels, recording, stated_lab_fixed=stated_lab_fixed)
+        check_joined_span(ref, moving_labels, recording)
     found, swaps = _artefacts(recording, segments, [] if mov else moving_index, rules)
     if found and artefacts == "refuse":
         keep = ""
@@ -549,9 +552,7 @@ def prepare(
     else:
         arrays = (world if ref is None else ref.local(world),)
     visible = np.all([np.isfinite(a).all(axis=(1, 2)) for a in arrays], axis=0)
-    bad = np.zeros(recording.n_frames, dtype=bool)
-    for artefact in found:
-        bad[[row for row in artefact.rows() if row >= 0]] = True
+    bad = flagged_frames(found, recording.n_frames)
     if found:
         warnings.warn(
             f"{recording.source}: left out {int(bad.sum())} frames with artefacts: "

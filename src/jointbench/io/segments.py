@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -46,6 +46,7 @@ from jointbench.screening import (
     find_rigidity_breaks,
     find_swaps,
     fit_poses,
+    flagged_frames,
     mean_shape,
     screen,
     summarise,
@@ -69,7 +70,6 @@ __all__ = [
     "check_axes_determined",
     "check_joined_span",
     "check_pose_determined",
-    "check_reference_span",
     "check_span",
     "find_jumps",
     "find_rigidity_breaks",
@@ -149,7 +149,10 @@ def lab_motion(markers: np.ndarray) -> tuple[float, int, int]:
 
 
 def _reference_bounds(
-    recording: Recording, labels: tuple[str, ...], stated_lab_fixed: bool
+    recording: Recording,
+    labels: tuple[str, ...],
+    artefacts: tuple[Artefact, ...],
+    stated_lab_fixed: bool,
 ) -> tuple[_Bound, _Bound]:
     """The bounds of the markers ``labels``, each seen in some frame, of a reference that may
     be fixed in the lab (the frame of a one-segment fit, not the proximal segment of a joint),
@@ -158,8 +161,19 @@ def _reference_bounds(
     otherwise a body segment's and two joined segments', saying why not a capture volume's
     where that is what the reference looks like or was said to be. The statement is needed: a
     still reference's size tells no unit, and a moving cluster too compact to tell it either
-    would let a reference in the wrong unit through."""
-    moved, column, row = lab_motion(recording.markers[:, recording.index(labels)])
+    would let a reference in the wrong unit through.
+
+    Stillness is measured over the frames that the reference's own ``artefacts`` (its screen's,
+    :func:`screen`) do not spoil: a bump, a ghost or a label swap in a few frames is an artefact
+    that the screen names, and that excluding artefacts leaves out, as for any cluster, not
+    motion in the lab. Where the artefacts spoil every frame showing one of the markers, no
+    frame shows them still, and all are measured."""
+    markers = recording.markers[:, recording.index(labels)]
+    unspoilt = markers.copy()
+    unspoilt[flagged_frames(artefacts, len(markers))] = np.nan
+    if np.isfinite(unspoilt[..., 0]).any(axis=0).all():
+        markers = unspoilt
+    moved, column, row = lab_motion(markers)
     still = moved <= LAB_FIXED_MM
     if still and stated_lab_fixed:
         return _CAPTURE_VOLUME, _CAPTURE_VOLUME
@@ -195,40 +209,18 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
     _check_unit(markers, labels, recording, _ONE_SEGMENT)
 
 
-def check_reference_span(
-    labels: tuple[str, ...], recording: Recording, *, stated_lab_fixed: bool
-) -> None:
-    """:func:`check_span` for the markers ``labels``, each seen in some frame, of a reference
-    that may be fixed in the lab (the frame of a ``center`` or ``axis`` fit): where the user
-    states it is (``stated_lab_fixed``) and they stay still in it (:data:`LAB_FIXED_MM`) they
-    are bounded by a capture volume
-    (:data:`~jointbench.estimators.validation.MAX_CAPTURE_SPAN_MM`), not a segment, and the
-    file's unit is told by the moving markers (:func:`_reference_bounds`)."""
-    bound, _ = _reference_bounds(recording, labels, stated_lab_fixed)
-    _check_unit(recording.markers[:, recording.index(labels)], labels, recording, bound)
-
-
-def check_joined_span(
-    reference: tuple[str, ...],
-    moving: tuple[str, ...],
-    recording: Recording,
-    *,
-    stated_lab_fixed: bool | None = None,
-) -> None:
+def check_joined_span(reference: Segment, moving: tuple[str, ...], recording: Recording) -> None:
     """``ValueError`` as :func:`check_span`'s when the markers of the ``reference`` segment
     and the ``moving`` ones, which turn about a joint between them, lie further apart than
     two joined human body segments' can
     (:data:`~jointbench.estimators.validation.MAX_JOINED_SPAN_MM`): clusters each small
     enough to pass for a segment in the wrong unit, but too far from each other. A reference
-    that may be fixed in the lab (``stated_lab_fixed`` not ``None``) and is stated and found so
-    (:func:`check_reference_span`) lies with them within one capture volume."""
-    bound = (
-        _TWO_SEGMENTS
-        if stated_lab_fixed is None
-        else _reference_bounds(recording, reference, stated_lab_fixed)[1]
+    stated fixed in the lab and found still lies with them within one capture volume
+    (:attr:`Segment.joined_bound`)."""
+    labels = reference.labels + moving
+    _check_unit(
+        recording.markers[:, recording.index(labels)], labels, recording, reference.joined_bound
     )
-    labels = reference + moving
-    _check_unit(recording.markers[:, recording.index(labels)], labels, recording, bound)
 
 
 def _check_unit(
@@ -336,7 +328,10 @@ class Segment:
     markers are seen); ``residuals`` ``(n_frames, n)`` [mm] each marker's distance from its
     fitted position (NaN where missing); ``artefacts`` the flagged rigidity breaks, swapped
     frames and jumps, and ``swaps`` the label swaps that explain some of them (:func:`screen`);
-    ``untested`` what the screen did not test, in words (``""`` when it tested everything).
+    ``untested`` what the screen did not test, in words (``""`` when it tested everything);
+    ``joined_bound`` what its markers may span with the moving ones (:func:`check_joined_span`):
+    two joined body segments, or a capture volume for a reference stated fixed in the lab and
+    found still.
     """
 
     labels: tuple[str, ...]
@@ -347,6 +342,7 @@ class Segment:
     artefacts: tuple[Artefact, ...]
     swaps: tuple[Swap, ...] = ()
     untested: str = ""
+    joined_bound: _Bound = field(default=_TWO_SEGMENTS, repr=False)
 
     @classmethod
     def fit(
@@ -361,7 +357,9 @@ class Segment:
         the mean. Its markers' span is bounded as a body segment's (:func:`check_span`), or,
         where it is a reference that may be fixed in the lab (``stated_lab_fixed`` not
         ``None``: whether the user states it is), by a capture volume where it is stated so
-        and they stay still (:func:`check_reference_span`)."""
+        and they stay still over the frames its artefacts do not spoil
+        (:func:`_reference_bounds`): that one is screened first, and its stillness measured
+        once, for its span alone and with the moving markers (``joined_bound``)."""
         rules = rules or ArtefactRules()
         index = recording.index(labels)
         labels = tuple(recording.labels[i] for i in index)
@@ -370,11 +368,16 @@ class Segment:
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
         _check_seen(recording, index)
+        markers = recording.markers[:, index]
+        joined_bound = _TWO_SEGMENTS
+        if stated_lab_fixed is None:
+            check_span(markers, labels, recording)
+        screening = screen(markers, labels, recording.source, rules)
         if stated_lab_fixed is not None:
-            check_reference_span(labels, recording, stated_lab_fixed=stated_lab_fixed)
-        else:
-            check_span(recording.markers[:, index], labels, recording)
-        screening = screen(recording.markers[:, index], labels, recording.source, rules)
+            bound, joined_bound = _reference_bounds(
+                recording, labels, screening.artefacts, stated_lab_fixed
+            )
+            _check_unit(markers, labels, recording, bound)
         shape, rotation, translation = screening.shape, screening.rotation, screening.translation
         # World x = R (A q + o) + t for technical coordinates q: pose (R A, R o + t).
         frame = technical_frame(shape, labels, recording.source)
@@ -391,6 +394,7 @@ class Segment:
             screening.artefacts,
             screening.swaps,
             screening.untested,
+            joined_bound,
         )
 
     def weakest_rotation_sd(self) -> tuple[float, float, float]:
@@ -398,9 +402,11 @@ class Segment:
         line, for nearly collinear ones), to first order: the SD of that rotation [rad], the
         rigid fit's noise per coordinate [mm] (its residuals over their ``3 n - 6`` degrees of
         freedom in each frame with a pose) and the markers' RMS distance from that axis
-        through their centroid [mm] (the noise over ``sqrt(n)`` times it is the SD)."""
+        through their centroid [mm] (the noise over ``sqrt(n)`` times it is the SD). The frames
+        its artefacts spoil do not count: a swap's or a bump's residuals are not noise."""
         seen = np.isfinite(self.residuals)
         posed = np.isfinite(self.rotation[:, 0, 0])
+        posed &= ~flagged_frames(self.artefacts, len(posed))
         dof = 3 * int(seen[posed].sum()) - 6 * int(posed.sum())
         noise = math.sqrt(np.nansum(self.residuals[posed] ** 2) / dof) if dof > 0 else math.nan
         # The smallest principal moment of the centred shape: sum over the markers of their

@@ -1,0 +1,285 @@
+"""A still reference's artefacts: a bump, a ghost or a label swap in a few frames of a
+treadmill stated fixed in the lab is screened as a moving cluster's is, before its stillness is
+measured. With ``artefacts="exclude"`` those frames are left out and reported, and the rest is
+bounded by a capture volume; by default the refusal names the marker (or the swapped pair) and
+the frame, as for moving markers, not as motion of the reference in the lab."""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+from test_io_recordings import KNEE, write_c3d
+from test_io_units import LAB_FIXED, SHANK, TM, TREADMILL, with_treadmill
+
+import jointbench
+from jointbench.cli import main
+from jointbench.estimators.validation import MAX_JOINED_SPAN_MM, MAX_SPAN_MM
+from jointbench.io import Artefact, Recording, prepare, read
+from jointbench.io import segments as segments_module
+
+#: The treadmill's corners as markers placed by hand on its frame: a few mm off a rectangle
+#: [mm]. Exchanging the labels of a long side's two markers, or of the other long side's, gives
+#: a rectangle's shape the same distances, which tell the two apart only by that much (a
+#: symmetric cluster's swap is ambiguous to a screen of its shape).
+HAND_PLACED = TREADMILL + np.array(
+    [[0.0, 0.0, 0.0], [4.0, -3.0, 1.0], [-2.0, 5.0, 0.0], [3.0, 2.0, -2.0]]
+)
+
+
+@pytest.fixture(scope="module")
+def treadmill():
+    """The knee trial's frames 100 to 399 with a still treadmill TM1 to TM4 [mm]."""
+    return with_treadmill(read(KNEE).frames("100:400"), HAND_PLACED)
+
+
+def edited(recording, edit):
+    """``recording`` with its markers changed by ``edit(markers, column_of)`` in place."""
+    markers = recording.markers.copy()
+    edit(markers, lambda label: recording.index(label)[0])
+    return Recording(
+        recording.labels,
+        markers,
+        recording.rate_hz,
+        recording.source,
+        recording.first_frame,
+        recording.units,
+    )
+
+
+def bumped(recording, rows, label="TM1", by=(50.0, 0.0, 0.0)):
+    """``recording`` with marker ``label`` displaced by ``by`` [mm] in the ``rows``."""
+
+    def edit(markers, column):
+        markers[rows, column(label)] += by
+
+    return edited(recording, edit)
+
+
+def lost(recording, row):
+    """``recording`` with every marker missing in the ``row``."""
+
+    def edit(markers, _):
+        markers[row] = np.nan
+
+    return edited(recording, edit)
+
+
+def swapped(recording, rows, first="TM1", second="TM2"):
+    """``recording`` with markers ``first`` and ``second`` exchanging labels in the ``rows``."""
+
+    def edit(markers, column):
+        a, b = column(first), column(second)
+        markers[rows, a], markers[rows, b] = markers[rows, b].copy(), markers[rows, a].copy()
+
+    return edited(recording, edit)
+
+
+def fit_still(recording, artefacts="exclude", **options):
+    """The shank's centre about the treadmill stated fixed in the lab, and the warnings."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fitted = jointbench.fit(
+            recording, "center", SHANK, TM, method="NM", artefacts=artefacts, **LAB_FIXED, **options
+        )
+    return fitted, [str(w.message) for w in caught]
+
+
+@pytest.mark.parametrize("row", [0, 150, 299], ids=["first", "middle", "last"])
+def test_a_bump_in_one_frame_of_a_still_reference_is_left_out_and_reported(treadmill, row):
+    """TM1 knocked 50 mm in one frame (the first, one in the middle, the last): that frame is
+    left out, reported as TM1's artefact at its frame number, and the answer is the clean
+    trial's but for that frame."""
+    clean, _ = fit_still(treadmill)
+    fitted, warned = fit_still(bumped(treadmill, [row]))
+    frame = treadmill.first_frame + row
+    assert frame not in fitted.frames_used
+    assert len(fitted.frames_used) == len(clean.frames_used) - 1
+    assert {a.frame for a in fitted.excluded} == {row}
+    assert any(a.label == "TM1" for a in fitted.excluded)
+    assert len(warned) == 1
+    left_out = rf"left out 1 frames with artefacts: marker TM1 .* at frame {frame} "
+    assert re.search(left_out, warned[0]), warned
+    # The same as the frame missing altogether: the bump shapes nothing.
+    gap, _ = fit_still(lost(treadmill, row))
+    np.testing.assert_allclose(fitted.estimate(), gap.estimate(), rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("row", [0, 150, 299], ids=["first", "middle", "last"])
+def test_a_bump_in_one_frame_of_a_still_reference_is_refused_by_default_naming_it(treadmill, row):
+    """Not excluded, the bump is refused as a moving cluster's is: naming the marker and the
+    frame as an artefact, and the option that leaves it out, not as motion in the lab."""
+    with pytest.raises(ValueError) as error:
+        fit_still(bumped(treadmill, [row]), artefacts="refuse")
+    message = str(error.value)
+    frame = treadmill.first_frame + row
+    assert message.startswith("treadmill.c3d: marker TM1 leaves its cluster's rigid shape by "), (
+        message
+    )
+    assert f" mm at frame {frame} (" in message
+    assert "pass artefacts='exclude' (--artefacts exclude)" in message
+    assert "move in the lab" not in message
+
+
+def test_two_bad_frames_of_a_still_reference_are_both_left_out(treadmill):
+    """A bump of TM1 and a ghost of TM3 800 mm off, in two frames far apart."""
+    recording = bumped(bumped(treadmill, [40]), [210], "TM3", (0.0, 800.0, 0.0))
+    fitted, _ = fit_still(recording)
+    assert {a.frame for a in fitted.excluded} == {40, 210}
+    assert {40 + treadmill.first_frame, 210 + treadmill.first_frame}.isdisjoint(fitted.frames_used)
+
+
+@pytest.mark.parametrize("artefacts", ["refuse", "exclude"])
+@pytest.mark.parametrize("missing", [np.nan, 0.0], ids=["nan", "zeros"])
+def test_a_marker_of_a_still_reference_lost_in_one_frame_is_a_gap(treadmill, missing, artefacts):
+    """Lost as NaN or written as (0, 0, 0), a sample is a gap, not an artefact: the frame keeps
+    its pose from the other three markers and nothing is excluded or refused."""
+
+    def lose(markers, column):
+        markers[150, column("TM2")] = missing
+
+    fitted, warned = fit_still(edited(treadmill, lose), artefacts=artefacts)
+    assert fitted.excluded == ()
+    assert warned == []
+    assert 150 + treadmill.first_frame in fitted.frames_used
+
+
+@pytest.mark.parametrize(("first", "second"), [("TM1", "TM2"), ("TM2", "TM4")])
+def test_a_swap_in_a_still_reference_is_refused_as_a_swap_naming_its_frames(
+    treadmill, first, second
+):
+    """TM1 and TM2 (a long side of the treadmill) or TM2 and TM4 (a short one) exchange labels
+    in frames 250 to 259: the refusal names the swap, the frames where the labels change and
+    both sides, as for a moving cluster, not 2 m of motion in the lab."""
+    with pytest.raises(ValueError) as error:
+        fit_still(swapped(treadmill, slice(150, 160), first, second), artefacts="refuse")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
+        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
+        "labelled one consistent way"
+    ), message
+    assert "keep one side with frames='100:250' or '250:260' or '260:400' (--frames)" in message
+    assert "move in the lab" not in message
+
+
+def test_a_swap_over_half_a_still_reference_s_trial_is_named_as_a_swap(treadmill):
+    """TM1 and TM2 exchanged from frame 240 to the end, 160 of the 300 frames: the frames
+    before it break the shape most frames share. Their residuals of some 2 m are the swap's,
+    not the rigid fit's noise, which would call the treadmill's markers collinear."""
+    recording = swapped(treadmill, slice(140, None))
+    with pytest.raises(ValueError) as error:
+        fit_still(recording, artefacts="refuse")
+    assert str(error.value).startswith(
+        "treadmill.c3d: markers TM1 and TM2 exchange labels at frame 240 (2.40 s); "
+    ), str(error.value)
+    fitted, _ = fit_still(recording)
+    np.testing.assert_array_equal(fitted.frames_used, np.arange(240, 400))
+
+
+def test_a_swap_in_a_still_reference_is_left_out_when_excluded(treadmill):
+    fitted, warned = fit_still(swapped(treadmill, slice(150, 160)))
+    assert {a.frame for a in fitted.excluded} == set(range(150, 160))
+    assert len(warned) == 1
+    assert "left out 10 frames with artefacts: markers TM1 and TM2 exchange labels" in warned[0]
+
+
+def test_a_swap_lasting_the_whole_trial_is_a_labelling_not_an_artefact(treadmill):
+    """Swapped in every frame the labels are consistent: nothing to screen, and the answer is
+    the same point in the lab, in the frame the labels as written define."""
+    clean, _ = fit_still(treadmill)
+    fitted, warned = fit_still(swapped(treadmill, slice(None)), artefacts="refuse")
+    assert fitted.excluded == () and warned == []
+    assert fitted.frame["x"] == "from TM1 towards TM2"
+    np.testing.assert_allclose(
+        np.nanmedian(fitted.world(), axis=0), np.nanmedian(clean.world(), axis=0), atol=1e-6
+    )
+
+
+def test_a_swap_between_a_reference_and_a_moving_marker_is_refused_and_left_out(treadmill):
+    """TM1 and the shank's RLEG1 exchange labels in frames 200 to 204: each cluster breaks its
+    shape there; refused naming the frame, left out when excluded."""
+    recording = swapped(treadmill, slice(100, 105), "TM1", "RLEG1")
+    with pytest.raises(ValueError, match=r"at frame 200 \(2\.00 s\).*pass artefacts='exclude'"):
+        fit_still(recording, artefacts="refuse")
+    fitted, _ = fit_still(recording)
+    assert {a.frame for a in fitted.excluded} == set(range(100, 105))
+    assert {a.label for a in fitted.excluded} >= {"TM1", "RLEG1"}
+
+
+@pytest.mark.parametrize(
+    ("artefacts", "code"), [("exclude", 0), ("refuse", 2)], ids=["exclude", "refuse"]
+)
+def test_jointbench_fit_screens_a_still_reference_from_a_c3d_file(
+    tmp_path, capsys, treadmill, artefacts, code
+):
+    """The command line as the API: a bump of TM1 in row 150 (frame 151 of the file, which
+    numbers its frames from 1), left out and warned of, or refused naming it."""
+    recording = bumped(treadmill, [150])
+    path = write_c3d(tmp_path / "treadmill.c3d", recording.labels, recording.markers)
+    argv = ["fit", "center", str(path), "--moving", SHANK, "--reference", TM, "--method", "NM"]
+    argv += ["--lab-fixed-reference", "--artefacts", artefacts, "--format", "json"]
+    assert main(argv) == code
+    out, err = capsys.readouterr()
+    if code:
+        assert f"{path}: marker TM1 leaves its cluster's rigid shape by " in err, err
+        assert "mm at frame 151 (1.51 s)" in err
+    else:
+        assert "left out 1 frames with artefacts: marker TM1 " in err, err
+        assert '"frame": 150' in out
+
+
+def test_a_still_reference_with_a_bump_is_still_not_fitted_when_not_stated_fixed(treadmill):
+    """The screen changes what is measured, not what is stated: unstated, the bumped
+    treadmill is a segment too wide, naming the option."""
+    with pytest.raises(ValueError, match=r"stated so \(lab_fixed_reference=True"):
+        jointbench.fit(bumped(treadmill, [150]), "center", SHANK, TM, artefacts="exclude")
+
+
+def counted(monkeypatch, name):
+    """Calls of ``jointbench.io.segments.<name>``, as the list of their first arguments."""
+    calls = []
+    original = getattr(segments_module, name)
+
+    def counting(*args, **kwargs):
+        calls.append(args[0])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(segments_module, name, counting)
+    return calls
+
+
+@pytest.mark.parametrize("kind", ["center", "joint_center"])
+def test_prepare_bounds_each_cluster_once(monkeypatch, treadmill, kind):
+    """One preparation measures each cluster's span once (the moving one, the reference, the
+    two joined) and a reference's stillness in the lab once."""
+    spans = counted(monkeypatch, "cluster_span")
+    motions = counted(monkeypatch, "lab_motion")
+    reference = TM if kind == "center" else "RTHI1,RTHI2,RTHI3,RGT"
+    options = LAB_FIXED if kind == "center" else {}
+    prepare(treadmill, kind, SHANK, reference, artefacts="exclude", **options)
+    assert [markers.shape[1] for markers in spans] == [6, 4, 10]
+    assert len(motions) == (1 if kind == "center" else 0)
+
+
+def test_a_marker_seen_only_in_spoilt_frames_shows_no_stillness(treadmill):
+    """TM4 seen only in frames 100 to 109, each spoilt by a bump of TM1: no frame shows TM4
+    still, so the reference is not taken as still from the others' frames (all frames are
+    measured, the bump among them) and is bounded as a segment, naming the bump."""
+
+    def edit(markers, column):
+        markers[10:, column("TM4")] = np.nan
+        markers[:10, column("TM1")] += [50.0, 0.0, 0.0]
+
+    recording = edited(treadmill, edit)
+    spoilt = tuple(Artefact("rigidity", "TM1", row, 50.0, 5.0) for row in range(10))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        alone, joined = segments_module._reference_bounds(
+            recording, tuple(TM.split(",")), spoilt, True
+        )
+    assert alone.largest_mm == MAX_SPAN_MM
+    assert "they move in the lab: TM1 lies 50" in alone.why_not_lab
+    assert joined.largest_mm == MAX_JOINED_SPAN_MM
