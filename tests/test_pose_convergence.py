@@ -13,6 +13,7 @@ coordinates to a multiple of their last place: the fit must still see when it ha
 from __future__ import annotations
 
 import dataclasses
+import functools
 import pickle
 from pathlib import Path
 
@@ -37,6 +38,22 @@ def _converged(arrays: tuple[np.ndarray, ...]) -> bool:
     return all(bool(fit_rigid_poses(markers).converged) for markers in arrays)
 
 
+# The sweep's trials in their recorded order are fitted and judged once per process: several
+# tests pick their trials by these pure results (a pass over the sweep costs seconds), and
+# each test still fits and judges for itself what it checks.
+@functools.cache
+def _clusters_converged(index: int) -> tuple[bool, ...]:
+    """Whether each cluster's pose fit of two-segment trial ``index``, frames as recorded,
+    converged (proximal, distal)."""
+    return tuple(bool(fit_rigid_poses(markers).converged) for markers in TWO_SEGMENTS[index])
+
+
+@functools.cache
+def _recorded_verdict(index: int) -> support.Support:
+    """The support verdict of two-segment trial ``index``, frames as recorded."""
+    return support.assess("joint_center", TWO_SEGMENTS[index])
+
+
 @pytest.fixture(scope="module")
 def thigh() -> np.ndarray:
     """The real knee trial's thigh cluster in its visible frames, ``(N, 4, 3)`` [mm]."""
@@ -54,18 +71,18 @@ def test_a_laboratory_origin_metres_away_converges_as_at_the_markers(thigh, metr
 
 
 def test_the_sweep_has_both_kinds_of_two_segment_trial():
-    converged = [_converged(arrays) for arrays in TWO_SEGMENTS]
+    converged = [all(_clusters_converged(index)) for index in range(len(TWO_SEGMENTS))]
     assert sum(converged) >= 100 and len(converged) - sum(converged) >= 100
 
 
 def test_every_pose_based_method_says_when_its_poses_did_not_converge():
     """Trials whose alternation stops short, through every pose-based method's many-trial
     form, checked and bare."""
-    stopped = [arrays for arrays in TWO_SEGMENTS if not _converged(arrays)]
     judged = [
         arrays
-        for arrays in stopped
-        if "collinear" not in " ".join(support.assess("joint_center", arrays).warnings)
+        for index, arrays in enumerate(TWO_SEGMENTS)
+        if not all(_clusters_converged(index))
+        and "collinear" not in " ".join(_recorded_verdict(index).warnings)
     ]
     assert len(judged) >= 20
     methods = jointbench.methods("joint_center")
@@ -96,9 +113,9 @@ def test_every_pose_based_method_says_when_its_poses_did_not_converge():
 def test_one_segment_pose_methods_say_when_their_poses_did_not_converge():
     stopped = [
         markers
-        for arrays in TWO_SEGMENTS
-        for markers in arrays
-        if not fit_rigid_poses(markers).converged
+        for index, arrays in enumerate(TWO_SEGMENTS)
+        for markers, converged in zip(arrays, _clusters_converged(index), strict=True)
+        if not converged
     ]
     tried = 0
     for markers in stopped[:30]:
@@ -115,7 +132,8 @@ def test_one_segment_pose_methods_say_when_their_poses_did_not_converge():
 
 
 def test_converged_poses_give_results_that_say_nothing_of_them():
-    done = [arrays for arrays in TWO_SEGMENTS if _converged(arrays)][:20]
+    done = [arrays for index, arrays in enumerate(TWO_SEGMENTS) if all(_clusters_converged(index))]
+    done = done[:20]
     answered = 0
     for arrays in done:
         (result,) = many("joint_center", "SCoRE", checked=False)(arrays[0][None], arrays[1][None])
@@ -132,15 +150,15 @@ def _rigid_and_converged() -> list[tuple[np.ndarray, ...]]:
     axis) and whose poses converge in their recorded order and every other tried."""
     found = []
     for index, arrays in enumerate(TWO_SEGMENTS):
-        verdict = support.assess("joint_center", arrays)
+        verdict = _recorded_verdict(index)
         if (
             verdict.diagnostics.get("nonrigid_share", 1.0) >= 0.01
             or min(map(_thinness, arrays)) < 0.02
         ):
             continue
-        if all(
+        if all(_clusters_converged(index)) and all(
             _converged(tuple(m[order] for m in arrays))
-            for order in [slice(None), *_orders(arrays[0].shape[0], index)]
+            for order in _orders(arrays[0].shape[0], index)
         ):
             found.append((index, arrays))
     return found

@@ -122,7 +122,7 @@ def test_the_readme_is_not_rewritten_from_verdicts_an_edit_made_stale(tmp_path):
     workdir = copy_workflow(tmp_path)
     shutil.copytree(ROOT / "src", workdir / "src", ignore=shutil.ignore_patterns("*.egg-info"))
     environment = {**os.environ, "PYTHONPATH": str(workdir / "src")}
-    reduced = str(ROOT / "tests" / "data" / "verdicts.yaml")
+    reduced = str(ROOT / "tests" / "data" / "verdicts_one_study.yaml")
     made = subprocess.run(
         [
             str(SNAKEMAKE),
