@@ -912,7 +912,12 @@ def _fixed_centre_test(
     error (a thigh cluster that slides with the hip angles moves SCoRE's answer by
     centimetres while its SD stays near a millimetre), and a warning says so.
     ``diagnostics["fixed_centre_test"]`` holds the fit's ``chi2`` and ``chi2_dof`` and the
-    test's numbers, or ``not_tested`` and why (the fit failed or did not converge)."""
+    test's numbers, or ``not_tested`` and why: the fit failed or did not converge, or the two
+    segments' rigid-body residuals reject the one noise that model pools for them
+    (:func:`_unequal_noise`), which the answer's own covariance does not assume."""
+    unequal = _unequal_noise(proximal, distal)
+    if unequal:
+        return with_warnings(result, (), {"fixed_centre_test": {"not_tested": unequal}})
     (fitted,) = _gauss_markov_results(
         [{"proximal": proximal, "distal": distal}],
         noise_mm=None,
@@ -933,6 +938,27 @@ def _fixed_centre_test(
         result,
         tuple(warning + shared for warning in warnings),
         {"fixed_centre_test": {**tested, **numbers}},
+    )
+
+
+def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
+    """Why the Gauss–Markov model's one noise does not hold for these two segments' poses, or
+    ``""`` where it may: their rigid-body residual variances differ at
+    :data:`~jointbench.estimators.support.ROTATION_ALPHA`, two-sided, by the F test of their
+    ratio on their own degrees of freedom. A noisy pelvis beside a clean thigh breaks the
+    pooled noise, not the fixed centre; SCoRE's and the analytic centre's covariances read each
+    segment's own."""
+    variances = [p.residual_ss / p.dof if p.dof else math.nan for p in (proximal, distal)]
+    if not (all(np.isfinite(variances)) and min(variances) > 0.0):
+        return ""
+    ratio = variances[0] / variances[1]
+    shape = (proximal.dof, distal.dof, ratio)
+    p_value = min(2.0 * min(float(special.fdtr(*shape)), float(special.fdtrc(*shape))), 1.0)
+    if p_value >= ROTATION_ALPHA:
+        return ""
+    return (
+        f"the segments' rigid-body noise differs (proximal over distal variance {ratio:.3g}, "
+        f"p = {p_value:.2g}), where the Gauss–Markov model pools one noise for both"
     )
 
 
