@@ -130,6 +130,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,6 +160,8 @@ from jointbench.estimators.twosegment import (
     batched_all,
     each_trial,
     eigen_solution,
+    fit_score,
+    score_scattered,
     trial_outcomes,
 )
 from jointbench.geometry import skew
@@ -186,6 +189,10 @@ MAX_NOISE_KURTOSIS = 6.0
 
 # "No relative rotation": largest eigenvalue of sum M'M below this times the number of frames.
 _NO_ROTATION = 1e-16
+# The Gauss–Markov fits' defaults: at most this many re-linearisations, stopping when the
+# centre moves no more than this [mm].
+_FIT_ITERATIONS = 100
+_FIT_TOL_MM = 1e-6
 
 
 def _as_noise(noise_mm: float | None) -> float | None:
@@ -781,6 +788,15 @@ def _model_test(
     (module docstring, "Model test"): ``chi2_p``, ``noise_kurtosis`` and ``chi2_inflation`` in
     its diagnostics (NaN where there is nothing to test), and below
     :data:`jointbench.estimators.support.ROTATION_ALPHA` a warning."""
+    return with_warnings(result, *_model_verdict(result, proximal, distal))
+
+
+def _model_verdict(
+    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+) -> tuple[tuple[str, ...], dict]:
+    """The test of :func:`_model_test` of the Gauss–Markov ``result`` on its poses: its
+    warnings (none, or one where the test rejects) and its numbers (``chi2_p``,
+    ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test)."""
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
@@ -799,10 +815,10 @@ def _model_test(
             "RMS: the zero covariance does not describe the centre's error (leave noise_mm out "
             "to estimate the noise from the data)"
         )
-        return with_warnings(result, (warning,), untested)
+        return (warning,), untested
     if not (np.isfinite(chi2) and dof >= 1 and noisy):
         # Noise-free data (rounding, not noise) or no chi^2: nothing to test against.
-        return with_warnings(result, (), untested)
+        return (), untested
     kurtosis, gaussian = _noise_kurtosis(segments, variance)
     excess = min(max(kurtosis, 0.0), MAX_NOISE_KURTOSIS) / 3.0
     n_steps = len(segments[0].markers) - 1
@@ -826,11 +842,11 @@ def _model_test(
     if p_value < ROTATION_ALPHA:
         given = residual is None
         warnings = (_model_warning(statistic, p_value, above, given, frame0, kurtosis),)
-    return with_warnings(
-        result,
-        warnings,
-        {"chi2_p": p_value, "noise_kurtosis": float(kurtosis), "chi2_inflation": inflation},
-    )
+    return warnings, {
+        "chi2_p": p_value,
+        "noise_kurtosis": float(kurtosis),
+        "chi2_inflation": inflation,
+    }
 
 
 def _model_p_value(
@@ -884,6 +900,78 @@ def _model_warning(
     return words
 
 
+def _fixed_centre_test(
+    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+) -> JointCenterResult:
+    """``result``, a least-squares joint centre with no model test of its own (SCoRE, the
+    analytic centre), held to the test of the model it shares with the Gauss–Markov fits, one
+    centre fixed in both segments: ``gauss-markov-frame0`` fitted to the same poses
+    ``proximal`` and ``distal`` and its model tested (module docstring, "Model test"). That
+    test asks whether the data allow any such centre with the rigid-body fits' noise; where it
+    rejects, the covariance the answer states from its poses' noise does not describe its
+    error (a thigh cluster that slides with the hip angles moves SCoRE's answer by
+    centimetres while its SD stays near a millimetre), and a warning says so.
+    ``diagnostics["fixed_centre_test"]`` holds the fit's ``chi2`` and ``chi2_dof`` and the
+    test's numbers, or ``not_tested`` and why: the fit failed or did not converge, or the two
+    segments' rigid-body residuals reject the one noise that model pools for them
+    (:func:`_unequal_noise`), which the answer's own covariance does not assume."""
+    unequal = _unequal_noise(proximal, distal)
+    if unequal:
+        return with_warnings(result, (), {"fixed_centre_test": {"not_tested": unequal}})
+    (fitted,) = _gauss_markov_results(
+        [{"proximal": proximal, "distal": distal}],
+        noise_mm=None,
+        frame0=True,
+        max_iterations=_FIT_ITERATIONS,
+        tol_mm=_FIT_TOL_MM,
+    )
+    if not (isinstance(fitted, JointCenterResult) and fitted.converged):
+        why = str(fitted) if isinstance(fitted, ValueError) else fitted.status
+        return with_warnings(result, (), {"fixed_centre_test": {"not_tested": why}})
+    warnings, numbers = _model_verdict(fitted, proximal, distal)
+    shared = (
+        "; this answer's model is the same (gauss-markov-frame0's fit to the same poses "
+        "tested it), so its SD does not describe its error"
+    )
+    tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
+    return with_warnings(
+        result,
+        tuple(warning + shared for warning in warnings),
+        {"fixed_centre_test": {**tested, **numbers}},
+    )
+
+
+def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
+    """Why the Gauss–Markov model's one noise does not hold for these two segments' poses, or
+    ``""`` where it may: their rigid-body residual variances differ at
+    :data:`~jointbench.estimators.support.ROTATION_ALPHA`, two-sided, by the F test of their
+    ratio on their own degrees of freedom. A noisy pelvis beside a clean thigh breaks the
+    pooled noise, not the fixed centre; SCoRE's and the analytic centre's covariances read each
+    segment's own."""
+    variances = [p.residual_ss / p.dof if p.dof else math.nan for p in (proximal, distal)]
+    if not (all(np.isfinite(variances)) and min(variances) > 0.0):
+        return ""
+    ratio = variances[0] / variances[1]
+    shape = (proximal.dof, distal.dof, ratio)
+    p_value = min(2.0 * min(float(special.fdtr(*shape)), float(special.fdtrc(*shape))), 1.0)
+    if p_value >= ROTATION_ALPHA:
+        return ""
+    return (
+        f"the segments' rigid-body noise differs (proximal over distal variance {ratio:.3g}, "
+        f"p = {p_value:.2g}), where the Gauss–Markov model pools one noise for both"
+    )
+
+
+def _held_to_the_model(scattered: Callable) -> Callable:
+    """The one-trial check ``scattered(result, proximal, distal)`` (a method's covariance on
+    its poses) followed by :func:`_fixed_centre_test`."""
+
+    def check(result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses):
+        return _fixed_centre_test(scattered(result, proximal, distal), proximal, distal)
+
+    return check
+
+
 def _analytic_scattered(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
 ) -> JointCenterResult:
@@ -921,8 +1009,8 @@ def fit_gauss_markov(
     distal: np.ndarray,
     *,
     noise_mm: NonNegative | None = None,
-    max_iterations: Count = 100,
-    tol_mm: NonNegative = 1e-6,
+    max_iterations: Count = _FIT_ITERATIONS,
+    tol_mm: NonNegative = _FIT_TOL_MM,
 ) -> JointCenterResult:
     """Paper C's Gauss–Markov joint centre with its predicted covariance (eqs. 11–23).
 
@@ -968,8 +1056,8 @@ def fit_gauss_markov_frame0(
     distal: np.ndarray,
     *,
     noise_mm: NonNegative | None = None,
-    max_iterations: Count = 100,
-    tol_mm: NonNegative = 1e-6,
+    max_iterations: Count = _FIT_ITERATIONS,
+    tol_mm: NonNegative = _FIT_TOL_MM,
 ) -> JointCenterResult:
     """Gauss–Markov joint centre whose covariance includes the frame-0 pose errors.
 
@@ -998,8 +1086,8 @@ def _batched_gauss_markov(frame0: bool):
         poses: list,
         *,
         noise_mm: float | None = None,
-        max_iterations: int = 100,
-        tol_mm: float = 1e-6,
+        max_iterations: int = _FIT_ITERATIONS,
+        tol_mm: float = _FIT_TOL_MM,
     ) -> list[JointCenterResult | ValueError]:
         return _gauss_markov_results(
             poses,
@@ -1016,8 +1104,8 @@ def _batched_gauss_markov(frame0: bool):
         try:
             _check_gauss_markov_options(
                 options.get("noise_mm"),
-                options.get("max_iterations", 100),
-                options.get("tol_mm", 1e-6),
+                options.get("max_iterations", _FIT_ITERATIONS),
+                options.get("tol_mm", _FIT_TOL_MM),
             )
         except ValueError as error:
             return [error] * len(proximal)
@@ -1040,7 +1128,9 @@ _gauss_markov_trials = {frame0: _batched_gauss_markov(frame0) for frame0 in (Fal
 register_many("joint_center", "analytic", _analytic_trials)
 register_many("joint_center", "gauss-markov", _gauss_markov_trials[False])
 register_many("joint_center", "gauss-markov-frame0", _gauss_markov_trials[True])
-fit_analytic.precision_many = precision_on_poses(_analytic_scattered)
+# SCoRE's covariance lives with SCoRE; the model test it is held to lives here.
+fit_analytic.precision_many = precision_on_poses(_held_to_the_model(_analytic_scattered))
+fit_score.precision_many = precision_on_poses(_held_to_the_model(score_scattered))
 fit_gauss_markov.precision_many = precision_on_poses(_model_test)
 fit_gauss_markov_frame0.precision_many = fit_gauss_markov.precision_many
 

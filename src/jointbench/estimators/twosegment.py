@@ -62,7 +62,6 @@ from jointbench.estimators.results import (
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
-    precision_on_poses,
     stopped_fit,
     trial_poses,
     with_stopped_fits,
@@ -238,7 +237,7 @@ def _score_joint(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | V
     )
 
 
-def _score_scattered(
+def score_scattered(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
 ) -> JointCenterResult:
     """SCoRE's joint-centre ``result`` with the covariance of its centre on the poses it was
@@ -249,7 +248,8 @@ def _score_scattered(
     return with_warnings(result, (), {"center_covariance_mm2": covariance.tolist()})
 
 
-fit_score.precision_many = precision_on_poses(_score_scattered)
+# Its precision_many, this covariance held to the model test, is set in
+# jointbench.estimators.hjc, where that test lives.
 
 
 @register("center", "SCoRE", min_frames=POSE_MIN_FRAMES, color="#a6761d", marker="P")
