@@ -17,6 +17,7 @@ import inspect
 import textwrap
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from test_claims import A_SPEEDS, _timed, paper_a_world, paper_b_world, paper_c_world
 from test_claims_subgrids import paper_sta_world
@@ -24,7 +25,7 @@ from test_claims_subgrids import paper_sta_world
 import jointbench.papers
 from jointbench.comparison.published import load_published
 from jointbench.papers import Inputs, paper_a, paper_b, paper_c, paper_sta
-from jointbench.papers.common import NotMeasured
+from jointbench.papers.common import NotMeasured, rows_at
 
 MODULES = {"A": paper_a, "B": paper_b, "C": paper_c, "S": paper_sta}
 
@@ -148,3 +149,18 @@ def test_every_lack_a_paper_words_says_what_it_selected_by():
     folder = Path(jointbench.papers.__file__).parent
     sites = [site for path in sorted(folder.glob("*.py")) for site in _raised_without_lacks(path)]
     assert not sites
+
+
+def test_a_selection_of_rows_says_what_the_run_lacks_by_key():
+    table = pd.DataFrame({"method": ["LS", "NM"], "marker_set": ["M", "H"]})
+    assert rows_at(table, method="LS", marker_set="M").index.tolist() == [0]
+    with pytest.raises(NotMeasured, match=r"^this run has no method BC$") as raised:
+        rows_at(table, method="BC")
+    assert raised.value.lacks == {"method": ("BC",)}
+    with pytest.raises(NotMeasured, match=r"^this run has no result at method LS, marker_set H$"):
+        rows_at(table, method="LS", marker_set="H")
+    with pytest.raises(NotMeasured, match=r"^BC is not in this run at the M set$") as raised:
+        rows_at(table, "BC is not in this run at the M set", method="BC", marker_set="M")
+    assert raised.value.lacks == {"method": ("BC",), "marker_set": ("M",)}
+    with pytest.raises(KeyError):
+        rows_at(table, methd="LS")
