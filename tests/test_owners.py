@@ -14,11 +14,12 @@ import pytest
 from jointbench import papers, report
 from jointbench.configuration import studies
 from jointbench.estimators import CenterResult, registry
+from jointbench.estimators.batching import ProgrammingError
 from jointbench.figures import extended
 from jointbench.figures.common import method_style, method_styles, study_title
 from jointbench.papers import FrontPart, Paper
 from jointbench.running import run
-from jointbench.simulate import GridValues, Study, Trials
+from jointbench.simulate import Diagnostic, GridValues, Study, Trials
 
 CENTRE = [1.0, 2.0, 3.0]
 
@@ -128,13 +129,31 @@ def _spread(arguments, results, truth):
 
 
 def test_a_newcomer_study_runs_its_own_truth_diagnostic(newcomer):
-    newcomer(_study(diagnostics={"LS": _spread}))
+    newcomer(_study(diagnostics={"LS": Diagnostic(("spread_mm",), _spread)}))
     trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
     condition = {"rom_deg": 20.0, "noise_mm": 0.5}
     table = run.estimate_table("gh", "LS", trials, condition).to_pandas()
     assert table["spread_mm"].notna().all() and "local_minimum" not in table
     other = run.estimate_table("gh", "NM", trials, condition).to_pandas()
     assert "spread_mm" not in other
+
+
+def test_a_diagnostic_writing_a_column_it_does_not_declare_stops_the_estimate_job(newcomer):
+    """What a study records is what its diagnostics declare: a claim selecting ``spread_mm``
+    would be refused as a column no study records, so the job writing it is stopped."""
+    newcomer(_study(diagnostics={"LS": Diagnostic(("spread",), _spread)}))
+    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
+    with pytest.raises(
+        ProgrammingError,
+        match=r"^gh LS: its diagnostic _spread writes the columns spread_mm, which it does not "
+        r"declare \(it declares spread\)",
+    ):
+        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+
+
+def test_a_diagnostic_names_the_columns_it_records():
+    with pytest.raises(ValueError, match=r"'gh': the diagnostics of LS must each be a Diagnostic"):
+        _study(diagnostics={"LS": _spread})
 
 
 def test_the_cmc_study_owns_paper_a_local_minimum_diagnostic():

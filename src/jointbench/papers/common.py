@@ -19,7 +19,9 @@ from jointbench.comparison.published import (
     claims_rows,
     status_legend,
 )
+from jointbench.configuration.studies import get_study
 from jointbench.papers.base import Inputs, Measured, Output, Paper, Table
+from jointbench.resultfiles.schema import recorded_columns
 
 __all__ = [
     "RECORDED_COLUMN",
@@ -29,7 +31,10 @@ __all__ = [
     "claims_headline",
     "claims_output",
     "measured_claims",
+    "none_measured",
     "one_step_changes",
+    "require_declared",
+    "rows_at",
     "with_columns",
 ]
 
@@ -43,9 +48,8 @@ def one_step_changes(table: pd.DataFrame) -> np.ndarray:
     return steps[np.isfinite(steps)]
 
 
-#: The key of a selection of recorded columns: the one kind of lack :func:`measured_claims`
-#: does not hold to the paper's declarations, as no one place lists every column a study may
-#: record (its diagnostics add their own).
+#: The key of a selection of recorded columns, held to the columns the paper's study records
+#: (:func:`~jointbench.resultfiles.schema.recorded_columns`).
 RECORDED_COLUMN = "recorded column"
 
 
@@ -55,9 +59,15 @@ class NotMeasured(Exception):
     this run, for that reason. Nothing else is: a ``KeyError``, ``IndexError``, ``ValueError``
     or ``StopIteration`` from elsewhere in a check is its mistake (:func:`measured_claims`).
 
-    ``lacks`` (by :func:`with_columns` and :func:`at_levels`) maps each key the selection asked
-    by (``"method"``, a grid key, :data:`RECORDED_COLUMN`) to the values it found the run
-    without; :func:`measured_claims` holds them to what the paper declares (:class:`Declared`).
+    ``lacks`` maps each key the check asked the run by (``"method"``, a grid key,
+    :data:`RECORDED_COLUMN`) to the values it named and did not get: those a selection found
+    the run without (:func:`with_columns`), or every value of a selection by several keys that
+    found nothing (:func:`at_levels`, :func:`rows_at`); a check that words its lack itself
+    passes the names it selected by, spelt where it selects by them, or ``{}`` where what it
+    lacks has no name (two levels on one line of the grid). Only names the check spells go
+    there, never values read from the run, whose grid may hold levels no paper declares.
+    :func:`measured_claims` holds them to what the paper declares (:class:`Declared`), so a
+    misspelt name is the check's mistake, not the run's lack.
     """
 
     def __init__(self, reason: str, lacks: Mapping[str, tuple] | None = None) -> None:
@@ -79,18 +89,44 @@ def with_columns(
     return table[list(names)]
 
 
+def rows_at(table: pd.DataFrame, reason: str | None = None, /, **values: object) -> pd.DataFrame:
+    """The rows of ``table`` (one row per result, the keys as columns) whose columns equal
+    ``values`` (column name to value: a method, a level the claim's sentence names);
+    :class:`NotMeasured` for ``reason`` (by default naming them) when no row of this run is
+    at all of them. A name that is no column is a mistake: ``KeyError``."""
+    shown = _shown(values)
+    default = (
+        f"this run has no {shown}" if len(values) == 1 else f"this run has no result at {shown}"
+    )
+    return table[_at(table.__getitem__, len(table), values, reason or default)]
+
+
 def at_levels(data: pd.DataFrame | pd.Series, **levels: object) -> pd.DataFrame | pd.Series:
     """The rows of ``data`` (indexed by a MultiIndex) at ``levels`` (level name to value), those
     levels dropped from the index; :class:`NotMeasured` naming them when no row of this run is
     at all of them. A name that is no level of the index is a mistake: ``KeyError``."""
-    at = np.ones(len(data.index), dtype=bool)
-    for name, value in levels.items():
-        at &= np.asarray(data.index.get_level_values(name) == value)
-    if not at.any():
-        shown = ", ".join(f"{name} {value}" for name, value in levels.items())
-        lacks = {name: (value,) for name, value in levels.items()}
-        raise NotMeasured(f"this run has no cell at {shown}", lacks)
+    reason = f"this run has no cell at {_shown(levels)}"
+    _at(data.index.get_level_values, len(data.index), levels, reason)
     return data.xs(tuple(levels.values()), level=list(levels))
+
+
+def _shown(selection: Mapping[str, object]) -> str:
+    """A selection in words: ``marker_set M, rom_deg 15``."""
+    return ", ".join(f"{name} {value}" for name, value in selection.items())
+
+
+def _at(
+    values_of: Callable[[str], object], size: int, selection: Mapping[str, object], reason: str
+) -> np.ndarray:
+    """``(size,)``: where every key of ``selection`` has its value (``values_of(key)``, the
+    ``size`` rows' values of that key); :class:`NotMeasured` for ``reason``, lacking every value
+    of ``selection``, where no row has all of them."""
+    at = np.ones(size, dtype=bool)
+    for name, value in selection.items():
+        at &= np.asarray(values_of(name) == value)
+    if not at.any():
+        raise NotMeasured(reason, {name: (value,) for name, value in selection.items()})
+    return at
 
 
 @dataclass(frozen=True)
@@ -98,8 +134,10 @@ class Declared:
     """What a run of ``paper`` may hold for its claims to ask for, by key: ``"method"`` the
     paper's methods and those it also measures (:attr:`~jointbench.papers.base.Paper.methods`,
     :attr:`~jointbench.papers.base.Paper.also_measures`), each key of its design grid
-    (``design.grid`` of ``published``, its published values) the levels listed there. Read only
-    when a selection finds the run without something."""
+    (``design.grid`` of ``published``, its published values) the levels listed there,
+    :data:`RECORDED_COLUMN` the columns its study records
+    (:func:`~jointbench.resultfiles.schema.recorded_columns`). Read only when a check finds the
+    run without something."""
 
     paper: Paper
     published: Mapping
@@ -107,7 +145,15 @@ class Declared:
     def values(self) -> dict[str, tuple]:
         """The declared values by key."""
         grid = {key: tuple(levels) for key, levels in self.published["design"]["grid"].items()}
-        return {**grid, "method": (*self.paper.methods, *self.paper.also_measures)}
+        return {
+            **grid,
+            "method": (*self.paper.methods, *self.paper.also_measures),
+            RECORDED_COLUMN: recorded_columns(get_study(self.paper.study)),
+        }
+
+
+#: How :func:`_undeclared` names the declared values of a key that is no grid key.
+_DECLARED_AS = {"method": "the paper's methods", RECORDED_COLUMN: "the columns its study records"}
 
 
 def _is_one_of(value: object, declared: Sequence) -> bool:
@@ -118,20 +164,18 @@ def _is_one_of(value: object, declared: Sequence) -> bool:
 def _undeclared(lacks: Mapping[str, tuple], declared: Mapping[str, Sequence]) -> list[str]:
     """The parts of a selection's ``lacks`` (:attr:`NotMeasured.lacks`) that no run could hold,
     given the ``declared`` values by key (:meth:`Declared.values`), in words: a key none of
-    them is (but :data:`RECORDED_COLUMN`), a value none of its key's is (misspelt, of another
-    type, or a level the design grid does not list)."""
+    them is, a value none of its key's is (misspelt, of another type, a level the design grid
+    does not list, a column the study does not record)."""
     wrong = []
     for key, values in lacks.items():
-        if key == RECORDED_COLUMN:
-            continue
         if key not in declared:
             keys = ", ".join(declared) or "none given"
             wrong.append(f"{key}, no key the paper declares ({keys})")
             continue
-        what = "methods" if key == "method" else f"{key} levels"
+        what = _DECLARED_AS.get(key, f"the paper's {key} levels")
         shown = ", ".join(map(repr, declared[key]))
         wrong += [
-            f"{key} {value!r}, none of the paper's {what} ({shown})"
+            f"{key} {value!r}, none of {what} ({shown})"
             for value in values
             if not _is_one_of(value, declared[key])
         ]
@@ -160,12 +204,12 @@ def measured_claims(
     the run lacks).
 
     A selection's lack is the run's only where ``declared`` (the paper's :class:`Declared`;
-    without it, nothing) holds what it asked for: a method or level no run of the paper could
-    hold is a misspelt or mistyped one (:func:`_undeclared`). That, any other exception of a
-    check, and a numpy or pandas ``RuntimeWarning`` (a mean of nothing, a division by zero: a
-    selection it did not guard) are mistakes of the check: ``RuntimeError`` naming the claim,
-    chained to it, so the mistake is mended rather than read as a run without the claim's data
-    or a number printed from it."""
+    without it, nothing) holds what it asked for: a method, level or recorded column no run of
+    the paper could hold is a misspelt or mistyped one (:func:`_undeclared`). That, any other
+    exception of a check, and a numpy or pandas ``RuntimeWarning`` (a mean of nothing, a
+    division by zero: a selection it did not guard) are mistakes of the check: ``RuntimeError``
+    naming the claim, chained to it, so the mistake is mended rather than read as a run without
+    the claim's data or a number printed from it."""
     out, not_measured = {}, {}
     for key, claim in claims.items():
         try:
@@ -173,7 +217,7 @@ def measured_claims(
                 warnings.simplefilter("error", RuntimeWarning)
                 measured = claim(*data)
         except NotMeasured as lack:
-            _require_declared(key, lack, declared)
+            require_declared(f"claim {key}", lack, declared)
             not_measured[key] = str(lack)
             continue
         except RuntimeWarning as warning:
@@ -188,17 +232,28 @@ def measured_claims(
     return Measurements(out, not_measured)
 
 
-def _require_declared(claim: str, lack: NotMeasured, declared: Declared | None) -> None:
-    """``RuntimeError`` naming ``claim`` and what of ``lack`` no run could hold, chained to it;
-    nothing when the run's lack is one the paper declares."""
+def require_declared(label: str, lack: NotMeasured, declared: Declared | None) -> None:
+    """``RuntimeError`` starting with ``label`` (``"claim A5"``) and naming what of ``lack`` no
+    run could hold, chained to it; nothing when the run's lack is one the paper declares."""
     if not lack.lacks:
         return
     wrong = _undeclared(lack.lacks, {} if declared is None else declared.values())
     if wrong:
         raise RuntimeError(
-            f"claim {claim}: asks for {'; '.join(wrong)}: a mistake of the check, not a run "
+            f"{label}: asks for {'; '.join(wrong)}: a mistake of the check, not a run "
             f"without it ({lack})"
         ) from lack
+
+
+def none_measured(
+    claims: Mapping[str, Callable[..., Measured]], lack: NotMeasured, declared: Declared | None
+) -> Measurements:
+    """Every claim of ``claims`` not measured for one ``lack`` they share (the run lacks the
+    method all of them read), held to ``declared`` as a lack a claim raises is
+    (:func:`require_declared`)."""
+    for key in claims:
+        require_declared(f"claim {key}", lack, declared)
+    return Measurements({}, dict.fromkeys(claims, str(lack)))
 
 
 def claims_headline(tables: Mapping) -> str:

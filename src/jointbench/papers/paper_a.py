@@ -35,10 +35,12 @@ from jointbench.papers.common import (
     claims_output,
     measured_claims,
     one_step_changes,
+    require_declared,
+    rows_at,
     with_columns,
 )
 from jointbench.resultfiles.formatting import number
-from jointbench.simulate.cmc import marker_positions
+from jointbench.simulate.cmc import LOCAL_MINIMUM, marker_positions
 
 __all__ = ["PAPER", "example_ordering_share", "measure", "radius_errors"]
 
@@ -120,10 +122,11 @@ def _a1(collected, means):
         )
         steps = np.concatenate([one_step_changes(by_noise) > 0, one_step_changes(by_rom) < 0])
         if not steps.size:
-            raise NotMeasured(f"A1 needs two noise levels or two RoMs measured for {method}")
+            # Two levels on one line of the grid: a lack no name says.
+            raise NotMeasured(f"A1 needs two noise levels or two RoMs measured for {method}", {})
         shares[method] = float(np.mean(steps))
     if not shares:
-        raise NotMeasured("A1 needs a method of paper A; this run has none")
+        raise NotMeasured("A1 needs a method of paper A; this run has none", {"method": METHODS})
     weakest = min(shares, key=shares.get)
     text = ", ".join(f"{m} {shares[m]:.0%}" for m in METHODS if m in shares)
     return Measured(
@@ -134,32 +137,39 @@ def _a1(collected, means):
 
 def _a2(collected, means, levels):
     """BC's converged trials at the M set and the smallest RoM, counted at each of ``levels``
-    (:data:`A2_LEVELS`' in the paper's design, in their order); ``ValueError`` when the run
-    lacks one: counts at other levels would be compared with the paper's as if they were its."""
-    bc = collected[
-        (collected["method"] == "BC")
-        & (collected["marker_set"] == "M")
-        & (collected["rom_deg"] == collected["rom_deg"].min())
-    ]
-    if bc.empty:
-        raise NotMeasured("BC is not in this run at the M set")
+    (:data:`A2_LEVELS`' in the paper's design, in their order); :class:`NotMeasured` when the
+    run lacks one: counts at other levels would be compared with the paper's as if they were
+    its."""
+    bc = rows_at(collected, "BC is not in this run at the M set", method="BC", marker_set="M")
+    bc = bc[bc["rom_deg"] == collected["rom_deg"].min()]
     converged = bc.groupby(A2_LEVELS.axis)["converged"].sum()
-    missing = [level for level in levels if level not in converged.index]
+    missing = tuple(level for level in levels if level not in converged.index)
     if missing:
         shown = ", ".join(map(str, missing))
-        raise NotMeasured(f"this run has no {A2_LEVELS.axis} {shown} for BC at the M set")
+        raise NotMeasured(
+            f"this run has no {A2_LEVELS.axis} {shown} for BC at the M set",
+            {A2_LEVELS.axis: missing},
+        )
     n_trials = collected["trial"].nunique()
     counts = [int(converged[level]) for level in levels]
     value = {"count": counts, "trials": [n_trials] * len(counts)}
     return Measured(value, f"{counts} of {n_trials}")
 
 
+def _a3_lack(levels) -> str:
+    """Why A3 is not measured, its ``levels`` of :data:`A3_LEVELS` without a mean."""
+    return f"A3: no mean error at the M set's smallest RoM at noise {list(levels)} mm"
+
+
 def _a3(collected, means):
-    cell = means[(means["marker_set"] == "M") & (means["rom_deg"] == means["rom_deg"].min())]
+    m_set = rows_at(means, _a3_lack(A3_LEVELS.levels), marker_set="M")
+    cell = m_set[m_set["rom_deg"] == means["rom_deg"].min()]
     lowest = cell.groupby(A3_LEVELS.axis)["mean_error_mm"].min()
-    missing = [level for level in A3_LEVELS.levels if not np.isfinite(lowest.get(level, np.nan))]
+    missing = tuple(
+        level for level in A3_LEVELS.levels if not np.isfinite(lowest.get(level, np.nan))
+    )
     if missing:
-        raise NotMeasured(f"A3: no mean error at the M set's smallest RoM at noise {missing} mm")
+        raise NotMeasured(_a3_lack(missing), {A3_LEVELS.axis: missing})
     values = [float(lowest[level]) for level in A3_LEVELS.levels]
     rows = draw.bc_converged(collected)
     rows = rows[(rows["marker_set"] == "M") & (rows["rom_deg"] == rows["rom_deg"].min())]
@@ -183,7 +193,9 @@ def _a4(collected, means):
     trials = _trial_errors(collected, SPHERE_FITS)
     others = [m for m in SPHERE_FITS if m != "LS"]
     smallest = wide.index.get_level_values("rom_deg").min()
-    exception = [c for c in wide.index if c[0] == "M" and c[1] == smallest]
+    # The set whose smallest RoM the sentence excepts, spelt once for the selection and its lack.
+    excepted = "M"
+    exception = [c for c in wide.index if c[0] == excepted and c[1] == smallest]
     covered = wide.drop(index=exception)
     # LS worse: the largest mean of the sphere fits in every condition the sentence covers.
     worst = covered[list(SPHERE_FITS)].idxmax(axis=1)
@@ -216,7 +228,8 @@ def _a4(collected, means):
     at_exception = [c for c in exception if c in trials]
     if len(at_exception) < 2:
         raise NotMeasured(
-            "A4's exception needs two noise levels or more at the M set's smallest RoM"
+            "A4's exception needs two noise levels or more at the M set's smallest RoM",
+            {"marker_set": (excepted,)},
         )
     excess_there = {
         c: _excess(trials[c], "LS", _best_other(trials[c], others)) for c in at_exception
@@ -297,18 +310,16 @@ def _a6(collected, means):
 
 
 def _a7(collected, means):
-    if "local_minimum" not in collected.columns:
-        raise NotMeasured("local minima not recorded in this run")
+    if LOCAL_MINIMUM not in collected.columns:
+        lack = {RECORDED_COLUMN: (LOCAL_MINIMUM,)}
+        raise NotMeasured("local minima not recorded in this run", lack)
     low, high = A7_LEVELS.levels
+    lacking = f"IS at the M set is not in this run at both {low}° and {high}°"
     # The paper counts at 5° among the BC-converged trials, at 15° among all trials.
-    converged = draw.bc_converged(collected)
-    is_m = (converged["method"] == "IS") & (converged["marker_set"] == "M")
-    at_low = converged[is_m & (converged[A7_LEVELS.axis] == low)]
-    all_m = (collected["method"] == "IS") & (collected["marker_set"] == "M")
-    at_high = collected[all_m & (collected[A7_LEVELS.axis] == high)]
-    if at_low.empty or at_high.empty:
-        raise NotMeasured(f"IS at the M set is not in this run at both {low}° and {high}°")
-    counts = [int(at_low["local_minimum"].sum()), int(at_high["local_minimum"].sum())]
+    is_m = {"method": "IS", "marker_set": "M"}
+    at_low = rows_at(draw.bc_converged(collected), lacking, **is_m, **{A7_LEVELS.axis: low})
+    at_high = rows_at(collected, lacking, **is_m, **{A7_LEVELS.axis: high})
+    counts = [int(at_low[LOCAL_MINIMUM].sum()), int(at_high[LOCAL_MINIMUM].sum())]
     sizes = [len(at_low), len(at_high)]
     return Measured(
         {"count": counts, "trials": sizes},
@@ -331,7 +342,9 @@ def _a8(collected, means):
     complete = means.groupby(CONDITION)["n_trials"].min() == n_trials
     converged = gap.loc[complete[complete].index]
     if converged.empty:
-        raise NotMeasured("no condition in which BC converged in every trial")
+        # A lack of a condition complete in BC's convergence, which no name the check selects
+        # by says (BC's converged trials are counted by condition_means).
+        raise NotMeasured("no condition in which BC converged in every trial", {})
     share, largest = float(np.mean(converged < 0.5)), float(converged.max())
     where = gap.idxmax()
     text = (
@@ -346,14 +359,14 @@ def _a8(collected, means):
 
 
 def _a9(collected, means):
-    cell = means[
-        (means["marker_set"] == "H")
-        & (means["rom_deg"] == 15)
-        & (means["noise_mm"] == 1.0)
-        & (means["method"] == "LS")
-    ]
-    if cell.empty or not np.isfinite(cell["mean_error_mm"].iloc[0]):
-        raise NotMeasured("A9: no LS mean at the H set, 15° and 1.0 mm in this run")
+    cell = rows_at(
+        means[np.isfinite(means["mean_error_mm"])],
+        "A9: no LS mean at the H set, 15° and 1.0 mm in this run",
+        marker_set="H",
+        rom_deg=15,
+        noise_mm=1.0,
+        method="LS",
+    )
     value = float(cell["mean_error_mm"].iloc[0])
     return Measured(value, f"{value:.1f} mm")
 
@@ -365,10 +378,11 @@ def _a10(collected, means):
     # has no ratio: the medians are over the cells that have one, and the ranges without any
     # are named, not printed as NaN.
     ratio = by_cell.median()
-    unmeasured = [m for m in METHODS if not np.isfinite(ratio[m])]
+    unmeasured = tuple(m for m in METHODS if not np.isfinite(ratio[m]))
     if unmeasured:
         raise NotMeasured(
-            f"no (RoM, noise) cell has a mean of {', '.join(unmeasured)} at both marker sets"
+            f"no (RoM, noise) cell has a mean of {', '.join(unmeasured)} at both marker sets",
+            {"method": unmeasured},
         )
     better_h, worse_h = ("IS", "BC", "NM"), ("LS", "MA")
     wrong = sum(ratio[m] >= 1 for m in better_h) + sum(ratio[m] <= 1 for m in worse_h)
@@ -384,16 +398,17 @@ def example_ordering_share(collected: pd.DataFrame) -> tuple[int, int]:
     """``(k, n)``: of the ``n`` trials at Fig 3's condition in which BC converged and every
     paper method has an error, the ``k`` in which LS errs most and NM least, the ordering of
     paper A's Fig 3 example; :class:`NotMeasured` when the run has no such trial."""
-    rows = draw.bc_converged(collected)
-    for key, value in FIG3_CONDITION.items():
-        rows = rows[rows[key] == value]
+    lacking = f"no trial at paper A's Fig 3 condition {FIG3_CONDITION}"
+    rows = rows_at(draw.bc_converged(collected), lacking, **FIG3_CONDITION)
     errors = rows[rows["method"].isin(METHODS)].pivot_table(
         index="trial", columns="method", values="error_mm"
     )
     errors = errors.dropna()
-    if errors.empty or not {"LS", "NM"} <= set(errors.columns):
-        raise NotMeasured(f"no trial at paper A's Fig 3 condition {FIG3_CONDITION}")
-    example = (errors.idxmax(axis=1) == "LS") & (errors.idxmin(axis=1) == "NM")
+    ordering = ("LS", "NM")  # the example's largest error and its smallest
+    if errors.empty or not set(ordering) <= set(errors.columns):
+        raise NotMeasured(lacking, {"method": ordering})
+    largest, smallest = ordering
+    example = (errors.idxmax(axis=1) == largest) & (errors.idxmin(axis=1) == smallest)
     return int(example.sum()), len(example)
 
 
@@ -429,7 +444,8 @@ def _a13(collected, means):
     roms = errors.index.get_level_values("rom_deg")
     smallest, largest = roms.min(), roms.max()
     if smallest == largest:
-        raise NotMeasured("one RoM in this run: reduced RoM cannot be told from the others")
+        # Two RoMs, whichever: a lack no name says.
+        raise NotMeasured("one RoM in this run: reduced RoM cannot be told from the others", {})
     small, large = errors.xs(smallest, level="rom_deg"), errors.xs(largest, level="rom_deg")
     holds = (
         (small["LS"] < 0)
@@ -500,13 +516,16 @@ def _fastest(collected: pd.DataFrame, means: pd.DataFrame, published: dict) -> M
     trial over the BC-converged trials (:func:`jointbench.figures.paper_a.table2`); ``means``
     unread, as every claim check is given them."""
     ours = _our_times(collected, published)
-    if "NM" not in ours.index or len(ours) < 2:
-        raise NotMeasured("NM and at least one other method are needed to rank speed")
+    fastest = "NM"  # the sentence's, whose speed every other method's is set against
+    if fastest not in ours.index or len(ours) < 2:
+        lack = {"method": (fastest,)}
+        raise NotMeasured(f"{fastest} and at least one other method are needed to rank speed", lack)
     medians = ours["median_s"].sort_values(kind="stable")
-    others = medians.drop("NM")
-    as_fast = int((others <= medians["NM"]).sum())
+    others = medians.drop(fastest)
+    as_fast = int((others <= medians[fastest]).sum())
     order = " < ".join(f"{method} {seconds:.2g} s" for method, seconds in medians.items())
-    return Measured(as_fast, f"by median: {order}; {as_fast} of {len(others)} as fast as NM")
+    text = f"by median: {order}; {as_fast} of {len(others)} as fast as {fastest}"
+    return Measured(as_fast, text)
 
 
 def _published_seconds(published) -> dict[str, float]:
@@ -526,10 +545,12 @@ def measure(inputs: Inputs) -> Measurements:
     collected = inputs.collected
     means = draw.condition_means(collected)
     out = _marker_distances(inputs.config)
+    declared = Declared(PAPER, inputs.published)
     try:
         out.update(_timings(collected, inputs.published))
-    except NotMeasured:
-        pass  # no times recorded in this run: Table 2 is not measured
+    except NotMeasured as lack:
+        # No times recorded in this run: Table 2 is not measured, unless the check misread.
+        require_declared("Table 2 (A-T2)", lack, declared)
     # A2 counts at the levels of the paper's design its published counts belong to.
     a2_levels = A2_LEVELS.levels_in(inputs.published["design"]["grid"])
     claims = {
@@ -537,7 +558,6 @@ def measure(inputs: Inputs) -> Measurements:
         "A2": functools.partial(_a2, levels=a2_levels),
         "A12": functools.partial(_fastest, published=inputs.published),
     }
-    declared = Declared(PAPER, inputs.published)
     return measured_claims(claims, collected, means, declared=declared).with_values(out)
 
 

@@ -22,6 +22,7 @@ from jointbench.papers.common import (
     claims_output,
     measured_claims,
     one_step_changes,
+    rows_at,
     with_columns,
 )
 from jointbench.resultfiles.formatting import number
@@ -52,9 +53,11 @@ def _b1(means):
     )
     steps = one_step_changes(wide)
     if not steps.size:
+        # Two ratios on one line of the grid, whichever: a lack no name says.
         raise NotMeasured(
             f"B1 needs two measured AA/FE ratios on a line of the grid; this run has ratios "
-            f"{list(wide.columns)}"
+            f"{list(wide.columns)}",
+            {},
         )
     share = float(np.mean(steps > 0))
     return Measured(share, f"error grows in {share:.0%} of one-step ratio increases")
@@ -72,19 +75,23 @@ def _at_low_ratios(cells: pd.DataFrame, claim: str) -> pd.DataFrame:
     low = cells[np.isclose(cells["aa_ratio"].to_numpy()[:, None], LOW_RATIOS).any(axis=1)]
     missing = [r for r in LOW_RATIOS if not np.isclose(low["aa_ratio"], r).any()]
     if missing:
-        raise NotMeasured(f"{claim} speaks of the ratios {LOW_RATIOS}; this run lacks {missing}")
+        lack = {"aa_ratio": tuple(missing)}
+        raise NotMeasured(
+            f"{claim} speaks of the ratios {LOW_RATIOS}; this run lacks {missing}", lack
+        )
     return low
 
 
 def _b2(means):
-    planar = means[means["method"] == "planar"]
+    planar = rows_at(means, method="planar")
     at_ratio = np.isclose(planar["aa_ratio"], B2_RATIO)
     low, rest = planar[at_ratio], planar[~at_ratio]
     # "Only at 0.1" speaks of 0.1 and of every other ratio: both must have been run.
     if low.empty or rest.empty:
         raise NotMeasured(
             f"B2 needs planar cells at ratio {B2_RATIO:g} and at another ratio; this run has "
-            f"ratios {sorted(planar['aa_ratio'].unique().tolist())}"
+            f"ratios {sorted(planar['aa_ratio'].unique().tolist())}",
+            {"aa_ratio": (B2_RATIO,)},
         )
     wrong = int((low["mean"] >= 5).sum() + (rest["mean"] < 5).sum())
     text = (
@@ -95,11 +102,15 @@ def _b2(means):
 
 
 def _b3(means):
-    combined = means[means["method"] == "combined"]
+    combined = rows_at(means, method="combined")
     upto_03 = _at_low_ratios(combined, "B3")
-    at_05 = combined[(combined["aa_ratio"] == 0.5) & combined["fe_rom_deg"].isin([30, 60])]
+    ratio, fe_roms = 0.5, (30, 60)  # "below 10° at 0.5 for the smaller ranges"
+    at_05 = combined[(combined["aa_ratio"] == ratio) & combined["fe_rom_deg"].isin(fe_roms)]
     if at_05.empty:
-        raise NotMeasured("B3 needs a combined cell at ratio 0.5 with FE 30° or 60°")
+        raise NotMeasured(
+            f"B3 needs a combined cell at ratio {ratio:g} with FE {fe_roms[0]}° or {fe_roms[1]}°",
+            {"aa_ratio": (ratio,), "fe_rom_deg": fe_roms},
+        )
     wrong = int((upto_03["mean"] >= 5).sum() + (at_05["mean"] >= 10).sum())
     text = (
         f"ratio ≤ 0.3: max {upto_03['mean'].max():.1f}°; "
@@ -113,10 +124,15 @@ def _b4(means):
         index=["protocol", "fe_rom_deg", "aa_ratio"], columns="method", values="mean"
     )
     # A cell one of the two costs was not run in compares nothing.
-    low = with_columns(low, ("radial", "combined"), "method").dropna()
+    costs = ("radial", "combined")
+    low = with_columns(low, costs, "method").dropna()
+    radial, combined = costs
     if low.empty:
-        raise NotMeasured("B4 needs radial and combined cells at a ratio up to 0.3")
-    holds = low["radial"] > low["combined"]
+        raise NotMeasured(
+            f"B4 needs {radial} and {combined} cells at a ratio up to {LOW_RATIOS[-1]:g}",
+            {"method": costs, "aa_ratio": LOW_RATIOS},
+        )
+    holds = low[radial] > low[combined]
     return Measured(
         int((~holds).sum()), f"radial > combined in {int(holds.sum())} of {len(holds)} cells"
     )
@@ -126,10 +142,15 @@ def _b5(means):
     wide = means.pivot_table(
         index=["method", "fe_rom_deg", "aa_ratio"], columns="protocol", values="mean"
     )
-    wide = with_columns(wide, ("knee", "mcp"), "protocol")
-    gap = (wide["knee"] - wide["mcp"]).abs().dropna()
+    protocols = ("knee", "mcp")
+    wide = with_columns(wide, protocols, "protocol")
+    knee, mcp = protocols
+    gap = (wide[knee] - wide[mcp]).abs().dropna()
     if gap.empty:
-        raise NotMeasured("B5 needs a (cost, FE RoM, ratio) cell run at both the knee and the MCP")
+        raise NotMeasured(
+            "B5 needs a (cost, FE RoM, ratio) cell run at both the knee and the MCP",
+            {"protocol": protocols},
+        )
     method, fe, ratio = gap.idxmax()
     return Measured(
         float(gap.max()),
@@ -148,7 +169,8 @@ def _b6(means):
                 crossings.append((*key, r1, after))
                 jumps += after > 50
     if not crossings:
-        raise NotMeasured("no mean error crosses 20° in this run")
+        # A lack of a crossing, which no name says.
+        raise NotMeasured("no mean error crosses 20° in this run", {})
     share = jumps / len(crossings)
     short = [f"{p} {m} FE {fe}° ratio {r:g}: {a:.1f}°" for p, m, fe, r, a in crossings if a <= 50]
     return Measured(

@@ -30,6 +30,8 @@ from jointbench.papers.common import (
     claims_headline,
     claims_output,
     measured_claims,
+    none_measured,
+    rows_at,
     with_columns,
 )
 from jointbench.resultfiles.formatting import number
@@ -75,7 +77,10 @@ def _require_reference(n_frames: pd.Series, what: str) -> None:
     """:class:`NotMeasured` naming ``what`` unless the run's longest Nt is :data:`REFERENCE_NT`."""
     if n_frames.empty or n_frames.max() != REFERENCE_NT:
         longest = "none" if n_frames.empty else int(n_frames.max())
-        raise NotMeasured(f"{what} needs Nt = {REFERENCE_NT}; this run's longest is {longest}")
+        raise NotMeasured(
+            f"{what} needs Nt = {REFERENCE_NT}; this run's longest is {longest}",
+            {"n_frames": (REFERENCE_NT,)},
+        )
 
 
 def _c1(ours, rows, collected):
@@ -83,7 +88,8 @@ def _c1(ours, rows, collected):
     if not {FALL_FROM, FALL_TO} <= set(series.index):
         raise NotMeasured(
             f"C1 needs sqrt(tr Wc) at Nt = {FALL_FROM} and {FALL_TO}; this run has "
-            f"{list(series.index)}"
+            f"{list(series.index)}",
+            {"n_frames": (FALL_FROM, FALL_TO)},
         )
     values = series.to_numpy()
     steps = np.diff(values) < 0
@@ -142,7 +148,8 @@ def _c3(ours, rows, collected):
     _require_reference(rows["n_frames"], "C3")
     shorter = rows[rows["n_frames"] < rows["n_frames"].max()]
     if shorter.empty:
-        raise NotMeasured("C3 needs an Nt below the longest; this run has none")
+        # An Nt below the longest, whichever: a lack no name says.
+        raise NotMeasured("C3 needs an Nt below the longest; this run has none", {})
     v = v_against_longest(rows).loc[shorter.index]
     # E[v²] = k² when the true covariance is k² times the predicted one (any error shape):
     # the RMS of v estimates k, each Nt weighted equally as the paper's eight rows are.
@@ -160,7 +167,8 @@ def _c4(ours, rows, collected):
     band = ours[ours["n_frames"] >= 75]
     values = band["mean_validation_index"]
     if values.empty:
-        raise NotMeasured("C4 needs an Nt ≥ 75; this run has none")
+        # An Nt in the band the sentence reads, whichever: a lack no name says.
+        raise NotMeasured("C4 needs an Nt ≥ 75; this run has none", {})
     text = ", ".join(f"Nt={n}: {v:.2f}" for n, v in zip(band["n_frames"], values, strict=True))
     squares = (
         rows[rows["n_frames"] >= 75]
@@ -199,7 +207,10 @@ def _c5(ours, rows, collected):
     with_columns(rows, POSE_FIT_COLUMNS, RECORDED_COLUMN)
     counts = converged_after(rows.dropna(subset=list(POSE_FIT_COLUMNS)))
     if counts.empty:
-        raise NotMeasured("no trial with a pose fit in this run")
+        # The columns are there, empty in every trial.
+        raise NotMeasured(
+            "no trial with a pose fit in this run", {RECORDED_COLUMN: POSE_FIT_COLUMNS}
+        )
     largest = int(counts.to_numpy().max())
     tally = counts.stack().astype(int).value_counts().sort_index()
     shown = ", ".join(f"{n}: {k}" for n, k in tally.items())
@@ -245,11 +256,12 @@ def _table1_values(ours: pd.DataFrame) -> dict[str, Measured]:
 
 def measure(inputs: Inputs) -> Measurements:
     """Every Table 1 value and claim of paper C, measured from the collected hip results."""
-    if draw.METHOD not in set(inputs.collected["method"]):
-        return Measurements({}, dict.fromkeys(_CLAIMS, f"this run has no method {draw.METHOD}"))
-    ours = draw.per_frames(inputs.collected)
-    rows = inputs.collected[inputs.collected["method"] == draw.METHOD]
     declared = Declared(PAPER, inputs.published)
+    try:
+        rows = rows_at(inputs.collected, method=draw.METHOD)
+    except NotMeasured as lack:
+        return none_measured(_CLAIMS, lack, declared)
+    ours = draw.per_frames(inputs.collected)
     claims = measured_claims(_CLAIMS, ours, rows, inputs.collected, declared=declared)
     return claims.with_values(_table1_values(ours))
 

@@ -310,7 +310,8 @@ def _paired_share(means, level: str, better, worse, what: str):
     # A cell run at only one of the two levels compares nothing.
     pairs = with_columns(wide, (better, worse), level).dropna()
     if pairs.empty:
-        raise NotMeasured(f"no cell with STA > 0 at both {better} and {worse} in this run")
+        lack = {level: (better, worse)}
+        raise NotMeasured(f"no cell with STA > 0 at both {better} and {worse} in this run", lack)
     wins = pairs[better] < pairs[worse]
     return Measured(
         float(wins.mean()),
@@ -331,7 +332,8 @@ def _s4(means):
 def _s6(means):
     above = sorted(level for level in means.index.get_level_values("sta_mm").unique() if level > 0)
     if not above:
-        raise NotMeasured("S6 needs an STA amplitude above 0 mm; this run has none")
+        # An amplitude above 0 mm, whichever: a lack no name says.
+        raise NotMeasured("S6 needs an STA amplitude above 0 mm; this run has none", {})
     lowest = above[0]
     ratio = at_levels(means, sta_mm=lowest) / at_levels(means, sta_mm=0.0)
     return Measured(
@@ -343,9 +345,11 @@ def _s6(means):
 def _s7(means):
     cell = at_levels(means, motion="star_arc", rom_deg=20.0)
     top = at_levels(cell, sta_mm=cell.index.get_level_values("sta_mm").max()).sort_values()
-    if "SCoRE" not in top.index:
-        raise NotMeasured("S7 ranks SCoRE; this run has no SCoRE at the star-arc, 20°")
-    rank = int(list(top.index).index("SCoRE")) + 1
+    ranked = "SCoRE"
+    if ranked not in top.index:
+        lack = {"method": (ranked,)}
+        raise NotMeasured(f"S7 ranks {ranked}; this run has no {ranked} at the star-arc, 20°", lack)
+    rank = int(list(top.index).index(ranked)) + 1
     text = ", ".join(f"{m} {v:.1f} mm" for m, v in top.items())
     return Measured(rank, f"SCoRE ranks {rank} of {len(top)}: {text}")
 

@@ -35,6 +35,8 @@ from jointbench.running.scoring import (
 if TYPE_CHECKING:
     import pandas as pd
 
+    from jointbench.simulate import Study
+
 __all__ = [
     "COMMON_COLUMNS",
     "COVARIANCE_PSD_TOL",
@@ -49,6 +51,7 @@ __all__ = [
     "check_estimates",
     "check_not_negative",
     "check_scores",
+    "recorded_columns",
     "required_columns",
 ]
 
@@ -127,6 +130,20 @@ def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tupl
         **COMMON_COLUMNS,
         **KIND_COLUMNS[kind],
     }
+
+
+def recorded_columns(spec: Study) -> tuple[str, ...]:
+    """Every column the collected results of study ``spec`` may hold from its own estimators,
+    each once: per kind it runs, what an estimates file of that kind carries
+    (:func:`required_columns`, with its grid keys) and may carry (:data:`OPTIONAL_COLUMNS`: the
+    scores the benchmark computes, a covariance, a fitted radius), then the columns of its
+    diagnostics (:attr:`~jointbench.simulate.Diagnostic.columns`). An external estimator's own
+    extra columns are no study's."""
+    by_kind = (
+        (*required_columns(kind, spec.grid_keys), *OPTIONAL_COLUMNS[kind]) for kind in spec.kinds
+    )
+    diagnosed = (check.columns for check in spec.diagnostics.values())
+    return tuple(dict.fromkeys(column for columns in (*by_kind, *diagnosed) for column in columns))
 
 
 def check_estimates(

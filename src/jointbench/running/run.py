@@ -21,7 +21,7 @@ from jointbench.configuration.config import estimator_names, parse_condition_id
 from jointbench.configuration.seeds import trial_rng
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
-from jointbench.estimators.batching import failed_trial, mistakes_named
+from jointbench.estimators.batching import ProgrammingError, failed_trial, mistakes_named
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.resultfiles.parquet import (
     iter_dataset,
@@ -34,7 +34,7 @@ from jointbench.resultfiles.parquet import (
 )
 from jointbench.resultfiles.schema import check_estimates
 from jointbench.running.scoring import proximal_at_frame0, score
-from jointbench.simulate import Trials
+from jointbench.simulate import Diagnostic, Trials
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -192,7 +192,7 @@ def estimate_table(
         extras = [{}] * trials.n_trials
         if diagnose:
             arrays = tuple(trials.segments[name] for name in segments)
-            extras = diagnose(arrays, [row[0] for row in fitted], trials.truth)
+            extras = _diagnosed(diagnose, arrays, [row[0] for row in fitted], trials.truth)
     frame0 = proximal_at_frame0(trials.segments, spec.segments)
     rows = []
     for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
@@ -214,6 +214,21 @@ def estimate_table(
     table = rows_table(rows)
     check_estimates(table, kind=kind, condition_keys=spec.grid_keys, method=method)
     return table
+
+
+def _diagnosed(check: Diagnostic, arguments, results, truth) -> list[dict[str, object]]:
+    """The rows of ``check`` (:class:`~jointbench.simulate.Diagnostic`) for one condition's
+    trials; :class:`~jointbench.estimators.batching.ProgrammingError` naming a column it does
+    not declare, which a claim could not select as one its study records."""
+    rows = check.diagnose(arguments, results, truth)
+    undeclared = sorted({column for row in rows for column in row} - set(check.columns))
+    if undeclared:
+        raise ProgrammingError(
+            f"its diagnostic {check.diagnose.__name__} writes the columns "
+            f"{', '.join(undeclared)}, which it does not declare (it declares "
+            f"{', '.join(check.columns) or 'none'})"
+        )
+    return rows
 
 
 def run_simulate_files(

@@ -28,6 +28,7 @@ __all__ = [
     "KINDS",
     "PROXIMAL_TRUTH",
     "RADII_TRUTH",
+    "Diagnostic",
     "GridValues",
     "Study",
     "Trials",
@@ -155,6 +156,22 @@ def value_text(key: str, value: object, spec: GridValues | None = None) -> str:
 
 
 @dataclass(frozen=True)
+class Diagnostic:
+    """A per-trial check of one method that needs the ground truth (:attr:`Study.diagnostics`).
+
+    ``diagnose(arguments, results, truth) -> rows`` is given the estimator's arguments for all
+    trials of a condition (each segment ``(n_trials, ...)``), its results (``None`` where it
+    returned none) and the truth, and returns the extra columns of each trial's row (an empty
+    mapping where there was no result). ``columns`` names every column those rows may hold:
+    what the study records beside its estimates (a claim selects them by name), which the
+    estimate job holds each row to.
+    """
+
+    columns: tuple[str, ...]
+    diagnose: Callable[..., list[dict[str, object]]]
+
+
+@dataclass(frozen=True)
 class Study:
     """One simulation study of the benchmark, exported by its simulator module as ``STUDY``.
 
@@ -169,11 +186,9 @@ class Study:
     reads for people (:class:`GridValues`).
 
     ``title`` is the study's name for people in titles and text ("thumb CMC"; the name when
-    empty). ``diagnostics`` maps a method to a diagnostic that needs the ground truth:
-    ``diagnose(segments, results, truth) -> rows``, given the estimator's arguments for all
-    trials of a condition (each segment ``(n_trials, ...)``), its results (``None`` where it
-    returned none) and the truth, returning the extra columns of each trial's row (an empty
-    mapping where there was no result); the estimate job adds them to that method's rows.
+    empty). ``diagnostics`` maps a method to a check that needs the ground truth
+    (:class:`Diagnostic`, with the columns it records); the estimate job adds its columns to
+    that method's rows.
 
     ``more_kinds`` gives the trials to estimators of further kinds, each with the segments its
     estimators take, in argument order (names in :attr:`Trials.segments`): a two-segment study
@@ -191,7 +206,7 @@ class Study:
     simulate: Callable[[Mapping[str, object], object, Sequence[np.random.Generator]], Trials]
     grid_spec: Mapping[str, GridValues] = field(default_factory=dict)
     title: str = ""
-    diagnostics: Mapping[str, Callable[..., list[dict[str, object]]]] = field(default_factory=dict)
+    diagnostics: Mapping[str, Diagnostic] = field(default_factory=dict)
     more_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -213,6 +228,12 @@ class Study:
             raise ValueError(
                 f"study {self.name!r}: protocol_class {self.protocol_class!r} must be a "
                 "dataclass, whose annotated fields declare what the config may set"
+            )
+        loose = [m for m, check in self.diagnostics.items() if not isinstance(check, Diagnostic)]
+        if loose:
+            raise ValueError(
+                f"study {self.name!r}: the diagnostics of {', '.join(loose)} must each be a "
+                "Diagnostic, which names the columns it records"
             )
         if self.grid_spec and tuple(self.grid_spec) != self.grid_keys:
             raise ValueError(

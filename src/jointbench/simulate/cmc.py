@@ -54,11 +54,12 @@ from jointbench.declared import check_fields as check_declared
 from jointbench.estimators.registry import many
 from jointbench.estimators.sphere import FMINSEARCH_OPTIONS, geometric_cost
 from jointbench.geometry import rotation_matrix, unit
-from jointbench.simulate import RADII_TRUTH, GridValues, Study, Trials
+from jointbench.simulate import RADII_TRUTH, Diagnostic, GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise, largest_noise_mm
 from jointbench.simulate.prior import Choice, Prior
 
 __all__ = [
+    "LOCAL_MINIMUM",
     "PRIOR",
     "STUDY",
     "CmcProtocol",
@@ -213,12 +214,16 @@ def simulate(
     )
 
 
+#: The column of :func:`is_local_minimum` that paper A's claim A7 counts.
+LOCAL_MINIMUM = "local_minimum"
+
+
 def is_local_minimum(arguments, results: Sequence, truth: Mapping) -> list[dict[str, object]]:
     """Claim A7 (paper A §5.1.1), made operational: IS "returned a local minimum" when IS
     restarted from the true centre reaches a lower geometric cost f1 than IS from the LS centre.
 
-    A diagnostic of :attr:`Study.diagnostics`: ``arguments`` is ``(markers,)``, the markers of
-    all trials ``(n_trials, n_frames, n_markers, 3)`` [mm]. Columns: ``local_minimum`` (bool)
+    The check of :attr:`Study.diagnostics` for IS: ``arguments`` is ``(markers,)``, the markers
+    of all trials ``(n_trials, n_frames, n_markers, 3)`` [mm]. Columns: :data:`LOCAL_MINIMUM` (bool)
     and ``f1_gap`` = f1(IS from LS) − f1(IS from truth) [mm²]. The restarts of all trials run
     as one batch (the same searches as one at a time).
     """
@@ -242,7 +247,7 @@ def is_local_minimum(arguments, results: Sequence, truth: Mapping) -> list[dict[
         best = geometric_cost(data, from_truth.center)
         rows.append(
             {
-                "local_minimum": bool(own - best > max(same_atol, same_rtol * best)),
+                LOCAL_MINIMUM: bool(own - best > max(same_atol, same_rtol * best)),
                 "f1_gap": float(own - best),
             }
         )
@@ -277,7 +282,7 @@ STUDY = Study(
         ),
     },
     title="thumb CMC",
-    diagnostics={"IS": is_local_minimum},
+    diagnostics={"IS": Diagnostic((LOCAL_MINIMUM, "f1_gap"), is_local_minimum)},
 )
 
 

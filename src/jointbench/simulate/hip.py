@@ -57,7 +57,7 @@ from jointbench.estimators.registry import many
 from jointbench.geometry import rotation_matrix
 from jointbench.numerics.poses import fit_rigid_poses
 from jointbench.running.scoring import score
-from jointbench.simulate import PROXIMAL_TRUTH, GridValues, Study, Trials
+from jointbench.simulate import PROXIMAL_TRUTH, Diagnostic, GridValues, Study, Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
 from jointbench.simulate.prior import Choice, Prior
 
@@ -288,7 +288,7 @@ def paper_c_checks(arguments, results: Sequence, truth: Mapping) -> list[dict[st
     """Paper C's method checked against what the paper says of it, per trial: the pose fit's
     convergence and the frame-0 control.
 
-    A diagnostic of :attr:`Study.diagnostics` for gauss-markov: ``arguments`` is ``(proximal,
+    The check of :attr:`Study.diagnostics` for gauss-markov: ``arguments`` is ``(proximal,
     distal)``, each ``(n_trials, Nt, 3, 3)`` [mm]. Columns :data:`POSE_FIT_COLUMNS`: how the
     alternation of poses and body-fixed coordinates of each segment ended
     (:func:`~jointbench.numerics.poses.fit_rigid_poses`, as the poses gauss-markov used were
@@ -355,7 +355,11 @@ STUDY = Study(
         )
     },
     title="hip joint centre",
-    diagnostics={"gauss-markov": paper_c_checks},
+    diagnostics={
+        "gauss-markov": Diagnostic(
+            (*POSE_FIT_COLUMNS, *EXACT_FRAME0_COLUMNS.values()), paper_c_checks
+        )
+    },
 )
 
 
