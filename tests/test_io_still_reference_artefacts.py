@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 from test_io_recordings import KNEE, write_c3d
-from test_io_units import LAB_FIXED, SHANK, TM, TREADMILL, with_treadmill
+from test_io_units import LAB_FIXED, SHANK, TM, TREADMILL, with_treadmill, write
 
 import jointbench
 from jointbench.cli import main
@@ -281,5 +281,113 @@ def test_a_marker_seen_only_in_spoilt_frames_shows_no_stillness(treadmill):
             recording, tuple(TM.split(",")), spoilt, True
         )
     assert alone.largest_mm == MAX_SPAN_MM
-    assert "they move in the lab: TM1 lies 50" in alone.why_not_lab
+    assert "they move in the lab: TM1 lies 49.9 mm or more from its median" in alone.why_not_lab
     assert joined.largest_mm == MAX_JOINED_SPAN_MM
+
+
+#: Out of the treadmill's plane: its four markers tilt to take most of a corner's bump, which
+#: leaves each a residual of a quarter of it, under the screen's level up to 20 mm.
+OUT_OF_PLANE = (0.0, 0.0, 1.0)
+
+
+@pytest.mark.parametrize("artefacts", ["refuse", "exclude"])
+@pytest.mark.parametrize("row", [0, 150, 299], ids=["first", "middle", "last"])
+@pytest.mark.parametrize("size", [5.0, 6.0, 7.0, 9.0])
+def test_a_small_bump_in_one_frame_of_a_still_reference_is_not_motion(
+    treadmill, size, row, artefacts
+):
+    """TM1 bumped 5 to 9 mm out of the treadmill's plane in one frame (the first, one in the
+    middle, the last): under the screen's level, so no artefact, and over the 5 mm a still
+    marker keeps to, but held by no second frame, so no motion either. The frame is kept, as
+    any cluster's frame the screen does not flag, and the treadmill is bounded as fixed."""
+    fitted, warned = fit_still(
+        bumped(treadmill, [row], by=tuple(size * np.array(OUT_OF_PLANE))), artefacts
+    )
+    assert fitted.excluded == () and warned == []
+    assert treadmill.first_frame + row in fitted.frames_used
+    assert len(fitted.frames_used) == treadmill.n_frames
+
+
+def test_a_small_bump_on_two_markers_in_one_frame_is_not_motion(treadmill):
+    """TM1 and TM4, two opposite corners, bumped 6 mm in opposite directions in frame 250."""
+
+    def edit(markers, column):
+        markers[150, column("TM1")] += [0.0, 0.0, 6.0]
+        markers[150, column("TM4")] += [0.0, 0.0, -6.0]
+
+    fitted, warned = fit_still(edited(treadmill, edit), artefacts="refuse")
+    assert fitted.excluded == () and warned == []
+    assert 250 in fitted.frames_used
+
+
+def moved(recording, by_row):
+    """``recording`` with every treadmill marker displaced by ``by_row`` ``(n_frames, 3)``
+    [mm]."""
+
+    def edit(markers, column):
+        markers[:, recording.index(TM)] += by_row[:, None, :]
+
+    return edited(recording, edit)
+
+
+def drift(n_frames, total_mm):
+    """A slow drift along x, 0 to ``total_mm`` over the ``n_frames`` ``(n_frames, 3)``."""
+    return np.linspace(0.0, total_mm, n_frames)[:, None] * [1.0, 0.0, 0.0]
+
+
+def step(n_frames, at, by):
+    """A step of ``by`` ``(3,)`` [mm] at row ``at``, held to the end ``(n_frames, 3)``."""
+    return (np.arange(n_frames) >= at)[:, None] * np.asarray(by, float)
+
+
+def slide_tm1(recording):
+    """TM1 sliding 8 mm along y over rows 100 to 150 and staying there."""
+
+    def edit(markers, column):
+        markers[:, column("TM1")] += np.clip((np.arange(len(markers)) - 100) / 50, 0, 1)[
+            :, None
+        ] * [0.0, 8.0, 0.0]
+
+    return edited(recording, edit)
+
+
+@pytest.mark.parametrize(
+    ("motion", "where"),
+    [
+        (lambda r: moved(r, drift(r.n_frames, 10.0)), "TM2 lies 5.22 mm or more from its "),
+        (lambda r: moved(r, step(r.n_frames, 100, (0.0, 0.0, 6.0))), "TM4 lies 6.25 mm or "),
+        (slide_tm1, "TM1 lies 7.76 mm or more from its median position in frame 187 (1.87 s) "),
+        (
+            lambda r: bumped(r, [150, 151], by=(0.0, 0.0, 6.0)),
+            "TM1 lies 6.23 mm or more from its median position in frame 250 (2.50 s) and frame "
+            "251 (2.51 s)",
+        ),
+    ],
+    ids=["drift-10mm", "step-6mm-held", "one-marker-slides-8mm", "bump-held-two-frames"],
+)
+def test_a_still_reference_that_moves_is_still_refused_as_moving(treadmill, motion, where):
+    """Motion held over frames is motion, whichever marker shows it: a 10 mm drift of the whole
+    treadmill, a 6 mm step held for the last two thirds of the trial, TM1 sliding 8 mm and
+    staying, a 6 mm bump held for two frames: bounded as a segment, naming the marker, how far
+    and the frames, with artefacts excluded too."""
+    with pytest.raises(ValueError) as error:
+        fit_still(motion(treadmill))
+    message = str(error.value)
+    assert "and they move in the lab: " in message, message
+    assert where in message, message
+
+
+@pytest.mark.parametrize("suffix", [".c3d", ".trc", ".csv"])
+def test_jointbench_fit_keeps_a_still_reference_bumped_in_one_frame(
+    tmp_path, capsys, treadmill, suffix
+):
+    """The command line as the API, from each reader: TM1 bumped 6 mm out of the treadmill's
+    plane in row 150 is neither an artefact nor motion, and the fit uses every frame."""
+    recording = bumped(treadmill, [150], by=(0.0, 0.0, 6.0))
+    path = write(tmp_path / f"treadmill{suffix}", recording.labels, recording.markers, "mm")
+    argv = ["fit", "center", str(path), "--moving", SHANK, "--reference", TM, "--method", "NM"]
+    argv += ["--lab-fixed-reference", "--format", "json"]
+    assert main(argv) == 0, capsys.readouterr().err
+    out, err = capsys.readouterr()
+    assert '"n_frames_used": 300' in out
+    assert "left out" not in err
