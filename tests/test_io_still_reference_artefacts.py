@@ -30,9 +30,15 @@ HAND_PLACED = TREADMILL + np.array(
 
 
 @pytest.fixture(scope="module")
-def treadmill():
+def knee():
+    """The knee trial's frames 100 to 399."""
+    return read(KNEE).frames("100:400")
+
+
+@pytest.fixture(scope="module")
+def treadmill(knee):
     """The knee trial's frames 100 to 399 with a still treadmill TM1 to TM4 [mm]."""
-    return with_treadmill(read(KNEE).frames("100:400"), HAND_PLACED)
+    return with_treadmill(knee, HAND_PLACED)
 
 
 def edited(recording, edit):
@@ -391,3 +397,79 @@ def test_jointbench_fit_keeps_a_still_reference_bumped_in_one_frame(
     out, err = capsys.readouterr()
     assert '"n_frames_used": 300' in out
     assert "left out" not in err
+
+
+#: A square wand frame 800 mm on a side, TM1 and TM4 (and TM2 and TM3) at opposite corners
+#: [mm].
+SQUARE = np.array(
+    [[-400.0, -300.0, 0.0], [400.0, -300.0, 0.0], [-400.0, 500.0, 0.0], [400.0, 500.0, 0.0]]
+)
+
+
+@pytest.mark.parametrize(
+    ("corners", "first", "second"),
+    [
+        (TREADMILL, "TM1", "TM2"),
+        (TREADMILL, "TM3", "TM4"),
+        (TREADMILL, "TM1", "TM3"),
+        (TREADMILL, "TM1", "TM4"),
+        (TREADMILL, "TM2", "TM3"),
+        (SQUARE, "TM1", "TM2"),
+        (SQUARE, "TM2", "TM4"),
+        (HAND_PLACED, "TM1", "TM4"),
+    ],
+    ids=[
+        "rectangle-long-side",
+        "rectangle-other-long-side",
+        "rectangle-short-side",
+        "rectangle-diagonal",
+        "rectangle-other-diagonal",
+        "square-side",
+        "square-other-side",
+        "hand-placed-diagonal",
+    ],
+)
+def test_a_swap_in_a_symmetric_still_reference_names_the_pair_that_swapped(
+    knee, corners, first, second
+):
+    """A rectangle's (or a square's) symmetry fits its shape alike with the swapped pair
+    exchanged or with the pair it maps that one to (TM1 and TM2, or TM3 and TM4: the 180 deg turn
+    about the axis between them). The frames around the swap tell them apart, as the swapped
+    pair's markers step back where they were and the other pair's would turn the frame over:
+    one swap, of the pair that swapped, from its first frame to its last."""
+    recording = swapped(with_treadmill(knee, corners), slice(150, 160), first, second)
+    with pytest.raises(ValueError) as error:
+        fit_still(recording, artefacts="refuse")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
+        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
+        "labelled one consistent way"
+    ), message
+    assert message.count("exchange labels") == 1, message
+    fitted, warned = fit_still(recording)
+    assert {a.frame for a in fitted.excluded} == set(range(150, 160))
+    assert f"left out 10 frames with artefacts: markers {first} and {second} exchange" in warned[0]
+
+
+def test_a_swap_the_frames_around_cannot_place_names_both_pairs_a_symmetry_fits(knee):
+    """TM1 and TM2 of the rectangle exchanged in frames 250 to 259, the treadmill unseen in the
+    three frames on either side: its symmetry fits TM3 and TM4 exchanged alike, and no frame
+    next to the swap tells which pair it was. The message says so, naming both, rather than
+    one with confidence."""
+
+    def unseen(markers, column):
+        for label in TM.split(","):
+            markers[147:150, column(label)] = np.nan
+            markers[160:163, column(label)] = np.nan
+
+    recording = edited(swapped(with_treadmill(knee, TREADMILL), slice(150, 160)), unseen)
+    with pytest.raises(ValueError) as error:
+        fit_still(recording, artefacts="refuse")
+    message = str(error.value)
+    assert message.startswith(
+        "treadmill.c3d: markers TM1 and TM2, or TM3 and TM4 (the cluster's symmetry fits either "
+        "pair alike, and the frames next to the swap do not tell which), exchange labels at "
+        "frame 250 (2.50 s) and back at frame 260 (2.60 s)"
+    ), message
+    assert message.count("exchange labels") == 1, message
