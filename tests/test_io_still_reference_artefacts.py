@@ -473,3 +473,38 @@ def test_a_swap_the_frames_around_cannot_place_names_both_pairs_a_symmetry_fits(
         "frame 250 (2.50 s) and back at frame 260 (2.60 s)"
     ), message
     assert message.count("exchange labels") == 1, message
+
+
+#: An isosceles triangle (TM1 and TM2 its base, TM3 its apex) with TM4 on its axis, in its
+#: plane [mm]: exchanging TM1 and TM2 keeps its shape (the plate turned 180 deg about its axis).
+ISOSCELES = np.array(
+    [[-400.0, -300.0, 0.0], [400.0, -300.0, 0.0], [0.0, 500.0, 0.0], [0.0, 100.0, 0.0]]
+)
+
+
+@pytest.mark.parametrize(
+    ("corners", "first", "second"),
+    [(SQUARE, "TM1", "TM4"), (SQUARE, "TM2", "TM3"), (ISOSCELES, "TM1", "TM2")],
+    ids=["square-diagonal", "square-other-diagonal", "isosceles-base"],
+)
+def test_a_swap_that_keeps_a_still_reference_s_shape_is_found_over_all_its_frames(
+    knee, corners, first, second
+):
+    """A square's diagonal (the square turned 180 deg about the other diagonal) or an isosceles
+    triangle's base, exchanged in frames 250 to 259: the shape is the same, so only time order
+    shows the swap, as both markers jump where the labels change and back. Named as a swap of
+    those two from its first frame to its last, and every frame of it left out when excluded,
+    not only the two steps: the frames between carry the reference turned over, and would move
+    the answer by metres."""
+    recording = swapped(with_treadmill(knee, corners), slice(150, 160), first, second)
+    with pytest.raises(ValueError) as error:
+        fit_still(recording, artefacts="refuse")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
+        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
+        "labelled one consistent way"
+    ), message
+    fitted, warned = fit_still(recording)
+    assert {a.frame for a in fitted.excluded} == set(range(150, 160))
+    assert f"left out 10 frames with artefacts: markers {first} and {second} exchange" in warned[0]

@@ -19,7 +19,10 @@ order of the frames. A step of one marker is flagged when it differs from both n
 steps by more than ``jump_factor`` times the median such difference and ``min_jump_mm``
 (:func:`find_jumps`), which needs the frames in time order: it is the only check of markers
 outside a cluster, and in a cluster it counts only where no rigidity break or swapped frame
-explains it (a swap of two markers of an isosceles triangle keeps the shape).
+explains it. A swap that keeps the shape (a square's diagonal, an isosceles triangle's base)
+shows only so: both markers jump where the labels change and back, and exchanging them between
+those frames leaves no jump (:func:`_shape_keeping_swaps`), which makes every frame between a
+swapped one.
 
 :func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen`;
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
@@ -1695,16 +1698,62 @@ def _screened(
         swaps = find_swaps(shape, markers, flagged, labels, level, exchanged, rules)
         flags = _named_by_swaps(flags, swaps, labels, broken)
     # A jump that a flagged sample explains adds nothing, and would spoil the frame on its
-    # other side; a jump without one is a swap that keeps the shape (two markers of an
-    # isosceles triangle), which only time order shows.
+    # other side; jumps without one may be a swap that keeps the shape, which only time order
+    # shows.
     explained = {(a.label, a.frame) for a in flags}
     jumps = [
         jump
         for jump in find_jumps(markers, labels, rules)
         if not {(jump.label, row) for row in jump.rows()} & explained
     ]
-    artefacts = sorted([*jumps, *flags], key=lambda a: (a.frame, a.label))
+    kept, swapped, jumps = _shape_keeping_swaps(markers, labels, jumps, rules)
+    artefacts = sorted([*jumps, *flags, *swapped], key=lambda a: (a.frame, a.label))
+    swaps = sorted([*swaps, *kept], key=lambda swap: (swap.start, swap.labels))
     return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, misfit, untested)
+
+
+def _shape_keeping_swaps(
+    markers: np.ndarray, labels: tuple[str, ...], jumps: list[Artefact], rules: ArtefactRules
+) -> tuple[list[Swap], list[Artefact], list[Artefact]]:
+    """The swaps among the ``jumps`` of the cluster ``markers`` ``(n_frames, n >= 3, 3)`` [mm]
+    that keep its shape (a square's diagonal, an isosceles triangle's base), which only time
+    order shows: two markers that jump at the same frames, where exchanging their labels in
+    every other stretch between those frames leaves neither a jump there (:func:`_refuted`).
+    The stretches alternate between two labellings; those of the labelling fewer frames hold
+    are the swaps, as :func:`find_swaps` reports a swap the shape shows, and their frames are
+    flagged swapped (``"swap"`` artefacts, sized as the largest jump they explain, at the jump
+    level), so that excluding artefacts leaves out every frame turned over, not only its two
+    steps. Returns the swaps, their artefacts and the jumps left unexplained."""
+    jumped: dict[str, set[int]] = {}
+    for jump in jumps:
+        jumped.setdefault(jump.label, set()).add(jump.frame)
+    if len(jumped) < 2:
+        return [], [], jumps
+    n_frames = len(markers)
+    level = _jump_level(markers, rules)
+    swaps, swapped, explained = [], [], set()
+    for first, second in combinations([label for label in labels if label in jumped], 2):
+        changes = sorted(jumped[first] & jumped[second])
+        if not changes:
+            continue
+        i, j = labels.index(first), labels.index(second)
+        stretches = list(pairwise([0, *changes, n_frames]))
+        turned = stretches[1::2]
+        if any(_refuted(markers, start, stop, (i, j), level) for start, stop in turned):
+            continue
+        held = sum(stop - start for start, stop in turned)
+        minority = turned if 2 * held <= n_frames else stretches[0::2]
+        size = max(a.size_mm for a in jumps if a.label in (first, second) and a.frame in changes)
+        for start, stop in minority:
+            if start == stop:
+                continue
+            swaps.append(Swap((first, second), start, stop, n_frames))
+            for row in range(start, stop):
+                swapped.append(Artefact("swap", first, row, size, level, second))
+                swapped.append(Artefact("swap", second, row, size, level, first))
+        explained |= {(label, frame) for label in (first, second) for frame in changes}
+    left = [jump for jump in jumps if (jump.label, jump.frame) not in explained]
+    return swaps, swapped, left
 
 
 def _named_by_swaps(
@@ -1780,8 +1829,11 @@ def find_artefacts(
         return found.artefacts, found.swaps
     if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm
         return (), ()
-    jumps = sorted(find_jumps(markers, labels, rules), key=lambda a: (a.frame, a.label))
-    return tuple(jumps), ()
+    kept, swapped, jumps = _shape_keeping_swaps(
+        markers, labels, find_jumps(markers, labels, rules), rules
+    )
+    artefacts = sorted([*jumps, *swapped], key=lambda a: (a.frame, a.label))
+    return tuple(artefacts), tuple(sorted(kept, key=lambda swap: (swap.start, swap.labels)))
 
 
 def surely_rigid(
