@@ -1464,7 +1464,9 @@ def find_swaps(
     for pair, state in states.items():
         key = tuple(sorted(alike[pair]))
         candidates[key] = candidates.get(key, False) | state
-    level = _jump_level(markers, rules)
+    # The jump level is needed only to tell candidates apart.
+    several = any(len(members) > 1 for members in candidates)
+    level = _jump_level(markers, rules) if several else rules.min_jump_mm
     swaps = []
     for members, state in candidates.items():
         seen = np.flatnonzero(
