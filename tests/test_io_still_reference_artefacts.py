@@ -508,3 +508,23 @@ def test_a_swap_that_keeps_a_still_reference_s_shape_is_found_over_all_its_frame
     fitted, warned = fit_still(recording)
     assert {a.frame for a in fitted.excluded} == set(range(150, 160))
     assert f"left out 10 frames with artefacts: markers {first} and {second} exchange" in warned[0]
+
+
+@pytest.mark.parametrize("suffix", [".c3d", ".trc", ".csv"])
+def test_jointbench_fit_names_the_pair_that_swapped_in_a_rectangle(tmp_path, capsys, knee, suffix):
+    """The command line as the API, from each reader: TM1 and TM2 of the perfect rectangle
+    exchanged in rows 150 to 159 are refused as one swap of those two, and left out, all ten
+    frames, when excluded."""
+    recording = swapped(with_treadmill(knee, TREADMILL), slice(150, 160))
+    path = write(tmp_path / f"treadmill{suffix}", recording.labels, recording.markers, "mm")
+    argv = ["fit", "center", str(path), "--moving", SHANK, "--reference", TM, "--method", "NM"]
+    argv += ["--lab-fixed-reference", "--format", "json"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    named = r": markers TM1 and TM2 exchange labels at frame \d+ (\(\S+ s\) )?and back at frame "
+    assert re.search(named, err), err
+    assert err.count("exchange labels") == 1, err
+    assert main([*argv, "--artefacts", "exclude"]) == 0
+    out, err = capsys.readouterr()
+    assert '"n_frames_used": 290' in out
+    assert "left out 10 frames with artefacts: markers TM1 and TM2 exchange labels" in err, err
