@@ -211,14 +211,32 @@ def test_smooth_soft_tissue_deformation_raises_no_swap(amplitude_mm, scale):
         assert _exchanges_found(markers) == ([], ())
 
 
-def test_a_swap_that_keeps_an_isosceles_shape_is_left_to_the_jump_check():
+def test_a_swap_that_keeps_an_isosceles_shape_is_found_through_its_jumps():
     """Markers 0 and 1 are the base of an isosceles triangle: exchanged, the shape is the same,
-    and only the jump of each (30 mm) shows the swap, as before."""
+    and only the jump of each (30 mm) shows the swap. Both jump where the labels change and
+    back, and exchanging them in between leaves no jump: a swap of those two over every frame
+    it holds, not two jumps that would leave the frames between them, the triangle turned
+    over, in a fit."""
     rng = np.random.default_rng(8)
     body = np.array([[-15.0, 0.0, 0.0], [15.0, 0.0, 0.0], [0.0, 12.0, 0.0]])
     markers = _swapped(_moving(rng, body, 120, 0.3), 0, 1, 50, 70)
     labels = _labels(3)
     artefacts, swaps = screening.find_artefacts(markers, labels, "m")
+    whole = screening.screen(markers, labels, "m")
+    assert (artefacts, swaps) == (whole.artefacts, whole.swaps)
+    assert [(s.labels, s.start, s.stop) for s in swaps] == [((labels[0], labels[1]), 50, 70)]
+    assert {a.kind for a in artefacts} == {"swap"}
+    assert {a.frame for a in artefacts} == set(range(50, 70))
+
+
+def test_a_cluster_shifted_as_a_whole_for_some_frames_is_no_swap():
+    """The triangle shifted 40 mm as a whole in frames 50 to 69: every marker jumps at the same
+    frames, but exchanging two labels leaves their jumps, so they stay jumps, not a swap."""
+    rng = np.random.default_rng(8)
+    body = np.array([[-15.0, 0.0, 0.0], [15.0, 0.0, 0.0], [0.0, 12.0, 0.0]])
+    markers = _moving(rng, body, 120, 0.3)
+    markers[50:70] += [40.0, 0.0, 0.0]
+    artefacts, swaps = screening.find_artefacts(markers, _labels(3), "m")
     assert swaps == ()
     assert {a.kind for a in artefacts} == {"jump"}
     assert {a.frame for a in artefacts} == {50, 70}

@@ -612,7 +612,8 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the --reference markers are fixed in the lab (a treadmill's frame, a force plate; "
         f"center and axis only): while they stay within {LAB_FIXED_MM:g} mm of their median "
-        "positions they are bounded by a capture volume, not by a body segment's "
+        "positions over any two consecutive frames they are bounded by a capture volume, not "
+        "by a body segment's "
         f"{MAX_SPAN_MM / 1000:g} m",
     )
     fit.add_argument(

@@ -19,7 +19,10 @@ order of the frames. A step of one marker is flagged when it differs from both n
 steps by more than ``jump_factor`` times the median such difference and ``min_jump_mm``
 (:func:`find_jumps`), which needs the frames in time order: it is the only check of markers
 outside a cluster, and in a cluster it counts only where no rigidity break or swapped frame
-explains it (a swap of two markers of an isosceles triangle keeps the shape).
+explains it. A swap that keeps the shape (a square's diagonal, an isosceles triangle's base)
+shows only so: both markers jump where the labels change and back, and exchanging them between
+those frames leaves no jump (:func:`_shape_keeping_swaps`), which makes every frame between a
+swapped one.
 
 :func:`screen` runs these checks on bare arrays, for :func:`jointbench.screen`;
 :meth:`Segment.fit` runs the same on a recording. The fit functions of :mod:`jointbench.api`
@@ -34,6 +37,7 @@ of the distance test that they show cannot flag a frame.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -742,12 +746,16 @@ class Artefact:
 class Swap:
     """Markers ``labels`` carried the other way round, relative to the rest of the trial, in
     rows ``start`` to ``stop - 1``: the labelling changes at ``start`` (unless 0) and back at
-    ``stop`` (unless the end of the trial, ``n_frames``)."""
+    ``stop`` (unless the end of the trial, ``n_frames``). ``alternatives``: other pairs that
+    the cluster's symmetry fits alike and the frames next to the swap do not rule out
+    (:func:`find_swaps`), so that ``labels`` is one of them, not the one; ``()`` where the data
+    tell the pair."""
 
     labels: tuple[str, str]
     start: int
     stop: int
     n_frames: int
+    alternatives: tuple[tuple[str, str], ...] = ()
 
     def sides(self) -> list[tuple[int, int]]:
         """Row ranges ``[start, stop)`` each labelled one consistent way, in time order."""
@@ -760,8 +768,16 @@ class Swap:
         first, second = self.labels
         changes = [row for row in (self.start, self.stop) if 0 < row < self.n_frames]
         sides = ", ".join(f"{frames.number(a)} to {frames.number(b - 1)}" for a, b in self.sides())
+        which = f"{first} and {second}"
+        if self.alternatives:
+            which += "".join(f", or {a} and {b}" for a, b in self.alternatives)
+            pairs = "either pair" if len(self.alternatives) == 1 else "each of these pairs"
+            which += (
+                f" (the cluster's symmetry fits {pairs} alike, and the frames next to the swap "
+                "do not tell which),"
+            )
         return (
-            f"markers {first} and {second} exchange labels at "
+            f"markers {which} exchange labels at "
             f"{' and back at '.join(frames.name(row) for row in changes)}; frames {sides} are "
             "each labelled one consistent way and the data cannot tell which is right"
         )
@@ -810,12 +826,28 @@ def find_jumps(
     # The level is at least min_jump_mm, so no step below it needs the median.
     if not _jump_sizes(kernel_array(markers), size) > rules.min_jump_mm:
         return []
-    level = max(rules.min_jump_mm, rules.jump_factor * _finite_median(size))
+    level = _level_of_steps(size, rules)
     step, marker = np.nonzero(size > level)
     return [
         Artefact("jump", labels[m], int(k) + 2, float(size[k, m]), level)
         for k, m in zip(step, marker, strict=True)
     ]
+
+
+def _level_of_steps(size: np.ndarray, rules: ArtefactRules) -> float:
+    """The level [mm] above which :func:`find_jumps` flags a step of ``size``
+    ``(n_frames - 3, n)`` [mm]: ``jump_factor`` times their median, at least ``min_jump_mm``."""
+    return max(rules.min_jump_mm, rules.jump_factor * _finite_median(size))
+
+
+def _jump_level(markers: np.ndarray, rules: ArtefactRules) -> float:
+    """:func:`_level_of_steps` of the steps of ``markers`` ``(n_frames, n, 3)`` [mm]
+    (``min_jump_mm`` for fewer than four frames, which have none)."""
+    if len(markers) < 4:
+        return rules.min_jump_mm
+    size = np.empty((len(markers) - 3, markers.shape[1]))
+    _jump_sizes(kernel_array(markers), size)
+    return _level_of_steps(size, rules)
 
 
 @kernel
@@ -1378,6 +1410,7 @@ def find_swaps(
     labels: tuple[str, ...],
     level_mm: float,
     exchanged: Sequence[Artefact] = (),
+    rules: ArtefactRules | None = None,
 ) -> list[Swap]:
     """Runs of frames in which exchanging two markers' labels fits the cluster's ``shape``.
 
@@ -1387,10 +1420,25 @@ def find_swaps(
     is missing do not interrupt a run. A frame that the distance test found swapped
     (``exchanged``, :func:`find_exchanges`) belongs to the swap of the pair it names and to no
     other pair's, which in a cluster of a few mm ``level_mm`` cannot tell apart.
+
+    A symmetric shape fits some exchanges alike (:func:`_alike_pairs`, within the distance
+    test's near level, else ``level_mm``): a rectangle's with its first two markers exchanged
+    or its last two (the shape turned 180 deg between them), and the pair a frame shows is then
+    the noise's choice. Those pairs are one swap's candidates and their frames one run, which
+    names the one pair the data tell: the run's distances, where one pair fits them better
+    than every other beyond the near probability (:func:`_told_pairs`), else the frames next
+    to the run (:func:`_continuing`): relabelled by the pair that swapped, every marker steps
+    on where it was, while a pair the symmetry only fits alike carries its markers across the
+    cluster, a step the jump check flags (``rules``' jump level). Where neither tells (a
+    perfect symmetry, and gaps next to the swap or a cluster smaller than a jump) the run
+    names every candidate, the best fitting first (:attr:`Swap.alternatives`): one pair named
+    with a confidence the data do not give would send a user to the wrong markers.
     """
+    rules = rules or _RULES
+    pairs = list(combinations(range(len(labels)), 2))
     named: dict[int, set[str]] = {a.frame: {a.label, a.partner} for a in exchanged}
-    swaps = []
-    for i, j in combinations(range(len(labels)), 2):
+    states = {}
+    for i, j in pairs:
         both = flagged[:, i] & flagged[:, j]
         state = np.zeros(len(markers), dtype=bool)
         if both.any():
@@ -1401,17 +1449,137 @@ def find_swaps(
             state[rows[np.nanmax(misfit, axis=1) <= level_mm]] = True
         for frame, pair in named.items():
             state[frame] = pair == {labels[i], labels[j]}
-        if not state.any():
-            continue
-        seen = np.flatnonzero(np.isfinite(markers[:, [i, j]]).all(axis=(1, 2)))
-        # Runs of swapped frames among the frames showing both markers.
+        if state.any():
+            states[(i, j)] = state
+    if not states:
+        return []
+    radius, noise = level_mm, None
+    if exchanged:
+        far, near = _exchange_levels(len(labels), rules)
+        noise = exchanged[0].level_mm / float(np.sqrt(far))
+        radius = noise * float(np.sqrt(near))
+    alike = _alike_pairs(shape, radius)
+    # One state per set of candidates, the union of its pairs' frames.
+    candidates: dict[tuple[tuple[int, int], ...], np.ndarray] = {}
+    for pair, state in states.items():
+        key = tuple(sorted(alike[pair]))
+        candidates[key] = candidates.get(key, False) | state
+    # The jump level is needed only to tell candidates apart.
+    several = any(len(members) > 1 for members in candidates)
+    level = _jump_level(markers, rules) if several else rules.min_jump_mm
+    swaps = []
+    for members, state in candidates.items():
+        seen = np.flatnonzero(
+            np.isfinite(markers[:, sorted({m for p in members for m in p})]).all(axis=(1, 2))
+        )
+        # Runs of swapped frames among the frames showing the candidates' markers.
         changes = np.flatnonzero(np.diff(state[seen].astype(int))) + 1
         for run in np.split(np.arange(seen.size), changes):
             if run.size and state[seen[run[0]]]:
                 start = 0 if run[0] == 0 else int(seen[run[0]])
                 stop = len(markers) if run[-1] == seen.size - 1 else int(seen[run[-1]]) + 1
-                swaps.append(Swap((labels[i], labels[j]), start, stop, len(markers)))
+                told = _told_pairs(markers[start:stop], members, shape, noise, rules)
+                told = _continuing(markers, start, stop, told, level)
+                (i, j), *others = told
+                swaps.append(
+                    Swap(
+                        (labels[i], labels[j]),
+                        start,
+                        stop,
+                        len(markers),
+                        tuple((labels[a], labels[b]) for a, b in others),
+                    )
+                )
     return sorted(swaps, key=lambda swap: (swap.start, swap.labels))
+
+
+def _alike_pairs(shape: np.ndarray, radius_mm: float) -> dict[tuple[int, int], set]:
+    """For each pair of markers ``(i, j)`` of ``shape`` ``(n, 3)`` [mm], the pairs whose
+    exchange gives the shape the same inter-marker distances as its own exchange, within
+    ``radius_mm`` (their norm over the pairs): the exchanges a frame's shape cannot tell apart
+    (itself among them). Only a symmetric shape has others: a rectangle's two long sides, its
+    two short sides, its two diagonals."""
+    n_markers = len(shape)
+    moved = _relabelled_pairs(n_markers)[1:]
+    distances = _pair_distances(kernel_array(shape[None]))[:, 0]
+    relabelled = distances[moved]
+    apart = np.linalg.norm(relabelled[:, None, :] - relabelled[None, :, :], axis=-1)
+    pairs = list(combinations(range(n_markers), 2))
+    return {
+        pair: {pairs[k] for k in np.flatnonzero(apart[e] <= radius_mm)}
+        for e, pair in enumerate(pairs)
+    }
+
+
+def _told_pairs(
+    frames: np.ndarray,
+    members: tuple[tuple[int, int], ...],
+    shape: np.ndarray,
+    noise_mm: float | None,
+    rules: ArtefactRules,
+) -> list[tuple[int, int]]:
+    """The candidate pairs ``members`` of a swap held by ``frames`` ``(n_frames, n, 3)`` [mm],
+    best first, as the distances tell them: each pair's exchange fits the frames' inter-marker
+    distances to ``shape``'s ``(n, 3)`` with a sum of squared misfits over the frames; in units
+    of the distance test's ``noise_mm`` (:class:`ArtefactRules`), the best pair is the only one
+    left where every other's sum exceeds it by more than the level one degree of freedom
+    exceeds with probability ``swap_near_probability``. Otherwise (or without the distance
+    test's noise, ``None``) every candidate is left."""
+    if len(members) == 1 or noise_mm is None:
+        return list(members)
+    complete = _complete_frames(kernel_array(frames))
+    if complete.size == 0:
+        return list(members)
+    distances = _pair_distances(kernel_array(frames[complete]))
+    typical = _pair_distances(kernel_array(shape[None]))[:, 0]
+    moved = _relabelled_pairs(len(shape))
+    pairs = list(combinations(range(len(shape)), 2))
+    misfits = [
+        float(np.sum((distances[moved[1 + pairs.index(pair)]] - typical[:, None]) ** 2))
+        for pair in members
+    ]
+    ranked = [members[k] for k in np.argsort(misfits, kind="stable")]
+    margin = float(chdtri(1, rules.swap_near_probability)) * noise_mm**2
+    if all(misfit - min(misfits) > margin for misfit in sorted(misfits)[1:]):
+        return ranked[:1]
+    return ranked
+
+
+def _continuing(
+    markers: np.ndarray,
+    start: int,
+    stop: int,
+    left: list[tuple[int, int]],
+    level_mm: float,
+) -> list[tuple[int, int]]:
+    """Of the pairs ``left`` for a swap in rows ``start`` to ``stop - 1`` of ``markers``
+    ``(n_frames, n, 3)`` [mm], the one no edge refutes (:func:`_refuted`) where the edges
+    refute every other; else all of them, in their order."""
+    if len(left) == 1:
+        return left
+    kept = [pair for pair in left if not _refuted(markers, start, stop, pair, level_mm)]
+    return kept if len(kept) == 1 else left
+
+
+def _refuted(
+    markers: np.ndarray, start: int, stop: int, pair: tuple[int, int], level_mm: float
+) -> bool:
+    """Whether exchanging the ``pair``'s labels in rows ``start`` to ``stop - 1`` of ``markers``
+    ``(n_frames, n, 3)`` [mm] leaves either marker a jump (:func:`find_jumps`' step size over
+    ``level_mm``) where the labelling changes, at ``start`` or at ``stop``: the pair did not
+    swap there. A step the gaps leave unmeasured refutes nothing."""
+    n_frames = len(markers)
+    low, high = max(start - 2, 0), min(stop + 2, n_frames)
+    window = markers[low:high].copy()
+    i, j = pair
+    window[start - low : stop - low, [i, j]] = window[start - low : stop - low, [j, i]]
+    if len(window) < 4:
+        return False
+    size = np.empty((len(window) - 3, markers.shape[1]))
+    _jump_sizes(kernel_array(window), size)
+    edges = [row - low - 2 for row in (start, stop) if 0 < row < n_frames]
+    edges = [row for row in edges if 0 <= row < len(size)]
+    return bool((size[edges][:, [i, j]] > level_mm).any())
 
 
 @dataclass(frozen=True, eq=False)
@@ -1529,18 +1697,96 @@ def _screened(
         for artefact in flags:
             flagged[artefact.frame, labels.index(artefact.label)] = True
         level = breaks[0].level_mm if breaks else _rigidity_level(misfit, rules)
-        swaps = find_swaps(shape, markers, flagged, labels, level, exchanged)
+        swaps = find_swaps(shape, markers, flagged, labels, level, exchanged, rules)
+        flags = _named_by_swaps(flags, swaps, labels, broken)
     # A jump that a flagged sample explains adds nothing, and would spoil the frame on its
-    # other side; a jump without one is a swap that keeps the shape (two markers of an
-    # isosceles triangle), which only time order shows.
+    # other side; jumps without one may be a swap that keeps the shape, which only time order
+    # shows.
     explained = {(a.label, a.frame) for a in flags}
     jumps = [
         jump
         for jump in find_jumps(markers, labels, rules)
         if not {(jump.label, row) for row in jump.rows()} & explained
     ]
-    artefacts = sorted([*jumps, *flags], key=lambda a: (a.frame, a.label))
+    kept, swapped, jumps = _shape_keeping_swaps(markers, labels, jumps, rules)
+    artefacts = sorted([*jumps, *flags, *swapped], key=lambda a: (a.frame, a.label))
+    swaps = sorted([*swaps, *kept], key=lambda swap: (swap.start, swap.labels))
     return Screening(tuple(artefacts), tuple(swaps), shape, rotation, translation, misfit, untested)
+
+
+def _shape_keeping_swaps(
+    markers: np.ndarray, labels: tuple[str, ...], jumps: list[Artefact], rules: ArtefactRules
+) -> tuple[list[Swap], list[Artefact], list[Artefact]]:
+    """The swaps among the ``jumps`` of the cluster ``markers`` ``(n_frames, n >= 3, 3)`` [mm]
+    that keep its shape (a square's diagonal, an isosceles triangle's base), which only time
+    order shows: two markers that jump at the same frames, where exchanging their labels in
+    every other stretch between those frames leaves neither a jump there (:func:`_refuted`).
+    The stretches alternate between two labellings; those of the labelling fewer frames hold
+    are the swaps, as :func:`find_swaps` reports a swap the shape shows, and their frames are
+    flagged swapped (``"swap"`` artefacts, sized as the largest jump they explain, at the jump
+    level), so that excluding artefacts leaves out every frame turned over, not only its two
+    steps. Returns the swaps, their artefacts and the jumps left unexplained."""
+    jumped: dict[str, set[int]] = {}
+    for jump in jumps:
+        jumped.setdefault(jump.label, set()).add(jump.frame)
+    if len(jumped) < 2:
+        return [], [], jumps
+    n_frames = len(markers)
+    level = _jump_level(markers, rules)
+    swaps, swapped, explained = [], [], set()
+    for first, second in combinations([label for label in labels if label in jumped], 2):
+        changes = sorted(jumped[first] & jumped[second])
+        if not changes:
+            continue
+        i, j = labels.index(first), labels.index(second)
+        stretches = list(pairwise([0, *changes, n_frames]))
+        turned = stretches[1::2]
+        if any(_refuted(markers, start, stop, (i, j), level) for start, stop in turned):
+            continue
+        held = sum(stop - start for start, stop in turned)
+        minority = turned if 2 * held <= n_frames else stretches[0::2]
+        size = max(a.size_mm for a in jumps if a.label in (first, second) and a.frame in changes)
+        for start, stop in minority:
+            if start == stop:
+                continue
+            swaps.append(Swap((first, second), start, stop, n_frames))
+            for row in range(start, stop):
+                swapped.append(Artefact("swap", first, row, size, level, second))
+                swapped.append(Artefact("swap", second, row, size, level, first))
+        explained |= {(label, frame) for label in (first, second) for frame in changes}
+    left = [jump for jump in jumps if (jump.label, jump.frame) not in explained]
+    return swaps, swapped, left
+
+
+def _named_by_swaps(
+    flags: list[Artefact],
+    swaps: list[Swap],
+    labels: tuple[str, ...],
+    broken: set[tuple[str, int]],
+) -> list[Artefact]:
+    """The ``flags`` with each swapped frame's pair the one its swap names where the data tell
+    it (a :class:`Swap` without ``alternatives``): of a symmetric shape the distance test names,
+    frame by frame, whichever of the pairs it fits alike the noise favours. A renamed sample
+    that breaks rigidity (``broken``, ``(label, frame)``) is flagged once, as the break."""
+    told: dict[int, list[tuple[str, str]]] = {}
+    for swap in swaps:
+        if not swap.alternatives:
+            for row in range(swap.start, swap.stop):
+                told.setdefault(row, []).append(swap.labels)
+    renamed = []
+    for artefact in flags:
+        pairs = told.get(artefact.frame, [])
+        shown = {artefact.label, artefact.partner}
+        if artefact.kind != "swap" or len(pairs) != 1 or shown == set(pairs[0]):
+            renamed.append(artefact)
+            continue
+        first, second = pairs[0]
+        # The sample of the pair's earlier label stands for the named pair's first.
+        earlier = min(shown, key=labels.index) == artefact.label
+        label, partner = (first, second) if earlier else (second, first)
+        if (label, artefact.frame) not in broken:
+            renamed.append(dataclasses.replace(artefact, label=label, partner=partner))
+    return renamed
 
 
 def find_artefacts(
@@ -1585,8 +1831,11 @@ def find_artefacts(
         return found.artefacts, found.swaps
     if not largest_jump > rules.min_jump_mm:  # the jumps' level is at least min_jump_mm
         return (), ()
-    jumps = sorted(find_jumps(markers, labels, rules), key=lambda a: (a.frame, a.label))
-    return tuple(jumps), ()
+    kept, swapped, jumps = _shape_keeping_swaps(
+        markers, labels, find_jumps(markers, labels, rules), rules
+    )
+    artefacts = sorted([*jumps, *swapped], key=lambda a: (a.frame, a.label))
+    return tuple(artefacts), tuple(sorted(kept, key=lambda swap: (swap.start, swap.labels)))
 
 
 def surely_rigid(

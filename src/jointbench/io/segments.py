@@ -101,12 +101,13 @@ def _check_seen(recording: Recording, index: list[int]) -> None:
 
 
 #: A reference stays still in the lab when each of its markers stays within this distance [mm]
-#: of its own median position over the frames it is seen in (:func:`lab_motion`). An optical
-#: system reconstructs a marker fixed in the lab with noise well under a millimetre, so 5 mm
-#: leaves a fixed marker room over a trial of any length, while a body segment's markers
-#: seldom stay so still while a joint moves (a standing subject's pelvis sways further). A cluster
-#: measured in another unit moves 10 or 1000 times as far: a segment read 10 times its size
-#: is taken as still only if it moved under 0.5 mm.
+#: of its own median position over the frames it is seen in, wherever two of its consecutive
+#: samples show it (:func:`lab_motion`). An optical system reconstructs a marker fixed in the
+#: lab with noise well under a millimetre, so 5 mm leaves a fixed marker room over a trial of
+#: any length, while a body segment's markers seldom stay so still while a joint moves (a
+#: standing subject's pelvis sways further). A cluster measured in another unit moves 10 or
+#: 1000 times as far: a segment read 10 times its size is taken as still only if it moved
+#: under 0.5 mm.
 LAB_FIXED_MM = 5.0
 
 
@@ -138,14 +139,36 @@ LAB_FIXED_KEYWORD = "lab_fixed_reference"
 LAB_FIXED_FLAG = "--lab-fixed-reference"
 
 
-def lab_motion(markers: np.ndarray) -> tuple[float, int, int]:
-    """How far the markers ``(n_frames, n, 3)`` [mm], each seen in some frame, move in the lab:
-    the largest distance [mm] of a marker from its own median position over the frames it is
-    seen in (NaN where missing), with that marker's column and that frame's row. The median,
-    not the mean, so that a bump in a few frames counts at its full size wherever it falls."""
+def lab_motion(markers: np.ndarray) -> tuple[float, int, int, int]:
+    """How far the markers ``(n_frames, n, 3)`` [mm], each seen in some frame, move in the lab
+    and hold there: a marker's distance [mm] from its own median position over the frames it
+    is seen in, the lesser of two consecutive samples of it (gaps skipped; its one sample,
+    where it is seen once), the largest over the markers and samples, with that marker's
+    column and the rows of its two samples (one row twice for a marker seen once).
+
+    This rests on the stillness's design (:data:`LAB_FIXED_MM`): "a body segment's markers
+    seldom stay so still while a joint moves (a standing subject's pelvis sways further)".
+    What tells a reference that moves from one fixed in the lab is sway, and a capture samples
+    any sway, drift or step of a segment in consecutive frames; a displacement that one sample
+    shows and the next does not is no motion the capture followed. Such a bump (a marker
+    reconstructed a few mm off in one frame) is the artefact screen's to judge, not the
+    stillness's: where it is under the screen's level (:func:`screen`; one corner of a flat
+    cluster bumped out of its plane leaves a quarter of the bump as residual, the rest taken
+    by a tilt of the pose) the frame is kept in the fit with that error, as any cluster's
+    frame the screen does not flag, and where it is over, it is flagged and left out or
+    refused by the artefact policy. The median, not the mean, so that a displacement held
+    for a few frames counts at its full size wherever it falls."""
     distances = np.linalg.norm(markers - np.nanmedian(markers, axis=0), axis=-1)
-    row, column = np.unravel_index(np.argmax(np.nan_to_num(distances, nan=-1.0)), distances.shape)
-    return float(distances[row, column]), int(column), int(row)
+    farthest = (-1.0, 0, 0, 0)
+    for column in range(distances.shape[1]):
+        rows = np.flatnonzero(np.isfinite(distances[:, column]))
+        seen = distances[rows, column]
+        held = np.minimum(seen[:-1], seen[1:]) if rows.size > 1 else seen
+        k = int(np.argmax(held))
+        if held[k] > farthest[0]:
+            last = rows[k + 1] if rows.size > 1 else rows[k]
+            farthest = (float(held[k]), column, int(rows[k]), int(last))
+    return farthest
 
 
 def _reference_bounds(
@@ -173,7 +196,7 @@ def _reference_bounds(
     unspoilt[flagged_frames(artefacts, len(markers))] = np.nan
     if np.isfinite(unspoilt[..., 0]).any(axis=0).all():
         markers = unspoilt
-    moved, column, row = lab_motion(markers)
+    moved, column, row, next_row = lab_motion(markers)
     still = moved <= LAB_FIXED_MM
     if still and stated_lab_fixed:
         return _CAPTURE_VOLUME, _CAPTURE_VOLUME
@@ -190,12 +213,20 @@ def _reference_bounds(
     if not stated_lab_fixed:
         return _ONE_SEGMENT, _TWO_SEGMENTS
     moves = (
-        f", and they move in the lab: {labels[column]} lies {moved:.3g} mm from its median "
-        f"position in {recording.when(row)}, more than the {LAB_FIXED_MM:g} mm a reference "
-        "fixed in the lab stays within (one bumped in some frames is fitted over frames that "
-        "leave them out, --frames)"
+        f", and they move in the lab: {labels[column]} lies {moved:.3g} mm or more from its "
+        f"median position in {_held_in(recording, row, next_row)}, more than the "
+        f"{LAB_FIXED_MM:g} mm a reference fixed in the lab stays within (one bumped in some "
+        "frames is fitted over frames that leave them out, --frames)"
     )
     return _ONE_SEGMENT._replace(why_not_lab=moves), _TWO_SEGMENTS
+
+
+def _held_in(recording: Recording, row: int, next_row: int) -> str:
+    """The samples :func:`lab_motion` found a marker held in, in words: ``"frame 250 (2.50 s)
+    and frame 251 (2.51 s)"``, or one frame."""
+    if next_row == row:
+        return recording.when(row)
+    return f"{recording.when(row)} and {recording.when(next_row)}"
 
 
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
