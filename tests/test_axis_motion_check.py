@@ -346,8 +346,9 @@ def test_markers_near_a_hinges_axis_leave_no_answer_ok_far_from_it():
     scattered by 3 mm, 1 mm noise, a 30 degree arc. Their arcs are a few millimetres long, so
     each marker reads the segment's rotation to several degrees a frame, beyond the first order
     every SD rests on: 7 combined, 4 SARA and 2 radial answers read ``ok`` 12-83 degrees off.
-    What still reads ``ok`` so far off has a marker whose arc reads the rotation within the
-    bound, which the rule cannot refuse (one combined answer, 13 degrees off)."""
+    The one combined answer the longest lever let through (13 degrees off, its best marker
+    reading 4.2 degrees a frame) the SD of the markers that read the rotation to first order
+    now refuses."""
     trials = [
         blind_spots._hinge(np.random.default_rng(seed), 30.0, 1.0, 5.0, 3.0) for seed in range(60)
     ]
@@ -358,9 +359,7 @@ def test_markers_near_a_hinges_axis_leave_no_answer_ok_far_from_it():
             error = angle_between_lines_deg(np.asarray(result.direction), trials[seed][1])
             if result.status == "ok" and error > blind_spots.FAR:
                 far_and_ok.append((method, seed, round(error)))
-                arc_sd_deg = check(result)["arc_rotation_sd_deg"]
-                assert arc_sd_deg <= precision.MAX_REFERENCE_POSE_SD_DEG, (method, seed)
-    assert len(far_and_ok) <= 1, far_and_ok
+    assert not far_and_ok
 
 
 def _joint_line_hinge(seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -395,3 +394,28 @@ def test_one_long_lever_keeps_its_correct_answers_ok(method):
         assert "with the longest lever" not in result.status, seed
         n_ok += result.status == "ok"
     assert n_ok >= 9  # one seed's answers are warned about for their frames or their cost
+
+
+def test_one_marker_far_from_a_hinges_axis_and_two_near_it_leave_few_answers_ok_far_off():
+    """``benchmarks/blind_spots.py``'s case: two markers 3 mm from a hinge's axis and one 100 mm
+    from it, arcs of 10, 20 and 30 degrees, 0.5-1 mm noise. The far marker reads the rotation
+    well, but its arc alone fixes the axis's direction only through its sagitta; the near
+    markers' residuals, not first order in their noise, made the SD read 4-9 degrees where the
+    radial and combined answers lay 10-85 degrees off (5 radial and 16 combined answers of 180
+    trials each). Three combined answers stay: two 13 and 11 degrees off within two of the SDs
+    their first-order markers give, and one 77 degrees off whose near markers' levers read 4.7
+    degrees a frame by chance (their travel within the noise's own scatter)."""
+    far_and_ok = []
+    for arc_deg in (10.0, 20.0, 30.0):
+        trials = [
+            blind_spots._lever_hinge(np.random.default_rng(seed), arc_deg, 1) for seed in range(60)
+        ]
+        markers = np.stack([data for data, _ in trials])
+        for method in METHODS:
+            for (_, axis), result in zip(
+                trials, registry.many("axis", method)(markers), strict=True
+            ):
+                error = angle_between_lines_deg(np.asarray(result.direction), axis)
+                if result.status == "ok" and error > blind_spots.FAR:
+                    far_and_ok.append((method, arc_deg, round(error, 1)))
+    assert len(far_and_ok) <= 3, far_and_ok
