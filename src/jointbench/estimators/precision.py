@@ -558,13 +558,14 @@ def annotate_first_order(result, sd_deg: float, first_order: np.ndarray):
     all_markers_sd_deg = result.diagnostics["axis_sd_deg"]
     warnings = ()
     if all_markers_sd_deg <= MAX_AXIS_SD_DEG and not sd_deg <= MAX_AXIS_SD_DEG:
+        size = "unbounded" if math.isinf(sd_deg) else f"at {sd_deg:.1f} deg"
         warnings = (
             f"precision not determined: only {kept.size} of {first_order.size} markers travel "
             "far enough for the rotation the poses show to read it within "
             f"{MAX_REFERENCE_POSE_SD_DEG:g} deg a frame, and on their own they leave the "
-            f"direction's SD at {sd_deg:.1f} deg (above {MAX_AXIS_SD_DEG:g} deg): the others lie "
-            "too near the axis for their residuals to be first order in their noise, so they "
-            f"do not make it the {all_markers_sd_deg:.1f} deg stated from every marker",
+            f"direction's SD {size} (above {MAX_AXIS_SD_DEG:g} deg): the others lie too near "
+            "the axis for their residuals to be first order in their noise, so they do not "
+            f"make it the {all_markers_sd_deg:.1f} deg stated from every marker",
         )
     record = {"markers": kept.tolist(), "all_markers_axis_sd_deg": float(all_markers_sd_deg)}
     return with_warnings(
