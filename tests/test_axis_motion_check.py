@@ -346,8 +346,9 @@ def test_markers_near_a_hinges_axis_leave_no_answer_ok_far_from_it():
     scattered by 3 mm, 1 mm noise, a 30 degree arc. Their arcs are a few millimetres long, so
     each marker reads the segment's rotation to several degrees a frame, beyond the first order
     every SD rests on: 7 combined, 4 SARA and 2 radial answers read ``ok`` 12-83 degrees off.
-    What still reads ``ok`` so far off has a marker whose arc reads the rotation within the
-    bound, which the rule cannot refuse (one combined answer, 13 degrees off)."""
+    The one combined answer the longest lever let through (13 degrees off, its best marker
+    reading 4.2 degrees a frame) the SD of the markers that read the rotation to first order
+    now refuses."""
     trials = [
         blind_spots._hinge(np.random.default_rng(seed), 30.0, 1.0, 5.0, 3.0) for seed in range(60)
     ]
@@ -358,9 +359,7 @@ def test_markers_near_a_hinges_axis_leave_no_answer_ok_far_from_it():
             error = angle_between_lines_deg(np.asarray(result.direction), trials[seed][1])
             if result.status == "ok" and error > blind_spots.FAR:
                 far_and_ok.append((method, seed, round(error)))
-                arc_sd_deg = check(result)["arc_rotation_sd_deg"]
-                assert arc_sd_deg <= precision.MAX_REFERENCE_POSE_SD_DEG, (method, seed)
-    assert len(far_and_ok) <= 1, far_and_ok
+    assert not far_and_ok
 
 
 def _joint_line_hinge(seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -395,3 +394,52 @@ def test_one_long_lever_keeps_its_correct_answers_ok(method):
         assert "with the longest lever" not in result.status, seed
         n_ok += result.status == "ok"
     assert n_ok >= 9  # one seed's answers are warned about for their frames or their cost
+
+
+def test_one_marker_far_from_a_hinges_axis_and_two_near_it_leave_few_answers_ok_far_off():
+    """``benchmarks/blind_spots.py``'s case: two markers 3 mm from a hinge's axis and one 100 mm
+    from it, arcs of 10, 20 and 30 degrees, 0.5-1 mm noise. The far marker reads the rotation
+    well, but its arc alone fixes the axis's direction only through its sagitta; the near
+    markers' residuals, not first order in their noise, made the SD read 4-9 degrees where the
+    radial and combined answers lay 10-85 degrees off (5 radial and 16 combined answers of 180
+    trials each). Three combined answers stay: two 13 and 11 degrees off within two of the SDs
+    their first-order markers give, and one 77 degrees off whose near markers' levers read 4.7
+    degrees a frame by chance (their travel within the noise's own scatter)."""
+    far_and_ok = []
+    for arc_deg in (10.0, 20.0, 30.0):
+        trials = [
+            blind_spots._lever_hinge(np.random.default_rng(seed), arc_deg, 1) for seed in range(60)
+        ]
+        markers = np.stack([data for data, _ in trials])
+        for method in METHODS:
+            for (_, axis), result in zip(
+                trials, registry.many("axis", method)(markers), strict=True
+            ):
+                error = angle_between_lines_deg(np.asarray(result.direction), axis)
+                if result.status == "ok" and error > blind_spots.FAR:
+                    far_and_ok.append((method, arc_deg, round(error, 1)))
+    assert len(far_and_ok) <= 3, far_and_ok
+
+
+@pytest.mark.parametrize("method", ("radial", "combined"))
+def test_an_answer_its_first_order_markers_do_not_fix_says_so(method):
+    """One trial of that case whose radial and combined answers lie 85 degrees off with SDs of
+    8-9 degrees from every marker: on the far marker alone the cost leaves the direction's SD
+    above 10 degrees (the radial one unbounded), which the result states, with the SD of every
+    marker beside it."""
+    markers, axis = blind_spots._lever_hinge(np.random.default_rng(25), 10.0, 1)
+    result = jointbench.fit_axis(markers, method)
+    assert angle_between_lines_deg(np.asarray(result.direction), axis) > 80.0  # the case
+    found = result.diagnostics["first_order_markers"]
+    assert found["markers"] == [2]
+    assert found["all_markers_axis_sd_deg"] <= precision.MAX_AXIS_SD_DEG
+    sd_deg = result.diagnostics["axis_sd_deg"]
+    assert sd_deg > precision.MAX_AXIS_SD_DEG
+    # One circle does not curve the radial cost in the axis's tilt (module notes of axis.py).
+    size = "unbounded" if method == "radial" else f"at {sd_deg:.1f} deg"
+    assert result.status.startswith(
+        "warning: precision not determined: only 1 of 3 markers travel far enough for the "
+        "rotation the poses show to read it within 5 deg a frame, and on their own they leave "
+        f"the direction's SD {size} (above 10 deg)"
+    )
+    assert result.converged  # left as the method set it

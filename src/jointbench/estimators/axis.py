@@ -1043,12 +1043,32 @@ def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> Axi
     at = _cost_at(markers, np.asarray(result.point), np.asarray(result.direction), result.method)
     sd, eigen = _precision_of(at, result.method)
     cost_name = f"the {result.method} cost"
-    annotated = precision.annotate(result, sd, cost_name)
+    annotated = _first_order_annotated(precision.annotate(result, sd, cost_name), markers, verdict)
     if result.method == "radial":
         annotated = _checked_against_planar(annotated, markers)
     elif eigen is not None:
         annotated = precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
     return _misfit_annotated(annotated, at, markers.shape[:2], verdict)
+
+
+def _first_order_annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> AxisResult:
+    """The radial or combined ``result`` for ``markers`` ``(N_d, P, 3)`` [mm] with the SD of
+    its direction that its cost on the markers that read the rotation to first order implies
+    (:func:`jointbench.estimators.precision.annotate_first_order`), where the support
+    ``verdict``'s levers leave some out but not all (where none reads it, the comparison with
+    the motion's axis says so: :func:`jointbench.estimators.precision.annotate_motion_axis`).
+    The planar answer is held to its own check of the noise's share of its scatter
+    (:func:`jointbench.estimators.precision.annotate_validity`), which the others lack."""
+    first_order = precision.first_order_markers(verdict.motion_axis)
+    if result.method == "planar" or first_order is None:
+        return result
+    if first_order.all() or not first_order.any():
+        return result
+    point, direction = np.asarray(result.point), np.asarray(result.direction)
+    if not (np.isfinite(point).all() and np.isfinite(direction).all()):
+        return result
+    at = _cost_at(markers[:, first_order], point, direction, result.method)
+    return precision.annotate_first_order(result, precision.direction_sd_deg(at), first_order)
 
 
 def _misfit_annotated(

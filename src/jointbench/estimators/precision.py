@@ -151,8 +151,29 @@ inertia, called compact plates far from a hinge undetermined although each marke
 it has a long lever. Where the poses' rotation is itself mostly noise (a cluster a few
 millimetres across against a millimetre of noise) it reads larger than the motion and the
 levers shorter: the rule then errs towards saying not determined.
-``tests/test_axis_motion_check.py`` holds the near-axis case, the compact plate and the
-joint-line markers.
+
+For the same reason the radial and combined costs' SD counts only the markers that read the
+rotation within that bound (:func:`first_order_markers`): the SD is the cost's curvature over
+its residuals' noise, which holds where each residual is linear in its marker's noise, and a
+marker's distance from a line 3 mm away, under 1 mm of noise, is mostly the noise's own length;
+its planar residuals are linear but its scatter is noise, whose fluctuations the combined cost
+would count as curvature. One marker's arc fixes one circle, and on a short arc fixes the
+axis's direction only through its sagitta, so the markers kept may not fix the direction while
+the others make the SD read a few degrees: two markers 3 mm from a hinge's axis and one 100 mm
+from it, on 10-30 degree arcs (``benchmarks/blind_spots.py``), left radial and combined answers
+``ok`` up to 85 degrees off with SDs under 10. So where some markers are left out,
+``diagnostics["axis_sd_deg"]`` is the SD the answer's cost implies on the others alone, and
+above :data:`MAX_AXIS_SD_DEG` the precision is said not to be determined
+(:func:`annotate_first_order`); where all are kept the SD is as before, and where none is, the
+rule above says so. The planar method is held to its own check of the noise's share of its
+scatter (:func:`annotate_validity`), SARA to the pose checks. A lever is read from a marker's
+travel net of the noise's mean; a marker a few millimetres from the axis travels less than the
+noise's own scatter, so its lever can read long by chance and the marker be kept (one of the
+benchmark's answers, 77 degrees off, kept two 3 mm markers reading 4.7 degrees a frame). A
+margin of the noise's scatter at 0.001 closed it but dropped, at random, a marker 16 mm from
+the axis under 1 mm of noise (3.6 degrees a frame) and with it the radial SD's calibration.
+``tests/test_axis_motion_check.py`` holds the near-axis case, the compact
+plate, the joint-line markers and the one far marker.
 
 What the band lets through: motion the cost does not model. A hinge with an independent wobble
 about another axis of a tenth of its arc (0.5 mm noise) leaves the planar and combined answers
@@ -214,12 +235,14 @@ __all__ = [
     "annotate",
     "annotate_agreement",
     "annotate_ambiguity",
+    "annotate_first_order",
     "annotate_misfit",
     "annotate_motion_axis",
     "annotate_validity",
     "cost_at",
     "direction_sd_deg",
     "distinct_frames",
+    "first_order_markers",
     "line_angle_deg",
     "misfit",
     "rigid_dof",
@@ -510,6 +533,44 @@ def annotate(result, sd_deg: float, cost_name: str):
             f"axis not determined by {cost_name}: {why} {size} (above {MAX_AXIS_SD_DEG:g} deg)",
         )
     return with_warnings(result, warnings, {"axis_sd_deg": float(sd_deg)})
+
+
+def first_order_markers(reference: MotionAxis | None) -> np.ndarray | None:
+    """Which markers ``(n,)`` read a frame's rotation through their arcs within
+    :data:`MAX_REFERENCE_POSE_SD_DEG` (``reference.marker_arc_sd_deg``, levers read from the
+    data alone; module docstring); ``None`` where the data gave no pose."""
+    if reference is None:
+        return None
+    # NaN fails the comparison: a marker whose lever is not read reads nothing.
+    return np.asarray(reference.marker_arc_sd_deg, dtype=float) <= MAX_REFERENCE_POSE_SD_DEG
+
+
+def annotate_first_order(result, sd_deg: float, first_order: np.ndarray):
+    """``result`` (:func:`annotate`'s) with ``diagnostics["axis_sd_deg"]`` = ``sd_deg``, the
+    direction's SD [deg] that the answer's cost implies on the markers ``first_order`` ``(n,)``
+    marks as reading the rotation to first order (:func:`first_order_markers`), and
+    ``diagnostics["first_order_markers"]``: ``markers``, their indices, and
+    ``all_markers_axis_sd_deg``, the SD stated from every marker, which counts the others'
+    residuals as first order in their noise where they are not (module docstring). Above
+    :data:`MAX_AXIS_SD_DEG`, and where that SD was not, a warning that the precision is not
+    determined. ``converged`` is left as the method set it."""
+    kept = np.flatnonzero(first_order)
+    all_markers_sd_deg = result.diagnostics["axis_sd_deg"]
+    warnings = ()
+    if all_markers_sd_deg <= MAX_AXIS_SD_DEG and not sd_deg <= MAX_AXIS_SD_DEG:
+        size = "unbounded" if math.isinf(sd_deg) else f"at {sd_deg:.1f} deg"
+        warnings = (
+            f"precision not determined: only {kept.size} of {first_order.size} markers travel "
+            "far enough for the rotation the poses show to read it within "
+            f"{MAX_REFERENCE_POSE_SD_DEG:g} deg a frame, and on their own they leave the "
+            f"direction's SD {size} (above {MAX_AXIS_SD_DEG:g} deg): the others lie too near "
+            "the axis for their residuals to be first order in their noise, so they do not "
+            f"make it the {all_markers_sd_deg:.1f} deg stated from every marker",
+        )
+    record = {"markers": kept.tolist(), "all_markers_axis_sd_deg": float(all_markers_sd_deg)}
+    return with_warnings(
+        result, warnings, {"axis_sd_deg": float(sd_deg), "first_order_markers": record}
+    )
 
 
 def annotate_validity(

@@ -1586,7 +1586,7 @@ def _one_segment_axes(
             sd_deg.tolist(),
             noise_share.tolist(),
             pose_sd_deg.tolist(),
-            arc_sd_deg.tolist(),
+            arc_sd_deg,
             strict=True,
         )
     ]
@@ -1597,19 +1597,19 @@ def _one_segment_axes(
 def _arc_rotation_sd_deg(
     markers: np.ndarray, variance: np.ndarray, principal_rms: np.ndarray, off_rms: np.ndarray
 ) -> np.ndarray:
-    """Per trial, the SD [deg] of one frame's rotation as the arc of the marker with the
-    longest lever reads it, from one segment's markers ``(T, N, n, 3)`` [mm] alone
-    (:class:`MotionAxis`): ``s / L``, ``s^2`` the rigid residual ``variance`` ``(T,)``
-    [mm^2] and a marker's lever ``L`` its travel (its positions' RMS distance from their mean,
-    net of the noise's ``3 s^2 (N - 1) / N`` in the square) over the rotation the poses measure
-    (the RMS rotation about the principal axis and the two others, ``principal_rms`` and
-    ``off_rms`` ``(T,)`` [rad], net of their noise). ``inf`` where every marker's travel
-    is within its noise. A compiled kernel."""
+    """Per trial and marker, the SD [deg] of one frame's rotation as the marker's arc reads
+    it, from one segment's markers ``(T, N, n, 3)`` [mm] alone (:class:`MotionAxis`):
+    ``s / L``, ``s^2`` the rigid residual ``variance`` ``(T,)`` [mm^2] and the marker's lever
+    ``L`` its travel (its positions' RMS distance from their mean, net of the noise's
+    ``3 s^2 (N - 1) / N`` in the square) over the rotation the poses measure (the RMS rotation
+    about the principal axis and the two others, ``principal_rms`` and ``off_rms`` ``(T,)``
+    [rad], net of their noise): ``(T, n)``, ``inf`` where a marker's travel is within its
+    noise. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
-    sd_deg = np.empty(n_trials)
-    travel = np.empty(n_markers)
+    sd_deg = np.empty((n_trials, n_markers))
     for t in range(n_trials):
         noise = 3.0 * variance[t] * (n_frames - 1) / n_frames
+        rotation_sq = principal_rms[t] ** 2 + off_rms[t] ** 2
         for i in range(n_markers):
             squares = 0.0
             for c in range(3):
@@ -1619,14 +1619,12 @@ def _arc_rotation_sd_deg(
                 mean /= n_frames
                 for k in range(n_frames):
                     squares += (markers[t, k, i, c] - mean) ** 2
-            travel[i] = squares / n_frames - noise
-        longest = travel.max()
-        rotation_sq = principal_rms[t] ** 2 + off_rms[t] ** 2
-        # L^2 = travel / rotation_sq, so s / L = s * rotation / sqrt(travel).
-        if longest <= 0.0:
-            sd_deg[t] = np.inf
-        else:
-            sd_deg[t] = np.degrees(np.sqrt(variance[t] * rotation_sq / longest))
+            travel = squares / n_frames - noise
+            # L^2 = travel / rotation_sq, so s / L = s * rotation / sqrt(travel).
+            if travel <= 0.0:
+                sd_deg[t, i] = np.inf
+            else:
+                sd_deg[t, i] = np.degrees(np.sqrt(variance[t] * rotation_sq / travel))
     return sd_deg
 
 
@@ -1707,19 +1705,26 @@ class MotionAxis(NamedTuple):
     of the rotation noise's share of the rotations' scatter over its eigen-gap (from 1 up, the
     axis is not determined by the motion) and ``pose_sd_deg`` the largest SD of one pose's
     rotation [deg], about the cluster's weakest axis (where it is large, a thin cluster's, the
-    first-order noise model behind the other two does not hold), and ``arc_rotation_sd_deg``
-    the SD [deg] of one frame's rotation as the arc of the marker with the longest lever
-    reads it: ``s / L``, a marker's lever ``L`` how far it travels against how much the
-    poses say the segment turns, both net of their noise (:func:`_arc_rotation_sd_deg`). A
-    marker at a distance ``r`` from the axis travels ``r`` times the rotation, so ``L`` is
-    that distance read from the data, whatever line an answer claims
+    first-order noise model behind the other two does not hold), and ``marker_arc_sd_deg``
+    ``(n,)`` the SD [deg] of one frame's rotation as each marker's arc reads it: ``s / L``, a
+    marker's lever ``L`` how far it travels against how much the poses say the segment turns,
+    both net of their noise (:func:`_arc_rotation_sd_deg`); ``arc_rotation_sd_deg``, the
+    smallest, is the marker's with the longest lever. A marker at a distance ``r`` from the
+    axis travels ``r`` times the rotation, so ``L`` is that distance read from the data,
+    whatever line an answer claims
     (:func:`jointbench.estimators.precision.annotate_motion_axis`)."""
 
     direction: np.ndarray
     sd_deg: float
     noise_share: float
     pose_sd_deg: float
-    arc_rotation_sd_deg: float
+    marker_arc_sd_deg: np.ndarray
+
+    @property
+    def arc_rotation_sd_deg(self) -> float:
+        """The SD [deg] of one frame's rotation as the marker with the longest lever reads it
+        (``inf`` for no marker)."""
+        return float(np.min(self.marker_arc_sd_deg, initial=np.inf))
 
 
 @kernel
