@@ -155,6 +155,33 @@ def test_children_that_left_the_group_and_ignore_sigterm_share_one_grace(tmp_pat
     assert seconds < 0.5 + GRACE_S + 1.0
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_daemons_that_detach_again_and_again_are_stopped_together_under_one_grace(tmp_path):
+    """A daemon that detaches twice and more: each level starts the next in a session of its
+    own and stays, ignoring SIGTERM, so that a level becomes an orphan of the job only once
+    the level above it has ended. Every level is stopped, however deep, and all under one
+    grace, not one grace per level."""
+    written = tmp_path / "pids"
+    levels = 7
+    level = tmp_path / "level.sh"
+    level.write_text(
+        f"trap '' TERM; echo $$ >> {written}\n"
+        f'if [ "$1" -gt 1 ]; then setsid bash {level} $(($1 - 1)) & fi\n'
+        f"exec {FOREVER}\n"
+    )
+    # The program ends once every level has started.
+    program = (
+        f"setsid bash {level} {levels} & "
+        f"until [ $(cat {written} 2>/dev/null | wc -l) -ge {levels} ]; do sleep 0.05; done"
+    )
+    status, seconds = timed(["bash", "-c", program], limit_s=10)
+    assert status == 0
+    daemons = pids(written)
+    assert len(daemons) == levels
+    assert not [pid for pid in daemons if alive(pid)]
+    assert seconds < GRACE_S + 2.0
+
+
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}

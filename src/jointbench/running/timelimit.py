@@ -1,5 +1,5 @@
 """The time limit of an external estimator's job: its program, whatever its language, runs in a
-process group of its own and is stopped, the whole group with it, once the run's limit
+process group of its own and is stopped, with every process it started, once the run's limit
 (``jobs.external_time_limit_s``) has passed.
 
 Snakemake sets no time limit on a local job, so the workflow gives every rule of the user's the
@@ -45,8 +45,6 @@ BASH_PREFIX = "set -euo pipefail; "
 # How often a stopped group is looked at [s], and how long a killed one is waited for [s].
 _POLL_S = 0.05
 _KILLED_S = 2.0
-# How many rounds of processes that left the command's group are stopped at most.
-_STRAY_ROUNDS = 5
 # The signals Python ignores for itself, which a command would inherit ignored: a writer to a
 # pipe whose reader has gone would fail its writes rather than end, and one that does not check
 # them would spin until the limit. Restored, as subprocess and a shell do.
@@ -142,10 +140,6 @@ class _Group:
         self.reap()
         return self.status is not None
 
-    def ended(self, within_s: float) -> bool:
-        """Whether the whole group ends within ``within_s`` [s]."""
-        return _all_ended([self], within_s)
-
 
 def _until(done, within_s: float) -> bool:
     """Whether ``done()`` is true within ``within_s`` [s], asked every :data:`_POLL_S`."""
@@ -158,32 +152,66 @@ def _until(done, within_s: float) -> bool:
         time.sleep(_POLL_S)
 
 
-def _all_ended(groups: Sequence[_Group], within_s: float) -> bool:
-    """Whether every process of ``groups`` ends within ``within_s`` [s], each group's ended
-    processes that are this process's children reaped as they end."""
+def _descendants() -> list[int]:
+    """The pids of every process descended from this one, at every remove (Linux's ``/proc``;
+    none known elsewhere). A process that left its group, or its session, is still a
+    descendant; one whose parent ended is this process's child (``_adopt_orphans``)."""
+    found = []
+    parents = [os.getpid()]
+    while parents:
+        for task in Path(f"/proc/{parents.pop()}/task").glob("*/children"):
+            with contextlib.suppress(OSError):
+                children = [int(pid) for pid in task.read_text().split()]
+                found += children
+                parents += children
+    return found
 
-    def ended() -> bool:
-        for group in groups:
-            group.reap()
-        return not any(group_alive(group.leader) for group in groups)
 
-    return _until(ended, within_s)
+def _reap_children() -> None:
+    """Reap every ended child of this process (an adopted orphan among them)."""
+    with contextlib.suppress(ChildProcessError):
+        while os.waitid(os.P_ALL, 0, os.WEXITED | os.WNOHANG) is not None:
+            pass
 
 
-def _stop_groups(groups: Sequence[_Group], grace_s: float) -> None:
-    """Stop every process of ``groups`` at once: SIGTERM to each, up to ``grace_s`` [s] for
-    them all to end, then SIGKILL to whatever is left, a process that ignores SIGTERM or a
-    child a leader left behind. One grace for all: groups stopped one after another would
-    hold the job a grace for each that ignores SIGTERM."""
-    for group in groups:
-        _signal_group(group.leader, signal.SIGTERM)
-    if _all_ended(groups, grace_s):
+def _signal_descendants(group: int | None, signum: int) -> None:
+    """Send ``signum`` to every descendant of this process and to the command's process
+    ``group`` (if any; where no descendant is known, it is the job)."""
+    if group is not None:
+        _signal_group(group, signum)
+    for pid in _descendants():
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signum)
+
+
+def _none_left(group: int | None) -> bool:
+    """Whether the job has ended: no descendant of this process (its ended children reaped)
+    and no process in the command's process ``group`` (if any)."""
+    _reap_children()
+    return not _descendants() and (group is None or not group_alive(group))
+
+
+def _stop_descendants(group: int | None, grace_s: float) -> None:
+    """Stop every process of the job: every descendant of this process, however many times
+    removed and whatever group or session it started (a daemon that detached, and one that
+    its daemon detached in turn), and the command's process ``group``, all at once: SIGTERM
+    to each, up to ``grace_s`` [s] for them all to end, then SIGKILL to whatever is left,
+    listed again until none is (a process started in between is listed the next time). One
+    grace for all: levels stopped one after another would hold the job a grace for each
+    that ignores SIGTERM."""
+    if _none_left(group):
         return
-    for group in groups:
-        _signal_group(group.leader, signal.SIGKILL)
+    _signal_descendants(group, signal.SIGTERM)
+    if _until(lambda: _none_left(group), grace_s):
+        return
+
+    def killed() -> bool:
+        _signal_descendants(group, signal.SIGKILL)
+        return _none_left(group)
+
     # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
     # disk) is past any signal's reach, and the job ends without it.
-    _all_ended(groups, _KILLED_S)
+    _until(killed, _KILLED_S)
 
 
 def _signal_group(group: int, signum: int) -> None:
@@ -197,9 +225,10 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     """Run ``argv`` in a process group of its own for at most ``limit_s`` [s]:
     its exit status (negative: the signal that ended it), or None when the limit stopped it.
     Whatever of it is still running when it ends, is stopped or is stopped from outside
-    (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_what_is_left`): nothing
+    (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_descendants`): nothing
     of the job outlives it. This process becomes the reaper of the command's orphans
-    (``_adopt_orphans``)."""
+    (``_adopt_orphans``), and every process descended from it is taken as the job's: it
+    runs nothing else (the limited shell, :func:`main`)."""
     _adopt_orphans()
     spawned = os.posix_spawnp(
         argv[0], list(argv), os.environ, setpgroup=0, setsigdef=_RESTORED_SIGNALS
@@ -208,39 +237,10 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     try:
         ended = group.wait(limit_s)
     except BaseException:
-        _stop_what_is_left(group, grace_s)
+        _stop_descendants(group.leader, grace_s)
         raise
-    _stop_what_is_left(group, grace_s)
+    _stop_descendants(group.leader, grace_s)
     return group.status if ended else None
-
-
-def _children() -> list[int]:
-    """The pids of this process's children (Linux's ``/proc``; none known elsewhere)."""
-    found = []
-    for task in Path("/proc/self/task").glob("*/children"):
-        with contextlib.suppress(OSError):
-            found += [int(pid) for pid in task.read_text().split()]
-    return found
-
-
-def _stop_what_is_left(group: _Group, grace_s: float) -> None:
-    """Stop what is left of the command started as ``group``: its group's processes, and the
-    processes that left it (``setsid``, a daemon that detached) whose parent there has ended,
-    which are this process's children (``_adopt_orphans``), all at once
-    (:func:`_stop_groups`); then, round by round, the children that stopping those left
-    (a child that left its group in turn). A few rounds, as one that cannot end (a read of
-    a dead disk) is past any signal's reach."""
-    groups = [] if group.ended(0) else [group]
-    for _ in range(_STRAY_ROUNDS):
-        strays = set()
-        for child in _children():
-            with contextlib.suppress(ProcessLookupError):
-                strays.add(os.getpgid(child))
-        groups += [_Group(leader) for leader in sorted(strays - {group.leader})]
-        if not groups:
-            return
-        _stop_groups(groups, grace_s)
-        groups = []
 
 
 #: The longest limit [s], a week: a cluster's longest partitions allow about that, and a longer
