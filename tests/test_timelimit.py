@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from snakemake.shell import shell as snakemake_shell
 from snakemake.utils import validate
 from workflow_copy import ROOT
 
@@ -31,6 +32,9 @@ LIMIT_S = 1.5
 GRACE_S = 0.5
 # A program that outlives its test by far: past the deadlines below, it was not stopped.
 FOREVER = "sleep 300"
+# What Snakemake puts before the command of a job whose shell is named bash, as the limited
+# shell is.
+SNAKEMAKES_PREFIX = "set -euo pipefail; "
 
 
 def alive(pid: int) -> bool:
@@ -193,12 +197,51 @@ def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     )
 
 
-def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does():
-    """bash, and Snakemake's prefix for it: a failing step of a pipe fails the command."""
-    shell = limited_shell("echo ok; false | true; echo not reached", "10", stdout=subprocess.PIPE)
-    out, _ = shell.communicate(timeout=30)
-    assert out == "ok\n"
-    assert shell.returncode == 1
+# Snakemake writes a command longer than 64 KB to a script, which the job's shell runs with
+# Snakemake's own bash (snakemake.shell.MAX_ARG_LEN): a no-op of 70 KB makes a command longer.
+LONG = f": {'x' * 70_000}; "
+
+
+def as_snakemake_runs(command: str, limit: str, tmp_path: Path, monkeypatch) -> int:
+    """``command`` run as Snakemake runs a job of an external estimator's (the limited shell
+    its resource ``shell_exec``, the limit in the environment the workflow sets): its exit
+    status."""
+    monkeypatch.setenv(timelimit.PYTHON_VARIABLE, sys.executable)
+    monkeypatch.setenv(timelimit.LIMIT_VARIABLE, limit)
+    monkeypatch.chdir(tmp_path)  # where Snakemake writes a long command's script
+    try:
+        snakemake_shell(command, resources={"shell_exec": timelimit.LIMITED_SHELL})
+    except subprocess.CalledProcessError as error:
+        return error.returncode
+    return 0
+
+
+@pytest.mark.parametrize("length", ["short", "over-64-KB"])
+def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does(length, tmp_path, monkeypatch):
+    """bash, and Snakemake's prefix for it: a failing step of a pipe fails the command, long
+    or short; a long command the job's shell runs from the script Snakemake wrote."""
+    out = tmp_path / "out"
+    command = f"echo ok >> {out}; false | true; echo not reached >> {out}"
+    command = (LONG if length == "over-64-KB" else "") + command
+    assert as_snakemake_runs(command, "10", tmp_path, monkeypatch) == 1
+    assert out.read_text() == "ok\n"
+
+
+def test_a_command_over_64_kb_is_stopped_at_the_limit(tmp_path, monkeypatch):
+    start = time.monotonic()
+    assert as_snakemake_runs(LONG + FOREVER, "1", tmp_path, monkeypatch) == timelimit.EXPIRED
+    assert time.monotonic() - start < 1 + timelimit.GRACE_S
+
+
+def test_a_long_shell_call_of_a_script_job_runs_as_a_short_one(tmp_path, monkeypatch):
+    """A ``script:`` job's preamble makes the limited shell Snakemake's shell for the script's
+    own ``shell()`` calls: a long one of those runs from its script, under the limit, too."""
+    monkeypatch.setattr(snakemake_shell, "_process_args", {})
+    snakemake_shell.executable(timelimit.LIMITED_SHELL)
+    out = tmp_path / "out"
+    command = f"{LONG}echo ok >> {out}; false | true; echo not reached >> {out}"
+    assert as_snakemake_runs(command, "10", tmp_path, monkeypatch) == 1
+    assert out.read_text() == "ok\n"
 
 
 @pytest.mark.skipif(shutil.which("perl") is None, reason="no perl on this machine")
@@ -207,7 +250,7 @@ def test_a_writer_whose_reader_has_gone_ends_as_under_snakemakes_bash():
     restores it: a writer that does not check its writes (Perl's print, C's printf) piped into
     ``head`` then spins until the limit, and is named as running too long, where Snakemake's
     own shell ends it with SIGPIPE at once."""
-    writer = "perl -e '$| = 1; print qq(y\\n) while 1' | head -n 1"
+    writer = SNAKEMAKES_PREFIX + "perl -e '$| = 1; print qq(y\\n) while 1' | head -n 1"
     shell = limited_shell(writer, "20", stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     out, err = shell.communicate(timeout=60)
     assert (shell.returncode, out, err) == (128 + signal.SIGPIPE, "y\n", "")
@@ -312,7 +355,7 @@ def test_a_program_that_sets_the_terminal_runs_as_it_would_without_the_limit():
 
 def test_a_program_that_reads_the_terminal_fails_at_once_rather_than_at_the_limit():
     """Reading the terminal (SIGTTIN) would stop it until the limit too: the read fails."""
-    status, seconds, written = on_a_terminal("read answer; echo answered", "20")
+    status, seconds, written = on_a_terminal(SNAKEMAKES_PREFIX + "read answer; echo answered", "20")
     assert status == 1 and "answered" not in written
     assert seconds < 10
 

@@ -4,7 +4,7 @@ process group of its own and is stopped, with every process it started, once the
 
 Snakemake sets no time limit on a local job, so the workflow gives every rule of the user's the
 resource ``shell_exec`` (workflow/rules/common.smk): Snakemake then runs the job's command,
-``shell:`` or ``script:``, as ``limited_shell -c COMMAND`` (the file beside this one), which
+``shell:`` or ``script:``, as ``limited/bash -c COMMAND`` (the folder beside this file), which
 runs this file with the project's interpreter. It reads the limit from the environment the
 workflow sets when it loads, so that every job of a run has the same, and it imports nothing
 but the standard library: it starts before the user's program, for every job.
@@ -30,18 +30,17 @@ from pathlib import Path
 #: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
 KEY = "jobs.external_time_limit_s"
 #: The environment variables the workflow sets when it loads: the limit [s] and the interpreter
-#: that runs this file (``limited_shell``).
+#: that runs this file (:data:`LIMITED_SHELL`).
 LIMIT_VARIABLE = "JOINTBENCH_TIME_LIMIT_S"
 PYTHON_VARIABLE = "JOINTBENCH_PYTHON"
-#: The shell ``shell_exec`` names, beside this file.
-LIMITED_SHELL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "limited_shell")
+#: The shell ``shell_exec`` names, in a folder beside this file: named bash, as Snakemake gives
+#: its prefix (``set -euo pipefail; ``) to a shell of that name alone, and to the script it
+#: writes for a command longer than a command line may be (64 KB) too.
+LIMITED_SHELL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "limited", "bash")
 #: The exit status of a command the limit stopped (GNU ``timeout``'s).
 EXPIRED = 124
 #: Seconds a stopped group has between SIGTERM (to write what it must, or clean up) and SIGKILL.
 GRACE_S = 5.0
-#: Snakemake's own prefix of a bash command, which it gives only a shell named ``bash``: the
-#: command of a limited job fails at its first failing step, as every other job's does.
-BASH_PREFIX = "set -euo pipefail; "
 # How often a stopped group is looked at [s], and how long a killed one is waited for [s].
 _POLL_S = 0.05
 _KILLED_S = 2.0
@@ -326,10 +325,9 @@ def _interrupt(signum: int, _frame: object) -> None:
 
 
 def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
-    """``limited_shell -c COMMAND``: COMMAND run by bash under the limit in ``environ``."""
-    if len(argv) != 2 or argv[0] != "-c":
-        print(f"usage: {LIMITED_SHELL} -c COMMAND (got {list(argv)!r})", file=sys.stderr)
-        return 2
+    """``limited/bash ARGUMENTS``: bash run with ``ARGUMENTS`` (``-c COMMAND``, or a script
+    Snakemake wrote for a command too long for a command line) under the limit in
+    ``environ``."""
     try:
         limit = limit_from(environ)
     except ValueError as error:
@@ -345,7 +343,7 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
         signal.signal(signum, signal.SIG_IGN)
     try:
         _end_with_the_run()
-        status = run_limited(["bash", "-c", BASH_PREFIX + argv[1]], limit)
+        status = run_limited(["bash", *argv], limit)
     except Interrupted as stopped:
         return 128 + stopped.signum
     if status is None:
