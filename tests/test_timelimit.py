@@ -22,7 +22,7 @@ import pytest
 import yaml
 from snakemake.shell import shell as snakemake_shell
 from snakemake.utils import validate
-from workflow_copy import ROOT
+from workflow_copy import ROOT, SNAKEMAKE
 
 from jointbench.configuration import config as jb_config
 from jointbench.running import timelimit
@@ -263,11 +263,20 @@ def test_the_limited_shell_stops_its_command_and_says_so():
     assert "ran past the time limit of 1 s (jobs.external_time_limit_s)" in err
 
 
-def started(written: Path) -> None:
-    """Wait until the command has written its pid file ``written``: it has started."""
+def started(written: Path, processes: int = 1) -> None:
+    """Wait until the command has written ``processes`` pids to its pid file ``written``: they
+    have started."""
     deadline = time.monotonic() + 20
-    while not (written.exists() and written.read_text().strip()):
+    while not (written.exists() and len(written.read_text().split()) >= processes):
         assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+
+
+def end_within(processes: list[int], seconds: float) -> None:
+    """Wait until none of ``processes`` runs, failing the test past ``seconds``."""
+    deadline = time.monotonic() + seconds
+    while running := [pid for pid in processes if alive(pid)]:
+        assert time.monotonic() < deadline, f"{running} run on"
         time.sleep(0.05)
 
 
@@ -294,6 +303,90 @@ def test_the_limited_shell_stopped_from_outside_stops_what_it_ran(command, tmp_p
     assert shell.wait(timeout=30) == 128 + signal.SIGTERM
     (process,) = pids(written)
     assert not alive(process)
+
+
+# A writer and a reader that never reads, each writing its pid: the writer fills the pipe and
+# waits on it, as a program whose consumer has stopped reading does.
+PIPE_NOBODY_READS = (
+    f"(echo $BASHPID >> {{written}}; exec yes) | (echo $BASHPID >> {{written}}; exec {FOREVER})"
+)
+
+
+@pytest.mark.parametrize(
+    ("command", "processes"),
+    [
+        (f"echo $$ > {{written}}; {FOREVER}", 1),
+        (PIPE_NOBODY_READS, 2),
+        pytest.param(
+            f"setsid {FOREVER} & echo $! > {{written}}; {FOREVER}",
+            1,
+            marks=pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid"),
+        ),
+    ],
+    ids=["its-group", "a-writer-into-a-pipe-nobody-reads", "a-child-that-left-the-group"],
+)
+def test_the_program_is_stopped_when_its_limited_shell_is_killed(command, processes, tmp_path):
+    """Snakemake kills a job's shell with SIGKILL, which nothing can catch, when another job
+    of its ``pipe()`` group fails (and so may anyone): what the shell ran does not run on
+    without a limit, a writer waiting on a pipe its reader no longer reads among them."""
+    written = tmp_path / "pids"
+    shell = limited_shell(command.format(written=written), "60")
+    started(written, processes)
+    shell.kill()
+    assert shell.wait(timeout=30) == -signal.SIGKILL
+    end_within(pids(written), timelimit.GRACE_S + 5)
+
+
+# Two limited jobs joined by a pipe(): the producer writes, then works on (sleeps) past its
+# consumer, which fails; Snakemake then kills the producer's shell with SIGKILL.
+PIPE_GROUP = """
+import os, sys
+from jointbench.running import timelimit
+os.environ[timelimit.LIMIT_VARIABLE] = "60"
+os.environ[timelimit.PYTHON_VARIABLE] = sys.executable
+
+rule all:
+    input: "consumed"
+
+rule produce:
+    output: pipe("stream")
+    resources: shell_exec=timelimit.LIMITED_SHELL
+    shell: "echo $$ > producer; echo data > {output}; exec sleep 300"
+
+rule consume:
+    input: "stream"
+    output: "consumed"
+    resources: shell_exec=timelimit.LIMITED_SHELL
+    shell: "cat {input} > /dev/null; sleep 0.5; exit 1"
+"""
+
+
+def test_a_job_of_a_failed_pipe_group_is_stopped_with_its_shell(tmp_path):
+    """Snakemake runs the jobs of a ``pipe()`` group together and, when one fails, kills the
+    others' shells with SIGKILL: their programs end with them rather than run on, without a
+    limit, past the run."""
+    (tmp_path / "Snakefile").write_text(PIPE_GROUP)
+    # To a file: a program that runs on would hold a pipe's end, and the test, open.
+    log = tmp_path / "log"
+    with log.open("w") as written:
+        run = subprocess.run(
+            [SNAKEMAKE, "all", "-j2", "-d", tmp_path, "-s", tmp_path / "Snakefile"],
+            stdout=written,
+            stderr=subprocess.STDOUT,
+            timeout=120,
+        )
+    assert run.returncode == 1, log.read_text()
+    assert "Error in rule consume" in log.read_text()
+    end_within(pids(tmp_path / "producer"), timelimit.GRACE_S + 5)
+
+
+def test_a_program_that_kills_the_process_that_limits_it_is_stopped(tmp_path):
+    """The program's parent is the process that holds it to the limit: killed with SIGKILL,
+    by the program or anyone, the limited shell adopts what it ran, and stops it."""
+    written = tmp_path / "pids"
+    shell = limited_shell(f"echo $$ > {written}; kill -KILL $PPID; {FOREVER}", "60")
+    assert shell.wait(timeout=30) == 128 + signal.SIGKILL
+    end_within(pids(written), 5)
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):

@@ -48,6 +48,9 @@ _KILLED_S = 2.0
 # pipe whose reader has gone would fail its writes rather than end, and one that does not check
 # them would spin until the limit. Restored, as subprocess and a shell do.
 _RESTORED_SIGNALS = (signal.SIGPIPE, signal.SIGXFSZ)
+# The signals that stop the limited shell from outside: Ctrl-C, a closed terminal, Snakemake
+# cancelling the job or ending.
+_STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
 # prctl(2)'s option that makes a process the reaper of its descendants' orphans.
 _PR_SET_CHILD_SUBREAPER = 36
 # prctl(2)'s option that sends this process a signal when its parent ends.
@@ -89,12 +92,12 @@ def _adopt_orphans() -> None:
     _prctl(_PR_SET_CHILD_SUBREAPER, 1)
 
 
-def _end_with_the_run() -> None:
-    """Be told with SIGTERM when the process that started this one (Snakemake) ends (Linux):
-    a run killed with SIGKILL then stops the command here rather than leave it running
-    without a limit. This process stays in the run's process group, which Ctrl-C and a
+def _end_with_the_run(parent: int) -> None:
+    """Be told with SIGTERM when ``parent``, the process that started this one, ends (Linux),
+    even killed with SIGKILL: the limited shell is told when Snakemake ends, and stops the
+    command rather than leave it running without a limit; the keeper is told when the
+    limited shell ends. The limited shell stays in the run's process group, which Ctrl-C and a
     closed terminal signal, and passes those on (:func:`main`)."""
-    parent = os.getppid()
     _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
     if os.getppid() != parent:  # it ended before it could tell
         raise Interrupted(signal.SIGTERM)
@@ -227,7 +230,7 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_descendants`): nothing
     of the job outlives it. This process becomes the reaper of the command's orphans
     (``_adopt_orphans``), and every process descended from it is taken as the job's: it
-    runs nothing else (the limited shell, :func:`main`)."""
+    runs nothing else (the keeper, :func:`_keep`)."""
     _adopt_orphans()
     spawned = os.posix_spawnp(
         argv[0], list(argv), os.environ, setpgroup=0, setsigdef=_RESTORED_SIGNALS
@@ -321,19 +324,25 @@ def runtime_minutes(limit_s: float) -> int:
 
 
 def _interrupt(signum: int, _frame: object) -> None:
+    # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
+    for each in _STOP_SIGNALS:
+        signal.signal(each, signal.SIG_IGN)
     raise Interrupted(signum)
 
 
 def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     """``limited/bash ARGUMENTS``: bash run with ``ARGUMENTS`` (``-c COMMAND``, or a script
     Snakemake wrote for a command too long for a command line) under the limit in
-    ``environ``."""
+    ``environ``, by a keeper (:func:`_keep`) in a process group of its own, which this
+    process waits for. Whichever of the two is killed, even with SIGKILL, the other stops
+    the job: the keeper is told when this process ends (``_end_with_the_run``), and this
+    process adopts and stops what a killed keeper leaves."""
     try:
         limit = limit_from(environ)
     except ValueError as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
-    for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+    for signum in _STOP_SIGNALS:
         signal.signal(signum, _interrupt)
     # The command's group of its own is out of the terminal's foreground: the stops that
     # brings (setting the terminal, reading it) would hold a program until the limit and have
@@ -342,14 +351,73 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     for signum in (signal.SIGTTOU, signal.SIGTTIN):
         signal.signal(signum, signal.SIG_IGN)
     try:
-        _end_with_the_run()
-        status = run_limited(["bash", *argv], limit)
+        _end_with_the_run(os.getppid())
+    except Interrupted as stopped:
+        return 128 + stopped.signum
+    _adopt_orphans()
+    shell = os.getpid()
+    # Held until each process is ready to pass a stop on: one arriving between the fork and
+    # the wait would end this process without stopping the keeper, and the keeper before it
+    # knows its parent.
+    signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    keeper = os.fork()
+    if keeper == 0:
+        _exit_keeping(argv, limit, shell)
+    return _wait_for_the_keeper(keeper)
+
+
+def _exit_keeping(argv: Sequence[str], limit_s: float, shell: int) -> None:
+    """End the forked keeper with :func:`_keep`'s status, never returning into the code of
+    the process it was forked from (a programming error's traceback printed first)."""
+    status = 70  # EX_SOFTWARE: the keeper itself failed
+    try:
+        status = _keep(argv, limit_s, shell)
+    except BaseException:
+        sys.excepthook(*sys.exc_info())
+    finally:
+        sys.stderr.flush()
+        os._exit(status)
+
+
+def _keep(argv: Sequence[str], limit_s: float, shell: int) -> int:
+    """The keeper: runs bash with ``argv`` under ``limit_s`` [s] (:func:`run_limited`), in a
+    process group of its own, apart from the run's, so that a SIGKILL to the run's group
+    (or to the limited shell alone, ``shell``: Snakemake kills the jobs of a ``pipe()`` group
+    so when one fails) leaves it to stop the job: its exit status, as a shell's."""
+    try:
+        os.setpgid(0, 0)
+        _end_with_the_run(shell)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
+        status = run_limited(["bash", *argv], limit_s)
     except Interrupted as stopped:
         return 128 + stopped.signum
     if status is None:
-        print(stopped_line(limit), file=sys.stderr)
+        print(stopped_line(limit_s), file=sys.stderr)
         return EXPIRED
+    return _as_a_shell(status)
+
+
+def _as_a_shell(status: int) -> int:
+    """A process's exit ``status`` (negative: the signal that ended it) as a shell gives it
+    (128 + the signal)."""
     return 128 - status if status < 0 else status
+
+
+def _wait_for_the_keeper(keeper: int) -> int:
+    """The keeper's exit status, as a shell's; when this process is told to stop, the
+    keeper is, and is waited for while it stops the job. Whatever a keeper killed from
+    outside left (its orphans are this process's) is stopped then."""
+    try:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
+        _, waited = os.waitpid(keeper, 0)
+        status = _as_a_shell(os.waitstatus_to_exitcode(waited))
+    except Interrupted as stopped:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(keeper, signal.SIGTERM)
+        os.waitpid(keeper, 0)
+        status = 128 + stopped.signum
+    _stop_descendants(None, GRACE_S)
+    return status
 
 
 if __name__ == "__main__":
