@@ -1,5 +1,5 @@
 """The time limit of an external estimator's job (jointbench.running.timelimit): a program past
-it is stopped with its whole process group, whatever it does to stay; one within it runs as it
+it is stopped with every process it started, whatever it does to stay; one within it runs as it
 would without; the limit is checked before any job.
 
 The end-to-end case, a user's program that never ends in a run, is in tests/test_extension.py.

@@ -301,7 +301,8 @@ def stopped_line(limit_s: float) -> str:
     """What the limited shell says on its stderr when the limit stopped its command."""
     return (
         f"jointbench: the job's program ran past the time limit of {_seconds(limit_s)} ({KEY}): "
-        f"its process group was stopped (SIGTERM, then SIGKILL after {_seconds(GRACE_S)})"
+        f"it was stopped with every process it started (SIGTERM, then SIGKILL after "
+        f"{_seconds(GRACE_S)})"
     )
 
 
@@ -311,8 +312,8 @@ def expired_message(rule: str, wildcards: Mapping[str, str], limit_s: float) -> 
     job = ", ".join(f"{name}={value}" for name, value in wildcards.items())
     return (
         f"rule {rule}{f' ({job})' if job else ''}: its program ran past the time limit of "
-        f"{_seconds(limit_s)} for a job of an external estimator and was stopped, its whole "
-        f"process group with it; if it needs longer, raise {KEY} in the config"
+        f"{_seconds(limit_s)} for a job of an external estimator and was stopped, with every "
+        f"process it started; if it needs longer, raise {KEY} in the config"
     )
 
 
