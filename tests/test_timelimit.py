@@ -389,6 +389,25 @@ def test_a_program_that_kills_the_process_that_limits_it_is_stopped(tmp_path):
     end_within(pids(written), 5)
 
 
+def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monkeypatch):
+    """Ctrl-C or a cancel just as the wait for the keeper returns: the keeper has ended and
+    been waited for, and the limited shell ends with the stop's status, not a traceback."""
+    keeper = os.fork()
+    if keeper == 0:  # the child: a keeper whose job is done
+        os._exit(0)
+    waits = []
+    wait = os.waitpid
+
+    def waited_then_stopped(pid: int, options: int):
+        waits.append(wait(pid, options))
+        if len(waits) == 1:
+            raise timelimit.Interrupted(signal.SIGINT)
+        return waits[-1]
+
+    monkeypatch.setattr(timelimit.os, "waitpid", waited_then_stopped)
+    assert timelimit._wait_for_the_keeper(keeper) == 128 + signal.SIGINT
+
+
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
     """Snakemake killed with SIGKILL: the limited shell it started stops the program rather
     than leave it running without a limit."""

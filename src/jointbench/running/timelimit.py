@@ -413,9 +413,10 @@ def _wait_for_the_keeper(keeper: int) -> int:
         _, waited = os.waitpid(keeper, 0)
         status = _as_a_shell(os.waitstatus_to_exitcode(waited))
     except Interrupted as stopped:
-        with contextlib.suppress(ProcessLookupError):
+        # The keeper may have ended, and been waited for, just before the stop came.
+        with contextlib.suppress(ProcessLookupError, ChildProcessError):
             os.kill(keeper, signal.SIGTERM)
-        os.waitpid(keeper, 0)
+            os.waitpid(keeper, 0)
         status = 128 + stopped.signum
     _stop_descendants(None, GRACE_S)
     return status
