@@ -1,5 +1,5 @@
 """The time limit of an external estimator's job (jointbench.running.timelimit): a program past
-it is stopped with its whole process group, whatever it does to stay; one within it runs as it
+it is stopped with every process it started, whatever it does to stay; one within it runs as it
 would without; the limit is checked before any job.
 
 The end-to-end case, a user's program that never ends in a run, is in tests/test_extension.py.
@@ -20,8 +20,9 @@ from pathlib import Path
 
 import pytest
 import yaml
+from snakemake.shell import shell as snakemake_shell
 from snakemake.utils import validate
-from workflow_copy import ROOT
+from workflow_copy import ROOT, SNAKEMAKE
 
 from jointbench.configuration import config as jb_config
 from jointbench.running import timelimit
@@ -31,6 +32,9 @@ LIMIT_S = 1.5
 GRACE_S = 0.5
 # A program that outlives its test by far: past the deadlines below, it was not stopped.
 FOREVER = "sleep 300"
+# What Snakemake puts before the command of a job whose shell is named bash, as the limited
+# shell is.
+SNAKEMAKES_PREFIX = "set -euo pipefail; "
 
 
 def alive(pid: int) -> bool:
@@ -155,6 +159,33 @@ def test_children_that_left_the_group_and_ignore_sigterm_share_one_grace(tmp_pat
     assert seconds < 0.5 + GRACE_S + 1.0
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_daemons_that_detach_again_and_again_are_stopped_together_under_one_grace(tmp_path):
+    """A daemon that detaches twice and more: each level starts the next in a session of its
+    own and stays, ignoring SIGTERM, so that a level becomes an orphan of the job only once
+    the level above it has ended. Every level is stopped, however deep, and all under one
+    grace, not one grace per level."""
+    written = tmp_path / "pids"
+    levels = 7
+    level = tmp_path / "level.sh"
+    level.write_text(
+        f"trap '' TERM; echo $$ >> {written}\n"
+        f'if [ "$1" -gt 1 ]; then setsid bash {level} $(($1 - 1)) & fi\n'
+        f"exec {FOREVER}\n"
+    )
+    # The program ends once every level has started.
+    program = (
+        f"setsid bash {level} {levels} & "
+        f"until [ $(cat {written} 2>/dev/null | wc -l) -ge {levels} ]; do sleep 0.05; done"
+    )
+    status, seconds = timed(["bash", "-c", program], limit_s=10)
+    assert status == 0
+    daemons = pids(written)
+    assert len(daemons) == levels
+    assert not [pid for pid in daemons if alive(pid)]
+    assert seconds < GRACE_S + 2.0
+
+
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
@@ -166,12 +197,51 @@ def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     )
 
 
-def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does():
-    """bash, and Snakemake's prefix for it: a failing step of a pipe fails the command."""
-    shell = limited_shell("echo ok; false | true; echo not reached", "10", stdout=subprocess.PIPE)
-    out, _ = shell.communicate(timeout=30)
-    assert out == "ok\n"
-    assert shell.returncode == 1
+# Snakemake writes a command longer than 64 KB to a script, which the job's shell runs with
+# Snakemake's own bash (snakemake.shell.MAX_ARG_LEN): a no-op of 70 KB makes a command longer.
+LONG = f": {'x' * 70_000}; "
+
+
+def as_snakemake_runs(command: str, limit: str, tmp_path: Path, monkeypatch) -> int:
+    """``command`` run as Snakemake runs a job of an external estimator's (the limited shell
+    its resource ``shell_exec``, the limit in the environment the workflow sets): its exit
+    status."""
+    monkeypatch.setenv(timelimit.PYTHON_VARIABLE, sys.executable)
+    monkeypatch.setenv(timelimit.LIMIT_VARIABLE, limit)
+    monkeypatch.chdir(tmp_path)  # where Snakemake writes a long command's script
+    try:
+        snakemake_shell(command, resources={"shell_exec": timelimit.LIMITED_SHELL})
+    except subprocess.CalledProcessError as error:
+        return error.returncode
+    return 0
+
+
+@pytest.mark.parametrize("length", ["short", "over-64-KB"])
+def test_the_limited_shell_runs_a_command_as_snakemakes_bash_does(length, tmp_path, monkeypatch):
+    """bash, and Snakemake's prefix for it: a failing step of a pipe fails the command, long
+    or short; a long command the job's shell runs from the script Snakemake wrote."""
+    out = tmp_path / "out"
+    command = f"echo ok >> {out}; false | true; echo not reached >> {out}"
+    command = (LONG if length == "over-64-KB" else "") + command
+    assert as_snakemake_runs(command, "10", tmp_path, monkeypatch) == 1
+    assert out.read_text() == "ok\n"
+
+
+def test_a_command_over_64_kb_is_stopped_at_the_limit(tmp_path, monkeypatch):
+    start = time.monotonic()
+    assert as_snakemake_runs(LONG + FOREVER, "1", tmp_path, monkeypatch) == timelimit.EXPIRED
+    assert time.monotonic() - start < 1 + timelimit.GRACE_S
+
+
+def test_a_long_shell_call_of_a_script_job_runs_as_a_short_one(tmp_path, monkeypatch):
+    """A ``script:`` job's preamble makes the limited shell Snakemake's shell for the script's
+    own ``shell()`` calls: a long one of those runs from its script, under the limit, too."""
+    monkeypatch.setattr(snakemake_shell, "_process_args", {})
+    snakemake_shell.executable(timelimit.LIMITED_SHELL)
+    out = tmp_path / "out"
+    command = f"{LONG}echo ok >> {out}; false | true; echo not reached >> {out}"
+    assert as_snakemake_runs(command, "10", tmp_path, monkeypatch) == 1
+    assert out.read_text() == "ok\n"
 
 
 @pytest.mark.skipif(shutil.which("perl") is None, reason="no perl on this machine")
@@ -180,7 +250,7 @@ def test_a_writer_whose_reader_has_gone_ends_as_under_snakemakes_bash():
     restores it: a writer that does not check its writes (Perl's print, C's printf) piped into
     ``head`` then spins until the limit, and is named as running too long, where Snakemake's
     own shell ends it with SIGPIPE at once."""
-    writer = "perl -e '$| = 1; print qq(y\\n) while 1' | head -n 1"
+    writer = SNAKEMAKES_PREFIX + "perl -e '$| = 1; print qq(y\\n) while 1' | head -n 1"
     shell = limited_shell(writer, "20", stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     out, err = shell.communicate(timeout=60)
     assert (shell.returncode, out, err) == (128 + signal.SIGPIPE, "y\n", "")
@@ -193,11 +263,20 @@ def test_the_limited_shell_stops_its_command_and_says_so():
     assert "ran past the time limit of 1 s (jobs.external_time_limit_s)" in err
 
 
-def started(written: Path) -> None:
-    """Wait until the command has written its pid file ``written``: it has started."""
+def started(written: Path, processes: int = 1) -> None:
+    """Wait until the command has written ``processes`` pids to its pid file ``written``: they
+    have started."""
     deadline = time.monotonic() + 20
-    while not (written.exists() and written.read_text().strip()):
+    while not (written.exists() and len(written.read_text().split()) >= processes):
         assert time.monotonic() < deadline, "the command never started"
+        time.sleep(0.05)
+
+
+def end_within(processes: list[int], seconds: float) -> None:
+    """Wait until none of ``processes`` runs, failing the test past ``seconds``."""
+    deadline = time.monotonic() + seconds
+    while running := [pid for pid in processes if alive(pid)]:
+        assert time.monotonic() < deadline, f"{running} run on"
         time.sleep(0.05)
 
 
@@ -224,6 +303,109 @@ def test_the_limited_shell_stopped_from_outside_stops_what_it_ran(command, tmp_p
     assert shell.wait(timeout=30) == 128 + signal.SIGTERM
     (process,) = pids(written)
     assert not alive(process)
+
+
+# A writer and a reader that never reads, each writing its pid: the writer fills the pipe and
+# waits on it, as a program whose consumer has stopped reading does.
+PIPE_NOBODY_READS = (
+    f"(echo $BASHPID >> {{written}}; exec yes) | (echo $BASHPID >> {{written}}; exec {FOREVER})"
+)
+
+
+@pytest.mark.parametrize(
+    ("command", "processes"),
+    [
+        (f"echo $$ > {{written}}; {FOREVER}", 1),
+        (PIPE_NOBODY_READS, 2),
+        pytest.param(
+            f"setsid {FOREVER} & echo $! > {{written}}; {FOREVER}",
+            1,
+            marks=pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid"),
+        ),
+    ],
+    ids=["its-group", "a-writer-into-a-pipe-nobody-reads", "a-child-that-left-the-group"],
+)
+def test_the_program_is_stopped_when_its_limited_shell_is_killed(command, processes, tmp_path):
+    """Snakemake kills a job's shell with SIGKILL, which nothing can catch, when another job
+    of its ``pipe()`` group fails (and so may anyone): what the shell ran does not run on
+    without a limit, a writer waiting on a pipe its reader no longer reads among them."""
+    written = tmp_path / "pids"
+    shell = limited_shell(command.format(written=written), "60")
+    started(written, processes)
+    shell.kill()
+    assert shell.wait(timeout=30) == -signal.SIGKILL
+    end_within(pids(written), timelimit.GRACE_S + 5)
+
+
+# Two limited jobs joined by a pipe(): the producer writes, then works on (sleeps) past its
+# consumer, which fails; Snakemake then kills the producer's shell with SIGKILL.
+PIPE_GROUP = """
+import os, sys
+from jointbench.running import timelimit
+os.environ[timelimit.LIMIT_VARIABLE] = "60"
+os.environ[timelimit.PYTHON_VARIABLE] = sys.executable
+
+rule all:
+    input: "consumed"
+
+rule produce:
+    output: pipe("stream")
+    resources: shell_exec=timelimit.LIMITED_SHELL
+    shell: "echo $$ > producer; echo data > {output}; exec sleep 300"
+
+rule consume:
+    input: "stream"
+    output: "consumed"
+    resources: shell_exec=timelimit.LIMITED_SHELL
+    shell: "cat {input} > /dev/null; sleep 0.5; exit 1"
+"""
+
+
+def test_a_job_of_a_failed_pipe_group_is_stopped_with_its_shell(tmp_path):
+    """Snakemake runs the jobs of a ``pipe()`` group together and, when one fails, kills the
+    others' shells with SIGKILL: their programs end with them rather than run on, without a
+    limit, past the run."""
+    (tmp_path / "Snakefile").write_text(PIPE_GROUP)
+    # To a file: a program that runs on would hold a pipe's end, and the test, open.
+    log = tmp_path / "log"
+    with log.open("w") as written:
+        run = subprocess.run(
+            [SNAKEMAKE, "all", "-j2", "-d", tmp_path, "-s", tmp_path / "Snakefile"],
+            stdout=written,
+            stderr=subprocess.STDOUT,
+            timeout=120,
+        )
+    assert run.returncode == 1, log.read_text()
+    assert "Error in rule consume" in log.read_text()
+    end_within(pids(tmp_path / "producer"), timelimit.GRACE_S + 5)
+
+
+def test_a_program_that_kills_the_process_that_limits_it_is_stopped(tmp_path):
+    """The program's parent is the process that holds it to the limit: killed with SIGKILL,
+    by the program or anyone, the limited shell adopts what it ran, and stops it."""
+    written = tmp_path / "pids"
+    shell = limited_shell(f"echo $$ > {written}; kill -KILL $PPID; {FOREVER}", "60")
+    assert shell.wait(timeout=30) == 128 + signal.SIGKILL
+    end_within(pids(written), 5)
+
+
+def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monkeypatch):
+    """Ctrl-C or a cancel just as the wait for the keeper returns: the keeper has ended and
+    been waited for, and the limited shell ends with the stop's status, not a traceback."""
+    keeper = os.fork()
+    if keeper == 0:  # the child: a keeper whose job is done
+        os._exit(0)
+    waits = []
+    wait = os.waitpid
+
+    def waited_then_stopped(pid: int, options: int):
+        waits.append(wait(pid, options))
+        if len(waits) == 1:
+            raise timelimit.Interrupted(signal.SIGINT)
+        return waits[-1]
+
+    monkeypatch.setattr(timelimit.os, "waitpid", waited_then_stopped)
+    assert timelimit._wait_for_the_keeper(keeper) == 128 + signal.SIGINT
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
@@ -285,7 +467,7 @@ def test_a_program_that_sets_the_terminal_runs_as_it_would_without_the_limit():
 
 def test_a_program_that_reads_the_terminal_fails_at_once_rather_than_at_the_limit():
     """Reading the terminal (SIGTTIN) would stop it until the limit too: the read fails."""
-    status, seconds, written = on_a_terminal("read answer; echo answered", "20")
+    status, seconds, written = on_a_terminal(SNAKEMAKES_PREFIX + "read answer; echo answered", "20")
     assert status == 1 and "answered" not in written
     assert seconds < 10
 

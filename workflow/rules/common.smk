@@ -51,7 +51,7 @@ def studies_listing(estimator):
 
 
 # Every job of an external estimator runs under one time limit (limit_user_jobs): the shell it
-# is run by (jointbench/running/limited_shell) reads it, and the interpreter it runs on, here.
+# is run by (jointbench/running/limited/bash) reads it, and the interpreter it runs on, here.
 TIME_LIMIT_S = timelimit.configured_limit(config)
 os.environ[timelimit.LIMIT_VARIABLE] = repr(TIME_LIMIT_S)
 os.environ[timelimit.PYTHON_VARIABLE] = PYTHON

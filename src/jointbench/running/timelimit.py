@@ -1,10 +1,10 @@
 """The time limit of an external estimator's job: its program, whatever its language, runs in a
-process group of its own and is stopped, the whole group with it, once the run's limit
+process group of its own and is stopped, with every process it started, once the run's limit
 (``jobs.external_time_limit_s``) has passed.
 
 Snakemake sets no time limit on a local job, so the workflow gives every rule of the user's the
 resource ``shell_exec`` (workflow/rules/common.smk): Snakemake then runs the job's command,
-``shell:`` or ``script:``, as ``limited_shell -c COMMAND`` (the file beside this one), which
+``shell:`` or ``script:``, as ``limited/bash -c COMMAND`` (the folder beside this file), which
 runs this file with the project's interpreter. It reads the limit from the environment the
 workflow sets when it loads, so that every job of a run has the same, and it imports nothing
 but the standard library: it starts before the user's program, for every job.
@@ -30,27 +30,27 @@ from pathlib import Path
 #: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
 KEY = "jobs.external_time_limit_s"
 #: The environment variables the workflow sets when it loads: the limit [s] and the interpreter
-#: that runs this file (``limited_shell``).
+#: that runs this file (:data:`LIMITED_SHELL`).
 LIMIT_VARIABLE = "JOINTBENCH_TIME_LIMIT_S"
 PYTHON_VARIABLE = "JOINTBENCH_PYTHON"
-#: The shell ``shell_exec`` names, beside this file.
-LIMITED_SHELL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "limited_shell")
+#: The shell ``shell_exec`` names, in a folder beside this file: named bash, as Snakemake gives
+#: its prefix (``set -euo pipefail; ``) to a shell of that name alone, and to the script it
+#: writes for a command longer than a command line may be (64 KB) too.
+LIMITED_SHELL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "limited", "bash")
 #: The exit status of a command the limit stopped (GNU ``timeout``'s).
 EXPIRED = 124
 #: Seconds a stopped group has between SIGTERM (to write what it must, or clean up) and SIGKILL.
 GRACE_S = 5.0
-#: Snakemake's own prefix of a bash command, which it gives only a shell named ``bash``: the
-#: command of a limited job fails at its first failing step, as every other job's does.
-BASH_PREFIX = "set -euo pipefail; "
 # How often a stopped group is looked at [s], and how long a killed one is waited for [s].
 _POLL_S = 0.05
 _KILLED_S = 2.0
-# How many rounds of processes that left the command's group are stopped at most.
-_STRAY_ROUNDS = 5
 # The signals Python ignores for itself, which a command would inherit ignored: a writer to a
 # pipe whose reader has gone would fail its writes rather than end, and one that does not check
 # them would spin until the limit. Restored, as subprocess and a shell do.
 _RESTORED_SIGNALS = (signal.SIGPIPE, signal.SIGXFSZ)
+# The signals that stop the limited shell from outside: Ctrl-C, a closed terminal, Snakemake
+# cancelling the job or ending.
+_STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
 # prctl(2)'s option that makes a process the reaper of its descendants' orphans.
 _PR_SET_CHILD_SUBREAPER = 36
 # prctl(2)'s option that sends this process a signal when its parent ends.
@@ -92,12 +92,12 @@ def _adopt_orphans() -> None:
     _prctl(_PR_SET_CHILD_SUBREAPER, 1)
 
 
-def _end_with_the_run() -> None:
-    """Be told with SIGTERM when the process that started this one (Snakemake) ends (Linux):
-    a run killed with SIGKILL then stops the command here rather than leave it running
-    without a limit. This process stays in the run's process group, which Ctrl-C and a
+def _end_with_the_run(parent: int) -> None:
+    """Be told with SIGTERM when ``parent``, the process that started this one, ends (Linux),
+    even killed with SIGKILL: the limited shell is told when Snakemake ends, and stops the
+    command rather than leave it running without a limit; the keeper is told when the
+    limited shell ends. The limited shell stays in the run's process group, which Ctrl-C and a
     closed terminal signal, and passes those on (:func:`main`)."""
-    parent = os.getppid()
     _prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
     if os.getppid() != parent:  # it ended before it could tell
         raise Interrupted(signal.SIGTERM)
@@ -142,10 +142,6 @@ class _Group:
         self.reap()
         return self.status is not None
 
-    def ended(self, within_s: float) -> bool:
-        """Whether the whole group ends within ``within_s`` [s]."""
-        return _all_ended([self], within_s)
-
 
 def _until(done, within_s: float) -> bool:
     """Whether ``done()`` is true within ``within_s`` [s], asked every :data:`_POLL_S`."""
@@ -158,32 +154,66 @@ def _until(done, within_s: float) -> bool:
         time.sleep(_POLL_S)
 
 
-def _all_ended(groups: Sequence[_Group], within_s: float) -> bool:
-    """Whether every process of ``groups`` ends within ``within_s`` [s], each group's ended
-    processes that are this process's children reaped as they end."""
+def _descendants() -> list[int]:
+    """The pids of every process descended from this one, at every remove (Linux's ``/proc``;
+    none known elsewhere). A process that left its group, or its session, is still a
+    descendant; one whose parent ended is this process's child (``_adopt_orphans``)."""
+    found = []
+    parents = [os.getpid()]
+    while parents:
+        for task in Path(f"/proc/{parents.pop()}/task").glob("*/children"):
+            with contextlib.suppress(OSError):
+                children = [int(pid) for pid in task.read_text().split()]
+                found += children
+                parents += children
+    return found
 
-    def ended() -> bool:
-        for group in groups:
-            group.reap()
-        return not any(group_alive(group.leader) for group in groups)
 
-    return _until(ended, within_s)
+def _reap_children() -> None:
+    """Reap every ended child of this process (an adopted orphan among them)."""
+    with contextlib.suppress(ChildProcessError):
+        while os.waitid(os.P_ALL, 0, os.WEXITED | os.WNOHANG) is not None:
+            pass
 
 
-def _stop_groups(groups: Sequence[_Group], grace_s: float) -> None:
-    """Stop every process of ``groups`` at once: SIGTERM to each, up to ``grace_s`` [s] for
-    them all to end, then SIGKILL to whatever is left, a process that ignores SIGTERM or a
-    child a leader left behind. One grace for all: groups stopped one after another would
-    hold the job a grace for each that ignores SIGTERM."""
-    for group in groups:
-        _signal_group(group.leader, signal.SIGTERM)
-    if _all_ended(groups, grace_s):
+def _signal_descendants(group: int | None, signum: int) -> None:
+    """Send ``signum`` to every descendant of this process and to the command's process
+    ``group`` (if any; where no descendant is known, it is the job)."""
+    if group is not None:
+        _signal_group(group, signum)
+    for pid in _descendants():
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signum)
+
+
+def _none_left(group: int | None) -> bool:
+    """Whether the job has ended: no descendant of this process (its ended children reaped)
+    and no process in the command's process ``group`` (if any)."""
+    _reap_children()
+    return not _descendants() and (group is None or not group_alive(group))
+
+
+def _stop_descendants(group: int | None, grace_s: float) -> None:
+    """Stop every process of the job: every descendant of this process, however many times
+    removed and whatever group or session it started (a daemon that detached, and one that
+    its daemon detached in turn), and the command's process ``group``, all at once: SIGTERM
+    to each, up to ``grace_s`` [s] for them all to end, then SIGKILL to whatever is left,
+    listed again until none is (a process started in between is listed the next time). One
+    grace for all: levels stopped one after another would hold the job a grace for each
+    that ignores SIGTERM."""
+    if _none_left(group):
         return
-    for group in groups:
-        _signal_group(group.leader, signal.SIGKILL)
+    _signal_descendants(group, signal.SIGTERM)
+    if _until(lambda: _none_left(group), grace_s):
+        return
+
+    def killed() -> bool:
+        _signal_descendants(group, signal.SIGKILL)
+        return _none_left(group)
+
     # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
     # disk) is past any signal's reach, and the job ends without it.
-    _all_ended(groups, _KILLED_S)
+    _until(killed, _KILLED_S)
 
 
 def _signal_group(group: int, signum: int) -> None:
@@ -197,9 +227,10 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     """Run ``argv`` in a process group of its own for at most ``limit_s`` [s]:
     its exit status (negative: the signal that ended it), or None when the limit stopped it.
     Whatever of it is still running when it ends, is stopped or is stopped from outside
-    (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_what_is_left`): nothing
+    (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_descendants`): nothing
     of the job outlives it. This process becomes the reaper of the command's orphans
-    (``_adopt_orphans``)."""
+    (``_adopt_orphans``), and every process descended from it is taken as the job's: it
+    runs nothing else (the keeper, :func:`_keep`)."""
     _adopt_orphans()
     spawned = os.posix_spawnp(
         argv[0], list(argv), os.environ, setpgroup=0, setsigdef=_RESTORED_SIGNALS
@@ -208,39 +239,10 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     try:
         ended = group.wait(limit_s)
     except BaseException:
-        _stop_what_is_left(group, grace_s)
+        _stop_descendants(group.leader, grace_s)
         raise
-    _stop_what_is_left(group, grace_s)
+    _stop_descendants(group.leader, grace_s)
     return group.status if ended else None
-
-
-def _children() -> list[int]:
-    """The pids of this process's children (Linux's ``/proc``; none known elsewhere)."""
-    found = []
-    for task in Path("/proc/self/task").glob("*/children"):
-        with contextlib.suppress(OSError):
-            found += [int(pid) for pid in task.read_text().split()]
-    return found
-
-
-def _stop_what_is_left(group: _Group, grace_s: float) -> None:
-    """Stop what is left of the command started as ``group``: its group's processes, and the
-    processes that left it (``setsid``, a daemon that detached) whose parent there has ended,
-    which are this process's children (``_adopt_orphans``), all at once
-    (:func:`_stop_groups`); then, round by round, the children that stopping those left
-    (a child that left its group in turn). A few rounds, as one that cannot end (a read of
-    a dead disk) is past any signal's reach."""
-    groups = [] if group.ended(0) else [group]
-    for _ in range(_STRAY_ROUNDS):
-        strays = set()
-        for child in _children():
-            with contextlib.suppress(ProcessLookupError):
-                strays.add(os.getpgid(child))
-        groups += [_Group(leader) for leader in sorted(strays - {group.leader})]
-        if not groups:
-            return
-        _stop_groups(groups, grace_s)
-        groups = []
 
 
 #: The longest limit [s], a week: a cluster's longest partitions allow about that, and a longer
@@ -299,7 +301,8 @@ def stopped_line(limit_s: float) -> str:
     """What the limited shell says on its stderr when the limit stopped its command."""
     return (
         f"jointbench: the job's program ran past the time limit of {_seconds(limit_s)} ({KEY}): "
-        f"its process group was stopped (SIGTERM, then SIGKILL after {_seconds(GRACE_S)})"
+        f"it was stopped with every process it started (SIGTERM, then SIGKILL after "
+        f"{_seconds(GRACE_S)})"
     )
 
 
@@ -309,8 +312,8 @@ def expired_message(rule: str, wildcards: Mapping[str, str], limit_s: float) -> 
     job = ", ".join(f"{name}={value}" for name, value in wildcards.items())
     return (
         f"rule {rule}{f' ({job})' if job else ''}: its program ran past the time limit of "
-        f"{_seconds(limit_s)} for a job of an external estimator and was stopped, its whole "
-        f"process group with it; if it needs longer, raise {KEY} in the config"
+        f"{_seconds(limit_s)} for a job of an external estimator and was stopped, with every "
+        f"process it started; if it needs longer, raise {KEY} in the config"
     )
 
 
@@ -322,20 +325,25 @@ def runtime_minutes(limit_s: float) -> int:
 
 
 def _interrupt(signum: int, _frame: object) -> None:
+    # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
+    for each in _STOP_SIGNALS:
+        signal.signal(each, signal.SIG_IGN)
     raise Interrupted(signum)
 
 
 def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
-    """``limited_shell -c COMMAND``: COMMAND run by bash under the limit in ``environ``."""
-    if len(argv) != 2 or argv[0] != "-c":
-        print(f"usage: {LIMITED_SHELL} -c COMMAND (got {list(argv)!r})", file=sys.stderr)
-        return 2
+    """``limited/bash ARGUMENTS``: bash run with ``ARGUMENTS`` (``-c COMMAND``, or a script
+    Snakemake wrote for a command too long for a command line) under the limit in
+    ``environ``, by a keeper (:func:`_keep`) in a process group of its own, which this
+    process waits for. Whichever of the two is killed, even with SIGKILL, the other stops
+    the job: the keeper is told when this process ends (``_end_with_the_run``), and this
+    process adopts and stops what a killed keeper leaves."""
     try:
         limit = limit_from(environ)
     except ValueError as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
-    for signum in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+    for signum in _STOP_SIGNALS:
         signal.signal(signum, _interrupt)
     # The command's group of its own is out of the terminal's foreground: the stops that
     # brings (setting the terminal, reading it) would hold a program until the limit and have
@@ -344,14 +352,74 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     for signum in (signal.SIGTTOU, signal.SIGTTIN):
         signal.signal(signum, signal.SIG_IGN)
     try:
-        _end_with_the_run()
-        status = run_limited(["bash", "-c", BASH_PREFIX + argv[1]], limit)
+        _end_with_the_run(os.getppid())
+    except Interrupted as stopped:
+        return 128 + stopped.signum
+    _adopt_orphans()
+    shell = os.getpid()
+    # Held until each process is ready to pass a stop on: one arriving between the fork and
+    # the wait would end this process without stopping the keeper, and the keeper before it
+    # knows its parent.
+    signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    keeper = os.fork()
+    if keeper == 0:
+        _exit_keeping(argv, limit, shell)
+    return _wait_for_the_keeper(keeper)
+
+
+def _exit_keeping(argv: Sequence[str], limit_s: float, shell: int) -> None:
+    """End the forked keeper with :func:`_keep`'s status, never returning into the code of
+    the process it was forked from (a programming error's traceback printed first)."""
+    status = 70  # EX_SOFTWARE: the keeper itself failed
+    try:
+        status = _keep(argv, limit_s, shell)
+    except BaseException:
+        sys.excepthook(*sys.exc_info())
+    finally:
+        sys.stderr.flush()
+        os._exit(status)
+
+
+def _keep(argv: Sequence[str], limit_s: float, shell: int) -> int:
+    """The keeper: runs bash with ``argv`` under ``limit_s`` [s] (:func:`run_limited`), in a
+    process group of its own, apart from the run's, so that a SIGKILL to the run's group
+    (or to the limited shell alone, ``shell``: Snakemake kills the jobs of a ``pipe()`` group
+    so when one fails) leaves it to stop the job: its exit status, as a shell's."""
+    try:
+        os.setpgid(0, 0)
+        _end_with_the_run(shell)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
+        status = run_limited(["bash", *argv], limit_s)
     except Interrupted as stopped:
         return 128 + stopped.signum
     if status is None:
-        print(stopped_line(limit), file=sys.stderr)
+        print(stopped_line(limit_s), file=sys.stderr)
         return EXPIRED
+    return _as_a_shell(status)
+
+
+def _as_a_shell(status: int) -> int:
+    """A process's exit ``status`` (negative: the signal that ended it) as a shell gives it
+    (128 + the signal)."""
     return 128 - status if status < 0 else status
+
+
+def _wait_for_the_keeper(keeper: int) -> int:
+    """The keeper's exit status, as a shell's; when this process is told to stop, the
+    keeper is, and is waited for while it stops the job. Whatever a keeper killed from
+    outside left (its orphans are this process's) is stopped then."""
+    try:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
+        _, waited = os.waitpid(keeper, 0)
+        status = _as_a_shell(os.waitstatus_to_exitcode(waited))
+    except Interrupted as stopped:
+        # The keeper may have ended, and been waited for, just before the stop came.
+        with contextlib.suppress(ProcessLookupError, ChildProcessError):
+            os.kill(keeper, signal.SIGTERM)
+            os.waitpid(keeper, 0)
+        status = 128 + stopped.signum
+    _stop_descendants(None, GRACE_S)
+    return status
 
 
 if __name__ == "__main__":
