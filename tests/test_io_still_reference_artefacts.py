@@ -383,6 +383,26 @@ def test_a_still_reference_that_moves_is_still_refused_as_moving(treadmill, moti
     assert where in message, message
 
 
+def every_third_frame(n_frames, by):
+    """A displacement of ``by`` ``(3,)`` [mm] in every third row, none in the others
+    ``(n_frames, 3)``: a mount that vibrates."""
+    return (np.arange(n_frames) % 3 == 0)[:, None] * np.asarray(by, float)
+
+
+@pytest.mark.parametrize("size", [6.0, 20.0])
+def test_a_reference_moving_together_in_every_third_frame_is_refused_as_moving(treadmill, size):
+    """The whole treadmill displaced 6 or 20 mm in every third frame, a hundred times in the
+    trial: no sample of a marker is held in the next, but every marker moves with the others,
+    which keeps the cluster's shape, so the screen cannot see it as a marker's bump. Motion the
+    capture followed, refused as it was before stillness was held over two samples."""
+    with pytest.raises(ValueError) as error:
+        fit_still(moved(treadmill, every_third_frame(treadmill.n_frames, (size, 0.0, 0.0))))
+    message = str(error.value)
+    assert "and they move in the lab: " in message, message
+    held = r"TM\d lies [\d.]+ mm or more from its median position in frame \d+ \("
+    assert re.search(held, message), message
+
+
 @pytest.mark.parametrize("suffix", [".c3d", ".trc", ".csv"])
 def test_jointbench_fit_keeps_a_still_reference_bumped_in_one_frame(
     tmp_path, capsys, treadmill, suffix

@@ -156,6 +156,53 @@ def test_a_diagnostic_names_the_columns_it_records():
         _study(diagnostics={"LS": _spread})
 
 
+def test_a_plain_function_diagnostic_is_told_what_to_write():
+    with pytest.raises(ValueError, match=r"write Diagnostic\(columns, diagnose\)"):
+        _study(diagnostics={"LS": _spread})
+
+
+def test_a_diagnostic_s_columns_given_as_one_string_are_refused_naming_it():
+    """``Diagnostic("spread_mm", f)`` would declare the columns s, p, r, ...: refused, saying
+    how to write one column."""
+    with pytest.raises(
+        ValueError,
+        match=r"'gh': the diagnostic of LS declares its columns as the string 'spread_mm'; "
+        r"write them as a tuple of names: \('spread_mm',\)",
+    ):
+        _study(diagnostics={"LS": Diagnostic("spread_mm", _spread)})
+
+
+def _overwriting(arguments, results, truth):
+    return [{"status": "ok", "error_mm": 0.0} for _ in results]
+
+
+def test_a_diagnostic_declaring_a_column_the_estimate_job_writes_is_a_mistake(newcomer):
+    """A diagnostic's ``status`` or ``error_mm`` would replace the estimator's own in each row,
+    silently: the job stops naming the columns."""
+    newcomer(_study(diagnostics={"LS": Diagnostic(("status", "error_mm"), _overwriting)}))
+    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
+    with pytest.raises(
+        ProgrammingError,
+        match=r"^gh LS: its diagnostic _overwriting declares the columns status, error_mm, "
+        r"which the estimate job writes itself",
+    ):
+        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+
+
+class _Spreads:
+    """A diagnostic that is a callable object, with no ``__name__``."""
+
+    def __call__(self, arguments, results, truth):
+        return _spread(arguments, results, truth)
+
+
+def test_a_callable_diagnostic_writing_an_undeclared_column_is_named_by_its_repr(newcomer):
+    newcomer(_study(diagnostics={"LS": Diagnostic(("spread",), _Spreads())}))
+    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
+    with pytest.raises(ProgrammingError, match=r"writes the columns spread_mm, which it does not"):
+        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+
+
 def test_the_cmc_study_owns_paper_a_local_minimum_diagnostic():
     cmc = studies.get_study("cmc")
     assert set(cmc.diagnostics) == {"IS"}

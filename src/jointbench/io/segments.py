@@ -157,8 +157,15 @@ def lab_motion(markers: np.ndarray) -> tuple[float, int, int, int]:
     by a tilt of the pose) the frame is kept in the fit with that error, as any cluster's
     frame the screen does not flag, and where it is over, it is flagged and left out or
     refused by the artefact policy. The median, not the mean, so that a displacement held
-    for a few frames counts at its full size wherever it falls."""
-    distances = np.linalg.norm(markers - np.nanmedian(markers, axis=0), axis=-1)
+    for a few frames counts at its full size wherever it falls.
+
+    The screen sees only what changes the cluster's shape, so the displacement the markers
+    share in a sample (their mean, over those seen in it) counts in every sample, held or not:
+    a mount displaced in every third frame keeps the shape, and moves. Where it is the
+    largest, the marker farthest in that sample is named, with its row once; the shared
+    displacement is no farther than that marker lies."""
+    displacements = markers - np.nanmedian(markers, axis=0)
+    distances = np.linalg.norm(displacements, axis=-1)
     farthest = (-1.0, 0, 0, 0)
     for column in range(distances.shape[1]):
         rows = np.flatnonzero(np.isfinite(distances[:, column]))
@@ -168,6 +175,13 @@ def lab_motion(markers: np.ndarray) -> tuple[float, int, int, int]:
         if held[k] > farthest[0]:
             last = rows[k + 1] if rows.size > 1 else rows[k]
             farthest = (float(held[k]), column, int(rows[k]), int(last))
+    seen_rows = np.flatnonzero(np.isfinite(distances).any(axis=1))
+    shared = np.linalg.norm(np.nanmean(displacements[seen_rows], axis=1), axis=-1)
+    k = int(np.argmax(shared))
+    if shared[k] > farthest[0]:
+        row = int(seen_rows[k])
+        column = int(np.nanargmax(distances[row]))
+        farthest = (float(shared[k]), column, row, row)
     return farthest
 
 

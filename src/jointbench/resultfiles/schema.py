@@ -51,6 +51,7 @@ __all__ = [
     "check_estimates",
     "check_not_negative",
     "check_scores",
+    "estimates_columns",
     "recorded_columns",
     "required_columns",
 ]
@@ -132,16 +133,21 @@ def required_columns(kind: str, condition_keys: Sequence[str]) -> dict[str, tupl
     }
 
 
+def estimates_columns(kind: str, condition_keys: Sequence[str]) -> tuple[str, ...]:
+    """Every column the estimate job writes itself into an estimates file of ``kind`` with
+    ``condition_keys``: what it carries (:func:`required_columns`) and may carry
+    (:data:`OPTIONAL_COLUMNS`: the scores the benchmark computes, a covariance, a fitted
+    radius)."""
+    return (*required_columns(kind, condition_keys), *OPTIONAL_COLUMNS[kind])
+
+
 def recorded_columns(spec: Study) -> tuple[str, ...]:
     """Every column the collected results of study ``spec`` may hold from its own estimators,
-    each once: per kind it runs, what an estimates file of that kind carries
-    (:func:`required_columns`, with its grid keys) and may carry (:data:`OPTIONAL_COLUMNS`: the
-    scores the benchmark computes, a covariance, a fitted radius), then the columns of its
-    diagnostics (:attr:`~jointbench.simulate.Diagnostic.columns`). An external estimator's own
-    extra columns are no study's."""
-    by_kind = (
-        (*required_columns(kind, spec.grid_keys), *OPTIONAL_COLUMNS[kind]) for kind in spec.kinds
-    )
+    each once: per kind it runs, what the estimate job writes itself (:func:`estimates_columns`,
+    with its grid keys), then the columns of its diagnostics
+    (:attr:`~jointbench.simulate.Diagnostic.columns`). An external estimator's own extra
+    columns are no study's."""
+    by_kind = (estimates_columns(kind, spec.grid_keys) for kind in spec.kinds)
     diagnosed = (check.columns for check in spec.diagnostics.values())
     return tuple(dict.fromkeys(column for columns in (*by_kind, *diagnosed) for column in columns))
 

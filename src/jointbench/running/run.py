@@ -32,7 +32,7 @@ from jointbench.resultfiles.parquet import (
     write_poses_blocks,
     write_table,
 )
-from jointbench.resultfiles.schema import check_estimates
+from jointbench.resultfiles.schema import check_estimates, estimates_columns
 from jointbench.running.scoring import proximal_at_frame0, score
 from jointbench.simulate import Diagnostic, Trials
 
@@ -192,7 +192,8 @@ def estimate_table(
         extras = [{}] * trials.n_trials
         if diagnose:
             arrays = tuple(trials.segments[name] for name in segments)
-            extras = _diagnosed(diagnose, arrays, [row[0] for row in fitted], trials.truth)
+            written = estimates_columns(kind, spec.grid_keys)
+            extras = _diagnosed(diagnose, written, arrays, [row[0] for row in fitted], trials.truth)
     frame0 = proximal_at_frame0(trials.segments, spec.segments)
     rows = []
     for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
@@ -216,17 +217,27 @@ def estimate_table(
     return table
 
 
-def _diagnosed(check: Diagnostic, arguments, results, truth) -> list[dict[str, object]]:
+def _diagnosed(
+    check: Diagnostic, written: Sequence[str], arguments, results, truth
+) -> list[dict[str, object]]:
     """The rows of ``check`` (:class:`~jointbench.simulate.Diagnostic`) for one condition's
-    trials; :class:`~jointbench.estimators.batching.ProgrammingError` naming a column it does
-    not declare, which a claim could not select as one its study records."""
+    trials; :class:`~jointbench.estimators.batching.ProgrammingError` naming a column it
+    declares among those the estimate job writes itself (``written``: its rows would replace
+    the estimator's status or score), or one it writes and does not declare, which a claim
+    could not select as one its study records."""
+    name = getattr(check.diagnose, "__name__", repr(check.diagnose))
+    taken = [column for column in check.columns if column in written]
+    if taken:
+        raise ProgrammingError(
+            f"its diagnostic {name} declares the columns {', '.join(taken)}, which the "
+            "estimate job writes itself; name its own columns otherwise"
+        )
     rows = check.diagnose(arguments, results, truth)
     undeclared = sorted({column for row in rows for column in row} - set(check.columns))
     if undeclared:
         raise ProgrammingError(
-            f"its diagnostic {check.diagnose.__name__} writes the columns "
-            f"{', '.join(undeclared)}, which it does not declare (it declares "
-            f"{', '.join(check.columns) or 'none'})"
+            f"its diagnostic {name} writes the columns {', '.join(undeclared)}, which it does "
+            f"not declare (it declares {', '.join(check.columns) or 'none'})"
         )
     return rows
 

@@ -233,8 +233,17 @@ class Study:
         if loose:
             raise ValueError(
                 f"study {self.name!r}: the diagnostics of {', '.join(loose)} must each be a "
-                "Diagnostic, which names the columns it records"
+                "Diagnostic, which names the columns it records: write Diagnostic(columns, "
+                "diagnose) (jointbench.simulate), columns a tuple of names"
             )
+        for method, check in self.diagnostics.items():
+            # A string is a sequence of its letters: each would be a column it declares.
+            if isinstance(check.columns, str):
+                raise ValueError(
+                    f"study {self.name!r}: the diagnostic of {method} declares its columns as "
+                    f"the string {check.columns!r}; write them as a tuple of names: "
+                    f"({check.columns!r},)"
+                )
         if self.grid_spec and tuple(self.grid_spec) != self.grid_keys:
             raise ValueError(
                 f"study {self.name!r}: grid_spec keys {tuple(self.grid_spec)} must be the grid "
