@@ -23,6 +23,7 @@ from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators import registry
 from jointbench.papers import get_paper, paper_names
+from jointbench.simulate import hip_sta
 
 
 @pytest.fixture(scope="module")
@@ -640,3 +641,22 @@ def test_a_noise_free_rotation_turning_a_marker_beyond_the_resolution_counts(con
     marker by about 0.02 mm moves, one by 0.005 mm does not (the case in BAD)."""
     quiet = {"noise_mm": 0.0, "cross_swing_deg": 2e-3, "twist_deg": 0}
     study_config.check_config(changed(config, "hip", ("protocol",), quiet))
+
+
+def test_a_run_simulates_each_conditions_frame_count_once(config, monkeypatch):
+    """Opening a config checks it and then each named protocol's overlay over it; the frames of
+    a condition whose study the overlays leave as it was (the STA study's) are simulated once,
+    not once per overlay."""
+    monkeypatch.setattr(study_config, "_FRAMES", {}, raising=False)
+    simulated: list[int] = []
+    pelvis_frame = hip_sta.thigh_in_pelvis_frame
+
+    def counted(pelvis, thigh):
+        simulated.append(pelvis.shape[1])
+        return pelvis_frame(pelvis, thigh)
+
+    monkeypatch.setattr(hip_sta, "thigh_in_pelvis_frame", counted)
+    study_config.check_config(config)
+    assert config["sensitivity"]["named"], "no named overlay to check over the config"
+    study_config.named_overlays(config, ROOT)
+    assert len(simulated) == len(study_config.conditions(config, "hip_sta"))

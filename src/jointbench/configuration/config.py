@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import inspect
 import itertools
+import json
 from collections.abc import Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
@@ -377,14 +378,13 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
         return
     fewest = min(needs.values())
     frames_key = next((key for key, values in spec.grid_spec.items() if values.frames), None)
+    overrides = _canonical(settings.get("protocol"))
     for condition in _cells(spec, settings["grid"]):
-        try:
-            trials = spec.simulate(condition, protocol, [np.random.default_rng(0)])
-        except ValueError as error:
+        n_frames = _simulated_frames(spec, protocol, overrides, condition)
+        if isinstance(n_frames, ValueError):
             raise ValueError(
-                f"{where}.grid: condition {condition_id(condition)}: {error}"
+                f"{where}.grid: condition {condition_id(condition)}: {n_frames}"
             ) from None
-        n_frames = trials.segments[spec.segments[0]].shape[1]
         if n_frames < fewest:
             culprit = f"grid.{frames_key}" if frames_key else "protocol"
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())
@@ -392,6 +392,36 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
                 f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
                 f"{n_frames} frame(s), fewer than any listed estimator fits (at least: {listed})"
             )
+
+
+def _canonical(value: object) -> str:
+    """``value``, a config mapping or a condition, as text equal for equal values whatever
+    their keys' order."""
+    return json.dumps(value, sort_keys=True, default=repr)
+
+
+#: The frames of one simulated trial, by study (its name and object, which the entry holds so
+#: that its id is not another's), the config's protocol overrides and the condition
+#: (:func:`_canonical`): a run checks its config and then each named protocol's overlay over it
+#: (:func:`named_overlays`), which leave most studies' settings as they were, and a trial's
+#: frames are the same each time.
+_FRAMES: dict[tuple[str, int, str, str], tuple[Study, int | ValueError]] = {}
+
+
+def _simulated_frames(
+    spec: Study, protocol: object, overrides: str, condition: Mapping
+) -> int | ValueError:
+    """The frames of one trial of ``spec``'s ``condition`` simulated under ``protocol``, the
+    study's protocol of the config's ``overrides`` (:func:`_canonical`); the simulator's
+    ``ValueError`` where it refuses them."""
+    key = (spec.name, id(spec), overrides, _canonical(condition))
+    if key not in _FRAMES:
+        try:
+            trials = spec.simulate(condition, protocol, [np.random.default_rng(0)])
+            _FRAMES[key] = (spec, trials.segments[spec.segments[0]].shape[1])
+        except ValueError as error:
+            _FRAMES[key] = (spec, error)
+    return _FRAMES[key][1]
 
 
 def study_names(config: Mapping) -> list[str]:
