@@ -211,6 +211,30 @@ def test_smooth_soft_tissue_deformation_raises_no_swap(amplitude_mm, scale):
         assert _exchanges_found(markers) == ([], ())
 
 
+def _regular_polygon(n_markers: int, radius_mm: float = 100.0) -> np.ndarray:
+    """``n_markers`` at the corners of a regular polygon of circumradius ``radius_mm``, in the
+    xy plane ``(n, 3)`` [mm]: a cluster whose symmetry fits several exchanges alike."""
+    angle = 2.0 * np.pi * np.arange(n_markers) / n_markers
+    return radius_mm * np.c_[np.cos(angle), np.sin(angle), np.zeros(n_markers)]
+
+
+@pytest.mark.parametrize("n_markers", [4, 5, 6], ids=["square", "pentagon", "hexagon"])
+def test_a_swap_in_a_regular_polygon_is_listed_once_over_its_frames(n_markers):
+    """Each pair of a regular polygon's corners exchanged in rows 150 to 159: the swap that the
+    distance test finds explains the jumps where the labels change, so they raise no second
+    swap of the same pair (or one from the change back to the end of the trial). One swap,
+    of that pair, and exactly its frames flagged."""
+    body = _regular_polygon(n_markers)
+    labels = _labels(n_markers)
+    for i, j in combinations(range(n_markers), 2):
+        markers = _swapped(_moving(np.random.default_rng(1), body, 300, 0.3), i, j, 150, 160)
+        found = screening.screen(markers, labels, "m")
+        listed = [(s.labels, s.start, s.stop) for s in found.swaps]
+        assert listed == [((labels[i], labels[j]), 150, 160)], (i, j)
+        flagged = np.flatnonzero(screening.flagged_frames(found.artefacts, len(markers)))
+        assert flagged.tolist() == list(range(150, 160)), (i, j)
+
+
 def test_a_swap_that_keeps_an_isosceles_shape_is_found_through_its_jumps():
     """Markers 0 and 1 are the base of an isosceles triangle: exchanged, the shape is the same,
     and only the jump of each (30 mm) shows the swap. Both jump where the labels change and

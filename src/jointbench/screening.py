@@ -762,11 +762,25 @@ class Swap:
         bounds = sorted({0, self.start, self.stop, self.n_frames})
         return list(pairwise(bounds))
 
+    def changes(self) -> list[int]:
+        """The rows at which the labelling changes: ``start`` and ``stop``, where within the
+        trial."""
+        return [row for row in (self.start, self.stop) if 0 < row < self.n_frames]
+
+    def named(self) -> list[str]:
+        """Every label the swap may name, in its message's order: its pair's, then each of
+        its ``alternatives``'."""
+        return [label for pair in (self.labels, *self.alternatives) for label in pair]
+
+    def steps(self) -> set[tuple[str, int]]:
+        """The samples ``(label, row)`` that step where the labelling changes: each marker the
+        swap may name (:meth:`named`) at each of :meth:`changes`."""
+        return {(label, row) for label in self.named() for row in self.changes()}
+
     def describe(self, frames: Numbering) -> str:
         """One line naming the frames where the labels change and both sides, as ``frames``
         numbers them."""
         first, second = self.labels
-        changes = [row for row in (self.start, self.stop) if 0 < row < self.n_frames]
         sides = ", ".join(f"{frames.number(a)} to {frames.number(b - 1)}" for a, b in self.sides())
         which = f"{first} and {second}"
         if self.alternatives:
@@ -778,7 +792,8 @@ class Swap:
             )
         return (
             f"markers {which} exchange labels at "
-            f"{' and back at '.join(frames.name(row) for row in changes)}; frames {sides} are "
+            f"{' and back at '.join(frames.name(row) for row in self.changes())}; frames {sides} "
+            "are "
             "each labelled one consistent way and the data cannot tell which is right"
         )
 
@@ -1699,10 +1714,11 @@ def _screened(
         level = breaks[0].level_mm if breaks else _rigidity_level(misfit, rules)
         swaps = find_swaps(shape, markers, flagged, labels, level, exchanged, rules)
         flags = _named_by_swaps(flags, swaps, labels, broken)
-    # A jump that a flagged sample explains adds nothing, and would spoil the frame on its
-    # other side; jumps without one may be a swap that keeps the shape, which only time order
-    # shows.
-    explained = {(a.label, a.frame) for a in flags}
+    # A jump that a flagged sample or a found swap's change of labelling explains adds
+    # nothing, and would spoil the frame on its other side (or be taken for a second swap of
+    # the same pair); jumps without one may be a swap that keeps the shape, which only time
+    # order shows.
+    explained = {(a.label, a.frame) for a in flags}.union(*(swap.steps() for swap in swaps))
     jumps = [
         jump
         for jump in find_jumps(markers, labels, rules)
