@@ -145,10 +145,58 @@ def test_two_segments_name_the_array_with_the_swap():
     rng = np.random.default_rng(6)
     proximal, distal = _cluster(rng), _cluster(rng, rom_deg=60.0)
     distal[40:60, [0, 1]] = distal[40:60, [1, 0]]
-    named = r"^markers distal\[:, 0\] and distal\[:, 1\] exchange labels at frame 40 and back at "
+    named = r"^distal\[:, 0\] and distal\[:, 1\] exchange labels at frame 40 and back at "
     with pytest.raises(ValueError, match=named + "frame 60; ") as error:
         jointbench.fit_joint_center(proximal, distal)
     assert "proximal" not in str(error.value)
+
+
+@pytest.mark.parametrize(
+    ("labels", "one", "both", "listed"),
+    [
+        (
+            ("markers[:, 0]", "markers[:, 1]", "markers[:, 2]"),
+            "markers[:, 0]",
+            "markers[:, 0] and markers[:, 2]",
+            "markers[:, 0], markers[:, 1], markers[:, 2]",
+        ),
+        (
+            ("TM1", "TM2", "TM3"),
+            "marker TM1",
+            "markers TM1 and TM3",
+            "markers TM1, TM2, TM3",
+        ),
+    ],
+    ids=["array-columns", "names"],
+)
+def test_array_columns_name_themselves_where_names_follow_the_word_marker(
+    labels, one, both, listed
+):
+    """An array's column (``markers[:, 0]``) is named by an expression that already says it is
+    a marker, so no message puts "marker" before it ("markers markers[:, 0]"); a name (TM1)
+    keeps the word."""
+    frames = screening.Numbering()
+    jump = screening.Artefact("jump", labels[0], 5, 30.0, 20.0)
+    broken = screening.Artefact("rigidity", labels[0], 5, 9.0, 5.0)
+    exchanged = screening.Artefact("swap", labels[0], 5, 9.0, 5.0, labels[2])
+    swap = screening.Swap((labels[0], labels[2]), 5, 9, 20)
+    ambiguous = screening.Swap((labels[0], labels[2]), 5, 9, 20, ((labels[1], labels[2]),))
+    assert jump.describe(frames).startswith(f"{one} jumps 30.0 mm at frame 5")
+    assert broken.describe(frames).startswith(f"{one} leaves its cluster's rigid shape")
+    assert exchanged.describe(frames).startswith(f"{both} exchange labels at frame 5")
+    assert swap.describe(frames).startswith(f"{both} exchange labels at frame 5")
+    assert ambiguous.describe(frames).startswith(f"{both}, or {labels[1]} and {labels[2]} (")
+    flagged = [screening.Artefact("rigidity", label, 5, 9.0, 5.0) for label in labels]
+    assert screening.summarise(flagged, [], frames).endswith(f"frames 5 to 5, {listed}")
+    unseen = np.zeros((4, 3, 3))
+    unseen[:, 0] = np.nan
+    with pytest.raises(ValueError, match=re.escape(f"m: {one} is never visible")):
+        screening.typical_shape(unseen, labels, "m")
+    unseen = np.zeros((4, 3, 3))
+    unseen[[0, 1], 0] = np.nan
+    unseen[[2, 3], 1] = np.nan
+    with pytest.raises(ValueError, match=re.escape(f"m: {listed} are never all visible")):
+        screening.typical_shape(unseen, labels, "m")
 
 
 def _random_trial(rng):

@@ -114,7 +114,7 @@ def cases() -> dict[str, tuple[str, tuple[np.ndarray, ...]]]:
 def _artefacts(markers: np.ndarray, name: str) -> dict:
     """What the screen finds in one array: ``surely_rigid``'s decision (``None`` for fewer than
     three markers), the artefacts and swaps, or the error."""
-    labels = tuple(f"{name}[:, {column}]" for column in range(markers.shape[1]))
+    labels = tuple(screening.column_label(name, column) for column in range(markers.shape[1]))
     surely = screening.surely_rigid(markers, labels, name, RULES) if len(labels) >= 3 else None
     try:
         artefacts, swaps = screening.find_artefacts(markers, labels, name)

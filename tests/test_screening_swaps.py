@@ -101,7 +101,7 @@ def _assert_swap_found(markers, i, j, start, stop):
     assert _changes(swaps) == changes
     with pytest.raises(ValueError) as refused:
         jointbench.fit_center(markers, method="LS")
-    named = f"markers markers[:, {i}] and markers[:, {j}] exchange labels at frame "
+    named = f"markers[:, {i}] and markers[:, {j}] exchange labels at frame "
     assert str(refused.value).startswith(named)
     assert int(str(refused.value)[len(named) :].split()[0].rstrip(";")) in changes
 

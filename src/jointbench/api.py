@@ -83,6 +83,7 @@ from jointbench.screening import (
     Numbering,
     Screening,
     checked_rules,
+    column_label,
     exchanges_untested,
     find_artefacts,
     summarise,
@@ -144,7 +145,7 @@ def screen(
 def _column_labels(name: str, n_markers: int) -> tuple[str, ...]:
     """The labels of the ``n_markers`` columns of the array ``name`` in messages:
     ``name[:, column]``."""
-    return tuple(f"{name}[:, {column}]" for column in range(n_markers))
+    return tuple(column_label(name, column) for column in range(n_markers))
 
 
 def describe_screening(found: dict[str, Screening]) -> str | None:

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import combinations, pairwise
@@ -56,6 +57,7 @@ __all__ = [
     "Numbering",
     "Screening",
     "Swap",
+    "column_label",
     "exchanges_untested",
     "find_artefacts",
     "find_exchanges",
@@ -64,6 +66,7 @@ __all__ = [
     "find_swaps",
     "fit_poses",
     "flagged_frames",
+    "markers_named",
     "mean_shape",
     "residuals",
     "screen",
@@ -85,6 +88,25 @@ _TOL_MM = 1e-10
 #: rigidity breaks and jumps only, which cost about the marker count times the frames, and the
 #: screen says what it did not test (:func:`exchanges_untested`).
 MAX_EXCHANGE_MARKERS = 20
+
+
+#: A label :func:`column_label` makes: an expression that says itself it names a marker.
+_COLUMN_LABEL = re.compile(r"\w+\[:, \d+\]")
+
+
+def column_label(name: str, column: int) -> str:
+    """The label in messages of column ``column`` of the marker array ``name``
+    ``(n_frames, n, 3)``: ``name[:, column]``."""
+    return f"{name}[:, {column}]"
+
+
+def markers_named(labels: Sequence[str], listed: str) -> str:
+    """``listed``, the ``labels`` in words, after "marker" or "markers" as they are one or
+    more; labels of array columns (:func:`column_label`) already say they name markers, and
+    stand alone ("markers[:, 0] and markers[:, 2]", not "markers markers[:, 0] and ...")."""
+    if all(_COLUMN_LABEL.fullmatch(label) for label in labels):
+        return listed
+    return f"{'marker' if len(labels) == 1 else 'markers'} {listed}"
 
 
 def exchanges_untested(n_markers: int) -> str:
@@ -205,12 +227,13 @@ def typical_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> 
     cannot pull."""
     seen = np.isfinite(markers[..., 0]).any(axis=0)
     if not seen.all():
-        raise ValueError(f"{source}: marker {labels[int(np.argmin(seen))]} is never visible")
+        unseen = labels[int(np.argmin(seen))]
+        raise ValueError(f"{source}: {markers_named([unseen], unseen)} is never visible")
     complete = _complete_frames(kernel_array(markers))
     if complete.size == 0:
         raise ValueError(
-            f"{source}: markers {', '.join(labels)} are never all visible in one frame; "
-            "a segment needs one frame showing its whole cluster"
+            f"{source}: {markers_named(labels, ', '.join(labels))} are never all visible in "
+            "one frame; a segment needs one frame showing its whole cluster"
         )
     clusters = markers[complete]
     return clusters[_most_typical(kernel_array(clusters))].copy()
@@ -724,16 +747,18 @@ class Artefact:
     def describe(self, frames: Numbering) -> str:
         """One line, naming the frame as ``frames`` does."""
         if self.kind == "swap":
+            pair = (self.label, self.partner)
             return (
-                f"markers {self.label} and {self.partner} exchange labels at "
+                f"{markers_named(pair, ' and '.join(pair))} exchange labels at "
                 f"{frames.name(self.frame)} (the cluster's inter-marker distances depart "
                 f"{self.size_mm:.1f} mm from their typical values, threshold "
                 f"{self.level_mm:.1f} mm, and fit them with the two labels exchanged)"
             )
         what = "jumps" if self.kind == "jump" else "leaves its cluster's rigid shape by"
         return (
-            f"marker {self.label} {what} {self.size_mm:.1f} mm at {frames.name(self.frame)} "
-            f"(threshold {self.level_mm:.1f} mm; a label swap or a marker falling off?)"
+            f"{markers_named([self.label], self.label)} {what} {self.size_mm:.1f} mm at "
+            f"{frames.name(self.frame)} (threshold {self.level_mm:.1f} mm; a label swap or a "
+            "marker falling off?)"
         )
 
     def rows(self) -> tuple[int, ...]:
@@ -790,10 +815,9 @@ class Swap:
                 f" (the cluster's symmetry fits {pairs} alike, and the frames next to the swap "
                 "do not tell which),"
             )
+        at = " and back at ".join(frames.name(row) for row in self.changes())
         return (
-            f"markers {which} exchange labels at "
-            f"{' and back at '.join(frames.name(row) for row in self.changes())}; frames {sides} "
-            "are "
+            f"{markers_named(self.named(), which)} exchange labels at {at}; frames {sides} are "
             "each labelled one consistent way and the data cannot tell which is right"
         )
 
@@ -820,7 +844,7 @@ def summarise(artefacts: list[Artefact], swaps: list[Swap], frames: Numbering) -
         markers = sorted({a.label for a in artefacts})
         text += (
             f"; {len(artefacts)} flagged samples in all, frames {frames.number(min(rows))} to "
-            f"{frames.number(max(rows))}, markers {', '.join(markers)}"
+            f"{frames.number(max(rows))}, {markers_named(markers, ', '.join(markers))}"
         )
     return text
 
