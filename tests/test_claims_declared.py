@@ -10,10 +10,10 @@ not list, a key no study has) the check is mistaken: a ``RuntimeError`` naming t
 
 from __future__ import annotations
 
+import claim_worlds
 import pandas as pd
 import pytest
-from test_claims import A_SPEEDS, _timed, paper_a_world, paper_b_world, paper_c_world
-from test_claims_subgrids import paper_sta_world
+from test_claims import paper_c_world
 
 from jointbench.comparison.published import NOT_APPLICABLE, comparison_rows, load_published
 from jointbench.papers import Inputs, Measured, paper_a, paper_b, paper_c, paper_sta
@@ -22,23 +22,8 @@ from jointbench.papers.common import NotMeasured, at_levels, measured_claims, wi
 MODULES = {"A": paper_a, "B": paper_b, "S": paper_sta}
 
 
-@pytest.fixture(scope="module")
-def documents():
-    return {letter: load_published(module.PAPER.published) for letter, module in MODULES.items()}
-
-
-@pytest.fixture(scope="module")
-def worlds(documents):
-    return {
-        "A": _timed(paper_a_world(), A_SPEEDS),
-        "B": paper_b_world(documents),
-        "S": paper_sta_world(),
-    }
-
-
-def _measure(letter, documents, collected):
-    inputs = Inputs(collected=collected, published=documents[letter], config={"studies": {}})
-    return MODULES[letter].measure(inputs)
+documents = claim_worlds.documents_fixture(MODULES)
+worlds = claim_worlds.worlds_fixture()
 
 
 def _a_wide(collected, means):
@@ -110,7 +95,7 @@ def test_a_selection_no_run_could_hold_is_raised_naming_the_claim(
     letter, claim, select, named = MISTAKES[case]
     monkeypatch.setitem(MODULES[letter]._CLAIMS, claim, _selecting(select))
     with pytest.raises(RuntimeError, match=rf"^claim {claim}: ") as raised:
-        _measure(letter, documents, worlds[letter])
+        claim_worlds.measure(letter, documents, worlds[letter])
     assert named in str(raised.value)
     assert isinstance(raised.value.__cause__, NotMeasured)
 
@@ -125,7 +110,7 @@ def test_a_key_no_study_has_is_raised_naming_the_claim(documents, worlds, monkey
     monkeypatch.setitem(paper_b._CLAIMS, "B5", _selecting(misspelt_key))
     world = worlds["B"]
     with pytest.raises(RuntimeError, match=r"^claim B5: asks for protocl, no key") as raised:
-        _measure("B", documents, world[world["protocol"] == "knee"])
+        claim_worlds.measure("B", documents, world[world["protocol"] == "knee"])
     assert isinstance(raised.value.__cause__, NotMeasured)
 
 
@@ -147,7 +132,7 @@ def test_a_declared_method_or_level_the_run_lacks_is_not_measured_saying_which(
 ):
     letter, kept, claim, named = ABSENT[case]
     world = worlds[letter]
-    measured = _measure(letter, documents, world[kept(world)])
+    measured = claim_worlds.measure(letter, documents, world[kept(world)])
     assert claim not in measured
     assert named in measured.not_measured[claim]
     # Each reason is read in the claims table: numbers as written, not numpy's reprs.
@@ -181,7 +166,7 @@ def test_a2_at_a_run_lacking_its_noise_levels_names_them_not_bc(documents, world
     world = worlds["A"]
     axis = paper_a.A2_LEVELS.axis
     kept = sorted(world[axis].unique())[1:2]
-    measured = _measure("A", documents, world[world[axis].isin(kept)])
+    measured = claim_worlds.measure("A", documents, world[world[axis].isin(kept)])
     design = documents["A"]["design"]["grid"]
     lacking = [level for level in paper_a.A2_LEVELS.levels_in(design) if level not in kept]
     assert lacking
@@ -233,7 +218,7 @@ def test_a_reason_lists_the_run_s_levels_as_the_config_writes_them(documents, wo
     """Paper B's grid at ratios 0.3 and 0.5 (the reduced run's): B2's reason, which the claims
     table and the published comparison show, lists them as numbers, not numpy's reprs."""
     world = worlds["B"]
-    measured = _measure("B", documents, world[world["aa_ratio"].isin([0.3, 0.5])])
+    measured = claim_worlds.measure("B", documents, world[world["aa_ratio"].isin([0.3, 0.5])])
     assert measured.not_measured["B2"].endswith("this run has ratios [0.3, 0.5]")
 
 

@@ -8,11 +8,9 @@ bad unpacking) is a mistake of the check, raised as a ``RuntimeError`` naming th
 
 from __future__ import annotations
 
+import claim_worlds
 import pytest
-from test_claims import A_SPEEDS, _timed, paper_a_world, paper_b_world, paper_c_world
-from test_claims_subgrids import paper_sta_world
 
-from jointbench.comparison.published import load_published
 from jointbench.figures import paper_a as paper_a_draw
 from jointbench.papers import Inputs, Measured, get_paper, paper_a, paper_b, paper_c, paper_sta
 
@@ -25,21 +23,8 @@ PAPERS = {
 }
 
 
-@pytest.fixture(scope="module")
-def documents():
-    return {
-        letter: load_published(module.PAPER.published) for letter, (module, _) in PAPERS.items()
-    }
-
-
-@pytest.fixture(scope="module")
-def worlds(documents):
-    return {
-        "A": _timed(paper_a_world(), A_SPEEDS),
-        "B": paper_b_world(documents),
-        "C": paper_c_world(trials=20),
-        "S": paper_sta_world(),
-    }
+documents = claim_worlds.documents_fixture(PAPERS)
+worlds = claim_worlds.worlds_fixture(c_trials=20)
 
 
 def _misspelt_column(table, *_):

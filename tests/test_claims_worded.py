@@ -17,37 +17,19 @@ import inspect
 import textwrap
 from pathlib import Path
 
+import claim_worlds
 import pandas as pd
 import pytest
-from test_claims import A_SPEEDS, _timed, paper_a_world, paper_b_world, paper_c_world
-from test_claims_subgrids import paper_sta_world
 
 import jointbench.papers
-from jointbench.comparison.published import load_published
-from jointbench.papers import Inputs, paper_a, paper_b, paper_c, paper_sta
+from jointbench.papers import paper_a, paper_b, paper_c, paper_sta
 from jointbench.papers.common import NotMeasured, rows_at
 
 MODULES = {"A": paper_a, "B": paper_b, "C": paper_c, "S": paper_sta}
 
 
-@pytest.fixture(scope="module")
-def documents():
-    return {letter: load_published(module.PAPER.published) for letter, module in MODULES.items()}
-
-
-@pytest.fixture(scope="module")
-def worlds(documents):
-    return {
-        "A": _timed(paper_a_world(), A_SPEEDS),
-        "B": paper_b_world(documents),
-        "C": paper_c_world(trials=5),
-        "S": paper_sta_world(),
-    }
-
-
-def _measure(letter, documents, collected):
-    inputs = Inputs(collected=collected, published=documents[letter], config={"studies": {}})
-    return MODULES[letter].measure(inputs)
+documents = claim_worlds.documents_fixture(MODULES)
+worlds = claim_worlds.worlds_fixture()
 
 
 def _misspelt(module, name: str, spelt: str, typo: str):
@@ -94,7 +76,7 @@ def test_a_misspelt_name_in_a_check_is_raised_naming_the_claim(
     # Also where measure or another check calls it by name (A2, A11, A12).
     monkeypatch.setattr(module, name, misspelt)
     with pytest.raises(RuntimeError, match=rf"^claim {claim}: ") as raised:
-        _measure(letter, documents, worlds[letter])
+        claim_worlds.measure(letter, documents, worlds[letter])
     assert repr(typo) in str(raised.value)
     assert isinstance(raised.value.__cause__, NotMeasured)
 
@@ -117,7 +99,7 @@ def test_a_mistaken_name_a_check_selects_by_is_raised_naming_the_claim(
     letter, (owner, constant), value, claim, named = MISTAKEN_CONSTANTS[case]
     monkeypatch.setattr(owner, constant, value)
     with pytest.raises(RuntimeError, match=rf"^claim {claim}: asks for ") as raised:
-        _measure(letter, documents, worlds[letter])
+        claim_worlds.measure(letter, documents, worlds[letter])
     assert named in str(raised.value)
 
 
@@ -126,7 +108,7 @@ def test_paper_a_table2_reading_a_misspelt_column_is_raised(documents, worlds, m
     misspelt = _misspelt(paper_a, "_our_times", "seconds", "secnds")
     monkeypatch.setattr(paper_a, "_our_times", misspelt)
     with pytest.raises(RuntimeError, match=r"^Table 2 \(A-T2\): asks for recorded column 'secnds'"):
-        _measure("A", documents, worlds["A"])
+        claim_worlds.measure("A", documents, worlds["A"])
 
 
 def _raised_without_lacks(path: Path) -> list[str]:

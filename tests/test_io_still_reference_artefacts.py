@@ -93,6 +93,29 @@ def fit_still(recording, artefacts="exclude", **options):
     return fitted, [str(w.message) for w in caught]
 
 
+def refused_swap(recording, first, second):
+    """The refusal of ``recording`` (by default), whose markers ``first`` and ``second``
+    exchange labels in rows 150 to 159 (frames 250 to 259), checked to name that swap, the
+    frames where the labels change and both sides; its message."""
+    with pytest.raises(ValueError) as error:
+        fit_still(recording, artefacts="refuse")
+    message = str(error.value)
+    assert message.startswith(
+        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
+        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
+        "labelled one consistent way"
+    ), message
+    return message
+
+
+def assert_swap_left_out(recording, first, second):
+    """Excluded, the swap of ``first`` and ``second`` in rows 150 to 159 of ``recording`` leaves
+    out those ten frames, and the warning names the pair."""
+    fitted, warned = fit_still(recording)
+    assert {a.frame for a in fitted.excluded} == set(range(150, 160))
+    assert f"left out 10 frames with artefacts: markers {first} and {second} exchange" in warned[0]
+
+
 @pytest.mark.parametrize("row", [0, 150, 299], ids=["first", "middle", "last"])
 def test_a_bump_in_one_frame_of_a_still_reference_is_left_out_and_reported(treadmill, row):
     """TM1 knocked 50 mm in one frame (the first, one in the middle, the last): that frame is
@@ -159,14 +182,7 @@ def test_a_swap_in_a_still_reference_is_refused_as_a_swap_naming_its_frames(
     """TM1 and TM2 (a long side of the treadmill) or TM2 and TM4 (a short one) exchange labels
     in frames 250 to 259: the refusal names the swap, the frames where the labels change and
     both sides, as for a moving cluster, not 2 m of motion in the lab."""
-    with pytest.raises(ValueError) as error:
-        fit_still(swapped(treadmill, slice(150, 160), first, second), artefacts="refuse")
-    message = str(error.value)
-    assert message.startswith(
-        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
-        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
-        "labelled one consistent way"
-    ), message
+    message = refused_swap(swapped(treadmill, slice(150, 160), first, second), first, second)
     assert "keep one side with frames='100:250' or '250:260' or '260:400' (--frames)" in message
     assert "move in the lab" not in message
 
@@ -458,18 +474,9 @@ def test_a_swap_in_a_symmetric_still_reference_names_the_pair_that_swapped(
     pair's markers step back where they were and the other pair's would turn the frame over:
     one swap, of the pair that swapped, from its first frame to its last."""
     recording = swapped(with_treadmill(knee, corners), slice(150, 160), first, second)
-    with pytest.raises(ValueError) as error:
-        fit_still(recording, artefacts="refuse")
-    message = str(error.value)
-    assert message.startswith(
-        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
-        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
-        "labelled one consistent way"
-    ), message
+    message = refused_swap(recording, first, second)
     assert message.count("exchange labels") == 1, message
-    fitted, warned = fit_still(recording)
-    assert {a.frame for a in fitted.excluded} == set(range(150, 160))
-    assert f"left out 10 frames with artefacts: markers {first} and {second} exchange" in warned[0]
+    assert_swap_left_out(recording, first, second)
 
 
 def test_a_swap_the_frames_around_cannot_place_names_both_pairs_a_symmetry_fits(knee):
@@ -517,17 +524,8 @@ def test_a_swap_that_keeps_a_still_reference_s_shape_is_found_over_all_its_frame
     not only the two steps: the frames between carry the reference turned over, and would move
     the answer by metres."""
     recording = swapped(with_treadmill(knee, corners), slice(150, 160), first, second)
-    with pytest.raises(ValueError) as error:
-        fit_still(recording, artefacts="refuse")
-    message = str(error.value)
-    assert message.startswith(
-        f"treadmill.c3d: markers {first} and {second} exchange labels at frame 250 (2.50 s) and "
-        "back at frame 260 (2.60 s); frames 100 to 249, 250 to 259, 260 to 399 are each "
-        "labelled one consistent way"
-    ), message
-    fitted, warned = fit_still(recording)
-    assert {a.frame for a in fitted.excluded} == set(range(150, 160))
-    assert f"left out 10 frames with artefacts: markers {first} and {second} exchange" in warned[0]
+    refused_swap(recording, first, second)
+    assert_swap_left_out(recording, first, second)
 
 
 @pytest.mark.parametrize("suffix", [".c3d", ".trc", ".csv"])

@@ -138,17 +138,24 @@ def test_a_newcomer_study_runs_its_own_truth_diagnostic(newcomer):
     assert "spread_mm" not in other
 
 
+def _stops_the_estimate_job(newcomer, diagnostic: Diagnostic, message: str):
+    """Study gh with ``diagnostic`` for LS: its estimate job raises a ``ProgrammingError``
+    matching ``message``."""
+    newcomer(_study(diagnostics={"LS": diagnostic}))
+    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
+    with pytest.raises(ProgrammingError, match=message):
+        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+
+
 def test_a_diagnostic_writing_a_column_it_does_not_declare_stops_the_estimate_job(newcomer):
     """What a study records is what its diagnostics declare: a claim selecting ``spread_mm``
     would be refused as a column no study records, so the job writing it is stopped."""
-    newcomer(_study(diagnostics={"LS": Diagnostic(("spread",), _spread)}))
-    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
-    with pytest.raises(
-        ProgrammingError,
-        match=r"^gh LS: its diagnostic _spread writes the columns spread_mm, which it does not "
+    _stops_the_estimate_job(
+        newcomer,
+        Diagnostic(("spread",), _spread),
+        r"^gh LS: its diagnostic _spread writes the columns spread_mm, which it does not "
         r"declare \(it declares spread\)",
-    ):
-        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+    )
 
 
 def test_a_diagnostic_names_the_columns_it_records():
@@ -179,14 +186,12 @@ def _overwriting(arguments, results, truth):
 def test_a_diagnostic_declaring_a_column_the_estimate_job_writes_is_a_mistake(newcomer):
     """A diagnostic's ``status`` or ``error_mm`` would replace the estimator's own in each row,
     silently: the job stops naming the columns."""
-    newcomer(_study(diagnostics={"LS": Diagnostic(("status", "error_mm"), _overwriting)}))
-    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
-    with pytest.raises(
-        ProgrammingError,
-        match=r"^gh LS: its diagnostic _overwriting declares the columns status, error_mm, "
+    _stops_the_estimate_job(
+        newcomer,
+        Diagnostic(("status", "error_mm"), _overwriting),
+        r"^gh LS: its diagnostic _overwriting declares the columns status, error_mm, "
         r"which the estimate job writes itself",
-    ):
-        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+    )
 
 
 class _Spreads:
@@ -197,10 +202,11 @@ class _Spreads:
 
 
 def test_a_callable_diagnostic_writing_an_undeclared_column_is_named_by_its_repr(newcomer):
-    newcomer(_study(diagnostics={"LS": Diagnostic(("spread",), _Spreads())}))
-    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
-    with pytest.raises(ProgrammingError, match=r"writes the columns spread_mm, which it does not"):
-        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
+    _stops_the_estimate_job(
+        newcomer,
+        Diagnostic(("spread",), _Spreads()),
+        r"writes the columns spread_mm, which it does not",
+    )
 
 
 def test_the_cmc_study_owns_paper_a_local_minimum_diagnostic():
