@@ -179,6 +179,18 @@ def test_a_diagnostic_s_columns_given_as_one_string_are_refused_naming_it():
         _study(diagnostics={"LS": Diagnostic("spread_mm", _spread)})
 
 
+def test_a_diagnostic_declaring_a_column_it_never_writes_stops_the_estimate_job(newcomer):
+    """A declared column is one a claim may select as recorded by the study: a diagnostic
+    that declares ``spread_sd_mm`` beside ``spread_mm`` and writes only the latter would leave
+    it absent from every row, so the job stops naming it."""
+    _stops_the_estimate_job(
+        newcomer,
+        Diagnostic(("spread_mm", "spread_sd_mm"), _spread),
+        r"^gh LS: its diagnostic _spread declares the columns spread_sd_mm, which it writes in "
+        r"no row",
+    )
+
+
 def _overwriting(arguments, results, truth):
     return [{"status": "ok", "error_mm": 0.0} for _ in results]
 

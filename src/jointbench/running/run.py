@@ -223,8 +223,10 @@ def _diagnosed(
     """The rows of ``check`` (:class:`~jointbench.simulate.Diagnostic`) for one condition's
     trials; :class:`~jointbench.estimators.batching.ProgrammingError` naming a column it
     declares among those the estimate job writes itself (``written``: its rows would replace
-    the estimator's status or score), or one it writes and does not declare, which a claim
-    could not select as one its study records."""
+    the estimator's status or score), one it writes and does not declare, which a claim
+    could not select as one its study records, or one it declares and writes in no row of
+    the condition where it writes others, which a claim would select as recorded and find
+    absent."""
     name = getattr(check.diagnose, "__name__", repr(check.diagnose))
     taken = [column for column in check.columns if column in written]
     if taken:
@@ -233,11 +235,19 @@ def _diagnosed(
             "estimate job writes itself; name its own columns otherwise"
         )
     rows = check.diagnose(arguments, results, truth)
-    undeclared = sorted({column for row in rows for column in row} - set(check.columns))
+    found = {column for row in rows for column in row}
+    undeclared = sorted(found - set(check.columns))
     if undeclared:
         raise ProgrammingError(
             f"its diagnostic {name} writes the columns {', '.join(undeclared)}, which it does "
             f"not declare (it declares {', '.join(check.columns) or 'none'})"
+        )
+    # Where no row writes anything (every trial failed), no column tells of the diagnostic.
+    unwritten = [column for column in check.columns if column not in found]
+    if found and unwritten:
+        raise ProgrammingError(
+            f"its diagnostic {name} declares the columns {', '.join(unwritten)}, which it "
+            f"writes in no row (it writes {', '.join(sorted(found))})"
         )
     return rows
 
