@@ -436,10 +436,10 @@ def test_an_answer_its_first_order_markers_do_not_fix_says_so(method):
     sd_deg = result.diagnostics["axis_sd_deg"]
     assert sd_deg > precision.MAX_AXIS_SD_DEG
     # One circle does not curve the radial cost in the axis's tilt (module notes of axis.py).
-    size = "unbounded" if method == "radial" else f"at {sd_deg:.1f} deg"
+    size = "unbounded" if method == "radial" else f"{sd_deg:.1f} deg"
     assert result.status.startswith(
         "warning: precision not determined: only 1 of 3 markers travel far enough for the "
-        "rotation the poses show to read it within 5 deg a frame, and on their own they leave "
-        f"the direction's SD {size} (above 10 deg)"
+        "rotation the poses show to read it within 5 deg a frame, and on their own the "
+        f"direction's SD is {size} (above 10 deg)"
     )
     assert result.converged  # left as the method set it

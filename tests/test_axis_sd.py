@@ -87,6 +87,25 @@ def test_the_warning_states_the_sd_and_the_limit():
     assert "SD is unbounded (above 10 deg)" in unbounded.status
 
 
+def test_an_sd_beyond_what_a_direction_can_be_off_is_stated_as_no_number():
+    """An SD above 90 deg (the furthest one line's direction can be from another's) is no
+    precision: the warning says the axis is not determined without printing it as a number,
+    and :func:`precision.stated_axis_sd` gives none, as above the 10 deg bound."""
+    fitted = checked("planar", hinge(0, 60.0))
+    result = precision.annotate(fitted, 299.7, "the radial cost")
+    assert result.status == (
+        "warning: axis not determined by the radial cost: its direction's SD is over 90 deg, "
+        "more than a direction can be off (above 10 deg)"
+    )
+    assert result.diagnostics["axis_sd_deg"] == 299.7
+    assert precision.stated_axis_sd(299.7) is None
+    assert precision.stated_axis_sd(31.4) is None
+    assert precision.stated_axis_sd(math.inf) is None
+    assert precision.stated_axis_sd(math.nan) is None
+    assert precision.stated_axis_sd(4.2) == 4.2
+    assert precision.stated_axis_sd(precision.MAX_AXIS_SD_DEG) == precision.MAX_AXIS_SD_DEG
+
+
 def _numerical_hessian(markers, foot, direction, basis, step=1e-4):
     """The radial cost's Hessian in (tangent angles, shift) by central differences of
     :class:`axis.AxisCosts` (on a long arc, where such a step exists)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -196,6 +197,34 @@ def test_every_row_states_the_answer_s_sd(capsys):
         prepared = jointbench.prepare(recording, kind, moving, THIGH)
         stated = prepared.fit(method).result.diagnostics[key]
         assert csv_rows(out).iloc[0][column] == pytest.approx(stated, rel=1e-6)
+
+
+def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
+    """The radial axis of the knee's frames 700 to 999: its cost leaves the direction's SD
+    far above what an axis direction can be off (90 deg). The row says "not determined", in
+    the table and the CSV, as its status does, and prints no number for it; the planar axis of
+    the same frames states its SD."""
+    arguments = ["fit", str(KNEE), "--kind", "axis", "--reference", THIGH, "--moving", SHANK]
+    arguments += ["--frames", "700:1000", "--method"]
+    recording = jointbench.read(KNEE).frames("700:1000")
+    prepared = jointbench.prepare(recording, "axis", SHANK.split(","), THIGH.split(","))
+    stated = prepared.fit("radial").result.diagnostics["axis_sd_deg"]
+    assert stated > 90.0  # the case
+    code, out, _ = run(capsys, *arguments, "radial", "--format", "csv")
+    assert code == 0
+    row = csv_rows(out).iloc[0]
+    assert row["sd_deg"] == "not determined"
+    assert row["status"].startswith(
+        "warning: axis not determined by the radial cost: its direction's SD is over 90 deg"
+    )
+    assert f"{stated:.1f}" not in out
+    code, out, _ = run(capsys, *arguments, "radial")
+    assert code == 0
+    assert re.search(r"^\s*radial( +\S+){6} +not determined +True ", out, re.MULTILINE), out
+    assert f"{stated:.1f}" not in out and f"{stated:.4f}" not in out
+    code, out, _ = run(capsys, *arguments, "planar", "--format", "csv")
+    planar = prepared.fit("planar").result.diagnostics["axis_sd_deg"]
+    assert csv_rows(out).iloc[0]["sd_deg"] == pytest.approx(planar, rel=1e-6)
 
 
 def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):

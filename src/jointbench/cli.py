@@ -353,12 +353,11 @@ def _row(fitted) -> dict:
         row.update(zip(("point_x_mm", "point_y_mm", "point_z_mm"), result.point, strict=True))
     else:
         row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
-    # The precision the checked call stated, where it stated one.
-    sd_key, column = (
-        ("axis_sd_deg", "sd_deg") if fitted.kind == "axis" else ("center_sd_mm", "sd_mm")
-    )
-    if sd_key in result.diagnostics:
-        row[column] = float(result.diagnostics[sd_key])
+    # The precision the checked call stated, where it stated one, and where it is no
+    # precision (above the bound its status declares it not determined beyond) no number.
+    stated = fitted.stated_sd()
+    if stated is not None:
+        row["sd_deg" if fitted.kind == "axis" else "sd_mm"] = stated
     # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
     # for gauss-markov), and the one the SD is read from under the name of its diagnostic.
     covariance = getattr(result, "covariance", None)

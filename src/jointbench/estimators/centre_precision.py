@@ -119,6 +119,7 @@ __all__ = [
     "annotate_joint_centres",
     "annotate_many",
     "centre_statistics",
+    "stated_center_sd",
     "stated_covariance",
 ]
 
@@ -639,7 +640,7 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
     the precision's only where the support verdict ``supported`` the data."""
     sd, share = numbers["center_sd_mm"], numbers["center_sd_noise_share"]
     warnings = []
-    if supported and not sd <= MAX_CENTER_SD_MM:
+    if supported and stated_center_sd(sd) is None:
         warnings.append(_undetermined(sd, f"the rigid-body residual of {residual_mm:.3g} mm"))
     elif supported and not share < MAX_SD_NOISE_SHARE:
         warnings.append(
@@ -765,7 +766,7 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
             covariance, source = stated
             sd = _largest_sd(covariance)
             numbers["center_sd_mm"] = sd
-            if not sd <= MAX_CENTER_SD_MM:
+            if stated_center_sd(sd) is None:
                 warnings.append(_undetermined(sd, source))
         noise = verdict.pose_noise
         if noise is not None:
@@ -808,6 +809,15 @@ def _largest_sd(covariance: np.ndarray) -> float:
         return math.inf
     largest = float(np.linalg.eigvalsh(covariance)[-1])
     return math.sqrt(largest) if largest >= 0.0 else math.nan
+
+
+def stated_center_sd(sd_mm: float) -> float | None:
+    """``sd_mm``, a centre's SD along its least determined direction [mm], where it states a
+    precision: at most :data:`MAX_CENTER_SD_MM`, above which the data do not determine the
+    centre; ``None`` where it does not (larger, infinite or NaN), so that no output prints it
+    as a number."""
+    # NaN fails the comparison: it states nothing either.
+    return float(sd_mm) if sd_mm <= MAX_CENTER_SD_MM else None
 
 
 def _undetermined(sd: float, source: str) -> str:

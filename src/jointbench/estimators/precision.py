@@ -226,6 +226,7 @@ from jointbench.numerics.small import tangent_basis_into
 __all__ = [
     "AMBIGUOUS_APART_DEG",
     "MAX_AXIS_SD_DEG",
+    "MAX_DIRECTION_OFF_DEG",
     "MAX_REFERENCE_POSE_SD_DEG",
     "MISFIT_BAND_DEG",
     "MOTION_AXIS_BAND_DEG",
@@ -247,6 +248,7 @@ __all__ = [
     "misfit",
     "rigid_dof",
     "smaller_eigenvalue",
+    "stated_axis_sd",
     "tangent_basis",
     "unsupported_by_its_cost",
 ]
@@ -255,6 +257,10 @@ __all__ = [
 #: Paper B states its accuracy in bands of 5 and 10 degrees (claims B2, B3): an SD above the
 #: looser band means the answer cannot be told within it.
 MAX_AXIS_SD_DEG = 10.0
+
+#: No line's direction is further than this [deg] from another's: an SD beyond it states no
+#: precision, whatever bound a method's precision is declared not determined above.
+MAX_DIRECTION_OFF_DEG = 90.0
 
 #: Two minima of an axis cost this far apart [deg] are two answers, not one answer's scatter:
 #: three times the largest SD the precision check passes as determined
@@ -518,19 +524,40 @@ def _rows_all_differ(rows: np.ndarray) -> bool:
     return True
 
 
+def stated_axis_sd(sd_deg: float) -> float | None:
+    """``sd_deg``, an axis direction's SD [deg], where it states a precision: at most
+    :data:`MAX_AXIS_SD_DEG`, above which the method's cost does not determine the axis
+    (:func:`annotate`), and :data:`MAX_DIRECTION_OFF_DEG`; ``None`` where it does not (larger,
+    infinite or NaN), so that no output prints it as a number."""
+    # NaN fails the comparison: it states nothing either.
+    return float(sd_deg) if sd_deg <= min(MAX_AXIS_SD_DEG, MAX_DIRECTION_OFF_DEG) else None
+
+
+def _sd_is(sd_deg: float) -> str:
+    """An axis direction's SD [deg] in a warning's words: ``"is 17.2 deg"``; beyond
+    :data:`MAX_DIRECTION_OFF_DEG`, infinite or NaN without its number, which would read as a
+    precision."""
+    if math.isnan(sd_deg):
+        return "is not a number"
+    if math.isinf(sd_deg):
+        return "is unbounded"
+    if sd_deg > MAX_DIRECTION_OFF_DEG:
+        return f"is over {MAX_DIRECTION_OFF_DEG:g} deg, more than a direction can be off"
+    return f"is {sd_deg:.1f} deg"
+
+
 def annotate(result, sd_deg: float, cost_name: str):
     """``result`` with ``diagnostics["axis_sd_deg"]`` = ``sd_deg`` and, above
     :data:`MAX_AXIS_SD_DEG`, a warning that ``cost_name`` ("the radial cost") does not
     determine the axis; ``converged`` is left as the method set it."""
     warnings = ()
-    if not sd_deg <= MAX_AXIS_SD_DEG:
+    if stated_axis_sd(sd_deg) is None:
+        why = "its direction's SD"
         if math.isinf(sd_deg):
-            why = "it does not rise in every direction from the answer, so its direction's SD"
-            size = "is unbounded"
-        else:
-            why, size = "its direction's SD", f"is {sd_deg:.1f} deg"
+            why = f"it does not rise in every direction from the answer, so {why}"
         warnings = (
-            f"axis not determined by {cost_name}: {why} {size} (above {MAX_AXIS_SD_DEG:g} deg)",
+            f"axis not determined by {cost_name}: {why} {_sd_is(sd_deg)} (above "
+            f"{MAX_AXIS_SD_DEG:g} deg)",
         )
     return with_warnings(result, warnings, {"axis_sd_deg": float(sd_deg)})
 
@@ -557,13 +584,12 @@ def annotate_first_order(result, sd_deg: float, first_order: np.ndarray):
     kept = np.flatnonzero(first_order)
     all_markers_sd_deg = result.diagnostics["axis_sd_deg"]
     warnings = ()
-    if all_markers_sd_deg <= MAX_AXIS_SD_DEG and not sd_deg <= MAX_AXIS_SD_DEG:
-        size = "unbounded" if math.isinf(sd_deg) else f"at {sd_deg:.1f} deg"
+    if stated_axis_sd(all_markers_sd_deg) is not None and stated_axis_sd(sd_deg) is None:
         warnings = (
             f"precision not determined: only {kept.size} of {first_order.size} markers travel "
             "far enough for the rotation the poses show to read it within "
-            f"{MAX_REFERENCE_POSE_SD_DEG:g} deg a frame, and on their own they leave the "
-            f"direction's SD {size} (above {MAX_AXIS_SD_DEG:g} deg): the others lie too near "
+            f"{MAX_REFERENCE_POSE_SD_DEG:g} deg a frame, and on their own the direction's SD "
+            f"{_sd_is(sd_deg)} (above {MAX_AXIS_SD_DEG:g} deg): the others lie too near "
             "the axis for their residuals to be first order in their noise, so they do not "
             f"make it the {all_markers_sd_deg:.1f} deg stated from every marker",
         )
@@ -593,7 +619,7 @@ def annotate_validity(
         diagnostics["axis_bias_deg"] = float(bias_deg)
     warnings = ()
     # NaN fails the comparisons and is warned about: it tells nothing either.
-    if sd_deg <= MAX_AXIS_SD_DEG:
+    if stated_axis_sd(sd_deg) is not None:
         if not ratio < 1.0:
             warnings = (
                 f"precision not determined: the eigen-gap of {problem_name} ({gap:.3g}) is "
@@ -665,7 +691,7 @@ def annotate_agreement(
     z = angle_deg / scale if scale > 0.0 else math.inf
     warnings = ()
     # NaN fails the comparisons and is warned about: it tells nothing either.
-    if sd_deg <= MAX_AXIS_SD_DEG and not z <= _TOLD_APART_Z:
+    if stated_axis_sd(sd_deg) is not None and not z <= _TOLD_APART_Z:
         warnings = (
             f"axis not determined by {cost_name}: its answer lies {angle_deg:.0f} deg from "
             f"{other_name}, {z:.2f} times their first-order SDs combined ({sd_deg:.1f} and "
@@ -716,9 +742,9 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
             f"{undetermined}: the noise's share of their scatter is "
             f"{reference.noise_share:.3g} of its eigen-gap (not below 1)"
         )
-    elif not reference.sd_deg <= MAX_AXIS_SD_DEG:
+    elif stated_axis_sd(reference.sd_deg) is None:
         record["not_checked"] = (
-            f"{undetermined}: its SD is {reference.sd_deg:.1f} deg (above {MAX_AXIS_SD_DEG:g} deg)"
+            f"{undetermined}: its SD {_sd_is(reference.sd_deg)} (above {MAX_AXIS_SD_DEG:g} deg)"
         )
     elif not reference.pose_sd_deg <= MAX_REFERENCE_POSE_SD_DEG:
         record["not_checked"] = (

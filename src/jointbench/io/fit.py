@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
-from jointbench.estimators.centre_precision import stated_covariance
+from jointbench.estimators.centre_precision import stated_center_sd, stated_covariance
+from jointbench.estimators.precision import stated_axis_sd
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.validation import check_input
@@ -61,6 +62,7 @@ __all__ = [
     "BLOCK_SPANS",
     "DEFAULT_METHODS",
     "LAB_FIXED_KINDS",
+    "NOT_DETERMINED",
     "Prepared",
     "RecordingFit",
     "fit",
@@ -83,6 +85,10 @@ DEFAULT_METHODS = {"center": "NM", "axis": "combined", "joint_center": "gauss-ma
 #: volume rather than a segment (:meth:`~jointbench.io.segments.Segment.fit`); a
 #: ``joint_center``'s is the proximal body segment of the joint.
 LAB_FIXED_KINDS = ("center", "axis")
+
+#: What an output prints in place of an SD that states no precision
+#: (:meth:`RecordingFit.stated_sd`), as the result's status says.
+NOT_DETERMINED = "not determined"
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,6 +140,24 @@ class RecordingFit:
         if self.kind != "joint_center":
             return None
         return stated_covariance(self.result)
+
+    def stated_sd(self) -> float | str | None:
+        """The SD the method states of its answer: an axis direction's [deg]
+        (``diagnostics["axis_sd_deg"]``), a centre's along its least determined direction [mm]
+        (``diagnostics["center_sd_mm"]``); :data:`NOT_DETERMINED` where that SD states no
+        precision (:func:`~jointbench.estimators.precision.stated_axis_sd`,
+        :func:`~jointbench.estimators.centre_precision.stated_center_sd`: above the bound the
+        status declares the answer not determined beyond), ``None`` where the method states
+        none."""
+        key, stated = (
+            ("axis_sd_deg", stated_axis_sd)
+            if self.kind == "axis"
+            else ("center_sd_mm", stated_center_sd)
+        )
+        if key not in self.result.diagnostics:
+            return None
+        sd = stated(self.result.diagnostics[key])
+        return NOT_DETERMINED if sd is None else sd
 
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
         """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
