@@ -55,6 +55,11 @@ def _warned(result) -> bool:
     return NOT_FIT in result.status
 
 
+# Each fit of 1500 trials costs seconds: the tests reading it run on one worker (under
+# ``--dist loadgroup``), which makes each once, rather than each worker making its own.
+ONE_WORKER = pytest.mark.xdist_group("gauss_markov_correct_model")
+
+
 @pytest.fixture(scope="module", params=[(m, n) for m in GM for n in NOISES])
 def correct_model(request):
     """``(method, noise, results)`` on trials where the model holds, the noise estimated from
@@ -69,6 +74,7 @@ def correct_model(request):
     return method, noise, results
 
 
+@ONE_WORKER
 @pytest.mark.parametrize("form", ["F", "chi2"])
 def test_correct_model_false_alarms_at_the_nominal_rate(correct_model, form):
     """Where the model holds, the p-values are uniform: the share below 1 % (15 expected
@@ -86,6 +92,7 @@ def test_correct_model_false_alarms_at_the_nominal_rate(correct_model, form):
     assert all(r.converged for r in results)
 
 
+@ONE_WORKER
 def test_chi2_variance_matches_its_calibration(correct_model):
     """With the noise given, the chi^2 varies as its Satterthwaite calibration says, ``2 dof``
     times the inflation, within 20 % (the sample variance of 1500 trials has a standard error
@@ -104,6 +111,7 @@ def test_chi2_variance_matches_its_calibration(correct_model):
         assert np.median(inflation) < 1.05 and blind == pytest.approx(1.0, abs=0.2)
 
 
+@ONE_WORKER
 def test_kurtosis_estimated_from_the_rigid_fit_residuals(correct_model):
     """Per-coordinate excess kurtosis: 0 for Gaussian errors, 2.4 for paper A's isotropic
     errors (normal magnitude along a uniform direction: E[x^4] = 3 sd^4 / 5, var = sd^2 / 3)."""
