@@ -499,7 +499,10 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
     ``arrays`` are the marker arrays named by :data:`ARRAY_NAMES` for ``kind``. One-segment
     kinds (``center``, ``axis``) also need markers that move and rotate; two-segment data must
     share frames (whether the segments rotate relative to each other is the estimators' and
-    the support check's business, as it needs their poses).
+    the support check's business, as it needs their poses). Inside a checked call
+    (:func:`jointbench.numerics.reuse.one_call`) a one-segment kind's array keeps the checks it
+    passed, which the fit's own :func:`check_markers`, :func:`check_moves` and
+    :func:`check_rotates` of it then do not make again.
     """
     names = ARRAY_NAMES[kind]
     if len(arrays) != len(names):
