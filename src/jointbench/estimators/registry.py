@@ -151,8 +151,8 @@ class _Entry:
         self.signature = inspect.signature(self.fn)
         self.valid = functools.partial(_fit_valid, self)
 
-        # The input checks run inside the call's scope (:func:`_fit_valid`), so that the fit's
-        # own checks of the same arrays are not made again.
+        # The input checks run inside the scope the stages share (as in :func:`_fit_valid`),
+        # so that the fit's own checks of the same arrays are not made again.
         @functools.wraps(self.fn)
         def checked(*arrays: object, **options: object):
             with reuse.one_call():
