@@ -224,7 +224,7 @@ def _first_failure(markers: np.ndarray, checks: int, move_tol_mm: float = _MOVE_
     of one: its failure, or 0. Inside a checked call (:func:`jointbench.numerics.reuse.one_call`)
     checks that :func:`check_input` passed on these very markers, at the same tolerance, are
     not made again: the fit's own checks of the call's input repeat them."""
-    if checks & ~_passed(markers, move_tol_mm) == 0:
+    if move_tol_mm == _MOVE_TOL_MM and checks & ~_passed(markers) == 0:
         return 0
     return _first_failure_made(markers, checks, move_tol_mm)
 
@@ -234,13 +234,18 @@ def _first_failure_made(markers: object, checks: int, move_tol_mm: float = _MOVE
     return _first_failures(kernel_array(markers)[np.newaxis], checks, move_tol_mm, _UNRECORDED)
 
 
-def _passed(markers: np.ndarray, move_tol_mm: float) -> int:
-    """The checks (bits of :func:`_first_failures`) that ``markers`` are known to pass at
-    ``move_tol_mm`` in the current checked call: those :func:`check_input` passed them with
+# The name under which a checked call keeps the checks its input passed (at the default
+# tolerance, check_input's).
+_PASSED = "input checks passed"
+
+
+def _passed(markers: np.ndarray) -> int:
+    """The checks (bits of :func:`_first_failures`) that ``markers`` are known to pass at the
+    default tolerance in the current checked call: those :func:`check_input` passed them with
     (:func:`_record_passed`), else none."""
     if type(markers) is not np.ndarray:
         return 0  # not the array the input checks return
-    return reuse.remembered(f"input checks passed at {move_tol_mm!r}", markers, _none_passed)
+    return reuse.remembered(_PASSED, markers, _none_passed)
 
 
 def _none_passed(_markers: np.ndarray) -> int:
@@ -251,7 +256,7 @@ def _none_passed(_markers: np.ndarray) -> int:
 def _record_passed(markers: np.ndarray, checks: int) -> None:
     """Keep, for the rest of the checked call, that ``markers`` passed ``checks`` at the
     default tolerance (:func:`_passed`); outside a checked call, nothing is kept."""
-    reuse.remembered(f"input checks passed at {_MOVE_TOL_MM!r}", markers, lambda _: checks)
+    reuse.remembered(_PASSED, markers, lambda _: checks)
 
 
 # The failures array of a call of _first_failures that needs only its return value.
