@@ -13,7 +13,7 @@ median wall-clock time per call of:
 * ``input checks``: :func:`jointbench.estimators.validation.check_input`;
 * ``verdict``: :func:`jointbench.estimators.support.assess_many` on the trial, of which
   ``verdict kernels`` is its compiled work alone (the rigidity and rotation tests, the frames'
-  dependence, the lag-1 correlations' SDs);
+  dependence, the lag-1 correlation and its SD);
 * ``precision``: :func:`jointbench.estimators.centre_precision.annotate_many` on the method's
   answer and the verdict, of which ``precision kernel`` is
   :func:`jointbench.estimators.centre_precision.centre_statistics` alone.
@@ -56,8 +56,7 @@ STAGES = (
 def _verdict_kernels(markers: np.ndarray) -> None:
     """The compiled work of the one-segment verdict on ``markers`` ``(1, N, n, 3)`` [mm]."""
     support._one_segment_numbers(markers, support._FLEX)
-    support._frame_correlations(markers)
-    support._correlation_sds(markers)
+    support._lag1_numbers(markers)
 
 
 def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[int], object]]:

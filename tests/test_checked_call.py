@@ -44,3 +44,21 @@ def test_the_input_checks_of_a_batch_make_one_compiled_pass(kernel_calls):
     checked = validation.check_input_many("center", (markers,), len(markers))
     assert checked.errors == [None] * 5
     assert kernel_calls == [markers.shape]
+
+
+@pytest.mark.parametrize("method", ["LS", "NM", "BC"])
+def test_a_checked_centre_call_makes_one_compiled_pass_of_the_input_checks(method, kernel_calls):
+    """The fit's own checks of its markers are those the call's input checks just passed."""
+    distal = two_segments(60)[1]
+    registry.get("center", method)(distal)
+    assert kernel_calls == [(1, *distal.shape)]
+
+
+def test_the_fit_alone_still_checks_its_markers(kernel_calls):
+    distal = two_segments(60)[1]
+    registry.get("center", "LS", checked=False)(distal)
+    assert len(kernel_calls) == 2  # check_markers, check_moves
+    with pytest.raises(ValueError, match="NaN or inf at marker 0, frame 3"):
+        registry.get("center", "LS", checked=False)(
+            np.where(np.arange(60)[:, None, None] == 3, np.nan, distal)
+        )

@@ -96,7 +96,9 @@ def test_a_checked_form_refuses_before_the_fit(form, monkeypatch):
         return fitting
 
     monkeypatch.setattr(entry, "many", counting(entry.many))
-    monkeypatch.setattr(registry, "_fit_valid", counting(registry._fit_valid))
+    # The one-trial forms' stages, the fit first (the checked form runs them in the scope its
+    # input checks share).
+    monkeypatch.setattr(registry, "_stages", counting(registry._stages))
     _refusal(FORMS[form], "center", "BC", max_iterations=10.5)
     assert fitted == []
     FORMS[form]("center", "BC", max_iterations=10)

@@ -28,6 +28,7 @@ import jointbench
 from jointbench.estimators import support
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.io.fit import BLOCK_SPANS
+from jointbench.numerics import compiled
 
 WARNING = "the frames are not independent"
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
@@ -531,11 +532,36 @@ def test_the_correlation_sd_is_that_of_the_distances_covariance():
             covariance = np.cov(distances, bias=True).reshape(len(pairs), len(pairs))
             spread = math.sqrt(n_frames - 1) * np.linalg.norm(covariance)
             expected.append(spread / (n_frames * np.trace(covariance)))
-        for function in (support._correlation_sds, support._correlation_sds.__wrapped__):
-            np.testing.assert_allclose(function(markers), expected, rtol=1e-12)
+        for function in (support._lag1_numbers, support._lag1_numbers.__wrapped__):
+            np.testing.assert_allclose(function(markers)[:, 1], expected, rtol=1e-12)
     # Two frames, whose mean is exact: the deviations are zero, not rounding.
     still = np.repeat(rng.normal(size=(1, 1, 4, 3)), 2, axis=1)
-    assert np.isnan(support._correlation_sds(still)).all()
+    assert np.isnan(support._lag1_numbers(still)[:, 1]).all()
+
+
+def test_the_lag_1_statement_reads_the_correlation_the_dependence_test_pools():
+    rng = np.random.default_rng(5)
+    markers = rng.normal(scale=30.0, size=(4, 50, 4, 3))
+    np.testing.assert_array_equal(
+        support._lag1_numbers(markers)[:, 0], support._frame_correlations(markers)[:, 0]
+    )
+
+
+def test_a_one_segment_verdict_makes_two_compiled_calls(monkeypatch):
+    """Its numbers in one pass over the trial, and the lag-1 statement's correlation and SD in
+    another over the pair distances: a checked one-trial fit pays each call's overhead."""
+    calls = []
+    kernel_call = compiled._Kernel.__call__
+
+    def counting(self, *args):
+        calls.append(self.__qualname__)
+        return kernel_call(self, *args)
+
+    rng = np.random.default_rng(2)
+    (markers,) = _kind_trial("center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
+    monkeypatch.setattr(compiled._Kernel, "__call__", counting)
+    support.assess_many("center", (markers[None],))
+    assert calls == ["_one_segment_numbers", "_lag1_numbers"]
 
 
 def _unsupported_count(kind: str, n_frames: int, share: float, n_trials: int) -> int:

@@ -715,7 +715,8 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         return annotated
     if len(checked) < len(results):
         markers = markers[checked]
-    variances = np.array(residuals) ** 2 / 3.0
+    # One array from the numbers, not three NumPy operations on a few elements.
+    variances = np.array([residual * residual / 3.0 for residual in residuals])
     rows = _statistics(markers, np.array(centres), variances)
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
         sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]

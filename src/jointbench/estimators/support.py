@@ -878,17 +878,25 @@ def _frame_correlations(markers: np.ndarray) -> np.ndarray:
     """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], how its marker-pair distances
     depend on each other from frame to frame (:func:`_frame_dependence`) ``(T, 4)``. A
     compiled kernel."""
-    n_trials, n_frames, n_markers, _ = markers.shape
-    out = np.empty((n_trials, 4))
-    for t in range(n_trials):
-        largest = 0.0
-        for f in range(n_frames):
-            for m in range(n_markers):
-                for i in range(3):
-                    largest = max(largest, abs(markers[t, f, m, i]))
-        lengths = _pair_distances(markers[t])
-        _frame_dependence(lengths, lengths.shape[0], largest, out[t])
+    out = np.empty((markers.shape[0], 4))
+    for t in range(markers.shape[0]):
+        _dependence_into(markers[t], out[t])
     return out
+
+
+@kernel
+def _dependence_into(markers: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """:func:`_frame_dependence` of one trial's markers ``(N, n, 3)`` [mm] into ``out``
+    ``(4,)``; returns their pair distances ``(P, N)`` [mm]. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    largest = 0.0
+    for f in range(n_frames):
+        for m in range(n_markers):
+            for i in range(3):
+                largest = max(largest, abs(markers[f, m, i]))
+    lengths = _pair_distances(markers)
+    _frame_dependence(lengths, lengths.shape[0], largest, out)
+    return lengths
 
 
 @kernel
@@ -2155,7 +2163,7 @@ class Untested(NamedTuple):
     distances' lag-1 autocorrelation (pooled as :func:`_frame_dependence` pools it), read from
     the segment ``name``, is not clearly below :data:`DEPENDENT_CORRELATION`: at or above
     ``bound``, that correlation less :data:`_Z_CLEARED` of the SDs ``n_frames`` independent
-    frames would give it (:func:`_correlation_sds`). Every SD and p-value of the fit counts each
+    frames would give it (:func:`_correlation_sd`). Every SD and p-value of the fit counts each
     frame as independent, and a short stretch of a recording, whose consecutive frames share
     their skin motion and their filter's smoothing, seldom is (22 frames of the knee trial:
     0.87; 32: 0.92, where the block test did not reject them).
@@ -2237,16 +2245,16 @@ def _untested(
     marker's blind spot, which the README names)."""
     n_trials, n_frames = arrays[0].shape[:2]
     found: list[Untested | None] = [None] * n_trials
-    trials = np.flatnonzero(unflagged)
-    if not trials.size:
+    trials = [t for t, flag in enumerate(unflagged) if flag]
+    if not trials:
         return found
     # The trials the caveat closed are not read: most of a long correlated recording's.
-    chosen = tuple(array if trials.size == n_trials else array[trials] for array in arrays)
+    chosen = tuple(array if len(trials) == n_trials else array[trials] for array in arrays)
     read = []
     for name, array in zip(names, chosen, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
-            ready = kernel_array(array)
-            read.append((name, _frame_correlations(ready)[:, 0], _correlation_sds(ready)))
+            numbers = _lag1_numbers(kernel_array(array)).tolist()
+            read.append((name, numbers))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
             for t in trials:
@@ -2254,11 +2262,11 @@ def _untested(
         return found
     for row, t in enumerate(trials):
         worst = None
-        for name, correlations, sds in read:
-            correlation = float(correlations[row])
+        for name, numbers in read:
+            correlation, sd = numbers[row]
             if not math.isfinite(correlation):
                 continue
-            bound = DEPENDENT_CORRELATION - _Z_CLEARED * float(sds[row])
+            bound = DEPENDENT_CORRELATION - _Z_CLEARED * sd
             if correlation >= bound and (
                 worst is None or correlation - bound > worst.correlation - worst.bound
             ):
@@ -2268,42 +2276,53 @@ def _untested(
 
 
 @kernel
-def _correlation_sds(markers: np.ndarray) -> np.ndarray:
-    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the SD of the lag-1
-    autocorrelation pooled over its pair distances ``(P, N)`` [mm] (:func:`_frame_dependence`)
-    that ``N`` independent frames of their covariance ``C`` ``(P, P)`` [mm^2] give it:
-    ``sqrt(N - 1) |C|_F / (N tr C)`` (NaN where every deviation is zero). The pooled products of
-    neighbouring frames' deviations sum ``N - 1`` terms of variance ``|C|_F^2`` (pairs that
-    share a marker share its noise), over the pooled squares, ``N tr C``: ``1 / sqrt(N)`` for
-    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each. A compiled kernel:
-    every checked fit reads it, where NumPy's calls on these small arrays cost tens of
-    microseconds."""
-    n_trials, n_frames = markers.shape[0], markers.shape[1]
-    out = np.empty(n_trials)
-    for t in range(n_trials):
-        deviations = _pair_distances(markers[t])
-        n_pairs = deviations.shape[0]
-        for p in range(n_pairs):
-            mean = 0.0
-            for f in range(n_frames):
-                mean += deviations[p, f]
-            mean /= n_frames
-            for f in range(n_frames):
-                deviations[p, f] -= mean
-        trace = 0.0
-        frobenius = 0.0
-        for p in range(n_pairs):
-            for q in range(p, n_pairs):
-                product = 0.0
-                for f in range(n_frames):
-                    product += deviations[p, f] * deviations[q, f]
-                # C is symmetric: an entry off the diagonal stands twice in |C|_F^2.
-                frobenius += (1.0 if p == q else 2.0) * product * product
-                if p == q:
-                    trace += product
-        # Both sums are of products over the frames, N times C's entries: their ratio holds.
-        out[t] = np.sqrt((n_frames - 1) * frobenius) / (n_frames * trace) if trace > 0.0 else np.nan
+def _lag1_numbers(markers: np.ndarray) -> np.ndarray:
+    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the lag-1 autocorrelation
+    pooled over its pair distances (the first of :func:`_frame_correlations`) and its SD for
+    independent frames (:func:`_correlation_sd`) ``(T, 2)``: what :class:`Untested` reads, the
+    distances computed once for both. A compiled kernel."""
+    out = np.empty((markers.shape[0], 2))
+    dependence = np.empty(4)
+    for t in range(markers.shape[0]):
+        distances = _dependence_into(markers[t], dependence)
+        out[t, 0] = dependence[0]
+        out[t, 1] = _correlation_sd(distances)
     return out
+
+
+@kernel
+def _correlation_sd(distances: np.ndarray) -> float:
+    """The SD of the lag-1 autocorrelation pooled over the pair ``distances`` ``(P, N)`` [mm]
+    (:func:`_frame_dependence`) that ``N`` independent frames of their covariance ``C``
+    ``(P, P)`` [mm^2] give it: ``sqrt(N - 1) |C|_F / (N tr C)`` (NaN where every deviation is
+    zero). The pooled products of neighbouring frames' deviations sum ``N - 1`` terms of
+    variance ``|C|_F^2`` (pairs that share a marker share its noise), over the pooled squares,
+    ``N tr C``: ``1 / sqrt(N)`` for one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own
+    noise each. The distances are made their deviations from their means, in place. A compiled
+    kernel: every checked fit reads it, where NumPy's calls on these small arrays cost tens of
+    microseconds."""
+    n_pairs, n_frames = distances.shape
+    deviations = distances
+    for p in range(n_pairs):
+        mean = 0.0
+        for f in range(n_frames):
+            mean += deviations[p, f]
+        mean /= n_frames
+        for f in range(n_frames):
+            deviations[p, f] -= mean
+    trace = 0.0
+    frobenius = 0.0
+    for p in range(n_pairs):
+        for q in range(p, n_pairs):
+            product = 0.0
+            for f in range(n_frames):
+                product += deviations[p, f] * deviations[q, f]
+            # C is symmetric: an entry off the diagonal stands twice in |C|_F^2.
+            frobenius += (1.0 if p == q else 2.0) * product * product
+            if p == q:
+                trace += product
+    # Both sums are of products over the frames, N times C's entries: their ratio holds.
+    return np.sqrt((n_frames - 1) * frobenius) / (n_frames * trace) if trace > 0.0 else np.nan
 
 
 def _without_poses(

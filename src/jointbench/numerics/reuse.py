@@ -6,7 +6,9 @@ same sum over every frame (paper B's scatter ``S``, for the axis methods): on a 
 sum costs more than the arithmetic of the check that reads it. Inside :func:`one_call` the
 first stage to compute such a value for an array keeps it and the later stages read it back
 (:func:`remembered`); outside one, every value is computed where it is asked for, so a stage
-returns the same numbers either way.
+returns the same numbers either way. The checks a one-trial call's input passed are such a
+value too: the fit's own checks of the same markers are not made again
+(:func:`jointbench.estimators.validation.check_input`).
 
 An array is known by its memory: its address, shape, strides and dtype, so the view of a trial
 that another stage takes of the same batch finds the value. The scope holds every array it has
@@ -16,8 +18,8 @@ stages of a call read their input and never write to it.
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 from contextvars import ContextVar
 from typing import TypeVar
 
@@ -32,15 +34,23 @@ _Value = TypeVar("_Value")
 _KEPT: ContextVar[dict | None] = ContextVar("jointbench_reuse", default=None)
 
 
-@contextlib.contextmanager
-def one_call() -> Iterator[None]:
+class _Scope:
+    """The context manager of :func:`one_call`: a class, as a generator's context manager costs
+    a few microseconds a call, a share of a checked one-trial fit."""
+
+    __slots__ = ("_token",)
+
+    def __enter__(self) -> None:
+        self._token = _KEPT.set({})
+
+    def __exit__(self, *_exception: object) -> None:
+        _KEPT.reset(self._token)
+
+
+def one_call() -> AbstractContextManager[None]:
     """The scope of one checked call: values remembered inside it are forgotten at its end. A
     scope opened inside another starts empty and the outer one's values return with it."""
-    token = _KEPT.set({})
-    try:
-        yield
-    finally:
-        _KEPT.reset(token)
+    return _Scope()
 
 
 def remembered(name: str, array: np.ndarray, compute: Callable[[np.ndarray], _Value]) -> _Value:
