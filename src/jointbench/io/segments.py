@@ -146,11 +146,12 @@ LAB_FIXED_FLAG = "--lab-fixed-reference"
 
 #: A marker's held position at a sample is the median, axis by axis, of this many consecutive
 #: samples of it centred there (:func:`held_positions`): a displacement shown in fewer than half
-#: of them, four samples or fewer, is no position the marker holds. Nine samples hold a median
-#: steady enough that noise of a millimetre on each axis, more than an optical system's, keeps a
-#: still marker's held positions within :data:`LAB_FIXED_MM` of one another over thousands of
-#: frames, while a segment's sway, drift or step lasts far longer than five samples.
-HELD_SAMPLES = 9
+#: of them, ten samples or fewer, is no position the marker holds. So many samples hold a
+#: median steady enough that noise of a millimetre or two on each axis, more than an optical
+#: system's, spends little of :data:`LAB_FIXED_MM` on spreading a still marker's held positions
+#: over thousands of frames, while a segment's sway, drift or step lasts far longer than eleven
+#: samples (a tenth of a second at 100 Hz).
+HELD_SAMPLES = 21
 
 #: Above this many held positions their farthest two are sought among their convex hull's
 #: vertices (a few dozen), not among every pair.
@@ -199,13 +200,14 @@ def lab_motion(markers: np.ndarray) -> tuple[float, int, int, int]:
     seldom stay so still while a joint moves (a standing subject's pelvis sways further)".
     What tells a reference that moves from one fixed in the lab is sway, and a capture samples
     any sway, drift or step of a segment over many consecutive frames: a displacement held over
-    a few samples of nine is no motion the capture followed, and one held longer moves the
-    reference by its full extent, however it lies about the trial's median position. A step
-    half-way through the trial leaves each marker half the step from its median, a drift half
-    the drift; the positions held before and after lie the whole step apart, the drift's ends
-    the whole drift. So a marker's motion is the extent of its held positions, not their
-    distance from one median. A bump of a few samples (a marker reconstructed a few mm off) is
-    the artefact screen's to judge, not the stillness's: where it is under the screen's level
+    fewer than half of :data:`HELD_SAMPLES` samples is no motion the capture followed, and one
+    held longer moves the reference by its full extent, however it lies about the trial's
+    median position. A step half-way through the trial leaves each marker half the step from
+    its median, a drift half the drift; the positions held before and after lie the whole step
+    apart, the drift's ends the whole drift. So a marker's motion is the extent of its held
+    positions, not their distance from one median. A bump of a few samples (a marker
+    reconstructed a few mm off) is the artefact screen's to judge, not the stillness's: where
+    it is under the screen's level
     (:func:`screen`; one corner of a flat cluster bumped out of its plane leaves a quarter of
     the bump as residual, the rest taken by a tilt of the pose) the frames are kept in the fit
     with that error, as any cluster's frames the screen does not flag, and where it is over,
