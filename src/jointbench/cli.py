@@ -42,7 +42,7 @@ from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
 from jointbench.io.fit import CENTER_IS
-from jointbench.io.segments import LAB_FIXED_FLAG, LAB_FIXED_MM
+from jointbench.io.segments import HELD_SAMPLES, LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
 from jointbench.report import (
     dry_run_pending,
@@ -610,9 +610,9 @@ def _parser() -> argparse.ArgumentParser:
         LAB_FIXED_FLAG,
         action="store_true",
         help="the --reference markers are fixed in the lab (a treadmill's frame, a force plate; "
-        f"center and axis only): while they stay within {LAB_FIXED_MM:g} mm of their median "
-        "positions over any two consecutive frames they are bounded by a capture volume, not "
-        "by a body segment's "
+        f"center and axis only): while the positions each holds (medians of {HELD_SAMPLES} "
+        f"consecutive frames) stay within {LAB_FIXED_MM:g} mm of one another they are bounded "
+        "by a capture volume, not by a body segment's "
         f"{MAX_SPAN_MM / 1000:g} m",
     )
     fit.add_argument(

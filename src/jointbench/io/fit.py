@@ -646,10 +646,10 @@ def fit(
         anything but a bool is refused): where they also stay still
         (:data:`~jointbench.io.segments.LAB_FIXED_MM`) they are bounded, alone and with the
         moving markers, by a capture volume rather than a body segment; where they move, the
-        refusal of their span names the marker, how far and the frame. Without it a reference
-        is bounded as a segment, and a still one too wide says so and names this option. A
-        still reference's size tells no unit: stated fixed, a unit 10 times off is caught only
-        by the moving markers.
+        refusal of their span names the marker, how far it moved and the frames. Without it a
+        reference is bounded as a segment, and a still one too wide says so and names this
+        option. A still reference's size tells no unit: stated fixed, a unit 10 times off is
+        caught only by the moving markers.
     n_bootstrap, block_length, seed : moving-block bootstrap (:mod:`jointbench.uncertainty`);
         0 resamples means none, otherwise at least 2; a block of 1 to all the frames fitted
         (``None``: ``ceil(sqrt(n))``); a seed >= 0. Each an integer (not a bool, a float or

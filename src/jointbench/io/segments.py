@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+from scipy.spatial import ConvexHull
 
 from jointbench.estimators.support import MAX_POSE_SD_RAD
 from jointbench.estimators.validation import (
@@ -58,6 +60,7 @@ if TYPE_CHECKING:
     from jointbench.io.recording import Recording
 
 __all__ = [
+    "HELD_SAMPLES",
     "LAB_FIXED_FLAG",
     "LAB_FIXED_KEYWORD",
     "LAB_FIXED_MM",
@@ -71,10 +74,12 @@ __all__ = [
     "check_joined_span",
     "check_pose_determined",
     "check_span",
+    "farthest_apart",
     "find_jumps",
     "find_rigidity_breaks",
     "find_swaps",
     "fit_poses",
+    "held_positions",
     "lab_motion",
     "mean_shape",
     "screen",
@@ -100,14 +105,14 @@ def _check_seen(recording: Recording, index: list[int]) -> None:
     )
 
 
-#: A reference stays still in the lab when each of its markers stays within this distance [mm]
-#: of its own median position over the frames it is seen in, wherever two of its consecutive
-#: samples show it (:func:`lab_motion`). An optical system reconstructs a marker fixed in the
-#: lab with noise well under a millimetre, so 5 mm leaves a fixed marker room over a trial of
-#: any length, while a body segment's markers seldom stay so still while a joint moves (a
-#: standing subject's pelvis sways further). A cluster measured in another unit moves 10 or
-#: 1000 times as far: a segment read 10 times its size is taken as still only if it moved
-#: under 0.5 mm.
+#: A reference stays still in the lab when the positions each of its markers holds over the
+#: frames it is seen in lie within this distance [mm] of one another, and the displacement its
+#: markers share in any one sample stays within it too (:func:`lab_motion`). An optical system
+#: reconstructs a marker fixed in the lab with noise well under a millimetre, so 5 mm leaves a
+#: fixed marker room over a trial of any length, while a body segment's markers seldom stay so
+#: still while a joint moves (a standing subject's pelvis sways further). A cluster measured in
+#: another unit moves 10 or 1000 times as far: a segment read 10 times its size is taken as
+#: still only if it moved under 0.5 mm.
 LAB_FIXED_MM = 5.0
 
 
@@ -139,42 +144,89 @@ LAB_FIXED_KEYWORD = "lab_fixed_reference"
 LAB_FIXED_FLAG = "--lab-fixed-reference"
 
 
+#: A marker's held position at a sample is the median, axis by axis, of this many consecutive
+#: samples of it centred there (:func:`held_positions`): a displacement shown in fewer than half
+#: of them, ten samples or fewer, is no position the marker holds. So many samples hold a
+#: median steady enough that noise of a millimetre or two on each axis, more than an optical
+#: system's, spends little of :data:`LAB_FIXED_MM` on spreading a still marker's held positions
+#: over thousands of frames, while a segment's sway, drift or step lasts far longer than eleven
+#: samples (a tenth of a second at 100 Hz).
+HELD_SAMPLES = 21
+
+#: Above this many held positions their farthest two are sought among their convex hull's
+#: vertices (a few dozen), not among every pair.
+_PAIRS_AT_MOST = 64
+
+
+def held_positions(samples: np.ndarray) -> np.ndarray:
+    """The positions ``(k - HELD_SAMPLES + 1, 3)`` [mm] that a marker seen in the ``samples``
+    ``(k, 3)`` [mm] (in time order, gaps left out) holds: the median, axis by axis, of each run
+    of :data:`HELD_SAMPLES` consecutive samples; one position, the median of all, where there
+    are fewer."""
+    if len(samples) < HELD_SAMPLES:
+        return np.median(samples, axis=0, keepdims=True)
+    # The median of an odd number of samples is their middle one: a partial sort finds it
+    # some thirty times faster than np.median.
+    middle = HELD_SAMPLES // 2
+    runs = sliding_window_view(samples, HELD_SAMPLES, axis=0)
+    return np.partition(runs, middle, axis=-1)[..., middle]
+
+
+def farthest_apart(points: np.ndarray) -> tuple[float, int, int]:
+    """The two of the ``points`` ``(m, 3)`` [mm] that lie farthest apart: their distance [mm]
+    and their indices, in order (``0.0, 0, 0`` for one point). The farthest two of a set are
+    vertices of its convex hull, so a long trial's are sought among those (joggled, ``QJ``, so
+    that points on a line or a plane, or all at one place, make a hull too)."""
+    candidates = np.arange(len(points))
+    if len(points) > _PAIRS_AT_MOST:
+        candidates = np.sort(ConvexHull(points, qhull_options="QJ").vertices)
+    among = points[candidates]
+    distances = np.linalg.norm(among[:, None] - among[None], axis=-1)
+    first, second = np.unravel_index(int(np.argmax(distances)), distances.shape)
+    first, second = sorted((int(candidates[first]), int(candidates[second])))
+    return float(distances.max()), first, second
+
+
 def lab_motion(markers: np.ndarray) -> tuple[float, int, int, int]:
     """How far the markers ``(n_frames, n, 3)`` [mm], each seen in some frame, move in the lab
-    and hold there: a marker's distance [mm] from its own median position over the frames it
-    is seen in, the lesser of two consecutive samples of it (gaps skipped; its one sample,
-    where it is seen once), the largest over the markers and samples, with that marker's
-    column and the rows of its two samples (one row twice for a marker seen once).
+    and hold there: how far apart the positions that each holds lie (:func:`held_positions`,
+    over the frames it is seen in, gaps skipped), the largest over the markers, with that
+    marker's column and the rows of the two farthest apart, in order (the middle rows of their
+    runs of samples); or, where larger, the displacement the markers share in one sample, with
+    the column of the marker farthest from its median position in that sample and that row
+    twice.
 
     This rests on the stillness's design (:data:`LAB_FIXED_MM`): "a body segment's markers
     seldom stay so still while a joint moves (a standing subject's pelvis sways further)".
     What tells a reference that moves from one fixed in the lab is sway, and a capture samples
-    any sway, drift or step of a segment in consecutive frames; a displacement that one sample
-    shows and the next does not is no motion the capture followed. Such a bump (a marker
-    reconstructed a few mm off in one frame) is the artefact screen's to judge, not the
-    stillness's: where it is under the screen's level (:func:`screen`; one corner of a flat
-    cluster bumped out of its plane leaves a quarter of the bump as residual, the rest taken
-    by a tilt of the pose) the frame is kept in the fit with that error, as any cluster's
-    frame the screen does not flag, and where it is over, it is flagged and left out or
-    refused by the artefact policy. The median, not the mean, so that a displacement held
-    for a few frames counts at its full size wherever it falls.
+    any sway, drift or step of a segment over many consecutive frames: a displacement held over
+    fewer than half of :data:`HELD_SAMPLES` samples is no motion the capture followed, and one
+    held longer moves the reference by its full extent, however it lies about the trial's
+    median position. A step half-way through the trial leaves each marker half the step from
+    its median, a drift half the drift; the positions held before and after lie the whole step
+    apart, the drift's ends the whole drift. So a marker's motion is the extent of its held
+    positions, not their distance from one median. A bump of a few samples (a marker
+    reconstructed a few mm off) is the artefact screen's to judge, not the stillness's: where
+    it is under the screen's level
+    (:func:`screen`; one corner of a flat cluster bumped out of its plane leaves a quarter of
+    the bump as residual, the rest taken by a tilt of the pose) the frames are kept in the fit
+    with that error, as any cluster's frames the screen does not flag, and where it is over,
+    they are flagged and left out or refused by the artefact policy.
 
     The screen sees only what changes the cluster's shape, so the displacement the markers
-    share in a sample (their mean, over those seen in it) counts in every sample, held or not:
-    a mount displaced in every third frame keeps the shape, and moves. Where it is the
-    largest, the marker farthest in that sample is named, with its row once; the shared
-    displacement is no farther than that marker lies."""
+    share in a sample (their mean, over those seen in it, from their median positions) counts
+    in every sample, held or not: a mount displaced in every third frame keeps the shape, and
+    moves. The shared displacement is no farther than the marker named lies from its median."""
+    farthest = (-1.0, 0, 0, 0)
+    for column in range(markers.shape[1]):
+        rows = np.flatnonzero(np.isfinite(markers[:, column, 0]))
+        held = held_positions(markers[rows, column])
+        middle = rows[(min(len(rows), HELD_SAMPLES) - 1) // 2 :]
+        apart, first, second = farthest_apart(held)
+        if apart > farthest[0]:
+            farthest = (apart, column, int(middle[first]), int(middle[second]))
     displacements = markers - np.nanmedian(markers, axis=0)
     distances = np.linalg.norm(displacements, axis=-1)
-    farthest = (-1.0, 0, 0, 0)
-    for column in range(distances.shape[1]):
-        rows = np.flatnonzero(np.isfinite(distances[:, column]))
-        seen = distances[rows, column]
-        held = np.minimum(seen[:-1], seen[1:]) if rows.size > 1 else seen
-        k = int(np.argmax(held))
-        if held[k] > farthest[0]:
-            last = rows[k + 1] if rows.size > 1 else rows[k]
-            farthest = (float(held[k]), column, int(rows[k]), int(last))
     seen_rows = np.flatnonzero(np.isfinite(distances).any(axis=1))
     shared = np.linalg.norm(np.nanmean(displacements[seen_rows], axis=1), axis=-1)
     k = int(np.argmax(shared))
@@ -216,8 +268,9 @@ def _reference_bounds(
         return _CAPTURE_VOLUME, _CAPTURE_VOLUME
     if still:
         unstated = (
-            f", and they stay still in the lab, every marker within {LAB_FIXED_MM:g} mm of its "
-            "median position: a reference fixed in the lab is bounded by what one optical "
+            f", and they stay still in the lab, the positions each marker holds within "
+            f"{LAB_FIXED_MM:g} mm of one another: a reference fixed in the lab is bounded by what "
+            "one optical "
             f"capture volume spans where it is stated so ({LAB_FIXED_KEYWORD}=True, "
             f"{LAB_FIXED_FLAG})"
         )
@@ -227,20 +280,27 @@ def _reference_bounds(
     if not stated_lab_fixed:
         return _ONE_SEGMENT, _TWO_SEGMENTS
     moves = (
-        f", and they move in the lab: {labels[column]} lies {moved:.3g} mm or more from its "
-        f"median position in {_held_in(recording, row, next_row)}, more than the "
+        f", and they move in the lab: {_moved(recording, labels[column], moved, row, next_row)}"
+        ", more than the "
         f"{LAB_FIXED_MM:g} mm a reference fixed in the lab stays within (one bumped in some "
         "frames is fitted over frames that leave them out, --frames)"
     )
     return _ONE_SEGMENT._replace(why_not_lab=moves), _TWO_SEGMENTS
 
 
-def _held_in(recording: Recording, row: int, next_row: int) -> str:
-    """The samples :func:`lab_motion` found a marker held in, in words: ``"frame 250 (2.50 s)
-    and frame 251 (2.51 s)"``, or one frame."""
-    if next_row == row:
-        return recording.when(row)
-    return f"{recording.when(row)} and {recording.when(next_row)}"
+def _moved(recording: Recording, label: str, moved: float, row: int, other_row: int) -> str:
+    """How the marker ``label`` moved ``moved`` [mm], as :func:`lab_motion` found it, in words:
+    how far apart the positions it holds at the rows ``row`` and ``other_row`` lie, or, where
+    the markers' shared displacement in one frame (``row == other_row``) is the larger, how far
+    that frame shows the marker from its median position."""
+    if other_row == row:
+        return (
+            f"{label} lies {moved:.3g} mm or more from its median position in {recording.when(row)}"
+        )
+    return (
+        f"{label} holds positions {moved:.3g} mm apart, at {recording.when(row)} and at "
+        f"{recording.when(other_row)}"
+    )
 
 
 def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
