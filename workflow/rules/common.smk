@@ -15,6 +15,7 @@ from jointbench import invocation, pipeline, report as jb_report
 from jointbench import jobs as jb_jobs
 from jointbench.figures.common import study_title
 from jointbench.fingerprint import (
+    OnePass,
     check_bytecode_by_content,
     code_fingerprint,
     data_names,
@@ -712,10 +713,17 @@ CODE_INPUTS = data_names(PUBLISHED)
 CODE_PLAN = {"inputs": CODE_INPUTS, "versions": dependency_versions()}
 
 
+# Every script's fingerprint is computed in this process, which plans the jobs before any runs:
+# one pass reads each file of the package once for them all (jointbench.fingerprint.OnePass).
+FINGERPRINTS = OnePass()
+
+
 @functools.cache
 def script_code(script):
     """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
-    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS)
+    return code_fingerprint(
+        SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS, one_pass=FINGERPRINTS
+    )
 
 
 def plan_code_checks():
