@@ -645,9 +645,15 @@ def test_a_noise_free_rotation_turning_a_marker_beyond_the_resolution_counts(con
 
 def test_a_run_simulates_each_conditions_frame_count_once(config, monkeypatch):
     """Opening a config checks it and then each named protocol's overlay over it; the frames of
-    a condition whose study the overlays leave as it was (the STA study's) are simulated once,
-    not once per overlay."""
+    a condition whose study the overlays leave as it was (the STA study's, here as a study that
+    does not count its frames from its protocol, as one from outside the package) are
+    simulated once, not once per overlay."""
     monkeypatch.setattr(study_config, "_FRAMES", {}, raising=False)
+    uncounted = dataclasses.replace(hip_sta.STUDY, frame_count=None)
+    studies = study_config.get_study
+    monkeypatch.setattr(
+        study_config, "get_study", lambda name: uncounted if name == "hip_sta" else studies(name)
+    )
     simulated: list[int] = []
     pelvis_frame = hip_sta.thigh_in_pelvis_frame
 

@@ -21,6 +21,7 @@ import pytest
 from jointbench import fingerprint
 from jointbench.fingerprint import (
     MISSING,
+    OnePass,
     check_bytecode_by_content,
     code_fingerprint,
     data_closure,
@@ -202,6 +203,45 @@ def test_an_edit_of_package_data_changes_the_fingerprint_of_the_jobs_that_read_i
     # Dated before the first version, as a copy keeping time stamps can leave it.
     os.utime(package / path, ns=(0, 0))
     assert (_fingerprint(package) != before) is changes
+
+
+def test_one_pass_gives_each_fingerprint_that_reading_anew_gives():
+    """The workflow fingerprints every script in one pass, which reads each file once: each
+    fingerprint is the one a call reading every file anew gives."""
+    scripts = sorted((Path(__file__).resolve().parents[1] / "workflow" / "scripts").glob("*.py"))
+    one_pass = OnePass()
+    shared = [code_fingerprint(script, one_pass=one_pass) for script in scripts]
+    assert shared == [code_fingerprint(script) for script in scripts]
+
+
+@pytest.mark.parametrize("path, old, new", CHANGES[:1] + CHANGES[-3:], ids=lambda c: str(c)[:20])
+def test_a_pass_sees_the_files_as_it_first_read_them_and_a_new_pass_sees_an_edit(
+    package, path, old, new
+):
+    """A pass is one planning pass's view of the files: an edit after it read them is seen by
+    a new pass and by a call without one, never by that pass."""
+    script = package.parent.parent / "script.py"
+    one_pass = OnePass()
+    before = code_fingerprint(script, package=PACKAGE, one_pass=one_pass)
+    text = (package / path).read_text()
+    assert old in text
+    (package / path).write_text(text.replace(old, new))
+    assert code_fingerprint(script, package=PACKAGE, one_pass=one_pass) == before
+    after = code_fingerprint(script, package=PACKAGE, one_pass=OnePass())
+    assert after != before
+    assert after == _fingerprint(package)
+
+
+def test_a_pass_sees_a_data_file_edited_before_it_began(package):
+    """Kept size and times do not hide an edit from a new pass: it reads the content."""
+    data = package / "limits.yaml"
+    script = package.parent.parent / "script.py"
+    before = code_fingerprint(script, package=PACKAGE, one_pass=OnePass())
+    stat = data.stat()
+    data.write_text(data.read_text().replace("1", "7"))
+    os.utime(data, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert data.stat().st_size == stat.st_size
+    assert code_fingerprint(script, package=PACKAGE, one_pass=OnePass()) != before
 
 
 def test_a_data_file_counts_where_a_module_that_names_it_counts(package):

@@ -89,7 +89,9 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from functools import cache
 from importlib.machinery import PathFinder
@@ -103,6 +105,7 @@ from jointbench.owncode import _library_roots
 
 __all__ = [
     "MISSING",
+    "OnePass",
     "check_bytecode_by_content",
     "code_fingerprint",
     "data_closure",
@@ -145,6 +148,9 @@ class _Package:
     def file(self, module: str) -> Path | None:
         """The file of ``module`` (a package's ``__init__.py``), or ``None`` if it is not one
         of the package's modules."""
+        return _once(("file", self.root, module), lambda: self._file(module))
+
+    def _file(self, module: str) -> Path | None:
         if module != self.name and not module.startswith(self.name + "."):
             return None
         path = self.root.joinpath(*module.split(".")[1:])
@@ -162,11 +168,17 @@ class _Package:
 
     def sources(self) -> list[Path]:
         """Every Python file of the package, its subpackages' included."""
-        return sorted(p for p in self.root.rglob("*.py") if _is_kept(p, self.root))
+        return _once(("sources", self.root), self._sources)
 
     def data(self) -> dict[str, Path]:
         """Every data file of the package (any file that is not Python code), by its path
         relative to the package's folder."""
+        return _once(("data", self.root), self._data)
+
+    def _sources(self) -> list[Path]:
+        return sorted(p for p in self.root.rglob("*.py") if _is_kept(p, self.root))
+
+    def _data(self) -> dict[str, Path]:
         found = (p for p in self.root.rglob("*") if p.is_file() and p.suffix not in _CODE)
         return {
             p.relative_to(self.root).as_posix(): p for p in sorted(found) if _is_kept(p, self.root)
@@ -306,8 +318,55 @@ def _absolute(level: int, source: str, module: str, is_package: bool) -> str:
     return ".".join([*base, *([source] if source else [])])
 
 
+class OnePass:
+    """What one pass of fingerprints reads of the files, each read once: every file's text,
+    every listing of a package's files and where each of its modules is, as first read. A
+    caller makes one for the life of one planning pass, over which the files do not change
+    (the workflow fingerprints every script with one, in the Snakemake process that plans the
+    jobs, before any runs); an edit after a pass first read a file is seen by a new pass, or
+    by a call without one, which reads every file anew, never by that pass."""
+
+    def __init__(self) -> None:
+        self._texts: dict[Path, str] = {}
+        self._found: dict[tuple, object] = {}
+
+    def text(self, path: Path) -> str:
+        """The text of ``path``, read at the first call."""
+        if path not in self._texts:
+            self._texts[path] = path.read_text(encoding="utf-8")
+        return self._texts[path]
+
+    def once(self, key: tuple, found: Callable[[], object]) -> object:
+        """What ``found`` gives, called at the first call with ``key``."""
+        if key not in self._found:
+            self._found[key] = found()
+        return self._found[key]
+
+
+#: The pass of the fingerprint being computed (:func:`code_fingerprint`'s ``one_pass``), or
+#: ``None``: every read then reads the file.
+_PASS: ContextVar[OnePass | None] = ContextVar("_PASS", default=None)
+
+
+@contextmanager
+def _within(one_pass: OnePass | None) -> Iterator[None]:
+    """Every read made meanwhile in this context reads through ``one_pass`` (none: anew)."""
+    token = _PASS.set(one_pass)
+    try:
+        yield
+    finally:
+        _PASS.reset(token)
+
+
 def _read(path: Path) -> str:
-    return path.read_text(encoding="utf-8")
+    one_pass = _PASS.get()
+    return path.read_text(encoding="utf-8") if one_pass is None else one_pass.text(path)
+
+
+def _once(key: tuple, found: Callable):
+    """What ``found`` gives, through the pass under way (:data:`_PASS`), if any."""
+    one_pass = _PASS.get()
+    return found() if one_pass is None else one_pass.once(key, found)
 
 
 @dataclass(frozen=True)
@@ -791,7 +850,12 @@ def _installed_versions(package: str) -> tuple[tuple[str, str], ...]:
     return tuple(versions.items())
 
 
-def code_fingerprint(*roots: str | Path, package: str = PACKAGE, inputs: Iterable[str] = ()) -> str:
+def code_fingerprint(
+    *roots: str | Path,
+    package: str = PACKAGE,
+    inputs: Iterable[str] = (),
+    one_pass: OnePass | None = None,
+) -> str:
     """A short hash of the Python files ``roots`` (a job's script, the extension modules it
     loads), of every module of ``package`` they can import, of every data file of ``package``
     those can read (:func:`data_closure`) and of the versions of its dependencies
@@ -804,9 +868,16 @@ def code_fingerprint(*roots: str | Path, package: str = PACKAGE, inputs: Iterabl
     read them (the papers' published values), left out here, by their paths relative to the
     package's folder (:func:`data_names`): a job's code can reach every paper's, and one
     paper's values must not rerun the jobs of another's study. ``ValueError`` naming any that
-    is no data file of the package by that path."""
-    found, paths = _package(package), [Path(r) for r in roots]
-    tracked = frozenset(inputs)
+    is no data file of the package by that path.
+
+    ``one_pass``: the pass of fingerprints this one belongs to, which reads each file once for
+    them all (:class:`OnePass`); without one, every file is read anew."""
+    with _within(one_pass):
+        return _code_fingerprint([Path(r) for r in roots], package, frozenset(inputs))
+
+
+def _code_fingerprint(paths: list[Path], package: str, tracked: frozenset[str]) -> str:
+    found = _package(package)
     # A file named otherwise (by its own path, as these once were) would leave nothing out.
     unknown = sorted(
         name

@@ -1,6 +1,5 @@
 # Helpers shared by the rules: config checks, the study and paper registries, file lists.
 import functools
-import itertools
 import os
 import re
 import subprocess
@@ -15,6 +14,7 @@ from jointbench import invocation, pipeline, report as jb_report
 from jointbench import jobs as jb_jobs
 from jointbench.figures.common import study_title
 from jointbench.fingerprint import (
+    OnePass,
     check_bytecode_by_content,
     code_fingerprint,
     data_names,
@@ -234,12 +234,9 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
                 "the blind file results/blind/{study}/{condition}.parquet, or the markers CSV "
                 "results/interchange/{study}/{condition}.csv (README, 'Adding an estimator')"
             )
+        read = list(dict.fromkeys([*raw, *spelt, *map(_judged, spelt)]))
         for upstream in everyone:
-            made = [
-                f
-                for f in dict.fromkeys([*raw, *spelt, *map(_judged, spelt)])
-                if upstream.is_producer(f)
-            ]
+            made = [f for f in read if upstream.is_producer(f)]
             if made:
                 _check_blind(
                     upstream, name, made, everyone, (producer.name, *via), seen
@@ -421,15 +418,21 @@ def _overlap(first, second):
 
 
 def _may_meet(first, second):
-    """Whether the texts before the first wildcard and after the last agree: most pairs of
-    patterns differ there, and matching them item by item costs far more."""
-    ahead = zip(first, second)
-    behind = zip(reversed(first), reversed(second))
-    return all(
-        a == b or _WILDCARD in (a, b)
-        for pairs in (ahead, behind)
-        for a, b in itertools.takewhile(lambda ab: _WILDCARD not in ab, pairs)
+    """Whether the texts before the first wildcard and after the last agree (one's is the
+    start, or the end, of the other's): most pairs of patterns differ there, and matching them
+    item by item costs far more."""
+    (head, tail), (other_head, other_tail) = _ends(first), _ends(second)
+    return (head.startswith(other_head) or other_head.startswith(head)) and (
+        tail.endswith(other_tail) or other_tail.endswith(tail)
     )
+
+
+@functools.cache
+def _ends(pattern):
+    """The texts of ``pattern`` (a tuple of characters and wildcards) before its first
+    wildcard and after its last: the whole text, twice, without one."""
+    items = "".join("\0" if item is _WILDCARD else item for item in pattern)
+    return items.split("\0", 1)[0], items.rsplit("\0", 1)[-1]
 
 
 @functools.cache
@@ -712,10 +715,17 @@ CODE_INPUTS = data_names(PUBLISHED)
 CODE_PLAN = {"inputs": CODE_INPUTS, "versions": dependency_versions()}
 
 
+# Every script's fingerprint is computed in this process, which plans the jobs before any runs:
+# one pass reads each file of the package once for them all (jointbench.fingerprint.OnePass).
+FINGERPRINTS = OnePass()
+
+
 @functools.cache
 def script_code(script):
     """The fingerprint of the code a job running ``workflow/scripts/<script>.py`` can run."""
-    return code_fingerprint(SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS)
+    return code_fingerprint(
+        SCRIPTS / f"{script}.py", *EXTENSIONS, inputs=CODE_INPUTS, one_pass=FINGERPRINTS
+    )
 
 
 def plan_code_checks():

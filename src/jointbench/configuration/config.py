@@ -366,9 +366,10 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     """Refuse a condition whose trials have fewer frames than any built-in estimator listed
     fits (its :class:`~jointbench.estimators.registry.Claims`): all its rows would fail.
 
-    The frames are counted on one simulated trial per condition, so they are the simulator's,
-    whatever key or protocol field sets them; external estimators declare no minimum and are
-    not counted.
+    The frames are the study's count from its protocol where it gives one, else counted on
+    one simulated trial per condition, so they are the simulator's, whatever key or protocol
+    field sets them (:func:`trial_frames`); external estimators declare no minimum and are not
+    counted.
     """
     needs = {
         name: registry.claims(method_kind(spec, name), name).min_frames
@@ -378,9 +379,8 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
         return
     fewest = min(needs.values())
     frames_key = next((key for key, values in spec.grid_spec.items() if values.frames), None)
-    overrides = _canonical(settings.get("protocol"))
     for condition in _cells(spec, settings["grid"]):
-        n_frames = _simulated_frames(spec, protocol, overrides, condition)
+        n_frames = trial_frames(spec, protocol, settings.get("protocol"), condition)
         if isinstance(n_frames, ValueError):
             raise ValueError(
                 f"{where}.grid: condition {condition_id(condition)}: {n_frames}"
@@ -406,6 +406,18 @@ def _canonical(value: object) -> str:
 #: (:func:`named_overlays`), which leave most studies' settings as they were, and a trial's
 #: frames are the same each time.
 _FRAMES: dict[tuple[str, int, str, str], tuple[Study, int | ValueError]] = {}
+
+
+def trial_frames(
+    spec: Study, protocol: object, overrides: Mapping | None, condition: Mapping
+) -> int | ValueError:
+    """The frames of a trial of ``spec``'s ``condition`` under ``protocol``, the study's
+    protocol of the config's ``overrides``: the study's count from its protocol
+    (:attr:`~jointbench.simulate.Study.frame_count`) where it gives one, else those of one
+    simulated trial, or the simulator's ``ValueError`` where it refuses them."""
+    if spec.frame_count is not None:
+        return spec.frame_count(condition, protocol)
+    return _simulated_frames(spec, protocol, _canonical(overrides), condition)
 
 
 def _simulated_frames(

@@ -195,6 +195,12 @@ class Study:
     whose simulator also writes the distal markers in the proximal segment's frame lets the
     one-segment centre methods fit them, e.g. ``{"center": ("distal_in_proximal",)}``. Every
     kind of a study must share its truth (the point or axis its errors are measured from).
+
+    ``frame_count`` gives the frames of a condition's trials under a protocol
+    (``frame_count(condition, protocol)``) without simulating them: the config's check of each
+    condition's frames counts them so where a study says how (the STA study, whose simulator
+    fits the pelvis poses with a compiled kernel), and simulates one trial of each condition
+    where it does not.
     """
 
     name: str
@@ -208,6 +214,7 @@ class Study:
     title: str = ""
     diagnostics: Mapping[str, Diagnostic] = field(default_factory=dict)
     more_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    frame_count: Callable[[Mapping[str, object], object], int] | None = None
 
     def __post_init__(self) -> None:
         for kind in self.kinds:

@@ -396,6 +396,12 @@ def simulate(
     )
 
 
+def frame_count(condition: Mapping[str, object], protocol: HipStaProtocol) -> int:
+    """The frames of every trial of ``condition`` under ``protocol``: the protocol's, whatever
+    the motion, excursion or artefact."""
+    return protocol.n_frames
+
+
 STUDY = Study(
     name="hip_sta",
     # The two-segment estimators see both clusters as recorded; the one-segment centre methods
@@ -408,6 +414,7 @@ STUDY = Study(
     more_kinds={"center": ("thigh_in_pelvis",)},
     protocol_class=HipStaProtocol,
     simulate=simulate,
+    frame_count=frame_count,
     grid_spec={
         "motion": GridValues(
             str,
