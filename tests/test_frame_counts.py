@@ -6,6 +6,7 @@ not say (one from outside the package) has one trial of each condition simulated
 from __future__ import annotations
 
 import copy
+import dataclasses
 import os
 import subprocess
 import sys
@@ -18,6 +19,8 @@ from workflow_copy import ROOT
 
 from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study
+from jointbench.estimators.batching import ProgrammingError
+from jointbench.running import run
 
 FOURTH = ROOT / "tests" / "data" / "fourth_study"
 
@@ -77,3 +80,17 @@ def test_checking_the_default_config_runs_no_compiled_kernel():
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, env=os.environ
     )
     assert checked.returncode == 0, checked.stderr[-2000:]
+
+
+def test_a_study_whose_trials_miss_its_declared_frame_count_is_refused_when_simulated(monkeypatch):
+    """The config's check trusts a declared count without simulating: a study whose simulator
+    gives other frames than it declares is a mistake in the study, refused where its trials
+    are simulated, naming the study, the condition and both counts."""
+    config = _reduced()
+    condition = study_config.conditions(config, "hip_sta")[0]
+    wrong = dataclasses.replace(
+        get_study("hip_sta"), frame_count=lambda condition, protocol: protocol.n_frames + 1
+    )
+    monkeypatch.setattr(run, "get_study", lambda name: wrong)
+    with pytest.raises(ProgrammingError, match=r"hip_sta.*motion-.*declares \d+ frames.*\d+"):
+        run.simulate_condition(config, "hip_sta", condition, range(1))

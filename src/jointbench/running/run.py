@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import pyarrow as pa
 
-from jointbench.configuration.config import estimator_names, parse_condition_id
+from jointbench.configuration.config import condition_id, estimator_names, parse_condition_id
 from jointbench.configuration.seeds import trial_rng
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.estimators import registry
@@ -34,7 +34,7 @@ from jointbench.resultfiles.parquet import (
 )
 from jointbench.resultfiles.schema import check_estimates, estimates_columns
 from jointbench.running.scoring import proximal_at_frame0, score
-from jointbench.simulate import Diagnostic, Trials
+from jointbench.simulate import Diagnostic, Study, Trials
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -62,14 +62,35 @@ def simulate_condition(
 ) -> Trials:
     """The trials of one condition (all, or the ``trials`` range), each from its own seed (see
     :mod:`jointbench.configuration.seeds`), so a trial is the same whichever others are
-    simulated."""
+    simulated. :class:`~jointbench.estimators.batching.ProgrammingError` where a study that
+    declares its trials' frames (:attr:`~jointbench.simulate.Study.frame_count`, which the
+    config's check trusts without simulating) simulates others."""
     spec = get_study(study)
     settings = config["studies"][study]
     protocol = spec.protocol(settings.get("protocol"))
     seed_condition = {key: condition[key] for key in spec.seed_keys}
     numbers = range(int(settings["trials"])) if trials is None else trials
     rngs = [trial_rng(config["base_seed"], study, seed_condition, trial) for trial in numbers]
-    return spec.simulate(condition, protocol, rngs)
+    simulated = spec.simulate(condition, protocol, rngs)
+    _check_frame_count(spec, condition, protocol, simulated)
+    return simulated
+
+
+def _check_frame_count(
+    spec: Study, condition: Mapping[str, object], protocol: object, trials: Trials
+) -> None:
+    """Refuse ``trials`` whose frames are not those ``spec`` declares for ``condition`` under
+    ``protocol``: the config's check held the declared count, not these, against the
+    estimators' fewest frames."""
+    if spec.frame_count is None:
+        return
+    declared = spec.frame_count(condition, protocol)
+    frames = trials.segments[spec.segments[0]].shape[1]
+    if frames != declared:
+        raise ProgrammingError(
+            f"study {spec.name!r}: condition {condition_id(condition)}: its frame_count "
+            f"declares {declared} frames a trial, its simulator gave {frames}"
+        )
 
 
 def _outcome(result) -> tuple[object, str, bool, int]:
