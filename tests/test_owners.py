@@ -186,8 +186,27 @@ def test_a_diagnostic_declaring_a_column_it_never_writes_stops_the_estimate_job(
     _stops_the_estimate_job(
         newcomer,
         Diagnostic(("spread_mm", "spread_sd_mm"), _spread),
-        r"^gh LS: its diagnostic _spread declares the columns spread_sd_mm, which it writes in "
-        r"no row",
+        r"^gh LS: its diagnostic _spread declares the columns spread_sd_mm, which it does not "
+        r"write in the row of trial 0",
+    )
+
+
+def _spread_sd_in_the_first_row(arguments, results, truth):
+    rows = _spread(arguments, results, truth)
+    rows[0]["spread_sd_mm"] = 0.0
+    return rows
+
+
+def test_a_diagnostic_leaving_a_declared_column_out_of_some_rows_stops_the_estimate_job(newcomer):
+    """A row the diagnostic writes holds every column it declares (NaN where it has no value):
+    one left out would be read as not measured in that trial, and whether it is left out of
+    every row of a condition, or only of some, depends on the trials. The job stops naming
+    the first trial's row that lacks it."""
+    _stops_the_estimate_job(
+        newcomer,
+        Diagnostic(("spread_mm", "spread_sd_mm"), _spread_sd_in_the_first_row),
+        r"^gh LS: its diagnostic _spread_sd_in_the_first_row declares the columns spread_sd_mm, "
+        r"which it does not write in the row of trial 1 \(it writes spread_mm\)",
     )
 
 

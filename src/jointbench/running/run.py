@@ -214,7 +214,9 @@ def estimate_table(
         if diagnose:
             arrays = tuple(trials.segments[name] for name in segments)
             written = estimates_columns(kind, spec.grid_keys)
-            extras = _diagnosed(diagnose, written, arrays, [row[0] for row in fitted], trials.truth)
+            extras = _diagnosed(
+                diagnose, written, arrays, [row[0] for row in fitted], trials.truth, first_trial
+            )
     frame0 = proximal_at_frame0(trials.segments, spec.segments)
     rows = []
     for trial, ((result, status, converged, iterations, seconds), extra) in enumerate(
@@ -239,15 +241,15 @@ def estimate_table(
 
 
 def _diagnosed(
-    check: Diagnostic, written: Sequence[str], arguments, results, truth
+    check: Diagnostic, written: Sequence[str], arguments, results, truth, first_trial: int = 0
 ) -> list[dict[str, object]]:
     """The rows of ``check`` (:class:`~jointbench.simulate.Diagnostic`) for one condition's
-    trials; :class:`~jointbench.estimators.batching.ProgrammingError` naming a column it
-    declares among those the estimate job writes itself (``written``: its rows would replace
-    the estimator's status or score), one it writes and does not declare, which a claim
-    could not select as one its study records, or one it declares and writes in no row of
-    the condition where it writes others, which a claim would select as recorded and find
-    absent."""
+    trials, numbered from ``first_trial``; :class:`~jointbench.estimators.batching.ProgrammingError`
+    naming a column it declares among those the estimate job writes itself (``written``: its
+    rows would replace the estimator's status or score), one it writes and does not declare,
+    which a claim could not select as one its study records, or one it declares and leaves
+    out of a row it writes (a trial with no result has an empty one), which would read as not
+    measured in that trial where the diagnostic measured nothing and said so in no value."""
     name = getattr(check.diagnose, "__name__", repr(check.diagnose))
     taken = [column for column in check.columns if column in written]
     if taken:
@@ -263,13 +265,14 @@ def _diagnosed(
             f"its diagnostic {name} writes the columns {', '.join(undeclared)}, which it does "
             f"not declare (it declares {', '.join(check.columns) or 'none'})"
         )
-    # Where no row writes anything (every trial failed), no column tells of the diagnostic.
-    unwritten = [column for column in check.columns if column not in found]
-    if found and unwritten:
-        raise ProgrammingError(
-            f"its diagnostic {name} declares the columns {', '.join(unwritten)}, which it "
-            f"writes in no row (it writes {', '.join(sorted(found))})"
-        )
+    # A trial with no result has an empty row: no column tells of the diagnostic there.
+    for trial, row in enumerate(rows, start=first_trial):
+        unwritten = [column for column in check.columns if column not in row]
+        if row and unwritten:
+            raise ProgrammingError(
+                f"its diagnostic {name} declares the columns {', '.join(unwritten)}, which it "
+                f"does not write in the row of trial {trial} (it writes {', '.join(row)})"
+            )
     return rows
 
 

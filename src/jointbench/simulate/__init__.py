@@ -162,9 +162,9 @@ class Diagnostic:
     ``diagnose(arguments, results, truth) -> rows`` is given the estimator's arguments for all
     trials of a condition (each segment ``(n_trials, ...)``), its results (``None`` where it
     returned none) and the truth, and returns the extra columns of each trial's row (an empty
-    mapping where there was no result). ``columns`` names every column those rows may hold:
-    what the study records beside its estimates (a claim selects them by name), which the
-    estimate job holds each row to.
+    mapping where there was no result). ``columns`` names the columns each of those rows that
+    is not empty holds (NaN where a trial has no value): what the study records beside its
+    estimates (a claim selects them by name), which the estimate job holds each row to.
     """
 
     columns: tuple[str, ...]
