@@ -151,20 +151,16 @@ class _Entry:
         self.signature = inspect.signature(self.fn)
         self.valid = functools.partial(_fit_valid, self)
 
-        # The input checks run inside the scope the stages share (as in :func:`_fit_valid`),
-        # so that the fit's own checks of the same arrays are not made again.
         @functools.wraps(self.fn)
         def checked(*arrays: object, **options: object):
-            with reuse.one_call():
-                clean = validation.check_input(self.kind, arrays)
-                if options:  # a call without options, the common one, pays nothing for it
-                    _check_entry_options(self, options)
-                return _stages(self, clean, options)
+            clean = validation.check_input(self.kind, arrays)
+            if options:  # a call without options, the common one, pays nothing for the check
+                _check_entry_options(self, options)
+            return _fit_valid(self, clean, **options)
 
         @functools.wraps(self.fn)
         def inputs_checked(*arrays: object, **options: object):
-            with reuse.one_call():
-                return _stages(self, validation.check_input(self.kind, arrays), options)
+            return _fit_valid(self, validation.check_input(self.kind, arrays), **options)
 
         self.checked = checked
         self.inputs_checked = inputs_checked

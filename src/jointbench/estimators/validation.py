@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.numerics import reuse
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import add_outer, symmetric_into
 
@@ -186,8 +185,6 @@ def _shaped(markers: object, name: str) -> np.ndarray:
 # raised (0: none).
 _SAMPLES, _MOVES, _LINES = 1, 2, 4
 _NOT_FINITE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4
-# Those of check_input's one compiled pass over one segment's markers.
-_ONE_SEGMENT_CHECKS = _SAMPLES | _MOVES | _LINES
 
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
@@ -219,44 +216,11 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         )
 
 
-def _first_failure(markers: np.ndarray, checks: int, move_tol_mm: float = _MOVE_TOL_MM) -> int:
+def _first_failure(markers: object, checks: int, move_tol_mm: float = _MOVE_TOL_MM) -> int:
     """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
-    of one: its failure, or 0. Inside a checked call (:func:`jointbench.numerics.reuse.one_call`)
-    checks that :func:`check_input` passed on these very markers, at the same tolerance, are
-    not made again: the fit's own checks of the call's input repeat them."""
-    if move_tol_mm == _MOVE_TOL_MM and checks & ~_passed(markers) == 0:
-        return 0
-    return _first_failure_made(markers, checks, move_tol_mm)
-
-
-def _first_failure_made(markers: object, checks: int, move_tol_mm: float = _MOVE_TOL_MM) -> int:
-    """:func:`_first_failure`, the checks made whatever passed before."""
+    of one: its failure, or 0. Made on every call, inside a checked call too: an estimator may
+    write into the markers it was given before it hands them to a fit."""
     return _first_failures(kernel_array(markers)[np.newaxis], checks, move_tol_mm, _UNRECORDED)
-
-
-# The name under which a checked call keeps the checks its input passed (at the default
-# tolerance, check_input's).
-_PASSED = "input checks passed"
-
-
-def _passed(markers: np.ndarray) -> int:
-    """The checks (bits of :func:`_first_failures`) that ``markers`` are known to pass at the
-    default tolerance in the current checked call: those :func:`check_input` passed them with
-    (:func:`_record_passed`), else none."""
-    if type(markers) is not np.ndarray:
-        return 0  # not the array the input checks return
-    return reuse.remembered(_PASSED, markers, _none_passed)
-
-
-def _none_passed(_markers: np.ndarray) -> int:
-    """No check is known to have passed on arrays the call's input checks did not see."""
-    return 0
-
-
-def _record_passed(markers: np.ndarray, checks: int) -> None:
-    """Keep, for the rest of the checked call, that ``markers`` passed ``checks`` at the
-    default tolerance (:func:`_passed`); outside a checked call, nothing is kept."""
-    reuse.remembered(_PASSED, markers, lambda _: checks)
 
 
 # The failures array of a call of _first_failures that needs only its return value.
@@ -504,10 +468,7 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
     ``arrays`` are the marker arrays named by :data:`ARRAY_NAMES` for ``kind``. One-segment
     kinds (``center``, ``axis``) also need markers that move and rotate; two-segment data must
     share frames (whether the segments rotate relative to each other is the estimators' and
-    the support check's business, as it needs their poses). Inside a checked call
-    (:func:`jointbench.numerics.reuse.one_call`) a one-segment kind's array keeps the checks it
-    passed, which the fit's own :func:`check_markers`, :func:`check_moves` and
-    :func:`check_rotates` of it then do not make again.
+    the support check's business, as it needs their poses).
     """
     names = ARRAY_NAMES[kind]
     if len(arrays) != len(names):
@@ -527,9 +488,8 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
     # in their order (the counts of frames and markers: at least one, as the array is not empty).
     name = names[0]
     array = _shaped(arrays[0], name)
-    _refuse(array, name, _first_failure_made(array, _ONE_SEGMENT_CHECKS))
+    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES))
     check_span(array, name=name)
-    _record_passed(array, _ONE_SEGMENT_CHECKS)
     return (array,)
 
 

@@ -6,9 +6,7 @@ same sum over every frame (paper B's scatter ``S``, for the axis methods): on a 
 sum costs more than the arithmetic of the check that reads it. Inside :func:`one_call` the
 first stage to compute such a value for an array keeps it and the later stages read it back
 (:func:`remembered`); outside one, every value is computed where it is asked for, so a stage
-returns the same numbers either way. The checks a one-trial call's input passed are such a
-value too: the fit's own checks of the same markers are not made again
-(:func:`jointbench.estimators.validation.check_input`).
+returns the same numbers either way.
 
 An array is known by its memory: its address, shape, strides and dtype, so the view of a trial
 that another stage takes of the same batch finds the value. The scope holds every array it has
