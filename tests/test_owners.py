@@ -138,26 +138,6 @@ def test_a_newcomer_study_runs_its_own_truth_diagnostic(newcomer):
     assert "spread_mm" not in other
 
 
-def _stops_the_estimate_job(newcomer, diagnostic: Diagnostic, message: str):
-    """Study gh with ``diagnostic`` for LS: its estimate job raises a ``ProgrammingError``
-    matching ``message``."""
-    newcomer(_study(diagnostics={"LS": diagnostic}))
-    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
-    with pytest.raises(ProgrammingError, match=message):
-        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
-
-
-def test_a_diagnostic_writing_a_column_it_does_not_declare_stops_the_estimate_job(newcomer):
-    """What a study records is what its diagnostics declare: a claim selecting ``spread_mm``
-    would be refused as a column no study records, so the job writing it is stopped."""
-    _stops_the_estimate_job(
-        newcomer,
-        Diagnostic(("spread",), _spread),
-        r"^gh LS: its diagnostic _spread writes the columns spread_mm, which it does not "
-        r"declare \(it declares spread\)",
-    )
-
-
 def test_a_diagnostic_names_the_columns_it_records():
     with pytest.raises(ValueError, match=r"'gh': the diagnostics of LS must each be a Diagnostic"):
         _study(diagnostics={"LS": _spread})
@@ -179,50 +159,14 @@ def test_a_diagnostic_s_columns_given_as_one_string_are_refused_naming_it():
         _study(diagnostics={"LS": Diagnostic("spread_mm", _spread)})
 
 
-def test_a_diagnostic_declaring_a_column_it_never_writes_stops_the_estimate_job(newcomer):
-    """A declared column is one a claim may select as recorded by the study: a diagnostic
-    that declares ``spread_sd_mm`` beside ``spread_mm`` and writes only the latter would leave
-    it absent from every row, so the job stops naming it."""
-    _stops_the_estimate_job(
-        newcomer,
-        Diagnostic(("spread_mm", "spread_sd_mm"), _spread),
-        r"^gh LS: its diagnostic _spread declares the columns spread_sd_mm, which it does not "
-        r"write in the row of trial 0",
-    )
-
-
 def _spread_sd_in_the_first_row(arguments, results, truth):
     rows = _spread(arguments, results, truth)
     rows[0]["spread_sd_mm"] = 0.0
     return rows
 
 
-def test_a_diagnostic_leaving_a_declared_column_out_of_some_rows_stops_the_estimate_job(newcomer):
-    """A row the diagnostic writes holds every column it declares (NaN where it has no value):
-    one left out would be read as not measured in that trial, and whether it is left out of
-    every row of a condition, or only of some, depends on the trials. The job stops naming
-    the first trial's row that lacks it."""
-    _stops_the_estimate_job(
-        newcomer,
-        Diagnostic(("spread_mm", "spread_sd_mm"), _spread_sd_in_the_first_row),
-        r"^gh LS: its diagnostic _spread_sd_in_the_first_row declares the columns spread_sd_mm, "
-        r"which it does not write in the row of trial 1 \(it writes spread_mm\)",
-    )
-
-
 def _overwriting(arguments, results, truth):
     return [{"status": "ok", "error_mm": 0.0} for _ in results]
-
-
-def test_a_diagnostic_declaring_a_column_the_estimate_job_writes_is_a_mistake(newcomer):
-    """A diagnostic's ``status`` or ``error_mm`` would replace the estimator's own in each row,
-    silently: the job stops naming the columns."""
-    _stops_the_estimate_job(
-        newcomer,
-        Diagnostic(("status", "error_mm"), _overwriting),
-        r"^gh LS: its diagnostic _overwriting declares the columns status, error_mm, "
-        r"which the estimate job writes itself",
-    )
 
 
 class _Spreads:
@@ -232,12 +176,53 @@ class _Spreads:
         return _spread(arguments, results, truth)
 
 
-def test_a_callable_diagnostic_writing_an_undeclared_column_is_named_by_its_repr(newcomer):
-    _stops_the_estimate_job(
-        newcomer,
+# Diagnostics the estimate job stops at, with what its ProgrammingError says.
+_MISTAKEN_DIAGNOSTICS = {
+    # What a study records is what its diagnostics declare: a claim selecting spread_mm would
+    # be refused as a column no study records, so the job writing it is stopped.
+    "writes-an-undeclared-column": (
+        Diagnostic(("spread",), _spread),
+        r"^gh LS: its diagnostic _spread writes the columns spread_mm, which it does not "
+        r"declare \(it declares spread\)",
+    ),
+    # A declared column is one a claim may select as recorded by the study: declared beside
+    # spread_mm and never written, it would be absent from every row.
+    "never-writes-a-declared-column": (
+        Diagnostic(("spread_mm", "spread_sd_mm"), _spread),
+        r"^gh LS: its diagnostic _spread declares the columns spread_sd_mm, which it does not "
+        r"write in the row of trial 0",
+    ),
+    # A row the diagnostic writes holds every column it declares (NaN where it has no value):
+    # one left out would read as not measured in that trial, and whether it is left out of
+    # every row of a condition, or only of some, depends on the trials.
+    "leaves-a-declared-column-out-of-some-rows": (
+        Diagnostic(("spread_mm", "spread_sd_mm"), _spread_sd_in_the_first_row),
+        r"^gh LS: its diagnostic _spread_sd_in_the_first_row declares the columns spread_sd_mm, "
+        r"which it does not write in the row of trial 1 \(it writes spread_mm\)",
+    ),
+    # Its status or error_mm would replace the estimator's own in each row, silently.
+    "declares-the-jobs-own-columns": (
+        Diagnostic(("status", "error_mm"), _overwriting),
+        r"^gh LS: its diagnostic _overwriting declares the columns status, error_mm, "
+        r"which the estimate job writes itself",
+    ),
+    # A callable object has no __name__: it is named by its repr.
+    "callable-object-writes-an-undeclared-column": (
         Diagnostic(("spread",), _Spreads()),
         r"writes the columns spread_mm, which it does not",
-    )
+    ),
+}
+
+
+@pytest.mark.parametrize("mistake", _MISTAKEN_DIAGNOSTICS)
+def test_a_mistaken_diagnostic_stops_the_estimate_job_naming_its_mistake(newcomer, mistake):
+    """Study gh with the mistaken diagnostic for LS: its estimate job raises a
+    ``ProgrammingError`` saying what is wrong."""
+    diagnostic, message = _MISTAKEN_DIAGNOSTICS[mistake]
+    newcomer(_study(diagnostics={"LS": diagnostic}))
+    trials = _simulate({}, None, [np.random.default_rng(k) for k in range(3)])
+    with pytest.raises(ProgrammingError, match=message):
+        run.estimate_table("gh", "LS", trials, {"rom_deg": 20.0, "noise_mm": 0.5})
 
 
 def test_the_cmc_study_owns_paper_a_local_minimum_diagnostic():
