@@ -19,11 +19,16 @@ as safe.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import pytest
 import yaml
 from workflow_copy import ROOT, FinishedRun, finish_run
+
+from jointbench import papers
+from jointbench.configuration import studies
+from jointbench.estimators import registry
 
 FOURTH_STUDY = ROOT / "tests" / "data" / "fourth_study"
 #: A second extension, and its study's settings: one condition, one trial, one method.
@@ -37,6 +42,8 @@ SECOND_SETTINGS = {
 }
 # The fixtures below: each names its run's pytest-xdist group.
 SHARED_RUNS = frozenset({"reduced_run", "fourth_study_run"})
+# The names under which jointbench.configuration.extensions imports an extension's file.
+EXTENSION_MODULES = "jointbench_extension_"
 
 
 def _state(workdir: Path) -> dict[str, tuple[int, int]]:
@@ -96,3 +103,20 @@ def fourth_study_run(tmp_path_factory) -> FinishedRun:
     overlay["studies"]["second"] = SECOND_SETTINGS
     workdir = tmp_path_factory.mktemp("fourth_study_run")
     yield from _shared(finish_run(workdir, overlay, files, (SECOND_HELPER,)))
+
+
+@pytest.fixture
+def forget_registrations(monkeypatch):
+    """Registries of estimators, studies and papers that forget, at the test's end, what it
+    registered, and the extensions it loaded in the test's process (whose estimators register
+    as their module runs, so a later load must run it again): a method left registered would
+    run in every later test of the process that runs all methods."""
+    for entries in registry._REGISTRY.values():
+        monkeypatch.setattr(entries, "_values", dict(entries._values))
+    monkeypatch.setattr(studies._STUDIES, "_values", dict(studies._STUDIES._values))
+    monkeypatch.setattr(papers._PAPERS, "_values", dict(papers._PAPERS._values))
+    loaded = set(sys.modules)
+    yield
+    for name in set(sys.modules) - loaded:
+        if name.startswith(EXTENSION_MODULES):
+            del sys.modules[name]

@@ -50,7 +50,7 @@ def _simulated_frames(spec, protocol, condition) -> int:
 
 
 @pytest.mark.parametrize("name", CONFIGS)
-def test_a_declared_frame_count_is_the_simulated_trials(name):
+def test_a_declared_frame_count_is_the_simulated_trials(name, forget_registrations):
     config = CONFIGS[name]()
     for study in study_config.study_names(config):
         spec, settings = get_study(study), config["studies"][study]
@@ -61,7 +61,9 @@ def test_a_declared_frame_count_is_the_simulated_trials(name):
             assert counted == simulated, (study, condition)
 
 
-def test_the_sta_study_declares_its_frame_count_and_an_outside_study_need_not():
+def test_the_sta_study_declares_its_frame_count_and_an_outside_study_need_not(
+    forget_registrations,
+):
     assert get_study("hip_sta").frame_count is not None
     _fourth()
     assert get_study("toy").frame_count is None

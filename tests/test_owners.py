@@ -50,12 +50,8 @@ def _study(**extra) -> Study:
 
 
 @pytest.fixture
-def newcomer(monkeypatch):
+def newcomer(forget_registrations):
     """Registries that forget what a test registers."""
-    for entries in registry._REGISTRY.values():
-        monkeypatch.setattr(entries, "_values", dict(entries._values))
-    monkeypatch.setattr(studies._STUDIES, "_values", dict(studies._STUDIES._values))
-    monkeypatch.setattr(papers._PAPERS, "_values", dict(papers._PAPERS._values))
 
     def add(study: Study) -> Study:
         return studies.register_study(study)
