@@ -213,7 +213,7 @@ def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
     code, out, _ = run(capsys, *arguments, "radial", "--format", "csv")
     assert code == 0
     row = csv_rows(out).iloc[0]
-    assert row["sd_deg"] == "not determined"
+    assert np.isnan(row["sd_deg"]) and not row["sd_stated"]
     assert row["status"].startswith(
         "warning: axis not determined by the radial cost: its direction's SD is over 90 deg"
     )
@@ -225,6 +225,53 @@ def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
     code, out, _ = run(capsys, *arguments, "planar", "--format", "csv")
     planar = prepared.fit("planar").result.diagnostics["axis_sd_deg"]
     assert csv_rows(out).iloc[0]["sd_deg"] == pytest.approx(planar, rel=1e-6)
+    assert csv_rows(out).iloc[0]["sd_stated"]
+
+
+def sd_outputs(capsys, arguments: list[str]) -> tuple[pd.DataFrame, list[dict], str]:
+    """The CSV (read by pandas), the JSON and the table of one ``jointbench fit``."""
+    outputs = []
+    for output in ("csv", "json", "table"):
+        code, out, _ = run(capsys, *arguments, "--format", output)
+        assert code == 0
+        outputs.append(out)
+    return csv_rows(outputs[0]), json.loads(outputs[1]), outputs[2]
+
+
+def check_sd_outputs(capsys, arguments: list[str], column: str, undetermined: set[str]):
+    """Each method's SD in ``column``: a number in the CSV (the column float, NaN where it
+    states no precision) and the JSON (null there), flagged by ``sd_stated``; the table reads
+    "not determined" for ``undetermined``, the methods whose SD states no precision."""
+    table, fits, text = sd_outputs(capsys, arguments)
+    assert table[column].dtype == np.float64 and table["sd_stated"].dtype == bool
+    assert set(table.loc[~table["sd_stated"], "method"]) == undetermined
+    assert table.loc[~table["sd_stated"], column].isna().all()
+    assert table.loc[table["sd_stated"], column].notna().all()
+    for fitted, row in zip(fits, table.itertuples(), strict=True):
+        assert fitted["method"] == row.method and fitted["sd_stated"] == row.sd_stated
+        if row.sd_stated:
+            assert fitted[column] == pytest.approx(getattr(row, column), rel=1e-6)
+        else:
+            assert fitted[column] is None
+    for method in table["method"]:
+        line = re.search(rf"^\s*{method} .*$", text, re.MULTILINE).group(0)
+        assert (" not determined " in line) == (method in undetermined), line
+    assert "sd_stated" not in text
+    return table
+
+
+def test_machine_readable_outputs_keep_the_sd_a_number(capsys):
+    """Every axis method on the knee's frames 700 to 999, where the radial cost's SD states
+    no precision: the CSV's ``sd_deg`` is read as a float column, the radial row NaN and
+    flagged, the others the SDs their fits state; JSON gives null and the same flag."""
+    arguments = ["fit", str(KNEE), "--kind", "axis", "--reference", THIGH, "--moving", SHANK]
+    arguments += ["--frames", "700:1000", "--method", "all"]
+    table = check_sd_outputs(capsys, arguments, "sd_deg", {"radial"})
+    recording = jointbench.read(KNEE).frames("700:1000")
+    prepared = jointbench.prepare(recording, "axis", SHANK.split(","), THIGH.split(","))
+    for row in table[table["sd_stated"]].itertuples():
+        stated = prepared.fit(row.method).result.diagnostics["axis_sd_deg"]
+        assert row.sd_deg == pytest.approx(stated, rel=1e-6)
 
 
 def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):

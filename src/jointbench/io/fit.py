@@ -63,6 +63,7 @@ __all__ = [
     "DEFAULT_METHODS",
     "LAB_FIXED_KINDS",
     "NOT_DETERMINED",
+    "SD_STATED",
     "Prepared",
     "RecordingFit",
     "fit",
@@ -89,6 +90,10 @@ LAB_FIXED_KINDS = ("center", "axis")
 #: What an output prints in place of an SD that states no precision
 #: (:meth:`RecordingFit.stated_sd`), as the result's status says.
 NOT_DETERMINED = "not determined"
+
+#: The flag a machine-readable output sets beside the SD (:meth:`RecordingFit.sd_fields`):
+#: true where it holds a number that states a precision.
+SD_STATED = "sd_stated"
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,6 +164,18 @@ class RecordingFit:
         sd = stated(self.result.diagnostics[key])
         return NOT_DETERMINED if sd is None else sd
 
+    def sd_fields(self) -> dict:
+        """:meth:`stated_sd` as a machine-readable output gives it, so that its column holds
+        numbers only: under ``sd_deg`` (an axis) or ``sd_mm`` (a centre) the SD, ``None``
+        where it states no precision, and :data:`SD_STATED`, whether it holds a number. Where
+        the method states no SD, the flag alone (false)."""
+        stated = self.stated_sd()
+        if stated is None:
+            return {SD_STATED: False}
+        name = "sd_deg" if self.kind == "axis" else "sd_mm"
+        number = None if stated == NOT_DETERMINED else stated
+        return {name: number, SD_STATED: number is not None}
+
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
         """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
         directions."""
@@ -177,6 +194,7 @@ class RecordingFit:
         else:
             out["center_mm"] = self.result.center.tolist()
             out.update(_joint_points(self.kind, self.result))
+        out.update(self.sd_fields())
         covariance = getattr(self.result, "covariance", None)
         if covariance is not None:
             out["covariance_mm2"] = np.asarray(covariance).tolist()
