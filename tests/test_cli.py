@@ -12,11 +12,14 @@ import numpy as np
 import pandas as pd
 import pytest
 from rigs import JOINT, PROXIMAL
+from test_axis_sd_validity import swing
 from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
 
 import jointbench
 from jointbench import cli
 from jointbench.cli import main
+from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM
+from jointbench.estimators.results import PRECISION_NOT_DETERMINED
 from jointbench.geometry import rotation_matrix
 
 SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
@@ -179,9 +182,12 @@ def test_fit_knee_axis_with_bootstrap(capsys):
 
 
 def test_every_row_states_the_answer_s_sd(capsys):
-    """A table or CSV row states each answer's SD, as the Python call does: ``sd_mm`` for a
-    centre or joint centre (the analytic centre's included, which has no covariance of its
-    own), ``sd_deg`` for an axis."""
+    """A table or CSV row states each answer's SD, as the Python call does
+    (:meth:`jointbench.RecordingFit.stated_sd`): ``sd_mm`` for a centre or joint centre (the
+    analytic centre's included, which has no covariance of its own), ``sd_deg`` for an axis.
+    On the knee's skin markers a centre's status says its precision is not determined (the
+    markers keep no distance from any centre), and its row states none, whatever the SD's
+    size."""
     for kind, moving, key, column in (
         ("joint_center", SHANK, "center_sd_mm", "sd_mm"),
         ("center", SHANK, "center_sd_mm", "sd_mm"),
@@ -194,9 +200,15 @@ def test_every_row_states_the_answer_s_sd(capsys):
         )  # fmt: skip
         assert code == 0
         recording = jointbench.read(KNEE)
-        prepared = jointbench.prepare(recording, kind, moving, THIGH)
-        stated = prepared.fit(method).result.diagnostics[key]
-        assert csv_rows(out).iloc[0][column] == pytest.approx(stated, rel=1e-6)
+        result = jointbench.prepare(recording, kind, moving, THIGH).fit(method).result
+        row = csv_rows(out).iloc[0]
+        if kind == "center":
+            assert result.diagnostics[key] < MAX_CENTER_SD_MM  # the case: under the bound
+            assert PRECISION_NOT_DETERMINED in result.status
+            assert np.isnan(row[column]) and not row["sd_stated"]
+        else:
+            assert row[column] == pytest.approx(result.diagnostics[key], rel=1e-6)
+            assert row["sd_stated"]
 
 
 def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
@@ -272,6 +284,20 @@ def test_machine_readable_outputs_keep_the_sd_a_number(capsys):
     for row in table[table["sd_stated"]].itertuples():
         stated = prepared.fit(row.method).result.diagnostics["axis_sd_deg"]
         assert row.sd_deg == pytest.approx(stated, rel=1e-6)
+
+
+def test_a_status_saying_the_precision_is_not_determined_prints_no_sd(tmp_path, capsys):
+    """A hinge swung 2 deg: the planar cost's and SARA's eigen-gaps lie within the noise, and
+    their statuses say the precision is not determined, though their SDs (some 5 deg) are
+    under the 10 deg bound; the combined cost's SD stands. No output gives the former as a
+    number."""
+    path = tmp_path / "swing.csv"
+    long_table(swing(39, 2.0)).to_csv(path, index=False)
+    arguments = ["fit", "axis", str(path), "--method", "all"]
+    table, _, _ = sd_outputs(capsys, arguments)
+    warned = table["status"].str.contains("precision not determined")
+    assert set(table.loc[warned, "method"]) == {"planar", "SARA"}  # the case
+    check_sd_outputs(capsys, arguments, "sd_deg", {"planar", "SARA", "radial"})
 
 
 def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):

@@ -35,7 +35,7 @@ from jointbench.estimators.batching import failed_trial, mistakes_named, numeric
 from jointbench.estimators.centre_precision import stated_center_sd, stated_covariance
 from jointbench.estimators.precision import stated_axis_sd
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
-from jointbench.estimators.results import with_warnings
+from jointbench.estimators.results import states_precision, with_warnings
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -150,10 +150,12 @@ class RecordingFit:
         """The SD the method states of its answer: an axis direction's [deg]
         (``diagnostics["axis_sd_deg"]``), a centre's along its least determined direction [mm]
         (``diagnostics["center_sd_mm"]``); :data:`NOT_DETERMINED` where that SD states no
-        precision (:func:`~jointbench.estimators.precision.stated_axis_sd`,
-        :func:`~jointbench.estimators.centre_precision.stated_center_sd`: above the bound the
-        status declares the answer not determined beyond), ``None`` where the method states
-        none."""
+        precision: above the bound the status declares the answer not determined beyond
+        (:func:`~jointbench.estimators.precision.stated_axis_sd`,
+        :func:`~jointbench.estimators.centre_precision.stated_center_sd`), or under it where
+        the status says the precision is not determined
+        (:func:`~jointbench.estimators.results.states_precision`); ``None`` where the method
+        states none."""
         key, stated = (
             ("axis_sd_deg", stated_axis_sd)
             if self.kind == "axis"
@@ -162,7 +164,7 @@ class RecordingFit:
         if key not in self.result.diagnostics:
             return None
         sd = stated(self.result.diagnostics[key])
-        return NOT_DETERMINED if sd is None else sd
+        return sd if sd is not None and states_precision(self.result.status) else NOT_DETERMINED
 
     def sd_fields(self) -> dict:
         """:meth:`stated_sd` as a machine-readable output gives it, so that its column holds
