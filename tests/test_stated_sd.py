@@ -13,7 +13,8 @@ from test_axis_sd_validity import swing
 
 import jointbench
 from jointbench.estimators import precision, results, support
-from jointbench.io.fit import NOT_DETERMINED, RecordingFit
+from jointbench.estimators.registry import KINDS
+from jointbench.io.fit import NOT_DETERMINED, SD_NAMES, RecordingFit
 
 SOURCE = Path(jointbench.__file__).resolve().parent
 
@@ -75,6 +76,10 @@ def test_a_status_saying_nothing_of_the_precision_keeps_the_sd():
     # Another warning (the answer's cost against another's) leaves the SD as it is.
     crossed = precision.annotate_agreement(result, result.direction, 1.0, "a", "b")
     assert stated_sd(crossed) == result.diagnostics["axis_sd_deg"]
+
+
+def test_every_kind_names_its_sd():
+    assert SD_NAMES.keys() == set(KINDS)
 
 
 def test_every_producer_of_the_warning_says_it_in_the_one_phrase():

@@ -41,7 +41,7 @@ from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
-from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_STATED
+from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_NAMES, SD_STATED
 from jointbench.io.segments import HELD_SAMPLES, LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
 from jointbench.report import (
@@ -382,10 +382,10 @@ def _row(fitted) -> dict:
 
 def _readable(row: dict) -> dict:
     """A :func:`_row` for people: an SD that states no precision reads
-    :data:`~jointbench.io.fit.NOT_DETERMINED`, which says what the flag beside it says for
+    :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of the flag that says so for
     programs."""
     readable = {key: value for key, value in row.items() if key != SD_STATED}
-    for name in ("sd_deg", "sd_mm"):
+    for name in set(SD_NAMES.values()):
         if name in readable and readable[name] is None:
             readable[name] = NOT_DETERMINED
     return readable

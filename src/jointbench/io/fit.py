@@ -63,6 +63,7 @@ __all__ = [
     "DEFAULT_METHODS",
     "LAB_FIXED_KINDS",
     "NOT_DETERMINED",
+    "SD_NAMES",
     "SD_STATED",
     "Prepared",
     "RecordingFit",
@@ -90,6 +91,9 @@ LAB_FIXED_KINDS = ("center", "axis")
 #: What an output prints in place of an SD that states no precision
 #: (:meth:`RecordingFit.stated_sd`), as the result's status says.
 NOT_DETERMINED = "not determined"
+
+#: Per kind, the name outputs give the SD a method states (:meth:`RecordingFit.sd_fields`).
+SD_NAMES = {"center": "sd_mm", "axis": "sd_deg", "joint_center": "sd_mm"}
 
 #: The flag a machine-readable output sets beside the SD (:meth:`RecordingFit.sd_fields`):
 #: true where it holds a number that states a precision.
@@ -174,7 +178,7 @@ class RecordingFit:
         stated = self.stated_sd()
         if stated is None:
             return {SD_STATED: False}
-        name = "sd_deg" if self.kind == "axis" else "sd_mm"
+        name = SD_NAMES[self.kind]
         number = None if stated == NOT_DETERMINED else stated
         return {name: number, SD_STATED: number is not None}
 
