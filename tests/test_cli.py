@@ -12,11 +12,14 @@ import numpy as np
 import pandas as pd
 import pytest
 from rigs import JOINT, PROXIMAL
+from test_axis_sd_validity import swing
 from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
 
 import jointbench
 from jointbench import cli
 from jointbench.cli import main
+from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM
+from jointbench.estimators.results import PRECISION_NOT_DETERMINED
 from jointbench.geometry import rotation_matrix
 
 SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
@@ -179,9 +182,12 @@ def test_fit_knee_axis_with_bootstrap(capsys):
 
 
 def test_every_row_states_the_answer_s_sd(capsys):
-    """A table or CSV row states each answer's SD, as the Python call does: ``sd_mm`` for a
-    centre or joint centre (the analytic centre's included, which has no covariance of its
-    own), ``sd_deg`` for an axis."""
+    """A table or CSV row states each answer's SD, as the Python call does
+    (:meth:`jointbench.RecordingFit.stated_sd`): ``sd_mm`` for a centre or joint centre (the
+    analytic centre's included, which has no covariance of its own), ``sd_deg`` for an axis.
+    On the knee's skin markers a centre's status says its precision is not determined (the
+    markers keep no distance from any centre), and its row states none, whatever the SD's
+    size."""
     for kind, moving, key, column in (
         ("joint_center", SHANK, "center_sd_mm", "sd_mm"),
         ("center", SHANK, "center_sd_mm", "sd_mm"),
@@ -194,9 +200,15 @@ def test_every_row_states_the_answer_s_sd(capsys):
         )  # fmt: skip
         assert code == 0
         recording = jointbench.read(KNEE)
-        prepared = jointbench.prepare(recording, kind, moving, THIGH)
-        stated = prepared.fit(method).result.diagnostics[key]
-        assert csv_rows(out).iloc[0][column] == pytest.approx(stated, rel=1e-6)
+        result = jointbench.prepare(recording, kind, moving, THIGH).fit(method).result
+        row = csv_rows(out).iloc[0]
+        if kind == "center":
+            assert result.diagnostics[key] < MAX_CENTER_SD_MM  # the case: under the bound
+            assert PRECISION_NOT_DETERMINED in result.status
+            assert np.isnan(row[column]) and not row["sd_stated"]
+        else:
+            assert row[column] == pytest.approx(result.diagnostics[key], rel=1e-6)
+            assert row["sd_stated"]
 
 
 def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
@@ -213,7 +225,7 @@ def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
     code, out, _ = run(capsys, *arguments, "radial", "--format", "csv")
     assert code == 0
     row = csv_rows(out).iloc[0]
-    assert row["sd_deg"] == "not determined"
+    assert np.isnan(row["sd_deg"]) and not row["sd_stated"]
     assert row["status"].startswith(
         "warning: axis not determined by the radial cost: its direction's SD is over 90 deg"
     )
@@ -225,6 +237,67 @@ def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
     code, out, _ = run(capsys, *arguments, "planar", "--format", "csv")
     planar = prepared.fit("planar").result.diagnostics["axis_sd_deg"]
     assert csv_rows(out).iloc[0]["sd_deg"] == pytest.approx(planar, rel=1e-6)
+    assert csv_rows(out).iloc[0]["sd_stated"]
+
+
+def sd_outputs(capsys, arguments: list[str]) -> tuple[pd.DataFrame, list[dict], str]:
+    """The CSV (read by pandas), the JSON and the table of one ``jointbench fit``."""
+    outputs = []
+    for output in ("csv", "json", "table"):
+        code, out, _ = run(capsys, *arguments, "--format", output)
+        assert code == 0
+        outputs.append(out)
+    return csv_rows(outputs[0]), json.loads(outputs[1]), outputs[2]
+
+
+def check_sd_outputs(capsys, arguments: list[str], column: str, undetermined: set[str]):
+    """Each method's SD in ``column``: a number in the CSV (the column float, NaN where it
+    states no precision) and the JSON (null there), flagged by ``sd_stated``; the table reads
+    "not determined" for ``undetermined``, the methods whose SD states no precision."""
+    table, fits, text = sd_outputs(capsys, arguments)
+    assert table[column].dtype == np.float64 and table["sd_stated"].dtype == bool
+    assert set(table.loc[~table["sd_stated"], "method"]) == undetermined
+    assert table.loc[~table["sd_stated"], column].isna().all()
+    assert table.loc[table["sd_stated"], column].notna().all()
+    for fitted, row in zip(fits, table.itertuples(), strict=True):
+        assert fitted["method"] == row.method and fitted["sd_stated"] == row.sd_stated
+        if row.sd_stated:
+            assert fitted[column] == pytest.approx(getattr(row, column), rel=1e-6)
+        else:
+            assert fitted[column] is None
+    for method in table["method"]:
+        line = re.search(rf"^\s*{method} .*$", text, re.MULTILINE).group(0)
+        assert (" not determined " in line) == (method in undetermined), line
+    assert "sd_stated" not in text
+    return table
+
+
+def test_machine_readable_outputs_keep_the_sd_a_number(capsys):
+    """Every axis method on the knee's frames 700 to 999, where the radial cost's SD states
+    no precision: the CSV's ``sd_deg`` is read as a float column, the radial row NaN and
+    flagged, the others the SDs their fits state; JSON gives null and the same flag."""
+    arguments = ["fit", str(KNEE), "--kind", "axis", "--reference", THIGH, "--moving", SHANK]
+    arguments += ["--frames", "700:1000", "--method", "all"]
+    table = check_sd_outputs(capsys, arguments, "sd_deg", {"radial"})
+    recording = jointbench.read(KNEE).frames("700:1000")
+    prepared = jointbench.prepare(recording, "axis", SHANK.split(","), THIGH.split(","))
+    for row in table[table["sd_stated"]].itertuples():
+        stated = prepared.fit(row.method).result.diagnostics["axis_sd_deg"]
+        assert row.sd_deg == pytest.approx(stated, rel=1e-6)
+
+
+def test_a_status_saying_the_precision_is_not_determined_prints_no_sd(tmp_path, capsys):
+    """A hinge swung 2 deg: the planar cost's and SARA's eigen-gaps lie within the noise, and
+    their statuses say the precision is not determined, though their SDs (some 5 deg) are
+    under the 10 deg bound; the combined cost's SD stands. No output gives the former as a
+    number."""
+    path = tmp_path / "swing.csv"
+    long_table(swing(39, 2.0)).to_csv(path, index=False)
+    arguments = ["fit", "axis", str(path), "--method", "all"]
+    table, _, _ = sd_outputs(capsys, arguments)
+    warned = table["status"].str.contains("precision not determined")
+    assert set(table.loc[warned, "method"]) == {"planar", "SARA"}  # the case
+    check_sd_outputs(capsys, arguments, "sd_deg", {"planar", "SARA", "radial"})
 
 
 def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):

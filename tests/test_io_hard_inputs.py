@@ -515,5 +515,10 @@ def test_method_all_runs_what_can_run_and_says_why_the_rest_did_not(tmp_path, ca
     assert table.loc["MA", "status"].startswith("failed: markers has 1 markers")
     # One moving marker: NM answers, and says what it could not verify (no pose).
     assert table.loc["NM", "status"].startswith("warning: not verified") and "MA did not run" in err
+    # No SD is stated (a failed method, or one marker: no centre's precision), and the flag
+    # says so in every row.
+    assert "sd_mm" not in table and table["sd_stated"].dtype == bool
+    assert not table["sd_stated"].any()
     code, out, _ = run(capsys, *arguments, "--method", "all", "--frames", "1:4", "--format", "json")
     assert code == 2 and all(f["status"].startswith("failed") for f in json.loads(out))
+    assert not any(f["sd_stated"] for f in json.loads(out))

@@ -15,8 +15,9 @@ from test_io_recordings import KNEE, write_c3d
 import jointbench
 from jointbench.cli import main
 from jointbench.estimators import registry
+from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM
 from jointbench.io import Recording, read
-from jointbench.io.fit import DEFAULT_METHODS
+from jointbench.io.fit import DEFAULT_METHODS, NOT_DETERMINED
 
 LABELS = ["P1", "P2", "P3", "D1", "D2", "D3"]
 
@@ -238,6 +239,9 @@ def test_a_centre_on_skin_markers_does_not_claim_a_noise_only_precision():
     )
     assert "precision not determined" in fitted.result.status, fitted.result.status
     assert fitted.result.diagnostics["center_spheres_fit_ratio"] > 1.5
+    # Nor does the SD it states, under the 10 mm bound, pass as one.
+    assert fitted.result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert fitted.stated_sd() == NOT_DETERMINED
 
 
 def _thigh_marker_on_a_line(offset_mm: float) -> Recording:

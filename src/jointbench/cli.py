@@ -41,7 +41,7 @@ from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
-from jointbench.io.fit import CENTER_IS
+from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_NAMES, SD_STATED
 from jointbench.io.segments import HELD_SAMPLES, LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
 from jointbench.report import (
@@ -343,9 +343,10 @@ def _labels(text: str | None) -> list[str] | None:
 
 
 def _row(fitted) -> dict:
-    """One flat row of a fit for the table and CSV outputs (a failed method: its status)."""
+    """One flat row of a fit for the CSV output (a failed method: its status, and no SD),
+    its SD a number or ``None`` (:meth:`jointbench.RecordingFit.sd_fields`)."""
     if isinstance(fitted, _Failed):
-        return {"method": fitted.method, "converged": False, "status": fitted.status}
+        return fitted.to_dict()
     row = {"method": fitted.method}
     result = fitted.result
     if fitted.kind == "axis":
@@ -353,11 +354,7 @@ def _row(fitted) -> dict:
         row.update(zip(("point_x_mm", "point_y_mm", "point_z_mm"), result.point, strict=True))
     else:
         row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
-    # The precision the checked call stated, where it stated one, and where it is no
-    # precision (above the bound its status declares it not determined beyond) no number.
-    stated = fitted.stated_sd()
-    if stated is not None:
-        row["sd_deg" if fitted.kind == "axis" else "sd_mm"] = stated
+    row.update(fitted.sd_fields())
     # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
     # for gauss-markov), and the one the SD is read from under the name of its diagnostic.
     covariance = getattr(result, "covariance", None)
@@ -383,6 +380,17 @@ def _row(fitted) -> dict:
     return row
 
 
+def _readable(row: dict) -> dict:
+    """A :func:`_row` for people: an SD that states no precision reads
+    :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of the flag that says so for
+    programs."""
+    readable = {key: value for key, value in row.items() if key != SD_STATED}
+    for name in set(SD_NAMES.values()):
+        if name in readable and readable[name] is None:
+            readable[name] = NOT_DETERMINED
+    return readable
+
+
 @dataclass(frozen=True)
 class _Failed:
     """A method of ``--method all`` that could not fit the data, and why."""
@@ -395,7 +403,12 @@ class _Failed:
         return f"failed: {self.error}"
 
     def to_dict(self) -> dict:
-        return {"method": self.method, "converged": False, "status": self.status}
+        return {
+            "method": self.method,
+            "converged": False,
+            SD_STATED: False,
+            "status": self.status,
+        }
 
 
 def _fit_all(prepared, names: list[str], args: argparse.Namespace) -> list:
@@ -489,13 +502,11 @@ def _fit(args: argparse.Namespace) -> int:
     if args.format == "json":
         print(json.dumps([fitted.to_dict() for fitted in fits], indent=2))
         return code
-    table = pd.DataFrame([_row(fitted) for fitted in fits])
-    # A failed method's row has no counts; the others' stay whole numbers beside it.
-    counts = [column for column in ("frames", "gap_frames") if column in table]
-    table[counts] = table[counts].astype("Int64")
+    rows = [_row(fitted) for fitted in fits]
     if args.format == "csv":
-        print(table.to_csv(index=False, float_format="%.9g"), end="")
+        print(_table(rows).to_csv(index=False, float_format="%.9g"), end="")
         return code
+    table = _table([_readable(row) for row in rows])
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
     if not done:
         return code
@@ -515,6 +526,16 @@ def _fit(args: argparse.Namespace) -> int:
         if stated is not None:
             print(f"sqrt_trace_center_cov_mm: {fitted.method}: from {stated[1]}")
     return code
+
+
+def _table(rows: list[dict]) -> pd.DataFrame:
+    """The fits' ``rows`` as one table: a row's missing entries, and ``None``, are empty in
+    its CSV."""
+    table = pd.DataFrame(rows)
+    # A failed method's row has no counts; the others' stay whole numbers beside it.
+    counts = [column for column in ("frames", "gap_frames") if column in table]
+    table[counts] = table[counts].astype("Int64")
+    return table
 
 
 def _write_world(path: Path, fits: list) -> None:

@@ -104,7 +104,7 @@ import numpy as np
 
 from jointbench.estimators.pose_noise import pull_mm
 from jointbench.estimators.precision import distinct_frames, rigid_dof
-from jointbench.estimators.results import with_warnings
+from jointbench.estimators.results import PRECISION_NOT_DETERMINED, with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric_into
@@ -644,14 +644,14 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
         warnings.append(_undetermined(sd, f"the rigid-body residual of {residual_mm:.3g} mm"))
     elif supported and not share < MAX_SD_NOISE_SHARE:
         warnings.append(
-            f"centre's precision not determined by the data: along its least determined "
+            f"centre's {PRECISION_NOT_DETERMINED} by the data: along its least determined "
             f"direction the noise is {100 * share:.0f}% of the spread of the markers' "
             f"directions from it (below {100 * MAX_SD_NOISE_SHARE:g}% its SD of {sd:.3g} mm "
             "would hold)"
         )
     elif supported and numbers["center_spheres_fit_p_value"] < ROTATION_ALPHA:
         warnings.append(
-            f"centre's precision not determined by the data: even about their own centre the "
+            f"centre's {PRECISION_NOT_DETERMINED} by the data: even about their own centre the "
             f"spheres leave radial residuals {numbers['center_spheres_fit_ratio']:.3g} times "
             f"the rigid-body noise's variance (p = "
             f"{numbers['center_spheres_fit_p_value']:.2g}): the markers do not keep their "

@@ -218,7 +218,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jointbench.estimators.results import with_warnings
+from jointbench.estimators.results import PRECISION_NOT_DETERMINED, with_warnings
 from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import tangent_basis_into
@@ -586,7 +586,7 @@ def annotate_first_order(result, sd_deg: float, first_order: np.ndarray):
     warnings = ()
     if stated_axis_sd(all_markers_sd_deg) is not None and stated_axis_sd(sd_deg) is None:
         warnings = (
-            f"precision not determined: only {kept.size} of {first_order.size} markers travel "
+            f"{PRECISION_NOT_DETERMINED}: only {kept.size} of {first_order.size} markers travel "
             "far enough for the rotation the poses show to read it within "
             f"{MAX_REFERENCE_POSE_SD_DEG:g} deg a frame, and on their own the direction's SD "
             f"{_sd_is(sd_deg)} (above {MAX_AXIS_SD_DEG:g} deg): the others lie too near "
@@ -622,13 +622,13 @@ def annotate_validity(
     if stated_axis_sd(sd_deg) is not None:
         if not ratio < 1.0:
             warnings = (
-                f"precision not determined: the eigen-gap of {problem_name} ({gap:.3g}) is "
+                f"{PRECISION_NOT_DETERMINED}: the eigen-gap of {problem_name} ({gap:.3g}) is "
                 f"within the noise's own share of it ({noise_share:.3g}), so its direction's "
                 f"first-order SD ({sd_deg:.1f} deg) is not a statement of precision",
             )
         elif bias_deg is not None and not bias_deg <= sd_deg:
             warnings = (
-                f"precision not determined: the noise's anisotropic share of {problem_name} "
+                f"{PRECISION_NOT_DETERMINED}: the noise's anisotropic share of {problem_name} "
                 f"pulls the axis by up to {bias_deg:.1f} deg, more than its direction's "
                 f"first-order SD ({sd_deg:.1f} deg), which does not include it",
             )
@@ -771,7 +771,7 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
         # NaN fails the comparison and is warned about: it tells nothing either.
         if not arc_sd_deg <= MAX_REFERENCE_POSE_SD_DEG:
             warnings = (
-                f"precision not determined: no marker travels far enough for the rotation "
+                f"{PRECISION_NOT_DETERMINED}: no marker travels far enough for the rotation "
                 f"the poses show to read it within {MAX_REFERENCE_POSE_SD_DEG:g} deg a frame "
                 f"(the one with the longest lever reads it to {arc_sd_deg:.1f} deg): they lie "
                 "too near the axis for their noise to be first order, so no SD stated of an "

@@ -7,13 +7,29 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
+    "PRECISION_NOT_DETERMINED",
     "AxisResult",
     "CenterResult",
     "JointCenterResult",
     "frozen_rows",
+    "states_precision",
     "with_fields",
     "with_warnings",
 ]
+
+
+#: The words of every warning that says an answer's stated SD is no statement of its
+#: precision, whatever its size (the noise within the eigen-gap it is read from, a pull it
+#: leaves out, no marker reading the rotation to first order, markers that keep no distance
+#: from any centre): the producers write them and :func:`states_precision` reads them.
+PRECISION_NOT_DETERMINED = "precision not determined"
+
+
+def states_precision(status: str) -> bool:
+    """Whether a result's ``status`` lets the SD its method states be read as a precision:
+    not where a warning in it says the precision is not determined
+    (:data:`PRECISION_NOT_DETERMINED`)."""
+    return PRECISION_NOT_DETERMINED not in status
 
 
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:

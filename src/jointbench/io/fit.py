@@ -35,7 +35,7 @@ from jointbench.estimators.batching import failed_trial, mistakes_named, numeric
 from jointbench.estimators.centre_precision import stated_center_sd, stated_covariance
 from jointbench.estimators.precision import stated_axis_sd
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
-from jointbench.estimators.results import with_warnings
+from jointbench.estimators.results import states_precision, with_warnings
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -63,6 +63,8 @@ __all__ = [
     "DEFAULT_METHODS",
     "LAB_FIXED_KINDS",
     "NOT_DETERMINED",
+    "SD_NAMES",
+    "SD_STATED",
     "Prepared",
     "RecordingFit",
     "fit",
@@ -89,6 +91,13 @@ LAB_FIXED_KINDS = ("center", "axis")
 #: What an output prints in place of an SD that states no precision
 #: (:meth:`RecordingFit.stated_sd`), as the result's status says.
 NOT_DETERMINED = "not determined"
+
+#: Per kind, the name outputs give the SD a method states (:meth:`RecordingFit.sd_fields`).
+SD_NAMES = {"center": "sd_mm", "axis": "sd_deg", "joint_center": "sd_mm"}
+
+#: The flag a machine-readable output sets beside the SD (:meth:`RecordingFit.sd_fields`):
+#: true where it holds a number that states a precision.
+SD_STATED = "sd_stated"
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,10 +154,12 @@ class RecordingFit:
         """The SD the method states of its answer: an axis direction's [deg]
         (``diagnostics["axis_sd_deg"]``), a centre's along its least determined direction [mm]
         (``diagnostics["center_sd_mm"]``); :data:`NOT_DETERMINED` where that SD states no
-        precision (:func:`~jointbench.estimators.precision.stated_axis_sd`,
-        :func:`~jointbench.estimators.centre_precision.stated_center_sd`: above the bound the
-        status declares the answer not determined beyond), ``None`` where the method states
-        none."""
+        precision: above the bound the status declares the answer not determined beyond
+        (:func:`~jointbench.estimators.precision.stated_axis_sd`,
+        :func:`~jointbench.estimators.centre_precision.stated_center_sd`), or under it where
+        the status says the precision is not determined
+        (:func:`~jointbench.estimators.results.states_precision`); ``None`` where the method
+        states none."""
         key, stated = (
             ("axis_sd_deg", stated_axis_sd)
             if self.kind == "axis"
@@ -157,7 +168,19 @@ class RecordingFit:
         if key not in self.result.diagnostics:
             return None
         sd = stated(self.result.diagnostics[key])
-        return NOT_DETERMINED if sd is None else sd
+        return sd if sd is not None and states_precision(self.result.status) else NOT_DETERMINED
+
+    def sd_fields(self) -> dict:
+        """:meth:`stated_sd` as a machine-readable output gives it, so that its column holds
+        numbers only: under ``sd_deg`` (an axis) or ``sd_mm`` (a centre) the SD, ``None``
+        where it states no precision, and :data:`SD_STATED`, whether it holds a number. Where
+        the method states no SD, the flag alone (false)."""
+        stated = self.stated_sd()
+        if stated is None:
+            return {SD_STATED: False}
+        name = SD_NAMES[self.kind]
+        number = None if stated == NOT_DETERMINED else stated
+        return {name: number, SD_STATED: number is not None}
 
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
         """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
@@ -177,6 +200,7 @@ class RecordingFit:
         else:
             out["center_mm"] = self.result.center.tolist()
             out.update(_joint_points(self.kind, self.result))
+        out.update(self.sd_fields())
         covariance = getattr(self.result, "covariance", None)
         if covariance is not None:
             out["covariance_mm2"] = np.asarray(covariance).tolist()
