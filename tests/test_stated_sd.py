@@ -10,9 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from test_axis_sd_validity import swing
+from test_gauss_markov_fit import _skin_thigh
 
 import jointbench
 from jointbench.estimators import precision, results, support
+from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM
 from jointbench.estimators.registry import KINDS
 from jointbench.io.fit import NOT_DETERMINED, SD_NAMES, RecordingFit
 
@@ -95,3 +97,27 @@ def test_every_producer_of_the_warning_says_it_in_the_one_phrase():
     # The producers this names read the constant (their wording is kept to the letter).
     for module in ("estimators/precision.py", "estimators/centre_precision.py"):
         assert "PRECISION_NOT_DETERMINED" in (SOURCE / module).read_text()
+
+
+def joint_centre_sd(result) -> float | str | None:
+    frames = np.arange(60)
+    return RecordingFit("joint_center", result.method, result, None, frames, 0).stated_sd()
+
+
+@pytest.mark.parametrize("method", ["SCoRE", "analytic"])
+def test_a_joint_centre_whose_model_the_data_reject_states_no_sd(method):
+    """A thigh cluster sliding with the hip angles: the fixed-centre model's test rejects, and
+    the status says the SD does not describe the answer's error; it is no precision."""
+    result = jointbench.fit_joint_center(*_skin_thigh(0)[:2], method=method)
+    assert "its SD does not describe its error" in result.status  # the case
+    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert joint_centre_sd(result) == NOT_DETERMINED
+
+
+def test_a_zero_noise_given_states_no_sd():
+    """``noise_mm=0`` given to paper C's fit on noisy data: a zero covariance, which its status
+    says does not describe the error, is no precision of 0 mm."""
+    result = jointbench.fit_joint_center(*_skin_thigh(0)[:2], method="gauss-markov", noise_mm=0.0)
+    assert "noise_mm = 0 was given" in result.status  # the case
+    assert result.diagnostics["center_sd_mm"] == 0.0
+    assert joint_centre_sd(result) == NOT_DETERMINED

@@ -146,7 +146,11 @@ from jointbench.estimators.pose_noise import (
     point_covariance_at,
 )
 from jointbench.estimators.registry import register, register_many
-from jointbench.estimators.results import JointCenterResult, with_warnings
+from jointbench.estimators.results import (
+    PRECISION_NOT_DETERMINED,
+    JointCenterResult,
+    with_warnings,
+)
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
@@ -812,8 +816,8 @@ def _model_verdict(
         rms_mm = math.sqrt(3.0 * variance)
         warning = (
             f"noise_mm = 0 was given, but the rigid-body residuals show noise of {rms_mm:.3g} mm "
-            "RMS: the zero covariance does not describe the centre's error (leave noise_mm out "
-            "to estimate the noise from the data)"
+            "RMS: the zero covariance does not describe the centre's error, its "
+            f"{PRECISION_NOT_DETERMINED} (leave noise_mm out to estimate the noise from the data)"
         )
         return (warning,), untested
     if not (np.isfinite(chi2) and dof >= 1 and noisy):
@@ -931,7 +935,7 @@ def _fixed_centre_test(
     warnings, numbers = _model_verdict(fitted, proximal, distal)
     shared = (
         "; this answer's model is the same (gauss-markov-frame0's fit to the same poses "
-        "tested it), so its SD does not describe its error"
+        f"tested it), so its SD does not describe its error: {PRECISION_NOT_DETERMINED}"
     )
     tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
     return with_warnings(
