@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 from test_axis_sd_validity import swing
 from test_gauss_markov_fit import _skin_thigh
+from test_pose_noise import _PULLED, _hip, _noisy
 
 import jointbench
 from jointbench.estimators import precision, results, support
-from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM
+from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM, MAX_POSE_NOISE_PULL_MM
 from jointbench.estimators.registry import KINDS
 from jointbench.io.fit import NOT_DETERMINED, SD_NAMES, RecordingFit
 
@@ -102,6 +103,18 @@ def test_every_producer_of_the_warning_says_it_in_the_one_phrase():
 def joint_centre_sd(result) -> float | str | None:
     frames = np.arange(60)
     return RecordingFit("joint_center", result.method, result, None, frames, 0).stated_sd()
+
+
+@pytest.mark.parametrize("method", ["SCoRE", "gauss-markov-frame0"])
+def test_a_joint_centre_the_poses_noise_pulled_states_no_sd(method):
+    """Nearly a hinge, 0.5 mm noise: the noise in the poses pulls the answer tens of
+    millimetres towards the markers, a bias its SD of a few millimetres (the scatter's) does
+    not contain, so that SD is no statement of the answer's precision."""
+    result = jointbench.fit_joint_center(*_noisy(_hip(0, ratio=0.06), 100), method=method)
+    assert _PULLED in result.status  # the case
+    assert result.diagnostics["center_pose_noise_pull_mm"] > MAX_POSE_NOISE_PULL_MM
+    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert joint_centre_sd(result) == NOT_DETERMINED
 
 
 @pytest.mark.parametrize("method", ["SCoRE", "analytic"])

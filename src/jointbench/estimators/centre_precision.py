@@ -837,8 +837,15 @@ def _undetermined(sd: float, source: str) -> str:
 def _pulled_by_pose_noise(share: float, pull: float) -> str:
     """The warning for a joint centre whose poses' noise has the ratio ``share`` to the
     noise-free information along its least determined direction and pulled it ``pull``
-    [mm]."""
-    words = "the noise in the poses pulls a least-squares joint centre towards the markers"
+    [mm]. The pull is a bias the answer's SD (its scatter's) does not contain: a pull of
+    :data:`MAX_POSE_NOISE_PULL_MM`, half :data:`MAX_CENTER_SD_MM`, is over
+    :data:`MAX_STEP_SDS` of any SD that holds, and at :data:`MAX_POSE_NOISE_SHARE` the answer
+    keeps at most five sixths of the joint's offset from the markers, so that SD is no
+    statement of the answer's precision."""
+    words = (
+        f"{PRECISION_NOT_DETERMINED}: the noise in the poses pulls a least-squares joint centre "
+        "towards the markers"
+    )
     if math.isinf(share):
         return (
             f"{words} by more than the data can bound: it is as large as the rotation off the "
