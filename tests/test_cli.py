@@ -14,6 +14,7 @@ import pytest
 from rigs import JOINT, PROXIMAL
 from test_axis_sd_validity import swing
 from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
+from test_pose_noise import _hip, _noisy
 
 import jointbench
 from jointbench import cli
@@ -308,7 +309,9 @@ def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
     for the analytic centre, which has no covariance of its own, the one from both segments'
     poses. ``sqrt_trace_cov_mm`` is the method's own, as the pipeline's scores name it (paper C's
     ``W_c``; none for the analytic centre), so that one name means one thing. The table names
-    where the stated one comes from, and JSON gives both covariances and the source."""
+    where the stated one comes from, and JSON gives both covariances and the source. On the
+    knee the noise in the poses pulls both answers, so that covariance states no precision:
+    the CSV leaves its root empty, as it does the SD, and the table reads "not determined"."""
     recording = jointbench.read(KNEE)
     prepared = jointbench.prepare(recording, "joint_center", SHANK.split(","), THIGH.split(","))
     arguments = ["fit", str(KNEE), "--kind", "joint_center", "--reference", THIGH]
@@ -319,24 +322,50 @@ def test_a_joint_centre_row_states_the_covariance_of_its_scatter(capsys):
     ):
         result = prepared.fit(method).result
         stated = np.asarray(result.diagnostics["center_covariance_mm2"])
+        assert PRECISION_NOT_DETERMINED in result.status  # the case
         code, out, _ = run(capsys, *arguments, method, "--format", "csv")
         assert code == 0
         row = csv_rows(out).iloc[0]
-        assert row["sqrt_trace_center_cov_mm"] == pytest.approx(np.sqrt(np.trace(stated)), rel=1e-6)
+        assert np.isnan(row["sqrt_trace_center_cov_mm"]) and not row["sd_stated"]
         if result.covariance is None:
             assert "sqrt_trace_cov_mm" not in row or np.isnan(row["sqrt_trace_cov_mm"])
         else:
             own = np.sqrt(np.trace(result.covariance))
             assert row["sqrt_trace_cov_mm"] == pytest.approx(own, rel=1e-6)
-            assert row["sqrt_trace_center_cov_mm"] > 2.0 * own
+            assert np.sqrt(np.trace(stated)) > 2.0 * own
         code, out, _ = run(capsys, *arguments, method)
         assert code == 0
         assert f"sqrt_trace_center_cov_mm: {method}: from {source}" in out
+        line = re.search(rf"^\s*{method} .*$", out, re.MULTILINE).group(0)
+        assert line.count(" not determined ") == 2, line
         code, out, _ = run(capsys, *arguments, method, "--format", "json")
         assert code == 0
         (fitted,) = json.loads(out)
         np.testing.assert_allclose(fitted["center_covariance_mm2"], stated, rtol=1e-9)
         assert fitted["center_covariance_is"] == source
+
+
+def test_a_joint_centre_row_whose_sd_holds_states_the_root_of_its_covariance(tmp_path, capsys):
+    """A hip swung 30 deg about two axes, 0.5 mm noise, whose joint centre's SD states its
+    precision: ``sqrt_trace_center_cov_mm`` is the root of the trace of the covariance that SD
+    is read from."""
+    proximal, distal = _noisy(_hip(0, ratio=1.0), 7)
+    labels = [f"P{i}" for i in range(4)], [f"D{i}" for i in range(4)]
+    markers = np.concatenate([proximal, distal], axis=1)
+    path = write_c3d(tmp_path / "hip.c3d", labels[0] + labels[1], markers)
+    arguments = ["--reference", ",".join(labels[0]), "--moving", ",".join(labels[1])]
+    code, out, _ = run(
+        capsys, "fit", str(path), "--kind", "joint_center", *arguments, "--method", "SCoRE",
+        "--format", "csv",
+    )  # fmt: skip
+    assert code == 0
+    row = csv_rows(out).iloc[0]
+    assert row["sd_stated"]  # the case
+    fitted = jointbench.fit(
+        jointbench.read(path), "joint_center", *reversed(labels), method="SCoRE"
+    )
+    stated = fitted.stated_covariance()[0]
+    assert row["sqrt_trace_center_cov_mm"] == pytest.approx(np.sqrt(np.trace(stated)), rel=1e-6)
 
 
 def test_world_trajectory_on_request(tmp_path, capsys):

@@ -342,9 +342,15 @@ def _labels(text: str | None) -> list[str] | None:
     return labels
 
 
+#: The column of a joint centre's row holding the root of the trace of the covariance its
+#: SD is read from (:meth:`jointbench.RecordingFit.stated_covariance`) [mm].
+_STATED_COVARIANCE = "sqrt_trace_center_cov_mm"
+
+
 def _row(fitted) -> dict:
     """One flat row of a fit for the CSV output (a failed method: its status, and no SD),
-    its SD a number or ``None`` (:meth:`jointbench.RecordingFit.sd_fields`)."""
+    its SD a number or ``None`` (:meth:`jointbench.RecordingFit.sd_fields`), and so the root
+    of the trace of the covariance it is read from (:data:`_STATED_COVARIANCE`)."""
     if isinstance(fitted, _Failed):
         return fitted.to_dict()
     row = {"method": fitted.method}
@@ -356,13 +362,15 @@ def _row(fitted) -> dict:
         row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
     row.update(fitted.sd_fields())
     # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
-    # for gauss-markov), and the one the SD is read from under the name of its diagnostic.
+    # for gauss-markov), and the one the SD is read from under the name of its diagnostic:
+    # where that SD states no precision, neither does the covariance it is read from.
     covariance = getattr(result, "covariance", None)
     if covariance is not None:
         row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(covariance)))
     stated = fitted.stated_covariance()
     if stated is not None:
-        row["sqrt_trace_center_cov_mm"] = float(np.sqrt(np.trace(stated[0])))
+        root = float(np.sqrt(np.trace(stated[0])))
+        row[_STATED_COVARIANCE] = root if row[SD_STATED] else None
     if fitted.bootstrap is not None:
         if fitted.kind == "axis":
             row["boot_cone95_deg"] = fitted.bootstrap_cone_deg()
@@ -381,11 +389,11 @@ def _row(fitted) -> dict:
 
 
 def _readable(row: dict) -> dict:
-    """A :func:`_row` for people: an SD that states no precision reads
-    :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of the flag that says so for
-    programs."""
+    """A :func:`_row` for people: an SD that states no precision, and the root of the
+    covariance it is read from, read :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of
+    the flag that says so for programs."""
     readable = {key: value for key, value in row.items() if key != SD_STATED}
-    for name in set(SD_NAMES.values()):
+    for name in {*SD_NAMES.values(), _STATED_COVARIANCE}:
         if name in readable and readable[name] is None:
             readable[name] = NOT_DETERMINED
     return readable
@@ -524,7 +532,7 @@ def _fit(args: argparse.Namespace) -> int:
     for fitted in done:
         stated = fitted.stated_covariance()
         if stated is not None:
-            print(f"sqrt_trace_center_cov_mm: {fitted.method}: from {stated[1]}")
+            print(f"{_STATED_COVARIANCE}: {fitted.method}: from {stated[1]}")
     return code
 
 
