@@ -68,13 +68,13 @@ def test_a_status_saying_the_precision_is_not_determined_states_no_sd(warn):
     assert isinstance(stated_sd(result), float)
     warned = warn(result)
     assert results.PRECISION_NOT_DETERMINED in warned.status  # the case
-    assert not results.states_precision(warned.status)
+    assert not results.states_precision(warned)
     assert stated_sd(warned) == NOT_DETERMINED
 
 
 def test_a_status_saying_nothing_of_the_precision_keeps_the_sd():
     result = planar_ok()
-    assert results.states_precision(result.status)
+    assert results.states_precision(result)
     assert stated_sd(result) == result.diagnostics["axis_sd_deg"]
     # Another warning (the answer's cost against another's) leaves the SD as it is.
     crossed = precision.annotate_agreement(result, result.direction, 1.0, "a", "b")
@@ -134,3 +134,24 @@ def test_a_zero_noise_given_states_no_sd():
     assert "noise_mm = 0 was given" in result.status  # the case
     assert result.diagnostics["center_sd_mm"] == 0.0
     assert joint_centre_sd(result) == NOT_DETERMINED
+
+
+@pytest.mark.parametrize("method", ["SCoRE", "gauss-markov-frame0"])
+def test_a_joint_centre_whose_data_the_verdict_refuses_states_no_sd(method):
+    """A noisy pure hinge: the support verdict says the centre is not determined along the
+    hinge's axis, so the SD the method computes (a few millimetres, from a covariance that
+    takes the centre as determined) is no statement of its precision."""
+    result = jointbench.fit_joint_center(*_noisy(_hip(1, ratio=0.0), 3), method=method)
+    assert "the centre is not determined along it" in result.status  # the case
+    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert joint_centre_sd(result) == NOT_DETERMINED
+
+
+def test_a_centre_whose_data_the_verdict_refuses_states_no_sd():
+    """One segment held still: the verdict refuses a centre (no rotation), whatever SD the
+    method's precision step would give."""
+    result = jointbench.fit_axis(swing(0, 60.0), "planar")
+    refused = support.annotate(result, support.Support(("range of motion too small",), {}))
+    assert stated_sd(refused) == NOT_DETERMINED
+    caveat = support.annotate(result, support.Support((), {}, caveats=("frames not independent",)))
+    assert stated_sd(caveat) == result.diagnostics["axis_sd_deg"]

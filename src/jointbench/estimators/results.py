@@ -8,6 +8,7 @@ import numpy as np
 
 __all__ = [
     "PRECISION_NOT_DETERMINED",
+    "REFUSED",
     "AxisResult",
     "CenterResult",
     "JointCenterResult",
@@ -25,11 +26,19 @@ __all__ = [
 PRECISION_NOT_DETERMINED = "precision not determined"
 
 
-def states_precision(status: str) -> bool:
-    """Whether a result's ``status`` lets the SD its method states be read as a precision:
-    not where a warning in it says the precision is not determined
-    (:data:`PRECISION_NOT_DETERMINED`)."""
-    return PRECISION_NOT_DETERMINED not in status
+#: The diagnostic a checked call sets true where the support verdict refused the data (the
+#: data cannot support an answer: too little motion, markers not rigid, a centre not
+#: determined along a hinge's axis), false where it did not; a method's SD then rests on a
+#: model the data do not support.
+REFUSED = "support_refused"
+
+
+def states_precision(result) -> bool:
+    """Whether the SD the method states of ``result`` can be read as a precision: not where
+    a warning in its status says the precision is not determined
+    (:data:`PRECISION_NOT_DETERMINED`), nor where the support verdict refused its data
+    (:data:`REFUSED`)."""
+    return PRECISION_NOT_DETERMINED not in result.status and not result.diagnostics.get(REFUSED)
 
 
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:

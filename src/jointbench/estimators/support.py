@@ -156,7 +156,7 @@ import numpy as np
 
 from jointbench.estimators.batching import check_poses
 from jointbench.estimators.pose_noise import NoisyPoses, PoseNoise, pose_noise
-from jointbench.estimators.results import with_warnings
+from jointbench.estimators.results import REFUSED, with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES, check_markers
 from jointbench.geometry import rotation_vector
@@ -2503,9 +2503,10 @@ def annotate(result, support: Support):
     """``result`` with the support warnings, then its caveats or, where it has none, what the
     frames' lag-1 autocorrelation says (:class:`Untested`), appended to its ``status``, and the
     numbers in its ``diagnostics`` under ``support_<name>`` (the lag-1 statement's under their
-    own names);
-    ``converged`` is left as the method set it."""
+    own names), and under :data:`~jointbench.estimators.results.REFUSED` whether the verdict
+    refused the data; ``converged`` is left as the method set it."""
     numbers = {f"support_{key}": value for key, value in support.diagnostics.items()}
+    numbers[REFUSED] = bool(support.warnings)
     words = support.warnings + support.caveats
     if support.untested is not None:
         words += (support.untested.words(),)

@@ -157,7 +157,7 @@ class RecordingFit:
         precision: above the bound the status declares the answer not determined beyond
         (:func:`~jointbench.estimators.precision.stated_axis_sd`,
         :func:`~jointbench.estimators.centre_precision.stated_center_sd`), or under it where
-        the status says the precision is not determined
+        the status says the precision is not determined or the support verdict refused the data
         (:func:`~jointbench.estimators.results.states_precision`); ``None`` where the method
         states none."""
         key, stated = (
@@ -168,7 +168,7 @@ class RecordingFit:
         if key not in self.result.diagnostics:
             return None
         sd = stated(self.result.diagnostics[key])
-        return sd if sd is not None and states_precision(self.result.status) else NOT_DETERMINED
+        return sd if sd is not None and states_precision(self.result) else NOT_DETERMINED
 
     def sd_fields(self) -> dict:
         """:meth:`stated_sd` as a machine-readable output gives it, so that its column holds
