@@ -7,6 +7,7 @@ The end-to-end case, a user's program that never ends in a run, is in tests/test
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import pty
@@ -406,6 +407,69 @@ def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monk
 
     monkeypatch.setattr(timelimit.os, "waitpid", waited_then_stopped)
     assert timelimit._wait_for_the_keeper(keeper) == 128 + signal.SIGINT
+
+
+@pytest.fixture
+def stopped_as_the_keeper_is():
+    """This process's stop signals raise :class:`timelimit.Interrupted`, as the keeper's do;
+    the test's own handlers are restored after (a stop's handler ignores the signals once it
+    has run)."""
+    saved = {signum: signal.getsignal(signum) for signum in timelimit._STOP_SIGNALS}
+    for signum in saved:
+        signal.signal(signum, timelimit._interrupt)
+    yield
+    for signum, handler in saved.items():
+        signal.signal(signum, handler)
+
+
+def test_a_stop_that_comes_as_the_program_is_started_stops_it(
+    stopped_as_the_keeper_is, monkeypatch
+):
+    """The limited shell killed just as the keeper starts the program (its SIGTERM to the
+    keeper arriving while the program is started): the program is stopped with the keeper,
+    not left running, without a limit, by a keeper that ended before it knew the program's
+    pid."""
+    spawned = []
+    spawn = os.posix_spawnp
+
+    def spawned_as_stopped(*arguments, **options) -> int:
+        spawned.append(spawn(*arguments, **options))
+        os.kill(os.getpid(), signal.SIGTERM)
+        return spawned[-1]
+
+    monkeypatch.setattr(timelimit.os, "posix_spawnp", spawned_as_stopped)
+    try:
+        with pytest.raises(timelimit.Interrupted):
+            timed(["bash", "-c", FOREVER])
+        (program,) = spawned
+        assert not alive(program)
+    finally:
+        for program in spawned:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(program, signal.SIGKILL)
+
+
+def test_the_program_starts_with_the_stop_signals_unblocked(tmp_path):
+    """However the process that limits it holds the stop signals (the keeper holds them while
+    it starts the program), the program does not inherit them held: a SIGTERM would wait,
+    unseen, until the SIGKILL after the grace."""
+    written = tmp_path / "mask"
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, timelimit._STOP_SIGNALS)
+    try:
+        timed(["bash", "-c", f"grep SigBlk /proc/self/status > {written}"])
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+    blocked = int(written.read_text().split()[1], 16)
+    assert [signum for signum in timelimit._STOP_SIGNALS if blocked >> (signum - 1) & 1] == []
+
+
+def test_a_program_that_cannot_be_started_leaves_the_stop_signals_as_they_were():
+    """The stops held while the program is started are taken again when it cannot be: a
+    keeper, or a caller, left holding them would no longer be stopped by Ctrl-C."""
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    with pytest.raises(FileNotFoundError):
+        timelimit.run_limited(["no-such-program-jointbench"], LIMIT_S, GRACE_S)
+    assert signal.pthread_sigmask(signal.SIG_BLOCK, []) == before
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):

@@ -230,13 +230,29 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_descendants`): nothing
     of the job outlives it. This process becomes the reaper of the command's orphans
     (``_adopt_orphans``), and every process descended from it is taken as the job's: it
-    runs nothing else (the keeper, :func:`_keep`)."""
+    runs nothing else (the keeper, :func:`_keep`).
+
+    A stop is held while the command is started, and taken once its group is known: one
+    taken before would end this process with the command's pid unknown, and the command
+    running on without a limit. The command starts with the stops unheld, whatever this
+    process held: one it inherited held would wait, unseen, until the SIGKILL."""
     _adopt_orphans()
-    spawned = os.posix_spawnp(
-        argv[0], list(argv), os.environ, setpgroup=0, setsigdef=_RESTORED_SIGNALS
-    )
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        spawned = os.posix_spawnp(
+            argv[0],
+            list(argv),
+            os.environ,
+            setpgroup=0,
+            setsigmask=held - set(_STOP_SIGNALS),
+            setsigdef=_RESTORED_SIGNALS,
+        )
+    except BaseException:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        raise
     group = _Group(spawned)
     try:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
         ended = group.wait(limit_s)
     except BaseException:
         _stop_descendants(group.leader, grace_s)
