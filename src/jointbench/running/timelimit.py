@@ -154,6 +154,16 @@ def _until(done, within_s: float) -> bool:
         time.sleep(_POLL_S)
 
 
+def _children(pid: int) -> list[int]:
+    """The pids of the children of process ``pid``, of every thread of it (Linux's ``/proc``;
+    none known elsewhere)."""
+    children = []
+    for task in Path(f"/proc/{pid}/task").glob("*/children"):
+        with contextlib.suppress(OSError):
+            children += [int(child) for child in task.read_text().split()]
+    return children
+
+
 def _descendants() -> list[int]:
     """The pids of every process descended from this one, at every remove (Linux's ``/proc``;
     none known elsewhere). A process that left its group, or its session, is still a
@@ -161,11 +171,9 @@ def _descendants() -> list[int]:
     found = []
     parents = [os.getpid()]
     while parents:
-        for task in Path(f"/proc/{parents.pop()}/task").glob("*/children"):
-            with contextlib.suppress(OSError):
-                children = [int(pid) for pid in task.read_text().split()]
-                found += children
-                parents += children
+        children = _children(parents.pop())
+        found += children
+        parents += children
     return found
 
 
