@@ -187,6 +187,29 @@ def test_daemons_that_detach_again_and_again_are_stopped_together_under_one_grac
     assert seconds < GRACE_S + 2.0
 
 
+def test_a_process_reaped_as_its_threads_are_listed_has_no_children(monkeypatch):
+    """A process listed as the job's may end, and be reaped by its parent, just as its
+    threads are listed for their children: it has none, rather than the keeper failing as it
+    stops the job, and leaving the rest of it running."""
+    process = subprocess.Popen(["sleep", "300"])
+    threads = f"/proc/{process.pid}/task"
+    reaped = []
+
+    def reaped_first(lister):
+        def listed(path="."):
+            if os.fspath(path) == threads and not reaped:
+                process.kill()
+                reaped.append(process.wait())
+            return lister(path)
+
+        return listed
+
+    monkeypatch.setattr(os, "scandir", reaped_first(os.scandir))
+    monkeypatch.setattr(os, "listdir", reaped_first(os.listdir))
+    assert timelimit._children(process.pid) == []
+    assert reaped == [-signal.SIGKILL]
+
+
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}

@@ -156,11 +156,17 @@ def _until(done, within_s: float) -> bool:
 
 def _children(pid: int) -> list[int]:
     """The pids of the children of process ``pid``, of every thread of it (Linux's ``/proc``;
-    none known elsewhere)."""
+    none known elsewhere, nor once it has ended: listed as a job's, it may end, and be
+    reaped, before its threads are)."""
+    threads = Path(f"/proc/{pid}/task")
+    try:
+        names = os.listdir(threads)
+    except (FileNotFoundError, ProcessLookupError):
+        return []
     children = []
-    for task in Path(f"/proc/{pid}/task").glob("*/children"):
-        with contextlib.suppress(OSError):
-            children += [int(child) for child in task.read_text().split()]
+    for name in names:
+        with contextlib.suppress(OSError):  # a thread that has ended since
+            children += [int(child) for child in (threads / name / "children").read_text().split()]
     return children
 
 
