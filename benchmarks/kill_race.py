@@ -6,7 +6,8 @@ moments after its start, many times, and the job's processes are watched until n
 A process that does not ignore SIGTERM ends at the keeper's SIGTERM, at once: a stop slower
 than ``--slow`` seconds is one the SIGTERM missed (SIGKILL ended it after the grace), and a
 process still running past the grace and ``--escaped`` seconds escaped the limit altogether
-(it is killed here, by its pid, so that the probe leaves nothing behind)::
+(it is killed here, by its pid, so that the probe leaves nothing behind). A keeper that
+failed (a traceback on its stderr) is counted too::
 
     PYTHONPATH=src python benchmarks/kill_race.py --delays-ms 0 300 10 --repeats 10
 
@@ -21,6 +22,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -50,24 +52,35 @@ def processes_holding(marker: str) -> list[int]:
     return found
 
 
-def seconds_to_stop(command: str, delay_s: float, marker: str, give_up_s: float) -> float | None:
+def stopped(
+    command: str, delay_s: float, marker: str, give_up_s: float
+) -> tuple[float | None, bool]:
     """Start the limited shell with ``command``, kill it with SIGKILL ``delay_s`` [s] after,
     and wait until no process holding ``marker`` runs: the seconds from the kill, or None
-    when one still runs ``give_up_s`` [s] after it (those are killed)."""
+    when one still runs ``give_up_s`` [s] after it (those are killed), and whether the keeper
+    failed (a traceback on its stderr)."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
     environ[timelimit.LIMIT_VARIABLE] = "600"
-    shell = subprocess.Popen([timelimit.LIMITED_SHELL, "-c", command], env=environ)
-    time.sleep(delay_s)
-    shell.kill()
-    killed = time.monotonic()
-    shell.wait()
-    while left := processes_holding(marker):
-        if time.monotonic() - killed > give_up_s:
-            for pid in left:
-                os.kill(pid, signal.SIGKILL)
-            return None
-        time.sleep(0.01)
-    return time.monotonic() - killed
+    # To a file: the keeper and the job write on after the shell has been killed.
+    with tempfile.TemporaryFile("w+") as stderr:
+        shell = subprocess.Popen(
+            [timelimit.LIMITED_SHELL, "-c", command], env=environ, stderr=stderr
+        )
+        time.sleep(delay_s)
+        shell.kill()
+        killed = time.monotonic()
+        shell.wait()
+        seconds = None
+        while left := processes_holding(marker):
+            if time.monotonic() - killed > give_up_s:
+                for pid in left:
+                    os.kill(pid, signal.SIGKILL)
+                break
+            time.sleep(0.01)
+        else:
+            seconds = time.monotonic() - killed
+        stderr.seek(0)
+        return seconds, "Traceback" in stderr.read()
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -84,24 +97,27 @@ def main(argv: list[str] | None = None) -> None:
     first, last, step = arguments.delays_ms
     give_up_s = timelimit.GRACE_S + arguments.escaped
     print(f"timelimit: {timelimit.__file__}")
-    print("| kill after [ms] | trials | slow | escaped | slowest stop [s] |")
-    print("|---|---|---|---|---|")
-    totals = [0, 0, 0]
+    print("| kill after [ms] | trials | slow | escaped | keeper failed | slowest stop [s] |")
+    print("|---|---|---|---|---|---|")
+    totals = [0, 0, 0, 0]
     trial = 0
     for delay_ms in range(first, last + 1, step):
-        stops = []
+        stops, failed = [], 0
         for _ in range(arguments.repeats):
             trial += 1
             # A sleep of 300 s and a fraction unique to the trial, in every process of it.
             marker = f"300.{os.getpid()}{trial:05d}"
             command = template.format(sleep=f"sleep {marker}")
-            stops.append(seconds_to_stop(command, delay_ms / 1000, marker, give_up_s))
+            seconds, keeper_failed = stopped(command, delay_ms / 1000, marker, give_up_s)
+            stops.append(seconds)
+            failed += keeper_failed
         slow = sum(stop is not None and stop > arguments.slow for stop in stops)
         escaped = stops.count(None)
         slowest = max((stop for stop in stops if stop is not None), default=float("nan"))
-        print(f"| {delay_ms} | {len(stops)} | {slow} | {escaped} | {slowest:.2f} |", flush=True)
-        totals = [totals[0] + len(stops), totals[1] + slow, totals[2] + escaped]
-    print(f"| all | {totals[0]} | {totals[1]} | {totals[2]} | |")
+        counts = [len(stops), slow, escaped, failed]
+        print(f"| {delay_ms} | {' | '.join(map(str, counts))} | {slowest:.2f} |", flush=True)
+        totals = [total + count for total, count in zip(totals, counts, strict=True)]
+    print(f"| all | {' | '.join(map(str, totals))} | |")
 
 
 if __name__ == "__main__":
