@@ -145,6 +145,47 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_daemon_whose_parent_ends_as_the_job_is_listed_is_sent_sigterm(tmp_path, monkeypatch):
+    """The SIGTERM to the program's group ends the program while the job's processes are
+    listed: a daemon it started, moved to the keeper (the reaper of the job's orphans) after
+    the keeper's children were read and before the program's were, is missed by that
+    listing, and would end only at the SIGKILL after the grace, its SIGTERM handler never
+    run. Here the program always ends at that moment."""
+    written, termed = tmp_path / "pids", tmp_path / "termed"
+    on_sigterm = f'trap "echo TERM > {termed}; exit" TERM'
+    daemon = f"setsid bash -c '{on_sigterm}; echo $$ > {written}; {FOREVER} & wait' &"
+    stopped_groups = []
+    signal_group, children = timelimit._signal_group, timelimit._children
+
+    def group_signalled(group: int, signum: int) -> None:
+        signal_group(group, signum)
+        stopped_groups.append(group)
+
+    def read_once_the_program_has_ended(pid: int) -> list[int]:
+        if pid in stopped_groups[:1]:
+            end_within([pid], 5)
+        return children(pid)
+
+    monkeypatch.setattr(timelimit, "_signal_group", group_signalled)
+    monkeypatch.setattr(timelimit, "_children", read_once_the_program_has_ended)
+    status, _ = timed(["bash", "-c", f"{daemon} {FOREVER}"])
+    assert status is None
+    assert termed.read_text() == "TERM\n"
+    (daemon_pid,) = pids(written)
+    assert not alive(daemon_pid)
+
+
+def test_a_program_that_leaves_orphans_without_end_is_stopped_after_the_grace():
+    """A program that ignores SIGTERM and leaves one orphan after another (each a process
+    started by a subshell that ends at once, as a daemon starts): every listing of the job
+    finds a new one, and the SIGTERM, sent to each process listed until a listing finds none
+    new, is not sent for ever; the SIGKILL after the grace ends the program."""
+    status, seconds = timed(["bash", "-c", "trap '' TERM; while :; do (sleep 1 &); done"])
+    assert status is None
+    assert LIMIT_S + GRACE_S <= seconds < LIMIT_S + GRACE_S + 1.0
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
 def test_children_that_left_the_group_and_ignore_sigterm_share_one_grace(tmp_path):
     """A program that leaves several daemons behind, each in a session of its own and each
     ignoring SIGTERM: they are stopped together, one grace for all, not one grace each (8

@@ -190,14 +190,28 @@ def _reap_children() -> None:
             pass
 
 
-def _signal_descendants(group: int | None, signum: int) -> None:
-    """Send ``signum`` to every descendant of this process and to the command's process
-    ``group`` (if any; where no descendant is known, it is the job)."""
+def _signal_descendants(group: int | None, signum: int, within_s: float) -> None:
+    """Send ``signum`` to the command's process ``group`` (if any; where no descendant is
+    known, it is the job) and to every descendant of this process, listed again until a
+    listing finds none not yet sent it, for up to ``within_s`` [s].
+
+    One listing is not enough: a process whose parent ends as the job is listed (the signal
+    ends it) is moved to this process after this process's children were read and before its
+    parent's were, and that listing misses it; the next finds it here. A process started
+    while the job is listed is sent the signal too; one started after (a process's own
+    clean-up on SIGTERM) is not. Bounded, as a job that leaves orphans faster than it is
+    listed would be listed for ever."""
     if group is not None:
         _signal_group(group, signum)
-    for pid in _descendants():
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(pid, signum)
+    deadline = time.monotonic() + within_s
+    sent: set[int] = set()
+    while unsent := set(_descendants()) - sent:
+        for pid in unsent:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signum)
+        sent |= unsent
+        if time.monotonic() >= deadline:
+            return
 
 
 def _none_left(group: int | None) -> bool:
@@ -211,18 +225,19 @@ def _stop_descendants(group: int | None, grace_s: float) -> None:
     """Stop every process of the job: every descendant of this process, however many times
     removed and whatever group or session it started (a daemon that detached, and one that
     its daemon detached in turn), and the command's process ``group``, all at once: SIGTERM
-    to each, up to ``grace_s`` [s] for them all to end, then SIGKILL to whatever is left,
-    listed again until none is (a process started in between is listed the next time). One
-    grace for all: levels stopped one after another would hold the job a grace for each
-    that ignores SIGTERM."""
+    to each (:func:`_signal_descendants`), up to ``grace_s`` [s] from it for them all to
+    end, then SIGKILL to whatever is left, listed again until none is (a process started in
+    between is listed the next time). One grace for all: levels stopped one after another
+    would hold the job a grace for each that ignores SIGTERM."""
     if _none_left(group):
         return
-    _signal_descendants(group, signal.SIGTERM)
-    if _until(lambda: _none_left(group), grace_s):
+    graced = time.monotonic() + grace_s
+    _signal_descendants(group, signal.SIGTERM, grace_s)
+    if _until(lambda: _none_left(group), graced - time.monotonic()):
         return
 
     def killed() -> bool:
-        _signal_descendants(group, signal.SIGKILL)
+        _signal_descendants(group, signal.SIGKILL, _KILLED_S)
         return _none_left(group)
 
     # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
