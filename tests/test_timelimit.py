@@ -145,15 +145,19 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
-def test_a_daemon_whose_parent_ends_as_the_job_is_listed_is_sent_sigterm(tmp_path, monkeypatch):
+def test_a_daemon_whose_parent_ends_as_the_job_is_listed_is_sent_sigterm(
+    tmp_path, monkeypatch, stopped_as_the_keeper_is
+):
     """The SIGTERM to the program's group ends the program while the job's processes are
     listed: a daemon it started, moved to the keeper (the reaper of the job's orphans) after
     the keeper's children were read and before the program's were, is missed by that
     listing, and would end only at the SIGKILL after the grace, its SIGTERM handler never
-    run. Here the program always ends at that moment."""
+    run. Here the program always ends at that moment; it stops its keeper (this process)
+    itself once the daemon handles SIGTERM."""
     written, termed = tmp_path / "pids", tmp_path / "termed"
     on_sigterm = f'trap "echo TERM > {termed}; exit" TERM'
     daemon = f"setsid bash -c '{on_sigterm}; echo $$ > {written}; {FOREVER} & wait' &"
+    ready = f"until [ -s {written} ]; do sleep 0.05; done"
     stopped_groups = []
     signal_group, children = timelimit._signal_group, timelimit._children
 
@@ -168,8 +172,8 @@ def test_a_daemon_whose_parent_ends_as_the_job_is_listed_is_sent_sigterm(tmp_pat
 
     monkeypatch.setattr(timelimit, "_signal_group", group_signalled)
     monkeypatch.setattr(timelimit, "_children", read_once_the_program_has_ended)
-    status, _ = timed(["bash", "-c", f"{daemon} {FOREVER}"])
-    assert status is None
+    with pytest.raises(timelimit.Interrupted):
+        timed(["bash", "-c", f"{daemon} {ready}; kill -TERM $PPID; {FOREVER}"], limit_s=60)
     assert termed.read_text() == "TERM\n"
     (daemon_pid,) = pids(written)
     assert not alive(daemon_pid)
