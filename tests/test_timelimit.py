@@ -484,7 +484,7 @@ def stopped_as_the_keeper_is():
     has run)."""
     saved = {signum: signal.getsignal(signum) for signum in timelimit._STOP_SIGNALS}
     for signum in saved:
-        signal.signal(signum, timelimit._interrupt)
+        signal.signal(signum, timelimit._stops)
     yield
     for signum, handler in saved.items():
         signal.signal(signum, handler)
@@ -531,13 +531,13 @@ def test_the_program_starts_with_the_stop_signals_unblocked(tmp_path):
     assert [signum for signum in timelimit._STOP_SIGNALS if blocked >> (signum - 1) & 1] == []
 
 
-def test_a_program_that_cannot_be_started_leaves_the_stop_signals_as_they_were():
-    """The stops held while the program is started are taken again when it cannot be: a
-    keeper, or a caller, left holding them would no longer be stopped by Ctrl-C."""
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+def test_a_program_that_cannot_be_started_leaves_a_stop_taken_at_once(stopped_as_the_keeper_is):
+    """The stops held while the program is started are taken at once again when it cannot
+    be: a keeper, or a caller, left holding them would no longer be stopped by Ctrl-C."""
     with pytest.raises(FileNotFoundError):
         timelimit.run_limited(["no-such-program-jointbench"], LIMIT_S, GRACE_S)
-    assert signal.pthread_sigmask(signal.SIG_BLOCK, []) == before
+    with pytest.raises(timelimit.Interrupted):
+        signal.raise_signal(signal.SIGTERM)
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):

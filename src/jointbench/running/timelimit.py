@@ -66,6 +66,42 @@ class Interrupted(Exception):
         self.signum = signum
 
 
+class _Stops:
+    """The handler of the stop signals (:data:`_STOP_SIGNALS`): a stop raises
+    :class:`Interrupted` where this process is, or, in a block that must not be cut short
+    (:meth:`held`), once the block has ended. Held in Python rather than in the signal mask,
+    which holds them from one thread alone: in a process with others (a library's), the
+    signal comes to another, and Python runs the handler all the same."""
+
+    def __init__(self) -> None:
+        self.holding = False
+        self.came: list[int] = []
+
+    def __call__(self, signum: int, _frame: object) -> None:
+        # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
+        for each in _STOP_SIGNALS:
+            signal.signal(each, signal.SIG_IGN)
+        if self.holding:
+            self.came.append(signum)
+            return
+        raise Interrupted(signum)
+
+    @contextlib.contextmanager
+    def held(self):
+        """Hold a stop that comes in the block, and raise it as :class:`Interrupted` once the
+        block has ended (unless it raised; in an enclosing block, once that has ended)."""
+        holding, self.holding = self.holding, True
+        try:
+            yield
+        finally:
+            self.holding = holding
+        if self.came and not holding:
+            raise Interrupted(self.came.pop())
+
+
+_stops = _Stops()
+
+
 def group_alive(group: int) -> bool:
     """Whether any process is left in the process group ``group`` (a zombie counts until its
     parent reaps it: :func:`run_limited` reaps the group's)."""
@@ -261,30 +297,29 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     (``_adopt_orphans``), and every process descended from it is taken as the job's: it
     runs nothing else (the keeper, :func:`_keep`).
 
-    A stop is held while the command is started, and taken once its group is known: one
-    taken before would end this process with the command's pid unknown, and the command
-    running on without a limit. The command starts with the stops unheld, whatever this
-    process held: one it inherited held would wait, unseen, until the SIGKILL."""
+    A stop that comes as the command is started is held until its group is known: taken
+    before, it would end this process with the command's pid unknown, and the command running
+    on without a limit. The command starts with the stops unblocked, whatever this process
+    blocked: one it inherited blocked would wait, unseen, until the SIGKILL."""
     _adopt_orphans()
-    held = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    job_mask = signal.pthread_sigmask(signal.SIG_BLOCK, []) - set(_STOP_SIGNALS)
+    group = None
     try:
-        spawned = os.posix_spawnp(
-            argv[0],
-            list(argv),
-            os.environ,
-            setpgroup=0,
-            setsigmask=held - set(_STOP_SIGNALS),
-            setsigdef=_RESTORED_SIGNALS,
-        )
-    except BaseException:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held)
-        raise
-    group = _Group(spawned)
-    try:
-        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+        with _stops.held():
+            group = _Group(
+                os.posix_spawnp(
+                    argv[0],
+                    list(argv),
+                    os.environ,
+                    setpgroup=0,
+                    setsigmask=job_mask,
+                    setsigdef=_RESTORED_SIGNALS,
+                )
+            )
         ended = group.wait(limit_s)
     except BaseException:
-        _stop_descendants(group.leader, grace_s)
+        if group is not None:
+            _stop_descendants(group.leader, grace_s)
         raise
     _stop_descendants(group.leader, grace_s)
     return group.status if ended else None
@@ -369,13 +404,6 @@ def runtime_minutes(limit_s: float) -> int:
     return math.ceil((limit_s + GRACE_S) / 60) + 1
 
 
-def _interrupt(signum: int, _frame: object) -> None:
-    # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
-    for each in _STOP_SIGNALS:
-        signal.signal(each, signal.SIG_IGN)
-    raise Interrupted(signum)
-
-
 def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     """``limited/bash ARGUMENTS``: bash run with ``ARGUMENTS`` (``-c COMMAND``, or a script
     Snakemake wrote for a command too long for a command line) under the limit in
@@ -389,7 +417,7 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
     for signum in _STOP_SIGNALS:
-        signal.signal(signum, _interrupt)
+        signal.signal(signum, _stops)
     # The command's group of its own is out of the terminal's foreground: the stops that
     # brings (setting the terminal, reading it) would hold a program until the limit and have
     # it named as running too long. Ignored, as the command inherits, they are not made: the
