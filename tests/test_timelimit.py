@@ -458,6 +458,37 @@ def test_a_program_that_kills_the_process_that_limits_it_is_stopped(tmp_path):
     end_within(pids(written), 5)
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_stop_that_comes_while_the_limited_shell_stops_what_its_keeper_left(tmp_path):
+    """The keeper killed (by the program, say), the limited shell stops what it left; told
+    to stop meanwhile (Ctrl-C, Snakemake cancelling the job), it finishes the stop, the
+    daemon killed after the grace, and ends with the stop's status, rather than with a
+    traceback and the daemon running on. Here the daemon, on SIGTERM, stops the shell."""
+    written = tmp_path / "pids"
+    daemon = tmp_path / "daemon.sh"
+    daemon.write_text(
+        "trap 'trap \"\" TERM; kill -TERM $1' TERM\n"
+        f"echo $$ > {written}\n"
+        f"while :; do {FOREVER} & wait; done\n"
+    )
+    keepers_parent = "$(sed 's/.*) //' /proc/$PPID/stat | cut -d' ' -f2)"
+    ready = f"until [ -s {written} ]; do sleep 0.05; done"
+    program = f"setsid bash {daemon} {keepers_parent} & {ready}; kill -KILL $PPID"
+    log = tmp_path / "stderr"
+    try:
+        # To a file: a daemon that runs on would hold a pipe open.
+        with log.open("w") as stderr:
+            shell = limited_shell(program, "60", stderr=stderr)
+            status = shell.wait(timeout=60)
+        assert (status, log.read_text()) == (128 + signal.SIGTERM, "")
+        (daemon_pid,) = pids(written)
+        assert not alive(daemon_pid)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(left, signal.SIGKILL)
+
+
 def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monkeypatch):
     """Ctrl-C or a cancel just as the wait for the keeper returns: the keeper has ended and
     been waited for, and the limited shell ends with the stop's status, not a traceback."""
@@ -529,6 +560,33 @@ def test_the_program_starts_with_the_stop_signals_unblocked(tmp_path):
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
     blocked = int(written.read_text().split()[1], 16)
     assert [signum for signum in timelimit._STOP_SIGNALS if blocked >> (signum - 1) & 1] == []
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_stop_that_comes_while_the_job_is_stopped_does_not_cut_the_stop_short(
+    tmp_path, stopped_as_the_keeper_is
+):
+    """The keeper told to stop (its limited shell killed) while it stops what a program
+    left behind, a daemon in the grace: it finishes the stop, the daemon killed after the
+    grace, before it ends, rather than end at once and leave the daemon running without a
+    limit. Here the daemon, on the keeper's SIGTERM, stops the keeper (this process)."""
+    written = tmp_path / "pids"
+    daemon = tmp_path / "daemon.sh"
+    daemon.write_text(
+        f"trap 'trap \"\" TERM; kill -TERM {os.getpid()}' TERM\n"
+        f"echo $$ > {written}\n"
+        f"while :; do {FOREVER} & wait; done\n"
+    )
+    program = f"setsid bash {daemon} & until [ -s {written} ]; do sleep 0.05; done"
+    try:
+        with pytest.raises(timelimit.Interrupted):
+            timed(["bash", "-c", program])
+        (daemon_pid,) = pids(written)
+        assert not alive(daemon_pid)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(left, signal.SIGKILL)
 
 
 def test_a_program_that_cannot_be_started_leaves_a_stop_taken_at_once(stopped_as_the_keeper_is):

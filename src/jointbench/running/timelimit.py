@@ -264,21 +264,26 @@ def _stop_descendants(group: int | None, grace_s: float) -> None:
     to each (:func:`_signal_descendants`), up to ``grace_s`` [s] from it for them all to
     end, then SIGKILL to whatever is left, listed again until none is (a process started in
     between is listed the next time). One grace for all: levels stopped one after another
-    would hold the job a grace for each that ignores SIGTERM."""
-    if _none_left(group):
-        return
-    graced = time.monotonic() + grace_s
-    _signal_descendants(group, signal.SIGTERM, grace_s)
-    if _until(lambda: _none_left(group), graced - time.monotonic()):
-        return
+    would hold the job a grace for each that ignores SIGTERM.
 
-    def killed() -> bool:
-        _signal_descendants(group, signal.SIGKILL, _KILLED_S)
-        return _none_left(group)
+    A stop that comes meanwhile (the limited shell killed, Ctrl-C) is held until the job is
+    stopped, and raised then (:class:`Interrupted`): taken at once, it would end this
+    process with the rest of the job running on, without a limit."""
+    with _stops.held():
+        if _none_left(group):
+            return
+        graced = time.monotonic() + grace_s
+        _signal_descendants(group, signal.SIGTERM, grace_s)
+        if _until(lambda: _none_left(group), graced - time.monotonic()):
+            return
 
-    # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
-    # disk) is past any signal's reach, and the job ends without it.
-    _until(killed, _KILLED_S)
+        def killed() -> bool:
+            _signal_descendants(group, signal.SIGKILL, _KILLED_S)
+            return _none_left(group)
+
+        # A killed process ends when the kernel next runs it; one that cannot (a read of a
+        # dead disk) is past any signal's reach, and the job ends without it.
+        _until(killed, _KILLED_S)
 
 
 def _signal_group(group: int, signum: int) -> None:
@@ -491,7 +496,10 @@ def _wait_for_the_keeper(keeper: int) -> int:
             os.kill(keeper, signal.SIGTERM)
             os.waitpid(keeper, 0)
         status = 128 + stopped.signum
-    _stop_descendants(None, GRACE_S)
+    try:
+        _stop_descendants(None, GRACE_S)
+    except Interrupted as stopped:  # told to stop as they were stopped: they are
+        status = 128 + stopped.signum
     return status
 
 
