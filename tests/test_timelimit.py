@@ -563,6 +563,32 @@ def test_the_program_starts_with_the_stop_signals_unblocked(tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_stop_that_comes_as_the_keeper_turns_to_stop_the_job_stops_it_all_the_same(
+    tmp_path, monkeypatch, stopped_as_the_keeper_is
+):
+    """The program has ended, leaving a daemon, and the keeper is told to stop the moment
+    it turns from waiting for the program to stopping the rest: the daemon is stopped all
+    the same, not left running because the stop came before the stop that holds it."""
+    written = tmp_path / "pids"
+    stop = timelimit._stop_descendants
+
+    def told_to_stop_first(group: int | None, grace_s: float) -> None:
+        os.kill(os.getpid(), signal.SIGTERM)
+        stop(group, grace_s)
+
+    monkeypatch.setattr(timelimit, "_stop_descendants", told_to_stop_first)
+    try:
+        with pytest.raises(timelimit.Interrupted):
+            timed(["bash", "-c", f"setsid {FOREVER} & echo $! > {written}; sleep 0.5"])
+        (daemon_pid,) = pids(written)
+        assert not alive(daemon_pid)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(left, signal.SIGKILL)
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
 def test_a_stop_that_comes_while_the_job_is_stopped_does_not_cut_the_stop_short(
     tmp_path, stopped_as_the_keeper_is
 ):

@@ -24,7 +24,7 @@ import select
 import signal
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 #: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
@@ -68,10 +68,11 @@ class Interrupted(Exception):
 
 class _Stops:
     """The handler of the stop signals (:data:`_STOP_SIGNALS`): a stop raises
-    :class:`Interrupted` where this process is, or, in a block that must not be cut short
-    (:meth:`held`), once the block has ended. Held in Python rather than in the signal mask,
-    which holds them from one thread alone: in a process with others (a library's), the
-    signal comes to another, and Python runs the handler all the same."""
+    :class:`Interrupted` where this process is, unless held (:meth:`held`, a step that must
+    not be cut short, which raises it once done); in a held step, a wait that a stop may
+    cut short takes it (:meth:`taken`). Held in Python rather than in the signal mask, which
+    holds them from one thread alone: in a process with others (a library's), the signal
+    comes to another, and Python runs the handler all the same."""
 
     def __init__(self) -> None:
         self.holding = False
@@ -87,9 +88,9 @@ class _Stops:
         raise Interrupted(signum)
 
     @contextlib.contextmanager
-    def held(self):
+    def held(self) -> Iterator[None]:
         """Hold a stop that comes in the block, and raise it as :class:`Interrupted` once the
-        block has ended (unless it raised; in an enclosing block, once that has ended)."""
+        block has ended (unless it raised; in an enclosing held block, once that has)."""
         holding, self.holding = self.holding, True
         try:
             yield
@@ -97,6 +98,18 @@ class _Stops:
             self.holding = holding
         if self.came and not holding:
             raise Interrupted(self.came.pop())
+
+    @contextlib.contextmanager
+    def taken(self) -> Iterator[None]:
+        """Raise a stop as :class:`Interrupted` as it comes in the block, and one held
+        before it at once."""
+        holding, self.holding = self.holding, False
+        try:
+            if self.came:
+                raise Interrupted(self.came.pop())
+            yield
+        finally:
+            self.holding = holding
 
 
 _stops = _Stops()
@@ -302,31 +315,30 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     (``_adopt_orphans``), and every process descended from it is taken as the job's: it
     runs nothing else (the keeper, :func:`_keep`).
 
-    A stop that comes as the command is started is held until its group is known: taken
-    before, it would end this process with the command's pid unknown, and the command running
-    on without a limit. The command starts with the stops unblocked, whatever this process
-    blocked: one it inherited blocked would wait, unseen, until the SIGKILL."""
+    A stop is taken only while the command runs (the wait for it). One that comes as the
+    command is started, or as the job is stopped, is held until that is done: taken as the
+    command is started, it would end this process with the command's pid unknown, and the
+    command running on without a limit. The command starts with the stops unblocked,
+    whatever this process blocked: one it inherited blocked would wait, unseen, until the
+    SIGKILL."""
     _adopt_orphans()
     job_mask = signal.pthread_sigmask(signal.SIG_BLOCK, []) - set(_STOP_SIGNALS)
-    group = None
-    try:
-        with _stops.held():
-            group = _Group(
-                os.posix_spawnp(
-                    argv[0],
-                    list(argv),
-                    os.environ,
-                    setpgroup=0,
-                    setsigmask=job_mask,
-                    setsigdef=_RESTORED_SIGNALS,
-                )
+    with _stops.held():
+        group = _Group(
+            os.posix_spawnp(
+                argv[0],
+                list(argv),
+                os.environ,
+                setpgroup=0,
+                setsigmask=job_mask,
+                setsigdef=_RESTORED_SIGNALS,
             )
-        ended = group.wait(limit_s)
-    except BaseException:
-        if group is not None:
+        )
+        try:
+            with _stops.taken():
+                ended = group.wait(limit_s)
+        finally:
             _stop_descendants(group.leader, grace_s)
-        raise
-    _stop_descendants(group.leader, grace_s)
     return group.status if ended else None
 
 
@@ -483,24 +495,32 @@ def _as_a_shell(status: int) -> int:
 
 
 def _wait_for_the_keeper(keeper: int) -> int:
-    """The keeper's exit status, as a shell's; when this process is told to stop, the
-    keeper is, and is waited for while it stops the job. Whatever a keeper killed from
-    outside left (its orphans are this process's) is stopped then."""
+    """The keeper's exit status, as a shell's (:func:`_keepers_status`). Whatever a keeper
+    killed from outside left (its orphans are this process's) is stopped then; a stop that
+    comes meanwhile is held until it is, and is the status."""
+    try:
+        with _stops.held():
+            status = _keepers_status(keeper)
+            _stop_descendants(None, GRACE_S)
+    except Interrupted as stopped:
+        status = 128 + stopped.signum
+    return status
+
+
+def _keepers_status(keeper: int) -> int:
+    """The keeper's exit status, as a shell's; when this process is told to stop as it
+    waits, the keeper is, and is waited for while it stops the job: the stop's status."""
     try:
         signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
-        _, waited = os.waitpid(keeper, 0)
-        status = _as_a_shell(os.waitstatus_to_exitcode(waited))
+        with _stops.taken():
+            _, waited = os.waitpid(keeper, 0)
+        return _as_a_shell(os.waitstatus_to_exitcode(waited))
     except Interrupted as stopped:
         # The keeper may have ended, and been waited for, just before the stop came.
         with contextlib.suppress(ProcessLookupError, ChildProcessError):
             os.kill(keeper, signal.SIGTERM)
             os.waitpid(keeper, 0)
-        status = 128 + stopped.signum
-    try:
-        _stop_descendants(None, GRACE_S)
-    except Interrupted as stopped:  # told to stop as they were stopped: they are
-        status = 128 + stopped.signum
-    return status
+        return 128 + stopped.signum
 
 
 if __name__ == "__main__":
