@@ -548,18 +548,39 @@ def test_a_stop_that_comes_as_the_program_is_started_stops_it(
                 os.killpg(program, signal.SIGKILL)
 
 
+def stop_signals_in(written: Path) -> list[int]:
+    """The stop signals set in the signal set a program wrote from its ``/proc/self/status``
+    (a line such as ``SigBlk:\t0000000000004000``)."""
+    signals = int(written.read_text().split()[1], 16)
+    return [signum for signum in timelimit._STOP_SIGNALS if signals >> (signum - 1) & 1]
+
+
 def test_the_program_starts_with_the_stop_signals_unblocked(tmp_path):
-    """However the process that limits it holds the stop signals (the keeper holds them while
-    it starts the program), the program does not inherit them held: a SIGTERM would wait,
-    unseen, until the SIGKILL after the grace."""
-    written = tmp_path / "mask"
+    """However the process that limits it blocks the stop signals (the limited shell blocks
+    them across the keeper's fork), the program does not inherit them blocked: a SIGTERM
+    would wait, unseen, until the SIGKILL after the grace."""
+    written = tmp_path / "blocked"
     held = signal.pthread_sigmask(signal.SIG_BLOCK, timelimit._STOP_SIGNALS)
     try:
         timed(["bash", "-c", f"grep SigBlk /proc/self/status > {written}"])
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
-    blocked = int(written.read_text().split()[1], 16)
-    assert [signum for signum in timelimit._STOP_SIGNALS if blocked >> (signum - 1) & 1] == []
+    assert stop_signals_in(written) == []
+
+
+def test_the_program_starts_with_the_stop_signals_at_their_defaults(
+    tmp_path, stopped_as_the_keeper_is
+):
+    """A keeper told to stop ignores the stop signals from then on (a second must not cut
+    its stop short): one told just before it starts the program (the stop held until the
+    program's group is known) starts it ignoring them. The program does not inherit them
+    ignored, which bash could not undo: the SIGTERM to it would do nothing, and the job end
+    only at the SIGKILL after the grace."""
+    written = tmp_path / "ignored"
+    for signum in timelimit._STOP_SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
+    timed(["bash", "-c", f"grep SigIgn /proc/self/status > {written}"])
+    assert stop_signals_in(written) == []
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")

@@ -318,9 +318,10 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     A stop is taken only while the command runs (the wait for it). One that comes as the
     command is started, or as the job is stopped, is held until that is done: taken as the
     command is started, it would end this process with the command's pid unknown, and the
-    command running on without a limit. The command starts with the stops unblocked,
-    whatever this process blocked: one it inherited blocked would wait, unseen, until the
-    SIGKILL."""
+    command running on without a limit. The command starts with the stops unblocked and at
+    their defaults, whatever this process does with them: one it inherited blocked would
+    wait, unseen, and one inherited ignored (as this process ignores them once told to stop)
+    would do nothing, until the SIGKILL."""
     _adopt_orphans()
     job_mask = signal.pthread_sigmask(signal.SIG_BLOCK, []) - set(_STOP_SIGNALS)
     with _stops.held():
@@ -331,7 +332,7 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
                 os.environ,
                 setpgroup=0,
                 setsigmask=job_mask,
-                setsigdef=_RESTORED_SIGNALS,
+                setsigdef=(*_RESTORED_SIGNALS, *_STOP_SIGNALS),
             )
         )
         try:
