@@ -7,6 +7,7 @@ The end-to-end case, a user's program that never ends in a run, is in tests/test
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import pty
@@ -144,6 +145,51 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_daemon_whose_parent_ends_as_the_job_is_listed_is_sent_sigterm(
+    tmp_path, monkeypatch, stopped_as_the_keeper_is
+):
+    """The SIGTERM to the program's group ends the program while the job's processes are
+    listed: a daemon it started, moved to the keeper (the reaper of the job's orphans) after
+    the keeper's children were read and before the program's were, is missed by that
+    listing, and would end only at the SIGKILL after the grace, its SIGTERM handler never
+    run. Here the program always ends at that moment; it stops its keeper (this process)
+    itself once the daemon handles SIGTERM."""
+    written, termed = tmp_path / "pids", tmp_path / "termed"
+    on_sigterm = f'trap "echo TERM > {termed}; exit" TERM'
+    daemon = f"setsid bash -c '{on_sigterm}; echo $$ > {written}; {FOREVER} & wait' &"
+    ready = f"until [ -s {written} ]; do sleep 0.05; done"
+    stopped_groups = []
+    signal_group, children = timelimit._signal_group, timelimit._children
+
+    def group_signalled(group: int, signum: int) -> None:
+        signal_group(group, signum)
+        stopped_groups.append(group)
+
+    def read_once_the_program_has_ended(pid: int) -> list[int]:
+        if pid in stopped_groups[:1]:
+            end_within([pid], 5)
+        return children(pid)
+
+    monkeypatch.setattr(timelimit, "_signal_group", group_signalled)
+    monkeypatch.setattr(timelimit, "_children", read_once_the_program_has_ended)
+    with pytest.raises(timelimit.Interrupted):
+        timed(["bash", "-c", f"{daemon} {ready}; kill -TERM $PPID; {FOREVER}"], limit_s=60)
+    assert termed.read_text() == "TERM\n"
+    (daemon_pid,) = pids(written)
+    assert not alive(daemon_pid)
+
+
+def test_a_program_that_leaves_orphans_without_end_is_stopped_after_the_grace():
+    """A program that ignores SIGTERM and leaves one orphan after another (each a process
+    started by a subshell that ends at once, as a daemon starts): every listing of the job
+    finds a new one, and the SIGTERM, sent to each process listed until a listing finds none
+    new, is not sent for ever; the SIGKILL after the grace ends the program."""
+    status, seconds = timed(["bash", "-c", "trap '' TERM; while :; do (sleep 1 &); done"])
+    assert status is None
+    assert LIMIT_S + GRACE_S <= seconds < LIMIT_S + GRACE_S + 1.0
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
 def test_children_that_left_the_group_and_ignore_sigterm_share_one_grace(tmp_path):
     """A program that leaves several daemons behind, each in a session of its own and each
     ignoring SIGTERM: they are stopped together, one grace for all, not one grace each (8
@@ -184,6 +230,29 @@ def test_daemons_that_detach_again_and_again_are_stopped_together_under_one_grac
     assert len(daemons) == levels
     assert not [pid for pid in daemons if alive(pid)]
     assert seconds < GRACE_S + 2.0
+
+
+def test_a_process_reaped_as_its_threads_are_listed_has_no_children(monkeypatch):
+    """A process listed as the job's may end, and be reaped by its parent, just as its
+    threads are listed for their children: it has none, rather than the keeper failing as it
+    stops the job, and leaving the rest of it running."""
+    process = subprocess.Popen(["sleep", "300"])
+    threads = f"/proc/{process.pid}/task"
+    reaped = []
+
+    def reaped_first(lister):
+        def listed(path="."):
+            if os.fspath(path) == threads and not reaped:
+                process.kill()
+                reaped.append(process.wait())
+            return lister(path)
+
+        return listed
+
+    monkeypatch.setattr(os, "scandir", reaped_first(os.scandir))
+    monkeypatch.setattr(os, "listdir", reaped_first(os.listdir))
+    assert timelimit._children(process.pid) == []
+    assert reaped == [-signal.SIGKILL]
 
 
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
@@ -389,6 +458,37 @@ def test_a_program_that_kills_the_process_that_limits_it_is_stopped(tmp_path):
     end_within(pids(written), 5)
 
 
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_stop_that_comes_while_the_limited_shell_stops_what_its_keeper_left(tmp_path):
+    """The keeper killed (by the program, say), the limited shell stops what it left; told
+    to stop meanwhile (Ctrl-C, Snakemake cancelling the job), it finishes the stop, the
+    daemon killed after the grace, and ends with the stop's status, rather than with a
+    traceback and the daemon running on. Here the daemon, on SIGTERM, stops the shell."""
+    written = tmp_path / "pids"
+    daemon = tmp_path / "daemon.sh"
+    daemon.write_text(
+        "trap 'trap \"\" TERM; kill -TERM $1' TERM\n"
+        f"echo $$ > {written}\n"
+        f"while :; do {FOREVER} & wait; done\n"
+    )
+    keepers_parent = "$(sed 's/.*) //' /proc/$PPID/stat | cut -d' ' -f2)"
+    ready = f"until [ -s {written} ]; do sleep 0.05; done"
+    program = f"setsid bash {daemon} {keepers_parent} & {ready}; kill -KILL $PPID"
+    log = tmp_path / "stderr"
+    try:
+        # To a file: a daemon that runs on would hold a pipe open.
+        with log.open("w") as stderr:
+            shell = limited_shell(program, "60", stderr=stderr)
+            status = shell.wait(timeout=60)
+        assert (status, log.read_text()) == (128 + signal.SIGTERM, "")
+        (daemon_pid,) = pids(written)
+        assert not alive(daemon_pid)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(left, signal.SIGKILL)
+
+
 def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monkeypatch):
     """Ctrl-C or a cancel just as the wait for the keeper returns: the keeper has ended and
     been waited for, and the limited shell ends with the stop's status, not a traceback."""
@@ -406,6 +506,143 @@ def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monk
 
     monkeypatch.setattr(timelimit.os, "waitpid", waited_then_stopped)
     assert timelimit._wait_for_the_keeper(keeper) == 128 + signal.SIGINT
+
+
+@pytest.fixture
+def stopped_as_the_keeper_is():
+    """This process's stop signals raise :class:`timelimit.Interrupted`, as the keeper's do;
+    the test's own handlers are restored after (a stop's handler ignores the signals once it
+    has run)."""
+    saved = {signum: signal.getsignal(signum) for signum in timelimit._STOP_SIGNALS}
+    for signum in saved:
+        signal.signal(signum, timelimit._stops)
+    yield
+    for signum, handler in saved.items():
+        signal.signal(signum, handler)
+
+
+def test_a_stop_that_comes_as_the_program_is_started_stops_it(
+    stopped_as_the_keeper_is, monkeypatch
+):
+    """The limited shell killed just as the keeper starts the program (its SIGTERM to the
+    keeper arriving while the program is started): the program is stopped with the keeper,
+    not left running, without a limit, by a keeper that ended before it knew the program's
+    pid."""
+    spawned = []
+    spawn = os.posix_spawnp
+
+    def spawned_as_stopped(*arguments, **options) -> int:
+        spawned.append(spawn(*arguments, **options))
+        os.kill(os.getpid(), signal.SIGTERM)
+        return spawned[-1]
+
+    monkeypatch.setattr(timelimit.os, "posix_spawnp", spawned_as_stopped)
+    try:
+        with pytest.raises(timelimit.Interrupted):
+            timed(["bash", "-c", FOREVER])
+        (program,) = spawned
+        assert not alive(program)
+    finally:
+        for program in spawned:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(program, signal.SIGKILL)
+
+
+def stop_signals_in(written: Path) -> list[int]:
+    """The stop signals set in the signal set a program wrote from its ``/proc/self/status``
+    (a line such as ``SigBlk:\t0000000000004000``)."""
+    signals = int(written.read_text().split()[1], 16)
+    return [signum for signum in timelimit._STOP_SIGNALS if signals >> (signum - 1) & 1]
+
+
+def test_the_program_starts_with_the_stop_signals_unblocked(tmp_path):
+    """However the process that limits it blocks the stop signals (the limited shell blocks
+    them across the keeper's fork), the program does not inherit them blocked: a SIGTERM
+    would wait, unseen, until the SIGKILL after the grace."""
+    written = tmp_path / "blocked"
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, timelimit._STOP_SIGNALS)
+    try:
+        timed(["bash", "-c", f"grep SigBlk /proc/self/status > {written}"])
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+    assert stop_signals_in(written) == []
+
+
+def test_the_program_starts_with_the_stop_signals_at_their_defaults(
+    tmp_path, stopped_as_the_keeper_is
+):
+    """A keeper told to stop ignores the stop signals from then on (a second must not cut
+    its stop short): one told just before it starts the program (the stop held until the
+    program's group is known) starts it ignoring them. The program does not inherit them
+    ignored, which bash could not undo: the SIGTERM to it would do nothing, and the job end
+    only at the SIGKILL after the grace."""
+    written = tmp_path / "ignored"
+    for signum in timelimit._STOP_SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
+    timed(["bash", "-c", f"grep SigIgn /proc/self/status > {written}"])
+    assert stop_signals_in(written) == []
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_stop_that_comes_as_the_keeper_turns_to_stop_the_job_stops_it_all_the_same(
+    tmp_path, monkeypatch, stopped_as_the_keeper_is
+):
+    """The program has ended, leaving a daemon, and the keeper is told to stop the moment
+    it turns from waiting for the program to stopping the rest: the daemon is stopped all
+    the same, not left running because the stop came before the stop that holds it."""
+    written = tmp_path / "pids"
+    stop = timelimit._stop_descendants
+
+    def told_to_stop_first(group: int | None, grace_s: float) -> None:
+        os.kill(os.getpid(), signal.SIGTERM)
+        stop(group, grace_s)
+
+    monkeypatch.setattr(timelimit, "_stop_descendants", told_to_stop_first)
+    try:
+        with pytest.raises(timelimit.Interrupted):
+            timed(["bash", "-c", f"setsid {FOREVER} & echo $! > {written}; sleep 0.5"])
+        (daemon_pid,) = pids(written)
+        assert not alive(daemon_pid)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(left, signal.SIGKILL)
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_stop_that_comes_while_the_job_is_stopped_does_not_cut_the_stop_short(
+    tmp_path, stopped_as_the_keeper_is
+):
+    """The keeper told to stop (its limited shell killed) while it stops what a program
+    left behind, a daemon in the grace: it finishes the stop, the daemon killed after the
+    grace, before it ends, rather than end at once and leave the daemon running without a
+    limit. Here the daemon, on the keeper's SIGTERM, stops the keeper (this process)."""
+    written = tmp_path / "pids"
+    daemon = tmp_path / "daemon.sh"
+    daemon.write_text(
+        f"trap 'trap \"\" TERM; kill -TERM {os.getpid()}' TERM\n"
+        f"echo $$ > {written}\n"
+        f"while :; do {FOREVER} & wait; done\n"
+    )
+    program = f"setsid bash {daemon} & until [ -s {written} ]; do sleep 0.05; done"
+    try:
+        with pytest.raises(timelimit.Interrupted):
+            timed(["bash", "-c", program])
+        (daemon_pid,) = pids(written)
+        assert not alive(daemon_pid)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(left, signal.SIGKILL)
+
+
+def test_a_program_that_cannot_be_started_leaves_a_stop_taken_at_once(stopped_as_the_keeper_is):
+    """The stops held while the program is started are taken at once again when it cannot
+    be: a keeper, or a caller, left holding them would no longer be stopped by Ctrl-C."""
+    with pytest.raises(FileNotFoundError):
+        timelimit.run_limited(["no-such-program-jointbench"], LIMIT_S, GRACE_S)
+    with pytest.raises(timelimit.Interrupted):
+        signal.raise_signal(signal.SIGTERM)
 
 
 def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):

@@ -24,7 +24,7 @@ import select
 import signal
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 #: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
@@ -64,6 +64,55 @@ class Interrupted(Exception):
     def __init__(self, signum: int):
         super().__init__(f"signal {signum}")
         self.signum = signum
+
+
+class _Stops:
+    """The handler of the stop signals (:data:`_STOP_SIGNALS`): a stop raises
+    :class:`Interrupted` where this process is, unless held (:meth:`held`, a step that must
+    not be cut short, which raises it once done); in a held step, a wait that a stop may
+    cut short takes it (:meth:`taken`). Held in Python rather than in the signal mask, which
+    holds them from one thread alone: in a process with others (a library's), the signal
+    comes to another, and Python runs the handler all the same."""
+
+    def __init__(self) -> None:
+        self.holding = False
+        self.came: list[int] = []
+
+    def __call__(self, signum: int, _frame: object) -> None:
+        # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
+        for each in _STOP_SIGNALS:
+            signal.signal(each, signal.SIG_IGN)
+        if self.holding:
+            self.came.append(signum)
+            return
+        raise Interrupted(signum)
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Hold a stop that comes in the block, and raise it as :class:`Interrupted` once the
+        block has ended (unless it raised; in an enclosing held block, once that has)."""
+        holding, self.holding = self.holding, True
+        try:
+            yield
+        finally:
+            self.holding = holding
+        if self.came and not holding:
+            raise Interrupted(self.came.pop())
+
+    @contextlib.contextmanager
+    def taken(self) -> Iterator[None]:
+        """Raise a stop as :class:`Interrupted` as it comes in the block, and one held
+        before it at once."""
+        holding, self.holding = self.holding, False
+        try:
+            if self.came:
+                raise Interrupted(self.came.pop())
+            yield
+        finally:
+            self.holding = holding
+
+
+_stops = _Stops()
 
 
 def group_alive(group: int) -> bool:
@@ -154,6 +203,22 @@ def _until(done, within_s: float) -> bool:
         time.sleep(_POLL_S)
 
 
+def _children(pid: int) -> list[int]:
+    """The pids of the children of process ``pid``, of every thread of it (Linux's ``/proc``;
+    none known elsewhere, nor once it has ended: listed as a job's, it may end, and be
+    reaped, before its threads are)."""
+    threads = Path(f"/proc/{pid}/task")
+    try:
+        names = os.listdir(threads)
+    except (FileNotFoundError, ProcessLookupError):
+        return []
+    children = []
+    for name in names:
+        with contextlib.suppress(OSError):  # a thread that has ended since
+            children += [int(child) for child in (threads / name / "children").read_text().split()]
+    return children
+
+
 def _descendants() -> list[int]:
     """The pids of every process descended from this one, at every remove (Linux's ``/proc``;
     none known elsewhere). A process that left its group, or its session, is still a
@@ -161,11 +226,9 @@ def _descendants() -> list[int]:
     found = []
     parents = [os.getpid()]
     while parents:
-        for task in Path(f"/proc/{parents.pop()}/task").glob("*/children"):
-            with contextlib.suppress(OSError):
-                children = [int(pid) for pid in task.read_text().split()]
-                found += children
-                parents += children
+        children = _children(parents.pop())
+        found += children
+        parents += children
     return found
 
 
@@ -176,14 +239,28 @@ def _reap_children() -> None:
             pass
 
 
-def _signal_descendants(group: int | None, signum: int) -> None:
-    """Send ``signum`` to every descendant of this process and to the command's process
-    ``group`` (if any; where no descendant is known, it is the job)."""
+def _signal_descendants(group: int | None, signum: int, within_s: float) -> None:
+    """Send ``signum`` to the command's process ``group`` (if any; where no descendant is
+    known, it is the job) and to every descendant of this process, listed again until a
+    listing finds none not yet sent it, for up to ``within_s`` [s].
+
+    One listing is not enough: a process whose parent ends as the job is listed (the signal
+    ends it) is moved to this process after this process's children were read and before its
+    parent's were, and that listing misses it; the next finds it here. A process started
+    while the job is listed is sent the signal too; one started after (a process's own
+    clean-up on SIGTERM) is not. Bounded, as a job that leaves orphans faster than it is
+    listed would be listed for ever."""
     if group is not None:
         _signal_group(group, signum)
-    for pid in _descendants():
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(pid, signum)
+    deadline = time.monotonic() + within_s
+    sent: set[int] = set()
+    while unsent := set(_descendants()) - sent:
+        for pid in unsent:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signum)
+        sent |= unsent
+        if time.monotonic() >= deadline:
+            return
 
 
 def _none_left(group: int | None) -> bool:
@@ -197,23 +274,29 @@ def _stop_descendants(group: int | None, grace_s: float) -> None:
     """Stop every process of the job: every descendant of this process, however many times
     removed and whatever group or session it started (a daemon that detached, and one that
     its daemon detached in turn), and the command's process ``group``, all at once: SIGTERM
-    to each, up to ``grace_s`` [s] for them all to end, then SIGKILL to whatever is left,
-    listed again until none is (a process started in between is listed the next time). One
-    grace for all: levels stopped one after another would hold the job a grace for each
-    that ignores SIGTERM."""
-    if _none_left(group):
-        return
-    _signal_descendants(group, signal.SIGTERM)
-    if _until(lambda: _none_left(group), grace_s):
-        return
+    to each (:func:`_signal_descendants`), up to ``grace_s`` [s] from it for them all to
+    end, then SIGKILL to whatever is left, listed again until none is (a process started in
+    between is listed the next time). One grace for all: levels stopped one after another
+    would hold the job a grace for each that ignores SIGTERM.
 
-    def killed() -> bool:
-        _signal_descendants(group, signal.SIGKILL)
-        return _none_left(group)
+    A stop that comes meanwhile (the limited shell killed, Ctrl-C) is held until the job is
+    stopped, and raised then (:class:`Interrupted`): taken at once, it would end this
+    process with the rest of the job running on, without a limit."""
+    with _stops.held():
+        if _none_left(group):
+            return
+        graced = time.monotonic() + grace_s
+        _signal_descendants(group, signal.SIGTERM, grace_s)
+        if _until(lambda: _none_left(group), graced - time.monotonic()):
+            return
 
-    # A killed process ends when the kernel next runs it; one that cannot (a read of a dead
-    # disk) is past any signal's reach, and the job ends without it.
-    _until(killed, _KILLED_S)
+        def killed() -> bool:
+            _signal_descendants(group, signal.SIGKILL, _KILLED_S)
+            return _none_left(group)
+
+        # A killed process ends when the kernel next runs it; one that cannot (a read of a
+        # dead disk) is past any signal's reach, and the job ends without it.
+        _until(killed, _KILLED_S)
 
 
 def _signal_group(group: int, signum: int) -> None:
@@ -230,18 +313,33 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     (:class:`Interrupted`, passed on after) is stopped (:func:`_stop_descendants`): nothing
     of the job outlives it. This process becomes the reaper of the command's orphans
     (``_adopt_orphans``), and every process descended from it is taken as the job's: it
-    runs nothing else (the keeper, :func:`_keep`)."""
+    runs nothing else (the keeper, :func:`_keep`).
+
+    A stop is taken only while the command runs (the wait for it). One that comes as the
+    command is started, or as the job is stopped, is held until that is done: taken as the
+    command is started, it would end this process with the command's pid unknown, and the
+    command running on without a limit. The command starts with the stops unblocked and at
+    their defaults, whatever this process does with them: one it inherited blocked would
+    wait, unseen, and one inherited ignored (as this process ignores them once told to stop)
+    would do nothing, until the SIGKILL."""
     _adopt_orphans()
-    spawned = os.posix_spawnp(
-        argv[0], list(argv), os.environ, setpgroup=0, setsigdef=_RESTORED_SIGNALS
-    )
-    group = _Group(spawned)
-    try:
-        ended = group.wait(limit_s)
-    except BaseException:
-        _stop_descendants(group.leader, grace_s)
-        raise
-    _stop_descendants(group.leader, grace_s)
+    job_mask = signal.pthread_sigmask(signal.SIG_BLOCK, []) - set(_STOP_SIGNALS)
+    with _stops.held():
+        group = _Group(
+            os.posix_spawnp(
+                argv[0],
+                list(argv),
+                os.environ,
+                setpgroup=0,
+                setsigmask=job_mask,
+                setsigdef=(*_RESTORED_SIGNALS, *_STOP_SIGNALS),
+            )
+        )
+        try:
+            with _stops.taken():
+                ended = group.wait(limit_s)
+        finally:
+            _stop_descendants(group.leader, grace_s)
     return group.status if ended else None
 
 
@@ -324,13 +422,6 @@ def runtime_minutes(limit_s: float) -> int:
     return math.ceil((limit_s + GRACE_S) / 60) + 1
 
 
-def _interrupt(signum: int, _frame: object) -> None:
-    # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
-    for each in _STOP_SIGNALS:
-        signal.signal(each, signal.SIG_IGN)
-    raise Interrupted(signum)
-
-
 def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     """``limited/bash ARGUMENTS``: bash run with ``ARGUMENTS`` (``-c COMMAND``, or a script
     Snakemake wrote for a command too long for a command line) under the limit in
@@ -344,7 +435,7 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
     for signum in _STOP_SIGNALS:
-        signal.signal(signum, _interrupt)
+        signal.signal(signum, _stops)
     # The command's group of its own is out of the terminal's foreground: the stops that
     # brings (setting the terminal, reading it) would hold a program until the limit and have
     # it named as running too long. Ignored, as the command inherits, they are not made: the
@@ -405,21 +496,32 @@ def _as_a_shell(status: int) -> int:
 
 
 def _wait_for_the_keeper(keeper: int) -> int:
-    """The keeper's exit status, as a shell's; when this process is told to stop, the
-    keeper is, and is waited for while it stops the job. Whatever a keeper killed from
-    outside left (its orphans are this process's) is stopped then."""
+    """The keeper's exit status, as a shell's (:func:`_keepers_status`). Whatever a keeper
+    killed from outside left (its orphans are this process's) is stopped then; a stop that
+    comes meanwhile is held until it is, and is the status."""
+    try:
+        with _stops.held():
+            status = _keepers_status(keeper)
+            _stop_descendants(None, GRACE_S)
+    except Interrupted as stopped:
+        status = 128 + stopped.signum
+    return status
+
+
+def _keepers_status(keeper: int) -> int:
+    """The keeper's exit status, as a shell's; when this process is told to stop as it
+    waits, the keeper is, and is waited for while it stops the job: the stop's status."""
     try:
         signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
-        _, waited = os.waitpid(keeper, 0)
-        status = _as_a_shell(os.waitstatus_to_exitcode(waited))
+        with _stops.taken():
+            _, waited = os.waitpid(keeper, 0)
+        return _as_a_shell(os.waitstatus_to_exitcode(waited))
     except Interrupted as stopped:
         # The keeper may have ended, and been waited for, just before the stop came.
         with contextlib.suppress(ProcessLookupError, ChildProcessError):
             os.kill(keeper, signal.SIGTERM)
             os.waitpid(keeper, 0)
-        status = 128 + stopped.signum
-    _stop_descendants(None, GRACE_S)
-    return status
+        return 128 + stopped.signum
 
 
 if __name__ == "__main__":
