@@ -232,11 +232,17 @@ def sweep(protocols: int) -> None:
             f"runs {table[0, 1]}; both refuse {table[1, 1]}; both run {table[0, 0]}"
         )
     widths, lengths = np.array(refused_margins).T
+    short = lengths <= bounds.PELVIS_LENGTH_PER_WIDTH
+    wide = widths > bounds.PELVIS_WIDTH_PER_DEPARTURE
     print(
-        f"  of those the job refuses: the largest width/departure {widths.max():.3g}, the "
-        f"smallest length/width {lengths.min():.3g} (bounds: "
-        f"{bounds.PELVIS_WIDTH_PER_DEPARTURE:g}, {bounds.PELVIS_LENGTH_PER_WIDTH:g})"
+        f"  of those the job refuses: the largest width/departure of those no longer than "
+        f"{bounds.PELVIS_LENGTH_PER_WIDTH:g} times their width {widths[short].max():.3g} (bound "
+        f"{bounds.PELVIS_WIDTH_PER_DEPARTURE:g}); the smallest length/width of those wider than "
+        f"{bounds.PELVIS_WIDTH_PER_DEPARTURE:g} times their departure "
+        f"{lengths[wide].min() if wide.any() else np.nan:.3g} (bound "
+        f"{bounds.PELVIS_LENGTH_PER_WIDTH:g})"
     )
+    largest_refused = widths[short].max()
     if over_refused:
         widths, lengths = np.array(over_refused).T
         narrow = widths <= bounds.PELVIS_WIDTH_PER_DEPARTURE
@@ -246,7 +252,9 @@ def sweep(protocols: int) -> None:
             f"departure (median {np.median(widths[narrow]) if narrow.any() else np.nan:.3g}), "
             f"{int(long.sum())} by length/width (median "
             f"{np.median(lengths[long]) if long.any() else np.nan:.3g}), "
-            f"{int((~narrow & ~long).sum())} by another check"
+            f"{int((~narrow & ~long).sum())} by another check; "
+            f"{int((narrow & (widths > largest_refused)).sum())} of them wider than "
+            f"{largest_refused:.3g} times their departure, the widest the job refused"
         )
 
 
