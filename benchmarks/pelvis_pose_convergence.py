@@ -109,6 +109,33 @@ def length(trials: int) -> None:
                 )
 
 
+def corner(trials: int) -> None:
+    """The corner of what the check accepts: width exactly the bound times the noise, length
+    the bound times the width (the default pelvis's shape scaled to them)."""
+    condition = {"motion": "star_arc", "rom_deg": 45.0, "sta_mm": 0.0}
+    print(f"the accepted region's corner: fits stopped short of {trials} trials")
+    default = hip_sta.HipStaProtocol().pelvis_markers_mm
+    along, _ = bounds.line_spreads(default)
+    for noise in (0.1, 0.3, 1.0, 1.7):
+        for frames in (4, 600):
+            for ratio in (20.0, bounds.PELVIS_LENGTH_PER_WIDTH):
+                wide = bounds.PELVIS_WIDTH_PER_DEPARTURE * noise * (1 + 1e-6)
+                scale = ratio * wide / along
+                markers = np.array(_squeezed(wide / scale))
+                centroid = markers.mean(axis=0)
+                protocol = hip_sta.HipStaProtocol(
+                    pelvis_markers_mm=[tuple(p) for p in (markers - centroid) * scale + centroid],
+                    noise_mm=noise,
+                    duration_s=frames / 50.0,
+                )
+                stopped, most = _pelvis_fits(protocol, condition, trials)
+                print(
+                    f"  noise {noise:4.2f} mm {frames:4d} frames  width/noise "
+                    f"{bounds.PELVIS_WIDTH_PER_DEPARTURE:g}, length/width {ratio:3.0f}: "
+                    f"{stopped:5d} (iterations <= {most})"
+                )
+
+
 def artefact(trials: int) -> None:
     config = study_config.load_config(ROOT / "config" / "config.yaml")
     settings = config["studies"]["hip_sta"]
@@ -262,10 +289,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=10_000)
     parser.add_argument("--protocols", type=int, default=300)
-    parser.add_argument("--only", default="width,length,artefact,sweep")
+    parser.add_argument("--only", default="width,length,corner,artefact,sweep")
     args = parser.parse_args()
     parts = args.only.split(",")
-    for name, run in (("width", width), ("length", length), ("artefact", artefact)):
+    sections = (("width", width), ("length", length), ("corner", corner), ("artefact", artefact))
+    for name, run in sections:
         if name in parts:
             run(args.trials)
     if "sweep" in parts:
