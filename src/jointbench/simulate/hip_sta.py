@@ -314,7 +314,9 @@ def thigh_in_pelvis_frame(pelvis: np.ndarray, thigh: np.ndarray) -> np.ndarray:
     noise and artefact go into the frame, as they do in the lab. A pelvis pose fit that stops
     before converging (a protocol whose pelvis cluster is thin or small against its noise)
     is refused, naming the trial: the frame, and every answer in it, would depend on the first
-    frame.
+    frame. The config's check refuses such a protocol before any job, from its pelvis cluster,
+    noise and artefact (:func:`jointbench.configuration.bounds.pelvis_poses_problem`); this
+    refusal stands for what that check does not foresee.
     """
     fit = fit_rigid_poses(pelvis)
     if not fit.converged.all():
