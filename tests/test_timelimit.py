@@ -145,6 +145,35 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_process_of_the_job_that_changed_its_user_leaves_the_rest_stopped(tmp_path, monkeypatch):
+    """A process of the job that is no longer this user's (a command run through sudo) cannot
+    be signalled: the kernel refuses with EPERM. The rest of the job is stopped all the same,
+    and the keeper goes on to end, rather than failing with a traceback and leaving the
+    processes not yet signalled running without a limit."""
+    written = tmp_path / "pids"
+    daemons = f"setsid {FOREVER} & echo $! >> {written}; setsid {FOREVER} & echo $! >> {written}"
+    kill = os.kill
+    try:
+        # Faked, as root may signal any process: the first daemon stands for one that changed
+        # its user.
+        def refused_for_the_first(pid: int, signum: int) -> None:
+            if pid == pids(written)[0]:
+                raise PermissionError(1, "Operation not permitted")
+            kill(pid, signum)
+
+        monkeypatch.setattr(timelimit.os, "kill", refused_for_the_first)
+        status, _ = timed(["bash", "-c", f"{daemons}; sleep 0.5"])
+        monkeypatch.undo()
+        assert status == 0
+        _changed_user, other = pids(written)
+        end_within([other], 1.0)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                kill(left, signal.SIGKILL)
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
 def test_a_daemon_whose_parent_ends_as_the_job_is_listed_is_sent_sigterm(
     tmp_path, monkeypatch, stopped_as_the_keeper_is
 ):

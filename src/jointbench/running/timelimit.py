@@ -256,7 +256,7 @@ def _signal_descendants(group: int | None, signum: int, within_s: float) -> None
     sent: set[int] = set()
     while unsent := set(_descendants()) - sent:
         for pid in unsent:
-            with contextlib.suppress(ProcessLookupError):
+            with _unreachable_passed():
                 os.kill(pid, signum)
         sent |= unsent
         if time.monotonic() >= deadline:
@@ -300,10 +300,16 @@ def _stop_descendants(group: int | None, grace_s: float) -> None:
 
 
 def _signal_group(group: int, signum: int) -> None:
-    try:
+    with _unreachable_passed():
         os.killpg(group, signum)
-    except ProcessLookupError:
-        pass
+
+
+def _unreachable_passed() -> contextlib.AbstractContextManager:
+    """Pass over a signal that cannot reach its process: it has ended, or it is no longer
+    this user's (a command run through sudo), which the kernel refuses with EPERM. Either
+    way the rest of the job must still be signalled: raised, it would end the keeper with
+    the processes not yet signalled running on without a limit."""
+    return contextlib.suppress(ProcessLookupError, PermissionError)
 
 
 def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -> int | None:
