@@ -550,6 +550,32 @@ def stopped_as_the_keeper_is():
         signal.signal(signum, handler)
 
 
+def test_a_stop_that_comes_as_the_limited_shell_starts_is_its_status(
+    stopped_as_the_keeper_is, monkeypatch
+):
+    """Ctrl-C or a cancel as the limited shell starts, once it handles the stops and before it
+    forks its keeper (as it makes itself the reaper of the job's orphans): nothing of the job
+    runs yet, and the shell ends with the stop's status, not a traceback of an uncaught
+    :class:`timelimit.Interrupted`."""
+    terminal = {signum: signal.getsignal(signum) for signum in (signal.SIGTTOU, signal.SIGTTIN)}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+    def forked() -> int:
+        raise AssertionError("the keeper was forked after the stop")
+
+    monkeypatch.setenv(timelimit.LIMIT_VARIABLE, "10")
+    # Not on the test's process: told to stop when its parent ends.
+    monkeypatch.setattr(timelimit, "_end_with_the_run", lambda parent: None)
+    monkeypatch.setattr(timelimit, "_adopt_orphans", lambda: signal.raise_signal(signal.SIGINT))
+    monkeypatch.setattr(timelimit.os, "fork", forked)
+    try:
+        assert timelimit.main(["-c", "true"]) == 128 + signal.SIGINT
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        for signum, handler in terminal.items():
+            signal.signal(signum, handler)
+
+
 def test_a_stop_that_comes_as_the_program_is_started_stops_it(
     stopped_as_the_keeper_is, monkeypatch
 ):

@@ -440,6 +440,23 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     except ValueError as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
+    # A stop before the fork finds nothing of the job running: its status, not a traceback.
+    try:
+        _ready_to_pass_stops_on()
+    except Interrupted as stopped:
+        return 128 + stopped.signum
+    shell = os.getpid()
+    keeper = os.fork()
+    if keeper == 0:
+        _exit_keeping(argv, limit, shell)
+    return _wait_for_the_keeper(keeper)
+
+
+def _ready_to_pass_stops_on() -> None:
+    """Make the limited shell ready to fork its keeper: its stops handled (:data:`_stops`),
+    told when the run ends (``_end_with_the_run``), the reaper of the job's orphans, and its
+    stops blocked until each process can pass one on (:class:`Interrupted` for one that came
+    before)."""
     for signum in _STOP_SIGNALS:
         signal.signal(signum, _stops)
     # The command's group of its own is out of the terminal's foreground: the stops that
@@ -448,20 +465,12 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     # terminal is set as from the foreground, and a read of it fails.
     for signum in (signal.SIGTTOU, signal.SIGTTIN):
         signal.signal(signum, signal.SIG_IGN)
-    try:
-        _end_with_the_run(os.getppid())
-    except Interrupted as stopped:
-        return 128 + stopped.signum
+    _end_with_the_run(os.getppid())
     _adopt_orphans()
-    shell = os.getpid()
-    # Held until each process is ready to pass a stop on: one arriving between the fork and
-    # the wait would end this process without stopping the keeper, and the keeper before it
-    # knows its parent.
+    # Blocked until each process is ready to pass a stop on: one arriving between the fork
+    # and the wait would end this process without stopping the keeper, and the keeper before
+    # it knows its parent.
     signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
-    keeper = os.fork()
-    if keeper == 0:
-        _exit_keeping(argv, limit, shell)
-    return _wait_for_the_keeper(keeper)
 
 
 def _exit_keeping(argv: Sequence[str], limit_s: float, shell: int) -> None:
