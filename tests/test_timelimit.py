@@ -16,6 +16,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -548,6 +549,25 @@ def stopped_as_the_keeper_is():
     yield
     for signum, handler in saved.items():
         signal.signal(signum, handler)
+
+
+def test_a_second_stop_that_comes_with_the_first_is_ignored_without_a_word(
+    stopped_as_the_keeper_is, monkeypatch
+):
+    """Two stops at once (the terminal closed: SIGHUP to the run's group, and SIGTERM as
+    Snakemake, its parent, ends): the first is taken, the second ignored, as a stop must not
+    cut the stop short; and ignored without the interpreter's "Signal 15 ignored due to race
+    condition" traceback on the job's stderr, which reads as the limited shell failing."""
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    both = {signal.SIGHUP, signal.SIGTERM}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, both)
+    for signum in both:  # to this thread, which holds them until it unblocks them
+        signal.pthread_kill(threading.get_ident(), signum)
+    with pytest.raises(timelimit.Interrupted):
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # both come here
+    signal.pthread_sigmask(signal.SIG_BLOCK, [])  # runs the second's handler
+    assert [str(each.exc_value) for each in unraisable] == []
 
 
 def test_a_stop_that_comes_as_the_limited_shell_starts_is_its_status(

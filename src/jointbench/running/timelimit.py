@@ -66,6 +66,10 @@ class Interrupted(Exception):
         self.signum = signum
 
 
+def _a_second_stop(_signum: int, _frame: object) -> None:
+    """The handler of a stop signal once a stop has come (:class:`_Stops`): nothing."""
+
+
 class _Stops:
     """The handler of the stop signals (:data:`_STOP_SIGNALS`): a stop raises
     :class:`Interrupted` where this process is, unless held (:meth:`held`, a step that must
@@ -80,8 +84,10 @@ class _Stops:
 
     def __call__(self, signum: int, _frame: object) -> None:
         # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
+        # Ignored by a handler, not SIG_IGN: one that came with the first, its handler not yet
+        # run, would have the interpreter write "ignored due to race condition" on stderr.
         for each in _STOP_SIGNALS:
-            signal.signal(each, signal.SIG_IGN)
+            signal.signal(each, _a_second_stop)
         if self.holding:
             self.came.append(signum)
             return
@@ -326,8 +332,8 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     command is started, it would end this process with the command's pid unknown, and the
     command running on without a limit. The command starts with the stops unblocked and at
     their defaults, whatever this process does with them: one it inherited blocked would
-    wait, unseen, and one inherited ignored (as this process ignores them once told to stop)
-    would do nothing, until the SIGKILL."""
+    wait, unseen, and one inherited ignored (a caller's) would do nothing, until the
+    SIGKILL."""
     _adopt_orphans()
     job_mask = signal.pthread_sigmask(signal.SIG_BLOCK, []) - set(_STOP_SIGNALS)
     with _stops.held():
