@@ -16,6 +16,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -142,6 +143,35 @@ def test_a_grandchild_that_left_the_group_of_a_child_that_left_is_stopped(tmp_pa
     assert status == 0
     (grandchild,) = pids(written)
     assert not alive(grandchild)
+
+
+@pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
+def test_a_process_of_the_job_that_changed_its_user_leaves_the_rest_stopped(tmp_path, monkeypatch):
+    """A process of the job that is no longer this user's (a command run through sudo) cannot
+    be signalled: the kernel refuses with EPERM. The rest of the job is stopped all the same,
+    and the keeper goes on to end, rather than failing with a traceback and leaving the
+    processes not yet signalled running without a limit."""
+    written = tmp_path / "pids"
+    daemons = f"setsid {FOREVER} & echo $! >> {written}; setsid {FOREVER} & echo $! >> {written}"
+    kill = os.kill
+    try:
+        # Faked, as root may signal any process: the first daemon stands for one that changed
+        # its user.
+        def refused_for_the_first(pid: int, signum: int) -> None:
+            if pid == pids(written)[0]:
+                raise PermissionError(1, "Operation not permitted")
+            kill(pid, signum)
+
+        monkeypatch.setattr(timelimit.os, "kill", refused_for_the_first)
+        status, _ = timed(["bash", "-c", f"{daemons}; sleep 0.5"])
+        monkeypatch.undo()
+        assert status == 0
+        _changed_user, other = pids(written)
+        end_within([other], 1.0)
+    finally:
+        for left in pids(written):
+            with contextlib.suppress(ProcessLookupError):
+                kill(left, signal.SIGKILL)
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
@@ -519,6 +549,51 @@ def stopped_as_the_keeper_is():
     yield
     for signum, handler in saved.items():
         signal.signal(signum, handler)
+
+
+def test_a_second_stop_that_comes_with_the_first_is_ignored_without_a_word(
+    stopped_as_the_keeper_is, monkeypatch
+):
+    """Two stops at once (the terminal closed: SIGHUP to the run's group, and SIGTERM as
+    Snakemake, its parent, ends): the first is taken, the second ignored, as a stop must not
+    cut the stop short; and ignored without the interpreter's "Signal 15 ignored due to race
+    condition" traceback on the job's stderr, which reads as the limited shell failing."""
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    both = {signal.SIGHUP, signal.SIGTERM}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, both)
+    for signum in both:  # to this thread, which holds them until it unblocks them
+        signal.pthread_kill(threading.get_ident(), signum)
+    with pytest.raises(timelimit.Interrupted):
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)  # both come here
+    signal.pthread_sigmask(signal.SIG_BLOCK, [])  # runs the second's handler
+    assert [str(each.exc_value) for each in unraisable] == []
+
+
+def test_a_stop_that_comes_as_the_limited_shell_starts_is_its_status(
+    stopped_as_the_keeper_is, monkeypatch
+):
+    """Ctrl-C or a cancel as the limited shell starts, once it handles the stops and before it
+    forks its keeper (as it makes itself the reaper of the job's orphans): nothing of the job
+    runs yet, and the shell ends with the stop's status, not a traceback of an uncaught
+    :class:`timelimit.Interrupted`."""
+    terminal = {signum: signal.getsignal(signum) for signum in (signal.SIGTTOU, signal.SIGTTIN)}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+    def forked() -> int:
+        raise AssertionError("the keeper was forked after the stop")
+
+    monkeypatch.setenv(timelimit.LIMIT_VARIABLE, "10")
+    # Not on the test's process: told to stop when its parent ends.
+    monkeypatch.setattr(timelimit, "_end_with_the_run", lambda parent: None)
+    monkeypatch.setattr(timelimit, "_adopt_orphans", lambda: signal.raise_signal(signal.SIGINT))
+    monkeypatch.setattr(timelimit.os, "fork", forked)
+    try:
+        assert timelimit.main(["-c", "true"]) == 128 + signal.SIGINT
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        for signum, handler in terminal.items():
+            signal.signal(signum, handler)
 
 
 def test_a_stop_that_comes_as_the_program_is_started_stops_it(

@@ -345,12 +345,16 @@ def _labels(text: str | None) -> list[str] | None:
 #: The column of a joint centre's row holding the root of the trace of the covariance its
 #: SD is read from (:meth:`jointbench.RecordingFit.stated_covariance`) [mm].
 _STATED_COVARIANCE = "sqrt_trace_center_cov_mm"
+#: The column of a row holding the root of the trace of the method's own covariance [mm], as
+#: the pipeline's scores name it.
+_OWN_COVARIANCE = "sqrt_trace_cov_mm"
 
 
 def _row(fitted) -> dict:
     """One flat row of a fit for the CSV output (a failed method: its status, and no SD),
-    its SD a number or ``None`` (:meth:`jointbench.RecordingFit.sd_fields`), and so the root
-    of the trace of the covariance it is read from (:data:`_STATED_COVARIANCE`)."""
+    its SD a number or ``None`` (:meth:`jointbench.RecordingFit.sd_fields`), and so the roots
+    of the traces of the method's own covariance (:data:`_OWN_COVARIANCE`) and of the one the
+    SD is read from (:data:`_STATED_COVARIANCE`)."""
     if isinstance(fitted, _Failed):
         return fitted.to_dict()
     row = {"method": fitted.method}
@@ -363,14 +367,17 @@ def _row(fitted) -> dict:
     row.update(fitted.sd_fields())
     # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
     # for gauss-markov), and the one the SD is read from under the name of its diagnostic:
-    # where that SD states no precision, neither does the covariance it is read from.
-    covariance = getattr(result, "covariance", None)
-    if covariance is not None:
-        row["sqrt_trace_cov_mm"] = float(np.sqrt(np.trace(covariance)))
+    # where that SD states no precision, neither does a covariance of the same answer (for
+    # gauss-markov-frame0 the method's own is the one the SD is read from).
+    no_precision = fitted.stated_sd() == NOT_DETERMINED
     stated = fitted.stated_covariance()
-    if stated is not None:
-        root = float(np.sqrt(np.trace(stated[0])))
-        row[_STATED_COVARIANCE] = root if row[SD_STATED] else None
+    covariances = {
+        _OWN_COVARIANCE: getattr(result, "covariance", None),
+        _STATED_COVARIANCE: None if stated is None else stated[0],
+    }
+    for name, covariance in covariances.items():
+        if covariance is not None:
+            row[name] = None if no_precision else float(np.sqrt(np.trace(covariance)))
     if fitted.bootstrap is not None:
         if fitted.kind == "axis":
             row["boot_cone95_deg"] = fitted.bootstrap_cone_deg()
@@ -389,11 +396,11 @@ def _row(fitted) -> dict:
 
 
 def _readable(row: dict) -> dict:
-    """A :func:`_row` for people: an SD that states no precision, and the root of the
-    covariance it is read from, read :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of
+    """A :func:`_row` for people: an SD that states no precision, and the roots of the
+    covariances of its answer, read :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of
     the flag that says so for programs."""
     readable = {key: value for key, value in row.items() if key != SD_STATED}
-    for name in {*SD_NAMES.values(), _STATED_COVARIANCE}:
+    for name in {*SD_NAMES.values(), _OWN_COVARIANCE, _STATED_COVARIANCE}:
         if name in readable and readable[name] is None:
             readable[name] = NOT_DETERMINED
     return readable

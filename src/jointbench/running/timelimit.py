@@ -66,6 +66,10 @@ class Interrupted(Exception):
         self.signum = signum
 
 
+def _a_second_stop(_signum: int, _frame: object) -> None:
+    """The handler of a stop signal once a stop has come (:class:`_Stops`): nothing."""
+
+
 class _Stops:
     """The handler of the stop signals (:data:`_STOP_SIGNALS`): a stop raises
     :class:`Interrupted` where this process is, unless held (:meth:`held`, a step that must
@@ -80,8 +84,10 @@ class _Stops:
 
     def __call__(self, signum: int, _frame: object) -> None:
         # Once stopping, a second signal (the run's end after a Ctrl-C) must not cut it short.
+        # Ignored by a handler, not SIG_IGN: one that came with the first, its handler not yet
+        # run, would have the interpreter write "ignored due to race condition" on stderr.
         for each in _STOP_SIGNALS:
-            signal.signal(each, signal.SIG_IGN)
+            signal.signal(each, _a_second_stop)
         if self.holding:
             self.came.append(signum)
             return
@@ -256,7 +262,7 @@ def _signal_descendants(group: int | None, signum: int, within_s: float) -> None
     sent: set[int] = set()
     while unsent := set(_descendants()) - sent:
         for pid in unsent:
-            with contextlib.suppress(ProcessLookupError):
+            with _unreachable_passed():
                 os.kill(pid, signum)
         sent |= unsent
         if time.monotonic() >= deadline:
@@ -300,10 +306,16 @@ def _stop_descendants(group: int | None, grace_s: float) -> None:
 
 
 def _signal_group(group: int, signum: int) -> None:
-    try:
+    with _unreachable_passed():
         os.killpg(group, signum)
-    except ProcessLookupError:
-        pass
+
+
+def _unreachable_passed() -> contextlib.AbstractContextManager:
+    """Pass over a signal that cannot reach its process: it has ended, or it is no longer
+    this user's (a command run through sudo), which the kernel refuses with EPERM. Either
+    way the rest of the job must still be signalled: raised, it would end the keeper with
+    the processes not yet signalled running on without a limit."""
+    return contextlib.suppress(ProcessLookupError, PermissionError)
 
 
 def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -> int | None:
@@ -320,8 +332,8 @@ def run_limited(argv: Sequence[str], limit_s: float, grace_s: float = GRACE_S) -
     command is started, it would end this process with the command's pid unknown, and the
     command running on without a limit. The command starts with the stops unblocked and at
     their defaults, whatever this process does with them: one it inherited blocked would
-    wait, unseen, and one inherited ignored (as this process ignores them once told to stop)
-    would do nothing, until the SIGKILL."""
+    wait, unseen, and one inherited ignored (a caller's) would do nothing, until the
+    SIGKILL."""
     _adopt_orphans()
     job_mask = signal.pthread_sigmask(signal.SIG_BLOCK, []) - set(_STOP_SIGNALS)
     with _stops.held():
@@ -434,6 +446,23 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     except ValueError as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
+    # A stop before the fork finds nothing of the job running: its status, not a traceback.
+    try:
+        _ready_to_pass_stops_on()
+    except Interrupted as stopped:
+        return 128 + stopped.signum
+    shell = os.getpid()
+    keeper = os.fork()
+    if keeper == 0:
+        _exit_keeping(argv, limit, shell)
+    return _wait_for_the_keeper(keeper)
+
+
+def _ready_to_pass_stops_on() -> None:
+    """Make the limited shell ready to fork its keeper: its stops handled (:data:`_stops`),
+    told when the run ends (``_end_with_the_run``), the reaper of the job's orphans, and its
+    stops blocked until each process can pass one on (:class:`Interrupted` for one that came
+    before)."""
     for signum in _STOP_SIGNALS:
         signal.signal(signum, _stops)
     # The command's group of its own is out of the terminal's foreground: the stops that
@@ -442,20 +471,12 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     # terminal is set as from the foreground, and a read of it fails.
     for signum in (signal.SIGTTOU, signal.SIGTTIN):
         signal.signal(signum, signal.SIG_IGN)
-    try:
-        _end_with_the_run(os.getppid())
-    except Interrupted as stopped:
-        return 128 + stopped.signum
+    _end_with_the_run(os.getppid())
     _adopt_orphans()
-    shell = os.getpid()
-    # Held until each process is ready to pass a stop on: one arriving between the fork and
-    # the wait would end this process without stopping the keeper, and the keeper before it
-    # knows its parent.
+    # Blocked until each process is ready to pass a stop on: one arriving between the fork
+    # and the wait would end this process without stopping the keeper, and the keeper before
+    # it knows its parent.
     signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
-    keeper = os.fork()
-    if keeper == 0:
-        _exit_keeping(argv, limit, shell)
-    return _wait_for_the_keeper(keeper)
 
 
 def _exit_keeping(argv: Sequence[str], limit_s: float, shell: int) -> None:
