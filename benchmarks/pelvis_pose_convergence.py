@@ -64,6 +64,12 @@ def _pelvis_fits(protocol, condition, trials: int):
     return stopped, max(int(fit.iterations.max()) for fit in fits)
 
 
+def _print_fits(label: str, protocol, condition, trials: int) -> None:
+    """Print ``label``, then how many of ``trials`` pelvis pose fits stopped short."""
+    stopped, most = _pelvis_fits(protocol, condition, trials)
+    print(f"{label}: {stopped:5d} (iterations <= {most})")
+
+
 def _squeezed(width_mm: float) -> list[tuple[float, ...]]:
     """The default pelvis squeezed (or stretched) across its common line to ``width_mm``."""
     markers = np.array(hip_sta.HipStaProtocol().pelvis_markers_mm)
@@ -83,10 +89,11 @@ def width(trials: int) -> None:
             protocol = hip_sta.HipStaProtocol(
                 pelvis_markers_mm=_squeezed(ratio * NOISE_MM), duration_s=frames / 50.0
             )
-            stopped, most = _pelvis_fits(protocol, condition, trials)
-            print(
-                f"  {frames:4d} frames  width/noise {ratio:5.2f}: {stopped:5d} "
-                f"(iterations <= {most})"
+            _print_fits(
+                f"  {frames:4d} frames  width/noise {ratio:5.2f}",
+                protocol,
+                condition,
+                trials,
             )
 
 
@@ -102,10 +109,11 @@ def length(trials: int) -> None:
                     noise_mm=noise,
                     duration_s=frames / 50.0,
                 )
-                stopped, most = _pelvis_fits(protocol, condition, trials)
-                print(
-                    f"  noise {noise:5.3f} mm {frames:4d} frames  length/width {ratio:5.0f}: "
-                    f"{stopped:5d} (iterations <= {most})"
+                _print_fits(
+                    f"  noise {noise:5.3f} mm {frames:4d} frames  length/width {ratio:5.0f}",
+                    protocol,
+                    condition,
+                    trials,
                 )
 
 
@@ -128,11 +136,12 @@ def corner(trials: int) -> None:
                     noise_mm=noise,
                     duration_s=frames / 50.0,
                 )
-                stopped, most = _pelvis_fits(protocol, condition, trials)
-                print(
+                _print_fits(
                     f"  noise {noise:4.2f} mm {frames:4d} frames  width/noise "
-                    f"{bounds.PELVIS_WIDTH_PER_DEPARTURE:g}, length/width {ratio:3.0f}: "
-                    f"{stopped:5d} (iterations <= {most})"
+                    f"{bounds.PELVIS_WIDTH_PER_DEPARTURE:g}, length/width {ratio:3.0f}",
+                    protocol,
+                    condition,
+                    trials,
                 )
 
 
@@ -150,11 +159,12 @@ def artefact(trials: int) -> None:
                 departure, _, _ = bounds.pelvis_departure(
                     {**settings, "grid": {k: [v] for k, v in condition.items()}}, protocol
                 )
-                stopped, most = _pelvis_fits(protocol, condition, trials)
-                print(
+                _print_fits(
                     f"  {motion:13s} width {width_mm:4.0f} mm  pelvis_sta_ratio {ratio:4.2f}  "
-                    f"width/departure {width_mm / departure:6.2f}: {stopped:5d} "
-                    f"(iterations <= {most})"
+                    f"width/departure {width_mm / departure:6.2f}",
+                    protocol,
+                    condition,
+                    trials,
                 )
 
 

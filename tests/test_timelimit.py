@@ -18,6 +18,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -50,6 +51,18 @@ def alive(pid: int) -> bool:
 
 def pids(path: Path) -> list[int]:
     return [int(line) for line in path.read_text().split()]
+
+
+@contextlib.contextmanager
+def ended_after(written: Path, kill=os.killpg) -> Iterator[None]:
+    """Run the block, then kill (SIGKILL) each process, or group, whose pid the job wrote to
+    ``written``: a test that fails leaves nothing of its job running."""
+    try:
+        yield
+    finally:
+        for left in pids(written) if written.exists() else []:
+            with contextlib.suppress(ProcessLookupError):
+                kill(left, signal.SIGKILL)
 
 
 def timed(argv: list[str], limit_s: float = LIMIT_S) -> tuple[int | None, float]:
@@ -154,7 +167,7 @@ def test_a_process_of_the_job_that_changed_its_user_leaves_the_rest_stopped(tmp_
     written = tmp_path / "pids"
     daemons = f"setsid {FOREVER} & echo $! >> {written}; setsid {FOREVER} & echo $! >> {written}"
     kill = os.kill
-    try:
+    with ended_after(written, kill):
         # Faked, as root may signal any process: the first daemon stands for one that changed
         # its user.
         def refused_for_the_first(pid: int, signum: int) -> None:
@@ -168,10 +181,6 @@ def test_a_process_of_the_job_that_changed_its_user_leaves_the_rest_stopped(tmp_
         assert status == 0
         _changed_user, other = pids(written)
         end_within([other], 1.0)
-    finally:
-        for left in pids(written):
-            with contextlib.suppress(ProcessLookupError):
-                kill(left, signal.SIGKILL)
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
@@ -505,7 +514,7 @@ def test_a_stop_that_comes_while_the_limited_shell_stops_what_its_keeper_left(tm
     ready = f"until [ -s {written} ]; do sleep 0.05; done"
     program = f"setsid bash {daemon} {keepers_parent} & {ready}; kill -KILL $PPID"
     log = tmp_path / "stderr"
-    try:
+    with ended_after(written):
         # To a file: a daemon that runs on would hold a pipe open.
         with log.open("w") as stderr:
             shell = limited_shell(program, "60", stderr=stderr)
@@ -513,10 +522,6 @@ def test_a_stop_that_comes_while_the_limited_shell_stops_what_its_keeper_left(tm
         assert (status, log.read_text()) == (128 + signal.SIGTERM, "")
         (daemon_pid,) = pids(written)
         assert not alive(daemon_pid)
-    finally:
-        for left in pids(written):
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(left, signal.SIGKILL)
 
 
 def test_a_stop_that_comes_as_the_keeper_is_waited_for_is_the_shells_status(monkeypatch):
@@ -673,15 +678,11 @@ def test_a_stop_that_comes_as_the_keeper_turns_to_stop_the_job_stops_it_all_the_
         stop(group, grace_s)
 
     monkeypatch.setattr(timelimit, "_stop_descendants", told_to_stop_first)
-    try:
+    with ended_after(written):
         with pytest.raises(timelimit.Interrupted):
             timed(["bash", "-c", f"setsid {FOREVER} & echo $! > {written}; sleep 0.5"])
         (daemon_pid,) = pids(written)
         assert not alive(daemon_pid)
-    finally:
-        for left in pids(written):
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(left, signal.SIGKILL)
 
 
 @pytest.mark.skipif(shutil.which("setsid") is None, reason="no setsid on this machine")
@@ -700,15 +701,11 @@ def test_a_stop_that_comes_while_the_job_is_stopped_does_not_cut_the_stop_short(
         f"while :; do {FOREVER} & wait; done\n"
     )
     program = f"setsid bash {daemon} & until [ -s {written} ]; do sleep 0.05; done"
-    try:
+    with ended_after(written):
         with pytest.raises(timelimit.Interrupted):
             timed(["bash", "-c", program])
         (daemon_pid,) = pids(written)
         assert not alive(daemon_pid)
-    finally:
-        for left in pids(written):
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(left, signal.SIGKILL)
 
 
 def test_a_program_that_cannot_be_started_leaves_a_stop_taken_at_once(stopped_as_the_keeper_is):

@@ -66,6 +66,20 @@ def run_snakemake(workdir: Path, *arguments: str, timeout: int = 900, jobs: int 
     return subprocess.run(command, capture_output=True, text=True, timeout=timeout)
 
 
+def refused_dry_run(workdir: Path, overlay: dict) -> str:
+    """Copy the workflow into ``workdir`` and dry-run it with the config file ``overlay``,
+    which it must refuse before planning any job or writing any result; its messages."""
+    copy_workflow(workdir)
+    path = workdir / "overlay.yaml"
+    path.write_text(yaml.safe_dump(overlay))
+    run = run_snakemake(workdir, "--configfile", str(path), "--dry-run", timeout=300)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-2000:]
+    assert "Job stats" not in message, message[-2000:]
+    assert not (workdir / "results").exists()
+    return message
+
+
 @dataclass(frozen=True)
 class FinishedRun:
     """A finished run in ``workdir``: the workflow, its own copy of the package under ``src/``

@@ -26,10 +26,11 @@ __all__ = [
 PRECISION_NOT_DETERMINED = "precision not determined"
 
 
-#: The diagnostic a checked call sets true where the support verdict refused the data (the
-#: data cannot support an answer: too little motion, markers not rigid, a centre not
-#: determined along a hinge's axis), false where it did not; a method's SD then rests on a
-#: model the data do not support.
+#: The diagnostic a checked call sets true where the support verdict did not find that the
+#: data support an answer (any of its warnings: too little motion, markers not rigid, a
+#: centre not determined along a hinge's axis, markers too nearly collinear for the verdict
+#: to test them), false where it found they do; a method's SD then rests on a model the data
+#: are not shown to support.
 REFUSED = "support_refused"
 
 
