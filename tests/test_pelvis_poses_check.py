@@ -10,6 +10,7 @@ Each protocol below is one the simulate job refuses and the check passed before.
 from __future__ import annotations
 
 import copy
+import warnings
 
 import numpy as np
 import pytest
@@ -106,3 +107,22 @@ def test_dry_run_stops_before_any_job_naming_the_pelvis_cluster(tmp_path):
     message = refused_dry_run(tmp_path, {"studies": {"hip_sta": {"protocol": overrides}}})
     expected = "config: studies.hip_sta.protocol.pelvis_markers_mm, noise_mm: "
     assert expected in message, message[-2000:]
+
+
+def test_a_recording_too_long_to_hold_is_refused_naming_its_frames_not_a_memory_error(config):
+    """A typo in ``duration_s`` makes trials of more frames than any job can hold: the check
+    refuses it as a mistake, before the pelvis check tries to lay out the motion's frames."""
+    with pytest.raises(ValueError) as raised:
+        study_config.check_config(_with_protocol(config, {"duration_s": 1e12}))
+    message = str(raised.value)
+    assert message.startswith("config: studies.hip_sta.protocol: condition "), message
+    assert "50000000000000 frame(s)" in message, message
+
+
+def test_a_recording_of_no_frames_is_refused_for_its_frames_without_a_numpy_warning(config):
+    """Trials of no frames have no RMS departure: the frame count's refusal comes first, and
+    the pelvis check never averages over an empty recording."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"trials of 0 frame\(s\), fewer than any listed"):
+            study_config.check_config(_with_protocol(config, {"duration_s": 0.001}))

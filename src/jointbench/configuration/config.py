@@ -45,6 +45,11 @@ SCHEMA_PATH = resources.files("jointbench.schemas").joinpath("config.schema.yaml
 # trials' spread, finer than any published tolerance; the largest dataset (hip: 1200 frames of
 # 6 markers) is then 72 million rows, about what one job can hold in memory. More is a typo.
 MAX_TRIALS = 10_000
+#: Frames of a condition's trials together: those of the largest dataset above (1200 frames
+#: times :data:`MAX_TRIALS`), what one job can hold. A protocol whose trials hold more (a
+#: ``duration_s`` or ``fps`` typed a few digits too long) is a typo, refused before any check
+#: lays out its frames.
+MAX_CONDITION_FRAMES = 1200 * MAX_TRIALS
 
 
 def read_yaml(text: str) -> object:
@@ -256,11 +261,12 @@ def check_config(config: Mapping) -> None:
             raise ValueError(f"{where}.trials: {trials!r} is not an integer in [1, {MAX_TRIALS}]")
         protocol = _protocol(spec, settings.get("protocol"), where)
         _check_grid(spec, settings["grid"], protocol, where)
+        # The frames first: the study's bounds lay out a trial's frames, which must exist and fit.
+        _check_estimators(spec, settings, where)
+        _check_frames(spec, settings, protocol, where)
         problem = study_problem(study, settings, protocol)
         if problem:
             raise ValueError(f"{where}.{problem[0]}: {problem[1]}")
-        _check_estimators(spec, settings, where)
-        _check_frames(spec, settings, protocol, where)
 
 
 def _protocol(spec: Study, overrides: Mapping | None, where: str) -> object:
@@ -364,7 +370,8 @@ def _check_options(spec: Study, name: str, options: Mapping, where: str) -> None
 
 def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) -> None:
     """Refuse a condition whose trials have fewer frames than any built-in estimator listed
-    fits (its :class:`~jointbench.estimators.registry.Claims`): all its rows would fail.
+    fits (its :class:`~jointbench.estimators.registry.Claims`): all its rows would fail; or
+    whose trials hold more than :data:`MAX_CONDITION_FRAMES` frames together.
 
     The frames are the study's count from its protocol where it gives one, else counted on
     one simulated trial per condition, so they are the simulator's, whatever key or protocol
@@ -375,9 +382,7 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
         name: registry.claims(method_kind(spec, name), name).min_frames
         for name in settings["estimators"]
     }
-    if not needs:
-        return
-    fewest = min(needs.values())
+    fewest = min(needs.values(), default=0)
     frames_key = next((key for key, values in spec.grid_spec.items() if values.frames), None)
     for condition in _cells(spec, settings["grid"]):
         n_frames = trial_frames(spec, protocol, settings.get("protocol"), condition)
@@ -385,8 +390,14 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
             raise ValueError(
                 f"{where}.grid: condition {condition_id(condition)}: {n_frames}"
             ) from None
+        culprit = f"grid.{frames_key}" if frames_key else "protocol"
+        if n_frames * settings["trials"] > MAX_CONDITION_FRAMES:
+            raise ValueError(
+                f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
+                f"{n_frames} frame(s), {settings['trials']} trials of which hold more than "
+                f"{MAX_CONDITION_FRAMES} frames, what one job can hold"
+            )
         if n_frames < fewest:
-            culprit = f"grid.{frames_key}" if frames_key else "protocol"
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())
             raise ValueError(
                 f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
