@@ -659,3 +659,40 @@ def test_a_run_simulates_each_conditions_frame_count_once(config, monkeypatch):
     assert config["sensitivity"]["named"], "no named overlay to check over the config"
     study_config.named_overlays(config, ROOT)
     assert len(simulated) == len(study_config.conditions(config, "hip_sta"))
+
+
+# Protocols whose trials would not fit in memory: a few digits too many in the frame count.
+# (study, protocol overrides, the key the refusal names, the frames it names)
+_TOO_LONG = [
+    ("cmc", {"n_frames": 10**13}, "config: studies.cmc.protocol: ", "10000000000000 frame(s)"),
+    ("hip", {"n_frames": 10**13}, "config: studies.hip.protocol: ", "10000000000000 frame(s)"),
+    (
+        "hinge",
+        {"all": {"n_frames": 10**12}},
+        "config: studies.hinge.protocol: ",
+        "1000000000000 frame(s)",
+    ),
+    # Each hip trial keeps its first Nt frames of one recording it draws whole: 200 trials of
+    # two million recorded frames each, whatever Nt the grid asks for.
+    ("hip", {"n_frames": 2 * 10**6}, "config: studies.hip.protocol: ", "2000000 frame(s)"),
+]
+
+
+@pytest.mark.parametrize(("study", "overrides", "key", "frames"), _TOO_LONG)
+def test_trials_too_long_to_hold_are_refused_naming_their_frames_before_any_simulation(
+    config, monkeypatch, study, overrides, key, frames
+):
+    """Every study of the package counts its trials' frames from its protocol: the check
+    simulates nothing (here, a simulation is an error), and refuses the protocol as a
+    mistake rather than ending in a MemoryError or an allocation of gigabytes."""
+
+    def simulated(*_arguments):
+        raise AssertionError(f"the {study} check simulated a trial to count its frames")
+
+    monkeypatch.setattr(study_config, "_simulated_frames", simulated)
+    bad = changed(config, study, ("protocol",), overrides)
+    with pytest.raises(ValueError) as raised:
+        study_config.check_config(bad)
+    message = str(raised.value)
+    assert message.startswith(key), message
+    assert frames in message and "what one job can hold" in message, message

@@ -18,7 +18,7 @@ from snakemake.utils import update_config
 from workflow_copy import ROOT
 
 from jointbench.configuration import config as study_config
-from jointbench.configuration.studies import get_study
+from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators.batching import ProgrammingError
 from jointbench.running import run
 
@@ -47,6 +47,14 @@ CONFIGS = {"default": _default, "reduced": _reduced, "fourth study": _fourth}
 def _simulated_frames(spec, protocol, condition) -> int:
     trials = spec.simulate(condition, protocol, [np.random.default_rng(0)])
     return trials.segments[spec.segments[0]].shape[1]
+
+
+@pytest.mark.parametrize("study", study_names())
+def test_every_study_of_the_package_declares_its_frame_count(study):
+    """So that its config's check simulates nothing (a frame count typed a few digits too long
+    is refused, not simulated: tests/test_config_validation.py); the count is checked against
+    the simulator's below."""
+    assert get_study(study).frame_count is not None
 
 
 @pytest.mark.parametrize("name", CONFIGS)

@@ -375,8 +375,9 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
 
     The frames are the study's count from its protocol where it gives one, else counted on
     one simulated trial per condition, so they are the simulator's, whatever key or protocol
-    field sets them (:func:`trial_frames`); external estimators declare no minimum and are not
-    counted.
+    field sets them (:func:`trial_frames`); what a trial holds is its recording's where the
+    study draws more frames than it keeps (:attr:`~jointbench.simulate.Study.recorded_frames`).
+    External estimators declare no minimum and are not counted.
     """
     needs = {
         name: registry.claims(method_kind(spec, name), name).min_frames
@@ -391,11 +392,15 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
                 f"{where}.grid: condition {condition_id(condition)}: {n_frames}"
             ) from None
         culprit = f"grid.{frames_key}" if frames_key else "protocol"
-        if n_frames * settings["trials"] > MAX_CONDITION_FRAMES:
+        recorded = spec.recorded_frames(protocol) if spec.recorded_frames else n_frames
+        if max(n_frames, recorded) * settings["trials"] > MAX_CONDITION_FRAMES:
+            held = f"{n_frames} frame(s)"
+            if recorded > n_frames:
+                culprit, held = "protocol", f"{held} of recordings of {recorded} frame(s)"
             raise ValueError(
-                f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
-                f"{n_frames} frame(s), {settings['trials']} trials of which hold more than "
-                f"{MAX_CONDITION_FRAMES} frames, what one job can hold"
+                f"{where}.{culprit}: condition {condition_id(condition)} has trials of {held}, "
+                f"{settings['trials']} trials of which hold more than {MAX_CONDITION_FRAMES} "
+                "frames, what one job can hold"
             )
         if n_frames < fewest:
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())

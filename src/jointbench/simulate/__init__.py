@@ -198,9 +198,12 @@ class Study:
 
     ``frame_count`` gives the frames of a condition's trials under a protocol
     (``frame_count(condition, protocol)``) without simulating them: the config's check of each
-    condition's frames counts them so where a study says how (the STA study, whose simulator
-    fits the pelvis poses with a compiled kernel), and simulates one trial of each condition
-    where it does not.
+    condition's frames counts them so where a study says how (every study of the package: a
+    frame count typed a few digits too long is then refused, not simulated), and simulates one
+    trial of each condition where it does not. ``recorded_frames`` gives the frames each
+    trial's simulation draws under a protocol (``recorded_frames(protocol)``) where it keeps
+    fewer of them (paper C's trials are the first ``Nt`` frames of one recording drawn whole):
+    what a job holds, which the check bounds.
     """
 
     name: str
@@ -215,6 +218,7 @@ class Study:
     diagnostics: Mapping[str, Diagnostic] = field(default_factory=dict)
     more_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     frame_count: Callable[[Mapping[str, object], object], int] | None = None
+    recorded_frames: Callable[[object], int] | None = None
 
     def __post_init__(self) -> None:
         for kind in self.kinds:

@@ -254,6 +254,12 @@ def is_local_minimum(arguments, results: Sequence, truth: Mapping) -> list[dict[
     return rows
 
 
+def frame_count(condition: Mapping[str, object], protocol: CmcProtocol) -> int:
+    """The frames of every trial of ``condition`` under ``protocol``: the protocol's, whatever
+    the marker set, excursion or noise."""
+    return protocol.n_frames
+
+
 STUDY = Study(
     name="cmc",
     kind="center",
@@ -262,6 +268,7 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=CmcProtocol,
     simulate=simulate,
+    frame_count=frame_count,
     grid_spec={
         "marker_set": GridValues(
             str,

@@ -68,6 +68,12 @@ def simulate(
     return hinge.simulate(condition, protocol.joints[name], rngs)
 
 
+def frame_count(condition: Mapping[str, object], protocol: HingeStudyProtocol) -> int:
+    """The frames of every trial of ``condition`` under ``protocol``: those of the joint's
+    protocol the condition chooses, whatever its excursion or ratio."""
+    return protocol.joints[str(condition["protocol"])].n_frames
+
+
 STUDY = Study(
     name="hinge",
     kind="axis",
@@ -76,6 +82,7 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=HingeStudyProtocol,
     simulate=simulate,
+    frame_count=frame_count,
     grid_spec={
         "protocol": GridValues(
             str,

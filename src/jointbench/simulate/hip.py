@@ -334,6 +334,18 @@ def _jsonable(value: object) -> object:
     return value
 
 
+def frame_count(condition: Mapping[str, object], protocol: HipProtocol) -> int:
+    """The frames of every trial of ``condition`` under ``protocol``: its ``Nt``, the first
+    frames of the recording (:func:`simulate`)."""
+    return int(condition.get("n_frames", protocol.n_frames))
+
+
+def recorded_frames(protocol: HipProtocol) -> int:
+    """The frames each trial's simulation draws under ``protocol``, whatever ``Nt`` it keeps:
+    the whole recording (:func:`simulate`)."""
+    return protocol.n_frames
+
+
 STUDY = Study(
     name="hip",
     kind="joint_center",
@@ -343,6 +355,8 @@ STUDY = Study(
     segments=("proximal", "distal"),
     protocol_class=HipProtocol,
     simulate=simulate,
+    frame_count=frame_count,
+    recorded_frames=recorded_frames,
     # Nt frames of a recording of the protocol's n_frames.
     grid_spec={
         "n_frames": GridValues(
