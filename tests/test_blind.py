@@ -506,6 +506,30 @@ def test_a_program_rewriting_its_blind_input_in_place_stops_the_run_naming_the_f
     assert f"results/blind/cmc/{condition}.parquet" in message
 
 
+# Started with every Python process of a run (on PYTHONPATH): a kernel without Landlock.
+_NO_LANDLOCK = """
+from jointbench.running import landlock
+landlock.abi_version = lambda: 0
+"""
+
+
+@pytest.mark.pipeline
+def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_confined(
+    tmp_path, monkeypatch
+):
+    copy_workflow(tmp_path)
+    shim = tmp_path / "no_landlock"
+    shim.mkdir()
+    (shim / "sitecustomize.py").write_text(_NO_LANDLOCK)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(shim), os.environ.get("PYTHONPATH", "")]))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
+    message = run.stdout + run.stderr
+    assert run.returncode == 0, message[-3000:]
+    said = "this kernel has no Landlock (Linux 5.13 or later, enabled): the programs of external"
+    assert message.count(said) == 1, message[-3000:]
+
+
 def _cmc_only(tmp_path, **cmc) -> str:
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}

@@ -925,7 +925,7 @@ def confine_user_jobs(user_rules):
 NOT_CONFINED = (
     "jointbench: this kernel has no Landlock (Linux 5.13 or later, enabled): the programs "
     "of external estimators run unconfined, and may open any file under results/, the "
-    "truth too (README, 'What these checks guarantee')"
+    "truth too (README, 'Adding an estimator')"
 )
 
 
