@@ -937,8 +937,11 @@ def _opened_by_users(users):
     for producer, wildcards in _jobs_of_external_estimators(users):
         for _, path in _declared(producer):
             writable.add(os.path.dirname(apply_wildcards(path, wildcards)))
-        inputs = [str(f) for f in producer.expand_input(wildcards)[0]]
-        readable.update(f for f in inputs if _as_matched(f).startswith(RESULTS))
+        inputs = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
+        # Those the checks let it read (check_external_rules has refused any other).
+        readable.update(
+            f for f in inputs if f.startswith(RESULTS) and _refusal(f, users) is None
+        )
     for producer in users:
         for _, path in _declared(producer):
             folder = os.path.dirname(path)

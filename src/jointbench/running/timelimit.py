@@ -9,6 +9,9 @@ runs this file with the project's interpreter. It reads the limit from the envir
 workflow sets when it loads, so that every job of a run has the same, and it imports nothing
 but the standard library: it starts before the user's program, for every job.
 
+The keeper confines the job's reads under ``results/`` first (:mod:`landlock`, beside this
+file, which it imports by path when run as a program: the package is not importable there).
+
 Run as a program it exits with the command's status, or :data:`EXPIRED` when the limit
 stopped it; the workflow turns that status into an error naming the rule, the job's wildcards,
 the limit and the key to raise (:func:`expired_message`).
