@@ -384,6 +384,7 @@ PROBE = (
 import json
 import os
 import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -431,6 +432,10 @@ tried["daemon"] = told.read_text() if told.exists() else "no word"
 scratch = mine / (blind.stem + ".scratch")
 scratch.write_text("its own")
 tried["its own folder"] = scratch.read_text()
+with tempfile.TemporaryFile("w+") as temporary:
+    temporary.write("its own")
+    temporary.seek(0)
+    tried["its own temporary file"] = temporary.read()
 (mine / (blind.stem + ".json")).write_text(json.dumps(tried))
 
 answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
@@ -447,8 +452,10 @@ def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
     built-in estimator's files and the collected results left by an earlier run, by their
     paths, through a link the program makes in its own folder, ``..`` or ``/proc/self/cwd``,
     listing results/, from a child process and from a daemon; a built-in estimator's log in
-    the folder LM writes its log in, which is only written in. The program's own folder is its
-    own, and the external estimators shipped (LS-C compiled into results/bin/) run beside it."""
+    the folder LM writes its log in, which is only written in. The program's own folder and
+    temporary files are its own (here in a temporary folder of the job's, as the checkout is
+    under /tmp), and the external estimators shipped (LS-C compiled into results/bin/) run
+    beside it."""
     for planted in (
         "estimates/cmc/LS/planted.txt",
         "collected/planted.txt",
@@ -461,6 +468,7 @@ def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
     (found,) = (tmp_path / "results" / "estimates" / "cmc" / "probe").glob("*.json")
     tried = json.loads(found.read_text())
     assert tried.pop("its own folder") == "its own"
+    assert tried.pop("its own temporary file") == "its own"
     assert len(tried) == 12
     refused = {name: "Permission denied" in outcome for name, outcome in tried.items()}
     assert all(refused.values()), tried
@@ -496,7 +504,8 @@ answers.columns = ["trial", "center_x", "center_y", "center_z"]
 @pytest.mark.pipeline
 def test_a_program_rewriting_its_blind_input_in_place_stops_the_run_naming_the_file(tmp_path):
     """Run first (one job at a time, its file prioritised), the spoiler changes the markers
-    the centroid reads after it: the run stops, naming the blind file."""
+    the centroid reads after it: the run stops, naming the blind file (where the kernel has
+    Landlock, the spoiler's write is refused, and its job fails naming the file)."""
     condition = "marker_set-M__rom_deg-15__noise_mm-1.0"
     first = f"results/estimates/cmc/spoil/{condition}.parquet"
     external = ["spoil", "centroid"]

@@ -8,14 +8,15 @@ it is granted whole. The folders leading to it are granted nothing (a right on a
 for everything below it, the hidden folder too): they can be passed through, not listed nor
 written in. Inside the hidden folder only the listed folders are granted: the readable ones
 (the blind copies, the programs a rule reads) to be read, the writable ones (where the rules
-write) wholly; everything else there is neither readable nor listable.
+write) wholly, the write-only ones (where the benchmark writes too) to make and write a file
+in; everything else there is neither readable nor listable.
 
 The workflow writes what to grant into :data:`VARIABLE` as it loads (:func:`encoded`); the
 keeper of each job (jointbench/running/timelimit.py) reads it (:func:`text_from`,
 :func:`decoded`) and confines itself with it (:func:`confine`) before it starts the job's
-command. It imports nothing but the standard
-library, as the keeper does; where the kernel has no Landlock (:func:`abi_version` 0: an older
-Linux, or another system) nothing is confined, and the workflow says so as it loads.
+command. It imports nothing but the standard library, as the keeper does; where the kernel
+has no Landlock (:func:`abi_version` 0: an older Linux, or another system) nothing is
+confined, and the workflow says so as it loads.
 """
 
 from __future__ import annotations
