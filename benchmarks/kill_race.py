@@ -26,7 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from jointbench.running import timelimit
+from jointbench.running import landlock, timelimit
 
 #: The command killed: a daemon left running (``{sleep}`` a sleep unique to the trial), then
 #: the program running on.
@@ -61,6 +61,9 @@ def stopped(
     failed (a traceback on its stderr)."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
     environ[timelimit.LIMIT_VARIABLE] = "600"
+    # Its jobs confined as an external estimator's, away from a results/ they do not read.
+    hidden = landlock.Confinement(os.path.realpath("results"), [], [], [])
+    environ[landlock.VARIABLE] = landlock.encoded(hidden)
     # To a file: the keeper and the job write on after the shell has been killed.
     with tempfile.TemporaryFile("w+") as stderr:
         shell = subprocess.Popen(

@@ -29,6 +29,7 @@ from jointbench.resultfiles.parquet import (
     write_blind_dataset,
     write_dataset,
 )
+from jointbench.running import landlock
 from jointbench.running.collected import collect
 from jointbench.running.placement import dataset_placements
 from jointbench.running.run import estimate, simulate_condition
@@ -326,10 +327,6 @@ def test_a_rule_answering_the_protocols_centre_ranks_last(tmp_path):
     assert error["cheat"].min() > error.drop(index="cheat").max()
 
 
-# What no check of the workflow's stops yet: a test of it fails, by its assertions, until one
-# does (strict: a test that passes then says so).
-_NOT_CHECKED = pytest.mark.xfail(strict=True, raises=AssertionError)
-
 # The end of a test's script: its ``answers`` (trial, center_x, center_y, center_z), claimed
 # converged, written as the estimates of the method its output's folder names.
 _ANSWERED = """
@@ -363,17 +360,119 @@ answers.insert(0, "trial", placed.index.to_numpy())
 )
 
 
+# Where the kernel has no Landlock, a program's reads are not confined (the run says so).
+_CONFINED = pytest.mark.skipif(landlock.abi_version() == 0, reason="this kernel has no Landlock")
+
+
 @pytest.mark.pipeline
-@_NOT_CHECKED(
-    reason="Only the files a rule declares are checked: a program that opens "
-    "results/datasets/ and results/placements/ by path (beside its blind input) answers the "
-    "truth, its run succeeds and the extended ranking shows it best with an error of about "
-    "1e-14 mm on 1 mm noise; the ranking's note says what is not checked, but the score stands.",
-)
+@_CONFINED
 def test_a_program_opening_the_truth_by_a_path_its_rule_does_not_declare_is_stopped(tmp_path):
+    """Its job is confined to the blind copies and its rule's folders: opening the full
+    dataset fails, and so does the job and the run, naming the file."""
     run = _run_with(tmp_path, "peek", PEEK, ["centroid", "peek"])
+    message = run.stdout + run.stderr
     assert run.returncode != 0, "the run succeeded with the truth read by an undeclared path"
-    assert "results/datasets/" in run.stdout + run.stderr
+    denied = r"results/datasets/cmc/\S+\.parquet'?\.? Detail: \[errno 13\] Permission denied"
+    assert re.search(denied, message), message[-3000:]
+    assert "Error in rule estimate_peek" in message, message[-3000:]
+
+
+# A program trying every way to the files its job may not open, and to its own: what each
+# attempt gave (an error's text, or "read"), written beside its estimates (the centroid's).
+PROBE = (
+    """
+import json
+import os
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import pandas as pd
+import pyarrow.parquet as pq
+
+blind, estimates = Path(snakemake.input[0]), Path(snakemake.output[0])
+mine, results = estimates.parent, Path("results")
+full = results / "datasets" / "cmc" / blind.name
+
+
+def attempt(read):
+    try:
+        read()
+    except OSError as error:
+        return str(error)
+    return "read"
+
+
+link = mine / (blind.stem + ".link")
+link.symlink_to(os.path.relpath(full, mine))
+paths = {
+    "dataset": full,
+    "placements": results / "placements" / "cmc" / blind.name,
+    "built-in estimate": results / "estimates" / "cmc" / "LS" / "planted.txt",
+    "collected": results / "collected" / "planted.txt",
+    "a built-in estimator's log, beside LM's": results / "logs" / "estimate" / "cmc" / "LS.log",
+    "a link of its own": link,
+    "blind/..": results / "blind" / ".." / "datasets" / "cmc" / blind.name,
+    "/proc/self/cwd": Path("/proc/self/cwd") / full,
+}
+tried = {name: attempt(path.read_bytes) for name, path in paths.items()}
+tried["listing datasets"] = attempt(lambda: os.listdir(results / "datasets"))
+tried["listing results"] = attempt(lambda: os.listdir(results))
+child = subprocess.run(["cat", str(full)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+tried["child process"] = child.stderr.decode() or "read"
+# A daemon: in a session of its own, its parent ended, it tells what it read by a file.
+told = mine / (blind.stem + ".daemon")
+daemon = f"cat {full} > /dev/null 2> {told}.part || true; mv {told}.part {told}"
+subprocess.run(["sh", "-c", f"(setsid sh -c '{daemon}' &)"], check=True)
+deadline = time.monotonic() + 30
+while not told.exists() and time.monotonic() < deadline:
+    time.sleep(0.05)
+tried["daemon"] = told.read_text() if told.exists() else "no word"
+scratch = mine / (blind.stem + ".scratch")
+scratch.write_text("its own")
+tried["its own folder"] = scratch.read_text()
+with tempfile.TemporaryFile("w+") as temporary:
+    temporary.write("its own")
+    temporary.seek(0)
+    tried["its own temporary file"] = temporary.read()
+(mine / (blind.stem + ".json")).write_text(json.dumps(tried))
+
+answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
+answers.columns = ["trial", "center_x", "center_y", "center_z"]
+"""
+    + _ANSWERED
+)
+
+
+@pytest.mark.pipeline
+@_CONFINED
+def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
+    """Every way tried fails with "Permission denied": the full dataset, the placements, a
+    built-in estimator's files and the collected results left by an earlier run, by their
+    paths, through a link the program makes in its own folder, ``..`` or ``/proc/self/cwd``,
+    listing results/, from a child process and from a daemon; a built-in estimator's log in
+    the folder LM writes its log in, which is only written in. The program's own folder and
+    temporary files are its own (here in a temporary folder of the job's, as the checkout is
+    under /tmp), and the external estimators shipped (LS-C compiled into results/bin/) run
+    beside it."""
+    for planted in (
+        "estimates/cmc/LS/planted.txt",
+        "collected/planted.txt",
+        "logs/estimate/cmc/LS.log",
+    ):
+        (tmp_path / "results" / planted).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "results" / planted).write_text("made from the truth")
+    external = ["centroid", "LM", "LS-C", "probe"]
+    error = _collected_with(tmp_path, "probe", PROBE, external)
+    (found,) = (tmp_path / "results" / "estimates" / "cmc" / "probe").glob("*.json")
+    tried = json.loads(found.read_text())
+    assert tried.pop("its own folder") == "its own"
+    assert tried.pop("its own temporary file") == "its own"
+    assert len(tried) == 12
+    refused = {name: "Permission denied" in outcome for name, outcome in tried.items()}
+    assert all(refused.values()), tried
+    assert set(error.index.get_level_values("method")) == {"LS", *external}
 
 
 # A program that rewrites the blind copy it was given in place, its metadata kept (cleaning it,
@@ -405,7 +504,8 @@ answers.columns = ["trial", "center_x", "center_y", "center_z"]
 @pytest.mark.pipeline
 def test_a_program_rewriting_its_blind_input_in_place_stops_the_run_naming_the_file(tmp_path):
     """Run first (one job at a time, its file prioritised), the spoiler changes the markers
-    the centroid reads after it: the run stops, naming the blind file."""
+    the centroid reads after it: the run stops, naming the blind file (where the kernel has
+    Landlock, the spoiler's write is refused, and its job fails naming the file)."""
     condition = "marker_set-M__rom_deg-15__noise_mm-1.0"
     first = f"results/estimates/cmc/spoil/{condition}.parquet"
     external = ["spoil", "centroid"]
@@ -413,6 +513,30 @@ def test_a_program_rewriting_its_blind_input_in_place_stops_the_run_naming_the_f
     message = run.stdout + run.stderr
     assert run.returncode != 0, "the run succeeded with the blind copy changed by the spoiler"
     assert f"results/blind/cmc/{condition}.parquet" in message
+
+
+# Started with every Python process of a run (on PYTHONPATH): a kernel without Landlock.
+_NO_LANDLOCK = """
+from jointbench.running import landlock
+landlock.abi_version = lambda: 0
+"""
+
+
+@pytest.mark.pipeline
+def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_confined(
+    tmp_path, monkeypatch
+):
+    copy_workflow(tmp_path)
+    shim = tmp_path / "no_landlock"
+    shim.mkdir()
+    (shim / "sitecustomize.py").write_text(_NO_LANDLOCK)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(shim), os.environ.get("PYTHONPATH", "")]))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
+    message = run.stdout + run.stderr
+    assert run.returncode == 0, message[-3000:]
+    said = "this kernel has no Landlock (Linux 5.13 or later, enabled): the programs of external"
+    assert message.count(said) == 1, message[-3000:]
 
 
 def _cmc_only(tmp_path, **cmc) -> str:

@@ -26,7 +26,7 @@ from jointbench import pipeline
 from jointbench.figures import extended
 from jointbench.papers import get_paper
 from jointbench.resultfiles.schema import check_estimates
-from jointbench.running import timelimit
+from jointbench.running import landlock, timelimit
 from jointbench.running.collected import scored_estimates
 
 # The minimal external estimator of the README's "Adding an estimator", shipped as a template
@@ -499,15 +499,21 @@ def test_extended_outputs_for_an_axis_study(tmp_path):
     assert Path(outputs["png"]).stat().st_size > 10_000
 
 
-def test_the_ranking_says_what_the_benchmark_does_not_check_of_an_external_estimator():
-    """An external estimator's seconds are its program's own report, and its program may open
-    files its rule does not declare (the full dataset, by its path) and rank first on the
-    truth: neither is checked, so the ranking that lists one says so."""
+@pytest.mark.parametrize("abi", [0, 7], ids=["no-landlock", "landlock"])
+def test_the_ranking_says_what_the_benchmark_does_not_check_of_an_external_estimator(
+    abi, monkeypatch
+):
+    """An external estimator's seconds are its program's own report; where the kernel has no
+    Landlock its program may open files its rule does not declare (the full dataset, by its
+    path) and rank first on the truth. The ranking that lists one says which holds."""
+    monkeypatch.setattr(landlock, "abi_version", lambda: abi)
     paper = ("A", ("LS",))
     config = {"studies": {"cmc": {"external_estimators": ["mine"]}}}
     note = extended.origin_note("cmc", ["LS", "mine"], paper, config)
     assert "external estimator's seconds are as its program reports them" in note, note
-    assert "checks the files its rule declares, not those its program opens" in note, note
+    unchecked = "checks the files its rule declares, not those its program opens"
+    confined = "its program may open only the blind copies and its rule's own files"
+    assert (unchecked in note, confined in note) == (not abi, bool(abi)), note
     alone = extended.origin_note("cmc", ["LS"], paper, {"studies": {"cmc": {}}})
     assert "its program" not in alone, alone
 

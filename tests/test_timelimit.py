@@ -28,13 +28,16 @@ from snakemake.utils import validate
 from workflow_copy import ROOT, SNAKEMAKE
 
 from jointbench.configuration import config as jb_config
-from jointbench.running import timelimit
+from jointbench.running import landlock, timelimit
 
 # Long enough for bash to start and write a pid file on a loaded machine, short for the tests.
 LIMIT_S = 1.5
 GRACE_S = 0.5
 # A program that outlives its test by far: past the deadlines below, it was not stopped.
 FOREVER = "sleep 300"
+# What the workflow lets a job open under a results/ (landlock): here, the repository's, which
+# the jobs of these tests do not read.
+CONFINED = landlock.encoded(landlock.Confinement(str(ROOT / "results"), [], [], []))
 # What Snakemake puts before the command of a job whose shell is named bash, as the limited
 # shell is.
 SNAKEMAKES_PREFIX = "set -euo pipefail; "
@@ -297,6 +300,7 @@ def test_a_process_reaped_as_its_threads_are_listed_has_no_children(monkeypatch)
 def limited_shell(command: str, limit: str | None, **popen) -> subprocess.Popen:
     """The limited shell as Snakemake starts it, with the limit (if any) the workflow sets."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[landlock.VARIABLE] = CONFINED
     environ.pop(timelimit.LIMIT_VARIABLE, None)
     if limit is not None:
         environ[timelimit.LIMIT_VARIABLE] = limit
@@ -316,6 +320,7 @@ def as_snakemake_runs(command: str, limit: str, tmp_path: Path, monkeypatch) -> 
     status."""
     monkeypatch.setenv(timelimit.PYTHON_VARIABLE, sys.executable)
     monkeypatch.setenv(timelimit.LIMIT_VARIABLE, limit)
+    monkeypatch.setenv(landlock.VARIABLE, CONFINED)
     monkeypatch.chdir(tmp_path)  # where Snakemake writes a long command's script
     try:
         snakemake_shell(command, resources={"shell_exec": timelimit.LIMITED_SHELL})
@@ -449,9 +454,12 @@ def test_the_program_is_stopped_when_its_limited_shell_is_killed(command, proces
 # consumer, which fails; Snakemake then kills the producer's shell with SIGKILL.
 PIPE_GROUP = """
 import os, sys
-from jointbench.running import timelimit
+from jointbench.running import landlock, timelimit
 os.environ[timelimit.LIMIT_VARIABLE] = "60"
 os.environ[timelimit.PYTHON_VARIABLE] = sys.executable
+# Its jobs write in the working folder: the folder hidden from them is not above it.
+hidden = landlock.Confinement("/jointbench-hides-nothing", [], [], [])
+os.environ[landlock.VARIABLE] = landlock.encoded(hidden)
 
 rule all:
     input: "consumed"
@@ -589,6 +597,7 @@ def test_a_stop_that_comes_as_the_limited_shell_starts_is_its_status(
         raise AssertionError("the keeper was forked after the stop")
 
     monkeypatch.setenv(timelimit.LIMIT_VARIABLE, "10")
+    monkeypatch.setenv(landlock.VARIABLE, CONFINED)
     # Not on the test's process: told to stop when its parent ends.
     monkeypatch.setattr(timelimit, "_end_with_the_run", lambda parent: None)
     monkeypatch.setattr(timelimit, "_adopt_orphans", lambda: signal.raise_signal(signal.SIGINT))
@@ -723,6 +732,7 @@ def test_the_limited_shell_stops_its_command_when_the_run_is_killed(tmp_path):
     written = tmp_path / "pids"
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
     environ[timelimit.LIMIT_VARIABLE] = "60"
+    environ[landlock.VARIABLE] = CONFINED
     # A stand-in for Snakemake: a shell that starts the limited shell and waits for it.
     command = f"echo $$ > {written}; {FOREVER}"
     run = subprocess.Popen(
@@ -743,6 +753,7 @@ def on_a_terminal(command: str, limit: str) -> tuple[int, float, str]:
     foreground process group: its exit status, its seconds and what it wrote there."""
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
     environ[timelimit.LIMIT_VARIABLE] = limit
+    environ[landlock.VARIABLE] = CONFINED
     start = time.monotonic()
     pid, terminal = pty.fork()
     if pid == 0:  # the child: a session of its own, the terminal its controlling one

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from snakemake.io import WILDCARD_REGEX, apply_wildcards
+from snakemake.logging import logger
 from snakemake.utils import validate
 
 from jointbench import invocation, pipeline, report as jb_report
@@ -22,7 +23,7 @@ from jointbench.fingerprint import (
     source_digests,
 )
 from jointbench.running import run as jb_run
-from jointbench.running import timelimit
+from jointbench.running import landlock, timelimit
 from jointbench.papers import get_paper, paper_names, papers_of_study
 from jointbench.configuration import config as jb_config
 
@@ -89,13 +90,7 @@ def check_external_rules(user_rules):
     write its estimates (see _refuse_rival_writers); and when its rule reads a file of
     results/ other than the blind copies (see _check_blind)."""
     users = [r for r in workflow.rules if r.name in user_rules]
-    # estimates_from_csv writes an external estimator's estimates, which its rule may write too.
-    package = [
-        r
-        for r in workflow.rules
-        if r.name not in user_rules and r.name != "estimates_from_csv"
-    ]
-    _check_user_outputs(users, package)
+    _check_user_outputs(users, _package_rules(user_rules))
     _check_user_folders(users)
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
     for study in STUDIES:
@@ -114,6 +109,17 @@ def check_external_rules(user_rules):
             _refuse_rival_writers(study, name, files, producers)
             for producer in producers:
                 _check_blind(producer, name, files, users)
+
+
+def _package_rules(user_rules):
+    """The rules of the benchmark's, all but those of the user's (``user_rules``, by name)
+    and estimates_from_csv, which writes an external estimator's estimates (converted from its
+    CSV), which its rule may write too."""
+    return [
+        r
+        for r in workflow.rules
+        if r.name not in user_rules and r.name != "estimates_from_csv"
+    ]
 
 
 def _refuse_rival_writers(study, name, files, producers):
@@ -887,6 +893,100 @@ def limit_user_jobs(user_rules):
         producer.resources["shell_exec"] = _ShellPath(timelimit.LIMITED_SHELL)
         producer.resources["runtime"] = timelimit.runtime_minutes(TIME_LIMIT_S)
         producer.run_func = _limited(producer.run_func, producer.name)
+    confine_user_jobs(user_rules)
+
+
+def confine_user_jobs(user_rules):
+    """Tell the limited shell what every job of the rules of the user's (``user_rules``, by
+    name) may open under results/ (jointbench.running.landlock, by the environment, as the
+    limit): read the blind copies and their CSV form, and the inputs under results/ of the
+    jobs the run's external estimators need; read and write the folders their files (outputs,
+    logs, benchmark files) go in, as those jobs spell them, and as any rule of the user's
+    spells them where no wildcard is in the folder; only write in such a folder where a rule
+    of the benchmark's may write too (a log beside the built-in estimators'). Nothing else
+    there: not the datasets, the placements, the built-in estimators' files nor anything made
+    from them. Where the kernel has no Landlock the jobs run unconfined, and the run says so
+    once, here."""
+    users = [r for r in workflow.rules if r.name in user_rules]
+    readable, writable = _opened_by_users(users)
+    shared = _shared_with_the_benchmark(writable, _package_rules(user_rules))
+    confinement = landlock.Confinement(
+        os.path.realpath(RESULTS),
+        _real_paths(readable),
+        _real_paths(writable - shared),
+        _real_paths(shared),
+    )
+    os.environ[landlock.VARIABLE] = landlock.encoded(confinement)
+    if users and not landlock.abi_version():
+        logger.warning(NOT_CONFINED)
+
+
+# What the run says where the kernel cannot confine the jobs of external estimators.
+NOT_CONFINED = (
+    "jointbench: this kernel has no Landlock (Linux 5.13 or later, enabled): the programs "
+    "of external estimators run unconfined, and may open any file under results/, the "
+    "truth too (README, 'Adding an estimator')"
+)
+
+
+def _opened_by_users(users):
+    """``(readable, writable)``: what the jobs of ``users`` (rules of the user's) may read
+    and write under results/ (see confine_user_jobs), as paths relative to the working
+    directory."""
+    readable, writable = set(READABLE), set()
+    for producer, wildcards in _jobs_of_external_estimators(users):
+        for _, path in _declared(producer):
+            writable.add(os.path.dirname(apply_wildcards(path, wildcards)))
+        inputs = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
+        # Those the checks let it read (check_external_rules has refused any other).
+        readable.update(
+            f for f in inputs if f.startswith(RESULTS) and _refusal(f, users) is None
+        )
+    for producer in users:
+        for _, path in _declared(producer):
+            folder = os.path.dirname(path)
+            if not WILDCARD_REGEX.search(folder):
+                writable.add(folder)
+    return readable, writable
+
+
+def _real_paths(paths):
+    return sorted({os.path.realpath(p) for p in paths})
+
+
+def _shared_with_the_benchmark(folders, package):
+    """Those of ``folders`` in which, or below which, a rule of ``package`` (the benchmark's
+    rules) can write a file."""
+    theirs = [_patterns_of(f) for other in package for f in _written(other)]
+    return {
+        folder
+        for folder in folders
+        if any(_overlap(_patterns_of(f"{folder}/{{inside}}"), t) for t in theirs)
+    }
+
+
+def _jobs_of_external_estimators(users):
+    """``(rule, wildcards)`` of each job of ``users`` (rules of the user's) that writes the
+    estimates of an external estimator of the run, or a file one of those jobs reads, at
+    any remove."""
+    todo = []
+    for study in STUDIES:
+        for name in jb_config.estimator_names(config, study, source="external"):
+            for parquet in estimates_files(study, [name]):
+                for file in (parquet, parquet.removesuffix(".parquet") + ".csv"):
+                    todo += [(u, file) for u in users if u.is_producer(file)]
+    seen = set()
+    while todo:
+        producer, file = todo.pop()
+        wildcards = dict(producer.get_wildcards(file))
+        job = (producer.name, tuple(sorted(wildcards.items())))
+        if job in seen:
+            continue
+        seen.add(job)
+        yield producer, wildcards
+        for read in producer.expand_input(wildcards)[0]:
+            spelt = _as_matched(str(read))
+            todo += [(u, spelt) for u in users if u.is_producer(spelt)]
 
 
 def _limited(run, name):

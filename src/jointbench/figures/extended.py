@@ -22,6 +22,7 @@ from jointbench.figures.common import (
     pyplot,
     study_title,
 )
+from jointbench.running import landlock
 from jointbench.running.scoring import ERROR_COLUMN
 from jointbench.running.summary import summarise
 
@@ -226,13 +227,27 @@ def origin_note(
     parts.append(f"Added, built in: {', '.join(added) or 'none'}.")
     parts.append(f"Added, external (a rule of their own): {', '.join(outside) or 'none'}.")
     if outside:
-        # Neither is checked: a reader of the ranking is told so where the methods are listed.
-        parts.append(
-            "An external estimator's seconds are as its program reports them, and the "
-            "benchmark checks the files its rule declares, not those its program opens "
+        # A reader of the ranking is told what is not checked where the methods are listed.
+        parts.append(external_note(landlock.abi_version() > 0))
+    return " ".join(p for p in parts if p)
+
+
+def external_note(confined: bool) -> str:
+    """What the benchmark does not check of an external estimator: its seconds, and, unless
+    its program's reads are ``confined`` (by Landlock, as its job runs on this machine), the
+    files its program opens."""
+    seconds = "An external estimator's seconds are as its program reports them"
+    if confined:
+        return (
+            f"{seconds}; under results/ its program may open only the blind copies and its "
+            "rule's own files, as the kernel confines it (Landlock) "
             "(README, 'Adding an estimator')."
         )
-    return " ".join(p for p in parts if p)
+    return (
+        f"{seconds}, and the benchmark checks the files its rule declares, not those its "
+        "program opens: this kernel has no Landlock to confine it "
+        "(README, 'Adding an estimator')."
+    )
 
 
 def condition_label(study: str, values: Sequence[object]) -> str:

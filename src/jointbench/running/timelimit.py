@@ -9,6 +9,9 @@ runs this file with the project's interpreter. It reads the limit from the envir
 workflow sets when it loads, so that every job of a run has the same, and it imports nothing
 but the standard library: it starts before the user's program, for every job.
 
+The keeper confines the job's reads under ``results/`` first (:mod:`landlock`, beside this
+file, which it imports by path when run as a program: the package is not importable there).
+
 Run as a program it exits with the command's status, or :data:`EXPIRED` when the limit
 stopped it; the workflow turns that status into an error naming the rule, the job's wildcards,
 the limit and the key to raise (:func:`expired_message`).
@@ -18,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import importlib.util
 import math
 import os
 import select
@@ -26,6 +30,16 @@ import sys
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
+
+if __package__:
+    from jointbench.running import landlock
+else:
+    # Run as a program by limited/bash (``python -I -S``), where the package cannot be
+    # imported: its sibling module, by path.
+    _SIBLING = os.path.join(os.path.dirname(os.path.abspath(__file__)), "landlock.py")
+    _SPEC = importlib.util.spec_from_file_location("landlock", _SIBLING)
+    landlock = importlib.util.module_from_spec(_SPEC)
+    _SPEC.loader.exec_module(landlock)
 
 #: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
 KEY = "jobs.external_time_limit_s"
@@ -437,12 +451,14 @@ def runtime_minutes(limit_s: float) -> int:
 def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     """``limited/bash ARGUMENTS``: bash run with ``ARGUMENTS`` (``-c COMMAND``, or a script
     Snakemake wrote for a command too long for a command line) under the limit in
-    ``environ``, by a keeper (:func:`_keep`) in a process group of its own, which this
-    process waits for. Whichever of the two is killed, even with SIGKILL, the other stops
-    the job: the keeper is told when this process ends (``_end_with_the_run``), and this
-    process adopts and stops what a killed keeper leaves."""
+    ``environ``, confined to what it may open there (:mod:`landlock`), by a keeper
+    (:func:`_keep`) in a process group of its own, which this process waits for. Whichever
+    of the two is killed, even with SIGKILL, the other stops the job: the keeper is told when
+    this process ends (``_end_with_the_run``), and this process adopts and stops what a
+    killed keeper leaves."""
     try:
         limit = limit_from(environ)
+        confined = landlock.decoded(landlock.text_from(environ))
     except ValueError as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2
@@ -452,10 +468,11 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     except Interrupted as stopped:
         return 128 + stopped.signum
     shell = os.getpid()
-    keeper = os.fork()
-    if keeper == 0:
-        _exit_keeping(argv, limit, shell)
-    return _wait_for_the_keeper(keeper)
+    with landlock.temporary_folder(confined):
+        keeper = os.fork()
+        if keeper == 0:
+            _exit_keeping(argv, limit, confined, shell)
+        return _wait_for_the_keeper(keeper)
 
 
 def _ready_to_pass_stops_on() -> None:
@@ -479,12 +496,14 @@ def _ready_to_pass_stops_on() -> None:
     signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
 
 
-def _exit_keeping(argv: Sequence[str], limit_s: float, shell: int) -> None:
+def _exit_keeping(
+    argv: Sequence[str], limit_s: float, confined: landlock.Confinement, shell: int
+) -> None:
     """End the forked keeper with :func:`_keep`'s status, never returning into the code of
     the process it was forked from (a programming error's traceback printed first)."""
     status = 70  # EX_SOFTWARE: the keeper itself failed
     try:
-        status = _keep(argv, limit_s, shell)
+        status = _keep(argv, limit_s, confined, shell)
     except BaseException:
         sys.excepthook(*sys.exc_info())
     finally:
@@ -492,11 +511,13 @@ def _exit_keeping(argv: Sequence[str], limit_s: float, shell: int) -> None:
         os._exit(status)
 
 
-def _keep(argv: Sequence[str], limit_s: float, shell: int) -> int:
+def _keep(argv: Sequence[str], limit_s: float, confined: landlock.Confinement, shell: int) -> int:
     """The keeper: runs bash with ``argv`` under ``limit_s`` [s] (:func:`run_limited`), in a
     process group of its own, apart from the run's, so that a SIGKILL to the run's group
     (or to the limited shell alone, ``shell``: Snakemake kills the jobs of a ``pipe()`` group
-    so when one fails) leaves it to stop the job: its exit status, as a shell's."""
+    so when one fails) leaves it to stop the job: its exit status, as a shell's. It confines
+    itself first, and so the job, to what ``confined`` grants (:func:`landlock.confine`)."""
+    landlock.confine(confined)
     try:
         os.setpgid(0, 0)
         _end_with_the_run(shell)
