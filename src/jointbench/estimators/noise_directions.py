@@ -36,27 +36,39 @@ incidence ``Delta`` and mean distances ``dbar``), so that summed over the frames
 only the markers' second moments ``sum_k x_ka x_kb'``.
 
 Isotropic noise has ``D = 0``. Under that hypothesis each marker's own variance ``theta_0``
-solves the marker rows, and the traceless rows' sum of deviations from what ``theta_0``
-gives, ``s = sum_k (R_k - M_k theta_0)_D``, is the score of ``D``; its variance is taken
-from the frames' own scatter of those deviations (a sandwich under the hypothesis, with the
-score's share of ``theta_0``'s own error taken off, ``s - M_Dtau M_tautau^-1 s_tau``), not from
-the normal distribution's fourth moments: paper A's and B's noise (uniform directions, normal
+solves the marker rows (read, to first order, from the distances' scatter,
+``tr(H Gamma_m H sum_k dd_k dd_k')``, before the pass over the residuals), and the sums of the
+deviations from what ``theta_0`` gives, projected off the marker rows,
+``s = A sum_k (R_k - M_k theta_0)`` with ``A = [-M_Dtau M_tautau^-1, I]`` (``M`` summed over
+the frames), are the score of ``D``, of mean zero under the hypothesis whatever the
+``theta_0``; its variance is taken from the frames' own scatter of those projected
+deviations (a sandwich under the hypothesis), not from the normal distribution's fourth
+moments: paper A's and B's noise (uniform directions, normal
 lengths) and skin markers have heavier tails, and a normal-theory variance would take their
 spread for anisotropy. The statistic ``W = s' V^-1 s`` equals the Wald statistic of
 ``D_hat = (M^-1 sum_k R_k)_D`` with the sandwich variance ``M^-1 C M^-1`` (the Schur complement
 of ``M``'s traceless block cancels), read as Hotelling's ``T^2`` of ``B`` blocks of frames
-(``F = W (B - 5) / (5 (B - 1))`` on ``(5, B - 5)`` degrees of freedom), which gives
-``p_value``. Frames that share their errors (filtered, or skin markers) make that scatter
-understate the variance: the deviations are summed over blocks of about as many frames as one
-independent frame spans (the support verdict's count, ``N / independent``), and ``B`` is the
-blocks'. Isotropic noise smoothed over 5 frames on a 10 degree hinge was rejected in 14 of 100
-trials with every frame counted. A model of one variance for every marker would not do: one
-marker five times noisier than three others, each isotropic, was read as noise differing by
-direction in most swings, since the projection mixes the markers. The whole is invariant to a
-rotation of the world. Where ``V`` is singular (a direction of ``D`` no residual reaches:
-three markers leave residuals in their own plane only, and a motion that hardly turns that
-plane leaves the noise along its normal unseen) or fewer than 7 blocks remain, the test is
-not made (``p_value`` NaN).
+(``F = W (B - 5) / (5 (B - 1))`` on ``(5, B - 5)`` degrees of freedom), held to its critical
+value at :data:`NOISE_DIRECTION_ALPHA`; the ``p_value`` is stated where it rejects. Frames
+that share their errors (filtered, or skin markers) make that scatter understate the
+variance: the deviations are summed over blocks of about as many frames as one independent
+frame spans (the support verdict's count, ``N / independent``), and ``B`` is the blocks'
+(``tests/test_noise_directions.py`` holds isotropic noise smoothed over 5 frames to it). A
+model of one variance for every marker would not do: the projection mixes the markers, and
+one isotropic marker noisier than the others would read as noise differing by direction. The
+whole is invariant to a rotation of the world. Where ``V`` is singular (a Cholesky pivot
+under ``1 / _MAX_CONDITION`` of its largest diagonal entry: a direction of ``D`` no residual
+reaches, as three markers leave residuals in their own plane only and a motion that hardly
+turns that plane leaves the noise along its normal unseen) or fewer than 7 blocks remain, the
+test is not made
+(``statistic`` NaN).
+
+The support verdict's pass over the frames makes the test where the frames are independent
+(:func:`trial_test_into`, from what that pass keeps, at a few tens of microseconds on a
+checked call of 120 frames); where they are not, :func:`sphericity_numbers` makes it over
+blocks, from a pass of its own. Unlike a rigid-body fit of every frame, the distances leave
+out the flexes of a nearly flat cluster (the support verdict's ``_FLEX``), whose residual the
+test then does not read.
 
 **Whether it matters.** Both a centre and an axis are read, by every method, from the markers'
 scatter about their mean positions, ``S = sum_m sum_k (x_km - xbar_m)(x_km - xbar_m)'``, of
@@ -77,7 +89,7 @@ frames of fourth powers of their unit vectors: it is summed where the test rejec
 covariance and pulls are stated there only. Where the test rejects at
 :data:`NOISE_DIRECTION_ALPHA` and the pull is larger than the SD the answer states, the
 answer's precision is not determined by an SD that assumes one noise variance
-(:func:`annotate`).
+(:func:`statement`).
 """
 
 from __future__ import annotations
@@ -116,8 +128,8 @@ _TRACELESS[0, 0, 0], _TRACELESS[0, 1, 1] = 1.0, -1.0
 _TRACELESS[1, 1, 1], _TRACELESS[1, 2, 2] = 1.0, -1.0
 for _a, (_i, _j) in enumerate(((0, 1), (0, 2), (1, 2)), start=2):
     _TRACELESS[_a, _i, _j] = _TRACELESS[_a, _j, _i] = 1.0
-# A variance of the score this much weaker than its strongest direction is a direction of D
-# no residual reaches: the test is not made.
+# A score variance whose Cholesky pivot is this much smaller than its largest diagonal entry
+# has a direction of D no residual reaches: the test is not made.
 _MAX_CONDITION = 1e10
 # The fewest blocks of frames whose scatter is read as the score's variance.
 _MIN_BLOCKS = 7
