@@ -154,13 +154,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jointbench.estimators import noise_directions as by_direction
 from jointbench.estimators.batching import check_poses
+from jointbench.estimators.noise_directions import inverse_gram_into, row_length, trial_test_into
 from jointbench.estimators.pose_noise import NoisyPoses, PoseNoise, pose_noise
 from jointbench.estimators.results import REFUSED, with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES, check_markers
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.distances import distance_modes_into
 from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.small import inertia_into, symmetric_eigen_into, tangent_basis_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
@@ -291,7 +294,10 @@ class Support(NamedTuple):
     whose lag-1 autocorrelation is not clearly below :data:`DEPENDENT_CORRELATION`, that the
     frames' independence was not established (:class:`Untested`), else ``None``. The status
     carries it after the caveats, as one of them: a warning (the status is no longer ``ok``)
-    that the other checks do not read as a refusal."""
+    that the other checks do not read as a refusal. For one segment's markers with a pose and
+    noise above rounding, ``noise_directions``, whether their noise is the same in every
+    direction (:class:`jointbench.estimators.noise_directions.NoiseDirections`), which
+    :func:`annotate` holds the answer's stated SD to, else ``None``."""
 
     warnings: tuple[str, ...]
     diagnostics: dict
@@ -299,6 +305,7 @@ class Support(NamedTuple):
     caveats: tuple[str, ...] = ()
     pose_noise: PoseNoise | None = None
     untested: Untested | None = None
+    noise_directions: by_direction.NoiseDirections | None = None
 
 
 class _Clusters(NamedTuple):
@@ -449,6 +456,9 @@ _ONE_SEGMENT_COLUMNS = (
 )
 # The column of the frame whose centred markers are nearest their mean positions.
 _CENTRAL_FRAME = _ONE_SEGMENT_COLUMNS.index("central_frame")
+# The columns of the residual's degrees of freedom and of the frames' dependence's excess.
+_RESIDUAL_DOF = _ONE_SEGMENT_COLUMNS.index("residual_dof")
+_EXCESS = _ONE_SEGMENT_COLUMNS.index("variance_ratio_excess")
 # The columns of the frames' dependence (:func:`_frame_dependence`).
 _DEPENDENCE = slice(
     _ONE_SEGMENT_COLUMNS.index("frame_correlation"),
@@ -468,10 +478,17 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     marker-pair differences, one over the centred markers about their mean positions, and
     one over the differences per set of distances (the cluster's, then its two projections).
     Modes of a distance Gram matrix weaker than ``flex`` times its
-    strongest are flexes, not shape. A compiled kernel."""
+    strongest are flexes, not shape. After those columns, the test of whether the markers'
+    noise is the same in every direction
+    (:func:`jointbench.estimators.noise_directions.trial_test_into`), from the first pass's
+    centred markers, differences and distances and the cluster's own distance modes, where the
+    residual is above rounding and the frames are not found dependent (else its first column
+    is NaN and its frames' blocks are the caller's to choose). A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
     n_pairs = n_markers * (n_markers - 1) // 2
-    out = np.zeros((n_trials, len(_ONE_SEGMENT_COLUMNS)))
+    n_columns = len(_ONE_SEGMENT_COLUMNS)
+    out = np.zeros((n_trials, n_columns + row_length(n_markers)))
+    inverse_gram = np.empty((n_pairs, n_pairs))
     pair_a = np.empty(n_pairs, dtype=np.int64)
     pair_b = np.empty(n_pairs, dtype=np.int64)
     p = 0
@@ -499,7 +516,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     # allocations in place of some thirty, a measurable share of a one-trial call. (The BLAS
     # products' operands below keep allocations of their own.)
     by_pair = np.empty((9, n_pairs))
-    pair_squares = np.empty((6, n_pairs, n_pairs))
+    pair_squares = np.empty((7, n_pairs, n_pairs))
     # Each frame's centred markers, and after them their mean positions.
     by_frame = np.empty((n_frames + 1, n_markers, 3))
     marker_squares = np.empty((4, n_markers, n_markers))
@@ -536,7 +553,14 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     mu = per_marker[1]
     vectors_n = marker_squares[2]
     work_n = marker_squares[3]
-    scratch = (squared, pair_squares[3], by_pair[8], pair_squares[4], pair_squares[5])
+    scratch = (
+        squared,
+        pair_squares[6],
+        pair_squares[3],
+        by_pair[8],
+        pair_squares[4],
+        pair_squares[5],
+    )
     for t in range(n_trials):
         trial = markers[t]
         # Scalar sums: the pooled scatter of the displacements e about the mean positions, and
@@ -636,6 +660,24 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                 mean_d, scatter_d[0], corrected, variance, flex, pair_a, pair_b, scratch
             )
             variance = residual[0] / max(rank[0] * (n_frames - 1), 1)
+        # The noise's directions, while the cluster's own distances and modes are at hand.
+        noise = out[t, n_columns:]
+        noise[0] = noise[2] = np.nan
+        noise[3] = 1.0
+        if variance > (ROUNDING * largest) ** 2 and not out[t, _EXCESS] >= 1.0:
+            inverse_gram_into(scratch[3], scratch[4], int(rank[0]), inverse_gram)
+            trial_test_into(
+                positions,
+                differences,
+                lengths[:n_pairs],
+                first_d[0],
+                sum_d,
+                scatter_d[0],
+                inverse_gram,
+                scratch[1],
+                1,
+                noise,
+            )
         # The mean shape's principal moments by classical scaling of the mean squared
         # distances less their noise (6 s^2 per pair).
         for p in range(n_pairs):
@@ -981,31 +1023,12 @@ def _shape_residual(
     mean distances ``mean_d`` ``(P,)`` [mm] give by the law of cosines. A mode counts as shape
     where it is above ``flex`` of the strongest and, for mean distances ``corrected`` for the
     noise ``variance`` [mm^2], where its first-order signal is 3 times the second-order one,
-    ``s^2 / d`` (``d`` the RMS distance), which noise adds to a flex. ``scratch`` holds work
-    arrays ``(n, n)``, ``(P, P)``, ``(P,)``, ``(P, P)`` and ``(P, P)``. A compiled kernel."""
-    squared, g, strength, modes, work = scratch
+    ``s^2 / d`` (``d`` the RMS distance), which noise adds to a flex
+    (:func:`jointbench.numerics.distances.distance_modes_into`, whose work arrays ``scratch``
+    holds). A compiled kernel."""
+    strength, modes = scratch[3], scratch[4]
     n_pairs = mean_d.shape[0]
-    rms_sq = 0.0
-    squared[:] = 0.0
-    for p in range(n_pairs):
-        squared[pair_a[p], pair_b[p]] = mean_d[p] ** 2
-        squared[pair_b[p], pair_a[p]] = mean_d[p] ** 2
-        rms_sq += mean_d[p] ** 2 / n_pairs
-    for p in range(n_pairs):
-        a, b = pair_a[p], pair_b[p]
-        for q in range(n_pairs):
-            c, d = pair_a[q], pair_b[q]
-            shared = int(a == c) - int(a == d) - int(b == c) + int(b == d)
-            if shared == 0 or mean_d[p] == 0.0 or mean_d[q] == 0.0:
-                g[p, q] = 0.0
-            else:
-                dot = 0.5 * (squared[a, d] + squared[b, c])
-                dot -= 0.5 * (squared[a, c] + squared[b, d])
-                g[p, q] = shared * dot / (mean_d[p] * mean_d[q])
-    symmetric_eigen_into(g, strength, modes, work)
-    weakest_mode = flex * strength[n_pairs - 1]
-    if corrected and rms_sq > 0.0:
-        weakest_mode = max(weakest_mode, 9.0 * variance / rms_sq)
+    weakest_mode = distance_modes_into(mean_d, corrected, variance, flex, pair_a, pair_b, scratch)
     residual = 0.0
     rank = 0
     for k in range(n_pairs):
@@ -1906,7 +1929,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
     tested = numbers[:, 5:14]  # (RMS, F ratio, dof) of each of the three tests
     p_values = _fdtrc()(tested[:, 2::3], numbers[:, 4:5], tested[:, 1::3]).tolist()
-    rows = numbers.tolist()
+    rows = numbers[:, : len(_ONE_SEGMENT_COLUMNS)].tolist()
     no_pose = [_no_pose_reason(row) for row in rows]
     # The hinge is given the candidate axis that explains the data better.
     tests = [
@@ -1925,6 +1948,8 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
         axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
         shares = {t: share for t, share in by_trial if tests[t][3] < ROTATION_ALPHA}
+    frames = {t: _segment_frames(rows[t][_DEPENDENCE], "markers", markers[t]) for t in posed}
+    by_noise = _noise_directions(markers, numbers, frames)
     return [
         _without_poses((markers[t],), no_pose[t])
         if no_pose[t] is not None
@@ -1936,10 +1961,65 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             tests[t],
             shares.get(t),
             axes.get(t),
-            frames=_segment_frames(row[_DEPENDENCE], "markers", markers[t]),
+            frames=frames[t],
+            noise_directions=by_noise.get(t),
         )
         for t, row in enumerate(rows)
     ]
+
+
+def _noise_directions(
+    markers: np.ndarray, numbers: np.ndarray, frames: dict[int, _Frames]
+) -> dict[int, by_direction.NoiseDirections]:
+    """Per trial of one segment's markers ``(T, N, n >= 3, 3)`` [mm] that has a pose
+    (``frames``, by trial), whether their noise is the same in every direction
+    (:mod:`jointbench.estimators.noise_directions`): from the verdict's pass ``numbers``
+    (:func:`_one_segment_numbers`) where the frames are independent, else over blocks of about
+    as many frames as one independent frame spans, by a pass of its own."""
+    posed = list(frames)
+    if not posed:
+        return {}
+    every = len(posed) == len(markers)
+    found = numbers[:, len(_ONE_SEGMENT_COLUMNS) :]
+    if not every:
+        found = found[posed]
+    dependent = [i for i, t in enumerate(posed) if frames[t].dependent()]
+    if dependent:
+        chosen = [posed[i] for i in dependent]
+        blocks = np.array([_frames_per_independent(frames[t]) for t in chosen])
+        ranks = np.rint(numbers[chosen, _RESIDUAL_DOF] / (markers.shape[1] - 1))
+        found[dependent] = by_direction.sphericity_numbers(
+            markers[chosen], numbers[chosen, 0], ranks, blocks, _FLEX, ROUNDING
+        )
+    found = by_direction.judged(
+        markers if every else markers[posed], found, _noise_critical_ratio, _fdtrc()
+    )
+    return dict(zip(posed, found, strict=True))
+
+
+@functools.cache
+def _noise_critical_ratio(dof: int) -> float:
+    """The F ratio on ``(5, dof)`` degrees of freedom beyond which the noise-direction test
+    rejects (:data:`jointbench.estimators.noise_directions.NOISE_DIRECTION_ALPHA`), held per
+    ``dof``: the F quantile once per recording length, not per checked call."""
+    return float(_fdtri()(5.0, dof, 1.0 - by_direction.NOISE_DIRECTION_ALPHA))
+
+
+@functools.cache
+def _fdtri():
+    """``scipy.special.fdtri(d1, d2, p)``, the F quantile, imported on first use as
+    :func:`_fdtrc` is."""
+    from scipy.special import fdtri
+
+    return fdtri
+
+
+def _frames_per_independent(frames: _Frames) -> int:
+    """About how many consecutive frames one independent frame spans: 1 unless the frames
+    are not independent (:class:`_Frames`)."""
+    if not frames.dependent():
+        return 1
+    return max(1, round(frames.n_frames / frames.independent))
 
 
 @functools.cache
@@ -2413,6 +2493,7 @@ def _verdict(
     *,
     frames,
     pose_noise=None,
+    noise_directions=None,
 ) -> Support:
     """One trial's warnings and numbers: ``rigidity`` holds per array of ``names`` its non-rigid
     share and RMS 3-D residual [mm], ``variance`` is the pooled residual per coordinate
@@ -2421,7 +2502,8 @@ def _verdict(
     resolved, an :class:`_AxisShare` row (share, RMS rotation about the principal axis and
     about the others [rad]); ``motion_axis`` the :class:`MotionAxis` the verdict carries;
     ``frames`` how independent the frames are (:class:`_Frames`); ``pose_noise`` the
-    :class:`PoseNoise` it carries for a joint centre."""
+    :class:`PoseNoise` it carries for a joint centre, ``noise_directions`` the
+    :class:`~jointbench.estimators.noise_directions.NoiseDirections` for one segment."""
     residual_mm = math.sqrt(3.0 * variance)
     rms_rad, p_any, second_rms_rad, p_second = map(float, tests)
     rms_deg, second_rms_deg = math.degrees(rms_rad), math.degrees(second_rms_rad)
@@ -2466,7 +2548,14 @@ def _verdict(
     }
     if axis_share is not None:
         numbers["off_principal_axis_share"] = float(axis_share[0])
-    return Support(tuple(warnings), numbers, motion_axis, frames.caveats(), pose_noise)
+    return Support(
+        tuple(warnings),
+        numbers,
+        motion_axis,
+        frames.caveats(),
+        pose_noise,
+        noise_directions=noise_directions,
+    )
 
 
 def assess(
@@ -2511,4 +2600,8 @@ def annotate(result, support: Support):
     if support.untested is not None:
         words += (support.untested.words(),)
         numbers.update(support.untested.numbers())
+    if support.noise_directions is not None:
+        warning, found = by_direction.statement(result, support.noise_directions)
+        words += warning
+        numbers.update(found)
     return with_warnings(result, words, numbers)
