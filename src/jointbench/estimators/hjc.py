@@ -89,7 +89,8 @@ error, or a given ``noise_mm`` is larger than the data's. So the checked call
 (:func:`jointbench.estimators.registry.get`, on the poses it fitted) tests the chi^2
 two-sided at :data:`jointbench.estimators.support.ROTATION_ALPHA` and, when it is rejected,
 warns that the model does not fit the data: the centre may be off and ``W_c`` does not
-describe its error (``converged`` and the answer stay as fitted).
+describe its error, nor does the SD read from it, whose precision the warning says is not
+determined (``converged`` and the answer stay as fitted).
 
 The noise need not be Gaussian: paper A's isotropic errors (a normal magnitude along a
 uniform direction, :func:`jointbench.simulate.noise.isotropic_noise`) have a per-coordinate
@@ -784,6 +785,13 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     return (fourth / variance**2 - gaussian) / excess, gaussian
 
 
+#: What a rejected model test says of the SD of an answer fitted under that model: the
+#: covariance it is read from assumes the model the data reject, so it is no statement of the
+#: answer's error, in either direction (a chi^2 above its dof: errors the model leaves out;
+#: below: less noise reaching the centre than the covariance counts).
+_SD_NOT_ITS_ERROR = f"so its SD does not describe its error: {PRECISION_NOT_DETERMINED}"
+
+
 def _model_test(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
 ) -> JointCenterResult:
@@ -791,15 +799,17 @@ def _model_test(
     on the poses ``proximal`` and ``distal`` it was fitted to
     (module docstring, "Model test"): ``chi2_p``, ``noise_kurtosis`` and ``chi2_inflation`` in
     its diagnostics (NaN where there is nothing to test), and below
-    :data:`jointbench.estimators.support.ROTATION_ALPHA` a warning."""
-    return with_warnings(result, *_model_verdict(result, proximal, distal))
+    :data:`jointbench.estimators.support.ROTATION_ALPHA` a warning that its SD does not
+    describe its error."""
+    return with_warnings(result, *_model_verdict(result, proximal, distal, _SD_NOT_ITS_ERROR))
 
 
 def _model_verdict(
-    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses, consequence: str
 ) -> tuple[tuple[str, ...], dict]:
     """The test of :func:`_model_test` of the Gauss–Markov ``result`` on its poses: its
-    warnings (none, or one where the test rejects) and its numbers (``chi2_p``,
+    warnings (none, or one where the test rejects, ending in ``consequence``, what that says
+    of the SD of the answer the test is made for) and its numbers (``chi2_p``,
     ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test)."""
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
@@ -845,7 +855,8 @@ def _model_verdict(
     warnings = ()
     if p_value < ROTATION_ALPHA:
         given = residual is None
-        warnings = (_model_warning(statistic, p_value, above, given, frame0, kurtosis),)
+        words = _model_warning(statistic, p_value, above, given, frame0, kurtosis)
+        warnings = (f"{words}; {consequence}",)
     return warnings, {
         "chi2_p": p_value,
         "noise_kurtosis": float(kurtosis),
@@ -932,17 +943,13 @@ def _fixed_centre_test(
     if not (isinstance(fitted, JointCenterResult) and fitted.converged):
         why = str(fitted) if isinstance(fitted, ValueError) else fitted.status
         return with_warnings(result, (), {"fixed_centre_test": {"not_tested": why}})
-    warnings, numbers = _model_verdict(fitted, proximal, distal)
     shared = (
-        "; this answer's model is the same (gauss-markov-frame0's fit to the same poses "
-        f"tested it), so its SD does not describe its error: {PRECISION_NOT_DETERMINED}"
+        "this answer's model is the same (gauss-markov-frame0's fit to the same poses tested "
+        f"it), {_SD_NOT_ITS_ERROR}"
     )
+    warnings, numbers = _model_verdict(fitted, proximal, distal, shared)
     tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
-    return with_warnings(
-        result,
-        tuple(warning + shared for warning in warnings),
-        {"fixed_centre_test": {**tested, **numbers}},
-    )
+    return with_warnings(result, warnings, {"fixed_centre_test": {**tested, **numbers}})
 
 
 def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
