@@ -197,8 +197,8 @@ EDITS = (
     Edit(
         "a module only the input checks import (centre precision)",
         f"{PKG}/estimators/centre_precision.py",
-        "MAX_CENTER_SD_MM = 10.0",
-        "MAX_CENTER_SD_MM = 9.0",
+        "MIN_REJECTED_STEP_MM = 5.0",
+        "MIN_REJECTED_STEP_MM = 4.0",
         reruns=SIMULATIONS | EVERY_ESTIMATE,
     ),
     Edit(

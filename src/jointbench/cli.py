@@ -364,20 +364,14 @@ def _row(fitted) -> dict:
         row.update(zip(("point_x_mm", "point_y_mm", "point_z_mm"), result.point, strict=True))
     else:
         row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
-    row.update(fitted.sd_fields())
+    fields = fitted.sd_fields()
+    row.update(fields)
     # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
-    # for gauss-markov), and the one the SD is read from under the name of its diagnostic:
-    # where that SD states no precision, neither does a covariance of the same answer (for
-    # gauss-markov-frame0 the method's own is the one the SD is read from).
-    no_precision = fitted.stated_sd() == NOT_DETERMINED
-    stated = fitted.stated_covariance()
-    covariances = {
-        _OWN_COVARIANCE: getattr(result, "covariance", None),
-        _STATED_COVARIANCE: None if stated is None else stated[0],
-    }
-    for name, covariance in covariances.items():
-        if covariance is not None:
-            row[name] = None if no_precision else float(np.sqrt(np.trace(covariance)))
+    # for gauss-markov), and the one the SD is read from under the name of its diagnostic
+    # (for gauss-markov-frame0 the method's own): None where the SD states no precision.
+    names = {"own": _OWN_COVARIANCE, "stated": _STATED_COVARIANCE}
+    for which, covariance in fitted.covariances(fields).items():
+        row[names[which]] = None if covariance is None else float(np.sqrt(np.trace(covariance)))
     if fitted.bootstrap is not None:
         if fitted.kind == "axis":
             row["boot_cone95_deg"] = fitted.bootstrap_cone_deg()

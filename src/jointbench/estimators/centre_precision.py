@@ -78,7 +78,9 @@ verdict has not already refused the data), or the score test or the lack of fit 
 :data:`jointbench.estimators.support.ROTATION_ALPHA`, or the answer lying :data:`MAX_STEP_SDS`
 of its SDs or more from the common centre where that SD holds, with the answer more than
 :data:`MIN_REJECTED_STEP_MM` from that centre (a method's own documented bias of a few
-millimetres is a property of the method, not a failure to find the centre). IS minimises the
+millimetres is a property of the method, not a failure to find the centre); that warning
+says the precision is not determined, the SD stating the scatter of the common centre and the
+answer's error adding the step to it. IS minimises the
 radial residuals and ends at the spheres' centre; NM's and BC's algebraic fits ended within
 3.6 and 4.7 mm of it on paper A's conditions and ``tests/test_centre_precision.py``'s caps;
 LS's algebraic fit, MA and SCoRE need not come near it. The noise ``s^2``
@@ -104,7 +106,12 @@ import numpy as np
 
 from jointbench.estimators.pose_noise import pull_mm
 from jointbench.estimators.precision import distinct_frames, rigid_dof
-from jointbench.estimators.results import PRECISION_NOT_DETERMINED, with_warnings
+from jointbench.estimators.results import (
+    MAX_CENTER_SD_MM,
+    PRECISION_NOT_DETERMINED,
+    stated_center_sd,
+    with_warnings,
+)
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric_into
@@ -122,11 +129,6 @@ __all__ = [
     "stated_center_sd",
     "stated_covariance",
 ]
-
-#: A centre whose SD along its least determined direction is above this [mm] is "not
-#: determined" by the data: paper A's errors on its hardest conditions are of this order, so
-#: an answer this uncertain cannot be told from a failed one.
-MAX_CENTER_SD_MM = 10.0
 
 #: Where the directions' noise is this share or more of their spread along the least
 #: determined direction, the first-order SD is not a statement of precision: the variance it
@@ -679,8 +681,11 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
             f"their centre would (p = {p_fit:.2g})"
         )
     if reasons:
+        # The SD states the scatter of the spheres' centre; this answer's error adds the step.
         warnings.append(
-            "the answer is not the markers' common centre of rotation: " + "; and ".join(reasons)
+            "the answer is not the markers' common centre of rotation: "
+            + "; and ".join(reasons)
+            + f"; its SD, that centre's scatter, leaves the step out: {PRECISION_NOT_DETERMINED}"
         )
     return tuple(warnings)
 
@@ -810,15 +815,6 @@ def _largest_sd(covariance: np.ndarray) -> float:
         return math.inf
     largest = float(np.linalg.eigvalsh(covariance)[-1])
     return math.sqrt(largest) if largest >= 0.0 else math.nan
-
-
-def stated_center_sd(sd_mm: float) -> float | None:
-    """``sd_mm``, a centre's SD along its least determined direction [mm], where it states a
-    precision: at most :data:`MAX_CENTER_SD_MM`, above which the data do not determine the
-    centre; ``None`` where it does not (larger, infinite or NaN), so that no output prints it
-    as a number."""
-    # NaN fails the comparison: it states nothing either.
-    return float(sd_mm) if sd_mm <= MAX_CENTER_SD_MM else None
 
 
 def _undetermined(sd: float, source: str) -> str:

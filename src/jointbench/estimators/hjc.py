@@ -89,7 +89,13 @@ error, or a given ``noise_mm`` is larger than the data's. So the checked call
 (:func:`jointbench.estimators.registry.get`, on the poses it fitted) tests the chi^2
 two-sided at :data:`jointbench.estimators.support.ROTATION_ALPHA` and, when it is rejected,
 warns that the model does not fit the data: the centre may be off and ``W_c`` does not
-describe its error (``converged`` and the answer stay as fitted).
+describe its error (``converged`` and the answer stay as fitted). For ``gauss-markov-frame0``,
+whose SD is read from that ``W_c``, the warning adds that the precision is not determined.
+``gauss-markov``'s SD is read from ``W_c`` with the frame-0 poses' errors added, the
+frame-0 extension's model, not its own: a rejection of exact frame-0 poses leaves that SD
+(where the model holds but for them its error is about that SD), and the checked call holds it
+to the frame-0 extension's test on the same poses, as SCoRE's and the analytic centre's
+(:func:`_fixed_centre_test`).
 
 The noise need not be Gaussian: paper A's isotropic errors (a normal magnitude along a
 uniform direction, :func:`jointbench.simulate.noise.isotropic_noise`) have a per-coordinate
@@ -784,6 +790,12 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     return (fourth / variance**2 - gaussian) / excess, gaussian
 
 
+#: What a rejected model test says of the SD of an answer whose covariance assumes that model:
+#: no statement of the answer's error, in either direction (a chi^2 above its dof: errors the
+#: model leaves out; below: less noise reaching the centre than the covariance counts).
+_SD_NOT_ITS_ERROR = f"so its SD does not describe its error: {PRECISION_NOT_DETERMINED}"
+
+
 def _model_test(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
 ) -> JointCenterResult:
@@ -795,11 +807,23 @@ def _model_test(
     return with_warnings(result, *_model_verdict(result, proximal, distal))
 
 
-def _model_verdict(
+def _frame0_model_test(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+) -> JointCenterResult:
+    """:func:`_model_test` of a ``gauss-markov-frame0`` ``result``, whose SD is read from the
+    covariance of the model tested: a rejection says that SD does not describe its error."""
+    return with_warnings(result, *_model_verdict(result, proximal, distal, _SD_NOT_ITS_ERROR))
+
+
+def _model_verdict(
+    result: JointCenterResult,
+    proximal: SegmentPoses,
+    distal: SegmentPoses,
+    consequence: str | None = None,
 ) -> tuple[tuple[str, ...], dict]:
     """The test of :func:`_model_test` of the Gauss–Markov ``result`` on its poses: its
-    warnings (none, or one where the test rejects) and its numbers (``chi2_p``,
+    warnings (none, or one where the test rejects, ending in ``consequence`` where given, what
+    that says of the SD of the answer the test is made for) and its numbers (``chi2_p``,
     ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test)."""
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
@@ -845,7 +869,8 @@ def _model_verdict(
     warnings = ()
     if p_value < ROTATION_ALPHA:
         given = residual is None
-        warnings = (_model_warning(statistic, p_value, above, given, frame0, kurtosis),)
+        words = _model_warning(statistic, p_value, above, given, frame0, kurtosis)
+        warnings = (words if consequence is None else f"{words}; {consequence}",)
     return warnings, {
         "chi2_p": p_value,
         "noise_kurtosis": float(kurtosis),
@@ -907,9 +932,11 @@ def _model_warning(
 def _fixed_centre_test(
     result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
 ) -> JointCenterResult:
-    """``result``, a least-squares joint centre with no model test of its own (SCoRE, the
-    analytic centre), held to the test of the model it shares with the Gauss–Markov fits, one
-    centre fixed in both segments: ``gauss-markov-frame0`` fitted to the same poses
+    """``result``, a least-squares joint centre whose covariance has no model test of its own
+    (SCoRE, the analytic centre; paper C's ``gauss-markov``, whose own test is of exact frame-0
+    poses and whose SD adds their errors), held to the test of the model it shares with the
+    Gauss–Markov fits, one centre fixed in both segments: ``gauss-markov-frame0`` fitted to the
+    same poses
     ``proximal`` and ``distal`` and its model tested (module docstring, "Model test"). That
     test asks whether the data allow any such centre with the rigid-body fits' noise; where it
     rejects, the covariance the answer states from its poses' noise does not describe its
@@ -932,17 +959,13 @@ def _fixed_centre_test(
     if not (isinstance(fitted, JointCenterResult) and fitted.converged):
         why = str(fitted) if isinstance(fitted, ValueError) else fitted.status
         return with_warnings(result, (), {"fixed_centre_test": {"not_tested": why}})
-    warnings, numbers = _model_verdict(fitted, proximal, distal)
     shared = (
-        "; this answer's model is the same (gauss-markov-frame0's fit to the same poses "
-        f"tested it), so its SD does not describe its error: {PRECISION_NOT_DETERMINED}"
+        "this answer's model is the same (gauss-markov-frame0's fit to the same poses tested "
+        f"it), {_SD_NOT_ITS_ERROR}"
     )
+    warnings, numbers = _model_verdict(fitted, proximal, distal, shared)
     tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
-    return with_warnings(
-        result,
-        tuple(warning + shared for warning in warnings),
-        {"fixed_centre_test": {**tested, **numbers}},
-    )
+    return with_warnings(result, warnings, {"fixed_centre_test": {**tested, **numbers}})
 
 
 def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
@@ -1135,8 +1158,10 @@ register_many("joint_center", "gauss-markov-frame0", _gauss_markov_trials[True])
 # SCoRE's covariance lives with SCoRE; the model test it is held to lives here.
 fit_analytic.precision_many = precision_on_poses(_held_to_the_model(_analytic_scattered))
 fit_score.precision_many = precision_on_poses(_held_to_the_model(score_scattered))
-fit_gauss_markov.precision_many = precision_on_poses(_model_test)
-fit_gauss_markov_frame0.precision_many = fit_gauss_markov.precision_many
+# Paper C's fit tests its own model (exact frame-0 poses), whose W_c is its covariance; the SD
+# it states adds the frame-0 poses' errors, the model gauss-markov-frame0 tests.
+fit_gauss_markov.precision_many = precision_on_poses(_held_to_the_model(_model_test))
+fit_gauss_markov_frame0.precision_many = precision_on_poses(_frame0_model_test)
 
 
 def align_to_markers(

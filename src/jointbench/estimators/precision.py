@@ -218,7 +218,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jointbench.estimators.results import PRECISION_NOT_DETERMINED, with_warnings
+from jointbench.estimators.results import (
+    MAX_AXIS_SD_DEG,
+    MAX_DIRECTION_OFF_DEG,
+    PRECISION_NOT_DETERMINED,
+    stated_axis_sd,
+    with_warnings,
+)
 from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import tangent_basis_into
@@ -252,15 +258,6 @@ __all__ = [
     "tangent_basis",
     "unsupported_by_its_cost",
 ]
-
-#: An axis whose direction's SD is above this [deg] is "not determined" by the method's cost.
-#: Paper B states its accuracy in bands of 5 and 10 degrees (claims B2, B3): an SD above the
-#: looser band means the answer cannot be told within it.
-MAX_AXIS_SD_DEG = 10.0
-
-#: No line's direction is further than this [deg] from another's: an SD beyond it states no
-#: precision, whatever bound a method's precision is declared not determined above.
-MAX_DIRECTION_OFF_DEG = 90.0
 
 #: Two minima of an axis cost this far apart [deg] are two answers, not one answer's scatter:
 #: three times the largest SD the precision check passes as determined
@@ -522,15 +519,6 @@ def _rows_all_differ(rows: np.ndarray) -> bool:
             slot = (slot + 1) & (size - 1)
         table[slot] = r
     return True
-
-
-def stated_axis_sd(sd_deg: float) -> float | None:
-    """``sd_deg``, an axis direction's SD [deg], where it states a precision: at most
-    :data:`MAX_AXIS_SD_DEG`, above which the method's cost does not determine the axis
-    (:func:`annotate`), and :data:`MAX_DIRECTION_OFF_DEG`; ``None`` where it does not (larger,
-    infinite or NaN), so that no output prints it as a number."""
-    # NaN fails the comparison: it states nothing either.
-    return float(sd_deg) if sd_deg <= min(MAX_AXIS_SD_DEG, MAX_DIRECTION_OFF_DEG) else None
 
 
 def _sd_is(sd_deg: float) -> str:

@@ -7,12 +7,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
+    "MAX_AXIS_SD_DEG",
+    "MAX_CENTER_SD_MM",
+    "MAX_DIRECTION_OFF_DEG",
     "PRECISION_NOT_DETERMINED",
     "REFUSED",
     "AxisResult",
     "CenterResult",
     "JointCenterResult",
     "frozen_rows",
+    "method_sd",
+    "stated_axis_sd",
+    "stated_center_sd",
+    "stated_sd",
     "states_precision",
     "with_fields",
     "with_warnings",
@@ -22,8 +29,24 @@ __all__ = [
 #: The words of every warning that says an answer's stated SD is no statement of its
 #: precision, whatever its size (the noise within the eigen-gap it is read from, a pull it
 #: leaves out, no marker reading the rotation to first order, markers that keep no distance
-#: from any centre): the producers write them and :func:`states_precision` reads them.
+#: from any centre, a step from the centre whose scatter it states, a model its data reject,
+#: frames that hold far fewer independent ones than it counts): the producers write them and
+#: :func:`states_precision` reads them.
 PRECISION_NOT_DETERMINED = "precision not determined"
+
+#: An axis whose direction's SD is above this [deg] is "not determined" by the method's cost.
+#: Paper B states its accuracy in bands of 5 and 10 degrees (claims B2, B3): an SD above the
+#: looser band means the answer cannot be told within it.
+MAX_AXIS_SD_DEG = 10.0
+
+#: No line's direction is further than this [deg] from another's: an SD beyond it states no
+#: precision, whatever bound a method's precision is declared not determined above.
+MAX_DIRECTION_OFF_DEG = 90.0
+
+#: A centre whose SD along its least determined direction is above this [mm] is "not
+#: determined" by the data: paper A's errors on its hardest conditions are of this order, so
+#: an answer this uncertain cannot be told from a failed one.
+MAX_CENTER_SD_MM = 10.0
 
 
 #: The diagnostic a checked call sets true where the support verdict did not find that the
@@ -40,6 +63,54 @@ def states_precision(result) -> bool:
     (:data:`PRECISION_NOT_DETERMINED`), nor where the support verdict refused its data
     (:data:`REFUSED`)."""
     return PRECISION_NOT_DETERMINED not in result.status and not result.diagnostics.get(REFUSED)
+
+
+def stated_axis_sd(sd_deg: float) -> float | None:
+    """``sd_deg``, an axis direction's SD [deg], where it states a precision: at most
+    :data:`MAX_AXIS_SD_DEG`, above which the method's cost does not determine the axis
+    (:func:`jointbench.estimators.precision.annotate`), and :data:`MAX_DIRECTION_OFF_DEG`;
+    ``None`` where it does not (larger, infinite or NaN), so that no output prints it as a
+    number."""
+    # NaN fails the comparison: it states nothing either.
+    return float(sd_deg) if sd_deg <= min(MAX_AXIS_SD_DEG, MAX_DIRECTION_OFF_DEG) else None
+
+
+def stated_center_sd(sd_mm: float) -> float | None:
+    """``sd_mm``, a centre's SD along its least determined direction [mm], where it states a
+    precision: at most :data:`MAX_CENTER_SD_MM`, above which the data do not determine the
+    centre; ``None`` where it does not (larger, infinite or NaN), so that no output prints it
+    as a number."""
+    # NaN fails the comparison: it states nothing either.
+    return float(sd_mm) if sd_mm <= MAX_CENTER_SD_MM else None
+
+
+def method_sd(result) -> float | None:
+    """The SD the method gives of ``result``'s answer, whatever it is worth: an axis
+    direction's [deg] (``diagnostics["axis_sd_deg"]``), a centre's or a joint centre's along
+    its least determined direction [mm] (``diagnostics["center_sd_mm"]``); ``None`` where the
+    method gives none."""
+    sd = result.diagnostics.get(_sd_key(result))
+    return None if sd is None else float(sd)
+
+
+def stated_sd(result) -> float | None:
+    """The SD of ``result``'s answer that states its precision [deg for an axis, mm for a
+    centre or a joint centre] (:func:`method_sd`), or ``None``: where the method gives none,
+    where it is above the bound the status declares the answer not determined beyond
+    (:func:`stated_axis_sd`, :func:`stated_center_sd`), and where the status says the
+    precision is not determined or the support verdict refused the data
+    (:func:`states_precision`). The one rule every output of an SD applies
+    (:meth:`jointbench.RecordingFit.stated_sd` prints ``None`` here as "not determined" where
+    the method gave an SD)."""
+    sd = method_sd(result)
+    if sd is None or not states_precision(result):
+        return None
+    return stated_axis_sd(sd) if isinstance(result, AxisResult) else stated_center_sd(sd)
+
+
+def _sd_key(result) -> str:
+    """The diagnostic in which the method states the SD of ``result``'s answer."""
+    return "axis_sd_deg" if isinstance(result, AxisResult) else "center_sd_mm"
 
 
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:

@@ -158,7 +158,7 @@ from jointbench.estimators import noise_directions as by_direction
 from jointbench.estimators.batching import check_poses
 from jointbench.estimators.noise_directions import inverse_gram_into, row_length, trial_test_into
 from jointbench.estimators.pose_noise import NoisyPoses, PoseNoise, pose_noise
-from jointbench.estimators.results import REFUSED, with_warnings
+from jointbench.estimators.results import PRECISION_NOT_DETERMINED, REFUSED, with_warnings
 from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
 from jointbench.estimators.validation import ARRAY_NAMES, check_markers
 from jointbench.geometry import rotation_vector
@@ -2158,9 +2158,11 @@ class _Frames(NamedTuple):
             f"would (lag-1 autocorrelation {self.correlation:.2f}), as filtered, interpolated or "
             "resampled frames, markers moving on the skin and slow drifts make them: every "
             f"p-value and SD of this fit counts {self.n_frames} independent frames where there "
-            f"are about {_count(self.independent)} (a recording's moving-block bootstrap, "
-            "n_bootstrap or --bootstrap, over blocks of three times the frames one of those "
-            "spans or more understates the scatter far less)",
+            f"are about {_count(self.independent)}, so its SD understates the error by a "
+            "factor those counts do not give (an answer fitted to the motion's smooth course "
+            f"is no mean of the frames): {PRECISION_NOT_DETERMINED} (a recording's "
+            "moving-block bootstrap, n_bootstrap or --bootstrap, over blocks of three times "
+            "the frames one of those spans or more understates the scatter far less)",
         )
 
     def numbers(self) -> dict[str, float]:

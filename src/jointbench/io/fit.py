@@ -31,11 +31,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointbench.estimators import results
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
-from jointbench.estimators.centre_precision import stated_center_sd, stated_covariance
-from jointbench.estimators.precision import stated_axis_sd
+from jointbench.estimators.centre_precision import stated_covariance
 from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
-from jointbench.estimators.results import states_precision, with_warnings
+from jointbench.estimators.results import with_warnings
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
 from jointbench.io.recording import Recording
@@ -151,24 +151,17 @@ class RecordingFit:
         return stated_covariance(self.result)
 
     def stated_sd(self) -> float | str | None:
-        """The SD the method states of its answer: an axis direction's [deg]
-        (``diagnostics["axis_sd_deg"]``), a centre's along its least determined direction [mm]
-        (``diagnostics["center_sd_mm"]``); :data:`NOT_DETERMINED` where that SD states no
-        precision: above the bound the status declares the answer not determined beyond
-        (:func:`~jointbench.estimators.precision.stated_axis_sd`,
-        :func:`~jointbench.estimators.centre_precision.stated_center_sd`), or under it where
-        the status says the precision is not determined or the support verdict refused the data
-        (:func:`~jointbench.estimators.results.states_precision`); ``None`` where the method
-        states none."""
-        key, stated = (
-            ("axis_sd_deg", stated_axis_sd)
-            if self.kind == "axis"
-            else ("center_sd_mm", stated_center_sd)
-        )
-        if key not in self.result.diagnostics:
+        """The SD the method states of its answer where it states a precision
+        (:func:`jointbench.estimators.results.stated_sd`, the one rule: an axis direction's
+        [deg], a centre's along its least determined direction [mm]); :data:`NOT_DETERMINED`
+        where the method gives an SD that states none (above the bound the status declares the
+        answer not determined beyond, or where the status says the precision is not
+        determined or the support verdict refused the data); ``None`` where the method gives
+        none."""
+        if results.method_sd(self.result) is None:
             return None
-        sd = stated(self.result.diagnostics[key])
-        return sd if sd is not None and states_precision(self.result) else NOT_DETERMINED
+        sd = results.stated_sd(self.result)
+        return NOT_DETERMINED if sd is None else sd
 
     def sd_fields(self) -> dict:
         """:meth:`stated_sd` as a machine-readable output gives it, so that its column holds
@@ -181,6 +174,22 @@ class RecordingFit:
         name = SD_NAMES[self.kind]
         number = None if stated == NOT_DETERMINED else stated
         return {name: number, SD_STATED: number is not None}
+
+    def covariances(self, fields: dict) -> dict[str, np.ndarray | None]:
+        """The covariances ``(3, 3)`` [mm^2] the method gives of its answer, by the rule of its
+        SD as ``fields`` (:meth:`sd_fields`, read once) state it: under ``"own"`` the method's
+        own (``result.covariance``), under ``"stated"`` the one its SD is read from
+        (:meth:`stated_covariance`), each only where the method gives it, and ``None`` where
+        the SD states no precision: a covariance of the same answer states none either."""
+        no_precision = len(fields) > 1 and not fields[SD_STATED]
+        own = getattr(self.result, "covariance", None)
+        stated = self.stated_covariance()
+        given = {"own": own, "stated": None if stated is None else stated[0]}
+        return {
+            which: None if no_precision else np.asarray(covariance, dtype=float)
+            for which, covariance in given.items()
+            if covariance is not None
+        }
 
     def bootstrap_cone_deg(self, level: float = 0.95) -> float:
         """Axis: the angle [deg] from the estimate holding ``level`` (in (0, 1)) of the refit
@@ -200,14 +209,14 @@ class RecordingFit:
         else:
             out["center_mm"] = self.result.center.tolist()
             out.update(_joint_points(self.kind, self.result))
-        out.update(self.sd_fields())
-        covariance = getattr(self.result, "covariance", None)
-        if covariance is not None:
-            out["covariance_mm2"] = np.asarray(covariance).tolist()
-        stated = self.stated_covariance()
-        if stated is not None:
-            out["center_covariance_mm2"] = stated[0].tolist()
-            out["center_covariance_is"] = stated[1]
+        fields = self.sd_fields()
+        out.update(fields)
+        names = {"own": "covariance_mm2", "stated": "center_covariance_mm2"}
+        covariances = self.covariances(fields)
+        for which, covariance in covariances.items():
+            out[names[which]] = None if covariance is None else covariance.tolist()
+        if "stated" in covariances:
+            out["center_covariance_is"] = self.stated_covariance()[1]
         out.update(
             converged=bool(self.result.converged),
             status=self.result.status,
