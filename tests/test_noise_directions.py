@@ -196,8 +196,9 @@ def test_noise_twenty_times_larger_along_one_direction_is_found_in_few_blocks():
     """Noise of 0.1, 0.1 and 2 mm along x, y and z on 40 independent frames, and on 120 frames
     smoothed over 5 (blocks about as few): the test is Hotelling's ``T^2`` of the blocks'
     scores, whose variance is their scatter about their mean. Their scatter about zero holds
-    the score itself: the statistic could not exceed the blocks' count, nor the F ratio its
-    critical value below some 40 blocks, and none of these 40 trials was rejected."""
+    the score itself: the statistic could not exceed the blocks' count ``B``, nor the F ratio
+    ``B (B - 5) / (5 (B - 1))``, under its critical value with a few tens of blocks, and none
+    of these 40 trials was rejected."""
     rng = np.random.default_rng(12)
     sds = np.array([0.1, 0.1, 2.0])
     independent, smoothed = 0, 0
