@@ -192,6 +192,28 @@ def test_the_estimate_is_the_noise_covariance_and_the_test_does_not_turn_with_th
     np.testing.assert_allclose(there.covariance, turn @ here.covariance @ turn.T, atol=1e-9)
 
 
+def test_noise_twenty_times_larger_along_one_direction_is_found_in_few_blocks():
+    """Noise of 0.1, 0.1 and 2 mm along x, y and z on 40 independent frames, and on 120 frames
+    smoothed over 5 (blocks about as few): the test is Hotelling's ``T^2`` of the blocks'
+    scores, whose variance is their scatter about their mean. Their scatter about zero holds
+    the score itself: the statistic could not exceed the blocks' count ``B``, nor the F ratio
+    ``B (B - 5) / (5 (B - 1))``, under its critical value with a few tens of blocks, and none
+    of these 40 trials was rejected."""
+    rng = np.random.default_rng(12)
+    sds = np.array([0.1, 0.1, 2.0])
+    independent, smoothed = 0, 0
+    for seed in range(20):
+        markers = _swing(np.random.default_rng(seed), 4, 40, 30.0, sds)
+        independent += _found(markers).rejected()
+        markers = _swing(np.random.default_rng(seed), 4, 120, 30.0, 0.0)
+        markers = markers + _smoothed(rng, markers.shape, 1.0, 5) * sds
+        verdict = support.assess("center", (markers,))
+        assert "the frames are not independent" in verdict.caveats[0]
+        smoothed += verdict.noise_directions.rejected()
+    assert independent >= 15
+    assert smoothed >= 15
+
+
 def test_a_direction_no_residual_reaches_is_not_read_as_anisotropy():
     """Three markers turned about their own plane's normal leave residuals in that plane only
     (their motions out of it are rigid to first order): the noise along the normal is not

@@ -109,6 +109,7 @@ def _assert_same_verdict(found: support.Support, expected: support.Support) -> N
         else:
             assert found.diagnostics[key] == value, key
     assert (found.motion_axis is None) == (expected.motion_axis is None)
+    _assert_same_noise_directions(found.noise_directions, expected.noise_directions)
     if expected.motion_axis is not None:
         axis, other = expected.motion_axis, found.motion_axis
         sign = 1.0 if float(axis.direction @ other.direction) >= 0.0 else -1.0
@@ -119,6 +120,25 @@ def _assert_same_verdict(found: support.Support, expected: support.Support) -> N
             rtol=1e-9,
             atol=1e-9,
         )
+
+
+def _assert_same_noise_directions(found, expected) -> None:
+    """The same noise-direction test (:mod:`jointbench.estimators.noise_directions`): made or
+    not, rejecting or not, its statistic to 1e-9 relative and, where it rejects, its estimate
+    of the noise's covariance to 1e-9 of that covariance's size."""
+    assert (found is None) == (expected is None)
+    if expected is None:
+        return
+    assert math.isnan(found.statistic) == math.isnan(expected.statistic)
+    if not math.isnan(expected.statistic):
+        assert math.isclose(found.statistic, expected.statistic, rel_tol=1e-9, abs_tol=1e-9), (
+            found.statistic,
+            expected.statistic,
+        )
+    assert found.rejected() == expected.rejected()
+    if expected.rejected():
+        size = np.abs(expected.covariance).max()
+        np.testing.assert_allclose(found.covariance, expected.covariance, atol=1e-9 * size)
 
 
 @pytest.mark.parametrize("kind", ["center", "axis"])

@@ -41,15 +41,18 @@ solves the marker rows (read, to first order, from the distances' scatter,
 deviations from what ``theta_0`` gives, projected off the marker rows,
 ``s = A sum_k (R_k - M_k theta_0)`` with ``A = [-M_Dtau M_tautau^-1, I]`` (``M`` summed over
 the frames), are the score of ``D``, of mean zero under the hypothesis whatever the
-``theta_0``; its variance is taken from the frames' own scatter of those projected
-deviations (a sandwich under the hypothesis), not from the normal distribution's fourth
-moments: paper A's and B's noise (uniform directions, normal
+``theta_0``; its variance is taken from the scatter of those projected deviations, summed
+over ``B`` blocks of frames, about their mean (a sandwich), not from the normal distribution's
+fourth moments: paper A's and B's noise (uniform directions, normal
 lengths) and skin markers have heavier tails, and a normal-theory variance would take their
-spread for anisotropy. The statistic ``W = s' V^-1 s`` equals the Wald statistic of
+spread for anisotropy. With ``V`` that scatter, the statistic
+``W = (B - 1) / B s' V^-1 s`` is Hotelling's ``T^2`` of the blocks' mean, a Wald statistic of
 ``D_hat = (M^-1 sum_k R_k)_D`` with the sandwich variance ``M^-1 C M^-1`` (the Schur complement
-of ``M``'s traceless block cancels), read as Hotelling's ``T^2`` of ``B`` blocks of frames
-(``F = W (B - 5) / (5 (B - 1))`` on ``(5, B - 5)`` degrees of freedom), held to its critical
-value at :data:`NOISE_DIRECTION_ALPHA`; the ``p_value`` is stated where it rejects. Frames
+of ``M``'s traceless block cancels), held as ``F = W (B - 5) / (5 (B - 1))`` on
+``(5, B - 5)`` degrees of freedom to its critical value at :data:`NOISE_DIRECTION_ALPHA`;
+the ``p_value`` is stated where it rejects. The scatter about zero would not do: it holds
+the score itself, ``s' V^-1 s`` could not exceed ``B``, and with a few tens of blocks no
+anisotropy could reach the critical value. Frames
 that share their errors (filtered, or skin markers) make that scatter understate the
 variance: the deviations are summed over blocks of about as many frames as one independent
 frame spans (the support verdict's count, ``N / independent``), and ``B`` is the blocks'
@@ -179,9 +182,10 @@ class NoiseDirections(NamedTuple):
         }
 
 
-#: The first columns of :func:`sphericity_numbers` per trial: the statistic ``W`` (NaN where
-#: the test was not made), the blocks ``B``, and the F ratio ``W (B - 5) / (5 (B - 1))`` and
-#: its denominator's degrees of freedom ``B - 5``, for the caller's F survival function.
+#: The first columns of :func:`sphericity_numbers` per trial: the statistic ``W``, Hotelling's
+#: ``T^2`` (NaN where the test was not made), the blocks ``B``, and the F ratio
+#: ``W (B - 5) / (5 (B - 1))`` and its denominator's degrees of freedom ``B - 5``, for the
+#: caller's F survival function.
 _COLUMNS = ("statistic", "blocks", "f_ratio", "f_dof")
 
 
@@ -741,20 +745,25 @@ def trial_test_into(
             block_sum[:] = 0.0
     for c in range(n_terms):
         row[at_sums + c] = summed[c]
-    for a in range(5):
-        along[a, 0] = score[a]
-        for b in range(a):
-            variance5[a, b] = variance5[b, a]
     row[1] = n_blocks
     row[2] = np.nan
     row[3] = 1.0
     if n_blocks < _MIN_BLOCKS:
         return
+    # The blocks' scatter about their mean: about zero it would hold the score itself, and
+    # s' V^-1 s could not exceed the blocks' count.
+    for a in range(5):
+        along[a, 0] = score[a]
+        for b in range(a, 5):
+            variance5[a, b] -= score[a] * score[b] / n_blocks
+        for b in range(a):
+            variance5[a, b] = variance5[b, a]
     if not _cholesky_solve(variance5, along, factor5) > 1.0 / _MAX_CONDITION:
         return
     statistic = 0.0
     for a in range(5):
         statistic += score[a] * along[a, 0]
+    statistic *= (n_blocks - 1.0) / n_blocks
     row[0] = statistic
     row[2] = statistic * (n_blocks - 5.0) / (5.0 * (n_blocks - 1.0))
     row[3] = n_blocks - 5.0
