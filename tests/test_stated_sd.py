@@ -282,3 +282,20 @@ def test_paper_cs_sd_stands_where_only_its_exact_frame0_poses_are_rejected():
         stated += results.stated_sd(result) is not None
     assert own_rejections >= 10  # the case
     assert stated >= 39
+
+
+@pytest.mark.parametrize("method", ["gauss-markov", "gauss-markov-frame0"])
+def test_a_fit_that_did_not_converge_states_no_sd(method):
+    """A Gauss–Markov fit stopped after one iteration, its centre still moving: the covariance
+    at that iterate is no statement of the answer's error, however small its SD, and the
+    covariances it is read from are no more."""
+    proximal, distal, _ = _skin_thigh(0, mm_per_rad=0.0)
+    result = jointbench.fit_joint_center(proximal, distal, method=method, max_iterations=1)
+    assert not result.converged and "did not converge" in result.status  # the case
+    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert joint_centre_sd(result) == NOT_DETERMINED
+    assert results.stated_sd(result) is None
+    summary = RecordingFit("joint_center", method, result, None, np.arange(60), 0).to_dict()
+    assert summary["sd_stated"] is False
+    assert summary["center_covariance_mm2"] is None
+    assert summary.get("covariance_mm2") is None

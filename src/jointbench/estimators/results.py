@@ -59,10 +59,15 @@ REFUSED = "support_refused"
 
 def states_precision(result) -> bool:
     """Whether the SD the method states of ``result`` can be read as a precision: not where
-    a warning in its status says the precision is not determined
+    the method did not converge (an SD read at an iterate that still moves is no answer's
+    precision), nor where a warning in its status says the precision is not determined
     (:data:`PRECISION_NOT_DETERMINED`), nor where the support verdict refused its data
     (:data:`REFUSED`)."""
-    return PRECISION_NOT_DETERMINED not in result.status and not result.diagnostics.get(REFUSED)
+    return (
+        bool(result.converged)
+        and PRECISION_NOT_DETERMINED not in result.status
+        and not result.diagnostics.get(REFUSED)
+    )
 
 
 def stated_axis_sd(sd_deg: float) -> float | None:
@@ -97,8 +102,8 @@ def stated_sd(result) -> float | None:
     """The SD of ``result``'s answer that states its precision [deg for an axis, mm for a
     centre or a joint centre] (:func:`method_sd`), or ``None``: where the method gives none,
     where it is above the bound the status declares the answer not determined beyond
-    (:func:`stated_axis_sd`, :func:`stated_center_sd`), and where the status says the
-    precision is not determined or the support verdict refused the data
+    (:func:`stated_axis_sd`, :func:`stated_center_sd`), and where the method did not converge,
+    the status says the precision is not determined or the support verdict refused the data
     (:func:`states_precision`). The one rule every output of an SD applies
     (:meth:`jointbench.RecordingFit.stated_sd` prints ``None`` here as "not determined" where
     the method gave an SD)."""
