@@ -239,9 +239,13 @@ def _replaced(result, changes: dict):
 
 def with_warnings(result, warnings: tuple[str, ...], diagnostics: dict):
     """``result`` with ``warnings`` appended to its ``status``, each as ``"warning: ..."`` (in
-    place of ``"ok"``, after any other status), and ``diagnostics`` added to its diagnostics;
+    place of ``"ok"``, after any other status) and once (two tests of one model that find the
+    same fault say it in the same words), and ``diagnostics`` added to its diagnostics;
     ``converged`` is left as the method set it."""
     status = result.status
+    # Bounded by the separators on both sides: a warning that begins another is not that one.
+    said = f"; {status}; warning: "
+    warnings = tuple(w for w in dict.fromkeys(warnings) if f"; warning: {w}; warning: " not in said)
     if warnings:
         words = "; ".join(f"warning: {warning}" for warning in warnings)
         status = words if status == "ok" else f"{status}; {words}"
