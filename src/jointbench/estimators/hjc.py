@@ -94,8 +94,8 @@ whose SD is read from that ``W_c``, the warning adds that the precision is not d
 ``gauss-markov``'s SD is read from ``W_c`` with the frame-0 poses' errors added, the
 frame-0 extension's model, not its own: a rejection of exact frame-0 poses leaves that SD
 (where the model holds but for them its error is about that SD), and the checked call holds it
-to the frame-0 extension's test on the same poses, as SCoRE's and the analytic centre's
-(:func:`_fixed_centre_test`).
+to the frame-0 extension's test on the same poses with the same noise (given or estimated), as
+SCoRE's and the analytic centre's (:func:`_fixed_centre_test`).
 
 The noise need not be Gaussian: paper A's isotropic errors (a normal magnitude along a
 uniform direction, :func:`jointbench.simulate.noise.isotropic_noise`) have a per-coordinate
