@@ -160,6 +160,8 @@ def test_a_zero_noise_given_states_no_sd():
     assert "noise_mm = 0 was given" in result.status  # the case
     assert result.diagnostics["center_sd_mm"] == 0.0
     assert joint_centre_sd(result) == NOT_DETERMINED
+    # Its own test and the frame-0 extension's it is held to, at the same noise, say it once.
+    assert result.status.count("noise_mm = 0 was given") == 1
 
 
 @pytest.mark.parametrize("method", ["SCoRE", "gauss-markov-frame0"])
@@ -282,3 +284,40 @@ def test_paper_cs_sd_stands_where_only_its_exact_frame0_poses_are_rejected():
         stated += results.stated_sd(result) is not None
     assert own_rejections >= 10  # the case
     assert stated >= 39
+
+
+@pytest.mark.parametrize("method", ["gauss-markov", "gauss-markov-frame0"])
+def test_a_fit_that_did_not_converge_states_no_sd(method):
+    """A Gauss–Markov fit stopped after one iteration, its centre still moving: the covariance
+    at that iterate is no statement of the answer's error, however small its SD, and the
+    covariances it is read from are no more."""
+    proximal, distal, _ = _skin_thigh(0, mm_per_rad=0.0)
+    result = jointbench.fit_joint_center(proximal, distal, method=method, max_iterations=1)
+    assert not result.converged and "did not converge" in result.status  # the case
+    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert joint_centre_sd(result) == NOT_DETERMINED
+    assert results.stated_sd(result) is None
+    summary = RecordingFit("joint_center", method, result, None, np.arange(60), 0).to_dict()
+    assert summary["sd_stated"] is False
+    assert summary["center_covariance_mm2"] is None
+    assert summary.get("covariance_mm2") is None
+
+
+def test_paper_cs_sd_from_a_noise_given_too_small_is_held_to_that_noise():
+    """Paper C's fit given a marker noise several times smaller than the data's: its SD, read
+    from that noise, is several times smaller than its error, and paper C's own test (of exact
+    frame-0 poses, which leaves the SD standing) rejects as it does on most long trials. The
+    frame-0 extension's test it is held to must be of the same noise, whose rejection says the
+    SD is no precision, as it says for ``gauss-markov-frame0`` given that noise."""
+    proximal, distal, _ = _skin_thigh(0, mm_per_rad=0.0)
+    estimated = jointbench.fit_joint_center(proximal, distal, method="gauss-markov")
+    assert results.stated_sd(estimated) is not None  # the case: with the data's noise it holds
+    small = estimated.diagnostics["noise_mm"] / 5.0
+    frame0 = jointbench.fit_joint_center(
+        proximal, distal, method="gauss-markov-frame0", noise_mm=small
+    )
+    assert results.stated_sd(frame0) is None  # the case: that noise is rejected
+    result = jointbench.fit_joint_center(proximal, distal, method="gauss-markov", noise_mm=small)
+    assert result.diagnostics["center_sd_mm"] < estimated.diagnostics["center_sd_mm"] / 3.0
+    assert result.diagnostics["fixed_centre_test"]["chi2_p"] < support.ROTATION_ALPHA
+    assert results.stated_sd(result) is None

@@ -94,8 +94,8 @@ whose SD is read from that ``W_c``, the warning adds that the precision is not d
 ``gauss-markov``'s SD is read from ``W_c`` with the frame-0 poses' errors added, the
 frame-0 extension's model, not its own: a rejection of exact frame-0 poses leaves that SD
 (where the model holds but for them its error is about that SD), and the checked call holds it
-to the frame-0 extension's test on the same poses, as SCoRE's and the analytic centre's
-(:func:`_fixed_centre_test`).
+to the frame-0 extension's test on the same poses with the same noise (given or estimated), as
+SCoRE's and the analytic centre's (:func:`_fixed_centre_test`).
 
 The noise need not be Gaussian: paper A's isotropic errors (a normal magnitude along a
 uniform direction, :func:`jointbench.simulate.noise.isotropic_noise`) have a per-coordinate
@@ -937,7 +937,8 @@ def _fixed_centre_test(
     poses and whose SD adds their errors), held to the test of the model it shares with the
     Gauss–Markov fits, one centre fixed in both segments: ``gauss-markov-frame0`` fitted to the
     same poses
-    ``proximal`` and ``distal`` and its model tested (module docstring, "Model test"). That
+    ``proximal`` and ``distal``, with the noise given to ``result``'s fit where one was
+    (:func:`_given_noise`), and its model tested (module docstring, "Model test"). That
     test asks whether the data allow any such centre with the rigid-body fits' noise; where it
     rejects, the covariance the answer states from its poses' noise does not describe its
     error (a thigh cluster that slides with the hip angles moves SCoRE's answer by
@@ -951,7 +952,7 @@ def _fixed_centre_test(
         return with_warnings(result, (), {"fixed_centre_test": {"not_tested": unequal}})
     (fitted,) = _gauss_markov_results(
         [{"proximal": proximal, "distal": distal}],
-        noise_mm=None,
+        noise_mm=_given_noise(result),
         frame0=True,
         max_iterations=_FIT_ITERATIONS,
         tol_mm=_FIT_TOL_MM,
@@ -966,6 +967,15 @@ def _fixed_centre_test(
     warnings, numbers = _model_verdict(fitted, proximal, distal, shared)
     tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
     return with_warnings(result, warnings, {"fixed_centre_test": {**tested, **numbers}})
+
+
+def _given_noise(result: JointCenterResult) -> float | None:
+    """The marker noise [mm] given to the fit of ``result``, which its SD is read from, or
+    ``None`` where the noise was estimated from the rigid-body residuals (or the method takes
+    none): the test the SD is held to is of the same noise."""
+    if result.diagnostics.get("noise_source") != "given":
+        return None
+    return float(result.diagnostics["noise_mm"])
 
 
 def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:

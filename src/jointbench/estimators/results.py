@@ -59,10 +59,15 @@ REFUSED = "support_refused"
 
 def states_precision(result) -> bool:
     """Whether the SD the method states of ``result`` can be read as a precision: not where
-    a warning in its status says the precision is not determined
+    the method did not converge (an SD read at an iterate that still moves is no answer's
+    precision), nor where a warning in its status says the precision is not determined
     (:data:`PRECISION_NOT_DETERMINED`), nor where the support verdict refused its data
     (:data:`REFUSED`)."""
-    return PRECISION_NOT_DETERMINED not in result.status and not result.diagnostics.get(REFUSED)
+    return (
+        bool(result.converged)
+        and PRECISION_NOT_DETERMINED not in result.status
+        and not result.diagnostics.get(REFUSED)
+    )
 
 
 def stated_axis_sd(sd_deg: float) -> float | None:
@@ -97,8 +102,8 @@ def stated_sd(result) -> float | None:
     """The SD of ``result``'s answer that states its precision [deg for an axis, mm for a
     centre or a joint centre] (:func:`method_sd`), or ``None``: where the method gives none,
     where it is above the bound the status declares the answer not determined beyond
-    (:func:`stated_axis_sd`, :func:`stated_center_sd`), and where the status says the
-    precision is not determined or the support verdict refused the data
+    (:func:`stated_axis_sd`, :func:`stated_center_sd`), and where the method did not converge,
+    the status says the precision is not determined or the support verdict refused the data
     (:func:`states_precision`). The one rule every output of an SD applies
     (:meth:`jointbench.RecordingFit.stated_sd` prints ``None`` here as "not determined" where
     the method gave an SD)."""
@@ -234,9 +239,13 @@ def _replaced(result, changes: dict):
 
 def with_warnings(result, warnings: tuple[str, ...], diagnostics: dict):
     """``result`` with ``warnings`` appended to its ``status``, each as ``"warning: ..."`` (in
-    place of ``"ok"``, after any other status), and ``diagnostics`` added to its diagnostics;
+    place of ``"ok"``, after any other status) and once (two tests of one model that find the
+    same fault say it in the same words), and ``diagnostics`` added to its diagnostics;
     ``converged`` is left as the method set it."""
     status = result.status
+    # Bounded by the separators on both sides: a warning that begins another is not that one.
+    said = f"; {status}; warning: "
+    warnings = tuple(w for w in dict.fromkeys(warnings) if f"; warning: {w}; warning: " not in said)
     if warnings:
         words = "; ".join(f"warning: {warning}" for warning in warnings)
         status = words if status == "ok" else f"{status}; {words}"

@@ -155,9 +155,9 @@ class RecordingFit:
         (:func:`jointbench.estimators.results.stated_sd`, the one rule: an axis direction's
         [deg], a centre's along its least determined direction [mm]); :data:`NOT_DETERMINED`
         where the method gives an SD that states none (above the bound the status declares the
-        answer not determined beyond, or where the status says the precision is not
-        determined or the support verdict refused the data); ``None`` where the method gives
-        none."""
+        answer not determined beyond, or where the method did not converge, the status says the
+        precision is not determined or the support verdict refused the data); ``None`` where
+        the method gives none."""
         if results.method_sd(self.result) is None:
             return None
         sd = results.stated_sd(self.result)
