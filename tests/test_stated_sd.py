@@ -5,6 +5,7 @@ producer of that warning says it in one phrase
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -321,3 +322,11 @@ def test_paper_cs_sd_from_a_noise_given_too_small_is_held_to_that_noise():
     assert result.diagnostics["center_sd_mm"] < estimated.diagnostics["center_sd_mm"] / 3.0
     assert result.diagnostics["fixed_centre_test"]["chi2_p"] < support.ROTATION_ALPHA
     assert results.stated_sd(result) is None
+
+
+@pytest.mark.parametrize("sd", [-1.0, -0.0001, -math.inf])
+def test_a_negative_sd_states_no_precision(sd):
+    """An SD below zero (an extension's sign error, a variance's root taken of a negative
+    number by other means) is no spread of anything: no output prints it as a number."""
+    assert results.stated_center_sd(sd) is None
+    assert results.stated_axis_sd(sd) is None

@@ -74,19 +74,19 @@ def stated_axis_sd(sd_deg: float) -> float | None:
     """``sd_deg``, an axis direction's SD [deg], where it states a precision: at most
     :data:`MAX_AXIS_SD_DEG`, above which the method's cost does not determine the axis
     (:func:`jointbench.estimators.precision.annotate`), and :data:`MAX_DIRECTION_OFF_DEG`;
-    ``None`` where it does not (larger, infinite or NaN), so that no output prints it as a
-    number."""
-    # NaN fails the comparison: it states nothing either.
-    return float(sd_deg) if sd_deg <= min(MAX_AXIS_SD_DEG, MAX_DIRECTION_OFF_DEG) else None
+    ``None`` where it does not (larger, negative, infinite or NaN), so that no output prints it as
+    a number."""
+    # NaN fails the comparison: it states nothing either; nor does a negative number, no spread.
+    return float(sd_deg) if 0.0 <= sd_deg <= min(MAX_AXIS_SD_DEG, MAX_DIRECTION_OFF_DEG) else None
 
 
 def stated_center_sd(sd_mm: float) -> float | None:
     """``sd_mm``, a centre's SD along its least determined direction [mm], where it states a
     precision: at most :data:`MAX_CENTER_SD_MM`, above which the data do not determine the
-    centre; ``None`` where it does not (larger, infinite or NaN), so that no output prints it
-    as a number."""
-    # NaN fails the comparison: it states nothing either.
-    return float(sd_mm) if sd_mm <= MAX_CENTER_SD_MM else None
+    centre; ``None`` where it does not (larger, negative, infinite or NaN), so that no output
+    prints it as a number."""
+    # NaN fails the comparison: it states nothing either; nor does a negative number, no spread.
+    return float(sd_mm) if 0.0 <= sd_mm <= MAX_CENTER_SD_MM else None
 
 
 def method_sd(result) -> float | None:
