@@ -539,6 +539,49 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert message.count(said) == 1, message[-3000:]
 
 
+# Started with every Python process of a run (on PYTHONPATH): writes what the workflow hands
+# its jobs of external estimators in the environment, as the process ends, to the file named.
+_HANDED_DOWN = """
+import atexit, os
+def _write():
+    with open({file!r}, "a") as written:
+        written.write(os.environ.get("JOINTBENCH_CONFINED", "") + "\\n")
+atexit.register(_write)
+"""
+
+
+def _handed_down(tmp_path, monkeypatch, grid) -> str:
+    """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
+    its jobs in :data:`landlock.VARIABLE`."""
+    tmp_path.mkdir()
+    copy_workflow(tmp_path)
+    shim = tmp_path / "shim"
+    shim.mkdir()
+    written = tmp_path / "handed_down"
+    (shim / "sitecustomize.py").write_text(_HANDED_DOWN.format(file=str(written)))
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(shim), os.environ.get("PYTHONPATH", "")]))
+    overlay = _cmc_only(
+        tmp_path, estimators=["LS"], external_estimators=["centroid", "LM"], grid=grid
+    )
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    (text,) = set(written.read_text().splitlines())
+    return text
+
+
+@pytest.mark.pipeline
+def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path, monkeypatch):
+    """Linux refuses to start a program given an environment variable longer than 128 KiB,
+    which every process of the run inherits: the variable names folders, not each condition's
+    files, and is as long for one condition as for a grid of them."""
+    one = {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]}
+    many = {"marker_set": ["M", "H"], "rom_deg": [5, 15, 45], "noise_mm": [0.5, 1.0, 2.0]}
+    alone = _handed_down(tmp_path / "one", monkeypatch, one)  # folders of one length
+    grid = _handed_down(tmp_path / "all", monkeypatch, many)
+    assert len(grid) == len(alone) < 4096, grid
+    assert "/results/blind" in grid and "/results/estimates/cmc/LM" in grid, grid
+
+
 def _cmc_only(tmp_path, **cmc) -> str:
     defaults = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     studies = {name: {"enabled": False} for name in defaults["studies"] if name != "cmc"}

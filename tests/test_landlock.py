@@ -207,3 +207,50 @@ def test_where_the_kernel_has_no_landlock_nothing_is_confined(tree, monkeypatch)
     assert landlock.confine(confinement(tree)) is False
     with landlock.temporary_folder(confinement(tree)) as own:
         assert own is None
+
+
+def test_a_job_starts_however_many_entries_lie_beside_its_checkout(tree, tmp_path):
+    """The limited shell, as Snakemake starts it, runs its command though the folder holding
+    results/ holds thousands of entries (a shared temporary folder): what the keeper lists of
+    them to confine itself is not handed down in the environment, whose single variable Linux
+    bounds (an exec given a longer one fails with "Argument list too long")."""
+    for number in range(1500):
+        (tree / f"an-entry-beside-the-checkout-with-a-long-name-{number:04d}-{'x' * 60}").touch()
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = "60"
+    environ[landlock.VARIABLE] = landlock.encoded(confinement(tree))
+    shell = subprocess.run(
+        [timelimit.LIMITED_SHELL, "-c", "cat results/blind/d.parquet"],
+        env=environ,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+    )
+    assert (shell.returncode, shell.stdout) == (0, "the markers"), shell.stderr[-2000:]
+
+
+def test_a_confinement_longer_than_an_environment_variable_may_be_is_refused():
+    """Every job of the run would fail to start: refused as it is encoded, before any job,
+    saying how long it is and what to do."""
+    folders = [f"/r/{'folder-' * 10}{number}" for number in range(2000)]
+    with pytest.raises(ValueError, match=landlock.VARIABLE) as refused:
+        landlock.encoded(landlock.Confinement("/r", [], folders, []))
+    assert "2000 folders" in str(refused.value)
+    assert "fewer folders" in str(refused.value)
+    assert landlock.decoded(landlock.encoded(landlock.Confinement("/r", [], folders[:9], [])))
+
+
+def test_a_confinement_claimed_inherited_by_a_process_not_confined_is_refused(tree, tmp_path):
+    """A keeper handed a confinement marked inherited adds nothing to its own: one that can
+    list the hidden folder (started unconfined) runs nothing."""
+    ran = tmp_path / "ran"
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = "60"
+    claimed = confinement(tree)._replace(inherited=True)
+    environ[landlock.VARIABLE] = landlock.encoded(claimed)
+    shell = subprocess.run(
+        [timelimit.LIMITED_SHELL, "-c", f"touch {ran}"], env=environ, capture_output=True, text=True
+    )
+    assert shell.returncode == 2, shell.stderr
+    assert "says this process is confined already" in shell.stderr
+    assert not ran.exists()

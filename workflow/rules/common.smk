@@ -908,8 +908,9 @@ def confine_user_jobs(user_rules):
     from them. Where the kernel has no Landlock the jobs run unconfined, and the run says so
     once, here."""
     users = [r for r in workflow.rules if r.name in user_rules]
-    readable, writable = _opened_by_users(users)
+    inputs, writable = _opened_by_users(users)
     shared = _shared_with_the_benchmark(writable, _package_rules(user_rules))
+    readable = _readable(inputs, writable - shared, users)
     confinement = landlock.Confinement(
         os.path.realpath(RESULTS),
         _real_paths(readable),
@@ -930,24 +931,33 @@ NOT_CONFINED = (
 
 
 def _opened_by_users(users):
-    """``(readable, writable)``: what the jobs of ``users`` (rules of the user's) may read
-    and write under results/ (see confine_user_jobs), as paths relative to the working
-    directory."""
-    readable, writable = set(READABLE), set()
+    """``(inputs, writable)``: the inputs under results/ of the jobs of ``users`` (rules of
+    the user's; see confine_user_jobs) and the folders they write in, as paths relative to
+    the working directory."""
+    inputs, writable = set(), set()
     for producer, wildcards in _jobs_of_external_estimators(users):
         for _, path in _declared(producer):
             writable.add(os.path.dirname(apply_wildcards(path, wildcards)))
-        inputs = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
-        # Those the checks let it read (check_external_rules has refused any other).
-        readable.update(
-            f for f in inputs if f.startswith(RESULTS) and _refusal(f, users) is None
-        )
+        read = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
+        inputs.update(f for f in read if f.startswith(RESULTS))
     for producer in users:
         for _, path in _declared(producer):
             folder = os.path.dirname(path)
             if not WILDCARD_REGEX.search(folder):
                 writable.add(folder)
-    return readable, writable
+    return inputs, writable
+
+
+def _readable(inputs, writable, users):
+    """What the jobs of ``users`` may read under results/: the blind copies (READABLE) and
+    those of their ``inputs`` the checks let them read (check_external_rules has refused any
+    other) that lie in none of those folders nor of the ``writable`` ones, which are granted
+    whole: folders as far as they go, so that what the jobs are handed does not grow with the
+    conditions."""
+    granted = tuple(f"{folder.rstrip('/')}/" for folder in (*READABLE, *writable))
+    return set(READABLE) | {
+        f for f in inputs if not f.startswith(granted) and _refusal(f, users) is None
+    }
 
 
 def _real_paths(paths):
