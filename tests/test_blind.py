@@ -411,7 +411,7 @@ paths = {
     "placements": results / "placements" / "cmc" / blind.name,
     "built-in estimate": results / "estimates" / "cmc" / "LS" / "planted.txt",
     "collected": results / "collected" / "planted.txt",
-    "a built-in estimator's log, beside LM's": results / "logs" / "estimate" / "cmc" / "LS.log",
+    "a built-in estimator's log": results / "logs" / "estimate" / "cmc" / "LS.log",
     "a link of its own": link,
     "blind/..": results / "blind" / ".." / "datasets" / "cmc" / blind.name,
     "/proc/self/cwd": Path("/proc/self/cwd") / full,
@@ -451,11 +451,10 @@ def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
     """Every way tried fails with "Permission denied": the full dataset, the placements, a
     built-in estimator's files and the collected results left by an earlier run, by their
     paths, through a link the program makes in its own folder, ``..`` or ``/proc/self/cwd``,
-    listing results/, from a child process and from a daemon; a built-in estimator's log in
-    the folder LM writes its log in, which is only written in. The program's own folder and
-    temporary files are its own (here in a temporary folder of the job's, as the checkout is
-    under /tmp), and the external estimators shipped (LS-C compiled into results/bin/) run
-    beside it."""
+    listing results/, from a child process and from a daemon; a built-in estimator's log.
+    The program's own folder and temporary files are its own (here in a temporary folder of
+    the job's, as the checkout is under /tmp), and the external estimators shipped (LS-C
+    compiled into results/bin/) run beside it."""
     for planted in (
         "estimates/cmc/LS/planted.txt",
         "collected/planted.txt",
@@ -580,6 +579,31 @@ def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path, mo
     grid = _handed_down(tmp_path / "all", monkeypatch, many)
     assert len(grid) == len(alone) < 4096, grid
     assert "/results/blind" in grid and "/results/estimates/cmc/LM" in grid, grid
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize(
+    "log",
+    ["results/logs/estimate/{study}/centroid-{condition}.log", "results/{study}-{condition}.log"],
+    ids=["beside-the-builtins-logs", "above-everything"],
+)
+def test_a_rule_writing_in_a_folder_of_the_benchmarks_is_refused_before_any_job(tmp_path, log):
+    """Its job may write its file there, and so any file of the benchmark's in or below that
+    folder (a built-in estimator's logs or estimates, the datasets): the run stops as it
+    loads, naming the rule, the file and the folder."""
+    copy_workflow(tmp_path)
+    rule = tmp_path / "workflow" / "rules" / "estimators" / "centroid.smk"
+    template = rule.read_text()
+    declared = '"results/logs/estimate/{study}/centroid/{condition}.log"'
+    assert declared in template
+    rule.write_text(template.replace(declared, f'"{log}"'))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-3000:]
+    assert "rule estimate_centroid writes its log results/" in message, message[-3000:]
+    assert "a folder of its own" in message, message[-3000:]
+    assert not (tmp_path / "results").exists()
 
 
 def _cmc_only(tmp_path, **cmc) -> str:

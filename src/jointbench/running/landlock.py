@@ -8,8 +8,8 @@ it is granted whole. The folders leading to it are granted nothing (a right on a
 for everything below it, the hidden folder too): they can be passed through, not listed nor
 written in. Inside the hidden folder only the listed folders are granted: the readable ones
 (the blind copies, the programs a rule reads) to be read, the writable ones (where the rules
-write) wholly, the write-only ones (where the benchmark writes too) to make and write a file
-in; everything else there is neither readable nor listable.
+write, none where the benchmark writes too) wholly; everything else there is neither readable
+nor listable.
 
 The workflow writes what to grant into :data:`VARIABLE` as it loads (:func:`encoded`); the
 keeper of each job (jointbench/running/timelimit.py) reads it (:func:`text_from`,
@@ -41,7 +41,6 @@ _EXECUTE = 1 << 0
 _WRITE_FILE = 1 << 1
 _READ_FILE = 1 << 2
 _READ_DIR = 1 << 3
-_MAKE_REG = 1 << 8
 _ABI_1 = (1 << 13) - 1  # execute .. make_sym
 _REFER = 1 << 13  # ABI 2
 _TRUNCATE = 1 << 14  # ABI 3
@@ -50,9 +49,6 @@ _IOCTL_DEV = 1 << 15  # ABI 5
 _FILE_RIGHTS = _EXECUTE | _WRITE_FILE | _READ_FILE | _TRUNCATE | _IOCTL_DEV
 #: What a readable folder or file grants: reading and listing it, running a program in it.
 READ = _EXECUTE | _READ_FILE | _READ_DIR
-#: What a folder shared with files the job may not read grants: making a file and writing it
-#: (a log beside the benchmark's), not reading nor listing one.
-WRITE_ONLY = _MAKE_REG | _WRITE_FILE | _TRUNCATE
 
 # The environment variables that name the temporary folder (Python's tempfile, a compiler's).
 _TEMPORARY = ("TMPDIR", "TEMP", "TMP")
@@ -123,13 +119,12 @@ MAX_LENGTH = 32 * 4096 - len(VARIABLE) - 2
 
 class Confinement(NamedTuple):
     """What a job may open: everything outside the ``hidden`` folder, and under it the
-    ``readable``, ``writable`` and ``write_only`` folders or files; real, absolute paths.
+    ``readable`` and ``writable`` folders or files; real, absolute paths.
     ``inherited``: the process holding it is confined to it already (:func:`confine`)."""
 
     hidden: str
     readable: list[str]
     writable: list[str]
-    write_only: list[str]
     inherited: bool = False
 
 
@@ -139,7 +134,7 @@ def encoded(confinement: Confinement) -> str:
     could start."""
     text = json.dumps(confinement._asdict())
     if len(text.encode()) > MAX_LENGTH:
-        count = sum(map(len, confinement[1:4]))
+        count = len(confinement.readable) + len(confinement.writable)
         raise ValueError(
             f"{VARIABLE}, which tells each job of an external estimator what it may open "
             f"under {confinement.hidden}, would name {count} folders or files there "
@@ -159,11 +154,11 @@ def decoded(text: str) -> Confinement:
         confinement = Confinement(**json.loads(text))
     except (ValueError, TypeError) as error:
         raise ValueError(f"{VARIABLE}={text!r} is not what the workflow writes: {error}") from None
-    hidden, readable, writable, write_only, _ = confinement
-    paths = [hidden, *readable, *writable, *write_only]
+    hidden, readable, writable, _ = confinement
+    paths = [hidden, *readable, *writable]
     if not all(isinstance(p, str) and os.path.isabs(p) for p in paths):
         raise ValueError(f"{VARIABLE}={text!r}: a path is not absolute")
-    outside = [p for p in (*readable, *writable, *write_only) if not _within(p, hidden)]
+    outside = [p for p in (*readable, *writable) if not _within(p, hidden)]
     if outside:
         raise ValueError(f"{VARIABLE}: {outside[0]} does not lie under {hidden}")
     return confinement
@@ -202,14 +197,12 @@ def entries_beside(hidden: str) -> list[str]:
 def granted(confinement: Confinement, beside: list[str], everything: int) -> list[tuple[str, int]]:
     """``(path, rights)`` of every grant of ``confinement``: the rights ``everything`` on each
     entry ``beside`` the folders leading to the hidden one (:func:`entries_beside`), and on
-    each writable path; :data:`READ` on each readable one, :data:`WRITE_ONLY` on each
-    write-only one. The folders leading to the hidden one are granted nothing (a right on a
-    folder holds for all below it)."""
+    each writable path; :data:`READ` on each readable one. The folders leading to the hidden
+    one are granted nothing (a right on a folder holds for all below it)."""
     return [
         *((p, everything) for p in beside),
         *((p, READ & everything) for p in confinement.readable),
         *((p, everything) for p in confinement.writable),
-        *((p, WRITE_ONLY & everything) for p in confinement.write_only),
     ]
 
 
