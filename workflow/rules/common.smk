@@ -904,9 +904,9 @@ def confine_user_jobs(user_rules):
     logs, benchmark files) go in, as those jobs spell them, and as any rule of the user's
     spells them where no wildcard is in the folder. Nothing else there: not the datasets, the
     placements, the built-in estimators' files nor anything made from them. A folder in or
-    below which a rule of the benchmark's writes too is refused (_refuse_the_benchmarks): its
-    job could write over the benchmark's files there. Where the kernel has no Landlock the jobs
-    run unconfined, and the run says so once, here."""
+    below which the benchmark writes too is refused, as its job could write over the
+    benchmark's files there (see _refuse_the_benchmarks). Where the kernel has no Landlock the
+    jobs run unconfined, and the run says so once, here."""
     users = [r for r in workflow.rules if r.name in user_rules]
     inputs, written = _opened_by_users(users)
     _refuse_the_benchmarks(written, _package_rules(user_rules))
