@@ -62,7 +62,7 @@ def stopped(
     environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
     environ[timelimit.LIMIT_VARIABLE] = "600"
     # Its jobs confined as an external estimator's, away from a results/ they do not read.
-    hidden = landlock.Confinement(os.path.realpath("results"), [], [], [])
+    hidden = landlock.Confinement(os.path.realpath("results"), [], [])
     environ[landlock.VARIABLE] = landlock.encoded(hidden)
     # To a file: the keeper and the job write on after the shell has been killed.
     with tempfile.TemporaryFile("w+") as stderr:

@@ -411,7 +411,7 @@ paths = {
     "placements": results / "placements" / "cmc" / blind.name,
     "built-in estimate": results / "estimates" / "cmc" / "LS" / "planted.txt",
     "collected": results / "collected" / "planted.txt",
-    "a built-in estimator's log, beside LM's": results / "logs" / "estimate" / "cmc" / "LS.log",
+    "a built-in estimator's log": results / "logs" / "estimate" / "cmc" / "LS.log",
     "a link of its own": link,
     "blind/..": results / "blind" / ".." / "datasets" / "cmc" / blind.name,
     "/proc/self/cwd": Path("/proc/self/cwd") / full,
@@ -451,11 +451,10 @@ def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
     """Every way tried fails with "Permission denied": the full dataset, the placements, a
     built-in estimator's files and the collected results left by an earlier run, by their
     paths, through a link the program makes in its own folder, ``..`` or ``/proc/self/cwd``,
-    listing results/, from a child process and from a daemon; a built-in estimator's log in
-    the folder LM writes its log in, which is only written in. The program's own folder and
-    temporary files are its own (here in a temporary folder of the job's, as the checkout is
-    under /tmp), and the external estimators shipped (LS-C compiled into results/bin/) run
-    beside it."""
+    listing results/, from a child process and from a daemon; a built-in estimator's log.
+    The program's own folder and temporary files are its own (here in a temporary folder of
+    the job's, as the checkout is under /tmp), and the external estimators shipped (LS-C
+    compiled into results/bin/) run beside it."""
     for planted in (
         "estimates/cmc/LS/planted.txt",
         "collected/planted.txt",
@@ -537,6 +536,74 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert run.returncode == 0, message[-3000:]
     said = "this kernel has no Landlock (Linux 5.13 or later, enabled): the programs of external"
     assert message.count(said) == 1, message[-3000:]
+
+
+# Started with every Python process of a run (on PYTHONPATH): writes what the workflow hands
+# its jobs of external estimators in the environment, as the process ends, to the file named.
+_HANDED_DOWN = """
+import atexit, os
+def _write():
+    with open({file!r}, "a") as written:
+        written.write(os.environ.get("JOINTBENCH_CONFINED", "") + "\\n")
+atexit.register(_write)
+"""
+
+
+def _handed_down(tmp_path, monkeypatch, grid) -> str:
+    """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
+    its jobs in :data:`landlock.VARIABLE`."""
+    tmp_path.mkdir()
+    copy_workflow(tmp_path)
+    shim = tmp_path / "shim"
+    shim.mkdir()
+    written = tmp_path / "handed_down"
+    (shim / "sitecustomize.py").write_text(_HANDED_DOWN.format(file=str(written)))
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(shim), os.environ.get("PYTHONPATH", "")]))
+    overlay = _cmc_only(
+        tmp_path, estimators=["LS"], external_estimators=["centroid", "LM"], grid=grid
+    )
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    (text,) = set(written.read_text().splitlines())
+    return text
+
+
+@pytest.mark.pipeline
+def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path, monkeypatch):
+    """Linux refuses to start a program given an environment variable longer than 128 KiB,
+    which every process of the run inherits: the variable names folders, not each condition's
+    files, and is as long for one condition as for a grid of them."""
+    one = {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]}
+    many = {"marker_set": ["M", "H"], "rom_deg": [5, 15, 45], "noise_mm": [0.5, 1.0, 2.0]}
+    alone = _handed_down(tmp_path / "one", monkeypatch, one)  # folders of one length
+    grid = _handed_down(tmp_path / "all", monkeypatch, many)
+    assert len(grid) == len(alone) < 4096, grid
+    assert "/results/blind" in grid and "/results/estimates/cmc/LM" in grid, grid
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize(
+    "log",
+    ["results/logs/estimate/{study}/centroid-{condition}.log", "results/{study}-{condition}.log"],
+    ids=["beside-the-builtins-logs", "above-everything"],
+)
+def test_a_rule_writing_in_a_folder_of_the_benchmarks_is_refused_before_any_job(tmp_path, log):
+    """Its job may write its file there, and so any file of the benchmark's in or below that
+    folder (a built-in estimator's logs or estimates, the datasets): the run stops as it
+    loads, naming the rule, the file and the folder."""
+    copy_workflow(tmp_path)
+    rule = tmp_path / "workflow" / "rules" / "estimators" / "centroid.smk"
+    template = rule.read_text()
+    declared = '"results/logs/estimate/{study}/centroid/{condition}.log"'
+    assert declared in template
+    rule.write_text(template.replace(declared, f'"{log}"'))
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-3000:]
+    assert "rule estimate_centroid writes its log results/" in message, message[-3000:]
+    assert "a folder of its own" in message, message[-3000:]
+    assert not (tmp_path / "results").exists()
 
 
 def _cmc_only(tmp_path, **cmc) -> str:

@@ -29,8 +29,7 @@ TREES = "/var/tmp"
 @pytest.fixture
 def tree() -> Iterator[Path]:
     """A checkout's tree: results/ holding a dataset (the truth), a blind copy, a folder of
-    the job's own and one it shares with the benchmark's logs, and a source file beside
-    results/."""
+    the job's own, the benchmark's logs, and a source file beside results/."""
     if not os.path.isdir(TREES):
         pytest.skip(f"no {TREES} on this machine")
     root = Path(tempfile.mkdtemp(dir=TREES, prefix="jointbench-test-"))
@@ -51,9 +50,7 @@ def tree() -> Iterator[Path]:
 
 def confinement(root: Path) -> landlock.Confinement:
     results = str(root / "results")
-    return landlock.Confinement(
-        results, [f"{results}/blind"], [f"{results}/estimates/mine"], [f"{results}/logs"]
-    )
+    return landlock.Confinement(results, [f"{results}/blind"], [f"{results}/estimates/mine"])
 
 
 def run_confined(root: Path, command: str, tmp_path: Path) -> tuple[int, str]:
@@ -86,7 +83,6 @@ def run_confined(root: Path, command: str, tmp_path: Path) -> tuple[int, str]:
         "mkdir -p results/estimates/mine/sub && echo x > results/estimates/mine/sub/x",
         "f=$(mktemp -p /tmp) && echo temporary > $f && cat $f && rm $f",
         "echo beside > src/new.py",
-        "echo its log > results/logs/mine.log",
     ],
 )
 def test_a_confined_process_opens_what_it_is_granted(tree, tmp_path, command):
@@ -125,18 +121,19 @@ REFUSALS = ("Permission denied", "Operation not permitted", "Invalid cross-devic
         "mv results/estimates/mine/old.txt results/datasets/",
         "cat results/logs/builtin.log",
         "ls results/logs",
-        "echo its log > results/logs/mine.log && cat results/logs/mine.log",
+        "echo its log > results/logs/mine.log",
+        "echo truncated > results/logs/builtin.log",
     ],
 )
 def test_a_confined_process_opens_nothing_else_under_the_hidden_folder(tree, tmp_path, command):
     """Whatever the path (``..``, ``/proc/self/cwd``, a link it makes in its own folder), by
-    itself, a child or a daemon: refused by the kernel, which judges the object opened. A
-    folder shared with the benchmark's files is written in, not read nor listed."""
+    itself, a child or a daemon: refused by the kernel, which judges the object opened."""
     status, written = run_confined(tree, command, tmp_path)
     assert status != 0, written
     assert any(refusal in written for refusal in REFUSALS), written
     assert (tree / "results" / "datasets" / "d.parquet").read_text() == "the truth"
     assert (tree / "results" / "blind" / "d.parquet").read_text() == "the markers"
+    assert (tree / "results" / "logs" / "builtin.log").read_text() == "the benchmark's log"
 
 
 def test_the_entries_beside_are_all_but_the_way_to_the_hidden_folder(tree):
@@ -155,15 +152,15 @@ def test_the_entries_beside_are_all_but_the_way_to_the_hidden_folder(tree):
         ("[]", "is not what the workflow writes"),
         ('{"hidden": "/r"}', "is not what the workflow writes"),
         (
-            '{"hidden": "r", "readable": [], "writable": [], "write_only": []}',
+            '{"hidden": "r", "readable": [], "writable": []}',
             "a path is not absolute",
         ),
         (
-            '{"hidden": "/r", "readable": ["/datasets"], "writable": [], "write_only": []}',
+            '{"hidden": "/r", "readable": ["/datasets"], "writable": []}',
             "/datasets does not lie",
         ),
         (
-            '{"hidden": "/r", "readable": [], "writable": [], "write_only": ["/r/../x"]}',
+            '{"hidden": "/r", "readable": [], "writable": ["/r/../x"]}',
             "/r/../x does not lie",
         ),
     ],
@@ -207,3 +204,50 @@ def test_where_the_kernel_has_no_landlock_nothing_is_confined(tree, monkeypatch)
     assert landlock.confine(confinement(tree)) is False
     with landlock.temporary_folder(confinement(tree)) as own:
         assert own is None
+
+
+def test_a_job_starts_however_many_entries_lie_beside_its_checkout(tree, tmp_path):
+    """The limited shell, as Snakemake starts it, runs its command though the folder holding
+    results/ holds thousands of entries (a shared temporary folder): what the keeper lists of
+    them to confine itself is not handed down in the environment, whose single variable Linux
+    bounds (an exec given a longer one fails with "Argument list too long")."""
+    for number in range(1500):
+        (tree / f"an-entry-beside-the-checkout-with-a-long-name-{number:04d}-{'x' * 60}").touch()
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = "60"
+    environ[landlock.VARIABLE] = landlock.encoded(confinement(tree))
+    shell = subprocess.run(
+        [timelimit.LIMITED_SHELL, "-c", "cat results/blind/d.parquet"],
+        env=environ,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+    )
+    assert (shell.returncode, shell.stdout) == (0, "the markers"), shell.stderr[-2000:]
+
+
+def test_a_confinement_longer_than_an_environment_variable_may_be_is_refused():
+    """Every job of the run would fail to start: refused as it is encoded, before any job,
+    saying how long it is and what to do."""
+    folders = [f"/r/{'folder-' * 10}{number}" for number in range(2000)]
+    with pytest.raises(ValueError, match=landlock.VARIABLE) as refused:
+        landlock.encoded(landlock.Confinement("/r", [], folders))
+    assert "2000 folders" in str(refused.value)
+    assert "fewer folders" in str(refused.value)
+    assert landlock.decoded(landlock.encoded(landlock.Confinement("/r", [], folders[:9])))
+
+
+def test_a_confinement_claimed_inherited_by_a_process_not_confined_is_refused(tree, tmp_path):
+    """A keeper handed a confinement marked inherited adds nothing to its own: one that can
+    list the hidden folder (started unconfined) runs nothing."""
+    ran = tmp_path / "ran"
+    environ = {**os.environ, timelimit.PYTHON_VARIABLE: sys.executable}
+    environ[timelimit.LIMIT_VARIABLE] = "60"
+    claimed = confinement(tree)._replace(inherited=True)
+    environ[landlock.VARIABLE] = landlock.encoded(claimed)
+    shell = subprocess.run(
+        [timelimit.LIMITED_SHELL, "-c", f"touch {ran}"], env=environ, capture_output=True, text=True
+    )
+    assert shell.returncode == 2, shell.stderr
+    assert "says this process is confined already" in shell.stderr
+    assert not ran.exists()

@@ -37,7 +37,7 @@ GRACE_S = 0.5
 FOREVER = "sleep 300"
 # What the workflow lets a job open under a results/ (landlock): here, the repository's, which
 # the jobs of these tests do not read.
-CONFINED = landlock.encoded(landlock.Confinement(str(ROOT / "results"), [], [], []))
+CONFINED = landlock.encoded(landlock.Confinement(str(ROOT / "results"), [], []))
 # What Snakemake puts before the command of a job whose shell is named bash, as the limited
 # shell is.
 SNAKEMAKES_PREFIX = "set -euo pipefail; "
@@ -458,7 +458,7 @@ from jointbench.running import landlock, timelimit
 os.environ[timelimit.LIMIT_VARIABLE] = "60"
 os.environ[timelimit.PYTHON_VARIABLE] = sys.executable
 # Its jobs write in the working folder: the folder hidden from them is not above it.
-hidden = landlock.Confinement("/jointbench-hides-nothing", [], [], [])
+hidden = landlock.Confinement("/jointbench-hides-nothing", [], [])
 os.environ[landlock.VARIABLE] = landlock.encoded(hidden)
 
 rule all:

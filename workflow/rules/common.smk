@@ -902,19 +902,18 @@ def confine_user_jobs(user_rules):
     limit): read the blind copies and their CSV form, and the inputs under results/ of the
     jobs the run's external estimators need; read and write the folders their files (outputs,
     logs, benchmark files) go in, as those jobs spell them, and as any rule of the user's
-    spells them where no wildcard is in the folder; only write in such a folder where a rule
-    of the benchmark's may write too (a log beside the built-in estimators'). Nothing else
-    there: not the datasets, the placements, the built-in estimators' files nor anything made
-    from them. Where the kernel has no Landlock the jobs run unconfined, and the run says so
-    once, here."""
+    spells them where no wildcard is in the folder. Nothing else there: not the datasets, the
+    placements, the built-in estimators' files nor anything made from them. A folder in or
+    below which the benchmark writes too is refused, as its job could write over the
+    benchmark's files there (see _refuse_the_benchmarks). Where the kernel has no Landlock the
+    jobs run unconfined, and the run says so once, here."""
     users = [r for r in workflow.rules if r.name in user_rules]
-    readable, writable = _opened_by_users(users)
-    shared = _shared_with_the_benchmark(writable, _package_rules(user_rules))
+    inputs, written = _opened_by_users(users)
+    _refuse_the_benchmarks(written, _package_rules(user_rules))
     confinement = landlock.Confinement(
         os.path.realpath(RESULTS),
-        _real_paths(readable),
-        _real_paths(writable - shared),
-        _real_paths(shared),
+        _real_paths(_readable(inputs, written, users)),
+        _real_paths(written),
     )
     os.environ[landlock.VARIABLE] = landlock.encoded(confinement)
     if users and not landlock.abi_version():
@@ -930,39 +929,57 @@ NOT_CONFINED = (
 
 
 def _opened_by_users(users):
-    """``(readable, writable)``: what the jobs of ``users`` (rules of the user's) may read
-    and write under results/ (see confine_user_jobs), as paths relative to the working
-    directory."""
-    readable, writable = set(READABLE), set()
+    """``(inputs, written)``: the inputs under results/ of the jobs of ``users`` (rules of
+    the user's; see confine_user_jobs), and the folders they write in, each with ``(rule,
+    kind, path)`` of a file written there; paths relative to the working directory."""
+    inputs, written = set(), {}
     for producer, wildcards in _jobs_of_external_estimators(users):
-        for _, path in _declared(producer):
-            writable.add(os.path.dirname(apply_wildcards(path, wildcards)))
-        inputs = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
-        # Those the checks let it read (check_external_rules has refused any other).
-        readable.update(
-            f for f in inputs if f.startswith(RESULTS) and _refusal(f, users) is None
-        )
+        for kind, path in _declared(producer):
+            path = apply_wildcards(path, wildcards)
+            written.setdefault(os.path.dirname(path), (producer.name, kind, path))
+        read = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
+        inputs.update(f for f in read if f.startswith(RESULTS))
     for producer in users:
-        for _, path in _declared(producer):
+        for kind, path in _declared(producer):
             folder = os.path.dirname(path)
             if not WILDCARD_REGEX.search(folder):
-                writable.add(folder)
-    return readable, writable
+                written.setdefault(folder, (producer.name, kind, path))
+    return inputs, written
+
+
+def _readable(inputs, writable, users):
+    """What the jobs of ``users`` may read under results/: the blind copies (READABLE) and
+    those of their ``inputs`` the checks let them read (check_external_rules has refused any
+    other) that lie in none of those folders nor of the ``writable`` ones, which are granted
+    whole: folders as far as they go, so that what the jobs are handed does not grow with the
+    conditions."""
+    granted = tuple(f"{folder.rstrip('/')}/" for folder in (*READABLE, *writable))
+    return set(READABLE) | {
+        f for f in inputs if not f.startswith(granted) and _refusal(f, users) is None
+    }
 
 
 def _real_paths(paths):
     return sorted({os.path.realpath(p) for p in paths})
 
 
-def _shared_with_the_benchmark(folders, package):
-    """Those of ``folders`` in which, or below which, a rule of ``package`` (the benchmark's
-    rules) can write a file."""
-    theirs = [_patterns_of(f) for other in package for f in _written(other)]
-    return {
-        folder
-        for folder in folders
-        if any(_overlap(_patterns_of(f"{folder}/{{inside}}"), t) for t in theirs)
-    }
+def _refuse_the_benchmarks(written, package):
+    """Stop when one of the folders ``written`` (each with ``(rule, kind, path)`` of a file a
+    rule of the user's writes there) is one in which, or below which, a rule of ``package``
+    (the benchmark's rules) can write a file, naming both: the job may write in its folder,
+    and so over any file of the benchmark's in or below it (a built-in estimator's logs or
+    estimates, the datasets), which the kernel cannot tell from its own."""
+    theirs = [(other, f, _patterns_of(f)) for other in package for f in _written(other)]
+    for folder, (rule, kind, path) in written.items():
+        mine = _patterns_of(f"{folder}/{{inside}}")
+        for other, file, patterns in theirs:
+            if _overlap(mine, patterns):
+                raise ValueError(
+                    f"rule {rule} writes its {kind} {path} in {folder}/, where rule "
+                    f"{other.name} of the benchmark writes ({_shown(file)}): its job could "
+                    "write over the benchmark's files there. A rule of yours writes its files "
+                    "under results/, in a folder of its own (README, 'Adding an estimator')"
+                )
 
 
 def _jobs_of_external_estimators(users):

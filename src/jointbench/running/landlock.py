@@ -8,8 +8,8 @@ it is granted whole. The folders leading to it are granted nothing (a right on a
 for everything below it, the hidden folder too): they can be passed through, not listed nor
 written in. Inside the hidden folder only the listed folders are granted: the readable ones
 (the blind copies, the programs a rule reads) to be read, the writable ones (where the rules
-write) wholly, the write-only ones (where the benchmark writes too) to make and write a file
-in; everything else there is neither readable nor listable.
+write, none where the benchmark writes too) wholly; everything else there is neither readable
+nor listable.
 
 The workflow writes what to grant into :data:`VARIABLE` as it loads (:func:`encoded`); the
 keeper of each job (jointbench/running/timelimit.py) reads it (:func:`text_from`,
@@ -41,7 +41,6 @@ _EXECUTE = 1 << 0
 _WRITE_FILE = 1 << 1
 _READ_FILE = 1 << 2
 _READ_DIR = 1 << 3
-_MAKE_REG = 1 << 8
 _ABI_1 = (1 << 13) - 1  # execute .. make_sym
 _REFER = 1 << 13  # ABI 2
 _TRUNCATE = 1 << 14  # ABI 3
@@ -50,9 +49,6 @@ _IOCTL_DEV = 1 << 15  # ABI 5
 _FILE_RIGHTS = _EXECUTE | _WRITE_FILE | _READ_FILE | _TRUNCATE | _IOCTL_DEV
 #: What a readable folder or file grants: reading and listing it, running a program in it.
 READ = _EXECUTE | _READ_FILE | _READ_DIR
-#: What a folder shared with files the job may not read grants: making a file and writing it
-#: (a log beside the benchmark's), not reading nor listing one.
-WRITE_ONLY = _MAKE_REG | _WRITE_FILE | _TRUNCATE
 
 # The environment variables that name the temporary folder (Python's tempfile, a compiler's).
 _TEMPORARY = ("TMPDIR", "TEMP", "TMP")
@@ -115,21 +111,39 @@ def handled_rights(abi: int) -> int:
     return rights
 
 
+#: The longest text one environment variable may hold (Linux's ``MAX_ARG_STRLEN``, 32 pages
+#: of 4 KiB, less the variable's name, ``=`` and the closing NUL): a program started with a
+#: longer one is refused ("Argument list too long"), and every process of a run inherits it.
+MAX_LENGTH = 32 * 4096 - len(VARIABLE) - 2
+
+
 class Confinement(NamedTuple):
-    """What a job may open: everything outside the ``hidden`` folder (``beside``: the entries
-    beside the folders leading to it, None until listed), and under it the ``readable``,
-    ``writable`` and ``write_only`` folders or files; real, absolute paths."""
+    """What a job may open: everything outside the ``hidden`` folder, and under it the
+    ``readable`` and ``writable`` folders or files; real, absolute paths.
+    ``inherited``: the process holding it is confined to it already (:func:`confine`)."""
 
     hidden: str
     readable: list[str]
     writable: list[str]
-    write_only: list[str]
-    beside: list[str] | None = None
+    inherited: bool = False
 
 
 def encoded(confinement: Confinement) -> str:
-    """What :data:`VARIABLE` holds: ``confinement`` as JSON."""
-    return json.dumps(confinement._asdict())
+    """What :data:`VARIABLE` holds: ``confinement`` as JSON; ``ValueError`` saying what to do
+    when that is longer than an environment variable may be (:data:`MAX_LENGTH`): no job
+    could start."""
+    text = json.dumps(confinement._asdict())
+    if len(text.encode()) > MAX_LENGTH:
+        count = len(confinement.readable) + len(confinement.writable)
+        raise ValueError(
+            f"{VARIABLE}, which tells each job of an external estimator what it may open "
+            f"under {confinement.hidden}, would name {count} folders or files there "
+            f"({len(text.encode())} bytes), more than one environment variable may hold "
+            f"({MAX_LENGTH} bytes): no job of the run could start. Have the rules of external "
+            "estimators write their files in fewer folders, one per study and estimator "
+            "rather than one per condition (README, 'Adding an estimator')"
+        )
+    return text
 
 
 def decoded(text: str) -> Confinement:
@@ -140,11 +154,11 @@ def decoded(text: str) -> Confinement:
         confinement = Confinement(**json.loads(text))
     except (ValueError, TypeError) as error:
         raise ValueError(f"{VARIABLE}={text!r} is not what the workflow writes: {error}") from None
-    hidden, readable, writable, write_only, beside = confinement
-    paths = [hidden, *readable, *writable, *write_only, *(beside or [])]
+    hidden, readable, writable, _ = confinement
+    paths = [hidden, *readable, *writable]
     if not all(isinstance(p, str) and os.path.isabs(p) for p in paths):
         raise ValueError(f"{VARIABLE}={text!r}: a path is not absolute")
-    outside = [p for p in (*readable, *writable, *write_only) if not _within(p, hidden)]
+    outside = [p for p in (*readable, *writable) if not _within(p, hidden)]
     if outside:
         raise ValueError(f"{VARIABLE}: {outside[0]} does not lie under {hidden}")
     return confinement
@@ -180,17 +194,15 @@ def entries_beside(hidden: str) -> list[str]:
     return entries
 
 
-def granted(confinement: Confinement, everything: int) -> list[tuple[str, int]]:
-    """``(path, rights)`` of every grant of ``confinement`` (its entries beside listed): the
-    rights ``everything`` on each entry beside the folders leading to the hidden one, and on
-    each writable path; :data:`READ` on each readable one, :data:`WRITE_ONLY` on each
-    write-only one. The folders leading to the hidden one are granted nothing (a right on a
-    folder holds for all below it)."""
+def granted(confinement: Confinement, beside: list[str], everything: int) -> list[tuple[str, int]]:
+    """``(path, rights)`` of every grant of ``confinement``: the rights ``everything`` on each
+    entry ``beside`` the folders leading to the hidden one (:func:`entries_beside`), and on
+    each writable path; :data:`READ` on each readable one. The folders leading to the hidden
+    one are granted nothing (a right on a folder holds for all below it)."""
     return [
-        *((p, everything) for p in confinement.beside),
+        *((p, everything) for p in beside),
         *((p, READ & everything) for p in confinement.readable),
         *((p, everything) for p in confinement.writable),
-        *((p, WRITE_ONLY & everything) for p in confinement.write_only),
     ]
 
 
@@ -199,20 +211,24 @@ def confine(confinement: Confinement) -> bool:
     ``confinement`` (:func:`granted`): whether it is, False where the kernel has no Landlock.
     A path that does not exist, or is no longer its real path (a link put in its place), is
     not granted; a file is granted a file's rights alone. The entries beside the folders
-    leading to the hidden one are listed here unless ``confinement`` holds them, and handed
-    down in :data:`VARIABLE` to a keeper the job starts in turn, which could not list them:
-    a confinement within one only narrows it, whatever the job writes there."""
+    leading to the hidden one are listed here, as they are now. A keeper the job starts in
+    turn (a script job's long shell() call) is handed ``confinement`` marked inherited in
+    :data:`VARIABLE`: it could not list those entries, and has nothing to add, as a process
+    cannot leave its confinement, whatever the job writes there; it only checks that it is
+    confined (:func:`check_inherited`)."""
     abi = abi_version()
     if abi == 0:
         return False
-    if confinement.beside is None:
-        confinement = confinement._replace(beside=entries_beside(confinement.hidden))
+    check_inherited(confinement)
+    if confinement.inherited:
+        return True
+    beside = entries_beside(confinement.hidden)
     everything = handled_rights(abi)
     attr = _RulesetAttr(everything)
     size = ctypes.c_size_t(ctypes.sizeof(attr))
     ruleset = _syscall(_CREATE_RULESET, ctypes.byref(attr), size, 0)
     try:
-        for path, rights in granted(confinement, everything):
+        for path, rights in granted(confinement, beside, everything):
             _add_rule(ruleset, path, rights)
         if _libc().prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0:
             errno = ctypes.get_errno()
@@ -220,8 +236,23 @@ def confine(confinement: Confinement) -> bool:
         _syscall(_RESTRICT_SELF, ruleset, 0)
     finally:
         os.close(ruleset)
-    os.environ[VARIABLE] = encoded(confinement)
+    os.environ[VARIABLE] = encoded(confinement._replace(inherited=True))
     return True
+
+
+def check_inherited(confinement: Confinement) -> None:
+    """``ValueError`` when ``confinement`` is marked inherited but this process can list its
+    hidden folder: it is not confined, and the variable was not set by a job's keeper."""
+    if not confinement.inherited or not abi_version():
+        return
+    try:
+        os.listdir(confinement.hidden)
+    except (PermissionError, FileNotFoundError):
+        return
+    raise ValueError(
+        f"{VARIABLE} says this process is confined already, but it can list "
+        f"{confinement.hidden}: it was not set by the keeper of a job"
+    )
 
 
 @contextlib.contextmanager

@@ -459,6 +459,7 @@ def main(argv: Sequence[str], environ: Mapping[str, str] = os.environ) -> int:
     try:
         limit = limit_from(environ)
         confined = landlock.decoded(landlock.text_from(environ))
+        landlock.check_inherited(confined)
     except ValueError as error:
         print(f"jointbench: {error}", file=sys.stderr)
         return 2

@@ -23,7 +23,7 @@ for _study in studies_listing("LM"):
                 condition=condition_ids(_study),
             ),
         log:
-            f"results/logs/estimate/{_study}/LM.log",
+            f"results/logs/estimate/{_study}/LM/LM.log",
         conda:
             "../../envs/jointbench.yaml"
         params:
