@@ -773,3 +773,28 @@ def test_results_a_run_would_redo_are_stale_naming_its_jobs(tmp_path, monkeypatc
     assert cli._stale(args, "snapshot")
     message = capsys.readouterr().err
     assert "`snakemake -j2` would redo a (1), b (1): run it first" in message
+
+
+def test_the_guide_s_knee_numbers_are_what_its_command_prints(capsys):
+    """docs/own-data.md states, for its own command on the shipped knee trial (the shank's six
+    markers in the thigh's frame), the distances' lag-1 autocorrelation, the independent
+    frames and the block length a bootstrap's blocks fall short of: each as that command's
+    status prints it, not as another marker set's."""
+    guide = (Path(__file__).resolve().parents[1] / "docs" / "own-data.md").read_text()
+    command = re.search(
+        r"jointbench fit data/functional-trials/right_knee\.c3d[^\n]*\n[^\n]*", guide
+    )
+    assert f"--reference {THIGH} --moving {SHANK}" in command.group(0)
+    stated = re.search(
+        r"lag-1 autocorrelation\s+(\S+), about (\d+)\s+independent frames of 922", guide
+    )
+    span = re.search(r"blocks of 31 frames against (\d+)\)", guide)
+    code, out, _ = run(
+        capsys, "fit", str(KNEE), "--kind", "axis", "--reference", THIGH, "--moving", SHANK,
+        "--method", "SARA", "--bootstrap", "20", "--format", "json",
+    )  # fmt: skip
+    assert code == 0
+    status = json.loads(out)[0]["status"]
+    assert f"lag-1 autocorrelation {stated.group(1)})" in status
+    assert f"where there are about {stated.group(2)}," in status
+    assert f"blocks of 31 frames are shorter than {span.group(1)}," in status

@@ -25,12 +25,13 @@ import pytest
 from scipy.signal import butter, filtfilt
 
 import jointbench
-from jointbench.estimators import support
+from jointbench.estimators import results, support
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.io.fit import BLOCK_SPANS
 from jointbench.numerics import compiled
 
 WARNING = "the frames are not independent"
+SHANK, THIGH = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH", "RTHI1,RTHI2,RTHI3,RGT"
 KNEE = Path(__file__).resolve().parents[1] / "data" / "functional-trials" / "right_knee.c3d"
 FIT = {
     "center": jointbench.fit_center,
@@ -595,3 +596,19 @@ def test_a_short_fit_of_one_marker_says_its_frames_independence_was_not_tested(k
     )
     assert UNTESTED in fitted.result.status
     assert fitted.result.diagnostics["frames_independence_untested"] == 22
+
+
+def test_a_stretch_whose_correlation_shows_its_frames_dependent_states_no_sd():
+    """Frames 300 to 339 of the knee trial: the block test does not reject their independence
+    over 40 frames, but their distances' lag-1 autocorrelation, 0.89, is beyond 0.2 (where an
+    SD that counts every frame understates the scatter by 1.22 times) and resolved from 0 at
+    the level the block test rejects at: the frames are shown not independent, as the caveat
+    would show them, and the planar axis, 5.3 degrees from the whole trial's, states no SD of
+    half a degree."""
+    knee = jointbench.read(KNEE)
+    prepared = jointbench.prepare(knee, "axis", SHANK, THIGH, frames="300:340")
+    result = prepared.fit("planar").result
+    assert "did not reject their independence over 40 frames" in result.status
+    assert result.diagnostics["frames_independence_unconfirmed"] == 40
+    assert results.PRECISION_NOT_DETERMINED in result.status
+    assert results.stated_sd(result) is None

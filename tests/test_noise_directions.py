@@ -7,9 +7,14 @@ anisotropic noise, and the answers that noise larger along one direction left ``
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.special import fdtrc
+from test_cli import SHANK, THIGH
+from test_io_recordings import KNEE
 
 import jointbench
 from jointbench.estimators import noise_directions as by_direction
@@ -313,3 +318,24 @@ def test_too_few_frames_to_test_leave_the_answer_without_a_pull():
     assert np.isnan(result.diagnostics["noise_direction_statistic"])
     assert "noise_direction_pull_deg" not in result.diagnostics
     assert "noise differs" not in result.status
+
+
+def test_the_readme_s_knee_centres_read_the_warning_it_states():
+    """The README says what the test does on the real knee trial (the shank's six markers in
+    the thigh's frame): every centre method's answer is pulled by the pull it states, against
+    the SDs it states, and reads the warning."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    stated = re.search(
+        r"every centre method's answer there, pulled (\S+) to (\S+) mm against SDs of\s+(\S+) "
+        r"to (\S+) mm, reads the warning",
+        readme,
+    )
+    prepared = jointbench.prepare(jointbench.read(KNEE), "center", SHANK, THIGH)
+    pulls, sds = [], []
+    for method in jointbench.methods("center"):
+        result = prepared.fit(method).result
+        assert "the noise differs by direction" in result.status, method
+        pulls.append(result.diagnostics["noise_direction_pull_mm"])
+        sds.append(result.diagnostics["center_sd_mm"])
+    assert f"{min(pulls):.1f}" == stated.group(1) and f"{max(pulls):.1f}" == stated.group(2)
+    assert f"{min(sds):.2f}" == stated.group(3) and f"{max(sds):.2f}" == stated.group(4)

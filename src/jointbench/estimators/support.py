@@ -2275,6 +2275,17 @@ class Untested(NamedTuple):
         """Whether the block test was made (and did not reject the frames' independence)."""
         return self.n_frames >= MIN_TESTED_FRAMES
 
+    @property
+    def dependent(self) -> bool:
+        """Whether the correlation shows the frames not independent by the caveat's own
+        measure: at or above :data:`DEPENDENT_CORRELATION`, where an SD counting every frame
+        understates the scatter by ``sqrt(MIN_VARIANCE_RATIO)`` or more, and resolved from 0
+        at :data:`ROTATION_ALPHA`, the block test's level (by the SDs independent frames give
+        it, ``(DEPENDENT_CORRELATION - bound) / _Z_CLEARED``). False where no correlation was
+        read (NaN)."""
+        sd = (DEPENDENT_CORRELATION - self.bound) / _Z_CLEARED
+        return self.correlation >= DEPENDENT_CORRELATION and self.correlation > _Z_SHARED[0] * sd
+
     def words(self) -> str:
         """The status's words."""
         found = (
@@ -2297,9 +2308,15 @@ class Untested(NamedTuple):
                 "under it), at which an SD that counts every frame as independent understates "
                 f"the scatter by {math.sqrt(MIN_VARIANCE_RATIO):.3g} times"
             )
-        return (
+        said = (
             f"{found} {read}: its SDs and p-values count each frame as independent, which "
             "consecutive frames of a recording seldom are: fit a longer stretch"
+        )
+        if not self.dependent:
+            return said
+        return (
+            f"{said}; that correlation, over {_Z_SHARED[0]:.3g} of those SDs above 0, shows "
+            f"the frames not independent: {PRECISION_NOT_DETERMINED}"
         )
 
     def numbers(self) -> dict[str, float]:
