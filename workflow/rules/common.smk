@@ -902,7 +902,7 @@ def confine_user_jobs(user_rules):
     limit): read the blind copies and their CSV form, and the inputs under results/ of the
     jobs the run's external estimators need; read and write the folders their files (outputs,
     logs, benchmark files) go in, as those jobs spell them, and as any rule of the user's
-    spells them where no wildcard is in the folder. Nothing else there: not the datasets, the
+    spells them (_spelt_folders). Nothing else there: not the datasets, the
     placements, the built-in estimators' files nor anything made from them. A folder in or
     below which the benchmark writes too is refused, as its job could write over the
     benchmark's files there (see _refuse_the_benchmarks). Where the kernel has no Landlock the
@@ -941,10 +941,25 @@ def _opened_by_users(users):
         inputs.update(f for f in read if f.startswith(RESULTS))
     for producer in users:
         for kind, path in _declared(producer):
-            folder = os.path.dirname(path)
-            if not WILDCARD_REGEX.search(folder):
+            for folder in _spelt_folders(os.path.dirname(path)):
                 written.setdefault(folder, (producer.name, kind, path))
     return inputs, written
+
+
+def _spelt_folders(folder):
+    """The folders a job of a rule of the user's may write in by the pattern ``folder``,
+    whether or not the run's studies list its estimator (a target asked for by name): itself
+    where it holds no wildcard; one per study of the config where ``{study}`` is its only one
+    (``results/estimates/{study}/<name>/``, as the README's rules write); none where another
+    wildcard names it, which no job spells before it runs."""
+    names = {match.group("name") for match in WILDCARD_REGEX.finditer(folder)}
+    if not names:
+        return [folder]
+    if names == {"study"}:
+        return [
+            apply_wildcards(folder, {"study": study}) for study in config["studies"]
+        ]
+    return []
 
 
 def _readable(inputs, writable, users):
