@@ -137,6 +137,18 @@ def test_a_joint_centre_the_poses_noise_pulled_states_no_sd(method):
     assert joint_centre_sd(result) == NOT_DETERMINED
 
 
+def _states_no_sd(result, method: str) -> None:
+    """``result``, a joint centre of ``method`` on 60 frames whose SD is within its bound,
+    states none: not in the table, the array API, the summary's flag nor its covariances."""
+    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
+    assert joint_centre_sd(result) == NOT_DETERMINED
+    assert results.stated_sd(result) is None
+    summary = RecordingFit("joint_center", method, result, None, np.arange(60), 0).to_dict()
+    assert summary["sd_stated"] is False
+    assert summary["center_covariance_mm2"] is None
+    assert summary.get("covariance_mm2") is None
+
+
 @pytest.mark.parametrize("method", ["SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0"])
 def test_a_joint_centre_whose_model_the_data_reject_states_no_sd(method):
     """A thigh cluster sliding with the hip angles: the fixed-centre model's test rejects
@@ -145,13 +157,7 @@ def test_a_joint_centre_whose_model_the_data_reject_states_no_sd(method):
     precision, nor is the covariance it is read from."""
     result = jointbench.fit_joint_center(*_skin_thigh(0)[:2], method=method)
     assert "the Gauss–Markov model does not fit the data" in result.status  # the case
-    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
-    assert joint_centre_sd(result) == NOT_DETERMINED
-    assert results.stated_sd(result) is None
-    summary = RecordingFit("joint_center", method, result, None, np.arange(60), 0).to_dict()
-    assert summary["sd_stated"] is False
-    assert summary["center_covariance_mm2"] is None
-    assert summary.get("covariance_mm2") is None
+    _states_no_sd(result, method)
 
 
 def test_a_zero_noise_given_states_no_sd():
@@ -295,13 +301,7 @@ def test_a_fit_that_did_not_converge_states_no_sd(method):
     proximal, distal, _ = _skin_thigh(0, mm_per_rad=0.0)
     result = jointbench.fit_joint_center(proximal, distal, method=method, max_iterations=1)
     assert not result.converged and "did not converge" in result.status  # the case
-    assert result.diagnostics["center_sd_mm"] < MAX_CENTER_SD_MM
-    assert joint_centre_sd(result) == NOT_DETERMINED
-    assert results.stated_sd(result) is None
-    summary = RecordingFit("joint_center", method, result, None, np.arange(60), 0).to_dict()
-    assert summary["sd_stated"] is False
-    assert summary["center_covariance_mm2"] is None
-    assert summary.get("covariance_mm2") is None
+    _states_no_sd(result, method)
 
 
 def test_paper_cs_sd_from_a_noise_given_too_small_is_held_to_that_noise():
