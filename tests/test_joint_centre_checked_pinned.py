@@ -5,13 +5,19 @@ registered joint-centre method, what the checked one-trial call
 (:func:`jointbench.estimators.registry.get`) and the checked many-trial call
 (:func:`jointbench.estimators.registry.many`) answered when it was written: each trial's error,
 or its centre, covariance, ``converged``, ``iterations``, status (with its warnings), cost and
-diagnostics. A
-faster implementation must answer the same: the same errors, statuses and warnings word for
-word (their numbers printed to four digits, so to rounding), the same numbers to 1e-9 (relative
-where large). Cases: paper C's hip protocol at Nt = 4, 20, 200 and 1200 frames, noisy,
-noise-free and with an exact frame 0, with a cluster that slides with the hip angles and with a
-noisy pelvis beside a clean thigh; the two-segment rig noise-free, as a hinge (degenerate
-motion) and nearly one; the noise given, given as 0, and too few iterations to converge.
+diagnostics. A faster implementation must answer the same: the same errors, statuses and
+warnings word for word (their numbers printed to four digits, so to rounding), the same numbers
+to 1e-9 (relative where large) or, for a number that rounding alone moves by more, to ten times
+what rounding moved it when the pin was written: its largest change under three perturbations
+of the markers by one unit in the last place (``rounding`` in the file). Those are the numbers
+of ill-conditioned fits (a hinge all but for 1e-6 rad, whose covariance rounding moves by
+1e-5) and the chi^2 of noise-free data, rounding over rounding; no implementation that orders
+one sum differently answers them closer.
+
+Cases: paper C's hip protocol at Nt = 4, 20, 200 and 1200 frames, noisy, noise-free and with
+an exact frame 0, with a cluster that slides with the hip angles and with a noisy pelvis
+beside a clean thigh; the two-segment rig noise-free, as a hinge (degenerate motion) and
+nearly one; the noise given, given as 0, and too few iterations to converge.
 ``python tests/test_joint_centre_checked_pinned.py --rewrite`` rewrites the file, for a
 deliberate change of the answers only.
 """
@@ -157,20 +163,66 @@ def _all_answers() -> dict:
     }
 
 
-def _assert_same(now: object, pinned: object, where: str) -> None:
-    """``now`` equals ``pinned``: strings and flags exactly, numbers to 1e-9 (relative where
-    large)."""
+#: Numbers agree to this, relative where large.
+AGREE = 1e-9
+#: A number rounding moves by more than :data:`AGREE` agrees to this many times that move.
+ROUNDING_TIMES = 10.0
+#: The relative perturbation of the markers, one unit in the last place.
+ULP = 2.0**-52
+
+
+def _numbers(answer: object, where: str, out: dict[str, float]) -> dict[str, float]:
+    """Every number of ``answer`` (as JSON) by its path."""
+    if isinstance(answer, dict):
+        for key, value in answer.items():
+            _numbers(value, f"{where}/{key}", out)
+    elif isinstance(answer, list):
+        for index, value in enumerate(answer):
+            _numbers(value, f"{where}[{index}]", out)
+    elif isinstance(answer, float):
+        out[where] = answer
+    return out
+
+
+def _rounding(answers: dict) -> dict[str, float]:
+    """By path, the largest change of each number of ``answers`` under three perturbations of
+    every case's markers by one unit in the last place, where it is above what
+    :data:`AGREE` allows."""
+    pinned = _numbers(answers, "", {})
+    moved: dict[str, float] = {}
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        for case, (trials, options) in _cases().items():
+            perturbed = tuple(m * (1.0 + ULP * rng.choice([-1.0, 1.0], m.shape)) for m in trials)
+            for method in METHODS:
+                again = _called(method, perturbed, _options_for(method, options))
+                for where, value in _numbers(again, f"/{case}/{method}", {}).items():
+                    if where in pinned:
+                        change = abs(value - pinned[where])
+                        moved[where] = max(moved.get(where, 0.0), change)
+    return {
+        where: change
+        for where, change in moved.items()
+        if change > AGREE * max(1.0, abs(pinned[where])) / ROUNDING_TIMES
+    }
+
+
+def _assert_same(now: object, pinned: object, where: str, rounding: dict[str, float]) -> None:
+    """``now`` equals ``pinned``: strings and flags exactly, numbers to :data:`AGREE`
+    (relative where large) or :data:`ROUNDING_TIMES` their move by rounding (``rounding``, by
+    path)."""
     if isinstance(pinned, dict):
         assert isinstance(now, dict) and now.keys() == pinned.keys(), where
         for key in pinned:
-            _assert_same(now[key], pinned[key], f"{where}/{key}")
+            _assert_same(now[key], pinned[key], f"{where}/{key}", rounding)
     elif isinstance(pinned, list):
         assert isinstance(now, list) and len(now) == len(pinned), where
         for index, (mine, theirs) in enumerate(zip(now, pinned, strict=True)):
-            _assert_same(mine, theirs, f"{where}[{index}]")
+            _assert_same(mine, theirs, f"{where}[{index}]", rounding)
     elif isinstance(pinned, float) and not isinstance(pinned, bool):
         assert isinstance(now, (int, float)) and not isinstance(now, bool), where
-        assert abs(now - pinned) <= 1e-9 * max(1.0, abs(pinned)), f"{where}: {now!r} != {pinned!r}"
+        allowed = max(AGREE * max(1.0, abs(pinned)), ROUNDING_TIMES * rounding.get(where, 0.0))
+        assert abs(now - pinned) <= allowed, f"{where}: {now!r} != {pinned!r}"
     else:
         assert now == pinned and type(now) is type(pinned), f"{where}: {now!r} != {pinned!r}"
 
@@ -180,16 +232,41 @@ def answers() -> dict:
     return _all_answers()
 
 
+@pytest.fixture(scope="module")
+def pinned() -> dict:
+    return json.loads(PINNED.read_text())
+
+
 @pytest.mark.parametrize("case", list(_cases()))
-def test_checked_joint_centre_calls_answer_as_pinned(answers, case):
-    pinned = json.loads(PINNED.read_text())
-    _assert_same(answers[case], pinned[case], case)
+def test_checked_joint_centre_calls_answer_as_pinned(answers, pinned, case):
+    _assert_same(answers[case], pinned["answers"][case], f"/{case}", pinned["rounding"])
+
+
+#: The cases whose fits are ill-conditioned (four frames, a hinge or nearly one) or whose
+#: chi^2 is rounding over rounding (noise-free): the only ones rounding may move by more than
+#: :data:`AGREE`.
+ROUNDING_BOUND = (
+    "hip Nt=4",
+    "hip Nt=200 noise-free",
+    "rig ball noise-free",
+    "rig hinge",
+    "rig near hinge",
+    "rig near hinge noise-free",
+    "rig nearer hinge noise-free",
+)
+
+
+def test_rounding_moves_only_the_ill_conditioned_beyond_the_agreement(pinned):
+    """The allowance for rounding is the exception, never a well-conditioned answer's."""
+    assert pinned["rounding"]
+    for where in pinned["rounding"]:
+        assert where.split("/")[1] in ROUNDING_BOUND, where
 
 
 def test_the_pin_covers_every_kind_of_answer():
     """The corpus is not all one outcome: it holds errors, unconverged fits, model-test
     rejections and untested fixed centres, each of which the pin must see."""
-    text = PINNED.read_text()
+    text = json.dumps(json.loads(PINNED.read_text())["answers"])
     for words in (
         "degenerate motion",
         "single axis",
@@ -201,14 +278,15 @@ def test_the_pin_covers_every_kind_of_answer():
         assert words in text, words
 
 
-def test_a_changed_number_fails_the_comparison():
-    pinned = json.loads(PINNED.read_text())
-    case = pinned["hip Nt=200"]["gauss-markov"]["one"][0]
+def test_a_changed_number_fails_the_comparison(pinned):
+    case = pinned["answers"]["hip Nt=200"]["gauss-markov"]["one"][0]
     moved = json.loads(json.dumps(case))
     moved["center"][0] += 1e-7 * max(1.0, abs(moved["center"][0]))
     with pytest.raises(AssertionError):
-        _assert_same(moved, case, "moved")
+        _assert_same(moved, case, "moved", pinned["rounding"])
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["--rewrite"]:
-    PINNED.write_text(json.dumps(_all_answers(), indent=1, sort_keys=True) + "\n")
+    written = _all_answers()
+    pin = {"answers": written, "rounding": _rounding(written)}
+    PINNED.write_text(json.dumps(pin, indent=1, sort_keys=True) + "\n")
