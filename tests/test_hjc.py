@@ -403,3 +403,18 @@ def test_the_compiled_iteration_is_its_python_source(frame0):
     np.testing.assert_allclose(compiled[3], python[3], rtol=1e-12)
     for mine, theirs in zip(arrays, expected, strict=True):
         np.testing.assert_allclose(mine, theirs, rtol=1e-12, atol=1e-12)
+
+
+def test_the_marker_gains_are_the_fits_hat_and_place_the_point_covariance():
+    """``B_pi = I/n - [p - m]x K^-1 [u_i]x``: summed as ``B B'`` over the markers it is
+    ``A(p)``, and at the markers themselves it is the rigid fit's hat matrix (idempotent)."""
+    rng = np.random.default_rng(8)
+    body = PROXIMAL + rng.normal(scale=5.0, size=PROXIMAL.shape)
+    point = JOINT + rng.normal(scale=20.0, size=3)
+    for gains_of in (hjc._marker_gains, hjc._marker_gains.__wrapped__):
+        gains = gains_of(point[None], body)[0]
+        np.testing.assert_allclose(
+            np.einsum("ikl,iml->km", gains, gains), point_covariance(point, body), rtol=1e-12
+        )
+        hat = gains_of(body, body).transpose(0, 2, 1, 3).reshape(9, 9)
+        np.testing.assert_allclose(hat @ hat, hat, atol=1e-12)

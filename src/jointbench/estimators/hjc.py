@@ -172,15 +172,14 @@ from jointbench.estimators.twosegment import (
     score_scattered,
     trial_outcomes,
 )
-from jointbench.geometry import skew
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
 from jointbench.numerics.small import (
-    inverse3,
     inverse3_entries,
     inverse3_into,
     rotated3,
+    rotated3_into,
     rotated3_upper,
 )
 
@@ -852,33 +851,81 @@ def _result(trial: _Prepared, done: _Iterated, method: str, tol_mm) -> JointCent
 # The model test (module docstring, "Model test").
 
 
+@kernel
 def _marker_gains(points: np.ndarray, body: np.ndarray) -> np.ndarray:
-    """``B_pi = I/n - [p - m]x K^-1 [u_i]x`` ``(..., n, 3, 3)`` for body points ``p``
-    ``(..., 3)`` [mm]: the error of ``p`` as a least-squares pose fit of the markers ``body``
-    ``(n, 3)`` [mm] places it, per unit error of marker ``i`` (``m``, ``u_i``, ``K`` as in
-    ``A(c)``; ``sum_i B_pi B_pi' = A(p) / s^2``). At ``p = x_j`` it is the fit's hat matrix."""
+    """``B_pi = I/n - [p - m]x K^-1 [u_i]x`` ``(P, n, 3, 3)`` for body points ``p`` ``(P, 3)``
+    [mm]: the error of ``p`` as a least-squares pose fit of the markers ``body`` ``(n, 3)``
+    [mm] places it, per unit error of marker ``i`` (``m``, ``u_i``, ``K`` as in ``A(c)``;
+    ``sum_i B_pi B_pi' = A(p) / s^2``). At ``p = x_j`` it is the fit's hat matrix. A compiled
+    kernel."""
     mean, inertia_inv, n = lever_factors(body)
-    lever = skew(np.asarray(points, dtype=float) - mean)[..., None, :, :]
-    return np.eye(3) / n - lever @ inertia_inv @ skew(body - mean)
+    gains = np.empty((points.shape[0], n, 3, 3))
+    for p in range(points.shape[0]):
+        lever = _skew9(points[p, 0] - mean[0], points[p, 1] - mean[1], points[p, 2] - mean[2])
+        turned = _transposed_times(_transposed9(lever), _rows9(inertia_inv))  # [p - m]x K^-1
+        for i in range(n):
+            offset = _skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
+            product = _transposed_times(_transposed9(turned), offset)
+            for r in range(3):
+                for c in range(3):
+                    gains[p, i, r, c] = (1.0 / n if r == c else 0.0) - product[3 * r + c]
+    return gains
 
 
-def _fourth_moments(blocks: np.ndarray) -> np.ndarray:
-    """``tr(X)^2 + 2 tr(X^2)`` ``(...)`` of symmetric ``(..., 3, 3)`` blocks: per unit ``s^4``,
-    ``E (e' X e)^2`` for one marker's Gaussian error ``e``, and ``3 / kappa`` times what
-    spherical noise of excess kurtosis ``kappa`` adds to it."""
-    trace = np.trace(blocks, axis1=-2, axis2=-1)
-    return trace**2 + 2.0 * np.sum(blocks * blocks, axis=(-2, -1))
+@kernel
+def _skew9(v0: float, v1: float, v2: float) -> tuple:
+    """``[v]x`` as 9 numbers by rows (:func:`jointbench.geometry.skew`). A compiled kernel."""
+    return (0.0, -v2, v1, v2, 0.0, -v0, -v1, v0, 0.0)
 
 
-def _residual_moments(body: np.ndarray) -> tuple[float, float]:
+@kernel
+def _transposed9(a: tuple) -> tuple:
+    """``A'`` of a 9-number matrix. A compiled kernel."""
+    return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
+
+
+@kernel
+def _fourth_moment(x: tuple) -> float:
+    """``tr(X)^2 + 2 tr(X X')`` of a 9-number block ``X`` (symmetric: ``tr(X^2)``): per unit
+    ``s^4``, ``E (e' X e)^2`` for one marker's Gaussian error ``e``, and ``3 / kappa`` times
+    what spherical noise of excess kurtosis ``kappa`` adds to it. A compiled kernel."""
+    trace = x[0] + x[4] + x[8]
+    squares = 0.0
+    for k in range(9):
+        squares += x[k] * x[k]
+    return trace * trace + 2.0 * squares
+
+
+@kernel
+def _residual_moments(body: np.ndarray) -> tuple:
     """Per frame, ``(G, F)`` of ``E sum_i |r_i|^4 = s^4 (G + kappa F)`` over the residuals
     ``r_i`` ``(3,)`` of a rigid fit of the markers ``body`` ``(n, 3)`` [mm]; ``kappa G / 3`` is
-    also what the kurtosis adds to the variance of the frame's residual sum of squares."""
-    n = len(body)
-    residual = np.eye(n)[:, :, None, None] * np.eye(3) - _marker_gains(body, body)
-    own = residual[np.arange(n), np.arange(n)]
-    shared = np.swapaxes(residual, -1, -2) @ residual
-    return float(np.sum(_fourth_moments(own))), float(np.sum(_fourth_moments(shared))) / 3.0
+    also what the kurtosis adds to the variance of the frame's residual sum of squares. With
+    ``Q_ji = delta_ji I - B_ji`` the blocks of ``I - H`` (:func:`_marker_gains` at the
+    markers), ``G = sum_i m(Q_ii)`` and ``F = sum_ji m(Q_ji' Q_ji) / 3``, ``m`` of
+    :func:`_fourth_moment`. A compiled kernel."""
+    n = body.shape[0]
+    hat = _marker_gains(body, body)
+    own, shared = 0.0, 0.0
+    for j in range(n):
+        for i in range(n):
+            block = _rows9(hat[j, i])
+            delta = 1.0 if i == j else 0.0
+            residual = (
+                delta - block[0],
+                -block[1],
+                -block[2],
+                -block[3],
+                delta - block[4],
+                -block[5],
+                -block[6],
+                -block[7],
+                delta - block[8],
+            )
+            if i == j:
+                own += _fourth_moment(residual)
+            shared += _fourth_moment(_transposed_times(residual, residual))
+    return own, shared / 3.0
 
 
 def _constraint_moments(rotations, bodies, points) -> float:
@@ -891,28 +938,56 @@ def _constraint_moments(rotations, bodies, points) -> float:
     ``V_at`` is the inverse of ``R_a' W_t R_a = A_a + R_ab A_b R_ab'`` with ``R_ab = R_a' R_b``
     the other segment's relative rotation. With ``C = B B'``, ``tr(X) = <V, C>`` and
     ``tr(X^2) = tr(V C V C)``, so the sum over frames needs only ``S = sum_t vec(V_t)
-    vec(V_t)'`` (9 x 9): ``c' S c`` and ``sum S[jk, lm] C_kl C_mj``, not one product per frame
-    and marker. On a long trial it is taken over :data:`_MOMENT_FRAMES` frames and scaled."""
+    vec(V_t)'`` (9 x 9, :func:`_local_weight_moments`): ``c' S c`` and ``sum S[jk, lm] C_kl
+    C_mj``, not one product per frame and marker. On a long trial it is taken over
+    :data:`_MOMENT_FRAMES` frames and scaled."""
     n_steps = len(rotations[0])
     chosen = _spread_frames(n_steps, _MOMENT_FRAMES)
-    covariances = [point_covariance(c, b) for c, b in zip(points, bodies, strict=True)]
-    relative = np.swapaxes(rotations[0][chosen], -1, -2) @ rotations[1][chosen]
-    others = (
-        rotated3(relative, covariances[1]),
-        rotated3(np.swapaxes(relative, -1, -2), covariances[0]),
+    covariances = np.stack([point_covariance(c, b) for c, b in zip(points, bodies, strict=True)])
+    seconds = _local_weight_moments(
+        kernel_array(rotations[0]), kernel_array(rotations[1]), chosen, covariances
     )
     total = 0.0
-    for body, point, own, other in zip(bodies, points, covariances, others, strict=True):
-        gains = _marker_gains(point, body)
+    for body, point, second in zip(bodies, points, seconds, strict=True):
+        gains = _marker_gains(kernel_array(np.reshape(point, (1, 3))), kernel_array(body))[0]
         spread = gains @ np.swapaxes(gains, -1, -2)
-        local = inverse3(own + other).reshape(-1, 9)
-        second = local.T @ local
         flat = spread.reshape(-1, 9)
         total += float(np.einsum("ip,pq,iq->", flat, second, flat))
         total += 2.0 * float(
             np.einsum("jklm,ikl,imj->", second.reshape(3, 3, 3, 3), spread, spread)
         )
     return total * n_steps / len(chosen)
+
+
+@kernel
+def _local_weight_moments(
+    r0: np.ndarray, r1: np.ndarray, frames: np.ndarray, covariances: np.ndarray
+) -> np.ndarray:
+    """``S_a = sum_t vec(V_at) vec(V_at)'`` ``(2, 9, 9)`` over the ``frames`` ``(k,)`` of the
+    rotations ``R_a`` ``(N-1, 3, 3)``, ``V_at = (A_a + R_ab A_b R_ab')^-1`` with ``A_a`` the
+    point ``covariances`` ``(2, 3, 3)`` and ``R_ab = R_a' R_b`` (:func:`_constraint_moments`).
+    A compiled kernel."""
+    seconds = np.zeros((2, 9, 9))
+    relative = np.empty((2, 3, 3))
+    other = np.empty((3, 3))
+    local = np.empty((3, 3))
+    for t in frames:
+        for i in range(3):
+            for j in range(3):
+                value = r0[t, 0, i] * r1[t, 0, j] + r0[t, 1, i] * r1[t, 1, j]
+                value += r0[t, 2, i] * r1[t, 2, j]
+                relative[0, i, j] = value
+                relative[1, j, i] = value
+        for a in range(2):
+            rotated3_into(relative[a], covariances[1 - a], other)
+            for i in range(3):
+                for j in range(3):
+                    other[i, j] += covariances[a, i, j]
+            inverse3_into(other, local)
+            for p in range(9):
+                for q in range(9):
+                    seconds[a, p, q] += local[p // 3, p % 3] * local[q // 3, q % 3]
+    return seconds
 
 
 #: Frames over which :func:`_constraint_moments` averages: its sum is one over the frames of a
@@ -945,7 +1020,7 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
         # moments by its square, fourth cumulants by its fourth power.
         n_frames = len(poses.markers)
         shrink = (n_frames - 1) / n_frames
-        g, f = _residual_moments(poses.body)
+        g, f = _residual_moments(kernel_array(poses.body))
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian
