@@ -437,9 +437,10 @@ def _relinearised(
     frame-0 model: unknowns ``(c, c0, c1)`` (``k = 9``), rows ``[R0, -R1]`` acting on ``(c0,
     c1)`` and the pseudo-measurements ``c0 - c = 0``, ``c1 - c = 0`` of covariances ``A_0(c0)``,
     ``A_1(c1)``. Each iteration weighs every frame by ``W_t^-1`` at the current state and
-    accumulates the normal equations in one pass over the frames (:func:`_frame_normal`); the
-    correction is solved from the residuals, which keeps full precision when they are tiny
-    (noise-free data) however large the coordinates.
+    accumulates the normal equations in one pass over the frames, each frame's terms in its
+    proximal body frame (:func:`_frame_normal`); the correction is solved from the residuals,
+    which keeps full precision when they are tiny (noise-free data) however large the
+    coordinates.
 
     Writes the last iteration's ``information`` ``(k, k)`` (unit variance) and, for paper C's
     model, ``frame0_added`` ``(3, 3)``: ``F_0 A_0 F_0' + F_1 A_1 F_1'`` with ``F_a = sum_t M_t'
@@ -455,6 +456,7 @@ def _relinearised(
     system = np.empty((k, k))
     correction = np.empty(k)
     gains = np.empty((2, 3, 3))
+    relative, local = _proximal_frames(r0, r1, y)
     iterations, step = 0, np.inf
     for iteration in range(1, max_iterations + 1):
         iterations = iteration
@@ -464,7 +466,7 @@ def _relinearised(
             point_covariance_into(
                 state[at : at + 3], means[a], inertia_invs[a], counts[a], at_joint[a]
             )
-        _frame_normal(r0, r1, y, at_joint, state, frame0, system, gradient)
+        _frame_normal(relative, local, at_joint, state, frame0, system, gradient)
         if frame0:
             for a in range(2):
                 if inverse3_into(at_joint[a], precisions[a]) == 0.0:
@@ -485,7 +487,7 @@ def _relinearised(
             step = max(step, length)
         if not step > tol_mm:  # NaN stops too
             break
-    chi2 = _frame_chi2(r0, r1, y, at_joint, state, frame0, gains)
+    chi2 = _frame_chi2(relative, local, at_joint, state, frame0, gains)
     if frame0:
         for a in range(2):
             at = 3 + 3 * a
@@ -506,10 +508,28 @@ def _relinearised(
 
 
 @kernel
+def _proximal_frames(r0: np.ndarray, r1: np.ndarray, y: np.ndarray) -> tuple:
+    """Each frame's relative rotation ``Q_t = R0' R1`` ``(N-1, 3, 3)`` and ``z_t = R0' y_t``
+    ``(N-1, 3)`` [mm], the constraint in the proximal body frame: ``R0' h_t = c0 - Q_t c1 -
+    z_t``, ``R0' W_t R0 = A_0 + Q_t A_1 Q_t'``, so that ``B_t' W_t^-1 B_t`` and ``B_t' W_t^-1
+    e_t`` (:func:`_frame_normal`) need one ``3 x 3`` inverse and no product with ``R0``. A
+    compiled kernel."""
+    n_steps = y.shape[0]
+    relative = np.empty((n_steps, 3, 3))
+    local = np.empty((n_steps, 3))
+    for t in range(n_steps):
+        for i in range(3):
+            for j in range(3):
+                turned = r0[t, 0, i] * r1[t, 0, j] + r0[t, 1, i] * r1[t, 1, j]
+                relative[t, i, j] = turned + r0[t, 2, i] * r1[t, 2, j]
+            local[t, i] = r0[t, 0, i] * y[t, 0] + r0[t, 1, i] * y[t, 1] + r0[t, 2, i] * y[t, 2]
+    return relative, local
+
+
+@kernel
 def _frame_normal(
-    r0: np.ndarray,
-    r1: np.ndarray,
-    y: np.ndarray,
+    relative: np.ndarray,
+    local: np.ndarray,
     at_joint: np.ndarray,
     state: np.ndarray,
     frame0: bool,
@@ -521,24 +541,28 @@ def _frame_normal(
     ``gradient`` ``(k,)``: ``sum_t B_t' W_t^-1 B_t`` and ``sum_t B_t' W_t^-1 e_t`` with rows
     ``B_t`` (``M_t``, or ``[R0, -R1]`` for the frame-0 model) and residuals ``e_t = y_t - B_t
     x`` at the current unknowns ``x``, weights ``W_t^-1`` of the point covariances
-    ``at_joint`` ``(2, 3, 3)`` (:func:`_frame_weight`). A compiled kernel."""
+    ``at_joint`` ``(2, 3, 3)``. Each frame's terms are taken in its proximal body frame
+    (:func:`_proximal_frames`: ``relative`` ``Q_t``, ``local`` ``z_t``): with ``V_t = (R0' W_t
+    R0)^-1`` (:func:`_local_weight`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
+    ``R0' e_t = z_t - [I, -Q_t] x``, so ``B_t' W_t^-1 B_t = [I, -Q_t]' V_t [I, -Q_t]``. A
+    compiled kernel."""
     system[:, :] = 0.0
     gradient[:] = 0.0
-    for t in range(y.shape[0]):
-        weight = _frame_weight(r0[t], r1[t], at_joint[0], at_joint[1])
+    for t in range(local.shape[0]):
+        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
+        q = _rows9(relative[t])
         if frame0:
-            p0, p1 = _rows9(r0[t]), _rows9(r1[t])
-            residual = _residual(y[t], p0, p1, state[3:6], state[6:9])
-            u0, u1 = _symmetric_times(weight, p0), _symmetric_times(weight, p1)
-            _add_upper(system, 3, 3, _transposed_times(p0, u0), 1.0)
-            _add_block(system, 3, 6, _transposed_times(p0, u1), -1.0)
-            _add_upper(system, 6, 6, _transposed_times(p1, u1), 1.0)
-            _add_vector(gradient, 3, _transposed_applied(u0, residual), 1.0)
-            _add_vector(gradient, 6, _transposed_applied(u1, residual), -1.0)
+            residual = _local_residual(local[t], q, state[3:6], state[6:9])
+            u = _symmetric_times(weight, q)  # V Q
+            _add_upper(system, 3, 3, _symmetric9(weight), 1.0)
+            _add_block(system, 3, 6, u, -1.0)
+            _add_upper(system, 6, 6, _transposed_times(q, u), 1.0)
+            pulled = _symmetric_applied(weight, residual)
+            _add_vector(gradient, 3, pulled, 1.0)
+            _add_vector(gradient, 6, _transposed_applied(q, pulled), -1.0)
         else:
-            m = _difference9(r0[t], r1[t])
-            zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-            residual = _residual(y[t], m, zero, state[0:3], state[0:3])
+            m = _identity_less(q)
+            residual = _local_residual(local[t], q, state[0:3], state[0:3])
             u = _symmetric_times(weight, m)
             _add_upper(system, 0, 0, _transposed_times(m, u), 1.0)
             _add_vector(gradient, 0, _transposed_applied(u, residual), 1.0)
@@ -550,9 +574,8 @@ def _frame_normal(
 
 @kernel
 def _frame_chi2(
-    r0: np.ndarray,
-    r1: np.ndarray,
-    y: np.ndarray,
+    relative: np.ndarray,
+    local: np.ndarray,
     at_joint: np.ndarray,
     state: np.ndarray,
     frame0: bool,
@@ -560,37 +583,35 @@ def _frame_chi2(
 ) -> float:
     """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, weights of the point covariances
     ``at_joint`` (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1
-    R_a(t)`` into ``gains`` ``(2, 3, 3)``. A compiled kernel."""
+    R_a(t)`` into ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I -
+    Q_t)' V_t Q_t``. A compiled kernel."""
     chi2 = 0.0
     gains[:, :, :] = 0.0
-    for t in range(y.shape[0]):
-        weight = _frame_weight(r0[t], r1[t], at_joint[0], at_joint[1])
-        p0, p1 = _rows9(r0[t]), _rows9(r1[t])
+    for t in range(local.shape[0]):
+        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
+        q = _rows9(relative[t])
         if frame0:
-            residual = _residual(y[t], p0, p1, state[3:6], state[6:9])
+            residual = _local_residual(local[t], q, state[3:6], state[6:9])
         else:
-            m = _difference9(r0[t], r1[t])
-            zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-            residual = _residual(y[t], m, zero, state[0:3], state[0:3])
-            u = _symmetric_times(weight, m)
-            _add_block(gains[0], 0, 0, _transposed_times(u, p0), 1.0)
-            _add_block(gains[1], 0, 0, _transposed_times(u, p1), 1.0)
+            residual = _local_residual(local[t], q, state[0:3], state[0:3])
+            u = _symmetric_times(weight, _identity_less(q))
+            _add_block(gains[0], 0, 0, _transposed9(u), 1.0)
+            _add_block(gains[1], 0, 0, _transposed_times(u, q), 1.0)
         weighted = _symmetric_applied(weight, residual)
         chi2 += residual[0] * weighted[0] + residual[1] * weighted[1] + residual[2] * weighted[2]
     return chi2
 
 
 @kernel
-def _frame_weight(r0: np.ndarray, r1: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple:
-    """The upper triangle ``(w00, w01, w02, w11, w12, w22)`` of one frame's weight
-    ``W_t^-1``, ``W_t = R0 A_0 R0' + R1 A_1 R1'`` (:func:`constraint_covariance`), of the
-    frame's rotations ``(3, 3)`` and the point covariances ``A_a`` ``(3, 3)``; its inverse
-    from the cofactors, as :func:`jointbench.numerics.small.inverse3` forms it. A compiled
-    kernel."""
-    p00, p01, p02, p11, p12, p22 = rotated3_upper(r0, a0)
-    q00, q01, q02, q11, q12, q22 = rotated3_upper(r1, a1)
-    s00, s01, s02 = p00 + q00, p01 + q01, p02 + q02
-    s11, s12, s22 = p11 + q11, p12 + q12, p22 + q22
+def _local_weight(relative: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple:
+    """The upper triangle ``(v00, v01, v02, v11, v12, v22)`` of one frame's weight in its
+    proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t A_1 Q_t')^-1``
+    (:func:`constraint_covariance`), of the relative rotation ``Q_t`` ``(3, 3)`` and the point
+    covariances ``A_a`` ``(3, 3)``; the inverse from the cofactors, as
+    :func:`jointbench.numerics.small.inverse3` forms it. A compiled kernel."""
+    q00, q01, q02, q11, q12, q22 = rotated3_upper(relative, a1)
+    s00, s01, s02 = a0[0, 0] + q00, a0[0, 1] + q01, a0[0, 2] + q02
+    s11, s12, s22 = a0[1, 1] + q11, a0[1, 2] + q12, a0[2, 2] + q22
     inverse = inverse3_entries(s00, s01, s02, s01, s11, s12, s02, s12, s22)
     return inverse[0], inverse[1], inverse[2], inverse[4], inverse[5], inverse[8]
 
@@ -606,32 +627,35 @@ def _rows9(a: np.ndarray) -> tuple:
 
 
 @kernel
-def _difference9(a: np.ndarray, b: np.ndarray) -> tuple:
-    """``a - b`` of ``(3, 3)`` matrices as 9 numbers by rows. A compiled kernel."""
+def _identity_less(q: tuple) -> tuple:
+    """``I - Q`` of a 9-number matrix. A compiled kernel."""
     return (
-        a[0, 0] - b[0, 0],
-        a[0, 1] - b[0, 1],
-        a[0, 2] - b[0, 2],
-        a[1, 0] - b[1, 0],
-        a[1, 1] - b[1, 1],
-        a[1, 2] - b[1, 2],
-        a[2, 0] - b[2, 0],
-        a[2, 1] - b[2, 1],
-        a[2, 2] - b[2, 2],
+        1.0 - q[0],
+        -q[1],
+        -q[2],
+        -q[3],
+        1.0 - q[4],
+        -q[5],
+        -q[6],
+        -q[7],
+        1.0 - q[8],
     )
 
 
 @kernel
-def _residual(y: np.ndarray, a: tuple, b: tuple, u: np.ndarray, v: np.ndarray) -> tuple:
-    """``y - (a u - b v)`` ``(3,)`` for 9-number matrices ``a``, ``b`` and ``(3,)`` vectors. A
-    compiled kernel."""
+def _symmetric9(w: tuple) -> tuple:
+    """A symmetric matrix's upper triangle (6 numbers) as its 9 by rows. A compiled kernel."""
+    return (w[0], w[1], w[2], w[1], w[3], w[4], w[2], w[4], w[5])
+
+
+@kernel
+def _local_residual(z: np.ndarray, q: tuple, u: np.ndarray, v: np.ndarray) -> tuple:
+    """``z - u + Q v`` ``(3,)`` for a 9-number ``Q`` and ``(3,)`` vectors: a frame's residual
+    in its proximal body frame (:func:`_frame_normal`). A compiled kernel."""
     return (
-        y[0]
-        - ((a[0] * u[0] + a[1] * u[1] + a[2] * u[2]) - (b[0] * v[0] + b[1] * v[1] + b[2] * v[2])),
-        y[1]
-        - ((a[3] * u[0] + a[4] * u[1] + a[5] * u[2]) - (b[3] * v[0] + b[4] * v[1] + b[5] * v[2])),
-        y[2]
-        - ((a[6] * u[0] + a[7] * u[1] + a[8] * u[2]) - (b[6] * v[0] + b[7] * v[1] + b[8] * v[2])),
+        z[0] - u[0] + (q[0] * v[0] + q[1] * v[1] + q[2] * v[2]),
+        z[1] - u[1] + (q[3] * v[0] + q[4] * v[1] + q[5] * v[2]),
+        z[2] - u[2] + (q[6] * v[0] + q[7] * v[1] + q[8] * v[2]),
     )
 
 
