@@ -134,6 +134,7 @@ at Nt = 4) is an honest answer, not an error.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -967,20 +968,49 @@ def _constraint_moments(rotations, bodies, points) -> float:
     :data:`_MOMENT_FRAMES` frames and scaled."""
     n_steps = len(rotations[0])
     chosen = _spread_frames(n_steps, _MOMENT_FRAMES)
-    covariances = np.stack([point_covariance(c, b) for c, b in zip(points, bodies, strict=True)])
-    seconds = _local_weight_moments(
-        kernel_array(rotations[0]), kernel_array(rotations[1]), chosen, covariances
-    )
+    arrays = [kernel_array(array) for array in (*rotations, *bodies)]
+    points = kernel_array(np.stack([np.asarray(point, dtype=float) for point in points]))
+    frames = kernel_array(chosen, int)
+    return _constraint_moment_sum(*arrays, frames, points) * n_steps / len(chosen)
+
+
+@kernel
+def _constraint_moment_sum(
+    r0: np.ndarray,
+    r1: np.ndarray,
+    body0: np.ndarray,
+    body1: np.ndarray,
+    frames: np.ndarray,
+    points: np.ndarray,
+) -> float:
+    """The sum of :func:`_constraint_moments` over the ``frames`` ``(k,)`` of the rotations
+    ``R_a`` ``(N-1, 3, 3)``, for the segments' markers ``body0`` ``(n_0, 3)``, ``body1`` ``(n_1,
+    3)`` [mm] and the centre in each, ``points`` ``(2, 3)`` [mm]: per segment and marker, with
+    ``C = B B'`` and ``S`` of :func:`_local_weight_moments`, ``c' S c + 2 sum S[jk, lm] C_kl
+    C_mj``. A compiled kernel."""
+    covariances = np.empty((2, 3, 3))
+    for a in range(2):
+        body = body0 if a == 0 else body1
+        mean, inertia_inv, n = lever_factors(body)
+        point_covariance_into(points[a], mean, inertia_inv, n, covariances[a])
+    seconds = _local_weight_moments(r0, r1, frames, covariances)
     total = 0.0
-    for body, point, second in zip(bodies, points, seconds, strict=True):
-        gains = _marker_gains(kernel_array(np.reshape(point, (1, 3))), kernel_array(body))[0]
-        spread = gains @ np.swapaxes(gains, -1, -2)
-        flat = spread.reshape(-1, 9)
-        total += float(np.einsum("ip,pq,iq->", flat, second, flat))
-        total += 2.0 * float(
-            np.einsum("jklm,ikl,imj->", second.reshape(3, 3, 3, 3), spread, spread)
-        )
-    return total * n_steps / len(chosen)
+    for a in range(2):
+        body = body0 if a == 0 else body1
+        gains = _marker_gains(points[a : a + 1], body)[0]
+        for i in range(body.shape[0]):
+            gain = _rows9(gains[i])
+            spread = _transposed_times(_transposed9(gain), _transposed9(gain))  # B B'
+            for p in range(9):
+                for q in range(9):
+                    total += spread[p] * seconds[a, p, q] * spread[q]
+            for j in range(3):
+                for k in range(3):
+                    for m in range(3):
+                        for o in range(3):
+                            second = seconds[a, 3 * j + k, 3 * m + o]
+                            total += 2.0 * second * spread[3 * k + m] * spread[3 * o + j]
+    return total
 
 
 @kernel
@@ -1021,10 +1051,14 @@ def _local_weight_moments(
 _MOMENT_FRAMES = 256
 
 
+@functools.lru_cache(maxsize=64)
 def _spread_frames(n_frames: int, most: int) -> np.ndarray:
     """At most ``most`` frame indices ``(k,)``, evenly spaced over ``n_frames``, first and last
-    included; every frame when there are no more."""
-    return np.unique(np.linspace(0, n_frames - 1, min(n_frames, most)).round().astype(int))
+    included; every frame when there are no more. Read-only: the same array serves every trial
+    of that many frames."""
+    frames = np.unique(np.linspace(0, n_frames - 1, min(n_frames, most)).round().astype(int))
+    frames.flags.writeable = False
+    return frames
 
 
 def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tuple[float, float]:
