@@ -350,8 +350,9 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
     return _Prepared(
         m=m,
         y=kernel_array(y),
-        r0=kernel_array(prox.rotation[1:]),
-        r1=kernel_array(dist.rotation[1:]),
+        # The poses' arrays are read-only and C-contiguous, as kernels take them: not copied.
+        r0=prox.rotation[1:],
+        r1=dist.rotation[1:],
         means=np.stack([lever[0] for lever in levers]),
         inertia_invs=np.stack([lever[1] for lever in levers]),
         counts=np.array([lever[2] for lever in levers]),
@@ -968,10 +969,10 @@ def _constraint_moments(rotations, bodies, points) -> float:
     :data:`_MOMENT_FRAMES` frames and scaled."""
     n_steps = len(rotations[0])
     chosen = _spread_frames(n_steps, _MOMENT_FRAMES)
-    arrays = [kernel_array(array) for array in (*rotations, *bodies)]
-    points = kernel_array(np.stack([np.asarray(point, dtype=float) for point in points]))
-    frames = kernel_array(chosen, int)
-    return _constraint_moment_sum(*arrays, frames, points) * n_steps / len(chosen)
+    # Contiguous, but not copied where read-only (the poses' arrays, the shared frames).
+    arrays = [np.ascontiguousarray(array, dtype=float) for array in (*rotations, *bodies)]
+    points = np.stack([np.asarray(point, dtype=float) for point in points])
+    return _constraint_moment_sum(*arrays, chosen, points) * n_steps / len(chosen)
 
 
 @kernel
@@ -1068,17 +1069,14 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     fourth, gaussian, excess = 0.0, 0.0, 0.0
     for poses in segments:
         fourth += _residual_fourth_powers(
-            kernel_array(poses.markers),
-            kernel_array(poses.rotation),
-            kernel_array(poses.translation),
-            kernel_array(poses.body),
+            poses.markers, poses.rotation, poses.translation, poses.body
         )
         # The body-fixed coordinates, fitted to all N frames, shrink each frame's residuals by
         # about (N - 1) / N (the residual dof are (3 n - 6)(N - 1), not (3 n - 6) N): second
         # moments by its square, fourth cumulants by its fourth power.
         n_frames = len(poses.markers)
         shrink = (n_frames - 1) / n_frames
-        g, f = _residual_moments(kernel_array(poses.body))
+        g, f = _residual_moments(poses.body)
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian
