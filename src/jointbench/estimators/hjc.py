@@ -254,8 +254,10 @@ def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
     """Eq. 9 for trials ``m`` ``(T, N-1, 3, 3)``, ``y`` ``(T, N-1, 3)``: centres ``c``
     ``(T, 3)`` [mm], ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of
     degenerate motion (the centre of such a trial is not used)."""
-    normal = np.einsum("tfki,tfkj->tij", m, m)
-    rhs = np.einsum("tfki,tfk->ti", m, y)
+    # The frames' 3 x 3 blocks stacked as one (3 (N-1), 3) matrix per trial: one product each.
+    rows = m.reshape(m.shape[0], -1, 3)
+    normal = np.swapaxes(rows, 1, 2) @ rows
+    rhs = (np.swapaxes(rows, 1, 2) @ y.reshape(y.shape[0], -1, 1))[..., 0]
     values, vectors = np.linalg.eigh(normal)
     errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
     # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
