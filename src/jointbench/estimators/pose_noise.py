@@ -156,7 +156,11 @@ def pose_noise(proximal: NoisyPoses, distal: NoisyPoses) -> list[PoseNoise]:
     """Per trial, the :class:`PoseNoise` of the ``proximal`` and ``distal`` segments' poses
     (module docstring: ``M``, ``B`` and the share)."""
     n_frames = proximal.rotation.shape[1]
-    relative_sum = np.einsum("tkji,tkjl->til", proximal.rotation, distal.rotation)
+    # sum_k R_p(k)' R_d(k): the frames' rotations stacked as one (3 N, 3) matrix per trial.
+    n_trials = proximal.rotation.shape[0]
+    relative_sum = np.swapaxes(proximal.rotation.reshape(n_trials, -1, 3), 1, 2) @ (
+        distal.rotation.reshape(n_trials, -1, 3)
+    )
     g_p, g_d = _shrinkage(proximal), _shrinkage(distal)
     attenuation = np.block(
         [
