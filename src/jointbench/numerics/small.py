@@ -1,8 +1,10 @@
 """Small matrices: LAPACK and ``matmul`` spend microseconds of call overhead per 3 x 3 matrix, the
 arithmetic takes nanoseconds.
 
-Stacks of 3 x 3 matrices, element-wise (``float64`` arrays shaped ``(..., 3, 3)``), and the
-eigen-decomposition of one small symmetric matrix inside a compiled kernel.
+Stacks of 3 x 3 matrices (``float64`` arrays shaped ``(..., 3, 3)``) through kernels that
+treat one matrix at a time, which other kernels call per frame (the inverse, ``R M R'``, as
+arrays or as numbers that stay in registers), and the eigen-decomposition of one small
+symmetric matrix inside a compiled kernel.
 """
 
 from __future__ import annotations
