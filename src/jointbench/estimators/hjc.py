@@ -149,7 +149,7 @@ from jointbench.estimators.pose_noise import (
     centre_covariance,
     lever_factors,
     point_covariance,
-    point_covariance_at,
+    point_covariance_into,
 )
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import (
@@ -160,7 +160,6 @@ from jointbench.estimators.results import (
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
-    pose_residuals,
     precision_on_poses,
 )
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING
@@ -174,10 +173,16 @@ from jointbench.estimators.twosegment import (
     score_scattered,
     trial_outcomes,
 )
-from jointbench.geometry import skew
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
-from jointbench.numerics.small import inverse3, rotated3
+from jointbench.numerics.small import (
+    inverse3_entries,
+    inverse3_into,
+    rotated3,
+    rotated3_into,
+    rotated3_upper,
+)
 
 __all__ = [
     "MAX_NOISE_KURTOSIS",
@@ -249,8 +254,10 @@ def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
     """Eq. 9 for trials ``m`` ``(T, N-1, 3, 3)``, ``y`` ``(T, N-1, 3)``: centres ``c``
     ``(T, 3)`` [mm], ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of
     degenerate motion (the centre of such a trial is not used)."""
-    normal = np.einsum("tfki,tfkj->tij", m, m)
-    rhs = np.einsum("tfki,tfk->ti", m, y)
+    # The frames' 3 x 3 blocks stacked as one (3 (N-1), 3) matrix per trial: one product each.
+    rows = m.reshape(m.shape[0], -1, 3)
+    normal = np.swapaxes(rows, 1, 2) @ rows
+    rhs = (np.swapaxes(rows, 1, 2) @ y.reshape(y.shape[0], -1, 1))[..., 0]
     values, vectors = np.linalg.eigh(normal)
     errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
     # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
@@ -315,15 +322,6 @@ def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult
     )
 
 
-def _weights(r0, r1, a0, a1) -> np.ndarray:
-    return inverse3(constraint_covariance(r0, a0, r1, a1))
-
-
-# Trials per Gauss–Markov batch: about this many frames in all, so that a batch's
-# (trials, frames, 3, 3) temporaries stay in cache and memory does not grow with the trials.
-_CHUNK_FRAMES = 8192
-
-
 @dataclass(frozen=True)
 class _Prepared:
     """One trial's Gauss–Markov system before iterating (frames ``t >= 1``)."""
@@ -332,8 +330,9 @@ class _Prepared:
     y: np.ndarray  # (N-1, 3) [mm]
     r0: np.ndarray  # (N-1, 3, 3)
     r1: np.ndarray  # (N-1, 3, 3)
-    lever0: tuple[np.ndarray, np.ndarray, int]
-    lever1: tuple[np.ndarray, np.ndarray, int]
+    means: np.ndarray  # (2, 3) [mm], the segments' lever factors (pose_noise.lever_factors)
+    inertia_invs: np.ndarray  # (2, 3, 3) [mm^-2]
+    counts: np.ndarray  # (2,), markers per segment
     analytic_center: np.ndarray  # (3,) [mm]
     variance: float  # s^2 [mm^2]
     diagnostics: dict
@@ -349,13 +348,16 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
         raise errors[0]
     analytic_center, rcond = centers[0], float(rconds[0])
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
+    levers = (lever_factors(prox.body), lever_factors(dist.body))
     return _Prepared(
         m=m,
-        y=y,
+        y=kernel_array(y),
+        # The poses' arrays are read-only and C-contiguous, as kernels take them: not copied.
         r0=prox.rotation[1:],
         r1=dist.rotation[1:],
-        lever0=lever_factors(prox.body),
-        lever1=lever_factors(dist.body),
+        means=np.stack([lever[0] for lever in levers]),
+        inertia_invs=np.stack([lever[1] for lever in levers]),
+        counts=np.array([lever[2] for lever in levers]),
         analytic_center=analytic_center,
         variance=variance,
         diagnostics={
@@ -369,228 +371,433 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
 
 
 @dataclass(frozen=True)
-class _Stacked:
-    """The systems of trials with the same frames, stacked on a leading trial axis."""
-
-    m: np.ndarray  # (T, N-1, 3, 3)
-    y: np.ndarray  # (T, N-1, 3)
-    r0: np.ndarray
-    r1: np.ndarray
-    levers: tuple[tuple[np.ndarray, np.ndarray, int], tuple[np.ndarray, np.ndarray, int]]
-
-    @classmethod
-    def of(cls, trials: list[_Prepared]) -> _Stacked:
-        def lever(segment: str):
-            factors = [getattr(trial, segment) for trial in trials]
-            return (
-                np.stack([f[0] for f in factors]),
-                np.stack([f[1] for f in factors]),
-                factors[0][2],
-            )
-
-        return cls(
-            m=np.stack([t.m for t in trials]),
-            y=np.stack([t.y for t in trials]),
-            r0=np.stack([t.r0 for t in trials]),
-            r1=np.stack([t.r1 for t in trials]),
-            levers=(lever("lever0"), lever("lever1")),
-        )
-
-    @functools.cached_property
-    def design(self) -> np.ndarray:
-        """``[R0, -R1]`` ``(T, N-1, 3, 6)``, acting on ``[c0; c1]``: the frame-0 model."""
-        return np.concatenate([self.r0, -self.r1], axis=-1)
-
-    def point_covariances(self, trials: np.ndarray, c0: np.ndarray, c1: np.ndarray):
-        """``A_0(c0)``, ``A_1(c1)`` per unit variance of ``trials`` ``(t,)``: ``(t, 3, 3)``."""
-        (mean0, inverse0, n0), (mean1, inverse1, n1) = self.levers
-        return (
-            point_covariance_at(c0, mean0[trials], inverse0[trials], n0),
-            point_covariance_at(c1, mean1[trials], inverse1[trials], n1),
-        )
-
-
-def _rows(stack: np.ndarray) -> np.ndarray:
-    """Per-frame blocks ``(t, F, 3, k)`` as one ``(t, 3 F, k)`` matrix per trial."""
-    t, n_frames, _, k = stack.shape
-    return stack.reshape(t, 3 * n_frames, k)
-
-
-def _summed_products(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``sum_f a_f' b_f`` for ``(t, F, 3, k)`` and ``(t, F, 3, l)``: ``(t, k, l)``, one matrix
-    product per trial."""
-    return np.swapaxes(_rows(a), -1, -2) @ _rows(b)
-
-
-def _applied(a: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``a_f x`` for ``(t, F, 3, k)`` and ``(t, k)``: ``(t, F, 3)``."""
-    return (_rows(a) @ x[..., None]).reshape(a.shape[:3])
-
-
-def _projected(a: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """``sum_f a_f' r_f`` for ``(t, F, 3, k)`` and ``(t, F, 3)``: ``(t, k)``."""
-    return (np.swapaxes(_rows(a), -1, -2) @ r.reshape(r.shape[0], -1, 1))[..., 0]
-
-
-def _solve(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """``A x = b`` for ``(t, k, k)`` and ``(t, k)``."""
-    return np.linalg.solve(matrices, vectors[..., None])[..., 0]
-
-
-def _update_single(system: _Stacked):
-    """One re-linearisation of paper C's model for ``trials`` at ``centers`` ``(t, 3)``."""
-
-    def update(trials: np.ndarray, centers: np.ndarray):
-        m, y = system.m[trials], system.y[trials]
-        at_joint = system.point_covariances(trials, centers, centers)
-        weights = _weights(system.r0[trials], system.r1[trials], *at_joint)
-        weighted = weights @ m
-        information = _summed_products(m, weighted)
-        # Solved for the correction from the residuals, which keeps full precision when the
-        # residuals are tiny (noise-free data) however large the coordinates.
-        residual = y - _applied(m, centers)
-        correction = _solve(information, _projected(weighted, residual))
-        kept = {"weights": weights, "a0": at_joint[0], "a1": at_joint[1]}
-        return correction, np.linalg.norm(correction, axis=1), information, kept
-
-    return update
-
-
-def _update_frame0(system: _Stacked):
-    """One re-linearisation of the frame-0 model for ``trials`` at ``states`` ``(t, 9)``:
-    unknowns ``(c, c0, c1)``."""
-
-    def update(trials: np.ndarray, states: np.ndarray):
-        a0, a1 = system.point_covariances(trials, states[:, 3:6], states[:, 6:])
-        weights = _weights(system.r0[trials], system.r1[trials], a0, a1)
-        rows = system.design[trials]
-        weighted = weights @ rows
-        p0, p1 = np.linalg.inv(a0), np.linalg.inv(a1)
-        information = np.zeros((len(trials), 9, 9))
-        information[:, 3:, 3:] = _summed_products(rows, weighted)
-        # Pseudo-measurements c0 - c = 0 (cov A0) and c1 - c = 0 (cov A1): the frame-0 placement.
-        information[:, :3, :3] = p0 + p1
-        information[:, :3, 3:6] = information[:, 3:6, :3] = -p0
-        information[:, :3, 6:] = information[:, 6:, :3] = -p1
-        information[:, 3:6, 3:6] += p0
-        information[:, 6:, 6:] += p1
-        # Correction from the residuals (see _update_single).
-        residual = system.y[trials] - _applied(rows, states[:, 3:])
-        pull0 = (p0 @ (states[:, 3:6] - states[:, :3])[..., None])[..., 0]
-        pull1 = (p1 @ (states[:, 6:] - states[:, :3])[..., None])[..., 0]
-        gradient = np.empty((len(trials), 9))
-        gradient[:, :3] = pull0 + pull1
-        gradient[:, 3:] = _projected(weighted, residual)
-        gradient[:, 3:6] -= pull0
-        gradient[:, 6:] -= pull1
-        correction = _solve(information, gradient)
-        step = np.max(np.linalg.norm(correction.reshape(-1, 3, 3), axis=2), axis=1)
-        return correction, step, information, {"weights": weights, "p0": p0, "p1": p1}
-
-    return update
-
-
-@dataclass
 class _Iterated:
-    """Where paper C's re-linearisation left each trial of a stack."""
+    """Where paper C's re-linearisation left one trial (:func:`_relinearised`)."""
 
-    state: np.ndarray  # (T, k): c, or (c, c0, c1)
-    information: np.ndarray  # (T, k, k), of the last iteration, unit variance
-    kept: dict[str, np.ndarray]  # the last iteration's weights (and p0, p1)
-    iterations: np.ndarray  # (T,)
-    step: np.ndarray  # (T,) [mm], the last correction
-    errors: dict[int, str]  # trial -> LinAlgError text
+    state: np.ndarray  # (k,): c, or (c, c0, c1) [mm]
+    information: np.ndarray  # (k, k), of the last iteration, unit variance
+    iterations: int
+    step: float  # [mm], the last correction
+    singular: bool  # the last iteration's system was singular: no answer
+    chi2: float  # at the final state, unit variance
+    frame0_added: np.ndarray | None  # (3, 3), paper C's model only (_relinearised)
 
 
-def _relinearise(update, state: np.ndarray, max_iterations: int, tol_mm: float) -> _Iterated:
-    """Paper C's re-linearisation for stacked trials in lockstep, from ``state`` ``(T, k)``.
-
-    Each trial stops once its own correction is at most ``tol_mm`` (or at ``max_iterations``),
-    so its answer does not depend on the others'. A singular system (``LinAlgError``) among
-    the trials of an iteration is found by redoing that iteration one trial at a time; that
-    trial stops with its error, the others go on.
-    """
-    n_trials, k = state.shape
-    done = _Iterated(
-        state=state.copy(),
-        information=np.full((n_trials, k, k), np.nan),
-        kept={},
-        iterations=np.zeros(n_trials, dtype=int),
-        step=np.full(n_trials, np.inf),
-        errors={},
+def _iterated(trial: _Prepared, *, frame0: bool, max_iterations: int, tol_mm: float):
+    """Paper C's re-linearisation of one ``trial`` from its analytic centre
+    (:func:`_relinearised`), for its own model or, ``frame0``, the frame-0 model."""
+    k = 9 if frame0 else 3
+    state = np.tile(trial.analytic_center, k // 3)
+    information = np.full((k, k), np.nan)
+    frame0_added = np.full((3, 3), np.nan)
+    iterations, step, singular, chi2 = _relinearised(
+        trial.r0,
+        trial.r1,
+        trial.y,
+        trial.means,
+        trial.inertia_invs,
+        trial.counts,
+        frame0,
+        int(max_iterations),
+        float(tol_mm),
+        state,
+        information,
+        frame0_added,
     )
-    active = np.arange(n_trials)
+    return _Iterated(
+        state=state,
+        information=information,
+        iterations=iterations,
+        step=step,
+        singular=singular,
+        chi2=chi2,
+        frame0_added=None if frame0 else frame0_added,
+    )
+
+
+@kernel
+def _relinearised(
+    r0: np.ndarray,
+    r1: np.ndarray,
+    y: np.ndarray,
+    means: np.ndarray,
+    inertia_invs: np.ndarray,
+    counts: np.ndarray,
+    frame0: bool,
+    max_iterations: int,
+    tol_mm: float,
+    state: np.ndarray,
+    information: np.ndarray,
+    frame0_added: np.ndarray,
+) -> tuple:
+    """Paper C's re-linearisation of one trial (eqs. 11–23, module docstring) from ``state``
+    ``(k,)`` [mm], iterated in place until the correction is at most ``tol_mm`` (each of the
+    centre's three points at most, for the frame-0 model) or for ``max_iterations``.
+
+    ``r0``, ``r1`` ``(N-1, 3, 3)`` and ``y = d1 - d0`` ``(N-1, 3)`` [mm] are the poses of the
+    frames ``t >= 1``; ``means`` ``(2, 3)``, ``inertia_invs`` ``(2, 3, 3)`` and ``counts`` ``(2,)``
+    the segments' lever factors (:func:`jointbench.estimators.pose_noise.lever_factors`).
+    Paper C's model (``frame0`` false): unknown ``c`` (``k = 3``), rows ``M_t = R0 - R1``. The
+    frame-0 model: unknowns ``(c, c0, c1)`` (``k = 9``), rows ``[R0, -R1]`` acting on ``(c0,
+    c1)`` and the pseudo-measurements ``c0 - c = 0``, ``c1 - c = 0`` of covariances ``A_0(c0)``,
+    ``A_1(c1)``. Each iteration weighs every frame by ``W_t^-1`` at the current state and
+    accumulates the normal equations in one pass over the frames, each frame's terms in its
+    proximal body frame (:func:`_frame_normal`); the correction is solved from the residuals,
+    which keeps full precision when they are tiny (noise-free data) however large the
+    coordinates.
+
+    Writes the last iteration's ``information`` ``(k, k)`` (unit variance) and, for paper C's
+    model, ``frame0_added`` ``(3, 3)``: ``F_0 A_0 F_0' + F_1 A_1 F_1'`` with ``F_a = sum_t M_t'
+    W_t^-1 R_a(t)`` at the weights of the last iteration, what the frame-0 poses' errors add
+    (module docstring, "Frame 0"). Returns ``(iterations, step [mm], singular, chi2)``:
+    ``singular`` where a normal matrix had an exactly zero pivot (the trial stops there, with no
+    answer), ``chi2`` ``sum_t r_t' W_t^-1 r_t`` (plus the frame-0 terms) at the final state with
+    the last iteration's weights, unit variance. A compiled kernel."""
+    k = state.shape[0]
+    at_joint = np.empty((2, 3, 3))
+    precisions = np.empty((2, 3, 3))
+    gradient = np.empty(k)
+    system = np.empty((k, k))
+    correction = np.empty(k)
+    gains = np.empty((2, 3, 3))
+    relative, local = _proximal_frames(r0, r1, y)
+    iterations, step = 0, np.inf
     for iteration in range(1, max_iterations + 1):
-        if active.size == 0:
+        iterations = iteration
+        for a in range(2):
+            # A_a at the centre as segment a places it: c, or c0 and c1.
+            at = 3 + 3 * a if frame0 else 0
+            point_covariance_into(
+                state[at : at + 3], means[a], inertia_invs[a], counts[a], at_joint[a]
+            )
+        _frame_normal(relative, local, at_joint, state, frame0, system, gradient)
+        if frame0:
+            for a in range(2):
+                if inverse3_into(at_joint[a], precisions[a]) == 0.0:
+                    return iterations, step, True, np.nan
+            _pseudo_measurements(precisions, state, system, gradient)
+        information[:, :] = system
+        if not _solved(system, gradient, correction):
+            return iterations, step, True, np.nan
+        step = 0.0
+        for point in range(k // 3):
+            for i in range(3):
+                state[3 * point + i] += correction[3 * point + i]
+            length = np.sqrt(
+                correction[3 * point] ** 2
+                + correction[3 * point + 1] ** 2
+                + correction[3 * point + 2] ** 2
+            )
+            step = max(step, length)
+        if not step > tol_mm:  # NaN stops too
             break
-        done.iterations[active] = iteration
-        try:
-            parts = [(active, update(active, done.state[active]))]
-        except np.linalg.LinAlgError:
-            parts = []
-            for trial in active:
-                try:
-                    parts.append(
-                        (np.array([trial]), update(np.array([trial]), done.state[[trial]]))
-                    )
-                except np.linalg.LinAlgError as error:
-                    done.errors[int(trial)] = str(error)
-        for trials, (correction, step, information, kept) in parts:
-            done.state[trials] += correction
-            done.step[trials] = step
-            done.information[trials] = information
-            for name, value in kept.items():
-                if name not in done.kept:
-                    done.kept[name] = np.full((n_trials, *value.shape[1:]), np.nan)
-                done.kept[name][trials] = value
-        still = np.concatenate([trials[step > tol_mm] for trials, (_, step, _, _) in parts] or [[]])
-        active = np.sort(still.astype(int))
-    return done
+    chi2 = _frame_chi2(relative, local, at_joint, state, frame0, gains)
+    if frame0:
+        for a in range(2):
+            at = 3 + 3 * a
+            for i in range(3):
+                for j in range(3):
+                    offsets = (state[at + i] - state[i]) * (state[at + j] - state[j])
+                    chi2 += offsets * precisions[a, i, j]
+    else:
+        frame0_added[:, :] = 0.0
+        for a in range(2):
+            for i in range(3):
+                for j in range(3):
+                    for p in range(3):
+                        for q in range(3):
+                            added = gains[a, i, p] * at_joint[a, p, q] * gains[a, j, q]
+                            frame0_added[i, j] += added
+    return iterations, step, False, chi2
 
 
-def _chi2(system: _Stacked, done: _Iterated, frame0: bool) -> np.ndarray:
-    """``sum_t r_t' W_t^-1 r_t`` at the final state (plus the frame-0 terms), unit variance;
-    NaN for a trial stopped by a singular system before any iteration completed."""
-    if "weights" not in done.kept:
-        return np.full(len(done.state), np.nan)
-    weights = done.kept["weights"]
-    if not frame0:
-        residual = system.y - _applied(system.m, done.state)
-        return np.einsum("tfi,tfij,tfj->t", residual, weights, residual)
-    residual = system.y - _applied(system.design, done.state[:, 3:])
-    chi2 = np.einsum("tfi,tfij,tfj->t", residual, weights, residual)
-    for segment, unknowns in (("p0", slice(3, 6)), ("p1", slice(6, 9))):
-        offset = done.state[:, unknowns] - done.state[:, :3]
-        chi2 = chi2 + np.einsum("ti,tij,tj->t", offset, done.kept[segment], offset)
+@kernel
+def _proximal_frames(r0: np.ndarray, r1: np.ndarray, y: np.ndarray) -> tuple:
+    """Each frame's relative rotation ``Q_t = R0' R1`` ``(N-1, 3, 3)`` and ``z_t = R0' y_t``
+    ``(N-1, 3)`` [mm], the constraint in the proximal body frame: ``R0' h_t = c0 - Q_t c1 -
+    z_t``, ``R0' W_t R0 = A_0 + Q_t A_1 Q_t'``, so that ``B_t' W_t^-1 B_t`` and ``B_t' W_t^-1
+    e_t`` (:func:`_frame_normal`) need one ``3 x 3`` inverse and no product with ``R0``. A
+    compiled kernel."""
+    n_steps = y.shape[0]
+    relative = np.empty((n_steps, 3, 3))
+    local = np.empty((n_steps, 3))
+    for t in range(n_steps):
+        for i in range(3):
+            for j in range(3):
+                turned = r0[t, 0, i] * r1[t, 0, j] + r0[t, 1, i] * r1[t, 1, j]
+                relative[t, i, j] = turned + r0[t, 2, i] * r1[t, 2, j]
+            local[t, i] = r0[t, 0, i] * y[t, 0] + r0[t, 1, i] * y[t, 1] + r0[t, 2, i] * y[t, 2]
+    return relative, local
+
+
+@kernel
+def _frame_normal(
+    relative: np.ndarray,
+    local: np.ndarray,
+    at_joint: np.ndarray,
+    state: np.ndarray,
+    frame0: bool,
+    system: np.ndarray,
+    gradient: np.ndarray,
+) -> None:
+    """The frames' part of one iteration's normal equations (:func:`_relinearised`), written
+    into ``system`` ``(k, k)`` (both triangles; zero where the pseudo-measurements go) and
+    ``gradient`` ``(k,)``: ``sum_t B_t' W_t^-1 B_t`` and ``sum_t B_t' W_t^-1 e_t`` with rows
+    ``B_t`` (``M_t``, or ``[R0, -R1]`` for the frame-0 model) and residuals ``e_t = y_t - B_t
+    x`` at the current unknowns ``x``, weights ``W_t^-1`` of the point covariances
+    ``at_joint`` ``(2, 3, 3)``. Each frame's terms are taken in its proximal body frame
+    (:func:`_proximal_frames`: ``relative`` ``Q_t``, ``local`` ``z_t``): with ``V_t = (R0' W_t
+    R0)^-1`` (:func:`_local_weight`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
+    ``R0' e_t = z_t - [I, -Q_t] x``, so ``B_t' W_t^-1 B_t = [I, -Q_t]' V_t [I, -Q_t]``. A
+    compiled kernel."""
+    system[:, :] = 0.0
+    gradient[:] = 0.0
+    for t in range(local.shape[0]):
+        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
+        q = _rows9(relative[t])
+        if frame0:
+            residual = _local_residual(local[t], q, state[3:6], state[6:9])
+            u = _symmetric_times(weight, q)  # V Q
+            _add_upper(system, 3, 3, _symmetric9(weight), 1.0)
+            _add_block(system, 3, 6, u, -1.0)
+            _add_upper(system, 6, 6, _transposed_times(q, u), 1.0)
+            pulled = _symmetric_applied(weight, residual)
+            _add_vector(gradient, 3, pulled, 1.0)
+            _add_vector(gradient, 6, _transposed_applied(q, pulled), -1.0)
+        else:
+            m = _identity_less(q)
+            residual = _local_residual(local[t], q, state[0:3], state[0:3])
+            u = _symmetric_times(weight, m)
+            _add_upper(system, 0, 0, _transposed_times(m, u), 1.0)
+            _add_vector(gradient, 0, _transposed_applied(u, residual), 1.0)
+    first = 3 if frame0 else 0
+    for i in range(first, system.shape[0]):
+        for j in range(i + 1, system.shape[0]):
+            system[j, i] = system[i, j]
+
+
+@kernel
+def _frame_chi2(
+    relative: np.ndarray,
+    local: np.ndarray,
+    at_joint: np.ndarray,
+    state: np.ndarray,
+    frame0: bool,
+    gains: np.ndarray,
+) -> float:
+    """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, weights of the point covariances
+    ``at_joint`` (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1
+    R_a(t)`` into ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I -
+    Q_t)' V_t Q_t``. A compiled kernel."""
+    chi2 = 0.0
+    gains[:, :, :] = 0.0
+    for t in range(local.shape[0]):
+        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
+        q = _rows9(relative[t])
+        if frame0:
+            residual = _local_residual(local[t], q, state[3:6], state[6:9])
+        else:
+            residual = _local_residual(local[t], q, state[0:3], state[0:3])
+            u = _symmetric_times(weight, _identity_less(q))
+            _add_block(gains[0], 0, 0, _transposed9(u), 1.0)
+            _add_block(gains[1], 0, 0, _transposed_times(u, q), 1.0)
+        weighted = _symmetric_applied(weight, residual)
+        chi2 += residual[0] * weighted[0] + residual[1] * weighted[1] + residual[2] * weighted[2]
     return chi2
 
 
-def _frame0_information(system: _Stacked, done: _Iterated) -> np.ndarray:
-    """``F_0 A_0(c) F_0' + F_1 A_1(c) F_1'`` ``(T, 3, 3)`` per unit variance, with ``F_a =
-    sum_t M_t' W_t^-1 R_a(t)``, at the centres ``c`` of a stack's last iteration, where its
-    information and so ``W_c`` were formed (paper C's answers, once converged): what the
-    frame-0 poses' errors add to the information's inverse on both sides (module docstring,
-    "Frame 0"); NaN for a trial stopped before any iteration completed."""
-    if "weights" not in done.kept:
-        return np.full((len(done.state), 3, 3), np.nan)
-    weighted = done.kept["weights"] @ system.m
-    added = np.zeros((len(done.state), 3, 3))
-    for rotations, at_joint in ((system.r0, done.kept["a0"]), (system.r1, done.kept["a1"])):
-        gain = _summed_products(weighted, rotations)
-        added += gain @ at_joint @ np.swapaxes(gain, -1, -2)
-    return added
+@kernel
+def _local_weight(relative: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple:
+    """The upper triangle ``(v00, v01, v02, v11, v12, v22)`` of one frame's weight in its
+    proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t A_1 Q_t')^-1``
+    (:func:`constraint_covariance`), of the relative rotation ``Q_t`` ``(3, 3)`` and the point
+    covariances ``A_a`` ``(3, 3)``; the inverse from the cofactors, as
+    :func:`jointbench.numerics.small.inverse3` forms it. A compiled kernel."""
+    q00, q01, q02, q11, q12, q22 = rotated3_upper(relative, a1)
+    s00, s01, s02 = a0[0, 0] + q00, a0[0, 1] + q01, a0[0, 2] + q02
+    s11, s12, s22 = a0[1, 1] + q11, a0[1, 2] + q12, a0[2, 2] + q22
+    inverse = inverse3_entries(s00, s01, s02, s01, s11, s12, s02, s12, s22)
+    return inverse[0], inverse[1], inverse[2], inverse[4], inverse[5], inverse[8]
 
 
-def _iterated_stack(trials: list[_Prepared], *, frame0: bool, max_iterations, tol_mm):
-    """Iterate a stack of trials with the same frames; returns the iteration, the chi^2 and,
-    for paper C's model, what the frame-0 poses' errors add (:func:`_frame0_information`)."""
-    system = _Stacked.of(trials)
-    start = np.stack([trial.analytic_center for trial in trials])
-    if frame0:
-        done = _relinearise(_update_frame0(system), np.tile(start, 3), int(max_iterations), tol_mm)
-        return done, _chi2(system, done, frame0), None
-    done = _relinearise(_update_single(system), start, int(max_iterations), tol_mm)
-    return done, _chi2(system, done, frame0), _frame0_information(system, done)
+# 3 x 3 matrices as 9 numbers by rows and symmetric ones as their upper triangle's 6, so that a
+# frame's terms stay in registers.
+
+
+@kernel
+def _rows9(a: np.ndarray) -> tuple:
+    """A ``(3, 3)`` matrix as 9 numbers by rows. A compiled kernel."""
+    return (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
+
+
+@kernel
+def _identity_less(q: tuple) -> tuple:
+    """``I - Q`` of a 9-number matrix. A compiled kernel."""
+    return (
+        1.0 - q[0],
+        -q[1],
+        -q[2],
+        -q[3],
+        1.0 - q[4],
+        -q[5],
+        -q[6],
+        -q[7],
+        1.0 - q[8],
+    )
+
+
+@kernel
+def _symmetric9(w: tuple) -> tuple:
+    """A symmetric matrix's upper triangle (6 numbers) as its 9 by rows. A compiled kernel."""
+    return (w[0], w[1], w[2], w[1], w[3], w[4], w[2], w[4], w[5])
+
+
+@kernel
+def _local_residual(z: np.ndarray, q: tuple, u: np.ndarray, v: np.ndarray) -> tuple:
+    """``z - u + Q v`` ``(3,)`` for a 9-number ``Q`` and ``(3,)`` vectors: a frame's residual
+    in its proximal body frame (:func:`_frame_normal`). A compiled kernel."""
+    return (
+        z[0] - u[0] + (q[0] * v[0] + q[1] * v[1] + q[2] * v[2]),
+        z[1] - u[1] + (q[3] * v[0] + q[4] * v[1] + q[5] * v[2]),
+        z[2] - u[2] + (q[6] * v[0] + q[7] * v[1] + q[8] * v[2]),
+    )
+
+
+@kernel
+def _symmetric_times(w: tuple, m: tuple) -> tuple:
+    """``W M`` for a symmetric ``W`` (upper triangle, 6 numbers) and a 9-number ``M``: 9
+    numbers. A compiled kernel."""
+    w00, w01, w02, w11, w12, w22 = w
+    return (
+        w00 * m[0] + w01 * m[3] + w02 * m[6],
+        w00 * m[1] + w01 * m[4] + w02 * m[7],
+        w00 * m[2] + w01 * m[5] + w02 * m[8],
+        w01 * m[0] + w11 * m[3] + w12 * m[6],
+        w01 * m[1] + w11 * m[4] + w12 * m[7],
+        w01 * m[2] + w11 * m[5] + w12 * m[8],
+        w02 * m[0] + w12 * m[3] + w22 * m[6],
+        w02 * m[1] + w12 * m[4] + w22 * m[7],
+        w02 * m[2] + w12 * m[5] + w22 * m[8],
+    )
+
+
+@kernel
+def _symmetric_applied(w: tuple, v: tuple) -> tuple:
+    """``W v`` for a symmetric ``W`` (upper triangle, 6 numbers) and 3 numbers ``v``. A
+    compiled kernel."""
+    w00, w01, w02, w11, w12, w22 = w
+    return (
+        w00 * v[0] + w01 * v[1] + w02 * v[2],
+        w01 * v[0] + w11 * v[1] + w12 * v[2],
+        w02 * v[0] + w12 * v[1] + w22 * v[2],
+    )
+
+
+@kernel
+def _transposed_times(a: tuple, b: tuple) -> tuple:
+    """``A' B`` of 9-number matrices: 9 numbers. A compiled kernel."""
+    return (
+        a[0] * b[0] + a[3] * b[3] + a[6] * b[6],
+        a[0] * b[1] + a[3] * b[4] + a[6] * b[7],
+        a[0] * b[2] + a[3] * b[5] + a[6] * b[8],
+        a[1] * b[0] + a[4] * b[3] + a[7] * b[6],
+        a[1] * b[1] + a[4] * b[4] + a[7] * b[7],
+        a[1] * b[2] + a[4] * b[5] + a[7] * b[8],
+        a[2] * b[0] + a[5] * b[3] + a[8] * b[6],
+        a[2] * b[1] + a[5] * b[4] + a[8] * b[7],
+        a[2] * b[2] + a[5] * b[5] + a[8] * b[8],
+    )
+
+
+@kernel
+def _transposed_applied(a: tuple, v: tuple) -> tuple:
+    """``A' v`` of a 9-number matrix and 3 numbers. A compiled kernel."""
+    return (
+        a[0] * v[0] + a[3] * v[1] + a[6] * v[2],
+        a[1] * v[0] + a[4] * v[1] + a[7] * v[2],
+        a[2] * v[0] + a[5] * v[1] + a[8] * v[2],
+    )
+
+
+@kernel
+def _add_block(matrix: np.ndarray, row: int, column: int, block: tuple, sign: float) -> None:
+    """``sign`` times the 9-number ``block`` added to ``matrix[row:row+3, column:column+3]``.
+    A compiled kernel."""
+    for i in range(3):
+        for j in range(3):
+            matrix[row + i, column + j] += sign * block[3 * i + j]
+
+
+@kernel
+def _add_upper(matrix: np.ndarray, row: int, column: int, block: tuple, sign: float) -> None:
+    """:func:`_add_block` of a symmetric ``block``'s upper triangle only. A compiled kernel."""
+    for i in range(3):
+        for j in range(i, 3):
+            matrix[row + i, column + j] += sign * block[3 * i + j]
+
+
+@kernel
+def _add_vector(vector: np.ndarray, start: int, part: tuple, sign: float) -> None:
+    """``sign`` times 3 numbers ``part`` added to ``vector[start:start+3]``. A compiled
+    kernel."""
+    for i in range(3):
+        vector[start + i] += sign * part[i]
+
+
+@kernel
+def _pseudo_measurements(
+    precisions: np.ndarray, state: np.ndarray, system: np.ndarray, gradient: np.ndarray
+) -> None:
+    """The frame-0 model's pseudo-measurements ``c0 - c = 0`` and ``c1 - c = 0``, of
+    precisions ``P_a = A_a^-1`` ``(2, 3, 3)``, added to its normal matrix ``system`` ``(9,
+    9)`` and its ``gradient`` ``(9,)`` at ``state`` ``(c, c0, c1)``. A compiled kernel."""
+    for a in range(2):
+        at = 3 + 3 * a
+        for i in range(3):
+            pull = 0.0
+            for j in range(3):
+                p = precisions[a, i, j]
+                system[i, j] += p
+                system[i, at + j] -= p
+                system[at + i, j] -= p
+                system[at + i, at + j] += p
+                pull += p * (state[at + j] - state[j])
+            gradient[i] += pull
+            gradient[at + i] -= pull
+
+
+@kernel
+def _solved(matrix: np.ndarray, vector: np.ndarray, solution: np.ndarray) -> bool:
+    """``matrix x = vector`` by Gaussian elimination with partial pivoting (the largest pivot
+    of its column, the first of equals, as LAPACK's ``getrf``), ``matrix`` ``(k, k)``
+    overwritten, ``x`` into ``solution`` ``(k,)``; false, with ``solution`` undefined, where a
+    pivot is exactly zero (a singular matrix, as LAPACK reports it). A compiled kernel."""
+    k = matrix.shape[0]
+    for i in range(k):
+        solution[i] = vector[i]
+    for column in range(k):
+        pivot = column
+        largest = abs(matrix[column, column])
+        for row in range(column + 1, k):
+            if abs(matrix[row, column]) > largest:
+                pivot, largest = row, abs(matrix[row, column])
+        if matrix[pivot, column] == 0.0:
+            return False
+        if pivot != column:
+            for j in range(k):
+                matrix[column, j], matrix[pivot, j] = matrix[pivot, j], matrix[column, j]
+            solution[column], solution[pivot] = solution[pivot], solution[column]
+        for row in range(column + 1, k):
+            factor = matrix[row, column] / matrix[column, column]
+            for j in range(column + 1, k):
+                matrix[row, j] -= factor * matrix[column, j]
+            solution[row] -= factor * solution[column]
+    for row in range(k - 1, -1, -1):
+        value = solution[row]
+        for j in range(row + 1, k):
+            value -= matrix[row, j] * solution[j]
+        solution[row] = value / matrix[row, row]
+    return True
 
 
 def _gauss_markov_results(
@@ -602,47 +809,25 @@ def _gauss_markov_results(
     tol_mm: float,
 ) -> list[JointCenterResult | ValueError]:
     """Paper C's Gauss–Markov fit of every trial's ``proximal`` and ``distal`` poses (a trial's
-    ``ValueError`` is kept as its outcome). Trials with the same frames iterate together, each
-    to its own convergence, so a trial's answer does not depend on its batch."""
+    ``ValueError`` is kept as its outcome), each trial iterated to its own convergence."""
     method = "gauss-markov-frame0" if frame0 else "gauss-markov"
     noise_mm = _as_noise(noise_mm)
     outcomes = each_trial(poses, lambda p: _prepared(p["proximal"], p["distal"], noise_mm, method))
-    by_frames: dict[int, list[int]] = {}
     for index, outcome in enumerate(outcomes):
         if isinstance(outcome, _Prepared):
-            by_frames.setdefault(outcome.m.shape[0], []).append(index)
-    for n_frames, indices in by_frames.items():
-        per_chunk = max(1, _CHUNK_FRAMES // max(n_frames, 1))
-        for first in range(0, len(indices), per_chunk):
-            chunk = indices[first : first + per_chunk]
-            trials = [outcomes[index] for index in chunk]
-            done, chi2, frame0_added = _iterated_stack(
-                trials, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm
-            )
-            for row, index in enumerate(chunk):
-                added = None if frame0_added is None else frame0_added[row]
-                outcomes[index] = _result(trials[row], done, row, chi2[row], method, added, tol_mm)
+            done = _iterated(outcome, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm)
+            outcomes[index] = _result(outcome, done, method, tol_mm)
     return outcomes
 
 
-def _result(
-    trial: _Prepared,
-    done: _Iterated,
-    row: int,
-    chi2: float,
-    method: str,
-    frame0_added: np.ndarray | None,
-    tol_mm,
-) -> JointCenterResult:
-    """One trial's result from its row of a stack's iteration; ``frame0_added`` ``(3, 3)``,
-    what the frame-0 poses' errors add to paper C's model (:func:`_frame0_information`), or
-    ``None`` for the frame-0 model, which holds them."""
-    frame0 = frame0_added is None
+def _result(trial: _Prepared, done: _Iterated, method: str, tol_mm) -> JointCenterResult:
+    """One trial's result from its iteration (:func:`_iterated`)."""
+    frame0 = done.frame0_added is None
     diagnostics = dict(trial.diagnostics)
     try:
-        if row in done.errors:
-            raise np.linalg.LinAlgError(done.errors[row])
-        unit_covariance = np.linalg.inv(done.information[row])
+        if done.singular:
+            raise np.linalg.LinAlgError("Singular matrix")
+        unit_covariance = np.linalg.inv(done.information)
         covariance_all = trial.variance * 0.5 * (unit_covariance + unit_covariance.T)
     except np.linalg.LinAlgError as error:
         return JointCenterResult(
@@ -654,13 +839,13 @@ def _result(
             method=method,
             diagnostics=diagnostics,
         )
-    state = done.state[row]
+    state = done.state
     covariance = covariance_all[:3, :3]
     if not frame0:
         # s^2 (H^-1 + H^-1 (F_0 A_0 F_0' + F_1 A_1 F_1') H^-1), H the information: W_c is
         # conditional on the frame-0 poses, whose errors every frame shares (module
         # docstring, "Frame 0").
-        unit = unit_covariance + unit_covariance @ frame0_added @ unit_covariance
+        unit = unit_covariance + unit_covariance @ done.frame0_added @ unit_covariance
         diagnostics["center_covariance_mm2"] = (trial.variance * 0.5 * (unit + unit.T)).tolist()
     if frame0:
         diagnostics["proximal_body"] = trial.proximal_body.tolist()
@@ -669,10 +854,10 @@ def _result(
         diagnostics["center_distal"] = state[6:].tolist()
         diagnostics["covariance_distal"] = covariance_all[6:, 6:].tolist()
     dof = 3 * trial.m.shape[0] - 3
-    chi2 = float(chi2) / trial.variance if trial.variance > 0 else float("nan")
+    chi2 = float(done.chi2) / trial.variance if trial.variance > 0 else float("nan")
     diagnostics["chi2"] = chi2
     diagnostics["chi2_dof"] = dof
-    step, iterations = float(done.step[row]), int(done.iterations[row])
+    step, iterations = float(done.step), int(done.iterations)
     converged = bool(step <= tol_mm and np.all(np.isfinite(covariance)))
     status = (
         "ok"
@@ -694,33 +879,81 @@ def _result(
 # The model test (module docstring, "Model test").
 
 
+@kernel
 def _marker_gains(points: np.ndarray, body: np.ndarray) -> np.ndarray:
-    """``B_pi = I/n - [p - m]x K^-1 [u_i]x`` ``(..., n, 3, 3)`` for body points ``p``
-    ``(..., 3)`` [mm]: the error of ``p`` as a least-squares pose fit of the markers ``body``
-    ``(n, 3)`` [mm] places it, per unit error of marker ``i`` (``m``, ``u_i``, ``K`` as in
-    ``A(c)``; ``sum_i B_pi B_pi' = A(p) / s^2``). At ``p = x_j`` it is the fit's hat matrix."""
+    """``B_pi = I/n - [p - m]x K^-1 [u_i]x`` ``(P, n, 3, 3)`` for body points ``p`` ``(P, 3)``
+    [mm]: the error of ``p`` as a least-squares pose fit of the markers ``body`` ``(n, 3)``
+    [mm] places it, per unit error of marker ``i`` (``m``, ``u_i``, ``K`` as in ``A(c)``;
+    ``sum_i B_pi B_pi' = A(p) / s^2``). At ``p = x_j`` it is the fit's hat matrix. A compiled
+    kernel."""
     mean, inertia_inv, n = lever_factors(body)
-    lever = skew(np.asarray(points, dtype=float) - mean)[..., None, :, :]
-    return np.eye(3) / n - lever @ inertia_inv @ skew(body - mean)
+    gains = np.empty((points.shape[0], n, 3, 3))
+    for p in range(points.shape[0]):
+        lever = _skew9(points[p, 0] - mean[0], points[p, 1] - mean[1], points[p, 2] - mean[2])
+        turned = _transposed_times(_transposed9(lever), _rows9(inertia_inv))  # [p - m]x K^-1
+        for i in range(n):
+            offset = _skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
+            product = _transposed_times(_transposed9(turned), offset)
+            for r in range(3):
+                for c in range(3):
+                    gains[p, i, r, c] = (1.0 / n if r == c else 0.0) - product[3 * r + c]
+    return gains
 
 
-def _fourth_moments(blocks: np.ndarray) -> np.ndarray:
-    """``tr(X)^2 + 2 tr(X^2)`` ``(...)`` of symmetric ``(..., 3, 3)`` blocks: per unit ``s^4``,
-    ``E (e' X e)^2`` for one marker's Gaussian error ``e``, and ``3 / kappa`` times what
-    spherical noise of excess kurtosis ``kappa`` adds to it."""
-    trace = np.trace(blocks, axis1=-2, axis2=-1)
-    return trace**2 + 2.0 * np.sum(blocks * blocks, axis=(-2, -1))
+@kernel
+def _skew9(v0: float, v1: float, v2: float) -> tuple:
+    """``[v]x`` as 9 numbers by rows (:func:`jointbench.geometry.skew`). A compiled kernel."""
+    return (0.0, -v2, v1, v2, 0.0, -v0, -v1, v0, 0.0)
 
 
-def _residual_moments(body: np.ndarray) -> tuple[float, float]:
+@kernel
+def _transposed9(a: tuple) -> tuple:
+    """``A'`` of a 9-number matrix. A compiled kernel."""
+    return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
+
+
+@kernel
+def _fourth_moment(x: tuple) -> float:
+    """``tr(X)^2 + 2 tr(X X')`` of a 9-number block ``X`` (symmetric: ``tr(X^2)``): per unit
+    ``s^4``, ``E (e' X e)^2`` for one marker's Gaussian error ``e``, and ``3 / kappa`` times
+    what spherical noise of excess kurtosis ``kappa`` adds to it. A compiled kernel."""
+    trace = x[0] + x[4] + x[8]
+    squares = 0.0
+    for k in range(9):
+        squares += x[k] * x[k]
+    return trace * trace + 2.0 * squares
+
+
+@kernel
+def _residual_moments(body: np.ndarray) -> tuple:
     """Per frame, ``(G, F)`` of ``E sum_i |r_i|^4 = s^4 (G + kappa F)`` over the residuals
     ``r_i`` ``(3,)`` of a rigid fit of the markers ``body`` ``(n, 3)`` [mm]; ``kappa G / 3`` is
-    also what the kurtosis adds to the variance of the frame's residual sum of squares."""
-    n = len(body)
-    residual = np.eye(n)[:, :, None, None] * np.eye(3) - _marker_gains(body, body)
-    own = residual[np.arange(n), np.arange(n)]
-    shared = np.swapaxes(residual, -1, -2) @ residual
-    return float(np.sum(_fourth_moments(own))), float(np.sum(_fourth_moments(shared))) / 3.0
+    also what the kurtosis adds to the variance of the frame's residual sum of squares. With
+    ``Q_ji = delta_ji I - B_ji`` the blocks of ``I - H`` (:func:`_marker_gains` at the
+    markers), ``G = sum_i m(Q_ii)`` and ``F = sum_ji m(Q_ji' Q_ji) / 3``, ``m`` of
+    :func:`_fourth_moment`. A compiled kernel."""
+    n = body.shape[0]
+    hat = _marker_gains(body, body)
+    own, shared = 0.0, 0.0
+    for j in range(n):
+        for i in range(n):
+            block = _rows9(hat[j, i])
+            delta = 1.0 if i == j else 0.0
+            residual = (
+                delta - block[0],
+                -block[1],
+                -block[2],
+                -block[3],
+                delta - block[4],
+                -block[5],
+                -block[6],
+                -block[7],
+                delta - block[8],
+            )
+            if i == j:
+                own += _fourth_moment(residual)
+            shared += _fourth_moment(_transposed_times(residual, residual))
+    return own, shared / 3.0
 
 
 def _constraint_moments(rotations, bodies, points) -> float:
@@ -733,28 +966,85 @@ def _constraint_moments(rotations, bodies, points) -> float:
     ``V_at`` is the inverse of ``R_a' W_t R_a = A_a + R_ab A_b R_ab'`` with ``R_ab = R_a' R_b``
     the other segment's relative rotation. With ``C = B B'``, ``tr(X) = <V, C>`` and
     ``tr(X^2) = tr(V C V C)``, so the sum over frames needs only ``S = sum_t vec(V_t)
-    vec(V_t)'`` (9 x 9): ``c' S c`` and ``sum S[jk, lm] C_kl C_mj``, not one product per frame
-    and marker. On a long trial it is taken over :data:`_MOMENT_FRAMES` frames and scaled."""
+    vec(V_t)'`` (9 x 9, :func:`_local_weight_moments`): ``c' S c`` and ``sum S[jk, lm] C_kl
+    C_mj``, not one product per frame and marker. On a long trial it is taken over
+    :data:`_MOMENT_FRAMES` frames and scaled."""
     n_steps = len(rotations[0])
     chosen = _spread_frames(n_steps, _MOMENT_FRAMES)
-    covariances = [point_covariance(c, b) for c, b in zip(points, bodies, strict=True)]
-    relative = np.swapaxes(rotations[0][chosen], -1, -2) @ rotations[1][chosen]
-    others = (
-        rotated3(relative, covariances[1]),
-        rotated3(np.swapaxes(relative, -1, -2), covariances[0]),
-    )
+    # Contiguous, but not copied where read-only (the poses' arrays, the shared frames).
+    arrays = [np.ascontiguousarray(array, dtype=float) for array in (*rotations, *bodies)]
+    points = np.stack([np.asarray(point, dtype=float) for point in points])
+    return _constraint_moment_sum(*arrays, chosen, points) * n_steps / len(chosen)
+
+
+@kernel
+def _constraint_moment_sum(
+    r0: np.ndarray,
+    r1: np.ndarray,
+    body0: np.ndarray,
+    body1: np.ndarray,
+    frames: np.ndarray,
+    points: np.ndarray,
+) -> float:
+    """The sum of :func:`_constraint_moments` over the ``frames`` ``(k,)`` of the rotations
+    ``R_a`` ``(N-1, 3, 3)``, for the segments' markers ``body0`` ``(n_0, 3)``, ``body1`` ``(n_1,
+    3)`` [mm] and the centre in each, ``points`` ``(2, 3)`` [mm]: per segment and marker, with
+    ``C = B B'`` and ``S`` of :func:`_local_weight_moments`, ``c' S c + 2 sum S[jk, lm] C_kl
+    C_mj``. A compiled kernel."""
+    covariances = np.empty((2, 3, 3))
+    for a in range(2):
+        body = body0 if a == 0 else body1
+        mean, inertia_inv, n = lever_factors(body)
+        point_covariance_into(points[a], mean, inertia_inv, n, covariances[a])
+    seconds = _local_weight_moments(r0, r1, frames, covariances)
     total = 0.0
-    for body, point, own, other in zip(bodies, points, covariances, others, strict=True):
-        gains = _marker_gains(point, body)
-        spread = gains @ np.swapaxes(gains, -1, -2)
-        local = inverse3(own + other).reshape(-1, 9)
-        second = local.T @ local
-        flat = spread.reshape(-1, 9)
-        total += float(np.einsum("ip,pq,iq->", flat, second, flat))
-        total += 2.0 * float(
-            np.einsum("jklm,ikl,imj->", second.reshape(3, 3, 3, 3), spread, spread)
-        )
-    return total * n_steps / len(chosen)
+    for a in range(2):
+        body = body0 if a == 0 else body1
+        gains = _marker_gains(points[a : a + 1], body)[0]
+        for i in range(body.shape[0]):
+            gain = _rows9(gains[i])
+            spread = _transposed_times(_transposed9(gain), _transposed9(gain))  # B B'
+            for p in range(9):
+                for q in range(9):
+                    total += spread[p] * seconds[a, p, q] * spread[q]
+            for j in range(3):
+                for k in range(3):
+                    for m in range(3):
+                        for o in range(3):
+                            second = seconds[a, 3 * j + k, 3 * m + o]
+                            total += 2.0 * second * spread[3 * k + m] * spread[3 * o + j]
+    return total
+
+
+@kernel
+def _local_weight_moments(
+    r0: np.ndarray, r1: np.ndarray, frames: np.ndarray, covariances: np.ndarray
+) -> np.ndarray:
+    """``S_a = sum_t vec(V_at) vec(V_at)'`` ``(2, 9, 9)`` over the ``frames`` ``(k,)`` of the
+    rotations ``R_a`` ``(N-1, 3, 3)``, ``V_at = (A_a + R_ab A_b R_ab')^-1`` with ``A_a`` the
+    point ``covariances`` ``(2, 3, 3)`` and ``R_ab = R_a' R_b`` (:func:`_constraint_moments`).
+    A compiled kernel."""
+    seconds = np.zeros((2, 9, 9))
+    relative = np.empty((2, 3, 3))
+    other = np.empty((3, 3))
+    local = np.empty((3, 3))
+    for t in frames:
+        for i in range(3):
+            for j in range(3):
+                value = r0[t, 0, i] * r1[t, 0, j] + r0[t, 1, i] * r1[t, 1, j]
+                value += r0[t, 2, i] * r1[t, 2, j]
+                relative[0, i, j] = value
+                relative[1, j, i] = value
+        for a in range(2):
+            rotated3_into(relative[a], covariances[1 - a], other)
+            for i in range(3):
+                for j in range(3):
+                    other[i, j] += covariances[a, i, j]
+            inverse3_into(other, local)
+            for p in range(9):
+                for q in range(9):
+                    seconds[a, p, q] += local[p // 3, p % 3] * local[q // 3, q % 3]
+    return seconds
 
 
 #: Frames over which :func:`_constraint_moments` averages: its sum is one over the frames of a
@@ -764,10 +1054,14 @@ def _constraint_moments(rotations, bodies, points) -> float:
 _MOMENT_FRAMES = 256
 
 
+@functools.lru_cache(maxsize=64)
 def _spread_frames(n_frames: int, most: int) -> np.ndarray:
     """At most ``most`` frame indices ``(k,)``, evenly spaced over ``n_frames``, first and last
-    included; every frame when there are no more."""
-    return np.unique(np.linspace(0, n_frames - 1, min(n_frames, most)).round().astype(int))
+    included; every frame when there are no more. Read-only: the same array serves every trial
+    of that many frames."""
+    frames = np.unique(np.linspace(0, n_frames - 1, min(n_frames, most)).round().astype(int))
+    frames.flags.writeable = False
+    return frames
 
 
 def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tuple[float, float]:
@@ -776,9 +1070,9 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     (:func:`_residual_moments`), and ``G`` summed over the frames and segments."""
     fourth, gaussian, excess = 0.0, 0.0, 0.0
     for poses in segments:
-        residual = pose_residuals(poses.markers, poses.rotation, poses.translation, poses.body)
-        squared = np.einsum("fmi,fmi->fm", residual, residual).ravel()
-        fourth += float(squared @ squared)
+        fourth += _residual_fourth_powers(
+            poses.markers, poses.rotation, poses.translation, poses.body
+        )
         # The body-fixed coordinates, fitted to all N frames, shrink each frame's residuals by
         # about (N - 1) / N (the residual dof are (3 n - 6)(N - 1), not (3 n - 6) N): second
         # moments by its square, fourth cumulants by its fourth power.
@@ -788,6 +1082,31 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian
+
+
+@kernel
+def _residual_fourth_powers(
+    markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
+) -> float:
+    """``sum_f sum_i |r_fi|^4`` [mm^4] of the residuals ``r_fi = x_fi - (R_f b_i + t_f)`` the
+    poses ``rotation`` ``(N, 3, 3)`` and ``translation`` ``(N, 3)`` [mm] of the body-fixed
+    markers ``body`` ``(n, 3)`` leave of ``markers`` ``(N, n, 3)`` [mm]
+    (:func:`jointbench.estimators.segment_poses.pose_residuals`), in one pass without their
+    array. A compiled kernel."""
+    total = 0.0
+    for f in range(markers.shape[0]):
+        for i in range(markers.shape[1]):
+            squared = 0.0
+            for k in range(3):
+                turned = (
+                    rotation[f, k, 0] * body[i, 0]
+                    + rotation[f, k, 1] * body[i, 1]
+                    + rotation[f, k, 2] * body[i, 2]
+                )
+                residual = markers[f, i, k] - turned - translation[f, k]
+                squared += residual * residual
+            total += squared * squared
+    return total
 
 
 #: What a rejected model test says of the SD of an answer whose covariance assumes that model:

@@ -100,6 +100,7 @@ __all__ = [
     "lever_factors",
     "point_covariance",
     "point_covariance_at",
+    "point_covariance_into",
     "pose_noise",
     "pull_mm",
     "score_covariance",
@@ -155,7 +156,11 @@ def pose_noise(proximal: NoisyPoses, distal: NoisyPoses) -> list[PoseNoise]:
     """Per trial, the :class:`PoseNoise` of the ``proximal`` and ``distal`` segments' poses
     (module docstring: ``M``, ``B`` and the share)."""
     n_frames = proximal.rotation.shape[1]
-    relative_sum = np.einsum("tkji,tkjl->til", proximal.rotation, distal.rotation)
+    # sum_k R_p(k)' R_d(k): the frames' rotations stacked as one (3 N, 3) matrix per trial.
+    n_trials = proximal.rotation.shape[0]
+    relative_sum = np.swapaxes(proximal.rotation.reshape(n_trials, -1, 3), 1, 2) @ (
+        distal.rotation.reshape(n_trials, -1, 3)
+    )
     g_p, g_d = _shrinkage(proximal), _shrinkage(distal)
     attenuation = np.block(
         [
@@ -234,19 +239,29 @@ def point_covariance_at(
     3)`` [mm] of segments with lever factors (:func:`lever_factors`) ``means`` ``(T, 3)``,
     ``inertia_invs`` ``(T, 3, 3)`` and ``n`` markers. A compiled kernel."""
     out = np.empty((points.shape[0], 3, 3))
-    lever = np.zeros((3, 3))
     for t in range(points.shape[0]):
-        v = points[t] - means[t]
-        lever[0, 1], lever[0, 2], lever[1, 2] = -v[2], v[1], -v[0]
-        lever[1, 0], lever[2, 0], lever[2, 1] = v[2], -v[1], v[0]
-        for i in range(3):
-            for j in range(3):
-                value = 1.0 / n if i == j else 0.0
-                for k in range(3):
-                    for m in range(3):
-                        value += lever[i, k] * inertia_invs[t, k, m] * lever[j, m]
-                out[t, i, j] = value
+        point_covariance_into(points[t], means[t], inertia_invs[t], n, out[t])
     return out
+
+
+@kernel
+def point_covariance_into(
+    point: np.ndarray, mean: np.ndarray, inertia_inv: np.ndarray, n: int, out: np.ndarray
+) -> None:
+    """:func:`point_covariance_at` of one point ``(3,)`` [mm] of a segment with lever factors
+    ``mean`` ``(3,)`` and ``inertia_inv`` ``(3, 3)`` and ``n`` markers, written into ``out``
+    ``(3, 3)``. A compiled kernel."""
+    lever = np.zeros((3, 3))
+    v = point - mean
+    lever[0, 1], lever[0, 2], lever[1, 2] = -v[2], v[1], -v[0]
+    lever[1, 0], lever[2, 0], lever[2, 1] = v[2], -v[1], v[0]
+    for i in range(3):
+        for j in range(3):
+            value = 1.0 / n if i == j else 0.0
+            for k in range(3):
+                for m in range(3):
+                    value += lever[i, k] * inertia_inv[k, m] * lever[j, m]
+            out[i, j] = value
 
 
 @kernel

@@ -1,8 +1,10 @@
 """Small matrices: LAPACK and ``matmul`` spend microseconds of call overhead per 3 x 3 matrix, the
 arithmetic takes nanoseconds.
 
-Stacks of 3 x 3 matrices, element-wise (``float64`` arrays shaped ``(..., 3, 3)``), and the
-eigen-decomposition of one small symmetric matrix inside a compiled kernel.
+Stacks of 3 x 3 matrices (``float64`` arrays shaped ``(..., 3, 3)``) through kernels that
+treat one matrix at a time, which other kernels call per frame (the inverse, ``R M R'``, as
+arrays or as numbers that stay in registers), and the eigen-decomposition of one small
+symmetric matrix inside a compiled kernel.
 """
 
 from __future__ import annotations
@@ -11,14 +13,18 @@ import math
 
 import numpy as np
 
-from jointbench.numerics.compiled import kernel
+from jointbench.numerics.compiled import kernel, kernel_array
 
 __all__ = [
     "add_outer",
     "inertia",
     "inertia_into",
     "inverse3",
+    "inverse3_entries",
+    "inverse3_into",
     "rotated3",
+    "rotated3_into",
+    "rotated3_upper",
     "symmetric_eigen",
     "symmetric_eigen_into",
     "symmetric_into",
@@ -27,58 +33,141 @@ __all__ = [
 
 
 def inverse3(matrices: np.ndarray) -> np.ndarray:
-    """Inverses of ``(..., 3, 3)`` matrices from their cofactors (adjugate over determinant).
+    """Inverses of ``(..., 3, 3)`` matrices from their cofactors (:func:`inverse3_into`).
 
     Accurate to ``cond * eps`` like an LU solve; a singular matrix gives inf/NaN entries
     rather than an error, so callers check the conditioning they need.
     """
     m = np.asarray(matrices, dtype=float)
-    a, b, c = m[..., 0, 0], m[..., 0, 1], m[..., 0, 2]
-    d, e, f = m[..., 1, 0], m[..., 1, 1], m[..., 1, 2]
-    g, h, i = m[..., 2, 0], m[..., 2, 1], m[..., 2, 2]
+    flat = kernel_array(m.reshape(-1, 3, 3))
+    return _inverses(flat).reshape(m.shape)
+
+
+@kernel
+def _inverses(matrices: np.ndarray) -> np.ndarray:
+    """:func:`inverse3_into` of each of ``matrices`` ``(k, 3, 3)``: ``(k, 3, 3)``. A compiled
+    kernel."""
+    out = np.empty(matrices.shape)
+    for index in range(matrices.shape[0]):
+        inverse3_into(matrices[index], out[index])
+    return out
+
+
+@kernel
+def inverse3_into(matrix: np.ndarray, out: np.ndarray) -> float:
+    """The inverse of ``matrix`` ``(3, 3)`` from its cofactors (:func:`inverse3_entries`)
+    written into ``out`` ``(3, 3)`` (not ``matrix`` itself); returns the determinant. A
+    singular matrix gives inf/NaN entries (a determinant of 0). A compiled kernel."""
+    entries = inverse3_entries(
+        matrix[0, 0],
+        matrix[0, 1],
+        matrix[0, 2],
+        matrix[1, 0],
+        matrix[1, 1],
+        matrix[1, 2],
+        matrix[2, 0],
+        matrix[2, 1],
+        matrix[2, 2],
+    )
+    out[0, 0], out[0, 1], out[0, 2] = entries[0], entries[1], entries[2]
+    out[1, 0], out[1, 1], out[1, 2] = entries[3], entries[4], entries[5]
+    out[2, 0], out[2, 1], out[2, 2] = entries[6], entries[7], entries[8]
+    return entries[9]
+
+
+@kernel
+def inverse3_entries(
+    a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float
+) -> tuple:
+    """The entries of the inverse of ``[[a, b, c], [d, e, f], [g, h, i]]`` by rows, from its
+    cofactors (adjugate over determinant), and the determinant: 10 numbers. A singular matrix
+    gives inf/NaN entries. A compiled kernel: the entries stay in registers."""
     c00, c01, c02 = e * i - f * h, f * g - d * i, d * h - e * g
     determinant = a * c00 + b * c01 + c * c02
-    inverse = np.stack(
-        [
-            c00,
-            c * h - b * i,
-            b * f - c * e,
-            c01,
-            a * i - c * g,
-            c * d - a * f,
-            c02,
-            b * g - a * h,
-            a * e - b * d,
-        ],
-        axis=-1,
+    return (
+        c00 / determinant,
+        (c * h - b * i) / determinant,
+        (b * f - c * e) / determinant,
+        c01 / determinant,
+        (a * i - c * g) / determinant,
+        (c * d - a * f) / determinant,
+        c02 / determinant,
+        (b * g - a * h) / determinant,
+        (a * e - b * d) / determinant,
+        determinant,
     )
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inverse /= determinant[..., None]
-    return inverse.reshape(m.shape)
 
 
 def rotated3(rotations: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     """``R M R'`` for rotations ``(..., N, 3, 3)`` and one symmetric matrix ``M`` ``(..., 3, 3)``
-    per leading index (e.g. per trial): ``(..., N, 3, 3)``, exactly symmetric.
-
-    One matrix product gives ``R M`` for all frames; the six distinct entries of the product
-    with ``R'`` are then formed element-wise and the lower triangle mirrors the upper one.
-    """
+    per leading index (e.g. per trial): ``(..., N, 3, 3)``, exactly symmetric
+    (:func:`rotated3_into`)."""
     rotations = np.asarray(rotations, dtype=float)
     *lead, n_frames, _, _ = rotations.shape
-    rows = rotations.reshape(*lead, n_frames * 3, 3)
-    left = (rows @ np.asarray(matrix, dtype=float)).reshape(rotations.shape)
+    matrices = np.broadcast_to(np.asarray(matrix, dtype=float), (*lead, 3, 3))
+    out = _rotated_stacks(
+        kernel_array(rotations.reshape(-1, n_frames, 3, 3)),
+        kernel_array(matrices.reshape(-1, 3, 3)),
+    )
+    return out.reshape(rotations.shape)
+
+
+@kernel
+def _rotated_stacks(rotations: np.ndarray, matrices: np.ndarray) -> np.ndarray:
+    """:func:`rotated3_into` of every rotation ``(k, N, 3, 3)`` with its stack's matrix
+    ``(k, 3, 3)``: ``(k, N, 3, 3)``. A compiled kernel."""
     out = np.empty(rotations.shape)
-    for i in range(3):
-        for j in range(i, 3):
-            entry = (
-                left[..., i, 0] * rotations[..., j, 0]
-                + left[..., i, 1] * rotations[..., j, 1]
-                + left[..., i, 2] * rotations[..., j, 2]
-            )
-            out[..., i, j] = entry
-            out[..., j, i] = entry
+    for stack in range(rotations.shape[0]):
+        for frame in range(rotations.shape[1]):
+            rotated3_into(rotations[stack, frame], matrices[stack], out[stack, frame])
     return out
+
+
+@kernel
+def rotated3_into(rotation: np.ndarray, matrix: np.ndarray, out: np.ndarray) -> None:
+    """``R M R'`` of a rotation ``R`` ``(3, 3)`` and a symmetric ``M`` ``(3, 3)`` written into
+    ``out`` ``(3, 3)``, exactly symmetric (:func:`rotated3_upper`). A compiled kernel."""
+    s00, s01, s02, s11, s12, s22 = rotated3_upper(rotation, matrix)
+    out[0, 0], out[1, 1], out[2, 2] = s00, s11, s22
+    out[0, 1] = out[1, 0] = s01
+    out[0, 2] = out[2, 0] = s02
+    out[1, 2] = out[2, 1] = s12
+
+
+@kernel
+def rotated3_upper(rotation: np.ndarray, matrix: np.ndarray) -> tuple:
+    """The upper triangle ``(s00, s01, s02, s11, s12, s22)`` of ``R M R'`` for a rotation ``R``
+    ``(3, 3)`` and a symmetric ``M`` ``(3, 3)``: ``R M`` row by row, then the entries of its
+    product with ``R'``. A compiled kernel: the entries stay in registers."""
+    left = (
+        _row_times(rotation, 0, matrix),
+        _row_times(rotation, 1, matrix),
+        _row_times(rotation, 2, matrix),
+    )
+    return (
+        _dot_row(left[0], rotation, 0),
+        _dot_row(left[0], rotation, 1),
+        _dot_row(left[0], rotation, 2),
+        _dot_row(left[1], rotation, 1),
+        _dot_row(left[1], rotation, 2),
+        _dot_row(left[2], rotation, 2),
+    )
+
+
+@kernel
+def _row_times(a: np.ndarray, i: int, b: np.ndarray) -> tuple:
+    """Row ``i`` of ``a b`` for ``(3, 3)`` matrices, as three numbers. A compiled kernel."""
+    return (
+        a[i, 0] * b[0, 0] + a[i, 1] * b[1, 0] + a[i, 2] * b[2, 0],
+        a[i, 0] * b[0, 1] + a[i, 1] * b[1, 1] + a[i, 2] * b[2, 1],
+        a[i, 0] * b[0, 2] + a[i, 1] * b[1, 2] + a[i, 2] * b[2, 2],
+    )
+
+
+@kernel
+def _dot_row(u: tuple, a: np.ndarray, j: int) -> float:
+    """``u . a[j]``, three numbers with row ``j`` of a ``(3, 3)`` matrix. A compiled kernel."""
+    return u[0] * a[j, 0] + u[1] * a[j, 1] + u[2] * a[j, 2]
 
 
 @kernel
