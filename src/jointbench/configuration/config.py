@@ -290,9 +290,12 @@ def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
         allowed = spec.grid_spec.get(key)
         for value in grid[key]:
             if allowed is not None and not allowed.accepts(value, protocol):
+                # A bound the protocol sets may be the protocol's mistake: say where it is.
+                by_protocol = f" (the bound studies.{spec.name}.protocol sets)"
+                source = by_protocol if allowed.by_protocol else ""
                 raise ValueError(
                     f"{where}.grid.{key}: {value!r} is not allowed; "
-                    f"allowed: {allowed.allowed(protocol)}"
+                    f"allowed: {allowed.allowed(protocol)}{source}"
                 )
         repeated = sorted({str(v) for v in grid[key] if grid[key].count(v) > 1})
         if repeated:

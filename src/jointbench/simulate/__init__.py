@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.declared import check_fields
+from jointbench.declared import below, check_fields
 from jointbench.simulate.noise import isotropic_noise
 
 __all__ = [
@@ -110,6 +110,12 @@ class GridValues:
             words.append(f"<= {maximum:g}")
         return " ".join(words[:2]) + "".join(f" and {w}" for w in words[2:])
 
+    @property
+    def by_protocol(self) -> bool:
+        """Whether the study's protocol sets the allowed values (:attr:`maximum` or
+        :attr:`choices` a function of it)."""
+        return callable(self.maximum) or callable(self.choices)
+
     def accepts(self, value, protocol) -> bool:
         """Whether ``value`` (as YAML gives it) is one of the allowed values."""
         if self.type is str:
@@ -119,9 +125,7 @@ class GridValues:
         numeric = (int,) if self.type is int else (int, float)
         if isinstance(value, bool) or not isinstance(value, numeric) or not math.isfinite(value):
             return False
-        if self.minimum is not None and (
-            value <= self.minimum if self.exclusive_minimum else value < self.minimum
-        ):
+        if self.minimum is not None and below(value, self.minimum, self.exclusive_minimum):
             return False
         maximum = self._resolve(self.maximum, protocol)
         return maximum is None or value <= maximum
