@@ -339,6 +339,44 @@ BAD = [
         {"pelvis_sway_hz": [0.0, 0.21, 0.17]},
         ["studies.hip_sta.protocol.pelvis_sway_hz, fps: 0.0", "> 0"],
     ),
+    # Periodic motions faster than their frames show, and an artefact beyond the segment.
+    (
+        "cmc",
+        ("protocol",),
+        {"spiral_turns": 1e13},
+        ["studies.cmc.protocol.spiral_turns, n_frames: 10000000000000.0 spiral turns"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "lissajous", "fe_cycles": 100}},
+        ["studies.hinge.protocol.all.fe_cycles, n_frames: 100 knee lissajous cycles over 121"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"hand_rotation_hz": [0.17, 0.29, 1e13]},
+        ["studies.hip.protocol.hand_rotation_hz, fps: 10000000000000.0", "< 30 Hz"],
+    ),
+    # No frames left for the arc: its phase would be 0 / 0 (NaN markers).
+    (
+        "hip_sta",
+        ("protocol",),
+        {"star_fraction": 1.0},
+        ["studies.hip_sta.protocol.arc_turns, star_fraction, duration_s, fps: 1.0 arc turns"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"circumduction_turns": 300},
+        ["studies.hip_sta.protocol.circumduction_turns, duration_s, fps: 300 circumduction"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"sta_reference_deg": 1e-300},
+        ["studies.hip_sta.protocol.sta_reference_deg: 1e-300", "further than the farthest"],
+    ),
     # A study of two kinds: names and options of both are checked, each against its own kind.
     (
         "hip_sta",

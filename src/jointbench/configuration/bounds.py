@@ -164,8 +164,8 @@ def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str
         for name, motions in HINGE_CYCLES.items():
             if hinge.motion not in motions:
                 continue
-            written = joint if name in overrides.get(joint, {}) else "all"
-            where = written if name in overrides.get(written, {}) else joint
+            own = name in overrides.get(joint, {})
+            where = "all" if not own and name in overrides.get("all", {}) else joint
             problem = _turns_problem(
                 f"protocol.{where}.{name}, n_frames",
                 getattr(hinge, name),
