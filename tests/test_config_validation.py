@@ -23,7 +23,6 @@ from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators import registry
 from jointbench.papers import get_paper, paper_names
-from jointbench.simulate import hip_sta
 
 
 @pytest.fixture(scope="module")
@@ -56,6 +55,8 @@ BAD = [
     # (study, path, value, words the message must contain)
     ("cmc", ("grid", "noise"), [2.0], ["studies.cmc.grid.noise", "unknown grid key", "noise_mm"]),
     ("cmc", ("grid", "noise_mm"), [-1], ["studies.cmc.grid.noise_mm", "-1", "a number >= 0"]),
+    # Its sign kept, -0.0 is below 0 to numpy's normal draws ("scale < 0").
+    ("cmc", ("grid", "noise_mm"), [-0.0], ["studies.cmc.grid.noise_mm", "-0.0", "a number >= 0"]),
     ("cmc", ("grid", "rom_deg"), ["five"], ["studies.cmc.grid.rom_deg", "'five'", "> 0"]),
     ("cmc", ("grid", "rom_deg"), [0], ["studies.cmc.grid.rom_deg", "a number > 0 and <= 180"]),
     ("cmc", ("grid", "rom_deg"), [float("nan")], ["studies.cmc.grid.rom_deg", "nan"]),
@@ -150,7 +151,10 @@ BAD = [
         "cmc",
         ("protocol",),
         {"center_mm": [0, 0]},
-        ["studies.cmc.protocol.center_mm: must be 3 numbers, got [0, 0]"],
+        [
+            "studies.cmc.protocol.center_mm: must be 3 numbers (each >= -100000 and "
+            "<= 100000), got [0, 0]"
+        ],
     ),
     (
         "cmc",
@@ -174,13 +178,16 @@ BAD = [
         "hinge",
         ("protocol",),
         {"knee": {"markers_mm": [[1, 2]]}},
-        ["studies.hinge.protocol.knee.markers_mm[0]: must be 3 numbers, got [1, 2]"],
+        [
+            "studies.hinge.protocol.knee.markers_mm[0]: must be 3 numbers (each >= -2000 and "
+            "<= 2000), got [1, 2]"
+        ],
     ),
     (
         "hip",
         ("protocol",),
         {"fps": 0},
-        ["studies.hip.protocol.fps: must be a number > 0, got 0"],
+        ["studies.hip.protocol.fps: must be a number > 0 and <= 100000, got 0"],
     ),
     # Noise beyond the geometry: the farthest marker's distance from the joint centre.
     ("cmc", ("grid", "noise_mm"), [1e200], ["studies.cmc.grid.noise_mm", "<= 69.1"]),
@@ -188,9 +195,14 @@ BAD = [
         "hinge",
         ("protocol",),
         {"all": {"noise_sd_mm": 1e200}},
-        ["studies.hinge.protocol.knee.noise_sd_mm: must be <= 176.458 mm"],
+        ["studies.hinge.protocol.knee.noise_sd_mm, markers_mm: must be <= 176.458 mm"],
     ),
-    ("hip", ("protocol",), {"noise_mm": 1e200}, ["studies.hip.protocol.noise_mm: must be <="]),
+    (
+        "hip",
+        ("protocol",),
+        {"noise_mm": 1e200},
+        ["studies.hip.protocol.noise_mm, proximal_markers_mm, distal_markers_mm: must be <="],
+    ),
     # Conditions no listed estimator can fit.
     (
         "hip",
@@ -239,13 +251,18 @@ BAD = [
         {"cross_swing_deg": 0, "twist_deg": 0},
         ["studies.hip.protocol", "swing_deg, cross_swing_deg, twist_deg", "only swing_deg"],
     ),
-    ("hip", ("protocol",), {"swing_hz": -0.75}, ["studies.hip.protocol.swing_hz: -0.75", "> 0"]),
-    ("hip", ("protocol",), {"twist_hz": 0}, ["studies.hip.protocol.twist_hz: 0", "> 0"]),
+    (
+        "hip",
+        ("protocol",),
+        {"swing_hz": -0.75},
+        ["studies.hip.protocol.swing_hz, fps: -0.75", "> 0"],
+    ),
+    ("hip", ("protocol",), {"twist_hz": 0}, ["studies.hip.protocol.twist_hz, fps: 0", "> 0"]),
     (
         "hip",
         ("protocol",),
         {"cross_swing_hz": 45.0},
-        ["studies.hip.protocol.cross_swing_hz: 45.0", "< 30 Hz", "half the frame rate"],
+        ["studies.hip.protocol.cross_swing_hz, fps: 45.0", "< 30 Hz", "half the frame rate"],
     ),
     # A rotation configured yet not seen beside the noise does not count as moving.
     (
@@ -314,13 +331,51 @@ BAD = [
         "hip_sta",
         ("protocol",),
         {"pelvis_sway_hz": [0.13, 40.0, 0.17]},
-        ["studies.hip_sta.protocol.pelvis_sway_hz: 40.0", "< 25 Hz", "half the frame rate"],
+        ["studies.hip_sta.protocol.pelvis_sway_hz, fps: 40.0", "< 25 Hz", "half the frame rate"],
     ),
     (
         "hip_sta",
         ("protocol",),
         {"pelvis_sway_hz": [0.0, 0.21, 0.17]},
-        ["studies.hip_sta.protocol.pelvis_sway_hz: 0.0", "> 0"],
+        ["studies.hip_sta.protocol.pelvis_sway_hz, fps: 0.0", "> 0"],
+    ),
+    # Periodic motions faster than their frames show, and an artefact beyond the segment.
+    (
+        "cmc",
+        ("protocol",),
+        {"spiral_turns": 1e13},
+        ["studies.cmc.protocol.spiral_turns, n_frames: 10000000000000.0 spiral turns"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "lissajous", "fe_cycles": 100}},
+        ["studies.hinge.protocol.all.fe_cycles, n_frames: 100 knee lissajous cycles over 121"],
+    ),
+    (
+        "hip",
+        ("protocol",),
+        {"hand_rotation_hz": [0.17, 0.29, 1e13]},
+        ["studies.hip.protocol.hand_rotation_hz, fps: 10000000000000.0", "< 30 Hz"],
+    ),
+    # No frames left for the arc: its phase would be 0 / 0 (NaN markers).
+    (
+        "hip_sta",
+        ("protocol",),
+        {"star_fraction": 1.0},
+        ["studies.hip_sta.protocol.arc_turns, star_fraction, duration_s, fps: 1.0 arc turns"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"circumduction_turns": 300},
+        ["studies.hip_sta.protocol.circumduction_turns, duration_s, fps: 300 circumduction"],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"sta_reference_deg": 1e-300},
+        ["studies.hip_sta.protocol.sta_reference_deg: 1e-300", "further than the farthest"],
     ),
     # A study of two kinds: names and options of both are checked, each against its own kind.
     (
@@ -399,8 +454,10 @@ def test_a_study_of_external_estimators_only_is_refused_before_any_job(config, s
 def test_a_condition_some_listed_estimator_can_fit_is_run(config):
     """Three frames: the pose-based estimators fit them, the sphere fits do not (their rows
     fail, each saying so); only a condition no listed estimator fits is refused."""
-    study_config.check_config(changed(config, "cmc", ("protocol",), {"n_frames": 3}))
-    only_spheres = changed(config, "cmc", ("protocol",), {"n_frames": 3})
+    # One spiral turn: the frames show fewer turns than half their count (bounds.py).
+    three = {"n_frames": 3, "spiral_turns": 1.0}
+    study_config.check_config(changed(config, "cmc", ("protocol",), three))
+    only_spheres = changed(config, "cmc", ("protocol",), three)
     only_spheres["studies"]["cmc"]["estimators"] = ["NM", "LS"]
     with pytest.raises(ValueError, match=r"studies\.cmc\.protocol: .* 3 frame"):
         study_config.check_config(only_spheres)
@@ -636,29 +693,27 @@ def test_a_noise_free_rotation_turning_a_marker_beyond_the_resolution_counts(con
     study_config.check_config(changed(config, "hip", ("protocol",), quiet))
 
 
-def test_a_run_simulates_each_conditions_frame_count_once(config, monkeypatch):
-    """Opening a config checks it and then each named protocol's overlay over it; the frames of
-    a condition whose study the overlays leave as it was (the STA study's, here as a study that
-    does not count its frames from its protocol, as one from outside the package) are
-    simulated once, not once per overlay."""
-    monkeypatch.setattr(study_config, "_FRAMES", {}, raising=False)
-    uncounted = dataclasses.replace(hip_sta.STUDY, frame_count=None)
-    studies = study_config.get_study
-    monkeypatch.setattr(
-        study_config, "get_study", lambda name: uncounted if name == "hip_sta" else studies(name)
-    )
-    simulated: list[int] = []
-    pelvis_frame = hip_sta.thigh_in_pelvis_frame
-
-    def counted(pelvis, thigh):
-        simulated.append(pelvis.shape[1])
-        return pelvis_frame(pelvis, thigh)
-
-    monkeypatch.setattr(hip_sta, "thigh_in_pelvis_frame", counted)
+def test_checking_a_config_and_its_named_overlays_simulates_no_trial(config, monkeypatch):
+    """Every study declares its frame count: opening a config checks it and each named
+    protocol's overlay over it without simulating a trial of any study."""
+    _simulating_is_an_error(monkeypatch)
     study_config.check_config(config)
     assert config["sensitivity"]["named"], "no named overlay to check over the config"
     study_config.named_overlays(config, ROOT)
-    assert len(simulated) == len(study_config.conditions(config, "hip_sta"))
+
+
+def _simulating_is_an_error(monkeypatch) -> None:
+    """The config's check sees every study with a simulator that raises ``AssertionError``."""
+    studies = study_config.get_study
+    monkeypatch.setattr(
+        study_config,
+        "get_study",
+        lambda name: dataclasses.replace(studies(name), simulate=_never_simulated),
+    )
+
+
+def _never_simulated(condition, protocol, rngs):
+    raise AssertionError("a trial was simulated to check the config")
 
 
 # Protocols whose trials would not fit in memory: a few digits too many in the frame count.
@@ -685,11 +740,7 @@ def test_trials_too_long_to_hold_are_refused_naming_their_frames_before_any_simu
     """Every study of the package counts its trials' frames from its protocol: the check
     simulates nothing (here, a simulation is an error), and refuses the protocol as a
     mistake rather than ending in a MemoryError or an allocation of gigabytes."""
-
-    def simulated(*_arguments):
-        raise AssertionError(f"the {study} check simulated a trial to count its frames")
-
-    monkeypatch.setattr(study_config, "_simulated_frames", simulated)
+    _simulating_is_an_error(monkeypatch)
     bad = changed(config, study, ("protocol",), overrides)
     with pytest.raises(ValueError) as raised:
         study_config.check_config(bad)

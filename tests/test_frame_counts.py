@@ -1,13 +1,15 @@
 """A condition's frame count, which the config's check holds against the fewest frames every
-listed estimator fits, read from the study's protocol where the study says how
-(:attr:`~jointbench.simulate.Study.frame_count`), without simulating a trial; a study that does
-not say (one from outside the package) has one trial of each condition simulated."""
+listed estimator fits, read from the study's protocol
+(:attr:`~jointbench.simulate.Study.frame_count`), without simulating a trial: every study
+declares it, one from outside the package too, so that no size typed a few digits too long in
+its config is simulated at plan time (a ``MemoryError``, or a simulator looping for hours)."""
 
 from __future__ import annotations
 
 import copy
 import dataclasses
 import os
+import shutil
 import subprocess
 import sys
 
@@ -21,6 +23,7 @@ from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators.batching import ProgrammingError
 from jointbench.running import run
+from jointbench.simulate import Study
 
 FOURTH = ROOT / "tests" / "data" / "fourth_study"
 
@@ -65,16 +68,54 @@ def test_a_declared_frame_count_is_the_simulated_trials(name, forget_registratio
         protocol = spec.protocol(settings.get("protocol"))
         for condition in study_config.conditions(config, study):
             simulated = _simulated_frames(spec, protocol, condition)
-            counted = study_config.trial_frames(spec, protocol, settings.get("protocol"), condition)
+            counted = study_config.trial_frames(spec, protocol, condition)
             assert counted == simulated, (study, condition)
 
 
-def test_the_sta_study_declares_its_frame_count_and_an_outside_study_need_not(
-    forget_registrations,
-):
-    assert get_study("hip_sta").frame_count is not None
+def test_an_outside_study_declares_its_frame_count(forget_registrations):
     _fourth()
-    assert get_study("toy").frame_count is None
+    assert get_study("toy").frame_count is not None
+
+
+def test_a_study_that_does_not_declare_its_frame_count_is_refused_naming_it_and_what_to_add():
+    uncounted = {f.name: getattr(get_study("cmc"), f.name) for f in dataclasses.fields(Study)}
+    uncounted.update(name="uncounted", frame_count=None)
+    with pytest.raises(ValueError, match=r"study 'uncounted'.*frame_count=.*condition, protocol"):
+        Study(**uncounted)
+
+
+def test_an_extension_whose_study_counts_no_frames_is_refused_naming_its_file(
+    tmp_path, forget_registrations
+):
+    source = (FOURTH / "toy_study.py").read_text()
+    declaration = "    frame_count=frame_count,\n"
+    assert declaration in source, "the example no longer declares its frame count so"
+    (tmp_path / "toy_study.py").write_text(source.replace(declaration, ""))
+    shutil.copy(FOURTH / "paper_t.yaml", tmp_path)
+    paths = [ROOT / "config" / "config.yaml", FOURTH / "toy.yaml"]
+    with pytest.raises(ValueError, match=r"toy_study\.py.*study 'toy'.*frame_count"):
+        study_config.open_config(study_config.read_configs(paths), tmp_path)
+
+
+@pytest.mark.parametrize("frames", [10**13, 10**8])
+def test_an_outside_studys_frame_count_typed_too_long_is_refused_without_simulating(
+    frames, monkeypatch, forget_registrations
+):
+    """The toy simulator lays out every frame (``linspace``) and loops over them in Python: at
+    1e13 frames that is a ``MemoryError``, at 1e8 minutes of looping; the check reads the count
+    the study declares and refuses it naming the protocol, before any trial is simulated."""
+    config = study_config.read_configs([ROOT / "config" / "config.yaml", FOURTH / "toy.yaml"])
+    config["studies"]["toy"]["protocol"] = {"n_frames": frames}
+    monkeypatch.setattr(np, "linspace", _never_called)
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config(config, FOURTH)
+    message = str(raised.value)
+    assert message.startswith("config: studies.toy.protocol: condition "), message
+    assert f"{frames} frame(s)" in message, message
+
+
+def _never_called(*args, **kwargs):
+    raise AssertionError("a trial was simulated to count its frames")
 
 
 def test_checking_the_default_config_runs_no_compiled_kernel():
@@ -104,3 +145,18 @@ def test_a_study_whose_trials_miss_its_declared_frame_count_is_refused_when_simu
     monkeypatch.setattr(run, "get_study", lambda name: wrong)
     with pytest.raises(ProgrammingError, match=r"hip_sta.*motion-.*declares \d+ frames.*\d+"):
         run.simulate_condition(config, "hip_sta", condition, range(1))
+
+
+def test_a_frame_count_that_is_no_whole_number_is_the_studys_mistake(monkeypatch):
+    """A count the study gives as 120.0 (or None from a function that forgot to return) is a
+    programming error in the study, raised as one naming it, not a refusal of the config."""
+    config = _default()
+    fractional = dataclasses.replace(
+        get_study("cmc"), frame_count=lambda condition, protocol: float(protocol.n_frames)
+    )
+    studies = study_config.get_study
+    monkeypatch.setattr(
+        study_config, "get_study", lambda name: fractional if name == "cmc" else studies(name)
+    )
+    with pytest.raises(TypeError, match=r"study 'cmc'.*frame_count gave 120\.0.*whole number"):
+        study_config.check_config(config)

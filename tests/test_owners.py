@@ -45,6 +45,7 @@ def _study(**extra) -> Study:
         segments=("moving",),
         protocol_class=_Protocol,
         simulate=_simulate,
+        frame_count=lambda condition, protocol: 20,
         **extra,
     )
 

@@ -110,13 +110,15 @@ def test_dry_run_stops_before_any_job_naming_the_pelvis_cluster(tmp_path):
 
 
 def test_a_recording_too_long_to_hold_is_refused_naming_its_frames_not_a_memory_error(config):
-    """A typo in ``duration_s`` makes trials of more frames than any job can hold: the check
-    refuses it as a mistake, before the pelvis check tries to lay out the motion's frames."""
+    """A ``duration_s`` within a day (its declared bound) and an ``fps`` within what cameras
+    record (``jointbench.simulate.ranges``) can still make trials of more frames than any job
+    can hold: the check refuses them as a mistake, before the pelvis check tries to lay out the
+    motion's frames."""
     with pytest.raises(ValueError) as raised:
-        study_config.check_config(_with_protocol(config, {"duration_s": 1e12}))
+        study_config.check_config(_with_protocol(config, {"duration_s": 86400, "fps": 1e4}))
     message = str(raised.value)
     assert message.startswith("config: studies.hip_sta.protocol: condition "), message
-    assert "50000000000000 frame(s)" in message, message
+    assert "864000000 frame(s)" in message, message
 
 
 def test_a_recording_of_no_frames_is_refused_for_its_frames_without_a_numpy_warning(config):

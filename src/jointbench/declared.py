@@ -38,6 +38,7 @@ __all__ = [
     "Positive",
     "Range",
     "Vector3",
+    "below",
     "check",
     "check_fields",
     "describe",
@@ -59,9 +60,7 @@ class Range:
     exclusive_minimum: bool = False
 
     def __contains__(self, value: float) -> bool:
-        if self.minimum is not None and (
-            value <= self.minimum if self.exclusive_minimum else value < self.minimum
-        ):
+        if self.minimum is not None and below(value, self.minimum, self.exclusive_minimum):
             return False
         return self.maximum is None or value <= self.maximum
 
@@ -73,6 +72,14 @@ class Range:
         if self.maximum is not None:
             words.append(f"<= {self.maximum:g}")
         return words
+
+
+def below(value: float, minimum: float, exclusive: bool = False) -> bool:
+    """Whether ``value`` is below ``minimum`` (or equal to it, ``exclusive``). ``-0.0`` is below
+    ``0``: numpy honours its sign (a normal draw of scale ``-0.0`` is refused, "scale < 0")."""
+    if value == minimum and math.copysign(1.0, value) < math.copysign(1.0, minimum):
+        return True
+    return value <= minimum if exclusive else value < minimum
 
 
 @dataclass(frozen=True)
@@ -197,8 +204,12 @@ def _sequence(base: object, metadata: tuple) -> tuple[Length, object]:
 
 
 def _items(count: str, item: object) -> str:
-    plain = {int: "integers", float: "numbers"}.get(item)
-    return f"{count} {plain}" if plain else f"a list of {count} items, each {describe(item)}"
+    base, metadata = _split(item)
+    plain = {int: "integers", float: "numbers"}.get(base)
+    if plain is None:
+        return f"a list of {count} items, each {describe(item)}"
+    bounds = _metadata(metadata, Range)
+    return f"{count} {plain}" + (f" (each {' and '.join(bounds.words())})" if bounds else "")
 
 
 def _is_number(value: object, base: object) -> bool:

@@ -19,6 +19,8 @@ import numpy as np
 
 from jointbench.simulate.hip import distal_rotation
 from jointbench.simulate.hip_sta import hip_angles
+from jointbench.simulate.noise import largest_noise_mm
+from jointbench.simulate.ranges import RESOLUTION_MM
 
 __all__ = [
     "AA_RATIO_BELOW",
@@ -67,17 +69,34 @@ HIP_ROTATIONS = ("swing_deg", "cross_swing_deg", "twist_deg")
 HIP_FEWEST_AXES = 2
 #: [mm] The least turn of a distal marker that counts a hip rig rotation as moving, whatever
 #: the noise: with ``noise_mm`` 0 the noise no longer sets a floor, and a rotation turning no
-#: marker by a hundredth of a millimetre (a tenth of what optical motion capture resolves) is no
-#: motion a recording of the rig could show; the estimators would read it from the rounding of
-#: the simulated coordinates alone.
-HIP_RESOLUTION_MM = 0.01
+#: marker by :data:`~jointbench.simulate.ranges.RESOLUTION_MM` (a tenth of what optical motion
+#: capture resolves) is no motion a recording of the rig could show; the estimators would read
+#: it from the rounding of the simulated coordinates alone.
+HIP_RESOLUTION_MM = RESOLUTION_MM
 #: Frequencies [Hz] of a study's periodic motions: a motion happens at a frequency above 0 (one
 #: that does not happen has amplitude 0) and below half the frame rate, beyond which the frames
 #: cannot show it (the sampling theorem: it would be recorded as a slower motion than the one
-#: configured). The hip rig's pendulum rotations; the skin-marker study's pelvis sway, one per
-#: world axis.
-HIP_FREQUENCIES = ("swing_hz", "cross_swing_hz", "twist_hz")
+#: configured). The hip rig's hand translations and rotations (one per world axis) and its
+#: pendulum rotations; the skin-marker study's pelvis sway, one per world axis.
+HIP_FREQUENCIES = (
+    "hand_translation_hz",
+    "hand_rotation_hz",
+    "swing_hz",
+    "cross_swing_hz",
+    "twist_hz",
+)
 HIP_STA_FREQUENCIES = ("pelvis_sway_hz",)
+#: Turns (or cycles) of a periodic motion over a stretch of a trial's frames are fewer than
+#: half those frames, as a frequency is below half the frame rate: the frames cannot show a
+#: faster motion (it would be recorded as a slower one than configured), and at 1e13 turns its
+#: phases are rounding alone. Checked for the motions the grid runs: the thumb's circumduction
+#: spiral; a hinge joint's FE and AA cycles where its motion uses them; the skin-marker study's
+#: circumduction, and its star (one sweep per plane) and the arc after it, each over its share
+#: of the trial (``star_fraction``).
+SAMPLED_PER_TURN = 2.0
+#: Hinge motions that use each cycles field (:func:`jointbench.simulate.hinge.joint_angles`).
+HINGE_CYCLES = {"fe_cycles": ("lissajous",), "aa_cycles": ("lissajous", "superimposed")}
+
 #: Marker clusters, each fitted as one rigid body (:func:`cluster_problem`): the hip rig's, and
 #: the skin-marker study's pelvis and thigh.
 HIP_CLUSTERS = ("proximal_markers_mm", "distal_markers_mm")
@@ -126,7 +145,39 @@ def translation_problem(value: float) -> str | None:
     )
 
 
+def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    return _turns_problem(
+        "protocol.spiral_turns, n_frames", protocol.spiral_turns, protocol.n_frames, "spiral turns"
+    )
+
+
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    return _hinge_cycles_problem(settings, protocol) or _aa_ratio_problem(settings)
+
+
+def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """:data:`SAMPLED_PER_TURN` for the cycles of each joint the grid runs, where its motion
+    uses them; named where the config sets them (the joint's own entry, else ``all``)."""
+    overrides = settings.get("protocol") or {}
+    for joint in settings["grid"]["protocol"]:
+        hinge = protocol.joints[joint]
+        for name, motions in HINGE_CYCLES.items():
+            if hinge.motion not in motions:
+                continue
+            own = name in overrides.get(joint, {})
+            where = "all" if not own and name in overrides.get("all", {}) else joint
+            problem = _turns_problem(
+                f"protocol.{where}.{name}, n_frames",
+                getattr(hinge, name),
+                hinge.n_frames,
+                f"{joint} {hinge.motion} cycles",
+            )
+            if problem:
+                return problem
+    return None
+
+
+def _aa_ratio_problem(settings: Mapping) -> tuple[str, str] | None:
     for ratio in settings["grid"]["aa_ratio"]:
         if not ratio < AA_RATIO_BELOW:
             return "grid.aa_ratio", (
@@ -140,16 +191,79 @@ def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return (
         _clusters_problem(protocol, HIP_CLUSTERS)
-        or _rotations_problem(protocol)
+        # The frequencies first: the rotations are laid out at them, over the frame rate.
         or _frequencies_problem(protocol, HIP_FREQUENCIES)
+        or _rotations_problem(protocol)
     )
 
 
 def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return (
         _clusters_problem(protocol, HIP_STA_CLUSTERS)
+        or _hip_sta_turns_problem(settings, protocol)
+        or _sta_reach_problem(settings, protocol)
         or pelvis_poses_problem(settings, protocol)
         or _frequencies_problem(protocol, HIP_STA_FREQUENCIES)
+    )
+
+
+def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """:data:`SAMPLED_PER_TURN` for the skin-marker study's motions the grid runs."""
+    motions = settings["grid"]["motion"]
+    n_frames, star = protocol.n_frames, protocol.star_fraction
+    frames = "duration_s, fps"  # the fields that set n_frames
+    stretches = []
+    if "star_arc" in motions:
+        stretches += [
+            (
+                f"protocol.star_azimuths_deg, star_fraction, {frames}",
+                len(protocol.star_azimuths_deg),
+                star * n_frames,
+                "star sweeps (one per azimuth)",
+            ),
+            (
+                f"protocol.arc_turns, star_fraction, {frames}",
+                protocol.arc_turns,
+                (1 - star) * n_frames,
+                "arc turns",
+            ),
+        ]
+    if "circumduction" in motions:
+        key = f"protocol.circumduction_turns, {frames}"
+        turns = protocol.circumduction_turns
+        stretches.append((key, turns, n_frames, "circumduction turns"))
+    return next((p for p in (_turns_problem(*stretch) for stretch in stretches) if p), None)
+
+
+def _turns_problem(key: str, turns: float, frames: float, what: str) -> tuple[str, str] | None:
+    """``(key, why)`` when ``turns`` of a periodic motion over ``frames`` frames are not fewer
+    than ``frames`` / :data:`SAMPLED_PER_TURN`, else None."""
+    if turns < frames / SAMPLED_PER_TURN:
+        return None
+    return key, (
+        f"{turns!r} {what} over {frames:.4g} frames are not fewer than half those frames: the "
+        "frames cannot show a motion of more than one turn per two frames (it would be "
+        "recorded as a slower one than configured)"
+    )
+
+
+def _sta_reach_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """The skin-marker study's artefact at the grid's largest ``sta_mm`` and ``rom_deg`` (it
+    grows linearly with the excursion, ``sta_mm`` at ``sta_reference_deg``) reaching further
+    than the farthest marker is from the joint: like noise that large
+    (:func:`~jointbench.simulate.noise.largest_noise_mm`), it measures nothing, and at a
+    reference excursion of 1e-300 deg it throws the markers 1e303 mm."""
+    grid = settings["grid"]
+    sta_mm, rom_deg = max(grid["sta_mm"]), max(grid["rom_deg"])
+    reach = sta_mm * rom_deg / protocol.sta_reference_deg
+    bound = largest_noise_mm(protocol.markers_from_joint())
+    if reach <= bound:
+        return None
+    return "protocol.sta_reference_deg", (
+        f"{protocol.sta_reference_deg!r} makes the grid's sta_mm {sta_mm:g} (defined at this "
+        f"excursion) reach {reach:.3g} mm RMS at its rom_deg {rom_deg:g}, further than the "
+        f"farthest marker is from the joint ({bound:.3g} mm): an artefact beyond the whole "
+        "segment's size measures nothing; raise sta_reference_deg or lower the grid's sta_mm"
     )
 
 
@@ -246,11 +360,13 @@ def line_spreads(markers_mm: Sequence[Sequence[float]]) -> tuple[float, float]:
 
 def _clusters_problem(protocol: object, names: Sequence[str]) -> tuple[str, str] | None:
     """The first of the clusters ``names`` (protocol fields) that :func:`cluster_problem`
-    refuses at the protocol's ``noise_mm``."""
+    refuses at the protocol's ``noise_mm``, naming ``noise_mm`` too where the cluster is
+    refused only beside that noise."""
     for name in names:
         problem = cluster_problem(getattr(protocol, name), protocol.noise_mm)
         if problem:
-            return f"protocol.{name}", problem
+            alone = cluster_problem(getattr(protocol, name), 0.0)
+            return f"protocol.{name}" + ("" if alone else ", noise_mm"), problem
     return None
 
 
@@ -264,7 +380,7 @@ def _frequencies_problem(protocol: object, names: Sequence[str]) -> tuple[str, s
         for part in value if per_axis else [value]:
             if not 0 < part < nyquist:
                 shown = f"{part!r} (of {list(value)!r})" if per_axis else f"{part!r}"
-                return f"protocol.{name}", (
+                return f"protocol.{name}, fps", (
                     f"{shown} is not > 0 and < {nyquist:g} Hz (half the frame rate, fps "
                     f"{protocol.fps:g}): a motion has a positive frequency (set its amplitude "
                     "to 0 for none), and the frames cannot show one at half the frame rate or "
@@ -278,15 +394,17 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
     (:func:`largest_turn_mm`), in words naming those configured that do not move and why."""
     t = np.arange(protocol.n_frames) / protocol.fps
     turns = largest_turn_mm(distal_rotation(protocol, t), protocol.distal_markers_mm)
-    moving = [name for name, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > 0]
+    configured = [name for name in HIP_ROTATIONS if getattr(protocol, name) != 0]
     floor, floor_words = _turn_floor(protocol)
     seen = [n for n, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > floor]
     if len(seen) >= HIP_FEWEST_AXES:
         return None
     which = f"only {', '.join(seen)}" if seen else "none"
-    unseen = [name for name in moving if name not in seen]
-    detail = ""
+    unseen = [name for name in configured if name not in seen]
+    detail, keys = "", list(HIP_ROTATIONS)
     if unseen:
+        # The recording's length is as much the culprit as the rotations configured in it.
+        keys += ["n_frames", "fps"]
         turned = ", ".join(f"{n} {turns[HIP_ROTATIONS.index(n)]:.3g} mm" for n in unseen)
         detail = (
             f"; the largest turn of a distal marker over the recording ({protocol.n_frames} "
@@ -294,7 +412,7 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
             "too small an amplitude, too slow a frequency or (the cross swing) too long a rise, "
             "cross_swing_rise_s, to be seen"
         )
-    return f"protocol.{', '.join(HIP_ROTATIONS)}", (
+    return f"protocol.{', '.join(keys)}", (
         f"{which} moving: the rig must rotate about at least {HIP_FEWEST_AXES} of the axes "
         "(paper C: the second segment 'moved around at least 2 of the axes'); about one, its "
         f"centre lies anywhere on that axis{detail}"
@@ -360,6 +478,7 @@ _ROUNDING = 1e-9
 
 
 _CHECKS: dict[str, Callable[[Mapping, object], tuple[str, str] | None]] = {
+    "cmc": _cmc,
     "hinge": _hinge,
     "hip": _hip,
     "hip_sta": _hip_sta,

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import inspect
 import itertools
-import json
+import numbers
 from collections.abc import Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
 
-import numpy as np
 import yaml
 
 from jointbench import declared
@@ -290,9 +289,12 @@ def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
         allowed = spec.grid_spec.get(key)
         for value in grid[key]:
             if allowed is not None and not allowed.accepts(value, protocol):
+                # A bound the protocol sets may be the protocol's mistake: say where it is.
+                by_protocol = f" (the bound studies.{spec.name}.protocol sets)"
+                source = by_protocol if allowed.by_protocol else ""
                 raise ValueError(
                     f"{where}.grid.{key}: {value!r} is not allowed; "
-                    f"allowed: {allowed.allowed(protocol)}"
+                    f"allowed: {allowed.allowed(protocol)}{source}"
                 )
         repeated = sorted({str(v) for v in grid[key] if grid[key].count(v) > 1})
         if repeated:
@@ -373,10 +375,10 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     fits (its :class:`~jointbench.estimators.registry.Claims`): all its rows would fail; or
     whose trials hold more than :data:`MAX_CONDITION_FRAMES` frames together.
 
-    The frames are the study's count from its protocol where it gives one, else counted on
-    one simulated trial per condition, so they are the simulator's, whatever key or protocol
-    field sets them (:func:`trial_frames`); what a trial holds is its recording's where the
-    study draws more frames than it keeps (:attr:`~jointbench.simulate.Study.recorded_frames`).
+    The frames are the study's count from its protocol (:func:`trial_frames`), which a job
+    holds its simulated trials to, whatever key or protocol field sets them; what a trial
+    holds is its recording's where the study draws more frames than it keeps
+    (:attr:`~jointbench.simulate.Study.recorded_frames`).
     External estimators declare no minimum and are not counted.
     """
     needs = {
@@ -386,11 +388,7 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     fewest = min(needs.values(), default=0)
     frames_key = next((key for key, values in spec.grid_spec.items() if values.frames), None)
     for condition in _cells(spec, settings["grid"]):
-        n_frames = trial_frames(spec, protocol, settings.get("protocol"), condition)
-        if isinstance(n_frames, ValueError):
-            raise ValueError(
-                f"{where}.grid: condition {condition_id(condition)}: {n_frames}"
-            ) from None
+        n_frames = trial_frames(spec, protocol, condition)
         culprit = f"grid.{frames_key}" if frames_key else "protocol"
         recorded = spec.recorded_frames(protocol) if spec.recorded_frames else n_frames
         if max(n_frames, recorded) * settings["trials"] > MAX_CONDITION_FRAMES:
@@ -410,46 +408,18 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
             )
 
 
-def _canonical(value: object) -> str:
-    """``value``, a config mapping or a condition, as text equal for equal values whatever
-    their keys' order."""
-    return json.dumps(value, sort_keys=True, default=repr)
-
-
-#: The frames of one simulated trial, by study (its name and object, which the entry holds so
-#: that its id is not another's), the config's protocol overrides and the condition
-#: (:func:`_canonical`): a run checks its config and then each named protocol's overlay over it
-#: (:func:`named_overlays`), which leave most studies' settings as they were, and a trial's
-#: frames are the same each time.
-_FRAMES: dict[tuple[str, int, str, str], tuple[Study, int | ValueError]] = {}
-
-
-def trial_frames(
-    spec: Study, protocol: object, overrides: Mapping | None, condition: Mapping
-) -> int | ValueError:
-    """The frames of a trial of ``spec``'s ``condition`` under ``protocol``, the study's
-    protocol of the config's ``overrides``: the study's count from its protocol
-    (:attr:`~jointbench.simulate.Study.frame_count`) where it gives one, else those of one
-    simulated trial, or the simulator's ``ValueError`` where it refuses them."""
-    if spec.frame_count is not None:
-        return spec.frame_count(condition, protocol)
-    return _simulated_frames(spec, protocol, _canonical(overrides), condition)
-
-
-def _simulated_frames(
-    spec: Study, protocol: object, overrides: str, condition: Mapping
-) -> int | ValueError:
-    """The frames of one trial of ``spec``'s ``condition`` simulated under ``protocol``, the
-    study's protocol of the config's ``overrides`` (:func:`_canonical`); the simulator's
-    ``ValueError`` where it refuses them."""
-    key = (spec.name, id(spec), overrides, _canonical(condition))
-    if key not in _FRAMES:
-        try:
-            trials = spec.simulate(condition, protocol, [np.random.default_rng(0)])
-            _FRAMES[key] = (spec, trials.segments[spec.segments[0]].shape[1])
-        except ValueError as error:
-            _FRAMES[key] = (spec, error)
-    return _FRAMES[key][1]
+def trial_frames(spec: Study, protocol: object, condition: Mapping) -> int:
+    """The frames of a trial of ``spec``'s ``condition`` under ``protocol``: the study's count
+    from its protocol (:attr:`~jointbench.simulate.Study.frame_count`), which every study
+    declares, so that none is simulated to be counted. ``TypeError`` naming the study where
+    the count is not a whole number: a mistake in the study, not in the config."""
+    n_frames = spec.frame_count(condition, protocol)
+    if isinstance(n_frames, bool) or not isinstance(n_frames, numbers.Integral):
+        raise TypeError(
+            f"study {spec.name!r}: its frame_count gave {n_frames!r} for condition "
+            f"{condition_id(condition)}, not a whole number of frames"
+        )
+    return int(n_frames)
 
 
 def study_names(config: Mapping) -> list[str]:

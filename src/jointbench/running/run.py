@@ -82,8 +82,6 @@ def _check_frame_count(
     """Refuse ``trials`` whose frames are not those ``spec`` declares for ``condition`` under
     ``protocol``: the config's check held the declared count, not these, against the
     estimators' fewest frames."""
-    if spec.frame_count is None:
-        return
     declared = spec.frame_count(condition, protocol)
     frames = trials.segments[spec.segments[0]].shape[1]
     if frames != declared:

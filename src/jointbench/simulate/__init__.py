@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.declared import check_fields
+from jointbench.declared import below, check_fields
 from jointbench.simulate.noise import isotropic_noise
 
 __all__ = [
@@ -110,6 +110,12 @@ class GridValues:
             words.append(f"<= {maximum:g}")
         return " ".join(words[:2]) + "".join(f" and {w}" for w in words[2:])
 
+    @property
+    def by_protocol(self) -> bool:
+        """Whether the study's protocol sets the allowed values (:attr:`maximum` or
+        :attr:`choices` a function of it)."""
+        return callable(self.maximum) or callable(self.choices)
+
     def accepts(self, value, protocol) -> bool:
         """Whether ``value`` (as YAML gives it) is one of the allowed values."""
         if self.type is str:
@@ -119,9 +125,7 @@ class GridValues:
         numeric = (int,) if self.type is int else (int, float)
         if isinstance(value, bool) or not isinstance(value, numeric) or not math.isfinite(value):
             return False
-        if self.minimum is not None and (
-            value <= self.minimum if self.exclusive_minimum else value < self.minimum
-        ):
+        if self.minimum is not None and below(value, self.minimum, self.exclusive_minimum):
             return False
         maximum = self._resolve(self.maximum, protocol)
         return maximum is None or value <= maximum
@@ -196,11 +200,12 @@ class Study:
     one-segment centre methods fit them, e.g. ``{"center": ("distal_in_proximal",)}``. Every
     kind of a study must share its truth (the point or axis its errors are measured from).
 
-    ``frame_count`` gives the frames of a condition's trials under a protocol
+    ``frame_count`` (required) gives the frames of a condition's trials under a protocol
     (``frame_count(condition, protocol)``) without simulating them: the config's check of each
-    condition's frames counts them so where a study says how (every study of the package: a
-    frame count typed a few digits too long is then refused, not simulated), and simulates one
-    trial of each condition where it does not. ``recorded_frames`` gives the frames each
+    condition's frames counts them so, and simulates nothing, so a size typed a few digits too
+    long in a study's config is refused before any job, not laid out in a ``MemoryError`` or
+    looped over for hours (a job refuses trials whose frames are not those declared).
+    ``recorded_frames`` gives the frames each
     trial's simulation draws under a protocol (``recorded_frames(protocol)``) where it keeps
     fewer of them (paper C's trials are the first ``Nt`` frames of one recording drawn whole):
     what a job holds, which the check bounds.
@@ -255,6 +260,14 @@ class Study:
                     f"the string {check.columns!r}; write them as a tuple of names: "
                     f"({check.columns!r},)"
                 )
+        if self.frame_count is None:
+            raise ValueError(
+                f"study {self.name!r}: declare its trials' frames, frame_count=, a function of "
+                "(condition, protocol) giving the frames of every trial of that condition "
+                "(e.g. frame_count=lambda condition, protocol: protocol.n_frames): the config's "
+                "check counts each condition's frames from it before any job, without "
+                "simulating a trial"
+            )
         if self.grid_spec and tuple(self.grid_spec) != self.grid_keys:
             raise ValueError(
                 f"study {self.name!r}: grid_spec keys {tuple(self.grid_spec)} must be the grid "

@@ -57,6 +57,7 @@ from jointbench.geometry import rotation_matrix, unit
 from jointbench.simulate import RADII_TRUTH, Diagnostic, GridValues, Study, Trials
 from jointbench.simulate.noise import isotropic_noise, largest_noise_mm
 from jointbench.simulate.prior import Choice, Prior
+from jointbench.simulate.ranges import LabPoint, MarkerDistance
 
 __all__ = [
     "LOCAL_MINIMUM",
@@ -104,14 +105,14 @@ class CmcProtocol:
     directions: dict[str, Annotated[tuple[Vector3, ...], Length(1)]] = field(
         default_factory=lambda: _as_tuples(_DEFAULT_DIRECTIONS)
     )
-    distances_mm: dict[str, Annotated[tuple[Positive, ...], Length(1)]] = field(
+    distances_mm: dict[str, Annotated[tuple[MarkerDistance, ...], Length(1)]] = field(
         default_factory=lambda: _as_tuples(_TABLE_1_DISTANCES_MM)
     )
     # No turns is a swing in one plane: a hinge, whose centre the fits cannot place (flagged).
     spiral_turns: NonNegative = 2.0
     tilt_power: Positive = 1.0
     n_frames: Count = 120
-    center_mm: Vector3 = (20.0, -25.0, -30.0)
+    center_mm: LabPoint = (20.0, -25.0, -30.0)
 
     def __post_init__(self) -> None:
         for name in {**self.directions, **self.distances_mm}:
@@ -131,8 +132,13 @@ class CmcProtocol:
                     f"marker set {name!r}",
                 )
             for index, direction in enumerate(directions):
-                if not any(direction):
-                    raise DeclarationError(("directions", name, index), "is zero, not a direction")
+                if not _normalisable(direction):
+                    raise DeclarationError(
+                        ("directions", name, index),
+                        f"{list(direction)!r} is not a direction whose length can be divided "
+                        "out: its squared length must be a positive, finite, normal number "
+                        "(components of about 1e-150 to 1e150; zero is no direction)",
+                    )
 
     @property
     def largest_noise_mm(self) -> float:
@@ -150,6 +156,14 @@ class CmcProtocol:
             if key in overrides:
                 overrides[key] = {**getattr(cls(), key), **_as_tuples(overrides[key])}
         return cls(**overrides)
+
+
+def _normalisable(direction: Sequence[float]) -> bool:
+    """Whether ``direction`` ``(3,)`` (any length) has a unit vector :func:`unit` computes: its
+    squared length neither overflows nor falls to zero or below the normal numbers, where the
+    division would give inf, NaN or a vector of another length than 1."""
+    squared = sum(float(c) * float(c) for c in direction)
+    return np.finfo(float).tiny <= squared < np.inf
 
 
 def marker_positions(protocol: CmcProtocol, marker_set: str) -> np.ndarray:

@@ -76,11 +76,12 @@ from typing import Annotated, Literal
 
 import numpy as np
 
-from jointbench.declared import DeclarationError, Length, NonNegative, Positive, Range, Vector3
+from jointbench.declared import DeclarationError, Length, NonNegative, Positive, Range
 from jointbench.declared import check_fields as check_declared
 from jointbench.geometry import rotation_about_axis
 from jointbench.simulate import Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
+from jointbench.simulate.ranges import Angle, MarkerOffset, check_marker_offsets
 
 __all__ = [
     "FE_AXIS",
@@ -139,12 +140,12 @@ class HingeProtocol:
 
     name: str
     marker_names: Annotated[tuple[str, ...], Length(1)]
-    markers_mm: Annotated[tuple[Vector3, ...], Length(1)]
+    markers_mm: Annotated[tuple[MarkerOffset, ...], Length(1)]
     motion: Motion = "grid"
     rom_convention: RomConvention = "full"
     fe_cycles: Positive = 1.0
     aa_cycles: Positive = 2.0
-    aa_phase_deg: float = 0.0
+    aa_phase_deg: Angle = 0.0
     rotation_order: RotationOrder = "fe_aa"
     noise_sd_mm: NonNegative = 1.0
     # Four frames: the fewest of a "grid" motion (2 x 2) and of the axis searches.
@@ -165,7 +166,8 @@ class HingeProtocol:
                 ("n_frames",), f"motion 'grid' needs a square n_frames, got {self.n_frames}"
             )
         # The joint centre is the origin of the frame the markers are given in.
-        check_noise_level("noise_sd_mm", self.noise_sd_mm, np.array(markers))
+        check_marker_offsets("markers_mm", markers)
+        check_noise_level("noise_sd_mm", self.noise_sd_mm, np.array(markers), ("markers_mm",))
 
     @property
     def markers(self) -> np.ndarray:

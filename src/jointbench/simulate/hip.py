@@ -50,7 +50,7 @@ from typing import Annotated
 
 import numpy as np
 
-from jointbench.declared import Length, NonNegative, Positive, Range, Vector3
+from jointbench.declared import Length, NonNegative, Range, Vector3
 from jointbench.declared import check_fields as check_declared
 from jointbench.estimators.batching import failed_trial
 from jointbench.estimators.registry import many
@@ -60,6 +60,15 @@ from jointbench.running.scoring import score
 from jointbench.simulate import PROXIMAL_TRUTH, Diagnostic, GridValues, Study, Trials
 from jointbench.simulate.noise import check_noise_level, isotropic_noise
 from jointbench.simulate.prior import Choice, Prior
+from jointbench.simulate.ranges import (
+    FrameRate,
+    LabPoint,
+    MarkerOffset,
+    Rotation,
+    Rotations,
+    TimeConstant,
+    check_marker_offsets,
+)
 
 __all__ = [
     "DISTAL_TRUTH",
@@ -120,30 +129,30 @@ class HipProtocol:
 
     # Three frames: the fewest in which two segments' relative rotation can be seen at all.
     n_frames: Annotated[int, Range(3)] = 1200
-    fps: Positive = 60.0
+    fps: FrameRate = 60.0
     noise_mm: NonNegative = 1.7
-    joint_mm: Vector3 = (0.0, 0.0, 1000.0)
+    joint_mm: LabPoint = (0.0, 0.0, 1000.0)
     # Three markers: the fewest that give a segment's pose.
-    proximal_markers_mm: Annotated[tuple[Vector3, ...], Length(3)] = (
+    proximal_markers_mm: Annotated[tuple[MarkerOffset, ...], Length(3)] = (
         (90.0, 0.0, 500.0),
         (-60.0, 90.0, 520.0),
         (-50.0, -100.0, 480.0),
     )
-    distal_markers_mm: Annotated[tuple[Vector3, ...], Length(3)] = (
+    distal_markers_mm: Annotated[tuple[MarkerOffset, ...], Length(3)] = (
         (80.0, 20.0, -500.0),
         (-70.0, 80.0, -470.0),
         (-30.0, -90.0, -530.0),
     )
-    hand_translation_mm: Vector3 = (40.0, 30.0, 20.0)
+    hand_translation_mm: LabPoint = (40.0, 30.0, 20.0)
     hand_translation_hz: Vector3 = (0.21, 0.13, 0.31)
-    hand_rotation_deg: Vector3 = (4.0, 3.0, 5.0)
+    hand_rotation_deg: Rotations = (4.0, 3.0, 5.0)
     hand_rotation_hz: Vector3 = (0.17, 0.29, 0.11)
-    swing_deg: float = 35.0
+    swing_deg: Rotation = 35.0
     swing_hz: float = 0.75
-    cross_swing_deg: float = 25.0
+    cross_swing_deg: Rotation = 25.0
     cross_swing_hz: float = 0.7
-    cross_swing_rise_s: Positive = 3.0
-    twist_deg: float = 8.0
+    cross_swing_rise_s: TimeConstant = 3.0
+    twist_deg: Rotation = 8.0
     twist_hz: float = 0.23
     # The frame-0 control: the same trials (the same draws) with frame 0 recorded exactly, so
     # that both body frames are placed without error and eq. 2's single centre exists.
@@ -162,8 +171,11 @@ class HipProtocol:
             "hand_rotation_hz",
         ):
             set_(self, name, _triple(getattr(self, name)))
+        check_marker_offsets("proximal_markers_mm", self.proximal_markers_mm)
+        check_marker_offsets("distal_markers_mm", self.distal_markers_mm)
         markers = (*self.proximal_markers_mm, *self.distal_markers_mm)  # relative to the joint
-        check_noise_level("noise_mm", self.noise_mm, np.array(markers))
+        clusters = ("proximal_markers_mm", "distal_markers_mm")
+        check_noise_level("noise_mm", self.noise_mm, np.array(markers), clusters)
 
     @classmethod
     def from_config(cls, overrides: Mapping[str, object] | None = None) -> HipProtocol:

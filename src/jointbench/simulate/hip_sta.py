@@ -104,6 +104,15 @@ from jointbench.screening import to_local
 from jointbench.simulate import GridValues, Study, Trials
 from jointbench.simulate.hip import _jsonable, _triple, _triples
 from jointbench.simulate.noise import check_noise_level, isotropic_noise, largest_noise_mm
+from jointbench.simulate.ranges import (
+    Angle,
+    Duration,
+    FrameRate,
+    LabPoint,
+    MarkerOffset,
+    Rotations,
+    check_marker_offsets,
+)
 
 __all__ = [
     "MOTIONS",
@@ -136,30 +145,30 @@ class HipStaProtocol:
     ``pelvis_sta_ratio`` times the thigh's. See the module docstring for the formulas.
     """
 
-    duration_s: Positive = 12.0
-    fps: Positive = 50.0
+    duration_s: Duration = 12.0
+    fps: FrameRate = 50.0
     noise_mm: NonNegative = 1.7
-    joint_mm: Vector3 = (0.0, -90.0, 900.0)
+    joint_mm: LabPoint = (0.0, -90.0, 900.0)
     # Bell et al. (1989) from the ASIS, inter-ASIS distance 240 mm; PSIS our choice.
-    pelvis_markers_mm: Annotated[tuple[Vector3, ...], Length(3)] = (
+    pelvis_markers_mm: Annotated[tuple[MarkerOffset, ...], Length(3)] = (
         (52.8, -33.6, 72.0),
         (52.8, 206.4, 72.0),
         (-107.2, 41.4, 85.0),
         (-107.2, 131.4, 85.0),
     )
     # Four skin markers on the lateral right thigh (lateral is -y).
-    thigh_markers_mm: Annotated[tuple[Vector3, ...], Length(3)] = (
+    thigh_markers_mm: Annotated[tuple[MarkerOffset, ...], Length(3)] = (
         (40.0, -95.0, -150.0),
         (-40.0, -95.0, -170.0),
         (45.0, -85.0, -330.0),
         (-35.0, -80.0, -350.0),
     )
-    star_azimuths_deg: Annotated[tuple[float, ...], Length(1)] = (0.0, 45.0, 90.0, 135.0, 180.0)
+    star_azimuths_deg: Annotated[tuple[Angle, ...], Length(1)] = (0.0, 45.0, 90.0, 135.0, 180.0)
     star_fraction: Annotated[float, Range(0, 1, exclusive_minimum=True)] = 0.7
     arc_turns: Positive = 1.0
     circumduction_turns: Positive = 3.0
-    pelvis_sway_mm: Vector3 = (8.0, 8.0, 4.0)
-    pelvis_sway_deg: Vector3 = (2.0, 2.0, 3.0)
+    pelvis_sway_mm: LabPoint = (8.0, 8.0, 4.0)
+    pelvis_sway_deg: Rotations = (2.0, 2.0, 3.0)
     pelvis_sway_hz: Vector3 = (0.13, 0.21, 0.17)
     sta_reference_deg: Annotated[float, Range(0, 180, exclusive_minimum=True)] = 30.0
     sta_rigid_share: Annotated[float, Range(0, 1)] = 0.8
@@ -172,7 +181,10 @@ class HipStaProtocol:
         set_(self, "star_azimuths_deg", tuple(float(a) for a in self.star_azimuths_deg))
         for name in ("joint_mm", "pelvis_sway_mm", "pelvis_sway_deg", "pelvis_sway_hz"):
             set_(self, name, _triple(getattr(self, name)))
-        check_noise_level("noise_mm", self.noise_mm, self.markers_from_joint())
+        check_marker_offsets("pelvis_markers_mm", self.pelvis_markers_mm)
+        check_marker_offsets("thigh_markers_mm", self.thigh_markers_mm)
+        clusters = ("pelvis_markers_mm", "thigh_markers_mm")
+        check_noise_level("noise_mm", self.noise_mm, self.markers_from_joint(), clusters)
 
     @classmethod
     def from_config(cls, overrides: Mapping[str, object] | None = None) -> HipStaProtocol:

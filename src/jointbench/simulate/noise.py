@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pickle
 from collections import OrderedDict
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -89,13 +90,16 @@ def largest_noise_mm(markers_mm: np.ndarray) -> float:
     return float(np.linalg.norm(np.reshape(markers_mm, (-1, 3)), axis=-1).max())
 
 
-def check_noise_level(name: str, noise_mm: float, markers_mm: np.ndarray) -> None:
-    """Raise :class:`~jointbench.declared.DeclarationError` at ``name`` when ``noise_mm`` is above
-    :func:`largest_noise_mm` of ``markers_mm``."""
+def check_noise_level(
+    name: str, noise_mm: float, markers_mm: np.ndarray, markers_names: Sequence[str]
+) -> None:
+    """Raise :class:`~jointbench.declared.DeclarationError` at ``name`` and the fields
+    ``markers_names`` that hold ``markers_mm`` (the bound is theirs as much) when ``noise_mm``
+    is above :func:`largest_noise_mm` of ``markers_mm``."""
     bound = largest_noise_mm(markers_mm)
     if noise_mm > bound:
         raise DeclarationError(
-            (name,),
+            (", ".join([name, *markers_names]),),
             f"must be <= {bound:g} mm (the farthest marker's distance from the joint centre: "
             f"noise beyond the whole segment's size measures nothing), got {noise_mm!r}",
         )

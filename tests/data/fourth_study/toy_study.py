@@ -48,6 +48,12 @@ def simulate(condition, protocol: ToyProtocol, rngs) -> Trials:
     return Trials(segments={"moving": noisy}, truth={"center": CENTRE.tolist()})
 
 
+def frame_count(condition, protocol: ToyProtocol) -> int:
+    """The frames of every trial: read from the protocol, so that the config's check counts
+    them without simulating one."""
+    return protocol.n_frames
+
+
 @register("center", "toy-centroid")
 def fit_centroid(markers: np.ndarray) -> CenterResult:
     """The mean marker position, (n_frames, n_markers, 3) [mm] -> (3,) [mm]: a user's estimator."""
@@ -68,6 +74,7 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=ToyProtocol,
     simulate=simulate,
+    frame_count=frame_count,
     # What each grid key allows: checked before any job runs, naming the key.
     grid_spec={"noise_mm": GridValues(float, minimum=0)},
 )

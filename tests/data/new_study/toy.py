@@ -44,6 +44,7 @@ STUDY = Study(
     segments=("moving",),
     protocol_class=ToyProtocol,
     simulate=simulate,
+    frame_count=lambda condition, protocol: protocol.n_frames,
     grid_spec={"noise_mm": GridValues(float, minimum=0, label="noise", text="σ {:g} mm")},
     title="toy centre",
 )
