@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -402,3 +403,22 @@ def test_the_marker_gains_are_the_fits_hat_and_place_the_point_covariance():
         )
         hat = gains_of(body, body).transpose(0, 2, 1, 3).reshape(9, 9)
         np.testing.assert_allclose(hat @ hat, hat, atol=1e-12)
+
+
+@pytest.mark.parametrize("frame0", [False, True])
+def test_a_correction_that_is_not_a_number_ends_the_fit_unconverged(frame0):
+    """A correction that is not a number (here from a residual that is not one) stops the
+    iteration with its step NaN, as not converged: never as a step of zero read as
+    convergence, which would state a centre of NaN as "ok"."""
+    proximal, distal = two_segments(20)
+    proximal, distal = _noisy(proximal, 5), _noisy(distal, 6)
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    method = "gauss-markov-frame0" if frame0 else "gauss-markov"
+    trial = hjc._prepared(poses["proximal"], poses["distal"], None, method)
+    y = trial.y.copy()
+    y[3, 1] = np.nan
+    broken = dataclasses.replace(trial, y=y)
+    done = hjc._iterated(broken, frame0=frame0, max_iterations=100, tol_mm=1e-6)
+    assert math.isnan(done.step)
+    result = hjc._result(broken, done, method, 1e-6)
+    assert not result.converged and result.status.startswith("did not converge")

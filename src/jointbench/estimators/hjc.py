@@ -501,8 +501,11 @@ def _relinearised(
                 + correction[3 * point + 1] ** 2
                 + correction[3 * point + 2] ** 2
             )
-            step = max(step, length)
-        if not step > tol_mm:  # NaN stops too
+            # Not max(): it keeps the larger of a comparison with NaN false, so a NaN correction
+            # would leave a step of 0 and read as converged.
+            if length > step or math.isnan(length):
+                step = length
+        if not step > tol_mm:  # a NaN step stops too, unconverged
             break
     chi2 = _frame_chi2(relative, local, at_joint, state, frame0, gains)
     if frame0:
