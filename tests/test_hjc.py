@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -322,22 +323,6 @@ def test_a_singular_gauss_markov_system_is_a_result_not_a_crash(monkeypatch, fra
         np.testing.assert_array_equal(result.center, single.diagnostics["analytic_center"])
 
 
-def test_the_normal_equations_solve_as_lapack_and_say_when_singular():
-    """The iteration's solve (partial pivoting) answers as ``np.linalg.solve`` and stops, as
-    LAPACK reports it, at an exactly zero pivot."""
-    rng = np.random.default_rng(4)
-    for k in (3, 9):
-        matrix = rng.normal(size=(k, k))
-        vector = rng.normal(size=k)
-        for solve in (hjc._solved, hjc._solved.__wrapped__):
-            solution = np.empty(k)
-            assert solve(matrix.copy(), vector, solution)
-            np.testing.assert_allclose(solution, np.linalg.solve(matrix, vector), rtol=1e-10)
-            singular = matrix.copy()
-            singular[:, 1] = 0.0
-            assert not solve(singular, vector, solution)
-
-
 def _frame0_covariance(proximal, distal, center, variance):
     """``s^2 (H^-1 + H^-1 (F_0 A_0 F_0' + F_1 A_1 F_1') H^-1)`` [mm^2] of paper C's centre with
     every term at ``center`` (``hjc`` module docstring, "Frame 0"), from the segments' poses."""
@@ -418,3 +403,22 @@ def test_the_marker_gains_are_the_fits_hat_and_place_the_point_covariance():
         )
         hat = gains_of(body, body).transpose(0, 2, 1, 3).reshape(9, 9)
         np.testing.assert_allclose(hat @ hat, hat, atol=1e-12)
+
+
+@pytest.mark.parametrize("frame0", [False, True])
+def test_a_correction_that_is_not_a_number_ends_the_fit_unconverged(frame0):
+    """A correction that is not a number (here from a residual that is not one) stops the
+    iteration with its step NaN, as not converged: never as a step of zero read as
+    convergence, which would state a centre of NaN as "ok"."""
+    proximal, distal = two_segments(20)
+    proximal, distal = _noisy(proximal, 5), _noisy(distal, 6)
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    method = "gauss-markov-frame0" if frame0 else "gauss-markov"
+    trial = hjc._prepared(poses["proximal"], poses["distal"], None, method)
+    y = trial.y.copy()
+    y[3, 1] = np.nan
+    broken = dataclasses.replace(trial, y=y)
+    done = hjc._iterated(broken, frame0=frame0, max_iterations=100, tol_mm=1e-6)
+    assert math.isnan(done.step)
+    result = hjc._result(broken, done, method, 1e-6)
+    assert not result.converged and result.status.startswith("did not converge")

@@ -116,3 +116,19 @@ def test_small_matrix_helpers_match_numpy():
     for trial in range(4):
         alone = small.rotated3(q[50 * trial : 50 * (trial + 1)], spd[trial])
         np.testing.assert_array_equal(per_trial[trial], alone)
+
+
+def test_the_small_solve_answers_as_lapack_and_says_when_singular():
+    """``solve_into`` (partial pivoting) answers as ``np.linalg.solve`` and stops, as LAPACK
+    reports it, at an exactly zero pivot."""
+    rng = np.random.default_rng(4)
+    for k in (3, 9):
+        matrix = rng.normal(size=(k, k))
+        vector = rng.normal(size=k)
+        for solve in (small.solve_into, small.solve_into.__wrapped__):
+            solution = np.empty(k)
+            assert solve(matrix.copy(), vector, solution)
+            np.testing.assert_allclose(solution, np.linalg.solve(matrix, vector), rtol=1e-10)
+            singular = matrix.copy()
+            singular[:, 1] = 0.0
+            assert not solve(singular, vector, solution)

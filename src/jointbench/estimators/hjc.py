@@ -177,11 +177,24 @@ from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
 from jointbench.numerics.small import (
+    add_block3,
+    add_upper3,
+    add_vector3,
+    identity_less9,
     inverse3_entries,
     inverse3_into,
     rotated3,
     rotated3_into,
     rotated3_upper,
+    rows9,
+    skew9,
+    solve_into,
+    symmetric9,
+    symmetric_applied9,
+    symmetric_times9,
+    transposed9,
+    transposed_applied9,
+    transposed_times9,
 )
 
 __all__ = [
@@ -477,7 +490,7 @@ def _relinearised(
                     return iterations, step, True, np.nan
             _pseudo_measurements(precisions, state, system, gradient)
         information[:, :] = system
-        if not _solved(system, gradient, correction):
+        if not solve_into(system, gradient, correction):
             return iterations, step, True, np.nan
         step = 0.0
         for point in range(k // 3):
@@ -488,8 +501,11 @@ def _relinearised(
                 + correction[3 * point + 1] ** 2
                 + correction[3 * point + 2] ** 2
             )
-            step = max(step, length)
-        if not step > tol_mm:  # NaN stops too
+            # Not max(): it keeps the larger of a comparison with NaN false, so a NaN correction
+            # would leave a step of 0 and read as converged.
+            if length > step or math.isnan(length):
+                step = length
+        if not step > tol_mm:  # a NaN step stops too, unconverged
             break
     chi2 = _frame_chi2(relative, local, at_joint, state, frame0, gains)
     if frame0:
@@ -554,22 +570,22 @@ def _frame_normal(
     gradient[:] = 0.0
     for t in range(local.shape[0]):
         weight = _local_weight(relative[t], at_joint[0], at_joint[1])
-        q = _rows9(relative[t])
+        q = rows9(relative[t])
         if frame0:
             residual = _local_residual(local[t], q, state[3:6], state[6:9])
-            u = _symmetric_times(weight, q)  # V Q
-            _add_upper(system, 3, 3, _symmetric9(weight), 1.0)
-            _add_block(system, 3, 6, u, -1.0)
-            _add_upper(system, 6, 6, _transposed_times(q, u), 1.0)
-            pulled = _symmetric_applied(weight, residual)
-            _add_vector(gradient, 3, pulled, 1.0)
-            _add_vector(gradient, 6, _transposed_applied(q, pulled), -1.0)
+            u = symmetric_times9(weight, q)  # V Q
+            add_upper3(system, 3, 3, symmetric9(weight), 1.0)
+            add_block3(system, 3, 6, u, -1.0)
+            add_upper3(system, 6, 6, transposed_times9(q, u), 1.0)
+            pulled = symmetric_applied9(weight, residual)
+            add_vector3(gradient, 3, pulled, 1.0)
+            add_vector3(gradient, 6, transposed_applied9(q, pulled), -1.0)
         else:
-            m = _identity_less(q)
+            m = identity_less9(q)
             residual = _local_residual(local[t], q, state[0:3], state[0:3])
-            u = _symmetric_times(weight, m)
-            _add_upper(system, 0, 0, _transposed_times(m, u), 1.0)
-            _add_vector(gradient, 0, _transposed_applied(u, residual), 1.0)
+            u = symmetric_times9(weight, m)
+            add_upper3(system, 0, 0, transposed_times9(m, u), 1.0)
+            add_vector3(gradient, 0, transposed_applied9(u, residual), 1.0)
     first = 3 if frame0 else 0
     for i in range(first, system.shape[0]):
         for j in range(i + 1, system.shape[0]):
@@ -593,15 +609,15 @@ def _frame_chi2(
     gains[:, :, :] = 0.0
     for t in range(local.shape[0]):
         weight = _local_weight(relative[t], at_joint[0], at_joint[1])
-        q = _rows9(relative[t])
+        q = rows9(relative[t])
         if frame0:
             residual = _local_residual(local[t], q, state[3:6], state[6:9])
         else:
             residual = _local_residual(local[t], q, state[0:3], state[0:3])
-            u = _symmetric_times(weight, _identity_less(q))
-            _add_block(gains[0], 0, 0, _transposed9(u), 1.0)
-            _add_block(gains[1], 0, 0, _transposed_times(u, q), 1.0)
-        weighted = _symmetric_applied(weight, residual)
+            u = symmetric_times9(weight, identity_less9(q))
+            add_block3(gains[0], 0, 0, transposed9(u), 1.0)
+            add_block3(gains[1], 0, 0, transposed_times9(u, q), 1.0)
+        weighted = symmetric_applied9(weight, residual)
         chi2 += residual[0] * weighted[0] + residual[1] * weighted[1] + residual[2] * weighted[2]
     return chi2
 
@@ -620,38 +636,6 @@ def _local_weight(relative: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple
     return inverse[0], inverse[1], inverse[2], inverse[4], inverse[5], inverse[8]
 
 
-# 3 x 3 matrices as 9 numbers by rows and symmetric ones as their upper triangle's 6, so that a
-# frame's terms stay in registers.
-
-
-@kernel
-def _rows9(a: np.ndarray) -> tuple:
-    """A ``(3, 3)`` matrix as 9 numbers by rows. A compiled kernel."""
-    return (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
-
-
-@kernel
-def _identity_less(q: tuple) -> tuple:
-    """``I - Q`` of a 9-number matrix. A compiled kernel."""
-    return (
-        1.0 - q[0],
-        -q[1],
-        -q[2],
-        -q[3],
-        1.0 - q[4],
-        -q[5],
-        -q[6],
-        -q[7],
-        1.0 - q[8],
-    )
-
-
-@kernel
-def _symmetric9(w: tuple) -> tuple:
-    """A symmetric matrix's upper triangle (6 numbers) as its 9 by rows. A compiled kernel."""
-    return (w[0], w[1], w[2], w[1], w[3], w[4], w[2], w[4], w[5])
-
-
 @kernel
 def _local_residual(z: np.ndarray, q: tuple, u: np.ndarray, v: np.ndarray) -> tuple:
     """``z - u + Q v`` ``(3,)`` for a 9-number ``Q`` and ``(3,)`` vectors: a frame's residual
@@ -661,87 +645,6 @@ def _local_residual(z: np.ndarray, q: tuple, u: np.ndarray, v: np.ndarray) -> tu
         z[1] - u[1] + (q[3] * v[0] + q[4] * v[1] + q[5] * v[2]),
         z[2] - u[2] + (q[6] * v[0] + q[7] * v[1] + q[8] * v[2]),
     )
-
-
-@kernel
-def _symmetric_times(w: tuple, m: tuple) -> tuple:
-    """``W M`` for a symmetric ``W`` (upper triangle, 6 numbers) and a 9-number ``M``: 9
-    numbers. A compiled kernel."""
-    w00, w01, w02, w11, w12, w22 = w
-    return (
-        w00 * m[0] + w01 * m[3] + w02 * m[6],
-        w00 * m[1] + w01 * m[4] + w02 * m[7],
-        w00 * m[2] + w01 * m[5] + w02 * m[8],
-        w01 * m[0] + w11 * m[3] + w12 * m[6],
-        w01 * m[1] + w11 * m[4] + w12 * m[7],
-        w01 * m[2] + w11 * m[5] + w12 * m[8],
-        w02 * m[0] + w12 * m[3] + w22 * m[6],
-        w02 * m[1] + w12 * m[4] + w22 * m[7],
-        w02 * m[2] + w12 * m[5] + w22 * m[8],
-    )
-
-
-@kernel
-def _symmetric_applied(w: tuple, v: tuple) -> tuple:
-    """``W v`` for a symmetric ``W`` (upper triangle, 6 numbers) and 3 numbers ``v``. A
-    compiled kernel."""
-    w00, w01, w02, w11, w12, w22 = w
-    return (
-        w00 * v[0] + w01 * v[1] + w02 * v[2],
-        w01 * v[0] + w11 * v[1] + w12 * v[2],
-        w02 * v[0] + w12 * v[1] + w22 * v[2],
-    )
-
-
-@kernel
-def _transposed_times(a: tuple, b: tuple) -> tuple:
-    """``A' B`` of 9-number matrices: 9 numbers. A compiled kernel."""
-    return (
-        a[0] * b[0] + a[3] * b[3] + a[6] * b[6],
-        a[0] * b[1] + a[3] * b[4] + a[6] * b[7],
-        a[0] * b[2] + a[3] * b[5] + a[6] * b[8],
-        a[1] * b[0] + a[4] * b[3] + a[7] * b[6],
-        a[1] * b[1] + a[4] * b[4] + a[7] * b[7],
-        a[1] * b[2] + a[4] * b[5] + a[7] * b[8],
-        a[2] * b[0] + a[5] * b[3] + a[8] * b[6],
-        a[2] * b[1] + a[5] * b[4] + a[8] * b[7],
-        a[2] * b[2] + a[5] * b[5] + a[8] * b[8],
-    )
-
-
-@kernel
-def _transposed_applied(a: tuple, v: tuple) -> tuple:
-    """``A' v`` of a 9-number matrix and 3 numbers. A compiled kernel."""
-    return (
-        a[0] * v[0] + a[3] * v[1] + a[6] * v[2],
-        a[1] * v[0] + a[4] * v[1] + a[7] * v[2],
-        a[2] * v[0] + a[5] * v[1] + a[8] * v[2],
-    )
-
-
-@kernel
-def _add_block(matrix: np.ndarray, row: int, column: int, block: tuple, sign: float) -> None:
-    """``sign`` times the 9-number ``block`` added to ``matrix[row:row+3, column:column+3]``.
-    A compiled kernel."""
-    for i in range(3):
-        for j in range(3):
-            matrix[row + i, column + j] += sign * block[3 * i + j]
-
-
-@kernel
-def _add_upper(matrix: np.ndarray, row: int, column: int, block: tuple, sign: float) -> None:
-    """:func:`_add_block` of a symmetric ``block``'s upper triangle only. A compiled kernel."""
-    for i in range(3):
-        for j in range(i, 3):
-            matrix[row + i, column + j] += sign * block[3 * i + j]
-
-
-@kernel
-def _add_vector(vector: np.ndarray, start: int, part: tuple, sign: float) -> None:
-    """``sign`` times 3 numbers ``part`` added to ``vector[start:start+3]``. A compiled
-    kernel."""
-    for i in range(3):
-        vector[start + i] += sign * part[i]
 
 
 @kernel
@@ -764,40 +667,6 @@ def _pseudo_measurements(
                 pull += p * (state[at + j] - state[j])
             gradient[i] += pull
             gradient[at + i] -= pull
-
-
-@kernel
-def _solved(matrix: np.ndarray, vector: np.ndarray, solution: np.ndarray) -> bool:
-    """``matrix x = vector`` by Gaussian elimination with partial pivoting (the largest pivot
-    of its column, the first of equals, as LAPACK's ``getrf``), ``matrix`` ``(k, k)``
-    overwritten, ``x`` into ``solution`` ``(k,)``; false, with ``solution`` undefined, where a
-    pivot is exactly zero (a singular matrix, as LAPACK reports it). A compiled kernel."""
-    k = matrix.shape[0]
-    for i in range(k):
-        solution[i] = vector[i]
-    for column in range(k):
-        pivot = column
-        largest = abs(matrix[column, column])
-        for row in range(column + 1, k):
-            if abs(matrix[row, column]) > largest:
-                pivot, largest = row, abs(matrix[row, column])
-        if matrix[pivot, column] == 0.0:
-            return False
-        if pivot != column:
-            for j in range(k):
-                matrix[column, j], matrix[pivot, j] = matrix[pivot, j], matrix[column, j]
-            solution[column], solution[pivot] = solution[pivot], solution[column]
-        for row in range(column + 1, k):
-            factor = matrix[row, column] / matrix[column, column]
-            for j in range(column + 1, k):
-                matrix[row, j] -= factor * matrix[column, j]
-            solution[row] -= factor * solution[column]
-    for row in range(k - 1, -1, -1):
-        value = solution[row]
-        for j in range(row + 1, k):
-            value -= matrix[row, j] * solution[j]
-        solution[row] = value / matrix[row, row]
-    return True
 
 
 def _gauss_markov_results(
@@ -889,27 +758,15 @@ def _marker_gains(points: np.ndarray, body: np.ndarray) -> np.ndarray:
     mean, inertia_inv, n = lever_factors(body)
     gains = np.empty((points.shape[0], n, 3, 3))
     for p in range(points.shape[0]):
-        lever = _skew9(points[p, 0] - mean[0], points[p, 1] - mean[1], points[p, 2] - mean[2])
-        turned = _transposed_times(_transposed9(lever), _rows9(inertia_inv))  # [p - m]x K^-1
+        lever = skew9(points[p, 0] - mean[0], points[p, 1] - mean[1], points[p, 2] - mean[2])
+        turned = transposed_times9(transposed9(lever), rows9(inertia_inv))  # [p - m]x K^-1
         for i in range(n):
-            offset = _skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
-            product = _transposed_times(_transposed9(turned), offset)
+            offset = skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
+            product = transposed_times9(transposed9(turned), offset)
             for r in range(3):
                 for c in range(3):
                     gains[p, i, r, c] = (1.0 / n if r == c else 0.0) - product[3 * r + c]
     return gains
-
-
-@kernel
-def _skew9(v0: float, v1: float, v2: float) -> tuple:
-    """``[v]x`` as 9 numbers by rows (:func:`jointbench.geometry.skew`). A compiled kernel."""
-    return (0.0, -v2, v1, v2, 0.0, -v0, -v1, v0, 0.0)
-
-
-@kernel
-def _transposed9(a: tuple) -> tuple:
-    """``A'`` of a 9-number matrix. A compiled kernel."""
-    return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
 
 
 @kernel
@@ -937,7 +794,7 @@ def _residual_moments(body: np.ndarray) -> tuple:
     own, shared = 0.0, 0.0
     for j in range(n):
         for i in range(n):
-            block = _rows9(hat[j, i])
+            block = rows9(hat[j, i])
             delta = 1.0 if i == j else 0.0
             residual = (
                 delta - block[0],
@@ -952,7 +809,7 @@ def _residual_moments(body: np.ndarray) -> tuple:
             )
             if i == j:
                 own += _fourth_moment(residual)
-            shared += _fourth_moment(_transposed_times(residual, residual))
+            shared += _fourth_moment(transposed_times9(residual, residual))
     return own, shared / 3.0
 
 
@@ -1002,8 +859,8 @@ def _constraint_moment_sum(
         body = body0 if a == 0 else body1
         gains = _marker_gains(points[a : a + 1], body)[0]
         for i in range(body.shape[0]):
-            gain = _rows9(gains[i])
-            spread = _transposed_times(_transposed9(gain), _transposed9(gain))  # B B'
+            gain = rows9(gains[i])
+            spread = transposed_times9(transposed9(gain), transposed9(gain))  # B B'
             for p in range(9):
                 for q in range(9):
                     total += spread[p] * seconds[a, p, q] * spread[q]

@@ -99,7 +99,6 @@ __all__ = [
     "centre_covariance",
     "lever_factors",
     "point_covariance",
-    "point_covariance_at",
     "point_covariance_into",
     "pose_noise",
     "pull_mm",
@@ -227,30 +226,20 @@ def point_covariance(point: np.ndarray, body: np.ndarray) -> np.ndarray:
     point ``c`` ``(3,)`` [mm] predicted by an LS pose fit of the markers ``body`` ``(n, 3)``
     [mm] in the frame where the pose is the identity (``R A R'`` for any other pose ``R``)."""
     mean, inertia_inv, n = lever_factors(np.asarray(body, dtype=float))
-    point = np.asarray(point, dtype=float).reshape(1, 3)
-    return point_covariance_at(point, mean[None], inertia_inv[None], n)[0]
-
-
-@kernel
-def point_covariance_at(
-    points: np.ndarray, means: np.ndarray, inertia_invs: np.ndarray, n: int
-) -> np.ndarray:
-    """``A(c) / s^2 = [c - m]x K^-1 [c - m]x' + I / n`` ``(T, 3, 3)`` for points ``c`` ``(T,
-    3)`` [mm] of segments with lever factors (:func:`lever_factors`) ``means`` ``(T, 3)``,
-    ``inertia_invs`` ``(T, 3, 3)`` and ``n`` markers. A compiled kernel."""
-    out = np.empty((points.shape[0], 3, 3))
-    for t in range(points.shape[0]):
-        point_covariance_into(points[t], means[t], inertia_invs[t], n, out[t])
-    return out
+    point = np.asarray(point, dtype=float).reshape(3)
+    covariance = np.empty((3, 3))
+    point_covariance_into(point, mean, inertia_inv, n, covariance)
+    return covariance
 
 
 @kernel
 def point_covariance_into(
     point: np.ndarray, mean: np.ndarray, inertia_inv: np.ndarray, n: int, out: np.ndarray
 ) -> None:
-    """:func:`point_covariance_at` of one point ``(3,)`` [mm] of a segment with lever factors
-    ``mean`` ``(3,)`` and ``inertia_inv`` ``(3, 3)`` and ``n`` markers, written into ``out``
-    ``(3, 3)``. A compiled kernel."""
+    """``A(c) / s^2 = [c - m]x K^-1 [c - m]x' + I / n`` (:func:`point_covariance`) of one point
+    ``c`` ``(3,)`` [mm] of a segment with lever factors (:func:`lever_factors`) ``mean`` ``(3,)``
+    and ``inertia_inv`` ``(3, 3)`` and ``n`` markers, written into ``out`` ``(3, 3)``. A compiled
+    kernel."""
     lever = np.zeros((3, 3))
     v = point - mean
     lever[0, 1], lever[0, 2], lever[1, 2] = -v[2], v[1], -v[0]

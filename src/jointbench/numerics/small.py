@@ -3,8 +3,9 @@ arithmetic takes nanoseconds.
 
 Stacks of 3 x 3 matrices (``float64`` arrays shaped ``(..., 3, 3)``) through kernels that
 treat one matrix at a time, which other kernels call per frame (the inverse, ``R M R'``, as
-arrays or as numbers that stay in registers), and the eigen-decomposition of one small
-symmetric matrix inside a compiled kernel.
+arrays or as numbers that stay in registers), the products, transposes and sums of 3 x 3
+matrices held as 9 numbers, the solve of one small linear system by partial pivoting, and the
+eigen-decomposition of one small symmetric matrix inside a compiled kernel.
 """
 
 from __future__ import annotations
@@ -16,7 +17,11 @@ import numpy as np
 from jointbench.numerics.compiled import kernel, kernel_array
 
 __all__ = [
+    "add_block3",
     "add_outer",
+    "add_upper3",
+    "add_vector3",
+    "identity_less9",
     "inertia",
     "inertia_into",
     "inverse3",
@@ -25,10 +30,19 @@ __all__ = [
     "rotated3",
     "rotated3_into",
     "rotated3_upper",
+    "rows9",
+    "skew9",
+    "solve_into",
+    "symmetric9",
+    "symmetric_applied9",
     "symmetric_eigen",
     "symmetric_eigen_into",
     "symmetric_into",
+    "symmetric_times9",
     "tangent_basis_into",
+    "transposed9",
+    "transposed_applied9",
+    "transposed_times9",
 ]
 
 
@@ -127,11 +141,7 @@ def _rotated_stacks(rotations: np.ndarray, matrices: np.ndarray) -> np.ndarray:
 def rotated3_into(rotation: np.ndarray, matrix: np.ndarray, out: np.ndarray) -> None:
     """``R M R'`` of a rotation ``R`` ``(3, 3)`` and a symmetric ``M`` ``(3, 3)`` written into
     ``out`` ``(3, 3)``, exactly symmetric (:func:`rotated3_upper`). A compiled kernel."""
-    s00, s01, s02, s11, s12, s22 = rotated3_upper(rotation, matrix)
-    out[0, 0], out[1, 1], out[2, 2] = s00, s11, s22
-    out[0, 1] = out[1, 0] = s01
-    out[0, 2] = out[2, 0] = s02
-    out[1, 2] = out[2, 1] = s12
+    symmetric_into(rotated3_upper(rotation, matrix), out)
 
 
 @kernel
@@ -415,3 +425,162 @@ def tangent_basis_into(direction: np.ndarray, basis: np.ndarray) -> None:
     f0, f1, f2 = f0 / length, f1 / length, f2 / length
     basis[0, 0], basis[1, 0], basis[2, 0] = f0, f1, f2
     basis[0, 1], basis[1, 1], basis[2, 1] = n1 * f2 - n2 * f1, n2 * f0 - n0 * f2, n0 * f1 - n1 * f0
+
+
+# 3 x 3 matrices as 9 numbers by rows and symmetric ones as their upper triangle's 6 (as
+# :func:`add_outer` orders them), so that a kernel's per-frame terms stay in registers.
+
+
+@kernel
+def rows9(a: np.ndarray) -> tuple:
+    """A ``(3, 3)`` matrix as 9 numbers by rows. A compiled kernel."""
+    return (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
+
+
+@kernel
+def identity_less9(q: tuple) -> tuple:
+    """``I - Q`` of a 9-number matrix. A compiled kernel."""
+    return (
+        1.0 - q[0],
+        -q[1],
+        -q[2],
+        -q[3],
+        1.0 - q[4],
+        -q[5],
+        -q[6],
+        -q[7],
+        1.0 - q[8],
+    )
+
+
+@kernel
+def symmetric9(w: tuple) -> tuple:
+    """A symmetric matrix's upper triangle (6 numbers) as its 9 by rows. A compiled kernel."""
+    return (w[0], w[1], w[2], w[1], w[3], w[4], w[2], w[4], w[5])
+
+
+@kernel
+def symmetric_times9(w: tuple, m: tuple) -> tuple:
+    """``W M`` for a symmetric ``W`` (upper triangle, 6 numbers) and a 9-number ``M``: 9
+    numbers. A compiled kernel."""
+    w00, w01, w02, w11, w12, w22 = w
+    return (
+        w00 * m[0] + w01 * m[3] + w02 * m[6],
+        w00 * m[1] + w01 * m[4] + w02 * m[7],
+        w00 * m[2] + w01 * m[5] + w02 * m[8],
+        w01 * m[0] + w11 * m[3] + w12 * m[6],
+        w01 * m[1] + w11 * m[4] + w12 * m[7],
+        w01 * m[2] + w11 * m[5] + w12 * m[8],
+        w02 * m[0] + w12 * m[3] + w22 * m[6],
+        w02 * m[1] + w12 * m[4] + w22 * m[7],
+        w02 * m[2] + w12 * m[5] + w22 * m[8],
+    )
+
+
+@kernel
+def symmetric_applied9(w: tuple, v: tuple) -> tuple:
+    """``W v`` for a symmetric ``W`` (upper triangle, 6 numbers) and 3 numbers ``v``. A
+    compiled kernel."""
+    w00, w01, w02, w11, w12, w22 = w
+    return (
+        w00 * v[0] + w01 * v[1] + w02 * v[2],
+        w01 * v[0] + w11 * v[1] + w12 * v[2],
+        w02 * v[0] + w12 * v[1] + w22 * v[2],
+    )
+
+
+@kernel
+def transposed_times9(a: tuple, b: tuple) -> tuple:
+    """``A' B`` of 9-number matrices: 9 numbers. A compiled kernel."""
+    return (
+        a[0] * b[0] + a[3] * b[3] + a[6] * b[6],
+        a[0] * b[1] + a[3] * b[4] + a[6] * b[7],
+        a[0] * b[2] + a[3] * b[5] + a[6] * b[8],
+        a[1] * b[0] + a[4] * b[3] + a[7] * b[6],
+        a[1] * b[1] + a[4] * b[4] + a[7] * b[7],
+        a[1] * b[2] + a[4] * b[5] + a[7] * b[8],
+        a[2] * b[0] + a[5] * b[3] + a[8] * b[6],
+        a[2] * b[1] + a[5] * b[4] + a[8] * b[7],
+        a[2] * b[2] + a[5] * b[5] + a[8] * b[8],
+    )
+
+
+@kernel
+def transposed_applied9(a: tuple, v: tuple) -> tuple:
+    """``A' v`` of a 9-number matrix and 3 numbers. A compiled kernel."""
+    return (
+        a[0] * v[0] + a[3] * v[1] + a[6] * v[2],
+        a[1] * v[0] + a[4] * v[1] + a[7] * v[2],
+        a[2] * v[0] + a[5] * v[1] + a[8] * v[2],
+    )
+
+
+@kernel
+def add_block3(matrix: np.ndarray, row: int, column: int, block: tuple, sign: float) -> None:
+    """``sign`` times the 9-number ``block`` added to ``matrix[row:row+3, column:column+3]``.
+    A compiled kernel."""
+    for i in range(3):
+        for j in range(3):
+            matrix[row + i, column + j] += sign * block[3 * i + j]
+
+
+@kernel
+def add_upper3(matrix: np.ndarray, row: int, column: int, block: tuple, sign: float) -> None:
+    """:func:`add_block3` of a symmetric ``block``'s upper triangle only. A compiled kernel."""
+    for i in range(3):
+        for j in range(i, 3):
+            matrix[row + i, column + j] += sign * block[3 * i + j]
+
+
+@kernel
+def add_vector3(vector: np.ndarray, start: int, part: tuple, sign: float) -> None:
+    """``sign`` times 3 numbers ``part`` added to ``vector[start:start+3]``. A compiled
+    kernel."""
+    for i in range(3):
+        vector[start + i] += sign * part[i]
+
+
+@kernel
+def skew9(v0: float, v1: float, v2: float) -> tuple:
+    """``[v]x`` as 9 numbers by rows (:func:`jointbench.geometry.skew`). A compiled kernel."""
+    return (0.0, -v2, v1, v2, 0.0, -v0, -v1, v0, 0.0)
+
+
+@kernel
+def transposed9(a: tuple) -> tuple:
+    """``A'`` of a 9-number matrix. A compiled kernel."""
+    return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
+
+
+@kernel
+def solve_into(matrix: np.ndarray, vector: np.ndarray, solution: np.ndarray) -> bool:
+    """``matrix x = vector`` by Gaussian elimination with partial pivoting (the largest pivot
+    of its column, the first of equals, as LAPACK's ``getrf``), ``matrix`` ``(k, k)``
+    overwritten, ``x`` into ``solution`` ``(k,)``; false, with ``solution`` undefined, where a
+    pivot is exactly zero (a singular matrix, as LAPACK reports it). A compiled kernel."""
+    k = matrix.shape[0]
+    for i in range(k):
+        solution[i] = vector[i]
+    for column in range(k):
+        pivot = column
+        largest = abs(matrix[column, column])
+        for row in range(column + 1, k):
+            if abs(matrix[row, column]) > largest:
+                pivot, largest = row, abs(matrix[row, column])
+        if matrix[pivot, column] == 0.0:
+            return False
+        if pivot != column:
+            for j in range(k):
+                matrix[column, j], matrix[pivot, j] = matrix[pivot, j], matrix[column, j]
+            solution[column], solution[pivot] = solution[pivot], solution[column]
+        for row in range(column + 1, k):
+            factor = matrix[row, column] / matrix[column, column]
+            for j in range(column + 1, k):
+                matrix[row, j] -= factor * matrix[column, j]
+            solution[row] -= factor * solution[column]
+    for row in range(k - 1, -1, -1):
+        value = solution[row]
+        for j in range(row + 1, k):
+            value -= matrix[row, j] * solution[j]
+        solution[row] = value / matrix[row, row]
+    return True
