@@ -195,7 +195,32 @@ BAD = [
         "hinge",
         ("protocol",),
         {"all": {"noise_sd_mm": 1e200}},
+        ["studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm: must be <= 176.458 mm"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"knee": {"noise_sd_mm": 1e200}},
         ["studies.hinge.protocol.knee.noise_sd_mm, markers_mm: must be <= 176.458 mm"],
+    ),
+    # A joint's bound broken by a field written under ``all`` is named there, for that joint.
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"n_frames": 120}},
+        ["studies.hinge.protocol.all.n_frames: motion 'grid' needs a square", "(joint 'knee')"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"markers_mm": [[0.0, 0.0, 0.001]] * 3}},
+        ["studies.hinge.protocol.all.markers_mm[0]: [0.0, 0.0, 0.001] lies 0.001 mm"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"noise_sd_mm": 100.0}, "mcp": {"markers_mm": [[0, 0, -40]] * 3}},
+        ["studies.hinge.protocol.all.noise_sd_mm, mcp.markers_mm: must be <= 40 mm"],
     ),
     (
         "hip",
@@ -350,7 +375,13 @@ BAD = [
         "hinge",
         ("protocol",),
         {"all": {"motion": "lissajous", "fe_cycles": 100}},
-        ["studies.hinge.protocol.all.fe_cycles, n_frames: 100 knee lissajous cycles over 121"],
+        ["studies.hinge.protocol.all.fe_cycles, knee.n_frames: 100 knee lissajous cycles over"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "lissajous", "fe_cycles": 30}, "knee": {"n_frames": 50}},
+        ["studies.hinge.protocol.all.fe_cycles, knee.n_frames: 30 knee lissajous cycles over 50"],
     ),
     (
         "hip",

@@ -17,6 +17,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
 from jointbench.simulate.hip_sta import hip_angles
 from jointbench.simulate.noise import largest_noise_mm
@@ -157,17 +158,16 @@ def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     """:data:`SAMPLED_PER_TURN` for the cycles of each joint the grid runs, where its motion
-    uses them; named where the config sets them (the joint's own entry, else ``all``)."""
+    uses them; named where the config sets them (:func:`placed_fields`)."""
     overrides = settings.get("protocol") or {}
     for joint in settings["grid"]["protocol"]:
         hinge = protocol.joints[joint]
         for name, motions in HINGE_CYCLES.items():
             if hinge.motion not in motions:
                 continue
-            own = name in overrides.get(joint, {})
-            where = "all" if not own and name in overrides.get("all", {}) else joint
+            entry, keys = placed_fields(overrides, joint, (name, "n_frames"))
             problem = _turns_problem(
-                f"protocol.{where}.{name}, n_frames",
+                f"protocol.{entry}.{keys}",
                 getattr(hinge, name),
                 hinge.n_frames,
                 f"{joint} {hinge.motion} cycles",
