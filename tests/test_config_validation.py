@@ -377,6 +377,20 @@ BAD = [
         {"all": {"motion": "lissajous", "fe_cycles": 100}},
         ["studies.hinge.protocol.all.fe_cycles, knee.n_frames: 100 knee lissajous cycles over"],
     ),
+    # A wave that never reaches an end of the excursion its condition names: at 1e-300 FE
+    # cycles the knee does not flex, and every axis method found the AA axis, status "ok".
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "lissajous", "fe_cycles": 1e-300}},
+        ["studies.hinge.protocol.all.fe_cycles: 1e-300 knee lissajous FE cycles", "both ends"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "superimposed", "aa_cycles": 0.25}},
+        ["studies.hinge.protocol.all.aa_cycles, knee.aa_phase_deg: 0.25 knee superimposed AA"],
+    ),
     (
         "hinge",
         ("protocol",),
@@ -430,6 +444,21 @@ def test_mistake_names_key_and_allowed_values(config, study, path, value, words)
         study_config.check_config(changed(config, study, path, value))
     for word in words:
         assert word in str(error.value), str(error.value)
+
+
+@pytest.mark.parametrize(
+    "waves",
+    [
+        {"fe_cycles": 0.5, "aa_cycles": 0.75, "aa_phase_deg": 90.0},
+        {"fe_cycles": 0.5, "aa_cycles": 1.0},
+        {"fe_cycles": 3.0, "aa_cycles": 0.5, "aa_phase_deg": -90.0},
+    ],
+)
+def test_a_hinge_wave_reaching_both_ends_of_its_excursion_passes(config, waves):
+    """Half an FE cycle reaches full flexion from full extension; an AA wave reaches both its
+    ends within a cycle, or within half of one from an end."""
+    hinge = {**config["studies"]["hinge"], "protocol": {"all": {"motion": "lissajous", **waves}}}
+    study_config.check_config({**config, "studies": {**config["studies"], "hinge": hinge}})
 
 
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])

@@ -13,10 +13,12 @@ too (:func:`translation_problem`).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
 from jointbench.simulate.hip_sta import hip_angles
@@ -95,8 +97,6 @@ HIP_STA_FREQUENCIES = ("pelvis_sway_hz",)
 #: circumduction, and its star (one sweep per plane) and the arc after it, each over its share
 #: of the trial (``star_fraction``).
 SAMPLED_PER_TURN = 2.0
-#: Hinge motions that use each cycles field (:func:`jointbench.simulate.hinge.joint_angles`).
-HINGE_CYCLES = {"fe_cycles": ("lissajous",), "aa_cycles": ("lissajous", "superimposed")}
 
 #: Marker clusters, each fitted as one rigid body (:func:`cluster_problem`): the hip rig's, and
 #: the skin-marker study's pelvis and thigh.
@@ -157,24 +157,46 @@ def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    """:data:`SAMPLED_PER_TURN` for the cycles of each joint the grid runs, where its motion
-    uses them; named where the config sets them (:func:`placed_fields`)."""
+    """For each sine wave of each joint the grid runs (:func:`sine_waves`): its cycles
+    :data:`SAMPLED_PER_TURN` over the frames, and its reach of both ends of its excursion
+    (:func:`_wave_ends_problem`); named where the config sets them (:func:`placed_fields`)."""
     overrides = settings.get("protocol") or {}
     for joint in settings["grid"]["protocol"]:
         hinge = protocol.joints[joint]
-        for name, motions in HINGE_CYCLES.items():
-            if hinge.motion not in motions:
-                continue
+        for name, (cycles, phase) in sine_waves(hinge).items():
             entry, keys = placed_fields(overrides, joint, (name, "n_frames"))
-            problem = _turns_problem(
-                f"protocol.{entry}.{keys}",
-                getattr(hinge, name),
-                hinge.n_frames,
-                f"{joint} {hinge.motion} cycles",
-            )
+            what = f"{joint} {hinge.motion} cycles"
+            problem = _turns_problem(f"protocol.{entry}.{keys}", cycles, hinge.n_frames, what)
+            if problem:
+                return problem
+            # The FE wave's phase is the motion's (full extension), the AA wave's the config's.
+            fields = (name,) if name == "fe_cycles" else (name, "aa_phase_deg")
+            entry, keys = placed_fields(overrides, joint, fields)
+            what = f"{joint} {hinge.motion} {name.split('_')[0].upper()} cycles"
+            problem = _wave_ends_problem(f"protocol.{entry}.{keys}", cycles, phase, what)
             if problem:
                 return problem
     return None
+
+
+def _wave_ends_problem(key: str, cycles: float, phase: float, what: str) -> tuple[str, str] | None:
+    """``(key, why)`` when ``sin(2 pi cycles t + phase)``, ``t`` in ``[0, 1]``, does not reach
+    both +1 and -1, else None: the trial would not reach the excursion its condition names
+    (at 1e-300 FE cycles the knee never flexes, and the axis methods find the AA axis)."""
+    end = phase + 2.0 * math.pi * cycles
+    # Each peak's first occurrence at or after the start, within the rounding of the phases.
+    firsts = [
+        peak + 2.0 * math.pi * math.ceil((phase - peak) / (2.0 * math.pi) - _ROUNDING)
+        for peak in (math.pi / 2.0, 3.0 * math.pi / 2.0)
+    ]
+    if all(first <= end + _ROUNDING * max(1.0, abs(end)) for first in firsts):
+        return None
+    return key, (
+        f"{cycles!r} {what} (phase {math.degrees(phase):g} deg) do not reach both ends of the "
+        "excursion the condition names: the trial would not move over the range of motion its "
+        "results are labelled with; a wave reaches both ends within one cycle, from an end "
+        "within half of one"
+    )
 
 
 def _aa_ratio_problem(settings: Mapping) -> tuple[str, str] | None:
