@@ -358,6 +358,22 @@ BAD = [
         {"pelvis_sway_hz": [0.13, 40.0, 0.17]},
         ["studies.hip_sta.protocol.pelvis_sway_hz, fps: 40.0", "< 25 Hz", "half the frame rate"],
     ),
+    # A hip moved about one axis only: its centre lies anywhere on that axis. At 1e-300
+    # circumduction turns the thigh swung in one plane, and the centre methods answered 17 to
+    # 70 mm off, each with status ok.
+    (
+        "hip_sta",
+        ("protocol",),
+        {"circumduction_turns": 1e-300},
+        ["studies.hip_sta.protocol.circumduction_turns, noise_mm: ", "circumduction at rom_deg 20"],
+    ),
+    ("hip_sta", ("grid", "rom_deg"), [1e-6], ["studies.hip_sta.grid.rom_deg: ", "about 0 axis"]),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"star_azimuths_deg": [0.0], "arc_turns": 1e-12},
+        ["studies.hip_sta.protocol.star_azimuths_deg, arc_turns, noise_mm: ", "about 1 axis"],
+    ),
     (
         "hip_sta",
         ("protocol",),

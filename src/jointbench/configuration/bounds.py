@@ -21,7 +21,7 @@ import numpy as np
 from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
-from jointbench.simulate.hip_sta import hip_angles
+from jointbench.simulate.hip_sta import hip_angles, thigh_rotation
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
 
@@ -89,6 +89,13 @@ HIP_FREQUENCIES = (
     "twist_hz",
 )
 HIP_STA_FREQUENCIES = ("pelvis_sway_hz",)
+#: The skin-marker study's protocol fields that set the directions each motion moves the thigh
+#: in (:func:`jointbench.simulate.hip_sta.hip_angles`): about at least :data:`HIP_FEWEST_AXES`
+#: axes, as paper C's rig (:func:`_hip_sta_axes_problem`).
+HIP_STA_DIRECTIONS = {
+    "circumduction": ("circumduction_turns",),
+    "star_arc": ("star_azimuths_deg", "arc_turns"),
+}
 #: Turns (or cycles) of a periodic motion over a stretch of a trial's frames are fewer than
 #: half those frames, as a frequency is below half the frame rate: the frames cannot show a
 #: faster motion (it would be recorded as a slower one than configured), and at 1e13 turns its
@@ -223,6 +230,7 @@ def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return (
         _clusters_problem(protocol, HIP_STA_CLUSTERS)
         or _hip_sta_turns_problem(settings, protocol)
+        or _hip_sta_axes_problem(settings, protocol)
         or _sta_reach_problem(settings, protocol)
         or pelvis_poses_problem(settings, protocol)
         or _frequencies_problem(protocol, HIP_STA_FREQUENCIES)
@@ -255,6 +263,43 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
         turns = protocol.circumduction_turns
         stretches.append((key, turns, n_frames, "circumduction turns"))
     return next((p for p in (_turns_problem(*stretch) for stretch in stretches) if p), None)
+
+
+def _hip_sta_axes_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """Each motion the grid runs, at its smallest ``rom_deg``, turning a thigh marker about
+    fewer than :data:`HIP_FEWEST_AXES` axes further than the floor of :func:`_turn_floor` (the
+    axes: the principal ones of the thigh's rotation vectors, :func:`principal_turns_mm`);
+    named at the fields that set the motion's directions (and the noise where it sets the
+    floor) where it is seen about one axis, at ``grid.rom_deg`` where about none."""
+    rom_deg = min(settings["grid"]["rom_deg"])
+    floor, floor_words = _turn_floor(protocol.noise_mm, protocol.thigh_markers_mm)
+    for motion in settings["grid"]["motion"]:
+        rotation = thigh_rotation(hip_angles(motion, rom_deg, protocol))
+        turns = np.sort(principal_turns_mm(rotation, protocol.thigh_markers_mm))[::-1]
+        seen = int(np.sum(turns > floor))
+        if seen >= HIP_FEWEST_AXES:
+            continue
+        # The noise is as much the culprit where it sets the floor.
+        noise = ("noise_mm",) if floor == protocol.noise_mm else ()
+        fields = (*HIP_STA_DIRECTIONS[motion], *noise)
+        key = f"protocol.{', '.join(fields)}" if seen else "grid.rom_deg"
+        return key, (
+            f"the thigh's {motion} at rom_deg {rom_deg:g} turns its markers about {seen} "
+            f"axis(es): about the next by {turns[seen]:.3g} mm at most, not above "
+            f"{floor_words}; a hip moved about fewer than {HIP_FEWEST_AXES} axes has no single "
+            f"centre (paper C's rig 'moved around at least {HIP_FEWEST_AXES} of the axes')"
+        )
+    return None
+
+
+def principal_turns_mm(rotation: np.ndarray, markers_mm: Sequence[Sequence[float]]) -> np.ndarray:
+    """:func:`largest_turn_mm` ``(3,)`` [mm] about the principal axes of the rotation vectors
+    ``rotation`` ``(n, 3)`` [rad] (the eigenvectors of their ``(3, 3)`` second moment, about
+    the joint), so that a swing in one plane at any azimuth turns the markers about one axis
+    alone."""
+    rotation = np.asarray(rotation, dtype=float)
+    _, axes = np.linalg.eigh(rotation.T @ rotation)
+    return largest_turn_mm(rotation @ axes, np.asarray(markers_mm, dtype=float) @ axes)
 
 
 def _turns_problem(key: str, turns: float, frames: float, what: str) -> tuple[str, str] | None:
@@ -417,7 +462,7 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
     t = np.arange(protocol.n_frames) / protocol.fps
     turns = largest_turn_mm(distal_rotation(protocol, t), protocol.distal_markers_mm)
     configured = [name for name in HIP_ROTATIONS if getattr(protocol, name) != 0]
-    floor, floor_words = _turn_floor(protocol)
+    floor, floor_words = _turn_floor(protocol.noise_mm, protocol.distal_markers_mm)
     seen = [n for n, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > floor]
     if len(seen) >= HIP_FEWEST_AXES:
         return None
@@ -441,18 +486,18 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
     )
 
 
-def _turn_floor(protocol: object) -> tuple[float, str]:
-    """``(floor [mm], it in words)``: the turn of a distal marker a hip rig rotation must exceed
-    to be seen, the largest of the marker noise, :data:`HIP_RESOLUTION_MM` (which sets it
-    without noise) and the rounding of the markers' coordinates (which passes it only for
-    markers ten kilometres from the joint)."""
-    rounding = _ROUNDING * float(np.abs(protocol.distal_markers_mm).max())
+def _turn_floor(noise_mm: float, markers_mm: Sequence[Sequence[float]]) -> tuple[float, str]:
+    """``(floor [mm], it in words)``: the turn of a marker of ``markers_mm`` (relative to the
+    joint) a rotation must exceed to be seen, the largest of the marker noise ``noise_mm``,
+    :data:`HIP_RESOLUTION_MM` (which sets it without noise) and the rounding of the markers'
+    coordinates (which passes it only for markers ten kilometres from the joint)."""
+    rounding = _ROUNDING * float(np.abs(np.asarray(markers_mm, dtype=float)).max())
     return max(
-        (protocol.noise_mm, f"the marker noise noise_mm ({protocol.noise_mm:g} mm)"),
+        (noise_mm, f"the marker noise noise_mm ({noise_mm:g} mm)"),
         (
             HIP_RESOLUTION_MM,
             f"HIP_RESOLUTION_MM ({HIP_RESOLUTION_MM:g} mm), the least turn a recording "
-            f"resolves (noise_mm is {protocol.noise_mm:g} mm)",
+            f"resolves (noise_mm is {noise_mm:g} mm)",
         ),
         (rounding, f"the rounding of the markers' coordinates ({rounding:.3g} mm)"),
         key=lambda candidate: candidate[0],
