@@ -195,7 +195,32 @@ BAD = [
         "hinge",
         ("protocol",),
         {"all": {"noise_sd_mm": 1e200}},
+        ["studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm: must be <= 176.458 mm"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"knee": {"noise_sd_mm": 1e200}},
         ["studies.hinge.protocol.knee.noise_sd_mm, markers_mm: must be <= 176.458 mm"],
+    ),
+    # A joint's bound broken by a field written under ``all`` is named there, for that joint.
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"n_frames": 120}},
+        ["studies.hinge.protocol.all.n_frames: motion 'grid' needs a square", "(joint 'knee')"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"markers_mm": [[0.0, 0.0, 0.001]] * 3}},
+        ["studies.hinge.protocol.all.markers_mm[0]: [0.0, 0.0, 0.001] lies 0.001 mm"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"noise_sd_mm": 100.0}, "mcp": {"markers_mm": [[0, 0, -40]] * 3}},
+        ["studies.hinge.protocol.all.noise_sd_mm, mcp.markers_mm: must be <= 40 mm"],
     ),
     (
         "hip",
@@ -333,6 +358,22 @@ BAD = [
         {"pelvis_sway_hz": [0.13, 40.0, 0.17]},
         ["studies.hip_sta.protocol.pelvis_sway_hz, fps: 40.0", "< 25 Hz", "half the frame rate"],
     ),
+    # A hip moved about one axis only: its centre lies anywhere on that axis. At 1e-300
+    # circumduction turns the thigh swung in one plane, and the centre methods answered 17 to
+    # 70 mm off, each with status ok.
+    (
+        "hip_sta",
+        ("protocol",),
+        {"circumduction_turns": 1e-300},
+        ["studies.hip_sta.protocol.circumduction_turns, noise_mm: ", "circumduction at rom_deg 20"],
+    ),
+    ("hip_sta", ("grid", "rom_deg"), [1e-6], ["studies.hip_sta.grid.rom_deg: ", "about 0 axis"]),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"star_azimuths_deg": [0.0], "arc_turns": 1e-12},
+        ["studies.hip_sta.protocol.star_azimuths_deg, arc_turns, noise_mm: ", "about 1 axis"],
+    ),
     (
         "hip_sta",
         ("protocol",),
@@ -350,7 +391,27 @@ BAD = [
         "hinge",
         ("protocol",),
         {"all": {"motion": "lissajous", "fe_cycles": 100}},
-        ["studies.hinge.protocol.all.fe_cycles, n_frames: 100 knee lissajous cycles over 121"],
+        ["studies.hinge.protocol.all.fe_cycles, knee.n_frames: 100 knee lissajous cycles over"],
+    ),
+    # A wave that never reaches an end of the excursion its condition names: at 1e-300 FE
+    # cycles the knee does not flex, and every axis method found the AA axis, status "ok".
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "lissajous", "fe_cycles": 1e-300}},
+        ["studies.hinge.protocol.all.fe_cycles: 1e-300 knee lissajous FE cycles", "both ends"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "superimposed", "aa_cycles": 0.25}},
+        ["studies.hinge.protocol.all.aa_cycles, knee.aa_phase_deg: 0.25 knee superimposed AA"],
+    ),
+    (
+        "hinge",
+        ("protocol",),
+        {"all": {"motion": "lissajous", "fe_cycles": 30}, "knee": {"n_frames": 50}},
+        ["studies.hinge.protocol.all.fe_cycles, knee.n_frames: 30 knee lissajous cycles over 50"],
     ),
     (
         "hip",
@@ -399,6 +460,21 @@ def test_mistake_names_key_and_allowed_values(config, study, path, value, words)
         study_config.check_config(changed(config, study, path, value))
     for word in words:
         assert word in str(error.value), str(error.value)
+
+
+@pytest.mark.parametrize(
+    "waves",
+    [
+        {"fe_cycles": 0.5, "aa_cycles": 0.75, "aa_phase_deg": 90.0},
+        {"fe_cycles": 0.5, "aa_cycles": 1.0},
+        {"fe_cycles": 3.0, "aa_cycles": 0.5, "aa_phase_deg": -90.0},
+    ],
+)
+def test_a_hinge_wave_reaching_both_ends_of_its_excursion_passes(config, waves):
+    """Half an FE cycle reaches full flexion from full extension; an AA wave reaches both its
+    ends within a cycle, or within half of one from an end."""
+    hinge = {**config["studies"]["hinge"], "protocol": {"all": {"motion": "lissajous", **waves}}}
+    study_config.check_config({**config, "studies": {**config["studies"], "hinge": hinge}})
 
 
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])

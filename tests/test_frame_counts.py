@@ -147,16 +147,21 @@ def test_a_study_whose_trials_miss_its_declared_frame_count_is_refused_when_simu
         run.simulate_condition(config, "hip_sta", condition, range(1))
 
 
-def test_a_frame_count_that_is_no_whole_number_is_the_studys_mistake(monkeypatch):
-    """A count the study gives as 120.0 (or None from a function that forgot to return) is a
-    programming error in the study, raised as one naming it, not a refusal of the config."""
+@pytest.mark.parametrize(
+    ("count", "shown"),
+    [(lambda n: float(n), r"120\.0"), (lambda n: None, "None"), (lambda n: -n, "-120")],
+)
+def test_a_frame_count_that_is_no_count_is_the_studys_mistake(monkeypatch, count, shown):
+    """A count the study gives as 120.0, None (a function that forgot to return) or -120 (a
+    sign slip) is a programming error in the study, raised as one naming it, not a refusal of
+    the config's protocol, which set no such count."""
     config = _default()
-    fractional = dataclasses.replace(
-        get_study("cmc"), frame_count=lambda condition, protocol: float(protocol.n_frames)
+    miscounted = dataclasses.replace(
+        get_study("cmc"), frame_count=lambda condition, protocol: count(protocol.n_frames)
     )
     studies = study_config.get_study
     monkeypatch.setattr(
-        study_config, "get_study", lambda name: fractional if name == "cmc" else studies(name)
+        study_config, "get_study", lambda name: miscounted if name == "cmc" else studies(name)
     )
-    with pytest.raises(TypeError, match=r"study 'cmc'.*frame_count gave 120\.0.*whole number"):
+    with pytest.raises(TypeError, match=rf"study 'cmc'.*frame_count gave {shown}\b.*0 or more"):
         study_config.check_config(config)

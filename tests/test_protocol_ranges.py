@@ -150,19 +150,21 @@ def _finite_trials(config: dict, study: str) -> None:
 def _refused_or_finite(config: dict, study: str, field: str, overrides: dict) -> None:
     """The check refuses ``overrides`` naming ``field`` (or, for a field of the frames, the
     protocol and the frames; or a grid value beyond a bound the protocol sets, naming the
-    protocol as its source), or passes and the study simulates finite data."""
+    protocol as its source), or passes and the study simulates finite data. The hinge's field,
+    written under ``all``, is named there."""
     candidate = _with_protocol(config, study, overrides)
     try:
         study_config.check_config(candidate)
     except ValueError as error:
         message = str(error)
         key, protocol = _key_of(message), f"studies.{study}.protocol"
+        written = f"all.{field}" if study == "hinge" else field
         if key.startswith(f"studies.{study}.grid."):
             assert f"the bound {protocol} sets" in message, message
         elif field in FRAME_FIELDS and key == protocol:
             assert "frame(s)" in message, message
         else:
-            assert key.startswith(protocol) and field in key, message
+            assert key.startswith(protocol) and written in key, message
         return
     _finite_trials(candidate, study)
 

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
-from jointbench.configuration.config import load_config
+from jointbench.configuration.config import check_config, load_config
 from jointbench.ensembles.members import MEMBER_COLUMNS
 from jointbench.ensembles.sensitivity import (
     DEPENDENCE_MEASURE,
@@ -43,6 +43,26 @@ def test_draws_lie_within_the_bounds_and_are_fixed_by_their_seed(study):
     # Every choice is drawn: no two draws agree on any of them.
     for choice in prior.choices:
         assert len({values[choice.name] for values in draws}) == len(draws), choice.name
+
+
+@pytest.mark.parametrize("study", sorted(PRIORS))
+def test_every_protocol_a_prior_may_draw_passes_the_configs_check(study):
+    """A drawn protocol runs inside a job, past the config's check: a value the check would
+    refuse (a range of :mod:`jointbench.simulate.ranges` or a bound across fields narrower than
+    the prior's) must never be drawn. At every bound of every choice and in draws."""
+    prior = PRIORS[study]
+    default = default_values(prior)
+    members = [{**default, c.name: end} for c in prior.choices for end in (c.low, c.high)]
+    members += [{c.name: c.low for c in prior.choices}, {c.name: c.high for c in prior.choices}]
+    members += [draw_values(prior, seed) for seed in range(20)]
+    for values in members:
+        if not prior.accept(values):
+            continue
+        # Merged into the config's own protocol as a member's is (the overlay's route).
+        overlay = {"studies": {study: {"protocol": prior.build(values)}}}
+        settings = dict(CONFIG["studies"][study])
+        settings["protocol"] = member_protocol(CONFIG, study, "at-bounds", overlay)
+        check_config({**CONFIG, "studies": {**CONFIG["studies"], study: settings}})
 
 
 def test_log_uniform_choices_fill_their_decades_evenly():

@@ -13,12 +13,15 @@ too (:func:`translation_problem`).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge import sine_waves
+from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
-from jointbench.simulate.hip_sta import hip_angles
+from jointbench.simulate.hip_sta import hip_angles, thigh_rotation
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
 
@@ -86,6 +89,13 @@ HIP_FREQUENCIES = (
     "twist_hz",
 )
 HIP_STA_FREQUENCIES = ("pelvis_sway_hz",)
+#: The skin-marker study's protocol fields that set the directions each motion moves the thigh
+#: in (:func:`jointbench.simulate.hip_sta.hip_angles`): about at least :data:`HIP_FEWEST_AXES`
+#: axes, as paper C's rig (:func:`_hip_sta_axes_problem`).
+HIP_STA_DIRECTIONS = {
+    "circumduction": ("circumduction_turns",),
+    "star_arc": ("star_azimuths_deg", "arc_turns"),
+}
 #: Turns (or cycles) of a periodic motion over a stretch of a trial's frames are fewer than
 #: half those frames, as a frequency is below half the frame rate: the frames cannot show a
 #: faster motion (it would be recorded as a slower one than configured), and at 1e13 turns its
@@ -94,8 +104,6 @@ HIP_STA_FREQUENCIES = ("pelvis_sway_hz",)
 #: circumduction, and its star (one sweep per plane) and the arc after it, each over its share
 #: of the trial (``star_fraction``).
 SAMPLED_PER_TURN = 2.0
-#: Hinge motions that use each cycles field (:func:`jointbench.simulate.hinge.joint_angles`).
-HINGE_CYCLES = {"fe_cycles": ("lissajous",), "aa_cycles": ("lissajous", "superimposed")}
 
 #: Marker clusters, each fitted as one rigid body (:func:`cluster_problem`): the hip rig's, and
 #: the skin-marker study's pelvis and thigh.
@@ -156,25 +164,46 @@ def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    """:data:`SAMPLED_PER_TURN` for the cycles of each joint the grid runs, where its motion
-    uses them; named where the config sets them (the joint's own entry, else ``all``)."""
+    """For each sine wave of each joint the grid runs (:func:`sine_waves`): its cycles
+    :data:`SAMPLED_PER_TURN` over the frames, and its reach of both ends of its excursion
+    (:func:`_wave_ends_problem`); named where the config sets them (:func:`placed_fields`)."""
     overrides = settings.get("protocol") or {}
     for joint in settings["grid"]["protocol"]:
         hinge = protocol.joints[joint]
-        for name, motions in HINGE_CYCLES.items():
-            if hinge.motion not in motions:
-                continue
-            own = name in overrides.get(joint, {})
-            where = "all" if not own and name in overrides.get("all", {}) else joint
-            problem = _turns_problem(
-                f"protocol.{where}.{name}, n_frames",
-                getattr(hinge, name),
-                hinge.n_frames,
-                f"{joint} {hinge.motion} cycles",
-            )
+        for name, (cycles, phase) in sine_waves(hinge).items():
+            entry, keys = placed_fields(overrides, joint, (name, "n_frames"))
+            what = f"{joint} {hinge.motion} cycles"
+            problem = _turns_problem(f"protocol.{entry}.{keys}", cycles, hinge.n_frames, what)
+            if problem:
+                return problem
+            # The FE wave's phase is the motion's (full extension), the AA wave's the config's.
+            fields = (name,) if name == "fe_cycles" else (name, "aa_phase_deg")
+            entry, keys = placed_fields(overrides, joint, fields)
+            what = f"{joint} {hinge.motion} {name.split('_')[0].upper()} cycles"
+            problem = _wave_ends_problem(f"protocol.{entry}.{keys}", cycles, phase, what)
             if problem:
                 return problem
     return None
+
+
+def _wave_ends_problem(key: str, cycles: float, phase: float, what: str) -> tuple[str, str] | None:
+    """``(key, why)`` when ``sin(2 pi cycles t + phase)``, ``t`` in ``[0, 1]``, does not reach
+    both +1 and -1, else None: the trial would not reach the excursion its condition names
+    (at 1e-300 FE cycles the knee never flexes, and the axis methods find the AA axis)."""
+    end = phase + 2.0 * math.pi * cycles
+    # Each peak's first occurrence at or after the start, within the rounding of the phases.
+    firsts = [
+        peak + 2.0 * math.pi * math.ceil((phase - peak) / (2.0 * math.pi) - _ROUNDING)
+        for peak in (math.pi / 2.0, 3.0 * math.pi / 2.0)
+    ]
+    if all(first <= end + _ROUNDING * max(1.0, abs(end)) for first in firsts):
+        return None
+    return key, (
+        f"{cycles!r} {what} (phase {math.degrees(phase):g} deg) do not reach both ends of the "
+        "excursion the condition names: the trial would not move over the range of motion its "
+        "results are labelled with; a wave reaches both ends within one cycle, from an end "
+        "within half of one"
+    )
 
 
 def _aa_ratio_problem(settings: Mapping) -> tuple[str, str] | None:
@@ -201,6 +230,7 @@ def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return (
         _clusters_problem(protocol, HIP_STA_CLUSTERS)
         or _hip_sta_turns_problem(settings, protocol)
+        or _hip_sta_axes_problem(settings, protocol)
         or _sta_reach_problem(settings, protocol)
         or pelvis_poses_problem(settings, protocol)
         or _frequencies_problem(protocol, HIP_STA_FREQUENCIES)
@@ -233,6 +263,43 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
         turns = protocol.circumduction_turns
         stretches.append((key, turns, n_frames, "circumduction turns"))
     return next((p for p in (_turns_problem(*stretch) for stretch in stretches) if p), None)
+
+
+def _hip_sta_axes_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """Each motion the grid runs, at its smallest ``rom_deg``, turning a thigh marker about
+    fewer than :data:`HIP_FEWEST_AXES` axes further than the floor of :func:`_turn_floor` (the
+    axes: the principal ones of the thigh's rotation vectors, :func:`principal_turns_mm`);
+    named at the fields that set the motion's directions (and the noise where it sets the
+    floor) where it is seen about one axis, at ``grid.rom_deg`` where about none."""
+    rom_deg = min(settings["grid"]["rom_deg"])
+    floor, floor_words = _turn_floor(protocol.noise_mm, protocol.thigh_markers_mm)
+    for motion in settings["grid"]["motion"]:
+        rotation = thigh_rotation(hip_angles(motion, rom_deg, protocol))
+        turns = np.sort(principal_turns_mm(rotation, protocol.thigh_markers_mm))[::-1]
+        seen = int(np.sum(turns > floor))
+        if seen >= HIP_FEWEST_AXES:
+            continue
+        # The noise is as much the culprit where it sets the floor.
+        noise = ("noise_mm",) if floor == protocol.noise_mm else ()
+        fields = (*HIP_STA_DIRECTIONS[motion], *noise)
+        key = f"protocol.{', '.join(fields)}" if seen else "grid.rom_deg"
+        return key, (
+            f"the thigh's {motion} at rom_deg {rom_deg:g} turns its markers about {seen} "
+            f"axis(es): about the next by {turns[seen]:.3g} mm at most, not above "
+            f"{floor_words}; a hip moved about fewer than {HIP_FEWEST_AXES} axes has no single "
+            f"centre (paper C's rig 'moved around at least {HIP_FEWEST_AXES} of the axes')"
+        )
+    return None
+
+
+def principal_turns_mm(rotation: np.ndarray, markers_mm: Sequence[Sequence[float]]) -> np.ndarray:
+    """:func:`largest_turn_mm` ``(3,)`` [mm] about the principal axes of the rotation vectors
+    ``rotation`` ``(n, 3)`` [rad] (the eigenvectors of their ``(3, 3)`` second moment, about
+    the joint), so that a swing in one plane at any azimuth turns the markers about one axis
+    alone."""
+    rotation = np.asarray(rotation, dtype=float)
+    _, axes = np.linalg.eigh(rotation.T @ rotation)
+    return largest_turn_mm(rotation @ axes, np.asarray(markers_mm, dtype=float) @ axes)
 
 
 def _turns_problem(key: str, turns: float, frames: float, what: str) -> tuple[str, str] | None:
@@ -395,7 +462,7 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
     t = np.arange(protocol.n_frames) / protocol.fps
     turns = largest_turn_mm(distal_rotation(protocol, t), protocol.distal_markers_mm)
     configured = [name for name in HIP_ROTATIONS if getattr(protocol, name) != 0]
-    floor, floor_words = _turn_floor(protocol)
+    floor, floor_words = _turn_floor(protocol.noise_mm, protocol.distal_markers_mm)
     seen = [n for n, turn in zip(HIP_ROTATIONS, turns, strict=True) if turn > floor]
     if len(seen) >= HIP_FEWEST_AXES:
         return None
@@ -419,18 +486,18 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
     )
 
 
-def _turn_floor(protocol: object) -> tuple[float, str]:
-    """``(floor [mm], it in words)``: the turn of a distal marker a hip rig rotation must exceed
-    to be seen, the largest of the marker noise, :data:`HIP_RESOLUTION_MM` (which sets it
-    without noise) and the rounding of the markers' coordinates (which passes it only for
-    markers ten kilometres from the joint)."""
-    rounding = _ROUNDING * float(np.abs(protocol.distal_markers_mm).max())
+def _turn_floor(noise_mm: float, markers_mm: Sequence[Sequence[float]]) -> tuple[float, str]:
+    """``(floor [mm], it in words)``: the turn of a marker of ``markers_mm`` (relative to the
+    joint) a rotation must exceed to be seen, the largest of the marker noise ``noise_mm``,
+    :data:`HIP_RESOLUTION_MM` (which sets it without noise) and the rounding of the markers'
+    coordinates (which passes it only for markers ten kilometres from the joint)."""
+    rounding = _ROUNDING * float(np.abs(np.asarray(markers_mm, dtype=float)).max())
     return max(
-        (protocol.noise_mm, f"the marker noise noise_mm ({protocol.noise_mm:g} mm)"),
+        (noise_mm, f"the marker noise noise_mm ({noise_mm:g} mm)"),
         (
             HIP_RESOLUTION_MM,
             f"HIP_RESOLUTION_MM ({HIP_RESOLUTION_MM:g} mm), the least turn a recording "
-            f"resolves (noise_mm is {protocol.noise_mm:g} mm)",
+            f"resolves (noise_mm is {noise_mm:g} mm)",
         ),
         (rounding, f"the rounding of the markers' coordinates ({rounding:.3g} mm)"),
         key=lambda candidate: candidate[0],

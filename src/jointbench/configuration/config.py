@@ -412,12 +412,13 @@ def trial_frames(spec: Study, protocol: object, condition: Mapping) -> int:
     """The frames of a trial of ``spec``'s ``condition`` under ``protocol``: the study's count
     from its protocol (:attr:`~jointbench.simulate.Study.frame_count`), which every study
     declares, so that none is simulated to be counted. ``TypeError`` naming the study where
-    the count is not a whole number: a mistake in the study, not in the config."""
+    the count is not a whole number of 0 or more: a mistake in the study, which no config
+    value can make (a protocol's own fields are bounded by their declarations)."""
     n_frames = spec.frame_count(condition, protocol)
-    if isinstance(n_frames, bool) or not isinstance(n_frames, numbers.Integral):
+    if isinstance(n_frames, bool) or not isinstance(n_frames, numbers.Integral) or n_frames < 0:
         raise TypeError(
             f"study {spec.name!r}: its frame_count gave {n_frames!r} for condition "
-            f"{condition_id(condition)}, not a whole number of frames"
+            f"{condition_id(condition)}, not a count of frames (a whole number, 0 or more)"
         )
     return int(n_frames)
 

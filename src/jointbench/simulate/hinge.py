@@ -94,6 +94,7 @@ __all__ = [
     "nominal_markers",
     "protocol_from_config",
     "simulate",
+    "sine_waves",
 ]
 
 Motion = Literal["lissajous", "sequential", "superimposed", "grid"]
@@ -271,6 +272,19 @@ def joint_angles(
         fe_wave = np.repeat(levels, side)
         aa_wave = np.concatenate([levels if i % 2 == 0 else levels[::-1] for i in range(side)])
     return fe_half * (1.0 + fe_wave), aa_half * aa_wave
+
+
+def sine_waves(protocol: HingeProtocol) -> dict[str, tuple[float, float]]:
+    """The sinusoids of ``protocol``'s motion, by the field that sets their cycles: ``(cycles,
+    phase [rad])`` of ``sin(2 pi cycles t + phase)`` over ``t`` in ``[0, 1]``, each the wave
+    :func:`joint_angles` lays out (the Lissajous FE wave ``-cos`` is the sine from ``-pi/2``,
+    full extension); none for the grid and sequential motions, which run no cycles."""
+    aa = (protocol.aa_cycles, math.radians(protocol.aa_phase_deg))
+    if protocol.motion == "lissajous":
+        return {"fe_cycles": (protocol.fe_cycles, -math.pi / 2.0), "aa_cycles": aa}
+    if protocol.motion == "superimposed":
+        return {"aa_cycles": aa}
+    return {}
 
 
 def nominal_markers(condition: Mapping[str, object], protocol: HingeProtocol) -> np.ndarray:

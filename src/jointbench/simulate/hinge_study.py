@@ -24,7 +24,7 @@ from jointbench.declared import check_fields as check_declared
 from jointbench.simulate import GridValues, Study, Trials, hinge
 from jointbench.simulate.prior import Choice, Prior
 
-__all__ = ["PRIOR", "STUDY", "HingeStudyProtocol", "simulate"]
+__all__ = ["PRIOR", "STUDY", "HingeStudyProtocol", "placed_fields", "simulate"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +45,7 @@ class HingeStudyProtocol:
                     (key,), f"must be a mapping of HingeProtocol fields, got {settings!r}"
                 )
             check_declared(hinge.HingeProtocol, settings, (key,))
+        written = dict(overrides)
         shared = dict(overrides.pop("all", {}))
         joints = {}
         for name in sorted(set(hinge.HINGE_PROTOCOLS) | set(overrides)):
@@ -52,8 +53,37 @@ class HingeStudyProtocol:
             try:
                 joints[name] = hinge.protocol_from_config(settings)
             except DeclarationError as error:
-                raise error.under(name) from None
+                raise _named_where_written(error, written, name) from None
         return cls(joints)
+
+
+def placed_fields(overrides: Mapping, joint: str, fields: Sequence[str]) -> tuple[str, str]:
+    """``(entry, keys)``: where the config's hinge protocol ``overrides`` set ``fields`` of
+    ``joint``. A field is the joint's own entry's where set there, else ``all``'s where set
+    there, else the joint's (its default); ``entry`` is the first field's, and ``keys`` the
+    fields, each after the first under its own entry where that is another, e.g. ``("all",
+    "noise_sd_mm, knee.markers_mm")``: a bound across fields names each where it is written."""
+
+    def entry(field: str) -> str:
+        own = field in (overrides.get(joint) or {})
+        return "all" if not own and field in (overrides.get("all") or {}) else joint
+
+    first = entry(fields[0])
+    rest = [field if entry(field) == first else f"{entry(field)}.{field}" for field in fields[1:]]
+    return first, ", ".join([fields[0], *rest])
+
+
+def _named_where_written(
+    error: DeclarationError, overrides: Mapping, joint: str
+) -> DeclarationError:
+    """``error``, raised by ``joint``'s protocol at its fields (the first key of its path,
+    comma-separated), named where the config writes them (:func:`placed_fields`); one met
+    under ``all`` says which joint it broke."""
+    if not error.path:
+        return error.under(joint)
+    entry, keys = placed_fields(overrides, joint, str(error.path[0]).split(", "))
+    reason = f"{error.reason} (joint {joint!r})" if entry == "all" else error.reason
+    return DeclarationError((entry, keys, *error.path[1:]), reason)
 
 
 def simulate(

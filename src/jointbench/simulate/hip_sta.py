@@ -124,6 +124,7 @@ __all__ = [
     "sta_displacements",
     "sta_field",
     "thigh_in_pelvis_frame",
+    "thigh_rotation",
 ]
 
 MOTIONS = ("star_arc", "circumduction")
@@ -288,6 +289,14 @@ def sta_displacements(field: np.ndarray, angles: np.ndarray) -> np.ndarray:
     return np.einsum("fk,kni->fni", angles, field)
 
 
+def thigh_rotation(angles: np.ndarray) -> np.ndarray:
+    """The thigh's rotation vectors ``(n_frames, 3)`` [rad] relative to the pelvis (pelvis
+    frame) at hip ``angles`` ``(n_frames, 2)`` [rad]: flexion about ``-y``, abduction about
+    ``-x``."""
+    flexion, abduction = angles[:, 0], angles[:, 1]
+    return np.stack([-abduction, -flexion, np.zeros_like(flexion)], axis=-1)
+
+
 def nominal_recording(
     angles: np.ndarray, protocol: HipStaProtocol
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -300,8 +309,7 @@ def nominal_recording(
     r0 = rotation_matrix(np.radians(protocol.pelvis_sway_deg) * sway)
     centroid = pelvis_body.mean(axis=0)
     d0 = centroid + np.asarray(protocol.pelvis_sway_mm) * sway - r0 @ centroid
-    flexion, abduction = angles[:, 0], angles[:, 1]
-    relative = rotation_matrix(np.stack([-abduction, -flexion, np.zeros_like(flexion)], axis=-1))
+    relative = rotation_matrix(thigh_rotation(angles))
     r1 = r0 @ relative
     # The ball joint: R0 c + d0 = R1 c + d1.
     d1 = r0 @ joint + d0 - r1 @ joint
