@@ -373,21 +373,26 @@ def _scatter_and_largest(
     markers' scatter about each frame's centroid [mm^2], the largest eigenvalue of ``K^-1``
     [mm^-2] and the largest absolute coordinate [mm], ``(T,)`` each. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
-    scatter = np.zeros(n_trials)
+    scatter = np.empty(n_trials)
     weakest = np.empty(n_trials)
-    largest = np.zeros(n_trials)
+    largest = np.empty(n_trials)
     centred = np.empty((n_markers, 3))
     tensor = np.empty((3, 3))
     for t in range(n_trials):
+        # The sums in locals, not in the arrays: a store per marker costs the pass its speed.
+        trial_scatter = 0.0
+        trial_largest = 0.0
         for f in range(n_frames):
             for i in range(3):
                 mean = 0.0
                 for m in range(n_markers):
                     mean += markers[t, f, m, i]
-                    largest[t] = max(largest[t], abs(markers[t, f, m, i]))
+                    trial_largest = max(trial_largest, abs(markers[t, f, m, i]))
                 mean /= n_markers
                 for m in range(n_markers):
-                    scatter[t] += (markers[t, f, m, i] - mean) ** 2
+                    trial_scatter += (markers[t, f, m, i] - mean) ** 2
+        scatter[t] = trial_scatter
+        largest[t] = trial_largest
         for i in range(3):
             mean = 0.0
             for m in range(n_markers):
@@ -1236,7 +1241,9 @@ def _hinge_residual(vectors: np.ndarray, noise: np.ndarray) -> float:
                 h1 += weights[4, e] * entry
             det = g00 * g11 - g01 * g01
             positive = positive and g00 > 0.0 and det > 0.0
-            i00, i01, i11 = g11 / det, -g01 / det, g00 / det
+            # One division, not three: the frame's inverse is most of its arithmetic.
+            scale = 1.0 / det
+            i00, i01, i11 = g11 * scale, -g01 * scale, g00 * scale
             z0 = i00 * y0 + i01 * y1
             z1 = i01 * y0 + i11 * y1
             residual += y0 * z0 + y1 * z1
