@@ -165,6 +165,7 @@ from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.distances import distance_modes_into
 from jointbench.numerics.poses import _horn_rotations, best_rotation
+from jointbench.numerics.reuse import remembered
 from jointbench.numerics.small import inertia_into, symmetric_eigen_into, tangent_basis_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
@@ -921,14 +922,32 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
 
 
 @kernel
-def _frame_correlations(markers: np.ndarray) -> np.ndarray:
+def _frame_numbers(markers: np.ndarray) -> np.ndarray:
     """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], how its marker-pair distances
-    depend on each other from frame to frame (:func:`_frame_dependence`) ``(T, 4)``. A
-    compiled kernel."""
-    out = np.empty((markers.shape[0], 4))
+    depend on each other from frame to frame (:func:`_frame_dependence`: the first four) and
+    the SD of their pooled lag-1 autocorrelation for independent frames
+    (:func:`_correlation_sd`), what :class:`Untested` reads beside the first, ``(T, 5)``: the
+    distances computed once for all. A compiled kernel."""
+    out = np.empty((markers.shape[0], 5))
     for t in range(markers.shape[0]):
-        _dependence_into(markers[t], out[t])
+        distances = _dependence_into(markers[t], out[t, :4])
+        out[t, 4] = _correlation_sd(distances)
     return out
+
+
+def _segment_frame_numbers(markers: np.ndarray) -> np.ndarray:
+    """:func:`_frame_numbers` of one segment's markers ``(T, N, n, 3)`` [mm], read-only: in a
+    checked call computed once for the block test and the lag-1 statement, which both read
+    them (:func:`jointbench.numerics.reuse.remembered`)."""
+    return remembered("frame numbers", markers, _read_only_frame_numbers)
+
+
+def _read_only_frame_numbers(markers: np.ndarray) -> np.ndarray:
+    """:func:`_frame_numbers` of ``markers`` ``(T, N, n, 3)`` [mm], as an array no reader can
+    write to."""
+    numbers = _frame_numbers(kernel_array(markers))
+    numbers.flags.writeable = False
+    return numbers
 
 
 @kernel
@@ -2231,7 +2250,7 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
     the :class:`_Frames` of the segment whose frames are the further from independent (the
     larger excess of :func:`_frame_dependence`), of those whose distances are not rounding."""
-    dependence = [_frame_correlations(kernel_array(array)) for array in arrays]
+    dependence = [_segment_frame_numbers(array) for array in arrays]
     frames = []
     for t in range(arrays[0].shape[0]):
         readable = [k for k in range(len(arrays)) if math.isfinite(dependence[k][t, 0])]
@@ -2241,7 +2260,7 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
             else len(arrays) - 1
         )
         frames.append(
-            _segment_frames(dependence[worst][t].tolist(), names[worst], arrays[worst][t])
+            _segment_frames(dependence[worst][t, :4].tolist(), names[worst], arrays[worst][t])
         )
     return frames
 
@@ -2359,7 +2378,7 @@ def _untested(
     read = []
     for name, array in zip(names, chosen, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
-            numbers = _lag1_numbers(kernel_array(array)).tolist()
+            numbers = _segment_frame_numbers(array)[:, ::4].tolist()
             read.append((name, numbers))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
@@ -2379,21 +2398,6 @@ def _untested(
                 worst = Untested(name, n_frames, correlation, bound)
         found[t] = worst
     return found
-
-
-@kernel
-def _lag1_numbers(markers: np.ndarray) -> np.ndarray:
-    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the lag-1 autocorrelation
-    pooled over its pair distances (the first of :func:`_frame_correlations`) and its SD for
-    independent frames (:func:`_correlation_sd`) ``(T, 2)``: what :class:`Untested` reads, the
-    distances computed once for both. A compiled kernel."""
-    out = np.empty((markers.shape[0], 2))
-    dependence = np.empty(4)
-    for t in range(markers.shape[0]):
-        distances = _dependence_into(markers[t], dependence)
-        out[t, 0] = dependence[0]
-        out[t, 1] = _correlation_sd(distances)
-    return out
 
 
 @kernel
@@ -2476,9 +2480,9 @@ def _without_poses(
         )
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
-    (dependence,) = _frame_correlations(kernel_array(markers[None]))
+    (dependence,) = _frame_numbers(kernel_array(markers[None]))
     name = "distal" if len(arrays) > 1 else "markers"
-    frames = _segment_frames(dependence.tolist(), name, markers)
+    frames = _segment_frames(dependence[:4].tolist(), name, markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
