@@ -1385,11 +1385,17 @@ def _rotation_spreads(
                         d[i, j] += nearest[k, i] * relative[f, k, j]
             cos_theta = min(max((d[0, 0] + d[1, 1] + d[2, 2] - 1.0) / 2.0, -1.0), 1.0)
             theta = np.arccos(cos_theta)
-            near_pi = near_pi or theta > np.pi - 1e-4
+            turned = theta > np.pi - 1e-4
+            near_pi = near_pi or turned
             if theta < 1e-6:
                 scale = 0.5 + theta**2 / 12.0
-            else:
+            elif turned:
                 scale = theta / (2.0 * np.sin(theta))
+            else:
+                # sin(arccos c) as sqrt((1 - c)(1 + c)), both factors exact where either is
+                # small: a root costs a fraction of a sine. Near pi, whose vectors are taken
+                # again another way, the sine keeps them finite.
+                scale = theta / (2.0 * np.sqrt((1.0 - cos_theta) * (1.0 + cos_theta)))
             vectors[f, 0] = scale * (d[2, 1] - d[1, 2])
             vectors[f, 1] = scale * (d[0, 2] - d[2, 0])
             vectors[f, 2] = scale * (d[1, 0] - d[0, 1])
