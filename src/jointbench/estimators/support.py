@@ -2381,10 +2381,16 @@ def _untested(
         return found
     # The trials the caveat closed are not read: most of a long correlated recording's.
     chosen = tuple(array if len(trials) == n_trials else array[trials] for array in arrays)
+    # Two segments' numbers are the block test's (_segments_frames), found again; one segment's
+    # verdict reads its block test from a pass of its own, and the look-up would cost it more
+    # than it finds.
     read = []
     for name, array in zip(names, chosen, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
-            numbers = _segment_frame_numbers(array)[:, ::4].tolist()
+            if len(arrays) > 1:
+                numbers = _segment_frame_numbers(array).tolist()
+            else:
+                numbers = _frame_numbers(kernel_array(array)).tolist()
             read.append((name, numbers))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
@@ -2394,7 +2400,7 @@ def _untested(
     for row, t in enumerate(trials):
         worst = None
         for name, numbers in read:
-            correlation, sd = numbers[row]
+            correlation, sd = numbers[row][0], numbers[row][4]
             if not math.isfinite(correlation):
                 continue
             bound = DEPENDENT_CORRELATION - _Z_CLEARED * sd
