@@ -56,7 +56,7 @@ STAGES = (
 def _verdict_kernels(markers: np.ndarray) -> None:
     """The compiled work of the one-segment verdict on ``markers`` ``(1, N, n, 3)`` [mm]."""
     support._one_segment_numbers(markers, support._FLEX)
-    support._lag1_numbers(markers)
+    support._frame_numbers(markers)
 
 
 def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[int], object]]:

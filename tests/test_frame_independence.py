@@ -220,7 +220,7 @@ def test_both_passes_compute_the_numbers_written_out_in_numpy(n_markers):
     expected = [_numpy_dependence(markers) for markers in trials]
     one_segment = support._one_segment_numbers(stacked, support._FLEX)
     np.testing.assert_allclose(one_segment[:, support._DEPENDENCE], expected, rtol=1e-9)
-    np.testing.assert_allclose(support._frame_correlations(stacked), expected, rtol=1e-9)
+    np.testing.assert_allclose(support._frame_numbers(stacked)[:, :4], expected, rtol=1e-9)
 
 
 def test_two_markers_that_give_no_pose_are_read_from_their_distance():
@@ -317,7 +317,7 @@ def independent_alarms(
     clean = _moved(body, _swing(n_frames))
     noise = rng.normal(scale=0.3, size=(n_trials, n_frames, n_markers, 3))
     noise[: n_trials // 2, :, 1:] = 0.0
-    dependence = support._frame_correlations(clean[None] + noise)
+    dependence = support._frame_numbers(clean[None] + noise)[:, :4]
     return int(np.sum(dependence[:, 3] >= 1.0))
 
 
@@ -345,7 +345,7 @@ def test_a_burst_of_noise_on_one_marker_is_not_read_as_dependent_frames():
         start = rng.integers(0, 980)
         markers[start : start + 20, 1] += rng.normal(scale=3.0, size=(20, 3))
         trials.append(markers)
-    dependence = support._frame_correlations(np.stack(trials))
+    dependence = support._frame_numbers(np.stack(trials))[:, :4]
     assert np.sum(dependence[:, 3] >= 1.0) <= 1
 
 
@@ -533,19 +533,11 @@ def test_the_correlation_sd_is_that_of_the_distances_covariance():
             covariance = np.cov(distances, bias=True).reshape(len(pairs), len(pairs))
             spread = math.sqrt(n_frames - 1) * np.linalg.norm(covariance)
             expected.append(spread / (n_frames * np.trace(covariance)))
-        for function in (support._lag1_numbers, support._lag1_numbers.__wrapped__):
-            np.testing.assert_allclose(function(markers)[:, 1], expected, rtol=1e-12)
+        for function in (support._frame_numbers, support._frame_numbers.__wrapped__):
+            np.testing.assert_allclose(function(markers)[:, 4], expected, rtol=1e-12)
     # Two frames, whose mean is exact: the deviations are zero, not rounding.
     still = np.repeat(rng.normal(size=(1, 1, 4, 3)), 2, axis=1)
-    assert np.isnan(support._lag1_numbers(still)[:, 1]).all()
-
-
-def test_the_lag_1_statement_reads_the_correlation_the_dependence_test_pools():
-    rng = np.random.default_rng(5)
-    markers = rng.normal(scale=30.0, size=(4, 50, 4, 3))
-    np.testing.assert_array_equal(
-        support._lag1_numbers(markers)[:, 0], support._frame_correlations(markers)[:, 0]
-    )
+    assert np.isnan(support._frame_numbers(still)[:, 4]).all()
 
 
 def test_a_one_segment_verdict_makes_two_compiled_calls(monkeypatch):
@@ -562,7 +554,28 @@ def test_a_one_segment_verdict_makes_two_compiled_calls(monkeypatch):
     (markers,) = _kind_trial("center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
     monkeypatch.setattr(compiled._Kernel, "__call__", counting)
     support.assess_many("center", (markers[None],))
-    assert calls == ["_one_segment_numbers", "_lag1_numbers"]
+    assert calls == ["_one_segment_numbers", "_frame_numbers"]
+
+
+def test_a_checked_joint_centre_call_reads_each_segments_distances_once(monkeypatch):
+    """The block test and the lag-1 statement of a checked two-segment call read one compiled
+    pass over each segment's pair distances, not one pass each: the second finds the first's
+    numbers (:func:`jointbench.numerics.reuse.remembered`)."""
+    calls = []
+    kernel_call = compiled._Kernel.__call__
+
+    def counting(self, *args):
+        calls.append(self.__qualname__)
+        return kernel_call(self, *args)
+
+    rng = np.random.default_rng(2)
+    arrays = _kind_trial("joint_center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
+    fit = jointbench.estimators.registry.get("joint_center", "SCoRE")
+    fit(*arrays)
+    monkeypatch.setattr(compiled._Kernel, "__call__", counting)
+    result = fit(*arrays)
+    assert "support_frame_correlation" in result.diagnostics
+    assert calls.count("_frame_numbers") == 2
 
 
 def _unsupported_count(kind: str, n_frames: int, share: float, n_trials: int) -> int:

@@ -11,6 +11,7 @@ import pytest
 
 import jointbench
 from jointbench.estimators import centre_precision, support
+from jointbench.estimators import pose_noise as pose_noise_module
 from jointbench.estimators.pose_noise import NoisyPoses, pose_noise, pull_mm
 from jointbench.estimators.results import JointCenterResult
 from jointbench.geometry import rotation_about_axis, rotation_matrix
@@ -269,3 +270,56 @@ def test_a_refusal_of_the_verdict_is_not_repeated():
     assert "rotation about a single axis" in result.status
     assert _PULLED not in result.status
     assert "center_pose_noise_share" in result.diagnostics
+
+
+def test_the_pose_noise_kernel_is_its_python_source_and_the_docstrings_formulas():
+    """The compiled pose-noise numbers answer as their Python source, run as written, and as
+    the module docstring's ``M``, ``B``, share and ``(M + B)^-1 B`` in NumPy, trial by trial,
+    a trial whose noise takes all the information (share and operator ``inf``) among them."""
+    rng = np.random.default_rng(3)
+    n_trials, n_frames = 3, 25
+    angles = rng.normal(scale=0.4, size=(2, n_trials, n_frames, 3))
+    rotations = [
+        rotation_matrix(a.reshape(-1, 3)).reshape(n_trials, n_frames, 3, 3) for a in angles
+    ]
+    bodies = rng.normal(scale=50.0, size=(2, n_trials, 4, 3))
+    inertia_invs = []
+    for body in bodies:
+        centred = body - body.mean(axis=1, keepdims=True)
+        inertia = np.einsum("tm,ij->tij", (centred**2).sum(-1), np.eye(3)) - np.einsum(
+            "tmi,tmj->tij", centred, centred
+        )
+        inertia_invs.append(np.linalg.inv(inertia))
+    variances = np.array([[0.3, 1.0, 4e4], [0.5, 2.0, 4e4]])
+    segments = [
+        NoisyPoses(rotations[s], bodies[s], inertia_invs[s], variances[s]) for s in range(2)
+    ]
+    compiled = pose_noise(*segments)
+    arrays = [a for s in segments for a in s]
+    python = pose_noise_module._pose_noise_numbers.__wrapped__(*arrays)
+    for t, noise in enumerate(compiled):
+        relative = np.einsum("fki,fkj->ij", rotations[0][t], rotations[1][t])
+        g_p, g_d = (
+            (v[t] * k[t] - np.trace(v[t] * k[t]) * np.eye(3)) / 2.0
+            for v, k in zip(variances, inertia_invs, strict=True)
+        )
+        normal = np.block([[n_frames * np.eye(3), -relative], [-relative.T, n_frames * np.eye(3)]])
+        attenuation = np.block(
+            [[n_frames * g_p, relative @ g_d], [relative.T @ g_p, n_frames * g_d]]
+        )
+        corrected = normal + attenuation
+        values, vectors = np.linalg.eigh((corrected + corrected.T) / 2.0)
+        centroids = bodies[:, t].mean(axis=1)
+        np.testing.assert_allclose(noise.centroids, centroids, rtol=1e-12)
+        np.testing.assert_array_equal(python[1][t], noise.centroids)
+        if values[0] <= 0.0:
+            assert t == 2 and np.isinf(noise.share) and np.isinf(noise.operator).all()
+            assert np.isinf(python[2][t]) and np.isinf(python[0][t]).all()
+            continue
+        share = -(vectors[:, 0] @ attenuation @ vectors[:, 0]) / values[0]
+        operator = np.linalg.solve(corrected, attenuation)
+        assert noise.share == pytest.approx(share, rel=1e-10) and noise.share > 0.0
+        np.testing.assert_allclose(noise.operator, operator, rtol=1e-10, atol=1e-12)
+        assert python[2][t] == pytest.approx(noise.share, rel=1e-12)
+        np.testing.assert_allclose(python[0][t], noise.operator, rtol=1e-12, atol=1e-14)
+    assert [np.isinf(noise.share) for noise in compiled] == [False, False, True]

@@ -86,7 +86,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from jointbench.numerics.compiled import kernel
+from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.joint_system import normal_matrix
 
 if TYPE_CHECKING:
@@ -143,49 +143,87 @@ class NoisyPoses(NamedTuple):
     variance: np.ndarray
 
 
-def _shrinkage(poses: NoisyPoses) -> np.ndarray:
-    """``G = (Sigma - tr(Sigma) I) / 2`` ``(T, 3, 3)`` [rad^2] with ``Sigma = s^2 K^-1`` the
-    covariance of a pose's rotation in the body frame (module docstring)."""
-    sigma = poses.variance[:, None, None] * poses.inertia_inv
-    trace = np.trace(sigma, axis1=1, axis2=2)
-    return (sigma - trace[:, None, None] * np.eye(3)) / 2.0
-
-
 def pose_noise(proximal: NoisyPoses, distal: NoisyPoses) -> list[PoseNoise]:
     """Per trial, the :class:`PoseNoise` of the ``proximal`` and ``distal`` segments' poses
     (module docstring: ``M``, ``B`` and the share)."""
-    n_frames = proximal.rotation.shape[1]
-    # sum_k R_p(k)' R_d(k): the frames' rotations stacked as one (3 N, 3) matrix per trial.
-    n_trials = proximal.rotation.shape[0]
-    relative_sum = np.swapaxes(proximal.rotation.reshape(n_trials, -1, 3), 1, 2) @ (
-        distal.rotation.reshape(n_trials, -1, 3)
+    operator, centroids, share = _pose_noise_numbers(
+        *(
+            kernel_array(array)
+            for poses in (proximal, distal)
+            for array in (poses.rotation, poses.body, poses.inertia_inv, poses.variance)
+        )
     )
-    g_p, g_d = _shrinkage(proximal), _shrinkage(distal)
-    attenuation = np.block(
-        [
-            [n_frames * g_p, relative_sum @ g_d],
-            [np.swapaxes(relative_sum, 1, 2) @ g_p, n_frames * g_d],
-        ]
-    )
-    corrected = normal_matrix(relative_sum, n_frames) + attenuation
-    # M + B is not symmetric; the information along a direction v is v' (M + B) v, which only
-    # its symmetric part carries.
-    values, vectors = np.linalg.eigh((corrected + np.swapaxes(corrected, 1, 2)) / 2.0)
-    least, direction = values[:, 0], vectors[:, :, 0]
-    noise_information = -np.einsum("ti,tij,tj->t", direction, attenuation, direction)
-    # No noise-free information left along v: the noise took it all, and no share or pull is
-    # finite (nor is M + B safely solvable there).
-    determined = least > 0.0
-    share = np.full(least.shape, np.inf)
-    share[determined] = noise_information[determined] / least[determined]
-    operator = np.full_like(attenuation, np.inf)
-    if determined.any():
-        operator[determined] = np.linalg.solve(corrected[determined], attenuation[determined])
-    centroids = np.stack([proximal.body.mean(axis=1), distal.body.mean(axis=1)], axis=1)
     return [
         PoseNoise(operator[t], centroids[t], float(share[t]))
         for t in range(proximal.rotation.shape[0])
     ]
+
+
+@kernel
+def _pose_noise_numbers(
+    rotation_p: np.ndarray,
+    body_p: np.ndarray,
+    inertia_inv_p: np.ndarray,
+    variance_p: np.ndarray,
+    rotation_d: np.ndarray,
+    body_d: np.ndarray,
+    inertia_inv_d: np.ndarray,
+    variance_d: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per trial of two segments' :class:`NoisyPoses` (proximal ``_p``, distal ``_d``: the
+    rotations ``(T, N, 3, 3)``, body-fixed markers ``(T, n, 3)`` [mm], inverse inertias
+    ``(T, 3, 3)`` [mm^-2] and residual variances ``(T,)`` [mm^2]), the numbers of their
+    :class:`PoseNoise`: ``(M + B)^-1 B`` ``(T, 6, 6)`` (``inf`` where the share is), the
+    clusters' centroids ``(T, 2, 3)`` [mm] and the share ``(T,)`` (module docstring). A compiled
+    kernel: a one-trial check would otherwise pay NumPy's overhead on a dozen small arrays."""
+    n_trials, n_frames = rotation_p.shape[:2]
+    # sum_k R_p(k)' R_d(k), the relative rotations summed over the frames.
+    relative_sum = np.zeros((n_trials, 3, 3))
+    for t in range(n_trials):
+        for f in range(n_frames):
+            for i in range(3):
+                for j in range(3):
+                    value = 0.0
+                    for k in range(3):
+                        value += rotation_p[t, f, k, i] * rotation_d[t, f, k, j]
+                    relative_sum[t, i, j] += value
+    normal = normal_matrix(relative_sum, n_frames)
+    operator = np.full((n_trials, 6, 6), np.inf)
+    centroids = np.empty((n_trials, 2, 3))
+    share = np.full(n_trials, np.inf)
+    attenuation = np.empty((6, 6))
+    for t in range(n_trials):
+        g_p = _shrinkage(variance_p[t], inertia_inv_p[t])
+        g_d = _shrinkage(variance_d[t], inertia_inv_d[t])
+        relative = relative_sum[t]
+        attenuation[:3, :3] = n_frames * g_p
+        attenuation[:3, 3:] = relative @ g_d
+        attenuation[3:, :3] = relative.T @ g_p
+        attenuation[3:, 3:] = n_frames * g_d
+        corrected = normal[t] + attenuation
+        # M + B is not symmetric; the information along a direction v is v' (M + B) v, which
+        # only its symmetric part carries.
+        values, vectors = np.linalg.eigh((corrected + corrected.T) / 2.0)
+        least, direction = values[0], vectors[:, 0]
+        # No noise-free information left along v: the noise took it all, and no share or pull
+        # is finite (nor is M + B safely solvable there).
+        if least > 0.0:
+            share[t] = -(direction @ attenuation @ direction) / least
+            operator[t] = np.linalg.solve(corrected, attenuation)
+        for segment, body in enumerate((body_p[t], body_d[t])):
+            for i in range(3):
+                centroids[t, segment, i] = body[:, i].sum() / body.shape[0]
+    return operator, centroids, share
+
+
+@kernel
+def _shrinkage(variance: float, inertia_inv: np.ndarray) -> np.ndarray:
+    """``G = (Sigma - tr(Sigma) I) / 2`` ``(3, 3)`` [rad^2] with ``Sigma = s^2 K^-1`` the
+    covariance of a pose's rotation in the body frame (module docstring), from the residual
+    ``variance`` ``s^2`` [mm^2] and ``inertia_inv`` ``K^-1`` ``(3, 3)`` [mm^-2]. A compiled
+    kernel."""
+    sigma = variance * inertia_inv
+    return (sigma - np.trace(sigma) * np.eye(3)) / 2.0
 
 
 def pull_mm(noise: PoseNoise, centre: np.ndarray) -> np.ndarray:

@@ -165,6 +165,7 @@ from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.distances import distance_modes_into
 from jointbench.numerics.poses import _horn_rotations, best_rotation
+from jointbench.numerics.reuse import remembered
 from jointbench.numerics.small import inertia_into, symmetric_eigen_into, tangent_basis_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
@@ -373,21 +374,26 @@ def _scatter_and_largest(
     markers' scatter about each frame's centroid [mm^2], the largest eigenvalue of ``K^-1``
     [mm^-2] and the largest absolute coordinate [mm], ``(T,)`` each. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
-    scatter = np.zeros(n_trials)
+    scatter = np.empty(n_trials)
     weakest = np.empty(n_trials)
-    largest = np.zeros(n_trials)
+    largest = np.empty(n_trials)
     centred = np.empty((n_markers, 3))
     tensor = np.empty((3, 3))
     for t in range(n_trials):
+        # The sums in locals, not in the arrays: a store per marker costs the pass its speed.
+        trial_scatter = 0.0
+        trial_largest = 0.0
         for f in range(n_frames):
             for i in range(3):
                 mean = 0.0
                 for m in range(n_markers):
                     mean += markers[t, f, m, i]
-                    largest[t] = max(largest[t], abs(markers[t, f, m, i]))
+                    trial_largest = max(trial_largest, abs(markers[t, f, m, i]))
                 mean /= n_markers
                 for m in range(n_markers):
-                    scatter[t] += (markers[t, f, m, i] - mean) ** 2
+                    trial_scatter += (markers[t, f, m, i] - mean) ** 2
+        scatter[t] = trial_scatter
+        largest[t] = trial_largest
         for i in range(3):
             mean = 0.0
             for m in range(n_markers):
@@ -916,14 +922,32 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
 
 
 @kernel
-def _frame_correlations(markers: np.ndarray) -> np.ndarray:
+def _frame_numbers(markers: np.ndarray) -> np.ndarray:
     """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], how its marker-pair distances
-    depend on each other from frame to frame (:func:`_frame_dependence`) ``(T, 4)``. A
-    compiled kernel."""
-    out = np.empty((markers.shape[0], 4))
+    depend on each other from frame to frame (:func:`_frame_dependence`: the first four) and
+    the SD of their pooled lag-1 autocorrelation for independent frames
+    (:func:`_correlation_sd`), what :class:`Untested` reads beside the first, ``(T, 5)``: the
+    distances computed once for all. A compiled kernel."""
+    out = np.empty((markers.shape[0], 5))
     for t in range(markers.shape[0]):
-        _dependence_into(markers[t], out[t])
+        distances = _dependence_into(markers[t], out[t, :4])
+        out[t, 4] = _correlation_sd(distances)
     return out
+
+
+def _segment_frame_numbers(markers: np.ndarray) -> np.ndarray:
+    """:func:`_frame_numbers` of one segment's markers ``(T, N, n, 3)`` [mm], read-only: in a
+    checked call computed once for the block test and the lag-1 statement, which both read
+    them (:func:`jointbench.numerics.reuse.remembered`)."""
+    return remembered("frame numbers", markers, _read_only_frame_numbers)
+
+
+def _read_only_frame_numbers(markers: np.ndarray) -> np.ndarray:
+    """:func:`_frame_numbers` of ``markers`` ``(T, N, n, 3)`` [mm], as an array no reader can
+    write to."""
+    numbers = _frame_numbers(kernel_array(markers))
+    numbers.flags.writeable = False
+    return numbers
 
 
 @kernel
@@ -1236,7 +1260,9 @@ def _hinge_residual(vectors: np.ndarray, noise: np.ndarray) -> float:
                 h1 += weights[4, e] * entry
             det = g00 * g11 - g01 * g01
             positive = positive and g00 > 0.0 and det > 0.0
-            i00, i01, i11 = g11 / det, -g01 / det, g00 / det
+            # One division, not three: the frame's inverse is most of its arithmetic.
+            scale = 1.0 / det
+            i00, i01, i11 = g11 * scale, -g01 * scale, g00 * scale
             z0 = i00 * y0 + i01 * y1
             z1 = i01 * y0 + i11 * y1
             residual += y0 * z0 + y1 * z1
@@ -1359,11 +1385,17 @@ def _rotation_spreads(
                         d[i, j] += nearest[k, i] * relative[f, k, j]
             cos_theta = min(max((d[0, 0] + d[1, 1] + d[2, 2] - 1.0) / 2.0, -1.0), 1.0)
             theta = np.arccos(cos_theta)
-            near_pi = near_pi or theta > np.pi - 1e-4
+            turned = theta > np.pi - 1e-4
+            near_pi = near_pi or turned
             if theta < 1e-6:
                 scale = 0.5 + theta**2 / 12.0
-            else:
+            elif turned:
                 scale = theta / (2.0 * np.sin(theta))
+            else:
+                # sin(arccos c) as sqrt((1 - c)(1 + c)), both factors exact where either is
+                # small: a root costs a fraction of a sine. Near pi, whose vectors are taken
+                # again another way, the sine keeps them finite.
+                scale = theta / (2.0 * np.sqrt((1.0 - cos_theta) * (1.0 + cos_theta)))
             vectors[f, 0] = scale * (d[2, 1] - d[1, 2])
             vectors[f, 1] = scale * (d[0, 2] - d[2, 0])
             vectors[f, 2] = scale * (d[1, 0] - d[0, 1])
@@ -2224,7 +2256,7 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
     the :class:`_Frames` of the segment whose frames are the further from independent (the
     larger excess of :func:`_frame_dependence`), of those whose distances are not rounding."""
-    dependence = [_frame_correlations(kernel_array(array)) for array in arrays]
+    dependence = [_segment_frame_numbers(array) for array in arrays]
     frames = []
     for t in range(arrays[0].shape[0]):
         readable = [k for k in range(len(arrays)) if math.isfinite(dependence[k][t, 0])]
@@ -2234,7 +2266,7 @@ def _segments_frames(names: tuple[str, ...], arrays: tuple[np.ndarray, ...]) -> 
             else len(arrays) - 1
         )
         frames.append(
-            _segment_frames(dependence[worst][t].tolist(), names[worst], arrays[worst][t])
+            _segment_frames(dependence[worst][t, :4].tolist(), names[worst], arrays[worst][t])
         )
     return frames
 
@@ -2349,10 +2381,16 @@ def _untested(
         return found
     # The trials the caveat closed are not read: most of a long correlated recording's.
     chosen = tuple(array if len(trials) == n_trials else array[trials] for array in arrays)
+    # Two segments' numbers are the block test's (_segments_frames), found again; one segment's
+    # verdict reads its block test from a pass of its own, and the look-up would cost it more
+    # than it finds.
     read = []
     for name, array in zip(names, chosen, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
-            numbers = _lag1_numbers(kernel_array(array)).tolist()
+            if len(arrays) > 1:
+                numbers = _segment_frame_numbers(array).tolist()
+            else:
+                numbers = _frame_numbers(kernel_array(array)).tolist()
             read.append((name, numbers))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
@@ -2362,7 +2400,7 @@ def _untested(
     for row, t in enumerate(trials):
         worst = None
         for name, numbers in read:
-            correlation, sd = numbers[row]
+            correlation, sd = numbers[row][0], numbers[row][4]
             if not math.isfinite(correlation):
                 continue
             bound = DEPENDENT_CORRELATION - _Z_CLEARED * sd
@@ -2372,21 +2410,6 @@ def _untested(
                 worst = Untested(name, n_frames, correlation, bound)
         found[t] = worst
     return found
-
-
-@kernel
-def _lag1_numbers(markers: np.ndarray) -> np.ndarray:
-    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm], the lag-1 autocorrelation
-    pooled over its pair distances (the first of :func:`_frame_correlations`) and its SD for
-    independent frames (:func:`_correlation_sd`) ``(T, 2)``: what :class:`Untested` reads, the
-    distances computed once for both. A compiled kernel."""
-    out = np.empty((markers.shape[0], 2))
-    dependence = np.empty(4)
-    for t in range(markers.shape[0]):
-        distances = _dependence_into(markers[t], dependence)
-        out[t, 0] = dependence[0]
-        out[t, 1] = _correlation_sd(distances)
-    return out
 
 
 @kernel
@@ -2469,9 +2492,9 @@ def _without_poses(
         )
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
-    (dependence,) = _frame_correlations(kernel_array(markers[None]))
+    (dependence,) = _frame_numbers(kernel_array(markers[None]))
     name = "distal" if len(arrays) > 1 else "markers"
-    frames = _segment_frames(dependence.tolist(), name, markers)
+    frames = _segment_frames(dependence[:4].tolist(), name, markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
