@@ -7,14 +7,12 @@ from jointbench.ensembles.sensitivity import DEFAULT, DRAW_PREFIX, PRIORS, membe
 
 SENSITIVITY = config.get("sensitivity", {})
 SENSITIVITY_STUDIES = [s for s in STUDIES if s in PRIORS and papers_of_study(s)]
-# Each named protocol's config overlay, read here to know which studies it sets.
+# Each named protocol's config overlay, read here to know which studies it sets: read and
+# checked once for all the studies, not once per study, and only where one has an ensemble.
 SENSITIVITY_NAMED = dict(SENSITIVITY.get("named", {}))
+SENSITIVITY_OVERLAYS = jb_config.named_overlays(config) if SENSITIVITY_STUDIES else {}
 SENSITIVITY_MEMBERS = {
-    study: member_names(
-        study,
-        int(SENSITIVITY.get("draws", 1)),
-        jb_config.named_overlays(config),
-    )
+    study: member_names(study, int(SENSITIVITY.get("draws", 1)), SENSITIVITY_OVERLAYS)
     for study in SENSITIVITY_STUDIES
 }
 SENSITIVITY_FILES = {
