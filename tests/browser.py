@@ -9,6 +9,7 @@ import itertools
 import json
 import os
 import shutil
+import signal
 import subprocess
 import tempfile
 import time
@@ -39,6 +40,40 @@ def _above_nine(fd: int) -> int:
     return moved
 
 
+def _end_group(group: int, timeout: float = 20.0) -> None:
+    """Kill every process of process group ``group`` and wait until none is left running (a
+    zombie has stopped writing; its reaping is its new parent's business)."""
+    deadline = time.monotonic() + timeout
+    while _running_in_group(group):
+        try:
+            os.killpg(group, signal.SIGKILL)
+        except ProcessLookupError:
+            return
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"Chromium's process group {group} did not end")
+        time.sleep(0.01)
+
+
+def _running_in_group(group: int) -> bool:
+    """Whether a process of process group ``group`` is running (not a zombie)."""
+    return any(state != "Z" and in_group == group for state, _, in_group in processes().values())
+
+
+def processes() -> dict[int, tuple[str, int, int]]:
+    """Every process's state letter, parent and process group, by its id (from /proc)."""
+    found = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:  # ended while listed
+            continue
+        # After the command's name: state, parent, process group.
+        found[int(entry.name)] = (fields[0], int(fields[1]), int(fields[2]))
+    return found
+
+
 class Browser:
     """One Chromium process and one page; a context manager."""
 
@@ -66,6 +101,8 @@ class Browser:
             preexec_fn=move_pipes,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
+            # Its own process group, so that closing ends its helpers too (below).
+            start_new_session=True,
         )
         os.close(to_child)
         os.close(from_child)
@@ -87,7 +124,20 @@ class Browser:
         os.close(self._from_browser)
         self._process.terminate()
         self._process.wait(timeout=20)
+        # Chromium's helpers (zygote, renderer, GPU) can outlive its main process for a moment
+        # and still write into the profile while it is removed ("Directory not empty").
+        _end_group(self._process.pid)
         self._profile.cleanup()
+
+    @property
+    def pid(self) -> int:
+        """Chromium's main process."""
+        return self._process.pid
+
+    @property
+    def profile(self) -> str:
+        """The profile folder Chromium was started with."""
+        return self._profile.name
 
     def _send(self, method: str, session: str | None = None, **params) -> dict:
         message_id = next(self._ids)
