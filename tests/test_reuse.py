@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from test_axis_sd import hinge
+from test_frame_independence import _interpolated, _kind_trial, _noisy
 
-from jointbench.estimators import axis, registry
+from jointbench.estimators import axis, registry, support
 from jointbench.numerics import reuse
 
 
@@ -105,3 +106,46 @@ def test_a_checked_many_trial_planar_call_sums_each_trials_scatter_once(monkeypa
     for result, alone in zip(results, expected, strict=True):
         assert result.status == alone.status
         assert result.diagnostics == alone.diagnostics
+
+
+def _refilled_trials() -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Two joint-centre trials of the same shape, ``(proximal, distal)`` ``(N, 4, 3)`` each
+    [mm]: the first with noise independent in each frame, the second with its frames
+    interpolated tenfold, which the support verdict says are not independent."""
+    rng = np.random.default_rng(11)
+    interpolated = tuple(
+        _interpolated(array, 10)
+        for array in _kind_trial("joint_center", rng, 30, lambda shape: _noisy(rng, shape, 0.5))
+    )
+    n_frames = interpolated[0].shape[0]
+    independent = _kind_trial("joint_center", rng, n_frames, lambda shape: _noisy(rng, shape, 0.5))
+    return independent, interpolated
+
+
+def test_a_verdict_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content():
+    """An estimator registered from outside may, inside its own fit, judge trial after trial
+    refilled into one buffer (a lab's loop): each verdict is the one the trial gets alone,
+    never the numbers an earlier content of the same memory left in the checked call."""
+    trials = _refilled_trials()
+    alone = [support.assess("joint_center", trial) for trial in trials]
+    assert alone[0].caveats != alone[1].caveats  # the two differ
+    buffers = tuple(array.copy() for array in trials[0])
+    seen: list = []
+    fit = registry.get("joint_center", "SCoRE", checked=False)
+
+    def judges_a_refilled_buffer(proximal, distal):
+        for trial in trials:
+            for buffer, array in zip(buffers, trial, strict=True):
+                np.copyto(buffer, array)
+            seen.append(support.assess("joint_center", buffers))
+        return fit(proximal, distal)
+
+    registry.register("joint_center", "judges-a-refilled-buffer")(judges_a_refilled_buffer)
+    try:
+        registry.get("joint_center", "judges-a-refilled-buffer")(*trials[0])
+    finally:
+        registry.unregister("joint_center", "judges-a-refilled-buffer")
+    for verdict, expected in zip(seen, alone, strict=True):
+        assert verdict.caveats == expected.caveats
+        assert verdict.diagnostics == expected.diagnostics
+        assert verdict.untested == expected.untested
