@@ -4,6 +4,8 @@ alone."""
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 from test_axis_sd import hinge
@@ -149,3 +151,37 @@ def test_a_verdict_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_cont
         assert verdict.caveats == expected.caveats
         assert verdict.diagnostics == expected.diagnostics
         assert verdict.untested == expected.untested
+
+
+def test_a_scope_is_its_own_threads():
+    """A value kept in one thread's checked call is not read by another thread's, which
+    computes its own."""
+    counts: list = []
+    array = np.ones((3, 1, 3))
+    found: list = []
+    with reuse.one_call():
+        reuse.remembered("sum", array, _counting(counts))
+        other = threading.Thread(
+            target=lambda: found.append(reuse.remembered("sum", array, _counting(counts)))
+        )
+        other.start()
+        other.join()
+    assert found == [9.0]
+    assert len(counts) == 2
+
+
+def test_a_batch_whose_flagged_trials_are_left_unread_reads_each_trial_as_alone():
+    """A batch's verdict reads the lag-1 statement of its unflagged trials only (a copy of
+    them): each trial's verdict is the one it gets alone, the numbers of the whole batch not
+    read for the part."""
+    independent, interpolated = _refilled_trials()
+    trials = (independent, interpolated, independent[::-1])
+    stacked = tuple(np.stack(arrays) for arrays in zip(*trials, strict=True))
+    with reuse.one_call():
+        batch = support.assess_many("joint_center", stacked)
+    for verdict, trial in zip(batch, trials, strict=True):
+        alone = support.assess("joint_center", trial)
+        assert verdict.caveats == alone.caveats
+        assert verdict.untested == alone.untested
+        assert verdict.diagnostics == alone.diagnostics
+    assert batch[1].caveats and not batch[0].caveats  # the middle trial is left unread
