@@ -9,7 +9,7 @@ import threading
 import numpy as np
 import pytest
 from test_axis_sd import hinge
-from test_frame_independence import _interpolated, _kind_trial, _noisy
+from test_frame_independence import _counting_kernel_calls, _interpolated, _kind_trial, _noisy
 
 from jointbench.estimators import axis, registry, support
 from jointbench.numerics import reuse
@@ -185,3 +185,16 @@ def test_a_batch_whose_flagged_trials_are_left_unread_reads_each_trial_as_alone(
         assert verdict.untested == alone.untested
         assert verdict.diagnostics == alone.diagnostics
     assert batch[1].caveats and not batch[0].caveats  # the middle trial is left unread
+
+
+def test_a_batch_verdict_with_a_flagged_trial_passes_over_each_segment_once(monkeypatch):
+    """Two segments' frame numbers, which the block test computes for every trial, are read
+    again for the lag-1 statement of the unflagged trials, not computed again for them."""
+    independent, interpolated = _refilled_trials()
+    trials = (independent, interpolated, independent[::-1])
+    stacked = tuple(np.stack(arrays) for arrays in zip(*trials, strict=True))
+    support.assess_many("joint_center", stacked)
+    calls = _counting_kernel_calls(monkeypatch)
+    batch = support.assess_many("joint_center", stacked)
+    assert batch[1].caveats and not batch[0].caveats
+    assert calls.count("_frame_numbers") == 2

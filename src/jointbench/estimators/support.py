@@ -2384,19 +2384,18 @@ def _untested(
     trials = [t for t, flag in enumerate(unflagged) if flag]
     if not trials:
         return found
-    # The trials the caveat closed are not read: most of a long correlated recording's.
-    chosen = tuple(array if len(trials) == n_trials else array[trials] for array in arrays)
-    # Two segments' numbers are the block test's (_segments_frames), found again; one segment's
-    # verdict reads its block test from a pass of its own, and the look-up would cost it more
-    # than it finds.
     read = []
-    for name, array in zip(names, chosen, strict=True):
+    for name, array in zip(names, arrays, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
             if len(arrays) > 1:
-                numbers = _segment_frame_numbers(array).tolist()
+                # The block test's numbers of every trial (_segments_frames), found again.
+                numbers = _segment_frame_numbers(array)[trials]
             else:
-                numbers = _frame_numbers(kernel_array(array)).tolist()
-            read.append((name, numbers))
+                # One segment's block test reads a pass of its own: the trials the caveat
+                # closed, most of a long correlated recording's, are not passed over here.
+                part = array if len(trials) == n_trials else array[trials]
+                numbers = _frame_numbers(kernel_array(part))
+            read.append((name, numbers.tolist()))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
             for t in trials:
