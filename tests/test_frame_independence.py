@@ -540,19 +540,25 @@ def test_the_correlation_sd_is_that_of_the_distances_covariance():
     assert np.isnan(support._frame_numbers(still)[:, 4]).all()
 
 
-def test_a_one_segment_verdict_makes_two_compiled_calls(monkeypatch):
-    """Its numbers in one pass over the trial, and the lag-1 statement's correlation and SD in
-    another over the pair distances: a checked one-trial fit pays each call's overhead."""
-    calls = []
+def _counting_kernel_calls(monkeypatch) -> list[str]:
+    """The names of the compiled kernels called from now on, in order."""
+    calls: list[str] = []
     kernel_call = compiled._Kernel.__call__
 
     def counting(self, *args):
         calls.append(self.__qualname__)
         return kernel_call(self, *args)
 
+    monkeypatch.setattr(compiled._Kernel, "__call__", counting)
+    return calls
+
+
+def test_a_one_segment_verdict_makes_two_compiled_calls(monkeypatch):
+    """Its numbers in one pass over the trial, and the lag-1 statement's correlation and SD in
+    another over the pair distances: a checked one-trial fit pays each call's overhead."""
     rng = np.random.default_rng(2)
     (markers,) = _kind_trial("center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
-    monkeypatch.setattr(compiled._Kernel, "__call__", counting)
+    calls = _counting_kernel_calls(monkeypatch)
     support.assess_many("center", (markers[None],))
     assert calls == ["_one_segment_numbers", "_frame_numbers"]
 
@@ -561,18 +567,11 @@ def test_a_checked_joint_centre_call_reads_each_segments_distances_once(monkeypa
     """The block test and the lag-1 statement of a checked two-segment call read one compiled
     pass over each segment's pair distances, not one pass each: the second finds the first's
     numbers (:func:`jointbench.numerics.reuse.remembered`)."""
-    calls = []
-    kernel_call = compiled._Kernel.__call__
-
-    def counting(self, *args):
-        calls.append(self.__qualname__)
-        return kernel_call(self, *args)
-
     rng = np.random.default_rng(2)
     arrays = _kind_trial("joint_center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
     fit = jointbench.estimators.registry.get("joint_center", "SCoRE")
     fit(*arrays)
-    monkeypatch.setattr(compiled._Kernel, "__call__", counting)
+    calls = _counting_kernel_calls(monkeypatch)
     result = fit(*arrays)
     assert "support_frame_correlation" in result.diagnostics
     assert calls.count("_frame_numbers") == 2

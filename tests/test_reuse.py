@@ -4,11 +4,14 @@ alone."""
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 from test_axis_sd import hinge
+from test_frame_independence import _counting_kernel_calls, _interpolated, _kind_trial, _noisy
 
-from jointbench.estimators import axis, registry
+from jointbench.estimators import axis, registry, support
 from jointbench.numerics import reuse
 
 
@@ -105,3 +108,93 @@ def test_a_checked_many_trial_planar_call_sums_each_trials_scatter_once(monkeypa
     for result, alone in zip(results, expected, strict=True):
         assert result.status == alone.status
         assert result.diagnostics == alone.diagnostics
+
+
+def _refilled_trials() -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Two joint-centre trials of the same shape, ``(proximal, distal)`` ``(N, 4, 3)`` each
+    [mm]: the first with noise independent in each frame, the second with its frames
+    interpolated tenfold, which the support verdict says are not independent."""
+    rng = np.random.default_rng(11)
+    interpolated = tuple(
+        _interpolated(array, 10)
+        for array in _kind_trial("joint_center", rng, 30, lambda shape: _noisy(rng, shape, 0.5))
+    )
+    n_frames = interpolated[0].shape[0]
+    independent = _kind_trial("joint_center", rng, n_frames, lambda shape: _noisy(rng, shape, 0.5))
+    return independent, interpolated
+
+
+def test_a_verdict_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content():
+    """An estimator registered from outside may, inside its own fit, judge trial after trial
+    refilled into one buffer (a lab's loop): each verdict is the one the trial gets alone,
+    never the numbers an earlier content of the same memory left in the checked call."""
+    trials = _refilled_trials()
+    alone = [support.assess("joint_center", trial) for trial in trials]
+    assert alone[0].caveats != alone[1].caveats  # the two differ
+    buffers = tuple(array.copy() for array in trials[0])
+    seen: list = []
+    fit = registry.get("joint_center", "SCoRE", checked=False)
+
+    def judges_a_refilled_buffer(proximal, distal):
+        for trial in trials:
+            for buffer, array in zip(buffers, trial, strict=True):
+                np.copyto(buffer, array)
+            seen.append(support.assess("joint_center", buffers))
+        return fit(proximal, distal)
+
+    registry.register("joint_center", "judges-a-refilled-buffer")(judges_a_refilled_buffer)
+    try:
+        registry.get("joint_center", "judges-a-refilled-buffer")(*trials[0])
+    finally:
+        registry.unregister("joint_center", "judges-a-refilled-buffer")
+    for verdict, expected in zip(seen, alone, strict=True):
+        assert verdict.caveats == expected.caveats
+        assert verdict.diagnostics == expected.diagnostics
+        assert verdict.untested == expected.untested
+
+
+def test_a_scope_is_its_own_threads():
+    """A value kept in one thread's checked call is not read by another thread's, which
+    computes its own."""
+    counts: list = []
+    array = np.ones((3, 1, 3))
+    found: list = []
+    with reuse.one_call():
+        reuse.remembered("sum", array, _counting(counts))
+        other = threading.Thread(
+            target=lambda: found.append(reuse.remembered("sum", array, _counting(counts)))
+        )
+        other.start()
+        other.join()
+    assert found == [9.0]
+    assert len(counts) == 2
+
+
+def test_a_batch_whose_flagged_trials_are_left_unread_reads_each_trial_as_alone():
+    """A batch's verdict reads the lag-1 statement of its unflagged trials only (a copy of
+    them): each trial's verdict is the one it gets alone, the numbers of the whole batch not
+    read for the part."""
+    independent, interpolated = _refilled_trials()
+    trials = (independent, interpolated, independent[::-1])
+    stacked = tuple(np.stack(arrays) for arrays in zip(*trials, strict=True))
+    with reuse.one_call():
+        batch = support.assess_many("joint_center", stacked)
+    for verdict, trial in zip(batch, trials, strict=True):
+        alone = support.assess("joint_center", trial)
+        assert verdict.caveats == alone.caveats
+        assert verdict.untested == alone.untested
+        assert verdict.diagnostics == alone.diagnostics
+    assert batch[1].caveats and not batch[0].caveats  # the middle trial is left unread
+
+
+def test_a_batch_verdict_with_a_flagged_trial_passes_over_each_segment_once(monkeypatch):
+    """Two segments' frame numbers, which the block test computes for every trial, are read
+    again for the lag-1 statement of the unflagged trials, not computed again for them."""
+    independent, interpolated = _refilled_trials()
+    trials = (independent, interpolated, independent[::-1])
+    stacked = tuple(np.stack(arrays) for arrays in zip(*trials, strict=True))
+    support.assess_many("joint_center", stacked)
+    calls = _counting_kernel_calls(monkeypatch)
+    batch = support.assess_many("joint_center", stacked)
+    assert batch[1].caveats and not batch[0].caveats
+    assert calls.count("_frame_numbers") == 2

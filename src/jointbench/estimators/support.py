@@ -165,7 +165,7 @@ from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.distances import distance_modes_into
 from jointbench.numerics.poses import _horn_rotations, best_rotation
-from jointbench.numerics.reuse import remembered
+from jointbench.numerics.reuse import one_call, remembered
 from jointbench.numerics.small import inertia_into, symmetric_eigen_into, tangent_basis_into
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
@@ -936,9 +936,9 @@ def _frame_numbers(markers: np.ndarray) -> np.ndarray:
 
 
 def _segment_frame_numbers(markers: np.ndarray) -> np.ndarray:
-    """:func:`_frame_numbers` of one segment's markers ``(T, N, n, 3)`` [mm], read-only: in a
-    checked call computed once for the block test and the lag-1 statement, which both read
-    them (:func:`jointbench.numerics.reuse.remembered`)."""
+    """:func:`_frame_numbers` of one segment's markers ``(T, N, n, 3)`` [mm], read-only: in one
+    verdict (:func:`assess_many`) computed once for the block test and the lag-1 statement,
+    which both read them (:func:`jointbench.numerics.reuse.remembered`)."""
     return remembered("frame numbers", markers, _read_only_frame_numbers)
 
 
@@ -1893,8 +1893,13 @@ def assess_many(
     """:func:`assess` for ``T`` trials at once: ``arrays`` as there with a leading trial axis,
     ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
     per trial."""
-    verdicts = _judged(kind, arrays, poses)
-    untested = _untested(ARRAY_NAMES[kind], arrays, [not verdict.caveats for verdict in verdicts])
+    # The numbers the verdict's stages share (_segment_frame_numbers) are kept for this verdict
+    # alone: the scope of the checked call around it also holds the fit, where an estimator's
+    # own code may judge trial after trial refilled into one array.
+    with one_call():
+        verdicts = _judged(kind, arrays, poses)
+        flags = [not verdict.caveats for verdict in verdicts]
+        untested = _untested(ARRAY_NAMES[kind], arrays, flags)
     return [
         verdict if found is None else verdict._replace(untested=found)
         for verdict, found in zip(verdicts, untested, strict=True)
@@ -2379,19 +2384,18 @@ def _untested(
     trials = [t for t, flag in enumerate(unflagged) if flag]
     if not trials:
         return found
-    # The trials the caveat closed are not read: most of a long correlated recording's.
-    chosen = tuple(array if len(trials) == n_trials else array[trials] for array in arrays)
-    # Two segments' numbers are the block test's (_segments_frames), found again; one segment's
-    # verdict reads its block test from a pass of its own, and the look-up would cost it more
-    # than it finds.
     read = []
-    for name, array in zip(names, chosen, strict=True):
+    for name, array in zip(names, arrays, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
             if len(arrays) > 1:
-                numbers = _segment_frame_numbers(array).tolist()
+                # The block test's numbers of every trial (_segments_frames), found again.
+                numbers = _segment_frame_numbers(array)[trials]
             else:
-                numbers = _frame_numbers(kernel_array(array)).tolist()
-            read.append((name, numbers))
+                # One segment's block test reads a pass of its own: the trials the caveat
+                # closed, most of a long correlated recording's, are not passed over here.
+                part = array if len(trials) == n_trials else array[trials]
+                numbers = _frame_numbers(kernel_array(part))
+            read.append((name, numbers.tolist()))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
             for t in trials:
