@@ -89,22 +89,26 @@ def _counting_scatters(monkeypatch) -> list:
     return summed
 
 
-def test_a_checked_planar_call_sums_its_trials_scatter_once(monkeypatch):
+def test_a_checked_planar_call_sums_its_trials_scatter_once_for_the_fit_once_for_the_checks(
+    monkeypatch,
+):
     markers = hinge(0, 30.0, noise=1.0)
     expected = registry.get("axis", "planar")(markers)
     summed = _counting_scatters(monkeypatch)
     result = registry.get("axis", "planar")(markers)
-    assert len(summed) == 1  # the fit's, read again by the self-check and the precision
+    # The fit's, outside the checks' scope (it may be a user's code refilling what it reads),
+    # then one the self-check and the precision share.
+    assert len(summed) == 2
     assert result.status == expected.status
     assert result.diagnostics == expected.diagnostics
 
 
-def test_a_checked_many_trial_planar_call_sums_each_trials_scatter_once(monkeypatch):
+def test_a_checked_many_trial_planar_call_sums_each_trials_scatter_once_and_once(monkeypatch):
     markers = np.stack([hinge(seed, 30.0, noise=1.0) for seed in range(3)])
     expected = registry.many("axis", "planar")(markers)
     summed = _counting_scatters(monkeypatch)
     results = registry.many("axis", "planar")(markers)
-    assert len(summed) == 3
+    assert len(summed) == 2 * 3
     for result, alone in zip(results, expected, strict=True):
         assert result.status == alone.status
         assert result.diagnostics == alone.diagnostics
@@ -198,3 +202,31 @@ def test_a_batch_verdict_with_a_flagged_trial_passes_over_each_segment_once(monk
     batch = support.assess_many("joint_center", stacked)
     assert batch[1].caveats and not batch[0].caveats
     assert calls.count("_frame_numbers") == 2
+
+
+def test_a_fit_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content():
+    """An estimator registered from outside may, inside its own fit, fit a built-in method on
+    trial after trial refilled into one buffer: each answer is the one the trial gets alone,
+    never the sums an earlier content of the same memory left in the checked call."""
+    trials = [hinge(seed, 30.0, noise=1.0) for seed in range(2)]
+    planar = registry.get("axis", "planar", checked=False)
+    alone = [planar(trial).direction for trial in trials]
+    assert not np.allclose(alone[0], alone[1])  # the two differ
+    buffer = trials[0].copy()
+    seen: list = []
+
+    def fits_a_refilled_buffer(markers):
+        for trial in trials:
+            np.copyto(buffer, trial)
+            seen.append(planar(buffer).direction)
+        return planar(markers)
+
+    registry.register("axis", "fits-a-refilled-buffer")(fits_a_refilled_buffer)
+    try:
+        registry.get("axis", "fits-a-refilled-buffer")(trials[0])
+        registry.many("axis", "fits-a-refilled-buffer")(np.stack(trials))
+    finally:
+        registry.unregister("axis", "fits-a-refilled-buffer")
+    assert len(seen) == 2 + 2 * 2
+    for direction, expected in zip(seen, alone * 3, strict=True):
+        np.testing.assert_array_equal(direction, expected)

@@ -181,10 +181,10 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     self-check, the precision its cost implies and the support verdict. A pose-based method
     of two segments has the segments'
     poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
-    one-trial function is) and for the verdict. The stages share the sums over the frames
-    that more than one of them reads (:mod:`jointbench.numerics.reuse`)."""
-    with reuse.one_call():
-        return _stages(entry, clean, options)
+    one-trial function is) and for the verdict. The stages after the fit share the sums over
+    the frames that more than one of them reads (:mod:`jointbench.numerics.reuse`); the fit
+    runs outside that scope, as it may be a user's code that refills an array it reads."""
+    return _stages(entry, clean, options)
 
 
 def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
@@ -198,13 +198,14 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
         result = entry.fn(*clean, **options)
     else:
         result = one_trial(entry.many, *clean, poses=shared, **options)
-    # Its arrays passed the input checks: the verdict's own check of them is not repeated.
-    (verdict,) = support.assess_many(entry.kind, stacked, poses=shared)
-    result = _self_checked(entry.fn, result, clean, options)
-    if hasattr(entry.fn, "precision_many"):
-        poses = _fitted_to(shared, [0])
-        (result,) = _precision_checked(entry.fn, [result], stacked, poses, [verdict])
-    (result,) = _answers_checked(entry.kind, [result], stacked, [verdict])
+    with reuse.one_call():
+        # Its arrays passed the input checks: the verdict's own check of them is not repeated.
+        (verdict,) = support.assess_many(entry.kind, stacked, poses=shared)
+        result = _self_checked(entry.fn, result, clean, options)
+        if hasattr(entry.fn, "precision_many"):
+            poses = _fitted_to(shared, [0])
+            (result,) = _precision_checked(entry.fn, [result], stacked, poses, [verdict])
+        (result,) = _answers_checked(entry.kind, [result], stacked, [verdict])
     return support.annotate(result, verdict)
 
 
@@ -416,8 +417,7 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
     def checked_many(*segments: object, **options: object) -> list:
         if options:  # a call without options, the common one, pays nothing for the check
             _check_entry_options(entry, options)
-        with reuse.one_call():
-            return _many_stages(entry, segments, options)
+        return _many_stages(entry, segments, options)
 
     return checked_many
 
@@ -441,15 +441,28 @@ def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
         elif not isinstance(outcome, Exception):
             fitted.append(trial)
     if fitted:
-        stacked = checked.stacked(fitted)
-        results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
-        poses = _fitted_to(options.get("poses"), fitted) if names else None
-        verdicts = support.assess_many(entry.kind, stacked, poses=poses)
-        results = _precision_checked(entry.fn, results, stacked, poses, verdicts)
-        results = _answers_checked(entry.kind, results, stacked, verdicts)
-        for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
-            outcomes[trial] = support.annotate(result, verdict)
+        with reuse.one_call():  # after the fit, as for one trial (:func:`_fit_valid`)
+            _judge_fitted(entry, outcomes, fitted, checked.stacked(fitted), options, names)
     return outcomes
+
+
+def _judge_fitted(
+    entry: _Entry,
+    outcomes: list,
+    fitted: list[int],
+    stacked: tuple,
+    options: dict,
+    names: tuple[str, ...] | None,
+) -> None:
+    """The checks of :func:`_many_stages` after the fit, on the trials ``fitted`` (their
+    arrays ``stacked``), each outcome replaced in ``outcomes`` by its checked result."""
+    results = _self_checked_many(entry.fn, [outcomes[t] for t in fitted], stacked, options)
+    poses = _fitted_to(options.get("poses"), fitted) if names else None
+    verdicts = support.assess_many(entry.kind, stacked, poses=poses)
+    results = _precision_checked(entry.fn, results, stacked, poses, verdicts)
+    results = _answers_checked(entry.kind, results, stacked, verdicts)
+    for trial, result, verdict in zip(fitted, results, verdicts, strict=True):
+        outcomes[trial] = support.annotate(result, verdict)
 
 
 def register(
