@@ -55,7 +55,22 @@ def swing(rng: np.random.Generator, distance_mm: float, rom_deg: float, noise_mm
     body = distance_mm * unit(rng.normal(size=3)) + rng.normal(
         scale=min(20.0, distance_mm / 2.0), size=(4, 3)
     )
-    t = np.linspace(0.0, 1.0, 120)
+    return swung(rng, turn, body, 120, rom_deg, noise_mm, centre), centre
+
+
+def swung(
+    rng: np.random.Generator,
+    turn: np.ndarray,
+    body: np.ndarray,
+    n_frames: int,
+    rom_deg: float,
+    noise_mm,
+    centre: np.ndarray,
+) -> np.ndarray:
+    """``body`` ``(n, 3)`` [mm] about ``centre`` ``(3,)`` [mm] swung by ``rom_deg`` about two
+    axes turned by ``turn`` ``(3, 3)``: ``(n_frames, n, 3)`` [mm] with normal noise of SD
+    ``noise_mm`` (a number or one per axis)."""
+    t = np.linspace(0.0, 1.0, n_frames)
     phase = rng.uniform(0.0, 2.0 * np.pi, 3)
     angles = np.column_stack(
         [
@@ -65,8 +80,7 @@ def swing(rng: np.random.Generator, distance_mm: float, rom_deg: float, noise_mm
         ]
     )
     markers = np.einsum("kij,pj->kpi", rotation_matrix(np.radians(rom_deg) * angles @ turn.T), body)
-    noisy = markers + centre + rng.normal(size=markers.shape) * np.asarray(noise_mm)
-    return noisy, centre
+    return markers + centre + rng.normal(size=markers.shape) * np.asarray(noise_mm)
 
 
 def _hinge(

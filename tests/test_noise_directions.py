@@ -8,6 +8,7 @@ anisotropic noise, and the answers that noise larger along one direction left ``
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,9 @@ from jointbench.estimators import noise_directions as by_direction
 from jointbench.estimators import support
 from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
 from jointbench.simulate import cmc, hinge, hip
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import blind_spots
 
 # Seeds of blind_spots.py's centre case whose answers reach a few far off.
 SEEDS = 20
@@ -52,24 +56,7 @@ def _swing(rng, n_markers: int, n_frames: int, rom_deg: float, noise) -> np.ndar
     noise of SD ``noise`` [mm] per coordinate (a number, or one per world axis)."""
     body = rng.normal(scale=40.0, size=(n_markers, 3)) + 80.0 * unit(rng.normal(size=3))
     turn = rotation_matrix(unit(rng.normal(size=3)) * rng.uniform(0.0, np.pi))
-    return _swung(rng, turn, body, n_frames, rom_deg, noise)
-
-
-def _swung(rng, turn: np.ndarray, body: np.ndarray, n_frames: int, rom_deg: float, noise):
-    """``body`` ``(n, 3)`` [mm] swung by ``rom_deg`` about two axes turned by ``turn`` about
-    the origin, as ``benchmarks/blind_spots.py`` swings it: ``(n_frames, n, 3)`` [mm] with
-    normal noise of SD ``noise`` per world axis."""
-    t = np.linspace(0.0, 1.0, n_frames)
-    phase = rng.uniform(0.0, 2.0 * np.pi, 3)
-    angles = np.column_stack(
-        [
-            np.sin(2 * np.pi * t + phase[0]),
-            np.sin(2 * np.pi * 1.37 * t + phase[1]),
-            0.3 * np.sin(2 * np.pi * 0.71 * t + phase[2]),
-        ]
-    )
-    markers = np.einsum("kij,pj->kpi", rotation_matrix(np.radians(rom_deg) * angles @ turn.T), body)
-    return markers + rng.normal(size=markers.shape) * np.asarray(noise)
+    return blind_spots.swung(rng, turn, body, n_frames, rom_deg, noise, np.zeros(3))
 
 
 def _hinge(rng, arc_deg: float, noise) -> tuple[np.ndarray, np.ndarray]:
@@ -263,11 +250,8 @@ def test_a_centre_pulled_off_by_noise_larger_along_one_direction_is_not_ok():
     far, caught = 0, 0
     for seed in range(SEEDS):
         rng = np.random.default_rng(seed)
-        # blind_spots.py's swing: four markers 60 mm from the centre, scattered by 20 mm.
-        centre = rng.uniform(-50.0, 50.0, 3)
-        turn = rotation_matrix(unit(rng.normal(size=3)) * rng.uniform(0.0, np.pi))
-        body = 60.0 * unit(rng.normal(size=3)) + rng.normal(scale=20.0, size=(4, 3))
-        markers = _swung(rng, turn, body, 120, 10.0, (0.1, 0.1, 2.0)) + centre
+        # Four markers 60 mm from the centre, scattered by 20 mm.
+        markers, centre = blind_spots.swing(rng, 60.0, 10.0, (0.1, 0.1, 2.0))
         for method in ("NM", "BC", "IS"):
             result = jointbench.fit_center(markers, method=method)
             if np.linalg.norm(result.center - centre) > 10.0:
