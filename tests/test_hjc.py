@@ -15,7 +15,6 @@ from jointbench.configuration.seeds import trial_rng
 from jointbench.estimators import hjc
 from jointbench.estimators.hjc import (
     align_to_markers,
-    constraint_covariance,
     fit_gauss_markov,
     point_covariance,
 )
@@ -69,11 +68,14 @@ def test_point_covariance_matches_pennec_pose_covariance():
     explicit = dh_dx @ pose_covariance @ dh_dx.T
     closed = rotation @ point_covariance(point, body) @ rotation.T
     np.testing.assert_allclose(closed, explicit, rtol=1e-10, atol=1e-12)
-    # Two segments: the constraint covariance is the sum (paper C eq. 20 with eq. 12).
+    # Two segments: the constraint covariance is the sum (paper C eq. 20 with eq. 12), and the
+    # iteration weighs each frame by its inverse taken in the proximal body frame.
     other = rotation_matrix(rng.normal(size=3))
     a0, a1 = point_covariance(point, body), point_covariance(point, body[::-1] * 1.5)
-    summed = constraint_covariance(rotation[None], a0, other[None], a1)[0]
-    np.testing.assert_allclose(summed, rotation @ a0 @ rotation.T + other @ a1 @ other.T)
+    summed = rotation @ a0 @ rotation.T + other @ a1 @ other.T
+    local = np.linalg.inv(rotation.T @ summed @ rotation)
+    weight = hjc._local_weight(rotation.T @ other, a0, a1)
+    np.testing.assert_allclose(weight, local[np.triu_indices(3)], rtol=1e-10)
 
 
 def test_analytic_is_paper_eq9():

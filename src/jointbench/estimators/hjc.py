@@ -183,7 +183,6 @@ from jointbench.numerics.small import (
     identity_less9,
     inverse3_entries,
     inverse3_into,
-    rotated3,
     rotated3_into,
     rotated3_upper,
     rows9,
@@ -200,7 +199,6 @@ from jointbench.numerics.small import (
 __all__ = [
     "MAX_NOISE_KURTOSIS",
     "align_to_markers",
-    "constraint_covariance",
     "fit_analytic",
     "fit_gauss_markov",
     "fit_gauss_markov_frame0",
@@ -245,13 +243,6 @@ def _per_coordinate_variance(
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
     """``s^2`` [mm^2]: the segments' rigid-body residual sum of squares over its dof."""
     return sum(p.residual_ss for p in segments) / sum(p.dof for p in segments)
-
-
-def constraint_covariance(
-    r0: np.ndarray, a0: np.ndarray, r1: np.ndarray, a1: np.ndarray
-) -> np.ndarray:
-    """``W_y,t = R0 A0 R0' + R1 A1 R1'`` for rotation stacks ``(N, 3, 3)``: ``(N, 3, 3)``."""
-    return rotated3(r0, a0) + rotated3(r1, a1)
 
 
 def _relative_system(prox, dist) -> tuple[np.ndarray, np.ndarray]:
@@ -626,7 +617,7 @@ def _frame_chi2(
 def _local_weight(relative: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple:
     """The upper triangle ``(v00, v01, v02, v11, v12, v22)`` of one frame's weight in its
     proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t A_1 Q_t')^-1``
-    (:func:`constraint_covariance`), of the relative rotation ``Q_t`` ``(3, 3)`` and the point
+    (paper C's eq. 20 in that frame), of the relative rotation ``Q_t`` ``(3, 3)`` and the point
     covariances ``A_a`` ``(3, 3)``; the inverse from the cofactors, as
     :func:`jointbench.numerics.small.inverse3` forms it. A compiled kernel."""
     q00, q01, q02, q11, q12, q22 = rotated3_upper(relative, a1)

@@ -27,7 +27,6 @@ __all__ = [
     "inverse3",
     "inverse3_entries",
     "inverse3_into",
-    "rotated3",
     "rotated3_into",
     "rotated3_upper",
     "rows9",
@@ -110,31 +109,6 @@ def inverse3_entries(
         (a * e - b * d) / determinant,
         determinant,
     )
-
-
-def rotated3(rotations: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """``R M R'`` for rotations ``(..., N, 3, 3)`` and one symmetric matrix ``M`` ``(..., 3, 3)``
-    per leading index (e.g. per trial): ``(..., N, 3, 3)``, exactly symmetric
-    (:func:`rotated3_into`)."""
-    rotations = np.asarray(rotations, dtype=float)
-    *lead, n_frames, _, _ = rotations.shape
-    matrices = np.broadcast_to(np.asarray(matrix, dtype=float), (*lead, 3, 3))
-    out = _rotated_stacks(
-        kernel_array(rotations.reshape(-1, n_frames, 3, 3)),
-        kernel_array(matrices.reshape(-1, 3, 3)),
-    )
-    return out.reshape(rotations.shape)
-
-
-@kernel
-def _rotated_stacks(rotations: np.ndarray, matrices: np.ndarray) -> np.ndarray:
-    """:func:`rotated3_into` of every rotation ``(k, N, 3, 3)`` with its stack's matrix
-    ``(k, 3, 3)``: ``(k, N, 3, 3)``. A compiled kernel."""
-    out = np.empty(rotations.shape)
-    for stack in range(rotations.shape[0]):
-        for frame in range(rotations.shape[1]):
-            rotated3_into(rotations[stack, frame], matrices[stack], out[stack, frame])
-    return out
 
 
 @kernel
