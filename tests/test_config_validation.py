@@ -239,7 +239,7 @@ BAD = [
         "cmc",
         ("protocol",),
         {"n_frames": 2},
-        ["studies.cmc.protocol: condition marker_set-M__rom_deg-5__noise_mm-0.5", "NM 4"],
+        ["studies.cmc.protocol.n_frames: condition marker_set-M__rom_deg-5__noise_mm-0.5", "NM 4"],
     ),
     # A study that runs nothing.
     ("hip", ("estimators",), [], ["studies.hip.estimators: empty, and no external_estimators"]),
@@ -535,7 +535,7 @@ def test_a_condition_some_listed_estimator_can_fit_is_run(config):
     study_config.check_config(changed(config, "cmc", ("protocol",), three))
     only_spheres = changed(config, "cmc", ("protocol",), three)
     only_spheres["studies"]["cmc"]["estimators"] = ["NM", "LS"]
-    with pytest.raises(ValueError, match=r"studies\.cmc\.protocol: .* 3 frame"):
+    with pytest.raises(ValueError, match=r"studies\.cmc\.protocol\.n_frames: .* 3 frame"):
         study_config.check_config(only_spheres)
 
 
@@ -795,17 +795,27 @@ def _never_simulated(condition, protocol, rngs):
 # Protocols whose trials would not fit in memory: a few digits too many in the frame count.
 # (study, protocol overrides, the key the refusal names, the frames it names)
 _TOO_LONG = [
-    ("cmc", {"n_frames": 10**13}, "config: studies.cmc.protocol: ", "10000000000000 frame(s)"),
-    ("hip", {"n_frames": 10**13}, "config: studies.hip.protocol: ", "10000000000000 frame(s)"),
+    (
+        "cmc",
+        {"n_frames": 10**13},
+        "config: studies.cmc.protocol.n_frames: ",
+        "10000000000000 frame(s)",
+    ),
+    (
+        "hip",
+        {"n_frames": 10**13},
+        "config: studies.hip.protocol.n_frames: ",
+        "10000000000000 frame(s)",
+    ),
     (
         "hinge",
         {"all": {"n_frames": 10**12}},
-        "config: studies.hinge.protocol: ",
+        "config: studies.hinge.protocol.all.n_frames: ",
         "1000000000000 frame(s)",
     ),
     # Each hip trial keeps its first Nt frames of one recording it draws whole: 200 trials of
     # two million recorded frames each, whatever Nt the grid asks for.
-    ("hip", {"n_frames": 2 * 10**6}, "config: studies.hip.protocol: ", "2000000 frame(s)"),
+    ("hip", {"n_frames": 2 * 10**6}, "config: studies.hip.protocol.n_frames: ", "2000000 frame(s)"),
 ]
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
-from jointbench.simulate.hip_sta import hip_angles, thigh_rotation
+from jointbench.simulate.hip_sta import FRAME_FIELDS, hip_angles, thigh_rotation
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
 
@@ -241,7 +241,7 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
     """:data:`SAMPLED_PER_TURN` for the skin-marker study's motions the grid runs."""
     motions = settings["grid"]["motion"]
     n_frames, star = protocol.n_frames, protocol.star_fraction
-    frames = "duration_s, fps"  # the fields that set n_frames
+    frames = ", ".join(FRAME_FIELDS)  # the fields that set n_frames
     stretches = []
     if "star_arc" in motions:
         stretches += [

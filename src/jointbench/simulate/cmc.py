@@ -274,6 +274,11 @@ def frame_count(condition: Mapping[str, object], protocol: CmcProtocol) -> int:
     return protocol.n_frames
 
 
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+    """Where the config sets the frames :func:`frame_count` gives."""
+    return "protocol.n_frames"
+
+
 STUDY = Study(
     name="cmc",
     kind="center",
@@ -283,6 +288,7 @@ STUDY = Study(
     protocol_class=CmcProtocol,
     simulate=simulate,
     frame_count=frame_count,
+    frame_keys=frame_keys,
     grid_spec={
         "marker_set": GridValues(
             str,

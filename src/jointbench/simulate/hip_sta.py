@@ -115,6 +115,7 @@ from jointbench.simulate.ranges import (
 )
 
 __all__ = [
+    "FRAME_FIELDS",
     "MOTIONS",
     "STUDY",
     "HipStaProtocol",
@@ -128,6 +129,8 @@ __all__ = [
 ]
 
 MOTIONS = ("star_arc", "circumduction")
+#: The protocol fields a trial's frames are read from (:attr:`HipStaProtocol.n_frames`).
+FRAME_FIELDS = ("duration_s", "fps")
 _CONDITION_KEYS = ("motion", "rom_deg", "sta_mm")
 
 
@@ -424,6 +427,11 @@ def frame_count(condition: Mapping[str, object], protocol: HipStaProtocol) -> in
     return protocol.n_frames
 
 
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+    """Where the config sets the frames :func:`frame_count` gives: :data:`FRAME_FIELDS`."""
+    return "protocol." + ", ".join(FRAME_FIELDS)
+
+
 STUDY = Study(
     name="hip_sta",
     # The two-segment estimators see both clusters as recorded; the one-segment centre methods
@@ -437,6 +445,7 @@ STUDY = Study(
     protocol_class=HipStaProtocol,
     simulate=simulate,
     frame_count=frame_count,
+    frame_keys=frame_keys,
     grid_spec={
         "motion": GridValues(
             str,
