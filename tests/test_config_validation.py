@@ -477,6 +477,97 @@ def test_a_hinge_wave_reaching_both_ends_of_its_excursion_passes(config, waves):
     study_config.check_config({**config, "studies": {**config["studies"], "hinge": hinge}})
 
 
+# A protocol field written in the config that the chosen motion does not read changes no data:
+# (study, grid motions or None for the default grid, protocol overrides, words the refusal has).
+_UNREAD = [
+    (
+        "hinge",
+        None,
+        {"all": {"fe_cycles": 3}},
+        ["config: studies.hinge.protocol.all.fe_cycles: ", "not read by motion 'grid'"],
+    ),
+    (
+        "hinge",
+        None,
+        {"knee": {"aa_phase_deg": 30.0}},
+        ["config: studies.hinge.protocol.knee.aa_phase_deg: ", "motion 'grid' (joint 'knee')"],
+    ),
+    (
+        "hinge",
+        None,
+        {"all": {"motion": "superimposed", "fe_cycles": 2.0}},
+        ["config: studies.hinge.protocol.all.fe_cycles: ", "motion 'superimposed'", "lissajous"],
+    ),
+    (
+        "hinge",
+        None,
+        {"all": {"motion": "sequential", "aa_cycles": 2.0}},
+        ["config: studies.hinge.protocol.all.aa_cycles: ", "motion 'sequential'"],
+    ),
+    # Written under all, it must be read by every joint the grid runs.
+    (
+        "hinge",
+        None,
+        {"all": {"fe_cycles": 2.0}, "knee": {"motion": "lissajous"}},
+        ["config: studies.hinge.protocol.all.fe_cycles: ", "motion 'grid' (joint 'mcp')"],
+    ),
+    (
+        "hip_sta",
+        ["star_arc"],
+        {"circumduction_turns": 4.0},
+        ["config: studies.hip_sta.protocol.circumduction_turns: ", "grid.motion star_arc"],
+    ),
+    (
+        "hip_sta",
+        ["circumduction"],
+        {"star_fraction": 0.5},
+        ["config: studies.hip_sta.protocol.star_fraction: ", "grid.motion circumduction"],
+    ),
+    (
+        "hip_sta",
+        ["circumduction"],
+        {"arc_turns": 2.0},
+        ["config: studies.hip_sta.protocol.arc_turns: ", "grid.motion circumduction"],
+    ),
+]
+
+
+def _with_motions(config, study, motions, overrides):
+    new = changed(config, study, ("protocol",), overrides)
+    if motions is not None:
+        new["studies"][study]["grid"]["motion"] = motions
+    return new
+
+
+@pytest.mark.parametrize(("study", "motions", "overrides", "words"), _UNREAD, ids=str)
+def test_a_field_the_chosen_motion_does_not_read_is_refused_naming_it(
+    config, study, motions, overrides, words
+):
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(_with_motions(config, study, motions, overrides))
+    message = str(error.value)
+    assert message.startswith(words[0]), message
+    for word in words[1:]:
+        assert word in message, message
+
+
+@pytest.mark.parametrize(
+    ("study", "motions", "overrides"),
+    [
+        ("hinge", None, {"knee": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        ("hinge", None, {"all": {"motion": "superimposed", "aa_cycles": 3.0}}),
+        ("hinge", None, {"all": {"motion": "lissajous", "aa_phase_deg": 90.0}}),
+        ("hinge", None, {"all": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        ("hip_sta", None, {"circumduction_turns": 2.0, "arc_turns": 2.0}),
+        ("hip_sta", ["star_arc"], {"star_fraction": 0.5, "arc_turns": 2.0}),
+        ("hip_sta", ["circumduction"], {"circumduction_turns": 2.0}),
+    ],
+    ids=str,
+)
+def test_a_field_the_chosen_motion_reads_passes(config, study, motions, overrides):
+    study_config.check_config(_with_motions(config, study, motions, overrides))
+
+
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])
 def test_a_blind_placement_translation_out_of_its_bounds_is_refused(config, value):
     """NaN and inf pass the schema (no comparison with NaN is true) and failed inside jobs;

@@ -18,10 +18,12 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge import MOTION_FIELDS as HINGE_MOTION_FIELDS
 from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
 from jointbench.simulate.hip_sta import FRAME_FIELDS, hip_angles, thigh_rotation
+from jointbench.simulate.hip_sta import MOTION_FIELDS as HIP_STA_MOTION_FIELDS
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
 
@@ -160,7 +162,49 @@ def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    return _hinge_cycles_problem(settings, protocol) or _aa_ratio_problem(settings)
+    return (
+        _hinge_unread_problem(settings, protocol)
+        or _hinge_cycles_problem(settings, protocol)
+        or _aa_ratio_problem(settings)
+    )
+
+
+def _unread_field(
+    written: Mapping, motions: Sequence[str], motion_fields: Mapping[str, Sequence[str]]
+) -> tuple[str, list[str]] | None:
+    """``(field, the motions that read it)`` for the first of the fields ``written`` that some
+    motion of ``motion_fields`` (motion -> the fields only some motions read) reads and none
+    of ``motions`` does; None if there is none. Such a value changes no data: a user who
+    writes it believes the trials follow it."""
+    read = {field for motion in motions for field in motion_fields[motion]}
+    for field in written:
+        readers = [motion for motion, fields in motion_fields.items() if field in fields]
+        if readers and field not in read:
+            return field, readers
+    return None
+
+
+def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """A field of :data:`~jointbench.simulate.hinge.MOTION_FIELDS` that the config writes
+    for a joint the grid runs, under the joint's own entry or ``all`` (which sets it for every
+    joint), whose motion does not read it. Defaults are not written and not refused."""
+    overrides = settings.get("protocol") or {}
+    every = list(dict.fromkeys(f for fields in HINGE_MOTION_FIELDS.values() for f in fields))
+    for joint in settings["grid"]["protocol"]:
+        motion = protocol.joints[joint].motion
+        for entry in (joint, "all"):
+            unread = _unread_field(overrides.get(entry) or {}, (motion,), HINGE_MOTION_FIELDS)
+            if not unread:
+                continue
+            field, readers = unread
+            reads = ", ".join(HINGE_MOTION_FIELDS[motion]) or f"none of {', '.join(every)}"
+            return f"protocol.{entry}.{field}", (
+                f"not read by motion {motion!r} (joint {joint!r}), which reads {reads}; "
+                f"{field} is read by motion {' and '.join(map(repr, readers))}: a value the "
+                "motion does not read changes no data; remove it, or choose a motion that "
+                "reads it"
+            )
+    return None
 
 
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
@@ -228,12 +272,28 @@ def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return (
-        _clusters_problem(protocol, HIP_STA_CLUSTERS)
+        _hip_sta_unread_problem(settings)
+        or _clusters_problem(protocol, HIP_STA_CLUSTERS)
         or _hip_sta_turns_problem(settings, protocol)
         or _hip_sta_axes_problem(settings, protocol)
         or _sta_reach_problem(settings, protocol)
         or pelvis_poses_problem(settings, protocol)
         or _frequencies_problem(protocol, HIP_STA_FREQUENCIES)
+    )
+
+
+def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
+    """A field of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that the config writes
+    and no motion of the grid reads. Defaults are not written and not refused."""
+    motions = settings["grid"]["motion"]
+    unread = _unread_field(settings.get("protocol") or {}, motions, HIP_STA_MOTION_FIELDS)
+    if not unread:
+        return None
+    field, readers = unread
+    return f"protocol.{field}", (
+        f"not read by the motions the grid runs, grid.motion {', '.join(motions)}; {field} is "
+        f"read by {' and '.join(readers)}: a value no motion of the run reads changes no "
+        f"data; remove it, or add {' or '.join(readers)} to grid.motion"
     )
 
 

@@ -117,6 +117,7 @@ from jointbench.simulate.ranges import (
 __all__ = [
     "FRAME_FIELDS",
     "MOTIONS",
+    "MOTION_FIELDS",
     "STUDY",
     "HipStaProtocol",
     "hip_angles",
@@ -129,6 +130,14 @@ __all__ = [
 ]
 
 MOTIONS = ("star_arc", "circumduction")
+#: The fields of :class:`HipStaProtocol` each motion reads that the other does not
+#: (:func:`hip_angles`); every other field both read. The config refuses one of these that no
+#: motion of its grid reads (it would change no data):
+#: :func:`jointbench.configuration.bounds.study_problem`.
+MOTION_FIELDS: dict[str, tuple[str, ...]] = {
+    "star_arc": ("star_azimuths_deg", "star_fraction", "arc_turns"),
+    "circumduction": ("circumduction_turns",),
+}
 #: The protocol fields a trial's frames are read from (:attr:`HipStaProtocol.n_frames`).
 FRAME_FIELDS = ("duration_s", "fps")
 _CONDITION_KEYS = ("motion", "rom_deg", "sta_mm")
