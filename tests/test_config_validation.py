@@ -19,10 +19,12 @@ from snakemake.utils import update_config
 from workflow_copy import ROOT, copy_workflow, refused_dry_run, run_snakemake
 
 from jointbench import declared
+from jointbench.configuration import bounds
 from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators import registry
 from jointbench.papers import get_paper, paper_names
+from jointbench.simulate import cmc
 
 
 @pytest.fixture(scope="module")
@@ -387,6 +389,13 @@ BAD = [
         {"spiral_turns": 1e13},
         ["studies.cmc.protocol.spiral_turns, n_frames: 10000000000000.0 spiral turns"],
     ),
+    # A spiral that circles out only in the trial's last frames (paper A: "circling out").
+    (
+        "cmc",
+        ("protocol",),
+        {"tilt_power": 82},
+        ["studies.cmc.protocol.tilt_power: 82", "by the middle of the trial"],
+    ),
     (
         "hinge",
         ("protocol",),
@@ -566,6 +575,36 @@ def test_a_field_the_chosen_motion_does_not_read_is_refused_naming_it(
 )
 def test_a_field_the_chosen_motion_reads_passes(config, study, motions, overrides):
     study_config.check_config(_with_motions(config, study, motions, overrides))
+
+
+def _tilt_at_the_middle(tilt_power: float) -> float:
+    """The share of its RoM the thumb's simulated tilt reaches at the middle frame (of 121,
+    whose middle is half-way through the trial)."""
+    rotations = cmc.spiral_rotations(40.0, 121, 2.0, tilt_power)
+    # The tilt: the angle between the mean long axis z and where the rotation carries it.
+    return float(np.degrees(np.arccos(np.clip(rotations[60, 2, 2], -1.0, 1.0))) / 40.0)
+
+
+@pytest.mark.parametrize("tilt_power", [82.0, 1e300, "just above"])
+def test_a_tilt_that_leaves_the_thumb_still_past_the_middle_is_refused(config, tilt_power):
+    """At tilt_power 82 the thumb barely leaves its mean position before the trial's last
+    frames: it does not circle out over the recording (paper A), whatever RoM labels it."""
+    if tilt_power == "just above":
+        tilt_power = bounds.CMC_LATEST_TILT_POWER * (1 + 1e-9)
+    assert _tilt_at_the_middle(tilt_power) < bounds.CMC_TILT_SHARE_BY_MIDDLE
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    assert message.startswith(f"config: studies.cmc.protocol.tilt_power: {tilt_power!r}"), message
+    assert "middle" in message and "circling out" in message, message
+
+
+@pytest.mark.parametrize("tilt_power", [0.5, 1.0, 2.0, "the latest"])
+def test_a_tilt_reaching_its_share_of_the_rom_by_the_middle_passes(config, tilt_power):
+    if tilt_power == "the latest":
+        tilt_power = bounds.CMC_LATEST_TILT_POWER * (1 - 1e-9)
+    assert _tilt_at_the_middle(tilt_power) >= bounds.CMC_TILT_SHARE_BY_MIDDLE
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
 
 
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])

@@ -29,6 +29,8 @@ from jointbench.simulate.ranges import RESOLUTION_MM
 
 __all__ = [
     "AA_RATIO_BELOW",
+    "CMC_LATEST_TILT_POWER",
+    "CMC_TILT_SHARE_BY_MIDDLE",
     "HIP_RESOLUTION_MM",
     "PELVIS_LENGTH_PER_WIDTH",
     "PELVIS_WIDTH_PER_DEPARTURE",
@@ -58,6 +60,22 @@ TRANSLATION_MM_RANGE = (100.0, 1e5)
 #: ratio, 0.7), half at ratio 1, where FE and AA are equal and no axis is the motion's, and
 #: most above it (at 50, abduction of 50 times the flexion). Paper B's grid is 0.1 to 0.7.
 AA_RATIO_BELOW = 1.0
+
+#: The thumb CMC's circumduction spiral circles out over the trial: by its middle the tilt
+#: has reached at least this share of the RoM its condition names. Paper A: "The generated
+#: marker trajectories simulated thumb circumduction by beginning from a nominal mean position
+#: and circling out to increasing angles relative to the mean position." A thumb still within a
+#: tenth of its RoM of the mean half-way through (an order of magnitude short of the
+#: excursion its condition names) has not begun to circle out over the recording: it stays
+#: near its mean position and reaches its RoM only in the trial's last frames (at tilt_power
+#: 82 it barely leaves the mean before them). The tilt grows as the trial's
+#: fraction to ``tilt_power`` (:func:`~jointbench.simulate.cmc.spiral_rotations`), so the rule
+#: bounds ``tilt_power`` by :data:`CMC_LATEST_TILT_POWER`; a linear spiral (1) reaches half
+#: the RoM by the middle, the prior's latest-growing spiral (2) a quarter.
+CMC_TILT_SHARE_BY_MIDDLE = 0.1
+#: The largest ``tilt_power`` whose spiral reaches :data:`CMC_TILT_SHARE_BY_MIDDLE` of its RoM
+#: by the middle of the trial: ``0.5 ** tilt_power >= share``.
+CMC_LATEST_TILT_POWER = math.log(CMC_TILT_SHARE_BY_MIDDLE) / math.log(0.5)
 
 #: The hip rig's pendulum rotations (distal relative to proximal, about x, y, z): paper C's rig
 #: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
@@ -158,6 +176,20 @@ def translation_problem(value: float) -> str | None:
 def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return _turns_problem(
         "protocol.spiral_turns, n_frames", protocol.spiral_turns, protocol.n_frames, "spiral turns"
+    ) or _tilt_problem(protocol.tilt_power)
+
+
+def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
+    """``(key, why)`` when the thumb's spiral does not reach :data:`CMC_TILT_SHARE_BY_MIDDLE`
+    of its RoM by the middle of the trial, else None."""
+    if tilt_power <= CMC_LATEST_TILT_POWER:
+        return None
+    return "protocol.tilt_power", (
+        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power:.3g} of its RoM by the "
+        f"middle of the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its "
+        "mean position and reach its RoM only in the last frames, not circle out over the "
+        "recording (paper A: 'beginning from a nominal mean position and circling out to "
+        f"increasing angles'); at most {CMC_LATEST_TILT_POWER:.4g}"
     )
 
 
