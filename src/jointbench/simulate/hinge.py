@@ -291,13 +291,13 @@ def sine_waves(protocol: HingeProtocol) -> dict[str, tuple[float, float]]:
     """The sinusoids of ``protocol``'s motion, by the field that sets their cycles: ``(cycles,
     phase [rad])`` of ``sin(2 pi cycles t + phase)`` over ``t`` in ``[0, 1]``, each the wave
     :func:`joint_angles` lays out (the Lissajous FE wave ``-cos`` is the sine from ``-pi/2``,
-    full extension); none for the grid and sequential motions, which run no cycles."""
-    aa = (protocol.aa_cycles, math.radians(protocol.aa_phase_deg))
-    if protocol.motion == "lissajous":
-        return {"fe_cycles": (protocol.fe_cycles, -math.pi / 2.0), "aa_cycles": aa}
-    if protocol.motion == "superimposed":
-        return {"aa_cycles": aa}
-    return {}
+    full extension); those the motion reads (:data:`MOTION_FIELDS`), none for the grid and
+    sequential motions, which run no cycles."""
+    waves = {
+        "fe_cycles": (protocol.fe_cycles, -math.pi / 2.0),
+        "aa_cycles": (protocol.aa_cycles, math.radians(protocol.aa_phase_deg)),
+    }
+    return {name: wave for name, wave in waves.items() if name in MOTION_FIELDS[protocol.motion]}
 
 
 def nominal_markers(condition: Mapping[str, object], protocol: HingeProtocol) -> np.ndarray:
