@@ -216,6 +216,7 @@ def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
     chosen motion does not read, is what :func:`hinge.joint_angles` reads: a change of a field
     the motion lists changes its poses, a change of another changes nothing."""
     assert set(_MOTION_FIELD_VALUES) == set().union(*hinge.MOTION_FIELDS.values())
+    assert set(hinge.MOTION_FIELDS) == set(hinge.MOTIONS)
     base = dataclasses.replace(hinge.HINGE_PROTOCOLS["knee"], motion=motion)
     condition = {"protocol": "knee", "fe_rom_deg": 60.0, "aa_ratio": 0.3}
     poses = np.stack(hinge.joint_angles(condition, base))
