@@ -19,10 +19,12 @@ from snakemake.utils import update_config
 from workflow_copy import ROOT, copy_workflow, refused_dry_run, run_snakemake
 
 from jointbench import declared
+from jointbench.configuration import bounds
 from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
 from jointbench.estimators import registry
 from jointbench.papers import get_paper, paper_names
+from jointbench.simulate import cmc
 
 
 @pytest.fixture(scope="module")
@@ -239,7 +241,7 @@ BAD = [
         "cmc",
         ("protocol",),
         {"n_frames": 2},
-        ["studies.cmc.protocol: condition marker_set-M__rom_deg-5__noise_mm-0.5", "NM 4"],
+        ["studies.cmc.protocol.n_frames: condition marker_set-M__rom_deg-5__noise_mm-0.5", "NM 4"],
     ),
     # A study that runs nothing.
     ("hip", ("estimators",), [], ["studies.hip.estimators: empty, and no external_estimators"]),
@@ -387,6 +389,13 @@ BAD = [
         {"spiral_turns": 1e13},
         ["studies.cmc.protocol.spiral_turns, n_frames: 10000000000000.0 spiral turns"],
     ),
+    # A spiral that circles out only in the trial's last frames (paper A: "circling out").
+    (
+        "cmc",
+        ("protocol",),
+        {"tilt_power": 82},
+        ["studies.cmc.protocol.tilt_power: 82", "by the middle of the trial"],
+    ),
     (
         "hinge",
         ("protocol",),
@@ -477,6 +486,127 @@ def test_a_hinge_wave_reaching_both_ends_of_its_excursion_passes(config, waves):
     study_config.check_config({**config, "studies": {**config["studies"], "hinge": hinge}})
 
 
+# A protocol field written in the config that the chosen motion does not read changes no data:
+# (study, grid motions or None for the default grid, protocol overrides, words the refusal has).
+_UNREAD = [
+    (
+        "hinge",
+        None,
+        {"all": {"fe_cycles": 3}},
+        ["config: studies.hinge.protocol.all.fe_cycles: ", "not read by motion 'grid'"],
+    ),
+    (
+        "hinge",
+        None,
+        {"knee": {"aa_phase_deg": 30.0}},
+        ["config: studies.hinge.protocol.knee.aa_phase_deg: ", "motion 'grid' (joint 'knee')"],
+    ),
+    (
+        "hinge",
+        None,
+        {"all": {"motion": "superimposed", "fe_cycles": 2.0}},
+        ["config: studies.hinge.protocol.all.fe_cycles: ", "motion 'superimposed'", "lissajous"],
+    ),
+    (
+        "hinge",
+        None,
+        {"all": {"motion": "sequential", "aa_cycles": 2.0}},
+        ["config: studies.hinge.protocol.all.aa_cycles: ", "motion 'sequential'"],
+    ),
+    # Written under all, it must be read by every joint the grid runs.
+    (
+        "hinge",
+        None,
+        {"all": {"fe_cycles": 2.0}, "knee": {"motion": "lissajous"}},
+        ["config: studies.hinge.protocol.all.fe_cycles: ", "motion 'grid' (joint 'mcp')"],
+    ),
+    (
+        "hip_sta",
+        ["star_arc"],
+        {"circumduction_turns": 4.0},
+        ["config: studies.hip_sta.protocol.circumduction_turns: ", "grid.motion star_arc"],
+    ),
+    (
+        "hip_sta",
+        ["circumduction"],
+        {"star_fraction": 0.5},
+        ["config: studies.hip_sta.protocol.star_fraction: ", "grid.motion circumduction"],
+    ),
+    (
+        "hip_sta",
+        ["circumduction"],
+        {"arc_turns": 2.0},
+        ["config: studies.hip_sta.protocol.arc_turns: ", "grid.motion circumduction"],
+    ),
+]
+
+
+def _with_motions(config, study, motions, overrides):
+    new = changed(config, study, ("protocol",), overrides)
+    if motions is not None:
+        new["studies"][study]["grid"]["motion"] = motions
+    return new
+
+
+@pytest.mark.parametrize(("study", "motions", "overrides", "words"), _UNREAD, ids=str)
+def test_a_field_the_chosen_motion_does_not_read_is_refused_naming_it(
+    config, study, motions, overrides, words
+):
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(_with_motions(config, study, motions, overrides))
+    message = str(error.value)
+    assert message.startswith(words[0]), message
+    for word in words[1:]:
+        assert word in message, message
+
+
+@pytest.mark.parametrize(
+    ("study", "motions", "overrides"),
+    [
+        ("hinge", None, {"knee": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        ("hinge", None, {"all": {"motion": "superimposed", "aa_cycles": 3.0}}),
+        ("hinge", None, {"all": {"motion": "lissajous", "aa_phase_deg": 90.0}}),
+        ("hinge", None, {"all": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        ("hip_sta", None, {"circumduction_turns": 2.0, "arc_turns": 2.0}),
+        ("hip_sta", ["star_arc"], {"star_fraction": 0.5, "arc_turns": 2.0}),
+        ("hip_sta", ["circumduction"], {"circumduction_turns": 2.0}),
+    ],
+    ids=str,
+)
+def test_a_field_the_chosen_motion_reads_passes(config, study, motions, overrides):
+    study_config.check_config(_with_motions(config, study, motions, overrides))
+
+
+def _tilt_at_the_middle(tilt_power: float) -> float:
+    """The share of its RoM the thumb's simulated tilt reaches at the middle frame (of 121,
+    whose middle is half-way through the trial)."""
+    rotations = cmc.spiral_rotations(40.0, 121, 2.0, tilt_power)
+    # The tilt: the angle between the mean long axis z and where the rotation carries it.
+    return float(np.degrees(np.arccos(np.clip(rotations[60, 2, 2], -1.0, 1.0))) / 40.0)
+
+
+@pytest.mark.parametrize("tilt_power", [82.0, 1e300, "just above"])
+def test_a_tilt_that_leaves_the_thumb_still_past_the_middle_is_refused(config, tilt_power):
+    """At tilt_power 82 the thumb barely leaves its mean position before the trial's last
+    frames: it does not circle out over the recording (paper A), whatever RoM labels it."""
+    if tilt_power == "just above":
+        tilt_power = bounds.CMC_LATEST_TILT_POWER * (1 + 1e-9)
+    assert _tilt_at_the_middle(tilt_power) < bounds.CMC_TILT_SHARE_BY_MIDDLE
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    assert message.startswith(f"config: studies.cmc.protocol.tilt_power: {tilt_power!r}"), message
+    assert "middle" in message and "circling out" in message, message
+
+
+@pytest.mark.parametrize("tilt_power", [0.5, 1.0, 2.0, "the latest"])
+def test_a_tilt_reaching_its_share_of_the_rom_by_the_middle_passes(config, tilt_power):
+    if tilt_power == "the latest":
+        tilt_power = bounds.CMC_LATEST_TILT_POWER * (1 - 1e-9)
+    assert _tilt_at_the_middle(tilt_power) >= bounds.CMC_TILT_SHARE_BY_MIDDLE
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+
+
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])
 def test_a_blind_placement_translation_out_of_its_bounds_is_refused(config, value):
     """NaN and inf pass the schema (no comparison with NaN is true) and failed inside jobs;
@@ -535,7 +665,7 @@ def test_a_condition_some_listed_estimator_can_fit_is_run(config):
     study_config.check_config(changed(config, "cmc", ("protocol",), three))
     only_spheres = changed(config, "cmc", ("protocol",), three)
     only_spheres["studies"]["cmc"]["estimators"] = ["NM", "LS"]
-    with pytest.raises(ValueError, match=r"studies\.cmc\.protocol: .* 3 frame"):
+    with pytest.raises(ValueError, match=r"studies\.cmc\.protocol\.n_frames: .* 3 frame"):
         study_config.check_config(only_spheres)
 
 
@@ -795,17 +925,27 @@ def _never_simulated(condition, protocol, rngs):
 # Protocols whose trials would not fit in memory: a few digits too many in the frame count.
 # (study, protocol overrides, the key the refusal names, the frames it names)
 _TOO_LONG = [
-    ("cmc", {"n_frames": 10**13}, "config: studies.cmc.protocol: ", "10000000000000 frame(s)"),
-    ("hip", {"n_frames": 10**13}, "config: studies.hip.protocol: ", "10000000000000 frame(s)"),
+    (
+        "cmc",
+        {"n_frames": 10**13},
+        "config: studies.cmc.protocol.n_frames: ",
+        "10000000000000 frame(s)",
+    ),
+    (
+        "hip",
+        {"n_frames": 10**13},
+        "config: studies.hip.protocol.n_frames: ",
+        "10000000000000 frame(s)",
+    ),
     (
         "hinge",
         {"all": {"n_frames": 10**12}},
-        "config: studies.hinge.protocol: ",
+        "config: studies.hinge.protocol.all.n_frames: ",
         "1000000000000 frame(s)",
     ),
     # Each hip trial keeps its first Nt frames of one recording it draws whole: 200 trials of
     # two million recorded frames each, whatever Nt the grid asks for.
-    ("hip", {"n_frames": 2 * 10**6}, "config: studies.hip.protocol: ", "2000000 frame(s)"),
+    ("hip", {"n_frames": 2 * 10**6}, "config: studies.hip.protocol.n_frames: ", "2000000 frame(s)"),
 ]
 
 

@@ -112,6 +112,8 @@ def test_an_outside_studys_frame_count_typed_too_long_is_refused_without_simulat
     message = str(raised.value)
     assert message.startswith("config: studies.toy.protocol: condition "), message
     assert f"{frames} frame(s)" in message, message
+    # Its frame_count is a function: which fields it reads, only the study can say.
+    assert "study 'toy' declares no frame_keys" in message, message
 
 
 def _never_called(*args, **kwargs):
@@ -165,3 +167,50 @@ def test_a_frame_count_that_is_no_count_is_the_studys_mistake(monkeypatch, count
     )
     with pytest.raises(TypeError, match=rf"study 'cmc'.*frame_count gave {shown}\b.*0 or more"):
         study_config.check_config(config)
+
+
+# A protocol's frame fields given values no recording has, in every built-in study: (study,
+# protocol overrides, the key the refusal names). Negative, zero and non-integer values are
+# refused by the fields' declarations; a count too large to hold or too small for any listed
+# estimator by the check of each condition's frames, which names the same fields.
+_FRAME_MISTAKES = [
+    ("cmc", {"n_frames": 10**13}, "studies.cmc.protocol.n_frames"),
+    ("cmc", {"n_frames": 2}, "studies.cmc.protocol.n_frames"),
+    ("cmc", {"n_frames": 0}, "studies.cmc.protocol.n_frames"),
+    ("cmc", {"n_frames": -120}, "studies.cmc.protocol.n_frames"),
+    ("cmc", {"n_frames": 120.5}, "studies.cmc.protocol.n_frames"),
+    ("hinge", {"all": {"n_frames": 10**12}}, "studies.hinge.protocol.all.n_frames"),
+    ("hinge", {"mcp": {"n_frames": 10**12}}, "studies.hinge.protocol.mcp.n_frames"),
+    (
+        "hinge",
+        {"all": {"n_frames": 121}, "knee": {"n_frames": 10**12}},
+        "studies.hinge.protocol.knee.n_frames",
+    ),
+    ("hinge", {"all": {"n_frames": 0}}, "studies.hinge.protocol.all.n_frames"),
+    ("hinge", {"knee": {"n_frames": -121}}, "studies.hinge.protocol.knee.n_frames"),
+    ("hip", {"n_frames": 2 * 10**6}, "studies.hip.protocol.n_frames"),
+    ("hip", {"n_frames": 0}, "studies.hip.protocol.n_frames"),
+    ("hip", {"n_frames": 1200.5}, "studies.hip.protocol.n_frames"),
+    ("hip_sta", {"duration_s": 1e-300}, "studies.hip_sta.protocol.duration_s, fps"),
+    ("hip_sta", {"fps": 1e-300}, "studies.hip_sta.protocol.duration_s, fps"),
+    ("hip_sta", {"duration_s": 0.02}, "studies.hip_sta.protocol.duration_s, fps"),
+    ("hip_sta", {"duration_s": 86400, "fps": 1e5}, "studies.hip_sta.protocol.duration_s, fps"),
+    ("hip_sta", {"duration_s": -12.0}, "studies.hip_sta.protocol.duration_s"),
+    ("hip_sta", {"fps": 0}, "studies.hip_sta.protocol.fps"),
+]
+
+
+@pytest.mark.parametrize(("study", "overrides", "key"), _FRAME_MISTAKES, ids=str)
+def test_a_frame_count_mistake_is_refused_naming_the_fields_it_comes_from(
+    study, overrides, key, monkeypatch
+):
+    """Whatever bound the count breaks, the refusal names the protocol field(s) the study's
+    count is read from (as the config writes them: a hinge joint's under its own entry or
+    ``all``), before any trial is simulated."""
+    config = _default()
+    config["studies"][study]["protocol"] = overrides
+    monkeypatch.setattr(np, "linspace", _never_called)
+    with pytest.raises(ValueError) as raised:
+        study_config.check_config(config)
+    message = str(raised.value)
+    assert message.startswith(f"config: {key}: "), message

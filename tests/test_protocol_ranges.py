@@ -25,6 +25,7 @@ from workflow_copy import ROOT, refused_dry_run
 
 from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study
+from jointbench.simulate import hinge
 from jointbench.simulate.ranges import LAB_MM
 
 STUDIES = ("cmc", "hinge", "hip", "hip_sta")
@@ -43,10 +44,6 @@ HOSTILE = (
     -math.inf,
     math.nan,
 )
-#: Fields that set a trial's frames: a typo in one may be refused by the check of a
-#: condition's frames (``MAX_CONDITION_FRAMES``, or fewer than the estimators fit), which names
-#: the protocol and the frames, not the field (it reads the count the study declares).
-FRAME_FIELDS = {"n_frames", "duration_s", "fps"}
 
 
 @pytest.fixture(scope="module")
@@ -113,7 +110,17 @@ FIELD_IDS = [f"{study}.{field}" for study, field in NUMERIC_FIELDS]
 
 def _overrides(study: str, field: str, hostile: object, every: bool) -> dict:
     value, _ = _poisoned(_default_fields(study)[field], hostile, every)
-    return {"all": {field: value}} if study == "hinge" else {field: value}
+    return _written(study, field, value)
+
+
+def _written(study: str, field: str, value: object) -> dict:
+    """The protocol overrides writing ``field`` as ``value``: the hinge's under ``all``, with
+    a motion that reads it where the default does not (the check refuses a field written for
+    a motion that does not read it, before its value)."""
+    if study != "hinge":
+        return {field: value}
+    readers = [motion for motion, fields in hinge.MOTION_FIELDS.items() if field in fields]
+    return {"all": {field: value, **({"motion": readers[0]} if readers else {})}}
 
 
 def _with_protocol(config: dict, study: str, overrides: dict) -> dict:
@@ -148,10 +155,10 @@ def _finite_trials(config: dict, study: str) -> None:
 
 
 def _refused_or_finite(config: dict, study: str, field: str, overrides: dict) -> None:
-    """The check refuses ``overrides`` naming ``field`` (or, for a field of the frames, the
-    protocol and the frames; or a grid value beyond a bound the protocol sets, naming the
-    protocol as its source), or passes and the study simulates finite data. The hinge's field,
-    written under ``all``, is named there."""
+    """The check refuses ``overrides`` naming ``field`` (a field of the frames too, refused by
+    the check of a condition's frames; or a grid value beyond a bound the protocol sets,
+    naming the protocol as its source), or passes and the study simulates finite data. The
+    hinge's field, written under ``all``, is named there."""
     candidate = _with_protocol(config, study, overrides)
     try:
         study_config.check_config(candidate)
@@ -161,8 +168,6 @@ def _refused_or_finite(config: dict, study: str, field: str, overrides: dict) ->
         written = f"all.{field}" if study == "hinge" else field
         if key.startswith(f"studies.{study}.grid."):
             assert f"the bound {protocol} sets" in message, message
-        elif field in FRAME_FIELDS and key == protocol:
-            assert "frame(s)" in message, message
         else:
             assert key.startswith(protocol) and written in key, message
         return
@@ -205,7 +210,7 @@ def test_any_number_in_any_protocol_field_is_refused_naming_its_key_or_simulates
 def test_each_protocol_fields_default_passes_the_check(config, study, field):
     """The hostile values are all that is refused: the default, written out, passes."""
     value = _default_fields(study)[field]
-    overrides = {"all": {field: _as_yaml(value)}} if study == "hinge" else {field: _as_yaml(value)}
+    overrides = _written(study, field, _as_yaml(value))
     study_config.check_config(_with_protocol(config, study, overrides))
 
 

@@ -204,3 +204,23 @@ def test_nominal_motion_is_a_rotation_about_the_joint_centre(name, rom, ratio, m
         np.broadcast_to(np.linalg.norm(protocol.markers, axis=-1), nominal.shape[:2]),
         rtol=1e-12,
     )
+
+
+# A value of each field some motions read and others not, other than its default.
+_MOTION_FIELD_VALUES = {"fe_cycles": 1.5, "aa_cycles": 3.0, "aa_phase_deg": 40.0}
+
+
+@pytest.mark.parametrize("motion", hinge.MOTIONS)
+def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
+    """:data:`hinge.MOTION_FIELDS`, against which the config's check refuses a field the
+    chosen motion does not read, is what :func:`hinge.joint_angles` reads: a change of a field
+    the motion lists changes its poses, a change of another changes nothing."""
+    assert set(_MOTION_FIELD_VALUES) == set().union(*hinge.MOTION_FIELDS.values())
+    assert set(hinge.MOTION_FIELDS) == set(hinge.MOTIONS)
+    base = dataclasses.replace(hinge.HINGE_PROTOCOLS["knee"], motion=motion)
+    condition = {"protocol": "knee", "fe_rom_deg": 60.0, "aa_ratio": 0.3}
+    poses = np.stack(hinge.joint_angles(condition, base))
+    for field, value in _MOTION_FIELD_VALUES.items():
+        other = np.stack(hinge.joint_angles(condition, dataclasses.replace(base, **{field: value})))
+        read = not np.array_equal(other, poses)
+        assert read == (field in hinge.MOTION_FIELDS[motion]), (motion, field)

@@ -238,3 +238,27 @@ def test_the_findings_count_the_joint_centre_methods_whatever_else_runs():
     assert set(paper_sta.PAPER.methods) | set(paper_sta.PAPER.also_measures) == set(
         paper_sta.MEASURED
     )
+
+
+# A value of each field one motion reads and the other not, other than its default.
+_MOTION_FIELD_VALUES = {
+    "star_azimuths_deg": (0.0, 90.0),
+    "star_fraction": 0.5,
+    "arc_turns": 2.0,
+    "circumduction_turns": 2.0,
+}
+
+
+@pytest.mark.parametrize("motion", hip_sta.MOTIONS)
+def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
+    """:data:`hip_sta.MOTION_FIELDS`, against which the config's check refuses a field no
+    motion of the grid reads, is what :func:`hip_sta.hip_angles` reads: a change of a field
+    the motion lists changes its angles, a change of another changes nothing."""
+    assert set(_MOTION_FIELD_VALUES) == set().union(*hip_sta.MOTION_FIELDS.values())
+    assert set(hip_sta.MOTION_FIELDS) == set(hip_sta.MOTIONS)
+    base = HipStaProtocol()
+    angles = hip_angles(motion, 30.0, base)
+    for field, value in _MOTION_FIELD_VALUES.items():
+        other = hip_angles(motion, 30.0, dataclasses.replace(base, **{field: value}))
+        read = not np.array_equal(other, angles)
+        assert read == (field in hip_sta.MOTION_FIELDS[motion]), (motion, field)

@@ -18,15 +18,19 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge import MOTION_FIELDS as HINGE_MOTION_FIELDS
 from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
-from jointbench.simulate.hip_sta import hip_angles, thigh_rotation
+from jointbench.simulate.hip_sta import FRAME_FIELDS, hip_angles, thigh_rotation
+from jointbench.simulate.hip_sta import MOTION_FIELDS as HIP_STA_MOTION_FIELDS
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
 
 __all__ = [
     "AA_RATIO_BELOW",
+    "CMC_LATEST_TILT_POWER",
+    "CMC_TILT_SHARE_BY_MIDDLE",
     "HIP_RESOLUTION_MM",
     "PELVIS_LENGTH_PER_WIDTH",
     "PELVIS_WIDTH_PER_DEPARTURE",
@@ -56,6 +60,22 @@ TRANSLATION_MM_RANGE = (100.0, 1e5)
 #: ratio, 0.7), half at ratio 1, where FE and AA are equal and no axis is the motion's, and
 #: most above it (at 50, abduction of 50 times the flexion). Paper B's grid is 0.1 to 0.7.
 AA_RATIO_BELOW = 1.0
+
+#: The thumb CMC's circumduction spiral circles out over the trial: by its middle the tilt
+#: has reached at least this share of the RoM its condition names. Paper A: "The generated
+#: marker trajectories simulated thumb circumduction by beginning from a nominal mean position
+#: and circling out to increasing angles relative to the mean position." A thumb still within a
+#: tenth of its RoM of the mean half-way through (an order of magnitude short of the
+#: excursion its condition names) has not begun to circle out over the recording: it stays
+#: near its mean position and reaches its RoM only in the trial's last frames (at tilt_power
+#: 82 it barely leaves the mean before them). The tilt grows as the trial's
+#: fraction to ``tilt_power`` (:func:`~jointbench.simulate.cmc.spiral_rotations`), so the rule
+#: bounds ``tilt_power`` by :data:`CMC_LATEST_TILT_POWER`; a linear spiral (1) reaches half
+#: the RoM by the middle, the prior's latest-growing spiral (2) a quarter.
+CMC_TILT_SHARE_BY_MIDDLE = 0.1
+#: The largest ``tilt_power`` whose spiral reaches :data:`CMC_TILT_SHARE_BY_MIDDLE` of its RoM
+#: by the middle of the trial: ``0.5 ** tilt_power >= share``.
+CMC_LATEST_TILT_POWER = math.log(CMC_TILT_SHARE_BY_MIDDLE) / math.log(0.5)
 
 #: The hip rig's pendulum rotations (distal relative to proximal, about x, y, z): paper C's rig
 #: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
@@ -156,11 +176,67 @@ def translation_problem(value: float) -> str | None:
 def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return _turns_problem(
         "protocol.spiral_turns, n_frames", protocol.spiral_turns, protocol.n_frames, "spiral turns"
+    ) or _tilt_problem(protocol.tilt_power)
+
+
+def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
+    """``(key, why)`` when the thumb's spiral does not reach :data:`CMC_TILT_SHARE_BY_MIDDLE`
+    of its RoM by the middle of the trial, else None."""
+    if tilt_power <= CMC_LATEST_TILT_POWER:
+        return None
+    return "protocol.tilt_power", (
+        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power:.3g} of its RoM by the "
+        f"middle of the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its "
+        "mean position and reach its RoM only in the last frames, not circle out over the "
+        "recording (paper A: 'beginning from a nominal mean position and circling out to "
+        f"increasing angles'); at most {CMC_LATEST_TILT_POWER:.4g}"
     )
 
 
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    return _hinge_cycles_problem(settings, protocol) or _aa_ratio_problem(settings)
+    return (
+        _hinge_unread_problem(settings, protocol)
+        or _hinge_cycles_problem(settings, protocol)
+        or _aa_ratio_problem(settings)
+    )
+
+
+def _unread_field(
+    written: Mapping, motions: Sequence[str], motion_fields: Mapping[str, Sequence[str]]
+) -> tuple[str, list[str]] | None:
+    """``(field, the motions that read it)`` for the first of the fields ``written`` that some
+    motion of ``motion_fields`` (motion -> the fields only some motions read) reads and none
+    of ``motions`` does; None if there is none. Such a value changes no data: a user who
+    writes it believes the trials follow it."""
+    read = {field for motion in motions for field in motion_fields[motion]}
+    for field in written:
+        readers = [motion for motion, fields in motion_fields.items() if field in fields]
+        if readers and field not in read:
+            return field, readers
+    return None
+
+
+def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+    """A field of :data:`~jointbench.simulate.hinge.MOTION_FIELDS` that the config writes
+    for a joint the grid runs, under the joint's own entry or ``all`` (which sets it for every
+    joint), whose motion does not read it. Defaults are not written and not refused."""
+    overrides = settings.get("protocol") or {}
+    every = list(dict.fromkeys(f for fields in HINGE_MOTION_FIELDS.values() for f in fields))
+    for joint in settings["grid"]["protocol"]:
+        motion = protocol.joints[joint].motion
+        for entry in (joint, "all"):
+            unread = _unread_field(overrides.get(entry) or {}, (motion,), HINGE_MOTION_FIELDS)
+            if not unread:
+                continue
+            field, readers = unread
+            reads = ", ".join(HINGE_MOTION_FIELDS[motion]) or f"none of {', '.join(every)}"
+            return f"protocol.{entry}.{field}", (
+                f"not read by motion {motion!r} (joint {joint!r}), which reads {reads}; "
+                f"{field} is read by motion {' and '.join(map(repr, readers))}: a value the "
+                "motion does not read changes no data; remove it, or choose a motion that "
+                "reads it"
+            )
+    return None
 
 
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
@@ -228,7 +304,8 @@ def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     return (
-        _clusters_problem(protocol, HIP_STA_CLUSTERS)
+        _hip_sta_unread_problem(settings)
+        or _clusters_problem(protocol, HIP_STA_CLUSTERS)
         or _hip_sta_turns_problem(settings, protocol)
         or _hip_sta_axes_problem(settings, protocol)
         or _sta_reach_problem(settings, protocol)
@@ -237,11 +314,26 @@ def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     )
 
 
+def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
+    """A field of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that the config writes
+    and no motion of the grid reads. Defaults are not written and not refused."""
+    motions = settings["grid"]["motion"]
+    unread = _unread_field(settings.get("protocol") or {}, motions, HIP_STA_MOTION_FIELDS)
+    if not unread:
+        return None
+    field, readers = unread
+    return f"protocol.{field}", (
+        f"not read by the motions the grid runs, grid.motion {', '.join(motions)}; {field} is "
+        f"read by {' and '.join(readers)}: a value no motion of the run reads changes no "
+        f"data; remove it, or add {' or '.join(readers)} to grid.motion"
+    )
+
+
 def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     """:data:`SAMPLED_PER_TURN` for the skin-marker study's motions the grid runs."""
     motions = settings["grid"]["motion"]
     n_frames, star = protocol.n_frames, protocol.star_fraction
-    frames = "duration_s, fps"  # the fields that set n_frames
+    frames = ", ".join(FRAME_FIELDS)  # the fields that set n_frames
     stretches = []
     if "star_arc" in motions:
         stretches += [

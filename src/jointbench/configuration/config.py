@@ -378,7 +378,9 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     The frames are the study's count from its protocol (:func:`trial_frames`), which a job
     holds its simulated trials to, whatever key or protocol field sets them; what a trial
     holds is its recording's where the study draws more frames than it keeps
-    (:attr:`~jointbench.simulate.Study.recorded_frames`).
+    (:attr:`~jointbench.simulate.Study.recorded_frames`). The refusal names the grid key that
+    sets a trial's frames, or the protocol fields the recording's are read from
+    (:func:`_frame_source`).
     External estimators declare no minimum and are not counted.
     """
     needs = {
@@ -389,23 +391,39 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     frames_key = next((key for key, values in spec.grid_spec.items() if values.frames), None)
     for condition in _cells(spec, settings["grid"]):
         n_frames = trial_frames(spec, protocol, condition)
-        culprit = f"grid.{frames_key}" if frames_key else "protocol"
+        recording, unnamed = _frame_source(spec, condition, settings.get("protocol") or {})
+        culprit, note = (f"grid.{frames_key}", "") if frames_key else (recording, unnamed)
         recorded = spec.recorded_frames(protocol) if spec.recorded_frames else n_frames
         if max(n_frames, recorded) * settings["trials"] > MAX_CONDITION_FRAMES:
             held = f"{n_frames} frame(s)"
             if recorded > n_frames:
-                culprit, held = "protocol", f"{held} of recordings of {recorded} frame(s)"
+                culprit, note = recording, unnamed
+                held = f"{held} of recordings of {recorded} frame(s)"
             raise ValueError(
                 f"{where}.{culprit}: condition {condition_id(condition)} has trials of {held}, "
                 f"{settings['trials']} trials of which hold more than {MAX_CONDITION_FRAMES} "
-                "frames, what one job can hold"
+                f"frames, what one job can hold{note}"
             )
         if n_frames < fewest:
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())
             raise ValueError(
                 f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
-                f"{n_frames} frame(s), fewer than any listed estimator fits (at least: {listed})"
+                f"{n_frames} frame(s), fewer than any listed estimator fits (at least: "
+                f"{listed}){note}"
             )
+
+
+def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[str, str]:
+    """``(keys, note)``: the keys below ``studies.<study>`` of the protocol fields that set the
+    frames of ``condition``'s recordings (:attr:`~jointbench.simulate.Study.frame_keys`) and
+    no note; for a study that does not declare them, its ``protocol`` and a note saying why
+    no field is named."""
+    if spec.frame_keys is not None:
+        return spec.frame_keys(condition, overrides), ""
+    return "protocol", (
+        f" (study {spec.name!r} declares no frame_keys: which of its protocol fields its "
+        "frame_count reads, only the study can say)"
+    )
 
 
 def trial_frames(spec: Study, protocol: object, condition: Mapping) -> int:

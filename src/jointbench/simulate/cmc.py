@@ -97,7 +97,10 @@ class CmcProtocol:
     ``directions``: per marker set, one direction per marker from the CoR (any length) in the
     frame described in the module docstring. ``distances_mm``: paper A Table 1.
     ``spiral_turns``: turns of the circumduction spiral. ``tilt_power``: the tilt grows as the
-    frame's fraction of the trial to this power. ``n_frames``: 120 (paper A §5.1).
+    frame's fraction of the trial to this power (the config refuses one whose thumb has not
+    begun to circle out by the middle of the trial,
+    :data:`jointbench.configuration.bounds.CMC_TILT_SHARE_BY_MIDDLE`). ``n_frames``: 120
+    (paper A §5.1).
     ``center_mm``: the nominal CoR in the reference frame. A marker set has as many
     directions as distances.
     """
@@ -274,6 +277,11 @@ def frame_count(condition: Mapping[str, object], protocol: CmcProtocol) -> int:
     return protocol.n_frames
 
 
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+    """Where the config sets the frames :func:`frame_count` gives."""
+    return "protocol.n_frames"
+
+
 STUDY = Study(
     name="cmc",
     kind="center",
@@ -283,6 +291,7 @@ STUDY = Study(
     protocol_class=CmcProtocol,
     simulate=simulate,
     frame_count=frame_count,
+    frame_keys=frame_keys,
     grid_spec={
         "marker_set": GridValues(
             str,

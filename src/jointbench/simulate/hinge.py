@@ -87,6 +87,7 @@ __all__ = [
     "FE_AXIS",
     "HINGE_PROTOCOLS",
     "MOTIONS",
+    "MOTION_FIELDS",
     "ROM_CONVENTIONS",
     "ROTATION_ORDERS",
     "HingeProtocol",
@@ -103,6 +104,18 @@ RotationOrder = Literal["fe_aa", "aa_fe"]
 MOTIONS = typing.get_args(Motion)
 ROM_CONVENTIONS = typing.get_args(RomConvention)
 ROTATION_ORDERS = typing.get_args(RotationOrder)
+
+#: The fields of :class:`HingeProtocol` that only some motions read, by motion: those setting
+#: the sine waves of the lissajous motion (FE and AA) and of the superimposed one (AA); the
+#: sequential and grid motions run no waves. Every other field every motion reads. The config
+#: refuses one of these written for a joint whose motion does not read it (it would change
+#: no data): :func:`jointbench.configuration.bounds.study_problem`.
+MOTION_FIELDS: dict[str, tuple[str, ...]] = {
+    "lissajous": ("fe_cycles", "aa_cycles", "aa_phase_deg"),
+    "sequential": (),
+    "superimposed": ("aa_cycles", "aa_phase_deg"),
+    "grid": (),
+}
 
 #: The flexion–extension axis, the true axis of rotation, in the reference segment's frame.
 FE_AXIS = np.array([1.0, 0.0, 0.0])
@@ -129,7 +142,7 @@ class HingeProtocol:
     rom_convention : "full" (the RoM is the peak-to-peak excursion) or "half" (the RoM is the
         amplitude, so the excursion is twice the RoM).
     fe_cycles, aa_cycles : cycles of FE and AA over the recording ("lissajous"; "superimposed"
-        uses ``aa_cycles``; ignored by "grid" and "sequential").
+        uses ``aa_cycles``; "grid" and "sequential" read neither, :data:`MOTION_FIELDS`).
     aa_phase_deg : phase of the AA sinusoid relative to FE ("lissajous", "superimposed").
     rotation_order : "fe_aa": ``R = R_FE(fe) R_AA(aa)``, AA about the axis carried by the moving
         segment (Grood & Suntay's floating axis), so the FE axis stays fixed in the reference
@@ -278,13 +291,13 @@ def sine_waves(protocol: HingeProtocol) -> dict[str, tuple[float, float]]:
     """The sinusoids of ``protocol``'s motion, by the field that sets their cycles: ``(cycles,
     phase [rad])`` of ``sin(2 pi cycles t + phase)`` over ``t`` in ``[0, 1]``, each the wave
     :func:`joint_angles` lays out (the Lissajous FE wave ``-cos`` is the sine from ``-pi/2``,
-    full extension); none for the grid and sequential motions, which run no cycles."""
-    aa = (protocol.aa_cycles, math.radians(protocol.aa_phase_deg))
-    if protocol.motion == "lissajous":
-        return {"fe_cycles": (protocol.fe_cycles, -math.pi / 2.0), "aa_cycles": aa}
-    if protocol.motion == "superimposed":
-        return {"aa_cycles": aa}
-    return {}
+    full extension); those the motion reads (:data:`MOTION_FIELDS`), none for the grid and
+    sequential motions, which run no cycles."""
+    waves = {
+        "fe_cycles": (protocol.fe_cycles, -math.pi / 2.0),
+        "aa_cycles": (protocol.aa_cycles, math.radians(protocol.aa_phase_deg)),
+    }
+    return {name: wave for name, wave in waves.items() if name in MOTION_FIELDS[protocol.motion]}
 
 
 def nominal_markers(condition: Mapping[str, object], protocol: HingeProtocol) -> np.ndarray:

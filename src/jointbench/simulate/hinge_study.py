@@ -104,6 +104,14 @@ def frame_count(condition: Mapping[str, object], protocol: HingeStudyProtocol) -
     return protocol.joints[str(condition["protocol"])].n_frames
 
 
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+    """Where the config sets the frames :func:`frame_count` gives: the condition's joint's
+    ``n_frames``, under its own entry, ``all`` or (its default) its own
+    (:func:`placed_fields`)."""
+    entry, keys = placed_fields(overrides, str(condition["protocol"]), ("n_frames",))
+    return f"protocol.{entry}.{keys}"
+
+
 STUDY = Study(
     name="hinge",
     kind="axis",
@@ -113,6 +121,7 @@ STUDY = Study(
     protocol_class=HingeStudyProtocol,
     simulate=simulate,
     frame_count=frame_count,
+    frame_keys=frame_keys,
     grid_spec={
         "protocol": GridValues(
             str,

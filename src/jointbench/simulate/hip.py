@@ -358,6 +358,12 @@ def recorded_frames(protocol: HipProtocol) -> int:
     return protocol.n_frames
 
 
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+    """Where the config sets the frames :func:`recorded_frames` gives (the grid's ``n_frames``
+    sets each trial's, :func:`frame_count`)."""
+    return "protocol.n_frames"
+
+
 STUDY = Study(
     name="hip",
     kind="joint_center",
@@ -369,6 +375,7 @@ STUDY = Study(
     simulate=simulate,
     frame_count=frame_count,
     recorded_frames=recorded_frames,
+    frame_keys=frame_keys,
     # Nt frames of a recording of the protocol's n_frames.
     grid_spec={
         "n_frames": GridValues(

@@ -115,7 +115,9 @@ from jointbench.simulate.ranges import (
 )
 
 __all__ = [
+    "FRAME_FIELDS",
     "MOTIONS",
+    "MOTION_FIELDS",
     "STUDY",
     "HipStaProtocol",
     "hip_angles",
@@ -128,6 +130,16 @@ __all__ = [
 ]
 
 MOTIONS = ("star_arc", "circumduction")
+#: The fields of :class:`HipStaProtocol` each motion reads that the other does not
+#: (:func:`hip_angles`); every other field both read. The config refuses one of these that no
+#: motion of its grid reads (it would change no data):
+#: :func:`jointbench.configuration.bounds.study_problem`.
+MOTION_FIELDS: dict[str, tuple[str, ...]] = {
+    "star_arc": ("star_azimuths_deg", "star_fraction", "arc_turns"),
+    "circumduction": ("circumduction_turns",),
+}
+#: The protocol fields a trial's frames are read from (:attr:`HipStaProtocol.n_frames`).
+FRAME_FIELDS = ("duration_s", "fps")
 _CONDITION_KEYS = ("motion", "rom_deg", "sta_mm")
 
 
@@ -424,6 +436,11 @@ def frame_count(condition: Mapping[str, object], protocol: HipStaProtocol) -> in
     return protocol.n_frames
 
 
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+    """Where the config sets the frames :func:`frame_count` gives: :data:`FRAME_FIELDS`."""
+    return "protocol." + ", ".join(FRAME_FIELDS)
+
+
 STUDY = Study(
     name="hip_sta",
     # The two-segment estimators see both clusters as recorded; the one-segment centre methods
@@ -437,6 +454,7 @@ STUDY = Study(
     protocol_class=HipStaProtocol,
     simulate=simulate,
     frame_count=frame_count,
+    frame_keys=frame_keys,
     grid_spec={
         "motion": GridValues(
             str,
