@@ -493,13 +493,13 @@ _UNREAD = [
         "hinge",
         None,
         {"all": {"fe_cycles": 3}},
-        ["config: studies.hinge.protocol.all.fe_cycles: ", "not read by motion 'grid'"],
+        ["config: studies.hinge.protocol.all.fe_cycles: 3 is not read by motion 'grid'"],
     ),
     (
         "hinge",
         None,
         {"knee": {"aa_phase_deg": 30.0}},
-        ["config: studies.hinge.protocol.knee.aa_phase_deg: ", "motion 'grid' (joint 'knee')"],
+        ["config: studies.hinge.protocol.knee.aa_phase_deg: 30.0 ", "motion 'grid' (joint 'knee')"],
     ),
     (
         "hinge",
@@ -513,18 +513,43 @@ _UNREAD = [
         {"all": {"motion": "sequential", "aa_cycles": 2.0}},
         ["config: studies.hinge.protocol.all.aa_cycles: ", "motion 'sequential'"],
     ),
-    # Written under all, it must be read by every joint the grid runs.
+    # Written under all, it is refused when no joint the grid runs that takes it from all
+    # reads it: set again by every such joint, or read only by a joint the grid does not run.
     (
         "hinge",
         None,
-        {"all": {"fe_cycles": 2.0}, "knee": {"motion": "lissajous"}},
-        ["config: studies.hinge.protocol.all.fe_cycles: ", "motion 'grid' (joint 'mcp')"],
+        {
+            "all": {"motion": "lissajous", "fe_cycles": 2.0},
+            "knee": {"fe_cycles": 3.0},
+            "mcp": {"fe_cycles": 4.0},
+        },
+        [
+            "config: studies.hinge.protocol.all.fe_cycles: 2.0 ",
+            "set again by every joint",
+            "knee.fe_cycles, mcp.fe_cycles",
+        ],
+    ),
+    (
+        "hinge",
+        None,
+        {"all": {"aa_phase_deg": 10.0}, "knee": {"motion": "lissajous", "aa_phase_deg": 20.0}},
+        ["config: studies.hinge.protocol.all.aa_phase_deg: 10.0 ", "motion 'grid' (joint 'mcp')"],
+    ),
+    # Any field under all: one that every joint the grid runs sets again changes no data.
+    (
+        "hinge",
+        None,
+        {"all": {"noise_sd_mm": 0.5}, "knee": {"noise_sd_mm": 1.0}, "mcp": {"noise_sd_mm": 2.0}},
+        [
+            "config: studies.hinge.protocol.all.noise_sd_mm: 0.5 ",
+            "knee.noise_sd_mm, mcp.noise_sd_mm",
+        ],
     ),
     (
         "hip_sta",
         ["star_arc"],
         {"circumduction_turns": 4.0},
-        ["config: studies.hip_sta.protocol.circumduction_turns: ", "grid.motion star_arc"],
+        ["config: studies.hip_sta.protocol.circumduction_turns: 4.0 ", "grid.motion star_arc"],
     ),
     (
         "hip_sta",
@@ -567,6 +592,18 @@ def test_a_field_the_chosen_motion_does_not_read_is_refused_naming_it(
         ("hinge", None, {"all": {"motion": "superimposed", "aa_cycles": 3.0}}),
         ("hinge", None, {"all": {"motion": "lissajous", "aa_phase_deg": 90.0}}),
         ("hinge", None, {"all": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        # Under all, a field changes data where one joint the grid runs reads it from there.
+        ("hinge", None, {"all": {"fe_cycles": 2.0}, "knee": {"motion": "lissajous"}}),
+        (
+            "hinge",
+            None,
+            {"all": {"motion": "lissajous", "fe_cycles": 2.0}, "mcp": {"motion": "superimposed"}},
+        ),
+        (
+            "hinge",
+            None,
+            {"all": {"motion": "lissajous", "fe_cycles": 2.0}, "knee": {"fe_cycles": 3.0}},
+        ),
         ("hip_sta", None, {"circumduction_turns": 2.0, "arc_turns": 2.0}),
         ("hip_sta", ["star_arc"], {"star_fraction": 0.5, "arc_turns": 2.0}),
         ("hip_sta", ["circumduction"], {"circumduction_turns": 2.0}),
