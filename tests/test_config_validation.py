@@ -644,6 +644,23 @@ def test_a_tilt_reaching_its_share_of_the_rom_by_the_middle_passes(config, tilt_
     study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
 
 
+@pytest.mark.parametrize("tilt_power", [3.322, 3.3219281, 82.0])
+def test_a_refused_tilt_states_a_share_below_its_bound_and_a_largest_tilt_power_that_passes(
+    config, tilt_power
+):
+    """Just past the bound, a share rounded to a few digits reads as the bound itself ("0.1
+    of its RoM, less than 0.1"), and a largest tilt_power rounded up (3.322) is refused when
+    typed back: the numbers the refusal gives must be what the check compares."""
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    number = r"([0-9][0-9.e+-]*)"
+    share = float(re.search(rf"tilt at {number} of its RoM", message).group(1))
+    assert share < bounds.CMC_TILT_SHARE_BY_MIDDLE, message
+    largest = float(re.search(rf"at most {number}", message).group(1))
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": largest}))
+
+
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])
 def test_a_blind_placement_translation_out_of_its_bounds_is_refused(config, value):
     """NaN and inf pass the schema (no comparison with NaN is true) and failed inside jobs;

@@ -184,12 +184,14 @@ def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
     of its RoM by the middle of the trial, else None."""
     if tilt_power <= CMC_LATEST_TILT_POWER:
         return None
+    # Unrounded: near the bound, a share or a largest value rounded to a few digits would read
+    # as the bound itself, or be refused when typed back.
     return "protocol.tilt_power", (
-        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power:.3g} of its RoM by the "
+        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power!r} of its RoM by the "
         f"middle of the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its "
         "mean position and reach its RoM only in the last frames, not circle out over the "
         "recording (paper A: 'beginning from a nominal mean position and circling out to "
-        f"increasing angles'); at most {CMC_LATEST_TILT_POWER:.4g}"
+        f"increasing angles'); at most {CMC_LATEST_TILT_POWER!r}"
     )
 
 
