@@ -241,8 +241,16 @@ def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str
             return f"protocol.{joint}.{field}", _hinge_unread_words(
                 field, overrides[joint][field], {motion: [joint]}
             )
-    shared = overrides.get("all") or {}
-    for field, value in shared.items():
+    return _hinge_all_unread_problem(overrides, run, protocol)
+
+
+def _hinge_all_unread_problem(
+    overrides: Mapping, run: Sequence[str], protocol: object
+) -> tuple[str, str] | None:
+    """A field under the hinge protocol ``overrides``' ``all`` that no joint of ``run`` (the
+    joints the grid runs) reads from there: each sets it again under its own entry or, by its
+    motion (:data:`~jointbench.simulate.hinge.MOTION_FIELDS`), does not read it."""
+    for field, value in (overrides.get("all") or {}).items():
         taking = [joint for joint in run if field not in (overrides.get(joint) or {})]
         if not taking:
             again = ", ".join(f"{joint}.{field}" for joint in run)
