@@ -493,13 +493,13 @@ _UNREAD = [
         "hinge",
         None,
         {"all": {"fe_cycles": 3}},
-        ["config: studies.hinge.protocol.all.fe_cycles: ", "not read by motion 'grid'"],
+        ["config: studies.hinge.protocol.all.fe_cycles: 3 is not read by motion 'grid'"],
     ),
     (
         "hinge",
         None,
         {"knee": {"aa_phase_deg": 30.0}},
-        ["config: studies.hinge.protocol.knee.aa_phase_deg: ", "motion 'grid' (joint 'knee')"],
+        ["config: studies.hinge.protocol.knee.aa_phase_deg: 30.0 ", "motion 'grid' (joint 'knee')"],
     ),
     (
         "hinge",
@@ -513,18 +513,43 @@ _UNREAD = [
         {"all": {"motion": "sequential", "aa_cycles": 2.0}},
         ["config: studies.hinge.protocol.all.aa_cycles: ", "motion 'sequential'"],
     ),
-    # Written under all, it must be read by every joint the grid runs.
+    # Written under all, it is refused when no joint the grid runs that takes it from all
+    # reads it: set again by every such joint, or read only by a joint the grid does not run.
     (
         "hinge",
         None,
-        {"all": {"fe_cycles": 2.0}, "knee": {"motion": "lissajous"}},
-        ["config: studies.hinge.protocol.all.fe_cycles: ", "motion 'grid' (joint 'mcp')"],
+        {
+            "all": {"motion": "lissajous", "fe_cycles": 2.0},
+            "knee": {"fe_cycles": 3.0},
+            "mcp": {"fe_cycles": 4.0},
+        },
+        [
+            "config: studies.hinge.protocol.all.fe_cycles: 2.0 ",
+            "set again by every joint",
+            "knee.fe_cycles, mcp.fe_cycles",
+        ],
+    ),
+    (
+        "hinge",
+        None,
+        {"all": {"aa_phase_deg": 10.0}, "knee": {"motion": "lissajous", "aa_phase_deg": 20.0}},
+        ["config: studies.hinge.protocol.all.aa_phase_deg: 10.0 ", "motion 'grid' (joint 'mcp')"],
+    ),
+    # Any field under all: one that every joint the grid runs sets again changes no data.
+    (
+        "hinge",
+        None,
+        {"all": {"noise_sd_mm": 0.5}, "knee": {"noise_sd_mm": 1.0}, "mcp": {"noise_sd_mm": 2.0}},
+        [
+            "config: studies.hinge.protocol.all.noise_sd_mm: 0.5 ",
+            "knee.noise_sd_mm, mcp.noise_sd_mm",
+        ],
     ),
     (
         "hip_sta",
         ["star_arc"],
         {"circumduction_turns": 4.0},
-        ["config: studies.hip_sta.protocol.circumduction_turns: ", "grid.motion star_arc"],
+        ["config: studies.hip_sta.protocol.circumduction_turns: 4.0 ", "grid.motion star_arc"],
     ),
     (
         "hip_sta",
@@ -567,6 +592,18 @@ def test_a_field_the_chosen_motion_does_not_read_is_refused_naming_it(
         ("hinge", None, {"all": {"motion": "superimposed", "aa_cycles": 3.0}}),
         ("hinge", None, {"all": {"motion": "lissajous", "aa_phase_deg": 90.0}}),
         ("hinge", None, {"all": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        # Under all, a field changes data where one joint the grid runs reads it from there.
+        ("hinge", None, {"all": {"fe_cycles": 2.0}, "knee": {"motion": "lissajous"}}),
+        (
+            "hinge",
+            None,
+            {"all": {"motion": "lissajous", "fe_cycles": 2.0}, "mcp": {"motion": "superimposed"}},
+        ),
+        (
+            "hinge",
+            None,
+            {"all": {"motion": "lissajous", "fe_cycles": 2.0}, "knee": {"fe_cycles": 3.0}},
+        ),
         ("hip_sta", None, {"circumduction_turns": 2.0, "arc_turns": 2.0}),
         ("hip_sta", ["star_arc"], {"star_fraction": 0.5, "arc_turns": 2.0}),
         ("hip_sta", ["circumduction"], {"circumduction_turns": 2.0}),
@@ -605,6 +642,23 @@ def test_a_tilt_reaching_its_share_of_the_rom_by_the_middle_passes(config, tilt_
         tilt_power = bounds.CMC_LATEST_TILT_POWER * (1 - 1e-9)
     assert _tilt_at_the_middle(tilt_power) >= bounds.CMC_TILT_SHARE_BY_MIDDLE
     study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+
+
+@pytest.mark.parametrize("tilt_power", [3.322, 3.3219281, 82.0])
+def test_a_refused_tilt_states_a_share_below_its_bound_and_a_largest_tilt_power_that_passes(
+    config, tilt_power
+):
+    """Just past the bound, a share rounded to a few digits reads as the bound itself ("0.1
+    of its RoM, less than 0.1"), and a largest tilt_power rounded up (3.322) is refused when
+    typed back: the numbers the refusal gives must be what the check compares."""
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    number = r"([0-9][0-9.e+-]*)"
+    share = float(re.search(rf"tilt at {number} of its RoM", message).group(1))
+    assert share < bounds.CMC_TILT_SHARE_BY_MIDDLE, message
+    largest = float(re.search(rf"at most {number}", message).group(1))
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": largest}))
 
 
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])

@@ -184,12 +184,14 @@ def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
     of its RoM by the middle of the trial, else None."""
     if tilt_power <= CMC_LATEST_TILT_POWER:
         return None
+    # Unrounded: near the bound, a share or a largest value rounded to a few digits would read
+    # as the bound itself, or be refused when typed back.
     return "protocol.tilt_power", (
-        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power:.3g} of its RoM by the "
+        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power!r} of its RoM by the "
         f"middle of the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its "
         "mean position and reach its RoM only in the last frames, not circle out over the "
         "recording (paper A: 'beginning from a nominal mean position and circling out to "
-        f"increasing angles'); at most {CMC_LATEST_TILT_POWER:.4g}"
+        f"increasing angles'); at most {CMC_LATEST_TILT_POWER!r}"
     )
 
 
@@ -210,33 +212,76 @@ def _unread_field(
     writes it believes the trials follow it."""
     read = {field for motion in motions for field in motion_fields[motion]}
     for field in written:
-        readers = [motion for motion, fields in motion_fields.items() if field in fields]
+        readers = _readers(field, motion_fields)
         if readers and field not in read:
             return field, readers
     return None
 
 
+def _readers(field: str, motion_fields: Mapping[str, Sequence[str]]) -> list[str]:
+    """The motions of ``motion_fields`` that read ``field``; none for a field every motion
+    reads."""
+    return [motion for motion, fields in motion_fields.items() if field in fields]
+
+
 def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    """A field of :data:`~jointbench.simulate.hinge.MOTION_FIELDS` that the config writes
-    for a joint the grid runs, under the joint's own entry or ``all`` (which sets it for every
-    joint), whose motion does not read it. Defaults are not written and not refused."""
+    """A field the config writes for the joints the grid runs that no trial of theirs reads
+    from where it is written: under a joint's own entry, a field of
+    :data:`~jointbench.simulate.hinge.MOTION_FIELDS` its motion does not read; under ``all``,
+    a field that each of those joints either sets again under its own entry or, by its motion,
+    does not read. Defaults are not written and not refused; nor is a field written for a
+    joint the grid does not run, whose whole entry that run leaves unread."""
     overrides = settings.get("protocol") or {}
-    every = list(dict.fromkeys(f for fields in HINGE_MOTION_FIELDS.values() for f in fields))
-    for joint in settings["grid"]["protocol"]:
+    run = list(settings["grid"]["protocol"])
+    for joint in run:
         motion = protocol.joints[joint].motion
-        for entry in (joint, "all"):
-            unread = _unread_field(overrides.get(entry) or {}, (motion,), HINGE_MOTION_FIELDS)
-            if not unread:
-                continue
-            field, readers = unread
-            reads = ", ".join(HINGE_MOTION_FIELDS[motion]) or f"none of {', '.join(every)}"
-            return f"protocol.{entry}.{field}", (
-                f"not read by motion {motion!r} (joint {joint!r}), which reads {reads}; "
-                f"{field} is read by motion {' and '.join(map(repr, readers))}: a value the "
-                "motion does not read changes no data; remove it, or choose a motion that "
-                "reads it"
+        unread = _unread_field(overrides.get(joint) or {}, (motion,), HINGE_MOTION_FIELDS)
+        if unread:
+            field = unread[0]
+            return f"protocol.{joint}.{field}", _hinge_unread_words(
+                field, overrides[joint][field], {motion: [joint]}
             )
+    return _hinge_all_unread_problem(overrides, run, protocol)
+
+
+def _hinge_all_unread_problem(
+    overrides: Mapping, run: Sequence[str], protocol: object
+) -> tuple[str, str] | None:
+    """A field under the hinge protocol ``overrides``' ``all`` that no joint of ``run`` (the
+    joints the grid runs) reads from there: each sets it again under its own entry or, by its
+    motion (:data:`~jointbench.simulate.hinge.MOTION_FIELDS`), does not read it."""
+    for field, value in (overrides.get("all") or {}).items():
+        taking = [joint for joint in run if field not in (overrides.get(joint) or {})]
+        if not taking:
+            again = ", ".join(f"{joint}.{field}" for joint in run)
+            return f"protocol.all.{field}", (
+                f"{value!r} is set again by every joint the grid runs ({again}), so no trial "
+                "reads it: a value no trial reads changes no data; remove it"
+            )
+        readers = _readers(field, HINGE_MOTION_FIELDS)
+        motions = {joint: protocol.joints[joint].motion for joint in taking}
+        if readers and not set(motions.values()) & set(readers):
+            unread: dict[str, list[str]] = {}
+            for joint, motion in motions.items():
+                unread.setdefault(motion, []).append(joint)
+            return f"protocol.all.{field}", _hinge_unread_words(field, value, unread)
     return None
+
+
+def _hinge_unread_words(field: str, value: object, joints: Mapping[str, Sequence[str]]) -> str:
+    """Why ``value`` written for ``field`` changes no data: no motion of ``joints`` (motion ->
+    the joints the grid runs that take ``field`` from where it is written) reads it."""
+    every = list(dict.fromkeys(f for fields in HINGE_MOTION_FIELDS.values() for f in fields))
+    unread = " nor by ".join(
+        f"motion {motion!r} (joint {', '.join(map(repr, names))}), which reads "
+        + (", ".join(HINGE_MOTION_FIELDS[motion]) or f"none of {', '.join(every)}")
+        for motion, names in joints.items()
+    )
+    readers = " and ".join(map(repr, _readers(field, HINGE_MOTION_FIELDS)))
+    return (
+        f"{value!r} is not read by {unread}; {field} is read by motion {readers}: a value the "
+        "motion does not read changes no data; remove it, or choose a motion that reads it"
+    )
 
 
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
@@ -318,14 +363,16 @@ def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
     """A field of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that the config writes
     and no motion of the grid reads. Defaults are not written and not refused."""
     motions = settings["grid"]["motion"]
-    unread = _unread_field(settings.get("protocol") or {}, motions, HIP_STA_MOTION_FIELDS)
+    written = settings.get("protocol") or {}
+    unread = _unread_field(written, motions, HIP_STA_MOTION_FIELDS)
     if not unread:
         return None
     field, readers = unread
     return f"protocol.{field}", (
-        f"not read by the motions the grid runs, grid.motion {', '.join(motions)}; {field} is "
-        f"read by {' and '.join(readers)}: a value no motion of the run reads changes no "
-        f"data; remove it, or add {' or '.join(readers)} to grid.motion"
+        f"{written[field]!r} is not read by the motions the grid runs, grid.motion "
+        f"{', '.join(motions)}; {field} is read by {' and '.join(readers)}: a value no motion "
+        f"of the run reads changes no data; remove it, or add {' or '.join(readers)} to "
+        "grid.motion"
     )
 
 

@@ -108,8 +108,9 @@ ROTATION_ORDERS = typing.get_args(RotationOrder)
 #: The fields of :class:`HingeProtocol` that only some motions read, by motion: those setting
 #: the sine waves of the lissajous motion (FE and AA) and of the superimposed one (AA); the
 #: sequential and grid motions run no waves. Every other field every motion reads. The config
-#: refuses one of these written for a joint whose motion does not read it (it would change
-#: no data): :func:`jointbench.configuration.bounds.study_problem`.
+#: refuses one of these written where no joint the grid runs reads it: under a joint whose
+#: motion does not, or under ``all`` where no joint taking it from there has a motion that
+#: does (it would change no data): :func:`jointbench.configuration.bounds.study_problem`.
 MOTION_FIELDS: dict[str, tuple[str, ...]] = {
     "lissajous": ("fe_cycles", "aa_cycles", "aa_phase_deg"),
     "sequential": (),
