@@ -392,6 +392,19 @@ def test_the_compiled_iteration_is_its_python_source(frame0):
         np.testing.assert_allclose(mine, theirs, rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.parametrize("frame0", [False, True])
+def test_an_iteration_without_iterations_is_refused_by_name(frame0):
+    """The public fits refuse ``max_iterations`` below 1 before any pose is fitted; the
+    iteration itself does too, naming it, instead of stating a chi^2 from weights it never
+    formed."""
+    proximal, distal = two_segments(20)
+    proximal, distal = _noisy(proximal, 5), _noisy(distal, 6)
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    trial = hjc._prepared(poses["proximal"], poses["distal"], None, "gauss-markov")
+    with pytest.raises(ValueError, match="max_iterations"):
+        hjc._iterated(trial, frame0=frame0, max_iterations=0, tol_mm=1e-6)
+
+
 def test_the_marker_gains_are_the_fits_hat_and_place_the_point_covariance():
     """``B_pi = I/n - [p - m]x K^-1 [u_i]x``: summed as ``B B'`` over the markers it is
     ``A(p)``, and at the markers themselves it is the rigid fit's hat matrix (idempotent)."""

@@ -389,7 +389,11 @@ class _Iterated:
 
 def _iterated(trial: _Prepared, *, frame0: bool, max_iterations: int, tol_mm: float):
     """Paper C's re-linearisation of one ``trial`` from its analytic centre
-    (:func:`_relinearised`), for its own model or, ``frame0``, the frame-0 model."""
+    (:func:`_relinearised`), for its own model or, ``frame0``, the frame-0 model.
+    ``ValueError`` for ``max_iterations`` below 1: no iteration forms the weights that the
+    chi^2 and the information are read at."""
+    if int(max_iterations) < 1:
+        raise ValueError(f"max_iterations must be >= 1, got {max_iterations!r}")
     k = 9 if frame0 else 3
     state = np.tile(trial.analytic_center, k // 3)
     information = np.full((k, k), np.nan)
