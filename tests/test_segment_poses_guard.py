@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rigs import two_segments
 
-from jointbench.estimators import registry
+from jointbench.estimators import hjc, registry, segment_poses
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
 from jointbench.numerics.poses import fit_rigid_poses
 from jointbench.resultfiles import parquet
@@ -297,3 +297,43 @@ def test_a_pose_fit_stopped_by_its_iteration_limit_is_anchored_at_frame_0(max_it
         SegmentPoses(
             segments["distal"][trial], fit.rotation[trial], fit.translation[trial], fit.body[trial]
         )
+
+
+def test_the_model_test_reads_the_residuals_the_poses_leave():
+    """Paper C's model test reads the noise's kurtosis from the fourth powers of the residuals
+    ``x_fi - (R_f b_i + t_f)`` the poses leave on their markers, the residuals whose sum of
+    squares is their ``residual_ss`` (:func:`segment_poses.pose_residuals`, their one home)."""
+    proximal, _ = two_segments(30)
+    rng = np.random.default_rng(4)
+    markers = proximal + rng.normal(scale=0.5, size=proximal.shape)
+    (poses,) = trial_poses({"markers": [markers]}, min_frames=POSE_MIN_FRAMES)
+    poses = poses["markers"]
+    residuals = segment_poses.pose_residuals(
+        poses.markers, poses.rotation, poses.translation, poses.body
+    )
+    assert poses.residual_ss == float(np.sum(residuals * residuals))
+    fourths = np.sum(np.sum(residuals**2, axis=-1) ** 2)
+    read = []
+    original = segment_poses.pose_residuals
+
+    def spy(*parts):
+        read.append(parts)
+        return original(*parts)
+
+    variance = poses.residual_ss / poses.dof
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(hjc, "pose_residuals", spy)
+        kurtosis, _ = hjc._noise_kurtosis((poses,), variance)
+    assert len(read) == 1 and all(
+        a is b
+        for a, b in zip(
+            read[0], (poses.markers, poses.rotation, poses.translation, poses.body), strict=True
+        )
+    )
+    n_frames = len(markers)
+    shrink = (n_frames - 1) / n_frames
+    own, shared = hjc._residual_moments(poses.body)
+    expected = (fourths / variance**2 - n_frames * shrink**2 * own) / (
+        n_frames * shrink**4 * shared
+    )
+    assert kurtosis == pytest.approx(expected, rel=1e-12)

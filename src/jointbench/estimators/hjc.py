@@ -160,6 +160,7 @@ from jointbench.estimators.results import (
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
+    pose_residuals,
     precision_on_poses,
 )
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING
@@ -922,9 +923,9 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     (:func:`_residual_moments`), and ``G`` summed over the frames and segments."""
     fourth, gaussian, excess = 0.0, 0.0, 0.0
     for poses in segments:
-        fourth += _residual_fourth_powers(
-            poses.markers, poses.rotation, poses.translation, poses.body
-        )
+        residual = pose_residuals(poses.markers, poses.rotation, poses.translation, poses.body)
+        squared = np.einsum("fik,fik->fi", residual, residual)
+        fourth += float(np.sum(squared * squared))
         # The body-fixed coordinates, fitted to all N frames, shrink each frame's residuals by
         # about (N - 1) / N (the residual dof are (3 n - 6)(N - 1), not (3 n - 6) N): second
         # moments by its square, fourth cumulants by its fourth power.
@@ -934,31 +935,6 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian
-
-
-@kernel
-def _residual_fourth_powers(
-    markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
-) -> float:
-    """``sum_f sum_i |r_fi|^4`` [mm^4] of the residuals ``r_fi = x_fi - (R_f b_i + t_f)`` the
-    poses ``rotation`` ``(N, 3, 3)`` and ``translation`` ``(N, 3)`` [mm] of the body-fixed
-    markers ``body`` ``(n, 3)`` leave of ``markers`` ``(N, n, 3)`` [mm]
-    (:func:`jointbench.estimators.segment_poses.pose_residuals`), in one pass without their
-    array. A compiled kernel."""
-    total = 0.0
-    for f in range(markers.shape[0]):
-        for i in range(markers.shape[1]):
-            squared = 0.0
-            for k in range(3):
-                turned = (
-                    rotation[f, k, 0] * body[i, 0]
-                    + rotation[f, k, 1] * body[i, 1]
-                    + rotation[f, k, 2] * body[i, 2]
-                )
-                residual = markers[f, i, k] - turned - translation[f, k]
-                squared += residual * residual
-            total += squared * squared
-    return total
 
 
 #: What a rejected model test says of the SD of an answer whose covariance assumes that model:
