@@ -451,9 +451,9 @@ def _relinearised(
     c1)`` and the pseudo-measurements ``c0 - c = 0``, ``c1 - c = 0`` of covariances ``A_0(c0)``,
     ``A_1(c1)``. Each iteration weighs every frame by ``W_t^-1`` at the current state and
     accumulates the normal equations in one pass over the frames, each frame's terms in its
-    proximal body frame (:func:`_frame_normal`); the correction is solved from the residuals,
-    which keeps full precision when they are tiny (noise-free data) however large the
-    coordinates.
+    proximal body frame (:func:`_frame_weights`, :func:`_frame_normal`); the correction is
+    solved from the residuals, which keeps full precision when they are tiny (noise-free data)
+    however large the coordinates.
 
     Writes the last iteration's ``information`` ``(k, k)`` (unit variance) and, for paper C's
     model, ``frame0_added`` ``(3, 3)``: ``F_0 A_0 F_0' + F_1 A_1 F_1'`` with ``F_a = sum_t M_t'
@@ -470,6 +470,7 @@ def _relinearised(
     correction = np.empty(k)
     gains = np.empty((2, 3, 3))
     relative, local = _proximal_frames(r0, r1, y)
+    weights = np.empty((local.shape[0], 6))
     iterations, step = 0, np.inf
     for iteration in range(1, max_iterations + 1):
         iterations = iteration
@@ -479,7 +480,8 @@ def _relinearised(
             point_covariance_into(
                 state[at : at + 3], means[a], inertia_invs[a], counts[a], at_joint[a]
             )
-        _frame_normal(relative, local, at_joint, state, frame0, system, gradient)
+        _frame_weights(relative, at_joint, weights)
+        _frame_normal(relative, local, weights, state, frame0, system, gradient)
         if frame0:
             for a in range(2):
                 if inverse3_into(at_joint[a], precisions[a]) == 0.0:
@@ -503,7 +505,7 @@ def _relinearised(
                 step = length
         if not step > tol_mm:  # a NaN step stops too, unconverged
             break
-    chi2 = _frame_chi2(relative, local, at_joint, state, frame0, gains)
+    chi2 = _frame_chi2(relative, local, weights, state, frame0, gains)
     if frame0:
         for a in range(2):
             at = 3 + 3 * a
@@ -543,10 +545,25 @@ def _proximal_frames(r0: np.ndarray, r1: np.ndarray, y: np.ndarray) -> tuple:
 
 
 @kernel
+def _frame_weights(relative: np.ndarray, at_joint: np.ndarray, weights: np.ndarray) -> None:
+    """Each frame's weight ``V_t`` in its proximal body frame (:func:`_local_weight`, upper
+    triangle) at the point covariances ``at_joint`` ``(2, 3, 3)``, written into ``weights``
+    ``(N-1, 6)``: formed once per iteration, for its normal equations (:func:`_frame_normal`)
+    and, after the last, the chi^2 (:func:`_frame_chi2`). A compiled kernel."""
+    # Copies, read into registers once: the frames' stores into ``weights`` could otherwise
+    # alias the point covariances, and each frame would read them again.
+    a0, a1 = at_joint[0].copy(), at_joint[1].copy()
+    for t in range(weights.shape[0]):
+        weight = _local_weight(relative[t], a0, a1)
+        for e in range(6):
+            weights[t, e] = weight[e]
+
+
+@kernel
 def _frame_normal(
     relative: np.ndarray,
     local: np.ndarray,
-    at_joint: np.ndarray,
+    weights: np.ndarray,
     state: np.ndarray,
     frame0: bool,
     system: np.ndarray,
@@ -556,19 +573,22 @@ def _frame_normal(
     into ``system`` ``(k, k)`` (both triangles; zero where the pseudo-measurements go) and
     ``gradient`` ``(k,)``: ``sum_t B_t' W_t^-1 B_t`` and ``sum_t B_t' W_t^-1 e_t`` with rows
     ``B_t`` (``M_t``, or ``[R0, -R1]`` for the frame-0 model) and residuals ``e_t = y_t - B_t
-    x`` at the current unknowns ``x``, weights ``W_t^-1`` of the point covariances
-    ``at_joint`` ``(2, 3, 3)``. Each frame's terms are taken in its proximal body frame
+    x`` at the current unknowns ``x``, with the frames' ``weights`` ``(N-1, 6)``
+    (:func:`_frame_weights`). Each frame's terms are taken in its proximal body frame
     (:func:`_proximal_frames`: ``relative`` ``Q_t``, ``local`` ``z_t``): with ``V_t = (R0' W_t
     R0)^-1`` (:func:`_local_weight`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
     ``R0' e_t = z_t - [I, -Q_t] x``, so ``B_t' W_t^-1 B_t = [I, -Q_t]' V_t [I, -Q_t]``. A
     compiled kernel."""
     system[:, :] = 0.0
     gradient[:] = 0.0
+    # The unknowns read once (see _frame_weights): c0 and c1, or c for both.
+    proximal = state[3:6].copy() if frame0 else state[0:3].copy()
+    distal = state[6:9].copy() if frame0 else state[0:3].copy()
     for t in range(local.shape[0]):
-        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
+        weight = _weight_at(weights, t)
         q = rows9(relative[t])
+        residual = _local_residual(local[t], q, proximal, distal)
         if frame0:
-            residual = _local_residual(local[t], q, state[3:6], state[6:9])
             u = symmetric_times9(weight, q)  # V Q
             add_upper3(system, 3, 3, symmetric9(weight), 1.0)
             add_block3(system, 3, 6, u, -1.0)
@@ -578,7 +598,6 @@ def _frame_normal(
             add_vector3(gradient, 6, transposed_applied9(q, pulled), -1.0)
         else:
             m = identity_less9(q)
-            residual = _local_residual(local[t], q, state[0:3], state[0:3])
             u = symmetric_times9(weight, m)
             add_upper3(system, 0, 0, transposed_times9(m, u), 1.0)
             add_vector3(gradient, 0, transposed_applied9(u, residual), 1.0)
@@ -592,30 +611,44 @@ def _frame_normal(
 def _frame_chi2(
     relative: np.ndarray,
     local: np.ndarray,
-    at_joint: np.ndarray,
+    weights: np.ndarray,
     state: np.ndarray,
     frame0: bool,
     gains: np.ndarray,
 ) -> float:
-    """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, weights of the point covariances
-    ``at_joint`` (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1
-    R_a(t)`` into ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I -
-    Q_t)' V_t Q_t``. A compiled kernel."""
+    """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, with the frames' ``weights``
+    (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1 R_a(t)`` into
+    ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I - Q_t)' V_t
+    Q_t``. A compiled kernel."""
     chi2 = 0.0
     gains[:, :, :] = 0.0
+    proximal = state[3:6].copy() if frame0 else state[0:3].copy()
+    distal = state[6:9].copy() if frame0 else state[0:3].copy()
     for t in range(local.shape[0]):
-        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
+        weight = _weight_at(weights, t)
         q = rows9(relative[t])
-        if frame0:
-            residual = _local_residual(local[t], q, state[3:6], state[6:9])
-        else:
-            residual = _local_residual(local[t], q, state[0:3], state[0:3])
+        residual = _local_residual(local[t], q, proximal, distal)
+        if not frame0:
             u = symmetric_times9(weight, identity_less9(q))
             add_block3(gains[0], 0, 0, transposed9(u), 1.0)
             add_block3(gains[1], 0, 0, transposed_times9(u, q), 1.0)
         weighted = symmetric_applied9(weight, residual)
         chi2 += residual[0] * weighted[0] + residual[1] * weighted[1] + residual[2] * weighted[2]
     return chi2
+
+
+@kernel
+def _weight_at(weights: np.ndarray, t: int) -> tuple:
+    """Frame ``t``'s weight of ``weights`` ``(N-1, 6)`` (:func:`_frame_weights`) as its 6
+    numbers. A compiled kernel."""
+    return (
+        weights[t, 0],
+        weights[t, 1],
+        weights[t, 2],
+        weights[t, 3],
+        weights[t, 4],
+        weights[t, 5],
+    )
 
 
 @kernel
