@@ -300,36 +300,32 @@ def test_a_pose_fit_stopped_by_its_iteration_limit_is_anchored_at_frame_0(max_it
 
 
 def test_the_model_test_reads_the_residuals_the_poses_leave():
-    """Paper C's model test reads the noise's kurtosis from the fourth powers of the residuals
-    ``x_fi - (R_f b_i + t_f)`` the poses leave on their markers, the residuals whose sum of
-    squares is their ``residual_ss`` (:func:`segment_poses.pose_residuals`, their one home)."""
+    """The residuals ``x_fi - (R_f b_i + t_f)`` the poses leave on their markers are formed
+    in one place (:func:`segment_poses.pose_residuals`), its compiled part and its Python
+    source alike: their sum of squares is the poses' ``residual_ss``, the sum of their
+    lengths' fourth powers the poses' ``residual_fourths``, which paper C's model test reads
+    the noise's kurtosis from."""
     proximal, _ = two_segments(30)
     rng = np.random.default_rng(4)
     markers = proximal + rng.normal(scale=0.5, size=proximal.shape)
     (poses,) = trial_poses({"markers": [markers]}, min_frames=POSE_MIN_FRAMES)
     poses = poses["markers"]
-    residuals = segment_poses.pose_residuals(
+    explicit = markers - np.einsum("fij,mj->fmi", poses.rotation, poses.body)
+    explicit = explicit - poses.translation[:, None, :]
+    fourths = np.sum(np.sum(explicit**2, axis=-1) ** 2)
+    residuals, summed = segment_poses.pose_residuals(
         poses.markers, poses.rotation, poses.translation, poses.body
     )
+    np.testing.assert_allclose(residuals, explicit, atol=1e-9)
+    assert summed == pytest.approx(fourths, rel=1e-12)
     assert poses.residual_ss == float(np.sum(residuals * residuals))
-    fourths = np.sum(np.sum(residuals**2, axis=-1) ** 2)
-    read = []
-    original = segment_poses.pose_residuals
-
-    def spy(*parts):
-        read.append(parts)
-        return original(*parts)
-
+    assert poses.residual_fourths == summed
+    turned = poses.rotation.reshape(-1, 3) @ poses.body.T
+    python = segment_poses._less_turned.__wrapped__(poses.markers, turned, poses.translation)
+    np.testing.assert_array_equal(python[0], residuals)
+    assert python[1] == pytest.approx(summed, rel=1e-12)
     variance = poses.residual_ss / poses.dof
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(hjc, "pose_residuals", spy)
-        kurtosis, _ = hjc._noise_kurtosis((poses,), variance)
-    assert len(read) == 1 and all(
-        a is b
-        for a, b in zip(
-            read[0], (poses.markers, poses.rotation, poses.translation, poses.body), strict=True
-        )
-    )
+    kurtosis, _ = hjc._noise_kurtosis((poses,), variance)
     n_frames = len(markers)
     shrink = (n_frames - 1) / n_frames
     own, shared = hjc._residual_moments(poses.body)

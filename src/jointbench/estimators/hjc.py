@@ -160,7 +160,6 @@ from jointbench.estimators.results import (
 from jointbench.estimators.segment_poses import (
     POSE_MIN_FRAMES,
     SegmentPoses,
-    pose_residuals,
     precision_on_poses,
 )
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING
@@ -956,9 +955,7 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     (:func:`_residual_moments`), and ``G`` summed over the frames and segments."""
     fourth, gaussian, excess = 0.0, 0.0, 0.0
     for poses in segments:
-        residual = pose_residuals(poses.markers, poses.rotation, poses.translation, poses.body)
-        squared = np.einsum("fik,fik->fi", residual, residual)
-        fourth += float(np.sum(squared * squared))
+        fourth += poses.residual_fourths
         # The body-fixed coordinates, fitted to all N frames, shrink each frame's residuals by
         # about (N - 1) / N (the residual dof are (3 n - 6)(N - 1), not (3 n - 6) N): second
         # moments by its square, fourth cumulants by its fourth power.
