@@ -184,7 +184,7 @@ from jointbench.numerics.small import (
     inverse3_entries,
     inverse3_into,
     rotated3_into,
-    rotated3_upper,
+    rotated9_upper,
     rows9,
     skew9,
     solve_into,
@@ -469,7 +469,7 @@ def _relinearised(
     correction = np.empty(k)
     gains = np.empty((2, 3, 3))
     relative, local = _proximal_frames(r0, r1, y)
-    weights = np.empty((local.shape[0], 6))
+    weights = np.empty((6, local.shape[0]))
     iterations, step = 0, np.inf
     for iteration in range(1, max_iterations + 1):
         iterations = iteration
@@ -526,36 +526,63 @@ def _relinearised(
 
 @kernel
 def _proximal_frames(r0: np.ndarray, r1: np.ndarray, y: np.ndarray) -> tuple:
-    """Each frame's relative rotation ``Q_t = R0' R1`` ``(N-1, 3, 3)`` and ``z_t = R0' y_t``
-    ``(N-1, 3)`` [mm], the constraint in the proximal body frame: ``R0' h_t = c0 - Q_t c1 -
-    z_t``, ``R0' W_t R0 = A_0 + Q_t A_1 Q_t'``, so that ``B_t' W_t^-1 B_t`` and ``B_t' W_t^-1
-    e_t`` (:func:`_frame_normal`) need one ``3 x 3`` inverse and no product with ``R0``. A
+    """Each frame's relative rotation ``Q_t = R0' R1``, entry ``(i, j)`` of frame ``t`` at
+    ``[3 i + j, t]`` of ``(9, N-1)``, and ``z_t = R0' y_t`` ``(N-1, 3)`` [mm]: the constraint
+    in the proximal body frame, ``R0' h_t = c0 - Q_t c1 - z_t``, ``R0' W_t R0 = A_0 + Q_t A_1
+    Q_t'``, so that ``B_t' W_t^-1 B_t`` and ``B_t' W_t^-1 e_t`` (:func:`_frame_normal`) need
+    one ``3 x 3`` inverse and no product with ``R0``. Each entry over the frames is contiguous,
+    so that the frames' weights (:func:`_frame_weights`) are formed several at once. A
     compiled kernel."""
     n_steps = y.shape[0]
-    relative = np.empty((n_steps, 3, 3))
+    relative = np.empty((9, n_steps))
     local = np.empty((n_steps, 3))
     for t in range(n_steps):
         for i in range(3):
             for j in range(3):
                 turned = r0[t, 0, i] * r1[t, 0, j] + r0[t, 1, i] * r1[t, 1, j]
-                relative[t, i, j] = turned + r0[t, 2, i] * r1[t, 2, j]
+                relative[3 * i + j, t] = turned + r0[t, 2, i] * r1[t, 2, j]
             local[t, i] = r0[t, 0, i] * y[t, 0] + r0[t, 1, i] * y[t, 1] + r0[t, 2, i] * y[t, 2]
     return relative, local
 
 
 @kernel
 def _frame_weights(relative: np.ndarray, at_joint: np.ndarray, weights: np.ndarray) -> None:
-    """Each frame's weight ``V_t`` in its proximal body frame (:func:`_local_weight`, upper
-    triangle) at the point covariances ``at_joint`` ``(2, 3, 3)``, written into ``weights``
-    ``(N-1, 6)``: formed once per iteration, for its normal equations (:func:`_frame_normal`)
-    and, after the last, the chi^2 (:func:`_frame_chi2`). A compiled kernel."""
-    # Copies, read into registers once: the frames' stores into ``weights`` could otherwise
-    # alias the point covariances, and each frame would read them again.
-    a0, a1 = at_joint[0].copy(), at_joint[1].copy()
-    for t in range(weights.shape[0]):
-        weight = _local_weight(relative[t], a0, a1)
-        for e in range(6):
-            weights[t, e] = weight[e]
+    """Each frame's weight in its proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t
+    A_1 Q_t')^-1`` (paper C's eq. 20 in that frame), of the relative rotations ``Q_t``
+    ``relative`` ``(9, N-1)`` (:func:`_proximal_frames`) and the point covariances ``A_a``
+    ``at_joint`` ``(2, 3, 3)``, its upper triangle ``(v00, v01, v02, v11, v12, v22)`` written
+    into ``weights`` ``(6, N-1)``, entry by entry as ``relative``; the inverse from the
+    cofactors, as :func:`jointbench.numerics.small.inverse3` forms it. Formed once per
+    iteration, for its normal equations (:func:`_frame_normal`) and, after the last, the
+    chi^2 (:func:`_frame_chi2`). A compiled kernel."""
+    # The point covariances read into registers once: the frames' stores into ``weights``
+    # could otherwise alias them. With them held, and every call inside the loop one that
+    # compiles into it, the frames are formed several at once.
+    a0, a1 = rows9(at_joint[0]), rows9(at_joint[1])
+    for t in range(weights.shape[1]):
+        q00, q01, q02, q11, q12, q22 = rotated9_upper(_frame_rotation(relative, t), a1)
+        s00, s01, s02 = a0[0] + q00, a0[1] + q01, a0[2] + q02
+        s11, s12, s22 = a0[4] + q11, a0[5] + q12, a0[8] + q22
+        inverse = inverse3_entries(s00, s01, s02, s01, s11, s12, s02, s12, s22)
+        weights[0, t], weights[1, t], weights[2, t] = inverse[0], inverse[1], inverse[2]
+        weights[3, t], weights[4, t], weights[5, t] = inverse[4], inverse[5], inverse[8]
+
+
+@kernel
+def _frame_rotation(relative: np.ndarray, t: int) -> tuple:
+    """Frame ``t``'s relative rotation of ``relative`` ``(9, N-1)`` (:func:`_proximal_frames`)
+    as 9 numbers by rows. A compiled kernel."""
+    return (
+        relative[0, t],
+        relative[1, t],
+        relative[2, t],
+        relative[3, t],
+        relative[4, t],
+        relative[5, t],
+        relative[6, t],
+        relative[7, t],
+        relative[8, t],
+    )
 
 
 @kernel
@@ -575,7 +602,7 @@ def _frame_normal(
     x`` at the current unknowns ``x``, with the frames' ``weights`` ``(N-1, 6)``
     (:func:`_frame_weights`). Each frame's terms are taken in its proximal body frame
     (:func:`_proximal_frames`: ``relative`` ``Q_t``, ``local`` ``z_t``): with ``V_t = (R0' W_t
-    R0)^-1`` (:func:`_local_weight`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
+    R0)^-1`` (:func:`_frame_weights`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
     ``R0' e_t = z_t - [I, -Q_t] x``, so ``B_t' W_t^-1 B_t = [I, -Q_t]' V_t [I, -Q_t]``. A
     compiled kernel."""
     system[:, :] = 0.0
@@ -585,7 +612,7 @@ def _frame_normal(
     distal = state[6:9].copy() if frame0 else state[0:3].copy()
     for t in range(local.shape[0]):
         weight = _weight_at(weights, t)
-        q = rows9(relative[t])
+        q = _frame_rotation(relative, t)
         residual = _local_residual(local[t], q, proximal, distal)
         if frame0:
             u = symmetric_times9(weight, q)  # V Q
@@ -625,7 +652,7 @@ def _frame_chi2(
     distal = state[6:9].copy() if frame0 else state[0:3].copy()
     for t in range(local.shape[0]):
         weight = _weight_at(weights, t)
-        q = rows9(relative[t])
+        q = _frame_rotation(relative, t)
         residual = _local_residual(local[t], q, proximal, distal)
         if not frame0:
             u = symmetric_times9(weight, identity_less9(q))
@@ -638,30 +665,16 @@ def _frame_chi2(
 
 @kernel
 def _weight_at(weights: np.ndarray, t: int) -> tuple:
-    """Frame ``t``'s weight of ``weights`` ``(N-1, 6)`` (:func:`_frame_weights`) as its 6
+    """Frame ``t``'s weight of ``weights`` ``(6, N-1)`` (:func:`_frame_weights`) as its 6
     numbers. A compiled kernel."""
     return (
-        weights[t, 0],
-        weights[t, 1],
-        weights[t, 2],
-        weights[t, 3],
-        weights[t, 4],
-        weights[t, 5],
+        weights[0, t],
+        weights[1, t],
+        weights[2, t],
+        weights[3, t],
+        weights[4, t],
+        weights[5, t],
     )
-
-
-@kernel
-def _local_weight(relative: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple:
-    """The upper triangle ``(v00, v01, v02, v11, v12, v22)`` of one frame's weight in its
-    proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t A_1 Q_t')^-1``
-    (paper C's eq. 20 in that frame), of the relative rotation ``Q_t`` ``(3, 3)`` and the point
-    covariances ``A_a`` ``(3, 3)``; the inverse from the cofactors, as
-    :func:`jointbench.numerics.small.inverse3` forms it. A compiled kernel."""
-    q00, q01, q02, q11, q12, q22 = rotated3_upper(relative, a1)
-    s00, s01, s02 = a0[0, 0] + q00, a0[0, 1] + q01, a0[0, 2] + q02
-    s11, s12, s22 = a0[1, 1] + q11, a0[1, 2] + q12, a0[2, 2] + q22
-    inverse = inverse3_entries(s00, s01, s02, s01, s11, s12, s02, s12, s22)
-    return inverse[0], inverse[1], inverse[2], inverse[4], inverse[5], inverse[8]
 
 
 @kernel
