@@ -352,16 +352,18 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
         raise errors[0]
     analytic_center, rcond = centers[0], float(rconds[0])
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
-    levers = (lever_factors(prox.body), lever_factors(dist.body))
+    means, inertia_invs, counts = np.empty((2, 3)), np.empty((2, 3, 3)), np.empty(2, dtype=int)
+    for segment, poses in enumerate((prox, dist)):
+        means[segment], inertia_invs[segment], counts[segment] = lever_factors(poses.body)
     return _Prepared(
         m=m,
         y=kernel_array(y),
         # The poses' arrays are read-only and C-contiguous, as kernels take them: not copied.
         r0=prox.rotation[1:],
         r1=dist.rotation[1:],
-        means=np.stack([lever[0] for lever in levers]),
-        inertia_invs=np.stack([lever[1] for lever in levers]),
-        counts=np.array([lever[2] for lever in levers]),
+        means=means,
+        inertia_invs=inertia_invs,
+        counts=counts,
         analytic_center=analytic_center,
         variance=variance,
         diagnostics={
@@ -1018,7 +1020,8 @@ def _model_verdict(
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
-    largest = max(float(np.max(np.abs(p.markers))) for p in segments)
+    # The largest |coordinate| from the extremes, without an array of absolute values.
+    largest = max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
     variance = _pooled_variance(segments)
     noisy = variance > (ROUNDING * largest) ** 2
     if (
