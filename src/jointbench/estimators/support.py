@@ -166,7 +166,13 @@ from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.distances import distance_modes_into
 from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.reuse import one_call, remembered
-from jointbench.numerics.small import inertia_into, symmetric_eigen_into, tangent_basis_into
+from jointbench.numerics.small import (
+    inertia_into,
+    rows9,
+    symmetric_eigen_into,
+    tangent_basis_into,
+    transposed_times9,
+)
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
 
@@ -1350,7 +1356,6 @@ def _rotation_spreads(
     vectors = np.empty((n_frames, 3))
     gram = np.empty((3, 3))
     mean = np.empty((3, 3))
-    d = np.empty((3, 3))
     centre = np.empty(3)
     noise = np.empty((n_frames, 6))
     reference_noise = np.zeros((3, 3))
@@ -1377,13 +1382,12 @@ def _rotation_spreads(
             reference_noise = nearest.T @ reference_inertia_inv[t] @ nearest
         covariance = moving_inertia_inv[t] + reference_noise
         centre[:] = 0.0
+        # M read into registers once, and each frame's M' relative in registers: in arrays,
+        # every frame's stores could alias M and would have it read again.
+        nearest9 = rows9(nearest)
         for f in range(n_frames):
-            d[:] = 0.0
-            for i in range(3):
-                for j in range(3):
-                    for k in range(3):
-                        d[i, j] += nearest[k, i] * relative[f, k, j]
-            cos_theta = min(max((d[0, 0] + d[1, 1] + d[2, 2] - 1.0) / 2.0, -1.0), 1.0)
+            d = transposed_times9(nearest9, rows9(relative[f]))
+            cos_theta = min(max((d[0] + d[4] + d[8] - 1.0) / 2.0, -1.0), 1.0)
             theta = np.arccos(cos_theta)
             turned = theta > np.pi - 1e-4
             near_pi = near_pi or turned
@@ -1396,9 +1400,9 @@ def _rotation_spreads(
                 # small: a root costs a fraction of a sine. Near pi, whose vectors are taken
                 # again another way, the sine keeps them finite.
                 scale = theta / (2.0 * np.sqrt((1.0 - cos_theta) * (1.0 + cos_theta)))
-            vectors[f, 0] = scale * (d[2, 1] - d[1, 2])
-            vectors[f, 1] = scale * (d[0, 2] - d[2, 0])
-            vectors[f, 2] = scale * (d[1, 0] - d[0, 1])
+            vectors[f, 0] = scale * (d[7] - d[5])
+            vectors[f, 1] = scale * (d[2] - d[6])
+            vectors[f, 2] = scale * (d[3] - d[1])
             for i in range(3):
                 centre[i] += vectors[f, i]
         for i in range(3):
