@@ -74,8 +74,11 @@ def test_point_covariance_matches_pennec_pose_covariance():
     a0, a1 = point_covariance(point, body), point_covariance(point, body[::-1] * 1.5)
     summed = rotation @ a0 @ rotation.T + other @ a1 @ other.T
     local = np.linalg.inv(rotation.T @ summed @ rotation)
-    weight = hjc._local_weight(rotation.T @ other, a0, a1)
-    np.testing.assert_allclose(weight, local[np.triu_indices(3)], rtol=1e-10)
+    relative = (rotation.T @ other).reshape(9, 1)
+    for form in (hjc._frame_weights, hjc._frame_weights.__wrapped__):
+        weight = np.empty((6, 1))
+        form(relative, np.stack([a0, a1]), weight)
+        np.testing.assert_allclose(weight[:, 0], local[np.triu_indices(3)], rtol=1e-10)
 
 
 def test_analytic_is_paper_eq9():
@@ -390,6 +393,19 @@ def test_the_compiled_iteration_is_its_python_source(frame0):
     np.testing.assert_allclose(compiled[3], python[3], rtol=1e-12)
     for mine, theirs in zip(arrays, expected, strict=True):
         np.testing.assert_allclose(mine, theirs, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("frame0", [False, True])
+def test_an_iteration_without_iterations_is_refused_by_name(frame0):
+    """The public fits refuse ``max_iterations`` below 1 before any pose is fitted; the
+    iteration itself does too, naming it, instead of stating a chi^2 from weights it never
+    formed."""
+    proximal, distal = two_segments(20)
+    proximal, distal = _noisy(proximal, 5), _noisy(distal, 6)
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    trial = hjc._prepared(poses["proximal"], poses["distal"], None, "gauss-markov")
+    with pytest.raises(ValueError, match="max_iterations"):
+        hjc._iterated(trial, frame0=frame0, max_iterations=0, tol_mm=1e-6)
 
 
 def test_the_marker_gains_are_the_fits_hat_and_place_the_point_covariance():

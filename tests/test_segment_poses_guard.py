@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from rigs import two_segments
 
-from jointbench.estimators import registry
+from jointbench.estimators import hjc, registry, segment_poses
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, SegmentPoses, trial_poses
 from jointbench.numerics.poses import fit_rigid_poses
 from jointbench.resultfiles import parquet
@@ -297,3 +297,39 @@ def test_a_pose_fit_stopped_by_its_iteration_limit_is_anchored_at_frame_0(max_it
         SegmentPoses(
             segments["distal"][trial], fit.rotation[trial], fit.translation[trial], fit.body[trial]
         )
+
+
+def test_the_model_test_reads_the_residuals_the_poses_leave():
+    """The residuals ``x_fi - (R_f b_i + t_f)`` the poses leave on their markers are formed
+    in one place (:func:`segment_poses.pose_residuals`), its compiled part and its Python
+    source alike: their sum of squares is the poses' ``residual_ss``, the sum of their
+    lengths' fourth powers the poses' ``residual_fourths``, which paper C's model test reads
+    the noise's kurtosis from."""
+    proximal, _ = two_segments(30)
+    rng = np.random.default_rng(4)
+    markers = proximal + rng.normal(scale=0.5, size=proximal.shape)
+    (poses,) = trial_poses({"markers": [markers]}, min_frames=POSE_MIN_FRAMES)
+    poses = poses["markers"]
+    explicit = markers - np.einsum("fij,mj->fmi", poses.rotation, poses.body)
+    explicit = explicit - poses.translation[:, None, :]
+    fourths = np.sum(np.sum(explicit**2, axis=-1) ** 2)
+    residuals, summed = segment_poses.pose_residuals(
+        poses.markers, poses.rotation, poses.translation, poses.body
+    )
+    np.testing.assert_allclose(residuals, explicit, atol=1e-9)
+    assert summed == pytest.approx(fourths, rel=1e-12)
+    assert poses.residual_ss == float(np.sum(residuals * residuals))
+    assert poses.residual_fourths == summed
+    turned = poses.rotation.reshape(-1, 3) @ poses.body.T
+    python = segment_poses._less_turned.__wrapped__(poses.markers, turned, poses.translation)
+    np.testing.assert_array_equal(python[0], residuals)
+    assert python[1] == pytest.approx(summed, rel=1e-12)
+    variance = poses.residual_ss / poses.dof
+    kurtosis, _ = hjc._noise_kurtosis((poses,), variance)
+    n_frames = len(markers)
+    shrink = (n_frames - 1) / n_frames
+    own, shared = hjc._residual_moments(poses.body)
+    expected = (fourths / variance**2 - n_frames * shrink**2 * own) / (
+        n_frames * shrink**4 * shared
+    )
+    assert kurtosis == pytest.approx(expected, rel=1e-12)

@@ -184,7 +184,7 @@ from jointbench.numerics.small import (
     inverse3_entries,
     inverse3_into,
     rotated3_into,
-    rotated3_upper,
+    rotated9_upper,
     rows9,
     skew9,
     solve_into,
@@ -352,16 +352,18 @@ def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> 
         raise errors[0]
     analytic_center, rcond = centers[0], float(rconds[0])
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
-    levers = (lever_factors(prox.body), lever_factors(dist.body))
+    means, inertia_invs, counts = np.empty((2, 3)), np.empty((2, 3, 3)), np.empty(2, dtype=int)
+    for segment, poses in enumerate((prox, dist)):
+        means[segment], inertia_invs[segment], counts[segment] = lever_factors(poses.body)
     return _Prepared(
         m=m,
         y=kernel_array(y),
         # The poses' arrays are read-only and C-contiguous, as kernels take them: not copied.
         r0=prox.rotation[1:],
         r1=dist.rotation[1:],
-        means=np.stack([lever[0] for lever in levers]),
-        inertia_invs=np.stack([lever[1] for lever in levers]),
-        counts=np.array([lever[2] for lever in levers]),
+        means=means,
+        inertia_invs=inertia_invs,
+        counts=counts,
         analytic_center=analytic_center,
         variance=variance,
         diagnostics={
@@ -389,7 +391,11 @@ class _Iterated:
 
 def _iterated(trial: _Prepared, *, frame0: bool, max_iterations: int, tol_mm: float):
     """Paper C's re-linearisation of one ``trial`` from its analytic centre
-    (:func:`_relinearised`), for its own model or, ``frame0``, the frame-0 model."""
+    (:func:`_relinearised`), for its own model or, ``frame0``, the frame-0 model.
+    ``ValueError`` for ``max_iterations`` below 1: no iteration forms the weights that the
+    chi^2 and the information are read at."""
+    if int(max_iterations) < 1:
+        raise ValueError(f"max_iterations must be >= 1, got {max_iterations!r}")
     k = 9 if frame0 else 3
     state = np.tile(trial.analytic_center, k // 3)
     information = np.full((k, k), np.nan)
@@ -446,9 +452,9 @@ def _relinearised(
     c1)`` and the pseudo-measurements ``c0 - c = 0``, ``c1 - c = 0`` of covariances ``A_0(c0)``,
     ``A_1(c1)``. Each iteration weighs every frame by ``W_t^-1`` at the current state and
     accumulates the normal equations in one pass over the frames, each frame's terms in its
-    proximal body frame (:func:`_frame_normal`); the correction is solved from the residuals,
-    which keeps full precision when they are tiny (noise-free data) however large the
-    coordinates.
+    proximal body frame (:func:`_frame_weights`, :func:`_frame_normal`); the correction is
+    solved from the residuals, which keeps full precision when they are tiny (noise-free data)
+    however large the coordinates.
 
     Writes the last iteration's ``information`` ``(k, k)`` (unit variance) and, for paper C's
     model, ``frame0_added`` ``(3, 3)``: ``F_0 A_0 F_0' + F_1 A_1 F_1'`` with ``F_a = sum_t M_t'
@@ -465,6 +471,7 @@ def _relinearised(
     correction = np.empty(k)
     gains = np.empty((2, 3, 3))
     relative, local = _proximal_frames(r0, r1, y)
+    weights = np.empty((6, local.shape[0]))
     iterations, step = 0, np.inf
     for iteration in range(1, max_iterations + 1):
         iterations = iteration
@@ -474,7 +481,8 @@ def _relinearised(
             point_covariance_into(
                 state[at : at + 3], means[a], inertia_invs[a], counts[a], at_joint[a]
             )
-        _frame_normal(relative, local, at_joint, state, frame0, system, gradient)
+        _frame_weights(relative, at_joint, weights)
+        _frame_normal(relative, local, weights, state, frame0, system, gradient)
         if frame0:
             for a in range(2):
                 if inverse3_into(at_joint[a], precisions[a]) == 0.0:
@@ -498,7 +506,7 @@ def _relinearised(
                 step = length
         if not step > tol_mm:  # a NaN step stops too, unconverged
             break
-    chi2 = _frame_chi2(relative, local, at_joint, state, frame0, gains)
+    chi2 = _frame_chi2(relative, local, weights, state, frame0, gains)
     if frame0:
         for a in range(2):
             at = 3 + 3 * a
@@ -520,28 +528,70 @@ def _relinearised(
 
 @kernel
 def _proximal_frames(r0: np.ndarray, r1: np.ndarray, y: np.ndarray) -> tuple:
-    """Each frame's relative rotation ``Q_t = R0' R1`` ``(N-1, 3, 3)`` and ``z_t = R0' y_t``
-    ``(N-1, 3)`` [mm], the constraint in the proximal body frame: ``R0' h_t = c0 - Q_t c1 -
-    z_t``, ``R0' W_t R0 = A_0 + Q_t A_1 Q_t'``, so that ``B_t' W_t^-1 B_t`` and ``B_t' W_t^-1
-    e_t`` (:func:`_frame_normal`) need one ``3 x 3`` inverse and no product with ``R0``. A
+    """Each frame's relative rotation ``Q_t = R0' R1``, entry ``(i, j)`` of frame ``t`` at
+    ``[3 i + j, t]`` of ``(9, N-1)``, and ``z_t = R0' y_t`` ``(N-1, 3)`` [mm]: the constraint
+    in the proximal body frame, ``R0' h_t = c0 - Q_t c1 - z_t``, ``R0' W_t R0 = A_0 + Q_t A_1
+    Q_t'``, so that ``B_t' W_t^-1 B_t`` and ``B_t' W_t^-1 e_t`` (:func:`_frame_normal`) need
+    one ``3 x 3`` inverse and no product with ``R0``. Each entry over the frames is contiguous,
+    so that the frames' weights (:func:`_frame_weights`) are formed several at once. A
     compiled kernel."""
     n_steps = y.shape[0]
-    relative = np.empty((n_steps, 3, 3))
+    relative = np.empty((9, n_steps))
     local = np.empty((n_steps, 3))
     for t in range(n_steps):
         for i in range(3):
             for j in range(3):
                 turned = r0[t, 0, i] * r1[t, 0, j] + r0[t, 1, i] * r1[t, 1, j]
-                relative[t, i, j] = turned + r0[t, 2, i] * r1[t, 2, j]
+                relative[3 * i + j, t] = turned + r0[t, 2, i] * r1[t, 2, j]
             local[t, i] = r0[t, 0, i] * y[t, 0] + r0[t, 1, i] * y[t, 1] + r0[t, 2, i] * y[t, 2]
     return relative, local
+
+
+@kernel
+def _frame_weights(relative: np.ndarray, at_joint: np.ndarray, weights: np.ndarray) -> None:
+    """Each frame's weight in its proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t
+    A_1 Q_t')^-1`` (paper C's eq. 20 in that frame), of the relative rotations ``Q_t``
+    ``relative`` ``(9, N-1)`` (:func:`_proximal_frames`) and the point covariances ``A_a``
+    ``at_joint`` ``(2, 3, 3)``, its upper triangle ``(v00, v01, v02, v11, v12, v22)`` written
+    into ``weights`` ``(6, N-1)``, entry by entry as ``relative``; the inverse from the
+    cofactors, as :func:`jointbench.numerics.small.inverse3` forms it. Formed once per
+    iteration, for its normal equations (:func:`_frame_normal`) and, after the last, the
+    chi^2 (:func:`_frame_chi2`). A compiled kernel."""
+    # The point covariances read into registers once: the frames' stores into ``weights``
+    # could otherwise alias them. With them held, and every call inside the loop one that
+    # compiles into it, the frames are formed several at once.
+    a0, a1 = rows9(at_joint[0]), rows9(at_joint[1])
+    for t in range(weights.shape[1]):
+        q00, q01, q02, q11, q12, q22 = rotated9_upper(_frame_rotation(relative, t), a1)
+        s00, s01, s02 = a0[0] + q00, a0[1] + q01, a0[2] + q02
+        s11, s12, s22 = a0[4] + q11, a0[5] + q12, a0[8] + q22
+        inverse = inverse3_entries(s00, s01, s02, s01, s11, s12, s02, s12, s22)
+        weights[0, t], weights[1, t], weights[2, t] = inverse[0], inverse[1], inverse[2]
+        weights[3, t], weights[4, t], weights[5, t] = inverse[4], inverse[5], inverse[8]
+
+
+@kernel
+def _frame_rotation(relative: np.ndarray, t: int) -> tuple:
+    """Frame ``t``'s relative rotation of ``relative`` ``(9, N-1)`` (:func:`_proximal_frames`)
+    as 9 numbers by rows. A compiled kernel."""
+    return (
+        relative[0, t],
+        relative[1, t],
+        relative[2, t],
+        relative[3, t],
+        relative[4, t],
+        relative[5, t],
+        relative[6, t],
+        relative[7, t],
+        relative[8, t],
+    )
 
 
 @kernel
 def _frame_normal(
     relative: np.ndarray,
     local: np.ndarray,
-    at_joint: np.ndarray,
+    weights: np.ndarray,
     state: np.ndarray,
     frame0: bool,
     system: np.ndarray,
@@ -551,19 +601,22 @@ def _frame_normal(
     into ``system`` ``(k, k)`` (both triangles; zero where the pseudo-measurements go) and
     ``gradient`` ``(k,)``: ``sum_t B_t' W_t^-1 B_t`` and ``sum_t B_t' W_t^-1 e_t`` with rows
     ``B_t`` (``M_t``, or ``[R0, -R1]`` for the frame-0 model) and residuals ``e_t = y_t - B_t
-    x`` at the current unknowns ``x``, weights ``W_t^-1`` of the point covariances
-    ``at_joint`` ``(2, 3, 3)``. Each frame's terms are taken in its proximal body frame
+    x`` at the current unknowns ``x``, with the frames' ``weights`` ``(N-1, 6)``
+    (:func:`_frame_weights`). Each frame's terms are taken in its proximal body frame
     (:func:`_proximal_frames`: ``relative`` ``Q_t``, ``local`` ``z_t``): with ``V_t = (R0' W_t
-    R0)^-1`` (:func:`_local_weight`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
+    R0)^-1`` (:func:`_frame_weights`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
     ``R0' e_t = z_t - [I, -Q_t] x``, so ``B_t' W_t^-1 B_t = [I, -Q_t]' V_t [I, -Q_t]``. A
     compiled kernel."""
     system[:, :] = 0.0
     gradient[:] = 0.0
+    # The unknowns read once (see _frame_weights): c0 and c1, or c for both.
+    proximal = state[3:6].copy() if frame0 else state[0:3].copy()
+    distal = state[6:9].copy() if frame0 else state[0:3].copy()
     for t in range(local.shape[0]):
-        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
-        q = rows9(relative[t])
+        weight = _weight_at(weights, t)
+        q = _frame_rotation(relative, t)
+        residual = _local_residual(local[t], q, proximal, distal)
         if frame0:
-            residual = _local_residual(local[t], q, state[3:6], state[6:9])
             u = symmetric_times9(weight, q)  # V Q
             add_upper3(system, 3, 3, symmetric9(weight), 1.0)
             add_block3(system, 3, 6, u, -1.0)
@@ -573,7 +626,6 @@ def _frame_normal(
             add_vector3(gradient, 6, transposed_applied9(q, pulled), -1.0)
         else:
             m = identity_less9(q)
-            residual = _local_residual(local[t], q, state[0:3], state[0:3])
             u = symmetric_times9(weight, m)
             add_upper3(system, 0, 0, transposed_times9(m, u), 1.0)
             add_vector3(gradient, 0, transposed_applied9(u, residual), 1.0)
@@ -587,24 +639,24 @@ def _frame_normal(
 def _frame_chi2(
     relative: np.ndarray,
     local: np.ndarray,
-    at_joint: np.ndarray,
+    weights: np.ndarray,
     state: np.ndarray,
     frame0: bool,
     gains: np.ndarray,
 ) -> float:
-    """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, weights of the point covariances
-    ``at_joint`` (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1
-    R_a(t)`` into ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I -
-    Q_t)' V_t Q_t``. A compiled kernel."""
+    """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, with the frames' ``weights``
+    (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1 R_a(t)`` into
+    ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I - Q_t)' V_t
+    Q_t``. A compiled kernel."""
     chi2 = 0.0
     gains[:, :, :] = 0.0
+    proximal = state[3:6].copy() if frame0 else state[0:3].copy()
+    distal = state[6:9].copy() if frame0 else state[0:3].copy()
     for t in range(local.shape[0]):
-        weight = _local_weight(relative[t], at_joint[0], at_joint[1])
-        q = rows9(relative[t])
-        if frame0:
-            residual = _local_residual(local[t], q, state[3:6], state[6:9])
-        else:
-            residual = _local_residual(local[t], q, state[0:3], state[0:3])
+        weight = _weight_at(weights, t)
+        q = _frame_rotation(relative, t)
+        residual = _local_residual(local[t], q, proximal, distal)
+        if not frame0:
             u = symmetric_times9(weight, identity_less9(q))
             add_block3(gains[0], 0, 0, transposed9(u), 1.0)
             add_block3(gains[1], 0, 0, transposed_times9(u, q), 1.0)
@@ -614,17 +666,17 @@ def _frame_chi2(
 
 
 @kernel
-def _local_weight(relative: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> tuple:
-    """The upper triangle ``(v00, v01, v02, v11, v12, v22)`` of one frame's weight in its
-    proximal body frame, ``V_t = (R0' W_t R0)^-1 = (A_0 + Q_t A_1 Q_t')^-1``
-    (paper C's eq. 20 in that frame), of the relative rotation ``Q_t`` ``(3, 3)`` and the point
-    covariances ``A_a`` ``(3, 3)``; the inverse from the cofactors, as
-    :func:`jointbench.numerics.small.inverse3` forms it. A compiled kernel."""
-    q00, q01, q02, q11, q12, q22 = rotated3_upper(relative, a1)
-    s00, s01, s02 = a0[0, 0] + q00, a0[0, 1] + q01, a0[0, 2] + q02
-    s11, s12, s22 = a0[1, 1] + q11, a0[1, 2] + q12, a0[2, 2] + q22
-    inverse = inverse3_entries(s00, s01, s02, s01, s11, s12, s02, s12, s22)
-    return inverse[0], inverse[1], inverse[2], inverse[4], inverse[5], inverse[8]
+def _weight_at(weights: np.ndarray, t: int) -> tuple:
+    """Frame ``t``'s weight of ``weights`` ``(6, N-1)`` (:func:`_frame_weights`) as its 6
+    numbers. A compiled kernel."""
+    return (
+        weights[0, t],
+        weights[1, t],
+        weights[2, t],
+        weights[3, t],
+        weights[4, t],
+        weights[5, t],
+    )
 
 
 @kernel
@@ -918,9 +970,7 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
     (:func:`_residual_moments`), and ``G`` summed over the frames and segments."""
     fourth, gaussian, excess = 0.0, 0.0, 0.0
     for poses in segments:
-        fourth += _residual_fourth_powers(
-            poses.markers, poses.rotation, poses.translation, poses.body
-        )
+        fourth += poses.residual_fourths
         # The body-fixed coordinates, fitted to all N frames, shrink each frame's residuals by
         # about (N - 1) / N (the residual dof are (3 n - 6)(N - 1), not (3 n - 6) N): second
         # moments by its square, fourth cumulants by its fourth power.
@@ -930,31 +980,6 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian
-
-
-@kernel
-def _residual_fourth_powers(
-    markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
-) -> float:
-    """``sum_f sum_i |r_fi|^4`` [mm^4] of the residuals ``r_fi = x_fi - (R_f b_i + t_f)`` the
-    poses ``rotation`` ``(N, 3, 3)`` and ``translation`` ``(N, 3)`` [mm] of the body-fixed
-    markers ``body`` ``(n, 3)`` leave of ``markers`` ``(N, n, 3)`` [mm]
-    (:func:`jointbench.estimators.segment_poses.pose_residuals`), in one pass without their
-    array. A compiled kernel."""
-    total = 0.0
-    for f in range(markers.shape[0]):
-        for i in range(markers.shape[1]):
-            squared = 0.0
-            for k in range(3):
-                turned = (
-                    rotation[f, k, 0] * body[i, 0]
-                    + rotation[f, k, 1] * body[i, 1]
-                    + rotation[f, k, 2] * body[i, 2]
-                )
-                residual = markers[f, i, k] - turned - translation[f, k]
-                squared += residual * residual
-            total += squared * squared
-    return total
 
 
 #: What a rejected model test says of the SD of an answer whose covariance assumes that model:
@@ -995,7 +1020,8 @@ def _model_verdict(
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
-    largest = max(float(np.max(np.abs(p.markers))) for p in segments)
+    # The largest |coordinate| from the extremes, without an array of absolute values.
+    largest = max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
     variance = _pooled_variance(segments)
     noisy = variance > (ROUNDING * largest) ** 2
     if (

@@ -13,7 +13,7 @@ are refused (:class:`SegmentPoses`).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -25,6 +25,7 @@ from jointbench.estimators.validation import (
     check_same_frames,
 )
 from jointbench.numerics import poses as pose_fit
+from jointbench.numerics.compiled import kernel
 
 __all__ = [
     "POSE_MIN_FRAMES",
@@ -68,7 +69,8 @@ class SegmentPoses:
     marker coordinates, ``residual_ss`` the sum of squared marker residuals [mm^2] and ``dof``
     its degrees of freedom, ``3 (n_markers - 2) (N - 1)``: ``3 n N`` coordinates less ``6 N``
     pose parameters and ``3 n`` body coordinates, plus the 6 of the
-    gauge (the body frame is pinned to frame 0).
+    gauge (the body frame is pinned to frame 0); ``residual_fourths`` the sum of the markers'
+    residual lengths to the fourth power [mm^4], formed with ``residual_ss`` (not an argument).
 
     The poses cannot be altered after their fit. Built, they refuse (``ValueError``) arrays
     shaped otherwise than their markers ask, a ``dof`` other than theirs, and a rotation,
@@ -93,6 +95,7 @@ class SegmentPoses:
     dof: int | None = None
     iterations: int | None = None
     change_mm: float | None = None
+    residual_fourths: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         arrays = {name: _owned_read_only(name, getattr(self, name)) for name in _POSE_ARRAYS}
@@ -104,7 +107,7 @@ class SegmentPoses:
                 f"{what}: dof is {self.dof}, not the {dof} their shapes give "
                 "(3 (n_markers - 2) (n_frames - 1))"
             )
-        residual = pose_residuals(**arrays)
+        residual, fourths = pose_residuals(**arrays)
         found = float(np.sum(residual * residual))
         if self.residual_ss is not None:
             residual_ss = _checked_residual(what, found, self.residual_ss, arrays["markers"])
@@ -121,6 +124,7 @@ class SegmentPoses:
             object.__setattr__(self, name, array)
         object.__setattr__(self, "residual_ss", residual_ss)
         object.__setattr__(self, "dof", dof)
+        object.__setattr__(self, "residual_fourths", fourths)
 
     @property
     def variance(self) -> float:
@@ -138,7 +142,7 @@ class SegmentPoses:
 
     def __reduce__(self) -> tuple:
         # A copy or an unpickled pose is built, and so checked and read-only, as any other.
-        return (type(self), tuple(getattr(self, f.name) for f in fields(self)))
+        return (type(self), tuple(getattr(self, f.name) for f in fields(self) if f.init))
 
 
 def _owned_read_only(name: str, array: object) -> np.ndarray:
@@ -263,17 +267,36 @@ def _segment_poses(
 
 def pose_residuals(
     markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
-) -> np.ndarray:
-    """``markers - (R_f b_m + t_f)`` ``(..., N, n, 3)`` [mm]: what the poses ``rotation``
-    ``(..., N, 3, 3)`` and ``translation`` ``(..., N, 3)`` [mm] of the body-fixed coordinates
-    ``body`` ``(..., n, 3)`` [mm] leave of ``markers`` ``(..., N, n, 3)``; leading axes are
-    trials."""
-    *lead, n_frames, _, _ = rotation.shape
-    # R_f b_m for every frame and marker as one (3N, 3) @ (3, n) product per trial.
-    turned = (rotation.reshape(*lead, -1, 3) @ np.swapaxes(body, -1, -2)).reshape(
-        *lead, n_frames, 3, -1
-    )
-    return markers - np.swapaxes(turned, -1, -2) - translation[..., None, :]
+) -> tuple[np.ndarray, float]:
+    """``markers - (R_f b_m + t_f)`` ``(N, n, 3)`` [mm]: what the poses ``rotation`` ``(N, 3,
+    3)`` and ``translation`` ``(N, 3)`` [mm] of the body-fixed coordinates ``body`` ``(n, 3)``
+    [mm] leave of ``markers`` ``(N, n, 3)``; and the sum of their fourth powers ``sum_fm
+    |r_fm|^4`` [mm^4], which paper C's model test reads the noise's kurtosis from
+    (:mod:`jointbench.estimators.hjc`)."""
+    # R_f b_m for every frame and marker as one (3N, 3) @ (3, n) product.
+    turned = rotation.reshape(-1, 3) @ np.swapaxes(body, -1, -2)
+    return _less_turned(markers, turned, translation)
+
+
+@kernel
+def _less_turned(markers: np.ndarray, turned: np.ndarray, translation: np.ndarray) -> tuple:
+    """``(r, sum |r_fm|^4)``: ``r = markers - turned' - translation`` ``(N, n, 3)`` [mm] of
+    ``markers`` ``(N, n, 3)``, the poses' rotated body coordinates ``turned`` ``(3 N, n)`` (frame
+    ``f``'s coordinate ``k`` of marker ``m`` at ``[3 f + k, m]``) and ``translation`` ``(N, 3)``
+    [mm]. A compiled kernel: NumPy's subtraction of the transposed product, and a sum over the
+    markers' three coordinates, each cost more than this pass."""
+    n_frames, n_markers, _ = markers.shape
+    residual = np.empty((n_frames, n_markers, 3))
+    fourths = 0.0
+    for f in range(n_frames):
+        for m in range(n_markers):
+            squared = 0.0
+            for k in range(3):
+                value = markers[f, m, k] - turned[3 * f + k, m] - translation[f, k]
+                residual[f, m, k] = value
+                squared += value * value
+            fourths += squared * squared
+    return residual, fourths
 
 
 def trial_poses(

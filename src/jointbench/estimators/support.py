@@ -166,7 +166,13 @@ from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.distances import distance_modes_into
 from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.reuse import one_call, remembered
-from jointbench.numerics.small import inertia_into, symmetric_eigen_into, tangent_basis_into
+from jointbench.numerics.small import (
+    inertia_into,
+    rows9,
+    symmetric_eigen_into,
+    tangent_basis_into,
+    transposed_times9,
+)
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
 
@@ -1132,8 +1138,10 @@ def _frame_noise_into(
     mean pose's covariance taken for every frame is off by a turn of half the frame's angle
     about the axis, each segment's the other way: with clusters of unequal inertia across the
     axis (three markers), a wide hinge over many frames resolves that."""
-    right = np.empty((3, 3))
-    left = np.empty((3, 3))
+    # The covariances read into registers once, and each frame's Jacobians kept in registers:
+    # in arrays, every frame's stores into ``noise`` could alias them and would have them read
+    # again.
+    moving, reference = rows9(moving_noise), rows9(reference_noise)
     for f in range(vectors.shape[0]):
         w0, w1, w2 = vectors[f, 0], vectors[f, 1], vectors[f, 2]
         squared = w0 * w0 + w1 * w1 + w2 * w2
@@ -1152,43 +1160,57 @@ def _frame_noise_into(
             angle = np.sqrt(squared)
             b = (1.0 - 0.5 * angle / np.tan(0.5 * angle)) / squared
         # I + b [w]^2, with [w]^2 = w w' - |w|^2 I, then the halves of [w] either way.
-        for i in range(3):
-            for j in range(3):
-                right[i, j] = b * vectors[f, i] * vectors[f, j]
-            right[i, i] += 1.0 - b * squared
-        left[:] = right
-        right[0, 1] -= 0.5 * w2
-        right[1, 0] += 0.5 * w2
-        right[0, 2] += 0.5 * w1
-        right[2, 0] -= 0.5 * w1
-        right[1, 2] -= 0.5 * w0
-        right[2, 1] += 0.5 * w0
-        left[0, 1] += 0.5 * w2
-        left[1, 0] -= 0.5 * w2
-        left[0, 2] -= 0.5 * w1
-        left[2, 0] += 0.5 * w1
-        left[1, 2] += 0.5 * w0
-        left[2, 1] -= 0.5 * w0
-        _add_sandwich(right, moving_noise, noise[f], False)
-        _add_sandwich(left, reference_noise, noise[f], True)
+        diagonal = 1.0 - b * squared
+        s00, s11, s22 = b * w0 * w0 + diagonal, b * w1 * w1 + diagonal, b * w2 * w2 + diagonal
+        s01, s02, s10 = b * w0 * w1, b * w0 * w2, b * w1 * w0
+        s12, s20, s21 = b * w1 * w2, b * w2 * w0, b * w2 * w1
+        half0, half1, half2 = 0.5 * w0, 0.5 * w1, 0.5 * w2
+        right = (
+            s00, s01 - half2, s02 + half1,
+            s10 + half2, s11, s12 - half0,
+            s20 - half1, s21 + half0, s22,
+        )  # fmt: skip
+        left = (
+            s00, s01 + half2, s02 - half1,
+            s10 - half2, s11, s12 + half0,
+            s20 + half1, s21 - half0, s22,
+        )  # fmt: skip
+        on_right = _sandwich_upper(right, moving)
+        on_left = _sandwich_upper(left, reference)
+        for e in range(6):
+            noise[f, e] = on_right[e] + on_left[e]
 
 
 @kernel
-def _add_sandwich(jacobian: np.ndarray, covariance: np.ndarray, upper: np.ndarray, add: bool):
-    """The upper triangle of ``jacobian covariance jacobian'`` (``(3, 3)`` each) written into
-    ``upper`` ``(6,)`` in the order of :data:`_UPPER`, or added to it. A compiled kernel."""
-    e = 0
-    for i in range(3):
-        p0 = jacobian[i, 0] * covariance[0, 0]
-        p0 += jacobian[i, 1] * covariance[1, 0] + jacobian[i, 2] * covariance[2, 0]
-        p1 = jacobian[i, 0] * covariance[0, 1]
-        p1 += jacobian[i, 1] * covariance[1, 1] + jacobian[i, 2] * covariance[2, 1]
-        p2 = jacobian[i, 0] * covariance[0, 2]
-        p2 += jacobian[i, 1] * covariance[1, 2] + jacobian[i, 2] * covariance[2, 2]
-        for j in range(i, 3):
-            value = p0 * jacobian[j, 0] + p1 * jacobian[j, 1] + p2 * jacobian[j, 2]
-            upper[e] = upper[e] + value if add else value
-            e += 1
+def _sandwich_upper(jacobian: tuple, covariance: tuple) -> tuple:
+    """The upper triangle of ``jacobian covariance jacobian'`` (9-number matrices), 6 numbers in
+    the order of :data:`_UPPER`. A compiled kernel."""
+    j0, j1, j2, j3, j4, j5, j6, j7, j8 = jacobian
+    c0, c1, c2, c3, c4, c5, c6, c7, c8 = covariance
+    # Row i of J C, then its products with the rows j >= i of J.
+    a0, a1, a2 = (
+        j0 * c0 + (j1 * c3 + j2 * c6),
+        j0 * c1 + (j1 * c4 + j2 * c7),
+        j0 * c2 + (j1 * c5 + j2 * c8),
+    )
+    b0, b1, b2 = (
+        j3 * c0 + (j4 * c3 + j5 * c6),
+        j3 * c1 + (j4 * c4 + j5 * c7),
+        j3 * c2 + (j4 * c5 + j5 * c8),
+    )
+    d0, d1, d2 = (
+        j6 * c0 + (j7 * c3 + j8 * c6),
+        j6 * c1 + (j7 * c4 + j8 * c7),
+        j6 * c2 + (j7 * c5 + j8 * c8),
+    )
+    return (
+        a0 * j0 + a1 * j1 + a2 * j2,
+        a0 * j3 + a1 * j4 + a2 * j5,
+        a0 * j6 + a1 * j7 + a2 * j8,
+        b0 * j3 + b1 * j4 + b2 * j5,
+        b0 * j6 + b1 * j7 + b2 * j8,
+        d0 * j6 + d1 * j7 + d2 * j8,
+    )
 
 
 @kernel
@@ -1350,7 +1372,6 @@ def _rotation_spreads(
     vectors = np.empty((n_frames, 3))
     gram = np.empty((3, 3))
     mean = np.empty((3, 3))
-    d = np.empty((3, 3))
     centre = np.empty(3)
     noise = np.empty((n_frames, 6))
     reference_noise = np.zeros((3, 3))
@@ -1377,13 +1398,12 @@ def _rotation_spreads(
             reference_noise = nearest.T @ reference_inertia_inv[t] @ nearest
         covariance = moving_inertia_inv[t] + reference_noise
         centre[:] = 0.0
+        # M read into registers once, and each frame's M' relative in registers: in arrays,
+        # every frame's stores could alias M and would have it read again.
+        nearest9 = rows9(nearest)
         for f in range(n_frames):
-            d[:] = 0.0
-            for i in range(3):
-                for j in range(3):
-                    for k in range(3):
-                        d[i, j] += nearest[k, i] * relative[f, k, j]
-            cos_theta = min(max((d[0, 0] + d[1, 1] + d[2, 2] - 1.0) / 2.0, -1.0), 1.0)
+            d = transposed_times9(nearest9, rows9(relative[f]))
+            cos_theta = min(max((d[0] + d[4] + d[8] - 1.0) / 2.0, -1.0), 1.0)
             theta = np.arccos(cos_theta)
             turned = theta > np.pi - 1e-4
             near_pi = near_pi or turned
@@ -1396,9 +1416,9 @@ def _rotation_spreads(
                 # small: a root costs a fraction of a sine. Near pi, whose vectors are taken
                 # again another way, the sine keeps them finite.
                 scale = theta / (2.0 * np.sqrt((1.0 - cos_theta) * (1.0 + cos_theta)))
-            vectors[f, 0] = scale * (d[2, 1] - d[1, 2])
-            vectors[f, 1] = scale * (d[0, 2] - d[2, 0])
-            vectors[f, 2] = scale * (d[1, 0] - d[0, 1])
+            vectors[f, 0] = scale * (d[7] - d[5])
+            vectors[f, 1] = scale * (d[2] - d[6])
+            vectors[f, 2] = scale * (d[3] - d[1])
             for i in range(3):
                 centre[i] += vectors[f, i]
         for i in range(3):

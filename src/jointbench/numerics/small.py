@@ -29,6 +29,7 @@ __all__ = [
     "inverse3_into",
     "rotated3_into",
     "rotated3_upper",
+    "rotated9_upper",
     "rows9",
     "skew9",
     "solve_into",
@@ -121,37 +122,40 @@ def rotated3_into(rotation: np.ndarray, matrix: np.ndarray, out: np.ndarray) -> 
 @kernel
 def rotated3_upper(rotation: np.ndarray, matrix: np.ndarray) -> tuple:
     """The upper triangle ``(s00, s01, s02, s11, s12, s22)`` of ``R M R'`` for a rotation ``R``
-    ``(3, 3)`` and a symmetric ``M`` ``(3, 3)``: ``R M`` row by row, then the entries of its
-    product with ``R'``. A compiled kernel: the entries stay in registers."""
-    left = (
-        _row_times(rotation, 0, matrix),
-        _row_times(rotation, 1, matrix),
-        _row_times(rotation, 2, matrix),
-    )
-    return (
-        _dot_row(left[0], rotation, 0),
-        _dot_row(left[0], rotation, 1),
-        _dot_row(left[0], rotation, 2),
-        _dot_row(left[1], rotation, 1),
-        _dot_row(left[1], rotation, 2),
-        _dot_row(left[2], rotation, 2),
-    )
+    ``(3, 3)`` and a symmetric ``M`` ``(3, 3)`` (:func:`rotated9_upper`). A compiled kernel."""
+    return rotated9_upper(rows9(rotation), rows9(matrix))
 
 
 @kernel
-def _row_times(a: np.ndarray, i: int, b: np.ndarray) -> tuple:
-    """Row ``i`` of ``a b`` for ``(3, 3)`` matrices, as three numbers. A compiled kernel."""
-    return (
-        a[i, 0] * b[0, 0] + a[i, 1] * b[1, 0] + a[i, 2] * b[2, 0],
-        a[i, 0] * b[0, 1] + a[i, 1] * b[1, 1] + a[i, 2] * b[2, 1],
-        a[i, 0] * b[0, 2] + a[i, 1] * b[1, 2] + a[i, 2] * b[2, 2],
+def rotated9_upper(rotation: tuple, matrix: tuple) -> tuple:
+    """:func:`rotated3_upper` of 9-number matrices: ``L = R M`` row by row, then the entries of
+    ``L R'``. A compiled kernel: the entries stay in registers, and a loop over many ``R`` can
+    run several at once (every index is a constant)."""
+    r0, r1, r2, r3, r4, r5, r6, r7, r8 = rotation
+    m0, m1, m2, m3, m4, m5, m6, m7, m8 = matrix
+    l00, l01, l02 = (
+        r0 * m0 + r1 * m3 + r2 * m6,
+        r0 * m1 + r1 * m4 + r2 * m7,
+        r0 * m2 + r1 * m5 + r2 * m8,
     )
-
-
-@kernel
-def _dot_row(u: tuple, a: np.ndarray, j: int) -> float:
-    """``u . a[j]``, three numbers with row ``j`` of a ``(3, 3)`` matrix. A compiled kernel."""
-    return u[0] * a[j, 0] + u[1] * a[j, 1] + u[2] * a[j, 2]
+    l10, l11, l12 = (
+        r3 * m0 + r4 * m3 + r5 * m6,
+        r3 * m1 + r4 * m4 + r5 * m7,
+        r3 * m2 + r4 * m5 + r5 * m8,
+    )
+    l20, l21, l22 = (
+        r6 * m0 + r7 * m3 + r8 * m6,
+        r6 * m1 + r7 * m4 + r8 * m7,
+        r6 * m2 + r7 * m5 + r8 * m8,
+    )
+    return (
+        l00 * r0 + l01 * r1 + l02 * r2,
+        l00 * r3 + l01 * r4 + l02 * r5,
+        l00 * r6 + l01 * r7 + l02 * r8,
+        l10 * r3 + l11 * r4 + l12 * r5,
+        l10 * r6 + l11 * r7 + l12 * r8,
+        l20 * r6 + l21 * r7 + l22 * r8,
+    )
 
 
 @kernel
