@@ -1,7 +1,8 @@
 """What a workflow job imports: each loads what its own work needs, not the whole package.
 
 Every job is a fresh interpreter, so what its script imports is paid once per job: matplotlib,
-scipy.stats and the recording readers cost seconds of CPU between them. Each check runs in a
+scipy.stats and the recording readers cost seconds of CPU between them. So is what the workflow
+imports as it starts, once per ``snakemake`` invocation (every dry run). Each check runs in a
 subprocess, which starts with nothing imported.
 """
 
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import json
+import re
 import subprocess
 import sys
 import textwrap
@@ -19,8 +21,9 @@ from workflow_copy import ROOT
 import jointbench
 
 SCRIPTS = ROOT / "workflow" / "scripts"
-# Nothing at start-up needs these: figures import matplotlib when they draw.
-NEVER = ("matplotlib", "mpl_toolkits", "scipy.stats", "ezc3d", "jointbench.io")
+# Nothing at start-up needs these: figures import matplotlib when they draw, and the checks that
+# read a distribution function import scipy.special when they test (jointbench.numerics.special).
+NEVER = ("matplotlib", "mpl_toolkits", "scipy.stats", "scipy.special", "ezc3d", "jointbench.io")
 # The jobs that simulate, fit poses, estimate, collect and summarise render and check nothing.
 RUN_SIDE = (
     "simulate",
@@ -69,6 +72,26 @@ def _script_imports(scripts: tuple[str, ...]) -> str:
         lines += [ast.unparse(n) for n in tree.body if isinstance(n, ast.Import | ast.ImportFrom)]
     assert lines, scripts
     return "\n".join(lines)
+
+
+# An import statement at the top level of a Snakefile or rule file, over its lines.
+_WORKFLOW_IMPORT = re.compile(r"^(?:from \S+ )?import (?:\([^)]*\)|.*)$", re.MULTILINE)
+
+
+def _workflow_imports() -> str:
+    """The import statements of the Snakefile and of every rule file it can include."""
+    files = [ROOT / "Snakefile", *sorted((ROOT / "workflow" / "rules").rglob("*.smk"))]
+    lines = [m.group(0) for path in files for m in _WORKFLOW_IMPORT.finditer(path.read_text())]
+    assert any("jointbench" in line for line in lines), lines
+    return "\n".join(lines)
+
+
+def test_the_workflows_start_imports_nothing_only_a_job_needs():
+    """What every ``snakemake`` invocation pays before it plans: the package's configuration,
+    rules and fingerprints, never the drawing nor scipy.special."""
+    loaded = _loaded(_workflow_imports())
+    assert "jointbench.report" in loaded and "jointbench.running.run" in loaded
+    assert not _within(loaded, NEVER), _within(loaded, NEVER)
 
 
 def test_every_script_is_checked_here():

@@ -45,10 +45,10 @@ from dataclasses import dataclass
 from itertools import combinations, pairwise
 
 import numpy as np
-from scipy.special import chdtri
 
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import _horn_rotations, best_rotation
+from jointbench.numerics.special import scipy_special
 
 __all__ = [
     "MAX_EXCHANGE_MARKERS",
@@ -1023,8 +1023,8 @@ def _exchange_levels(n_markers: int, rules: ArtefactRules) -> tuple[float, float
     exchange of labels explains it; chi-square quantiles with one degree of freedom per pair."""
     n_pairs = n_markers * (n_markers - 1) // 2
     return (
-        float(chdtri(n_pairs, rules.swap_far_probability)),
-        float(chdtri(n_pairs, rules.swap_near_probability)),
+        float(scipy_special().chdtri(n_pairs, rules.swap_far_probability)),
+        float(scipy_special().chdtri(n_pairs, rules.swap_near_probability)),
     )
 
 
@@ -1578,7 +1578,7 @@ def _told_pairs(
         for pair in members
     ]
     ranked = [members[k] for k in np.argsort(misfits, kind="stable")]
-    margin = float(chdtri(1, rules.swap_near_probability)) * noise_mm**2
+    margin = float(scipy_special().chdtri(1, rules.swap_near_probability)) * noise_mm**2
     if all(misfit - min(misfits) > margin for misfit in sorted(misfits)[1:]):
         return ranked[:1]
     return ranked

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.numerics.special import scipy_special
 from jointbench.resultfiles.formatting import margin_words, words
 
 __all__ = ["TYPES", "Verdict", "binomial_interval", "describe", "evaluate", "wilson_interval"]
@@ -140,15 +141,12 @@ def _binomial_quantile(q: float, trials: int, proportion: float) -> int:
     """The smallest count ``k`` with ``P(X ≤ k) ≥ q`` for ``X ~ Binomial(trials, proportion)``
     and ``0 < q < 1``: ``scipy.stats.binom.ppf``, from ``scipy.special``, which costs a fraction
     of ``scipy.stats`` to import (tests/test_tolerance.py compares the two)."""
-    # Imported here: the workflow's start and the render jobs load this module for its
-    # registry of tolerance kinds, and scipy.special costs them a quarter of a second.
-    from scipy import special
-
     if not (trials >= 0 and 0 <= proportion <= 1):
         raise ValueError(f"Binomial({trials}, {proportion}) is not a distribution")
     # bdtrik inverts the cdf continued to real k, so the quantile is its ceiling or one below:
     # start below and step up to the first count whose cdf reaches q. bdtrik is NaN where the
     # count is surely or nearly surely 0 (no trials, a proportion below ~1e-16): start at 0.
+    special = scipy_special()
     guess = special.bdtrik(q, trials, proportion)
     k = max(math.ceil(guess) - 1, 0) if math.isfinite(guess) else 0
     while special.bdtr(k, trials, proportion) < q:

@@ -140,7 +140,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special
 
 from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated, one_trial
@@ -195,6 +194,7 @@ from jointbench.numerics.small import (
     transposed_applied9,
     transposed_times9,
 )
+from jointbench.numerics.special import scipy_special
 
 __all__ = [
     "MAX_NOISE_KURTOSIS",
@@ -1079,6 +1079,7 @@ def _model_p_value(
     g)``), whether it lies above its expectation, and how it reads. ``residual``: ``None`` for
     a given noise, else the rigid-body residuals' dof and inflation, for the F form
     ``(chi2 / dof) ~ F(dof / g, dof_r / g_r)``."""
+    special = scipy_special()
     if residual is None:
         upper = float(special.chdtrc(dof / inflation, chi2 / inflation))
         lower = float(special.chdtr(dof / inflation, chi2 / inflation))
@@ -1183,6 +1184,7 @@ def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
         return ""
     ratio = variances[0] / variances[1]
     shape = (proximal.dof, distal.dof, ratio)
+    special = scipy_special()
     p_value = min(2.0 * min(float(special.fdtr(*shape)), float(special.fdtrc(*shape))), 1.0)
     if p_value >= ROTATION_ALPHA:
         return ""

@@ -228,6 +228,7 @@ from jointbench.estimators.results import (
 from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import tangent_basis_into
+from jointbench.numerics.special import scipy_special
 
 __all__ = [
     "AMBIGUOUS_APART_DEG",
@@ -355,8 +356,6 @@ def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit | None:
     ``dof s^2``, ``lambda`` the largest eigenvalue of the direction's block of ``(H / 2)^-1``.
     ``None`` where ``H`` is not positive definite (the cost has no minimum to measure at) or
     the residuals have no degrees of freedom."""
-    from scipy.special import fdtrc  # only a user's checked call reads it
-
     if at.inverse is None or at.dof < 1:
         return None
     inverse, least = at.inverse, at.least
@@ -367,7 +366,7 @@ def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit | None:
         ratio = math.inf if variance > 0.0 else math.nan
     kurtosis = at.n_residuals * at.fourths / at.cost**2 - 3.0 if at.cost > 0.0 else 0.0
     shrink = 2.0 / (2.0 + max(kurtosis, 0.0))
-    p_value = float(fdtrc(at.dof * shrink, noise_dof * shrink, ratio))
+    p_value = float(scipy_special().fdtrc(at.dof * shrink, noise_dof * shrink, ratio))
     excess = max(least - at.dof * noise_variance, 0.0)
     reach = max(float(np.linalg.eigvalsh(2.0 * inverse[:2, :2])[-1]), 0.0)
     return Misfit(ratio, p_value, math.degrees(math.sqrt(excess * reach)))

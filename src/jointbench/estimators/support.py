@@ -173,6 +173,7 @@ from jointbench.numerics.small import (
     tangent_basis_into,
     transposed_times9,
 )
+from jointbench.numerics.special import scipy_special
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
 
@@ -1881,11 +1882,8 @@ def _rotation_test(
     rms = np.sqrt(raw.sum(axis=1) / n_frames)
     second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
     noise = np.where(exact, 1.0, variance)
-    # fdtrc(d1, d2, x) is the F survival function (scipy.stats would import far more). Imported
-    # here: only a user's checked call assesses support, and the simulated studies' estimate
-    # jobs would pay a third of a second each for scipy.special.
-    from scipy.special import fdtrc
-
+    # fdtrc(d1, d2, x) is the F survival function (scipy.stats would import far more).
+    fdtrc = scipy_special().fdtrc
     any_dof = 3 * (n_frames - 1)
     # A hinge fits each frame's angle, its axis and the offset normal to it: two frames are
     # always on one, and leave nothing to test.
@@ -1985,7 +1983,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
     tested = numbers[:, 5:14]  # (RMS, F ratio, dof) of each of the three tests
-    p_values = _fdtrc()(tested[:, 2::3], numbers[:, 4:5], tested[:, 1::3]).tolist()
+    p_values = scipy_special().fdtrc(tested[:, 2::3], numbers[:, 4:5], tested[:, 1::3]).tolist()
     rows = numbers[:, : len(_ONE_SEGMENT_COLUMNS)].tolist()
     no_pose = [_no_pose_reason(row) for row in rows]
     # The hinge is given the candidate axis that explains the data better.
@@ -2049,7 +2047,7 @@ def _noise_directions(
             markers[chosen], numbers[chosen, 0], ranks, blocks, _FLEX, ROUNDING
         )
     found = by_direction.judged(
-        markers if every else markers[posed], found, _noise_critical_ratio, _fdtrc()
+        markers if every else markers[posed], found, _noise_critical_ratio, scipy_special().fdtrc
     )
     return dict(zip(posed, found, strict=True))
 
@@ -2059,16 +2057,7 @@ def _noise_critical_ratio(dof: int) -> float:
     """The F ratio on ``(5, dof)`` degrees of freedom beyond which the noise-direction test
     rejects (:data:`jointbench.estimators.noise_directions.NOISE_DIRECTION_ALPHA`), held per
     ``dof``: the F quantile once per recording length, not per checked call."""
-    return float(_fdtri()(5.0, dof, 1.0 - by_direction.NOISE_DIRECTION_ALPHA))
-
-
-@functools.cache
-def _fdtri():
-    """``scipy.special.fdtri(d1, d2, p)``, the F quantile, imported on first use as
-    :func:`_fdtrc` is."""
-    from scipy.special import fdtri
-
-    return fdtri
+    return float(scipy_special().fdtri(5.0, dof, 1.0 - by_direction.NOISE_DIRECTION_ALPHA))
 
 
 def _frames_per_independent(frames: _Frames) -> int:
@@ -2077,18 +2066,6 @@ def _frames_per_independent(frames: _Frames) -> int:
     if not frames.dependent():
         return 1
     return max(1, round(frames.n_frames / frames.independent))
-
-
-@functools.cache
-def _fdtrc():
-    """``scipy.special.fdtrc(d1, d2, x)``, the F survival function (scipy.stats would import
-    far more), imported on the first verdict: only a user's checked call assesses support, and
-    the simulated studies' estimate jobs would pay a third of a second each for
-    scipy.special. Held after that: an import statement per verdict costs a share of a
-    one-trial check."""
-    from scipy.special import fdtrc
-
-    return fdtrc
 
 
 def _no_pose_reason(row: list[float]) -> str | None:
@@ -2492,8 +2469,7 @@ def _without_poses(
     Rigidity between markers, and rotation about more than one axis, are not tested here: the
     status always says so.
     """
-    from scipy.special import fdtrc
-
+    fdtrc = scipy_special().fdtrc
     markers = arrays[-1]
     n_frames, n_markers, _ = markers.shape
     offsets = markers - markers[0, 0]
