@@ -24,6 +24,7 @@ from test_support_verdicts import _one_segment_cases
 
 from jointbench.estimators import support
 from jointbench.geometry import rotation_matrix, unit
+from jointbench.numerics import small
 
 PINNED = Path(__file__).parent / "snapshots" / "one_segment_numbers.npz"
 # The verdict's own columns, before the noise-direction test's.
@@ -142,6 +143,30 @@ def test_a_batch_computes_each_trials_numbers(pinned):
         stacked = np.stack([TRIALS[index] for index in group])
         verdict = support._one_segment_numbers(stacked, support._FLEX)[:, :VERDICT_COLUMNS]
         _assert_same(verdict, pinned[group])
+
+
+def test_each_frames_noise_is_the_packages_one_sandwich(monkeypatch):
+    """Each frame's noise ``J S J'`` (:func:`support._frame_noise_into`, both segments') is
+    formed by the package's one ``3 x 3`` sandwich, :func:`small.rotated9_upper`, and the
+    compiled kernel computes what its Python source does, to the last bit."""
+    rng = np.random.default_rng(11)
+    vectors = rng.normal(scale=0.8, size=(6, 3))
+    vectors[0] = 0.0  # the series branch
+    spread = rng.normal(size=(2, 3, 3))
+    moving, reference = spread @ np.swapaxes(spread, 1, 2)
+    compiled = np.empty((6, 6))
+    support._frame_noise_into(vectors, moving, reference, compiled)
+    sandwiches = []
+
+    def counted(jacobian: tuple, covariance: tuple) -> tuple:
+        sandwiches.append(covariance)
+        return small.rotated9_upper(jacobian, covariance)
+
+    monkeypatch.setattr(support, "rotated9_upper", counted)
+    python = np.empty((6, 6))
+    support._frame_noise_into.__wrapped__(vectors, moving, reference, python)
+    assert len(sandwiches) == 2 * len(vectors)
+    np.testing.assert_array_equal(compiled, python)
 
 
 def _write() -> None:

@@ -601,7 +601,7 @@ def _frame_normal(
     into ``system`` ``(k, k)`` (both triangles; zero where the pseudo-measurements go) and
     ``gradient`` ``(k,)``: ``sum_t B_t' W_t^-1 B_t`` and ``sum_t B_t' W_t^-1 e_t`` with rows
     ``B_t`` (``M_t``, or ``[R0, -R1]`` for the frame-0 model) and residuals ``e_t = y_t - B_t
-    x`` at the current unknowns ``x``, with the frames' ``weights`` ``(N-1, 6)``
+    x`` at the current unknowns ``x``, with the frames' ``weights`` ``(6, N-1)``
     (:func:`_frame_weights`). Each frame's terms are taken in its proximal body frame
     (:func:`_proximal_frames`: ``relative`` ``Q_t``, ``local`` ``z_t``): with ``V_t = (R0' W_t
     R0)^-1`` (:func:`_frame_weights`), ``B_t = R0 [I, -Q_t]`` (or ``R0 (I - Q_t)``) and
@@ -645,9 +645,9 @@ def _frame_chi2(
     gains: np.ndarray,
 ) -> float:
     """``sum_t e_t' W_t^-1 e_t`` at the unknowns ``state``, with the frames' ``weights``
-    (:func:`_frame_normal`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1 R_a(t)`` into
-    ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I - Q_t)' V_t
-    Q_t``. A compiled kernel."""
+    ``(6, N-1)`` (:func:`_frame_weights`) and, for paper C's model, ``F_a = sum_t M_t' W_t^-1
+    R_a(t)`` into ``gains`` ``(2, 3, 3)``: ``F_0 = sum_t (I - Q_t)' V_t``, ``F_1 = sum_t (I -
+    Q_t)' V_t Q_t``. A compiled kernel."""
     chi2 = 0.0
     gains[:, :, :] = 0.0
     proximal = state[3:6].copy() if frame0 else state[0:3].copy()

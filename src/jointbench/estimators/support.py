@@ -168,6 +168,7 @@ from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.reuse import one_call, remembered
 from jointbench.numerics.small import (
     inertia_into,
+    rotated9_upper,
     rows9,
     symmetric_eigen_into,
     tangent_basis_into,
@@ -1176,42 +1177,10 @@ def _frame_noise_into(
             s10 - half2, s11, s12 + half0,
             s20 + half1, s21 - half0, s22,
         )  # fmt: skip
-        on_right = _sandwich_upper(right, moving)
-        on_left = _sandwich_upper(left, reference)
+        on_right = rotated9_upper(right, moving)
+        on_left = rotated9_upper(left, reference)
         for e in range(6):
             noise[f, e] = on_right[e] + on_left[e]
-
-
-@kernel
-def _sandwich_upper(jacobian: tuple, covariance: tuple) -> tuple:
-    """The upper triangle of ``jacobian covariance jacobian'`` (9-number matrices), 6 numbers in
-    the order of :data:`_UPPER`. A compiled kernel."""
-    j0, j1, j2, j3, j4, j5, j6, j7, j8 = jacobian
-    c0, c1, c2, c3, c4, c5, c6, c7, c8 = covariance
-    # Row i of J C, then its products with the rows j >= i of J.
-    a0, a1, a2 = (
-        j0 * c0 + (j1 * c3 + j2 * c6),
-        j0 * c1 + (j1 * c4 + j2 * c7),
-        j0 * c2 + (j1 * c5 + j2 * c8),
-    )
-    b0, b1, b2 = (
-        j3 * c0 + (j4 * c3 + j5 * c6),
-        j3 * c1 + (j4 * c4 + j5 * c7),
-        j3 * c2 + (j4 * c5 + j5 * c8),
-    )
-    d0, d1, d2 = (
-        j6 * c0 + (j7 * c3 + j8 * c6),
-        j6 * c1 + (j7 * c4 + j8 * c7),
-        j6 * c2 + (j7 * c5 + j8 * c8),
-    )
-    return (
-        a0 * j0 + a1 * j1 + a2 * j2,
-        a0 * j3 + a1 * j4 + a2 * j5,
-        a0 * j6 + a1 * j7 + a2 * j8,
-        b0 * j3 + b1 * j4 + b2 * j5,
-        b0 * j6 + b1 * j7 + b2 * j8,
-        d0 * j6 + d1 * j7 + d2 * j8,
-    )
 
 
 @kernel

@@ -128,9 +128,10 @@ def rotated3_upper(rotation: np.ndarray, matrix: np.ndarray) -> tuple:
 
 @kernel
 def rotated9_upper(rotation: tuple, matrix: tuple) -> tuple:
-    """:func:`rotated3_upper` of 9-number matrices: ``L = R M`` row by row, then the entries of
-    ``L R'``. A compiled kernel: the entries stay in registers, and a loop over many ``R`` can
-    run several at once (every index is a constant)."""
+    """:func:`rotated3_upper` of 9-number matrices, by rows: ``L = R M`` row by row, then the
+    entries of ``L R'``; ``R`` need not be a rotation (the sandwich ``J M J'`` of any ``3 x 3``
+    ``J``, a Jacobian, say). A compiled kernel: the entries stay in registers, and a loop over
+    many ``R`` can run several at once (every index is a constant)."""
     r0, r1, r2, r3, r4, r5, r6, r7, r8 = rotation
     m0, m1, m2, m3, m4, m5, m6, m7, m8 = matrix
     l00, l01, l02 = (
