@@ -301,7 +301,7 @@ def test_a_pose_fit_stopped_by_its_iteration_limit_is_anchored_at_frame_0(max_it
 
 def test_the_model_test_reads_the_residuals_the_poses_leave():
     """The residuals ``x_fi - (R_f b_i + t_f)`` the poses leave on their markers are formed
-    in one place (:func:`segment_poses.pose_residuals`), its compiled part and its Python
+    in one place (:func:`segment_poses._pose_residuals`), its compiled part and its Python
     source alike: their sum of squares is the poses' ``residual_ss``, the sum of their
     lengths' fourth powers the poses' ``residual_fourths``, which paper C's model test reads
     the noise's kurtosis from."""
@@ -313,7 +313,7 @@ def test_the_model_test_reads_the_residuals_the_poses_leave():
     explicit = markers - np.einsum("fij,mj->fmi", poses.rotation, poses.body)
     explicit = explicit - poses.translation[:, None, :]
     fourths = np.sum(np.sum(explicit**2, axis=-1) ** 2)
-    residuals, summed = segment_poses.pose_residuals(
+    residuals, summed = segment_poses._pose_residuals(
         poses.markers, poses.rotation, poses.translation, poses.body
     )
     np.testing.assert_allclose(residuals, explicit, atol=1e-9)

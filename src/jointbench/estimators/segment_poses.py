@@ -31,7 +31,6 @@ __all__ = [
     "POSE_MIN_FRAMES",
     "AlteredPoses",
     "SegmentPoses",
-    "pose_residuals",
     "pose_segments",
     "precision_on_poses",
     "residual_differs",
@@ -107,7 +106,7 @@ class SegmentPoses:
                 f"{what}: dof is {self.dof}, not the {dof} their shapes give "
                 "(3 (n_markers - 2) (n_frames - 1))"
             )
-        residual, fourths = pose_residuals(**arrays)
+        residual, fourths = _pose_residuals(**arrays)
         found = float(np.sum(residual * residual))
         if self.residual_ss is not None:
             residual_ss = _checked_residual(what, found, self.residual_ss, arrays["markers"])
@@ -265,7 +264,7 @@ def _segment_poses(
     )
 
 
-def pose_residuals(
+def _pose_residuals(
     markers: np.ndarray, rotation: np.ndarray, translation: np.ndarray, body: np.ndarray
 ) -> tuple[np.ndarray, float]:
     """``markers - (R_f b_m + t_f)`` ``(N, n, 3)`` [mm]: what the poses ``rotation`` ``(N, 3,
