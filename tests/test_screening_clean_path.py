@@ -160,6 +160,44 @@ def test_the_bound_is_tight_where_a_swap_is_held_by_one_frame():
             assert not bounded
 
 
+def _triangles(seed: int, n_cases: int):
+    """Seeded trials ``(n_frames, 3, 3)`` [mm] of triangles of sides of tens of mm, as the
+    benchmark's segments are, under noise of a few tenths to 2 mm, of every kind."""
+    rng = np.random.default_rng(seed)
+    for _ in range(n_cases):
+        body = rng.normal(scale=40.0, size=(3, 3))
+        n_frames = int(rng.choice([20, 120, 1200]))
+        markers = _moving(rng, body, n_frames, float(rng.choice([0.2, 0.5, 1.0, 2.0])))
+        yield _spoilt(rng, markers, KINDS[int(rng.integers(len(KINDS)))])
+
+
+def test_the_bound_at_the_anchor_clears_only_what_the_test_clears():
+    """:func:`screening._unexchanged_from_anchor`, the bound with its first step taken at the
+    test's own anchor frame (where the frames' distances rank alike): on seeded trials of every
+    kind it never clears one that the whole distance test flags, and it clears many that the
+    bound through the largest departure (:func:`screening._surely_unexchanged`) leaves to the
+    test."""
+    cleared_by_anchor_alone = 0
+    for markers in [*_cases(20261206, 600, (20, 40, 120, 400)), *_triangles(5, 400)]:
+        n_markers = markers.shape[1]
+        distances = screening._pair_distances(markers)
+        if not screening._ranked_alike(distances):  # the anchor is another frame's
+            continue
+        far, near = screening._exchange_levels(n_markers, RULES)
+        medians = screening._medians(distances)
+        typical = distances[:, screening._nearest(distances, medians)].copy()
+        largest_sq = screening._largest_departure_sq(distances, medians)
+        moved = screening._relabelled_pairs(n_markers)
+        if screening._unexchanged_from_anchor(
+            distances, moved, typical, medians, largest_sq, far, near
+        ):
+            assert not _distance_test_swaps(markers)
+            cleared_by_anchor_alone += not screening._surely_unexchanged(
+                distances, medians, n_markers, far, near
+            )
+    assert cleared_by_anchor_alone > 40, cleared_by_anchor_alone
+
+
 def _found(screen, markers: np.ndarray):
     """``(artefacts, swaps)`` that ``screen`` (``screening.screen`` or ``find_artefacts``)
     finds in ``markers``, or the message of the error it raises."""
