@@ -357,13 +357,16 @@ def _median_by_band(values: np.ndarray) -> tuple[bool, float]:
 def _select_sweeping(values: np.ndarray, k: int) -> float:
     """The ``k``-th smallest of ``values`` ``(n,)``, which hold no NaN, reordering them so that
     none before it is greater and none after it is less. Each round sweeps the range left
-    about the median of its first, middle and last value: those less than it first, then
-    those equal. A sweep adds each comparison to a count rather than branching on it, for in
-    measured values it is true as often as not, and a mispredicted branch costs more than the
-    sweep; it is written out twice, as a kernel call per sweep would cost more than a short
-    sweep. A compiled kernel."""
+    about the median of its first, middle and last value, those less than it first, and goes
+    on in the part that holds the ``k``-th: above the pivot, that part starts with the values
+    equal to it, so a second sweep, for those, is needed only where none was less (then the
+    range would not shrink), which distinct values, as measured ones are, seldom meet. A
+    sweep adds each comparison to a count rather than branching on it, for in measured
+    values it is true as often as not, and a mispredicted branch costs more than the sweep;
+    it is written out twice, as a kernel call per sweep would cost more than a short sweep.
+    A compiled kernel."""
     low, high = 0, values.size
-    while True:
+    while high - low > 1:
         first, middle, last = values[low], values[(low + high) >> 1], values[high - 1]
         pivot = max(min(first, middle), min(max(first, middle), last))
         less = low
@@ -372,10 +375,13 @@ def _select_sweeping(values: np.ndarray, k: int) -> float:
             values[index] = values[less]
             values[less] = value
             less += value < pivot
+        # The pivot is one of the values, so fewer than all are less.
         if k < less:
             high = less
             continue
-        # The pivot is one of the values, so the range shrinks in either case.
+        if less > low:
+            low = less
+            continue
         equal = less
         for index in range(less, high):
             value = values[index]
@@ -385,6 +391,7 @@ def _select_sweeping(values: np.ndarray, k: int) -> float:
         if k < equal:
             return pivot
         low = equal
+    return values[low]
 
 
 @kernel
