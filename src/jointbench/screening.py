@@ -263,7 +263,9 @@ def _medians(values: np.ndarray) -> np.ndarray:
 def _median_in_place(values: np.ndarray) -> float:
     """The median of ``values`` ``(n,)``, NaN if empty, perhaps reordering them: the middle
     value, or ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values
-    without NaN have one order, in which any selection finds the same numbers:
+    without NaN have one order, in which any selection finds the same numbers (equal ones:
+    -0.0 and 0.0 are equal in it, so a zero median's sign depends on the selection, which the
+    screen's distances and departures, never -0.0, do not meet):
     :func:`_select_sweeping` is the fastest at every count, measured on values new to each
     call, as a trial's are (the same values over and over let the branch predictor learn a
     quickselect's branches and hide their cost); from :data:`_BAND_MIN_VALUES` values up it
