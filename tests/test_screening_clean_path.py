@@ -100,10 +100,10 @@ def _cases(seed: int, n_cases: int, frames: tuple[int, ...]):
         yield _spoilt(rng, markers, KINDS[int(rng.integers(len(KINDS)))])
 
 
-def _distance_test_swaps(markers: np.ndarray) -> bool:
-    """Whether the whole distance test finds a swapped frame in ``markers``."""
-    far, near = screening._exchange_levels(markers.shape[1], RULES)
-    exchange, _, _ = screening._exchange_test(markers, far, near, RULES.swap_min_frames)
+def _distance_test_swaps(markers: np.ndarray, rules: screening.ArtefactRules = RULES) -> bool:
+    """Whether the whole distance test, under ``rules``, finds a swapped frame in ``markers``."""
+    far, near = screening._exchange_levels(markers.shape[1], rules)
+    exchange, _, _ = screening._exchange_test(markers, far, near, rules.swap_min_frames)
     return bool((exchange >= 0).any())
 
 
@@ -158,6 +158,63 @@ def test_the_bound_is_tight_where_a_swap_is_held_by_one_frame():
             markers[70, [i, j]] = markers[70, [j, i]]
             bounded, _ = _check_verdict(markers)
             assert not bounded
+
+
+def _triangles(seed: int, n_cases: int):
+    """Seeded trials ``(n_frames, 3, 3)`` [mm] of triangles of sides of tens of mm, as the
+    benchmark's segments are, under noise of a few tenths to 2 mm, of every kind."""
+    rng = np.random.default_rng(seed)
+    for _ in range(n_cases):
+        body = rng.normal(scale=40.0, size=(3, 3))
+        n_frames = int(rng.choice([20, 120, 1200]))
+        markers = _moving(rng, body, n_frames, float(rng.choice([0.2, 0.5, 1.0, 2.0])))
+        yield _spoilt(rng, markers, KINDS[int(rng.integers(len(KINDS)))])
+
+
+# Rules whose near level (chi2 within which an exchange explains a frame) exceeds the far one.
+NEAR_ABOVE_FAR = screening.ArtefactRules(swap_far_probability=0.3, swap_near_probability=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("rules", "least_cleared", "flags_some"),
+    [(RULES, 40, False), (NEAR_ABOVE_FAR, 5, True)],
+    ids=["default", "near above far"],
+)
+def test_the_bound_at_the_anchor_clears_only_what_the_test_clears(rules, least_cleared, flags_some):
+    """:func:`screening._unexchanged_from_anchor`, the bound with its first step taken at the
+    test's own anchor frame (where the frames' distances rank alike): on seeded trials of every
+    kind it never clears one that the whole distance test flags, and it clears many that the
+    bound through the largest departure (:func:`screening._surely_unexchanged`) leaves to the
+    test.
+
+    Where the frames' distances rank alike, an exchange moves no frame's distances nearer to
+    distances ranked as they are (each exchanged pair of values meets the typical pair in the
+    opposite order), so where the far level is above the near one, as by default, the whole
+    test flags none of these trials and the clearance is not put to the test: the rules whose
+    near level is above the far one let the test flag some, which the bound must not clear
+    (a bound clearing every trial whose distances rank alike passes under the default)."""
+    cleared_by_anchor_alone = flagged = 0
+    for markers in [*_cases(20261206, 600, (20, 40, 120, 400)), *_triangles(5, 400)]:
+        n_markers = markers.shape[1]
+        distances = screening._pair_distances(markers)
+        if not screening._ranked_alike(distances):  # the anchor is another frame's
+            continue
+        far, near = screening._exchange_levels(n_markers, rules)
+        medians = screening._medians(distances)
+        typical = distances[:, screening._nearest(distances, medians)].copy()
+        largest_sq = screening._largest_departure_sq(distances, medians)
+        moved = screening._relabelled_pairs(n_markers)
+        swapped = _distance_test_swaps(markers, rules)
+        flagged += swapped
+        if screening._unexchanged_from_anchor(
+            distances, moved, typical, medians, largest_sq, far, near
+        ):
+            assert not swapped
+            cleared_by_anchor_alone += not screening._surely_unexchanged(
+                distances, medians, n_markers, far, near
+            )
+    assert cleared_by_anchor_alone > least_cleared, cleared_by_anchor_alone
+    assert (flagged > 0) == flags_some, flagged
 
 
 def _found(screen, markers: np.ndarray):

@@ -167,9 +167,10 @@ if __name__ == "__main__":
 
 
 def test_the_medians_are_those_numbas_median_finds():
-    """The in-place selection gives the number Numba's ``np.median`` gives, bit for bit: for
-    odd and even counts, ties, infinities and NaN (which leave no order, so that the number
-    depends on how it is found), and none; from ``_BAND_MIN_VALUES`` up also where the sample
+    """The in-place selection gives the number Numba's ``np.median`` gives (equal, so that a
+    zero's sign may differ, :func:`screening._median_in_place`): for odd and even counts,
+    ties, infinities and NaN (which leave no order, so that the number depends on how it is
+    found), and none; from ``_BAND_MIN_VALUES`` up also where the sample
     of every 8th value misses the middle (``"strided"``, the whole selection's answer)."""
     numba_median = numba.njit(lambda values: np.median(values))
     rng = np.random.default_rng(11)

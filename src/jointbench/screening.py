@@ -263,7 +263,9 @@ def _medians(values: np.ndarray) -> np.ndarray:
 def _median_in_place(values: np.ndarray) -> float:
     """The median of ``values`` ``(n,)``, NaN if empty, perhaps reordering them: the middle
     value, or ``(a + b) / 2`` of the middle two; ``np.median`` would first copy them. Values
-    without NaN have one order, in which any selection finds the same numbers:
+    without NaN have one order, in which any selection finds the same numbers (equal ones:
+    -0.0 and 0.0 are equal in it, so a zero median's sign depends on the selection, which the
+    screen's distances and departures, never -0.0, do not meet):
     :func:`_select_sweeping` is the fastest at every count, measured on values new to each
     call, as a trial's are (the same values over and over let the branch predictor learn a
     quickselect's branches and hide their cost); from :data:`_BAND_MIN_VALUES` values up it
@@ -357,13 +359,16 @@ def _median_by_band(values: np.ndarray) -> tuple[bool, float]:
 def _select_sweeping(values: np.ndarray, k: int) -> float:
     """The ``k``-th smallest of ``values`` ``(n,)``, which hold no NaN, reordering them so that
     none before it is greater and none after it is less. Each round sweeps the range left
-    about the median of its first, middle and last value: those less than it first, then
-    those equal. A sweep adds each comparison to a count rather than branching on it, for in
-    measured values it is true as often as not, and a mispredicted branch costs more than the
-    sweep; it is written out twice, as a kernel call per sweep would cost more than a short
-    sweep. A compiled kernel."""
+    about the median of its first, middle and last value, those less than it first, and goes
+    on in the part that holds the ``k``-th: above the pivot, that part starts with the values
+    equal to it, so a second sweep, for those, is needed only where none was less (then the
+    range would not shrink), which distinct values, as measured ones are, seldom meet. A
+    sweep adds each comparison to a count rather than branching on it, for in measured
+    values it is true as often as not, and a mispredicted branch costs more than the sweep;
+    it is written out twice, as a kernel call per sweep would cost more than a short sweep.
+    A compiled kernel."""
     low, high = 0, values.size
-    while True:
+    while high - low > 1:
         first, middle, last = values[low], values[(low + high) >> 1], values[high - 1]
         pivot = max(min(first, middle), min(max(first, middle), last))
         less = low
@@ -372,10 +377,13 @@ def _select_sweeping(values: np.ndarray, k: int) -> float:
             values[index] = values[less]
             values[less] = value
             less += value < pivot
+        # The pivot is one of the values, so fewer than all are less.
         if k < less:
             high = less
             continue
-        # The pivot is one of the values, so the range shrinks in either case.
+        if less > low:
+            low = less
+            continue
         equal = less
         for index in range(less, high):
             value = values[index]
@@ -385,6 +393,7 @@ def _select_sweeping(values: np.ndarray, k: int) -> float:
         if k < equal:
             return pivot
         low = equal
+    return values[low]
 
 
 @kernel
@@ -1074,9 +1083,10 @@ def _judge_frames(
     (:func:`_pair_distances`) of the frames it judges, of a cluster of ``n_markers``, and
     their rows' ``medians`` ``(n_pairs,)`` [mm] (:func:`_medians`): per frame the exchange
     (-1 for none) and the squared distance misfit [mm^2], and the noise of one distance [mm].
-    With ``verdict``, only whether any frame has an exchange counts: where no frame is
-    relabelled and :func:`_within_far` shows every frame within the far level, no frame has
-    one, and the misfits and the noise are left NaN. A compiled kernel."""
+    With ``verdict``, only whether any frame has an exchange counts: where the bound at the
+    anchor frame shows none (:func:`_unexchanged_from_anchor`), or no frame is relabelled and
+    :func:`_within_far` shows every frame within the far level, no frame has one, and the
+    misfits and the noise are left NaN. A compiled kernel."""
     largest_sq = _largest_departure_sq(distances, medians) if verdict else np.nan
     return _judged(
         distances, medians, _relabelled_pairs(n_markers), -1, largest_sq, far, near, verdict
@@ -1103,16 +1113,22 @@ def _judged(
     # distances and the aligned ones, which each median selection reorders in place.
     work = np.empty_like(distances)
     ranked = _ranked_alike(distances)
-    spread = _median_departure(distances, medians, work) if ranked else np.nan
     if ranked:
         # Sorting each frame's distances then moves whole rows, which changes no row's median,
         # no frame's largest departure and not the set of departures: the anchor and its noise
         # are the labelled distances' own.
         anchor = nearest if nearest >= 0 else _nearest(distances, medians)
+        typical = distances[:, anchor].copy()
+        if verdict and _unexchanged_from_anchor(
+            distances, moved, typical, medians, largest_sq, far, near
+        ):
+            return np.full(n_frames, -1), np.full(n_frames, np.nan), np.nan
+        spread = _median_departure(distances, medians, work)
         noise = spread
     else:
+        spread = np.nan
         anchor, noise = _anchor_frame(distances, work)
-    typical = distances[:, anchor].copy()
+        typical = distances[:, anchor].copy()
     allowed = _distinct_exchanges(moved, typical, noise, far, near)
     allowed[0] = True
     candidates = _candidates(distances, moved, typical, allowed)
@@ -2008,13 +2024,63 @@ def _unexchanged_by_bound(
     """:func:`_surely_unexchanged`, given ``moved`` (:func:`_relabelled_pairs` of the cluster)
     and ``largest_sq`` (:func:`_largest_departure_sq` of the distances and ``medians``). A
     compiled kernel."""
+    largest, least, ratio = _bound_terms(moved, medians, largest_sq, far, near)
+    return 6.0 * largest < least and largest < ratio * least
+
+
+@kernel
+def _unswapped_by_bound(
+    moved: np.ndarray, medians: np.ndarray, largest_sq: float, far: float, near: float
+) -> bool:
+    """Step 2 of :func:`_surely_unexchanged` alone, ``U < r S``: where the distance test
+    relabels no frame, its reference distances are ``medians`` and it finds no swapped frame,
+    whatever the noise. ``moved`` and ``largest_sq`` as for :func:`_unexchanged_by_bound`. A
+    compiled kernel."""
+    largest, least, ratio = _bound_terms(moved, medians, largest_sq, far, near)
+    return largest < ratio * least
+
+
+@kernel
+def _bound_terms(
+    moved: np.ndarray, medians: np.ndarray, largest_sq: float, far: float, near: float
+) -> tuple[float, float, float]:
+    """The terms of :func:`_surely_unexchanged`'s bound: ``U`` [mm] with its margins, ``S``
+    [mm] (NaN where the cluster has no exchange, which fails every comparison) and ``r``. A
+    compiled kernel."""
     sizes_sq = _exchange_sizes_sq(moved, medians)
-    if sizes_sq.size < 2:
-        return False  # no exchange to bound
-    least = np.sqrt(np.min(sizes_sq[1:]))
+    least = np.sqrt(np.min(sizes_sq[1:])) if sizes_sq.size >= 2 else np.nan
     largest = np.sqrt(largest_sq) * (1.0 + 1e-6) + 1e-150
     ratio = np.sqrt(far) / (np.sqrt(far) + np.sqrt(near))
-    return 6.0 * largest < least and largest < ratio * least
+    return largest, least, ratio
+
+
+@kernel
+def _unexchanged_from_anchor(
+    distances: np.ndarray,
+    moved: np.ndarray,
+    typical: np.ndarray,
+    medians: np.ndarray,
+    largest_sq: float,
+    far: float,
+    near: float,
+) -> bool:
+    """Whether the distance test's verdict on ``distances`` ``(n_pairs, n_frames)`` [mm], with
+    their rows' ``medians`` ``(n_pairs,)`` [mm], is shown to be "no swapped frame" where its
+    anchor frame's distances are ``typical`` ``(n_pairs,)`` [mm] (the labelled distances'
+    own anchor, :func:`_judged`), without the noise's median; ``False`` means not shown.
+    ``moved`` and ``largest_sq`` as for :func:`_unexchanged_by_bound`. A compiled kernel.
+
+    It is :func:`_surely_unexchanged`'s bound with step 1 taken at the anchor itself instead
+    of through ``U``: no frame is a candidate of any exchange (:func:`_candidates`, every
+    exchange allowed). The exchanges the test allows are some of those, so the least size it
+    compares with is no less and its candidates are among these (the same numbers, computed
+    the same way): none, and the test relabels no frame. Its reference distances are then
+    ``medians``, and step 2 (:func:`_unswapped_by_bound`) shows that it finds no swapped
+    frame."""
+    every = np.ones(moved.shape[0], dtype=np.bool_)
+    if _candidates(distances, moved, typical, every).size:
+        return False
+    return _unswapped_by_bound(moved, medians, largest_sq, far, near)
 
 
 def _rigid_misfits(markers: np.ndarray, typical: int, fitted: bool) -> tuple[float, float]:
