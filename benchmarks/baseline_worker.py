@@ -4,12 +4,13 @@
 
 Usage::
 
-    PYTHONPATH=<checkout>/src python benchmarks/baseline_worker.py TRIALS.npz CALLS
+    PYTHONPATH=<checkout>/src python benchmarks/baseline_worker.py TRIALS.npz CALLS [CLOCK]
 
 ``TRIALS.npz`` holds, per data set ``<kind>|<method>|<label>``, the marker arrays
 ``<key>|<argument index>`` stacked over trials. Each method is timed as the benchmark times
 today's: one untimed warm-up call, then ``CALLS`` calls cycling through the trials, the median
-wall-clock time per call. Prints one JSON object ``{key: seconds}`` (NaN where the checkout
+time per call by ``CLOCK``, the name of a function of :mod:`time` (``perf_counter``, wall-clock
+time, by default). Prints one JSON object ``{key: seconds}`` (NaN where the checkout
 does not have the method or the call fails). Uses only the public API, which every version
 has.
 """
@@ -32,18 +33,18 @@ _PUBLIC = {
 }
 
 
-def _median_call(fit, trials: list[tuple[np.ndarray, ...]], calls: int) -> float:
+def _median_call(fit, trials: list[tuple[np.ndarray, ...]], calls: int, clock) -> float:
     fit(*trials[0])
     timings = []
     for call in range(calls):
         trial = trials[call % len(trials)]
-        start = time.perf_counter()
+        start = clock()
         fit(*trial)
-        timings.append(time.perf_counter() - start)
+        timings.append(clock() - start)
     return statistics.median(timings)
 
 
-def main(path: str, calls: int) -> dict[str, float]:
+def main(path: str, calls: int, clock: str = "perf_counter") -> dict[str, float]:
     stored = np.load(path)
     keys = sorted({name.rsplit("|", 1)[0] for name in stored.files})
     timings: dict[str, float] = {}
@@ -60,11 +61,18 @@ def main(path: str, calls: int) -> dict[str, float]:
             return _PUBLIC[kind](*arrays, method=method)
 
         try:
-            timings[key] = _median_call(fit, trials, calls)
+            timings[key] = _median_call(fit, trials, calls, getattr(time, clock))
         except Exception:  # an old version's failure is a missing number, not a crash
             timings[key] = float("nan")
     return timings
 
 
 if __name__ == "__main__":
-    print(json.dumps({"jointbench": jointbench.__file__, **main(sys.argv[1], int(sys.argv[2]))}))
+    print(
+        json.dumps(
+            {
+                "jointbench": jointbench.__file__,
+                **main(sys.argv[1], int(sys.argv[2]), *sys.argv[3:4]),
+            }
+        )
+    )

@@ -30,8 +30,10 @@ hinge trials of 3 + 3 markers x 1200 frames. Each method is timed call by call o
 trials, its three calls (alone, checked, public) in alternating blocks of the same trials after
 an untimed first call each (:func:`time_variants`), its many-trial forms likewise
 (:func:`time_batched`); medians are reported with the targets, and kinds with no registered
-method are skipped. Timings are wall-clock on a shared machine: run twice before trusting a
-failure.
+method are skipped. Timings are wall-clock by default (``--clock wall``); ``--clock cpu`` times
+the process's CPU time instead (``time.process_time``), which another process's load on a
+shared machine does not lengthen, though it still slows the call through the caches and memory
+it shares. On a shared machine run twice before trusting a failure.
 """
 
 from __future__ import annotations
@@ -194,9 +196,17 @@ def _n_segments(kind: str, name: str) -> int:
     return max(1, len(required))
 
 
+#: The clocks a timing may read, by ``--clock`` name: the name of a function of :mod:`time`
+#: (the baseline worker reads the same function by that name).
+CLOCKS = {"wall": "perf_counter", "cpu": "process_time"}
+
+#: A clock: seconds since an arbitrary origin.
+Clock = Callable[[], float]
+
+
 class Timed(NamedTuple):
-    """One variant's timing: median wall-clock seconds per call (NaN if it failed), the calls
-    timed and a note (an error, or trials that did not converge)."""
+    """One variant's timing: median seconds per call by the clock it was timed with (NaN if it
+    failed), the calls timed and a note (an error, or trials that did not converge)."""
 
     seconds: float
     calls: int
@@ -204,10 +214,15 @@ class Timed(NamedTuple):
 
 
 def time_variants(
-    fits: dict[str, Callable], data: DataSet, seconds: float, min_calls: int, max_calls: int
+    fits: dict[str, Callable],
+    data: DataSet,
+    seconds: float,
+    min_calls: int,
+    max_calls: int,
+    clock: Clock = time.perf_counter,
 ) -> dict[str, Timed]:
     """:class:`Timed` of each of ``fits`` (the variants of one method: alone, checked, public)
-    called on the trials of ``data``, by the same name.
+    called on the trials of ``data``, by the same name, each call timed by ``clock``.
 
     Each variant is first called once untimed, before the clock starts: the imports, the
     compilation of kernels and the caches of a first call are not what is measured, and must not
@@ -215,8 +230,8 @@ def time_variants(
     of distinct trials in turn, the order rotating from round to round, so that every variant
     meets the same windows of the machine's load and their ratios compare like with like. The
     rounds stop when every variant has ``max_calls`` calls, or, once each has ``min_calls``,
-    when they have used ``seconds`` each. A variant that raises is reported (its note) and
-    dropped; the others go on.
+    when they have used ``seconds`` each (of wall-clock time, whatever ``clock``). A variant
+    that raises is reported (its note) and dropped; the others go on.
     """
     timings: dict[str, list[float]] = {name: [] for name in fits}
     notes = dict.fromkeys(fits, "")
@@ -241,7 +256,7 @@ def time_variants(
         for name in live[shift:] + live[:shift]:
             try:
                 converged = _time_block(
-                    fits[name], block[: max_calls - len(timings[name])], timings[name]
+                    fits[name], block[: max_calls - len(timings[name])], timings[name], clock
                 )
             except Exception as error:
                 notes[name] = f"error: {type(error).__name__}: {error}"
@@ -259,14 +274,14 @@ def time_variants(
     }
 
 
-def _time_block(fit: Callable, trials: list, timings: list[float]) -> bool:
-    """Append the wall-clock seconds of ``fit(*trial)`` for each of ``trials`` to ``timings``;
-    whether every result converged."""
+def _time_block(fit: Callable, trials: list, timings: list[float], clock: Clock) -> bool:
+    """Append the seconds by ``clock`` of ``fit(*trial)`` for each of ``trials`` to
+    ``timings``; whether every result converged."""
     converged = True
     for trial in trials:
-        start = time.perf_counter()
+        start = clock()
         result = fit(*trial)
-        timings.append(time.perf_counter() - start)
+        timings.append(clock() - start)
         converged = converged and bool(result.converged)
     return converged
 
@@ -278,9 +293,14 @@ def _batch(data: DataSet, n_trials: int) -> list[np.ndarray]:
 
 
 def time_batched(
-    kind: str, name: str, data: DataSet, n_trials: int, repeats: int
+    kind: str,
+    name: str,
+    data: DataSet,
+    n_trials: int,
+    repeats: int,
+    clock: Clock = time.perf_counter,
 ) -> dict[str, tuple[float, str]]:
-    """Median over ``repeats`` of a batched call's wall-clock seconds divided by its trials, and a
+    """Median over ``repeats`` of a batched call's seconds by ``clock`` divided by its trials, and a
     note, for each variant of the many-trial form of method ``name``: ``"estimator"``, the bare
     form the study's estimate jobs run; ``"checked"``, the registry's checked form (input checks
     and support verdict per trial, as a user's call); and, for a pose-based method, ``"from
@@ -315,9 +335,9 @@ def time_batched(
         for variant in live[shift:] + live[:shift]:
             batched, options = variants[variant]
             try:
-                start = time.perf_counter()
+                start = clock()
                 outcomes = batched(*segments, **options)
-                timings[variant].append((time.perf_counter() - start) / n_trials)
+                timings[variant].append((clock() - start) / n_trials)
             except Exception as error:
                 notes[variant] = f"error: {type(error).__name__}: {error}"
                 continue
@@ -334,16 +354,18 @@ def time_batched(
     }
 
 
-def time_pose_fit(data: DataSet, n_trials: int, repeats: int) -> float:
-    """Median seconds per trial of fitting every segment's poses of a batch (with the checks
-    the pose-based methods make), which pose-based methods can share."""
+def time_pose_fit(
+    data: DataSet, n_trials: int, repeats: int, clock: Clock = time.perf_counter
+) -> float:
+    """Median seconds by ``clock`` per trial of fitting every segment's poses of a batch (with
+    the checks the pose-based methods make), which pose-based methods can share."""
     segments = _batch(data, n_trials)
     names = [f"segment {index}" for index in range(len(segments))]
     timings = []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start = clock()
         trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
-        timings.append((time.perf_counter() - start) / n_trials)
+        timings.append((clock() - start) / n_trials)
     return statistics.median(timings)
 
 
@@ -353,12 +375,13 @@ BASELINE_COMMIT = "235295a"
 
 
 def baseline_timings(
-    commit: str, jobs: dict[tuple[str, str, str], DataSet], calls: int
+    commit: str, jobs: dict[tuple[str, str, str], DataSet], calls: int, clock: str = "wall"
 ) -> dict[tuple[str, str, str], float]:
     """Median seconds per public call of ``commit``'s jointbench on the same trials, by
     ``(kind, method, data label)``: the commit is checked out into a temporary ``git
     worktree`` and timed in a subprocess (``benchmarks/baseline_worker.py``) whose
-    ``PYTHONPATH`` is that checkout's ``src``. NaN where it lacks the method."""
+    ``PYTHONPATH`` is that checkout's ``src``, by the clock named ``clock`` (a key of
+    :data:`CLOCKS`). NaN where it lacks the method."""
     repo = Path(__file__).resolve().parent.parent
     worker = Path(__file__).resolve().parent / "baseline_worker.py"
     with tempfile.TemporaryDirectory(prefix="jointbench-baseline-") as scratch:
@@ -377,7 +400,7 @@ def baseline_timings(
             np.savez(trials, **stacks)
             env = {**os.environ, "PYTHONPATH": str(checkout / "src")}
             found = subprocess.run(
-                [sys.executable, str(worker), str(trials), str(calls)],
+                [sys.executable, str(worker), str(trials), str(calls), CLOCKS[clock]],
                 check=True,
                 capture_output=True,
                 text=True,
@@ -450,11 +473,19 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--no-baseline", action="store_true", help="do not time the baseline")
     parser.add_argument(
+        "--clock",
+        choices=sorted(CLOCKS),
+        default="wall",
+        help="time each call by wall-clock time or by the process's CPU time (%(default)s)",
+    )
+    parser.add_argument(
         "--strict",
         action="store_true",
         help="exit with status 1 when a target or the checks' cost limit is missed",
     )
     args = parser.parse_args(argv)
+    clock = getattr(time, CLOCKS[args.clock])
+    clock_text = "wall-clock" if args.clock == "wall" else "process CPU"
 
     seconds = args.seconds if args.seconds is not None else (0.3 if args.quick else 3.0)
     max_calls = args.max_calls if args.max_calls is not None else (30 if args.quick else 400)
@@ -488,6 +519,7 @@ def main(argv: list[str] | None = None) -> int:
                     seconds,
                     min_calls,
                     max_calls,
+                    clock,
                 )
                 alone, held, api = timed["estimator"], timed["checked"], timed["public"]
                 note = alone.note or held.note or api.note
@@ -510,11 +542,11 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_baseline:
         jobs = {(kind, name, label): data_by_kind[kind][label] for kind, name, label, *_ in rows}
         calls = max(min_calls, min(max_calls, 100))
-        baseline = baseline_timings(args.baseline, jobs, calls)
+        baseline = baseline_timings(args.baseline, jobs, calls, args.clock)
     old = f"public call at {args.baseline}" if baseline else "baseline"
 
     print(
-        f"Estimator timings: median wall-clock seconds per call "
+        f"Estimator timings: median {clock_text} seconds per call "
         f"({'quick' if args.quick else 'full'} run; Python {platform.python_version()}, "
         f"NumPy {np.__version__}, {platform.machine()}). 'estimator': the registered function "
         "alone, as a study's estimate job calls it (the target applies to it); 'checked': "
@@ -553,8 +585,8 @@ def main(argv: list[str] | None = None) -> int:
 
     one_trial = {(kind, name, label): median for kind, name, label, _, median, *_ in rows}
     print(
-        "\nMany trials at once: median over repeats of the call's wall-clock time divided by its "
-        "trials; 'estimator' is the bare many-trial form the estimate jobs run and time (the "
+        f"\nMany trials at once: median over repeats of the call's {clock_text} time divided by "
+        "its trials; 'estimator' is the bare many-trial form the estimate jobs run and time (the "
         "target applies to it; a method without its own is fitted trial by trial), 'checked' the "
         "registry's checked form with every trial's input checks and support verdict, the "
         "variants called in turn in every repeat; "
@@ -574,7 +606,7 @@ def main(argv: list[str] | None = None) -> int:
         n_trials = max(4, n_trials // (8 if args.quick else 1))
         repeats = 3 if args.quick or target is None else 7
         data = data_by_kind[kind][label]
-        timed = time_batched(kind, name, data, n_trials, repeats)
+        timed = time_batched(kind, name, data, n_trials, repeats, clock)
         per_trial, note = timed["estimator"]
         checked, checked_note = timed["checked"]
         posed, _ = timed.get("from fitted poses", (float("nan"), ""))
@@ -601,7 +633,7 @@ def main(argv: list[str] | None = None) -> int:
             "shared by every pose-based method, costs per trial:\n"
         )
         for (kind, label), (n_trials, repeats) in sorted(pose_labels.items()):
-            seconds_per_trial = time_pose_fit(data_by_kind[kind][label], n_trials, repeats)
+            seconds_per_trial = time_pose_fit(data_by_kind[kind][label], n_trials, repeats, clock)
             print(f"- {kind}, {label}: {_format_seconds(seconds_per_trial)} (both segments' poses)")
     return 1 if failed and args.strict else 0
 

@@ -144,3 +144,40 @@ def test_the_check_stages_table_times_every_stage_of_each_method(capsys):
         cells = row.strip("| ").split(" | ")
         assert cells[0] == method
         assert all(float(cell.rstrip("×")) > 0.0 for cell in cells[1:])
+
+
+class _TickingClock:
+    """A clock that advances ``step`` seconds each time it is read."""
+
+    def __init__(self, step: float):
+        self.step, self.now, self.reads = step, 0.0, 0
+
+    def __call__(self) -> float:
+        self.reads += 1
+        self.now += self.step
+        return self.now
+
+
+def test_each_call_is_timed_by_the_clock_given(monkeypatch):
+    # --clock cpu reads the process's CPU time: every timing, one trial and many, must come from
+    # the clock handed in, not from a wall clock read beside it.
+    clock = _TickingClock(0.25)
+    fits = {name: _recording(name, []) for name in ("estimator", "checked")}
+    timed = bench.time_variants(fits, _data(), seconds=10.0, min_calls=2, max_calls=4, clock=clock)
+    assert {variant.seconds for variant in timed.values()} == {0.25}
+    assert clock.reads == 2 * 2 * 4
+
+    def many(kind, name, *, checked):
+        return lambda markers, **options: [SimpleNamespace(converged=True)] * len(markers)
+
+    monkeypatch.setattr(bench.registry, "many", many)
+    monkeypatch.setattr(bench, "pose_segments", lambda batched: None)
+    data = bench.DataSet("center", "3 x 120", [(bench.np.zeros((4, 3, 3)),) for _ in range(3)])
+    batched = bench.time_batched("center", "LS", data, n_trials=5, repeats=3, clock=clock)
+    assert {seconds for seconds, _ in batched.values()} == {0.25 / 5}
+
+
+def test_the_clocks_are_functions_of_time_the_baseline_worker_can_read_by_name():
+    assert bench.CLOCKS["wall"] == "perf_counter"
+    for name in bench.CLOCKS.values():
+        assert callable(getattr(time, name))
