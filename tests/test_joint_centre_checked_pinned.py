@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pinning import answer, assert_same, one_trial, rounding_moves
 from rigs import two_segments
 
 from jointbench.configuration.studies import get_study
@@ -117,31 +118,8 @@ def _options_for(method: str, options: dict) -> dict:
     return {key: value for key, value in options.items() if key == "noise_mm"}
 
 
-def _plain(value: object) -> object:
-    """``value`` as JSON: arrays as lists, non-finite numbers as strings."""
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, dict):
-        return {str(key): _plain(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(item) for item in value]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else repr(float(value))
-    return value
-
-
-def _answer(outcome: object) -> dict:
-    """What the pin holds of one trial's outcome."""
-    if isinstance(outcome, Exception):
-        return {"error": f"{type(outcome).__name__}: {outcome}"}
-    fields = ("center", "covariance", "converged", "iterations", "status", "cost", "method")
-    answer = {name: _plain(getattr(outcome, name)) for name in fields}
-    answer["diagnostics"] = _plain(outcome.diagnostics)
-    return answer
+#: What the pin holds of a trial's outcome beside its diagnostics.
+FIELDS = ("center", "covariance", "converged", "iterations", "status", "cost", "method")
 
 
 def _called(method: str, markers: tuple[np.ndarray, np.ndarray], options: dict) -> dict:
@@ -154,7 +132,10 @@ def _called(method: str, markers: tuple[np.ndarray, np.ndarray], options: dict) 
         except ValueError as error:
             each.append(error)
     many = registry.many("joint_center", method)(*markers, **options)
-    return {"one": [_answer(o) for o in each], "many": [_answer(o) for o in many]}
+    return {
+        "one": [answer(o, FIELDS) for o in each],
+        "many": [answer(o, FIELDS) for o in many],
+    }
 
 
 def _all_answers() -> dict:
@@ -162,85 +143,6 @@ def _all_answers() -> dict:
         case: {method: _called(method, trials, _options_for(method, options)) for method in METHODS}
         for case, (trials, options) in _cases().items()
     }
-
-
-def _one_trial(answers: dict) -> dict:
-    """What the pin keeps of ``answers``: the one-trial calls'."""
-    return {
-        case: {method: {"one": called["one"]} for method, called in methods.items()}
-        for case, methods in answers.items()
-    }
-
-
-def _as_one_trial(where: str) -> str:
-    """The pinned path a many-trial answer's number ``where`` is held to."""
-    return where.replace("/many[", "/one[")
-
-
-#: Numbers agree to this, relative where large.
-AGREE = 1e-9
-#: A number rounding moves by more than :data:`AGREE` agrees to this many times that move.
-ROUNDING_TIMES = 10.0
-#: The relative perturbation of the markers, one unit in the last place.
-ULP = 2.0**-52
-
-
-def _numbers(answer: object, where: str, out: dict[str, float]) -> dict[str, float]:
-    """Every number of ``answer`` (as JSON) by its path."""
-    if isinstance(answer, dict):
-        for key, value in answer.items():
-            _numbers(value, f"{where}/{key}", out)
-    elif isinstance(answer, list):
-        for index, value in enumerate(answer):
-            _numbers(value, f"{where}[{index}]", out)
-    elif isinstance(answer, float):
-        out[where] = answer
-    return out
-
-
-def _rounding(answers: dict) -> dict[str, float]:
-    """By path, the largest change of each number of ``answers`` under three perturbations of
-    every case's markers by one unit in the last place, where it is above what
-    :data:`AGREE` allows."""
-    pinned = _numbers(answers, "", {})
-    moved: dict[str, float] = {}
-    for seed in range(3):
-        rng = np.random.default_rng(seed)
-        for case, (trials, options) in _cases().items():
-            perturbed = tuple(m * (1.0 + ULP * rng.choice([-1.0, 1.0], m.shape)) for m in trials)
-            for method in METHODS:
-                again = _called(method, perturbed, _options_for(method, options))
-                for where, value in _numbers(again, f"/{case}/{method}", {}).items():
-                    if _as_one_trial(where) in pinned:
-                        where = _as_one_trial(where)
-                        change = abs(value - pinned[where])
-                        moved[where] = max(moved.get(where, 0.0), change)
-    return {
-        where: change
-        for where, change in moved.items()
-        if change > AGREE * max(1.0, abs(pinned[where])) / ROUNDING_TIMES
-    }
-
-
-def _assert_same(now: object, pinned: object, where: str, rounding: dict[str, float]) -> None:
-    """``now`` equals ``pinned``: strings and flags exactly, numbers to :data:`AGREE`
-    (relative where large) or :data:`ROUNDING_TIMES` their move by rounding (``rounding``, by
-    path)."""
-    if isinstance(pinned, dict):
-        assert isinstance(now, dict) and now.keys() == pinned.keys(), where
-        for key in pinned:
-            _assert_same(now[key], pinned[key], f"{where}/{key}", rounding)
-    elif isinstance(pinned, list):
-        assert isinstance(now, list) and len(now) == len(pinned), where
-        for index, (mine, theirs) in enumerate(zip(now, pinned, strict=True)):
-            _assert_same(mine, theirs, f"{where}[{index}]", rounding)
-    elif isinstance(pinned, float) and not isinstance(pinned, bool):
-        assert isinstance(now, (int, float)) and not isinstance(now, bool), where
-        moved = rounding.get(_as_one_trial(where), 0.0)
-        allowed = max(AGREE * max(1.0, abs(pinned)), ROUNDING_TIMES * moved)
-        assert abs(now - pinned) <= allowed, f"{where}: {now!r} != {pinned!r}"
-    else:
-        assert now == pinned and type(now) is type(pinned), f"{where}: {now!r} != {pinned!r}"
 
 
 @pytest.fixture(scope="module")
@@ -259,12 +161,12 @@ def test_checked_joint_centre_calls_answer_as_pinned(answers, pinned, case):
         one = pinned["answers"][case][method]["one"]
         for call in ("one", "many"):
             where = f"/{case}/{method}/{call}"
-            _assert_same(called[call], one, where, pinned["rounding"])
+            assert_same(called[call], one, where, pinned["rounding"])
 
 
 #: The cases whose fits are ill-conditioned (four frames, a hinge or nearly one) or whose
 #: chi^2 is rounding over rounding (noise-free): the only ones rounding may move by more than
-#: :data:`AGREE`.
+#: :data:`pinning.AGREE`.
 ROUNDING_BOUND = (
     "hip Nt=4",
     "hip Nt=200 noise-free",
@@ -303,10 +205,13 @@ def test_a_changed_number_fails_the_comparison(pinned):
     moved = json.loads(json.dumps(case))
     moved["center"][0] += 1e-7 * max(1.0, abs(moved["center"][0]))
     with pytest.raises(AssertionError):
-        _assert_same(moved, case, "moved", pinned["rounding"])
+        assert_same(moved, case, "moved", pinned["rounding"])
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["--rewrite"]:
-    written = _one_trial(_all_answers())
-    pin = {"answers": written, "rounding": _rounding(written)}
+    written = one_trial(_all_answers())
+    moved = rounding_moves(
+        written, _cases(), METHODS, lambda m, t, o: _called(m, t, _options_for(m, o))
+    )
+    pin = {"answers": written, "rounding": moved}
     PINNED.write_text(json.dumps(pin, indent=1, sort_keys=True) + "\n")
