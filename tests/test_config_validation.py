@@ -614,6 +614,108 @@ def test_a_field_the_chosen_motion_reads_passes(config, study, motions, override
     study_config.check_config(_with_motions(config, study, motions, overrides))
 
 
+# A field that shapes the trials only through a grid amplitude, written under a grid whose
+# every value of that amplitude is 0, changes no data: (study, grid changes, protocol
+# overrides, words the refusal has).
+_UNREAD_WITHOUT_AMPLITUDE = [
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"all": {"motion": "lissajous", "aa_cycles": 3.0}},
+        [
+            "config: studies.hinge.protocol.all.aa_cycles: 3.0 is not read",
+            "every aa_ratio of the grid is 0 (grid.aa_ratio [0.0])",
+        ],
+    ),
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"all": {"motion": "superimposed"}, "mcp": {"aa_phase_deg": 30.0}},
+        ["config: studies.hinge.protocol.mcp.aa_phase_deg: 30.0 ", "every aa_ratio"],
+    ),
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"knee": {"rotation_order": "aa_fe"}},
+        ["config: studies.hinge.protocol.knee.rotation_order: 'aa_fe' ", "every aa_ratio"],
+    ),
+    # Under all too where one joint takes it from there: no joint reads it from anywhere.
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"all": {"motion": "lissajous", "aa_phase_deg": 10.0}, "knee": {"aa_phase_deg": 20.0}},
+        ["config: studies.hinge.protocol.knee.aa_phase_deg: 20.0 ", "every aa_ratio"],
+    ),
+    (
+        "hip_sta",
+        {"sta_mm": [0.0]},
+        {"sta_rigid_share": 0.5},
+        [
+            "config: studies.hip_sta.protocol.sta_rigid_share: 0.5 is not read",
+            "every sta_mm of the grid is 0 (grid.sta_mm [0.0])",
+        ],
+    ),
+    (
+        "hip_sta",
+        {"sta_mm": [0.0]},
+        {"pelvis_sta_ratio": 0.3},
+        ["config: studies.hip_sta.protocol.pelvis_sta_ratio: 0.3 ", "every sta_mm"],
+    ),
+    (
+        "hip_sta",
+        {"sta_mm": [0.0], "motion": ["circumduction"]},
+        {"sta_reference_deg": 20.0},
+        ["config: studies.hip_sta.protocol.sta_reference_deg: 20.0 ", "every sta_mm"],
+    ),
+]
+
+
+def _with_grid(config, study, grid, overrides):
+    new = changed(config, study, ("protocol",), overrides)
+    new["studies"][study]["grid"].update(grid)
+    return new
+
+
+@pytest.mark.parametrize(
+    ("study", "grid", "overrides", "words"), _UNREAD_WITHOUT_AMPLITUDE, ids=str
+)
+def test_a_field_read_only_through_an_amplitude_the_grid_sets_to_0_is_refused_naming_it(
+    config, study, grid, overrides, words
+):
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(_with_grid(config, study, grid, overrides))
+    message = str(error.value)
+    assert message.startswith(words[0]), message
+    for word in words[1:]:
+        assert word in message, message
+
+
+@pytest.mark.parametrize(
+    ("study", "grid", "overrides"),
+    [
+        # One value above 0 of the amplitude, and the field is read.
+        ("hinge", {"aa_ratio": [0.0, 0.1]}, {"all": {"motion": "lissajous", "aa_cycles": 3.0}}),
+        ("hinge", {"aa_ratio": [0.0, 0.3]}, {"knee": {"rotation_order": "aa_fe"}}),
+        ("hip_sta", {"sta_mm": [0.0, 10.0]}, {"sta_rigid_share": 0.5, "pelvis_sta_ratio": 0.3}),
+        ("hip_sta", {"sta_mm": [0.0, 10.0]}, {"sta_reference_deg": 20.0}),
+        # A joint the grid does not run: its whole entry is unread, and not refused.
+        (
+            "hinge",
+            {"aa_ratio": [0.0], "protocol": ["mcp"]},
+            {"knee": {"motion": "lissajous", "aa_cycles": 3.0}},
+        ),
+        # Without the amplitude, the fields it does not touch are read as before.
+        ("hinge", {"aa_ratio": [0.0]}, {"all": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        ("hip_sta", {"sta_mm": [0.0]}, {"noise_mm": 1.0, "arc_turns": 2.0}),
+    ],
+    ids=str,
+)
+def test_a_field_read_through_an_amplitude_the_grid_sets_above_0_passes(
+    config, study, grid, overrides
+):
+    study_config.check_config(_with_grid(config, study, grid, overrides))
+
+
 def _tilt_at_the_middle(tilt_power: float) -> float:
     """The share of its RoM the thumb's simulated tilt reaches at the middle frame (of 121,
     whose middle is half-way through the trial)."""

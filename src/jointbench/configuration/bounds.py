@@ -18,10 +18,12 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge import AMPLITUDE_FIELDS as HINGE_AMPLITUDE_FIELDS
 from jointbench.simulate.hinge import MOTION_FIELDS as HINGE_MOTION_FIELDS
 from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
+from jointbench.simulate.hip_sta import AMPLITUDE_FIELDS as HIP_STA_AMPLITUDE_FIELDS
 from jointbench.simulate.hip_sta import FRAME_FIELDS, hip_angles, thigh_rotation
 from jointbench.simulate.hip_sta import MOTION_FIELDS as HIP_STA_MOTION_FIELDS
 from jointbench.simulate.noise import largest_noise_mm
@@ -218,6 +220,33 @@ def _unread_field(
     return None
 
 
+def _silenced_field(
+    written: Mapping, grid: Mapping, amplitude_fields: Mapping[str, Sequence[str]]
+) -> tuple[str, str] | None:
+    """``(field, grid key)`` for the first of the fields ``written`` that shapes the trials
+    only through an amplitude the grid sets (``amplitude_fields``: grid key -> the fields read
+    only where its value is above 0) while every value of that key in ``grid`` is 0; None if
+    there is none. No trial reads such a field, whatever the motion: like a field no motion of
+    the run reads (:func:`_unread_field`), a user who writes it believes the trials follow it."""
+    for key, fields in amplitude_fields.items():
+        if any(value != 0 for value in grid[key]):
+            continue
+        for field in written:
+            if field in fields:
+                return field, key
+    return None
+
+
+def _silenced_words(field: str, value: object, key: str, grid: Mapping) -> str:
+    """Why ``value`` written for ``field`` changes no data: every value of the grid's ``key``,
+    the amplitude through which alone it shapes the trials, is 0 (:func:`_silenced_field`)."""
+    return (
+        f"{value!r} is not read: every {key} of the grid is 0 (grid.{key} {list(grid[key])!r}), "
+        f"and {field} shapes the trials only where {key} is above 0: a value no trial reads "
+        f"changes no data; remove it, or add a value above 0 to grid.{key}"
+    )
+
+
 def _readers(field: str, motion_fields: Mapping[str, Sequence[str]]) -> list[str]:
     """The motions of ``motion_fields`` that read ``field``; none for a field every motion
     reads."""
@@ -226,13 +255,22 @@ def _readers(field: str, motion_fields: Mapping[str, Sequence[str]]) -> list[str
 
 def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     """A field the config writes for the joints the grid runs that no trial of theirs reads
-    from where it is written: under a joint's own entry, a field of
+    from where it is written: under a joint's own entry or ``all``, a field of
+    :data:`~jointbench.simulate.hinge.AMPLITUDE_FIELDS` where every ``aa_ratio`` of the grid
+    is 0 (no joint reads it then); under a joint's own entry, a field of
     :data:`~jointbench.simulate.hinge.MOTION_FIELDS` its motion does not read; under ``all``,
     a field that each of those joints either sets again under its own entry or, by its motion,
     does not read. Defaults are not written and not refused; nor is a field written for a
     joint the grid does not run, whose whole entry that run leaves unread."""
     overrides = settings.get("protocol") or {}
-    run = list(settings["grid"]["protocol"])
+    grid = settings["grid"]
+    run = list(grid["protocol"])
+    for entry in [*run, "all"]:
+        written = overrides.get(entry) or {}
+        silenced = _silenced_field(written, grid, HINGE_AMPLITUDE_FIELDS)
+        if silenced:
+            field, key = silenced
+            return f"protocol.{entry}.{field}", _silenced_words(field, written[field], key, grid)
     for joint in run:
         motion = protocol.joints[joint].motion
         unread = _unread_field(overrides.get(joint) or {}, (motion,), HINGE_MOTION_FIELDS)
@@ -360,10 +398,17 @@ def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
-    """A field of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that the config writes
-    and no motion of the grid reads. Defaults are not written and not refused."""
-    motions = settings["grid"]["motion"]
+    """A field the config writes that no trial of the grid reads: one of
+    :data:`~jointbench.simulate.hip_sta.AMPLITUDE_FIELDS` where every ``sta_mm`` of the grid
+    is 0, or of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that no motion of the grid
+    reads. Defaults are not written and not refused."""
+    grid = settings["grid"]
+    motions = grid["motion"]
     written = settings.get("protocol") or {}
+    silenced = _silenced_field(written, grid, HIP_STA_AMPLITUDE_FIELDS)
+    if silenced:
+        field, key = silenced
+        return f"protocol.{field}", _silenced_words(field, written[field], key, grid)
     unread = _unread_field(written, motions, HIP_STA_MOTION_FIELDS)
     if not unread:
         return None

@@ -84,6 +84,7 @@ from jointbench.simulate.noise import check_noise_level, isotropic_noise
 from jointbench.simulate.ranges import Angle, MarkerOffset, check_marker_offsets
 
 __all__ = [
+    "AMPLITUDE_FIELDS",
     "FE_AXIS",
     "HINGE_PROTOCOLS",
     "MOTIONS",
@@ -116,6 +117,16 @@ MOTION_FIELDS: dict[str, tuple[str, ...]] = {
     "sequential": (),
     "superimposed": ("aa_cycles", "aa_phase_deg"),
     "grid": (),
+}
+
+#: The fields of :class:`HingeProtocol` that shape the trials only through abduction–adduction,
+#: by the grid key that sets its amplitude: the AA wave's cycles and phase, and the order of the
+#: FE and AA rotations (``R_AA`` is the identity without AA, so both orders give ``R_FE``). Where
+#: every ``aa_ratio`` of the grid is 0 no trial reads them, whatever the motion; the config
+#: refuses one written for a joint the grid runs, as it does a field the motion does not read:
+#: :func:`jointbench.configuration.bounds.study_problem`.
+AMPLITUDE_FIELDS: dict[str, tuple[str, ...]] = {
+    "aa_ratio": ("aa_cycles", "aa_phase_deg", "rotation_order"),
 }
 
 #: The flexion–extension axis, the true axis of rotation, in the reference segment's frame.

@@ -115,6 +115,7 @@ from jointbench.simulate.ranges import (
 )
 
 __all__ = [
+    "AMPLITUDE_FIELDS",
     "FRAME_FIELDS",
     "MOTIONS",
     "MOTION_FIELDS",
@@ -137,6 +138,16 @@ MOTIONS = ("star_arc", "circumduction")
 MOTION_FIELDS: dict[str, tuple[str, ...]] = {
     "star_arc": ("star_azimuths_deg", "star_fraction", "arc_turns"),
     "circumduction": ("circumduction_turns",),
+}
+#: The fields of :class:`HipStaProtocol` that shape the trials only through the soft-tissue
+#: artefact, by the grid key that sets its amplitude: where ``sta_mm`` is 0 every marker's
+#: artefact is 0 whatever its reference excursion, rigid share or pelvis ratio
+#: (:func:`sta_field`; its draws, and so the noise after them, do not depend on them either).
+#: Where every ``sta_mm`` of the grid is 0 no trial reads them; the config refuses one written
+#: there, as it does a field no motion of the grid reads:
+#: :func:`jointbench.configuration.bounds.study_problem`.
+AMPLITUDE_FIELDS: dict[str, tuple[str, ...]] = {
+    "sta_mm": ("sta_reference_deg", "sta_rigid_share", "pelvis_sta_ratio"),
 }
 #: The protocol fields a trial's frames are read from (:attr:`HipStaProtocol.n_frames`).
 FRAME_FIELDS = ("duration_s", "fps")
