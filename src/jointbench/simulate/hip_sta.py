@@ -452,6 +452,12 @@ def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
     return "protocol." + ", ".join(FRAME_FIELDS)
 
 
+def frame_values(condition: Mapping[str, object], protocol: HipStaProtocol) -> dict[str, float]:
+    """The values of the fields :func:`frame_keys` names, :data:`FRAME_FIELDS`, under
+    ``protocol``: a refused count gives them, since it is neither one of them."""
+    return {field: getattr(protocol, field) for field in FRAME_FIELDS}
+
+
 STUDY = Study(
     name="hip_sta",
     # The two-segment estimators see both clusters as recorded; the one-segment centre methods
@@ -466,6 +472,7 @@ STUDY = Study(
     simulate=simulate,
     frame_count=frame_count,
     frame_keys=frame_keys,
+    frame_values=frame_values,
     grid_spec={
         "motion": GridValues(
             str,
