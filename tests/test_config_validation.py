@@ -716,12 +716,12 @@ def test_a_field_read_through_an_amplitude_the_grid_sets_above_0_passes(
     study_config.check_config(_with_grid(config, study, grid, overrides))
 
 
-def _tilt_at_the_middle(tilt_power: float) -> float:
+def _tilt_at_the_middle(tilt_power: float, frame: int = 60) -> float:
     """The share of its RoM the thumb's simulated tilt reaches at the middle frame (of 121,
-    whose middle is half-way through the trial)."""
+    whose middle is half-way through the trial), or at ``frame``."""
     rotations = cmc.spiral_rotations(40.0, 121, 2.0, tilt_power)
     # The tilt: the angle between the mean long axis z and where the rotation carries it.
-    return float(np.degrees(np.arccos(np.clip(rotations[60, 2, 2], -1.0, 1.0))) / 40.0)
+    return float(np.degrees(np.arccos(np.clip(rotations[frame, 2, 2], -1.0, 1.0))) / 40.0)
 
 
 @pytest.mark.parametrize("tilt_power", [82.0, 1e300, "just above"])
@@ -761,6 +761,49 @@ def test_a_refused_tilt_states_a_share_below_its_bound_and_a_largest_tilt_power_
     assert share < bounds.CMC_TILT_SHARE_BY_MIDDLE, message
     largest = float(re.search(rf"at most {number}", message).group(1))
     study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": largest}))
+
+
+@pytest.mark.parametrize("tilt_power", [1e-6, 1e-300, 0.1, "just below"])
+def test_a_tilt_that_leaves_the_thumb_at_its_rom_from_the_start_is_refused(config, tilt_power):
+    """At tilt_power 1e-6 the thumb jumps to its full RoM at the first frame after the start
+    and stays there: it does not begin from its mean position and circle out (paper A),
+    whatever RoM labels it."""
+    if tilt_power == "just below":
+        tilt_power = bounds.CMC_EARLIEST_TILT_POWER * (1 - 1e-9)
+    assert _tilt_at_the_middle(tilt_power) > 1 - bounds.CMC_TILT_SHARE_BY_MIDDLE
+    if tilt_power == 1e-6:
+        assert _tilt_at_the_middle(tilt_power, frame=1) > 0.999
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    assert message.startswith(f"config: studies.cmc.protocol.tilt_power: {tilt_power!r}"), message
+    assert "middle" in message and "circling out" in message, message
+    assert f"at least {bounds.CMC_EARLIEST_TILT_POWER!r}" in message, message
+
+
+@pytest.mark.parametrize("tilt_power", ["the earliest", 0.2, 0.5])
+def test_a_tilt_still_short_of_its_rom_by_the_middle_passes(config, tilt_power):
+    if tilt_power == "the earliest":
+        tilt_power = bounds.CMC_EARLIEST_TILT_POWER * (1 + 1e-9)
+    assert _tilt_at_the_middle(tilt_power) <= 1 - bounds.CMC_TILT_SHARE_BY_MIDDLE
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+
+
+@pytest.mark.parametrize("tilt_power", [0.152, 0.15200309, 1e-6])
+def test_a_refused_early_tilt_states_a_share_above_its_bound_and_a_least_tilt_power_that_passes(
+    config, tilt_power
+):
+    """Just below the bound, a share rounded to a few digits reads as the bound itself, and a
+    least tilt_power rounded down (0.152) is refused when typed back: the numbers the refusal
+    gives must be what the check compares."""
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    number = r"([0-9][0-9.e+-]*)"
+    share = float(re.search(rf"tilt to {number} of its RoM", message).group(1))
+    assert share > 1 - bounds.CMC_TILT_SHARE_BY_MIDDLE, message
+    least = float(re.search(rf"at least {number}", message).group(1))
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": least}))
 
 
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])

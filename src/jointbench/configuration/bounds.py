@@ -31,6 +31,7 @@ from jointbench.simulate.ranges import RESOLUTION_MM
 
 __all__ = [
     "AA_RATIO_BELOW",
+    "CMC_EARLIEST_TILT_POWER",
     "CMC_LATEST_TILT_POWER",
     "CMC_TILT_SHARE_BY_MIDDLE",
     "HIP_RESOLUTION_MM",
@@ -64,20 +65,28 @@ TRANSLATION_MM_RANGE = (100.0, 1e5)
 AA_RATIO_BELOW = 1.0
 
 #: The thumb CMC's circumduction spiral circles out over the trial: by its middle the tilt
-#: has reached at least this share of the RoM its condition names. Paper A: "The generated
-#: marker trajectories simulated thumb circumduction by beginning from a nominal mean position
-#: and circling out to increasing angles relative to the mean position." A thumb still within a
-#: tenth of its RoM of the mean half-way through (an order of magnitude short of the
-#: excursion its condition names) has not begun to circle out over the recording: it stays
-#: near its mean position and reaches its RoM only in the trial's last frames (at tilt_power
-#: 82 it barely leaves the mean before them). The tilt grows as the trial's
-#: fraction to ``tilt_power`` (:func:`~jointbench.simulate.cmc.spiral_rotations`), so the rule
-#: bounds ``tilt_power`` by :data:`CMC_LATEST_TILT_POWER`; a linear spiral (1) reaches half
-#: the RoM by the middle, the prior's latest-growing spiral (2) a quarter.
+#: has reached at least this share of the RoM its condition names, and is still at least this
+#: share short of it. Paper A: "The generated marker trajectories simulated thumb
+#: circumduction by beginning from a nominal mean position and circling out to increasing
+#: angles relative to the mean position." A thumb still within a tenth of its RoM of the mean
+#: half-way through (an order of magnitude short of the excursion its condition names) has not
+#: begun to circle out over the recording: it stays near its mean position and reaches its RoM
+#: only in the trial's last frames (at tilt_power 82 it barely leaves the mean before them).
+#: One already within a tenth of its RoM of it half-way through has circled out in the
+#: trial's first frames and stays at its RoM: it does not begin from its mean position and
+#: circle out to increasing angles over the recording (at tilt_power 1e-6 it is at its RoM
+#: from the first frame after the start). The tilt grows as the trial's fraction to
+#: ``tilt_power`` (:func:`~jointbench.simulate.cmc.spiral_rotations`), so the rule bounds
+#: ``tilt_power`` to [:data:`CMC_EARLIEST_TILT_POWER`, :data:`CMC_LATEST_TILT_POWER`]; a
+#: linear spiral (1) reaches half the RoM by the middle, the prior's earliest-growing spiral
+#: (0.5) 1/sqrt(2) of it, its latest-growing (2) a quarter.
 CMC_TILT_SHARE_BY_MIDDLE = 0.1
 #: The largest ``tilt_power`` whose spiral reaches :data:`CMC_TILT_SHARE_BY_MIDDLE` of its RoM
 #: by the middle of the trial: ``0.5 ** tilt_power >= share``.
 CMC_LATEST_TILT_POWER = math.log(CMC_TILT_SHARE_BY_MIDDLE) / math.log(0.5)
+#: The smallest ``tilt_power`` whose spiral is still :data:`CMC_TILT_SHARE_BY_MIDDLE` of its
+#: RoM short of it by the middle of the trial: ``0.5 ** tilt_power <= 1 - share``.
+CMC_EARLIEST_TILT_POWER = math.log(1.0 - CMC_TILT_SHARE_BY_MIDDLE) / math.log(0.5)
 
 #: The hip rig's pendulum rotations (distal relative to proximal, about x, y, z): paper C's rig
 #: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
@@ -182,19 +191,32 @@ def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
-    """``(key, why)`` when the thumb's spiral does not reach :data:`CMC_TILT_SHARE_BY_MIDDLE`
-    of its RoM by the middle of the trial, else None."""
-    if tilt_power <= CMC_LATEST_TILT_POWER:
-        return None
-    # Unrounded: near the bound, a share or a largest value rounded to a few digits would read
-    # as the bound itself, or be refused when typed back.
-    return "protocol.tilt_power", (
-        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power!r} of its RoM by the "
-        f"middle of the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its "
-        "mean position and reach its RoM only in the last frames, not circle out over the "
-        "recording (paper A: 'beginning from a nominal mean position and circling out to "
-        f"increasing angles'); at most {CMC_LATEST_TILT_POWER!r}"
-    )
+    """``(key, why)`` when the thumb's spiral has not reached :data:`CMC_TILT_SHARE_BY_MIDDLE`
+    of its RoM by the middle of the trial, or is no longer that share short of it, else
+    None."""
+    # Unrounded: near a bound, a share or a bound rounded to a few digits would read as the
+    # bound itself, or be refused when typed back.
+    share = 0.5**tilt_power
+    if tilt_power > CMC_LATEST_TILT_POWER:
+        return "protocol.tilt_power", (
+            f"{tilt_power!r} leaves the thumb's tilt at {share!r} of its RoM by the middle of "
+            f"the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its mean "
+            "position and reach its RoM only in the last frames, not circle out over the "
+            f"recording ({_CIRCLING_OUT}); at most {CMC_LATEST_TILT_POWER!r}"
+        )
+    if tilt_power < CMC_EARLIEST_TILT_POWER:
+        return "protocol.tilt_power", (
+            f"{tilt_power!r} takes the thumb's tilt to {share!r} of its RoM by the middle of "
+            f"the trial, more than {1.0 - CMC_TILT_SHARE_BY_MIDDLE:g}: it would reach its RoM "
+            "in the first frames and stay there, not circle out over the recording "
+            f"({_CIRCLING_OUT}); at least {CMC_EARLIEST_TILT_POWER!r}"
+        )
+    return None
+
+
+_CIRCLING_OUT = (
+    "paper A: 'beginning from a nominal mean position and circling out to increasing angles'"
+)
 
 
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
