@@ -156,6 +156,8 @@ class HingeProtocol:
     fe_cycles, aa_cycles : cycles of FE and AA over the recording ("lissajous"; "superimposed"
         uses ``aa_cycles``; "grid" and "sequential" read neither, :data:`MOTION_FIELDS`).
     aa_phase_deg : phase of the AA sinusoid relative to FE ("lissajous", "superimposed").
+        Neither it nor ``aa_cycles`` nor ``rotation_order`` shapes a trial without AA
+        (``aa_ratio`` 0, :data:`AMPLITUDE_FIELDS`).
     rotation_order : "fe_aa": ``R = R_FE(fe) R_AA(aa)``, AA about the axis carried by the moving
         segment (Grood & Suntay's floating axis), so the FE axis stays fixed in the reference
         frame, as paper B's model requires; "aa_fe": ``R = R_AA(aa) R_FE(fe)``, AA about the

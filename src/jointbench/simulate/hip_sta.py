@@ -166,7 +166,9 @@ class HipStaProtocol:
     ``circumduction_turns`` for the circumduction; pelvis sway ``pelvis_sway_mm``,
     ``pelvis_sway_deg`` per world axis at ``pelvis_sway_hz``. STA: amplitude defined at
     ``sta_reference_deg``, rigid share ``sta_rigid_share``, pelvis amplitude
-    ``pelvis_sta_ratio`` times the thigh's. See the module docstring for the formulas.
+    ``pelvis_sta_ratio`` times the thigh's; none of these three shapes a trial without
+    artefact (``sta_mm`` 0, :data:`AMPLITUDE_FIELDS`). See the module docstring for the
+    formulas.
     """
 
     duration_s: Duration = 12.0
