@@ -433,13 +433,29 @@ BAD = [
         "hip_sta",
         ("protocol",),
         {"star_fraction": 1.0},
-        ["studies.hip_sta.protocol.arc_turns, star_fraction, duration_s, fps: 1.0 arc turns"],
+        [
+            "studies.hip_sta.protocol.arc_turns, star_fraction, duration_s, fps: 1.0 arc turns",
+            # The values of the fields named, each the count depends on.
+            "over 0 frames (1 - star_fraction 1.0 of the 600 from duration_s 12.0, fps 50.0)",
+        ],
     ),
     (
         "hip_sta",
         ("protocol",),
-        {"circumduction_turns": 300},
-        ["studies.hip_sta.protocol.circumduction_turns, duration_s, fps: 300 circumduction"],
+        {"circumduction_turns": 300, "duration_s": 11.0},
+        [
+            "studies.hip_sta.protocol.circumduction_turns, duration_s, fps: 300 circumduction",
+            "over 550 frames (from duration_s 11.0, fps 50.0)",
+        ],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"star_azimuths_deg": [0.0, 45.0, 90.0, 135.0], "duration_s": 0.2},
+        [
+            "studies.hip_sta.protocol.star_azimuths_deg, star_fraction, duration_s, fps: 4 star",
+            "over 7 frames (star_fraction 0.7 of the 10 from duration_s 0.2, fps 50.0)",
+        ],
     ),
     (
         "hip_sta",

@@ -24,7 +24,12 @@ from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
 from jointbench.simulate.hip_sta import AMPLITUDE_FIELDS as HIP_STA_AMPLITUDE_FIELDS
-from jointbench.simulate.hip_sta import FRAME_FIELDS, hip_angles, thigh_rotation
+from jointbench.simulate.hip_sta import (
+    FRAME_FIELDS,
+    hip_angles,
+    recording_values,
+    thigh_rotation,
+)
 from jointbench.simulate.hip_sta import MOTION_FIELDS as HIP_STA_MOTION_FIELDS
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
@@ -38,6 +43,7 @@ __all__ = [
     "PELVIS_LENGTH_PER_WIDTH",
     "PELVIS_WIDTH_PER_DEPARTURE",
     "TRANSLATION_MM_RANGE",
+    "field_values",
     "line_spreads",
     "pelvis_departure",
     "pelvis_poses_problem",
@@ -448,6 +454,7 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
     motions = settings["grid"]["motion"]
     n_frames, star = protocol.n_frames, protocol.star_fraction
     frames = ", ".join(FRAME_FIELDS)  # the fields that set n_frames
+    recording = f"from {field_values(recording_values(protocol))}"
     stretches = []
     if "star_arc" in motions:
         stretches += [
@@ -456,18 +463,20 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
                 len(protocol.star_azimuths_deg),
                 star * n_frames,
                 "star sweeps (one per azimuth)",
+                f"star_fraction {star!r} of the {n_frames} {recording}",
             ),
             (
                 f"protocol.arc_turns, star_fraction, {frames}",
                 protocol.arc_turns,
                 (1 - star) * n_frames,
                 "arc turns",
+                f"1 - star_fraction {star!r} of the {n_frames} {recording}",
             ),
         ]
     if "circumduction" in motions:
         key = f"protocol.circumduction_turns, {frames}"
         turns = protocol.circumduction_turns
-        stretches.append((key, turns, n_frames, "circumduction turns"))
+        stretches.append((key, turns, n_frames, "circumduction turns", recording))
     return next((p for p in (_turns_problem(*stretch) for stretch in stretches) if p), None)
 
 
@@ -508,16 +517,25 @@ def principal_turns_mm(rotation: np.ndarray, markers_mm: Sequence[Sequence[float
     return largest_turn_mm(rotation @ axes, np.asarray(markers_mm, dtype=float) @ axes)
 
 
-def _turns_problem(key: str, turns: float, frames: float, what: str) -> tuple[str, str] | None:
+def _turns_problem(
+    key: str, turns: float, frames: float, what: str, source: str = ""
+) -> tuple[str, str] | None:
     """``(key, why)`` when ``turns`` of a periodic motion over ``frames`` frames are not fewer
-    than ``frames`` / :data:`SAMPLED_PER_TURN`, else None."""
+    than ``frames`` / :data:`SAMPLED_PER_TURN`, else None; ``source``, where the frames are
+    read from several fields, gives their values after the count."""
     if turns < frames / SAMPLED_PER_TURN:
         return None
     return key, (
-        f"{turns!r} {what} over {frames:.4g} frames are not fewer than half those frames: the "
-        "frames cannot show a motion of more than one turn per two frames (it would be "
-        "recorded as a slower one than configured)"
+        f"{turns!r} {what} over {frames:.4g} frames{f' ({source})' if source else ''} are not "
+        "fewer than half those frames: the frames cannot show a motion of more than one turn "
+        "per two frames (it would be recorded as a slower one than configured)"
     )
+
+
+def field_values(values: Mapping[str, object]) -> str:
+    """``values`` (protocol field -> value) in words, ``"duration_s 12.0, fps 50.0"``: what
+    a refusal naming several fields gives of each."""
+    return ", ".join(f"{field} {value!r}" for field, value in values.items())
 
 
 def _sta_reach_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:

@@ -13,7 +13,7 @@ from pathlib import Path
 import yaml
 
 from jointbench import declared
-from jointbench.configuration.bounds import study_problem, translation_problem
+from jointbench.configuration.bounds import field_values, study_problem, translation_problem
 from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
@@ -422,8 +422,7 @@ def _frame_values(spec: Study, condition: Mapping, protocol: object) -> str:
     (:attr:`~jointbench.simulate.Study.frame_values`); else nothing."""
     if spec.frame_values is None:
         return ""
-    values = spec.frame_values(condition, protocol)
-    return " (from " + ", ".join(f"{field} {value!r}" for field, value in values.items()) + ")"
+    return f" (from {field_values(spec.frame_values(condition, protocol))})"
 
 
 def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[str, str]:

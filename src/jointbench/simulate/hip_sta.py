@@ -123,6 +123,7 @@ __all__ = [
     "HipStaProtocol",
     "hip_angles",
     "nominal_recording",
+    "recording_values",
     "simulate",
     "sta_displacements",
     "sta_field",
@@ -454,10 +455,16 @@ def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
     return "protocol." + ", ".join(FRAME_FIELDS)
 
 
-def frame_values(condition: Mapping[str, object], protocol: HipStaProtocol) -> dict[str, float]:
-    """The values of the fields :func:`frame_keys` names, :data:`FRAME_FIELDS`, under
-    ``protocol``: a refused count gives them, since it is neither one of them."""
+def recording_values(protocol: HipStaProtocol) -> dict[str, float]:
+    """The values of :data:`FRAME_FIELDS` under ``protocol``, which a refusal of a count of
+    frames gives, since the count is neither one of them."""
     return {field: getattr(protocol, field) for field in FRAME_FIELDS}
+
+
+def frame_values(condition: Mapping[str, object], protocol: HipStaProtocol) -> dict[str, float]:
+    """The values of the fields :func:`frame_keys` names (:func:`recording_values`), whatever
+    the condition."""
+    return recording_values(protocol)
 
 
 STUDY = Study(
