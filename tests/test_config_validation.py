@@ -433,13 +433,29 @@ BAD = [
         "hip_sta",
         ("protocol",),
         {"star_fraction": 1.0},
-        ["studies.hip_sta.protocol.arc_turns, star_fraction, duration_s, fps: 1.0 arc turns"],
+        [
+            "studies.hip_sta.protocol.arc_turns, star_fraction, duration_s, fps: 1.0 arc turns",
+            # The values of the fields named, each the count depends on.
+            "over 0 frames (1 - star_fraction 1.0 of the 600 from duration_s 12.0, fps 50.0)",
+        ],
     ),
     (
         "hip_sta",
         ("protocol",),
-        {"circumduction_turns": 300},
-        ["studies.hip_sta.protocol.circumduction_turns, duration_s, fps: 300 circumduction"],
+        {"circumduction_turns": 300, "duration_s": 11.0},
+        [
+            "studies.hip_sta.protocol.circumduction_turns, duration_s, fps: 300 circumduction",
+            "over 550 frames (from duration_s 11.0, fps 50.0)",
+        ],
+    ),
+    (
+        "hip_sta",
+        ("protocol",),
+        {"star_azimuths_deg": [0.0, 45.0, 90.0, 135.0], "duration_s": 0.2},
+        [
+            "studies.hip_sta.protocol.star_azimuths_deg, star_fraction, duration_s, fps: 4 star",
+            "over 7 frames (star_fraction 0.7 of the 10 from duration_s 0.2, fps 50.0)",
+        ],
     ),
     (
         "hip_sta",
@@ -614,12 +630,114 @@ def test_a_field_the_chosen_motion_reads_passes(config, study, motions, override
     study_config.check_config(_with_motions(config, study, motions, overrides))
 
 
-def _tilt_at_the_middle(tilt_power: float) -> float:
+# A field that shapes the trials only through a grid amplitude, written under a grid whose
+# every value of that amplitude is 0, changes no data: (study, grid changes, protocol
+# overrides, words the refusal has).
+_UNREAD_WITHOUT_AMPLITUDE = [
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"all": {"motion": "lissajous", "aa_cycles": 3.0}},
+        [
+            "config: studies.hinge.protocol.all.aa_cycles: 3.0 is not read",
+            "every aa_ratio of the grid is 0 (grid.aa_ratio [0.0])",
+        ],
+    ),
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"all": {"motion": "superimposed"}, "mcp": {"aa_phase_deg": 30.0}},
+        ["config: studies.hinge.protocol.mcp.aa_phase_deg: 30.0 ", "every aa_ratio"],
+    ),
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"knee": {"rotation_order": "aa_fe"}},
+        ["config: studies.hinge.protocol.knee.rotation_order: 'aa_fe' ", "every aa_ratio"],
+    ),
+    # Under all too where one joint takes it from there: no joint reads it from anywhere.
+    (
+        "hinge",
+        {"aa_ratio": [0.0]},
+        {"all": {"motion": "lissajous", "aa_phase_deg": 10.0}, "knee": {"aa_phase_deg": 20.0}},
+        ["config: studies.hinge.protocol.knee.aa_phase_deg: 20.0 ", "every aa_ratio"],
+    ),
+    (
+        "hip_sta",
+        {"sta_mm": [0.0]},
+        {"sta_rigid_share": 0.5},
+        [
+            "config: studies.hip_sta.protocol.sta_rigid_share: 0.5 is not read",
+            "every sta_mm of the grid is 0 (grid.sta_mm [0.0])",
+        ],
+    ),
+    (
+        "hip_sta",
+        {"sta_mm": [0.0]},
+        {"pelvis_sta_ratio": 0.3},
+        ["config: studies.hip_sta.protocol.pelvis_sta_ratio: 0.3 ", "every sta_mm"],
+    ),
+    (
+        "hip_sta",
+        {"sta_mm": [0.0], "motion": ["circumduction"]},
+        {"sta_reference_deg": 20.0},
+        ["config: studies.hip_sta.protocol.sta_reference_deg: 20.0 ", "every sta_mm"],
+    ),
+]
+
+
+def _with_grid(config, study, grid, overrides):
+    new = changed(config, study, ("protocol",), overrides)
+    new["studies"][study]["grid"].update(grid)
+    return new
+
+
+@pytest.mark.parametrize(
+    ("study", "grid", "overrides", "words"), _UNREAD_WITHOUT_AMPLITUDE, ids=str
+)
+def test_a_field_read_only_through_an_amplitude_the_grid_sets_to_0_is_refused_naming_it(
+    config, study, grid, overrides, words
+):
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(_with_grid(config, study, grid, overrides))
+    message = str(error.value)
+    assert message.startswith(words[0]), message
+    for word in words[1:]:
+        assert word in message, message
+
+
+@pytest.mark.parametrize(
+    ("study", "grid", "overrides"),
+    [
+        # One value above 0 of the amplitude, and the field is read.
+        ("hinge", {"aa_ratio": [0.0, 0.1]}, {"all": {"motion": "lissajous", "aa_cycles": 3.0}}),
+        ("hinge", {"aa_ratio": [0.0, 0.3]}, {"knee": {"rotation_order": "aa_fe"}}),
+        ("hip_sta", {"sta_mm": [0.0, 10.0]}, {"sta_rigid_share": 0.5, "pelvis_sta_ratio": 0.3}),
+        ("hip_sta", {"sta_mm": [0.0, 10.0]}, {"sta_reference_deg": 20.0}),
+        # A joint the grid does not run: its whole entry is unread, and not refused.
+        (
+            "hinge",
+            {"aa_ratio": [0.0], "protocol": ["mcp"]},
+            {"knee": {"motion": "lissajous", "aa_cycles": 3.0}},
+        ),
+        # Without the amplitude, the fields it does not touch are read as before.
+        ("hinge", {"aa_ratio": [0.0]}, {"all": {"motion": "lissajous", "fe_cycles": 2.0}}),
+        ("hip_sta", {"sta_mm": [0.0]}, {"noise_mm": 1.0, "arc_turns": 2.0}),
+    ],
+    ids=str,
+)
+def test_a_field_read_through_an_amplitude_the_grid_sets_above_0_passes(
+    config, study, grid, overrides
+):
+    study_config.check_config(_with_grid(config, study, grid, overrides))
+
+
+def _tilt_at_the_middle(tilt_power: float, frame: int = 60) -> float:
     """The share of its RoM the thumb's simulated tilt reaches at the middle frame (of 121,
-    whose middle is half-way through the trial)."""
+    whose middle is half-way through the trial), or at ``frame``."""
     rotations = cmc.spiral_rotations(40.0, 121, 2.0, tilt_power)
     # The tilt: the angle between the mean long axis z and where the rotation carries it.
-    return float(np.degrees(np.arccos(np.clip(rotations[60, 2, 2], -1.0, 1.0))) / 40.0)
+    return float(np.degrees(np.arccos(np.clip(rotations[frame, 2, 2], -1.0, 1.0))) / 40.0)
 
 
 @pytest.mark.parametrize("tilt_power", [82.0, 1e300, "just above"])
@@ -659,6 +777,49 @@ def test_a_refused_tilt_states_a_share_below_its_bound_and_a_largest_tilt_power_
     assert share < bounds.CMC_TILT_SHARE_BY_MIDDLE, message
     largest = float(re.search(rf"at most {number}", message).group(1))
     study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": largest}))
+
+
+@pytest.mark.parametrize("tilt_power", [1e-6, 1e-300, 0.1, "just below"])
+def test_a_tilt_that_leaves_the_thumb_at_its_rom_from_the_start_is_refused(config, tilt_power):
+    """At tilt_power 1e-6 the thumb jumps to its full RoM at the first frame after the start
+    and stays there: it does not begin from its mean position and circle out (paper A),
+    whatever RoM labels it."""
+    if tilt_power == "just below":
+        tilt_power = bounds.CMC_EARLIEST_TILT_POWER * (1 - 1e-9)
+    assert _tilt_at_the_middle(tilt_power) > 1 - bounds.CMC_TILT_SHARE_BY_MIDDLE
+    if tilt_power == 1e-6:
+        assert _tilt_at_the_middle(tilt_power, frame=1) > 0.999
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    assert message.startswith(f"config: studies.cmc.protocol.tilt_power: {tilt_power!r}"), message
+    assert "middle" in message and "circling out" in message, message
+    assert f"at least {bounds.CMC_EARLIEST_TILT_POWER!r}" in message, message
+
+
+@pytest.mark.parametrize("tilt_power", ["the earliest", 0.2, 0.5])
+def test_a_tilt_still_short_of_its_rom_by_the_middle_passes(config, tilt_power):
+    if tilt_power == "the earliest":
+        tilt_power = bounds.CMC_EARLIEST_TILT_POWER * (1 + 1e-9)
+    assert _tilt_at_the_middle(tilt_power) <= 1 - bounds.CMC_TILT_SHARE_BY_MIDDLE
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+
+
+@pytest.mark.parametrize("tilt_power", [0.152, 0.15200309, 1e-6])
+def test_a_refused_early_tilt_states_a_share_above_its_bound_and_a_least_tilt_power_that_passes(
+    config, tilt_power
+):
+    """Just below the bound, a share rounded to a few digits reads as the bound itself, and a
+    least tilt_power rounded down (0.152) is refused when typed back: the numbers the refusal
+    gives must be what the check compares."""
+    with pytest.raises(ValueError) as error:
+        study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": tilt_power}))
+    message = str(error.value)
+    number = r"([0-9][0-9.e+-]*)"
+    share = float(re.search(rf"tilt to {number} of its RoM", message).group(1))
+    assert share > 1 - bounds.CMC_TILT_SHARE_BY_MIDDLE, message
+    least = float(re.search(rf"at least {number}", message).group(1))
+    study_config.check_config(changed(config, "cmc", ("protocol",), {"tilt_power": least}))
 
 
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e30, 1e-12, 99.0, 1.000001e5])

@@ -214,3 +214,28 @@ def test_a_frame_count_mistake_is_refused_naming_the_fields_it_comes_from(
         study_config.check_config(config)
     message = str(raised.value)
     assert message.startswith(f"config: {key}: "), message
+
+
+# The skin-marker study's frames are read from two fields, round(duration_s * fps): a count
+# refused gives both values, written or default: (protocol overrides, the words it has).
+_HIP_STA_FRAME_VALUES = [
+    ({"duration_s": 1e-300}, "trials of 0 frame(s) (from duration_s 1e-300, fps 50.0), fewer"),
+    ({"fps": 0.1}, "trials of 1 frame(s) (from duration_s 12.0, fps 0.1), fewer"),
+    (
+        {"duration_s": 86400, "fps": 1e5},
+        "trials of 8640000000 frame(s) (from duration_s 86400, fps 100000.0), 60 trials",
+    ),
+]
+
+
+@pytest.mark.parametrize(("overrides", "words"), _HIP_STA_FRAME_VALUES, ids=str)
+def test_a_frame_count_read_from_two_fields_is_refused_giving_both_values(overrides, words):
+    """The count alone (0 frames) does not say which of duration_s and fps is the mistake, nor
+    by how much: the refusal gives the value of each, as it names each."""
+    config = _default()
+    config["studies"]["hip_sta"]["protocol"] = overrides
+    with pytest.raises(ValueError) as raised:
+        study_config.check_config(config)
+    message = str(raised.value)
+    assert message.startswith("config: studies.hip_sta.protocol.duration_s, fps: "), message
+    assert words in message, message

@@ -231,3 +231,33 @@ def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
         other = trials(dataclasses.replace(base, **{field: value}))
         read = not np.array_equal(other, simulated)
         assert read == (field in hinge.MOTION_FIELDS[motion]), (motion, field)
+
+
+# A value of each field the AA wave alone reads, other than its default.
+_AA_FIELD_VALUES = {"aa_cycles": 3.0, "aa_phase_deg": 40.0, "rotation_order": "aa_fe"}
+
+
+@pytest.mark.parametrize("motion", hinge.MOTIONS)
+def test_the_aa_fields_change_the_trials_only_where_aa_ratio_is_above_0(motion):
+    """:data:`hinge.AMPLITUDE_FIELDS`, against which the config's check refuses a field
+    written under a grid whose every ``aa_ratio`` is 0, is what :func:`hinge.simulate` reads:
+    at a ratio of 0 a change of one of them changes no trial, at 0.3 each changes the trials
+    of a motion that reads it, and the motion's other fields change them at either ratio."""
+    assert set(_AA_FIELD_VALUES) == set(hinge.AMPLITUDE_FIELDS["aa_ratio"])
+    base = dataclasses.replace(hinge.HINGE_PROTOCOLS["knee"], motion=motion)
+
+    def trials(protocol: hinge.HingeProtocol, ratio: float) -> np.ndarray:
+        condition = {"protocol": "knee", "fe_rom_deg": 60.0, "aa_ratio": ratio}
+        rngs = [np.random.default_rng(seed) for seed in range(2)]
+        return hinge.simulate(condition, protocol, rngs).segments["moving"]
+
+    values = {**_MOTION_FIELD_VALUES, **_AA_FIELD_VALUES}
+    for ratio in (0.0, 0.3):
+        simulated = trials(base, ratio)
+        for field, value in values.items():
+            if field in _MOTION_FIELD_VALUES and field not in hinge.MOTION_FIELDS[motion]:
+                continue
+            other = trials(dataclasses.replace(base, **{field: value}), ratio)
+            read = not np.array_equal(other, simulated)
+            without_aa = ratio == 0 and field in hinge.AMPLITUDE_FIELDS["aa_ratio"]
+            assert read == (not without_aa), (motion, ratio, field)

@@ -269,3 +269,32 @@ def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
         other = trials(dataclasses.replace(base, **{field: value}))
         read = any(not np.array_equal(other[name], simulated[name]) for name in simulated)
         assert read == (field in hip_sta.MOTION_FIELDS[motion]), (motion, field)
+
+
+# A value of each field the artefact alone reads, other than its default.
+_STA_FIELD_VALUES = {"sta_reference_deg": 20.0, "sta_rigid_share": 0.5, "pelvis_sta_ratio": 0.3}
+
+
+@pytest.mark.parametrize("motion", hip_sta.MOTIONS)
+def test_the_artefact_fields_change_the_trials_only_where_sta_mm_is_above_0(motion):
+    """:data:`hip_sta.AMPLITUDE_FIELDS`, against which the config's check refuses a field
+    written under a grid whose every ``sta_mm`` is 0, is what :func:`hip_sta.simulate` reads:
+    at an artefact of 0 a change of one of them changes no segment of the trials, at 10 mm
+    each changes them, and the motion's own fields change them at either amplitude."""
+    assert set(_STA_FIELD_VALUES) == set(hip_sta.AMPLITUDE_FIELDS["sta_mm"])
+    base = dataclasses.replace(PROTOCOL, duration_s=2.0)
+
+    def trials(protocol: HipStaProtocol, sta: float) -> dict[str, np.ndarray]:
+        return simulate(_condition(motion, rom=30.0, sta=sta), protocol, _rngs(2)).segments
+
+    values = {
+        **{f: v for f, v in _MOTION_FIELD_VALUES.items() if f in hip_sta.MOTION_FIELDS[motion]},
+        **_STA_FIELD_VALUES,
+    }
+    for sta in (0.0, 10.0):
+        simulated = trials(base, sta)
+        for field, value in values.items():
+            other = trials(dataclasses.replace(base, **{field: value}), sta)
+            read = any(not np.array_equal(other[name], simulated[name]) for name in simulated)
+            without_sta = sta == 0 and field in hip_sta.AMPLITUDE_FIELDS["sta_mm"]
+            assert read == (not without_sta), (motion, sta, field)

@@ -18,23 +18,32 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from jointbench.simulate.hinge import AMPLITUDE_FIELDS as HINGE_AMPLITUDE_FIELDS
 from jointbench.simulate.hinge import MOTION_FIELDS as HINGE_MOTION_FIELDS
 from jointbench.simulate.hinge import sine_waves
 from jointbench.simulate.hinge_study import placed_fields
 from jointbench.simulate.hip import distal_rotation
-from jointbench.simulate.hip_sta import FRAME_FIELDS, hip_angles, thigh_rotation
+from jointbench.simulate.hip_sta import AMPLITUDE_FIELDS as HIP_STA_AMPLITUDE_FIELDS
+from jointbench.simulate.hip_sta import (
+    FRAME_FIELDS,
+    hip_angles,
+    recording_values,
+    thigh_rotation,
+)
 from jointbench.simulate.hip_sta import MOTION_FIELDS as HIP_STA_MOTION_FIELDS
 from jointbench.simulate.noise import largest_noise_mm
 from jointbench.simulate.ranges import RESOLUTION_MM
 
 __all__ = [
     "AA_RATIO_BELOW",
+    "CMC_EARLIEST_TILT_POWER",
     "CMC_LATEST_TILT_POWER",
     "CMC_TILT_SHARE_BY_MIDDLE",
     "HIP_RESOLUTION_MM",
     "PELVIS_LENGTH_PER_WIDTH",
     "PELVIS_WIDTH_PER_DEPARTURE",
     "TRANSLATION_MM_RANGE",
+    "field_values",
     "line_spreads",
     "pelvis_departure",
     "pelvis_poses_problem",
@@ -62,20 +71,28 @@ TRANSLATION_MM_RANGE = (100.0, 1e5)
 AA_RATIO_BELOW = 1.0
 
 #: The thumb CMC's circumduction spiral circles out over the trial: by its middle the tilt
-#: has reached at least this share of the RoM its condition names. Paper A: "The generated
-#: marker trajectories simulated thumb circumduction by beginning from a nominal mean position
-#: and circling out to increasing angles relative to the mean position." A thumb still within a
-#: tenth of its RoM of the mean half-way through (an order of magnitude short of the
-#: excursion its condition names) has not begun to circle out over the recording: it stays
-#: near its mean position and reaches its RoM only in the trial's last frames (at tilt_power
-#: 82 it barely leaves the mean before them). The tilt grows as the trial's
-#: fraction to ``tilt_power`` (:func:`~jointbench.simulate.cmc.spiral_rotations`), so the rule
-#: bounds ``tilt_power`` by :data:`CMC_LATEST_TILT_POWER`; a linear spiral (1) reaches half
-#: the RoM by the middle, the prior's latest-growing spiral (2) a quarter.
+#: has reached at least this share of the RoM its condition names, and is still at least this
+#: share short of it. Paper A: "The generated marker trajectories simulated thumb
+#: circumduction by beginning from a nominal mean position and circling out to increasing
+#: angles relative to the mean position." A thumb still within a tenth of its RoM of the mean
+#: half-way through (an order of magnitude short of the excursion its condition names) has not
+#: begun to circle out over the recording: it stays near its mean position and reaches its RoM
+#: only in the trial's last frames (at tilt_power 82 it barely leaves the mean before them).
+#: One already within a tenth of its RoM of it half-way through has circled out in the
+#: trial's first frames and stays at its RoM: it does not begin from its mean position and
+#: circle out to increasing angles over the recording (at tilt_power 1e-6 it is at its RoM
+#: from the first frame after the start). The tilt grows as the trial's fraction to
+#: ``tilt_power`` (:func:`~jointbench.simulate.cmc.spiral_rotations`), so the rule bounds
+#: ``tilt_power`` to [:data:`CMC_EARLIEST_TILT_POWER`, :data:`CMC_LATEST_TILT_POWER`]; a
+#: linear spiral (1) reaches half the RoM by the middle, the prior's earliest-growing spiral
+#: (0.5) 1/sqrt(2) of it, its latest-growing (2) a quarter.
 CMC_TILT_SHARE_BY_MIDDLE = 0.1
 #: The largest ``tilt_power`` whose spiral reaches :data:`CMC_TILT_SHARE_BY_MIDDLE` of its RoM
 #: by the middle of the trial: ``0.5 ** tilt_power >= share``.
 CMC_LATEST_TILT_POWER = math.log(CMC_TILT_SHARE_BY_MIDDLE) / math.log(0.5)
+#: The smallest ``tilt_power`` whose spiral is still :data:`CMC_TILT_SHARE_BY_MIDDLE` of its
+#: RoM short of it by the middle of the trial: ``0.5 ** tilt_power <= 1 - share``.
+CMC_EARLIEST_TILT_POWER = math.log(1.0 - CMC_TILT_SHARE_BY_MIDDLE) / math.log(0.5)
 
 #: The hip rig's pendulum rotations (distal relative to proximal, about x, y, z): paper C's rig
 #: was swung so that "the second segment moved around at least 2 of the axes" (§8); with fewer,
@@ -180,19 +197,32 @@ def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
-    """``(key, why)`` when the thumb's spiral does not reach :data:`CMC_TILT_SHARE_BY_MIDDLE`
-    of its RoM by the middle of the trial, else None."""
-    if tilt_power <= CMC_LATEST_TILT_POWER:
-        return None
-    # Unrounded: near the bound, a share or a largest value rounded to a few digits would read
-    # as the bound itself, or be refused when typed back.
-    return "protocol.tilt_power", (
-        f"{tilt_power!r} leaves the thumb's tilt at {0.5**tilt_power!r} of its RoM by the "
-        f"middle of the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its "
-        "mean position and reach its RoM only in the last frames, not circle out over the "
-        "recording (paper A: 'beginning from a nominal mean position and circling out to "
-        f"increasing angles'); at most {CMC_LATEST_TILT_POWER!r}"
-    )
+    """``(key, why)`` when the thumb's spiral has not reached :data:`CMC_TILT_SHARE_BY_MIDDLE`
+    of its RoM by the middle of the trial, or is no longer that share short of it, else
+    None."""
+    # Unrounded: near a bound, a share or a bound rounded to a few digits would read as the
+    # bound itself, or be refused when typed back.
+    share = 0.5**tilt_power
+    if tilt_power > CMC_LATEST_TILT_POWER:
+        return "protocol.tilt_power", (
+            f"{tilt_power!r} leaves the thumb's tilt at {share!r} of its RoM by the middle of "
+            f"the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its mean "
+            "position and reach its RoM only in the last frames, not circle out over the "
+            f"recording ({_CIRCLING_OUT}); at most {CMC_LATEST_TILT_POWER!r}"
+        )
+    if tilt_power < CMC_EARLIEST_TILT_POWER:
+        return "protocol.tilt_power", (
+            f"{tilt_power!r} takes the thumb's tilt to {share!r} of its RoM by the middle of "
+            f"the trial, more than {1.0 - CMC_TILT_SHARE_BY_MIDDLE:g}: it would reach its RoM "
+            "in the first frames and stay there, not circle out over the recording "
+            f"({_CIRCLING_OUT}); at least {CMC_EARLIEST_TILT_POWER!r}"
+        )
+    return None
+
+
+_CIRCLING_OUT = (
+    "paper A: 'beginning from a nominal mean position and circling out to increasing angles'"
+)
 
 
 def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
@@ -218,6 +248,33 @@ def _unread_field(
     return None
 
 
+def _silenced_field(
+    written: Mapping, grid: Mapping, amplitude_fields: Mapping[str, Sequence[str]]
+) -> tuple[str, str] | None:
+    """``(field, grid key)`` for the first of the fields ``written`` that shapes the trials
+    only through an amplitude the grid sets (``amplitude_fields``: grid key -> the fields read
+    only where its value is above 0) while every value of that key in ``grid`` is 0; None if
+    there is none. No trial reads such a field, whatever the motion: like a field no motion of
+    the run reads (:func:`_unread_field`), a user who writes it believes the trials follow it."""
+    for key, fields in amplitude_fields.items():
+        if any(value != 0 for value in grid[key]):
+            continue
+        for field in written:
+            if field in fields:
+                return field, key
+    return None
+
+
+def _silenced_words(field: str, value: object, key: str, grid: Mapping) -> str:
+    """Why ``value`` written for ``field`` changes no data: every value of the grid's ``key``,
+    the amplitude through which alone it shapes the trials, is 0 (:func:`_silenced_field`)."""
+    return (
+        f"{value!r} is not read: every {key} of the grid is 0 (grid.{key} {list(grid[key])!r}), "
+        f"and {field} shapes the trials only where {key} is above 0: a value no trial reads "
+        f"changes no data; remove it, or add a value above 0 to grid.{key}"
+    )
+
+
 def _readers(field: str, motion_fields: Mapping[str, Sequence[str]]) -> list[str]:
     """The motions of ``motion_fields`` that read ``field``; none for a field every motion
     reads."""
@@ -226,13 +283,22 @@ def _readers(field: str, motion_fields: Mapping[str, Sequence[str]]) -> list[str
 
 def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     """A field the config writes for the joints the grid runs that no trial of theirs reads
-    from where it is written: under a joint's own entry, a field of
+    from where it is written: under a joint's own entry or ``all``, a field of
+    :data:`~jointbench.simulate.hinge.AMPLITUDE_FIELDS` where every ``aa_ratio`` of the grid
+    is 0 (no joint reads it then); under a joint's own entry, a field of
     :data:`~jointbench.simulate.hinge.MOTION_FIELDS` its motion does not read; under ``all``,
     a field that each of those joints either sets again under its own entry or, by its motion,
     does not read. Defaults are not written and not refused; nor is a field written for a
     joint the grid does not run, whose whole entry that run leaves unread."""
     overrides = settings.get("protocol") or {}
-    run = list(settings["grid"]["protocol"])
+    grid = settings["grid"]
+    run = list(grid["protocol"])
+    for entry in [*run, "all"]:
+        written = overrides.get(entry) or {}
+        silenced = _silenced_field(written, grid, HINGE_AMPLITUDE_FIELDS)
+        if silenced:
+            field, key = silenced
+            return f"protocol.{entry}.{field}", _silenced_words(field, written[field], key, grid)
     for joint in run:
         motion = protocol.joints[joint].motion
         unread = _unread_field(overrides.get(joint) or {}, (motion,), HINGE_MOTION_FIELDS)
@@ -360,10 +426,17 @@ def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
 
 
 def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
-    """A field of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that the config writes
-    and no motion of the grid reads. Defaults are not written and not refused."""
-    motions = settings["grid"]["motion"]
+    """A field the config writes that no trial of the grid reads: one of
+    :data:`~jointbench.simulate.hip_sta.AMPLITUDE_FIELDS` where every ``sta_mm`` of the grid
+    is 0, or of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that no motion of the grid
+    reads. Defaults are not written and not refused."""
+    grid = settings["grid"]
+    motions = grid["motion"]
     written = settings.get("protocol") or {}
+    silenced = _silenced_field(written, grid, HIP_STA_AMPLITUDE_FIELDS)
+    if silenced:
+        field, key = silenced
+        return f"protocol.{field}", _silenced_words(field, written[field], key, grid)
     unread = _unread_field(written, motions, HIP_STA_MOTION_FIELDS)
     if not unread:
         return None
@@ -381,6 +454,7 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
     motions = settings["grid"]["motion"]
     n_frames, star = protocol.n_frames, protocol.star_fraction
     frames = ", ".join(FRAME_FIELDS)  # the fields that set n_frames
+    recording = f"from {field_values(recording_values(protocol))}"
     stretches = []
     if "star_arc" in motions:
         stretches += [
@@ -389,18 +463,20 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
                 len(protocol.star_azimuths_deg),
                 star * n_frames,
                 "star sweeps (one per azimuth)",
+                f"star_fraction {star!r} of the {n_frames} {recording}",
             ),
             (
                 f"protocol.arc_turns, star_fraction, {frames}",
                 protocol.arc_turns,
                 (1 - star) * n_frames,
                 "arc turns",
+                f"1 - star_fraction {star!r} of the {n_frames} {recording}",
             ),
         ]
     if "circumduction" in motions:
         key = f"protocol.circumduction_turns, {frames}"
         turns = protocol.circumduction_turns
-        stretches.append((key, turns, n_frames, "circumduction turns"))
+        stretches.append((key, turns, n_frames, "circumduction turns", recording))
     return next((p for p in (_turns_problem(*stretch) for stretch in stretches) if p), None)
 
 
@@ -441,16 +517,25 @@ def principal_turns_mm(rotation: np.ndarray, markers_mm: Sequence[Sequence[float
     return largest_turn_mm(rotation @ axes, np.asarray(markers_mm, dtype=float) @ axes)
 
 
-def _turns_problem(key: str, turns: float, frames: float, what: str) -> tuple[str, str] | None:
+def _turns_problem(
+    key: str, turns: float, frames: float, what: str, source: str = ""
+) -> tuple[str, str] | None:
     """``(key, why)`` when ``turns`` of a periodic motion over ``frames`` frames are not fewer
-    than ``frames`` / :data:`SAMPLED_PER_TURN`, else None."""
+    than ``frames`` / :data:`SAMPLED_PER_TURN`, else None; ``source``, where the frames are
+    read from several fields, gives their values after the count."""
     if turns < frames / SAMPLED_PER_TURN:
         return None
     return key, (
-        f"{turns!r} {what} over {frames:.4g} frames are not fewer than half those frames: the "
-        "frames cannot show a motion of more than one turn per two frames (it would be "
-        "recorded as a slower one than configured)"
+        f"{turns!r} {what} over {frames:.4g} frames{f' ({source})' if source else ''} are not "
+        "fewer than half those frames: the frames cannot show a motion of more than one turn "
+        "per two frames (it would be recorded as a slower one than configured)"
     )
+
+
+def field_values(values: Mapping[str, object]) -> str:
+    """``values`` (protocol field -> value) in words, ``"duration_s 12.0, fps 50.0"``: what
+    a refusal naming several fields gives of each."""
+    return ", ".join(f"{field} {value!r}" for field, value in values.items())
 
 
 def _sta_reach_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:

@@ -13,7 +13,7 @@ from pathlib import Path
 import yaml
 
 from jointbench import declared
-from jointbench.configuration.bounds import study_problem, translation_problem
+from jointbench.configuration.bounds import field_values, study_problem, translation_problem
 from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
@@ -380,7 +380,8 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     holds is its recording's where the study draws more frames than it keeps
     (:attr:`~jointbench.simulate.Study.recorded_frames`). The refusal names the grid key that
     sets a trial's frames, or the protocol fields the recording's are read from
-    (:func:`_frame_source`).
+    (:func:`_frame_source`), with their values where the study gives them (a count read from
+    several fields, :attr:`~jointbench.simulate.Study.frame_values`).
     External estimators declare no minimum and are not counted.
     """
     needs = {
@@ -394,11 +395,14 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
         recording, unnamed = _frame_source(spec, condition, settings.get("protocol") or {})
         culprit, note = (f"grid.{frames_key}", "") if frames_key else (recording, unnamed)
         recorded = spec.recorded_frames(protocol) if spec.recorded_frames else n_frames
+        # The protocol's values go with the count they set: the recording's, or the trial's
+        # where no grid key sets that.
+        values = _frame_values(spec, condition, protocol)
+        held = f"{n_frames} frame(s)" + ("" if frames_key else values)
         if max(n_frames, recorded) * settings["trials"] > MAX_CONDITION_FRAMES:
-            held = f"{n_frames} frame(s)"
             if recorded > n_frames:
                 culprit, note = recording, unnamed
-                held = f"{held} of recordings of {recorded} frame(s)"
+                held = f"{n_frames} frame(s) of recordings of {recorded} frame(s){values}"
             raise ValueError(
                 f"{where}.{culprit}: condition {condition_id(condition)} has trials of {held}, "
                 f"{settings['trials']} trials of which hold more than {MAX_CONDITION_FRAMES} "
@@ -408,9 +412,17 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())
             raise ValueError(
                 f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
-                f"{n_frames} frame(s), fewer than any listed estimator fits (at least: "
-                f"{listed}){note}"
+                f"{held}, fewer than any listed estimator fits (at least: {listed}){note}"
             )
+
+
+def _frame_values(spec: Study, condition: Mapping, protocol: object) -> str:
+    """`` (from field value, ...)``: the values of the protocol fields ``condition``'s
+    recordings' frames are read from, where the study gives them
+    (:attr:`~jointbench.simulate.Study.frame_values`); else nothing."""
+    if spec.frame_values is None:
+        return ""
+    return f" (from {field_values(spec.frame_values(condition, protocol))})"
 
 
 def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[str, str]:

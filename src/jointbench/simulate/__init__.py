@@ -218,6 +218,11 @@ class Study:
     that sets each where fields can be written under more than one. A frame count refused by
     the config's check names them; a study that does not declare them is refused naming its
     ``protocol`` alone, since only the study knows which fields its ``frame_count`` reads.
+    ``frame_values`` gives the values of those fields (``frame_values(condition, protocol)``,
+    field -> value, written or default) where the frames are not one of them but read from
+    several (``round(duration_s * fps)``): the count alone says neither which field is the
+    mistake nor by how much, so the refusal gives each value beside it. A study whose frames
+    are one field's value (``n_frames``) need not declare it: the count is that value.
     """
 
     name: str
@@ -234,6 +239,7 @@ class Study:
     frame_count: Callable[[Mapping[str, object], object], int] | None = None
     recorded_frames: Callable[[object], int] | None = None
     frame_keys: Callable[[Mapping[str, object], Mapping], str] | None = None
+    frame_values: Callable[[Mapping[str, object], object], Mapping[str, object]] | None = None
 
     def __post_init__(self) -> None:
         for kind in self.kinds:

@@ -98,7 +98,7 @@ class CmcProtocol:
     frame described in the module docstring. ``distances_mm``: paper A Table 1.
     ``spiral_turns``: turns of the circumduction spiral. ``tilt_power``: the tilt grows as the
     frame's fraction of the trial to this power (the config refuses one whose thumb has not
-    begun to circle out by the middle of the trial,
+    begun to circle out by the middle of the trial, or has already reached nearly its RoM,
     :data:`jointbench.configuration.bounds.CMC_TILT_SHARE_BY_MIDDLE`). ``n_frames``: 120
     (paper A §5.1).
     ``center_mm``: the nominal CoR in the reference frame. A marker set has as many

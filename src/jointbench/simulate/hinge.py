@@ -84,6 +84,7 @@ from jointbench.simulate.noise import check_noise_level, isotropic_noise
 from jointbench.simulate.ranges import Angle, MarkerOffset, check_marker_offsets
 
 __all__ = [
+    "AMPLITUDE_FIELDS",
     "FE_AXIS",
     "HINGE_PROTOCOLS",
     "MOTIONS",
@@ -118,6 +119,16 @@ MOTION_FIELDS: dict[str, tuple[str, ...]] = {
     "grid": (),
 }
 
+#: The fields of :class:`HingeProtocol` that shape the trials only through abduction–adduction,
+#: by the grid key that sets its amplitude: the AA wave's cycles and phase, and the order of the
+#: FE and AA rotations (``R_AA`` is the identity without AA, so both orders give ``R_FE``). Where
+#: every ``aa_ratio`` of the grid is 0 no trial reads them, whatever the motion; the config
+#: refuses one written for a joint the grid runs, as it does a field the motion does not read:
+#: :func:`jointbench.configuration.bounds.study_problem`.
+AMPLITUDE_FIELDS: dict[str, tuple[str, ...]] = {
+    "aa_ratio": ("aa_cycles", "aa_phase_deg", "rotation_order"),
+}
+
 #: The flexion–extension axis, the true axis of rotation, in the reference segment's frame.
 FE_AXIS = np.array([1.0, 0.0, 0.0])
 #: The adduction–abduction axis in the neutral pose (anterior / dorsal).
@@ -145,6 +156,8 @@ class HingeProtocol:
     fe_cycles, aa_cycles : cycles of FE and AA over the recording ("lissajous"; "superimposed"
         uses ``aa_cycles``; "grid" and "sequential" read neither, :data:`MOTION_FIELDS`).
     aa_phase_deg : phase of the AA sinusoid relative to FE ("lissajous", "superimposed").
+        Neither it nor ``aa_cycles`` nor ``rotation_order`` shapes a trial without AA
+        (``aa_ratio`` 0, :data:`AMPLITUDE_FIELDS`).
     rotation_order : "fe_aa": ``R = R_FE(fe) R_AA(aa)``, AA about the axis carried by the moving
         segment (Grood & Suntay's floating axis), so the FE axis stays fixed in the reference
         frame, as paper B's model requires; "aa_fe": ``R = R_AA(aa) R_FE(fe)``, AA about the

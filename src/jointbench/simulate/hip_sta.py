@@ -115,6 +115,7 @@ from jointbench.simulate.ranges import (
 )
 
 __all__ = [
+    "AMPLITUDE_FIELDS",
     "FRAME_FIELDS",
     "MOTIONS",
     "MOTION_FIELDS",
@@ -122,6 +123,7 @@ __all__ = [
     "HipStaProtocol",
     "hip_angles",
     "nominal_recording",
+    "recording_values",
     "simulate",
     "sta_displacements",
     "sta_field",
@@ -137,6 +139,16 @@ MOTIONS = ("star_arc", "circumduction")
 MOTION_FIELDS: dict[str, tuple[str, ...]] = {
     "star_arc": ("star_azimuths_deg", "star_fraction", "arc_turns"),
     "circumduction": ("circumduction_turns",),
+}
+#: The fields of :class:`HipStaProtocol` that shape the trials only through the soft-tissue
+#: artefact, by the grid key that sets its amplitude: where ``sta_mm`` is 0 every marker's
+#: artefact is 0 whatever its reference excursion, rigid share or pelvis ratio
+#: (:func:`sta_field`; its draws, and so the noise after them, do not depend on them either).
+#: Where every ``sta_mm`` of the grid is 0 no trial reads them; the config refuses one written
+#: there, as it does a field no motion of the grid reads:
+#: :func:`jointbench.configuration.bounds.study_problem`.
+AMPLITUDE_FIELDS: dict[str, tuple[str, ...]] = {
+    "sta_mm": ("sta_reference_deg", "sta_rigid_share", "pelvis_sta_ratio"),
 }
 #: The protocol fields a trial's frames are read from (:attr:`HipStaProtocol.n_frames`).
 FRAME_FIELDS = ("duration_s", "fps")
@@ -155,7 +167,9 @@ class HipStaProtocol:
     ``circumduction_turns`` for the circumduction; pelvis sway ``pelvis_sway_mm``,
     ``pelvis_sway_deg`` per world axis at ``pelvis_sway_hz``. STA: amplitude defined at
     ``sta_reference_deg``, rigid share ``sta_rigid_share``, pelvis amplitude
-    ``pelvis_sta_ratio`` times the thigh's. See the module docstring for the formulas.
+    ``pelvis_sta_ratio`` times the thigh's; none of these three shapes a trial without
+    artefact (``sta_mm`` 0, :data:`AMPLITUDE_FIELDS`). See the module docstring for the
+    formulas.
     """
 
     duration_s: Duration = 12.0
@@ -441,6 +455,18 @@ def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
     return "protocol." + ", ".join(FRAME_FIELDS)
 
 
+def recording_values(protocol: HipStaProtocol) -> dict[str, float]:
+    """The values of :data:`FRAME_FIELDS` under ``protocol``, which a refusal of a count of
+    frames gives, since the count is neither one of them."""
+    return {field: getattr(protocol, field) for field in FRAME_FIELDS}
+
+
+def frame_values(condition: Mapping[str, object], protocol: HipStaProtocol) -> dict[str, float]:
+    """The values of the fields :func:`frame_keys` names (:func:`recording_values`), whatever
+    the condition."""
+    return recording_values(protocol)
+
+
 STUDY = Study(
     name="hip_sta",
     # The two-segment estimators see both clusters as recorded; the one-segment centre methods
@@ -455,6 +481,7 @@ STUDY = Study(
     simulate=simulate,
     frame_count=frame_count,
     frame_keys=frame_keys,
+    frame_values=frame_values,
     grid_spec={
         "motion": GridValues(
             str,
