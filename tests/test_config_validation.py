@@ -732,6 +732,28 @@ def test_a_field_read_through_an_amplitude_the_grid_sets_above_0_passes(
     study_config.check_config(_with_grid(config, study, grid, overrides))
 
 
+@pytest.mark.parametrize("motion", ["lissajous", "superimposed"])
+def test_an_aa_wave_no_trial_runs_is_not_held_to_its_frames(config, motion):
+    """Where every aa_ratio of the grid is 0 no trial runs the AA wave: at 4 frames its default
+    2 cycles were refused as too fast for them, naming ``aa_cycles`` as the fix, while the
+    check refuses any ``aa_cycles`` written there as unread. The FE wave, which every trial
+    runs, is still held to the frames, and so is the AA wave once a condition runs it."""
+    short = {"motion": motion, "n_frames": 4}
+
+    def check(ratios, **fields):
+        overrides = {"all": {**short, **fields}}
+        study_config.check_config(_with_grid(config, "hinge", {"aa_ratio": ratios}, overrides))
+
+    check([0.0])
+    with pytest.raises(ValueError, match=r"all\.aa_cycles: 1\.0 is not read"):
+        check([0.0], aa_cycles=1.0)
+    if motion == "lissajous":
+        with pytest.raises(ValueError, match=r"all\.fe_cycles, n_frames: 2\.0 knee lissajous"):
+            check([0.0], fe_cycles=2.0)
+    with pytest.raises(ValueError, match=r"knee\.aa_cycles, all\.n_frames: 2\.0 knee"):
+        check([0.0, 0.1])
+
+
 def _tilt_at_the_middle(tilt_power: float, frame: int = 60) -> float:
     """The share of its RoM the thumb's simulated tilt reaches at the middle frame (of 121,
     whose middle is half-way through the trial), or at ``frame``."""
