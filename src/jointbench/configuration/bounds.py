@@ -137,9 +137,10 @@ HIP_STA_DIRECTIONS = {
 #: half those frames, as a frequency is below half the frame rate: the frames cannot show a
 #: faster motion (it would be recorded as a slower one than configured), and at 1e13 turns its
 #: phases are rounding alone. Checked for the motions the grid runs: the thumb's circumduction
-#: spiral; a hinge joint's FE and AA cycles where its motion uses them; the skin-marker study's
-#: circumduction, and its star (one sweep per plane) and the arc after it, each over its share
-#: of the trial (``star_fraction``).
+#: spiral; a hinge joint's FE and AA cycles where its motion uses them (the AA's where some
+#: ``aa_ratio`` of the grid is above 0); the skin-marker study's circumduction, and its star
+#: (one sweep per plane) and the arc after it, each over its share of the trial
+#: (``star_fraction``).
 SAMPLED_PER_TURN = 2.0
 
 #: Marker clusters, each fitted as one rigid body (:func:`cluster_problem`): the hip rig's, and
