@@ -233,29 +233,45 @@ def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
         assert read == (field in hinge.MOTION_FIELDS[motion]), (motion, field)
 
 
-# A value of each field the AA wave alone reads, other than its default.
-_AA_FIELD_VALUES = {"aa_cycles": 3.0, "aa_phase_deg": 40.0, "rotation_order": "aa_fe"}
+# A value other than its default of each field of a joint's protocol that could shape its
+# trials; the others only name them (its name, its markers' names).
+_FIELD_VALUES = {
+    "markers_mm": ((62.5, 36.0, -143.5), (-32.5, -23.5, -151.0), (43.5, -2.0, -171.0)),
+    "rom_convention": "half",
+    "fe_cycles": 1.5,
+    "aa_cycles": 3.0,
+    "aa_phase_deg": 40.0,
+    "rotation_order": "aa_fe",
+    "noise_sd_mm": 0.5,
+    "n_frames": 144,
+}
+_NAMING_FIELDS = ("name", "marker_names")
 
 
 @pytest.mark.parametrize("motion", hinge.MOTIONS)
 def test_the_aa_fields_change_the_trials_only_where_aa_ratio_is_above_0(motion):
     """:data:`hinge.AMPLITUDE_FIELDS`, against which the config's check refuses a field
     written under a grid whose every ``aa_ratio`` is 0, is what :func:`hinge.simulate` reads:
-    at a ratio of 0 a change of one of them changes no trial, at 0.3 each changes the trials
-    of a motion that reads it, and the motion's other fields change them at either ratio."""
-    assert set(_AA_FIELD_VALUES) == set(hinge.AMPLITUDE_FIELDS["aa_ratio"])
+    at a ratio of 0 a change of one of them changes no trial, and a change of any other field
+    of the protocol (the motion included) that the motion reads changes them; at 0.3 each
+    changes them. Every field is tried, so a field the simulation leaves unread without
+    abduction-adduction and the declaration leaves out fails as one it lists but reads."""
+    fields = {field.name for field in dataclasses.fields(hinge.HingeProtocol)}
+    assert set(_FIELD_VALUES) | {"motion"} == fields - set(_NAMING_FIELDS)
+    assert set(hinge.AMPLITUDE_FIELDS) == {"aa_ratio"}
     base = dataclasses.replace(hinge.HINGE_PROTOCOLS["knee"], motion=motion)
+    other_motion = next(other for other in hinge.MOTIONS if other != motion)
+    motion_fields = set().union(*hinge.MOTION_FIELDS.values())
 
     def trials(protocol: hinge.HingeProtocol, ratio: float) -> np.ndarray:
         condition = {"protocol": "knee", "fe_rom_deg": 60.0, "aa_ratio": ratio}
         rngs = [np.random.default_rng(seed) for seed in range(2)]
         return hinge.simulate(condition, protocol, rngs).segments["moving"]
 
-    values = {**_MOTION_FIELD_VALUES, **_AA_FIELD_VALUES}
     for ratio in (0.0, 0.3):
         simulated = trials(base, ratio)
-        for field, value in values.items():
-            if field in _MOTION_FIELD_VALUES and field not in hinge.MOTION_FIELDS[motion]:
+        for field, value in {**_FIELD_VALUES, "motion": other_motion}.items():
+            if field in motion_fields and field not in hinge.MOTION_FIELDS[motion]:
                 continue
             other = trials(dataclasses.replace(base, **{field: value}), ratio)
             read = not np.array_equal(other, simulated)

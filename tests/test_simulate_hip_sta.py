@@ -271,17 +271,34 @@ def test_each_motion_reads_the_fields_it_declares_and_no_other(motion):
         assert read == (field in hip_sta.MOTION_FIELDS[motion]), (motion, field)
 
 
-# A value of each field the artefact alone reads, other than its default.
-_STA_FIELD_VALUES = {"sta_reference_deg": 20.0, "sta_rigid_share": 0.5, "pelvis_sta_ratio": 0.3}
+# A value other than its default of each field of the protocol the motions read alike.
+_SHARED_FIELD_VALUES = {
+    "duration_s": 2.5,
+    "fps": 60.0,
+    "noise_mm": 1.0,
+    "joint_mm": (0.0, -90.0, 905.0),
+    "pelvis_markers_mm": ((57.8, -33.6, 72.0), *PROTOCOL.pelvis_markers_mm[1:]),
+    "thigh_markers_mm": ((45.0, -95.0, -150.0), *PROTOCOL.thigh_markers_mm[1:]),
+    "pelvis_sway_mm": (6.0, 8.0, 4.0),
+    "pelvis_sway_deg": (1.0, 2.0, 3.0),
+    "pelvis_sway_hz": (0.2, 0.21, 0.17),
+    "sta_reference_deg": 20.0,
+    "sta_rigid_share": 0.5,
+    "pelvis_sta_ratio": 0.3,
+}
 
 
 @pytest.mark.parametrize("motion", hip_sta.MOTIONS)
 def test_the_artefact_fields_change_the_trials_only_where_sta_mm_is_above_0(motion):
     """:data:`hip_sta.AMPLITUDE_FIELDS`, against which the config's check refuses a field
     written under a grid whose every ``sta_mm`` is 0, is what :func:`hip_sta.simulate` reads:
-    at an artefact of 0 a change of one of them changes no segment of the trials, at 10 mm
-    each changes them, and the motion's own fields change them at either amplitude."""
-    assert set(_STA_FIELD_VALUES) == set(hip_sta.AMPLITUDE_FIELDS["sta_mm"])
+    at an artefact of 0 a change of one of them changes no segment of the trials, and a change
+    of any other field of the protocol that the motion reads changes them; at 10 mm each
+    changes them. Every field is tried, so a field the simulation leaves unread without
+    artefact and the declaration leaves out fails as one it lists but reads."""
+    fields = {field.name for field in dataclasses.fields(HipStaProtocol)}
+    assert set(_SHARED_FIELD_VALUES) | set(_MOTION_FIELD_VALUES) == fields
+    assert set(hip_sta.AMPLITUDE_FIELDS) == {"sta_mm"}
     base = dataclasses.replace(PROTOCOL, duration_s=2.0)
 
     def trials(protocol: HipStaProtocol, sta: float) -> dict[str, np.ndarray]:
@@ -289,7 +306,7 @@ def test_the_artefact_fields_change_the_trials_only_where_sta_mm_is_above_0(moti
 
     values = {
         **{f: v for f, v in _MOTION_FIELD_VALUES.items() if f in hip_sta.MOTION_FIELDS[motion]},
-        **_STA_FIELD_VALUES,
+        **_SHARED_FIELD_VALUES,
     }
     for sta in (0.0, 10.0):
         simulated = trials(base, sta)

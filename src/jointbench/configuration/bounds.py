@@ -137,9 +137,10 @@ HIP_STA_DIRECTIONS = {
 #: half those frames, as a frequency is below half the frame rate: the frames cannot show a
 #: faster motion (it would be recorded as a slower one than configured), and at 1e13 turns its
 #: phases are rounding alone. Checked for the motions the grid runs: the thumb's circumduction
-#: spiral; a hinge joint's FE and AA cycles where its motion uses them; the skin-marker study's
-#: circumduction, and its star (one sweep per plane) and the arc after it, each over its share
-#: of the trial (``star_fraction``).
+#: spiral; a hinge joint's FE and AA cycles where its motion uses them (the AA's where some
+#: ``aa_ratio`` of the grid is above 0); the skin-marker study's circumduction, and its star
+#: (one sweep per plane) and the arc after it, each over its share of the trial
+#: (``star_fraction``).
 SAMPLED_PER_TURN = 2.0
 
 #: Marker clusters, each fitted as one rigid body (:func:`cluster_problem`): the hip rig's, and
@@ -248,21 +249,30 @@ def _unread_field(
     return None
 
 
+def _silenced_fields(
+    grid: Mapping, amplitude_fields: Mapping[str, Sequence[str]]
+) -> dict[str, str]:
+    """The fields no trial of ``grid`` reads, each with its grid key: those that shape the
+    trials only through an amplitude the grid sets (``amplitude_fields``: grid key -> the
+    fields read only where its value is above 0) while every value of that key in ``grid`` is
+    0, whatever the motion."""
+    return {
+        field: key
+        for key, fields in amplitude_fields.items()
+        if all(value == 0 for value in grid[key])
+        for field in fields
+    }
+
+
 def _silenced_field(
     written: Mapping, grid: Mapping, amplitude_fields: Mapping[str, Sequence[str]]
 ) -> tuple[str, str] | None:
-    """``(field, grid key)`` for the first of the fields ``written`` that shapes the trials
-    only through an amplitude the grid sets (``amplitude_fields``: grid key -> the fields read
-    only where its value is above 0) while every value of that key in ``grid`` is 0; None if
-    there is none. No trial reads such a field, whatever the motion: like a field no motion of
-    the run reads (:func:`_unread_field`), a user who writes it believes the trials follow it."""
-    for key, fields in amplitude_fields.items():
-        if any(value != 0 for value in grid[key]):
-            continue
-        for field in written:
-            if field in fields:
-                return field, key
-    return None
+    """``(field, grid key)`` for the first of the fields ``written`` that no trial of ``grid``
+    reads (:func:`_silenced_fields`); None if there is none. Like a field no motion of the run
+    reads (:func:`_unread_field`), a user who writes it believes the trials follow it."""
+    silenced = _silenced_fields(grid, amplitude_fields)
+    field = next((field for field in written if field in silenced), None)
+    return None if field is None else (field, silenced[field])
 
 
 def _silenced_words(field: str, value: object, key: str, grid: Mapping) -> str:
@@ -353,11 +363,17 @@ def _hinge_unread_words(field: str, value: object, joints: Mapping[str, Sequence
 def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     """For each sine wave of each joint the grid runs (:func:`sine_waves`): its cycles
     :data:`SAMPLED_PER_TURN` over the frames, and its reach of both ends of its excursion
-    (:func:`_wave_ends_problem`); named where the config sets them (:func:`placed_fields`)."""
+    (:func:`_wave_ends_problem`); named where the config sets them (:func:`placed_fields`).
+    A wave whose amplitude the grid sets to 0 everywhere (the AA wave where every
+    ``aa_ratio`` is 0) is not checked: no trial runs it, and the config may not set its
+    cycles there (:func:`_silenced_field`)."""
     overrides = settings.get("protocol") or {}
+    silenced = _silenced_fields(settings["grid"], HINGE_AMPLITUDE_FIELDS)
     for joint in settings["grid"]["protocol"]:
         hinge = protocol.joints[joint]
         for name, (cycles, phase) in sine_waves(hinge).items():
+            if name in silenced:
+                continue
             entry, keys = placed_fields(overrides, joint, (name, "n_frames"))
             what = f"{joint} {hinge.motion} cycles"
             problem = _turns_problem(f"protocol.{entry}.{keys}", cycles, hinge.n_frames, what)
