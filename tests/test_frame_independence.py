@@ -553,14 +553,20 @@ def _counting_kernel_calls(monkeypatch) -> list[str]:
     return calls
 
 
-def test_a_one_segment_verdict_makes_two_compiled_calls(monkeypatch):
-    """Its numbers in one pass over the trial, and the lag-1 statement's correlation and SD in
-    another over the pair distances: a checked one-trial fit pays each call's overhead."""
+def test_a_one_segment_verdict_makes_one_compiled_call(monkeypatch):
+    """Its numbers and the lag-1 statement's correlation and SD in one compiled call: a
+    checked one-trial fit pays each call's overhead. The statement reads the numbers
+    :func:`support._frame_numbers` gives."""
     rng = np.random.default_rng(2)
     (markers,) = _kind_trial("center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
+    expected = support._frame_numbers(markers[None])
     calls = _counting_kernel_calls(monkeypatch)
+    numbers = support._one_segment_numbers(markers[None], support._FLEX)
+    assert calls == ["_one_segment_numbers"]
+    assert np.array_equal(numbers[:, -support._FRAME_COLUMNS :], expected)
+    calls.clear()
     support.assess_many("center", (markers[None],))
-    assert calls == ["_one_segment_numbers", "_frame_numbers"]
+    assert calls == ["_one_segment_numbers"]
 
 
 def test_a_checked_joint_centre_call_reads_each_segments_distances_once(monkeypatch):

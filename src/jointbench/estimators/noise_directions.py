@@ -626,21 +626,19 @@ def trial_test_into(
     for m in range(n_markers):
         own[m] = row[at_own + m]
     for f in range(n_frames):
-        x = positions[f]
         for a in range(n_markers):
-            x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+            x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
             for b in range(a, n_markers):
-                y0, y1, y2 = x[b, 0], x[b, 1], x[b, 2]
-                pair = second[a, b]
-                pair[0, 0] += x0 * y0
-                pair[0, 1] += x0 * y1
-                pair[0, 2] += x0 * y2
-                pair[1, 0] += x1 * y0
-                pair[1, 1] += x1 * y1
-                pair[1, 2] += x1 * y2
-                pair[2, 0] += x2 * y0
-                pair[2, 1] += x2 * y1
-                pair[2, 2] += x2 * y2
+                y0, y1, y2 = positions[f, b, 0], positions[f, b, 1], positions[f, b, 2]
+                second[a, b, 0, 0] += x0 * y0
+                second[a, b, 0, 1] += x0 * y1
+                second[a, b, 0, 2] += x0 * y2
+                second[a, b, 1, 0] += x1 * y0
+                second[a, b, 1, 1] += x1 * y1
+                second[a, b, 1, 2] += x1 * y2
+                second[a, b, 2, 0] += x2 * y0
+                second[a, b, 2, 1] += x2 * y1
+                second[a, b, 2, 2] += x2 * y2
     for a in range(n_markers):
         for b in range(a):
             for i in range(3):
@@ -689,7 +687,6 @@ def trial_test_into(
     for p in range(n_pairs):
         z[p] = total[p] / n_frames
     for f in range(n_frames):
-        x = positions[f]
         for p in range(n_pairs):
             scale[p] = 1.0 / (deviations[p, f] + first[p])
         residual[:] = 0.0
@@ -715,10 +712,10 @@ def trial_test_into(
         for a in range(n_markers):
             w0 = w1 = w2 = 0.0
             for b in range(n_markers):
-                w0 += isotropic[a, b] * x[b, 0]
-                w1 += isotropic[a, b] * x[b, 1]
-                w2 += isotropic[a, b] * x[b, 2]
-            x0, x1, x2 = x[a, 0], x[a, 1], x[a, 2]
+                w0 += isotropic[a, b] * positions[f, b, 0]
+                w1 += isotropic[a, b] * positions[f, b, 1]
+                w2 += isotropic[a, b] * positions[f, b, 2]
+            x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
             q00 -= x0 * w0
             q01 -= x0 * w1
             q02 -= x0 * w2

@@ -479,6 +479,9 @@ _DEPENDENCE = slice(
     _ONE_SEGMENT_COLUMNS.index("variance_ratio_excess") + 1,
 )
 
+#: The columns of :func:`_frame_numbers` per trial, which :func:`_one_segment_numbers` ends with.
+_FRAME_COLUMNS = 5
+
 # A mode of a distance Gram matrix this much weaker than the strongest is a flex of a (nearly)
 # flat or collinear cluster, which moves no distance to first order: it is not counted as shape.
 _FLEX = 1e-2
@@ -497,11 +500,14 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     (:func:`jointbench.estimators.noise_directions.trial_test_into`), from the first pass's
     centred markers, differences and distances and the cluster's own distance modes, where the
     residual is above rounding and the frames are not found dependent (else its first column
-    is NaN and its frames' blocks are the caller's to choose). A compiled kernel."""
+    is NaN and its frames' blocks are the caller's to choose). Last, the trial's row of
+    :func:`_frame_numbers`, which the lag-1 statement reads (:class:`Untested`): one dispatch
+    for the whole verdict. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
     n_pairs = n_markers * (n_markers - 1) // 2
     n_columns = len(_ONE_SEGMENT_COLUMNS)
-    out = np.zeros((n_trials, n_columns + row_length(n_markers)))
+    at_frames = n_columns + row_length(n_markers)
+    out = np.zeros((n_trials, at_frames + _FRAME_COLUMNS))
     inverse_gram = np.empty((n_pairs, n_pairs))
     pair_a = np.empty(n_pairs, dtype=np.int64)
     pair_b = np.empty(n_pairs, dtype=np.int64)
@@ -577,6 +583,7 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     )
     for t in range(n_trials):
         trial = markers[t]
+        _trial_frame_numbers_into(trial, out[t, at_frames:])
         # Scalar sums: the pooled scatter of the displacements e about the mean positions, and
         # the linearised rotations w and their outer products (upper triangles). Both e and w
         # sum to zero over the frames, so these are their scatters about their means.
@@ -935,12 +942,19 @@ def _frame_numbers(markers: np.ndarray) -> np.ndarray:
     depend on each other from frame to frame (:func:`_frame_dependence`: the first four) and
     the SD of their pooled lag-1 autocorrelation for independent frames
     (:func:`_correlation_sd`), what :class:`Untested` reads beside the first, ``(T, 5)``: the
-    distances computed once for all. A compiled kernel."""
-    out = np.empty((markers.shape[0], 5))
+    distances computed once for all (:func:`_trial_frame_numbers_into`). A compiled kernel."""
+    out = np.empty((markers.shape[0], _FRAME_COLUMNS))
     for t in range(markers.shape[0]):
-        distances = _dependence_into(markers[t], out[t, :4])
-        out[t, 4] = _correlation_sd(distances)
+        _trial_frame_numbers_into(markers[t], out[t])
     return out
+
+
+@kernel
+def _trial_frame_numbers_into(markers: np.ndarray, out: np.ndarray) -> None:
+    """One trial's row of :func:`_frame_numbers` for its markers ``(N, n, 3)`` [mm], into
+    ``out`` ``(5,)``. A compiled kernel."""
+    distances = _dependence_into(markers, out[:4])
+    out[4] = _correlation_sd(distances)
 
 
 def _segment_frame_numbers(markers: np.ndarray) -> np.ndarray:
@@ -1884,18 +1898,21 @@ def assess_many(
     # alone: the scope of the checked call around it also holds the fit, where an estimator's
     # own code may judge trial after trial refilled into one array.
     with one_call():
-        verdicts = _judged(kind, arrays, poses)
+        verdicts, frame_numbers = _judged(kind, arrays, poses)
         flags = [not verdict.caveats for verdict in verdicts]
-        untested = _untested(ARRAY_NAMES[kind], arrays, flags)
+        untested = _untested(ARRAY_NAMES[kind], arrays, flags, frame_numbers)
     return [
         verdict if found is None else verdict._replace(untested=found)
         for verdict, found in zip(verdicts, untested, strict=True)
     ]
 
 
-def _judged(kind: str, arrays: tuple[np.ndarray, ...], poses: list | None) -> list[Support]:
+def _judged(
+    kind: str, arrays: tuple[np.ndarray, ...], poses: list | None
+) -> tuple[list[Support], np.ndarray | None]:
     """The verdicts of :func:`assess_many` but for what the frames' lag-1 autocorrelation
-    says where the block test does not (:class:`Untested`)."""
+    says where the block test does not (:class:`Untested`), and the one segment's
+    :func:`_frame_numbers` ``(T, 5)`` where the verdict's pass computed them (else ``None``)."""
     n_trials = arrays[0].shape[0]
     if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
         n_markers = arrays[0].shape[2]
@@ -1904,13 +1921,13 @@ def _judged(kind: str, arrays: tuple[np.ndarray, ...], poses: list | None) -> li
                 f"{n_markers} markers, more than the {MAX_DISTANCE_MARKERS} whose pairwise "
                 "distances the rigidity test compares"
             )
-            return [_without_poses((trial,), reason, has_pose=True) for trial in arrays[0]]
+            return [_without_poses((trial,), reason, has_pose=True) for trial in arrays[0]], None
         return _one_segment(kind, arrays[0])
     if len(arrays) > 1:
         check_poses(arrays, poses, ARRAY_NAMES[kind])
     if not all(_poses_defined(array) for array in arrays):
         if n_trials > 1:
-            return [
+            each = [
                 assess(
                     kind,
                     tuple(array[t] for array in arrays),
@@ -1918,7 +1935,9 @@ def _judged(kind: str, arrays: tuple[np.ndarray, ...], poses: list | None) -> li
                 )
                 for t in range(n_trials)
             ]
-        return [_without_poses(tuple(array[0] for array in arrays), "no 3 non-collinear markers")]
+            return each, None
+        one = tuple(array[0] for array in arrays)
+        return [_without_poses(one, "no 3 non-collinear markers")], None
     if poses is None:
         poses = _fitted_poses(kind, arrays)
     verdicts: list = [None] * n_trials
@@ -1935,7 +1954,7 @@ def _judged(kind: str, arrays: tuple[np.ndarray, ...], poses: list | None) -> li
         judged = _two_segments(kind, arrays, [poses[t] for t in fitted])
         for t, verdict in zip(fitted, judged, strict=True):
             verdicts[t] = verdict
-    return verdicts
+    return verdicts, None
 
 
 def _fitted_poses(kind: str, arrays: tuple[np.ndarray, ...]) -> list:
@@ -1945,10 +1964,11 @@ def _fitted_poses(kind: str, arrays: tuple[np.ndarray, ...]) -> list:
     return trial_poses(dict(zip(ARRAY_NAMES[kind], arrays, strict=True)), min_frames=2)
 
 
-def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
+def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndarray]:
     """The verdicts on one segment's markers ``(T, N, n >= 3, 3)`` in the reference frame, from
     one compiled call (module docstring, "one segment"), and for an axis the rotations of the
-    trials that rotate about more than one axis (:func:`_one_segment_axes`)."""
+    trials that rotate about more than one axis (:func:`_one_segment_axes`); and the
+    markers' :func:`_frame_numbers` ``(T, 5)``, which that call gives too."""
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
     # p-values (T, 3): any rotation, off the hinge about each candidate axis.
     tested = numbers[:, 5:14]  # (RMS, F ratio, dof) of each of the three tests
@@ -1989,7 +2009,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> list[Support]:
             noise_directions=by_noise.get(t),
         )
         for t, row in enumerate(rows)
-    ]
+    ], numbers[:, -_FRAME_COLUMNS:]
 
 
 def _noise_directions(
@@ -2004,7 +2024,7 @@ def _noise_directions(
     if not posed:
         return {}
     every = len(posed) == len(markers)
-    found = numbers[:, len(_ONE_SEGMENT_COLUMNS) :]
+    found = numbers[:, len(_ONE_SEGMENT_COLUMNS) : -_FRAME_COLUMNS]
     if not every:
         found = found[posed]
     dependent = [i for i, t in enumerate(posed) if frames[t].dependent()]
@@ -2334,7 +2354,10 @@ class Untested(NamedTuple):
 
 
 def _untested(
-    names: tuple[str, ...], arrays: tuple[np.ndarray, ...], unflagged: list[bool]
+    names: tuple[str, ...],
+    arrays: tuple[np.ndarray, ...],
+    unflagged: list[bool],
+    frame_numbers: np.ndarray | None = None,
 ) -> list[Untested | None]:
     """Per trial of the segments' markers ``arrays`` ``(T, N, n, 3)`` each (named ``names``),
     the :class:`Untested` of the segment whose lag-1 autocorrelation is the furthest above its
@@ -2344,7 +2367,8 @@ def _untested(
     there are fewer than two frames), no correlation can clear the frames: below
     :data:`MIN_TESTED_FRAMES` frames an :class:`Untested` whose ``correlation`` and ``bound``
     are NaN; from them on ``None``, the block test having had no distances either (a single
-    marker's blind spot, which the README names)."""
+    marker's blind spot, which the README names). ``frame_numbers``: one segment's
+    :func:`_frame_numbers` ``(T, 5)`` where the verdict's pass already computed them."""
     n_trials, n_frames = arrays[0].shape[:2]
     found: list[Untested | None] = [None] * n_trials
     trials = [t for t, flag in enumerate(unflagged) if flag]
@@ -2353,14 +2377,17 @@ def _untested(
     read = []
     for name, array in zip(names, arrays, strict=True):
         if array.shape[2] >= 2 and n_frames >= 2:  # a pair's distance over two frames at least
-            if len(arrays) > 1:
+            part = slice(None) if len(trials) == n_trials else trials
+            if frame_numbers is not None:
+                numbers = frame_numbers[part]
+            elif len(arrays) > 1:
                 # The block test's numbers of every trial (_segments_frames), found again.
-                numbers = _segment_frame_numbers(array)[trials]
+                numbers = _segment_frame_numbers(array)[part]
             else:
-                # One segment's block test reads a pass of its own: the trials the caveat
-                # closed, most of a long correlated recording's, are not passed over here.
-                part = array if len(trials) == n_trials else array[trials]
-                numbers = _frame_numbers(kernel_array(part))
+                # One segment judged without its pass (_without_poses) reads a pass of its
+                # own: the trials the caveat closed, most of a long correlated recording's,
+                # are not passed over here.
+                numbers = _frame_numbers(kernel_array(array[part]))
             read.append((name, numbers.tolist()))
     if not read:
         if n_frames < MIN_TESTED_FRAMES:
