@@ -16,6 +16,7 @@ import pytest
 from jointbench.estimators import axis, registry, sphere, validation
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import poses
+from jointbench.numerics.compiled import kernel_array
 
 
 def _both(kernel, make_outputs, *inputs):
@@ -414,3 +415,20 @@ def test_a_kernel_is_compiled_on_its_first_call_and_then_called_directly(monkeyp
     assert asked == [doubled] and doubled._compiled is not None
     assert doubled(2.5) == 5.0 and doubled(np.float64(0.5)) == 1.0
     assert asked == [doubled]
+
+
+def test_a_kernel_array_is_the_array_itself_only_where_it_is_already_a_kernels_input():
+    markers = np.random.default_rng(9).normal(size=(4, 3, 3))
+    assert kernel_array(markers) is markers
+    counts = np.arange(5)
+    assert kernel_array(counts, np.int64) is counts
+    read_only = markers.copy()
+    read_only.setflags(write=False)
+    big_endian = markers.astype(">f8")
+    for other in (read_only, markers[::2], markers.astype(np.float32), big_endian, counts):
+        ready = kernel_array(other)
+        assert ready is not other and ready.dtype == np.float64
+        assert ready.flags.c_contiguous and ready.flags.writeable
+        np.testing.assert_array_equal(ready, other)
+    assert kernel_array(markers, np.int64).dtype == np.int64
+    assert kernel_array([[1.0, 2.0]]).flags.carray
