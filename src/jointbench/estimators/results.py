@@ -243,12 +243,13 @@ def with_warnings(result, warnings: tuple[str, ...], diagnostics: dict):
     same fault say it in the same words), and ``diagnostics`` added to its diagnostics;
     ``converged`` is left as the method set it."""
     status = result.status
-    # Bounded by the separators on both sides: a warning that begins another is not that one.
-    said = f"; {status}; warning: "
-    warnings = tuple(w for w in dict.fromkeys(warnings) if f"; warning: {w}; warning: " not in said)
-    if warnings:
-        words = "; ".join(f"warning: {warning}" for warning in warnings)
-        status = words if status == "ok" else f"{status}; {words}"
+    if warnings:  # a call that adds numbers only pays nothing for the words' checks
+        # Bounded by the separators on both sides: a warning that begins another is not that one.
+        said = f"; {status}; warning: "
+        fresh = [w for w in dict.fromkeys(warnings) if f"; warning: {w}; warning: " not in said]
+        if fresh:
+            words = "warning: " + "; warning: ".join(fresh)
+            status = words if status == "ok" else f"{status}; {words}"
     # Fields every result has: with_fields's check of the names is not needed.
     merged = {**result.diagnostics, **diagnostics}
     return _replaced(result, {"status": status, "diagnostics": merged})
