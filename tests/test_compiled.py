@@ -78,17 +78,23 @@ def test_input_check_kernels(sample):
     still = np.repeat(markers[:1], len(markers), axis=0)
     sliding = markers[0] + np.linspace(0.0, 50.0, 7)[:, None, None] * np.array([0.2, 0.5, -0.3])
     batch = np.stack([markers, still, sliding])
-    runs = []
+    runs, measured = [], []
     for function in (validation._first_failures, validation._first_failures.__wrapped__):
         failures = np.full(len(batch), -1, dtype=np.int8)
+        spans = np.full(len(batch), -1.0)
         checks = validation._SAMPLES | validation._MOVES | validation._LINES
         # The probe for non-finite samples multiplies them by zero: NumPy's scalars warn of
         # inf * 0 where the compiled code, with the same answer, does not.
         with np.errstate(invalid="ignore"):
-            first = function(batch, checks, 1e-9, failures)
+            first = function(batch, checks, 1e-9, failures, spans)
         assert first == failures[np.flatnonzero(failures)[0]] if failures.any() else first == 0
         runs.append(failures)
+        measured.append(spans)
     np.testing.assert_array_equal(*runs)
+    np.testing.assert_array_equal(*measured)
+    # Each trial's size, failing or not, is typical_span's of it over the frames checked.
+    expected_spans = [validation.typical_span(trial, validation._SPAN_FRAMES) for trial in batch]
+    np.testing.assert_array_equal(measured[0], expected_spans)
     finite = np.isfinite(batch).all(axis=(1, 2, 3))
     origin = (~batch.any(axis=-1)).any(axis=(1, 2))
     with np.errstate(invalid="ignore"):  # inf - inf in the non-finite trials
@@ -381,7 +387,7 @@ def test_the_line_check_decides_as_the_eigenvalues_do_near_its_threshold():
         trials.append(curved)
     batch = np.stack(trials)
     failures = np.empty(len(batch), dtype=np.int8)
-    validation._first_failures(batch, validation._LINES, 1e-9, failures)
+    validation._first_failures(batch, validation._LINES, 1e-9, failures, np.empty(0))
 
     def straight(trial):
         for marker in np.moveaxis(trial, 1, 0):
@@ -432,3 +438,20 @@ def test_a_kernel_array_is_the_array_itself_only_where_it_is_already_a_kernels_i
         np.testing.assert_array_equal(ready, other)
     assert kernel_array(markers, np.int64).dtype == np.int64
     assert kernel_array([[1.0, 2.0]]).flags.carray
+
+
+def test_a_centres_input_checks_are_one_kernel_call(monkeypatch):
+    """check_input's checks of one segment's markers (samples, motion, lines and the cluster's
+    size) run in one compiled pass: a checked call pays one kernel dispatch for them."""
+    called = []
+    kernel_type = type(validation._first_failures)
+    call = kernel_type.__call__
+    monkeypatch.setattr(
+        kernel_type, "__call__", lambda self, *a: called.append(self) or call(self, *a)
+    )
+    rng = np.random.default_rng(12)
+    validation.check_input("center", (_hinge_markers(rng, 1)[0],))
+    assert [kernel.__name__ for kernel in called] == ["_first_failures"]
+    for scale, refused in ((1e-3, "metres read as millimetres"), (1e2, "read as centimetres")):
+        with pytest.raises(ValueError, match=refused):
+            validation.check_input("center", (scale * _hinge_markers(rng, 1)[0],))
