@@ -118,6 +118,9 @@ def _sd_key(result) -> str:
     return "axis_sd_deg" if isinstance(result, AxisResult) else "center_sd_mm"
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
     """A read-only float64 copy of ``value``; a read-only view of read-only float64 memory (a
     row of :func:`frozen_rows`) is already that and is kept as it is."""
@@ -125,7 +128,7 @@ def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
         return None
     if (
         type(value) is np.ndarray
-        and value.dtype == np.float64
+        and value.dtype == _FLOAT64  # a dtype, not np.float64: comparing with a type builds one
         and not value.flags.writeable
         and (value.base is None or not value.base.flags.writeable)
     ):
