@@ -3,10 +3,11 @@ implementation of the same checks could cost: their compiled kernels alone.
 
 Usage::
 
-    python benchmarks/check_stages.py [--methods LS NM BC] [--calls 400]
+    python benchmarks/check_stages.py [--methods LS NM BC] [--calls 400] [--clock {cpu,wall}]
 
 On ``estimators.py``'s centre trials (3 markers x 120 frames, 1 mm noise), per method, the
-median wall-clock time per call of:
+median time per call, by wall clock (the default) or, ``--clock cpu``, by the process's CPU
+time, which other processes' load on a shared machine does not lengthen, of:
 
 * ``estimator``: the registered function alone (what ``checked / estimator`` divides by);
 * ``checked``: ``registry.get("center", method)``, every stage below and the plumbing between;
@@ -40,7 +41,7 @@ from jointbench.estimators import centre_precision, registry, support, validatio
 from jointbench.numerics.compiled import kernel_array
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from estimators import center_data
+from estimators import CLOCKS, Clock, center_data
 
 STAGES = (
     "estimator",
@@ -86,18 +87,24 @@ def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[in
     }
 
 
-def time_stages(calls: dict[str, Callable[[int], object]], n_trials: int, rounds: int) -> dict:
-    """Median seconds per call of each of ``calls`` over ``rounds`` rounds of ``n_trials``
-    calls, the stages taking turns round by round so that they share the machine's load."""
+def time_stages(
+    calls: dict[str, Callable[[int], object]],
+    n_trials: int,
+    rounds: int,
+    clock: Clock = time.perf_counter,
+) -> dict:
+    """Median seconds by ``clock`` per call of each of ``calls`` over ``rounds`` rounds of
+    ``n_trials`` calls, the stages taking turns round by round so that they share the
+    machine's load."""
     for call in calls.values():
         call(0)  # compiles the kernels and fills the caches before the clock starts
     times: dict[str, list[float]] = {name: [] for name in calls}
     for _ in range(rounds):
         for name, call in calls.items():
-            start = time.perf_counter()
+            start = clock()
             for i in range(n_trials):
                 call(i)
-            times[name].append((time.perf_counter() - start) / n_trials)
+            times[name].append((clock() - start) / n_trials)
     return {name: statistics.median(values) for name, values in times.items()}
 
 
@@ -105,16 +112,27 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--methods", nargs="+", default=["LS", "NM", "BC"])
     parser.add_argument("--calls", type=int, default=400, help="calls per stage in all")
+    parser.add_argument(
+        "--clock",
+        choices=sorted(CLOCKS),
+        default="wall",
+        help="time the calls by wall-clock time or by the process's CPU time (%(default)s)",
+    )
     args = parser.parse_args(argv)
+    clock = getattr(time, CLOCKS[args.clock])
+    clock_text = "wall-clock" if args.clock == "wall" else "process CPU"
     n_trials = min(40, args.calls)
     rounds = max(1, args.calls // n_trials)
     trials = [trial for (trial,) in center_data(np.random.default_rng(0), n_trials).trials]
     header = [*STAGES, "checked / estimator", "floor / estimator"]
-    print("Median µs per call, 3 markers x 120 frames, 1 mm noise (see the script's doc).\n")
+    print(
+        f"Median {clock_text} µs per call, 3 markers x 120 frames, 1 mm noise "
+        "(see the script's doc).\n"
+    )
     print("| method | " + " | ".join(header) + " |")
     print("|---|" + "---:|" * len(header))
     for method in args.methods:
-        median = time_stages(stage_calls(method, trials), n_trials, rounds)
+        median = time_stages(stage_calls(method, trials), n_trials, rounds, clock)
         floor = sum(
             median[name]
             for name in ("estimator", "input checks", "verdict kernels", "precision kernel")

@@ -181,3 +181,21 @@ def test_the_clocks_are_functions_of_time_the_baseline_worker_can_read_by_name()
     assert bench.CLOCKS["wall"] == "perf_counter"
     for name in bench.CLOCKS.values():
         assert callable(getattr(time, name))
+
+
+def test_the_check_stages_are_timed_by_the_clock_given():
+    # --clock cpu reads the process's CPU time, which other processes' load does not lengthen:
+    # every stage's time must come from the clock handed in, not from a wall clock beside it.
+    clock = _TickingClock(0.25)
+    calls = {"estimator": lambda i: None, "checked": lambda i: None}
+    median = check_stages.time_stages(calls, n_trials=4, rounds=3, clock=clock)
+    assert median == {"estimator": 0.25 / 4, "checked": 0.25 / 4}
+    assert clock.reads == 2 * 2 * 3
+
+
+def test_the_check_stages_clocks_are_the_estimator_benchmarks(capsys):
+    assert check_stages.CLOCKS is bench.CLOCKS
+    assert check_stages.main(["--methods", "LS", "--calls", "2", "--clock", "cpu"]) == 0
+    assert "process CPU" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        check_stages.main(["--methods", "LS", "--calls", "2", "--clock", "sundial"])

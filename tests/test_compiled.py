@@ -16,6 +16,7 @@ import pytest
 from jointbench.estimators import axis, registry, sphere, validation
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import poses
+from jointbench.numerics.compiled import kernel_array
 
 
 def _both(kernel, make_outputs, *inputs):
@@ -77,17 +78,23 @@ def test_input_check_kernels(sample):
     still = np.repeat(markers[:1], len(markers), axis=0)
     sliding = markers[0] + np.linspace(0.0, 50.0, 7)[:, None, None] * np.array([0.2, 0.5, -0.3])
     batch = np.stack([markers, still, sliding])
-    runs = []
+    runs, measured = [], []
     for function in (validation._first_failures, validation._first_failures.__wrapped__):
         failures = np.full(len(batch), -1, dtype=np.int8)
+        spans = np.full(len(batch), -1.0)
         checks = validation._SAMPLES | validation._MOVES | validation._LINES
         # The probe for non-finite samples multiplies them by zero: NumPy's scalars warn of
         # inf * 0 where the compiled code, with the same answer, does not.
         with np.errstate(invalid="ignore"):
-            first = function(batch, checks, 1e-9, failures)
+            first = function(batch, checks, 1e-9, failures, spans)
         assert first == failures[np.flatnonzero(failures)[0]] if failures.any() else first == 0
         runs.append(failures)
+        measured.append(spans)
     np.testing.assert_array_equal(*runs)
+    np.testing.assert_array_equal(*measured)
+    # Each trial's size, failing or not, is typical_span's of it over the frames checked.
+    expected_spans = [validation.typical_span(trial, validation._SPAN_FRAMES) for trial in batch]
+    np.testing.assert_array_equal(measured[0], expected_spans)
     finite = np.isfinite(batch).all(axis=(1, 2, 3))
     origin = (~batch.any(axis=-1)).any(axis=(1, 2))
     with np.errstate(invalid="ignore"):  # inf - inf in the non-finite trials
@@ -380,7 +387,7 @@ def test_the_line_check_decides_as_the_eigenvalues_do_near_its_threshold():
         trials.append(curved)
     batch = np.stack(trials)
     failures = np.empty(len(batch), dtype=np.int8)
-    validation._first_failures(batch, validation._LINES, 1e-9, failures)
+    validation._first_failures(batch, validation._LINES, 1e-9, failures, np.empty(0))
 
     def straight(trial):
         for marker in np.moveaxis(trial, 1, 0):
@@ -414,3 +421,37 @@ def test_a_kernel_is_compiled_on_its_first_call_and_then_called_directly(monkeyp
     assert asked == [doubled] and doubled._compiled is not None
     assert doubled(2.5) == 5.0 and doubled(np.float64(0.5)) == 1.0
     assert asked == [doubled]
+
+
+def test_a_kernel_array_is_the_array_itself_only_where_it_is_already_a_kernels_input():
+    markers = np.random.default_rng(9).normal(size=(4, 3, 3))
+    assert kernel_array(markers) is markers
+    counts = np.arange(5)
+    assert kernel_array(counts, np.int64) is counts
+    read_only = markers.copy()
+    read_only.setflags(write=False)
+    big_endian = markers.astype(">f8")
+    for other in (read_only, markers[::2], markers.astype(np.float32), big_endian, counts):
+        ready = kernel_array(other)
+        assert ready is not other and ready.dtype == np.float64
+        assert ready.flags.c_contiguous and ready.flags.writeable
+        np.testing.assert_array_equal(ready, other)
+    assert kernel_array(markers, np.int64).dtype == np.int64
+    assert kernel_array([[1.0, 2.0]]).flags.carray
+
+
+def test_a_centres_input_checks_are_one_kernel_call(monkeypatch):
+    """check_input's checks of one segment's markers (samples, motion, lines and the cluster's
+    size) run in one compiled pass: a checked call pays one kernel dispatch for them."""
+    called = []
+    kernel_type = type(validation._first_failures)
+    call = kernel_type.__call__
+    monkeypatch.setattr(
+        kernel_type, "__call__", lambda self, *a: called.append(self) or call(self, *a)
+    )
+    rng = np.random.default_rng(12)
+    validation.check_input("center", (_hinge_markers(rng, 1)[0],))
+    assert [kernel.__name__ for kernel in called] == ["_first_failures"]
+    for scale, refused in ((1e-3, "metres read as millimetres"), (1e2, "read as centimetres")):
+        with pytest.raises(ValueError, match=refused):
+            validation.check_input("center", (scale * _hinge_markers(rng, 1)[0],))

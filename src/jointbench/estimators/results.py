@@ -118,6 +118,9 @@ def _sd_key(result) -> str:
     return "axis_sd_deg" if isinstance(result, AxisResult) else "center_sd_mm"
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
 def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
     """A read-only float64 copy of ``value``; a read-only view of read-only float64 memory (a
     row of :func:`frozen_rows`) is already that and is kept as it is."""
@@ -125,7 +128,7 @@ def _frozen_array(value: np.ndarray | None) -> np.ndarray | None:
         return None
     if (
         type(value) is np.ndarray
-        and value.dtype == np.float64
+        and value.dtype == _FLOAT64  # a dtype, not np.float64: comparing with a type builds one
         and not value.flags.writeable
         and (value.base is None or not value.base.flags.writeable)
     ):
@@ -243,12 +246,13 @@ def with_warnings(result, warnings: tuple[str, ...], diagnostics: dict):
     same fault say it in the same words), and ``diagnostics`` added to its diagnostics;
     ``converged`` is left as the method set it."""
     status = result.status
-    # Bounded by the separators on both sides: a warning that begins another is not that one.
-    said = f"; {status}; warning: "
-    warnings = tuple(w for w in dict.fromkeys(warnings) if f"; warning: {w}; warning: " not in said)
-    if warnings:
-        words = "; ".join(f"warning: {warning}" for warning in warnings)
-        status = words if status == "ok" else f"{status}; {words}"
+    if warnings:  # a call that adds numbers only pays nothing for the words' checks
+        # Bounded by the separators on both sides: a warning that begins another is not that one.
+        said = f"; {status}; warning: "
+        fresh = [w for w in dict.fromkeys(warnings) if f"; warning: {w}; warning: " not in said]
+        if fresh:
+            words = "warning: " + "; warning: ".join(fresh)
+            status = words if status == "ok" else f"{status}; {words}"
     # Fields every result has: with_fields's check of the names is not needed.
     merged = {**result.diagnostics, **diagnostics}
     return _replaced(result, {"status": status, "diagnostics": merged})

@@ -216,20 +216,27 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         )
 
 
-def _first_failure(markers: object, checks: int, move_tol_mm: float = _MOVE_TOL_MM) -> int:
-    """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
-    of one: its failure, or 0. Made on every call, inside a checked call too: an estimator may
-    write into the markers it was given before it hands them to a fit."""
-    return _first_failures(kernel_array(markers)[np.newaxis], checks, move_tol_mm, _UNRECORDED)
-
-
-# The failures array of a call of _first_failures that needs only its return value.
+# The failures and spans arrays of a call of _first_failures that needs only its return value.
 _UNRECORDED = np.empty(0, dtype=np.int8)
+_UNMEASURED = np.empty(0)
+
+
+def _first_failure(
+    markers: object,
+    checks: int,
+    move_tol_mm: float = _MOVE_TOL_MM,
+    span: np.ndarray = _UNMEASURED,
+) -> int:
+    """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
+    of one: its failure, or 0, and its size [mm] written into ``span`` ``(1,)`` unless it is
+    empty. Made on every call, inside a checked call too: an estimator may
+    write into the markers it was given before it hands them to a fit."""
+    return _first_failures(kernel_array(markers)[None], checks, move_tol_mm, _UNRECORDED, span)
 
 
 @kernel
 def _first_failures(
-    markers: np.ndarray, checks: int, move_tol_mm: float, failures: np.ndarray
+    markers: np.ndarray, checks: int, move_tol_mm: float, failures: np.ndarray, spans: np.ndarray
 ) -> int:
     """The first check each trial of ``markers`` ``(n_trials, n_frames, n_markers, 3)`` [mm]
     fails, of those asked, in this order, or 0: written into ``failures`` ``(n_trials,)``
@@ -243,6 +250,10 @@ def _first_failures(
     * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
       eigenvalue of its scatter matrix about its mean position at most :data:`_LINE_RATIO`
       times the largest (never for fewer than three frames, which always lie on a line).
+
+    Unless ``spans`` is empty, each trial's :func:`typical_span` over :data:`_SPAN_FRAMES`
+    frames is written into it ``(n_trials,)`` [mm], failing or not: the size check then needs
+    no kernel call of its own.
 
     A compiled kernel: the checks run before every fit, and NumPy's passes over the array and
     its per-call overhead on 3 x 3 matrices cost as much as a closed-form fit.
@@ -321,6 +332,8 @@ def _first_failures(
                 failure = _STRAIGHT
         if len(failures):
             failures[t] = failure
+        if len(spans):
+            spans[t] = typical_span(trial, _SPAN_FRAMES)
         if first_failure == 0:
             first_failure = failure
     return first_failure
@@ -352,16 +365,6 @@ def typical_span(markers: np.ndarray, n_sampled: int) -> float:
     if seen == 0:
         return np.nan
     return np.median(spans[:seen])
-
-
-@kernel
-def _typical_spans(markers: np.ndarray, n_sampled: int) -> np.ndarray:
-    """:func:`typical_span` of each trial of ``markers`` ``(n_trials, n_frames, n, 3)`` [mm],
-    ``(n_trials,)``. A compiled kernel."""
-    spans = np.empty(markers.shape[0])
-    for t in range(markers.shape[0]):
-        spans[t] = typical_span(markers[t], n_sampled)
-    return spans
 
 
 def cluster_span(markers: np.ndarray) -> float:
@@ -409,7 +412,12 @@ def check_span(markers: np.ndarray, *, name: str = "markers") -> None:
     (:func:`typical_span`, :func:`span_problem`): an answer in another unit would pass every
     check, which are built for millimetres, at a thousandth of its size, or fail them for the
     wrong reason."""
-    span = cluster_span(markers)
+    _refuse_span(cluster_span(markers), name)
+
+
+def _refuse_span(span: float, name: str) -> None:
+    """Raise :func:`check_span`'s ``ValueError`` for the markers ``name`` of typical size
+    ``span`` [mm] (:func:`typical_span`) where :func:`span_problem` finds one."""
     problem = span_problem(span)
     if problem is not None:
         raise ValueError(
@@ -485,11 +493,13 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
             check_span(array, name=name)
         return checked
     # One pass of the kernel for the checks of check_markers, check_moves and check_rotates,
-    # in their order (the counts of frames and markers: at least one, as the array is not empty).
+    # in their order (the counts of frames and markers: at least one, as the array is not empty),
+    # and for the cluster's size of check_span, whose error comes after theirs.
     name = names[0]
     array = _shaped(arrays[0], name)
-    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES))
-    check_span(array, name=name)
+    span = np.empty(1)
+    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES, span=span))
+    _refuse_span(span[0], name)
     return (array,)
 
 
@@ -541,11 +551,11 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
     checks = _SAMPLES if kind == "joint_center" else _SAMPLES | _MOVES | _LINES
     passes = np.ones(n_trials, dtype=bool)
     failures = np.empty(n_trials, dtype=np.int8)
+    spans = np.empty(n_trials)
     try:
         for array in batch:
-            if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures):
+            if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures, spans):
                 passes &= failures == 0
-            spans = _typical_spans(kernel_array(array), _SPAN_FRAMES)
             passes &= ~(((spans > 0.0) & (spans < MIN_SPAN_MM)) | (spans > MAX_SPAN_MM))
     except np.linalg.LinAlgError:
         # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise

@@ -185,14 +185,17 @@ def kernel_array(array: object, dtype: type = float) -> np.ndarray:
     """``array`` as a kernel's input: ``dtype``, C-contiguous and writable, copied only when it
     is not. Numba compiles a kernel once per argument type, and a read-only or strided array is
     a type of its own, which would cost another compilation."""
-    if (
-        isinstance(array, np.ndarray)
-        and array.dtype == dtype
-        and array.flags.c_contiguous
-        and array.flags.writeable
-    ):
-        return array  # np.require's own checks cost more than a small kernel call
+    # A checked call hands a dozen arrays through here: np.require's own checks, and comparing
+    # a dtype with a Python type (which builds a dtype), cost more than a small kernel call.
+    # NumPy's float64 dtype is one object; ``carray`` is C-contiguous, writable and aligned.
+    if isinstance(array, np.ndarray) and array.flags.carray:
+        wanted = _FLOAT64 if dtype is float else dtype
+        if array.dtype is wanted or array.dtype == wanted:
+            return array
     return np.require(array, dtype, ["C", "W"])
+
+
+_FLOAT64 = np.dtype(np.float64)
 
 
 def kernel(function: Callable) -> Callable:
