@@ -318,6 +318,44 @@ def test_a_marker_at_the_centre_carries_no_direction():
     )
 
 
+def test_the_compiled_sums_compute_what_their_source_says():
+    """The spheres' sums and the statistics built on them, compiled and as plain Python
+    (``kernel.__wrapped__``), to the last bit: on a cap with a marker exactly at the answer in
+    one frame (no direction there), a virtual marker near the joint (left out of the
+    iterations, kept in the fits), and with the lack of fit's sums asked for or not."""
+    rng = np.random.default_rng(29)
+    markers = _cap(rng, 20.0, 0.5)
+    near_joint = CENTRE + rng.normal(scale=0.5, size=(len(markers), 1, 3))
+    near_joint[7, 0] = CENTRE
+    markers = np.concatenate([markers, near_joint], axis=1)
+    coordinates = np.empty((markers.shape[1], 3, len(markers)))
+    centre_precision._transposed_into(markers, coordinates)
+    np.testing.assert_array_equal(coordinates, markers.transpose(1, 2, 0))
+    runs = []
+    for marker_sums in (centre_precision._marker_sums, centre_precision._marker_sums.__wrapped__):
+        outputs = (np.empty(len(markers)), np.empty(len(markers)), np.empty(3), np.empty(3))
+        outputs += (np.empty((3, 3)),)
+        radius = marker_sums(coordinates[-1], CENTRE, *outputs)
+        runs.append((radius, outputs[0], *outputs[2:]))
+    for compiled, interpreted in zip(*runs, strict=True):
+        np.testing.assert_array_equal(compiled, interpreted)
+    assert runs[0][1][7] == 0.0
+    for nearest, fit in ((0.0, True), (1.5, False)):
+        runs = []
+        for sums_at in (centre_precision._sums_at, centre_precision._sums_at.__wrapped__):
+            scratch = centre_precision._scratch_for(len(markers))
+            returned = sums_at(coordinates, CENTRE + 0.3, 0.25, nearest, fit, scratch)
+            runs.append((returned, [scratch[i].copy() for i in (0, 1, 2, 3, 11, 12)]))
+        assert runs[0][0] == runs[1][0]
+        for compiled, interpreted in zip(runs[0][1], runs[1][1], strict=True):
+            np.testing.assert_array_equal(compiled, interpreted)
+    rows = [
+        statistics(markers[None].copy(), (CENTRE + 2.0)[None], np.array([0.25]))
+        for statistics in (centre_statistics, centre_statistics.__wrapped__)
+    ]
+    np.testing.assert_array_equal(rows[0], rows[1])
+
+
 def test_an_answer_among_the_markers_is_caught_at_its_distance():
     """The markers' centroid, 18 mm from the centre of paper A's M set on a 3 degree cap with
     0.1 mm noise: the first-order step from it is 4 mm, under the 5 mm a method's bias is

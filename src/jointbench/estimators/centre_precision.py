@@ -210,16 +210,18 @@ def centre_statistics(
     SDs, its Mahalanobis length under the covariance the SD is from (:func:`_in_sds`).
     ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
     else 0. A compiled kernel."""
-    n_trials, n_frames = markers.shape[:2]
+    n_trials, n_frames, n_markers = markers.shape[:3]
     out = np.empty((n_trials, 14))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
-    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * markers.shape[2]))
+    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    coordinates = np.empty((n_markers, 3, n_frames))
     for t in range(n_trials):
-        mixed = _row_at(markers[t], centres[t], variances[t], out[t], scratch)
+        _transposed_into(markers[t], coordinates)
+        mixed = _row_at(coordinates, centres[t], variances[t], out[t], scratch)
         out[t, _REPEATS] = _repeats(markers[t], weights, keys)
         # Wherever the score test passes it too: a method's bias of a few of its SDs does.
-        refined = _refine(markers[t], centres[t], variances[t], mixed, out[t], scratch)
+        refined = _refine(coordinates, centres[t], variances[t], mixed, out[t], scratch)
         out[t, _STEP_SDS] = _in_sds(out[t, _TOWARDS], scratch[13], scratch[14], variances[t])
         if not refined and _definite(scratch[13]):
             # No centre the iterations reach fits the spheres better: the answer is theirs.
@@ -244,11 +246,24 @@ def _noise_free(markers: np.ndarray, s2: float) -> bool:
 
 
 @kernel
+def _transposed_into(markers: np.ndarray, coordinates: np.ndarray) -> None:
+    """The markers ``(N, n, 3)`` [mm] written into ``coordinates`` ``(n, 3, N)``: each
+    marker's coordinates frame after frame, which the sums over its frames
+    (:func:`_marker_sums`), run several times per trial, read contiguously. A compiled
+    kernel."""
+    for k in range(markers.shape[0]):
+        for p in range(markers.shape[1]):
+            for i in range(3):
+                coordinates[p, i, k] = markers[k, p, i]
+
+
+@kernel
 def _scratch_for(n_frames: int) -> tuple:
     """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames, allocated once
     per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
-    sum_uu, stated, stated_noise, sd_values, sd_vectors)``, the last two the eigen-decomposition
-    of the information the SD is stated from (:func:`_row_at`). A compiled kernel."""
+    sum_uu, stated, stated_noise, sd_values, sd_vectors, inverses, iterate, move, there)``,
+    ``sd_values`` and ``sd_vectors`` the eigen-decomposition of the information the SD is stated
+    from (:func:`_row_at`), the last three :func:`_refine`'s. A compiled kernel."""
     return (
         np.empty((3, 3)),
         np.empty((3, 3)),
@@ -265,12 +280,16 @@ def _scratch_for(n_frames: int) -> tuple:
         np.empty((3, 3)),
         np.empty(3),
         np.empty((3, 3)),
+        np.empty(n_frames),
+        np.empty(3),
+        np.empty(3),
+        np.empty(14),
     )
 
 
 @kernel
 def _refine(
-    markers: np.ndarray,
+    coordinates: np.ndarray,
     answer: np.ndarray,
     s2: float,
     mixed: bool,
@@ -286,23 +305,25 @@ def _refine(
     radial residual of one (a virtual marker at the joint) is not smooth there, and draws the
     iterations to it or throws them off; the fits compared keep it. They start from ``row``'s
     first-order step, unless some markers lie that near the answer (``mixed``, as
-    :func:`_row_at` returns it), whose step keeps them. The iterations overwrite ``scratch``
-    but for the SD's eigen-decomposition. A compiled kernel."""
-    centre = answer.copy() if mixed else answer + row[_TOWARDS]
-    move = np.empty(3)
+    :func:`_row_at` returns it), whose step keeps them. ``coordinates`` ``(n, 3, N)`` [mm] are
+    the markers' (:func:`_transposed_into`). The iterations overwrite ``scratch`` but for the
+    SD's eigen-decomposition. A compiled kernel."""
+    centre, move, there = scratch[16:19]
+    centre[:] = answer
+    if not mixed:
+        centre += row[_TOWARDS]
     nearest = _CLEAR_RADIUS * math.sqrt(s2)
     sd = row[_SD] if math.isfinite(row[_SD]) else 0.0
     for _ in range(_REFINE_ITERATIONS):
-        _step_at(markers, centre, s2, nearest, move, scratch)
+        _step_at(coordinates, centre, s2, nearest, move, scratch)
         if not (math.isfinite(move[0]) and math.isfinite(move[1]) and math.isfinite(move[2])):
             return False
         centre += move
         distance = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
         if _length(move[0], move[1], move[2]) <= _REFINED_TO * max(distance, sd):
             break
-    n_frames, n_markers, _ = markers.shape
-    squares, fourths, kept, _ = _sums_at(markers, centre, s2, 0.0, scratch)
-    there = np.empty_like(row)
+    n_markers, _, n_frames = coordinates.shape
+    squares, fourths, kept, _ = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
     _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
     if not there[_FIT_RATIO] < row[_FIT_RATIO]:
         return False
@@ -338,21 +359,27 @@ def _in_sds(step: np.ndarray, values: np.ndarray, vectors: np.ndarray, s2: float
 
 @kernel
 def _sums_at(
-    markers: np.ndarray, centre: np.ndarray, s2: float, nearest: float, scratch: tuple
+    coordinates: np.ndarray,
+    centre: np.ndarray,
+    s2: float,
+    nearest: float,
+    fit: bool,
+    scratch: tuple,
 ) -> tuple:
-    """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers ``(N, n, 3)``
-    [mm] at a mean distance of ``nearest`` [mm] or more from it, with noise ``s2`` [mm^2] per
-    coordinate, into ``scratch`` (:func:`_scratch_for`): the
-    information ``F``, its part ``F_s`` beyond the directions' noise and that noise's part
-    ``F - F_s`` (upper triangles), the score ``g``, and the parts of ``F_s`` and ``F - F_s``
-    from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns the radial residuals' sum
-    of squares and of fourth powers, the markers kept, and whether only some of those lie that
-    far. A marker whose directions from the
-    answer do not spread beyond their noise (one at the answer, a virtual marker at the joint,
-    say) carries nothing on it and is left out. A compiled kernel."""
+    """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers whose
+    ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) at a mean distance of
+    ``nearest`` [mm] or more from it, with noise ``s2`` [mm^2] per coordinate, into ``scratch``
+    (:func:`_scratch_for`): the information ``F``, its part ``F_s`` beyond the directions'
+    noise and that noise's part ``F - F_s`` (upper triangles), the score ``g``, and the parts
+    of ``F_s`` and ``F - F_s`` from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns
+    the radial residuals' sum of squares and of fourth powers (where ``fit`` asks for them,
+    else 0), the markers kept, and whether only some of those lie that far. A marker whose
+    directions from the answer do not spread beyond their noise (one at the answer, a virtual
+    marker at the joint, say) carries nothing on it and is left out. A compiled kernel."""
     info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch[:11]
     stated, stated_noise = scratch[11:13]
-    n_frames, n_markers, _ = markers.shape
+    inverses = scratch[15]
+    n_markers, _, n_frames = coordinates.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
     # of freedom each: beyond this factor of that spread the marker has a signal.
     beyond_noise = 1.0 + _Z_ALPHA / math.sqrt(max(n_frames - 1, 1))
@@ -364,7 +391,7 @@ def _sums_at(
     stated_noise[:] = 0.0
     squares, fourths, kept, clear = 0.0, 0.0, 0, 0
     for p in range(n_markers):
-        radius = _marker_sums(markers[:, p], centre, distances, sum_u, sum_du, sum_uu)
+        radius = _marker_sums(coordinates[p], centre, distances, inverses, sum_u, sum_du, sum_uu)
         if radius < nearest:
             continue
         noise = (n_frames - 1) * s2 / radius**2 if radius > 0.0 else np.inf
@@ -375,10 +402,11 @@ def _sums_at(
         kept += 1
         far = radius >= _CLEAR_RADIUS * math.sqrt(s2)
         clear += far
-        for k in range(n_frames):
-            e2 = (distances[k] - radius) ** 2
-            squares += e2
-            fourths += e2 * e2
+        if fit:
+            for k in range(n_frames):
+                e2 = (distances[k] - radius) ** 2
+                squares += e2
+                fourths += e2 * e2
         for i in range(3):
             score[i] += sum_du[i] - radius * sum_u[i]
         for i in range(3):
@@ -416,7 +444,7 @@ def _corrected_step(
 
 @kernel
 def _step_at(
-    markers: np.ndarray,
+    coordinates: np.ndarray,
     centre: np.ndarray,
     s2: float,
     nearest: float,
@@ -424,11 +452,12 @@ def _step_at(
     scratch: tuple,
 ) -> None:
     """:func:`_row_at`'s step towards the spheres' centre from ``centre`` ``(3,)`` [mm] alone,
-    over the markers ``nearest`` [mm] or more from it (:func:`_sums_at`), into ``towards``
-    ``(3,)``: ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not positive definite (NaN where
-    neither is). A compiled kernel."""
+    over the markers ``nearest`` [mm] or more from it (:func:`_sums_at`, whose ``coordinates``
+    ``(n, 3, N)``), into ``towards`` ``(3,)``: ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not
+    positive definite (NaN where neither is). A compiled kernel."""
     info, signal, _, score, values, vectors, work = scratch[:7]
-    _sums_at(markers, centre, s2, nearest, scratch)
+    # The lack of fit is not wanted here: its sums are skipped.
+    _sums_at(coordinates, centre, s2, nearest, False, scratch)
     symmetric_eigen_into(signal, values, vectors, work)
     if _definite(values):
         _corrected_step(score, values, vectors, towards)
@@ -438,18 +467,19 @@ def _step_at(
 
 @kernel
 def _row_at(
-    markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray, scratch: tuple
+    coordinates: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray, scratch: tuple
 ) -> bool:
     """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
-    the markers ``(N, n, 3)`` [mm] with noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`),
+    the markers whose ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) with
+    noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`),
     into ``row`` ``(14,)`` but for ``repeats`` and the step in SDs; ``inf`` SD, step and share where
     the corrected information is not positive definite. Leaves the eigen-decomposition of the
     information the SD is from in ``scratch`` (:func:`_scratch_for`); returns whether that is
     from only some of the markers (those clear of the answer, module docstring). A compiled
     kernel."""
-    n_frames, n_markers, _ = markers.shape
+    n_markers, _, n_frames = coordinates.shape
     info, signal, noisy, score, values, vectors, work = scratch[:7]
-    squares, fourths, kept, mixed = _sums_at(markers, centre, s2, 0.0, scratch)
+    squares, fourths, kept, mixed = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
     _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
     row[_SPHERES_RATIO] = row[_FIT_RATIO]
@@ -467,7 +497,7 @@ def _row_at(
         # marker.
         signal, noisy = scratch[11:13]
         symmetric_eigen_into(signal, values, vectors, work)
-    sd_values, sd_vectors = scratch[13:]
+    sd_values, sd_vectors = scratch[13:15]
     sd_values[:] = values
     sd_vectors[:] = vectors
     if not _definite(values):
@@ -488,30 +518,40 @@ def _marker_sums(
     track: np.ndarray,
     centre: np.ndarray,
     distances: np.ndarray,
+    inverses: np.ndarray,
     sum_u: np.ndarray,
     sum_du: np.ndarray,
     sum_uu: np.ndarray,
 ) -> float:
-    """One marker's sums over its ``track`` ``(N, 3)`` [mm] about ``centre`` ``(3,)``: its
-    ``distances`` ``(N,)``, the sums of its unit directions ``u``, of ``d u`` and of ``u u'``
-    (both triangles); returns its mean distance ``r``. ``F_p = sum u u' - N m m'`` and
-    ``g_p = sum d u - N r m`` follow, ``m`` the mean direction. A compiled kernel."""
-    n_frames = track.shape[0]
+    """One marker's sums over its ``track`` ``(3, N)`` [mm] (its coordinates, each over the
+    frames) about ``centre`` ``(3,)``: its ``distances`` ``(N,)``, the sums of its unit
+    directions ``u``, of ``d u`` and of ``u u'`` (both triangles); returns its mean distance
+    ``r``. ``F_p = sum u u' - N m m'`` and ``g_p = sum d u - N r m`` follow, ``m`` the mean
+    direction. ``inverses`` ``(N,)`` is scratch. A compiled kernel."""
+    xs, ys, zs = track[0], track[1], track[2]
+    n_frames = xs.shape[0]
     cx, cy, cz = centre[0], centre[1], centre[2]
+    # The square roots and divisions, most of the cost, in a loop without a sum: the compiler
+    # runs it on several frames at once, which a sum, kept in its order, would forbid.
+    for k in range(n_frames):
+        x = xs[k] - cx
+        y = ys[k] - cy
+        z = zs[k] - cz
+        d = math.sqrt(x * x + y * y + z * z)
+        distances[k] = d
+        inverses[k] = 1.0 / d if d > 0.0 else 0.0
     # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers.
     sum_d = 0.0
     su0 = su1 = su2 = 0.0
     sd0 = sd1 = sd2 = 0.0
     outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for k in range(n_frames):
-        x = track[k, 0] - cx
-        y = track[k, 1] - cy
-        z = track[k, 2] - cz
-        d = math.sqrt(x * x + y * y + z * z)
-        distances[k] = d
-        inverse = 1.0 / d if d > 0.0 else 0.0
+        x = xs[k] - cx
+        y = ys[k] - cy
+        z = zs[k] - cz
+        inverse = inverses[k]
         u0, u1, u2 = x * inverse, y * inverse, z * inverse
-        sum_d += d
+        sum_d += distances[k]
         su0 += u0
         su1 += u1
         su2 += u2
