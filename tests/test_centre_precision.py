@@ -228,6 +228,30 @@ def test_repeated_frames_carry_no_new_information():
         assert repeated.diagnostics[key] == pytest.approx(result.diagnostics[key], rel=1e-2)
 
 
+def test_repeated_frames_are_flagged_wherever_two_keys_are_equal():
+    """The repeated-frames flag, compiled and as plain Python, is 1 exactly where two frames'
+    keys are equal: noisy frames all distinct, one frame repeated far from the first, frames
+    in a regular progression, and those with one of them repeated at the end."""
+    rng = np.random.default_rng(31)
+    noisy = _cap(rng, 20.0, 0.5)
+    repeated = noisy.copy()
+    repeated[97] = repeated[4]
+    grid = np.arange(120.0)[:, None, None] * np.array([[1.0, 0.0, 2.0], [0.0, 3.0, 1.0]])
+    for markers, expected in (
+        (noisy, 0.0),
+        (repeated, 1.0),
+        (grid, 0.0),
+        (grid[[*range(120), 60]], 1.0),
+    ):
+        markers = np.ascontiguousarray(markers)
+        weights = np.sqrt(np.arange(2.0, 2.0 + 3 * markers.shape[1]))
+        keys = markers.reshape(len(markers), -1) @ weights
+        assert (len(np.unique(keys)) < len(keys)) == bool(expected)
+        for repeats in (centre_precision._repeats, centre_precision._repeats.__wrapped__):
+            slots = np.empty(256, dtype=np.int64)
+            assert repeats(markers, weights, np.empty(len(markers)), slots) == expected
+
+
 def test_a_cap_within_the_noise_is_not_determined():
     """A 3 degree cap with 1 mm noise: the rotation is resolved (the support verdict passes
     it) but the data hold the centre to tens of millimetres, which the status says."""
@@ -333,7 +357,7 @@ def test_the_compiled_sums_compute_what_their_source_says():
     np.testing.assert_array_equal(coordinates, markers.transpose(1, 2, 0))
     runs = []
     for marker_sums in (centre_precision._marker_sums, centre_precision._marker_sums.__wrapped__):
-        outputs = (np.empty(len(markers)), np.empty(len(markers)), np.empty(3), np.empty(3))
+        outputs = (np.empty(len(markers)), np.empty((6, len(markers))), np.empty(3), np.empty(3))
         outputs += (np.empty((3, 3)),)
         radius = marker_sums(coordinates[-1], CENTRE, *outputs)
         runs.append((radius, outputs[0], *outputs[2:]))

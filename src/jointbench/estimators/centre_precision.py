@@ -214,12 +214,16 @@ def centre_statistics(
     out = np.empty((n_trials, 14))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
+    table = 2
+    while table < 2 * n_frames:
+        table *= 2
+    slots = np.empty(table, dtype=np.int64)
     weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
     coordinates = np.empty((n_markers, 3, n_frames))
     for t in range(n_trials):
         _transposed_into(markers[t], coordinates)
         mixed = _row_at(coordinates, centres[t], variances[t], out[t], scratch)
-        out[t, _REPEATS] = _repeats(markers[t], weights, keys)
+        out[t, _REPEATS] = _repeats(markers[t], weights, keys, slots)
         # Wherever the score test passes it too: a method's bias of a few of its SDs does.
         refined = _refine(coordinates, centres[t], variances[t], mixed, out[t], scratch)
         out[t, _STEP_SDS] = _in_sds(out[t, _TOWARDS], scratch[13], scratch[14], variances[t])
@@ -261,7 +265,7 @@ def _transposed_into(markers: np.ndarray, coordinates: np.ndarray) -> None:
 def _scratch_for(n_frames: int) -> tuple:
     """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames, allocated once
     per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
-    sum_uu, stated, stated_noise, sd_values, sd_vectors, inverses, iterate, move, there)``,
+    sum_uu, stated, stated_noise, sd_values, sd_vectors, offsets, iterate, move, there)``,
     ``sd_values`` and ``sd_vectors`` the eigen-decomposition of the information the SD is stated
     from (:func:`_row_at`), the last three :func:`_refine`'s. A compiled kernel."""
     return (
@@ -280,7 +284,7 @@ def _scratch_for(n_frames: int) -> tuple:
         np.empty((3, 3)),
         np.empty(3),
         np.empty((3, 3)),
-        np.empty(n_frames),
+        np.empty((6, n_frames)),
         np.empty(3),
         np.empty(3),
         np.empty(14),
@@ -378,7 +382,7 @@ def _sums_at(
     marker at the joint, say) carries nothing on it and is left out. A compiled kernel."""
     info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch[:11]
     stated, stated_noise = scratch[11:13]
-    inverses = scratch[15]
+    offsets = scratch[15]
     n_markers, _, n_frames = coordinates.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
     # of freedom each: beyond this factor of that spread the marker has a signal.
@@ -391,7 +395,7 @@ def _sums_at(
     stated_noise[:] = 0.0
     squares, fourths, kept, clear = 0.0, 0.0, 0, 0
     for p in range(n_markers):
-        radius = _marker_sums(coordinates[p], centre, distances, inverses, sum_u, sum_du, sum_uu)
+        radius = _marker_sums(coordinates[p], centre, distances, offsets, sum_u, sum_du, sum_uu)
         if radius < nearest:
             continue
         noise = (n_frames - 1) * s2 / radius**2 if radius > 0.0 else np.inf
@@ -518,7 +522,7 @@ def _marker_sums(
     track: np.ndarray,
     centre: np.ndarray,
     distances: np.ndarray,
-    inverses: np.ndarray,
+    offsets: np.ndarray,
     sum_u: np.ndarray,
     sum_du: np.ndarray,
     sum_uu: np.ndarray,
@@ -527,37 +531,37 @@ def _marker_sums(
     frames) about ``centre`` ``(3,)``: its ``distances`` ``(N,)``, the sums of its unit
     directions ``u``, of ``d u`` and of ``u u'`` (both triangles); returns its mean distance
     ``r``. ``F_p = sum u u' - N m m'`` and ``g_p = sum d u - N r m`` follow, ``m`` the mean
-    direction. ``inverses`` ``(N,)`` is scratch. A compiled kernel."""
+    direction. ``offsets`` ``(6, N)`` is scratch (the offsets from ``centre`` and the unit
+    directions). A compiled kernel."""
     xs, ys, zs = track[0], track[1], track[2]
     n_frames = xs.shape[0]
     cx, cy, cz = centre[0], centre[1], centre[2]
-    # The square roots and divisions, most of the cost, in a loop without a sum: the compiler
-    # runs it on several frames at once, which a sum, kept in its order, would forbid.
+    # The offsets, distances and directions, most of the cost (square roots, divisions), in a
+    # loop without a sum: the compiler runs it on several frames at once, which a sum, kept in
+    # its order, would forbid.
     for k in range(n_frames):
         x = xs[k] - cx
         y = ys[k] - cy
         z = zs[k] - cz
         d = math.sqrt(x * x + y * y + z * z)
         distances[k] = d
-        inverses[k] = 1.0 / d if d > 0.0 else 0.0
+        inverse = 1.0 / d if d > 0.0 else 0.0
+        offsets[0, k], offsets[1, k], offsets[2, k] = x, y, z
+        offsets[3, k], offsets[4, k], offsets[5, k] = x * inverse, y * inverse, z * inverse
     # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers.
     sum_d = 0.0
     su0 = su1 = su2 = 0.0
     sd0 = sd1 = sd2 = 0.0
     outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for k in range(n_frames):
-        x = xs[k] - cx
-        y = ys[k] - cy
-        z = zs[k] - cz
-        inverse = inverses[k]
-        u0, u1, u2 = x * inverse, y * inverse, z * inverse
+        u0, u1, u2 = offsets[3, k], offsets[4, k], offsets[5, k]
         sum_d += distances[k]
         su0 += u0
         su1 += u1
         su2 += u2
-        sd0 += x
-        sd1 += y
-        sd2 += z
+        sd0 += offsets[0, k]
+        sd1 += offsets[1, k]
+        sd2 += offsets[2, k]
         outer = add_outer(outer, u0, u1, u2)
     sum_u[0], sum_u[1], sum_u[2] = su0, su1, su2
     sum_du[0], sum_du[1], sum_du[2] = sd0, sd1, sd2
@@ -566,21 +570,33 @@ def _marker_sums(
 
 
 @kernel
-def _repeats(markers: np.ndarray, weights: np.ndarray, keys: np.ndarray) -> float:
+def _repeats(
+    markers: np.ndarray, weights: np.ndarray, keys: np.ndarray, slots: np.ndarray
+) -> float:
     """1 where two frames of ``markers`` ``(N, n, 3)`` may be equal, else 0: equal frames have
     equal keys ``(N,)`` (scratch), sums of the coordinates with the ``weights`` ``(3 n,)``, of
-    which no two of a frame's coordinates share one. A compiled kernel."""
+    which no two of a frame's coordinates share one. Each key is looked up among the earlier
+    ones in a hash table, ``slots`` (scratch, a power of two of at least ``2 N`` entries): a
+    pass over the frames where sorting the keys cost several. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
+    # The sums start at +0.0 and so are never -0.0: equal keys have equal bits.
+    bits = keys.view(np.int64)
+    mask = slots.shape[0] - 1
+    slots[:] = -1
     for k in range(n_frames):
         key = 0.0
         for p in range(n_markers):
             for i in range(3):
                 key += weights[3 * p + i] * markers[k, p, i]
         keys[k] = key
-    keys.sort()
-    for k in range(n_frames - 1):
-        if not keys[k + 1] != keys[k]:
-            return 1.0
+        # The exponent's and the mantissa's upper bits folded onto the lower: keys of round
+        # numbers differ there only.
+        slot = (bits[k] ^ (bits[k] >> 17) ^ (bits[k] >> 34) ^ (bits[k] >> 51)) & mask
+        while slots[slot] >= 0:
+            if keys[slots[slot]] == key:
+                return 1.0
+            slot = (slot + 1) & mask
+        slots[slot] = k
     return 0.0
 
 
