@@ -181,6 +181,9 @@ _TOWARDS = slice(8, 11)
 _SPHERES_RATIO, _SPHERES_Z = 11, 12
 # The step in the answer's SDs (Mahalanobis).
 _STEP_SDS = 13
+# The p-values of the score test, of the lack of fit and of the lack of fit about the spheres'
+# centre.
+_SCORE_P, _FIT_P, _SPHERES_P = 14, 15, 16
 
 # The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
 # exceed their noise by, in standard errors, for the marker to count.
@@ -203,15 +206,17 @@ def centre_statistics(
 ) -> np.ndarray:
     """Per trial ``(SD [mm], score chi-square, step [mm], repeats, noise share, lack-of-fit
     ratio, its z, offset [mm], step (3,) [mm], the lack of fit's ratio and z about the spheres'
-    centre, step in SDs)`` ``(T, 14)`` of the answers ``centres`` ``(T, 3)`` [mm] to the
-    markers ``(T, N, n, 3)`` [mm], with noise ``variances`` ``(T,)`` [mm^2] per coordinate
-    (module docstring). The step is the one to where Gauss–Newton iterations from the answer
-    end, where the spheres fit better there (:func:`_refine`), else the first-order step; in
-    SDs, its Mahalanobis length under the covariance the SD is from (:func:`_in_sds`).
+    centre, step in SDs, and the p-values of the score test, of the lack of fit and of the lack
+    of fit about the spheres' centre)`` ``(T, 17)`` of the answers ``centres`` ``(T, 3)`` [mm]
+    to the markers ``(T, N, n, 3)`` [mm], with noise ``variances`` ``(T,)`` [mm^2] per
+    coordinate (module docstring). The step is the one to where Gauss–Newton iterations from
+    the answer end, where the spheres fit better there (:func:`_refine`), else the first-order
+    step; in SDs, its Mahalanobis length under the covariance the SD is from
+    (:func:`_in_sds`).
     ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
     else 0. A compiled kernel."""
     n_trials, n_frames, n_markers = markers.shape[:3]
-    out = np.empty((n_trials, 14))
+    out = np.empty((n_trials, 17))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
     table = 2
@@ -233,6 +238,9 @@ def centre_statistics(
         if _noise_free(markers[t], variances[t]):
             # Rounding measured against rounding: nothing for the spheres' fit to fail.
             out[t, _SPHERES_Z] = np.nan
+        out[t, _SCORE_P] = _chi2_3_sf(out[t, _CHI2])
+        out[t, _FIT_P] = _normal_sf(out[t, _FIT_Z])
+        out[t, _SPHERES_P] = _normal_sf(out[t, _SPHERES_Z])
     return out
 
 
@@ -287,7 +295,7 @@ def _scratch_for(n_frames: int) -> tuple:
         np.empty((6, n_frames)),
         np.empty(3),
         np.empty(3),
-        np.empty(14),
+        np.empty(17),
     )
 
 
@@ -475,9 +483,9 @@ def _row_at(
 ) -> bool:
     """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
     the markers whose ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) with
-    noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`),
-    into ``row`` ``(14,)`` but for ``repeats`` and the step in SDs; ``inf`` SD, step and share where
-    the corrected information is not positive definite. Leaves the eigen-decomposition of the
+    noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`), into ``row`` ``(17,)`` but for
+    ``repeats``, the step in SDs and the p-values; ``inf`` SD, step and share where the
+    corrected information is not positive definite. Leaves the eigen-decomposition of the
     information the SD is from in ``scratch`` (:func:`_scratch_for`); returns whether that is
     from only some of the markers (those clear of the answer, module docstring). A compiled
     kernel."""
@@ -671,14 +679,21 @@ def _solved(
     return total
 
 
+@kernel
 def _chi2_3_sf(x: float) -> float:
     """The upper tail of the chi-square distribution with 3 degrees of freedom at ``x``, in
-    closed form (a SciPy call costs more than the rest of the check)."""
+    closed form (a SciPy call costs more than the rest of the check). A compiled kernel."""
     if not x >= 0.0:
         return math.nan
     if math.isinf(x):
         return 0.0
     return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
+
+
+@kernel
+def _normal_sf(z: float) -> float:
+    """The upper tail of the standard normal distribution at ``z``. A compiled kernel."""
+    return 0.5 * math.erfc(z / math.sqrt(2.0))
 
 
 def _statistics(markers: np.ndarray, centres: np.ndarray, variances: np.ndarray) -> list:
@@ -780,19 +795,18 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
     variances = np.array([residual * residual / 3.0 for residual in residuals])
     rows = _statistics(markers, np.array(centres), variances)
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
-        sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]
         numbers = {
-            "center_sd_mm": sd,
-            "center_sd_noise_share": share,
-            "center_score_chi2": chi2,
-            "center_score_p_value": _chi2_3_sf(chi2),
-            "center_step_mm": step,
+            "center_sd_mm": row[_SD],
+            "center_sd_noise_share": row[_SHARE],
+            "center_score_chi2": row[_CHI2],
+            "center_score_p_value": row[_SCORE_P],
+            "center_step_mm": row[_STEP],
             "center_step_sds": row[_STEP_SDS],
-            "center_fit_ratio": fit_ratio,
-            "center_fit_p_value": 0.5 * math.erfc(fit_z / math.sqrt(2.0)),
-            "center_offset_mm": offset,
+            "center_fit_ratio": row[_FIT_RATIO],
+            "center_fit_p_value": row[_FIT_P],
+            "center_offset_mm": row[_OFFSET],
             "center_spheres_fit_ratio": row[_SPHERES_RATIO],
-            "center_spheres_fit_p_value": 0.5 * math.erfc(row[_SPHERES_Z] / math.sqrt(2.0)),
+            "center_spheres_fit_p_value": row[_SPHERES_P],
         }
         warnings = _warnings(numbers, residual_mm, not verdicts[t].warnings)
         annotated[t] = with_warnings(results[t], warnings, numbers)
