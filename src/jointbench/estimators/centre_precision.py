@@ -556,21 +556,23 @@ def _marker_sums(
         inverse = 1.0 / d if d > 0.0 else 0.0
         offsets[0, k], offsets[1, k], offsets[2, k] = x, y, z
         offsets[3, k], offsets[4, k], offsets[5, k] = x * inverse, y * inverse, z * inverse
-    # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers.
+    # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers: in
+    # two loops, as the thirteen of them and their terms in one would spill one of them to
+    # memory on every pass.
     sum_d = 0.0
     su0 = su1 = su2 = 0.0
     sd0 = sd1 = sd2 = 0.0
-    outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for k in range(n_frames):
-        u0, u1, u2 = offsets[3, k], offsets[4, k], offsets[5, k]
         sum_d += distances[k]
-        su0 += u0
-        su1 += u1
-        su2 += u2
+        su0 += offsets[3, k]
+        su1 += offsets[4, k]
+        su2 += offsets[5, k]
         sd0 += offsets[0, k]
         sd1 += offsets[1, k]
         sd2 += offsets[2, k]
-        outer = add_outer(outer, u0, u1, u2)
+    outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    for k in range(n_frames):
+        outer = add_outer(outer, offsets[3, k], offsets[4, k], offsets[5, k])
     sum_u[0], sum_u[1], sum_u[2] = su0, su1, su2
     sum_du[0], sum_du[1], sum_du[2] = sd0, sd1, sd2
     symmetric_into(outer, sum_uu)
