@@ -212,13 +212,13 @@ def centre_statistics(
     coordinate (module docstring). The step is the one to where Gauss–Newton iterations from
     the answer end, where the spheres fit better there (:func:`_refine`), else the first-order
     step; in SDs, its Mahalanobis length under the covariance the SD is from
-    (:func:`_in_sds`).
-    ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
-    else 0. A compiled kernel."""
+    (:func:`_in_sds`). ``repeats`` is 1 where two frames may be equal (the numbers then count
+    that frame twice), else 0. A compiled kernel."""
     n_trials, n_frames, n_markers = markers.shape[:3]
     out = np.empty((n_trials, 17))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
+    # _repeats' hash table: a power of two at least twice the frames, so that lookups stay short.
     table = 2
     while table < 2 * n_frames:
         table *= 2
