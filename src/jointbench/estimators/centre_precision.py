@@ -589,21 +589,23 @@ def _repeats(
     ones in a hash table, ``slots`` (scratch, a power of two of at least ``2 N`` entries): a
     pass over the frames where sorting the keys cost several. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
-    # The sums start at +0.0 and so are never -0.0: equal keys have equal bits.
-    bits = keys.view(np.int64)
-    mask = slots.shape[0] - 1
-    slots[:] = -1
     for k in range(n_frames):
         key = 0.0
         for p in range(n_markers):
             for i in range(3):
                 key += weights[3 * p + i] * markers[k, p, i]
         keys[k] = key
+    # The keys all formed before the lookups: each lookup then waits on no key just stored.
+    # The sums start at +0.0 and so are never -0.0: equal keys have equal bits.
+    bits = keys.view(np.int64)
+    mask = slots.shape[0] - 1
+    slots[:] = -1
+    for k in range(n_frames):
         # The exponent's and the mantissa's upper bits folded onto the lower: keys of round
         # numbers differ there only.
         slot = (bits[k] ^ (bits[k] >> 17) ^ (bits[k] >> 34) ^ (bits[k] >> 51)) & mask
         while slots[slot] >= 0:
-            if keys[slots[slot]] == key:
+            if keys[slots[slot]] == keys[k]:
                 return 1.0
             slot = (slot + 1) & mask
         slots[slot] = k
