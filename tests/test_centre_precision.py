@@ -228,6 +228,30 @@ def test_repeated_frames_carry_no_new_information():
         assert repeated.diagnostics[key] == pytest.approx(result.diagnostics[key], rel=1e-2)
 
 
+def test_repeated_frames_are_flagged_wherever_two_keys_are_equal():
+    """The repeated-frames flag, compiled and as plain Python, is 1 exactly where two frames'
+    keys are equal: noisy frames all distinct, one frame repeated far from the first, frames
+    in a regular progression, and those with one of them repeated at the end."""
+    rng = np.random.default_rng(31)
+    noisy = _cap(rng, 20.0, 0.5)
+    repeated = noisy.copy()
+    repeated[97] = repeated[4]
+    grid = np.arange(120.0)[:, None, None] * np.array([[1.0, 0.0, 2.0], [0.0, 3.0, 1.0]])
+    for markers, expected in (
+        (noisy, 0.0),
+        (repeated, 1.0),
+        (grid, 0.0),
+        (grid[[*range(120), 60]], 1.0),
+    ):
+        markers = np.ascontiguousarray(markers)
+        weights = np.sqrt(np.arange(2.0, 2.0 + 3 * markers.shape[1]))
+        keys = markers.reshape(len(markers), -1) @ weights
+        assert (len(np.unique(keys)) < len(keys)) == bool(expected)
+        for repeats in (centre_precision._repeats, centre_precision._repeats.__wrapped__):
+            slots = np.empty(256, dtype=np.int64)
+            assert repeats(markers, weights, np.empty(len(markers)), slots) == expected
+
+
 def test_a_cap_within_the_noise_is_not_determined():
     """A 3 degree cap with 1 mm noise: the rotation is resolved (the support verdict passes
     it) but the data hold the centre to tens of millimetres, which the status says."""
@@ -316,6 +340,44 @@ def test_a_marker_at_the_centre_carries_no_direction():
     np.testing.assert_allclose(
         centre_statistics(exact[None].copy(), CENTRE[None], variance)[0, :3], plain[:3], rtol=1e-12
     )
+
+
+def test_the_compiled_sums_compute_what_their_source_says():
+    """The spheres' sums and the statistics built on them, compiled and as plain Python
+    (``kernel.__wrapped__``), to the last bit: on a cap with a marker exactly at the answer in
+    one frame (no direction there), a virtual marker near the joint (left out of the
+    iterations, kept in the fits), and with the lack of fit's sums asked for or not."""
+    rng = np.random.default_rng(29)
+    markers = _cap(rng, 20.0, 0.5)
+    near_joint = CENTRE + rng.normal(scale=0.5, size=(len(markers), 1, 3))
+    near_joint[7, 0] = CENTRE
+    markers = np.concatenate([markers, near_joint], axis=1)
+    coordinates = np.empty((markers.shape[1], 3, len(markers)))
+    centre_precision._transposed_into(markers, coordinates)
+    np.testing.assert_array_equal(coordinates, markers.transpose(1, 2, 0))
+    runs = []
+    for marker_sums in (centre_precision._marker_sums, centre_precision._marker_sums.__wrapped__):
+        outputs = (np.empty(len(markers)), np.empty((6, len(markers))), np.empty(3), np.empty(3))
+        outputs += (np.empty((3, 3)),)
+        radius = marker_sums(coordinates[-1], CENTRE, *outputs)
+        runs.append((radius, outputs[0], *outputs[2:]))
+    for compiled, interpreted in zip(*runs, strict=True):
+        np.testing.assert_array_equal(compiled, interpreted)
+    assert runs[0][1][7] == 0.0
+    for nearest, fit in ((0.0, True), (1.5, False)):
+        runs = []
+        for sums_at in (centre_precision._sums_at, centre_precision._sums_at.__wrapped__):
+            scratch = centre_precision._scratch_for(len(markers))
+            returned = sums_at(coordinates, CENTRE + 0.3, 0.25, nearest, fit, scratch)
+            runs.append((returned, [scratch[i].copy() for i in (0, 1, 2, 3, 11, 12)]))
+        assert runs[0][0] == runs[1][0]
+        for compiled, interpreted in zip(runs[0][1], runs[1][1], strict=True):
+            np.testing.assert_array_equal(compiled, interpreted)
+    rows = [
+        statistics(markers[None].copy(), (CENTRE + 2.0)[None], np.array([0.25]))
+        for statistics in (centre_statistics, centre_statistics.__wrapped__)
+    ]
+    np.testing.assert_array_equal(rows[0], rows[1])
 
 
 def test_an_answer_among_the_markers_is_caught_at_its_distance():

@@ -181,6 +181,9 @@ _TOWARDS = slice(8, 11)
 _SPHERES_RATIO, _SPHERES_Z = 11, 12
 # The step in the answer's SDs (Mahalanobis).
 _STEP_SDS = 13
+# The p-values of the score test, of the lack of fit and of the lack of fit about the spheres'
+# centre.
+_SCORE_P, _FIT_P, _SPHERES_P = 14, 15, 16
 
 # The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
 # exceed their noise by, in standard errors, for the marker to count.
@@ -203,23 +206,31 @@ def centre_statistics(
 ) -> np.ndarray:
     """Per trial ``(SD [mm], score chi-square, step [mm], repeats, noise share, lack-of-fit
     ratio, its z, offset [mm], step (3,) [mm], the lack of fit's ratio and z about the spheres'
-    centre, step in SDs)`` ``(T, 14)`` of the answers ``centres`` ``(T, 3)`` [mm] to the
-    markers ``(T, N, n, 3)`` [mm], with noise ``variances`` ``(T,)`` [mm^2] per coordinate
-    (module docstring). The step is the one to where Gauss–Newton iterations from the answer
-    end, where the spheres fit better there (:func:`_refine`), else the first-order step; in
-    SDs, its Mahalanobis length under the covariance the SD is from (:func:`_in_sds`).
-    ``repeats`` is 1 where two frames may be equal (the numbers then count that frame twice),
-    else 0. A compiled kernel."""
-    n_trials, n_frames = markers.shape[:2]
-    out = np.empty((n_trials, 14))
+    centre, step in SDs, and the p-values of the score test, of the lack of fit and of the lack
+    of fit about the spheres' centre)`` ``(T, 17)`` of the answers ``centres`` ``(T, 3)`` [mm]
+    to the markers ``(T, N, n, 3)`` [mm], with noise ``variances`` ``(T,)`` [mm^2] per
+    coordinate (module docstring). The step is the one to where Gauss–Newton iterations from
+    the answer end, where the spheres fit better there (:func:`_refine`), else the first-order
+    step; in SDs, its Mahalanobis length under the covariance the SD is from
+    (:func:`_in_sds`). ``repeats`` is 1 where two frames may be equal (the numbers then count
+    that frame twice), else 0. A compiled kernel."""
+    n_trials, n_frames, n_markers = markers.shape[:3]
+    out = np.empty((n_trials, 17))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
-    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * markers.shape[2]))
+    # _repeats' hash table: a power of two at least twice the frames, so that lookups stay short.
+    table = 2
+    while table < 2 * n_frames:
+        table *= 2
+    slots = np.empty(table, dtype=np.int64)
+    weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    coordinates = np.empty((n_markers, 3, n_frames))
     for t in range(n_trials):
-        mixed = _row_at(markers[t], centres[t], variances[t], out[t], scratch)
-        out[t, _REPEATS] = _repeats(markers[t], weights, keys)
+        _transposed_into(markers[t], coordinates)
+        mixed = _row_at(coordinates, centres[t], variances[t], out[t], scratch)
+        out[t, _REPEATS] = _repeats(markers[t], weights, keys, slots)
         # Wherever the score test passes it too: a method's bias of a few of its SDs does.
-        refined = _refine(markers[t], centres[t], variances[t], mixed, out[t], scratch)
+        refined = _refine(coordinates, centres[t], variances[t], mixed, out[t], scratch)
         out[t, _STEP_SDS] = _in_sds(out[t, _TOWARDS], scratch[13], scratch[14], variances[t])
         if not refined and _definite(scratch[13]):
             # No centre the iterations reach fits the spheres better: the answer is theirs.
@@ -227,6 +238,9 @@ def centre_statistics(
         if _noise_free(markers[t], variances[t]):
             # Rounding measured against rounding: nothing for the spheres' fit to fail.
             out[t, _SPHERES_Z] = np.nan
+        out[t, _SCORE_P] = _chi2_3_sf(out[t, _CHI2])
+        out[t, _FIT_P] = _normal_sf(out[t, _FIT_Z])
+        out[t, _SPHERES_P] = _normal_sf(out[t, _SPHERES_Z])
     return out
 
 
@@ -244,11 +258,24 @@ def _noise_free(markers: np.ndarray, s2: float) -> bool:
 
 
 @kernel
+def _transposed_into(markers: np.ndarray, coordinates: np.ndarray) -> None:
+    """The markers ``(N, n, 3)`` [mm] written into ``coordinates`` ``(n, 3, N)``: each
+    marker's coordinates frame after frame, which the sums over its frames
+    (:func:`_marker_sums`), run several times per trial, read contiguously. A compiled
+    kernel."""
+    for k in range(markers.shape[0]):
+        for p in range(markers.shape[1]):
+            for i in range(3):
+                coordinates[p, i, k] = markers[k, p, i]
+
+
+@kernel
 def _scratch_for(n_frames: int) -> tuple:
     """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames, allocated once
     per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
-    sum_uu, stated, stated_noise, sd_values, sd_vectors)``, the last two the eigen-decomposition
-    of the information the SD is stated from (:func:`_row_at`). A compiled kernel."""
+    sum_uu, stated, stated_noise, sd_values, sd_vectors, offsets, iterate, move, there)``,
+    ``sd_values`` and ``sd_vectors`` the eigen-decomposition of the information the SD is stated
+    from (:func:`_row_at`), the last three :func:`_refine`'s. A compiled kernel."""
     return (
         np.empty((3, 3)),
         np.empty((3, 3)),
@@ -265,12 +292,16 @@ def _scratch_for(n_frames: int) -> tuple:
         np.empty((3, 3)),
         np.empty(3),
         np.empty((3, 3)),
+        np.empty((6, n_frames)),
+        np.empty(3),
+        np.empty(3),
+        np.empty(17),
     )
 
 
 @kernel
 def _refine(
-    markers: np.ndarray,
+    coordinates: np.ndarray,
     answer: np.ndarray,
     s2: float,
     mixed: bool,
@@ -286,23 +317,25 @@ def _refine(
     radial residual of one (a virtual marker at the joint) is not smooth there, and draws the
     iterations to it or throws them off; the fits compared keep it. They start from ``row``'s
     first-order step, unless some markers lie that near the answer (``mixed``, as
-    :func:`_row_at` returns it), whose step keeps them. The iterations overwrite ``scratch``
-    but for the SD's eigen-decomposition. A compiled kernel."""
-    centre = answer.copy() if mixed else answer + row[_TOWARDS]
-    move = np.empty(3)
+    :func:`_row_at` returns it), whose step keeps them. ``coordinates`` ``(n, 3, N)`` [mm] are
+    the markers' (:func:`_transposed_into`). The iterations overwrite ``scratch`` but for the
+    SD's eigen-decomposition. A compiled kernel."""
+    centre, move, there = scratch[16:19]
+    centre[:] = answer
+    if not mixed:
+        centre += row[_TOWARDS]
     nearest = _CLEAR_RADIUS * math.sqrt(s2)
     sd = row[_SD] if math.isfinite(row[_SD]) else 0.0
     for _ in range(_REFINE_ITERATIONS):
-        _step_at(markers, centre, s2, nearest, move, scratch)
+        _step_at(coordinates, centre, s2, nearest, move, scratch)
         if not (math.isfinite(move[0]) and math.isfinite(move[1]) and math.isfinite(move[2])):
             return False
         centre += move
         distance = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
         if _length(move[0], move[1], move[2]) <= _REFINED_TO * max(distance, sd):
             break
-    n_frames, n_markers, _ = markers.shape
-    squares, fourths, kept, _ = _sums_at(markers, centre, s2, 0.0, scratch)
-    there = np.empty_like(row)
+    n_markers, _, n_frames = coordinates.shape
+    squares, fourths, kept, _ = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
     _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
     if not there[_FIT_RATIO] < row[_FIT_RATIO]:
         return False
@@ -338,21 +371,27 @@ def _in_sds(step: np.ndarray, values: np.ndarray, vectors: np.ndarray, s2: float
 
 @kernel
 def _sums_at(
-    markers: np.ndarray, centre: np.ndarray, s2: float, nearest: float, scratch: tuple
+    coordinates: np.ndarray,
+    centre: np.ndarray,
+    s2: float,
+    nearest: float,
+    fit: bool,
+    scratch: tuple,
 ) -> tuple:
-    """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers ``(N, n, 3)``
-    [mm] at a mean distance of ``nearest`` [mm] or more from it, with noise ``s2`` [mm^2] per
-    coordinate, into ``scratch`` (:func:`_scratch_for`): the
-    information ``F``, its part ``F_s`` beyond the directions' noise and that noise's part
-    ``F - F_s`` (upper triangles), the score ``g``, and the parts of ``F_s`` and ``F - F_s``
-    from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns the radial residuals' sum
-    of squares and of fourth powers, the markers kept, and whether only some of those lie that
-    far. A marker whose directions from the
-    answer do not spread beyond their noise (one at the answer, a virtual marker at the joint,
-    say) carries nothing on it and is left out. A compiled kernel."""
+    """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers whose
+    ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) at a mean distance of
+    ``nearest`` [mm] or more from it, with noise ``s2`` [mm^2] per coordinate, into ``scratch``
+    (:func:`_scratch_for`): the information ``F``, its part ``F_s`` beyond the directions'
+    noise and that noise's part ``F - F_s`` (upper triangles), the score ``g``, and the parts
+    of ``F_s`` and ``F - F_s`` from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns
+    the radial residuals' sum of squares and of fourth powers (where ``fit`` asks for them,
+    else 0), the markers kept, and whether only some of those lie that far. A marker whose
+    directions from the answer do not spread beyond their noise (one at the answer, a virtual
+    marker at the joint, say) carries nothing on it and is left out. A compiled kernel."""
     info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch[:11]
     stated, stated_noise = scratch[11:13]
-    n_frames, n_markers, _ = markers.shape
+    offsets = scratch[15]
+    n_markers, _, n_frames = coordinates.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
     # of freedom each: beyond this factor of that spread the marker has a signal.
     beyond_noise = 1.0 + _Z_ALPHA / math.sqrt(max(n_frames - 1, 1))
@@ -364,7 +403,7 @@ def _sums_at(
     stated_noise[:] = 0.0
     squares, fourths, kept, clear = 0.0, 0.0, 0, 0
     for p in range(n_markers):
-        radius = _marker_sums(markers[:, p], centre, distances, sum_u, sum_du, sum_uu)
+        radius = _marker_sums(coordinates[p], centre, distances, offsets, sum_u, sum_du, sum_uu)
         if radius < nearest:
             continue
         noise = (n_frames - 1) * s2 / radius**2 if radius > 0.0 else np.inf
@@ -375,10 +414,11 @@ def _sums_at(
         kept += 1
         far = radius >= _CLEAR_RADIUS * math.sqrt(s2)
         clear += far
-        for k in range(n_frames):
-            e2 = (distances[k] - radius) ** 2
-            squares += e2
-            fourths += e2 * e2
+        if fit:
+            for k in range(n_frames):
+                e2 = (distances[k] - radius) ** 2
+                squares += e2
+                fourths += e2 * e2
         for i in range(3):
             score[i] += sum_du[i] - radius * sum_u[i]
         for i in range(3):
@@ -416,7 +456,7 @@ def _corrected_step(
 
 @kernel
 def _step_at(
-    markers: np.ndarray,
+    coordinates: np.ndarray,
     centre: np.ndarray,
     s2: float,
     nearest: float,
@@ -424,11 +464,12 @@ def _step_at(
     scratch: tuple,
 ) -> None:
     """:func:`_row_at`'s step towards the spheres' centre from ``centre`` ``(3,)`` [mm] alone,
-    over the markers ``nearest`` [mm] or more from it (:func:`_sums_at`), into ``towards``
-    ``(3,)``: ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not positive definite (NaN where
-    neither is). A compiled kernel."""
+    over the markers ``nearest`` [mm] or more from it (:func:`_sums_at`, whose ``coordinates``
+    ``(n, 3, N)``), into ``towards`` ``(3,)``: ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not
+    positive definite (NaN where neither is). A compiled kernel."""
     info, signal, _, score, values, vectors, work = scratch[:7]
-    _sums_at(markers, centre, s2, nearest, scratch)
+    # The lack of fit is not wanted here: its sums are skipped.
+    _sums_at(coordinates, centre, s2, nearest, False, scratch)
     symmetric_eigen_into(signal, values, vectors, work)
     if _definite(values):
         _corrected_step(score, values, vectors, towards)
@@ -438,18 +479,19 @@ def _step_at(
 
 @kernel
 def _row_at(
-    markers: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray, scratch: tuple
+    coordinates: np.ndarray, centre: np.ndarray, s2: float, row: np.ndarray, scratch: tuple
 ) -> bool:
     """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
-    the markers ``(N, n, 3)`` [mm] with noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`),
-    into ``row`` ``(14,)`` but for ``repeats`` and the step in SDs; ``inf`` SD, step and share where
-    the corrected information is not positive definite. Leaves the eigen-decomposition of the
+    the markers whose ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) with
+    noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`), into ``row`` ``(17,)`` but for
+    ``repeats``, the step in SDs and the p-values; ``inf`` SD, step and share where the
+    corrected information is not positive definite. Leaves the eigen-decomposition of the
     information the SD is from in ``scratch`` (:func:`_scratch_for`); returns whether that is
     from only some of the markers (those clear of the answer, module docstring). A compiled
     kernel."""
-    n_frames, n_markers, _ = markers.shape
+    n_markers, _, n_frames = coordinates.shape
     info, signal, noisy, score, values, vectors, work = scratch[:7]
-    squares, fourths, kept, mixed = _sums_at(markers, centre, s2, 0.0, scratch)
+    squares, fourths, kept, mixed = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
     _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
     row[_SPHERES_RATIO] = row[_FIT_RATIO]
@@ -467,7 +509,7 @@ def _row_at(
         # marker.
         signal, noisy = scratch[11:13]
         symmetric_eigen_into(signal, values, vectors, work)
-    sd_values, sd_vectors = scratch[13:]
+    sd_values, sd_vectors = scratch[13:15]
     sd_values[:] = values
     sd_vectors[:] = vectors
     if not _definite(values):
@@ -488,37 +530,49 @@ def _marker_sums(
     track: np.ndarray,
     centre: np.ndarray,
     distances: np.ndarray,
+    offsets: np.ndarray,
     sum_u: np.ndarray,
     sum_du: np.ndarray,
     sum_uu: np.ndarray,
 ) -> float:
-    """One marker's sums over its ``track`` ``(N, 3)`` [mm] about ``centre`` ``(3,)``: its
-    ``distances`` ``(N,)``, the sums of its unit directions ``u``, of ``d u`` and of ``u u'``
-    (both triangles); returns its mean distance ``r``. ``F_p = sum u u' - N m m'`` and
-    ``g_p = sum d u - N r m`` follow, ``m`` the mean direction. A compiled kernel."""
-    n_frames = track.shape[0]
+    """One marker's sums over its ``track`` ``(3, N)`` [mm] (its coordinates, each over the
+    frames) about ``centre`` ``(3,)``: its ``distances`` ``(N,)``, the sums of its unit
+    directions ``u``, of ``d u`` and of ``u u'`` (both triangles); returns its mean distance
+    ``r``. ``F_p = sum u u' - N m m'`` and ``g_p = sum d u - N r m`` follow, ``m`` the mean
+    direction. ``offsets`` ``(6, N)`` is scratch (the offsets from ``centre`` and the unit
+    directions). A compiled kernel."""
+    xs, ys, zs = track[0], track[1], track[2]
+    n_frames = xs.shape[0]
     cx, cy, cz = centre[0], centre[1], centre[2]
-    # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers.
-    sum_d = 0.0
-    su0 = su1 = su2 = 0.0
-    sd0 = sd1 = sd2 = 0.0
-    outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    # The offsets, distances and directions, most of the cost (square roots, divisions), in a
+    # loop without a sum: the compiler runs it on several frames at once, which a sum, kept in
+    # its order, would forbid.
     for k in range(n_frames):
-        x = track[k, 0] - cx
-        y = track[k, 1] - cy
-        z = track[k, 2] - cz
+        x = xs[k] - cx
+        y = ys[k] - cy
+        z = zs[k] - cz
         d = math.sqrt(x * x + y * y + z * z)
         distances[k] = d
         inverse = 1.0 / d if d > 0.0 else 0.0
-        u0, u1, u2 = x * inverse, y * inverse, z * inverse
-        sum_d += d
-        su0 += u0
-        su1 += u1
-        su2 += u2
-        sd0 += x
-        sd1 += y
-        sd2 += z
-        outer = add_outer(outer, u0, u1, u2)
+        offsets[0, k], offsets[1, k], offsets[2, k] = x, y, z
+        offsets[3, k], offsets[4, k], offsets[5, k] = x * inverse, y * inverse, z * inverse
+    # Sums kept in locals, not in the arrays, so that the compiler keeps them in registers: in
+    # two loops, as the thirteen of them and their terms in one would spill one of them to
+    # memory on every pass.
+    sum_d = 0.0
+    su0 = su1 = su2 = 0.0
+    sd0 = sd1 = sd2 = 0.0
+    for k in range(n_frames):
+        sum_d += distances[k]
+        su0 += offsets[3, k]
+        su1 += offsets[4, k]
+        su2 += offsets[5, k]
+        sd0 += offsets[0, k]
+        sd1 += offsets[1, k]
+        sd2 += offsets[2, k]
+    outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    for k in range(n_frames):
+        outer = add_outer(outer, offsets[3, k], offsets[4, k], offsets[5, k])
     sum_u[0], sum_u[1], sum_u[2] = su0, su1, su2
     sum_du[0], sum_du[1], sum_du[2] = sd0, sd1, sd2
     symmetric_into(outer, sum_uu)
@@ -526,10 +580,14 @@ def _marker_sums(
 
 
 @kernel
-def _repeats(markers: np.ndarray, weights: np.ndarray, keys: np.ndarray) -> float:
+def _repeats(
+    markers: np.ndarray, weights: np.ndarray, keys: np.ndarray, slots: np.ndarray
+) -> float:
     """1 where two frames of ``markers`` ``(N, n, 3)`` may be equal, else 0: equal frames have
     equal keys ``(N,)`` (scratch), sums of the coordinates with the ``weights`` ``(3 n,)``, of
-    which no two of a frame's coordinates share one. A compiled kernel."""
+    which no two of a frame's coordinates share one. Each key is looked up among the earlier
+    ones in a hash table, ``slots`` (scratch, a power of two of at least ``2 N`` entries): a
+    pass over the frames where sorting the keys cost several. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     for k in range(n_frames):
         key = 0.0
@@ -537,10 +595,20 @@ def _repeats(markers: np.ndarray, weights: np.ndarray, keys: np.ndarray) -> floa
             for i in range(3):
                 key += weights[3 * p + i] * markers[k, p, i]
         keys[k] = key
-    keys.sort()
-    for k in range(n_frames - 1):
-        if not keys[k + 1] != keys[k]:
-            return 1.0
+    # The keys all formed before the lookups: each lookup then waits on no key just stored.
+    # The sums start at +0.0 and so are never -0.0: equal keys have equal bits.
+    bits = keys.view(np.int64)
+    mask = slots.shape[0] - 1
+    slots[:] = -1
+    for k in range(n_frames):
+        # The exponent's and the mantissa's upper bits folded onto the lower: keys of round
+        # numbers differ there only.
+        slot = (bits[k] ^ (bits[k] >> 17) ^ (bits[k] >> 34) ^ (bits[k] >> 51)) & mask
+        while slots[slot] >= 0:
+            if keys[slots[slot]] == keys[k]:
+                return 1.0
+            slot = (slot + 1) & mask
+        slots[slot] = k
     return 0.0
 
 
@@ -615,14 +683,21 @@ def _solved(
     return total
 
 
+@kernel
 def _chi2_3_sf(x: float) -> float:
     """The upper tail of the chi-square distribution with 3 degrees of freedom at ``x``, in
-    closed form (a SciPy call costs more than the rest of the check)."""
+    closed form (a SciPy call costs more than the rest of the check). A compiled kernel."""
     if not x >= 0.0:
         return math.nan
     if math.isinf(x):
         return 0.0
     return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
+
+
+@kernel
+def _normal_sf(z: float) -> float:
+    """The upper tail of the standard normal distribution at ``z``. A compiled kernel."""
+    return 0.5 * math.erfc(z / math.sqrt(2.0))
 
 
 def _statistics(markers: np.ndarray, centres: np.ndarray, variances: np.ndarray) -> list:
@@ -724,19 +799,18 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
     variances = np.array([residual * residual / 3.0 for residual in residuals])
     rows = _statistics(markers, np.array(centres), variances)
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
-        sd, chi2, step, _, share, fit_ratio, fit_z, offset = row[:8]
         numbers = {
-            "center_sd_mm": sd,
-            "center_sd_noise_share": share,
-            "center_score_chi2": chi2,
-            "center_score_p_value": _chi2_3_sf(chi2),
-            "center_step_mm": step,
+            "center_sd_mm": row[_SD],
+            "center_sd_noise_share": row[_SHARE],
+            "center_score_chi2": row[_CHI2],
+            "center_score_p_value": row[_SCORE_P],
+            "center_step_mm": row[_STEP],
             "center_step_sds": row[_STEP_SDS],
-            "center_fit_ratio": fit_ratio,
-            "center_fit_p_value": 0.5 * math.erfc(fit_z / math.sqrt(2.0)),
-            "center_offset_mm": offset,
+            "center_fit_ratio": row[_FIT_RATIO],
+            "center_fit_p_value": row[_FIT_P],
+            "center_offset_mm": row[_OFFSET],
             "center_spheres_fit_ratio": row[_SPHERES_RATIO],
-            "center_spheres_fit_p_value": 0.5 * math.erfc(row[_SPHERES_Z] / math.sqrt(2.0)),
+            "center_spheres_fit_p_value": row[_SPHERES_P],
         }
         warnings = _warnings(numbers, residual_mm, not verdicts[t].warnings)
         annotated[t] = with_warnings(results[t], warnings, numbers)
