@@ -214,7 +214,9 @@ def test_the_verdict_kernels_stage_makes_the_verdicts_compiled_calls(monkeypatch
     called: list[str] = []
     call = compiled._Kernel.__call__
     monkeypatch.setattr(
-        compiled._Kernel, "__call__", lambda self, *a: called.append(self.__name__) or call(self, *a)
+        compiled._Kernel,
+        "__call__",
+        lambda self, *a: called.append(self.__name__) or call(self, *a),
     )
     support.assess_many("center", (stacked,))
     verdicts = called.copy()

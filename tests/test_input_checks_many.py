@@ -291,3 +291,26 @@ def test_a_batch_whose_one_fault_is_a_trials_size_refuses_that_trial(name):
     assert refused == [1 if kind == "joint_center" else 3]
     assert "Marker positions are millimetres" in str(checked.errors[refused[0]])
     _assert_as_one_by_one(kind, segments, 5)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3], ids=["metres", "too large"])
+@pytest.mark.parametrize("fault", ["nan", "inf", "origin", "nan and origin", "static", "sliding"])
+def test_a_trials_own_fault_is_named_before_its_size(fault, scale):
+    """A trial out of size that also fails the checks of the samples, the motion or the lines
+    is refused for that fault, in its words, one trial and in a batch, as the checks' order
+    says: the size is measured in the same pass, its error raised after theirs."""
+    trial = _bad_samples(fault, 3)
+    with pytest.raises(ValueError) as alone:
+        validation.check_input("center", (trial,))
+    with np.errstate(invalid="ignore"), pytest.raises(ValueError) as scaled:
+        validation.check_input("center", (scale * trial,))
+    assert "Marker positions are millimetres" not in str(scaled.value)
+    assert str(scaled.value) == str(alone.value)
+    markers = np.stack([_moving(seed) for seed in range(5)])
+    markers[3] = scale * trial
+    with np.errstate(invalid="ignore"):
+        errors = validation.check_input_many("axis", (markers,), 5).errors
+    assert [str(error) if error else None for error in errors] == [None] * 3 + [
+        str(alone.value),
+        None,
+    ]
