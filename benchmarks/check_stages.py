@@ -55,9 +55,9 @@ STAGES = (
 
 
 def _verdict_kernels(markers: np.ndarray) -> None:
-    """The compiled work of the one-segment verdict on ``markers`` ``(1, N, n, 3)`` [mm]."""
+    """The compiled work of the one-segment verdict on ``markers`` ``(1, N, n, 3)`` [mm]: one
+    call, which gives the lag-1 statement's numbers too."""
     support._one_segment_numbers(markers, support._FLEX)
-    support._frame_numbers(markers)
 
 
 def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[int], object]]:

@@ -6,7 +6,12 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
+
+from jointbench.estimators import support
+from jointbench.numerics import compiled
+from jointbench.numerics.compiled import kernel_array
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 
@@ -199,3 +204,22 @@ def test_the_check_stages_clocks_are_the_estimator_benchmarks(capsys):
     assert "process CPU" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         check_stages.main(["--methods", "LS", "--calls", "2", "--clock", "sundial"])
+
+
+def test_the_verdict_kernels_stage_makes_the_verdicts_compiled_calls(monkeypatch):
+    # The floor adds the verdict's compiled work alone: a kernel call the verdict does not
+    # make (the lag-1 numbers, which its one-segment call now gives) would raise the floor.
+    (trial,) = bench.center_data(np.random.default_rng(0), 1).trials[0]
+    stacked = kernel_array(trial[None])
+    called: list[str] = []
+    call = compiled._Kernel.__call__
+    monkeypatch.setattr(
+        compiled._Kernel,
+        "__call__",
+        lambda self, *a: called.append(self.__name__) or call(self, *a),
+    )
+    support.assess_many("center", (stacked,))
+    verdicts = called.copy()
+    called.clear()
+    check_stages._verdict_kernels(stacked)
+    assert called == verdicts == ["_one_segment_numbers"]

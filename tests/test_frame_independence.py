@@ -569,6 +569,24 @@ def test_a_one_segment_verdict_makes_one_compiled_call(monkeypatch):
     assert calls == ["_one_segment_numbers"]
 
 
+@pytest.mark.parametrize("kind", sorted(FIT))
+def test_a_batch_states_each_trials_lag_1_correlation_as_the_trial_alone(kind):
+    """In a batch whose trials the block test flags in part (noise carrying 0.9 of itself
+    over), the lag-1 statement of each trial it leaves is that trial's own, as judging it
+    alone gives: the statement reads the rows of the trials left, not the batch's first
+    rows (a one-segment verdict hands the statement its numbers for every trial)."""
+    rng = np.random.default_rng(31)
+    trials = [_cluster_trial(kind, rng, 64, 4, share) for share in (0.9, 0.3, 0.9, 0.3, 0.0)]
+    batch = tuple(np.stack(segment) for segment in zip(*trials, strict=True))
+    together = support.assess_many(kind, batch)
+    alone = [support.assess(kind, arrays) for arrays in trials]
+    assert [bool(verdict.caveats) for verdict in alone] == [True, False, True, False, False]
+    assert alone[1].untested is not None and alone[4].untested is None
+    for verdict, expected in zip(together, alone, strict=True):
+        assert verdict.caveats == expected.caveats
+        assert verdict.untested == expected.untested
+
+
 def test_a_checked_joint_centre_call_reads_each_segments_distances_once(monkeypatch):
     """The block test and the lag-1 statement of a checked two-segment call read one compiled
     pass over each segment's pair distances, not one pass each: the second finds the first's

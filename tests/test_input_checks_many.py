@@ -264,3 +264,53 @@ def test_one_non_finite_coordinate_anywhere_is_refused_at_any_magnitude(
     trial[frame, marker, axis] = value
     with pytest.raises(ValueError, match=f"NaN or inf at marker {marker}, frame {frame} "):
         validation.check_markers(trial)
+
+
+def _sized_batches() -> dict[str, tuple[str, tuple]]:
+    """Batches of valid trials but for the size of one trial's segment, the one fault in the
+    batch: a cluster in metres, or ten times a body segment's size (millimetres read as
+    centimetres or the markers of several segments). By kind, its segments."""
+    markers = np.stack([_moving(seed) for seed in range(5)])
+    proximal, distal = (np.stack([segment] * 5) for segment in two_segments(N_FRAMES))
+    distal = distal.copy()
+    distal[1] *= 1e-3
+    return {
+        "metres": ("center", (np.concatenate([markers[:3], 1e-3 * markers[3:4], markers[4:]]),)),
+        "too large": ("axis", (np.concatenate([markers[:3], 1e3 * markers[3:4], markers[4:]]),)),
+        "distal metres": ("joint_center", (proximal, distal)),
+    }
+
+
+@pytest.mark.parametrize("name", list(_sized_batches()))
+def test_a_batch_whose_one_fault_is_a_trials_size_refuses_that_trial(name):
+    """The size check's error stands where no trial fails the checks of the samples, the
+    motion or the lines: the batch's one pass measures every trial's size beside them."""
+    kind, segments = _sized_batches()[name]
+    checked = validation.check_input_many(kind, segments, 5)
+    refused = [trial for trial, error in enumerate(checked.errors) if error is not None]
+    assert refused == [1 if kind == "joint_center" else 3]
+    assert "Marker positions are millimetres" in str(checked.errors[refused[0]])
+    _assert_as_one_by_one(kind, segments, 5)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3], ids=["metres", "too large"])
+@pytest.mark.parametrize("fault", ["nan", "inf", "origin", "nan and origin", "static", "sliding"])
+def test_a_trials_own_fault_is_named_before_its_size(fault, scale):
+    """A trial out of size that also fails the checks of the samples, the motion or the lines
+    is refused for that fault, in its words, one trial and in a batch, as the checks' order
+    says: the size is measured in the same pass, its error raised after theirs."""
+    trial = _bad_samples(fault, 3)
+    with pytest.raises(ValueError) as alone:
+        validation.check_input("center", (trial,))
+    with np.errstate(invalid="ignore"), pytest.raises(ValueError) as scaled:
+        validation.check_input("center", (scale * trial,))
+    assert "Marker positions are millimetres" not in str(scaled.value)
+    assert str(scaled.value) == str(alone.value)
+    markers = np.stack([_moving(seed) for seed in range(5)])
+    markers[3] = scale * trial
+    with np.errstate(invalid="ignore"):
+        errors = validation.check_input_many("axis", (markers,), 5).errors
+    assert [str(error) if error else None for error in errors] == [None] * 3 + [
+        str(alone.value),
+        None,
+    ]

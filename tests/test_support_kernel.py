@@ -23,6 +23,7 @@ from test_support_sweep import TRIALS as SWEEP
 from test_support_verdicts import _one_segment_cases
 
 from jointbench.estimators import support
+from jointbench.estimators.noise_directions import row_length
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import small
 
@@ -143,6 +144,46 @@ def test_a_batch_computes_each_trials_numbers(pinned):
         stacked = np.stack([TRIALS[index] for index in group])
         verdict = support._one_segment_numbers(stacked, support._FLEX)[:, :VERDICT_COLUMNS]
         _assert_same(verdict, pinned[group])
+
+
+def _frame_number_cases() -> list[np.ndarray]:
+    """Trials ``(T, N, n, 3)`` beyond the pinned ones' range: 8 to 20 markers, 3 to 5000
+    frames, a marker at the centre of rotation, every frame the same, and mixed batches of
+    noisy, noise-free and collinear trials."""
+    rng = np.random.default_rng(20261206)
+    found = []
+    for n_markers, n_frames in ((20, 3), (12, 4), (12, 5000), (8, 300)):
+        body = rng.normal(scale=40.0, size=(n_markers, 3)) + 100.0
+        body[0] = 0.0  # at the centre of rotation: it does not move
+        line = np.outer(rng.uniform(-50.0, 50.0, n_markers), unit(rng.normal(size=3))) + 80.0
+        angle = 0.8 * np.sin(np.linspace(0.0, 6.0, n_frames))
+        turning = rotation_matrix(np.outer(angle, unit(rng.normal(size=3))))
+        moved = np.einsum("fij,mj->fmi", turning, np.stack([body, line]).reshape(-1, 3))
+        clean, collinear = np.split(moved, 2, axis=1)
+        noisy = clean + rng.normal(scale=0.3, size=clean.shape)
+        still = np.repeat(noisy[:1], n_frames, axis=0)
+        trials = [noisy, clean, collinear + 0.2 * noisy - 0.2 * clean, still]
+        # Twenty markers' pair distances cost seconds a trial (MAX_DISTANCE_MARKERS): one.
+        found.append(np.stack(trials[2:3] if n_markers == 20 else trials))
+    return found
+
+
+def test_the_lag_1_statements_numbers_are_the_frame_numbers_kernels():
+    """The columns the one-segment kernel ends with are :func:`support._frame_numbers` of
+    each trial, to the last bit, alone and in batches: the lag-1 statement reads them in its
+    place."""
+    groups: dict[tuple, list[np.ndarray]] = {}
+    for markers in TRIALS:
+        groups.setdefault(markers.shape, []).append(markers)
+    batches = [np.stack(group) for group in groups.values()] + _frame_number_cases()
+    for batch in batches:
+        numbers = support._one_segment_numbers(batch, support._FLEX)
+        expected = support._frame_numbers(batch)
+        assert numbers.shape[1] == VERDICT_COLUMNS + row_length(batch.shape[2]) + expected.shape[1]
+        assert np.array_equal(numbers[:, -support._FRAME_COLUMNS :], expected, equal_nan=True)
+        for t in range(len(batch)):
+            alone = support._one_segment_numbers(batch[t : t + 1], support._FLEX)
+            assert np.array_equal(alone, numbers[t : t + 1], equal_nan=True)
 
 
 def test_each_frames_noise_is_the_packages_one_sandwich(monkeypatch):

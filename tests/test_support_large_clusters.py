@@ -72,3 +72,13 @@ def test_the_public_fit_of_a_large_cluster_returns_with_the_warning(monkeypatch)
     result = jointbench.fit_center(_ball(40, 60), method="LS", artefacts="ignore")
     assert result.status.startswith("warning: not verified: 40 markers")
     assert np.linalg.norm(result.center - CENTRE) < 1.0
+
+
+@pytest.mark.parametrize("kind", ["center", "axis"])
+def test_two_frames_of_a_large_cluster_resolve_no_arc(kind):
+    """Two frames lie on a line whatever the motion: the straight-line test has no degrees of
+    freedom, and its p-value is 1, no arc resolved, instead of a division by them; the
+    verdict supports no answer (the sphere fit on two frames leaves much unexplained)."""
+    verdict = support.assess(kind, (_ball(support.MAX_DISTANCE_MARKERS + 1, 2),))
+    assert verdict.diagnostics["straight_line_p_value"] == 1.0
+    assert len(verdict.warnings) == 2 and verdict.warnings[0].startswith("not verified")

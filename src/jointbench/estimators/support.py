@@ -2480,7 +2480,9 @@ def _without_poses(
     sphere_dof = n_frames * n_markers - 3 - n_markers
     line_dof = 2 * n_markers * (n_frames - 2)
     rounding = (ROUNDING * float(np.abs(markers).max())) ** 2 * n_frames * n_markers
-    if rss_sphere <= rounding:
+    if line_dof == 0:
+        p_line = 1.0  # two frames lie on a line whatever the motion: no arc can be resolved
+    elif rss_sphere <= rounding:
         p_line = float(rss_line <= rounding)
     else:
         p_line = float(
