@@ -248,8 +248,95 @@ def test_repeated_frames_are_flagged_wherever_two_keys_are_equal():
         keys = markers.reshape(len(markers), -1) @ weights
         assert (len(np.unique(keys)) < len(keys)) == bool(expected)
         for repeats in (centre_precision._repeats, centre_precision._repeats.__wrapped__):
-            slots = np.empty(256, dtype=np.int64)
+            slots = centre_precision._table_for(len(markers))
             assert repeats(markers, weights, np.empty(len(markers)), slots) == expected
+
+
+def _sorted_repeats(markers: np.ndarray, weights: np.ndarray) -> float:
+    """The repeated-frames flag of ``markers`` ``(N, n, 3)`` as first written: each frame's key
+    summed coordinate after coordinate as :func:`centre_precision._repeats` sums it, the keys
+    sorted and neighbours compared (NaN equal to nothing)."""
+    flat = markers.reshape(len(markers), -1)
+    keys = np.zeros(len(markers))
+    for j in range(flat.shape[1]):
+        keys = keys + weights[j] * flat[:, j]
+    keys.sort()
+    return float(bool(np.any(~(keys[1:] != keys[:-1]))))
+
+
+def _one_slot_keys(n_frames: int) -> np.ndarray:
+    """``n_frames`` distinct keys (up to 2^17) that :func:`centre_precision._repeats`' table
+    puts in one slot for any table of up to 2^17 slots: a key's bits ``j`` and ``j + 17``
+    flipped together, which its fold onto the lower bits cancels."""
+    patterns = np.arange(n_frames, dtype=np.int64)
+    flips = np.zeros(n_frames, dtype=np.int64)
+    for j in range(17):
+        bit = (patterns >> j) & 1
+        flips |= (bit << j) | (bit << (j + 17))
+    return (np.float64(1234.5678).view(np.int64) ^ flips).view(np.float64)
+
+
+def _frames_to_flag(rng: np.random.Generator):
+    """``(markers (N, n, 3), weights (3 n,))`` on which the repeated-frames flag must be the
+    sorted keys': frames from a few values (signed zeros among them, so that frames and keys
+    repeat often), one coordinate a unit in the last place from another frame's, a frame
+    repeated first or last, NaN and infinite coordinates, 1 to 3 frames, keys that all fall in
+    one slot of the table (the weights then picking the first coordinate alone), and 100,000
+    frames."""
+    pool = np.array([-1.0, -0.0, 0.0, 0.5, 1.0, 2.0])
+    for _ in range(3000):
+        n_frames, n_markers = int(rng.integers(1, 40)), int(rng.integers(1, 4))
+        markers = rng.choice(pool, size=(n_frames, n_markers, 3))
+        yield markers, np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    for _ in range(3000):
+        n_frames, n_markers = int(rng.integers(1, 4)), int(rng.integers(1, 3))
+        markers = rng.choice(pool, size=(n_frames, n_markers, 3))
+        yield markers, np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    for kind in range(4000):
+        n_frames, n_markers = int(rng.integers(2, 200)), int(rng.integers(1, 5))
+        markers = rng.normal(scale=100.0, size=(n_frames, n_markers, 3))
+        first, second = rng.choice(n_frames, size=2, replace=False)
+        if kind % 4 == 0:
+            markers[second] = markers[first]
+            where = (int(rng.integers(n_markers)), int(rng.integers(3)))
+            markers[second][where] = np.nextafter(markers[first][where], rng.choice([-1, 1]) * 1e9)
+        elif kind % 4 == 1:
+            markers[[0, -1][kind % 8 == 1]] = markers[first]
+        elif kind % 4 == 2:
+            markers[first, 0, int(rng.integers(3))] = rng.choice([np.nan, np.inf, -np.inf])
+            markers[second] = markers[first]
+        yield markers, np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    only_first = np.array([1.0, 0.0, 0.0])
+    for n_frames in (2, 3, 300, 2000):
+        markers = np.zeros((n_frames, 1, 3))
+        markers[:, 0, 0] = _one_slot_keys(n_frames)
+        yield markers, only_first
+        markers[-1] = markers[0]
+        yield markers, only_first
+    markers = rng.normal(scale=100.0, size=(100_000, 4, 3))
+    yield markers, np.sqrt(np.arange(2.0, 14.0))
+    markers[-1] = markers[0]
+    yield markers, np.sqrt(np.arange(2.0, 14.0))
+
+
+def test_the_repeated_frames_table_flags_what_sorting_the_keys_flags():
+    """The hash table's flag, compiled and (on up to 300 frames) as plain Python, is the one
+    the sorted keys give, on 10,000 random and adversarial sets of frames, with the table as
+    :func:`centre_statistics` sizes it."""
+    rng = np.random.default_rng(37)
+    flagged = 0
+    for markers, weights in _frames_to_flag(rng):
+        markers = np.ascontiguousarray(markers)
+        n_frames = len(markers)
+        expected = _sorted_repeats(markers, weights)
+        flagged += expected == 1.0
+        repeats = [centre_precision._repeats]
+        if n_frames <= 300:
+            repeats.append(centre_precision._repeats.__wrapped__)
+        for flag in repeats:
+            table = centre_precision._table_for(n_frames)
+            assert flag(markers, weights, np.empty(n_frames), table) == expected, markers
+    assert 1000 < flagged < 9000
 
 
 def test_a_cap_within_the_noise_is_not_determined():
