@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import stats
 from test_checked_centre_calls import BODY, CENTRE, _trial
 
 from jointbench.estimators import centre_precision, registry, support
@@ -465,6 +466,31 @@ def test_the_compiled_sums_compute_what_their_source_says():
         for statistics in (centre_statistics, centre_statistics.__wrapped__)
     ]
     np.testing.assert_array_equal(rows[0], rows[1])
+
+
+def _bits(value: float) -> int:
+    """The bits of the float ``value``: equal only where the floats are the same to the last
+    bit, sign of zero and NaN included."""
+    return int(np.float64(value).view(np.int64))
+
+
+def test_the_p_values_are_the_distributions_tails_at_every_extreme():
+    """The score test's and the lack of fit's p-values, compiled, are their closed forms as
+    written to the last bit, and SciPy's tails to 1e-12 (or both below the smallest normal
+    float), from 0 to the largest float and infinity: a chi-square too large for its closed
+    form's terms is still a tail of 0, not NaN, which no rejection reads."""
+    chi2_3_sf, normal_sf = centre_precision._chi2_3_sf, centre_precision._normal_sf
+    largest = sys.float_info.max
+    for x in (0.0, 5e-324, 1e-300, 1e-8, 1.0, 7.8, 100.0, 1400.0, 1480.0, 1e300, largest, math.inf):
+        p = chi2_3_sf(x)
+        assert _bits(p) == _bits(chi2_3_sf.__wrapped__(x)), x
+        assert p == pytest.approx(stats.chi2.sf(x, 3), rel=1e-12, abs=1e-300), x
+    assert math.isnan(chi2_3_sf(math.nan))
+    for z in (-math.inf, -40.0, -8.0, -1.0, -0.0, 0.0, 1e-300, 1.0, 8.0, 37.0, 40.0, math.inf):
+        p = normal_sf(z)
+        assert _bits(p) == _bits(normal_sf.__wrapped__(z)), z
+        assert p == pytest.approx(stats.norm.sf(z), rel=1e-12, abs=1e-300), z
+    assert math.isnan(normal_sf(math.nan))
 
 
 def test_an_answer_among_the_markers_is_caught_at_its_distance():

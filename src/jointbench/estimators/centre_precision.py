@@ -698,7 +698,9 @@ def _chi2_3_sf(x: float) -> float:
         return math.nan
     if math.isinf(x):
         return 0.0
-    return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
+    # 2 x / pi as x / pi doubled: the same number, but 2 x overflows for x above half the
+    # largest float, and inf times the exponential's 0 would make the tail NaN.
+    return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(x / math.pi * 2.0) * math.exp(-x / 2.0)
 
 
 @kernel
