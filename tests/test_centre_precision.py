@@ -493,6 +493,125 @@ def test_the_p_values_are_the_distributions_tails_at_every_extreme():
     assert math.isnan(normal_sf(math.nan))
 
 
+def _mixed_and_refined(markers: np.ndarray, centre: np.ndarray, s2: float) -> tuple[bool, bool]:
+    """Whether, on one trial's ``markers`` ``(N, n, 3)`` [mm] about the answer ``centre``
+    ``(3,)`` [mm] with noise ``s2`` [mm^2], some markers lie within three noise SDs of the
+    answer and others beyond, and whether the Gauss–Newton iterations end where the spheres fit
+    better, as :func:`centre_statistics` finds them."""
+    coordinates = np.empty((markers.shape[1], 3, len(markers)))
+    centre_precision._transposed_into(markers, coordinates)
+    scratch = centre_precision._scratch_for(len(markers))
+    row = np.empty(17)
+    mixed = centre_precision._row_at(coordinates, centre, s2, row, scratch)
+    return mixed, centre_precision._refine(coordinates, centre, s2, mixed, row, scratch)
+
+
+def _unlike_trials() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Trials of 120 frames of four markers ``(T, N, n, 3)`` [mm], their answers ``(T, 3)``
+    [mm] and noise ``(T,)`` [mm^2], each unlike the one before: iterations that end where the
+    spheres fit better, a marker within three noise SDs of the answer (the iterations then
+    start from it), iterations that stop on a step that is not finite (the noise as large as
+    the cap), noise-free frames, a hinge, and frames repeated."""
+    rng = np.random.default_rng(43)
+    near = BODY.copy()
+    near[0] = [0.5, 0.0, 0.0]
+    cap = _cap(rng, 30.0, 0.5)
+    markers = [cap, _cap(rng, 30.0, 0.5, body=near), cap, _cap(rng, 30.0, 0.0)]
+    markers += [_cap(rng, 40.0, 0.5, hinge=True), cap[np.arange(120) // 2]]
+    answers = CENTRE + np.array([[3.0, -2.0, 1.0], [0.5, 0.5, 0.0], [3.0, -2.0, 1.0]] * 2)
+    return np.stack(markers), answers, np.array([0.25, 0.25, 1e6, 1e-4, 0.25, 0.25])
+
+
+def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the float arrays ``a`` and ``b`` are the same to the last bit."""
+    return a.shape == b.shape and np.array_equal(a.view(np.int64), b.view(np.int64))
+
+
+def test_a_trials_row_in_a_batch_is_its_row_alone():
+    """The scratch one batch's trials share leaves nothing of one trial in the next: each
+    trial's row, to the last bit, whatever trials come before it, is its row alone, in either
+    order of the batch, and through :func:`centre_precision._statistics` from markers neither
+    contiguous nor writable."""
+    markers, answers, variances = _unlike_trials()
+    paths = [_mixed_and_refined(*trial) for trial in zip(markers, answers, variances, strict=True)]
+    assert paths[:3] == [(False, True), (True, True), (False, False)]
+    alone = np.concatenate(
+        [
+            centre_statistics(markers[t : t + 1], answers[t : t + 1], variances[t : t + 1])
+            for t in range(len(markers))
+        ]
+    )
+    for order in (np.arange(len(markers)), np.arange(len(markers))[::-1]):
+        together = centre_statistics(markers[order], answers[order], variances[order])
+        for t, row in zip(order, together, strict=True):
+            assert _same_bits(row, alone[t]), t
+    strided = np.zeros((len(markers), 120, 8, 3))
+    strided[:, :, ::2] = markers
+    strided.setflags(write=False)
+    rows = centre_precision._statistics(strided[:, :, ::2], answers, variances)
+    assert _same_bits(
+        np.array(rows), np.array(centre_precision._statistics(markers, answers, variances))
+    )
+
+
+def test_the_p_value_columns_are_the_tails_of_their_statistics():
+    """Each p-value of :func:`centre_statistics`' rows is its closed form, as written, of its
+    own statistic: the score test's of the chi-square, the lack of fit's of its z, and the lack
+    of fit's about the spheres' centre of that z, on trials where those z differ."""
+    markers, answers, variances = _unlike_trials()
+    rows = centre_statistics(markers, answers, variances)
+    sources = {
+        centre_precision._SCORE_P: (centre_precision._CHI2, centre_precision._chi2_3_sf),
+        centre_precision._FIT_P: (centre_precision._FIT_Z, centre_precision._normal_sf),
+        centre_precision._SPHERES_P: (centre_precision._SPHERES_Z, centre_precision._normal_sf),
+    }
+    assert np.any(rows[:, centre_precision._FIT_Z] != rows[:, centre_precision._SPHERES_Z])
+    for column, (statistic, tail) in sources.items():
+        expected = np.array([tail.__wrapped__(value) for value in rows[:, statistic].tolist()])
+        assert _same_bits(rows[:, column], expected), column
+
+
+def _marker_sums_in_frame_order(track: np.ndarray, centre: np.ndarray) -> tuple:
+    """One marker's distances ``(N,)`` from ``centre`` and its sums over its ``track``
+    ``(N, 3)`` [mm] as :func:`centre_precision._marker_sums` states them, each summed frame
+    after frame in one loop: ``(radius, distances, sum u, sum d u, sum u u')``."""
+    distances = np.empty(len(track))
+    sum_d, sum_u, sum_du, sum_uu = 0.0, [0.0] * 3, [0.0] * 3, [[0.0] * 3 for _ in range(3)]
+    for k, point in enumerate(track.tolist()):
+        offset = [point[i] - centre[i] for i in range(3)]
+        d = math.sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2])
+        distances[k] = d
+        inverse = 1.0 / d if d > 0.0 else 0.0
+        u = [offset[i] * inverse for i in range(3)]
+        sum_d += d
+        for i in range(3):
+            sum_u[i] += u[i]
+            sum_du[i] += offset[i]
+            for j in range(3):
+                sum_uu[i][j] += u[i] * u[j]
+    return sum_d / len(track), distances, np.array(sum_u), np.array(sum_du), np.array(sum_uu)
+
+
+def test_a_markers_sums_are_taken_frame_after_frame():
+    """:func:`centre_precision._marker_sums`, compiled, gives every sum to the last bit as one
+    loop over the frames in their order gives it, on a marker of 5,000 frames and on one
+    exactly at the centre in one frame: a sum taken in another order (in blocks, or
+    pairwise) moves the numbers in their last bits, which the pins' tolerance does not see."""
+    rng = np.random.default_rng(47)
+    markers = _cap(rng, 30.0, 0.5)
+    wide = CENTRE + rng.normal(scale=50.0, size=(5000, 3))
+    wide[11] = CENTRE
+    for track in (wide, markers[:, 2]):
+        coordinates = np.ascontiguousarray(track.T)
+        outputs = (np.empty(len(track)), np.empty((6, len(track))), np.empty(3), np.empty(3))
+        outputs += (np.empty((3, 3)),)
+        radius = centre_precision._marker_sums(coordinates, CENTRE, *outputs)
+        expected = _marker_sums_in_frame_order(track, CENTRE)
+        computed = (np.float64(radius), outputs[0], *outputs[2:])
+        for got, want in zip(computed, expected, strict=True):
+            assert _same_bits(np.asarray(got), np.asarray(want))
+
+
 def test_an_answer_among_the_markers_is_caught_at_its_distance():
     """The markers' centroid, 18 mm from the centre of paper A's M set on a 3 degree cap with
     0.1 mm noise: the first-order step from it is 4 mm, under the 5 mm a method's bias is
