@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import stats
 from test_checked_centre_calls import BODY, CENTRE, _trial
 
 from jointbench.estimators import centre_precision, registry, support
@@ -248,8 +249,95 @@ def test_repeated_frames_are_flagged_wherever_two_keys_are_equal():
         keys = markers.reshape(len(markers), -1) @ weights
         assert (len(np.unique(keys)) < len(keys)) == bool(expected)
         for repeats in (centre_precision._repeats, centre_precision._repeats.__wrapped__):
-            slots = np.empty(256, dtype=np.int64)
+            slots = centre_precision._table_for(len(markers))
             assert repeats(markers, weights, np.empty(len(markers)), slots) == expected
+
+
+def _sorted_repeats(markers: np.ndarray, weights: np.ndarray) -> float:
+    """The repeated-frames flag of ``markers`` ``(N, n, 3)`` as first written: each frame's key
+    summed coordinate after coordinate as :func:`centre_precision._repeats` sums it, the keys
+    sorted and neighbours compared (NaN equal to nothing)."""
+    flat = markers.reshape(len(markers), -1)
+    keys = np.zeros(len(markers))
+    for j in range(flat.shape[1]):
+        keys = keys + weights[j] * flat[:, j]
+    keys.sort()
+    return float(bool(np.any(~(keys[1:] != keys[:-1]))))
+
+
+def _one_slot_keys(n_frames: int) -> np.ndarray:
+    """``n_frames`` distinct keys (up to 2^17) that :func:`centre_precision._repeats`' table
+    puts in one slot for any table of up to 2^17 slots: a key's bits ``j`` and ``j + 17``
+    flipped together, which its fold onto the lower bits cancels."""
+    patterns = np.arange(n_frames, dtype=np.int64)
+    flips = np.zeros(n_frames, dtype=np.int64)
+    for j in range(17):
+        bit = (patterns >> j) & 1
+        flips |= (bit << j) | (bit << (j + 17))
+    return (np.float64(1234.5678).view(np.int64) ^ flips).view(np.float64)
+
+
+def _frames_to_flag(rng: np.random.Generator):
+    """``(markers (N, n, 3), weights (3 n,))`` on which the repeated-frames flag must be the
+    sorted keys': frames from a few values (signed zeros among them, so that frames and keys
+    repeat often), one coordinate a unit in the last place from another frame's, a frame
+    repeated first or last, NaN and infinite coordinates, 1 to 3 frames, keys that all fall in
+    one slot of the table (the weights then picking the first coordinate alone), and 100,000
+    frames."""
+    pool = np.array([-1.0, -0.0, 0.0, 0.5, 1.0, 2.0])
+    for _ in range(3000):
+        n_frames, n_markers = int(rng.integers(1, 40)), int(rng.integers(1, 4))
+        markers = rng.choice(pool, size=(n_frames, n_markers, 3))
+        yield markers, np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    for _ in range(3000):
+        n_frames, n_markers = int(rng.integers(1, 4)), int(rng.integers(1, 3))
+        markers = rng.choice(pool, size=(n_frames, n_markers, 3))
+        yield markers, np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    for kind in range(4000):
+        n_frames, n_markers = int(rng.integers(2, 200)), int(rng.integers(1, 5))
+        markers = rng.normal(scale=100.0, size=(n_frames, n_markers, 3))
+        first, second = rng.choice(n_frames, size=2, replace=False)
+        if kind % 4 == 0:
+            markers[second] = markers[first]
+            where = (int(rng.integers(n_markers)), int(rng.integers(3)))
+            markers[second][where] = np.nextafter(markers[first][where], rng.choice([-1, 1]) * 1e9)
+        elif kind % 4 == 1:
+            markers[[0, -1][kind % 8 == 1]] = markers[first]
+        elif kind % 4 == 2:
+            markers[first, 0, int(rng.integers(3))] = rng.choice([np.nan, np.inf, -np.inf])
+            markers[second] = markers[first]
+        yield markers, np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
+    only_first = np.array([1.0, 0.0, 0.0])
+    for n_frames in (2, 3, 300, 2000):
+        markers = np.zeros((n_frames, 1, 3))
+        markers[:, 0, 0] = _one_slot_keys(n_frames)
+        yield markers, only_first
+        markers[-1] = markers[0]
+        yield markers, only_first
+    markers = rng.normal(scale=100.0, size=(100_000, 4, 3))
+    yield markers, np.sqrt(np.arange(2.0, 14.0))
+    markers[-1] = markers[0]
+    yield markers, np.sqrt(np.arange(2.0, 14.0))
+
+
+def test_the_repeated_frames_table_flags_what_sorting_the_keys_flags():
+    """The hash table's flag, compiled and (on up to 300 frames) as plain Python, is the one
+    the sorted keys give, on 10,000 random and adversarial sets of frames, with the table as
+    :func:`centre_statistics` sizes it."""
+    rng = np.random.default_rng(37)
+    flagged = 0
+    for markers, weights in _frames_to_flag(rng):
+        markers = np.ascontiguousarray(markers)
+        n_frames = len(markers)
+        expected = _sorted_repeats(markers, weights)
+        flagged += expected == 1.0
+        repeats = [centre_precision._repeats]
+        if n_frames <= 300:
+            repeats.append(centre_precision._repeats.__wrapped__)
+        for flag in repeats:
+            table = centre_precision._table_for(n_frames)
+            assert flag(markers, weights, np.empty(n_frames), table) == expected, markers
+    assert 1000 < flagged < 9000
 
 
 def test_a_cap_within_the_noise_is_not_determined():
@@ -378,6 +466,150 @@ def test_the_compiled_sums_compute_what_their_source_says():
         for statistics in (centre_statistics, centre_statistics.__wrapped__)
     ]
     np.testing.assert_array_equal(rows[0], rows[1])
+
+
+def _bits(value: float) -> int:
+    """The bits of the float ``value``: equal only where the floats are the same to the last
+    bit, sign of zero and NaN included."""
+    return int(np.float64(value).view(np.int64))
+
+
+def test_the_p_values_are_the_distributions_tails_at_every_extreme():
+    """The score test's and the lack of fit's p-values, compiled, are their closed forms as
+    written to the last bit, and SciPy's tails to 1e-12 (or both below the smallest normal
+    float), from 0 to the largest float and infinity: a chi-square too large for its closed
+    form's terms is still a tail of 0, not NaN, which no rejection reads."""
+    chi2_3_sf, normal_sf = centre_precision._chi2_3_sf, centre_precision._normal_sf
+    largest = sys.float_info.max
+    for x in (0.0, 5e-324, 1e-300, 1e-8, 1.0, 7.8, 100.0, 1400.0, 1480.0, 1e300, largest, math.inf):
+        p = chi2_3_sf(x)
+        assert _bits(p) == _bits(chi2_3_sf.__wrapped__(x)), x
+        assert p == pytest.approx(stats.chi2.sf(x, 3), rel=1e-12, abs=1e-300), x
+    assert math.isnan(chi2_3_sf(math.nan))
+    for z in (-math.inf, -40.0, -8.0, -1.0, -0.0, 0.0, 1e-300, 1.0, 8.0, 37.0, 40.0, math.inf):
+        p = normal_sf(z)
+        assert _bits(p) == _bits(normal_sf.__wrapped__(z)), z
+        assert p == pytest.approx(stats.norm.sf(z), rel=1e-12, abs=1e-300), z
+    assert math.isnan(normal_sf(math.nan))
+
+
+def _mixed_and_refined(markers: np.ndarray, centre: np.ndarray, s2: float) -> tuple[bool, bool]:
+    """Whether, on one trial's ``markers`` ``(N, n, 3)`` [mm] about the answer ``centre``
+    ``(3,)`` [mm] with noise ``s2`` [mm^2], some markers lie within three noise SDs of the
+    answer and others beyond, and whether the Gauss–Newton iterations end where the spheres fit
+    better, as :func:`centre_statistics` finds them."""
+    coordinates = np.empty((markers.shape[1], 3, len(markers)))
+    centre_precision._transposed_into(markers, coordinates)
+    scratch = centre_precision._scratch_for(len(markers))
+    row = np.empty(17)
+    mixed = centre_precision._row_at(coordinates, centre, s2, row, scratch)
+    return mixed, centre_precision._refine(coordinates, centre, s2, mixed, row, scratch)
+
+
+def _unlike_trials() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Trials of 120 frames of four markers ``(T, N, n, 3)`` [mm], their answers ``(T, 3)``
+    [mm] and noise ``(T,)`` [mm^2], each unlike the one before: iterations that end where the
+    spheres fit better, a marker within three noise SDs of the answer (the iterations then
+    start from it), iterations that stop on a step that is not finite (the noise as large as
+    the cap), noise-free frames, a hinge, and frames repeated."""
+    rng = np.random.default_rng(43)
+    near = BODY.copy()
+    near[0] = [0.5, 0.0, 0.0]
+    cap = _cap(rng, 30.0, 0.5)
+    markers = [cap, _cap(rng, 30.0, 0.5, body=near), cap, _cap(rng, 30.0, 0.0)]
+    markers += [_cap(rng, 40.0, 0.5, hinge=True), cap[np.arange(120) // 2]]
+    answers = CENTRE + np.array([[3.0, -2.0, 1.0], [0.5, 0.5, 0.0], [3.0, -2.0, 1.0]] * 2)
+    return np.stack(markers), answers, np.array([0.25, 0.25, 1e6, 1e-4, 0.25, 0.25])
+
+
+def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the float arrays ``a`` and ``b`` are the same to the last bit."""
+    return a.shape == b.shape and np.array_equal(a.view(np.int64), b.view(np.int64))
+
+
+def test_a_trials_row_in_a_batch_is_its_row_alone():
+    """The scratch one batch's trials share leaves nothing of one trial in the next: each
+    trial's row, to the last bit, whatever trials come before it, is its row alone, in either
+    order of the batch, and through :func:`centre_precision._statistics` from markers neither
+    contiguous nor writable."""
+    markers, answers, variances = _unlike_trials()
+    paths = [_mixed_and_refined(*trial) for trial in zip(markers, answers, variances, strict=True)]
+    assert paths[:3] == [(False, True), (True, True), (False, False)]
+    alone = np.concatenate(
+        [
+            centre_statistics(markers[t : t + 1], answers[t : t + 1], variances[t : t + 1])
+            for t in range(len(markers))
+        ]
+    )
+    for order in (np.arange(len(markers)), np.arange(len(markers))[::-1]):
+        together = centre_statistics(markers[order], answers[order], variances[order])
+        for t, row in zip(order, together, strict=True):
+            assert _same_bits(row, alone[t]), t
+    strided = np.zeros((len(markers), 120, 8, 3))
+    strided[:, :, ::2] = markers
+    strided.setflags(write=False)
+    rows = centre_precision._statistics(strided[:, :, ::2], answers, variances)
+    assert _same_bits(
+        np.array(rows), np.array(centre_precision._statistics(markers, answers, variances))
+    )
+
+
+def test_the_p_value_columns_are_the_tails_of_their_statistics():
+    """Each p-value of :func:`centre_statistics`' rows is its closed form, as written, of its
+    own statistic: the score test's of the chi-square, the lack of fit's of its z, and the lack
+    of fit's about the spheres' centre of that z, on trials where those z differ."""
+    markers, answers, variances = _unlike_trials()
+    rows = centre_statistics(markers, answers, variances)
+    sources = {
+        centre_precision._SCORE_P: (centre_precision._CHI2, centre_precision._chi2_3_sf),
+        centre_precision._FIT_P: (centre_precision._FIT_Z, centre_precision._normal_sf),
+        centre_precision._SPHERES_P: (centre_precision._SPHERES_Z, centre_precision._normal_sf),
+    }
+    assert np.any(rows[:, centre_precision._FIT_Z] != rows[:, centre_precision._SPHERES_Z])
+    for column, (statistic, tail) in sources.items():
+        expected = np.array([tail.__wrapped__(value) for value in rows[:, statistic].tolist()])
+        assert _same_bits(rows[:, column], expected), column
+
+
+def _marker_sums_in_frame_order(track: np.ndarray, centre: np.ndarray) -> tuple:
+    """One marker's distances ``(N,)`` from ``centre`` and its sums over its ``track``
+    ``(N, 3)`` [mm] as :func:`centre_precision._marker_sums` states them, each summed frame
+    after frame in one loop: ``(radius, distances, sum u, sum d u, sum u u')``."""
+    distances = np.empty(len(track))
+    sum_d, sum_u, sum_du, sum_uu = 0.0, [0.0] * 3, [0.0] * 3, [[0.0] * 3 for _ in range(3)]
+    for k, point in enumerate(track.tolist()):
+        offset = [point[i] - centre[i] for i in range(3)]
+        d = math.sqrt(offset[0] * offset[0] + offset[1] * offset[1] + offset[2] * offset[2])
+        distances[k] = d
+        inverse = 1.0 / d if d > 0.0 else 0.0
+        u = [offset[i] * inverse for i in range(3)]
+        sum_d += d
+        for i in range(3):
+            sum_u[i] += u[i]
+            sum_du[i] += offset[i]
+            for j in range(3):
+                sum_uu[i][j] += u[i] * u[j]
+    return sum_d / len(track), distances, np.array(sum_u), np.array(sum_du), np.array(sum_uu)
+
+
+def test_a_markers_sums_are_taken_frame_after_frame():
+    """:func:`centre_precision._marker_sums`, compiled, gives every sum to the last bit as one
+    loop over the frames in their order gives it, on a marker of 5,000 frames and on one
+    exactly at the centre in one frame: a sum taken in another order (in blocks, or
+    pairwise) moves the numbers in their last bits, which the pins' tolerance does not see."""
+    rng = np.random.default_rng(47)
+    markers = _cap(rng, 30.0, 0.5)
+    wide = CENTRE + rng.normal(scale=50.0, size=(5000, 3))
+    wide[11] = CENTRE
+    for track in (wide, markers[:, 2]):
+        coordinates = np.ascontiguousarray(track.T)
+        outputs = (np.empty(len(track)), np.empty((6, len(track))), np.empty(3), np.empty(3))
+        outputs += (np.empty((3, 3)),)
+        radius = centre_precision._marker_sums(coordinates, CENTRE, *outputs)
+        expected = _marker_sums_in_frame_order(track, CENTRE)
+        computed = (np.float64(radius), outputs[0], *outputs[2:])
+        for got, want in zip(computed, expected, strict=True):
+            assert _same_bits(np.asarray(got), np.asarray(want))
 
 
 def test_an_answer_among_the_markers_is_caught_at_its_distance():

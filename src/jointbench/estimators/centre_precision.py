@@ -218,11 +218,7 @@ def centre_statistics(
     out = np.empty((n_trials, 17))
     scratch = _scratch_for(n_frames)
     keys = np.empty(n_frames)
-    # _repeats' hash table: a power of two at least twice the frames, so that lookups stay short.
-    table = 2
-    while table < 2 * n_frames:
-        table *= 2
-    slots = np.empty(table, dtype=np.int64)
+    slots = _table_for(n_frames)
     weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
     coordinates = np.empty((n_markers, 3, n_frames))
     for t in range(n_trials):
@@ -580,14 +576,25 @@ def _marker_sums(
 
 
 @kernel
+def _table_for(n_frames: int) -> np.ndarray:
+    """The hash table of :func:`_repeats` for ``n_frames`` frames (scratch, allocated once per
+    batch): a power of two of at least ``2 N`` entries, so that a lookup stays short and always
+    meets an empty entry. A compiled kernel."""
+    size = 2
+    while size < 2 * n_frames:
+        size *= 2
+    return np.empty(size, dtype=np.int64)
+
+
+@kernel
 def _repeats(
     markers: np.ndarray, weights: np.ndarray, keys: np.ndarray, slots: np.ndarray
 ) -> float:
     """1 where two frames of ``markers`` ``(N, n, 3)`` may be equal, else 0: equal frames have
     equal keys ``(N,)`` (scratch), sums of the coordinates with the ``weights`` ``(3 n,)``, of
     which no two of a frame's coordinates share one. Each key is looked up among the earlier
-    ones in a hash table, ``slots`` (scratch, a power of two of at least ``2 N`` entries): a
-    pass over the frames where sorting the keys cost several. A compiled kernel."""
+    ones in a hash table, ``slots`` (:func:`_table_for`): a pass over the frames where sorting
+    the keys cost several. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     for k in range(n_frames):
         key = 0.0
@@ -691,7 +698,9 @@ def _chi2_3_sf(x: float) -> float:
         return math.nan
     if math.isinf(x):
         return 0.0
-    return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(2.0 * x / math.pi) * math.exp(-x / 2.0)
+    # 2 x / pi as x / pi doubled: the same number, but 2 x overflows for x above half the
+    # largest float, and inf times the exponential's 0 would make the tail NaN.
+    return math.erfc(math.sqrt(x / 2.0)) + math.sqrt(x / math.pi * 2.0) * math.exp(-x / 2.0)
 
 
 @kernel
