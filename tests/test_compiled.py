@@ -15,7 +15,7 @@ import pytest
 
 from jointbench.estimators import axis, registry, sphere, validation
 from jointbench.geometry import rotation_matrix, unit
-from jointbench.numerics import poses
+from jointbench.numerics import compiled, poses
 from jointbench.numerics.compiled import kernel_array
 
 
@@ -455,3 +455,18 @@ def test_a_centres_input_checks_are_one_kernel_call(monkeypatch):
     for scale, refused in ((1e-3, "metres read as millimetres"), (1e2, "read as centimetres")):
         with pytest.raises(ValueError, match=refused):
             validation.check_input("center", (scale * _hinge_markers(rng, 1)[0],))
+
+
+def _doubled(x: float) -> float:
+    return 2.0 * x
+
+
+def test_a_kernels_cache_entry_is_named_by_how_it_is_compiled(monkeypatch):
+    """Machine code compiled under other options (``fastmath``, say) is never loaded from the
+    cache as this code's: the options are part of the entry's name, and are the ones used."""
+    plain = compiled.kernel(_doubled)
+    assert plain.compiled().targetoptions.items() >= compiled.COMPILE_OPTIONS.items()
+    monkeypatch.setattr(compiled, "COMPILE_OPTIONS", {**compiled.COMPILE_OPTIONS, "fastmath": True})
+    fast = compiled.kernel(_doubled)
+    assert fast.digest() != plain.digest()
+    assert fast.compiled().targetoptions["fastmath"]

@@ -30,6 +30,14 @@ from jointbench.owncode import own_code
 __all__ = ["kernel", "kernel_array", "kernel_called"]
 
 
+#: How every kernel is compiled (``numba.njit``'s options besides the cache). They name its
+#: cache entry with its code (:meth:`_Kernel.digest`): Numba's cache tells neither an edit of
+#: them nor of this file from the machine code it holds, and would load code compiled under
+#: other options (``fastmath``'s fused multiply-adds, say) as if it were this. error_model
+#: "numpy": a float division by zero gives inf or nan, as NumPy's does, instead of raising.
+COMPILE_OPTIONS: dict[str, object] = {"nogil": True, "error_model": "numpy"}
+
+
 class _Kernel:
     """A function compiled on its first call (see the module doc)."""
 
@@ -70,15 +78,16 @@ class _Kernel:
             # when the function's own file changes; the digest in the name gives every version
             # of what is compiled in an entry of its own.
             function.__qualname__ = f"{self.__wrapped__.__qualname__}.{self.digest()}"
-            # error_model="numpy": a float division by zero gives inf or nan, as NumPy's does,
-            # instead of raising.
-            self._compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+            self._compiled = numba.njit(cache=True, **COMPILE_OPTIONS)(function)
         return self._compiled
 
     def digest(self) -> str:
-        """A digest of everything compiled into the kernel (:func:`_code_digest`)."""
+        """A digest of everything compiled into the kernel (:func:`_code_digest`) and of how
+        (:data:`COMPILE_OPTIONS`)."""
         if self._digest is None:
-            self._digest = _code_digest(self.__wrapped__, set())
+            code = _code_digest(self.__wrapped__, set())
+            options = repr(sorted(COMPILE_OPTIONS.items()))
+            self._digest = hashlib.sha256(f"{code}\n{options}".encode()).hexdigest()[:16]
         return self._digest
 
 
