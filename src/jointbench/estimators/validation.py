@@ -36,6 +36,7 @@ __all__ = [
     "check_same_frames",
     "check_span",
     "cluster_span",
+    "largest_coordinate",
     "prepare_trials",
     "span_bound",
     "span_problem",
@@ -184,7 +185,27 @@ def _shaped(markers: object, name: str) -> np.ndarray:
 # straightness of the trajectories; and the failures it reports, in the order their errors are
 # raised (0: none).
 _SAMPLES, _MOVES, _LINES = 1, 2, 4
-_NOT_FINITE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4
+_NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4, 5
+
+# 2^255, ~5.8e76: the power of two below the fourth root of the largest float64 (just under
+# 2^1024), so that the bound of largest_coordinate leaves products no rounding can overflow.
+_FOURTH_ROOT_MAX = 2.0**255
+
+
+@kernel
+def largest_coordinate(n_samples: int) -> float:
+    """The largest magnitude [mm] a coordinate of an array of ``n_samples`` samples (frames
+    times markers) may have: a larger one is refused as a non-finite one is.
+
+    The checks and the fits sum squared distances over the samples and multiply two such sums
+    (a scatter matrix's minors and squared trace; the sphere fits' sums of ``|x|^2 x x'``):
+    with every coordinate within ``M``, two samples lie within ``sqrt(12) M`` of each other, a
+    sum of squared distances is within ``12 n M^2`` and a product of two within
+    ``(12 n M^2)^2``, which float64 holds while ``M`` is at most the fourth root of its
+    largest value (taken as 2^255) over ``sqrt(12 n)``. No capture volume comes near it; a
+    coordinate beyond it is a corrupt sample (or a wrong unit), and past it the arithmetic
+    overflows into NaN, which no check can read. A compiled kernel, for the checks' own."""
+    return _FOURTH_ROOT_MAX / math.sqrt(12.0 * n_samples)
 
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
@@ -198,6 +219,18 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         raise ValueError(
             f"{name} contains NaN or inf at marker {marker}, frame {frame} "
             f"({int(bad.any(axis=-1).sum())} in all); {_GAP_ADVICE}"
+        )
+    if failure == _TOO_LARGE:
+        n_frames, n_markers, _ = array.shape
+        bound = largest_coordinate(n_frames * n_markers)
+        beyond = np.abs(array) > bound
+        frame, marker = _first_sample(beyond)
+        raise ValueError(
+            f"{name} has a coordinate of {array[frame, marker][beyond[frame, marker]][0]:.3g} "
+            f"mm at marker {marker}, frame {frame} ({int(beyond.any(axis=-1).sum())} in all), "
+            f"beyond the {bound:.3g} mm whose squares the checks and fits can sum over its "
+            f"{n_frames * n_markers} samples in float64: a corrupt sample or a wrong unit; "
+            "drop those frames before fitting"
         )
     if failure == _AT_ORIGIN:
         at_origin = ~array.any(axis=-1)
@@ -243,8 +276,9 @@ def _first_failures(
     (unless it is empty), and the first trial's that fails one returned (0 if none does).
     ``checks`` asks for some, as bits:
 
-    * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_AT_ORIGIN`, a
-      sample is exactly ``(0, 0, 0)``;
+    * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_TOO_LARGE`,
+      one is larger in magnitude than :func:`largest_coordinate` allows (which also keeps the
+      sums of the checks below finite); :data:`_AT_ORIGIN`, a sample is exactly ``(0, 0, 0)``;
     * :data:`_MOVES`: :data:`_STILL`, no coordinate changes from frame 0 by more than
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
     * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
@@ -273,6 +307,7 @@ def _first_failures(
         # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so the
         # sum of those is 0 exactly when every coordinate is finite.
         probe = 0.0
+        largest = 0.0
         origins = 0
         spread = 0.0  # frame by frame, in memory order
         totals[:] = 0.0
@@ -280,6 +315,7 @@ def _first_failures(
             for m in range(n_markers):
                 x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
                 probe += x * 0.0 + y * 0.0 + z * 0.0
+                largest = max(largest, abs(x), abs(y), abs(z))
                 origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
                 if moves and f > 0:
                     spread = max(spread, abs(x - trial[0, m, 0]))
@@ -292,8 +328,12 @@ def _first_failures(
         if checks & _SAMPLES:
             if not probe == 0.0:
                 failure = _NOT_FINITE
+            elif largest > largest_coordinate(n_frames * n_markers):
+                failure = _TOO_LARGE
             elif origins > 0:
                 failure = _AT_ORIGIN
+        elif lines and largest > largest_coordinate(n_frames * n_markers):
+            failure = _TOO_LARGE  # the line test's sums would overflow
         if failure == 0 and moves:
             first = 0.0
             for m in range(n_markers):
@@ -552,15 +592,10 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
     passes = np.ones(n_trials, dtype=bool)
     failures = np.empty(n_trials, dtype=np.int8)
     spans = np.empty(n_trials)
-    try:
-        for array in batch:
-            if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures, spans):
-                passes &= failures == 0
-            passes &= ~(((spans > 0.0) & (spans < MIN_SPAN_MM)) | (spans > MAX_SPAN_MM))
-    except np.linalg.LinAlgError:
-        # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
-        # their own error for it, and the others pass or fail alone.
-        return _check_each(kind, segments, n_trials)
+    for array in batch:
+        if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures, spans):
+            passes &= failures == 0
+        passes &= ~(((spans > 0.0) & (spans < MIN_SPAN_MM)) | (spans > MAX_SPAN_MM))
     errors: list[ValueError | None] = [None] * n_trials
     for trial in np.flatnonzero(~passes).tolist():
         errors[trial] = _error_of(kind, tuple(segment[trial] for segment in segments))
