@@ -3,10 +3,13 @@
 A finite coordinate of 1e200 mm squares past float64's range: the checks' own sums overflowed
 into NaN and escaped as NumPy's ``LinAlgError``. Every entry that takes marker arrays (the
 checked and bare one-trial calls and the many-trial calls of every method of every kind, the
-input checks, the support verdict, a recording's fit) meets such a coordinate, a whole marker
-or frame of them, data offset by 1e200, subnormal data and huge values mixed with a NaN, with a
-``ValueError`` naming the array, and the marker and frame of the first sample at fault; never
-another exception. :func:`jointbench.estimators.validation.largest_coordinate` states the bound.
+input checks, the support verdict, the artefact screen, the public fits, a recording's fit)
+meets such a coordinate, a whole marker or frame of them, data offset by 1e200, subnormal data
+and huge values mixed with a NaN, with a ``ValueError`` naming the array, and the marker and
+frame of the first sample at fault (the screen, which reads NaN as a gap: the first huge one);
+never another exception. :func:`jointbench.numerics.magnitudes.largest_coordinate` states the
+bound. Subnormal data are a cluster at one point where no unit is read (the sample checks, the
+screen) and refused where one is.
 """
 
 from __future__ import annotations
@@ -18,7 +21,9 @@ import pytest
 from rigs import two_segments
 
 import jointbench
+from jointbench import screening
 from jointbench.estimators import registry, support, validation
+from jointbench.numerics.magnitudes import first_beyond, largest_coordinate
 
 N_FRAMES = 40
 
@@ -115,6 +120,22 @@ ENTRIES = {
         arrays[-1], name=validation.ARRAY_NAMES[kind][-1]
     ),
     "assess": lambda kind, arrays: support.assess(kind, arrays),
+    "public-fit": lambda kind, arrays: PUBLIC_FITS[kind](*arrays),
+    "public-screen": lambda kind, arrays: jointbench.screen(*arrays),
+    "find_artefacts": lambda kind, arrays: screening.find_artefacts(arrays[-1], LABELS, "markers"),
+    "screen": lambda kind, arrays: screening.screen(arrays[-1], LABELS, "markers"),
+}
+
+#: The labels the screen is given, in its messages for the marker.
+LABELS = ("0", "1", "2")
+
+#: The entries that take no unit: subnormal markers are a cluster there like any other.
+SCALE_FREE = ("check_markers", "public-screen", "find_artefacts", "screen")
+
+PUBLIC_FITS = {
+    "center": jointbench.fit_center,
+    "axis": jointbench.fit_axis,
+    "joint_center": jointbench.fit_joint_center,
 }
 
 
@@ -149,12 +170,14 @@ def test_every_entry_refuses_hostile_coordinates_naming_array_marker_and_frame(
     kind, entry, hostile
 ):
     arrays, name, sample = _arrays(kind, hostile)
+    call = ENTRIES.get(entry) or _method_entries(kind)[entry]
     if hostile == "subnormal" and (
-        entry == "check_markers" or (entry, kind) == ("check_input", "joint_center")
+        entry in SCALE_FREE or (entry, kind) == ("check_input", "joint_center")
     ):
         # Subnormal samples are finite samples, and their distances square to 0: a cluster at
-        # one point, left to the checks of the markers each method needs (below).
-        validation.check_markers(arrays[-1])
+        # one point, left to the checks of the markers each method needs (below); the screen
+        # is scale-free.
+        call(kind, arrays)
         return
     if (entry, hostile) == ("assess", "subnormal"):
         # The verdict takes no unit (its callers check the cluster's size): markers at a
@@ -162,7 +185,14 @@ def test_every_entry_refuses_hostile_coordinates_naming_array_marker_and_frame(
         (stated, *_) = support.assess(kind, arrays).warnings
         assert stated.startswith("not verified: no 3 non-collinear markers"), stated
         return
-    call = ENTRIES.get(entry) or _method_entries(kind)[entry]
+    if entry in ("find_artefacts", "screen"):
+        # The screen reads NaN as a gap: it names the first sample beyond the bound, by label.
+        error = _raised(lambda: call(kind, arrays))
+        assert isinstance(error, ValueError), f"{type(error).__name__}: {error}"
+        frame, marker, *_ = first_beyond(arrays[-1])
+        assert f"marker {LABELS[marker]} has a coordinate of " in str(error), str(error)
+        assert f" at frame {frame} (" in str(error), str(error)
+        return
     _assert_named(_raised(lambda: call(kind, arrays)), name, sample)
 
 
@@ -187,7 +217,7 @@ def test_the_bound_keeps_every_sum_of_the_checks_finite_and_passes_a_distant_ori
     """At the bound, the largest the checks' arithmetic reaches, the product of two sums of
     squared deviations, is finite; just past it a sample is refused; a cluster 1e6 mm from the
     origin (tests/test_centre_checked_pinned.py) is nowhere near it."""
-    bound = validation.largest_coordinate(n_frames * 3)
+    bound = largest_coordinate(n_frames * 3)
     distance_sums = 12.0 * n_frames * 3 * bound**2
     assert np.isfinite(distance_sums * distance_sums)
     assert bound > 1e70

@@ -30,13 +30,9 @@ from jointbench.estimators import selfcheck
 from jointbench.estimators.batching import isolated
 from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import CenterResult, frozen_rows
-from jointbench.estimators.validation import (
-    check_markers,
-    check_moves,
-    largest_coordinate,
-    prepare_trials,
-)
+from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.magnitudes import largest_coordinate
 from jointbench.numerics.rank import RCOND
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
 from jointbench.numerics.spheres import ls_system, mean_weights, row_sq, solve_ls_system

@@ -2631,8 +2631,9 @@ def assess(
     ``arrays`` is ``(markers,)`` for ``center``/``axis`` (reference frame) and
     ``(proximal, distal)`` for ``joint_center`` (world frame); see the module docstring. Each
     is refused with a ``ValueError`` naming it, the marker and the frame where it is not a
-    ``(frames, markers, 3)`` array of finite samples
-    (:func:`jointbench.estimators.validation.check_markers`).
+    ``(frames, markers, 3)`` array of finite samples within float64's sums
+    (:func:`jointbench.estimators.validation.check_markers`), or has fewer than
+    :data:`MIN_JUDGED_FRAMES` frames.
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
     are not assessed (``diagnostics["assessed"]`` is False); nor is one segment of more than
     :data:`MAX_DISTANCE_MARKERS` markers. ``poses``: the two segments'

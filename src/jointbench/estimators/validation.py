@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.magnitudes import first_beyond, largest_coordinate
 from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
@@ -36,7 +37,6 @@ __all__ = [
     "check_same_frames",
     "check_span",
     "cluster_span",
-    "largest_coordinate",
     "prepare_trials",
     "span_bound",
     "span_problem",
@@ -154,8 +154,9 @@ def check_markers(
     """Return ``markers`` as a float64 ``(n_frames, n_markers, 3)`` array, or raise ``ValueError``.
 
     Rejects complex, boolean or non-numeric data and masked arrays with masked values (the
-    mask would otherwise be dropped silently), checks the shape, rejects NaN/inf and samples at
-    exactly ``(0, 0, 0)`` (how some C3D readers store gaps), naming marker and frame, and
+    mask would otherwise be dropped silently), checks the shape, rejects NaN/inf, coordinates
+    beyond :func:`~jointbench.numerics.magnitudes.largest_coordinate` and samples at exactly
+    ``(0, 0, 0)`` (how some C3D readers store gaps), naming marker and frame, and
     checks the minimum numbers of frames and markers a method needs.
     """
     array = _shaped(markers, name)
@@ -187,26 +188,6 @@ def _shaped(markers: object, name: str) -> np.ndarray:
 _SAMPLES, _MOVES, _LINES = 1, 2, 4
 _NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4, 5
 
-# 2^255, ~5.8e76: the power of two below the fourth root of the largest float64 (just under
-# 2^1024), so that the bound of largest_coordinate leaves products no rounding can overflow.
-_FOURTH_ROOT_MAX = 2.0**255
-
-
-@kernel
-def largest_coordinate(n_samples: int) -> float:
-    """The largest magnitude [mm] a coordinate of an array of ``n_samples`` samples (frames
-    times markers) may have: a larger one is refused as a non-finite one is.
-
-    The checks and the fits sum squared distances over the samples and multiply two such sums
-    (a scatter matrix's minors and squared trace; the sphere fits' sums of ``|x|^2 x x'``):
-    with every coordinate within ``M``, two samples lie within ``sqrt(12) M`` of each other, a
-    sum of squared distances is within ``12 n M^2`` and a product of two within
-    ``(12 n M^2)^2``, which float64 holds while ``M`` is at most the fourth root of its
-    largest value (taken as 2^255) over ``sqrt(12 n)``. No capture volume comes near it; a
-    coordinate beyond it is a corrupt sample (or a wrong unit), and past it the arithmetic
-    overflows into NaN, which no check can read. A compiled kernel, for the checks' own."""
-    return _FOURTH_ROOT_MAX / math.sqrt(12.0 * n_samples)
-
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
     """Raise the ``ValueError`` for the ``failure`` :func:`_first_failures` found in ``array``
@@ -221,15 +202,11 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
             f"({int(bad.any(axis=-1).sum())} in all); {_GAP_ADVICE}"
         )
     if failure == _TOO_LARGE:
-        n_frames, n_markers, _ = array.shape
-        bound = largest_coordinate(n_frames * n_markers)
-        beyond = np.abs(array) > bound
-        frame, marker = _first_sample(beyond)
+        frame, marker, value, bound, count = first_beyond(array)
         raise ValueError(
-            f"{name} has a coordinate of {array[frame, marker][beyond[frame, marker]][0]:.3g} "
-            f"mm at marker {marker}, frame {frame} ({int(beyond.any(axis=-1).sum())} in all), "
-            f"beyond the {bound:.3g} mm whose squares the checks and fits can sum over its "
-            f"{n_frames * n_markers} samples in float64: a corrupt sample or a wrong unit; "
+            f"{name} has a coordinate of {value:.3g} mm at marker {marker}, frame {frame} "
+            f"({count} in all), beyond the {bound:.3g} mm whose squares float64 can sum over "
+            f"its {array.shape[0] * array.shape[1]} samples: a corrupt sample or a wrong unit; "
             "drop those frames before fitting"
         )
     if failure == _AT_ORIGIN:
@@ -277,8 +254,9 @@ def _first_failures(
     ``checks`` asks for some, as bits:
 
     * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_TOO_LARGE`,
-      one is larger in magnitude than :func:`largest_coordinate` allows (which also keeps the
-      sums of the checks below finite); :data:`_AT_ORIGIN`, a sample is exactly ``(0, 0, 0)``;
+      one is beyond :func:`~jointbench.numerics.magnitudes.largest_coordinate` (a bound that
+      also keeps the sums of the checks below finite; the line test alone refuses it too);
+      :data:`_AT_ORIGIN`, a sample is exactly ``(0, 0, 0)``;
     * :data:`_MOVES`: :data:`_STILL`, no coordinate changes from frame 0 by more than
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
     * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second

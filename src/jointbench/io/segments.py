@@ -34,7 +34,6 @@ from jointbench.estimators.validation import (
     ONE_SEGMENT,
     TWO_SEGMENTS,
     cluster_span,
-    largest_coordinate,
     span_bound,
 )
 from jointbench.io.units import fitting_units, unit_hint
@@ -45,6 +44,7 @@ from jointbench.screening import (
     Numbering,
     Screening,
     Swap,
+    check_magnitudes,
     find_jumps,
     find_rigidity_breaks,
     find_swaps,
@@ -103,26 +103,6 @@ def _check_seen(recording: Recording, index: list[int]) -> None:
     raise ValueError(
         f"{recording.source}: marker {label} is never visible in frames "
         f"{numbering.number(0)} to {numbering.number(recording.n_frames - 1)} (the frames read)"
-    )
-
-
-def _check_magnitudes(recording: Recording, index: list[int]) -> None:
-    """``ValueError`` naming the file, the marker and the frame of the first coordinate of the
-    columns ``index`` beyond :func:`~jointbench.estimators.validation.largest_coordinate` for
-    their samples: the screen's and the fits' arithmetic would overflow on it (gaps are NaN
-    and pass)."""
-    markers = recording.markers[:, index]
-    bound = largest_coordinate(markers.shape[0] * markers.shape[1])
-    beyond = np.abs(markers) > bound
-    if not beyond.any():
-        return
-    frame, column = np.argwhere(beyond.any(axis=-1))[0]
-    value = markers[frame, column][beyond[frame, column]][0]
-    raise ValueError(
-        f"{recording.source}: marker {recording.labels[index[column]]} has a coordinate of "
-        f"{value:.3g} mm at {recording.when(int(frame))}, beyond the {bound:.3g} mm whose "
-        "squares can be summed over the segment's samples in float64: a corrupt sample or a "
-        "wrong unit; leave that frame out (frames=)"
     )
 
 
@@ -494,8 +474,9 @@ class Segment:
                 f"{recording.source}: a segment needs at least three markers, got {list(labels)}"
             )
         _check_seen(recording, index)
-        _check_magnitudes(recording, index)
         markers = recording.markers[:, index]
+        # Before the screen, whose own check would name the frame by its row.
+        check_magnitudes(markers, labels, recording.source, recording.numbering)
         joined_bound = _TWO_SEGMENTS
         if stated_lab_fixed is None:
             check_span(markers, labels, recording)
