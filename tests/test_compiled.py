@@ -17,6 +17,7 @@ from jointbench.estimators import axis, registry, sphere, validation
 from jointbench.geometry import rotation_matrix, unit
 from jointbench.numerics import compiled, poses
 from jointbench.numerics.compiled import kernel_array
+from jointbench.numerics.magnitudes import largest_coordinate
 
 
 def _both(kernel, make_outputs, *inputs):
@@ -65,11 +66,19 @@ def test_rotation_kernel():
 
 @pytest.mark.parametrize(
     "sample",
-    [None, (3, 1, [np.nan, 0, 0]), (0, 2, [0, np.inf, 1]), (5, 0, [0, 0, 0]), (2, 2, [0, 0, 1])],
+    [
+        None,
+        (3, 1, [np.nan, 0, 0]),
+        (0, 2, [0, np.inf, 1]),
+        (5, 0, [0, 0, 0]),
+        (2, 2, [0, 0, 1]),
+        (4, 1, [0, -1e200, 1]),
+    ],
 )
 def test_input_check_kernels(sample):
     """The input checks' compiled pass finds what its Python source says, per trial: non-finite
-    and (0, 0, 0) samples, markers that stay at frame 0 and markers that slide along lines."""
+    samples, coordinates beyond float64's sums, (0, 0, 0) samples, markers that stay at frame 0
+    and markers that slide along lines."""
     rng = np.random.default_rng(22)
     markers = rng.normal(scale=100.0, size=(7, 3, 3))
     if sample is not None:
@@ -101,8 +110,19 @@ def test_input_check_kernels(sample):
         moved = [np.abs(t - t[0]).max() > 1e-9 * max(1.0, np.abs(t[0]).max()) for t in batch]
     # The first check failed, in the order their errors are raised; motion is measured only
     # on trials whose samples pass.
+    too_large = np.abs(np.nan_to_num(batch)).max(axis=(1, 2, 3)) > largest_coordinate(7 * 3)
     expected = [
-        1 if not finite[t] else 2 if origin[t] else 3 if not moved[t] else 4 if t > 0 else 0
+        validation._NOT_FINITE
+        if not finite[t]
+        else validation._TOO_LARGE
+        if too_large[t]
+        else validation._AT_ORIGIN
+        if origin[t]
+        else validation._STILL
+        if not moved[t]
+        else validation._STRAIGHT
+        if t > 0
+        else 0
         for t in range(len(batch))
     ]
     np.testing.assert_array_equal(runs[0], expected)

@@ -75,10 +75,10 @@ def test_the_public_fit_of_a_large_cluster_returns_with_the_warning(monkeypatch)
 
 
 @pytest.mark.parametrize("kind", ["center", "axis"])
-def test_two_frames_of_a_large_cluster_resolve_no_arc(kind):
+def test_two_frames_of_a_large_cluster_are_refused(kind):
     """Two frames lie on a line whatever the motion: the straight-line test has no degrees of
-    freedom, and its p-value is 1, no arc resolved, instead of a division by them; the
-    verdict supports no answer (the sphere fit on two frames leaves much unexplained)."""
-    verdict = support.assess(kind, (_ball(support.MAX_DISTANCE_MARKERS + 1, 2),))
-    assert verdict.diagnostics["straight_line_p_value"] == 1.0
-    assert len(verdict.warnings) == 2 and verdict.warnings[0].startswith("not verified")
+    freedom, and the verdict refuses fewer frames than its tests need, naming the array and
+    its count, as for any cluster (tests/test_support_few_frames.py), instead of dividing by
+    them."""
+    with pytest.raises(ValueError, match=r"^markers has 2 frames; the support verdict needs"):
+        support.assess(kind, (_ball(support.MAX_DISTANCE_MARKERS + 1, 2),))

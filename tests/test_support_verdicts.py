@@ -3,10 +3,11 @@
 ``tests/snapshots/support_verdicts.json`` holds, for every case below, what
 :func:`jointbench.estimators.validation.check_input` and
 :func:`jointbench.estimators.support.assess` decided when it was written: the input check's
-error, or the verdict's warnings and numbers. A faster implementation must decide the same:
-the same errors and warnings word for word, the same numbers to rounding (noise-free cases'
-rotations, which are rounding themselves, to 1e-6 deg). ``python tests/test_support_verdicts.py``
-rewrites the file, for a deliberate change of the verdict only.
+or the verdict's refusal, or the verdict's warnings and numbers. A faster implementation must
+decide the same: the same errors and warnings word for word, the same numbers to rounding
+(noise-free cases' rotations, which are rounding themselves, to 1e-6 deg).
+``python tests/test_support_verdicts.py`` rewrites the file, for a deliberate change of the
+verdict only.
 """
 
 from __future__ import annotations
@@ -202,12 +203,12 @@ def cases() -> dict[str, tuple[str, tuple[np.ndarray, ...]]]:
 
 
 def decide(kind: str, arrays: tuple[np.ndarray, ...]) -> dict:
-    """What the checks decide on ``arrays``: the input error, or the verdict."""
+    """What the checks decide on ``arrays``: the input's or the verdict's refusal, or the
+    verdict."""
     try:
-        clean = validation.check_input(kind, arrays)
+        verdict = support.assess(kind, validation.check_input(kind, arrays))
     except ValueError as error:
         return {"error": str(error)}
-    verdict = support.assess(kind, clean)
     return {
         "warnings": list(verdict.warnings + verdict.caveats),
         "diagnostics": verdict.diagnostics,

@@ -47,6 +47,7 @@ from itertools import combinations, pairwise
 import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.magnitudes import first_beyond
 from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.special import scipy_special
 
@@ -57,6 +58,7 @@ __all__ = [
     "Numbering",
     "Screening",
     "Swap",
+    "check_magnitudes",
     "column_label",
     "exchanges_untested",
     "find_artefacts",
@@ -676,6 +678,25 @@ class Numbering:
         if self.rate_hz is None:
             return f"frame {frame}"
         return f"frame {frame} ({frame / self.rate_hz:.2f} s)"
+
+
+def check_magnitudes(
+    markers: np.ndarray, labels: Sequence[str], source: str, numbering: Numbering = Numbering()
+) -> None:
+    """``ValueError`` naming ``source``, the label and the frame (by ``numbering``) of the
+    first coordinate of ``markers`` ``(n_frames, len(labels), 3)`` [mm] beyond
+    :func:`~jointbench.numerics.magnitudes.largest_coordinate`: the screen's sums, scale-free
+    as they are, overflow on it (gaps, NaN, pass)."""
+    found = first_beyond(markers)
+    if found is None:
+        return
+    frame, marker, value, bound, count = found
+    raise ValueError(
+        f"{source}: marker {labels[marker]} has a coordinate of {value:.3g} mm at "
+        f"{numbering.name(frame)} ({count} samples in all), beyond the {bound:.3g} mm whose "
+        "squares float64 can sum over the cluster's samples: a corrupt sample or a wrong "
+        "unit; leave those frames out"
+    )
 
 
 @dataclass(frozen=True)
@@ -1674,6 +1695,7 @@ def screen(
             f"{source}: markers must be shaped (n_frames, {len(labels)} labels, 3), got shape "
             f"{np.shape(markers)}"
         )
+    check_magnitudes(markers, labels, source)
     if len(labels) < 3:
         return Screening(tuple(find_jumps(markers, labels, rules)))
     exchanged = [] if exchanges_untested(len(labels)) else find_exchanges(markers, labels, rules)
@@ -1861,6 +1883,7 @@ def find_artefacts(
     frame, it starts from the typical frame and pose fit of the fitted bounds, which are its
     own first. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
     label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
+    check_magnitudes(markers, labels, source)
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules or _RULES)), ()
     # Looked up before the default is filled in: None hashes faster than the rules.

@@ -32,6 +32,7 @@ from jointbench.estimators.registry import register, register_many
 from jointbench.estimators.results import CenterResult, frozen_rows
 from jointbench.estimators.validation import check_markers, check_moves, prepare_trials
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.magnitudes import largest_coordinate
 from jointbench.numerics.rank import RCOND
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
 from jointbench.numerics.spheres import ls_system, mean_weights, row_sq, solve_ls_system
@@ -106,8 +107,13 @@ def _screen(markers: object, min_frames: int = _MIN_FRAMES) -> tuple[np.ndarray,
         # A coordinate at exactly zero may belong to a sample at (0, 0, 0), how some readers
         # store gaps, which the one-trial checks refuse; a coordinate is cheaper to test than a
         # sample.
-        touches_zero = np.abs(array, out=offsets).min(axis=(1, 2, 3)) == 0
-    return array, ~finite | still | touches_zero | (array.shape[2] < 1)
+        magnitudes = np.abs(array, out=offsets)
+        touches_zero = magnitudes.min(axis=(1, 2, 3)) == 0
+        # Finite but too large for the fits' sums: the one-trial checks refuse it.
+        too_large = magnitudes.max(axis=(1, 2, 3)) > largest_coordinate(
+            array.shape[1] * array.shape[2]
+        )
+    return array, ~finite | still | touches_zero | too_large | (array.shape[2] < 1)
 
 
 def _screened(markers: np.ndarray, good: np.ndarray) -> np.ndarray:

@@ -186,6 +186,7 @@ __all__ = [
     "MAX_OFF_AXIS_SHARE",
     "MAX_POSE_SD_RAD",
     "MIN_BLOCKS",
+    "MIN_JUDGED_FRAMES",
     "MIN_TESTED_FRAMES",
     "MIN_VARIANCE_RATIO",
     "ROTATION_ALPHA",
@@ -245,6 +246,11 @@ MIN_VARIANCE_RATIO = 1.5
 #: fewer means is itself too uncertain (a chi-square of 7 degrees of freedom or fewer), so
 #: fewer than twice as many frames are not read.
 MIN_BLOCKS = 8
+
+#: The fewest frames the verdict judges: its tests of a straight line and of a hinge have
+#: ``2 (N - 2)`` degrees of freedom (module docstring; :func:`_without_poses`), none in two
+#: frames, where random markers that are no rigid body were judged with no warning at all.
+MIN_JUDGED_FRAMES = 3
 
 #: The fewest frames whose independence the verdict can test: below four times its fewest
 #: blocks no variance ratio can reach its quantile (module docstring, "independent frames").
@@ -1894,6 +1900,7 @@ def assess_many(
     """:func:`assess` for ``T`` trials at once: ``arrays`` as there with a leading trial axis,
     ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
     per trial."""
+    _check_judged_frames(kind, arrays)
     # The numbers the verdict's stages share (_segment_frame_numbers) are kept for this verdict
     # alone: the scope of the checked call around it also holds the fit, where an estimator's
     # own code may judge trial after trial refilled into one array.
@@ -1905,6 +1912,18 @@ def assess_many(
         verdict if found is None else verdict._replace(untested=found)
         for verdict, found in zip(verdicts, untested, strict=True)
     ]
+
+
+def _check_judged_frames(kind: str, arrays: tuple[np.ndarray, ...]) -> None:
+    """Raise ``ValueError`` naming the first of ``arrays`` ``(T, N, n, 3)`` (named by
+    :data:`ARRAY_NAMES` for ``kind``) with fewer than :data:`MIN_JUDGED_FRAMES` frames."""
+    for name, array in zip(ARRAY_NAMES[kind], arrays, strict=True):
+        if array.shape[1] < MIN_JUDGED_FRAMES:
+            raise ValueError(
+                f"{name} has {array.shape[1]} frames; the support verdict needs at least "
+                f"{MIN_JUDGED_FRAMES} (its tests of a straight line and of a hinge have "
+                "2 (frames - 2) degrees of freedom)"
+            )
 
 
 def _judged(
@@ -2480,8 +2499,9 @@ def _without_poses(
     sphere_dof = n_frames * n_markers - 3 - n_markers
     line_dof = 2 * n_markers * (n_frames - 2)
     rounding = (ROUNDING * float(np.abs(markers).max())) ** 2 * n_frames * n_markers
-    if line_dof == 0:
-        p_line = 1.0  # two frames lie on a line whatever the motion: no arc can be resolved
+    # Three frames or more (assess_many refuses fewer): the line test has 2 P (N - 2) > 0.
+    if sphere_dof < 1:
+        p_line = math.nan  # a sphere passes through every sample: no residual to test against
     elif rss_sphere <= rounding:
         p_line = float(rss_line <= rounding)
     else:
@@ -2498,7 +2518,12 @@ def _without_poses(
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
         "than one axis was not tested"
     ]
-    if share >= MAX_NONRIGID_SHARE:
+    if sphere_dof < 1:
+        warnings.append(
+            f"whether the trajectories are arcs was not tested: spheres pass through every "
+            f"sample of {n_frames} frames of {n_markers} markers, leaving no residual"
+        )
+    elif share >= MAX_NONRIGID_SHARE:
         warnings.append(
             f"the markers do not move on concentric spheres: the sphere fit leaves "
             f"{100 * share:.0f}% of their scatter about their mean positions unexplained"
@@ -2606,8 +2631,9 @@ def assess(
     ``arrays`` is ``(markers,)`` for ``center``/``axis`` (reference frame) and
     ``(proximal, distal)`` for ``joint_center`` (world frame); see the module docstring. Each
     is refused with a ``ValueError`` naming it, the marker and the frame where it is not a
-    ``(frames, markers, 3)`` array of finite samples
-    (:func:`jointbench.estimators.validation.check_markers`).
+    ``(frames, markers, 3)`` array of finite samples within float64's sums
+    (:func:`jointbench.estimators.validation.check_markers`), or has fewer than
+    :data:`MIN_JUDGED_FRAMES` frames.
     Data with fewer than three non-collinear markers per segment give no rigid-body fit and
     are not assessed (``diagnostics["assessed"]`` is False); nor is one segment of more than
     :data:`MAX_DISTANCE_MARKERS` markers. ``poses``: the two segments'

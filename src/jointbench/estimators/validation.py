@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.magnitudes import first_beyond, largest_coordinate
 from jointbench.numerics.small import add_outer, symmetric_into
 
 __all__ = [
@@ -153,8 +154,9 @@ def check_markers(
     """Return ``markers`` as a float64 ``(n_frames, n_markers, 3)`` array, or raise ``ValueError``.
 
     Rejects complex, boolean or non-numeric data and masked arrays with masked values (the
-    mask would otherwise be dropped silently), checks the shape, rejects NaN/inf and samples at
-    exactly ``(0, 0, 0)`` (how some C3D readers store gaps), naming marker and frame, and
+    mask would otherwise be dropped silently), checks the shape, rejects NaN/inf, coordinates
+    beyond :func:`~jointbench.numerics.magnitudes.largest_coordinate` and samples at exactly
+    ``(0, 0, 0)`` (how some C3D readers store gaps), naming marker and frame, and
     checks the minimum numbers of frames and markers a method needs.
     """
     array = _shaped(markers, name)
@@ -184,7 +186,7 @@ def _shaped(markers: object, name: str) -> np.ndarray:
 # straightness of the trajectories; and the failures it reports, in the order their errors are
 # raised (0: none).
 _SAMPLES, _MOVES, _LINES = 1, 2, 4
-_NOT_FINITE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4
+_NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4, 5
 
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
@@ -198,6 +200,14 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         raise ValueError(
             f"{name} contains NaN or inf at marker {marker}, frame {frame} "
             f"({int(bad.any(axis=-1).sum())} in all); {_GAP_ADVICE}"
+        )
+    if failure == _TOO_LARGE:
+        frame, marker, value, bound, count = first_beyond(array)
+        raise ValueError(
+            f"{name} has a coordinate of {value:.3g} mm at marker {marker}, frame {frame} "
+            f"({count} in all), beyond the {bound:.3g} mm whose squares float64 can sum over "
+            f"its {array.shape[0] * array.shape[1]} samples: a corrupt sample or a wrong unit; "
+            "drop those frames before fitting"
         )
     if failure == _AT_ORIGIN:
         at_origin = ~array.any(axis=-1)
@@ -243,8 +253,10 @@ def _first_failures(
     (unless it is empty), and the first trial's that fails one returned (0 if none does).
     ``checks`` asks for some, as bits:
 
-    * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_AT_ORIGIN`, a
-      sample is exactly ``(0, 0, 0)``;
+    * :data:`_SAMPLES`: :data:`_NOT_FINITE`, a coordinate is NaN or inf; :data:`_TOO_LARGE`,
+      one is beyond :func:`~jointbench.numerics.magnitudes.largest_coordinate` (a bound that
+      also keeps the sums of the checks below finite; the line test alone refuses it too);
+      :data:`_AT_ORIGIN`, a sample is exactly ``(0, 0, 0)``;
     * :data:`_MOVES`: :data:`_STILL`, no coordinate changes from frame 0 by more than
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
     * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
@@ -273,6 +285,7 @@ def _first_failures(
         # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so the
         # sum of those is 0 exactly when every coordinate is finite.
         probe = 0.0
+        largest = 0.0
         origins = 0
         spread = 0.0  # frame by frame, in memory order
         totals[:] = 0.0
@@ -280,6 +293,7 @@ def _first_failures(
             for m in range(n_markers):
                 x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
                 probe += x * 0.0 + y * 0.0 + z * 0.0
+                largest = max(largest, abs(x), abs(y), abs(z))
                 origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
                 if moves and f > 0:
                     spread = max(spread, abs(x - trial[0, m, 0]))
@@ -292,8 +306,12 @@ def _first_failures(
         if checks & _SAMPLES:
             if not probe == 0.0:
                 failure = _NOT_FINITE
+            elif largest > largest_coordinate(n_frames * n_markers):
+                failure = _TOO_LARGE
             elif origins > 0:
                 failure = _AT_ORIGIN
+        elif lines and largest > largest_coordinate(n_frames * n_markers):
+            failure = _TOO_LARGE  # the line test's sums would overflow
         if failure == 0 and moves:
             first = 0.0
             for m in range(n_markers):
@@ -552,15 +570,10 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
     passes = np.ones(n_trials, dtype=bool)
     failures = np.empty(n_trials, dtype=np.int8)
     spans = np.empty(n_trials)
-    try:
-        for array in batch:
-            if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures, spans):
-                passes &= failures == 0
-            passes &= ~(((spans > 0.0) & (spans < MIN_SPAN_MM)) | (spans > MAX_SPAN_MM))
-    except np.linalg.LinAlgError:
-        # A trial whose coordinates overflow a scatter matrix: the one-trial checks raise
-        # their own error for it, and the others pass or fail alone.
-        return _check_each(kind, segments, n_trials)
+    for array in batch:
+        if _first_failures(kernel_array(array), checks, _MOVE_TOL_MM, failures, spans):
+            passes &= failures == 0
+        passes &= ~(((spans > 0.0) & (spans < MIN_SPAN_MM)) | (spans > MAX_SPAN_MM))
     errors: list[ValueError | None] = [None] * n_trials
     for trial in np.flatnonzero(~passes).tolist():
         errors[trial] = _error_of(kind, tuple(segment[trial] for segment in segments))

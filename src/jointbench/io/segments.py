@@ -44,6 +44,7 @@ from jointbench.screening import (
     Numbering,
     Screening,
     Swap,
+    check_magnitudes,
     find_jumps,
     find_rigidity_breaks,
     find_swaps,
@@ -474,6 +475,8 @@ class Segment:
             )
         _check_seen(recording, index)
         markers = recording.markers[:, index]
+        # Before the screen, whose own check would name the frame by its row.
+        check_magnitudes(markers, labels, recording.source, recording.numbering)
         joined_bound = _TWO_SEGMENTS
         if stated_lab_fixed is None:
             check_span(markers, labels, recording)
