@@ -9,10 +9,13 @@ perturbations of the markers by one unit in the last place (:func:`rounding_move
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable
 
 import numpy as np
+
+from jointbench.estimators import registry
 
 #: Numbers agree to this, relative where large.
 AGREE = 1e-9
@@ -46,6 +49,64 @@ def answer(outcome: object, fields: tuple[str, ...]) -> dict:
     held = {name: plain(getattr(outcome, name)) for name in fields}
     held["diagnostics"] = plain(outcome.diagnostics)
     return held
+
+
+def checked_calls(
+    kind: str, method: str, markers: tuple[np.ndarray, ...], options: dict, fields: tuple[str, ...]
+) -> dict:
+    """:func:`answer` of every trial of a case, its ``markers`` one ``(T, N, n, 3)`` [mm] array
+    per segment, by the checked call of ``method`` of ``kind`` with ``options``, one trial at a
+    time (its ``ValueError`` the answer where it raises one) and in one many-trial call:
+    ``{"one": [...], "many": [...]}``."""
+    one = registry.get(kind, method)
+    each: list[object] = []
+    for trial in range(len(markers[0])):
+        try:
+            each.append(one(*(segment[trial] for segment in markers), **options))
+        except ValueError as error:
+            each.append(error)
+    many = registry.many(kind, method)(*markers, **options)
+    return {
+        "one": [answer(o, fields) for o in each],
+        "many": [answer(o, fields) for o in many],
+    }
+
+
+def all_answers(
+    cases: dict[str, tuple[tuple[np.ndarray, ...], dict]],
+    methods: tuple[str, ...],
+    called: Callable[[str, tuple[np.ndarray, ...], dict], dict],
+) -> dict:
+    """case -> method -> ``called(method, markers, options)`` over every case."""
+    return {
+        case: {method: called(method, trials, options) for method in methods}
+        for case, (trials, options) in cases.items()
+    }
+
+
+def assert_case_as_pinned(answers: dict, pinned: dict, case: str) -> None:
+    """Every method's one-trial and many-trial answers of ``case`` are its pinned one-trial
+    answers (:func:`assert_same`)."""
+    for method, called in answers[case].items():
+        one = pinned["answers"][case][method]["one"]
+        for call in ("one", "many"):
+            assert_same(called[call], one, f"/{case}/{method}/{call}", pinned["rounding"])
+
+
+def assert_changed_number_fails(held: dict, path: tuple[str | int, ...], rounding: dict) -> None:
+    """A pinned answer ``held`` whose number at ``path`` (keys and indices) moves by 1e-7 of
+    itself (at least 1e-7) fails :func:`assert_same`: the comparison can fail."""
+    moved = json.loads(json.dumps(held))
+    *inner, last = path
+    container = moved
+    for key in inner:
+        container = container[key]
+    container[last] += 1e-7 * max(1.0, abs(container[last]))
+    try:
+        assert_same(moved, held, "moved", rounding)
+    except AssertionError:
+        return
+    raise AssertionError(f"a number moved at {path} passed the comparison")
 
 
 def one_trial(answers: dict) -> dict:

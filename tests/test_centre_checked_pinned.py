@@ -26,7 +26,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pinning import answer, assert_same, one_trial, rounding_moves, signs_by_value
+from pinning import (
+    all_answers,
+    assert_case_as_pinned,
+    assert_changed_number_fails,
+    checked_calls,
+    one_trial,
+    rounding_moves,
+    signs_by_value,
+)
 from test_checked_centre_calls import BODY, CENTRE, _trial
 
 from jointbench.estimators import registry
@@ -102,32 +110,14 @@ def _cases() -> dict[str, tuple[tuple[np.ndarray], dict]]:
 
 
 def _called(method: str, markers: tuple[np.ndarray], options: dict) -> dict:
-    """Every trial of a case, one at a time and in one many-trial call, checked."""
-    taken = options.get(method, {})
-    one = registry.get("center", method)
-    each = []
-    for trial in markers[0]:
-        try:
-            each.append(one(trial, **taken))
-        except ValueError as error:
-            each.append(error)
-    many = registry.many("center", method)(markers[0], **taken)
-    return {
-        "one": [answer(o, FIELDS) for o in each],
-        "many": [answer(o, FIELDS) for o in many],
-    }
-
-
-def _all_answers() -> dict:
-    return {
-        case: {method: _called(method, trials, options) for method in METHODS}
-        for case, (trials, options) in _cases().items()
-    }
+    """Every trial of a case, one at a time and in one many-trial call, checked, with the
+    case's options for ``method``."""
+    return checked_calls("center", method, markers, options.get(method, {}), FIELDS)
 
 
 @pytest.fixture(scope="module")
 def answers() -> dict:
-    return _all_answers()
+    return all_answers(_cases(), METHODS, _called)
 
 
 @pytest.fixture(scope="module")
@@ -137,11 +127,7 @@ def pinned() -> dict:
 
 @pytest.mark.parametrize("case", list(_cases()))
 def test_checked_centre_calls_answer_as_pinned(answers, pinned, case):
-    for method, called in answers[case].items():
-        one = pinned["answers"][case][method]["one"]
-        for call in ("one", "many"):
-            where = f"/{case}/{method}/{call}"
-            assert_same(called[call], one, where, pinned["rounding"])
+    assert_case_as_pinned(answers, pinned, case)
 
 
 #: The cases whose fits are ill-conditioned (four frames, a hinge, a cap too small, a 10
@@ -185,15 +171,12 @@ def test_the_pin_covers_every_kind_of_answer():
 
 
 def test_a_changed_number_fails_the_comparison(pinned):
-    case = pinned["answers"]["spiral 15 deg 1 mm"]["LS"]["one"][0]
-    moved = json.loads(json.dumps(case))
-    moved["diagnostics"]["center_sd_mm"] *= 1.0 + 1e-7
-    with pytest.raises(AssertionError):
-        assert_same(moved, case, "moved", pinned["rounding"])
+    held = pinned["answers"]["spiral 15 deg 1 mm"]["LS"]["one"][0]
+    assert_changed_number_fails(held, ("diagnostics", "center_sd_mm"), pinned["rounding"])
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["--rewrite"]:
-    written = one_trial(_all_answers())
+    written = one_trial(all_answers(_cases(), METHODS, _called))
     moved = rounding_moves(written, _cases(), METHODS, _called, signs_by_value)
     pin = {"answers": written, "rounding": moved}
     PINNED.write_text(json.dumps(pin, indent=1, sort_keys=True) + "\n")

@@ -32,11 +32,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pinning import answer, assert_same, one_trial, rounding_moves
+from pinning import (
+    all_answers,
+    assert_case_as_pinned,
+    assert_changed_number_fails,
+    checked_calls,
+    one_trial,
+    rounding_moves,
+)
 from rigs import two_segments
 
 from jointbench.configuration.studies import get_study
-from jointbench.estimators import registry
 from jointbench.simulate.hip import HipProtocol, nominal_recording
 
 PINNED = Path(__file__).parent / "snapshots" / "joint_centre_checked.json"
@@ -123,31 +129,14 @@ FIELDS = ("center", "covariance", "converged", "iterations", "status", "cost", "
 
 
 def _called(method: str, markers: tuple[np.ndarray, np.ndarray], options: dict) -> dict:
-    """Every trial of a case, one at a time and in one many-trial call, checked."""
-    one = registry.get("joint_center", method)
-    each = []
-    for trial in range(len(markers[0])):
-        try:
-            each.append(one(markers[0][trial], markers[1][trial], **options))
-        except ValueError as error:
-            each.append(error)
-    many = registry.many("joint_center", method)(*markers, **options)
-    return {
-        "one": [answer(o, FIELDS) for o in each],
-        "many": [answer(o, FIELDS) for o in many],
-    }
-
-
-def _all_answers() -> dict:
-    return {
-        case: {method: _called(method, trials, _options_for(method, options)) for method in METHODS}
-        for case, (trials, options) in _cases().items()
-    }
+    """Every trial of a case, one at a time and in one many-trial call, checked, with the
+    case's options ``method`` takes."""
+    return checked_calls("joint_center", method, markers, _options_for(method, options), FIELDS)
 
 
 @pytest.fixture(scope="module")
 def answers() -> dict:
-    return _all_answers()
+    return all_answers(_cases(), METHODS, _called)
 
 
 @pytest.fixture(scope="module")
@@ -157,11 +146,7 @@ def pinned() -> dict:
 
 @pytest.mark.parametrize("case", list(_cases()))
 def test_checked_joint_centre_calls_answer_as_pinned(answers, pinned, case):
-    for method, called in answers[case].items():
-        one = pinned["answers"][case][method]["one"]
-        for call in ("one", "many"):
-            where = f"/{case}/{method}/{call}"
-            assert_same(called[call], one, where, pinned["rounding"])
+    assert_case_as_pinned(answers, pinned, case)
 
 
 #: The cases whose fits are ill-conditioned (four frames, a hinge or nearly one) or whose
@@ -201,17 +186,12 @@ def test_the_pin_covers_every_kind_of_answer():
 
 
 def test_a_changed_number_fails_the_comparison(pinned):
-    case = pinned["answers"]["hip Nt=200"]["gauss-markov"]["one"][0]
-    moved = json.loads(json.dumps(case))
-    moved["center"][0] += 1e-7 * max(1.0, abs(moved["center"][0]))
-    with pytest.raises(AssertionError):
-        assert_same(moved, case, "moved", pinned["rounding"])
+    held = pinned["answers"]["hip Nt=200"]["gauss-markov"]["one"][0]
+    assert_changed_number_fails(held, ("center", 0), pinned["rounding"])
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["--rewrite"]:
-    written = one_trial(_all_answers())
-    moved = rounding_moves(
-        written, _cases(), METHODS, lambda m, t, o: _called(m, t, _options_for(m, o))
-    )
+    written = one_trial(all_answers(_cases(), METHODS, _called))
+    moved = rounding_moves(written, _cases(), METHODS, _called)
     pin = {"answers": written, "rounding": moved}
     PINNED.write_text(json.dumps(pin, indent=1, sort_keys=True) + "\n")
