@@ -1,16 +1,22 @@
 """What the pinned-answer tests share: answers as JSON, their numbers by path, how far rounding
 moves each, and the comparison of a new answer with the pinned one.
 
-A pinned answer is compared strings and flags exactly and numbers to :data:`AGREE` (relative
+A pinned answer is compared flags and words exactly and numbers to :data:`AGREE` (relative
 where large) or, for a number that rounding alone moves by more, to :data:`ROUNDING_TIMES`
 what rounding moved it when the pin was written: its largest change under three
-perturbations of the markers by one unit in the last place (:func:`rounding_moves`).
+perturbations of the markers by one unit in the last place (:func:`rounding_moves`). Numbers
+are the floats, the counts (iterations) and the numbers written in a string (a statement's
+"p = 2.8e-59"): another processor or library build rounds differently, and where the
+perturbations show that rounding moves one of them, that machine may read another iteration
+count or another last digit of a statement about noise-free data. The words around a
+string's numbers are compared exactly.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Callable
 
 import numpy as np
@@ -23,6 +29,23 @@ AGREE = 1e-9
 ROUNDING_TIMES = 10.0
 #: The relative perturbation of the markers, one unit in the last place.
 ULP = 2.0**-52
+#: A number written in a string: a sign, digits with a point, an exponent.
+_WRITTEN_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def words(text: str) -> str:
+    """``text`` with each number written in it replaced by ``#``: what must stay word for word."""
+    return _WRITTEN_NUMBER.sub("#", text)
+
+
+def written_numbers(text: str) -> list[float]:
+    """The numbers written in ``text``, in order."""
+    return [float(number) for number in _WRITTEN_NUMBER.findall(text)]
+
+
+def _counted(value: object) -> bool:
+    """Whether a JSON value is a count (an int, not a flag)."""
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def plain(value: object) -> object:
@@ -124,14 +147,31 @@ def as_one_trial(where: str) -> str:
 
 
 def numbers(held: object, where: str, out: dict[str, float]) -> dict[str, float]:
-    """Every number of ``held`` (as JSON) by its path."""
+    """Every number of ``held`` (as JSON) by its path: floats, counts, and the numbers written
+    in a string (its ``k``-th at ``{path}#{k}``)."""
     if isinstance(held, dict):
         for key, value in held.items():
             numbers(value, f"{where}/{key}", out)
     elif isinstance(held, list):
         for index, value in enumerate(held):
             numbers(value, f"{where}[{index}]", out)
-    elif isinstance(held, float):
+    elif isinstance(held, float) or _counted(held):
+        out[where] = held
+    elif isinstance(held, str):
+        for index, value in enumerate(written_numbers(held)):
+            out[f"{where}#{index}"] = value
+    return out
+
+
+def strings(held: object, where: str, out: dict[str, str]) -> dict[str, str]:
+    """Every string of ``held`` (as JSON) by its path."""
+    if isinstance(held, dict):
+        for key, value in held.items():
+            strings(value, f"{where}/{key}", out)
+    elif isinstance(held, list):
+        for index, value in enumerate(held):
+            strings(value, f"{where}[{index}]", out)
+    elif isinstance(held, str):
         out[where] = held
     return out
 
@@ -157,17 +197,25 @@ def rounding_moves(
     called: Callable[[str, tuple[np.ndarray, ...], dict], dict],
     perturbed: Callable[[np.ndarray, int], np.ndarray] = random_signs,
 ) -> dict[str, float]:
-    """By path, the largest change of each number of ``answers`` under three perturbations of
-    every case's markers by one unit in the last place (``perturbed(markers, seed)``), where it
-    is above what :data:`AGREE` allows. ``called(method, markers, options)`` answers a case as
-    ``answers`` hold it."""
+    """By path, the largest change of each number of ``answers`` (:func:`numbers`) under three
+    perturbations of every case's markers by one unit in the last place
+    (``perturbed(markers, seed)``), where it is above what :data:`AGREE` allows.
+    ``called(method, markers, options)`` answers a case as ``answers`` hold it. A string whose
+    words (:func:`words`) rounding changes is no answer a pin can hold: ``AssertionError``
+    naming it."""
     pinned = numbers(answers, "", {})
+    pinned_strings = strings(answers, "", {})
     moved: dict[str, float] = {}
     for seed in range(3):
         for case, (trials, options) in cases.items():
             markers = tuple(perturbed(m, seed) for m in trials)
             for method in methods:
                 again = called(method, markers, options)
+                for where, text in strings(again, f"/{case}/{method}", {}).items():
+                    held = pinned_strings.get(as_one_trial(where))
+                    assert held is None or words(text) == words(held), (
+                        f"{where}: rounding changes its words: {text!r} against {held!r}"
+                    )
                 for where, value in numbers(again, f"/{case}/{method}", {}).items():
                     if as_one_trial(where) in pinned:
                         where = as_one_trial(where)
@@ -181,9 +229,9 @@ def rounding_moves(
 
 
 def assert_same(now: object, pinned: object, where: str, rounding: dict[str, float]) -> None:
-    """``now`` equals ``pinned``: strings and flags exactly, numbers to :data:`AGREE`
-    (relative where large) or :data:`ROUNDING_TIMES` their move by rounding (``rounding``, by
-    path)."""
+    """``now`` equals ``pinned``: flags and the words of strings exactly, numbers (floats,
+    counts, the numbers written in strings) to :data:`AGREE` (relative where large) or
+    :data:`ROUNDING_TIMES` their move by rounding (``rounding``, by path)."""
     if isinstance(pinned, dict):
         assert isinstance(now, dict) and now.keys() == pinned.keys(), where
         for key in pinned:
@@ -192,10 +240,29 @@ def assert_same(now: object, pinned: object, where: str, rounding: dict[str, flo
         assert isinstance(now, list) and len(now) == len(pinned), where
         for index, (mine, theirs) in enumerate(zip(now, pinned, strict=True)):
             assert_same(mine, theirs, f"{where}[{index}]", rounding)
-    elif isinstance(pinned, float) and not isinstance(pinned, bool):
+    elif isinstance(pinned, float):
         assert isinstance(now, (int, float)) and not isinstance(now, bool), where
-        moved = rounding.get(as_one_trial(where), 0.0)
-        allowed = max(AGREE * max(1.0, abs(pinned)), ROUNDING_TIMES * moved)
-        assert abs(now - pinned) <= allowed, f"{where}: {now!r} != {pinned!r}"
+        _assert_near(now, pinned, where, rounding)
+    elif _counted(pinned):
+        assert _counted(now), f"{where}: {now!r} != {pinned!r}"
+        _assert_near(now, pinned, where, rounding)
+    elif isinstance(pinned, str):
+        assert isinstance(now, str) and words(now) == words(pinned), (
+            f"{where}: {now!r} != {pinned!r}"
+        )
+        for index, (mine, theirs) in enumerate(
+            zip(written_numbers(now), written_numbers(pinned), strict=True)
+        ):
+            _assert_near(mine, theirs, f"{where}#{index}", rounding, f"{now!r} != {pinned!r}")
     else:
         assert now == pinned and type(now) is type(pinned), f"{where}: {now!r} != {pinned!r}"
+
+
+def _assert_near(
+    now: float, pinned: float, where: str, rounding: dict[str, float], shown: str = ""
+) -> None:
+    """The number ``now`` is within :data:`AGREE` (relative where large) of ``pinned``, or
+    within :data:`ROUNDING_TIMES` its move by rounding at ``where``."""
+    moved = rounding.get(as_one_trial(where), 0.0)
+    allowed = max(AGREE * max(1.0, abs(pinned)), ROUNDING_TIMES * moved)
+    assert abs(now - pinned) <= allowed, f"{where}: {shown or f'{now!r} != {pinned!r}'}"

@@ -40,11 +40,13 @@ def test_the_planar_sd_does_not_depend_on_the_point_of_the_axis(seed):
 
 
 def _numpy_basis(direction: np.ndarray) -> np.ndarray:
-    """The tangent basis as :func:`np.cross` gives it."""
+    """The tangent basis as :func:`np.cross` gives it, normalised by the root of its squares
+    summed in order: ``np.linalg.norm`` sums them in the order of the processor's BLAS kernel,
+    which differs between processors in the last bit."""
     helper = np.zeros(3)
     helper[np.argmin(np.abs(direction))] = 1.0
     first = np.cross(direction, helper)
-    first /= np.linalg.norm(first)
+    first /= math.sqrt(first[0] * first[0] + first[1] * first[1] + first[2] * first[2])
     return np.stack([first, np.cross(direction, first)], axis=1)
 
 
