@@ -1901,13 +1901,25 @@ def assess_many(
     ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
     per trial."""
     _check_judged_frames(kind, arrays)
+    if len(arrays) == 1:
+        # One segment's pass gives the block test and the lag-1 statement their numbers
+        # (_one_segment): its stages share nothing through a scope, and none is opened.
+        return _judged_untested(kind, arrays, poses)
     # The numbers the verdict's stages share (_segment_frame_numbers) are kept for this verdict
     # alone: the scope of the checked call around it also holds the fit, where an estimator's
     # own code may judge trial after trial refilled into one array.
     with one_call():
-        verdicts, frame_numbers = _judged(kind, arrays, poses)
-        flags = [not verdict.caveats for verdict in verdicts]
-        untested = _untested(ARRAY_NAMES[kind], arrays, flags, frame_numbers)
+        return _judged_untested(kind, arrays, poses)
+
+
+def _judged_untested(
+    kind: str, arrays: tuple[np.ndarray, ...], poses: list | None
+) -> list[Support]:
+    """:func:`assess_many` after its check of the frames: the verdicts of :func:`_judged`,
+    each with what the frames' lag-1 autocorrelation says where the block test does not."""
+    verdicts, frame_numbers = _judged(kind, arrays, poses)
+    flags = [not verdict.caveats for verdict in verdicts]
+    untested = _untested(ARRAY_NAMES[kind], arrays, flags, frame_numbers)
     return [
         verdict if found is None else verdict._replace(untested=found)
         for verdict, found in zip(verdicts, untested, strict=True)
