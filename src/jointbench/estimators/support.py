@@ -1901,13 +1901,25 @@ def assess_many(
     ``(T, N, n, 3)`` each, and ``poses`` one entry per trial as there; one :class:`Support`
     per trial."""
     _check_judged_frames(kind, arrays)
+    if len(arrays) == 1:
+        # One segment's pass gives the block test and the lag-1 statement their numbers
+        # (_one_segment): its stages share nothing through a scope, and none is opened.
+        return _judged_untested(kind, arrays, poses)
     # The numbers the verdict's stages share (_segment_frame_numbers) are kept for this verdict
     # alone: the scope of the checked call around it also holds the fit, where an estimator's
     # own code may judge trial after trial refilled into one array.
     with one_call():
-        verdicts, frame_numbers = _judged(kind, arrays, poses)
-        flags = [not verdict.caveats for verdict in verdicts]
-        untested = _untested(ARRAY_NAMES[kind], arrays, flags, frame_numbers)
+        return _judged_untested(kind, arrays, poses)
+
+
+def _judged_untested(
+    kind: str, arrays: tuple[np.ndarray, ...], poses: list | None
+) -> list[Support]:
+    """:func:`assess_many` after its check of the frames: the verdicts of :func:`_judged`,
+    each with what the frames' lag-1 autocorrelation says where the block test does not."""
+    verdicts, frame_numbers = _judged(kind, arrays, poses)
+    flags = [not verdict.caveats for verdict in verdicts]
+    untested = _untested(ARRAY_NAMES[kind], arrays, flags, frame_numbers)
     return [
         verdict if found is None else verdict._replace(untested=found)
         for verdict, found in zip(verdicts, untested, strict=True)
@@ -1993,17 +2005,23 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     tested = numbers[:, 5:14]  # (RMS, F ratio, dof) of each of the three tests
     p_values = scipy_special().fdtrc(tested[:, 2::3], numbers[:, 4:5], tested[:, 1::3]).tolist()
     rows = numbers[:, : len(_ONE_SEGMENT_COLUMNS)].tolist()
-    no_pose = [_no_pose_reason(row) for row in rows]
-    # The hinge is given the candidate axis that explains the data better.
-    tests = [
-        (row[5], p[0], row[11], p[2]) if p[2] > p[1] else (row[5], p[0], row[8], p[1])
-        for row, p in zip(rows, p_values, strict=True)
-    ]
+    # Per trial in one pass (a checked one-trial call pays for every pass over the trials):
+    # why it has no pose, its tests, and where it has a pose, how independent its frames are.
+    no_pose: list[str | None] = []
+    tests: list[tuple[float, float, float, float]] = []
+    frames: dict[int, _Frames] = {}
+    for t, (row, p) in enumerate(zip(rows, p_values, strict=True)):
+        reason = _no_pose_reason(row)
+        no_pose.append(reason)
+        # The hinge is given the candidate axis that explains the data better.
+        tests.append((row[5], p[0], row[11], p[2]) if p[2] > p[1] else (row[5], p[0], row[8], p[1]))
+        if reason is None:
+            frames[t] = _segment_frames(row[_DEPENDENCE], "markers", markers[t])
     # For an axis: the motion's own axis of every trial with a pose, and where rotation off
     # the main axis is resolved, how much of the rotation it is (a centre needs neither).
     shares: dict[int, tuple[float, ...]] = {}
     axes: dict[int, MotionAxis] = {}
-    posed = [t for t, reason in enumerate(no_pose) if reason is None]
+    posed = list(frames)
     if kind not in CENTRE_KINDS and posed:
         found_axes, found = _one_segment_axes(
             markers[posed], numbers[posed, 0], numbers[posed, _CENTRAL_FRAME]
@@ -2011,7 +2029,6 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
         axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
         shares = {t: share for t, share in by_trial if tests[t][3] < ROTATION_ALPHA}
-    frames = {t: _segment_frames(rows[t][_DEPENDENCE], "markers", markers[t]) for t in posed}
     by_noise = _noise_directions(markers, numbers, frames)
     return [
         _without_poses((markers[t],), no_pose[t])
