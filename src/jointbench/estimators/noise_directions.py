@@ -625,20 +625,25 @@ def trial_test_into(
             row[at_markers + m * n_markers + mm] = n_frames * per_frame[m, mm]
     for m in range(n_markers):
         own[m] = row[at_own + m]
-    for f in range(n_frames):
-        for a in range(n_markers):
-            x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
-            for b in range(a, n_markers):
+    # Pair by pair, each sum in frame order: its nine sums stay in registers through the frames.
+    for a in range(n_markers):
+        for b in range(a, n_markers):
+            s00 = s01 = s02 = s10 = s11 = s12 = s20 = s21 = s22 = 0.0
+            for f in range(n_frames):
+                x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
                 y0, y1, y2 = positions[f, b, 0], positions[f, b, 1], positions[f, b, 2]
-                second[a, b, 0, 0] += x0 * y0
-                second[a, b, 0, 1] += x0 * y1
-                second[a, b, 0, 2] += x0 * y2
-                second[a, b, 1, 0] += x1 * y0
-                second[a, b, 1, 1] += x1 * y1
-                second[a, b, 1, 2] += x1 * y2
-                second[a, b, 2, 0] += x2 * y0
-                second[a, b, 2, 1] += x2 * y1
-                second[a, b, 2, 2] += x2 * y2
+                s00 += x0 * y0
+                s01 += x0 * y1
+                s02 += x0 * y2
+                s10 += x1 * y0
+                s11 += x1 * y1
+                s12 += x1 * y2
+                s20 += x2 * y0
+                s21 += x2 * y1
+                s22 += x2 * y2
+            second[a, b, 0, 0], second[a, b, 0, 1], second[a, b, 0, 2] = s00, s01, s02
+            second[a, b, 1, 0], second[a, b, 1, 1], second[a, b, 1, 2] = s10, s11, s12
+            second[a, b, 2, 0], second[a, b, 2, 1], second[a, b, 2, 2] = s20, s21, s22
     for a in range(n_markers):
         for b in range(a):
             for i in range(3):

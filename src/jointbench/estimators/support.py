@@ -1684,14 +1684,23 @@ def _arc_rotation_sd_deg(
         noise = 3.0 * variance[t] * (n_frames - 1) / n_frames
         rotation_sq = principal_rms[t] ** 2 + off_rms[t] ** 2
         for i in range(n_markers):
+            # The three coordinates' means side by side, each summed in frame order: one
+            # sum's additions wait for each other, the coordinates' do not.
+            mean0 = mean1 = mean2 = 0.0
+            for k in range(n_frames):
+                mean0 += markers[t, k, i, 0]
+                mean1 += markers[t, k, i, 1]
+                mean2 += markers[t, k, i, 2]
+            mean0 /= n_frames
+            mean1 /= n_frames
+            mean2 /= n_frames
             squares = 0.0
-            for c in range(3):
-                mean = 0.0
-                for k in range(n_frames):
-                    mean += markers[t, k, i, c]
-                mean /= n_frames
-                for k in range(n_frames):
-                    squares += (markers[t, k, i, c] - mean) ** 2
+            for k in range(n_frames):
+                squares += (markers[t, k, i, 0] - mean0) ** 2
+            for k in range(n_frames):
+                squares += (markers[t, k, i, 1] - mean1) ** 2
+            for k in range(n_frames):
+                squares += (markers[t, k, i, 2] - mean2) ** 2
             travel = squares / n_frames - noise
             # L^2 = travel / rotation_sq, so s / L = s * rotation / sqrt(travel).
             if travel <= 0.0:
