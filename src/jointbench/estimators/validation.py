@@ -28,6 +28,7 @@ __all__ = [
     "ONE_SEGMENT",
     "TWO_SEGMENTS",
     "CheckedTrials",
+    "check_counts",
     "check_input",
     "check_input_many",
     "check_markers",
@@ -161,14 +162,24 @@ def check_markers(
     """
     array = _shaped(markers, name)
     _refuse(array, name, _first_failure(array, _SAMPLES))
-    n_frames, n_markers, _ = array.shape
+    return check_counts(array, min_frames=min_frames, min_markers=min_markers, name=name)
+
+
+def check_counts(
+    markers: np.ndarray, *, min_frames: int = 1, min_markers: int = 1, name: str = "markers"
+) -> np.ndarray:
+    """Return ``markers`` ``(n_frames, n_markers, 3)`` [mm], an array :func:`check_markers`
+    passed, or raise the ``ValueError`` it raises for fewer frames or markers than a method
+    needs: the part of its checks that depends on the method, for a caller holding an array
+    whose samples it checked."""
+    n_frames, n_markers, _ = markers.shape
     if n_frames < min_frames:
         raise ValueError(f"{name} has {n_frames} frames; this method needs at least {min_frames}")
     if n_markers < min_markers:
         raise ValueError(
             f"{name} has {n_markers} markers; this method needs at least {min_markers}"
         )
-    return array
+    return markers
 
 
 def _shaped(markers: object, name: str) -> np.ndarray:
