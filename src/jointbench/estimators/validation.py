@@ -296,7 +296,9 @@ def _first_failures(
         # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so the
         # sum of those is 0 exactly when every coordinate is finite.
         probe = 0.0
-        largest = 0.0
+        # The largest |coordinate| as three running maxima, one per axis, that advance side by
+        # side (one alone waits on each comparison); their largest is the same number.
+        largest_x = largest_y = largest_z = 0.0
         origins = 0
         spread = 0.0  # frame by frame, in memory order
         totals[:] = 0.0
@@ -304,7 +306,9 @@ def _first_failures(
             for m in range(n_markers):
                 x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
                 probe += x * 0.0 + y * 0.0 + z * 0.0
-                largest = max(largest, abs(x), abs(y), abs(z))
+                largest_x = max(largest_x, abs(x))
+                largest_y = max(largest_y, abs(y))
+                largest_z = max(largest_z, abs(z))
                 origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
                 if moves and f > 0:
                     spread = max(spread, abs(x - trial[0, m, 0]))
@@ -314,6 +318,7 @@ def _first_failures(
                     totals[m, 0] += x
                     totals[m, 1] += y
                     totals[m, 2] += z
+        largest = max(max(largest_x, largest_y), largest_z)
         if checks & _SAMPLES:
             if not probe == 0.0:
                 failure = _NOT_FINITE
