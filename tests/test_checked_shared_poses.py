@@ -352,3 +352,33 @@ def test_trials_of_other_lengths_are_refused_naming_them(name, checked):
         registry.many(KIND, name, checked=checked)(*segments)
     outcomes = registry.many(KIND, name, checked=checked)(*(s[:2] for s in segments))
     assert "has 2 frames; this method needs at least 3" in str(outcomes[1])
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_poses_of_checked_samples_are_those_of_unchecked_ones(case):
+    """A checked call's inputs passed the sample checks just before their poses are fitted:
+    ``samples_checked`` skips that scan, and fits and refuses (too few frames, collinear
+    markers) exactly as the scan does."""
+    arrays = tuple(validation.check_input(KIND, CASES[case]))
+    segments = {"proximal": [arrays[0]], "distal": [arrays[1]]}
+    scanned = trial_poses(segments, min_frames=3)
+    skipped = trial_poses(segments, min_frames=3, samples_checked=True)
+    for found, expected in zip(skipped, scanned, strict=True):
+        if isinstance(expected, ValueError):
+            assert type(found) is type(expected) and str(found) == str(expected)
+        else:
+            for name in segments:
+                for field in dataclasses.fields(expected[name]):
+                    mine = getattr(found[name], field.name)
+                    theirs = getattr(expected[name], field.name)
+                    assert np.array_equal(mine, theirs), (name, field.name)
+
+
+def test_samples_checked_still_counts_frames_and_markers():
+    proximal, distal = CASES["ball-noisy"]
+    short = {"proximal": [proximal[:2]], "distal": [distal[:2]]}
+    few = {"proximal": [proximal[:, :2]], "distal": [distal]}
+    for segments in (short, few):
+        (scanned,) = trial_poses(segments, min_frames=3)
+        (skipped,) = trial_poses(segments, min_frames=3, samples_checked=True)
+        assert isinstance(skipped, ValueError) and str(skipped) == str(scanned)

@@ -440,3 +440,29 @@ def test_a_correction_that_is_not_a_number_ends_the_fit_unconverged(frame0):
     assert math.isnan(done.step)
     result = hjc._result(broken, done, method, 1e-6)
     assert not result.converged and result.status.startswith("did not converge")
+
+
+@pytest.mark.parametrize("method", ["analytic", "gauss-markov"])
+@pytest.mark.parametrize("noise_mm", [None, 1.7])
+def test_the_fixed_centre_test_from_the_fits_analytic_centre_is_that_of_solving_it(
+    method, noise_mm
+):
+    """The checked call's fixed-centre test starts gauss-markov-frame0 from the analytic
+    centre: the analytic answer, or the one paper C's fit started from, on the same poses,
+    taken as found rather than solved again, to the bit."""
+    options = {} if method == "analytic" else {"noise_mm": noise_mm}
+    for seed in range(3):
+        proximal, distal = (_noisy(markers, seed) for markers in two_segments(150))
+        (poses,) = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)
+        result = jb.estimators.registry.get("joint_center", method, checked=False)(
+            proximal, distal, **options
+        )
+        start = (
+            hjc._analytic_answer(result)
+            if method == "analytic"
+            else hjc._gauss_markov_start(result)
+        )
+        given = hjc._fixed_centre_test(result, poses["proximal"], poses["distal"], start)
+        solved = hjc._fixed_centre_test(result, poses["proximal"], poses["distal"])
+        assert repr(given.diagnostics) == repr(solved.diagnostics)
+        assert given.status == solved.status

@@ -259,7 +259,9 @@ def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> d
     the artefacts are needed, not the clusters' fits a Screening keeps."""
     found = {}
     for name, markers in zip(_NAMES[kind], clean, strict=True):
-        flagged, swaps = find_artefacts(markers, _column_labels(name, markers.shape[1]), name)
+        labels = _column_labels(name, markers.shape[1])
+        # The input checks refused every coordinate the screen's magnitude check would.
+        flagged, swaps = find_artefacts(markers, labels, name, magnitudes_checked=True)
         if flagged:  # swaps come only with the artefacts they explain
             found[name] = Screening(flagged, swaps)
     if not found:

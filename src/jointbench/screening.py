@@ -1872,6 +1872,8 @@ def find_artefacts(
     labels: tuple[str, ...],
     source: str,
     rules: ArtefactRules | None = None,
+    *,
+    magnitudes_checked: bool = False,
 ) -> tuple[tuple[Artefact, ...], tuple[Swap, ...]]:
     """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
     [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears and
@@ -1882,8 +1884,12 @@ def find_artefacts(
     ``min_jump_mm``. Where the whole screen runs on a complete cluster without a swapped
     frame, it starts from the typical frame and pose fit of the fitted bounds, which are its
     own first. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
-    label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
-    check_magnitudes(markers, labels, source)
+    label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`).
+    ``magnitudes_checked``: ``markers`` passed
+    :func:`~jointbench.estimators.validation.check_markers`, which refuses every coordinate
+    :func:`check_magnitudes` refuses, and it is not run again."""
+    if not magnitudes_checked:
+        check_magnitudes(markers, labels, source)
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules or _RULES)), ()
     # Looked up before the default is filled in: None hashes faster than the rules.

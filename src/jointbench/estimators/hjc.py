@@ -343,14 +343,29 @@ class _Prepared:
     proximal_body: np.ndarray  # (n, 3) [mm]
 
 
-def _prepared(prox: SegmentPoses, dist: SegmentPoses, noise_mm, method: str) -> _Prepared:
+#: The analytic centre ``(3,)`` [mm] of one trial's poses and its ``rcond`` (:func:`_analytic`).
+_Analytic = tuple[np.ndarray, float]
+
+
+def _prepared(
+    prox: SegmentPoses,
+    dist: SegmentPoses,
+    noise_mm,
+    method: str,
+    *,
+    analytic: _Analytic | None = None,
+) -> _Prepared:
     """The analytic start, the noise variance and the lever factors of one trial; the analytic
-    step's ``ValueError`` on degenerate motion."""
+    step's ``ValueError`` on degenerate motion. ``analytic``: the analytic centre and its
+    ``rcond`` where a fit to the same poses found them (eq. 9 gives the same numbers), so
+    that it is not solved again."""
     m, y = _relative_system(prox, dist)
-    centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
-    if errors[0] is not None:
-        raise errors[0]
-    analytic_center, rcond = centers[0], float(rconds[0])
+    if analytic is None:
+        centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
+        if errors[0] is not None:
+            raise errors[0]
+        analytic = centers[0], float(rconds[0])
+    analytic_center, rcond = analytic
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
     means, inertia_invs, counts = np.empty((2, 3)), np.empty((2, 3, 3)), np.empty(2, dtype=int)
     for segment, poses in enumerate((prox, dist)):
@@ -719,12 +734,21 @@ def _gauss_markov_results(
     frame0: bool,
     max_iterations: int,
     tol_mm: float,
+    analytic: list[_Analytic | None] | None = None,
 ) -> list[JointCenterResult | ValueError]:
     """Paper C's Gauss–Markov fit of every trial's ``proximal`` and ``distal`` poses (a trial's
-    ``ValueError`` is kept as its outcome), each trial iterated to its own convergence."""
+    ``ValueError`` is kept as its outcome), each trial iterated to its own convergence from its
+    analytic centre: per trial in ``analytic`` where a fit to the same poses found it
+    (:func:`_prepared`), else solved here."""
     method = "gauss-markov-frame0" if frame0 else "gauss-markov"
     noise_mm = _as_noise(noise_mm)
-    outcomes = each_trial(poses, lambda p: _prepared(p["proximal"], p["distal"], noise_mm, method))
+    starts = [None] * len(poses) if analytic is None else analytic
+    outcomes = each_trial(
+        [p if isinstance(p, ValueError) else (p, s) for p, s in zip(poses, starts, strict=True)],
+        lambda given: _prepared(
+            given[0]["proximal"], given[0]["distal"], noise_mm, method, analytic=given[1]
+        ),
+    )
     for index, outcome in enumerate(outcomes):
         if isinstance(outcome, _Prepared):
             done = _iterated(outcome, frame0=frame0, max_iterations=max_iterations, tol_mm=tol_mm)
@@ -941,9 +965,15 @@ def _local_weight_moments(
                 for j in range(3):
                     other[i, j] += covariances[a, i, j]
             inverse3_into(other, local)
+            # S is symmetric: its upper triangle summed, the lower copied after the frames
+            # (each entry the same products in the same order, so the same bits).
             for p in range(9):
-                for q in range(9):
+                for q in range(p, 9):
                     seconds[a, p, q] += local[p // 3, p % 3] * local[q // 3, q % 3]
+    for a in range(2):
+        for p in range(9):
+            for q in range(p):
+                seconds[a, p, q] = seconds[a, q, p]
     return seconds
 
 
@@ -1124,7 +1154,10 @@ def _model_warning(
 
 
 def _fixed_centre_test(
-    result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses
+    result: JointCenterResult,
+    proximal: SegmentPoses,
+    distal: SegmentPoses,
+    analytic: _Analytic | None = None,
 ) -> JointCenterResult:
     """``result``, a least-squares joint centre whose covariance has no model test of its own
     (SCoRE, the analytic centre; paper C's ``gauss-markov``, whose own test is of exact frame-0
@@ -1140,7 +1173,9 @@ def _fixed_centre_test(
     ``diagnostics["fixed_centre_test"]`` holds the fit's ``chi2`` and ``chi2_dof`` and the
     test's numbers, or ``not_tested`` and why: the fit failed or did not converge, or the two
     segments' rigid-body residuals reject the one noise that model pools for them
-    (:func:`_unequal_noise`), which the answer's own covariance does not assume."""
+    (:func:`_unequal_noise`), which the answer's own covariance does not assume.
+    ``analytic``: the analytic centre of these poses and its ``rcond`` where ``result``'s fit
+    found them, the fit's start (:func:`_prepared`)."""
     unequal = _unequal_noise(proximal, distal)
     if unequal:
         return with_warnings(result, (), {"fixed_centre_test": {"not_tested": unequal}})
@@ -1150,6 +1185,7 @@ def _fixed_centre_test(
         frame0=True,
         max_iterations=_FIT_ITERATIONS,
         tol_mm=_FIT_TOL_MM,
+        analytic=[analytic],
     )
     if not (isinstance(fitted, JointCenterResult) and fitted.converged):
         why = str(fitted) if isinstance(fitted, ValueError) else fitted.status
@@ -1194,14 +1230,28 @@ def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
     )
 
 
-def _held_to_the_model(scattered: Callable) -> Callable:
+def _held_to_the_model(
+    scattered: Callable, analytic_of: Callable[[JointCenterResult], _Analytic] | None = None
+) -> Callable:
     """The one-trial check ``scattered(result, proximal, distal)`` (a method's covariance on
-    its poses) followed by :func:`_fixed_centre_test`."""
+    its poses) followed by :func:`_fixed_centre_test`, given ``analytic_of(result)``, the
+    analytic centre that the method's fit found on the same poses, where it finds one."""
 
     def check(result: JointCenterResult, proximal: SegmentPoses, distal: SegmentPoses):
-        return _fixed_centre_test(scattered(result, proximal, distal), proximal, distal)
+        analytic = None if analytic_of is None else analytic_of(result)
+        return _fixed_centre_test(scattered(result, proximal, distal), proximal, distal, analytic)
 
     return check
+
+
+def _analytic_answer(result: JointCenterResult) -> _Analytic:
+    """The analytic centre of an ``analytic`` ``result``: its answer and ``rcond``."""
+    return result.center, result.diagnostics["rcond"]
+
+
+def _gauss_markov_start(result: JointCenterResult) -> _Analytic:
+    """The analytic centre a ``gauss-markov`` ``result`` started from and its ``rcond``."""
+    return np.array(result.diagnostics["analytic_center"]), result.diagnostics["rcond"]
 
 
 def _analytic_scattered(
@@ -1361,11 +1411,15 @@ register_many("joint_center", "analytic", _analytic_trials)
 register_many("joint_center", "gauss-markov", _gauss_markov_trials[False])
 register_many("joint_center", "gauss-markov-frame0", _gauss_markov_trials[True])
 # SCoRE's covariance lives with SCoRE; the model test it is held to lives here.
-fit_analytic.precision_many = precision_on_poses(_held_to_the_model(_analytic_scattered))
+fit_analytic.precision_many = precision_on_poses(
+    _held_to_the_model(_analytic_scattered, _analytic_answer)
+)
 fit_score.precision_many = precision_on_poses(_held_to_the_model(score_scattered))
 # Paper C's fit tests its own model (exact frame-0 poses), whose W_c is its covariance; the SD
 # it states adds the frame-0 poses' errors, the model gauss-markov-frame0 tests.
-fit_gauss_markov.precision_many = precision_on_poses(_held_to_the_model(_model_test))
+fit_gauss_markov.precision_many = precision_on_poses(
+    _held_to_the_model(_model_test, _gauss_markov_start)
+)
 fit_gauss_markov_frame0.precision_many = precision_on_poses(_frame0_model_test)
 
 

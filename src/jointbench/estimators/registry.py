@@ -192,7 +192,8 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
     names = _pose_names(entry, len(clean))
     shared = None
     if names is not None and _binds(entry, clean, options):
-        shared = _shared_poses(names, tuple([array] for array in clean))
+        # The arrays passed the input checks just now: their samples are not scanned again.
+        shared = _shared_poses(names, tuple([array] for array in clean), samples_checked=True)
     stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
     if shared is None:
         result = entry.fn(*clean, **options)
@@ -315,13 +316,18 @@ def _declared_options(fn: Callable, n_arrays: int) -> Mapping[str, object]:
     )
 
 
-def _shared_poses(names: tuple[str, ...], segments: tuple) -> list | None:
+def _shared_poses(
+    names: tuple[str, ...], segments: tuple, *, samples_checked: bool = False
+) -> list | None:
     """Per trial of ``segments`` (in ``names`` order, each ``(T, N, n, 3)`` or a list of
     trials), its poses as every pose-based method fits them, or its ``ValueError``; ``None``
     when they cannot be fitted as one batch (another number of arrays, trials of other
-    shapes)."""
+    shapes). ``samples_checked``: as :func:`trial_poses` takes it."""
     try:
-        return trial_poses(dict(zip(names, segments, strict=True)), min_frames=POSE_MIN_FRAMES)
+        segments_by_name = dict(zip(names, segments, strict=True))
+        return trial_poses(
+            segments_by_name, min_frames=POSE_MIN_FRAMES, samples_checked=samples_checked
+        )
     except NUMERICAL_FAILURES:
         # The many-trial form fits them inside :func:`batching.isolated`, which answers for
         # such a failure in its own way (each trial alone, or the call's error): sharing

@@ -20,6 +20,7 @@ import numpy as np
 from jointbench.estimators.batching import NUMERICAL_FAILURES, check_same_trials, each_alone
 from jointbench.estimators.results import with_fields
 from jointbench.estimators.validation import (
+    check_counts,
     check_markers,
     check_not_collinear,
     check_same_frames,
@@ -299,7 +300,7 @@ def _less_turned(markers: np.ndarray, turned: np.ndarray, translation: np.ndarra
 
 
 def trial_poses(
-    segments: dict[str, np.ndarray], *, min_frames: int
+    segments: dict[str, np.ndarray], *, min_frames: int, samples_checked: bool = False
 ) -> list[dict[str, SegmentPoses] | ValueError]:
     """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
     and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials; every
@@ -311,7 +312,9 @@ def trial_poses(
     its ``ValueError``. The trials that pass must share their shapes (``ValueError`` naming
     the first that does not): every segment's poses are fitted for all trials in one call of
     :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
-    ``batched`` form of every pose-based method.
+    ``batched`` form of every pose-based method. ``samples_checked``: every trial's arrays are
+    float64 ``(N, n, 3)`` arrays whose samples :func:`check_markers` passed just before, and
+    are not scanned again (their counts, frames and collinearity are still checked).
     """
     names = list(segments)
     check_same_trials(tuple(segments.values()), tuple(names))
@@ -325,7 +328,9 @@ def trial_poses(
     for trial in range(n_trials):
         try:
             checked[trial] = [
-                check_markers(arrays[name][trial], min_frames=min_frames, min_markers=3, name=name)
+                (check_counts if samples_checked else check_markers)(
+                    arrays[name][trial], min_frames=min_frames, min_markers=3, name=name
+                )
                 for name in names
             ]
             if len(names) == 2:

@@ -164,6 +164,7 @@ from jointbench.estimators.validation import ARRAY_NAMES, check_markers
 from jointbench.geometry import rotation_vector
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.distances import distance_modes_into
+from jointbench.numerics.magnitudes import largest_magnitude
 from jointbench.numerics.poses import _horn_rotations, best_rotation
 from jointbench.numerics.reuse import one_call, remembered
 from jointbench.numerics.small import (
@@ -982,14 +983,8 @@ def _read_only_frame_numbers(markers: np.ndarray) -> np.ndarray:
 def _dependence_into(markers: np.ndarray, out: np.ndarray) -> np.ndarray:
     """:func:`_frame_dependence` of one trial's markers ``(N, n, 3)`` [mm] into ``out``
     ``(4,)``; returns their pair distances ``(P, N)`` [mm]. A compiled kernel."""
-    n_frames, n_markers, _ = markers.shape
-    largest = 0.0
-    for f in range(n_frames):
-        for m in range(n_markers):
-            for i in range(3):
-                largest = max(largest, abs(markers[f, m, i]))
     lengths = _pair_distances(markers)
-    _frame_dependence(lengths, lengths.shape[0], largest, out)
+    _frame_dependence(lengths, lengths.shape[0], largest_magnitude(markers), out)
     return lengths
 
 

@@ -28,6 +28,7 @@ __all__ = [
     "ONE_SEGMENT",
     "TWO_SEGMENTS",
     "CheckedTrials",
+    "check_counts",
     "check_input",
     "check_input_many",
     "check_markers",
@@ -161,14 +162,24 @@ def check_markers(
     """
     array = _shaped(markers, name)
     _refuse(array, name, _first_failure(array, _SAMPLES))
-    n_frames, n_markers, _ = array.shape
+    return check_counts(array, min_frames=min_frames, min_markers=min_markers, name=name)
+
+
+def check_counts(
+    markers: np.ndarray, *, min_frames: int = 1, min_markers: int = 1, name: str = "markers"
+) -> np.ndarray:
+    """Return ``markers`` ``(n_frames, n_markers, 3)`` [mm], an array :func:`check_markers`
+    passed, or raise the ``ValueError`` it raises for fewer frames or markers than a method
+    needs: the part of its checks that depends on the method, for a caller holding an array
+    whose samples it checked."""
+    n_frames, n_markers, _ = markers.shape
     if n_frames < min_frames:
         raise ValueError(f"{name} has {n_frames} frames; this method needs at least {min_frames}")
     if n_markers < min_markers:
         raise ValueError(
             f"{name} has {n_markers} markers; this method needs at least {min_markers}"
         )
-    return array
+    return markers
 
 
 def _shaped(markers: object, name: str) -> np.ndarray:
@@ -285,7 +296,9 @@ def _first_failures(
         # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so the
         # sum of those is 0 exactly when every coordinate is finite.
         probe = 0.0
-        largest = 0.0
+        # The largest |coordinate| as three running maxima, one per axis, that advance side by
+        # side (one alone waits on each comparison); their largest is the same number.
+        largest_x = largest_y = largest_z = 0.0
         origins = 0
         spread = 0.0  # frame by frame, in memory order
         totals[:] = 0.0
@@ -293,7 +306,9 @@ def _first_failures(
             for m in range(n_markers):
                 x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
                 probe += x * 0.0 + y * 0.0 + z * 0.0
-                largest = max(largest, abs(x), abs(y), abs(z))
+                largest_x = max(largest_x, abs(x))
+                largest_y = max(largest_y, abs(y))
+                largest_z = max(largest_z, abs(z))
                 origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
                 if moves and f > 0:
                     spread = max(spread, abs(x - trial[0, m, 0]))
@@ -303,6 +318,7 @@ def _first_failures(
                     totals[m, 0] += x
                     totals[m, 1] += y
                     totals[m, 2] += z
+        largest = max(max(largest_x, largest_y), largest_z)
         if checks & _SAMPLES:
             if not probe == 0.0:
                 failure = _NOT_FINITE

@@ -8,7 +8,7 @@ import numpy as np
 
 from jointbench.numerics.compiled import kernel
 
-__all__ = ["first_beyond", "largest_coordinate"]
+__all__ = ["first_beyond", "largest_coordinate", "largest_magnitude"]
 
 # 2^255, ~5.8e76: the power of two below the fourth root of the largest float64 (just under
 # 2^1024), so that the bound of largest_coordinate leaves products no rounding can overflow.
@@ -29,6 +29,24 @@ def largest_coordinate(n_samples: int) -> float:
     coordinate beyond it is a corrupt sample (or a wrong unit), and past it the arithmetic
     overflows into NaN, which no check can read. A compiled kernel, for the checks' own."""
     return _FOURTH_ROOT_MAX / math.sqrt(12.0 * n_samples)
+
+
+@kernel
+def largest_magnitude(markers: np.ndarray) -> float:
+    """The largest absolute coordinate [mm] of ``markers`` ``(n_frames, n_markers, 3)``, 0 for
+    none: what a running ``max(largest, abs(x))`` from 0 over every coordinate gives (a NaN
+    coordinate is passed over, as Numba's ``max`` passes it over in its second argument). The
+    three coordinates are taken by three running maxima, which the processor advances side by
+    side: one alone waits on each comparison, at a few times the cost of the pass. The largest
+    of a set does not depend on the order it is read in, so the answer is that of one. A
+    compiled kernel."""
+    x = y = z = 0.0
+    for f in range(markers.shape[0]):
+        for m in range(markers.shape[1]):
+            x = max(x, abs(markers[f, m, 0]))
+            y = max(y, abs(markers[f, m, 1]))
+            z = max(z, abs(markers[f, m, 2]))
+    return max(max(x, y), z)
 
 
 def first_beyond(markers: np.ndarray) -> tuple[int, int, float, float, int] | None:
