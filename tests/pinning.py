@@ -29,8 +29,11 @@ AGREE = 1e-9
 ROUNDING_TIMES = 10.0
 #: The relative perturbation of the markers, one unit in the last place.
 ULP = 2.0**-52
-#: A number written in a string: a sign, digits with a point, an exponent.
-_WRITTEN_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+#: A number written in a string: a sign, digits with a point and digits after it, an exponent.
+#: A sign right after a letter, a digit or a point is a hyphen or an operator ("frame-0",
+#: "lag-1", "0.5-1"), a word; so is a point no digit follows (a sentence's end): neither may
+#: change unseen as a number's sign or a number's point would.
+_WRITTEN_NUMBER = re.compile(r"(?:(?<![\w.])[-+])?(?:\d+(?:\.\d+)?|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def words(text: str) -> str:
@@ -163,19 +166,6 @@ def numbers(held: object, where: str, out: dict[str, float]) -> dict[str, float]
     return out
 
 
-def strings(held: object, where: str, out: dict[str, str]) -> dict[str, str]:
-    """Every string of ``held`` (as JSON) by its path."""
-    if isinstance(held, dict):
-        for key, value in held.items():
-            strings(value, f"{where}/{key}", out)
-    elif isinstance(held, list):
-        for index, value in enumerate(held):
-            strings(value, f"{where}[{index}]", out)
-    elif isinstance(held, str):
-        out[where] = held
-    return out
-
-
 def random_signs(markers: np.ndarray, seed: int) -> np.ndarray:
     """``markers`` each moved by one unit in the last place up or down at random."""
     rng = np.random.default_rng(seed)
@@ -190,6 +180,17 @@ def signs_by_value(markers: np.ndarray, seed: int) -> np.ndarray:
     return markers * (1.0 + ULP * (2.0 * bit - 1.0))
 
 
+class _AnyMove(dict):
+    """Rounding that moves every number by any amount: :func:`assert_same` under it compares
+    only what is not a number (words, flags, ``None``, the shape of the answer)."""
+
+    def get(self, where: str, default: object = None) -> float:
+        return math.inf
+
+
+_ANY_MOVE = _AnyMove()
+
+
 def rounding_moves(
     answers: dict,
     cases: dict[str, tuple[tuple[np.ndarray, ...], dict]],
@@ -200,22 +201,23 @@ def rounding_moves(
     """By path, the largest change of each number of ``answers`` (:func:`numbers`) under three
     perturbations of every case's markers by one unit in the last place
     (``perturbed(markers, seed)``), where it is above what :data:`AGREE` allows.
-    ``called(method, markers, options)`` answers a case as ``answers`` hold it. A string whose
-    words (:func:`words`) rounding changes is no answer a pin can hold: ``AssertionError``
-    naming it."""
+    ``called(method, markers, options)`` answers a case as ``answers`` hold it. An answer
+    whose words (:func:`words`), flags or shape rounding changes (a warning more, a flag
+    flipped, a number turned "nan") is no answer a pin can hold: ``AssertionError`` naming
+    it."""
     pinned = numbers(answers, "", {})
-    pinned_strings = strings(answers, "", {})
     moved: dict[str, float] = {}
     for seed in range(3):
         for case, (trials, options) in cases.items():
             markers = tuple(perturbed(m, seed) for m in trials)
             for method in methods:
                 again = called(method, markers, options)
-                for where, text in strings(again, f"/{case}/{method}", {}).items():
-                    held = pinned_strings.get(as_one_trial(where))
-                    assert held is None or words(text) == words(held), (
-                        f"{where}: rounding changes its words: {text!r} against {held!r}"
-                    )
+                for call, outcomes in again.items():
+                    try:
+                        held = answers[case][method]["one"]
+                        assert_same(outcomes, held, f"/{case}/{method}/{call}", _ANY_MOVE)
+                    except AssertionError as unlike:
+                        raise AssertionError(f"rounding changes its words: {unlike}") from None
                 for where, value in numbers(again, f"/{case}/{method}", {}).items():
                     if as_one_trial(where) in pinned:
                         where = as_one_trial(where)

@@ -68,3 +68,53 @@ def test_rounding_that_changes_a_statements_words_stops_the_pin_from_being_writt
     held = {"edge": {"m": _statement("m", (np.array([1.0]),), {})}}
     with pytest.raises(AssertionError, match="rounding changes its words"):
         rounding_moves(held, cases, ("m",), _statement)
+
+
+@pytest.mark.parametrize(
+    ("pinned", "changed"),
+    [
+        # A hyphen between a word and a number is a word, not the number's sign.
+        ("the frame-0 poses", "the frame0 poses"),
+        ("gauss-markov-frame0", "gauss-markov-frame-0"),
+        ("the lag-1 autocorrelation", "the lag+1 autocorrelation"),
+        ("a range of 0.5-1 mm", "a range of 0.5+1 mm"),
+        ("3+3 frames", "3-3 frames"),
+        # A point after a number that no digit follows ends the sentence.
+        ("stopped at iteration 2.", "stopped at iteration 2"),
+    ],
+)
+def test_a_changed_word_next_to_a_written_number_fails(pinned, changed):
+    with pytest.raises(AssertionError):
+        assert_same({"status": changed}, {"status": pinned}, "", {})
+
+
+@pytest.mark.parametrize(
+    ("text", "written", "held"),
+    [
+        ("the lag-1 autocorrelation", "the lag-# autocorrelation", [1.0]),
+        ("below -0.36, +2 and (-5)", "below #, # and (#)", [-0.36, 2.0, -5.0]),
+        ("0.5-1 mm", "#-# mm", [0.5, 1.0]),
+        ("1e6 mm, 12mm, 2.5E-3", "# mm, #mm, #", [1e6, 12.0, 2.5e-3]),
+        ("7,245 frames", "#,# frames", [7.0, 245.0]),
+        ("at iteration 2.", "at iteration #.", [2.0]),
+        ("p = nan, ratio inf", "p = nan, ratio inf", []),
+    ],
+)
+def test_written_numbers_and_the_words_around_them(text, written, held):
+    assert words(text) == written
+    assert written_numbers(text) == held
+
+
+def _warned(method: str, markers: tuple[np.ndarray, ...], options: dict) -> dict:
+    """A stand-in for a checked call that warns, and says it did not converge, where the last
+    bit of its input puts it above 1."""
+    above = float(markers[0][0]) > 1.0
+    warnings = ["the fit is above"] if above else []
+    return {"one": [{"warnings": warnings, "converged": not above, "iterations": 3}]}
+
+
+def test_rounding_that_adds_a_warning_or_flips_a_flag_stops_the_pin_from_being_written():
+    cases = {"edge": ((np.array([1.0]),), {})}
+    held = {"edge": {"m": _warned("m", (np.array([1.0]),), {})}}
+    with pytest.raises(AssertionError, match="rounding changes its words"):
+        rounding_moves(held, cases, ("m",), _warned)

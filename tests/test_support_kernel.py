@@ -216,3 +216,44 @@ def _write() -> None:
 
 if __name__ == "__main__":
     _write()
+
+
+def _arc_sd_in_frame_order(markers, variance, principal_rms, off_rms) -> np.ndarray:
+    """:func:`support._arc_rotation_sd_deg` read plainly: each mean, then the squares of the
+    first, second and third coordinate, every sum from 0 in frame order."""
+    n_trials, n_frames, n_markers, _ = markers.shape
+    found = np.empty((n_trials, n_markers))
+    for t in range(n_trials):
+        noise = 3.0 * float(variance[t]) * (n_frames - 1) / n_frames
+        rotation_sq = float(principal_rms[t]) ** 2 + float(off_rms[t]) ** 2
+        for i in range(n_markers):
+            squares = 0.0
+            for c in range(3):
+                values = [float(x) for x in markers[t, :, i, c]]
+                mean = 0.0
+                for x in values:
+                    mean += x
+                mean /= n_frames
+                for x in values:
+                    squares += (x - mean) * (x - mean)
+            travel = squares / n_frames - noise
+            ratio = np.inf if travel <= 0.0 else float(variance[t]) * rotation_sq / travel
+            found[t, i] = np.degrees(np.sqrt(ratio))
+    return found
+
+
+def test_the_arc_sd_sums_every_coordinate_in_frame_order_to_the_bit():
+    """The arc SD's sums keep their order (frame by frame, coordinate after coordinate) to the
+    last bit, on frames reversed, far from the origin, with a NaN frame and of many markers:
+    the tolerance of the pinned numbers would let a reordered sum through."""
+    rng = np.random.default_rng(11)
+    base = TRIALS[0]
+    nan_frame = base.copy()
+    nan_frame[1] = np.nan
+    many = rng.normal(scale=50.0, size=(40, 12, 3))
+    for trial in (base, base[::-1], base + 1e6, nan_frame, base[:3], many):
+        stacked = np.ascontiguousarray(trial[None])
+        variance, principal, off = rng.uniform(0.1, 1.0, size=(3, 1))
+        found = support._arc_rotation_sd_deg(stacked, variance, principal, off)
+        expected = _arc_sd_in_frame_order(stacked, variance, principal, off)
+        assert found.tobytes() == expected.tobytes()
