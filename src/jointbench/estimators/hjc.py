@@ -240,6 +240,12 @@ def _per_coordinate_variance(
     return variance, float(np.sqrt(3.0 * variance)), "rigid-body residuals"
 
 
+def _largest_coordinate(segments: tuple[SegmentPoses, ...]) -> float:
+    """The largest |coordinate| [mm] of the segments' markers, the scale of their rounding."""
+    # From the extremes, without an array of absolute values.
+    return max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
+
+
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
     """``s^2`` [mm^2]: the segments' rigid-body residual sum of squares over its dof."""
     return sum(p.residual_ss for p in segments) / sum(p.dof for p in segments)
@@ -1050,10 +1056,8 @@ def _model_verdict(
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
-    # The largest |coordinate| from the extremes, without an array of absolute values.
-    largest = max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
     variance = _pooled_variance(segments)
-    noisy = variance > (ROUNDING * largest) ** 2
+    noisy = variance > (ROUNDING * _largest_coordinate(segments)) ** 2
     if (
         noisy
         and result.diagnostics["noise_source"] == "given"
@@ -1214,9 +1218,14 @@ def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
     :data:`~jointbench.estimators.support.ROTATION_ALPHA`, two-sided, by the F test of their
     ratio on their own degrees of freedom. A noisy pelvis beside a clean thigh breaks the
     pooled noise, not the fixed centre; SCoRE's and the analytic centre's covariances read each
-    segment's own."""
-    variances = [p.residual_ss / p.dof if p.dof else math.nan for p in (proximal, distal)]
+    segment's own. Residuals of rounding in both segments (noise-free data, as
+    :func:`_model_verdict` judges them) have no noise to compare: their ratio is rounding over
+    rounding."""
+    segments = (proximal, distal)
+    variances = [p.residual_ss / p.dof if p.dof else math.nan for p in segments]
     if not (all(np.isfinite(variances)) and min(variances) > 0.0):
+        return ""
+    if max(variances) <= (ROUNDING * _largest_coordinate(segments)) ** 2:
         return ""
     ratio = variances[0] / variances[1]
     shape = (proximal.dof, distal.dof, ratio)
