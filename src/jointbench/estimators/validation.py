@@ -23,6 +23,7 @@ __all__ = [
     "CAPTURE_VOLUME",
     "MAX_CAPTURE_SPAN_MM",
     "MAX_JOINED_SPAN_MM",
+    "MAX_SCALE_CHANGE",
     "MAX_SPAN_MM",
     "MIN_SPAN_MM",
     "ONE_SEGMENT",
@@ -37,6 +38,7 @@ __all__ = [
     "check_same_frames",
     "check_span",
     "cluster_span",
+    "frames_off_scale",
     "prepare_trials",
     "span_bound",
     "span_problem",
@@ -107,6 +109,13 @@ MAX_CAPTURE_SPAN_MM = 100_000.0
 ONE_SEGMENT = "the markers of any one human body segment span"
 TWO_SEGMENTS = "the markers of two human body segments joined at a joint span"
 CAPTURE_VOLUME = "the markers of one optical capture volume span"
+
+#: No frame of one cluster is this many times larger or smaller than its typical frame: units
+#: differ by a factor of 10 at least (centimetres and millimetres; 25.4 for inches, 1000 for
+#: metres), and its square root, the geometric middle between one and ten, puts a frame with
+#: the scale it lies nearer. Skin markers change their distances by tens of percent, not
+#: three times (:func:`frames_off_scale`).
+MAX_SCALE_CHANGE = math.sqrt(10.0)
 
 # Frames the check of a cluster's size reads at most, evenly spaced: a median of this many
 # tells a unit 10 or 1000 times off at any gap or glitch a check before it lets through.
@@ -185,8 +194,8 @@ def _shaped(markers: object, name: str) -> np.ndarray:
 # The checks _first_failures can make, as bits: the samples, the motion from frame 0 and the
 # straightness of the trajectories; and the failures it reports, in the order their errors are
 # raised (0: none).
-_SAMPLES, _MOVES, _LINES = 1, 2, 4
-_NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4, 5
+_SAMPLES, _MOVES, _LINES, _SCALE = 1, 2, 4, 8
+_NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT, _OFF_SCALE = 1, 2, 3, 4, 5, 6
 
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
@@ -224,6 +233,28 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
             f"{name} do not rotate: every marker moves along a straight line, so there is no "
             "centre or axis of rotation"
         )
+    if failure == _OFF_SCALE:
+        frames, typical, spans = frames_off_scale(array)
+        first = int(frames[0])
+        raise ValueError(
+            f"{name} change size between frames: the farthest two markers lie {typical:.3g} mm "
+            f"apart (median over the frames) but {spans[first]:.3g} mm at frame {first} "
+            f"({frames.size} frames in all, {_listed(frames)}, each with every distance "
+            f"more than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the "
+            "typical size): frames "
+            "in another unit (metres or centimetres among millimetres?) or markers not of one "
+            "cluster. Marker positions are millimetres in every frame"
+        )
+
+
+def _listed(frames: np.ndarray, most: int = 4) -> str:
+    """The increasing ``frames`` as runs in words ("frames 3, 7 to 9"), the first ``most``
+    runs and a count of the rest."""
+    breaks = np.flatnonzero(np.diff(frames) != 1) + 1
+    runs = [(int(run[0]), int(run[-1])) for run in np.split(frames, breaks)]
+    words = [f"{a}" if a == b else f"{a} to {b}" for a, b in runs[:most]]
+    rest = f" and {len(runs) - most} more runs" if len(runs) > most else ""
+    return f"frames {', '.join(words)}{rest}"
 
 
 # The failures and spans arrays of a call of _first_failures that needs only its return value.
@@ -261,7 +292,9 @@ def _first_failures(
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
     * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
       eigenvalue of its scatter matrix about its mean position at most :data:`_LINE_RATIO`
-      times the largest (never for fewer than three frames, which always lie on a line).
+      times the largest (never for fewer than three frames, which always lie on a line);
+    * :data:`_SCALE`: :data:`_OFF_SCALE`, some frames lie off the cluster's scale, in another
+      unit than the rest (:func:`frames_off_scale`).
 
     Unless ``spans`` is empty, each trial's :func:`typical_span` over :data:`_SPAN_FRAMES`
     frames is written into it ``(n_trials,)`` [mm], failing or not: the size check then needs
@@ -274,6 +307,8 @@ def _first_failures(
     scatter = np.empty((3, 3))
     mean = np.empty(3)
     totals = np.empty((n_markers, 3))
+    off = np.empty(n_frames, dtype=np.bool_)
+    extents = np.empty(n_frames)
     moves, lines = checks & _MOVES, checks & _LINES
     first_failure = 0
     for t in range(n_trials):
@@ -348,6 +383,8 @@ def _first_failures(
                     break
             if every:
                 failure = _STRAIGHT
+        if failure == 0 and checks & _SCALE and _scale_flags(trial, off, extents) > 0:
+            failure = _OFF_SCALE
         if len(failures):
             failures[t] = failure
         if len(spans):
@@ -358,31 +395,109 @@ def _first_failures(
 
 
 @kernel
+def _extent(markers: np.ndarray, frame: int) -> tuple[float, float]:
+    """The largest and the smallest squared distance [mm^2] between two markers of ``frame``
+    of ``markers`` ``(n_frames, n, 3)`` [mm] that it shows (a marker with a NaN coordinate is
+    not shown): ``(-1, inf)`` where it shows fewer than two. A compiled kernel."""
+    n_markers = markers.shape[1]
+    largest, smallest = -1.0, np.inf
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            dx = markers[frame, a, 0] - markers[frame, b, 0]
+            dy = markers[frame, a, 1] - markers[frame, b, 1]
+            dz = markers[frame, a, 2] - markers[frame, b, 2]
+            squared = dx * dx + dy * dy + dz * dz
+            if squared > largest:  # False for a NaN: a pair not shown
+                largest = squared
+            if squared < smallest:
+                smallest = squared
+    return largest, smallest
+
+
+@kernel
 def typical_span(markers: np.ndarray, n_sampled: int) -> float:
     """The typical size [mm] of a cluster ``markers`` ``(n_frames, n, 3)`` [mm]: the median,
     over at most ``n_sampled`` evenly spaced frames that show two of its markers or more (a
     marker with a NaN coordinate is not shown), of the largest distance between two of them;
     NaN where none does. A compiled kernel."""
-    n_frames, n_markers, _ = markers.shape
+    n_frames = markers.shape[0]
     stride = max(1, -(-n_frames // max(n_sampled, 1)))
     spans = np.empty(n_frames // stride + 1)
     seen = 0
     for f in range(0, n_frames, stride):
-        largest = -1.0
-        for a in range(n_markers):
-            for b in range(a + 1, n_markers):
-                dx = markers[f, a, 0] - markers[f, b, 0]
-                dy = markers[f, a, 1] - markers[f, b, 1]
-                dz = markers[f, a, 2] - markers[f, b, 2]
-                squared = dx * dx + dy * dy + dz * dz
-                if squared > largest:  # False for a NaN: a pair not shown
-                    largest = squared
+        largest = _extent(markers, f)[0]
         if largest >= 0.0:
             spans[seen] = math.sqrt(largest)
             seen += 1
     if seen == 0:
         return np.nan
     return np.median(spans[:seen])
+
+
+@kernel
+def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int:
+    """How many frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) lie off
+    its scale, as every distance of a frame in another unit does: both the largest and the
+    smallest distance between two of its markers (the smallest where its median is not 0, one
+    marker given twice) more than :data:`MAX_SCALE_CHANGE` times larger than in every frame
+    within that factor of their medians over the frames, or smaller than in every such frame.
+    Frames apart from the others by that gap, not a cluster whose size wanders (markers not
+    of one cluster, scattered at random, whose rigidity is the support verdict's to judge),
+    nor one that a marker left (its smallest distance stays). Each frame's flag is written
+    into ``off`` ``(n_frames,)`` and its largest distance [mm] into ``spans`` ``(n_frames,)``.
+    None for fewer than two markers, which have no distances. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    off[:] = False
+    if n_markers < 2:
+        spans[:] = np.nan
+        return 0
+    smallest = np.empty(n_frames)
+    for f in range(n_frames):
+        largest, least = _extent(markers, f)
+        spans[f], smallest[f] = math.sqrt(largest), math.sqrt(least)
+    typical, typical_least = np.median(spans), np.median(smallest)
+    told = typical_least > 0.0  # duplicated markers: the smallest distance tells no scale
+    # The range of the frames on the cluster's scale: within the factor of both medians.
+    low, high, low_least, high_least = np.inf, -np.inf, np.inf, -np.inf
+    for f in range(n_frames):
+        if (
+            typical <= MAX_SCALE_CHANGE * spans[f]
+            and spans[f] <= MAX_SCALE_CHANGE * typical
+            and (
+                not told
+                or (
+                    typical_least <= MAX_SCALE_CHANGE * smallest[f]
+                    and smallest[f] <= MAX_SCALE_CHANGE * typical_least
+                )
+            )
+        ):
+            low, high = min(low, spans[f]), max(high, spans[f])
+            low_least, high_least = min(low_least, smallest[f]), max(high_least, smallest[f])
+    if high < low:
+        return 0  # no frame on both medians' scale: no scale to hold the others to
+    count = 0
+    for f in range(n_frames):
+        larger = spans[f] > MAX_SCALE_CHANGE * high and (
+            not told or smallest[f] > MAX_SCALE_CHANGE * high_least
+        )
+        smaller = spans[f] * MAX_SCALE_CHANGE < low and (
+            not told or smallest[f] * MAX_SCALE_CHANGE < low_least
+        )
+        off[f] = larger or smaller
+        count += off[f]
+    return count
+
+
+def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """The frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) that lie off
+    its scale (:func:`_scale_flags`), increasing; its typical size [mm], the median over the
+    frames of the largest distance between two markers; and that distance in each frame
+    ``(n_frames,)`` [mm]."""
+    array = kernel_array(markers)
+    off = np.empty(array.shape[0], dtype=np.bool_)
+    spans = np.empty(array.shape[0])
+    _scale_flags(array, off, spans)
+    return np.flatnonzero(off), float(np.median(spans)), spans
 
 
 def cluster_span(markers: np.ndarray) -> float:
@@ -425,12 +540,15 @@ def span_bound(span_mm: float, largest_mm: float, largest: str) -> str | None:
 
 
 def check_span(markers: np.ndarray, *, name: str = "markers") -> None:
-    """Raise ``ValueError`` when the markers ``(n_frames, n, 3)``, which are millimetres, lie
-    closer together than a marker's own size or further apart than a body segment's
-    (:func:`typical_span`, :func:`span_problem`): an answer in another unit would pass every
-    check, which are built for millimetres, at a thousandth of its size, or fail them for the
-    wrong reason."""
-    _refuse_span(cluster_span(markers), name)
+    """Raise ``ValueError`` when some frames of the markers ``(n_frames, n, 3)`` (finite),
+    which are millimetres, are in another unit than the rest (:func:`frames_off_scale`), or
+    when they lie closer together than a marker's own size or further apart than a body
+    segment's (:func:`typical_span`, :func:`span_problem`): an answer in another unit would
+    pass every check, which are built for millimetres, at a thousandth of its size, or fail
+    them for the wrong reason."""
+    span = np.empty(1)
+    _refuse(markers, name, _first_failure(markers, _SCALE, span=span))
+    _refuse_span(span[0], name)
 
 
 def _refuse_span(span: float, name: str) -> None:
@@ -503,20 +621,29 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
             f"got {len(arrays)}"
         )
     if kind == "joint_center":
-        checked = tuple(
-            check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
-        )
+        # One pass of the kernel per array for the checks of check_markers and check_span;
+        # the errors in their order: each array's samples, the shared frames, then each
+        # array's frames' scales and size.
+        checked = tuple(_shaped(array, name) for array, name in zip(arrays, names, strict=True))
+        spans = np.empty(len(checked))
+        failures = []
+        for i, (array, name) in enumerate(zip(checked, names, strict=True)):
+            failures.append(_first_failure(array, _SAMPLES | _SCALE, span=spans[i : i + 1]))
+            if failures[-1] != _OFF_SCALE:
+                _refuse(array, name, failures[-1])
         check_same_frames(*checked)
-        for array, name in zip(checked, names, strict=True):
-            check_span(array, name=name)
+        for array, name, failure, span in zip(checked, names, failures, spans, strict=True):
+            _refuse(array, name, failure)
+            _refuse_span(span, name)
         return checked
     # One pass of the kernel for the checks of check_markers, check_moves and check_rotates,
     # in their order (the counts of frames and markers: at least one, as the array is not empty),
-    # and for the cluster's size of check_span, whose error comes after theirs.
+    # and for the frames' scales and the cluster's size of check_span, whose errors come after
+    # theirs.
     name = names[0]
     array = _shaped(arrays[0], name)
     span = np.empty(1)
-    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES, span=span))
+    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES | _SCALE, span=span))
     _refuse_span(span[0], name)
     return (array,)
 
@@ -566,7 +693,7 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
     batch = _regular_batch(kind, segments, n_trials)
     if batch is None:
         return _check_each(kind, segments, n_trials)
-    checks = _SAMPLES if kind == "joint_center" else _SAMPLES | _MOVES | _LINES
+    checks = _SAMPLES | _SCALE if kind == "joint_center" else _SAMPLES | _MOVES | _LINES | _SCALE
     passes = np.ones(n_trials, dtype=bool)
     failures = np.empty(n_trials, dtype=np.int8)
     spans = np.empty(n_trials)
