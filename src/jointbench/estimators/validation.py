@@ -123,7 +123,8 @@ _SPAN_FRAMES = 25
 
 
 def _real_array(markers: object, name: str) -> np.ndarray:
-    """``markers`` as a float64 array; complex, boolean, non-numeric and masked data raise."""
+    """``markers`` as a real numeric array of its own dtype (a float64 one as it is); complex,
+    boolean, non-numeric and masked data raise."""
     if type(markers) is np.ndarray and markers.dtype is _FLOAT64:
         return markers  # the common case, before the checks' own cost
     if np.ma.isMaskedArray(markers):
@@ -147,7 +148,45 @@ def _real_array(markers: object, name: str) -> np.ndarray:
         raise ValueError(
             f"{name} has dtype {array.dtype}; marker coordinates must be real numbers [mm]"
         )
-    return array.astype(float, copy=False)
+    return array
+
+
+def _as_float64(array: np.ndarray, name: str) -> np.ndarray:
+    """The real numeric ``array`` ``(n_frames, n_markers, 3)`` as float64, or ``ValueError``
+    where another float dtype does not hold its coordinates: an inf in a narrower one (float32,
+    float16) is what a value beyond the largest it holds becomes when it is stored or computed
+    in it (or a gap stored so), and a wider one's (longdouble) value beyond float64's largest
+    becomes inf in float64. Either would otherwise read as a bare "NaN or inf". Integers
+    convert exactly up to 2^53 mm, far past every coordinate bound the checks set."""
+    if array.dtype.kind != "f" or array.dtype == _FLOAT64:
+        return array.astype(float, copy=False)
+    with np.errstate(over="ignore"):  # an overflow is reported below, by name
+        converted = array.astype(float, copy=False)
+    narrow = array.dtype.itemsize < _FLOAT64.itemsize
+    # In a wider float, only the values that float64 turned into inf: an inf given is a gap's,
+    # which the checks of the samples name.
+    infinite = np.isinf(converted) if narrow else np.isinf(converted) & np.isfinite(array)
+    if not infinite.any():
+        return converted
+    frame, marker = _first_sample(infinite)
+    count = int(infinite.any(axis=-1).sum())
+    largest = np.finfo(array.dtype if narrow else _FLOAT64)
+    if narrow:
+        raise ValueError(
+            f"{name} is {array.dtype} and holds inf at marker {marker}, frame {frame} ({count} "
+            f"in all): what a value beyond the largest {largest.dtype} holds ({largest.max:.3g}) "
+            f"becomes when it is stored or computed in {array.dtype} (a corrupt sample or a "
+            f"wrong unit), or a gap stored as inf; {_GAP_ADVICE}"
+        )
+    value = np.format_float_scientific(
+        array[frame, marker][infinite[frame, marker]][0], 2, trim="-"
+    )
+    raise ValueError(
+        f"{name} is {array.dtype} and has a coordinate of {value} mm at marker {marker}, "
+        f"frame {frame} ({count} in all), beyond the largest float64 holds "
+        f"({largest.max:.3g}), which the fits compute in: a corrupt sample or a wrong unit; "
+        "drop those frames before fitting"
+    )
 
 
 def _first_sample(flags: np.ndarray) -> tuple[int, int]:
@@ -188,7 +227,7 @@ def _shaped(markers: object, name: str) -> np.ndarray:
         raise ValueError(f"{name} must be shaped (n_frames, n_markers, 3), got shape {array.shape}")
     if array.size == 0:
         raise ValueError(f"{name} is empty (shape {array.shape})")
-    return array
+    return _as_float64(array, name)
 
 
 # The checks _first_failures can make, as bits: the samples, the motion from frame 0 and the
@@ -307,8 +346,9 @@ def _first_failures(
     scatter = np.empty((3, 3))
     mean = np.empty(3)
     totals = np.empty((n_markers, 3))
-    off = np.empty(n_frames, dtype=np.bool_)
-    extents = np.empty(n_frames)
+    scaled = n_frames if checks & _SCALE else 0  # the scale check's buffers, where asked
+    off = np.empty(scaled, dtype=np.bool_)
+    extents = np.empty(scaled)
     moves, lines = checks & _MOVES, checks & _LINES
     first_failure = 0
     for t in range(n_trials):
@@ -435,6 +475,16 @@ def typical_span(markers: np.ndarray, n_sampled: int) -> float:
 
 
 @kernel
+def _frame_spans(markers: np.ndarray, spans: np.ndarray, smallest: np.ndarray) -> None:
+    """The largest and the smallest distance [mm] between two markers of each frame of
+    ``markers`` ``(n_frames, n >= 2, 3)`` [mm] (finite), written into ``spans`` and
+    ``smallest`` ``(n_frames,)``. A compiled kernel."""
+    for f in range(markers.shape[0]):
+        largest, least = _extent(markers, f)
+        spans[f], smallest[f] = math.sqrt(largest), math.sqrt(least)
+
+
+@kernel
 def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int:
     """How many frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) lie off
     its scale, as every distance of a frame in another unit does: both the largest and the
@@ -444,17 +494,22 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
     Frames apart from the others by that gap, not a cluster whose size wanders (markers not
     of one cluster, scattered at random, whose rigidity is the support verdict's to judge),
     nor one that a marker left (its smallest distance stays). Each frame's flag is written
-    into ``off`` ``(n_frames,)`` and its largest distance [mm] into ``spans`` ``(n_frames,)``.
-    None for fewer than two markers, which have no distances. A compiled kernel."""
+    into ``off`` ``(n_frames,)`` and, unless every frame's largest distance lies within the
+    factor of every other's (none is off then, and the pass over them ends there), that
+    distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than two markers, which have
+    no distances. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     off[:] = False
     if n_markers < 2:
-        spans[:] = np.nan
+        return 0
+    low, high = np.inf, 0.0
+    for f in range(n_frames):
+        squared = _extent(markers, f)[0]
+        low, high = min(low, squared), max(high, squared)
+    if high <= MAX_SCALE_CHANGE * MAX_SCALE_CHANGE * low:
         return 0
     smallest = np.empty(n_frames)
-    for f in range(n_frames):
-        largest, least = _extent(markers, f)
-        spans[f], smallest[f] = math.sqrt(largest), math.sqrt(least)
+    _frame_spans(markers, spans, smallest)
     typical, typical_least = np.median(spans), np.median(smallest)
     told = typical_least > 0.0  # duplicated markers: the smallest distance tells no scale
     # The range of the frames on the cluster's scale: within the factor of both medians.
@@ -495,8 +550,10 @@ def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, float, np.ndarray
     ``(n_frames,)`` [mm]."""
     array = kernel_array(markers)
     off = np.empty(array.shape[0], dtype=np.bool_)
-    spans = np.empty(array.shape[0])
+    spans, smallest = np.full(array.shape[0], np.nan), np.empty(array.shape[0])
     _scale_flags(array, off, spans)
+    if array.shape[1] >= 2:
+        _frame_spans(array, spans, smallest)
     return np.flatnonzero(off), float(np.median(spans)), spans
 
 
@@ -741,7 +798,8 @@ def _regular_batch(
             or 0 in segment.shape[1:]
         ):
             return None
-        batch.append(segment.astype(float, copy=False))
+        with np.errstate(over="ignore"):  # a trial that overflows is checked on its own
+            batch.append(segment.astype(float, copy=False))
     if len({array.shape[1] for array in batch}) > 1:
         return None
     return tuple(batch)
