@@ -38,6 +38,7 @@ __all__ = [
     "check_same_frames",
     "check_span",
     "cluster_span",
+    "frames_listed",
     "frames_off_scale",
     "prepare_trials",
     "span_bound",
@@ -278,7 +279,7 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         raise ValueError(
             f"{name} change size between frames: the farthest two markers lie {typical:.3g} mm "
             f"apart (median over the frames) but {spans[first]:.3g} mm at frame {first} "
-            f"({frames.size} frames in all, {_listed(frames)}, each with every distance "
+            f"({frames.size} frames in all, {frames_listed(frames)}, each with every distance "
             f"more than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the "
             "typical size): frames "
             "in another unit (metres or centimetres among millimetres?) or markers not of one "
@@ -286,9 +287,9 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         )
 
 
-def _listed(frames: np.ndarray, most: int = 4) -> str:
-    """The increasing ``frames`` as runs in words ("frames 3, 7 to 9"), the first ``most``
-    runs and a count of the rest."""
+def frames_listed(frames: np.ndarray, most: int = 4) -> str:
+    """The increasing frame numbers ``frames`` as runs in words ("frames 3, 7 to 9"), the
+    first ``most`` runs and a count of the rest."""
     breaks = np.flatnonzero(np.diff(frames) != 1) + 1
     runs = [(int(run[0]), int(run[-1])) for run in np.split(frames, breaks)]
     words = [f"{a}" if a == b else f"{a} to {b}" for a, b in runs[:most]]
