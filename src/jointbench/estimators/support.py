@@ -1949,7 +1949,8 @@ def _judged(
     says where the block test does not (:class:`Untested`), and the one segment's
     :func:`_frame_numbers` ``(T, 5)`` where the verdict's pass computed them (else ``None``)."""
     n_trials = arrays[0].shape[0]
-    if len(arrays) == 1 and arrays[0].shape[1] >= 2 and arrays[0].shape[2] >= 3:
+    # Every array has MIN_JUDGED_FRAMES frames or more: _check_judged_frames refused the rest.
+    if len(arrays) == 1 and arrays[0].shape[2] >= 3:
         n_markers = arrays[0].shape[2]
         if n_markers > MAX_DISTANCE_MARKERS:
             reason = (

@@ -23,6 +23,7 @@ __all__ = [
     "CAPTURE_VOLUME",
     "MAX_CAPTURE_SPAN_MM",
     "MAX_JOINED_SPAN_MM",
+    "MAX_SCALE_CHANGE",
     "MAX_SPAN_MM",
     "MIN_SPAN_MM",
     "ONE_SEGMENT",
@@ -38,6 +39,8 @@ __all__ = [
     "check_same_frames",
     "check_span",
     "cluster_span",
+    "frames_listed",
+    "frames_off_scale",
     "prepare_trials",
     "span_bound",
     "span_problem",
@@ -109,13 +112,21 @@ ONE_SEGMENT = "the markers of any one human body segment span"
 TWO_SEGMENTS = "the markers of two human body segments joined at a joint span"
 CAPTURE_VOLUME = "the markers of one optical capture volume span"
 
+#: No frame of one cluster is this many times larger or smaller than its typical frame: units
+#: differ by a factor of 10 at least (centimetres and millimetres; 25.4 for inches, 1000 for
+#: metres), and its square root, the geometric middle between one and ten, puts a frame with
+#: the scale it lies nearer. Skin markers change their distances by tens of percent, not
+#: three times (:func:`frames_off_scale`).
+MAX_SCALE_CHANGE = math.sqrt(10.0)
+
 # Frames the check of a cluster's size reads at most, evenly spaced: a median of this many
 # tells a unit 10 or 1000 times off at any gap or glitch a check before it lets through.
 _SPAN_FRAMES = 25
 
 
 def _real_array(markers: object, name: str) -> np.ndarray:
-    """``markers`` as a float64 array; complex, boolean, non-numeric and masked data raise."""
+    """``markers`` as a real numeric array of its own dtype (a float64 one as it is); complex,
+    boolean, non-numeric and masked data raise."""
     if type(markers) is np.ndarray and markers.dtype is _FLOAT64:
         return markers  # the common case, before the checks' own cost
     if np.ma.isMaskedArray(markers):
@@ -139,7 +150,45 @@ def _real_array(markers: object, name: str) -> np.ndarray:
         raise ValueError(
             f"{name} has dtype {array.dtype}; marker coordinates must be real numbers [mm]"
         )
-    return array.astype(float, copy=False)
+    return array
+
+
+def _as_float64(array: np.ndarray, name: str) -> np.ndarray:
+    """The real numeric ``array`` ``(n_frames, n_markers, 3)`` as float64, or ``ValueError``
+    where another float dtype does not hold its coordinates: an inf in a narrower one (float32,
+    float16) is what a value beyond the largest it holds becomes when it is stored or computed
+    in it (or a gap stored so), and a wider one's (longdouble) value beyond float64's largest
+    becomes inf in float64. Either would otherwise read as a bare "NaN or inf". Integers
+    convert exactly up to 2^53 mm, far past every coordinate bound the checks set."""
+    if array.dtype.kind != "f" or array.dtype == _FLOAT64:
+        return array.astype(float, copy=False)
+    with np.errstate(over="ignore"):  # an overflow is reported below, by name
+        converted = array.astype(float, copy=False)
+    narrow = array.dtype.itemsize < _FLOAT64.itemsize
+    # In a wider float, only the values that float64 turned into inf: an inf given is a gap's,
+    # which the checks of the samples name.
+    infinite = np.isinf(converted) if narrow else np.isinf(converted) & np.isfinite(array)
+    if not infinite.any():
+        return converted
+    frame, marker = _first_sample(infinite)
+    count = int(infinite.any(axis=-1).sum())
+    largest = np.finfo(array.dtype if narrow else _FLOAT64)
+    if narrow:
+        raise ValueError(
+            f"{name} is {array.dtype} and holds inf at marker {marker}, frame {frame} ({count} "
+            f"in all): what a value beyond the largest {largest.dtype} holds ({largest.max:.3g}) "
+            f"becomes when it is stored or computed in {array.dtype} (a corrupt sample or a "
+            f"wrong unit), or a gap stored as inf; {_GAP_ADVICE}"
+        )
+    value = np.format_float_scientific(
+        array[frame, marker][infinite[frame, marker]][0], 2, trim="-"
+    )
+    raise ValueError(
+        f"{name} is {array.dtype} and has a coordinate of {value} mm at marker {marker}, "
+        f"frame {frame} ({count} in all), beyond the largest float64 holds "
+        f"({largest.max:.3g}), which the fits compute in: a corrupt sample or a wrong unit; "
+        "drop those frames before fitting"
+    )
 
 
 def _first_sample(flags: np.ndarray) -> tuple[int, int]:
@@ -190,14 +239,14 @@ def _shaped(markers: object, name: str) -> np.ndarray:
         raise ValueError(f"{name} must be shaped (n_frames, n_markers, 3), got shape {array.shape}")
     if array.size == 0:
         raise ValueError(f"{name} is empty (shape {array.shape})")
-    return array
+    return _as_float64(array, name)
 
 
 # The checks _first_failures can make, as bits: the samples, the motion from frame 0 and the
 # straightness of the trajectories; and the failures it reports, in the order their errors are
 # raised (0: none).
-_SAMPLES, _MOVES, _LINES = 1, 2, 4
-_NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT = 1, 2, 3, 4, 5
+_SAMPLES, _MOVES, _LINES, _SCALE = 1, 2, 4, 8
+_NOT_FINITE, _TOO_LARGE, _AT_ORIGIN, _STILL, _STRAIGHT, _OFF_SCALE = 1, 2, 3, 4, 5, 6
 
 
 def _refuse(array: np.ndarray, name: str, failure: int) -> None:
@@ -235,6 +284,28 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
             f"{name} do not rotate: every marker moves along a straight line, so there is no "
             "centre or axis of rotation"
         )
+    if failure == _OFF_SCALE:
+        frames, typical, spans = frames_off_scale(array)
+        first = int(frames[0])
+        raise ValueError(
+            f"{name} change size between frames: the farthest two markers lie {typical:.3g} mm "
+            f"apart (median over the frames) but {spans[first]:.3g} mm at frame {first} "
+            f"({frames.size} frames in all, {frames_listed(frames)}, each with every distance "
+            f"more than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the "
+            "typical size): frames "
+            "in another unit (metres or centimetres among millimetres?) or markers not of one "
+            "cluster. Marker positions are millimetres in every frame"
+        )
+
+
+def frames_listed(frames: np.ndarray, most: int = 4) -> str:
+    """The increasing frame numbers ``frames`` as runs in words ("frames 3, 7 to 9"), the
+    first ``most`` runs and a count of the rest."""
+    breaks = np.flatnonzero(np.diff(frames) != 1) + 1
+    runs = [(int(run[0]), int(run[-1])) for run in np.split(frames, breaks)]
+    words = [f"{a}" if a == b else f"{a} to {b}" for a, b in runs[:most]]
+    rest = f" and {len(runs) - most} more runs" if len(runs) > most else ""
+    return f"frames {', '.join(words)}{rest}"
 
 
 # The failures and spans arrays of a call of _first_failures that needs only its return value.
@@ -272,7 +343,9 @@ def _first_failures(
       ``move_tol_mm`` times the largest absolute coordinate of frame 0 (at least 1 mm);
     * :data:`_LINES`: :data:`_STRAIGHT`, every marker's trajectory is a line, the second
       eigenvalue of its scatter matrix about its mean position at most :data:`_LINE_RATIO`
-      times the largest (never for fewer than three frames, which always lie on a line).
+      times the largest (never for fewer than three frames, which always lie on a line);
+    * :data:`_SCALE`: :data:`_OFF_SCALE`, some frames lie off the cluster's scale, in another
+      unit than the rest (:func:`frames_off_scale`).
 
     Unless ``spans`` is empty, each trial's :func:`typical_span` over :data:`_SPAN_FRAMES`
     frames is written into it ``(n_trials,)`` [mm], failing or not: the size check then needs
@@ -285,6 +358,9 @@ def _first_failures(
     scatter = np.empty((3, 3))
     mean = np.empty(3)
     totals = np.empty((n_markers, 3))
+    scaled = n_frames if checks & _SCALE else 0  # the scale check's buffers, where asked
+    off = np.empty(scaled, dtype=np.bool_)
+    extents = np.empty(scaled)
     moves, lines = checks & _MOVES, checks & _LINES
     first_failure = 0
     for t in range(n_trials):
@@ -364,6 +440,8 @@ def _first_failures(
                     break
             if every:
                 failure = _STRAIGHT
+        if failure == 0 and checks & _SCALE and _scale_flags(trial, off, extents) > 0:
+            failure = _OFF_SCALE
         if len(failures):
             failures[t] = failure
         if len(spans):
@@ -374,31 +452,126 @@ def _first_failures(
 
 
 @kernel
+def _extent(markers: np.ndarray, frame: int) -> tuple[float, float]:
+    """The largest and the smallest squared distance [mm^2] between two markers of ``frame``
+    of ``markers`` ``(n_frames, n, 3)`` [mm] that it shows (a marker with a NaN coordinate is
+    not shown): ``(-1, inf)`` where it shows fewer than two. A compiled kernel."""
+    n_markers = markers.shape[1]
+    largest, smallest = -1.0, np.inf
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            dx = markers[frame, a, 0] - markers[frame, b, 0]
+            dy = markers[frame, a, 1] - markers[frame, b, 1]
+            dz = markers[frame, a, 2] - markers[frame, b, 2]
+            squared = dx * dx + dy * dy + dz * dz
+            if squared > largest:  # False for a NaN: a pair not shown
+                largest = squared
+            if squared < smallest:
+                smallest = squared
+    return largest, smallest
+
+
+@kernel
 def typical_span(markers: np.ndarray, n_sampled: int) -> float:
     """The typical size [mm] of a cluster ``markers`` ``(n_frames, n, 3)`` [mm]: the median,
     over at most ``n_sampled`` evenly spaced frames that show two of its markers or more (a
     marker with a NaN coordinate is not shown), of the largest distance between two of them;
     NaN where none does. A compiled kernel."""
-    n_frames, n_markers, _ = markers.shape
+    n_frames = markers.shape[0]
     stride = max(1, -(-n_frames // max(n_sampled, 1)))
     spans = np.empty(n_frames // stride + 1)
     seen = 0
     for f in range(0, n_frames, stride):
-        largest = -1.0
-        for a in range(n_markers):
-            for b in range(a + 1, n_markers):
-                dx = markers[f, a, 0] - markers[f, b, 0]
-                dy = markers[f, a, 1] - markers[f, b, 1]
-                dz = markers[f, a, 2] - markers[f, b, 2]
-                squared = dx * dx + dy * dy + dz * dz
-                if squared > largest:  # False for a NaN: a pair not shown
-                    largest = squared
+        largest = _extent(markers, f)[0]
         if largest >= 0.0:
             spans[seen] = math.sqrt(largest)
             seen += 1
     if seen == 0:
         return np.nan
     return np.median(spans[:seen])
+
+
+@kernel
+def _frame_spans(markers: np.ndarray, spans: np.ndarray, smallest: np.ndarray) -> None:
+    """The largest and the smallest distance [mm] between two markers of each frame of
+    ``markers`` ``(n_frames, n >= 2, 3)`` [mm] (finite), written into ``spans`` and
+    ``smallest`` ``(n_frames,)``. A compiled kernel."""
+    for f in range(markers.shape[0]):
+        largest, least = _extent(markers, f)
+        spans[f], smallest[f] = math.sqrt(largest), math.sqrt(least)
+
+
+@kernel
+def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int:
+    """How many frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) lie off
+    its scale, as every distance of a frame in another unit does: both the largest and the
+    smallest distance between two of its markers (the smallest where its median is not 0, one
+    marker given twice) more than :data:`MAX_SCALE_CHANGE` times larger than in every frame
+    within that factor of their medians over the frames, or smaller than in every such frame.
+    Frames apart from the others by that gap, not a cluster whose size wanders (markers not
+    of one cluster, scattered at random, whose rigidity is the support verdict's to judge),
+    nor one that a marker left (its smallest distance stays). Each frame's flag is written
+    into ``off`` ``(n_frames,)`` and, unless every frame's largest distance lies within the
+    factor of every other's (none is off then, and the pass over them ends there), that
+    distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than two markers, which have
+    no distances. A compiled kernel."""
+    n_frames, n_markers, _ = markers.shape
+    off[:] = False
+    if n_markers < 2:
+        return 0
+    low, high = np.inf, 0.0
+    for f in range(n_frames):
+        squared = _extent(markers, f)[0]
+        low, high = min(low, squared), max(high, squared)
+    if high <= MAX_SCALE_CHANGE * MAX_SCALE_CHANGE * low:
+        return 0
+    smallest = np.empty(n_frames)
+    _frame_spans(markers, spans, smallest)
+    typical, typical_least = np.median(spans), np.median(smallest)
+    told = typical_least > 0.0  # duplicated markers: the smallest distance tells no scale
+    # The range of the frames on the cluster's scale: within the factor of both medians.
+    low, high, low_least, high_least = np.inf, -np.inf, np.inf, -np.inf
+    for f in range(n_frames):
+        if (
+            typical <= MAX_SCALE_CHANGE * spans[f]
+            and spans[f] <= MAX_SCALE_CHANGE * typical
+            and (
+                not told
+                or (
+                    typical_least <= MAX_SCALE_CHANGE * smallest[f]
+                    and smallest[f] <= MAX_SCALE_CHANGE * typical_least
+                )
+            )
+        ):
+            low, high = min(low, spans[f]), max(high, spans[f])
+            low_least, high_least = min(low_least, smallest[f]), max(high_least, smallest[f])
+    if high < low:
+        return 0  # no frame on both medians' scale: no scale to hold the others to
+    count = 0
+    for f in range(n_frames):
+        larger = spans[f] > MAX_SCALE_CHANGE * high and (
+            not told or smallest[f] > MAX_SCALE_CHANGE * high_least
+        )
+        smaller = spans[f] * MAX_SCALE_CHANGE < low and (
+            not told or smallest[f] * MAX_SCALE_CHANGE < low_least
+        )
+        off[f] = larger or smaller
+        count += off[f]
+    return count
+
+
+def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """The frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) that lie off
+    its scale (:func:`_scale_flags`), increasing; its typical size [mm], the median over the
+    frames of the largest distance between two markers; and that distance in each frame
+    ``(n_frames,)`` [mm]."""
+    array = kernel_array(markers)
+    off = np.empty(array.shape[0], dtype=np.bool_)
+    spans, smallest = np.full(array.shape[0], np.nan), np.empty(array.shape[0])
+    _scale_flags(array, off, spans)
+    if array.shape[1] >= 2:
+        _frame_spans(array, spans, smallest)
+    return np.flatnonzero(off), float(np.median(spans)), spans
 
 
 def cluster_span(markers: np.ndarray) -> float:
@@ -441,12 +614,15 @@ def span_bound(span_mm: float, largest_mm: float, largest: str) -> str | None:
 
 
 def check_span(markers: np.ndarray, *, name: str = "markers") -> None:
-    """Raise ``ValueError`` when the markers ``(n_frames, n, 3)``, which are millimetres, lie
-    closer together than a marker's own size or further apart than a body segment's
-    (:func:`typical_span`, :func:`span_problem`): an answer in another unit would pass every
-    check, which are built for millimetres, at a thousandth of its size, or fail them for the
-    wrong reason."""
-    _refuse_span(cluster_span(markers), name)
+    """Raise ``ValueError`` when some frames of the markers ``(n_frames, n, 3)`` (finite),
+    which are millimetres, are in another unit than the rest (:func:`frames_off_scale`), or
+    when they lie closer together than a marker's own size or further apart than a body
+    segment's (:func:`typical_span`, :func:`span_problem`): an answer in another unit would
+    pass every check, which are built for millimetres, at a thousandth of its size, or fail
+    them for the wrong reason."""
+    span = np.empty(1)
+    _refuse(markers, name, _first_failure(markers, _SCALE, span=span))
+    _refuse_span(span[0], name)
 
 
 def _refuse_span(span: float, name: str) -> None:
@@ -519,20 +695,29 @@ def check_input(kind: str, arrays: tuple[object, ...]) -> tuple[np.ndarray, ...]
             f"got {len(arrays)}"
         )
     if kind == "joint_center":
-        checked = tuple(
-            check_markers(array, name=name) for array, name in zip(arrays, names, strict=True)
-        )
+        # One pass of the kernel per array for the checks of check_markers and check_span;
+        # the errors in their order: each array's samples, the shared frames, then each
+        # array's frames' scales and size.
+        checked = tuple(_shaped(array, name) for array, name in zip(arrays, names, strict=True))
+        spans = np.empty(len(checked))
+        failures = []
+        for i, (array, name) in enumerate(zip(checked, names, strict=True)):
+            failures.append(_first_failure(array, _SAMPLES | _SCALE, span=spans[i : i + 1]))
+            if failures[-1] != _OFF_SCALE:
+                _refuse(array, name, failures[-1])
         check_same_frames(*checked)
-        for array, name in zip(checked, names, strict=True):
-            check_span(array, name=name)
+        for array, name, failure, span in zip(checked, names, failures, spans, strict=True):
+            _refuse(array, name, failure)
+            _refuse_span(span, name)
         return checked
     # One pass of the kernel for the checks of check_markers, check_moves and check_rotates,
     # in their order (the counts of frames and markers: at least one, as the array is not empty),
-    # and for the cluster's size of check_span, whose error comes after theirs.
+    # and for the frames' scales and the cluster's size of check_span, whose errors come after
+    # theirs.
     name = names[0]
     array = _shaped(arrays[0], name)
     span = np.empty(1)
-    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES, span=span))
+    _refuse(array, name, _first_failure(array, _SAMPLES | _MOVES | _LINES | _SCALE, span=span))
     _refuse_span(span[0], name)
     return (array,)
 
@@ -582,7 +767,7 @@ def check_input_many(kind: str, segments: tuple[object, ...], n_trials: int) -> 
     batch = _regular_batch(kind, segments, n_trials)
     if batch is None:
         return _check_each(kind, segments, n_trials)
-    checks = _SAMPLES if kind == "joint_center" else _SAMPLES | _MOVES | _LINES
+    checks = _SAMPLES | _SCALE if kind == "joint_center" else _SAMPLES | _MOVES | _LINES | _SCALE
     passes = np.ones(n_trials, dtype=bool)
     failures = np.empty(n_trials, dtype=np.int8)
     spans = np.empty(n_trials)
@@ -630,7 +815,8 @@ def _regular_batch(
             or 0 in segment.shape[1:]
         ):
             return None
-        batch.append(segment.astype(float, copy=False))
+        with np.errstate(over="ignore"):  # a trial that overflows is checked on its own
+            batch.append(segment.astype(float, copy=False))
     if len({array.shape[1] for array in batch}) > 1:
         return None
     return tuple(batch)

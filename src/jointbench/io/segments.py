@@ -30,10 +30,13 @@ from jointbench.estimators.validation import (
     CAPTURE_VOLUME,
     MAX_CAPTURE_SPAN_MM,
     MAX_JOINED_SPAN_MM,
+    MAX_SCALE_CHANGE,
     MAX_SPAN_MM,
     ONE_SEGMENT,
     TWO_SEGMENTS,
     cluster_span,
+    frames_listed,
+    frames_off_scale,
     span_bound,
 )
 from jointbench.io.units import fitting_units, unit_hint
@@ -311,8 +314,35 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
     (:func:`~jointbench.estimators.validation.span_bound`,
     :data:`~jointbench.estimators.validation.MAX_SPAN_MM`): coordinates in another unit than
     the file states, whose every answer would be off by a factor of 10 to 1000 and pass the
-    checks, which are built for millimetres, or fail them for the wrong reason."""
+    checks, which are built for millimetres, or fail them for the wrong reason. Frames in
+    another unit than the rest are named first (:func:`_check_frames_scale`)."""
+    _check_frames_scale(markers, labels, recording)
     _check_unit(markers, labels, recording, _ONE_SEGMENT)
+
+
+def _check_frames_scale(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
+    """``ValueError`` naming the file, the markers ``labels`` and the file's frames where,
+    among the frames that show all of ``markers`` ``(n_frames, n, 3)`` [mm], some lie off the
+    cluster's scale (:func:`~jointbench.estimators.validation.frames_off_scale`): frames in
+    another unit than the rest, which the artefact screen would otherwise read as a broken
+    shape, or leave out as artefacts and fit the rest as if nothing were wrong."""
+    complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
+    if complete.size == 0:
+        return
+    off, typical, spans = frames_off_scale(markers[complete])
+    if off.size == 0:
+        return
+    rows = complete[off]
+    raise ValueError(
+        f"{recording.source}: markers {', '.join(labels)} change size between frames: the "
+        f"farthest two lie {typical:.3g} mm apart (median over the frames) but "
+        f"{spans[off[0]]:.3g} mm at {recording.when(int(rows[0]))} ({rows.size} frames in "
+        f"all, {frames_listed(recording.first_frame + rows)}, each with every distance more "
+        f"than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical "
+        f"size): frames in another unit than the rest (metres or centimetres among the "
+        f"file's {recording.units!r}?) or markers not of one segment; correct those frames' "
+        "coordinates, or choose other frames (frames=, --frames)"
+    )
 
 
 def check_joined_span(reference: Segment, moving: tuple[str, ...], recording: Recording) -> None:

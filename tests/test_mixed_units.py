@@ -1,0 +1,94 @@
+"""Frames in another unit among millimetres: the size check judges each frame, not the median.
+
+A recording in which some frames (a block, or scattered ones) hold metres and the rest
+millimetres has a median size a body segment's; the checks must name those frames rather than
+fit them, whichever public call receives them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jointbench import api
+from jointbench.estimators import registry
+from jointbench.estimators.validation import check_input, check_input_many
+from tests.rigs import two_segments
+
+N_FRAMES = 120
+BLOCK = np.arange(40, 80)
+SCATTERED = np.sort(np.random.default_rng(0).choice(N_FRAMES, 40, replace=False))
+
+
+def _in_metres(markers: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    mixed = markers.copy()
+    mixed[frames] /= 1000.0
+    return mixed
+
+
+def _arrays(kind: str, frames: np.ndarray) -> tuple[np.ndarray, ...]:
+    if kind == "joint_center":
+        return tuple(_in_metres(a, frames) for a in two_segments(N_FRAMES))
+    relative = "hinge" if kind == "axis" else "ball"
+    _, moving = two_segments(N_FRAMES, relative=relative, proximal_moves=False)
+    return (_in_metres(moving, frames),)
+
+
+CASES = [
+    (kind, method, frames)
+    for kind, method in (("center", "LS"), ("axis", "planar"), ("joint_center", "SCoRE"))
+    for frames in (BLOCK, SCATTERED)
+]
+FIT = {"center": api.fit_center, "axis": api.fit_axis, "joint_center": api.fit_joint_center}
+
+
+def _names_the_frames(error: pytest.ExceptionInfo, frames: np.ndarray) -> None:
+    text = str(error.value)
+    assert "another unit" in text
+    assert f"frame {frames[0]} " in text
+    assert f"{len(frames)} frames" in text
+
+
+@pytest.mark.parametrize(("kind", "method", "frames"), CASES)
+@pytest.mark.parametrize("artefacts", ["refuse", "warn", "ignore"])
+def test_public_calls_name_the_frames_in_another_unit(kind, method, frames, artefacts):
+    with pytest.raises(ValueError, match="another unit") as error:
+        FIT[kind](*_arrays(kind, frames), method, artefacts=artefacts)
+    _names_the_frames(error, frames)
+
+
+@pytest.mark.parametrize(("kind", "method", "frames"), CASES)
+def test_checked_registry_calls_name_the_frames(kind, method, frames):
+    with pytest.raises(ValueError, match="another unit") as error:
+        registry.get(kind, method)(*_arrays(kind, frames))
+    _names_the_frames(error, frames)
+
+
+@pytest.mark.parametrize(("kind", "method", "frames"), CASES)
+def test_many_trials_name_the_trial_and_frames(kind, method, frames):
+    clean = _arrays(kind, np.arange(0))
+    mixed = _arrays(kind, frames)
+    segments = tuple(np.stack([c, m]) for c, m in zip(clean, mixed, strict=True))
+    errors = check_input_many(kind, segments, 2).errors
+    assert errors[0] is None
+    assert "another unit" in str(errors[1])
+    results = registry.many(kind, method)(*segments)
+    assert isinstance(results[1], ValueError)
+    assert "another unit" in str(results[1])
+
+
+def test_centimetres_among_millimetres_are_named():
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    mixed = moving.copy()
+    mixed[BLOCK] /= 10.0
+    with pytest.raises(ValueError, match="another unit"):
+        check_input("center", (mixed,))
+
+
+def test_a_cluster_that_changes_shape_by_tens_of_percent_passes():
+    # Skin markers move on the bone by tens of percent of their distances, not by a unit.
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    stretched = moving.copy()
+    centre = moving.mean(axis=1, keepdims=True)
+    stretched[BLOCK] = centre[BLOCK] + 1.5 * (moving[BLOCK] - centre[BLOCK])
+    check_input("center", (stretched,))
