@@ -508,3 +508,23 @@ def test_the_largest_magnitude_is_a_running_maximum_read_in_any_order():
         assert largest_magnitude(markers) == running
         if np.isfinite(markers).all():
             assert largest_magnitude(markers) == max(markers.max(), -markers.min())
+
+
+@pytest.mark.parametrize("axis", range(3))
+@pytest.mark.parametrize("checks", ["samples", "lines"])
+def test_a_coordinate_too_large_on_any_one_axis_is_refused(axis, checks):
+    """The input checks read the largest coordinate per axis: one beyond float64's sums on
+    any single axis, the others small, is refused by the sample checks, and by the line test
+    (whose sums it would overflow) where that test alone is asked for."""
+    rng = np.random.default_rng(23)
+    batch = rng.normal(scale=100.0, size=(1, 9, 3, 3))
+    bound = largest_coordinate(9 * 3)
+    batch[0, 6, 2, axis] = -2.0 * bound
+    asked = validation._SAMPLES if checks == "samples" else validation._LINES
+    failures = np.zeros(1, dtype=np.int8)
+    assert validation._first_failures(batch, asked, 1e-9, failures, np.empty(0)) == (
+        validation._TOO_LARGE
+    )
+    if checks == "samples":
+        with pytest.raises(ValueError, match=r"at marker 2, frame 6 \(1 in all\), beyond the "):
+            validation.check_markers(batch[0])

@@ -466,3 +466,51 @@ def test_the_fixed_centre_test_from_the_fits_analytic_centre_is_that_of_solving_
         solved = hjc._fixed_centre_test(result, poses["proximal"], poses["distal"])
         assert repr(given.diagnostics) == repr(solved.diagnostics)
         assert given.status == solved.status
+
+
+@pytest.mark.parametrize("method", ["analytic", "gauss-markov"])
+def test_the_fixed_centre_test_of_many_trials_starts_from_each_trials_own_analytic_centre(method):
+    """The many-trial form solves eq. 9 for all trials in one batch; the fixed-centre test of
+    each trial, started from its answer, is that of solving its trial alone, to the bit, with
+    trials of other noise (one noise-free, one a noisy hinge, nearly degenerate) beside it."""
+    proximal, distal = two_segments(90)
+    sds = (0.2, 3.0, 0.0, 1.1, 7.0)
+    stacked = [
+        np.stack([_noisy(markers, seed + 10 * index, sd) for seed, sd in enumerate(sds)])
+        for index, markers in enumerate((proximal, distal))
+    ]
+    hinge = two_segments(90, relative="hinge")
+    for segment in range(2):
+        stacked[segment][3] = _noisy(hinge[segment], 40 + segment)
+    poses = trial_poses({"proximal": stacked[0], "distal": stacked[1]}, min_frames=3)
+    results = jb.estimators.registry.many("joint_center", method, checked=False)(
+        *stacked, poses=poses
+    )
+    start_of = hjc._analytic_answer if method == "analytic" else hjc._gauss_markov_start
+    for result, trial in zip(results, poses, strict=True):
+        if isinstance(result, ValueError):
+            continue
+        given = hjc._fixed_centre_test(result, trial["proximal"], trial["distal"], start_of(result))
+        solved = hjc._fixed_centre_test(result, trial["proximal"], trial["distal"])
+        assert repr(given.diagnostics) == repr(solved.diagnostics)
+        assert given.status == solved.status
+
+
+def test_the_weight_moments_are_the_full_sum_of_each_frames_outer_product():
+    """``S_a = sum_t vec(V_at) vec(V_at)'`` (:func:`hjc._local_weight_moments`), summed over
+    its upper triangle: every entry, below the diagonal too, is that of the full outer
+    products summed over the frames asked for, and ``S_a`` is exactly symmetric."""
+    rng = np.random.default_rng(31)
+    r0, r1 = (rotation_matrix(rng.normal(scale=0.8, size=(12, 3))) for _ in range(2))
+    factors = rng.normal(size=(2, 3, 3))
+    covariances = factors @ np.swapaxes(factors, 1, 2) + 0.1 * np.eye(3)
+    frames = np.array([0, 3, 4, 7, 11])
+    seconds = hjc._local_weight_moments(r0, r1, frames, covariances)
+    expected = np.zeros((2, 9, 9))
+    for t in frames:
+        relative = r0[t].T @ r1[t]
+        for a, turned in enumerate((relative, relative.T)):
+            local = np.linalg.inv(covariances[a] + turned @ covariances[1 - a] @ turned.T)
+            expected[a] += np.outer(local.ravel(), local.ravel())
+    np.testing.assert_allclose(seconds, expected, rtol=1e-12, atol=0.0)
+    np.testing.assert_array_equal(seconds, np.swapaxes(seconds, 1, 2))
