@@ -270,6 +270,23 @@ def test_a_noise_of_zero_given_on_noisy_data_is_warned(method):
     assert exact.status == "ok", exact.status
 
 
+@pytest.mark.parametrize("method", GM)
+@pytest.mark.parametrize("noise_mm", [1e-300, 1e-160, 1e300])
+def test_a_given_noise_whose_square_leaves_the_floats_is_warned(method, noise_mm):
+    """A given noise so small that its variance rounds to zero or below the normal floats, or
+    so large that it overflows, on data with 0.5 mm of noise: said not to describe the
+    centre's error, as a noise of zero is (it read ``ok`` with a NaN or infinite chi^2 and an
+    SD of 1e-160 mm, or raised OverflowError)."""
+    proximal, distal = two_segments()
+    rng = np.random.default_rng(3)
+    proximal = proximal + isotropic_noise(rng, proximal.shape[:2], 0.5)
+    distal = distal + isotropic_noise(rng, distal.shape[:2], 0.5)
+    result = jb.fit_joint_center(proximal, distal, method=method, noise_mm=noise_mm)
+    assert result.status != "ok", result.status
+    zero = f"noise_mm = {noise_mm:.3g} was given, but the rigid-body residuals show noise"
+    assert NOT_FIT in result.status or zero in result.status, result.status
+
+
 def _skin_thigh(seed: int, mm_per_rad: float = 10.0, n_frames: int = 60) -> tuple:
     """A hip on a 30 degree two-axis swing, the pelvis moving, four thigh markers 150 mm out
     whose cluster slides on the bone as a whole, ``mm_per_rad`` per radian of each hip angle

@@ -235,7 +235,9 @@ def _per_coordinate_variance(
 ) -> tuple[float, float, str]:
     """``(s^2 [mm^2], noise_mm = sqrt(3 s^2), source)`` -- see the module docstring."""
     if noise_mm is not None:
-        return noise_mm**2 / 3.0, noise_mm, "given"
+        # A product, not a power: a noise whose square overflows gives an infinite variance
+        # (which the model test then reads), not OverflowError.
+        return noise_mm * noise_mm / 3.0, noise_mm, "given"
     variance = _pooled_variance((prox, dist))
     return variance, float(np.sqrt(3.0 * variance)), "rigid-body residuals"
 
@@ -1058,21 +1060,21 @@ def _model_verdict(
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
     variance = _pooled_variance(segments)
     noisy = variance > (ROUNDING * _largest_coordinate(segments)) ** 2
-    if (
-        noisy
-        and result.diagnostics["noise_source"] == "given"
-        and not result.diagnostics["noise_mm"]
-    ):
-        # A noise of 0 makes the covariance 0 and the chi^2 undefined: a confident answer.
+    given = result.diagnostics["noise_mm"] if result.diagnostics["noise_source"] == "given" else 1
+    if noisy and given * given == 0.0:
+        # A noise of 0 (or one whose variance rounds to 0) makes the covariance 0 and the
+        # chi^2 undefined: a confident answer.
         rms_mm = math.sqrt(3.0 * variance)
         warning = (
-            f"noise_mm = 0 was given, but the rigid-body residuals show noise of {rms_mm:.3g} mm "
+            f"noise_mm = {given:.3g} was given, but the rigid-body residuals show noise of "
+            f"{rms_mm:.3g} mm "
             "RMS: the zero covariance does not describe the centre's error, its "
             f"{PRECISION_NOT_DETERMINED} (leave noise_mm out to estimate the noise from the data)"
         )
         return (warning,), untested
-    if not (np.isfinite(chi2) and dof >= 1 and noisy):
-        # Noise-free data (rounding, not noise) or no chi^2: nothing to test against.
+    if np.isnan(chi2) or dof < 1 or not noisy:
+        # Noise-free data (rounding, not noise) or no chi^2: nothing to test against. An
+        # infinite one (a given noise far below the data's) is tested, and rejects.
         return (), untested
     kurtosis, gaussian = _noise_kurtosis(segments, variance)
     excess = min(max(kurtosis, 0.0), MAX_NOISE_KURTOSIS) / 3.0
