@@ -278,6 +278,9 @@ def _shapes_of(segment: object) -> list[tuple[int, ...] | None] | None:
         return None
     shapes: list[tuple[int, ...] | None] = []
     for trial in segment:
+        if isinstance(trial, np.ndarray):  # the common case, without np.shape's conversion
+            shapes.append(trial.shape)
+            continue
         try:
             shapes.append(np.shape(trial))
         except ValueError:  # nested sequences of other lengths: no array at all

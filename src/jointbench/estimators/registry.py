@@ -28,8 +28,10 @@ array with a leading trials axis, ``(n_trials, n_frames, n_markers, 3)`` (every 
 same trials: a ``ValueError`` names each count otherwise), and returns per trial what the
 one-trial function returns, or the numerical failure (``ValueError``, ``FloatingPointError``)
 it raises. A pose-based method also takes ``poses=``, one entry per trial of
-:func:`jointbench.estimators.segment_poses.trial_poses`, and fits the trials that pass its
-checks as one batch, so they share their numbers of frames and markers. A method states its
+:func:`jointbench.estimators.segment_poses.trial_poses`. A method's own many-trial form fits
+its trials as one batch, so they share their numbers of frames and markers (a ``ValueError``
+names a trial that does not); given lists of trials of other shapes, the checked form fits the
+trials of each shape as one batch (:func:`_shape_by_shape`). A method states its
 own many-trial form at registration (``register(..., many=...)``, or :func:`register_many`
 where the module defines it after the one-trial function); a method without one, such as a
 newcomer's per-trial function, gets the one-trial function called trial by trial.
@@ -624,7 +626,11 @@ def _trial_by_trial(fn: Callable, names: tuple[str, ...]) -> Callable[..., list]
     @functools.wraps(fn)
     def each(*segments: object, **options: object) -> list:
         check_same_trials(segments, names)
-        arrays = [np.asarray(segment) for segment in segments]
+        # A list's trials reach ``fn`` as given: they may differ in shape, fitted one by one.
+        arrays = [
+            segment if isinstance(segment, list | tuple) else np.asarray(segment)
+            for segment in segments
+        ]
         return each_alone(lambda t: fn(*(array[t] for array in arrays), **options), len(arrays[0]))
 
     # The checked form applies them, once.
