@@ -303,7 +303,8 @@ def check_one_shape(names: tuple[str, ...], shapes: dict[int, tuple]) -> None:
                 raise ValueError(
                     f"{name} of trial {trial} {_extents(shape, first_shape, first)}: the "
                     "trials of one call share their numbers of frames and markers; fit the "
-                    "others in a call of their own"
+                    "others in a call of their own (the checked many-trial form fits each "
+                    "shape as a batch of its own)"
                 )
 
 
