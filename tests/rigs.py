@@ -1,6 +1,9 @@
-"""A noise-free two-segment rig joined by a ball joint, shared by the two-segment tests."""
+"""A noise-free two-segment rig joined by a ball joint, shared by the two-segment tests; one
+segment moving about the joint in the reference frame; two outcomes compared field by field."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -35,3 +38,26 @@ def two_segments(n_frames=200, *, relative="ball", proximal_moves=True):
     r1 = r0 @ rotation_matrix(rel)
     d1 = r0 @ JOINT + d0 - r1 @ JOINT
     return apply_pose(r0, d0, PROXIMAL), apply_pose(r1, d1, DISTAL)
+
+
+def one_segment(n_frames: int, motion: str = "ball") -> np.ndarray:
+    """Noise-free markers ``(N, 3, 3)`` [mm] of DISTAL moving about JOINT in the reference frame:
+    ``"ball"`` about three axes, ``"hinge"`` about HINGE only."""
+    t = np.linspace(0.0, 4.0, n_frames)
+    if motion == "hinge":
+        rotvec = 0.7 * np.sin(1.9 * t)[:, None] * HINGE
+    else:
+        rotvec = np.stack([0.6 * np.sin(1.9 * t), 0.4 * np.sin(1.3 * t), 0.1 * np.sin(t)], -1)
+    rotation = rotation_matrix(rotvec)
+    return apply_pose(rotation, JOINT - rotation @ JOINT, DISTAL)
+
+
+def assert_same_outcome(found, expected) -> None:
+    """``found`` is ``expected``: the same error type and words, or every field of the result
+    equal to the bit."""
+    if isinstance(expected, Exception):
+        assert type(found) is type(expected) and str(found) == str(expected), (found, expected)
+        return
+    assert not isinstance(found, Exception), found
+    for field in dataclasses.fields(expected):
+        np.testing.assert_equal(getattr(found, field.name), getattr(expected, field.name))

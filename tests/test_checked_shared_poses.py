@@ -10,7 +10,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from rigs import two_segments
+from rigs import assert_same_outcome, two_segments
 
 from jointbench.estimators import registry, support, validation
 from jointbench.estimators.segment_poses import pose_segments, trial_poses
@@ -120,15 +120,6 @@ def _outcome(call):
         return error
 
 
-def _assert_same(found, expected) -> None:
-    if isinstance(expected, Exception):
-        assert type(found) is type(expected) and str(found) == str(expected), (found, expected)
-        return
-    assert not isinstance(found, Exception), found
-    for field in dataclasses.fields(expected):
-        np.testing.assert_equal(getattr(found, field.name), getattr(expected, field.name))
-
-
 def test_the_pose_based_methods_are_found():
     assert {"SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0"} <= set(POSE_BASED)
 
@@ -139,7 +130,7 @@ def test_the_pose_based_methods_are_found():
 def test_one_checked_trial_answers_as_fitting_twice(name, case):
     arrays = ONE_TRIAL[case]
     found = _outcome(lambda: registry.get(KIND, name)(*arrays))
-    _assert_same(found, _outcome(lambda: _separately(name, arrays)))
+    assert_same_outcome(found, _outcome(lambda: _separately(name, arrays)))
 
 
 @pytest.mark.parametrize("name", ["gauss-markov", "gauss-markov-frame0"])
@@ -147,7 +138,7 @@ def test_options_reach_the_fit_as_before(name):
     arrays = CASES["ball-noisy"]
     options = {"noise_mm": 0.5, "max_iterations": 3, "tol_mm": 1e-9}
     found = registry.get(KIND, name)(*arrays, **options)
-    _assert_same(found, _separately(name, arrays, **options))
+    assert_same_outcome(found, _separately(name, arrays, **options))
 
 
 @pytest.mark.parametrize("name", POSE_BASED)
@@ -181,7 +172,7 @@ BATCH = ["ball-noisy", "ball-noise-free", "hinge-noisy", "still", "collinear-dis
 def test_many_checked_trials_answer_as_each_fitting_twice(name):
     outcomes = registry.many(KIND, name)(*_batch(BATCH))
     for case, found in zip(BATCH, outcomes, strict=True):
-        _assert_same(found, _outcome(lambda case=case: _separately(name, CASES[case])))
+        assert_same_outcome(found, _outcome(lambda case=case: _separately(name, CASES[case])))
 
 
 @pytest.mark.parametrize("name", POSE_BASED)
@@ -194,7 +185,7 @@ def test_poses_of_the_very_markers_give_the_answer_of_none(name):
     without = registry.many(KIND, name)(*segments)
     with_own = registry.many(KIND, name)(*segments, poses=own)
     for found, expected in zip(with_own, without, strict=True):
-        _assert_same(found, expected)
+        assert_same_outcome(found, expected)
 
 
 FITTED = ["ball-noisy", "ball-noise-free", "hinge-noisy", "still"]
@@ -259,20 +250,19 @@ def _unshared_many(name: str, segments: tuple, **options) -> list:
 
 def _assert_same_outcomes(found, expected) -> None:
     if isinstance(expected, Exception) or isinstance(found, Exception):
-        _assert_same(found, expected)
+        assert_same_outcome(found, expected)
         return
     assert len(found) == len(expected)
     for one, other in zip(found, expected, strict=True):
-        _assert_same(one, other)
+        assert_same_outcome(one, other)
 
 
 def _not_one_batch() -> dict[str, tuple]:
-    """Segments whose poses cannot be fitted as one batch: a third marker array, and trials of
-    other lengths given as lists."""
+    """Segments whose poses cannot be fitted as one batch: a third marker array. (Trials of
+    other lengths are fitted length by length: ``test_ragged_trials.py``.)"""
     proximal, distal = CASES["ball-noisy"]
     return {
         "three-arrays": (np.stack([proximal] * 2), np.stack([distal] * 2), np.stack([distal] * 2)),
-        "trials-of-other-lengths": ([proximal, proximal[:-5]], [distal, distal[:-5]]),
     }
 
 
@@ -333,15 +323,16 @@ def test_a_batch_of_user_input_answers_as_fitting_twice(name):
     outcomes = registry.many(KIND, name)(*segments)
     _assert_same_outcomes(outcomes, _unshared_many(name, segments))
     for case, found in zip(same_shape, outcomes, strict=True):
-        _assert_same(found, _outcome(lambda case=case: _separately(name, USER_INPUT[case])))
+        assert_same_outcome(found, _outcome(lambda case=case: _separately(name, USER_INPUT[case])))
 
 
-@pytest.mark.parametrize("checked", [True, False])
 @pytest.mark.parametrize("name", POSE_BASED)
-def test_trials_of_other_lengths_are_refused_naming_them(name, checked):
-    """Trials of one call are fitted as one batch: a trial of other length that passes the
-    checks is named, with the length of the first; one the checks refuse is that trial's
-    error alone."""
+def test_trials_of_other_lengths_are_refused_naming_them_without_checks(name):
+    """The form without checks fits the trials of one call as one batch: a trial of other
+    length that passes the pose fit's checks is named, with the length of the first; one the
+    checks refuse is that trial's error alone. (The checked form fits them length by length:
+    ``test_ragged_trials.py``.)"""
+    checked = False
     proximal, distal = CASES["ball-noisy"]
     segments = ([proximal, proximal[:2], proximal[:-5]], [distal, distal[:2], distal[:-5]])
     with pytest.raises(

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rigs import DISTAL, HINGE, JOINT, apply_pose, two_segments
+from rigs import HINGE, JOINT, one_segment, two_segments
 from workflow_copy import readme_builtin_example
 
 import jointbench
@@ -43,23 +43,11 @@ FAR = np.array([1e9, -1e9, 1e9])
 FRAME, MARKER = 7, 1
 
 
-def _one_segment(motion: str) -> np.ndarray:
-    """Noise-free markers ``(N, 3, 3)`` [mm] of DISTAL moving about JOINT in the reference frame:
-    ``"ball"`` about three axes, ``"hinge"`` about HINGE only."""
-    t = np.linspace(0.0, 4.0, N_FRAMES)
-    if motion == "hinge":
-        rotvec = 0.7 * np.sin(1.9 * t)[:, None] * HINGE
-    else:
-        rotvec = np.stack([0.6 * np.sin(1.9 * t), 0.4 * np.sin(1.3 * t), 0.1 * np.sin(t)], -1)
-    rotation = rotation_matrix(rotvec)
-    return apply_pose(rotation, JOINT - rotation @ JOINT, DISTAL)
-
-
 def clean(kind: str) -> tuple[np.ndarray, ...]:
     """Noise-free marker arrays for ``kind`` whose answer is JOINT (and HINGE for axes)."""
     if kind == "joint_center":
         return two_segments(N_FRAMES)
-    return (_one_segment("hinge" if kind == "axis" else "ball"),)
+    return (one_segment(N_FRAMES, "hinge" if kind == "axis" else "ball"),)
 
 
 def noisy(kind: str, sd_mm: float = 0.5, seed: int = 0) -> tuple[np.ndarray, ...]:

@@ -69,6 +69,18 @@ def test_a_newcomer_gets_a_many_trial_form_trial_by_trial(newcomer, checked):
         )
 
 
+@pytest.mark.parametrize("checked", [True, False])
+def test_a_newcomer_fits_trials_of_other_shapes_trial_by_trial(newcomer, checked):
+    """Given as lists, trials of other numbers of frames or markers reach the one-trial
+    function as given."""
+    trials = [_trials(1, 60)[0], _trials(1, 45)[0][:, :2]]
+    outcomes = registry.many("center", newcomer, checked=checked)(trials)
+    for outcome, markers in zip(outcomes, trials, strict=True):
+        alone = registry.get("center", newcomer, checked=checked)(markers)
+        np.testing.assert_array_equal(outcome.center, alone.center)
+        assert outcome.status == alone.status
+
+
 def test_a_checked_many_trial_form_refuses_a_bad_trial_alone(newcomer):
     markers = _trials()
     markers[2, 5, 1] = np.nan

@@ -34,6 +34,7 @@ from jointbench.owncode import own_code
 __all__ = [
     "NUMERICAL_FAILURES",
     "ProgrammingError",
+    "check_one_shape",
     "check_poses",
     "check_same_trials",
     "each_alone",
@@ -42,6 +43,7 @@ __all__ = [
     "mistakes_named",
     "numerical_failure",
     "one_trial",
+    "trial_shapes",
 ]
 
 #: The types of what a fit raises when a trial's values defeat it (``LinAlgError`` is a
@@ -245,12 +247,87 @@ def check_same_trials(segments: tuple, names: tuple[str, ...]) -> None:
         return
     if len(set(counts)) < 2:
         return
-    if len(names) != len(segments):
-        names = tuple(f"marker array {index + 1}" for index in range(len(segments)))
+    names = _segment_names(names, len(segments))
     others = ", ".join(f"{name} {count}" for name, count in zip(names[1:], counts[1:], strict=True))
     raise ValueError(
         f"{names[0]} holds {counts[0]} trials, {others}: give every segment the same trials"
     )
+
+
+def trial_shapes(segments: tuple) -> list[tuple] | None:
+    """Per trial, the shapes of its arrays in ``segments`` (each ``(n_trials, ...)`` or a list
+    of trials), where some segment is a list or tuple of trials, whose trials may differ in
+    shape; ``None`` where every segment is an array (its trials share one shape), or where
+    the segments are no sequences of trials or hold other numbers of them (left to the
+    checks that name those). A trial that is no array of one shape has the shape ``None``.
+    Reads the trials' shapes, not their samples."""
+    if not any(isinstance(segment, list | tuple) for segment in segments):
+        return None
+    columns = [_shapes_of(segment) for segment in segments]
+    if any(column is None for column in columns) or len({len(c) for c in columns}) > 1:
+        return None
+    return list(zip(*columns, strict=True))
+
+
+def _shapes_of(segment: object) -> list[tuple[int, ...] | None] | None:
+    """The shape of each trial of ``segment`` (:func:`trial_shapes`), or ``None`` where it is
+    no array or sequence of trials."""
+    if isinstance(segment, np.ndarray):
+        return [segment.shape[1:]] * len(segment) if segment.ndim else None
+    if not isinstance(segment, list | tuple):
+        return None
+    shapes: list[tuple[int, ...] | None] = []
+    for trial in segment:
+        if isinstance(trial, np.ndarray):  # the common case, without np.shape's conversion
+            shapes.append(trial.shape)
+            continue
+        try:
+            shapes.append(np.shape(trial))
+        except ValueError:  # nested sequences of other lengths: no array at all
+            shapes.append(None)
+    return shapes
+
+
+def check_one_shape(names: tuple[str, ...], shapes: dict[int, tuple]) -> None:
+    """``ValueError`` naming the first trial of ``shapes`` (per trial, the shapes of its
+    segments' arrays in ``names`` order, :func:`trial_shapes`) shaped otherwise than the first,
+    with the segment and both shapes: trials fitted as one batch share their numbers of frames
+    and markers."""
+    if not shapes:
+        return
+    names = _segment_names(names, len(next(iter(shapes.values()))))
+    first, *others = shapes
+    for trial in others:
+        for name, shape, first_shape in zip(names, shapes[trial], shapes[first], strict=True):
+            if shape != first_shape:
+                raise ValueError(
+                    f"{name} of trial {trial} {_extents(shape, first_shape, first)}: the "
+                    "trials of one call share their numbers of frames and markers; fit the "
+                    "others in a call of their own (the checked many-trial form fits each "
+                    "shape as a batch of its own)"
+                )
+
+
+def _extents(shape: tuple | None, first_shape: tuple | None, first: int) -> str:
+    """How a trial's ``shape`` differs from ``first_shape``, trial ``first``'s: in frames and
+    markers where both are ``(N, n, 3)``."""
+    if all(s is not None and len(s) == 3 and s[2] == 3 for s in (shape, first_shape)):
+        return (
+            f"has {shape[0]} frames and {shape[1]} markers, of trial {first} "
+            f"{first_shape[0]} and {first_shape[1]}"
+        )
+    return f"is shaped {_shape_text(shape)}, trial {first} {_shape_text(first_shape)}"
+
+
+def _shape_text(shape: tuple | None) -> str:
+    return "as no array" if shape is None else str(shape)
+
+
+def _segment_names(names: tuple[str, ...], n_segments: int) -> tuple[str, ...]:
+    """``names`` of ``n_segments`` segments, or their positions where they are not as many."""
+    if len(names) == n_segments:
+        return names
+    return tuple(f"marker array {index + 1}" for index in range(n_segments))
 
 
 def isolated(batched: Callable[..., list]) -> Callable[..., list]:
@@ -268,6 +345,12 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     def run(*segments: object, **options: object) -> list:
         if names is not None:
             check_same_trials(segments, names)
+        else:
+            # A pose-based form names trials of other shapes after their checks
+            # (:func:`jointbench.estimators.segment_poses.trial_poses`); the others stack them.
+            shapes = trial_shapes(segments)
+            if shapes is not None:
+                check_one_shape(("markers",), dict(enumerate(shapes)))
         check_poses(segments, options.get("poses"), names)
         try:
             return batched(*segments, **options)

@@ -28,8 +28,10 @@ array with a leading trials axis, ``(n_trials, n_frames, n_markers, 3)`` (every 
 same trials: a ``ValueError`` names each count otherwise), and returns per trial what the
 one-trial function returns, or the numerical failure (``ValueError``, ``FloatingPointError``)
 it raises. A pose-based method also takes ``poses=``, one entry per trial of
-:func:`jointbench.estimators.segment_poses.trial_poses`, and fits the trials that pass its
-checks as one batch, so they share their numbers of frames and markers. A method states its
+:func:`jointbench.estimators.segment_poses.trial_poses`. A method's own many-trial form fits
+its trials as one batch, so they share their numbers of frames and markers (a ``ValueError``
+names a trial that does not); given lists of trials of other shapes, the checked form fits the
+trials of each shape as one batch (:func:`_shape_by_shape`). A method states its
 own many-trial form at registration (``register(..., many=...)``, or :func:`register_many`
 where the module defines it after the one-trial function); a method without one, such as a
 newcomer's per-trial function, gets the one-trial function called trial by trial.
@@ -56,9 +58,11 @@ from jointbench import declared, owncode
 from jointbench.estimators import centre_precision, precision, support, validation
 from jointbench.estimators.batching import (
     NUMERICAL_FAILURES,
+    check_poses,
     check_same_trials,
     each_alone,
     one_trial,
+    trial_shapes,
 )
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
 from jointbench.numerics import reuse
@@ -430,7 +434,10 @@ def _checked_many(entry: _Entry) -> Callable[..., list]:
 
 def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
     """The stages of :func:`_checked_many`'s call of ``entry`` on ``segments``, after the
-    check of its ``options``."""
+    check of its ``options``; trials of other shapes :func:`_shape_by_shape`."""
+    shapes = trial_shapes(segments)
+    if shapes is not None and len(set(shapes)) > 1:
+        return _shape_by_shape(entry, segments, options)
     names = _pose_names(entry, len(segments))
     shared = None
     if names is not None and options.get("poses") is None:
@@ -449,6 +456,32 @@ def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
     if fitted:
         with reuse.one_call():  # after the fit, as for one trial (:func:`_fit_valid`)
             _judge_fitted(entry, outcomes, fitted, checked.stacked(fitted), options, names)
+    return outcomes
+
+
+def _shape_by_shape(entry: _Entry, segments: tuple, options: dict) -> list:
+    """:func:`_many_stages` of trials of other numbers of frames or markers (lists of trials):
+    each trial's input checks, whose error is its outcome, then the trials that passed, those
+    of one shape as one regular batch of :func:`_many_stages` (``poses=`` split with them), so
+    a method's many-trial form fits each shape at once; outcomes in the trials' order."""
+    check_same_trials(segments, validation.ARRAY_NAMES[entry.kind])
+    n_trials = len(segments[0])
+    poses = options.get("poses")
+    check_poses(segments, poses, None)  # one entry per trial, before they are split
+    checked = validation.check_input_many(entry.kind, segments, n_trials)
+    groups: dict[tuple, list[int]] = {}
+    for trial, error in enumerate(checked.errors):
+        if error is None:
+            shapes = tuple(array.shape for array in checked.arrays(trial))
+            groups.setdefault(shapes, []).append(trial)
+    outcomes: list = list(checked.errors)
+    for group in groups.values():
+        alike = dict(options)
+        if poses is not None:
+            alike["poses"] = [poses[trial] for trial in group]
+        fitted = _many_stages(entry, checked.stacked(group), alike)
+        for trial, outcome in zip(group, fitted, strict=True):
+            outcomes[trial] = outcome
     return outcomes
 
 
@@ -593,7 +626,11 @@ def _trial_by_trial(fn: Callable, names: tuple[str, ...]) -> Callable[..., list]
     @functools.wraps(fn)
     def each(*segments: object, **options: object) -> list:
         check_same_trials(segments, names)
-        arrays = [np.asarray(segment) for segment in segments]
+        # A list's trials reach ``fn`` as given: they may differ in shape, fitted one by one.
+        arrays = [
+            segment if isinstance(segment, list | tuple) else np.asarray(segment)
+            for segment in segments
+        ]
         return each_alone(lambda t: fn(*(array[t] for array in arrays), **options), len(arrays[0]))
 
     # The checked form applies them, once.

@@ -17,7 +17,12 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from jointbench.estimators.batching import NUMERICAL_FAILURES, check_same_trials, each_alone
+from jointbench.estimators.batching import (
+    NUMERICAL_FAILURES,
+    check_one_shape,
+    check_same_trials,
+    each_alone,
+)
 from jointbench.estimators.results import with_fields
 from jointbench.estimators.validation import (
     check_counts,
@@ -341,7 +346,10 @@ def trial_poses(
             outcomes[trial] = error
             checked.pop(trial, None)
     good = list(checked)
-    _check_one_shape(names, checked)
+    check_one_shape(
+        tuple(names),
+        {trial: tuple(array.shape for array in arrays) for trial, arrays in checked.items()},
+    )
     stacked = [
         np.stack([checked[trial][index] for trial in good]) if good else None
         for index in range(len(names))
@@ -356,23 +364,6 @@ def trial_poses(
         except ValueError as error:
             outcomes[trial] = error
     return outcomes
-
-
-def _check_one_shape(names: list[str], checked: dict[int, list[np.ndarray]]) -> None:
-    """``ValueError`` naming the first trial of ``checked`` (per trial, its checked arrays in
-    ``names`` order) shaped otherwise than the first: the trials are fitted as one batch."""
-    if not checked:
-        return
-    first, *others = checked
-    for trial in others:
-        for name, array, first_array in zip(names, checked[trial], checked[first], strict=True):
-            if array.shape != first_array.shape:
-                raise ValueError(
-                    f"{name} of trial {trial} has {array.shape[0]} frames and "
-                    f"{array.shape[1]} markers, of trial {first} {first_array.shape[0]} and "
-                    f"{first_array.shape[1]}: the trials of one call share their numbers of "
-                    "frames and markers; fit the others in a call of their own"
-                )
 
 
 def _fitted_poses(markers: np.ndarray) -> list:
