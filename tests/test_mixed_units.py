@@ -92,3 +92,31 @@ def test_a_cluster_that_changes_shape_by_tens_of_percent_passes():
     centre = moving.mean(axis=1, keepdims=True)
     stretched[BLOCK] = centre[BLOCK] + 1.5 * (moving[BLOCK] - centre[BLOCK])
     check_input("center", (stretched,))
+
+
+def _pair_with_a_gap_filled() -> np.ndarray:
+    """Two markers 10 mm apart on a segment turning 180 degrees about a centre 400 mm away
+    ``(N_FRAMES, 2, 3)`` [mm], one of them filled in by a straight line over frames 30 to 89,
+    as software fills a gap: the chord cuts the arc, up to ~120 mm from the marker."""
+    angles = np.deg2rad(np.linspace(-90.0, 90.0, N_FRAMES))
+    arm = np.array([[0.0, -400.0], [0.0, -410.0]])  # (2 markers, y/z) [mm]
+    cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    markers = np.zeros((N_FRAMES, 2, 3))
+    markers[:, :, 0] = 30.0 * np.sin(3.0 * angles)[:, None]
+    markers[:, :, 1] = cos * arm[:, 0] - sin * arm[:, 1]
+    markers[:, :, 2] = sin * arm[:, 0] + cos * arm[:, 1]
+    markers += np.array([150.0, 250.0, 900.0])
+    gap = np.arange(30, 90)
+    start, stop = gap[0] - 1, gap[-1] + 1
+    weights = np.linspace(0.0, 1.0, stop - start + 1)[1:-1, None]
+    markers[gap, 1] = (1.0 - weights) * markers[start, 1] + weights * markers[stop, 1]
+    return markers
+
+
+def test_a_pair_with_one_marker_astray_is_no_unit():
+    # With two markers the one distance is every distance: a marker gap-filled, or a ghost
+    # marker for some frames, changes it as a unit would. Three markers keep a distance.
+    markers = _pair_with_a_gap_filled()
+    distances = np.linalg.norm(markers[:, 0] - markers[:, 1], axis=1)
+    assert distances.max() > 10.0 * np.median(distances)  # astray by more than a unit's gap
+    check_input("center", (markers,))

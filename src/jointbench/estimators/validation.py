@@ -513,11 +513,12 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
     nor one that a marker left (its smallest distance stays). Each frame's flag is written
     into ``off`` ``(n_frames,)`` and, unless every frame's largest distance lies within the
     factor of every other's (none is off then, and the pass over them ends there), that
-    distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than two markers, which have
-    no distances. A compiled kernel."""
+    distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than three markers: two
+    have one distance, which one marker gap-filled along a chord, or a ghost taken for it,
+    changes as a unit does; of three, the two others keep theirs. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     off[:] = False
-    if n_markers < 2:
+    if n_markers < 3:
         return 0
     low, high = np.inf, 0.0
     for f in range(n_frames):
