@@ -120,3 +120,15 @@ def test_a_pair_with_one_marker_astray_is_no_unit():
     distances = np.linalg.norm(markers[:, 0] - markers[:, 1], axis=1)
     assert distances.max() > 10.0 * np.median(distances)  # astray by more than a unit's gap
     check_input("center", (markers,))
+
+
+def test_a_marker_astray_in_a_cluster_is_no_unit():
+    # A ghost taken for one marker for some frames moves that marker's distances tenfold, but
+    # the other markers keep theirs: not a unit, whose frames change every distance.
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    ghost = moving.copy()
+    ghost[BLOCK, 0] = moving[BLOCK, 1] + 20.0 * (moving[BLOCK, 0] - moving[BLOCK, 1])
+    near = moving.copy()
+    near[BLOCK, 0] = moving[BLOCK, 1] + 0.01 * (moving[BLOCK, 0] - moving[BLOCK, 1])
+    for astray in (ghost, near):
+        check_input("center", (astray,))
