@@ -132,3 +132,14 @@ def test_a_marker_astray_in_a_cluster_is_no_unit():
     near[BLOCK, 0] = moving[BLOCK, 1] + 0.01 * (moving[BLOCK, 0] - moving[BLOCK, 1])
     for astray in (ghost, near):
         check_input("center", (astray,))
+
+
+def test_half_the_frames_in_metres_name_the_others_size():
+    # With half the frames in each unit, the median over all of them lies between the two
+    # sizes, no frame's: the error gives the size of the frames on the cluster's scale.
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    mixed = _in_metres(moving, np.arange(0, N_FRAMES, 2))
+    span = np.median(np.linalg.norm(moving[:, :, None] - moving[:, None], axis=-1).max((1, 2)))
+    with pytest.raises(ValueError, match="another unit") as error:
+        check_input("center", (mixed,))
+    assert f"lie {span:.3g} mm apart" in str(error.value)
