@@ -92,3 +92,54 @@ def test_a_cluster_that_changes_shape_by_tens_of_percent_passes():
     centre = moving.mean(axis=1, keepdims=True)
     stretched[BLOCK] = centre[BLOCK] + 1.5 * (moving[BLOCK] - centre[BLOCK])
     check_input("center", (stretched,))
+
+
+def _pair_with_a_gap_filled() -> np.ndarray:
+    """Two markers 10 mm apart on a segment turning 180 degrees about a centre 400 mm away
+    ``(N_FRAMES, 2, 3)`` [mm], one of them filled in by a straight line over frames 30 to 89,
+    as software fills a gap: the chord cuts the arc, up to ~120 mm from the marker."""
+    angles = np.deg2rad(np.linspace(-90.0, 90.0, N_FRAMES))
+    arm = np.array([[0.0, -400.0], [0.0, -410.0]])  # (2 markers, y/z) [mm]
+    cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    markers = np.zeros((N_FRAMES, 2, 3))
+    markers[:, :, 0] = 30.0 * np.sin(3.0 * angles)[:, None]
+    markers[:, :, 1] = cos * arm[:, 0] - sin * arm[:, 1]
+    markers[:, :, 2] = sin * arm[:, 0] + cos * arm[:, 1]
+    markers += np.array([150.0, 250.0, 900.0])
+    gap = np.arange(30, 90)
+    start, stop = gap[0] - 1, gap[-1] + 1
+    weights = np.linspace(0.0, 1.0, stop - start + 1)[1:-1, None]
+    markers[gap, 1] = (1.0 - weights) * markers[start, 1] + weights * markers[stop, 1]
+    return markers
+
+
+def test_a_pair_with_one_marker_astray_is_no_unit():
+    # With two markers the one distance is every distance: a marker gap-filled, or a ghost
+    # marker for some frames, changes it as a unit would. Three markers keep a distance.
+    markers = _pair_with_a_gap_filled()
+    distances = np.linalg.norm(markers[:, 0] - markers[:, 1], axis=1)
+    assert distances.max() > 10.0 * np.median(distances)  # astray by more than a unit's gap
+    check_input("center", (markers,))
+
+
+def test_a_marker_astray_in_a_cluster_is_no_unit():
+    # A ghost taken for one marker for some frames moves that marker's distances tenfold, but
+    # the other markers keep theirs: not a unit, whose frames change every distance.
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    ghost = moving.copy()
+    ghost[BLOCK, 0] = moving[BLOCK, 1] + 20.0 * (moving[BLOCK, 0] - moving[BLOCK, 1])
+    near = moving.copy()
+    near[BLOCK, 0] = moving[BLOCK, 1] + 0.01 * (moving[BLOCK, 0] - moving[BLOCK, 1])
+    for astray in (ghost, near):
+        check_input("center", (astray,))
+
+
+def test_half_the_frames_in_metres_name_the_others_size():
+    # With half the frames in each unit, the median over all of them lies between the two
+    # sizes, no frame's: the error gives the size of the frames on the cluster's scale.
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    mixed = _in_metres(moving, np.arange(0, N_FRAMES, 2))
+    span = np.median(np.linalg.norm(moving[:, :, None] - moving[:, None], axis=-1).max((1, 2)))
+    with pytest.raises(ValueError, match="another unit") as error:
+        check_input("center", (mixed,))
+    assert f"lie {span:.3g} mm apart" in str(error.value)

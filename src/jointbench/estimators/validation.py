@@ -289,7 +289,7 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         first = int(frames[0])
         raise ValueError(
             f"{name} change size between frames: the farthest two markers lie {typical:.3g} mm "
-            f"apart (median over the frames) but {spans[first]:.3g} mm at frame {first} "
+            f"apart (median over the other frames) but {spans[first]:.3g} mm at frame {first} "
             f"({frames.size} frames in all, {frames_listed(frames)}, each with every distance "
             f"more than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the "
             "typical size): frames "
@@ -513,11 +513,12 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
     nor one that a marker left (its smallest distance stays). Each frame's flag is written
     into ``off`` ``(n_frames,)`` and, unless every frame's largest distance lies within the
     factor of every other's (none is off then, and the pass over them ends there), that
-    distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than two markers, which have
-    no distances. A compiled kernel."""
+    distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than three markers: two
+    have one distance, which one marker gap-filled along a chord, or a ghost taken for it,
+    changes as a unit does; of three, the two others keep theirs. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
     off[:] = False
-    if n_markers < 2:
+    if n_markers < 3:
         return 0
     low, high = np.inf, 0.0
     for f in range(n_frames):
@@ -563,15 +564,16 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
 def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """The frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) that lie off
     its scale (:func:`_scale_flags`), increasing; its typical size [mm], the median over the
-    frames of the largest distance between two markers; and that distance in each frame
-    ``(n_frames,)`` [mm]."""
+    other frames of the largest distance between two markers (over all of them, where half
+    are off, a value between the two scales); and that distance in each frame ``(n_frames,)``
+    [mm]."""
     array = kernel_array(markers)
     off = np.empty(array.shape[0], dtype=np.bool_)
     spans, smallest = np.full(array.shape[0], np.nan), np.empty(array.shape[0])
     _scale_flags(array, off, spans)
     if array.shape[1] >= 2:
         _frame_spans(array, spans, smallest)
-    return np.flatnonzero(off), float(np.median(spans)), spans
+    return np.flatnonzero(off), float(np.median(spans[~off])), spans
 
 
 def cluster_span(markers: np.ndarray) -> float:

@@ -335,7 +335,7 @@ def _check_frames_scale(markers: np.ndarray, labels: tuple[str, ...], recording:
     rows = complete[off]
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} change size between frames: the "
-        f"farthest two lie {typical:.3g} mm apart (median over the frames) but "
+        f"farthest two lie {typical:.3g} mm apart (median over the other frames) but "
         f"{spans[off[0]]:.3g} mm at {recording.when(int(rows[0]))} ({rows.size} frames in "
         f"all, {frames_listed(recording.first_frame + rows)}, each with every distance more "
         f"than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical "
