@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rigs import two_segments
 
 from jointbench.io.fit import fit
 from jointbench.io.recording import Recording
-from tests.rigs import two_segments
 
 LABELS = ("P1", "P2", "P3", "D1", "D2", "D3")
 

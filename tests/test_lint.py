@@ -112,6 +112,22 @@ def test_no_function_local_imports_of_the_package():
     assert not offenders, offenders
 
 
+def test_tests_import_their_helpers_as_the_test_command_finds_them():
+    """A test module imports a helper module of tests/ by its own name (``from rigs import``):
+    pytest puts tests/ on the path, not the repository, so ``from tests.rigs import`` works
+    under ``python -m pytest`` from the root (which adds the working directory) and fails
+    under the README's ``pytest``."""
+    offenders = []
+    for path in (ROOT / "tests").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            if any(name == "tests" or name.startswith("tests.") for name in names):
+                offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not offenders, offenders
+
+
 def test_every_file_the_package_holds_besides_its_modules_is_installed_with_it():
     """A file of the package that is not a module (a schema, a paper's values, the limited
     shell of the external estimators' jobs) reaches an install that is not editable only if

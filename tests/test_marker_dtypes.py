@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rigs import two_segments
 
 from jointbench import api
 from jointbench.estimators import registry
 from jointbench.estimators.validation import check_input, check_input_many
-from tests.rigs import two_segments
 
 N_FRAMES = 60
 
