@@ -42,6 +42,7 @@ __all__ = [
     "frames_listed",
     "frames_off_scale",
     "prepare_trials",
+    "scale_change",
     "span_bound",
     "span_problem",
     "typical_span",
@@ -288,14 +289,22 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         frames, typical, spans = frames_off_scale(array)
         first = int(frames[0])
         raise ValueError(
-            f"{name} change size between frames: the farthest two markers lie {typical:.3g} mm "
-            f"apart (median over the other frames) but {spans[first]:.3g} mm at frame {first} "
-            f"({frames.size} frames in all, {frames_listed(frames)}, each with every distance "
-            f"more than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the "
-            "typical size): frames "
+            f"{name} {scale_change(typical, spans[first], f'frame {first}', frames)}: frames "
             "in another unit (metres or centimetres among millimetres?) or markers not of one "
             "cluster. Marker positions are millimetres in every frame"
         )
+
+
+def scale_change(typical_mm: float, span_mm: float, first: str, frames: np.ndarray) -> str:
+    """How a refusal of frames off a cluster's scale (:func:`frames_off_scale`) names them: its
+    typical size ``typical_mm`` and the size ``span_mm`` at the ``first`` such frame (in the
+    caller's words), and all of them, ``frames`` (increasing, as the caller numbers them)."""
+    return (
+        f"change size between frames: the farthest two markers lie {typical_mm:.3g} mm apart "
+        f"(median over the other frames) but {span_mm:.3g} mm at {first} ({frames.size} frames "
+        f"in all, {frames_listed(frames)}, each with every distance more than "
+        f"{MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical size)"
+    )
 
 
 def frames_listed(frames: np.ndarray, most: int = 4) -> str:
@@ -564,9 +573,8 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
 def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """The frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) that lie off
     its scale (:func:`_scale_flags`), increasing; its typical size [mm], the median over the
-    other frames of the largest distance between two markers (over all of them, where half
-    are off, a value between the two scales); and that distance in each frame ``(n_frames,)``
-    [mm]."""
+    other frames of the largest distance between two markers; and that distance in each frame
+    ``(n_frames,)`` [mm]."""
     array = kernel_array(markers)
     off = np.empty(array.shape[0], dtype=np.bool_)
     spans, smallest = np.full(array.shape[0], np.nan), np.empty(array.shape[0])

@@ -30,13 +30,12 @@ from jointbench.estimators.validation import (
     CAPTURE_VOLUME,
     MAX_CAPTURE_SPAN_MM,
     MAX_JOINED_SPAN_MM,
-    MAX_SCALE_CHANGE,
     MAX_SPAN_MM,
     ONE_SEGMENT,
     TWO_SEGMENTS,
     cluster_span,
-    frames_listed,
     frames_off_scale,
+    scale_change,
     span_bound,
 )
 from jointbench.io.units import fitting_units, unit_hint
@@ -333,13 +332,11 @@ def _check_frames_scale(markers: np.ndarray, labels: tuple[str, ...], recording:
     if off.size == 0:
         return
     rows = complete[off]
+    first = recording.when(int(rows[0]))
+    named = scale_change(typical, spans[off[0]], first, recording.first_frame + rows)
     raise ValueError(
-        f"{recording.source}: markers {', '.join(labels)} change size between frames: the "
-        f"farthest two lie {typical:.3g} mm apart (median over the other frames) but "
-        f"{spans[off[0]]:.3g} mm at {recording.when(int(rows[0]))} ({rows.size} frames in "
-        f"all, {frames_listed(recording.first_frame + rows)}, each with every distance more "
-        f"than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical "
-        f"size): frames in another unit than the rest (metres or centimetres among the "
+        f"{recording.source}: markers {', '.join(labels)} {named}: frames in another unit "
+        "than the rest (metres or centimetres among the "
         f"file's {recording.units!r}?) or markers not of one segment; correct those frames' "
         "coordinates, or choose other frames (frames=, --frames)"
     )
