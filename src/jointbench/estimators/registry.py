@@ -64,7 +64,7 @@ from jointbench.estimators.batching import (
     one_trial,
     trial_shapes,
 )
-from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, _trial_poses, pose_segments
 from jointbench.numerics import reuse
 from jointbench.registries import Registry
 
@@ -326,10 +326,11 @@ def _shared_poses(
     """Per trial of ``segments`` (in ``names`` order, each ``(T, N, n, 3)`` or a list of
     trials), its poses as every pose-based method fits them, or its ``ValueError``; ``None``
     when they cannot be fitted as one batch (another number of arrays, trials of other
-    shapes). ``samples_checked``: as :func:`trial_poses` takes it."""
+    shapes). ``samples_checked``: as
+    :func:`~jointbench.estimators.segment_poses._trial_poses` takes it."""
     try:
         segments_by_name = dict(zip(names, segments, strict=True))
-        return trial_poses(
+        return _trial_poses(
             segments_by_name, min_frames=POSE_MIN_FRAMES, samples_checked=samples_checked
         )
     except NUMERICAL_FAILURES:
