@@ -30,11 +30,14 @@ one-trial function returns, or the numerical failure (``ValueError``, ``Floating
 it raises. A pose-based method also takes ``poses=``, one entry per trial of
 :func:`jointbench.estimators.segment_poses.trial_poses`. A method's own many-trial form fits
 its trials as one batch, so they share their numbers of frames and markers (a ``ValueError``
-names a trial that does not); given lists of trials of other shapes, the checked form fits the
-trials of each shape as one batch (:func:`_shape_by_shape`). A method states its
-own many-trial form at registration (``register(..., many=...)``, or :func:`register_many`
-where the module defines it after the one-trial function); a method without one, such as a
-newcomer's per-trial function, gets the one-trial function called trial by trial.
+names a trial that does not), but for a trial too short for the method, whose error is its
+own outcome, the others fitted (:func:`jointbench.estimators.batching.isolated`, the pose fit
+of :func:`jointbench.estimators.segment_poses.trial_poses`); given lists of trials of other
+shapes, the checked form fits the trials of each shape as one batch (:func:`_shape_by_shape`).
+A method states its own many-trial form at registration (``register(..., many=...)``, or
+:func:`register_many` where the module defines it after the one-trial function); a method
+without one, such as a newcomer's per-trial function, gets the one-trial function called trial
+by trial.
 
 At registration an estimator states its :class:`Claims`: the fewest frames it fits, how
 closely it recovers a noise-free answer and under which transformations of the data its answer
