@@ -1,15 +1,19 @@
 """What the pinned-answer tests share: answers as JSON, their numbers by path, how far rounding
 moves each, and the comparison of a new answer with the pinned one.
 
-A pinned answer is compared flags and words exactly and numbers to :data:`AGREE` (relative
-where large) or, for a number that rounding alone moves by more, to :data:`ROUNDING_TIMES`
-what rounding moved it when the pin was written: its largest change under three
-perturbations of the markers by one unit in the last place (:func:`rounding_moves`). Numbers
-are the floats, the counts (iterations) and the numbers written in a string (a statement's
-"p = 2.8e-59"): another processor or library build rounds differently, and where the
-perturbations show that rounding moves one of them, that machine may read another iteration
-count or another last digit of a statement about noise-free data. The words around a
-string's numbers are compared exactly.
+A pinned answer is compared flags and words exactly and numbers to :data:`AGREE` of their
+size (:func:`agreement`) or, for a number that rounding alone moves by more, to
+:data:`ROUNDING_TIMES` what rounding moved it when the pin was written: its largest change
+under three perturbations of the markers by one unit in the last place
+(:func:`rounding_moves`). Numbers are the floats, the counts (iterations) and the numbers
+written in a string (a statement's "p = 2.8e-59"): another processor or library build rounds
+differently, and where the perturbations show that rounding moves one of them, that machine
+may read another iteration count or another last digit of a statement about noise-free data.
+The words around a string's numbers are compared exactly.
+
+A float or a count agrees relative to its size where large and absolutely below 1: a centre
+of 1e-12 mm is the origin. A number written in a string agrees relative to its size however
+small: it carries its own significant digits, and a p of 1e-257 is not one of 5e-10.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import numpy as np
 
 from jointbench.estimators import registry
 
-#: Numbers agree to this, relative where large.
+#: Numbers agree to this of their size (:func:`agreement`).
 AGREE = 1e-9
 #: A number rounding moves by more than :data:`AGREE` agrees to this many times that move.
 ROUNDING_TIMES = 10.0
@@ -44,6 +48,26 @@ def words(text: str) -> str:
 def written_numbers(text: str) -> list[float]:
     """The numbers written in ``text``, in order."""
     return [float(number) for number in _WRITTEN_NUMBER.findall(text)]
+
+
+def written_at(where: str, index: int) -> str:
+    """The path of the ``index``-th number written in the string at path ``where``."""
+    return f"{where}#{index}"
+
+
+def _written(where: str) -> bool:
+    """Whether the path ``where`` (:func:`numbers`) is a number written in a string's: its last
+    step names one (:func:`written_at`)."""
+    return "#" in where.rpartition("/")[2]
+
+
+def agreement(pinned: float, where: str) -> float:
+    """How far a number may be from its ``pinned`` value at path ``where`` where rounding did
+    not move it: :data:`AGREE` of its size, at least of 1 for a float or a count, which agree
+    absolutely below 1; a number written in a string agrees relative to its size however
+    small, since it carries its own significant digits."""
+    size = abs(pinned) if _written(where) else max(1.0, abs(pinned))
+    return AGREE * size
 
 
 def _counted(value: object) -> bool:
@@ -162,7 +186,7 @@ def numbers(held: object, where: str, out: dict[str, float]) -> dict[str, float]
         out[where] = held
     elif isinstance(held, str):
         for index, value in enumerate(written_numbers(held)):
-            out[f"{where}#{index}"] = value
+            out[written_at(where, index)] = value
     return out
 
 
@@ -200,7 +224,8 @@ def rounding_moves(
 ) -> dict[str, float]:
     """By path, the largest change of each number of ``answers`` (:func:`numbers`) under three
     perturbations of every case's markers by one unit in the last place
-    (``perturbed(markers, seed)``), where it is above what :data:`AGREE` allows.
+    (``perturbed(markers, seed)``), where it is above what :func:`agreement` allows (so a
+    written number's relative to its size, however small).
     ``called(method, markers, options)`` answers a case as ``answers`` hold it. An answer
     whose words (:func:`words`), flags or shape rounding changes (a warning more, a flag
     flipped, a number turned "nan") is no answer a pin can hold: ``AssertionError`` naming
@@ -226,14 +251,14 @@ def rounding_moves(
     return {
         where: change
         for where, change in moved.items()
-        if change > AGREE * max(1.0, abs(pinned[where])) / ROUNDING_TIMES
+        if change > agreement(pinned[where], where) / ROUNDING_TIMES
     }
 
 
 def assert_same(now: object, pinned: object, where: str, rounding: dict[str, float]) -> None:
     """``now`` equals ``pinned``: flags and the words of strings exactly, numbers (floats,
-    counts, the numbers written in strings) to :data:`AGREE` (relative where large) or
-    :data:`ROUNDING_TIMES` their move by rounding (``rounding``, by path)."""
+    counts, the numbers written in strings) to :func:`agreement` or :data:`ROUNDING_TIMES`
+    their move by rounding (``rounding``, by path)."""
     if isinstance(pinned, dict):
         assert isinstance(now, dict) and now.keys() == pinned.keys(), where
         for key in pinned:
@@ -255,7 +280,7 @@ def assert_same(now: object, pinned: object, where: str, rounding: dict[str, flo
         for index, (mine, theirs) in enumerate(
             zip(written_numbers(now), written_numbers(pinned), strict=True)
         ):
-            _assert_near(mine, theirs, f"{where}#{index}", rounding, f"{now!r} != {pinned!r}")
+            _assert_near(mine, theirs, written_at(where, index), rounding, f"{now!r} != {pinned!r}")
     else:
         assert now == pinned and type(now) is type(pinned), f"{where}: {now!r} != {pinned!r}"
 
@@ -263,8 +288,8 @@ def assert_same(now: object, pinned: object, where: str, rounding: dict[str, flo
 def _assert_near(
     now: float, pinned: float, where: str, rounding: dict[str, float], shown: str = ""
 ) -> None:
-    """The number ``now`` is within :data:`AGREE` (relative where large) of ``pinned``, or
-    within :data:`ROUNDING_TIMES` its move by rounding at ``where``."""
+    """The number ``now`` is within :func:`agreement` of ``pinned``, or within
+    :data:`ROUNDING_TIMES` its move by rounding at ``where``."""
     moved = rounding.get(as_one_trial(where), 0.0)
-    allowed = max(AGREE * max(1.0, abs(pinned)), ROUNDING_TIMES * moved)
+    allowed = max(agreement(pinned, where), ROUNDING_TIMES * moved)
     assert abs(now - pinned) <= allowed, f"{where}: {shown or f'{now!r} != {pinned!r}'}"

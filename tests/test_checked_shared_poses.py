@@ -13,7 +13,7 @@ import pytest
 from rigs import assert_same_outcome, two_segments
 
 from jointbench.estimators import registry, support, validation
-from jointbench.estimators.segment_poses import pose_segments, trial_poses
+from jointbench.estimators.segment_poses import _trial_poses, pose_segments, trial_poses
 
 KIND = "joint_center"
 POSE_BASED = [
@@ -348,12 +348,12 @@ def test_trials_of_other_lengths_are_refused_naming_them_without_checks(name):
 @pytest.mark.parametrize("case", list(CASES))
 def test_poses_of_checked_samples_are_those_of_unchecked_ones(case):
     """A checked call's inputs passed the sample checks just before their poses are fitted:
-    ``samples_checked`` skips that scan, and fits and refuses (too few frames, collinear
-    markers) exactly as the scan does."""
+    its private form with ``samples_checked`` skips that scan, and fits and refuses (too few
+    frames, collinear markers) exactly as the scan does."""
     arrays = tuple(validation.check_input(KIND, CASES[case]))
     segments = {"proximal": [arrays[0]], "distal": [arrays[1]]}
     scanned = trial_poses(segments, min_frames=3)
-    skipped = trial_poses(segments, min_frames=3, samples_checked=True)
+    skipped = _trial_poses(segments, min_frames=3, samples_checked=True)
     for found, expected in zip(skipped, scanned, strict=True):
         if isinstance(expected, ValueError):
             assert type(found) is type(expected) and str(found) == str(expected)
@@ -371,5 +371,5 @@ def test_samples_checked_still_counts_frames_and_markers():
     few = {"proximal": [proximal[:, :2]], "distal": [distal]}
     for segments in (short, few):
         (scanned,) = trial_poses(segments, min_frames=3)
-        (skipped,) = trial_poses(segments, min_frames=3, samples_checked=True)
+        (skipped,) = _trial_poses(segments, min_frames=3, samples_checked=True)
         assert isinstance(skipped, ValueError) and str(skipped) == str(scanned)

@@ -41,3 +41,48 @@ def test_scattered_frames_in_metres_are_named():
     rows = np.array([3, 17, 18, 19, 64, 100])
     with pytest.raises(ValueError, match="6 frames in all, frames 4, 18 to 20, 65, 101"):
         fit(_recording(rows), "center", "D1,D2,D3", "P1,P2,P3", method="LS")
+
+
+def _four_markers(frames: np.ndarray, gap: np.ndarray, *, units: str = "mm") -> Recording:
+    """A segment of four markers D1 to D4 turning about the joint ``(120, 4, 3)`` [mm], its
+    ``frames`` divided by 1000 and D4 missing in ``gap``."""
+    _, distal = two_segments(120, proximal_moves=False)
+    normal = np.cross(distal[:, 1] - distal[:, 0], distal[:, 2] - distal[:, 0])
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    markers = np.concatenate([distal, (distal.mean(axis=1) + 40.0 * normal)[:, None]], axis=1)
+    markers[frames] /= 1000.0
+    markers[gap, 3] = np.nan
+    return Recording(
+        ("D1", "D2", "D3", "D4"), markers, rate_hz=100.0, first_frame=1, source="trial.csv"
+    )
+
+
+@pytest.mark.parametrize("artefacts", ["refuse", "exclude"])
+def test_frames_in_metres_with_a_marker_missing_are_named(artefacts):
+    # D4 missing in every frame in metres: those frames are judged by D1 to D3 against the
+    # same three markers in the others.
+    block = np.arange(40, 80)
+    recording = _four_markers(block, block)
+    with pytest.raises(ValueError, match="another unit") as error:
+        fit(recording, "center", "D1,D2,D3,D4", method="LS", artefacts=artefacts)
+    text = str(error.value)
+    assert "40 frames in all, frames 41 to 80" in text
+    assert "markers shown at frame 41 (0.41 s)" in text
+
+
+@pytest.mark.parametrize(
+    ("metres", "smaller"), [(np.arange(40, 80), True), (np.r_[0:40, 80:120], False)]
+)
+def test_the_refusal_says_which_frames_are_in_the_files_unit(metres, smaller):
+    # A minority in metres among millimetres, or in millimetres among metres: the frames named
+    # are the minority either way, and the refusal says which group is in the file's unit.
+    recording = _four_markers(metres, np.arange(0))
+    with pytest.raises(ValueError, match="another unit") as error:
+        fit(recording, "center", "D1,D2,D3,D4", method="LS")
+    text = str(error.value)
+    assert "40 frames in all, frames 41 to 80" in text
+    if smaller:
+        assert "the rest are a body segment's size in the file's 'mm'" in text
+    else:
+        assert "those frames are a body segment's size in the file's 'mm'" in text
+    assert "among the file's" not in text

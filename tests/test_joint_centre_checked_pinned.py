@@ -7,13 +7,14 @@ or its centre, covariance, ``converged``, ``iterations``, status (with its warni
 diagnostics. A trial's answer does not depend on the others of a call, so the checked
 many-trial call (:func:`jointbench.estimators.registry.many`) is held to the same pin. A
 faster implementation must answer the same: the same errors, statuses and
-warnings word for word (their numbers printed to four digits, so to rounding), the same numbers
-to 1e-9 (relative where large) or, for a number that rounding alone moves by more, to ten times
-what rounding moved it when the pin was written: its largest change under three perturbations
-of the markers by one unit in the last place (``rounding`` in the file). Those are the numbers
-of ill-conditioned fits (a hinge all but for 1e-6 rad, whose covariance rounding moves by
-1e-5) and the chi^2 of noise-free data, rounding over rounding; no implementation that orders
-one sum differently answers them closer.
+warnings word for word (their numbers printed to four digits, so to rounding, and compared
+relative to their size however small), the same numbers to 1e-9 (relative where large) or, for
+a number that rounding alone moves by more, to ten times what rounding moved it when the pin
+was written: its largest change under three perturbations of the markers by one unit in the
+last place (``rounding`` in the file). Those are the numbers of ill-conditioned fits (a hinge
+all but for 1e-6 rad, whose covariance rounding moves by 1e-5) and the chi^2 of noise-free
+data, rounding over rounding; no implementation that orders one sum differently answers them
+closer.
 
 Cases: paper C's hip protocol at Nt = 4, 20, 200 and 1200 frames, noisy, noise-free and with
 an exact frame 0, with a cluster that slides with the hip angles and with a noisy pelvis

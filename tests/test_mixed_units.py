@@ -13,7 +13,12 @@ from rigs import two_segments
 
 from jointbench import api
 from jointbench.estimators import registry
-from jointbench.estimators.validation import check_input, check_input_many
+from jointbench.estimators.validation import (
+    check_input,
+    check_input_many,
+    check_span,
+    frames_off_scale,
+)
 
 N_FRAMES = 120
 BLOCK = np.arange(40, 80)
@@ -143,3 +148,65 @@ def test_half_the_frames_in_metres_name_the_others_size():
     with pytest.raises(ValueError, match="another unit") as error:
         check_input("center", (mixed,))
     assert f"lie {span:.3g} mm apart" in str(error.value)
+
+
+def _cluster_of_four() -> np.ndarray:
+    """Four markers ``(N_FRAMES, 4, 3)`` [mm] of a segment turning about JOINT: DISTAL and its
+    centroid lifted 40 mm off their plane."""
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    normal = np.cross(moving[:, 1] - moving[:, 0], moving[:, 2] - moving[:, 0])
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    fourth = moving.mean(axis=1) + 40.0 * normal
+    return np.concatenate([moving, fourth[:, None]], axis=1)
+
+
+def test_frames_in_metres_with_a_gap_are_judged_by_the_markers_they_show():
+    # A marker missing in the metre frames, and a frame that shows none: the frames are
+    # named by what they show, against the same markers in the other frames.
+    markers = _in_metres(_cluster_of_four(), BLOCK)
+    markers[BLOCK, 3] = np.nan
+    markers[5] = np.nan
+    with pytest.raises(ValueError, match="another unit") as error:
+        check_span(markers)
+    text = str(error.value)
+    assert f"frame {BLOCK[0]} " in text
+    assert "nan" not in text
+    assert f"markers shown at frame {BLOCK[0]} " in text
+    off, typical, spans = frames_off_scale(markers)
+    assert off.tolist() == BLOCK.tolist()
+    shown = markers[BLOCK[0], :3]
+    assert spans[BLOCK[0]] == pytest.approx(np.linalg.norm(shown[:, None] - shown, axis=-1).max())
+    assert typical[BLOCK[0]] == pytest.approx(1000.0 * spans[BLOCK[0]], rel=0.01)
+
+
+def test_a_gap_in_the_frames_of_the_typical_size_is_no_change_of_unit():
+    # The farthest marker missing: the others lie closer together than the whole cluster, as
+    # they do in every frame; compared with the same markers elsewhere, no frame is off.
+    markers = _cluster_of_four()
+    markers[BLOCK, 3] = np.nan
+    markers[10:20, 0] = np.nan
+    assert frames_off_scale(markers)[0].size == 0
+    check_span(markers)
+
+
+#: The other frames than BLOCK, most of them.
+OUTSIDE_BLOCK = np.setdiff1d(np.arange(N_FRAMES), BLOCK)
+
+
+@pytest.mark.parametrize(("metres", "smaller"), [(BLOCK, True), (OUTSIDE_BLOCK, False)])
+def test_the_refusal_says_how_the_frames_differ_and_which_are_millimetres(metres, smaller):
+    # Most frames in millimetres and some in metres, or most in metres and some in
+    # millimetres: the refusal names the fewer, BLOCK, says how they differ from the rest and
+    # which group is a body segment's size in millimetres.
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    with pytest.raises(ValueError, match="another unit") as error:
+        check_input("center", (_in_metres(moving, metres),))
+    text = str(error.value)
+    assert f"{BLOCK.size} frames in all, frames {BLOCK[0]} to {BLOCK[-1]}" in text
+    if smaller:
+        assert "those frames are 1000 times smaller than the rest:" in text
+        assert "the rest are a body segment's size in millimetres" in text
+    else:
+        assert "those frames are 1000 times larger than the rest:" in text
+        assert "those frames are a body segment's size in millimetres" in text
+    assert "among millimetres" not in text

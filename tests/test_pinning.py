@@ -118,3 +118,49 @@ def test_rounding_that_adds_a_warning_or_flips_a_flag_stops_the_pin_from_being_w
     held = {"edge": {"m": _warned("m", (np.array([1.0]),), {})}}
     with pytest.raises(AssertionError, match="rounding changes its words"):
         rounding_moves(held, cases, ("m",), _warned)
+
+
+@pytest.mark.parametrize(
+    ("pinned", "now"),
+    [
+        ("p = 5e-10", "p = 1e-257"),
+        ("variance 7e-10 mm^2", "variance 3e-12 mm^2"),
+        ("p = 1.9e-94", "p = 0"),
+        ("p = 0", "p = 1e-300"),
+        ("p = 0.5", "p = 0.5001"),
+    ],
+)
+def test_a_small_written_number_agrees_relative_to_its_size(pinned, now):
+    """A number written in a statement carries its own significant digits: 1e-257 is not
+    5e-10, however small both are beside 1."""
+    with pytest.raises(AssertionError):
+        assert_same({"status": now}, {"status": pinned}, "", {})
+
+
+@pytest.mark.parametrize("text", ["p = 5e-10", "p = 1.9e-94, sd 3e-12 mm", "p = 0", "p = -0.0"])
+def test_a_written_number_identical_to_its_pin_agrees(text):
+    assert_same({"status": text}, {"status": text}, "", {})
+
+
+def test_a_small_written_number_that_rounding_moved_agrees_to_ten_times_the_move():
+    moved = {"/status#0": 1e-12}
+    assert_same({"status": "p = 5.05e-10"}, {"status": "p = 5e-10"}, "", moved)
+    with pytest.raises(AssertionError):
+        assert_same({"status": "p = 5.2e-10"}, {"status": "p = 5e-10"}, "", moved)
+
+
+def _small_statement(method: str, markers: tuple[np.ndarray, ...], options: dict) -> dict:
+    """A stand-in for a checked call that writes a small number rounding moves relatively by
+    about 1e-8, and a float beside it that it moves alike."""
+    value = float(markers[0][0]) * (1.0 + 1e-8 * (float(markers[0][0]) != 1.0))
+    return {"one": [{"status": f"p = {5e-10 * value!r}", "cost": 5e-10 * value}]}
+
+
+def test_rounding_moves_of_a_small_written_number_are_measured_relative_to_its_size():
+    """Rounding's move of a small written number is measured against the number's own size;
+    a pinned float's, as the agreement allows it, against at least one."""
+    cases = {"edge": ((np.array([1.0]),), {})}
+    held = {"edge": {"m": _small_statement("m", (np.array([1.0]),), {})}}
+    moved = rounding_moves(held, cases, ("m",), _small_statement)
+    assert list(moved) == ["/edge/m/one[0]/status#0"]
+    assert moved["/edge/m/one[0]/status#0"] == pytest.approx(5e-18, rel=1e-3)

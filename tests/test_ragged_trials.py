@@ -2,7 +2,8 @@
 
 The checked many-trial form fits each shape as a batch of its own and answers every trial as
 its one-trial checked call does; the form without checks, whose trials are fitted as one
-batch, refuses them with a ``ValueError`` naming the segment and the trials.
+batch, refuses them with a ``ValueError`` naming the segment and the trials. A trial too short
+for the method fails alone in either form, its error its outcome, the others fitted.
 """
 
 from __future__ import annotations
@@ -160,3 +161,40 @@ def test_poses_given_for_trials_of_other_lengths_are_split_with_them(name):
         assert_same_outcome(found, expected)
     with pytest.raises(ValueError, match=r"^poses: 5 entries for 6 trials"):
         registry.many("joint_center", name)(*segments, poses=poses[1:])
+
+
+@pytest.mark.parametrize(("kind", "name"), OWN_MANY)
+def test_a_trial_too_short_fails_alone_in_either_form(kind, name):
+    # As the checked form and a pose-based method's pose fit treat it: a trial too short for
+    # the method (a frame fewer than it claims to need) among normal ones carries its own
+    # error, and the others are fitted as without it.
+    too_few = registry.claims(kind, name).min_frames - 1
+    normal = [_trial(kind, 60, 3, 0), _trial(kind, 60, 3, 1)]
+    mixed = _segments([normal[0], _trial(kind, too_few, 3, 2), normal[1]])
+    checked = registry.many(kind, name)(*mixed)
+    assert isinstance(checked[1], ValueError) and f"has {too_few} frames" in str(checked[1])
+    unchecked = registry.many(kind, name, checked=False)(*mixed)
+    assert_same_outcome(unchecked[1], checked[1])
+    alone = registry.many(kind, name, checked=False)(*_segments(normal))
+    for found, expected in zip(unchecked[::2], alone, strict=True):
+        assert_same_outcome(found, expected)
+
+
+@pytest.mark.parametrize(("kind", "name"), OWN_MANY)
+def test_beside_a_trial_too_short_trials_of_other_frames_are_named_as_given(kind, name):
+    too_few = registry.claims(kind, name).min_frames - 1
+    trials = [_trial(kind, 60, 3, 0), _trial(kind, too_few, 3, 1), _trial(kind, 45, 3, 2)]
+    first = "proximal" if kind == "joint_center" else "markers"
+    with pytest.raises(
+        ValueError, match=rf"^{first} of trial 2 has 45 frames and 3 markers, of trial 0 60 and 3"
+    ):
+        registry.many(kind, name, checked=False)(*_segments(trials))
+
+
+@pytest.mark.parametrize(("kind", "name"), OWN_MANY)
+def test_trials_all_too_short_fail_each_alone(kind, name):
+    too_few = registry.claims(kind, name).min_frames - 1
+    trials = [_trial(kind, too_few, 3, 0), _trial(kind, too_few - 1, 3, 1)]
+    outcomes = registry.many(kind, name, checked=False)(*_segments(trials))
+    for outcome, frames in zip(outcomes, (too_few, too_few - 1), strict=True):
+        assert isinstance(outcome, ValueError) and f"has {frames} frames" in str(outcome)

@@ -82,10 +82,10 @@ from jointbench.screening import (
     ArtefactRules,
     Numbering,
     Screening,
+    _find_artefacts,
     checked_rules,
     column_label,
     exchanges_untested,
-    find_artefacts,
     summarise,
 )
 from jointbench.screening import screen as screen_markers
@@ -261,7 +261,7 @@ def _screen_valid(kind: str, clean: tuple[np.ndarray, ...], artefacts: str) -> d
     for name, markers in zip(_NAMES[kind], clean, strict=True):
         labels = _column_labels(name, markers.shape[1])
         # The input checks refused every coordinate the screen's magnitude check would.
-        flagged, swaps = find_artefacts(markers, labels, name, magnitudes_checked=True)
+        flagged, swaps = _find_artefacts(markers, labels, name)
         if flagged:  # swaps come only with the artefacts they explain
             found[name] = Screening(flagged, swaps)
     if not found:

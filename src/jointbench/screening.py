@@ -1872,11 +1872,21 @@ def find_artefacts(
     labels: tuple[str, ...],
     source: str,
     rules: ArtefactRules | None = None,
-    *,
-    magnitudes_checked: bool = False,
 ) -> tuple[tuple[Artefact, ...], tuple[Swap, ...]]:
     """The ``artefacts`` and ``swaps`` :func:`screen` finds in ``markers`` ``(n_frames, n, 3)``
-    [mm], without the cluster's fit: a complete cluster that :func:`surely_rigid` clears and
+    [mm], without the cluster's fit (:func:`_find_artefacts`), once :func:`check_magnitudes`
+    passed them: ``ValueError`` naming ``source``, the marker and the frame of a coordinate
+    beyond what float64's sums over them can hold, an inf among them."""
+    check_magnitudes(markers, labels, source)
+    return _find_artefacts(markers, labels, source, rules)
+
+
+def _find_artefacts(
+    markers: np.ndarray, labels: tuple[str, ...], source: str, rules: ArtefactRules | None = None
+) -> tuple[tuple[Artefact, ...], tuple[Swap, ...]]:
+    """:func:`find_artefacts` of ``markers`` that passed :func:`check_magnitudes` (or
+    :func:`~jointbench.estimators.validation.check_markers`, which refuses every coordinate it
+    refuses) just before, not run again: a complete cluster that :func:`surely_rigid` clears and
     in which :func:`find_exchanges` finds no swap needs only the jump check, anything else
     gets the whole screen. A cluster the marker-frame bounds clear costs one compiled call
     (:func:`_clean_screen`), which finds what the bound, the distance test's verdict and the
@@ -1884,12 +1894,7 @@ def find_artefacts(
     ``min_jump_mm``. Where the whole screen runs on a complete cluster without a swapped
     frame, it starts from the typical frame and pose fit of the fitted bounds, which are its
     own first. A cluster of more than :data:`MAX_EXCHANGE_MARKERS` is not tested for
-    label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`).
-    ``magnitudes_checked``: ``markers`` passed
-    :func:`~jointbench.estimators.validation.check_markers`, which refuses every coordinate
-    :func:`check_magnitudes` refuses, and it is not run again."""
-    if not magnitudes_checked:
-        check_magnitudes(markers, labels, source)
+    label exchanges, as in :func:`screen`: its callers say so (:func:`exchanges_untested`)."""
     if len(labels) < 3:
         return tuple(find_jumps(markers, labels, rules or _RULES)), ()
     # Looked up before the default is filled in: None hashes faster than the rules.

@@ -290,4 +290,4 @@ def _ma_judged(
 
 fit_ma.self_check = _ma_self_check
 fit_ma.self_check_many = _ma_self_check_many
-register_many("center", "MA", isolated(_fit_ma_batch))
+register_many("center", "MA", isolated(_fit_ma_batch, min_frames=_MIN_FRAMES))

@@ -1127,7 +1127,7 @@ def _make(method: str, summary: str) -> Callable[..., AxisResult]:
 
 
 def _many(method: str) -> Callable[..., list]:
-    return isolated(_entry(_fit_trials, method))
+    return isolated(_entry(_fit_trials, method), min_frames=_MIN_FRAMES)
 
 
 _CLAIMS = {"recovery": 1e-4, "invariances": 1e-4, "min_frames": _MIN_FRAMES}

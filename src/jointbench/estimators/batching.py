@@ -330,7 +330,7 @@ def _segment_names(names: tuple[str, ...], n_segments: int) -> tuple[str, ...]:
     return tuple(f"marker array {index + 1}" for index in range(n_segments))
 
 
-def isolated(batched: Callable[..., list]) -> Callable[..., list]:
+def isolated(batched: Callable[..., list], *, min_frames: int = 1) -> Callable[..., list]:
     """``batched(*segments, **options)`` (segments ``(n_trials, ...)``, one outcome per trial)
     that, when the whole call fails numerically, returns per trial the outcome it has alone.
 
@@ -338,6 +338,12 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
     :func:`jointbench.estimators.segment_poses.trial_poses`) is split with the trials; a list
     of another length, or an entry that is neither the poses of ``batched``'s segments (its
     ``pose_segments``) nor a ``ValueError``, is refused.
+
+    Given lists of trials, a form that is not pose-based fits each trial with fewer than
+    ``min_frames`` frames (the method's fewest) alone, its error its outcome, and the others
+    as one batch (:func:`_short_apart`): a trial too short for the method fails alone, as a
+    pose-based form's pose fit refuses it alone, and as the checked form does; trials of other
+    shapes that are long enough are refused, as by the pose fit.
     """
     names = getattr(batched, "pose_segments", None)
 
@@ -350,7 +356,11 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
             # (:func:`jointbench.estimators.segment_poses.trial_poses`); the others stack them.
             shapes = trial_shapes(segments)
             if shapes is not None:
-                check_one_shape(("markers",), dict(enumerate(shapes)))
+                short = {t for t, shape in enumerate(shapes) if _too_short(shape, min_frames)}
+                long_enough = {t: shape for t, shape in enumerate(shapes) if t not in short}
+                check_one_shape(("markers",), long_enough)
+                if short and len(shapes) > 1:
+                    return _short_apart(run, segments, options, sorted(short))
         check_poses(segments, options.get("poses"), names)
         try:
             return batched(*segments, **options)
@@ -379,6 +389,37 @@ def isolated(batched: Callable[..., list]) -> Callable[..., list]:
         return each_alone(alone, n_trials)
 
     return run
+
+
+def _too_short(shape: tuple, min_frames: int) -> bool:
+    """Whether a trial of the shapes ``shape`` (:func:`trial_shapes`, one per segment) has
+    fewer than ``min_frames`` frames in some segment."""
+    return any(s is not None and len(s) > 0 and s[0] < min_frames for s in shape)
+
+
+def _short_apart(
+    run: Callable[..., list], segments: tuple, options: dict, short: list[int]
+) -> list:
+    """``run(*segments, **options)`` (lists of trials) with the trials ``short`` (increasing)
+    each called alone and the others, if any, in one call (``poses=`` split with them):
+    outcomes in the trials' order."""
+    n_trials = len(segments[0])
+    poses = options.get("poses")
+    check_poses(segments, poses, None)  # one entry per trial, before they are split
+
+    def called(trials: list[int]) -> list:
+        part = dict(options)
+        if poses is not None:
+            part["poses"] = [poses[t] for t in trials]
+        return run(*([segment[t] for t in trials] for segment in segments), **part)
+
+    outcomes: list = [None] * n_trials
+    alone = set(short)
+    rest = [t for t in range(n_trials) if t not in alone]
+    for trials in [*([t] for t in short), *([rest] if rest else [])]:
+        for trial, outcome in zip(trials, called(trials), strict=True):
+            outcomes[trial] = outcome
+    return outcomes
 
 
 def check_poses(segments: tuple, poses: list | None, names: tuple[str, ...] | None) -> None:

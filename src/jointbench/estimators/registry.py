@@ -30,11 +30,14 @@ one-trial function returns, or the numerical failure (``ValueError``, ``Floating
 it raises. A pose-based method also takes ``poses=``, one entry per trial of
 :func:`jointbench.estimators.segment_poses.trial_poses`. A method's own many-trial form fits
 its trials as one batch, so they share their numbers of frames and markers (a ``ValueError``
-names a trial that does not); given lists of trials of other shapes, the checked form fits the
-trials of each shape as one batch (:func:`_shape_by_shape`). A method states its
-own many-trial form at registration (``register(..., many=...)``, or :func:`register_many`
-where the module defines it after the one-trial function); a method without one, such as a
-newcomer's per-trial function, gets the one-trial function called trial by trial.
+names a trial that does not), but for a trial too short for the method, whose error is its
+own outcome, the others fitted (:func:`jointbench.estimators.batching.isolated`, the pose fit
+of :func:`jointbench.estimators.segment_poses.trial_poses`); given lists of trials of other
+shapes, the checked form fits the trials of each shape as one batch (:func:`_shape_by_shape`).
+A method states its own many-trial form at registration (``register(..., many=...)``, or
+:func:`register_many` where the module defines it after the one-trial function); a method
+without one, such as a newcomer's per-trial function, gets the one-trial function called trial
+by trial.
 
 At registration an estimator states its :class:`Claims`: the fewest frames it fits, how
 closely it recovers a noise-free answer and under which transformations of the data its answer
@@ -64,7 +67,7 @@ from jointbench.estimators.batching import (
     one_trial,
     trial_shapes,
 )
-from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, _trial_poses, pose_segments
 from jointbench.numerics import reuse
 from jointbench.registries import Registry
 
@@ -326,10 +329,11 @@ def _shared_poses(
     """Per trial of ``segments`` (in ``names`` order, each ``(T, N, n, 3)`` or a list of
     trials), its poses as every pose-based method fits them, or its ``ValueError``; ``None``
     when they cannot be fitted as one batch (another number of arrays, trials of other
-    shapes). ``samples_checked``: as :func:`trial_poses` takes it."""
+    shapes). ``samples_checked``: as
+    :func:`~jointbench.estimators.segment_poses._trial_poses` takes it."""
     try:
         segments_by_name = dict(zip(names, segments, strict=True))
-        return trial_poses(
+        return _trial_poses(
             segments_by_name, min_frames=POSE_MIN_FRAMES, samples_checked=samples_checked
         )
     except NUMERICAL_FAILURES:

@@ -305,7 +305,7 @@ def _less_turned(markers: np.ndarray, turned: np.ndarray, translation: np.ndarra
 
 
 def trial_poses(
-    segments: dict[str, np.ndarray], *, min_frames: int, samples_checked: bool = False
+    segments: dict[str, np.ndarray], *, min_frames: int
 ) -> list[dict[str, SegmentPoses] | ValueError]:
     """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
     and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials; every
@@ -317,10 +317,18 @@ def trial_poses(
     its ``ValueError``. The trials that pass must share their shapes (``ValueError`` naming
     the first that does not): every segment's poses are fitted for all trials in one call of
     :func:`jointbench.numerics.poses.rigid_poses`. Compute them once and pass them to the
-    ``batched`` form of every pose-based method. ``samples_checked``: every trial's arrays are
-    float64 ``(N, n, 3)`` arrays whose samples :func:`check_markers` passed just before, and
-    are not scanned again (their counts, frames and collinearity are still checked).
+    ``batched`` form of every pose-based method.
     """
+    return _trial_poses(segments, min_frames=min_frames, samples_checked=False)
+
+
+def _trial_poses(
+    segments: dict[str, np.ndarray], *, min_frames: int, samples_checked: bool
+) -> list[dict[str, SegmentPoses] | ValueError]:
+    """:func:`trial_poses`; ``samples_checked``: every trial's arrays are float64
+    ``(N, n, 3)`` arrays whose samples :func:`check_markers` passed just before (a checked
+    call's), and are not scanned again (their counts, frames and collinearity are still
+    checked)."""
     names = list(segments)
     check_same_trials(tuple(segments.values()), tuple(names))
     arrays = {

@@ -1167,7 +1167,7 @@ def _bc_judged(result: CenterResult, step: float, tol_x: float) -> CenterResult:
 fit_is.self_check = _is_self_check
 fit_bc.self_check = _bc_self_check
 fit_bc.self_check_many = _bc_self_check_many
-register_many("center", "LS", isolated(_fit_ls_batch))
-register_many("center", "NM", isolated(_fit_nm_batch))
-register_many("center", "BC", isolated(_fit_bc_batch))
-register_many("center", "IS", isolated(_fit_is_batch))
+register_many("center", "LS", isolated(_fit_ls_batch, min_frames=_MIN_FRAMES))
+register_many("center", "NM", isolated(_fit_nm_batch, min_frames=_MIN_FRAMES))
+register_many("center", "BC", isolated(_fit_bc_batch, min_frames=_MIN_FRAMES))
+register_many("center", "IS", isolated(_fit_is_batch, min_frames=_MIN_FRAMES))

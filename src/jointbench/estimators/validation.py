@@ -286,25 +286,61 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
             "centre or axis of rotation"
         )
     if failure == _OFF_SCALE:
-        frames, typical, spans = frames_off_scale(array)
-        first = int(frames[0])
+        judged = frames_off_scale(array)
+        frames = judged[0]
+        named = scale_change(array, judged, f"frame {frames[0]}", frames, "millimetres")
         raise ValueError(
-            f"{name} {scale_change(typical, spans[first], f'frame {first}', frames)}: frames "
-            "in another unit (metres or centimetres among millimetres?) or markers not of one "
-            "cluster. Marker positions are millimetres in every frame"
+            f"{name} {named}, or markers not of one cluster. Marker positions are millimetres "
+            "in every frame"
         )
 
 
-def scale_change(typical_mm: float, span_mm: float, first: str, frames: np.ndarray) -> str:
-    """How a refusal of frames off a cluster's scale (:func:`frames_off_scale`) names them: its
-    typical size ``typical_mm`` and the size ``span_mm`` at the ``first`` such frame (in the
-    caller's words), and all of them, ``frames`` (increasing, as the caller numbers them)."""
-    return (
-        f"change size between frames: the farthest two markers lie {typical_mm:.3g} mm apart "
-        f"(median over the other frames) but {span_mm:.3g} mm at {first} ({frames.size} frames "
-        f"in all, {frames_listed(frames)}, each with every distance more than "
-        f"{MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical size)"
+def scale_change(
+    markers: np.ndarray,
+    judged: tuple[np.ndarray, np.ndarray, np.ndarray],
+    first: str,
+    frames: np.ndarray,
+    unit: str,
+) -> str:
+    """How a refusal of the frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] off its
+    scale names them, ``judged`` what :func:`frames_off_scale` returns of them: the size of
+    the markers the first of them shows, typical (over the other frames) and there, ``first``
+    (in the caller's words), and all of them, ``frames`` (increasing, as the caller numbers
+    them); how many times larger or smaller than the rest they are, and which of the two groups
+    is a body segment's size in ``unit`` (in words, "millimetres", "the file's 'mm'"), that
+    either group may be the one in another unit."""
+    off, typical, spans = judged
+    row = int(off[0])
+    typical_mm, span_mm = float(typical[row]), float(spans[row])
+    complete = bool(np.isfinite(markers[row]).all())
+    which = "markers" if complete else f"of the markers shown at {first}"
+    others = "other frames" if complete else "other frames that show them"
+    times = (
+        f"{typical_mm / span_mm:.4g} times smaller"
+        if span_mm < typical_mm
+        else f"{span_mm / typical_mm:.4g} times larger"
     )
+    return (
+        f"change size between frames: the farthest two {which} lie {typical_mm:.3g} mm apart "
+        f"(median over the {others}) but {span_mm:.3g} mm at {first} ({frames.size} frames in "
+        f"all, {frames_listed(frames)}, each with every distance more than "
+        f"{MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical "
+        f"size): those frames are {times} than the rest: "
+        f"{_in_which_unit(typical_mm, span_mm, unit)}"
+    )
+
+
+def _in_which_unit(typical_mm: float, span_mm: float, unit: str) -> str:
+    """Which of two groups of frames, the rest of typical size ``typical_mm`` [mm] and those
+    of size ``span_mm`` [mm], is in ``unit`` (in words) and which in another, as far as a body
+    segment's size (:func:`span_bound`) tells: either may be, the rest as well."""
+    rest = span_bound(typical_mm, MAX_SPAN_MM, ONE_SEGMENT) is None
+    those = span_bound(span_mm, MAX_SPAN_MM, ONE_SEGMENT) is None
+    if rest and not those:
+        return f"the rest are a body segment's size in {unit} and those frames in another unit"
+    if those and not rest:
+        return f"those frames are a body segment's size in {unit} and the rest in another unit"
+    return f"one of the two groups is in another unit than {unit} (their sizes cannot tell which)"
 
 
 def frames_listed(frames: np.ndarray, most: int = 4) -> str:
@@ -570,18 +606,59 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
     return count
 
 
-def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-    """The frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] (finite) that lie off
-    its scale (:func:`_scale_flags`), increasing; its typical size [mm], the median over the
-    other frames of the largest distance between two markers; and that distance in each frame
-    ``(n_frames,)`` [mm]."""
+def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The frames of the cluster ``markers`` ``(n_frames, n, 3)`` [mm] that lie off its scale
+    (:func:`_scale_flags`), increasing; the typical size [mm] of the markers each frame shows,
+    the median over the other frames that show them of the largest distance between two of
+    them ``(n_frames,)``; and that distance in each frame ``(n_frames,)`` [mm] (NaN where it
+    shows fewer than two).
+
+    A frame with a gap (a marker with a NaN coordinate) is judged by the markers it shows
+    against the same markers in every frame that shows them: like with like, since the
+    markers a frame shows lie closer together than the whole cluster in every unit. One that
+    shows fewer than three is not judged: its one distance cannot tell a unit from one marker
+    astray (:func:`_scale_flags`), and it holds no pose a fit could take."""
     array = kernel_array(markers)
-    off = np.empty(array.shape[0], dtype=np.bool_)
-    spans, smallest = np.full(array.shape[0], np.nan), np.empty(array.shape[0])
-    _scale_flags(array, off, spans)
-    if array.shape[1] >= 2:
-        _frame_spans(array, spans, smallest)
-    return np.flatnonzero(off), float(np.median(spans[~off])), spans
+    n_frames = array.shape[0]
+    off = np.zeros(n_frames, dtype=np.bool_)
+    typical, spans = np.full(n_frames, np.nan), np.full(n_frames, np.nan)
+    finite = np.isfinite(array)
+    if finite.all():  # the common case: one pattern, every frame's, judged on the array itself
+        off[:], spans[:] = _frames_off(array)
+        typical[:] = np.median(spans[~off])
+        return np.flatnonzero(off), typical, spans
+    shown = finite.all(axis=-1)
+    patterns, inverse = _patterns(shown)
+    for k, pattern in enumerate(patterns):
+        if pattern.sum() < 2:
+            continue
+        frames = np.flatnonzero(shown[:, pattern].all(axis=1))  # those that show these markers
+        own = inverse[frames] == k  # ... of which those that show no other
+        flags, sizes = _frames_off(np.ascontiguousarray(array[frames][:, pattern]))
+        off[frames[own]], spans[frames[own]] = flags[own], sizes[own]
+        typical[frames[own]] = np.median(sizes[~flags])
+    return np.flatnonzero(off), typical, spans
+
+
+def _patterns(shown: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``shown`` ``(n_frames, n)`` bool, ``(k, n)``, and the index of each
+    frame's among them ``(n_frames,)``. Each row is packed into bytes and the bytes compared
+    as one value: NumPy's ``unique`` over rows sorts them as records, twenty times slower."""
+    packed = np.ascontiguousarray(np.packbits(shown, axis=1))
+    keys = packed.view(np.dtype((np.void, packed.shape[1]))).reshape(-1)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    return shown[first], inverse.reshape(-1)
+
+
+def _frames_off(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which frames of the complete cluster ``markers`` ``(n_frames, n >= 2, 3)`` [mm] lie off
+    its scale (:func:`_scale_flags`) ``(n_frames,)`` bool, and the largest distance between
+    two of its markers in each ``(n_frames,)`` [mm]."""
+    off = np.empty(markers.shape[0], dtype=np.bool_)
+    spans, smallest = np.full(markers.shape[0], np.nan), np.empty(markers.shape[0])
+    _scale_flags(markers, off, spans)
+    _frame_spans(markers, spans, smallest)
+    return off, spans
 
 
 def cluster_span(markers: np.ndarray) -> float:
@@ -624,15 +701,16 @@ def span_bound(span_mm: float, largest_mm: float, largest: str) -> str | None:
 
 
 def check_span(markers: np.ndarray, *, name: str = "markers") -> None:
-    """Raise ``ValueError`` when some frames of the markers ``(n_frames, n, 3)`` (finite),
-    which are millimetres, are in another unit than the rest (:func:`frames_off_scale`), or
-    when they lie closer together than a marker's own size or further apart than a body
-    segment's (:func:`typical_span`, :func:`span_problem`): an answer in another unit would
-    pass every check, which are built for millimetres, at a thousandth of its size, or fail
-    them for the wrong reason."""
-    span = np.empty(1)
-    _refuse(markers, name, _first_failure(markers, _SCALE, span=span))
-    _refuse_span(span[0], name)
+    """Raise ``ValueError`` when some frames of the markers ``(n_frames, n, 3)``, which are
+    millimetres, are in another unit than the rest (:func:`frames_off_scale`, a frame with a
+    gap judged by the markers it shows), or when they lie closer together than a marker's own
+    size or further apart than a body segment's (:func:`typical_span`, :func:`span_problem`):
+    an answer in another unit would pass every check, which are built for millimetres, at a
+    thousandth of its size, or fail them for the wrong reason."""
+    array = kernel_array(markers)
+    if frames_off_scale(array)[0].size:
+        _refuse(array, name, _OFF_SCALE)
+    _refuse_span(cluster_span(array), name)
 
 
 def _refuse_span(span: float, name: str) -> None:

@@ -320,25 +320,24 @@ def check_span(markers: np.ndarray, labels: tuple[str, ...], recording: Recordin
 
 
 def _check_frames_scale(markers: np.ndarray, labels: tuple[str, ...], recording: Recording) -> None:
-    """``ValueError`` naming the file, the markers ``labels`` and the file's frames where,
-    among the frames that show all of ``markers`` ``(n_frames, n, 3)`` [mm], some lie off the
-    cluster's scale (:func:`~jointbench.estimators.validation.frames_off_scale`): frames in
-    another unit than the rest, which the artefact screen would otherwise read as a broken
-    shape, or leave out as artefacts and fit the rest as if nothing were wrong."""
-    complete = np.flatnonzero(np.isfinite(markers).all(axis=(1, 2)))
-    if complete.size == 0:
-        return
-    off, typical, spans = frames_off_scale(markers[complete])
+    """``ValueError`` naming the file, the markers ``labels`` and the file's frames where some
+    frames of ``markers`` ``(n_frames, n, 3)`` [mm] lie off the cluster's scale, a frame with a
+    gap judged by the markers it shows
+    (:func:`~jointbench.estimators.validation.frames_off_scale`): frames in another unit than
+    the rest, which the artefact screen would otherwise read as a broken shape, or leave out
+    as artefacts and fit the rest as if nothing were wrong. It says which of the two groups is
+    a body segment's size in the unit the file states."""
+    judged = frames_off_scale(markers)
+    off = judged[0]
     if off.size == 0:
         return
-    rows = complete[off]
-    first = recording.when(int(rows[0]))
-    named = scale_change(typical, spans[off[0]], first, recording.first_frame + rows)
+    first = recording.when(int(off[0]))
+    named = scale_change(
+        markers, judged, first, recording.first_frame + off, f"the file's {recording.units!r}"
+    )
     raise ValueError(
-        f"{recording.source}: markers {', '.join(labels)} {named}: frames in another unit "
-        "than the rest (metres or centimetres among the "
-        f"file's {recording.units!r}?) or markers not of one segment; correct those frames' "
-        "coordinates, or choose other frames (frames=, --frames)"
+        f"{recording.source}: markers {', '.join(labels)} {named}, or markers not of one "
+        "segment; correct those frames' coordinates, or choose other frames (frames=, --frames)"
     )
 
 
