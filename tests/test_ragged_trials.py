@@ -198,3 +198,21 @@ def test_trials_all_too_short_fail_each_alone(kind, name):
     outcomes = registry.many(kind, name, checked=False)(*_segments(trials))
     for outcome, frames in zip(outcomes, (too_few, too_few - 1), strict=True):
         assert isinstance(outcome, ValueError) and f"has {frames} frames" in str(outcome)
+
+
+@pytest.mark.parametrize(("kind", "name"), OWN_MANY)
+def test_trials_given_as_tuples_are_read_as_lists(kind, name):
+    # A sequence of trials is a list or a tuple (batching.trial_shapes): a tuple of trials of
+    # other frames is named as a list of them is, and a trial too short among them fails alone.
+    first = "proximal" if kind == "joint_center" else "markers"
+    trials = [_trial(kind, 60, 3, 0), _trial(kind, 60, 3, 1), _trial(kind, 45, 3, 2)]
+    as_tuples = tuple(tuple(segment) for segment in _segments(trials))
+    with pytest.raises(ValueError, match=rf"^{first} of trial 2 has 45 frames and 3 markers"):
+        registry.many(kind, name, checked=False)(*as_tuples)
+    too_few = registry.claims(kind, name).min_frames - 1
+    mixed = _segments([trials[0], _trial(kind, too_few, 3, 3), trials[1]])
+    unchecked = registry.many(kind, name, checked=False)
+    for found, expected in zip(
+        unchecked(*(tuple(segment) for segment in mixed)), unchecked(*mixed), strict=True
+    ):
+        assert_same_outcome(found, expected)

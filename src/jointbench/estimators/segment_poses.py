@@ -308,8 +308,8 @@ def trial_poses(
     segments: dict[str, np.ndarray], *, min_frames: int
 ) -> list[dict[str, SegmentPoses] | ValueError]:
     """Poses of many trials at once: ``segments`` maps a name (``"markers"``, or ``"proximal"``
-    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list of trials; every
-    segment holds the same trials (``ValueError`` otherwise).
+    and ``"distal"``) to ``(n_trials, N, n_markers, 3)`` [mm], or to a list or tuple of
+    trials; every segment holds the same trials (``ValueError`` otherwise).
 
     Per trial, each segment's markers are checked (at least ``min_frames`` frames and 3
     markers, not collinear at frame 0), two segments must share frames, and the body-fixed
@@ -331,8 +331,10 @@ def _trial_poses(
     checked)."""
     names = list(segments)
     check_same_trials(tuple(segments.values()), tuple(names))
+    # A list or a tuple of trials (batching.trial_shapes) may hold trials of other shapes,
+    # which each trial's checks name; only an array of trials is read as one array.
     arrays = {
-        name: markers if isinstance(markers, list) else np.asarray(markers)
+        name: markers if isinstance(markers, list | tuple) else np.asarray(markers)
         for name, markers in segments.items()
     }
     n_trials = len(arrays[names[0]])
