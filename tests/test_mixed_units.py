@@ -210,3 +210,23 @@ def test_the_refusal_says_how_the_frames_differ_and_which_are_millimetres(metres
         assert "those frames are 1000 times larger than the rest:" in text
         assert "those frames are a body segment's size in millimetres" in text
     assert "among millimetres" not in text
+
+
+def test_a_refusal_with_a_gap_gives_the_first_frames_size_and_the_typical_one_of_the_rest():
+    # The first frame off the scale in centimetres, the others in metres, a marker missing in
+    # all of them, noisy markers: the refusal's sizes are the first frame's and the median
+    # over the frames on the scale that show the same markers, not over every frame.
+    markers = _cluster_of_four() + np.random.default_rng(1).normal(scale=0.3, size=(N_FRAMES, 4, 3))
+    markers = _in_metres(markers, BLOCK[1:])
+    markers[BLOCK[0]] /= 10.0
+    markers[BLOCK, 3] = np.nan
+    off, typical, spans = frames_off_scale(markers)
+    assert off.tolist() == BLOCK.tolist()
+    shown = markers[:, :3]
+    sizes = np.linalg.norm(shown[:, :, None] - shown[:, None], axis=-1).max(axis=(1, 2))
+    on_scale = np.setdiff1d(np.arange(N_FRAMES), BLOCK)
+    assert typical[BLOCK[0]] == pytest.approx(np.median(sizes[on_scale]), rel=1e-12)
+    with pytest.raises(ValueError, match="another unit") as error:
+        check_span(markers)
+    assert f"but {spans[BLOCK[0]]:.3g} mm at frame {BLOCK[0]} " in str(error.value)
+    assert f"lie {typical[BLOCK[0]]:.3g} mm apart" in str(error.value)
