@@ -552,12 +552,14 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
     its scale, as every distance of a frame in another unit does: both the largest and the
     smallest distance between two of its markers (the smallest where its median is not 0, one
     marker given twice) more than :data:`MAX_SCALE_CHANGE` times larger than in every frame
-    within that factor of their medians over the frames, or smaller than in every such frame.
-    Frames apart from the others by that gap, not a cluster whose size wanders (markers not
-    of one cluster, scattered at random, whose rigidity is the support verdict's to judge),
-    nor one that a marker left (its smallest distance stays). Each frame's flag is written
-    into ``off`` ``(n_frames,)`` and, unless every frame's largest distance lies within the
-    factor of every other's (none is off then, and the pass over them ends there), that
+    within that factor of their medians over the frames, or smaller than in every such frame,
+    and every distance between two of its markers beyond that factor of the same two's median
+    over those frames (:func:`_every_pair_off`). Frames apart from the others by that gap, not
+    a cluster whose size wanders (markers not of one cluster, scattered at random, whose
+    rigidity is the support verdict's to judge), nor one that a marker left (the others keep
+    their distances, though the one it left may have been the smallest). Each frame's flag is
+    written into ``off`` ``(n_frames,)`` and, unless every frame's largest distance lies within
+    the factor of every other's (none is off then, and the pass over them ends there), that
     distance [mm] into ``spans`` ``(n_frames,)``. None for fewer than three markers: two
     have one distance, which one marker gap-filled along a chord, or a ghost taken for it,
     changes as a unit does; of three, the two others keep theirs. A compiled kernel."""
@@ -577,6 +579,7 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
     told = typical_least > 0.0  # duplicated markers: the smallest distance tells no scale
     # The range of the frames on the cluster's scale: within the factor of both medians.
     low, high, low_least, high_least = np.inf, -np.inf, np.inf, -np.inf
+    on_scale = np.zeros(n_frames, dtype=np.bool_)
     for f in range(n_frames):
         if (
             typical <= MAX_SCALE_CHANGE * spans[f]
@@ -591,19 +594,80 @@ def _scale_flags(markers: np.ndarray, off: np.ndarray, spans: np.ndarray) -> int
         ):
             low, high = min(low, spans[f]), max(high, spans[f])
             low_least, high_least = min(low_least, smallest[f]), max(high_least, smallest[f])
+            on_scale[f] = True
     if high < low:
         return 0  # no frame on both medians' scale: no scale to hold the others to
+    pairs = _pair_medians(markers, on_scale)
     count = 0
     for f in range(n_frames):
-        larger = spans[f] > MAX_SCALE_CHANGE * high and (
-            not told or smallest[f] > MAX_SCALE_CHANGE * high_least
+        larger = (
+            spans[f] > MAX_SCALE_CHANGE * high
+            and (not told or smallest[f] > MAX_SCALE_CHANGE * high_least)
+            and _every_pair_off(markers, f, pairs, True)
         )
-        smaller = spans[f] * MAX_SCALE_CHANGE < low and (
-            not told or smallest[f] * MAX_SCALE_CHANGE < low_least
+        smaller = (
+            spans[f] * MAX_SCALE_CHANGE < low
+            and (not told or smallest[f] * MAX_SCALE_CHANGE < low_least)
+            and _every_pair_off(markers, f, pairs, False)
         )
         off[f] = larger or smaller
         count += off[f]
     return count
+
+
+@kernel
+def _pair_medians(markers: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """The median over the frames ``frames`` ``(n_frames,)`` bool of the distance [mm] between
+    each two markers of ``markers`` ``(n_frames, n, 3)`` [mm] (finite), ``(n (n - 1) / 2,)``,
+    the pairs in the order (0, 1), (0, 2), ..., (1, 2), ... A compiled kernel."""
+    n_markers = markers.shape[1]
+    rows = np.flatnonzero(frames)
+    distances = np.empty((n_markers * (n_markers - 1) // 2, rows.size))
+    for column in range(rows.size):
+        pair = 0
+        for a in range(n_markers):
+            for b in range(a + 1, n_markers):
+                distances[pair, column] = _distance(markers, rows[column], a, b)
+                pair += 1
+    medians = np.empty(distances.shape[0])
+    for pair in range(distances.shape[0]):
+        medians[pair] = np.median(distances[pair])
+    return medians
+
+
+@kernel
+def _every_pair_off(markers: np.ndarray, frame: int, typical: np.ndarray, larger: bool) -> bool:
+    """Whether at ``frame`` of ``markers`` ``(n_frames, n, 3)`` [mm] every two markers lie more
+    than :data:`MAX_SCALE_CHANGE` times further apart than their typical distance ``typical``
+    ``(n (n - 1) / 2,)`` [mm] (:func:`_pair_medians`) (``larger``), or that many times closer:
+    as in a frame in another unit, not one in which a marker lies astray (a ghost, a swap with
+    a marker away), whose others keep their distances. A pair typically at distance 0 (one
+    marker given twice) tells no scale and is passed over. A compiled kernel."""
+    n_markers = markers.shape[1]
+    pair = 0
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            distance, held = _distance(markers, frame, a, b), typical[pair]
+            pair += 1
+            if held == 0.0:
+                continue
+            if (
+                (distance <= MAX_SCALE_CHANGE * held)
+                if larger
+                else (distance * MAX_SCALE_CHANGE >= held)
+            ):
+                return False
+    return True
+
+
+@kernel
+def _distance(markers: np.ndarray, frame: int, a: int, b: int) -> float:
+    """The distance [mm] between markers ``a`` and ``b`` at ``frame`` of ``markers``
+    ``(n_frames, n, 3)`` [mm]. A compiled kernel."""
+    dx = markers[frame, a, 0] - markers[frame, b, 0]
+    dy = markers[frame, a, 1] - markers[frame, b, 1]
+    dz = markers[frame, a, 2] - markers[frame, b, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
 def frames_off_scale(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
