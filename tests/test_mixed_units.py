@@ -252,3 +252,12 @@ def test_a_marker_astray_from_the_closest_pair_is_no_change_of_unit(gap):
     check_span(markers)
     if not gap:
         check_input("center", (markers,))
+
+
+def test_a_single_frame_in_another_unit_is_one_frame():
+    _, moving = two_segments(N_FRAMES, proximal_moves=False)
+    with pytest.raises(ValueError, match="another unit") as error:
+        check_input("center", (_in_metres(moving, np.array([57])),))
+    text = str(error.value)
+    assert "(1 frame in all, frame 57, each with" in text
+    assert "that frame is 1000 times smaller than the rest:" in text

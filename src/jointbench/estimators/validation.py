@@ -320,13 +320,14 @@ def scale_change(
         if span_mm < typical_mm
         else f"{span_mm / typical_mm:.4g} times larger"
     )
+    one = frames.size == 1
     return (
         f"change size between frames: the farthest two {which} lie {typical_mm:.3g} mm apart "
-        f"(median over the {others}) but {span_mm:.3g} mm at {first} ({frames.size} frames in "
-        f"all, {frames_listed(frames)}, each with every distance more than "
-        f"{MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the typical "
-        f"size): those frames are {times} than the rest: "
-        f"{_in_which_unit(typical_mm, span_mm, unit)}"
+        f"(median over the {others}) but {span_mm:.3g} mm at {first} ({frames.size} "
+        f"frame{'' if one else 's'} in all, {frames_listed(frames)}, each with every distance "
+        f"more than {MAX_SCALE_CHANGE:.3g} times larger or smaller than in any frame of the "
+        f"typical size): {'that frame is' if one else 'those frames are'} {times} than the "
+        f"rest: {_in_which_unit(typical_mm, span_mm, unit)}"
     )
 
 
@@ -344,13 +345,13 @@ def _in_which_unit(typical_mm: float, span_mm: float, unit: str) -> str:
 
 
 def frames_listed(frames: np.ndarray, most: int = 4) -> str:
-    """The increasing frame numbers ``frames`` as runs in words ("frames 3, 7 to 9"), the
-    first ``most`` runs and a count of the rest."""
+    """The increasing frame numbers ``frames`` as runs in words ("frames 3, 7 to 9", "frame
+    3"), the first ``most`` runs and a count of the rest."""
     breaks = np.flatnonzero(np.diff(frames) != 1) + 1
     runs = [(int(run[0]), int(run[-1])) for run in np.split(frames, breaks)]
     words = [f"{a}" if a == b else f"{a} to {b}" for a, b in runs[:most]]
     rest = f" and {len(runs) - most} more runs" if len(runs) > most else ""
-    return f"frames {', '.join(words)}{rest}"
+    return f"frame{'' if frames.size == 1 else 's'} {', '.join(words)}{rest}"
 
 
 # The failures and spans arrays of a call of _first_failures that needs only its return value.
