@@ -195,8 +195,9 @@ def test_each_frames_noise_is_the_packages_one_sandwich(monkeypatch):
     vectors[0] = 0.0  # the series branch
     spread = rng.normal(size=(2, 3, 3))
     moving, reference = spread @ np.swapaxes(spread, 1, 2)
+    columns = np.ascontiguousarray(vectors.T)  # each coordinate over the frames
     compiled = np.empty((6, 6))
-    support._frame_noise_into(vectors, moving, reference, compiled)
+    support._frame_noise_into(columns, moving, reference, compiled)
     sandwiches = []
 
     def counted(jacobian: tuple, covariance: tuple) -> tuple:
@@ -205,7 +206,7 @@ def test_each_frames_noise_is_the_packages_one_sandwich(monkeypatch):
 
     monkeypatch.setattr(support, "rotated9_upper", counted)
     python = np.empty((6, 6))
-    support._frame_noise_into.__wrapped__(vectors, moving, reference, python)
+    support._frame_noise_into.__wrapped__(columns, moving, reference, python)
     assert len(sandwiches) == 2 * len(vectors)
     np.testing.assert_array_equal(compiled, python)
 

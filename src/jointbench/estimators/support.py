@@ -1139,13 +1139,13 @@ _HINGE_STEPS = 3
 
 @kernel
 def _frame_noise_into(
-    vectors: np.ndarray, moving_noise: np.ndarray, reference_noise: np.ndarray, noise: np.ndarray
+    columns: np.ndarray, moving_noise: np.ndarray, reference_noise: np.ndarray, noise: np.ndarray
 ) -> None:
-    """The noise covariance per unit variance [mm^-2] of each rotation vector ``vectors``
-    ``(N, 3)`` [rad] of the relative rotations about their mean pose ``M``
-    (``M' relative_k = exp([w_k])``), its upper triangle written into ``noise`` ``(6, N)`` in
-    the order of :data:`_UPPER`, each entry over the frames contiguous (as
-    :func:`_hinge_terms_into` reads them several frames at once). A compiled kernel.
+    """The noise covariance per unit variance [mm^-2] of each rotation vector ``w_k`` of the
+    relative rotations about their mean pose ``M`` (``M' relative_k = exp([w_k])``), given by
+    coordinate over the frames, ``columns`` ``(3, N)`` [rad]: its upper triangle written into
+    ``noise`` ``(6, N)`` in the order of :data:`_UPPER`, each entry over the frames contiguous
+    (as :func:`_hinge_terms_into` reads them). A compiled kernel.
 
     The moving segment's pose noise, ``moving_noise`` ``(3, 3)`` in its own frame, enters
     ``exp([w_k])`` on the right and reaches ``w_k`` through the logarithm's right Jacobian,
@@ -1158,10 +1158,13 @@ def _frame_noise_into(
     axis (three markers), a wide hinge over many frames resolves that."""
     # The covariances read into registers once, and each frame's Jacobians kept in registers:
     # in arrays, every frame's stores into ``noise`` could alias them and would have them read
-    # again.
+    # again. Each frame's b first, in a loop of its own (its branch and tangent would keep the
+    # frames of the sandwiches from being formed several at once).
     moving, reference = rows9(moving_noise), rows9(reference_noise)
-    for f in range(vectors.shape[0]):
-        w0, w1, w2 = vectors[f, 0], vectors[f, 1], vectors[f, 2]
+    n_frames = columns.shape[1]
+    scales = np.empty(n_frames)
+    for f in range(n_frames):
+        w0, w1, w2 = columns[0, f], columns[1, f], columns[2, f]
         squared = w0 * w0 + w1 * w1 + w2 * w2
         if squared < 0.25:
             # b's series in t^2 (from the Bernoulli numbers), within 1e-13 of it below half a
@@ -1177,6 +1180,11 @@ def _frame_noise_into(
         else:
             angle = np.sqrt(squared)
             b = (1.0 - 0.5 * angle / np.tan(0.5 * angle)) / squared
+        scales[f] = b
+    for f in range(n_frames):
+        w0, w1, w2 = columns[0, f], columns[1, f], columns[2, f]
+        squared = w0 * w0 + w1 * w1 + w2 * w2
+        b = scales[f]
         # I + b [w]^2, with [w]^2 = w w' - |w|^2 I, then the halves of [w] either way.
         diagonal = 1.0 - b * squared
         s00, s11, s22 = b * w0 * w0 + diagonal, b * w1 * w1 + diagonal, b * w2 * w2 + diagonal
@@ -1200,9 +1208,10 @@ def _frame_noise_into(
 
 
 @kernel
-def _hinge_residual(vectors: np.ndarray, noise: np.ndarray) -> float:
-    """What rotation about a single axis leaves unexplained of the rotation vectors ``vectors``
-    ``(N, 3)`` [rad], each frame against its own noise, ``noise`` ``(6, N)`` per unit variance
+def _hinge_residual(columns: np.ndarray, noise: np.ndarray) -> float:
+    """What rotation about a single axis leaves unexplained of the rotation vectors ``w_k``,
+    given by coordinate over the frames, ``columns`` ``(3, N)`` [rad], each frame against its
+    own noise, ``noise`` ``(6, N)`` per unit variance
     [mm^-2] (:func:`_frame_noise_into`): the least
     ``sum_k (w_k - c - theta_k h)' S_k^-1 (w_k - c - theta_k h)`` [mm^2] over an axis ``h``, an
     offset ``c`` and an angle ``theta_k`` per frame, which is about the variance times a
@@ -1216,23 +1225,21 @@ def _hinge_residual(vectors: np.ndarray, noise: np.ndarray) -> float:
     than 1e-6 of the residual; the least residual met is returned. Each step's pass over the
     frames forms their terms first, several frames at once (:func:`_hinge_terms_into`), then
     sums them frame by frame, in the order one loop would."""
-    n_frames = vectors.shape[0]
+    n_frames = columns.shape[1]
     offset = np.zeros(3)
     for f in range(n_frames):
         for i in range(3):
-            offset[i] += vectors[f, i] / n_frames
+            offset[i] += columns[i, f] / n_frames
     scatter = np.zeros((3, 3))
     for f in range(n_frames):
         for i in range(3):
             for j in range(3):
-                scatter[i, j] += (vectors[f, i] - offset[i]) * (vectors[f, j] - offset[j])
+                scatter[i, j] += (columns[i, f] - offset[i]) * (columns[j, f] - offset[j])
     values = np.empty(3)
     axes = np.empty((3, 3))
     symmetric_eigen_into(scatter, values, axes, np.empty((3, 3)))
     axis = axes[:, 2].copy()
     basis = np.empty((3, 2))
-    # Each coordinate over the frames contiguous, as the frames' terms read them.
-    columns = np.ascontiguousarray(vectors.T)
     terms = np.empty((7, n_frames))
     best = np.inf
     for step in range(_HINGE_STEPS + 1):
@@ -1507,8 +1514,10 @@ def _hinge_left(
     (the plug-in Jacobian of a nearly collinear cluster's frame, turned by its noise, leaks
     the noise about its line into the directions it fixes). The mean pose's where each frame's
     is NaN (a frame's noise not positive definite). A compiled kernel."""
-    _frame_noise_into(vectors, moving_noise, reference_noise, noise)
-    per_frame = _hinge_residual(vectors, noise)
+    # Each coordinate over the frames contiguous, as the frames' passes read them.
+    columns = np.ascontiguousarray(vectors.T)
+    _frame_noise_into(columns, moving_noise, reference_noise, noise)
+    per_frame = _hinge_residual(columns, noise)
     if not per_frame < at_mean_pose:  # NaN compares false: the mean pose's then
         return at_mean_pose
     return per_frame
