@@ -1120,9 +1120,6 @@ def _hinge_plane(axis: np.ndarray, pooled: np.ndarray, plane: np.ndarray) -> flo
     return along
 
 
-# The entries (i, j) of a symmetric 3 x 3 matrix's upper triangle, in the order it is stored.
-_UPPER = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-
 # The coefficient of t^10 in the series of the logarithm's Jacobian (:func:`_frame_noise_into`).
 _B12 = 691.0 / 1307674368000.0
 
@@ -1144,8 +1141,9 @@ def _frame_noise_into(
     """The noise covariance per unit variance [mm^-2] of each rotation vector ``w_k`` of the
     relative rotations about their mean pose ``M`` (``M' relative_k = exp([w_k])``), given by
     coordinate over the frames, ``columns`` ``(3, N)`` [rad]: its upper triangle written into
-    ``noise`` ``(6, N)`` in the order of :data:`_UPPER`, each entry over the frames contiguous
-    (as :func:`_hinge_terms_into` reads them). A compiled kernel.
+    ``noise`` ``(6, N)`` in the order of :func:`rotated9_upper`, ``(s00, s01, s02, s11, s12,
+    s22)``, each entry over the frames contiguous (as :func:`_hinge_terms_into` reads them). A
+    compiled kernel.
 
     The moving segment's pose noise, ``moving_noise`` ``(3, 3)`` in its own frame, enters
     ``exp([w_k])`` on the right and reaches ``w_k`` through the logarithm's right Jacobian,
@@ -1305,8 +1303,9 @@ def _hinge_residual(columns: np.ndarray, noise: np.ndarray) -> float:
 
 @kernel
 def _upper_weights(u: tuple, v: tuple) -> tuple:
-    """The weights of a symmetric ``S``'s upper triangle (in :data:`_UPPER`'s order) in ``u' S
-    v`` for the vectors ``u``, ``v`` (3 numbers each). A compiled kernel."""
+    """The weights of a symmetric ``S``'s upper triangle ``(s00, s01, s02, s11, s12, s22)`` (as
+    :func:`_frame_noise_into` stores it) in ``u' S v`` for the vectors ``u``, ``v`` (3 numbers
+    each). A compiled kernel."""
     return (
         u[0] * v[0],
         u[0] * v[1] + u[1] * v[0],
