@@ -1209,12 +1209,11 @@ def _frame_noise_into(
 def _hinge_residual(columns: np.ndarray, noise: np.ndarray) -> float:
     """What rotation about a single axis leaves unexplained of the rotation vectors ``w_k``,
     given by coordinate over the frames, ``columns`` ``(3, N)`` [rad], each frame against its
-    own noise, ``noise`` ``(6, N)`` per unit variance
-    [mm^-2] (:func:`_frame_noise_into`): the least
-    ``sum_k (w_k - c - theta_k h)' S_k^-1 (w_k - c - theta_k h)`` [mm^2] over an axis ``h``, an
-    offset ``c`` and an angle ``theta_k`` per frame, which is about the variance times a
-    chi-square of ``2 (N - 2)`` degrees of freedom where the rotation is about one axis. NaN
-    where a frame's noise is not positive definite. A compiled kernel.
+    own noise, ``noise`` ``(6, N)`` per unit variance [mm^-2] (:func:`_frame_noise_into`): the
+    least ``sum_k (w_k - c - theta_k h)' S_k^-1 (w_k - c - theta_k h)`` [mm^2] over an axis
+    ``h``, an offset ``c`` and an angle ``theta_k`` per frame, which is about the variance times
+    a chi-square of ``2 (N - 2)`` degrees of freedom where the rotation is about one axis. NaN
+    where a frame's noise is not positive definite across the axis. A compiled kernel.
 
     The angles drop out in closed form: with ``U`` ``(3, 2)`` a basis normal to ``h``, frame
     ``k`` leaves ``y' G^-1 y``, ``y = U' (w_k - c)`` and ``G = U' S_k U``. The axis and the
