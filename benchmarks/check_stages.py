@@ -1,9 +1,11 @@
-"""Where the time of a checked one-trial centre call goes, stage by stage, and the least any
-implementation of the same checks could cost: their compiled kernels alone.
+"""Where the time of a checked one-trial centre or joint-centre call goes, stage by stage, and
+for a centre the least any implementation of the same checks could cost: their compiled kernels
+alone.
 
 Usage::
 
     python benchmarks/check_stages.py [--methods LS NM BC] [--calls 400] [--clock {cpu,wall}]
+    python benchmarks/check_stages.py --kind joint_center [--methods SCoRE analytic]
 
 On ``estimators.py``'s centre trials (3 markers x 120 frames, 1 mm noise), per method, the
 median time per call, by wall clock (the default) or, ``--clock cpu``, by the process's CPU
@@ -24,6 +26,26 @@ precision kernel) / estimator: the ratio a checked call would have if nothing bu
 input checks and the compiled arithmetic of the checks ran, no Python between them. Where it is
 above 1.5 no rearrangement of the checks' Python reaches a checked call within 1.5 times the
 fit; only cheaper arithmetic, or fewer checks, would.
+
+With ``--kind joint_center``, on ``estimators.py``'s joint-centre trials (3 + 3 markers x 1200
+frames, a ball joint, 0.5 mm noise), per method (by default every registered one), the same
+medians of (:data:`JOINT_STAGES`):
+
+* ``estimator``, ``checked`` and ``public``: the registered function alone, ``registry.get``
+  and :func:`jointbench.fit_joint_center` (the checked call after the artefact screen);
+* ``input checks``: :func:`jointbench.estimators.validation.check_input`;
+* ``poses``: both segments' poses as the checked call fits them once for the fit and the
+  verdict (:func:`jointbench.estimators.segment_poses.trial_poses`, the samples checked);
+* ``fit on poses``: the method's many-trial form on those poses, a batch of one;
+* ``verdict``: :func:`jointbench.estimators.support.assess_many` on those poses;
+* ``precision``: the method's ``precision_many`` on its answer and those poses (the model
+  tests, :mod:`jointbench.estimators.hjc`), in one call's scope
+  (:func:`jointbench.numerics.reuse.one_call`) as the checked call runs it;
+* ``answers``: :func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
+* ``screen``: :func:`jointbench.screening.find_artefacts` of both segments, what the public
+  call adds.
+
+``checked`` less the stages from ``input checks`` to ``answers`` is the plumbing between them.
 """
 
 from __future__ import annotations
@@ -37,11 +59,16 @@ from pathlib import Path
 
 import numpy as np
 
+import jointbench
+from jointbench import screening
 from jointbench.estimators import centre_precision, registry, support, validation
+from jointbench.estimators.batching import one_trial
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.numerics import reuse
 from jointbench.numerics.compiled import kernel_array
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from estimators import CLOCKS, Clock, center_data
+from estimators import CLOCKS, Clock, center_data, two_segment_data
 
 STAGES = (
     "estimator",
@@ -51,6 +78,21 @@ STAGES = (
     "verdict kernels",
     "precision",
     "precision kernel",
+)
+
+
+#: The stages of a checked joint-centre call (module docstring).
+JOINT_STAGES = (
+    "estimator",
+    "checked",
+    "public",
+    "input checks",
+    "poses",
+    "fit on poses",
+    "verdict",
+    "precision",
+    "answers",
+    "screen",
 )
 
 
@@ -87,6 +129,64 @@ def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[in
     }
 
 
+def joint_stage_calls(
+    method: str, trials: list[tuple[np.ndarray, np.ndarray]]
+) -> dict[str, Callable[[int], object]]:
+    """Per stage of :data:`JOINT_STAGES`, a call of it on trial ``i`` of ``trials`` (proximal
+    and distal markers ``(N, n, 3)`` each)."""
+    bare = registry.get("joint_center", method, checked=False)
+    checked = registry.get("joint_center", method)
+    many = registry.many("joint_center", method, checked=False)
+    names = pose_segments(many) or ("proximal", "distal")
+    stacked = [tuple(array[None] for array in trial) for trial in trials]
+    poses = [
+        trial_poses(
+            {name: [array] for name, array in zip(names, trial, strict=True)},
+            min_frames=POSE_MIN_FRAMES,
+            samples_checked=True,
+        )
+        for trial in trials
+    ]
+    results = [
+        [one_trial(many, *trial, poses=fitted)] for trial, fitted in zip(trials, poses, strict=True)
+    ]
+    verdicts = [
+        support.assess_many("joint_center", arrays, poses=fitted)
+        for arrays, fitted in zip(stacked, poses, strict=True)
+    ]
+    labels = {
+        name: tuple(f"{name}[:, {column}]" for column in range(trials[0][index].shape[1]))
+        for index, name in enumerate(("proximal", "distal"))
+    }
+
+    def precision(i: int) -> object:
+        with reuse.one_call():
+            return bare.precision_many(
+                results[i], *stacked[i], verdicts=verdicts[i], poses=poses[i]
+            )
+
+    def screen(i: int) -> None:
+        for (name, names_), markers in zip(labels.items(), trials[i], strict=True):
+            screening.find_artefacts(markers, names_, name, magnitudes_checked=True)
+
+    return {
+        "estimator": lambda i: bare(*trials[i]),
+        "checked": lambda i: checked(*trials[i]),
+        "public": lambda i: jointbench.fit_joint_center(*trials[i], method=method),
+        "input checks": lambda i: validation.check_input("joint_center", trials[i]),
+        "poses": lambda i: trial_poses(
+            {name: [array] for name, array in zip(names, trials[i], strict=True)},
+            min_frames=POSE_MIN_FRAMES,
+            samples_checked=True,
+        ),
+        "fit on poses": lambda i: one_trial(many, *trials[i], poses=poses[i]),
+        "verdict": lambda i: support.assess_many("joint_center", stacked[i], poses=poses[i]),
+        "precision": precision,
+        "answers": lambda i: centre_precision.annotate_joint_centres(results[i], verdicts[i]),
+        "screen": screen,
+    }
+
+
 def time_stages(
     calls: dict[str, Callable[[int], object]],
     n_trials: int,
@@ -110,7 +210,10 @@ def time_stages(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--methods", nargs="+", default=["LS", "NM", "BC"])
+    parser.add_argument("--kind", choices=["center", "joint_center"], default="center")
+    parser.add_argument(
+        "--methods", nargs="+", help="(default: LS NM BC; every method for joint_center)"
+    )
     parser.add_argument("--calls", type=int, default=400, help="calls per stage in all")
     parser.add_argument(
         "--clock",
@@ -123,6 +226,13 @@ def main(argv: list[str] | None = None) -> int:
     clock_text = "wall-clock" if args.clock == "wall" else "process CPU"
     n_trials = min(40, args.calls)
     rounds = max(1, args.calls // n_trials)
+    if args.kind == "joint_center":
+        methods = args.methods or registry.methods("joint_center")
+        print(
+            f"Median {clock_text} µs per call, 3 + 3 markers x 1200 frames, a ball joint, "
+            "0.5 mm noise (see the script's doc).\n"
+        )
+        return _joint_table(methods, n_trials, rounds, clock)
     trials = [trial for (trial,) in center_data(np.random.default_rng(0), n_trials).trials]
     header = [*STAGES, "checked / estimator", "floor / estimator"]
     print(
@@ -131,7 +241,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("| method | " + " | ".join(header) + " |")
     print("|---|" + "---:|" * len(header))
-    for method in args.methods:
+    for method in args.methods or ["LS", "NM", "BC"]:
         median = time_stages(stage_calls(method, trials), n_trials, rounds, clock)
         floor = sum(
             median[name]
@@ -142,6 +252,21 @@ def main(argv: list[str] | None = None) -> int:
             f"{median['checked'] / median['estimator']:.2f}×",
             f"{floor / median['estimator']:.2f}×",
         ]
+        print(f"| {method} | " + " | ".join(cells) + " |")
+    return 0
+
+
+def _joint_table(methods: list[str], n_trials: int, rounds: int, clock: Clock) -> int:
+    """Print the joint-centre stages' table (module docstring) of ``methods``."""
+    rng = np.random.default_rng(0)
+    trials = two_segment_data(rng, n_trials, "joint_center", "ball").trials
+    header = [*JOINT_STAGES, "checked / estimator", "public / estimator"]
+    print(f"| method | {' | '.join(header)} |")
+    print("|---|" + "---:|" * len(header))
+    for method in methods:
+        median = time_stages(joint_stage_calls(method, trials), n_trials, rounds, clock)
+        cells = [f"{1e6 * median[name]:.1f}" for name in JOINT_STAGES]
+        cells += [f"{median[name] / median['estimator']:.2f}×" for name in ("checked", "public")]
         print(f"| {method} | " + " | ".join(cells) + " |")
     return 0
 

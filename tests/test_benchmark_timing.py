@@ -151,6 +151,21 @@ def test_the_check_stages_table_times_every_stage_of_each_method(capsys):
         assert all(float(cell.rstrip("×")) > 0.0 for cell in cells[1:])
 
 
+def test_the_joint_centre_stages_table_times_every_stage_of_each_method(capsys):
+    # A checked joint-centre call's stages (input checks, the shared pose fit, the fit on those
+    # poses, the verdict, the model test, the answers' checks) and the public call's screen,
+    # each the checks' own function: a renamed or moved one fails here.
+    argv = ["--kind", "joint_center", "--methods", "SCoRE", "gauss-markov", "--calls", "2"]
+    assert check_stages.main(argv) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ")]
+    header = [*check_stages.JOINT_STAGES, "checked / estimator", "public / estimator"]
+    assert rows[0].strip("| ").split(" | ")[1:] == header
+    for method, row in zip(["SCoRE", "gauss-markov"], rows[1:], strict=True):
+        cells = row.strip("| ").split(" | ")
+        assert cells[0] == method
+        assert all(float(cell.rstrip("×")) > 0.0 for cell in cells[1:])
+
+
 class _TickingClock:
     """A clock that advances ``step`` seconds each time it is read."""
 

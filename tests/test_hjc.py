@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 
@@ -20,6 +21,7 @@ from jointbench.estimators.hjc import (
 )
 from jointbench.estimators.segment_poses import trial_poses
 from jointbench.geometry import rotation_matrix, skew
+from jointbench.numerics import reuse
 from jointbench.numerics.poses import rigid_poses
 from jointbench.simulate.hip import HipProtocol, marker_layout, nominal_recording, simulate
 from jointbench.simulate.noise import isotropic_noise
@@ -514,3 +516,26 @@ def test_the_weight_moments_are_the_full_sum_of_each_frames_outer_product():
             expected[a] += np.outer(local.ravel(), local.ravel())
     np.testing.assert_allclose(seconds, expected, rtol=1e-12, atol=0.0)
     np.testing.assert_array_equal(seconds, np.swapaxes(seconds, 1, 2))
+
+
+def test_the_model_tests_read_each_trials_own_segments_once_in_a_call():
+    """The largest |coordinate| of the segments (the scale of their rounding) and each
+    cluster's residual moments, which a checked call computes once per segment
+    (:func:`jointbench.numerics.reuse.remembered`), are those of the segments asked about: the
+    largest over both segments' markers and every frame (here the distal's, negative), and
+    within one call's scope each of two trials of the same shape, asked in turn, its own."""
+    proximal, distal = two_segments(20)
+    trials = [
+        trial_poses({"proximal": [proximal], "distal": [_noisy(d, seed)]}, min_frames=3)[0]
+        for seed, d in ((1, distal - 5000.0), (2, distal))
+    ]
+    segments = [(poses["proximal"], poses["distal"]) for poses in trials]
+    largest = [max(float(np.abs(p.markers).max()) for p in pair) for pair in segments]
+    assert largest[0] == -float(segments[0][1].markers.min()) > largest[1]
+    alone = [hjc._noise_kurtosis(pair, 1.0) for pair in segments]
+    assert alone[0] != alone[1]
+    for scope in (contextlib.nullcontext(), reuse.one_call()):
+        with scope:
+            for trial in (0, 1, 0, 1):
+                assert hjc._largest_coordinate(segments[trial]) == largest[trial]
+                assert hjc._noise_kurtosis(segments[trial], 1.0) == alone[trial]

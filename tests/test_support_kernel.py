@@ -195,8 +195,9 @@ def test_each_frames_noise_is_the_packages_one_sandwich(monkeypatch):
     vectors[0] = 0.0  # the series branch
     spread = rng.normal(size=(2, 3, 3))
     moving, reference = spread @ np.swapaxes(spread, 1, 2)
+    columns = np.ascontiguousarray(vectors.T)  # each coordinate over the frames
     compiled = np.empty((6, 6))
-    support._frame_noise_into(vectors, moving, reference, compiled)
+    support._frame_noise_into(columns, moving, reference, compiled)
     sandwiches = []
 
     def counted(jacobian: tuple, covariance: tuple) -> tuple:
@@ -205,9 +206,47 @@ def test_each_frames_noise_is_the_packages_one_sandwich(monkeypatch):
 
     monkeypatch.setattr(support, "rotated9_upper", counted)
     python = np.empty((6, 6))
-    support._frame_noise_into.__wrapped__(vectors, moving, reference, python)
+    support._frame_noise_into.__wrapped__(columns, moving, reference, python)
     assert len(sandwiches) == 2 * len(vectors)
     np.testing.assert_array_equal(compiled, python)
+
+
+def test_the_hinge_weights_read_the_packages_upper_triangle():
+    """``u' S v`` is the dot product of :func:`support._upper_weights` with ``S``'s upper
+    triangle as the package stores it (:func:`small.rotated9_upper`'s order), for ``u = v`` and
+    for two vectors: the frames' noise and the hinge fit read one layout."""
+    rng = np.random.default_rng(5)
+    u, v = rng.normal(size=(2, 3))
+    spread = rng.normal(size=(3, 3))
+    symmetric = spread @ spread.T
+    upper = np.array(small.rotated9_upper(tuple(np.eye(3).ravel()), tuple(symmetric.ravel())))
+    for left, right in ((u, u), (u, v), (v, u)):
+        weights = np.array(support._upper_weights(tuple(left), tuple(right)))
+        np.testing.assert_allclose(weights @ upper, left @ symmetric @ right, rtol=1e-12)
+
+
+def test_a_frames_noise_not_positive_definite_across_the_axis_leaves_no_hinge_residual():
+    """A frame whose noise across the hinge axis is indefinite, its first diagonal entry
+    positive but its determinant negative, makes the residual against each frame's own noise
+    NaN (the verdict then reads the mean pose's), in the compiled kernel and its source."""
+    n_frames = 8
+    axis = unit(np.array([1.0, 2.0, 3.0]))
+    basis = np.empty((3, 2))
+    small.tangent_basis_into(axis, basis)
+    u0, u1 = basis.T
+    # About the axis, and a little off it, so that something is left: the fit's axis stays
+    # near it, and so its basis U near (u0, u1).
+    angles = np.linspace(-0.5, 0.5, n_frames)
+    columns = np.outer(axis, angles) + np.outer(u0, 1e-3 * np.cos(7.0 * angles))
+    identity = np.zeros((6, n_frames))
+    identity[[0, 3, 5]] = 1.0  # in the order of the upper triangle (s00, s01, s02, s11, s12, s22)
+    # U' S U = diag(1, -2): its first entry positive, its determinant negative.
+    indefinite = np.outer(u0, u0) - 2.0 * np.outer(u1, u1) + np.outer(axis, axis)
+    noise = identity.copy()
+    noise[:, 3] = indefinite[np.triu_indices(3)]
+    for residual in (support._hinge_residual, support._hinge_residual.__wrapped__):
+        assert np.isfinite(residual(columns, identity))
+        assert np.isnan(residual(columns, noise))
 
 
 def _write() -> None:

@@ -175,6 +175,7 @@ from jointbench.estimators.twosegment import (
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
+from jointbench.numerics.reuse import remembered
 from jointbench.numerics.small import (
     add_block3,
     add_upper3,
@@ -243,9 +244,16 @@ def _per_coordinate_variance(
 
 
 def _largest_coordinate(segments: tuple[SegmentPoses, ...]) -> float:
-    """The largest |coordinate| [mm] of the segments' markers, the scale of their rounding."""
+    """The largest |coordinate| [mm] of the segments' markers, the scale of their rounding:
+    within one checked call found once per segment (:func:`jointbench.numerics.reuse.remembered`),
+    as the test of the segments' noise and every model test read it."""
+    return max(remembered("largest coordinate", p.markers, _largest_of) for p in segments)
+
+
+def _largest_of(markers: np.ndarray) -> float:
+    """The largest |coordinate| [mm] of ``markers`` ``(N, n, 3)``."""
     # From the extremes, without an array of absolute values.
-    return max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
+    return max(float(markers.max()), -float(markers.min()))
 
 
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
@@ -256,10 +264,12 @@ def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
 def _relative_system(prox, dist) -> tuple[np.ndarray, np.ndarray]:
     """``M_t = R0 - R1`` ``(..., N-1, 3, 3)`` and ``y_t = d1 - d0`` ``(..., N-1, 3)`` for
     ``t >= 1``, of one trial's poses (:class:`SegmentPoses`) or a stack's (:class:`PoseStack`)."""
-    return (
-        prox.rotation[..., 1:, :, :] - dist.rotation[..., 1:, :, :],
-        dist.translation[..., 1:, :] - prox.translation[..., 1:, :],
-    )
+    return prox.rotation[..., 1:, :, :] - dist.rotation[..., 1:, :, :], _translations(prox, dist)
+
+
+def _translations(prox, dist) -> np.ndarray:
+    """``y_t = d1 - d0`` ``(..., N-1, 3)`` [mm] of :func:`_relative_system`."""
+    return dist.translation[..., 1:, :] - prox.translation[..., 1:, :]
 
 
 def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
@@ -338,7 +348,6 @@ def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult
 class _Prepared:
     """One trial's Gauss–Markov system before iterating (frames ``t >= 1``)."""
 
-    m: np.ndarray  # (N-1, 3, 3)
     y: np.ndarray  # (N-1, 3) [mm]
     r0: np.ndarray  # (N-1, 3, 3)
     r1: np.ndarray  # (N-1, 3, 3)
@@ -367,19 +376,20 @@ def _prepared(
     step's ``ValueError`` on degenerate motion. ``analytic``: the analytic centre and its
     ``rcond`` where a fit to the same poses found them (eq. 9 gives the same numbers), so
     that it is not solved again."""
-    m, y = _relative_system(prox, dist)
     if analytic is None:
+        m, y = _relative_system(prox, dist)
         centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
         if errors[0] is not None:
             raise errors[0]
         analytic = centers[0], float(rconds[0])
+    else:
+        y = _translations(prox, dist)  # M_t, which only eq. 9 reads, is not formed
     analytic_center, rcond = analytic
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
     means, inertia_invs, counts = np.empty((2, 3)), np.empty((2, 3, 3)), np.empty(2, dtype=int)
     for segment, poses in enumerate((prox, dist)):
         means[segment], inertia_invs[segment], counts[segment] = lever_factors(poses.body)
     return _Prepared(
-        m=m,
         y=kernel_array(y),
         # The poses' arrays are read-only and C-contiguous, as kernels take them: not copied.
         r0=prox.rotation[1:],
@@ -797,7 +807,7 @@ def _result(trial: _Prepared, done: _Iterated, method: str, tol_mm) -> JointCent
         diagnostics["covariance_proximal"] = covariance_all[3:6, 3:6].tolist()
         diagnostics["center_distal"] = state[6:].tolist()
         diagnostics["covariance_distal"] = covariance_all[6:, 6:].tolist()
-    dof = 3 * trial.m.shape[0] - 3
+    dof = 3 * trial.y.shape[0] - 3
     chi2 = float(done.chi2) / trial.variance if trial.variance > 0 else float("nan")
     diagnostics["chi2"] = chi2
     diagnostics["chi2_dof"] = dof
@@ -1014,7 +1024,8 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
         # moments by its square, fourth cumulants by its fourth power.
         n_frames = len(poses.markers)
         shrink = (n_frames - 1) / n_frames
-        g, f = _residual_moments(poses.body)
+        # Each cluster's once in a checked call, which may test two models on the same poses.
+        g, f = remembered("residual moments", poses.body, _residual_moments)
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian

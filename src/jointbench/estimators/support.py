@@ -1120,9 +1120,6 @@ def _hinge_plane(axis: np.ndarray, pooled: np.ndarray, plane: np.ndarray) -> flo
     return along
 
 
-# The entries (i, j) of a symmetric 3 x 3 matrix's upper triangle, in the order it is stored.
-_UPPER = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-
 # The coefficient of t^10 in the series of the logarithm's Jacobian (:func:`_frame_noise_into`).
 _B12 = 691.0 / 1307674368000.0
 
@@ -1139,12 +1136,14 @@ _HINGE_STEPS = 3
 
 @kernel
 def _frame_noise_into(
-    vectors: np.ndarray, moving_noise: np.ndarray, reference_noise: np.ndarray, noise: np.ndarray
+    columns: np.ndarray, moving_noise: np.ndarray, reference_noise: np.ndarray, noise: np.ndarray
 ) -> None:
-    """The noise covariance per unit variance [mm^-2] of each rotation vector ``vectors``
-    ``(N, 3)`` [rad] of the relative rotations about their mean pose ``M``
-    (``M' relative_k = exp([w_k])``), its upper triangle written into ``noise`` ``(N, 6)`` in
-    the order of :data:`_UPPER`. A compiled kernel.
+    """The noise covariance per unit variance [mm^-2] of each rotation vector ``w_k`` of the
+    relative rotations about their mean pose ``M`` (``M' relative_k = exp([w_k])``), given by
+    coordinate over the frames, ``columns`` ``(3, N)`` [rad]: its upper triangle written into
+    ``noise`` ``(6, N)`` in the order of :func:`rotated9_upper`, ``(s00, s01, s02, s11, s12,
+    s22)``, each entry over the frames contiguous (as :func:`_hinge_terms_into` reads them). A
+    compiled kernel.
 
     The moving segment's pose noise, ``moving_noise`` ``(3, 3)`` in its own frame, enters
     ``exp([w_k])`` on the right and reaches ``w_k`` through the logarithm's right Jacobian,
@@ -1157,10 +1156,13 @@ def _frame_noise_into(
     axis (three markers), a wide hinge over many frames resolves that."""
     # The covariances read into registers once, and each frame's Jacobians kept in registers:
     # in arrays, every frame's stores into ``noise`` could alias them and would have them read
-    # again.
+    # again. Each frame's b first, in a loop of its own (its branch and tangent would keep the
+    # frames of the sandwiches from being formed several at once).
     moving, reference = rows9(moving_noise), rows9(reference_noise)
-    for f in range(vectors.shape[0]):
-        w0, w1, w2 = vectors[f, 0], vectors[f, 1], vectors[f, 2]
+    n_frames = columns.shape[1]
+    scales = np.empty(n_frames)
+    for f in range(n_frames):
+        w0, w1, w2 = columns[0, f], columns[1, f], columns[2, f]
         squared = w0 * w0 + w1 * w1 + w2 * w2
         if squared < 0.25:
             # b's series in t^2 (from the Bernoulli numbers), within 1e-13 of it below half a
@@ -1176,6 +1178,11 @@ def _frame_noise_into(
         else:
             angle = np.sqrt(squared)
             b = (1.0 - 0.5 * angle / np.tan(0.5 * angle)) / squared
+        scales[f] = b
+    for f in range(n_frames):
+        w0, w1, w2 = columns[0, f], columns[1, f], columns[2, f]
+        squared = w0 * w0 + w1 * w1 + w2 * w2
+        b = scales[f]
         # I + b [w]^2, with [w]^2 = w w' - |w|^2 I, then the halves of [w] either way.
         diagonal = 1.0 - b * squared
         s00, s11, s22 = b * w0 * w0 + diagonal, b * w1 * w1 + diagonal, b * w2 * w2 + diagonal
@@ -1195,98 +1202,80 @@ def _frame_noise_into(
         on_right = rotated9_upper(right, moving)
         on_left = rotated9_upper(left, reference)
         for e in range(6):
-            noise[f, e] = on_right[e] + on_left[e]
+            noise[e, f] = on_right[e] + on_left[e]
 
 
 @kernel
-def _hinge_residual(vectors: np.ndarray, noise: np.ndarray) -> float:
-    """What rotation about a single axis leaves unexplained of the rotation vectors ``vectors``
-    ``(N, 3)`` [rad], each frame against its own noise, ``noise`` ``(N, 6)`` per unit variance
-    [mm^-2] (:func:`_frame_noise_into`): the least
-    ``sum_k (w_k - c - theta_k h)' S_k^-1 (w_k - c - theta_k h)`` [mm^2] over an axis ``h``, an
-    offset ``c`` and an angle ``theta_k`` per frame, which is about the variance times a
-    chi-square of ``2 (N - 2)`` degrees of freedom where the rotation is about one axis. NaN
-    where a frame's noise is not positive definite. A compiled kernel.
+def _hinge_residual(columns: np.ndarray, noise: np.ndarray) -> float:
+    """What rotation about a single axis leaves unexplained of the rotation vectors ``w_k``,
+    given by coordinate over the frames, ``columns`` ``(3, N)`` [rad], each frame against its
+    own noise, ``noise`` ``(6, N)`` per unit variance [mm^-2] (:func:`_frame_noise_into`): the
+    least ``sum_k (w_k - c - theta_k h)' S_k^-1 (w_k - c - theta_k h)`` [mm^2] over an axis
+    ``h``, an offset ``c`` and an angle ``theta_k`` per frame, which is about the variance times
+    a chi-square of ``2 (N - 2)`` degrees of freedom where the rotation is about one axis. NaN
+    where a frame's noise is not positive definite across the axis. A compiled kernel.
 
     The angles drop out in closed form: with ``U`` ``(3, 2)`` a basis normal to ``h``, frame
     ``k`` leaves ``y' G^-1 y``, ``y = U' (w_k - c)`` and ``G = U' S_k U``. The axis and the
     offset normal to it are Gauss-Newton's, from the principal axis of the vectors' scatter and
     their mean, for at most :data:`_HINGE_STEPS` steps and until a step would take off less
-    than 1e-6 of the residual; the least residual met is returned."""
-    n_frames = vectors.shape[0]
+    than 1e-6 of the residual; the least residual met is returned. Each step's pass over the
+    frames forms their terms first, several frames at once (:func:`_hinge_terms_into`), then
+    sums them frame by frame, in the order one loop would."""
+    n_frames = columns.shape[1]
     offset = np.zeros(3)
     for f in range(n_frames):
         for i in range(3):
-            offset[i] += vectors[f, i] / n_frames
+            offset[i] += columns[i, f] / n_frames
     scatter = np.zeros((3, 3))
     for f in range(n_frames):
         for i in range(3):
             for j in range(3):
-                scatter[i, j] += (vectors[f, i] - offset[i]) * (vectors[f, j] - offset[j])
+                scatter[i, j] += (columns[i, f] - offset[i]) * (columns[j, f] - offset[j])
     values = np.empty(3)
     axes = np.empty((3, 3))
     symmetric_eigen_into(scatter, values, axes, np.empty((3, 3)))
     axis = axes[:, 2].copy()
     basis = np.empty((3, 2))
-    weights = np.empty((5, 6))
+    terms = np.empty((7, n_frames))
     best = np.inf
     for step in range(_HINGE_STEPS + 1):
         tangent_basis_into(axis, basis)
         u0 = (basis[0, 0], basis[1, 0], basis[2, 0])
         u1 = (basis[0, 1], basis[1, 1], basis[2, 1])
         h = (axis[0], axis[1], axis[2])
+        # u' S v for the pairs (u0, u0), (u0, u1), (u1, u1), (h, u0), (h, u1) of U's columns
+        # and the axis, as sums over S's upper triangle.
+        weights = (
+            _upper_weights(u0, u0),
+            _upper_weights(u0, u1),
+            _upper_weights(u1, u1),
+            _upper_weights(h, u0),
+            _upper_weights(h, u1),
+        )
+        positive = _hinge_terms_into(columns, noise, offset, u0, u1, h, weights, terms)
+        residual = 0.0
+        for f in range(n_frames):
+            residual += terms[5, f]
+        if not positive:
+            return np.nan
+        best = min(best, residual)
+        if step == _HINGE_STEPS:
+            break
         # The normal equations of a step in the offset and the axis (two coordinates each,
         # along U), the angles eliminated: 2 x 2 symmetric blocks [[P, Q], [Q, R]], the sums
         # over the frames of G^-1 times 1, theta_k and theta_k^2, and right-hand sides gc, ga.
         p00 = p01 = p11 = q00 = q01 = q11 = r00 = r01 = r11 = 0.0
         gc0 = gc1 = ga0 = ga1 = 0.0
-        residual = 0.0
-        positive = True
-        # u' S v for the pairs (u0, u0), (u0, u1), (u1, u1), (h, u0), (h, u1) of U's columns
-        # and the axis, as sums over S's upper triangle.
-        pairs = ((u0, u0), (u0, u1), (u1, u1), (h, u0), (h, u1))
-        for k in range(5):
-            u, v = pairs[k]
-            for e in range(6):
-                i, j = _UPPER[e]
-                weights[k, e] = u[i] * v[j] + (u[j] * v[i] if i != j else 0.0)
         for f in range(n_frames):
-            a0 = vectors[f, 0] - offset[0]
-            a1 = vectors[f, 1] - offset[1]
-            a2 = vectors[f, 2] - offset[2]
-            y0 = u0[0] * a0 + u0[1] * a1 + u0[2] * a2
-            y1 = u1[0] * a0 + u1[1] * a1 + u1[2] * a2
-            along = h[0] * a0 + h[1] * a1 + h[2] * a2
-            g00 = g01 = g11 = h0 = h1 = 0.0
-            for e in range(6):
-                entry = noise[f, e]
-                g00 += weights[0, e] * entry
-                g01 += weights[1, e] * entry
-                g11 += weights[2, e] * entry
-                h0 += weights[3, e] * entry
-                h1 += weights[4, e] * entry
-            det = g00 * g11 - g01 * g01
-            positive = positive and g00 > 0.0 and det > 0.0
-            # One division, not three: the frame's inverse is most of its arithmetic.
-            scale = 1.0 / det
-            i00, i01, i11 = g11 * scale, -g01 * scale, g00 * scale
-            z0 = i00 * y0 + i01 * y1
-            z1 = i01 * y0 + i11 * y1
-            residual += y0 * z0 + y1 * z1
-            # The frame's best angle: its rotation along h less what the noise off the axis
-            # shares with the noise along it.
-            theta = along - h0 * z0 - h1 * z1
+            i00, i01, i11 = terms[0, f], terms[1, f], terms[2, f]
+            z0, z1, theta = terms[3, f], terms[4, f], terms[6, f]
             p00, p01, p11 = p00 + i00, p01 + i01, p11 + i11
             q00, q01, q11 = q00 + theta * i00, q01 + theta * i01, q11 + theta * i11
             t2 = theta * theta
             r00, r01, r11 = r00 + t2 * i00, r01 + t2 * i01, r11 + t2 * i11
             gc0, gc1 = gc0 + z0, gc1 + z1
             ga0, ga1 = ga0 + theta * z0, ga1 + theta * z1
-        if not positive:
-            return np.nan
-        best = min(best, residual)
-        if step == _HINGE_STEPS:
-            break
         # The offset eliminated (Schur complement of P), the axis's step, then the offset's.
         det = p00 * p11 - p01 * p01
         v00, v01, v11 = p11 / det, -p01 / det, p00 / det
@@ -1309,6 +1298,75 @@ def _hinge_residual(vectors: np.ndarray, noise: np.ndarray) -> float:
             axis[i] += basis[i, 0] * turn0 + basis[i, 1] * turn1
         axis /= np.sqrt(axis[0] ** 2 + axis[1] ** 2 + axis[2] ** 2)
     return best
+
+
+@kernel
+def _upper_weights(u: tuple, v: tuple) -> tuple:
+    """The weights of a symmetric ``S``'s upper triangle ``(s00, s01, s02, s11, s12, s22)`` (as
+    :func:`_frame_noise_into` stores it) in ``u' S v`` for the vectors ``u``, ``v`` (3 numbers
+    each). A compiled kernel."""
+    return (
+        u[0] * v[0],
+        u[0] * v[1] + u[1] * v[0],
+        u[0] * v[2] + u[2] * v[0],
+        u[1] * v[1],
+        u[1] * v[2] + u[2] * v[1],
+        u[2] * v[2],
+    )
+
+
+@kernel
+def _hinge_terms_into(
+    columns: np.ndarray,
+    noise: np.ndarray,
+    offset: np.ndarray,
+    u0: tuple,
+    u1: tuple,
+    h: tuple,
+    weights: tuple,
+    terms: np.ndarray,
+) -> bool:
+    """Each frame's terms of one step of :func:`_hinge_residual`, written into ``terms``
+    ``(7, N)``: its ``G^-1`` (``i00``, ``i01``, ``i11``), ``z = G^-1 y`` (two), ``y' G^-1 y`` and
+    its best angle ``theta``, for the rotation vectors ``columns`` ``(3, N)`` [rad] about
+    ``offset`` ``(3,)``, their noise ``noise`` ``(6, N)`` (:func:`_frame_noise_into`), the
+    basis ``U`` of columns ``u0``, ``u1`` normal to the axis ``h`` (3 numbers each) and the
+    ``weights`` (five of :func:`_upper_weights`: the pairs of :func:`_hinge_residual`).
+    Whether every frame's ``G`` is positive definite. A compiled kernel: no frame's terms wait
+    on another's, so with each term over the frames contiguous several frames are formed at
+    once; the sums over them, in frame order, are the caller's."""
+    o0, o1, o2 = offset[0], offset[1], offset[2]
+    w0, w1, w2, w3, w4 = weights
+    positive = True
+    for f in range(columns.shape[1]):
+        a0 = columns[0, f] - o0
+        a1 = columns[1, f] - o1
+        a2 = columns[2, f] - o2
+        y0 = u0[0] * a0 + u0[1] * a1 + u0[2] * a2
+        y1 = u1[0] * a0 + u1[1] * a1 + u1[2] * a2
+        along = h[0] * a0 + h[1] * a1 + h[2] * a2
+        g00 = g01 = g11 = h0 = h1 = 0.0
+        for e in range(6):
+            entry = noise[e, f]
+            g00 += w0[e] * entry
+            g01 += w1[e] * entry
+            g11 += w2[e] * entry
+            h0 += w3[e] * entry
+            h1 += w4[e] * entry
+        det = g00 * g11 - g01 * g01
+        positive = positive & (g00 > 0.0) & (det > 0.0)
+        # One division, not three: the frame's inverse is most of its arithmetic.
+        scale = 1.0 / det
+        i00, i01, i11 = g11 * scale, -g01 * scale, g00 * scale
+        z0 = i00 * y0 + i01 * y1
+        z1 = i01 * y0 + i11 * y1
+        terms[0, f], terms[1, f], terms[2, f] = i00, i01, i11
+        terms[3, f], terms[4, f] = z0, z1
+        terms[5, f] = y0 * z0 + y1 * z1
+        # The frame's best angle: its rotation along h less what the noise off the axis
+        # shares with the noise along it.
+        terms[6, f] = along - h0 * z0 - h1 * z1
+    return positive
 
 
 class _Rotation(NamedTuple):
@@ -1358,7 +1416,7 @@ def _rotation_spreads(
     gram = np.empty((3, 3))
     mean = np.empty((3, 3))
     centre = np.empty(3)
-    noise = np.empty((n_frames, 6))
+    noise = np.empty((6, n_frames))
     reference_noise = np.zeros((3, 3))
     near_pi = False
     for t in range(n_trials):
@@ -1448,14 +1506,16 @@ def _hinge_left(
     """What a hinge leaves unexplained of the rotation vectors ``vectors`` ``(N, 3)`` [rad]
     [mm^2 per unit variance]: read against each frame's own noise (:func:`_frame_noise_into`
     of ``moving_noise`` and ``reference_noise`` ``(3, 3)``, into the scratch ``noise``
-    ``(N, 6)``; :func:`_hinge_residual`) or, ``at_mean_pose``, against the mean pose's,
+    ``(6, N)``; :func:`_hinge_residual`) or, ``at_mean_pose``, against the mean pose's,
     whichever leaves it less. Each frame's holds where its rotation is well above its noise
     (a wide hinge), the mean pose's where the noise turns the frames more than the motion does
     (the plug-in Jacobian of a nearly collinear cluster's frame, turned by its noise, leaks
     the noise about its line into the directions it fixes). The mean pose's where each frame's
     is NaN (a frame's noise not positive definite). A compiled kernel."""
-    _frame_noise_into(vectors, moving_noise, reference_noise, noise)
-    per_frame = _hinge_residual(vectors, noise)
+    # Each coordinate over the frames contiguous, as the frames' passes read them.
+    columns = np.ascontiguousarray(vectors.T)
+    _frame_noise_into(columns, moving_noise, reference_noise, noise)
+    per_frame = _hinge_residual(columns, noise)
     if not per_frame < at_mean_pose:  # NaN compares false: the mean pose's then
         return at_mean_pose
     return per_frame
@@ -1491,7 +1551,7 @@ def _spreads_near_pi(
     )
     sums = np.empty((n_trials, 2))
     sums[:, 0] = white.sum(axis=1)
-    noise = np.empty((n_frames, 6))
+    noise = np.empty((6, n_frames))
     for t in range(n_trials):
         sums[t, 1] = _hinge_left(
             white[t, 0] + white[t, 1],
