@@ -20,7 +20,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
-from workflow_copy import ROOT, SNAKEMAKE, copy_workflow, readme_builtin_example, run_snakemake
+from workflow_copy import (
+    ROOT,
+    SNAKEMAKE,
+    copy_workflow,
+    readme_builtin_example,
+    run_snakemake,
+    running_in,
+)
 
 from jointbench import pipeline
 from jointbench.figures import extended
@@ -200,10 +207,10 @@ def test_an_estimator_that_never_ends_is_stopped_and_named(tmp_path):
     summary names the failed jobs and their logs, which say the limit stopped them. Run as a
     clone runs, with the default profile."""
     shipped = (ROOT / CENTROID_SCRIPT).read_text()
-    # The program's pid, to see that it was stopped; bounded, so that a program the run left
-    # behind ends by itself.
-    hang = 'open(estimates + ".pid", "w").write(str(os.getpid()))\ntime.sleep(240)\n'
-    script = shipped.replace("rows = []\n", f"import os\n{hang}rows = []\n", 1)
+    # Bounded, so that a program the run left behind ends by itself. Whether the program got
+    # this far within the limit depends on the machine's load (its interpreter and imports take
+    # about the 3 s on a loaded one): what is left of it is looked for wherever it was stopped.
+    script = shipped.replace("rows = []\n", "time.sleep(240)\nrows = []\n", 1)
     assert script != shipped
     overlay = user_clone(
         tmp_path, estimators=["LS"], external=["centroid"], centroid_script=script, profiles=True
@@ -237,10 +244,7 @@ def test_an_estimator_that_never_ends_is_stopped_and_named(tmp_path):
         assert f"condition={condition}): its program ran past the time limit of 3 s" in (
             (tmp_path / log).read_text()
         )
-    estimates = tmp_path / "results" / "estimates" / "cmc" / "centroid"
-    for condition in conditions:
-        pid = int((estimates / f"{condition}.parquet.pid").read_text())
-        assert not Path(f"/proc/{pid}").exists(), f"{condition}: its program still runs"
+    assert running_in(tmp_path) == [], "a program of the run still runs"
     assert (tmp_path / "results" / "summaries" / "cmc" / "LS.csv").is_file(), message[-3000:]
     assert not (tmp_path / "results" / "collected" / "cmc.parquet").exists()
 

@@ -51,6 +51,22 @@ def copy_workflow(destination: Path, *, profiles: bool = False) -> Path:
     return destination
 
 
+def running_in(folder: Path) -> list[int]:
+    """The pids of the processes whose working directory is ``folder`` or below it: what is
+    left of a run's jobs, which Snakemake starts in its ``--directory``, however far each got
+    (a program stopped before it could write its pid is found too). A zombie, which runs
+    nothing, has no working directory to read."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            where = Path(os.readlink(entry / "cwd"))
+        except OSError:  # not a process, one that ended, or another user's
+            continue
+        if where == folder.resolve() or folder.resolve() in where.parents:
+            found.append(int(entry.name))
+    return found
+
+
 def run_snakemake(workdir: Path, *arguments: str, timeout: int = 900, jobs: int = 2):
     """Run ``snakemake -j2`` (``jobs`` at a time) on the copy in ``workdir`` with extra
     arguments (targets first)."""
