@@ -35,15 +35,15 @@ medians of (:data:`JOINT_STAGES`):
   and :func:`jointbench.fit_joint_center` (the checked call after the artefact screen);
 * ``input checks``: :func:`jointbench.estimators.validation.check_input`;
 * ``poses``: both segments' poses as the checked call fits them once for the fit and the
-  verdict (:func:`jointbench.estimators.segment_poses.trial_poses`, the samples checked);
+  verdict (``segment_poses._trial_poses``, the samples checked, as the checked call fits them);
 * ``fit on poses``: the method's many-trial form on those poses, a batch of one;
 * ``verdict``: :func:`jointbench.estimators.support.assess_many` on those poses;
 * ``precision``: the method's ``precision_many`` on its answer and those poses (the model
   tests, :mod:`jointbench.estimators.hjc`), in one call's scope
   (:func:`jointbench.numerics.reuse.one_call`) as the checked call runs it;
 * ``answers``: :func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
-* ``screen``: :func:`jointbench.screening.find_artefacts` of both segments, what the public
-  call adds.
+* ``screen``: ``screening._find_artefacts`` of both segments (the artefact screen trusting
+  the magnitudes the input checks passed), what the public call adds.
 
 ``checked`` less the stages from ``input checks`` to ``answers`` is the plumbing between them.
 """
@@ -63,7 +63,7 @@ import jointbench
 from jointbench import screening
 from jointbench.estimators import centre_precision, registry, support, validation
 from jointbench.estimators.batching import one_trial
-from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, pose_segments, trial_poses
+from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, _trial_poses, pose_segments
 from jointbench.numerics import reuse
 from jointbench.numerics.compiled import kernel_array
 
@@ -140,7 +140,7 @@ def joint_stage_calls(
     names = pose_segments(many) or ("proximal", "distal")
     stacked = [tuple(array[None] for array in trial) for trial in trials]
     poses = [
-        trial_poses(
+        _trial_poses(
             {name: [array] for name, array in zip(names, trial, strict=True)},
             min_frames=POSE_MIN_FRAMES,
             samples_checked=True,
@@ -167,14 +167,14 @@ def joint_stage_calls(
 
     def screen(i: int) -> None:
         for (name, names_), markers in zip(labels.items(), trials[i], strict=True):
-            screening.find_artefacts(markers, names_, name, magnitudes_checked=True)
+            screening._find_artefacts(markers, names_, name)
 
     return {
         "estimator": lambda i: bare(*trials[i]),
         "checked": lambda i: checked(*trials[i]),
         "public": lambda i: jointbench.fit_joint_center(*trials[i], method=method),
         "input checks": lambda i: validation.check_input("joint_center", trials[i]),
-        "poses": lambda i: trial_poses(
+        "poses": lambda i: _trial_poses(
             {name: [array] for name, array in zip(names, trials[i], strict=True)},
             min_frames=POSE_MIN_FRAMES,
             samples_checked=True,
