@@ -520,10 +520,10 @@ def test_the_weight_moments_are_the_full_sum_of_each_frames_outer_product():
 
 def test_the_model_tests_read_each_trials_own_segments_once_in_a_call():
     """The largest |coordinate| of the segments (the scale of their rounding) and each
-    cluster's residual moments, which a checked call computes once per segment
-    (:func:`jointbench.numerics.reuse.remembered`), are those of the segments asked about: the
-    largest over both segments' markers and every frame (here the distal's, negative), and
-    within one call's scope each of two trials of the same shape, asked in turn, its own."""
+    cluster's residual moments are those of the segments asked about: the largest over both
+    segments' markers and every frame (here the distal's, negative), and within one call's
+    scope (:func:`jointbench.numerics.reuse.one_call`) each of two trials of the same shape,
+    asked in turn, its own."""
     proximal, distal = two_segments(20)
     trials = [
         trial_poses({"proximal": [proximal], "distal": [_noisy(d, seed)]}, min_frames=3)[0]

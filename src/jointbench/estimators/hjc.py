@@ -175,7 +175,6 @@ from jointbench.estimators.twosegment import (
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
 from jointbench.numerics.rank import negligible
-from jointbench.numerics.reuse import remembered
 from jointbench.numerics.small import (
     add_block3,
     add_upper3,
@@ -244,16 +243,9 @@ def _per_coordinate_variance(
 
 
 def _largest_coordinate(segments: tuple[SegmentPoses, ...]) -> float:
-    """The largest |coordinate| [mm] of the segments' markers, the scale of their rounding:
-    within one checked call found once per segment (:func:`jointbench.numerics.reuse.remembered`),
-    as the test of the segments' noise and every model test read it."""
-    return max(remembered("largest coordinate", p.markers, _largest_of) for p in segments)
-
-
-def _largest_of(markers: np.ndarray) -> float:
-    """The largest |coordinate| [mm] of ``markers`` ``(N, n, 3)``."""
+    """The largest |coordinate| [mm] of the segments' markers, the scale of their rounding."""
     # From the extremes, without an array of absolute values.
-    return max(float(markers.max()), -float(markers.min()))
+    return max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
 
 
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
@@ -1024,8 +1016,7 @@ def _noise_kurtosis(segments: tuple[SegmentPoses, ...], variance: float) -> tupl
         # moments by its square, fourth cumulants by its fourth power.
         n_frames = len(poses.markers)
         shrink = (n_frames - 1) / n_frames
-        # Each cluster's once in a checked call, which may test two models on the same poses.
-        g, f = remembered("residual moments", poses.body, _residual_moments)
+        g, f = _residual_moments(poses.body)
         gaussian += n_frames * shrink**2 * g
         excess += n_frames * shrink**4 * f
     return (fourth / variance**2 - gaussian) / excess, gaussian
