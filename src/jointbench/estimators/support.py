@@ -2102,8 +2102,11 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     axes: dict[int, MotionAxis] = {}
     posed = list(frames)
     if kind not in CENTRE_KINDS and posed:
+        # Every trial has a pose, as a rule: its markers are not copied.
         found_axes, found = _one_segment_axes(
-            markers[posed], numbers[posed, 0], numbers[posed, _CENTRAL_FRAME]
+            markers if len(posed) == len(markers) else markers[posed],
+            numbers[posed, 0],
+            numbers[posed, _CENTRAL_FRAME],
         )
         axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
