@@ -677,8 +677,10 @@ def trial_test_into(
         np.empty((n_pairs, n_pairs)),
         np.empty((max(n_pairs, n_markers), n_pairs)),
     )
-    # Sum over the frames of x_a x_b' (a <= b), x_a marker a's centred position.
-    second = np.zeros((n_markers, n_markers, 3, 3))
+    # Sum over the frames of d_a d_b' (a <= b < n - 1), d_a marker a's position less the last
+    # marker's, and the pair (a, n - 1) that holds it.
+    second = np.zeros((n_markers - 1, n_markers - 1, 3, 3))
+    to_last = np.empty(n_markers - 1, dtype=np.int64)
     own = np.empty(n_markers)
     sums = np.empty(6)
     expected_own = np.empty(n_markers)
@@ -710,13 +712,22 @@ def trial_test_into(
             row[at_markers + m * n_markers + mm] = n_frames * per_frame[m, mm]
     for m in range(n_markers):
         own[m] = row[at_own + m]
-    # Pair by pair, each sum in frame order: its nine sums stay in registers through the frames.
-    for a in range(n_markers):
-        for b in range(a, n_markers):
+    # K~_m's rows and columns sum to zero (each pair's signs do), so sum_ab K~_m,ab x_a x_b'
+    # is the same sum over the markers a, b < L of their differences d_a = x_a - x_L from the
+    # last marker L, which the pairs (a, L) hold: sum_k d_a d_b', fewer sums than of every
+    # x_a x_b'. Pair by pair, each sum in frame order, its sums in registers through the frames.
+    last = n_markers - 1
+    for p in range(n_pairs):
+        if pairs[1][p] == last:
+            to_last[pairs[0][p]] = p
+    for a in range(last):
+        da = differences[to_last[a]]
+        for b in range(a, last):
+            db = differences[to_last[b]]
             s00 = s01 = s02 = s10 = s11 = s12 = s20 = s21 = s22 = 0.0
             for f in range(n_frames):
-                x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
-                y0, y1, y2 = positions[f, b, 0], positions[f, b, 1], positions[f, b, 2]
+                x0, x1, x2 = da[0, f], da[1, f], da[2, f]
+                y0, y1, y2 = db[0, f], db[1, f], db[2, f]
                 s00 += x0 * y0
                 s01 += x0 * y1
                 s02 += x0 * y2
@@ -729,15 +740,15 @@ def trial_test_into(
             second[a, b, 0, 0], second[a, b, 0, 1], second[a, b, 0, 2] = s00, s01, s02
             second[a, b, 1, 0], second[a, b, 1, 1], second[a, b, 1, 2] = s10, s11, s12
             second[a, b, 2, 0], second[a, b, 2, 1], second[a, b, 2, 2] = s20, s21, s22
-    for a in range(n_markers):
+    for a in range(last):
         for b in range(a):
             for i in range(3):
                 for j in range(3):
                     second[a, b, i, j] = second[b, a, j, i]
     for m in range(n_markers):
         sums[:] = 0.0
-        for a in range(n_markers):
-            for b in range(n_markers):
+        for a in range(last):
+            for b in range(last):
                 weight = through[m, a, b]
                 for i in range(3):
                     for j in range(i, 3):
