@@ -264,15 +264,15 @@ if __name__ == "__main__":
 
 
 def _arc_sd_in_frame_order(markers, variance, principal_rms, off_rms) -> np.ndarray:
-    """:func:`support._arc_rotation_sd_deg` read plainly: each mean, then the squares of the
-    first, second and third coordinate, every sum from 0 in frame order."""
+    """:func:`support._arc_rotation_sd_deg` read plainly: per coordinate its mean and its
+    squares, every sum from 0 in frame order, then the three coordinates' squares added."""
     n_trials, n_frames, n_markers, _ = markers.shape
     found = np.empty((n_trials, n_markers))
     for t in range(n_trials):
         noise = 3.0 * float(variance[t]) * (n_frames - 1) / n_frames
         rotation_sq = float(principal_rms[t]) ** 2 + float(off_rms[t]) ** 2
         for i in range(n_markers):
-            squares = 0.0
+            squares = [0.0, 0.0, 0.0]
             for c in range(3):
                 values = [float(x) for x in markers[t, :, i, c]]
                 mean = 0.0
@@ -280,17 +280,17 @@ def _arc_sd_in_frame_order(markers, variance, principal_rms, off_rms) -> np.ndar
                     mean += x
                 mean /= n_frames
                 for x in values:
-                    squares += (x - mean) * (x - mean)
-            travel = squares / n_frames - noise
+                    squares[c] += (x - mean) * (x - mean)
+            travel = (squares[0] + squares[1] + squares[2]) / n_frames - noise
             ratio = np.inf if travel <= 0.0 else float(variance[t]) * rotation_sq / travel
             found[t, i] = np.degrees(np.sqrt(ratio))
     return found
 
 
 def test_the_arc_sd_sums_every_coordinate_in_frame_order_to_the_bit():
-    """The arc SD's sums keep their order (frame by frame, coordinate after coordinate) to the
-    last bit, on frames reversed, far from the origin, with a NaN frame and of many markers:
-    the tolerance of the pinned numbers would let a reordered sum through."""
+    """The arc SD's sums keep their order (each coordinate's frame by frame, then the three
+    added) to the last bit, on frames reversed, far from the origin, with a NaN frame and of
+    many markers: the tolerance of the pinned numbers would let a reordered sum through."""
     rng = np.random.default_rng(11)
     base = TRIALS[0]
     nan_frame = base.copy()

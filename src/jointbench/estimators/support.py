@@ -1763,14 +1763,13 @@ def _arc_rotation_sd_deg(
             mean0 /= n_frames
             mean1 /= n_frames
             mean2 /= n_frames
-            squares = 0.0
+            # Likewise the squares, per coordinate, added up after.
+            squares0 = squares1 = squares2 = 0.0
             for k in range(n_frames):
-                squares += (markers[t, k, i, 0] - mean0) ** 2
-            for k in range(n_frames):
-                squares += (markers[t, k, i, 1] - mean1) ** 2
-            for k in range(n_frames):
-                squares += (markers[t, k, i, 2] - mean2) ** 2
-            travel = squares / n_frames - noise
+                squares0 += (markers[t, k, i, 0] - mean0) ** 2
+                squares1 += (markers[t, k, i, 1] - mean1) ** 2
+                squares2 += (markers[t, k, i, 2] - mean2) ** 2
+            travel = (squares0 + squares1 + squares2) / n_frames - noise
             # L^2 = travel / rotation_sq, so s / L = s * rotation / sqrt(travel).
             if travel <= 0.0:
                 sd_deg[t, i] = np.inf
