@@ -540,6 +540,20 @@ def test_the_correlation_sd_is_that_of_the_distances_covariance():
     assert np.isnan(support._frame_numbers(still)[:, 4]).all()
 
 
+def test_distances_at_rounding_level_have_no_correlation_sd():
+    """A rigid body turned without noise: its distances vary by rounding alone, which has no
+    correlation to read (NaN), and no SD of one either, however its scatter is summed: the
+    verdict's pass and :func:`support._frame_numbers` agree on NaN."""
+    rng = np.random.default_rng(8)
+    body = rng.normal(scale=40.0, size=(4, 3))
+    turns = rotation_matrix(np.outer(np.linspace(0.0, 1.0, 60), unit(rng.normal(size=3))))
+    markers = np.einsum("fij,mj->fmi", turns, body)[None] + 500.0
+    numbers = support._frame_numbers(markers)
+    assert np.isnan(numbers[0, 0])
+    assert np.isnan(numbers[0, 4])
+    assert np.isnan(support._one_segment_numbers(markers, support._FLEX)[0, -1])
+
+
 def _counting_kernel_calls(monkeypatch) -> list[str]:
     """The names of the compiled kernels called from now on, in order."""
     calls: list[str] = []
@@ -556,14 +570,15 @@ def _counting_kernel_calls(monkeypatch) -> list[str]:
 def test_a_one_segment_verdict_makes_one_compiled_call(monkeypatch):
     """Its numbers and the lag-1 statement's correlation and SD in one compiled call: a
     checked one-trial fit pays each call's overhead. The statement reads the numbers
-    :func:`support._frame_numbers` gives."""
+    :func:`support._frame_numbers` gives, to rounding: the verdict's pass takes them from
+    the distances of each frame's centred markers and their scatter."""
     rng = np.random.default_rng(2)
     (markers,) = _kind_trial("center", rng, 120, lambda shape: rng.normal(0.0, 0.5, shape))
     expected = support._frame_numbers(markers[None])
     calls = _counting_kernel_calls(monkeypatch)
     numbers = support._one_segment_numbers(markers[None], support._FLEX)
     assert calls == ["_one_segment_numbers"]
-    assert np.array_equal(numbers[:, -support._FRAME_COLUMNS :], expected)
+    np.testing.assert_allclose(numbers[:, -support._FRAME_COLUMNS :], expected, rtol=1e-10)
     calls.clear()
     support.assess_many("center", (markers[None],))
     assert calls == ["_one_segment_numbers"]

@@ -170,8 +170,11 @@ def _frame_number_cases() -> list[np.ndarray]:
 
 def test_the_lag_1_statements_numbers_are_the_frame_numbers_kernels():
     """The columns the one-segment kernel ends with are :func:`support._frame_numbers` of
-    each trial, to the last bit, alone and in batches: the lag-1 statement reads them in its
-    place."""
+    each trial, alone and in batches: the lag-1 statement reads them in its place. The kernel
+    takes them from the cluster's own distances, which it centres on each frame's centroid
+    first, and their scatter, which it sums from frame 0's distances: they agree to rounding
+    (within 1e-10, relative where above 1), NaN where the others are, and its dependence
+    columns are the verdict's own to the last bit."""
     groups: dict[tuple, list[np.ndarray]] = {}
     for markers in TRIALS:
         groups.setdefault(markers.shape, []).append(markers)
@@ -180,7 +183,10 @@ def test_the_lag_1_statements_numbers_are_the_frame_numbers_kernels():
         numbers = support._one_segment_numbers(batch, support._FLEX)
         expected = support._frame_numbers(batch)
         assert numbers.shape[1] == VERDICT_COLUMNS + row_length(batch.shape[2]) + expected.shape[1]
-        assert np.array_equal(numbers[:, -support._FRAME_COLUMNS :], expected, equal_nan=True)
+        found = numbers[:, -support._FRAME_COLUMNS :]
+        assert np.array_equal(np.isnan(found), np.isnan(expected))
+        np.testing.assert_allclose(found, expected, rtol=1e-10, atol=1e-10)
+        assert np.array_equal(found[:, :4], numbers[:, support._DEPENDENCE], equal_nan=True)
         for t in range(len(batch)):
             alone = support._one_segment_numbers(batch[t : t + 1], support._FLEX)
             assert np.array_equal(alone, numbers[t : t + 1], equal_nan=True)
@@ -258,15 +264,15 @@ if __name__ == "__main__":
 
 
 def _arc_sd_in_frame_order(markers, variance, principal_rms, off_rms) -> np.ndarray:
-    """:func:`support._arc_rotation_sd_deg` read plainly: each mean, then the squares of the
-    first, second and third coordinate, every sum from 0 in frame order."""
+    """:func:`support._arc_rotation_sd_deg` read plainly: per coordinate its mean and its
+    squares, every sum from 0 in frame order, then the three coordinates' squares added."""
     n_trials, n_frames, n_markers, _ = markers.shape
     found = np.empty((n_trials, n_markers))
     for t in range(n_trials):
         noise = 3.0 * float(variance[t]) * (n_frames - 1) / n_frames
         rotation_sq = float(principal_rms[t]) ** 2 + float(off_rms[t]) ** 2
         for i in range(n_markers):
-            squares = 0.0
+            squares = [0.0, 0.0, 0.0]
             for c in range(3):
                 values = [float(x) for x in markers[t, :, i, c]]
                 mean = 0.0
@@ -274,17 +280,17 @@ def _arc_sd_in_frame_order(markers, variance, principal_rms, off_rms) -> np.ndar
                     mean += x
                 mean /= n_frames
                 for x in values:
-                    squares += (x - mean) * (x - mean)
-            travel = squares / n_frames - noise
+                    squares[c] += (x - mean) * (x - mean)
+            travel = (squares[0] + squares[1] + squares[2]) / n_frames - noise
             ratio = np.inf if travel <= 0.0 else float(variance[t]) * rotation_sq / travel
             found[t, i] = np.degrees(np.sqrt(ratio))
     return found
 
 
 def test_the_arc_sd_sums_every_coordinate_in_frame_order_to_the_bit():
-    """The arc SD's sums keep their order (frame by frame, coordinate after coordinate) to the
-    last bit, on frames reversed, far from the origin, with a NaN frame and of many markers:
-    the tolerance of the pinned numbers would let a reordered sum through."""
+    """The arc SD's sums keep their order (each coordinate's frame by frame, then the three
+    added) to the last bit, on frames reversed, far from the origin, with a NaN frame and of
+    many markers: the tolerance of the pinned numbers would let a reordered sum through."""
     rng = np.random.default_rng(11)
     base = TRIALS[0]
     nan_frame = base.copy()

@@ -136,6 +136,8 @@ for _a, (_i, _j) in enumerate(((0, 1), (0, 2), (1, 2)), start=2):
 _MAX_CONDITION = 1e10
 # The fewest blocks of frames whose scatter is read as the score's variance.
 _MIN_BLOCKS = 7
+# Frames whose residuals the test's pass forms side by side (:func:`_frame_terms_into`).
+_CHUNK = 128
 
 
 class NoiseDirections(NamedTuple):
@@ -533,6 +535,92 @@ def inverse_gram_into(
 
 
 @kernel
+def _frame_terms_into(
+    begin: int,
+    count: int,
+    positions: np.ndarray,
+    differences: np.ndarray,
+    deviations: np.ndarray,
+    first: np.ndarray,
+    z: np.ndarray,
+    inverse_gram: np.ndarray,
+    pairs: tuple,
+    expected_own: np.ndarray,
+    isotropic: np.ndarray,
+    work: tuple,
+) -> None:
+    """The residual moments' deviations from what ``theta_0`` gives (:func:`trial_test_into`)
+    of the ``count`` frames from ``begin``, into ``work[3]`` ``(n + 5, >= count)``: each
+    marker's squared residual less ``expected_own`` ``(n,)`` [mm^2], then the five traceless
+    moments less those of ``X_k' K~ X_k`` (``isotropic`` ``(n, n)``). ``work[0]``
+    ``(P, >= count)``, ``work[1]`` and ``work[2]`` ``(3 n, >= count)`` and ``work[4]``
+    ``(6, >= count)`` are work arrays (the residuals and the markers by coordinate, frames
+    innermost): ``r_k = J_k' H dd_k`` from the deviations ``deviations`` ``(P, N)`` [mm] from
+    ``first`` ``(P,)`` less their means ``first + z``, the frames' pair differences
+    ``differences`` ``(P, 3, N)`` and centred markers ``positions`` ``(N, n, 3)`` [mm], ``H``
+    ``inverse_gram``. Each frame's numbers by the operations of one frame alone, in the same
+    order, with the frames innermost so that they run side by side. A compiled kernel."""
+    values, residuals, markers_t, terms, moments = work
+    pair_a, pair_b = pairs[0], pairs[1]
+    n_markers = positions.shape[1]
+    n_pairs = first.shape[0]
+    for p in range(n_pairs):
+        for j in range(count):
+            values[p, j] = 0.0
+        for q in range(n_pairs):
+            h, mean = inverse_gram[p, q], z[q]
+            for j in range(count):
+                values[p, j] += h * (deviations[q, begin + j] - mean)
+        start = first[p]
+        for j in range(count):
+            values[p, j] *= 1.0 / (deviations[p, begin + j] + start)
+    residuals[:, :count] = 0.0
+    for p in range(n_pairs):
+        a, b = pair_a[p], pair_b[p]
+        for i in range(3):
+            for j in range(count):
+                step = values[p, j] * differences[p, i, begin + j]
+                residuals[3 * a + i, j] += step
+                residuals[3 * b + i, j] -= step
+    moments[:, :count] = 0.0
+    for m in range(n_markers):
+        expected = expected_own[m]
+        for j in range(count):
+            r0, r1, r2 = residuals[3 * m, j], residuals[3 * m + 1, j], residuals[3 * m + 2, j]
+            terms[m, j] = r0 * r0 + r1 * r1 + r2 * r2 - expected
+            moments[0, j] += r0 * r0
+            moments[1, j] += r0 * r1
+            moments[2, j] += r0 * r2
+            moments[3, j] += r1 * r1
+            moments[4, j] += r1 * r2
+            moments[5, j] += r2 * r2
+    for j in range(count):
+        for m in range(n_markers):
+            for i in range(3):
+                markers_t[3 * m + i, j] = positions[begin + j, m, i]
+    for a in range(n_markers):
+        for j in range(count):
+            w0 = w1 = w2 = 0.0
+            for b in range(n_markers):
+                w0 += isotropic[a, b] * markers_t[3 * b, j]
+                w1 += isotropic[a, b] * markers_t[3 * b + 1, j]
+                w2 += isotropic[a, b] * markers_t[3 * b + 2, j]
+            x0, x1, x2 = markers_t[3 * a, j], markers_t[3 * a + 1, j], markers_t[3 * a + 2, j]
+            moments[0, j] -= x0 * w0
+            moments[1, j] -= x0 * w1
+            moments[2, j] -= x0 * w2
+            moments[3, j] -= x1 * w1
+            moments[4, j] -= x1 * w2
+            moments[5, j] -= x2 * w2
+    for j in range(count):
+        terms[n_markers, j] = moments[0, j] - moments[3, j]
+        terms[n_markers + 1, j] = moments[3, j] - moments[5, j]
+        terms[n_markers + 2, j] = 2.0 * moments[1, j]
+        terms[n_markers + 3, j] = 2.0 * moments[2, j]
+        terms[n_markers + 4, j] = 2.0 * moments[4, j]
+
+
+@kernel
 def trial_test_into(
     positions: np.ndarray,
     differences: np.ndarray,
@@ -571,9 +659,8 @@ def trial_test_into(
     at_mixed = at_markers + n_markers * n_markers
     at_inverse = at_mixed + 5 * n_markers
     pairs = _pairs(n_markers)
-    pair_a, pair_b = pairs[0], pairs[1]
-    by_pair = np.empty((3, n_pairs))
-    mean_d, z, scale = by_pair[0], by_pair[1], by_pair[2]
+    by_pair = np.empty((2, n_pairs))
+    mean_d, z = by_pair[0], by_pair[1]
     marker_squares = np.empty((4, n_markers, n_markers))
     per_frame, isotropic, inverse_markers, work = (
         marker_squares[0],
@@ -590,18 +677,18 @@ def trial_test_into(
         np.empty((n_pairs, n_pairs)),
         np.empty((max(n_pairs, n_markers), n_pairs)),
     )
-    # Sum over the frames of x_a x_b' (a <= b), x_a marker a's centred position.
-    second = np.zeros((n_markers, n_markers, 3, 3))
-    residual = np.empty((n_markers, 3))
+    # Sum over the frames of d_a d_b' (a <= b < n - 1), d_a marker a's position less the last
+    # marker's, and the pair (a, n - 1) that holds it.
+    second = np.zeros((n_markers - 1, n_markers - 1, 3, 3))
+    to_last = np.empty(n_markers - 1, dtype=np.int64)
     own = np.empty(n_markers)
     sums = np.empty(6)
     expected_own = np.empty(n_markers)
     projector = np.empty((5, n_markers))
-    by_term = np.empty((2, n_terms))
-    deviation, summed = by_term[0], by_term[1]
-    five = np.empty((4, 5, 5))
+    summed = np.empty(n_terms)
+    five = np.empty((3, 5, 5))
     variance5, factor5 = five[0], five[1]
-    score, along, block_sum, projected = five[2, 0], five[2, 1:2].T, five[2, 2], five[2, 3]
+    score, along = five[2, 0], five[2, 1:2].T
     for p in range(n_pairs):
         mean_d[p] = first[p] + total[p] / n_frames
     _marker_maps(n_frames, pairs, mean_d, cosines, inverse_gram, maps)
@@ -625,13 +712,22 @@ def trial_test_into(
             row[at_markers + m * n_markers + mm] = n_frames * per_frame[m, mm]
     for m in range(n_markers):
         own[m] = row[at_own + m]
-    # Pair by pair, each sum in frame order: its nine sums stay in registers through the frames.
-    for a in range(n_markers):
-        for b in range(a, n_markers):
+    # K~_m's rows and columns sum to zero (each pair's signs do), so sum_ab K~_m,ab x_a x_b'
+    # is the same sum over the markers a, b < L of their differences d_a = x_a - x_L from the
+    # last marker L, which the pairs (a, L) hold: sum_k d_a d_b', fewer sums than of every
+    # x_a x_b'. Pair by pair, each sum in frame order, its sums in registers through the frames.
+    last = n_markers - 1
+    for p in range(n_pairs):
+        if pairs[1][p] == last:
+            to_last[pairs[0][p]] = p
+    for a in range(last):
+        da = differences[to_last[a]]
+        for b in range(a, last):
+            db = differences[to_last[b]]
             s00 = s01 = s02 = s10 = s11 = s12 = s20 = s21 = s22 = 0.0
             for f in range(n_frames):
-                x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
-                y0, y1, y2 = positions[f, b, 0], positions[f, b, 1], positions[f, b, 2]
+                x0, x1, x2 = da[0, f], da[1, f], da[2, f]
+                y0, y1, y2 = db[0, f], db[1, f], db[2, f]
                 s00 += x0 * y0
                 s01 += x0 * y1
                 s02 += x0 * y2
@@ -644,15 +740,15 @@ def trial_test_into(
             second[a, b, 0, 0], second[a, b, 0, 1], second[a, b, 0, 2] = s00, s01, s02
             second[a, b, 1, 0], second[a, b, 1, 1], second[a, b, 1, 2] = s10, s11, s12
             second[a, b, 2, 0], second[a, b, 2, 1], second[a, b, 2, 2] = s20, s21, s22
-    for a in range(n_markers):
+    for a in range(last):
         for b in range(a):
             for i in range(3):
                 for j in range(3):
                     second[a, b, i, j] = second[b, a, j, i]
     for m in range(n_markers):
         sums[:] = 0.0
-        for a in range(n_markers):
-            for b in range(n_markers):
+        for a in range(last):
+            for b in range(last):
                 weight = through[m, a, b]
                 for i in range(3):
                     for j in range(i, 3):
@@ -682,69 +778,93 @@ def trial_test_into(
             projector[a, m] = -value / n_frames
     # Each frame's residuals and their moments' deviations from what theta_0 gives
     # (X_k' K~ X_k for the traceless ones), projected by A and summed over blocks of frames.
-    variance5[:] = 0.0
-    block_sum[:] = 0.0
-    score[:] = 0.0
+    # Frames are taken _CHUNK at a time: each frame's numbers by the operations, in the order,
+    # of a frame alone, but with the frames innermost, where they run side by side; then the
+    # sums over the frames, in frame order.
     summed[:] = 0.0
     n_blocks = 0
     in_block = 0
     block = max(block, 1)
     for p in range(n_pairs):
         z[p] = total[p] / n_frames
-    for f in range(n_frames):
-        for p in range(n_pairs):
-            scale[p] = 1.0 / (deviations[p, f] + first[p])
-        residual[:] = 0.0
-        for p in range(n_pairs):
-            value = 0.0
-            for q in range(n_pairs):
-                value += inverse_gram[p, q] * (deviations[q, f] - z[q])
-            value *= scale[p]
-            a, b = pair_a[p], pair_b[p]
-            for i in range(3):
-                residual[a, i] += value * differences[p, i, f]
-                residual[b, i] -= value * differences[p, i, f]
-        q00 = q01 = q02 = q11 = q12 = q22 = 0.0
-        for m in range(n_markers):
-            r0, r1, r2 = residual[m, 0], residual[m, 1], residual[m, 2]
-            deviation[m] = r0 * r0 + r1 * r1 + r2 * r2 - expected_own[m]
-            q00 += r0 * r0
-            q01 += r0 * r1
-            q02 += r0 * r2
-            q11 += r1 * r1
-            q12 += r1 * r2
-            q22 += r2 * r2
-        for a in range(n_markers):
-            w0 = w1 = w2 = 0.0
-            for b in range(n_markers):
-                w0 += isotropic[a, b] * positions[f, b, 0]
-                w1 += isotropic[a, b] * positions[f, b, 1]
-                w2 += isotropic[a, b] * positions[f, b, 2]
-            x0, x1, x2 = positions[f, a, 0], positions[f, a, 1], positions[f, a, 2]
-            q00 -= x0 * w0
-            q01 -= x0 * w1
-            q02 -= x0 * w2
-            q11 -= x1 * w1
-            q12 -= x1 * w2
-            q22 -= x2 * w2
-        _traceless_moments(q00, q01, q02, q11, q12, q22, deviation, n_markers)
+    chunk = np.empty((n_pairs + 6 * n_markers + n_terms + 11, _CHUNK))
+    values = chunk[:n_pairs]
+    residuals = chunk[n_pairs : n_pairs + 3 * n_markers]
+    markers_t = chunk[n_pairs + 3 * n_markers : n_pairs + 6 * n_markers]
+    terms = chunk[n_pairs + 6 * n_markers : n_pairs + 6 * n_markers + n_terms]
+    moments = chunk[n_pairs + 6 * n_markers + n_terms : n_pairs + 6 * n_markers + n_terms + 6]
+    scores = chunk[n_pairs + 6 * n_markers + n_terms + 6 :]
+    # The blocks' sums, their sum and their products (upper triangle), as scalars: the five
+    # directions of D are the model's, and the sums stay in registers through the frames.
+    b0 = b1 = b2 = b3 = b4 = 0.0
+    s0 = s1 = s2 = s3 = s4 = 0.0
+    v00 = v01 = v02 = v03 = v04 = v11 = v12 = v13 = v14 = 0.0
+    v22 = v23 = v24 = v33 = v34 = v44 = 0.0
+    for begin in range(0, n_frames, _CHUNK):
+        count = min(_CHUNK, n_frames - begin)
+        _frame_terms_into(
+            begin,
+            count,
+            positions,
+            differences,
+            deviations,
+            first,
+            z,
+            inverse_gram,
+            pairs,
+            expected_own,
+            isotropic,
+            (values, residuals, markers_t, terms, moments),
+        )
         for c in range(n_terms):
-            summed[c] += deviation[c]
+            value = summed[c]
+            for j in range(count):
+                value += terms[c, j]
+            summed[c] = value
         for a in range(5):
-            value = deviation[n_markers + a]
+            for j in range(count):
+                scores[a, j] = terms[n_markers + a, j]
             for m in range(n_markers):
-                value += projector[a, m] * deviation[m]
-            projected[a] = value
-            block_sum[a] += value
-        in_block += 1
-        if in_block == block or f == n_frames - 1:
-            in_block = 0
-            n_blocks += 1
-            for a in range(5):
-                score[a] += block_sum[a]
-                for b in range(a, 5):
-                    variance5[a, b] += block_sum[a] * block_sum[b]
-            block_sum[:] = 0.0
+                weight = projector[a, m]
+                for j in range(count):
+                    scores[a, j] += weight * terms[m, j]
+        for j in range(count):
+            b0 += scores[0, j]
+            b1 += scores[1, j]
+            b2 += scores[2, j]
+            b3 += scores[3, j]
+            b4 += scores[4, j]
+            in_block += 1
+            if in_block == block or begin + j == n_frames - 1:
+                in_block = 0
+                n_blocks += 1
+                s0 += b0
+                s1 += b1
+                s2 += b2
+                s3 += b3
+                s4 += b4
+                v00 += b0 * b0
+                v01 += b0 * b1
+                v02 += b0 * b2
+                v03 += b0 * b3
+                v04 += b0 * b4
+                v11 += b1 * b1
+                v12 += b1 * b2
+                v13 += b1 * b3
+                v14 += b1 * b4
+                v22 += b2 * b2
+                v23 += b2 * b3
+                v24 += b2 * b4
+                v33 += b3 * b3
+                v34 += b3 * b4
+                v44 += b4 * b4
+                b0 = b1 = b2 = b3 = b4 = 0.0
+    score[0], score[1], score[2], score[3], score[4] = s0, s1, s2, s3, s4
+    variance5[0, 0], variance5[0, 1], variance5[0, 2] = v00, v01, v02
+    variance5[0, 3], variance5[0, 4], variance5[1, 1] = v03, v04, v11
+    variance5[1, 2], variance5[1, 3], variance5[1, 4] = v12, v13, v14
+    variance5[2, 2], variance5[2, 3], variance5[2, 4] = v22, v23, v24
+    variance5[3, 3], variance5[3, 4], variance5[4, 4] = v33, v34, v44
     for c in range(n_terms):
         row[at_sums + c] = summed[c]
     row[1] = n_blocks

@@ -508,7 +508,8 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     centred markers, differences and distances and the cluster's own distance modes, where the
     residual is above rounding and the frames are not found dependent (else its first column
     is NaN and its frames' blocks are the caller's to choose). Last, the trial's row of
-    :func:`_frame_numbers`, which the lag-1 statement reads (:class:`Untested`): one dispatch
+    :func:`_frame_numbers`, which the lag-1 statement reads (:class:`Untested`), from the
+    cluster's own distances' dependence and scatter, which the pass forms anyway: one dispatch
     for the whole verdict. A compiled kernel."""
     n_trials, n_frames, n_markers, _ = markers.shape
     n_pairs = n_markers * (n_markers - 1) // 2
@@ -590,7 +591,6 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
     )
     for t in range(n_trials):
         trial = markers[t]
-        _trial_frame_numbers_into(trial, out[t, at_frames:])
         # Scalar sums: the pooled scatter of the displacements e about the mean positions, and
         # the linearised rotations w and their outer products (upper triangles). Both e and w
         # sum to zero over the frames, so these are their scatters about their means.
@@ -674,6 +674,12 @@ def _one_segment_numbers(markers: np.ndarray, flex: float) -> np.ndarray:
                 lengths[p, f] = np.sqrt(dx[f] * dx[f] + dy[f] * dy[f] + dz[f] * dz[f])
         _frame_dependence(lengths, n_pairs, largest, out[t, _DEPENDENCE])
         _distance_moments(lengths, first_d[0], sum_d, scatter_d[0], mean_sq[0], terms)
+        # The trial's row of _frame_numbers from these distances' own numbers: their
+        # dependence, and the SD of their lag-1 autocorrelation from their scatter.
+        out[t, at_frames : at_frames + 4] = out[t, _DEPENDENCE]
+        out[t, at_frames + 4] = _read_correlation_sd(
+            out[t, at_frames], _scatter_correlation_sd(scatter_d[0], n_frames)
+        )
         # The cluster's own distance residual, from its mean distances and again from its mean
         # squared distances less their noise (6 s^2 per pair), and the residual per degree of
         # freedom each gives.
@@ -961,7 +967,15 @@ def _trial_frame_numbers_into(markers: np.ndarray, out: np.ndarray) -> None:
     """One trial's row of :func:`_frame_numbers` for its markers ``(N, n, 3)`` [mm], into
     ``out`` ``(5,)``. A compiled kernel."""
     distances = _dependence_into(markers, out[:4])
-    out[4] = _correlation_sd(distances)
+    out[4] = _read_correlation_sd(out[0], _correlation_sd(distances))
+
+
+@kernel
+def _read_correlation_sd(correlation: float, sd: float) -> float:
+    """The SD of the lag-1 ``correlation`` of a row of :func:`_frame_numbers`: ``sd``, NaN
+    where the correlation is (distances at rounding level, whose scatter is rounding too and
+    which no statement reads). A compiled kernel."""
+    return sd if not np.isnan(correlation) else np.nan
 
 
 def _segment_frame_numbers(markers: np.ndarray) -> np.ndarray:
@@ -1749,14 +1763,13 @@ def _arc_rotation_sd_deg(
             mean0 /= n_frames
             mean1 /= n_frames
             mean2 /= n_frames
-            squares = 0.0
+            # Likewise the squares, per coordinate, added up after.
+            squares0 = squares1 = squares2 = 0.0
             for k in range(n_frames):
-                squares += (markers[t, k, i, 0] - mean0) ** 2
-            for k in range(n_frames):
-                squares += (markers[t, k, i, 1] - mean1) ** 2
-            for k in range(n_frames):
-                squares += (markers[t, k, i, 2] - mean2) ** 2
-            travel = squares / n_frames - noise
+                squares0 += (markers[t, k, i, 0] - mean0) ** 2
+                squares1 += (markers[t, k, i, 1] - mean1) ** 2
+                squares2 += (markers[t, k, i, 2] - mean2) ** 2
+            travel = (squares0 + squares1 + squares2) / n_frames - noise
             # L^2 = travel / rotation_sq, so s / L = s * rotation / sqrt(travel).
             if travel <= 0.0:
                 sd_deg[t, i] = np.inf
@@ -2088,8 +2101,11 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     axes: dict[int, MotionAxis] = {}
     posed = list(frames)
     if kind not in CENTRE_KINDS and posed:
+        # Every trial has a pose, as a rule: its markers are not copied.
         found_axes, found = _one_segment_axes(
-            markers[posed], numbers[posed, 0], numbers[posed, _CENTRAL_FRAME]
+            markers if len(posed) == len(markers) else markers[posed],
+            numbers[posed, 0],
+            numbers[posed, _CENTRAL_FRAME],
         )
         axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
@@ -2513,14 +2529,10 @@ def _untested(
 @kernel
 def _correlation_sd(distances: np.ndarray) -> float:
     """The SD of the lag-1 autocorrelation pooled over the pair ``distances`` ``(P, N)`` [mm]
-    (:func:`_frame_dependence`) that ``N`` independent frames of their covariance ``C``
-    ``(P, P)`` [mm^2] give it: ``sqrt(N - 1) |C|_F / (N tr C)`` (NaN where every deviation is
-    zero). The pooled products of neighbouring frames' deviations sum ``N - 1`` terms of
-    variance ``|C|_F^2`` (pairs that share a marker share its noise), over the pooled squares,
-    ``N tr C``: ``1 / sqrt(N)`` for one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own
-    noise each. The distances are made their deviations from their means, in place. A compiled
-    kernel: every checked fit reads it, where NumPy's calls on these small arrays cost tens of
-    microseconds."""
+    (:func:`_frame_dependence`) that ``N`` independent frames of their covariance give it
+    (:func:`_scatter_correlation_sd`). The distances are made their deviations from their
+    means, in place. A compiled kernel: every checked fit reads it, where NumPy's calls on
+    these small arrays cost tens of microseconds."""
     n_pairs, n_frames = distances.shape
     deviations = distances
     for p in range(n_pairs):
@@ -2530,17 +2542,33 @@ def _correlation_sd(distances: np.ndarray) -> float:
         mean /= n_frames
         for f in range(n_frames):
             deviations[p, f] -= mean
-    trace = 0.0
-    frobenius = 0.0
+    scatter = np.empty((n_pairs, n_pairs))
     for p in range(n_pairs):
         for q in range(p, n_pairs):
             product = 0.0
             for f in range(n_frames):
                 product += deviations[p, f] * deviations[q, f]
+            scatter[p, q] = scatter[q, p] = product
+    return _scatter_correlation_sd(scatter, n_frames)
+
+
+@kernel
+def _scatter_correlation_sd(scatter: np.ndarray, n_frames: int) -> float:
+    """The SD of the lag-1 autocorrelation pooled over pair distances (:func:`_frame_dependence`)
+    whose deviations from their means over ``n_frames`` frames have the ``scatter`` ``(P, P)``
+    [mm^2], ``N C`` for their covariance ``C``, that ``N`` independent frames give it:
+    ``sqrt(N - 1) |C|_F / (N tr C)`` (NaN where every deviation is zero). The pooled products
+    of neighbouring frames' deviations sum ``N - 1`` terms of variance ``|C|_F^2`` (pairs that
+    share a marker share its noise), over the pooled squares, ``N tr C``: ``1 / sqrt(N)`` for
+    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each. A compiled kernel."""
+    n_pairs = scatter.shape[0]
+    trace = 0.0
+    frobenius = 0.0
+    for p in range(n_pairs):
+        trace += scatter[p, p]
+        for q in range(p, n_pairs):
             # C is symmetric: an entry off the diagonal stands twice in |C|_F^2.
-            frobenius += (1.0 if p == q else 2.0) * product * product
-            if p == q:
-                trace += product
+            frobenius += (1.0 if p == q else 2.0) * scatter[p, q] * scatter[p, q]
     # Both sums are of products over the frames, N times C's entries: their ratio holds.
     return np.sqrt((n_frames - 1) * frobenius) / (n_frames * trace) if trace > 0.0 else np.nan
 

@@ -417,30 +417,36 @@ def _first_failures(
         # check is read only where the checks before it passed.
         # Without a branch per sample: x * 0 is NaN for a NaN or infinite x, else +-0, so the
         # sum of those is 0 exactly when every coordinate is finite.
-        probe = 0.0
+        # One probe per axis, likewise: each is 0 exactly when its coordinates are finite.
+        probe_x = probe_y = probe_z = 0.0
         # The largest |coordinate| as three running maxima, one per axis, that advance side by
         # side (one alone waits on each comparison); their largest is the same number.
         largest_x = largest_y = largest_z = 0.0
         origins = 0
-        spread = 0.0  # frame by frame, in memory order
+        # The motion from frame 0 per axis, likewise.
+        spread_x = spread_y = spread_z = 0.0
         totals[:] = 0.0
         for f in range(n_frames):
             for m in range(n_markers):
                 x, y, z = trial[f, m, 0], trial[f, m, 1], trial[f, m, 2]
-                probe += x * 0.0 + y * 0.0 + z * 0.0
+                probe_x += x * 0.0
+                probe_y += y * 0.0
+                probe_z += z * 0.0
                 largest_x = max(largest_x, abs(x))
                 largest_y = max(largest_y, abs(y))
                 largest_z = max(largest_z, abs(z))
                 origins += (x == 0.0) & (y == 0.0) & (z == 0.0)
                 if moves and f > 0:
-                    spread = max(spread, abs(x - trial[0, m, 0]))
-                    spread = max(spread, abs(y - trial[0, m, 1]))
-                    spread = max(spread, abs(z - trial[0, m, 2]))
+                    spread_x = max(spread_x, abs(x - trial[0, m, 0]))
+                    spread_y = max(spread_y, abs(y - trial[0, m, 1]))
+                    spread_z = max(spread_z, abs(z - trial[0, m, 2]))
                 if lines:
                     totals[m, 0] += x
                     totals[m, 1] += y
                     totals[m, 2] += z
         largest = max(max(largest_x, largest_y), largest_z)
+        probe = probe_x + probe_y + probe_z
+        spread = max(max(spread_x, spread_y), spread_z)
         if checks & _SAMPLES:
             if not probe == 0.0:
                 failure = _NOT_FINITE
