@@ -97,6 +97,29 @@ def test_analytic_is_paper_eq9():
     np.testing.assert_allclose(result.center, np.linalg.solve(matrix, vector), atol=1e-8)
 
 
+def test_the_analytic_normal_equations_are_the_stacked_rows_product():
+    """Eq. 9's sums from one pass over the frames (:func:`hjc._analytic_sums`) are ``M' M``
+    and ``M' y`` of the frames' stacked rows ``M_t = R0 - R1``, ``y_t = d1 - d0`` (``t >= 1``),
+    per trial of a stack as for one trial's own poses, and the centre solves them."""
+    trials = [two_segments(40) for _ in range(2)]
+    trials = [(_noisy(p, 2 * k), _noisy(d, 2 * k + 1)) for k, (p, d) in enumerate(trials)]
+    poses = trial_poses(
+        {"proximal": [p for p, _ in trials], "distal": [d for _, d in trials]}, min_frames=3
+    )
+    for trial in poses:
+        prox, dist = trial["proximal"], trial["distal"]
+        rows = (prox.rotation[1:] - dist.rotation[1:]).reshape(-1, 3)
+        y = (dist.translation[1:] - prox.translation[1:]).reshape(-1)
+        normal, rhs = hjc._analytic_sums(
+            prox.rotation[None], dist.rotation[None], prox.translation[None], dist.translation[None]
+        )
+        np.testing.assert_allclose(normal[0], rows.T @ rows, rtol=1e-13, atol=1e-12)
+        np.testing.assert_allclose(rhs[0], rows.T @ y, rtol=1e-13, atol=1e-9)
+        centers, _, errors = hjc._analytic(prox, dist, "analytic")
+        assert errors == [None]
+        np.testing.assert_allclose(centers[0], np.linalg.solve(rows.T @ rows, rows.T @ y))
+
+
 def test_gauss_markov_agrees_with_analytic_at_low_noise():
     proximal, distal = two_segments(300)
     proximal, distal = _noisy(proximal, 3, 0.01), _noisy(distal, 4, 0.01)

@@ -264,20 +264,69 @@ def _translations(prox, dist) -> np.ndarray:
     return dist.translation[..., 1:, :] - prox.translation[..., 1:, :]
 
 
-def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
-    """Eq. 9 for trials ``m`` ``(T, N-1, 3, 3)``, ``y`` ``(T, N-1, 3)``: centres ``c``
-    ``(T, 3)`` [mm], ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of
-    degenerate motion (the centre of such a trial is not used)."""
-    # The frames' 3 x 3 blocks stacked as one (3 (N-1), 3) matrix per trial: one product each.
-    rows = m.reshape(m.shape[0], -1, 3)
-    normal = np.swapaxes(rows, 1, 2) @ rows
-    rhs = (np.swapaxes(rows, 1, 2) @ y.reshape(y.shape[0], -1, 1))[..., 0]
+def _analytic(prox, dist, what: str):
+    """Eq. 9 for the trials of the poses ``prox``, ``dist`` (a :class:`PoseStack` each, or
+    one trial's :class:`SegmentPoses` as a batch of one): centres ``c`` ``(T, 3)`` [mm],
+    ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of degenerate motion (the
+    centre of such a trial is not used)."""
+    arrays = [
+        array if array.ndim == dims else array[None]
+        for array, dims in (
+            (prox.rotation, 4),
+            (dist.rotation, 4),
+            (prox.translation, 3),
+            (dist.translation, 3),
+        )
+    ]
+    # C-contiguous as both kinds of poses hold them (read-only for one trial's): not copied.
+    normal, rhs = _analytic_sums(*arrays)
     values, vectors = np.linalg.eigh(normal)
+    n_frames = arrays[0].shape[1]
     errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
     # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
     with np.errstate(divide="ignore", invalid="ignore"):
         rcond = values[:, 0] / values[:, -1]
     return eigen_solution(vectors, values, rhs), rcond, errors
+
+
+@kernel
+def _analytic_sums(
+    r0: np.ndarray, r1: np.ndarray, d0: np.ndarray, d1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 9's normal equations ``sum_t M_t' M_t`` ``(T, 3, 3)`` and ``sum_t M_t' y_t``
+    ``(T, 3)`` [mm] over the frames ``t >= 1``, ``M_t = R0 - R1``, ``y_t = d1 - d0``, of the
+    rotations ``r0``, ``r1`` ``(T, N, 3, 3)`` and translations ``d0``, ``d1`` ``(T, N, 3)``
+    [mm], one pass over the frames that forms no ``M_t`` array: a matrix product of the
+    stacked ``(3 (N - 1), 3)`` rows costs several times that pass. Each entry is summed from
+    its own products, not as ``2 I - R0' R1 - R1' R0``, whose cancellation would lose the
+    small eigenvalues that tell degenerate motion. A compiled kernel."""
+    n_trials, n_frames = r0.shape[0], r0.shape[1]
+    normal = np.zeros((n_trials, 3, 3))
+    rhs = np.zeros((n_trials, 3))
+    for trial in range(n_trials):
+        # The sums in locals (the upper triangle), stored once per trial.
+        n00 = n01 = n02 = n11 = n12 = n22 = 0.0
+        b0 = b1 = b2 = 0.0
+        for t in range(1, n_frames):
+            for k in range(3):  # row k of M_t and of y_t
+                m0 = r0[trial, t, k, 0] - r1[trial, t, k, 0]
+                m1 = r0[trial, t, k, 1] - r1[trial, t, k, 1]
+                m2 = r0[trial, t, k, 2] - r1[trial, t, k, 2]
+                y = d1[trial, t, k] - d0[trial, t, k]
+                n00 += m0 * m0
+                n01 += m0 * m1
+                n02 += m0 * m2
+                n11 += m1 * m1
+                n12 += m1 * m2
+                n22 += m2 * m2
+                b0 += m0 * y
+                b1 += m1 * y
+                b2 += m2 * y
+        normal[trial, 0, 0], normal[trial, 0, 1], normal[trial, 0, 2] = n00, n01, n02
+        normal[trial, 1, 0], normal[trial, 1, 1], normal[trial, 1, 2] = n01, n11, n12
+        normal[trial, 2, 0], normal[trial, 2, 1], normal[trial, 2, 2] = n02, n12, n22
+        rhs[trial, 0], rhs[trial, 1], rhs[trial, 2] = b0, b1, b2
+    return normal, rhs
 
 
 def _motion_error(values: np.ndarray, n_frames: int, what: str) -> ValueError | None:
@@ -317,8 +366,8 @@ def fit_analytic(
 
 
 def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | ValueError]:
+    centers, rcond, errors = _analytic(prox, dist, "analytic")
     m, y = _relative_system(prox, dist)
-    centers, rcond, errors = _analytic(m, y, prox.rotation.shape[1], "analytic")
     residual = np.einsum("tfij,tj->tfi", m, centers) - y
     cost = np.sum(residual**2, axis=(1, 2))
     return trial_outcomes(
@@ -369,13 +418,11 @@ def _prepared(
     ``rcond`` where a fit to the same poses found them (eq. 9 gives the same numbers), so
     that it is not solved again."""
     if analytic is None:
-        m, y = _relative_system(prox, dist)
-        centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
+        centers, rconds, errors = _analytic(prox, dist, method)
         if errors[0] is not None:
             raise errors[0]
         analytic = centers[0], float(rconds[0])
-    else:
-        y = _translations(prox, dist)  # M_t, which only eq. 9 reads, is not formed
+    y = _translations(prox, dist)
     analytic_center, rcond = analytic
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
     means, inertia_invs, counts = np.empty((2, 3)), np.empty((2, 3, 3)), np.empty(2, dtype=int)
