@@ -248,6 +248,12 @@ def _largest_coordinate(segments: tuple[SegmentPoses, ...]) -> float:
     return max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
 
 
+def _rounding_variance(segments: tuple[SegmentPoses, ...]) -> float:
+    """The per-coordinate variance [mm^2] at or below which the segments' rigid-body residuals
+    are rounding, not noise: ``(ROUNDING * their largest |coordinate|)^2``."""
+    return (ROUNDING * _largest_coordinate(segments)) ** 2
+
+
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
     """``s^2`` [mm^2]: the segments' rigid-body residual sum of squares over its dof."""
     return sum(p.residual_ss for p in segments) / sum(p.dof for p in segments)
@@ -1099,16 +1105,18 @@ def _model_verdict(
     proximal: SegmentPoses,
     distal: SegmentPoses,
     consequence: str | None = None,
+    rounding: float | None = None,
 ) -> tuple[tuple[str, ...], dict]:
     """The test of :func:`_model_test` of the Gauss–Markov ``result`` on its poses: its
     warnings (none, or one where the test rejects, ending in ``consequence`` where given, what
     that says of the SD of the answer the test is made for) and its numbers (``chi2_p``,
-    ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test)."""
+    ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test).
+    ``rounding``: :func:`_rounding_variance` of the poses where the caller read it."""
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
     variance = _pooled_variance(segments)
-    noisy = variance > (ROUNDING * _largest_coordinate(segments)) ** 2
+    noisy = variance > (_rounding_variance(segments) if rounding is None else rounding)
     given = result.diagnostics["noise_mm"] if result.diagnostics["noise_source"] == "given" else 1
     if noisy and given * given == 0.0:
         # A noise of 0 (or one whose variance rounds to 0) makes the covariance 0 and the
@@ -1231,7 +1239,10 @@ def _fixed_centre_test(
     (:func:`_unequal_noise`), which the answer's own covariance does not assume.
     ``analytic``: the analytic centre of these poses and its ``rcond`` where ``result``'s fit
     found them, the fit's start (:func:`_prepared`)."""
-    unequal = _unequal_noise(proximal, distal)
+    # Both the noise comparison and the model test ask the same poses where rounding ends: a
+    # scan of every coordinate, read once.
+    rounding = _rounding_variance((proximal, distal))
+    unequal = _unequal_noise(proximal, distal, rounding)
     if unequal:
         return with_warnings(result, (), {"fixed_centre_test": {"not_tested": unequal}})
     (fitted,) = _gauss_markov_results(
@@ -1249,7 +1260,7 @@ def _fixed_centre_test(
         "this answer's model is the same (gauss-markov-frame0's fit to the same poses tested "
         f"it), {_SD_NOT_ITS_ERROR}"
     )
-    warnings, numbers = _model_verdict(fitted, proximal, distal, shared)
+    warnings, numbers = _model_verdict(fitted, proximal, distal, shared, rounding)
     tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
     return with_warnings(result, warnings, {"fixed_centre_test": {**tested, **numbers}})
 
@@ -1263,20 +1274,21 @@ def _given_noise(result: JointCenterResult) -> float | None:
     return float(result.diagnostics["noise_mm"])
 
 
-def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
+def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses, rounding: float) -> str:
     """Why the Gauss–Markov model's one noise does not hold for these two segments' poses, or
     ``""`` where it may: their rigid-body residual variances differ at
     :data:`~jointbench.estimators.support.ROTATION_ALPHA`, two-sided, by the F test of their
     ratio on their own degrees of freedom. A noisy pelvis beside a clean thigh breaks the
     pooled noise, not the fixed centre; SCoRE's and the analytic centre's covariances read each
     segment's own. Residuals of rounding in both segments (noise-free data, as
-    :func:`_model_verdict` judges them) have no noise to compare: their ratio is rounding over
+    :func:`_model_verdict` judges them, at or below ``rounding``, their
+    :func:`_rounding_variance` [mm^2]) have no noise to compare: their ratio is rounding over
     rounding."""
     segments = (proximal, distal)
     variances = [p.residual_ss / p.dof if p.dof else math.nan for p in segments]
     if not (all(np.isfinite(variances)) and min(variances) > 0.0):
         return ""
-    if max(variances) <= (ROUNDING * _largest_coordinate(segments)) ** 2:
+    if max(variances) <= rounding:
         return ""
     ratio = variances[0] / variances[1]
     shape = (proximal.dof, distal.dof, ratio)
