@@ -167,14 +167,13 @@ from jointbench.estimators.twosegment import (
     batched,
     batched_all,
     each_trial,
-    eigen_solution,
     fit_score,
     score_scattered,
     trial_outcomes,
 )
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
-from jointbench.numerics.rank import negligible
+from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.small import (
     add_block3,
     add_upper3,
@@ -285,14 +284,45 @@ def _analytic(prox, dist, what: str):
         )
     ]
     # C-contiguous as both kinds of poses hold them (read-only for one trial's): not copied.
-    normal, rhs = _analytic_sums(*arrays)
-    values, vectors = np.linalg.eigh(normal)
+    centres, values, rcond = _analytic_solution(*arrays)
     n_frames = arrays[0].shape[1]
     errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
-    # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rcond = values[:, 0] / values[:, -1]
-    return eigen_solution(vectors, values, rhs), rcond, errors
+    return centres, rcond, errors
+
+
+@kernel
+def _analytic_solution(
+    r0: np.ndarray, r1: np.ndarray, d0: np.ndarray, d1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eq. 9 solved per trial of the rotations ``r0``, ``r1`` ``(T, N, 3, 3)`` and translations
+    ``d0``, ``d1`` ``(T, N, 3)`` [mm] (:func:`_analytic_sums`): the centres ``(T, 3)`` [mm],
+    the normal matrices' ascending eigenvalues ``(T, 3)`` and ``rcond`` ``(T,)``, their
+    smallest over their largest. The centre is
+    :func:`~jointbench.estimators.twosegment.eigen_solution`'s, from LAPACK's eigenpairs as
+    NumPy's ``eigh`` gives them: an eigenvalue negligible against the largest
+    (:func:`jointbench.numerics.rank.negligible`) is left out, so that the unused centre of a
+    trial of degenerate motion (:func:`_motion_error`) stays finite; without relative rotation
+    every eigenvalue can be zero and ``rcond`` is NaN. A compiled kernel: NumPy's ``eigh``,
+    solve and ``errstate`` on one 3 x 3 matrix cost a checked call several times the sums."""
+    normal, rhs = _analytic_sums(r0, r1, d0, d1)
+    n_trials = normal.shape[0]
+    centres = np.zeros((n_trials, 3))
+    values = np.empty((n_trials, 3))
+    rcond = np.empty(n_trials)
+    for trial in range(n_trials):
+        trial_values, vectors = np.linalg.eigh(normal[trial])
+        values[trial] = trial_values
+        largest = trial_values[2]
+        for j in range(3):
+            kept = np.inf if abs(trial_values[j]) <= RCOND * largest else trial_values[j]
+            projected = 0.0
+            for i in range(3):
+                projected += vectors[i, j] * rhs[trial, i]
+            projected /= kept
+            for i in range(3):
+                centres[trial, i] += vectors[i, j] * projected
+        rcond[trial] = trial_values[0] / largest
+    return centres, values, rcond
 
 
 @kernel
