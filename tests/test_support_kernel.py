@@ -296,3 +296,25 @@ def test_the_arc_sd_sums_every_coordinate_in_frame_order_to_the_bit():
         found = support._arc_rotation_sd_deg(stacked, variance, principal, off)
         expected = _arc_sd_in_frame_order(stacked, variance, principal, off)
         assert found.tobytes() == expected.tobytes()
+
+
+@pytest.mark.parametrize("n_frames", [3, 2, 1200])
+def test_the_rotation_ratios_are_numpys_to_the_bit(n_frames):
+    """The compiled RMS rotations and F ratios of the two-segment rotation test
+    (:func:`support._rotation_ratios`) are the NumPy expressions they stand for, to the bit: the
+    sums of ``raw`` in order over the frames, each test's sum over its degrees of freedom (the
+    hinge test's at least 1) over the noise, 1 for a trial of rounding only."""
+    rng = np.random.default_rng(3)
+    raw = np.sort(rng.uniform(0.0, 2.0, (4, 3)), axis=1) * [[1e-9], [1.0], [1e3], [1.0]]
+    sums = rng.uniform(1.0, 5e3, (4, 2))
+    variance = rng.uniform(0.01, 2.0, 4)
+    exact = np.array([False, True, False, False])
+    any_dof, off_axis = 3 * (n_frames - 1), 2 * (n_frames - 2)
+    rms, second, ratios = support._rotation_ratios(
+        raw, sums, variance, exact, n_frames, any_dof, off_axis
+    )
+    noise = np.where(exact, 1.0, variance)
+    expected = np.stack([sums[:, 0] / any_dof, sums[:, 1] / max(off_axis, 1)]) / noise
+    assert np.array_equal(rms, np.sqrt(raw.sum(axis=1) / n_frames))
+    assert np.array_equal(second, np.sqrt(raw[:, :2].sum(axis=1) / n_frames))
+    assert np.array_equal(ratios, expected)
