@@ -318,3 +318,23 @@ def test_the_rotation_ratios_are_numpys_to_the_bit(n_frames):
     assert np.array_equal(rms, np.sqrt(raw.sum(axis=1) / n_frames))
     assert np.array_equal(second, np.sqrt(raw[:, :2].sum(axis=1) / n_frames))
     assert np.array_equal(ratios, expected)
+
+
+def test_each_clusters_own_noise_scales_its_inertia_as_numpy_would():
+    """:func:`support._scaled_to_own_noise` scales each trial's inverse inertia and its largest
+    eigenvalue by the cluster's own residual variance over the pooled one, to the bit of the
+    NumPy form, and leaves a trial whose pooled residual is not positive unscaled; its inputs
+    are not written to."""
+    rng = np.random.default_rng(5)
+    residual_ss, dof = rng.uniform(1.0, 50.0, 4), 7
+    pooled = np.array([0.3, 0.0, 2.5, np.nan])
+    inertia_inv, weakest = rng.normal(size=(4, 3, 3)), rng.uniform(1e-6, 1e-3, 4)
+    before = inertia_inv.copy(), weakest.copy()
+    scaled, scaled_weakest = support._scaled_to_own_noise(
+        residual_ss, dof, pooled, inertia_inv, weakest
+    )
+    weight = np.divide(residual_ss / dof, pooled, out=np.ones_like(pooled), where=pooled > 0.0)
+    assert np.array_equal(scaled, inertia_inv * weight[:, None, None])
+    assert np.array_equal(scaled_weakest, weakest * weight)
+    assert np.array_equal(scaled[1], inertia_inv[1]) and np.array_equal(scaled[3], inertia_inv[3])
+    assert np.array_equal(inertia_inv, before[0]) and np.array_equal(weakest, before[1])
