@@ -683,3 +683,22 @@ def test_a_cluster_sliding_on_its_segment_has_no_noise_only_precision():
             assert sliding.diagnostics["center_spheres_fit_p_value"] < 1e-3
             still = registry.get("center", method)(_sliding_cluster(rng, 0.0))
             assert still.status == "ok", still.status
+
+
+def test_the_largest_sd_is_numpys_largest_eigenvalue_to_the_bit():
+    """A joint centre's SD along its least determined direction reads the largest eigenvalue of
+    its covariance as NumPy's ``eigvalsh`` gives it (its lower triangle), from a compiled call:
+    to the bit; ``inf`` where an entry is not finite, NaN where no variance is positive."""
+    rng = np.random.default_rng(7)
+    for scale in (1e-6, 1.0, 1e6):
+        factor = rng.normal(size=(3, 3))
+        covariance = scale * factor @ factor.T
+        covariance[0, 2] += 1e-9 * scale  # the upper triangle is not read
+        largest = float(np.linalg.eigvalsh(covariance)[-1])
+        assert centre_precision._largest_variance(covariance) == largest
+        assert centre_precision._largest_sd(covariance) == math.sqrt(largest)
+    for entry in (math.nan, math.inf):
+        broken = np.eye(3)
+        broken[1, 2] = entry
+        assert centre_precision._largest_sd(broken) == math.inf
+    assert math.isnan(centre_precision._largest_sd(-np.eye(3)))

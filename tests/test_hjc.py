@@ -20,6 +20,7 @@ from jointbench.estimators.hjc import (
     point_covariance,
 )
 from jointbench.estimators.segment_poses import trial_poses
+from jointbench.estimators.twosegment import eigen_solution
 from jointbench.geometry import rotation_matrix, skew
 from jointbench.numerics import reuse
 from jointbench.numerics.poses import rigid_poses
@@ -95,6 +96,52 @@ def test_analytic_is_paper_eq9():
     vector = (p0 + p1 - np.einsum("fij,fj->fi", r01, p1) - np.einsum("fji,fj->fi", r01, p0)).sum(0)
     result = jb.fit_joint_center(proximal, distal, method="analytic")
     np.testing.assert_allclose(result.center, np.linalg.solve(matrix, vector), atol=1e-8)
+
+
+def test_the_analytic_normal_equations_are_the_stacked_rows_product():
+    """Eq. 9's sums from one pass over the frames (:func:`hjc._analytic_sums`) are ``M' M``
+    and ``M' y`` of the frames' stacked rows ``M_t = R0 - R1``, ``y_t = d1 - d0`` (``t >= 1``),
+    per trial of a stack as for one trial's own poses, and the centre solves them."""
+    trials = [two_segments(40) for _ in range(2)]
+    trials = [(_noisy(p, 2 * k), _noisy(d, 2 * k + 1)) for k, (p, d) in enumerate(trials)]
+    poses = trial_poses(
+        {"proximal": [p for p, _ in trials], "distal": [d for _, d in trials]}, min_frames=3
+    )
+    for trial in poses:
+        prox, dist = trial["proximal"], trial["distal"]
+        rows = (prox.rotation[1:] - dist.rotation[1:]).reshape(-1, 3)
+        y = (dist.translation[1:] - prox.translation[1:]).reshape(-1)
+        normal, rhs = hjc._analytic_sums(
+            prox.rotation[None], dist.rotation[None], prox.translation[None], dist.translation[None]
+        )
+        np.testing.assert_allclose(normal[0], rows.T @ rows, rtol=1e-13, atol=1e-12)
+        np.testing.assert_allclose(rhs[0], rows.T @ y, rtol=1e-13, atol=1e-9)
+        centers, _, errors = hjc._analytic(prox, dist, "analytic")
+        assert errors == [None]
+        np.testing.assert_allclose(centers[0], np.linalg.solve(rows.T @ rows, rows.T @ y))
+
+
+@pytest.mark.parametrize("relative", ["ball", "hinge", "none"])
+def test_the_compiled_analytic_solution_is_the_eigen_solution(relative):
+    """The compiled solve of eq. 9 (:func:`hjc._analytic_solution`) gives NumPy's eigenvalues
+    to the bit, their ratio as ``rcond`` and the centre
+    :func:`~jointbench.estimators.twosegment.eigen_solution` gives from them; a trial of
+    degenerate motion gets its error and a finite centre no one reads."""
+    proximal, distal = two_segments(60, relative=relative)
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    prox, dist = poses["proximal"], poses["distal"]
+    arrays = [a[None] for a in (prox.rotation, dist.rotation, prox.translation, dist.translation)]
+    centres, values, rcond = hjc._analytic_solution(*arrays)
+    normal, rhs = hjc._analytic_sums(*arrays)
+    expected_values, vectors = np.linalg.eigh(normal)
+    assert np.array_equal(values, expected_values)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.testing.assert_array_equal(rcond, values[:, 0] / values[:, -1])
+    expected = eigen_solution(vectors, expected_values, rhs)
+    np.testing.assert_allclose(centres, expected, rtol=1e-13, atol=1e-12)
+    assert np.isfinite(centres).all()
+    (error,) = hjc._analytic(prox, dist, "analytic")[2]
+    assert (error is None) == (relative == "ball")
 
 
 def test_gauss_markov_agrees_with_analytic_at_low_noise():

@@ -302,3 +302,45 @@ def test_the_arc_sd_sums_every_coordinate_in_frame_order_to_the_bit():
         found = support._arc_rotation_sd_deg(stacked, variance, principal, off)
         expected = _arc_sd_in_frame_order(stacked, variance, principal, off)
         assert found.tobytes() == expected.tobytes()
+
+
+@pytest.mark.parametrize("n_frames", [3, 2, 1200])
+def test_the_rotation_ratios_are_numpys_to_the_bit(n_frames):
+    """The compiled RMS rotations and F ratios of the two-segment rotation test
+    (:func:`support._rotation_ratios`) are the NumPy expressions they stand for, to the bit: the
+    sums of ``raw`` in order over the frames, each test's sum over its degrees of freedom (the
+    hinge test's at least 1) over the noise, 1 for a trial of rounding only."""
+    rng = np.random.default_rng(3)
+    raw = np.sort(rng.uniform(0.0, 2.0, (4, 3)), axis=1) * [[1e-9], [1.0], [1e3], [1.0]]
+    sums = rng.uniform(1.0, 5e3, (4, 2))
+    variance = rng.uniform(0.01, 2.0, 4)
+    exact = np.array([False, True, False, False])
+    any_dof, off_axis = 3 * (n_frames - 1), 2 * (n_frames - 2)
+    rms, second, ratios = support._rotation_ratios(
+        raw, sums, variance, exact, n_frames, any_dof, off_axis
+    )
+    noise = np.where(exact, 1.0, variance)
+    expected = np.stack([sums[:, 0] / any_dof, sums[:, 1] / max(off_axis, 1)]) / noise
+    assert np.array_equal(rms, np.sqrt(raw.sum(axis=1) / n_frames))
+    assert np.array_equal(second, np.sqrt(raw[:, :2].sum(axis=1) / n_frames))
+    assert np.array_equal(ratios, expected)
+
+
+def test_each_clusters_own_noise_scales_its_inertia_as_numpy_would():
+    """:func:`support._scaled_to_own_noise` scales each trial's inverse inertia and its largest
+    eigenvalue by the cluster's own residual variance over the pooled one, to the bit of the
+    NumPy form, and leaves a trial whose pooled residual is not positive unscaled; its inputs
+    are not written to."""
+    rng = np.random.default_rng(5)
+    residual_ss, dof = rng.uniform(1.0, 50.0, 4), 7
+    pooled = np.array([0.3, 0.0, 2.5, np.nan])
+    inertia_inv, weakest = rng.normal(size=(4, 3, 3)), rng.uniform(1e-6, 1e-3, 4)
+    before = inertia_inv.copy(), weakest.copy()
+    scaled, scaled_weakest = support._scaled_to_own_noise(
+        residual_ss, dof, pooled, inertia_inv, weakest
+    )
+    weight = np.divide(residual_ss / dof, pooled, out=np.ones_like(pooled), where=pooled > 0.0)
+    assert np.array_equal(scaled, inertia_inv * weight[:, None, None])
+    assert np.array_equal(scaled_weakest, weakest * weight)
+    assert np.array_equal(scaled[1], inertia_inv[1]) and np.array_equal(scaled[3], inertia_inv[3])
+    assert np.array_equal(inertia_inv, before[0]) and np.array_equal(weakest, before[1])

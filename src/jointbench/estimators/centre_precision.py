@@ -894,10 +894,21 @@ def _largest_sd(covariance: np.ndarray) -> float:
     """The SD [mm] along the least determined direction of ``covariance`` ``(3, 3)`` [mm^2]:
     ``inf`` where it is not finite, NaN where no direction has a positive variance (no
     covariance of an answer with noise)."""
-    if not np.isfinite(covariance).all():
-        return math.inf
-    largest = float(np.linalg.eigvalsh(covariance)[-1])
+    largest = _largest_variance(kernel_array(covariance))
     return math.sqrt(largest) if largest >= 0.0 else math.nan
+
+
+@kernel
+def _largest_variance(covariance: np.ndarray) -> float:
+    """The largest eigenvalue [mm^2] of ``covariance`` ``(3, 3)`` [mm^2] (its lower triangle,
+    as NumPy's ``eigvalsh`` reads it, whose LAPACK call gives the same bits), ``inf`` where an
+    entry is not finite. A compiled kernel: NumPy's ``eigvalsh`` of one 3 x 3 matrix costs a
+    checked call tens of microseconds."""
+    for i in range(covariance.shape[0]):
+        for j in range(covariance.shape[1]):
+            if not np.isfinite(covariance[i, j]):
+                return np.inf
+    return np.linalg.eigvalsh(covariance)[-1]
 
 
 def _undetermined(sd: float, source: str) -> str:

@@ -167,14 +167,13 @@ from jointbench.estimators.twosegment import (
     batched,
     batched_all,
     each_trial,
-    eigen_solution,
     fit_score,
     score_scattered,
     trial_outcomes,
 )
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.poses import rigid_fit
-from jointbench.numerics.rank import negligible
+from jointbench.numerics.rank import RCOND, negligible
 from jointbench.numerics.small import (
     add_block3,
     add_upper3,
@@ -248,6 +247,12 @@ def _largest_coordinate(segments: tuple[SegmentPoses, ...]) -> float:
     return max(max(float(p.markers.max()), -float(p.markers.min())) for p in segments)
 
 
+def _rounding_variance(segments: tuple[SegmentPoses, ...]) -> float:
+    """The per-coordinate variance [mm^2] at or below which the segments' rigid-body residuals
+    are rounding, not noise: ``(ROUNDING * their largest |coordinate|)^2``."""
+    return (ROUNDING * _largest_coordinate(segments)) ** 2
+
+
 def _pooled_variance(segments: tuple[SegmentPoses, ...]) -> float:
     """``s^2`` [mm^2]: the segments' rigid-body residual sum of squares over its dof."""
     return sum(p.residual_ss for p in segments) / sum(p.dof for p in segments)
@@ -264,20 +269,100 @@ def _translations(prox, dist) -> np.ndarray:
     return dist.translation[..., 1:, :] - prox.translation[..., 1:, :]
 
 
-def _analytic(m: np.ndarray, y: np.ndarray, n_frames: int, what: str):
-    """Eq. 9 for trials ``m`` ``(T, N-1, 3, 3)``, ``y`` ``(T, N-1, 3)``: centres ``c``
-    ``(T, 3)`` [mm], ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of
-    degenerate motion (the centre of such a trial is not used)."""
-    # The frames' 3 x 3 blocks stacked as one (3 (N-1), 3) matrix per trial: one product each.
-    rows = m.reshape(m.shape[0], -1, 3)
-    normal = np.swapaxes(rows, 1, 2) @ rows
-    rhs = (np.swapaxes(rows, 1, 2) @ y.reshape(y.shape[0], -1, 1))[..., 0]
-    values, vectors = np.linalg.eigh(normal)
+def _analytic(prox, dist, what: str):
+    """Eq. 9 for the trials of the poses ``prox``, ``dist`` (a :class:`PoseStack` each, or
+    one trial's :class:`SegmentPoses` as a batch of one): centres ``c`` ``(T, 3)`` [mm],
+    ``rcond`` ``(T,)`` and per trial ``None`` or the ``ValueError`` of degenerate motion (the
+    centre of such a trial is not used)."""
+    arrays = [
+        array if array.ndim == dims else array[None]
+        for array, dims in (
+            (prox.rotation, 4),
+            (dist.rotation, 4),
+            (prox.translation, 3),
+            (dist.translation, 3),
+        )
+    ]
+    # C-contiguous as both kinds of poses hold them (read-only for one trial's): not copied.
+    centres, values, rcond = _analytic_solution(*arrays)
+    n_frames = arrays[0].shape[1]
     errors = [_motion_error(trial_values, n_frames, what) for trial_values in values]
-    # Without relative rotation every eigenvalue can be zero; such a trial carries its error.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rcond = values[:, 0] / values[:, -1]
-    return eigen_solution(vectors, values, rhs), rcond, errors
+    return centres, rcond, errors
+
+
+@kernel
+def _analytic_solution(
+    r0: np.ndarray, r1: np.ndarray, d0: np.ndarray, d1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eq. 9 solved per trial of the rotations ``r0``, ``r1`` ``(T, N, 3, 3)`` and translations
+    ``d0``, ``d1`` ``(T, N, 3)`` [mm] (:func:`_analytic_sums`): the centres ``(T, 3)`` [mm],
+    the normal matrices' ascending eigenvalues ``(T, 3)`` and ``rcond`` ``(T,)``, their
+    smallest over their largest. The centre is
+    :func:`~jointbench.estimators.twosegment.eigen_solution`'s, from LAPACK's eigenpairs as
+    NumPy's ``eigh`` gives them: an eigenvalue negligible against the largest
+    (:func:`jointbench.numerics.rank.negligible`) is left out, so that the unused centre of a
+    trial of degenerate motion (:func:`_motion_error`) stays finite; without relative rotation
+    every eigenvalue can be zero and ``rcond`` is NaN. A compiled kernel: NumPy's ``eigh``,
+    solve and ``errstate`` on one 3 x 3 matrix cost a checked call several times the sums."""
+    normal, rhs = _analytic_sums(r0, r1, d0, d1)
+    n_trials = normal.shape[0]
+    centres = np.zeros((n_trials, 3))
+    values = np.empty((n_trials, 3))
+    rcond = np.empty(n_trials)
+    for trial in range(n_trials):
+        trial_values, vectors = np.linalg.eigh(normal[trial])
+        values[trial] = trial_values
+        largest = trial_values[2]
+        for j in range(3):
+            kept = np.inf if abs(trial_values[j]) <= RCOND * largest else trial_values[j]
+            projected = 0.0
+            for i in range(3):
+                projected += vectors[i, j] * rhs[trial, i]
+            projected /= kept
+            for i in range(3):
+                centres[trial, i] += vectors[i, j] * projected
+        rcond[trial] = trial_values[0] / largest
+    return centres, values, rcond
+
+
+@kernel
+def _analytic_sums(
+    r0: np.ndarray, r1: np.ndarray, d0: np.ndarray, d1: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 9's normal equations ``sum_t M_t' M_t`` ``(T, 3, 3)`` and ``sum_t M_t' y_t``
+    ``(T, 3)`` [mm] over the frames ``t >= 1``, ``M_t = R0 - R1``, ``y_t = d1 - d0``, of the
+    rotations ``r0``, ``r1`` ``(T, N, 3, 3)`` and translations ``d0``, ``d1`` ``(T, N, 3)``
+    [mm], one pass over the frames that forms no ``M_t`` array: a matrix product of the
+    stacked ``(3 (N - 1), 3)`` rows costs several times that pass. Each entry is summed from
+    its own products, not as ``2 I - R0' R1 - R1' R0``, whose cancellation would lose the
+    small eigenvalues that tell degenerate motion. A compiled kernel."""
+    n_trials, n_frames = r0.shape[0], r0.shape[1]
+    normal = np.zeros((n_trials, 3, 3))
+    rhs = np.zeros((n_trials, 3))
+    for trial in range(n_trials):
+        # The sums in locals (the upper triangle), stored once per trial.
+        n00 = n01 = n02 = n11 = n12 = n22 = 0.0
+        b0 = b1 = b2 = 0.0
+        for t in range(1, n_frames):
+            for k in range(3):  # row k of M_t and of y_t
+                m0 = r0[trial, t, k, 0] - r1[trial, t, k, 0]
+                m1 = r0[trial, t, k, 1] - r1[trial, t, k, 1]
+                m2 = r0[trial, t, k, 2] - r1[trial, t, k, 2]
+                y = d1[trial, t, k] - d0[trial, t, k]
+                n00 += m0 * m0
+                n01 += m0 * m1
+                n02 += m0 * m2
+                n11 += m1 * m1
+                n12 += m1 * m2
+                n22 += m2 * m2
+                b0 += m0 * y
+                b1 += m1 * y
+                b2 += m2 * y
+        normal[trial, 0, 0], normal[trial, 0, 1], normal[trial, 0, 2] = n00, n01, n02
+        normal[trial, 1, 0], normal[trial, 1, 1], normal[trial, 1, 2] = n01, n11, n12
+        normal[trial, 2, 0], normal[trial, 2, 1], normal[trial, 2, 2] = n02, n12, n22
+        rhs[trial, 0], rhs[trial, 1], rhs[trial, 2] = b0, b1, b2
+    return normal, rhs
 
 
 def _motion_error(values: np.ndarray, n_frames: int, what: str) -> ValueError | None:
@@ -317,8 +402,8 @@ def fit_analytic(
 
 
 def _analytic_result(prox: PoseStack, dist: PoseStack) -> list[JointCenterResult | ValueError]:
+    centers, rcond, errors = _analytic(prox, dist, "analytic")
     m, y = _relative_system(prox, dist)
-    centers, rcond, errors = _analytic(m, y, prox.rotation.shape[1], "analytic")
     residual = np.einsum("tfij,tj->tfi", m, centers) - y
     cost = np.sum(residual**2, axis=(1, 2))
     return trial_outcomes(
@@ -369,13 +454,11 @@ def _prepared(
     ``rcond`` where a fit to the same poses found them (eq. 9 gives the same numbers), so
     that it is not solved again."""
     if analytic is None:
-        m, y = _relative_system(prox, dist)
-        centers, rconds, errors = _analytic(m[None], y[None], prox.rotation.shape[0], method)
+        centers, rconds, errors = _analytic(prox, dist, method)
         if errors[0] is not None:
             raise errors[0]
         analytic = centers[0], float(rconds[0])
-    else:
-        y = _translations(prox, dist)  # M_t, which only eq. 9 reads, is not formed
+    y = _translations(prox, dist)
     analytic_center, rcond = analytic
     variance, noise_used, noise_source = _per_coordinate_variance(noise_mm, prox, dist)
     means, inertia_invs, counts = np.empty((2, 3)), np.empty((2, 3, 3)), np.empty(2, dtype=int)
@@ -1052,16 +1135,18 @@ def _model_verdict(
     proximal: SegmentPoses,
     distal: SegmentPoses,
     consequence: str | None = None,
+    rounding: float | None = None,
 ) -> tuple[tuple[str, ...], dict]:
     """The test of :func:`_model_test` of the Gauss–Markov ``result`` on its poses: its
     warnings (none, or one where the test rejects, ending in ``consequence`` where given, what
     that says of the SD of the answer the test is made for) and its numbers (``chi2_p``,
-    ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test)."""
+    ``noise_kurtosis``, ``chi2_inflation``; NaN where there is nothing to test).
+    ``rounding``: :func:`_rounding_variance` of the poses where the caller read it."""
     segments = (proximal, distal)
     untested = {"chi2_p": math.nan, "noise_kurtosis": math.nan, "chi2_inflation": math.nan}
     chi2, dof = result.diagnostics.get("chi2", math.nan), result.diagnostics.get("chi2_dof", 0)
     variance = _pooled_variance(segments)
-    noisy = variance > (ROUNDING * _largest_coordinate(segments)) ** 2
+    noisy = variance > (_rounding_variance(segments) if rounding is None else rounding)
     given = result.diagnostics["noise_mm"] if result.diagnostics["noise_source"] == "given" else 1
     if noisy and given * given == 0.0:
         # A noise of 0 (or one whose variance rounds to 0) makes the covariance 0 and the
@@ -1184,7 +1269,10 @@ def _fixed_centre_test(
     (:func:`_unequal_noise`), which the answer's own covariance does not assume.
     ``analytic``: the analytic centre of these poses and its ``rcond`` where ``result``'s fit
     found them, the fit's start (:func:`_prepared`)."""
-    unequal = _unequal_noise(proximal, distal)
+    # Both the noise comparison and the model test ask the same poses where rounding ends: a
+    # scan of every coordinate, read once.
+    rounding = _rounding_variance((proximal, distal))
+    unequal = _unequal_noise(proximal, distal, rounding)
     if unequal:
         return with_warnings(result, (), {"fixed_centre_test": {"not_tested": unequal}})
     (fitted,) = _gauss_markov_results(
@@ -1202,7 +1290,7 @@ def _fixed_centre_test(
         "this answer's model is the same (gauss-markov-frame0's fit to the same poses tested "
         f"it), {_SD_NOT_ITS_ERROR}"
     )
-    warnings, numbers = _model_verdict(fitted, proximal, distal, shared)
+    warnings, numbers = _model_verdict(fitted, proximal, distal, shared, rounding)
     tested = {key: fitted.diagnostics[key] for key in ("chi2", "chi2_dof")}
     return with_warnings(result, warnings, {"fixed_centre_test": {**tested, **numbers}})
 
@@ -1216,20 +1304,21 @@ def _given_noise(result: JointCenterResult) -> float | None:
     return float(result.diagnostics["noise_mm"])
 
 
-def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses) -> str:
+def _unequal_noise(proximal: SegmentPoses, distal: SegmentPoses, rounding: float) -> str:
     """Why the Gauss–Markov model's one noise does not hold for these two segments' poses, or
     ``""`` where it may: their rigid-body residual variances differ at
     :data:`~jointbench.estimators.support.ROTATION_ALPHA`, two-sided, by the F test of their
     ratio on their own degrees of freedom. A noisy pelvis beside a clean thigh breaks the
     pooled noise, not the fixed centre; SCoRE's and the analytic centre's covariances read each
     segment's own. Residuals of rounding in both segments (noise-free data, as
-    :func:`_model_verdict` judges them) have no noise to compare: their ratio is rounding over
+    :func:`_model_verdict` judges them, at or below ``rounding``, their
+    :func:`_rounding_variance` [mm^2]) have no noise to compare: their ratio is rounding over
     rounding."""
     segments = (proximal, distal)
     variances = [p.residual_ss / p.dof if p.dof else math.nan for p in segments]
     if not (all(np.isfinite(variances)) and min(variances) > 0.0):
         return ""
-    if max(variances) <= (ROUNDING * _largest_coordinate(segments)) ** 2:
+    if max(variances) <= rounding:
         return ""
     ratio = variances[0] / variances[1]
     shape = (proximal.dof, distal.dof, ratio)

@@ -1930,6 +1930,39 @@ def _motion_axis_numbers(
     return directions, sd_deg, share
 
 
+@kernel
+def _rotation_ratios(
+    raw: np.ndarray,
+    sums: np.ndarray,
+    variance: np.ndarray,
+    exact: np.ndarray,
+    n_frames: int,
+    any_dof: int,
+    off_axis: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What :func:`_rotation_test` reads of :func:`_spreads`' ``raw`` ``(T, 3)`` [rad^2] and
+    ``sums`` ``(T, 2)`` over ``n_frames``: the RMS rotation and the RMS
+    rotation about all but the dominant axis [rad], ``(T,)`` each, and the two tests' F ratios
+    ``(2, T)``, each sum over its degrees of freedom (``any_dof``; ``off_axis``, at least 1)
+    over the noise, ``variance`` ``(T,)`` [mm^2], or 1 where ``exact`` ``(T,)`` (rounding
+    only). Each number from the same operations in the same order as NumPy's forms of them, so
+    the same bits. A compiled kernel: a dozen NumPy operations on arrays of one trial cost a
+    checked call tens of microseconds."""
+    n_trials = raw.shape[0]
+    off_dof = max(off_axis, 1)
+    rms = np.empty(n_trials)
+    second = np.empty(n_trials)
+    ratios = np.empty((2, n_trials))
+    for t in range(n_trials):
+        lesser = raw[t, 0] + raw[t, 1]
+        rms[t] = np.sqrt((lesser + raw[t, 2]) / n_frames)
+        second[t] = np.sqrt(lesser / n_frames)
+        noise = 1.0 if exact[t] else variance[t]
+        ratios[0, t] = sums[t, 0] / any_dof / noise
+        ratios[1, t] = sums[t, 1] / off_dof / noise
+    return rms, second, ratios
+
+
 def _rotation_test(
     moving: _Clusters,
     reference: _Clusters | None,
@@ -1945,22 +1978,24 @@ def _rotation_test(
     # squares and what a hinge leaves of them.
     raw, sums, *_ = _spreads(moving.rotation, moving.inertia_inv, reference, variance)
     n_frames = moving.rotation.shape[1]
-    rms = np.sqrt(raw.sum(axis=1) / n_frames)
-    second = np.sqrt(raw[:, :2].sum(axis=1) / n_frames)
-    noise = np.where(exact, 1.0, variance)
     # fdtrc(d1, d2, x) is the F survival function (scipy.stats would import far more).
     fdtrc = scipy_special().fdtrc
     any_dof = 3 * (n_frames - 1)
     # A hinge fits each frame's angle, its axis and the offset normal to it: two frames are
     # always on one, and leave nothing to test.
     off_axis = 2 * (n_frames - 2)
+    rms, second, ratios = _rotation_ratios(
+        kernel_array(raw),
+        kernel_array(sums),
+        kernel_array(variance),
+        kernel_array(exact, np.bool_),
+        n_frames,
+        any_dof,
+        off_axis,
+    )
     # Both tests in one call: "any rotation" (3 (N - 1) degrees of freedom) and "rotation
     # about a second axis" (2 (N - 2)).
-    p_any, p_second = fdtrc(
-        np.array([[any_dof], [max(off_axis, 1)]]),
-        dof,
-        np.stack([sums[:, 0] / any_dof, sums[:, 1] / max(off_axis, 1)]) / noise,
-    )
+    p_any, p_second = fdtrc(np.array([[any_dof], [max(off_axis, 1)]]), dof, ratios)
     if off_axis <= 0:
         p_second = np.ones_like(p_second)
     # Noise-free data: a rotation above rounding is resolved, and rotation about other axes is
@@ -2250,11 +2285,39 @@ def _with_own_noise(cluster: _Clusters, pooled: np.ndarray) -> _Clusters:
     rigid-body residual over the ``pooled`` one ``(T,)`` [mm^2], so that ``pooled`` times it is
     the covariance ``s^2 K^-1`` of its poses' rotations with its own ``s^2``; unscaled where
     the pooled residual is zero."""
-    weight = np.divide(cluster.variance, pooled, out=np.ones_like(pooled), where=pooled > 0.0)
-    return cluster._replace(
-        inertia_inv=cluster.inertia_inv * weight[:, None, None],
-        weakest_variance=cluster.weakest_variance * weight,
+    inertia_inv, weakest_variance = _scaled_to_own_noise(
+        cluster.residual_ss,
+        cluster.dof,
+        kernel_array(pooled),
+        cluster.inertia_inv,
+        cluster.weakest_variance,
     )
+    return cluster._replace(inertia_inv=inertia_inv, weakest_variance=weakest_variance)
+
+
+@kernel
+def _scaled_to_own_noise(
+    residual_ss: np.ndarray,
+    dof: int,
+    pooled: np.ndarray,
+    inertia_inv: np.ndarray,
+    weakest_variance: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_with_own_noise`'s ``inertia_inv`` ``(T, 3, 3)`` [mm^-2] and
+    ``weakest_variance`` ``(T,)`` [mm^-2], each times the weight ``(residual_ss / dof) /
+    pooled`` per trial (a cluster's own residual over the pooled one, ``(T,)`` [mm^2] each;
+    1 where ``pooled`` is not positive), as new arrays: the same operations as NumPy's, so
+    the same bits. A compiled kernel: NumPy's half dozen operations on one trial's arrays cost
+    a checked call tens of microseconds."""
+    scaled = np.empty_like(inertia_inv)
+    weakest = np.empty_like(weakest_variance)
+    for t in range(pooled.shape[0]):
+        weight = (residual_ss[t] / dof) / pooled[t] if pooled[t] > 0.0 else 1.0
+        for i in range(3):
+            for j in range(3):
+                scaled[t, i, j] = inertia_inv[t, i, j] * weight
+        weakest[t] = weakest_variance[t] * weight
+    return scaled, weakest
 
 
 def _centre_pose_noise(clusters: list[_Clusters]) -> list[PoseNoise]:
