@@ -320,3 +320,18 @@ def test_a_trials_own_fault_is_named_before_its_size(fault, scale):
         str(alone.value),
         None,
     ]
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_markers_that_move_along_one_axis_alone_move(axis):
+    """The motion from frame 0 is read along every axis: markers that travel along one axis
+    only, by far more than the tolerance, move (and are refused as not rotating), while the
+    same markers held at frame 0 do not."""
+    still = np.repeat(_moving(3)[:1], N_FRAMES, axis=0)
+    with pytest.raises(ValueError, match="do not move"):
+        validation.check_moves(still)
+    travel = still.copy()
+    travel[..., axis] += np.linspace(0.0, 50.0, N_FRAMES)[:, None]
+    validation.check_moves(travel)
+    with pytest.raises(ValueError, match="do not rotate"):
+        validation.check_input("center", (travel,))
