@@ -150,6 +150,26 @@ def test_the_maps_are_the_projection_traces_written_out():
     np.testing.assert_allclose(parts.mixed_map, shrink * mixed, atol=1e-9)
 
 
+@pytest.mark.parametrize("block", [1, 7, 10, 129])
+def test_every_frame_is_summed_into_a_block(block):
+    """The frames' deviations are summed over blocks of ``block`` frames, the last block
+    holding what is left, across the pass's chunks of frames: ``ceil(N / block)`` blocks
+    (below 7 of them no test), and the sums over all frames whatever the blocks."""
+    rng = np.random.default_rng(4)
+    markers = _swing(rng, 4, 300, 60.0, 0.5)[None]
+
+    def row(frames: int) -> np.ndarray:
+        return by_direction.sphericity_numbers(
+            markers, np.array([0.25]), np.array([6]), np.array([frames]), support._FLEX, 0.0
+        )[0]
+
+    found, single = row(block), row(1)
+    assert found[1] == -(-300 // block)
+    assert np.isnan(found[0]) == (found[1] < 7)
+    at_sums = len(by_direction._COLUMNS)
+    assert np.array_equal(found[at_sums:], single[at_sums:])
+
+
 def test_one_marker_noisier_than_the_others_is_not_read_as_anisotropic():
     """One of four markers five times noisier than the others, each isotropic: the projection
     off the rigid motions mixes the markers, and a model of one variance for all of them read
