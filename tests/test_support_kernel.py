@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pinning import ROUNDING_TIMES, random_signs
 from test_support_calibration import _draw, _elongated, _plate, _trial
 from test_support_sweep import TRIALS as SWEEP
 from test_support_verdicts import _one_segment_cases
@@ -261,6 +262,32 @@ def _write() -> None:
 
 if __name__ == "__main__":
     _write()
+
+
+def test_the_lag_1_numbers_near_rounding_differ_by_rounding_alone():
+    """Where the noise is a few times the rounding of the coordinates, near the origin and
+    far from it, the one-segment kernel's lag-1 columns and :func:`support._frame_numbers`,
+    whose distances are formed from other differences, may differ by more than 1e-10 of
+    their size, but by no more than :data:`pinning.ROUNDING_TIMES` what a change of the
+    markers by one unit in the last place moves the latter: NaN in the same places."""
+    rng = np.random.default_rng(1)
+    for offset in (1.0, 1e3, 1e6):
+        for relative_noise in (1e-12, 1e-11, 1e-10):
+            body = rng.normal(scale=40.0, size=(4, 3))
+            turns = rotation_matrix(rng.normal(scale=0.5, size=(200, 3)))
+            markers = np.einsum("fij,mj->fmi", turns, body) + offset * unit(rng.normal(size=3))
+            markers += rng.normal(0.0, relative_noise * max(offset, 40.0), markers.shape)
+            found = support._one_segment_numbers(markers[None], support._FLEX)[0]
+            found = found[-support._FRAME_COLUMNS :]
+            expected = support._frame_numbers(markers[None])[0]
+            assert np.array_equal(np.isnan(found), np.isnan(expected))
+            moved = np.zeros(support._FRAME_COLUMNS)
+            for seed in range(3):
+                nudged = support._frame_numbers(random_signs(markers, seed)[None])[0]
+                moved = np.fmax(moved, np.abs(nudged - expected))
+            allowed = np.fmax(1e-10 * np.fmax(np.abs(expected), 1.0), ROUNDING_TIMES * moved)
+            known = ~np.isnan(expected)
+            assert (np.abs(found - expected)[known] <= allowed[known]).all(), (found, expected)
 
 
 def _arc_sd_in_frame_order(markers, variance, principal_rms, off_rms) -> np.ndarray:
