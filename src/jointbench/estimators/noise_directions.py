@@ -613,11 +613,16 @@ def _frame_terms_into(
             moments[4, j] -= x1 * w2
             moments[5, j] -= x2 * w2
     for j in range(count):
-        terms[n_markers, j] = moments[0, j] - moments[3, j]
-        terms[n_markers + 1, j] = moments[3, j] - moments[5, j]
-        terms[n_markers + 2, j] = 2.0 * moments[1, j]
-        terms[n_markers + 3, j] = 2.0 * moments[2, j]
-        terms[n_markers + 4, j] = 2.0 * moments[4, j]
+        _traceless_moments(
+            moments[0, j],
+            moments[1, j],
+            moments[2, j],
+            moments[3, j],
+            moments[4, j],
+            moments[5, j],
+            terms[:, j],
+            n_markers,
+        )
 
 
 @kernel
