@@ -144,6 +144,31 @@ def test_the_compiled_analytic_solution_is_the_eigen_solution(relative):
     assert (error is None) == (relative == "ball")
 
 
+def test_a_relative_rotation_within_the_rounding_of_each_frame_is_none():
+    """Eq. 9's motion check reads the frames' count: a relative rotation whose normal matrix's
+    largest eigenvalue is below :data:`hjc._NO_ROTATION` per frame (here 3e-9 rad, 4.5e-18 per
+    frame: above that bound for one frame) is no rotation, for one trial's poses and for each
+    trial of a stack, not a hinge."""
+    n_frames = 60
+    t = np.linspace(0.0, 4.0, n_frames)
+    r0 = rotation_matrix(np.stack([0.3 * np.sin(t), 0.2 * np.sin(0.7 * t), 0.1 * t], -1))
+    r1 = r0 @ rotation_matrix(3e-9 * np.sin(1.9 * t)[:, None] * HINGE)
+    d0, d1 = np.zeros((n_frames, 3)), np.ones((n_frames, 3))
+    # Only the poses' rotations and translations are read.
+    poses = dataclasses.make_dataclass("Poses", ["rotation", "translation"])
+    for prox, dist in (
+        (poses(r0, d0), poses(r1, d1)),
+        (
+            poses(np.stack([r0, r0]), np.stack([d0, d0])),
+            poses(np.stack([r1, r1]), np.stack([d1, d1])),
+        ),
+    ):
+        errors = hjc._analytic(prox, dist, "analytic")[2]
+        assert len(errors) == prox.rotation.size // (n_frames * 9)
+        for error in errors:
+            assert "do not rotate relative to each other" in str(error)
+
+
 def test_gauss_markov_agrees_with_analytic_at_low_noise():
     proximal, distal = two_segments(300)
     proximal, distal = _noisy(proximal, 3, 0.01), _noisy(distal, 4, 0.01)
