@@ -21,12 +21,14 @@ import re
 
 import numpy as np
 import pytest
+import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from rigs import HINGE, JOINT, one_segment, two_segments
 from workflow_copy import readme_builtin_example
 
 import jointbench
+from jointbench.configuration.config import SCHEMA_PATH
 from jointbench.estimators import registry, support
 from jointbench.estimators.results import CenterResult
 from jointbench.geometry import angle_between_lines_deg, rotation_matrix, unit
@@ -340,6 +342,25 @@ def naive_estimator():
     registry.register("center", "centroid")(centroid)
     yield "centroid"
     registry.unregister("center", "centroid")
+
+
+@pytest.mark.parametrize("name", ["1st-centre", "my centre", "lab/centre", "", "café"])
+def test_a_name_the_config_cannot_list_is_refused_at_registration(name):
+    """The README's rule for names (a letter, then letters, digits, '_' and '-') is the
+    config's: a name outside it, which no study could list and which would name an estimates
+    folder, is refused as the estimator registers, naming the rule, not first at a run."""
+    with pytest.raises(ValueError, match="starts with a letter"):
+        registry.register("center", name)(lambda markers: None)
+    assert name not in registry.methods("center")
+
+
+def test_the_estimator_name_rule_is_the_config_schema_s():
+    """One rule for a name: the config schema's patterns for its estimator lists are the
+    registry's."""
+    schema = yaml.safe_load(SCHEMA_PATH.read_text())
+    study = schema["properties"]["studies"]["additionalProperties"]["properties"]
+    for key in ("estimators", "external_estimators"):
+        assert study[key]["items"]["pattern"] == f"^{registry.NAME_PATTERN.pattern}$"
 
 
 def test_a_new_estimator_gets_the_checks_without_code_of_its_own(naive_estimator):

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -74,6 +75,7 @@ from jointbench.registries import Registry
 __all__ = [
     "INVARIANCES",
     "KINDS",
+    "NAME_PATTERN",
     "Claims",
     "binding_error",
     "check_options",
@@ -89,6 +91,11 @@ __all__ = [
 ]
 
 KINDS = ("center", "axis", "joint_center")
+
+#: What an estimator's name may be: the config lists it (``estimators``,
+#: ``external_estimators``, whose schema patterns are this one) and its estimates go in a folder
+#: of that name, so a space, a slash or a leading digit would be a name no run can use.
+NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
 
 #: Transformations of the data an answer may be claimed to follow: a rigid translation or
 #: rotation of all markers, and a permutation of the markers or of the frames after the first
@@ -534,6 +541,12 @@ def register(
     style = MappingProxyType(
         {k: v for k, v in (("color", color), ("marker", marker)) if v is not None}
     )
+
+    if not (isinstance(name, str) and NAME_PATTERN.fullmatch(name)):
+        raise ValueError(
+            f"{kind} estimator name {name!r}: a name starts with a letter and holds only "
+            "letters, digits, '_' and '-', as the config's estimator lists take it"
+        )
 
     def decorate(fn: Callable) -> Callable:
         if name in _REGISTRY[kind].names():
