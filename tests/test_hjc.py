@@ -124,7 +124,7 @@ def test_the_analytic_normal_equations_are_the_stacked_rows_product():
 @pytest.mark.parametrize("relative", ["ball", "hinge", "none"])
 def test_the_compiled_analytic_solution_is_the_eigen_solution(relative):
     """The compiled solve of eq. 9 (:func:`hjc._analytic_solution`) gives NumPy's eigenvalues
-    to the bit, their ratio as ``rcond`` and the centre
+    to rounding, their ratio as ``rcond`` and the centre
     :func:`~jointbench.estimators.twosegment.eigen_solution` gives from them; a trial of
     degenerate motion gets its error and a finite centre no one reads."""
     proximal, distal = two_segments(60, relative=relative)
@@ -134,7 +134,10 @@ def test_the_compiled_analytic_solution_is_the_eigen_solution(relative):
     centres, values, rcond = hjc._analytic_solution(*arrays)
     normal, rhs = hjc._analytic_sums(*arrays)
     expected_values, vectors = np.linalg.eigh(normal)
-    assert np.array_equal(values, expected_values)
+    # Two LAPACK builds (NumPy's, and SciPy's that the kernel calls) may round differently:
+    # equal to a few units in the last place of the largest eigenvalue, not to the bit.
+    rounding = 8 * np.finfo(float).eps * np.abs(expected_values[:, -1:])
+    assert np.all(np.abs(values - expected_values) <= rounding)
     with np.errstate(divide="ignore", invalid="ignore"):
         np.testing.assert_array_equal(rcond, values[:, 0] / values[:, -1])
     expected = eigen_solution(vectors, expected_values, rhs)

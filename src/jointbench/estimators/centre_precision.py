@@ -901,7 +901,7 @@ def _largest_sd(covariance: np.ndarray) -> float:
 @kernel
 def _largest_variance(covariance: np.ndarray) -> float:
     """The largest eigenvalue [mm^2] of ``covariance`` ``(3, 3)`` [mm^2] (its lower triangle,
-    as NumPy's ``eigvalsh`` reads it, whose LAPACK call gives the same bits), ``inf`` where an
+    as NumPy's ``eigvalsh`` reads it, by the same LAPACK routine), ``inf`` where an
     entry is not finite. A compiled kernel: NumPy's ``eigvalsh`` of one 3 x 3 matrix costs a
     checked call tens of microseconds."""
     for i in range(covariance.shape[0]):
