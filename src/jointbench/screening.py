@@ -1936,8 +1936,9 @@ def surely_rigid(
     """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
     ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
     is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
-    first. It does not show that the screen's mean shape converges (where it does not, the
-    screen raises)."""
+    first, the marker-frame ones refined on the frames that exceed them
+    (:func:`_refined_clears`) before the fitted ones. It does not show that the screen's mean
+    shape converges (where it does not, the screen raises)."""
     markers, limit = kernel_array(markers), _rigid_limit(rules)
     typical, cleared, _ = _screen_sums(markers, limit)
     return _fitted_clears(markers, typical, cleared, limit)
@@ -1966,8 +1967,8 @@ def _rigid_limit(rules: ArtefactRules) -> float:
 def _fitted_clears(markers: np.ndarray, typical: int, cleared: bool, limit: float) -> bool:
     """:func:`surely_rigid`'s decision on ``markers`` ``(n_frames, n >= 3, 3)`` [mm] (a kernel
     array), given what :func:`_screen_sums` found (its ``typical`` frame and whether the
-    marker-frame bounds ``cleared`` it): those, else the fitted bounds (a pose fit) where
-    there is a typical frame to fit."""
+    marker-frame bounds ``cleared`` it): those, else where there is a typical frame those
+    refined (:func:`_refined_clears`), else the fitted bounds (a pose fit)."""
     if not cleared and typical >= 0:
         cleared = _refined_clears(markers, typical, limit)
     if not cleared and typical >= 0:
