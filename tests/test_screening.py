@@ -124,6 +124,26 @@ def test_clean_clusters_are_cleared_by_the_bound(noise_mm):
     assert _same_as_screen(markers) == ((), ())
 
 
+@pytest.mark.parametrize("seed", [4, 8])
+def test_a_clean_cluster_just_past_the_marker_frame_bound_needs_no_pose_fit_of_every_frame(
+    monkeypatch, seed
+):
+    """5000 frames whose marker-frame bounds just exceed the limit: the few frames that
+    exceed it, each posed alone, clear the cluster, and the screen finds what the whole
+    screen finds without fitting a pose to every frame."""
+    markers = _cluster(np.random.default_rng(seed), n_frames=5000, noise_mm=0.7)
+    typical, cleared, _ = screening._screen_sums(markers, screening._rigid_limit(RULES))
+    assert typical >= 0 and not cleared
+    whole = screening.screen(markers, _labels(3), "m")
+    assert np.nanmax(whole.residuals) <= RULES.min_residual_mm
+    posed = []
+    monkeypatch.setattr(screening, "_posed", lambda *arguments: posed.append(arguments))
+    assert screening.surely_rigid(markers, _labels(3), "m", RULES)
+    found = screening.find_artefacts(markers, _labels(3), "m")
+    assert _outcome(*found) == _outcome(whole.artefacts, whole.swaps)
+    assert posed == []
+
+
 def test_markers_on_a_line_leave_the_bound_to_the_fitted_poses():
     """A 3-marker cluster two of whose markers coincide gives no marker frame: that bound
     fails (NaN), and the typical frame's fitted poses clear it."""

@@ -22,7 +22,7 @@ import sysconfig
 import types
 from collections.abc import Callable
 
-__all__ = ["claim", "own_code"]
+__all__ = ["claim", "own_code", "package_code"]
 
 _PACKAGE = os.path.join(os.path.dirname(os.path.realpath(__file__)), "")
 
@@ -49,10 +49,25 @@ def own_code(filename: str) -> bool:
         return False
     path = os.path.realpath(filename)
     return (
-        path.startswith(_PACKAGE)
+        _in_package(filename)
         or path.startswith(tuple(_CLAIMED))
         or not path.startswith(_library_roots())
     )
+
+
+def package_code(function: Callable) -> bool:
+    """Whether ``function`` (unwrapped) is a Python function defined in a file of this package
+    itself, not a user's (claimed or not) nor a library's: code whose every read and write of
+    its arrays the package knows."""
+    code = getattr(inspect.unwrap(function), "__code__", None)
+    return code is not None and _in_package(code.co_filename)
+
+
+@functools.lru_cache(maxsize=1024)
+def _in_package(filename: str) -> bool:
+    """Whether the file ``filename`` (a code object's ``co_filename``) is one of this
+    package's, wherever it is installed."""
+    return os.path.realpath(filename).startswith(_PACKAGE)
 
 
 def claim(function: Callable) -> None:

@@ -1907,6 +1907,8 @@ def _find_artefacts(
     typical, cleared, largest_jump, exchanged = _clean_screen(markers, limit, far, near, min_frames)
     posed = None
     if not (exchanged or cleared) and typical >= 0:
+        cleared = _refined_clears(markers, typical, limit)
+    if not (exchanged or cleared) and typical >= 0:
         # The fitted bounds' pose fit is the whole screen's first, from the same typical frame
         # (every frame is complete), and serves it too.
         shape = markers[typical].copy()
@@ -1934,8 +1936,9 @@ def surely_rigid(
     """Whether a bound shows that :func:`screen` flags no rigidity break in the complete cluster
     ``markers`` ``(n_frames, n >= 3, 3)`` [mm]; ``False`` means not shown (gaps, or the bound
     is too loose), not broken. It tries the bounds of :func:`_rigid_misfits`, the cheaper
-    first. It does not show that the screen's mean shape converges (where it does not, the
-    screen raises)."""
+    first, the marker-frame ones refined on the frames that exceed them
+    (:func:`_refined_clears`) before the fitted ones. It does not show that the screen's mean
+    shape converges (where it does not, the screen raises)."""
     markers, limit = kernel_array(markers), _rigid_limit(rules)
     typical, cleared, _ = _screen_sums(markers, limit)
     return _fitted_clears(markers, typical, cleared, limit)
@@ -1964,11 +1967,89 @@ def _rigid_limit(rules: ArtefactRules) -> float:
 def _fitted_clears(markers: np.ndarray, typical: int, cleared: bool, limit: float) -> bool:
     """:func:`surely_rigid`'s decision on ``markers`` ``(n_frames, n >= 3, 3)`` [mm] (a kernel
     array), given what :func:`_screen_sums` found (its ``typical`` frame and whether the
-    marker-frame bounds ``cleared`` it): those, else the fitted bounds (a pose fit) where
-    there is a typical frame to fit."""
+    marker-frame bounds ``cleared`` it): those, else where there is a typical frame those
+    refined (:func:`_refined_clears`), else the fitted bounds (a pose fit)."""
+    if not cleared and typical >= 0:
+        cleared = _refined_clears(markers, typical, limit)
     if not cleared and typical >= 0:
         cleared = all(bound <= limit for bound in _rigid_misfits(markers, typical, True))
     return cleared
+
+
+#: The most frames whose marker-frame bound :func:`_refined_clears` replaces by a pose fit of
+#: their own: beyond it the fit of every frame costs little more.
+_MAX_REFINED_FRAMES = 64
+
+
+def _refined_clears(markers: np.ndarray, typical: int, limit: float) -> bool:
+    """Whether the marker-frame bounds of :func:`_rigid_misfits` (without ``fitted``) are at
+    most ``limit`` [mm] once the few frames ``f`` that exceed it read ``e_f``, the residual
+    norm of the mean ``M`` in a pose fitted to that frame alone, in place of ``u_f``; a cluster
+    ``markers`` ``(n_frames, n >= 3, 3)`` [mm] (a kernel array) with ``typical`` frame ``t``.
+    ``False`` means not shown, as where more than :data:`_MAX_REFINED_FRAMES` frames exceed.
+
+    ``u_f`` entered the bounds only as a bound of ``d_f(M)`` (steps 2 and 3), which any pose of
+    ``M`` bounds: ``r_fm(T) <= c (d_f(M) + u_t)`` and ``r_fm(S) <= c (d_f(M) + mean u +
+    sqrt(mean u^2 + u_t^2))``, the second no less than the first. A cluster just short of the
+    bound of each frame's marker frame is cleared by a handful of small fits instead of a pose
+    fit of every frame."""
+    mean, u = _triad_distances(markers, typical)
+    c = _per_marker(markers.shape[1])
+    rest = u.mean() + np.hypot(np.sqrt((u**2).mean()), u[typical])
+    if not np.isfinite(rest):  # collinear markers, or squares beyond the floats' range
+        return False
+    over = np.flatnonzero(~(c * (u + rest) <= limit))
+    if over.size > _MAX_REFINED_FRAMES:
+        return False
+    return bool(np.all(c * (_posed_misfits(mean, markers[over]) + rest) <= limit))
+
+
+@kernel
+def _triad_distances(markers: np.ndarray, typical: int) -> tuple[np.ndarray, np.ndarray]:
+    """The mean ``M`` ``(n, 3)`` [mm] of the frames of ``markers`` ``(n_frames, n >= 3, 3)``
+    [mm] each in its marker frame (:func:`_triad_local`) and every frame's distance ``u_f``
+    ``(n_frames,)`` [mm] from it. A compiled kernel."""
+    local = np.empty_like(markers)
+    _triad_local(markers, typical, local)
+    n_frames, n_markers = local.shape[0], local.shape[1]
+    mean = _frame_mean(local)
+    distance = np.empty(n_frames)
+    for f in range(n_frames):
+        norm_sq = 0.0
+        for m in range(n_markers):
+            for i in range(3):
+                norm_sq += (local[f, m, i] - mean[m, i]) ** 2
+        distance[f] = np.sqrt(norm_sq)
+    return mean, distance
+
+
+@kernel
+def _frame_mean(local: np.ndarray) -> np.ndarray:
+    """The mean ``(n, 3)`` [mm] of the frames ``local`` ``(n_frames, n, 3)`` [mm], summed in
+    frame order. A compiled kernel."""
+    n_frames, n_markers = local.shape[0], local.shape[1]
+    mean = np.zeros((n_markers, 3))
+    for f in range(n_frames):
+        for m in range(n_markers):
+            for i in range(3):
+                mean[m, i] += local[f, m, i]
+    mean /= n_frames
+    return mean
+
+
+def _posed_misfits(shape: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """Each frame's residual norm ``(k,)`` [mm] of ``shape`` ``(n, 3)`` [mm] in a pose fitted
+    to it, centroid on centroid and rotated by :func:`best_rotation`, of the frames ``frames``
+    ``(k, n, 3)`` [mm]: at least the least residual norm of any pose, whichever rotation the
+    fit settles on (NaN where the sums overflow, which bounds nothing)."""
+    source = shape - shape.mean(axis=0)
+    target = frames - frames.mean(axis=1, keepdims=True)
+    cross = np.einsum("kmi,mj->kij", target, source)
+    if not np.isfinite(cross).all():  # beyond the floats' range: no pose shown
+        return np.full(len(frames), np.nan)
+    rotation = best_rotation(cross)
+    misfit = target - np.einsum("kij,mj->kmi", rotation, source)
+    return np.sqrt((misfit**2).sum(axis=(1, 2)))
 
 
 @kernel
@@ -2282,12 +2363,7 @@ def _spread(local: np.ndarray, typical: int) -> tuple[float, float, float, float
     ``u_f = |local[f] - M|`` of the frames ``local`` ``(n_frames, n, 3)`` [mm] from their mean
     ``M`` (:func:`_rigid_misfits`). A compiled kernel."""
     n_frames, n_markers = local.shape[0], local.shape[1]
-    mean = np.zeros((n_markers, 3))
-    for f in range(n_frames):
-        for m in range(n_markers):
-            for i in range(3):
-                mean[m, i] += local[f, m, i]
-    mean /= n_frames
+    mean = _frame_mean(local)
     highest = total = total_sq = at_typical = 0.0
     for f in range(n_frames):
         norm_sq = 0.0

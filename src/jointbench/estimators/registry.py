@@ -49,10 +49,12 @@ makes it so.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import re
 from collections.abc import Callable, Mapping
+from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
@@ -196,7 +198,8 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     of two segments has the segments'
     poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
     one-trial function is) and for the verdict. The stages after the fit share the sums over
-    the frames that more than one of them reads (:mod:`jointbench.numerics.reuse`); the fit
+    the frames that more than one of them reads (:mod:`jointbench.numerics.reuse`), and with the
+    package's own fit (:func:`jointbench.owncode.package_code`) those it formed; any other fit
     runs outside that scope, as it may be a user's code that refills an array it reads."""
     return _stages(entry, clean, options)
 
@@ -208,19 +211,38 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
     if names is not None and _binds(entry, clean, options):
         # The arrays passed the input checks just now: their samples are not scanned again.
         shared = _shared_poses(names, tuple([array] for array in clean), samples_checked=True)
-    stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
-    if shared is None:
-        result = entry.fn(*clean, **options)
-    else:
-        result = one_trial(entry.many, *clean, poses=shared, **options)
+    if owncode.package_code(entry.fn):
+        # The package's own fits write to none of the arrays they read: the stages after the
+        # fit read the sums it formed (paper B's S) instead of forming them again.
+        with reuse.one_call():
+            result = _fit(entry, clean, shared, options)
+            return _checked_stages(entry, result, clean, shared, options)
+    result = _fit(entry, clean, shared, options)
     with reuse.one_call():
-        # Its arrays passed the input checks: the verdict's own check of them is not repeated.
-        (verdict,) = support.assess_many(entry.kind, stacked, poses=shared)
-        result = _self_checked(entry.fn, result, clean, options)
-        if hasattr(entry.fn, "precision_many"):
-            poses = _fitted_to(shared, [0])
-            (result,) = _precision_checked(entry.fn, [result], stacked, poses, [verdict])
-        (result,) = _answers_checked(entry.kind, [result], stacked, [verdict])
+        return _checked_stages(entry, result, clean, shared, options)
+
+
+def _fit(entry: _Entry, clean: tuple[np.ndarray, ...], shared: object, options: dict):
+    """``entry``'s fit of the trial ``clean``: its one-trial function, or its many-trial form on
+    a batch of one given the segments' poses ``shared`` (``None``: not fitted for it)."""
+    if shared is None:
+        return entry.fn(*clean, **options)
+    return one_trial(entry.many, *clean, poses=shared, **options)
+
+
+def _checked_stages(
+    entry: _Entry, result: object, clean: tuple[np.ndarray, ...], shared: object, options: dict
+):
+    """The stages of :func:`_stages` after the fit ``result`` of the trial ``clean`` (poses
+    ``shared`` and ``options`` as for :func:`_fit`), inside the scope of one call."""
+    stacked = tuple(array[None] for array in clean)  # the trial as a batch of one
+    # Its arrays passed the input checks: the verdict's own check of them is not repeated.
+    (verdict,) = support.assess_many(entry.kind, stacked, poses=shared)
+    result = _self_checked(entry.fn, result, clean, options)
+    if hasattr(entry.fn, "precision_many"):
+        poses = _fitted_to(shared, [0])
+        (result,) = _precision_checked(entry.fn, [result], stacked, poses, [verdict])
+    (result,) = _answers_checked(entry.kind, [result], stacked, [verdict])
     return support.annotate(result, verdict)
 
 
@@ -455,6 +477,24 @@ def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
         shared = _shared_poses(names, segments)
     if shared is not None:
         options["poses"] = shared
+    if owncode.package_code(entry.many):
+        # As for one trial (:func:`_stages`): the package's own fit shares its sums.
+        with reuse.one_call():
+            return _fitted_many(entry, segments, options, names, contextlib.nullcontext())
+    # After the fit, as for one trial (:func:`_fit_valid`).
+    return _fitted_many(entry, segments, options, names, reuse.one_call())
+
+
+def _fitted_many(
+    entry: _Entry,
+    segments: tuple,
+    options: dict,
+    names: tuple[str, ...] | None,
+    scope: AbstractContextManager,
+) -> list:
+    """The stages of :func:`_many_stages` from the fit of ``entry``'s many-trial form on
+    ``segments`` (``options`` with the poses it shares, of the segments ``names``), the checks
+    after it in ``scope``."""
     outcomes = list(entry.many(*segments, **options))
     checked = validation.check_input_many(entry.kind, segments, len(outcomes))
     fitted = []
@@ -465,7 +505,7 @@ def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
         elif not isinstance(outcome, Exception):
             fitted.append(trial)
     if fitted:
-        with reuse.one_call():  # after the fit, as for one trial (:func:`_fit_valid`)
+        with scope:
             _judge_fitted(entry, outcomes, fitted, checked.stacked(fitted), options, names)
     return outcomes
 
