@@ -4,6 +4,7 @@ alone."""
 
 from __future__ import annotations
 
+import functools
 import threading
 
 import numpy as np
@@ -11,6 +12,7 @@ import pytest
 from test_axis_sd import hinge
 from test_frame_independence import _counting_kernel_calls, _interpolated, _kind_trial, _noisy
 
+from jointbench import owncode
 from jointbench.estimators import axis, registry, support
 from jointbench.numerics import reuse
 
@@ -201,10 +203,13 @@ def test_a_batch_verdict_with_a_flagged_trial_passes_over_each_segment_once(monk
     assert calls.count("_frame_numbers") == 2
 
 
-def test_a_fit_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content():
+@pytest.mark.parametrize("wraps", [False, True])
+def test_a_fit_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content(wraps):
     """An estimator registered from outside may, inside its own fit, fit a built-in method on
     trial after trial refilled into one buffer: each answer is the one the trial gets alone,
-    never the sums an earlier content of the same memory left in the checked call."""
+    never the sums an earlier content of the same memory left in the checked call. So too
+    where it states the built-in fit as the one it wraps (``functools.wraps`` sets
+    ``__wrapped__``): it is still the user's code, run before the checks' scope."""
     trials = [hinge(seed, 30.0, noise=1.0) for seed in range(2)]
     planar = registry.get("axis", "planar", checked=False)
     alone = [planar(trial).direction for trial in trials]
@@ -218,6 +223,9 @@ def test_a_fit_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content(
             seen.append(planar(buffer).direction)
         return planar(markers)
 
+    if wraps:
+        fits_a_refilled_buffer = functools.wraps(planar)(fits_a_refilled_buffer)
+        assert not owncode.package_code(fits_a_refilled_buffer)
     registry.register("axis", "fits-a-refilled-buffer")(fits_a_refilled_buffer)
     try:
         registry.get("axis", "fits-a-refilled-buffer")(trials[0])
@@ -227,3 +235,32 @@ def test_a_fit_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content(
     assert len(seen) == 2 + 2 * 2
     for direction, expected in zip(seen, alone * 3, strict=True):
         np.testing.assert_array_equal(direction, expected)
+
+
+def test_a_wrapping_users_fit_refilling_its_input_is_checked_on_the_new_content():
+    """A user's fit wrapping a built-in one may write to the array it was given after the
+    built-in fit read it: the checks after the fit read that array's new content, as they
+    do for any user's fit, never the sums the built-in fit left."""
+    trials = [hinge(seed, 30.0, noise=1.0) for seed in range(2)]
+    planar = registry.get("axis", "planar", checked=False)
+
+    def refills(markers):
+        result = planar(markers)
+        np.copyto(markers, trials[1])
+        return result
+
+    wrapped = functools.wraps(planar)(lambda markers: refills(markers))
+    # The same wrapper (the built-in fit's attributes too) without ``__wrapped__``.
+    plain = functools.wraps(planar)(lambda markers: refills(markers))
+    del plain.__wrapped__
+    results = []
+    for name, fn in (("refills-plain", plain), ("refills-wrapped", wrapped)):
+        registry.register("axis", name)(fn)
+        try:
+            results.append(registry.get("axis", name)(trials[0].copy()))
+        finally:
+            registry.unregister("axis", name)
+    plain, wrapped_result = results
+    assert wrapped_result.status == plain.status
+    assert wrapped_result.diagnostics == plain.diagnostics
+    np.testing.assert_array_equal(wrapped_result.direction, plain.direction)

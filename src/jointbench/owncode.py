@@ -56,10 +56,19 @@ def own_code(filename: str) -> bool:
 
 
 def package_code(function: Callable) -> bool:
-    """Whether ``function`` (unwrapped) is a Python function defined in a file of this package
-    itself, not a user's (claimed or not) nor a library's: code whose every read and write of
-    its arrays the package knows."""
-    code = getattr(inspect.unwrap(function), "__code__", None)
+    """Whether ``function`` and every function it wraps (its ``__wrapped__`` chain) are Python
+    functions defined in files of this package itself, not a user's (claimed or not) nor a
+    library's: code whose every read and write of its arrays the package knows. Every layer
+    is asked, as a user's wrapper states the package's fit as the one it wraps yet runs its
+    own code around it, and a package's wrapper may run a user's fit."""
+    wrappers: list[Callable] = []  # each layer that wraps another, outermost first
+    innermost = inspect.unwrap(function, stop=wrappers.append)  # append returns None: no stop
+    return all(_package_function(layer) for layer in (*wrappers, innermost))
+
+
+def _package_function(function: Callable) -> bool:
+    """Whether ``function`` itself (not what it wraps) is a Python function of this package."""
+    code = getattr(function, "__code__", None)
     return code is not None and _in_package(code.co_filename)
 
 
