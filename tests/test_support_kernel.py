@@ -364,7 +364,7 @@ def test_each_clusters_own_noise_scales_its_inertia_as_numpy_would():
     inertia_inv, weakest = rng.normal(size=(4, 3, 3)), rng.uniform(1e-6, 1e-3, 4)
     before = inertia_inv.copy(), weakest.copy()
     scaled, scaled_weakest = support._scaled_to_own_noise(
-        residual_ss, dof, pooled, inertia_inv, weakest
+        residual_ss / dof, pooled, inertia_inv, weakest
     )
     weight = np.divide(residual_ss / dof, pooled, out=np.ones_like(pooled), where=pooled > 0.0)
     assert np.array_equal(scaled, inertia_inv * weight[:, None, None])

@@ -2286,8 +2286,7 @@ def _with_own_noise(cluster: _Clusters, pooled: np.ndarray) -> _Clusters:
     the covariance ``s^2 K^-1`` of its poses' rotations with its own ``s^2``; unscaled where
     the pooled residual is zero."""
     inertia_inv, weakest_variance = _scaled_to_own_noise(
-        cluster.residual_ss,
-        cluster.dof,
+        kernel_array(cluster.variance),
         kernel_array(pooled),
         cluster.inertia_inv,
         cluster.weakest_variance,
@@ -2297,22 +2296,21 @@ def _with_own_noise(cluster: _Clusters, pooled: np.ndarray) -> _Clusters:
 
 @kernel
 def _scaled_to_own_noise(
-    residual_ss: np.ndarray,
-    dof: int,
+    own: np.ndarray,
     pooled: np.ndarray,
     inertia_inv: np.ndarray,
     weakest_variance: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_with_own_noise`'s ``inertia_inv`` ``(T, 3, 3)`` [mm^-2] and
-    ``weakest_variance`` ``(T,)`` [mm^-2], each times the weight ``(residual_ss / dof) /
-    pooled`` per trial (a cluster's own residual over the pooled one, ``(T,)`` [mm^2] each;
-    1 where ``pooled`` is not positive), as new arrays: the same operations as NumPy's, so
-    the same bits. A compiled kernel: NumPy's half dozen operations on one trial's arrays cost
-    a checked call tens of microseconds."""
+    ``weakest_variance`` ``(T,)`` [mm^-2], each times the weight ``own / pooled`` per trial
+    (a cluster's own residual variance, :attr:`_Clusters.variance`, over the pooled one,
+    ``(T,)`` [mm^2] each; 1 where ``pooled`` is not positive), as new arrays: the same
+    operations as NumPy's, so the same bits. A compiled kernel: NumPy's half dozen operations
+    on one trial's arrays cost a checked call tens of microseconds."""
     scaled = np.empty_like(inertia_inv)
     weakest = np.empty_like(weakest_variance)
     for t in range(pooled.shape[0]):
-        weight = (residual_ss[t] / dof) / pooled[t] if pooled[t] > 0.0 else 1.0
+        weight = own[t] / pooled[t] if pooled[t] > 0.0 else 1.0
         for i in range(3):
             for j in range(3):
                 scaled[t, i, j] = inertia_inv[t, i, j] * weight
