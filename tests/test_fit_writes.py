@@ -8,13 +8,15 @@ to that here), which is what lets them share the checks' sums (:mod:`jointbench.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
 from rigs import one_segment, two_segments
 
 import jointbench
-from jointbench.estimators import registry
+from jointbench import owncode
+from jointbench.estimators import registry, twosegment
 
 BUILT_IN = {"center": "LS", "axis": "planar", "joint_center": "SCoRE"}
 
@@ -128,3 +130,47 @@ def test_a_built_in_fit_writes_to_none_of_its_input(kind, method):
             strict=True,
         ):
             _same_result(result, alone)
+
+
+def _users_finish(*stacks, **options):
+    """A user's last step of a pose-based fit (what ``twosegment.batched`` closes over)."""
+    raise NotImplementedError
+
+
+class _UsersCallable:
+    def __call__(self, *stacks, **options):
+        raise NotImplementedError
+
+
+@dataclasses.dataclass
+class _UnhashableCallable(_UsersCallable):  # eq without frozen: no __hash__
+    n_trials: int = 1
+
+
+@pytest.mark.parametrize(
+    "made",
+    [
+        lambda: twosegment.batched(_users_finish, ("markers",)),
+        lambda: twosegment.batched_all(_users_finish, ("proximal", "distal")),
+        lambda: twosegment.batched(functools.partial(_users_finish, 1), ("markers",)),
+        lambda: twosegment.batched(_UsersCallable(), ("markers",)),
+        lambda: _UnhashableCallable(),
+        lambda: functools.partial(registry.get("center", "LS", checked=False), _users_finish),
+    ],
+    ids=["batched", "batched-all", "partial", "callable", "unhashable", "partial-passing-users"],
+)
+def test_a_package_closure_over_a_users_function_is_not_the_package_s_own_code(made):
+    """A many-trial form the package builds around a user's function (a closure, no
+    ``__wrapped__`` to say so) runs that user's code: it is not the package's own fit, which
+    alone shares the checks' sums and is handed the caller's arrays."""
+    assert not owncode.package_code(made())
+
+
+def test_the_package_s_closures_over_its_own_functions_are_its_own_code():
+    for kind in BUILT_IN:
+        for method in jointbench.methods(kind):
+            if registry.has_own_many(kind, method):
+                assert owncode.package_code(registry.many(kind, method, checked=False))
+            assert owncode.package_code(registry.get(kind, method, checked=False))
+    # Nothing of a user's in it: the fit with some of its arguments given.
+    assert owncode.package_code(functools.partial(registry.get("center", "LS", checked=False)))
