@@ -237,10 +237,11 @@ def test_a_fit_on_a_refilled_buffer_inside_a_checked_call_reads_the_new_content(
         np.testing.assert_array_equal(direction, expected)
 
 
-def test_a_wrapping_users_fit_refilling_its_input_is_checked_on_the_new_content():
-    """A user's fit wrapping a built-in one may write to the array it was given after the
-    built-in fit read it: the checks after the fit read that array's new content, as they
-    do for any user's fit, never the sums the built-in fit left."""
+def test_a_wrapping_users_fit_refilling_its_input_is_checked_on_the_data_given():
+    """A user's fit wrapping a built-in one may write to the array it was handed after the
+    built-in fit read it: it was handed a copy of its own, and the checks after the fit read
+    the data as the caller gave them, as they do for any user's fit (``tests/test_fit_writes.py``),
+    never the sums the built-in fit left on its copy."""
     trials = [hinge(seed, 30.0, noise=1.0) for seed in range(2)]
     planar = registry.get("axis", "planar", checked=False)
 

@@ -20,7 +20,7 @@ import site
 import sys
 import sysconfig
 import types
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 
 __all__ = ["claim", "own_code", "package_code"]
 
@@ -56,14 +56,82 @@ def own_code(filename: str) -> bool:
 
 
 def package_code(function: Callable) -> bool:
-    """Whether ``function`` and every function it wraps (its ``__wrapped__`` chain) are Python
-    functions defined in files of this package itself, not a user's (claimed or not) nor a
-    library's: code whose every read and write of its arrays the package knows. Every layer
-    is asked, as a user's wrapper states the package's fit as the one it wraps yet runs its
-    own code around it, and a package's wrapper may run a user's fit."""
-    wrappers: list[Callable] = []  # each layer that wraps another, outermost first
-    innermost = inspect.unwrap(function, stop=wrappers.append)  # append returns None: no stop
-    return all(_package_function(layer) for layer in (*wrappers, innermost))
+    """Whether ``function`` and every Python function a call of it may run that it holds are
+    Python functions defined in files of this package itself, not a user's (claimed or not) nor
+    a library's: code whose every read and write of its arrays the package knows. Held are the
+    functions it wraps (its ``__wrapped__`` chain: a user's wrapper states the package's fit as
+    the one it wraps yet runs its own code around it) and those it closes over, their own
+    likewise (a many-trial form the package builds around a user's function, such as
+    :func:`jointbench.estimators.twosegment.batched`'s, runs that function and says nothing
+    of it); a ``functools.partial`` holds its function and the callables among its arguments,
+    an object its class's ``__call__``. Remembered per function (one that can be hashed): a
+    checked call asks it of its method's fit."""
+    if isinstance(function, Hashable):
+        return _remembered_package_code(function)
+    return _all_package_code(function)
+
+
+@functools.lru_cache(maxsize=256)
+def _remembered_package_code(function: Callable) -> bool:
+    return _all_package_code(function)
+
+
+def _all_package_code(function: Callable) -> bool:
+    """:func:`package_code`, found anew."""
+    return all(_package_function(held) for held in _functions_held(function))
+
+
+def _functions_held(function: Callable) -> list:
+    """``function`` and the Python functions it holds (:func:`package_code`), each once."""
+    found: dict[int, object] = {}
+    pending = [function]
+    while pending:
+        item = pending.pop()
+        if id(item) in found:
+            continue
+        found[id(item)] = item
+        if isinstance(item, functools.partial):
+            pending += [item.func, *filter(callable, (*item.args, *item.keywords.values()))]
+            continue
+        wrapped = getattr(item, "__wrapped__", None)
+        if wrapped is not None:
+            pending.append(wrapped)
+        if isinstance(item, types.FunctionType):
+            cells = item.__closure__ or ()
+            pending += [cell.cell_contents for cell in cells if _held_code(cell)]
+        elif _python_call(item) is not None:
+            pending.append(_python_call(item))
+    # A callable object is its class's __call__, held above; the one asked about is itself
+    # too (anything but a Python function or a partial is no function of the package's).
+    held = [item for item in found.values() if isinstance(item, types.FunctionType)]
+    if not isinstance(function, types.FunctionType | functools.partial):
+        held.append(function)
+    return held
+
+
+def _held_code(cell: types.CellType) -> bool:
+    """Whether a closure's ``cell`` holds code a call may run: a Python function, a partial, or
+    an object whose class defines ``__call__`` in Python (not a class, nor a library's
+    callable, such as a NumPy ufunc)."""
+    try:
+        item = cell.cell_contents
+    except ValueError:  # a cell not yet filled
+        return False
+    return isinstance(item, types.FunctionType | functools.partial) or (
+        _python_call(item) is not None
+    )
+
+
+def _python_call(item: object) -> types.FunctionType | None:
+    """The ``__call__`` of ``item``'s class where the class defines it in Python, for an
+    object that is not itself a class; else ``None``."""
+    if isinstance(item, type):
+        return None
+    for klass in type(item).__mro__:  # as inspect.getattr_static finds it, at a tenth the cost
+        if "__call__" in vars(klass):
+            call = vars(klass)["__call__"]
+            return call if isinstance(call, types.FunctionType) else None
+    return None
 
 
 def _package_function(function: Callable) -> bool:

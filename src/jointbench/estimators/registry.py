@@ -50,6 +50,7 @@ makes it so.
 from __future__ import annotations
 
 import contextlib
+import copy
 import functools
 import inspect
 import re
@@ -199,8 +200,10 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     poses fitted once, for its fit (its many-trial form on a batch of one, which is what its
     one-trial function is) and for the verdict. The stages after the fit share the sums over
     the frames that more than one of them reads (:mod:`jointbench.numerics.reuse`), and with the
-    package's own fit (:func:`jointbench.owncode.package_code`) those it formed; any other fit
-    runs outside that scope, as it may be a user's code that refills an array it reads."""
+    package's own fit (:func:`jointbench.owncode.package_code`), which writes to none of the
+    arrays it reads, those it formed. Any other fit may be a user's code that writes to the
+    arrays it is handed (normalises them in place, refills them as a buffer): it fits copies
+    of its own, outside that scope, and the checks judge the data as the caller gave them."""
     return _stages(entry, clean, options)
 
 
@@ -217,7 +220,7 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
         with reuse.one_call():
             result = _fit(entry, clean, shared, options)
             return _checked_stages(entry, result, clean, shared, options)
-    result = _fit(entry, clean, shared, options)
+    result = _fit(entry, copy.deepcopy(clean), shared, options)
     with reuse.one_call():
         return _checked_stages(entry, result, clean, shared, options)
 
@@ -480,22 +483,24 @@ def _many_stages(entry: _Entry, segments: tuple, options: dict) -> list:
     if owncode.package_code(entry.many):
         # As for one trial (:func:`_stages`): the package's own fit shares its sums.
         with reuse.one_call():
-            return _fitted_many(entry, segments, options, names, contextlib.nullcontext())
-    # After the fit, as for one trial (:func:`_fit_valid`).
-    return _fitted_many(entry, segments, options, names, reuse.one_call())
+            return _fitted_many(entry, segments, segments, options, names, contextlib.nullcontext())
+    # As for one trial (:func:`_fit_valid`): copies of its own, the checks after it.
+    handed = copy.deepcopy(segments)
+    return _fitted_many(entry, segments, handed, options, names, reuse.one_call())
 
 
 def _fitted_many(
     entry: _Entry,
     segments: tuple,
+    handed: tuple,
     options: dict,
     names: tuple[str, ...] | None,
     scope: AbstractContextManager,
 ) -> list:
     """The stages of :func:`_many_stages` from the fit of ``entry``'s many-trial form on
-    ``segments`` (``options`` with the poses it shares, of the segments ``names``), the checks
-    after it in ``scope``."""
-    outcomes = list(entry.many(*segments, **options))
+    ``handed`` (``segments`` or copies of them; ``options`` with the poses it shares, of the
+    segments ``names``), the checks of ``segments`` after it in ``scope``."""
+    outcomes = list(entry.many(*handed, **options))
     checked = validation.check_input_many(entry.kind, segments, len(outcomes))
     fitted = []
     for trial, (outcome, error) in enumerate(zip(outcomes, checked.errors, strict=True)):
