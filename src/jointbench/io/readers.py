@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import codecs
 import csv
 import io
 import math
@@ -29,12 +30,14 @@ def _check_file(path: str | Path) -> Path:
     return path
 
 
-def _read_text(path: Path) -> str:
-    """The text of ``path`` decoded as UTF-8 (a byte-order mark dropped); ``ValueError`` naming
-    the line and the byte that is not UTF-8. No other encoding is guessed: a Latin-1 or
+def _read_text(path: Path, kind: str) -> str:
+    """The text of ``path``, a ``kind`` (``"TRC"``, ``"CSV"``) file, decoded as UTF-8 (a
+    byte-order mark dropped); ``ValueError`` naming the line and the byte that is not UTF-8, or
+    a binary file (:func:`_check_not_binary`). No other encoding is guessed: a Latin-1 or
     Windows-1252 label read as UTF-8 with replacement characters would be a label nobody can
     type, and one read as Latin-1 from a Windows-1252 file would be another marker's name."""
     content = path.read_bytes()
+    _check_not_binary(content, path, kind)
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -44,6 +47,34 @@ def _read_text(path: Path) -> str:
             "file) is not UTF-8 text; save the file as UTF-8 (from Latin-1: "
             "iconv -f latin1 -t utf-8)"
         ) from None
+
+
+#: Bytes no text file holds: the control characters but tab, line feed, vertical tab, form
+#: feed, carriage return and the end-of-file mark (0x1a) some DOS programs end a file with.
+_BINARY_BYTE = re.compile(rb"[\x00-\x08\x0e-\x19\x1b-\x1f]")
+
+
+def _check_not_binary(content: bytes, path: Path, kind: str) -> None:
+    """``ValueError`` when ``content``, the bytes of ``path`` read as a ``kind`` text file,
+    holds a control character no text holds: a C3D file (its first byte the parameters' block,
+    a control character, its second 0x50) under a text extension, named so, or another
+    program's binary format, naming the first such byte (0-based). Read as text, such a file
+    would be refused as text of another encoding, a remedy no binary file takes. Text in
+    UTF-16, whose byte-order mark says so, is text, whose zero bytes are left to the UTF-8
+    refusal."""
+    found = _BINARY_BYTE.search(content)
+    if found is None or content.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return
+    if len(content) > 1 and content[0] < 0x20 and content[1] == 0x50:
+        raise ValueError(
+            f"{path}: a binary file, not {kind} text: its first bytes are a C3D file's; name it "
+            ".c3d"
+        )
+    raise ValueError(
+        f"{path}: a binary file, not {kind} text: byte {found.start()} is "
+        f"0x{content[found.start()]:02x}, a control character no text holds (a spreadsheet, or "
+        f"another program's own format? export it as {kind})"
+    )
 
 
 def read(path: str | Path) -> Recording:
@@ -172,7 +203,7 @@ def read_trc(path: str | Path) -> Recording:
     fixed columns (:func:`_trc_labels`) and no row may write past the labelled markers
     (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`)."""
     path = _check_file(path)
-    lines = _read_text(path).splitlines()
+    lines = _read_text(path, "TRC").splitlines()
     if len(lines) < 6:
         raise ValueError(f"{path}: too short for a TRC file (needs 5 header lines and data)")
     keys, values = lines[1].split("\t"), lines[2].split("\t")
@@ -449,7 +480,7 @@ def read_csv(path: str | Path) -> Recording:
     its line. The file is UTF-8 (:func:`_read_text`).
     """
     path = _check_file(path)
-    text = _read_text(path)
+    text = _read_text(path, "CSV")
     try:
         # The marker column is text as written: no type inference ("01" stays "01") and no
         # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
