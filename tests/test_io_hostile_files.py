@@ -4,8 +4,9 @@ output path that cannot be written, each refused naming the file and what is wro
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
-from test_io_recordings import KNEE
+from test_io_recordings import KNEE, write_c3d
 
 from jointbench.io import read
 
@@ -45,3 +46,32 @@ def test_text_with_tabs_and_line_ends_is_text(tmp_path):
     path = tmp_path / "markers.csv"
     path.write_bytes(b"frame,marker,x,y,z\r\n0,A,1,2,3\r\n\t\r\n")
     assert read(path).labels == ("A",)
+
+
+def _long_c3d(path, n_frames):
+    """A C3D of ``n_frames`` > 65535 frames of eight markers (128 bytes a frame, so that the
+    frames end a 512-byte block), as ezc3d writes it: its header and ``POINT:FRAMES`` stop at
+    65535, and no ``TRIAL`` group counts the rest."""
+    rng = np.random.default_rng(3)
+    markers = rng.uniform(10.0, 100.0, size=(n_frames, 8, 3))
+    return write_c3d(path, tuple("ABCDEFGH"), markers)
+
+
+def test_a_c3d_of_more_frames_than_its_parameters_count_is_refused(tmp_path):
+    """ezc3d read its first 65535 frames and nothing said that 4465 more were left unread."""
+    path = _long_c3d(tmp_path / "long.c3d", 70000)
+    refusal = (
+        f"{path}: the file holds 572032 bytes past the 65535 frames its header and parameters "
+        "count, room for 4465 to 4469 more frames of 8 points and 0 analog samples each (a C3D's "
+        "header counts at most 65535 frames; POINT:FRAMES, POINT:LONG_FRAMES or "
+        "TRIAL:ACTUAL_END_FIELD counts more, and this file's do not): frames from 65536 on "
+        "would be left out unread; export the trial as TRC, or in parts"
+    )
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value) == refusal
+
+
+def test_a_c3d_of_65535_frames_reads(tmp_path):
+    path = _long_c3d(tmp_path / "long.c3d", 65535)
+    assert read(path).n_frames == 65535

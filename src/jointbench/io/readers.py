@@ -134,14 +134,15 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     samples, each value a float32 (``POINT:SCALE`` < 0) or an int16.
     """
     n_points, n_analog, first, last, data_block = _c3d_header(path)
-    if last == 0xFFFF:  # a long file: the header cannot hold its last frame
-        return
-    frames = last - first + 1
     scale = c3d["parameters"]["POINT"].get("SCALE", {"value": [-1.0]})["value"]
     word = 4 if len(scale) == 0 or float(scale[0]) < 0 else 2
     start = (data_block - 1) * 512
     frame_bytes = word * (4 * n_points + n_analog)
     size = path.stat().st_size
+    if last == 0xFFFF:  # a long file: the header cannot hold its last frame
+        _check_c3d_long(c3d, path, start, frame_bytes, first)
+        return
+    frames = last - first + 1
     if frames <= 0 or size >= start + frames * frame_bytes:
         return
     complete = max(0, (size - start) // frame_bytes)
@@ -150,6 +151,32 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
         f"frames) of {n_points} points and {n_analog} analog samples each "
         f"({start + frames * frame_bytes} bytes), but the file has {size} bytes: "
         f"{complete} complete frames"
+    )
+
+
+def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, first: int) -> None:
+    """``ValueError`` when the C3D file ``path``, whose header's last frame is 65535, the most
+    it can count, holds frames past those ezc3d read (``c3d``): a file whose parameters count
+    no more (``POINT:FRAMES`` as an integer, no ``POINT:LONG_FRAMES`` or ``TRIAL`` group, as
+    ezc3d itself writes one), whose later frames would be left out unseen. Its frames start at
+    byte ``start``, take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte
+    block of padding may follow them (ezc3d writes a whole one where they end a block), so the
+    frames past them are counted within that."""
+    header = c3d["header"]["points"]
+    read = int(header["last_frame"]) - int(header["first_frame"]) + 1
+    extra = path.stat().st_size - start - read * frame_bytes
+    if frame_bytes == 0 or extra <= 512:
+        return
+    fewest, most = -(-(extra - 512) // frame_bytes), extra // frame_bytes
+    more = f"{fewest}" if fewest == most else f"{fewest} to {most}"
+    n_points, n_analog = _c3d_header(path)[:2]
+    raise ValueError(
+        f"{path}: the file holds {extra} bytes past the {read} frames its header and parameters "
+        f"count, room for {more} more frames of {n_points} points and "
+        f"{n_analog} analog samples each (a C3D's header counts at most 65535 frames; "
+        "POINT:FRAMES, POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD counts more, and this "
+        f"file's do not): frames from {first + read} on would be left out unread; export the "
+        "trial as TRC, or in parts"
     )
 
 
