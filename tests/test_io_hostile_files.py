@@ -4,8 +4,10 @@ output path that cannot be written, each refused naming the file and what is wro
 
 from __future__ import annotations
 
+import ezc3d
 import numpy as np
 import pytest
+from test_cli import run
 from test_io_recordings import KNEE, write_c3d
 
 from jointbench.io import read
@@ -75,3 +77,23 @@ def test_a_c3d_of_more_frames_than_its_parameters_count_is_refused(tmp_path):
 def test_a_c3d_of_65535_frames_reads(tmp_path):
     path = _long_c3d(tmp_path / "long.c3d", 65535)
     assert read(path).n_frames == 65535
+
+
+def test_a_c3d_without_markers_is_named_as_such_by_fit(tmp_path, capsys):
+    """An analog-only C3D (force plates, EMG): fit answered "no marker labels given", as if the
+    command had named none."""
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = [100.0]
+    c3d["parameters"]["ANALOG"]["RATE"]["value"] = [1000.0]
+    c3d["parameters"]["ANALOG"]["LABELS"]["value"] = ["Fx", "Fy"]
+    c3d["data"]["points"] = np.ones((4, 0, 50))
+    c3d["data"]["analogs"] = np.random.default_rng(0).random((1, 2, 500))
+    path = tmp_path / "forces.c3d"
+    c3d.write(str(path))
+    assert read(path).labels == ()
+    code, _, err = run(capsys, "fit", str(path))
+    assert code == 2
+    assert err == (
+        f"jointbench: {path}: the file holds no markers (no 3D points: only analog channels?); "
+        "a fit needs marker trajectories\n"
+    )

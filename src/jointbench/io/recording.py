@@ -121,7 +121,13 @@ class Recording:
         return Path(self.source).name
 
     def index(self, labels: str | list[str] | tuple[str, ...]) -> list[int]:
-        """Column indices of ``labels`` (a list, or one comma-separated string)."""
+        """Column indices of ``labels`` (a list, or one comma-separated string); a recording
+        without markers (an analog-only C3D) refuses any, saying so."""
+        if not self.labels:
+            raise ValueError(
+                f"{self.source}: the file holds no markers (no 3D points: only analog "
+                "channels?); a fit needs marker trajectories"
+            )
         if isinstance(labels, str):
             labels = [label.strip() for label in labels.split(",") if label.strip()]
         if not labels:
