@@ -12,6 +12,9 @@ from test_io_recordings import KNEE, write_c3d
 
 from jointbench.io import read
 
+THIGH = "RTHI1,RTHI2,RTHI3,RGT"
+SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
+
 
 @pytest.mark.parametrize(
     ("name", "content", "what"),
@@ -97,3 +100,28 @@ def test_a_c3d_without_markers_is_named_as_such_by_fit(tmp_path, capsys):
         f"jointbench: {path}: the file holds no markers (no 3D points: only analog channels?); "
         "a fit needs marker trajectories\n"
     )
+
+
+@pytest.mark.parametrize("where", ["missing folder", "folder"])
+def test_a_world_output_that_cannot_be_written_is_refused_before_the_fit(tmp_path, capsys, where):
+    """The path was tried after the fit: the fit's time was lost, and its table with it, to
+    "Cannot save file into a non-existent directory", which named no option."""
+    world = tmp_path / "absent" / "world.csv" if where == "missing folder" else tmp_path
+    missing = tmp_path / "absent.c3d"  # read after the output is checked: never reached
+    code, out, err = run(capsys, "fit", str(missing), "--world", str(world))
+    assert (code, out) == (2, "")
+    reason = (
+        f"its folder {tmp_path / 'absent'} does not exist"
+        if where == "missing folder"
+        else "it is a folder"
+    )
+    assert err == f"jointbench: --world {world}: cannot be written: {reason}\n"
+
+
+def test_a_world_output_in_an_existing_folder_is_written(tmp_path, capsys):
+    world = tmp_path / "world.csv"
+    code, _, _ = run(
+        capsys, "fit", str(KNEE), "--reference", THIGH, "--moving", SHANK, "--world", str(world)
+    )
+    assert code == 0
+    assert world.read_text().startswith("frame,method,x_mm,y_mm,z_mm\n100,NM,")
