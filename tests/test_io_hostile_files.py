@@ -16,6 +16,13 @@ THIGH = "RTHI1,RTHI2,RTHI3,RGT"
 SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
 
 
+def _refusal(path) -> str:
+    """The message of the ``ValueError`` reading ``path`` raises."""
+    with pytest.raises(ValueError) as error:
+        read(path)
+    return str(error.value)
+
+
 @pytest.mark.parametrize(
     ("name", "content", "what"),
     [
@@ -35,9 +42,7 @@ def test_a_binary_file_under_a_text_extension_is_named_as_binary(tmp_path, name,
     UTF-8 text; save the file as UTF-8", a remedy no binary file takes."""
     path = tmp_path / name
     path.write_bytes(KNEE.read_bytes() if content is None else content)
-    with pytest.raises(ValueError) as error:
-        read(path)
-    assert str(error.value) == f"{path}: a binary file, not {what}"
+    assert _refusal(path) == f"{path}: a binary file, not {what}"
 
 
 def test_a_utf16_text_file_is_refused_as_text_not_in_utf8(tmp_path):
@@ -72,9 +77,7 @@ def test_a_c3d_of_more_frames_than_its_parameters_count_is_refused(tmp_path):
         "TRIAL:ACTUAL_END_FIELD counts more, and this file's do not): frames from 65536 on "
         "would be left out unread; export the trial as TRC, or in parts"
     )
-    with pytest.raises(ValueError) as error:
-        read(path)
-    assert str(error.value) == refusal
+    assert _refusal(path) == refusal
 
 
 def test_a_c3d_of_65535_frames_reads(tmp_path):
@@ -125,3 +128,46 @@ def test_a_world_output_in_an_existing_folder_is_written(tmp_path, capsys):
     )
     assert code == 0
     assert world.read_text().startswith("frame,method,x_mm,y_mm,z_mm\n100,NM,")
+
+
+def _timed_trc(path, times, rate="100"):
+    """A TRC of one marker at ``DataRate`` ``rate``, its frames 1, 2, ... written at ``times``
+    [s] (their text as given)."""
+    text = "PathFileType\t4\t(X/Y/Z)\tt.trc\nDataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\n"
+    text += f"{rate}\t{rate}\t{len(times)}\t1\tmm\nFrame#\tTime\tA\t\t\n\t\tX1\tY1\tZ1\n"
+    text += "".join(f"{i + 1}\t{t}\t{i}.5\t1.5\t2.5\n" for i, t in enumerate(times))
+    path.write_text(text)
+    return path
+
+
+def test_trc_frames_not_at_the_headers_rate_are_refused_naming_the_line(tmp_path):
+    """Two recordings joined, the second at 200 Hz under the first's 100 Hz, read as one of
+    100 Hz: their Time column, which said otherwise, was not read."""
+    times = [f"{i / 100:.3f}" for i in range(50)] + [f"{0.49 + i / 200:.3f}" for i in range(1, 51)]
+    path = _timed_trc(tmp_path / "joined.trc", times)
+    assert _refusal(path) == (
+        f"{path}: line 57, field Time: 0.500 s, where frame 52 falls at 0.51 s at the header's "
+        "DataRate of 100 Hz (frame 1 at 0.000 s, line 6): the frames are not at that rate; a "
+        "wrong DataRate, or recordings of different rates joined?"
+    )
+
+
+def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path):
+    path = _timed_trc(tmp_path / "rate.trc", [f"{i / 100:.5f}" for i in range(10)], rate="120")
+    with pytest.raises(ValueError, match=r"line 9, field Time: 0.03000 s, where frame 4 falls"):
+        read(path)
+
+
+@pytest.mark.parametrize(
+    ("times", "rate"),
+    [
+        ([f"{0.25 + i / 2000:.3f}" for i in range(40)], "2000"),  # rounded to 1 ms
+        ([f"{i / 100:g}" for i in range(40)], "100"),  # %g: 0, 0.01, ..., 0.39
+        ([f"{i / 120:.6e}" for i in range(40)], "120"),  # exponent form
+        (["", *(f"{i / 100}" for i in range(1, 40))], "100"),  # a time not written
+        ([f"{i / 100:.2f}" for i in range(40)], ""),  # no DataRate: no rate to keep
+    ],
+    ids=["rounded", "%g", "exponent", "empty", "no rate"],
+)
+def test_trc_times_at_the_headers_rate_as_written_read(tmp_path, times, rate):
+    assert read(_timed_trc(tmp_path / "t.trc", times, rate)).n_frames == 40

@@ -272,9 +272,49 @@ def read_trc(path: str | Path) -> Recording:
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
+    _check_trc_times([row[1] for row in rows], [n for n, _ in data], numbers, rate_hz, path)
     return _no_repeated_frames(
         Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
     )
+
+
+def _check_trc_times(
+    times: list[str], lines: list[int], numbers: list[int], rate: float | None, path: Path
+) -> None:
+    """``ValueError`` naming the line of the first row of the TRC file ``path`` whose ``Time``
+    (``times``, each row's text; ``lines`` their 1-based lines, ``numbers`` their ``Frame#``)
+    is not where its frame falls at the header's ``DataRate`` ``rate`` [Hz], counted from the
+    first row that writes a time: by more than half a frame, beyond the rounding of the two
+    times as written. Recordings of different rates joined, or a wrong ``DataRate``, would
+    otherwise read as frames at one rate. Without a rate, and in a row whose time is empty or
+    no number, there is nothing to compare."""
+    if rate is None:
+        return
+    seconds = pd.to_numeric(pd.Series(times, dtype=object), errors="coerce").to_numpy(float)
+    timed = np.flatnonzero(np.isfinite(seconds))
+    if timed.size == 0:
+        return
+    first = int(timed[0])
+    expected = seconds[first] + (np.asarray(numbers) - numbers[first]) / rate
+    # Only rows off by over half a frame can be off beyond their rounding: the rest pass
+    # unread, so that a long file's rows are not each read again as text.
+    for i in np.flatnonzero(np.abs(seconds - expected) > 0.5 / rate):
+        text, first_text = times[i].strip(), times[first].strip()
+        if abs(seconds[i] - expected[i]) > 0.5 / rate + _rounding(first_text) + _rounding(text):
+            raise ValueError(
+                f"{path}: line {lines[i]}, field Time: {text} s, where frame {numbers[i]} falls "
+                f"at {expected[i]:.6g} s at the header's DataRate of {rate:g} Hz (frame "
+                f"{numbers[first]} at {first_text} s, line {lines[first]}): the frames are not "
+                "at that rate; a wrong DataRate, or recordings of different rates joined?"
+            )
+
+
+def _rounding(text: str) -> float:
+    """Half the last written digit's unit of the number ``text`` (``0.0005`` for
+    ``"0.125"``): how far rounding may have put it from its value; 0 for an exponent form,
+    whose digits are taken as exact."""
+    decimals = _decimals(text)
+    return 0.0 if decimals is None else 0.5 * 10.0**-decimals
 
 
 def _trc_labels(line: str, path: Path) -> list[str]:
