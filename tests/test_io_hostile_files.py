@@ -171,3 +171,23 @@ def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path):
 )
 def test_trc_times_at_the_headers_rate_as_written_read(tmp_path, times, rate):
     assert read(_timed_trc(tmp_path / "t.trc", times, rate)).n_frames == 40
+
+
+@pytest.mark.parametrize(
+    ("asked", "close"),
+    [
+        ("RTH1,RLEG1", "close to 'RTH1': 'RTHI1'"),
+        ("RGTR,RTIB1", "close to 'RGTR': 'RGT'; close to 'RTIB1': 'RTHI1'"),
+    ],
+)
+def test_a_label_missing_from_the_file_is_shown_its_close_matches(asked, close):
+    """A mistyped label was answered with the file's 73 labels to search by eye."""
+    with pytest.raises(ValueError) as error:
+        read(KNEE).select(asked)
+    assert str(error.value).endswith(f"RLEG1, RLEG2, RLEG3; {close}")
+
+
+def test_a_label_with_no_close_match_is_shown_none():
+    with pytest.raises(ValueError) as error:
+        read(KNEE).select("RKNE")
+    assert str(error.value).endswith("RLEG1, RLEG2, RLEG3")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,6 +47,21 @@ def _near_labels(asked: list[str], labels: tuple[str, ...]) -> str:
         f"; the file writes {', '.join(pairs)} (labels are matched as written: case, spaces "
         "and a subject prefix count)"
     )
+
+
+def _close_labels(asked: list[str], labels: tuple[str, ...]) -> str:
+    """For a refusal of the ``asked`` labels, up to three ``labels`` of the file spelled much as
+    each is (:func:`difflib.get_close_matches`, a similarity of 0.75 or more), most alike
+    first, for those :func:`_near_labels` names none: ``"; close to 'RTH1': 'RTHI1'"``, or
+    ``""``. A typing slip is then shown, not left to be found among the file's labels."""
+    parts = []
+    for name in asked:
+        if any(_bare(label) == _bare(name) for label in labels):
+            continue
+        close = difflib.get_close_matches(name, labels, n=3, cutoff=0.75)
+        if close:
+            parts.append(f"; close to {name!r}: {', '.join(map(repr, close))}")
+    return "".join(parts)
 
 
 def parse_frames(text: str, n_frames: int, first_frame: int = 0) -> slice:
@@ -138,6 +154,7 @@ class Recording:
             raise ValueError(
                 f"{self.source}: no marker labelled {', '.join(map(repr, unknown))}; "
                 f"labels in the file: {', '.join(self.labels)}{_near_labels(unknown, self.labels)}"
+                f"{_close_labels(unknown, self.labels)}"
             )
         if len(set(labels)) != len(labels):
             raise ValueError(f"{self.source}: a label is named twice in {list(labels)}")
