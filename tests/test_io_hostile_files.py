@@ -191,3 +191,16 @@ def test_a_label_with_no_close_match_is_shown_none():
     with pytest.raises(ValueError) as error:
         read(KNEE).select("RKNE")
     assert str(error.value).endswith("RLEG1, RLEG2, RLEG3")
+
+
+def test_a_world_output_onto_the_recording_read_is_refused(tmp_path, capsys):
+    """The recording was overwritten by the trajectory written after the fit."""
+    path = tmp_path / "knee.c3d"
+    path.write_bytes(KNEE.read_bytes())
+    world = tmp_path / "." / "knee.c3d"
+    code, out, err = run(
+        capsys, "fit", str(path), "--reference", THIGH, "--moving", SHANK, "--world", str(world)
+    )
+    assert (code, out) == (2, "")
+    assert err == f"jointbench: --world {world}: cannot be written: it is the recording read\n"
+    assert path.read_bytes() == KNEE.read_bytes()

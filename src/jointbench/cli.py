@@ -472,13 +472,16 @@ def _check_bootstrap_options(args: argparse.Namespace) -> None:
     )
 
 
-def _check_writable(path: Path | None, option: str) -> None:
+def _check_writable(path: Path | None, option: str, source: Path) -> None:
     """``ValueError`` naming ``option`` and ``path`` (``None``: not asked for) when the output
-    cannot be written there: a folder, in a folder that does not exist, or without permission.
-    Checked before the fit, which may take minutes, and whose table would be lost with it."""
+    cannot be written there: a folder, in a folder that does not exist, without permission, or
+    the file ``source``, the recording read, which it would overwrite. Checked before the fit,
+    which may take minutes, and whose table would be lost with it."""
     if path is None:
         return
-    if path.is_dir():
+    if path.is_file() and source.is_file() and path.samefile(source):
+        reason = "it is the recording read"
+    elif path.is_dir():
         reason = "it is a folder"
     elif not path.parent.is_dir():
         reason = f"its folder {path.parent} does not exist"
@@ -496,7 +499,7 @@ def _fit(args: argparse.Namespace) -> int:
         _open_run(args)
     names = _method_names(args.kind, args.method)
     _check_bootstrap_options(args)
-    _check_writable(args.world, "--world")
+    _check_writable(args.world, "--world", args.file)
     recording = read(args.file)
     moving = _labels(args.moving)
     reference = _labels(args.reference)
