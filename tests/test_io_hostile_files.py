@@ -85,6 +85,19 @@ def test_a_c3d_of_65535_frames_reads(tmp_path):
     assert read(path).n_frames == 65535
 
 
+def test_a_c3d_of_65535_frames_or_more_cut_short_is_refused(tmp_path):
+    """Its header's last frame, 65535, is the most a header counts, and was taken to promise
+    nothing: the file cut in half read as its first 32762 frames."""
+    path = _long_c3d(tmp_path / "long.c3d", 65535)
+    content = path.read_bytes()
+    path.write_bytes(content[: len(content) // 2])
+    assert _refusal(path) == (
+        f"{path}: truncated C3D file: its header promises frames 1 to 65535 or more (65535 "
+        "frames or more) of 8 points and 0 analog samples each (8390016 bytes or more), but the "
+        "file has 4195072 bytes: 32762 complete frames"
+    )
+
+
 def test_a_c3d_without_markers_is_named_as_such_by_fit(tmp_path, capsys):
     """An analog-only C3D (force plates, EMG): fit answered "no marker labels given", as if the
     command had named none."""

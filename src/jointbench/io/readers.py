@@ -125,7 +125,9 @@ def read_c3d(path: str | Path) -> Recording:
 
 
 def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
-    """``ValueError`` when the file ends before the frames its header promises.
+    """``ValueError`` when the file ends before the frames its header promises (a last frame of
+    65535, the most a header counts, promises at least the frames up to it), or holds more
+    than a long file's parameters count (:func:`_check_c3d_long`).
 
     ezc3d reads the frames that are there and rewrites its header and ``POINT:FRAMES`` to
     match, so the promise is read from the file's own header block: the number of points, of
@@ -139,19 +141,19 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     start = (data_block - 1) * 512
     frame_bytes = word * (4 * n_points + n_analog)
     size = path.stat().st_size
-    if last == 0xFFFF:  # a long file: the header cannot hold its last frame
-        _check_c3d_long(c3d, path, start, frame_bytes, first)
-        return
+    # A last frame of 65535, the most the header counts, promises that many or more.
+    more = " or more" if last == 0xFFFF else ""
     frames = last - first + 1
-    if frames <= 0 or size >= start + frames * frame_bytes:
-        return
-    complete = max(0, (size - start) // frame_bytes)
-    raise ValueError(
-        f"{path}: truncated C3D file: its header promises frames {first} to {last} ({frames} "
-        f"frames) of {n_points} points and {n_analog} analog samples each "
-        f"({start + frames * frame_bytes} bytes), but the file has {size} bytes: "
-        f"{complete} complete frames"
-    )
+    if frames > 0 and size < start + frames * frame_bytes:
+        complete = max(0, (size - start) // frame_bytes)
+        raise ValueError(
+            f"{path}: truncated C3D file: its header promises frames {first} to {last}{more} "
+            f"({frames} frames{more}) of {n_points} points and {n_analog} analog samples each "
+            f"({start + frames * frame_bytes} bytes{more}), but the file has {size} bytes: "
+            f"{complete} complete frames"
+        )
+    if more:
+        _check_c3d_long(c3d, path, start, frame_bytes, first)
 
 
 def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, first: int) -> None:
