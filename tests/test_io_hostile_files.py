@@ -45,6 +45,22 @@ def test_a_binary_file_under_a_text_extension_is_named_as_binary(tmp_path, name,
     assert _refusal(path) == f"{path}: a binary file, not {what}"
 
 
+@pytest.mark.parametrize("end", ["inside a line", "at a line's end"])
+def test_a_text_file_ending_in_zero_bytes_is_refused_as_cut_short(tmp_path, end):
+    """A file a crash or a full disk left short, its end filled with zero bytes, is no binary
+    file: it was named one, and with the zeros after a line's end it would read as a shorter
+    recording if they were dropped."""
+    path = tmp_path / "markers.csv"
+    text = b"frame,marker,x,y,z\n0,A,1,2,3\n1,A,2,3,4\n"
+    cut = len(text) - (3 if end == "inside a line" else 0)
+    path.write_bytes(text[:cut] + bytes(1000))
+    line = 3 if end == "inside a line" else 4
+    assert _refusal(path) == (
+        f"{path}: the file ends in 1000 zero bytes, from byte {cut} (line {line}) on: it was cut "
+        "short there and filled with zeros, as a crash or a full disk leaves a file"
+    )
+
+
 def test_a_utf16_text_file_is_refused_as_text_not_in_utf8(tmp_path):
     path = tmp_path / "markers.csv"
     path.write_text("frame,marker,x,y,z\n0,A,1,2,3\n", encoding="utf-16")

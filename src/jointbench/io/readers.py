@@ -59,12 +59,20 @@ def _check_not_binary(content: bytes, path: Path, kind: str) -> None:
     holds a control character no text holds: a C3D file (its first byte the parameters' block,
     a control character, its second 0x50) under a text extension, named so, or another
     program's binary format, naming the first such byte (0-based). Read as text, such a file
-    would be refused as text of another encoding, a remedy no binary file takes. Text in
+    would be refused as text of another encoding, a remedy no binary file takes. Text that
+    ends in zero bytes only was cut short and zero-filled, and is refused as such. Text in
     UTF-16, whose byte-order mark says so, is text, whose zero bytes are left to the UTF-8
     refusal."""
     found = _BINARY_BYTE.search(content)
     if found is None or content.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
         return
+    if not content[found.start() :].strip(b"\x00"):
+        line = content.count(b"\n", 0, found.start()) + 1
+        raise ValueError(
+            f"{path}: the file ends in {len(content) - found.start()} zero bytes, from byte "
+            f"{found.start()} (line {line}) on: it was cut short there and filled with zeros, as "
+            "a crash or a full disk leaves a file"
+        )
     if len(content) > 1 and content[0] < 0x20 and content[1] == 0x50:
         raise ValueError(
             f"{path}: a binary file, not {kind} text: its first bytes are a C3D file's; name it "
