@@ -233,3 +233,28 @@ def test_a_world_output_onto_the_recording_read_is_refused(tmp_path, capsys):
     assert (code, out) == (2, "")
     assert err == f"jointbench: --world {world}: cannot be written: it is the recording read\n"
     assert path.read_bytes() == KNEE.read_bytes()
+
+
+def test_a_vicon_nexus_csv_export_is_named_as_such(tmp_path):
+    """pandas' "Error tokenizing data. C error: Expected 1 fields in line 3, saw 8" was all a
+    lab's commonest CSV was answered with."""
+    path = tmp_path / "trial.csv"
+    path.write_text(
+        "Trajectories\n100\n,,Sub01:A,,,Sub01:B,,\nFrame,Sub Frame,X,Y,Z,X,Y,Z\n"
+        ",,mm,mm,mm,mm,mm,mm\n1,0,1.5,2.5,3.5,4.5,5.5,6.5\n"
+    )
+    assert _refusal(path) == (
+        f"{path}: line 1, 'Trajectories': a Vicon Nexus CSV export (sections of one row per "
+        "frame, three columns per marker), not the CSV jointbench reads (one row per frame and "
+        "marker: frame, marker, x, y, z); export the trial as C3D or TRC"
+    )
+
+
+def test_a_csv_of_one_row_per_frame_is_shown_the_layout_read(tmp_path):
+    path = tmp_path / "wide.csv"
+    path.write_text("frame,A_x,A_y,A_z\n0,1.5,2.5,3.5\n")
+    assert _refusal(path) == (
+        f"{path}: missing columns ['marker', 'x', 'y', 'z']; the header names ['frame', 'A_x', "
+        "'A_y', 'A_z']; jointbench reads one row per frame and marker: frame, marker, x, y, z "
+        "[mm]"
+    )

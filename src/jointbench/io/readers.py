@@ -558,6 +558,7 @@ def read_csv(path: str | Path) -> Recording:
     """
     path = _check_file(path)
     text = _read_text(path, "CSV")
+    _check_not_nexus(text, path)
     try:
         # The marker column is text as written: no type inference ("01" stays "01") and no
         # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
@@ -589,7 +590,8 @@ def read_csv(path: str | Path) -> Recording:
     if missing:
         # The names as written: a space or another separator is what tells them apart.
         raise ValueError(
-            f"{path}: missing columns {sorted(missing)}; the header names {list(table.columns)}"
+            f"{path}: missing columns {sorted(missing)}; the header names {list(table.columns)}; "
+            "jointbench reads one row per frame and marker: frame, marker, x, y, z [mm]"
         )
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
@@ -630,6 +632,25 @@ def read_csv(path: str | Path) -> Recording:
         float
     )
     return _no_repeated_frames(Recording(tuple(labels), markers, None, str(path), first_frame))
+
+
+#: The first lines of the sections of a Vicon Nexus CSV export.
+_NEXUS_SECTIONS = ("Trajectories", "Devices", "Joints", "Segments", "Model Outputs")
+
+
+def _check_not_nexus(text: str, path: Path) -> None:
+    """``ValueError`` when ``text``, the CSV file ``path``, is a Vicon Nexus export: its first
+    line a section's name (:data:`_NEXUS_SECTIONS`), then the rate, the labels and one row per
+    frame of three columns per marker, which pandas refuses as rows of more fields than the
+    first line's, naming neither the layout nor a remedy."""
+    first = text.split("\n", 1)[0].strip().strip(",").strip()
+    if first not in _NEXUS_SECTIONS:
+        return
+    raise ValueError(
+        f"{path}: line 1, {first!r}: a Vicon Nexus CSV export (sections of one row per frame, "
+        "three columns per marker), not the CSV jointbench reads (one row per frame and marker:"
+        " frame, marker, x, y, z); export the trial as C3D or TRC"
+    )
 
 
 def _no_repeated_frames(recording: Recording) -> Recording:
