@@ -117,11 +117,15 @@ class Recording:
                 f"{self.source}: markers must be (n_frames, {len(labels)}, 3) for "
                 f"{len(labels)} labels, got shape {markers.shape}"
             )
-        seen: set[str] = set()
-        for label in labels:
+        seen: dict[str, int] = {}
+        for i, label in enumerate(labels):
             if label in seen:
-                raise ValueError(f"{self.source}: marker label {label!r} appears twice")
-            seen.add(label)
+                raise ValueError(
+                    f"{self.source}: markers {seen[label] + 1} and {i + 1} (of {len(labels)}) "
+                    f"are both labelled {label!r}; each marker needs a label of its own "
+                    "(relabel them, or export the trial without unlabelled trajectories)"
+                )
+            seen[label] = i
         if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ValueError(f"{self.source}: frame rate must be positive, got {self.rate_hz!r}")
         markers.setflags(write=False)
