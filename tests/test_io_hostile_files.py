@@ -269,3 +269,15 @@ def test_a_label_written_twice_is_refused_naming_both_markers(tmp_path):
         f"{path}: markers 2 and 3 (of 4) are both labelled ''; each marker needs a label of its "
         "own (relabel them, or export the trial without unlabelled trajectories)"
     )
+
+
+@pytest.mark.parametrize("kind", ["center", "axis"])
+def test_one_frame_to_fit_is_refused_as_one_frame(capsys, kind):
+    """A range of one frame was refused as markers that "do not move: every marker stays at
+    one point in every frame", of markers the trial shows moving."""
+    code, _, err = run(
+        capsys, "fit", str(KNEE), "--kind", kind, "--reference", THIGH, "--moving", SHANK,
+        "--frames", "500:501",
+    )  # fmt: skip
+    assert code == 2
+    assert err.endswith(": markers has 1 frame: no motion to fit a centre or an axis to\n")
