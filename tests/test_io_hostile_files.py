@@ -4,6 +4,8 @@ output path that cannot be written, each refused naming the file and what is wro
 
 from __future__ import annotations
 
+import struct
+
 import ezc3d
 import numpy as np
 import pytest
@@ -281,3 +283,27 @@ def test_one_frame_to_fit_is_refused_as_one_frame(capsys, kind):
     )  # fmt: skip
     assert code == 2
     assert err.endswith(": markers has 1 frame: no motion to fit a centre or an axis to\n")
+
+
+def _c3d_at_rate(path, rate):
+    """A C3D of three markers whose ``POINT:RATE`` and header rate are ``rate`` [Hz] (0 or
+    negative: ezc3d writes none such, so both floats are set in the file)."""
+    markers = np.random.default_rng(0).uniform(10.0, 100.0, size=(20, 3, 3))
+    content = bytearray(write_c3d(path, ("A", "B", "C"), markers).read_bytes())
+    # A parameter: its group (POINT is 1), its name, the offset to the next (2 bytes), its
+    # type (4: float), its dimensions (0: a scalar) and then its value.
+    value = content.index(b"\x01RATE\t\x00\x04\x00") + 9
+    content[value : value + 4] = struct.pack("<f", rate)
+    content[20:24] = struct.pack("<f", rate)  # the header's 11th and 12th words
+    path.write_bytes(bytes(content))
+    return path
+
+
+def test_a_c3d_frame_rate_of_0_is_no_rate_stated(tmp_path):
+    assert read(_c3d_at_rate(tmp_path / "rate.c3d", 0.0)).rate_hz is None
+
+
+def test_a_negative_c3d_frame_rate_is_refused_naming_it(tmp_path):
+    """It was read as a rate not stated, as 0 is."""
+    path = _c3d_at_rate(tmp_path / "rate.c3d", -100.0)
+    assert _refusal(path) == f"{path}: POINT:RATE -100 is not a frame rate (frames per second)"

@@ -122,14 +122,23 @@ def read_c3d(path: str | Path) -> Recording:
     residuals = c3d["data"]["meta_points"]["residuals"]
     if residuals.size:
         markers[np.transpose(residuals[0]) < 0] = np.nan
-    rate = float(c3d["header"]["points"]["frame_rate"])
+    rate = _c3d_rate(float(c3d["header"]["points"]["frame_rate"]), path)
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
     return _no_repeated_frames(
-        Recording(
-            tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
-        )
+        Recording(tuple(labels), markers, rate, str(path), first, units.strip())
     )
+
+
+def _c3d_rate(rate: float, path: Path) -> float | None:
+    """The C3D file ``path``'s point rate ``rate`` [Hz], ``None`` for 0, the rate of a file
+    that states none; ``ValueError`` naming ``POINT:RATE`` for a negative or infinite one,
+    which no recording has, as a TRC's ``DataRate`` is refused (:func:`_trc_rate`)."""
+    if rate == 0:
+        return None
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"{path}: POINT:RATE {rate:g} is not a frame rate (frames per second)")
+    return rate
 
 
 def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
