@@ -1,6 +1,8 @@
 """Files a lab meets that are not what their name or header says: a binary file under a text
-extension, a C3D of more frames than its parameters count, one with no markers at all, and an
-output path that cannot be written, each refused naming the file and what is wrong with it."""
+extension or a text file zero-filled past a cut, a Vicon Nexus export, a C3D of more or fewer
+frames than its header and parameters count, one with no markers, a rate no recording has, a
+TRC whose times leave its rate, labels written twice or mistyped, one frame to fit, and an
+output path that cannot be written: each refused naming the file and what is wrong with it."""
 
 from __future__ import annotations
 
