@@ -145,8 +145,14 @@ def test_a_file_cut_right_after_a_separator_of_its_last_line_is_refused(
 
 
 def _three_decimals(text: str) -> str:
-    """``text`` with every coordinate written to three decimals, as most exporters write them."""
-    return re.sub(r"(?<![\d.])(\d+)\.(\d)(?![\d.])", r"\g<1>.\g<2>25", text)
+    """``text`` with every coordinate written to three decimals, as most exporters write them;
+    a TRC row's ``Frame#`` and ``Time``, its first two fields, as they are."""
+    lines = []
+    for line in text.split("\n"):
+        *kept, rest = line.split("\t", 2) if line.count("\t") >= 2 else [line]
+        rest = re.sub(r"(?<![\d.])(\d+)\.(\d)(?![\d.])", r"\g<1>.\g<2>25", rest)
+        lines.append("\t".join([*kept, rest]))
+    return "\n".join(lines)
 
 
 @pytest.mark.parametrize("kept", [4, 3, 2, 1], ids=["2.52", "2.5", "2.", "2"])

@@ -472,6 +472,26 @@ def _check_bootstrap_options(args: argparse.Namespace) -> None:
     )
 
 
+def _check_writable(path: Path | None, option: str, source: Path) -> None:
+    """``ValueError`` naming ``option`` and ``path`` (``None``: not asked for) when the output
+    cannot be written there: a folder, in a folder that does not exist, without permission, or
+    the file ``source``, the recording read, which it would overwrite. Checked before the fit,
+    which may take minutes, and whose table would be lost with it."""
+    if path is None:
+        return
+    if path.is_file() and source.is_file() and path.samefile(source):
+        reason = "it is the recording read"
+    elif path.is_dir():
+        reason = "it is a folder"
+    elif not path.parent.is_dir():
+        reason = f"its folder {path.parent} does not exist"
+    elif not os.access(path if path.exists() else path.parent, os.W_OK):
+        reason = "no permission to write it"
+    else:
+        return
+    raise ValueError(f"{option} {path}: cannot be written: {reason}")
+
+
 def _fit(args: argparse.Namespace) -> int:
     # The config, the method name and the bootstrap's options first: a mistake in any stops
     # before the file is read.
@@ -479,6 +499,7 @@ def _fit(args: argparse.Namespace) -> int:
         _open_run(args)
     names = _method_names(args.kind, args.method)
     _check_bootstrap_options(args)
+    _check_writable(args.world, "--world", args.file)
     recording = read(args.file)
     moving = _labels(args.moving)
     reference = _labels(args.reference)

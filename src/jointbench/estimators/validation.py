@@ -278,6 +278,9 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
             f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; if these "
             f"are gaps, {_GAP_ADVICE} (it reads (0, 0, 0) as a gap)"
         )
+    if failure == _STILL and array.shape[0] == 1:
+        # No motion is seen in one frame, and none is refused: the markers may well move.
+        raise ValueError(f"{name} has 1 frame: no motion to fit a centre or an axis to")
     if failure == _STILL:
         raise ValueError(f"{name} do not move: every marker stays at one point in every frame")
     if failure == _STRAIGHT:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import codecs
 import csv
 import io
 import math
@@ -29,12 +30,14 @@ def _check_file(path: str | Path) -> Path:
     return path
 
 
-def _read_text(path: Path) -> str:
-    """The text of ``path`` decoded as UTF-8 (a byte-order mark dropped); ``ValueError`` naming
-    the line and the byte that is not UTF-8. No other encoding is guessed: a Latin-1 or
+def _read_text(path: Path, kind: str) -> str:
+    """The text of ``path``, a ``kind`` (``"TRC"``, ``"CSV"``) file, decoded as UTF-8 (a
+    byte-order mark dropped); ``ValueError`` naming the line and the byte that is not UTF-8, or
+    a binary file (:func:`_check_not_binary`). No other encoding is guessed: a Latin-1 or
     Windows-1252 label read as UTF-8 with replacement characters would be a label nobody can
     type, and one read as Latin-1 from a Windows-1252 file would be another marker's name."""
     content = path.read_bytes()
+    _check_not_binary(content, path, kind)
     try:
         return content.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -44,6 +47,42 @@ def _read_text(path: Path) -> str:
             "file) is not UTF-8 text; save the file as UTF-8 (from Latin-1: "
             "iconv -f latin1 -t utf-8)"
         ) from None
+
+
+#: Bytes no text file holds: the control characters but tab, line feed, vertical tab, form
+#: feed, carriage return and the end-of-file mark (0x1a) some DOS programs end a file with.
+_BINARY_BYTE = re.compile(rb"[\x00-\x08\x0e-\x19\x1b-\x1f]")
+
+
+def _check_not_binary(content: bytes, path: Path, kind: str) -> None:
+    """``ValueError`` when ``content``, the bytes of ``path`` read as a ``kind`` text file,
+    holds a control character no text holds: a C3D file (its first byte the parameters' block,
+    a control character, its second 0x50) under a text extension, named so, or another
+    program's binary format, naming the first such byte (0-based). Read as text, such a file
+    would be refused as text of another encoding, a remedy no binary file takes. Text that
+    ends in zero bytes only was cut short and zero-filled, and is refused as such. Text in
+    UTF-16, whose byte-order mark says so, is text, whose zero bytes are left to the UTF-8
+    refusal."""
+    found = _BINARY_BYTE.search(content)
+    if found is None or content.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return
+    if not content[found.start() :].strip(b"\x00"):
+        line = content.count(b"\n", 0, found.start()) + 1
+        raise ValueError(
+            f"{path}: the file ends in {len(content) - found.start()} zero bytes, from byte "
+            f"{found.start()} (line {line}) on: it was cut short there and filled with zeros, as "
+            "a crash or a full disk leaves a file"
+        )
+    if len(content) > 1 and content[0] < 0x20 and content[1] == 0x50:
+        raise ValueError(
+            f"{path}: a binary file, not {kind} text: its first bytes are a C3D file's; name it "
+            ".c3d"
+        )
+    raise ValueError(
+        f"{path}: a binary file, not {kind} text: byte {found.start()} is "
+        f"0x{content[found.start()]:02x}, a control character no text holds (a spreadsheet, or "
+        f"another program's own format? export it as {kind})"
+    )
 
 
 def read(path: str | Path) -> Recording:
@@ -83,18 +122,29 @@ def read_c3d(path: str | Path) -> Recording:
     residuals = c3d["data"]["meta_points"]["residuals"]
     if residuals.size:
         markers[np.transpose(residuals[0]) < 0] = np.nan
-    rate = float(c3d["header"]["points"]["frame_rate"])
+    rate = _c3d_rate(float(c3d["header"]["points"]["frame_rate"]), path)
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
     return _no_repeated_frames(
-        Recording(
-            tuple(labels), markers, rate if rate > 0 else None, str(path), first, units.strip()
-        )
+        Recording(tuple(labels), markers, rate, str(path), first, units.strip())
     )
 
 
+def _c3d_rate(rate: float, path: Path) -> float | None:
+    """The C3D file ``path``'s point rate ``rate`` [Hz], ``None`` for 0, the rate of a file
+    that states none; ``ValueError`` naming ``POINT:RATE`` for a negative or infinite one,
+    which no recording has, as a TRC's ``DataRate`` is refused (:func:`_trc_rate`)."""
+    if rate == 0:
+        return None
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"{path}: POINT:RATE {rate:g} is not a frame rate (frames per second)")
+    return rate
+
+
 def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
-    """``ValueError`` when the file ends before the frames its header promises.
+    """``ValueError`` when the file ends before the frames its header promises (a last frame of
+    65535, the most a header counts, promises at least the frames up to it), or holds more
+    than a long file's parameters count (:func:`_check_c3d_long`).
 
     ezc3d reads the frames that are there and rewrites its header and ``POINT:FRAMES`` to
     match, so the promise is read from the file's own header block: the number of points, of
@@ -103,22 +153,49 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     samples, each value a float32 (``POINT:SCALE`` < 0) or an int16.
     """
     n_points, n_analog, first, last, data_block = _c3d_header(path)
-    if last == 0xFFFF:  # a long file: the header cannot hold its last frame
-        return
-    frames = last - first + 1
     scale = c3d["parameters"]["POINT"].get("SCALE", {"value": [-1.0]})["value"]
     word = 4 if len(scale) == 0 or float(scale[0]) < 0 else 2
     start = (data_block - 1) * 512
     frame_bytes = word * (4 * n_points + n_analog)
     size = path.stat().st_size
-    if frames <= 0 or size >= start + frames * frame_bytes:
+    # A last frame of 65535, the most the header counts, promises that many or more.
+    more = " or more" if last == 0xFFFF else ""
+    frames = last - first + 1
+    if frames > 0 and size < start + frames * frame_bytes:
+        complete = max(0, (size - start) // frame_bytes)
+        raise ValueError(
+            f"{path}: truncated C3D file: its header promises frames {first} to {last}{more} "
+            f"({frames} frames{more}) of {n_points} points and {n_analog} analog samples each "
+            f"({start + frames * frame_bytes} bytes{more}), but the file has {size} bytes: "
+            f"{complete} complete frames"
+        )
+    if more:
+        _check_c3d_long(c3d, path, start, frame_bytes, first)
+
+
+def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, first: int) -> None:
+    """``ValueError`` when the C3D file ``path``, whose header's last frame is 65535, the most
+    it can count, holds frames past those ezc3d read (``c3d``): a file whose parameters count
+    no more (``POINT:FRAMES`` as an integer, no ``POINT:LONG_FRAMES`` or ``TRIAL`` group, as
+    ezc3d itself writes one), whose later frames would be left out unseen. Its frames start at
+    byte ``start``, take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte
+    block of padding may follow them (ezc3d writes a whole one where they end a block), so the
+    frames past them are counted within that."""
+    header = c3d["header"]["points"]
+    read = int(header["last_frame"]) - int(header["first_frame"]) + 1
+    extra = path.stat().st_size - start - read * frame_bytes
+    if frame_bytes == 0 or extra <= 512:
         return
-    complete = max(0, (size - start) // frame_bytes)
+    fewest, most = -(-(extra - 512) // frame_bytes), extra // frame_bytes
+    more = f"{fewest}" if fewest == most else f"{fewest} to {most}"
+    n_points, n_analog = _c3d_header(path)[:2]
     raise ValueError(
-        f"{path}: truncated C3D file: its header promises frames {first} to {last} ({frames} "
-        f"frames) of {n_points} points and {n_analog} analog samples each "
-        f"({start + frames * frame_bytes} bytes), but the file has {size} bytes: "
-        f"{complete} complete frames"
+        f"{path}: the file holds {extra} bytes past the {read} frames its header and parameters "
+        f"count, room for {more} more frames of {n_points} points and "
+        f"{n_analog} analog samples each (a C3D's header counts at most 65535 frames; "
+        "POINT:FRAMES, POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD counts more, and this "
+        f"file's do not): frames from {first + read} on would be left out unread; export the "
+        "trial as TRC, or in parts"
     )
 
 
@@ -172,7 +249,7 @@ def read_trc(path: str | Path) -> Recording:
     fixed columns (:func:`_trc_labels`) and no row may write past the labelled markers
     (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`)."""
     path = _check_file(path)
-    lines = _read_text(path).splitlines()
+    lines = _read_text(path, "TRC").splitlines()
     if len(lines) < 6:
         raise ValueError(f"{path}: too short for a TRC file (needs 5 header lines and data)")
     keys, values = lines[1].split("\t"), lines[2].split("\t")
@@ -214,9 +291,49 @@ def read_trc(path: str | Path) -> Recording:
                     ) from None
     markers = markers.reshape(len(rows), len(labels), 3) * to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
+    _check_trc_times([row[1] for row in rows], [n for n, _ in data], numbers, rate_hz, path)
     return _no_repeated_frames(
         Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
     )
+
+
+def _check_trc_times(
+    times: list[str], lines: list[int], numbers: list[int], rate: float | None, path: Path
+) -> None:
+    """``ValueError`` naming the line of the first row of the TRC file ``path`` whose ``Time``
+    (``times``, each row's text; ``lines`` their 1-based lines, ``numbers`` their ``Frame#``)
+    is not where its frame falls at the header's ``DataRate`` ``rate`` [Hz], counted from the
+    first row that writes a time: by more than half a frame, beyond the rounding of the two
+    times as written. Recordings of different rates joined, or a wrong ``DataRate``, would
+    otherwise read as frames at one rate. Without a rate, and in a row whose time is empty or
+    no number, there is nothing to compare."""
+    if rate is None:
+        return
+    seconds = pd.to_numeric(pd.Series(times, dtype=object), errors="coerce").to_numpy(float)
+    timed = np.flatnonzero(np.isfinite(seconds))
+    if timed.size == 0:
+        return
+    first = int(timed[0])
+    expected = seconds[first] + (np.asarray(numbers) - numbers[first]) / rate
+    # Only rows off by over half a frame can be off beyond their rounding: the rest pass
+    # unread, so that a long file's rows are not each read again as text.
+    for i in np.flatnonzero(np.abs(seconds - expected) > 0.5 / rate):
+        text, first_text = times[i].strip(), times[first].strip()
+        if abs(seconds[i] - expected[i]) > 0.5 / rate + _rounding(first_text) + _rounding(text):
+            raise ValueError(
+                f"{path}: line {lines[i]}, field Time: {text} s, where frame {numbers[i]} falls "
+                f"at {expected[i]:.6g} s at the header's DataRate of {rate:g} Hz (frame "
+                f"{numbers[first]} at {first_text} s, line {lines[first]}): the frames are not "
+                "at that rate; a wrong DataRate, or recordings of different rates joined?"
+            )
+
+
+def _rounding(text: str) -> float:
+    """Half the last written digit's unit of the number ``text`` (``0.0005`` for
+    ``"0.125"``): how far rounding may have put it from its value; 0 for an exponent form,
+    whose digits are taken as exact."""
+    decimals = _decimals(text)
+    return 0.0 if decimals is None else 0.5 * 10.0**-decimals
 
 
 def _trc_labels(line: str, path: Path) -> list[str]:
@@ -449,7 +566,8 @@ def read_csv(path: str | Path) -> Recording:
     its line. The file is UTF-8 (:func:`_read_text`).
     """
     path = _check_file(path)
-    text = _read_text(path)
+    text = _read_text(path, "CSV")
+    _check_not_nexus(text, path)
     try:
         # The marker column is text as written: no type inference ("01" stays "01") and no
         # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
@@ -481,7 +599,8 @@ def read_csv(path: str | Path) -> Recording:
     if missing:
         # The names as written: a space or another separator is what tells them apart.
         raise ValueError(
-            f"{path}: missing columns {sorted(missing)}; the header names {list(table.columns)}"
+            f"{path}: missing columns {sorted(missing)}; the header names {list(table.columns)}; "
+            "jointbench reads one row per frame and marker: frame, marker, x, y, z [mm]"
         )
     if table.empty:
         raise ValueError(f"{path}: no samples: the file has a header but no data rows")
@@ -522,6 +641,25 @@ def read_csv(path: str | Path) -> Recording:
         float
     )
     return _no_repeated_frames(Recording(tuple(labels), markers, None, str(path), first_frame))
+
+
+#: The first lines of the sections of a Vicon Nexus CSV export.
+_NEXUS_SECTIONS = ("Trajectories", "Devices", "Joints", "Segments", "Model Outputs")
+
+
+def _check_not_nexus(text: str, path: Path) -> None:
+    """``ValueError`` when ``text``, the CSV file ``path``, is a Vicon Nexus export: its first
+    line a section's name (:data:`_NEXUS_SECTIONS`), then the rate, the labels and one row per
+    frame of three columns per marker, which pandas refuses as rows of more fields than the
+    first line's, naming neither the layout nor a remedy."""
+    first = text.split("\n", 1)[0].strip().strip(",").strip()
+    if first not in _NEXUS_SECTIONS:
+        return
+    raise ValueError(
+        f"{path}: line 1, {first!r}: a Vicon Nexus CSV export (sections of one row per frame, "
+        "three columns per marker), not the CSV jointbench reads (one row per frame and marker:"
+        " frame, marker, x, y, z); export the trial as C3D or TRC"
+    )
 
 
 def _no_repeated_frames(recording: Recording) -> Recording:

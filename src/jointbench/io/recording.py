@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,6 +47,21 @@ def _near_labels(asked: list[str], labels: tuple[str, ...]) -> str:
         f"; the file writes {', '.join(pairs)} (labels are matched as written: case, spaces "
         "and a subject prefix count)"
     )
+
+
+def _close_labels(asked: list[str], labels: tuple[str, ...]) -> str:
+    """For a refusal of the ``asked`` labels, up to three ``labels`` of the file spelled much as
+    each is (:func:`difflib.get_close_matches`, a similarity of 0.75 or more), most alike
+    first, for those :func:`_near_labels` names none: ``"; close to 'RTH1': 'RTHI1'"``, or
+    ``""``. A typing slip is then shown, not left to be found among the file's labels."""
+    parts = []
+    for name in asked:
+        if any(_bare(label) == _bare(name) for label in labels):
+            continue
+        close = difflib.get_close_matches(name, labels, n=3, cutoff=0.75)
+        if close:
+            parts.append(f"; close to {name!r}: {', '.join(map(repr, close))}")
+    return "".join(parts)
 
 
 def parse_frames(text: str, n_frames: int, first_frame: int = 0) -> slice:
@@ -101,11 +117,15 @@ class Recording:
                 f"{self.source}: markers must be (n_frames, {len(labels)}, 3) for "
                 f"{len(labels)} labels, got shape {markers.shape}"
             )
-        seen: set[str] = set()
-        for label in labels:
+        seen: dict[str, int] = {}
+        for i, label in enumerate(labels):
             if label in seen:
-                raise ValueError(f"{self.source}: marker label {label!r} appears twice")
-            seen.add(label)
+                raise ValueError(
+                    f"{self.source}: markers {seen[label] + 1} and {i + 1} (of {len(labels)}) "
+                    f"are both labelled {label!r}; each marker needs a label of its own "
+                    "(relabel them, or export the trial without unlabelled trajectories)"
+                )
+            seen[label] = i
         if self.rate_hz is not None and not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ValueError(f"{self.source}: frame rate must be positive, got {self.rate_hz!r}")
         markers.setflags(write=False)
@@ -121,7 +141,13 @@ class Recording:
         return Path(self.source).name
 
     def index(self, labels: str | list[str] | tuple[str, ...]) -> list[int]:
-        """Column indices of ``labels`` (a list, or one comma-separated string)."""
+        """Column indices of ``labels`` (a list, or one comma-separated string); a recording
+        without markers (an analog-only C3D) refuses any, saying so."""
+        if not self.labels:
+            raise ValueError(
+                f"{self.source}: the file holds no markers (no 3D points: only analog "
+                "channels?); a fit needs marker trajectories"
+            )
         if isinstance(labels, str):
             labels = [label.strip() for label in labels.split(",") if label.strip()]
         if not labels:
@@ -132,6 +158,7 @@ class Recording:
             raise ValueError(
                 f"{self.source}: no marker labelled {', '.join(map(repr, unknown))}; "
                 f"labels in the file: {', '.join(self.labels)}{_near_labels(unknown, self.labels)}"
+                f"{_close_labels(unknown, self.labels)}"
             )
         if len(set(labels)) != len(labels):
             raise ValueError(f"{self.source}: a label is named twice in {list(labels)}")
