@@ -74,10 +74,10 @@ def _write(tmp_path, study: str):
     return dataset, blind, trials
 
 
-def _unplaced(blind, markers):
-    """``markers`` ``(n_trials, n_frames, n_markers, 3)`` of the blind file ``blind`` moved
-    back by each trial's placement."""
-    placements = dataset_placements(blind, CONFIG["base_seed"])
+def _unplaced(dataset, markers):
+    """``markers`` ``(n_trials, n_frames, n_markers, 3)`` of the blind copy of ``dataset``
+    moved back by each trial's placement."""
+    placements = dataset_placements(dataset, CONFIG["base_seed"])
     offsets = markers - placements.translations[:, None, None, :]
     return np.einsum("nji,nfmj->nfmi", placements.rotations, offsets)
 
@@ -90,7 +90,7 @@ def test_a_blind_file_holds_the_markers_and_nothing_that_places_the_truth(tmp_pa
     dataset, blind, trials = _write(tmp_path, study)
     read, metadata = read_dataset(blind)
     for name, markers in trials.segments.items():
-        np.testing.assert_allclose(_unplaced(blind, read.segments[name]), markers, atol=1e-9)
+        np.testing.assert_allclose(_unplaced(dataset, read.segments[name]), markers, atol=1e-9)
     assert read.truth is None and read.parameters == {}
     assert set(metadata) == {*BLIND_KEYS, "provenance"}
     assert metadata["condition"] == read_metadata(dataset)["condition"]
@@ -335,6 +335,49 @@ method = Path(estimates).parent.name
 answers = answers.assign(**condition, method=method, converged=True, iterations=0, seconds=0.0)
 answers.assign(status="ok").to_parquet(estimates, index=False)
 """
+
+# A cheat by public numbers: the program draws each trial's placement from the trial's seed
+# (the config's base seed, the study, condition and trial, all beside its blind copy) as the
+# package's module draws its stream, and answers the protocol's centre placed by it.
+SEEDED = (
+    """
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+
+from jointbench.configuration.seeds import trial_seed
+from jointbench.running import placement
+from jointbench.simulate.cmc import CmcProtocol
+
+blind, estimates = snakemake.input[0], snakemake.output[0]
+meta = json.loads(pq.read_schema(blind).metadata[b"jointbench"])
+base = snakemake.config["base_seed"]
+half = snakemake.config["blind_placement"]["translation_mm"]
+centre = np.asarray(CmcProtocol().center_mm, dtype=float)
+rows = []
+for trial in sorted(pd.read_parquet(blind)["trial"].unique()):
+    seed = trial_seed(base, meta["study"], meta["condition"], int(trial))
+    rng = np.random.default_rng([seed, placement._STREAM])
+    quaternion = rng.standard_normal(4)
+    rotation = placement._rotation(quaternion / np.linalg.norm(quaternion))
+    rows.append([int(trial), *(rotation @ centre + rng.uniform(-half, half, 3))])
+answers = pd.DataFrame(rows, columns=["trial", "center_x", "center_y", "center_z"])
+"""
+    + _ANSWERED
+)
+
+
+@pytest.mark.pipeline
+def test_a_rule_drawing_the_placements_from_the_public_seed_ranks_last(tmp_path):
+    """The placements depend on the markers as simulated, not on the public seed alone: the
+    cheat's answers are a constant moved by motions it did not guess."""
+    error = _collected_with(tmp_path, "seeded", SEEDED, ["seeded", "LM"])
+    assert (error["seeded"] > 20.0).all(), error["seeded"]
+    assert error["seeded"].min() > error.drop(index="seeded").max()
+
 
 # A cheat by paths its rule does not declare: the program opens the full dataset beside the
 # blind copy it was given, and the copy's placements, and answers the truth as placed.
