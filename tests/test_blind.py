@@ -9,6 +9,7 @@ import dataclasses
 import json
 import os
 import re
+import shlex
 
 import numpy as np
 import pandas as pd
@@ -379,6 +380,17 @@ def test_a_rule_drawing_the_placements_from_the_public_seed_ranks_last(tmp_path)
     assert error["seeded"].min() > error.drop(index="seeded").max()
 
 
+# The end of a probing script: what each attempt gave (``tried``) written beside its estimates,
+# and the centroid of each trial's markers as its answers.
+_TOLD_AND_CENTROID = (
+    """
+(mine / (blind.stem + ".json")).write_text(json.dumps(tried))
+answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
+answers.columns = ["trial", "center_x", "center_y", "center_z"]
+"""
+    + _ANSWERED
+)
+
 # A cheat by paths its rule does not declare: the program opens the full dataset beside the
 # blind copy it was given, and the copy's placements, and answers the truth as placed.
 PEEK = (
@@ -479,12 +491,8 @@ with tempfile.TemporaryFile("w+") as temporary:
     temporary.write("its own")
     temporary.seek(0)
     tried["its own temporary file"] = temporary.read()
-(mine / (blind.stem + ".json")).write_text(json.dumps(tried))
-
-answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
-answers.columns = ["trial", "center_x", "center_y", "center_z"]
 """
-    + _ANSWERED
+    + _TOLD_AND_CENTROID
 )
 
 
@@ -515,6 +523,63 @@ def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
     refused = {name: "Permission denied" in outcome for name, outcome in tried.items()}
     assert all(refused.values()), tried
     assert set(error.index.get_level_values("method")) == {"LS", *external}
+
+
+# A program reaching into another external estimator's folders: reading its answers to copy
+# them, writing over them to spoil its rank, or planting a file among them. What each attempt
+# gave (an error's text, or "read"/"written"), beside its own estimates (the centroid's).
+TAMPER = (
+    """
+import json
+import os
+from pathlib import Path
+
+import pandas as pd
+import pyarrow.parquet as pq
+
+blind, estimates = Path(snakemake.input[0]), Path(snakemake.output[0])
+mine, results = estimates.parent, Path("results")
+theirs = results / "estimates" / "cmc" / "LM"
+their_log = results / "logs" / "estimate" / "cmc" / "LM"
+
+
+def attempt(act, done):
+    try:
+        act()
+    except OSError as error:
+        return str(error)
+    return done
+
+
+tried = {
+    "listing its estimates": attempt(lambda: os.listdir(theirs), "read"),
+    "planting among its estimates": attempt(
+        lambda: (theirs / (blind.stem + ".planted")).write_text("x"), "written"
+    ),
+    "planting in its log folder": attempt(
+        lambda: (their_log / (blind.stem + ".planted")).write_text("x"), "written"
+    ),
+}
+"""
+    + _TOLD_AND_CENTROID
+)
+
+
+@pytest.mark.pipeline
+@_CONFINED
+def test_a_program_cannot_open_another_external_estimators_folders(tmp_path):
+    """Each job of a rule of the user's is confined to its own rule's folders, beside the blind
+    copies and the inputs it declares: an external estimator's program can neither read another
+    one's answers nor write among them or its logs."""
+    # LM's folders, as its jobs leave them, whichever job runs first.
+    for folder in ("estimates/cmc/LM", "logs/estimate/cmc/LM"):
+        (tmp_path / "results" / folder).mkdir(parents=True)
+    error = _collected_with(tmp_path, "tamper", TAMPER, ["LM", "tamper"])
+    (found, *_) = (tmp_path / "results" / "estimates" / "cmc" / "tamper").glob("*.json")
+    tried = json.loads(found.read_text())
+    assert all("Permission denied" in outcome for outcome in tried.values()), tried
+    assert not list((tmp_path / "results").rglob("*.planted"))
+    assert set(error.index.get_level_values("method")) == {"LS", "LM", "tamper"}
 
 
 # A program that rewrites the blind copy it was given in place, its metadata kept (cleaning it,
@@ -581,47 +646,45 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert message.count(said) == 1, message[-3000:]
 
 
-# Started with every Python process of a run (on PYTHONPATH): writes what the workflow hands
-# its jobs of external estimators in the environment, as the process ends, to the file named.
-_HANDED_DOWN = """
-import atexit, os
-def _write():
-    with open({file!r}, "a") as written:
-        written.write(os.environ.get("JOINTBENCH_CONFINED", "") + "\\n")
-atexit.register(_write)
-"""
-
-
-def _handed_down(tmp_path, monkeypatch, grid) -> str:
+def _handed_down(tmp_path, grid) -> dict[str, dict]:
     """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
-    its jobs in :data:`landlock.VARIABLE`."""
+    the jobs of each rule of the user's in :data:`landlock.VARIABLE`, as the shell each rule's
+    jobs run with sets it (``.snakemake/jointbench/shells/<rule>/bash``), by rule: the text
+    and the confinement it holds."""
     tmp_path.mkdir()
     copy_workflow(tmp_path)
-    shim = tmp_path / "shim"
-    shim.mkdir()
-    written = tmp_path / "handed_down"
-    (shim / "sitecustomize.py").write_text(_HANDED_DOWN.format(file=str(written)))
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(shim), os.environ.get("PYTHONPATH", "")]))
     overlay = _cmc_only(
         tmp_path, estimators=["LS"], external_estimators=["centroid", "LM"], grid=grid
     )
     run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
-    (text,) = set(written.read_text().splitlines())
-    return text
+    handed = {}
+    for shell in (tmp_path / ".snakemake" / "jointbench" / "shells").glob("*/bash"):
+        (line,) = [x for x in shell.read_text().splitlines() if x.startswith(landlock.VARIABLE)]
+        (assignment,) = shlex.split(line)
+        text = assignment.removeprefix(f"{landlock.VARIABLE}=")
+        handed[shell.parent.name] = {"text": text, **json.loads(text)}
+    return handed
 
 
 @pytest.mark.pipeline
-def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path, monkeypatch):
-    """Linux refuses to start a program given an environment variable longer than 128 KiB,
-    which every process of the run inherits: the variable names folders, not each condition's
-    files, and is as long for one condition as for a grid of them."""
+def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path):
+    """Linux refuses to start a program given an environment variable longer than 128 KiB:
+    the variable names folders, not each condition's files, and is as long for one condition
+    as for a grid of them. Each rule of the user's is handed its own folders, not another's."""
     one = {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]}
     many = {"marker_set": ["M", "H"], "rom_deg": [5, 15, 45], "noise_mm": [0.5, 1.0, 2.0]}
-    alone = _handed_down(tmp_path / "one", monkeypatch, one)  # folders of one length
-    grid = _handed_down(tmp_path / "all", monkeypatch, many)
-    assert len(grid) == len(alone) < 4096, grid
-    assert "/results/blind" in grid and "/results/estimates/cmc/LM" in grid, grid
+    alone = _handed_down(tmp_path / "one", one)  # folders of one length
+    grid = _handed_down(tmp_path / "all", many)
+    assert set(grid) == set(alone) >= {"estimate_cmc_LM", "estimate_centroid"}, grid
+    for rule, handed in grid.items():
+        assert len(handed["text"]) == len(alone[rule]["text"]) < 4096, handed
+        assert any(p.endswith("/results/blind") for p in handed["readable"]), handed
+    lm, centroid = grid["estimate_cmc_LM"]["writable"], grid["estimate_centroid"]["writable"]
+    assert any(p.endswith("/results/estimates/cmc/LM") for p in lm), lm
+    assert not any(p.endswith("/results/estimates/cmc/LM") for p in centroid), centroid
+    assert any(p.endswith("/results/estimates/cmc/centroid") for p in centroid), centroid
+    assert not any("centroid" in p for p in lm), lm
 
 
 @pytest.mark.pipeline
