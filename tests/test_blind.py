@@ -582,6 +582,38 @@ def test_a_program_cannot_open_another_external_estimators_folders(tmp_path):
     assert set(error.index.get_level_values("method")) == {"LS", "LM", "tamper"}
 
 
+# A script that runs a shell command inside its job, as Snakemake's shell() does: by the rule's
+# own limited shell, within its job's confinement.
+SHELLING = (
+    """
+import json
+from pathlib import Path
+
+import pandas as pd
+import pyarrow.parquet as pq
+from snakemake.shell import shell
+
+blind, estimates = Path(snakemake.input[0]), Path(snakemake.output[0])
+said = estimates.parent / (blind.stem + ".said")
+shell(f"head -c 4 {blind} > /dev/null && echo from-the-shell > {said}")
+answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
+answers.columns = ["trial", "center_x", "center_y", "center_z"]
+"""
+    + _ANSWERED
+)
+
+
+@pytest.mark.pipeline
+def test_a_script_running_a_shell_command_in_its_job_runs(tmp_path):
+    """The command runs by the rule's own shell, whose keeper keeps the confinement the job's
+    keeper handed down: it reads the blind copy, writes in its rule's folder, and the run goes
+    on."""
+    error = _collected_with(tmp_path, "shelling", SHELLING, ["shelling"])
+    said = list((tmp_path / "results" / "estimates" / "cmc" / "shelling").glob("*.said"))
+    assert said and all(path.read_text() == "from-the-shell\n" for path in said), said
+    assert set(error.index.get_level_values("method")) == {"LS", "shelling"}
+
+
 # A program that rewrites the blind copy it was given in place, its metadata kept (cleaning it,
 # or spoiling it for the external estimators that read it after).
 SPOIL = (
@@ -660,9 +692,8 @@ def _handed_down(tmp_path, grid) -> dict[str, dict]:
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
     handed = {}
     for shell in (tmp_path / ".snakemake" / "jointbench" / "shells").glob("*/bash"):
-        (line,) = [x for x in shell.read_text().splitlines() if x.startswith(landlock.VARIABLE)]
-        (assignment,) = shlex.split(line)
-        text = assignment.removeprefix(f"{landlock.VARIABLE}=")
+        (text,) = re.findall(rf"{landlock.VARIABLE}=('[^']*')", shell.read_text())
+        (text,) = shlex.split(text)
         handed[shell.parent.name] = {"text": text, **json.loads(text)}
     return handed
 

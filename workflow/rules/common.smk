@@ -951,6 +951,10 @@ NOT_CONFINED = (
 RULE_SHELLS = os.path.join(".snakemake", "jointbench", "shells")
 
 
+# How landlock.VARIABLE spells a confinement marked inherited (landlock.confine).
+_INHERITED = '"inherited": true'
+
+
 def _rule_shell(name, confinement):
     """The absolute path of the shell the jobs of the rule ``name`` run with, a script named bash
     (Snakemake gives its prefix to a shell of that name alone) that runs the limited shell
@@ -958,12 +962,17 @@ def _rule_shell(name, confinement):
     rule's jobs get their own. Written where it differs, whole and then moved into place:
     the Snakemake processes of a cluster's jobs load the workflow at once."""
     path = os.path.abspath(os.path.join(RULE_SHELLS, name, "bash"))
+    variable = landlock.VARIABLE
     text = (
         "#!/bin/sh\n"
         f"# The limited shell of the jobs of rule {name}, with what they may open under "
         "results/ (written by workflow/rules/common.smk as the workflow loads).\n"
-        f"{landlock.VARIABLE}={shlex.quote(landlock.encoded(confinement))}\n"
-        f"export {landlock.VARIABLE}\n"
+        "# Within a job (a script's shell() call) the confinement its keeper handed down is\n"
+        "# kept: the job cannot widen it, nor list again what the keeper listed.\n"
+        f'case "${{{variable}-}}" in\n'
+        f"*{shlex.quote(_INHERITED)}*) ;;\n"
+        f"*) {variable}={shlex.quote(landlock.encoded(confinement))}; export {variable} ;;\n"
+        "esac\n"
         f'exec {shlex.quote(timelimit.LIMITED_SHELL)} "$@"\n'
     )
     if os.path.isfile(path) and Path(path).read_text() == text:
