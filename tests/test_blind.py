@@ -9,6 +9,7 @@ import dataclasses
 import json
 import os
 import re
+import shlex
 
 import numpy as np
 import pandas as pd
@@ -74,10 +75,10 @@ def _write(tmp_path, study: str):
     return dataset, blind, trials
 
 
-def _unplaced(blind, markers):
-    """``markers`` ``(n_trials, n_frames, n_markers, 3)`` of the blind file ``blind`` moved
-    back by each trial's placement."""
-    placements = dataset_placements(blind, CONFIG["base_seed"])
+def _unplaced(dataset, markers):
+    """``markers`` ``(n_trials, n_frames, n_markers, 3)`` of the blind copy of ``dataset``
+    moved back by each trial's placement."""
+    placements = dataset_placements(dataset, CONFIG["base_seed"])
     offsets = markers - placements.translations[:, None, None, :]
     return np.einsum("nji,nfmj->nfmi", placements.rotations, offsets)
 
@@ -90,7 +91,7 @@ def test_a_blind_file_holds_the_markers_and_nothing_that_places_the_truth(tmp_pa
     dataset, blind, trials = _write(tmp_path, study)
     read, metadata = read_dataset(blind)
     for name, markers in trials.segments.items():
-        np.testing.assert_allclose(_unplaced(blind, read.segments[name]), markers, atol=1e-9)
+        np.testing.assert_allclose(_unplaced(dataset, read.segments[name]), markers, atol=1e-9)
     assert read.truth is None and read.parameters == {}
     assert set(metadata) == {*BLIND_KEYS, "provenance"}
     assert metadata["condition"] == read_metadata(dataset)["condition"]
@@ -336,6 +337,60 @@ answers = answers.assign(**condition, method=method, converged=True, iterations=
 answers.assign(status="ok").to_parquet(estimates, index=False)
 """
 
+# A cheat by public numbers: the program draws each trial's placement from the trial's seed
+# (the config's base seed, the study, condition and trial, all beside its blind copy) as the
+# package's module draws its stream, and answers the protocol's centre placed by it.
+SEEDED = (
+    """
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+
+from jointbench.configuration.seeds import trial_seed
+from jointbench.running import placement
+from jointbench.simulate.cmc import CmcProtocol
+
+blind, estimates = snakemake.input[0], snakemake.output[0]
+meta = json.loads(pq.read_schema(blind).metadata[b"jointbench"])
+base = snakemake.config["base_seed"]
+half = snakemake.config["blind_placement"]["translation_mm"]
+centre = np.asarray(CmcProtocol().center_mm, dtype=float)
+rows = []
+for trial in sorted(pd.read_parquet(blind)["trial"].unique()):
+    seed = trial_seed(base, meta["study"], meta["condition"], int(trial))
+    rng = np.random.default_rng([seed, placement._STREAM])
+    quaternion = rng.standard_normal(4)
+    rotation = placement._rotation(quaternion / np.linalg.norm(quaternion))
+    rows.append([int(trial), *(rotation @ centre + rng.uniform(-half, half, 3))])
+answers = pd.DataFrame(rows, columns=["trial", "center_x", "center_y", "center_z"])
+"""
+    + _ANSWERED
+)
+
+
+@pytest.mark.pipeline
+def test_a_rule_drawing_the_placements_from_the_public_seed_ranks_last(tmp_path):
+    """The placements depend on the markers as simulated, not on the public seed alone: the
+    cheat's answers are a constant moved by motions it did not guess."""
+    error = _collected_with(tmp_path, "seeded", SEEDED, ["seeded", "LM"])
+    assert (error["seeded"] > 20.0).all(), error["seeded"]
+    assert error["seeded"].min() > error.drop(index="seeded").max()
+
+
+# The end of a probing script: what each attempt gave (``tried``) written beside its estimates,
+# and the centroid of each trial's markers as its answers.
+_TOLD_AND_CENTROID = (
+    """
+(mine / (blind.stem + ".json")).write_text(json.dumps(tried))
+answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
+answers.columns = ["trial", "center_x", "center_y", "center_z"]
+"""
+    + _ANSWERED
+)
+
 # A cheat by paths its rule does not declare: the program opens the full dataset beside the
 # blind copy it was given, and the copy's placements, and answers the truth as placed.
 PEEK = (
@@ -436,12 +491,8 @@ with tempfile.TemporaryFile("w+") as temporary:
     temporary.write("its own")
     temporary.seek(0)
     tried["its own temporary file"] = temporary.read()
-(mine / (blind.stem + ".json")).write_text(json.dumps(tried))
-
-answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
-answers.columns = ["trial", "center_x", "center_y", "center_z"]
 """
-    + _ANSWERED
+    + _TOLD_AND_CENTROID
 )
 
 
@@ -472,6 +523,95 @@ def test_no_way_of_a_program_leads_to_what_its_job_may_not_open(tmp_path):
     refused = {name: "Permission denied" in outcome for name, outcome in tried.items()}
     assert all(refused.values()), tried
     assert set(error.index.get_level_values("method")) == {"LS", *external}
+
+
+# A program reaching into another external estimator's folders: reading its answers to copy
+# them, writing over them to spoil its rank, or planting a file among them. What each attempt
+# gave (an error's text, or "read"/"written"), beside its own estimates (the centroid's).
+TAMPER = (
+    """
+import json
+import os
+from pathlib import Path
+
+import pandas as pd
+import pyarrow.parquet as pq
+
+blind, estimates = Path(snakemake.input[0]), Path(snakemake.output[0])
+mine, results = estimates.parent, Path("results")
+theirs = results / "estimates" / "cmc" / "LM"
+their_log = results / "logs" / "estimate" / "cmc" / "LM"
+
+
+def attempt(act, done):
+    try:
+        act()
+    except OSError as error:
+        return str(error)
+    return done
+
+
+tried = {
+    "listing its estimates": attempt(lambda: os.listdir(theirs), "read"),
+    "planting among its estimates": attempt(
+        lambda: (theirs / (blind.stem + ".planted")).write_text("x"), "written"
+    ),
+    "planting in its log folder": attempt(
+        lambda: (their_log / (blind.stem + ".planted")).write_text("x"), "written"
+    ),
+}
+"""
+    + _TOLD_AND_CENTROID
+)
+
+
+@pytest.mark.pipeline
+@_CONFINED
+def test_a_program_cannot_open_another_external_estimators_folders(tmp_path):
+    """Each job of a rule of the user's is confined to its own rule's folders, beside the blind
+    copies and the inputs it declares: an external estimator's program can neither read another
+    one's answers nor write among them or its logs."""
+    # LM's folders, as its jobs leave them, whichever job runs first.
+    for folder in ("estimates/cmc/LM", "logs/estimate/cmc/LM"):
+        (tmp_path / "results" / folder).mkdir(parents=True)
+    error = _collected_with(tmp_path, "tamper", TAMPER, ["LM", "tamper"])
+    (found, *_) = (tmp_path / "results" / "estimates" / "cmc" / "tamper").glob("*.json")
+    tried = json.loads(found.read_text())
+    assert all("Permission denied" in outcome for outcome in tried.values()), tried
+    assert not list((tmp_path / "results").rglob("*.planted"))
+    assert set(error.index.get_level_values("method")) == {"LS", "LM", "tamper"}
+
+
+# A script that runs a shell command inside its job, as Snakemake's shell() does: by the rule's
+# own limited shell, within its job's confinement.
+SHELLING = (
+    """
+import json
+from pathlib import Path
+
+import pandas as pd
+import pyarrow.parquet as pq
+from snakemake.shell import shell
+
+blind, estimates = Path(snakemake.input[0]), Path(snakemake.output[0])
+said = estimates.parent / (blind.stem + ".said")
+shell(f"head -c 4 {blind} > /dev/null && echo from-the-shell > {said}")
+answers = pd.read_parquet(blind).groupby("trial")[["x", "y", "z"]].mean().reset_index()
+answers.columns = ["trial", "center_x", "center_y", "center_z"]
+"""
+    + _ANSWERED
+)
+
+
+@pytest.mark.pipeline
+def test_a_script_running_a_shell_command_in_its_job_runs(tmp_path):
+    """The command runs by the rule's own shell, whose keeper keeps the confinement the job's
+    keeper handed down: it reads the blind copy, writes in its rule's folder, and the run goes
+    on."""
+    error = _collected_with(tmp_path, "shelling", SHELLING, ["shelling"])
+    said = list((tmp_path / "results" / "estimates" / "cmc" / "shelling").glob("*.said"))
+    assert said and all(path.read_text() == "from-the-shell\n" for path in said), said
+    assert set(error.index.get_level_values("method")) == {"LS", "shelling"}
 
 
 # A program that rewrites the blind copy it was given in place, its metadata kept (cleaning it,
@@ -538,47 +678,44 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert message.count(said) == 1, message[-3000:]
 
 
-# Started with every Python process of a run (on PYTHONPATH): writes what the workflow hands
-# its jobs of external estimators in the environment, as the process ends, to the file named.
-_HANDED_DOWN = """
-import atexit, os
-def _write():
-    with open({file!r}, "a") as written:
-        written.write(os.environ.get("JOINTBENCH_CONFINED", "") + "\\n")
-atexit.register(_write)
-"""
-
-
-def _handed_down(tmp_path, monkeypatch, grid) -> str:
+def _handed_down(tmp_path, grid) -> dict[str, dict]:
     """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
-    its jobs in :data:`landlock.VARIABLE`."""
+    the jobs of each rule of the user's in :data:`landlock.VARIABLE`, as the shell each rule's
+    jobs run with sets it (``.snakemake/jointbench/shells/<rule>/bash``), by rule: the text
+    and the confinement it holds."""
     tmp_path.mkdir()
     copy_workflow(tmp_path)
-    shim = tmp_path / "shim"
-    shim.mkdir()
-    written = tmp_path / "handed_down"
-    (shim / "sitecustomize.py").write_text(_HANDED_DOWN.format(file=str(written)))
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(shim), os.environ.get("PYTHONPATH", "")]))
     overlay = _cmc_only(
         tmp_path, estimators=["LS"], external_estimators=["centroid", "LM"], grid=grid
     )
     run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n")
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
-    (text,) = set(written.read_text().splitlines())
-    return text
+    handed = {}
+    for shell in (tmp_path / ".snakemake" / "jointbench" / "shells").glob("*/bash"):
+        (text,) = re.findall(rf"{landlock.VARIABLE}=('[^']*')", shell.read_text())
+        (text,) = shlex.split(text)
+        handed[shell.parent.name] = {"text": text, **json.loads(text)}
+    return handed
 
 
 @pytest.mark.pipeline
-def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path, monkeypatch):
-    """Linux refuses to start a program given an environment variable longer than 128 KiB,
-    which every process of the run inherits: the variable names folders, not each condition's
-    files, and is as long for one condition as for a grid of them."""
+def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path):
+    """Linux refuses to start a program given an environment variable longer than 128 KiB:
+    the variable names folders, not each condition's files, and is as long for one condition
+    as for a grid of them. Each rule of the user's is handed its own folders, not another's."""
     one = {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]}
     many = {"marker_set": ["M", "H"], "rom_deg": [5, 15, 45], "noise_mm": [0.5, 1.0, 2.0]}
-    alone = _handed_down(tmp_path / "one", monkeypatch, one)  # folders of one length
-    grid = _handed_down(tmp_path / "all", monkeypatch, many)
-    assert len(grid) == len(alone) < 4096, grid
-    assert "/results/blind" in grid and "/results/estimates/cmc/LM" in grid, grid
+    alone = _handed_down(tmp_path / "one", one)  # folders of one length
+    grid = _handed_down(tmp_path / "all", many)
+    assert set(grid) == set(alone) >= {"estimate_cmc_LM", "estimate_centroid"}, grid
+    for rule, handed in grid.items():
+        assert len(handed["text"]) == len(alone[rule]["text"]) < 4096, handed
+        assert any(p.endswith("/results/blind") for p in handed["readable"]), handed
+    lm, centroid = grid["estimate_cmc_LM"]["writable"], grid["estimate_centroid"]["writable"]
+    assert any(p.endswith("/results/estimates/cmc/LM") for p in lm), lm
+    assert not any(p.endswith("/results/estimates/cmc/LM") for p in centroid), centroid
+    assert any(p.endswith("/results/estimates/cmc/centroid") for p in centroid), centroid
+    assert not any("centroid" in p for p in lm), lm
 
 
 @pytest.mark.pipeline

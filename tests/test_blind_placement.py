@@ -6,6 +6,7 @@ that answers in the coordinates of the data it reads scores as on the unplaced d
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import shutil
@@ -21,22 +22,26 @@ import yaml
 from workflow_copy import ROOT
 
 from jointbench.configuration.bounds import TRANSLATION_MM_RANGE
+from jointbench.configuration.seeds import trial_seed
 from jointbench.configuration.studies import get_study
 from jointbench.resultfiles.interchange import read_estimates_csv, write_dataset_csv
 from jointbench.resultfiles.parquet import (
     check_blind_copy,
     read_dataset,
+    read_metadata,
     read_table,
     write_blind_dataset,
     write_dataset,
     write_table,
 )
 from jointbench.resultfiles.schema import KIND_COLUMNS, OPTIONAL_COLUMNS
+from jointbench.running import placement
 from jointbench.running.collected import collect
 from jointbench.running.placement import (
     DEFAULT_TRANSLATION_MM,
     ESTIMATE_GEOMETRY,
     Placements,
+    dataset_placements,
     draw_placements,
     read_placements,
     unplaced_estimates,
@@ -75,12 +80,18 @@ def _blind_condition(tmp_path, study: str, trials: int = 12):
     simulated = simulate_condition(config, study, condition)
     dataset = tmp_path / "datasets" / study / "c.parquet"
     write_dataset(dataset, simulated, study=study, condition=condition)
-    placements = draw_placements(SEED, study, condition, range(trials), TRANSLATION_MM)
+    placements = dataset_placements(dataset, SEED, TRANSLATION_MM)
     blind = tmp_path / "blind" / study / "c.parquet"
     write_blind_dataset(dataset, blind, placements)
     placed = tmp_path / "placements" / study / "c.parquet"
     write_placements(placed, placements)
     return dataset, blind, placed, simulated
+
+
+def _digests(trials, markers: str = "") -> dict[int, bytes]:
+    """Stand-ins for the digests of ``trials``' markers (one per trial, differing with
+    ``markers``), for draws that need no dataset."""
+    return {t: hashlib.sha256(f"{markers} trial {t}".encode()).digest() for t in trials}
 
 
 def _rows(study: str, method: str, answers: dict[str, np.ndarray]) -> pd.DataFrame:
@@ -121,6 +132,51 @@ def _constant(study: str, truth: dict, answer: str, n: int) -> dict[str, np.ndar
     return {c: np.full(n, float(v)) for c, v in zip(ESTIMATE_COLUMNS[kind], values, strict=True)}
 
 
+def _drawn_from_public_numbers(blind) -> list[Placements]:
+    """Every way a program given the blind copy ``blind`` and the config (``base_seed``,
+    ``blind_placement``) can draw placements from them: the package's own function on the copy
+    (refused, once the motions depend on more than the copy holds) and the trial's seed in the
+    module's stream, by hand."""
+    metadata = read_metadata(blind)
+    drawn = []
+    try:
+        drawn.append(dataset_placements(blind, SEED, TRANSLATION_MM))
+    except ValueError as error:
+        assert str(error).startswith(f"{blind} is a blind copy"), str(error)
+    trials = range(metadata["shapes"]["moving"][0])
+    rotations, translations = [], []
+    for trial in trials:
+        seed = trial_seed(SEED, metadata["study"], metadata["condition"], trial)
+        rng = np.random.default_rng([seed, placement._STREAM])
+        quaternion = rng.standard_normal(4)
+        rotations.append(placement._rotation(quaternion / np.linalg.norm(quaternion)))
+        translations.append(rng.uniform(-TRANSLATION_MM, TRANSLATION_MM, 3))
+    drawn.append(Placements(np.arange(len(trials)), np.array(rotations), np.array(translations)))
+    return drawn
+
+
+def test_a_program_cannot_draw_its_placements_from_the_public_seed(tmp_path):
+    """A trial's seed is public: the config's base seed, the study, condition and trial, all in
+    or beside the blind copy. A program drawing the placements from it and answering the
+    study's constant truth placed by them is scored as any constant: its answers are mapped
+    back by motions drawn from the markers as simulated too, which the copy does not hold."""
+    dataset, blind, placed, simulated = _blind_condition(tmp_path, "cmc", trials=6)
+    truth = np.asarray(simulated.truth["center"], dtype=float)
+    for guess in _drawn_from_public_numbers(blind):
+        centres = np.einsum("nij,j->ni", guess.rotations, truth) + guess.translations
+        answers = dict(zip(ESTIMATE_COLUMNS["center"], centres.T, strict=True))
+        rows = _rows("cmc", "seeded", answers)
+        collected = _collected(tmp_path, "cmc", dataset, placed, "seeded", rows)
+        assert (collected["error_mm"] > 20.0).all(), collected["error_mm"].tolist()
+
+
+def test_the_placements_of_a_blind_copy_are_refused_by_name(tmp_path):
+    """Its markers are placed already: the placements drawn from them would not be its own."""
+    _, blind, _, _ = _blind_condition(tmp_path, "cmc", trials=2)
+    with pytest.raises(ValueError, match=re.escape(f"{blind} is a blind copy")):
+        dataset_placements(blind, SEED, TRANSLATION_MM)
+
+
 @pytest.mark.parametrize("answer", ["truth", "origin"])
 @pytest.mark.parametrize("study", STUDIES)
 def test_a_contestant_answering_a_constant_scores_the_error_of_a_constant(tmp_path, study, answer):
@@ -151,7 +207,7 @@ def test_a_centre_placed_and_mapped_back_keeps_its_coordinates_at_the_bounds(tra
     the config accepts, a centre at (10, 20, 30) comes back within the 1e-9 mm the results are
     compared at (at 1e30 mm it came back as 0)."""
     n = 200
-    placements = draw_placements(SEED, "x", {"k": 1}, range(n), translation_mm)
+    placements = draw_placements(SEED, "x", {"k": 1}, _digests(range(n)), translation_mm)
     centre = np.array([10.0, 20.0, 30.0])
     placed = np.einsum("nij,j->ni", placements.rotations, centre) + placements.translations
     assert np.abs(placements.translations).max() > 0.8 * translation_mm
@@ -169,13 +225,13 @@ def test_a_centre_placed_and_mapped_back_keeps_its_coordinates_at_the_bounds(tra
 @pytest.mark.parametrize("translation_mm", [float("nan"), float("inf"), 1e30, 1e-12, 0.0])
 def test_a_translation_out_of_its_bounds_draws_no_placement(translation_mm):
     with pytest.raises(ValueError, match=r"^translation_mm: .* is not a finite number in"):
-        draw_placements(SEED, "x", {"k": 1}, range(3), translation_mm)
+        draw_placements(SEED, "x", {"k": 1}, _digests(range(3)), translation_mm)
 
 
 def test_placements_are_proper_rotations_reproducible_and_differ_by_trial():
     condition = _condition("cmc")
-    one = draw_placements(SEED, "cmc", condition, range(50), TRANSLATION_MM)
-    again = draw_placements(SEED, "cmc", condition, [3, 1], TRANSLATION_MM)
+    one = draw_placements(SEED, "cmc", condition, _digests(range(50)), TRANSLATION_MM)
+    again = draw_placements(SEED, "cmc", condition, _digests([3, 1]), TRANSLATION_MM)
     rotations = one.rotations
     identity = np.broadcast_to(np.eye(3), rotations.shape)
     np.testing.assert_allclose(rotations @ rotations.transpose(0, 2, 1), identity, atol=1e-12)
@@ -185,8 +241,19 @@ def test_placements_are_proper_rotations_reproducible_and_differ_by_trial():
     np.testing.assert_array_equal(again.rotations, rotations[[1, 3]])
     np.testing.assert_array_equal(again.translations, one.translations[[1, 3]])
     assert len({tuple(r.ravel().round(6)) for r in rotations}) == 50
-    other = draw_placements(SEED, "cmc", {**condition, "noise_mm": 0.5}, range(50), TRANSLATION_MM)
+    other = draw_placements(
+        SEED, "cmc", {**condition, "noise_mm": 0.5}, _digests(range(50)), TRANSLATION_MM
+    )
     assert not np.allclose(other.translations, one.translations)
+    # Other markers, the same seeds: other motions.
+    moved = draw_placements(SEED, "cmc", condition, _digests(range(50), "other"), TRANSLATION_MM)
+    assert not np.allclose(moved.translations, one.translations)
+
+
+def test_a_trial_without_a_digest_of_its_markers_draws_no_placement():
+    """Its motion would be drawn from the public seed alone."""
+    with pytest.raises(ValueError, match="trial 1: no digest of its markers"):
+        draw_placements(SEED, "cmc", _condition("cmc"), {0: b"x", 1: b""}, TRANSLATION_MM)
 
 
 def test_the_blind_copy_holds_each_trial_placed_and_every_segment_moved_alike(tmp_path):
@@ -270,7 +337,7 @@ def test_mapping_back_undoes_the_placement_exactly(kind, translation_mm):
     """At the default translation and at the largest the config accepts."""
     n = 40
     rng = np.random.default_rng(7)
-    placements = draw_placements(SEED, "x", {"k": 1}, range(n), translation_mm)
+    placements = draw_placements(SEED, "x", {"k": 1}, _digests(range(n)), translation_mm)
     answers = {c: rng.normal(0, 100, n) for c in ESTIMATE_COLUMNS[kind]}
     if kind == "joint_center":
         for prefix in ("", "proximal_"):

@@ -286,7 +286,10 @@ def test_an_external_job_runs_by_the_limited_shell_with_a_cluster_runtime_above_
     )
     minutes = timelimit.runtime_minutes(3600)
     assert f"runtime={minutes}," in resources["estimate_centroid"], resources
-    assert f"shell_exec='{timelimit.LIMITED_SHELL}'" in resources["estimate_centroid"]
+    # The rule's own shell, which runs the limited shell with the rule's own grant.
+    shell = tmp_path / ".snakemake" / "jointbench" / "shells" / "estimate_centroid" / "bash"
+    assert f"shell_exec='{shell}'" in resources["estimate_centroid"], resources
+    assert f'exec {timelimit.LIMITED_SHELL} "$@"' in shell.read_text()
     assert (
         "runtime=15" in resources["estimate_cmc"] and "shell_exec" not in resources["estimate_cmc"]
     )

@@ -97,6 +97,21 @@ def test_claims_tables_are_computed(reduced_run):
     assert set(claims["status"]) <= {"reproduced", "not reproduced", "not applicable"}
 
 
+def test_the_comparison_says_what_each_status_rests_on(reduced_run):
+    """A status in the default run's comparison is one seed's: the table says so, with the
+    trials per condition of each study it compares, and where the verdicts over seeds are."""
+    tables = reduced_run.workdir / "results" / "tables"
+    config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    trials = {name: study["trials"] for name, study in reduced_run.overlay["studies"].items()}
+    for name in ("published_comparison.md", "published_comparison.html"):
+        text = (tables / name).read_text()
+        assert f"one base seed ({config['base_seed']})" in text, text[-1500:]
+        for study in ("cmc", "hinge", "hip", "hip_sta"):
+            assert f"{study} {trials[study]}" in text, text[-1500:]
+        seeds = config["verdicts"]["seeds"]
+        assert f"over {seeds} base seeds: results/tables/verdicts.md" in text, text[-1500:]
+
+
 def test_every_study_is_reduced():
     reduced = yaml.safe_load((ROOT / "tests" / "data" / "reduced.yaml").read_text())
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())

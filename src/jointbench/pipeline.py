@@ -24,6 +24,7 @@ from jointbench.comparison.published import (
     failure_message,
     load_published,
     reader_order,
+    run_basis,
     status_legend,
 )
 from jointbench.configuration.config import condition_id
@@ -184,9 +185,9 @@ def check_published(collected: Mapping[str, str], outputs, config: Mapping) -> p
         outputs,
         title="Published values and claims beside ours",
         note="Claims with a verdict first, then values with a verdict, then the rows without "
-        f"one. {status_legend()}. Margin: how far inside or outside its tolerance each value "
-        "lies, in the tolerance's own units.\n\n## Counts by study and status\n\n"
-        + markdown_table(counts),
+        f"one. {status_legend()}. {run_basis(config, sorted(set(table['study'])))}. Margin: how "
+        "far inside or outside its tolerance each value lies, in the tolerance's own "
+        "units.\n\n## Counts by study and status\n\n" + markdown_table(counts),
     )
     message = failure_message(table)
     if message:

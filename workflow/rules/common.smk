@@ -2,6 +2,7 @@
 import functools
 import os
 import re
+import shlex
 import subprocess
 import sys
 import time
@@ -878,10 +879,9 @@ def limit_user_jobs(user_rules):
     and a job the limit stopped fails with an error saying so. A ``run:`` block runs inside
     Snakemake, which no limit can stop without stopping the run: it is refused, naming the rule.
     """
-    for producer in workflow.rules:
-        # A rule without a command (a target of the user's) runs nothing to limit.
-        if producer.name not in user_rules or producer.norun:
-            continue
+    # A rule without a command (a target of the user's) runs nothing to limit.
+    limited = [r for r in workflow.rules if r.name in user_rules and not r.norun]
+    for producer in limited:
         if producer.is_run:
             raise ValueError(
                 f"rule {producer.name} runs its code in a run"
@@ -890,34 +890,53 @@ def limit_user_jobs(user_rules):
                 f"time limit of an external estimator's job ({timelimit.KEY}) cannot stop it: "
                 "put the code in a script: or a shell: command (README, 'Adding an estimator')"
             )
-        producer.resources["shell_exec"] = _ShellPath(timelimit.LIMITED_SHELL)
+    shells = confine_user_jobs(user_rules)
+    for producer in limited:
+        producer.resources["shell_exec"] = _ShellPath(shells[producer.name])
         producer.resources["runtime"] = timelimit.runtime_minutes(TIME_LIMIT_S)
         producer.run_func = _limited(producer.run_func, producer.name)
-    confine_user_jobs(user_rules)
 
 
 def confine_user_jobs(user_rules):
-    """Tell the limited shell what every job of the rules of the user's (``user_rules``, by
+    """Tell the limited shell what each job of the rules of the user's (``user_rules``, by
     name) may open under results/ (jointbench.running.landlock, by the environment, as the
-    limit): read the blind copies and their CSV form, and the inputs under results/ of the
-    jobs the run's external estimators need; read and write the folders their files (outputs,
-    logs, benchmark files) go in, as those jobs spell them, and as any rule of the user's
-    spells them (_spelt_folders). Nothing else there: not the datasets, the
-    placements, the built-in estimators' files nor anything made from them. A folder in or
-    below which the benchmark writes too is refused, as its job could write over the
-    benchmark's files there (see _refuse_the_benchmarks). Where the kernel has no Landlock the
-    jobs run unconfined, and the run says so once, here."""
+    limit), each rule its own grant. It may read the blind copies and their CSV form, and
+    the inputs under results/ of its own rule's jobs that the run's external estimators need;
+    read and write
+    the folders its own rule's files (outputs, logs, benchmark files) go in, as those jobs
+    spell them, and as their rule spells them (_spelt_folders); nothing else there, not the
+    datasets, the placements, the built-in estimators' files nor anything made from them, and
+    not the folders of another rule of the user's, whose answers a program could copy or
+    spoil. A folder in or below which the benchmark writes too is refused, as its job could
+    write over the benchmark's files there (see _refuse_the_benchmarks). Where the kernel has
+    no Landlock the jobs run unconfined, and the run says so once, here.
+
+    Returns, per rule of the user's by name, the shell its jobs run with (_rule_shell), which
+    hands the limited shell its rule's confinement; the run's environment holds the least,
+    the blind copies alone."""
     users = [r for r in workflow.rules if r.name in user_rules]
-    inputs, written = _opened_by_users(users)
-    _refuse_the_benchmarks(written, _package_rules(user_rules))
-    confinement = landlock.Confinement(
-        os.path.realpath(RESULTS),
-        _real_paths(_readable(inputs, written, users)),
-        _real_paths(written),
+    opened = _opened_by_users(users)
+    everyone = {}
+    for _, written in opened.values():
+        for folder, first in written.items():
+            everyone.setdefault(folder, first)
+    _refuse_the_benchmarks(everyone, _package_rules(user_rules))
+    hidden = os.path.realpath(RESULTS)
+    os.environ[landlock.VARIABLE] = landlock.encoded(
+        landlock.Confinement(hidden, _real_paths(READABLE), [])
     )
-    os.environ[landlock.VARIABLE] = landlock.encoded(confinement)
+    shells = {}
+    for producer in users:
+        inputs, written = opened[producer.name]
+        confinement = landlock.Confinement(
+            hidden,
+            _real_paths(_readable(inputs, written, users, everyone)),
+            _real_paths(written),
+        )
+        shells[producer.name] = _rule_shell(producer.name, confinement)
     if users and not landlock.abi_version():
         logger.warning(NOT_CONFINED)
+    return shells
 
 
 # What the run says where the kernel cannot confine the jobs of external estimators.
@@ -927,23 +946,64 @@ NOT_CONFINED = (
     "truth too (README, 'Adding an estimator')"
 )
 
+# Where each rule of the user's gets the shell its jobs run with (_rule_shell), beside
+# Snakemake's own records, outside results/, which no job of the user's may write in.
+RULE_SHELLS = os.path.join(".snakemake", "jointbench", "shells")
+
+
+# How landlock.VARIABLE spells a confinement marked inherited (landlock.confine).
+_INHERITED = '"inherited": true'
+
+
+def _rule_shell(name, confinement):
+    """The absolute path of the shell the jobs of the rule ``name`` run with, a script named bash
+    (Snakemake gives its prefix to a shell of that name alone) that runs the limited shell
+    (jointbench.running.timelimit) with ``confinement`` in landlock.VARIABLE, so that each
+    rule's jobs get their own. Written where it differs, whole and then moved into place:
+    the Snakemake processes of a cluster's jobs load the workflow at once."""
+    path = os.path.abspath(os.path.join(RULE_SHELLS, name, "bash"))
+    variable = landlock.VARIABLE
+    text = (
+        "#!/bin/sh\n"
+        f"# The limited shell of the jobs of rule {name}, with what they may open under "
+        "results/ (written by workflow/rules/common.smk as the workflow loads).\n"
+        "# Within a job (a script's shell() call) the confinement its keeper handed down is\n"
+        "# kept: the job cannot widen it, nor list again what the keeper listed.\n"
+        f'case "${{{variable}-}}" in\n'
+        f"*{shlex.quote(_INHERITED)}*) ;;\n"
+        f"*) {variable}={shlex.quote(landlock.encoded(confinement))}; export {variable} ;;\n"
+        "esac\n"
+        f'exec {shlex.quote(timelimit.LIMITED_SHELL)} "$@"\n'
+    )
+    if os.path.isfile(path) and Path(path).read_text() == text:
+        return path
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    temporary = f"{path}.{os.getpid()}"
+    Path(temporary).write_text(text)
+    os.chmod(temporary, 0o755)
+    os.replace(temporary, path)
+    return path
+
 
 def _opened_by_users(users):
-    """``(inputs, written)``: the inputs under results/ of the jobs of ``users`` (rules of
-    the user's; see confine_user_jobs), and the folders they write in, each with ``(rule,
-    kind, path)`` of a file written there; paths relative to the working directory."""
-    inputs, written = set(), {}
+    """Per rule of ``users`` (rules of the user's; see confine_user_jobs), by name, ``(inputs,
+    written)``: the inputs under results/ of its jobs, and the folders they write in, each
+    with ``(rule, kind, path)`` of a file written there; paths relative to the working
+    directory."""
+    opened = {producer.name: (set(), {}) for producer in users}
     for producer, wildcards in _jobs_of_external_estimators(users):
+        inputs, written = opened[producer.name]
         for kind, path in _declared(producer):
             path = apply_wildcards(path, wildcards)
             written.setdefault(os.path.dirname(path), (producer.name, kind, path))
         read = [_as_matched(str(f)) for f in producer.expand_input(wildcards)[0]]
         inputs.update(f for f in read if f.startswith(RESULTS))
     for producer in users:
+        _, written = opened[producer.name]
         for kind, path in _declared(producer):
             for folder in _spelt_folders(os.path.dirname(path)):
                 written.setdefault(folder, (producer.name, kind, path))
-    return inputs, written
+    return opened
 
 
 def _spelt_folders(folder):
@@ -962,16 +1022,21 @@ def _spelt_folders(folder):
     return []
 
 
-def _readable(inputs, writable, users):
-    """What the jobs of ``users`` may read under results/: the blind copies (READABLE) and
-    those of their ``inputs`` the checks let them read (check_external_rules has refused any
-    other) that lie in none of those folders nor of the ``writable`` ones, which are granted
-    whole: folders as far as they go, so that what the jobs are handed does not grow with the
-    conditions."""
+def _readable(inputs, writable, users, shared):
+    """What the jobs of one rule of ``users`` may read under results/, the blind copies
+    (READABLE) and those of its ``inputs`` the checks let it read (check_external_rules has
+    refused any other) that lie in none of those folders nor of its own ``writable`` ones,
+    which are granted whole: one in a folder of ``shared`` (those every rule of the user's
+    writes in) by that folder, to be read, any other by itself, so that what the jobs are
+    handed does not grow with the conditions."""
     granted = tuple(f"{folder.rstrip('/')}/" for folder in (*READABLE, *writable))
-    return set(READABLE) | {
-        f for f in inputs if not f.startswith(granted) and _refusal(f, users) is None
-    }
+    found = set(READABLE)
+    for f in inputs:
+        if f.startswith(granted) or _refusal(f, users) is not None:
+            continue
+        folder = next((d for d in shared if f.startswith(f"{d.rstrip('/')}/")), None)
+        found.add(f if folder is None else folder)
+    return found
 
 
 def _real_paths(paths):

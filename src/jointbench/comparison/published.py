@@ -43,6 +43,7 @@ __all__ = [
     "load_published",
     "matches_design",
     "reader_order",
+    "run_basis",
     "status_legend",
     "unexplained",
 ]
@@ -371,6 +372,21 @@ def claims_rows(document: Mapping, measurements: Mapping) -> pd.DataFrame:
         for entry_id in rows.loc[missing, "id"]
     ]
     return rows[CLAIM_COLUMNS]
+
+
+def run_basis(config: Mapping, studies: Sequence[str]) -> str:
+    """What every status of one run's comparison rests on, for its note: the run's one base
+    seed and the trials per condition of each of ``studies``, and where the verdicts over
+    seeds are (``snakemake -j2 verdicts``, the config's ``verdicts.seeds``): a status
+    reproduced in one seed may not be in others."""
+    trials = ", ".join(f"{study} {config['studies'][study]['trials']}" for study in studies)
+    trials = trials or "(no study compared)"
+    seeds = config.get("verdicts", {}).get("seeds", 1)
+    return (
+        f"Every status is this run's: one base seed ({config['base_seed']}), trials per "
+        f"condition {trials}. How often each holds over {seeds} base seeds: "
+        "results/tables/verdicts.md (`snakemake -j2 verdicts`)"
+    )
 
 
 def status_legend() -> str:

@@ -16,6 +16,7 @@ parameters as empty); the benchmark alone scores, and :func:`read_truth` refuses
 from __future__ import annotations
 
 import functools
+import hashlib
 import inspect
 import json
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -48,6 +49,7 @@ __all__ = [
     "read_trial_numbers",
     "read_truth",
     "rows_table",
+    "trial_digests",
     "write_blind_dataset",
     "write_dataset",
     "write_dataset_blocks",
@@ -561,6 +563,29 @@ def read_trial_numbers(path: str | Path) -> np.ndarray:
     """The trial numbers of a dataset file, ``0 .. n_trials - 1``."""
     shapes = _shapes(path, read_metadata(path))
     return np.arange(next(iter(shapes.values()))[0])
+
+
+@_names_unreadable_file
+def trial_digests(path: str | Path) -> dict[int, bytes]:
+    """Per trial of the dataset file ``path``: the SHA-256 digest of its marker coordinates,
+    ``x, y, z`` of every row of the trial as float64 in the file's order, read a row group at a
+    time. Simulated noise makes each trial's digest its own, and only a file holding the
+    trial's markers as simulated (the dataset, not its blind copy) gives it."""
+    hashes = {}
+    source = pq.ParquetFile(path)
+    for group in range(source.num_row_groups):
+        table = source.read_row_group(group, columns=["trial", "x", "y", "z"])
+        trials = table.column("trial").to_numpy()
+        coordinates = np.column_stack(
+            [table.column(axis).to_numpy().astype(np.float64) for axis in "xyz"]
+        )
+        order = np.argsort(trials, kind="stable")
+        found, first = np.unique(trials[order], return_index=True)
+        for trial, rows in zip(found.tolist(), np.split(order, first[1:]), strict=True):
+            hashes.setdefault(trial, hashlib.sha256()).update(
+                np.ascontiguousarray(coordinates[rows]).tobytes()
+            )
+    return {trial: digest.digest() for trial, digest in sorted(hashes.items())}
 
 
 @_names_unreadable_file

@@ -7,7 +7,12 @@ it starts from, would score no error. The blind copy an external estimator reads
 (:func:`jointbench.resultfiles.parquet.write_blind_dataset`) therefore holds each trial under
 a rigid motion of its own, ``x' = R x + p`` applied to every marker of every segment of the
 trial (the relative motion of two segments unchanged): ``R`` uniform on SO(3), ``p`` uniform in
-the cube of half-side ``translation_mm`` (:func:`draw_placements`). The motions are stored
+the cube of half-side ``translation_mm`` (:func:`draw_placements`), drawn from the trial's seed
+and the digest of its markers as simulated (:func:`dataset_placements`): the seed alone is public
+(the config's ``base_seed``, the study, condition and trial), and a motion drawn from it alone
+would let a program recompute it from what it reads and answer the constant truth placed. The
+digest is of the unplaced markers, which the blind copy does not hold; a program can reach it
+only by running the simulation again (README, "Adding an estimator"). The motions are stored
 apart from the blind copy (:func:`write_placements`), in a file only the package's rules read,
 and an external estimator's answers are mapped back by the inverse motion before anything
 scores them (:func:`unplaced_estimates`): centres and axis points ``c = R^T (c' - p)``,
@@ -31,6 +36,7 @@ from jointbench.resultfiles.parquet import (
     read_table,
     read_trial_numbers,
     rows_table,
+    trial_digests,
     write_table,
 )
 from jointbench.running.scoring import (
@@ -133,22 +139,28 @@ def draw_placements(
     base_seed: int,
     study: str,
     condition: Mapping[str, object],
-    trials,
+    digests: Mapping[int, bytes],
     translation_mm: float = DEFAULT_TRANSLATION_MM,
 ) -> Placements:
-    """The placement of each of ``trials`` of a condition, from its trial's seed
-    (:func:`jointbench.configuration.seeds.trial_seed`) in a stream of its own: a rotation
-    uniform on SO(3) (a unit quaternion of four standard normals, uniform on the 3-sphere) and
-    a translation uniform in ``[-translation_mm, translation_mm]^3`` [mm]."""
+    """The placement of each trial of ``digests`` (trial -> the digest of its markers as
+    simulated, :func:`jointbench.resultfiles.parquet.trial_digests`) of a condition, from its
+    trial's seed (:func:`jointbench.configuration.seeds.trial_seed`) and its digest in a stream
+    of its own: a rotation uniform on SO(3) (a unit quaternion of four standard normals,
+    uniform on the 3-sphere) and a translation uniform in ``[-translation_mm,
+    translation_mm]^3`` [mm]. ``ValueError`` for an empty digest: without one the motion would
+    be drawn from public numbers alone."""
     problem = translation_problem(translation_mm)
     if problem:
         raise ValueError(f"translation_mm: {problem}")
-    trials = np.sort(np.asarray(trials, dtype=np.int64))
+    trials = np.sort(np.asarray(list(digests), dtype=np.int64))
     rotations = np.empty((len(trials), 3, 3))
     translations = np.empty((len(trials), 3))
     for row, trial in enumerate(trials):
+        digest = digests[int(trial)]
+        if not digest:
+            raise ValueError(f"trial {int(trial)}: no digest of its markers to draw its placement")
         seed = trial_seed(base_seed, study, condition, int(trial))
-        rng = np.random.default_rng([seed, _STREAM])
+        rng = np.random.default_rng([seed, _STREAM, int.from_bytes(digest, "little")])
         quaternion = rng.standard_normal(4)
         rotations[row] = _rotation(quaternion / np.linalg.norm(quaternion))
         translations[row] = rng.uniform(-translation_mm, translation_mm, 3)
@@ -159,11 +171,22 @@ def dataset_placements(
     dataset: str | Path, base_seed: int, translation_mm: float = DEFAULT_TRANSLATION_MM
 ) -> Placements:
     """The placements of every trial of the dataset file ``dataset`` (:func:`draw_placements`
-    for its study, condition and trials)."""
+    for its study, condition and its trials' digests). ``ValueError`` naming ``dataset`` when it
+    is a blind copy, whose markers are placed already: its digests are not the trials'."""
     metadata = read_metadata(dataset)
+    if metadata.get("blind"):
+        raise ValueError(
+            f"{dataset} is a blind copy: its trials' placements are drawn from the markers as "
+            "simulated, which only the full dataset file holds"
+        )
+    digests = trial_digests(dataset)
     trials = read_trial_numbers(dataset)
+    if sorted(digests) != trials.tolist():
+        raise ValueError(
+            f"{dataset}: its rows hold trials {sorted(digests)}, its metadata {trials.tolist()}"
+        )
     return draw_placements(
-        base_seed, metadata["study"], metadata["condition"], trials, translation_mm
+        base_seed, metadata["study"], metadata["condition"], digests, translation_mm
     )
 
 
