@@ -147,6 +147,11 @@ class _UnhashableCallable(_UsersCallable):  # eq without frozen: no __hash__
     n_trials: int = 1
 
 
+@dataclasses.dataclass(frozen=True)
+class _FrozenHoldingAList(_UsersCallable):  # its class states a hash its list cannot give
+    weights: list = dataclasses.field(default_factory=lambda: [1.0])
+
+
 @pytest.mark.parametrize(
     "made",
     [
@@ -155,9 +160,18 @@ class _UnhashableCallable(_UsersCallable):  # eq without frozen: no __hash__
         lambda: twosegment.batched(functools.partial(_users_finish, 1), ("markers",)),
         lambda: twosegment.batched(_UsersCallable(), ("markers",)),
         lambda: _UnhashableCallable(),
+        lambda: _FrozenHoldingAList(),
         lambda: functools.partial(registry.get("center", "LS", checked=False), _users_finish),
     ],
-    ids=["batched", "batched-all", "partial", "callable", "unhashable", "partial-passing-users"],
+    ids=[
+        "batched",
+        "batched-all",
+        "partial",
+        "callable",
+        "unhashable",
+        "hash-of-a-list",
+        "partial-passing-users",
+    ],
 )
 def test_a_package_closure_over_a_users_function_is_not_the_package_s_own_code(made):
     """A many-trial form the package builds around a user's function (a closure, no
