@@ -78,6 +78,29 @@ def test_text_with_tabs_and_line_ends_is_text(tmp_path):
     assert read(path).labels == ("A",)
 
 
+@pytest.mark.parametrize(
+    ("name", "content"),
+    [
+        ("markers.csv", b"frame,marker,x,y,z\r\n0,A,1,2,3\r\n1,A,1,2,4\r\n"),
+        ("markers.csv", b"frame,marker,x,y,z\r\n0,A,1,2,3\r\n1,A,1,2,\r\n"),  # a gap
+        (
+            "markers.trc",
+            b"PathFileType\t4\t(X/Y/Z)\tt.trc\r\nDataRate\tCameraRate\tNumFrames\tNumMarkers"
+            b"\tUnits\r\n100\t100\t2\t1\tmm\r\nFrame#\tTime\tA\t\t\r\n\t\tX1\tY1\tZ1\r\n"
+            b"1\t0\t1\t2\t3\r\n2\t0.01\t1\t2\t4\r\n",
+        ),
+    ],
+    ids=["csv", "csv-gap", "trc"],
+)
+def test_a_dos_end_of_file_mark_ends_the_text(tmp_path, name, content):
+    """A file some DOS programs end with 0x1a reads as the text before it, not as a last line
+    cut short."""
+    plain, marked = tmp_path / name, tmp_path / f"dos-{name}"
+    plain.write_bytes(content)
+    marked.write_bytes(content + b"\x1a")
+    np.testing.assert_array_equal(read(marked).markers, read(plain).markers)
+
+
 def _long_c3d(path, n_frames):
     """A C3D of ``n_frames`` > 65535 frames of eight markers (128 bytes a frame, so that the
     frames end a 512-byte block), as ezc3d writes it: its header and ``POINT:FRAMES`` stop at

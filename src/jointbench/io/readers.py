@@ -35,8 +35,10 @@ def _read_text(path: Path, kind: str) -> str:
     byte-order mark dropped); ``ValueError`` naming the line and the byte that is not UTF-8, or
     a binary file (:func:`_check_not_binary`). No other encoding is guessed: a Latin-1 or
     Windows-1252 label read as UTF-8 with replacement characters would be a label nobody can
-    type, and one read as Latin-1 from a Windows-1252 file would be another marker's name."""
-    content = path.read_bytes()
+    type, and one read as Latin-1 from a Windows-1252 file would be another marker's name.
+    The end-of-file mark some DOS programs end a file with (0x1a) ends the text: kept, it
+    would read as a last line cut short."""
+    content = path.read_bytes().removesuffix(_DOS_END)
     _check_not_binary(content, path, kind)
     try:
         return content.decode("utf-8-sig")
@@ -48,6 +50,9 @@ def _read_text(path: Path, kind: str) -> str:
             "iconv -f latin1 -t utf-8)"
         ) from None
 
+
+#: The end-of-file mark some DOS programs end a text file with; the text ends before it.
+_DOS_END = b"\x1a"
 
 #: Bytes no text file holds: the control characters but tab, line feed, vertical tab, form
 #: feed, carriage return and the end-of-file mark (0x1a) some DOS programs end a file with.
@@ -494,10 +499,11 @@ def _check_cut_after_separator(path: Path, line: int, column: list[str], name: s
 
 
 def _ends_with_newline(path: Path) -> bool:
-    """Whether the file's last byte ends a line (``\\n``, or ``\\r`` of an old Mac file)."""
+    """Whether the file's text (:func:`_read_text`) ends a line with its last byte (``\\n``,
+    or ``\\r`` of an old Mac file)."""
     with path.open("rb") as file:
-        file.seek(max(0, path.stat().st_size - 1))
-        return file.read(1) in (b"\n", b"\r")
+        file.seek(max(0, path.stat().st_size - 2))
+        return file.read().removesuffix(_DOS_END)[-1:] in (b"\n", b"\r")
 
 
 def _whole_number(text: str) -> int | None:
@@ -608,7 +614,7 @@ def read_csv(path: str | Path) -> Recording:
     # after its last separator; either leaves the last column empty. A cut inside the last
     # number leaves no line end. Only then is the file read again to find it.
     if table[table.columns[-1]].isna().any() or not _ends_with_newline(path):
-        _check_csv_fields(path, list(table.columns))
+        _check_csv_fields(path, text, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
     table["frame"] = numbers  # "7" and "7.0" are one frame
     empty = (table["marker"] == "").to_numpy()
@@ -697,12 +703,12 @@ def _no_repeated_frames(recording: Recording) -> Recording:
 _CHANCE_REPEATS = 0.01
 
 
-def _check_csv_fields(path: Path, header: list[str]) -> None:
-    """``ValueError`` naming the first line of ``path`` with fewer fields than ``header``, or
-    its last line when the file ends inside it right after a separator
-    (:func:`_check_cut_after_separator`)."""
+def _check_csv_fields(path: Path, text: str, header: list[str]) -> None:
+    """``ValueError`` naming the first line of ``path``, whose text is ``text``
+    (:func:`_read_text`), with fewer fields than ``header``, or its last line when the file
+    ends inside it right after a separator (:func:`_check_cut_after_separator`)."""
     last_field = []
-    with path.open(newline="", errors="replace") as file:
+    with io.StringIO(text, newline="") as file:
         records = csv.reader(file)
         next(records)
         for record in records:
