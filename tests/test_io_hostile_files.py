@@ -208,9 +208,19 @@ def test_trc_frames_not_at_the_headers_rate_are_refused_naming_the_line(tmp_path
     )
 
 
-def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path):
-    path = _timed_trc(tmp_path / "rate.trc", [f"{i / 100:.5f}" for i in range(10)], rate="120")
-    with pytest.raises(ValueError, match=r"line 9, field Time: 0.03000 s, where frame 4 falls"):
+@pytest.mark.parametrize(
+    ("first", "refused"),
+    [
+        ("0.00000", r"line 9, field Time: 0.03000 s, where frame 4 falls"),
+        ("", r"line 10, field Time: 0.04000 s, where frame 5 falls"),  # frame 2 at 0.01 s
+    ],
+    ids=["timed", "first-time-empty"],
+)
+def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path, first, refused):
+    """Times are counted from the first row that writes one, which need not be the first."""
+    times = [first, *(f"{i / 100:.5f}" for i in range(1, 10))]
+    path = _timed_trc(tmp_path / "rate.trc", times, rate="120")
+    with pytest.raises(ValueError, match=refused):
         read(path)
 
 
@@ -262,13 +272,15 @@ def test_a_world_output_onto_the_recording_read_is_refused(tmp_path, capsys):
     assert path.read_bytes() == KNEE.read_bytes()
 
 
-def test_a_vicon_nexus_csv_export_is_named_as_such(tmp_path):
+@pytest.mark.parametrize("first", ["Trajectories\n", "Trajectories,,,,,,,\r\n"])
+def test_a_vicon_nexus_csv_export_is_named_as_such(tmp_path, first):
     """pandas' "Error tokenizing data. C error: Expected 1 fields in line 3, saw 8" was all a
-    lab's commonest CSV was answered with."""
+    lab's commonest CSV was answered with; Nexus on Windows ends its lines with CR LF, and some
+    exports fill the first line with the separators of the rows below."""
     path = tmp_path / "trial.csv"
-    path.write_text(
-        "Trajectories\n100\n,,Sub01:A,,,Sub01:B,,\nFrame,Sub Frame,X,Y,Z,X,Y,Z\n"
-        ",,mm,mm,mm,mm,mm,mm\n1,0,1.5,2.5,3.5,4.5,5.5,6.5\n"
+    path.write_bytes(
+        first.encode() + b"100\n,,Sub01:A,,,Sub01:B,,\nFrame,Sub Frame,X,Y,Z,X,Y,Z\n"
+        b",,mm,mm,mm,mm,mm,mm\n1,0,1.5,2.5,3.5,4.5,5.5,6.5\n"
     )
     assert _refusal(path) == (
         f"{path}: line 1, 'Trajectories': a Vicon Nexus CSV export (sections of one row per "
