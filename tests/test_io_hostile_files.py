@@ -101,24 +101,31 @@ def test_a_dos_end_of_file_mark_ends_the_text(tmp_path, name, content):
     np.testing.assert_array_equal(read(marked).markers, read(plain).markers)
 
 
-def _long_c3d(path, n_frames):
+def _long_c3d(path, n_frames, added=()):
     """A C3D of ``n_frames`` > 65535 frames of eight markers (128 bytes a frame, so that the
     frames end a 512-byte block), as ezc3d writes it: its header and ``POINT:FRAMES`` stop at
-    65535, and no ``TRIAL`` group counts the rest."""
+    65535, and no ``TRIAL`` group counts the rest unless ``added`` (:func:`write_c3d`)."""
     rng = np.random.default_rng(3)
     markers = rng.uniform(10.0, 100.0, size=(n_frames, 8, 3))
-    return write_c3d(path, tuple("ABCDEFGH"), markers)
+    return write_c3d(path, tuple("ABCDEFGH"), markers, added=added)
 
 
-def test_a_c3d_of_more_frames_than_its_parameters_count_is_refused(tmp_path):
-    """ezc3d read its first 65535 frames and nothing said that 4465 more were left unread."""
-    path = _long_c3d(tmp_path / "long.c3d", 70000)
+@pytest.mark.parametrize(
+    "added",
+    [(), [("TRIAL", "ACTUAL_START_FIELD", [1, 0]), ("TRIAL", "ACTUAL_END_FIELD", [4464, 1])]],
+    ids=["counted-by-none", "counted-by-trial"],
+)
+def test_a_c3d_of_more_frames_than_were_read_is_refused(tmp_path, added):
+    """ezc3d read its first 65535 frames and nothing said that 4465 more were left unread; it
+    reads no more where the file's TRIAL group counts all 70000, which the refusal does not
+    deny."""
+    path = _long_c3d(tmp_path / "long.c3d", 70000, added)
     refusal = (
-        f"{path}: the file holds 572032 bytes past the 65535 frames its header and parameters "
-        "count, room for 4465 to 4469 more frames of 8 points and 0 analog samples each (a C3D's "
-        "header counts at most 65535 frames; POINT:FRAMES, POINT:LONG_FRAMES or "
-        "TRIAL:ACTUAL_END_FIELD counts more, and this file's do not): frames from 65536 on "
-        "would be left out unread; export the trial as TRC, or in parts"
+        f"{path}: the file holds 572032 bytes past the 65535 frames read, room for 4465 to 4469 "
+        "more frames of 8 points and 0 analog samples each (a C3D's header counts at most 65535 "
+        "frames, and frames past those its header and POINT:FRAMES count are not read, whatever "
+        "its POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD say): frames from 65536 on would be "
+        "left out unread; export the trial as TRC, or in parts"
     )
     assert _refusal(path) == refusal
 

@@ -149,7 +149,7 @@ def _c3d_rate(rate: float, path: Path) -> float | None:
 def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     """``ValueError`` when the file ends before the frames its header promises (a last frame of
     65535, the most a header counts, promises at least the frames up to it), or holds more
-    than a long file's parameters count (:func:`_check_c3d_long`).
+    than ezc3d reads of a long file (:func:`_check_c3d_long`).
 
     ezc3d reads the frames that are there and rewrites its header and ``POINT:FRAMES`` to
     match, so the promise is read from the file's own header block: the number of points, of
@@ -180,12 +180,13 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
 
 def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, first: int) -> None:
     """``ValueError`` when the C3D file ``path``, whose header's last frame is 65535, the most
-    it can count, holds frames past those ezc3d read (``c3d``): a file whose parameters count
-    no more (``POINT:FRAMES`` as an integer, no ``POINT:LONG_FRAMES`` or ``TRIAL`` group, as
-    ezc3d itself writes one), whose later frames would be left out unseen. Its frames start at
-    byte ``start``, take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte
-    block of padding may follow them (ezc3d writes a whole one where they end a block), so the
-    frames past them are counted within that."""
+    it can count, holds frames past those ezc3d read (``c3d``), which would be left out unseen:
+    ezc3d reads the frames its header and ``POINT:FRAMES`` count, not those a file's
+    ``POINT:LONG_FRAMES`` or ``TRIAL`` group count past them (nor those of a file, such as
+    ezc3d itself writes, whose parameters count no more). Its frames start at byte ``start``,
+    take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte block of
+    padding may follow them (ezc3d writes a whole one where they end a block), so the frames
+    past them are counted within that."""
     header = c3d["header"]["points"]
     read = int(header["last_frame"]) - int(header["first_frame"]) + 1
     extra = path.stat().st_size - start - read * frame_bytes
@@ -195,12 +196,11 @@ def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, fi
     more = f"{fewest}" if fewest == most else f"{fewest} to {most}"
     n_points, n_analog = _c3d_header(path)[:2]
     raise ValueError(
-        f"{path}: the file holds {extra} bytes past the {read} frames its header and parameters "
-        f"count, room for {more} more frames of {n_points} points and "
-        f"{n_analog} analog samples each (a C3D's header counts at most 65535 frames; "
-        "POINT:FRAMES, POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD counts more, and this "
-        f"file's do not): frames from {first + read} on would be left out unread; export the "
-        "trial as TRC, or in parts"
+        f"{path}: the file holds {extra} bytes past the {read} frames read, room for {more} "
+        f"more frames of {n_points} points and {n_analog} analog samples each (a C3D's header "
+        "counts at most 65535 frames, and frames past those its header and POINT:FRAMES count "
+        "are not read, whatever its POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD say): frames "
+        f"from {first + read} on would be left out unread; export the trial as TRC, or in parts"
     )
 
 
