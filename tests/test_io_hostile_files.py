@@ -347,7 +347,9 @@ def test_a_c3d_frame_rate_of_0_is_no_rate_stated(tmp_path):
     assert read(_c3d_at_rate(tmp_path / "rate.c3d", 0.0)).rate_hz is None
 
 
-def test_a_negative_c3d_frame_rate_is_refused_naming_it(tmp_path):
-    """It was read as a rate not stated, as 0 is."""
-    path = _c3d_at_rate(tmp_path / "rate.c3d", -100.0)
-    assert _refusal(path) == f"{path}: POINT:RATE -100 is not a frame rate (frames per second)"
+@pytest.mark.parametrize(("rate", "written"), [(-100.0, "-100"), (np.inf, "inf")])
+def test_a_negative_or_infinite_c3d_frame_rate_is_refused_naming_it(tmp_path, rate, written):
+    """It was read as a rate not stated, as 0 is; an infinite one was refused as the
+    recording's rate, not naming the file's POINT:RATE."""
+    path = _c3d_at_rate(tmp_path / "rate.c3d", rate)
+    assert _refusal(path) == f"{path}: POINT:RATE {written} is not a frame rate (frames per second)"
