@@ -147,6 +147,16 @@ class _UnhashableCallable(_UsersCallable):  # eq without frozen: no __hash__
     n_trials: int = 1
 
 
+@dataclasses.dataclass(frozen=True)
+class _FrozenHoldingAList(_UsersCallable):  # its class states a hash its list cannot give
+    weights: list = dataclasses.field(default_factory=lambda: [1.0])
+
+
+class _UsersFit:
+    def fit(self, markers):
+        raise NotImplementedError
+
+
 @pytest.mark.parametrize(
     "made",
     [
@@ -155,9 +165,20 @@ class _UnhashableCallable(_UsersCallable):  # eq without frozen: no __hash__
         lambda: twosegment.batched(functools.partial(_users_finish, 1), ("markers",)),
         lambda: twosegment.batched(_UsersCallable(), ("markers",)),
         lambda: _UnhashableCallable(),
+        lambda: _FrozenHoldingAList(),
+        lambda: _UsersFit().fit,
         lambda: functools.partial(registry.get("center", "LS", checked=False), _users_finish),
     ],
-    ids=["batched", "batched-all", "partial", "callable", "unhashable", "partial-passing-users"],
+    ids=[
+        "batched",
+        "batched-all",
+        "partial",
+        "callable",
+        "unhashable",
+        "hash-of-a-list",
+        "bound-method",
+        "partial-passing-users",
+    ],
 )
 def test_a_package_closure_over_a_users_function_is_not_the_package_s_own_code(made):
     """A many-trial form the package builds around a user's function (a closure, no
@@ -174,3 +195,13 @@ def test_the_package_s_closures_over_its_own_functions_are_its_own_code():
             assert owncode.package_code(registry.get(kind, method, checked=False))
     # Nothing of a user's in it: the fit with some of its arguments given.
     assert owncode.package_code(functools.partial(registry.get("center", "LS", checked=False)))
+
+
+def test_the_package_s_checked_form_of_a_users_fit_is_not_the_package_s_own_code():
+    """A checked form closes over its method's entry, not its fit: only the ``__wrapped__``
+    it states tells the user's function it runs."""
+    registry.register("center", "users-checked")(_users_finish)
+    try:
+        assert not owncode.package_code(registry.get("center", "users-checked"))
+    finally:
+        registry.unregister("center", "users-checked")

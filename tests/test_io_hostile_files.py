@@ -78,24 +78,54 @@ def test_text_with_tabs_and_line_ends_is_text(tmp_path):
     assert read(path).labels == ("A",)
 
 
-def _long_c3d(path, n_frames):
+@pytest.mark.parametrize(
+    ("name", "content"),
+    [
+        ("markers.csv", b"frame,marker,x,y,z\r\n0,A,1,2,3\r\n1,A,1,2,4\r\n"),
+        ("markers.csv", b"frame,marker,x,y,z\r\n0,A,1,2,3\r\n1,A,1,2,\r\n"),  # a gap
+        (
+            "markers.trc",
+            b"PathFileType\t4\t(X/Y/Z)\tt.trc\r\nDataRate\tCameraRate\tNumFrames\tNumMarkers"
+            b"\tUnits\r\n100\t100\t2\t1\tmm\r\nFrame#\tTime\tA\t\t\r\n\t\tX1\tY1\tZ1\r\n"
+            b"1\t0\t1\t2\t3\r\n2\t0.01\t1\t2\t4\r\n",
+        ),
+    ],
+    ids=["csv", "csv-gap", "trc"],
+)
+def test_a_dos_end_of_file_mark_ends_the_text(tmp_path, name, content):
+    """A file some DOS programs end with 0x1a reads as the text before it, not as a last line
+    cut short."""
+    plain, marked = tmp_path / name, tmp_path / f"dos-{name}"
+    plain.write_bytes(content)
+    marked.write_bytes(content + b"\x1a")
+    np.testing.assert_array_equal(read(marked).markers, read(plain).markers)
+
+
+def _long_c3d(path, n_frames, added=()):
     """A C3D of ``n_frames`` > 65535 frames of eight markers (128 bytes a frame, so that the
     frames end a 512-byte block), as ezc3d writes it: its header and ``POINT:FRAMES`` stop at
-    65535, and no ``TRIAL`` group counts the rest."""
+    65535, and no ``TRIAL`` group counts the rest unless ``added`` (:func:`write_c3d`)."""
     rng = np.random.default_rng(3)
     markers = rng.uniform(10.0, 100.0, size=(n_frames, 8, 3))
-    return write_c3d(path, tuple("ABCDEFGH"), markers)
+    return write_c3d(path, tuple("ABCDEFGH"), markers, added=added)
 
 
-def test_a_c3d_of_more_frames_than_its_parameters_count_is_refused(tmp_path):
-    """ezc3d read its first 65535 frames and nothing said that 4465 more were left unread."""
-    path = _long_c3d(tmp_path / "long.c3d", 70000)
+@pytest.mark.parametrize(
+    "added",
+    [(), [("TRIAL", "ACTUAL_START_FIELD", [1, 0]), ("TRIAL", "ACTUAL_END_FIELD", [4464, 1])]],
+    ids=["counted-by-none", "counted-by-trial"],
+)
+def test_a_c3d_of_more_frames_than_were_read_is_refused(tmp_path, added):
+    """ezc3d read its first 65535 frames and nothing said that 4465 more were left unread; it
+    reads no more where the file's TRIAL group counts all 70000, which the refusal does not
+    deny."""
+    path = _long_c3d(tmp_path / "long.c3d", 70000, added)
     refusal = (
-        f"{path}: the file holds 572032 bytes past the 65535 frames its header and parameters "
-        "count, room for 4465 to 4469 more frames of 8 points and 0 analog samples each (a C3D's "
-        "header counts at most 65535 frames; POINT:FRAMES, POINT:LONG_FRAMES or "
-        "TRIAL:ACTUAL_END_FIELD counts more, and this file's do not): frames from 65536 on "
-        "would be left out unread; export the trial as TRC, or in parts"
+        f"{path}: the file holds 572032 bytes past the 65535 frames read, room for 4465 to 4469 "
+        "more frames of 8 points and 0 analog samples each (a C3D's header counts at most 65535 "
+        "frames, and frames past those its header and POINT:FRAMES count are not read, whatever "
+        "its POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD say): frames from 65536 on would be "
+        "left out unread; export the trial as TRC, or in parts"
     )
     assert _refusal(path) == refusal
 
@@ -185,9 +215,19 @@ def test_trc_frames_not_at_the_headers_rate_are_refused_naming_the_line(tmp_path
     )
 
 
-def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path):
-    path = _timed_trc(tmp_path / "rate.trc", [f"{i / 100:.5f}" for i in range(10)], rate="120")
-    with pytest.raises(ValueError, match=r"line 9, field Time: 0.03000 s, where frame 4 falls"):
+@pytest.mark.parametrize(
+    ("first", "refused"),
+    [
+        ("0.00000", r"line 9, field Time: 0.03000 s, where frame 4 falls"),
+        ("", r"line 10, field Time: 0.04000 s, where frame 5 falls"),  # frame 2 at 0.01 s
+    ],
+    ids=["timed", "first-time-empty"],
+)
+def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path, first, refused):
+    """Times are counted from the first row that writes one, which need not be the first."""
+    times = [first, *(f"{i / 100:.5f}" for i in range(1, 10))]
+    path = _timed_trc(tmp_path / "rate.trc", times, rate="120")
+    with pytest.raises(ValueError, match=refused):
         read(path)
 
 
@@ -239,13 +279,15 @@ def test_a_world_output_onto_the_recording_read_is_refused(tmp_path, capsys):
     assert path.read_bytes() == KNEE.read_bytes()
 
 
-def test_a_vicon_nexus_csv_export_is_named_as_such(tmp_path):
+@pytest.mark.parametrize("first", ["Trajectories\n", "Trajectories,,,,,,,\r\n"])
+def test_a_vicon_nexus_csv_export_is_named_as_such(tmp_path, first):
     """pandas' "Error tokenizing data. C error: Expected 1 fields in line 3, saw 8" was all a
-    lab's commonest CSV was answered with."""
+    lab's commonest CSV was answered with; Nexus on Windows ends its lines with CR LF, and some
+    exports fill the first line with the separators of the rows below."""
     path = tmp_path / "trial.csv"
-    path.write_text(
-        "Trajectories\n100\n,,Sub01:A,,,Sub01:B,,\nFrame,Sub Frame,X,Y,Z,X,Y,Z\n"
-        ",,mm,mm,mm,mm,mm,mm\n1,0,1.5,2.5,3.5,4.5,5.5,6.5\n"
+    path.write_bytes(
+        first.encode() + b"100\n,,Sub01:A,,,Sub01:B,,\nFrame,Sub Frame,X,Y,Z,X,Y,Z\n"
+        b",,mm,mm,mm,mm,mm,mm\n1,0,1.5,2.5,3.5,4.5,5.5,6.5\n"
     )
     assert _refusal(path) == (
         f"{path}: line 1, 'Trajectories': a Vicon Nexus CSV export (sections of one row per "
@@ -305,7 +347,9 @@ def test_a_c3d_frame_rate_of_0_is_no_rate_stated(tmp_path):
     assert read(_c3d_at_rate(tmp_path / "rate.c3d", 0.0)).rate_hz is None
 
 
-def test_a_negative_c3d_frame_rate_is_refused_naming_it(tmp_path):
-    """It was read as a rate not stated, as 0 is."""
-    path = _c3d_at_rate(tmp_path / "rate.c3d", -100.0)
-    assert _refusal(path) == f"{path}: POINT:RATE -100 is not a frame rate (frames per second)"
+@pytest.mark.parametrize(("rate", "written"), [(-100.0, "-100"), (np.inf, "inf")])
+def test_a_negative_or_infinite_c3d_frame_rate_is_refused_naming_it(tmp_path, rate, written):
+    """It was read as a rate not stated, as 0 is; an infinite one was refused as the
+    recording's rate, not naming the file's POINT:RATE."""
+    path = _c3d_at_rate(tmp_path / "rate.c3d", rate)
+    assert _refusal(path) == f"{path}: POINT:RATE {written} is not a frame rate (frames per second)"

@@ -22,9 +22,12 @@ PROX = ["P1", "P2", "P3"]
 DIST = ["D1", "D2", "D3"]
 
 
-def write_c3d(path, labels, markers, *, units="mm", rate=100.0, residuals=None):
-    """Markers ``(n_frames, n, 3)`` in ``units`` (NaN stays NaN) to a C3D file via ezc3d."""
+def write_c3d(path, labels, markers, *, units="mm", rate=100.0, residuals=None, added=()):
+    """Markers ``(n_frames, n, 3)`` in ``units`` (NaN stays NaN) to a C3D file via ezc3d, with
+    the parameters ``added`` (``(group, name, value)`` each) besides its own."""
     c3d = ezc3d.c3d()
+    for group, name, value in added:
+        c3d.add_parameter(group, name, value)
     c3d["parameters"]["POINT"]["RATE"]["value"] = [rate]
     c3d["parameters"]["POINT"]["LABELS"]["value"] = list(labels)
     c3d["parameters"]["POINT"]["UNITS"]["value"] = [units]

@@ -20,7 +20,7 @@ import site
 import sys
 import sysconfig
 import types
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 
 __all__ = ["claim", "own_code", "package_code"]
 
@@ -66,9 +66,12 @@ def package_code(function: Callable) -> bool:
     of it); a ``functools.partial`` holds its function and the callables among its arguments,
     an object its class's ``__call__``. Remembered per function (one that can be hashed): a
     checked call asks it of its method's fit."""
-    if isinstance(function, Hashable):
-        return _remembered_package_code(function)
-    return _all_package_code(function)
+    try:
+        hash(function)
+    except TypeError:  # unhashable, as its class says or as a field of it (a frozen dataclass
+        # of a list, whose class states a hash its fields cannot give): found anew each time
+        return _all_package_code(function)
+    return _remembered_package_code(function)
 
 
 @functools.lru_cache(maxsize=256)

@@ -35,8 +35,10 @@ def _read_text(path: Path, kind: str) -> str:
     byte-order mark dropped); ``ValueError`` naming the line and the byte that is not UTF-8, or
     a binary file (:func:`_check_not_binary`). No other encoding is guessed: a Latin-1 or
     Windows-1252 label read as UTF-8 with replacement characters would be a label nobody can
-    type, and one read as Latin-1 from a Windows-1252 file would be another marker's name."""
-    content = path.read_bytes()
+    type, and one read as Latin-1 from a Windows-1252 file would be another marker's name.
+    The end-of-file mark some DOS programs end a file with (0x1a) ends the text: kept, it
+    would read as a last line cut short."""
+    content = path.read_bytes().removesuffix(_DOS_END)
     _check_not_binary(content, path, kind)
     try:
         return content.decode("utf-8-sig")
@@ -48,6 +50,9 @@ def _read_text(path: Path, kind: str) -> str:
             "iconv -f latin1 -t utf-8)"
         ) from None
 
+
+#: The end-of-file mark some DOS programs end a text file with; the text ends before it.
+_DOS_END = b"\x1a"
 
 #: Bytes no text file holds: the control characters but tab, line feed, vertical tab, form
 #: feed, carriage return and the end-of-file mark (0x1a) some DOS programs end a file with.
@@ -144,7 +149,7 @@ def _c3d_rate(rate: float, path: Path) -> float | None:
 def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     """``ValueError`` when the file ends before the frames its header promises (a last frame of
     65535, the most a header counts, promises at least the frames up to it), or holds more
-    than a long file's parameters count (:func:`_check_c3d_long`).
+    than ezc3d reads of a long file (:func:`_check_c3d_long`).
 
     ezc3d reads the frames that are there and rewrites its header and ``POINT:FRAMES`` to
     match, so the promise is read from the file's own header block: the number of points, of
@@ -175,12 +180,13 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
 
 def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, first: int) -> None:
     """``ValueError`` when the C3D file ``path``, whose header's last frame is 65535, the most
-    it can count, holds frames past those ezc3d read (``c3d``): a file whose parameters count
-    no more (``POINT:FRAMES`` as an integer, no ``POINT:LONG_FRAMES`` or ``TRIAL`` group, as
-    ezc3d itself writes one), whose later frames would be left out unseen. Its frames start at
-    byte ``start``, take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte
-    block of padding may follow them (ezc3d writes a whole one where they end a block), so the
-    frames past them are counted within that."""
+    it can count, holds frames past those ezc3d read (``c3d``), which would be left out unseen:
+    ezc3d reads the frames its header and ``POINT:FRAMES`` count, not those a file's
+    ``POINT:LONG_FRAMES`` or ``TRIAL`` group count past them (nor those of a file, such as
+    ezc3d itself writes, whose parameters count no more). Its frames start at byte ``start``,
+    take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte block of
+    padding may follow them (ezc3d writes a whole one where they end a block), so the frames
+    past them are counted within that."""
     header = c3d["header"]["points"]
     read = int(header["last_frame"]) - int(header["first_frame"]) + 1
     extra = path.stat().st_size - start - read * frame_bytes
@@ -190,12 +196,11 @@ def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, fi
     more = f"{fewest}" if fewest == most else f"{fewest} to {most}"
     n_points, n_analog = _c3d_header(path)[:2]
     raise ValueError(
-        f"{path}: the file holds {extra} bytes past the {read} frames its header and parameters "
-        f"count, room for {more} more frames of {n_points} points and "
-        f"{n_analog} analog samples each (a C3D's header counts at most 65535 frames; "
-        "POINT:FRAMES, POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD counts more, and this "
-        f"file's do not): frames from {first + read} on would be left out unread; export the "
-        "trial as TRC, or in parts"
+        f"{path}: the file holds {extra} bytes past the {read} frames read, room for {more} "
+        f"more frames of {n_points} points and {n_analog} analog samples each (a C3D's header "
+        "counts at most 65535 frames, and frames past those its header and POINT:FRAMES count "
+        "are not read, whatever its POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD say): frames "
+        f"from {first + read} on would be left out unread; export the trial as TRC, or in parts"
     )
 
 
@@ -494,10 +499,11 @@ def _check_cut_after_separator(path: Path, line: int, column: list[str], name: s
 
 
 def _ends_with_newline(path: Path) -> bool:
-    """Whether the file's last byte ends a line (``\\n``, or ``\\r`` of an old Mac file)."""
+    """Whether the file's text (:func:`_read_text`) ends a line with its last byte (``\\n``,
+    or ``\\r`` of an old Mac file)."""
     with path.open("rb") as file:
-        file.seek(max(0, path.stat().st_size - 1))
-        return file.read(1) in (b"\n", b"\r")
+        file.seek(max(0, path.stat().st_size - 2))
+        return file.read().removesuffix(_DOS_END)[-1:] in (b"\n", b"\r")
 
 
 def _whole_number(text: str) -> int | None:
@@ -608,7 +614,7 @@ def read_csv(path: str | Path) -> Recording:
     # after its last separator; either leaves the last column empty. A cut inside the last
     # number leaves no line end. Only then is the file read again to find it.
     if table[table.columns[-1]].isna().any() or not _ends_with_newline(path):
-        _check_csv_fields(path, list(table.columns))
+        _check_csv_fields(path, text, list(table.columns))
     numbers = _csv_frame_numbers(table["frame"], path)
     table["frame"] = numbers  # "7" and "7.0" are one frame
     empty = (table["marker"] == "").to_numpy()
@@ -697,12 +703,12 @@ def _no_repeated_frames(recording: Recording) -> Recording:
 _CHANCE_REPEATS = 0.01
 
 
-def _check_csv_fields(path: Path, header: list[str]) -> None:
-    """``ValueError`` naming the first line of ``path`` with fewer fields than ``header``, or
-    its last line when the file ends inside it right after a separator
-    (:func:`_check_cut_after_separator`)."""
+def _check_csv_fields(path: Path, text: str, header: list[str]) -> None:
+    """``ValueError`` naming the first line of ``path``, whose text is ``text``
+    (:func:`_read_text`), with fewer fields than ``header``, or its last line when the file
+    ends inside it right after a separator (:func:`_check_cut_after_separator`)."""
     last_field = []
-    with path.open(newline="", errors="replace") as file:
+    with io.StringIO(text, newline="") as file:
         records = csv.reader(file)
         next(records)
         for record in records:
