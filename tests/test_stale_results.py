@@ -777,3 +777,17 @@ def test_results_snakemake_has_no_record_of_are_not_taken_as_current(reduced_run
     # Moved aside, they are made again from the edited code.
     shutil.move(run.workdir / "results", tmp_path / "old-results")
     assert "estimate_cmc" in _dry_run(run)
+
+
+# Python's site imports a sitecustomize (or usercustomize) module by name at start-up, from
+# anywhere on the path: one of the user's own, beside the package, runs in every job before its
+# script, and can change what each computes.
+@pytest.mark.xdist_group("reduced_run")
+def test_a_start_up_module_on_the_jobs_path_reruns_every_job_it_runs_in(reduced_run):
+    hook = reduced_run.workdir / "src" / "sitecustomize.py"
+    hook.write_text("import numpy\n\nnumpy.seterr(all='ignore')\n")
+    try:
+        jobs = _dry_run(reduced_run)
+    finally:
+        hook.unlink()
+    _check("a start-up module on the jobs' path", jobs, DATA_JOBS | _jobs("collect"), NOTHING)
