@@ -1089,7 +1089,7 @@ def _record_path(folder, path):
     encoded = base64.urlsafe_b64encode(path.encode()).decode()
     longest = os.pathconf(".", "PC_NAME_MAX") - 1 if os.name == "posix" else 254
     pieces = [encoded[i : i + longest] for i in range(0, len(encoded), longest)]
-    return folder.joinpath(*["@" + p for p in pieces[:-1]], pieces[-1])
+    return folder.joinpath(*[f"@{p}" for p in pieces[:-1]], pieces[-1])
 
 
 def _unrecorded(path):
