@@ -98,3 +98,7 @@ limit_user_jobs(USER_RULES)
 # against the planned fingerprint with.
 track_sources(USER_RULES)
 plan_code_checks()
+
+
+# Files under results/ that Snakemake has no record of are refused: it would take them as current.
+refuse_unrecorded_results()

@@ -607,6 +607,10 @@ def test_processes_starting_at_once_get_the_fingerprint(package, tmp_path):
 # A lab's own modules that an extension imports: beside it, in a package on PYTHONPATH, installed
 # in editable mode. Each case runs fresh processes, with the paths and import hooks a job has.
 _LAB = {
+    # Run at start-up by every process with lab/ on its path, before any script.
+    "lab/sitecustomize.py": """
+        _HOOKED = 1
+        """,
     "ext/mine.py": """
         import json
 
@@ -756,6 +760,7 @@ LAB_EDITS = [
     ("lab/labpkg/methods/sphere.py", True),  # by a name built on its package's
     ("editable/labedit/__init__.py", True),  # installed in editable mode, by a .pth path
     ("hooked/labhook/tools.py", True),  # installed in editable mode, by an import hook
+    ("lab/sitecustomize.py", True),  # imported by name by Python's site at start-up
     ("ext/unrelated.py", False),
     ("lab/labpkg/unused.py", False),
 ]

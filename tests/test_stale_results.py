@@ -28,6 +28,7 @@ import dataclasses
 import json
 import os
 import re
+import shutil
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -753,3 +754,40 @@ def test_an_edit_that_keeps_size_and_time_reruns_on_the_edited_code(
     assert made.returncode == 0, made.stderr[-4000:]
     claims = (run.workdir / target).read_text()
     assert re.search(r"knee–MCP difference \d+\.\d\d\d°", claims), "the old code ran"
+
+
+# Snakemake reruns a job whose code, settings or sources changed only by its record of the job
+# that made the files (.snakemake/metadata). Without it (the folder deleted to clear a lock,
+# results/ copied from another clone or a cluster) it took every file as current, so an edit
+# left stale results and "Nothing to be done": such files are refused before any job.
+@pytest.mark.xdist_group("reduced_run")
+def test_results_snakemake_has_no_record_of_are_not_taken_as_current(reduced_run, tmp_path):
+    run = reduced_run.copy(tmp_path / "run")
+    records = run.workdir / ".snakemake" / "metadata"
+    shutil.move(records, tmp_path / "records")
+    edit = EDITS[0]  # an estimator's keyword default
+    path = run.workdir / edit.path
+    path.write_text(edit.apply(path.read_text()))
+    planned = run.snakemake("--dry-run")
+    message = planned.stdout + planned.stderr
+    assert "Nothing to be done" not in message, "stale results taken as current"
+    assert planned.returncode != 0, message[-3000:]
+    assert "Snakemake has no record of" in message, message[-3000:]
+    assert re.search(r"results/ holds \d+ files", message), message[-3000:]
+    # Moved aside, they are made again from the edited code.
+    shutil.move(run.workdir / "results", tmp_path / "old-results")
+    assert "estimate_cmc" in _dry_run(run)
+
+
+# Python's site imports a sitecustomize (or usercustomize) module by name at start-up, from
+# anywhere on the path: one of the user's own, beside the package, runs in every job before its
+# script, and can change what each computes.
+@pytest.mark.xdist_group("reduced_run")
+def test_a_start_up_module_on_the_jobs_path_reruns_every_job_it_runs_in(reduced_run):
+    hook = reduced_run.workdir / "src" / "sitecustomize.py"
+    hook.write_text("import numpy\n\nnumpy.seterr(all='ignore')\n")
+    try:
+        jobs = _dry_run(reduced_run)
+    finally:
+        hook.unlink()
+    _check("a start-up module on the jobs' path", jobs, DATA_JOBS | _jobs("collect"), NOTHING)

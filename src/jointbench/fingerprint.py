@@ -43,7 +43,9 @@ an editable install's hook among them) without running anything; a module found 
 of the standard library or of installed distributions is not read (Python's version, and the
 package's dependencies' versions, stand for it; the version of a distribution the package does
 not depend on is not recorded). A module imported only by a name taken whole from data must be
-listed under ``extensions`` itself to count.
+listed under ``extensions`` itself to count. The start-up modules ``site`` imports in every
+process (``sitecustomize``, ``usercustomize``), when they are the user's own, count as a job's
+files do (:func:`_site_hooks`).
 
 The package's data files (its schemas, published values: every file in its folders that is not
 a Python module, caches and editors' leftovers aside) count like its modules, byte for byte. A
@@ -889,6 +891,7 @@ def _code_fingerprint(paths: list[Path], package: str, tracked: frozenset[str]) 
             f"inputs {', '.join(map(repr, unknown))}: no data file of the package {package} "
             "by its path relative to the package's folder (data_names)"
         )
+    paths = [*paths, *_site_hooks()]
     own = own_closure(*paths, package=package)
     reached = [*paths, *(path for _, path in own)]
     modules = _closure(found, reached)
@@ -904,6 +907,29 @@ def _code_fingerprint(paths: list[Path], package: str, tracked: frozenset[str]) 
         if name not in tracked:
             digest.update(name.encode() + _file_digest(path).encode())
     return digest.hexdigest()[:16]
+
+
+#: The modules Python's ``site`` imports by name at start-up, wherever the path finds them: they run
+#: in every job's process before its script does.
+_SITE_HOOKS = ("sitecustomize", "usercustomize")
+
+
+def _site_hooks() -> list[Path]:
+    """The files of the start-up modules (:data:`_SITE_HOOKS`) that are the user's own, found
+    on the path as ``site`` finds them: one outside the standard library and installed
+    distributions (a ``sitecustomize.py`` on ``PYTHONPATH``) changes what a job computes as
+    surely as its script, and counts as one of its roots."""
+    hooks = []
+    for name in _SITE_HOOKS:
+        try:
+            spec = importlib.util.find_spec(name)
+        except (ImportError, ValueError):  # in ``sys.modules`` without a spec
+            continue
+        origin = spec.origin if spec is not None and spec.has_location else None
+        if origin and origin.endswith(".py"):
+            if not os.path.realpath(origin).startswith(_library_roots()):
+                hooks.append(Path(origin))
+    return hooks
 
 
 def data_names(paths: Iterable[str | Path], package: str = PACKAGE) -> list[str]:

@@ -1,4 +1,5 @@
 # Helpers shared by the rules: config checks, the study and paper registries, file lists.
+import base64
 import functools
 import os
 import re
@@ -1135,3 +1136,69 @@ class _ShellPath(str):
 
     def __reduce__(self):
         return str, (str(self),)
+
+
+# Snakemake reruns a job whose parameters (its code, its settings, its sources) changed only by
+# its record of the job that made the files (.snakemake/metadata); a file it holds no record of
+# (that folder deleted, results/ copied from another clone or a cluster) it takes as current,
+# whatever made it. Such files are refused before any job runs: no record, no known provenance.
+# A file a killed job left is marked incomplete instead, which Snakemake itself refuses or remakes.
+RECORDS = Path(".snakemake", "metadata")
+INCOMPLETE = Path(".snakemake", "incomplete")
+
+
+def _record_path(folder, path):
+    """Where Snakemake's file store (its default) keeps, in ``folder``, what it knows of the
+    output ``path``: the URL-safe base64 of the path, cut into names the file system allows.
+    """
+    encoded = base64.urlsafe_b64encode(path.encode()).decode()
+    longest = os.pathconf(".", "PC_NAME_MAX") - 1 if os.name == "posix" else 254
+    pieces = [encoded[i : i + longest] for i in range(0, len(encoded), longest)]
+    return folder.joinpath(*[f"@{p}" for p in pieces[:-1]], pieces[-1])
+
+
+def _unrecorded(path):
+    """Whether Snakemake holds neither a record of the output ``path`` nor a mark that the job
+    writing it did not finish."""
+    return not any(_record_path(f, path).exists() for f in (RECORDS, INCOMPLETE))
+
+
+def _persistence_backend(argv):
+    """The store of records a Snakemake command line (``sys.argv[1:]``) names, or None."""
+    for i, argument in enumerate(argv):
+        if argument.startswith("--persistence-backend="):
+            return argument.partition("=")[2]
+        if argument == "--persistence-backend" and i + 1 < len(argv):
+            return argv[i + 1]
+    return None
+
+
+def unrecorded_results():
+    """The files under results/ that a rule writes and that Snakemake holds no record of."""
+    if not Path("results").is_dir():
+        return []
+    products = [o for producer in workflow.rules for o in producer.output]
+    return [
+        name
+        for name in (
+            p.as_posix() for p in sorted(Path("results").rglob("*")) if p.is_file()
+        )
+        if _unrecorded(name) and any(o.match(name) for o in products)
+    ]
+
+
+def refuse_unrecorded_results():
+    """Stop the run, before any job, when results/ holds files of the workflow's rules that
+    Snakemake has no record of (unrecorded_results): it would take them as current. Not on a
+    cluster node, which plans nothing, nor with a store of records other than Snakemake's
+    default one."""
+    if workflow.remote_exec or _persistence_backend(sys.argv[1:]) not in (None, "file"):
+        return
+    found = unrecorded_results()
+    if found:
+        raise ValueError(
+            f"results/ holds {len(found)} files Snakemake has no record of (e.g. {found[0]}): "
+            "their code, config and data are unknown, and Snakemake would take them as current "
+            f"({RECORDS} lost, or results/ copied from elsewhere). Move results/ aside, or "
+            "delete those files, and run again."
+        )
