@@ -239,8 +239,10 @@ def test_a_trc_data_rate_its_times_do_not_keep_is_refused(tmp_path, first, refus
         ([f"{i / 120:.6e}" for i in range(40)], "120"),  # exponent form
         (["", *(f"{i / 100}" for i in range(1, 40))], "100"),  # a time not written
         ([f"{i / 100:.2f}" for i in range(40)], ""),  # no DataRate: no rate to keep
+        (["0"] * 40, "100"),  # a writer that leaves the column unfilled
+        (["0.000"] * 40, "100"),
     ],
-    ids=["rounded", "%g", "exponent", "empty", "no rate"],
+    ids=["rounded", "%g", "exponent", "empty", "no rate", "unfilled", "unfilled-decimals"],
 )
 def test_trc_times_at_the_headers_rate_as_written_read(tmp_path, times, rate):
     assert read(_timed_trc(tmp_path / "t.trc", times, rate)).n_frames == 40

@@ -311,12 +311,13 @@ def _check_trc_times(
     first row that writes a time: by more than half a frame, beyond the rounding of the two
     times as written. Recordings of different rates joined, or a wrong ``DataRate``, would
     otherwise read as frames at one rate. Without a rate, and in a row whose time is empty or
-    no number, there is nothing to compare."""
+    no number, there is nothing to compare; nor in a column that writes one time in every row
+    (left unfilled by its writer: all zeros), which states no rate."""
     if rate is None:
         return
     seconds = pd.to_numeric(pd.Series(times, dtype=object), errors="coerce").to_numpy(float)
     timed = np.flatnonzero(np.isfinite(seconds))
-    if timed.size == 0:
+    if timed.size == 0 or np.all(seconds[timed] == seconds[timed[0]]):
         return
     first = int(timed[0])
     expected = seconds[first] + (np.asarray(numbers) - numbers[first]) / rate
