@@ -736,3 +736,38 @@ def test_a_restart_from_the_eigenvector_is_not_said_to_stop_above_it(method, par
             markers, fatol=0.0, max_iter=3, parameterisation=parameterisation
         )
         assert "not the cost's minimum" not in found.status, (seed, found.status)
+
+
+@pytest.mark.parametrize(
+    ("converged", "at_eigenvector", "said"),
+    [
+        (True, 100.0 - 2e-4, ["warning: not the cost's minimum: "]),
+        (True, 100.0 - 1e-4, []),
+        (True, 100.0 + 1.0, []),
+        (True, float("nan"), []),
+        (False, 100.0 - 1e-4, ["winning start stopped at the iteration/evaluation limit"]),
+        (
+            False,
+            50.0,
+            [
+                "winning start stopped at the iteration/evaluation limit",
+                "warning: not the cost's minimum: ",
+            ],
+        ),
+    ],
+)
+def test_an_axis_search_says_ok_unless_stopped_or_undercut_by_more_than_fatol(
+    converged, at_eigenvector, said
+):
+    """The status of a search that ended at cost 100 with fatol 1e-4: the eigenvector's cost
+    lower by more than fatol (not by fatol itself, nor a NaN cost) says it, after the limit
+    where the search stopped there; nothing said is ``"ok"``."""
+    status = axis_costs._search_status(converged, 100.0, at_eigenvector, 1e-4)
+    parts = status.split("; ")
+    assert len(parts) == max(len(said), 1), status
+    if not said:
+        assert status == "ok"
+    for part, start in zip(parts, said, strict=False):
+        assert part.startswith(start), status
+    if "minimum" in status:
+        assert f"{at_eigenvector:.6g}" in status and "100" in status, status
