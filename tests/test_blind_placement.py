@@ -16,6 +16,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import pytest
 import yaml
@@ -286,6 +287,19 @@ def test_a_trials_digest_is_of_its_coordinates_as_little_endian_doubles_in_the_f
     pq.write_table(table.set_column(table.schema.get_field_index("x"), "x", pa.array(x)), moved)
     changed = trial_digests(moved)
     assert [t for t in expected if changed[t] != expected[t]] == [1]
+
+
+def test_a_dataset_whose_rows_lack_a_trial_its_metadata_counts_draws_no_placements(tmp_path):
+    """A trial without rows has no digest to draw its placement from: the file is refused,
+    naming it and both lists of trials, not placed with the trials it holds."""
+    dataset, _, _, _ = _blind_condition(tmp_path, "hip", trials=3)
+    table = pq.read_table(dataset)
+    kept = table.filter(pc.not_equal(table.column("trial"), 1))
+    cut = tmp_path / "cut.parquet"
+    pq.write_table(kept, cut)
+    assert read_metadata(cut) == read_metadata(dataset)
+    with pytest.raises(ValueError, match=re.escape(f"{cut}: its rows hold trials [0, 2], its")):
+        dataset_placements(cut, SEED, TRANSLATION_MM)
 
 
 def test_the_blind_copy_holds_each_trial_placed_and_every_segment_moved_alike(tmp_path):
