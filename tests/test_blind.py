@@ -725,6 +725,29 @@ def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path):
     assert not any("centroid" in p for p in lm), lm
 
 
+@pytest.mark.pipeline
+def test_a_checkout_where_the_rules_shells_cannot_be_written_still_lists_its_rules(tmp_path):
+    """The shells of the user's rules are written as the workflow loads, also for a command
+    that runs no job (``--list-rules``) in a checkout where they cannot be: it answers as
+    before. A shell written earlier with another confinement, which cannot be replaced, stops
+    the run naming it, as its jobs would run with the grant of another workflow."""
+    copy_workflow(tmp_path)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    (tmp_path / ".snakemake").mkdir()
+    (tmp_path / ".snakemake" / "jointbench").write_text("not a folder")
+    run = run_snakemake(tmp_path, "--list-rules", "--configfile", overlay)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    assert "estimate_centroid" in run.stdout, run.stdout[-3000:]
+    (tmp_path / ".snakemake" / "jointbench").unlink()
+    stale = tmp_path / ".snakemake" / "jointbench" / "shells" / "estimate_centroid" / "bash"
+    stale.mkdir(parents=True)  # in place of the file, which no rename then replaces
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "-n", "--configfile", overlay)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-3000:]
+    assert f"{stale} cannot be replaced" in message, message[-3000:]
+    assert "Building DAG of jobs" not in message, message[-3000:]
+
+
 # A rule of the user's that makes, from each blind copy, the file an external estimator reads.
 _PREPARE_RULE = """
 
