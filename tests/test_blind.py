@@ -678,13 +678,20 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert message.count(said) == 1, message[-3000:]
 
 
-def _handed_down(tmp_path, grid) -> dict[str, dict]:
+def _handed_down(tmp_path, grid, *, prepared: bool = False) -> dict[str, dict]:
     """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
     the jobs of each rule of the user's in :data:`landlock.VARIABLE`, as the shell each rule's
     jobs run with sets it (``.snakemake/jointbench/shells/<rule>/bash``), by rule: the text
-    and the confinement it holds."""
+    and the confinement it holds. With ``prepared``, the centroid reads what a rule of the
+    user's upstream of it (:data:`_PREPARE_RULE`) made of the blind copy, not the copy."""
     tmp_path.mkdir()
     copy_workflow(tmp_path)
+    if prepared:
+        rule = tmp_path / "workflow" / "rules" / "estimators" / "centroid.smk"
+        template = rule.read_text()
+        assert _BLIND_INPUT in template
+        prepared_input = '"results/prepared/{study}/{condition}.parquet",'
+        rule.write_text(template.replace(_BLIND_INPUT, prepared_input) + _PREPARE_RULE)
     overlay = _cmc_only(
         tmp_path, estimators=["LS"], external_estimators=["centroid", "LM"], grid=grid
     )
@@ -716,6 +723,59 @@ def test_what_the_jobs_are_handed_does_not_grow_with_the_conditions(tmp_path):
     assert not any(p.endswith("/results/estimates/cmc/LM") for p in centroid), centroid
     assert any(p.endswith("/results/estimates/cmc/centroid") for p in centroid), centroid
     assert not any("centroid" in p for p in lm), lm
+
+
+@pytest.mark.pipeline
+def test_a_checkout_where_the_rules_shells_cannot_be_written_still_lists_its_rules(tmp_path):
+    """The shells of the user's rules are written as the workflow loads, also for a command
+    that runs no job (``--list-rules``) in a checkout where they cannot be: it answers as
+    before. A shell written earlier with another confinement, which cannot be replaced, stops
+    the run naming it, as its jobs would run with the grant of another workflow."""
+    copy_workflow(tmp_path)
+    overlay = _cmc_only(tmp_path, estimators=["LS"], external_estimators=["centroid"])
+    (tmp_path / ".snakemake").mkdir()
+    (tmp_path / ".snakemake" / "jointbench").write_text("not a folder")
+    run = run_snakemake(tmp_path, "--list-rules", "--configfile", overlay)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    assert "estimate_centroid" in run.stdout, run.stdout[-3000:]
+    (tmp_path / ".snakemake" / "jointbench").unlink()
+    stale = tmp_path / ".snakemake" / "jointbench" / "shells" / "estimate_centroid" / "bash"
+    stale.mkdir(parents=True)  # in place of the file, which no rename then replaces
+    run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "-n", "--configfile", overlay)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-3000:]
+    assert f"{stale} cannot be replaced" in message, message[-3000:]
+    assert "Building DAG of jobs" not in message, message[-3000:]
+
+
+# A rule of the user's that makes, from each blind copy, the file an external estimator reads.
+_PREPARE_RULE = """
+
+rule prepare_blind:
+    input:
+        "results/blind/{study}/{condition}.parquet",
+    output:
+        "results/prepared/{study}/{condition}.parquet",
+    shell:
+        "cp {input} {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_what_a_rule_reads_from_another_of_the_users_is_handed_by_folder(tmp_path):
+    """An estimator reading each condition's file of a rule of the user's upstream of it is
+    handed that rule's folder to read, not each file, so that what it is handed does not grow
+    with the conditions; the upstream rule is handed none of the estimator's folders."""
+    one = {"marker_set": ["M"], "rom_deg": [15], "noise_mm": [1.0]}
+    many = {"marker_set": ["M", "H"], "rom_deg": [5, 15, 45], "noise_mm": [0.5, 1.0, 2.0]}
+    alone = _handed_down(tmp_path / "one", one, prepared=True)
+    grid = _handed_down(tmp_path / "all", many, prepared=True)
+    centroid, prepare = grid["estimate_centroid"], grid["prepare_blind"]
+    assert len(centroid["text"]) == len(alone["estimate_centroid"]["text"]), centroid
+    assert any(p.endswith("/results/prepared/cmc") for p in centroid["readable"]), centroid
+    assert not any(p.endswith(".parquet") for p in centroid["readable"]), centroid
+    assert any(p.endswith("/results/prepared/cmc") for p in prepare["writable"]), prepare
+    assert not any("centroid" in p for p in (*prepare["readable"], *prepare["writable"])), prepare
 
 
 @pytest.mark.pipeline

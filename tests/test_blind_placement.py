@@ -16,6 +16,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import pytest
 import yaml
@@ -30,6 +31,7 @@ from jointbench.resultfiles.parquet import (
     read_dataset,
     read_metadata,
     read_table,
+    trial_digests,
     write_blind_dataset,
     write_dataset,
     write_table,
@@ -254,6 +256,50 @@ def test_a_trial_without_a_digest_of_its_markers_draws_no_placement():
     """Its motion would be drawn from the public seed alone."""
     with pytest.raises(ValueError, match="trial 1: no digest of its markers"):
         draw_placements(SEED, "cmc", _condition("cmc"), {0: b"x", 1: b""}, TRANSLATION_MM)
+
+
+@pytest.mark.parametrize("study", ["hip", "hip_sta"])
+def test_a_trials_digest_is_of_its_coordinates_as_little_endian_doubles_in_the_files_order(
+    tmp_path, study
+):
+    """Each trial's digest is the SHA-256 of ``x, y, z`` of its rows in the file's order as
+    little-endian float64, whatever the host's byte order and however the file is cut into row
+    groups (a trial across several); one sample moved by one ulp changes its trial's digest
+    alone."""
+    dataset, _, _, _ = _blind_condition(tmp_path, study, trials=3)
+    table = pq.read_table(dataset)
+    frame = table.select(["trial", "x", "y", "z"]).to_pandas()
+    expected = {
+        int(trial): hashlib.sha256(
+            rows[["x", "y", "z"]].to_numpy().astype("<f8", order="C").tobytes()
+        ).digest()
+        for trial, rows in frame.groupby("trial", sort=True)
+    }
+    assert trial_digests(dataset) == expected
+    cut = tmp_path / "cut.parquet"
+    pq.write_table(table, cut, row_group_size=len(frame) // 5 + 1)
+    assert pq.ParquetFile(cut).num_row_groups > 3
+    assert trial_digests(cut) == expected
+    x = table.column("x").to_numpy().copy()
+    row = int(np.flatnonzero(np.isfinite(x) & (frame["trial"].to_numpy() == 1))[-1])
+    x[row] = np.nextafter(x[row], np.inf)
+    moved = tmp_path / "moved.parquet"
+    pq.write_table(table.set_column(table.schema.get_field_index("x"), "x", pa.array(x)), moved)
+    changed = trial_digests(moved)
+    assert [t for t in expected if changed[t] != expected[t]] == [1]
+
+
+def test_a_dataset_whose_rows_lack_a_trial_its_metadata_counts_draws_no_placements(tmp_path):
+    """A trial without rows has no digest to draw its placement from: the file is refused,
+    naming it and both lists of trials, not placed with the trials it holds."""
+    dataset, _, _, _ = _blind_condition(tmp_path, "hip", trials=3)
+    table = pq.read_table(dataset)
+    kept = table.filter(pc.not_equal(table.column("trial"), 1))
+    cut = tmp_path / "cut.parquet"
+    pq.write_table(kept, cut)
+    assert read_metadata(cut) == read_metadata(dataset)
+    with pytest.raises(ValueError, match=re.escape(f"{cut}: its rows hold trials [0, 2], its")):
+        dataset_placements(cut, SEED, TRANSLATION_MM)
 
 
 def test_the_blind_copy_holds_each_trial_placed_and_every_segment_moved_alike(tmp_path):

@@ -1,11 +1,13 @@
 # Helpers shared by the rules: config checks, the study and paper registries, file lists.
 import base64
+import contextlib
 import functools
 import os
 import re
 import shlex
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -960,8 +962,10 @@ def _rule_shell(name, confinement):
     """The absolute path of the shell the jobs of the rule ``name`` run with, a script named bash
     (Snakemake gives its prefix to a shell of that name alone) that runs the limited shell
     (jointbench.running.timelimit) with ``confinement`` in landlock.VARIABLE, so that each
-    rule's jobs get their own. Written where it differs, whole and then moved into place:
-    the Snakemake processes of a cluster's jobs load the workflow at once."""
+    rule's jobs get their own. Written where it differs (_replaced). Where it cannot be, and
+    none was written before, no job can run either (a read-only checkout): the path is returned
+    for a command that runs none (--list-rules), and a job would find no shell there. One
+    written before that cannot be replaced is refused, naming it."""
     path = os.path.abspath(os.path.join(RULE_SHELLS, name, "bash"))
     variable = landlock.VARIABLE
     text = (
@@ -978,12 +982,33 @@ def _rule_shell(name, confinement):
     )
     if os.path.isfile(path) and Path(path).read_text() == text:
         return path
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    temporary = f"{path}.{os.getpid()}"
-    Path(temporary).write_text(text)
-    os.chmod(temporary, 0o755)
-    os.replace(temporary, path)
+    try:
+        _replaced(path, text)
+    except OSError as error:
+        if os.path.lexists(path):
+            raise ValueError(
+                f"{path} cannot be replaced ({error.strerror}): the jobs of rule {name} would "
+                "run with the confinement written there before, not this workflow's; remove "
+                "it, or make .snakemake/ writable"
+            ) from error
     return path
+
+
+def _replaced(path, text):
+    """Write ``text`` to an executable file at ``path``, whole and then moved into place, from
+    a file of a name no other process has: the Snakemake processes of a cluster's jobs load the
+    workflow at once, on hosts whose process ids may be the same."""
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix="bash.", dir=os.path.dirname(path))
+    try:
+        with os.fdopen(handle, "w") as file:
+            file.write(text)
+        os.chmod(temporary, 0o755)
+        os.replace(temporary, path)
+    finally:
+        # Left only where the move failed.
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(temporary)
 
 
 def _opened_by_users(users):

@@ -599,7 +599,13 @@ def _result(array, trial, costs, runs, method, parameterisation, fatol) -> AxisR
     foot = m + direction * float(direction @ (centroid - m))
     eigenvalues, eigenvectors = np.linalg.eigh(costs.scatter[trial])
     eigenvector = canonical_sign(eigenvectors[:, 0])
-    at_eigenvector = float(getattr(costs, method)(eigenvector[None], np.array([trial]))[0])
+    # The search's own cost at the restart's own start, not the cost of the unit vector: the
+    # restart then ends at most at it exactly, not above it by the rounding between the two.
+    at_eigenvector = float(
+        costs.search_cost(method, parameterisation)(
+            _restart_starts([eigenvector], parameterisation), np.array([trial])
+        )[0]
+    )
     status = _search_status(converged, float(f_best), at_eigenvector, fatol)
     return AxisResult(
         point=m,
@@ -761,11 +767,8 @@ def _self_check_many(
         markers if isinstance(markers, np.ndarray) else list(markers),
         np.stack([np.asarray(result.point) for result in results]),
     )
-    eigenvectors = [np.asarray(result.diagnostics["eigenvector"]) for result in results]
-    starts = (
-        np.array([direction_to_angles(eigenvector) for eigenvector in eigenvectors])
-        if parameterisation == "angles"
-        else np.stack(eigenvectors)
+    starts = _restart_starts(
+        [np.asarray(result.diagnostics["eigenvector"]) for result in results], parameterisation
     )
     limits = {"xatol": xatol, "fatol": fatol, "max_iter": max_iter, "max_fev": max_fev}
     if method == "planar" and parameterisation == "angles":
@@ -776,6 +779,14 @@ def _self_check_many(
         _judged(result, costs, trial, runs[trial : trial + 1], parameterisation, fatol)
         for trial, result in enumerate(results)
     ]
+
+
+def _restart_starts(eigenvectors: list[np.ndarray], parameterisation: str) -> np.ndarray:
+    """The self-check's restarts' starts at ``eigenvectors`` (each (3,), unit) in the search's
+    ``parameterisation``: ``(k, 2)`` angles [rad] or ``(k, 3)`` vectors."""
+    if parameterisation == "angles":
+        return np.array([direction_to_angles(eigenvector) for eigenvector in eigenvectors])
+    return np.stack(eigenvectors)
 
 
 def _planar_restarts(scatter: np.ndarray, starts: np.ndarray, **limits) -> list[SimplexResult]:

@@ -568,16 +568,18 @@ def read_trial_numbers(path: str | Path) -> np.ndarray:
 @_names_unreadable_file
 def trial_digests(path: str | Path) -> dict[int, bytes]:
     """Per trial of the dataset file ``path``: the SHA-256 digest of its marker coordinates,
-    ``x, y, z`` of every row of the trial as float64 in the file's order, read a row group at a
-    time. Simulated noise makes each trial's digest its own, and only a file holding the
-    trial's markers as simulated (the dataset, not its blind copy) gives it."""
+    ``x, y, z`` of every row of the trial as little-endian float64 in the file's order, read a
+    row group at a time. Simulated noise makes each trial's digest its own, and only a file
+    holding the trial's markers as simulated (the dataset, not its blind copy) gives it."""
     hashes = {}
     source = pq.ParquetFile(path)
     for group in range(source.num_row_groups):
         table = source.read_row_group(group, columns=["trial", "x", "y", "z"])
         trials = table.column("trial").to_numpy()
         coordinates = np.column_stack(
-            [table.column(axis).to_numpy().astype(np.float64) for axis in "xyz"]
+            # Little-endian whatever the host's: the placements drawn from the digests, and
+            # so the blind copies and external estimates, are the same on every machine.
+            [table.column(axis).to_numpy().astype("<f8") for axis in "xyz"]
         )
         order = np.argsort(trials, kind="stable")
         found, first = np.unique(trials[order], return_index=True)
