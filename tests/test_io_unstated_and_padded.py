@@ -8,6 +8,7 @@ from __future__ import annotations
 import struct
 import warnings
 
+import ezc3d
 import numpy as np
 import pytest
 from test_cli import run
@@ -17,6 +18,7 @@ from test_io_units import fit_knee, knee_legs, write_trc  # noqa: F401 (a fixtur
 from test_user_recordings import write_long_csv
 
 from jointbench.io import read
+from jointbench.io.units import UNIT_TO_MM
 
 NO_UNIT = "the unit the file is read in (it states no unit; read as mm)"
 
@@ -345,3 +347,38 @@ def test_a_csv_of_another_layout_is_refused_naming_where(tmp_path, rows, refused
     path = tmp_path / "trial.csv"
     path.write_text("\n".join(rows) + "\n")
     assert _refusal(path).startswith(f"{path}: {refused}")
+
+
+def _c3d_with_a_second_point_group(path, units):
+    """A C3D of three markers in metres (stated 'm') whose POINT group is written twice: the
+    first without ``UNITS`` (renamed ``UNITZ``), the second holding ``UNITS`` ``units``, as a
+    program that appends a parameter under a group already written may write it. ezc3d reads
+    the two as one POINT group."""
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = [100.0]
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = ["A", "B", "C"]
+    c3d.add_parameter("ZZZZZ", "UNITS", [units])
+    points = np.ones((4, 3, 20))
+    points[:3] = np.transpose(_markers(), (2, 1, 0)) / 1000.0
+    c3d["data"]["points"] = points
+    c3d.write(str(path))
+    content = bytearray(path.read_bytes())
+    name = content.index(b"\x01UNITS") + 1
+    content[name : name + 5] = b"UNITZ"
+    group = content.index(b"ZZZZZ")
+    content[group : group + 5] = b"POINT"
+    path.write_bytes(bytes(content))
+    assert ezc3d.c3d(str(path))["parameters"]["POINT"]["UNITS"]["value"] == [units]
+    return path
+
+
+@pytest.mark.parametrize("units", ["m", "mm"])
+def test_a_unit_stated_in_a_point_group_written_twice_is_read(tmp_path, units):
+    """The parameter walk looked in the first group of the name only: the file was said to
+    state no unit, and its metres were read as millimetres."""
+    path = _c3d_with_a_second_point_group(tmp_path / "twice.c3d", units)
+    recording = _read_quietly(path)
+    assert recording.units == units
+    np.testing.assert_allclose(
+        recording.markers, _markers() / 1000.0 * UNIT_TO_MM[units], rtol=1e-6
+    )

@@ -268,10 +268,14 @@ def _c3d_parameter(path: Path, group: str, name: str) -> tuple[int, bytes, str |
             at = body - 2 + offset
     except (IndexError, struct.error):
         return None
+    # A group may be written more than once (a program appending a parameter to it), each
+    # with an id of its own; ezc3d reads them as one group, and so the parameter is looked
+    # for under each.
     ids = [number for number, title in groups.items() if title == group.upper()]
-    if not ids or (ids[0], name.upper()) not in found:
+    entries = [found[(number, name.upper())] for number in ids if (number, name.upper()) in found]
+    if not entries:
         return None
-    kind, value = found[(ids[0], name.upper())]
+    kind, value = entries[0]
     return kind, value, None if processor == 85 and kind == 4 else order
 
 
