@@ -382,3 +382,24 @@ def test_a_unit_stated_in_a_point_group_written_twice_is_read(tmp_path, units):
     np.testing.assert_allclose(
         recording.markers, _markers() / 1000.0 * UNIT_TO_MM[units], rtol=1e-6
     )
+
+
+def test_a_c3d_zero_filled_throughout_names_every_frame(tmp_path):
+    path = write_c3d(tmp_path / "zeros.c3d", "ABC", np.zeros((20, 3, 3)))
+    every = ZERO_FILLED.replace("frames 16 to 20 (the last 5)", "frames 1 to 20 (the last 20)")
+    with pytest.warns(UserWarning) as caught:
+        recording = read(path)
+    assert [str(w.message) for w in caught] == [f"{path}: {every}"]
+    assert np.isnan(recording.markers).all()
+
+
+def test_a_parameter_section_that_counts_no_blocks_is_read_to_the_frames(tmp_path):
+    """A writer that leaves the parameter section's block count 0: its parameters run to the
+    block the header places the frames in, and the unit they state is read."""
+    path = write_c3d(tmp_path / "m.c3d", "ABC", _markers() / 1000.0, units="m")
+    content = bytearray(path.read_bytes())
+    content[(content[0] - 1) * 512 + 2] = 0
+    path.write_bytes(bytes(content))
+    recording = _read_quietly(path)
+    assert recording.units == "m"
+    np.testing.assert_allclose(recording.markers, _markers(), rtol=1e-6)
