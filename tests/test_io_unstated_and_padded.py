@@ -403,3 +403,18 @@ def test_a_parameter_section_that_counts_no_blocks_is_read_to_the_frames(tmp_pat
     recording = _read_quietly(path)
     assert recording.units == "m"
     np.testing.assert_allclose(recording.markers, _markers(), rtol=1e-6)
+
+
+@pytest.mark.parametrize("line", [3, 4])
+def test_a_trc_header_line_of_spaces_is_refused_as_not_tab_separated(tmp_path, line):
+    """Line 3 of spaces was refused as a header with no 'Units' while naming line 2's Units
+    key, line 4 as naming no marker."""
+    path = write_trc(tmp_path / "trial.trc", "ABC", _markers())
+    lines = path.read_text().splitlines()
+    lines[line - 1] = " ".join(lines[line - 1].split("\t"))
+    path.write_text("\n".join(lines) + "\n")
+    assert _refusal(path) == (
+        f"{path}: line {line} is not tab-separated: a TRC file's fields are separated by tabs, "
+        "and spaces cannot tell an empty field (a gap) from none, nor a label with a space in "
+        "it; save the file with tabs"
+    )

@@ -430,7 +430,10 @@ def read_trc(path: str | Path) -> Recording:
     lines = _read_text(path, "TRC").splitlines()
     if len(lines) < 6:
         raise ValueError(f"{path}: too short for a TRC file (needs 5 header lines and data)")
-    _check_tab_separated(lines, 1, path)
+    # The header's keys, their values and the labels (lines 2 to 4): read split at tabs, a
+    # line of spaces would be refused as lacking what it holds.
+    for index in (1, 2, 3):
+        _check_tab_separated(lines, index, path)
     keys, values = lines[1].split("\t"), lines[2].split("\t")
     header = {key.strip(): value.strip() for key, value in zip(keys, values, strict=False)}
     if "Units" not in header:
