@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from jointbench.io.recording import Recording
-from jointbench.io.units import UNIT_READ, UNIT_TO_MM, to_mm
+from jointbench.io.units import UNIT_READ, UNIT_TO_MM, read_unit, to_mm
 
 __all__ = ["UNIT_TO_MM", "read", "read_c3d", "read_csv", "read_trc"]
 
@@ -125,7 +125,7 @@ def read_c3d(path: str | Path) -> Recording:
     points = c3d["data"]["points"]
     labels = _c3d_labels(c3d["parameters"]["POINT"], points.shape[1], path)
     units = _c3d_units(c3d, path, len(labels))
-    markers = np.transpose(points[:3], (2, 1, 0)) * to_mm(units or UNIT_READ, path)
+    markers = np.transpose(points[:3], (2, 1, 0)) * to_mm(read_unit(units), path)
     residuals = c3d["data"]["meta_points"]["residuals"]
     if residuals.size:
         markers[np.transpose(residuals[0]) < 0] = np.nan

@@ -39,8 +39,8 @@ from jointbench.estimators.validation import (
     span_bound,
 )
 from jointbench.io.units import (
-    UNIT_READ,
     fitting_units,
+    read_unit,
     the_files_unit,
     unit_hint,
     unit_read_in,
@@ -376,7 +376,7 @@ def _check_unit(
         return
     if span > bound.largest_mm:
         broken += bound.why_not_lab
-    read_in = recording.units or UNIT_READ
+    read_in = read_unit(recording.units)
     hint = unit_hint(span, read_in, bound.largest_mm)
     if span > bound.largest_mm and fitting_units(span, read_in, bound.largest_mm) == {}:
         raise ValueError(

@@ -10,6 +10,7 @@ __all__ = [
     "UNIT_READ",
     "UNIT_TO_MM",
     "fitting_units",
+    "read_unit",
     "the_files_unit",
     "to_mm",
     "unit_hint",
@@ -90,6 +91,12 @@ def unit_hint(span_mm: float, stated: str, largest_mm: float) -> str:
     return "its numbers look like " + " or ".join(
         f"{name} read as {read_as} (a cluster {size:.3g} mm across)" for name, size in fits.items()
     )
+
+
+def read_unit(stated: str) -> str:
+    """The unit a file's coordinates are read in, given the unit it ``stated`` (``""`` where
+    it states none, read as :data:`UNIT_READ`)."""
+    return stated or UNIT_READ
 
 
 def unit_read_in(stated: str) -> str:
