@@ -17,7 +17,7 @@ from test_io_recordings import write_c3d
 from test_io_units import fit_knee, knee_legs, write_trc  # noqa: F401 (a fixture)
 from test_user_recordings import write_long_csv
 
-from jointbench.io import read
+from jointbench.io import read, readers
 from jointbench.io.units import UNIT_TO_MM
 
 NO_UNIT = "the unit the file is read in (it states no unit; read as mm)"
@@ -418,3 +418,16 @@ def test_a_trc_header_line_of_spaces_is_refused_as_not_tab_separated(tmp_path, l
         "and spaces cannot tell an empty field (a gap) from none, nor a label with a space in "
         "it; save the file with tabs"
     )
+
+
+@pytest.mark.parametrize("units", ["m", "cm"])
+def test_a_unit_other_than_mm_that_ezc3d_reads_is_the_files_own(tmp_path, monkeypatch, units):
+    """ezc3d supplies only 'mm' for a file that states no unit: any other unit it reads came
+    from the file, and is kept where the package's own walk of the parameters finds no
+    ``POINT:UNITS`` (a layout it does not know), not replaced by 'mm' under a warning, which
+    would read metres as millimetres."""
+    path = write_c3d(tmp_path / "m.c3d", "ABC", _markers() / UNIT_TO_MM[units], units=units)
+    monkeypatch.setattr(readers, "_c3d_parameter", lambda *args: None)
+    recording = _read_quietly(path)
+    assert recording.units == units
+    np.testing.assert_allclose(recording.markers, _markers(), rtol=1e-6)

@@ -166,12 +166,13 @@ def _c3d_labels(point: dict, n_points: int, path: Path) -> list[str]:
 def _c3d_units(c3d: ezc3d.c3d, path: Path, n_points: int) -> str:
     """The point unit the C3D file ``path`` of ``n_points`` points states in ``POINT:UNITS``,
     ``""`` where it states none: no such parameter, which ezc3d adds as ``mm`` on reading (so
-    the file's own parameters are looked at), or a blank one. Its coordinates are then read as
-    mm, which a warning says, unless it holds no points (an analog-only file), whose unit
-    nothing reads."""
+    the file's own parameters are looked at for an ``mm``), or a blank one. Its coordinates
+    are then read as mm, which a warning says, unless it holds no points (an analog-only
+    file), whose unit nothing reads. A unit other than ``mm`` is the file's whatever the walk
+    of its parameters finds: ezc3d supplies no other."""
     value = c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])
     stated = str(value[0]).strip() if len(value) else ""
-    if stated and _c3d_parameter(path, "POINT", "UNITS") is not None:
+    if stated and (stated != "mm" or _c3d_parameter(path, "POINT", "UNITS") is not None):
         return stated
     if n_points == 0:
         return ""
