@@ -45,7 +45,8 @@ def test_scattered_frames_in_metres_are_named():
 
 def _four_markers(frames: np.ndarray, gap: np.ndarray, *, units: str = "mm") -> Recording:
     """A segment of four markers D1 to D4 turning about the joint ``(120, 4, 3)`` [mm], its
-    ``frames`` divided by 1000 and D4 missing in ``gap``."""
+    ``frames`` divided by 1000 and D4 missing in ``gap``, of a file that states ``units``
+    (``""``: none)."""
     _, distal = two_segments(120, proximal_moves=False)
     normal = np.cross(distal[:, 1] - distal[:, 0], distal[:, 2] - distal[:, 0])
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
@@ -53,7 +54,12 @@ def _four_markers(frames: np.ndarray, gap: np.ndarray, *, units: str = "mm") -> 
     markers[frames] /= 1000.0
     markers[gap, 3] = np.nan
     return Recording(
-        ("D1", "D2", "D3", "D4"), markers, rate_hz=100.0, first_frame=1, source="trial.csv"
+        ("D1", "D2", "D3", "D4"),
+        markers,
+        rate_hz=100.0,
+        first_frame=1,
+        source="trial.csv",
+        units=units,
     )
 
 
@@ -86,3 +92,16 @@ def test_the_refusal_says_which_frames_are_in_the_files_unit(metres, smaller):
     else:
         assert "those frames are a body segment's size in the file's 'mm'" in text
     assert "among the file's" not in text
+
+
+def test_the_refusal_of_a_file_that_states_no_unit_names_the_unit_it_is_read_in():
+    # A CSV states no unit: its frames are not said to be in a unit "the file's ''".
+    recording = _four_markers(np.arange(40, 80), np.arange(0), units="")
+    with pytest.raises(ValueError, match="another unit") as error:
+        fit(recording, "center", "D1,D2,D3,D4", method="LS")
+    text = str(error.value)
+    assert (
+        "the rest are a body segment's size in mm, which the file is read in (it states no unit)"
+        in text
+    )
+    assert "the file's ''" not in text
