@@ -102,3 +102,20 @@ def test_listing_an_external_estimator_keeps_the_studys_own():
     listed = _yaml_after("### Any language: one rule")["studies"]["cmc"]["external_estimators"]
     own = shipped["studies"]["cmc"]["external_estimators"]
     assert listed[: len(own)] == own and listed[len(own) :] == ["centroid"]
+
+
+#: The texts that list the run's files: the README, the results folder's own and the docs.
+LISTINGS = [
+    ROOT / "README.md",
+    ROOT / "results" / "README.md",
+    *sorted((ROOT / "docs").glob("*.md")),
+]
+
+
+@pytest.mark.parametrize("path", LISTINGS, ids=lambda path: path.name)
+def test_every_table_listed_names_its_html_page(path):
+    """Every table a run writes as CSV and Markdown it writes as an HTML page too (the report
+    shows that page): a listing of ``tables/NAME.{csv,md}`` sent a reader of the results
+    folder to two of its three files."""
+    listed = re.findall(r"tables/[\w*{}]+\.\{([a-z,]+)\}", path.read_text())
+    assert all("html" in forms.split(",") for forms in listed if "csv" in forms), listed
