@@ -748,6 +748,70 @@ def test_a_checkout_where_the_rules_shells_cannot_be_written_still_lists_its_rul
     assert "Building DAG of jobs" not in message, message[-3000:]
 
 
+# Names Snakemake accepts for a rule (its ``name:`` directive takes any string): a line break
+# followed by a command, a path up and out, a name longer than a file name may be, letters
+# beyond ASCII, two names one case apart, quotes and a command substitution.
+_ODD_NAMES = (
+    "odd\ntouch INJECTED #",
+    "../../../../escaped",
+    "r" * 300,
+    "Règle_ü",
+    "Fold",
+    "fold",
+    "quote'\"$(touch INJECTED)",
+)
+
+_ODD_RULE = """
+
+rule:
+    name:
+        {name!r}
+    output:
+        "results/odd{number}/made.txt",
+    shell:
+        "echo made > {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_rule_of_any_name_snakemake_accepts_runs_in_a_shell_of_its_own(tmp_path):
+    """Each rule of the user's gets its own shell, inside the folder of shells, whatever its
+    name: the shell's text runs nothing of the name, its file name fits the file system, and
+    two names one case apart do not share a folder on a file system blind to case. Each job
+    runs with its rule's shell and makes its file."""
+    workdir = tmp_path / "checkout"
+    workdir.mkdir()
+    copy_workflow(workdir)
+    rules = workdir / "workflow" / "rules" / "estimators" / "odd.smk"
+    rules.write_text(
+        "".join(_ODD_RULE.format(name=name, number=i) for i, name in enumerate(_ODD_NAMES))
+    )
+    overlay = _cmc_only(workdir, estimators=["LS"])
+    targets = [f"results/odd{i}/made.txt" for i in range(len(_ODD_NAMES))]
+    run = run_snakemake(workdir, *targets, "--configfile", overlay)
+    message = run.stdout + run.stderr
+    assert run.returncode == 0, message[-3000:]
+    for target in targets:
+        assert (workdir / target).read_text() == "made\n", target
+    assert not list(tmp_path.rglob("INJECTED")), "a rule's name ran as a command"
+    assert not (tmp_path / "escaped").exists(), "a shell written outside its folder"
+    shells = sorted((workdir / ".snakemake" / "jointbench" / "shells").glob("*/bash"))
+    folders = [shell.parent.name for shell in shells]
+    assert len({folder.casefold() for folder in folders}) == len(folders), folders
+    assert all(len(folder.encode()) <= 255 for folder in folders), folders
+    named = set()
+    for shell in shells:
+        (line,) = re.findall(
+            r"^# The limited shell of the jobs of rule (.*), with ", shell.read_text(), re.M
+        )
+        named.add(json.loads(line))
+        assert not any(
+            row and not row.startswith(("#", "case", "*", "esac", "exec "))
+            for row in shell.read_text().splitlines()
+        ), shell.read_text()
+    assert set(_ODD_NAMES) <= named, named
+
+
 # A rule of the user's that makes, from each blind copy, the file an external estimator reads.
 _PREPARE_RULE = """
 

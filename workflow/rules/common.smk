@@ -2,6 +2,8 @@
 import base64
 import contextlib
 import functools
+import hashlib
+import json
 import os
 import re
 import shlex
@@ -966,11 +968,14 @@ def _rule_shell(name, confinement):
     none was written before, no job can run either (a read-only checkout): the path is returned
     for a command that runs none (--list-rules), and a job would find no shell there. One
     written before that cannot be replaced is refused, naming it."""
-    path = os.path.abspath(os.path.join(RULE_SHELLS, name, "bash"))
+    path = os.path.abspath(os.path.join(RULE_SHELLS, _shell_folder(name), "bash"))
     variable = landlock.VARIABLE
     text = (
         "#!/bin/sh\n"
-        f"# The limited shell of the jobs of rule {name}, with what they may open under "
+        # The name as JSON: ASCII on one line, whatever it holds (a line break would end the
+        # comment and run the rest).
+        f"# The limited shell of the jobs of rule {json.dumps(name)}, with what they may "
+        "open under "
         "results/ (written by workflow/rules/common.smk as the workflow loads).\n"
         "# Within a job (a script's shell() call) the confinement its keeper handed down is\n"
         "# kept: the job cannot widen it, nor list again what the keeper listed.\n"
@@ -992,6 +997,27 @@ def _rule_shell(name, confinement):
                 "it, or make .snakemake/ writable"
             ) from error
     return path
+
+
+# A rule's name as its shell's folder is named when it is plain: lower-case ASCII letters,
+# digits and underscores, short enough for any file system.
+_PLAIN_RULE_NAME = re.compile(r"[a-z0-9_]{1,100}")
+
+
+def _shell_folder(name):
+    """The folder, in RULE_SHELLS, of the shell of the rule ``name``: a plain name
+    (_PLAIN_RULE_NAME, as the workflow's rules are named) itself; any other (Snakemake's
+    ``name:`` takes any string: a path, a line break, a name longer than a file's, letters
+    beyond ASCII, another's name in other case) its plain characters in lower case, at most
+    64, then a hyphen, which no plain name holds, and a digest of the name itself. Names
+    differing in anything, case included, get folders differing in more than case, on one
+    line, inside RULE_SHELLS."""
+    if _PLAIN_RULE_NAME.fullmatch(name):
+        return name
+    plain = "".join(
+        c for c in name.lower() if c in "abcdefghijklmnopqrstuvwxyz0123456789_"
+    )
+    return f"{plain[:64]}-{hashlib.sha256(name.encode('utf-8', 'surrogatepass')).hexdigest()[:16]}"
 
 
 def _replaced(path, text):
