@@ -8,6 +8,7 @@ Snakemake on the real workflow.
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
 import json
 import os
 import site
@@ -294,6 +295,20 @@ def test_modules_found_by_a_registry_are_in_the_fingerprint():
     assert {"jointbench.simulate.hip_sta", "jointbench.simulate.cmc"} <= simulate
     render = set(module_closure(scripts / "render.py"))
     assert {"jointbench.papers.paper_sta", "jointbench.papers.paper_c"} <= render
+
+
+def test_numbas_code_generator_is_recorded_as_a_dependency():
+    # One Numba release allows several of llvmlite's, each with its own LLVM.
+    assert dependency_versions()["llvmlite"] == importlib.metadata.version("llvmlite")
+
+
+def test_a_compilers_version_is_its_first_line_and_none_is_named(tmp_path, monkeypatch):
+    compiler = tmp_path / "mycc"
+    compiler.write_text("#!/bin/sh\necho 'mycc (Lab) 12.2.0'\necho 'Copyright'\n")
+    compiler.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ['PATH']}")
+    assert fingerprint.compiler_version("mycc") == "mycc (Lab) 12.2.0"
+    assert fingerprint.compiler_version("no-such-compiler-here") == "not found"
 
 
 def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):

@@ -92,6 +92,7 @@ import py_compile
 import re
 import shutil
 import site
+import subprocess
 import sys
 import tempfile
 import time
@@ -114,6 +115,7 @@ __all__ = [
     "OnePass",
     "check_bytecode_by_content",
     "code_fingerprint",
+    "compiler_version",
     "data_closure",
     "data_names",
     "dependency_versions",
@@ -801,7 +803,8 @@ def _digest_of(text: str) -> bytes:
 
 def dependency_versions(package: str = PACKAGE) -> dict[str, str]:
     """The installed version of Python and of every distribution ``package`` requires (its
-    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too.
+    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too;
+    and of llvmlite, Numba's code generator (:data:`_CODE_GENERATORS`).
     With Numba's compiler switched off (:func:`numba_jit_disabled`), also ``numba_jit``:
     ``"disabled"``."""
     versions = {"python": platform.python_version(), **dict(_installed_versions(package))}
@@ -853,7 +856,40 @@ def _installed_versions(package: str) -> tuple[tuple[str, str], ...]:
             versions[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
             versions[name] = "not installed"
+    for name in _CODE_GENERATORS:
+        try:
+            versions[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            continue  # a dependency without its compiler compiles nothing
     return tuple(versions.items())
+
+
+#: Distributions that make the machine code the package's dependencies run, not required by the
+#: package itself: llvmlite holds the LLVM that Numba compiles the kernels with, one Numba
+#: version allowing several of its releases, and another LLVM may optimise a kernel otherwise.
+_CODE_GENERATORS = ("llvmlite",)
+
+
+def compiler_version(command: str) -> str:
+    """The first line ``command --version`` prints (a C compiler's name and version, ``cc
+    (Debian 12.2.0-14) 12.2.0``), or ``"not found"``: what a rule compiling a program records
+    as a parameter, so that another compiler, which may optimise the program otherwise, makes
+    it again. Asked once per process."""
+    return _compiler_version(shutil.which(command) or "")
+
+
+@cache
+def _compiler_version(path: str) -> str:
+    if not path:
+        return "not found"
+    try:
+        done = subprocess.run(
+            [path, "--version"], capture_output=True, text=True, timeout=30, check=False
+        )
+    except (OSError, subprocess.SubprocessError):
+        return "not found"
+    lines = done.stdout.splitlines()
+    return lines[0].strip() if lines else "not found"
 
 
 def code_fingerprint(

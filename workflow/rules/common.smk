@@ -24,6 +24,7 @@ from jointbench.fingerprint import (
     OnePass,
     check_bytecode_by_content,
     code_fingerprint,
+    compiler_version,
     data_names,
     dependency_versions,
     source_digests,
