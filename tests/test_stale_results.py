@@ -388,6 +388,69 @@ EDITS = (
         backdated=True,
         targets=("results/bin/ls_sphere",),
     ),
+    # -- edits that change no result: text only, a copy of the same bytes, what no job reads ---
+    Edit(
+        "a comment in the config",
+        "config/config.yaml",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "render_hinge", "check_published"),
+    ),
+    Edit(
+        "a comment in a named protocol's overlay",
+        "config/variants/hinge_anatomical_knee.yaml",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_hinge", "check_published"),
+    ),
+    Edit(
+        "a comment at the end of a rule file",
+        "workflow/rules/render.smk",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "render_hinge", "check_published"),
+    ),
+    Edit(
+        "a published value rewritten with the same bytes (paper A)",
+        f"{PKG}/papers/paper_a.yaml",
+        "",
+        "",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published"),
+    ),
+    Edit(
+        "an external estimator's program rewritten with the same bytes (LM)",
+        "workflow/external/lm_sphere.py",
+        "",
+        "",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc"),
+    ),
+    Edit(
+        "a new external estimator's rule, not yet listed",
+        "workflow/rules/estimators/centroid.smk",
+        "",
+        "\n\nrule estimate_newcomer:\n    input:\n"
+        '        "results/blind/{study}/{condition}.parquet",\n    output:\n'
+        '        "results/estimates/{study}/newcomer/{condition}.parquet",\n    log:\n'
+        '        "results/logs/estimate/{study}/newcomer/{condition}.log",\n    script:\n'
+        '        "../../external/centroid.py"\n',
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published", "blind_dataset"),
+    ),
+    Edit(
+        "a published value (paper C)",
+        f"{PKG}/papers/paper_c.yaml",
+        "  published: 96.04\n",
+        "  published: 96.05\n",
+        reruns=_jobs("render_hip", "check_published"),
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "render_hinge"),
+    ),
+    Edit(
+        "an extension's docstring",
+        "toy_study.py",
+        "The study spins three markers",
+        "The study turns three markers",
+        spares=_jobs("simulate_toy", "estimate_toy", "collect", "render_toy", "check_published"),
+        scenario="extension",
+    ),
     Edit(
         "a named protocol's overlay, dated before the results",
         "config/variants/hinge_anatomical_knee.yaml",
