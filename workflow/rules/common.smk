@@ -1006,8 +1006,8 @@ _PLAIN_RULE_NAME = re.compile(r"[a-z0-9_]{1,100}")
 
 
 def _shell_folder(name):
-    """The folder, in RULE_SHELLS, of the shell of the rule ``name``: a plain name
-    (_PLAIN_RULE_NAME, as the workflow's rules are named) itself; any other (Snakemake's
+    """The folder, in RULE_SHELLS, of the shell of the rules named ``name``. A plain name
+    (_PLAIN_RULE_NAME, as the workflow's rules are named) is its own; any other (Snakemake's
     ``name:`` takes any string: a path, a line break, a name longer than a file's, letters
     beyond ASCII, another's name in other case) its plain characters in lower case, at most
     64, then a hyphen, which no plain name holds, and a digest of the name itself. Names
