@@ -678,6 +678,15 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert message.count(said) == 1, message[-3000:]
 
 
+def _shell_rule(shell) -> str:
+    """The name of the rule whose jobs run with ``shell``, as its comment writes it (JSON): a
+    name other than lower-case letters, digits and underscores is not its folder's."""
+    (name,) = re.findall(
+        r"^# The limited shell of the jobs of rule (.*), with ", shell.read_text(), re.M
+    )
+    return json.loads(name)
+
+
 def _handed_down(tmp_path, grid, *, prepared: bool = False) -> dict[str, dict]:
     """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
     the jobs of each rule of the user's in :data:`landlock.VARIABLE`, as the shell each rule's
@@ -701,7 +710,7 @@ def _handed_down(tmp_path, grid, *, prepared: bool = False) -> dict[str, dict]:
     for shell in (tmp_path / ".snakemake" / "jointbench" / "shells").glob("*/bash"):
         (text,) = re.findall(rf"{landlock.VARIABLE}=('[^']*')", shell.read_text())
         (text,) = shlex.split(text)
-        handed[shell.parent.name] = {"text": text, **json.loads(text)}
+        handed[_shell_rule(shell)] = {"text": text, **json.loads(text)}
     return handed
 
 
@@ -801,10 +810,7 @@ def test_a_rule_of_any_name_snakemake_accepts_runs_in_a_shell_of_its_own(tmp_pat
     assert all(len(folder.encode()) <= 255 for folder in folders), folders
     named = set()
     for shell in shells:
-        (line,) = re.findall(
-            r"^# The limited shell of the jobs of rule (.*), with ", shell.read_text(), re.M
-        )
-        named.add(json.loads(line))
+        named.add(_shell_rule(shell))
         assert not any(
             row and not row.startswith(("#", "case", "*", "esac", "exec "))
             for row in shell.read_text().splitlines()
