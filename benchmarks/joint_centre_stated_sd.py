@@ -3,7 +3,7 @@
 Usage::
 
     python benchmarks/joint_centre_stated_sd.py [--method analytic] [--seeds 100]
-        [--rom 2,3,5,10,20,30] [--noise 0.5] [--near-hinge] [--exact-frame0]
+        [--rom 2,3,5,10,20,30] [--noise 0.5] [--near-hinge] [--exact-frame0] [--anchors 8]
 
 Each seed draws the noise of one trial of ``joint_centre_degenerate.py``'s two segments (a
 proximal segment that sways and drifts, a distal one circumducted about a ball joint, 200
@@ -19,9 +19,20 @@ with a second rotation of 5 and 10 % of it), printed:
   SD (from that mean) [mm], the errors' SD and mean [mm] and their excess kurtosis;
 * the mean of the errors [mm, world frame at frame 0] beside the mean pull the checked call
   reports (``center_pose_noise_pull_mm``, its length) and the mean of the analytic centre's
-  second-order bias from the frame-0 poses' errors (:func:`frame0_bias`).
+  second-order bias from the frame-0 poses' errors (``pose_noise.anchor_bias_mm``).
 
 ``--exact-frame0`` leaves frame 0's markers noise-free, so that the frame-0 poses are exact.
+
+``--anchors K`` (``analytic`` only) asks whether an answer's dependence on the frame that
+anchors its body frames tells the answers its SD understates: the same markers are fitted again
+with each of ``K`` evenly spread frames first (frame 0 among them), each answer taken to the
+proximal body frame of the first fit by that frame's proximal pose, its stated covariance
+turned with it; the spread of the ``K`` answers about their mean against their mean covariance
+is chi-square on ``3 (K - 1)`` degrees of freedom where the anchors' errors are independent
+and the covariances hold (the frames' shared noise moves every answer alike and leaves the
+spread, so the statistic is conservative). Printed: its mean over dof, how many answers it
+rejects at ``support.ROTATION_ALPHA``, and how many of the ``ok`` answers beyond chi-square's
+99 % quantile it rejects. Slow: ``K`` fits per draw.
 """
 
 from __future__ import annotations
@@ -34,8 +45,10 @@ import numpy as np
 
 import jointbench
 from jointbench.estimators.centre_precision import stated_covariance
-from jointbench.estimators.pose_noise import lever_factors
-from jointbench.estimators.segment_poses import SegmentPoses, trial_poses
+from jointbench.estimators.pose_noise import anchor_bias_mm
+from jointbench.estimators.segment_poses import trial_poses
+from jointbench.estimators.support import ROTATION_ALPHA
+from jointbench.numerics.special import scipy_special
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from joint_centre_degenerate import circumduction, hinge, two_segments
@@ -44,34 +57,31 @@ from joint_centre_degenerate import circumduction, hinge, two_segments
 CHI2_3_99 = 11.345
 
 
-def frame0_bias(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndarray) -> np.ndarray:
-    """The mean ``(3,)`` [mm] of the analytic centre's error that the frame-0 poses' errors
-    cause to second order, read at ``centre`` ``(3,)`` [mm] on the fitted poses.
-
-    A frame-0 fit misplaces segment ``a``'s body frame by a rotation ``e_a`` (covariance
-    ``Sigma_a = s_a^2 K_a^-1``) and so the joint in it by ``delta_a = [c - m_a]x e_a`` (plus the
-    centroid's error). The analytic centre's error is exactly ``N^-1 (D_p delta_p + D_d
-    delta_d)`` on the observed relative rotations ``Q_t`` (``D_p = n I - S'``, ``D_d = n I -
-    S``, ``S = sum_t Q_t`` over frames ``t >= 1``, ``N = D_p + D_d``), and each ``Q_t`` carries
-    the same errors, ``dQ_t = -[e_p]x Q_t + Q_t [e_d]x``: ``D`` and ``delta`` are correlated,
-    and the error's mean is ``N^-1 (2 S' G_p (c - m_p) + 2 S G_d (c - m_d))`` with ``G_a =
-    (Sigma_a - tr(Sigma_a) I) / 2``, the pose noise's shrinkage."""
-    relative = np.einsum("fki,fkj->ij", proximal.rotation[1:], distal.rotation[1:])
-    n_frames = len(proximal.rotation) - 1
-    terms = []
-    for poses in (proximal, distal):
-        mean, inertia_inv, _ = lever_factors(np.asarray(poses.body, dtype=float))
-        sigma = poses.variance * inertia_inv
-        shrinkage = (sigma - np.trace(sigma) * np.eye(3)) / 2.0
-        terms.append(2.0 * shrinkage @ (centre - mean))
-    normal = 2.0 * n_frames * np.eye(3) - relative - relative.T
-    return np.linalg.solve(normal, relative.T @ terms[0] + relative @ terms[1])
+def anchor_spread(proximal: np.ndarray, distal: np.ndarray, anchors: int) -> tuple:
+    """The spread chi-square of the analytic answers to the markers ``proximal``, ``distal``
+    ``(N, n, 3)`` [mm] anchored at ``anchors`` evenly spread frames (module docstring) and its
+    degrees of freedom."""
+    poses = trial_poses({"proximal": [proximal]}, min_frames=3)[0]["proximal"]
+    n_frames = len(proximal)
+    answers, covariances = [], []
+    for frame in np.unique(np.linspace(0, n_frames - 1, anchors).astype(int)):
+        order = np.r_[frame, np.delete(np.arange(n_frames), frame)]
+        result = jointbench.fit_joint_center(proximal[order], distal[order], "analytic")
+        back = poses.rotation[frame].T
+        answers.append(back @ (result.center - poses.translation[frame]))
+        covariances.append(back @ stated_covariance(result)[0] @ back.T)
+    spread = np.array(answers) - np.mean(answers, axis=0)
+    pooled = np.mean(covariances, axis=0)
+    chi2 = float(np.einsum("ki,ik->", spread, np.linalg.solve(pooled, spread.T)))
+    return chi2, 3 * (len(answers) - 1)
 
 
-def draws(method: str, motion, seeds: int, noise_mm: float, exact_frame0: bool) -> dict:
+def draws(
+    method: str, motion, seeds: int, noise_mm: float, exact_frame0: bool, anchors: int = 0
+) -> dict:
     """Per seed, the error ``(3,)`` [mm], stated covariance ``(3, 3)`` [mm^2], status, pull
     [mm] and frame-0 bias ``(3,)`` [mm] of ``method``'s checked answer on ``motion``."""
-    rows = {"error": [], "covariance": [], "ok": [], "pull": [], "frame0": []}
+    rows = {"error": [], "covariance": [], "ok": [], "pull": [], "frame0": [], "anchors": []}
     for seed in range(seeds):
         proximal, distal, centre = two_segments(
             np.random.default_rng(seed), motion(), noise_mm=noise_mm
@@ -86,7 +96,9 @@ def draws(method: str, motion, seeds: int, noise_mm: float, exact_frame0: bool) 
         rows["covariance"].append(stated_covariance(result)[0])
         rows["ok"].append(result.status == "ok")
         rows["pull"].append(result.diagnostics.get("center_pose_noise_pull_mm", np.nan))
-        rows["frame0"].append(frame0_bias(poses["proximal"], poses["distal"], result.center))
+        rows["frame0"].append(anchor_bias_mm(poses["proximal"], poses["distal"], result.center))
+        if anchors:
+            rows["anchors"].append(anchor_spread(proximal, distal, anchors))
     return {key: np.array(value) for key, value in rows.items()}
 
 
@@ -119,6 +131,15 @@ def report(name: str, rows: dict) -> None:
         f"    mean error {np.round(errors.mean(axis=0), 2)}  mean |pull| "
         f"{np.nanmean(rows['pull']):.2f}  mean frame-0 bias {np.round(rows['frame0'].mean(0), 2)}"
     )
+    if len(rows["anchors"]):
+        chi2, dof = rows["anchors"].T
+        rejected = scipy_special().chdtrc(dof, chi2) < ROTATION_ALPHA
+        beyond = ok & (squared > CHI2_3_99)
+        print(
+            f"    anchors: spread chi2/dof {np.mean(chi2 / dof):.2f}  rejected "
+            f"{rejected.sum()}/{len(chi2)}  ok beyond 99% rejected {np.sum(rejected & beyond)}/"
+            f"{beyond.sum()}"
+        )
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -129,6 +150,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--noise", type=float, default=0.5, help="marker noise [mm]")
     parser.add_argument("--near-hinge", action="store_true")
     parser.add_argument("--exact-frame0", action="store_true")
+    parser.add_argument("--anchors", type=int, default=0, help="frames anchoring refits")
     arguments = parser.parse_args(argv)
     cases = [
         (f"swing {rom:g} deg", lambda rom=rom: circumduction(rom, 200))
@@ -141,7 +163,12 @@ def main(argv: list[str] | None = None) -> None:
         ]
     for name, motion in cases:
         rows = draws(
-            arguments.method, motion, arguments.seeds, arguments.noise, arguments.exact_frame0
+            arguments.method,
+            motion,
+            arguments.seeds,
+            arguments.noise,
+            arguments.exact_frame0,
+            arguments.anchors,
         )
         report(f"{arguments.method} {name}, {arguments.noise:g} mm", rows)
 

@@ -848,7 +848,9 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     * ``["center_pose_noise_share"]``, the ratio of the noise's information to the noise-free
       information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
       how far the noise pulled the answer (both ``inf`` where the noise is as large as the
-      rotation that fixes the centre), and where the ratio reaches
+      rotation that fixes the centre), with the analytic centre's bias from its anchoring
+      frame-0 poses added where the result states one (``["center_anchor_bias_mm"]``,
+      :func:`jointbench.estimators.pose_noise.anchor_bias_mm`), and where the ratio reaches
       :data:`MAX_POSE_NOISE_SHARE` or the pull :func:`pull_bound_mm` of the SD a warning.
 
     No warning is added where the verdict has already refused the data. A result without a
@@ -870,7 +872,13 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
                 warnings.append(_undetermined(sd, source))
         noise = verdict.pose_noise
         if noise is not None:
-            pull = float(np.linalg.norm(pull_mm(noise, np.asarray(result.center))))
+            pulled = pull_mm(noise, np.asarray(result.center))
+            # The analytic centre's bias from its anchoring frame-0 poses, a product of the
+            # same noise that the pull, built on independent frames, leaves out.
+            anchor = result.diagnostics.get("center_anchor_bias_mm")
+            if anchor is not None:
+                pulled = pulled + np.asarray(anchor)
+            pull = float(np.linalg.norm(pulled))
             numbers["center_pose_noise_share"] = noise.share
             numbers["center_pose_noise_pull_mm"] = pull
             if noise.share >= MAX_POSE_NOISE_SHARE or pull >= pull_bound_mm(sd):
