@@ -390,7 +390,8 @@ def anchor_bias_mm(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndar
     frame-0 rotation errors turn every relative rotation by about as much as the motion does,
     and this mean is a bias of the order of the pull (:func:`pull_mm`, built on independent
     frames, which leaves it out)."""
-    relative = np.einsum("fki,fkj->ij", proximal.rotation[1:], distal.rotation[1:])
+    # S by the compiled pass over the frames: NumPy's einsum over them costs the check more.
+    relative = _relative_rows(proximal.rotation, distal.rotation)[1].reshape(3, 3)
     n_frames = len(proximal.rotation) - 1
     terms = []
     for poses in (proximal, distal):
