@@ -122,10 +122,12 @@ __all__ = [
     "MAX_POSE_NOISE_SHARE",
     "MAX_SD_NOISE_SHARE",
     "MAX_STEP_SDS",
+    "MIN_POSE_NOISE_PULL_MM",
     "MIN_REJECTED_STEP_MM",
     "annotate_joint_centres",
     "annotate_many",
     "centre_statistics",
+    "pull_bound_mm",
     "stated_center_sd",
     "stated_covariance",
 ]
@@ -170,6 +172,14 @@ MAX_POSE_NOISE_SHARE = 0.2
 #: small caps; this is half the :data:`MAX_CENTER_SD_MM` beyond which a centre counts as not
 #: determined.
 MAX_POSE_NOISE_PULL_MM = 5.0
+
+#: ... or this far [mm] or more where that is also :data:`MAX_STEP_SDS` of the answer's SD
+#: (:func:`pull_bound_mm`): a pull under :data:`MAX_POSE_NOISE_PULL_MM` is still a bias beside
+#: the scatter a smaller SD states. A smaller pull is not reported: the SD shrinks with the
+#: frames and the pull does not, so on a long trial the pulls of well-spread motion (under
+#: 1 mm on 30 degree two-axis swings with 0.5 mm noise, ``tests/test_pose_noise.py``) would
+#: outgrow any SD while moving no answer by more than this.
+MIN_POSE_NOISE_PULL_MM = 2.0
 
 # Columns of centre_statistics' rows.
 _SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
@@ -838,8 +848,10 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     * ``["center_pose_noise_share"]``, the ratio of the noise's information to the noise-free
       information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
       how far the noise pulled the answer (both ``inf`` where the noise is as large as the
-      rotation that fixes the centre), and where the ratio reaches
-      :data:`MAX_POSE_NOISE_SHARE` or the pull :data:`MAX_POSE_NOISE_PULL_MM` a warning.
+      rotation that fixes the centre), with the analytic centre's bias from its anchoring
+      frame-0 poses added where the result states one (``["center_anchor_bias_mm"]``,
+      :func:`jointbench.estimators.pose_noise.anchor_bias_mm`), and where the ratio reaches
+      :data:`MAX_POSE_NOISE_SHARE` or the pull :func:`pull_bound_mm` of the SD a warning.
 
     No warning is added where the verdict has already refused the data. A result without a
     finite centre is returned as it is; one that states no covariance gets no SD, and one
@@ -850,6 +862,7 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
         if not np.isfinite(result.center).all():
             continue
         numbers, warnings = {}, []
+        sd = None
         stated = stated_covariance(result)
         if stated is not None:
             covariance, source = stated
@@ -859,11 +872,17 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
                 warnings.append(_undetermined(sd, source))
         noise = verdict.pose_noise
         if noise is not None:
-            pull = float(np.linalg.norm(pull_mm(noise, np.asarray(result.center))))
+            pulled = pull_mm(noise, np.asarray(result.center))
+            # The analytic centre's bias from its anchoring frame-0 poses, a product of the
+            # same noise that the pull, built on independent frames, leaves out.
+            anchor = result.diagnostics.get("center_anchor_bias_mm")
+            if anchor is not None:
+                pulled = pulled + np.asarray(anchor)
+            pull = float(np.linalg.norm(pulled))
             numbers["center_pose_noise_share"] = noise.share
             numbers["center_pose_noise_pull_mm"] = pull
-            if noise.share >= MAX_POSE_NOISE_SHARE or pull >= MAX_POSE_NOISE_PULL_MM:
-                warnings.append(_pulled_by_pose_noise(noise.share, pull))
+            if noise.share >= MAX_POSE_NOISE_SHARE or pull >= pull_bound_mm(sd):
+                warnings.append(_pulled_by_pose_noise(noise.share, pull, sd))
         if numbers:
             kept = () if verdict.warnings else tuple(warnings)
             annotated[t] = with_warnings(result, kept, numbers)
@@ -924,14 +943,32 @@ def _undetermined(sd: float, source: str) -> str:
     )
 
 
-def _pulled_by_pose_noise(share: float, pull: float) -> str:
+def pull_bound_mm(sd: float | None) -> float:
+    """The least pull [mm] of the noise in the poses (:mod:`jointbench.estimators.pose_noise`)
+    that leaves a joint centre's SD ``sd`` [mm] (along its least determined direction, or
+    ``None`` where the method states none) no statement of its precision:
+    :data:`MAX_STEP_SDS` of that SD, but at least :data:`MIN_POSE_NOISE_PULL_MM`, and
+    :data:`MAX_POSE_NOISE_PULL_MM` where that is less or no finite SD is stated. The pull is a
+    bias the SD (its scatter's) does not hold, so the answer's mean square error along it is
+    ``1 + m^2`` times the variance the SD states, ``m`` the pull in SDs: at
+    :data:`MAX_STEP_SDS` the SD understates the error by a tenth, as a centre's step does. On
+    nearly hinged motion whose share stays below :data:`MAX_POSE_NOISE_SHARE`, answers with
+    SDs of 2 to 3 mm read ``ok`` with pulls of 3 to 5 mm and errors up to 8 mm before
+    (``benchmarks/joint_centre_degenerate.py``)."""
+    if sd is None or not math.isfinite(sd):
+        return MAX_POSE_NOISE_PULL_MM
+    return min(MAX_POSE_NOISE_PULL_MM, max(MIN_POSE_NOISE_PULL_MM, MAX_STEP_SDS * sd))
+
+
+def _pulled_by_pose_noise(share: float, pull: float, sd: float | None) -> str:
     """The warning for a joint centre whose poses' noise has the ratio ``share`` to the
     noise-free information along its least determined direction and pulled it ``pull``
-    [mm]. The pull is a bias the answer's SD (its scatter's) does not contain: a pull of
-    :data:`MAX_POSE_NOISE_PULL_MM`, half :data:`MAX_CENTER_SD_MM`, is over
-    :data:`MAX_STEP_SDS` of any SD that holds, and at :data:`MAX_POSE_NOISE_SHARE` the answer
-    keeps at most five sixths of the joint's offset from the markers, so that SD is no
-    statement of the answer's precision."""
+    [mm], the answer stating an SD ``sd`` [mm] (``None`` for none). The pull is a bias the
+    answer's SD (its scatter's) does not contain: a pull of :data:`MAX_POSE_NOISE_PULL_MM`,
+    half :data:`MAX_CENTER_SD_MM`, is over :data:`MAX_STEP_SDS` of any SD that holds, a
+    smaller one over that of a smaller SD (:func:`pull_bound_mm`), and at
+    :data:`MAX_POSE_NOISE_SHARE` the answer keeps at most five sixths of the joint's offset
+    from the markers, so that SD is no statement of the answer's precision."""
     words = (
         f"{PRECISION_NOT_DETERMINED}: the noise in the poses pulls a least-squares joint centre "
         "towards the markers"
@@ -951,6 +988,11 @@ def _pulled_by_pose_noise(share: float, pull: float) -> str:
             f"read at this answer, {pull:.3g} mm, understates it where the noise has moved "
             "the answer itself)"
         )
+    if pull < MAX_POSE_NOISE_PULL_MM:
+        # Only the SD makes so small a pull count: the words say so, and a larger one's stay.
+        times = pull / sd if sd > 0.0 else math.inf
+        held = f"{times:.2g} of its SD of {sd:.3g} mm, a bias beside the scatter it states"
+        kept = f"{held}; {kept}"
     return (
         f"{words}, about {pull:.3g} mm here ({kept}): too little rotation off the main axis "
         "for that noise"

@@ -96,6 +96,7 @@ __all__ = [
     "NoisyPoses",
     "PoseNoise",
     "analytic_covariance",
+    "anchor_bias_mm",
     "centre_covariance",
     "lever_factors",
     "point_covariance",
@@ -371,6 +372,35 @@ def score_covariance(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> np.nd
     half, shift = 0.5 * np.eye(3), g_p - g_d
     frame0 = (half - shift) @ a_p @ (half - shift).T + (half + shift) @ a_d @ (half + shift).T
     return _symmetric(frames + frame0)
+
+
+def anchor_bias_mm(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndarray) -> np.ndarray:
+    """The mean ``(3,)`` [mm] of the analytic centre's error that the errors of the frame-0
+    poses, which anchor both body frames, cause to second order, read at ``centre`` ``(3,)``
+    [mm] on the fitted poses ``proximal`` and ``distal``.
+
+    A frame-0 fit misplaces segment ``a``'s body frame by a rotation ``e_a`` (covariance
+    ``Sigma_a = s_a^2 K_a^-1``) and so the joint in it by ``delta_a = [c - m_a]x e_a`` (plus the
+    centroid's error). The analytic centre's error is exactly ``N^-1 (D_p delta_p + D_d
+    delta_d)`` on the observed relative rotations ``Q_t`` (``D_p = n I - S'``, ``D_d = n I -
+    S``, ``S = sum_t Q_t`` over frames ``t >= 1``, ``N = D_p + D_d``), and each ``Q_t`` carries
+    the same errors, ``dQ_t = -[e_p]x Q_t + Q_t [e_d]x``: ``D`` and ``delta`` are correlated,
+    and the error's mean is ``N^-1 (2 S' G_p (c - m_p) + 2 S G_d (c - m_d))`` with ``G_a =
+    (Sigma_a - tr(Sigma_a) I) / 2``, the pose noise's shrinkage. On a small swing the
+    frame-0 rotation errors turn every relative rotation by about as much as the motion does,
+    and this mean is a bias of the order of the pull (:func:`pull_mm`, built on independent
+    frames, which leaves it out)."""
+    # S by the compiled pass over the frames: NumPy's einsum over them costs the check more.
+    relative = _relative_rows(proximal.rotation, distal.rotation)[1].reshape(3, 3)
+    n_frames = len(proximal.rotation) - 1
+    terms = []
+    for poses in (proximal, distal):
+        mean, inertia_inv, _ = lever_factors(np.asarray(poses.body, dtype=float))
+        sigma = poses.variance * inertia_inv
+        shrinkage = (sigma - np.trace(sigma) * np.eye(3)) / 2.0
+        terms.append(2.0 * shrinkage @ (centre - mean))
+    normal = 2.0 * n_frames * np.eye(3) - relative - relative.T
+    return np.linalg.solve(normal, relative.T @ terms[0] + relative @ terms[1])
 
 
 def centre_covariance(
