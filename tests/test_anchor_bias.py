@@ -19,6 +19,7 @@ from jointbench.estimators.pose_noise import pull_mm
 from jointbench.geometry import rotation_about_axis
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from anchor_bias_frame0 import formula
 from joint_centre_degenerate import circumduction, two_segments
 
 _PULLED = "the noise in the poses pulls a least-squares joint centre"
@@ -105,3 +106,31 @@ def _anchor_bias(proximal: np.ndarray, distal: np.ndarray) -> np.ndarray:
 )
 def test_the_pull_bound_is_the_sds_share_between_its_floor_and_cap(sd, bound):
     assert centre_precision.pull_bound_mm(sd) == bound
+
+
+@pytest.mark.parametrize("rom_deg", [3.0, 10.0])
+def test_the_anchor_bias_is_the_second_order_mean_of_frame0_errors(rom_deg):
+    """On a noise-free circumduction the analytic centre's mean error from noise of variance
+    ``s^2`` on frame 0's markers alone is, to second order, ``s^2 / 2`` times the trace of
+    its Hessian in those 24 coordinates, here by central second differences: the formula,
+    read with that variance, is it (the terms it leaves out, of the body-fixed markers' own
+    errors, are a few percent)."""
+    proximal, distal, centre = two_segments(
+        np.random.default_rng(0), circumduction(rom_deg, 200), noise_mm=0.0
+    )
+    step_mm, noise_mm = 1e-2, 0.02
+
+    def answer(shift: np.ndarray) -> np.ndarray:
+        moved = [proximal.copy(), distal.copy()]
+        moved[0][0] += shift[:12].reshape(4, 3)
+        moved[1][0] += shift[12:].reshape(4, 3)
+        return jointbench.fit_joint_center(*moved, "analytic").center
+
+    still = answer(np.zeros(24))
+    trace = (
+        sum(answer(step) + answer(-step) - 2.0 * still for step in step_mm * np.eye(24))
+        / step_mm**2
+    )
+    second_order = noise_mm**2 / 2.0 * trace
+    bias = formula(proximal, distal, centre[0], noise_mm)
+    assert np.linalg.norm(bias - second_order) < 0.06 * np.linalg.norm(second_order)
