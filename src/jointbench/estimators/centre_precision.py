@@ -176,9 +176,9 @@ MAX_POSE_NOISE_PULL_MM = 5.0
 #: ... or this far [mm] or more where that is also :data:`MAX_STEP_SDS` of the answer's SD
 #: (:func:`pull_bound_mm`): a pull under :data:`MAX_POSE_NOISE_PULL_MM` is still a bias beside
 #: the scatter a smaller SD states. A smaller pull is not reported: the SD shrinks with the
-#: frames and the pull does not, so on a long trial the pulls of well-spread motion (under
-#: 1 mm on 30 degree two-axis swings with 0.5 mm noise, ``tests/test_pose_noise.py``) would
-#: outgrow any SD while moving no answer by more than this.
+#: frames and the pull does not, so on a long trial the small pulls of well-spread motion
+#: (``tests/test_pose_noise.py``'s two-axis swings) would outgrow any SD while moving no
+#: answer by more than this.
 MIN_POSE_NOISE_PULL_MM = 2.0
 
 # Columns of centre_statistics' rows.
@@ -949,12 +949,10 @@ def pull_bound_mm(sd: float | None) -> float:
     ``None`` where the method states none) no statement of its precision:
     :data:`MAX_STEP_SDS` of that SD, but at least :data:`MIN_POSE_NOISE_PULL_MM`, and
     :data:`MAX_POSE_NOISE_PULL_MM` where that is less or no finite SD is stated. The pull is a
-    bias the SD (its scatter's) does not hold, so the answer's mean square error along it is
-    ``1 + m^2`` times the variance the SD states, ``m`` the pull in SDs: at
-    :data:`MAX_STEP_SDS` the SD understates the error by a tenth, as a centre's step does. On
-    nearly hinged motion whose share stays below :data:`MAX_POSE_NOISE_SHARE`, answers with
-    SDs of 2 to 3 mm read ``ok`` with pulls of 3 to 5 mm and errors up to 8 mm before
-    (``benchmarks/joint_centre_degenerate.py``)."""
+    bias the SD (its scatter's) does not hold, as a centre's step is, and is held to the SD as
+    the step is (:data:`MAX_STEP_SDS` says why); the floor and the cap say theirs.
+    ``benchmarks/joint_centre_degenerate.py`` counts, on nearly hinged trials, the answers
+    that read ``ok`` and how far off they are."""
     if sd is None or not math.isfinite(sd):
         return MAX_POSE_NOISE_PULL_MM
     return min(MAX_POSE_NOISE_PULL_MM, max(MIN_POSE_NOISE_PULL_MM, MAX_STEP_SDS * sd))

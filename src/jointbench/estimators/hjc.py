@@ -1364,9 +1364,9 @@ def _analytic_scattered(
     (:func:`jointbench.estimators.pose_noise.analytic_covariance`),
     ``diagnostics["center_covariance_mm2"]``, and the mean error its frame-0 poses' errors
     cause to second order (:func:`jointbench.estimators.pose_noise.anchor_bias_mm`),
-    ``["center_anchor_bias_mm"]``: on 3 degree circumductions with 0.5 mm noise about as long
-    as the pull, which the checked call adds it to
-    (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`)."""
+    ``["center_anchor_bias_mm"]``: on small swings of the order of the pull, which the checked
+    call adds it to (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
+    ``benchmarks/joint_centre_stated_sd.py`` prints both)."""
     covariance = centre_covariance(
         analytic_covariance, proximal, distal, (result.center, result.center)
     )

@@ -389,7 +389,9 @@ def anchor_bias_mm(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndar
     (Sigma_a - tr(Sigma_a) I) / 2``, the pose noise's shrinkage. On a small swing the
     frame-0 rotation errors turn every relative rotation by about as much as the motion does,
     and this mean is a bias of the order of the pull (:func:`pull_mm`, built on independent
-    frames, which leaves it out)."""
+    frames, which leaves it out). It is the first term of an expansion in those errors: where
+    they are not small against the swing, the error's mean differs from it
+    (``benchmarks/anchor_bias_frame0.py`` sets the two side by side on frame-0 errors alone)."""
     # S by the compiled pass over the frames: NumPy's einsum over them costs the check more.
     relative = _relative_rows(proximal.rotation, distal.rotation)[1].reshape(3, 3)
     n_frames = len(proximal.rotation) - 1
