@@ -309,12 +309,13 @@ def test_a_csv_of_one_row_per_frame_is_shown_the_layout_read(tmp_path):
 
 
 def test_a_label_written_twice_is_refused_naming_both_markers(tmp_path):
-    """Unlabelled trajectories some writers leave with empty labels were refused as "marker
-    label '' appears twice", naming neither marker."""
+    """Two trajectories under one label were refused as "marker label 'X' appears twice",
+    naming neither marker. (Empty labels, which some writers leave on unlabelled
+    trajectories, are refused as points without a label, before they are compared.)"""
     markers = np.random.default_rng(0).uniform(10.0, 100.0, size=(20, 4, 3))
-    path = write_c3d(tmp_path / "blank.c3d", ["A", "", "", "B"], markers)
+    path = write_c3d(tmp_path / "twice.c3d", ["A", "X", "X", "B"], markers)
     assert _refusal(path) == (
-        f"{path}: markers 2 and 3 (of 4) are both labelled ''; each marker needs a label of its "
+        f"{path}: markers 2 and 3 (of 4) are both labelled 'X'; each marker needs a label of its "
         "own (relabel them, or export the trial without unlabelled trajectories)"
     )
 

@@ -114,19 +114,25 @@ def test_numbers_in_another_unit_are_refused_naming_the_unit_they_look_like(
     tmp_path, knee_legs, suffixes, scale, units, span, bound, hint
 ):
     """The knee's thigh and shank written as ``scale`` times their millimetres under ``units``,
-    by every reader that states that unit: refused naming the file, the unit it states, the
-    shank's markers and span (the moving markers, which tell the unit before the reference),
-    and the units in which its numbers are a body's."""
+    by every reader that states that unit (a CSV, read as mm, states none): refused naming the
+    file, the unit it states, the shank's markers and span (the moving markers, which tell the
+    unit before the reference), and the units in which its numbers are a body's."""
     labels, markers = knee_legs
     for suffix in suffixes:
         path = write(tmp_path / f"knee.{suffix}", labels, markers * scale, units)
         with pytest.raises(ValueError) as error:
             fit_knee(read(path))
+        # A CSV states no unit: it is read as mm, and not said to state it.
+        stated = (
+            "the unit the file is read in (it states no unit; read as mm)"
+            if suffix == "csv"
+            else f"the unit the file states ({units!r}, read as mm)"
+        )
         assert str(error.value) == (
             f"{path}: markers RLEG1, RLEG2, RLEG3, RATT, RLM, RSPH lie {span} mm apart (the "
-            f"farthest two, median over the frames), {bound}. The coordinates are not in the "
-            f"unit the file states ({units!r}, read as mm): its numbers look like {hint}; "
-            "correct the file's unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
+            f"farthest two, median over the frames), {bound}. The coordinates are not in "
+            f"{stated}: its numbers look like {hint}; correct the file's unit (C3D POINT:UNITS, "
+            "TRC Units; a CSV is in mm)"
         )
 
 

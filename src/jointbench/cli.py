@@ -40,7 +40,7 @@ from jointbench.configuration.config import open_config, read_configs, study_nam
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
-from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, prepare, read
+from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, Recording, prepare, read
 from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_NAMES, SD_STATED
 from jointbench.io.segments import HELD_SAMPLES, LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
@@ -299,8 +299,19 @@ def _incomplete(args: argparse.Namespace, command: str) -> bool:
     return True
 
 
+def _read(path: str) -> Recording:
+    """The recording at ``path`` (:func:`~jointbench.io.read`), its warnings (a unit the file
+    does not state, frames zero-filled past its end) printed first, whatever follows."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        recording = read(path)
+    for warning in caught:
+        print(f"jointbench: warning: {warning.message}", file=sys.stderr)
+    return recording
+
+
 def _inspect(args: argparse.Namespace) -> int:
-    recording = read(args.file)
+    recording = _read(args.file)
     gaps = recording.gaps()
     last = recording.first_frame + recording.n_frames - 1
     if args.format == "json":
@@ -312,7 +323,7 @@ def _inspect(args: argparse.Namespace) -> int:
                     "first_frame": recording.first_frame,
                     "last_frame": last,
                     "rate_hz": recording.rate_hz,
-                    "units_in_file": recording.units,
+                    "units_in_file": recording.units or None,
                     "units": "mm",
                     "labels": list(recording.labels),
                     "missing_samples": gaps,
@@ -324,8 +335,8 @@ def _inspect(args: argparse.Namespace) -> int:
     rate = "unknown" if recording.rate_hz is None else f"{recording.rate_hz:g} Hz"
     print(
         f"{args.file}: {recording.n_frames} frames (numbered {recording.first_frame} to {last} "
-        f"as in the file), {rate}, {len(recording.labels)} markers, units {recording.units} "
-        "(read as mm)"
+        f"as in the file), {rate}, {len(recording.labels)} markers, "
+        f"{f'units {recording.units}' if recording.units else 'no unit stated'} (read as mm)"
     )
     print(f"{'marker':<16}{'missing':>8}")
     for label, n in gaps.items():
@@ -500,7 +511,7 @@ def _fit(args: argparse.Namespace) -> int:
     names = _method_names(args.kind, args.method)
     _check_bootstrap_options(args)
     _check_writable(args.world, "--world", args.file)
-    recording = read(args.file)
+    recording = _read(args.file)
     moving = _labels(args.moving)
     reference = _labels(args.reference)
     if moving is None:

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from jointbench.io.recording import Recording
-from jointbench.io.units import UNIT_TO_MM, to_mm
+from jointbench.io.units import UNIT_READ, UNIT_TO_MM, to_mm
 
 __all__ = ["UNIT_TO_MM", "read", "read_c3d", "read_csv", "read_trc"]
 
@@ -106,32 +106,102 @@ def read_c3d(path: str | Path) -> Recording:
     """A C3D file via ``ezc3d``: POINT labels, rate and units; negative residuals are gaps.
 
     The file must hold every frame its header promises (:func:`_check_c3d_size`); row 0 is the
-    header's first frame, numbered as in the file (1-based, as other software shows it).
+    header's first frame, numbered as in the file (1-based, as other software shows it). A file
+    that states no point unit (no ``POINT:UNITS``, or a blank one) is read as mm, with a
+    warning, and its recording's ``units`` is ``""``; frames zero-filled past its capture's end
+    are read as missing, with a warning (:func:`_warn_zero_filled_end`).
     """
     path = _check_file(path)
     try:
         c3d = ezc3d.c3d(str(path))
     except Exception as error:  # ezc3d raises bare RuntimeError/IOError for any bad file
         _check_c3d_reaches_frames(path)
+        # ezc3d fails on a rate of NaN: the file's own word names it.
+        rate = _c3d_float_parameter(path, "POINT", "RATE")
+        if rate is not None:
+            _c3d_rate(rate, path)
         raise ValueError(f"{path}: not a readable C3D file ({error})") from None
     _check_c3d_size(c3d, path)
-    point = c3d["parameters"]["POINT"]
-    labels = list(point["LABELS"]["value"])
-    for extra in ("LABELS2", "LABELS3"):
-        if extra in point:
-            labels += list(point[extra]["value"])
     points = c3d["data"]["points"]
-    labels = [label.strip() for label in labels[: points.shape[1]]]
-    units = point["UNITS"]["value"][0] if "UNITS" in point and point["UNITS"]["value"] else "mm"
-    markers = np.transpose(points[:3], (2, 1, 0)) * to_mm(units, path)
+    labels = _c3d_labels(c3d["parameters"]["POINT"], points.shape[1], path)
+    units = _c3d_units(c3d, path, len(labels))
+    markers = np.transpose(points[:3], (2, 1, 0)) * to_mm(units or UNIT_READ, path)
     residuals = c3d["data"]["meta_points"]["residuals"]
     if residuals.size:
         markers[np.transpose(residuals[0]) < 0] = np.nan
     rate = _c3d_rate(float(c3d["header"]["points"]["frame_rate"]), path)
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
-    return _no_repeated_frames(
-        Recording(tuple(labels), markers, rate, str(path), first, units.strip())
+    _warn_zero_filled_end(markers, first, path)
+    return _no_repeated_frames(Recording(tuple(labels), markers, rate, str(path), first, units))
+
+
+def _c3d_labels(point: dict, n_points: int, path: Path) -> list[str]:
+    """The labels of the ``n_points`` points of the C3D file ``path`` (``point``, its POINT
+    group as ezc3d reads it): ``LABELS``, then ``LABELS2`` and ``LABELS3`` where more points
+    need them, stripped of spaces; labels past the points are not read. ``ValueError`` naming
+    the file where they are fewer than the points (``POINT:USED``), or a point's is empty:
+    either would leave a marker's coordinates without a name to take them by (or with
+    another's, shifting every label after it), as a TRC's empty label is refused."""
+    labels = list(point["LABELS"]["value"])
+    for extra in ("LABELS2", "LABELS3"):
+        if extra in point:
+            labels += list(point[extra]["value"])
+    labels = [label.strip() for label in labels[:n_points]]
+    if len(labels) < n_points:
+        raise ValueError(
+            f"{path}: POINT:USED counts {n_points} points, but POINT:LABELS (with LABELS2, "
+            f"LABELS3) names {len(labels)}; every point needs a label"
+        )
+    empty = [i + 1 for i, label in enumerate(labels) if not label]
+    if empty:
+        raise ValueError(
+            f"{path}: POINT:LABELS: point {empty[0]} (of {n_points}) has no label, an empty "
+            f"one ({len(empty)} in all); every marker needs a label (relabel those points, or "
+            "export the trial without unlabelled trajectories)"
+        )
+    return labels
+
+
+def _c3d_units(c3d: ezc3d.c3d, path: Path, n_points: int) -> str:
+    """The point unit the C3D file ``path`` of ``n_points`` points states in ``POINT:UNITS``,
+    ``""`` where it states none: no such parameter, which ezc3d adds as ``mm`` on reading (so
+    the file's own parameters are looked at), or a blank one. Its coordinates are then read as
+    mm, which a warning says, unless it holds no points (an analog-only file), whose unit
+    nothing reads."""
+    value = c3d["parameters"]["POINT"].get("UNITS", {}).get("value", [])
+    stated = str(value[0]).strip() if len(value) else ""
+    if stated and _c3d_parameter(path, "POINT", "UNITS") is not None:
+        return stated
+    if n_points == 0:
+        return ""
+    warnings.warn(
+        f"{path}: the file states no point unit (POINT:UNITS); its coordinates are read as "
+        f"{UNIT_READ}",
+        stacklevel=3,
+    )
+    return ""
+
+
+def _warn_zero_filled_end(markers: np.ndarray, first: int, path: Path) -> None:
+    """A warning naming the last frames of the C3D file ``path`` when every marker of each
+    is exactly (0, 0, 0) with no negative residual: a capture stopped early and padded, or a
+    file cut and zero-filled, not a gap a recording writes (a marker unseen has a residual of
+    -1). ``markers`` ``(n_frames, n_markers, 3)``, row 0 frame ``first``, NaN where the file
+    marks a sample missing. The frames are read as missing (:class:`Recording`), as they hold
+    nothing; the warning says what they are, so that the trial is not taken for one whose
+    markers all vanished at its end."""
+    zero = (markers == 0.0).all(axis=(1, 2))
+    if markers.shape[1] == 0 or not zero.size or not zero[-1]:
+        return
+    n_zero = len(zero) - 1 - int(np.flatnonzero(~zero)[-1]) if not zero.all() else len(zero)
+    last = first + len(zero) - 1
+    warnings.warn(
+        f"{path}: frames {last - n_zero + 1} to {last} (the last {n_zero}) hold every marker "
+        "at exactly (0, 0, 0) with no negative residual: frames zero-filled past the capture's "
+        "end (a capture stopped early and padded, or a file cut and padded), not gaps a "
+        "recording writes; they are read as missing",
+        stacklevel=3,
     )
 
 
@@ -146,6 +216,79 @@ def _c3d_rate(rate: float, path: Path) -> float | None:
     return rate
 
 
+def _c3d_float_parameter(path: Path, group: str, name: str) -> float | None:
+    """The first value of the C3D file ``path``'s float parameter ``group:name``, read from
+    the file itself (:func:`_c3d_parameter`); ``None`` where it has none, or it is no float
+    (or a DEC processor's, which this does not decode)."""
+    found = _c3d_parameter(path, group, name)
+    if found is None or found[0] != 4 or len(found[1]) < 4 or found[2] is None:
+        return None
+    return struct.unpack(found[2] + "f", found[1][:4])[0]
+
+
+def _c3d_parameter(path: Path, group: str, name: str) -> tuple[int, bytes, str | None] | None:
+    """The C3D file ``path``'s parameter ``group:name`` as its parameter section writes it: its
+    type (-1 text, 1 byte, 2 int16, 4 float), its value's bytes and their byte order (``"<"``
+    or ``">"``; ``None`` for a DEC processor's floats); ``None`` where the section holds no
+    such parameter or cannot be walked. ezc3d adds the parameters a file lacks, and fails on
+    some values without naming them, so those questions are put to the file itself.
+
+    The section starts at the 512-byte block the header's first byte names, with 4 bytes (the
+    processor's code last: 84 Intel, 85 DEC, 86 MIPS); each entry then writes its name's
+    length (negative where locked; 0 ends the section), its group's id (negative for a group
+    itself), its name, a 16-bit offset from that word to the next entry (0 for the last), and,
+    for a parameter, its type, its number of dimensions, the dimensions (a byte each) and the
+    value."""
+    try:
+        content = _c3d_parameter_section(path)
+        processor = content[3]
+        order = ">" if processor == 86 else "<"
+        groups: dict[int, str] = {}
+        found: dict[tuple[int, str], tuple[int, bytes]] = {}
+        at = 4
+        while at < len(content):
+            length, number = struct.unpack("bb", content[at : at + 2])
+            if length == 0:
+                break
+            entry = content[at + 2 : at + 2 + abs(length)].decode("ascii", "replace").upper()
+            (offset,) = struct.unpack(
+                order + "h", content[at + 2 + abs(length) : at + 4 + abs(length)]
+            )
+            body = at + 4 + abs(length)
+            if number < 0:
+                groups[-number] = entry
+            else:
+                kind, n_dims = struct.unpack("bb", content[body : body + 2])
+                dims = content[body + 2 : body + 2 + n_dims]
+                size = abs(kind) * math.prod(dims)
+                value = content[body + 2 + n_dims : body + 2 + n_dims + size]
+                found[(number, entry)] = (kind, value)
+            if offset <= 0:
+                break
+            at = body - 2 + offset
+    except (IndexError, struct.error):
+        return None
+    ids = [number for number, title in groups.items() if title == group.upper()]
+    if not ids or (ids[0], name.upper()) not in found:
+        return None
+    kind, value = found[(ids[0], name.upper())]
+    return kind, value, None if processor == 85 and kind == 4 else order
+
+
+def _c3d_parameter_section(path: Path) -> bytes:
+    """The bytes of the C3D file ``path``'s parameter section: from the block the header's
+    first byte names to the frames' first block, or over the blocks its third byte counts
+    where that is more (a writer may leave blocks between them). ``IndexError`` or
+    ``struct.error`` for a file too short to hold a header."""
+    data_start = (_c3d_header(path)[-1] - 1) * 512
+    with path.open("rb") as file:
+        start = max(0, (file.read(1)[0] - 1) * 512)
+        file.seek(start)
+        content = file.read(4)
+        blocks = content[2] if len(content) == 4 else 0
+        return content + file.read(max(0, max(blocks * 512, data_start - start) - 4))
+
+
 def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     """``ValueError`` when the file ends before the frames its header promises (a last frame of
     65535, the most a header counts, promises at least the frames up to it), or holds more
@@ -158,8 +301,7 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     samples, each value a float32 (``POINT:SCALE`` < 0) or an int16.
     """
     n_points, n_analog, first, last, data_block = _c3d_header(path)
-    scale = c3d["parameters"]["POINT"].get("SCALE", {"value": [-1.0]})["value"]
-    word = 4 if len(scale) == 0 or float(scale[0]) < 0 else 2
+    word = 4 if _c3d_scale(c3d, path) < 0 else 2
     start = (data_block - 1) * 512
     frame_bytes = word * (4 * n_points + n_analog)
     size = path.stat().st_size
@@ -178,6 +320,22 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
         _check_c3d_long(c3d, path, start, frame_bytes, first)
 
 
+def _c3d_scale(c3d: ezc3d.c3d, path: Path) -> float:
+    """The C3D file ``path``'s ``POINT:SCALE`` (-1, a float file's, where it has none);
+    ``ValueError`` naming it where it is 0 or not finite, which makes no format: its sign
+    says whether the coordinates are floats (negative) or integers (positive, their step in
+    the file's unit), and 0 or NaN would make every coordinate 0 or NaN, every sample a gap."""
+    value = c3d["parameters"]["POINT"].get("SCALE", {"value": [-1.0]})["value"]
+    scale = float(value[0]) if len(value) else -1.0
+    if scale == 0 or not math.isfinite(scale):
+        raise ValueError(
+            f"{path}: POINT:SCALE {scale:g} is no scale: a float file's is negative, an integer "
+            "file's the size of its unit step (0 or NaN would make every coordinate 0 or NaN, "
+            "and so every sample a gap)"
+        )
+    return scale
+
+
 def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, first: int) -> None:
     """``ValueError`` when the C3D file ``path``, whose header's last frame is 65535, the most
     it can count, holds frames past those ezc3d read (``c3d``), which would be left out unseen:
@@ -186,13 +344,22 @@ def _check_c3d_long(c3d: ezc3d.c3d, path: Path, start: int, frame_bytes: int, fi
     ezc3d itself writes, whose parameters count no more). Its frames start at byte ``start``,
     take ``frame_bytes`` each and are numbered from ``first``; up to a 512-byte block of
     padding may follow them (ezc3d writes a whole one where they end a block), so the frames
-    past them are counted within that."""
+    past them are counted within that. Padding is zero bytes: a frame smaller than a block
+    may end the block the last frame read ends in (frame 65536 always ends a block), and
+    bytes there that are not zero are such frames, not padding."""
     header = c3d["header"]["points"]
     read = int(header["last_frame"]) - int(header["first_frame"]) + 1
-    extra = path.stat().st_size - start - read * frame_bytes
-    if frame_bytes == 0 or extra <= 512:
+    end = start + read * frame_bytes
+    extra = path.stat().st_size - end
+    if frame_bytes == 0 or extra < frame_bytes:
         return
-    fewest, most = -(-(extra - 512) // frame_bytes), extra // frame_bytes
+    with path.open("rb") as file:
+        file.seek(end)
+        written = file.read().rstrip(b"\x00")
+    if extra <= 512 and not written:
+        return
+    fewest = max(-(-(extra - 512) // frame_bytes), -(-len(written) // frame_bytes))
+    most = extra // frame_bytes
     more = f"{fewest}" if fewest == most else f"{fewest} to {most}"
     n_points, n_analog = _c3d_header(path)[:2]
     raise ValueError(
@@ -252,15 +419,23 @@ def read_trc(path: str | Path) -> Recording:
     fill it: cut right after a separator), and so is a frame on line 5, where the ``X1 Y1 Z1``
     names belong (:func:`_check_names_line`); row 0 is the first row's ``Frame#``. Labels sit at
     fixed columns (:func:`_trc_labels`) and no row may write past the labelled markers
-    (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`)."""
+    (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`). Its fields are
+    tab-separated: a line of fields separated by spaces is refused, naming it, not read
+    (:func:`_check_tab_separated`), and so is an empty ``Units``: a TRC states its unit."""
     path = _check_file(path)
     lines = _read_text(path, "TRC").splitlines()
     if len(lines) < 6:
         raise ValueError(f"{path}: too short for a TRC file (needs 5 header lines and data)")
+    _check_tab_separated(lines, 1, path)
     keys, values = lines[1].split("\t"), lines[2].split("\t")
     header = {key.strip(): value.strip() for key, value in zip(keys, values, strict=False)}
     if "Units" not in header:
         raise ValueError(f"{path}: TRC header has no 'Units' (line 2 keys: {keys})")
+    if not header["Units"]:
+        raise ValueError(
+            f"{path}: line 3, field Units: empty; a TRC file states its point unit there (mm, "
+            "cm or m)"
+        )
     labels = _trc_labels(lines[3], path)
     width = 2 + 3 * len(labels)
     # Data start on line 6; a blank line is no frame.
@@ -269,6 +444,8 @@ def read_trc(path: str | Path) -> Recording:
         raise ValueError(f"{path}: no frames: the TRC header is followed by blank lines only")
     for number, line in data:
         fields = line.count("\t") + 1
+        if fields == 1:
+            _check_tab_separated(lines, number - 1, path)
         if fields < width:
             columns = f"Frame#, Time and X, Y, Z of {len(labels)} markers"
             raise _short_row(path, number, fields, width, columns, number == len(lines))
@@ -299,6 +476,21 @@ def read_trc(path: str | Path) -> Recording:
     _check_trc_times([row[1] for row in rows], [n for n, _ in data], numbers, rate_hz, path)
     return _no_repeated_frames(
         Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
+    )
+
+
+def _check_tab_separated(lines: list[str], index: int, path: Path) -> None:
+    """``ValueError`` naming line ``index + 1`` of the TRC file ``path`` (``lines``) when it
+    holds no tab but several fields separated by spaces, as an editor or exporter that turns
+    tabs into spaces writes. Such a file is refused, not read: spaces cannot tell an empty
+    field (a gap) from no field, nor a label with a space in it from two labels."""
+    line = lines[index]
+    if "\t" in line or len(line.split()) < 2:
+        return
+    raise ValueError(
+        f"{path}: line {index + 1} is not tab-separated: a TRC file's fields are separated by "
+        "tabs, and spaces cannot tell an empty field (a gap) from none, nor a label with a "
+        "space in it; save the file with tabs"
     )
 
 
@@ -647,7 +839,10 @@ def read_csv(path: str | Path) -> Recording:
     markers[numbers - first_frame, table["marker"].map(column).to_numpy()] = coordinates.to_numpy(
         float
     )
-    return _no_repeated_frames(Recording(tuple(labels), markers, None, str(path), first_frame))
+    # The format states no unit: its coordinates are read as mm, and said to be read so.
+    return _no_repeated_frames(
+        Recording(tuple(labels), markers, None, str(path), first_frame, units="")
+    )
 
 
 #: The first lines of the sections of a Vicon Nexus CSV export.

@@ -94,7 +94,9 @@ class Recording:
     NaN where a sample is missing (NaN, inf or exactly (0, 0, 0) in the file, or a negative
     residual where the format has one); ``rate_hz`` the frame rate (``None`` when the file does
     not say); ``source`` the file it came from, for messages; ``units`` the point unit the file
-    states (the markers are converted to mm whatever it is).
+    states (the markers are converted to mm whatever it is), ``""`` where it states none and
+    its coordinates were read as mm (a C3D without ``POINT:UNITS``, a CSV), which messages say
+    (:func:`~jointbench.io.units.unit_read_in`).
 
     Frames are named by the file's own numbers, as other motion-capture software shows them:
     row ``i`` is frame ``first_frame + i`` (a C3D header's first frame, a TRC's first

@@ -38,7 +38,13 @@ from jointbench.estimators.validation import (
     scale_change,
     span_bound,
 )
-from jointbench.io.units import fitting_units, unit_hint
+from jointbench.io.units import (
+    UNIT_READ,
+    fitting_units,
+    the_files_unit,
+    unit_hint,
+    unit_read_in,
+)
 from jointbench.numerics.small import inertia
 from jointbench.screening import (
     Artefact,
@@ -333,7 +339,7 @@ def _check_frames_scale(markers: np.ndarray, labels: tuple[str, ...], recording:
         return
     first = recording.when(int(off[0]))
     named = scale_change(
-        markers, judged, first, recording.first_frame + off, f"the file's {recording.units!r}"
+        markers, judged, first, recording.first_frame + off, the_files_unit(recording.units)
     )
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} {named}, or markers not of one "
@@ -370,19 +376,20 @@ def _check_unit(
         return
     if span > bound.largest_mm:
         broken += bound.why_not_lab
-    hint = unit_hint(span, recording.units, bound.largest_mm)
-    if span > bound.largest_mm and fitting_units(span, recording.units, bound.largest_mm) == {}:
+    read_in = recording.units or UNIT_READ
+    hint = unit_hint(span, read_in, bound.largest_mm)
+    if span > bound.largest_mm and fitting_units(span, read_in, bound.largest_mm) == {}:
         raise ValueError(
             f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the "
-            f"farthest two, median over the frames), {broken}, in the unit the file states "
-            f"({recording.units!r}, read as mm), and {hint}: they are not the markers of "
+            f"farthest two, median over the frames), {broken}, in "
+            f"{unit_read_in(recording.units)}, and {hint}: they are not the markers of "
             f"{bound.whose}, or are in a unit no file states; choose one segment's markers "
             "(moving, reference; --moving, --reference)"
         )
     raise ValueError(
         f"{recording.source}: markers {', '.join(labels)} lie {span:.3g} mm apart (the farthest "
-        f"two, median over the frames), {broken}. The coordinates are not in the unit the file "
-        f"states ({recording.units!r}, read as mm){': ' + hint if hint else ''}; correct the "
+        f"two, median over the frames), {broken}. The coordinates are not in "
+        f"{unit_read_in(recording.units)}{': ' + hint if hint else ''}; correct the "
         "file's unit (C3D POINT:UNITS, TRC Units; a CSV is in mm)"
     )
 

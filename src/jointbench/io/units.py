@@ -6,11 +6,24 @@ from pathlib import Path
 
 from jointbench.estimators.validation import MIN_SPAN_MM
 
-__all__ = ["UNIT_TO_MM", "fitting_units", "to_mm", "unit_hint", "unit_size"]
+__all__ = [
+    "UNIT_READ",
+    "UNIT_TO_MM",
+    "fitting_units",
+    "the_files_unit",
+    "to_mm",
+    "unit_hint",
+    "unit_read_in",
+    "unit_size",
+]
 
 #: The point units a file may state (C3D ``POINT:UNITS``, TRC ``Units``) by symbol, each's
 #: size [mm]; spelled out (:func:`unit_size`) they are read as these.
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
+
+#: The unit a file's coordinates are read in where it states none (a C3D without
+#: ``POINT:UNITS``; a CSV, whose format states no unit and is in mm).
+UNIT_READ = "mm"
 
 # The symbol each unit's name, in either spelling and either number, is read as.
 _SPELLED = {
@@ -77,3 +90,21 @@ def unit_hint(span_mm: float, stated: str, largest_mm: float) -> str:
     return "its numbers look like " + " or ".join(
         f"{name} read as {read_as} (a cluster {size:.3g} mm across)" for name, size in fits.items()
     )
+
+
+def unit_read_in(stated: str) -> str:
+    """For messages, in words, the unit a file's coordinates were read in, given the unit it
+    ``stated`` (``""`` where it states none): ``"the unit the file states ('cm', read as
+    mm)"``, or ``"the unit the file is read in (it states no unit; read as mm)"``; a file that
+    states nothing is not said to state mm."""
+    if not stated:
+        return f"the unit the file is read in (it states no unit; read as {UNIT_READ})"
+    return f"the unit the file states ({stated!r}, read as mm)"
+
+
+def the_files_unit(stated: str) -> str:
+    """For messages, the unit of a file that ``stated`` it (``""`` where it states none), as
+    a name: ``"the file's 'cm'"``, or ``"mm, which the file is read in (it states no unit)"``."""
+    if not stated:
+        return f"{UNIT_READ}, which the file is read in (it states no unit)"
+    return f"the file's {stated!r}"

@@ -1,0 +1,347 @@
+"""Recordings read on an assumption, or told the wrong thing: a C3D that states no point unit
+(read as mm, and said so), a rate of NaN, frames zero-filled past a capture's end, a TRC whose
+fields are separated by spaces, a frame hidden in a long C3D's last block, a scale that zeroes
+every coordinate; and files whose header disagrees with their rows, each refused naming it."""
+
+from __future__ import annotations
+
+import struct
+import warnings
+
+import numpy as np
+import pytest
+from test_cli import run
+from test_io_hostile_files import SHANK, THIGH, _refusal
+from test_io_recordings import write_c3d
+from test_io_units import fit_knee, knee_legs, write_trc  # noqa: F401 (a fixture)
+from test_user_recordings import write_long_csv
+
+from jointbench.io import read
+
+NO_UNIT = "the unit the file is read in (it states no unit; read as mm)"
+
+
+def _read_quietly(path):
+    """``read(path)``, failing on any warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return read(path)
+
+
+def _markers(n_frames=20, n_markers=3, seed=0):
+    return np.random.default_rng(seed).uniform(10.0, 100.0, size=(n_frames, n_markers, 3))
+
+
+def _c3d_without_units(path, labels, markers, units_value=None):
+    """A C3D of ``markers`` whose POINT group has no ``UNITS`` (ezc3d writes one, so it is
+    renamed ``UNITZ`` in the file), or, with ``units_value`` (two characters), one that
+    writes that."""
+    content = bytearray(write_c3d(path, labels, markers).read_bytes())
+    name = content.index(b"\x01UNITS") + 1
+    if units_value is None:
+        content[name : name + 5] = b"UNITZ"
+    else:
+        value = content.index(b"mm", name)
+        content[value : value + 2] = units_value
+    path.write_bytes(bytes(content))
+    return path
+
+
+@pytest.mark.parametrize("units_value", [None, b"  "], ids=["no-units", "blank-units"])
+def test_a_c3d_that_states_no_unit_is_read_as_mm_and_says_so(tmp_path, units_value):
+    """Read as if it stated 'mm' (ezc3d adds the parameter it lacks); a blank one was refused
+    as the unknown unit ''."""
+    markers = _markers()
+    path = _c3d_without_units(tmp_path / "trial.c3d", "ABC", markers, units_value)
+    with pytest.warns(UserWarning) as caught:
+        recording = read(path)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: the file states no point unit (POINT:UNITS); its coordinates are read as mm"
+    ]
+    assert recording.units == ""
+    np.testing.assert_allclose(recording.markers, markers, rtol=1e-6)
+
+
+def test_metres_in_a_c3d_that_states_no_unit_are_not_said_to_be_under_mm(tmp_path, request):
+    labels, markers = request.getfixturevalue("knee_legs")
+    path = _c3d_without_units(tmp_path / "knee.c3d", labels, markers / 1000.0)
+    with pytest.warns(UserWarning, match="states no point unit"):
+        recording = read(path)
+    with pytest.raises(ValueError) as error:
+        fit_knee(recording)
+    message = str(error.value)
+    assert f"The coordinates are not in {NO_UNIT}: its numbers look like " in message
+    assert "or metres read as millimetres (a cluster 341 mm across)" in message
+    assert "states ('mm'" not in message
+
+
+def test_metres_in_a_csv_are_not_said_to_be_under_a_unit_the_file_states(tmp_path, request):
+    """A CSV states no unit: it is read as mm, the format's."""
+    labels, markers = request.getfixturevalue("knee_legs")
+    recording = _read_quietly(write_long_csv(tmp_path / "knee.csv", labels, markers / 1000.0))
+    assert recording.units == ""
+    with pytest.raises(ValueError) as error:
+        fit_knee(recording)
+    assert f"The coordinates are not in {NO_UNIT}" in str(error.value)
+
+
+def test_a_trc_whose_units_field_is_empty_is_refused_naming_it(tmp_path):
+    path = write_trc(tmp_path / "trial.trc", "ABC", _markers(), units="")
+    assert _refusal(path) == (
+        f"{path}: line 3, field Units: empty; a TRC file states its point unit there (mm, cm or m)"
+    )
+
+
+def test_inspect_and_fit_say_the_unit_was_not_stated(tmp_path, capsys):
+    path = _c3d_without_units(tmp_path / "trial.c3d", "ABC", _markers())
+    code, out, err = run(capsys, "inspect", str(path))
+    assert code == 0
+    assert "3 markers, no unit stated (read as mm)" in out
+    assert err == (
+        f"jointbench: warning: {path}: the file states no point unit (POINT:UNITS); its "
+        "coordinates are read as mm\n"
+    )
+    code, out, err = run(capsys, "inspect", str(path), "--format", "json")
+    assert '"units_in_file": null' in out
+
+
+def _c3d_rate_words(path, header=None, parameter=None):
+    """A C3D of three markers at 100 Hz, its header's rate and its POINT:RATE parameter set."""
+    content = bytearray(write_c3d(path, "ABC", _markers()).read_bytes())
+    if parameter is not None:
+        value = content.index(b"\x01RATE\t\x00\x04\x00") + 9
+        content[value : value + 4] = struct.pack("<f", parameter)
+    if header is not None:
+        content[20:24] = struct.pack("<f", header)
+    path.write_bytes(bytes(content))
+    return path
+
+
+@pytest.mark.parametrize("header", [None, np.nan], ids=["parameter", "both"])
+def test_a_c3d_point_rate_of_nan_is_refused_naming_it(tmp_path, header):
+    """ezc3d failed on it ("vector::_M_default_append"), reported as an unreadable file."""
+    path = _c3d_rate_words(tmp_path / "rate.c3d", header=header, parameter=np.nan)
+    assert _refusal(path) == f"{path}: POINT:RATE nan is not a frame rate (frames per second)"
+
+
+def test_a_c3d_header_rate_of_nan_under_a_parameter_rate_reads_the_parameter(tmp_path):
+    """ezc3d takes the rate from POINT:RATE, which other programs read too."""
+    path = _c3d_rate_words(tmp_path / "rate.c3d", header=np.nan)
+    assert _read_quietly(path).rate_hz == 100.0
+
+
+ZERO_FILLED = (
+    "frames 16 to 20 (the last 5) hold every marker at exactly (0, 0, 0) with no negative "
+    "residual: frames zero-filled past the capture's end (a capture stopped early and padded, "
+    "or a file cut and padded), not gaps a recording writes; they are read as missing"
+)
+
+
+def test_a_c3d_zero_filled_at_its_end_is_read_as_missing_and_says_so(tmp_path):
+    markers = _markers()
+    markers[15:] = 0.0
+    path = write_c3d(tmp_path / "padded.c3d", "ABC", markers)
+    with pytest.warns(UserWarning) as caught:
+        recording = read(path)
+    assert [str(w.message) for w in caught] == [f"{path}: {ZERO_FILLED}"]
+    assert np.isnan(recording.markers[15:]).all()
+    assert np.isfinite(recording.markers[:15]).all()
+
+
+def test_fit_prints_the_zero_filled_frames(tmp_path, capsys, request):
+    labels, markers = request.getfixturevalue("knee_legs")
+    markers = markers.copy()
+    markers[290:] = 0.0
+    path = write_c3d(tmp_path / "padded.c3d", labels, markers)
+    code, _, err = run(capsys, "fit", "center", str(path), "--moving", SHANK, "--reference", THIGH)
+    assert code == 0
+    assert err.startswith(
+        f"jointbench: warning: {path}: frames 291 to 300 (the last 10) hold every marker at "
+        "exactly (0, 0, 0)"
+    ), err
+
+
+@pytest.mark.parametrize("gap", ["residual", "some-markers", "middle"])
+def test_real_gaps_read_as_before_without_a_word(tmp_path, gap):
+    """Gaps marked by a residual of -1 (a marker unseen, at the end too), zeros in some
+    markers only, or zeros in every marker before frames that see them, are gaps."""
+    markers = _markers()
+    residuals = None
+    if gap == "residual":
+        markers[15:] = 0.0
+        residuals = np.zeros(markers.shape[:2])
+        residuals[15:] = -1.0
+    elif gap == "some-markers":
+        markers[15:, :2] = 0.0
+    else:
+        markers[10:15] = 0.0
+    path = write_c3d(tmp_path / "gaps.c3d", "ABC", markers, residuals=residuals)
+    recording = _read_quietly(path)
+    assert np.isnan(recording.markers[..., 0]).sum() == (markers == 0.0).all(axis=-1).sum()
+
+
+@pytest.mark.parametrize(
+    ("line", "text", "refusal"),
+    [
+        (
+            None,
+            None,
+            "line 2 is not tab-separated: a TRC file's fields are separated by tabs, and spaces "
+            "cannot tell an empty field (a gap) from none, nor a label with a space in it; save "
+            "the file with tabs",
+        ),
+        (
+            6,
+            "1 0.0000 10.0 20.0 30.0 40.0 50.0 60.0 70.0 80.0 90.0",
+            "line 6 is not tab-separated: a TRC file's fields are separated by tabs, and spaces "
+            "cannot tell an empty field (a gap) from none, nor a label with a space in it; save "
+            "the file with tabs",
+        ),
+    ],
+    ids=["whole-file", "one-row"],
+)
+def test_a_space_separated_trc_is_refused_as_not_tab_separated(tmp_path, line, text, refusal):
+    """It was refused as having no 'Units' (the whole file), or a row of 1 field (one row)."""
+    path = write_trc(tmp_path / "trial.trc", "ABC", _markers())
+    lines = path.read_text().splitlines()
+    if line is None:
+        lines = [" ".join(row.split("\t")) for row in lines]
+    else:
+        lines[line - 1] = text
+    path.write_text("\n".join(lines) + "\n")
+    assert _refusal(path) == f"{path}: {refusal}"
+
+
+def _long_c3d_unpadded(path, n_frames):
+    """A C3D of ``n_frames`` frames of one marker (16 bytes a frame) as a writer that pads
+    its last block no further than its end writes it: ezc3d's file without the whole block
+    of zeros it adds where the frames end a block."""
+    markers = np.random.default_rng(1).uniform(10.0, 100.0, size=(n_frames, 1, 3))
+    content = write_c3d(path, ("A",), markers).read_bytes()
+    assert content.endswith(bytes(512))
+    path.write_bytes(content[:-512])
+    return path
+
+
+def test_a_frame_hidden_in_a_long_c3ds_last_block_is_refused(tmp_path):
+    """Frame 65536 ends the block the 65535th ends in: it was read as padding, unseen."""
+    path = _long_c3d_unpadded(tmp_path / "long.c3d", 65536)
+    assert _refusal(path) == (
+        f"{path}: the file holds 16 bytes past the 65535 frames read, room for 1 more frames "
+        "of 1 points and 0 analog samples each (a C3D's header counts at most 65535 frames, and "
+        "frames past those its header and POINT:FRAMES count are not read, whatever its "
+        "POINT:LONG_FRAMES or TRIAL:ACTUAL_END_FIELD say): frames from 65536 on would be left "
+        "out unread; export the trial as TRC, or in parts"
+    )
+
+
+def test_a_long_c3ds_zero_padding_is_no_frame(tmp_path):
+    markers = np.random.default_rng(1).uniform(10.0, 100.0, size=(65535, 1, 3))
+    path = write_c3d(tmp_path / "long.c3d", ("A",), markers)
+    assert _read_quietly(path).n_frames == 65535
+
+
+@pytest.mark.parametrize("scale", [0.0, np.nan])
+def test_a_c3d_point_scale_of_0_or_nan_is_refused_naming_it(tmp_path, scale):
+    """Every coordinate read as 0 (or NaN), and so every sample as a gap."""
+    path = write_c3d(tmp_path / "scale.c3d", "ABC", _markers())
+    content = bytearray(path.read_bytes())
+    value = content.index(b"\x01SCALE") + 10
+    content[value : value + 4] = struct.pack("<f", scale)
+    path.write_bytes(bytes(content))
+    assert _refusal(path) == (
+        f"{path}: POINT:SCALE {scale:g} is no scale: a float file's is negative, an integer "
+        "file's the size of its unit step (0 or NaN would make every coordinate 0 or NaN, and so "
+        "every sample a gap)"
+    )
+
+
+@pytest.mark.parametrize(
+    ("labels", "refused"),
+    [
+        (("", "", ""), "point 1 (of 3) has no label, an empty one (3 in all)"),
+        (("A", "", "C"), "point 2 (of 3) has no label, an empty one (1 in all)"),
+    ],
+    ids=["all-empty", "one-empty"],
+)
+def test_a_c3d_point_without_a_label_is_refused_naming_it(tmp_path, labels, refused):
+    """All empty, they were refused as markers 1 and 2 both labelled ''; one empty read as a
+    marker named '', which no --moving can name."""
+    path = write_c3d(tmp_path / "labels.c3d", labels, _markers())
+    assert _refusal(path) == (
+        f"{path}: POINT:LABELS: {refused}; every marker needs a label (relabel those points, "
+        "or export the trial without unlabelled trajectories)"
+    )
+
+
+def test_a_c3d_of_more_points_than_labels_is_refused_naming_both(tmp_path):
+    """ezc3d reads POINT:USED points a frame: refused as markers of another shape than the
+    labels, naming neither parameter."""
+    path = write_c3d(tmp_path / "used.c3d", "ABC", _markers())
+    content = bytearray(path.read_bytes())
+    value = content.index(b"\x01USED") + 9
+    content[value : value + 2] = struct.pack("<h", 5)
+    path.write_bytes(bytes(content))
+    assert _refusal(path) == (
+        f"{path}: POINT:USED counts 5 points, but POINT:LABELS (with LABELS2, LABELS3) names 3; "
+        "every point needs a label"
+    )
+
+
+def _edited_trc(path, line, text):
+    """A TRC of three markers over 20 frames with line ``line`` (1-based) replaced by
+    ``text``."""
+    lines = write_trc(path, "ABC", _markers()).read_text().splitlines()
+    lines[line - 1] = text
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("line", "text", "refused"),
+    [
+        (3, "100\t100\t25\t3\tmm", "the TRC header promises NumFrames 25 but the file has 20"),
+        (3, "100\t100\t20\t4\tmm", "the TRC header promises NumMarkers 4 but the file has 3"),
+        (3, "100\t100\t20\t3\tin", "unknown point unit 'in'; known: cm, m, mm"),
+        (3, "nan\t100\t20\t3\tmm", "line 3, field DataRate: 'nan' is not a frame rate"),
+        (7, "1\t0.0\t1\t2\t3\t4\t5\t6\t7\t8\t9", "line 7, field Frame#: frame 1 follows frame 1"),
+    ],
+    ids=["num-frames", "num-markers", "inches", "rate-nan", "frame-twice"],
+)
+def test_a_trc_header_its_rows_do_not_keep_is_refused(tmp_path, line, text, refused):
+    path = _edited_trc(tmp_path / "trial.trc", line, text)
+    assert _refusal(path).startswith(f"{path}: {refused}")
+
+
+@pytest.mark.parametrize(
+    ("rows", "refused"),
+    [
+        (
+            ["frame,marker,x,y,z", ",,m,m,m", "0,A,1,2,3"],
+            "line 2, field frame: '' is not a frame number",
+        ),
+        (
+            ["frame,marker,x,y,z", "0,,A,1,2,3"],
+            "line 2, column 6: '3' lies past the header's 5 columns",
+        ),
+        (
+            [",frame,marker,x,y,z", "0,A,1,2,3"],
+            "line 2 has 5 fields, but the header has 6",
+        ),
+        (
+            ["frame,marker,x_m,y_m,z_m", "0,A,1,2,3"],
+            "missing columns ['x', 'y', 'z']; the header names ['frame', 'marker', 'x_m',",
+        ),
+        (
+            ["Frame,A,,,B,,", "mm,X,Y,Z,X,Y,Z", "0,1,2,3,4,5,6"],
+            "missing columns ['frame', 'marker', 'x', 'y', 'z']; the header names ['Frame', 'A',",
+        ),
+    ],
+    ids=["units-row", "row-shifted", "header-shifted", "units-in-names", "one-row-per-frame"],
+)
+def test_a_csv_of_another_layout_is_refused_naming_where(tmp_path, rows, refused):
+    """A units row in metres, a label row shifted by one column either way, units in the
+    column names, a wide layout with a units row: none is read as millimetres."""
+    path = tmp_path / "trial.csv"
+    path.write_text("\n".join(rows) + "\n")
+    assert _refusal(path).startswith(f"{path}: {refused}")
