@@ -798,3 +798,12 @@ def test_the_guide_s_knee_numbers_are_what_its_command_prints(capsys):
     assert f"lag-1 autocorrelation {stated.group(1)})" in status
     assert f"where there are about {stated.group(2)}," in status
     assert f"blocks of 31 frames are shorter than {span.group(1)}," in status
+
+
+def test_the_readme_command_says_which_blocks_it_rewrites(capsys):
+    """Its one-line help named two of the README's generated blocks; it rewrites every one
+    (README, "The README's generated blocks")."""
+    top = " ".join(cli._parser().format_help().split())
+    for block in ("reproduction summary", "STA ranking", "what stands out", "verdicts over seeds"):
+        assert block in _help(capsys, "readme"), block
+        assert block in top, block

@@ -36,6 +36,19 @@ def test_truncated_c3d_is_refused_naming_what_the_header_promised(tmp_path, cut)
     assert f"{complete} complete frames" in str(error.value)
 
 
+@pytest.mark.parametrize("cut", [300, 1024, 9000, 1_000_000, 2_045_000])
+def test_a_truncated_c3d_refusal_says_what_to_do(tmp_path, cut):
+    """Every refusal of a C3D file cut short, inside its header, its parameters or its frames,
+    ends saying how to go on: the part that is there is not read as the trial."""
+    path = tmp_path / "cut.c3d"
+    path.write_bytes(KNEE.read_bytes()[:cut])
+    with pytest.raises(ValueError) as error:
+        read(path)
+    assert str(error.value).endswith(
+        "; copy the file again from where it was recorded, or export it again"
+    )
+
+
 @pytest.mark.parametrize(
     ("cut", "where"),
     [
@@ -52,7 +65,8 @@ def test_a_c3d_file_cut_before_its_frames_is_refused_as_truncated(tmp_path, cut,
     with pytest.raises(ValueError) as error:
         read(path)
     assert str(error.value) == (
-        f"{path}: truncated C3D file: it ends after {cut} bytes, inside {where}"
+        f"{path}: truncated C3D file: it ends after {cut} bytes, inside {where}; copy the "
+        "file again from where it was recorded, or export it again"
     )
 
 

@@ -144,7 +144,8 @@ def test_a_c3d_of_65535_frames_or_more_cut_short_is_refused(tmp_path):
     assert _refusal(path) == (
         f"{path}: truncated C3D file: its header promises frames 1 to 65535 or more (65535 "
         "frames or more) of 8 points and 0 analog samples each (8390016 bytes or more), but the "
-        "file has 4195072 bytes: 32762 complete frames"
+        "file has 4195072 bytes: 32762 complete frames; copy the file again from where it was "
+        "recorded, or export it again"
     )
 
 

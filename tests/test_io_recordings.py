@@ -252,6 +252,20 @@ def test_a_marker_never_seen_is_named(tmp_path):
         prepare(recording, "joint_center", DIST, PROX)
 
 
+def test_a_marker_never_seen_is_named_with_what_to_do(tmp_path):
+    """The refusal of a marker seen in none of the frames read says how to go on: fit the
+    segment without it, or read frames where it is seen."""
+    markers = rig_recording().markers.copy()
+    markers[:, 4] = np.nan
+    recording = read(write_c3d(tmp_path / "dropped.c3d", PROX + DIST, markers))
+    with pytest.raises(ValueError) as error:
+        prepare(recording, "joint_center", DIST, PROX)
+    assert str(error.value).endswith(
+        "leave it out of the segment's markers (moving, reference; --moving, --reference), or "
+        "read frames where it is seen (frames; --frames)"
+    )
+
+
 def test_estimator_errors_name_the_file_and_method():
     proximal, distal = two_segments(100, relative="hinge")
     recording = Recording(

@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 import pytest
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -77,3 +78,44 @@ def test_the_summary_has_no_cryptic_counts():
 def test_the_quick_start_and_test_commands_are_intact():
     assert ".venv/bin/pip install -e . && .venv/bin/snakemake -j2" in README
     assert ".venv/bin/pip install -e '.[test]' && .venv/bin/pytest" in README
+
+
+def _yaml_after(marker: str) -> dict:
+    """The first YAML block of the README after ``marker``."""
+    start = README.index("```yaml\n", README.index(marker)) + len("```yaml\n")
+    return yaml.safe_load(README[start : README.index("```", start)])
+
+
+def test_listing_a_new_estimator_keeps_the_studys_own():
+    """Copied as written, the list that adds a built-in estimator to the cmc study keeps every
+    estimator the shipped config lists there: a list that left one out (SCoRE) would drop it
+    from the ranking the newcomer is to be compared in."""
+    shipped = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    listed = _yaml_after("meets them")["studies"]["cmc"]["estimators"]
+    own = shipped["studies"]["cmc"]["estimators"]
+    assert listed[: len(own)] == own and listed[len(own) :] == ["sphere-mean"]
+
+
+def test_listing_an_external_estimator_keeps_the_studys_own():
+    """Likewise the list that adds an external estimator to the cmc study."""
+    shipped = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    listed = _yaml_after("### Any language: one rule")["studies"]["cmc"]["external_estimators"]
+    own = shipped["studies"]["cmc"]["external_estimators"]
+    assert listed[: len(own)] == own and listed[len(own) :] == ["centroid"]
+
+
+#: The texts that list the run's files: the README, the results folder's own and the docs.
+LISTINGS = [
+    ROOT / "README.md",
+    ROOT / "results" / "README.md",
+    *sorted((ROOT / "docs").glob("*.md")),
+]
+
+
+@pytest.mark.parametrize("path", LISTINGS, ids=lambda path: path.name)
+def test_every_table_listed_names_its_html_page(path):
+    """Every table a run writes as CSV and Markdown it writes as an HTML page too (the report
+    shows that page): a listing of ``tables/NAME.{csv,md}`` sent a reader of the results
+    folder to two of its three files."""
+    listed = re.findall(r"tables/[\w*{}]+\.\{([a-z,]+)\}", path.read_text())
+    assert all("html" in forms.split(",") for forms in listed if "csv" in forms), listed

@@ -702,7 +702,11 @@ def _parser() -> argparse.ArgumentParser:
 
     readme = sub.add_parser(
         "readme",
-        help="refresh the README's reproduction summary and verdicts over seeds",
+        help="rewrite the README's generated blocks from the run's tables: the reproduction "
+        "summary, the STA ranking, what stands out and the verdicts over seeds",
+        description="Rewrite every block of the README between its <!-- NAME:start --> and "
+        "<!-- NAME:end --> markers from the run's tables: the reproduction summary, the papers' "
+        "headlines (the STA ranking), what stands out and the verdicts over seeds.",
         formatter_class=_Formatter,
     )
     _run_options(readme)

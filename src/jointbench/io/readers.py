@@ -54,6 +54,10 @@ def _read_text(path: Path, kind: str) -> str:
 #: The end-of-file mark some DOS programs end a text file with; the text ends before it.
 _DOS_END = b"\x1a"
 
+#: What a refusal of a C3D file cut short tells its reader to do: the frames that are there are
+#: not the trial, and only a whole copy or a new export from the capture software restores it.
+_C3D_CUT_ADVICE = "; copy the file again from where it was recorded, or export it again"
+
 #: Bytes no text file holds: the control characters but tab, line feed, vertical tab, form
 #: feed, carriage return and the end-of-file mark (0x1a) some DOS programs end a file with.
 _BINARY_BYTE = re.compile(rb"[\x00-\x08\x0e-\x19\x1b-\x1f]")
@@ -314,7 +318,7 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
             f"{path}: truncated C3D file: its header promises frames {first} to {last}{more} "
             f"({frames} frames{more}) of {n_points} points and {n_analog} analog samples each "
             f"({start + frames * frame_bytes} bytes{more}), but the file has {size} bytes: "
-            f"{complete} complete frames"
+            f"{complete} complete frames{_C3D_CUT_ADVICE}"
         )
     if more:
         _check_c3d_long(c3d, path, start, frame_bytes, first)
@@ -400,13 +404,13 @@ def _check_c3d_reaches_frames(path: Path) -> None:
     if size < 512:
         raise ValueError(
             f"{path}: truncated C3D file: it ends after {size} bytes, inside its 512-byte "
-            "header block"
+            f"header block{_C3D_CUT_ADVICE}"
         )
     start = (_c3d_header(path)[-1] - 1) * 512
     if size < start:
         raise ValueError(
             f"{path}: truncated C3D file: it ends after {size} bytes, inside its parameters, "
-            f"before the frames its header places at byte {start}"
+            f"before the frames its header places at byte {start}{_C3D_CUT_ADVICE}"
         )
 
 

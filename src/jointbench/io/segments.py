@@ -102,7 +102,8 @@ __all__ = [
 def _check_seen(recording: Recording, index: list[int]) -> None:
     """``ValueError`` naming the file, the marker and the frames read when a marker of the
     columns ``index`` shows in none of them: a range of frames (``--frames``) can leave out
-    every frame a marker shows in, where "never visible" would read as the whole file's."""
+    every frame a marker shows in, where "never visible" would read as the whole file's. It
+    says how to go on: the segment without that marker, or frames where it is seen."""
     seen = np.isfinite(recording.markers[:, index, 0]).any(axis=0)
     if seen.all():
         return
@@ -110,7 +111,9 @@ def _check_seen(recording: Recording, index: list[int]) -> None:
     numbering = recording.numbering
     raise ValueError(
         f"{recording.source}: marker {label} is never visible in frames "
-        f"{numbering.number(0)} to {numbering.number(recording.n_frames - 1)} (the frames read)"
+        f"{numbering.number(0)} to {numbering.number(recording.n_frames - 1)} (the frames "
+        "read): leave it out of the segment's markers (moving, reference; --moving, "
+        "--reference), or read frames where it is seen (frames; --frames)"
     )
 
 
