@@ -34,6 +34,12 @@ if _REPORT:
     atexit.register(jb_report.finish_report, _REPORT)
 
 
+onstart:
+    # A profile's --drop-metadata, which the command line checked as the workflow loaded
+    # does not show (refuse_dropped_metadata).
+    refuse_dropped_metadata(workflow.execution_settings.keep_metadata)
+
+
 onsuccess:
     print(jb_report.closing_lines(), file=sys.stderr)
 
@@ -100,5 +106,7 @@ track_sources(USER_RULES)
 plan_code_checks()
 
 
-# Files under results/ that Snakemake has no record of are refused: it would take them as current.
+# Files under results/ that Snakemake has no record of are refused: it would take them as current;
+# so is a run that would leave such files, or files with another job's record.
+refuse_dropped_metadata()
 refuse_unrecorded_results()

@@ -532,7 +532,7 @@ def _overlay(tmp_path, **cmc) -> str:
 
 @pytest.mark.pipeline
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) on this machine")
-def test_the_c_estimator_runs_as_a_rule_and_equals_the_built_in_ls(tmp_path):
+def test_the_c_estimator_runs_as_a_rule_and_equals_the_built_in_ls(tmp_path, monkeypatch):
     copy_workflow(tmp_path)
     overlay = _overlay(tmp_path, estimators=["LS"], external_estimators=["LS-C"])
     run = run_snakemake(tmp_path, "results/collected/cmc.parquet", "--configfile", overlay)
@@ -547,6 +547,20 @@ def test_the_c_estimator_runs_as_a_rule_and_equals_the_built_in_ls(tmp_path):
     assert gap.max() < 1e-9, gap
     # Scored by the benchmark, from the estimate: the same error as the built-in LS.
     assert np.allclose(theirs["error_mm"], ours["error_mm"], rtol=0, atol=1e-9)
+    # Another C compiler, which may optimise the program otherwise, compiles it again.
+    other = tmp_path / "other-cc"
+    other.mkdir()
+    (other / "cc").write_text(
+        '#!/bin/sh\n[ "$1" = --version ] && echo "cc (Other) 99.0" && exit 0\n'
+        f'exec {shutil.which("cc")} "$@"\n'
+    )
+    (other / "cc").chmod(0o755)
+    monkeypatch.setenv("PATH", f"{other}{os.pathsep}{os.environ['PATH']}")
+    planned = run_snakemake(
+        tmp_path, "results/collected/cmc.parquet", "--configfile", overlay, "-n"
+    )
+    assert planned.returncode == 0, planned.stdout[-3000:] + planned.stderr[-3000:]
+    assert "rule compile_ls_sphere:" in planned.stdout, planned.stdout[-3000:]
 
 
 @pytest.mark.pipeline

@@ -678,6 +678,15 @@ def test_where_the_kernel_has_no_landlock_the_run_says_once_that_jobs_are_not_co
     assert message.count(said) == 1, message[-3000:]
 
 
+def _shell_rule(shell) -> str:
+    """The name of the rule whose jobs run with ``shell``, as its comment writes it (JSON): a
+    name other than lower-case letters, digits and underscores is not its folder's."""
+    (name,) = re.findall(
+        r"^# The limited shell of the jobs of rule (.*), with ", shell.read_text(), re.M
+    )
+    return json.loads(name)
+
+
 def _handed_down(tmp_path, grid, *, prepared: bool = False) -> dict[str, dict]:
     """What a dry run of cmc on ``grid`` with the external estimators centroid and LM hands
     the jobs of each rule of the user's in :data:`landlock.VARIABLE`, as the shell each rule's
@@ -701,7 +710,7 @@ def _handed_down(tmp_path, grid, *, prepared: bool = False) -> dict[str, dict]:
     for shell in (tmp_path / ".snakemake" / "jointbench" / "shells").glob("*/bash"):
         (text,) = re.findall(rf"{landlock.VARIABLE}=('[^']*')", shell.read_text())
         (text,) = shlex.split(text)
-        handed[shell.parent.name] = {"text": text, **json.loads(text)}
+        handed[_shell_rule(shell)] = {"text": text, **json.loads(text)}
     return handed
 
 
@@ -746,6 +755,67 @@ def test_a_checkout_where_the_rules_shells_cannot_be_written_still_lists_its_rul
     assert run.returncode != 0, message[-3000:]
     assert f"{stale} cannot be replaced" in message, message[-3000:]
     assert "Building DAG of jobs" not in message, message[-3000:]
+
+
+# Names Snakemake accepts for a rule (its ``name:`` directive takes any string): a line break
+# followed by a command, a path up and out, a name longer than a file name may be, letters
+# beyond ASCII, two names one case apart, quotes and a command substitution.
+_ODD_NAMES = (
+    "odd\ntouch INJECTED #",
+    "../../../../escaped",
+    "r" * 300,
+    "Règle_ü",
+    "Fold",
+    "fold",
+    "quote'\"$(touch INJECTED)",
+)
+
+_ODD_RULE = """
+
+rule:
+    name:
+        {name!r}
+    output:
+        "results/odd{number}/made.txt",
+    shell:
+        "echo made > {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_rule_of_any_name_snakemake_accepts_runs_in_a_shell_of_its_own(tmp_path):
+    """Each rule of the user's gets its own shell, inside the folder of shells, whatever its
+    name: the shell's text runs nothing of the name, its file name fits the file system, and
+    two names one case apart do not share a folder on a file system blind to case. Each job
+    runs with its rule's shell and makes its file."""
+    workdir = tmp_path / "checkout"
+    workdir.mkdir()
+    copy_workflow(workdir)
+    rules = workdir / "workflow" / "rules" / "estimators" / "odd.smk"
+    rules.write_text(
+        "".join(_ODD_RULE.format(name=name, number=i) for i, name in enumerate(_ODD_NAMES))
+    )
+    overlay = _cmc_only(workdir, estimators=["LS"])
+    targets = [f"results/odd{i}/made.txt" for i in range(len(_ODD_NAMES))]
+    run = run_snakemake(workdir, *targets, "--configfile", overlay)
+    message = run.stdout + run.stderr
+    assert run.returncode == 0, message[-3000:]
+    for target in targets:
+        assert (workdir / target).read_text() == "made\n", target
+    assert not list(tmp_path.rglob("INJECTED")), "a rule's name ran as a command"
+    assert not (tmp_path / "escaped").exists(), "a shell written outside its folder"
+    shells = sorted((workdir / ".snakemake" / "jointbench" / "shells").glob("*/bash"))
+    folders = [shell.parent.name for shell in shells]
+    assert len({folder.casefold() for folder in folders}) == len(folders), folders
+    assert all(len(folder.encode()) <= 255 for folder in folders), folders
+    named = set()
+    for shell in shells:
+        named.add(_shell_rule(shell))
+        assert not any(
+            row and not row.startswith(("#", "case", "*", "esac", "exec "))
+            for row in shell.read_text().splitlines()
+        ), shell.read_text()
+    assert set(_ODD_NAMES) <= named, named
 
 
 # A rule of the user's that makes, from each blind copy, the file an external estimator reads.

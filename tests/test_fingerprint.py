@@ -8,8 +8,10 @@ Snakemake on the real workflow.
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
 import json
 import os
+import site
 import subprocess
 import sys
 import textwrap
@@ -295,6 +297,20 @@ def test_modules_found_by_a_registry_are_in_the_fingerprint():
     assert {"jointbench.papers.paper_sta", "jointbench.papers.paper_c"} <= render
 
 
+def test_numbas_code_generator_is_recorded_as_a_dependency():
+    # One Numba release allows several of llvmlite's, each with its own LLVM.
+    assert dependency_versions()["llvmlite"] == importlib.metadata.version("llvmlite")
+
+
+def test_a_compilers_version_is_its_first_line_and_none_is_named(tmp_path, monkeypatch):
+    compiler = tmp_path / "mycc"
+    compiler.write_text("#!/bin/sh\necho 'mycc (Lab) 12.2.0'\necho 'Copyright'\n")
+    compiler.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path}{os.pathsep}{os.environ['PATH']}")
+    assert fingerprint.compiler_version("mycc") == "mycc (Lab) 12.2.0"
+    assert fingerprint.compiler_version("no-such-compiler-here") == "not found"
+
+
 def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):
     script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
     versions = dependency_versions()
@@ -304,6 +320,41 @@ def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):
         fingerprint, "dependency_versions", lambda package: {**versions, "numpy": "0.0.1"}
     )
     assert code_fingerprint(script) != before
+
+
+# Python's site runs, at start-up of every process, each line of the .pth files of the site
+# folders that starts with ``import``: such a line changes what every job imports, as a
+# sitecustomize does. A line naming a folder only puts it on the path, where the modules a job
+# imports are found and read by content wherever they are.
+def test_the_code_a_pth_file_runs_at_start_up_counts_by_content(monkeypatch, tmp_path):
+    folder, own = tmp_path / "site-packages", tmp_path / "own"
+    folder.mkdir()
+    own.mkdir()
+    monkeypatch.setattr(site, "getsitepackages", lambda *_: [str(folder)])
+    monkeypatch.setattr(site, "ENABLE_USER_SITE", False)
+    monkeypatch.syspath_prepend(str(own))
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    before = code_fingerprint(script)
+    pth = folder / "lab.pth"
+    pth.write_text(f"# a comment\n{own}\n\n")
+    assert code_fingerprint(script) == before, "a comment or a path line counted"
+    pth.write_text("import os; os.environ.setdefault('OMP_NUM_THREADS', '1')\n")
+    hooked = code_fingerprint(script)
+    assert hooked != before, "the code a .pth file runs left out"
+    os.utime(pth, ns=(946_684_800 * 10**9,) * 2)
+    assert code_fingerprint(script) == hooked, "a time stamp counted"
+    (folder / "a-first.pth").write_text("import os\n")
+    first = code_fingerprint(script)
+    assert first not in (before, hooked)
+    assert code_fingerprint(script) == first, "not the same from one call to the next"
+    pth.write_text("import os; os.environ.setdefault('OMP_NUM_THREADS', '2')\n")
+    assert code_fingerprint(script) != first
+    # A module of the user's that such a line imports counts by its code, as a job's file does.
+    (own / "labstart.py").write_text("SCALE = 1.0\n")
+    pth.write_text("import labstart\n")
+    started = code_fingerprint(script)
+    (own / "labstart.py").write_text("SCALE = 2.0\n")
+    assert code_fingerprint(script) != started, "a module a .pth line imports left out"
 
 
 @pytest.mark.parametrize(

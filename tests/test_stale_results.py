@@ -388,6 +388,69 @@ EDITS = (
         backdated=True,
         targets=("results/bin/ls_sphere",),
     ),
+    # -- edits that change no result: text only, a copy of the same bytes, what no job reads ---
+    Edit(
+        "a comment in the config",
+        "config/config.yaml",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "render_hinge", "check_published"),
+    ),
+    Edit(
+        "a comment in a named protocol's overlay",
+        "config/variants/hinge_anatomical_knee.yaml",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_hinge", "check_published"),
+    ),
+    Edit(
+        "a comment at the end of a rule file",
+        "workflow/rules/render.smk",
+        "",
+        "\n# A comment changes nothing.\n",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "render_hinge", "check_published"),
+    ),
+    Edit(
+        "a published value rewritten with the same bytes (paper A)",
+        f"{PKG}/papers/paper_a.yaml",
+        "",
+        "",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published"),
+    ),
+    Edit(
+        "an external estimator's program rewritten with the same bytes (LM)",
+        "workflow/external/lm_sphere.py",
+        "",
+        "",
+        spares=DATA_JOBS | _jobs("collect", "render_cmc"),
+    ),
+    Edit(
+        "a new external estimator's rule, not yet listed",
+        "workflow/rules/estimators/centroid.smk",
+        "",
+        "\n\nrule estimate_newcomer:\n    input:\n"
+        '        "results/blind/{study}/{condition}.parquet",\n    output:\n'
+        '        "results/estimates/{study}/newcomer/{condition}.parquet",\n    log:\n'
+        '        "results/logs/estimate/{study}/newcomer/{condition}.log",\n    script:\n'
+        '        "../../external/centroid.py"\n',
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "check_published", "blind_dataset"),
+    ),
+    Edit(
+        "a published value (paper C)",
+        f"{PKG}/papers/paper_c.yaml",
+        "  published: 96.04\n",
+        "  published: 96.05\n",
+        reruns=_jobs("render_hip", "check_published"),
+        spares=DATA_JOBS | _jobs("collect", "render_cmc", "render_hinge"),
+    ),
+    Edit(
+        "an extension's docstring",
+        "toy_study.py",
+        "The study spins three markers",
+        "The study turns three markers",
+        spares=_jobs("simulate_toy", "estimate_toy", "collect", "render_toy", "check_published"),
+        scenario="extension",
+    ),
     Edit(
         "a named protocol's overlay, dated before the results",
         "config/variants/hinge_anatomical_knee.yaml",
@@ -777,6 +840,55 @@ def test_results_snakemake_has_no_record_of_are_not_taken_as_current(reduced_run
     # Moved aside, they are made again from the edited code.
     shutil.move(run.workdir / "results", tmp_path / "old-results")
     assert "estimate_cmc" in _dry_run(run)
+
+
+# A run with --drop-metadata writes no record of the jobs it runs, and leaves each file it
+# rewrites with the record of the job that made it before, which describes other code or
+# settings: reverting them would then leave that file, made by neither, current. It is refused
+# before any job, naming the option.
+@pytest.mark.xdist_group("reduced_run")
+def test_a_run_with_drop_metadata_is_refused_before_any_job(reduced_run, tmp_path):
+    run = reduced_run.copy(tmp_path / "run")
+    target = run.workdir / "results" / "tables" / "paper_a_claims.csv"
+    before = target.stat().st_mtime_ns
+    made = run.snakemake(
+        "results/tables/paper_a_claims.csv", "--forcerun", "render_cmc", "--drop-metadata"
+    )
+    message = made.stdout + made.stderr
+    assert made.returncode != 0, message[-3000:]
+    assert "--drop-metadata" in message and "refused" in message, message[-3000:]
+    assert "Building DAG of jobs" not in message, message[-3000:]
+    assert target.stat().st_mtime_ns == before
+
+
+# Files Snakemake holds no record of (records lost, results/ copied, a run with --drop-metadata
+# of an older version): the refusal lists them in a file and names the two ways out, each taken
+# here as the message words it: recording them as they are (``--touch --force`` on the listed
+# files), and deleting them, which makes them again.
+@pytest.mark.xdist_group("reduced_run")
+def test_unrecorded_results_are_refused_naming_the_ways_out_which_work(reduced_run, tmp_path):
+    run = reduced_run.copy(tmp_path / "run")
+    shutil.rmtree(run.workdir / ".snakemake" / "metadata")
+    planned = run.snakemake("--dry-run")
+    message = planned.stdout + planned.stderr
+    assert planned.returncode != 0, message[-3000:]
+    assert "--drop-metadata" in message, message[-3000:]
+    listing = re.search(r"listed in (\S+):", message)
+    assert listing, message[-3000:]
+    assert "--touch --force $(cat " + listing.group(1) + ")" in message, message[-3000:]
+    assert "xargs -d '\\n' rm -- < " + listing.group(1) in message, message[-3000:]
+    files = (run.workdir / listing.group(1)).read_text().splitlines()
+    assert "results/tables/paper_a_claims.csv" in files, files
+    # Recorded as they are: the next run plans again.
+    recorded = run.copy(tmp_path / "recorded")
+    touched = recorded.snakemake(*files, "--touch", "--force")
+    assert touched.returncode == 0, (touched.stdout + touched.stderr)[-3000:]
+    again = recorded.snakemake("--dry-run")
+    assert again.returncode == 0, (again.stdout + again.stderr)[-3000:]
+    # Deleted: made again.
+    for name in files:
+        (run.workdir / name).unlink()
+    assert {"estimate_cmc", "render_cmc"} <= _dry_run(run)
 
 
 # Python's site imports a sitecustomize (or usercustomize) module by name at start-up, from

@@ -45,7 +45,10 @@ package's dependencies' versions, stand for it; the version of a distribution th
 not depend on is not recorded). A module imported only by a name taken whole from data must be
 listed under ``extensions`` itself to count. The start-up modules ``site`` imports in every
 process (``sitecustomize``, ``usercustomize``), when they are the user's own, count as a job's
-files do (:func:`_site_hooks`).
+files do (:func:`_site_hooks`); so do the lines of code (``import …``) of the ``.pth`` files in
+the site folders, which ``site`` runs at start-up too, by content, with the user's own modules
+they import (:func:`_startup_lines`). A ``.pth`` line naming a folder is not counted: it puts the
+folder on the path, where the modules a job imports from it are found and read as above.
 
 The package's data files (its schemas, published values: every file in its folders that is not
 a Python module, caches and editors' leftovers aside) count like its modules, byte for byte. A
@@ -88,6 +91,8 @@ import platform
 import py_compile
 import re
 import shutil
+import site
+import subprocess
 import sys
 import tempfile
 import time
@@ -110,6 +115,7 @@ __all__ = [
     "OnePass",
     "check_bytecode_by_content",
     "code_fingerprint",
+    "compiler_version",
     "data_closure",
     "data_names",
     "dependency_versions",
@@ -797,7 +803,8 @@ def _digest_of(text: str) -> bytes:
 
 def dependency_versions(package: str = PACKAGE) -> dict[str, str]:
     """The installed version of Python and of every distribution ``package`` requires (its
-    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too.
+    run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too;
+    and of llvmlite, Numba's code generator (:data:`_CODE_GENERATORS`).
     With Numba's compiler switched off (:func:`numba_jit_disabled`), also ``numba_jit``:
     ``"disabled"``."""
     versions = {"python": platform.python_version(), **dict(_installed_versions(package))}
@@ -849,7 +856,40 @@ def _installed_versions(package: str) -> tuple[tuple[str, str], ...]:
             versions[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
             versions[name] = "not installed"
+    for name in _CODE_GENERATORS:
+        try:
+            versions[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            continue  # a dependency without its compiler compiles nothing
     return tuple(versions.items())
+
+
+#: Distributions that make the machine code the package's dependencies run, not required by the
+#: package itself: llvmlite holds the LLVM that Numba compiles the kernels with, one Numba
+#: version allowing several of its releases, and another LLVM may optimise a kernel otherwise.
+_CODE_GENERATORS = ("llvmlite",)
+
+
+def compiler_version(command: str) -> str:
+    """The first line ``command --version`` prints (a C compiler's name and version, ``cc
+    (Debian 12.2.0-14) 12.2.0``), or ``"not found"``: what a rule compiling a program records
+    as a parameter, so that another compiler, which may optimise the program otherwise, makes
+    it again. Asked once per process."""
+    return _compiler_version(shutil.which(command) or "")
+
+
+@cache
+def _compiler_version(path: str) -> str:
+    if not path:
+        return "not found"
+    try:
+        done = subprocess.run(
+            [path, "--version"], capture_output=True, text=True, timeout=30, check=False
+        )
+    except (OSError, subprocess.SubprocessError):
+        return "not found"
+    lines = done.stdout.splitlines()
+    return lines[0].strip() if lines else "not found"
 
 
 def code_fingerprint(
@@ -891,12 +931,15 @@ def _code_fingerprint(paths: list[Path], package: str, tracked: frozenset[str]) 
             f"inputs {', '.join(map(repr, unknown))}: no data file of the package {package} "
             "by its path relative to the package's folder (data_names)"
         )
-    paths = [*paths, *_site_hooks()]
+    started = _startup_lines()
+    paths = [*paths, *_site_hooks(), *_startup_imports(started)]
     own = own_closure(*paths, package=package)
     reached = [*paths, *(path for _, path in own)]
     modules = _closure(found, reached)
     digest = hashlib.sha256()
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
+    for line in started:
+        digest.update(line)
     for root in sorted(path.resolve() for path in paths):
         digest.update(root.name.encode() + _source_digest(root))
     for name, path in own:
@@ -919,17 +962,73 @@ def _site_hooks() -> list[Path]:
     on the path as ``site`` finds them: one outside the standard library and installed
     distributions (a ``sitecustomize.py`` on ``PYTHONPATH``) changes what a job computes as
     surely as its script, and counts as one of its roots."""
-    hooks = []
-    for name in _SITE_HOOKS:
+    return [path for name in _SITE_HOOKS if (path := _own_module_file(name)) is not None]
+
+
+def _own_module_file(name: str) -> Path | None:
+    """The source file of the top-level module ``name`` as the path finds it, if it is the
+    user's own (outside the standard library and installed distributions), else ``None``."""
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):  # in ``sys.modules`` without a spec
+        return None
+    origin = spec.origin if spec is not None and spec.has_location else None
+    if origin and origin.endswith(".py"):
+        if not os.path.realpath(origin).startswith(_library_roots()):
+            return Path(origin)
+    return None
+
+
+def _site_folders() -> list[Path]:
+    """The folders whose ``.pth`` files Python's ``site`` reads at start-up, in its order: the
+    user's site folder (when ``site`` reads it) before the environment's."""
+    user = [site.getusersitepackages()] if site.ENABLE_USER_SITE else []
+    return [Path(folder) for folder in (*user, *site.getsitepackages())]
+
+
+def _startup_lines() -> list[bytes]:
+    """The lines of code ``site`` runs at start-up in every process, before any job's script:
+    those starting with ``import`` (then a space or a tab) of each ``.pth`` file of the site
+    folders (:func:`_site_folders`), in the order ``site`` runs them (folder, then file name),
+    each with its file's name. By content: a time stamp is no change. A line naming a folder
+    only puts it on the path, where a module a job imports is found and read by content
+    wherever it is (:func:`own_closure`), so it is not counted itself."""
+    lines = []
+    for folder in _site_folders():
         try:
-            spec = importlib.util.find_spec(name)
-        except (ImportError, ValueError):  # in ``sys.modules`` without a spec
+            names = sorted(n for n in os.listdir(folder) if n.endswith(".pth"))
+        except OSError:  # no such folder
             continue
-        origin = spec.origin if spec is not None and spec.has_location else None
-        if origin and origin.endswith(".py"):
-            if not os.path.realpath(origin).startswith(_library_roots()):
-                hooks.append(Path(origin))
-    return hooks
+        for name in names:
+            if name.startswith("."):  # skipped by site
+                continue
+            try:
+                text = (folder / name).read_bytes()
+            except OSError:
+                continue
+            lines += [
+                name.encode() + b"\0" + line
+                for line in text.splitlines()
+                if line.startswith((b"import ", b"import\t"))
+            ]
+    return lines
+
+
+def _startup_imports(lines: list[bytes]) -> list[Path]:
+    """The files of the user's own modules the start-up lines ``lines`` (:func:`_startup_lines`)
+    import, found as :func:`_site_hooks` finds its modules: their code runs in every job."""
+    names = set()
+    for line in lines:
+        try:
+            tree = ast.parse(line.partition(b"\0")[2])
+        except (SyntaxError, ValueError):
+            continue  # site stops at it with an error: it imports nothing
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names.update(alias.name.partition(".")[0] for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                names.add(node.module.partition(".")[0])
+    return [path for name in sorted(names) if (path := _own_module_file(name)) is not None]
 
 
 def data_names(paths: Iterable[str | Path], package: str = PACKAGE) -> list[str]:

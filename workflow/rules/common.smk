@@ -2,6 +2,8 @@
 import base64
 import contextlib
 import functools
+import hashlib
+import json
 import os
 import re
 import shlex
@@ -22,6 +24,7 @@ from jointbench.fingerprint import (
     OnePass,
     check_bytecode_by_content,
     code_fingerprint,
+    compiler_version,
     data_names,
     dependency_versions,
     source_digests,
@@ -966,11 +969,14 @@ def _rule_shell(name, confinement):
     none was written before, no job can run either (a read-only checkout): the path is returned
     for a command that runs none (--list-rules), and a job would find no shell there. One
     written before that cannot be replaced is refused, naming it."""
-    path = os.path.abspath(os.path.join(RULE_SHELLS, name, "bash"))
+    path = os.path.abspath(os.path.join(RULE_SHELLS, _shell_folder(name), "bash"))
     variable = landlock.VARIABLE
     text = (
         "#!/bin/sh\n"
-        f"# The limited shell of the jobs of rule {name}, with what they may open under "
+        # The name as JSON: ASCII on one line, whatever it holds (a line break would end the
+        # comment and run the rest).
+        f"# The limited shell of the jobs of rule {json.dumps(name)}, with what they may "
+        "open under "
         "results/ (written by workflow/rules/common.smk as the workflow loads).\n"
         "# Within a job (a script's shell() call) the confinement its keeper handed down is\n"
         "# kept: the job cannot widen it, nor list again what the keeper listed.\n"
@@ -992,6 +998,27 @@ def _rule_shell(name, confinement):
                 "it, or make .snakemake/ writable"
             ) from error
     return path
+
+
+# A rule's name as its shell's folder is named when it is plain: lower-case ASCII letters,
+# digits and underscores, short enough for any file system.
+_PLAIN_RULE_NAME = re.compile(r"[a-z0-9_]{1,100}")
+
+
+def _shell_folder(name):
+    """The folder, in RULE_SHELLS, of the shell of the rules named ``name``. A plain name
+    (_PLAIN_RULE_NAME, as the workflow's rules are named) is its own; any other (Snakemake's
+    ``name:`` takes any string: a path, a line break, a name longer than a file's, letters
+    beyond ASCII, another's name in other case) its plain characters in lower case, at most
+    64, then a hyphen, which no plain name holds, and a digest of the name itself. Names
+    differing in anything, case included, get folders differing in more than case, on one
+    line, inside RULE_SHELLS."""
+    if _PLAIN_RULE_NAME.fullmatch(name):
+        return name
+    plain = "".join(
+        c for c in name.lower() if c in "abcdefghijklmnopqrstuvwxyz0123456789_"
+    )
+    return f"{plain[:64]}-{hashlib.sha256(name.encode('utf-8', 'surrogatepass')).hexdigest()[:16]}"
 
 
 def _replaced(path, text):
@@ -1188,6 +1215,17 @@ def _unrecorded(path):
     return not any(_record_path(f, path).exists() for f in (RECORDS, INCOMPLETE))
 
 
+def _option_given(argv, option, short=None):
+    """Whether a Snakemake command line (``sys.argv[1:]``) gives the flag ``option`` (or its
+    ``short`` form alone): the workflow loads before Snakemake hands it its settings. Spelt in
+    full or shortened as Snakemake's parser takes it (a prefix, which must name one option).
+    """
+    return any(
+        argument == short or (len(argument) > 3 and option.startswith(argument))
+        for argument in argv
+    )
+
+
 def _persistence_backend(argv):
     """The store of records a Snakemake command line (``sys.argv[1:]``) names, or None."""
     for i, argument in enumerate(argv):
@@ -1214,16 +1252,60 @@ def unrecorded_results():
 
 def refuse_unrecorded_results():
     """Stop the run, before any job, when results/ holds files of the workflow's rules that
-    Snakemake has no record of (unrecorded_results): it would take them as current. Not on a
-    cluster node, which plans nothing, nor with a store of records other than Snakemake's
-    default one."""
-    if workflow.remote_exec or _persistence_backend(sys.argv[1:]) not in (None, "file"):
+    Snakemake has no record of (unrecorded_results): it would take them as current. They are
+    listed in UNRECORDED_LIST, which the message names with the two ways out: recording them as
+    they are (``--touch --force`` on them), which such a command may do unrefused, and
+    deleting them. Not on a cluster node, which plans nothing, nor with a store of records
+    other than Snakemake's default one."""
+    argv = sys.argv[1:]
+    if (
+        workflow.remote_exec
+        or _option_given(argv, "--touch", "-t")
+        or _persistence_backend(argv) not in (None, "file")
+    ):
         return
     found = unrecorded_results()
     if found:
         raise ValueError(
-            f"results/ holds {len(found)} files Snakemake has no record of (e.g. {found[0]}): "
-            "their code, config and data are unknown, and Snakemake would take them as current "
-            f"({RECORDS} lost, or results/ copied from elsewhere). Move results/ aside, or "
-            "delete those files, and run again."
+            f"results/ holds {len(found)} files Snakemake has no record of (e.g. {found[0]}), "
+            f"{_listed_in(found)}: their code, config and data are unknown, and Snakemake "
+            f"would take them as current ({RECORDS} lost, results/ copied from elsewhere, or a "
+            "run with --drop-metadata, which records nothing). Delete them and run again, "
+            f"which makes them anew: xargs -d '\\n' rm -- < {UNRECORDED_LIST}. Or, only if "
+            "this very code, config and data made them, record them as they are: snakemake "
+            f"--touch --force $(cat {UNRECORDED_LIST}), with this run's other options."
+        )
+
+
+# Where refuse_unrecorded_results lists the files it refuses, one a line, for the commands its
+# message gives.
+UNRECORDED_LIST = os.path.join(".snakemake", "jointbench", "unrecorded.txt")
+
+
+def _listed_in(files):
+    """Write ``files`` to UNRECORDED_LIST, one a line, and say where: "listed in ...", or,
+    where it cannot be written (a read-only checkout), the files themselves."""
+    try:
+        _replaced(UNRECORDED_LIST, "".join(f"{name}\n" for name in files))
+    except OSError:
+        return "listed here: " + " ".join(files)
+    return f"listed in {UNRECORDED_LIST}"
+
+
+def refuse_dropped_metadata(kept=None):
+    """Stop a run with ``--drop-metadata`` before any job: it records nothing of the jobs it
+    runs, and leaves each file it rewrites with the record of the job that made it before,
+    which describes other code, config or data; reverting to those would leave the file, made
+    by neither, current. ``kept``: whether Snakemake keeps records, once it has handed the
+    workflow its settings (``onstart``, which a profile's setting reaches too); before, as the
+    workflow loads, read from the command line. Not on a cluster node, whose job Snakemake
+    hands the option to."""
+    if kept is None:
+        kept = not _option_given(sys.argv[1:], "--drop-metadata")
+    if not workflow.remote_exec and not kept:
+        raise ValueError(
+            "--drop-metadata is refused: a run with it records nothing of the jobs it runs, "
+            "and leaves each file it rewrites with the record of the job that made it before, "
+            "of other code, config or data, which Snakemake would then take the file as made "
+            "by; run without it"
         )

@@ -14,6 +14,9 @@ rule compile_ls_sphere:
     localrule: True
     conda:
         "../../envs/c.yaml"
+    params:
+        # Another compiler may optimise the program otherwise: it is compiled again.
+        compiler=compiler_version("cc"),
     shell:
         "cc -std=c99 -O2 -Wall -Wextra -o {output:q} {input:q} -lm 2> {log:q}"
 
