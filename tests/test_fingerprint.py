@@ -859,3 +859,24 @@ def test_inputs_left_out_of_the_code_must_be_named_as_the_packages_data_files():
         code_fingerprint(script, inputs=[str(published)])
     with pytest.raises(ValueError, match=r"'papers/paper_z\.yaml'.* no data file of the package"):
         code_fingerprint(script, inputs=["papers/paper_z.yaml"])
+
+
+# A checkout moved or cloned again elsewhere reruns nothing: where a job's script lies beside
+# the user's own start-up module (one a .pth line imports, or a sitecustomize) is no change.
+def test_the_fingerprint_does_not_depend_on_where_the_checkout_lies(monkeypatch, tmp_path):
+    folder, own = tmp_path / "site-packages", tmp_path / "m-own"
+    folder.mkdir()
+    own.mkdir()
+    monkeypatch.setattr(site, "getsitepackages", lambda *_: [str(folder)])
+    monkeypatch.setattr(site, "ENABLE_USER_SITE", False)
+    monkeypatch.syspath_prepend(str(own))
+    (own / "labstart.py").write_text("SCALE = 1.0\n")
+    (folder / "lab.pth").write_text("import labstart\n")
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    prints = set()
+    for checkout in ("a-clone", "z-clone"):
+        (tmp_path / checkout).mkdir()
+        moved = tmp_path / checkout / script.name
+        moved.write_bytes(script.read_bytes())
+        prints.add(code_fingerprint(moved))
+    assert len(prints) == 1, "a checkout's folder counted"

@@ -940,8 +940,11 @@ def _code_fingerprint(paths: list[Path], package: str, tracked: frozenset[str]) 
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for line in started:
         digest.update(line)
-    for root in sorted(path.resolve() for path in paths):
-        digest.update(root.name.encode() + _source_digest(root))
+    # By name and content, not by path: where the checkout lies, which decides how its files
+    # sort among the user's start-up modules outside it, is no change.
+    roots = [path.resolve() for path in paths]
+    for named in sorted(root.name.encode() + _source_digest(root) for root in roots):
+        digest.update(named)
     for name, path in own:
         digest.update(name.encode() + _file_digest(path).encode())
     for name, path in modules.items():
