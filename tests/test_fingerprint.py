@@ -880,3 +880,28 @@ def test_the_fingerprint_does_not_depend_on_where_the_checkout_lies(monkeypatch,
         moved.write_bytes(script.read_bytes())
         prints.add(code_fingerprint(moved))
     assert len(prints) == 1, "a checkout's folder counted"
+
+
+# A .pth line may import by a call, as setuptools' own does (``__import__('_distutils_hack')``):
+# the user's module it names runs in every job as surely as one an import statement names.
+@pytest.mark.parametrize(
+    "line",
+    [
+        "import os; __import__('labstart').setup()",
+        "import importlib; importlib.import_module('labstart.hooks')",
+    ],
+)
+def test_a_module_a_pth_line_imports_by_a_call_counts_by_content(monkeypatch, tmp_path, line):
+    folder, own = tmp_path / "site-packages", tmp_path / "own"
+    folder.mkdir()
+    (own / "labstart").mkdir(parents=True)
+    monkeypatch.setattr(site, "getsitepackages", lambda *_: [str(folder)])
+    monkeypatch.setattr(site, "ENABLE_USER_SITE", False)
+    monkeypatch.syspath_prepend(str(own))
+    (folder / "lab.pth").write_text(line + "\n")
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    module = own / "labstart" / "__init__.py"
+    module.write_text("SCALE = 1.0\n")
+    before = code_fingerprint(script)
+    module.write_text("SCALE = 2.0\n")
+    assert code_fingerprint(script) != before, "a module a .pth line imports by a call left out"
