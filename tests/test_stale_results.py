@@ -846,18 +846,27 @@ def test_results_snakemake_has_no_record_of_are_not_taken_as_current(reduced_run
 # rewrites with the record of the job that made it before, which describes other code or
 # settings: reverting them would then leave that file, made by neither, current. It is refused
 # before any job, naming the option.
+# Given in full, shortened as Snakemake's parser takes it, or in a profile, which the command
+# line does not show.
 @pytest.mark.xdist_group("reduced_run")
-def test_a_run_with_drop_metadata_is_refused_before_any_job(reduced_run, tmp_path):
+@pytest.mark.parametrize("given", ["--drop-metadata", "--drop-meta", "profile"])
+def test_a_run_with_drop_metadata_is_refused_before_any_job(reduced_run, tmp_path, given):
     run = reduced_run.copy(tmp_path / "run")
     target = run.workdir / "results" / "tables" / "paper_a_claims.csv"
     before = target.stat().st_mtime_ns
-    made = run.snakemake(
-        "results/tables/paper_a_claims.csv", "--forcerun", "render_cmc", "--drop-metadata"
-    )
+    option = [given]
+    if given == "profile":
+        profile = tmp_path / "my profile"
+        profile.mkdir()
+        (profile / "config.yaml").write_text("drop-metadata: true\n")
+        option = ["--profile", str(profile)]
+    made = run.snakemake("results/tables/paper_a_claims.csv", "--forcerun", "render_cmc", *option)
     message = made.stdout + made.stderr
     assert made.returncode != 0, message[-3000:]
     assert "--drop-metadata" in message and "refused" in message, message[-3000:]
-    assert "Building DAG of jobs" not in message, message[-3000:]
+    if given != "profile":  # a profile's is seen once Snakemake hands its settings over
+        assert "Building DAG of jobs" not in message, message[-3000:]
+    assert "Finished job" not in message, message[-3000:]
     assert target.stat().st_mtime_ns == before
 
 
