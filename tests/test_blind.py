@@ -759,7 +759,8 @@ def test_a_checkout_where_the_rules_shells_cannot_be_written_still_lists_its_rul
 
 # Names Snakemake accepts for a rule (its ``name:`` directive takes any string): a line break
 # followed by a command, a path up and out, a name longer than a file name may be, letters
-# beyond ASCII, two names one case apart, quotes and a command substitution.
+# beyond ASCII, names one case apart (a plain one, and two that are not), quotes and a command
+# substitution.
 _ODD_NAMES = (
     "odd\ntouch INJECTED #",
     "../../../../escaped",
@@ -767,6 +768,7 @@ _ODD_NAMES = (
     "Règle_ü",
     "Fold",
     "fold",
+    "FOLD",
     "quote'\"$(touch INJECTED)",
 )
 

@@ -322,17 +322,24 @@ def test_an_upgraded_dependency_changes_the_fingerprint(monkeypatch):
     assert code_fingerprint(script) != before
 
 
-# Python's site runs, at start-up of every process, each line of the .pth files of the site
-# folders that starts with ``import``: such a line changes what every job imports, as a
-# sitecustomize does. A line naming a folder only puts it on the path, where the modules a job
-# imports are found and read by content wherever they are.
-def test_the_code_a_pth_file_runs_at_start_up_counts_by_content(monkeypatch, tmp_path):
-    folder, own = tmp_path / "site-packages", tmp_path / "own"
+def _startup_site(monkeypatch, tmp_path, own_name: str = "own") -> tuple[Path, Path]:
+    """A site folder that alone holds the ``.pth`` files read at start-up, and a folder of the
+    user's own modules on the path, both new in ``tmp_path``."""
+    folder, own = tmp_path / "site-packages", tmp_path / own_name
     folder.mkdir()
     own.mkdir()
     monkeypatch.setattr(site, "getsitepackages", lambda *_: [str(folder)])
     monkeypatch.setattr(site, "ENABLE_USER_SITE", False)
     monkeypatch.syspath_prepend(str(own))
+    return folder, own
+
+
+# Python's site runs, at start-up of every process, each line of the .pth files of the site
+# folders that starts with ``import``: such a line changes what every job imports, as a
+# sitecustomize does. A line naming a folder only puts it on the path, where the modules a job
+# imports are found and read by content wherever they are.
+def test_the_code_a_pth_file_runs_at_start_up_counts_by_content(monkeypatch, tmp_path):
+    folder, own = _startup_site(monkeypatch, tmp_path)
     script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
     before = code_fingerprint(script)
     pth = folder / "lab.pth"
@@ -859,3 +866,40 @@ def test_inputs_left_out_of_the_code_must_be_named_as_the_packages_data_files():
         code_fingerprint(script, inputs=[str(published)])
     with pytest.raises(ValueError, match=r"'papers/paper_z\.yaml'.* no data file of the package"):
         code_fingerprint(script, inputs=["papers/paper_z.yaml"])
+
+
+# A checkout moved or cloned again elsewhere reruns nothing: where a job's script lies beside
+# the user's own start-up module (one a .pth line imports, or a sitecustomize) is no change.
+def test_the_fingerprint_does_not_depend_on_where_the_checkout_lies(monkeypatch, tmp_path):
+    folder, own = _startup_site(monkeypatch, tmp_path, "m-own")
+    (own / "labstart.py").write_text("SCALE = 1.0\n")
+    (folder / "lab.pth").write_text("import labstart\n")
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    prints = set()
+    for checkout in ("a-clone", "z-clone"):
+        (tmp_path / checkout).mkdir()
+        moved = tmp_path / checkout / script.name
+        moved.write_bytes(script.read_bytes())
+        prints.add(code_fingerprint(moved))
+    assert len(prints) == 1, "a checkout's folder counted"
+
+
+# A .pth line may import by a call, as setuptools' own does (``__import__('_distutils_hack')``):
+# the user's module it names runs in every job as surely as one an import statement names.
+@pytest.mark.parametrize(
+    "line",
+    [
+        "import os; __import__('labstart').setup()",
+        "import importlib; importlib.import_module('labstart.hooks')",
+    ],
+)
+def test_a_module_a_pth_line_imports_by_a_call_counts_by_content(monkeypatch, tmp_path, line):
+    folder, own = _startup_site(monkeypatch, tmp_path)
+    (own / "labstart").mkdir()
+    (folder / "lab.pth").write_text(line + "\n")
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    module = own / "labstart" / "__init__.py"
+    module.write_text("SCALE = 1.0\n")
+    before = code_fingerprint(script)
+    module.write_text("SCALE = 2.0\n")
+    assert code_fingerprint(script) != before, "a module a .pth line imports by a call left out"

@@ -29,6 +29,7 @@ import json
 import os
 import re
 import shutil
+import subprocess
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -846,18 +847,27 @@ def test_results_snakemake_has_no_record_of_are_not_taken_as_current(reduced_run
 # rewrites with the record of the job that made it before, which describes other code or
 # settings: reverting them would then leave that file, made by neither, current. It is refused
 # before any job, naming the option.
+# Given in full, shortened as Snakemake's parser takes it, or in a profile, which the command
+# line does not show.
 @pytest.mark.xdist_group("reduced_run")
-def test_a_run_with_drop_metadata_is_refused_before_any_job(reduced_run, tmp_path):
+@pytest.mark.parametrize("given", ["--drop-metadata", "--drop-meta", "profile"])
+def test_a_run_with_drop_metadata_is_refused_before_any_job(reduced_run, tmp_path, given):
     run = reduced_run.copy(tmp_path / "run")
     target = run.workdir / "results" / "tables" / "paper_a_claims.csv"
     before = target.stat().st_mtime_ns
-    made = run.snakemake(
-        "results/tables/paper_a_claims.csv", "--forcerun", "render_cmc", "--drop-metadata"
-    )
+    option = [given]
+    if given == "profile":
+        profile = tmp_path / "my profile"
+        profile.mkdir()
+        (profile / "config.yaml").write_text("drop-metadata: true\n")
+        option = ["--profile", str(profile)]
+    made = run.snakemake("results/tables/paper_a_claims.csv", "--forcerun", "render_cmc", *option)
     message = made.stdout + made.stderr
     assert made.returncode != 0, message[-3000:]
     assert "--drop-metadata" in message and "refused" in message, message[-3000:]
-    assert "Building DAG of jobs" not in message, message[-3000:]
+    if given != "profile":  # a profile's is seen once Snakemake hands its settings over
+        assert "Building DAG of jobs" not in message, message[-3000:]
+    assert "Finished job" not in message, message[-3000:]
     assert target.stat().st_mtime_ns == before
 
 
@@ -876,8 +886,9 @@ def test_unrecorded_results_are_refused_naming_the_ways_out_which_work(reduced_r
     listing = re.search(r"listed in (\S+):", message)
     assert listing, message[-3000:]
     assert "--touch --force $(cat " + listing.group(1) + ")" in message, message[-3000:]
-    assert "xargs -d '\\n' rm -- < " + listing.group(1) in message, message[-3000:]
-    files = (run.workdir / listing.group(1)).read_text().splitlines()
+    removal = "xargs -d '\\n' rm -- < .snakemake/jointbench/unrecorded.txt)"
+    assert removal in message, message[-3000:]
+    files = Path(listing.group(1)).read_text().splitlines()
     assert "results/tables/paper_a_claims.csv" in files, files
     # Recorded as they are: the next run plans again.
     recorded = run.copy(tmp_path / "recorded")
@@ -889,6 +900,40 @@ def test_unrecorded_results_are_refused_naming_the_ways_out_which_work(reduced_r
     for name in files:
         (run.workdir / name).unlink()
     assert {"estimate_cmc", "render_cmc"} <= _dry_run(run)
+
+
+# The ways out as the refusal words them, run by a shell in another folder than the run's, which
+# a run given --directory leaves its user in, the run's folder's path holding a space: the list
+# named where it is, its files where they are.
+@pytest.mark.xdist_group("reduced_run")
+def test_the_ways_out_of_unrecorded_results_work_as_worded_from_another_folder(
+    reduced_run, tmp_path
+):
+    run = reduced_run.copy(tmp_path / "my run")
+    shutil.rmtree(run.workdir / ".snakemake" / "metadata")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    planned = run.snakemake("--dry-run")
+    message = planned.stdout + planned.stderr
+    assert planned.returncode != 0, message[-3000:]
+    touch = re.search(r"snakemake --touch --force (\$\(cat .+?\)), with this run", message)
+    remove = re.search(r"which makes them anew: (.+?)\. Or, only", message)
+    assert touch and remove, message[-3000:]
+    listed = subprocess.run(
+        ["bash", "-c", f"printf '%s\\n' {touch.group(1)}"],
+        cwd=elsewhere,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert listed.returncode == 0, listed.stderr
+    files = listed.stdout.splitlines()
+    assert "results/tables/paper_a_claims.csv" in files, files
+    removed = subprocess.run(
+        ["bash", "-c", remove.group(1)], cwd=elsewhere, capture_output=True, text=True, check=False
+    )
+    assert removed.returncode == 0, removed.stderr
+    assert not any((run.workdir / name).exists() for name in files), "not deleted"
 
 
 # Python's site imports a sitecustomize (or usercustomize) module by name at start-up, from

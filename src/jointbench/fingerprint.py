@@ -940,8 +940,11 @@ def _code_fingerprint(paths: list[Path], package: str, tracked: frozenset[str]) 
     digest.update(repr(sorted(dependency_versions(package).items())).encode())
     for line in started:
         digest.update(line)
-    for root in sorted(path.resolve() for path in paths):
-        digest.update(root.name.encode() + _source_digest(root))
+    # By name and content, not by path: where the checkout lies, which decides how its files
+    # sort among the user's start-up modules outside it, is no change.
+    roots = [path.resolve() for path in paths]
+    for named in sorted(root.name.encode() + _source_digest(root) for root in roots):
+        digest.update(named)
     for name, path in own:
         digest.update(name.encode() + _file_digest(path).encode())
     for name, path in modules.items():
@@ -1016,19 +1019,26 @@ def _startup_lines() -> list[bytes]:
 
 def _startup_imports(lines: list[bytes]) -> list[Path]:
     """The files of the user's own modules the start-up lines ``lines`` (:func:`_startup_lines`)
-    import, found as :func:`_site_hooks` finds its modules: their code runs in every job."""
+    import, found as :func:`_site_hooks` finds its modules: their code runs in every job. A
+    module is imported by a statement, or by a call with its name written out (setuptools' own
+    ``.pth`` line calls ``__import__('_distutils_hack')``), as :func:`_summarised` reads both."""
     names = set()
     for line in lines:
         try:
-            tree = ast.parse(line.partition(b"\0")[2])
-        except (SyntaxError, ValueError):
+            summary = _summarised(line.partition(b"\0")[2].decode())
+        except (SyntaxError, ValueError):  # ValueError: not UTF-8, or a null byte
             continue  # site stops at it with an error: it imports nothing
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Import):
-                names.update(alias.name.partition(".")[0] for alias in node.names)
-            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
-                names.add(node.module.partition(".")[0])
-    return [path for name in sorted(names) if (path := _own_module_file(name)) is not None]
+        for kind, *rest in summary.imports:
+            if kind == "import" or rest[0] == 0:  # not a relative ``from . import``
+                names.add(rest[0 if kind == "import" else 1])
+        if summary.dynamic_calls:
+            names.update(s for s in summary.strings if _MODULE_NAME.fullmatch(s))
+    tops = sorted({name.partition(".")[0] for name in names if name})
+    return [path for name in tops if (path := _own_module_file(name)) is not None]
+
+
+#: A module's absolute name, as a string a start-up line imports by a call may hold.
+_MODULE_NAME = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*")
 
 
 def data_names(paths: Iterable[str | Path], package: str = PACKAGE) -> list[str]:

@@ -1271,9 +1271,10 @@ def refuse_unrecorded_results():
             f"{_listed_in(found)}: their code, config and data are unknown, and Snakemake "
             f"would take them as current ({RECORDS} lost, results/ copied from elsewhere, or a "
             "run with --drop-metadata, which records nothing). Delete them and run again, "
-            f"which makes them anew: xargs -d '\\n' rm -- < {UNRECORDED_LIST}. Or, only if "
-            "this very code, config and data made them, record them as they are: snakemake "
-            f"--touch --force $(cat {UNRECORDED_LIST}), with this run's other options."
+            f"which makes them anew: (cd {shlex.quote(os.getcwd())} && xargs -d '\\n' rm -- "
+            f"< {UNRECORDED_LIST}). Or, only if this very code, config and data made them, "
+            "record them as they are: snakemake --touch --force "
+            f"$(cat {_where(UNRECORDED_LIST)}), with this run's other options."
         )
 
 
@@ -1289,7 +1290,14 @@ def _listed_in(files):
         _replaced(UNRECORDED_LIST, "".join(f"{name}\n" for name in files))
     except OSError:
         return "listed here: " + " ".join(files)
-    return f"listed in {UNRECORDED_LIST}"
+    return f"listed in {_where(UNRECORDED_LIST)}"
+
+
+def _where(path):
+    """``path`` as a shell reads it from any folder, absolute and quoted where it must be: a
+    run given --directory works in a folder its user is not in, whose path may hold a
+    space."""
+    return shlex.quote(os.path.abspath(path))
 
 
 def refuse_dropped_metadata(kept=None):
