@@ -1075,8 +1075,10 @@ def test_yaml_is_read_as_the_safe_loader_reads_it():
         ("studies: {hinge: {protocol: {kneee: {noise_sd_mm: 2.0}}}}\n", ["named.mine", "kneee"]),
         ("studies: {cmc: {trials: 0}}\n", ["sensitivity.named.mine", "studies/cmc/trials"]),
         ("studis: {}\n", ["sensitivity.named.mine", "studis"]),
+        ("studies:\n\thip: {}\n", ["sensitivity.named.mine", "line 2, column 1", "a tab"]),
+        ("# studies: {}\n", ["sensitivity.named.mine", "empty"]),
     ],
-    ids=["missing", "not a mapping", "misspelt joint", "bad value", "misspelt key"],
+    ids=["missing", "not a mapping", "misspelt joint", "bad value", "misspelt key", "tab", "empty"],
 )
 def test_a_named_protocols_overlay_is_checked_naming_its_key(config, tmp_path, overlay, words):
     path = tmp_path / "mine.yaml"
