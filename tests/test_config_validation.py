@@ -1058,6 +1058,38 @@ def test_dry_run_stops_before_any_job_naming_the_key(tmp_path):
     assert expected in message, message[-2000:]
 
 
+# A count or a seed written as a whole float: a decimal point left in, or what Snakemake's
+# --config makes of 1e3. The grid's and the protocol's integers refuse it; so do these.
+@pytest.mark.parametrize(
+    ("path", "value", "where"),
+    [
+        (("base_seed",), 1000.0, "base_seed"),
+        (("studies", "cmc", "trials"), 3.0, "studies/cmc/trials"),
+        (("verdicts", "seeds"), 2.0, "verdicts/seeds"),
+        (("sensitivity", "draws"), 2.0, "sensitivity/draws"),
+    ],
+)
+def test_a_whole_float_where_an_integer_is_meant_is_refused_naming_the_key(
+    config, path, value, where
+):
+    new = copy.deepcopy(config)
+    node = new
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(ValueError, match=f"config error at {where}: {value!r} is not of type"):
+        study_config.validate_config(new)
+
+
+def test_dry_run_refuses_a_seed_the_command_line_types_as_a_float(tmp_path):
+    folder = copy_workflow(tmp_path)
+    run = run_snakemake(folder, "-n", "--config", "base_seed=1e3")
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    assert "Job stats" not in message
+    assert "config error at base_seed: 1000.0 is not of type 'integer'" in message, message[-2000:]
+
+
 def test_yaml_is_read_as_the_safe_loader_reads_it():
     """read_yaml may use PyYAML's C loader: same documents, and still no arbitrary objects."""
     for name in paper_names():

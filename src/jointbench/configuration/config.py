@@ -60,18 +60,31 @@ def read_yaml(text: str) -> object:
 
 def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
     """Raise ``ValueError`` naming ``what`` and the offending path when ``document`` does not
-    match the JSON schema (YAML) at ``schema_path``."""
+    match the JSON schema (YAML) at ``schema_path``, whose ``integer`` is a Python ``int``
+    (:func:`_is_integer`), not a whole float."""
     if isinstance(schema_path, str):
         schema_path = Path(schema_path)
     # Imported here: only the workflow's start checks the config, not each job.
     import jsonschema
 
     schema = read_yaml(schema_path.read_text())
+    base = jsonschema.validators.validator_for(schema)
+    # JSON Schema counts 3.0 as an integer. A count or seed written so (a decimal point left in,
+    # or Snakemake's --config typing base_seed=1e3 as 1000.0) is refused, as the grid's and the
+    # protocol's integers refuse it, not carried as a float into the jobs' parameters.
+    strict = jsonschema.validators.extend(
+        base, type_checker=base.TYPE_CHECKER.redefine("integer", _is_integer)
+    )
     try:
-        jsonschema.validate(dict(document), schema)
+        jsonschema.validate(dict(document), schema, cls=strict)
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
         raise ValueError(f"{what} error at {where}: {error.message}") from None
+
+
+def _is_integer(_checker: object, instance: object) -> bool:
+    """JSON Schema's ``integer``, of Python's ``int`` alone: not ``True``, nor ``3.0``."""
+    return isinstance(instance, int) and not isinstance(instance, bool)
 
 
 def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCHEMA_PATH) -> None:
