@@ -10,6 +10,7 @@ import copy
 import dataclasses
 import inspect
 import re
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ import yaml
 from snakemake.utils import update_config
 from workflow_copy import ROOT, copy_workflow, refused_dry_run, run_snakemake
 
-from jointbench import declared
+from jointbench import declared, invocation
 from jointbench.configuration import bounds
 from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
@@ -1221,3 +1222,40 @@ def test_trials_too_long_to_hold_are_refused_naming_their_frames_before_any_simu
     message = str(raised.value)
     assert message.startswith(key), message
     assert frames in message and "what one job can hold" in message, message
+
+
+# Snakemake keeps the last of an option given twice: the first file, or the first values, would
+# be dropped without a word (here the first alone would be refused: the run would not be the
+# one meant).
+@pytest.mark.parametrize(
+    ("first", "second", "option"),
+    [
+        (["--configfile", "first.yaml"], ["--configfile", "second.yaml"], "--configfile"),
+        (["--config", "verdicts={'seeds': 0}"], ["--config", "base_seed=3"], "--config"),
+    ],
+    ids=["configfile", "config"],
+)
+def test_dry_run_refuses_an_option_snakemake_would_drop_naming_it(tmp_path, first, second, option):
+    folder = copy_workflow(tmp_path)
+    (folder / "first.yaml").write_text("studies: {cmc: {trials: 0}}\n")
+    (folder / "second.yaml").write_text("base_seed: 3\n")
+    # Snakemake reads the files from the folder it is started in, not its --directory.
+    first, second = (
+        [str(folder / v) if v.endswith(".yaml") else v for v in o] for o in (first, second)
+    )
+    run = run_snakemake(folder, "-n", *first, *second)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    assert "Job stats" not in message
+    assert f"{option} is given 2 times" in message, message[-2000:]
+    assert shlex.join(first[1:]) in message
+
+
+def test_several_config_files_after_one_option_are_read():
+    argv = ["-n", "--configfile", "a.yaml", "b.yaml", "--config", "x=1", "y=2"]
+    assert invocation.repeated_options(argv) == []
+    twice = ["--configfile", "a.yaml", "--configfiles", "b.yaml", "-C", "x=1", "--config=y=2"]
+    assert invocation.repeated_options(twice) == [
+        ("--configfile", [["a.yaml"], ["b.yaml"]]),
+        ("--config", [["x=1"], ["y=2"]]),
+    ]
