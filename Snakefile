@@ -6,7 +6,7 @@ from pathlib import Path
 from snakemake.logging import logger
 from snakemake.utils import min_version
 
-from jointbench import console
+from jointbench import console, invocation
 from jointbench import report as jb_report
 from jointbench.configuration import config as jb_config
 
@@ -47,6 +47,10 @@ onsuccess:
 onerror:
     print(jb_report.failure_lines(log), file=sys.stderr)
 
+
+# Snakemake keeps the last of a --configfile or --config given twice: the run would be made on
+# another config than its command line shows (jointbench.invocation.check_options).
+invocation.check_options(sys.argv[1:])
 
 # The project's own schema check before Snakemake's (workflow/rules/common.smk), whose error
 # leads with a dump of the schema: a mistake, a misspelt study first, is named in one line.

@@ -15,6 +15,7 @@ from rigs import JOINT, PROXIMAL
 from test_axis_sd_validity import swing
 from test_io_recordings import DIST, KNEE, PROX, in_frame, rig_recording, swapped, write_c3d
 from test_pose_noise import _hip, _noisy
+from workflow_copy import ROOT
 
 import jointbench
 from jointbench import cli
@@ -807,3 +808,29 @@ def test_the_readme_command_says_which_blocks_it_rewrites(capsys):
     for block in ("reproduction summary", "STA ranking", "what stands out", "verdicts over seeds"):
         assert block in _help(capsys, "readme"), block
         assert block in top, block
+
+
+# A user's config file as an editor leaves it: indented with a tab, a bracket left open, or
+# saved empty (Snakemake's --configfile refuses each of these too).
+BROKEN_CONFIG_FILES = {
+    "tab": ("studies:\n\tcmc:\n\t\ttrials: 5\n", "not valid YAML", "line 2", "a tab"),
+    "open bracket": ("studies: {cmc: [\n", "not valid YAML", "line 2"),
+    "empty": ("", "empty", "no keys"),
+    "comments only": ("# trials: 5\n", "empty", "no keys"),
+}
+
+
+@pytest.mark.parametrize("broken", BROKEN_CONFIG_FILES)
+def test_a_configfile_that_is_no_yaml_mapping_is_refused_naming_it(
+    tmp_path, monkeypatch, capsys, broken
+):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text((ROOT / "config" / "config.yaml").read_text())
+    text, *words = BROKEN_CONFIG_FILES[broken]
+    (tmp_path / "mine.yaml").write_text(text)
+    code, _, err = run(capsys, "fit", "markers.csv", "--configfile", "mine.yaml")
+    assert code == 2
+    assert "config file mine.yaml: " in err
+    for word in words:
+        assert word in err

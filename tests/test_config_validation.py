@@ -10,6 +10,7 @@ import copy
 import dataclasses
 import inspect
 import re
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ import yaml
 from snakemake.utils import update_config
 from workflow_copy import ROOT, copy_workflow, refused_dry_run, run_snakemake
 
-from jointbench import declared
+from jointbench import declared, invocation
 from jointbench.configuration import bounds
 from jointbench.configuration import config as study_config
 from jointbench.configuration.studies import get_study, study_names
@@ -1058,6 +1059,38 @@ def test_dry_run_stops_before_any_job_naming_the_key(tmp_path):
     assert expected in message, message[-2000:]
 
 
+# A count or a seed written as a whole float: a decimal point left in, or what Snakemake's
+# --config makes of 1e3. The grid's and the protocol's integers refuse it; so do these.
+@pytest.mark.parametrize(
+    ("path", "value", "where"),
+    [
+        (("base_seed",), 1000.0, "base_seed"),
+        (("studies", "cmc", "trials"), 3.0, "studies/cmc/trials"),
+        (("verdicts", "seeds"), 2.0, "verdicts/seeds"),
+        (("sensitivity", "draws"), 2.0, "sensitivity/draws"),
+    ],
+)
+def test_a_whole_float_where_an_integer_is_meant_is_refused_naming_the_key(
+    config, path, value, where
+):
+    new = copy.deepcopy(config)
+    node = new
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(ValueError, match=f"config error at {where}: {value!r} is not of type"):
+        study_config.validate_config(new)
+
+
+def test_dry_run_refuses_a_seed_the_command_line_types_as_a_float(tmp_path):
+    folder = copy_workflow(tmp_path)
+    run = run_snakemake(folder, "-n", "--config", "base_seed=1e3")
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    assert "Job stats" not in message
+    assert "config error at base_seed: 1000.0 is not of type 'integer'" in message, message[-2000:]
+
+
 def test_yaml_is_read_as_the_safe_loader_reads_it():
     """read_yaml may use PyYAML's C loader: same documents, and still no arbitrary objects."""
     for name in paper_names():
@@ -1075,8 +1108,10 @@ def test_yaml_is_read_as_the_safe_loader_reads_it():
         ("studies: {hinge: {protocol: {kneee: {noise_sd_mm: 2.0}}}}\n", ["named.mine", "kneee"]),
         ("studies: {cmc: {trials: 0}}\n", ["sensitivity.named.mine", "studies/cmc/trials"]),
         ("studis: {}\n", ["sensitivity.named.mine", "studis"]),
+        ("studies:\n\thip: {}\n", ["sensitivity.named.mine", "line 2, column 1", "a tab"]),
+        ("# studies: {}\n", ["sensitivity.named.mine", "empty"]),
     ],
-    ids=["missing", "not a mapping", "misspelt joint", "bad value", "misspelt key"],
+    ids=["missing", "not a mapping", "misspelt joint", "bad value", "misspelt key", "tab", "empty"],
 )
 def test_a_named_protocols_overlay_is_checked_naming_its_key(config, tmp_path, overlay, words):
     path = tmp_path / "mine.yaml"
@@ -1187,3 +1222,40 @@ def test_trials_too_long_to_hold_are_refused_naming_their_frames_before_any_simu
     message = str(raised.value)
     assert message.startswith(key), message
     assert frames in message and "what one job can hold" in message, message
+
+
+# Snakemake keeps the last of an option given twice: the first file, or the first values, would
+# be dropped without a word (here the first alone would be refused: the run would not be the
+# one meant).
+@pytest.mark.parametrize(
+    ("first", "second", "option"),
+    [
+        (["--configfile", "first.yaml"], ["--configfile", "second.yaml"], "--configfile"),
+        (["--config", "verdicts={'seeds': 0}"], ["--config", "base_seed=3"], "--config"),
+    ],
+    ids=["configfile", "config"],
+)
+def test_dry_run_refuses_an_option_snakemake_would_drop_naming_it(tmp_path, first, second, option):
+    folder = copy_workflow(tmp_path)
+    (folder / "first.yaml").write_text("studies: {cmc: {trials: 0}}\n")
+    (folder / "second.yaml").write_text("base_seed: 3\n")
+    # Snakemake reads the files from the folder it is started in, not its --directory.
+    first, second = (
+        [str(folder / v) if v.endswith(".yaml") else v for v in o] for o in (first, second)
+    )
+    run = run_snakemake(folder, "-n", *first, *second)
+    message = run.stdout + run.stderr
+    assert run.returncode != 0
+    assert "Job stats" not in message
+    assert f"{option} is given 2 times" in message, message[-2000:]
+    assert shlex.join(first[1:]) in message
+
+
+def test_several_config_files_after_one_option_are_read():
+    argv = ["-n", "--configfile", "a.yaml", "b.yaml", "--config", "x=1", "y=2"]
+    assert invocation.repeated_options(argv) == []
+    twice = ["--configfile", "a.yaml", "--configfiles", "b.yaml", "-C", "x=1", "--config=y=2"]
+    assert invocation.repeated_options(twice) == [
+        ("--configfile", [["a.yaml"], ["b.yaml"]]),
+        ("--config", [["x=1"], ["y=2"]]),
+    ]

@@ -15,7 +15,14 @@ import os
 import shlex
 from collections.abc import MutableMapping, Sequence
 
-__all__ = ["ENVIRONMENT_VARIABLE", "record", "snakemake_command", "workflow_options"]
+__all__ = [
+    "ENVIRONMENT_VARIABLE",
+    "check_options",
+    "record",
+    "repeated_options",
+    "snakemake_command",
+    "workflow_options",
+]
 
 #: Where the Snakemake process leaves its options for its jobs, as a shell-quoted string.
 ENVIRONMENT_VARIABLE = "JOINTBENCH_SNAKEMAKE_OPTIONS"
@@ -61,6 +68,34 @@ def workflow_options(argv: Sequence[str]) -> list[str]:
     if not set(options) & set(_PARALLELISM):
         options = [*_DEFAULT_PARALLELISM, *options]
     return options
+
+
+def repeated_options(argv: Sequence[str]) -> list[tuple[str, list[list[str]]]]:
+    """Each option of a Snakemake command line (``sys.argv[1:]``) that takes a list of values
+    (config files, config values) and is given more than once, in its long spelling, with the
+    values of every time it is given, in order."""
+    parser = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    listed = [(names, nargs) for names, nargs in _OPTIONS if nargs]
+    for names, nargs in listed:
+        parser.add_argument(*names, dest=names[0], nargs=nargs, action="append")
+    given, _ = parser.parse_known_args(list(argv))
+    times = [(names[0], getattr(given, names[0]) or []) for names, _ in listed]
+    return [(option, values) for option, values in times if len(values) > 1]
+
+
+def check_options(argv: Sequence[str]) -> None:
+    """``ValueError`` naming an option of ``argv`` given more than once
+    (:func:`repeated_options`): Snakemake keeps the values of its last time alone, and a config
+    file or config value given before would be dropped without a word, the run made on another
+    config than the one its command line shows."""
+    for option, values in repeated_options(argv):
+        dropped = "; ".join(shlex.join(each) for each in values[:-1])
+        every = shlex.join([value for each in values for value in each])
+        raise ValueError(
+            f"{option} is given {len(values)} times: Snakemake keeps the last alone "
+            f"({shlex.join(values[-1])}) and would drop {dropped}; give them all after one "
+            f"{option}: {option} {every}"
+        )
 
 
 def record(argv: Sequence[str], environ: MutableMapping[str, str] = os.environ) -> None:

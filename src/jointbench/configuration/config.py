@@ -31,6 +31,7 @@ __all__ = [
     "open_config",
     "ordered_settings",
     "parse_condition_id",
+    "read_config_file",
     "read_configs",
     "read_yaml",
     "study_names",
@@ -59,18 +60,31 @@ def read_yaml(text: str) -> object:
 
 def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
     """Raise ``ValueError`` naming ``what`` and the offending path when ``document`` does not
-    match the JSON schema (YAML) at ``schema_path``."""
+    match the JSON schema (YAML) at ``schema_path``, whose ``integer`` is a Python ``int``
+    (:func:`_is_integer`), not a whole float."""
     if isinstance(schema_path, str):
         schema_path = Path(schema_path)
     # Imported here: only the workflow's start checks the config, not each job.
     import jsonschema
 
     schema = read_yaml(schema_path.read_text())
+    base = jsonschema.validators.validator_for(schema)
+    # JSON Schema counts 3.0 as an integer. A count or seed written so (a decimal point left in,
+    # or Snakemake's --config typing base_seed=1e3 as 1000.0) is refused, as the grid's and the
+    # protocol's integers refuse it, not carried as a float into the jobs' parameters.
+    strict = jsonschema.validators.extend(
+        base, type_checker=base.TYPE_CHECKER.redefine("integer", _is_integer)
+    )
     try:
-        jsonschema.validate(dict(document), schema)
+        jsonschema.validate(dict(document), schema, cls=strict)
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
         raise ValueError(f"{what} error at {where}: {error.message}") from None
+
+
+def _is_integer(_checker: object, instance: object) -> bool:
+    """JSON Schema's ``integer``, of Python's ``int`` alone: not ``True``, nor ``3.0``."""
+    return isinstance(instance, int) and not isinstance(instance, bool)
 
 
 def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCHEMA_PATH) -> None:
@@ -186,15 +200,7 @@ def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping
     overlays = {}
     for name, path in dict(config.get("sensitivity", {}).get("named", {})).items():
         where = f"config error at sensitivity.named.{name} ({path})"
-        file = Path(base) / path
-        if not file.is_file():
-            raise ValueError(f"{where}: no such file")
-        try:
-            document = read_yaml(file.read_text())
-        except yaml.YAMLError as error:
-            raise ValueError(f"{where}: not valid YAML ({error})") from None
-        if not isinstance(document, Mapping):
-            raise ValueError(f"{where}: not a mapping of config keys to values")
+        document = read_config_file(Path(base) / path, where)
         merged = _merged(config, document)
         try:
             validate_against(merged, SCHEMA_PATH, "config")
@@ -210,14 +216,48 @@ def read_configs(paths: Sequence[str | Path]) -> dict:
     ``--configfile`` does: a mapping merged key by key, any other value replaced."""
     config: dict = {}
     for path in paths:
-        path = Path(path)
-        if not path.is_file():
-            raise ValueError(f"config file {path}: no such file")
-        document = read_yaml(path.read_text()) or {}
-        if not isinstance(document, Mapping):
-            raise ValueError(f"config file {path}: not a mapping of keys to values")
-        config = _merged(config, document)
+        config = _merged(config, read_config_file(Path(path), f"config file {path}"))
     return config
+
+
+def read_config_file(path: Path, where: str) -> Mapping:
+    """The mapping of config keys to values the YAML file ``path`` holds, or ``ValueError``
+    in one line beginning with ``where`` (the file, or the key naming it): no such file, not
+    YAML (where in the file, and why), or no mapping. An empty file, or one of comments alone,
+    is refused as Snakemake's ``--configfile`` refuses it: it changes nothing, which is not
+    what its writer meant."""
+    if not path.is_file():
+        raise ValueError(f"{where}: no such file")
+    text = path.read_text()
+    try:
+        document = read_yaml(text)
+    except yaml.YAMLError as error:
+        raise ValueError(f"{where}: not valid YAML{_yaml_error_place(error, text)}") from None
+    if document is None:
+        raise ValueError(
+            f"{where}: empty: it holds no keys (a config file sets the keys it changes)"
+        )
+    if not isinstance(document, Mapping):
+        raise ValueError(f"{where}: not a mapping of config keys to values")
+    return document
+
+
+def _yaml_error_place(error: yaml.YAMLError, text: str) -> str:
+    """Where in ``text`` the YAML ``error`` is and what it is, as `` at line 2, column 1:
+    found character that cannot start any token (...)``; the YAML library's own message spans
+    lines and names no file. A tab, which YAML never takes as indentation, is said to be one."""
+    mark = getattr(error, "problem_mark", None)
+    problem = getattr(error, "problem", None) or str(error).replace("\n", " ")
+    if mark is None:
+        return f": {problem}"
+    lines = text.splitlines()
+    line = lines[mark.line] if mark.line < len(lines) else ""
+    tab = (
+        " (a tab: YAML indents with spaces only)"
+        if line[mark.column : mark.column + 1] == "\t"
+        else ""
+    )
+    return f" at line {mark.line + 1}, column {mark.column + 1}: {problem}{tab}"
 
 
 def _merged(base: Mapping, update: Mapping) -> dict:
