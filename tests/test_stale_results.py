@@ -843,6 +843,27 @@ def test_results_snakemake_has_no_record_of_are_not_taken_as_current(reduced_run
     assert "estimate_cmc" in _dry_run(run)
 
 
+# Commands that run no job and take no result as current: listing the rules, and deleting the
+# workflow's output, one of the ways out of results without a record. Refused, they left the
+# deletion to a shell command alone and the rules unlisted.
+@pytest.mark.xdist_group("reduced_run")
+@pytest.mark.parametrize("command", ["--list-rules", "--list-target-rules", "--delete-all-output"])
+def test_results_without_a_record_refuse_no_command_that_runs_no_job(
+    reduced_run, tmp_path, command
+):
+    run = reduced_run.copy(tmp_path / "run")
+    shutil.move(run.workdir / ".snakemake" / "metadata", tmp_path / "records")
+    done = run.snakemake(command)
+    message = done.stdout + done.stderr
+    assert done.returncode == 0, message[-3000:]
+    assert "Snakemake has no record of" not in message, message[-3000:]
+    if command == "--delete-all-output":
+        assert not list((run.workdir / "results" / "collected").glob("*.parquet"))
+        assert "estimate_cmc" in _dry_run(run)
+    else:
+        assert "estimate_cmc" in message, message[-3000:]
+
+
 # A run with --drop-metadata writes no record of the jobs it runs, and leaves each file it
 # rewrites with the record of the job that made it before, which describes other code or
 # settings: reverting them would then leave that file, made by neither, current. It is refused

@@ -1256,11 +1256,13 @@ def refuse_unrecorded_results():
     listed in UNRECORDED_LIST, which the message names with the two ways out: recording them as
     they are (``--touch --force`` on them), which such a command may do unrefused, and
     deleting them. Not on a cluster node, which plans nothing, nor with a store of records
-    other than Snakemake's default one."""
+    other than Snakemake's default one, nor for a command that runs no job and takes no file as
+    current (RUNS_NO_JOB)."""
     argv = sys.argv[1:]
     if (
         workflow.remote_exec
         or _option_given(argv, "--touch", "-t")
+        or any(_option_given(argv, *flag) for flag in RUNS_NO_JOB)
         or _persistence_backend(argv) not in (None, "file")
     ):
         return
@@ -1276,6 +1278,16 @@ def refuse_unrecorded_results():
             "record them as they are: snakemake --touch --force "
             f"$(cat {_where(UNRECORDED_LIST)}), with this run's other options."
         )
+
+
+# Snakemake's flags (and short forms) of commands that run no job and take no file as current:
+# the rules listed, or the workflow's output deleted, which is one way out of results without
+# a record.
+RUNS_NO_JOB = (
+    ("--list-rules", "-l"),
+    ("--list-target-rules", "--lt"),
+    ("--delete-all-output",),
+)
 
 
 # Where refuse_unrecorded_results lists the files it refuses, one a line, for the commands its
