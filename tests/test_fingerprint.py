@@ -11,6 +11,7 @@ import importlib
 import importlib.metadata
 import json
 import os
+import platform
 import site
 import subprocess
 import sys
@@ -300,6 +301,25 @@ def test_modules_found_by_a_registry_are_in_the_fingerprint():
 def test_numbas_code_generator_is_recorded_as_a_dependency():
     # One Numba release allows several of llvmlite's, each with its own LLVM.
     assert dependency_versions()["llvmlite"] == importlib.metadata.version("llvmlite")
+
+
+def test_the_c_library_is_recorded_as_a_dependency():
+    # Numba's kernels and NumPy call the C library's libm (acos, atan2, exp, ...), whose
+    # releases differ in the last bits of some results.
+    library, version = platform.libc_ver()
+    recorded = dependency_versions()["libc"]
+    assert recorded == (f"{library} {version}" if library else "unknown")
+
+
+def test_another_c_library_changes_the_fingerprint(monkeypatch):
+    script = Path(__file__).resolve().parents[1] / "workflow" / "scripts" / "estimate.py"
+    before = code_fingerprint(script)
+    monkeypatch.setattr(platform, "libc_ver", lambda *args, **kwargs: ("glibc", "1.0"))
+    fingerprint._c_library.cache_clear()
+    try:
+        assert code_fingerprint(script) != before
+    finally:
+        fingerprint._c_library.cache_clear()
 
 
 def test_a_compilers_version_is_its_first_line_and_none_is_named(tmp_path, monkeypatch):

@@ -804,10 +804,15 @@ def _digest_of(text: str) -> bytes:
 def dependency_versions(package: str = PACKAGE) -> dict[str, str]:
     """The installed version of Python and of every distribution ``package`` requires (its
     run-time dependencies, extras left out): upgrading NumPy or SciPy can move a result too;
-    and of llvmlite, Numba's code generator (:data:`_CODE_GENERATORS`).
+    and of llvmlite, Numba's code generator (:data:`_CODE_GENERATORS`); and ``libc``, the C
+    library's name and version (:func:`_c_library`).
     With Numba's compiler switched off (:func:`numba_jit_disabled`), also ``numba_jit``:
     ``"disabled"``."""
-    versions = {"python": platform.python_version(), **dict(_installed_versions(package))}
+    versions = {
+        "python": platform.python_version(),
+        "libc": _c_library(),
+        **dict(_installed_versions(package)),
+    }
     if numba_jit_disabled():
         versions["numba_jit"] = "disabled"
     return versions
@@ -836,6 +841,17 @@ def numba_jit_disabled() -> bool:
         return value is not None and int(value) != 0
     except (TypeError, ValueError):
         return False
+
+
+# The compiled kernels' and NumPy's elementary functions (acos, atan2, exp) are the C library's
+# libm, whose releases round some results differently. Asked once per process: ``libc_ver`` reads
+# the interpreter's binary.
+@cache
+def _c_library() -> str:
+    """The C library the interpreter runs on, as ``"glibc 2.36"``; ``"unknown"`` where Python
+    cannot tell (musl, macOS)."""
+    library, version = platform.libc_ver()
+    return f"{library} {version}" if library else "unknown"
 
 
 # Reading the installed distributions' metadata costs more than a job's whole fingerprint, and a
