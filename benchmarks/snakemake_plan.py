@@ -63,13 +63,14 @@ def _command(workdir: Path, overlay: Path | None, *extra: str) -> list[str]:
 
 
 def _large_grid(conditions: int) -> str:
-    """An overlay running the cmc study alone on ``conditions`` conditions (rounded up to an
-    even number of them): both marker sets, ten noise levels, the RoMs the rest takes."""
-    roms = -(-conditions // 20)
+    """An overlay running the cmc study alone on ``conditions`` conditions (rounded up to a
+    multiple of 40): both marker sets, twenty noise levels, the RoMs (5 to 90 degrees, up to
+    18 of them) the rest takes."""
+    roms = -(-conditions // 40)
     return (
         "studies:\n  cmc:\n    grid:\n      marker_set: [M, H]\n"
         f"      rom_deg: {[5 + 5 * i for i in range(roms)]}\n"
-        f"      noise_mm: {[0.5 * (i + 1) for i in range(10)]}\n"
+        f"      noise_mm: {[0.25 * (i + 1) for i in range(20)]}\n"
         "  hinge: {enabled: false}\n  hip: {enabled: false}\n  hip_sta: {enabled: false}\n"
     )
 
@@ -96,7 +97,9 @@ def _prepared(
 def _seconds(command: list[str], environment: dict[str, str], clock: str = "wall") -> float:
     """The time ``command`` takes: wall clock, or the CPU time of the processes it ran."""
     start, used = time.perf_counter(), _children_cpu()
-    subprocess.run(command, env=environment, check=True, capture_output=True)
+    done = subprocess.run(command, env=environment, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(command)} failed:\n{done.stderr[-2000:]}")
     return time.perf_counter() - start if clock == "wall" else _children_cpu() - used
 
 
