@@ -106,7 +106,7 @@ def check_external_rules(user_rules):
             files = [
                 f for p in parquets for f in (p, p.removesuffix(".parquet") + ".csv")
             ]
-            producers = [w for w in writers if any(w.is_producer(f) for f in files)]
+            producers = [w for w in writers if any(_produces(w, f) for f in files)]
             if not producers:
                 raise ValueError(
                     f"config: studies.{study}.external_estimators: no rule writes the "
@@ -116,6 +116,26 @@ def check_external_rules(user_rules):
             _refuse_rival_writers(study, name, files, producers)
             for producer in producers:
                 _check_blind(producer, name, files, users)
+
+
+def _produces(rule, path):
+    """Whether ``rule`` writes ``path``, as Rule.is_producer judges it, found in an index of
+    its products (:func:`_products`): a rule writing every condition's file in one job has as
+    many outputs as conditions, and asking each of them about each file made the plan grow as
+    their square."""
+    literal, patterns = _products(rule.name)
+    # A pattern's regular expression ends in $, which also takes a final newline.
+    return path.removesuffix("\n") in literal or any(p.match(path) for p in patterns)
+
+
+@functools.cache
+def _products(name):
+    """The products of rule ``name`` (outputs, logs, benchmark file, as is_producer reads
+    them), ``(literal, patterns)``: the paths without a wildcard, and those with one. Asked only
+    once every rule is read (check_external_rules runs last)."""
+    products = list(workflow.get_rule(name).products())
+    literal = frozenset(str(p) for p in products if not p.contains_wildcard())
+    return literal, [p for p in products if p.contains_wildcard()]
 
 
 def _package_rules(user_rules):
@@ -135,7 +155,7 @@ def _refuse_rival_writers(study, name, files, producers):
     decided by a rule order, not by the estimator's name, and the answers of one would be
     ranked under the other's."""
     for path in files:
-        rivals = sorted(p.name for p in producers if p.is_producer(path))
+        rivals = sorted(p.name for p in producers if _produces(p, path))
         if len(rivals) > 1:
             raise ValueError(
                 f"rules {' and '.join(rivals)} both write the estimates of {name!r} in study "
@@ -177,7 +197,7 @@ def _unreadable(path, users):
     if path.startswith(READABLE):
         return None
     spellings = (path, os.path.abspath(path))
-    if any(other.is_producer(f) for other in users for f in spellings):
+    if any(_produces(other, f) for other in users for f in spellings):
         return None
     return next(
         (held for folder, held in UNSEEN.items() if path.startswith(folder)),
@@ -230,12 +250,17 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
     wildcards. A rule of the user's upstream (the estimator's own rule too, in another job) is
     followed in turn, found by the path as written (as Snakemake finds it), as normalised and
     by its real path, so that none can hand the estimator what it read from the truth;
-    ``seen`` holds the (rule, file) pairs already followed."""
-    for file in filter(producer.is_producer, files):
-        if (producer.name, file) in seen:
+    ``seen`` holds the jobs already followed, as (rule, wildcards): the files a job writes share
+    its inputs, which are judged once (a rule writing every condition's file in one job would
+    otherwise have its inputs judged once per condition, a plan growing as their square).
+    """
+    for file in (f for f in files if _produces(producer, f)):
+        wildcards = producer.get_wildcards(file)
+        job = (producer.name, tuple(sorted(wildcards.items())))
+        if job in seen:
             continue
-        seen = seen | {(producer.name, file)}
-        raw = [str(f) for f in producer.expand_input(producer.get_wildcards(file))[0]]
+        seen = seen | {job}
+        raw = [str(f) for f in producer.expand_input(wildcards)[0]]
         spelt = [_as_matched(f) for f in raw]
         refused = [r for r in (_refusal(f, everyone) for f in spelt) if r is not None]
         if refused:
@@ -249,7 +274,7 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
             )
         read = list(dict.fromkeys([*raw, *spelt, *map(_judged, spelt)]))
         for upstream in everyone:
-            made = [f for f in read if upstream.is_producer(f)]
+            made = [f for f in read if _produces(upstream, f)]
             if made:
                 _check_blind(
                     upstream, name, made, everyone, (producer.name, *via), seen
@@ -267,7 +292,7 @@ def _check_user_outputs(users, package):
     user's rule claims would pass for the user's own, readable, or replace the benchmark's.
     A wildcard is taken to match anything unless it lists its names, so no overlap is missed.
     """
-    theirs = [(other, f, _patterns_of(f)) for other in package for f in _written(other)]
+    theirs = _WrittenIndex(package)
     for user in users:
         for written in _written(user):
             mine = _patterns_of(written)
@@ -281,14 +306,51 @@ def _check_user_outputs(users, package):
                     ": only the benchmark writes there, and an external estimator reads "
                     "what it writes there as blind (README, 'Adding an estimator')"
                 )
-            for other, path, patterns in theirs:
-                if _overlap(mine, patterns):
-                    _refuse_a_builtins_name(user, written, mine, other)
-                    raise ValueError(
-                        f"rule {user.name} writes {_shown(written)}, which rule "
-                        f"{other.name} of the benchmark writes ({_shown(path)})"
-                        ": a rule of yours writes files of its own, in a folder of its own"
-                    )
+            overlapping = theirs.first_overlap(mine)
+            if overlapping is not None:
+                other, path = overlapping
+                _refuse_a_builtins_name(user, written, mine, other)
+                raise ValueError(
+                    f"rule {user.name} writes {_shown(written)}, which rule "
+                    f"{other.name} of the benchmark writes ({_shown(path)})"
+                    ": a rule of yours writes files of its own, in a folder of its own"
+                )
+
+
+class _WrittenIndex:
+    """The files the rules ``package`` write (:func:`_written`), as patterns, indexed so that a
+    pattern without a wildcard is looked up, not compared with each: a rule writing every
+    condition's file in one job lists as many files as conditions, and comparing each file of
+    the user's rules with each of the benchmark's made the plan grow as their square."""
+
+    def __init__(self, package):
+        self.entries = [(other, f) for other in package for f in _written(other)]
+        self.literal = {}  # pattern without a wildcard -> index of its first entry
+        self.wild = []  # (index, pattern) of the patterns with one
+        for index, (_, path) in enumerate(self.entries):
+            for pattern in _patterns_of(path):
+                if _WILDCARD in pattern:
+                    self.wild.append((index, pattern))
+                else:
+                    self.literal.setdefault(pattern, index)
+
+    def first_overlap(self, mine):
+        """``(rule, path)`` of the first entry some path matching ``mine`` (patterns, as
+        :func:`_patterns_of` gives) matches too, in the rules' order, or None."""
+        found = [index for pattern in mine for index in self._overlapping(pattern)]
+        return self.entries[min(found)] if found else None
+
+    def _overlapping(self, pattern):
+        if _WILDCARD in pattern:
+            candidates = [*((i, p) for p, i in self.literal.items()), *self.wild]
+        else:
+            exact = self.literal.get(pattern)
+            candidates = [*([] if exact is None else [(exact, pattern)]), *self.wild]
+        return [
+            index
+            for index, theirs in candidates
+            if _may_meet(pattern, theirs) and _meet(pattern, theirs)
+        ]
 
 
 def _refuse_a_builtins_name(user, written, mine, other):
@@ -1102,17 +1164,17 @@ def _refuse_the_benchmarks(written, package):
     (the benchmark's rules) can write a file, naming both: the job may write in its folder,
     and so over any file of the benchmark's in or below it (a built-in estimator's logs or
     estimates, the datasets), which the kernel cannot tell from its own."""
-    theirs = [(other, f, _patterns_of(f)) for other in package for f in _written(other)]
+    theirs = _WrittenIndex(package)
     for folder, (rule, kind, path) in written.items():
-        mine = _patterns_of(f"{folder}/{{inside}}")
-        for other, file, patterns in theirs:
-            if _overlap(mine, patterns):
-                raise ValueError(
-                    f"rule {rule} writes its {kind} {path} in {folder}/, where rule "
-                    f"{other.name} of the benchmark writes ({_shown(file)}): its job could "
-                    "write over the benchmark's files there. A rule of yours writes its files "
-                    "under results/, in a folder of its own (README, 'Adding an estimator')"
-                )
+        overlapping = theirs.first_overlap(_patterns_of(f"{folder}/{{inside}}"))
+        if overlapping is not None:
+            other, file = overlapping
+            raise ValueError(
+                f"rule {rule} writes its {kind} {path} in {folder}/, where rule "
+                f"{other.name} of the benchmark writes ({_shown(file)}): its job could "
+                "write over the benchmark's files there. A rule of yours writes its files "
+                "under results/, in a folder of its own (README, 'Adding an estimator')"
+            )
 
 
 def _jobs_of_external_estimators(users):
@@ -1124,7 +1186,7 @@ def _jobs_of_external_estimators(users):
         for name in jb_config.estimator_names(config, study, source="external"):
             for parquet in estimates_files(study, [name]):
                 for file in (parquet, parquet.removesuffix(".parquet") + ".csv"):
-                    todo += [(u, file) for u in users if u.is_producer(file)]
+                    todo += [(u, file) for u in users if _produces(u, file)]
     seen = set()
     while todo:
         producer, file = todo.pop()
@@ -1136,7 +1198,7 @@ def _jobs_of_external_estimators(users):
         yield producer, wildcards
         for read in producer.expand_input(wildcards)[0]:
             spelt = _as_matched(str(read))
-            todo += [(u, spelt) for u in users if u.is_producer(spelt)]
+            todo += [(u, spelt) for u in users if _produces(u, spelt)]
 
 
 def _limited(run, name):
