@@ -136,7 +136,9 @@ __all__ = [
 #: determined direction, the first-order SD is not a statement of precision: the variance it
 #: leaves out grows as ``1 + share`` (module docstring), so at this share the SD understates the
 #: scatter by a tenth, and beyond it the answers' errors grow heavy tails
-#: (``tests/test_centre_precision.py`` counts them on both sides).
+#: (``tests/test_centre_precision.py`` counts them on both sides). The analytic joint centre's
+#: SD is held to the same share of the poses' noise in the information its relative rotations
+#: hold (:func:`jointbench.estimators.pose_noise.analytic_noise_share`).
 MAX_SD_NOISE_SHARE = 0.2
 
 #: The score test's or the lack of fit's rejection, or a step of :data:`MAX_STEP_SDS`, is
@@ -739,12 +741,7 @@ def _warnings(numbers: dict, residual_mm: float, supported: bool) -> tuple[str, 
     if supported and stated_center_sd(sd) is None:
         warnings.append(_undetermined(sd, f"the rigid-body residual of {residual_mm:.3g} mm"))
     elif supported and not share < MAX_SD_NOISE_SHARE:
-        warnings.append(
-            f"centre's {PRECISION_NOT_DETERMINED} by the data: along its least determined "
-            f"direction the noise is {100 * share:.0f}% of the spread of the markers' "
-            f"directions from it (below {100 * MAX_SD_NOISE_SHARE:g}% its SD of {sd:.3g} mm "
-            "would hold)"
-        )
+        warnings.append(_noisy_sd(share, sd, "the spread of the markers' directions from it"))
     elif supported and numbers["center_spheres_fit_p_value"] < ROTATION_ALPHA:
         warnings.append(
             f"centre's {PRECISION_NOT_DETERMINED} by the data: even about their own centre the "
@@ -844,7 +841,11 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     * ``diagnostics["center_sd_mm"]``, the SD along the least determined direction of the
       covariance the result states of its answer's scatter (:func:`stated_covariance`), and
       above :data:`MAX_CENTER_SD_MM` the warning that the data do not determine the centre,
-      as for a centre of rotation;
+      as for a centre of rotation; below it, where the result states the share of the poses'
+      noise in the information that SD is first order in (``["center_sd_noise_share"]``, the
+      analytic centre's, :func:`jointbench.estimators.pose_noise.analytic_noise_share`) and
+      that reaches :data:`MAX_SD_NOISE_SHARE`, the warning that the SD does not hold, as for a
+      centre of rotation's directions;
     * ``["center_pose_noise_share"]``, the ratio of the noise's information to the noise-free
       information along the least determined direction, and ``["center_pose_noise_pull_mm"]``,
       how far the noise pulled the answer (both ``inf`` where the noise is as large as the
@@ -868,8 +869,12 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
             covariance, source = stated
             sd = _largest_sd(covariance)
             numbers["center_sd_mm"] = sd
+            share = result.diagnostics.get("center_sd_noise_share", 0.0)
             if stated_center_sd(sd) is None:
                 warnings.append(_undetermined(sd, source))
+            elif not share < MAX_SD_NOISE_SHARE:
+                held = "the information the relative rotations of the poses hold on it"
+                warnings.append(_noisy_sd(share, sd, held))
         noise = verdict.pose_noise
         if noise is not None:
             pulled = pull_mm(noise, np.asarray(result.center))
@@ -940,6 +945,17 @@ def _undetermined(sd: float, source: str) -> str:
     return (
         f"centre not determined by the data: its SD along the least determined direction "
         f"{size} (above {MAX_CENTER_SD_MM:g} mm, from {source})"
+    )
+
+
+def _noisy_sd(share: float, sd: float, held: str) -> str:
+    """The warning for a centre whose SD ``sd`` [mm] is first order in an information of
+    which the noise is the share ``share``, :data:`MAX_SD_NOISE_SHARE` or more, along the
+    least determined direction; ``held`` names that information."""
+    return (
+        f"centre's {PRECISION_NOT_DETERMINED} by the data: along its least determined "
+        f"direction the noise is {100 * share:.0f}% of {held} (below "
+        f"{100 * MAX_SD_NOISE_SHARE:g}% its SD of {sd:.3g} mm would hold)"
     )
 
 

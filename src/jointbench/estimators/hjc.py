@@ -145,6 +145,7 @@ from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.pose_noise import (
     analytic_covariance,
+    analytic_noise_share,
     anchor_bias_mm,
     centre_covariance,
     lever_factors,
@@ -1362,10 +1363,14 @@ def _analytic_scattered(
 ) -> JointCenterResult:
     """The analytic ``result`` with the covariance of its centre on the poses it was fitted to
     (:func:`jointbench.estimators.pose_noise.analytic_covariance`),
-    ``diagnostics["center_covariance_mm2"]``, and the mean error its frame-0 poses' errors
-    cause to second order (:func:`jointbench.estimators.pose_noise.anchor_bias_mm`),
+    ``diagnostics["center_covariance_mm2"]``, the share of the poses' noise in the
+    information that covariance is first order in
+    (:func:`jointbench.estimators.pose_noise.analytic_noise_share`),
+    ``["center_sd_noise_share"]``, and the mean error its frame-0 poses' errors cause to
+    second order (:func:`jointbench.estimators.pose_noise.anchor_bias_mm`),
     ``["center_anchor_bias_mm"]``: on small swings of the order of the pull, which the checked
-    call adds it to (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
+    call adds it to, as it holds the share to the centres' bound
+    (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
     ``benchmarks/joint_centre_stated_sd.py`` prints both)."""
     covariance = centre_covariance(
         analytic_covariance, proximal, distal, (result.center, result.center)
@@ -1373,7 +1378,11 @@ def _analytic_scattered(
     # The frame-0 poses' second-order bias, which the pull of independent frames leaves out
     # and the checked call adds to it (centre_precision.annotate_joint_centres).
     bias = anchor_bias_mm(proximal, distal, result.center)
-    numbers = {"center_covariance_mm2": covariance.tolist(), "center_anchor_bias_mm": bias.tolist()}
+    numbers = {
+        "center_covariance_mm2": covariance.tolist(),
+        "center_sd_noise_share": analytic_noise_share(proximal, distal),
+        "center_anchor_bias_mm": bias.tolist(),
+    }
     return with_warnings(result, (), numbers)
 
 

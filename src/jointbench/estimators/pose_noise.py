@@ -74,8 +74,10 @@ rotations of frames ``t >= 1``, ``S = sum_t Q_t`` and ``n`` those frames:
 Every sum over the frames is one of ``S`` and ``sum_t Q_t' A Q_t`` or ``sum_t Q_t A Q_t'``,
 which the second moments ``sum_t vec(Q_t) vec(Q_t)'`` (9 x 9) give for any ``A``. What it does not
 hold: the pull above (second order), noise larger along one direction than across it, and
-markers that move on their segment. ``tests/test_joint_centre_scatter.py`` holds the covariances
-to the answers' scatter over noise draws.
+markers that move on their segment. How much of the information the analytic centre's
+covariance is first order in is the noise's own: :func:`analytic_noise_share`.
+``tests/test_joint_centre_scatter.py`` holds the covariances to the answers' scatter over noise
+draws.
 """
 
 from __future__ import annotations
@@ -96,6 +98,7 @@ __all__ = [
     "NoisyPoses",
     "PoseNoise",
     "analytic_covariance",
+    "analytic_noise_share",
     "anchor_bias_mm",
     "centre_covariance",
     "lever_factors",
@@ -403,6 +406,66 @@ def anchor_bias_mm(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndar
         terms.append(2.0 * shrinkage @ (centre - mean))
     normal = 2.0 * n_frames * np.eye(3) - relative - relative.T
     return np.linalg.solve(normal, relative.T @ terms[0] + relative @ terms[1])
+
+
+def analytic_noise_share(proximal: SegmentPoses, distal: SegmentPoses) -> float:
+    """The share of the poses' noise in the information the relative rotations of the fitted
+    poses ``proximal`` and ``distal`` hold on the analytic centre (paper C's eq. 9), along its
+    least determined direction: where it reaches
+    :data:`jointbench.estimators.centre_precision.MAX_SD_NOISE_SHARE` the first-order SD
+    (:func:`analytic_covariance`) does not hold. ``inf`` where the noise's part is all of
+    that information.
+
+    The method solves ``N c = sum_t M_t' y_t`` over the frames ``t >= 1``, ``M_t = R_p(t) -
+    R_d(t)``, ``N = sum_t M_t' M_t = 2 n I - S - S'`` (``S = sum_t Q_t``, ``Q_t = R_p(t)'
+    R_d(t)``): ``N`` is the information the relative rotations hold on the centre. Its error
+    is ``N^-1 sum_t M_t' nu_t``, ``nu_t`` the errors of ``y_t`` at the true centre (the
+    frame-0 placements and frame ``t``'s poses, module docstring, "Scatter"); the SD reads
+    ``M_t`` on the observed rotations as if they were exact. Each observed relative pose
+    carries the errors of two pose fits, frame ``t``'s and frame 0's, which anchors the body
+    frame: ``R_a(t) = R0_a(t) E_a`` with ``E[E_a] = I + 2 G_a`` (``G_a`` the shrinkage of
+    the module docstring, one per fit). As ``E_a' E_a = I``, ``N = sum_t (2 I - E_p' Q0_t
+    E_d - E_d' Q0_t' E_p)``, and to second order in the noise
+
+        ``E[N] = N0 + W``,   ``W = -2 (G_p S + S' G_p + S G_d + G_d S')``,
+
+    positive semidefinite (each ``G_a`` is negative semidefinite where ``S`` is near ``n I``):
+    the noise adds information of its own, which the first-order SD counts as the motion's.
+    Writing ``M_t = M0_t + dM_t``, the error holds ``N^-1 sum_t dM_t' nu_t``, a product of two
+    noises the linearisation leaves out; against the first-order ``N^-1 sum_t M0_t' nu_t``
+    its variance is, for errors ``nu_t`` independent of ``dM_t``, ``W`` against ``N0``
+    (errors in variables, as for a centre of rotation's directions,
+    :mod:`jointbench.estimators.centre_precision`). So along the least determined direction
+    ``v`` of ``N - W``, ``share = v' W v / v' (N - W) v`` is the variance the SD leaves out,
+    a factor ``1 + share``. Here the errors are not independent of ``dM_t``: frame 0's
+    rotation errors turn every relative rotation alike, and also place the joint in both body
+    frames (:func:`anchor_bias_mm`), so as the share grows the answers' errors, products of
+    the same noise, grow heavy tails that no factor of the SD holds
+    (``benchmarks/joint_centre_stated_sd.py``). ``S`` is read on the observed rotations;
+    ``S0`` in its place changes the share by a third order."""
+    relative = _relative_rows(proximal.rotation, distal.rotation)[1].reshape(3, 3)
+    shrinkages = [
+        _shrinkage(poses.variance, lever_factors(np.asarray(poses.body, dtype=float))[1])
+        for poses in (proximal, distal)
+    ]
+    return float(_information_share(relative, len(proximal.rotation) - 1, *shrinkages))
+
+
+@kernel
+def _information_share(
+    relative: np.ndarray, n_frames: int, g_p: np.ndarray, g_d: np.ndarray
+) -> float:
+    """:func:`analytic_noise_share` from the sum ``S`` ``(3, 3)`` of the relative rotations of
+    ``n_frames`` frames and the shrinkages ``G_p``, ``G_d`` ``(3, 3)`` [rad^2] of the two
+    segments' poses (:func:`_shrinkage`). A compiled kernel."""
+    normal = 2.0 * n_frames * np.eye(3) - relative - relative.T
+    turned = g_p @ relative + relative @ g_d
+    noise = -2.0 * (turned + turned.T)
+    values, vectors = np.linalg.eigh(normal - noise)
+    if not values[0] > 0.0:
+        return np.inf
+    direction = vectors[:, 0]
+    return (direction @ noise @ direction) / values[0]
 
 
 def centre_covariance(
