@@ -114,6 +114,7 @@ from jointbench.estimators.results import (
 )
 from jointbench.estimators.support import ROTATION_ALPHA, ROUNDING, Support
 from jointbench.numerics.compiled import kernel, kernel_array
+from jointbench.numerics.magnitudes import largest_magnitude
 from jointbench.numerics.small import add_outer, symmetric_eigen_into, symmetric_into
 
 __all__ = [
@@ -255,12 +256,7 @@ def _noise_free(markers: np.ndarray, s2: float) -> bool:
     """Whether the noise ``s2`` [mm^2] per coordinate of the markers ``(N, n, 3)`` [mm] is
     rounding, as the support verdict judges it (:data:`ROUNDING` of the largest coordinate).
     A compiled kernel."""
-    largest = 0.0
-    for k in range(markers.shape[0]):
-        for p in range(markers.shape[1]):
-            for i in range(3):
-                largest = max(largest, abs(markers[k, p, i]))
-    return s2 <= (ROUNDING * largest) ** 2
+    return s2 <= (ROUNDING * largest_magnitude(markers)) ** 2
 
 
 @kernel
@@ -281,26 +277,30 @@ def _scratch_for(n_frames: int) -> tuple:
     per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
     sum_uu, stated, stated_noise, sd_values, sd_vectors, offsets, iterate, move, there)``,
     ``sd_values`` and ``sd_vectors`` the eigen-decomposition of the information the SD is stated
-    from (:func:`_row_at`), the last three :func:`_refine`'s. A compiled kernel."""
+    from (:func:`_row_at`), the last three :func:`_refine`'s. The 3 x 3 matrices and the
+    3-vectors are each one array's rows: an allocation costs a one-trial call more than the
+    arithmetic of several of them. A compiled kernel."""
+    matrices = np.empty((9, 3, 3))
+    vectors = np.empty((7, 3))
     return (
-        np.empty((3, 3)),
-        np.empty((3, 3)),
-        np.empty((3, 3)),
-        np.empty(3),
-        np.empty(3),
-        np.empty((3, 3)),
-        np.empty((3, 3)),
+        matrices[0],
+        matrices[1],
+        matrices[2],
+        vectors[0],
+        vectors[1],
+        matrices[3],
+        matrices[4],
         np.empty(n_frames),
-        np.empty(3),
-        np.empty(3),
-        np.empty((3, 3)),
-        np.empty((3, 3)),
-        np.empty((3, 3)),
-        np.empty(3),
-        np.empty((3, 3)),
+        vectors[2],
+        vectors[3],
+        matrices[5],
+        matrices[6],
+        matrices[7],
+        vectors[4],
+        matrices[8],
         np.empty((6, n_frames)),
-        np.empty(3),
-        np.empty(3),
+        vectors[5],
+        vectors[6],
         np.empty(17),
     )
 
