@@ -793,7 +793,7 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
     verdict did not assess (no rigid-body residual), is returned with
     ``["center_precision_not_checked"]`` saying why."""
     annotated = list(results)
-    checked, centres, residuals = [], [], []
+    checked, centres, residuals, variances = [], [], [], []
     for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
         centre = result.center.tolist()
         if not all(map(math.isfinite, centre)):
@@ -807,16 +807,17 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
             reason = "the support verdict did not assess the data (no rigid-body residual)"
             annotated[t] = with_warnings(result, (), {"center_precision_not_checked": reason})
             continue
+        residual = verdict.diagnostics["rigid_residual_mm"]
         checked.append(t)
         centres.append(centre)
-        residuals.append(verdict.diagnostics["rigid_residual_mm"])
+        residuals.append(residual)
+        variances.append(residual * residual / 3.0)
     if not checked:
         return annotated
     if len(checked) < len(results):
         markers = markers[checked]
-    # One array from the numbers, not three NumPy operations on a few elements.
-    variances = np.array([residual * residual / 3.0 for residual in residuals])
-    rows = _statistics(markers, np.array(centres), variances)
+    # Arrays from the numbers, not NumPy operations on a few elements.
+    rows = _statistics(markers, np.array(centres), np.array(variances))
     for t, residual_mm, row in zip(checked, residuals, rows, strict=True):
         numbers = {
             "center_sd_mm": row[_SD],
