@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import types
 
-__all__ = ["scipy_special"]
+__all__ = ["f_survival", "scipy_special"]
 
 
 @functools.cache
@@ -24,3 +24,20 @@ def scipy_special() -> types.ModuleType:
     import scipy.special
 
     return scipy.special
+
+
+@functools.cache
+def _cython_special() -> types.ModuleType:
+    """``scipy.special.cython_special``, imported on the first call (see the module doc)."""
+    from scipy.special import cython_special
+
+    return cython_special
+
+
+def f_survival(dfn: float, dfd: float, ratio: float) -> float:
+    """The F distribution's survival function at ``ratio`` on ``(dfn, dfd)`` degrees of
+    freedom, three real numbers: ``scipy.special.fdtrc``'s number, through its scalar form
+    (``cython_special``), which skips the ufunc's dispatch over arrays, a microsecond a call
+    where a checked call reads a few. Its arguments are made floats first, as the ufunc
+    makes them doubles: the scalar form takes no integer."""
+    return _cython_special().fdtrc(float(dfn), float(dfd), float(ratio))
