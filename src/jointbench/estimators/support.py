@@ -2128,12 +2128,14 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     for t, row in enumerate(rows):
         reason = _no_pose_reason(row)
         no_pose.append(reason)
-        rms_any, p_any = _test_read(row, _ROTATION_TEST)
+        p_any = _p_value(row, _ROTATION_TEST)
+        p_least = _p_value(row, _LEAST_MOVING_TEST)
+        p_axis = _p_value(row, _ROTATION_AXIS_TEST)
         # The hinge is given the candidate axis that explains the data better.
-        least = _test_read(row, _LEAST_MOVING_TEST)
-        axis = _test_read(row, _ROTATION_AXIS_TEST)
-        hinge = axis if axis[1] > least[1] else least
-        tests.append((rms_any, p_any, hinge[0], hinge[1]))
+        hinge, p_hinge = (
+            (_ROTATION_AXIS_TEST, p_axis) if p_axis > p_least else (_LEAST_MOVING_TEST, p_least)
+        )
+        tests.append((row[_ROTATION_TEST], p_any, row[hinge], p_hinge))
         if reason is None:
             frames[t] = _segment_frames(row[_DEPENDENCE], "markers", markers[t])
     # For an axis: the motion's own axis of every trial with a pose, and where rotation off
@@ -2170,12 +2172,12 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     ], numbers[:, -_FRAME_COLUMNS:]
 
 
-def _test_read(row: list[float], column: int) -> tuple[float, float]:
-    """The RMS rotation [rad] and the p-value of the test of a trial's
-    :func:`_one_segment_numbers` ``row`` whose columns start at ``column`` (one of
-    :data:`_ROTATION_TEST`, :data:`_LEAST_MOVING_TEST`, :data:`_ROTATION_AXIS_TEST`): the F
-    survival of its ratio on its numerator's degrees of freedom over the residual's."""
-    return row[column], f_survival(row[column + 2], row[_RESIDUAL_DOF], row[column + 1])
+def _p_value(row: list[float], column: int) -> float:
+    """The p-value of the test of a trial's :func:`_one_segment_numbers` ``row`` whose columns
+    start at ``column`` (one of :data:`_ROTATION_TEST`, :data:`_LEAST_MOVING_TEST`,
+    :data:`_ROTATION_AXIS_TEST`): the F survival of its ratio on its numerator's degrees of
+    freedom over the residual's."""
+    return f_survival(row[column + 2], row[_RESIDUAL_DOF], row[column + 1])
 
 
 def _noise_directions(
