@@ -38,6 +38,9 @@ def f_survival(dfn: float, dfd: float, ratio: float) -> float:
     """The F distribution's survival function at ``ratio`` on ``(dfn, dfd)`` degrees of
     freedom, three real numbers: ``scipy.special.fdtrc``'s number, through its scalar form
     (``cython_special``), which skips the ufunc's dispatch over arrays, a microsecond a call
-    where a checked call reads a few. Its arguments are made floats first, as the ufunc
-    makes them doubles: the scalar form takes no integer."""
-    return _cython_special().fdtrc(float(dfn), float(dfd), float(ratio))
+    where a checked call reads a few."""
+    fdtrc = _cython_special().fdtrc
+    try:
+        return fdtrc(dfn, dfd, ratio)
+    except TypeError:  # an integer: the scalar form takes floats, as the ufunc makes it doubles
+        return fdtrc(float(dfn), float(dfd), float(ratio))
