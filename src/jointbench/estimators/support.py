@@ -2788,7 +2788,9 @@ def _verdict(
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
-        "nonrigid_share": float(max(share for share, _ in rigidity)),
+        # The pairs compare by their shares first: the largest share's pair, without a
+        # generator per verdict.
+        "nonrigid_share": float(max(rigidity)[0]),
         "rotation_rms_deg": rms_deg,
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,
