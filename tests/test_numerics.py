@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import minimize
 
 from jointbench.geometry import angle_between_lines_deg
-from jointbench.numerics import rank, simplex, small
+from jointbench.numerics import rank, simplex, small, special
 
 
 def rosenbrock3(a: float, b: float, c: float) -> float:
@@ -129,3 +129,16 @@ def test_the_small_solve_answers_as_lapack_and_says_when_singular():
             singular = matrix.copy()
             singular[:, 1] = 0.0
             assert not solve(singular, vector, solution)
+
+
+def test_f_survival_is_scipys_fdtrc_on_every_kind_of_number():
+    """The scalar F survival the checks read is the ufunc's number, bit for bit, on integers
+    (degrees of freedom are counts), NumPy scalars, zero, infinite and NaN ratios."""
+    fdtrc = special.scipy_special().fdtrc
+    numbers = [0, 1, 3, 2.5, np.int64(7), np.float64(0.75), 1e6, np.inf, np.nan]
+    for dfn in numbers[1:]:
+        for dfd in numbers[1:]:
+            for ratio in numbers:
+                found = special.f_survival(dfn, dfd, ratio)
+                assert type(found) is float
+                np.testing.assert_array_equal(found, float(fdtrc(dfn, dfd, ratio)))

@@ -228,7 +228,7 @@ from jointbench.estimators.results import (
 from jointbench.estimators.support import ROTATION_ALPHA, MotionAxis
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.small import tangent_basis_into
-from jointbench.numerics.special import scipy_special
+from jointbench.numerics.special import f_survival
 
 __all__ = [
     "AMBIGUOUS_APART_DEG",
@@ -366,7 +366,7 @@ def misfit(at: CostAt, noise_variance: float, noise_dof: int) -> Misfit | None:
         ratio = math.inf if variance > 0.0 else math.nan
     kurtosis = at.n_residuals * at.fourths / at.cost**2 - 3.0 if at.cost > 0.0 else 0.0
     shrink = 2.0 / (2.0 + max(kurtosis, 0.0))
-    p_value = float(scipy_special().fdtrc(at.dof * shrink, noise_dof * shrink, ratio))
+    p_value = f_survival(at.dof * shrink, noise_dof * shrink, ratio)
     excess = max(least - at.dof * noise_variance, 0.0)
     reach = max(float(np.linalg.eigvalsh(2.0 * inverse[:2, :2])[-1]), 0.0)
     return Misfit(ratio, p_value, math.degrees(math.sqrt(excess * reach)))

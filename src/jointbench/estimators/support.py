@@ -175,7 +175,7 @@ from jointbench.numerics.small import (
     tangent_basis_into,
     transposed_times9,
 )
-from jointbench.numerics.special import scipy_special
+from jointbench.numerics.special import f_survival, scipy_special
 from jointbench.numerics.spheres import ls_system, solve_ls_system
 from jointbench.screening import _pair_distances
 
@@ -477,6 +477,11 @@ _ONE_SEGMENT_COLUMNS = (
 )
 # The column of the frame whose centred markers are nearest their mean positions.
 _CENTRAL_FRAME = _ONE_SEGMENT_COLUMNS.index("central_frame")
+# The first column of each test's (RMS [rad], F ratio, its numerator's degrees of freedom):
+# any rotation, and off the hinge about each candidate axis.
+_ROTATION_TEST = _ONE_SEGMENT_COLUMNS.index("rotation_rms_rad")
+_LEAST_MOVING_TEST = _ONE_SEGMENT_COLUMNS.index("least_moving_rms_rad")
+_ROTATION_AXIS_TEST = _ONE_SEGMENT_COLUMNS.index("rotation_axis_rms_rad")
 # The columns of the residual's degrees of freedom and of the frames' dependence's excess.
 _RESIDUAL_DOF = _ONE_SEGMENT_COLUMNS.index("residual_dof")
 _EXCESS = _ONE_SEGMENT_COLUMNS.index("variance_ratio_excess")
@@ -2114,20 +2119,23 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     trials that rotate about more than one axis (:func:`_one_segment_axes`); and the
     markers' :func:`_frame_numbers` ``(T, 5)``, which that call gives too."""
     numbers = _one_segment_numbers(kernel_array(markers), _FLEX)
-    # p-values (T, 3): any rotation, off the hinge about each candidate axis.
-    tested = numbers[:, 5:14]  # (RMS, F ratio, dof) of each of the three tests
-    p_values = scipy_special().fdtrc(tested[:, 2::3], numbers[:, 4:5], tested[:, 1::3]).tolist()
     rows = numbers[:, : len(_ONE_SEGMENT_COLUMNS)].tolist()
     # Per trial in one pass (a checked one-trial call pays for every pass over the trials):
     # why it has no pose, its tests, and where it has a pose, how independent its frames are.
     no_pose: list[str | None] = []
     tests: list[tuple[float, float, float, float]] = []
     frames: dict[int, _Frames] = {}
-    for t, (row, p) in enumerate(zip(rows, p_values, strict=True)):
+    for t, row in enumerate(rows):
         reason = _no_pose_reason(row)
         no_pose.append(reason)
+        p_any = _p_value(row, _ROTATION_TEST)
+        p_least = _p_value(row, _LEAST_MOVING_TEST)
+        p_axis = _p_value(row, _ROTATION_AXIS_TEST)
         # The hinge is given the candidate axis that explains the data better.
-        tests.append((row[5], p[0], row[11], p[2]) if p[2] > p[1] else (row[5], p[0], row[8], p[1]))
+        hinge, p_hinge = (
+            (_ROTATION_AXIS_TEST, p_axis) if p_axis > p_least else (_LEAST_MOVING_TEST, p_least)
+        )
+        tests.append((row[_ROTATION_TEST], p_any, row[hinge], p_hinge))
         if reason is None:
             frames[t] = _segment_frames(row[_DEPENDENCE], "markers", markers[t])
     # For an axis: the motion's own axis of every trial with a pose, and where rotation off
@@ -2164,6 +2172,14 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
     ], numbers[:, -_FRAME_COLUMNS:]
 
 
+def _p_value(row: list[float], column: int) -> float:
+    """The p-value of the test of a trial's :func:`_one_segment_numbers` ``row`` whose columns
+    start at ``column`` (one of :data:`_ROTATION_TEST`, :data:`_LEAST_MOVING_TEST`,
+    :data:`_ROTATION_AXIS_TEST`): the F survival of its ratio on its numerator's degrees of
+    freedom over the residual's."""
+    return f_survival(row[column + 2], row[_RESIDUAL_DOF], row[column + 1])
+
+
 def _noise_directions(
     markers: np.ndarray, numbers: np.ndarray, frames: dict[int, _Frames]
 ) -> dict[int, by_direction.NoiseDirections]:
@@ -2188,7 +2204,7 @@ def _noise_directions(
             markers[chosen], numbers[chosen, 0], ranks, blocks, _FLEX, ROUNDING
         )
     found = by_direction.judged(
-        markers if every else markers[posed], found, _noise_critical_ratio, scipy_special().fdtrc
+        markers if every else markers[posed], found, _noise_critical_ratio, f_survival
     )
     return dict(zip(posed, found, strict=True))
 
@@ -2655,7 +2671,6 @@ def _without_poses(
     Rigidity between markers, and rotation about more than one axis, are not tested here: the
     status always says so.
     """
-    fdtrc = scipy_special().fdtrc
     markers = arrays[-1]
     n_frames, n_markers, _ = markers.shape
     offsets = markers - markers[0, 0]
@@ -2676,9 +2691,7 @@ def _without_poses(
     elif rss_sphere <= rounding:
         p_line = float(rss_line <= rounding)
     else:
-        p_line = float(
-            fdtrc(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
-        )
+        p_line = f_survival(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
     (dependence,) = _frame_numbers(kernel_array(markers[None]))
@@ -2775,7 +2788,9 @@ def _verdict(
     numbers = {
         "assessed": True,
         "rigid_residual_mm": residual_mm,
-        "nonrigid_share": float(max(share for share, _ in rigidity)),
+        # The pairs compare by their shares first: the largest share's pair, without a
+        # generator per verdict.
+        "nonrigid_share": float(max(rigidity)[0]),
         "rotation_rms_deg": rms_deg,
         "rotation_p_value": p_any,
         "off_axis_rotation_rms_deg": second_rms_deg,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import types
 
-__all__ = ["scipy_special"]
+__all__ = ["f_survival", "scipy_special"]
 
 
 @functools.cache
@@ -24,3 +24,23 @@ def scipy_special() -> types.ModuleType:
     import scipy.special
 
     return scipy.special
+
+
+@functools.cache
+def _cython_special() -> types.ModuleType:
+    """``scipy.special.cython_special``, imported on the first call (see the module doc)."""
+    from scipy.special import cython_special
+
+    return cython_special
+
+
+def f_survival(dfn: float, dfd: float, ratio: float) -> float:
+    """The F distribution's survival function at ``ratio`` on ``(dfn, dfd)`` degrees of
+    freedom, three real numbers: ``scipy.special.fdtrc``'s number, through its scalar form
+    (``cython_special``), which skips the ufunc's dispatch over arrays, a microsecond a call
+    where a checked call reads a few."""
+    fdtrc = _cython_special().fdtrc
+    try:
+        return fdtrc(dfn, dfd, ratio)
+    except TypeError:  # an integer: the scalar form takes floats, as the ufunc makes it doubles
+        return fdtrc(float(dfn), float(dfd), float(ratio))
