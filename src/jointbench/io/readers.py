@@ -15,6 +15,7 @@ import ezc3d
 import numpy as np
 import pandas as pd
 
+from jointbench.io.caller import warn_caller
 from jointbench.io.recording import Recording
 from jointbench.io.units import UNIT_READ, UNIT_TO_MM, read_unit, to_mm
 
@@ -180,10 +181,9 @@ def _c3d_units(c3d: ezc3d.c3d, path: Path, n_points: int) -> str:
         return stated
     if n_points == 0:
         return ""
-    warnings.warn(
+    warn_caller(
         f"{path}: the file states no point unit (POINT:UNITS); its coordinates are read as "
-        f"{UNIT_READ}",
-        stacklevel=3,
+        f"{UNIT_READ}"
     )
     return ""
 
@@ -201,12 +201,11 @@ def _warn_zero_filled_end(markers: np.ndarray, first: int, path: Path) -> None:
         return
     n_zero = len(zero) - 1 - int(np.flatnonzero(~zero)[-1]) if not zero.all() else len(zero)
     last = first + len(zero) - 1
-    warnings.warn(
+    warn_caller(
         f"{path}: frames {last - n_zero + 1} to {last} (the last {n_zero}) hold every marker "
         "at exactly (0, 0, 0) with no negative residual: frames zero-filled past the capture's "
         "end (a capture stopped early and padded, or a file cut and padded), not gaps a "
-        "recording writes; they are read as missing",
-        stacklevel=3,
+        "recording writes; they are read as missing"
     )
 
 
@@ -803,9 +802,7 @@ def read_csv(path: str | Path) -> Recording:
         if issubclass(warning.category, pd.errors.ParserWarning):
             _check_csv_extra_fields(path, list(table.columns))  # an empty field loses nothing
         else:
-            warnings.warn_explicit(
-                warning.message, warning.category, warning.filename, warning.lineno
-            )
+            warn_caller(str(warning.message), warning.category)
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
         # The names as written: a space or another separator is what tells them apart.
