@@ -10,6 +10,7 @@ import warnings
 import numpy as np
 import pytest
 from test_io_recordings import KNEE, write_c3d
+from test_io_units import write
 from test_io_unstated_and_padded import _c3d_without_units
 
 import jointbench
@@ -17,7 +18,9 @@ from jointbench.io import read_c3d
 
 
 def _markers(n_frames=20, n_markers=3, seed=0):
-    return np.random.default_rng(seed).uniform(10.0, 100.0, size=(n_frames, n_markers, 3))
+    """Markers ``(n_frames, n_markers, 3)`` [mm] about a metre from the lab's origin, each
+    moving up to 160 mm a frame: far from it for any motion of theirs."""
+    return np.random.default_rng(seed).uniform(1000.0, 1090.0, size=(n_frames, n_markers, 3))
 
 
 def _caught(reader, path):
@@ -121,3 +124,95 @@ def test_the_knee_trial_reads_as_before():
     markers = jointbench.read(KNEE).markers
     assert np.isfinite(markers).all()
     assert markers[0, 0].tolist() == [575.7947998046875, 604.501953125, 1678.9611816406250]
+
+
+# --- a marker at exactly (0, 0, 0) -------------------------------------------------------------
+
+
+def _through_the_origin(n_frames=20):
+    """Three markers ``(n_frames, 3, 3)`` [mm]: A passes through the lab's origin at row 10,
+    0.5 mm a frame along each axis (exactly (0, 0, 0) there), B and C far from it."""
+    markers = _markers(n_frames)
+    markers[:, 0] = 0.5 * (np.arange(n_frames) - 10.0)[:, None]
+    return markers
+
+
+@pytest.mark.parametrize("suffix", [".c3d", ".trc", ".csv"])
+def test_a_marker_at_the_origin_between_samples_far_from_it_is_a_gap_named(tmp_path, suffix):
+    """It was read as missing without a word (the fit then leaves out its frames unsaid)."""
+    markers = _markers()
+    markers[[4, 5, 6, 12], 1] = 0.0
+    path = write(tmp_path / f"trial{suffix}", "ABC", markers, "mm")
+    first = 0 if suffix == ".csv" else 1
+    caught = _caught(jointbench.read, path)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: 4 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored as "
+        "zeros (the C3D format's coordinates of an invalid point), not positions at the lab's "
+        "origin: the samples on either side of each lie farther from the origin than the "
+        f"marker moves in a frame: B at frames {first + 4} to {first + 6} and {first + 12}"
+    ]
+    assert caught[0].filename == __file__
+    recording = jointbench.read(path)
+    assert np.isnan(recording.markers[[4, 5, 6, 12], 1]).all()
+    assert np.isfinite(np.delete(recording.markers, [4, 5, 6, 12], axis=0)).all()
+
+
+@pytest.mark.parametrize("suffix", [".c3d", ".trc", ".csv"])
+def test_a_marker_passing_through_the_origin_is_kept(tmp_path, suffix):
+    """Its samples on either side lie one frame's motion from the origin: it was read as a gap."""
+    markers = _through_the_origin()
+    path = write(tmp_path / f"trial{suffix}", "ABC", markers, "mm")
+    assert _caught(jointbench.read, path) == []
+    recording = jointbench.read(path)
+    assert recording.markers[10, 0].tolist() == [0.0, 0.0, 0.0]
+    assert np.isfinite(recording.markers).all()
+    # A part of it keeps the sample too, whatever the part holds of the marker's motion.
+    assert recording.frames(slice(10, 11)).markers[0, 0].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_a_marker_that_stops_at_the_origin_at_a_c3ds_end_is_kept(tmp_path):
+    """A one-marker C3D whose marker moves to the origin and stays: it was read as frames
+    zero-filled past the capture's end."""
+    markers = _through_the_origin()[:, :1]
+    markers[10:] = 0.0
+    path = write_c3d(tmp_path / "stops.c3d", "A", markers)
+    assert _caught(jointbench.read, path) == []
+    assert (jointbench.read(path).markers[10:] == 0.0).all()
+
+
+def test_a_marker_of_one_at_the_origin_at_a_c3ds_end_is_a_gap_named(tmp_path):
+    """Far from the origin before: a writer's gap, named by its marker (with more markers it
+    would be frames zero-filled past the capture's end)."""
+    markers = _markers(n_markers=1)
+    markers[15:] = 0.0
+    path = write_c3d(tmp_path / "gap.c3d", "A", markers)
+    (warning,) = _caught(jointbench.read, path)
+    assert str(warning.message).endswith("marker moves in a frame: A at frames 16 to 20")
+
+
+def test_a_marker_never_away_from_the_origin_is_a_gap_named(tmp_path):
+    """A marker a writer never saw (a labelled template's): nothing puts it at the origin."""
+    markers = _markers()
+    markers[:, 2] = 0.0
+    path = write(tmp_path / "trial.trc", "ABC", markers, "mm")
+    (warning,) = _caught(jointbench.read, path)
+    assert str(warning.message) == (
+        f"{path}: 20 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored "
+        "as zeros (the C3D format's coordinates of an invalid point), not positions at the "
+        "lab's origin: the samples on either side of each lie farther from the origin than the "
+        "marker moves in a frame: C at every frame (never away from the origin)"
+    )
+    assert np.isnan(jointbench.read(path).markers[:, 2]).all()
+
+
+def test_every_marker_zero_filled_at_a_trcs_end_is_named_as_padding(tmp_path):
+    """As in a C3D: a capture stopped early and padded, whatever the format."""
+    markers = _markers()
+    markers[15:] = 0.0
+    path = write(tmp_path / "padded.trc", "ABC", markers, "mm")
+    (warning,) = _caught(jointbench.read, path)
+    assert str(warning.message) == (
+        f"{path}: frames 16 to 20 (the last 5) hold every marker at exactly (0, 0, 0): frames "
+        "zero-filled past the capture's end (a capture stopped early and padded, or a file cut "
+        "and padded), not gaps a recording writes; they are read as missing"
+    )

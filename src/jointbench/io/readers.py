@@ -113,8 +113,10 @@ def read_c3d(path: str | Path) -> Recording:
     The file must hold every frame its header promises (:func:`_check_c3d_size`); row 0 is the
     header's first frame, numbered as in the file (1-based, as other software shows it). A file
     that states no point unit (no ``POINT:UNITS``, or a blank one) is read as mm, with a
-    warning, and its recording's ``units`` is ``""``; frames zero-filled past its capture's end
-    are read as missing, with a warning (:func:`_warn_zero_filled_end`).
+    warning, and its recording's ``units`` is ``""``. A point at exactly (0, 0, 0) with no
+    negative residual is read by the rule of every format (:func:`~jointbench.io.recording.
+    origin_gaps`), and a point's frames stored other than its ``POINT:SCALE`` says are refused
+    (:func:`_c3d_word`).
     """
     path = _check_file(path)
     try:
@@ -137,7 +139,6 @@ def read_c3d(path: str | Path) -> Recording:
     rate = _c3d_rate(float(c3d["header"]["points"]["frame_rate"]), path)
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
-    _warn_zero_filled_end(markers, first, path)
     return _no_repeated_frames(Recording(tuple(labels), markers, rate, str(path), first, units))
 
 
@@ -186,27 +187,6 @@ def _c3d_units(c3d: ezc3d.c3d, path: Path, n_points: int) -> str:
         f"{UNIT_READ}"
     )
     return ""
-
-
-def _warn_zero_filled_end(markers: np.ndarray, first: int, path: Path) -> None:
-    """A warning naming the last frames of the C3D file ``path`` when every marker of each
-    is exactly (0, 0, 0) with no negative residual: a capture stopped early and padded, or a
-    file cut and zero-filled, not a gap a recording writes (a marker unseen has a residual of
-    -1). ``markers`` ``(n_frames, n_markers, 3)``, row 0 frame ``first``, NaN where the file
-    marks a sample missing. The frames are read as missing (:class:`Recording`), as they hold
-    nothing; the warning says what they are, so that the trial is not taken for one whose
-    markers all vanished at its end."""
-    zero = (markers == 0.0).all(axis=(1, 2))
-    if markers.shape[1] == 0 or not zero.size or not zero[-1]:
-        return
-    n_zero = len(zero) - 1 - int(np.flatnonzero(~zero)[-1]) if not zero.all() else len(zero)
-    last = first + len(zero) - 1
-    warn_caller(
-        f"{path}: frames {last - n_zero + 1} to {last} (the last {n_zero}) hold every marker "
-        "at exactly (0, 0, 0) with no negative residual: frames zero-filled past the capture's "
-        "end (a capture stopped early and padded, or a file cut and padded), not gaps a "
-        "recording writes; they are read as missing"
-    )
 
 
 def _c3d_rate(rate: float, path: Path) -> float | None:
