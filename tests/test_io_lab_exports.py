@@ -190,13 +190,20 @@ def test_a_marker_of_one_at_the_origin_at_a_c3ds_end_is_a_gap_named(tmp_path):
     assert str(warning.message).endswith("marker moves in a frame: A at frames 16 to 20")
 
 
-def test_a_marker_never_away_from_the_origin_is_a_gap_named(tmp_path):
-    """A marker a writer never saw (a labelled template's): nothing puts it at the origin."""
+def _trc_warning(tmp_path, zeroed):
+    """The TRC file of :func:`_markers` with the samples ``zeroed`` (an index) at (0, 0, 0), and
+    the one warning reading it gives."""
     markers = _markers()
-    markers[:, 2] = 0.0
+    markers[zeroed] = 0.0
     path = write(tmp_path / "trial.trc", "ABC", markers, "mm")
     (warning,) = _caught(jointbench.read, path)
-    assert str(warning.message) == (
+    return path, str(warning.message)
+
+
+def test_a_marker_never_away_from_the_origin_is_a_gap_named(tmp_path):
+    """A marker a writer never saw (a labelled template's): nothing puts it at the origin."""
+    path, message = _trc_warning(tmp_path, (slice(None), 2))
+    assert message == (
         f"{path}: 20 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored "
         "as zeros (the C3D format's coordinates of an invalid point), not positions at the "
         "lab's origin: the samples on either side of each lie farther from the origin than the "
@@ -207,11 +214,8 @@ def test_a_marker_never_away_from_the_origin_is_a_gap_named(tmp_path):
 
 def test_every_marker_zero_filled_at_a_trcs_end_is_named_as_padding(tmp_path):
     """As in a C3D: a capture stopped early and padded, whatever the format."""
-    markers = _markers()
-    markers[15:] = 0.0
-    path = write(tmp_path / "padded.trc", "ABC", markers, "mm")
-    (warning,) = _caught(jointbench.read, path)
-    assert str(warning.message) == (
+    path, message = _trc_warning(tmp_path, slice(15, None))
+    assert message == (
         f"{path}: frames 16 to 20 (the last 5) hold every marker at exactly (0, 0, 0): frames "
         "zero-filled past the capture's end (a capture stopped early and padded, or a file cut "
         "and padded), not gaps a recording writes; they are read as missing"
