@@ -14,7 +14,7 @@ from test_io_units import write
 from test_io_unstated_and_padded import _c3d_without_units
 
 import jointbench
-from jointbench.io import read_c3d
+from jointbench.io import Recording, read_c3d
 
 
 def _markers(n_frames=20, n_markers=3, seed=0):
@@ -220,3 +220,16 @@ def test_every_marker_zero_filled_at_a_trcs_end_is_named_as_padding(tmp_path):
         "zero-filled past the capture's end (a capture stopped early and padded, or a file cut "
         "and padded), not gaps a recording writes; they are read as missing"
     )
+
+
+def test_arrays_given_a_recording_follow_the_rule_and_one_gap_is_named_so():
+    markers = _markers(n_markers=2)
+    markers[3, 0] = 0.0
+    caught = _caught(lambda array: Recording(("A", "B"), array), markers)
+    assert [str(w.message) for w in caught] == [
+        "<memory>: 1 sample at exactly (0, 0, 0) is read as missing, as a gap a writer stored "
+        "as zeros (the C3D format's coordinates of an invalid point), not a position at the "
+        "lab's origin: the samples on either side of it lie farther from the origin than the "
+        "marker moves in a frame: A at frame 3"
+    ]
+    assert caught[0].filename == __file__

@@ -107,11 +107,15 @@ def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, sou
         f"{labels[marker]} {_frames_named(gaps[:, marker], first)}"
         for marker in np.flatnonzero(gaps.any(axis=0))
     )
+    n_gaps = int(gaps.sum())
+    many = n_gaps > 1
     warn_caller(
-        f"{source}: {int(gaps.sum())} samples at exactly (0, 0, 0) are read as missing, as gaps "
-        "a writer stored as zeros (the C3D format's coordinates of an invalid point), not "
-        "positions at the lab's origin: the samples on either side of each lie farther from "
-        f"the origin than the marker moves in a frame: {named}"
+        f"{source}: {n_gaps} sample{'s' if many else ''} at exactly (0, 0, 0) "
+        f"{'are' if many else 'is'} read as missing, as {'gaps' if many else 'a gap'} a writer "
+        "stored as zeros (the C3D format's coordinates of an invalid point), not "
+        f"{'positions' if many else 'a position'} at the lab's origin: the samples on either "
+        f"side of {'each' if many else 'it'} lie farther from the origin than the marker moves "
+        f"in a frame: {named}"
     )
 
 
