@@ -120,6 +120,33 @@ def test_a_c3d_whose_two_scales_disagree_is_refused(tmp_path, header, parameter,
     )
 
 
+def _integers_under_a_negative_scale(path):
+    """A C3D of three markers, 20 frames, whose frames are 16-bit integers (1 mm a step, padded
+    to the 512-byte block) under the POINT:SCALE of -1 ezc3d writes, which says floats."""
+    markers = np.round(_markers())
+    content = write_c3d(path, "ABC", markers).read_bytes()
+    start = (struct.unpack("<H", content[16:18])[0] - 1) * 512
+    assert struct.unpack("<f", content[12:16])[0] == -1.0
+    words = np.zeros((20, 3, 4), "<i2")
+    words[..., :3] = markers
+    frames = words.tobytes()
+    path.write_bytes(content[:start] + frames + bytes(-len(frames) % 512))
+    return path
+
+
+def test_a_c3d_of_integers_under_a_negative_scale_is_not_only_said_cut_short(tmp_path):
+    """It was refused as cut short only, to be copied again: a copy is as short."""
+    path = _integers_under_a_negative_scale(tmp_path / "integers.c3d")
+    assert _refusal(path) == (
+        f"{path}: truncated C3D file: its header promises frames 1 to 20 (20 frames) of 3 points "
+        "and 0 analog samples each (2496 bytes), but the file has 2048 bytes: 10 complete "
+        "frames; copy the file again from where it was recorded, or export it again; or, as "
+        "the file ends where its frames end as 16-bit integers (or at the end of that 512-byte "
+        "block), they are integers under a POINT:SCALE of -1 that says floats: export the "
+        "trial again (its POINT:SCALE positive, for integers)"
+    )
+
+
 def test_the_knee_trial_reads_as_before():
     markers = jointbench.read(KNEE).markers
     assert np.isfinite(markers).all()

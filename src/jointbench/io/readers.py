@@ -303,9 +303,25 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
             f"({frames} frames{more}) of {n_points} points and {n_analog} analog samples each "
             f"({start + frames * frame_bytes} bytes{more}), but the file has {size} bytes: "
             f"{complete} complete frames{_C3D_CUT_ADVICE}"
+            f"{_c3d_integers_advice(c3d, path, start + frames * frame_bytes // 2, word)}"
         )
     if more:
         _check_c3d_long(c3d, path, start, frame_bytes, first)
+
+
+def _c3d_integers_advice(c3d: ezc3d.c3d, path: Path, end: int, word: int) -> str:
+    """For the refusal of the C3D file ``path`` as too short for its frames of floats (``word``
+    4), what else it may be where it ends where its frames as 16-bit integers end (byte
+    ``end``) or at the end of that 512-byte block: frames of integers under a negative
+    ``POINT:SCALE``, which a copy does not mend; ``""`` otherwise."""
+    if word != 4 or path.stat().st_size not in (end, -(-end // 512) * 512):
+        return ""
+    return (
+        "; or, as the file ends where its frames end as 16-bit integers (or at the end of that "
+        "512-byte block), they are integers under a POINT:SCALE of "
+        f"{_c3d_scale(c3d, path):.3g} that says floats: export the trial again (its "
+        "POINT:SCALE positive, for integers)"
+    )
 
 
 def _c3d_word(c3d: ezc3d.c3d, path: Path) -> int:
