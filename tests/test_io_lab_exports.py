@@ -9,12 +9,12 @@ import warnings
 
 import numpy as np
 import pytest
-from test_io_recordings import KNEE, write_c3d
+from test_io_recordings import DIST, KNEE, PROX, rig_recording, swapped, write_c3d
 from test_io_units import write
 from test_io_unstated_and_padded import _c3d_without_units
 
 import jointbench
-from jointbench.io import Recording, read_c3d
+from jointbench.io import Recording, fit, prepare, read_c3d
 
 
 def _markers(n_frames=20, n_markers=3, seed=0):
@@ -260,3 +260,16 @@ def test_arrays_given_a_recording_follow_the_rule_and_one_gap_is_named_so():
         "marker moves in a frame: A at frame 3"
     ]
     assert caught[0].filename == __file__
+
+
+@pytest.mark.parametrize("call", ["prepare", "fit"])
+def test_the_artefact_warning_names_the_line_that_called_prepare_or_fit(call):
+    """Called as prepare(), it named the line above the caller's (pytest's own)."""
+    recording = swapped(rig_recording(), 150, "D1", "D3")
+    function = {"prepare": prepare, "fit": fit}[call]
+    options = {"method": "SCoRE"} if call == "fit" else {}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        function(recording, "joint_center", DIST, PROX, artefacts="exclude", **options)
+    (warning,) = [w for w in caught if "left out 50 frames with artefacts" in str(w.message)]
+    assert warning.filename == __file__

@@ -1,9 +1,10 @@
 """Warnings about a recording, placed at the line that asked for it.
 
-A reader's warning is about the file the caller named, so Python names the caller's line with
-it (``warnings.warn``'s ``stacklevel``), not the reader's own: the first frame outside this
-package, however deep the public function the caller called (``jointbench.read`` calls
-``read_c3d``, ``jointbench.io.fit`` calls ``read``) reaches into it.
+A reader's warning is about the file the caller named, and a fit's about the recording it was
+given, so Python names the caller's line with it (``warnings.warn``'s ``stacklevel``), not one
+of this package's: the first frame outside it, however deep the public function the caller
+called (``jointbench.read`` calls ``read_c3d``, which builds a ``Recording``; ``fit`` calls
+``prepare``) reaches into it.
 """
 
 from __future__ import annotations
