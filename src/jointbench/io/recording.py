@@ -63,25 +63,25 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
     steps = np.linalg.norm(np.diff(track, axis=0)[consecutive], axis=-1)
     reach = float(steps.max()) if steps.size else 0.0
     distance = np.linalg.norm(track[rows], axis=-1)
-    for start, stop in runs(at_origin):
-        after = int(np.searchsorted(rows, start))
-        near = True
-        if after > 0:
-            near &= bool(distance[after - 1] <= reach * (start - rows[after - 1]))
-        if after < rows.size:
-            near &= bool(distance[after] <= reach * (rows[after] - stop + 1))
-        if near:
-            gaps[start:stop] = False
+    starts, stops = runs(at_origin)
+    # Each run's nearest sample away from the origin after it is rows[after], before it
+    # rows[after - 1]; a run at the recording's start or end has only one.
+    after = np.searchsorted(rows, starts)
+    before = np.maximum(after - 1, 0)
+    following = np.minimum(after, rows.size - 1)
+    reached_before = distance[before] <= reach * (starts - rows[before])
+    reached_after = distance[following] <= reach * (rows[following] - stops + 1)
+    kept = ((after == 0) | reached_before) & ((after == rows.size) | reached_after)
+    for start, stop in zip(starts[kept], stops[kept], strict=True):
+        gaps[start:stop] = False
     return gaps
 
 
-def runs(flags: np.ndarray) -> list[tuple[int, int]]:
-    """The runs of ``True`` in ``flags`` ``(n,)`` bool, as ``(start, stop)`` rows (stop
-    excluded), in order."""
+def runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The runs of ``True`` in ``flags`` ``(n,)`` bool: their first rows and the rows after
+    their last, ``(n_runs,)`` int each, in order."""
     edges = np.diff(np.concatenate([[False], flags, [False]]).astype(np.int8))
-    return list(
-        zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True)
-    )
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
 def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, source: str) -> None:
@@ -130,7 +130,7 @@ def _frames_named(flags: np.ndarray, first: int) -> str:
         return "at every frame (never away from the origin)"
     parts = [
         f"{first + start}" if stop == start + 1 else f"{first + start} to {first + stop - 1}"
-        for start, stop in runs(flags)
+        for start, stop in zip(*runs(flags), strict=True)
     ]
     if parts == [parts[0]] and " to " not in parts[0]:
         return f"at frame {parts[0]}"
