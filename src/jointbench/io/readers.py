@@ -114,9 +114,9 @@ def read_c3d(path: str | Path) -> Recording:
     header's first frame, numbered as in the file (1-based, as other software shows it). A file
     that states no point unit (no ``POINT:UNITS``, or a blank one) is read as mm, with a
     warning, and its recording's ``units`` is ``""``. A point at exactly (0, 0, 0) with no
-    negative residual is read by the rule of every format (:func:`~jointbench.io.recording.
-    origin_gaps`), and a point's frames stored other than its ``POINT:SCALE`` says are refused
-    (:func:`_c3d_word`).
+    negative residual is read by the rule of every format
+    (:func:`~jointbench.io.recording.origin_gaps`); frames stored other than the file's
+    ``POINT:SCALE`` says are refused (:func:`_c3d_word`).
     """
     path = _check_file(path)
     try:

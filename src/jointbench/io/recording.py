@@ -63,7 +63,7 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
     steps = np.linalg.norm(np.diff(track, axis=0)[consecutive], axis=-1)
     reach = float(steps.max()) if steps.size else 0.0
     distance = np.linalg.norm(track[rows], axis=-1)
-    starts, stops = runs(at_origin)
+    starts, stops = _runs(at_origin)
     # Each run's nearest sample away from the origin after it is rows[after], before it
     # rows[after - 1]; a run at the recording's start or end has only one.
     after = np.searchsorted(rows, starts)
@@ -77,7 +77,7 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
     return gaps
 
 
-def runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The runs of ``True`` in ``flags`` ``(n,)`` bool: their first rows and the rows after
     their last, ``(n_runs,)`` int each, in order."""
     edges = np.diff(np.concatenate([[False], flags, [False]]).astype(np.int8))
@@ -130,7 +130,7 @@ def _frames_named(flags: np.ndarray, first: int) -> str:
         return "at every frame (never away from the origin)"
     parts = [
         f"{first + start}" if stop == start + 1 else f"{first + start} to {first + stop - 1}"
-        for start, stop in zip(*runs(flags), strict=True)
+        for start, stop in zip(*_runs(flags), strict=True)
     ]
     if parts == [parts[0]] and " to " not in parts[0]:
         return f"at frame {parts[0]}"
