@@ -46,6 +46,9 @@ def test_a_sample_at_the_origin_is_named_as_a_possible_gap():
     assert "at exactly (0, 0, 0) at marker 1, frame 7" in message
     assert "some C3D readers store gaps as zeros" in message
     assert "jointbench.io.Recording" in message and "reads (0, 0, 0) as a gap" in message
+    # A Recording keeps a sample its marker's own motion reaches the origin by: the advice
+    # does not say it reads every one as a gap.
+    assert "unless its marker moves through the origin" in message
 
 
 def test_a_masked_gap_is_not_told_to_be_marked_as_nan():

@@ -133,14 +133,20 @@ def test_a_c3d_header_rate_of_nan_under_a_parameter_rate_reads_the_parameter(tmp
 
 
 ZERO_FILLED = (
-    "frames 16 to 20 (the last 5) hold every marker at exactly (0, 0, 0) with no negative "
-    "residual: frames zero-filled past the capture's end (a capture stopped early and padded, "
-    "or a file cut and padded), not gaps a recording writes; they are read as missing"
+    "frames 16 to 20 (the last 5) hold every marker at exactly (0, 0, 0): frames zero-filled "
+    "past the capture's end (a capture stopped early and padded, or a file cut and padded), not "
+    "gaps a recording writes; they are read as missing"
 )
 
 
+def _far_markers():
+    """:func:`_markers` a metre from the lab's origin: their random jumps of up to 160 mm a
+    frame reach the origin from 17 to 173 mm, where a marker at it would be kept."""
+    return _markers() + 1000.0
+
+
 def test_a_c3d_zero_filled_at_its_end_is_read_as_missing_and_says_so(tmp_path):
-    markers = _markers()
+    markers = _far_markers()
     markers[15:] = 0.0
     path = write_c3d(tmp_path / "padded.c3d", "ABC", markers)
     with pytest.warns(UserWarning) as caught:
@@ -163,22 +169,41 @@ def test_fit_prints_the_zero_filled_frames(tmp_path, capsys, request):
     ), err
 
 
-@pytest.mark.parametrize("gap", ["residual", "some-markers", "middle"])
-def test_real_gaps_read_as_before_without_a_word(tmp_path, gap):
-    """Gaps marked by a residual of -1 (a marker unseen, at the end too), zeros in some
-    markers only, or zeros in every marker before frames that see them, are gaps."""
+def test_gaps_a_residual_marks_read_as_before_without_a_word(tmp_path):
+    """Gaps marked by a residual of -1 (a marker unseen, at the end too)."""
     markers = _markers()
-    residuals = None
-    if gap == "residual":
-        markers[15:] = 0.0
-        residuals = np.zeros(markers.shape[:2])
-        residuals[15:] = -1.0
-    elif gap == "some-markers":
+    markers[15:] = 0.0
+    residuals = np.zeros(markers.shape[:2])
+    residuals[15:] = -1.0
+    path = write_c3d(tmp_path / "gaps.c3d", "ABC", markers, residuals=residuals)
+    recording = _read_quietly(path)
+    assert np.isnan(recording.markers[15:]).all() and np.isfinite(recording.markers[:15]).all()
+
+
+@pytest.mark.parametrize(
+    ("gap", "count", "named"),
+    [
+        ("some-markers", 10, "A at frames 16 to 20; B at frames 16 to 20"),
+        ("middle", 15, "A at frames 11 to 15; B at frames 11 to 15; C at frames 11 to 15"),
+    ],
+)
+def test_gaps_stored_as_zeros_read_as_before_and_are_named(tmp_path, gap, count, named):
+    """Zeros in some markers only, or zeros in every marker before frames that see them, are
+    gaps, as they were, read without a word: the rule of every format now names them."""
+    markers = _far_markers()
+    if gap == "some-markers":
         markers[15:, :2] = 0.0
     else:
         markers[10:15] = 0.0
-    path = write_c3d(tmp_path / "gaps.c3d", "ABC", markers, residuals=residuals)
-    recording = _read_quietly(path)
+    path = write_c3d(tmp_path / "gaps.c3d", "ABC", markers)
+    with pytest.warns(UserWarning) as caught:
+        recording = read(path)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: {count} samples at exactly (0, 0, 0) are read as missing, as gaps a writer "
+        "stored as zeros (the C3D format's coordinates of an invalid point), not positions at "
+        "the lab's origin: the samples on either side of each lie farther from the origin than "
+        f"the marker moves in a frame: {named}"
+    ]
     assert np.isnan(recording.markers[..., 0]).sum() == (markers == 0.0).all(axis=-1).sum()
 
 

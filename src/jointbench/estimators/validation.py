@@ -52,7 +52,8 @@ __all__ = [
 ARRAY_NAMES = {"center": ("markers",), "axis": ("markers",), "joint_center": ("proximal", "distal")}
 
 # What to do with the frames of a gap, however it is stored: the fits take complete frames
-# only, and a Recording reads NaN, inf and (0, 0, 0) as gaps and leaves their frames out.
+# only, and a Recording reads NaN, inf and (0, 0, 0) as gaps (the last unless its marker moves
+# through the origin: jointbench.io.recording.origin_gaps) and leaves their frames out.
 _GAP_ADVICE = (
     "drop those frames before fitting, or fit a jointbench.io.Recording, which leaves out "
     "frames with gaps"
@@ -276,7 +277,8 @@ def _refuse(array: np.ndarray, name: str, failure: int) -> None:
         raise ValueError(
             f"{name} has a sample at exactly (0, 0, 0) at marker {marker}, frame {frame} "
             f"({int(at_origin.sum())} in all): some C3D readers store gaps as zeros; if these "
-            f"are gaps, {_GAP_ADVICE} (it reads (0, 0, 0) as a gap)"
+            f"are gaps, {_GAP_ADVICE} (it reads (0, 0, 0) as a gap unless its marker moves "
+            "through the origin)"
         )
     if failure == _STILL and array.shape[0] == 1:
         # No motion is seen in one frame, and none is refused: the markers may well move.

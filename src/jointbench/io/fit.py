@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 import numbers
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +37,7 @@ from jointbench.estimators.registry import KINDS, check_options, get_for_valid, 
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
+from jointbench.io.caller import warn_caller
 from jointbench.io.recording import Recording
 from jointbench.io.segments import (
     LAB_FIXED_FLAG,
@@ -611,10 +611,9 @@ def prepare(
     visible = np.all([np.isfinite(a).all(axis=(1, 2)) for a in arrays], axis=0)
     bad = flagged_frames(found, recording.n_frames)
     if found:
-        warnings.warn(
+        warn_caller(
             f"{recording.source}: left out {int(bad.sum())} frames with artefacts: "
-            f"{summarise(found, swaps, recording.numbering)}",
-            stacklevel=3,
+            f"{summarise(found, swaps, recording.numbering)}"
         )
     usable = np.flatnonzero(visible & ~bad)
     if usable.size == 0:

@@ -15,6 +15,7 @@ import ezc3d
 import numpy as np
 import pandas as pd
 
+from jointbench.io.caller import warn_caller
 from jointbench.io.recording import Recording
 from jointbench.io.units import UNIT_READ, UNIT_TO_MM, read_unit, to_mm
 
@@ -112,8 +113,10 @@ def read_c3d(path: str | Path) -> Recording:
     The file must hold every frame its header promises (:func:`_check_c3d_size`); row 0 is the
     header's first frame, numbered as in the file (1-based, as other software shows it). A file
     that states no point unit (no ``POINT:UNITS``, or a blank one) is read as mm, with a
-    warning, and its recording's ``units`` is ``""``; frames zero-filled past its capture's end
-    are read as missing, with a warning (:func:`_warn_zero_filled_end`).
+    warning, and its recording's ``units`` is ``""``. A point at exactly (0, 0, 0) with no
+    negative residual is read by the rule of every format
+    (:func:`~jointbench.io.recording.origin_gaps`); frames stored other than the file's
+    ``POINT:SCALE`` says are refused (:func:`_c3d_word`).
     """
     path = _check_file(path)
     try:
@@ -136,7 +139,6 @@ def read_c3d(path: str | Path) -> Recording:
     rate = _c3d_rate(float(c3d["header"]["points"]["frame_rate"]), path)
     # ezc3d counts frames from 0; the file (and every other program) from 1.
     first = int(c3d["header"]["points"]["first_frame"]) + 1
-    _warn_zero_filled_end(markers, first, path)
     return _no_repeated_frames(Recording(tuple(labels), markers, rate, str(path), first, units))
 
 
@@ -180,34 +182,11 @@ def _c3d_units(c3d: ezc3d.c3d, path: Path, n_points: int) -> str:
         return stated
     if n_points == 0:
         return ""
-    warnings.warn(
+    warn_caller(
         f"{path}: the file states no point unit (POINT:UNITS); its coordinates are read as "
-        f"{UNIT_READ}",
-        stacklevel=3,
+        f"{UNIT_READ}"
     )
     return ""
-
-
-def _warn_zero_filled_end(markers: np.ndarray, first: int, path: Path) -> None:
-    """A warning naming the last frames of the C3D file ``path`` when every marker of each
-    is exactly (0, 0, 0) with no negative residual: a capture stopped early and padded, or a
-    file cut and zero-filled, not a gap a recording writes (a marker unseen has a residual of
-    -1). ``markers`` ``(n_frames, n_markers, 3)``, row 0 frame ``first``, NaN where the file
-    marks a sample missing. The frames are read as missing (:class:`Recording`), as they hold
-    nothing; the warning says what they are, so that the trial is not taken for one whose
-    markers all vanished at its end."""
-    zero = (markers == 0.0).all(axis=(1, 2))
-    if markers.shape[1] == 0 or not zero.size or not zero[-1]:
-        return
-    n_zero = len(zero) - 1 - int(np.flatnonzero(~zero)[-1]) if not zero.all() else len(zero)
-    last = first + len(zero) - 1
-    warnings.warn(
-        f"{path}: frames {last - n_zero + 1} to {last} (the last {n_zero}) hold every marker "
-        "at exactly (0, 0, 0) with no negative residual: frames zero-filled past the capture's "
-        "end (a capture stopped early and padded, or a file cut and padded), not gaps a "
-        "recording writes; they are read as missing",
-        stacklevel=3,
-    )
 
 
 def _c3d_rate(rate: float, path: Path) -> float | None:
@@ -247,7 +226,7 @@ def _c3d_parameter(path: Path, group: str, name: str) -> tuple[int, bytes, str |
     try:
         content = _c3d_parameter_section(path)
         processor = content[3]
-        order = ">" if processor == 86 else "<"
+        order = _c3d_order(processor)
         groups: dict[int, str] = {}
         found: dict[tuple[int, str], tuple[int, bytes]] = {}
         at = 4
@@ -310,7 +289,7 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
     samples, each value a float32 (``POINT:SCALE`` < 0) or an int16.
     """
     n_points, n_analog, first, last, data_block = _c3d_header(path)
-    word = 4 if _c3d_scale(c3d, path) < 0 else 2
+    word = _c3d_word(c3d, path)
     start = (data_block - 1) * 512
     frame_bytes = word * (4 * n_points + n_analog)
     size = path.stat().st_size
@@ -324,9 +303,93 @@ def _check_c3d_size(c3d: ezc3d.c3d, path: Path) -> None:
             f"({frames} frames{more}) of {n_points} points and {n_analog} analog samples each "
             f"({start + frames * frame_bytes} bytes{more}), but the file has {size} bytes: "
             f"{complete} complete frames{_C3D_CUT_ADVICE}"
+            f"{_c3d_integers_advice(c3d, path, start + frames * frame_bytes // 2, word)}"
         )
     if more:
         _check_c3d_long(c3d, path, start, frame_bytes, first)
+
+
+def _c3d_integers_advice(c3d: ezc3d.c3d, path: Path, end: int, word: int) -> str:
+    """For the refusal of the C3D file ``path`` as too short for its frames of floats (``word``
+    4), what else it may be where it ends where its frames as 16-bit integers end (byte
+    ``end``) or at the end of that 512-byte block: frames of integers under a negative
+    ``POINT:SCALE``, which a copy does not mend; ``""`` otherwise."""
+    if word != 4 or path.stat().st_size not in (end, -(-end // 512) * 512):
+        return ""
+    return (
+        "; or, as the file ends where its frames end as 16-bit integers (or at the end of that "
+        "512-byte block), they are integers under a POINT:SCALE of "
+        f"{_c3d_scale(c3d, path):.3g} that says floats: export the trial again (its "
+        "POINT:SCALE positive, for integers)"
+    )
+
+
+def _c3d_word(c3d: ezc3d.c3d, path: Path) -> int:
+    """The bytes of each value in the frames of the C3D file ``path``: 4 for floats, 2 for
+    16-bit integers, as the sign of its ``POINT:SCALE`` says (:func:`_c3d_scale`): "a negative
+    SCALE factor indicates that the C3D file contains 3D points that have been pre-scaled and
+    stored as floating-point values" (c3d.org, POINT:SCALE). ``ValueError`` naming both where
+    its header's copy of the scale (words 7-8) has the other sign: a file that disagrees with
+    itself, which ezc3d reads without a word as integers in all or some of its frames. And
+    so where the scale is positive but the frames take a float's 4 bytes a value (the bytes
+    past the integers' share not all zero): ezc3d reads them as integers, every coordinate
+    another number."""
+    scale = _c3d_scale(c3d, path)
+    header = _c3d_header_scale(path)
+    agree = header is None or (header < 0) == (scale < 0)
+    n_points, n_analog, first, last, data_block = _c3d_header(path)
+    start = (data_block - 1) * 512
+    frames = max(0, last - first + 1)
+    int_bytes = 2 * (4 * n_points + n_analog) * frames
+    size = path.stat().st_size
+    holds_floats = n_points > 0 and size >= start + 2 * int_bytes
+    if agree and scale < 0:
+        return 4
+    if agree and holds_floats:
+        with path.open("rb") as file:
+            file.seek(start + int_bytes)
+            holds_floats = file.read(int_bytes).strip(b"\x00") != b""
+    if agree and not holds_floats:
+        return 2
+    floats = (
+        f"the file's {size} bytes hold its {frames} frames of its {n_points} points' "
+        f"coordinates as {_C3D_STORAGE[True]}"
+    )
+    if agree:
+        raise ValueError(
+            f"{path}: POINT:SCALE {scale:.3g} and its header's scale say its coordinates are "
+            f"{_C3D_STORAGE[False]} (a positive scale), but {floats}, as a negative scale says: "
+            "read as integers, every coordinate would be another number; export the trial "
+            "again (its POINT:SCALE negative, for floats)"
+        )
+    says = (
+        f"{path}: POINT:SCALE {scale:.3g} says its coordinates are {_C3D_STORAGE[scale < 0]} "
+        f"(a {_SIGN[scale < 0]} scale), its header's scale {header:.3g} says "
+        f"{_C3D_STORAGE[header < 0]} (a {_SIGN[header < 0]} one): a file that disagrees with "
+        "itself, which ezc3d reads as integers in all or some of its frames"
+    )
+    if holds_floats:
+        raise ValueError(
+            f"{says}; {floats}, and those read as integers would be other numbers; export the "
+            "trial again (both scales negative, for floats)"
+        )
+    raise ValueError(f"{says}; export the trial again (both scales of one sign)")
+
+
+#: How a C3D's frames store each value, by whether its scale is negative.
+_C3D_STORAGE = {True: "32-bit floats", False: "16-bit integers"}
+_SIGN = {True: "negative", False: "positive"}
+
+
+def _c3d_header_scale(path: Path) -> float | None:
+    """The scale the C3D file ``path``'s header block copies from ``POINT:SCALE`` (words 7-8),
+    ``None`` where it is 0 or not finite (a writer that leaves it unset) or a DEC processor's
+    float, which this does not decode."""
+    block, processor = _c3d_header_block(path)
+    if processor == 85 or len(block) < 16:
+        return None
+    (scale,) = struct.unpack(_c3d_order(processor) + "f", block[12:16])
+    return scale if math.isfinite(scale) and scale != 0 else None
 
 
 def _c3d_scale(c3d: ezc3d.c3d, path: Path) -> float:
@@ -385,15 +448,29 @@ def _c3d_header(path: Path) -> tuple[int, int, int, int, int]:
     of analog samples per frame, the first and last frame, and the 512-byte block (1-based)
     where the frames start. The byte order is the parameter section's processor's; a file cut
     before it is read as Intel's, the commonest."""
+    block, processor = _c3d_header_block(path)
+    order = _c3d_order(processor)
+    n_points, n_analog, first, last = struct.unpack(order + "4H", block[2:10])
+    (data_block,) = struct.unpack(order + "H", block[16:18])
+    return n_points, n_analog, first, last, data_block
+
+
+def _c3d_header_block(path: Path) -> tuple[bytes, int | None]:
+    """The C3D file ``path``'s 512-byte header block and its processor's code (84 Intel, 85
+    DEC, 86 MIPS), the 4th byte of the parameter section the header's first byte places;
+    ``None`` where the file ends before it."""
     with path.open("rb") as file:
         block = file.read(512)
         file.seek(max(0, (block[0] - 1) * 512 + 3))
         processor = file.read(1)
-    # Intel (84) and DEC (85) store integers little-endian, MIPS (86) big-endian.
-    order = ">" if processor == bytes([86]) else "<"
-    n_points, n_analog, first, last = struct.unpack(order + "4H", block[2:10])
-    (data_block,) = struct.unpack(order + "H", block[16:18])
-    return n_points, n_analog, first, last, data_block
+    return block, processor[0] if processor else None
+
+
+def _c3d_order(processor: int | None) -> str:
+    """The byte order (``struct``'s ``"<"`` or ``">"``) of a C3D processor's integers: Intel
+    (84) and DEC (85) store them little-endian, MIPS (86) big-endian; a file cut before its
+    processor's code is read as Intel's, the commonest."""
+    return ">" if processor == 86 else "<"
 
 
 def _check_c3d_reaches_frames(path: Path) -> None:
@@ -803,9 +880,7 @@ def read_csv(path: str | Path) -> Recording:
         if issubclass(warning.category, pd.errors.ParserWarning):
             _check_csv_extra_fields(path, list(table.columns))  # an empty field loses nothing
         else:
-            warnings.warn_explicit(
-                warning.message, warning.category, warning.filename, warning.lineno
-            )
+            warn_caller(str(warning.message), warning.category)
     missing = {"frame", "marker", "x", "y", "z"} - set(table.columns)
     if missing:
         # The names as written: a space or another separator is what tells them apart.

@@ -2,27 +2,144 @@
 
 from __future__ import annotations
 
+import copy
 import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from jointbench.io.caller import warn_caller
 from jointbench.io.segments import Numbering, Segment
 
 __all__ = ["Recording", "parse_frames"]
 
 
-def _as_missing(markers: np.ndarray) -> np.ndarray:
-    """Samples that are not finite or exactly (0, 0, 0) become NaN in all three coordinates.
-
-    Several C3D and TRC writers store an occluded marker as the origin; a real marker exactly
-    at the lab origin to the last bit does not happen, a gap stored that way does.
-    """
+def _as_missing(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``markers`` ``(n_frames, n_markers, 3)`` as float64 with NaN in all three coordinates of
+    each sample missing: not finite, or a gap stored at exactly (0, 0, 0)
+    (:func:`origin_gaps`); and those gaps, ``(n_frames, n_markers)`` bool, for the warning that
+    names them. Other arrays are returned as given, for the shape check to name."""
     markers = np.array(markers, dtype=float)
-    missing = ~np.isfinite(markers).all(axis=-1) | (markers == 0.0).all(axis=-1)
-    markers[missing] = np.nan
-    return markers
+    if markers.ndim != 3 or markers.shape[-1] != 3:
+        return markers, np.zeros(markers.shape[:2], dtype=bool)
+    gaps = origin_gaps(markers)
+    markers[~np.isfinite(markers).all(axis=-1) | gaps] = np.nan
+    return markers, gaps
+
+
+def origin_gaps(markers: np.ndarray) -> np.ndarray:
+    """Which samples of ``markers`` ``(n_frames, n_markers, 3)`` [mm] at exactly (0, 0, 0) are
+    gaps a writer stored as zeros, ``(n_frames, n_markers)`` bool: the rule every format is
+    read by.
+
+    The C3D format writes an invalid point's coordinates as zeros beside its residual of -1
+    ("If a point is invalid then the fourth word (camera mask and residual) will be set to -1
+    and the X, Y and Z co-ordinate values should all be zero", c3d.org, notes for programmers,
+    integer 3D data); an exporter that drops the residual (a TRC, a CSV) or sets it to 0 keeps
+    the zeros, and so do capture programs padding a trial. A measured marker lands at the
+    origin to the last bit in all three coordinates only where it moves through it, so such a
+    sample is a gap unless its marker could be there: its nearest samples away from the origin
+    before and after the run of such samples it belongs to (those the recording holds) lie no
+    farther from the origin than the marker moves, at its fastest between two consecutive
+    samples, in the frames between. A marker never away from the origin was never seen (a
+    labelled template's marker): all its samples are gaps."""
+    at_origin = (markers == 0.0).all(axis=-1)
+    gaps = at_origin.copy()
+    for marker in np.flatnonzero(at_origin.any(axis=0)):
+        gaps[:, marker] = _track_origin_gaps(markers[:, marker], at_origin[:, marker])
+    return gaps
+
+
+def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
+    """:func:`origin_gaps` for one marker: ``track`` ``(n_frames, 3)`` [mm], ``at_origin``
+    ``(n_frames,)`` its samples at exactly (0, 0, 0); the gaps among them ``(n_frames,)``."""
+    seen = np.isfinite(track).all(axis=-1) & ~at_origin
+    rows = np.flatnonzero(seen)
+    gaps = at_origin.copy()
+    if rows.size == 0:
+        return gaps
+    consecutive = seen[1:] & seen[:-1]
+    steps = np.linalg.norm(np.diff(track, axis=0)[consecutive], axis=-1)
+    reach = float(steps.max()) if steps.size else 0.0
+    distance = np.linalg.norm(track[rows], axis=-1)
+    starts, stops = _runs(at_origin)
+    # Each run's nearest sample away from the origin after it is rows[after], before it
+    # rows[after - 1]; a run at the recording's start or end has only one.
+    after = np.searchsorted(rows, starts)
+    before = np.maximum(after - 1, 0)
+    following = np.minimum(after, rows.size - 1)
+    reached_before = distance[before] <= reach * (starts - rows[before])
+    reached_after = distance[following] <= reach * (rows[following] - stops + 1)
+    kept = ((after == 0) | reached_before) & ((after == rows.size) | reached_after)
+    for start, stop in zip(starts[kept], stops[kept], strict=True):
+        gaps[start:stop] = False
+    return gaps
+
+
+def _runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The runs of ``True`` in ``flags`` ``(n,)`` bool: their first rows and the rows after
+    their last, ``(n_runs,)`` int each, in order."""
+    edges = np.diff(np.concatenate([[False], flags, [False]]).astype(np.int8))
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+
+
+def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, source: str) -> None:
+    """Warn of the ``gaps`` ``(n_frames, n_markers)`` :func:`origin_gaps` found in ``source``,
+    whose row 0 is frame ``first``, naming them: as frames zero-filled past the capture's end
+    where the last frames hold every marker (of two or more) at the origin, and each other
+    marker's frames after."""
+    padded = gaps.all(axis=1) if gaps.shape[1] > 1 else np.zeros(len(gaps), dtype=bool)
+    kept = np.flatnonzero(~padded)
+    n_padded = len(padded) - (int(kept[-1]) + 1 if kept.size else 0)
+    if n_padded:
+        last = first + len(padded) - 1
+        warn_caller(
+            f"{source}: frames {last - n_padded + 1} to {last} (the last {n_padded}) hold every "
+            "marker at exactly (0, 0, 0): frames zero-filled past the capture's end (a capture "
+            "stopped early and padded, or a file cut and padded), not gaps a recording writes; "
+            "they are read as missing"
+        )
+    gaps = gaps[: len(gaps) - n_padded]
+    if not gaps.any():
+        return
+    named = "; ".join(
+        f"{labels[marker]} {_frames_named(gaps[:, marker], first)}"
+        for marker in np.flatnonzero(gaps.any(axis=0))
+    )
+    n_gaps = int(gaps.sum())
+    many = n_gaps > 1
+    warn_caller(
+        f"{source}: {n_gaps} sample{'s' if many else ''} at exactly (0, 0, 0) "
+        f"{'are' if many else 'is'} read as missing, as {'gaps' if many else 'a gap'} a writer "
+        "stored as zeros (the C3D format's coordinates of an invalid point), not "
+        f"{'positions' if many else 'a position'} at the lab's origin: the samples on either "
+        f"side of {'each' if many else 'it'} lie farther from the origin than the marker moves "
+        f"in a frame: {named}"
+    )
+
+
+#: The runs of a marker's frames a warning names; the rest it counts.
+_RUNS_NAMED = 3
+
+
+def _frames_named(flags: np.ndarray, first: int) -> str:
+    """``"at frames 5 to 7 and 13"``: the rows ``flags`` ``(n_frames,)`` bool marks, by frame
+    number (row 0 is frame ``first``); ``"at every frame (never away from the origin)"``."""
+    if flags.all():
+        return "at every frame (never away from the origin)"
+    parts = [
+        f"{first + start}" if stop == start + 1 else f"{first + start} to {first + stop - 1}"
+        for start, stop in zip(*_runs(flags), strict=True)
+    ]
+    if parts == [parts[0]] and " to " not in parts[0]:
+        return f"at frame {parts[0]}"
+    if len(parts) > _RUNS_NAMED:
+        shown = [*parts[:_RUNS_NAMED], f"{len(parts) - _RUNS_NAMED} more runs"]
+    else:
+        shown = parts
+    listed = shown[0] if len(shown) == 1 else f"{', '.join(shown[:-1])} and {shown[-1]}"
+    return f"at frames {listed}"
 
 
 def _bare(label: str) -> str:
@@ -91,11 +208,13 @@ class Recording:
     """Marker trajectories of one trial.
 
     ``labels`` ``(n_markers,)`` names; ``markers`` ``(n_frames, n_markers, 3)`` float64 [mm],
-    NaN where a sample is missing (NaN, inf or exactly (0, 0, 0) in the file, or a negative
-    residual where the format has one); ``rate_hz`` the frame rate (``None`` when the file does
-    not say); ``source`` the file it came from, for messages; ``units`` the point unit the file
-    states (the markers are converted to mm whatever it is), ``""`` where it states none and
-    its coordinates were read as mm (a C3D without ``POINT:UNITS``, a CSV), which messages say
+    NaN where a sample is missing (NaN or inf in the file, a negative residual where the format
+    has one, or exactly (0, 0, 0) where :func:`origin_gaps` reads that as a gap a writer stored
+    as zeros, which a warning names; a marker passing through the lab's origin keeps it);
+    ``rate_hz`` the frame rate (``None`` when the file does not say); ``source`` the file it
+    came from, for messages; ``units`` the point unit the file states (the markers are
+    converted to mm whatever it is), ``""`` where it states none and its coordinates were read
+    as mm (a C3D without ``POINT:UNITS``, a CSV), which messages say
     (:func:`~jointbench.io.units.unit_read_in`).
 
     Frames are named by the file's own numbers, as other motion-capture software shows them:
@@ -113,7 +232,7 @@ class Recording:
 
     def __post_init__(self) -> None:
         labels = tuple(str(label) for label in self.labels)
-        markers = _as_missing(self.markers)
+        markers, gaps = _as_missing(self.markers)
         if markers.ndim != 3 or markers.shape[1:] != (len(labels), 3):
             raise ValueError(
                 f"{self.source}: markers must be (n_frames, {len(labels)}, 3) for "
@@ -133,6 +252,8 @@ class Recording:
         markers.setflags(write=False)
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "markers", markers)
+        if gaps.any():
+            _warn_origin_gaps(gaps, labels, self.first_frame, self.source)
 
     @property
     def n_frames(self) -> int:
@@ -181,14 +302,12 @@ class Recording:
         start, stop, step = frames.indices(self.n_frames)
         if step != 1:
             raise ValueError(f"{self.source}: a frame range takes consecutive frames, got {frames}")
-        return Recording(
-            self.labels,
-            self.markers[start:stop],
-            self.rate_hz,
-            self.source,
-            self.first_frame + start,
-            self.units,
-        )
+        # The samples at the origin kept were judged with the whole recording's motion
+        # (origin_gaps), which a part may not hold: a part is taken as it is, not judged again.
+        part = copy.copy(self)
+        object.__setattr__(part, "markers", self.markers[start:stop])
+        object.__setattr__(part, "first_frame", self.first_frame + start)
+        return part
 
     def gaps(self) -> dict[str, int]:
         """Missing samples per marker label."""
