@@ -20,18 +20,20 @@ from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
 from jointbench.estimators import registry
-from jointbench.simulate import Study
+from jointbench.simulate import KINDS, Study
 
 __all__ = [
     "MAX_TRIALS",
     "SchemaError",
     "check_config",
     "check_config_values",
+    "check_external_kind",
     "check_schema",
     "check_sources",
     "condition_id",
     "conditions",
     "estimator_names",
+    "external_kind",
     "load_config",
     "open_config",
     "ordered_settings",
@@ -769,3 +771,49 @@ def estimator_names(config: Mapping, study: str, *, source: str = "all") -> list
     builtin = list(settings.get("estimators", []))
     external = list(settings.get("external_estimators", []))
     return {"builtin": builtin, "external": external, "all": builtin + external}[source]
+
+
+def external_kind(name: str, kind: object, before: str | None) -> str:
+    """``kind``, the kind of estimates the rule file of the external estimator ``name``
+    declares it writes (``center``, ``axis`` or ``joint_center``: the estimate columns of each
+    kind); ``ValueError`` naming ``name`` for any other, or where it was declared ``before``
+    as another kind (by another rule file): which would be its files' kind is not known."""
+    if not isinstance(kind, str) or kind not in KINDS:
+        raise ValueError(
+            f"external estimator {name!r}: kind={kind!r} is no kind of estimates; the kinds: "
+            f"{', '.join(KINDS)}"
+        )
+    if before not in (None, kind):
+        raise ValueError(
+            f"external estimator {name!r} is declared twice, writing {before} estimates and "
+            f"{kind} estimates; one estimator writes one kind"
+        )
+    return kind
+
+
+def check_external_kind(study: str, name: str, kind: str | None) -> None:
+    """Refuse, naming the study, the estimator and both kinds, the external estimator ``name``
+    listed by ``study`` whose rule file declares estimates of ``kind`` (:func:`external_kind`),
+    another kind than the study scores its external estimators' files as
+    (:attr:`~jointbench.simulate.Study.kind`): a centre's rule listed by the hinge study would
+    run, then fail when its files are collected, and by the hip study be scored as a joint
+    centre from markers it did not read as one. A rule file that declares no kind is refused
+    too, saying how to declare it: which kind it writes only its writer can say."""
+    spec = get_study(study)
+    where = f"config: studies.{study}.external_estimators: {name!r}"
+    if kind is None:
+        raise ValueError(
+            f"{where}: its rule file declares no kind of estimates; if it writes {spec.kind} "
+            f"estimates, the kind study {study} scores, add "
+            f'external_estimator("{name}", kind="{spec.kind}") to it (README, "Any language: '
+            'one rule")'
+        )
+    if kind != spec.kind:
+        alike = [s for s in registered_studies() if get_study(s).kind == kind]
+        raise ValueError(
+            f"{where} writes {kind} estimates (as its rule file declares), but study {study} "
+            f"scores {spec.kind} estimates: its files would fail as they are collected, or be "
+            f"scored as what they are not; list it under a study of {kind} estimates "
+            f"({', '.join(alike) or 'none is registered'}), or write a rule of {spec.kind} "
+            f"estimates for {study}"
+        )
