@@ -128,9 +128,9 @@ def check_external_rules(user_rules):
                     "workflow/rules/estimators/ (README, 'Adding an estimator')"
                 )
             _refuse_rival_writers(study, name, files, producers)
-            jb_config.check_external_kind(study, name, EXTERNAL_KINDS.get(name))
             for producer in producers:
                 _check_blind(producer, name, files, users)
+            jb_config.check_external_kind(study, name, EXTERNAL_KINDS.get(name))
 
 
 def _package_rules(user_rules):
