@@ -82,7 +82,7 @@ EXTERNAL_KINDS = {}
 
 def external_estimator(name, kind):
     """Declare, in the rule file of the external estimator ``name``, the kind of the estimates
-    its rule writes: ``center``, ``axis`` or ``joint_center`` (README, "The estimates file").
+    its rule writes, ``center``, ``axis`` or ``joint_center`` (README, "The estimates file").
     A study of another kind that lists it stops the run before any job."""
     EXTERNAL_KINDS[name] = jb_config.external_kind(name, kind, EXTERNAL_KINDS.get(name))
 
