@@ -52,9 +52,23 @@ onerror:
 # another config than its command line shows (jointbench.invocation.check_options).
 invocation.check_options(sys.argv[1:])
 
-# The project's own schema check before Snakemake's (workflow/rules/common.smk), whose error
-# leads with a dump of the schema: a mistake, a misspelt study first, is named in one line.
-jb_config.check_schema(config)
+# Each config file read again as written (Snakemake's reader takes 010 as 8, keeps the last of
+# a key given twice), and the --config values as typed (Python reads 010 as 10). Then the
+# project's own schema check before Snakemake's (workflow/rules/common.smk), whose error leads
+# with a dump of the schema: a mistake, a misspelt study first, is named in one line with the
+# file, or --config, that set it. Snakemake merges the workflow's config file first, then
+# each --configfile, then the --config values.
+_GIVEN_FILES = list(workflow.config_settings.configfiles)
+jb_config.check_config_values(workflow.config_settings.config_args or [])
+jb_config.check_sources(
+    config,
+    [
+        *jb_config.read_sources(
+            [f for f in workflow.configfiles if f not in _GIVEN_FILES] + _GIVEN_FILES
+        ),
+        ("--config", dict(workflow.config_settings.config)),
+    ],
+)
 
 
 include: "workflow/rules/common.smk"

@@ -684,6 +684,21 @@ def test_a_config_typo_is_named_before_any_extension_is_imported(
     assert "'trails' was unexpected" in err
 
 
+def test_fit_names_the_config_file_of_a_schema_error(tmp_path, monkeypatch, capsys):
+    workdir = _toy_run(tmp_path)
+    monkeypatch.chdir(workdir)
+    (workdir / "a.yaml").write_text("studies: {cmc: {trials: 0}}\n")
+    (workdir / "b.yaml").write_text("base_seed: 3\n")
+    options = ["--configfile", "a.yaml", "--configfile", "b.yaml"]
+    code, _, err = run(capsys, "fit", "markers.csv", *options)
+    assert code == 2
+    assert "config error at studies/cmc/trials" in err and "(set in a.yaml)" in err, err
+    (workdir / "b.yaml").write_text("base_seed: 010\n")
+    code, _, err = run(capsys, "fit", "markers.csv", *options)
+    assert code == 2
+    assert "config file b.yaml: base_seed at line 1: 010 is read as 8" in err, err
+
+
 BROKEN_EXTENSIONS = {
     "import": (
         "import numpy as np\n\nimport jointbench_no_such_module\n",

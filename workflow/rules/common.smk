@@ -75,6 +75,18 @@ EXTERNAL_ESTIMATORS = sorted(
 )
 
 
+# The kind of estimates each external estimator's rule file declares (external_estimator), by
+# name: held to the kind of each study of the run that lists it, before any job.
+EXTERNAL_KINDS = {}
+
+
+def external_estimator(name, kind):
+    """Declare, in the rule file of the external estimator ``name``, the kind of the estimates
+    its rule writes, ``center``, ``axis`` or ``joint_center`` (README, "The estimates file").
+    A study of another kind that lists it stops the run before any job."""
+    EXTERNAL_KINDS[name] = jb_config.external_kind(name, kind, EXTERNAL_KINDS.get(name))
+
+
 def include_user_rules(folder):
     """Include every rule file of ``folder``, the user's, and return the names of the rules
     they define (those of a file they include too, whatever its folder). The names of the
@@ -91,9 +103,11 @@ def include_user_rules(folder):
 def check_external_rules(user_rules):
     """Stop, naming the study and the estimator, when no rule writes the estimates of an
     external estimator of this run, as parquet or as the CSV that estimates_from_csv converts
-    (a misspelt name, a rule file not yet written), not at a missing CSV later; when a rule
-    of the user's (``user_rules``, by name) can write a file of the benchmark's (see
-    _check_user_outputs) or a file outside results/ (see _check_user_folders); when two rules
+    (a misspelt name, a rule file not yet written), not at a missing CSV later; when its rule
+    file declares another kind of estimates than the study's, or none (see external_estimator
+    and jb_config.check_external_kind); when a rule of the user's (``user_rules``, by name)
+    can write a file of the benchmark's (see _check_user_outputs) or a file outside results/
+    (see _check_user_folders); when two rules
     write its estimates (see _refuse_rival_writers); and when its rule reads a file of
     results/ other than the blind copies (see _check_blind)."""
     users = [r for r in workflow.rules if r.name in user_rules]
@@ -116,6 +130,7 @@ def check_external_rules(user_rules):
             _refuse_rival_writers(study, name, files, producers)
             for producer in producers:
                 _check_blind(producer, name, files, users)
+            jb_config.check_external_kind(study, name, EXTERNAL_KINDS.get(name))
 
 
 def _produces(rule, path):

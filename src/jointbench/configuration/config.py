@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import itertools
 import numbers
+import re
 from collections.abc import Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
@@ -18,21 +20,27 @@ from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
 from jointbench.estimators import registry
-from jointbench.simulate import Study
+from jointbench.simulate import KINDS, Study
 
 __all__ = [
     "MAX_TRIALS",
+    "SchemaError",
     "check_config",
+    "check_config_values",
+    "check_external_kind",
     "check_schema",
+    "check_sources",
     "condition_id",
     "conditions",
     "estimator_names",
+    "external_kind",
     "load_config",
     "open_config",
     "ordered_settings",
     "parse_condition_id",
     "read_config_file",
     "read_configs",
+    "read_sources",
     "read_yaml",
     "study_names",
     "validate_against",
@@ -52,10 +60,23 @@ MAX_TRIALS = 10_000
 MAX_CONDITION_FRAMES = 1200 * MAX_TRIALS
 
 
+# The safe loader, in C when PyYAML has it (10x faster than Python's on the published-values
+# files, which every render job reads).
+_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
 def read_yaml(text: str) -> object:
-    """A YAML document with the safe loader, in C when PyYAML has it (10x faster than Python's
-    on the published-values files, which every render job reads)."""
-    return yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    """A YAML document with the safe loader."""
+    return yaml.load(text, Loader=_LOADER)
+
+
+class SchemaError(ValueError):
+    """A document that does not match its schema. ``path``: the keys (and list indices) from
+    the top to the value at fault; for a key the schema does not allow, down to that key."""
+
+    def __init__(self, message: str, path: Sequence = ()) -> None:
+        super().__init__(message)
+        self.path = tuple(path)
 
 
 def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
@@ -79,7 +100,18 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
         jsonschema.validate(dict(document), schema, cls=strict)
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
-        raise ValueError(f"{what} error at {where}: {error.message}") from None
+        raise SchemaError(f"{what} error at {where}: {error.message}", _at_fault(error)) from None
+
+
+def _at_fault(error) -> tuple:
+    """The keys leading to what the jsonschema ``error`` is about: its path, and for a key the
+    schema does not allow (a misspelt one), that key, which the path stops above."""
+    path = tuple(error.absolute_path)
+    allowed = error.schema.get("properties", {}) if isinstance(error.schema, Mapping) else {}
+    if error.validator == "additionalProperties" and isinstance(error.instance, Mapping):
+        extra = [key for key in error.instance if key not in allowed]
+        return (*path, *extra[:1])
+    return path
 
 
 def _is_integer(_checker: object, instance: object) -> bool:
@@ -117,9 +149,10 @@ def check_schema(config: Mapping) -> None:
         unknown = _unknown_studies(config)
         if not unknown:
             raise
-        raise ValueError(
+        raise SchemaError(
             f"{error} ({', '.join(map(repr, unknown))} is not a built-in study: built in are "
-            f"{', '.join(registered_studies())}; another must come from the extensions)"
+            f"{', '.join(registered_studies())}; another must come from the extensions)",
+            error.path,
         ) from None
 
 
@@ -131,10 +164,11 @@ def _check_studies_registered(config: Mapping) -> None:
     """Raise ``ValueError`` naming the studies of ``config`` that no module registered."""
     unknown = _unknown_studies(config)
     if unknown:
-        raise ValueError(
+        raise SchemaError(
             f"config error at studies: unknown studies {unknown}; registered studies are "
             f"{', '.join(registered_studies())} (a study outside the package is added by listing "
-            "its module under extensions)"
+            "its module under extensions)",
+            ("studies", unknown[0]),
         )
 
 
@@ -213,24 +247,103 @@ def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping
 
 def read_configs(paths: Sequence[str | Path]) -> dict:
     """The config of YAML files read in order, each updating the ones before as Snakemake's
-    ``--configfile`` does: a mapping merged key by key, any other value replaced."""
-    config: dict = {}
-    for path in paths:
-        config = _merged(config, read_config_file(Path(path), f"config file {path}"))
+    ``--configfile`` does: a mapping merged key by key, any other value replaced; checked
+    against the schema, an error naming the file that set the key (:func:`check_sources`)."""
+    sources = read_sources(paths)
+    config = merged_sources(sources)
+    check_sources(config, sources)
     return config
+
+
+def read_sources(paths: Sequence[str | Path]) -> list[tuple[str, Mapping]]:
+    """``(path, document)`` of each config file of ``paths``, in order, each read as
+    :func:`read_config_file` reads it."""
+    return [(str(path), read_config_file(Path(path), f"config file {path}")) for path in paths]
+
+
+def merged_sources(sources: Sequence[tuple[str, Mapping]]) -> dict:
+    """The config ``sources`` (``(name, document)``) make, each over the ones before."""
+    config: dict = {}
+    for _name, document in sources:
+        config = _merged(config, document)
+    return config
+
+
+def check_sources(config: Mapping, sources: Sequence[tuple[str, Mapping]]) -> None:
+    """``config``, made of ``sources`` (``(name, document)``: a config file's path, or
+    ``--config``, each over the ones before), against its schema (:func:`check_schema`); the
+    error, in one line, names the key and the sources that set it (`` (set in b.yaml)``), which
+    among several files the key alone does not say."""
+    try:
+        check_schema(config)
+    except SchemaError as error:
+        setters = _setters(error.path, sources)
+        said = f" (set in {', '.join(setters)})" if setters and error.path else ""
+        raise SchemaError(f"{error}{said}", error.path) from None
+
+
+def _setters(path: Sequence, sources: Sequence[tuple[str, Mapping]]) -> list[str]:
+    """The names of the ``sources`` whose values make the config's value at ``path``: the
+    last that sets it to anything but a mapping and those after it that merge a mapping over
+    that; none where no source holds ``path``."""
+    setters: list[str] = []
+    for name, document in sources:
+        found, value = _value_at(document, path)
+        if found:
+            setters = [*setters, name] if isinstance(value, Mapping) else [name]
+    return setters
+
+
+def _value_at(document: object, path: Sequence) -> tuple[bool, object]:
+    """``(True, value)`` at ``path`` (keys and list indices) in ``document``, or ``(False,
+    None)`` where it has none."""
+    for step in path:
+        if isinstance(document, Mapping) and step in document:
+            document = document[step]
+        elif isinstance(document, list) and isinstance(step, int) and step < len(document):
+            document = document[step]
+        else:
+            return False, None
+    return True, document
+
+
+def check_config_values(entries: Sequence[str]) -> None:
+    """Refuse, naming the entry, a ``--config`` value (``KEY=VALUE`` as typed, ``entries``)
+    that Snakemake reads as a number other than YAML would, or than its digits show: it tries
+    Python's ``int`` and ``float`` first, which read ``010`` as 10 (a config file, as 8) and
+    drop underscores (``1_000``)."""
+    for entry in entries:
+        text = entry.partition("=")[2].strip()
+        if not (_LEADING_ZERO.match(text) or "_" in text):
+            continue
+        for parse in (int, float):
+            try:
+                number = parse(text)
+            except ValueError:
+                continue
+            in_file = read_yaml(text)
+            also = f", and in a config file as {in_file!r}" if in_file != number else ""
+            raise ValueError(
+                f"--config {entry}: {text} is read as {number!r}{also}; write the number in "
+                "decimal digits, with no leading 0 or underscore"
+            )
 
 
 def read_config_file(path: Path, where: str) -> Mapping:
     """The mapping of config keys to values the YAML file ``path`` holds, or ``ValueError``
-    in one line beginning with ``where`` (the file, or the key naming it): no such file, not
-    YAML (where in the file, and why), or no mapping. An empty file, or one of comments alone,
-    is refused as Snakemake's ``--configfile`` refuses it: it changes nothing, which is not
-    what its writer meant."""
+    in one line beginning with ``where`` (the file, or the key naming it): no such file, a
+    folder, not UTF-8 text (the byte and its line), not YAML (where in the file, and why), no
+    mapping, or YAML that reads otherwise than it is written (:func:`_read_as_written`: a
+    number in another base, a key given twice, a value holding itself). An empty file, or one
+    of comments alone, is refused as Snakemake's ``--configfile`` refuses it: it changes
+    nothing, which is not what its writer meant."""
+    if path.is_dir():
+        raise ValueError(f"{where}: a folder, not a file")
     if not path.is_file():
         raise ValueError(f"{where}: no such file")
-    text = path.read_text()
+    text = _utf8_text(path.read_bytes(), where)
     try:
-        document = read_yaml(text)
+        document = _read_as_written(text, where)
     except yaml.YAMLError as error:
         raise ValueError(f"{where}: not valid YAML{_yaml_error_place(error, text)}") from None
     if document is None:
@@ -240,6 +353,126 @@ def read_config_file(path: Path, where: str) -> Mapping:
     if not isinstance(document, Mapping):
         raise ValueError(f"{where}: not a mapping of config keys to values")
     return document
+
+
+def _utf8_text(data: bytes, where: str) -> str:
+    """``data`` as UTF-8 text, which Snakemake reads a config file as; else ``ValueError``
+    naming ``where``, the first byte that is not and its line."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = data[: error.start].count(b"\n") + 1
+        raise ValueError(
+            f"{where}: not UTF-8 text: byte 0x{data[error.start]:02x} at line {line} "
+            "(save the file as UTF-8)"
+        ) from None
+
+
+def _read_as_written(text: str, where: str) -> object:
+    """The YAML document ``text``, read by the safe loader once its nodes are held to what
+    they show (:func:`_check_nodes`, ``ValueError`` beginning with ``where``); None for a
+    document of nothing."""
+    loader = _LOADER(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _check_nodes(node, _Place(where, (), 1), (), set())
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+@dataclasses.dataclass(frozen=True)
+class _Place:
+    """Where a YAML node is: ``where`` (the file), the keys (and list indices) leading to it
+    and the line that names it (its key's, or its own for a list item), from 1."""
+
+    where: str
+    keys: tuple
+    line: int
+
+    def at(self, key: object, line: int) -> _Place:
+        return _Place(self.where, (*self.keys, key), line)
+
+    def __str__(self) -> str:
+        keys = ".".join(map(str, self.keys)) or "(top level)"
+        return f"{self.where}: {keys} at line {self.line}"
+
+
+# The tags PyYAML resolves a plain scalar to; a number in decimal digits as YAML reads it, and
+# a leading 0 Python reads past.
+_INTEGER, _FLOAT, _MERGE = (f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge"))
+_DECIMAL = re.compile(r"[-+]?(0|[1-9][0-9]*)")
+_LEADING_ZERO = re.compile(r"[-+]?0[0-9_]")
+
+
+def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -> None:
+    """Refuse, with ``ValueError`` naming ``place``, a YAML node graph that reads otherwise
+    than it is written: a number in a base its digits do not show (:func:`_number_problem`);
+    a key given twice in one mapping (YAML keeps the last alone, so a value meant is dropped
+    without a word); an alias inside the anchor it names, a value that would hold itself.
+    ``holding``: the nodes above ``node``; ``checked``: the ids of nodes checked whole, each
+    checked once however many aliases name it."""
+    if any(node is above for above in holding):
+        raise ValueError(f"{place}: an alias inside the value it names: a value cannot hold itself")
+    if id(node) in checked:
+        return
+    if isinstance(node, yaml.ScalarNode):
+        problem = _number_problem(node)
+        if problem:
+            raise ValueError(f"{place}: {problem}")
+    elif isinstance(node, yaml.SequenceNode):
+        for index, item in enumerate(node.value):
+            _check_nodes(item, place.at(index, item.start_mark.line + 1), (*holding, node), checked)
+    else:
+        lines: dict = {}
+        for key, value in node.value:
+            line = key.start_mark.line + 1
+            name = key.value if isinstance(key, yaml.ScalarNode) else f"(key at line {line})"
+            if isinstance(key, yaml.ScalarNode) and key.tag != _MERGE:
+                first = lines.setdefault((key.tag, key.value), line)
+                if first != line:
+                    raise ValueError(
+                        f"{place.where}: {'.'.join(map(str, (*place.keys, name)))} is given "
+                        f"twice, at lines {first} and {line}: YAML keeps the last alone; "
+                        "keep one"
+                    )
+            _check_nodes(value, place.at(name, line), (*holding, node), checked)
+    checked.add(id(node))
+
+
+def _number_problem(node: yaml.ScalarNode) -> str | None:
+    """Why the plain scalar ``node`` reads as another number than its digits show, or None:
+    an integer with a leading 0 (octal), a base prefix (``0x``, ``0b``), an underscore
+    (dropped) or a colon (base 60), which YAML 1.1, PyYAML's and Snakemake's, reads so
+    (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text."""
+    text = node.value
+    # Plain: no style in Python's parser, an empty one in C's.
+    if node.style:
+        return None
+    integer = node.tag == _INTEGER and not _DECIMAL.fullmatch(text)
+    if not integer and not (node.tag == _FLOAT and ("_" in text or ":" in text)):
+        return None
+    return (
+        f"{text} is read as {read_yaml(text)!r} ({_base_reason(text)}); write the number in "
+        "decimal digits, with no leading 0, underscore or colon"
+    )
+
+
+def _base_reason(text: str) -> str:
+    """What makes YAML 1.1 read the number ``text`` in a base other than ten, or drop some of
+    its characters."""
+    digits = text.lstrip("+-")
+    if ":" in digits:
+        return "a colon makes it base 60"
+    if digits[:2] in ("0x", "0X"):
+        return "0x makes it hexadecimal"
+    if digits[:2] in ("0b", "0B"):
+        return "0b makes it binary"
+    if digits.startswith("0") and "." not in digits:
+        return "a leading 0 makes it octal"
+    return "YAML drops the underscores"
 
 
 def _yaml_error_place(error: yaml.YAMLError, text: str) -> str:
@@ -538,3 +771,49 @@ def estimator_names(config: Mapping, study: str, *, source: str = "all") -> list
     builtin = list(settings.get("estimators", []))
     external = list(settings.get("external_estimators", []))
     return {"builtin": builtin, "external": external, "all": builtin + external}[source]
+
+
+def external_kind(name: str, kind: object, before: str | None) -> str:
+    """``kind``, the kind of estimates the rule file of the external estimator ``name``
+    declares it writes (``center``, ``axis`` or ``joint_center``: the estimate columns of each
+    kind); ``ValueError`` naming ``name`` for any other, or where it was declared ``before``
+    as another kind (by another rule file): which would be its files' kind is not known."""
+    if not isinstance(kind, str) or kind not in KINDS:
+        raise ValueError(
+            f"external estimator {name!r}: kind={kind!r} is no kind of estimates; the kinds: "
+            f"{', '.join(KINDS)}"
+        )
+    if before not in (None, kind):
+        raise ValueError(
+            f"external estimator {name!r} is declared twice, writing {before} estimates and "
+            f"{kind} estimates; one estimator writes one kind"
+        )
+    return kind
+
+
+def check_external_kind(study: str, name: str, kind: str | None) -> None:
+    """Refuse, naming the study, the estimator and both kinds, the external estimator ``name``
+    listed by ``study`` whose rule file declares estimates of ``kind`` (:func:`external_kind`),
+    another kind than the study scores its external estimators' files as
+    (:attr:`~jointbench.simulate.Study.kind`): a centre's rule listed by the hinge study would
+    run, then fail when its files are collected, and by the hip study be scored as a joint
+    centre from markers it did not read as one. A rule file that declares no kind is refused
+    too, saying how to declare it: which kind it writes only its writer can say."""
+    spec = get_study(study)
+    where = f"config: studies.{study}.external_estimators: {name!r}"
+    if kind is None:
+        raise ValueError(
+            f"{where}: its rule file declares no kind of estimates; if it writes {spec.kind} "
+            f"estimates, the kind study {study} scores, add "
+            f'external_estimator("{name}", kind="{spec.kind}") to it (README, "Any language: '
+            'one rule")'
+        )
+    if kind != spec.kind:
+        alike = [s for s in registered_studies() if get_study(s).kind == kind]
+        raise ValueError(
+            f"{where} writes {kind} estimates (as its rule file declares), but study {study} "
+            f"scores {spec.kind} estimates: its files would fail as they are collected, or be "
+            f"scored as what they are not; list it under a study of {kind} estimates "
+            f"({', '.join(alike) or 'none is registered'}), or write a rule of {spec.kind} "
+            f"estimates for {study}"
+        )

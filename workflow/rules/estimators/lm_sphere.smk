@@ -2,6 +2,9 @@
 # (README). Listed under a study's external_estimators (the cmc study's by default), its
 # estimates join the collected results, the extended ranking and the per-estimator summaries
 # like any built-in's. One rule per study that lists it; a study not in the run has none.
+# Its estimates are a centre's: only a study of centre estimates may list it.
+external_estimator("LM", kind="center")
+
 for _study in studies_listing("LM"):
 
     rule:

@@ -2,6 +2,8 @@
 # of an estimator in a compiled language. One rule serves every centre study that lists LS-C
 # under external_estimators: it reads the condition's markers as CSV and writes its estimates as
 # CSV, which the interchange rules (workflow/rules/interchange.smk) convert; no Python of its own.
+# Its estimates are a centre's: only a study of centre estimates may list it.
+external_estimator("LS-C", kind="center")
 
 
 rule compile_ls_sphere:

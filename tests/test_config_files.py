@@ -1,0 +1,159 @@
+"""Config files read as their writer meant them, or refused naming the file and the key: an
+integer YAML reads in another base than the digits show, a key given twice (YAML keeps the
+last alone), a value that holds itself, bytes that are not UTF-8 text, a folder; a schema error
+names the file (or ``--config``) that set the key, among several. Through the package's reader
+(``jointbench fit --configfile``, the named protocols' overlays) and a real dry run alike."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from workflow_copy import ROOT, copy_workflow, run_snakemake
+
+from jointbench.configuration import config as study_config
+
+DEFAULT = ROOT / "config" / "config.yaml"
+
+
+def _refused(path: Path) -> str:
+    with pytest.raises(ValueError) as raised:
+        study_config.read_config_file(path, f"config file {path}")
+    return str(raised.value)
+
+
+def _dry_run(folder: Path, *arguments: str):
+    """A dry run of the workflow copied into ``folder``: returncode, messages."""
+    folder.mkdir()
+    copy_workflow(folder)
+    run = run_snakemake(folder, "-n", *arguments, timeout=300)
+    return run.returncode, run.stdout + run.stderr
+
+
+@pytest.mark.parametrize(
+    ("written", "read"),
+    [("010", 8), ("0x10", 16), ("1_000", 1000), ("0b11", 3), ("1:30", 90), ("-010", -8)],
+    ids=["octal", "hex", "underscore", "binary", "sexagesimal", "negative octal"],
+)
+def test_an_integer_yaml_reads_in_another_base_is_refused_naming_the_key_and_file(
+    tmp_path, written, read
+):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"base_seed: 3\nstudies:\n  cmc:\n    trials: {written}\n")
+    message = _refused(path)
+    for word in (str(path), "studies.cmc.trials", "line 4", written, f"as {read}"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize("written", ["1_000.5", "1:30.5"], ids=["underscore", "sexagesimal"])
+def test_a_float_yaml_reads_otherwise_than_written_is_refused(tmp_path, written):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"blind_placement: {{translation_mm: {written}}}\n")
+    message = _refused(path)
+    assert "blind_placement.translation_mm" in message and written in message, message
+
+
+@pytest.mark.parametrize("written", ["10", "0", "-3", "+7", "1.5", "0.5", "1e3", "'010'"])
+def test_numbers_in_decimal_digits_and_quoted_text_are_read(tmp_path, written):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"base_seed: {written}\n")
+    assert study_config.read_config_file(path, "config file") == {
+        "base_seed": study_config.read_yaml(written)
+    }
+
+
+def test_the_shipped_config_files_are_read_as_before():
+    for path in [DEFAULT, *sorted((ROOT / "config" / "variants").glob("*.yaml"))]:
+        expected = study_config.read_yaml(path.read_text())
+        assert study_config.read_config_file(path, f"config file {path}") == expected
+
+
+def test_a_key_given_twice_is_refused_naming_it_and_both_lines(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_text("studies:\n  cmc:\n    trials: 5\n    grid: {}\n    trials: 7\n")
+    message = _refused(path)
+    for word in (str(path), "studies.cmc.trials", "lines 3 and 5"):
+        assert word in message, message
+
+
+def test_a_value_that_holds_itself_is_refused(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_text("studies:\n  cmc: &loop\n    grid: *loop\n")
+    message = _refused(path)
+    assert str(path) in message and "studies.cmc.grid" in message and "line 3" in message, message
+
+
+def test_text_that_is_not_utf8_is_refused_naming_the_byte_and_line(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_bytes(b"base_seed: 3\n# caf\xe9\n")
+    message = _refused(path)
+    assert str(path) in message and "UTF-8" in message and "line 2" in message, message
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(b"\x00\x01\xff\xfe")
+    assert "UTF-8" in _refused(binary)
+
+
+def test_a_folder_is_refused_as_one(tmp_path):
+    assert "a folder, not a file" in _refused(tmp_path)
+
+
+def test_a_schema_error_names_the_file_that_set_the_key(tmp_path):
+    first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    first.write_text("studies: {cmc: {trials: 0}}\n")
+    second.write_text("base_seed: 3\n")
+    with pytest.raises(ValueError) as raised:
+        study_config.read_configs([DEFAULT, first, second])
+    message = str(raised.value)
+    assert "studies/cmc/trials" in message and f"set in {first}" in message, message
+    assert str(second) not in message and str(DEFAULT) not in message, message
+
+
+def test_a_misspelt_key_names_the_file_that_holds_it(tmp_path):
+    first = tmp_path / "a.yaml"
+    first.write_text("blind_placement: {translation_mm: 400.0}\n")
+    second = tmp_path / "b.yaml"
+    second.write_text("blind_placement: {rotation: true}\n")
+    with pytest.raises(ValueError) as raised:
+        study_config.read_configs([DEFAULT, first, second])
+    message = str(raised.value)
+    assert "rotation" in message and f"set in {second})" in message, message
+    assert str(first) not in message, message
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("studies:\n  cmc:\n    trials: 010\n", ["studies.cmc.trials", "line 3", "as 8"]),
+        (
+            "studies:\n  cmc:\n    trials: 5\n    trials: 7\n",
+            ["studies.cmc.trials", "lines 3 and 4"],
+        ),
+    ],
+    ids=["octal", "twice"],
+)
+def test_dry_run_refuses_a_config_file_read_otherwise_than_written(tmp_path, text, words):
+    overlay = tmp_path / "mine.yaml"
+    overlay.write_text(text)
+    code, message = _dry_run(tmp_path / "wf", "--configfile", str(overlay))
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    for word in [str(overlay), *words]:
+        assert word in message, message[-2000:]
+
+
+@pytest.mark.parametrize("value", ["010", "1_000"])
+def test_dry_run_refuses_a_config_value_read_otherwise_than_written(tmp_path, value):
+    code, message = _dry_run(tmp_path / "wf", "--config", f"base_seed={value}")
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    assert f"--config base_seed={value}" in message, message[-2000:]
+
+
+def test_dry_run_names_the_config_file_of_a_schema_error(tmp_path):
+    first, second = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    first.write_text("studies: {cmc: {trials: 0}}\n")
+    second.write_text("base_seed: 3\n")
+    code, message = _dry_run(tmp_path / "wf", "--configfile", str(first), str(second))
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    assert "studies/cmc/trials" in message and f"set in {first}" in message, message[-2000:]
+    code, message = _dry_run(tmp_path / "wf2", "--config", "verdicts={'seeds': 0}")
+    assert code != 0 and "verdicts/seeds" in message, message[-2000:]
+    assert "set in --config" in message, message[-2000:]
