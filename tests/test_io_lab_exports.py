@@ -273,3 +273,17 @@ def test_the_artefact_warning_names_the_line_that_called_prepare_or_fit(call):
         function(recording, "joint_center", DIST, PROX, artefacts="exclude", **options)
     (warning,) = [w for w in caught if "left out 50 frames with artefacts" in str(w.message)]
     assert warning.filename == __file__
+
+
+@pytest.mark.parametrize("spike", [3, 11], ids=["elsewhere", "next-to-the-gap"])
+def test_a_gap_at_the_origin_is_not_kept_for_an_artefacts_jump(tmp_path, spike):
+    """One sample of B 2 m off (a ghost labelled B), elsewhere in the trial or just before B's
+    gap of zeros: its jump of 2 m a frame was taken as B's motion, which reaches the origin
+    from anywhere, and the gap was kept as three samples at the lab's origin, without a word."""
+    markers = _markers()
+    markers[spike, 1] += 2000.0
+    markers[12:15, 1] = 0.0
+    path = write(tmp_path / "trial.trc", "ABC", markers, "mm")
+    (warning,) = _caught(jointbench.read, path)
+    assert str(warning.message).endswith("marker moves in a frame: B at frames 13 to 15")
+    assert np.isnan(jointbench.read(path).markers[12:15, 1]).all()
