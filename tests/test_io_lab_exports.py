@@ -287,3 +287,32 @@ def test_a_gap_at_the_origin_is_not_kept_for_an_artefacts_jump(tmp_path, spike):
     (warning,) = _caught(jointbench.read, path)
     assert str(warning.message).endswith("marker moves in a frame: B at frames 13 to 15")
     assert np.isnan(jointbench.read(path).markers[12:15, 1]).all()
+
+
+def _cluster_through_the_origin(n_frames=120):
+    """Three markers ``(n_frames, 3, 3)`` [mm] of a segment swinging about a centre 300 mm off,
+    shifted so that A is at exactly (0, 0, 0) at row 60: A passes through the lab's origin."""
+    angle = np.linspace(-0.6, 0.6, n_frames)[:, None]
+    tilt = 0.4 * np.sin(np.linspace(0.0, 2 * np.pi, n_frames))[:, None]
+    local = np.array([[300.0, 0.0, 0.0], [300.0, 40.0, 0.0], [300.0, 0.0, 40.0]])
+    x, y, z = local[:, 0], local[:, 1], local[:, 2]
+    swung = np.stack(
+        [
+            np.cos(angle) * x - np.sin(angle) * y,
+            np.sin(angle) * x + np.cos(angle) * y,
+            z + tilt * x,
+        ],
+        axis=-1,
+    )
+    return swung - swung[60, 0]
+
+
+def test_a_marker_swinging_fastest_through_the_origin_is_kept():
+    """Its step into the origin (7.020 mm) is its fastest, and those before it reach 7.013 mm
+    a frame only: its sample there was read as a gap, and named as one."""
+    markers = _cluster_through_the_origin()
+    caught = _caught(lambda array: Recording(("A", "B", "C"), array), markers)
+    assert caught == []
+    recording = Recording(("A", "B", "C"), markers)
+    assert recording.markers[60, 0].tolist() == [0.0, 0.0, 0.0]
+    assert np.isfinite(recording.markers).all()
