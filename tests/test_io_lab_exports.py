@@ -316,3 +316,22 @@ def test_a_marker_swinging_fastest_through_the_origin_is_kept():
     recording = Recording(("A", "B", "C"), markers)
     assert recording.markers[60, 0].tolist() == [0.0, 0.0, 0.0]
     assert np.isfinite(recording.markers).all()
+
+
+def test_a_sample_kept_at_the_origin_is_refused_by_a_fit_saying_what_to_do():
+    """The estimators' input checks refuse every sample at exactly (0, 0, 0) as a possible gap:
+    a fit without a reference refused A's at frame 60, kept by the Recording, with the advice
+    to fit a Recording, which it was."""
+    recording = Recording(("A", "B", "C"), _cluster_through_the_origin(), 100.0, "wand.trc")
+    assert recording.markers[60, 0].tolist() == [0.0, 0.0, 0.0]
+    with pytest.raises(ValueError) as error:
+        fit(recording, "center", "A,B,C")
+    assert str(error.value) == (
+        "wand.trc: A is at exactly (0, 0, 0) at frame 60 (0.60 s), read as a position (its "
+        "samples on either side lie within its motion of the lab's origin), which the fits "
+        "refuse as a possible gap stored as zeros: name a --reference segment (reference=), in "
+        "whose frame the markers are fitted, or fit frames without it (frames='0:60' or "
+        "'61:120')"
+    )
+    # Frames without it are fitted.
+    assert fit(recording, "center", "A,B,C", frames="61:120").frames_used[0] == 61
