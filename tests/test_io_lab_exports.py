@@ -335,3 +335,22 @@ def test_a_sample_kept_at_the_origin_is_refused_by_a_fit_saying_what_to_do():
     )
     # Frames without it are fitted.
     assert fit(recording, "center", "A,B,C", frames="61:120").frames_used[0] == 61
+
+
+def test_a_marker_with_many_gaps_at_the_origin_names_three_runs_and_counts_the_rest():
+    markers = _markers(n_frames=30, n_markers=2)
+    markers[[2, 3, 8, 14, 20, 26], 0] = 0.0
+    (warning,) = _caught(lambda array: Recording(("A", "B"), array), markers)
+    assert str(warning.message).endswith(
+        "marker moves in a frame: A at frames 2 to 3, 8, 14 and 2 more runs"
+    )
+
+
+def test_a_recordings_markers_and_a_parts_are_read_only_and_shared():
+    """A part is a view of the recording's markers, not a copy, and neither can be written."""
+    recording = Recording(("A", "B", "C"), _through_the_origin())
+    part = recording.frames("5:15")
+    assert np.shares_memory(part.markers, recording.markers)
+    for markers in (recording.markers, part.markers):
+        with pytest.raises(ValueError, match="read-only"):
+            markers[0, 0, 0] = 1.0
