@@ -354,3 +354,38 @@ def test_a_recordings_markers_and_a_parts_are_read_only_and_shared():
     for markers in (recording.markers, part.markers):
         with pytest.raises(ValueError, match="read-only"):
             markers[0, 0, 0] = 1.0
+
+
+def _integers_under_a_positive_scale(path, n_frames):
+    """A C3D of one marker, ``n_frames``, whose frames are 16-bit integers under a POINT:SCALE
+    of 0.1 in its parameter and its header (a file as integer writers make it), the marker
+    moving 0.1 mm a frame along x from 100 mm."""
+    x = 100.0 + 0.1 * (np.arange(n_frames) % 1000)
+    markers = np.stack([x, np.full(n_frames, 200.0), np.full(n_frames, 300.0)], -1)[:, None]
+    content = bytearray(write_c3d(path, "A", markers).read_bytes())
+    start = (struct.unpack("<H", content[16:18])[0] - 1) * 512
+    scale = content.find(b"SCALE", content.find(b"POINT", 512)) + 9  # name, offset, type, dims
+    for where in (slice(12, 16), slice(scale, scale + 4)):
+        assert struct.unpack("<f", content[where])[0] == -1.0
+        content[where] = struct.pack("<f", 0.1)
+    words = np.zeros((n_frames, 1, 4), "<i2")
+    words[..., :3] = np.round(markers / 0.1)
+    frames = words.tobytes()
+    path.write_bytes(bytes(content[:start]) + frames + bytes(-len(frames) % 512))
+    return path
+
+
+def test_an_integer_c3d_is_read_as_written(tmp_path):
+    path = _integers_under_a_positive_scale(tmp_path / "integers.c3d", 300)
+    markers = jointbench.read(path).markers
+    assert np.allclose(markers[[0, 299], 0], [[100.0, 200.0, 300.0], [129.9, 200.0, 300.0]])
+
+
+def test_an_integer_c3d_of_twice_the_frames_a_header_counts_is_refused_as_long(tmp_path):
+    """Its frames past the 65535 its header counts, as many bytes again, were taken for the
+    second half of frames of floats: refused as floats under a positive scale, to be exported
+    again with a negative one, which it is not."""
+    path = _integers_under_a_positive_scale(tmp_path / "long.c3d", 140_000)
+    assert _refusal(path).startswith(
+        f"{path}: the file holds 595976 bytes past the 65535 frames read, room for "
+    )
