@@ -41,9 +41,8 @@ def origin_gaps(markers: np.ndarray) -> np.ndarray:
     origin to the last bit in all three coordinates only where it moves through it, so such a
     sample is a gap unless its marker could be there: its nearest samples away from the origin
     before and after the run of such samples it belongs to (those the recording holds) lie no
-    farther from the origin than the marker moves, at twice its fastest between two consecutive
-    samples within :data:`_REACH_FRAMES` frames on that side of the run, in the frames between
-    (:data:`_REACH_SLACK`).
+    farther from the origin than the marker moves, at its fastest between two consecutive
+    samples within :data:`_REACH_FRAMES` frames on that side of the run, in the frames between.
     Its motion next to the run, not its fastest anywhere: one sample of an artefact (a ghost
     labelled as the marker) jumps far enough to reach the origin from anywhere, and would keep
     every gap of its trial. A marker never away from the origin was never seen (a labelled
@@ -78,8 +77,8 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
     before = rows[np.maximum(after - 1, 0)]
     following = rows[np.minimum(after, rows.size - 1)]
     # The fastest steps in the frames up to the sample before and from the sample after.
-    reach_before = _REACH_SLACK * steps[before[:, None] + window].max(axis=1)
-    reach_after = _REACH_SLACK * steps[following[:, None] + _REACH_FRAMES + window].max(axis=1)
+    reach_before = steps[before[:, None] + window].max(axis=1)
+    reach_after = steps[following[:, None] + _REACH_FRAMES + window].max(axis=1)
     reached_before = np.linalg.norm(track[before], axis=-1) <= reach_before * (starts - before)
     reached_after = np.linalg.norm(track[following], axis=-1) <= reach_after * (
         following - stops + 1
@@ -93,12 +92,6 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
 #: The frames on each side of a run at the origin whose steps tell how fast its marker moves
 #: there (:func:`origin_gaps`): a tenth of a second at 100 Hz.
 _REACH_FRAMES = 10
-
-#: How much farther than those steps a marker may step into the origin: the step into it is
-#: not seen, and a marker swinging fastest through the origin takes its longest step there;
-#: twice allows a speed that changes by as much as itself in a frame. A gap lies farther: a
-#: marker a metre away steps a few centimetres a frame.
-_REACH_SLACK = 2.0
 
 
 def _runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
