@@ -175,8 +175,9 @@ def test_a_marker_at_the_origin_between_samples_far_from_it_is_a_gap_named(tmp_p
     assert [str(w.message) for w in caught] == [
         f"{path}: 4 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored as "
         "zeros (the C3D format's coordinates of an invalid point), not positions at the lab's "
-        "origin: the samples on either side of each lie farther from the origin than the "
-        f"marker moves in a frame: B at frames {first + 4} to {first + 6} and {first + 12}"
+        "origin: the marker's nearest sample before or after each lies farther from the origin "
+        "than the marker moves in a frame nearby (or it has none): B at frames "
+        f"{first + 4} to {first + 6} and {first + 12}"
     ]
     assert caught[0].filename == __file__
     recording = jointbench.read(path)
@@ -214,7 +215,9 @@ def test_a_marker_of_one_at_the_origin_at_a_c3ds_end_is_a_gap_named(tmp_path):
     markers[15:] = 0.0
     path = write_c3d(tmp_path / "gap.c3d", "A", markers)
     (warning,) = _caught(jointbench.read, path)
-    assert str(warning.message).endswith("marker moves in a frame: A at frames 16 to 20")
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): A at frames 16 to 20"
+    )
 
 
 def _trc_warning(tmp_path, zeroed):
@@ -233,8 +236,9 @@ def test_a_marker_never_away_from_the_origin_is_a_gap_named(tmp_path):
     assert message == (
         f"{path}: 20 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored "
         "as zeros (the C3D format's coordinates of an invalid point), not positions at the "
-        "lab's origin: the samples on either side of each lie farther from the origin than the "
-        "marker moves in a frame: C at every frame (never away from the origin)"
+        "lab's origin: the marker's nearest sample before or after each lies farther from the "
+        "origin than the marker moves in a frame nearby (or it has none): C at every frame "
+        "(never away from the origin)"
     )
     assert np.isnan(jointbench.read(path).markers[:, 2]).all()
 
@@ -256,8 +260,8 @@ def test_arrays_given_a_recording_follow_the_rule_and_one_gap_is_named_so():
     assert [str(w.message) for w in caught] == [
         "<memory>: 1 sample at exactly (0, 0, 0) is read as missing, as a gap a writer stored "
         "as zeros (the C3D format's coordinates of an invalid point), not a position at the "
-        "lab's origin: the samples on either side of it lie farther from the origin than the "
-        "marker moves in a frame: A at frame 3"
+        "lab's origin: the marker's nearest sample before or after it lies farther from the "
+        "origin than the marker moves in a frame nearby (or it has none): A at frame 3"
     ]
     assert caught[0].filename == __file__
 
@@ -285,7 +289,9 @@ def test_a_gap_at_the_origin_is_not_kept_for_an_artefacts_jump(tmp_path, spike):
     markers[12:15, 1] = 0.0
     path = write(tmp_path / "trial.trc", "ABC", markers, "mm")
     (warning,) = _caught(jointbench.read, path)
-    assert str(warning.message).endswith("marker moves in a frame: B at frames 13 to 15")
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): B at frames 13 to 15"
+    )
     assert np.isnan(jointbench.read(path).markers[12:15, 1]).all()
 
 
@@ -331,7 +337,7 @@ def test_a_marker_with_many_gaps_at_the_origin_names_three_runs_and_counts_the_r
     markers[[2, 3, 8, 14, 20, 26], 0] = 0.0
     (warning,) = _caught(lambda array: Recording(("A", "B"), array), markers)
     assert str(warning.message).endswith(
-        "marker moves in a frame: A at frames 2 to 3, 8, 14 and 2 more runs"
+        "marker moves in a frame nearby (or it has none): A at frames 2 to 3, 8, 14 and 2 more runs"
     )
 
 
@@ -388,4 +394,6 @@ def test_a_gap_of_a_marker_passing_over_the_origin_is_read_as_a_gap():
     markers[:, 0] = np.stack([40.0 * (np.arange(20) - 10.0), np.zeros(20), np.full(20, 60.0)], -1)
     markers[10, 0] = 0.0
     (warning,) = _caught(lambda array: Recording(("A", "B"), array), markers)
-    assert str(warning.message).endswith("marker moves in a frame: A at frame 10")
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): A at frame 10"
+    )

@@ -130,9 +130,9 @@ def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, sou
         f"{source}: {n_gaps} sample{'s' if many else ''} at exactly (0, 0, 0) "
         f"{'are' if many else 'is'} read as missing, as {'gaps' if many else 'a gap'} a writer "
         "stored as zeros (the C3D format's coordinates of an invalid point), not "
-        f"{'positions' if many else 'a position'} at the lab's origin: the samples on either "
-        f"side of {'each' if many else 'it'} lie farther from the origin than the marker moves "
-        f"in a frame: {named}"
+        f"{'positions' if many else 'a position'} at the lab's origin: the marker's nearest "
+        f"sample before or after {'each' if many else 'it'} lies farther from the origin than "
+        f"the marker moves in a frame nearby (or it has none): {named}"
     )
 
 
