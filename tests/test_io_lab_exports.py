@@ -397,3 +397,16 @@ def test_a_gap_of_a_marker_passing_over_the_origin_is_read_as_a_gap():
     assert str(warning.message).endswith(
         "marker moves in a frame nearby (or it has none): A at frame 10"
     )
+
+
+def test_a_gap_at_the_origin_between_missing_samples_is_read_as_a_gap():
+    """B unseen (NaN) for 20 frames, then one frame at (0, 0, 0), then unseen for 20 more: its
+    steps of up to 156 mm a frame times the 21 frames to its samples reached the origin from
+    1.8 m, and the sample was kept at the lab's origin, without a word; frames unseen say
+    nothing of where a marker went."""
+    markers = _markers(n_frames=60)
+    markers[10:30, 1] = np.nan
+    markers[30, 1] = 0.0
+    markers[31:51, 1] = np.nan
+    (warning,) = _caught(lambda array: Recording(("A", "B", "C"), array), markers)
+    assert str(warning.message).endswith("(or it has none): B at frame 30")

@@ -40,9 +40,10 @@ def origin_gaps(markers: np.ndarray) -> np.ndarray:
     the zeros, and so do capture programs padding a trial. A measured marker lands at the
     origin to the last bit in all three coordinates only where it moves through it, so such a
     sample is a gap unless its marker could be there: its nearest samples away from the origin
-    before and after the run of such samples it belongs to (those the recording holds) lie no
-    farther from the origin than the marker moves, at its fastest between two consecutive
-    samples within :data:`_REACH_FRAMES` frames on that side of the run, in the frames between.
+    before and after the run of such samples it belongs to (those the recording holds) are next
+    to it, with no missing sample between, and lie no farther from the origin than the marker
+    moves, at its fastest between two consecutive samples within :data:`_REACH_FRAMES` frames
+    on that side of the run, in a frame.
     Its motion next to the run, not its fastest anywhere: one sample of an artefact (a ghost
     labelled as the marker) jumps far enough to reach the origin from anywhere, and would keep
     every gap of its trial. A marker never away from the origin was never seen (a labelled
@@ -79,9 +80,13 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
     # The fastest steps in the frames up to the sample before and from the sample after.
     reach_before = steps[before[:, None] + window].max(axis=1)
     reach_after = steps[following[:, None] + _REACH_FRAMES + window].max(axis=1)
-    reached_before = np.linalg.norm(track[before], axis=-1) <= reach_before * (starts - before)
-    reached_after = np.linalg.norm(track[following], axis=-1) <= reach_after * (
-        following - stops + 1
+    # A side reaches the run from the sample right next to it only: frames unseen between
+    # them say nothing of where the marker went.
+    reached_before = (before == starts - 1) & (
+        np.linalg.norm(track[before], axis=-1) <= reach_before
+    )
+    reached_after = (following == stops) & (
+        np.linalg.norm(track[following], axis=-1) <= reach_after
     )
     kept = ((after == 0) | reached_before) & ((after == rows.size) | reached_after)
     for start, stop in zip(starts[kept], stops[kept], strict=True):
