@@ -175,8 +175,9 @@ def test_a_marker_at_the_origin_between_samples_far_from_it_is_a_gap_named(tmp_p
     assert [str(w.message) for w in caught] == [
         f"{path}: 4 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored as "
         "zeros (the C3D format's coordinates of an invalid point), not positions at the lab's "
-        "origin: the samples on either side of each lie farther from the origin than the "
-        f"marker moves in a frame: B at frames {first + 4} to {first + 6} and {first + 12}"
+        "origin: the marker's nearest sample before or after each lies farther from the origin "
+        "than the marker moves in a frame nearby (or it has none): B at frames "
+        f"{first + 4} to {first + 6} and {first + 12}"
     ]
     assert caught[0].filename == __file__
     recording = jointbench.read(path)
@@ -214,7 +215,9 @@ def test_a_marker_of_one_at_the_origin_at_a_c3ds_end_is_a_gap_named(tmp_path):
     markers[15:] = 0.0
     path = write_c3d(tmp_path / "gap.c3d", "A", markers)
     (warning,) = _caught(jointbench.read, path)
-    assert str(warning.message).endswith("marker moves in a frame: A at frames 16 to 20")
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): A at frames 16 to 20"
+    )
 
 
 def _trc_warning(tmp_path, zeroed):
@@ -233,8 +236,9 @@ def test_a_marker_never_away_from_the_origin_is_a_gap_named(tmp_path):
     assert message == (
         f"{path}: 20 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored "
         "as zeros (the C3D format's coordinates of an invalid point), not positions at the "
-        "lab's origin: the samples on either side of each lie farther from the origin than the "
-        "marker moves in a frame: C at every frame (never away from the origin)"
+        "lab's origin: the marker's nearest sample before or after each lies farther from the "
+        "origin than the marker moves in a frame nearby (or it has none): C at every frame "
+        "(never away from the origin)"
     )
     assert np.isnan(jointbench.read(path).markers[:, 2]).all()
 
@@ -256,8 +260,8 @@ def test_arrays_given_a_recording_follow_the_rule_and_one_gap_is_named_so():
     assert [str(w.message) for w in caught] == [
         "<memory>: 1 sample at exactly (0, 0, 0) is read as missing, as a gap a writer stored "
         "as zeros (the C3D format's coordinates of an invalid point), not a position at the "
-        "lab's origin: the samples on either side of it lie farther from the origin than the "
-        "marker moves in a frame: A at frame 3"
+        "lab's origin: the marker's nearest sample before or after it lies farther from the "
+        "origin than the marker moves in a frame nearby (or it has none): A at frame 3"
     ]
     assert caught[0].filename == __file__
 
@@ -273,3 +277,136 @@ def test_the_artefact_warning_names_the_line_that_called_prepare_or_fit(call):
         function(recording, "joint_center", DIST, PROX, artefacts="exclude", **options)
     (warning,) = [w for w in caught if "left out 50 frames with artefacts" in str(w.message)]
     assert warning.filename == __file__
+
+
+@pytest.mark.parametrize("spike", [3, 11], ids=["elsewhere", "next-to-the-gap"])
+def test_a_gap_at_the_origin_is_not_kept_for_an_artefacts_jump(tmp_path, spike):
+    """One sample of B 2 m off (a ghost labelled B), elsewhere in the trial or just before B's
+    gap of zeros: its jump of 2 m a frame was taken as B's motion, which reaches the origin
+    from anywhere, and the gap was kept as three samples at the lab's origin, without a word."""
+    markers = _markers()
+    markers[spike, 1] += 2000.0
+    markers[12:15, 1] = 0.0
+    path = write(tmp_path / "trial.trc", "ABC", markers, "mm")
+    (warning,) = _caught(jointbench.read, path)
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): B at frames 13 to 15"
+    )
+    assert np.isnan(jointbench.read(path).markers[12:15, 1]).all()
+
+
+def _cluster_through_the_origin(n_frames=120):
+    """Three markers ``(n_frames, 3, 3)`` [mm] of a segment swinging about a centre 300 mm off,
+    shifted so that A is at exactly (0, 0, 0) at row 60: A passes through the lab's origin."""
+    angle = np.linspace(-0.6, 0.6, n_frames)[:, None]
+    tilt = 0.4 * np.cos(np.linspace(0.0, 2 * np.pi, n_frames))[:, None]
+    local = np.array([[300.0, 0.0, 0.0], [300.0, 40.0, 0.0], [300.0, 0.0, 40.0]])
+    x, y, z = local[:, 0], local[:, 1], local[:, 2]
+    swung = np.stack(
+        [
+            np.cos(angle) * x - np.sin(angle) * y,
+            np.sin(angle) * x + np.cos(angle) * y,
+            z + tilt * x,
+        ],
+        axis=-1,
+    )
+    return swung - swung[60, 0]
+
+
+def test_a_sample_kept_at_the_origin_is_refused_by_a_fit_saying_what_to_do():
+    """The estimators' input checks refuse every sample at exactly (0, 0, 0) as a possible gap:
+    a fit without a reference refused A's at frame 60, kept by the Recording, with the advice
+    to fit a Recording, which it was."""
+    recording = Recording(("A", "B", "C"), _cluster_through_the_origin(), 100.0, "wand.trc")
+    assert recording.markers[60, 0].tolist() == [0.0, 0.0, 0.0]
+    with pytest.raises(ValueError) as error:
+        fit(recording, "center", "A,B,C")
+    assert str(error.value) == (
+        "wand.trc: A is at exactly (0, 0, 0) at frame 60 (0.60 s), read as a position (its "
+        "samples on either side lie within its motion of the lab's origin), which the fits "
+        "refuse as a possible gap stored as zeros: name a --reference segment (reference=), in "
+        "whose frame the markers are fitted, or fit frames without it (frames='0:60' or "
+        "'61:120')"
+    )
+    # Frames without it are fitted.
+    assert fit(recording, "center", "A,B,C", frames="61:120").frames_used[0] == 61
+
+
+def test_a_marker_with_many_gaps_at_the_origin_names_three_runs_and_counts_the_rest():
+    markers = _markers(n_frames=30, n_markers=2)
+    markers[[2, 3, 8, 14, 20, 26], 0] = 0.0
+    (warning,) = _caught(lambda array: Recording(("A", "B"), array), markers)
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): A at frames 2 to 3, 8, 14 and 2 more runs"
+    )
+
+
+def test_a_recordings_markers_and_a_parts_are_read_only_and_shared():
+    """A part is a view of the recording's markers, not a copy, and neither can be written."""
+    recording = Recording(("A", "B", "C"), _through_the_origin())
+    part = recording.frames("5:15")
+    assert np.shares_memory(part.markers, recording.markers)
+    for markers in (recording.markers, part.markers):
+        with pytest.raises(ValueError, match="read-only"):
+            markers[0, 0, 0] = 1.0
+
+
+def _integers_under_a_positive_scale(path, n_frames):
+    """A C3D of one marker, ``n_frames``, whose frames are 16-bit integers under a POINT:SCALE
+    of 0.1 in its parameter and its header (a file as integer writers make it), the marker
+    moving 0.1 mm a frame along x from 100 mm."""
+    x = 100.0 + 0.1 * (np.arange(n_frames) % 1000)
+    markers = np.stack([x, np.full(n_frames, 200.0), np.full(n_frames, 300.0)], -1)[:, None]
+    content = bytearray(write_c3d(path, "A", markers).read_bytes())
+    start = (struct.unpack("<H", content[16:18])[0] - 1) * 512
+    scale = content.find(b"SCALE", content.find(b"POINT", 512)) + 9  # name, offset, type, dims
+    for where in (slice(12, 16), slice(scale, scale + 4)):
+        assert struct.unpack("<f", content[where])[0] == -1.0
+        content[where] = struct.pack("<f", 0.1)
+    words = np.zeros((n_frames, 1, 4), "<i2")
+    words[..., :3] = np.round(markers / 0.1)
+    frames = words.tobytes()
+    path.write_bytes(bytes(content[:start]) + frames + bytes(-len(frames) % 512))
+    return path
+
+
+def test_an_integer_c3d_is_read_as_written(tmp_path):
+    path = _integers_under_a_positive_scale(tmp_path / "integers.c3d", 300)
+    markers = jointbench.read(path).markers
+    assert np.allclose(markers[[0, 299], 0], [[100.0, 200.0, 300.0], [129.9, 200.0, 300.0]])
+
+
+def test_an_integer_c3d_of_twice_the_frames_a_header_counts_is_refused_as_long(tmp_path):
+    """Its frames past the 65535 its header counts, as many bytes again, were taken for the
+    second half of frames of floats: refused as floats under a positive scale, to be exported
+    again with a negative one, which it is not."""
+    path = _integers_under_a_positive_scale(tmp_path / "long.c3d", 140_000)
+    assert _refusal(path).startswith(
+        f"{path}: the file holds 595976 bytes past the 65535 frames read, room for "
+    )
+
+
+def test_a_gap_of_a_marker_passing_over_the_origin_is_read_as_a_gap():
+    """A moves 40 mm a frame along x, 60 mm above the lab's origin (a foot marker swinging over
+    a floor origin), its sample at x = 0 a gap stored as zeros: the samples on either side lie
+    72 mm from the origin, farther than it moves in a frame, though within two frames' motion."""
+    markers = _markers(n_markers=2)
+    markers[:, 0] = np.stack([40.0 * (np.arange(20) - 10.0), np.zeros(20), np.full(20, 60.0)], -1)
+    markers[10, 0] = 0.0
+    (warning,) = _caught(lambda array: Recording(("A", "B"), array), markers)
+    assert str(warning.message).endswith(
+        "marker moves in a frame nearby (or it has none): A at frame 10"
+    )
+
+
+def test_a_gap_at_the_origin_between_missing_samples_is_read_as_a_gap():
+    """B unseen (NaN) for 20 frames, then one frame at (0, 0, 0), then unseen for 20 more: its
+    steps of up to 156 mm a frame times the 21 frames to its samples reached the origin from
+    1.8 m, and the sample was kept at the lab's origin, without a word; frames unseen say
+    nothing of where a marker went."""
+    markers = _markers(n_frames=60)
+    markers[10:30, 1] = np.nan
+    markers[30, 1] = 0.0
+    markers[31:51, 1] = np.nan
+    (warning,) = _caught(lambda array: Recording(("A", "B", "C"), array), markers)
+    assert str(warning.message).endswith("(or it has none): B at frame 30")

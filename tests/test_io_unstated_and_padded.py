@@ -201,8 +201,8 @@ def test_gaps_stored_as_zeros_read_as_before_and_are_named(tmp_path, gap, count,
     assert [str(w.message) for w in caught] == [
         f"{path}: {count} samples at exactly (0, 0, 0) are read as missing, as gaps a writer "
         "stored as zeros (the C3D format's coordinates of an invalid point), not positions at "
-        "the lab's origin: the samples on either side of each lie farther from the origin than "
-        f"the marker moves in a frame: {named}"
+        "the lab's origin: the marker's nearest sample before or after each lies farther from "
+        f"the origin than the marker moves in a frame nearby (or it has none): {named}"
     ]
     assert np.isnan(recording.markers[..., 0]).sum() == (markers == 0.0).all(axis=-1).sum()
 

@@ -533,6 +533,33 @@ def _check_lab_fixed(lab_fixed_reference: object, kind: str, reference: object) 
         )
 
 
+def _refuse_kept_origin(
+    world: np.ndarray, usable: np.ndarray, labels: tuple[str, ...], recording: Recording
+) -> None:
+    """``ValueError`` where the moving markers ``world`` ``(len(usable), n_markers, 3)`` [mm],
+    rows ``usable`` of ``recording``, fitted without a reference, hold a sample at exactly
+    (0, 0, 0) the recording kept (:func:`~jointbench.io.recording.origin_gaps`: its marker
+    passes through the lab's origin): the estimators' input checks refuse any such sample as a
+    possible gap stored as zeros, and their advice, to fit a Recording, is what was done. It
+    names the first such sample and the ways round it: a reference, in whose frame none is at
+    the origin, or the frames on either side."""
+    at_origin = (world == 0.0).all(axis=-1)
+    if not at_origin.any():
+        return
+    rows, markers = np.nonzero(at_origin)
+    first, end = recording.first_frame, recording.first_frame + recording.n_frames
+    before, after = first + int(usable[rows[0]]), first + int(usable[rows[-1]]) + 1
+    sides = [f"'{a}:{b}'" for a, b in ((first, before), (after, end)) if a < b]
+    without = f", or fit frames without it (frames={' or '.join(sides)})" if sides else ""
+    raise ValueError(
+        f"{recording.source}: {labels[markers[0]]} is at exactly (0, 0, 0) at "
+        f"{recording.when(int(usable[rows[0]]))}, read as a position (its samples on either side "
+        "lie within its motion of the lab's origin), which the fits refuse as a possible gap "
+        f"stored as zeros: name a --reference segment (reference=), in whose frame the markers "
+        f"are fitted{without}"
+    )
+
+
 def prepare(
     recording: Recording,
     kind: str,
@@ -618,6 +645,8 @@ def prepare(
     usable = np.flatnonzero(visible & ~bad)
     if usable.size == 0:
         raise ValueError(f"{recording.source}: no frame has every marker the fit needs")
+    if ref is None:
+        _refuse_kept_origin(world[usable], usable, moving_labels, recording)
     return Prepared(
         kind=kind,
         recording=recording,

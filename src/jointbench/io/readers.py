@@ -333,7 +333,9 @@ def _c3d_word(c3d: ezc3d.c3d, path: Path) -> int:
     itself, which ezc3d reads without a word as integers in all or some of its frames. And
     so where the scale is positive but the frames take a float's 4 bytes a value (the bytes
     past the integers' share not all zero): ezc3d reads them as integers, every coordinate
-    another number."""
+    another number. Not so in a file whose header's last frame is 65535, the most it counts:
+    the bytes past its integers' share may be its frames past those, which
+    :func:`_check_c3d_long` refuses."""
     scale = _c3d_scale(c3d, path)
     header = _c3d_header_scale(path)
     agree = header is None or (header < 0) == (scale < 0)
@@ -342,7 +344,7 @@ def _c3d_word(c3d: ezc3d.c3d, path: Path) -> int:
     frames = max(0, last - first + 1)
     int_bytes = 2 * (4 * n_points + n_analog) * frames
     size = path.stat().st_size
-    holds_floats = n_points > 0 and size >= start + 2 * int_bytes
+    holds_floats = n_points > 0 and last != 0xFFFF and size >= start + 2 * int_bytes
     if agree and scale < 0:
         return 4
     if agree and holds_floats:

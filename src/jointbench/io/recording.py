@@ -40,10 +40,14 @@ def origin_gaps(markers: np.ndarray) -> np.ndarray:
     the zeros, and so do capture programs padding a trial. A measured marker lands at the
     origin to the last bit in all three coordinates only where it moves through it, so such a
     sample is a gap unless its marker could be there: its nearest samples away from the origin
-    before and after the run of such samples it belongs to (those the recording holds) lie no
-    farther from the origin than the marker moves, at its fastest between two consecutive
-    samples, in the frames between. A marker never away from the origin was never seen (a
-    labelled template's marker): all its samples are gaps."""
+    before and after the run of such samples it belongs to (those the recording holds) are next
+    to it, with no missing sample between, and lie no farther from the origin than the marker
+    moves, at its fastest between two consecutive samples within :data:`_REACH_FRAMES` frames
+    on that side of the run, in a frame.
+    Its motion next to the run, not its fastest anywhere: one sample of an artefact (a ghost
+    labelled as the marker) jumps far enough to reach the origin from anywhere, and would keep
+    every gap of its trial. A marker never away from the origin was never seen (a labelled
+    template's marker): all its samples are gaps."""
     at_origin = (markers == 0.0).all(axis=-1)
     gaps = at_origin.copy()
     for marker in np.flatnonzero(at_origin.any(axis=0)):
@@ -59,22 +63,40 @@ def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
     gaps = at_origin.copy()
     if rows.size == 0:
         return gaps
-    consecutive = seen[1:] & seen[:-1]
-    steps = np.linalg.norm(np.diff(track, axis=0)[consecutive], axis=-1)
-    reach = float(steps.max()) if steps.size else 0.0
-    distance = np.linalg.norm(track[rows], axis=-1)
+    # steps[_REACH_FRAMES + i]: the step from row i to row i + 1 where both are seen, else 0;
+    # the zeros on either side stand for the rows before the first and after the last.
+    steps = np.zeros(len(track) - 1 + 2 * _REACH_FRAMES)
+    consecutive = np.flatnonzero(seen[1:] & seen[:-1])
+    steps[_REACH_FRAMES + consecutive] = np.linalg.norm(
+        track[consecutive + 1] - track[consecutive], axis=-1
+    )
+    window = np.arange(_REACH_FRAMES)
     starts, stops = _runs(at_origin)
     # Each run's nearest sample away from the origin after it is rows[after], before it
     # rows[after - 1]; a run at the recording's start or end has only one.
     after = np.searchsorted(rows, starts)
-    before = np.maximum(after - 1, 0)
-    following = np.minimum(after, rows.size - 1)
-    reached_before = distance[before] <= reach * (starts - rows[before])
-    reached_after = distance[following] <= reach * (rows[following] - stops + 1)
+    before = rows[np.maximum(after - 1, 0)]
+    following = rows[np.minimum(after, rows.size - 1)]
+    # The fastest steps in the frames up to the sample before and from the sample after.
+    reach_before = steps[before[:, None] + window].max(axis=1)
+    reach_after = steps[following[:, None] + _REACH_FRAMES + window].max(axis=1)
+    # A side reaches the run from the sample right next to it only: frames unseen between
+    # them say nothing of where the marker went.
+    reached_before = (before == starts - 1) & (
+        np.linalg.norm(track[before], axis=-1) <= reach_before
+    )
+    reached_after = (following == stops) & (
+        np.linalg.norm(track[following], axis=-1) <= reach_after
+    )
     kept = ((after == 0) | reached_before) & ((after == rows.size) | reached_after)
     for start, stop in zip(starts[kept], stops[kept], strict=True):
         gaps[start:stop] = False
     return gaps
+
+
+#: The frames on each side of a run at the origin whose steps tell how fast its marker moves
+#: there (:func:`origin_gaps`): a tenth of a second at 100 Hz.
+_REACH_FRAMES = 10
 
 
 def _runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,9 +135,9 @@ def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, sou
         f"{source}: {n_gaps} sample{'s' if many else ''} at exactly (0, 0, 0) "
         f"{'are' if many else 'is'} read as missing, as {'gaps' if many else 'a gap'} a writer "
         "stored as zeros (the C3D format's coordinates of an invalid point), not "
-        f"{'positions' if many else 'a position'} at the lab's origin: the samples on either "
-        f"side of {'each' if many else 'it'} lie farther from the origin than the marker moves "
-        f"in a frame: {named}"
+        f"{'positions' if many else 'a position'} at the lab's origin: the marker's nearest "
+        f"sample before or after {'each' if many else 'it'} lies farther from the origin than "
+        f"the marker moves in a frame nearby (or it has none): {named}"
     )
 
 
