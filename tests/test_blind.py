@@ -1216,6 +1216,34 @@ def test_a_user_rule_writing_a_path_of_the_benchmarks_through_an_empty_wildcard_
     _refused(tmp_path, _EMPTY_SUFFIX, _BLIND_INPUT, message)
 
 
+# A rule of the user's whose wildcard constraint is no regular expression: an unclosed set, and
+# a constraint given again where the wildcard recurs, which Snakemake refuses to match with.
+_BAD_CONSTRAINTS = {
+    "unclosed": ("results/mine/{x,[a-}.txt", "bad character range"),
+    "twice": ("results/mine/{x,a+}/{x,b+}.txt", "Constraint regex must be defined only"),
+}
+_MISSPELT = """
+
+rule misspelt:
+    output:
+        "{output}",
+    shell:
+        "touch {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("case", sorted(_BAD_CONSTRAINTS))
+def test_a_user_rule_whose_wildcard_constraint_is_no_regular_expression_is_named(tmp_path, case):
+    """Named with its rule and file, not as the bare error of Python's regular expressions."""
+    output, why = _BAD_CONSTRAINTS[case]
+    copy_workflow(tmp_path)
+    message = (
+        f"rule misspelt writes {output}, whose wildcard constraint is no regular expression ({why}"
+    )
+    _refused(tmp_path, _MISSPELT.format(output=output), _BLIND_INPUT, message)
+
+
 # A rule of the user's writing under results/blind/ by its output, log or benchmark file,
 # however the path is spelt: the process's own link to the working directory, a link at the
 # top of the repository (``shortcut``, to results/), a folder of its own and back.

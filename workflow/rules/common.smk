@@ -95,8 +95,11 @@ def check_external_rules(user_rules):
     of the user's (``user_rules``, by name) can write a file of the benchmark's (see
     _check_user_outputs) or a file outside results/ (see _check_user_folders); when two rules
     write its estimates (see _refuse_rival_writers); and when its rule reads a file of
-    results/ other than the blind copies (see _check_blind)."""
+    results/ other than the blind copies (see _check_blind). First, when a wildcard's
+    constraint in a file a rule of the user's writes is no regular expression (see
+    _check_user_patterns)."""
     users = [r for r in workflow.rules if r.name in user_rules]
+    _check_user_patterns(users)
     _check_user_outputs(users, _package_rules(user_rules))
     _check_user_folders(users)
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
@@ -116,6 +119,22 @@ def check_external_rules(user_rules):
             _refuse_rival_writers(study, name, files, producers)
             for producer in producers:
                 _check_blind(producer, name, files, users)
+
+
+def _check_user_patterns(users):
+    """Stop, naming the rule and the file, where a file a rule of ``users`` (the user's) writes
+    has a wildcard whose constraint is no regular expression, or is given again where the
+    wildcard recurs: every check below matches paths with them, and would stop on the bare
+    error of the regular expression, naming neither."""
+    for user in users:
+        for product in user.products():
+            try:
+                product.regex()
+            except (re.error, ValueError) as error:
+                raise ValueError(
+                    f"rule {user.name} writes {product}, whose wildcard constraint is no "
+                    f"regular expression ({error})"
+                ) from None
 
 
 def _produces(rule, path):
