@@ -1216,6 +1216,32 @@ def test_a_user_rule_writing_a_path_of_the_benchmarks_through_an_empty_wildcard_
     _refused(tmp_path, _EMPTY_SUFFIX, _BLIND_INPUT, message)
 
 
+# A rule of the user's writing one file from the full dataset, which the estimator's rule reads
+# by a path with a final newline: a regular expression's $ takes it, so Snakemake finds the
+# file's rule by it, and so must the checks.
+_LEAK_ONE = f"""
+
+rule leak_one:
+    input:
+        "{_DATASET}",
+    output:
+        "results/leak/all.parquet",
+    shell:
+        "cp {{input}} {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_rule_upstream_found_by_a_path_with_a_final_newline_is_named(tmp_path):
+    copy_workflow(tmp_path)
+    newline = 'lambda w: "results/leak/all.parquet\\n",'
+    message = (
+        "rule leak_one, which feeds rule estimate_centroid (external estimator 'centroid') "
+        f"reads {_DATASET}"
+    )
+    _refused(tmp_path, _LEAK_ONE, newline, message)
+
+
 # A rule of the user's whose wildcard constraint is no regular expression: an unclosed set, and
 # a constraint given again where the wildcard recurs, which Snakemake refuses to match with.
 _BAD_CONSTRAINTS = {
