@@ -1216,6 +1216,30 @@ def test_a_user_rule_writing_a_path_of_the_benchmarks_through_an_empty_wildcard_
     _refused(tmp_path, _EMPTY_SUFFIX, _BLIND_INPUT, message)
 
 
+# A rule of the user's writing any log of results/logs/, where every rule of the benchmark's
+# writes its own.
+_EVERY_LOG = """
+
+rule every_log:
+    output:
+        "results/logs/{x}.log",
+    shell:
+        "touch {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_files_of_many_of_the_benchmarks_rules_names_the_first(tmp_path):
+    """The first of the benchmark's rules, in the order they are defined, and the first of its
+    files the user's rule writes too."""
+    copy_workflow(tmp_path)
+    message = (
+        "rule every_log writes results/logs/{x}.log, which rule simulate_cmc of the benchmark "
+        "writes (results/logs/simulate/cmc.log)"
+    )
+    _refused(tmp_path, _EVERY_LOG, _BLIND_INPUT, message)
+
+
 # A rule of the user's writing one file from the full dataset, which the estimator's rule reads
 # by a path with a final newline: a regular expression's $ takes it, so Snakemake finds the
 # file's rule by it, and so must the checks.
