@@ -1062,7 +1062,8 @@ def _refused(tmp_path, rules: str, estimator_input: str, message: str) -> None:
     assert "Building DAG of jobs" not in run.stdout + run.stderr
 
 
-_DATASET = "results/datasets/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet"
+_CONDITION = "marker_set-M__rom_deg-15__noise_mm-1.0"
+_DATASET = f"results/datasets/cmc/{_CONDITION}.parquet"
 
 # A rule of the user's that claims to write the datasets, which the package's rule still writes.
 _DECOY = """
@@ -1238,6 +1239,31 @@ def test_a_user_rule_writing_files_of_many_of_the_benchmarks_rules_names_the_fir
         "writes (results/logs/simulate/cmc.log)"
     )
     _refused(tmp_path, _EVERY_LOG, _BLIND_INPUT, message)
+
+
+# A rule of the user's whose jobs read the blind file for one wildcard and the full dataset for
+# another, the estimator's rule reading what both write.
+_TWO_JOBS = f"""
+
+rule either:
+    input:
+        lambda w: "results/blind/cmc/{_CONDITION}.parquet" if w.k == "a" else "{_DATASET}",
+    output:
+        "results/either/{{study}}/{{k}}.parquet",
+    shell:
+        "cp {{input}} {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+def test_each_job_of_a_rule_upstream_of_an_external_estimator_is_judged(tmp_path):
+    copy_workflow(tmp_path)
+    both = '"results/either/{study}/a.parquet", "results/either/{study}/b.parquet",'
+    message = (
+        "rule either, which feeds rule estimate_centroid (external estimator 'centroid') "
+        f"reads {_DATASET}"
+    )
+    _refused(tmp_path, _TWO_JOBS, both, message)
 
 
 # A rule of the user's writing one file from the full dataset, which the estimator's rule reads
