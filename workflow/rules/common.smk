@@ -274,8 +274,7 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
     otherwise have its inputs judged once per condition, a plan growing as their square).
     """
     for file in (f for f in files if _produces(producer, f)):
-        wildcards = producer.get_wildcards(file)
-        job = (producer.name, tuple(sorted(wildcards.items())))
+        wildcards, job = _job(producer, file)
         if job in seen:
             continue
         seen = seen | {job}
@@ -303,6 +302,14 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
 # Where only the package's rules write: the blind copies and their CSV form, which an external
 # estimator trusts.
 BENCHMARK_ONLY = ("results/blind/", "results/interchange/")
+
+
+def _job(producer, file):
+    """The wildcards (a dict) of the job of rule ``producer`` writing ``file``, and that job
+    as the name of its rule and its wildcards, hashable; the files a job writes share its
+    inputs."""
+    wildcards = dict(producer.get_wildcards(file))
+    return wildcards, (producer.name, tuple(sorted(wildcards.items())))
 
 
 def _check_user_outputs(users, package):
@@ -1209,8 +1216,7 @@ def _jobs_of_external_estimators(users):
     seen = set()
     while todo:
         producer, file = todo.pop()
-        wildcards = dict(producer.get_wildcards(file))
-        job = (producer.name, tuple(sorted(wildcards.items())))
+        wildcards, job = _job(producer, file)
         if job in seen:
             continue
         seen.add(job)
