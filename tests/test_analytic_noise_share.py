@@ -132,3 +132,19 @@ def test_noise_free_poses_leave_the_sd_no_noise_share():
     result = jointbench.fit_joint_center(proximal, distal, "analytic")
     assert result.diagnostics["center_sd_noise_share"] < 1e-12
     assert _NOISY_SD not in result.status
+
+
+@pytest.mark.parametrize("rom_deg", [30.0, 90.0])
+def test_the_share_is_the_noise_information_against_the_rest_along_its_least_direction(rom_deg):
+    """On a swing whose relative rotations' sum ``S`` is far from ``n I``, where ``G S`` and
+    ``S G`` differ, the share is ``v' W v / v' (N - W) v`` along the least determined direction
+    ``v`` of ``N - W``, formed here from the poses without the package's kernels."""
+    proximal, distal, _ = _trial(rom_deg, 5, noise_mm=2.0)
+    poses = trial_poses({"proximal": [proximal], "distal": [distal]}, min_frames=3)[0]
+    normal, total, _ = _normal(poses)
+    turned = _shrinkage(poses["proximal"]) @ total + total @ _shrinkage(poses["distal"])
+    noise = -2.0 * (turned + turned.T)
+    values, vectors = np.linalg.eigh(normal - noise)
+    expected = vectors[:, 0] @ noise @ vectors[:, 0] / values[0]
+    share = analytic_noise_share(poses["proximal"], poses["distal"])
+    assert share == pytest.approx(expected, rel=1e-9)

@@ -1062,7 +1062,8 @@ def _refused(tmp_path, rules: str, estimator_input: str, message: str) -> None:
     assert "Building DAG of jobs" not in run.stdout + run.stderr
 
 
-_DATASET = "results/datasets/cmc/marker_set-M__rom_deg-15__noise_mm-1.0.parquet"
+_CONDITION = "marker_set-M__rom_deg-15__noise_mm-1.0"
+_DATASET = f"results/datasets/cmc/{_CONDITION}.parquet"
 
 # A rule of the user's that claims to write the datasets, which the package's rule still writes.
 _DECOY = """
@@ -1214,6 +1215,109 @@ def test_a_user_rule_writing_a_path_of_the_benchmarks_through_an_empty_wildcard_
         "the benchmark writes"
     )
     _refused(tmp_path, _EMPTY_SUFFIX, _BLIND_INPUT, message)
+
+
+# A rule of the user's writing any log of results/logs/, where every rule of the benchmark's
+# writes its own.
+_EVERY_LOG = """
+
+rule every_log:
+    output:
+        "results/logs/{x}.log",
+    shell:
+        "touch {output}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_user_rule_writing_files_of_many_of_the_benchmarks_rules_names_the_first(tmp_path):
+    """The first of the benchmark's rules, in the order they are defined, and the first of its
+    files the user's rule writes too."""
+    copy_workflow(tmp_path)
+    message = (
+        "rule every_log writes results/logs/{x}.log, which rule simulate_cmc of the benchmark "
+        "writes (results/logs/simulate/cmc.log)"
+    )
+    _refused(tmp_path, _EVERY_LOG, _BLIND_INPUT, message)
+
+
+# A rule of the user's whose jobs read the blind file for one wildcard and the full dataset for
+# another, the estimator's rule reading what both write.
+_TWO_JOBS = f"""
+
+rule either:
+    input:
+        lambda w: "results/blind/cmc/{_CONDITION}.parquet" if w.k == "a" else "{_DATASET}",
+    output:
+        "results/either/{{study}}/{{k}}.parquet",
+    shell:
+        "cp {{input}} {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+def test_each_job_of_a_rule_upstream_of_an_external_estimator_is_judged(tmp_path):
+    copy_workflow(tmp_path)
+    both = '"results/either/{study}/a.parquet", "results/either/{study}/b.parquet",'
+    message = (
+        "rule either, which feeds rule estimate_centroid (external estimator 'centroid') "
+        f"reads {_DATASET}"
+    )
+    _refused(tmp_path, _TWO_JOBS, both, message)
+
+
+# A rule of the user's writing one file from the full dataset, which the estimator's rule reads
+# by a path with a final newline: a regular expression's $ takes it, so Snakemake finds the
+# file's rule by it, and so must the checks.
+_LEAK_ONE = f"""
+
+rule leak_one:
+    input:
+        "{_DATASET}",
+    output:
+        "results/leak/all.parquet",
+    shell:
+        "cp {{input}} {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+def test_a_rule_upstream_found_by_a_path_with_a_final_newline_is_named(tmp_path):
+    copy_workflow(tmp_path)
+    newline = 'lambda w: "results/leak/all.parquet\\n",'
+    message = (
+        "rule leak_one, which feeds rule estimate_centroid (external estimator 'centroid') "
+        f"reads {_DATASET}"
+    )
+    _refused(tmp_path, _LEAK_ONE, newline, message)
+
+
+# A rule of the user's whose wildcard constraint is no regular expression: an unclosed set, and
+# a constraint given again where the wildcard recurs, which Snakemake refuses to match with.
+_BAD_CONSTRAINTS = {
+    "unclosed": ("results/mine/{x,[a-}.txt", "bad character range"),
+    "twice": ("results/mine/{x,a+}/{x,b+}.txt", "Constraint regex must be defined only"),
+}
+_MISSPELT = """
+
+rule misspelt:
+    output:
+        "{output}",
+    shell:
+        "touch {{output}}"
+"""
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize("case", sorted(_BAD_CONSTRAINTS))
+def test_a_user_rule_whose_wildcard_constraint_is_no_regular_expression_is_named(tmp_path, case):
+    """Named with its rule and file, not as the bare error of Python's regular expressions."""
+    output, why = _BAD_CONSTRAINTS[case]
+    copy_workflow(tmp_path)
+    message = (
+        f"rule misspelt writes {output}, whose wildcard constraint is no regular expression ({why}"
+    )
+    _refused(tmp_path, _MISSPELT.format(output=output), _BLIND_INPUT, message)
 
 
 # A rule of the user's writing under results/blind/ by its output, log or benchmark file,

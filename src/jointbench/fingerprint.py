@@ -844,14 +844,18 @@ def numba_jit_disabled() -> bool:
 
 
 # The compiled kernels' and NumPy's elementary functions (acos, atan2, exp) are the C library's
-# libm, whose releases round some results differently. Asked once per process: ``libc_ver`` reads
-# the interpreter's binary.
+# libm, whose releases round some results differently. Asked once per process: where the C
+# library does not state its version (glibc does), ``libc_ver`` reads the interpreter's binary.
 @cache
 def _c_library() -> str:
-    """The C library the interpreter runs on, as ``"glibc 2.36"``; ``"unknown"`` where Python
-    cannot tell (musl, macOS)."""
+    """The C library the interpreter runs on, as ``"glibc 2.36"``; on macOS, whose C library
+    (libSystem, its libm included) comes with the system, the system's release, as ``"macOS
+    14.2"``; ``"unknown"`` where Python cannot tell (musl)."""
     library, version = platform.libc_ver()
-    return f"{library} {version}" if library else "unknown"
+    if library:
+        return f"{library} {version}"
+    release = platform.mac_ver()[0]
+    return f"macOS {release}" if release else "unknown"
 
 
 # Reading the installed distributions' metadata costs more than a job's whole fingerprint, and a

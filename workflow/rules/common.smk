@@ -109,8 +109,11 @@ def check_external_rules(user_rules):
     can write a file of the benchmark's (see _check_user_outputs) or a file outside results/
     (see _check_user_folders); when two rules
     write its estimates (see _refuse_rival_writers); and when its rule reads a file of
-    results/ other than the blind copies (see _check_blind)."""
+    results/ other than the blind copies (see _check_blind). First, when a wildcard's
+    constraint in a file a rule of the user's writes is no regular expression (see
+    _check_user_patterns)."""
     users = [r for r in workflow.rules if r.name in user_rules]
+    _check_user_patterns(users)
     _check_user_outputs(users, _package_rules(user_rules))
     _check_user_folders(users)
     writers = [r for r in workflow.rules if r.name != "estimates_from_csv"]
@@ -131,6 +134,22 @@ def check_external_rules(user_rules):
             for producer in producers:
                 _check_blind(producer, name, files, users)
             jb_config.check_external_kind(study, name, EXTERNAL_KINDS.get(name))
+
+
+def _check_user_patterns(users):
+    """Stop, naming the rule and the file, where a file a rule of ``users`` (the user's) writes
+    has a wildcard whose constraint is no regular expression, or is given again where the
+    wildcard recurs: every check below matches paths with them, and would stop on the bare
+    error of the regular expression, naming neither."""
+    for user in users:
+        for product in user.products():
+            try:
+                product.regex()
+            except (re.error, ValueError) as error:
+                raise ValueError(
+                    f"rule {user.name} writes {product}, whose wildcard constraint is no "
+                    f"regular expression ({error})"
+                ) from None
 
 
 def _produces(rule, path):
@@ -270,8 +289,7 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
     otherwise have its inputs judged once per condition, a plan growing as their square).
     """
     for file in (f for f in files if _produces(producer, f)):
-        wildcards = producer.get_wildcards(file)
-        job = (producer.name, tuple(sorted(wildcards.items())))
+        wildcards, job = _job(producer, file)
         if job in seen:
             continue
         seen = seen | {job}
@@ -299,6 +317,14 @@ def _check_blind(producer, name, files, everyone, via=(), seen=frozenset()):
 # Where only the package's rules write: the blind copies and their CSV form, which an external
 # estimator trusts.
 BENCHMARK_ONLY = ("results/blind/", "results/interchange/")
+
+
+def _job(producer, file):
+    """The wildcards (a dict) of the job of rule ``producer`` writing ``file``, and that job
+    as the name of its rule and its wildcards, hashable; the files a job writes share its
+    inputs."""
+    wildcards = dict(producer.get_wildcards(file))
+    return wildcards, (producer.name, tuple(sorted(wildcards.items())))
 
 
 def _check_user_outputs(users, package):
@@ -1205,8 +1231,7 @@ def _jobs_of_external_estimators(users):
     seen = set()
     while todo:
         producer, file = todo.pop()
-        wildcards = dict(producer.get_wildcards(file))
-        job = (producer.name, tuple(sorted(wildcards.items())))
+        wildcards, job = _job(producer, file)
         if job in seen:
             continue
         seen.add(job)
