@@ -76,6 +76,32 @@ def test_a_key_given_twice_is_refused_naming_it_and_both_lines(tmp_path):
         assert word in message, message
 
 
+@pytest.mark.parametrize(
+    "text",
+    [
+        "studies: {cmc: {trials: 5, trials: 7}}\n",
+        "studies:\n  cmc: {trials: 5, grid: {}, trials: 7}\n",
+    ],
+    ids=["flow", "flow in block"],
+)
+def test_a_key_given_twice_on_one_line_is_refused(tmp_path, text):
+    path = tmp_path / "mine.yaml"
+    path.write_text(text)
+    message = _refused(path)
+    line = text.count("\n", 0, text.index("trials")) + 1
+    for word in (str(path), "studies.cmc.trials", f"twice on line {line}"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize("written", ["010", "0x10", "1_000"])
+def test_a_key_yaml_reads_as_another_number_is_refused(tmp_path, written):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    {written}: 3\n")
+    message = _refused(path)
+    for word in (str(path), f"studies.cmc.{written}", "line 3", f"{written} is read as"):
+        assert word in message, message
+
+
 def test_a_value_that_holds_itself_is_refused(tmp_path):
     path = tmp_path / "mine.yaml"
     path.write_text("studies:\n  cmc: &loop\n    grid: *loop\n")

@@ -431,15 +431,23 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
             line = key.start_mark.line + 1
             name = key.value if isinstance(key, yaml.ScalarNode) else f"(key at line {line})"
             if isinstance(key, yaml.ScalarNode) and key.tag != _MERGE:
-                first = lines.setdefault((key.tag, key.value), line)
-                if first != line:
+                # A key is a value too: 010 as a key is the key 8.
+                _check_nodes(key, place.at(name, line), holding, checked)
+                # Seen before, not on another line: a flow mapping holds both on one.
+                if (key.tag, key.value) in lines:
                     raise ValueError(
                         f"{place.where}: {'.'.join(map(str, (*place.keys, name)))} is given "
-                        f"twice, at lines {first} and {line}: YAML keeps the last alone; "
-                        "keep one"
+                        f"{_twice(lines[key.tag, key.value], line)}: YAML keeps the last "
+                        "alone; keep one"
                     )
+                lines[key.tag, key.value] = line
             _check_nodes(value, place.at(name, line), (*holding, node), checked)
     checked.add(id(node))
+
+
+def _twice(first: int, then: int) -> str:
+    """Where a key is given twice, at lines ``first`` and ``then`` (from 1)."""
+    return f"twice on line {first}" if first == then else f"twice, at lines {first} and {then}"
 
 
 def _number_problem(node: yaml.ScalarNode) -> str | None:
