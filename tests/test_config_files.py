@@ -146,6 +146,17 @@ def test_a_misspelt_key_names_the_file_that_holds_it(tmp_path):
     assert str(first) not in message, message
 
 
+def test_a_mapping_at_fault_names_every_file_that_merged_into_it(tmp_path):
+    first, second, third = (tmp_path / f"{name}.yaml" for name in "abc")
+    first.write_text("studies: {toy: {trials: 2}}\n")
+    second.write_text("base_seed: 3\n")
+    third.write_text("studies: {toy: {enabled: true}}\n")
+    with pytest.raises(ValueError) as raised:
+        study_config.read_configs([DEFAULT, first, second, third])
+    message = str(raised.value)
+    assert "'toy'" in message and f"(set in {first}, {third})" in message, message
+
+
 @pytest.mark.parametrize(
     ("text", "words"),
     [
