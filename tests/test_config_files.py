@@ -53,6 +53,17 @@ def test_a_float_yaml_reads_otherwise_than_written_is_refused(tmp_path, written)
     assert "blind_placement.translation_mm" in message and written in message, message
 
 
+@pytest.mark.parametrize(
+    ("written", "read"), [('!!int "010"', 8), ("!!int '0x10'", 16), ('!!float "1_000.5"', 1000.5)]
+)
+def test_a_quoted_number_tagged_as_one_is_held_to_its_digits(tmp_path, written, read):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    trials: {written}\n")
+    message = _refused(path)
+    for word in (str(path), "studies.cmc.trials", "line 3", f"as {read}"):
+        assert word in message, message
+
+
 @pytest.mark.parametrize("written", ["10", "0", "-3", "+7", "1.5", "0.5", "1e3", "'010'"])
 def test_numbers_in_decimal_digits_and_quoted_text_are_read(tmp_path, written):
     path = tmp_path / "mine.yaml"

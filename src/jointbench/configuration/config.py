@@ -451,14 +451,13 @@ def _twice(first: int, then: int) -> str:
 
 
 def _number_problem(node: yaml.ScalarNode) -> str | None:
-    """Why the plain scalar ``node`` reads as another number than its digits show, or None:
+    """Why the scalar ``node`` reads as another number than its digits show, or None:
     an integer with a leading 0 (octal), a base prefix (``0x``, ``0b``), an underscore
     (dropped) or a colon (base 60), which YAML 1.1, PyYAML's and Snakemake's, reads so
-    (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text."""
+    (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text, unless
+    tagged a number (``!!int "010"``)."""
     text = node.value
-    # Plain: no style in Python's parser, an empty one in C's.
-    if node.style:
-        return None
+    # By its tag, not its quotes: a quoted number is text, but one tagged !!int reads as 8 too.
     integer = node.tag == _INTEGER and not _DECIMAL.fullmatch(text)
     if not integer and not (node.tag == _FLOAT and ("_" in text or ":" in text)):
         return None
