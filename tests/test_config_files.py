@@ -205,3 +205,14 @@ def test_dry_run_names_the_config_file_of_a_schema_error(tmp_path):
     code, message = _dry_run(tmp_path / "wf2", "--config", "verdicts={'seeds': 0}")
     assert code != 0 and "verdicts/seeds" in message, message[-2000:]
     assert "set in --config" in message, message[-2000:]
+
+
+@pytest.mark.parametrize("value", ["010.5", "00.5", "-07.25", "0", "-0", "0.0", "10"])
+def test_a_config_value_read_as_its_digits_show_is_not_refused(value):
+    study_config.check_config_values([f"base_seed={value}", f"label=v{value}"])
+
+
+@pytest.mark.parametrize("value", ["010", "-010", "1_000", "1_000.5", "0_1.5"])
+def test_a_config_value_read_otherwise_than_written_is_refused(value):
+    with pytest.raises(ValueError, match=f"--config base_seed={value}: {value} is read as"):
+        study_config.check_config_values([f"base_seed={value}"])

@@ -311,16 +311,18 @@ def check_config_values(entries: Sequence[str]) -> None:
     """Refuse, naming the entry, a ``--config`` value (``KEY=VALUE`` as typed, ``entries``)
     that Snakemake reads as a number other than YAML would, or than its digits show: it tries
     Python's ``int`` and ``float`` first, which read ``010`` as 10 (a config file, as 8) and
-    drop underscores (``1_000``)."""
+    drop underscores (``1_000``). A float's leading 0 (``010.5``) reads as its digits show,
+    here and in a file alike."""
     for entry in entries:
         text = entry.partition("=")[2].strip()
-        if not (_LEADING_ZERO.match(text) or "_" in text):
-            continue
+        misread = {int: bool(_LEADING_ZERO.match(text)) or "_" in text, float: "_" in text}
         for parse in (int, float):
             try:
                 number = parse(text)
             except ValueError:
                 continue
+            if not misread[parse]:
+                break
             in_file = read_yaml(text)
             also = f", and in a config file as {in_file!r}" if in_file != number else ""
             raise ValueError(
