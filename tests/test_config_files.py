@@ -31,17 +31,24 @@ def _dry_run(folder: Path, *arguments: str):
 
 
 @pytest.mark.parametrize(
-    ("written", "read"),
-    [("010", 8), ("0x10", 16), ("1_000", 1000), ("0b11", 3), ("1:30", 90), ("-010", -8)],
+    ("written", "read", "why"),
+    [
+        ("010", 8, "octal"),
+        ("0x10", 16, "hexadecimal"),
+        ("1_000", 1000, "drops the underscores"),
+        ("0b11", 3, "binary"),
+        ("1:30", 90, "base 60"),
+        ("-010", -8, "octal"),
+    ],
     ids=["octal", "hex", "underscore", "binary", "sexagesimal", "negative octal"],
 )
 def test_an_integer_yaml_reads_in_another_base_is_refused_naming_the_key_and_file(
-    tmp_path, written, read
+    tmp_path, written, read, why
 ):
     path = tmp_path / "mine.yaml"
     path.write_text(f"base_seed: 3\nstudies:\n  cmc:\n    trials: {written}\n")
     message = _refused(path)
-    for word in (str(path), "studies.cmc.trials", "line 4", written, f"as {read}"):
+    for word in (str(path), "studies.cmc.trials", "line 4", written, f"as {read}", why):
         assert word in message, message
 
 
