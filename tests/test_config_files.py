@@ -31,17 +31,24 @@ def _dry_run(folder: Path, *arguments: str):
 
 
 @pytest.mark.parametrize(
-    ("written", "read"),
-    [("010", 8), ("0x10", 16), ("1_000", 1000), ("0b11", 3), ("1:30", 90), ("-010", -8)],
+    ("written", "read", "why"),
+    [
+        ("010", 8, "octal"),
+        ("0x10", 16, "hexadecimal"),
+        ("1_000", 1000, "drops the underscores"),
+        ("0b11", 3, "binary"),
+        ("1:30", 90, "base 60"),
+        ("-010", -8, "octal"),
+    ],
     ids=["octal", "hex", "underscore", "binary", "sexagesimal", "negative octal"],
 )
 def test_an_integer_yaml_reads_in_another_base_is_refused_naming_the_key_and_file(
-    tmp_path, written, read
+    tmp_path, written, read, why
 ):
     path = tmp_path / "mine.yaml"
     path.write_text(f"base_seed: 3\nstudies:\n  cmc:\n    trials: {written}\n")
     message = _refused(path)
-    for word in (str(path), "studies.cmc.trials", "line 4", written, f"as {read}"):
+    for word in (str(path), "studies.cmc.trials", "line 4", written, f"as {read}", why):
         assert word in message, message
 
 
@@ -51,6 +58,17 @@ def test_a_float_yaml_reads_otherwise_than_written_is_refused(tmp_path, written)
     path.write_text(f"blind_placement: {{translation_mm: {written}}}\n")
     message = _refused(path)
     assert "blind_placement.translation_mm" in message and written in message, message
+
+
+@pytest.mark.parametrize(
+    ("written", "read"), [('!!int "010"', 8), ("!!int '0x10'", 16), ('!!float "1_000.5"', 1000.5)]
+)
+def test_a_quoted_number_tagged_as_one_is_held_to_its_digits(tmp_path, written, read):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    trials: {written}\n")
+    message = _refused(path)
+    for word in (str(path), "studies.cmc.trials", "line 3", f"as {read}"):
+        assert word in message, message
 
 
 @pytest.mark.parametrize("written", ["10", "0", "-3", "+7", "1.5", "0.5", "1e3", "'010'"])
@@ -73,6 +91,32 @@ def test_a_key_given_twice_is_refused_naming_it_and_both_lines(tmp_path):
     path.write_text("studies:\n  cmc:\n    trials: 5\n    grid: {}\n    trials: 7\n")
     message = _refused(path)
     for word in (str(path), "studies.cmc.trials", "lines 3 and 5"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "studies: {cmc: {trials: 5, trials: 7}}\n",
+        "studies:\n  cmc: {trials: 5, grid: {}, trials: 7}\n",
+    ],
+    ids=["flow", "flow in block"],
+)
+def test_a_key_given_twice_on_one_line_is_refused(tmp_path, text):
+    path = tmp_path / "mine.yaml"
+    path.write_text(text)
+    message = _refused(path)
+    line = text.count("\n", 0, text.index("trials")) + 1
+    for word in (str(path), "studies.cmc.trials", f"twice on line {line}"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize("written", ["010", "0x10", "1_000"])
+def test_a_key_yaml_reads_as_another_number_is_refused(tmp_path, written):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    {written}: 3\n")
+    message = _refused(path)
+    for word in (str(path), f"studies.cmc.{written}", "line 3", f"{written} is read as"):
         assert word in message, message
 
 
@@ -120,6 +164,17 @@ def test_a_misspelt_key_names_the_file_that_holds_it(tmp_path):
     assert str(first) not in message, message
 
 
+def test_a_mapping_at_fault_names_every_file_that_merged_into_it(tmp_path):
+    first, second, third = (tmp_path / f"{name}.yaml" for name in "abc")
+    first.write_text("studies: {toy: {trials: 2}}\n")
+    second.write_text("base_seed: 3\n")
+    third.write_text("studies: {toy: {enabled: true}}\n")
+    with pytest.raises(ValueError) as raised:
+        study_config.read_configs([DEFAULT, first, second, third])
+    message = str(raised.value)
+    assert "'toy'" in message and f"(set in {first}, {third})" in message, message
+
+
 @pytest.mark.parametrize(
     ("text", "words"),
     [
@@ -157,3 +212,14 @@ def test_dry_run_names_the_config_file_of_a_schema_error(tmp_path):
     code, message = _dry_run(tmp_path / "wf2", "--config", "verdicts={'seeds': 0}")
     assert code != 0 and "verdicts/seeds" in message, message[-2000:]
     assert "set in --config" in message, message[-2000:]
+
+
+@pytest.mark.parametrize("value", ["010.5", "00.5", "-07.25", "0", "-0", "0.0", "10"])
+def test_a_config_value_read_as_its_digits_show_is_not_refused(value):
+    study_config.check_config_values([f"base_seed={value}", f"label=v{value}"])
+
+
+@pytest.mark.parametrize("value", ["010", "-010", "1_000", "1_000.5", "0_1.5"])
+def test_a_config_value_read_otherwise_than_written_is_refused(value):
+    with pytest.raises(ValueError, match=f"--config base_seed={value}: {value} is read as"):
+        study_config.check_config_values([f"base_seed={value}"])

@@ -311,16 +311,18 @@ def check_config_values(entries: Sequence[str]) -> None:
     """Refuse, naming the entry, a ``--config`` value (``KEY=VALUE`` as typed, ``entries``)
     that Snakemake reads as a number other than YAML would, or than its digits show: it tries
     Python's ``int`` and ``float`` first, which read ``010`` as 10 (a config file, as 8) and
-    drop underscores (``1_000``)."""
+    drop underscores (``1_000``). A float's leading 0 (``010.5``) reads as its digits show,
+    here and in a file alike."""
     for entry in entries:
         text = entry.partition("=")[2].strip()
-        if not (_LEADING_ZERO.match(text) or "_" in text):
-            continue
+        misread = {int: bool(_LEADING_ZERO.match(text)) or "_" in text, float: "_" in text}
         for parse in (int, float):
             try:
                 number = parse(text)
             except ValueError:
                 continue
+            if not misread[parse]:
+                break
             in_file = read_yaml(text)
             also = f", and in a config file as {in_file!r}" if in_file != number else ""
             raise ValueError(
@@ -431,26 +433,33 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
             line = key.start_mark.line + 1
             name = key.value if isinstance(key, yaml.ScalarNode) else f"(key at line {line})"
             if isinstance(key, yaml.ScalarNode) and key.tag != _MERGE:
-                first = lines.setdefault((key.tag, key.value), line)
-                if first != line:
+                # A key is a value too: 010 as a key is the key 8.
+                _check_nodes(key, place.at(name, line), holding, checked)
+                # Seen before, not on another line: a flow mapping holds both on one.
+                if (key.tag, key.value) in lines:
                     raise ValueError(
                         f"{place.where}: {'.'.join(map(str, (*place.keys, name)))} is given "
-                        f"twice, at lines {first} and {line}: YAML keeps the last alone; "
-                        "keep one"
+                        f"{_twice(lines[key.tag, key.value], line)}: YAML keeps the last "
+                        "alone; keep one"
                     )
+                lines[key.tag, key.value] = line
             _check_nodes(value, place.at(name, line), (*holding, node), checked)
     checked.add(id(node))
 
 
+def _twice(first: int, then: int) -> str:
+    """Where a key is given twice, at lines ``first`` and ``then`` (from 1)."""
+    return f"twice on line {first}" if first == then else f"twice, at lines {first} and {then}"
+
+
 def _number_problem(node: yaml.ScalarNode) -> str | None:
-    """Why the plain scalar ``node`` reads as another number than its digits show, or None:
+    """Why the scalar ``node`` reads as another number than its digits show, or None:
     an integer with a leading 0 (octal), a base prefix (``0x``, ``0b``), an underscore
     (dropped) or a colon (base 60), which YAML 1.1, PyYAML's and Snakemake's, reads so
-    (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text."""
+    (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text, unless
+    tagged a number (``!!int "010"``)."""
     text = node.value
-    # Plain: no style in Python's parser, an empty one in C's.
-    if node.style:
-        return None
+    # By its tag, not its quotes: a quoted number is text, but one tagged !!int reads as 8 too.
     integer = node.tag == _INTEGER and not _DECIMAL.fullmatch(text)
     if not integer and not (node.tag == _FLOAT and ("_" in text or ":" in text)):
         return None
