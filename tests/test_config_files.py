@@ -71,7 +71,9 @@ def test_a_quoted_number_tagged_as_one_is_held_to_its_digits(tmp_path, written, 
         assert word in message, message
 
 
-@pytest.mark.parametrize("written", ["10", "0", "-3", "+7", "1.5", "0.5", "1e3", "'010'"])
+@pytest.mark.parametrize(
+    "written", ["10", "0", "-3", "+7", "1.5", "0.5", "1.0e3", "'1e3'", "'010'"]
+)
 def test_numbers_in_decimal_digits_and_quoted_text_are_read(tmp_path, written):
     path = tmp_path / "mine.yaml"
     path.write_text(f"base_seed: {written}\n")
@@ -223,3 +225,29 @@ def test_a_config_value_read_as_its_digits_show_is_not_refused(value):
 def test_a_config_value_read_otherwise_than_written_is_refused(value):
     with pytest.raises(ValueError, match=f"--config base_seed={value}: {value} is read as"):
         study_config.check_config_values([f"base_seed={value}"])
+
+
+@pytest.mark.parametrize("written", ["1e-3", "2E5", "-1e3", "+5e0"])
+def test_an_exponent_without_a_dot_yaml_reads_as_text_is_refused(tmp_path, written):
+    # YAML 1.1 (PyYAML's, Snakemake's) reads 1e-3 as the text '1e-3', not a number; in a
+    # field that takes text it would pass for a name.
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    protocol:\n      noise_mm: {written}\n")
+    message = _refused(path)
+    for word in (str(path), "studies.cmc.protocol.noise_mm", "line 4", written, "text", "dot"):
+        assert word in message, message
+
+
+def test_a_json_config_file_is_read_as_json_as_snakemake_reads_it(tmp_path):
+    # Snakemake reads a config file as JSON first, where 1e-3 is a number and 010 no number.
+    path = tmp_path / "mine.json"
+    path.write_text('{"studies": {"cmc": {"protocol": {"noise_mm": 1e-3}, "trials": 3}}}')
+    read = study_config.read_config_file(path, "config file")
+    assert read == {"studies": {"cmc": {"protocol": {"noise_mm": 0.001}, "trials": 3}}}
+
+
+def test_a_key_given_twice_in_a_json_config_file_is_refused(tmp_path):
+    path = tmp_path / "mine.json"
+    path.write_text('{"studies": {"cmc": {"trials": 3, "trials": 5}}}')
+    message = _refused(path)
+    assert str(path) in message and "'trials'" in message and "twice" in message, message

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import itertools
+import json
 import numbers
 import re
 from collections.abc import Mapping, Sequence
@@ -345,7 +346,11 @@ def read_config_file(path: Path, where: str) -> Mapping:
         raise ValueError(f"{where}: no such file")
     text = _utf8_text(path.read_bytes(), where)
     try:
-        document = _read_as_written(text, where)
+        # As Snakemake reads a config file: as JSON where it is JSON (where 1e-3 is a number),
+        # else as YAML.
+        document = _json_document(text, where)
+        if document is _NOT_JSON:
+            document = _read_as_written(text, where)
     except yaml.YAMLError as error:
         raise ValueError(f"{where}: not valid YAML{_yaml_error_place(error, text)}") from None
     if document is None:
@@ -355,6 +360,30 @@ def read_config_file(path: Path, where: str) -> Mapping:
     if not isinstance(document, Mapping):
         raise ValueError(f"{where}: not a mapping of config keys to values")
     return document
+
+
+_NOT_JSON = object()
+
+
+def _json_document(text: str, where: str) -> object:
+    """The JSON document ``text`` holds, or :data:`_NOT_JSON` where it is no JSON; a key given
+    twice in one object refused naming ``where`` (JSON readers keep the last alone)."""
+
+    def once(pairs: list[tuple[str, object]]) -> dict:
+        document: dict = {}
+        for key, value in pairs:
+            if key in document:
+                raise ValueError(
+                    f"{where}: the key {key!r} is given twice in one object: JSON keeps the "
+                    "last alone; keep one"
+                )
+            document[key] = value
+        return document
+
+    try:
+        return json.loads(text, object_pairs_hook=once)
+    except json.JSONDecodeError:
+        return _NOT_JSON
 
 
 def _utf8_text(data: bytes, where: str) -> str:
@@ -406,6 +435,9 @@ class _Place:
 # a leading 0 Python reads past.
 _INTEGER, _FLOAT, _MERGE = (f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge"))
 _DECIMAL = re.compile(r"[-+]?(0|[1-9][0-9]*)")
+_TEXT = "tag:yaml.org,2002:str"
+# A number to JSON and YAML 1.2 that YAML 1.1 reads as text: an exponent, no dot.
+_EXPONENT_ONLY = re.compile(r"[-+]?[0-9]+[eE][-+]?[0-9]+")
 _LEADING_ZERO = re.compile(r"[-+]?0[0-9_]")
 
 
@@ -459,6 +491,12 @@ def _number_problem(node: yaml.ScalarNode) -> str | None:
     (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text, unless
     tagged a number (``!!int "010"``)."""
     text = node.value
+    # Plain, not quoted: the C parser marks a plain scalar with the style "", the other None.
+    if node.tag == _TEXT and not node.style and _EXPONENT_ONLY.fullmatch(text):
+        return (
+            f"{text} is read as the text {text!r}: YAML 1.1 reads a number with an exponent "
+            "only with a dot in it; write it with one (1.0e-3), or in quotes if text is meant"
+        )
     # By its tag, not its quotes: a quoted number is text, but one tagged !!int reads as 8 too.
     integer = node.tag == _INTEGER and not _DECIMAL.fullmatch(text)
     if not integer and not (node.tag == _FLOAT and ("_" in text or ":" in text)):
