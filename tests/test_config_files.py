@@ -310,7 +310,7 @@ def test_a_mistake_after_the_schema_names_the_config_file_that_set_it(tmp_path, 
 
 def test_a_mistake_at_keys_of_several_files_names_each():
     """A bound across fields names each file that sets one of them, in the order read: the
-    default config's noise and the overlay's markers of the hinge's knee."""
+    first's noise under ``all`` and the second's markers of the knee, not a third's keys."""
     sources = [
         ("base.yaml", {"studies": {"hinge": {"protocol": {"all": {"noise_sd_mm": 1e200}}}}}),
         ("over.yaml", {"studies": {"hinge": {"protocol": {"knee": {"markers_mm": [[0, 0, 1]]}}}}}),
