@@ -57,18 +57,17 @@ invocation.check_options(sys.argv[1:])
 # project's own schema check before Snakemake's (workflow/rules/common.smk), whose error leads
 # with a dump of the schema: a mistake, a misspelt study first, is named in one line with the
 # file, or --config, that set it. Snakemake merges the workflow's config file first, then
-# each --configfile, then the --config values.
+# each --configfile, then the --config values. Every later check of the config names them too
+# (jb_config.sources_named).
 _GIVEN_FILES = list(workflow.config_settings.configfiles)
 jb_config.check_config_values(workflow.config_settings.config_args or [])
-jb_config.check_sources(
-    config,
-    [
-        *jb_config.read_sources(
-            [f for f in workflow.configfiles if f not in _GIVEN_FILES] + _GIVEN_FILES
-        ),
-        ("--config", dict(workflow.config_settings.config)),
-    ],
-)
+CONFIG_SOURCES = [
+    *jb_config.read_sources(
+        [f for f in workflow.configfiles if f not in _GIVEN_FILES] + _GIVEN_FILES
+    ),
+    ("--config", dict(workflow.config_settings.config)),
+]
+jb_config.check_sources(config, CONFIG_SOURCES)
 
 
 include: "workflow/rules/common.smk"
@@ -110,7 +109,8 @@ include: "workflow/rules/sensitivity.smk"
 
 
 # Once every rule of the package's exists, each of which a rule of the user's may not imitate.
-check_external_rules(USER_RULES)
+with jb_config.sources_named(CONFIG_SOURCES):
+    check_external_rules(USER_RULES)
 
 
 # Every job of the user's runs under the run's time limit (jobs.external_time_limit_s).

@@ -684,19 +684,35 @@ def test_a_config_typo_is_named_before_any_extension_is_imported(
     assert "'trails' was unexpected" in err
 
 
+def _fit_over(workdir, first: str, second: str) -> list[str]:
+    """The options of a fit with the overlays ``first`` then ``second``, written in
+    ``workdir`` as ``a.yaml`` and ``b.yaml``."""
+    (workdir / "a.yaml").write_text(first)
+    (workdir / "b.yaml").write_text(second)
+    return ["fit", "markers.csv", "--configfile", "a.yaml", "--configfile", "b.yaml"]
+
+
 def test_fit_names_the_config_file_of_a_schema_error(tmp_path, monkeypatch, capsys):
     workdir = _toy_run(tmp_path)
     monkeypatch.chdir(workdir)
-    (workdir / "a.yaml").write_text("studies: {cmc: {trials: 0}}\n")
-    (workdir / "b.yaml").write_text("base_seed: 3\n")
-    options = ["--configfile", "a.yaml", "--configfile", "b.yaml"]
-    code, _, err = run(capsys, "fit", "markers.csv", *options)
+    arguments = _fit_over(workdir, "studies: {cmc: {trials: 0}}\n", "base_seed: 3\n")
+    code, _, err = run(capsys, *arguments)
     assert code == 2
     assert "config error at studies/cmc/trials" in err and "(set in a.yaml)" in err, err
     (workdir / "b.yaml").write_text("base_seed: 010\n")
-    code, _, err = run(capsys, "fit", "markers.csv", *options)
+    code, _, err = run(capsys, *arguments)
     assert code == 2
     assert "config file b.yaml: base_seed at line 1: 010 is read as 8" in err, err
+
+
+def test_fit_names_the_config_file_of_a_mistake_after_the_schema(tmp_path, monkeypatch, capsys):
+    workdir = _toy_run(tmp_path)
+    monkeypatch.chdir(workdir)
+    second = "studies: {cmc: {grid: {rom_deg: [0]}}}\n"
+    code, _, err = run(capsys, *_fit_over(workdir, "studies: {cmc: {trials: 3}}\n", second))
+    assert code == 2
+    assert "config: studies.cmc.grid.rom_deg: 0 is not allowed" in err, err
+    assert "(set in b.yaml)" in err and "a.yaml" not in err, err
 
 
 BROKEN_EXTENSIONS = {

@@ -251,3 +251,128 @@ def test_a_key_given_twice_in_a_json_config_file_is_refused(tmp_path):
     path.write_text('{"studies": {"cmc": {"trials": 3, "trials": 5}}}')
     message = _refused(path)
     assert str(path) in message and "'trials'" in message and "twice" in message, message
+
+
+# A mistake after the schema's check, of each kind of check, and the overlay setting it: a
+# first overlay over the config sets keys of the same study, a second the one at fault.
+AFTER_SCHEMA = {
+    "grid value": (
+        "studies: {cmc: {grid: {rom_deg: [0]}}}\n",
+        ["studies.cmc.grid.rom_deg: 0 is not allowed"],
+    ),
+    "protocol field": (
+        "studies: {hip: {protocol: {fps: 0}}}\n",
+        ["studies.hip.protocol.fps: must be a number > 0"],
+    ),
+    "motion short of its rom": (
+        "studies: {hinge: {protocol: {all: {motion: lissajous, fe_cycles: 1.0e-300}}}}\n",
+        ["studies.hinge.protocol.all.fe_cycles: 1e-300 knee lissajous FE cycles"],
+    ),
+    "hip rig about one axis": (
+        "studies: {hip: {protocol: {cross_swing_deg: 0, twist_deg: 0}}}\n",
+        ["studies.hip.protocol.swing_deg, cross_swing_deg, twist_deg", "only swing_deg"],
+    ),
+    "estimator option": (
+        "studies: {cmc: {options: {BC: {tol_x: -1}}}}\n",
+        ["studies.cmc.options.BC.tol_x: must be a number > 0, got -1"],
+    ),
+    "frames": (
+        "studies: {hip: {grid: {n_frames: [1]}}}\n",
+        ["studies.hip.grid.n_frames: condition n_frames-1 has trials of 1 frame(s)"],
+    ),
+    "estimator name": (
+        "studies: {hip: {estimators: [SCoRE, XX]}}\n",
+        ["studies.hip.estimators: unknown joint_center estimator 'XX'"],
+    ),
+}
+# The first overlay: a key of each study, beside the one the second sets.
+FIRST = "studies: {cmc: {trials: 3}, hinge: {trials: 3}, hip: {trials: 3}}\n"
+
+
+def _overlays(folder: Path, second: str) -> tuple[Path, Path]:
+    first_path, second_path = folder / "a.yaml", folder / "b.yaml"
+    first_path.write_text(FIRST)
+    second_path.write_text(second)
+    return first_path, second_path
+
+
+@pytest.mark.parametrize("kind", AFTER_SCHEMA)
+def test_a_mistake_after_the_schema_names_the_config_file_that_set_it(tmp_path, kind):
+    text, words = AFTER_SCHEMA[kind]
+    first, second = _overlays(tmp_path, text)
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config_files([DEFAULT, first, second])
+    message = str(raised.value)
+    for word in [*words, f"(set in {second})"]:
+        assert word in message, message
+    assert str(first) not in message and str(DEFAULT) not in message, message
+
+
+def test_a_mistake_at_keys_of_several_files_names_each():
+    """A bound across fields names each file that sets one of them, in the order read: the
+    first's noise under ``all`` and the second's markers of the knee, not a third's keys."""
+    sources = [
+        ("base.yaml", {"studies": {"hinge": {"protocol": {"all": {"noise_sd_mm": 1e200}}}}}),
+        ("over.yaml", {"studies": {"hinge": {"protocol": {"knee": {"markers_mm": [[0, 0, 1]]}}}}}),
+        ("other.yaml", {"base_seed": 3}),
+    ]
+    error = study_config.ConfigError(
+        "config: studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm: too much",
+        study_config.key_paths("studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm"),
+    )
+    with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
+        raise error
+    assert str(raised.value).endswith("too much (set in base.yaml, over.yaml)"), raised.value
+
+
+@pytest.mark.parametrize(
+    ("keys", "paths"),
+    [
+        ("studies.cmc.trials", [("studies", "cmc", "trials")]),
+        ("studies.cmc.options.MA.start[2]", [("studies", "cmc", "options", "MA", "start", 2)]),
+        (
+            "studies.hip.protocol.swing_hz, fps",
+            [("studies", "hip", "protocol", "swing_hz"), ("studies", "hip", "protocol", "fps")],
+        ),
+        (
+            "studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm",
+            [
+                ("studies", "hinge", "protocol", "all", "noise_sd_mm"),
+                ("studies", "hinge", "protocol", "knee", "markers_mm"),
+            ],
+        ),
+        (
+            "studies.hinge.protocol.all.markers_mm[0], noise_sd_mm",
+            [
+                ("studies", "hinge", "protocol", "all", "markers_mm", 0),
+                ("studies", "hinge", "protocol", "all", "noise_sd_mm"),
+            ],
+        ),
+    ],
+)
+def test_the_keys_a_refusal_names_are_read_as_paths(keys, paths):
+    assert study_config.key_paths(keys) == paths
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize(
+    "kind", ["grid value", "hip rig about one axis", "estimator option", "protocol field"]
+)
+def test_dry_run_names_the_config_file_of_a_mistake_after_the_schema(tmp_path, kind):
+    text, words = AFTER_SCHEMA[kind]
+    first, second = _overlays(tmp_path, text)
+    code, message = _dry_run(tmp_path / "wf", "--configfile", str(first), str(second))
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    for word in [*words, f"(set in {second})"]:
+        assert word in message, message[-2000:]
+    assert f"(set in {first}" not in message, message[-2000:]
+
+
+@pytest.mark.pipeline
+def test_dry_run_names_the_config_file_listing_an_external_estimator_of_another_kind(tmp_path):
+    first, second = _overlays(tmp_path, "studies: {hinge: {external_estimators: [centroid]}}\n")
+    code, message = _dry_run(tmp_path / "wf", "--configfile", str(first), str(second))
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    for word in ["studies.hinge.external_estimators: 'centroid' writes center", str(second)]:
+        assert word in message, message[-2000:]
+    assert f"(set in {second})" in message, message[-2000:]

@@ -36,7 +36,7 @@ from jointbench.comparison.snapshot import (
     snapshot_table,
     update_readme,
 )
-from jointbench.configuration.config import open_config, read_configs, study_names
+from jointbench.configuration.config import open_config_files, study_names
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
@@ -103,7 +103,7 @@ def _open_run(args: argparse.Namespace) -> Mapping:
             "--configfile updates as snakemake's does, is read from the folder the run is in: "
             "run jointbench there"
         )
-    return open_config(read_configs([DEFAULT_CONFIG, *args.configfile]))
+    return open_config_files([DEFAULT_CONFIG, *args.configfile])
 
 
 def _snapshot(args: argparse.Namespace) -> int:

@@ -36,8 +36,10 @@ from jointbench.configuration import config as jb_config
 
 validate(config, str(jb_config.SCHEMA_PATH))
 # Extensions loaded, then grid values, estimator names and options checked: a mistake stops the
-# run here, naming the key (the command line opens a run's config the same way).
-jb_config.open_config(config)
+# run here, naming the key and the config files that set it (the command line opens a run's
+# config the same way).
+with jb_config.sources_named(CONFIG_SOURCES):
+    jb_config.open_config(config)
 
 # Advice a job prints (the --forcerun for an unreadable file) repeats this run's options: its
 # --configfile and --config, --directory, --profile.
@@ -125,10 +127,11 @@ def check_external_rules(user_rules):
             ]
             producers = [w for w in writers if any(_produces(w, f) for f in files)]
             if not producers:
-                raise ValueError(
+                raise jb_config.ConfigError(
                     f"config: studies.{study}.external_estimators: no rule writes the "
                     f"estimates of {name!r} ({files[0]} or .csv); its rule goes in "
-                    "workflow/rules/estimators/ (README, 'Adding an estimator')"
+                    "workflow/rules/estimators/ (README, 'Adding an estimator')",
+                    [("studies", study, "external_estimators")],
                 )
             _refuse_rival_writers(study, name, files, producers)
             for producer in producers:

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import inspect
 import itertools
 import json
 import numbers
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
@@ -25,6 +26,7 @@ from jointbench.simulate import KINDS, Study
 
 __all__ = [
     "MAX_TRIALS",
+    "ConfigError",
     "SchemaError",
     "check_config",
     "check_config_values",
@@ -35,14 +37,17 @@ __all__ = [
     "conditions",
     "estimator_names",
     "external_kind",
+    "key_paths",
     "load_config",
     "open_config",
+    "open_config_files",
     "ordered_settings",
     "parse_condition_id",
     "read_config_file",
     "read_configs",
     "read_sources",
     "read_yaml",
+    "sources_named",
     "study_names",
     "validate_against",
     "validate_config",
@@ -71,12 +76,22 @@ def read_yaml(text: str) -> object:
     return yaml.load(text, Loader=_LOADER)
 
 
-class SchemaError(ValueError):
+class ConfigError(ValueError):
+    """A config refused at some of its keys. ``paths``: each the keys (and list indices) from
+    the top to a value at fault, whose sources a run of several config files names
+    (:func:`sources_named`); ``()`` is the config as a whole, which no one source sets."""
+
+    def __init__(self, message: str, paths: Sequence[Sequence] = ()) -> None:
+        super().__init__(message)
+        self.paths = tuple(tuple(path) for path in paths)
+
+
+class SchemaError(ConfigError):
     """A document that does not match its schema. ``path``: the keys (and list indices) from
     the top to the value at fault; for a key the schema does not allow, down to that key."""
 
     def __init__(self, message: str, path: Sequence = ()) -> None:
-        super().__init__(message)
+        super().__init__(message, [path])
         self.path = tuple(path)
 
 
@@ -174,8 +189,17 @@ def _check_studies_registered(config: Mapping) -> None:
 
 
 def load_config(path: str | Path) -> dict:
-    """A YAML config opened as a run opens it (:func:`open_config`)."""
-    return dict(open_config(read_configs([path])))
+    """A YAML config opened as a run opens it (:func:`open_config_files`)."""
+    return dict(open_config_files([path]))
+
+
+def open_config_files(paths: Sequence[str | Path], base: str | Path = ".") -> Mapping:
+    """The config of the files ``paths``, each over the ones before (:func:`read_sources`),
+    opened as a run opens it (:func:`open_config`); an error at a key names the files that set
+    it (:func:`sources_named`)."""
+    sources = read_sources(paths)
+    with sources_named(sources):
+        return open_config(merged_sources(sources), base)
 
 
 def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
@@ -273,14 +297,26 @@ def merged_sources(sources: Sequence[tuple[str, Mapping]]) -> dict:
 def check_sources(config: Mapping, sources: Sequence[tuple[str, Mapping]]) -> None:
     """``config``, made of ``sources`` (``(name, document)``: a config file's path, or
     ``--config``, each over the ones before), against its schema (:func:`check_schema`); the
-    error, in one line, names the key and the sources that set it (`` (set in b.yaml)``), which
-    among several files the key alone does not say."""
-    try:
+    error, in one line, names the key and the sources that set it (:func:`sources_named`)."""
+    with sources_named(sources):
         check_schema(config)
-    except SchemaError as error:
-        setters = _setters(error.path, sources)
-        said = f" (set in {', '.join(setters)})" if setters and error.path else ""
-        raise SchemaError(f"{error}{said}", error.path) from None
+
+
+@contextlib.contextmanager
+def sources_named(sources: Sequence[tuple[str, Mapping]]) -> Iterator[None]:
+    """Within it, a :class:`ConfigError` names, after its own words, the ``sources``
+    (``(name, document)``, each over the ones before) that set the keys it is at
+    (`` (set in b.yaml)``, :func:`_setters`): among several config files, the key alone does not
+    say which to mend. Every check of a config, before or after its schema's, is named so."""
+    try:
+        yield
+    except ConfigError as error:
+        setters = dict.fromkeys(
+            name for path in error.paths if path for name in _setters(path, sources)
+        )
+        if not setters:
+            raise
+        raise ConfigError(f"{error} (set in {', '.join(setters)})", error.paths) from None
 
 
 def _setters(path: Sequence, sources: Sequence[tuple[str, Mapping]]) -> list[str]:
@@ -563,21 +599,22 @@ def check_config(config: Mapping) -> None:
     stops the workflow instead of turning into failed rows or numpy errors later.
     """
     if not study_names(config):
-        raise ValueError(
+        raise ConfigError(
             "config: studies: every study has enabled: false, so there is nothing to run; "
-            "enable at least one"
+            "enable at least one",
+            [("studies", study, "enabled") for study in config["studies"]],
         )
     placement = config.get("blind_placement", {})
     if "translation_mm" in placement:
         problem = translation_problem(placement["translation_mm"])
         if problem:
-            raise ValueError(f"config: blind_placement.translation_mm: {problem}")
+            raise _refused("blind_placement.translation_mm", problem)
     for study, settings in config["studies"].items():
         spec = get_study(study)
-        where = f"config: studies.{study}"
+        where = f"studies.{study}"
         trials = settings["trials"]
         if not 1 <= trials <= MAX_TRIALS:
-            raise ValueError(f"{where}.trials: {trials!r} is not an integer in [1, {MAX_TRIALS}]")
+            raise _refused(f"{where}.trials", f"{trials!r} is not an integer in [1, {MAX_TRIALS}]")
         protocol = _protocol(spec, settings.get("protocol"), where)
         _check_grid(spec, settings["grid"], protocol, where)
         # The frames first: the study's bounds lay out a trial's frames, which must exist and fit.
@@ -585,40 +622,74 @@ def check_config(config: Mapping) -> None:
         _check_frames(spec, settings, protocol, where)
         problem = study_problem(study, settings, protocol)
         if problem:
-            raise ValueError(f"{where}.{problem[0]}: {problem[1]}")
+            raise _refused(f"{where}.{problem[0]}", problem[1])
+
+
+def _refused(keys: str, why: str) -> ConfigError:
+    """The refusal of the config at ``keys`` (their text, :func:`key_paths`) for ``why``:
+    ``config: studies.cmc.trials: ...``."""
+    return ConfigError(f"config: {keys}: {why}", key_paths(keys))
+
+
+def _declaration_refused(where: str, error: declared.DeclarationError) -> ConfigError:
+    """The refusal of the value below the key ``where`` that ``error`` is at."""
+    return _refused(f"{where}.{declared.key(error.path)}" if error.path else where, error.reason)
+
+
+# A key of a key path's text, or a list index in brackets.
+_KEY = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
+
+
+def key_paths(keys: str) -> list[tuple]:
+    """The key paths (keys and list indices from the top) the text ``keys`` of a refusal
+    names: comma-separated, the first from the top, a list index in brackets
+    (``studies.hinge.protocol.all.markers_mm[0]``); each after it beside the first, in place of
+    as many of the first's last keys, its list indices aside, as it has itself: after
+    ``studies.hip.protocol.swing_hz``, ``fps`` is ``studies.hip.protocol.fps``, and after
+    ``studies.hinge.protocol.all.noise_sd_mm``, ``knee.markers_mm`` is
+    ``studies.hinge.protocol.knee.markers_mm`` (as :func:`~jointbench.simulate.hinge_study.
+    placed_fields` and :mod:`~jointbench.configuration.bounds` write them)."""
+    first, *beside = (
+        tuple(int(index) if index else key for key, index in _KEY.findall(item))
+        for item in keys.split(", ")
+    )
+    stem = first
+    while stem and isinstance(stem[-1], int):
+        stem = stem[:-1]
+    return [first, *(stem[: max(len(stem) - len(item), 0)] + item for item in beside)]
 
 
 def _protocol(spec: Study, overrides: Mapping | None, where: str) -> object:
-    """The study's protocol from the config's overrides, or ``ValueError`` naming the field."""
+    """The study's protocol from the config's overrides, or ``ConfigError`` naming the field."""
     try:
         return spec.protocol(overrides)
     except declared.DeclarationError as error:
-        raise ValueError(f"{where}.protocol.{error}") from None
+        raise _declaration_refused(f"{where}.protocol", error) from None
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{where}.protocol: {error}") from None
+        raise _refused(f"{where}.protocol", str(error)) from None
 
 
 def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
     keys = ", ".join(spec.grid_keys)
     for key in grid:
         if key not in spec.grid_keys:
-            raise ValueError(f"{where}.grid.{key}: unknown grid key; the {spec.name} keys: {keys}")
+            raise _refused(f"{where}.grid.{key}", f"unknown grid key; the {spec.name} keys: {keys}")
     for key in spec.grid_keys:
         if key not in grid:
-            raise ValueError(f"{where}.grid.{key}: missing; the {spec.name} grid needs {keys}")
+            raise _refused(f"{where}.grid.{key}", f"missing; the {spec.name} grid needs {keys}")
         allowed = spec.grid_spec.get(key)
         for value in grid[key]:
             if allowed is not None and not allowed.accepts(value, protocol):
                 # A bound the protocol sets may be the protocol's mistake: say where it is.
                 by_protocol = f" (the bound studies.{spec.name}.protocol sets)"
                 source = by_protocol if allowed.by_protocol else ""
-                raise ValueError(
-                    f"{where}.grid.{key}: {value!r} is not allowed; "
-                    f"allowed: {allowed.allowed(protocol)}{source}"
+                raise _refused(
+                    f"{where}.grid.{key}",
+                    f"{value!r} is not allowed; allowed: {allowed.allowed(protocol)}{source}",
                 )
         repeated = sorted({str(v) for v in grid[key] if grid[key].count(v) > 1})
         if repeated:
-            raise ValueError(f"{where}.grid.{key}: {', '.join(repeated)} listed more than once")
+            raise _refused(f"{where}.grid.{key}", f"{', '.join(repeated)} listed more than once")
 
 
 def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
@@ -627,37 +698,40 @@ def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     external = list(settings.get("external_estimators", []))
     if settings.get("enabled", True) and not builtin:
         if not external:
-            raise ValueError(
-                f"{where}.estimators: empty, and no external_estimators: the study would run no "
-                f"estimator; list some ({', '.join(known)}) or set enabled: false"
+            raise _refused(
+                f"{where}.estimators",
+                "empty, and no external_estimators: the study would run no estimator; list "
+                f"some ({', '.join(known)}) or set enabled: false",
             )
         # Its papers' figures, tables and checks compare the built-in estimators; without one
         # they would fail after the external estimators had run.
-        raise ValueError(
-            f"{where}.estimators: empty: external_estimators ({', '.join(map(repr, external))}) "
-            "are ranked beside the study's built-in estimators, whose comparisons its papers' "
-            f"figures, tables and checks make; list at least one ({', '.join(known)})"
+        raise _refused(
+            f"{where}.estimators",
+            f"empty: external_estimators ({', '.join(map(repr, external))}) are ranked beside "
+            "the study's built-in estimators, whose comparisons its papers' figures, tables and "
+            f"checks make; list at least one ({', '.join(known)})",
         )
     for name in builtin:
         if name not in known:
-            raise ValueError(
-                f"{where}.estimators: unknown {' or '.join(spec.kinds)} estimator {name!r}; known: "
+            raise _refused(
+                f"{where}.estimators",
+                f"unknown {' or '.join(spec.kinds)} estimator {name!r}; known: "
                 f"{', '.join(known)} (an estimator with a rule of its own goes under "
-                "external_estimators)"
+                "external_estimators)",
             )
     clash = [n for n in settings.get("external_estimators", []) if n in {*known, *builtin}]
     if clash:
         # Both would write results/estimates/{study}/{name}/: the files would collide.
-        raise ValueError(
-            f"{where}.external_estimators: {clash} have the name of a built-in estimator; "
-            "rename them"
+        raise _refused(
+            f"{where}.external_estimators",
+            f"{clash} have the name of a built-in estimator; rename them",
         )
     for name, options in settings.get("options", {}).items():
         if name not in builtin:
-            raise ValueError(
-                f"{where}.options.{name}: {name!r} is not listed under "
-                f"studies.{spec.name}.estimators; options go to those built-in estimators: "
-                f"{', '.join(builtin) or 'none'}"
+            raise _refused(
+                f"{where}.options.{name}",
+                f"{name!r} is not listed under studies.{spec.name}.estimators; options go to "
+                f"those built-in estimators: {', '.join(builtin) or 'none'}",
             )
         _check_options(spec, name, options, f"{where}.options.{name}")
 
@@ -668,26 +742,25 @@ def _check_options(spec: Study, name: str, options: Mapping, where: str) -> None
         kind = method_kind(spec, name)
         accepted = declared.keyword_types(registry.get(kind, name), len(spec.segments_of(kind)))
     except NameError as error:
-        raise ValueError(
-            f"{where}: the types of {name}'s options cannot be read: {error}"
-        ) from None
+        raise _refused(where, f"the types of {name}'s options cannot be read: {error}") from None
     if accepted is None:  # it takes **options: any name, any value
         return
     for option, value in options.items():
         if option not in accepted:
-            raise ValueError(
-                f"{where}.{option}: {name} takes no option {option!r}; "
-                f"its options: {', '.join(accepted) or 'none'}"
+            raise _refused(
+                f"{where}.{option}",
+                f"{name} takes no option {option!r}; its options: {', '.join(accepted) or 'none'}",
             )
         if accepted[option] is inspect.Parameter.empty:
-            raise ValueError(
-                f"{where}.{option}: {name} does not declare what {option!r} takes, so it cannot "
-                "be checked before the run: annotate the parameter (jointbench.declared)"
+            raise _refused(
+                f"{where}.{option}",
+                f"{name} does not declare what {option!r} takes, so it cannot be checked before "
+                "the run: annotate the parameter (jointbench.declared)",
             )
         try:
             declared.check(value, accepted[option], (option,))
         except declared.DeclarationError as error:
-            raise ValueError(f"{where}.{error}") from None
+            raise _declaration_refused(where, error) from None
 
 
 def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) -> None:
@@ -723,16 +796,18 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
             if recorded > n_frames:
                 culprit, note = recording, unnamed
                 held = f"{n_frames} frame(s) of recordings of {recorded} frame(s){values}"
-            raise ValueError(
-                f"{where}.{culprit}: condition {condition_id(condition)} has trials of {held}, "
+            raise _refused(
+                f"{where}.{culprit}",
+                f"condition {condition_id(condition)} has trials of {held}, "
                 f"{settings['trials']} trials of which hold more than {MAX_CONDITION_FRAMES} "
-                f"frames, what one job can hold{note}"
+                f"frames, what one job can hold{note}",
             )
         if n_frames < fewest:
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())
-            raise ValueError(
-                f"{where}.{culprit}: condition {condition_id(condition)} has trials of "
-                f"{held}, fewer than any listed estimator fits (at least: {listed}){note}"
+            raise _refused(
+                f"{where}.{culprit}",
+                f"condition {condition_id(condition)} has trials of {held}, fewer than any "
+                f"listed estimator fits (at least: {listed}){note}",
             )
 
 
@@ -848,19 +923,22 @@ def check_external_kind(study: str, name: str, kind: str | None) -> None:
     too, saying how to declare it: which kind it writes only its writer can say."""
     spec = get_study(study)
     where = f"config: studies.{study}.external_estimators: {name!r}"
+    at = [("studies", study, "external_estimators")]
     if kind is None:
-        raise ValueError(
+        raise ConfigError(
             f"{where}: its rule file declares no kind of estimates; if it writes {spec.kind} "
             f"estimates, the kind study {study} scores, add "
             f'external_estimator("{name}", kind="{spec.kind}") to it (README, "Any language: '
-            'one rule")'
+            'one rule")',
+            at,
         )
     if kind != spec.kind:
         alike = [s for s in registered_studies() if get_study(s).kind == kind]
-        raise ValueError(
+        raise ConfigError(
             f"{where} writes {kind} estimates (as its rule file declares), but study {study} "
             f"scores {spec.kind} estimates: its files would fail as they are collected, or be "
             f"scored as what they are not; list it under a study of {kind} estimates "
             f"({', '.join(alike) or 'none is registered'}), or write a rule of {spec.kind} "
-            f"estimates for {study}"
+            f"estimates for {study}",
+            at,
         )
