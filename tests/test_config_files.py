@@ -6,6 +6,7 @@ names the file (or ``--config``) that set the key, among several. Through the pa
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -72,7 +73,7 @@ def test_a_quoted_number_tagged_as_one_is_held_to_its_digits(tmp_path, written, 
 
 
 @pytest.mark.parametrize(
-    "written", ["10", "0", "-3", "+7", "1.5", "0.5", "1.0e3", "'1e3'", "'010'"]
+    "written", ["10", "0", "-3", "+7", "1.5", "0.5", "1.0e+3", "'1e3'", "'010'"]
 )
 def test_numbers_in_decimal_digits_and_quoted_text_are_read(tmp_path, written):
     path = tmp_path / "mine.yaml"
@@ -236,6 +237,20 @@ def test_an_exponent_without_a_dot_yaml_reads_as_text_is_refused(tmp_path, writt
     message = _refused(path)
     for word in (str(path), "studies.cmc.protocol.noise_mm", "line 4", written, "text", "dot"):
         assert word in message, message
+
+
+@pytest.mark.parametrize("written", ["1.0e3", "2.5E7", "1e3", "-.5", "+.5e-3", "1.e2", "7e-1"])
+def test_a_number_yaml_1_1_reads_as_text_is_refused_with_a_rewrite_it_reads(tmp_path, written):
+    # YAML 1.1 takes an exponent only after a dot and with its sign, and a sign only before a
+    # digit: 1.0e3, the rewrite a dot alone suggests, is the text '1.0e3' too, and was refused
+    # only as no number, without a word on why or how to write it.
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    protocol:\n      noise_mm: {written}\n")
+    message = _refused(path)
+    for word in (str(path), "studies.cmc.protocol.noise_mm", "line 4", f"the text {written!r}"):
+        assert word in message, message
+    rewrite = re.search(r"write it as (\S+?),", message).group(1)
+    assert study_config.read_yaml(rewrite) == float(written), message
 
 
 def test_a_json_config_file_is_read_as_json_as_snakemake_reads_it(tmp_path):

@@ -94,6 +94,20 @@ def test_a_trc_whose_units_field_is_empty_is_refused_naming_it(tmp_path):
     )
 
 
+def test_inspect_says_the_rate_was_not_stated(tmp_path, capsys):
+    # A CSV states no rate: the summary said "unknown" where the unit beside it says
+    # "no unit stated", a word without its noun.
+    path = tmp_path / "trial.csv"
+    rows = [f"{frame},{label},{x + frame},{y},20.5" for frame in (1, 2) for label, x, y in _CORNERS]
+    path.write_text("frame,marker,x,y,z\n" + "\n".join(rows) + "\n")
+    code, out, _ = run(capsys, "inspect", str(path))
+    assert code == 0
+    assert "(numbered 1 to 2 as in the file), no rate stated, 3 markers" in out, out
+
+
+_CORNERS = [("A", 0.5, 0.5), ("B", 100.5, 0.5), ("C", 0.5, 100.5)]
+
+
 def test_inspect_and_fit_say_the_unit_was_not_stated(tmp_path, capsys):
     path = _c3d_without_units(tmp_path / "trial.c3d", "ABC", _markers())
     code, out, err = run(capsys, "inspect", str(path))

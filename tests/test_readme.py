@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from jointbench.configuration import config as study_config
+
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
 #: Where the README explains its names, and where its top ends.
@@ -119,3 +121,26 @@ def test_every_table_listed_names_its_html_page(path):
     folder to two of its three files."""
     listed = re.findall(r"tables/[\w*{}]+\.\{([a-z,]+)\}", path.read_text())
     assert all("html" in forms.split(",") for forms in listed if "csv" in forms), listed
+
+
+#: The README and the docs, whose config snippets a reader copies into a file.
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda path: path.name)
+def test_every_config_block_shown_is_read_as_written(doc, tmp_path):
+    # Read as Snakemake reads a --configfile, with the checks that refuse a number YAML 1.1
+    # reads otherwise than written: a block copied from the docs runs.
+    for block in re.findall(r"```ya?ml\n(.*?)```", doc.read_text(), re.S):
+        path = tmp_path / "shown.yaml"
+        path.write_text(block)
+        study_config.read_config_file(path, f"a config block of {doc.name}")
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda path: path.name)
+def test_every_config_value_with_an_exponent_shown_reads_as_a_number(doc):
+    # `fe_cycles: 1e-300` copied into a config file is the text '1e-300' to YAML 1.1.
+    for key, value in re.findall(r"`([a-z_]+): ([-+.0-9][-+.0-9eE]*)`", doc.read_text()):
+        if "e" in value.lower():
+            read = study_config.read_yaml(f"{key}: {value}")[key]
+            assert isinstance(read, float), f"{doc.name}: `{key}: {value}` reads as {read!r}"

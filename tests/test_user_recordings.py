@@ -114,6 +114,14 @@ def test_every_frame_written_twice_is_refused(tmp_path, suffix):
         read(path)
 
 
+def test_one_frame_written_twice_is_counted_in_the_singular(tmp_path):
+    markers = rig_markers(60)
+    markers[11] = markers[10]
+    path = write_long_csv(tmp_path / "once.csv", LABELS, markers, first_frame=1)
+    with pytest.raises(ValueError, match="; 1 frame in all repeats the one before it: frames"):
+        read(path)
+
+
 def test_frames_that_miss_every_marker_are_no_repeats(tmp_path):
     markers = rig_markers(60)
     markers[20:30] = np.nan

@@ -332,7 +332,7 @@ def _inspect(args: argparse.Namespace) -> int:
             )
         )
         return 0
-    rate = "unknown" if recording.rate_hz is None else f"{recording.rate_hz:g} Hz"
+    rate = "no rate stated" if recording.rate_hz is None else f"{recording.rate_hz:g} Hz"
     print(
         f"{args.file}: {recording.n_frames} frames (numbered {recording.first_frame} to {last} "
         f"as in the file), {rate}, {len(recording.labels)} markers, "

@@ -472,8 +472,11 @@ class _Place:
 _INTEGER, _FLOAT, _MERGE = (f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge"))
 _DECIMAL = re.compile(r"[-+]?(0|[1-9][0-9]*)")
 _TEXT = "tag:yaml.org,2002:str"
-# A number to JSON and YAML 1.2 that YAML 1.1 reads as text: an exponent, no dot.
-_EXPONENT_ONLY = re.compile(r"[-+]?[0-9]+[eE][-+]?[0-9]+")
+# A number as JSON and YAML 1.2 write one (sign, digits, a dot, an exponent): where YAML 1.1
+# resolves it to text, an exponent lacked a dot before it or a sign, or a sign a digit after it.
+_NUMBER_1_2 = re.compile(
+    r"(?P<sign>[-+]?)(?P<mantissa>[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE](?P<exponent>[-+]?[0-9]+))?"
+)
 _LEADING_ZERO = re.compile(r"[-+]?0[0-9_]")
 
 
@@ -524,14 +527,17 @@ def _number_problem(node: yaml.ScalarNode) -> str | None:
     """Why the scalar ``node`` reads as another number than its digits show, or None:
     an integer with a leading 0 (octal), a base prefix (``0x``, ``0b``), an underscore
     (dropped) or a colon (base 60), which YAML 1.1, PyYAML's and Snakemake's, reads so
-    (``010`` is 8); a float with an underscore or a colon. Quoted, any of these is text, unless
-    tagged a number (``!!int "010"``)."""
+    (``010`` is 8); a float with an underscore or a colon; a plain number JSON and YAML 1.2 read
+    that YAML 1.1 reads as text (``1e-3``, ``1.0e3``, ``-.5``), named with the form it reads as
+    that number. Quoted, any of these is text, unless tagged a number (``!!int "010"``)."""
     text = node.value
     # Plain, not quoted: the C parser marks a plain scalar with the style "", the other None.
-    if node.tag == _TEXT and not node.style and _EXPONENT_ONLY.fullmatch(text):
+    number = _NUMBER_1_2.fullmatch(text)
+    if node.tag == _TEXT and not node.style and number:
         return (
             f"{text} is read as the text {text!r}: YAML 1.1 reads a number with an exponent "
-            "only with a dot in it; write it with one (1.0e-3), or in quotes if text is meant"
+            "only with a dot before it and a sign in it, and a sign only before a digit; "
+            f"write it as {_yaml_1_1_number(number)}, or in quotes if text is meant"
         )
     # By its tag, not its quotes: a quoted number is text, but one tagged !!int reads as 8 too.
     integer = node.tag == _INTEGER and not _DECIMAL.fullmatch(text)
@@ -541,6 +547,21 @@ def _number_problem(node: yaml.ScalarNode) -> str | None:
         f"{text} is read as {read_yaml(text)!r} ({_base_reason(text)}); write the number in "
         "decimal digits, with no leading 0, underscore or colon"
     )
+
+
+def _yaml_1_1_number(number: re.Match) -> str:
+    """The number ``number`` (a match of ``_NUMBER_1_2``) written as YAML 1.1 reads it: a
+    digit before the dot, a dot in the mantissa of an exponent, a sign in the exponent
+    (``1e3`` -> ``1.0e+3``, ``-.5`` -> ``-0.5``)."""
+    mantissa = number["mantissa"]
+    if mantissa.startswith("."):
+        mantissa = "0" + mantissa
+    elif "." not in mantissa:
+        mantissa += ".0"
+    exponent = number["exponent"]
+    if exponent is None:
+        return number["sign"] + mantissa
+    return f"{number['sign']}{mantissa}e{'' if exponent[0] in '+-' else '+'}{exponent}"
 
 
 def _base_reason(text: str) -> str:

@@ -976,9 +976,13 @@ def _no_repeated_frames(recording: Recording) -> Recording:
     row = int(repeats[0]) + 1
     raise ValueError(
         f"{recording.source}: {recording.when(row)} repeats {recording.when(row - 1)} to the "
-        f"last bit in all {int(seen[row - 1])} markers; {repeats.size} frames in all repeat the "
-        "one before them: frames written twice, whose noise would count twice; remove the "
-        "repeated frames"
+        f"last bit in all {int(seen[row - 1])} markers; "
+        + (
+            "1 frame in all repeats the one before it"
+            if repeats.size == 1
+            else f"{repeats.size} frames in all repeat the one before them"
+        )
+        + ": frames written twice, whose noise would count twice; remove the repeated frames"
     )
 
 
