@@ -531,8 +531,8 @@ def _number_problem(node: yaml.ScalarNode) -> str | None:
     that YAML 1.1 reads as text (``1e-3``, ``1.0e3``, ``-.5``), named with the form it reads as
     that number. Quoted, any of these is text, unless tagged a number (``!!int "010"``)."""
     text = node.value
-    # Plain, not quoted: the C parser marks a plain scalar with the style "", the other None.
     number = _NUMBER_1_2.fullmatch(text)
+    # Plain, not quoted: the C parser marks a plain scalar with the style "", the other None.
     if node.tag == _TEXT and not node.style and number:
         return (
             f"{text} is read as the text {text!r}: YAML 1.1 reads a number with an exponent "
