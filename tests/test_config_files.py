@@ -370,8 +370,8 @@ def test_a_mistake_after_the_schema_names_the_config_file_that_set_it(tmp_path, 
     assert str(first) not in message and str(DEFAULT) not in message, message
 
 
-def test_a_mistake_at_keys_of_several_files_names_each():
-    """A bound across fields names each file that sets one of them, in the order read: the
+def test_a_mistake_at_keys_of_several_files_names_each_keys_file():
+    """A bound across fields names the file that sets each of them, where they differ: the
     first's noise under ``all`` and the second's markers of the knee, not a third's keys."""
     sources = [
         ("base.yaml", {"studies": {"hinge": {"protocol": {"all": {"noise_sd_mm": 1e200}}}}}),
@@ -387,7 +387,39 @@ def test_a_mistake_at_keys_of_several_files_names_each():
     )
     with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
         raise error
-    assert str(raised.value).endswith("too much (set in base.yaml, over.yaml)"), raised.value
+    assert str(raised.value).endswith(
+        "too much (studies.hinge.protocol.all.noise_sd_mm set in base.yaml; knee.markers_mm set "
+        "in over.yaml)"
+    ), raised.value
+
+
+@pytest.mark.parametrize(
+    ("second", "named"),
+    [
+        ({"fps": 50.0, "swing_hz": 0.1}, "(set in over.yaml)"),
+        ({"fps": 50.0}, "(set in over.yaml)"),
+        (
+            {"swing_hz": 0.1},
+            "(studies.hip.protocol.swing_hz set in over.yaml; fps set in base.yaml)",
+        ),
+    ],
+    ids=["one file sets both", "a default beside", "each its own"],
+)
+def test_a_mistake_at_several_keys_names_only_the_files_that_set_them(second, named):
+    """Keys set by one file, beside any no file sets (a default), are named as that file's;
+    keys set by different files, each with its own, and no file that sets neither."""
+    sources = [
+        ("base.yaml", {"studies": {"hip": {"protocol": {"fps": 60.0}}}}),
+        ("over.yaml", {"studies": {"hip": {"protocol": second}}}),
+        ("other.yaml", {"base_seed": 3}),
+    ]
+    error = study_config.ConfigError(
+        "config: studies.hip.protocol.swing_hz, fps: too fast",
+        [("studies", "hip", "protocol", "swing_hz"), ("studies", "hip", "protocol", "fps")],
+    )
+    with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
+        raise error
+    assert str(raised.value) == f"config: studies.hip.protocol.swing_hz, fps: too fast {named}"
 
 
 @pytest.mark.parametrize(
@@ -488,7 +520,8 @@ def test_dry_run_names_the_config_file_of_a_refused_run_setting(tmp_path, kind, 
     first, second = _overlays(tmp_path, text)
     code, message = _dry_run(tmp_path / "wf", "--configfile", str(first), str(second))
     assert code != 0 and "Job stats" not in message, message[-2000:]
-    assert f"{words} (set in {second})" in message, message[-2000:]
+    for word in (words, f"(set in {second})"):
+        assert word in message, message[-2000:]
 
 
 @pytest.mark.pipeline

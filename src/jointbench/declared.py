@@ -43,6 +43,7 @@ __all__ = [
     "check_fields",
     "describe",
     "key",
+    "key_texts",
     "keys",
     "keyword_types",
 ]
@@ -158,16 +159,22 @@ def key(path: Sequence[str | int]) -> str:
 
 
 def keys(paths: Sequence[Sequence[str | int]]) -> str:
-    """The text of several paths of keys (:func:`key`), comma-separated: the first whole, each
-    after it from where it parts from the first, its list indices aside
-    (``protocol.all.noise_sd_mm, knee.markers_mm``; ``protocol.swing_hz, fps``). Text for a
+    """The text of several paths of keys, comma-separated (:func:`key_texts`):
+    ``protocol.all.noise_sd_mm, knee.markers_mm``; ``protocol.swing_hz, fps``. Text for a
     reader alone: a key may hold a dot, a comma or a bracket, so a path is never read back
     from it."""
+    return ", ".join(key_texts(paths))
+
+
+def key_texts(paths: Sequence[Sequence[str | int]]) -> list[str]:
+    """The text of each of several paths of keys (:func:`key`): the first whole, each after it
+    from where it parts from the first, its list indices aside (``protocol.all.noise_sd_mm``,
+    ``knee.markers_mm``)."""
     first, *beside = (tuple(path) for path in paths)
     stem = first
     while stem and isinstance(stem[-1], int):
         stem = stem[:-1]
-    return ", ".join([key(first), *(key(other[_shared(stem, other) :]) for other in beside)])
+    return [key(first), *(key(other[_shared(stem, other) :]) for other in beside)]
 
 
 def _shared(stem: Sequence, other: Sequence) -> int:

@@ -315,17 +315,31 @@ def check_sources(config: Mapping, sources: Sequence[tuple[str, Mapping]]) -> No
 def sources_named(sources: Sequence[tuple[str, Mapping]]) -> Iterator[None]:
     """Within it, a :class:`ConfigError` names, after its own words, the ``sources``
     (``(name, document)``, each over the ones before) that set the keys it is at
-    (`` (set in b.yaml)``, :func:`_setters`): among several config files, the key alone does not
+    (`` (set in b.yaml)``, :func:`_set_in`): among several config files, the key alone does not
     say which to mend. Every check of a config, before or after its schema's, is named so."""
     try:
         yield
     except ConfigError as error:
-        setters = dict.fromkeys(
-            name for path in error.paths if path for name in _setters(path, sources)
-        )
-        if not setters:
+        named = _set_in([path for path in error.paths if path], sources)
+        if not named:
             raise
-        raise ConfigError(f"{error} (set in {', '.join(setters)})", error.paths) from None
+        raise ConfigError(f"{error} ({named})", error.paths) from None
+
+
+def _set_in(paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]]) -> str:
+    """Which of ``sources`` set the keys at ``paths`` (:func:`_setters`): ``set in b.yaml``
+    where every key a source sets is set by the same ones (a key no source sets, a default,
+    aside), else each key with its own (``noise_sd_mm set in a.yaml; knee.markers_mm set in
+    b.yaml``, the keys written as the refusal writes them, :func:`~jointbench.declared.
+    key_texts`); empty where no source sets any."""
+    if not paths:
+        return ""
+    texts = declared.key_texts(paths)
+    setters = [(text, _setters(path, sources)) for text, path in zip(texts, paths, strict=True)]
+    setters = [(text, names) for text, names in setters if names]
+    if len({tuple(names) for _, names in setters}) == 1:
+        return f"set in {', '.join(setters[0][1])}"
+    return "; ".join(f"{text} set in {', '.join(names)}" for text, names in setters)
 
 
 def _setters(path: Sequence, sources: Sequence[tuple[str, Mapping]]) -> list[str]:
