@@ -514,6 +514,12 @@ def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path)
             "sensitivity: {named: {mine: config/variants/gone.yaml}}\n",
             "config error at sensitivity.named.mine (config/variants/gone.yaml): no such file",
         ),
+        (
+            "named as a drawn protocol",
+            "sensitivity: {named: {draw-3: config/variants/hinge_anatomical_knee.yaml}}\n",
+            "config: sensitivity.named.draw-3: named protocol 'draw-3' takes the name of a "
+            "default or drawn one",
+        ),
     ],
 )
 def test_dry_run_names_the_config_file_of_a_refused_run_setting(tmp_path, kind, text, words):
