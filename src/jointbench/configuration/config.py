@@ -262,9 +262,9 @@ def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping
     run."""
     overlays = {}
     for name, path in dict(config.get("sensitivity", {}).get("named", {})).items():
-        where = f"config error at sensitivity.named.{name} ({path})"
         # The key naming the overlay, which a config file sets: its words name the overlay.
         at = [("sensitivity", "named", name)]
+        where = f"config error at {declared.keys(at)} ({path})"
         try:
             document = read_config_file(Path(base) / path, where)
         except ValueError as error:
