@@ -509,6 +509,7 @@ def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path)
     ("kind", "text", "words"),
     [
         ("time limit", *RUN_SETTINGS["time limit"]),
+        ("extension", *RUN_SETTINGS["extension"]),
         (
             "named protocol",
             "sensitivity: {named: {mine: config/variants/gone.yaml}}\n",
