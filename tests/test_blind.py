@@ -1118,6 +1118,21 @@ def test_a_user_rule_writing_another_external_estimators_estimates_stops_the_run
     _refused(tmp_path, _IMPOSTOR, _BLIND_INPUT, message)
 
 
+@pytest.mark.pipeline
+def test_rival_writers_name_the_config_file_that_lists_the_estimator(tmp_path):
+    copy_workflow(tmp_path)
+    rules = tmp_path / "workflow" / "rules" / "estimators" / "centroid.smk"
+    rules.write_text(rules.read_text() + _IMPOSTOR)
+    first = _cmc_only(tmp_path, estimators=["LS"], external_estimators=[])
+    second = tmp_path / "second.yaml"
+    second.write_text("studies: {cmc: {external_estimators: [centroid]}}\n")
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", first, str(second))
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-3000:]
+    for words in ("rules estimate_centroid and impostor both write", f"(set in {second})"):
+        assert words in message, message[-3000:]
+
+
 # A rule file in the package's folder, included by the user's: by its folder it would pass for
 # the benchmark's own, and the copy it writes under results/blind/ for a blind one.
 _COPY = """

@@ -865,3 +865,21 @@ def test_a_configfile_that_is_no_yaml_mapping_is_refused_naming_it(
     assert "config file mine.yaml: " in err
     for word in words:
         assert word in err
+
+
+def test_a_mistake_of_a_second_configfile_under_an_odd_key_names_that_file(
+    tmp_path, monkeypatch, capsys
+):
+    """A key holding a dot or a comma, set by the second of two files: the refusal names it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text((ROOT / "config" / "config.yaml").read_text())
+    (tmp_path / "a.yaml").write_text("studies: {hinge: {trials: 3}}\n")
+    (tmp_path / "b.yaml").write_text(
+        'studies: {hinge: {protocol: {"knee.v2, b": {n_frames: 2}}}}\n'
+    )
+    arguments = ["fit", "markers.csv", "--configfile", "a.yaml", "--configfile", "b.yaml"]
+    code, _, err = run(capsys, *arguments)
+    assert code == 2
+    assert "config: studies.hinge.protocol.knee.v2, b.n_frames: must be" in err, err
+    assert "(set in b.yaml)" in err, err

@@ -6,12 +6,14 @@ names the file (or ``--config``) that set the key, among several. Through the pa
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
 import pytest
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
+from jointbench import declared
 from jointbench.configuration import config as study_config
 
 DEFAULT = ROOT / "config" / "config.yaml"
@@ -112,6 +114,36 @@ def test_a_key_given_twice_on_one_line_is_refused(tmp_path, text):
     line = text.count("\n", 0, text.index("trials")) + 1
     for word in (str(path), "studies.cmc.trials", f"twice on line {line}"):
         assert word in message, message
+
+
+@pytest.mark.parametrize(
+    ("first", "then"),
+    [
+        ("yes", "true"),
+        ("on", "True"),
+        ("1", "1.0"),
+        ("true", "1"),
+        ("null", "~"),
+        (".nan", ".NaN"),
+        ("0o", "'0o'"),
+    ],
+    ids=["yes true", "on True", "1 1.0", "true 1", "null ~", "nan NaN", "same text, one quoted"],
+)
+def test_keys_written_apart_that_read_as_one_are_refused_naming_both_lines(tmp_path, first, then):
+    # YAML 1.1 reads yes, on and true as True, and Python's mapping holds True, 1 and 1.0 as
+    # one key: the first value would be dropped without a word, as with a key written twice.
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    {first}: 5\n    grid: {{}}\n    {then}: 7\n")
+    message = _refused(path)
+    for word in (str(path), f"studies.cmc.{first}", "twice, at lines 3 and 5"):
+        assert word in message, message
+
+
+def test_keys_that_only_look_alike_are_read(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_text("a:\n  yes: 1\n  'yes': 2\n  2: 3\n  '2': 4\n  2.5: 5\n  '2.5': 6\n")
+    read = study_config.read_config_file(path, f"config file {path}")
+    assert len(read["a"]) == 6, read
 
 
 @pytest.mark.parametrize("written", ["010", "0x10", "1_000"])
@@ -268,6 +300,21 @@ def test_a_key_given_twice_in_a_json_config_file_is_refused(tmp_path):
     assert str(path) in message and "'trials'" in message and "twice" in message, message
 
 
+@pytest.mark.parametrize(
+    ("text", "keys"),
+    [
+        ('{"studies": {"cmc": {"trials": 3, "trials": 5}}}', "studies.cmc.trials"),
+        ('{"a": [1, {"b": {"c": 1, "c": 2}}]}', "a[1].b.c"),
+        ('{"a": {"x": 1}, "b": {"x": 1, "x": 2}}', "b.x"),
+        ('{"a": {"k": 1, "k": 2}, "b": {"j": 1, "j": 2}}', "a.k"),
+    ],
+)
+def test_a_key_given_twice_in_a_json_config_file_is_named_by_its_path(tmp_path, text, keys):
+    path = tmp_path / "mine.json"
+    path.write_text(text)
+    assert f"{path}: {keys} is given twice in one object" in _refused(path)
+
+
 # A mistake after the schema's check, of each kind of check, and the overlay setting it: a
 # first overlay over the config sets keys of the same study, a second the one at fault.
 AFTER_SCHEMA = {
@@ -323,8 +370,8 @@ def test_a_mistake_after_the_schema_names_the_config_file_that_set_it(tmp_path, 
     assert str(first) not in message and str(DEFAULT) not in message, message
 
 
-def test_a_mistake_at_keys_of_several_files_names_each():
-    """A bound across fields names each file that sets one of them, in the order read: the
+def test_a_mistake_at_keys_of_several_files_names_each_keys_file():
+    """A bound across fields names the file that sets each of them, where they differ: the
     first's noise under ``all`` and the second's markers of the knee, not a third's keys."""
     sources = [
         ("base.yaml", {"studies": {"hinge": {"protocol": {"all": {"noise_sd_mm": 1e200}}}}}),
@@ -333,40 +380,155 @@ def test_a_mistake_at_keys_of_several_files_names_each():
     ]
     error = study_config.ConfigError(
         "config: studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm: too much",
-        study_config.key_paths("studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm"),
+        [
+            ("studies", "hinge", "protocol", "all", "noise_sd_mm"),
+            ("studies", "hinge", "protocol", "knee", "markers_mm"),
+        ],
     )
     with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
         raise error
-    assert str(raised.value).endswith("too much (set in base.yaml, over.yaml)"), raised.value
+    assert str(raised.value).endswith(
+        "too much (studies.hinge.protocol.all.noise_sd_mm set in base.yaml; knee.markers_mm set "
+        "in over.yaml)"
+    ), raised.value
 
 
 @pytest.mark.parametrize(
-    ("keys", "paths"),
+    ("second", "named"),
     [
-        ("studies.cmc.trials", [("studies", "cmc", "trials")]),
-        ("studies.cmc.options.MA.start[2]", [("studies", "cmc", "options", "MA", "start", 2)]),
+        ({"fps": 50.0, "swing_hz": 0.1}, "(set in over.yaml)"),
+        ({"fps": 50.0}, "(set in over.yaml)"),
         (
-            "studies.hip.protocol.swing_hz, fps",
+            {"swing_hz": 0.1},
+            "(studies.hip.protocol.swing_hz set in over.yaml; fps set in base.yaml)",
+        ),
+    ],
+    ids=["one file sets both", "a default beside", "each its own"],
+)
+def test_a_mistake_at_several_keys_names_only_the_files_that_set_them(second, named):
+    """Keys set by one file, beside any no file sets (a default), are named as that file's;
+    keys set by different files, each with its own, and no file that sets neither."""
+    sources = [
+        ("base.yaml", {"studies": {"hip": {"protocol": {"fps": 60.0}}}}),
+        ("over.yaml", {"studies": {"hip": {"protocol": second}}}),
+        ("other.yaml", {"base_seed": 3}),
+    ]
+    error = study_config.ConfigError(
+        "config: studies.hip.protocol.swing_hz, fps: too fast",
+        [("studies", "hip", "protocol", "swing_hz"), ("studies", "hip", "protocol", "fps")],
+    )
+    with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
+        raise error
+    assert str(raised.value) == f"config: studies.hip.protocol.swing_hz, fps: too fast {named}"
+
+
+@pytest.mark.parametrize(
+    ("paths", "keys"),
+    [
+        ([("studies", "cmc", "trials")], "studies.cmc.trials"),
+        ([("studies", "cmc", "options", "MA", "start", 2)], "studies.cmc.options.MA.start[2]"),
+        (
             [("studies", "hip", "protocol", "swing_hz"), ("studies", "hip", "protocol", "fps")],
+            "studies.hip.protocol.swing_hz, fps",
         ),
         (
-            "studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm",
             [
                 ("studies", "hinge", "protocol", "all", "noise_sd_mm"),
                 ("studies", "hinge", "protocol", "knee", "markers_mm"),
             ],
+            "studies.hinge.protocol.all.noise_sd_mm, knee.markers_mm",
         ),
         (
-            "studies.hinge.protocol.all.markers_mm[0], noise_sd_mm",
             [
                 ("studies", "hinge", "protocol", "all", "markers_mm", 0),
                 ("studies", "hinge", "protocol", "all", "noise_sd_mm"),
             ],
+            "studies.hinge.protocol.all.markers_mm[0], noise_sd_mm",
         ),
     ],
 )
-def test_the_keys_a_refusal_names_are_read_as_paths(keys, paths):
-    assert study_config.key_paths(keys) == paths
+def test_the_paths_a_refusal_is_at_are_written_as_its_keys(paths, keys):
+    assert declared.keys(paths) == keys
+
+
+# Keys a user names (a joint of the hinge protocol) holding what a key path's text is made of.
+ODD_KEYS = ["knee.v2", "a, b", "x[0]", "[1]"]
+
+
+@pytest.mark.parametrize("joint", ODD_KEYS)
+def test_a_mistake_under_a_key_holding_a_dot_comma_or_bracket_names_its_config_file(
+    tmp_path, joint
+):
+    first, second = _overlays(
+        tmp_path, f"studies: {{hinge: {{protocol: {{{json.dumps(joint)}: {{n_frames: 2}}}}}}}}\n"
+    )
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config_files([DEFAULT, first, second])
+    message = str(raised.value)
+    assert f"studies.hinge.protocol.{joint}.n_frames: must be an integer >= 4" in message, message
+    assert message.endswith(f"(set in {second})"), message
+
+
+# A refusal of a setting of the run's, not of a study's, and the second overlay setting it.
+RUN_SETTINGS = {
+    "time limit": (
+        "jobs: {external_time_limit_s: .inf}\n",
+        "config: jobs.external_time_limit_s: inf is not a number of seconds in (0, 604800]",
+    ),
+    "extension": (
+        "extensions: [gone.py]\n",
+        "config error at extensions: 'gone.py' is not a file",
+    ),
+}
+
+
+@pytest.mark.parametrize("kind", RUN_SETTINGS)
+def test_a_refusal_of_a_runs_setting_names_the_config_file_that_set_it(tmp_path, kind):
+    text, words = RUN_SETTINGS[kind]
+    first, second = _overlays(tmp_path, text)
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config_files([DEFAULT, first, second], tmp_path)
+    message = str(raised.value)
+    assert words in message and message.endswith(f"(set in {second})"), message
+
+
+def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path):
+    overlay = tmp_path / "mine.yaml"
+    overlay.write_text("studies: {cmc: {trials: 0}}\n")
+    first, second = _overlays(tmp_path, f"sensitivity: {{named: {{mine: {overlay}}}}}\n")
+    sources = study_config.read_sources([DEFAULT, first, second])
+    with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
+        study_config.named_overlays(study_config.merged_sources(sources))
+    message = str(raised.value)
+    assert message.startswith(f"config error at sensitivity.named.mine ({overlay}): "), message
+    assert message.endswith(f"(set in {second})"), message
+
+
+@pytest.mark.pipeline
+@pytest.mark.parametrize(
+    ("kind", "text", "words"),
+    [
+        ("time limit", *RUN_SETTINGS["time limit"]),
+        ("extension", *RUN_SETTINGS["extension"]),
+        (
+            "named protocol",
+            "sensitivity: {named: {mine: config/variants/gone.yaml}}\n",
+            "config error at sensitivity.named.mine (config/variants/gone.yaml): no such file",
+        ),
+        (
+            "named as a drawn protocol",
+            "sensitivity: {named: {draw-3: config/variants/hinge_anatomical_knee.yaml}}\n",
+            "config: sensitivity.named.draw-3: named protocol 'draw-3' takes the name of a "
+            "default or drawn one",
+        ),
+    ],
+)
+def test_dry_run_names_the_config_file_of_a_refused_run_setting(tmp_path, kind, text, words):
+    first, second = _overlays(tmp_path, text)
+    code, message = _dry_run(tmp_path / "wf", "--configfile", str(first), str(second))
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    for word in (words, f"(set in {second})"):
+        assert word in message, message[-2000:]
 
 
 @pytest.mark.pipeline

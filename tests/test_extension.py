@@ -368,6 +368,24 @@ def test_a_builtin_named_as_a_rule_files_estimator_is_named_as_such(tmp_path):
     assert expected in message, message[-3000:]
 
 
+@pytest.mark.pipeline
+def test_a_builtin_named_as_a_rule_files_estimator_names_the_config_file_listing_it(tmp_path):
+    code, _ = readme_builtin_example()
+    registered = re.search(r'@register\("center", "([^"]+)"', code).group(1)
+    (tmp_path / "clashing.py").write_text(code.replace(f'"{registered}"', '"centroid"'))
+    first = user_clone(tmp_path, estimators=["LS"], external=[])
+    config = yaml.safe_load(first.read_text())
+    config["extensions"] = ["clashing.py"]
+    first.write_text(yaml.safe_dump(config))
+    second = tmp_path / "second.yaml"
+    second.write_text("studies: {cmc: {estimators: [LS, centroid]}}\n")
+    run = run_snakemake(tmp_path, "--dry-run", "--configfile", str(first), str(second))
+    message = run.stdout + run.stderr
+    assert run.returncode != 0, message[-3000:]
+    for words in ("studies.cmc.estimators lists as built in", f"(set in {second})"):
+        assert words in message, message[-3000:]
+
+
 def test_the_readme_builtin_example_passes_the_style_checks(tmp_path):
     """Copied into src/jointbench/estimators/, the README's example passes tests/test_lint.py's
     ruff checks as it stands."""

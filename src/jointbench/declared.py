@@ -42,6 +42,9 @@ __all__ = [
     "check",
     "check_fields",
     "describe",
+    "key",
+    "key_texts",
+    "keys",
     "keyword_types",
 ]
 
@@ -120,17 +123,31 @@ class DeclarationError(ValueError):
     :meth:`under` puts the key below an outer one.
     """
 
-    def __init__(self, path: Sequence[str | int], reason: str) -> None:
+    def __init__(
+        self,
+        path: Sequence[str | int],
+        reason: str,
+        beside: Sequence[Sequence[str | int]] = (),
+    ) -> None:
         self.path = tuple(path)
         self.reason = reason
+        # The paths of the other values a bound across fields is theirs as much, from the same
+        # top as ``path``: a refusal names each where it is written.
+        self.beside = tuple(tuple(other) for other in beside)
         super().__init__(str(self))
 
+    @property
+    def paths(self) -> tuple[tuple[str | int, ...], ...]:
+        """``path``, then each of ``beside``."""
+        return (self.path, *self.beside)
+
     def __str__(self) -> str:
-        return f"{key(self.path)}: {self.reason}" if self.path else self.reason
+        return f"{keys(self.paths)}: {self.reason}" if self.path else self.reason
 
     def under(self, *outer: str | int) -> DeclarationError:
         """The same error with ``outer`` keys in front of its own."""
-        return DeclarationError((*outer, *self.path), self.reason)
+        beside = [(*outer, *other) for other in self.beside]
+        return DeclarationError((*outer, *self.path), self.reason, beside)
 
 
 def key(path: Sequence[str | int]) -> str:
@@ -139,6 +156,34 @@ def key(path: Sequence[str | int]) -> str:
     for part in path:
         text += f"[{part}]" if isinstance(part, int) else f".{part}" if text else str(part)
     return text
+
+
+def keys(paths: Sequence[Sequence[str | int]]) -> str:
+    """The text of several paths of keys, comma-separated (:func:`key_texts`):
+    ``protocol.all.noise_sd_mm, knee.markers_mm``; ``protocol.swing_hz, fps``. Text for a
+    reader alone: a key may hold a dot, a comma or a bracket, so a path is never read back
+    from it."""
+    return ", ".join(key_texts(paths))
+
+
+def key_texts(paths: Sequence[Sequence[str | int]]) -> list[str]:
+    """The text of each of several paths of keys (:func:`key`): the first whole, each after it
+    from where it parts from the first, its list indices aside (``protocol.all.noise_sd_mm``,
+    ``knee.markers_mm``)."""
+    first, *beside = (tuple(path) for path in paths)
+    stem = first
+    while stem and isinstance(stem[-1], int):
+        stem = stem[:-1]
+    return [key(first), *(key(other[_shared(stem, other) :]) for other in beside)]
+
+
+def _shared(stem: Sequence, other: Sequence) -> int:
+    """How many of ``other``'s first keys it shares with ``stem``, all but its last at most:
+    what :func:`keys` leaves out of it."""
+    shared = 0
+    while shared < min(len(stem), len(other) - 1) and stem[shared] == other[shared]:
+        shared += 1
+    return shared
 
 
 def _split(annotation: object) -> tuple[object, tuple]:

@@ -194,10 +194,11 @@ def _refuse_rival_writers(study, name, files, producers):
     for path in files:
         rivals = sorted(p.name for p in producers if _produces(p, path))
         if len(rivals) > 1:
-            raise ValueError(
+            raise jb_config.ConfigError(
                 f"rules {' and '.join(rivals)} both write the estimates of {name!r} in study "
                 f"{study} ({path}): an estimator's estimates are written by its own rule "
-                "alone (README, 'Adding an estimator')"
+                "alone (README, 'Adding an estimator')",
+                [("studies", study, "external_estimators")],
             )
 
 
@@ -406,13 +407,14 @@ def _refuse_a_builtins_name(user, written, mine, other):
         for name in jb_config.estimator_names(config, study, source="builtin"):
             files = estimates_files(study, [name])
             if any(_overlap(mine, _patterns_of(_judged(f))) for f in files):
-                raise ValueError(
+                raise jb_config.ConfigError(
                     f"rule {user.name} writes the estimates of {name!r} in study {study} "
                     f"({_shown(written)}), an estimator studies.{study}.estimators lists as "
                     f"built in, run by rule {other.name}"
                     # Apart: Snakemake's linter reads "rule" and a colon on one line as a rule.
                     ": a built-in estimator and a rule file's take different names (README, "
-                    "'Adding an estimator')"
+                    "'Adding an estimator')",
+                    [("studies", study, "estimators")],
                 )
 
 

@@ -10,11 +10,17 @@ SENSITIVITY_STUDIES = [s for s in STUDIES if s in PRIORS and papers_of_study(s)]
 # Each named protocol's config overlay, read here to know which studies it sets: read and
 # checked once for all the studies, not once per study, and only where one has an ensemble.
 SENSITIVITY_NAMED = dict(SENSITIVITY.get("named", {}))
-SENSITIVITY_OVERLAYS = jb_config.named_overlays(config) if SENSITIVITY_STUDIES else {}
-SENSITIVITY_MEMBERS = {
-    study: member_names(study, int(SENSITIVITY.get("draws", 1)), SENSITIVITY_OVERLAYS)
-    for study in SENSITIVITY_STUDIES
-}
+# A mistake in one, or in its name, names the config file that named it.
+with jb_config.sources_named(CONFIG_SOURCES):
+    SENSITIVITY_OVERLAYS = (
+        jb_config.named_overlays(config) if SENSITIVITY_STUDIES else {}
+    )
+    SENSITIVITY_MEMBERS = {
+        study: member_names(
+            study, int(SENSITIVITY.get("draws", 1)), SENSITIVITY_OVERLAYS
+        )
+        for study in SENSITIVITY_STUDIES
+    }
 SENSITIVITY_FILES = {
     kind: [
         f"results/sensitivity/{study}/{member}{suffix}.csv"

@@ -51,6 +51,10 @@ __all__ = [
     "translation_problem",
 ]
 
+#: A bound's refusal: the paths of keys below ``studies.<study>`` of the values it is at, each
+#: a tuple (``("protocol", "all", "noise_sd_mm")``), and what is wrong and why.
+Problem = tuple[list[tuple], str]
+
 #: ``blind_placement.translation_mm`` [mm], the half-side of the cube each trial of a blind copy
 #: is translated within (:mod:`jointbench.running.placement`), lies in ``[low, high]``, finite.
 #: Low: the rotation turns the data about the origin, so a truth at the origin (the knee's axis
@@ -168,10 +172,11 @@ PELVIS_WIDTH_PER_DEPARTURE = 4.0
 PELVIS_LENGTH_PER_WIDTH = 30.0
 
 
-def study_problem(study: str, settings: Mapping, protocol: object) -> tuple[str, str] | None:
-    """``(key, what is wrong and why)`` for the first value of a study's checked ``settings``
-    (``key`` below ``studies.<study>``, e.g. ``grid.aa_ratio``) or its ``protocol`` that a bound
-    of this module refuses; None for a study without such bounds or within them."""
+def study_problem(study: str, settings: Mapping, protocol: object) -> Problem | None:
+    """``(paths, what is wrong and why)`` for the first value of a study's checked ``settings``
+    or its ``protocol`` that a bound of this module refuses, ``paths`` the keys below
+    ``studies.<study>`` of each value the bound is at (``[("grid", "aa_ratio")]``); None for a
+    study without such bounds or within them."""
     check = _CHECKS.get(study)
     return check(settings, protocol) if check else None
 
@@ -191,13 +196,21 @@ def translation_problem(value: float) -> str | None:
     )
 
 
-def _cmc(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _protocol_fields(*fields: str) -> list[tuple[str, str]]:
+    """The paths below ``studies.<study>`` of the protocol's ``fields``."""
+    return [("protocol", field) for field in fields]
+
+
+def _cmc(settings: Mapping, protocol: object) -> Problem | None:
     return _turns_problem(
-        "protocol.spiral_turns, n_frames", protocol.spiral_turns, protocol.n_frames, "spiral turns"
+        _protocol_fields("spiral_turns", "n_frames"),
+        protocol.spiral_turns,
+        protocol.n_frames,
+        "spiral turns",
     ) or _tilt_problem(protocol.tilt_power)
 
 
-def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
+def _tilt_problem(tilt_power: float) -> Problem | None:
     """``(key, why)`` when the thumb's spiral has not reached :data:`CMC_TILT_SHARE_BY_MIDDLE`
     of its RoM by the middle of the trial, or is no longer that share short of it, else
     None."""
@@ -205,14 +218,14 @@ def _tilt_problem(tilt_power: float) -> tuple[str, str] | None:
     # bound itself, or be refused when typed back.
     share = 0.5**tilt_power
     if tilt_power > CMC_LATEST_TILT_POWER:
-        return "protocol.tilt_power", (
+        return _protocol_fields("tilt_power"), (
             f"{tilt_power!r} leaves the thumb's tilt at {share!r} of its RoM by the middle of "
             f"the trial, less than {CMC_TILT_SHARE_BY_MIDDLE:g}: it would stay near its mean "
             "position and reach its RoM only in the last frames, not circle out over the "
             f"recording ({_CIRCLING_OUT}); at most {CMC_LATEST_TILT_POWER!r}"
         )
     if tilt_power < CMC_EARLIEST_TILT_POWER:
-        return "protocol.tilt_power", (
+        return _protocol_fields("tilt_power"), (
             f"{tilt_power!r} takes the thumb's tilt to {share!r} of its RoM by the middle of "
             f"the trial, more than {1.0 - CMC_TILT_SHARE_BY_MIDDLE:g}: it would reach its RoM "
             "in the first frames and stay there, not circle out over the recording "
@@ -226,7 +239,7 @@ _CIRCLING_OUT = (
 )
 
 
-def _hinge(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hinge(settings: Mapping, protocol: object) -> Problem | None:
     return (
         _hinge_unread_problem(settings, protocol)
         or _hinge_cycles_problem(settings, protocol)
@@ -291,7 +304,7 @@ def _readers(field: str, motion_fields: Mapping[str, Sequence[str]]) -> list[str
     return [motion for motion, fields in motion_fields.items() if field in fields]
 
 
-def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hinge_unread_problem(settings: Mapping, protocol: object) -> Problem | None:
     """A field the config writes for the joints the grid runs that no trial of theirs reads
     from where it is written: under a joint's own entry or ``all``, a field of
     :data:`~jointbench.simulate.hinge.AMPLITUDE_FIELDS` where every ``aa_ratio`` of the grid
@@ -308,13 +321,13 @@ def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str
         silenced = _silenced_field(written, grid, HINGE_AMPLITUDE_FIELDS)
         if silenced:
             field, key = silenced
-            return f"protocol.{entry}.{field}", _silenced_words(field, written[field], key, grid)
+            return [("protocol", entry, field)], _silenced_words(field, written[field], key, grid)
     for joint in run:
         motion = protocol.joints[joint].motion
         unread = _unread_field(overrides.get(joint) or {}, (motion,), HINGE_MOTION_FIELDS)
         if unread:
             field = unread[0]
-            return f"protocol.{joint}.{field}", _hinge_unread_words(
+            return [("protocol", joint, field)], _hinge_unread_words(
                 field, overrides[joint][field], {motion: [joint]}
             )
     return _hinge_all_unread_problem(overrides, run, protocol)
@@ -322,7 +335,7 @@ def _hinge_unread_problem(settings: Mapping, protocol: object) -> tuple[str, str
 
 def _hinge_all_unread_problem(
     overrides: Mapping, run: Sequence[str], protocol: object
-) -> tuple[str, str] | None:
+) -> Problem | None:
     """A field under the hinge protocol ``overrides``' ``all`` that no joint of ``run`` (the
     joints the grid runs) reads from there: each sets it again under its own entry or, by its
     motion (:data:`~jointbench.simulate.hinge.MOTION_FIELDS`), does not read it."""
@@ -330,7 +343,7 @@ def _hinge_all_unread_problem(
         taking = [joint for joint in run if field not in (overrides.get(joint) or {})]
         if not taking:
             again = ", ".join(f"{joint}.{field}" for joint in run)
-            return f"protocol.all.{field}", (
+            return [("protocol", "all", field)], (
                 f"{value!r} is set again by every joint the grid runs ({again}), so no trial "
                 "reads it: a value no trial reads changes no data; remove it"
             )
@@ -340,7 +353,7 @@ def _hinge_all_unread_problem(
             unread: dict[str, list[str]] = {}
             for joint, motion in motions.items():
                 unread.setdefault(motion, []).append(joint)
-            return f"protocol.all.{field}", _hinge_unread_words(field, value, unread)
+            return [("protocol", "all", field)], _hinge_unread_words(field, value, unread)
     return None
 
 
@@ -360,7 +373,7 @@ def _hinge_unread_words(field: str, value: object, joints: Mapping[str, Sequence
     )
 
 
-def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hinge_cycles_problem(settings: Mapping, protocol: object) -> Problem | None:
     """For each sine wave of each joint the grid runs (:func:`sine_waves`): its cycles
     :data:`SAMPLED_PER_TURN` over the frames, and its reach of both ends of its excursion
     (:func:`_wave_ends_problem`); named where the config sets them (:func:`placed_fields`).
@@ -374,23 +387,30 @@ def _hinge_cycles_problem(settings: Mapping, protocol: object) -> tuple[str, str
         for name, (cycles, phase) in sine_waves(hinge).items():
             if name in silenced:
                 continue
-            entry, keys = placed_fields(overrides, joint, (name, "n_frames"))
+            paths = _placed(overrides, joint, (name, "n_frames"))
             what = f"{joint} {hinge.motion} cycles"
-            problem = _turns_problem(f"protocol.{entry}.{keys}", cycles, hinge.n_frames, what)
+            problem = _turns_problem(paths, cycles, hinge.n_frames, what)
             if problem:
                 return problem
             # The FE wave's phase is the motion's (full extension), the AA wave's the config's.
             fields = (name,) if name == "fe_cycles" else (name, "aa_phase_deg")
-            entry, keys = placed_fields(overrides, joint, fields)
             what = f"{joint} {hinge.motion} {name.split('_')[0].upper()} cycles"
-            problem = _wave_ends_problem(f"protocol.{entry}.{keys}", cycles, phase, what)
+            problem = _wave_ends_problem(_placed(overrides, joint, fields), cycles, phase, what)
             if problem:
                 return problem
     return None
 
 
-def _wave_ends_problem(key: str, cycles: float, phase: float, what: str) -> tuple[str, str] | None:
-    """``(key, why)`` when ``sin(2 pi cycles t + phase)``, ``t`` in ``[0, 1]``, does not reach
+def _placed(overrides: Mapping, joint: str, fields: Sequence[str]) -> list[tuple[str, ...]]:
+    """The paths below ``studies.hinge`` of ``joint``'s ``fields`` where the protocol
+    ``overrides`` set them (:func:`placed_fields`)."""
+    return [("protocol", *at) for at in placed_fields(overrides, joint, fields)]
+
+
+def _wave_ends_problem(
+    paths: list[tuple], cycles: float, phase: float, what: str
+) -> Problem | None:
+    """``(paths, why)`` when ``sin(2 pi cycles t + phase)``, ``t`` in ``[0, 1]``, does not reach
     both +1 and -1, else None: the trial would not reach the excursion its condition names
     (at 1e-300 FE cycles the knee never flexes, and the axis methods find the AA axis)."""
     end = phase + 2.0 * math.pi * cycles
@@ -401,7 +421,7 @@ def _wave_ends_problem(key: str, cycles: float, phase: float, what: str) -> tupl
     ]
     if all(first <= end + _ROUNDING * max(1.0, abs(end)) for first in firsts):
         return None
-    return key, (
+    return paths, (
         f"{cycles!r} {what} (phase {math.degrees(phase):g} deg) do not reach both ends of the "
         "excursion the condition names: the trial would not move over the range of motion its "
         "results are labelled with; a wave reaches both ends within one cycle, from an end "
@@ -409,10 +429,10 @@ def _wave_ends_problem(key: str, cycles: float, phase: float, what: str) -> tupl
     )
 
 
-def _aa_ratio_problem(settings: Mapping) -> tuple[str, str] | None:
+def _aa_ratio_problem(settings: Mapping) -> Problem | None:
     for ratio in settings["grid"]["aa_ratio"]:
         if not ratio < AA_RATIO_BELOW:
-            return "grid.aa_ratio", (
+            return [("grid", "aa_ratio")], (
                 f"{ratio!r} is not < {AA_RATIO_BELOW:g}: at a ratio of 1 or more "
                 "abduction-adduction is as large as the flexion-extension whose axis the "
                 "estimators find, so that axis is not the motion's (paper B: 0.1 to 0.7)"
@@ -420,7 +440,7 @@ def _aa_ratio_problem(settings: Mapping) -> tuple[str, str] | None:
     return None
 
 
-def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hip(settings: Mapping, protocol: object) -> Problem | None:
     return (
         _clusters_problem(protocol, HIP_CLUSTERS)
         # The frequencies first: the rotations are laid out at them, over the frame rate.
@@ -429,7 +449,7 @@ def _hip(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     )
 
 
-def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hip_sta(settings: Mapping, protocol: object) -> Problem | None:
     return (
         _hip_sta_unread_problem(settings)
         or _clusters_problem(protocol, HIP_STA_CLUSTERS)
@@ -441,7 +461,7 @@ def _hip_sta(settings: Mapping, protocol: object) -> tuple[str, str] | None:
     )
 
 
-def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
+def _hip_sta_unread_problem(settings: Mapping) -> Problem | None:
     """A field the config writes that no trial of the grid reads: one of
     :data:`~jointbench.simulate.hip_sta.AMPLITUDE_FIELDS` where every ``sta_mm`` of the grid
     is 0, or of :data:`~jointbench.simulate.hip_sta.MOTION_FIELDS` that no motion of the grid
@@ -452,12 +472,12 @@ def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
     silenced = _silenced_field(written, grid, HIP_STA_AMPLITUDE_FIELDS)
     if silenced:
         field, key = silenced
-        return f"protocol.{field}", _silenced_words(field, written[field], key, grid)
+        return _protocol_fields(field), _silenced_words(field, written[field], key, grid)
     unread = _unread_field(written, motions, HIP_STA_MOTION_FIELDS)
     if not unread:
         return None
     field, readers = unread
-    return f"protocol.{field}", (
+    return _protocol_fields(field), (
         f"{written[field]!r} is not read by the motions the grid runs, grid.motion "
         f"{', '.join(motions)}; {field} is read by {' and '.join(readers)}: a value no motion "
         f"of the run reads changes no data; remove it, or add {' or '.join(readers)} to "
@@ -465,24 +485,23 @@ def _hip_sta_unread_problem(settings: Mapping) -> tuple[str, str] | None:
     )
 
 
-def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> Problem | None:
     """:data:`SAMPLED_PER_TURN` for the skin-marker study's motions the grid runs."""
     motions = settings["grid"]["motion"]
     n_frames, star = protocol.n_frames, protocol.star_fraction
-    frames = ", ".join(FRAME_FIELDS)  # the fields that set n_frames
     recording = f"from {field_values(recording_values(protocol))}"
     stretches = []
     if "star_arc" in motions:
         stretches += [
             (
-                f"protocol.star_azimuths_deg, star_fraction, {frames}",
+                _protocol_fields("star_azimuths_deg", "star_fraction", *FRAME_FIELDS),
                 len(protocol.star_azimuths_deg),
                 star * n_frames,
                 "star sweeps (one per azimuth)",
                 f"star_fraction {star!r} of the {n_frames} {recording}",
             ),
             (
-                f"protocol.arc_turns, star_fraction, {frames}",
+                _protocol_fields("arc_turns", "star_fraction", *FRAME_FIELDS),
                 protocol.arc_turns,
                 (1 - star) * n_frames,
                 "arc turns",
@@ -490,13 +509,13 @@ def _hip_sta_turns_problem(settings: Mapping, protocol: object) -> tuple[str, st
             ),
         ]
     if "circumduction" in motions:
-        key = f"protocol.circumduction_turns, {frames}"
+        paths = _protocol_fields("circumduction_turns", *FRAME_FIELDS)
         turns = protocol.circumduction_turns
-        stretches.append((key, turns, n_frames, "circumduction turns", recording))
+        stretches.append((paths, turns, n_frames, "circumduction turns", recording))
     return next((p for p in (_turns_problem(*stretch) for stretch in stretches) if p), None)
 
 
-def _hip_sta_axes_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _hip_sta_axes_problem(settings: Mapping, protocol: object) -> Problem | None:
     """Each motion the grid runs, at its smallest ``rom_deg``, turning a thigh marker about
     fewer than :data:`HIP_FEWEST_AXES` axes further than the floor of :func:`_turn_floor` (the
     axes: the principal ones of the thigh's rotation vectors, :func:`principal_turns_mm`);
@@ -513,8 +532,8 @@ def _hip_sta_axes_problem(settings: Mapping, protocol: object) -> tuple[str, str
         # The noise is as much the culprit where it sets the floor.
         noise = ("noise_mm",) if floor == protocol.noise_mm else ()
         fields = (*HIP_STA_DIRECTIONS[motion], *noise)
-        key = f"protocol.{', '.join(fields)}" if seen else "grid.rom_deg"
-        return key, (
+        paths = _protocol_fields(*fields) if seen else [("grid", "rom_deg")]
+        return paths, (
             f"the thigh's {motion} at rom_deg {rom_deg:g} turns its markers about {seen} "
             f"axis(es): about the next by {turns[seen]:.3g} mm at most, not above "
             f"{floor_words}; a hip moved about fewer than {HIP_FEWEST_AXES} axes has no single "
@@ -534,14 +553,14 @@ def principal_turns_mm(rotation: np.ndarray, markers_mm: Sequence[Sequence[float
 
 
 def _turns_problem(
-    key: str, turns: float, frames: float, what: str, source: str = ""
-) -> tuple[str, str] | None:
-    """``(key, why)`` when ``turns`` of a periodic motion over ``frames`` frames are not fewer
+    paths: list[tuple], turns: float, frames: float, what: str, source: str = ""
+) -> Problem | None:
+    """``(paths, why)`` when ``turns`` of a periodic motion over ``frames`` frames are not fewer
     than ``frames`` / :data:`SAMPLED_PER_TURN`, else None; ``source``, where the frames are
     read from several fields, gives their values after the count."""
     if turns < frames / SAMPLED_PER_TURN:
         return None
-    return key, (
+    return paths, (
         f"{turns!r} {what} over {frames:.4g} frames{f' ({source})' if source else ''} are not "
         "fewer than half those frames: the frames cannot show a motion of more than one turn "
         "per two frames (it would be recorded as a slower one than configured)"
@@ -554,7 +573,7 @@ def field_values(values: Mapping[str, object]) -> str:
     return ", ".join(f"{field} {value!r}" for field, value in values.items())
 
 
-def _sta_reach_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def _sta_reach_problem(settings: Mapping, protocol: object) -> Problem | None:
     """The skin-marker study's artefact at the grid's largest ``sta_mm`` and ``rom_deg`` (it
     grows linearly with the excursion, ``sta_mm`` at ``sta_reference_deg``) reaching further
     than the farthest marker is from the joint: like noise that large
@@ -566,7 +585,7 @@ def _sta_reach_problem(settings: Mapping, protocol: object) -> tuple[str, str] |
     bound = largest_noise_mm(protocol.markers_from_joint())
     if reach <= bound:
         return None
-    return "protocol.sta_reference_deg", (
+    return _protocol_fields("sta_reference_deg"), (
         f"{protocol.sta_reference_deg!r} makes the grid's sta_mm {sta_mm:g} (defined at this "
         f"excursion) reach {reach:.3g} mm RMS at its rom_deg {rom_deg:g}, further than the "
         f"farthest marker is from the joint ({bound:.3g} mm): an artefact beyond the whole "
@@ -574,7 +593,7 @@ def _sta_reach_problem(settings: Mapping, protocol: object) -> tuple[str, str] |
     )
 
 
-def pelvis_poses_problem(settings: Mapping, protocol: object) -> tuple[str, str] | None:
+def pelvis_poses_problem(settings: Mapping, protocol: object) -> Problem | None:
     """``(keys, what is wrong and why)`` when the skin-marker study's pelvis cluster cannot
     determine its poses in every trial of ``settings`` (the study's checked config) under
     ``protocol`` (a :class:`~jointbench.simulate.hip_sta.HipStaProtocol`), else None.
@@ -610,7 +629,7 @@ def pelvis_poses_problem(settings: Mapping, protocol: object) -> tuple[str, str]
                 f"({worst['motion']}) with pelvis_sta_ratio {protocol.pelvis_sta_ratio:g}, its "
                 f"non-rigid share 1 - sta_rigid_share = {share:g}"
             )
-        return "protocol." + ", ".join(keys), (
+        return _protocol_fields(*keys), (
             f"the pelvis markers' RMS distance from their common line, {width:.3g} mm, is not "
             f"above {PELVIS_WIDTH_PER_DEPARTURE:g} times their RMS departure from one rigid "
             f"shape, {departure:.3g} mm ({' and '.join(parts)}): the pelvis pose fit (paper C "
@@ -619,7 +638,7 @@ def pelvis_poses_problem(settings: Mapping, protocol: object) -> tuple[str, str]
             "pelvis artefact"
         )
     if along > PELVIS_LENGTH_PER_WIDTH * width:
-        return "protocol.pelvis_markers_mm", (
+        return _protocol_fields("pelvis_markers_mm"), (
             f"the pelvis markers lie {along / width:.3g} times further along their common line "
             f"than off it (RMS {along:.3g} mm along, {width:.3g} mm off), more than "
             f"{PELVIS_LENGTH_PER_WIDTH:g} times: the pelvis pose fit (paper C §5) cannot settle "
@@ -665,7 +684,7 @@ def line_spreads(markers_mm: Sequence[Sequence[float]]) -> tuple[float, float]:
     return along, float(np.sqrt(np.sum(singular[1:] ** 2) / len(markers)))
 
 
-def _clusters_problem(protocol: object, names: Sequence[str]) -> tuple[str, str] | None:
+def _clusters_problem(protocol: object, names: Sequence[str]) -> Problem | None:
     """The first of the clusters ``names`` (protocol fields) that :func:`cluster_problem`
     refuses at the protocol's ``noise_mm``, naming ``noise_mm`` too where the cluster is
     refused only beside that noise."""
@@ -673,11 +692,11 @@ def _clusters_problem(protocol: object, names: Sequence[str]) -> tuple[str, str]
         problem = cluster_problem(getattr(protocol, name), protocol.noise_mm)
         if problem:
             alone = cluster_problem(getattr(protocol, name), 0.0)
-            return f"protocol.{name}" + ("" if alone else ", noise_mm"), problem
+            return _protocol_fields(name, *(() if alone else ("noise_mm",))), problem
     return None
 
 
-def _frequencies_problem(protocol: object, names: Sequence[str]) -> tuple[str, str] | None:
+def _frequencies_problem(protocol: object, names: Sequence[str]) -> Problem | None:
     """The first of the frequencies ``names`` (protocol fields, each a number or one per axis)
     not above 0 and below half the protocol's frame rate."""
     nyquist = protocol.fps / 2
@@ -687,7 +706,7 @@ def _frequencies_problem(protocol: object, names: Sequence[str]) -> tuple[str, s
         for part in value if per_axis else [value]:
             if not 0 < part < nyquist:
                 shown = f"{part!r} (of {list(value)!r})" if per_axis else f"{part!r}"
-                return f"protocol.{name}, fps", (
+                return _protocol_fields(name, "fps"), (
                     f"{shown} is not > 0 and < {nyquist:g} Hz (half the frame rate, fps "
                     f"{protocol.fps:g}): a motion has a positive frequency (set its amplitude "
                     "to 0 for none), and the frames cannot show one at half the frame rate or "
@@ -696,7 +715,7 @@ def _frequencies_problem(protocol: object, names: Sequence[str]) -> tuple[str, s
     return None
 
 
-def _rotations_problem(protocol: object) -> tuple[str, str] | None:
+def _rotations_problem(protocol: object) -> Problem | None:
     """Fewer than :data:`HIP_FEWEST_AXES` of the hip rig's rotations moving
     (:func:`largest_turn_mm`), in words naming those configured that do not move and why."""
     t = np.arange(protocol.n_frames) / protocol.fps
@@ -719,7 +738,7 @@ def _rotations_problem(protocol: object) -> tuple[str, str] | None:
             "too small an amplitude, too slow a frequency or (the cross swing) too long a rise, "
             "cross_swing_rise_s, to be seen"
         )
-    return f"protocol.{', '.join(keys)}", (
+    return _protocol_fields(*keys), (
         f"{which} moving: the rig must rotate about at least {HIP_FEWEST_AXES} of the axes "
         "(paper C: the second segment 'moved around at least 2 of the axes'); about one, its "
         f"centre lies anywhere on that axis{detail}"
@@ -784,7 +803,7 @@ def cluster_problem(markers_mm: Sequence[Sequence[float]], noise_mm: float) -> s
 _ROUNDING = 1e-9
 
 
-_CHECKS: dict[str, Callable[[Mapping, object], tuple[str, str] | None]] = {
+_CHECKS: dict[str, Callable[[Mapping, object], Problem | None]] = {
     "cmc": _cmc,
     "hinge": _hinge,
     "hip": _hip,

@@ -22,6 +22,7 @@ from jointbench.configuration.extensions import load_extensions
 from jointbench.configuration.studies import get_study, method_kind
 from jointbench.configuration.studies import study_names as registered_studies
 from jointbench.estimators import registry
+from jointbench.running import timelimit
 from jointbench.simulate import KINDS, Study
 
 __all__ = [
@@ -37,7 +38,6 @@ __all__ = [
     "conditions",
     "estimator_names",
     "external_kind",
-    "key_paths",
     "load_config",
     "open_config",
     "open_config_files",
@@ -212,7 +212,11 @@ def open_config(config: Mapping, base: str | Path = ".") -> Mapping:
     # The schema first: a misspelt key is named as such, not hidden behind an extension's import
     # error, and no extension is imported from a config that is not the one meant.
     check_schema(config)
-    load_extensions(config, base)
+    try:
+        load_extensions(config, base)
+    except ValueError as error:
+        # Its words name the entry and its file; the list is what a config file sets.
+        raise ConfigError(str(error), [("extensions",)]) from error
     _check_studies_registered(config)
     check_config(config)
     # Jobs' parameters list the studies (a job's settings of every study): in one order,
@@ -258,14 +262,19 @@ def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping
     run."""
     overlays = {}
     for name, path in dict(config.get("sensitivity", {}).get("named", {})).items():
-        where = f"config error at sensitivity.named.{name} ({path})"
-        document = read_config_file(Path(base) / path, where)
+        # The key naming the overlay, which a config file sets: its words name the overlay.
+        at = [("sensitivity", "named", name)]
+        where = f"config error at {declared.keys(at)} ({path})"
+        try:
+            document = read_config_file(Path(base) / path, where)
+        except ValueError as error:
+            raise ConfigError(str(error), at) from None
         merged = _merged(config, document)
         try:
             validate_against(merged, SCHEMA_PATH, "config")
             check_config(merged)
         except ValueError as error:
-            raise ValueError(f"{where}: {error}") from None
+            raise ConfigError(f"{where}: {error}", at) from None
         overlays[name] = document
     return overlays
 
@@ -306,17 +315,31 @@ def check_sources(config: Mapping, sources: Sequence[tuple[str, Mapping]]) -> No
 def sources_named(sources: Sequence[tuple[str, Mapping]]) -> Iterator[None]:
     """Within it, a :class:`ConfigError` names, after its own words, the ``sources``
     (``(name, document)``, each over the ones before) that set the keys it is at
-    (`` (set in b.yaml)``, :func:`_setters`): among several config files, the key alone does not
+    (`` (set in b.yaml)``, :func:`_set_in`): among several config files, the key alone does not
     say which to mend. Every check of a config, before or after its schema's, is named so."""
     try:
         yield
     except ConfigError as error:
-        setters = dict.fromkeys(
-            name for path in error.paths if path for name in _setters(path, sources)
-        )
-        if not setters:
+        named = _set_in([path for path in error.paths if path], sources)
+        if not named:
             raise
-        raise ConfigError(f"{error} (set in {', '.join(setters)})", error.paths) from None
+        raise ConfigError(f"{error} ({named})", error.paths) from None
+
+
+def _set_in(paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]]) -> str:
+    """Which of ``sources`` set the keys at ``paths`` (:func:`_setters`): ``set in b.yaml``
+    where every key a source sets is set by the same ones (a key no source sets, a default,
+    aside), else each key with its own (``noise_sd_mm set in a.yaml; knee.markers_mm set in
+    b.yaml``, the keys written as the refusal writes them, :func:`~jointbench.declared.
+    key_texts`); empty where no source sets any."""
+    if not paths:
+        return ""
+    texts = declared.key_texts(paths)
+    setters = [(text, _setters(path, sources)) for text, path in zip(texts, paths, strict=True)]
+    setters = [(text, names) for text, names in setters if names]
+    if len({tuple(names) for _, names in setters}) == 1:
+        return f"set in {', '.join(setters[0][1])}"
+    return "; ".join(f"{text} set in {', '.join(names)}" for text, names in setters)
 
 
 def _setters(path: Sequence, sources: Sequence[tuple[str, Mapping]]) -> list[str]:
@@ -403,23 +426,60 @@ _NOT_JSON = object()
 
 def _json_document(text: str, where: str) -> object:
     """The JSON document ``text`` holds, or :data:`_NOT_JSON` where it is no JSON; a key given
-    twice in one object refused naming ``where`` (JSON readers keep the last alone)."""
-
-    def once(pairs: list[tuple[str, object]]) -> dict:
-        document: dict = {}
-        for key, value in pairs:
-            if key in document:
-                raise ValueError(
-                    f"{where}: the key {key!r} is given twice in one object: JSON keeps the "
-                    "last alone; keep one"
-                )
-            document[key] = value
-        return document
-
+    twice in one object refused naming ``where`` and the key's path (JSON readers keep the
+    last alone)."""
     try:
-        return json.loads(text, object_pairs_hook=once)
+        document = json.loads(text, object_pairs_hook=_JsonObject.of)
     except json.JSONDecodeError:
         return _NOT_JSON
+    twice = _twice_in_json(document, ())
+    if twice is not None:
+        raise ValueError(
+            f"{where}: {declared.key(twice)} is given twice in one object (the key "
+            f"{twice[-1]!r}): JSON keeps the last alone; keep one"
+        )
+    return _plain(document)
+
+
+class _JsonObject(dict):
+    """A JSON object as read, with ``twice``, the first of its keys given more than once, or
+    None: the reader, which builds the innermost objects first, does not know where one is."""
+
+    twice: str | None = None
+
+    @classmethod
+    def of(cls, pairs: list[tuple[str, object]]) -> _JsonObject:
+        read = cls()
+        for key, value in pairs:
+            if key in read and read.twice is None:
+                read.twice = key
+            read[key] = value
+        return read
+
+
+def _twice_in_json(document: object, path: tuple) -> tuple | None:
+    """The path (keys and list indices from the top) of a key given twice in one object of the
+    JSON ``document`` (of :class:`_JsonObject`): the first met walking it in the order
+    written, an object before the values it holds; None where there is none."""
+    if isinstance(document, _JsonObject):
+        if document.twice is not None:
+            return (*path, document.twice)
+        items = document.items()
+    elif isinstance(document, list):
+        items = enumerate(document)
+    else:
+        return None
+    found = (_twice_in_json(value, (*path, key)) for key, value in items)
+    return next((twice for twice in found if twice is not None), None)
+
+
+def _plain(document: object) -> object:
+    """``document`` with each :class:`_JsonObject` a plain ``dict``."""
+    if isinstance(document, dict):
+        return {key: _plain(value) for key, value in document.items()}
+    if isinstance(document, list):
+        return [_plain(item) for item in document]
+    return document
 
 
 def _utf8_text(data: bytes, where: str) -> str:
@@ -499,28 +559,36 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
         for index, item in enumerate(node.value):
             _check_nodes(item, place.at(index, item.start_mark.line + 1), (*holding, node), checked)
     else:
-        lines: dict = {}
+        # Each key as read, with the line and the text of its first: a mapping holds keys
+        # equal as values once, whether written alike or not (yes and true, 1 and 1.0).
+        seen: dict = {}
         for key, value in node.value:
             line = key.start_mark.line + 1
             name = key.value if isinstance(key, yaml.ScalarNode) else f"(key at line {line})"
             if isinstance(key, yaml.ScalarNode) and key.tag != _MERGE:
                 # A key is a value too: 010 as a key is the key 8.
                 _check_nodes(key, place.at(name, line), holding, checked)
+                read = yaml.constructor.SafeConstructor().construct_object(key)
                 # Seen before, not on another line: a flow mapping holds both on one.
-                if (key.tag, key.value) in lines:
+                if read in seen:
                     raise ValueError(
-                        f"{place.where}: {'.'.join(map(str, (*place.keys, name)))} is given "
-                        f"{_twice(lines[key.tag, key.value], line)}: YAML keeps the last "
-                        "alone; keep one"
+                        f"{place.where}: {_twice(place.keys, seen[read], (line, name), read)}"
                     )
-                lines[key.tag, key.value] = line
+                seen[read] = (line, name)
             _check_nodes(value, place.at(name, line), (*holding, node), checked)
     checked.add(id(node))
 
 
-def _twice(first: int, then: int) -> str:
-    """Where a key is given twice, at lines ``first`` and ``then`` (from 1)."""
-    return f"twice on line {first}" if first == then else f"twice, at lines {first} and {then}"
+def _twice(keys: tuple, first: tuple[int, str], then: tuple[int, str], read: object) -> str:
+    """A key below ``keys`` given twice: ``first`` and ``then`` its ``(line, text)`` (lines
+    from 1), both read as ``read``."""
+    (line, name), (again, text) = first, then
+    where = f"twice on line {line}" if line == again else f"twice, at lines {line} and {again}"
+    written = "" if name == text else f" (as {name} and {text}, both read as {read!r})"
+    return (
+        f"{'.'.join(map(str, (*keys, name)))} is given {where}{written}: YAML keeps the last "
+        "alone; keep one"
+    )
 
 
 def _number_problem(node: yaml.ScalarNode) -> str | None:
@@ -609,7 +677,8 @@ def _merged(base: Mapping, update: Mapping) -> dict:
 
 def check_config(config: Mapping) -> None:
     """Raise ``ValueError`` naming the key and its allowed values for what the schema cannot
-    see: a run of no study, the blind copies' translation
+    see: a run of no study, the time limit of an external estimator's job
+    (:func:`~jointbench.running.timelimit.limit_problem`), the blind copies' translation
     (:func:`~jointbench.configuration.bounds.translation_problem`), the trial count's bound,
     protocol fields, grid keys and values, the bounds a study's own declarations do not state
     (:mod:`jointbench.configuration.bounds`), estimator names and their options (each against
@@ -625,17 +694,25 @@ def check_config(config: Mapping) -> None:
             "enable at least one",
             [("studies", study, "enabled") for study in config["studies"]],
         )
+    jobs = config.get("jobs", {})
+    # Absent, the schema's default, which the workflow's validation fills in, is the limit.
+    if timelimit.KEY_PATH[-1] in jobs:
+        problem = timelimit.limit_problem(jobs[timelimit.KEY_PATH[-1]])
+        if problem:
+            raise _refused([timelimit.KEY_PATH], problem)
     placement = config.get("blind_placement", {})
     if "translation_mm" in placement:
         problem = translation_problem(placement["translation_mm"])
         if problem:
-            raise _refused("blind_placement.translation_mm", problem)
+            raise _refused([("blind_placement", "translation_mm")], problem)
     for study, settings in config["studies"].items():
         spec = get_study(study)
-        where = f"studies.{study}"
+        where = ("studies", study)
         trials = settings["trials"]
         if not 1 <= trials <= MAX_TRIALS:
-            raise _refused(f"{where}.trials", f"{trials!r} is not an integer in [1, {MAX_TRIALS}]")
+            raise _refused(
+                [(*where, "trials")], f"{trials!r} is not an integer in [1, {MAX_TRIALS}]"
+            )
         protocol = _protocol(spec, settings.get("protocol"), where)
         _check_grid(spec, settings["grid"], protocol, where)
         # The frames first: the study's bounds lay out a trial's frames, which must exist and fit.
@@ -643,61 +720,44 @@ def check_config(config: Mapping) -> None:
         _check_frames(spec, settings, protocol, where)
         problem = study_problem(study, settings, protocol)
         if problem:
-            raise _refused(f"{where}.{problem[0]}", problem[1])
+            paths, why = problem
+            raise _refused([(*where, *path) for path in paths], why)
 
 
-def _refused(keys: str, why: str) -> ConfigError:
-    """The refusal of the config at ``keys`` (their text, :func:`key_paths`) for ``why``:
+def _refused(paths: Sequence[tuple], why: str) -> ConfigError:
+    """The refusal of the config at ``paths`` (keys and list indices from the top, each a
+    tuple, the text of them :func:`~jointbench.declared.keys`) for ``why``:
     ``config: studies.cmc.trials: ...``."""
-    return ConfigError(f"config: {keys}: {why}", key_paths(keys))
+    return ConfigError(f"config: {declared.keys(paths)}: {why}", paths)
 
 
-def _declaration_refused(where: str, error: declared.DeclarationError) -> ConfigError:
-    """The refusal of the value below the key ``where`` that ``error`` is at."""
-    return _refused(f"{where}.{declared.key(error.path)}" if error.path else where, error.reason)
+def _declaration_refused(where: tuple, error: declared.DeclarationError) -> ConfigError:
+    """The refusal of the values below the keys ``where`` that ``error`` is at."""
+    if not error.path:
+        return _refused([where], error.reason)
+    return _refused([(*where, *path) for path in error.paths], error.reason)
 
 
-# A key of a key path's text, or a list index in brackets.
-_KEY = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
-
-
-def key_paths(keys: str) -> list[tuple]:
-    """The key paths (keys and list indices from the top) the text ``keys`` of a refusal
-    names: comma-separated, the first from the top, a list index in brackets
-    (``studies.hinge.protocol.all.markers_mm[0]``); each after it beside the first, in place of
-    as many of the first's last keys, its list indices aside, as it has itself: after
-    ``studies.hip.protocol.swing_hz``, ``fps`` is ``studies.hip.protocol.fps``, and after
-    ``studies.hinge.protocol.all.noise_sd_mm``, ``knee.markers_mm`` is
-    ``studies.hinge.protocol.knee.markers_mm`` (as :func:`~jointbench.simulate.hinge_study.
-    placed_fields` and :mod:`~jointbench.configuration.bounds` write them)."""
-    first, *beside = (
-        tuple(int(index) if index else key for key, index in _KEY.findall(item))
-        for item in keys.split(", ")
-    )
-    stem = first
-    while stem and isinstance(stem[-1], int):
-        stem = stem[:-1]
-    return [first, *(stem[: max(len(stem) - len(item), 0)] + item for item in beside)]
-
-
-def _protocol(spec: Study, overrides: Mapping | None, where: str) -> object:
+def _protocol(spec: Study, overrides: Mapping | None, where: tuple) -> object:
     """The study's protocol from the config's overrides, or ``ConfigError`` naming the field."""
     try:
         return spec.protocol(overrides)
     except declared.DeclarationError as error:
-        raise _declaration_refused(f"{where}.protocol", error) from None
+        raise _declaration_refused((*where, "protocol"), error) from None
     except (TypeError, ValueError) as error:
-        raise _refused(f"{where}.protocol", str(error)) from None
+        raise _refused([(*where, "protocol")], str(error)) from None
 
 
-def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
+def _check_grid(spec: Study, grid: Mapping, protocol, where: tuple) -> None:
     keys = ", ".join(spec.grid_keys)
     for key in grid:
         if key not in spec.grid_keys:
-            raise _refused(f"{where}.grid.{key}", f"unknown grid key; the {spec.name} keys: {keys}")
+            raise _refused(
+                [(*where, "grid", key)], f"unknown grid key; the {spec.name} keys: {keys}"
+            )
     for key in spec.grid_keys:
         if key not in grid:
-            raise _refused(f"{where}.grid.{key}", f"missing; the {spec.name} grid needs {keys}")
+            raise _refused([(*where, "grid", key)], f"missing; the {spec.name} grid needs {keys}")
         allowed = spec.grid_spec.get(key)
         for value in grid[key]:
             if allowed is not None and not allowed.accepts(value, protocol):
@@ -705,29 +765,29 @@ def _check_grid(spec: Study, grid: Mapping, protocol, where: str) -> None:
                 by_protocol = f" (the bound studies.{spec.name}.protocol sets)"
                 source = by_protocol if allowed.by_protocol else ""
                 raise _refused(
-                    f"{where}.grid.{key}",
+                    [(*where, "grid", key)],
                     f"{value!r} is not allowed; allowed: {allowed.allowed(protocol)}{source}",
                 )
         repeated = sorted({str(v) for v in grid[key] if grid[key].count(v) > 1})
         if repeated:
-            raise _refused(f"{where}.grid.{key}", f"{', '.join(repeated)} listed more than once")
+            raise _refused([(*where, "grid", key)], f"{', '.join(repeated)} listed more than once")
 
 
-def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
+def _check_estimators(spec: Study, settings: Mapping, where: tuple) -> None:
     known = list(dict.fromkeys(m for kind in spec.kinds for m in registry.methods(kind)))
     builtin = list(settings.get("estimators", []))
     external = list(settings.get("external_estimators", []))
     if settings.get("enabled", True) and not builtin:
         if not external:
             raise _refused(
-                f"{where}.estimators",
+                [(*where, "estimators")],
                 "empty, and no external_estimators: the study would run no estimator; list "
                 f"some ({', '.join(known)}) or set enabled: false",
             )
         # Its papers' figures, tables and checks compare the built-in estimators; without one
         # they would fail after the external estimators had run.
         raise _refused(
-            f"{where}.estimators",
+            [(*where, "estimators")],
             f"empty: external_estimators ({', '.join(map(repr, external))}) are ranked beside "
             "the study's built-in estimators, whose comparisons its papers' figures, tables and "
             f"checks make; list at least one ({', '.join(known)})",
@@ -735,7 +795,7 @@ def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     for name in builtin:
         if name not in known:
             raise _refused(
-                f"{where}.estimators",
+                [(*where, "estimators")],
                 f"unknown {' or '.join(spec.kinds)} estimator {name!r}; known: "
                 f"{', '.join(known)} (an estimator with a rule of its own goes under "
                 "external_estimators)",
@@ -744,37 +804,37 @@ def _check_estimators(spec: Study, settings: Mapping, where: str) -> None:
     if clash:
         # Both would write results/estimates/{study}/{name}/: the files would collide.
         raise _refused(
-            f"{where}.external_estimators",
+            [(*where, "external_estimators")],
             f"{clash} have the name of a built-in estimator; rename them",
         )
     for name, options in settings.get("options", {}).items():
         if name not in builtin:
             raise _refused(
-                f"{where}.options.{name}",
+                [(*where, "options", name)],
                 f"{name!r} is not listed under studies.{spec.name}.estimators; options go to "
                 f"those built-in estimators: {', '.join(builtin) or 'none'}",
             )
-        _check_options(spec, name, options, f"{where}.options.{name}")
+        _check_options(spec, name, options, (*where, "options", name))
 
 
-def _check_options(spec: Study, name: str, options: Mapping, where: str) -> None:
+def _check_options(spec: Study, name: str, options: Mapping, where: tuple) -> None:
     """Each of ``options`` against the type its estimator's signature declares for it."""
     try:
         kind = method_kind(spec, name)
         accepted = declared.keyword_types(registry.get(kind, name), len(spec.segments_of(kind)))
     except NameError as error:
-        raise _refused(where, f"the types of {name}'s options cannot be read: {error}") from None
+        raise _refused([where], f"the types of {name}'s options cannot be read: {error}") from None
     if accepted is None:  # it takes **options: any name, any value
         return
     for option, value in options.items():
         if option not in accepted:
             raise _refused(
-                f"{where}.{option}",
+                [(*where, option)],
                 f"{name} takes no option {option!r}; its options: {', '.join(accepted) or 'none'}",
             )
         if accepted[option] is inspect.Parameter.empty:
             raise _refused(
-                f"{where}.{option}",
+                [(*where, option)],
                 f"{name} does not declare what {option!r} takes, so it cannot be checked before "
                 "the run: annotate the parameter (jointbench.declared)",
             )
@@ -784,7 +844,7 @@ def _check_options(spec: Study, name: str, options: Mapping, where: str) -> None
             raise _declaration_refused(where, error) from None
 
 
-def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) -> None:
+def _check_frames(spec: Study, settings: Mapping, protocol: object, where: tuple) -> None:
     """Refuse a condition whose trials have fewer frames than any built-in estimator listed
     fits (its :class:`~jointbench.estimators.registry.Claims`): all its rows would fail; or
     whose trials hold more than :data:`MAX_CONDITION_FRAMES` frames together.
@@ -807,7 +867,7 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
     for condition in _cells(spec, settings["grid"]):
         n_frames = trial_frames(spec, protocol, condition)
         recording, unnamed = _frame_source(spec, condition, settings.get("protocol") or {})
-        culprit, note = (f"grid.{frames_key}", "") if frames_key else (recording, unnamed)
+        culprit, note = ([("grid", frames_key)], "") if frames_key else (recording, unnamed)
         recorded = spec.recorded_frames(protocol) if spec.recorded_frames else n_frames
         # The protocol's values go with the count they set: the recording's, or the trial's
         # where no grid key sets that.
@@ -818,7 +878,7 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
                 culprit, note = recording, unnamed
                 held = f"{n_frames} frame(s) of recordings of {recorded} frame(s){values}"
             raise _refused(
-                f"{where}.{culprit}",
+                [(*where, *path) for path in culprit],
                 f"condition {condition_id(condition)} has trials of {held}, "
                 f"{settings['trials']} trials of which hold more than {MAX_CONDITION_FRAMES} "
                 f"frames, what one job can hold{note}",
@@ -826,7 +886,7 @@ def _check_frames(spec: Study, settings: Mapping, protocol: object, where: str) 
         if n_frames < fewest:
             listed = ", ".join(f"{name} {n}" for name, n in needs.items())
             raise _refused(
-                f"{where}.{culprit}",
+                [(*where, *path) for path in culprit],
                 f"condition {condition_id(condition)} has trials of {held}, fewer than any "
                 f"listed estimator fits (at least: {listed}){note}",
             )
@@ -841,17 +901,25 @@ def _frame_values(spec: Study, condition: Mapping, protocol: object) -> str:
     return f" (from {field_values(spec.frame_values(condition, protocol))})"
 
 
-def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[str, str]:
-    """``(keys, note)``: the keys below ``studies.<study>`` of the protocol fields that set the
-    frames of ``condition``'s recordings (:attr:`~jointbench.simulate.Study.frame_keys`) and
-    no note; for a study that does not declare them, its ``protocol`` and a note saying why
-    no field is named."""
-    if spec.frame_keys is not None:
-        return spec.frame_keys(condition, overrides), ""
-    return "protocol", (
-        f" (study {spec.name!r} declares no frame_keys: which of its protocol fields its "
-        "frame_count reads, only the study can say)"
-    )
+def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[list, str]:
+    """``(paths, note)``: the paths of keys below ``studies.<study>`` of the protocol fields
+    that set the frames of ``condition``'s recordings
+    (:attr:`~jointbench.simulate.Study.frame_keys`) and no note; for a study that does not
+    declare them, its ``protocol`` and a note saying why no field is named. ``TypeError``
+    naming the study where its ``frame_keys`` gives no list of paths (each a tuple)."""
+    if spec.frame_keys is None:
+        return [("protocol",)], (
+            f" (study {spec.name!r} declares no frame_keys: which of its protocol fields its "
+            "frame_count reads, only the study can say)"
+        )
+    paths = spec.frame_keys(condition, overrides)
+    if isinstance(paths, str | bytes) or not all(isinstance(path, tuple) for path in paths):
+        raise TypeError(
+            f"study {spec.name!r}: its frame_keys gave {paths!r} for condition "
+            f"{condition_id(condition)}, not a list of paths of keys, each a tuple "
+            '([("protocol", "n_frames")])'
+        )
+    return list(paths), ""
 
 
 def trial_frames(spec: Study, protocol: object, condition: Mapping) -> int:

@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from jointbench import declared
 from jointbench.comparison.published import load_published
-from jointbench.configuration.config import read_yaml
+from jointbench.configuration.config import ConfigError, read_yaml
 from jointbench.ensembles.members import _member_config, collect_member, judge
 from jointbench.ensembles.verdicts import TESTED, quantities_of, seed_verdict, share_columns
 from jointbench.figures.paper_a import condition_means
@@ -110,7 +111,9 @@ def member_values(base_seed: int, study: str, member: str) -> dict[str, float]:
 
 def member_names(study: str, draws: int, overlays: Mapping[str, Mapping]) -> list[str]:
     """Every member of ``study``'s ensemble: the default, ``draw-1`` to ``draw-<draws>`` and
-    each named member whose overlay (a config document, by name) sets ``study``'s protocol."""
+    each named member whose overlay (a config document, by name) sets ``study``'s protocol;
+    :class:`~jointbench.configuration.config.ConfigError` at ``sensitivity.named.<name>`` for
+    one named as the default or a draw."""
     named = [
         name
         for name, overlay in overlays.items()
@@ -118,7 +121,12 @@ def member_names(study: str, draws: int, overlays: Mapping[str, Mapping]) -> lis
     ]
     for name in named:
         if name == DEFAULT or name.startswith(DRAW_PREFIX):
-            raise ValueError(f"named protocol {name!r} takes the name of a default or drawn one")
+            at = ("sensitivity", "named", name)
+            raise ConfigError(
+                f"config: {declared.key(at)}: named protocol {name!r} takes the name of a "
+                "default or drawn one",
+                [at],
+            )
     return [DEFAULT, *(f"{DRAW_PREFIX}{k}" for k in range(1, draws + 1)), *named]
 
 

@@ -41,8 +41,10 @@ else:
     landlock = importlib.util.module_from_spec(_SPEC)
     _SPEC.loader.exec_module(landlock)
 
-#: The config key, under ``jobs``, of the limit [s] of each job of an external estimator.
-KEY = "jobs.external_time_limit_s"
+#: The config key, under ``jobs``, of the limit [s] of each job of an external estimator: its
+#: path and its text.
+KEY_PATH = ("jobs", "external_time_limit_s")
+KEY = ".".join(KEY_PATH)
 #: The environment variables the workflow sets when it loads: the limit [s] and the interpreter
 #: that runs this file (:data:`LIMITED_SHELL`).
 LIMIT_VARIABLE = "JOINTBENCH_TIME_LIMIT_S"
@@ -391,7 +393,7 @@ def configured_limit(config: Mapping) -> float:
     workflow's validation fills in, where the files set none); ``ValueError`` naming the key
     when it is no limit (:func:`limit_problem`), which the workflow raises as it loads,
     before any job."""
-    section, key = KEY.split(".")
+    section, key = KEY_PATH
     value = config.get(section, {}).get(key)
     problem = limit_problem(value)
     if problem:

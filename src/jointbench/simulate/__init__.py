@@ -211,11 +211,11 @@ class Study:
     what a job holds, which the check bounds.
 
     ``frame_keys`` gives where the config sets those frames (``frame_keys(condition,
-    overrides)``, ``overrides`` the config's ``protocol`` as written): the keys below
+    overrides)``, ``overrides`` the config's ``protocol`` as written): the paths of keys below
     ``studies.<name>`` of the protocol fields the recording's frames are read from, by
-    ``frame_count`` or, where a grid key sets a trial's frames, by ``recorded_frames``;
-    comma-separated as a refusal names them (``"protocol.duration_s, fps"``), under the entry
-    that sets each where fields can be written under more than one. A frame count refused by
+    ``frame_count`` or, where a grid key sets a trial's frames, by ``recorded_frames``, each a
+    tuple (``[("protocol", "duration_s"), ("protocol", "fps")]``), under the entry that sets
+    each where fields can be written under more than one. A frame count refused by
     the config's check names them; a study that does not declare them is refused naming its
     ``protocol`` alone, since only the study knows which fields its ``frame_count`` reads.
     ``frame_values`` gives the values of those fields (``frame_values(condition, protocol)``,
@@ -238,7 +238,7 @@ class Study:
     more_kinds: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     frame_count: Callable[[Mapping[str, object], object], int] | None = None
     recorded_frames: Callable[[object], int] | None = None
-    frame_keys: Callable[[Mapping[str, object], Mapping], str] | None = None
+    frame_keys: Callable[[Mapping[str, object], Mapping], Sequence[tuple]] | None = None
     frame_values: Callable[[Mapping[str, object], object], Mapping[str, object]] | None = None
 
     def __post_init__(self) -> None:

@@ -277,9 +277,9 @@ def frame_count(condition: Mapping[str, object], protocol: CmcProtocol) -> int:
     return protocol.n_frames
 
 
-def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> list[tuple[str, str]]:
     """Where the config sets the frames :func:`frame_count` gives."""
-    return "protocol.n_frames"
+    return [("protocol", "n_frames")]
 
 
 STUDY = Study(

@@ -57,33 +57,31 @@ class HingeStudyProtocol:
         return cls(joints)
 
 
-def placed_fields(overrides: Mapping, joint: str, fields: Sequence[str]) -> tuple[str, str]:
-    """``(entry, keys)``: where the config's hinge protocol ``overrides`` set ``fields`` of
-    ``joint``. A field is the joint's own entry's where set there, else ``all``'s where set
-    there, else the joint's (its default); ``entry`` is the first field's, and ``keys`` the
-    fields, each after the first under its own entry where that is another, e.g. ``("all",
-    "noise_sd_mm, knee.markers_mm")``: a bound across fields names each where it is written."""
+def placed_fields(overrides: Mapping, joint: str, fields: Sequence[str]) -> list[tuple[str, str]]:
+    """``(entry, field)`` of each of ``fields`` of ``joint``: where the config's hinge protocol
+    ``overrides`` set it. A field is the joint's own entry's where set there, else ``all``'s
+    where set there, else the joint's (its default), e.g. ``[("all", "noise_sd_mm"), ("knee",
+    "markers_mm")]``: a bound across fields names each where it is written."""
 
     def entry(field: str) -> str:
         own = field in (overrides.get(joint) or {})
         return "all" if not own and field in (overrides.get("all") or {}) else joint
 
-    first = entry(fields[0])
-    rest = [field if entry(field) == first else f"{entry(field)}.{field}" for field in fields[1:]]
-    return first, ", ".join([fields[0], *rest])
+    return [(entry(field), field) for field in fields]
 
 
 def _named_where_written(
     error: DeclarationError, overrides: Mapping, joint: str
 ) -> DeclarationError:
-    """``error``, raised by ``joint``'s protocol at its fields (the first key of its path,
-    comma-separated), named where the config writes them (:func:`placed_fields`); one met
-    under ``all`` says which joint it broke."""
+    """``error``, raised by ``joint``'s protocol at its fields (the first key of each of its
+    paths), named where the config writes them (:func:`placed_fields`); one met under ``all``
+    says which joint it broke."""
     if not error.path:
         return error.under(joint)
-    entry, keys = placed_fields(overrides, joint, str(error.path[0]).split(", "))
-    reason = f"{error.reason} (joint {joint!r})" if entry == "all" else error.reason
-    return DeclarationError((entry, keys, *error.path[1:]), reason)
+    placed = placed_fields(overrides, joint, [str(path[0]) for path in error.paths])
+    first, *beside = ((*at, *path[1:]) for at, path in zip(placed, error.paths, strict=True))
+    reason = f"{error.reason} (joint {joint!r})" if first[0] == "all" else error.reason
+    return DeclarationError(first, reason, beside)
 
 
 def simulate(
@@ -104,12 +102,14 @@ def frame_count(condition: Mapping[str, object], protocol: HingeStudyProtocol) -
     return protocol.joints[str(condition["protocol"])].n_frames
 
 
-def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> list[tuple]:
     """Where the config sets the frames :func:`frame_count` gives: the condition's joint's
     ``n_frames``, under its own entry, ``all`` or (its default) its own
     (:func:`placed_fields`)."""
-    entry, keys = placed_fields(overrides, str(condition["protocol"]), ("n_frames",))
-    return f"protocol.{entry}.{keys}"
+    return [
+        ("protocol", *at)
+        for at in placed_fields(overrides, str(condition["protocol"]), ("n_frames",))
+    ]
 
 
 STUDY = Study(

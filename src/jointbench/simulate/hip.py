@@ -358,10 +358,10 @@ def recorded_frames(protocol: HipProtocol) -> int:
     return protocol.n_frames
 
 
-def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> list[tuple[str, str]]:
     """Where the config sets the frames :func:`recorded_frames` gives (the grid's ``n_frames``
     sets each trial's, :func:`frame_count`)."""
-    return "protocol.n_frames"
+    return [("protocol", "n_frames")]
 
 
 STUDY = Study(

@@ -450,9 +450,9 @@ def frame_count(condition: Mapping[str, object], protocol: HipStaProtocol) -> in
     return protocol.n_frames
 
 
-def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> str:
+def frame_keys(condition: Mapping[str, object], overrides: Mapping) -> list[tuple[str, str]]:
     """Where the config sets the frames :func:`frame_count` gives: :data:`FRAME_FIELDS`."""
-    return "protocol." + ", ".join(FRAME_FIELDS)
+    return [("protocol", field) for field in FRAME_FIELDS]
 
 
 def recording_values(protocol: HipStaProtocol) -> dict[str, float]:

@@ -99,7 +99,8 @@ def check_noise_level(
     bound = largest_noise_mm(markers_mm)
     if noise_mm > bound:
         raise DeclarationError(
-            (", ".join([name, *markers_names]),),
+            (name,),
             f"must be <= {bound:g} mm (the farthest marker's distance from the joint centre: "
             f"noise beyond the whole segment's size measures nothing), got {noise_mm!r}",
+            [(markers,) for markers in markers_names],
         )
