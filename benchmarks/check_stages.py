@@ -46,6 +46,31 @@ medians of (:data:`JOINT_STAGES`):
   the magnitudes the input checks passed), what the public call adds.
 
 ``checked`` less the stages from ``input checks`` to ``answers`` is the plumbing between them.
+
+With ``--kind axis``, on ``estimators.py``'s axis trials (3 markers x ``--frames`` frames, 5000
+by default, a near-hinge, 1 mm noise), per one-segment method (by default ``planar``), the same
+medians of (:data:`AXIS_STAGES`):
+
+* ``estimator``, ``checked`` and ``public``: the registered function alone, ``registry.get``
+  and :func:`jointbench.fit_axis` (the checked call after the artefact screen);
+* ``input checks``: :func:`jointbench.estimators.validation.check_input`;
+* ``verdict``: :func:`jointbench.estimators.support.assess_many` on the trial, of which
+  ``verdict kernels`` is its compiled work alone: the one-segment pass (the rigidity, rotation
+  and hinge tests, the frames' dependence, the noise's directions) and the motion's own axis
+  (the sampled frames' rotations, the markers' arcs);
+* ``self-check``: the method's ``self_check`` on its answer, in one call's scope holding the
+  scatter ``S`` that the checked call's fit formed (:func:`jointbench.numerics.reuse.one_call`);
+* ``precision``: its ``precision_many`` on the answer and the verdict, likewise, of which
+  ``precision kernels`` is its compiled passes over the frames alone (whether two frames are
+  equal, the planar residuals' fourth powers);
+* ``answers``: :func:`jointbench.estimators.precision.annotate_motion_axis` and
+  :func:`jointbench.estimators.support.annotate`;
+* ``screen``: ``screening._find_artefacts`` of the markers, what the public call adds.
+
+The last column, ``floor / estimator``, is (estimator + input checks + verdict kernels +
+precision kernels + screen) / estimator: the public call's ratio if nothing but the fit and the
+compiled passes over the frames ran (the screen of a clean cluster being one compiled call),
+no Python between them. The radial cost's derivatives are NumPy arrays, not counted there.
 """
 
 from __future__ import annotations
@@ -56,19 +81,20 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 import jointbench
 from jointbench import screening
-from jointbench.estimators import centre_precision, registry, support, validation
+from jointbench.estimators import axis, centre_precision, precision, registry, support, validation
 from jointbench.estimators.batching import one_trial
 from jointbench.estimators.segment_poses import POSE_MIN_FRAMES, _trial_poses, pose_segments
 from jointbench.numerics import reuse
 from jointbench.numerics.compiled import kernel_array
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from estimators import CLOCKS, Clock, center_data, two_segment_data
+from estimators import CLOCKS, Clock, axis_data, center_data, two_segment_data
 
 STAGES = (
     "estimator",
@@ -96,20 +122,57 @@ JOINT_STAGES = (
 )
 
 
+#: The stages of a checked one-segment axis call (module docstring).
+AXIS_STAGES = (
+    "estimator",
+    "checked",
+    "public",
+    "input checks",
+    "verdict",
+    "verdict kernels",
+    "self-check",
+    "precision",
+    "precision kernels",
+    "answers",
+    "screen",
+)
+
+
 def _verdict_kernels(markers: np.ndarray) -> None:
     """The compiled work of the one-segment verdict on ``markers`` ``(1, N, n, 3)`` [mm]: one
     call, which gives the lag-1 statement's numbers too."""
     support._one_segment_numbers(markers, support._FLEX)
 
 
+class _OneSegment(NamedTuple):
+    """What the stages of a checked one-segment call read, per trial of ``trials``
+    ``(N, n, 3)`` [mm] (:func:`_one_segment`)."""
+
+    bare: Callable  # the registered function
+    checked: Callable  # registry.get's checked form
+    stacked: list[np.ndarray]  # each trial as a batch of one, (1, N, n, 3)
+    ready: list[np.ndarray]  # those as a kernel takes them
+    results: list  # the registered function's answers
+    verdicts: list[list]  # the support verdict of each, a list of one
+
+
+def _one_segment(kind: str, method: str, trials: list[np.ndarray]) -> _OneSegment:
+    """:class:`_OneSegment` of the ``kind`` method ``method`` on ``trials``."""
+    bare = registry.get(kind, method, checked=False)
+    stacked = [trial[None] for trial in trials]
+    return _OneSegment(
+        bare,
+        registry.get(kind, method),
+        stacked,
+        [kernel_array(trial) for trial in stacked],
+        [bare(trial) for trial in trials],
+        [support.assess_many(kind, (trial,)) for trial in stacked],
+    )
+
+
 def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[int], object]]:
     """Per stage of :data:`STAGES`, a call of it on trial ``i`` of ``trials`` ``(N, n, 3)``."""
-    bare = registry.get("center", method, checked=False)
-    checked = registry.get("center", method)
-    stacked = [trial[None] for trial in trials]
-    ready = [kernel_array(trial) for trial in stacked]
-    results = [bare(trial) for trial in trials]
-    verdicts = [support.assess_many("center", (trial,)) for trial in stacked]
+    bare, checked, stacked, ready, results, verdicts = _one_segment("center", method, trials)
     centres = [result.center[None] for result in results]
     variances = [
         np.array([verdict[0].diagnostics["rigid_residual_mm"] ** 2 / 3.0]) for verdict in verdicts
@@ -126,6 +189,77 @@ def stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[in
         "precision kernel": lambda i: centre_precision.centre_statistics(
             ready[i], centres[i], variances[i]
         ),
+    }
+
+
+def _axis_verdict_kernels(markers: np.ndarray) -> None:
+    """The compiled work of the one-segment verdict on an axis's ``markers`` ``(1, N, n, 3)``
+    [mm]: its pass over the frames, then the motion's own axis from the sampled frames'
+    rotations and the markers' arcs (``support._one_segment_axes``'s kernels)."""
+    numbers = support._one_segment_numbers(markers, support._FLEX)
+    variance = kernel_array(numbers[:, 0])
+    central = kernel_array(numbers[:, support._CENTRAL_FRAME])
+    step = support._frame_step(markers.shape[1])
+    found = support._sampled_axis_numbers(markers, step, variance, central)
+    support._arc_rotation_sd_deg(markers, variance, found[-2], found[-1])
+
+
+def _axis_precision_kernels(markers: np.ndarray, direction: np.ndarray) -> None:
+    """The compiled passes over the frames of an axis's statement of precision on ``markers``
+    ``(N, n, 3)`` [mm] at ``direction`` (3,): whether two frames are equal, and the planar
+    residuals' fourth powers."""
+    precision._rows_all_differ(markers.reshape(len(markers), -1))
+    axis._height_fourths(markers, direction)
+
+
+#: The name under which :func:`jointbench.estimators.axis.trial_scatter` keeps paper B's ``S``
+#: in one call's scope.
+_SCATTER = "planar scatter"
+
+
+def _formed_by_the_fit(markers: np.ndarray, scatter: np.ndarray) -> None:
+    """Hold ``scatter``, the ``S`` ``(3, 3)`` [mm^2] of ``markers`` ``(N, n, 3)``, in the open
+    scope of one call, as a checked call's fit leaves it for the checks after it, so that a
+    stage's time is its own and not that of forming ``S`` again."""
+    reuse.remembered(_SCATTER, markers, lambda _: scatter)
+
+
+def axis_stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callable[[int], object]]:
+    """Per stage of :data:`AXIS_STAGES`, a call of it on trial ``i`` of ``trials``
+    ``(N, n, 3)`` [mm] by the one-segment axis method ``method``."""
+    bare, checked, stacked, ready, results, verdicts = _one_segment("axis", method, trials)
+    directions = [kernel_array(np.asarray(result.direction)) for result in results]
+    scatters = [axis.trial_scatter(trial) for trial in trials]
+    labels = tuple(f"markers[:, {column}]" for column in range(trials[0].shape[1]))
+
+    def self_check(i: int) -> object:
+        with reuse.one_call():
+            _formed_by_the_fit(trials[i], scatters[i])
+            return bare.self_check(results[i], trials[i])
+
+    def precision_stage(i: int) -> object:
+        with reuse.one_call():
+            _formed_by_the_fit(trials[i], scatters[i])
+            return bare.precision_many([results[i]], stacked[i], verdicts=verdicts[i])
+
+    def answers(i: int) -> object:
+        (verdict,) = verdicts[i]
+        reason = verdict.diagnostics.get("reason", "")
+        checked_answer = precision.annotate_motion_axis(results[i], verdict.motion_axis, reason)
+        return support.annotate(checked_answer, verdict)
+
+    return {
+        "estimator": lambda i: bare(trials[i]),
+        "checked": lambda i: checked(trials[i]),
+        "public": lambda i: jointbench.fit_axis(trials[i], method=method),
+        "input checks": lambda i: validation.check_input("axis", (trials[i],)),
+        "verdict": lambda i: support.assess_many("axis", (stacked[i],)),
+        "verdict kernels": lambda i: _axis_verdict_kernels(ready[i]),
+        "self-check": self_check,
+        "precision": precision_stage,
+        "precision kernels": lambda i: _axis_precision_kernels(ready[i][0], directions[i]),
+        "answers": answers,
+        "screen": lambda i: screening._find_artefacts(trials[i], labels, "markers"),
     }
 
 
@@ -210,9 +344,14 @@ def time_stages(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--kind", choices=["center", "joint_center"], default="center")
+    parser.add_argument("--kind", choices=["center", "axis", "joint_center"], default="center")
     parser.add_argument(
-        "--methods", nargs="+", help="(default: LS NM BC; every method for joint_center)"
+        "--methods",
+        nargs="+",
+        help="(default: LS NM BC; planar for axis; every method for joint_center)",
+    )
+    parser.add_argument(
+        "--frames", type=int, default=5000, help="frames of the axis trials (%(default)s)"
     )
     parser.add_argument("--calls", type=int, default=400, help="calls per stage in all")
     parser.add_argument(
@@ -233,6 +372,12 @@ def main(argv: list[str] | None = None) -> int:
             "0.5 mm noise (see the script's doc).\n"
         )
         return _joint_table(methods, n_trials, rounds, clock)
+    if args.kind == "axis":
+        print(
+            f"Median {clock_text} µs per call, 3 markers x {args.frames} frames, a near-hinge, "
+            "1 mm noise (see the script's doc).\n"
+        )
+        return _axis_table(args.methods or ["planar"], args.frames, n_trials, rounds, clock)
     trials = [trial for (trial,) in center_data(np.random.default_rng(0), n_trials).trials]
     header = [*STAGES, "checked / estimator", "floor / estimator"]
     print(
@@ -252,6 +397,23 @@ def main(argv: list[str] | None = None) -> int:
             f"{median['checked'] / median['estimator']:.2f}×",
             f"{floor / median['estimator']:.2f}×",
         ]
+        print(f"| {method} | " + " | ".join(cells) + " |")
+    return 0
+
+
+def _axis_table(methods: list[str], n_frames: int, n_trials: int, rounds: int, clock: Clock) -> int:
+    """Print the axis stages' table (module docstring) of ``methods`` on ``n_frames`` frames."""
+    trials = [trial for (trial,) in axis_data(np.random.default_rng(0), n_trials, n_frames).trials]
+    header = [*AXIS_STAGES, "checked / estimator", "public / estimator", "floor / estimator"]
+    print(f"| method | {' | '.join(header)} |")
+    print("|---|" + "---:|" * len(header))
+    floor_stages = ("estimator", "input checks", "verdict kernels", "precision kernels", "screen")
+    for method in methods:
+        median = time_stages(axis_stage_calls(method, trials), n_trials, rounds, clock)
+        cells = [f"{1e6 * median[name]:.1f}" for name in AXIS_STAGES]
+        cells += [f"{median[name] / median['estimator']:.2f}×" for name in ("checked", "public")]
+        floor = sum(median[name] for name in floor_stages)
+        cells.append(f"{floor / median['estimator']:.2f}×")
         print(f"| {method} | " + " | ".join(cells) + " |")
     return 0
 

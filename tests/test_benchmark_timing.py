@@ -166,6 +166,22 @@ def test_the_joint_centre_stages_table_times_every_stage_of_each_method(capsys):
         assert all(float(cell.rstrip("×")) > 0.0 for cell in cells[1:])
 
 
+def test_the_axis_stages_table_times_every_stage_of_each_method(capsys):
+    # A checked one-segment axis call's stages (input checks, the verdict and its compiled
+    # passes, the self-check, the statement of precision and its compiled passes, the answers'
+    # checks) and the public call's screen, each the checks' own function: a renamed or moved
+    # one fails here.
+    argv = ["--kind", "axis", "--methods", "planar", "combined", "--calls", "2"]
+    assert check_stages.main(argv) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ")]
+    header = [*check_stages.AXIS_STAGES, "checked / estimator", "public / estimator"]
+    assert rows[0].strip("| ").split(" | ")[1:] == [*header, "floor / estimator"]
+    for method, row in zip(["planar", "combined"], rows[1:], strict=True):
+        cells = row.strip("| ").split(" | ")
+        assert cells[0] == method
+        assert all(float(cell.rstrip("×")) > 0.0 for cell in cells[1:])
+
+
 class _TickingClock:
     """A clock that advances ``step`` seconds each time it is read."""
 

@@ -927,13 +927,23 @@ def _sample_squares(
 _RESIDUAL_SETS = {"planar": 1, "radial": 1, "combined": 2}
 
 
-def _planar_hessian(scatter: np.ndarray, direction: np.ndarray, basis: np.ndarray) -> np.ndarray:
+def _planar_hessian(
+    scatter: np.ndarray, direction: np.ndarray, basis: np.ndarray, cost: float | None = None
+) -> np.ndarray:
     """The Hessian ``(2, 2)`` [mm^2/rad^2] of ``f_p = n' S n`` in the tangent angles ``a`` of
     ``n(a) = (n + E a) / |n + E a|`` at ``a = 0``: ``2 (E' S E - (n' S n) I)``, ``S`` the
-    scatter ``(3, 3)`` [mm^2], ``E`` the basis ``(3, 2)``. Exact at any ``n``; at the minimum
-    it is the curvature left above the noise's own share of ``S``, which a Gauss–Newton
-    ``2 E' S E`` would count as signal."""
-    return 2.0 * (basis.T @ scatter @ basis - float(direction @ scatter @ direction) * np.eye(2))
+    scatter ``(3, 3)`` [mm^2], ``E`` the basis ``(3, 2)``; ``cost``, where the caller has it,
+    is ``n' S n`` [mm^2] at the unit ``direction`` ``n`` (3,). Exact at any ``n``; at the
+    minimum it is the curvature left above the noise's own share of ``S``, which a
+    Gauss–Newton ``2 E' S E`` would count as signal."""
+    if cost is None:
+        cost = float(direction @ scatter @ direction)
+    return 2.0 * (basis.T @ scatter @ basis - cost * _IDENTITY_2)
+
+
+# The identity of the tangent angles (_planar_hessian), made once: read, never written.
+_IDENTITY_2 = np.eye(2)
+_IDENTITY_2.setflags(write=False)
 
 
 def _outer_sum(factor: np.ndarray, unit: np.ndarray) -> np.ndarray:
@@ -998,6 +1008,22 @@ def _planar_gap(planar_hessian: np.ndarray) -> float:
     return precision.smaller_eigenvalue(0.5 * planar_hessian)
 
 
+def _planar_terms(
+    markers: np.ndarray, direction: np.ndarray, basis: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """The planar cost ``n' S n`` [mm^2] at the unit ``direction`` ``n`` (3,) on the distinct
+    frames ``markers`` ``(N_d, P, 3)`` [mm], with its gradient ``(2,)`` and Hessian ``(2, 2)``
+    in the tangent angles of ``basis`` ``(3, 2)`` (:func:`_planar_hessian`) and its residuals'
+    fourth powers summed [mm^4]: ``(gradient, hessian, cost, fourths)``. ``S`` does not depend
+    on the axis's point: the planar cost needs no foot, whose centroid of every sample costs
+    more than ``S`` itself on a long trial."""
+    scatter = trial_scatter(markers)
+    cost = float(direction @ scatter @ direction)
+    gradient = 2.0 * basis.T @ scatter @ direction
+    fourths = _height_fourths(kernel_array(markers), kernel_array(direction))
+    return gradient, _planar_hessian(scatter, direction, basis, cost), cost, fourths
+
+
 def _cost_at(
     markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str
 ) -> precision.CostAt:
@@ -1007,16 +1033,13 @@ def _cost_at(
     n_frames, n_markers = markers.shape[:2]
     basis = precision.tangent_basis(direction)
     n_params = 2 if method == "planar" else 4
-    gradient, hessian = np.zeros(n_params), np.zeros((n_params, n_params))
-    cost, fourths = 0.0, 0.0
-    if method != "radial":
-        # S does not depend on the axis's point: the planar cost needs no foot, whose centroid
-        # of every sample costs more than S itself on a long trial.
-        scatter = trial_scatter(markers)
-        gradient[:2] = 2.0 * basis.T @ scatter @ direction
-        hessian[:2, :2] = _planar_hessian(scatter, direction, basis)
-        cost = float(direction @ scatter @ direction)
-        fourths = _height_fourths(kernel_array(markers), kernel_array(direction))
+    if method == "planar":
+        gradient, hessian, cost, fourths = _planar_terms(markers, direction, basis)
+    else:
+        gradient, hessian = np.zeros(n_params), np.zeros((n_params, n_params))
+        cost, fourths = 0.0, 0.0
+    if method == "combined":
+        gradient[:2], hessian[:2, :2], cost, fourths = _planar_terms(markers, direction, basis)
     if method != "planar":
         foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
         radial = _radial_derivatives(markers, foot, direction, basis)

@@ -322,7 +322,7 @@ def direction_sd_deg(at: CostAt) -> float:
         return math.inf
     step = -at.inverse @ at.gradient
     covariance = 2.0 * (at.least / at.dof) * at.inverse
-    variance = float(np.trace(covariance[:2, :2])) + float(step[:2] @ step[:2])
+    variance = float(covariance[:2, :2].trace()) + float(step[:2] @ step[:2])
     return math.degrees(math.sqrt(max(variance, 0.0)))
 
 
