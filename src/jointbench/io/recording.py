@@ -49,7 +49,11 @@ def origin_gaps(markers: np.ndarray) -> np.ndarray:
     labelled as the marker) jumps far enough to reach the origin from anywhere, and would keep
     every gap of its trial. A marker never away from the origin was never seen (a labelled
     template's marker): all its samples are gaps."""
-    return _origin_gaps_of(np.ascontiguousarray(markers, dtype=np.float64))
+    markers = np.ascontiguousarray(markers, dtype=np.float64)
+    if not (markers == 0.0).all(axis=-1).any():
+        # Most recordings hold no sample at the origin, and their reading needs no compiler.
+        return np.zeros(markers.shape[:2], dtype=bool)
+    return _origin_gaps_of(markers)
 
 
 @kernel
