@@ -132,21 +132,22 @@ def _runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
-def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, source: str) -> None:
+def _warn_origin_gaps(
+    gaps: np.ndarray, missing: np.ndarray, labels: tuple[str, ...], first: int, source: str
+) -> None:
     """Warn of the ``gaps`` ``(n_frames, n_markers)`` :func:`origin_gaps` found in ``source``,
-    whose row 0 is frame ``first``, naming them: as frames zero-filled past the capture's end
-    where the last frames hold every marker (of two or more) at the origin, and each other
-    marker's frames after."""
-    padded = gaps.all(axis=1) if gaps.shape[1] > 1 else np.zeros(len(gaps), dtype=bool)
-    kept = np.flatnonzero(~padded)
-    n_padded = len(padded) - (int(kept[-1]) + 1 if kept.size else 0)
+    whose row 0 is frame ``first`` and whose other samples ``missing`` ``(n_frames,
+    n_markers)`` are missing, naming them: once, as frames zero-filled past the capture's end,
+    where the last frames (:func:`_padded_frames`) hold every marker at the origin or missing,
+    naming the markers missing there; and each other marker's frames after."""
+    n_padded = _padded_frames(gaps, missing)
     if n_padded:
-        last = first + len(padded) - 1
+        last = first + len(gaps) - 1
         warn_caller(
             f"{source}: frames {last - n_padded + 1} to {last} (the last {n_padded}) hold every "
-            "marker at exactly (0, 0, 0): frames zero-filled past the capture's end (a capture "
-            "stopped early and padded, or a file cut and padded), not gaps a recording writes; "
-            "they are read as missing"
+            f"marker at exactly (0, 0, 0){_missing_named(missing[-n_padded:], labels)}: frames "
+            "zero-filled past the capture's end (a capture stopped early and padded, or a file "
+            "cut and padded), not gaps a recording writes; they are read as missing"
         )
     gaps = gaps[: len(gaps) - n_padded]
     if not gaps.any():
@@ -165,6 +166,28 @@ def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, sou
         f"sample before or after {'each' if many else 'it'} lies farther from the origin than "
         f"the marker moves in a frame nearby (or it has none): {named}"
     )
+
+
+def _padded_frames(gaps: np.ndarray, missing: np.ndarray) -> int:
+    """How many of the last frames are zero-filled past a capture's end: each holds two or more
+    markers at the origin that :func:`origin_gaps` reads as gaps (``gaps`` ``(n_frames,
+    n_markers)``), and every other marker ``missing`` there (a marker unseen before the capture
+    stopped is no zero-filling's). One marker alone at the origin may have stopped there, and
+    its gap is its own."""
+    padded = (gaps | missing).all(axis=1) & (gaps.sum(axis=1) >= 2)
+    kept = np.flatnonzero(~padded)
+    return len(padded) - (int(kept[-1]) + 1 if kept.size else 0)
+
+
+def _missing_named(missing: np.ndarray, labels: tuple[str, ...]) -> str:
+    """``" but C, D (in 3 of them), missing there"``: the markers ``missing`` ``(n_frames,
+    n_markers)`` marks in some of a warning's frames, by ``labels``; ``""`` for none."""
+    parts = [
+        labels[marker]
+        + ("" if missing[:, marker].all() else f" (in {missing[:, marker].sum()} of them)")
+        for marker in np.flatnonzero(missing.any(axis=0))
+    ]
+    return f" but {', '.join(parts)}, missing there" if parts else ""
 
 
 #: The runs of a marker's frames a warning names; the rest it counts.
@@ -301,7 +324,8 @@ class Recording:
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "markers", markers)
         if gaps.any():
-            _warn_origin_gaps(gaps, labels, self.first_frame, self.source)
+            missing = np.isnan(markers[..., 0]) & ~gaps
+            _warn_origin_gaps(gaps, missing, labels, self.first_frame, self.source)
 
     @property
     def n_frames(self) -> int:
