@@ -4,10 +4,12 @@ the answers of its array implementation, kept here as the reference, bit for bit
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
+from jointbench.io import Recording
 from jointbench.io.recording import _REACH_FRAMES, _runs, origin_gaps
 
 
@@ -129,3 +131,21 @@ def test_the_compiled_rule_gives_the_reference_answers_over_long_motions(seed):
             0.0 if rng.random() < 0.8 else np.nan
         )
     np.testing.assert_array_equal(origin_gaps(markers), reference_origin_gaps(markers))
+
+
+def test_a_marker_at_its_fastest_exactly_at_the_origin_loses_the_sample_named():
+    """A wand swung through the origin, at its fastest there (``100 sin(0.3 i)`` mm): its
+    steps on either side (27 mm) are shorter than its distance from the origin next to it
+    (30 mm), and its step into the origin counts for no reach: the sample is read as a gap, and
+    named (the rule's documented limit)."""
+    frames = np.arange(-10, 11)
+    markers = np.zeros((len(frames), 3, 3))
+    markers[:, 0, 0] = 100.0 * np.sin(0.3 * frames)
+    markers[:, 1] = [500.0, 0.0, 0.0]
+    markers[:, 2] = [0.0, 500.0, 0.0]
+    markers[:, 1:] += np.random.default_rng(0).normal(0.0, 0.1, (len(frames), 2, 3))
+    assert markers[10, 0].tolist() == [0.0, 0.0, 0.0]
+    with pytest.warns(UserWarning, match=r"A at frame 10$"):
+        recording = Recording(("A", "B", "C"), markers)
+    assert np.isnan(recording.markers[10, 0]).all()
+    assert np.isfinite(np.delete(recording.markers, 10, axis=0)).all()

@@ -48,7 +48,17 @@ def origin_gaps(markers: np.ndarray) -> np.ndarray:
     Its motion next to the run, not its fastest anywhere: one sample of an artefact (a ghost
     labelled as the marker) jumps far enough to reach the origin from anywhere, and would keep
     every gap of its trial. A marker never away from the origin was never seen (a labelled
-    template's marker): all its samples are gaps."""
+    template's marker): all its samples are gaps.
+
+    A marker at its fastest exactly at the origin (a wand swung through it) loses the sample
+    there, with the warning: its steps into and out of the origin are the ones being judged,
+    and cannot count towards its reach (the step from any sample to a writer's zeros is as long
+    as that sample's distance, and would keep every gap), so its reach is its slower steps on
+    either side, shorter than its distance from the origin. A reach read across the run
+    instead (the step from the sample before to the sample after, the origin between them)
+    would keep that sample, and with it the zeros of a marker invalid while it passed the
+    origin at that distance, which only the residual tells apart, and which TRC and CSV
+    exports drop: the rule leaves the sample out, and names it."""
     markers = np.ascontiguousarray(markers, dtype=np.float64)
     if not (markers == 0.0).all(axis=-1).any():
         # Most recordings hold no sample at the origin, and their reading needs no compiler.
