@@ -170,6 +170,54 @@ def test_a_c3d_zero_filled_at_its_end_is_read_as_missing_and_says_so(tmp_path):
     assert np.isfinite(recording.markers[:15]).all()
 
 
+def _zero_filled_and_missing(path, missing_from):
+    """A file (C3D or TRC, by ``path``'s suffix) of :func:`_far_markers` zero-filled from frame
+    16 on, where C is missing from row ``missing_from`` on."""
+    markers = _far_markers()
+    markers[15:] = 0.0
+    markers[missing_from:, 2] = np.nan
+    writer = write_c3d if path.suffix == ".c3d" else write_trc
+    return writer(path, "ABC", markers)
+
+
+@pytest.mark.parametrize("suffix", [".c3d", ".trc"])
+@pytest.mark.parametrize(
+    ("missing_from", "missing"), [(12, "C, missing there"), (17, "C (in 3 of them), missing there")]
+)
+def test_frames_zero_filled_where_a_marker_is_missing_are_said_once(
+    tmp_path, suffix, missing_from, missing
+):
+    """C unseen from before the padding, or within it: the padding was warned marker by marker,
+    as gaps of A and B (and C's zeros) a writer stored, not as frames past the capture's end."""
+    path = _zero_filled_and_missing(tmp_path / f"padded{suffix}", missing_from)
+    with pytest.warns(UserWarning) as caught:
+        recording = read(path)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: frames 16 to 20 (the last 5) hold every marker at exactly (0, 0, 0) but "
+        f"{missing}: frames zero-filled past the capture's end (a capture stopped early and "
+        "padded, or a file cut and padded), not gaps a recording writes; they are read as "
+        "missing"
+    ]
+    assert np.isnan(recording.markers[15:]).all()
+
+
+def test_frames_where_one_marker_is_at_the_origin_and_the_rest_missing_are_its_gaps(tmp_path):
+    """Two or more markers at (0, 0, 0) in each frame make a padding: one alone is a gap of its
+    own, named by its marker."""
+    markers = _far_markers()
+    markers[15:, 0] = 0.0
+    markers[12:, 1:] = np.nan
+    path = write_trc(tmp_path / "trial.trc", "ABC", markers)
+    with pytest.warns(UserWarning) as caught:
+        read(path)
+    assert [str(w.message) for w in caught] == [
+        f"{path}: 5 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored as "
+        "zeros (the C3D format's coordinates of an invalid point), not positions at the lab's "
+        "origin: the marker's nearest sample before or after each lies farther from the origin "
+        "than the marker moves in a frame nearby (or it has none): A at frames 16 to 20"
+    ]
+
+
 def test_fit_prints_the_zero_filled_frames(tmp_path, capsys, request):
     labels, markers = request.getfixturevalue("knee_legs")
     markers = markers.copy()

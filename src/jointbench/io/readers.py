@@ -5,10 +5,13 @@ from __future__ import annotations
 import codecs
 import csv
 import io
+import itertools
 import math
 import re
 import struct
 import warnings
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import ezc3d
@@ -33,16 +36,25 @@ def _check_file(path: str | Path) -> Path:
 
 def _read_text(path: Path, kind: str) -> str:
     """The text of ``path``, a ``kind`` (``"TRC"``, ``"CSV"``) file, decoded as UTF-8 (a
-    byte-order mark dropped); ``ValueError`` naming the line and the byte that is not UTF-8, or
-    a binary file (:func:`_check_not_binary`). No other encoding is guessed: a Latin-1 or
-    Windows-1252 label read as UTF-8 with replacement characters would be a label nobody can
-    type, and one read as Latin-1 from a Windows-1252 file would be another marker's name.
-    The end-of-file mark some DOS programs end a file with (0x1a) ends the text: kept, it
-    would read as a last line cut short."""
+    byte-order mark dropped), its bytes checked by :func:`_text_bytes`."""
+    return _text_bytes(path, kind).decode("utf-8-sig")
+
+
+def _text_bytes(path: Path, kind: str) -> bytes:
+    """The bytes of ``path``, a ``kind`` (``"TRC"``, ``"CSV"``) file, checked as UTF-8 text;
+    ``ValueError`` naming the line and the byte that is not UTF-8, or a binary file
+    (:func:`_check_not_binary`). No other encoding is guessed: a Latin-1 or Windows-1252 label
+    read as UTF-8 with replacement characters would be a label nobody can type, and one read
+    as Latin-1 from a Windows-1252 file would be another marker's name. The end-of-file mark
+    some DOS programs end a file with (0x1a) ends the text: kept, it would read as a last line
+    cut short. ASCII text, as most exports are, is UTF-8 as it is: only other text is decoded
+    to be checked, a copy of it the size of the file's."""
     content = path.read_bytes().removesuffix(_DOS_END)
     _check_not_binary(content, path, kind)
+    if content.isascii():
+        return content
     try:
-        return content.decode("utf-8-sig")
+        content.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         line = content.count(b"\n", 0, error.start) + 1
         raise ValueError(
@@ -50,6 +62,7 @@ def _read_text(path: Path, kind: str) -> str:
             "file) is not UTF-8 text; save the file as UTF-8 (from Latin-1: "
             "iconv -f latin1 -t utf-8)"
         ) from None
+    return content
 
 
 #: The end-of-file mark some DOS programs end a text file with; the text ends before it.
@@ -509,16 +522,20 @@ def read_trc(path: str | Path) -> Recording:
     fixed columns (:func:`_trc_labels`) and no row may write past the labelled markers
     (:func:`_check_unlabelled_fields`); the file is UTF-8 (:func:`_read_text`). Its fields are
     tab-separated: a line of fields separated by spaces is refused, naming it, not read
-    (:func:`_check_tab_separated`), and so is an empty ``Units``: a TRC states its unit."""
+    (:func:`_check_tab_separated`), and so is an empty ``Units``: a TRC states its unit. The
+    rows are read line by line into one array (:func:`_trc_rows`): a long capture is read in
+    about twice its file's size (its text and its numbers), not its fields as text, ten times."""
     path = _check_file(path)
-    lines = _read_text(path, "TRC").splitlines()
-    if len(lines) < 6:
+    text = _read_text(path, "TRC")
+    n_lines = sum(1 for _ in _text_lines(text))
+    if n_lines < 6:
         raise ValueError(f"{path}: too short for a TRC file (needs 5 header lines and data)")
+    head = list(itertools.islice(_text_lines(text), 5))
     # The header's keys, their values and the labels (lines 2 to 4): read split at tabs, a
     # line of spaces would be refused as lacking what it holds.
     for index in (1, 2, 3):
-        _check_tab_separated(lines, index, path)
-    keys, values = lines[1].split("\t"), lines[2].split("\t")
+        _check_tab_separated(head[index], index + 1, path)
+    keys, values = head[1].split("\t"), head[2].split("\t")
     header = {key.strip(): value.strip() for key, value in zip(keys, values, strict=False)}
     if "Units" not in header:
         raise ValueError(f"{path}: TRC header has no 'Units' (line 2 keys: {keys})")
@@ -527,59 +544,137 @@ def read_trc(path: str | Path) -> Recording:
             f"{path}: line 3, field Units: empty; a TRC file states its point unit there (mm, "
             "cm or m)"
         )
-    labels = _trc_labels(lines[3], path)
+    labels = _trc_labels(head[3], path)
     width = 2 + 3 * len(labels)
-    # Data start on line 6; a blank line is no frame.
-    data = [(number, line) for number, line in enumerate(lines[5:], 6) if line.strip()]
-    if not data:
-        raise ValueError(f"{path}: no frames: the TRC header is followed by blank lines only")
-    for number, line in data:
+    # The rows are read twice, line by line, never all split at once: a long capture's fields
+    # as text take ten times the file's size. First their count and their fields' (a line cut
+    # short is refused before any is read as numbers), then their values.
+    n_rows, last_row = 0, 0
+    for number, line in _trc_data(text):
         fields = line.count("\t") + 1
         if fields == 1:
-            _check_tab_separated(lines, number - 1, path)
+            _check_tab_separated(line, number, path)
         if fields < width:
             columns = f"Frame#, Time and X, Y, Z of {len(labels)} markers"
-            raise _short_row(path, number, fields, width, columns, number == len(lines))
-    rows = [line.split("\t") for _, line in data]
-    _check_names_line(lines[4].split("\t"), path)
-    _check_unlabelled_fields(lines[4].split("\t"), width, path, 5)
-    for (number, _), row in zip(data, rows, strict=True):
-        _check_unlabelled_fields(row, width, path, number)
-    if data[-1][0] == len(lines):
-        last_field = [row[width - 1] for row in rows]
-        _check_last_field(path, len(lines), last_field, f"Z of {labels[-1]}")
-    numbers = _trc_frame_numbers(rows, [n for n, _ in data], header, len(labels), path)
-    markers = np.full((len(rows), len(labels) * 3), np.nan)
-    for i, row in enumerate(rows):
-        fields = row[2:width]
-        for j, text in enumerate(fields):
-            text = text.strip()
-            if text:
-                try:
-                    markers[i, j] = float(text)
-                except ValueError:
-                    raise ValueError(
-                        f"{path}: frame {numbers[i]}, marker {labels[j // 3]}: {text!r} is not "
-                        f"a number{_decimal_comma(text)}"
-                    ) from None
-    markers = markers.reshape(len(rows), len(labels), 3) * to_mm(header["Units"], path)
+            raise _short_row(path, number, fields, width, columns, number == n_lines)
+        n_rows, last_row = n_rows + 1, number
+    if not n_rows:
+        raise ValueError(f"{path}: no frames: the TRC header is followed by blank lines only")
+    _check_names_line(head[4].split("\t"), path)
+    _check_unlabelled_fields(head[4].split("\t"), width, path, 5)
+    # The last field of every row, for a file that ends inside its last line.
+    cut = last_row == n_lines and not _ends_with_newline(path)
+    rows = _trc_rows(text, n_rows, width, path, cut)
+    del text  # the values are read: the file's text is no longer needed
+    if cut:
+        _check_last_field(path, n_lines, rows.last_field, f"Z of {labels[-1]}")
+    numbers = _trc_frame_numbers(rows.frames, rows.lines, header, len(labels), path)
+    if rows.not_a_number is not None:
+        i, j, text = rows.not_a_number
+        raise ValueError(
+            f"{path}: frame {numbers[i]}, marker {labels[j // 3]}: {text!r} is not a number"
+            f"{_decimal_comma(text)}"
+        )
+    markers = rows.values.reshape(n_rows, len(labels), 3)
+    markers *= to_mm(header["Units"], path)
     rate_hz = _trc_rate(header.get("DataRate", ""), path)
-    _check_trc_times([row[1] for row in rows], [n for n, _ in data], numbers, rate_hz, path)
+    _check_trc_times(rows.times, rows.lines, numbers, rate_hz, path)
     return _no_repeated_frames(
         Recording(tuple(labels), markers, rate_hz, str(path), numbers[0], header["Units"])
     )
 
 
-def _check_tab_separated(lines: list[str], index: int, path: Path) -> None:
-    """``ValueError`` naming line ``index + 1`` of the TRC file ``path`` (``lines``) when it
-    holds no tab but several fields separated by spaces, as an editor or exporter that turns
+def _text_lines(text: str) -> Iterator[str]:
+    """The lines of ``text``, as :meth:`str.splitlines` gives them, a part of the text of about
+    :data:`_PART_CHARACTERS` at a time: a long file's lines are never all held at once. Each part
+    ends with a line feed, so a line (and a ``\\r\\n``) is never split between two."""
+    start = 0
+    while start < len(text):
+        end = text.find("\n", start + _PART_CHARACTERS)
+        end = len(text) if end < 0 else end + 1
+        yield from text[start:end].splitlines()
+        start = end
+
+
+#: The characters of text split into lines at once (:func:`_text_lines`).
+_PART_CHARACTERS = 1 << 18
+
+
+def _trc_data(text: str) -> Iterator[tuple[int, str]]:
+    """The data lines of the TRC file's ``text``, from line 6, with their 1-based numbers; a
+    blank line is no frame."""
+    lines = enumerate(_text_lines(text), 1)
+    for number, line in lines:
+        if number > 5 and line.strip():
+            yield number, line
+
+
+@dataclass
+class _TrcRows:
+    """The ``n_rows`` data rows of a TRC file as read (:func:`_trc_rows`): ``values``
+    ``(n_rows, 3 * n_markers)`` float64, NaN where a field is empty, in the file's unit;
+    ``frames`` and ``times`` each row's ``Frame#`` and ``Time`` text, ``lines`` its 1-based
+    line; ``last_field`` each row's last field's text where it was asked for (else empty); and
+    the first field that is not a number, ``(row, column among the values, text)``, or ``None``."""
+
+    values: np.ndarray
+    frames: list[str]
+    times: list[str]
+    lines: list[int]
+    last_field: list[str]
+    not_a_number: tuple[int, int, str] | None
+
+
+def _trc_rows(text: str, n_rows: int, width: int, path: Path, last_field: bool) -> _TrcRows:
+    """The ``n_rows`` data rows of the TRC file ``path``, whose ``text`` has rows of ``width``
+    fields or more (``Frame#``, ``Time``, X, Y, Z of each labelled marker), read line by line
+    into one array, with each row's ``last_field`` where asked; ``ValueError`` naming the first
+    line that writes past the labelled markers (:func:`_check_unlabelled_fields`). A field that
+    is not a number is refused by the caller, after the frame numbers that name it."""
+    values = np.full((n_rows, width - 2), np.nan)
+    frames, times, lines, last = [], [], [], []
+    not_a_number = None
+    for i, (number, line) in enumerate(_trc_data(text)):
+        row = line.split("\t")
+        _check_unlabelled_fields(row, width, path, number)
+        frames.append(row[0])
+        times.append(row[1])
+        lines.append(number)
+        if last_field:
+            last.append(row[width - 1])
+        if not_a_number is None:
+            not_a_number = _read_values(row[2:width], values[i], i)
+    return _TrcRows(values, frames, times, lines, last, not_a_number)
+
+
+def _read_values(fields: list[str], into: np.ndarray, row: int) -> tuple[int, int, str] | None:
+    """The numbers ``fields`` write, read into ``into`` ``(len(fields),)``, an empty field left
+    as it is (NaN, a gap); the first that is not a number, ``(row, its index, its text)``, or
+    ``None``."""
+    try:
+        into[:] = [float(text) for text in fields]
+        return None
+    except ValueError:
+        pass  # an empty field, or no number: each field read on its own
+    for j, text in enumerate(fields):
+        text = text.strip()
+        if text:
+            try:
+                into[j] = float(text)
+            except ValueError:
+                return row, j, text
+    return None
+
+
+def _check_tab_separated(line: str, number: int, path: Path) -> None:
+    """``ValueError`` naming line ``number`` (1-based) of the TRC file ``path``, ``line``, when
+    it holds no tab but several fields separated by spaces, as an editor or exporter that turns
     tabs into spaces writes. Such a file is refused, not read: spaces cannot tell an empty
     field (a gap) from no field, nor a label with a space in it from two labels."""
-    line = lines[index]
     if "\t" in line or len(line.split()) < 2:
         return
     raise ValueError(
-        f"{path}: line {index + 1} is not tab-separated: a TRC file's fields are separated by "
+        f"{path}: line {number} is not tab-separated: a TRC file's fields are separated by "
         "tabs, and spaces cannot tell an empty field (a gap) from none, nor a label with a "
         "space in it; save the file with tabs"
     )
@@ -814,23 +909,24 @@ def _not_a_frame_number(path: Path, where: str, field: str, text: str) -> ValueE
 
 
 def _trc_frame_numbers(
-    rows: list[list[str]], lines: list[int], header: dict, n_labels: int, path: Path
+    frames: list[str], lines: list[int], header: dict, n_labels: int, path: Path
 ) -> list:
-    """The ``Frame#`` of every row (``lines``: each row's 1-based line in the file);
+    """The frame numbers of every row, ``frames`` its ``Frame#`` text (``lines``: each row's
+    1-based line in the file);
     ``ValueError`` when they are not consecutive integers, naming the line of the first one
     that is not (and of the row before it, blank lines between them being no rows), or not the
     frames and markers the header promises."""
     promised = {key: header.get(key, "") for key in ("NumFrames", "NumMarkers")}
-    for key, found in (("NumFrames", len(rows)), ("NumMarkers", n_labels)):
+    for key, found in (("NumFrames", len(frames)), ("NumMarkers", n_labels)):
         if re.fullmatch(r"[0-9]+", promised[key]) and int(promised[key]) != found:
             raise ValueError(
                 f"{path}: the TRC header promises {key} {promised[key]} but the file has {found}"
             )
     numbers = []
-    for i, row in enumerate(rows):
-        number = _whole_number(row[0])
+    for i, text in enumerate(frames):
+        number = _whole_number(text)
         if number is None:
-            raise _not_a_frame_number(path, f"line {lines[i]}", "Frame#", row[0])
+            raise _not_a_frame_number(path, f"line {lines[i]}", "Frame#", text)
         numbers.append(number)
         if i and numbers[i] != numbers[i - 1] + 1:
             raise ValueError(
@@ -853,11 +949,13 @@ def read_csv(path: str | Path) -> Recording:
     with its last field empty where other rows fill it (cut right after a separator). The file
     declares no frame count, so a file cut at a line's end reads as a shorter recording.
     ``marker`` is text exactly as written (``01``, ``NA``); an empty one is refused, naming
-    its line. The file is UTF-8 (:func:`_read_text`).
+    its line. The file is UTF-8 (:func:`_text_bytes`).
     """
     path = _check_file(path)
-    text = _read_text(path, "CSV")
-    _check_not_nexus(text, path)
+    # The parser reads the file's bytes: its text as a str, copied for the parser at four
+    # bytes a character, took five times the file's size.
+    content = _text_bytes(path, "CSV")
+    _check_not_nexus(content.split(b"\n", 1)[0].decode("utf-8-sig"), path)
     try:
         # The marker column is text as written: no type inference ("01" stays "01") and no
         # missing-value words ("NA" is a marker's name); the other columns keep pandas' own.
@@ -869,7 +967,8 @@ def read_csv(path: str | Path) -> Recording:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", pd.errors.ParserWarning)
             table = pd.read_csv(
-                io.StringIO(text),
+                io.BytesIO(content),
+                encoding="utf-8-sig",
                 dtype={"marker": str, "frame": str},
                 keep_default_na=False,
                 na_values={column: _NA_TEXT for column in ("frame", "x", "y", "z")},
@@ -896,41 +995,61 @@ def read_csv(path: str | Path) -> Recording:
     # after its last separator; either leaves the last column empty. A cut inside the last
     # number leaves no line end. Only then is the file read again to find it.
     if table[table.columns[-1]].isna().any() or not _ends_with_newline(path):
-        _check_csv_fields(path, text, list(table.columns))
+        _check_csv_fields(path, content, list(table.columns))
+    del content  # read: the table holds what the rest of the reading needs
     numbers = _csv_frame_numbers(table["frame"], path)
     table["frame"] = numbers  # "7" and "7.0" are one frame
     empty = (table["marker"] == "").to_numpy()
     if empty.any():
         line, _ = _csv_line(path, int(np.argmax(empty)), "marker")
         raise ValueError(f"{path}: {line}, field marker: empty; every sample needs a marker")
-    twice = table.duplicated(["frame", "marker"], keep=False)
-    if twice.any():
-        first = table[twice].iloc[0]
-        same = (numbers == numbers[first.name]) & (table["marker"] == first["marker"]).to_numpy()
-        raise ValueError(
-            f"{path}: frame {numbers[first.name]}, marker {first['marker']} has "
-            f"{int(same.sum())} rows for the same (frame, marker); each sample must appear once"
-            f" ({int(twice.sum())} rows in all repeat a sample)"
-        )
+    # Each row's marker as its column, by the labels' natural order: an array of integers, where
+    # a mapping of the text column would take ten times the file's size.
+    codes, names = pd.factorize(table["marker"])
+    order = sorted(range(len(names)), key=lambda code: _natural(names[code]))
+    labels = [names[code] for code in order]
+    column = np.empty(len(order), dtype=np.intp)
+    column[order] = np.arange(len(order))
+    column = column[codes]
     first_frame = int(numbers.min())
-    labels = sorted(table["marker"].unique(), key=_natural)
-    column = {label: i for i, label in enumerate(labels)}
     markers = np.full((int(numbers.max()) - first_frame + 1, len(labels), 3), np.nan)
-    coordinates = table[["x", "y", "z"]].apply(pd.to_numeric, errors="coerce")
-    bad = coordinates.isna().to_numpy() & table[["x", "y", "z"]].notna().to_numpy()
-    if bad.any():
-        row, axis = np.argwhere(bad)[0]
-        text = table[["x", "y", "z"]].iloc[row, axis]
-        raise ValueError(
-            f"{path}: frame {numbers[row]}, marker {table['marker'].iloc[row]}: "
-            f"{'xyz'[axis]} = {text!r} is not a number{_decimal_comma(str(text))}"
-        )
-    markers[numbers - first_frame, table["marker"].map(column).to_numpy()] = coordinates.to_numpy(
-        float
-    )
+    # A sample given twice leaves fewer samples given than rows.
+    given = np.zeros(markers.shape[:2], dtype=bool)
+    given[numbers - first_frame, column] = True
+    if np.count_nonzero(given) < len(column):
+        _refuse_csv_repeats(table, numbers, path)
+    written = table[["x", "y", "z"]]
+    if (written.dtypes == np.float64).all():
+        coordinates = written  # numbers as parsed: none to refuse
+    else:
+        coordinates = written.apply(pd.to_numeric, errors="coerce")
+        bad = coordinates.isna().to_numpy() & written.notna().to_numpy()
+        if bad.any():
+            row, axis = np.argwhere(bad)[0]
+            text = written.iloc[row, axis]
+            raise ValueError(
+                f"{path}: frame {numbers[row]}, marker {table['marker'].iloc[row]}: "
+                f"{'xyz'[axis]} = {text!r} is not a number{_decimal_comma(str(text))}"
+            )
+    markers[numbers - first_frame, column] = coordinates.to_numpy(float)
+    del table, written, coordinates  # in the markers now, which the recording copies
     # The format states no unit: its coordinates are read as mm, and said to be read so.
     return _no_repeated_frames(
         Recording(tuple(labels), markers, None, str(path), first_frame, units="")
+    )
+
+
+def _refuse_csv_repeats(table: pd.DataFrame, numbers: np.ndarray, path: Path) -> None:
+    """``ValueError`` naming the first (frame, marker) of the CSV file ``path`` (``table``, its
+    rows; ``numbers``, their frame numbers) given in more than one row, how many rows give it
+    and how many rows in all repeat a sample."""
+    twice = table.duplicated(["frame", "marker"], keep=False)
+    first = table[twice].iloc[0]
+    same = (numbers == numbers[first.name]) & (table["marker"] == first["marker"]).to_numpy()
+    raise ValueError(
+        f"{path}: frame {numbers[first.name]}, marker {first['marker']} has "
+        f"{int(same.sum())} rows for the same (frame, marker); each sample must appear once"
+        f" ({int(twice.sum())} rows in all repeat a sample)"
     )
 
 
@@ -992,12 +1111,12 @@ def _no_repeated_frames(recording: Recording) -> Recording:
 _CHANCE_REPEATS = 0.01
 
 
-def _check_csv_fields(path: Path, text: str, header: list[str]) -> None:
-    """``ValueError`` naming the first line of ``path``, whose text is ``text``
-    (:func:`_read_text`), with fewer fields than ``header``, or its last line when the file
+def _check_csv_fields(path: Path, content: bytes, header: list[str]) -> None:
+    """``ValueError`` naming the first line of ``path``, whose bytes are ``content``
+    (:func:`_text_bytes`), with fewer fields than ``header``, or its last line when the file
     ends inside it right after a separator (:func:`_check_cut_after_separator`)."""
     last_field = []
-    with io.StringIO(text, newline="") as file:
+    with io.TextIOWrapper(io.BytesIO(content), encoding="utf-8-sig", newline="") as file:
         records = csv.reader(file)
         next(records)
         for record in records:

@@ -11,6 +11,7 @@ import numpy as np
 
 from jointbench.io.caller import warn_caller
 from jointbench.io.segments import Numbering, Segment
+from jointbench.numerics.compiled import kernel
 
 __all__ = ["Recording", "parse_frames"]
 
@@ -47,50 +48,85 @@ def origin_gaps(markers: np.ndarray) -> np.ndarray:
     Its motion next to the run, not its fastest anywhere: one sample of an artefact (a ghost
     labelled as the marker) jumps far enough to reach the origin from anywhere, and would keep
     every gap of its trial. A marker never away from the origin was never seen (a labelled
-    template's marker): all its samples are gaps."""
-    at_origin = (markers == 0.0).all(axis=-1)
-    gaps = at_origin.copy()
-    for marker in np.flatnonzero(at_origin.any(axis=0)):
-        gaps[:, marker] = _track_origin_gaps(markers[:, marker], at_origin[:, marker])
-    return gaps
+    template's marker): all its samples are gaps.
+
+    A marker at its fastest exactly at the origin (a wand swung through it) loses the sample
+    there, with the warning: its steps into and out of the origin are the ones being judged,
+    and cannot count towards its reach (the step from any sample to a writer's zeros is as long
+    as that sample's distance, and would keep every gap), so its reach is its slower steps on
+    either side, shorter than its distance from the origin. A reach read across the run
+    instead (the step from the sample before to the sample after, the origin between them)
+    would keep that sample, and with it the zeros of a marker invalid while it passed the
+    origin at that distance, which only the residual tells apart, and which TRC and CSV
+    exports drop: the rule leaves the sample out, and names it."""
+    markers = np.ascontiguousarray(markers, dtype=np.float64)
+    if not (markers == 0.0).all(axis=-1).any():
+        # Most recordings hold no sample at the origin, and their reading needs no compiler.
+        return np.zeros(markers.shape[:2], dtype=bool)
+    return _origin_gaps_of(markers)
 
 
-def _track_origin_gaps(track: np.ndarray, at_origin: np.ndarray) -> np.ndarray:
-    """:func:`origin_gaps` for one marker: ``track`` ``(n_frames, 3)`` [mm], ``at_origin``
-    ``(n_frames,)`` its samples at exactly (0, 0, 0); the gaps among them ``(n_frames,)``."""
-    seen = np.isfinite(track).all(axis=-1) & ~at_origin
-    rows = np.flatnonzero(seen)
-    gaps = at_origin.copy()
-    if rows.size == 0:
-        return gaps
-    # steps[_REACH_FRAMES + i]: the step from row i to row i + 1 where both are seen, else 0;
-    # the zeros on either side stand for the rows before the first and after the last.
-    steps = np.zeros(len(track) - 1 + 2 * _REACH_FRAMES)
-    consecutive = np.flatnonzero(seen[1:] & seen[:-1])
-    steps[_REACH_FRAMES + consecutive] = np.linalg.norm(
-        track[consecutive + 1] - track[consecutive], axis=-1
-    )
-    window = np.arange(_REACH_FRAMES)
-    starts, stops = _runs(at_origin)
-    # Each run's nearest sample away from the origin after it is rows[after], before it
-    # rows[after - 1]; a run at the recording's start or end has only one.
-    after = np.searchsorted(rows, starts)
-    before = rows[np.maximum(after - 1, 0)]
-    following = rows[np.minimum(after, rows.size - 1)]
-    # The fastest steps in the frames up to the sample before and from the sample after.
-    reach_before = steps[before[:, None] + window].max(axis=1)
-    reach_after = steps[following[:, None] + _REACH_FRAMES + window].max(axis=1)
-    # A side reaches the run from the sample right next to it only: frames unseen between
-    # them say nothing of where the marker went.
-    reached_before = (before == starts - 1) & (
-        np.linalg.norm(track[before], axis=-1) <= reach_before
-    )
-    reached_after = (following == stops) & (
-        np.linalg.norm(track[following], axis=-1) <= reach_after
-    )
-    kept = ((after == 0) | reached_before) & ((after == rows.size) | reached_after)
-    for start, stop in zip(starts[kept], stops[kept], strict=True):
-        gaps[start:stop] = False
+@kernel
+def _origin_gaps_of(markers: np.ndarray) -> np.ndarray:
+    """:func:`origin_gaps` of ``markers`` ``(n_frames, n_markers, 3)`` [mm], C-contiguous
+    float64: ``(n_frames, n_markers)`` bool. A compiled kernel: one pass over each marker's
+    frames, where array operations would read them a dozen times."""
+    n_frames, n_markers = markers.shape[0], markers.shape[1]
+    gaps = np.zeros((n_frames, n_markers), dtype=np.bool_)
+    at_origin = np.empty(n_frames, dtype=np.bool_)
+    seen = np.empty(n_frames, dtype=np.bool_)
+    step = np.zeros(max(n_frames - 1, 0))
+    for k in range(n_markers):
+        first_seen, last_seen, any_at_origin = n_frames, -1, False
+        for i in range(n_frames):
+            x, y, z = markers[i, k, 0], markers[i, k, 1], markers[i, k, 2]
+            at_origin[i] = x == 0.0 and y == 0.0 and z == 0.0
+            gaps[i, k] = at_origin[i]
+            seen[i] = not at_origin[i] and np.isfinite(x) and np.isfinite(y) and np.isfinite(z)
+            any_at_origin |= at_origin[i]
+            if seen[i]:
+                first_seen, last_seen = min(first_seen, i), i
+        if last_seen < 0 or not any_at_origin:
+            continue  # never away from the origin: every sample there is a gap
+        for i in range(n_frames - 1):
+            step[i] = 0.0
+            if seen[i] and seen[i + 1]:
+                dx = markers[i + 1, k, 0] - markers[i, k, 0]
+                dy = markers[i + 1, k, 1] - markers[i, k, 1]
+                dz = markers[i + 1, k, 2] - markers[i, k, 2]
+                step[i] = np.sqrt((dx * dx + dy * dy) + dz * dz)  # as numpy's norm sums
+        start = 0
+        while start < n_frames:
+            if not at_origin[start]:
+                start += 1
+                continue
+            stop = start
+            while stop < n_frames and at_origin[stop]:
+                stop += 1
+            # The run's nearest samples away from the origin reach it only from right next to
+            # it (frames unseen between say nothing of where the marker went), and only where
+            # they lie within its fastest step in the _REACH_FRAMES frames on their side.
+            kept_before = first_seen > start
+            if not kept_before and start > 0 and seen[start - 1]:
+                reach = 0.0
+                for i in range(max(start - 1 - _REACH_FRAMES, 0), start - 1):
+                    reach = max(reach, step[i])
+                x, y, z = (
+                    markers[start - 1, k, 0],
+                    markers[start - 1, k, 1],
+                    markers[start - 1, k, 2],
+                )
+                kept_before = np.sqrt((x * x + y * y) + z * z) <= reach
+            kept_after = last_seen < stop
+            if not kept_after and stop < n_frames and seen[stop]:
+                reach = 0.0
+                for i in range(stop, min(stop + _REACH_FRAMES, n_frames - 1)):
+                    reach = max(reach, step[i])
+                x, y, z = markers[stop, k, 0], markers[stop, k, 1], markers[stop, k, 2]
+                kept_after = np.sqrt((x * x + y * y) + z * z) <= reach
+            if kept_before and kept_after:
+                gaps[start:stop, k] = False
+            start = stop
     return gaps
 
 
@@ -106,21 +142,22 @@ def _runs(flags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
-def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, source: str) -> None:
+def _warn_origin_gaps(
+    gaps: np.ndarray, missing: np.ndarray, labels: tuple[str, ...], first: int, source: str
+) -> None:
     """Warn of the ``gaps`` ``(n_frames, n_markers)`` :func:`origin_gaps` found in ``source``,
-    whose row 0 is frame ``first``, naming them: as frames zero-filled past the capture's end
-    where the last frames hold every marker (of two or more) at the origin, and each other
-    marker's frames after."""
-    padded = gaps.all(axis=1) if gaps.shape[1] > 1 else np.zeros(len(gaps), dtype=bool)
-    kept = np.flatnonzero(~padded)
-    n_padded = len(padded) - (int(kept[-1]) + 1 if kept.size else 0)
+    whose row 0 is frame ``first`` and whose other samples ``missing`` ``(n_frames,
+    n_markers)`` are missing, naming them: once, as frames zero-filled past the capture's end,
+    where the last frames (:func:`_padded_frames`) hold every marker at the origin or missing,
+    naming the markers missing there; and each other marker's frames after."""
+    n_padded = _padded_frames(gaps, missing)
     if n_padded:
-        last = first + len(padded) - 1
+        last = first + len(gaps) - 1
         warn_caller(
             f"{source}: frames {last - n_padded + 1} to {last} (the last {n_padded}) hold every "
-            "marker at exactly (0, 0, 0): frames zero-filled past the capture's end (a capture "
-            "stopped early and padded, or a file cut and padded), not gaps a recording writes; "
-            "they are read as missing"
+            f"marker at exactly (0, 0, 0){_missing_named(missing[-n_padded:], labels)}: frames "
+            "zero-filled past the capture's end (a capture stopped early and padded, or a file "
+            "cut and padded), not gaps a recording writes; they are read as missing"
         )
     gaps = gaps[: len(gaps) - n_padded]
     if not gaps.any():
@@ -139,6 +176,28 @@ def _warn_origin_gaps(gaps: np.ndarray, labels: tuple[str, ...], first: int, sou
         f"sample before or after {'each' if many else 'it'} lies farther from the origin than "
         f"the marker moves in a frame nearby (or it has none): {named}"
     )
+
+
+def _padded_frames(gaps: np.ndarray, missing: np.ndarray) -> int:
+    """How many of the last frames are zero-filled past a capture's end: each holds two or more
+    markers at the origin that :func:`origin_gaps` reads as gaps (``gaps`` ``(n_frames,
+    n_markers)``), and every other marker ``missing`` there (a marker unseen before the capture
+    stopped is no zero-filling's). One marker alone at the origin may have stopped there, and
+    its gap is its own."""
+    padded = (gaps | missing).all(axis=1) & (gaps.sum(axis=1) >= 2)
+    kept = np.flatnonzero(~padded)
+    return len(padded) - (int(kept[-1]) + 1 if kept.size else 0)
+
+
+def _missing_named(missing: np.ndarray, labels: tuple[str, ...]) -> str:
+    """``" but C, D (in 3 of them), missing there"``: the markers ``missing`` ``(n_frames,
+    n_markers)`` marks in some of a warning's frames, by ``labels``; ``""`` for none."""
+    parts = [
+        labels[marker]
+        + ("" if missing[:, marker].all() else f" (in {missing[:, marker].sum()} of them)")
+        for marker in np.flatnonzero(missing.any(axis=0))
+    ]
+    return f" but {', '.join(parts)}, missing there" if parts else ""
 
 
 #: The runs of a marker's frames a warning names; the rest it counts.
@@ -275,7 +334,8 @@ class Recording:
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "markers", markers)
         if gaps.any():
-            _warn_origin_gaps(gaps, labels, self.first_frame, self.source)
+            missing = np.isnan(markers[..., 0]) & ~gaps
+            _warn_origin_gaps(gaps, missing, labels, self.first_frame, self.source)
 
     @property
     def n_frames(self) -> int:
