@@ -566,16 +566,36 @@ def _anchor_covariance(
             sigma[start + 3 + i, start + 3 + i] = variances[a] / counts[a]
             gains[a, i, start + 3 + i] = -1.0
     first = inverse @ (d_p @ gains[0] + d_d @ gains[1])
-    quadratic = np.zeros((3, 12, 12))
+    # Column k of each: u = x1 - delta_p, v = x1 - delta_d and their turned S v, S' u, per
+    # unit of z_k; the blocks of H_i in e_p's and e_d's columns are N^-1 times
+    # [S v]x - S' [u]x and [S' u]x - S [v]x, formed for every k and turned by N^-1 at once
+    # (one product, where one per k costs the check more than the arithmetic).
+    off_p = first - gains[0]
+    off_d = first - gains[1]
+    turned_d = relative @ off_d
+    turned_p = relative.T @ off_p
+    blocks = np.empty((3, 72))
     for k in range(12):
-        u = np.ascontiguousarray(first[:, k] - gains[0, :, k])
-        v = np.ascontiguousarray(first[:, k] - gains[1, :, k])
-        quadratic[:, k, 0:3] = inverse @ (
-            _cross_matrix(relative @ v) - relative.T @ _cross_matrix(u)
-        )
-        quadratic[:, k, 6:9] = inverse @ (
-            _cross_matrix(relative.T @ u) - relative @ _cross_matrix(v)
-        )
+        cross_sv = skew9(turned_d[0, k], turned_d[1, k], turned_d[2, k])
+        cross_su = skew9(turned_p[0, k], turned_p[1, k], turned_p[2, k])
+        cross_u = skew9(off_p[0, k], off_p[1, k], off_p[2, k])
+        cross_v = skew9(off_d[0, k], off_d[1, k], off_d[2, k])
+        for a in range(3):
+            for b in range(3):
+                proximal = cross_sv[3 * a + b]
+                distal = cross_su[3 * a + b]
+                for c in range(3):
+                    proximal -= relative[c, a] * cross_u[3 * c + b]
+                    distal -= relative[a, c] * cross_v[3 * c + b]
+                blocks[a, 6 * k + b] = proximal
+                blocks[a, 6 * k + 3 + b] = distal
+    turned = inverse @ blocks
+    quadratic = np.zeros((3, 12, 12))
+    for i in range(3):
+        for k in range(12):
+            for b in range(3):
+                quadratic[i, k, b] = turned[i, 6 * k + b]
+                quadratic[i, k, 6 + b] = turned[i, 6 * k + 3 + b]
     weighted = np.empty((3, 12, 12))
     for i in range(3):
         weighted[i] = 0.5 * (quadratic[i] + quadratic[i].T) @ sigma
