@@ -43,18 +43,19 @@ def _distance(result, truth: np.ndarray) -> float:
     return float(np.sqrt(error @ np.linalg.solve(stated_covariance(result)[0], error)))
 
 
-def assert_sd_said_not_to_hold(rom_deg: float, seed: int, share_key: str, words: str) -> None:
+def assert_sd_said_not_to_hold(
+    rom_deg: float, seed: int, share_key: str, words: str, bound: float
+) -> None:
     """The checked analytic answer to ``_trial(rom_deg, seed)``, more than 3 of its SDs off,
     says in ``words`` that its SD does not hold, its share ``diagnostics[share_key]`` at
-    :data:`~jointbench.estimators.centre_precision.MAX_SD_NOISE_SHARE` or more and written
-    there as a percentage, and keeps the answer and its SD."""
+    ``bound`` or more and written there as a percentage, and keeps the answer and its SD."""
     proximal, distal, truth = _trial(rom_deg, seed)
     result = jointbench.fit_joint_center(proximal, distal, "analytic")
     assert _distance(result, truth) > 3.0
     assert result.status != "ok"
     assert words in result.status
     share = result.diagnostics[share_key]
-    assert share >= centre_precision.MAX_SD_NOISE_SHARE
+    assert share >= bound
     assert f" {100 * share:.0f}% of" in result.status
     # The answer and its SD are kept: only the status says the SD does not hold.
     bare = hjc.fit_analytic(proximal, distal)
@@ -65,7 +66,9 @@ def assert_sd_said_not_to_hold(rom_deg: float, seed: int, share_key: str, words:
 @pytest.mark.parametrize("seed", [35, 77])
 def test_a_small_swing_ok_beyond_three_sds_says_its_sd_does_not_hold(seed):
     # Read ok before, 19.9 and 28.5 mm off, 3.1 and 4.0 of their SDs.
-    assert_sd_said_not_to_hold(3.0, seed, "center_sd_noise_share", _NOISY_SD)
+    assert_sd_said_not_to_hold(
+        3.0, seed, "center_sd_noise_share", _NOISY_SD, centre_precision.MAX_SD_NOISE_SHARE
+    )
 
 
 @pytest.mark.parametrize("seed", range(3))

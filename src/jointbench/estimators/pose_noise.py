@@ -612,7 +612,7 @@ def analytic_anchor_share(anchor: np.ndarray, covariance: np.ndarray) -> float:
     errors: the largest ratio, over directions, of ``anchor`` ``(3, 3)`` [mm^2]
     (:func:`analytic_anchor_covariance`) to the first-order ``covariance`` ``(3, 3)`` [mm^2]
     (:func:`analytic_covariance`), both on the same poses. Where it reaches
-    :data:`jointbench.estimators.centre_precision.MAX_SD_NOISE_SHARE` the answer's error is
+    :data:`jointbench.estimators.centre_precision.MAX_ANCHOR_SHARE` the answer's error is
     not linear in the noise: the first-order SD read on the observed rotations holds its
     variance only through the draw's own anchor error, and the errors, products of that
     noise, have heavy tails. Directions in which ``covariance``'s variance is negligible
