@@ -93,6 +93,7 @@ import numpy as np
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.joint_system import normal_matrix
 from jointbench.numerics.rank import RCOND
+from jointbench.numerics.reuse import remembered
 from jointbench.numerics.small import skew9
 
 if TYPE_CHECKING:
@@ -322,8 +323,25 @@ def _turns(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> tuple:
     return rows.shape[0], total.copy().reshape(3, 3), turned_p, turned_d
 
 
-@kernel
 def _relative_rows(proximal: np.ndarray, distal: np.ndarray) -> tuple:
+    """:func:`_relative_rows_of` the rotations ``proximal`` and ``distal`` ``(N, 3, 3)``, read
+    only, and inside one checked call (:mod:`jointbench.numerics.reuse`) computed once for
+    every check that reads them: the analytic centre's covariance, its anchor bias and its
+    noise share each read the same pass over the frames."""
+    return remembered("relative rotations", (proximal, distal), _read_only_relative_rows)
+
+
+def _read_only_relative_rows(rotations: tuple[np.ndarray, np.ndarray]) -> tuple:
+    """:func:`_relative_rows_of` the ``(proximal, distal)`` ``rotations``, as read-only
+    arrays, which every check that reads them may share."""
+    rows, total = _relative_rows_of(*rotations)
+    rows.flags.writeable = False
+    total.flags.writeable = False
+    return rows, total
+
+
+@kernel
+def _relative_rows_of(proximal: np.ndarray, distal: np.ndarray) -> tuple:
     """The relative rotations ``Q_t = R_p(t)' R_d(t)`` of frames ``t >= 1`` of the rotations
     ``proximal`` and ``distal`` ``(N, 3, 3)``, each by rows, ``(N - 1, 9)``, and their sum
     ``(9,)``. A compiled kernel: NumPy's product of a stack of 3 x 3 matrices, and its sum over
@@ -407,9 +425,7 @@ def anchor_bias_mm(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndar
     terms = []
     for poses in (proximal, distal):
         mean, inertia_inv, _ = lever_factors(np.asarray(poses.body, dtype=float))
-        sigma = poses.variance * inertia_inv
-        shrinkage = (sigma - np.trace(sigma) * np.eye(3)) / 2.0
-        terms.append(2.0 * shrinkage @ (centre - mean))
+        terms.append(2.0 * _shrinkage(poses.variance, inertia_inv) @ (centre - mean))
     normal = 2.0 * n_frames * np.eye(3) - relative - relative.T
     return np.linalg.solve(normal, relative.T @ terms[0] + relative @ terms[1])
 
