@@ -265,3 +265,49 @@ def test_a_wrapping_users_fit_refilling_its_input_is_checked_on_the_data_given()
     assert wrapped_result.status == plain.status
     assert wrapped_result.diagnostics == plain.diagnostics
     np.testing.assert_array_equal(wrapped_result.direction, plain.direction)
+
+
+def test_a_value_of_several_arrays_is_known_by_the_memory_of_each():
+    counts: list = []
+
+    def compute(arrays: tuple) -> float:
+        counts.append(1)
+        return float(sum(array.sum() for array in arrays))
+
+    batch = np.arange(24.0).reshape(2, 2, 2, 3)
+    with reuse.one_call():
+        first = reuse.remembered("sum", (batch[0], batch[1]), compute)
+        views = list(batch)  # other array objects over the same memory
+        again = reuse.remembered("sum", (views[0], views[1]), compute)
+        swapped = reuse.remembered("sum", (batch[1], batch[0]), compute)
+        alone = reuse.remembered("sum", (batch[0],), compute)
+    assert first == again == swapped == float(batch.sum())
+    assert alone == float(batch[0].sum())
+    assert len(counts) == 3  # the pair, the pair in the other order, the one array
+
+
+def test_a_checked_analytic_centre_passes_over_its_relative_rotations_once(monkeypatch):
+    """Its covariance, its anchor bias and its noise share read the same relative rotations of
+    the poses: one compiled pass in the checked call, and the same numbers as the checks'
+    own passes outside it."""
+    rng = np.random.default_rng(5)
+    trial = _kind_trial("joint_center", rng, 200, lambda shape: _noisy(rng, shape, 0.5))
+    checked = registry.get("joint_center", "analytic")
+    expected = checked(*trial)
+    calls = _counting_kernel_calls(monkeypatch)
+    result = checked(*trial)
+    assert calls.count("_relative_rows_of") == 1
+    assert result.diagnostics == expected.diagnostics
+    assert result.status == expected.status
+
+
+def test_an_array_asked_for_is_held_so_another_never_takes_its_identity():
+    """Arrays made and dropped in turn inside one call (each perhaps where the one before
+    was) are each read for their own values."""
+    counts: list = []
+    with reuse.one_call():
+        for value in range(20):
+            assert reuse.remembered("sum", np.full((2, 3), float(value)), _counting(counts)) == (
+                6.0 * value
+            )
+    assert len(counts) == 20

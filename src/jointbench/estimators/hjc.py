@@ -144,6 +144,8 @@ import numpy as np
 from jointbench.declared import Count, NonNegative
 from jointbench.estimators.batching import isolated, one_trial
 from jointbench.estimators.pose_noise import (
+    analytic_anchor_covariance,
+    analytic_anchor_share,
     analytic_covariance,
     analytic_noise_share,
     anchor_bias_mm,
@@ -1366,21 +1368,26 @@ def _analytic_scattered(
     ``diagnostics["center_covariance_mm2"]``, the share of the poses' noise in the
     information that covariance is first order in
     (:func:`jointbench.estimators.pose_noise.analytic_noise_share`),
-    ``["center_sd_noise_share"]``, and the mean error its frame-0 poses' errors cause to
-    second order (:func:`jointbench.estimators.pose_noise.anchor_bias_mm`),
-    ``["center_anchor_bias_mm"]``: on small swings of the order of the pull, which the checked
-    call adds it to, as it holds the share to the centres' bound
+    ``["center_sd_noise_share"]``, the share of its variance that is second order in the
+    errors of the frame-0 poses, which anchor both body frames
+    (:func:`jointbench.estimators.pose_noise.analytic_anchor_share`),
+    ``["center_sd_anchor_share"]``, and the mean error those errors cause to second order
+    (:func:`jointbench.estimators.pose_noise.anchor_bias_mm`), ``["center_anchor_bias_mm"]``:
+    on small swings of the order of the pull, which the checked call adds it to, as it holds
+    both shares to the centres' bound
     (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
-    ``benchmarks/joint_centre_stated_sd.py`` prints both)."""
+    ``benchmarks/joint_centre_stated_sd.py`` prints them)."""
     covariance = centre_covariance(
         analytic_covariance, proximal, distal, (result.center, result.center)
     )
     # The frame-0 poses' second-order bias, which the pull of independent frames leaves out
     # and the checked call adds to it (centre_precision.annotate_joint_centres).
     bias = anchor_bias_mm(proximal, distal, result.center)
+    anchor = analytic_anchor_covariance(proximal, distal, result.center)
     numbers = {
         "center_covariance_mm2": covariance.tolist(),
         "center_sd_noise_share": analytic_noise_share(proximal, distal),
+        "center_sd_anchor_share": float(analytic_anchor_share(anchor, covariance)),
         "center_anchor_bias_mm": bias.tolist(),
     }
     return with_warnings(result, (), numbers)

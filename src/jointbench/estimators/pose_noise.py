@@ -75,7 +75,9 @@ Every sum over the frames is one of ``S`` and ``sum_t Q_t' A Q_t`` or ``sum_t Q_
 which the second moments ``sum_t vec(Q_t) vec(Q_t)'`` (9 x 9) give for any ``A``. What it does not
 hold: the pull above (second order), noise larger along one direction than across it, and
 markers that move on their segment. How much of the information the analytic centre's
-covariance is first order in is the noise's own: :func:`analytic_noise_share`.
+covariance is first order in is the noise's own: :func:`analytic_noise_share`; how much of
+its error is second order in the frame-0 poses' errors, which turn every relative rotation as
+they place the joint: :func:`analytic_anchor_covariance`.
 ``tests/test_joint_centre_scatter.py`` holds the covariances to the answers' scatter over noise
 draws.
 """
@@ -90,6 +92,9 @@ import numpy as np
 
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.joint_system import normal_matrix
+from jointbench.numerics.rank import RCOND
+from jointbench.numerics.reuse import remembered
+from jointbench.numerics.small import skew9
 
 if TYPE_CHECKING:
     from jointbench.estimators.segment_poses import SegmentPoses
@@ -97,6 +102,8 @@ if TYPE_CHECKING:
 __all__ = [
     "NoisyPoses",
     "PoseNoise",
+    "analytic_anchor_covariance",
+    "analytic_anchor_share",
     "analytic_covariance",
     "analytic_noise_share",
     "anchor_bias_mm",
@@ -316,8 +323,25 @@ def _turns(relative: tuple, a_p: np.ndarray, a_d: np.ndarray) -> tuple:
     return rows.shape[0], total.copy().reshape(3, 3), turned_p, turned_d
 
 
-@kernel
 def _relative_rows(proximal: np.ndarray, distal: np.ndarray) -> tuple:
+    """:func:`_relative_rows_of` the rotations ``proximal`` and ``distal`` ``(N, 3, 3)``, read
+    only, and inside one checked call (:mod:`jointbench.numerics.reuse`) computed once for
+    every check that reads them: the analytic centre's covariance, its anchor bias and its
+    noise share each read the same pass over the frames."""
+    return remembered("relative rotations", (proximal, distal), _read_only_relative_rows)
+
+
+def _read_only_relative_rows(rotations: tuple[np.ndarray, np.ndarray]) -> tuple:
+    """:func:`_relative_rows_of` the ``(proximal, distal)`` ``rotations``, as read-only
+    arrays, which every check that reads them may share."""
+    rows, total = _relative_rows_of(*rotations)
+    rows.flags.writeable = False
+    total.flags.writeable = False
+    return rows, total
+
+
+@kernel
+def _relative_rows_of(proximal: np.ndarray, distal: np.ndarray) -> tuple:
     """The relative rotations ``Q_t = R_p(t)' R_d(t)`` of frames ``t >= 1`` of the rotations
     ``proximal`` and ``distal`` ``(N, 3, 3)``, each by rows, ``(N - 1, 9)``, and their sum
     ``(9,)``. A compiled kernel: NumPy's product of a stack of 3 x 3 matrices, and its sum over
@@ -401,9 +425,7 @@ def anchor_bias_mm(proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndar
     terms = []
     for poses in (proximal, distal):
         mean, inertia_inv, _ = lever_factors(np.asarray(poses.body, dtype=float))
-        sigma = poses.variance * inertia_inv
-        shrinkage = (sigma - np.trace(sigma) * np.eye(3)) / 2.0
-        terms.append(2.0 * shrinkage @ (centre - mean))
+        terms.append(2.0 * _shrinkage(poses.variance, inertia_inv) @ (centre - mean))
     normal = 2.0 * n_frames * np.eye(3) - relative - relative.T
     return np.linalg.solve(normal, relative.T @ terms[0] + relative @ terms[1])
 
@@ -466,6 +488,165 @@ def _information_share(
         return np.inf
     direction = vectors[:, 0]
     return (direction @ noise @ direction) / values[0]
+
+
+def analytic_anchor_covariance(
+    proximal: SegmentPoses, distal: SegmentPoses, centre: np.ndarray
+) -> np.ndarray:
+    """The covariance ``(3, 3)`` [mm^2] of the part of the analytic centre's error (paper C's
+    eq. 9) that is second order in the errors of the frame-0 poses, which anchor both body
+    frames, read at ``centre`` ``(3,)`` [mm] on the fitted poses ``proximal`` and ``distal``.
+
+    Frame 0's fit of segment ``a`` misplaces its body frame by a rotation ``e_a`` about the
+    markers' centroid ``m_a`` (covariance ``s_a^2 K_a^-1``, :func:`lever_factors`) and a shift
+    ``tau_a`` of that centroid (covariance ``s_a^2 / n_a I``), all four independent: ``z =
+    (e_p, tau_p, e_d, tau_d)`` ``(12,)``, Gaussian with block-diagonal covariance ``Sigma``.
+    The joint then lies at ``c + delta_a`` in the body frame, ``delta_a = [c - m_a]x e_a -
+    tau_a = J_a z``, and every later pose carries the rotation, ``R_a(t) = R0_a(t) exp([e_a]x)``,
+    so that the sum of the relative rotations is ``S = exp(-[e_p]x) S0 exp([e_d]x)``, to first
+    order ``dS = -[e_p]x S + S [e_d]x``. The method builds ``N = D_p + D_d`` (``D_p = n I -
+    S'``, ``D_d = n I - S``, ``n`` the frames ``t >= 1``) and its answer's error is exactly
+    ``N^-1 (D_p delta_p + D_d delta_d)`` (module docstring, "Scatter"; the later frames' own
+    errors add to it independently). Differentiating it in ``S`` (``dD_p = -dS'``, ``dD_d =
+    -dS``, ``dN = -(dS + dS')``) gives, beside the first order ``x1 = L z``, ``L = N^-1 (D_p
+    J_p + D_d J_d)``, the second
+
+        ``x2 = N^-1 [dS' (x1 - delta_p) + dS (x1 - delta_d)]``,
+
+    with ``dS' u = -S' [u]x e_p + [S' u]x e_d`` and ``dS v = [S v]x e_p - S [v]x e_d``: each
+    component a quadratic form ``z' H_i z``. Its mean ``tr(H_i Sigma)`` is the anchor's bias
+    (:func:`anchor_bias_mm`, the same expansion's leading terms), its covariance ``2 tr(H_i
+    Sigma H_j Sigma)`` (``H_i`` symmetrised; Isserlis' theorem), and it is uncorrelated with
+    ``x1`` (odd moments of ``z`` vanish). Left out: the products of the anchor's rotation with
+    the later frames' errors, which average over the frames.
+
+    Read on the noise-free rotations, the first-order covariance
+    (:func:`analytic_covariance`) plus this one is the answers' scatter; the first order alone
+    understates it five-fold at a 10 degree circumduction with 0.5 mm noise
+    (``tests/test_analytic_anchor_share.py``). Read on the observed rotations, as a checked
+    call must, the first-order covariance already holds it on average: the observed ``S``
+    carries the draw's own ``e``, which turns every relative rotation (on a small swing
+    ``D_d`` gains ``n [e_d - e_p]x``), so this covariance is not added to it (that would count
+    it twice). What it measures is how far the answer's error is from linear in the noise:
+    :func:`analytic_anchor_share`."""
+    relative = _relative_rows(proximal.rotation, distal.rotation)[1].reshape(3, 3)
+    factors = [lever_factors(np.asarray(poses.body, dtype=float)) for poses in (proximal, distal)]
+    return _anchor_covariance(
+        relative,
+        len(proximal.rotation) - 1,
+        np.asarray(centre, dtype=float),
+        np.array([factor[0] for factor in factors]),
+        np.array([factor[1] for factor in factors]),
+        np.array([float(factor[2]) for factor in factors]),
+        np.array([poses.variance for poses in (proximal, distal)]),
+    )
+
+
+@kernel
+def _cross_matrix(v: np.ndarray) -> np.ndarray:
+    """``[v]x`` ``(3, 3)`` of ``v`` ``(3,)`` (:func:`jointbench.numerics.small.skew9`). A
+    compiled kernel."""
+    entries = skew9(v[0], v[1], v[2])
+    matrix = np.empty((3, 3))
+    for k in range(9):
+        matrix[k // 3, k % 3] = entries[k]
+    return matrix
+
+
+@kernel
+def _anchor_covariance(
+    relative: np.ndarray,
+    n_frames: int,
+    centre: np.ndarray,
+    means: np.ndarray,
+    inertia_invs: np.ndarray,
+    counts: np.ndarray,
+    variances: np.ndarray,
+) -> np.ndarray:
+    """:func:`analytic_anchor_covariance` ``(3, 3)`` [mm^2] from the sum ``S`` ``(3, 3)`` of
+    the relative rotations of ``n_frames`` frames ``t >= 1``, the ``centre`` ``(3,)`` [mm] and
+    per segment (proximal, distal) its markers' centroid ``means`` ``(2, 3)`` [mm], inverse
+    inertia ``inertia_invs`` ``(2, 3, 3)`` [mm^-2], marker ``counts`` ``(2,)`` and residual
+    ``variances`` ``(2,)`` [mm^2]. A compiled kernel."""
+    identity = np.eye(3)
+    d_p = n_frames * identity - relative.T
+    d_d = n_frames * identity - relative
+    inverse = np.linalg.inv(d_p + d_d)
+    sigma = np.zeros((12, 12))
+    gains = np.zeros((2, 3, 12))
+    for a in range(2):
+        start = 6 * a
+        sigma[start : start + 3, start : start + 3] = variances[a] * inertia_invs[a]
+        gains[a, :, start : start + 3] = _cross_matrix(centre - means[a])
+        for i in range(3):
+            sigma[start + 3 + i, start + 3 + i] = variances[a] / counts[a]
+            gains[a, i, start + 3 + i] = -1.0
+    first = inverse @ (d_p @ gains[0] + d_d @ gains[1])
+    # Column k of each: u = x1 - delta_p, v = x1 - delta_d and their turned S v, S' u, per
+    # unit of z_k; the blocks of H_i in e_p's and e_d's columns are N^-1 times
+    # [S v]x - S' [u]x and [S' u]x - S [v]x, formed for every k and turned by N^-1 at once
+    # (one product, where one per k costs the check more than the arithmetic).
+    off_p = first - gains[0]
+    off_d = first - gains[1]
+    turned_d = relative @ off_d
+    turned_p = relative.T @ off_p
+    blocks = np.empty((3, 72))
+    for k in range(12):
+        cross_sv = skew9(turned_d[0, k], turned_d[1, k], turned_d[2, k])
+        cross_su = skew9(turned_p[0, k], turned_p[1, k], turned_p[2, k])
+        cross_u = skew9(off_p[0, k], off_p[1, k], off_p[2, k])
+        cross_v = skew9(off_d[0, k], off_d[1, k], off_d[2, k])
+        for a in range(3):
+            for b in range(3):
+                proximal = cross_sv[3 * a + b]
+                distal = cross_su[3 * a + b]
+                for c in range(3):
+                    proximal -= relative[c, a] * cross_u[3 * c + b]
+                    distal -= relative[a, c] * cross_v[3 * c + b]
+                blocks[a, 6 * k + b] = proximal
+                blocks[a, 6 * k + 3 + b] = distal
+    turned = inverse @ blocks
+    quadratic = np.zeros((3, 12, 12))
+    for i in range(3):
+        for k in range(12):
+            for b in range(3):
+                quadratic[i, k, b] = turned[i, 6 * k + b]
+                quadratic[i, k, 6 + b] = turned[i, 6 * k + 3 + b]
+    weighted = np.empty((3, 12, 12))
+    for i in range(3):
+        weighted[i] = 0.5 * (quadratic[i] + quadratic[i].T) @ sigma
+    covariance = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            covariance[i, j] = 2.0 * np.sum(weighted[i] * weighted[j].T)
+    return _symmetric(covariance)
+
+
+@kernel
+def analytic_anchor_share(anchor: np.ndarray, covariance: np.ndarray) -> float:
+    """The share of the analytic centre's variance that is second order in its frame-0 poses'
+    errors: the largest ratio, over directions, of ``anchor`` ``(3, 3)`` [mm^2]
+    (:func:`analytic_anchor_covariance`) to the first-order ``covariance`` ``(3, 3)`` [mm^2]
+    (:func:`analytic_covariance`), both on the same poses. Where it reaches
+    :data:`jointbench.estimators.centre_precision.MAX_ANCHOR_SHARE` the answer's error is
+    not linear in the noise: the first-order SD read on the observed rotations holds its
+    variance only through the draw's own anchor error, and the errors, products of that
+    noise, have heavy tails. Directions in which ``covariance``'s variance is negligible
+    against its largest (:data:`jointbench.numerics.rank.RCOND`) are left out: there both
+    are rounding (noise-free poses on a nearly hinged motion). ``0`` where neither has a
+    variance, ``inf`` where only the anchor's has. A compiled kernel."""
+    values, vectors = np.linalg.eigh(covariance)
+    largest = values[-1]
+    if not largest > 0.0:
+        return 0.0 if np.abs(anchor).max() == 0.0 else np.inf
+    kept = 0
+    scaled = np.zeros((3, 3))
+    for j in range(3):
+        if values[j] > RCOND * largest:
+            scaled[:, kept] = vectors[:, j] / np.sqrt(values[j])
+            kept += 1
+    basis = np.ascontiguousarray(scaled[:, :kept])
+    return np.linalg.eigvalsh(basis.T @ anchor @ basis)[-1]
 
 
 def centre_covariance(

@@ -9,7 +9,8 @@ first stage to compute such a value for an array keeps it and the later stages r
 returns the same numbers either way.
 
 An array is known by its memory: its address, shape, strides and dtype, so the view of a trial
-that another stage takes of the same batch finds the value. The scope holds every array it has
+that another stage takes of the same batch finds the value; a value of several arrays (two
+segments' rotations) by the memory of each, in order. The scope holds every array it has
 seen, so no memory it knows can be freed and reused by another array while it lasts; the
 stages of a call read their input and never write to it.
 """
@@ -51,15 +52,33 @@ def one_call() -> AbstractContextManager[None]:
     return _Scope()
 
 
-def remembered(name: str, array: np.ndarray, compute: Callable[[np.ndarray], _Value]) -> _Value:
+def remembered(
+    name: str, array: np.ndarray | tuple[np.ndarray, ...], compute: Callable[..., _Value]
+) -> _Value:
     """``compute(array)``, or inside :func:`one_call` the value ``name`` already computed for
-    an array of the same memory. The value is shared by every stage that asks: ``compute``
-    returns one that no caller writes to (a read-only array)."""
+    an array of the same memory (for a tuple of arrays, each of the same memory). The value is
+    shared by every stage that asks: ``compute`` returns one that no caller writes to (a
+    read-only array)."""
     kept = _KEPT.get()
     if kept is None:
         return compute(array)
-    key = (name, array.__array_interface__["data"][0], array.shape, array.strides, array.dtype)
-    found = kept.get(key)
+    arrays = array if isinstance(array, tuple) else (array,)
+    # The same array objects asked again are found by their identity first: the scope holds
+    # every array it has seen, so no other object takes its id while it lasts, and reading an
+    # array's address (its __array_interface__) costs microseconds a look-up. Each id in a
+    # tuple of its own, never equal to the address a memory key below holds.
+    asked = (name, *[((id(each),), each.shape, each.strides, each.dtype) for each in arrays])
+    found = kept.get(asked)
     if found is None:
-        found = kept[key] = (array, compute(array))
+        key = (name, *(_memory(each) for each in arrays))
+        found = kept.get(key)
+        if found is None:
+            found = kept[key] = (array, compute(array))
+        kept[asked] = (array, found[1])  # held, so that no other object takes its id
     return found[1]
+
+
+def _memory(array: np.ndarray) -> tuple:
+    """What tells ``array``'s memory from any other's: its address, shape, strides and
+    dtype."""
+    return (array.__array_interface__["data"][0], array.shape, array.strides, array.dtype)
