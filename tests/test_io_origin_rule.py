@@ -1,5 +1,6 @@
 """The rule reading samples at exactly (0, 0, 0) as gaps (:func:`origin_gaps`), compiled, gives
-the answers of its array implementation, kept here as the reference, bit for bit."""
+the answers of its array implementation, kept here as the reference, bit for bit, and is not
+run on a recording with no sample there."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from jointbench.io import Recording
+from jointbench.io import recording as recording_module
 from jointbench.io.recording import _REACH_FRAMES, _runs, origin_gaps
 
 
@@ -149,3 +151,21 @@ def test_a_marker_at_its_fastest_exactly_at_the_origin_loses_the_sample_named():
         recording = Recording(("A", "B", "C"), markers)
     assert np.isnan(recording.markers[10, 0]).all()
     assert np.isfinite(np.delete(recording.markers, 10, axis=0)).all()
+
+
+def test_a_recording_with_no_sample_at_the_origin_is_read_without_the_compiled_rule(monkeypatch):
+    """Most recordings hold no sample at exactly (0, 0, 0): reading one needs neither the
+    compiled rule nor Numba, which take a second of CPU to load or longer to compile. A
+    coordinate at 0 alone, or a missing sample, is no sample at the origin."""
+
+    def compiled(markers):
+        raise AssertionError("the compiled rule was called")
+
+    monkeypatch.setattr(recording_module, "_origin_gaps_of", compiled)
+    markers = np.ones((5, 2, 3))
+    markers[2, 0, 1] = 0.0
+    markers[3, 1] = np.nan
+    assert Recording(("A", "B"), markers).markers[2, 0, 1] == 0.0
+    markers[1, 0] = 0.0
+    with pytest.raises(AssertionError, match="compiled rule was called"):
+        Recording(("A", "B"), markers)

@@ -208,14 +208,37 @@ def test_frames_where_one_marker_is_at_the_origin_and_the_rest_missing_are_its_g
     markers[15:, 0] = 0.0
     markers[12:, 1:] = np.nan
     path = write_trc(tmp_path / "trial.trc", "ABC", markers)
+    assert _warnings_reading(path) == [f"{path}: {_gaps_said(5, 'A at frames 16 to 20')}"]
+
+
+def _warnings_reading(path):
+    """The messages of the warnings :func:`read` gives reading ``path``."""
     with pytest.warns(UserWarning) as caught:
         read(path)
-    assert [str(w.message) for w in caught] == [
-        f"{path}: 5 samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored as "
-        "zeros (the C3D format's coordinates of an invalid point), not positions at the lab's "
+    return [str(w.message) for w in caught]
+
+
+def _gaps_said(n_samples, named):
+    """The warning of ``n_samples`` (two or more) samples at (0, 0, 0) read as a writer's gaps,
+    naming each marker's frames (``named``), after the file's name."""
+    return (
+        f"{n_samples} samples at exactly (0, 0, 0) are read as missing, as gaps a writer stored "
+        "as zeros (the C3D format's coordinates of an invalid point), not positions at the lab's "
         "origin: the marker's nearest sample before or after each lies farther from the origin "
-        "than the marker moves in a frame nearby (or it has none): A at frames 16 to 20"
-    ]
+        f"than the marker moves in a frame nearby (or it has none): {named}"
+    )
+
+
+def test_markers_never_seen_at_the_origin_where_the_rest_are_missing_are_no_padding(tmp_path):
+    """D and E, a template's markers never seen, at (0, 0, 0) in every frame, and A to C missing
+    from frame 16 on (the subject out of the volume): no marker seen in the trial stops at the
+    origin, so those frames are no padding; they were said zero-filled past the capture's end,
+    and D and E's zeros before them as gaps, where each is a marker never seen."""
+    markers = np.concatenate([_far_markers(), np.zeros((20, 2, 3))], axis=1)
+    markers[15:, :3] = np.nan
+    path = write_trc(tmp_path / "trial.trc", "ABCDE", markers)
+    never = "at every frame (never away from the origin)"
+    assert _warnings_reading(path) == [f"{path}: {_gaps_said(40, f'D {never}; E {never}')}"]
 
 
 def test_fit_prints_the_zero_filled_frames(tmp_path, capsys, request):

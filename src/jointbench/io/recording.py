@@ -179,12 +179,16 @@ def _warn_origin_gaps(
 
 
 def _padded_frames(gaps: np.ndarray, missing: np.ndarray) -> int:
-    """How many of the last frames are zero-filled past a capture's end: each holds two or more
-    markers at the origin that :func:`origin_gaps` reads as gaps (``gaps`` ``(n_frames,
-    n_markers)``), and every other marker ``missing`` there (a marker unseen before the capture
-    stopped is no zero-filling's). One marker alone at the origin may have stopped there, and
-    its gap is its own."""
-    padded = (gaps | missing).all(axis=1) & (gaps.sum(axis=1) >= 2)
+    """How many of the last frames are zero-filled past a capture's end: each holds every marker
+    (of two or more) at the origin where :func:`origin_gaps` reads it as a gap (``gaps``
+    ``(n_frames, n_markers)``), or two or more markers seen elsewhere in the recording there
+    and every other marker ``missing`` (a marker unseen before the capture stopped is no
+    zero-filling's). One marker alone at the origin may have stopped there, and its gap is its
+    own; so are a never seen marker's zeros where the markers seen are missing (a template's
+    marker as the subject leaves the volume), which stopped nothing."""
+    seen = (~gaps & ~missing).any(axis=0)
+    every = gaps.all(axis=1) & (gaps.shape[1] >= 2)
+    padded = every | ((gaps | missing).all(axis=1) & ((gaps & seen).sum(axis=1) >= 2))
     kept = np.flatnonzero(~padded)
     return len(padded) - (int(kept[-1]) + 1 if kept.size else 0)
 
