@@ -311,3 +311,19 @@ def test_an_array_asked_for_is_held_so_another_never_takes_its_identity():
                 6.0 * value
             )
     assert len(counts) == 20
+
+
+def test_a_second_view_found_by_its_memory_is_held_too():
+    """A view found by the memory another view of it was first asked for under is held as
+    well: views of one row after another, each made, asked for and dropped in turn (each
+    perhaps taking the identity of the one before), are each read for their own row's value,
+    never the row an earlier view of that identity was."""
+    counts: list = []
+    batch = np.arange(60.0).reshape(10, 2, 3)
+    with reuse.one_call():
+        for row in range(len(batch)):
+            reuse.remembered("sum", batch[row], _counting(counts))
+            again = batch[row]  # another view of the same memory, found by it
+            assert reuse.remembered("sum", again, _counting(counts)) == batch[row].sum()
+            del again
+    assert len(counts) == len(batch)
