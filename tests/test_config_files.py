@@ -146,6 +146,27 @@ def test_keys_that_only_look_alike_are_read(tmp_path):
     assert len(read["a"]) == 6, read
 
 
+def test_the_key_written_as_an_equals_sign_is_read_as_text(tmp_path):
+    # YAML 1.1 tags a plain = with its "value" tag, which the safe loader reads, as a key, as
+    # the text '='.
+    path = tmp_path / "mine.yaml"
+    path.write_text("a:\n  =: 1\n  b: 2\n")
+    assert study_config.read_config_file(path, f"config file {path}") == {"a": {"=": 1, "b": 2}}
+    path.write_text("a:\n  =: 1\n  '=': 2\n")
+    message = _refused(path)
+    for word in (str(path), "a.= is given twice, at lines 2 and 3"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize("tag", ["!!set", "!!seq", "!!map", "!!omap"])
+def test_a_key_tagged_as_a_collection_is_refused_naming_the_file(tmp_path, tag):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"a:\n  {tag} k: 1\n")
+    message = _refused(path)
+    for word in (str(path), "not valid YAML at line 2", "unhashable key"):
+        assert word in message, message
+
+
 @pytest.mark.parametrize("written", ["010", "0x10", "1_000"])
 def test_a_key_yaml_reads_as_another_number_is_refused(tmp_path, written):
     path = tmp_path / "mine.yaml"

@@ -9,7 +9,7 @@ import itertools
 import json
 import numbers
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Hashable, Iterator, Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
@@ -529,7 +529,9 @@ class _Place:
 
 # The tags PyYAML resolves a plain scalar to; a number in decimal digits as YAML reads it, and
 # a leading 0 Python reads past.
-_INTEGER, _FLOAT, _MERGE = (f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge"))
+_INTEGER, _FLOAT, _MERGE, _VALUE = (
+    f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge", "value")
+)
 _DECIMAL = re.compile(r"[-+]?(0|[1-9][0-9]*)")
 _TEXT = "tag:yaml.org,2002:str"
 # A number as JSON and YAML 1.2 write one (sign, digits, a dot, an exponent): where YAML 1.1
@@ -568,7 +570,7 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
             if isinstance(key, yaml.ScalarNode) and key.tag != _MERGE:
                 # A key is a value too: 010 as a key is the key 8.
                 _check_nodes(key, place.at(name, line), holding, checked)
-                read = yaml.constructor.SafeConstructor().construct_object(key)
+                read = _key_read(key)
                 # Seen before, not on another line: a flow mapping holds both on one.
                 if read in seen:
                     raise ValueError(
@@ -577,6 +579,20 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
                 seen[read] = (line, name)
             _check_nodes(value, place.at(name, line), (*holding, node), checked)
     checked.add(id(node))
+
+
+def _key_read(key: yaml.ScalarNode) -> object:
+    """The value the safe loader's mappings read the scalar ``key`` as: ``=``, which YAML 1.1
+    tags with its ``value`` tag, as the text ``'='``; ``ConstructorError`` (a ``YAMLError``, at
+    the key) for a key tagged as a collection (``!!set k``), which no mapping can hold."""
+    if key.tag == _VALUE:
+        return key.value
+    read = yaml.constructor.SafeConstructor().construct_object(key)
+    if not isinstance(read, Hashable):
+        raise yaml.constructor.ConstructorError(
+            "while constructing a mapping", None, "found unhashable key", key.start_mark
+        )
+    return read
 
 
 def _twice(keys: tuple, first: tuple[int, str], then: tuple[int, str], read: object) -> str:
