@@ -922,14 +922,21 @@ def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[
     that set the frames of ``condition``'s recordings
     (:attr:`~jointbench.simulate.Study.frame_keys`) and no note; for a study that does not
     declare them, its ``protocol`` and a note saying why no field is named. ``TypeError``
-    naming the study where its ``frame_keys`` gives no list of paths (each a tuple)."""
+    naming the study where its ``frame_keys`` gives no list of one or more paths, each a
+    tuple of one or more keys (a text, as before they were paths; an iterator, which checking
+    would use up)."""
     if spec.frame_keys is None:
         return [("protocol",)], (
             f" (study {spec.name!r} declares no frame_keys: which of its protocol fields its "
             "frame_count reads, only the study can say)"
         )
     paths = spec.frame_keys(condition, overrides)
-    if isinstance(paths, str | bytes) or not all(isinstance(path, tuple) for path in paths):
+    if (
+        isinstance(paths, str | bytes)
+        or not isinstance(paths, Sequence)
+        or not paths
+        or not all(isinstance(path, tuple) and path for path in paths)
+    ):
         raise TypeError(
             f"study {spec.name!r}: its frame_keys gave {paths!r} for condition "
             f"{condition_id(condition)}, not a list of paths of keys, each a tuple "
