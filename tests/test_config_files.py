@@ -137,6 +137,10 @@ def test_keys_written_apart_that_read_as_one_are_refused_naming_both_lines(tmp_p
     message = _refused(path)
     for word in (str(path), f"studies.cmc.{first}", "twice, at lines 3 and 5"):
         assert word in message, message
+    # Written apart, each is named as written, and what both read as.
+    read = next(iter(study_config.read_yaml(f"{then}: 0")))
+    apart = f" (as {first} and {then}, both read as {read!r})"
+    assert (apart in message) == (then.strip("'") != first), message
 
 
 def test_keys_that_only_look_alike_are_read(tmp_path):
@@ -328,6 +332,7 @@ def test_a_key_given_twice_in_a_json_config_file_is_refused(tmp_path):
         ('{"a": [1, {"b": {"c": 1, "c": 2}}]}', "a[1].b.c"),
         ('{"a": {"x": 1}, "b": {"x": 1, "x": 2}}', "b.x"),
         ('{"a": {"k": 1, "k": 2}, "b": {"j": 1, "j": 2}}', "a.k"),
+        ('{"a": {"k": 1, "j": 1, "k": 2, "j": 2}}', "a.k"),
     ],
 )
 def test_a_key_given_twice_in_a_json_config_file_is_named_by_its_path(tmp_path, text, keys):
@@ -466,10 +471,24 @@ def test_a_mistake_at_several_keys_names_only_the_files_that_set_them(second, na
             ],
             "studies.hinge.protocol.all.markers_mm[0], noise_sd_mm",
         ),
+        # A path all of whose keys the first holds keeps its last.
+        (
+            [("studies", "hip", "protocol", "fps"), ("studies", "hip", "protocol")],
+            "studies.hip.protocol.fps, protocol",
+        ),
     ],
 )
 def test_the_paths_a_refusal_is_at_are_written_as_its_keys(paths, keys):
     assert declared.keys(paths) == keys
+
+
+def test_a_declaration_error_put_under_outer_keys_puts_each_of_its_paths_there():
+    error = declared.DeclarationError(("noise_mm",), "too large", [("markers_mm", 0)])
+    assert error.under("protocol").paths == (
+        ("protocol", "noise_mm"),
+        ("protocol", "markers_mm", 0),
+    )
+    assert str(error.under("protocol")) == "protocol.noise_mm, markers_mm[0]: too large"
 
 
 # Keys a user names (a joint of the hinge protocol) holding what a key path's text is made of.
