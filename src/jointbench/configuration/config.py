@@ -931,9 +931,9 @@ def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[
             "frame_count reads, only the study can say)"
         )
     paths = spec.frame_keys(condition, overrides)
+    # A text is a sequence too, of characters, none of them a tuple.
     if (
-        isinstance(paths, str | bytes)
-        or not isinstance(paths, Sequence)
+        not isinstance(paths, Sequence)
         or not paths
         or not all(isinstance(path, tuple) and path for path in paths)
     ):
