@@ -15,6 +15,7 @@ from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench import declared
 from jointbench.configuration import config as study_config
+from jointbench.ensembles.sensitivity import member_names
 
 DEFAULT = ROOT / "config" / "config.yaml"
 
@@ -532,15 +533,42 @@ def test_a_refusal_of_a_runs_setting_names_the_config_file_that_set_it(tmp_path,
     assert words in message and message.endswith(f"(set in {second})"), message
 
 
-def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path):
+@pytest.mark.parametrize(
+    ("written", "words"),
+    [
+        ("studies: {cmc: {trials: 0}}\n", "config error at studies/cmc/trials: 0 is less"),
+        (None, "no such file"),
+        ("studies: {cmc: {trials: 3, trials: 4}}\n", "studies.cmc.trials is given twice"),
+    ],
+    ids=["refused by the check", "missing", "refused as read"],
+)
+def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path, written, words):
     overlay = tmp_path / "mine.yaml"
-    overlay.write_text("studies: {cmc: {trials: 0}}\n")
+    if written is not None:
+        overlay.write_text(written)
     first, second = _overlays(tmp_path, f"sensitivity: {{named: {{mine: {overlay}}}}}\n")
     sources = study_config.read_sources([DEFAULT, first, second])
     with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
         study_config.named_overlays(study_config.merged_sources(sources))
     message = str(raised.value)
     assert message.startswith(f"config error at sensitivity.named.mine ({overlay}): "), message
+    assert words in message and message.endswith(f"(set in {second})"), message
+
+
+@pytest.mark.parametrize("name", ["default", "draw-2", "draw-1.v2, x[0]"])
+def test_a_named_protocol_named_as_the_default_or_a_draw_names_the_config_file_naming_it(
+    tmp_path, name
+):
+    named = ROOT / "config" / "variants" / "hinge_anatomical_knee.yaml"
+    first, second = _overlays(
+        tmp_path, f"sensitivity: {{named: {json.dumps({name: str(named)})}}}\n"
+    )
+    sources = study_config.read_sources([DEFAULT, first, second])
+    with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
+        overlays = study_config.named_overlays(study_config.merged_sources(sources))
+        member_names("hinge", 2, overlays)
+    message = str(raised.value)
+    assert message.startswith(f"config: sensitivity.named.{name}: named protocol "), message
     assert message.endswith(f"(set in {second})"), message
 
 
