@@ -181,6 +181,24 @@ def test_a_key_yaml_reads_as_another_number_is_refused(tmp_path, written):
         assert word in message, message
 
 
+@pytest.mark.parametrize(
+    ("text", "keys", "line"),
+    [
+        ("studies:\n  cmc:\n    trials: 2020-02-30\n", "studies.cmc.trials", 3),
+        ("sensitivity:\n  named:\n    2021-13-01: mine.yaml\n", "sensitivity.named.2021-13-01", 3),
+    ],
+    ids=["value", "key"],
+)
+def test_a_date_that_is_no_date_is_refused_naming_the_key_and_file(tmp_path, text, keys, line):
+    # YAML 1.1 reads the digits of a date as one; the day or month out of range fails in the
+    # reader with Python's words alone, naming neither the file nor the key.
+    path = tmp_path / "mine.yaml"
+    path.write_text(text)
+    message = _refused(path)
+    for word in (str(path), f"{keys} at line {line}", "is read as a date, and is none ("):
+        assert word in message, message
+
+
 def test_a_value_that_holds_itself_is_refused(tmp_path):
     path = tmp_path / "mine.yaml"
     path.write_text("studies:\n  cmc: &loop\n    grid: *loop\n")

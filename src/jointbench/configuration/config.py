@@ -529,8 +529,8 @@ class _Place:
 
 # The tags PyYAML resolves a plain scalar to; a number in decimal digits as YAML reads it, and
 # a leading 0 Python reads past.
-_INTEGER, _FLOAT, _MERGE, _VALUE = (
-    f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge", "value")
+_INTEGER, _FLOAT, _MERGE, _VALUE, _DATE = (
+    f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge", "value", "timestamp")
 )
 _DECIMAL = re.compile(r"[-+]?(0|[1-9][0-9]*)")
 _TEXT = "tag:yaml.org,2002:str"
@@ -554,7 +554,7 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
     if id(node) in checked:
         return
     if isinstance(node, yaml.ScalarNode):
-        problem = _number_problem(node)
+        problem = _number_problem(node) or _date_problem(node)
         if problem:
             raise ValueError(f"{place}: {problem}")
     elif isinstance(node, yaml.SequenceNode):
@@ -605,6 +605,19 @@ def _twice(keys: tuple, first: tuple[int, str], then: tuple[int, str], read: obj
         f"{'.'.join(map(str, (*keys, name)))} is given {where}{written}: YAML keeps the last "
         "alone; keep one"
     )
+
+
+def _date_problem(node: yaml.ScalarNode) -> str | None:
+    """Why the scalar ``node``, which YAML 1.1 reads as a date (``2020-02-30``: its digits
+    alone make it one), is no date, or None: the reader fails on it in Python's words alone
+    (``day is out of range for month``), naming neither the file nor the key."""
+    if node.tag != _DATE:
+        return None
+    try:
+        yaml.constructor.SafeConstructor().construct_yaml_timestamp(node)
+    except ValueError as error:
+        return f"{node.value} is read as a date, and is none ({error}); in quotes it is text"
+    return None
 
 
 def _number_problem(node: yaml.ScalarNode) -> str | None:
