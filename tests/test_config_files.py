@@ -138,10 +138,23 @@ def test_keys_written_apart_that_read_as_one_are_refused_naming_both_lines(tmp_p
     message = _refused(path)
     for word in (str(path), f"studies.cmc.{first}", "twice, at lines 3 and 5"):
         assert word in message, message
-    # Written apart, each is named as written, and what both read as.
-    read = next(iter(study_config.read_yaml(f"{then}: 0")))
-    apart = f" (as {first} and {then}, both read as {read!r})"
-    assert (apart in message) == (then.strip("'") != first), message
+    # Written apart, each is named as written (test_keys_read_alike_are_named_as_each_reads).
+    assert (f" (as {first} and {then}, " in message) == (then.strip("'") != first), message
+
+
+@pytest.mark.parametrize(
+    ("first", "then", "words"),
+    [
+        ("yes", "true", "(as yes and true, both read as True)"),
+        ("true", "1", "(as true and 1, read as True and 1, which a mapping holds as one key)"),
+        ("1", "1.0", "(as 1 and 1.0, read as 1 and 1.0, which a mapping holds as one key)"),
+    ],
+)
+def test_keys_read_alike_are_named_as_each_reads(tmp_path, first, then, words):
+    # true is not read as 1, nor 1 as 1.0: they are equal, and a mapping holds them as one key.
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"a:\n  {first}: 5\n  {then}: 7\n")
+    assert words in _refused(path)
 
 
 def test_keys_that_only_look_alike_are_read(tmp_path):

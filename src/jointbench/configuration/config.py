@@ -574,9 +574,9 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
                 # Seen before, not on another line: a flow mapping holds both on one.
                 if read in seen:
                     raise ValueError(
-                        f"{place.where}: {_twice(place.keys, seen[read], (line, name), read)}"
+                        f"{place.where}: {_twice(place.keys, seen[read], (line, name, read))}"
                     )
-                seen[read] = (line, name)
+                seen[read] = (line, name, read)
             _check_nodes(value, place.at(name, line), (*holding, node), checked)
     checked.add(id(node))
 
@@ -595,12 +595,21 @@ def _key_read(key: yaml.ScalarNode) -> object:
     return read
 
 
-def _twice(keys: tuple, first: tuple[int, str], then: tuple[int, str], read: object) -> str:
-    """A key below ``keys`` given twice: ``first`` and ``then`` its ``(line, text)`` (lines
-    from 1), both read as ``read``."""
-    (line, name), (again, text) = first, then
+def _twice(keys: tuple, first: tuple[int, str, object], then: tuple[int, str, object]) -> str:
+    """A key below ``keys`` given twice: ``first`` and ``then`` its ``(line, text, value read)``
+    (lines from 1), the values equal: the same (``yes`` and ``true``, both True) or of two
+    types a mapping holds as one key (``true`` and ``1``, True and 1)."""
+    (line, name, read), (again, text, read_again) = first, then
     where = f"twice on line {line}" if line == again else f"twice, at lines {line} and {again}"
-    written = "" if name == text else f" (as {name} and {text}, both read as {read!r})"
+    if name == text:
+        written = ""
+    elif repr(read) == repr(read_again):
+        written = f" (as {name} and {text}, both read as {read!r})"
+    else:
+        written = (
+            f" (as {name} and {text}, read as {read!r} and {read_again!r}, which a mapping "
+            "holds as one key)"
+        )
     return (
         f"{'.'.join(map(str, (*keys, name)))} is given {where}{written}: YAML keeps the last "
         "alone; keep one"
