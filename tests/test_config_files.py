@@ -15,6 +15,7 @@ from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench import declared
 from jointbench.configuration import config as study_config
+from jointbench.ensembles.sensitivity import member_names
 
 DEFAULT = ROOT / "config" / "config.yaml"
 
@@ -137,6 +138,23 @@ def test_keys_written_apart_that_read_as_one_are_refused_naming_both_lines(tmp_p
     message = _refused(path)
     for word in (str(path), f"studies.cmc.{first}", "twice, at lines 3 and 5"):
         assert word in message, message
+    # Written apart, each is named as written (test_keys_read_alike_are_named_as_each_reads).
+    assert (f" (as {first} and {then}, " in message) == (then.strip("'") != first), message
+
+
+@pytest.mark.parametrize(
+    ("first", "then", "words"),
+    [
+        ("yes", "true", "(as yes and true, both read as True)"),
+        ("true", "1", "(as true and 1, read as True and 1, which a mapping holds as one key)"),
+        ("1", "1.0", "(as 1 and 1.0, read as 1 and 1.0, which a mapping holds as one key)"),
+    ],
+)
+def test_keys_read_alike_are_named_as_each_reads(tmp_path, first, then, words):
+    # true is not read as 1, nor 1 as 1.0: they are equal, and a mapping holds them as one key.
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"a:\n  {first}: 5\n  {then}: 7\n")
+    assert words in _refused(path)
 
 
 def test_keys_that_only_look_alike_are_read(tmp_path):
@@ -146,12 +164,51 @@ def test_keys_that_only_look_alike_are_read(tmp_path):
     assert len(read["a"]) == 6, read
 
 
+def test_the_key_written_as_an_equals_sign_is_read_as_text(tmp_path):
+    # YAML 1.1 tags a plain = with its "value" tag, which the safe loader reads, as a key, as
+    # the text '='.
+    path = tmp_path / "mine.yaml"
+    path.write_text("a:\n  =: 1\n  b: 2\n")
+    assert study_config.read_config_file(path, f"config file {path}") == {"a": {"=": 1, "b": 2}}
+    path.write_text("a:\n  =: 1\n  '=': 2\n")
+    message = _refused(path)
+    for word in (str(path), "a.= is given twice, at lines 2 and 3"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize("tag", ["!!set", "!!seq", "!!map", "!!omap"])
+def test_a_key_tagged_as_a_collection_is_refused_naming_the_file(tmp_path, tag):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"a:\n  {tag} k: 1\n")
+    message = _refused(path)
+    for word in (str(path), "not valid YAML at line 2", "unhashable key"):
+        assert word in message, message
+
+
 @pytest.mark.parametrize("written", ["010", "0x10", "1_000"])
 def test_a_key_yaml_reads_as_another_number_is_refused(tmp_path, written):
     path = tmp_path / "mine.yaml"
     path.write_text(f"studies:\n  cmc:\n    {written}: 3\n")
     message = _refused(path)
     for word in (str(path), f"studies.cmc.{written}", "line 3", f"{written} is read as"):
+        assert word in message, message
+
+
+@pytest.mark.parametrize(
+    ("text", "keys", "line"),
+    [
+        ("studies:\n  cmc:\n    trials: 2020-02-30\n", "studies.cmc.trials", 3),
+        ("sensitivity:\n  named:\n    2021-13-01: mine.yaml\n", "sensitivity.named.2021-13-01", 3),
+    ],
+    ids=["value", "key"],
+)
+def test_a_date_that_is_no_date_is_refused_naming_the_key_and_file(tmp_path, text, keys, line):
+    # YAML 1.1 reads the digits of a date as one; the day or month out of range fails in the
+    # reader with Python's words alone, naming neither the file nor the key.
+    path = tmp_path / "mine.yaml"
+    path.write_text(text)
+    message = _refused(path)
+    for word in (str(path), f"{keys} at line {line}", "is read as a date, and is none ("):
         assert word in message, message
 
 
@@ -307,6 +364,7 @@ def test_a_key_given_twice_in_a_json_config_file_is_refused(tmp_path):
         ('{"a": [1, {"b": {"c": 1, "c": 2}}]}', "a[1].b.c"),
         ('{"a": {"x": 1}, "b": {"x": 1, "x": 2}}', "b.x"),
         ('{"a": {"k": 1, "k": 2}, "b": {"j": 1, "j": 2}}', "a.k"),
+        ('{"a": {"k": 1, "j": 1, "k": 2, "j": 2}}', "a.k"),
     ],
 )
 def test_a_key_given_twice_in_a_json_config_file_is_named_by_its_path(tmp_path, text, keys):
@@ -445,10 +503,24 @@ def test_a_mistake_at_several_keys_names_only_the_files_that_set_them(second, na
             ],
             "studies.hinge.protocol.all.markers_mm[0], noise_sd_mm",
         ),
+        # A path all of whose keys the first holds keeps its last.
+        (
+            [("studies", "hip", "protocol", "fps"), ("studies", "hip", "protocol")],
+            "studies.hip.protocol.fps, protocol",
+        ),
     ],
 )
 def test_the_paths_a_refusal_is_at_are_written_as_its_keys(paths, keys):
     assert declared.keys(paths) == keys
+
+
+def test_a_declaration_error_put_under_outer_keys_puts_each_of_its_paths_there():
+    error = declared.DeclarationError(("noise_mm",), "too large", [("markers_mm", 0)])
+    assert error.under("protocol").paths == (
+        ("protocol", "noise_mm"),
+        ("protocol", "markers_mm", 0),
+    )
+    assert str(error.under("protocol")) == "protocol.noise_mm, markers_mm[0]: too large"
 
 
 # Keys a user names (a joint of the hinge protocol) holding what a key path's text is made of.
@@ -492,15 +564,42 @@ def test_a_refusal_of_a_runs_setting_names_the_config_file_that_set_it(tmp_path,
     assert words in message and message.endswith(f"(set in {second})"), message
 
 
-def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path):
+@pytest.mark.parametrize(
+    ("written", "words"),
+    [
+        ("studies: {cmc: {trials: 0}}\n", "config error at studies/cmc/trials: 0 is less"),
+        (None, "no such file"),
+        ("studies: {cmc: {trials: 3, trials: 4}}\n", "studies.cmc.trials is given twice"),
+    ],
+    ids=["refused by the check", "missing", "refused as read"],
+)
+def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path, written, words):
     overlay = tmp_path / "mine.yaml"
-    overlay.write_text("studies: {cmc: {trials: 0}}\n")
+    if written is not None:
+        overlay.write_text(written)
     first, second = _overlays(tmp_path, f"sensitivity: {{named: {{mine: {overlay}}}}}\n")
     sources = study_config.read_sources([DEFAULT, first, second])
     with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
         study_config.named_overlays(study_config.merged_sources(sources))
     message = str(raised.value)
     assert message.startswith(f"config error at sensitivity.named.mine ({overlay}): "), message
+    assert words in message and message.endswith(f"(set in {second})"), message
+
+
+@pytest.mark.parametrize("name", ["default", "draw-2", "draw-1.v2, x[0]"])
+def test_a_named_protocol_named_as_the_default_or_a_draw_names_the_config_file_naming_it(
+    tmp_path, name
+):
+    named = ROOT / "config" / "variants" / "hinge_anatomical_knee.yaml"
+    first, second = _overlays(
+        tmp_path, f"sensitivity: {{named: {json.dumps({name: str(named)})}}}\n"
+    )
+    sources = study_config.read_sources([DEFAULT, first, second])
+    with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
+        overlays = study_config.named_overlays(study_config.merged_sources(sources))
+        member_names("hinge", 2, overlays)
+    message = str(raised.value)
+    assert message.startswith(f"config: sensitivity.named.{name}: named protocol "), message
     assert message.endswith(f"(set in {second})"), message
 
 

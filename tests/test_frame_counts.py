@@ -116,6 +116,35 @@ def test_an_outside_studys_frame_count_typed_too_long_is_refused_without_simulat
     assert "study 'toy' declares no frame_keys" in message, message
 
 
+@pytest.mark.parametrize(
+    "given",
+    [
+        '"protocol.n_frames"',
+        '(path for path in [("protocol", "n_frames")])',
+        "[]",
+        "[()]",
+    ],
+    ids=["text", "generator", "no path", "empty path"],
+)
+def test_an_outside_studys_frame_keys_giving_no_paths_is_refused_naming_the_study(
+    tmp_path, given, forget_registrations
+):
+    """Its frame_keys must give the paths a refusal of its frames names: a text (as
+    frame_keys gave before they were paths), an iterator that checking them would use up, or
+    no path at all, is a mistake of the study's, named as such, not a refusal without keys."""
+    source = (FOURTH / "toy_study.py").read_text()
+    declaration = "    frame_count=frame_count,\n"
+    assert declaration in source, "the example no longer declares its frame count so"
+    keys = f"    frame_keys=lambda condition, overrides: {given},\n"
+    (tmp_path / "toy_study.py").write_text(source.replace(declaration, declaration + keys))
+    shutil.copy(FOURTH / "paper_t.yaml", tmp_path)
+    config = study_config.read_configs([ROOT / "config" / "config.yaml", FOURTH / "toy.yaml"])
+    # Too many frames: the refusal would name the keys.
+    config["studies"]["toy"]["protocol"] = {"n_frames": 10**10}
+    with pytest.raises(TypeError, match=r"study 'toy': its frame_keys gave .* not a list"):
+        study_config.open_config(config, tmp_path)
+
+
 def _never_called(*args, **kwargs):
     raise AssertionError("a trial was simulated to count its frames")
 

@@ -211,9 +211,9 @@ def _cmc(settings: Mapping, protocol: object) -> Problem | None:
 
 
 def _tilt_problem(tilt_power: float) -> Problem | None:
-    """``(key, why)`` when the thumb's spiral has not reached :data:`CMC_TILT_SHARE_BY_MIDDLE`
-    of its RoM by the middle of the trial, or is no longer that share short of it, else
-    None."""
+    """``(paths, why)`` (:data:`Problem`) when the thumb's spiral has not reached
+    :data:`CMC_TILT_SHARE_BY_MIDDLE` of its RoM by the middle of the trial, or is no longer that
+    share short of it, else None."""
     # Unrounded: near a bound, a share or a bound rounded to a few digits would read as the
     # bound itself, or be refused when typed back.
     share = 0.5**tilt_power
@@ -594,9 +594,10 @@ def _sta_reach_problem(settings: Mapping, protocol: object) -> Problem | None:
 
 
 def pelvis_poses_problem(settings: Mapping, protocol: object) -> Problem | None:
-    """``(keys, what is wrong and why)`` when the skin-marker study's pelvis cluster cannot
-    determine its poses in every trial of ``settings`` (the study's checked config) under
-    ``protocol`` (a :class:`~jointbench.simulate.hip_sta.HipStaProtocol`), else None.
+    """``(paths, what is wrong and why)`` (:data:`Problem`) when the skin-marker study's
+    pelvis cluster cannot determine its poses in every trial of ``settings`` (the study's
+    checked config) under ``protocol`` (a :class:`~jointbench.simulate.hip_sta.HipStaProtocol`),
+    else None.
 
     The simulate job gives the one-segment centre methods the thigh in the pelvis frame, whose
     poses it fits in every frame by paper C §5's alternation of SVD poses and body-fixed

@@ -9,7 +9,7 @@ import itertools
 import json
 import numbers
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Hashable, Iterator, Mapping, Sequence
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
@@ -529,7 +529,9 @@ class _Place:
 
 # The tags PyYAML resolves a plain scalar to; a number in decimal digits as YAML reads it, and
 # a leading 0 Python reads past.
-_INTEGER, _FLOAT, _MERGE = (f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge"))
+_INTEGER, _FLOAT, _MERGE, _VALUE, _DATE = (
+    f"tag:yaml.org,2002:{tag}" for tag in ("int", "float", "merge", "value", "timestamp")
+)
 _DECIMAL = re.compile(r"[-+]?(0|[1-9][0-9]*)")
 _TEXT = "tag:yaml.org,2002:str"
 # A number as JSON and YAML 1.2 write one (sign, digits, a dot, an exponent): where YAML 1.1
@@ -552,7 +554,7 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
     if id(node) in checked:
         return
     if isinstance(node, yaml.ScalarNode):
-        problem = _number_problem(node)
+        problem = _number_problem(node) or _date_problem(node)
         if problem:
             raise ValueError(f"{place}: {problem}")
     elif isinstance(node, yaml.SequenceNode):
@@ -568,27 +570,63 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
             if isinstance(key, yaml.ScalarNode) and key.tag != _MERGE:
                 # A key is a value too: 010 as a key is the key 8.
                 _check_nodes(key, place.at(name, line), holding, checked)
-                read = yaml.constructor.SafeConstructor().construct_object(key)
+                read = _key_read(key)
                 # Seen before, not on another line: a flow mapping holds both on one.
                 if read in seen:
                     raise ValueError(
-                        f"{place.where}: {_twice(place.keys, seen[read], (line, name), read)}"
+                        f"{place.where}: {_twice(place.keys, seen[read], (line, name, read))}"
                     )
-                seen[read] = (line, name)
+                seen[read] = (line, name, read)
             _check_nodes(value, place.at(name, line), (*holding, node), checked)
     checked.add(id(node))
 
 
-def _twice(keys: tuple, first: tuple[int, str], then: tuple[int, str], read: object) -> str:
-    """A key below ``keys`` given twice: ``first`` and ``then`` its ``(line, text)`` (lines
-    from 1), both read as ``read``."""
-    (line, name), (again, text) = first, then
+def _key_read(key: yaml.ScalarNode) -> object:
+    """The value the safe loader's mappings read the scalar ``key`` as: ``=``, which YAML 1.1
+    tags with its ``value`` tag, as the text ``'='``; ``ConstructorError`` (a ``YAMLError``, at
+    the key) for a key tagged as a collection (``!!set k``), which no mapping can hold."""
+    if key.tag == _VALUE:
+        return key.value
+    read = yaml.constructor.SafeConstructor().construct_object(key)
+    if not isinstance(read, Hashable):
+        raise yaml.constructor.ConstructorError(
+            "while constructing a mapping", None, "found unhashable key", key.start_mark
+        )
+    return read
+
+
+def _twice(keys: tuple, first: tuple[int, str, object], then: tuple[int, str, object]) -> str:
+    """A key below ``keys`` given twice: ``first`` and ``then`` its ``(line, text, value read)``
+    (lines from 1), the values equal: the same (``yes`` and ``true``, both True) or of two
+    types a mapping holds as one key (``true`` and ``1``, True and 1)."""
+    (line, name, read), (again, text, read_again) = first, then
     where = f"twice on line {line}" if line == again else f"twice, at lines {line} and {again}"
-    written = "" if name == text else f" (as {name} and {text}, both read as {read!r})"
+    if name == text:
+        written = ""
+    elif repr(read) == repr(read_again):
+        written = f" (as {name} and {text}, both read as {read!r})"
+    else:
+        written = (
+            f" (as {name} and {text}, read as {read!r} and {read_again!r}, which a mapping "
+            "holds as one key)"
+        )
     return (
         f"{'.'.join(map(str, (*keys, name)))} is given {where}{written}: YAML keeps the last "
         "alone; keep one"
     )
+
+
+def _date_problem(node: yaml.ScalarNode) -> str | None:
+    """Why the scalar ``node``, which YAML 1.1 reads as a date (``2020-02-30``: its digits
+    alone make it one), is no date, or None: the reader fails on it in Python's words alone
+    (``day is out of range for month``), naming neither the file nor the key."""
+    if node.tag != _DATE:
+        return None
+    try:
+        yaml.constructor.SafeConstructor().construct_yaml_timestamp(node)
+    except ValueError as error:
+        return f"{node.value} is read as a date, and is none ({error}); in quotes it is text"
+    return None
 
 
 def _number_problem(node: yaml.ScalarNode) -> str | None:
@@ -906,14 +944,21 @@ def _frame_source(spec: Study, condition: Mapping, overrides: Mapping) -> tuple[
     that set the frames of ``condition``'s recordings
     (:attr:`~jointbench.simulate.Study.frame_keys`) and no note; for a study that does not
     declare them, its ``protocol`` and a note saying why no field is named. ``TypeError``
-    naming the study where its ``frame_keys`` gives no list of paths (each a tuple)."""
+    naming the study where its ``frame_keys`` gives no list of one or more paths, each a
+    tuple of one or more keys (a text, as before they were paths; an iterator, which checking
+    would use up)."""
     if spec.frame_keys is None:
         return [("protocol",)], (
             f" (study {spec.name!r} declares no frame_keys: which of its protocol fields its "
             "frame_count reads, only the study can say)"
         )
     paths = spec.frame_keys(condition, overrides)
-    if isinstance(paths, str | bytes) or not all(isinstance(path, tuple) for path in paths):
+    # A text is a sequence too, of characters, none of them a tuple.
+    if (
+        not isinstance(paths, Sequence)
+        or not paths
+        or not all(isinstance(path, tuple) and path for path in paths)
+    ):
         raise TypeError(
             f"study {spec.name!r}: its frame_keys gave {paths!r} for condition "
             f"{condition_id(condition)}, not a list of paths of keys, each a tuple "
