@@ -492,16 +492,28 @@ def test_a_refusal_of_a_runs_setting_names_the_config_file_that_set_it(tmp_path,
     assert words in message and message.endswith(f"(set in {second})"), message
 
 
-def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path):
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("studies: {cmc: {trials: 0}}\n", "studies/cmc/trials: 0 is less than the minimum of 1"),
+        ("studies: {cmc: {grid: {rom_deg: [0]}}}\n", "studies.cmc.grid.rom_deg: 0 is not allowed"),
+    ],
+)
+def test_a_named_protocols_refusal_names_the_overlay_and_the_config_file_that_named_it(
+    tmp_path, text, words
+):
+    # The key at fault is the overlay's, the key naming the overlay the config file's: each
+    # named with its own file, so that neither reads as set where it is not.
     overlay = tmp_path / "mine.yaml"
-    overlay.write_text("studies: {cmc: {trials: 0}}\n")
+    overlay.write_text(text)
     first, second = _overlays(tmp_path, f"sensitivity: {{named: {{mine: {overlay}}}}}\n")
     sources = study_config.read_sources([DEFAULT, first, second])
     with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
         study_config.named_overlays(study_config.merged_sources(sources))
     message = str(raised.value)
     assert message.startswith(f"config error at sensitivity.named.mine ({overlay}): "), message
-    assert message.endswith(f"(set in {second})"), message
+    assert f"{words}" in message and f"(set in {overlay})" in message, message
+    assert message.endswith(f"(sensitivity.named.mine set in {second})"), message
 
 
 @pytest.mark.pipeline

@@ -79,11 +79,14 @@ def read_yaml(text: str) -> object:
 class ConfigError(ValueError):
     """A config refused at some of its keys. ``paths``: each the keys (and list indices) from
     the top to a value at fault, whose sources a run of several config files names
-    (:func:`sources_named`); ``()`` is the config as a whole, which no one source sets."""
+    (:func:`sources_named`); ``()`` is the config as a whole, which no one source sets.
+    ``keyed``: the sources name each key, even where one source sets them all, for a refusal
+    whose words also name keys that are not at ``paths`` (a named protocol's overlay's)."""
 
-    def __init__(self, message: str, paths: Sequence[Sequence] = ()) -> None:
+    def __init__(self, message: str, paths: Sequence[Sequence] = (), *, keyed: bool = False):
         super().__init__(message)
         self.paths = tuple(tuple(path) for path in paths)
+        self.keyed = keyed
 
 
 class SchemaError(ConfigError):
@@ -271,10 +274,12 @@ def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping
             raise ConfigError(str(error), at) from None
         merged = _merged(config, document)
         try:
-            validate_against(merged, SCHEMA_PATH, "config")
-            check_config(merged)
+            # A key at fault that the overlay sets is named with it, as a config file's is.
+            with sources_named([(str(path), document)]):
+                validate_against(merged, SCHEMA_PATH, "config")
+                check_config(merged)
         except ValueError as error:
-            raise ConfigError(f"{where}: {error}", at) from None
+            raise ConfigError(f"{where}: {error}", at, keyed=True) from None
         overlays[name] = document
     return overlays
 
@@ -320,24 +325,26 @@ def sources_named(sources: Sequence[tuple[str, Mapping]]) -> Iterator[None]:
     try:
         yield
     except ConfigError as error:
-        named = _set_in([path for path in error.paths if path], sources)
+        named = _set_in([path for path in error.paths if path], sources, keyed=error.keyed)
         if not named:
             raise
         raise ConfigError(f"{error} ({named})", error.paths) from None
 
 
-def _set_in(paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]]) -> str:
+def _set_in(
+    paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]], *, keyed: bool = False
+) -> str:
     """Which of ``sources`` set the keys at ``paths`` (:func:`_setters`): ``set in b.yaml``
     where every key a source sets is set by the same ones (a key no source sets, a default,
-    aside), else each key with its own (``noise_sd_mm set in a.yaml; knee.markers_mm set in
-    b.yaml``, the keys written as the refusal writes them, :func:`~jointbench.declared.
-    key_texts`); empty where no source sets any."""
+    aside) and not ``keyed``, else each key with its own (``noise_sd_mm set in a.yaml;
+    knee.markers_mm set in b.yaml``, the keys written as the refusal writes them,
+    :func:`~jointbench.declared.key_texts`); empty where no source sets any."""
     if not paths:
         return ""
     texts = declared.key_texts(paths)
     setters = [(text, _setters(path, sources)) for text, path in zip(texts, paths, strict=True)]
     setters = [(text, names) for text, names in setters if names]
-    if len({tuple(names) for _, names in setters}) == 1:
+    if not keyed and len({tuple(names) for _, names in setters}) == 1:
         return f"set in {', '.join(setters[0][1])}"
     return "; ".join(f"{text} set in {', '.join(names)}" for text, names in setters)
 
