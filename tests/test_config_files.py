@@ -565,3 +565,18 @@ def test_dry_run_names_the_config_file_listing_an_external_estimator_of_another_
     for word in ["studies.hinge.external_estimators: 'centroid' writes center", str(second)]:
         assert word in message, message[-2000:]
     assert f"(set in {second})" in message, message[-2000:]
+
+
+def test_a_study_name_the_schema_refuses_names_the_file_that_wrote_it(tmp_path):
+    # The key at fault is the study's name, which one file writes: not `studies`, which every
+    # config file sets.
+    study = "{trials: 4, grid: {noise_mm: [0.5]}, estimators: [NM]}"
+    first, second = _overlays(
+        tmp_path, f"extensions: [lab_study.py]\nstudies: {{lab.v2: {study}}}\n"
+    )
+    sources = study_config.read_sources([DEFAULT, first, second])
+    with pytest.raises(ValueError) as raised:
+        study_config.check_sources(study_config.merged_sources(sources), sources)
+    message = str(raised.value)
+    assert "'lab.v2' does not match" in message, message
+    assert message.endswith(f"(set in {second})"), message

@@ -124,12 +124,15 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
 
 def _at_fault(error) -> tuple:
     """The keys leading to what the jsonschema ``error`` is about: its path, and for a key the
-    schema does not allow (a misspelt one), that key, which the path stops above."""
+    schema does not allow (a misspelt one, or a name its ``propertyNames`` refuses, whose
+    error's instance is the name), that key, which the path stops above."""
     path = tuple(error.absolute_path)
     allowed = error.schema.get("properties", {}) if isinstance(error.schema, Mapping) else {}
     if error.validator == "additionalProperties" and isinstance(error.instance, Mapping):
         extra = [key for key in error.instance if key not in allowed]
         return (*path, *extra[:1])
+    if "propertyNames" in error.absolute_schema_path:
+        return (*path, error.instance)
     return path
 
 
