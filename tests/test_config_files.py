@@ -580,3 +580,5 @@ def test_a_study_name_the_schema_refuses_names_the_file_that_wrote_it(tmp_path):
     message = str(raised.value)
     assert "'lab.v2' does not match" in message, message
     assert message.endswith(f"(set in {second})"), message
+    # Its name is the mistake, not where the study comes from.
+    assert "not a built-in study" not in message, message

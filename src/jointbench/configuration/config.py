@@ -91,11 +91,13 @@ class ConfigError(ValueError):
 
 class SchemaError(ConfigError):
     """A document that does not match its schema. ``path``: the keys (and list indices) from
-    the top to the value at fault; for a key the schema does not allow, down to that key."""
+    the top to the value at fault; for a key the schema does not allow, down to that key.
+    ``of_name``: the key's name is refused (a ``propertyNames`` pattern), not its value."""
 
-    def __init__(self, message: str, path: Sequence = ()) -> None:
+    def __init__(self, message: str, path: Sequence = (), *, of_name: bool = False) -> None:
         super().__init__(message, [path])
         self.path = tuple(path)
+        self.of_name = of_name
 
 
 def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
@@ -119,7 +121,11 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
         jsonschema.validate(dict(document), schema, cls=strict)
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
-        raise SchemaError(f"{what} error at {where}: {error.message}", _at_fault(error)) from None
+        raise SchemaError(
+            f"{what} error at {where}: {error.message}",
+            _at_fault(error),
+            of_name=_of_name(error),
+        ) from None
 
 
 def _at_fault(error) -> tuple:
@@ -131,9 +137,15 @@ def _at_fault(error) -> tuple:
     if error.validator == "additionalProperties" and isinstance(error.instance, Mapping):
         extra = [key for key in error.instance if key not in allowed]
         return (*path, *extra[:1])
-    if "propertyNames" in error.absolute_schema_path:
+    if _of_name(error):
         return (*path, error.instance)
     return path
+
+
+def _of_name(error) -> bool:
+    """Whether the jsonschema ``error`` refuses a key's name (``propertyNames``), whose
+    instance is then the name."""
+    return "propertyNames" in error.absolute_schema_path
 
 
 def _is_integer(_checker: object, instance: object) -> bool:
@@ -167,9 +179,10 @@ def check_schema(config: Mapping) -> None:
         return
     try:
         validate_against(config, SCHEMA_PATH, "config")
-    except ValueError as error:
+    except SchemaError as error:
         unknown = _unknown_studies(config)
-        if not unknown:
+        # A name the schema refuses is the mistake, wherever the study would come from.
+        if not unknown or error.of_name:
             raise
         raise SchemaError(
             f"{error} ({', '.join(map(repr, unknown))} is not a built-in study: built in are "
