@@ -152,6 +152,16 @@ def test_a_5_degree_answer_ok_beyond_three_sds_says_its_sd_does_not_hold(seed):
     )
 
 
+def test_a_5_degree_warning_says_what_would_lower_the_share():
+    # A lab reading it on a small swing learns what to record again, not only that the SD
+    # does not hold: the share falls as the swing widens (README: 2.8-29 at 5 degrees,
+    # 0.18-0.35 at 20) and as the markers' noise falls (a product of two noises).
+    proximal, distal, _ = _trial(5.0, 64)
+    result = jointbench.fit_joint_center(proximal, distal, "analytic")
+    assert _ANCHORED_SD in result.status
+    assert "a wider swing or less marker noise lowers it" in result.status, result.status
+
+
 @pytest.mark.parametrize(
     ("rom_deg", "noise_mm", "seed"), [(20.0, 0.5, 0), (20.0, 0.5, 1), (30.0, 1.0, 0)]
 )

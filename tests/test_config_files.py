@@ -564,26 +564,51 @@ def test_a_refusal_of_a_runs_setting_names_the_config_file_that_set_it(tmp_path,
     assert words in message and message.endswith(f"(set in {second})"), message
 
 
-@pytest.mark.parametrize(
-    ("written", "words"),
-    [
-        ("studies: {cmc: {trials: 0}}\n", "config error at studies/cmc/trials: 0 is less"),
-        (None, "no such file"),
-        ("studies: {cmc: {trials: 3, trials: 4}}\n", "studies.cmc.trials is given twice"),
-    ],
-    ids=["refused by the check", "missing", "refused as read"],
-)
-def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path, written, words):
-    overlay = tmp_path / "mine.yaml"
-    if written is not None:
-        overlay.write_text(written)
-    first, second = _overlays(tmp_path, f"sensitivity: {{named: {{mine: {overlay}}}}}\n")
+def _named_overlays_refusal(folder: Path, overlay: Path) -> tuple[str, Path]:
+    """The refusal of the named protocol ``mine`` at ``overlay``, named by the second of two
+    config files over the default, and that file."""
+    first, second = _overlays(folder, f"sensitivity: {{named: {{mine: {overlay}}}}}\n")
     sources = study_config.read_sources([DEFAULT, first, second])
     with pytest.raises(ValueError) as raised, study_config.sources_named(sources):
         study_config.named_overlays(study_config.merged_sources(sources))
     message = str(raised.value)
     assert message.startswith(f"config error at sensitivity.named.mine ({overlay}): "), message
+    return message, second
+
+
+@pytest.mark.parametrize(
+    ("written", "words"),
+    [
+        (None, "no such file"),
+        ("studies: {cmc: {trials: 3, trials: 4}}\n", "studies.cmc.trials is given twice"),
+    ],
+    ids=["missing", "refused as read"],
+)
+def test_a_named_protocols_refusal_names_the_config_file_that_named_it(tmp_path, written, words):
+    overlay = tmp_path / "mine.yaml"
+    if written is not None:
+        overlay.write_text(written)
+    message, second = _named_overlays_refusal(tmp_path, overlay)
     assert words in message and message.endswith(f"(set in {second})"), message
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("studies: {cmc: {trials: 0}}\n", "studies/cmc/trials: 0 is less than the minimum of 1"),
+        ("studies: {cmc: {grid: {rom_deg: [0]}}}\n", "studies.cmc.grid.rom_deg: 0 is not allowed"),
+    ],
+)
+def test_a_named_protocols_refusal_names_the_overlay_and_the_config_file_that_named_it(
+    tmp_path, text, words
+):
+    # The key at fault is the overlay's, the key naming the overlay the config file's: each
+    # named with its own file, so that neither reads as set where it is not.
+    overlay = tmp_path / "mine.yaml"
+    overlay.write_text(text)
+    message, second = _named_overlays_refusal(tmp_path, overlay)
+    assert f"{words}" in message and f"(set in {overlay})" in message, message
+    assert message.endswith(f"(sensitivity.named.mine set in {second})"), message
 
 
 @pytest.mark.parametrize("name", ["default", "draw-2", "draw-1.v2, x[0]"])
@@ -652,3 +677,20 @@ def test_dry_run_names_the_config_file_listing_an_external_estimator_of_another_
     for word in ["studies.hinge.external_estimators: 'centroid' writes center", str(second)]:
         assert word in message, message[-2000:]
     assert f"(set in {second})" in message, message[-2000:]
+
+
+def test_a_study_name_the_schema_refuses_names_the_file_that_wrote_it(tmp_path):
+    # The key at fault is the study's name, which one file writes: not `studies`, which every
+    # config file sets.
+    study = "{trials: 4, grid: {noise_mm: [0.5]}, estimators: [NM]}"
+    first, second = _overlays(
+        tmp_path, f"extensions: [lab_study.py]\nstudies: {{lab.v2: {study}}}\n"
+    )
+    sources = study_config.read_sources([DEFAULT, first, second])
+    with pytest.raises(ValueError) as raised:
+        study_config.check_sources(study_config.merged_sources(sources), sources)
+    message = str(raised.value)
+    assert "'lab.v2' does not match" in message, message
+    assert message.endswith(f"(set in {second})"), message
+    # Its name is the mistake, not where the study comes from.
+    assert "not a built-in study" not in message, message

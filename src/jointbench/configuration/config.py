@@ -79,20 +79,25 @@ def read_yaml(text: str) -> object:
 class ConfigError(ValueError):
     """A config refused at some of its keys. ``paths``: each the keys (and list indices) from
     the top to a value at fault, whose sources a run of several config files names
-    (:func:`sources_named`); ``()`` is the config as a whole, which no one source sets."""
+    (:func:`sources_named`); ``()`` is the config as a whole, which no one source sets.
+    ``keyed``: the sources name each key, even where one source sets them all, for a refusal
+    whose words also name keys that are not at ``paths`` (a named protocol's overlay's)."""
 
-    def __init__(self, message: str, paths: Sequence[Sequence] = ()) -> None:
+    def __init__(self, message: str, paths: Sequence[Sequence] = (), *, keyed: bool = False):
         super().__init__(message)
         self.paths = tuple(tuple(path) for path in paths)
+        self.keyed = keyed
 
 
 class SchemaError(ConfigError):
     """A document that does not match its schema. ``path``: the keys (and list indices) from
-    the top to the value at fault; for a key the schema does not allow, down to that key."""
+    the top to the value at fault; for a key the schema does not allow, down to that key.
+    ``of_name``: the key's name is refused (a ``propertyNames`` pattern), not its value."""
 
-    def __init__(self, message: str, path: Sequence = ()) -> None:
+    def __init__(self, message: str, path: Sequence = (), *, of_name: bool = False) -> None:
         super().__init__(message, [path])
         self.path = tuple(path)
+        self.of_name = of_name
 
 
 def validate_against(document: Mapping, schema_path: str | Path | Traversable, what: str) -> None:
@@ -116,18 +121,31 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
         jsonschema.validate(dict(document), schema, cls=strict)
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
-        raise SchemaError(f"{what} error at {where}: {error.message}", _at_fault(error)) from None
+        raise SchemaError(
+            f"{what} error at {where}: {error.message}",
+            _at_fault(error),
+            of_name=_of_name(error),
+        ) from None
 
 
 def _at_fault(error) -> tuple:
     """The keys leading to what the jsonschema ``error`` is about: its path, and for a key the
-    schema does not allow (a misspelt one), that key, which the path stops above."""
+    schema does not allow (a misspelt one, or a name its ``propertyNames`` refuses, whose
+    error's instance is the name), that key, which the path stops above."""
     path = tuple(error.absolute_path)
     allowed = error.schema.get("properties", {}) if isinstance(error.schema, Mapping) else {}
     if error.validator == "additionalProperties" and isinstance(error.instance, Mapping):
         extra = [key for key in error.instance if key not in allowed]
         return (*path, *extra[:1])
+    if _of_name(error):
+        return (*path, error.instance)
     return path
+
+
+def _of_name(error) -> bool:
+    """Whether the jsonschema ``error`` refuses a key's name (``propertyNames``), whose
+    instance is then the name."""
+    return "propertyNames" in error.absolute_schema_path
 
 
 def _is_integer(_checker: object, instance: object) -> bool:
@@ -161,9 +179,10 @@ def check_schema(config: Mapping) -> None:
         return
     try:
         validate_against(config, SCHEMA_PATH, "config")
-    except ValueError as error:
+    except SchemaError as error:
         unknown = _unknown_studies(config)
-        if not unknown:
+        # A name the schema refuses is the mistake, wherever the study would come from.
+        if not unknown or error.of_name:
             raise
         raise SchemaError(
             f"{error} ({', '.join(map(repr, unknown))} is not a built-in study: built in are "
@@ -271,10 +290,12 @@ def named_overlays(config: Mapping, base: str | Path = ".") -> dict[str, Mapping
             raise ConfigError(str(error), at) from None
         merged = _merged(config, document)
         try:
-            validate_against(merged, SCHEMA_PATH, "config")
-            check_config(merged)
+            # A key at fault that the overlay sets is named with it, as a config file's is.
+            with sources_named([(str(path), document)]):
+                validate_against(merged, SCHEMA_PATH, "config")
+                check_config(merged)
         except ValueError as error:
-            raise ConfigError(f"{where}: {error}", at) from None
+            raise ConfigError(f"{where}: {error}", at, keyed=True) from None
         overlays[name] = document
     return overlays
 
@@ -320,24 +341,26 @@ def sources_named(sources: Sequence[tuple[str, Mapping]]) -> Iterator[None]:
     try:
         yield
     except ConfigError as error:
-        named = _set_in([path for path in error.paths if path], sources)
+        named = _set_in([path for path in error.paths if path], sources, keyed=error.keyed)
         if not named:
             raise
         raise ConfigError(f"{error} ({named})", error.paths) from None
 
 
-def _set_in(paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]]) -> str:
+def _set_in(
+    paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]], *, keyed: bool = False
+) -> str:
     """Which of ``sources`` set the keys at ``paths`` (:func:`_setters`): ``set in b.yaml``
     where every key a source sets is set by the same ones (a key no source sets, a default,
-    aside), else each key with its own (``noise_sd_mm set in a.yaml; knee.markers_mm set in
-    b.yaml``, the keys written as the refusal writes them, :func:`~jointbench.declared.
-    key_texts`); empty where no source sets any."""
+    aside) and not ``keyed``, else each key with its own (``noise_sd_mm set in a.yaml;
+    knee.markers_mm set in b.yaml``, the keys written as the refusal writes them,
+    :func:`~jointbench.declared.key_texts`); empty where no source sets any."""
     if not paths:
         return ""
     texts = declared.key_texts(paths)
     setters = [(text, _setters(path, sources)) for text, path in zip(texts, paths, strict=True)]
     setters = [(text, names) for text, names in setters if names]
-    if len({tuple(names) for _, names in setters}) == 1:
+    if not keyed and len({tuple(names) for _, names in setters}) == 1:
         return f"set in {', '.join(setters[0][1])}"
     return "; ".join(f"{text} set in {', '.join(names)}" for text, names in setters)
 

@@ -981,13 +981,15 @@ def _anchored_sd(share: float, sd: float) -> str:
     """The warning for a joint centre whose variance is the share ``share``,
     :data:`MAX_ANCHOR_SHARE` or more, second order in the errors of the frame-0 poses that
     anchor both body frames (:func:`jointbench.estimators.pose_noise.analytic_anchor_share`)
-    against its first-order SD ``sd`` [mm]."""
+    against its first-order SD ``sd`` [mm], and what lowers that share: the rotations
+    that errors of the frame-0 poses add are a larger part of a smaller swing's, and the
+    second-order part grows with the noise's square against the first's."""
     return (
         f"centre's {PRECISION_NOT_DETERMINED} by the data: the errors of the frame-0 poses, "
         "which place the joint in both segments and turn every relative rotation, make its "
         f"error a product of noises whose second-order variance is {100 * share:.0f}% of the "
         f"first-order one in some direction (below {100 * MAX_ANCHOR_SHARE:g}% its SD of "
-        f"{sd:.3g} mm would hold)"
+        f"{sd:.3g} mm would hold; a wider swing or less marker noise lowers it)"
     )
 
 
