@@ -7,6 +7,8 @@ that calls its one-trial function trial by trial. Nothing is attached to the fun
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from rigs import DISTAL, JOINT, apply_pose, two_segments
@@ -159,3 +161,42 @@ def test_arrays_of_other_numbers_of_trials_are_named_by_position_past_the_segmen
         ValueError, match=r"^marker array 1 holds 3 trials, marker array 2 3, marker array 3 2:"
     ):
         registry.many("joint_center", "SCoRE", checked=checked)(*segments)
+
+
+@dataclasses.dataclass
+class _MidpointOf:
+    """A joint-centre estimator that is a callable instance with fields, as a user may write
+    one: a dataclass compares by its fields, so it has no hash."""
+
+    method: str
+
+    def __call__(self, proximal, distal):
+        both = np.concatenate([np.asarray(proximal), np.asarray(distal)], axis=1)
+        return JointCenterResult(
+            center=both.reshape(-1, 3).mean(axis=0),
+            covariance=None,
+            converged=True,
+            iterations=0,
+            status="ok",
+            method=self.method,
+        )
+
+
+def test_an_estimator_without_a_hash_is_checked_as_any_other():
+    """Its checked call shares the poses it fits with the verdict, whether its signature takes
+    the trial asked (remembered per method) included."""
+    estimator = _MidpointOf("midpoint-of")
+    with pytest.raises(TypeError):
+        hash(estimator)
+
+    def midpoints(proximal, distal, *, poses=None):
+        return [estimator(p, d) for p, d in zip(proximal, distal, strict=True)]
+
+    midpoints.pose_segments = ("proximal", "distal")
+    registry.register("joint_center", "midpoint-of", many=midpoints)(estimator)
+    try:
+        proximal, distal = two_segments(30)
+        result = registry.get("joint_center", "midpoint-of")(proximal, distal)
+    finally:
+        registry.unregister("joint_center", "midpoint-of")
+    np.testing.assert_array_equal(result.center, estimator(proximal, distal).center)

@@ -148,7 +148,8 @@ class Claims:
 class _Entry:
     """A registered method of ``kind``: its one-trial function ``fn``, its claims, its figure
     style and its own many-trial form (``None`` until stated, or for none); derived from
-    those, the function's signature and its checked forms: for any input and options
+    those, the function's signature, whether it binds a call's arrays and options (``binds``,
+    by their count and names, :func:`_binds`) and its checked forms: for any input and options
     (``checked``), for any input and options its caller checked (``inputs_checked``: each
     trial of :func:`many`, which checks the options once for all trials), and for input and
     options that passed their checks (``valid``, :func:`get_for_valid`)."""
@@ -160,6 +161,7 @@ class _Entry:
     style: Mapping[str, str]
     many: Callable[..., list] | None = None
     signature: inspect.Signature = field(init=False)
+    binds: dict[tuple, bool] = field(init=False, default_factory=dict)
     checked: Callable = field(init=False)
     inputs_checked: Callable = field(init=False)
     valid: Callable = field(init=False)
@@ -259,20 +261,15 @@ def _pose_names(entry: _Entry, n_segments: int) -> tuple[str, ...] | None:
 
 def _binds(entry: _Entry, arrays: tuple, options: dict) -> bool:
     """Whether ``entry``'s one-trial function takes ``arrays`` and ``options``: where it does
-    not, calling it raises the ``TypeError`` a caller should see."""
-    return _binds_counted(entry.fn, len(arrays), tuple(options))
-
-
-@functools.lru_cache(maxsize=1024)
-def _binds_counted(fn: Callable, n_arrays: int, names: tuple[str, ...]) -> bool:
-    """Whether ``fn`` takes ``n_arrays`` positional arguments and the keyword options
-    ``names``, remembered: a signature binds by the count and the names alone, and binding
-    it costs a checked one-trial call several microseconds."""
-    try:
-        inspect.signature(fn).bind(*(None,) * n_arrays, **dict.fromkeys(names))
-    except TypeError:
-        return False
-    return True
+    not, calling it raises the ``TypeError`` a caller should see. Remembered per method: a
+    signature binds by the arrays' count and the options' names alone, and binding it costs a
+    checked one-trial call several microseconds."""
+    asked = (len(arrays), tuple(options))
+    binds = entry.binds.get(asked)
+    if binds is None:
+        unbound = _binding_error(entry, (None,) * len(arrays), dict.fromkeys(options))
+        binds = entry.binds[asked] = unbound is None
+    return binds
 
 
 def _binding_error(entry: _Entry, arrays: tuple, options: dict) -> TypeError | None:
