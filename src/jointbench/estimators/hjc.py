@@ -1374,7 +1374,7 @@ def _analytic_scattered(
     ``["center_sd_anchor_share"]``, and the mean error those errors cause to second order
     (:func:`jointbench.estimators.pose_noise.anchor_bias_mm`), ``["center_anchor_bias_mm"]``:
     on small swings of the order of the pull, which the checked call adds it to, as it holds
-    both shares to the centres' bound
+    the noise share to the centres' bound and the anchor share to its own
     (:func:`jointbench.estimators.centre_precision.annotate_joint_centres`;
     ``benchmarks/joint_centre_stated_sd.py`` prints them)."""
     covariance = centre_covariance(
