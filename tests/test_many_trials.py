@@ -116,21 +116,26 @@ def test_every_method_has_both_forms_and_nothing_attached(kind):
             assert not hasattr(registry.get(kind, name, checked=checked), "batched"), name
 
 
+def _midpoint(proximal, distal, method: str) -> JointCenterResult:
+    """The midpoint of the two clusters' centroids over every frame, as ``method``."""
+    both = np.concatenate([np.asarray(proximal), np.asarray(distal)], axis=1)
+    return JointCenterResult(
+        center=both.reshape(-1, 3).mean(axis=0),
+        covariance=None,
+        converged=True,
+        iterations=0,
+        status="ok",
+        method=method,
+    )
+
+
 @pytest.fixture
 def two_segment_newcomer():
     """A per-trial joint centre estimator without a many-trial form: the midpoint of the
     clusters' centroids."""
 
     def midpoint(proximal, distal):
-        both = np.concatenate([np.asarray(proximal), np.asarray(distal)], axis=1)
-        return JointCenterResult(
-            center=both.reshape(-1, 3).mean(axis=0),
-            covariance=None,
-            converged=True,
-            iterations=0,
-            status="ok",
-            method="midpoint",
-        )
+        return _midpoint(proximal, distal, "midpoint")
 
     registry.register("joint_center", "midpoint")(midpoint)
     yield "midpoint"
@@ -171,15 +176,7 @@ class _MidpointOf:
     method: str
 
     def __call__(self, proximal, distal):
-        both = np.concatenate([np.asarray(proximal), np.asarray(distal)], axis=1)
-        return JointCenterResult(
-            center=both.reshape(-1, 3).mean(axis=0),
-            covariance=None,
-            converged=True,
-            iterations=0,
-            status="ok",
-            method=self.method,
-        )
+        return _midpoint(proximal, distal, self.method)
 
 
 def test_an_estimator_without_a_hash_is_checked_as_any_other():
