@@ -520,9 +520,19 @@ def test_short_noise_free_frames_have_no_correlation_to_call_untested(kind):
 
 def test_the_correlation_sd_is_that_of_the_distances_covariance():
     """``sqrt(N - 1) |C|_F / (N tr C)`` of the pair distances' covariance ``C``, compiled and
-    as written; NaN where no distance varies."""
+    as written, whether it sums the pairs' scatter or, where the pairs outnumber the frames
+    (the last three), the frames' (``|D D'|_F = |D' D|_F``); NaN where no distance varies."""
     rng = np.random.default_rng(4)
-    for n_frames, n_markers in ((2, 2), (5, 3), (32, 4), (300, 6)):
+    for n_frames, n_markers in (
+        (2, 2),
+        (5, 3),
+        (32, 4),
+        (300, 6),
+        (6, 4),
+        (3, 4),
+        (4, 12),
+        (10, 8),
+    ):
         markers = rng.normal(scale=30.0, size=(3, n_frames, n_markers, 3))
         expected = []
         for trial in markers:

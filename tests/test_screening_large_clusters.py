@@ -33,12 +33,16 @@ def _labels(n_markers: int) -> tuple[str, ...]:
 
 
 def _refuse_the_exchange_test(monkeypatch) -> None:
-    """Make the exchange test fail the test if the screen reaches it."""
+    """Make the searches for two markers exchanging labels fail the test if the screen reaches
+    them: the distance test and the search of the rigidity breaks for exchanged pairs, whose
+    cost grows as the pairs times the markers (a recording of a few markers passed as
+    ``(markers, frames, 3)``, every sample a break, took minutes at 2,000 frames)."""
 
     def reached(*_):
         raise AssertionError("the exchange test ran on a cluster it cannot take")
 
     monkeypatch.setattr(screening, "find_exchanges", reached)
+    monkeypatch.setattr(screening, "find_swaps", reached)
 
 
 def test_the_words_name_the_count_and_the_limit():

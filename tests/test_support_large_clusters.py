@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from rigs import two_segments
 
 import jointbench
-from jointbench.estimators import support
+from jointbench.estimators import registry, support
 from jointbench.geometry import rotation_matrix
 
 CENTRE = np.array([20.0, -25.0, -30.0])
@@ -82,3 +83,33 @@ def test_two_frames_of_a_large_cluster_are_refused(kind):
     them."""
     with pytest.raises(ValueError, match=r"^markers has 2 frames; the support verdict needs"):
         support.assess(kind, (_ball(support.MAX_DISTANCE_MARKERS + 1, 2),))
+
+
+#: Frames of a recording of few markers passed as (markers, frames, 3): as many "markers" as
+#: it has frames, whose marker pairs (79,800 here) are far more than their frames.
+TRANSPOSED_FRAMES = 400
+
+
+@pytest.mark.parametrize(
+    ("kind", "method"),
+    [("center", method) for method in registry.methods("center")]
+    + [("axis", method) for method in ("planar", "radial", "combined")],
+)
+def test_a_long_recording_passed_transposed_is_judged_and_named(kind, method):
+    """Its frames' dependence is read from the pair distances' scatter, whose size is the
+    smaller of the pairs and the frames squared: a scatter over the pairs would be 51 GB."""
+    frames = max(registry.claims(kind, method).min_frames, support.MIN_JUDGED_FRAMES)
+    markers = np.swapaxes(_ball(frames, TRANSPOSED_FRAMES), 0, 1)
+    fit = jointbench.fit_center if kind == "center" else jointbench.fit_axis
+    result = fit(markers, method, artefacts="warn")
+    assert f"not verified: {TRANSPOSED_FRAMES} markers, more than the " in result.status
+    assert "may be (markers, frames, 3); it must be (frames, markers, 3)" in result.status
+
+
+@pytest.mark.parametrize("method", registry.methods("joint_center"))
+def test_a_long_two_segment_recording_passed_transposed_is_judged_and_named(method):
+    proximal, distal = (
+        np.swapaxes(markers, 0, 1) for markers in two_segments(n_frames=TRANSPOSED_FRAMES)
+    )
+    result = jointbench.fit_joint_center(proximal, distal, method, artefacts="warn")
+    assert "may be (markers, frames, 3); it must be (frames, markers, 3)" in result.status

@@ -1769,7 +1769,9 @@ def _screened(
     broken = {(a.label, a.frame) for a in breaks}
     flags = [*breaks, *(a for a in exchanged if (a.label, a.frame) not in broken)]
     swaps: list[Swap] = []
-    if flags:
+    # Above MAX_EXCHANGE_MARKERS no exchange of labels is searched for, as ``untested`` says:
+    # the search of the breaks tries every pair of markers, each with a pose fit of them all.
+    if flags and not untested:
         flagged = np.zeros(misfit.shape, dtype=bool)
         for artefact in flags:
             flagged[artefact.frame, labels.index(artefact.label)] = True

@@ -2608,8 +2608,12 @@ def _correlation_sd(distances: np.ndarray) -> float:
     """The SD of the lag-1 autocorrelation pooled over the pair ``distances`` ``(P, N)`` [mm]
     (:func:`_frame_dependence`) that ``N`` independent frames of their covariance give it
     (:func:`_scatter_correlation_sd`). The distances are made their deviations from their
-    means, in place. A compiled kernel: every checked fit reads it, where NumPy's calls on
-    these small arrays cost tens of microseconds."""
+    means, in place. The scatter's trace and Frobenius norm are those of the deviations' Gram
+    matrix over the frames too (``D D'`` and ``D' D`` share both), the one formed where the
+    pairs outnumber the frames: many markers over few frames (a recording passed as
+    ``(markers, frames, 3)``) have more pairs than a ``(P, P)`` scatter could hold in memory. A
+    compiled kernel: every checked fit reads it, where NumPy's calls on these small arrays cost
+    tens of microseconds."""
     n_pairs, n_frames = distances.shape
     deviations = distances
     for p in range(n_pairs):
@@ -2619,6 +2623,14 @@ def _correlation_sd(distances: np.ndarray) -> float:
         mean /= n_frames
         for f in range(n_frames):
             deviations[p, f] -= mean
+    if n_pairs > n_frames:
+        # Its upper triangle, all that _scatter_correlation_sd reads.
+        gram = np.zeros((n_frames, n_frames))
+        for p in range(n_pairs):
+            for f in range(n_frames):
+                for g in range(f, n_frames):
+                    gram[f, g] += deviations[p, f] * deviations[p, g]
+        return _scatter_correlation_sd(gram, n_frames)
     scatter = np.empty((n_pairs, n_pairs))
     for p in range(n_pairs):
         for q in range(p, n_pairs):
@@ -2637,7 +2649,9 @@ def _scatter_correlation_sd(scatter: np.ndarray, n_frames: int) -> float:
     ``sqrt(N - 1) |C|_F / (N tr C)`` (NaN where every deviation is zero). The pooled products
     of neighbouring frames' deviations sum ``N - 1`` terms of variance ``|C|_F^2`` (pairs that
     share a marker share its noise), over the pooled squares, ``N tr C``: ``1 / sqrt(N)`` for
-    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each. A compiled kernel."""
+    one pair, ``1 / sqrt(P N)`` for ``P`` pairs of their own noise each. Only the upper
+    triangle is read, and only the trace and the Frobenius norm: the deviations' Gram matrix
+    over the frames ``(N, N)`` serves as well (:func:`_correlation_sd`). A compiled kernel."""
     n_pairs = scatter.shape[0]
     trace = 0.0
     frobenius = 0.0
