@@ -179,7 +179,8 @@ def test_a_swing_whose_sd_holds_on_average_keeps_it(rom_deg, noise_mm, seed):
 @pytest.mark.parametrize("seed", range(3))
 def test_an_ordinary_30_degree_swing_stays_ok_with_its_sd(seed):
     """The anchor's share is below half the noise share's bound, and the SD is the first-order
-    one unchanged (a factor of exactly 1): the anchor's covariance is never added to it."""
+    one with only the pull's outer product added (the bias it states): the anchor's covariance
+    is never added to it."""
     proximal, distal, truth = _trial(30.0, seed)
     result = jointbench.fit_joint_center(proximal, distal, "analytic")
     assert result.status == "ok", result.status
@@ -191,7 +192,9 @@ def test_an_ordinary_30_degree_swing_stays_ok_with_its_sd(seed):
         poses["distal"],
         (result.center, result.center),
     )
-    assert result.diagnostics["center_sd_mm"] == np.sqrt(np.linalg.eigvalsh(first)[-1])
+    bias = np.asarray(result.diagnostics["center_pose_noise_bias_mm"])
+    stated = first + np.outer(bias, bias)
+    assert result.diagnostics["center_sd_mm"] == np.sqrt(np.linalg.eigvalsh(stated)[-1])
     assert _distance(result, truth) < 3.0
 
 
