@@ -876,10 +876,10 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
       scatter's SD, as their constants say; where the pull reaches its bound the warning says
       the SD is no statement of the precision, and the pull, an expansion to second order
       that overstates the mean error where the noise takes most of the rotation off a hinge
-      (:mod:`jointbench.estimators.pose_noise`), is not added.
-      SCoRE's answers on a 10 degree circumduction with 1 mm noise lie about 0.8 of their
-      scatter's SD along the pull, which put 89 of 1000 beyond 3 SDs where 29 were implied
-      (``benchmarks/joint_centre_stated_sd.py``; ``tests/test_pose_noise_pull_stated.py``).
+      (:mod:`jointbench.estimators.pose_noise`), is not added. On small swings SCoRE's answers
+      lie a good part of their scatter's SD along the pull, which the scatter's SD alone does
+      not hold (``benchmarks/joint_centre_stated_sd.py`` counts them beyond 3 SDs;
+      ``tests/test_pose_noise_pull_stated.py``).
 
     No warning is added where the verdict has already refused the data. A result without a
     finite centre is returned as it is; one that states no covariance gets no SD, and one
