@@ -33,11 +33,12 @@ def _near_hinge(seed: int, *, flexion_deg=40.0, other_deg=4.0, noise_mm=0.5) -> 
 @pytest.mark.xfail(
     strict=True,
     reason="a step to the spheres' centre under MIN_REJECTED_STEP_MM is not reported, "
-    "however many SDs it is: SCoRE reads ok 3.1 mm off with an SD of 0.51 mm",
+    "however many SDs it is: SCoRE reads ok 3.1 mm off with an SD of 0.51 mm (4 deg), "
+    "7.4 mm off with an SD of 1.05 mm and a score test at p < 1e-3 (2 deg)",
 )
-@pytest.mark.parametrize("seed", [1, 3])
-def test_an_ok_score_centre_of_a_near_hinge_lies_within_three_of_its_sds(seed):
-    result = jointbench.fit_center(_near_hinge(seed), "SCoRE")
+@pytest.mark.parametrize("other_deg, seed", [(4.0, 1), (4.0, 3), (2.0, 26)])
+def test_an_ok_score_centre_of_a_near_hinge_lies_within_three_of_its_sds(other_deg, seed):
+    result = jointbench.fit_center(_near_hinge(seed, other_deg=other_deg), "SCoRE")
     sd = float(result.diagnostics["center_sd_mm"])
     error = float(np.linalg.norm(result.center - JOINT))
     assert result.status != "ok" or error <= 3.0 * sd, (result.status, error, sd)
