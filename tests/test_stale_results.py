@@ -525,6 +525,13 @@ CONFIG_EDITS = (
         {"simulate_cmc", "render_cmc"},
         {"simulate_hinge", "simulate_hip"},
     ),
+    # The comparison's note says over how many seeds the verdicts are judged.
+    _config_edit(
+        "the verdicts' seeds",
+        _set("verdicts.seeds", 7),
+        {"check_published"},
+        DATA_JOBS | _jobs("collect"),
+    ),
     _config_edit(
         "one estimator's options",
         _set("studies.cmc.options.BC.tol_x", 1e-3),

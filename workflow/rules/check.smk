@@ -23,6 +23,8 @@ rule check_published:
         code=script_code("check_published"),
         settings={study: config["studies"][study] for study in STUDIES},
         base_seed=config.get("base_seed"),
+        # The comparison's note names the number of seeds the verdicts are judged over.
+        verdict_seeds=jb_config.verdict_seeds(config),
     message:
         "check: every published value and claim against this run"
     script:

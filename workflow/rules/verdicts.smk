@@ -2,7 +2,7 @@
 # each the papers' whole study grids from its own base seed (member 0 is the run's base_seed),
 # and tabulates per value and claim the share of seeds in which it reproduces
 # (jointbench.ensembles.members). K is `verdicts: {seeds: K}` in the config.
-VERDICT_SEEDS = int(config.get("verdicts", {}).get("seeds", 1))
+VERDICT_SEEDS = jb_config.verdict_seeds(config)
 VERDICT_STUDIES = [study for study in STUDIES if papers_of_study(study)]
 MEMBER = "results/verdicts/{study}/member-{member}.csv"
 

@@ -25,7 +25,7 @@ import yaml
 
 from jointbench.comparison.published_types import entry_problem, is_number, length_problem
 from jointbench.comparison.tolerance import describe, evaluate, is_compared
-from jointbench.configuration.config import read_yaml, validate_against
+from jointbench.configuration.config import read_yaml, validate_against, verdict_seeds
 from jointbench.jobs import require_declared
 
 if TYPE_CHECKING:  # the papers import this module
@@ -381,10 +381,9 @@ def run_basis(config: Mapping, studies: Sequence[str]) -> str:
     reproduced in one seed may not be in others."""
     trials = ", ".join(f"{study} {config['studies'][study]['trials']}" for study in studies)
     trials = trials or "(no study compared)"
-    seeds = config.get("verdicts", {}).get("seeds", 1)
     return (
         f"Every status is this run's: one base seed ({config['base_seed']}), trials per "
-        f"condition {trials}. How often each holds over {seeds} base seeds: "
+        f"condition {trials}. How often each holds over {verdict_seeds(config)} base seeds: "
         "results/tables/verdicts.md (`snakemake -j2 verdicts`)"
     )
 

@@ -51,6 +51,7 @@ __all__ = [
     "study_names",
     "validate_against",
     "validate_config",
+    "verdict_seeds",
 ]
 
 SCHEMA_PATH = resources.files("jointbench.schemas").joinpath("config.schema.yaml")
@@ -1013,6 +1014,12 @@ def study_names(config: Mapping) -> list[str]:
     and the comparison's rows; the order in which the config lists the studies, or the
     extensions, means nothing."""
     return [name for name, study in config["studies"].items() if study.get("enabled", True)]
+
+
+def verdict_seeds(config: Mapping) -> int:
+    """K, the base seeds ``snakemake verdicts`` judges every published value and claim over
+    (the config's ``verdicts.seeds``, 1 where it is not set)."""
+    return int(config.get("verdicts", {}).get("seeds", 1))
 
 
 def conditions(config: Mapping, study: str) -> list[dict[str, object]]:
