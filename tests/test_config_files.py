@@ -694,3 +694,49 @@ def test_a_study_name_the_schema_refuses_names_the_file_that_wrote_it(tmp_path):
     assert message.endswith(f"(set in {second})"), message
     # Its name is the mistake, not where the study comes from.
     assert "not a built-in study" not in message, message
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("'': 1\n'': 2\n", "'' is given twice, at lines 1 and 2"),
+        ('"": 1\n"": 2\n', "'' is given twice, at lines 1 and 2"),
+        ("studies:\n  '': 1\n  ' ': 2\n  ' ': 3\n", "studies.' ' is given twice, at lines 3 and 4"),
+        ("'':\n  '': {a: 1, a: 2}\n", "''.''.a is given twice on line 2"),
+        ("'':\n  trials: 010\n", "config file {}: ''.trials at line 2: 010 is read as 8"),
+        ('{"": 1, "": 2}', "'' is given twice in one object (the key '')"),
+    ],
+    ids=["single quotes", "double quotes", "blank", "under a blank key", "octal", "json"],
+)
+def test_a_blank_key_is_named_so_a_reader_can_find_it(tmp_path, text, words):
+    path = tmp_path / "mine.yaml"
+    path.write_text(text)
+    assert words.format(path) in _refused(path)
+
+
+def _study_name_refused(tmp_path: Path, text: str) -> str:
+    first, second = _overlays(tmp_path, text)
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config_files([DEFAULT, first, second])
+    return str(raised.value)
+
+
+STUDY = "{trials: 4, grid: {noise_mm: [0.5]}, estimators: [NM]}"
+
+
+@pytest.mark.parametrize("name", ["knee.v2", "knee-v2", "knee v2", "2knee", "_knee"])
+@pytest.mark.parametrize("extensions", ["", "extensions: [lab_study.py]\n"], ids=["", "extension"])
+def test_a_study_name_no_study_may_have_is_named_with_the_rule_and_its_file(
+    tmp_path, name, extensions
+):
+    message = _study_name_refused(tmp_path, f"{extensions}studies: {{'{name}': {STUDY}}}\n")
+    assert f"config error at studies: {name!r} does not match" in message, message
+    # What a name may be, in words; not an unknown study, which any name would then be.
+    assert "a study's name is a letter, then letters, digits or underscores" in message, message
+    assert "unknown studies" not in message and "not a built-in" not in message, message
+    assert message.endswith(f"(set in {tmp_path / 'b.yaml'})"), message
+
+
+def test_a_study_name_that_may_be_one_but_is_not_registered_is_named_unknown(tmp_path):
+    message = _study_name_refused(tmp_path, f"studies: {{knee_v2: {STUDY}}}\n")
+    assert "config error at studies: unknown studies ['knee_v2']" in message, message

@@ -122,7 +122,7 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
         raise SchemaError(
-            f"{what} error at {where}: {error.message}",
+            f"{what} error at {where}: {error.message}{_name_rule(error)}",
             _at_fault(error),
             of_name=_of_name(error),
         ) from None
@@ -148,6 +148,14 @@ def _of_name(error) -> bool:
     return "propertyNames" in error.absolute_schema_path
 
 
+def _name_rule(error) -> str:
+    """``: `` and what a name may be, the ``description`` of the ``propertyNames`` schema that
+    refuses a key's name in the jsonschema ``error`` (a pattern alone says it to few readers);
+    else nothing."""
+    rule = error.schema.get("description") if isinstance(error.schema, Mapping) else None
+    return f": {rule}" if rule and _of_name(error) else ""
+
+
 def _is_integer(_checker: object, instance: object) -> bool:
     """JSON Schema's ``integer``, of Python's ``int`` alone: not ``True``, nor ``3.0``."""
     return isinstance(instance, int) and not isinstance(instance, bool)
@@ -163,7 +171,8 @@ def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCH
 def check_schema(config: Mapping) -> None:
     """``config`` against its schema (:func:`validate_against`), a study not registered named
     first: an overlay's misspelt study (``studies: {cmx: {trials: 5}}``) is a study without a
-    grid to the schema, but the mistake is its name. With ``extensions`` listed, a study may be
+    grid to the schema, but the mistake is its name. Before it, a name no study may have
+    (``knee.v2``), with what a name may be: registering one would not mend it. With ``extensions`` listed, a study may be
     theirs, and none is imported from a config that fails the schema: the schema's error is
     given, saying which studies are not built in. ``ValueError`` in one line naming the key.
 
@@ -173,22 +182,23 @@ def check_schema(config: Mapping) -> None:
     if not isinstance(studies, Mapping):
         validate_against(config, SCHEMA_PATH, "config")
         return
-    if not config.get("extensions"):
-        _check_studies_registered(config)
-        validate_against(config, SCHEMA_PATH, "config")
-        return
     try:
         validate_against(config, SCHEMA_PATH, "config")
     except SchemaError as error:
         unknown = _unknown_studies(config)
-        # A name the schema refuses is the mistake, wherever the study would come from.
+        # A name the schema refuses is the mistake, wherever the study would come from, and
+        # whether or not one is registered: no study may have it.
         if not unknown or error.of_name:
             raise
+        if not config.get("extensions"):
+            _check_studies_registered(config)
         raise SchemaError(
             f"{error} ({', '.join(map(repr, unknown))} is not a built-in study: built in are "
             f"{', '.join(registered_studies())}; another must come from the extensions)",
             error.path,
         ) from None
+    if not config.get("extensions"):
+        _check_studies_registered(config)
 
 
 def _unknown_studies(config: Mapping) -> list[str]:
@@ -546,7 +556,7 @@ class _Place:
         return _Place(self.where, (*self.keys, key), line)
 
     def __str__(self) -> str:
-        keys = ".".join(map(str, self.keys)) or "(top level)"
+        keys = ".".join(map(declared.key_name, self.keys)) or "(top level)"
         return f"{self.where}: {keys} at line {self.line}"
 
 
@@ -634,8 +644,8 @@ def _twice(keys: tuple, first: tuple[int, str, object], then: tuple[int, str, ob
             "holds as one key)"
         )
     return (
-        f"{'.'.join(map(str, (*keys, name)))} is given {where}{written}: YAML keeps the last "
-        "alone; keep one"
+        f"{'.'.join(map(declared.key_name, (*keys, name)))} is given {where}{written}: YAML "
+        "keeps the last alone; keep one"
     )
 
 
