@@ -27,11 +27,18 @@ import pandas as pd
 
 from jointbench import declared
 from jointbench.comparison.published import load_published
-from jointbench.configuration.config import ConfigError, read_yaml
+from jointbench.configuration.config import (
+    ConfigError,
+    named_overlays,
+    read_yaml,
+    sources_named,
+    study_names,
+)
 from jointbench.ensembles.members import _member_config, collect_member, judge
 from jointbench.ensembles.verdicts import TESTED, quantities_of, seed_verdict, share_columns
 from jointbench.figures.paper_a import condition_means
 from jointbench.figures.paper_c import calibration_table
+from jointbench.papers import papers_of_study
 from jointbench.resultfiles.tables import markdown_table, write_tables
 from jointbench.simulate import cmc, hinge_study, hip
 from jointbench.simulate.prior import Prior, default_values, draw_values
@@ -44,6 +51,7 @@ __all__ = [
     "SUMMARY_COLUMNS",
     "depends_most_on",
     "draw_seed",
+    "ensembles",
     "member_names",
     "member_protocol",
     "member_values",
@@ -107,6 +115,24 @@ def member_values(base_seed: int, study: str, member: str) -> dict[str, float]:
     if member.startswith(DRAW_PREFIX) and member[len(DRAW_PREFIX) :].isdigit():
         return draw_values(prior, draw_seed(base_seed, study, int(member[len(DRAW_PREFIX) :])))
     raise ValueError(f"member {member!r} of {study!r} is neither {DEFAULT!r} nor 'draw-<k>'")
+
+
+def ensembles(
+    config: Mapping, sources: Sequence[tuple[str, Mapping]], base: str | Path = "."
+) -> tuple[dict[str, Mapping], dict[str, list[str]]]:
+    """``(overlays, members)`` of a run of the opened ``config``: each named protocol's config
+    overlay by name (:func:`~jointbench.configuration.config.named_overlays`, relative to
+    ``base``) and the members of each switched-on study's ensemble in the config's order
+    (:func:`member_names`), of the studies with a prior and a paper whose values it judges;
+    where none has, no overlay is read. A mistake names the ``sources`` (``(name, document)``)
+    that set its keys (:func:`~jointbench.configuration.config.sources_named`). The workflow
+    and ``jointbench fit --configfile`` read a config's named protocols so alike."""
+    studies = [s for s in study_names(config) if s in PRIORS and papers_of_study(s)]
+    draws = int(config.get("sensitivity", {}).get("draws", 1))
+    with sources_named(sources):
+        overlays = named_overlays(config, base) if studies else {}
+        members = {study: member_names(study, draws, overlays) for study in studies}
+    return overlays, members
 
 
 def member_names(study: str, draws: int, overlays: Mapping[str, Mapping]) -> list[str]:
