@@ -37,7 +37,7 @@ from jointbench.comparison.snapshot import (
     update_readme,
 )
 from jointbench.configuration.config import open_sources, read_sources, study_names
-from jointbench.ensembles.sensitivity import ensembles
+from jointbench.ensembles.named import ensembles
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
@@ -97,7 +97,7 @@ def _open_run(args: argparse.Namespace) -> Mapping:
     """The run's config, as the workflow opens it: the repository's config and each
     ``--configfile`` over it, checked against the schema, then extensions loaded (relative to
     the working directory), the rest checked and its named protocols read
-    (:func:`~jointbench.ensembles.sensitivity.ensembles`); returns it."""
+    (:func:`~jointbench.ensembles.named.ensembles`); returns it."""
     if not DEFAULT_CONFIG.is_file():
         # Said in full: `fit` is often run outside the run's folder, where this is not obvious.
         raise ValueError(

@@ -3,7 +3,7 @@
 # default protocol, in N protocols drawn from the prior (`sensitivity: {draws: N}`) and in each
 # named protocol (`sensitivity: {named: {name: overlay}}`), every one from the run's base seed.
 from jointbench.figures.sensitivity import FIGURES as SENSITIVITY_FIGURES
-from jointbench.ensembles.sensitivity import DEFAULT, DRAW_PREFIX, ensembles
+from jointbench.ensembles.named import DEFAULT, DRAW_PREFIX, ensembles
 
 SENSITIVITY = config.get("sensitivity", {})
 SENSITIVITY_NAMED = dict(SENSITIVITY.get("named", {}))
