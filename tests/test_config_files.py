@@ -814,8 +814,9 @@ def test_a_config_value_left_as_text_is_refused_saying_so_and_how_to_write_a_num
         ("studies={cmc: {trials: 010}}", "cmc.trials at line 1: 010 is read as 8"),
         ("studies={cmc: {trials: 3, trials: 4}}", "cmc.trials is given twice on line 1"),
         ("studies={cmc: {options: {NM: {tol: 1e-3}}}}", "write it as 1.0e-3"),
+        ("studies={cmc: {trials: !!int seven}}", "seven is tagged as a number (int), and is none"),
     ],
-    ids=["octal", "twice", "exponent"],
+    ids=["octal", "twice", "exponent", "no such integer"],
 )
 def test_a_config_value_read_otherwise_than_written_in_a_mapping_is_refused(entry, words):
     with pytest.raises(ValueError) as raised:
@@ -852,3 +853,16 @@ def test_dry_run_refuses_a_config_value_left_as_text_saying_so(tmp_path):
     code, message = _dry_run(tmp_path / "wf", "--config", "studies={cmc: {trials: 7 trials}}")
     assert code != 0 and "Job stats" not in message, message[-2000:]
     assert "(set in --config, as the text '7 trials':" in message, message[-2000:]
+
+
+@pytest.mark.parametrize(
+    ("written", "tag"), [("!!int seven", "int"), ("!!float abc", "float"), ("!!int 1.5", "int")]
+)
+def test_a_value_tagged_as_a_number_that_is_none_is_refused_naming_the_key(tmp_path, written, tag):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    trials: {written}\n")
+    message = _refused(path)
+    value = written.split()[1]
+    assert f"studies.cmc.trials at line 3: {value} is tagged as a number ({tag}), and is none" in (
+        message
+    ), message

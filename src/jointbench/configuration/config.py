@@ -675,7 +675,7 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
     if id(node) in checked:
         return
     if isinstance(node, yaml.ScalarNode):
-        problem = _number_problem(node) or _date_problem(node)
+        problem = _tag_problem(node) or _number_problem(node) or _date_problem(node)
         if problem:
             raise ValueError(f"{place}: {problem}")
     elif isinstance(node, yaml.SequenceNode):
@@ -735,6 +735,23 @@ def _twice(keys: tuple, first: tuple[int, str, object], then: tuple[int, str, ob
         f"{'.'.join(map(declared.key_name, (*keys, name)))} is given {where}{written}: YAML "
         "keeps the last alone; keep one"
     )
+
+
+def _tag_problem(node: yaml.ScalarNode) -> str | None:
+    """Why the scalar ``node``, tagged as a number (``!!int seven``, ``!!float abc``, ``!!int
+    1.5``), is none, or None: the reader fails on it in Python's words alone (``could not
+    convert string to float``), naming neither the file nor the key."""
+    if node.tag not in (_INTEGER, _FLOAT):
+        return None
+    try:
+        yaml.constructor.SafeConstructor().construct_object(node)
+    except ValueError:
+        kind = node.tag.rpartition(":")[2]
+        return (
+            f"{node.value} is tagged as a number ({kind}), and is none; write the number in "
+            "decimal digits, or leave the tag out if text is meant"
+        )
+    return None
 
 
 def _date_problem(node: yaml.ScalarNode) -> str | None:
