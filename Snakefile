@@ -60,12 +60,17 @@ invocation.check_options(sys.argv[1:])
 # each --configfile, then the --config values. Every later check of the config names them too
 # (jb_config.sources_named).
 _GIVEN_FILES = list(workflow.config_settings.configfiles)
-jb_config.check_config_values(workflow.config_settings.config_args or [])
+_CONFIG_ARGS = workflow.config_settings.config_args or []
+jb_config.check_config_values(_CONFIG_ARGS)
+# Snakemake leaves text each value of a --config mapping or list ({trials: 7} gives '7'): each
+# is read as a config file holding it would be, and the config holds it so.
+CONFIG_VALUES = jb_config.config_values(_CONFIG_ARGS, workflow.config_settings.config)
+config.update(jb_config.merged_sources([("", config), ("", CONFIG_VALUES)]))
 CONFIG_SOURCES = [
     *jb_config.read_sources(
         [f for f in workflow.configfiles if f not in _GIVEN_FILES] + _GIVEN_FILES
     ),
-    ("--config", dict(workflow.config_settings.config)),
+    (jb_config.CONFIG_VALUES, CONFIG_VALUES),
 ]
 jb_config.check_sources(config, CONFIG_SOURCES)
 

@@ -6,6 +6,7 @@ import argparse
 import io
 import json
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -511,8 +512,8 @@ def _toy_run(tmp_path):
 
     for name in ("toy_study.py", "paper_t.yaml", "toy.yaml"):
         (tmp_path / name).write_text((ROOT / "tests" / "data" / "fourth_study" / name).read_text())
-    (tmp_path / "config").mkdir()
-    (tmp_path / "config" / "config.yaml").write_text((ROOT / "config" / "config.yaml").read_text())
+    # The whole of config/: its config names the named protocols' overlays beside it.
+    shutil.copytree(ROOT / "config", tmp_path / "config")
     (tmp_path / "results" / "collected").mkdir(parents=True)
     (tmp_path / "results" / "tables").mkdir()
     pd.DataFrame(
@@ -883,3 +884,48 @@ def test_a_mistake_of_a_second_configfile_under_an_odd_key_names_that_file(
     assert code == 2
     assert "config: studies.hinge.protocol.knee.v2, b.n_frames: must be" in err, err
     assert "(set in b.yaml)" in err, err
+
+
+# A config file naming a protocol of the sensitivity ensembles, and what `fit` says of it: the
+# same as the workflow, which reads every named protocol's overlay as it starts.
+NAMED_PROTOCOLS = {
+    "missing": ("sensitivity: {named: {mine: absent.yaml}}\n", None, "absent.yaml): no such file"),
+    "refused": (
+        "sensitivity: {named: {mine: bad.yaml}}\n",
+        "studies: {cmc: {trials: 0}}\n",
+        "(bad.yaml): config error at studies/cmc/trials: 0 is less than the minimum of 1",
+    ),
+    "named as the default": (
+        "sensitivity: {named: {default: bad.yaml}}\n",
+        "studies: {cmc: {protocol: {n_frames: 100}}}\n",
+        "named protocol 'default' takes the name of a default or drawn one",
+    ),
+}
+
+
+@pytest.mark.parametrize("kind", NAMED_PROTOCOLS)
+def test_fit_reads_the_named_protocols_as_the_workflow_does(tmp_path, monkeypatch, capsys, kind):
+    monkeypatch.chdir(tmp_path)
+    shutil.copytree(ROOT / "config", tmp_path / "config")
+    text, overlay, words = NAMED_PROTOCOLS[kind]
+    (tmp_path / "mine.yaml").write_text(text)
+    if overlay is not None:
+        (tmp_path / "bad.yaml").write_text(overlay)
+    code, _, err = run(capsys, "fit", "markers.csv", "--configfile", "mine.yaml")
+    assert code == 2, err
+    assert words in err and "set in mine.yaml)" in err, err
+
+
+def test_fit_reads_no_named_protocol_where_no_study_runs_an_ensemble(tmp_path, monkeypatch, capsys):
+    """As the workflow, which reads them for the studies with a sensitivity ensemble alone."""
+    monkeypatch.chdir(tmp_path)
+    shutil.copytree(ROOT / "config", tmp_path / "config")
+    (tmp_path / "mine.yaml").write_text(
+        "sensitivity: {named: {mine: absent.yaml}}\n"
+        "studies: {cmc: {enabled: false}, hinge: {enabled: false}, hip: {enabled: false}}\n"
+    )
+    markers, _ = sphere_markers()
+    long_table(markers).to_csv(tmp_path / "markers.csv", index=False)
+    arguments = ["markers.csv", "--configfile", "mine.yaml", "--format", "csv"]
+    code, _, err = run(capsys, "fit", *arguments)
+    assert code == 0, err

@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
+from snakemake.cli import parse_config
 from workflow_copy import ROOT, copy_workflow, run_snakemake
 
 from jointbench import declared
@@ -694,3 +696,173 @@ def test_a_study_name_the_schema_refuses_names_the_file_that_wrote_it(tmp_path):
     assert message.endswith(f"(set in {second})"), message
     # Its name is the mistake, not where the study comes from.
     assert "not a built-in study" not in message, message
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("'': 1\n'': 2\n", "'' is given twice, at lines 1 and 2"),
+        ('"": 1\n"": 2\n', "'' is given twice, at lines 1 and 2"),
+        ("studies:\n  '': 1\n  ' ': 2\n  ' ': 3\n", "studies.' ' is given twice, at lines 3 and 4"),
+        ("'':\n  '': {a: 1, a: 2}\n", "''.''.a is given twice on line 2"),
+        ("'':\n  trials: 010\n", "config file {}: ''.trials at line 2: 010 is read as 8"),
+        ('{"": 1, "": 2}', "'' is given twice in one object (the key '')"),
+    ],
+    ids=["single quotes", "double quotes", "blank", "under a blank key", "octal", "json"],
+)
+def test_a_blank_key_is_named_so_a_reader_can_find_it(tmp_path, text, words):
+    path = tmp_path / "mine.yaml"
+    path.write_text(text)
+    assert words.format(path) in _refused(path)
+
+
+def _study_name_refused(tmp_path: Path, text: str) -> str:
+    first, second = _overlays(tmp_path, text)
+    with pytest.raises(ValueError) as raised:
+        study_config.open_config_files([DEFAULT, first, second])
+    return str(raised.value)
+
+
+STUDY = "{trials: 4, grid: {noise_mm: [0.5]}, estimators: [NM]}"
+
+
+@pytest.mark.parametrize("name", ["knee.v2", "knee-v2", "knee v2", "2knee", "_knee"])
+@pytest.mark.parametrize("extensions", ["", "extensions: [lab_study.py]\n"], ids=["", "extension"])
+def test_a_study_name_no_study_may_have_is_named_with_the_rule_and_its_file(
+    tmp_path, name, extensions
+):
+    message = _study_name_refused(tmp_path, f"{extensions}studies: {{'{name}': {STUDY}}}\n")
+    assert f"config error at studies: {name!r} does not match" in message, message
+    # What a name may be, in words; not an unknown study, which any name would then be.
+    assert "a study's name is a letter, then letters, digits or underscores" in message, message
+    assert "unknown studies" not in message and "not a built-in" not in message, message
+    assert message.endswith(f"(set in {tmp_path / 'b.yaml'})"), message
+
+
+def test_a_study_name_that_may_be_one_but_is_not_registered_is_named_unknown(tmp_path):
+    message = _study_name_refused(tmp_path, f"studies: {{knee_v2: {STUDY}}}\n")
+    assert "config error at studies: unknown studies ['knee_v2']" in message, message
+
+
+def _config_values(*entries: str) -> dict:
+    """The ``--config`` values ``entries`` as the workflow reads them: Snakemake's reading,
+    each number in a mapping or list read as one."""
+    return study_config.config_values(entries, parse_config(list(entries)))
+
+
+def _opened_with(values: dict) -> Mapping:
+    sources = [*study_config.read_sources([DEFAULT]), ("--config", values)]
+    with study_config.sources_named(sources):
+        return study_config.open_config(study_config.merged_sources(sources))
+
+
+@pytest.mark.parametrize(
+    ("entry", "path", "value"),
+    [
+        ("studies={cmc: {protocol: {n_frames: 700}}}", ("cmc", "protocol", "n_frames"), 700),
+        ('studies={"cmc": {"trials": 7}}', ("cmc", "trials"), 7),
+        ("studies={hinge: {protocol: {knee: {noise_sd_mm: 0.5}}}}", ("hinge", "protocol"), None),
+        ("studies={cmc: {enabled: false}}", ("cmc", "enabled"), False),
+        ("studies={cmc: {grid: {noise_mm: [0.5, 1]}}}", ("cmc", "grid", "noise_mm"), [0.5, 1]),
+        ("studies={hip: {grid: {n_frames: [8, 16]}}}", ("hip", "grid", "n_frames"), [8, 16]),
+    ],
+    ids=["protocol", "json", "nested protocol", "boolean", "list", "ints"],
+)
+def test_a_number_written_in_a_config_value_is_checked_as_that_number(entry, path, value):
+    values = _config_values(entry)
+    opened = _opened_with(values)
+    found = opened["studies"]
+    for key in path:
+        found = found[key]
+    if value is not None:
+        assert found == value and type(found) is type(value), found
+    else:
+        assert found["knee"]["noise_sd_mm"] == 0.5, found
+
+
+def test_config_values_given_twice_keep_the_last_as_written():
+    values = _config_values("studies={cmc: {trials: 3}}", "studies={hip: {trials: '4'}}")
+    assert values == {"studies": {"cmc": {"trials": 3}, "hip": {"trials": "4"}}}
+    values = _config_values("studies={cmc: {trials: 3}}", "studies={cmc: {trials: '5'}}")
+    assert values == {"studies": {"cmc": {"trials": "5"}}}
+    assert _config_values("base_seed=3", "base_seed=text") == {"base_seed": "text"}
+    assert _config_values("verdicts={seeds: 2}", "verdicts=") == {"verdicts": None}
+
+
+@pytest.mark.parametrize(
+    ("entry", "text"),
+    [
+        ("base_seed=7mm", "7mm"),
+        ("studies={cmc: {trials: '7'}}", "7"),
+        ("studies={cmc: {protocol: {n_frames: 700 frames}}}", "700 frames"),
+        ("studies={hinge: {protocol: {knee: {noise_sd_mm: '0.5'}}}}", "0.5"),
+        ("studies={cmc: {grid: {noise_mm: [0.5, '1.0']}}}", "1.0"),
+    ],
+    ids=["unit", "quoted", "unit in a mapping", "quoted in a protocol", "quoted in a list"],
+)
+def test_a_config_value_left_as_text_is_refused_saying_so_and_how_to_write_a_number(entry, text):
+    with pytest.raises(ValueError) as raised:
+        _opened_with(_config_values(entry))
+    message = str(raised.value)
+    assert f"(set in --config, as the text {text!r}:" in message, message
+    assert "a number is read from --config where it is written alone, unquoted" in message
+
+
+@pytest.mark.parametrize(
+    ("entry", "words"),
+    [
+        ("studies={cmc: {trials: 010}}", "cmc.trials at line 1: 010 is read as 8"),
+        ("studies={cmc: {trials: 3, trials: 4}}", "cmc.trials is given twice on line 1"),
+        ("studies={cmc: {options: {NM: {tol: 1e-3}}}}", "write it as 1.0e-3"),
+        ("studies={cmc: {trials: !!int seven}}", "seven is tagged as a number (int), and is none"),
+    ],
+    ids=["octal", "twice", "exponent", "no such integer"],
+)
+def test_a_config_value_read_otherwise_than_written_in_a_mapping_is_refused(entry, words):
+    with pytest.raises(ValueError) as raised:
+        _config_values(entry)
+    assert str(raised.value).startswith(f"--config {entry}: "), raised.value
+    assert words in str(raised.value), raised.value
+
+
+def test_a_text_value_that_is_no_number_is_named_as_before():
+    with pytest.raises(ValueError) as raised:
+        _opened_with(_config_values("studies={cmc: {estimators: [NM, XX]}}"))
+    assert "as the text" not in str(raised.value), raised.value
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["--config", "studies={cmc: {protocol: {n_frames: 700}}, hip: {trials: 5}}"],
+        ["--config", "verdicts={seeds: 3}", "base_seed=7"],
+        ["--profile", "mine"],
+    ],
+    ids=["mapping", "two values", "profile"],
+)
+def test_dry_run_reads_a_number_in_a_config_mapping_as_the_number(tmp_path, arguments):
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "config.yaml").write_text('config:\n  - "studies={cmc: {trials: 7}}"\n')
+    if arguments[0] == "--profile":
+        arguments = ["--profile", str(tmp_path / "mine")]
+    code, message = _dry_run(tmp_path / "wf", *arguments)
+    assert code == 0 and "Job stats" in message, message[-2000:]
+
+
+def test_dry_run_refuses_a_config_value_left_as_text_saying_so(tmp_path):
+    code, message = _dry_run(tmp_path / "wf", "--config", "studies={cmc: {trials: 7 trials}}")
+    assert code != 0 and "Job stats" not in message, message[-2000:]
+    assert "(set in --config, as the text '7 trials':" in message, message[-2000:]
+
+
+@pytest.mark.parametrize(
+    ("written", "tag"), [("!!int seven", "int"), ("!!float abc", "float"), ("!!int 1.5", "int")]
+)
+def test_a_value_tagged_as_a_number_that_is_none_is_refused_naming_the_key(tmp_path, written, tag):
+    path = tmp_path / "mine.yaml"
+    path.write_text(f"studies:\n  cmc:\n    trials: {written}\n")
+    message = _refused(path)
+    value = written.split()[1]
+    assert f"studies.cmc.trials at line 3: {value} is tagged as a number ({tag}), and is none" in (
+        message
+    ), message

@@ -36,7 +36,8 @@ from jointbench.comparison.snapshot import (
     snapshot_table,
     update_readme,
 )
-from jointbench.configuration.config import open_config_files, study_names
+from jointbench.configuration.config import open_sources, read_sources, study_names
+from jointbench.ensembles.named import ensembles
 from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
@@ -95,7 +96,8 @@ def _method_list() -> str:
 def _open_run(args: argparse.Namespace) -> Mapping:
     """The run's config, as the workflow opens it: the repository's config and each
     ``--configfile`` over it, checked against the schema, then extensions loaded (relative to
-    the working directory) and the rest checked; returns it."""
+    the working directory), the rest checked and its named protocols read
+    (:func:`~jointbench.ensembles.named.ensembles`); returns it."""
     if not DEFAULT_CONFIG.is_file():
         # Said in full: `fit` is often run outside the run's folder, where this is not obvious.
         raise ValueError(
@@ -103,7 +105,12 @@ def _open_run(args: argparse.Namespace) -> Mapping:
             "--configfile updates as snakemake's does, is read from the folder the run is in: "
             "run jointbench there"
         )
-    return open_config_files([DEFAULT_CONFIG, *args.configfile])
+    sources = read_sources([DEFAULT_CONFIG, *args.configfile])
+    config = open_sources(sources)
+    # Its named protocols, which a run under Snakemake reads as it starts: a mistake in one
+    # refuses the config here too.
+    ensembles(config, sources)
+    return config
 
 
 def _snapshot(args: argparse.Namespace) -> int:

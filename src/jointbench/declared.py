@@ -151,11 +151,21 @@ class DeclarationError(ValueError):
 
 
 def key(path: Sequence[str | int]) -> str:
-    """Dotted form of a path of keys, indices in brackets: ``directions.M[0]``."""
+    """Dotted form of a path of keys, indices in brackets: ``directions.M[0]``; a key a reader
+    would not see in it quoted (:func:`key_name`)."""
     text = ""
     for part in path:
-        text += f"[{part}]" if isinstance(part, int) else f".{part}" if text else str(part)
+        name = key_name(part)
+        text += f"[{part}]" if isinstance(part, int) else f".{name}" if text else name
     return text
+
+
+def key_name(name: object) -> str:
+    """The text of one key, ``name``, in a path of keys: as written, but quoted where it is
+    empty or begins or ends with a space (``''``, ``' a'``), which would leave nothing, or
+    nothing to see, between the dots a reader looks for it by."""
+    text = str(name)
+    return repr(text) if not text or text != text.strip() else text
 
 
 def keys(paths: Sequence[Sequence[str | int]]) -> str:

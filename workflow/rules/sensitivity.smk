@@ -3,24 +3,15 @@
 # default protocol, in N protocols drawn from the prior (`sensitivity: {draws: N}`) and in each
 # named protocol (`sensitivity: {named: {name: overlay}}`), every one from the run's base seed.
 from jointbench.figures.sensitivity import FIGURES as SENSITIVITY_FIGURES
-from jointbench.ensembles.sensitivity import DEFAULT, DRAW_PREFIX, PRIORS, member_names
+from jointbench.ensembles.named import DEFAULT, DRAW_PREFIX, ensembles
 
 SENSITIVITY = config.get("sensitivity", {})
-SENSITIVITY_STUDIES = [s for s in STUDIES if s in PRIORS and papers_of_study(s)]
-# Each named protocol's config overlay, read here to know which studies it sets: read and
-# checked once for all the studies, not once per study, and only where one has an ensemble.
 SENSITIVITY_NAMED = dict(SENSITIVITY.get("named", {}))
-# A mistake in one, or in its name, names the config file that named it.
-with jb_config.sources_named(CONFIG_SOURCES):
-    SENSITIVITY_OVERLAYS = (
-        jb_config.named_overlays(config) if SENSITIVITY_STUDIES else {}
-    )
-    SENSITIVITY_MEMBERS = {
-        study: member_names(
-            study, int(SENSITIVITY.get("draws", 1)), SENSITIVITY_OVERLAYS
-        )
-        for study in SENSITIVITY_STUDIES
-    }
+# Each named protocol's config overlay, read and checked once for all the studies with an
+# ensemble, and only where one has, and the members of each study's ensemble, as `jointbench
+# fit --configfile` reads them; a mistake names the config file that set it.
+SENSITIVITY_OVERLAYS, SENSITIVITY_MEMBERS = ensembles(config, CONFIG_SOURCES)
+SENSITIVITY_STUDIES = list(SENSITIVITY_MEMBERS)
 SENSITIVITY_FILES = {
     kind: [
         f"results/sensitivity/{study}/{member}{suffix}.csv"

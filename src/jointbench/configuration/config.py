@@ -26,6 +26,7 @@ from jointbench.running import timelimit
 from jointbench.simulate import KINDS, Study
 
 __all__ = [
+    "CONFIG_VALUES",
     "MAX_TRIALS",
     "ConfigError",
     "SchemaError",
@@ -36,11 +37,13 @@ __all__ = [
     "check_sources",
     "condition_id",
     "conditions",
+    "config_values",
     "estimator_names",
     "external_kind",
     "load_config",
     "open_config",
     "open_config_files",
+    "open_sources",
     "ordered_settings",
     "parse_condition_id",
     "read_config_file",
@@ -123,7 +126,7 @@ def validate_against(document: Mapping, schema_path: str | Path | Traversable, w
     except jsonschema.ValidationError as error:
         where = "/".join(map(str, error.absolute_path)) or "(top level)"
         raise SchemaError(
-            f"{what} error at {where}: {error.message}",
+            f"{what} error at {where}: {error.message}{_name_rule(error)}",
             _at_fault(error),
             of_name=_of_name(error),
         ) from None
@@ -149,6 +152,14 @@ def _of_name(error) -> bool:
     return "propertyNames" in error.absolute_schema_path
 
 
+def _name_rule(error) -> str:
+    """``: `` and what a name may be, the ``description`` of the ``propertyNames`` schema that
+    refuses a key's name in the jsonschema ``error`` (a pattern alone says it to few readers);
+    else nothing."""
+    rule = error.schema.get("description") if isinstance(error.schema, Mapping) else None
+    return f": {rule}" if rule and _of_name(error) else ""
+
+
 def _is_integer(_checker: object, instance: object) -> bool:
     """JSON Schema's ``integer``, of Python's ``int`` alone: not ``True``, nor ``3.0``."""
     return isinstance(instance, int) and not isinstance(instance, bool)
@@ -164,9 +175,11 @@ def validate_config(config: Mapping, schema_path: str | Path | Traversable = SCH
 def check_schema(config: Mapping) -> None:
     """``config`` against its schema (:func:`validate_against`), a study not registered named
     first: an overlay's misspelt study (``studies: {cmx: {trials: 5}}``) is a study without a
-    grid to the schema, but the mistake is its name. With ``extensions`` listed, a study may be
-    theirs, and none is imported from a config that fails the schema: the schema's error is
-    given, saying which studies are not built in. ``ValueError`` in one line naming the key.
+    grid to the schema, but the mistake is its name. Before it, a name no study may have
+    (``knee.v2``), with what a name may be: registering one would not mend it. With
+    ``extensions`` listed, a study may be theirs, and none is imported from a config that fails
+    the schema: the schema's error is given, saying which studies are not built in.
+    ``ValueError`` in one line naming the key.
 
     The workflow runs it before Snakemake's own validation, whose error leads with a dump of
     the schema; :func:`open_config` runs it first."""
@@ -174,22 +187,23 @@ def check_schema(config: Mapping) -> None:
     if not isinstance(studies, Mapping):
         validate_against(config, SCHEMA_PATH, "config")
         return
-    if not config.get("extensions"):
-        _check_studies_registered(config)
-        validate_against(config, SCHEMA_PATH, "config")
-        return
     try:
         validate_against(config, SCHEMA_PATH, "config")
     except SchemaError as error:
         unknown = _unknown_studies(config)
-        # A name the schema refuses is the mistake, wherever the study would come from.
+        # A name the schema refuses is the mistake, wherever the study would come from, and
+        # whether or not one is registered: no study may have it.
         if not unknown or error.of_name:
             raise
+        if not config.get("extensions"):
+            _check_studies_registered(config)
         raise SchemaError(
             f"{error} ({', '.join(map(repr, unknown))} is not a built-in study: built in are "
             f"{', '.join(registered_studies())}; another must come from the extensions)",
             error.path,
         ) from None
+    if not config.get("extensions"):
+        _check_studies_registered(config)
 
 
 def _unknown_studies(config: Mapping) -> list[str]:
@@ -217,7 +231,13 @@ def open_config_files(paths: Sequence[str | Path], base: str | Path = ".") -> Ma
     """The config of the files ``paths``, each over the ones before (:func:`read_sources`),
     opened as a run opens it (:func:`open_config`); an error at a key names the files that set
     it (:func:`sources_named`)."""
-    sources = read_sources(paths)
+    return open_sources(read_sources(paths), base)
+
+
+def open_sources(sources: Sequence[tuple[str, Mapping]], base: str | Path = ".") -> Mapping:
+    """The config ``sources`` (``(name, document)``, each over the ones before) make, opened as
+    a run opens it (:func:`open_config`); an error at a key names the sources that set it
+    (:func:`sources_named`)."""
     with sources_named(sources):
         return open_config(merged_sources(sources), base)
 
@@ -342,10 +362,43 @@ def sources_named(sources: Sequence[tuple[str, Mapping]]) -> Iterator[None]:
     try:
         yield
     except ConfigError as error:
-        named = _set_in([path for path in error.paths if path], sources, keyed=error.keyed)
+        paths = [path for path in error.paths if path]
+        named = _set_in(paths, sources, keyed=error.keyed)
         if not named:
             raise
-        raise ConfigError(f"{error} ({named})", error.paths) from None
+        raise ConfigError(
+            f"{error} ({named}{_given_as_text(paths, sources)})", error.paths
+        ) from None
+
+
+# A text that begins as a number does (a sign, a dot or a digit): a number meant, given as text.
+_NUMBER_START = re.compile(r"[-+]?\.?[0-9]")
+
+
+def _given_as_text(paths: Sequence[tuple], sources: Sequence[tuple[str, Mapping]]) -> str:
+    """``, as the text '7mm': ...``, how to write a number in ``--config``, where the value at
+    one of ``paths`` is the text of a number (:data:`_NUMBER_START`), or holds one, and the
+    ``--config`` values set it last: ``--config`` leaves text what is written in quotes or
+    with a unit (:func:`config_values`), which the refusal's own words do not tell from a
+    number. Else nothing."""
+    values = dict(sources).get(CONFIG_VALUES)
+    for path in paths:
+        setters = _setters(path, sources)
+        if values is None or not setters or setters[-1] != CONFIG_VALUES:
+            continue
+        value = _value_at(values, path)[1]
+        texts = [
+            item
+            for item in (value if isinstance(value, list) else [value])
+            if isinstance(item, str) and _NUMBER_START.match(item)
+        ]
+        if texts:
+            return (
+                f", as the text {texts[0]!r}: a number is read from --config where it is "
+                "written alone, unquoted and with no unit (--config base_seed=7, or "
+                "studies='{cmc: {trials: 7}}')"
+            )
+    return ""
 
 
 def _set_in(
@@ -413,6 +466,51 @@ def check_config_values(entries: Sequence[str]) -> None:
                 f"--config {entry}: {text} is read as {number!r}{also}; write the number in "
                 "decimal digits, with no leading 0 or underscore"
             )
+
+
+#: The name the config's sources give Snakemake's ``--config`` values (:func:`sources_named`).
+CONFIG_VALUES = "--config"
+
+
+def config_values(entries: Sequence[str], parsed: Mapping) -> dict:
+    """The ``--config`` values (``KEY=VALUE`` as typed, ``entries``) as a config file holding
+    them would be read: ``parsed``, Snakemake's reading of them, with each text in a mapping or
+    list that YAML reads as a number or true/false read so. Snakemake reads a mapping or list
+    value with YAML's base loader, which leaves every value in it text (``{trials: 7}`` gives
+    ``'7'``); a value alone it reads as a number itself, where it is one (``base_seed=7``).
+    A text written in quotes (``'7'``) or with a unit (``7mm``) stays text. ``ValueError``
+    beginning with the entry for one that reads otherwise than written (:func:`_read_as_written`:
+    ``010``, a key given twice, ``1e-3``, which YAML 1.1 reads as text). Each entry is read over
+    the ones before, mappings merged key by key, as Snakemake merges them."""
+    values: dict = {}
+    for entry in entries:
+        key, _, text = entry.partition("=")
+        # Snakemake drops the quotes around a value, and reads a mapping or list by YAML alone.
+        text = text.strip("'\"")
+        given = yaml.load(text, Loader=yaml.BaseLoader) if text else None
+        if isinstance(given, (Mapping, list)):
+            value = _numbers_read(given, _read_as_written(text, f"--config {entry}"))
+        else:
+            value = parsed.get(key)
+        values = _merged(values, {key: value})
+    return values
+
+
+def _numbers_read(given: object, read: object) -> object:
+    """``given``, a value as YAML's base loader reads it (mappings, lists and texts), with each
+    text that ``read``, the same value as the safe loader reads it, holds as a number or
+    true/false replaced by that."""
+    if isinstance(given, Mapping) and isinstance(read, Mapping):
+        # The base loader keeps keys as text; the safe loader reads 1: as the number 1.
+        keys = {str(key): key for key in read}
+        return {
+            key: _numbers_read(value, read.get(keys.get(key, key))) for key, value in given.items()
+        }
+    if isinstance(given, list) and isinstance(read, list) and len(given) == len(read):
+        return [_numbers_read(item, again) for item, again in zip(given, read, strict=True)]
+    if isinstance(given, str) and isinstance(read, (int, float)):
+        return read
+    return given
 
 
 def read_config_file(path: Path, where: str) -> Mapping:
@@ -547,7 +645,7 @@ class _Place:
         return _Place(self.where, (*self.keys, key), line)
 
     def __str__(self) -> str:
-        keys = ".".join(map(str, self.keys)) or "(top level)"
+        keys = ".".join(map(declared.key_name, self.keys)) or "(top level)"
         return f"{self.where}: {keys} at line {self.line}"
 
 
@@ -578,7 +676,7 @@ def _check_nodes(node: yaml.Node, place: _Place, holding: tuple, checked: set) -
     if id(node) in checked:
         return
     if isinstance(node, yaml.ScalarNode):
-        problem = _number_problem(node) or _date_problem(node)
+        problem = _tag_problem(node) or _number_problem(node) or _date_problem(node)
         if problem:
             raise ValueError(f"{place}: {problem}")
     elif isinstance(node, yaml.SequenceNode):
@@ -635,9 +733,26 @@ def _twice(keys: tuple, first: tuple[int, str, object], then: tuple[int, str, ob
             "holds as one key)"
         )
     return (
-        f"{'.'.join(map(str, (*keys, name)))} is given {where}{written}: YAML keeps the last "
-        "alone; keep one"
+        f"{'.'.join(map(declared.key_name, (*keys, name)))} is given {where}{written}: YAML "
+        "keeps the last alone; keep one"
     )
+
+
+def _tag_problem(node: yaml.ScalarNode) -> str | None:
+    """Why the scalar ``node``, tagged as a number (``!!int seven``, ``!!float abc``, ``!!int
+    1.5``), is none, or None: the reader fails on it in Python's words alone (``could not
+    convert string to float``), naming neither the file nor the key."""
+    if node.tag not in (_INTEGER, _FLOAT):
+        return None
+    try:
+        yaml.constructor.SafeConstructor().construct_object(node)
+    except ValueError:
+        kind = node.tag.rpartition(":")[2]
+        return (
+            f"{node.value} is tagged as a number ({kind}), and is none; write the number in "
+            "decimal digits, or leave the tag out if text is meant"
+        )
+    return None
 
 
 def _date_problem(node: yaml.ScalarNode) -> str | None:

@@ -25,16 +25,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from jointbench import declared
 from jointbench.comparison.published import load_published
-from jointbench.configuration.config import ConfigError, read_yaml
+from jointbench.configuration.config import read_yaml
 from jointbench.ensembles.members import _member_config, collect_member, judge
+from jointbench.ensembles.named import DEFAULT, DRAW_PREFIX, PRIORS, member_names
 from jointbench.ensembles.verdicts import TESTED, quantities_of, seed_verdict, share_columns
 from jointbench.figures.paper_a import condition_means
 from jointbench.figures.paper_c import calibration_table
 from jointbench.resultfiles.tables import markdown_table, write_tables
-from jointbench.simulate import cmc, hinge_study, hip
-from jointbench.simulate.prior import Prior, default_values, draw_values
+from jointbench.simulate.prior import default_values, draw_values
 
 __all__ = [
     "CURVES",
@@ -56,12 +55,6 @@ __all__ = [
     "write_summary",
 ]
 
-#: The prior of every study a protocol ensemble draws.
-PRIORS: dict[str, Prior] = {
-    prior.study: prior for prior in (cmc.PRIOR, hinge_study.PRIOR, hip.PRIOR)
-}
-DEFAULT = "default"
-DRAW_PREFIX = "draw-"
 DEPENDENCE_MEASURE = (
     "the choice whose draws split at its median give the largest difference in the share of "
     "draws reproducing the value (upper half minus lower half; the sign says which way)"
@@ -107,27 +100,6 @@ def member_values(base_seed: int, study: str, member: str) -> dict[str, float]:
     if member.startswith(DRAW_PREFIX) and member[len(DRAW_PREFIX) :].isdigit():
         return draw_values(prior, draw_seed(base_seed, study, int(member[len(DRAW_PREFIX) :])))
     raise ValueError(f"member {member!r} of {study!r} is neither {DEFAULT!r} nor 'draw-<k>'")
-
-
-def member_names(study: str, draws: int, overlays: Mapping[str, Mapping]) -> list[str]:
-    """Every member of ``study``'s ensemble: the default, ``draw-1`` to ``draw-<draws>`` and
-    each named member whose overlay (a config document, by name) sets ``study``'s protocol;
-    :class:`~jointbench.configuration.config.ConfigError` at ``sensitivity.named.<name>`` for
-    one named as the default or a draw."""
-    named = [
-        name
-        for name, overlay in overlays.items()
-        if "protocol" in ((overlay or {}).get("studies", {}).get(study) or {})
-    ]
-    for name in named:
-        if name == DEFAULT or name.startswith(DRAW_PREFIX):
-            at = ("sensitivity", "named", name)
-            raise ConfigError(
-                f"config: {declared.key(at)}: named protocol {name!r} takes the name of a "
-                "default or drawn one",
-                [at],
-            )
-    return [DEFAULT, *(f"{DRAW_PREFIX}{k}" for k in range(1, draws + 1)), *named]
 
 
 def _merged(base: Mapping, overrides: Mapping) -> dict:
