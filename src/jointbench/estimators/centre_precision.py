@@ -59,7 +59,7 @@ profiled out):
   off; with the bias, over 100 seeds per case, no ``ok`` answer of theirs is, nor of LS's
   on small caps (5 to 20 degrees, 0.5 and 1 mm), and their share beyond one SD (0.31 to
   0.52) is about that of IS (0.32 to 0.45), which ends at the spheres' centre and is
-  unchanged. Three ``ok`` NM and BC answers of 5
+  unchanged (``benchmarks/centre_stated_sd.py``). Three ``ok`` NM and BC answers of 5
   degree caps, 6.6 to 16 mm off, now read not determined: their SD with the step exceeds
   :data:`MAX_CENTER_SD_MM`.
 * Lack of fit: the radial residuals' sum of squares over ``s^2``, on ``P (N - 1)`` degrees of
