@@ -642,7 +642,9 @@ def test_a_virtual_marker_at_the_joint_does_not_unsettle_a_methods_answer(distan
     """A virtual marker at the joint (or at a point half a millimetre from it), beside markers
     that fix the centre well: its directions from a method's answer (not the true centre, which
     no method returns) are noise far beyond first order. It must not turn a well-determined
-    centre into an undetermined one, nor shrink the SD the other markers give."""
+    centre into an undetermined one, nor shrink the SD of the scatter the other markers give
+    (the SD stated adds a step to the spheres' centre where one is stated as a bias:
+    :func:`test_a_virtual_marker_at_the_joint_hides_no_step_bias`)."""
     rng = np.random.default_rng(21)
     body = np.vstack([BODY, [[distance_mm, 0.0, 0.0]]])
     for _ in range(12):
@@ -652,7 +654,32 @@ def test_a_virtual_marker_at_the_joint_does_not_unsettle_a_methods_answer(distan
             beside = registry.get("center", method)(markers)
             assert alone.status == "ok", alone.status
             assert beside.status == "ok", (method, beside.status)
-            assert beside.diagnostics["center_sd_mm"] >= 0.8 * alone.diagnostics["center_sd_mm"]
+            scatter = _numbers(markers, beside.center)[0]
+            assert scatter >= 0.8 * _numbers(markers[:, : len(BODY)], alone.center)[0]
+            assert beside.diagnostics["center_sd_mm"] >= scatter
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="with a virtual marker at (or 0.5 mm from) the joint the Gauss-Newton iterations "
+    "find no centre the spheres fit better than LS's answer in 1 (3) of 12 trials, which "
+    "then states no step bias and an SD of its scatter alone, half the SD stated without it",
+)
+@pytest.mark.parametrize("distance_mm", [0.0, 0.5])
+def test_a_virtual_marker_at_the_joint_hides_no_step_bias(distance_mm):
+    """LS's answer 1.5 to 2.6 of its scatter's SDs from the spheres' centre on a 30 degree cap
+    states that step as a bias (:func:`centre_precision.annotate_many`), and so it must beside
+    a virtual marker at the joint."""
+    rng = np.random.default_rng(21)
+    body = np.vstack([BODY, [[distance_mm, 0.0, 0.0]]])
+    hidden = 0
+    for _ in range(12):
+        markers = _cap(rng, 30.0, 0.5, body=body)
+        alone = registry.get("center", "LS")(markers[:, : len(BODY)])
+        beside = registry.get("center", "LS")(markers)
+        stated = "center_step_bias_mm" in alone.diagnostics
+        hidden += stated and "center_step_bias_mm" not in beside.diagnostics
+    assert hidden == 0
 
 
 def _sliding_cluster(rng, slide_mm: float) -> np.ndarray:
