@@ -1049,15 +1049,6 @@ def _pulled(noise: PoseNoise, result) -> np.ndarray:
     return pulled
 
 
-def _with_bias(scatter: np.ndarray, bias: np.ndarray | list | None) -> np.ndarray:
-    """The mean square ``(3, 3)`` [mm^2] of an error whose covariance about its mean is
-    ``scatter`` ``(3, 3)`` [mm^2] and whose mean is ``bias`` ``(3,)`` [mm] (``None``: none)."""
-    if bias is None:
-        return scatter
-    mean = np.asarray(bias, dtype=float)
-    return scatter + np.outer(mean, mean)
-
-
 def _largest_sd(covariance: np.ndarray) -> float:
     """The SD [mm] along the least determined direction of ``covariance`` ``(3, 3)`` [mm^2]:
     ``inf`` where it is not finite, NaN where no direction has a positive variance (no
