@@ -11,14 +11,18 @@ stated covariance implied 29, and the mean squared Mahalanobis distance was 4.2 
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 import jointbench
+from jointbench.estimators import centre_precision
 from jointbench.estimators.centre_precision import stated_covariance
+from jointbench.estimators.results import MAX_CENTER_SD_MM, JointCenterResult, stated_sd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from joint_centre_degenerate import circumduction, hinge, two_segments
@@ -73,3 +77,42 @@ def test_stated_covariance_adds_the_pull_outer_product() -> None:
     assert result.diagnostics["center_sd_mm"] == pytest.approx(
         np.sqrt(np.linalg.eigvalsh(stated)[-1]), rel=1e-12
     )
+
+
+@pytest.mark.parametrize(
+    ("rom_deg", "seed"), [(5.0, 64), (3.0, 35)], ids=["anchor share", "noise share"]
+)
+def test_a_warning_quotes_the_sd_the_answer_states(rom_deg: float, seed: int) -> None:
+    """An analytic answer whose SD is said not to hold, pulled within the pull's bound, quotes
+    the SD it states (``center_sd_mm``, the pull's outer product in it), not its scatter's."""
+    proximal, distal, _ = two_segments(
+        np.random.default_rng(seed), circumduction(rom_deg, 200), noise_mm=0.5
+    )
+    result = jointbench.fit_joint_center(proximal, distal, "analytic")
+    assert "center_pose_noise_bias_mm" in result.diagnostics
+    quoted = re.findall(r"its SD of ([^ ]+) mm would hold", result.status)
+    assert quoted == [f"{result.diagnostics['center_sd_mm']:.3g}"], result.status
+
+
+def test_an_sd_the_pull_takes_beyond_the_bound_is_said_not_determined(monkeypatch) -> None:
+    """A scatter's SD of 9.9 mm, within :data:`MAX_CENTER_SD_MM`, and a pull of 3 mm along
+    it, within its bound, state an SD of 10.3 mm: beyond the bound, which the status says, as
+    it would of a scatter's that large, so that no answer reads ``ok`` with an SD that every
+    output prints as not determined (:func:`jointbench.estimators.results.stated_sd`)."""
+    pulled = np.array([3.0, 0.0, 0.0])
+    monkeypatch.setattr(centre_precision, "pull_mm", lambda noise, centre: pulled)
+    result = JointCenterResult(
+        center=np.zeros(3),
+        covariance=np.diag([9.9**2, 1.0, 1.0]),
+        converged=True,
+        iterations=1,
+        status="ok",
+        method="gauss-markov-frame0",
+    )
+    verdict = SimpleNamespace(pose_noise=SimpleNamespace(share=0.01), warnings=())
+    (annotated,) = centre_precision.annotate_joint_centres([result], [verdict])
+    sd = annotated.diagnostics["center_sd_mm"]
+    assert sd == pytest.approx(np.hypot(9.9, 3.0))
+    assert stated_sd(annotated) is None
+    assert annotated.status != "ok"
+    assert f"is {sd:.3g} mm (above {MAX_CENTER_SD_MM:g} mm" in annotated.status

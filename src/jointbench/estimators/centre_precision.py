@@ -951,8 +951,11 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
       its bound and the SD is positive and finite: a bias of the answer that the scatter's
       covariance leaves out, added to it as its outer product, so that the SD reported, and
       :func:`stated_covariance`, are of the answer's error about the truth (mean square), not
-      of its scatter about where the noise pulled it. The bounds above are held to the
-      scatter's SD, as their constants say; where the pull reaches its bound the warning says
+      of its scatter about where the noise pulled it. The pull's bound is held to the
+      scatter's SD, as its constants say; :data:`MAX_CENTER_SD_MM` and the words of the SD's
+      warnings to the SD reported, so that no answer reads ``ok`` with an SD every output
+      prints as none, nor quotes another SD than it states. Where the pull reaches its bound
+      the warning says
       the SD is no statement of the precision, and the pull, an expansion to second order
       that overstates the mean error where the noise takes most of the rotation off a hinge
       (:mod:`jointbench.estimators.pose_noise`), is not added. On small swings SCoRE's answers
@@ -968,22 +971,12 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
     for t, (result, verdict) in enumerate(zip(results, verdicts, strict=True)):
         if not np.isfinite(result.center).all():
             continue
-        numbers, warnings = {}, []
-        sd = None
+        numbers, pulled_words = {}, []
+        covariance, sd = None, None
         stated = stated_covariance(result)
         if stated is not None:
             covariance, source = stated
             sd = _largest_sd(covariance)
-            numbers["center_sd_mm"] = sd
-            share = result.diagnostics.get("center_sd_noise_share", 0.0)
-            anchored = result.diagnostics.get("center_sd_anchor_share", 0.0)
-            if stated_center_sd(sd) is None:
-                warnings.append(_undetermined(sd, source))
-            elif not share < MAX_SD_NOISE_SHARE:
-                held = "the information the relative rotations of the poses hold on it"
-                warnings.append(_noisy_sd(share, sd, held))
-            elif not anchored < MAX_ANCHOR_SHARE:
-                warnings.append(_anchored_sd(anchored, sd))
         noise = verdict.pose_noise
         if noise is not None:
             pulled = _pulled(noise, result)
@@ -991,16 +984,40 @@ def annotate_joint_centres(results: list, verdicts: list[Support]) -> list:
             numbers["center_pose_noise_share"] = noise.share
             numbers["center_pose_noise_pull_mm"] = pull
             if noise.share >= MAX_POSE_NOISE_SHARE or pull >= pull_bound_mm(sd):
-                warnings.append(_pulled_by_pose_noise(noise.share, pull, sd))
+                pulled_words.append(_pulled_by_pose_noise(noise.share, pull, sd))
             elif sd is not None and 0.0 < sd < math.inf:
                 # Within its bound the pull is a bias the SD can hold: the SD states the
                 # answer's error about the truth, not its scatter about where it was pulled.
                 numbers["center_pose_noise_bias_mm"] = pulled.tolist()
-                numbers["center_sd_mm"] = _largest_sd(_with_bias(covariance, pulled))
+                sd = _largest_sd(_with_bias(covariance, pulled))
+        # The SD stated, the pull's outer product in it, is the one the words quote and hold
+        # to MAX_CENTER_SD_MM: an answer reads no SD that an output would print as none.
+        warnings = [] if covariance is None else _sd_warnings(result, sd, source)
+        warnings += pulled_words
+        if sd is not None:
+            numbers["center_sd_mm"] = sd
         if numbers:
             kept = () if verdict.warnings else tuple(warnings)
             annotated[t] = with_warnings(result, kept, numbers)
     return annotated
+
+
+def _sd_warnings(result, sd: float, source: str) -> list[str]:
+    """The warning (none, or one) that a joint centre ``result`` stating the SD ``sd`` [mm]
+    along its least determined direction, from the noise ``source`` names, gets for that SD:
+    that the data do not determine the centre (:func:`stated_center_sd`), or that the SD does
+    not hold where the noise's share (``diagnostics["center_sd_noise_share"]``) or the frame-0
+    poses' (``["center_sd_anchor_share"]``) reaches its bound."""
+    share = result.diagnostics.get("center_sd_noise_share", 0.0)
+    anchored = result.diagnostics.get("center_sd_anchor_share", 0.0)
+    if stated_center_sd(sd) is None:
+        return [_undetermined(sd, source)]
+    if not share < MAX_SD_NOISE_SHARE:
+        held = "the information the relative rotations of the poses hold on it"
+        return [_noisy_sd(share, sd, held)]
+    if not anchored < MAX_ANCHOR_SHARE:
+        return [_anchored_sd(anchored, sd)]
+    return []
 
 
 def stated_covariance(result) -> tuple[np.ndarray, str] | None:
