@@ -227,7 +227,8 @@ _SCORE_P, _FIT_P, _SPHERES_P = 14, 15, 16
 _COVARIANCE = slice(17, 26)
 # 1 where the noise is rounding (_noise_free), else 0.
 _ROUNDING_NOISE = 26
-_WIDTH = 27
+_BIASED_SD = 27
+_WIDTH = 28
 
 # The one-sided normal quantile at ROTATION_ALPHA: what a marker's spread of directions must
 # exceed their noise by, in standard errors, for the marker to count.
@@ -252,7 +253,8 @@ def centre_statistics(
     ratio, its z, offset [mm], step (3,) [mm], the lack of fit's ratio and z about the spheres'
     centre, step in SDs, and the p-values of the score test, of the lack of fit and of the lack
     of fit about the spheres' centre, the covariance (3, 3) [mm^2] the SD is from, row after
-    row, and whether the noise is rounding)`` ``(T, 27)`` of the answers ``centres`` ``(T, 3)`` [mm]
+    row, whether the noise is rounding, and the SD [mm] with the step's outer product added to
+    that covariance)`` ``(T, 28)`` of the answers ``centres`` ``(T, 3)`` [mm]
     to the markers ``(T, N, n, 3)`` [mm], with noise ``variances`` ``(T,)`` [mm^2] per
     coordinate (module docstring). The step is the one to where Gauss–Newton iterations from
     the answer end, where the spheres fit better there (:func:`_refine`), else the first-order
@@ -266,6 +268,7 @@ def centre_statistics(
     slots = _table_for(n_frames)
     weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
     coordinates = np.empty((n_markers, 3, n_frames))
+    biased = np.empty((3, 3))
     for t in range(n_trials):
         _transposed_into(markers[t], coordinates)
         mixed = _row_at(coordinates, centres[t], variances[t], out[t], scratch)
@@ -274,6 +277,7 @@ def centre_statistics(
         refined = _refine(coordinates, centres[t], variances[t], mixed, out[t], scratch)
         out[t, _STEP_SDS] = _in_sds(out[t, _TOWARDS], scratch[13], scratch[14], variances[t])
         _covariance_into(scratch[13], scratch[14], variances[t], out[t, _COVARIANCE])
+        out[t, _BIASED_SD] = _biased_sd(out[t, _COVARIANCE], out[t, _TOWARDS], biased)
         if not refined and _definite(scratch[13]):
             # No centre the iterations reach fits the spheres better: the answer is theirs.
             out[t, _STEP_SDS] = 0.0
@@ -426,6 +430,20 @@ def _covariance_into(values: np.ndarray, vectors: np.ndarray, s2: float, out: np
             for k in range(3):
                 total += vectors[i, k] * vectors[j, k] / values[k]
             out[3 * i + j] = s2 * total
+
+
+@kernel
+def _biased_sd(covariance: np.ndarray, step: np.ndarray, work: np.ndarray) -> float:
+    """The SD [mm] along the least determined direction of ``covariance`` ``(9,)`` [mm^2] (row
+    after row) with the outer product of ``step`` ``(3,)`` [mm] added, into ``work`` ``(3, 3)``:
+    :func:`_largest_sd` of :func:`_with_bias`, the SD of an answer whose bias is the step, in
+    the kernel that forms both, where NumPy's calls on a 3 x 3 matrix would cost a one-trial
+    call more than the fit's checks of it. A compiled kernel."""
+    for i in range(3):
+        for j in range(3):
+            work[i, j] = covariance[3 * i + j] + step[i] * step[j]
+    largest = _largest_variance(work)
+    return math.sqrt(largest) if largest >= 0.0 else math.nan
 
 
 @kernel
@@ -914,9 +932,8 @@ def annotate_many(results: list, markers: np.ndarray, verdicts: list[Support]) -
         bias = None if verdicts[t].warnings or warnings else _step_bias(numbers, row)
         if bias is not None:
             # The SD states the spheres' centre's scatter; the answer's error adds the step.
-            covariance = np.reshape(row[_COVARIANCE], (3, 3))
             numbers["center_step_bias_mm"] = bias
-            numbers["center_sd_mm"] = _largest_sd(_with_bias(covariance, bias))
+            numbers["center_sd_mm"] = row[_BIASED_SD]
             if stated_center_sd(numbers["center_sd_mm"]) is None:
                 source = f"the rigid-body residual of {residual_mm:.3g} mm and the step"
                 warnings = (_undetermined(numbers["center_sd_mm"], source),)
