@@ -227,6 +227,7 @@ _SCORE_P, _FIT_P, _SPHERES_P = 14, 15, 16
 _COVARIANCE = slice(17, 26)
 # 1 where the noise is rounding (_noise_free), else 0.
 _ROUNDING_NOISE = 26
+# The SD [mm] of that covariance with the step's outer product added (_biased_sd).
 _BIASED_SD = 27
 _WIDTH = 28
 
@@ -560,10 +561,10 @@ def _row_at(
 ) -> bool:
     """:func:`centre_statistics`'s first-order numbers of the answer ``centre`` ``(3,)`` [mm] to
     the markers whose ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) with
-    noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`), into ``row`` ``(27,)`` but for
-    ``repeats``, the step in SDs, the p-values, the covariance and the noise's rounding; ``inf``
-    SD, step and share where the corrected information is not positive definite. Leaves the
-    eigen-decomposition of the information the SD is from in ``scratch``
+    noise ``s2`` [mm^2] per coordinate (:func:`_sums_at`), into ``row`` ``(28,)`` but for
+    ``repeats``, the step in SDs, the p-values, the covariance, the noise's rounding and the SD
+    with the step; ``inf`` SD, step and share where the corrected information is not positive
+    definite. Leaves the eigen-decomposition of the information the SD is from in ``scratch``
     (:func:`_scratch_for`); returns whether that is from only some of the markers (those clear
     of the answer, module docstring). A compiled kernel."""
     n_markers, _, n_frames = coordinates.shape
