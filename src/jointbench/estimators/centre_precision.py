@@ -37,7 +37,9 @@ profiled out):
   millimetres where the centre is twenty away. ``center_step_mm`` is instead the distance to
   where Gauss–Newton iterations from the answer end, if the spheres fit better there (the
   iterations leave out a marker within three noise SDs of where they are, whose radial
-  residual is not smooth there).
+  residual is not smooth there, and so do the fits compared there and about the answer: the
+  distance of a marker within its noise of a point is that noise's length, whose spread is not
+  the radial noise's and moves by more than the step's whole gain as the point moves).
 * The score test does not judge a method's answer: its chi-square holds for an answer fixed
   before the data are seen, and of one fitted to them it measures, to first order, the
   distance to the spheres' centre in the answer's SDs, rejecting at about four of them. The
@@ -78,8 +80,8 @@ virtual marker at the joint, placed where an earlier estimate put it) has direct
 (``s / r`` of a third or more) that the first-order correction, whose left-out terms are of
 relative size ``s^2 / r^2``, misjudges their noise; where other markers lie beyond, the SD and
 the noise share are those of the markers beyond, since with it a centre the others fix well
-read as undetermined. The score test, the lack of fit and the first-order step keep it (the
-Gauss–Newton iterations do not, above), and a marker
+read as undetermined. The score test, the lack of fit about the answer and the first-order step
+keep it (the Gauss–Newton iterations and the fits they compare do not, above), and a marker
 further out is kept in everything: a marker near an answer far from the centre is what they
 must see (on paper A's grid, leaving out markers within ten noise SDs passed five answers more
 than 10 mm off as ``ok``).
@@ -95,9 +97,12 @@ of its SDs or more from the common centre where that SD holds, with the answer m
 millimetres is a property of the method, not a failure to find the centre); that warning
 says the precision is not determined, the SD stating the scatter of the common centre and the
 answer's error adding the step to it. IS minimises the
-radial residuals and ends at the spheres' centre; NM's and BC's algebraic fits ended within
-3.6 and 4.7 mm of it on paper A's conditions and ``tests/test_centre_precision.py``'s caps;
-LS's algebraic fit, MA and SCoRE need not come near it. The noise ``s^2``
+radial residuals and ends at the spheres' centre (of every marker's: beside a virtual marker at
+the joint, whose distance is its noise's length, a fraction of a millimetre from the other
+markers' centre, a step stated as its bias where significant); NM's and BC's algebraic fits
+ended within 3.6 and 4.7 mm of it on paper A's conditions and
+``tests/test_centre_precision.py``'s caps; LS's algebraic fit, MA and SCoRE need not come near
+it. The noise ``s^2``
 is the support verdict's rigid-body residual, which does not depend on the answer; it is one
 level for every marker, so a marker much noisier than the others biases a geometric fit by more
 than the SD, a statement of scatter, says. Markers that move on their segment (skin, a
@@ -216,7 +221,8 @@ _SD, _CHI2, _STEP, _REPEATS, _SHARE, _FIT_RATIO, _FIT_Z, _OFFSET = range(8)
 # order's (F_s^-1 g; F^-1 g where F_s is not definite).
 _TOWARDS = slice(8, 11)
 # The lack of fit's ratio and z about the spheres' centre: where Gauss-Newton iterations from
-# the answer end if the spheres fit better there, else about the answer.
+# the answer end if the spheres fit better there (over the markers clear of it), else about
+# the answer.
 _SPHERES_RATIO, _SPHERES_Z = 11, 12
 # The step in the answer's SDs (Mahalanobis).
 _STEP_SDS = 13
@@ -264,7 +270,7 @@ def centre_statistics(
     that frame twice), else 0. A compiled kernel."""
     n_trials, n_frames, n_markers = markers.shape[:3]
     out = np.empty((n_trials, _WIDTH))
-    scratch = _scratch_for(n_frames)
+    scratch = _scratch_for(n_frames, n_markers)
     keys = np.empty(n_frames)
     slots = _table_for(n_frames)
     weights = np.sqrt(np.arange(2.0, 2.0 + 3 * n_markers))
@@ -313,12 +319,15 @@ def _transposed_into(markers: np.ndarray, coordinates: np.ndarray) -> None:
 
 
 @kernel
-def _scratch_for(n_frames: int) -> tuple:
-    """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames, allocated once
-    per batch: ``(info, signal, noisy, score, values, vectors, work, distances, sum_u, sum_du,
-    sum_uu, stated, stated_noise, sd_values, sd_vectors, offsets, iterate, move, there)``,
-    ``sd_values`` and ``sd_vectors`` the eigen-decomposition of the information the SD is stated
-    from (:func:`_row_at`), the last three :func:`_refine`'s. The 3 x 3 matrices and the
+def _scratch_for(n_frames: int, n_markers: int) -> tuple:
+    """Scratch arrays of :func:`_sums_at` and its callers for ``n_frames`` frames of
+    ``n_markers`` markers, allocated once per batch: ``(info, signal, noisy, score, values,
+    vectors, work, distances, sum_u, sum_du, sum_uu, stated, stated_noise, sd_values,
+    sd_vectors, offsets, iterate, move, there, kept)``, ``sd_values`` and ``sd_vectors`` the
+    eigen-decomposition of the information the SD is stated from (:func:`_row_at`),
+    ``iterate``, ``move`` and ``there`` :func:`_refine`'s, ``kept`` ``(2, n)`` 1 for each
+    marker the last :func:`_sums_at` kept (else 0), then for each that :func:`_row_at`'s sums
+    about the answer kept. The 3 x 3 matrices and the
     3-vectors are each one array's rows: an allocation costs a one-trial call more than the
     arithmetic of several of them. A compiled kernel."""
     matrices = np.empty((9, 3, 3))
@@ -343,6 +352,7 @@ def _scratch_for(n_frames: int) -> tuple:
         vectors[5],
         vectors[6],
         np.empty(17),
+        np.empty((2, n_markers)),
     )
 
 
@@ -362,7 +372,9 @@ def _refine(
     one. Each iteration takes :func:`_row_at`'s step (:func:`_step_at`) without the rest of its
     numbers, and without the markers within :data:`_CLEAR_RADIUS` noise SDs of the iterate: the
     radial residual of one (a virtual marker at the joint) is not smooth there, and draws the
-    iterations to it or throws them off; the fits compared keep it. They start from ``row``'s
+    iterations to it or throws them off. The fits compared, about the answer and where the
+    iterations end, are over the markers the last iteration keeps (:func:`_fits_better`). They
+    start from ``row``'s
     first-order step, unless some markers lie that near the answer (``mixed``, as
     :func:`_row_at` returns it), whose step keeps them. ``coordinates`` ``(n, 3, N)`` [mm] are
     the markers' (:func:`_transposed_into`). The iterations overwrite ``scratch`` but for the
@@ -382,15 +394,58 @@ def _refine(
         if _length(move[0], move[1], move[2]) <= _REFINED_TO * max(distance, sd):
             break
     n_markers, _, n_frames = coordinates.shape
-    squares, fourths, kept, _ = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
+    squares, fourths, kept, _ = _sums_at(coordinates, centre, s2, nearest, True, scratch)
     _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
-    if not there[_FIT_RATIO] < row[_FIT_RATIO]:
+    if not _fits_better(coordinates, answer, row, there, squares, scratch):
         return False
     row[_TOWARDS] = centre - answer
     row[_STEP] = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
     row[_SPHERES_RATIO] = there[_FIT_RATIO]
     row[_SPHERES_Z] = there[_FIT_Z]
     return True
+
+
+@kernel
+def _fits_better(
+    coordinates: np.ndarray,
+    answer: np.ndarray,
+    row: np.ndarray,
+    there: np.ndarray,
+    squares: float,
+    scratch: tuple,
+) -> bool:
+    """Whether the spheres fit better where :func:`_refine`'s iterations end than about
+    ``answer`` ``(3,)`` [mm], given the lack of fit there (``there``, of :func:`_lack_of_fit`,
+    and its sum of squares ``squares`` [mm^2]) over the markers :func:`_sums_at` kept there
+    (``scratch``'s ``kept``, its first row) and ``row``'s about the answer over those it kept
+    there (its second). Where the two are the same markers, the ratios compare; else the
+    radial residuals' sums of squares over the markers kept where the iterations end, about
+    either point. A marker within a few noise SDs of a point (a virtual marker at the joint)
+    has no direction from it: its distance is the length of its noise, whose spread is not the
+    radial noise's and changes by several times the whole gain of a step as the point moves by
+    a fraction of that noise, and whether its directions spread beyond their noise flips with
+    it (on a 30 degree cap with 0.5 mm noise, one 0.5 mm from the joint raised its sum of
+    squares from 11 to 20 mm^2 over the step from LS's answer to the spheres' centre, which
+    lowered the four other markers' ratio from 1.017 to 1.010). ``coordinates`` ``(n, 3, N)``
+    [mm] are the markers' (:func:`_transposed_into`). A compiled kernel."""
+    kept, kept_at_answer = scratch[19]
+    same = True
+    for p in range(kept.shape[0]):
+        same = same and kept[p] == kept_at_answer[p]
+    if same:
+        return there[_FIT_RATIO] < row[_FIT_RATIO]
+    if not math.isfinite(there[_FIT_RATIO]):
+        return False
+    distances, sum_u, sum_du, sum_uu = scratch[7:11]
+    offsets = scratch[15]
+    about_answer = 0.0
+    for p in range(kept.shape[0]):
+        if not kept[p]:
+            continue
+        radius = _marker_sums(coordinates[p], answer, distances, offsets, sum_u, sum_du, sum_uu)
+        for k in range(distances.shape[0]):
+            about_answer += (distances[k] - radius) ** 2
+    return squares < about_answer
 
 
 @kernel
@@ -463,12 +518,14 @@ def _sums_at(
     noise and that noise's part ``F - F_s`` (upper triangles), the score ``g``, and the parts
     of ``F_s`` and ``F - F_s`` from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns
     the radial residuals' sum of squares and of fourth powers (where ``fit`` asks for them,
-    else 0), the markers kept, and whether only some of those lie that far. A marker whose
+    else 0), the markers kept (each marker's 1 if kept, else 0, into the first row of
+    ``scratch``'s ``kept``), and whether only some of those lie that far. A marker whose
     directions from the answer do not spread beyond their noise (one at the answer, a virtual
     marker at the joint, say) carries nothing on it and is left out. A compiled kernel."""
     info, signal, noisy, score, _, _, _, distances, sum_u, sum_du, sum_uu = scratch[:11]
     stated, stated_noise = scratch[11:13]
     offsets = scratch[15]
+    flags = scratch[19][0]
     n_markers, _, n_frames = coordinates.shape
     # Pure noise spreads a marker's directions over two tangential coordinates, N - 1 degrees
     # of freedom each: beyond this factor of that spread the marker has a signal.
@@ -481,6 +538,7 @@ def _sums_at(
     stated_noise[:] = 0.0
     squares, fourths, kept, clear = 0.0, 0.0, 0, 0
     for p in range(n_markers):
+        flags[p] = 0.0
         radius = _marker_sums(coordinates[p], centre, distances, offsets, sum_u, sum_du, sum_uu)
         if radius < nearest:
             continue
@@ -489,6 +547,7 @@ def _sums_at(
         norm2 = sum_u[0] ** 2 + sum_u[1] ** 2 + sum_u[2] ** 2
         if not spread - norm2 / n_frames > 2.0 * noise * beyond_noise:
             continue
+        flags[p] = 1.0
         kept += 1
         far = radius >= _CLEAR_RADIUS * math.sqrt(s2)
         clear += far
@@ -570,6 +629,10 @@ def _row_at(
     n_markers, _, n_frames = coordinates.shape
     info, signal, noisy, score, values, vectors, work = scratch[:7]
     squares, fourths, kept, mixed = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
+    # The markers kept about the answer, for the fits :func:`_refine` compares.
+    kept_markers = scratch[19]
+    for p in range(n_markers):
+        kept_markers[1, p] = kept_markers[0, p]
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
     _lack_of_fit(row, squares, fourths, kept, n_frames, n_markers, s2)
     row[_SPHERES_RATIO] = row[_FIT_RATIO]
