@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_axis_sd import hinge
+from test_axis_sd import Z, hinge
 from test_io_recordings import KNEE, SHANK, THIGH
 
 import jointbench
@@ -218,6 +218,33 @@ def test_an_answer_within_the_band_is_not_warned_about_however_precise():
     assert check(warned)["angle_deg"] == pytest.approx(20.0)
     assert check(warned)["z"] < 0.0
     assert NOT_THE_MOTIONS not in warned.status
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="a cluster that translates along the hinge's axis with the angle (a plate sliding "
+    "on its segment, a screw motion) leaves every marker's short arc nearly in a plane tilted "
+    "from the axis, which the planar and combined costs fit: on a 60 degree arc with 5 mm of "
+    "travel, 10 of 10 answers of each read ok 7.9 to 9.1 deg off with SDs of 0.42 to 0.93 "
+    "deg, while the principal axis of the rotations (and SARA) lies within 0.2 deg of the "
+    "axis. Their costs' misfit is significant (residuals 3.8 and 2.7 times the rigid-body "
+    "noise, p below 1e-15) but its tilt scale, 6 deg, is under MAX_AXIS_SD_DEG, so the check "
+    "holds them only to MOTION_AXIS_BAND_DEG (30 deg) from that axis, which coupled knees "
+    "need, and the SD leaves the tilt out",
+)
+@pytest.mark.parametrize("method", ["planar", "combined"])
+def test_a_cluster_screwing_along_its_axis_leaves_no_answer_ok_beyond_its_sd(method):
+    """A hinge of 60 degrees about z whose four markers also travel 5 mm along z with the
+    angle, 0.5 mm noise: the rotations are about z alone, so an ``ok`` answer more than three
+    of its SDs from z is one its SD does not hold (1.1 % of answers where it does)."""
+    beyond = 0
+    for seed in range(10):
+        markers = hinge(seed, 60.0, noise=0.5) + np.linspace(0.0, 5.0, 120)[:, None, None] * Z
+        result = jointbench.fit_axis(markers, method)
+        error = angle_between_lines_deg(np.asarray(result.direction), Z)
+        if result.status == "ok" and error > 3.0 * result.diagnostics["axis_sd_deg"]:
+            beyond += 1
+    assert beyond <= 1
 
 
 @pytest.fixture
