@@ -32,7 +32,8 @@ The conditions (noise 1 mm per coordinate where none other is named; 100 Hz, 3 s
   the same at a fifth of it (0.4 to 2 mm);
 * ``plate``: the moving markers a rigid plate on the skin, turned about its centroid by 1 to
   3 degrees and shifted by 2 to 10 mm in proportion to the joint angles (its shape kept, so
-  the rigid-body residual sees only the 0.5 mm white noise);
+  the rigid-body residual sees only the 0.5 mm white noise); ``slide`` the same plate
+  shifted only, not turned;
 * ``aniso``: noise 3 times larger along one camera's depth direction (a random unit vector),
   0.5 mm across it;
 * ``gap-linear``/``gap-spline``: one moving marker's 10 to 30 consecutive frames replaced by
@@ -53,22 +54,24 @@ from (``centre_precision.stated_covariance``; chi-square(3): 2.9 %). Beside each
 ``ok`` answers beyond 3 SDs, the binomial probability of that many or more where each does so
 with that share; a cell where it is below 1e-3 is marked ``HEAVY``.
 
-What it found (50 seeds, arcs 20 and 60 degrees): filtered noise (100, 200 and 50 Hz), skin
-artefact of 0.4 to 10 mm and a plate on a centre or a joint centre leave no answer ``ok``:
-every status says the frames are not independent, or the spheres or the joint model do not
-fit. Anisotropic noise, gaps filled linearly or by a spline, 50 Hz over a slow motion and
-markers 200 to 300 mm out leave ``ok`` answers beyond 3 SDs no more often than stated beyond
-chance over the cells (the worst: IS on spline-filled gaps, 8 to 9 % of about 85 ``ok``
-answers over 300 seeds, mean squared ratio 3.2 where white noise gives 1.2 to 1.9; the
-analytic joint centre on white noise at 60 degrees, 5 of 50). The ``plate`` on a hinge is
-the exception (60 degrees: planar 45 and SARA 50 of 50 ``ok``, every one beyond 3 SDs, up
-to 11 and 5 degrees off with SDs of tenths of a degree). Its travel along the axis tilts the
-planar and combined answers alone (shifted only, SARA's are within their SDs), while the
-principal axis of the rotations stays on the axis; the answers lie within the 30 degrees
-from it that the check allows (``tests/test_axis_motion_check.py`` holds this as a strict
-expected failure). Its turn tilts every method's axis, the rotation's own included: a plate
-turning on its segment with the angle is, to its markers, a hinge about another axis, which
-no check of the markers can tell.
+What it found (50 seeds, arcs 20 and 60 degrees; 30 for ``slide``): filtered noise (100, 200
+and 50 Hz), skin artefact of 0.4 to 10 mm and a plate on a centre or a joint centre leave no
+answer ``ok``: every status says the frames are not independent, or the spheres or the joint
+model do not fit. Anisotropic noise, gaps filled linearly or by a spline, 50 Hz over a slow
+motion and markers 200 to 300 mm out leave ``ok`` answers beyond 3 SDs no more often than
+stated beyond chance over the cells (the worst: IS on spline-filled gaps, 8 to 9 % of about 85
+``ok`` answers over 300 seeds, mean squared ratio 3.2 where white noise gives 1.2 to 1.9; the
+analytic joint centre on white noise at 60 degrees, 5 of 50). A plate on a hinge is the
+exception. Its slide along the axis tilts the planar and combined answers while the rotations
+stay about the axis: ``ok`` up to 23 degrees off with SDs under 1 at 20 degrees, before the
+motion-axis check held a hinge's answers within 5 degrees of its principal axis, not 30
+(:mod:`jointbench.estimators.precision`); within 5 now, though still beyond their SDs
+(``tests/test_axis_motion_check.py``'s strict expected failure). Its turn tilts every
+method's axis, the rotation's own included (``plate``, 60 degrees: SARA 50 of 50 ``ok``, all
+beyond 3 SDs, up to 5 degrees off): a plate that turns on its segment with the angle is, to
+its markers, a hinge about another axis, which no check of the markers can tell. So is, for a
+centre, a slide that is nearly ``d x angles``: 2 of 30 ``slide`` trials at 20 degrees read
+``ok`` about 22 mm off with SDs of 0.4 mm, the spheres fitting the noise (another centre).
 """
 
 from __future__ import annotations
@@ -100,6 +103,7 @@ CONDITIONS = (
     "sta",
     "sta-small",
     "plate",
+    "slide",
     "aniso",
     "gap-linear",
     "gap-spline",
@@ -226,14 +230,17 @@ def soft_tissue(rng: np.random.Generator, angles: np.ndarray, arc_deg: float, n:
     return np.einsum("mcj,kj->kmc", np.swapaxes(columns, 1, 2), angles / np.radians(arc_deg / 2))
 
 
-def plate_moved(rng: np.random.Generator, markers: np.ndarray, angles: np.ndarray, arc_deg: float):
+def plate_moved(
+    rng: np.random.Generator, markers: np.ndarray, angles: np.ndarray, arc_deg: float, turns: bool
+) -> np.ndarray:
     """``markers`` ``(N, n, 3)`` [mm] of a rigid plate on the skin that moves on its segment
-    with the joint ``angles`` ``(N, 3)`` [rad]: turned about its centroid by ``B (angles / half
-    arc)`` and shifted by ``A (angles / half arc)``, ``A``'s columns random directions 2 to 10
-    mm long, ``B``'s 1 to 3 degrees: its shape is kept, its distances to the joint are not."""
+    with the joint ``angles`` ``(N, 3)`` [rad]: shifted by ``A (angles / half arc)`` and, where
+    it ``turns``, turned about its centroid by ``B (angles / half arc)``, ``A``'s rows random
+    directions 2 to 10 mm long, ``B``'s 1 to 3 degrees: its shape is kept, its distances to the
+    joint are not."""
     share = angles / np.radians(arc_deg / 2)
     shift = unit(rng.normal(size=(3, 3))) * rng.uniform(2.0, 10.0)
-    turn = unit(rng.normal(size=(3, 3))) * np.radians(rng.uniform(1.0, 3.0))
+    turn = unit(rng.normal(size=(3, 3))) * np.radians(rng.uniform(1.0, 3.0)) * turns
     centroid = markers.mean(axis=1, keepdims=True)
     rotations = rotation_matrix(share @ turn)
     turned = np.einsum("kij,kpj->kpi", rotations, markers - centroid) + centroid
@@ -276,10 +283,10 @@ def perturbed(
             if moving:
                 scale = 0.2 if condition == "sta-small" else 1.0
                 noise += scale * soft_tissue(rng, angles, arc_deg, clean.shape[1])
-        elif condition == "plate":
+        elif condition in ("plate", "slide"):
             noise = 0.5 * rng.normal(size=clean.shape)
             if moving:
-                clean = plate_moved(rng, clean, angles, arc_deg)
+                clean = plate_moved(rng, clean, angles, arc_deg, condition == "plate")
         else:
             noise = rng.normal(size=clean.shape)
             if "filtered" in condition:
@@ -347,13 +354,21 @@ def line(kind: str, name: str, method: str, rows: list) -> str:
     )
 
 
-def main(argv: list[str] | None = None) -> int:
+def arguments(argv: list[str] | None) -> argparse.Namespace:
+    """The command line's ``--seeds``, ``--kinds``, ``--conditions`` and ``--arcs``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    for name, default in (
+        ("--kinds", "center,axis,joint_center"),
+        ("--conditions", ",".join(CONDITIONS)),
+        ("--arcs", "20,60"),
+    ):
+        parser.add_argument(name, default=default, help="comma-separated")
     parser.add_argument("--seeds", type=int, default=50)
-    parser.add_argument("--kinds", default="center,axis,joint_center")
-    parser.add_argument("--conditions", default=",".join(CONDITIONS))
-    parser.add_argument("--arcs", default="20,60", help="arcs [deg], comma-separated")
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = arguments(argv)
     print(
         "| kind | condition, arc | method | n | ok | dependent | ok > 3 SD | p | "
         "mean (err/SD)^2 | largest ok error |"
