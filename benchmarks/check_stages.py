@@ -76,6 +76,7 @@ no Python between them. The radial cost's derivatives are NumPy arrays, not coun
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 import sys
 import time
@@ -245,7 +246,12 @@ def axis_stage_calls(method: str, trials: list[np.ndarray]) -> dict[str, Callabl
     def answers(i: int) -> object:
         (verdict,) = verdicts[i]
         reason = verdict.diagnostics.get("reason", "")
-        checked_answer = precision.annotate_motion_axis(results[i], verdict.motion_axis, reason)
+        checked_answer = precision.annotate_motion_axis(
+            results[i],
+            verdict.motion_axis,
+            reason,
+            verdict.diagnostics.get("off_axis_p_value", math.nan),
+        )
         return support.annotate(checked_answer, verdict)
 
     return {

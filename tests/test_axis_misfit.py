@@ -190,7 +190,7 @@ def test_pure_hinges_fit_their_model_at_the_tests_level(method):
         assert "p_value" in misfit or "axis not determined by" in result.status
         rejected += misfit.get("p_value", 1.0) < support.ROTATION_ALPHA
         assert MISFIT not in result.status
-        assert result.diagnostics["motion_axis_check"].get("band_deg", 30.0) == 30.0
+        assert not precision.unsupported_by_its_cost(misfit)
     assert rejected <= 1
 
 

@@ -126,7 +126,16 @@ compromise of this motion's. The answer's own stated SD plays no part, since a m
 state any. Where the reference is not determined (the noise's share of the rotations' scatter
 reaches its eigen-gap, its SD is above :data:`MAX_AXIS_SD_DEG`, or a pose's rotation SD is
 above :data:`MAX_REFERENCE_POSE_SD_DEG`, where the first-order pose noise behind both
-understates a thin cluster's) nothing is compared, and the result says why.
+understates a thin cluster's) nothing is compared, and the result says why. Where the
+support verdict finds no rotation about a second axis (its off-axis test passes at
+:data:`jointbench.estimators.support.ROTATION_ALPHA`), nothing couples to the flexion to tilt
+the principal axis, which is then the hinge's own, and the band is the narrower
+:data:`MISFIT_BAND_DEG`. A cluster that translates along its hinge's axis with the angle (a
+plate sliding on its segment, a screw motion) needs it: each marker's arc then lies nearly in
+a plane tilted from the axis, which the planar and combined costs fit to a sharp minimum
+(a 60 degree arc with 5 mm of travel: every answer 8 to 9 degrees off with SDs of 0.4 to
+0.9, read ``ok`` with the wide band), while the rotations are about the axis alone. On
+pure hinges and the hinge study's near-hinges it turned no ``ok`` answer into a warning.
 ``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
 
 What every SD above rests on: markers that read the segment's rotation to first order. A
@@ -276,7 +285,9 @@ MOTION_AXIS_BAND_DEG = AMBIGUOUS_APART_DEG
 
 #: ... or further than this [deg], where the answer's own cost cannot vouch for it
 #: (:func:`unsupported_by_its_cost`): the markers leave the cost's model of a fixed axis by
-#: more than their noise, enough to tilt its answer beyond :data:`MAX_AXIS_SD_DEG`. The
+#: more than their noise, enough to tilt its answer beyond :data:`MAX_AXIS_SD_DEG`; or where
+#: the support verdict finds no rotation about a second axis, so that no coupling tilts the
+#: principal axis from the joint's (module docstring). The
 #: principal axis is the estimate such motion tilts least: its eigen-gap is the rotations' own
 #: spread, where a planar cost's is the arcs' sagitta. Paper B's tighter accuracy band
 #: (claim B2).
@@ -694,14 +705,23 @@ def annotate_agreement(
     return with_warnings(result, warnings, {"cross_check": record})
 
 
-def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str = ""):
+def annotate_motion_axis(
+    result,
+    reference: MotionAxis | None,
+    unavailable: str = "",
+    off_axis_p_value: float = math.nan,
+):
     """``result`` with ``diagnostics["motion_axis_check"]``: the answer compared with the
     principal axis of the segment's rotations ``reference``
     (:class:`jointbench.estimators.support.MotionAxis`, taken from the data alone by the
     support verdict; module docstring). It records ``principal_axis`` (3,),
     ``principal_axis_sd_deg``, ``principal_axis_noise_share`` and ``pose_sd_deg``, and
     ``angle_deg``, the angle between the answer and that axis [deg], and ``z``, how far the
-    angle is beyond :data:`MOTION_AXIS_BAND_DEG` in the reference's SDs. Where ``z`` is above
+    angle is beyond its band in the reference's SDs (``band_deg``: :data:`MOTION_AXIS_BAND_DEG`,
+    or :data:`MISFIT_BAND_DEG` where the answer's cost cannot vouch for it or where
+    ``off_axis_p_value``, the support verdict's p-value of rotation about a second axis, is not
+    below :data:`~jointbench.estimators.support.ROTATION_ALPHA`: a hinge, whose principal axis
+    is its own; NaN, not tested, keeps the wide band). Where ``z`` is above
     ``_TOLD_APART_Z``, a warning that the answer is not the motion's axis. The answer's own
     stated SD plays no part: the question is whether it is an axis of this motion at all, and
     a method could state any SD. Where the reference is not determined (its noise share not
@@ -766,7 +786,9 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
             )
     if "not_checked" in record:
         return with_warnings(result, warnings, {"motion_axis_check": record})
-    band = MISFIT_BAND_DEG if unsupported else MOTION_AXIS_BAND_DEG
+    # NaN fails the comparison: an untested motion may turn about a second axis.
+    hinge = off_axis_p_value >= ROTATION_ALPHA
+    band = MISFIT_BAND_DEG if unsupported or hinge else MOTION_AXIS_BAND_DEG
     angle_deg = line_angle_deg(result.direction, reference.direction)
     beyond = angle_deg - band
     z = beyond / reference.sd_deg if reference.sd_deg > 0.0 else math.copysign(math.inf, beyond)
@@ -777,6 +799,12 @@ def annotate_motion_axis(result, reference: MotionAxis | None, unavailable: str 
             why = (
                 f"; {band:g} deg, not {MOTION_AXIS_BAND_DEG:g}, since "
                 f"{_misfit_words(result.method, misfit)}"
+            )
+        elif hinge:
+            why = (
+                f"; {band:g} deg, not {MOTION_AXIS_BAND_DEG:g}, since the segment turns about no "
+                f"second axis (p = {off_axis_p_value:.2g}): the principal axis of a hinge's "
+                "rotations is its axis"
             )
         warnings = (
             f"axis not the motion's: the answer lies {angle_deg:.0f} deg from the principal "

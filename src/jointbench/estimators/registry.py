@@ -53,6 +53,7 @@ import contextlib
 import copy
 import functools
 import inspect
+import math
 import re
 from collections.abc import Callable, Mapping
 from contextlib import AbstractContextManager
@@ -447,7 +448,10 @@ def _answers_checked(kind: str, results: list, stacked: tuple, verdicts: list) -
     if kind == "axis":
         return [
             precision.annotate_motion_axis(
-                result, verdict.motion_axis, verdict.diagnostics.get("reason", "")
+                result,
+                verdict.motion_axis,
+                verdict.diagnostics.get("reason", ""),
+                verdict.diagnostics.get("off_axis_p_value", math.nan),
             )
             for result, verdict in zip(results, verdicts, strict=True)
         ]
