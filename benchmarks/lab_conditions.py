@@ -54,24 +54,16 @@ from (``centre_precision.stated_covariance``; chi-square(3): 2.9 %). Beside each
 ``ok`` answers beyond 3 SDs, the binomial probability of that many or more where each does so
 with that share; a cell where it is below 1e-3 is marked ``HEAVY``.
 
-What it found (50 seeds, arcs 20 and 60 degrees; 30 for ``slide``): filtered noise (100, 200
-and 50 Hz), skin artefact of 0.4 to 10 mm and a plate on a centre or a joint centre leave no
-answer ``ok``: every status says the frames are not independent, or the spheres or the joint
-model do not fit. Anisotropic noise, gaps filled linearly or by a spline, 50 Hz over a slow
-motion and markers 200 to 300 mm out leave ``ok`` answers beyond 3 SDs no more often than
-stated beyond chance over the cells (the worst: IS on spline-filled gaps, 8 to 9 % of about 85
-``ok`` answers over 300 seeds, mean squared ratio 3.2 where white noise gives 1.2 to 1.9; the
-analytic joint centre on white noise at 60 degrees, 5 of 50). A plate on a hinge is the
-exception. Its slide along the axis tilts the planar and combined answers while the rotations
-stay about the axis: ``ok`` up to 23 degrees off with SDs under 1 at 20 degrees, before the
-motion-axis check held a hinge's answers within 5 degrees of its principal axis, not 30
-(:mod:`jointbench.estimators.precision`); within 5 now, though still beyond their SDs
-(``tests/test_axis_motion_check.py``'s strict expected failure). Its turn tilts every
-method's axis, the rotation's own included (``plate``, 60 degrees: SARA 50 of 50 ``ok``, all
-beyond 3 SDs, up to 5 degrees off): a plate that turns on its segment with the angle is, to
-its markers, a hinge about another axis, which no check of the markers can tell. So is, for a
-centre, a slide that is nearly ``d x angles``: 2 of 30 ``slide`` trials at 20 degrees read
-``ok`` about 22 mm off with SDs of 0.4 mm, the spheres fitting the noise (another centre).
+What it finds, in words (its table holds the numbers): filtered noise, skin artefact and a
+plate on a centre or a joint centre leave no answer ``ok`` (the frames are found dependent, or
+the spheres or the joint model do not fit); anisotropic noise, filled gaps, 50 Hz over a slow
+motion and far markers leave ``ok`` answers beyond 3 SDs about as often as stated. A plate on
+a hinge is the exception: its slide along the axis tilts the planar and combined answers while
+the rotations stay about the axis (held within ``precision.MISFIT_BAND_DEG``
+of the principal axis, though still beyond their SDs: ``tests/test_axis_motion_check.py``'s
+strict expected failure), and its turn with the angle is, to its markers, a hinge about
+another axis, which no check of the markers can tell; so is, for a centre, a slide nearly
+``d x angles`` (another centre).
 """
 
 from __future__ import annotations

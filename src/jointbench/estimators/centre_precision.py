@@ -111,10 +111,8 @@ noise, while their distances from any centre change: the spheres then fit worse 
 noise about every centre, the SD from it understates the answer's error many times over
 (``tests/test_centre_precision.py``'s sliding plate), and only a resampling of the frames (a
 bootstrap) states it. A slide linear in the rotation vector ``w`` as ``d x w`` is, to first
-order, the motion about a centre ``d`` away, and no fit can tell it from one: of
-``benchmarks/lab_conditions.py``'s plates shifted 2 to 10 mm at the ends of a 20 degree swing
-(30 seeds), two of the three whose slide departed least from that form (by 24 to 31 % of
-its size) read ``ok`` 21 and 22 mm off with SDs of 0.4 mm; the rest were warned. Frames
+order, the motion about a centre ``d`` away, and no fit can tell it from one
+(``benchmarks/lab_conditions.py``'s ``slide``). Frames
 repeated exactly carry no new noise and are counted once
 (:func:`jointbench.estimators.precision.distinct_frames`). ``converged`` and the answer are
 left as the method set them; the simulated studies call the methods without this check.

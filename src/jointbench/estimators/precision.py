@@ -133,9 +133,7 @@ the principal axis, which is then the hinge's own, and the band is the narrower
 :data:`MISFIT_BAND_DEG`. A cluster that translates along its hinge's axis with the angle (a
 plate sliding on its segment, a screw motion) needs it: each marker's arc then lies nearly in
 a plane tilted from the axis, which the planar and combined costs fit to a sharp minimum
-(a 60 degree arc with 5 mm of travel: every answer 8 to 9 degrees off with SDs of 0.4 to
-0.9, read ``ok`` with the wide band), while the rotations are about the axis alone. On
-pure hinges and the hinge study's near-hinges it turned no ``ok`` answer into a warning.
+far from the axis in their own SDs, while the rotations are about the axis alone.
 ``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
 
 What every SD above rests on: markers that read the segment's rotation to first order. A
