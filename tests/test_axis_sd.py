@@ -268,4 +268,5 @@ def test_the_many_trial_form_gives_each_trial_its_outcome_alone():
 def test_the_simulated_studies_bare_functions_carry_no_sd():
     result = registry.get("axis", "radial", checked=False)(hinge(0, 2.0))
     assert "axis_sd_deg" not in result.diagnostics
+    assert "axis_point_sd_mm" not in result.diagnostics
     assert result.status == "ok"

@@ -24,6 +24,28 @@ use ``m``; its line is still anchored there). For a near-pure hinge the sphere f
 determined *along* the axis, so ``m`` may lie far from the markers;
 ``diagnostics["centroid_foot"]`` is the point of the axis closest to the markers' centroid.
 
+The checked call states how far ``m`` may lie from the axis, across it (where along the axis a
+point lies does not matter): ``diagnostics["axis_point_covariance_mm2"]`` ``(3, 3)`` [mm^2],
+rank 2 in the plane normal to the axis, and ``diagnostics["axis_point_sd_mm"]``, the SD along
+its least determined direction across the axis; above
+:data:`jointbench.estimators.results.MAX_AXIS_POINT_SD_MM` the status says the point is not
+determined, whatever its direction's SD (:func:`_point_covariance`). ``m`` is the same point
+for the three costs, so one model states it: the circles of the combined cost (eq. 12), the
+only one of the three that places a line as well as orienting it (the planar cost has no
+point; the radial cost's direction is the least determined of the three, and ``m``, fitted by
+the sphere, does not move with it). Its Hessian gives the line's tilt and shift at the
+markers jointly; the point moves by the shift plus the tilt times its height ``h`` along the
+axis from the markers' centroid, so a small direction SD still leaves a point hundreds of
+millimetres along a short arc's axis (where the sphere fit puts ``m``) tens of millimetres
+off; and how far ``m`` lies from that cost's minimum (its Newton step, carried to ``h``) is
+added as a bias (:func:`jointbench.estimators.precision.point_covariance`). The cost is taken
+at the line through ``m`` along the planar eigenvector, for the combined answer at its own
+line: a radial answer degrees off the axis still passes through ``m``, and expanding about it
+would carry that tilt to ``h`` as if ``m`` moved with it. On swings of 3-90 degrees (0.5-1 mm
+noise, four markers about 100 mm from the axis, ``tests/test_axis_point_sd.py``) the squared
+Mahalanobis distance of the ``ok`` answers' points from the axis averaged about 2, as a
+calibrated 2-D statement's should.
+
 Search (paper B §3): MATLAB's ``fminsearch`` (Nelder–Mead, Lagarias et al. 1998) as
 re-implemented in :mod:`jointbench.numerics.simplex`, from ten starting directions: one vertex
 of each antipodal pair of a regular dodecahedron,
@@ -1041,7 +1063,7 @@ def _cost_at(
     if method == "combined":
         gradient[:2], hessian[:2, :2], cost, fourths = _planar_terms(markers, direction, basis)
     if method != "planar":
-        foot = point + direction * float(direction @ (markers.reshape(-1, 3).mean(axis=0) - point))
+        foot = point + direction * float(direction @ (_centroid(markers) - point))
         radial = _radial_derivatives(markers, foot, direction, basis)
         gradient, hessian = gradient + radial[0], hessian + radial[1]
         cost, fourths = cost + radial[2], fourths + radial[3]
@@ -1104,7 +1126,48 @@ def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> Axi
         annotated = _checked_against_planar(annotated, markers)
     elif eigen is not None:
         annotated = precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
-    return _misfit_annotated(annotated, at, markers.shape[:2], verdict)
+    annotated = _misfit_annotated(annotated, at, markers.shape[:2], verdict)
+    return precision.annotate_point(annotated, _point_covariance(result, markers, at, verdict))
+
+
+def _point_covariance(
+    result: AxisResult, markers: np.ndarray, at: precision.CostAt, verdict: Support
+) -> np.ndarray:
+    """The covariance ``(3, 3)`` [mm^2] of ``result``'s point ``m`` across the axis, for the
+    distinct frames ``markers`` ``(N_d, P, 3)`` [mm] (module notes: which point, and why the
+    circles' cost states it): :func:`jointbench.estimators.precision.point_covariance` of the
+    combined cost at the combined answer's own line (``at``, where its direction's SD was
+    read), else at the line through ``m`` along the planar eigenvector the result carries; on
+    the markers that read the rotation to first order where the support ``verdict``'s levers
+    leave some out but not all, as the direction's SD is read
+    (:func:`_first_order_annotated`)."""
+    point = np.asarray(result.point)
+    first_order = precision.first_order_markers(verdict.motion_axis)
+    if first_order is not None and first_order.any() and not first_order.all():
+        markers = markers[:, first_order]
+    elif result.method == "combined":
+        return _point_covariance_at(at, point, np.asarray(result.direction), markers)
+    direction = np.asarray(
+        result.direction if result.method == "combined" else result.diagnostics["eigenvector"]
+    )
+    at = _cost_at(markers, point, direction, "combined")
+    return _point_covariance_at(at, point, direction, markers)
+
+
+def _point_covariance_at(
+    at: precision.CostAt, point: np.ndarray, direction: np.ndarray, markers: np.ndarray
+) -> np.ndarray:
+    """:func:`jointbench.estimators.precision.point_covariance` of ``point`` (3,) [mm] on the
+    line along ``direction`` (3,) whose combined cost on ``markers`` ``(N_d, P, 3)`` [mm] is
+    ``at``: its height is read from the markers' centroid, the cost's foot."""
+    height = float(direction @ (point - _centroid(markers)))
+    return precision.point_covariance(at, direction, height)
+
+
+def _centroid(markers: np.ndarray) -> np.ndarray:
+    """The centroid (3,) [mm] of every sample of ``markers`` ``(N, P, 3)`` [mm]: the foot of an
+    axis cost's tilt and shift (:func:`_cost_at`)."""
+    return markers.reshape(-1, 3).mean(axis=0)
 
 
 def _first_order_annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> AxisResult:
