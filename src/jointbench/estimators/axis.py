@@ -968,17 +968,6 @@ _IDENTITY_2 = np.eye(2)
 _IDENTITY_2.setflags(write=False)
 
 
-def _outer_sum(factor: np.ndarray, unit: np.ndarray) -> np.ndarray:
-    """``sum factor u u'`` ``(2, 2)`` over samples: ``factor`` of any shape, ``unit`` the
-    samples' ``u`` ``(factor.size, 2)``."""
-    return (factor.reshape(-1, 1) * unit).T @ unit
-
-
-def _tangential_sum(factor: np.ndarray, unit: np.ndarray) -> np.ndarray:
-    """``sum factor (I - u u')`` ``(2, 2)`` over samples (as :func:`_outer_sum`)."""
-    return float(factor.sum()) * np.eye(2) - _outer_sum(factor, unit)
-
-
 def _radial_derivatives(
     markers: np.ndarray, foot: np.ndarray, direction: np.ndarray, basis: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, float, float]:
@@ -995,26 +984,120 @@ def _radial_derivatives(
     profiled, a residual is ``rho = d - mean_k d`` of its marker, the gradient of ``sum rho^2``
     is ``2 sum rho grad(d)`` and its Hessian ``2 sum grad(rho) grad(rho)' + 2 sum rho d2d``
     (the radii's own derivatives sum to zero against ``rho``). A marker on the axis
-    (``d = 0``), where the cost has no derivative, gives a Hessian that is not finite."""
-    offsets = markers - foot
-    along = offsets @ direction
-    across = offsets @ basis
-    with np.errstate(divide="ignore", invalid="ignore"):
-        distance = np.linalg.norm(across, axis=-1)
-        unit = across / distance[..., None]
-        gradient = np.concatenate([-along[..., None] * unit, -unit], axis=-1)
-        residual = distance - distance.mean(axis=0)
-        weight = residual / distance
-    unit = unit.reshape(-1, 2)
-    bb = _tangential_sum(weight, unit)
-    ab = _tangential_sum(weight * along, unit)
-    aa = _tangential_sum(weight * along**2, unit) - _outer_sum(residual * distance, unit)
-    centred = (gradient - gradient.mean(axis=0)).reshape(-1, 4)
-    hessian = 2.0 * centred.T @ centred
-    hessian += 2.0 * np.block([[aa, ab], [ab, bb]])
-    gradient = 2.0 * residual.reshape(-1) @ gradient.reshape(-1, 4)
-    squares = np.square(residual)
-    return gradient, hessian, float(np.sum(squares)), float(np.sum(np.square(squares)))
+    (``d = 0``), where the cost has no derivative, gives a Hessian that is not finite.
+
+    Summed in one compiled pass over the samples (:func:`_radial_sums`): the paper's three
+    costs all state the point's precision through these derivatives, and as NumPy arrays of
+    every sample they cost a long trial's planar check ten times its own statement."""
+    gradient, hessian = np.empty(4), np.empty((4, 4))
+    cost, fourths = _radial_sums(
+        kernel_array(markers),
+        kernel_array(foot),
+        kernel_array(direction),
+        kernel_array(basis),
+        gradient,
+        hessian,
+    )
+    return gradient, hessian, cost, fourths
+
+
+@kernel
+def _radial_sums(
+    markers: np.ndarray,
+    foot: np.ndarray,
+    direction: np.ndarray,
+    basis: np.ndarray,
+    gradient: np.ndarray,
+    hessian: np.ndarray,
+) -> tuple[float, float]:
+    """:func:`_radial_derivatives` of ``markers`` ``(N, P, 3)`` [mm]: the gradient into
+    ``gradient`` ``(4,)`` and the Hessian into ``hessian`` ``(4, 4)``; returns the cost [mm^2]
+    and its residuals' fourth powers [mm^4]. A compiled kernel: per marker, a first pass over
+    its frames for the means of its distance and of the distance's gradient, which the radii
+    profiled out subtract (two passes: on a short arc the gradient barely changes, and its
+    centred products would cancel in one), and a second for the sums; the second derivatives'
+    ``(2, 2)`` blocks are summed as the scalar sums they are made of."""
+    n_frames, n_markers, _ = markers.shape
+    cost, fourths = 0.0, 0.0
+    centred = np.zeros((4, 4))
+    grad = np.zeros(4)
+    mean = np.empty(4)
+    sample = np.empty(4)
+    # Per block weight (c^2, c, 1): sum w, sum w u0 u0, sum w u0 u1, sum w u1 u1 (w = rho / d);
+    # and sum rho d u u' (u0 u0, u0 u1, u1 u1).
+    tangential = np.zeros((3, 4))
+    outer = np.zeros(3)
+    for p in range(n_markers):
+        mean_distance = 0.0
+        mean[:] = 0.0
+        for k in range(n_frames):
+            c, x0, x1, d = _axis_coordinates(markers[k, p], foot, direction, basis)
+            mean_distance += d
+            mean[0] -= c * x0 / d
+            mean[1] -= c * x1 / d
+            mean[2] -= x0 / d
+            mean[3] -= x1 / d
+        mean_distance /= n_frames
+        mean /= n_frames
+        for k in range(n_frames):
+            c, x0, x1, d = _axis_coordinates(markers[k, p], foot, direction, basis)
+            u0, u1 = x0 / d, x1 / d
+            sample[0], sample[1], sample[2], sample[3] = -c * u0, -c * u1, -u0, -u1
+            residual = d - mean_distance
+            squared = residual * residual
+            cost += squared
+            fourths += squared * squared
+            for i in range(4):
+                grad[i] += residual * sample[i]
+                offset = sample[i] - mean[i]
+                for j in range(i, 4):
+                    centred[i, j] += offset * (sample[j] - mean[j])
+            weight = residual / d
+            u00, u01, u11 = u0 * u0, u0 * u1, u1 * u1
+            for b in range(3):
+                w = weight * (c * c if b == 0 else (c if b == 1 else 1.0))
+                tangential[b, 0] += w
+                tangential[b, 1] += w * u00
+                tangential[b, 2] += w * u01
+                tangential[b, 3] += w * u11
+            rd = residual * d
+            outer[0] += rd * u00
+            outer[1] += rd * u01
+            outer[2] += rd * u11
+    for i in range(4):
+        gradient[i] = 2.0 * grad[i]
+        for j in range(i, 4):
+            hessian[i, j] = hessian[j, i] = 2.0 * centred[i, j]
+    # 2 sum rho d2d: the blocks sum w (I - u u') times c^2 (angle-angle), c (angle-shift) and
+    # 1 (shift-shift), less sum rho d u u' in the angle-angle block.
+    for b, (row, column) in enumerate(((0, 0), (0, 2), (2, 2))):
+        t = tangential[b]
+        block = ((t[0] - t[1], -t[2]), (-t[2], t[0] - t[3]))
+        for i in range(2):
+            for j in range(2):
+                hessian[row + i, column + j] += 2.0 * block[i][j]
+                if row != column:
+                    hessian[column + j, row + i] += 2.0 * block[i][j]
+    hessian[0, 0] -= 2.0 * outer[0]
+    hessian[0, 1] -= 2.0 * outer[1]
+    hessian[1, 0] -= 2.0 * outer[1]
+    hessian[1, 1] -= 2.0 * outer[2]
+    return cost, fourths
+
+
+@kernel
+def _axis_coordinates(
+    point: np.ndarray, foot: np.ndarray, direction: np.ndarray, basis: np.ndarray
+) -> tuple[float, float, float, float]:
+    """A ``point`` (3,) [mm] in the coordinates of the axis through ``foot`` (3,) along
+    ``direction`` (3,): ``(c, x0, x1, d)``, its height ``c`` along the axis, its offset
+    ``x = E' (point - foot)`` across it in the ``basis`` ``E`` ``(3, 2)`` and ``d = |x|``
+    [mm]. A compiled kernel."""
+    w0, w1, w2 = point[0] - foot[0], point[1] - foot[1], point[2] - foot[2]
+    c = w0 * direction[0] + w1 * direction[1] + w2 * direction[2]
+    x0 = w0 * basis[0, 0] + w1 * basis[1, 0] + w2 * basis[2, 0]
+    x1 = w0 * basis[0, 1] + w1 * basis[1, 1] + w2 * basis[2, 1]
+    return c, x0, x1, math.sqrt(x0 * x0 + x1 * x1)
 
 
 def _direction_sd_deg(markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str):
@@ -1167,7 +1250,19 @@ def _point_covariance_at(
 def _centroid(markers: np.ndarray) -> np.ndarray:
     """The centroid (3,) [mm] of every sample of ``markers`` ``(N, P, 3)`` [mm]: the foot of an
     axis cost's tilt and shift (:func:`_cost_at`)."""
-    return markers.reshape(-1, 3).mean(axis=0)
+    return _sample_centroid(kernel_array(markers))
+
+
+@kernel
+def _sample_centroid(markers: np.ndarray) -> np.ndarray:
+    """:func:`_centroid` in a compiled kernel: NumPy's mean over the samples' axis of a
+    ``(N P, 3)`` view costs a long trial's planar check several times the sum."""
+    total = np.zeros(3)
+    for k in range(markers.shape[0]):
+        for p in range(markers.shape[1]):
+            for i in range(3):
+                total[i] += markers[k, p, i]
+    return total / (markers.shape[0] * markers.shape[1])
 
 
 def _first_order_annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> AxisResult:

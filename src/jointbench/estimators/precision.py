@@ -216,7 +216,8 @@ determined (:func:`annotate_point`). The direction's own statements are left as 
 short arc can fix the direction and leave the line's place open. From a least-squares cost in
 the line's tilt and shift, :func:`point_covariance` carries the tilt's uncertainty to the
 point by its height along the axis, with the cost's Newton step as a bias (paper B's costs:
-:mod:`jointbench.estimators.axis`).
+:mod:`jointbench.estimators.axis`); SARA states its point from its normal matrix, with the
+pull of its rotations' noise as the bias (:mod:`jointbench.estimators.twosegment`).
 
 The simulated studies call the registered functions without this check, as they do without the
 self-check, so their results are the papers' methods alone.
