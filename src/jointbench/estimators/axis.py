@@ -1027,21 +1027,30 @@ def _radial_sums(
     # and sum rho d u u' (u0 u0, u0 u1, u1 u1).
     tangential = np.zeros((3, 4))
     outer = np.zeros(3)
+    # A marker's samples in the axis's coordinates (c, u0, u1, d), kept from the first pass.
+    coordinates = np.empty((n_frames, 4))
     for p in range(n_markers):
         mean_distance = 0.0
         mean[:] = 0.0
         for k in range(n_frames):
             c, x0, x1, d = _axis_coordinates(markers[k, p], foot, direction, basis)
+            u0, u1 = x0 / d, x1 / d
+            coordinates[k, 0], coordinates[k, 1], coordinates[k, 2] = c, u0, u1
+            coordinates[k, 3] = d
             mean_distance += d
-            mean[0] -= c * x0 / d
-            mean[1] -= c * x1 / d
-            mean[2] -= x0 / d
-            mean[3] -= x1 / d
+            mean[0] -= c * u0
+            mean[1] -= c * u1
+            mean[2] -= u0
+            mean[3] -= u1
         mean_distance /= n_frames
         mean /= n_frames
         for k in range(n_frames):
-            c, x0, x1, d = _axis_coordinates(markers[k, p], foot, direction, basis)
-            u0, u1 = x0 / d, x1 / d
+            c, u0, u1, d = (
+                coordinates[k, 0],
+                coordinates[k, 1],
+                coordinates[k, 2],
+                coordinates[k, 3],
+            )
             sample[0], sample[1], sample[2], sample[3] = -c * u0, -c * u1, -u0, -u1
             residual = d - mean_distance
             squared = residual * residual
