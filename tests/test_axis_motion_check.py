@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_axis_sd import Z, hinge
+from test_axis_sd import Z, hinge, ok_but_for_the_point
 from test_io_recordings import KNEE, SHANK, THIGH
 
 import jointbench
@@ -53,11 +53,13 @@ def test_a_planar_answer_far_off_on_a_small_arc_is_warned_about():
     # Held within 5 degrees of it, not 30: the markers leave the planar cost's model of a
     # fixed axis (tests/test_axis_misfit.py).
     assert found["band_deg"] == precision.MISFIT_BAND_DEG
-    assert result.status.startswith(
-        f"warning: {NOT_THE_MOTIONS}: the answer lies {found['angle_deg']:.0f} deg from the "
+    # Its point is not determined either (tests/test_axis_point_sd.py), said first.
+    assert result.status.startswith("warning: point not determined: ")
+    assert (
+        f"; warning: {NOT_THE_MOTIONS}: the answer lies {found['angle_deg']:.0f} deg from the "
         f"principal axis of the segment's rotations, beyond 5 deg by {found['z']:.2f} times "
         f"that axis's SD of {found['principal_axis_sd_deg']:.2g} deg (above 3.09 at 0.001); "
-    )
+    ) in result.status
     assert result.converged  # left as the method set it
     bare = registry.get("axis", "planar", checked=False)(markers)
     np.testing.assert_array_equal(result.direction, bare.direction)
@@ -399,7 +401,9 @@ def test_a_compact_cluster_far_from_the_axis_keeps_its_correct_answers_ok(method
         result = jointbench.fit_axis(markers, method)
         error = angle_between_lines_deg(np.asarray(result.direction), axis)
         assert error < 5.0, (seed, error)
-        assert result.status == "ok", (seed, result.status)
+        # A 20 mm plate under 1 mm noise leaves the point's SD near 10 mm: seeds 4, 7 and 8 are
+        # said to leave the point undetermined (tests/test_axis_point_sd.py), not the direction.
+        assert ok_but_for_the_point(result.status), (seed, result.status)
 
 
 def test_markers_near_a_hinges_axis_leave_no_answer_ok_far_from_it():
@@ -453,7 +457,9 @@ def test_one_long_lever_keeps_its_correct_answers_ok(method):
         assert error < 5.0, (seed, error)
         assert check(result)["arc_rotation_sd_deg"] < 1.0, seed
         assert "with the longest lever" not in result.status, seed
-        n_ok += result.status == "ok"
+        # The point's own warning (seeds 7 and 8: SDs of 11-12 mm from the one far marker's
+        # arc) is not about the direction (tests/test_axis_point_sd.py).
+        n_ok += ok_but_for_the_point(result.status)
     assert n_ok >= 9  # one seed's answers are warned about for their frames or their cost
 
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from test_axis_sd import hinge
+from test_axis_sd import hinge, ok_but_for_the_point
 from test_io_recordings import KNEE, SHANK, THIGH
 
 import jointbench
@@ -58,8 +58,11 @@ def test_on_small_arcs_the_answers_passed_as_ok_are_within_four_sds(method):
     outcomes = []
     for arc_deg in (2.0, 5.0):
         results = fit(np.stack([swing(seed, arc_deg) for seed in range(60)]))
+        # The direction's status: a short arc's point is often not determined, its own warning.
         outcomes += [
-            (error_deg(r), r.diagnostics["axis_sd_deg"]) for r in results if r.status == "ok"
+            (error_deg(r), r.diagnostics["axis_sd_deg"])
+            for r in results
+            if ok_but_for_the_point(r.status)
         ]
     errors, sds = np.array(outcomes).T
     assert len(outcomes) > 40

@@ -38,7 +38,12 @@ Every method is reached through the registry, which holds it to the same rules:
 * an axis whose direction the method's own cost leaves undetermined (the SD of the direction
   that the cost's curvature and residuals imply, ``diagnostics["axis_sd_deg"]``, above
   :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG`) gets a warning in ``status`` the
-  same way (see :mod:`jointbench.estimators.precision`);
+  same way (see :mod:`jointbench.estimators.precision`); so does an axis whose point the data
+  leave undetermined across the axis (``diagnostics["axis_point_sd_mm"]`` above
+  :data:`jointbench.estimators.results.MAX_AXIS_POINT_SD_MM`, with its covariance in
+  ``diagnostics["axis_point_covariance_mm2"]``; ``"warning: point not determined: ..."``),
+  whatever its direction's SD: a short arc can fix an axis's direction and leave where it lies
+  open by tens of millimetres;
 * a mistake in a method's code (a ``TypeError``, an ``IndexError``, arrays that do not
   broadcast: any error but a failure the method states with a ``ValueError`` of its own, a
   ``LinAlgError`` or a ``FloatingPointError``) raises

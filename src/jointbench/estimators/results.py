@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
+    "MAX_AXIS_POINT_SD_MM",
     "MAX_AXIS_SD_DEG",
     "MAX_CENTER_SD_MM",
     "MAX_DIRECTION_OFF_DEG",
@@ -19,6 +20,7 @@ __all__ = [
     "method_sd",
     "stated_axis_sd",
     "stated_center_sd",
+    "stated_point_sd",
     "stated_sd",
     "states_precision",
     "with_fields",
@@ -38,6 +40,12 @@ PRECISION_NOT_DETERMINED = "precision not determined"
 #: Paper B states its accuracy in bands of 5 and 10 degrees (claims B2, B3): an SD above the
 #: looser band means the answer cannot be told within it.
 MAX_AXIS_SD_DEG = 10.0
+
+#: An axis whose point's SD across the axis, along its least determined direction, is above
+#: this [mm] does not place the axis: a line placed for a model (a knee's flexion axis) that
+#: far off cannot be told from a failed one, as a centre cannot beyond
+#: :data:`MAX_CENTER_SD_MM`. Its direction may still be determined: the warning names the point.
+MAX_AXIS_POINT_SD_MM = 10.0
 
 #: No line's direction is further than this [deg] from another's: an SD beyond it states no
 #: precision, whatever bound a method's precision is declared not determined above.
@@ -111,6 +119,19 @@ def stated_sd(result) -> float | None:
     if sd is None or not states_precision(result):
         return None
     return stated_axis_sd(sd) if isinstance(result, AxisResult) else stated_center_sd(sd)
+
+
+def stated_point_sd(result) -> float | None:
+    """The SD of an axis ``result``'s point across the axis [mm] where it states the point's
+    precision: the one the method gives (``diagnostics["axis_point_sd_mm"]``), at most
+    :data:`MAX_AXIS_POINT_SD_MM`, above which the status says the point is not determined, and
+    only where the answer's SD states a precision at all (:func:`states_precision`: the point's
+    is read from the same cost); ``None`` otherwise, and where the method gives none."""
+    sd = result.diagnostics.get("axis_point_sd_mm")
+    if sd is None or not states_precision(result):
+        return None
+    # NaN fails the comparison: it states nothing either; nor does a negative number.
+    return float(sd) if 0.0 <= sd <= MAX_AXIS_POINT_SD_MM else None
 
 
 def _sd_key(result) -> str:

@@ -332,7 +332,13 @@ def fit_sara(markers: np.ndarray) -> AxisResult:
     [mm]. ``diagnostics["ratio"]`` is the smallest over the second-smallest eigenvalue of the
     normal matrix: near 0 for hinge-like motion, near 1 when no axis stands out;
     ``diagnostics["eigenvalues"]`` ``(6,)`` and ``["eigenvectors"]`` ``(6, 6)`` (columns) are
-    that matrix's, from which the checked call states the direction's SD (:func:`_sara_sd_deg`).
+    that matrix's, from which the checked call states the direction's SD (:func:`_sara_sd_deg`)
+    and the covariance of the point ``p1`` across the axis
+    (``diagnostics["axis_point_covariance_mm2"]``, :func:`_sara_point_covariance`; with
+    ``diagnostics["point_moving"]``, ``p2``): the minimum-norm least-squares point, which
+    for a noise-free hinge is the axis's point nearest the cluster's centroid at frame 0, on a
+    short arc is pulled towards it by the rotations' noise, tens of millimetres at a few
+    degrees, a bias that covariance holds.
     """
     return one_trial(_sara_trials, markers)
 
@@ -491,6 +497,88 @@ def _bilinear(u: np.ndarray, matrix: np.ndarray, v: np.ndarray) -> float:
     return total
 
 
+@kernel
+def _sara_point_covariance(
+    values: np.ndarray,
+    vectors: np.ndarray,
+    moving: np.ndarray,
+    shape: np.ndarray,
+    n_frames: int,
+    n_distinct: int,
+) -> np.ndarray:
+    """The covariance ``(3, 3)`` [mm^2] of SARA's one-segment point ``p1`` across its axis
+    ``n1`` (rank 2, in the plane normal to it), from the normal matrix ``M`` ``(6, 6)`` of
+    ``n_frames`` frames, ``n_distinct`` of them distinct, by its ascending eigenvalues
+    ``values`` ``(6,)`` and eigenvectors ``vectors`` ``(6, 6)`` (columns), the point's
+    version ``p2`` in the moving body frame ``moving`` (3,) [mm] and the cluster's ``shape``
+    ``(P, 3)`` [mm] (its markers at frame 0, where the body frame is the reference's).
+
+    ``x = [p1 - o; p2 - o]`` (``o`` the cluster's centroid) is the least-squares solution of
+    ``A x = b`` with ``M = A'A``'s null vector (the axis) dropped, ``M^+`` its pseudo-inverse.
+    A frame's residual ``p1 - R p2 - t`` takes the pose noise as ``-R (dw x (p2 - o)) - dt``
+    (Pennec & Thirion 1997: ``dw`` of covariance ``s^2 K^-1``, ``K`` the centred cluster's
+    inertia, ``dt`` at ``o`` of ``s^2 / P`` per coordinate); across the axis, which ``R``
+    keeps, its variance per coordinate is ``s^2 (1 / P + tr(P_n L K^-1 L') / 2)``, ``L`` the
+    cross-product matrix of ``p2 - o`` and ``P_n`` the projector across ``n``, whatever the
+    frame's rotation: the covariance ``s^2 (...) M^+``, its ``p1`` block taken across the axis.
+    The noise in ``A`` itself adds ``Psi = N s^2 [[0, 0], [0, tr(K^-1) I - K^-1]]`` to ``M``
+    in expectation, which pulls ``x`` towards ``o`` by ``-M^+ Psi x`` (the attenuation of an
+    errors-in-variables fit, largest on a short arc, whose ``M`` holds little more than that
+    noise across the axis): a bias, added as its outer product, as the direction's is judged
+    (:func:`_sara_validity`). A change of the direction moves the minimum-norm point along the
+    axis only, to first order. ``s^2`` is read from the smallest eigenvalue, ``lambda_0 =
+    N s^2 q(n) / 2`` over the null vector's halves of length ``1 / sqrt(2)``, ``q`` as in
+    :func:`_sara_validity`. ``inf`` throughout where the cluster's inertia is singular or no
+    eigenvalue above the smallest is positive. A compiled kernel."""
+    covariance = np.full((3, 3), np.inf)
+    n_markers = shape.shape[0]
+    centroid = shape.sum(axis=0) / n_markers
+    inertia = np.empty((3, 3))
+    inertia_into(shape - centroid, inertia)
+    try:
+        compliance = np.linalg.inv(inertia)
+    except Exception:  # singular: LAPACK's verdict, as NumPy's inverse gives it
+        return covariance
+    half = vectors[:3, 0].copy()
+    direction = half / math.sqrt(half[0] ** 2 + half[1] ** 2 + half[2] ** 2)
+    trace = compliance[0, 0] + compliance[1, 1] + compliance[2, 2]
+    along = trace - _bilinear(direction, compliance, direction)
+    if not (along > 0.0 and (values[1:] > 0.0).all()):
+        return covariance
+    noise = 2.0 * max(values[0], 0.0) / along  # N s^2
+    lever = moving - centroid
+    cross = np.array(
+        [
+            [0.0, -lever[2], lever[1]],
+            [lever[2], 0.0, -lever[0]],
+            [-lever[1], lever[0], 0.0],
+        ]
+    )
+    spread = cross @ compliance @ cross.T
+    across = spread[0, 0] + spread[1, 1] + spread[2, 2] - _bilinear(direction, spread, direction)
+    variance = noise / n_frames * (1.0 / n_markers + 0.5 * across) * n_frames / n_distinct
+    # The rows of M^+ that give p1: sum_j v_j[:3] v_j' / lambda_j over the eigenvectors kept.
+    rows = np.zeros((3, 6))
+    for j in range(1, 6):
+        for i in range(3):
+            for k in range(6):
+                rows[i, k] += vectors[i, j] * vectors[k, j] / values[j]
+    attenuated = noise * (trace * lever - compliance @ lever)  # Psi x, its moving half
+    pull = np.zeros(3)
+    for i in range(3):
+        for k in range(3):
+            pull[i] -= rows[i, 3 + k] * attenuated[k]
+    full = np.empty((3, 3))
+    for i in range(3):
+        for k in range(3):
+            full[i, k] = variance * rows[i, k] + pull[i] * pull[k]
+    projector = np.eye(3)
+    for i in range(3):
+        for k in range(3):
+            projector[i, k] -= direction[i] * direction[k]
+    return projector @ full @ projector
+
+
 def _sara_annotated(result: AxisResult, sd_deg: float, share: float, gap: float, bias_deg: float):
     """SARA's one-segment ``result`` with its direction's SD ``sd_deg`` (:func:`_sara_sd_deg`),
     above :data:`jointbench.estimators.precision.MAX_AXIS_SD_DEG` a warning, and where the
@@ -505,18 +593,28 @@ def _sara_annotated(result: AxisResult, sd_deg: float, share: float, gap: float,
 
 @kernel
 def _sara_precision_numbers(
-    values: np.ndarray, vectors: np.ndarray, n_distinct: np.ndarray, markers: np.ndarray
+    values: np.ndarray,
+    vectors: np.ndarray,
+    n_distinct: np.ndarray,
+    markers: np.ndarray,
+    moving: np.ndarray,
+    covariances: np.ndarray,
 ) -> np.ndarray:
     """Per trial, :func:`_sara_sd_deg` and :func:`_sara_validity` of its eigenvalues ``values``
     ``(T, 6)`` and eigenvectors ``vectors`` ``(T, 6, 6)``, for its markers ``(T, N, P, 3)``
     [mm], ``n_distinct`` ``(T,)`` of whose frames are distinct: ``(T, 4)``, the SD [deg], the
-    noise's share, the eigen-gap and the pull [deg]. A compiled kernel: one call for a batch,
-    where two per trial cost a checked call more than their arithmetic."""
+    noise's share, the eigen-gap and the pull [deg]; and into ``covariances`` ``(T, 3, 3)``
+    [mm^2] its point's :func:`_sara_point_covariance`, its version in the moving body frame
+    ``moving`` ``(T, 3)`` [mm]. A compiled kernel: one call for a batch, where several per
+    trial cost a checked call more than their arithmetic."""
     numbers = np.empty((values.shape[0], 4))
     for t in range(values.shape[0]):
         numbers[t, 0] = _sara_sd_deg(values[t], vectors[t], markers.shape[1], n_distinct[t])
         numbers[t, 1], numbers[t, 2], numbers[t, 3] = _sara_validity(
             values[t], vectors[t], markers[t, 0]
+        )
+        covariances[t] = _sara_point_covariance(
+            values[t], vectors[t], moving[t], markers[t, 0], markers.shape[1], n_distinct[t]
         )
     return numbers
 
@@ -525,21 +623,27 @@ def _sara_precision_many(
     results: list[AxisResult], markers: np.ndarray, *, verdicts
 ) -> list[AxisResult]:
     """Each of SARA's one-segment ``results`` (the trials of ``markers`` ``(T, N, P, 3)``
-    [mm]) annotated by :func:`_sara_annotated` with the numbers of its eigen-problem
-    (:func:`_sara_precision_numbers`). The support ``verdicts`` are not read: the
-    eigen-problem states its own noise."""
+    [mm]) annotated by :func:`_sara_annotated` with the numbers of its eigen-problem and with
+    its point's covariance across the axis
+    (:func:`jointbench.estimators.precision.annotate_point`), both from
+    :func:`_sara_precision_numbers`. The support ``verdicts`` are not read: the eigen-problem
+    states its own noise."""
     del verdicts
     if not results:
         return []
     markers = kernel_array(markers)
+    covariances = np.empty((len(results), 3, 3))
     numbers = _sara_precision_numbers(
         np.array([result.diagnostics["eigenvalues"] for result in results], dtype=float),
         np.array([result.diagnostics["eigenvectors"] for result in results], dtype=float),
         np.array([len(precision.distinct_frames(trial)) for trial in markers]),
         markers,
+        np.array([result.diagnostics["point_moving"] for result in results], dtype=float),
+        covariances,
     )
     return [
-        _sara_annotated(result, *row) for result, row in zip(results, numbers.tolist(), strict=True)
+        precision.annotate_point(_sara_annotated(result, *row), covariance)
+        for result, row, covariance in zip(results, numbers.tolist(), covariances, strict=True)
     ]
 
 

@@ -211,6 +211,8 @@ class RecordingFit:
             out.update(_joint_points(self.kind, self.result))
         fields = self.sd_fields()
         out.update(fields)
+        if self.kind == "axis":
+            out.update(_point_precision(self.result))
         names = {"own": "covariance_mm2", "stated": "center_covariance_mm2"}
         covariances = self.covariances(fields)
         for which, covariance in covariances.items():
@@ -239,6 +241,19 @@ class RecordingFit:
             out["bootstrap"] = boot
         out["frame"] = self.frame or "as recorded (markers taken as already in the reference frame)"
         return out
+
+
+def _point_precision(result) -> dict:
+    """An axis answer's point precision as :meth:`RecordingFit.to_dict` gives it, where the
+    method states one (``diagnostics["axis_point_sd_mm"]``): ``point_sd_mm``, its SD across the
+    axis [mm], and ``point_covariance_mm2`` ``(3, 3)``, both ``None`` where they state no
+    precision (:func:`jointbench.estimators.results.stated_point_sd`: the status says the point
+    or the answer's precision is not determined)."""
+    if "axis_point_sd_mm" not in result.diagnostics:
+        return {}
+    sd = results.stated_point_sd(result)
+    covariance = None if sd is None else result.diagnostics["axis_point_covariance_mm2"]
+    return {"point_sd_mm": sd, "point_covariance_mm2": covariance}
 
 
 CENTER_IS = {
