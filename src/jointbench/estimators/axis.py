@@ -41,12 +41,10 @@ off; and how far ``m`` lies from that cost's minimum (its Newton step, carried t
 added as a bias (:func:`jointbench.estimators.precision.point_covariance`). The cost is taken
 at the line through ``m`` along the planar eigenvector, for the combined answer at its own
 line: a radial answer degrees off the axis still passes through ``m``, and expanding about it
-would carry that tilt to ``h`` as if ``m`` moved with it. On swings of 3-90 degrees (0.5-1 mm
-noise, four markers about 100 mm from the axis, 40 seeds each, ``tests/test_axis_point_sd.py``)
-the squared Mahalanobis distance of the ``ok`` answers' points from the axis averaged 1.5-2.3
-(a calibrated 2-D statement's 2) in every case with 8 or more of them but one, whose 7.0 came
-from one combined answer on a 10 degree arc with 1 mm noise, 36 mm off; 7 of about 490 lay
-beyond 3 SDs. Before, ``ok`` answers on 3-10 degree arcs lay up to 1.45 m off.
+would carry that tilt to ``h`` as if ``m`` moved with it. On swings of 3-90 degrees
+(``tests/test_axis_point_sd.py``) the squared Mahalanobis distance of the ``ok`` answers'
+points from the axis averages about 2, as a calibrated 2-D statement's should (the README
+gives the counts).
 
 Search (paper B §3): MATLAB's ``fminsearch`` (Nelder–Mead, Lagarias et al. 1998) as
 re-implemented in :mod:`jointbench.numerics.simplex`, from ten starting directions: one vertex
