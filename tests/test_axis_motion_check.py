@@ -4,6 +4,7 @@ segment's rotations about their mean pose (:class:`jointbench.estimators.support
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -281,6 +282,31 @@ def test_the_band_narrows_to_5_degrees_where_the_segment_turns_about_no_second_a
     checked = precision.annotate_motion_axis(result, reference, "", off_axis_p_value)
     assert check(checked)["band_deg"] == band
     assert (NOT_THE_MOTIONS in checked.status) is (band == 5.0)
+
+
+@pytest.mark.parametrize(
+    ("stated_sd_deg", "warned"), [(0.5, True), (1.0, True), (6.0, False), (math.nan, True)]
+)
+def test_a_hinges_narrow_band_holds_an_answer_to_no_more_than_its_own_sd(stated_sd_deg, warned):
+    """An answer 12 degrees from a precise reference where the segment turns about no second
+    axis: one that states an SD of a degree or less is warned about (the slide along a hinge's
+    axis, :func:`test_a_cluster_screwing_along_its_axis_leaves_no_answer_ok_beyond_its_sd`),
+    one that states 6 degrees, 2 of its SDs off where the principal axis is the hinge's, is not
+    (on hinges of 5 to 60 degrees under 2 mm of noise, radial answers 1.1 to 2.5 of their SDs
+    from the hinge read ``ok`` with the 30 degree band and were warned about with 5), and one
+    that states none is held to 5 degrees."""
+    result = jointbench.fit_axis(_turning(0, 60.0), "planar")
+    result = dataclasses.replace(
+        result, diagnostics={**result.diagnostics, "axis_sd_deg": stated_sd_deg}
+    )
+    direction = np.asarray(result.direction)
+    normal = unit(np.cross(direction, [1.0, 0.0, 0.0]))
+    reference = support.MotionAxis(
+        rotation_matrix(normal * math.radians(12.0)) @ direction, 0.5, 0.0, 0.5, np.array([0.1])
+    )
+    checked = precision.annotate_motion_axis(result, reference, "", 0.5)
+    assert (NOT_THE_MOTIONS in checked.status) is warned
+    assert check(checked)["band_deg"] <= precision.MOTION_AXIS_BAND_DEG
 
 
 @pytest.fixture

@@ -133,7 +133,11 @@ the principal axis, which is then the hinge's own, and the band is the narrower
 :data:`MISFIT_BAND_DEG`. A cluster that translates along its hinge's axis with the angle (a
 plate sliding on its segment, a screw motion) needs it: each marker's arc then lies nearly in
 a plane tilted from the axis, which the planar and combined costs fit to a sharp minimum
-far from the axis in their own SDs, while the rotations are about the axis alone.
+far from the axis in their own SDs, while the rotations are about the axis alone. An answer
+whose own stated SD reaches beyond that band is held to :data:`_TOLD_APART_Z` of that SD
+instead (:func:`_hinge_band_deg`), no wider than the band of any motion: a radial answer on a
+short arc under heavy noise, stating several degrees, lies that far off as its own scatter,
+not as another axis's answer.
 ``tests/test_axis_motion_check.py`` holds the cases it catches and those it passes.
 
 What every SD above rests on: markers that read the segment's rotation to first order. A
@@ -769,6 +773,20 @@ def annotate_agreement(
     return with_warnings(result, warnings, {"cross_check": record})
 
 
+def _hinge_band_deg(answer_sd_deg: float) -> float:
+    """The band [deg] about the principal axis of a hinge's rotations (the support verdict finds
+    no rotation about a second axis) for an answer that states an SD of ``answer_sd_deg``
+    [deg]: :data:`MISFIT_BAND_DEG`, or :data:`_TOLD_APART_Z` of that SD where these reach
+    further, up to :data:`MOTION_AXIS_BAND_DEG`. That axis is the hinge's, so an answer that
+    states a degree lying 8 off is not this motion's; one that states 6 (a radial answer on a
+    short arc under 2 mm of noise) lies 8 to 15 off as its own scatter. No SD (NaN) is held to
+    :data:`MISFIT_BAND_DEG`; the widest band is the one any motion's answer is held to, so a
+    method stating a large SD escapes nothing it did not before."""
+    if not answer_sd_deg > MISFIT_BAND_DEG / _TOLD_APART_Z:
+        return MISFIT_BAND_DEG
+    return min(_TOLD_APART_Z * answer_sd_deg, MOTION_AXIS_BAND_DEG)
+
+
 def annotate_motion_axis(
     result,
     reference: MotionAxis | None,
@@ -782,10 +800,11 @@ def annotate_motion_axis(
     ``principal_axis_sd_deg``, ``principal_axis_noise_share`` and ``pose_sd_deg``, and
     ``angle_deg``, the angle between the answer and that axis [deg], and ``z``, how far the
     angle is beyond its band in the reference's SDs (``band_deg``: :data:`MOTION_AXIS_BAND_DEG`,
-    or :data:`MISFIT_BAND_DEG` where the answer's cost cannot vouch for it or where
+    or :data:`MISFIT_BAND_DEG` where the answer's cost cannot vouch for it, or where
     ``off_axis_p_value``, the support verdict's p-value of rotation about a second axis, is not
     below :data:`~jointbench.estimators.support.ROTATION_ALPHA`: a hinge, whose principal axis
-    is its own; NaN, not tested, keeps the wide band). Where ``z`` is above
+    is its own, the band widened to the answer's own stated SD's reach,
+    :func:`_hinge_band_deg`; NaN, not tested, keeps the wide band). Where ``z`` is above
     ``_TOLD_APART_Z``, a warning that the answer is not the motion's axis. The answer's own
     stated SD plays no part: the question is whether it is an axis of this motion at all, and
     a method could state any SD. Where the reference is not determined (its noise share not
@@ -851,8 +870,14 @@ def annotate_motion_axis(
     if "not_checked" in record:
         return with_warnings(result, warnings, {"motion_axis_check": record})
     # NaN fails the comparison: an untested motion may turn about a second axis.
-    hinge = off_axis_p_value >= ROTATION_ALPHA
-    band = MISFIT_BAND_DEG if unsupported or hinge else MOTION_AXIS_BAND_DEG
+    hinge = off_axis_p_value >= ROTATION_ALPHA and not unsupported
+    answer_sd_deg = result.diagnostics.get("axis_sd_deg", math.nan)
+    if unsupported:
+        band = MISFIT_BAND_DEG
+    elif hinge:
+        band = _hinge_band_deg(answer_sd_deg)
+    else:
+        band = MOTION_AXIS_BAND_DEG
     angle_deg = line_angle_deg(result.direction, reference.direction)
     beyond = angle_deg - band
     z = beyond / reference.sd_deg if reference.sd_deg > 0.0 else math.copysign(math.inf, beyond)
@@ -864,15 +889,20 @@ def annotate_motion_axis(
                 f"; {band:g} deg, not {MOTION_AXIS_BAND_DEG:g}, since "
                 f"{_misfit_words(result.method, misfit)}"
             )
-        elif hinge:
+        elif hinge and band < MOTION_AXIS_BAND_DEG:
             why = (
-                f"; {band:g} deg, not {MOTION_AXIS_BAND_DEG:g}, since the segment turns about no "
-                f"second axis (p = {off_axis_p_value:.2g}): the principal axis of a hinge's "
+                f"; {band:.3g} deg, not {MOTION_AXIS_BAND_DEG:g}, since the segment turns about "
+                f"no second axis (p = {off_axis_p_value:.2g}): the principal axis of a hinge's "
                 "rotations is its axis"
             )
+            if band > MISFIT_BAND_DEG:
+                why += (
+                    f", widened to {_TOLD_APART_Z:.2f} times the answer's own SD of "
+                    f"{answer_sd_deg:.2g} deg"
+                )
         warnings = (
             f"axis not the motion's: the answer lies {angle_deg:.0f} deg from the principal "
-            f"axis of the segment's rotations, beyond {band:g} deg by {z:.2f} times that "
+            f"axis of the segment's rotations, beyond {band:.3g} deg by {z:.2f} times that "
             f"axis's SD of {reference.sd_deg:.2g} deg (above {_TOLD_APART_Z:.2f} at "
             f"{ROTATION_ALPHA:g}){why}",
         )
