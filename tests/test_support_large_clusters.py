@@ -113,3 +113,38 @@ def test_a_long_two_segment_recording_passed_transposed_is_judged_and_named(meth
     )
     result = jointbench.fit_joint_center(proximal, distal, method, artefacts="warn")
     assert "may be (markers, frames, 3); it must be (frames, markers, 3)" in result.status
+
+
+def _count_frame_numbers(monkeypatch) -> list[tuple[int, ...]]:
+    """The shapes of the markers each pass of the frames' numbers is given, as it is made."""
+    passes: list[tuple[int, ...]] = []
+    numbers = support._frame_numbers
+
+    def counted(markers):
+        passes.append(markers.shape)
+        return numbers(markers)
+
+    monkeypatch.setattr(support, "_frame_numbers", counted)
+    return passes
+
+
+@pytest.mark.parametrize(("kind", "method"), [("center", "LS"), ("axis", "planar")])
+def test_a_large_cluster_s_frames_are_read_once_per_checked_call(monkeypatch, kind, method):
+    """The pair distances' numbers serve the block test and the lag-1 statement alike: over
+    the pairs of thousands of markers (a recording passed as ``(markers, frames, 3)``) each
+    pass costs seconds and the distances' gigabytes."""
+    markers = _ball(support.MAX_DISTANCE_MARKERS + 10, 40)
+    plain = registry.get(kind, method)(markers)
+    passes = _count_frame_numbers(monkeypatch)
+    counted = registry.get(kind, method)(markers)
+    assert passes == [(1, *markers.shape)]
+    assert counted.status == plain.status
+    assert counted.diagnostics == plain.diagnostics
+
+
+def test_a_batch_of_large_clusters_reads_its_frames_in_one_pass(monkeypatch):
+    trials = np.stack([_ball(30, 20, seed) for seed in range(3)])
+    plain = support.assess_many("center", (trials,))
+    passes = _count_frame_numbers(monkeypatch)
+    assert support.assess_many("center", (trials,)) == plain
+    assert passes == [trials.shape]

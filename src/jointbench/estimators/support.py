@@ -2070,7 +2070,13 @@ def _judged(
                 f"{n_markers} markers, more than the {MAX_DISTANCE_MARKERS} whose pairwise "
                 "distances the rigidity test compares"
             )
-            return [_without_poses((trial,), reason, has_pose=True) for trial in arrays[0]], None
+            # One pass over the pairs (thousands of markers have millions) for every trial's
+            # verdict and its lag-1 statement alike.
+            numbers = _frame_numbers(kernel_array(arrays[0]))
+            return [
+                _without_poses((trial,), reason, has_pose=True, frame_numbers=row)
+                for trial, row in zip(arrays[0], numbers, strict=True)
+            ], numbers
         return _one_segment(kind, arrays[0])
     if len(arrays) > 1:
         check_poses(arrays, poses, ARRAY_NAMES[kind])
@@ -2665,14 +2671,19 @@ def _scatter_correlation_sd(scatter: np.ndarray, n_frames: int) -> float:
 
 
 def _without_poses(
-    arrays: tuple[np.ndarray, ...], reason: str, *, has_pose: bool = False
+    arrays: tuple[np.ndarray, ...],
+    reason: str,
+    *,
+    has_pose: bool = False,
+    frame_numbers: np.ndarray | None = None,
 ) -> Support:
     """The verdict on one trial whose markers give no rigid-body pose (``reason``): fewer
     than three markers, or collinear ones; or (``has_pose``) whose markers the rigidity test
     cannot take (``reason`` says why). What the positions alone can show is tested on the
     moving markers ``arrays[-1]`` ``(N, P, 3)``, fitted with the concentric spheres every centre
     and axis model implies (a marker turning about an axis moves on a sphere about any of its
-    points; LS, closed form):
+    points; LS, closed form); ``frame_numbers``, their row of :func:`_frame_numbers` ``(5,)``
+    where the caller has it (else computed here):
 
     * the sphere fit's residual share of the markers' scatter about their mean positions, as
       the rigidity share of the module docstring (a cloud has no sphere to fit);
@@ -2708,9 +2719,10 @@ def _without_poses(
         p_line = f_survival(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
-    (dependence,) = _frame_numbers(kernel_array(markers[None]))
+    if frame_numbers is None:
+        (frame_numbers,) = _frame_numbers(kernel_array(markers[None]))
     name = "distal" if len(arrays) > 1 else "markers"
-    frames = _segment_frames(dependence[:4].tolist(), name, markers)
+    frames = _segment_frames(frame_numbers[:4].tolist(), name, markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
