@@ -134,3 +134,34 @@ def test_a_recording_with_a_large_segment_says_so_in_its_status():
     assert f"warning: {words}" in result.result.status
     assert result.to_dict()["status"] == result.result.status
     assert result.result.diagnostics["artefacts_untested"] == [words]
+
+
+def _count_typical_frames(monkeypatch) -> list[tuple[int, ...]]:
+    """The shapes of the clusters each search of the typical frame is given, as it is made."""
+    searches: list[tuple[int, ...]] = []
+    most_typical = screening._most_typical
+
+    def counted(clusters):
+        searches.append(clusters.shape)
+        return most_typical(clusters)
+
+    monkeypatch.setattr(screening, "_most_typical", counted)
+    return searches
+
+
+@pytest.mark.parametrize(("n_markers", "n_frames"), [(LIMIT + 1, 60), (400, 5)])
+def test_a_clean_cluster_s_typical_frame_is_found_once(monkeypatch, n_markers, n_frames):
+    """The mean shape of a cluster nothing was flagged in starts from the typical frame the
+    screen started from: each search compares every marker pair over every frame, millions of
+    pairs for a recording passed as ``(markers, frames, 3)``."""
+    markers, labels = _ball(n_markers, n_frames), _labels(n_markers)
+    plain = screening.screen(markers, labels, "m")
+    searches = _count_typical_frames(monkeypatch)
+    found = screening.screen(markers, labels, "m")
+    assert searches == [markers.shape]
+    assert found.artefacts == plain.artefacts == ()
+    for name in ("shape", "rotation", "translation", "residuals"):
+        assert np.array_equal(getattr(found, name), getattr(plain, name)), name
+    # The fit's screen finds the typical frame in the pass that clears the cluster, or not.
+    assert screening.find_artefacts(markers, labels, "m") == ((), ())
+    assert searches == [markers.shape]

@@ -514,10 +514,14 @@ def _finite_pair_distances(clusters: np.ndarray) -> tuple[np.ndarray, bool]:
     return distances, finite
 
 
-def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
+def mean_shape(
+    markers: np.ndarray, labels: tuple[str, ...], source: str, typical: np.ndarray | None = None
+) -> np.ndarray:
     """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
-    in the frame of its most typical complete frame (the caller fixes the frame)."""
-    shape = typical_shape(markers, labels, source)
+    in the frame of its most typical complete frame (the caller fixes the frame):
+    ``typical`` ``(n, 3)`` [mm] where the caller has found it (:func:`typical_shape`), else
+    found here."""
+    shape = typical_shape(markers, labels, source) if typical is None else typical.copy()
     markers = kernel_array(markers)
     done = 0
     while done < _MAX_ITERATIONS:
@@ -1751,6 +1755,7 @@ def _screened(
     (:func:`typical_shape`, of the frames the swaps do not hold) and that shape's
     :func:`_posed` fit ``posed``: the iterated mean shape and all that follows."""
     untested = exchanges_untested(len(labels))
+    typical = shape
     breaks: list[Artefact] | None = None
     for _ in range(5):
         rotation, translation, misfit = posed
@@ -1761,7 +1766,10 @@ def _screened(
         clean = markers.copy()
         for artefact in [*breaks, *exchanged]:
             clean[artefact.frame, labels.index(artefact.label)] = np.nan
-        shape = mean_shape(clean, labels, source)
+        # With nothing flagged the samples are the markers themselves, whose typical frame the
+        # screen started from: its search over every marker pair is not made again.
+        unflagged = typical if not (breaks or exchanged) else None
+        shape = mean_shape(clean, labels, source, unflagged)
         posed = _posed(shape, markers)
     else:
         rotation, translation, misfit = posed
