@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_support_large_clusters import CENTRE, _ball
+from test_support_large_clusters import CENTRE, _ball, shapes_passed
 
 import jointbench
 from jointbench import screening
@@ -136,19 +136,6 @@ def test_a_recording_with_a_large_segment_says_so_in_its_status():
     assert result.result.diagnostics["artefacts_untested"] == [words]
 
 
-def _count_typical_frames(monkeypatch) -> list[tuple[int, ...]]:
-    """The shapes of the clusters each search of the typical frame is given, as it is made."""
-    searches: list[tuple[int, ...]] = []
-    most_typical = screening._most_typical
-
-    def counted(clusters):
-        searches.append(clusters.shape)
-        return most_typical(clusters)
-
-    monkeypatch.setattr(screening, "_most_typical", counted)
-    return searches
-
-
 @pytest.mark.parametrize(("n_markers", "n_frames"), [(LIMIT + 1, 60), (400, 5)])
 def test_a_clean_cluster_s_typical_frame_is_found_once(monkeypatch, n_markers, n_frames):
     """The mean shape of a cluster nothing was flagged in starts from the typical frame the
@@ -156,7 +143,7 @@ def test_a_clean_cluster_s_typical_frame_is_found_once(monkeypatch, n_markers, n
     pairs for a recording passed as ``(markers, frames, 3)``."""
     markers, labels = _ball(n_markers, n_frames), _labels(n_markers)
     plain = screening.screen(markers, labels, "m")
-    searches = _count_typical_frames(monkeypatch)
+    searches = shapes_passed(monkeypatch, screening, "_most_typical")
     found = screening.screen(markers, labels, "m")
     assert searches == [markers.shape]
     assert found.artefacts == plain.artefacts == ()

@@ -115,17 +115,23 @@ def test_a_long_two_segment_recording_passed_transposed_is_judged_and_named(meth
     assert "may be (markers, frames, 3); it must be (frames, markers, 3)" in result.status
 
 
+def shapes_passed(monkeypatch, module, name: str) -> list[tuple[int, ...]]:
+    """The shapes of the arrays each call of ``module.<name>`` (one array argument) is given,
+    as the calls are made."""
+    shapes: list[tuple[int, ...]] = []
+    original = getattr(module, name)
+
+    def counted(array):
+        shapes.append(array.shape)
+        return original(array)
+
+    monkeypatch.setattr(module, name, counted)
+    return shapes
+
+
 def _count_frame_numbers(monkeypatch) -> list[tuple[int, ...]]:
-    """The shapes of the markers each pass of the frames' numbers is given, as it is made."""
-    passes: list[tuple[int, ...]] = []
-    numbers = support._frame_numbers
-
-    def counted(markers):
-        passes.append(markers.shape)
-        return numbers(markers)
-
-    monkeypatch.setattr(support, "_frame_numbers", counted)
-    return passes
+    """The shapes of the markers each pass of the frames' numbers is given."""
+    return shapes_passed(monkeypatch, support, "_frame_numbers")
 
 
 @pytest.mark.parametrize(("kind", "method"), [("center", "LS"), ("axis", "planar")])
