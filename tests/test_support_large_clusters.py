@@ -8,6 +8,11 @@ not reach it.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 from rigs import two_segments
@@ -154,3 +159,61 @@ def test_a_batch_of_large_clusters_reads_its_frames_in_one_pass(monkeypatch):
     passes = _count_frame_numbers(monkeypatch)
     assert support.assess_many("center", (trials,)) == plain
     assert passes == [trials.shape]
+
+
+@pytest.mark.parametrize(("n_markers", "n_frames"), [(8, 27), (9, 12), (40, 20), (300, 5)])
+def test_many_pairs_over_few_frames_are_read_pair_by_pair_to_the_same_numbers(n_markers, n_frames):
+    """More pairs than frames: each pair's distances are made and pooled in turn, the same
+    sums in the same order as over the distances kept (bitwise), and the lag-1 correlation's
+    SD from the Gram matrix over the frames is the scatter's over the pairs to rounding."""
+    markers = _ball(n_markers, n_frames)
+    (row,) = support._frame_numbers(markers[None])
+    kept = np.empty(4)
+    distances = support._dependence_into(markers, kept)
+    assert distances.shape[0] > n_frames
+    np.testing.assert_array_equal(row[:4], kept)
+    deviations = distances - distances.mean(axis=1, keepdims=True)
+    scatter = deviations @ deviations.T
+    sd = support._scatter_correlation_sd(scatter, n_frames)
+    assert row[4] == pytest.approx(sd, rel=1e-10)
+
+
+#: Markers whose pair distances over FEW_FRAMES frames, kept, would take 144 MB.
+MANY_MARKERS, FEW_FRAMES = 3000, 4
+
+
+def test_many_markers_over_few_frames_are_judged_without_keeping_their_pair_distances():
+    """The frames' numbers of 3,000 markers over 4 frames in a process of its own: its peak
+    memory grows by far less than their 4.5 million pairs' distances (144 MB) would take. The
+    peak is Linux's (``VmHWM``), reset after the kernels are loaded, whose compilation can
+    take more memory than the call."""
+    if not os.access("/proc/self/clear_refs", os.W_OK):
+        pytest.skip("the peak memory cannot be reset here (Linux's /proc/self/clear_refs)")
+    script = textwrap.dedent(
+        f"""
+        import numpy as np
+        from jointbench.estimators import support
+
+        def memory_kb(key):
+            with open("/proc/self/status") as status:
+                return next(int(line.split()[1]) for line in status if line.startswith(key))
+
+        rng = np.random.default_rng(0)
+        support._frame_numbers(rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, 30, 3)))
+        markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, {MANY_MARKERS}, 3))
+        with open("/proc/self/clear_refs", "w") as peak:
+            peak.write("5")
+        before = memory_kb("VmRSS:")
+        support._frame_numbers(markers)
+        print((memory_kb("VmHWM:") - before) / 1024.0)
+        """
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+    )
+    pairs_mb = MANY_MARKERS * (MANY_MARKERS - 1) // 2 * FEW_FRAMES * 8 / 2**20
+    assert float(done.stdout) < pairs_mb / 4

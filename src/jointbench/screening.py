@@ -503,15 +503,22 @@ def _finite_pair_distances(clusters: np.ndarray) -> tuple[np.ndarray, bool]:
     pair = 0
     for a in range(n_markers):
         for b in range(a + 1, n_markers):
+            _pair_distances_into(clusters, a, b, distances[pair])
             for f in range(n_frames):
-                dx = clusters[f, a, 0] - clusters[f, b, 0]
-                dy = clusters[f, a, 1] - clusters[f, b, 1]
-                dz = clusters[f, a, 2] - clusters[f, b, 2]
-                distance = np.sqrt(dx * dx + dy * dy + dz * dz)
-                distances[pair, f] = distance
-                finite &= distance < np.inf
+                finite &= distances[pair, f] < np.inf
             pair += 1
     return distances, finite
+
+
+@kernel
+def _pair_distances_into(clusters: np.ndarray, a: int, b: int, out: np.ndarray) -> None:
+    """The distances ``(n_frames,)`` [mm] between markers ``a`` and ``b`` of ``clusters``
+    ``(n_frames, n, 3)`` [mm], frame by frame, into ``out``. A compiled kernel."""
+    for f in range(clusters.shape[0]):
+        dx = clusters[f, a, 0] - clusters[f, b, 0]
+        dy = clusters[f, a, 1] - clusters[f, b, 1]
+        dz = clusters[f, a, 2] - clusters[f, b, 2]
+        out[f] = np.sqrt(dx * dx + dy * dy + dz * dz)
 
 
 def mean_shape(
