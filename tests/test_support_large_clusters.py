@@ -161,7 +161,7 @@ def test_a_batch_of_large_clusters_reads_its_frames_in_one_pass(monkeypatch):
     assert passes == [trials.shape]
 
 
-@pytest.mark.parametrize(("n_markers", "n_frames"), [(8, 27), (9, 12), (40, 20), (300, 5)])
+@pytest.mark.parametrize(("n_markers", "n_frames"), [(8, 27), (9, 12), (40, 20), (60, 5)])
 def test_many_pairs_over_few_frames_are_read_pair_by_pair_to_the_same_numbers(n_markers, n_frames):
     """More pairs than frames: each pair's distances are made and pooled in turn, the same
     sums in the same order as over the distances kept (bitwise), and the lag-1 correlation's
@@ -182,16 +182,25 @@ def test_many_pairs_over_few_frames_are_read_pair_by_pair_to_the_same_numbers(n_
 MANY_MARKERS, FEW_FRAMES = 3000, 4
 
 
-def test_many_markers_over_few_frames_are_judged_without_keeping_their_pair_distances():
-    """The frames' numbers of 3,000 markers over 4 frames in a process of its own: its peak
-    memory grows by far less than their 4.5 million pairs' distances (144 MB) would take. The
-    peak is Linux's (``VmHWM``), reset after the kernels are loaded, whose compilation can
-    take more memory than the call."""
+@pytest.mark.parametrize(
+    "call",
+    [
+        "support._frame_numbers(markers)",
+        # The fit's screen of a cluster past the exchange test: no distance test to keep them for.
+        "screening._clean_screen(markers[0], 1.0, 0.0, 0.0, markers.shape[1] + 1)",
+    ],
+)
+def test_many_markers_over_few_frames_are_judged_without_keeping_their_pair_distances(call):
+    """The frames' numbers and the screen's typical frame of 3,000 markers over 4 frames, in a
+    process of its own: its peak memory grows by far less than their 4.5 million pairs'
+    distances (144 MB) would take. The peak is Linux's (``VmHWM``), reset after the kernels
+    are loaded, whose compilation can take more memory than the call."""
     if not os.access("/proc/self/clear_refs", os.W_OK):
         pytest.skip("the peak memory cannot be reset here (Linux's /proc/self/clear_refs)")
     script = textwrap.dedent(
         f"""
         import numpy as np
+        from jointbench import screening
         from jointbench.estimators import support
 
         def memory_kb(key):
@@ -199,12 +208,13 @@ def test_many_markers_over_few_frames_are_judged_without_keeping_their_pair_dist
                 return next(int(line.split()[1]) for line in status if line.startswith(key))
 
         rng = np.random.default_rng(0)
-        support._frame_numbers(rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, 30, 3)))
+        markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, 30, 3))
+        {call}
         markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, {MANY_MARKERS}, 3))
         with open("/proc/self/clear_refs", "w") as peak:
             peak.write("5")
         before = memory_kb("VmRSS:")
-        support._frame_numbers(markers)
+        {call}
         print((memory_kb("VmHWM:") - before) / 1024.0)
         """
     )

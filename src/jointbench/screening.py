@@ -246,8 +246,32 @@ def _most_typical(clusters: np.ndarray) -> int:
     """The index of the frame of ``clusters`` ``(n_frames, n, 3)`` [mm] whose largest
     inter-marker distance deviation from that distance's median over the frames is least (the
     first, on a tie). A compiled kernel (:mod:`jointbench.numerics.compiled`)."""
-    distances = _pair_distances(clusters)
-    return _nearest(distances, _medians(distances))
+    return _typical_and_finite(clusters)[0]
+
+
+@kernel
+def _typical_and_finite(clusters: np.ndarray) -> tuple[int, bool]:
+    """:func:`_most_typical` of ``clusters`` ``(n_frames, n >= 2, 3)`` [mm] and whether their
+    distances are all finite (:func:`_finite_pair_distances`), each pair's distances made,
+    their median taken and the frames' largest departures updated in turn: the numbers of
+    :func:`_nearest` over :func:`_medians` of the distances kept, without their ``(n_pairs,
+    n_frames)`` array, gigabytes for thousands of markers (a recording passed as
+    ``(markers, frames, 3)``). A compiled kernel."""
+    n_frames, n_markers = clusters.shape[0], clusters.shape[1]
+    deviation = np.zeros(n_frames)
+    lengths = np.empty(n_frames)
+    row_copy = np.empty(n_frames)
+    finite = True
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            _pair_distances_into(clusters, a, b, lengths)
+            for f in range(n_frames):
+                finite &= lengths[f] < np.inf
+            row_copy[:] = lengths
+            median = _median_in_place(row_copy)
+            for f in range(n_frames):
+                deviation[f] = max(deviation[f], abs(lengths[f] - median))
+    return int(np.argmin(deviation)), finite
 
 
 @kernel
@@ -2092,22 +2116,29 @@ def _clean_screen(
     :func:`find_jumps` (-inf if none; NaN where a sample is missing) and whether the distance
     test of :func:`_exchange_test` (levels ``far``, ``near``, at least ``min_frames`` frames)
     finds a swapped frame (``False`` where a sample is missing, as the whole screen then
-    runs). The inter-marker distances and their medians serve both the typical frame and the
-    distance test, and where :func:`_surely_unexchanged` shows that the test finds nothing it
-    is not run. The bound and the test share the exchanges and the largest departure, and the
-    test's anchor is the typical frame wherever it is the labelled distances' own. A compiled
-    kernel."""
+    runs). Where the distance test runs, the inter-marker distances and their medians serve
+    both it and the typical frame (without it, the typical frame is found pair by pair,
+    :func:`_typical_and_finite`), and where :func:`_surely_unexchanged` shows that the test
+    finds nothing it is not run. The bound and the test share the exchanges and the largest
+    departure, and the test's anchor is the typical frame wherever it is the labelled
+    distances' own. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
-    distances, finite = _finite_pair_distances(markers)
+    tested = n_frames >= max(min_frames, 1)
+    # The distance test reads the distances kept; without it, each pair's are made in turn.
+    if tested:
+        distances, finite = _finite_pair_distances(markers)
+    else:
+        typical, finite = _typical_and_finite(markers)
     # Finite distances show every coordinate finite; else the frames are counted.
     if not finite and _complete_frames(markers).size < n_frames:
         return -1, False, np.nan, False  # the whole screen finds the jumps
-    medians = _medians(distances)
-    typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
+    if tested:
+        medians = _medians(distances)
+        typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
     first, second = _frame_misfits(markers, typical)
     largest_jump = _jump_sizes(markers, np.empty((max(n_frames - 3, 0), n_markers)))
     exchanged = False
-    if n_frames >= max(min_frames, 1):
+    if tested:
         moved = _relabelled_pairs(n_markers)
         largest_sq = _largest_departure_sq(distances, medians)
         if not _unexchanged_by_bound(moved, medians, largest_sq, far, near):
