@@ -928,17 +928,21 @@ def _pool_pair(
     for f in range(n_frames):
         mean += lengths[f]
     mean /= n_frames
+    # The totals carried in scalars through the loop (the arrays written beside them would
+    # keep them in memory), each sum the same as added in place.
+    lagged, squares = totals[0], totals[1]
     previous = lengths[0] - mean
-    totals[1] += previous * previous
+    squares += previous * previous
     sums[0] = previous
     weights[0] += previous * previous
     for f in range(1, n_frames):
         current = lengths[f] - mean
-        totals[0] += previous * current
-        totals[1] += current * current
+        lagged += previous * current
+        squares += current * current
         sums[f] = current
         weights[f] += current * current
         previous = current
+    totals[0], totals[1] = lagged, squares
     # Each level's block sums are the sums of the last level's pairs of blocks (a frame
     # left over at the end of a level is left out of the longer blocks).
     count = n_frames
