@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_support_large_clusters import CENTRE, _ball
+from test_support_large_clusters import CENTRE, _ball, shapes_passed
 
 import jointbench
 from jointbench import screening
@@ -134,3 +134,21 @@ def test_a_recording_with_a_large_segment_says_so_in_its_status():
     assert f"warning: {words}" in result.result.status
     assert result.to_dict()["status"] == result.result.status
     assert result.result.diagnostics["artefacts_untested"] == [words]
+
+
+@pytest.mark.parametrize(("n_markers", "n_frames"), [(LIMIT + 1, 60), (400, 5)])
+def test_a_clean_cluster_s_typical_frame_is_found_once(monkeypatch, n_markers, n_frames):
+    """The mean shape of a cluster nothing was flagged in starts from the typical frame the
+    screen started from: each search compares every marker pair over every frame, millions of
+    pairs for a recording passed as ``(markers, frames, 3)``."""
+    markers, labels = _ball(n_markers, n_frames), _labels(n_markers)
+    plain = screening.screen(markers, labels, "m")
+    searches = shapes_passed(monkeypatch, screening, "_most_typical")
+    found = screening.screen(markers, labels, "m")
+    assert searches == [markers.shape]
+    assert found.artefacts == plain.artefacts == ()
+    for name in ("shape", "rotation", "translation", "residuals"):
+        assert np.array_equal(getattr(found, name), getattr(plain, name)), name
+    # The fit's screen finds the typical frame in the pass that clears the cluster, or not.
+    assert screening.find_artefacts(markers, labels, "m") == ((), ())
+    assert searches == [markers.shape]

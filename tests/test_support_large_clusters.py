@@ -8,6 +8,11 @@ not reach it.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 from rigs import two_segments
@@ -113,3 +118,112 @@ def test_a_long_two_segment_recording_passed_transposed_is_judged_and_named(meth
     )
     result = jointbench.fit_joint_center(proximal, distal, method, artefacts="warn")
     assert "may be (markers, frames, 3); it must be (frames, markers, 3)" in result.status
+
+
+def shapes_passed(monkeypatch, module, name: str) -> list[tuple[int, ...]]:
+    """The shapes of the arrays each call of ``module.<name>`` (one array argument) is given,
+    as the calls are made."""
+    shapes: list[tuple[int, ...]] = []
+    original = getattr(module, name)
+
+    def counted(array):
+        shapes.append(array.shape)
+        return original(array)
+
+    monkeypatch.setattr(module, name, counted)
+    return shapes
+
+
+def _count_frame_numbers(monkeypatch) -> list[tuple[int, ...]]:
+    """The shapes of the markers each pass of the frames' numbers is given."""
+    return shapes_passed(monkeypatch, support, "_frame_numbers")
+
+
+@pytest.mark.parametrize(("kind", "method"), [("center", "LS"), ("axis", "planar")])
+def test_a_large_cluster_s_frames_are_read_once_per_checked_call(monkeypatch, kind, method):
+    """The pair distances' numbers serve the block test and the lag-1 statement alike: over
+    the pairs of thousands of markers (a recording passed as ``(markers, frames, 3)``) each
+    pass costs seconds and the distances' gigabytes."""
+    markers = _ball(support.MAX_DISTANCE_MARKERS + 10, 40)
+    plain = registry.get(kind, method)(markers)
+    passes = _count_frame_numbers(monkeypatch)
+    counted = registry.get(kind, method)(markers)
+    assert passes == [(1, *markers.shape)]
+    assert counted.status == plain.status
+    assert counted.diagnostics == plain.diagnostics
+
+
+def test_a_batch_of_large_clusters_reads_its_frames_in_one_pass(monkeypatch):
+    trials = np.stack([_ball(30, 20, seed) for seed in range(3)])
+    plain = support.assess_many("center", (trials,))
+    passes = _count_frame_numbers(monkeypatch)
+    assert support.assess_many("center", (trials,)) == plain
+    assert passes == [trials.shape]
+
+
+@pytest.mark.parametrize(("n_markers", "n_frames"), [(8, 27), (9, 12), (40, 20), (60, 5)])
+def test_many_pairs_over_few_frames_are_read_pair_by_pair_to_the_same_numbers(n_markers, n_frames):
+    """More pairs than frames: each pair's distances are made and pooled in turn, the same
+    sums in the same order as over the distances kept (bitwise), and the lag-1 correlation's
+    SD from the Gram matrix over the frames is the scatter's over the pairs to rounding."""
+    markers = _ball(n_markers, n_frames)
+    (row,) = support._frame_numbers(markers[None])
+    kept = np.empty(4)
+    distances = support._dependence_into(markers, kept)
+    assert distances.shape[0] > n_frames
+    np.testing.assert_array_equal(row[:4], kept)
+    deviations = distances - distances.mean(axis=1, keepdims=True)
+    scatter = deviations @ deviations.T
+    sd = support._scatter_correlation_sd(scatter, n_frames)
+    assert row[4] == pytest.approx(sd, rel=1e-10)
+
+
+#: Markers whose pair distances over FEW_FRAMES frames, kept, would take 144 MB.
+MANY_MARKERS, FEW_FRAMES = 3000, 4
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        "support._frame_numbers(markers)",
+        # The fit's screen of a cluster past the exchange test: no distance test to keep them for.
+        "screening._clean_screen(markers[0], 1.0, 0.0, 0.0, markers.shape[1] + 1)",
+    ],
+)
+def test_many_markers_over_few_frames_are_judged_without_keeping_their_pair_distances(call):
+    """The frames' numbers and the screen's typical frame of 3,000 markers over 4 frames, in a
+    process of its own: its peak memory grows by far less than their 4.5 million pairs'
+    distances (144 MB) would take. The peak is Linux's (``VmHWM``), reset after the kernels
+    are loaded, whose compilation can take more memory than the call."""
+    if not os.access("/proc/self/clear_refs", os.W_OK):
+        pytest.skip("the peak memory cannot be reset here (Linux's /proc/self/clear_refs)")
+    script = textwrap.dedent(
+        f"""
+        import numpy as np
+        from jointbench import screening
+        from jointbench.estimators import support
+
+        def memory_kb(key):
+            with open("/proc/self/status") as status:
+                return next(int(line.split()[1]) for line in status if line.startswith(key))
+
+        rng = np.random.default_rng(0)
+        markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, 30, 3))
+        {call}
+        markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, {MANY_MARKERS}, 3))
+        with open("/proc/self/clear_refs", "w") as peak:
+            peak.write("5")
+        before = memory_kb("VmRSS:")
+        {call}
+        print((memory_kb("VmHWM:") - before) / 1024.0)
+        """
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+    )
+    pairs_mb = MANY_MARKERS * (MANY_MARKERS - 1) // 2 * FEW_FRAMES * 8 / 2**20
+    assert float(done.stdout) < pairs_mb / 4

@@ -246,8 +246,32 @@ def _most_typical(clusters: np.ndarray) -> int:
     """The index of the frame of ``clusters`` ``(n_frames, n, 3)`` [mm] whose largest
     inter-marker distance deviation from that distance's median over the frames is least (the
     first, on a tie). A compiled kernel (:mod:`jointbench.numerics.compiled`)."""
-    distances = _pair_distances(clusters)
-    return _nearest(distances, _medians(distances))
+    return _typical_and_finite(clusters)[0]
+
+
+@kernel
+def _typical_and_finite(clusters: np.ndarray) -> tuple[int, bool]:
+    """:func:`_most_typical` of ``clusters`` ``(n_frames, n >= 2, 3)`` [mm] and whether their
+    distances are all finite (:func:`_finite_pair_distances`), each pair's distances made,
+    their median taken and the frames' largest departures updated in turn: the numbers of
+    :func:`_nearest` over :func:`_medians` of the distances kept, without their ``(n_pairs,
+    n_frames)`` array, gigabytes for thousands of markers (a recording passed as
+    ``(markers, frames, 3)``). A compiled kernel."""
+    n_frames, n_markers = clusters.shape[0], clusters.shape[1]
+    deviation = np.zeros(n_frames)
+    lengths = np.empty(n_frames)
+    row_copy = np.empty(n_frames)
+    finite = True
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            _pair_distances_into(clusters, a, b, lengths)
+            for f in range(n_frames):
+                finite &= lengths[f] < np.inf
+            row_copy[:] = lengths
+            median = _median_in_place(row_copy)
+            for f in range(n_frames):
+                deviation[f] = max(deviation[f], abs(lengths[f] - median))
+    return int(np.argmin(deviation)), finite
 
 
 @kernel
@@ -503,21 +527,32 @@ def _finite_pair_distances(clusters: np.ndarray) -> tuple[np.ndarray, bool]:
     pair = 0
     for a in range(n_markers):
         for b in range(a + 1, n_markers):
+            _pair_distances_into(clusters, a, b, distances[pair])
             for f in range(n_frames):
-                dx = clusters[f, a, 0] - clusters[f, b, 0]
-                dy = clusters[f, a, 1] - clusters[f, b, 1]
-                dz = clusters[f, a, 2] - clusters[f, b, 2]
-                distance = np.sqrt(dx * dx + dy * dy + dz * dz)
-                distances[pair, f] = distance
-                finite &= distance < np.inf
+                finite &= distances[pair, f] < np.inf
             pair += 1
     return distances, finite
 
 
-def mean_shape(markers: np.ndarray, labels: tuple[str, ...], source: str) -> np.ndarray:
+@kernel
+def _pair_distances_into(clusters: np.ndarray, a: int, b: int, out: np.ndarray) -> None:
+    """The distances ``(n_frames,)`` [mm] between markers ``a`` and ``b`` of ``clusters``
+    ``(n_frames, n, 3)`` [mm], frame by frame, into ``out``. A compiled kernel."""
+    for f in range(clusters.shape[0]):
+        dx = clusters[f, a, 0] - clusters[f, b, 0]
+        dy = clusters[f, a, 1] - clusters[f, b, 1]
+        dz = clusters[f, a, 2] - clusters[f, b, 2]
+        out[f] = np.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+def mean_shape(
+    markers: np.ndarray, labels: tuple[str, ...], source: str, typical: np.ndarray | None = None
+) -> np.ndarray:
     """Generalised Procrustes mean shape ``(n, 3)`` [mm] of a cluster (module docstring),
-    in the frame of its most typical complete frame (the caller fixes the frame)."""
-    shape = typical_shape(markers, labels, source)
+    in the frame of its most typical complete frame (the caller fixes the frame):
+    ``typical`` ``(n, 3)`` [mm] where the caller has found it (:func:`typical_shape`), else
+    found here."""
+    shape = typical_shape(markers, labels, source) if typical is None else typical.copy()
     markers = kernel_array(markers)
     done = 0
     while done < _MAX_ITERATIONS:
@@ -1751,6 +1786,7 @@ def _screened(
     (:func:`typical_shape`, of the frames the swaps do not hold) and that shape's
     :func:`_posed` fit ``posed``: the iterated mean shape and all that follows."""
     untested = exchanges_untested(len(labels))
+    typical = shape
     breaks: list[Artefact] | None = None
     for _ in range(5):
         rotation, translation, misfit = posed
@@ -1761,7 +1797,10 @@ def _screened(
         clean = markers.copy()
         for artefact in [*breaks, *exchanged]:
             clean[artefact.frame, labels.index(artefact.label)] = np.nan
-        shape = mean_shape(clean, labels, source)
+        # With nothing flagged the samples are the markers themselves, whose typical frame the
+        # screen started from: its search over every marker pair is not made again.
+        unflagged = typical if not (breaks or exchanged) else None
+        shape = mean_shape(clean, labels, source, unflagged)
         posed = _posed(shape, markers)
     else:
         rotation, translation, misfit = posed
@@ -2077,22 +2116,29 @@ def _clean_screen(
     :func:`find_jumps` (-inf if none; NaN where a sample is missing) and whether the distance
     test of :func:`_exchange_test` (levels ``far``, ``near``, at least ``min_frames`` frames)
     finds a swapped frame (``False`` where a sample is missing, as the whole screen then
-    runs). The inter-marker distances and their medians serve both the typical frame and the
-    distance test, and where :func:`_surely_unexchanged` shows that the test finds nothing it
-    is not run. The bound and the test share the exchanges and the largest departure, and the
-    test's anchor is the typical frame wherever it is the labelled distances' own. A compiled
-    kernel."""
+    runs). Where the distance test runs, the inter-marker distances and their medians serve
+    both it and the typical frame (without it, the typical frame is found pair by pair,
+    :func:`_typical_and_finite`), and where :func:`_surely_unexchanged` shows that the test
+    finds nothing it is not run. The bound and the test share the exchanges and the largest
+    departure, and the test's anchor is the typical frame wherever it is the labelled
+    distances' own. A compiled kernel."""
     n_frames, n_markers, _ = markers.shape
-    distances, finite = _finite_pair_distances(markers)
+    tested = n_frames >= max(min_frames, 1)
+    # The distance test reads the distances kept; without it, each pair's are made in turn.
+    if tested:
+        distances, finite = _finite_pair_distances(markers)
+    else:
+        typical, finite = _typical_and_finite(markers)
     # Finite distances show every coordinate finite; else the frames are counted.
     if not finite and _complete_frames(markers).size < n_frames:
         return -1, False, np.nan, False  # the whole screen finds the jumps
-    medians = _medians(distances)
-    typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
+    if tested:
+        medians = _medians(distances)
+        typical = _nearest(distances, medians)  # _most_typical's, every frame being complete
     first, second = _frame_misfits(markers, typical)
     largest_jump = _jump_sizes(markers, np.empty((max(n_frames - 3, 0), n_markers)))
     exchanged = False
-    if n_frames >= max(min_frames, 1):
+    if tested:
         moved = _relabelled_pairs(n_markers)
         largest_sq = _largest_departure_sq(distances, medians)
         if not _unexchanged_by_bound(moved, medians, largest_sq, far, near):

@@ -177,7 +177,7 @@ from jointbench.numerics.small import (
 )
 from jointbench.numerics.special import f_survival, scipy_special
 from jointbench.numerics.spheres import ls_system, solve_ls_system
-from jointbench.screening import _pair_distances
+from jointbench.screening import _pair_distances, _pair_distances_into
 
 __all__ = [
     "CENTRE_KINDS",
@@ -884,44 +884,93 @@ def _frame_dependence(lengths: np.ndarray, n_pairs: int, largest: float, out: np
     :data:`ROUNDING` of the ``largest`` coordinate [mm] squared, what noise of that size per
     coordinate would give), whose pattern says nothing of the noise. A compiled kernel."""
     n_frames = lengths.shape[1]
+    pooled = _pooled_dependence(n_frames)
+    for p in range(n_pairs):
+        _pool_pair(lengths[p], pooled)
+    _dependence_of(pooled, n_pairs, largest, out)
+
+
+@kernel
+def _pooled_dependence(
+    n_frames: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The empty sums :func:`_pool_pair` adds each pair's distances over ``n_frames`` frames
+    to: per block length ``L`` (:func:`_block_levels`) the block sums' sum of squares about
+    their mean ``(levels,)``; a work row ``(N,)``; per frame the
+    pairs' squared deviations ``(N,)``, whose block sums are the ``W_b``; and the lagged
+    products and the squares ``(2,)``. A compiled kernel."""
+    n_levels = _block_levels(n_frames)
+    return np.zeros(max(n_levels, 1)), np.empty(n_frames), np.zeros(n_frames), np.zeros(2)
+
+
+@kernel
+def _block_levels(n_frames: int) -> int:
+    """How many block lengths ``L = 2, 4, ...`` over ``n_frames`` frames leave
+    :data:`MIN_BLOCKS` blocks or more. A compiled kernel."""
     n_levels = 0
     while n_frames >> (n_levels + 1) >= MIN_BLOCKS:
         n_levels += 1
-    # Per block length, the pairs' block sums' sum of squares about their mean; per frame, the
-    # pairs' squared deviations, whose block sums are the W_b.
-    level_squares = np.zeros(max(n_levels, 1))
-    sums = np.empty(n_frames)
-    weights = np.zeros(n_frames)
-    lagged = 0.0
-    squares = 0.0
-    for p in range(n_pairs):
-        mean = 0.0
-        for f in range(n_frames):
-            mean += lengths[p, f]
-        mean /= n_frames
-        previous = lengths[p, 0] - mean
-        squares += previous * previous
-        sums[0] = previous
-        weights[0] += previous * previous
-        for f in range(1, n_frames):
-            current = lengths[p, f] - mean
-            lagged += previous * current
-            squares += current * current
-            sums[f] = current
-            weights[f] += current * current
-            previous = current
-        # Each level's block sums are the sums of the last level's pairs of blocks (a frame
-        # left over at the end of a level is left out of the longer blocks).
-        count = n_frames
-        for level in range(n_levels):
-            count //= 2
-            total = 0.0
-            for b in range(count):
-                sums[b] = sums[2 * b] + sums[2 * b + 1]
-                total += sums[b]
-            centre = total / count
-            for b in range(count):
-                level_squares[level] += (sums[b] - centre) ** 2
+    return n_levels
+
+
+@kernel
+def _pool_pair(
+    lengths: np.ndarray, pooled: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+) -> None:
+    """Add one pair's distances ``lengths`` ``(N,)`` [mm] to the ``pooled`` sums of
+    :func:`_pooled_dependence` (:func:`_frame_dependence`): the pairs are pooled one after the
+    other in one order, so that the sums are the same numbers whether the distances were
+    kept or each pair's were made in turn. A compiled kernel."""
+    level_squares, sums, weights, totals = pooled
+    n_frames = lengths.shape[0]
+    n_levels = _block_levels(n_frames)
+    mean = 0.0
+    for f in range(n_frames):
+        mean += lengths[f]
+    mean /= n_frames
+    # The totals carried in scalars through the loop (the arrays written beside them would
+    # keep them in memory), each sum the same as added in place.
+    lagged, squares = totals[0], totals[1]
+    previous = lengths[0] - mean
+    squares += previous * previous
+    sums[0] = previous
+    weights[0] += previous * previous
+    for f in range(1, n_frames):
+        current = lengths[f] - mean
+        lagged += previous * current
+        squares += current * current
+        sums[f] = current
+        weights[f] += current * current
+        previous = current
+    totals[0], totals[1] = lagged, squares
+    # Each level's block sums are the sums of the last level's pairs of blocks (a frame
+    # left over at the end of a level is left out of the longer blocks).
+    count = n_frames
+    for level in range(n_levels):
+        count //= 2
+        total = 0.0
+        for b in range(count):
+            sums[b] = sums[2 * b] + sums[2 * b + 1]
+            total += sums[b]
+        centre = total / count
+        for b in range(count):
+            level_squares[level] += (sums[b] - centre) ** 2
+
+
+@kernel
+def _dependence_of(
+    pooled: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    n_pairs: int,
+    largest: float,
+    out: np.ndarray,
+) -> None:
+    """:func:`_frame_dependence`'s numbers ``(4,)`` into ``out`` from the ``pooled`` sums of
+    ``n_pairs`` pairs' distances (:func:`_pool_pair`), ``largest`` the largest coordinate
+    [mm]. A compiled kernel."""
+    level_squares, _, weights, totals = pooled
+    lagged, squares = totals[0], totals[1]
+    n_frames = weights.shape[0]
+    n_levels = _block_levels(n_frames)
     if squares <= 2.0 * (ROUNDING * largest) ** 2 * n_pairs * (n_frames - 1):
         out[:] = np.nan
         return
@@ -970,9 +1019,42 @@ def _frame_numbers(markers: np.ndarray) -> np.ndarray:
 @kernel
 def _trial_frame_numbers_into(markers: np.ndarray, out: np.ndarray) -> None:
     """One trial's row of :func:`_frame_numbers` for its markers ``(N, n, 3)`` [mm], into
-    ``out`` ``(5,)``. A compiled kernel."""
+    ``out`` ``(5,)``: from its distances kept ``(P, N)`` where the pairs are no more than the
+    frames, else from each pair's in turn (:func:`_streamed_frame_numbers_into`). A compiled
+    kernel."""
+    n_markers = markers.shape[1]
+    if n_markers * (n_markers - 1) // 2 > markers.shape[0]:
+        _streamed_frame_numbers_into(markers, out)
+        return
     distances = _dependence_into(markers, out[:4])
     out[4] = _read_correlation_sd(out[0], _correlation_sd(distances))
+
+
+@kernel
+def _streamed_frame_numbers_into(markers: np.ndarray, out: np.ndarray) -> None:
+    """:func:`_trial_frame_numbers_into` of markers ``(N, n, 3)`` [mm] with more pairs ``P``
+    than frames, into ``out`` ``(5,)``, each pair's distances ``(N,)`` made, pooled
+    (:func:`_pool_pair`) and added to the deviations' Gram matrix over the frames ``(N, N)``
+    in turn: the same sums in the same order as from the distances kept, without their
+    ``(P, N)`` array, gigabytes for thousands of markers (a recording passed as
+    ``(markers, frames, 3)``). The Gram matrix has the trace and the Frobenius norm of the
+    ``(P, P)`` scatter (``D D'`` and ``D' D`` share both), all that
+    :func:`_scatter_correlation_sd` reads. A compiled kernel."""
+    n_frames, n_markers = markers.shape[0], markers.shape[1]
+    pooled = _pooled_dependence(n_frames)
+    # Its upper triangle, all that _scatter_correlation_sd reads.
+    gram = np.zeros((n_frames, n_frames))
+    lengths = np.empty(n_frames)
+    for a in range(n_markers):
+        for b in range(a + 1, n_markers):
+            _pair_distances_into(markers, a, b, lengths)
+            _pool_pair(lengths, pooled)
+            _deviations_in_place(lengths)
+            for f in range(n_frames):
+                for g in range(f, n_frames):
+                    gram[f, g] += lengths[f] * lengths[g]
+    _dependence_of(pooled, n_markers * (n_markers - 1) // 2, largest_magnitude(markers), out[:4])
+    out[4] = _read_correlation_sd(out[0], _scatter_correlation_sd(gram, n_frames))
 
 
 @kernel
@@ -2070,7 +2152,13 @@ def _judged(
                 f"{n_markers} markers, more than the {MAX_DISTANCE_MARKERS} whose pairwise "
                 "distances the rigidity test compares"
             )
-            return [_without_poses((trial,), reason, has_pose=True) for trial in arrays[0]], None
+            # One pass over the pairs (thousands of markers have millions) for every trial's
+            # verdict and its lag-1 statement alike.
+            numbers = _frame_numbers(kernel_array(arrays[0]))
+            return [
+                _without_poses((trial,), reason, has_pose=True, frame_numbers=row)
+                for trial, row in zip(arrays[0], numbers, strict=True)
+            ], numbers
         return _one_segment(kind, arrays[0])
     if len(arrays) > 1:
         check_poses(arrays, poses, ARRAY_NAMES[kind])
@@ -2607,30 +2695,15 @@ def _untested(
 def _correlation_sd(distances: np.ndarray) -> float:
     """The SD of the lag-1 autocorrelation pooled over the pair ``distances`` ``(P, N)`` [mm]
     (:func:`_frame_dependence`) that ``N`` independent frames of their covariance give it
-    (:func:`_scatter_correlation_sd`). The distances are made their deviations from their
-    means, in place. The scatter's trace and Frobenius norm are those of the deviations' Gram
-    matrix over the frames too (``D D'`` and ``D' D`` share both), the one formed where the
-    pairs outnumber the frames: many markers over few frames (a recording passed as
-    ``(markers, frames, 3)``) have more pairs than a ``(P, P)`` scatter could hold in memory. A
-    compiled kernel: every checked fit reads it, where NumPy's calls on these small arrays cost
-    tens of microseconds."""
+    (:func:`_scatter_correlation_sd`), from their scatter ``(P, P)``: for no more pairs than
+    frames (:func:`_trial_frame_numbers_into`; more are read by
+    :func:`_streamed_frame_numbers_into`). The distances are made their deviations from their
+    means, in place. A compiled kernel: every checked fit reads it, where NumPy's calls on
+    these small arrays cost tens of microseconds."""
     n_pairs, n_frames = distances.shape
     deviations = distances
     for p in range(n_pairs):
-        mean = 0.0
-        for f in range(n_frames):
-            mean += deviations[p, f]
-        mean /= n_frames
-        for f in range(n_frames):
-            deviations[p, f] -= mean
-    if n_pairs > n_frames:
-        # Its upper triangle, all that _scatter_correlation_sd reads.
-        gram = np.zeros((n_frames, n_frames))
-        for p in range(n_pairs):
-            for f in range(n_frames):
-                for g in range(f, n_frames):
-                    gram[f, g] += deviations[p, f] * deviations[p, g]
-        return _scatter_correlation_sd(gram, n_frames)
+        _deviations_in_place(deviations[p])
     scatter = np.empty((n_pairs, n_pairs))
     for p in range(n_pairs):
         for q in range(p, n_pairs):
@@ -2639,6 +2712,19 @@ def _correlation_sd(distances: np.ndarray) -> float:
                 product += deviations[p, f] * deviations[q, f]
             scatter[p, q] = scatter[q, p] = product
     return _scatter_correlation_sd(scatter, n_frames)
+
+
+@kernel
+def _deviations_in_place(values: np.ndarray) -> None:
+    """``values`` ``(N,)`` made their deviations from their mean, in place. A compiled
+    kernel."""
+    n = values.shape[0]
+    mean = 0.0
+    for f in range(n):
+        mean += values[f]
+    mean /= n
+    for f in range(n):
+        values[f] -= mean
 
 
 @kernel
@@ -2665,14 +2751,19 @@ def _scatter_correlation_sd(scatter: np.ndarray, n_frames: int) -> float:
 
 
 def _without_poses(
-    arrays: tuple[np.ndarray, ...], reason: str, *, has_pose: bool = False
+    arrays: tuple[np.ndarray, ...],
+    reason: str,
+    *,
+    has_pose: bool = False,
+    frame_numbers: np.ndarray | None = None,
 ) -> Support:
     """The verdict on one trial whose markers give no rigid-body pose (``reason``): fewer
     than three markers, or collinear ones; or (``has_pose``) whose markers the rigidity test
     cannot take (``reason`` says why). What the positions alone can show is tested on the
     moving markers ``arrays[-1]`` ``(N, P, 3)``, fitted with the concentric spheres every centre
     and axis model implies (a marker turning about an axis moves on a sphere about any of its
-    points; LS, closed form):
+    points; LS, closed form); ``frame_numbers``, their row of :func:`_frame_numbers` ``(5,)``
+    where the caller has it (else computed here):
 
     * the sphere fit's residual share of the markers' scatter about their mean positions, as
       the rigidity share of the module docstring (a cloud has no sphere to fit);
@@ -2708,9 +2799,10 @@ def _without_poses(
         p_line = f_survival(line_dof, sphere_dof, (rss_line / line_dof) / (rss_sphere / sphere_dof))
     residual_mm = float(np.sqrt(rss_sphere / max(sphere_dof, 1)))
     # Pair distances hold whatever the motion; a single marker's hold nothing to read.
-    (dependence,) = _frame_numbers(kernel_array(markers[None]))
+    if frame_numbers is None:
+        (frame_numbers,) = _frame_numbers(kernel_array(markers[None]))
     name = "distal" if len(arrays) > 1 else "markers"
-    frames = _segment_frames(dependence[:4].tolist(), name, markers)
+    frames = _segment_frames(frame_numbers[:4].tolist(), name, markers)
     why = reason if has_pose else f"{reason}, so no rigid-body pose"
     warnings = [
         f"not verified: {why}: whether the markers are one rigid body and rotate about more "
