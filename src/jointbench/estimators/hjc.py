@@ -137,17 +137,18 @@ Pooled noise. The model pools one noise for both segments in every frame, frame 
 and two tests of the rigid-body residuals ask whether the data have it before the model test is
 read (:func:`_fixed_centre_test`): the segments' residual variances against each other (an F
 test, :func:`_unequal_noise`; where they differ, the model test is not made) and frame 0's
-residuals against the other frames' (:func:`_frame0_noise`; where they lie above, a warning),
-for frame-0 markers off by more than the noise move the body frames frame 0 places, which
-neither the model test (an error common to both segments moves the centre alike in both) nor
-the variance ratio (one frame among hundreds) sees. Both allow for the noise's kurtosis as the
-model test does (Satterthwaite, each residual sum of squares' dof divided by its inflation
-``1 + kappa G / (6 dof)`` per frame), ``kappa`` read from the frames after frame 0, each
-segment's fourth moments over its own variance (:func:`_rest_kurtosis`), so that neither
-error reads as heavy tails. Blind to the kurtosis, the variance ratio said equal noise of paper
-A's law differs many times more often than its level; allowing for it, at about its level
-(``tests/test_gauss_markov_fit.py``). Frame 0's test, one frame's residual with few dof, keeps
-a tail somewhat heavier than its level under that law (the README gives the rates measured).
+residuals against those a fit of the other frames leaves (:func:`_frame0_noise`; where they
+lie above, a warning), for frame-0 markers off by more than the noise move the body frames
+frame 0 places, which neither the model test (an error common to both segments moves the
+centre alike in both) nor the variance ratio (one frame among hundreds) sees. Both allow for
+the noise's kurtosis as the model test does (Satterthwaite, each residual sum of squares' dof
+divided by its inflation ``1 + kappa G / (6 dof)`` per frame), ``kappa`` read from the frames
+after frame 0, each segment's fourth moments over its own variance (:func:`_rest_kurtosis`), so
+that neither error reads as heavy tails. Blind to the kurtosis, the variance ratio said equal
+noise of paper A's law differs many times more often than its level; allowing for it, at about
+its level (``tests/test_gauss_markov_fit.py``). Frame 0's test, one frame's residual with few
+dof, keeps a tail heavier than its level under that law, most on a few frames, from which the
+kurtosis mostly reads 0 (the README gives the rates measured).
 
 Degenerate motion. Before anything is solved, the analytic normal matrix ``sum M'M`` must have
 rank 3: an eigenvalue below ``1e-12`` of the largest (relative rotation off the main axis below
@@ -1494,30 +1495,49 @@ def _unequal_noise(noise: tuple[tuple[_SegmentNoise, ...], float] | None) -> str
 
 
 def _frame0_noise_p(noise: tuple[tuple[_SegmentNoise, ...], float]) -> tuple[float, list]:
-    """``(p, ratios)``: per segment, frame 0's residual sum of squares per dof over the other
-    frames' residual variance, and the p-value that neither lies above its noise: the upper
-    tail of the F law of each ratio, on ``dof / N`` and ``dof (N - 1) / N`` each divided by
-    the segment's inflation under the noise's kurtosis (Satterthwaite), the smaller of the
-    two p-values doubled (Bonferroni). One frame's markers off by more than the noise (a
-    marker's position misread, a cluster not yet settled when the recording starts) leave
-    every frame's residual as it was but that one's, and move the body frame that frame 0
-    places, and with it every centre stated in it."""
+    """``(p, ratios)``: per segment, frame 0's residual per dof over the other frames'
+    (:func:`_frame0_ratio`), and the p-value that neither lies above its noise: the upper
+    tail of the F law of each ratio, its dof each divided by the segment's inflation under the
+    noise's kurtosis (Satterthwaite), the smaller of the two p-values doubled (Bonferroni).
+    One frame's markers off by more than the noise (a marker's position misread, a cluster
+    not yet settled when the recording starts) move the body frame that frame 0 places, and
+    with it every centre stated in it."""
     segments, kurtosis = noise
     special = scipy_special()
     ratios, p_values = [], []
     for segment in segments:
-        if segment.rest_variance <= 0.0:
-            ratios.append(math.nan)
-            continue
-        frame0_dof = segment.dof / segment.n_frames
-        ratio = segment.frame0_ss / frame0_dof / segment.rest_variance
-        inflation = segment.inflation(kurtosis)
-        shape = (frame0_dof / inflation, (segment.dof - frame0_dof) / inflation, ratio)
+        ratio, dofs = _frame0_ratio(segment)
         ratios.append(ratio)
-        p_values.append(float(special.fdtrc(*shape)))
+        if math.isnan(ratio):
+            continue
+        inflation = segment.inflation(kurtosis)
+        p_values.append(float(special.fdtrc(dofs[0] / inflation, dofs[1] / inflation, ratio)))
     if not p_values:
         return math.nan, ratios
     return min(len(p_values) * min(p_values), 1.0), ratios
+
+
+def _frame0_ratio(segment: _SegmentNoise) -> tuple[float, tuple[float, float]]:
+    """``(ratio, (dof_0, dof_rest))``: frame 0's residual per dof over that of a fit of the
+    other frames alone, F-distributed on ``3 (n - 2)`` and ``3 (n - 2)(N - 2)`` dof for
+    Gaussian noise (to first order); NaN where there are no other frames' dof (two frames) or
+    residual. The body-fixed coordinates, fitted to every frame, take a share ``1 / N`` of
+    frame 0's error away from its residual and pass a share ``1 / (N - 1)`` of it into the
+    other frames': to first order frame 0's residual sum of squares ``q`` is ``(N - 1) / N``
+    of that left by a fit of the others, which leave ``residual_ss - q N / (N - 1)``. Read off
+    the one fit, frame 0's ratio to the others' would be bounded by ``(N - 1)^2`` (on four
+    frames of three markers, no error of frame 0 however large could be told from noise),
+    and, its two parts sharing frame 0's noise, would reject honest frames below its level."""
+    per_frame = segment.dof / (segment.n_frames - 1)
+    rest_dof = per_frame * (segment.n_frames - 2)
+    left_out = segment.frame0_ss * segment.n_frames / (segment.n_frames - 1)
+    rest = segment.variance * segment.dof - left_out
+    if rest_dof <= 0.0 or not (rest > 0.0 or left_out > 0.0):
+        return math.nan, (per_frame, rest_dof)
+    # The others left with no residual (to rounding, by a frame 0 that holds it all): frame 0
+    # infinitely off.
+    ratio = left_out / per_frame / (rest / rest_dof) if rest > 0.0 else math.inf
+    return ratio, (per_frame, rest_dof)
 
 
 def _frame0_noise(noise: tuple[tuple[_SegmentNoise, ...], float] | None) -> tuple[tuple, dict]:
