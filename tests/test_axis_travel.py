@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_axis_motion_check import _screwing, paper_b_trials
+from test_axis_motion_check import _screwing, paper_b_trials, screw_home_knee
 from test_axis_sd import Z, hinge
 from test_io_recordings import KNEE, SHANK, THIGH
 
@@ -16,7 +16,6 @@ import jointbench
 from jointbench.estimators import registry, support
 from jointbench.geometry import angle_between_lines_deg, rotation_matrix
 from jointbench.io import prepare, read
-from jointbench.simulate import hinge as paper_b
 
 TRAVELS = "along the axis over the arc"
 
@@ -87,18 +86,9 @@ def test_paper_bs_coupled_abduction_is_rotation_not_travel(protocol, ratio):
 
 
 def test_the_screw_home_knee_is_not_said_to_travel():
-    flexion = np.array([1.0, 0.0, 0.0])
-    body = paper_b.HINGE_PROTOCOLS["knee"].markers
-    angle = np.radians(np.linspace(0.0, 90.0, 121))
-    screw = np.radians(20.0) * np.clip(1.0 - np.degrees(angle) / 20.0, 0.0, 1.0)
-    turns = rotation_matrix(np.outer(angle, flexion)) @ rotation_matrix(
-        np.outer(screw, [0.0, 0.0, 1.0])
-    )
-    clean = np.einsum("fij,mj->fmi", turns, body)
     for seed in range(5):
-        markers = clean + np.random.default_rng(seed).normal(scale=0.6, size=clean.shape)
         for method in ("planar", "combined"):
-            assert TRAVELS not in registry.get("axis", method)(markers).status
+            assert TRAVELS not in registry.get("axis", method)(screw_home_knee(seed)).status
 
 
 def test_the_real_knee_trials_travel_is_read_on_its_independent_frames():
