@@ -122,3 +122,21 @@ def test_too_few_frames_leave_the_travel_untested_and_unsaid():
     """Three frames make one pair: no scatter to test it against."""
     markers = _screwing(0, 5.0)[::50]
     assert np.isnan(travel_of(markers).p_value)
+
+
+def test_the_travel_is_the_same_from_the_one_call_rotations_and_the_svds():
+    """Where Horn's rotations hold, the verdict's one compiled call gives them; elsewhere the
+    SVD's: the travel read from either is the same to rounding."""
+    markers = np.stack([_screwing(seed, 2.0) for seed in range(3)])
+    variance = np.full(3, 0.25)
+    step = support._frame_step(markers.shape[1])
+    central = support._one_segment_numbers(markers, support._FLEX)[:, support._CENTRAL_FRAME]
+    fused, horn, directions, *_ = support._sampled_axis_numbers(markers, step, variance, central)
+    assert fused
+    svd = support._one_segment_rotations(markers, variance, central).rotations
+    np.testing.assert_allclose(
+        support._travel_numbers(markers, step, svd, directions),
+        support._travel_numbers(markers, step, horn, directions),
+        rtol=1e-9,
+        atol=1e-12,
+    )

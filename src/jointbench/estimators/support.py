@@ -32,7 +32,10 @@ more non-collinear markers), each first order in the noise:
   ``_SHARE_FRAMES`` frames is sampled at evenly spaced frames in the order given).
   The principal axis itself, with its SD from the rotations' noise, is the motion's own axis
   (:class:`MotionAxis`), which the verdict on one segment carries for the registry to compare
-  every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`).
+  every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`),
+  with how far the segment travels along that axis as it turns (:class:`Travel`: a hinge's
+  does not), which the costs whose model excludes it are held to
+  (:func:`jointbench.estimators.precision.annotate_travel`).
 * Independent frames. Every test above, and every SD or covariance a method states, counts
   each frame's noise as new. The markers' pair distances, which the rigid motion leaves alone,
   then vary independently from frame to frame, and the mean of ``L`` consecutive frames'
