@@ -1207,8 +1207,11 @@ def _precision_of(at: precision.CostAt, method: str) -> tuple[float, tuple[float
 def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> AxisResult:
     """``result`` for ``markers`` ``(N, P, 3)`` [mm] with its direction's SD
     (:func:`_direction_precision`), where the first-order SD does not hold the planar
-    eigen-problem's warning, and its cost's misfit against the support ``verdict``'s
-    rigid-body noise (:func:`jointbench.estimators.precision.misfit`)."""
+    eigen-problem's warning, the segment's travel along the axis, which every one of these
+    costs' models excludes (:func:`jointbench.estimators.precision.annotate_travel`), and its
+    cost's misfit against the support ``verdict``'s rigid-body noise
+    (:func:`jointbench.estimators.precision.misfit`), and its point's precision across the
+    axis (:func:`_point_covariance`)."""
     markers = precision.distinct_frames(markers)
     at = _cost_at(markers, np.asarray(result.point), np.asarray(result.direction), result.method)
     sd, eigen = _precision_of(at, result.method)
@@ -1218,6 +1221,7 @@ def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> Axi
         annotated = _checked_against_planar(annotated, markers)
     elif eigen is not None:
         annotated = precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
+    annotated = precision.annotate_travel(annotated, verdict.motion_axis, cost_name)
     annotated = _misfit_annotated(annotated, at, markers.shape[:2], verdict)
     return precision.annotate_point(annotated, _point_covariance(result, markers, at, verdict))
 

@@ -274,6 +274,7 @@ __all__ = [
     "annotate_misfit",
     "annotate_motion_axis",
     "annotate_point",
+    "annotate_travel",
     "annotate_validity",
     "cost_at",
     "direction_sd_deg",
@@ -907,3 +908,41 @@ def annotate_motion_axis(
             f"{ROTATION_ALPHA:g}){why}",
         )
     return with_warnings(result, warnings, {"motion_axis_check": record})
+
+
+def annotate_travel(result, reference: MotionAxis | None, cost_name: str):
+    """``result`` of a cost whose model is a fixed axis the markers circle (paper B's planar,
+    radial and combined costs: the radial one's point is the concentric spheres' centre) with
+    ``diagnostics["axis_travel"]``, how far the segment moves along the motion axis of its
+    support verdict ``reference`` as it turns (:class:`jointbench.estimators.support.Travel`):
+    ``over_arc_mm`` over the arc of ``arc_deg``, ``per_10_deg_mm``, its SD ``sd_per_10_deg_mm``,
+    ``dof`` and ``p_value``; and where that p-value is below
+    :data:`~jointbench.estimators.support.ROTATION_ALPHA`, a warning naming it: each marker's
+    arc is then a helix, which those costs fit with a plane or a centre tilted from the axis
+    (2 mm over a 60 degree arc tilted their answers by 3 to 4 degrees, many of their SDs).
+    SARA's direction comes from the rotations alone, which travel leaves alone, so it is not
+    held to this. Nothing is recorded where the verdict read no travel."""
+    travel = None if reference is None else reference.travel
+    if travel is None:
+        return result
+    per_10_deg = math.radians(10.0)
+    p_value = travel.p_value
+    record = {
+        "over_arc_mm": float(travel.over_arc_mm),
+        "arc_deg": math.degrees(travel.arc_rad),
+        "per_10_deg_mm": travel.per_rad_mm * per_10_deg,
+        "sd_per_10_deg_mm": travel.sd_mm * per_10_deg,
+        "dof": float(travel.dof),
+        "p_value": p_value,
+    }
+    warnings = ()
+    # NaN (no test) fails the comparison: nothing is said of a travel that was not tested.
+    if p_value < ROTATION_ALPHA:
+        warnings = (
+            f"axis not determined by {cost_name}: the segment travels "
+            f"{travel.over_arc_mm:.2g} mm along the axis over the arc of "
+            f"{record['arc_deg']:.0f} deg ({record['per_10_deg_mm']:.2g} mm per 10 deg, "
+            f"p = {p_value:.2g}), which the cost's model of markers circling a fixed axis "
+            "excludes: a helix's plane or centre tilts the answer",
+        )
+    return with_warnings(result, warnings, {"axis_travel": record})

@@ -32,7 +32,10 @@ more non-collinear markers), each first order in the noise:
   ``_SHARE_FRAMES`` frames is sampled at evenly spaced frames in the order given).
   The principal axis itself, with its SD from the rotations' noise, is the motion's own axis
   (:class:`MotionAxis`), which the verdict on one segment carries for the registry to compare
-  every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`).
+  every axis answer with (:func:`jointbench.estimators.precision.annotate_motion_axis`),
+  with how far the segment travels along that axis as it turns (:class:`Travel`: a hinge's
+  does not), which the costs whose model excludes it are held to
+  (:func:`jointbench.estimators.precision.annotate_travel`).
 * Independent frames. Every test above, and every SD or covariance a method states, counts
   each frame's noise as new. The markers' pair distances, which the rigid motion leaves alone,
   then vary independently from frame to frame, and the mean of ``L`` consecutive frames'
@@ -194,6 +197,7 @@ __all__ = [
     "ROUNDING",
     "MotionAxis",
     "Support",
+    "Travel",
     "Untested",
     "annotate",
     "assess",
@@ -1750,6 +1754,7 @@ class _OneSegmentRotations(NamedTuple):
     mean: np.ndarray  # (T, 3, 3) the mean pose M
     noise: np.ndarray  # (T, 3, 3) each rotation vector's noise covariance s^2 K^-1 [rad^2]
     n_frames: int  # the frames sampled
+    rotations: np.ndarray  # (T, F, 3, 3) the sampled frames' rotations from the central one
 
 
 def _one_segment_rotations(
@@ -1779,47 +1784,203 @@ def _one_segment_rotations(
     rotations = best_rotation(cross)
     _, _, values, own, mean = _spreads(rotations, inertia_inv, None, variance)
     noise = variance[:, None, None] * inertia_inv
-    return _OneSegmentRotations(values, own, mean, noise, rotations.shape[1])
+    return _OneSegmentRotations(values, own, mean, noise, rotations.shape[1], rotations)
 
 
 def _one_segment_axes(
-    markers: np.ndarray, variance: np.ndarray, central: np.ndarray
+    markers: np.ndarray,
+    variance: np.ndarray,
+    central: np.ndarray,
+    independent: np.ndarray | None = None,
 ) -> tuple[list[MotionAxis], _AxisShare]:
     """The :class:`MotionAxis` of each trial of one segment's markers ``(T, N, n, 3)`` [mm] in
     the reference frame, and how much of its rotation is about that axis
     (:func:`_axis_numbers`), from the rotations of :func:`_one_segment_rotations`;
-    ``variance`` ``(T,)`` [mm^2] is the rigid residual per coordinate and ``central`` ``(T,)``
-    the frame the rotations start from (:func:`_onto_central_frame`). One compiled call
+    ``variance`` ``(T,)`` [mm^2] is the rigid residual per coordinate, ``central`` ``(T,)``
+    the frame the rotations start from (:func:`_onto_central_frame`) and ``independent``
+    ``(T,)`` about how many independent frames each holds (``inf``, or ``None`` for every
+    trial, where the verdict did not find them otherwise), which the travel along the axis
+    reads (:class:`Travel`). One compiled call
     (:func:`_sampled_axis_numbers`) where every sampled frame's rotation is Horn's and none is
     near pi from the mean pose; otherwise the rotations' own way, through the SVD and
     :func:`jointbench.geometry.rotation_vector`, which give the same numbers where both hold."""
     variance = kernel_array(variance)
     central = kernel_array(central)
-    fused, *numbers = _sampled_axis_numbers(
-        kernel_array(markers), _frame_step(markers.shape[1]), variance, central
+    step = _frame_step(markers.shape[1])
+    fused, rotations, *numbers = _sampled_axis_numbers(
+        kernel_array(markers), step, variance, central
     )
     if not fused:
-        rotations = _one_segment_rotations(markers, variance, central)
-        numbers = _axis_numbers(
-            rotations.values, rotations.own, rotations.mean, rotations.noise, rotations.n_frames
-        )
+        found = _one_segment_rotations(markers, variance, central)
+        rotations = found.rotations
+        numbers = _axis_numbers(found.values, found.own, found.mean, found.noise, found.n_frames)
     directions, sd_deg, noise_share, pose_sd_deg, *shares = numbers
     axis_share = _AxisShare(*shares)
     arc_sd_deg = _arc_rotation_sd_deg(
         kernel_array(markers), variance, axis_share.principal_rms_rad, axis_share.off_rms_rad
     )
+    if independent is None:
+        independent = np.full(len(markers), np.inf)
+    travels = _travels(
+        _travel_numbers(kernel_array(markers), step, kernel_array(rotations), directions),
+        independent,
+    )
     axes = [
-        MotionAxis(direction, sd, share, pose_sd, arc_sd)
-        for direction, sd, share, pose_sd, arc_sd in zip(
+        MotionAxis(direction, sd, share, pose_sd, arc_sd, travel)
+        for direction, sd, share, pose_sd, arc_sd, travel in zip(
             directions,
             sd_deg.tolist(),
             noise_share.tolist(),
             pose_sd_deg.tolist(),
             arc_sd_deg,
+            travels,
             strict=True,
         )
     ]
     return axes, axis_share
+
+
+class Travel(NamedTuple):
+    """How far a segment moves along its motion axis as it turns about it: a hinge's segment
+    does not, and every model of a fixed axis whose markers circle it excludes it (paper B
+    \u00a72: "each marker trajectory is a circular path on a plane orthogonal to the AoR"). A
+    marker plate sliding on its segment, or a joint with travel, moves it ``per_rad_mm``
+    [mm/rad] along the axis: each marker's arc is a helix, which a plane tilted from the axis
+    fits. Read from the rigid displacements between the sampled frames, not from the markers'
+    positions along the axis, which rotation about a second axis moves too: the displacement
+    from one frame to another along that displacement's own rotation axis (its screw
+    translation, the same about whatever point it is taken), which a rotation about any fixed
+    point leaves zero (a coupled or screw-home knee turns about one). The frames sorted by
+    their angle about the motion axis, the first half is paired with the second, each frame in
+    one pair: the pairs' displacements are independent, and the shape the rotations start from
+    cancels out of each. For a pair turning by ``w`` [rad] and moving the centroid by ``d``
+    [mm], ``w . d = p |w|^2`` with ``p`` the travel per radian; ``p`` is its weighted mean,
+    ``sum w . d / sum |w|^2``, and ``sd_mm`` [mm/rad] its SD from the pairs' own scatter about
+    it (noise, and whatever the model leaves out), over ``dof`` degrees of freedom; where the
+    frames are not independent, as if only ``independent`` of them were. ``arc_rad`` is the
+    range of the sampled frames' angles about the axis [rad]."""
+
+    per_rad_mm: float
+    sd_mm: float
+    dof: float
+    arc_rad: float
+
+    @property
+    def over_arc_mm(self) -> float:
+        """The travel along the axis over the arc [mm]."""
+        return self.per_rad_mm * self.arc_rad
+
+    @property
+    def p_value(self) -> float:
+        """The two-sided p-value of "the segment does not travel along its axis" (a t test on
+        ``dof`` degrees of freedom, as the F ratio on ``(1, dof)``); NaN without a test."""
+        if not (self.dof >= 1.0 and self.sd_mm > 0.0):
+            return math.nan
+        return f_survival(1.0, self.dof, (self.per_rad_mm / self.sd_mm) ** 2)
+
+
+def _travels(numbers: np.ndarray, independent: np.ndarray) -> list[Travel]:
+    """A :class:`Travel` per row of :func:`_travel_numbers` ``numbers`` ``(T, 5)``, the pairs
+    counted as no more than half of the ``independent`` frames ``(T,)`` (each pair takes two):
+    where the frames share their errors, so do the pairs, and their mean's variance grows by
+    as much as their count is cut."""
+    travels = []
+    for (per_rad, scatter, weight, n_pairs, arc), count in zip(
+        numbers.tolist(), independent.tolist(), strict=True
+    ):
+        effective = min(n_pairs, count / 2.0)
+        if n_pairs < 2 or not weight > 0.0 or effective < 2.0:
+            travels.append(Travel(per_rad, math.nan, math.nan, arc))
+            continue
+        variance = scatter / weight**2 * n_pairs / (n_pairs - 1.0) * n_pairs / effective
+        travels.append(Travel(per_rad, math.sqrt(variance), effective - 1.0, arc))
+    return travels
+
+
+@kernel
+def _travel_numbers(
+    markers: np.ndarray, step: int, rotations: np.ndarray, directions: np.ndarray
+) -> np.ndarray:
+    """Per trial of one segment's markers ``(T, N, n, 3)`` [mm] sampled every ``step``
+    frames, with those frames' ``rotations`` ``(T, F, 3, 3)`` from one shape and the motion
+    axes ``directions`` ``(T, 3)``: per trial ``(T, 5)`` the travel along the axis per radian
+    ``p`` [mm/rad], the pairs' squared residuals about it ``sum (w . d - p |w|^2)^2``
+    [mm^2 rad^2], their weight ``sum |w|^2`` [rad^2], the number of pairs and the arc [rad]
+    (:class:`Travel`). A compiled kernel."""
+    n_trials, n_sampled = rotations.shape[0], rotations.shape[1]
+    n_markers = markers.shape[2]
+    out = np.zeros((n_trials, 5))
+    centroids = np.empty((n_sampled, 3))
+    angles = np.empty(n_sampled)
+    vector = np.empty(3)
+    relative = np.empty((3, 3))
+    half = n_sampled // 2
+    dots = np.empty(half)
+    squares = np.empty(half)
+    for t in range(n_trials):
+        for s in range(n_sampled):
+            for i in range(3):
+                total = 0.0
+                for m in range(n_markers):
+                    total += markers[t, s * step, m, i]
+                centroids[s, i] = total / n_markers
+            _rotation_vector_into(rotations[t, s], vector)
+            angles[s] = (
+                vector[0] * directions[t, 0]
+                + vector[1] * directions[t, 1]
+                + vector[2] * directions[t, 2]
+            )
+        order = np.argsort(angles, kind="mergesort")
+        weight = 0.0
+        moved = 0.0
+        for j in range(half):
+            a = order[j]
+            b = order[n_sampled - half + j]
+            # The rotation from frame a to frame b, R_b R_a'.
+            for i in range(3):
+                for k in range(3):
+                    value = 0.0
+                    for q in range(3):
+                        value += rotations[t, b, i, q] * rotations[t, a, k, q]
+                    relative[i, k] = value
+            _rotation_vector_into(relative, vector)
+            dot = 0.0
+            square = 0.0
+            for i in range(3):
+                dot += vector[i] * (centroids[b, i] - centroids[a, i])
+                square += vector[i] * vector[i]
+            dots[j] = dot
+            squares[j] = square
+            moved += dot
+            weight += square
+        per_rad = moved / weight if weight > 0.0 else np.nan
+        scatter = 0.0
+        for j in range(half):
+            scatter += (dots[j] - per_rad * squares[j]) ** 2
+        out[t, 0] = per_rad
+        out[t, 1] = scatter
+        out[t, 2] = weight
+        out[t, 3] = half
+        out[t, 4] = angles[order[n_sampled - 1]] - angles[order[0]] if n_sampled else 0.0
+    return out
+
+
+@kernel
+def _rotation_vector_into(matrix: np.ndarray, vector: np.ndarray) -> None:
+    """The rotation vector [rad] of a rotation ``matrix`` ``(3, 3)`` into ``vector`` ``(3,)``:
+    its angle from the trace and the axial part together (``atan2``), which hold to rounding
+    at any angle short of pi, where the axis is left to the axial part's noise. A compiled
+    kernel."""
+    a0 = 0.5 * (matrix[2, 1] - matrix[1, 2])
+    a1 = 0.5 * (matrix[0, 2] - matrix[2, 0])
+    a2 = 0.5 * (matrix[1, 0] - matrix[0, 1])
+    sine = np.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    angle = np.arctan2(sine, 0.5 * (matrix[0, 0] + matrix[1, 1] + matrix[2, 2] - 1.0))
+    # angle / sin(angle), 1 to rounding below 1e-8 rad.
+    scale = angle / sine if sine > 1e-12 else 1.0
+    vector[0] = scale * a0
+    vector[1] = scale * a1
+    vector[2] = scale * a2
 
 
 @kernel
@@ -1871,9 +2032,10 @@ def _sampled_axis_numbers(
 ) -> tuple:
     """:func:`_axis_numbers` of the rotations of :func:`_one_segment_rotations` of ``markers``
     ``(T, N, n, 3)`` [mm], sampled every ``step`` frames from the ``central`` frames ``(T,)``,
-    with the rigid residual ``variance`` ``(T,)`` [mm^2], preceded by whether they hold:
-    ``False`` (and empty arrays) where Horn's method leaves a sampled frame's rotation to the
-    SVD or one is within 1e-4 of pi from the mean pose
+    with the rigid residual ``variance`` ``(T,)`` [mm^2], preceded by whether they hold and
+    the sampled frames' rotations ``(T, F, 3, 3)``: ``False`` (and empty arrays) where
+    Horn's method leaves a sampled frame's rotation to the SVD or one is within 1e-4 of pi
+    from the mean pose
     (:func:`jointbench.numerics.poses.best_rotation`, :func:`_spreads`), which the caller then
     takes the whole way. A compiled kernel: the same kernels in one call, where
     the glue between them cost a one-trial check as much as their work."""
@@ -1884,11 +2046,13 @@ def _sampled_axis_numbers(
     unsettled = np.empty(flat.shape[0], dtype=np.bool_)
     _horn_rotations(flat, np.full(flat.shape[0], np.inf), rotation, unsettled)
     empty = np.empty(0)
+    no_rotations = np.empty((0, 0, 3, 3))
     if unsettled.any():
-        return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
+        return False, no_rotations, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
     no_frames = np.empty((n_trials, 0, 3, 3))
+    sampled = rotation.reshape((n_trials, n_sampled, 3, 3))
     _, _, values, own, mean, near_pi = _rotation_spreads(
-        rotation.reshape((n_trials, n_sampled, 3, 3)),
+        sampled,
         inertia_inv,
         no_frames,
         inertia_inv,
@@ -1896,14 +2060,14 @@ def _sampled_axis_numbers(
         False,
     )
     if near_pi:
-        return False, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
+        return False, no_rotations, np.empty((0, 3)), empty, empty, empty, empty, empty, empty
     noise = np.empty_like(inertia_inv)
     for t in range(n_trials):
         noise[t] = variance[t] * inertia_inv[t]
     directions, sd_deg, share, pose_sd_deg, off_share, principal, off = _axis_numbers(
         values, own, mean, noise, n_sampled
     )
-    return True, directions, sd_deg, share, pose_sd_deg, off_share, principal, off
+    return True, sampled, directions, sd_deg, share, pose_sd_deg, off_share, principal, off
 
 
 @kernel
@@ -1949,13 +2113,15 @@ class MotionAxis(NamedTuple):
     smallest, is the marker's with the longest lever. A marker at a distance ``r`` from the
     axis travels ``r`` times the rotation, so ``L`` is that distance read from the data,
     whatever line an answer claims
-    (:func:`jointbench.estimators.precision.annotate_motion_axis`)."""
+    (:func:`jointbench.estimators.precision.annotate_motion_axis`); ``travel``, how far the
+    segment moves along the axis as it turns (:class:`Travel`), where the verdict read it."""
 
     direction: np.ndarray
     sd_deg: float
     noise_share: float
     pose_sd_deg: float
     marker_arc_sd_deg: np.ndarray
+    travel: Travel | None = None
 
     @property
     def arc_rotation_sd_deg(self) -> float:
@@ -2237,6 +2403,7 @@ def _one_segment(kind: str, markers: np.ndarray) -> tuple[list[Support], np.ndar
             markers if len(posed) == len(markers) else markers[posed],
             numbers[posed, 0],
             numbers[posed, _CENTRAL_FRAME],
+            np.array([frames[t].independent if frames[t].dependent() else np.inf for t in posed]),
         )
         axes = dict(zip(posed, found_axes, strict=True))
         by_trial = zip(posed, zip(*(column.tolist() for column in found), strict=True), strict=True)
