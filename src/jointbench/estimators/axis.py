@@ -1017,8 +1017,8 @@ def _radial_sums(
     profiled out subtract (two passes: on a short arc the gradient barely changes, and its
     centred products would cancel in one), and a second for the sums; the second derivatives'
     ``(2, 2)`` blocks are summed as the scalar sums they are made of. Every sum is a scalar of
-    its own, which the compiler keeps in a register (in arrays, each term is a load and a
-    store: most of a long trial's pass)."""
+    its own, which the compiler keeps in a register: in arrays each term was a load and a
+    store, a sixth of the pass's time on a long trial."""
     n_frames, n_markers, _ = markers.shape
     cost, fourths = 0.0, 0.0
     # The gradient's sums, sum rho grad(d), and the centred products' upper triangle.
