@@ -167,3 +167,26 @@ def test_the_distinct_frames_are_those_np_unique_tells(markers):
     expected = _distinct_as_np_unique(markers)
     np.testing.assert_array_equal(distinct, expected)
     assert (distinct is markers) == (expected is markers)
+
+
+@pytest.mark.parametrize("method", ["planar", "radial", "combined"])
+def test_a_checked_fit_passes_over_its_samples_for_each_sum_once(monkeypatch, method):
+    # The point's covariance reads neither cost's fourth powers, and its height and the
+    # combined cost's foot are read from one centroid.
+    passes = {"_height_fourths": 0, "_sample_centroid": 0}
+
+    def counting(name):
+        compiled = getattr(axis, name)
+
+        def counted(*args):
+            passes[name] += 1
+            return compiled(*args)
+
+        return counted
+
+    for name in passes:
+        monkeypatch.setattr(axis, name, counting(name))
+    registry.get("axis", method)(hinge(0, 30.0, noise=1.0))
+    # Once each: the planar residuals' for the answer's own statement (the radial answer's
+    # being checked against the planar eigenvector's), the centroid for the radial costs.
+    assert passes == {"_height_fourths": 1, "_sample_centroid": 1}

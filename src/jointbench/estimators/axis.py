@@ -1016,34 +1016,40 @@ def _radial_sums(
     its frames for the means of its distance and of the distance's gradient, which the radii
     profiled out subtract (two passes: on a short arc the gradient barely changes, and its
     centred products would cancel in one), and a second for the sums; the second derivatives'
-    ``(2, 2)`` blocks are summed as the scalar sums they are made of."""
+    ``(2, 2)`` blocks are summed as the scalar sums they are made of. Every sum is a scalar of
+    its own, which the compiler keeps in a register: in arrays each term was a load and a
+    store, a sixth of the pass's time on a long trial."""
     n_frames, n_markers, _ = markers.shape
     cost, fourths = 0.0, 0.0
-    centred = np.zeros((4, 4))
-    grad = np.zeros(4)
-    mean = np.empty(4)
-    sample = np.empty(4)
+    # The gradient's sums, sum rho grad(d), and the centred products' upper triangle.
+    g0 = g1 = g2 = g3 = 0.0
+    h00 = h01 = h02 = h03 = h11 = h12 = h13 = h22 = h23 = h33 = 0.0
     # Per block weight (c^2, c, 1): sum w, sum w u0 u0, sum w u0 u1, sum w u1 u1 (w = rho / d);
     # and sum rho d u u' (u0 u0, u0 u1, u1 u1).
-    tangential = np.zeros((3, 4))
-    outer = np.zeros(3)
+    aa0 = aa1 = aa2 = aa3 = ab0 = ab1 = ab2 = ab3 = bb0 = bb1 = bb2 = bb3 = 0.0
+    outer0 = outer1 = outer2 = 0.0
     # A marker's samples in the axis's coordinates (c, u0, u1, d), kept from the first pass.
     coordinates = np.empty((n_frames, 4))
     for p in range(n_markers):
         mean_distance = 0.0
-        mean[:] = 0.0
+        mean0 = mean1 = mean2 = mean3 = 0.0
         for k in range(n_frames):
             c, x0, x1, d = _axis_coordinates(markers[k, p], foot, direction, basis)
             u0, u1 = x0 / d, x1 / d
             coordinates[k, 0], coordinates[k, 1], coordinates[k, 2] = c, u0, u1
             coordinates[k, 3] = d
             mean_distance += d
-            mean[0] -= c * u0
-            mean[1] -= c * u1
-            mean[2] -= u0
-            mean[3] -= u1
+            mean0 -= c * u0
+            mean1 -= c * u1
+            mean2 -= u0
+            mean3 -= u1
         mean_distance /= n_frames
-        mean /= n_frames
+        mean0, mean1, mean2, mean3 = (
+            mean0 / n_frames,
+            mean1 / n_frames,
+            mean2 / n_frames,
+            mean3 / n_frames,
+        )
         for k in range(n_frames):
             c, u0, u1, d = (
                 coordinates[k, 0],
@@ -1051,34 +1057,53 @@ def _radial_sums(
                 coordinates[k, 2],
                 coordinates[k, 3],
             )
-            sample[0], sample[1], sample[2], sample[3] = -c * u0, -c * u1, -u0, -u1
+            s0, s1, s2, s3 = -c * u0, -c * u1, -u0, -u1
             residual = d - mean_distance
             squared = residual * residual
             cost += squared
             fourths += squared * squared
-            for i in range(4):
-                grad[i] += residual * sample[i]
-                offset = sample[i] - mean[i]
-                for j in range(i, 4):
-                    centred[i, j] += offset * (sample[j] - mean[j])
+            g0, g1 = g0 + residual * s0, g1 + residual * s1
+            g2, g3 = g2 + residual * s2, g3 + residual * s3
+            o0, o1, o2, o3 = s0 - mean0, s1 - mean1, s2 - mean2, s3 - mean3
+            h00 += o0 * o0
+            h01 += o0 * o1
+            h02 += o0 * o2
+            h03 += o0 * o3
+            h11 += o1 * o1
+            h12 += o1 * o2
+            h13 += o1 * o3
+            h22 += o2 * o2
+            h23 += o2 * o3
+            h33 += o3 * o3
             weight = residual / d
             u00, u01, u11 = u0 * u0, u0 * u1, u1 * u1
-            for b in range(3):
-                w = weight * (c * c if b == 0 else (c if b == 1 else 1.0))
-                tangential[b, 0] += w
-                tangential[b, 1] += w * u00
-                tangential[b, 2] += w * u01
-                tangential[b, 3] += w * u11
+            w = weight * (c * c)
+            aa0, aa1, aa2, aa3 = aa0 + w, aa1 + w * u00, aa2 + w * u01, aa3 + w * u11
+            w = weight * c
+            ab0, ab1, ab2, ab3 = ab0 + w, ab1 + w * u00, ab2 + w * u01, ab3 + w * u11
+            bb0, bb1, bb2, bb3 = (
+                bb0 + weight,
+                bb1 + weight * u00,
+                bb2 + weight * u01,
+                bb3 + weight * u11,
+            )
             rd = residual * d
-            outer[0] += rd * u00
-            outer[1] += rd * u01
-            outer[2] += rd * u11
+            outer0 += rd * u00
+            outer1 += rd * u01
+            outer2 += rd * u11
+    gradient[0], gradient[1], gradient[2], gradient[3] = 2.0 * g0, 2.0 * g1, 2.0 * g2, 2.0 * g3
+    centred = (
+        (h00, h01, h02, h03),
+        (0.0, h11, h12, h13),
+        (0.0, 0.0, h22, h23),
+        (0.0, 0.0, 0.0, h33),
+    )
     for i in range(4):
-        gradient[i] = 2.0 * grad[i]
         for j in range(i, 4):
-            hessian[i, j] = hessian[j, i] = 2.0 * centred[i, j]
+            hessian[i, j] = hessian[j, i] = 2.0 * centred[i][j]
     # 2 sum rho d2d: the blocks sum w (I - u u') times c^2 (angle-angle), c (angle-shift) and
     # 1 (shift-shift), less sum rho d u u' in the angle-angle block.
+    tangential = ((aa0, aa1, aa2, aa3), (ab0, ab1, ab2, ab3), (bb0, bb1, bb2, bb3))
     for b, (row, column) in enumerate(((0, 0), (0, 2), (2, 2))):
         t = tangential[b]
         block = ((t[0] - t[1], -t[2]), (-t[2], t[0] - t[3]))
@@ -1087,10 +1112,10 @@ def _radial_sums(
                 hessian[row + i, column + j] += 2.0 * block[i][j]
                 if row != column:
                     hessian[column + j, row + i] += 2.0 * block[i][j]
-    hessian[0, 0] -= 2.0 * outer[0]
-    hessian[0, 1] -= 2.0 * outer[1]
-    hessian[1, 0] -= 2.0 * outer[1]
-    hessian[1, 1] -= 2.0 * outer[2]
+    hessian[0, 0] -= 2.0 * outer0
+    hessian[0, 1] -= 2.0 * outer1
+    hessian[1, 0] -= 2.0 * outer1
+    hessian[1, 1] -= 2.0 * outer2
     return cost, fourths
 
 
@@ -1123,45 +1148,51 @@ def _planar_gap(planar_hessian: np.ndarray) -> float:
 
 
 def _planar_terms(
-    markers: np.ndarray, direction: np.ndarray, basis: np.ndarray
+    markers: np.ndarray, direction: np.ndarray, basis: np.ndarray, fourths: bool = True
 ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """The planar cost ``n' S n`` [mm^2] at the unit ``direction`` ``n`` (3,) on the distinct
     frames ``markers`` ``(N_d, P, 3)`` [mm], with its gradient ``(2,)`` and Hessian ``(2, 2)``
     in the tangent angles of ``basis`` ``(3, 2)`` (:func:`_planar_hessian`) and its residuals'
-    fourth powers summed [mm^4]: ``(gradient, hessian, cost, fourths)``. ``S`` does not depend
-    on the axis's point: the planar cost needs no foot, whose centroid of every sample costs
-    more than ``S`` itself on a long trial."""
+    fourth powers summed [mm^4], NaN unless ``fourths`` asks for them (a pass over every
+    sample): ``(gradient, hessian, cost, fourths)``. ``S`` does not depend on the axis's
+    point: the planar cost needs no foot, whose centroid of every sample costs more than ``S``
+    itself on a long trial."""
     scatter = trial_scatter(markers)
     cost = float(direction @ scatter @ direction)
     gradient = 2.0 * basis.T @ scatter @ direction
-    fourths = _height_fourths(kernel_array(markers), kernel_array(direction))
-    return gradient, _planar_hessian(scatter, direction, basis, cost), cost, fourths
+    summed = (
+        _height_fourths(kernel_array(markers), kernel_array(direction)) if fourths else math.nan
+    )
+    return gradient, _planar_hessian(scatter, direction, basis, cost), cost, summed
 
 
 def _cost_at(
-    markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str
+    markers: np.ndarray, point: np.ndarray, direction: np.ndarray, method: str, fourths: bool = True
 ) -> precision.CostAt:
     """``method``'s cost at the axis through ``point`` (3,) [mm] along ``direction`` (3,) on the
     distinct frames ``markers`` ``(N_d, P, 3)`` [mm], with its analytic gradient and Hessian
-    (:func:`_direction_precision`)."""
+    (:func:`_direction_precision`); its residuals' fourth powers NaN unless ``fourths`` asks
+    for them (the point's covariance does not read them, and the planar residuals' take a
+    pass over every sample: :func:`_planar_terms`)."""
     n_frames, n_markers = markers.shape[:2]
     basis = precision.tangent_basis(direction)
     n_params = 2 if method == "planar" else 4
     if method == "planar":
-        gradient, hessian, cost, fourths = _planar_terms(markers, direction, basis)
+        gradient, hessian, cost, summed = _planar_terms(markers, direction, basis, fourths)
     else:
         gradient, hessian = np.zeros(n_params), np.zeros((n_params, n_params))
-        cost, fourths = 0.0, 0.0
+        cost, summed = 0.0, 0.0
     if method == "combined":
-        gradient[:2], hessian[:2, :2], cost, fourths = _planar_terms(markers, direction, basis)
+        planar = _planar_terms(markers, direction, basis, fourths)
+        gradient[:2], hessian[:2, :2], cost, summed = planar
     if method != "planar":
         foot = point + direction * float(direction @ (_centroid(markers) - point))
         radial = _radial_derivatives(markers, foot, direction, basis)
         gradient, hessian = gradient + radial[0], hessian + radial[1]
-        cost, fourths = cost + radial[2], fourths + radial[3]
+        cost, summed = cost + radial[2], summed + radial[3]
     n_residuals = _RESIDUAL_SETS[method] * n_markers * n_frames
     dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
-    return precision.cost_at(gradient, hessian, cost, fourths, n_residuals, dof)
+    return precision.cost_at(gradient, hessian, cost, summed, n_residuals, dof)
 
 
 def _direction_precision(
@@ -1246,7 +1277,7 @@ def _point_covariance(
     direction = np.asarray(
         result.direction if result.method == "combined" else result.diagnostics["eigenvector"]
     )
-    at = _cost_at(markers, point, direction, "combined")
+    at = _cost_at(markers, point, direction, "combined", fourths=False)
     return _point_covariance_at(at, point, direction, markers)
 
 
@@ -1262,8 +1293,17 @@ def _point_covariance_at(
 
 def _centroid(markers: np.ndarray) -> np.ndarray:
     """The centroid (3,) [mm] of every sample of ``markers`` ``(N, P, 3)`` [mm]: the foot of an
-    axis cost's tilt and shift (:func:`_cost_at`)."""
-    return _sample_centroid(kernel_array(markers))
+    axis cost's tilt and shift (:func:`_cost_at`), from which the point's height is read
+    (:func:`_point_covariance_at`); read-only, computed once per array in a checked call
+    (:func:`jointbench.numerics.reuse.remembered`)."""
+    return remembered("sample centroid", markers, _centroid_of)
+
+
+def _centroid_of(markers: np.ndarray) -> np.ndarray:
+    """:func:`_sample_centroid` of ``markers`` ``(N, P, 3)`` [mm], read-only (3,) [mm]."""
+    centroid = _sample_centroid(kernel_array(markers))
+    centroid.setflags(write=False)
+    return centroid
 
 
 @kernel
