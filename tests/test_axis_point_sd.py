@@ -12,10 +12,12 @@ import pytest
 from test_axis_sd_validity import swing
 
 import jointbench
+from jointbench import cli
 from jointbench.estimators import registry, results
 from jointbench.estimators.results import MAX_AXIS_POINT_SD_MM
 from jointbench.geometry import angle_between_lines_deg, rotation_about_axis
 from jointbench.io import RecordingFit
+from jointbench.io.fit import NOT_DETERMINED
 
 METHODS = ("planar", "radial", "combined", "SARA")
 POINT_NOT_DETERMINED = "warning: point not determined: "
@@ -140,3 +142,18 @@ def test_the_summary_states_the_point_sd_where_it_is_determined_and_none_where_n
     assert summary["point_covariance_mm2"] is None
     assert results.stated_point_sd(far) is None
     assert results.stated_point_sd(determined) == determined.diagnostics["axis_point_sd_mm"]
+
+
+def test_the_fit_commands_rows_state_the_point_sd_as_its_json_does():
+    """``jointbench fit``'s CSV and table rows carry the point's SD across the axis beside the
+    direction's, a number where it is determined and "not determined" to people where not."""
+    frames = np.arange(50)
+    for markers, determined in ((swing(2, 60.0), True), (swing(9, 3.0), False)):
+        fitted = RecordingFit(
+            "axis", "combined", jointbench.fit_axis(markers, "combined"), None, frames, 0
+        )
+        row = cli._row(fitted)
+        assert row["point_sd_mm"] == fitted.to_dict()["point_sd_mm"]
+        assert (row["point_sd_mm"] is not None) is determined
+        if not determined:
+            assert cli._readable(row)["point_sd_mm"] == NOT_DETERMINED

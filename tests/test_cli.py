@@ -24,6 +24,7 @@ from jointbench.cli import main
 from jointbench.estimators.centre_precision import MAX_CENTER_SD_MM
 from jointbench.estimators.results import PRECISION_NOT_DETERMINED
 from jointbench.geometry import rotation_matrix
+from jointbench.io.fit import NOT_DETERMINED
 
 SHANK = "RLEG1,RLEG2,RLEG3,RATT,RLM,RSPH"
 THIGH = "RTHI1,RTHI2,RTHI3,RGT"
@@ -245,7 +246,7 @@ def test_an_sd_that_states_no_precision_is_printed_not_determined(capsys):
     assert f"{stated:.1f}" not in out
     code, out, _ = run(capsys, *arguments, "radial")
     assert code == 0
-    assert re.search(r"^\s*radial( +\S+){6} +not determined +True ", out, re.MULTILINE), out
+    assert table_cell(out, "radial", "sd_deg") == NOT_DETERMINED, out
     assert f"{stated:.1f}" not in out and f"{stated:.4f}" not in out
     code, out, _ = run(capsys, *arguments, "planar", "--format", "csv")
     planar = prepared.fit("planar").result
@@ -264,6 +265,16 @@ def sd_outputs(capsys, arguments: list[str]) -> tuple[pd.DataFrame, list[dict], 
     return csv_rows(outputs[0]), json.loads(outputs[1]), outputs[2]
 
 
+def table_cell(text: str, method: str, column: str) -> str:
+    """The printed ``column`` of ``method``'s row of a ``jointbench fit`` table ``text``: the
+    columns are right-aligned, each cell ending where its header does."""
+    header = re.search(rf"^\s*method .*\b{column}\b.*$", text, re.MULTILINE).group(0)
+    end = re.search(rf"\b{column}\b", header).end()
+    before = re.search(rf"^\s*{method} .*$", text, re.MULTILINE).group(0)[:end]
+    # "not determined" is the one cell of two words.
+    return NOT_DETERMINED if before.endswith(NOT_DETERMINED) else before.split()[-1]
+
+
 def check_sd_outputs(capsys, arguments: list[str], column: str, undetermined: set[str]):
     """Each method's SD in ``column``: a number in the CSV (the column float, NaN where it
     states no precision) and the JSON (null there), flagged by ``sd_stated``; the table reads
@@ -280,8 +291,8 @@ def check_sd_outputs(capsys, arguments: list[str], column: str, undetermined: se
         else:
             assert fitted[column] is None
     for method in table["method"]:
-        line = re.search(rf"^\s*{method} .*$", text, re.MULTILINE).group(0)
-        assert (" not determined " in line) == (method in undetermined), line
+        cell = table_cell(text, method, column)
+        assert (cell == NOT_DETERMINED) == (method in undetermined), cell
     assert "sd_stated" not in text
     return table
 

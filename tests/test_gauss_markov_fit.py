@@ -553,3 +553,33 @@ def _frame0_p(proximal, distal) -> float:
     """The p-value of the test of frame 0's noise on two segments' poses."""
     rounding = hjc._rounding_variance((proximal, distal))
     return hjc._frame0_noise(hjc._segments_noise(proximal, distal, rounding))[1]["frame0_p"]
+
+
+def _frame0_segment(n_markers: int, ratio: float, n_frames: int = 11) -> hjc._SegmentNoise:
+    """A segment's residuals whose frame 0 leaves ``ratio`` times the other frames' residual
+    per dof (:func:`hjc._frame0_ratio`), the others' variance 1 mm^2."""
+    dof = 3 * (n_markers - 2) * (n_frames - 1)
+    per_frame = dof / (n_frames - 1)
+    rest = per_frame * (n_frames - 2)
+    left_out = ratio * per_frame
+    return hjc._SegmentNoise(
+        dof=dof,
+        variance=(rest + left_out) / dof,
+        n_frames=n_frames,
+        frame0_ss=left_out * (n_frames - 1) / n_frames,
+        rest_variance=1.0,
+        rest_fourths=0.0,
+        gaussian=0.0,
+        excess=0.0,
+    )
+
+
+def test_frame0_warning_names_the_segment_whose_test_rejects():
+    """The warning quotes the ratio of the segment whose p-value it states: ten markers leaving
+    3 times their noise reject far more surely than three leaving 4 times theirs."""
+    segments = (_frame0_segment(10, 3.0), _frame0_segment(3, 4.0))
+    assert hjc._frame0_ratio(segments[0])[0] == pytest.approx(3.0)
+    assert hjc._frame0_ratio(segments[1])[0] == pytest.approx(4.0)
+    (warning,), numbers = hjc._frame0_noise((segments, 0.0))
+    assert numbers["frame0_p"] < ROTATION_ALPHA
+    assert "proximal segment leave 3 times" in warning, warning

@@ -42,7 +42,7 @@ from jointbench.ensembles.verdicts import PROTOCOL_SHARES, standout_summary
 from jointbench.estimators.registry import KINDS, get
 from jointbench.estimators.validation import MAX_SPAN_MM
 from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, Recording, prepare, read
-from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_NAMES, SD_STATED
+from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_NAMES, SD_STATED, point_precision
 from jointbench.io.segments import HELD_SAMPLES, LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
 from jointbench.report import (
@@ -384,6 +384,10 @@ def _row(fitted) -> dict:
         row.update(zip(("x_mm", "y_mm", "z_mm"), result.center, strict=True))
     fields = fitted.sd_fields()
     row.update(fields)
+    if fitted.kind == "axis":
+        # The point's SD across the axis; its covariance has no flat column.
+        row.update(point_precision(result))
+        row.pop("point_covariance_mm2", None)
     # The method's own covariance under the name the pipeline's scores give it (paper C's W_c
     # for gauss-markov), and the one the SD is read from under the name of its diagnostic
     # (for gauss-markov-frame0 the method's own): None where the SD states no precision.
@@ -412,7 +416,7 @@ def _readable(row: dict) -> dict:
     covariances of its answer, read :data:`~jointbench.io.fit.NOT_DETERMINED`, in place of
     the flag that says so for programs."""
     readable = {key: value for key, value in row.items() if key != SD_STATED}
-    for name in {*SD_NAMES.values(), _OWN_COVARIANCE, _STATED_COVARIANCE}:
+    for name in {*SD_NAMES.values(), _OWN_COVARIANCE, _STATED_COVARIANCE, "point_sd_mm"}:
         if name in readable and readable[name] is None:
             readable[name] = NOT_DETERMINED
     return readable

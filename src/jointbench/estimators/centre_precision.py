@@ -426,9 +426,8 @@ def _fits_better(
     has no direction from it: its distance is the length of its noise, whose spread is not the
     radial noise's and changes by several times the whole gain of a step as the point moves by
     a fraction of that noise, and whether its directions spread beyond their noise flips with
-    it (on a 30 degree cap with 0.5 mm noise, one 0.5 mm from the joint raised its sum of
-    squares from 11 to 20 mm^2 over the step from LS's answer to the spheres' centre, which
-    lowered the four other markers' ratio from 1.017 to 1.010). ``coordinates`` ``(n, 3, N)``
+    it (on a short cap, such a marker's sum of squares can rise over a step that lowers the
+    other markers' lack of fit: ``tests/test_centre_precision.py``). ``coordinates`` ``(n, 3, N)``
     [mm] are the markers' (:func:`_transposed_into`). A compiled kernel."""
     kept, kept_at_answer = scratch[19]
     same = True

@@ -1494,11 +1494,14 @@ def _unequal_noise(noise: tuple[tuple[_SegmentNoise, ...], float] | None) -> str
     )
 
 
-def _frame0_noise_p(noise: tuple[tuple[_SegmentNoise, ...], float]) -> tuple[float, list]:
-    """``(p, ratios)``: per segment, frame 0's residual per dof over the other frames'
-    (:func:`_frame0_ratio`), and the p-value that neither lies above its noise: the upper
-    tail of the F law of each ratio, its dof each divided by the segment's inflation under the
-    noise's kurtosis (Satterthwaite), the smaller of the two p-values doubled (Bonferroni).
+def _frame0_noise_p(
+    noise: tuple[tuple[_SegmentNoise, ...], float],
+) -> tuple[float, list, list]:
+    """``(p, ratios, p_values)``: per segment, frame 0's residual per dof over the other
+    frames' (:func:`_frame0_ratio`) and the upper tail of the F law of that ratio, its dof
+    each divided by the segment's inflation under the noise's kurtosis (Satterthwaite; NaN
+    where the segment has no test); and ``p``, the p-value that neither lies above its noise,
+    the smaller of the tested segments' p-values times their number (Bonferroni).
     One frame's markers off by more than the noise (a marker's position misread, a cluster
     not yet settled when the recording starts) move the body frame that frame 0 places, and
     with it every centre stated in it."""
@@ -1508,13 +1511,16 @@ def _frame0_noise_p(noise: tuple[tuple[_SegmentNoise, ...], float]) -> tuple[flo
     for segment in segments:
         ratio, dofs = _frame0_ratio(segment)
         ratios.append(ratio)
-        if math.isnan(ratio):
-            continue
         inflation = segment.inflation(kurtosis)
-        p_values.append(float(special.fdtrc(dofs[0] / inflation, dofs[1] / inflation, ratio)))
-    if not p_values:
-        return math.nan, ratios
-    return min(len(p_values) * min(p_values), 1.0), ratios
+        p_values.append(
+            math.nan
+            if math.isnan(ratio)
+            else float(special.fdtrc(dofs[0] / inflation, dofs[1] / inflation, ratio))
+        )
+    tested = [p for p in p_values if not math.isnan(p)]
+    if not tested:
+        return math.nan, ratios, p_values
+    return min(len(tested) * min(tested), 1.0), ratios, p_values
 
 
 def _frame0_ratio(segment: _SegmentNoise) -> tuple[float, tuple[float, float]]:
@@ -1547,10 +1553,11 @@ def _frame0_noise(noise: tuple[tuple[_SegmentNoise, ...], float] | None) -> tupl
     is no noise to test)."""
     if noise is None:
         return (), {"frame0_p": math.nan}
-    p_value, ratios = _frame0_noise_p(noise)
+    p_value, ratios, p_values = _frame0_noise_p(noise)
     if not p_value < ROTATION_ALPHA:
         return (), {"frame0_p": p_value}
-    worst = int(np.nanargmax(ratios))
+    # The segment whose test rejects: a larger ratio on fewer dof may reject less surely.
+    worst = int(np.nanargmin(p_values))
     warning = (
         f"frame 0's markers of the {('proximal', 'distal')[worst]} segment leave "
         f"{ratios[worst]:.3g} times the other frames' rigid-body residual (p = {p_value:.2g}): "

@@ -122,11 +122,12 @@ the flexion axis an accurate method finds by up to about 20 degrees. So an answe
 to be the motion's axis (:func:`annotate_motion_axis`) only beyond
 :data:`MOTION_AXIS_BAND_DEG` from it, significantly in the reference's SD (the one-sided
 normal quantile at :data:`jointbench.estimators.support.ROTATION_ALPHA`): another axis, not a
-compromise of this motion's. The answer's own stated SD plays no part, since a method could
-state any. Where the reference is not determined (the noise's share of the rotations' scatter
-reaches its eigen-gap, its SD is above :data:`MAX_AXIS_SD_DEG`, or a pose's rotation SD is
-above :data:`MAX_REFERENCE_POSE_SD_DEG`, where the first-order pose noise behind both
-understates a thin cluster's) nothing is compared, and the result says why. Where the
+compromise of this motion's. The answer's own stated SD does not narrow the band, since a
+method could state any; it can widen only a hinge's (below). Where the reference is not
+determined (the noise's share of the rotations' scatter reaches its eigen-gap, its SD is above
+:data:`MAX_AXIS_SD_DEG`, or a pose's rotation SD is above :data:`MAX_REFERENCE_POSE_SD_DEG`,
+where the first-order pose noise behind both understates a thin cluster's) nothing is
+compared, and the result says why. Where the
 support verdict finds no rotation about a second axis (its off-axis test passes at
 :data:`jointbench.estimators.support.ROTATION_ALPHA`), nothing couples to the flexion to tilt
 the principal axis, which is then the hinge's own, and the band is the narrower
@@ -779,8 +780,9 @@ def _hinge_band_deg(answer_sd_deg: float) -> float:
     no rotation about a second axis) for an answer that states an SD of ``answer_sd_deg``
     [deg]: :data:`MISFIT_BAND_DEG`, or :data:`_TOLD_APART_Z` of that SD where these reach
     further, up to :data:`MOTION_AXIS_BAND_DEG`. That axis is the hinge's, so an answer that
-    states a degree lying 8 off is not this motion's; one that states 6 (a radial answer on a
-    short arc under 2 mm of noise) lies 8 to 15 off as its own scatter. No SD (NaN) is held to
+    states a small SD and lies beyond the narrow band is not this motion's; one that states a
+    large SD (a radial answer on a short arc under heavy noise) lies that far off as its own
+    scatter (README: the hinge band's measured false alarms). No SD (NaN) is held to
     :data:`MISFIT_BAND_DEG`; the widest band is the one any motion's answer is held to, so a
     method stating a large SD escapes nothing it did not before."""
     if not answer_sd_deg > MISFIT_BAND_DEG / _TOLD_APART_Z:
@@ -807,8 +809,9 @@ def annotate_motion_axis(
     is its own, the band widened to the answer's own stated SD's reach,
     :func:`_hinge_band_deg`; NaN, not tested, keeps the wide band). Where ``z`` is above
     ``_TOLD_APART_Z``, a warning that the answer is not the motion's axis. The answer's own
-    stated SD plays no part: the question is whether it is an axis of this motion at all, and
-    a method could state any SD. Where the reference is not determined (its noise share not
+    stated SD never narrows the band (the question is whether it is an axis of this motion at
+    all, and a method could state any SD); it widens only a hinge's, at most to the band of
+    any motion. Where the reference is not determined (its noise share not
     below 1, its SD above :data:`MAX_AXIS_SD_DEG`, a pose's SD above
     :data:`MAX_REFERENCE_POSE_SD_DEG`), or is ``None`` (the data gave no pose: ``unavailable``
     says why), nothing is compared and ``not_checked`` says why. Where a reference is given
@@ -919,9 +922,9 @@ def annotate_travel(result, reference: MotionAxis | None, cost_name: str):
     ``dof`` and ``p_value``; and where that p-value is below
     :data:`~jointbench.estimators.support.ROTATION_ALPHA`, a warning naming it: each marker's
     arc is then a helix, which those costs fit with a plane or a centre tilted from the axis
-    (2 mm over a 60 degree arc tilted their answers by 3 to 4 degrees, many of their SDs).
-    SARA's direction comes from the rotations alone, which travel leaves alone, so it is not
-    held to this. Nothing is recorded where the verdict read no travel."""
+    by many of their own SDs (``tests/test_axis_travel.py``). SARA's direction comes from the
+    rotations alone, which travel leaves alone, so it is not held to this.
+    Nothing is recorded where the verdict read no travel."""
     travel = None if reference is None else reference.travel
     if travel is None:
         return result

@@ -68,6 +68,7 @@ __all__ = [
     "Prepared",
     "RecordingFit",
     "fit",
+    "point_precision",
     "prepare",
 ]
 
@@ -212,7 +213,7 @@ class RecordingFit:
         fields = self.sd_fields()
         out.update(fields)
         if self.kind == "axis":
-            out.update(_point_precision(self.result))
+            out.update(point_precision(self.result))
         names = {"own": "covariance_mm2", "stated": "center_covariance_mm2"}
         covariances = self.covariances(fields)
         for which, covariance in covariances.items():
@@ -243,12 +244,12 @@ class RecordingFit:
         return out
 
 
-def _point_precision(result) -> dict:
-    """An axis answer's point precision as :meth:`RecordingFit.to_dict` gives it, where the
-    method states one (``diagnostics["axis_point_sd_mm"]``): ``point_sd_mm``, its SD across the
-    axis [mm], and ``point_covariance_mm2`` ``(3, 3)``, both ``None`` where they state no
-    precision (:func:`jointbench.estimators.results.stated_point_sd`: the status says the point
-    or the answer's precision is not determined)."""
+def point_precision(result) -> dict:
+    """An axis answer's point precision as every output of a fit gives it, where the method
+    states one (``diagnostics["axis_point_sd_mm"]``): ``point_sd_mm``, its SD across the axis
+    [mm], and ``point_covariance_mm2`` ``(3, 3)``, both ``None`` where they state no precision
+    (:func:`jointbench.estimators.results.stated_point_sd`: the status says the point or the
+    answer's precision is not determined); empty for a method that states none."""
     if "axis_point_sd_mm" not in result.diagnostics:
         return {}
     sd = results.stated_point_sd(result)
