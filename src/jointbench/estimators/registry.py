@@ -220,7 +220,9 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
     if owncode.package_code(entry.fn):
         # The package's own fits write to none of the arrays they read: the stages after the
         # fit read the sums it formed (paper B's S) instead of forming them again.
+        # Nor do they check again the arrays the input checks passed just now.
         with reuse.one_call():
+            validation.passed(entry.kind, clean)
             result = _fit(entry, clean, shared, options)
             return _checked_stages(entry, result, clean, shared, options)
     result = _fit(entry, copy.deepcopy(clean), shared, options)
