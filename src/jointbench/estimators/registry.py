@@ -660,8 +660,9 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
 def get_for_valid(kind: str, name: str) -> Callable:
     """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
     already passed :func:`jointbench.estimators.validation.check_input`, and options that
-    passed :func:`check_options`, whose checks it does not repeat: for a caller that ran them
-    itself, with its own label."""
+    passed :func:`check_options`, whose checks it does not repeat, nor does the package's own
+    fit (:func:`jointbench.estimators.validation.passed`): for a caller that ran them itself,
+    with its own label, on the arrays ``check_input`` returned."""
     return _entry(kind, name).valid
 
 
