@@ -11,7 +11,9 @@ On ``estimators.py``'s centre trials (3 markers x 120 frames, 1 mm noise), per m
 median time per call, by wall clock (the default) or, ``--clock cpu``, by the process's CPU
 time, which other processes' load on a shared machine does not lengthen, of:
 
-* ``estimator``: the registered function alone (what ``checked / estimator`` divides by);
+* ``estimator``: the registered function alone (what ``checked / estimator`` divides by),
+  its own checks of its markers included, which inside the checked call it does not repeat
+  over the arrays the input checks passed (:func:`jointbench.estimators.validation.passed`);
 * ``checked``: ``registry.get("center", method)``, every stage below and the plumbing between;
 * ``input checks``: :func:`jointbench.estimators.validation.check_input`;
 * ``verdict``: :func:`jointbench.estimators.support.assess_many` on the trial, of which

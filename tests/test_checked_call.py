@@ -56,6 +56,18 @@ def test_the_fit_alone_still_checks_its_markers(kernel_calls):
         )
 
 
+@pytest.mark.parametrize("method", ["LS", "NM", "BC", "IS"])
+def test_the_checked_call_s_fit_does_not_repeat_the_input_checks(method, kernel_calls):
+    """The package's own fit, handed the very arrays the checked call's input checks passed,
+    makes no compiled pass of its own over them; called alone afterwards, it does again."""
+    distal = two_segments(60)[1]
+    registry.get("center", method)(distal)
+    assert kernel_calls == [(1, *distal.shape)]
+    kernel_calls.clear()
+    registry.get("center", method, checked=False)(distal)
+    assert len(kernel_calls) == 2  # check_markers, check_moves
+
+
 def test_an_estimator_writing_a_nan_into_its_checked_markers_is_refused_by_the_fit_it_calls():
     """A checked call's input checks hold for the markers as they were given: an estimator
     (one registered from outside, as README "Adding an estimator" shows) that writes a NaN

@@ -33,6 +33,21 @@ def test_outside_a_call_every_value_is_computed_where_it_is_asked_for():
     assert len(counts) == 2
 
 
+def test_a_value_kept_for_an_array_object_is_held_by_that_object_inside_one_call_alone():
+    array = np.arange(12.0).reshape(2, 2, 3)
+    reuse.keep("passed", array, 7)
+    assert reuse.kept_for("passed", array) is None  # outside a call nothing is held
+    with reuse.one_call():
+        reuse.keep("passed", array, 7)
+        assert reuse.kept_for("passed", array) == 7
+        assert reuse.kept_for("other", array) is None
+        assert reuse.kept_for("passed", array[:]) is None  # another object, same memory
+        with reuse.one_call():
+            assert reuse.kept_for("passed", array) is None  # an inner scope starts empty
+        assert reuse.kept_for("passed", array) == 7
+    assert reuse.kept_for("passed", array) is None
+
+
 def test_inside_a_call_a_view_of_the_same_memory_reads_the_value_back():
     counts: list = []
     batch = np.arange(24.0).reshape(2, 2, 2, 3)

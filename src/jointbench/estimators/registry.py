@@ -220,7 +220,9 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
     if owncode.package_code(entry.fn):
         # The package's own fits write to none of the arrays they read: the stages after the
         # fit read the sums it formed (paper B's S) instead of forming them again.
+        # Nor do they check again the arrays the input checks passed just now.
         with reuse.one_call():
+            validation.passed(entry.kind, clean)
             result = _fit(entry, clean, shared, options)
             return _checked_stages(entry, result, clean, shared, options)
     result = _fit(entry, copy.deepcopy(clean), shared, options)
@@ -658,8 +660,9 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
 def get_for_valid(kind: str, name: str) -> Callable:
     """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
     already passed :func:`jointbench.estimators.validation.check_input`, and options that
-    passed :func:`check_options`, whose checks it does not repeat: for a caller that ran them
-    itself, with its own label."""
+    passed :func:`check_options`, whose checks it does not repeat, nor does the package's own
+    fit (:func:`jointbench.estimators.validation.passed`): for a caller that ran them itself,
+    with its own label, on the arrays ``check_input`` returned."""
     return _entry(kind, name).valid
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.numerics import reuse
 from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.magnitudes import first_beyond, largest_coordinate
 from jointbench.numerics.small import add_outer, symmetric_into
@@ -372,9 +373,38 @@ def _first_failure(
 ) -> int:
     """:func:`_first_failures` of one trial ``markers`` ``(n_frames, n_markers, 3)``, a batch
     of one: its failure, or 0, and its size [mm] written into ``span`` ``(1,)`` unless it is
-    empty. Made on every call, inside a checked call too: an estimator may
-    write into the markers it was given before it hands them to a fit."""
+    empty. Made on every call but for the very array a checked call's input checks passed and
+    handed to the package's own fit (:func:`passed`), which writes to no array it reads: an
+    estimator may write into the markers it was given before it hands them to a fit, and a
+    user's is handed copies, outside the scope that holds what passed."""
+    if not span.size and (move_tol_mm == _MOVE_TOL_MM or not checks & _MOVES):
+        held = reuse.kept_for(_PASSED, markers)
+        if held is not None and not checks & ~held:
+            return 0  # every check asked passed on these very markers
     return _first_failures(kernel_array(markers)[None], checks, move_tol_mm, _UNRECORDED, span)
+
+
+#: What a checked call holds, in its scope, of each array its input checks passed
+#: (:func:`passed`): the checks of :func:`_first_failures`, as bits.
+_PASSED = "input checks passed"
+
+#: The checks of :func:`_first_failures` that :func:`check_input` makes of each array, by kind.
+_INPUT_CHECKS = {
+    "center": _SAMPLES | _MOVES | _LINES | _SCALE,
+    "axis": _SAMPLES | _MOVES | _LINES | _SCALE,
+    "joint_center": _SAMPLES | _SCALE,
+}
+
+
+def passed(kind: str, arrays: tuple[np.ndarray, ...]) -> None:
+    """State, in the open scope of one checked call (:func:`jointbench.numerics.reuse.one_call`),
+    that ``arrays``, as :func:`check_input` returned them for ``kind``, passed its checks: the
+    package's own fit that checks these very arrays again (:func:`check_markers`,
+    :func:`check_moves`, :func:`check_rotates`) then does not repeat the compiled pass; the
+    counts of frames and markers a method needs are still checked. Outside a scope, nothing."""
+    checks = _INPUT_CHECKS[kind]
+    for array in arrays:
+        reuse.keep(_PASSED, array, checks)
 
 
 @kernel

@@ -24,7 +24,7 @@ from typing import TypeVar
 
 import numpy as np
 
-__all__ = ["one_call", "remembered"]
+__all__ = ["keep", "kept_for", "one_call", "remembered"]
 
 _Value = TypeVar("_Value")
 
@@ -76,6 +76,31 @@ def remembered(
             found = kept[key] = (array, compute(array))
         kept[asked] = (array, found[1])  # held, so that no other object takes its id
     return found[1]
+
+
+def keep(name: str, array: np.ndarray, value: object) -> None:
+    """Inside :func:`one_call`, hold ``value`` as what ``name`` is of this very array object
+    (:func:`kept_for`); outside one, nothing. For a value a stage states of an array rather
+    than computes from its frames (that it passed a check): it is known by the object, not by
+    its memory, whose address costs a look-up microseconds."""
+    kept = _KEPT.get()
+    if kept is not None:
+        kept[_identity(name, array)] = (array, value)  # held, so no other object takes its id
+
+
+def kept_for(name: str, array: np.ndarray) -> object | None:
+    """The value :func:`keep` holds as ``name`` of this very array object in the open scope
+    of one call; ``None`` outside one, or where none is held."""
+    kept = _KEPT.get()
+    if kept is None:
+        return None
+    found = kept.get(_identity(name, array))
+    return None if found is None else found[1]
+
+
+def _identity(name: str, array: np.ndarray) -> tuple:
+    """The key of ``array`` known by its identity, as :func:`remembered` keys it first."""
+    return (name, ((id(array),), array.shape, array.strides, array.dtype))
 
 
 def _memory(array: np.ndarray) -> tuple:
