@@ -28,7 +28,7 @@ on the first ``--frames`` frames of
 
 Printed per rig, law and frame count: how many of ``--trials`` trials each test rejects at 5 %
 and at ``ROTATION_ALPHA`` (1e-3), and those counts over what the level expects, and the
-kurtosis the tests read (its median). ``--power N`` then prints, on ``N`` draws each, the
+kurtosis the tests allow for (its median). ``--power N`` then prints, on ``N`` draws each, the
 studies' circumduction (``benchmarks/joint_centre_degenerate.py``: 20 degrees, 200 frames, four
 markers a segment, 0.5 mm of paper A's noise) with the proximal segment's frame-0 markers each
 2 mm off in a direction of their own, then both segments' (the frame-0 warnings at
