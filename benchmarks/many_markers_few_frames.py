@@ -4,7 +4,8 @@ passed as ``(markers, frames, 3)``.
 ::
 
     python benchmarks/many_markers_few_frames.py [--markers 2000 5000 10000] [--frames 5]
-        [--calls LS NM BC planar SCoRE screen] [--trees SRC ...] [--timeout 300]
+        [--calls LS NM BC planar SCoRE analytic gauss-markov gauss-markov-frame0 screen]
+        [--trees SRC ...] [--timeout 300]
 
 Per marker count and call, the CPU time [s] (the process's own, which other processes' load on
 a shared machine does not lengthen) and the peak resident memory [MB] of one call, each in a
@@ -12,7 +13,9 @@ process of its own after a small call (30 markers) that loads the compiled kerne
 
 * ``LS``, ``NM``, ``BC``: :func:`jointbench.fit_center` with ``artefacts="warn"``;
 * ``planar``: :func:`jointbench.fit_axis`;
-* ``SCoRE``: :func:`jointbench.fit_joint_center` on two clusters of that many markers each;
+* ``SCoRE``, ``analytic``, ``gauss-markov``, ``gauss-markov-frame0``:
+  :func:`jointbench.fit_joint_center` with ``artefacts="warn"`` on two clusters of that many
+  markers each;
 * ``screen``: :func:`jointbench.screen` of the one cluster.
 
 The clusters are :func:`screen_large_clusters.cluster`'s (a rigid cluster turning about three
@@ -35,7 +38,8 @@ from screen_large_clusters import cluster
 
 import jointbench
 
-CALLS = ("LS", "NM", "BC", "planar", "SCoRE", "screen")
+JOINT_CENTRES = ("SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0")
+CALLS = ("LS", "NM", "BC", "planar", *JOINT_CENTRES, "screen")
 
 
 def _call(name: str, n_markers: int, n_frames: int):
@@ -46,9 +50,9 @@ def _call(name: str, n_markers: int, n_frames: int):
         return lambda: jointbench.screen(markers)
     if name == "planar":
         return lambda: jointbench.fit_axis(markers, "planar", artefacts="warn")
-    if name == "SCoRE":
+    if name in JOINT_CENTRES:
         distal = cluster(n_markers, n_frames, seed=1)
-        return lambda: jointbench.fit_joint_center(markers, distal, "SCoRE", artefacts="warn")
+        return lambda: jointbench.fit_joint_center(markers, distal, name, artefacts="warn")
     return lambda: jointbench.fit_center(markers, name, artefacts="warn")
 
 

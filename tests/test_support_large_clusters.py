@@ -8,13 +8,9 @@ not reach it.
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-import textwrap
-
 import numpy as np
 import pytest
+from peak_memory import peak_growth_mb
 from rigs import two_segments
 
 import jointbench
@@ -195,35 +191,12 @@ def test_many_markers_over_few_frames_are_judged_without_keeping_their_pair_dist
     process of its own: its peak memory grows by far less than their 4.5 million pairs'
     distances (144 MB) would take. The peak is Linux's (``VmHWM``), reset after the kernels
     are loaded, whose compilation can take more memory than the call."""
-    if not os.access("/proc/self/clear_refs", os.W_OK):
-        pytest.skip("the peak memory cannot be reset here (Linux's /proc/self/clear_refs)")
-    script = textwrap.dedent(
-        f"""
+    setup = f"""
         import numpy as np
         from jointbench import screening
         from jointbench.estimators import support
-
-        def memory_kb(key):
-            with open("/proc/self/status") as status:
-                return next(int(line.split()[1]) for line in status if line.startswith(key))
-
-        rng = np.random.default_rng(0)
-        markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, 30, 3))
-        {call}
-        markers = rng.normal(scale=60.0, size=(1, {FEW_FRAMES}, {MANY_MARKERS}, 3))
-        with open("/proc/self/clear_refs", "w") as peak:
-            peak.write("5")
-        before = memory_kb("VmRSS:")
-        {call}
-        print((memory_kb("VmHWM:") - before) / 1024.0)
-        """
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        check=True,
-        env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
-    )
+        markers = np.random.default_rng(0).normal(scale=60.0, size=(1, {FEW_FRAMES}, n, 3))
+    """
+    grown = peak_growth_mb(setup, call, 30, MANY_MARKERS)
     pairs_mb = MANY_MARKERS * (MANY_MARKERS - 1) // 2 * FEW_FRAMES * 8 / 2**20
-    assert float(done.stdout) < pairs_mb / 4
+    assert grown < pairs_mb / 4

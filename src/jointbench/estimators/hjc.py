@@ -218,6 +218,7 @@ from jointbench.numerics.small import (
     solve_into,
     symmetric9,
     symmetric_applied9,
+    symmetric_eigen,
     symmetric_times9,
     transposed9,
     transposed_applied9,
@@ -949,14 +950,41 @@ def _marker_gains(points: np.ndarray, body: np.ndarray) -> np.ndarray:
     gains = np.empty((points.shape[0], n, 3, 3))
     for p in range(points.shape[0]):
         lever = skew9(points[p, 0] - mean[0], points[p, 1] - mean[1], points[p, 2] - mean[2])
-        turned = transposed_times9(transposed9(lever), rows9(inertia_inv))  # [p - m]x K^-1
+        turned = _levered(lever, inertia_inv)
         for i in range(n):
             offset = skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
-            product = transposed_times9(transposed9(turned), offset)
-            for r in range(3):
-                for c in range(3):
-                    gains[p, i, r, c] = (1.0 / n if r == c else 0.0) - product[3 * r + c]
+            gain = _gain9(turned, offset, n)
+            for k in range(9):
+                gains[p, i, k // 3, k % 3] = gain[k]
     return gains
+
+
+@kernel
+def _levered(lever: tuple, inertia_inv: np.ndarray) -> tuple:
+    """``[p - m]x K^-1`` (9 numbers) of the skew matrix ``lever`` (9 numbers) of a point about
+    the centroid and the inverse inertia ``K^-1`` ``(3, 3)`` [mm^-2] (:func:`_marker_gains`).
+    A compiled kernel."""
+    return transposed_times9(transposed9(lever), rows9(inertia_inv))
+
+
+@kernel
+def _gain9(turned: tuple, offset: tuple, n: int) -> tuple:
+    """``I/n - T [u_i]x`` (9 numbers): marker ``i``'s gain (:func:`_marker_gains`) from
+    ``T = [p - m]x K^-1`` (:func:`_levered`) and ``offset = [u_i]x`` (9 numbers each), of
+    ``n`` markers. A compiled kernel."""
+    product = transposed_times9(transposed9(turned), offset)
+    share = 1.0 / n
+    return (
+        share - product[0],
+        0.0 - product[1],
+        0.0 - product[2],
+        0.0 - product[3],
+        share - product[4],
+        0.0 - product[5],
+        0.0 - product[6],
+        0.0 - product[7],
+        share - product[8],
+    )
 
 
 @kernel
@@ -978,13 +1006,80 @@ def _residual_moments(body: np.ndarray) -> tuple:
     also what the kurtosis adds to the variance of the frame's residual sum of squares. With
     ``Q_ji = delta_ji I - B_ji`` the blocks of ``I - H`` (:func:`_marker_gains` at the
     markers), ``G = sum_i m(Q_ii)`` and ``F = sum_ji m(Q_ji' Q_ji) / 3``, ``m`` of
-    :func:`_fourth_moment`. A compiled kernel."""
+    :func:`_fourth_moment`. A compiled kernel.
+
+    ``F``'s sum over the ``n^2`` pairs is taken in closed form, in time and memory linear in
+    ``n``: the hat's blocks are ``B_ji = U_j U_i'`` with ``U_i = [I / sqrt(n), [u_i]x L]``
+    ``(3, 6)`` and ``L L' = K^-1``, so with ``A_i = U_i' U_i`` ``(6, 6)`` a pair has
+    ``tr(B' B) = tr(A_j A_i)`` and ``tr((B' B)^2) = tr(A_j A_i A_j A_i)``, and over all pairs
+    these need only ``T = sum_i vec(A_i) vec(A_i)'`` ``(36, 36)`` (:func:`_pair_moments`). The
+    pairs ``i = j`` take ``m(Q_ii' Q_ii)`` in place of ``m(B_ii' B_ii)``. Up to
+    :data:`_PAIRED_MARKERS` markers the pairs are summed one by one (:func:`_paired_moments`),
+    which costs less there."""
     n = body.shape[0]
-    hat = _marker_gains(body, body)
+    if n <= _PAIRED_MARKERS:
+        return _paired_moments(body)
+    mean, inertia_inv, _ = lever_factors(body)
+    values, vectors = symmetric_eigen(inertia_inv)
+    # L = V diag(sqrt(values)), L L' = K^-1, a square root rather than K^-1 itself: the
+    # U_i's columns are then orthonormal over the markers (sum_i U_i' U_i = I), so every A_i
+    # is bounded by 1 and the sums over the pairs cancel no more than their answer.
+    root = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            root[r, c] = vectors[r, c] * math.sqrt(values[c])
+    seconds = np.zeros((36, 36))
+    basis = np.empty((3, 6))
+    spread = np.empty(36)
+    own, diagonal = 0.0, 0.0
+    scale = 1.0 / math.sqrt(n)
+    for i in range(n):
+        offset = skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
+        for r in range(3):
+            for c in range(3):
+                basis[r, c] = scale if r == c else 0.0
+                basis[r, 3 + c] = (
+                    offset[3 * r] * root[0, c]
+                    + offset[3 * r + 1] * root[1, c]
+                    + offset[3 * r + 2] * root[2, c]
+                )
+        for p in range(6):
+            for q in range(6):
+                spread[6 * p + q] = (
+                    basis[0, p] * basis[0, q]
+                    + basis[1, p] * basis[1, q]
+                    + basis[2, p] * basis[2, q]
+                )
+        for p in range(36):
+            for q in range(p, 36):
+                seconds[p, q] += spread[p] * spread[q]
+        block = _gain9(_levered(offset, inertia_inv), offset, n)
+        residual = identity_less9(block)
+        own += _fourth_moment(residual)
+        diagonal += _fourth_moment(transposed_times9(residual, residual))
+        diagonal -= _fourth_moment(transposed_times9(block, block))
+    return own, (_pair_moments(seconds) + diagonal) / 3.0
+
+
+#: Markers up to which :func:`_residual_moments` sums the hat's pairs of blocks one by one:
+#: ``n^2`` small products, fewer than the closed form's fixed ``36 x 36`` sums on a few
+#: markers.
+_PAIRED_MARKERS = 12
+
+
+@kernel
+def _paired_moments(body: np.ndarray) -> tuple:
+    """:func:`_residual_moments` summed over the pairs of markers one by one, each block of
+    the hat made where it is read (:func:`_gain9`). A compiled kernel."""
+    n = body.shape[0]
+    mean, inertia_inv, _ = lever_factors(body)
     own, shared = 0.0, 0.0
     for j in range(n):
+        lever = skew9(body[j, 0] - mean[0], body[j, 1] - mean[1], body[j, 2] - mean[2])
+        turned = _levered(lever, inertia_inv)
         for i in range(n):
-            block = rows9(hat[j, i])
+            offset = skew9(body[i, 0] - mean[0], body[i, 1] - mean[1], body[i, 2] - mean[2])
+            block = _gain9(turned, offset, n)
             delta = 1.0 if i == j else 0.0
             residual = (
                 delta - block[0],
@@ -1001,6 +1096,27 @@ def _residual_moments(body: np.ndarray) -> tuple:
                 own += _fourth_moment(residual)
             shared += _fourth_moment(transposed_times9(residual, residual))
     return own, shared / 3.0
+
+
+@kernel
+def _pair_moments(seconds: np.ndarray) -> float:
+    """``sum_ji m(B_ji' B_ji)`` over all pairs of markers, ``i = j`` included, from the upper
+    triangle of ``T = sum_i vec(A_i) vec(A_i)'`` ``(36, 36)`` (:func:`_residual_moments`; its
+    lower triangle is filled here): ``sum_ji tr(A_j A_i)^2 = sum T[pq, rs]^2`` (``A``
+    symmetric) and ``sum_ji tr(A_j A_i A_j A_i) = sum T[pq, rs] T[qr, sp]``. A compiled
+    kernel."""
+    for p in range(36):
+        for q in range(p):
+            seconds[p, q] = seconds[q, p]
+    squares, chained = 0.0, 0.0
+    for p in range(6):
+        for q in range(6):
+            for r in range(6):
+                for s in range(6):
+                    second = seconds[6 * p + q, 6 * r + s]
+                    squares += second * second
+                    chained += second * seconds[6 * q + r, 6 * s + p]
+    return squares + 2.0 * chained
 
 
 def _constraint_moments(rotations, bodies, points) -> float:

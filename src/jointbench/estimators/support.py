@@ -378,7 +378,8 @@ def _first_frame_spread(markers: np.ndarray) -> np.ndarray:
     centred = np.empty((n_markers, 3))
     for t in range(n_trials):
         _centred_into(markers[t, 0], centred)
-        singular = np.linalg.svd(centred)[1]
+        # Without the (n, n) left singular vectors a full SVD would make of many markers.
+        singular = np.linalg.svd(centred, False)[1]
         spread[t] = singular[1] > 1e-6 * singular[0]
     return spread
 
