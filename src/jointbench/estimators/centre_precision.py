@@ -39,7 +39,11 @@ profiled out):
   iterations leave out a marker within three noise SDs of where they are, whose radial
   residual is not smooth there, and so do the fits compared there and about the answer: the
   distance of a marker within its noise of a point is that noise's length, whose spread is not
-  the radial noise's and moves by more than the step's whole gain as the point moves).
+  the radial noise's and moves by more than the step's whole gain as the point moves). The
+  comparison reads the sum of squares of the last step's markers, the one the iterations
+  lowered; where a marker left out at one iterate and let back in at the next keeps them from
+  settling (cycling between two sets' centres, to end at one no better than the answer), a
+  marker left out from then on stays out, so that they settle on one set.
 * The score test does not judge a method's answer: its chi-square holds for an answer fixed
   before the data are seen, and of one fitted to them it measures, to first order, the
   distance to the spheres' centre in the answer's SDs, rejecting at about four of them. The
@@ -327,9 +331,11 @@ def _scratch_for(n_frames: int, n_markers: int) -> tuple:
     vectors, work, distances, sum_u, sum_du, sum_uu, stated, stated_noise, sd_values,
     sd_vectors, offsets, iterate, move, there, kept)``, ``sd_values`` and ``sd_vectors`` the
     eigen-decomposition of the information the SD is stated from (:func:`_row_at`),
-    ``iterate``, ``move`` and ``there`` :func:`_refine`'s, ``kept`` ``(2, n)`` 1 for each
+    ``iterate``, ``move`` and ``there`` :func:`_refine`'s, ``kept`` ``(4, n)`` 1 for each
     marker the last :func:`_sums_at` kept (else 0), then for each that :func:`_row_at`'s sums
-    about the answer kept. The 3 x 3 matrices and the
+    about the answer kept, then for each that :func:`_refine`'s iterations have not left out
+    (the markers :func:`_sums_at` may keep), then for each clear of the answer they start
+    from. The 3 x 3 matrices and the
     3-vectors are each one array's rows: an allocation costs a one-trial call more than the
     arithmetic of several of them. A compiled kernel."""
     matrices = np.empty((9, 3, 3))
@@ -354,7 +360,7 @@ def _scratch_for(n_frames: int, n_markers: int) -> tuple:
         vectors[5],
         vectors[6],
         np.empty(17),
-        np.empty((2, n_markers)),
+        np.empty((4, n_markers)),
     )
 
 
@@ -368,35 +374,78 @@ def _refine(
     scratch: tuple,
 ) -> bool:
     """``row``'s step made the one from ``answer`` ``(3,)`` [mm] to where Gauss–Newton
-    iterations on the spheres' radial residuals end (at most :data:`_REFINE_ITERATIONS`),
-    where the spheres fit better there; returns whether they do. The first-order step is exact
-    only near the centre, and an answer far from it (among the markers, say) can have a small
-    one. Each iteration takes :func:`_row_at`'s step (:func:`_step_at`) without the rest of its
-    numbers, and without the markers within :data:`_CLEAR_RADIUS` noise SDs of the iterate: the
-    radial residual of one (a virtual marker at the joint) is not smooth there, and draws the
-    iterations to it or throws them off. The fits compared, about the answer and where the
-    iterations end, are over the markers the last iteration keeps (:func:`_fits_better`). They
+    iterations on the spheres' radial residuals end (at most :data:`_REFINE_ITERATIONS` on one
+    set of markers), where the spheres fit better there; returns whether they do. The
+    first-order step is exact only near the centre, and an answer far from it (among the
+    markers, say) can have a small one. Each iteration takes :func:`_row_at`'s step
+    (:func:`_step_at`) without the rest of its numbers, and without the markers within
+    :data:`_CLEAR_RADIUS` noise SDs of the iterate: the radial residual of one (a virtual
+    marker at the joint) is not smooth there, and draws the iterations to it or throws them
+    off. The fits compared, about the answer and where the iterations end
+    (:func:`_fits_better`), are over the markers of the last step: the sum of squares whose
+    least the iterations sought (their steps, corrected for the directions' noise or not,
+    vanish only where its gradient does). A marker near that radius can be left out at one
+    iterate and let back in at the next, and the iterations cycle between two points, each
+    the least of the other set's sum (a marker 1 mm from the joint on a 30 degree cap:
+    ``tests/test_centre_precision.py``), to end at one no better than the answer. Where they
+    have not settled within :data:`_REFINE_ITERATIONS` and some step left a marker out, or the
+    end leaves out a marker of the last step, a marker left out from then on stays out, so that
+    they settle on one set (where no step left one out, they end at the last iterate); where
+    they settle with every marker clear of each iterate, that set is the one clear of where
+    they end, as the fits about a centre of rotation read it. A marker within the noise of the
+    answer is left out of them all: the fit about the answer cannot read it (beside a marker
+    2 mm from the joint, IS's answer can lie among its noise, drawn towards it, and
+    iterations that let it back in where it is clear settle at another least of the five
+    markers' sum, which fits worse than the answer). They
     start from ``row``'s
     first-order step, unless some markers lie that near the answer (``mixed``, as
     :func:`_row_at` returns it), whose step keeps them. ``coordinates`` ``(n, 3, N)`` [mm] are
     the markers' (:func:`_transposed_into`). The iterations overwrite ``scratch`` but for the
     SD's eigen-decomposition. A compiled kernel."""
     centre, move, there = scratch[16:19]
+    kept_here, allowed, clear_of_answer = scratch[19][0], scratch[19][2], scratch[19][3]
     centre[:] = answer
     if not mixed:
         centre += row[_TOWARDS]
     nearest = _CLEAR_RADIUS * math.sqrt(s2)
     sd = row[_SD] if math.isfinite(row[_SD]) else 0.0
-    for _ in range(_REFINE_ITERATIONS):
-        _step_at(coordinates, centre, s2, nearest, move, scratch)
+    n_markers, _, n_frames = coordinates.shape
+    keeping_out, first, left_out = False, True, False
+    squares, fourths, kept, steps = 0.0, 0.0, 0, 0
+    clear_of_answer[:] = 1.0
+    while True:
+        if not keeping_out:
+            allowed[:] = clear_of_answer
+        _step_at(coordinates, centre, s2, nearest, allowed, move, scratch)
         if not (math.isfinite(move[0]) and math.isfinite(move[1]) and math.isfinite(move[2])):
             return False
+        if mixed and first:
+            # The first step is from the answer: a marker within the noise of it is left out of
+            # the fit about it, and so of every sum the iterations compare with that fit.
+            clear_of_answer[:] = kept_here
+        first = False
+        # ``allowed`` is now the step's markers, those whose sum it lowers.
+        if _narrowed(allowed, kept_here):
+            left_out = True
+            if keeping_out:
+                # The sum the iterations seek the least of has changed: they count afresh.
+                steps = 0
         centre += move
+        steps += 1
         distance = _length(centre[0] - answer[0], centre[1] - answer[1], centre[2] - answer[2])
-        if _length(move[0], move[1], move[2]) <= _REFINED_TO * max(distance, sd):
-            break
-    n_markers, _, n_frames = coordinates.shape
-    squares, fourths, kept, _ = _sums_at(coordinates, centre, s2, nearest, True, scratch)
+        settled = _length(move[0], move[1], move[2]) <= _REFINED_TO * max(distance, sd)
+        if settled or steps >= _REFINE_ITERATIONS:
+            # The fit where they end is over the last step's markers.
+            squares, fourths, kept, _ = _sums_at(
+                coordinates, centre, s2, nearest, allowed, True, scratch
+            )
+            if not _narrowed(allowed, kept_here) and (settled or keeping_out or not left_out):
+                break
+            # Not settled where markers were left out at some steps, or the end leaves out one
+            # of the last step's: from here on a marker left out stays out. Each is left out
+            # once, so the iterations end.
+            keeping_out = True
+            steps = 0
     _lack_of_fit(there, squares, fourths, kept, n_frames, n_markers, s2)
     if not _fits_better(coordinates, answer, row, there, squares, scratch):
         return False
@@ -405,6 +454,19 @@ def _refine(
     row[_SPHERES_RATIO] = there[_FIT_RATIO]
     row[_SPHERES_Z] = there[_FIT_Z]
     return True
+
+
+@kernel
+def _narrowed(allowed: np.ndarray, kept: np.ndarray) -> bool:
+    """Whether some marker that ``allowed`` ``(n,)`` marks 1 is 0 in ``kept`` ``(n,)``, the
+    markers :func:`_sums_at` kept at the last iterate; such markers are set to 0 in
+    ``allowed``. A compiled kernel."""
+    narrowed = False
+    for p in range(allowed.shape[0]):
+        if allowed[p] and not kept[p]:
+            allowed[p] = 0.0
+            narrowed = True
+    return narrowed
 
 
 @kernel
@@ -429,7 +491,7 @@ def _fits_better(
     it (on a short cap, such a marker's sum of squares can rise over a step that lowers the
     other markers' lack of fit: ``tests/test_centre_precision.py``). ``coordinates`` ``(n, 3, N)``
     [mm] are the markers' (:func:`_transposed_into`). A compiled kernel."""
-    kept, kept_at_answer = scratch[19]
+    kept, kept_at_answer = scratch[19][0], scratch[19][1]
     same = True
     for p in range(kept.shape[0]):
         same = same and kept[p] == kept_at_answer[p]
@@ -509,12 +571,14 @@ def _sums_at(
     centre: np.ndarray,
     s2: float,
     nearest: float,
+    allowed: np.ndarray,
     fit: bool,
     scratch: tuple,
 ) -> tuple:
     """The spheres' sums about the answer ``centre`` ``(3,)`` [mm] over the markers whose
     ``coordinates`` are ``(n, 3, N)`` [mm] (:func:`_transposed_into`) at a mean distance of
-    ``nearest`` [mm] or more from it, with noise ``s2`` [mm^2] per coordinate, into ``scratch``
+    ``nearest`` [mm] or more from it, among those ``allowed`` ``(n,)`` marks 1 (the others 0),
+    with noise ``s2`` [mm^2] per coordinate, into ``scratch``
     (:func:`_scratch_for`): the information ``F``, its part ``F_s`` beyond the directions'
     noise and that noise's part ``F - F_s`` (upper triangles), the score ``g``, and the parts
     of ``F_s`` and ``F - F_s`` from the markers beyond :data:`_CLEAR_RADIUS` noise SDs; returns
@@ -540,6 +604,8 @@ def _sums_at(
     squares, fourths, kept, clear = 0.0, 0.0, 0, 0
     for p in range(n_markers):
         flags[p] = 0.0
+        if not allowed[p]:
+            continue
         radius = _marker_sums(coordinates[p], centre, distances, offsets, sum_u, sum_du, sum_uu)
         if radius < nearest:
             continue
@@ -598,16 +664,18 @@ def _step_at(
     centre: np.ndarray,
     s2: float,
     nearest: float,
+    allowed: np.ndarray,
     towards: np.ndarray,
     scratch: tuple,
 ) -> None:
     """:func:`_row_at`'s step towards the spheres' centre from ``centre`` ``(3,)`` [mm] alone,
-    over the markers ``nearest`` [mm] or more from it (:func:`_sums_at`, whose ``coordinates``
-    ``(n, 3, N)``), into ``towards`` ``(3,)``: ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not
-    positive definite (NaN where neither is). A compiled kernel."""
+    over the markers ``nearest`` [mm] or more from it among those ``allowed`` ``(n,)`` marks
+    (:func:`_sums_at`, whose ``coordinates`` ``(n, 3, N)``), into ``towards`` ``(3,)``:
+    ``F_s^-1 g``, or ``F^-1 g`` where ``F_s`` is not positive definite (NaN where neither is).
+    A compiled kernel."""
     info, signal, _, score, values, vectors, work = scratch[:7]
     # The lack of fit is not wanted here: its sums are skipped.
-    _sums_at(coordinates, centre, s2, nearest, False, scratch)
+    _sums_at(coordinates, centre, s2, nearest, allowed, False, scratch)
     symmetric_eigen_into(signal, values, vectors, work)
     if _definite(values):
         _corrected_step(score, values, vectors, towards)
@@ -629,9 +697,13 @@ def _row_at(
     of the answer, module docstring). A compiled kernel."""
     n_markers, _, n_frames = coordinates.shape
     info, signal, noisy, score, values, vectors, work = scratch[:7]
-    squares, fourths, kept, mixed = _sums_at(coordinates, centre, s2, 0.0, True, scratch)
-    # The markers kept about the answer, for the fits :func:`_refine` compares.
+    # Every marker may be kept about the answer.
     kept_markers = scratch[19]
+    kept_markers[2, :] = 1.0
+    squares, fourths, kept, mixed = _sums_at(
+        coordinates, centre, s2, 0.0, kept_markers[2], True, scratch
+    )
+    # The markers kept about the answer, for the fits :func:`_refine` compares.
     for p in range(n_markers):
         kept_markers[1, p] = kept_markers[0, p]
     row[_CHI2] = _solved(info, score, row[_TOWARDS], values, vectors, work) / s2
