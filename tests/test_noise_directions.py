@@ -170,6 +170,48 @@ def test_every_frame_is_summed_into_a_block(block):
     assert np.array_equal(found[at_sums:], single[at_sums:])
 
 
+def _frame_terms(inputs: tuple, begin: int, count: int) -> np.ndarray:
+    """The per-frame terms ``(n + 5, count)`` of frames ``begin`` to ``begin + count`` by the
+    compiled pass over a chunk of frames, on the work arrays of a chunk as wide."""
+    positions, first = inputs[0], inputs[3]
+    n_markers, n_pairs = positions.shape[1], first.shape[0]
+    work = (
+        np.empty((n_pairs, count)),
+        np.empty((3 * n_markers, count)),
+        np.empty((3 * n_markers, count)),
+        np.empty((n_markers + 5, count)),
+        np.empty((6, count)),
+    )
+    by_direction._frame_terms_into(begin, count, *inputs, work)
+    return work[3]
+
+
+@pytest.mark.parametrize("n_markers", [3, 5])
+def test_a_chunk_of_frames_gives_each_frame_s_terms_as_that_frame_alone(n_markers):
+    """The pass over the frames runs a chunk of them side by side, from frame ``begin`` on:
+    each frame's terms are the bits of that frame alone (a chunk of one), wherever the chunk
+    starts."""
+    rng = np.random.default_rng(11)
+    n_frames = 300
+    n_pairs = n_markers * (n_markers - 1) // 2
+    first = rng.uniform(40.0, 80.0, n_pairs)
+    inputs = (
+        rng.normal(size=(n_frames, n_markers, 3)),
+        rng.normal(size=(n_pairs, 3, n_frames)),
+        rng.normal(size=(n_pairs, n_frames)),
+        first,
+        rng.normal(size=n_pairs),
+        rng.normal(size=(n_pairs, n_pairs)),
+        by_direction._pairs(n_markers),
+        rng.normal(size=n_markers),
+        rng.normal(size=(n_markers, n_markers)),
+    )
+    for begin, count in ((0, 128), (128, 128), (256, 44), (37, 5)):
+        chunk = _frame_terms(inputs, begin, count)
+        alone = np.hstack([_frame_terms(inputs, begin + j, 1) for j in range(count)])
+        assert np.array_equal(chunk, alone)
+
+
 def test_one_marker_noisier_than_the_others_is_not_read_as_anisotropic():
     """One of four markers five times noisier than the others, each isotropic: the projection
     off the rigid motions mixes the markers, and a model of one variance for all of them read

@@ -555,33 +555,45 @@ def _frame_terms_into(
     moments less those of ``X_k' K~ X_k`` (``isotropic`` ``(n, n)``). ``work[0]``
     ``(P, >= count)``, ``work[1]`` and ``work[2]`` ``(3 n, >= count)`` and ``work[4]``
     ``(6, >= count)`` are work arrays (the residuals and the markers by coordinate, frames
-    innermost): ``r_k = J_k' H dd_k`` from the deviations ``deviations`` ``(P, N)`` [mm] from
-    ``first`` ``(P,)`` less their means ``first + z``, the frames' pair differences
-    ``differences`` ``(P, 3, N)`` and centred markers ``positions`` ``(N, n, 3)`` [mm], ``H``
-    ``inverse_gram``. Each frame's numbers by the operations of one frame alone, in the same
-    order, with the frames innermost so that they run side by side. A compiled kernel."""
+    innermost), ``work[0]``'s first three rows then each marker's row of ``isotropic X_k``
+    (``P >= 3`` as ``n >= 3``): ``r_k = J_k' H dd_k`` from the deviations ``deviations``
+    ``(P, N)`` [mm] from ``first`` ``(P,)`` less their means ``first + z``, the frames' pair
+    differences ``differences`` ``(P, 3, N)`` and centred markers ``positions`` ``(N, n, 3)``
+    [mm], ``H`` ``inverse_gram``. Each frame's numbers by the operations of one frame alone,
+    in the same order, with the frames innermost so that they run side by side. A compiled
+    kernel."""
     values, residuals, markers_t, terms, moments = work
     pair_a, pair_b = pairs[0], pairs[1]
     n_markers = positions.shape[1]
     n_pairs = first.shape[0]
+    # The chunk's frames through rows of its own, indexed from 0: an index offset by
+    # ``begin`` could be negative for all the compiler knows, and its wraparound test on every
+    # load keeps these loops from running several frames at once.
+    end = begin + count
     for p in range(n_pairs):
+        pair_values = values[p]
         for j in range(count):
-            values[p, j] = 0.0
+            pair_values[j] = 0.0
         for q in range(n_pairs):
             h, mean = inverse_gram[p, q], z[q]
+            deviation = deviations[q, begin:end]
             for j in range(count):
-                values[p, j] += h * (deviations[q, begin + j] - mean)
+                pair_values[j] += h * (deviation[j] - mean)
         start = first[p]
+        deviation = deviations[p, begin:end]
         for j in range(count):
-            values[p, j] *= 1.0 / (deviations[p, begin + j] + start)
+            pair_values[j] *= 1.0 / (deviation[j] + start)
     residuals[:, :count] = 0.0
     for p in range(n_pairs):
         a, b = pair_a[p], pair_b[p]
+        pair_values = values[p]
         for i in range(3):
+            difference = differences[p, i, begin:end]
+            at_a, at_b = residuals[3 * a + i], residuals[3 * b + i]
             for j in range(count):
-                step = values[p, j] * differences[p, i, begin + j]
-                residuals[3 * a + i, j] += step
-                residuals[3 * b + i, j] -= step
+                step = pair_values[j] * difference[j]
+                at_a[j] += step
+                at_b[j] -= step
     moments[:, :count] = 0.0
     for m in range(n_markers):
         expected = expected_own[m]
@@ -594,24 +606,32 @@ def _frame_terms_into(
             moments[3, j] += r1 * r1
             moments[4, j] += r1 * r2
             moments[5, j] += r2 * r2
+    frames = positions[begin:end]
     for j in range(count):
         for m in range(n_markers):
             for i in range(3):
-                markers_t[3 * m + i, j] = positions[begin + j, m, i]
+                markers_t[3 * m + i, j] = frames[j, m, i]
+    # The residuals made, the first three of the pairs' rows hold row a of isotropic X_k
+    # (P >= 3), each a sum over b in order as before, the frames innermost: a sum per frame
+    # over b innermost would run the frames one at a time.
+    weighted = values[:3]
     for a in range(n_markers):
+        weighted[:, :count] = 0.0
+        for b in range(n_markers):
+            weight = isotropic[a, b]
+            for i in range(3):
+                to, marker = weighted[i], markers_t[3 * b + i]
+                for j in range(count):
+                    to[j] += weight * marker[j]
+        w0, w1, w2 = weighted[0], weighted[1], weighted[2]
+        x0, x1, x2 = markers_t[3 * a], markers_t[3 * a + 1], markers_t[3 * a + 2]
         for j in range(count):
-            w0 = w1 = w2 = 0.0
-            for b in range(n_markers):
-                w0 += isotropic[a, b] * markers_t[3 * b, j]
-                w1 += isotropic[a, b] * markers_t[3 * b + 1, j]
-                w2 += isotropic[a, b] * markers_t[3 * b + 2, j]
-            x0, x1, x2 = markers_t[3 * a, j], markers_t[3 * a + 1, j], markers_t[3 * a + 2, j]
-            moments[0, j] -= x0 * w0
-            moments[1, j] -= x0 * w1
-            moments[2, j] -= x0 * w2
-            moments[3, j] -= x1 * w1
-            moments[4, j] -= x1 * w2
-            moments[5, j] -= x2 * w2
+            moments[0, j] -= x0[j] * w0[j]
+            moments[1, j] -= x0[j] * w1[j]
+            moments[2, j] -= x0[j] * w2[j]
+            moments[3, j] -= x1[j] * w1[j]
+            moments[4, j] -= x1[j] * w2[j]
+            moments[5, j] -= x2[j] * w2[j]
     for j in range(count):
         _traceless_moments(
             moments[0, j],
