@@ -68,6 +68,27 @@ def test_the_checked_call_s_fit_does_not_repeat_the_input_checks(method, kernel_
     assert len(kernel_calls) == 2  # check_markers, check_moves
 
 
+@pytest.mark.parametrize("method", ["LS", "NM", "BC"])
+def test_the_fit_for_valid_input_still_refuses_a_buffer_refilled_after_its_checks(method):
+    """:func:`registry.get_for_valid` trusts its caller's input checks for its own stages, but
+    nothing shows that the arrays it is handed are, as they are now, the ones that passed: a
+    buffer checked once and refilled with a NaN is refused by the package's fit, by name, not
+    fitted into a ``LinAlgError``."""
+    distal = two_segments(60)[1]
+    (buffer,) = validation.check_input("center", (distal.copy(),))
+    buffer[5, 1, 2] = np.nan
+    with pytest.raises(ValueError, match="NaN or inf at marker 1, frame 5"):
+        registry.get_for_valid("center", method)((buffer,))
+
+
+def test_the_public_fit_checks_its_arrays_once(kernel_calls):
+    """The public fit hands the fit the very arrays its input checks returned
+    (:func:`registry.get_for_passed`): one compiled pass over them in all."""
+    distal = two_segments(60)[1]
+    jointbench.fit_center(distal, method="LS")
+    assert kernel_calls == [(1, *distal.shape)]
+
+
 def test_an_estimator_writing_a_nan_into_its_checked_markers_is_refused_by_the_fit_it_calls():
     """A checked call's input checks hold for the markers as they were given: an estimator
     (one registered from outside, as README "Adding an estimator" shows) that writes a NaN

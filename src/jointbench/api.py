@@ -177,12 +177,12 @@ def _fit(kind: str, method: str, arrays: tuple[object, ...], artefacts: str, opt
     if artefacts not in ARRAY_POLICIES:
         raise ValueError(f"artefacts must be one of {', '.join(ARRAY_POLICIES)}, got {artefacts!r}")
     if artefacts == "ignore":
-        fit = registry.get_for_valid(kind, method)  # an unknown method is named first, as ever
+        fit = registry.get_for_passed(kind, method)  # an unknown method is named first, as ever
         clean = check_input(kind, arrays)
     else:
         # The input checks come first, so bad input gets their message, not the screen's.
         clean = check_input(kind, arrays)
-        fit = registry.get_for_valid(kind, method)
+        fit = registry.get_for_passed(kind, method)
     transposed = _maybe_transposed(kind, clean, registry.claims(kind, method).min_frames)
     if artefacts == "ignore":
         result = _called(fit, kind, method, clean, options)

@@ -153,7 +153,9 @@ class _Entry:
     by their count and names, :func:`_binds`) and its checked forms: for any input and options
     (``checked``), for any input and options its caller checked (``inputs_checked``: each
     trial of :func:`many`, which checks the options once for all trials), and for input and
-    options that passed their checks (``valid``, :func:`get_for_valid`)."""
+    options that passed their checks (``valid``, :func:`get_for_valid`), and for the very
+    arrays :func:`jointbench.estimators.validation.check_input` returned to the package's own
+    caller just now (``passed``, :func:`get_for_passed`)."""
 
     kind: str
     name: str
@@ -166,21 +168,23 @@ class _Entry:
     checked: Callable = field(init=False)
     inputs_checked: Callable = field(init=False)
     valid: Callable = field(init=False)
+    passed: Callable = field(init=False)
 
     def __post_init__(self) -> None:
         self.signature = inspect.signature(self.fn)
         self.valid = functools.partial(_fit_valid, self)
+        self.passed = functools.partial(_fit_passed, self)
 
         @functools.wraps(self.fn)
         def checked(*arrays: object, **options: object):
             clean = validation.check_input(self.kind, arrays)
             if options:  # a call without options, the common one, pays nothing for the check
                 _check_entry_options(self, options)
-            return _fit_valid(self, clean, **options)
+            return _fit_passed(self, clean, **options)
 
         @functools.wraps(self.fn)
         def inputs_checked(*arrays: object, **options: object):
-            return _fit_valid(self, validation.check_input(self.kind, arrays), **options)
+            return _fit_passed(self, validation.check_input(self.kind, arrays), **options)
 
         self.checked = checked
         self.inputs_checked = inputs_checked
@@ -206,12 +210,23 @@ def _fit_valid(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
     package's own fit (:func:`jointbench.owncode.package_code`), which writes to none of the
     arrays it reads, those it formed. Any other fit may be a user's code that writes to the
     arrays it is handed (normalises them in place, refills them as a buffer): it fits copies
-    of its own, outside that scope, and the checks judge the data as the caller gave them."""
-    return _stages(entry, clean, options)
+    of its own, outside that scope, and the checks judge the data as the caller gave them.
+    The package's fit still makes its own input checks: nothing shows that these arrays, as
+    they are now, are the ones that passed (:func:`_fit_passed`)."""
+    return _stages(entry, clean, options, passed=False)
 
 
-def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
-    """The stages of :func:`_fit_valid`."""
+def _fit_passed(entry: _Entry, clean: tuple[np.ndarray, ...], **options: object):
+    """:func:`_fit_valid` of ``clean``, the very arrays
+    :func:`jointbench.estimators.validation.check_input` returned just now, untouched since:
+    the package's own fit does not repeat their checks
+    (:func:`jointbench.estimators.validation.passed`)."""
+    return _stages(entry, clean, options, passed=True)
+
+
+def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict, *, passed: bool):
+    """The stages of :func:`_fit_valid`; ``passed``: ``clean`` are the arrays the input checks
+    returned just now (:func:`_fit_passed`)."""
     names = _pose_names(entry, len(clean))
     shared = None
     if names is not None and _binds(entry, clean, options):
@@ -222,7 +237,8 @@ def _stages(entry: _Entry, clean: tuple[np.ndarray, ...], options: dict):
         # fit read the sums it formed (paper B's S) instead of forming them again.
         # Nor do they check again the arrays the input checks passed just now.
         with reuse.one_call():
-            validation.passed(entry.kind, clean)
+            if passed:
+                validation.passed(entry.kind, clean)
             result = _fit(entry, clean, shared, options)
             return _checked_stages(entry, result, clean, shared, options)
     result = _fit(entry, copy.deepcopy(clean), shared, options)
@@ -660,10 +676,19 @@ def get(kind: str, name: str, *, checked: bool = True) -> Callable:
 def get_for_valid(kind: str, name: str) -> Callable:
     """The checked estimator ``name`` of ``kind`` (:func:`get`) taking one tuple of arrays that
     already passed :func:`jointbench.estimators.validation.check_input`, and options that
-    passed :func:`check_options`, whose checks it does not repeat, nor does the package's own
-    fit (:func:`jointbench.estimators.validation.passed`): for a caller that ran them itself,
-    with its own label, on the arrays ``check_input`` returned."""
+    passed :func:`check_options`, whose checks it does not repeat: for a caller that ran them
+    itself, with its own label. The package's own fit still checks the arrays it reads, as
+    nothing shows they are, as they are now, the ones that passed (an array checked once and
+    refilled as a buffer is refused by it, not fitted)."""
     return _entry(kind, name).valid
+
+
+def get_for_passed(kind: str, name: str) -> Callable:
+    """:func:`get_for_valid`, for a caller of the package's own that hands it the very arrays
+    :func:`jointbench.estimators.validation.check_input` returned, untouched since: the
+    package's own fit does not repeat their checks either
+    (:func:`jointbench.estimators.validation.passed`)."""
+    return _entry(kind, name).passed
 
 
 def many(kind: str, name: str, *, checked: bool = True) -> Callable[..., list]:

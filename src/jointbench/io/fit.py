@@ -33,7 +33,7 @@ import numpy as np
 from jointbench.estimators import results
 from jointbench.estimators.batching import failed_trial, mistakes_named, numerical_failure
 from jointbench.estimators.centre_precision import stated_covariance
-from jointbench.estimators.registry import KINDS, check_options, get_for_valid, many
+from jointbench.estimators.registry import KINDS, check_options, get_for_passed, many
 from jointbench.estimators.results import with_warnings
 from jointbench.estimators.validation import check_input
 from jointbench.geometry import angle_between_lines_deg
@@ -392,7 +392,7 @@ class Prepared:
         # the options' check in fit, with the recording's label, so it is not repeated here.
         arrays = tuple(a[rows] for a in self.arrays)
         try:
-            result = get_for_valid(self.kind, method)(check_input(self.kind, arrays), **options)
+            result = get_for_passed(self.kind, method)(check_input(self.kind, arrays), **options)
         except ValueError as error:
             if not numerical_failure(error):
                 raise  # a mistake in the method: :meth:`fit` names it as one
