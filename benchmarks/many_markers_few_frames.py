@@ -4,15 +4,20 @@ passed as ``(markers, frames, 3)``.
 ::
 
     python benchmarks/many_markers_few_frames.py [--markers 2000 5000 10000] [--frames 5]
-        [--calls LS NM BC planar SCoRE analytic gauss-markov gauss-markov-frame0 screen]
+        [--calls LS NM BC MA IS planar radial combined SARA SCoRE analytic gauss-markov
+        gauss-markov-frame0 screen]
         [--trees SRC ...] [--timeout 300]
 
 Per marker count and call, the CPU time [s] (the process's own, which other processes' load on
-a shared machine does not lengthen) and the peak resident memory [MB] of one call, each in a
-process of its own after a small call (30 markers) that loads the compiled kernels:
+a shared machine does not lengthen) and the peak resident memory [MB] of the process during one
+call (Linux's ``VmHWM``, reset before the call, so that the kernels' compilation does not count;
+elsewhere the process's peak), each in a process of its own after a small call (30 markers)
+that loads the compiled kernels:
 
-* ``LS``, ``NM``, ``BC``: :func:`jointbench.fit_center` with ``artefacts="warn"``;
-* ``planar``: :func:`jointbench.fit_axis`;
+* ``LS``, ``NM``, ``BC``, ``MA``, ``IS``: :func:`jointbench.fit_center` with
+  ``artefacts="warn"``;
+* ``planar``, ``radial``, ``combined``, ``SARA``: :func:`jointbench.fit_axis` with
+  ``artefacts="warn"``;
 * ``SCoRE``, ``analytic``, ``gauss-markov``, ``gauss-markov-frame0``:
   :func:`jointbench.fit_joint_center` with ``artefacts="warn"`` on two clusters of that many
   markers each;
@@ -39,7 +44,9 @@ from screen_large_clusters import cluster
 import jointbench
 
 JOINT_CENTRES = ("SCoRE", "analytic", "gauss-markov", "gauss-markov-frame0")
-CALLS = ("LS", "NM", "BC", "planar", *JOINT_CENTRES, "screen")
+CENTRES = ("LS", "NM", "BC", "MA", "IS")
+AXES = ("planar", "radial", "combined", "SARA")
+CALLS = (*CENTRES, *AXES, *JOINT_CENTRES, "screen")
 
 
 def _call(name: str, n_markers: int, n_frames: int):
@@ -48,8 +55,8 @@ def _call(name: str, n_markers: int, n_frames: int):
     markers = cluster(n_markers, n_frames)
     if name == "screen":
         return lambda: jointbench.screen(markers)
-    if name == "planar":
-        return lambda: jointbench.fit_axis(markers, "planar", artefacts="warn")
+    if name in AXES:
+        return lambda: jointbench.fit_axis(markers, name, artefacts="warn")
     if name in JOINT_CENTRES:
         distal = cluster(n_markers, n_frames, seed=1)
         return lambda: jointbench.fit_joint_center(markers, distal, name, artefacts="warn")
@@ -62,11 +69,25 @@ def _one(name: str, n_markers: int, n_frames: int) -> None:
     compares)."""
     _call(name, 30, n_frames)()
     run = _call(name, n_markers, n_frames)
+    resettable = os.access("/proc/self/clear_refs", os.W_OK)
+    if resettable:
+        # The call's own peak, not the kernels' compilation before it.
+        with open("/proc/self/clear_refs", "w") as peak:
+            peak.write("5")
     start = time.process_time()
     run()
     cpu = time.process_time() - start
-    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    if resettable:
+        peak_mb = _status_kb("VmHWM:") / 1024.0
+    else:
+        peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(f"{cpu:.3f} {peak_mb:.0f}")
+
+
+def _status_kb(key: str) -> int:
+    """The line ``key`` of Linux's ``/proc/self/status`` [kB]."""
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith(key))
 
 
 def _measured(tree: str | None, name: str, n_markers: int, n_frames: int, timeout: float) -> str:

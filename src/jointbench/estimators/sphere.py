@@ -375,6 +375,11 @@ def _nm_constraint(n_markers: int) -> np.ndarray:
     return constraint
 
 
+#: The most markers whose NM fit solves the full ``(4 + P)``-square problem
+#: (:func:`_nm_trials`); more take its reduction to five unknowns (:func:`_nm_reduced_trials`),
+#: the same answer in time and memory linear in the markers, not cubic and quadratic.
+NM_DENSE_MARKERS = 20
+
 # Why a trial has no NM centre, by the code :func:`_nm_trials` gives it.
 _NM_FAILURES = {
     1: "NM: no admissible sphere (every generalised eigenvalue is negative)",
@@ -437,7 +442,10 @@ def _nm_fits(data: np.ndarray) -> list[CenterResult | ValueError]:
     n_trials, _, n_markers, _ = data.shape
     centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
     costs, failures = np.empty(n_trials), np.zeros(n_trials, dtype=np.int64)
-    _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, failures)
+    if n_markers > NM_DENSE_MARKERS:
+        _nm_reduced_trials(data, _EPS, centers, radii, costs, failures)
+    else:
+        _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, failures)
     outcomes: list = _closed_form_results("NM", centers, radii, costs)
     for trial in np.flatnonzero(failures):
         code = int(failures[trial])
@@ -498,7 +506,6 @@ def _nm_trials(
     """
     n_trials, n_frames, n_markers, _ = data.shape
     size = 4 + n_markers
-    n_rows = n_frames * n_markers
     scatter = np.empty((size, size))
     lower = np.empty((size, size))
     whitened = np.empty((size, size))
@@ -508,19 +515,7 @@ def _nm_trials(
     for t in range(n_trials):
         trial = data[t]
         failures[t] = 0
-        ox = oy = oz = 0.0
-        for f in range(n_frames):
-            for p in range(n_markers):
-                ox += trial[f, p, 0]
-                oy += trial[f, p, 1]
-                oz += trial[f, p, 2]
-        ox, oy, oz = ox / n_rows, oy / n_rows, oz / n_rows
-        spread = 0.0
-        for f in range(n_frames):
-            for p in range(n_markers):
-                dx, dy, dz = trial[f, p, 0] - ox, trial[f, p, 1] - oy, trial[f, p, 2] - oz
-                spread += dx * dx + dy * dy + dz * dz
-        scale = math.sqrt(spread / n_rows)
+        ox, oy, oz, scale = _nm_origin_scale(trial)
         inverse_scale = 1.0 / scale
         # The scatter S = D'D by blocks: the 4 x 4 block sums basis' basis over every row,
         # basis = (|s|^2, s) for the scaled sample s; column 4 + p sums the basis over marker
@@ -613,25 +608,230 @@ def _nm_trials(
         for i in range(size):
             for j in range(size):
                 norm += u[i] * constraint[i, j] * u[j]
-        if not (largest > 0.0 and norm > 0.0):
-            failures[t] = 1
-            continue
-        for i in range(size):
-            u[i] /= math.sqrt(norm)
-        costs[t] = 1.0 / largest
-        a = u[0]
-        if not abs(a) >= eps * np.abs(u).max():
-            failures[t] = 2
-            continue
-        center_scaled = u[1:4] / (-2.0 * a)
-        squared_distance = 0.0
-        for i in range(3):
-            squared_distance += center_scaled[i] * center_scaled[i]
-        centers[t, 0] = ox + scale * center_scaled[0]
-        centers[t, 1] = oy + scale * center_scaled[1]
-        centers[t, 2] = oz + scale * center_scaled[2]
+        _nm_answer_into(
+            u, largest, norm, eps, scale, ox, oy, oz, t, centers, radii, costs, failures
+        )
+
+
+@kernel
+def _nm_reduced_trials(
+    data: np.ndarray,
+    eps: float,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    costs: np.ndarray,
+    failures: np.ndarray,
+) -> None:
+    """:func:`_nm_trials` of ``data`` (T, N, P, 3) [mm] without its ``(4 + P)``-square
+    matrices: the same centres (T, 3) [mm], radii (T, P) [mm], costs (T,) and failure codes,
+    to rounding, in time and memory linear in the markers. A compiled kernel.
+
+    The scatter ``S = [[A, B], [B', N I]]`` (``A`` 4 x 4, ``B`` 4 x P, ``N`` frames) and the
+    constraint ``C = G K G'`` of rank 5 (``G = [e_0, e_1, e_2, e_3, (0, 1_P)]``,
+    ``K = [[0, 0, -2], [0, P I_3, 0], [-2, 0, 0]]`` by blocks 1, 3, 1) have structure:
+
+    * Cholesky's pivots of ``S`` in :func:`_nm_trials`' order are those of ``A``, then of
+      ``N I - U U'`` with ``U = B' L_A^-T`` (P x 4), each ``d_p = N - u_p' Q_p u_p`` with
+      ``Q_0 = I``, ``Q_{p+1} = Q_p + Q_p u_p u_p' Q_p / d_p`` (the Schur complement of the
+      pivots before it), the test of a singular scatter (code 3) the same;
+    * ``S u = lambda C u`` has its positive ``mu = 1 / lambda`` where ``u = S^-1 G x`` with
+      ``K H x = mu x``, ``H = G' S^-1 G`` (5 x 5); with ``H = L L'`` and ``y = L' x``,
+      ``L' K L y = mu y`` is symmetric; ``M = W C W'`` of :func:`_nm_trials` has these five
+      eigenvalues and zeros;
+    * ``S^-1`` by the Schur complement of the diagonal block,
+      ``Z = A - B B' / N = sum_p sum_f (s_f - m_p)(s_f - m_p)'`` over marker ``p``'s basis
+      rows ``s_f = (|v|^2, v)`` about their mean ``m_p``: ``S [u_1; u_2] = [v_1; v_2]`` gives
+      ``u_1 = Z^-1 (v_1 - B v_2 / N)``, ``u_2 = (v_2 - B' u_1) / N``.
+    """
+    n_trials, n_frames, n_markers, _ = data.shape
+    size = 4 + n_markers
+    sums = np.empty((4, n_markers))
+    u = np.empty(size)
+    basis = np.empty(4)
+    lower = np.empty((4, 4))
+    within = np.zeros((4, 4))
+    carried = np.empty((4, 4))
+    row = np.empty(4)
+    q_row = np.empty(4)
+    total = np.empty(4)
+    reduced = np.empty((5, 5))
+    weights = np.zeros((5, 5))
+    weights[0, 4] = weights[4, 0] = -2.0
+    for i in range(1, 4):
+        weights[i, i] = n_markers
+    for t in range(n_trials):
+        trial = data[t]
+        failures[t] = 0
+        ox, oy, oz, scale = _nm_origin_scale(trial)
+        inverse_scale = 1.0 / scale
+        corner = np.zeros((4, 4))
+        within[:] = 0.0
+        total[:] = 0.0
         for p in range(n_markers):
-            radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
+            for k in range(4):
+                sums[k, p] = 0.0
+            for f in range(n_frames):
+                _nm_basis_into(trial[f, p], ox, oy, oz, inverse_scale, basis)
+                for i in range(4):
+                    sums[i, p] += basis[i]
+                    for j in range(4):
+                        corner[i, j] += basis[i] * basis[j]
+            for f in range(n_frames):
+                _nm_basis_into(trial[f, p], ox, oy, oz, inverse_scale, basis)
+                for i in range(4):
+                    basis[i] -= sums[i, p] / n_frames
+                for i in range(4):
+                    for j in range(4):
+                        within[i, j] += basis[i] * basis[j]
+            for k in range(4):
+                total[k] += sums[k, p]
+        # Cholesky's pivots of S: A's, then the Schur complements' of N I - U U'.
+        regular = True
+        smallest, largest_pivot = np.inf, 0.0
+        for j in range(4):
+            pivot = corner[j, j]
+            for k in range(j):
+                pivot -= lower[j, k] * lower[j, k]
+            if not pivot > 0.0:
+                regular = False
+                break
+            smallest, largest_pivot = min(smallest, pivot), max(largest_pivot, pivot)
+            lower[j, j] = math.sqrt(pivot)
+            for i in range(j + 1, 4):
+                value = corner[i, j]
+                for k in range(j):
+                    value -= lower[i, k] * lower[j, k]
+                lower[i, j] = value / lower[j, j]
+        carried[:] = 0.0
+        for i in range(4):
+            carried[i, i] = 1.0
+        for p in range(n_markers if regular else 0):
+            for j in range(4):
+                value = sums[j, p]
+                for k in range(j):
+                    value -= row[k] * lower[j, k]
+                row[j] = value / lower[j, j]
+            pivot = float(n_frames)
+            for i in range(4):
+                q_row[i] = 0.0
+                for j in range(4):
+                    q_row[i] += carried[i, j] * row[j]
+                pivot -= row[i] * q_row[i]
+            if not pivot > 0.0:
+                regular = False
+                break
+            smallest, largest_pivot = min(smallest, pivot), max(largest_pivot, pivot)
+            for i in range(4):
+                for j in range(4):
+                    carried[i, j] += q_row[i] * q_row[j] / pivot
+        if not (regular and smallest > 1e-9 * largest_pivot):
+            failures[t] = 3
+            continue
+        # H = G' S^-1 G: Z^-1 beside -Z^-1 b / N, b the sum of B's columns, and
+        # P / N + b' Z^-1 b / N^2.
+        within_inv = np.linalg.inv(within)
+        shifted = within_inv @ total
+        reduced[:4, :4] = within_inv
+        for i in range(4):
+            reduced[i, 4] = reduced[4, i] = -shifted[i] / n_frames
+        reduced[4, 4] = n_markers / n_frames + (total @ shifted) / n_frames**2
+        factor = np.linalg.cholesky(reduced)
+        mu, eigenvectors = np.linalg.eigh(factor.T @ weights @ factor)
+        largest = mu[-1]
+        x = np.linalg.solve(factor.T, eigenvectors[:, 4])
+        # u = S^-1 G x, by the Schur complement of the diagonal block.
+        for i in range(4):
+            row[i] = x[i] - x[4] * total[i] / n_frames
+        u[:4] = within_inv @ row
+        for p in range(n_markers):
+            value = x[4]
+            for i in range(4):
+                value -= sums[i, p] * u[i]
+            u[4 + p] = value / n_frames
+        spread = 0.0
+        for p in range(n_markers):
+            spread += u[4 + p]
+        norm = n_markers * (u[1] * u[1] + u[2] * u[2] + u[3] * u[3]) - 4.0 * u[0] * spread
+        _nm_answer_into(
+            u, largest, norm, eps, scale, ox, oy, oz, t, centers, radii, costs, failures
+        )
+
+
+@kernel
+def _nm_origin_scale(trial: np.ndarray) -> tuple[float, float, float, float]:
+    """The centroid ``(x, y, z)`` [mm] of one trial's markers ``(N, P, 3)`` [mm] and their RMS
+    distance from it [mm], the origin and scale of NM's unit-RMS data. A compiled kernel."""
+    n_frames, n_markers, _ = trial.shape
+    n_rows = n_frames * n_markers
+    ox = oy = oz = 0.0
+    for f in range(n_frames):
+        for p in range(n_markers):
+            ox += trial[f, p, 0]
+            oy += trial[f, p, 1]
+            oz += trial[f, p, 2]
+    ox, oy, oz = ox / n_rows, oy / n_rows, oz / n_rows
+    spread = 0.0
+    for f in range(n_frames):
+        for p in range(n_markers):
+            dx, dy, dz = trial[f, p, 0] - ox, trial[f, p, 1] - oy, trial[f, p, 2] - oz
+            spread += dx * dx + dy * dy + dz * dz
+    return ox, oy, oz, math.sqrt(spread / n_rows)
+
+
+@kernel
+def _nm_basis_into(
+    point: np.ndarray, ox: float, oy: float, oz: float, inverse_scale: float, out: np.ndarray
+) -> None:
+    """The basis ``(|s|^2, s)`` of NM's data matrix (paper A eq. 22) for the unit-RMS sample
+    ``s`` of ``point`` ``(3,)`` [mm] (origin ``(ox, oy, oz)`` [mm], ``inverse_scale``
+    [mm^-1]), into ``out`` ``(4,)``. A compiled kernel."""
+    x = (point[0] - ox) * inverse_scale
+    y = (point[1] - oy) * inverse_scale
+    z = (point[2] - oz) * inverse_scale
+    out[0], out[1], out[2], out[3] = x * x + y * y + z * z, x, y, z
+
+
+@kernel
+def _nm_answer_into(
+    u: np.ndarray,
+    largest: float,
+    norm: float,
+    eps: float,
+    scale: float,
+    ox: float,
+    oy: float,
+    oz: float,
+    t: int,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    costs: np.ndarray,
+    failures: np.ndarray,
+) -> None:
+    """Trial ``t``'s NM answer from the eigenvector ``u`` ``(4 + P,)`` of the largest
+    eigenvalue ``largest`` of the whitened problem, ``norm = u' C u``: its centre [mm], radii
+    [mm] and cost into row ``t`` of ``centers``, ``radii`` and ``costs``, or its failure code
+    (:data:`_NM_FAILURES`) into ``failures[t]``; ``u`` is normalised in place. A compiled
+    kernel."""
+    n_markers = u.shape[0] - 4
+    if not (largest > 0.0 and norm > 0.0):
+        failures[t] = 1
+        return
+    for i in range(u.shape[0]):
+        u[i] /= math.sqrt(norm)
+    costs[t] = 1.0 / largest
+    a = u[0]
+    if not abs(a) >= eps * np.abs(u).max():
+        failures[t] = 2
+        return
+    center_scaled = u[1:4] / (-2.0 * a)
+    squared_distance = 0.0
+    for i in range(3):
+        squared_distance += center_scaled[i] * center_scaled[i]
+    centers[t, 0] = ox + scale * center_scaled[0]
+    centers[t, 1] = oy + scale * center_scaled[1]
+    centers[t, 2] = oz + scale * center_scaled[2]
+    for p in range(n_markers):
+        radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
 
 
 # --------------------------------------------------------------------------------------------
