@@ -172,7 +172,6 @@ def test_nm_kernel():
             np.empty(n_trials, dtype=np.int64),
         ),
         np.ascontiguousarray(markers),
-        sphere._nm_constraint(3),
         sphere._EPS,
     )
     np.testing.assert_array_equal(compiled[3], interpreted[3])

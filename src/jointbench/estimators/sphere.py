@@ -375,11 +375,6 @@ def _nm_constraint(n_markers: int) -> np.ndarray:
     return constraint
 
 
-#: The most markers whose NM fit solves the full ``(4 + P)``-square problem
-#: (:func:`_nm_trials`); more take its reduction to five unknowns (:func:`_nm_reduced_trials`),
-#: the same answer in time and memory linear in the markers, not cubic and quadratic.
-NM_DENSE_MARKERS = 20
-
 # Why a trial has no NM centre, by the code :func:`_nm_trials` gives it.
 _NM_FAILURES = {
     1: "NM: no admissible sphere (every generalised eigenvalue is negative)",
@@ -399,8 +394,8 @@ def _nm_design(scaled: np.ndarray) -> np.ndarray:
 
 def _nm_singular(markers: np.ndarray) -> CenterResult | ValueError:
     """NM of one trial ``(N, P, 3)`` [mm] whose scatter ``S = D'D`` is (nearly) singular, as
-    for noise-free data, which :func:`_nm_trials` leaves: the problem of :func:`_nm_trials`
-    whitened with ``W = diag(1 / s) V'`` from the SVD of ``D`` instead of a Cholesky factor
+    for noise-free data, which :func:`_nm_trials` leaves: the problem of :func:`_nm_trials`,
+    whitened with ``W = diag(1 / s) V'`` from the SVD of ``D`` at its full size
     (``W' W = S^+``); an exact fit is ``D``'s null vector."""
     n_rows = markers.shape[0] * markers.shape[1]
     shifted = markers.reshape(-1, 3)
@@ -442,10 +437,7 @@ def _nm_fits(data: np.ndarray) -> list[CenterResult | ValueError]:
     n_trials, _, n_markers, _ = data.shape
     centers, radii = np.empty((n_trials, 3)), np.empty((n_trials, n_markers))
     costs, failures = np.empty(n_trials), np.zeros(n_trials, dtype=np.int64)
-    if n_markers > NM_DENSE_MARKERS:
-        _nm_reduced_trials(data, _EPS, centers, radii, costs, failures)
-    else:
-        _nm_trials(data, _nm_constraint(n_markers), _EPS, centers, radii, costs, failures)
+    _nm_trials(data, _EPS, centers, radii, costs, failures)
     outcomes: list = _closed_form_results("NM", centers, radii, costs)
     for trial in np.flatnonzero(failures):
         code = int(failures[trial])
@@ -481,7 +473,6 @@ def _fit_nm_batch(markers: object) -> list[CenterResult | ValueError]:
 @kernel
 def _nm_trials(
     data: np.ndarray,
-    constraint: np.ndarray,
     eps: float,
     centers: np.ndarray,
     radii: np.ndarray,
@@ -491,153 +482,30 @@ def _nm_trials(
     """NM's fit of each trial of ``data`` (T, N, P, 3) [mm] (see :func:`fit_nm`): centres
     (T, 3) [mm], radii (T, P) [mm] and costs (T,) into the arrays given, and ``failures`` (T,)
     a key of :data:`_NM_FAILURES` where a trial has no centre, 3 where its scatter is (nearly)
-    singular, 0 where it has a centre.
-    ``constraint`` is :func:`_nm_constraint`, ``eps`` the float64 machine epsilon. A compiled
-    kernel (:mod:`jointbench.numerics.compiled`): this source is the implementation.
+    singular, 0 where it has a centre; ``eps`` the float64 machine epsilon. A compiled kernel
+    (:mod:`jointbench.numerics.compiled`): this source is the implementation.
 
     Minimise ``|D u|^2`` subject to ``u' C u = 1`` (paper A eq. 15) for the data matrix ``D``
-    of the unit-RMS markers (eq. 22, rows ``[|s|^2, s, e_p]``) and ``C`` of eq. 24.
-    ``S u = lambda C u`` (eq. 17) is whitened with the Cholesky factor ``S = L L'``:
-    ``u = W' y`` with ``W = L^-1`` gives the symmetric problem ``W C W' y = mu y`` with
-    ``mu = 1 / lambda``, so the admissible eigenvector of least cost ``lambda`` is the one of
-    largest positive ``mu``. ``m = -(b, c, d) / 2a`` (eq. 18), ``r_p^2 = |m|^2 - e_p / a``.
-    A (nearly) singular ``S``, as for noise-free data, is left to :func:`_nm_singular`
-    (failure code 3).
-    """
-    n_trials, n_frames, n_markers, _ = data.shape
-    size = 4 + n_markers
-    scatter = np.empty((size, size))
-    lower = np.empty((size, size))
-    whitened = np.empty((size, size))
-    product = np.empty((size, size))
-    m_matrix = np.empty((size, size))
-    u = np.empty(size)
-    for t in range(n_trials):
-        trial = data[t]
-        failures[t] = 0
-        ox, oy, oz, scale = _nm_origin_scale(trial)
-        inverse_scale = 1.0 / scale
-        # The scatter S = D'D by blocks: the 4 x 4 block sums basis' basis over every row,
-        # basis = (|s|^2, s) for the scaled sample s; column 4 + p sums the basis over marker
-        # p's rows. Scalars, so that the sums stay in registers.
-        s00 = s01 = s02 = s03 = s11 = s12 = s13 = s22 = s23 = s33 = 0.0
-        scatter[:] = 0.0
-        for p in range(n_markers):
-            m0 = m1 = m2 = m3 = 0.0
-            for f in range(n_frames):
-                x = (trial[f, p, 0] - ox) * inverse_scale
-                y = (trial[f, p, 1] - oy) * inverse_scale
-                z = (trial[f, p, 2] - oz) * inverse_scale
-                w = x * x + y * y + z * z
-                s00 += w * w
-                s01 += w * x
-                s02 += w * y
-                s03 += w * z
-                s11 += x * x
-                s12 += x * y
-                s13 += x * z
-                s22 += y * y
-                s23 += y * z
-                s33 += z * z
-                m0 += w
-                m1 += x
-                m2 += y
-                m3 += z
-            scatter[0, 4 + p], scatter[1, 4 + p] = m0, m1
-            scatter[2, 4 + p], scatter[3, 4 + p] = m2, m3
-            scatter[4 + p, 4 + p] = n_frames
-        scatter[0, 0], scatter[0, 1], scatter[0, 2], scatter[0, 3] = s00, s01, s02, s03
-        scatter[1, 1], scatter[1, 2], scatter[1, 3] = s11, s12, s13
-        scatter[2, 2], scatter[2, 3], scatter[3, 3] = s22, s23, s33
-        for i in range(size):
-            for j in range(i):
-                scatter[i, j] = scatter[j, i]
-        # Cholesky: a pivot that is not positive means a singular scatter.
-        regular = True
-        for j in range(size):
-            pivot = scatter[j, j]
-            for k in range(j):
-                pivot -= lower[j, k] * lower[j, k]
-            if not pivot > 0.0:
-                regular = False
-                break
-            lower[j, j] = math.sqrt(pivot)
-            for i in range(j + 1, size):
-                value = scatter[i, j]
-                for k in range(j):
-                    value -= lower[i, k] * lower[j, k]
-                lower[i, j] = value / lower[j, j]
-        if regular:
-            smallest, largest_pivot = lower[0, 0] ** 2, lower[0, 0] ** 2
-            for j in range(1, size):
-                smallest = min(smallest, lower[j, j] ** 2)
-                largest_pivot = max(largest_pivot, lower[j, j] ** 2)
-            regular = smallest > 1e-9 * largest_pivot
-        if not regular:
-            failures[t] = 3
-            continue
-        # W = L^-1, lower triangular, by forward substitution column by column.
-        whitened[:] = 0.0
-        for j in range(size):
-            whitened[j, j] = 1.0 / lower[j, j]
-            for i in range(j + 1, size):
-                value = 0.0
-                for k in range(j, i):
-                    value -= lower[i, k] * whitened[k, j]
-                whitened[i, j] = value / lower[i, i]
-        # M = W C W', exactly symmetric, then its eigenvector of the largest eigenvalue.
-        for i in range(size):
-            for j in range(size):
-                value = 0.0
-                for k in range(j + 1):
-                    value += constraint[i, k] * whitened[j, k]
-                product[i, j] = value
-        for i in range(size):
-            for j in range(i + 1):
-                value = 0.0
-                for k in range(i + 1):
-                    value += whitened[i, k] * product[k, j]
-                m_matrix[i, j] = m_matrix[j, i] = value
-        mu, eigenvectors = np.linalg.eigh(m_matrix)
-        largest = mu[-1]
-        for i in range(size):
-            u[i] = 0.0
-            for k in range(i, size):
-                u[i] += whitened[k, i] * eigenvectors[k, size - 1]
-        norm = 0.0
-        for i in range(size):
-            for j in range(size):
-                norm += u[i] * constraint[i, j] * u[j]
-        _nm_answer_into(
-            u, largest, norm, eps, scale, ox, oy, oz, t, centers, radii, costs, failures
-        )
-
-
-@kernel
-def _nm_reduced_trials(
-    data: np.ndarray,
-    eps: float,
-    centers: np.ndarray,
-    radii: np.ndarray,
-    costs: np.ndarray,
-    failures: np.ndarray,
-) -> None:
-    """:func:`_nm_trials` of ``data`` (T, N, P, 3) [mm] without its ``(4 + P)``-square
-    matrices: the same centres (T, 3) [mm], radii (T, P) [mm], costs (T,) and failure codes,
-    to rounding, in time and memory linear in the markers. A compiled kernel.
+    of the unit-RMS markers (eq. 22, rows ``[|s|^2, s, e_p]``, :func:`_nm_design`) and ``C`` of
+    eq. 24 (:func:`_nm_constraint`): ``S u = lambda C u`` (eq. 17) with ``S = D'D``, whose
+    admissible eigenvector of least cost ``lambda`` is that of the largest positive
+    ``mu = 1 / lambda``; ``m = -(b, c, d) / 2a`` (eq. 18), ``r_p^2 = |m|^2 - e_p / a``. A
+    (nearly) singular ``S``, as for noise-free data, is left to :func:`_nm_singular` (code 3).
+    Never formed at its size ``4 + P``: the problem's structure reduces it to five unknowns,
+    in time and memory linear in the markers.
 
     The scatter ``S = [[A, B], [B', N I]]`` (``A`` 4 x 4, ``B`` 4 x P, ``N`` frames) and the
     constraint ``C = G K G'`` of rank 5 (``G = [e_0, e_1, e_2, e_3, (0, 1_P)]``,
     ``K = [[0, 0, -2], [0, P I_3, 0], [-2, 0, 0]]`` by blocks 1, 3, 1) have structure:
 
-    * Cholesky's pivots of ``S`` in :func:`_nm_trials`' order are those of ``A``, then of
+    * Cholesky's pivots of ``S`` (``A``'s rows first) are those of ``A``, then of
       ``N I - U U'`` with ``U = B' L_A^-T`` (P x 4), each ``d_p = N - u_p' Q_p u_p`` with
       ``Q_0 = I``, ``Q_{p+1} = Q_p + Q_p u_p u_p' Q_p / d_p`` (the Schur complement of the
       pivots before it), the test of a singular scatter (code 3) the same;
     * ``S u = lambda C u`` has its positive ``mu = 1 / lambda`` where ``u = S^-1 G x`` with
       ``K H x = mu x``, ``H = G' S^-1 G`` (5 x 5); with ``H = L L'`` and ``y = L' x``,
-      ``L' K L y = mu y`` is symmetric; ``M = W C W'`` of :func:`_nm_trials` has these five
-      eigenvalues and zeros;
+      ``L' K L y = mu y`` is symmetric; ``S``'s problem whitened, ``W C W' y = mu y``
+      with ``W' W = S^-1``, has these five eigenvalues and zeros;
     * ``S^-1`` by the Schur complement of the diagonal block,
       ``Z = A - B B' / N = sum_p sum_f (s_f - m_p)(s_f - m_p)'`` over marker ``p``'s basis
       rows ``s_f = (|v|^2, v)`` about their mean ``m_p``: ``S [u_1; u_2] = [v_1; v_2]`` gives
