@@ -35,6 +35,7 @@ from jointbench.numerics.compiled import kernel, kernel_array
 from jointbench.numerics.magnitudes import largest_coordinate
 from jointbench.numerics.rank import RCOND
 from jointbench.numerics.simplex import FMINSEARCH_OPTIONS, lockstep, stop_status
+from jointbench.numerics.small import symmetric_eigen_into
 from jointbench.numerics.spheres import ls_system, mean_weights, row_sq, solve_ls_system
 
 __all__ = [
@@ -503,73 +504,101 @@ def _nm_trials(
       ``Q_0 = I``, ``Q_{p+1} = Q_p + Q_p u_p u_p' Q_p / d_p`` (the Schur complement of the
       pivots before it), the test of a singular scatter (code 3) the same;
     * ``S u = lambda C u`` has its positive ``mu = 1 / lambda`` where ``u = S^-1 G x`` with
-      ``K H x = mu x``, ``H = G' S^-1 G`` (5 x 5); with ``H = L L'`` and ``y = L' x``,
-      ``L' K L y = mu y`` is symmetric; ``S``'s problem whitened, ``W C W' y = mu y``
+      ``K H x = mu x``, ``H = G' S^-1 G`` (5 x 5); with any ``H = F F'`` and ``y = F' x``,
+      ``F' K F y = mu y`` is symmetric; ``S``'s problem whitened, ``W C W' y = mu y``
       with ``W' W = S^-1``, has these five eigenvalues and zeros;
     * ``S^-1`` by the Schur complement of the diagonal block,
       ``Z = A - B B' / N = sum_p sum_f (s_f - m_p)(s_f - m_p)'`` over marker ``p``'s basis
       rows ``s_f = (|v|^2, v)`` about their mean ``m_p``: ``S [u_1; u_2] = [v_1; v_2]`` gives
-      ``u_1 = Z^-1 (v_1 - B v_2 / N)``, ``u_2 = (v_2 - B' u_1) / N``.
+      ``u_1 = Z^-1 (v_1 - B v_2 / N)``, ``u_2 = (v_2 - B' u_1) / N``; so
+      ``H = E' diag(Z^-1, P / N) E`` with ``E = [[I, -b / N], [0, 1]]``, ``b`` the sum of
+      ``B``'s columns, and ``F`` follows from ``Z``'s Cholesky factor
+      (:func:`_nm_factor_into`), neither ``Z^-1`` nor ``H`` formed; a pivot of ``Z`` that is
+      not positive is a singular scatter's rounding (code 3).
+
+    Every matrix is 4 x 4 or 5 x 5, its entries in loops or in the package's Jacobi
+    eigen-solve (:func:`jointbench.numerics.small.symmetric_eigen_into`): a few markers' fit
+    takes microseconds, and LAPACK's calls on matrices this small spend more on their overhead
+    than on the arithmetic.
     """
     n_trials, n_frames, n_markers, _ = data.shape
     size = 4 + n_markers
     sums = np.empty((4, n_markers))
     u = np.empty(size)
-    basis = np.empty(4)
+    corner = np.empty((4, 4))
     lower = np.empty((4, 4))
-    within = np.zeros((4, 4))
+    within = np.empty((4, 4))
     carried = np.empty((4, 4))
     row = np.empty(4)
     q_row = np.empty(4)
     total = np.empty(4)
+    factor = np.empty((5, 5))
     reduced = np.empty((5, 5))
-    weights = np.zeros((5, 5))
-    weights[0, 4] = weights[4, 0] = -2.0
-    for i in range(1, 4):
-        weights[i, i] = n_markers
+    mu = np.empty(5)
+    eigenvectors = np.empty((5, 5))
+    work = np.empty((5, 5))
     for t in range(n_trials):
         trial = data[t]
         failures[t] = 0
         ox, oy, oz, scale = _nm_origin_scale(trial)
         inverse_scale = 1.0 / scale
-        corner = np.zeros((4, 4))
-        within[:] = 0.0
-        total[:] = 0.0
+        # A and Z by their ten distinct entries, in scalars that stay in registers: the basis
+        # of a row is (w, x, y, z), w = |s|^2 of the scaled sample s.
+        a_ww = a_wx = a_wy = a_wz = a_xx = a_xy = a_xz = a_yy = a_yz = a_zz = 0.0
+        z_ww = z_wx = z_wy = z_wz = z_xx = z_xy = z_xz = z_yy = z_yz = z_zz = 0.0
+        t_w = t_x = t_y = t_z = 0.0
         for p in range(n_markers):
-            for k in range(4):
-                sums[k, p] = 0.0
+            m_w = m_x = m_y = m_z = 0.0
             for f in range(n_frames):
-                _nm_basis_into(trial[f, p], ox, oy, oz, inverse_scale, basis)
-                for i in range(4):
-                    sums[i, p] += basis[i]
-                    for j in range(4):
-                        corner[i, j] += basis[i] * basis[j]
+                x = (trial[f, p, 0] - ox) * inverse_scale
+                y = (trial[f, p, 1] - oy) * inverse_scale
+                z = (trial[f, p, 2] - oz) * inverse_scale
+                w = x * x + y * y + z * z
+                m_w += w
+                m_x += x
+                m_y += y
+                m_z += z
+                a_ww += w * w
+                a_wx += w * x
+                a_wy += w * y
+                a_wz += w * z
+                a_xx += x * x
+                a_xy += x * y
+                a_xz += x * z
+                a_yy += y * y
+                a_yz += y * z
+                a_zz += z * z
+            sums[0, p], sums[1, p], sums[2, p], sums[3, p] = m_w, m_x, m_y, m_z
+            # Z about each marker's own mean, in a second pass: one pass's A - B B' / N
+            # would cancel where a marker moves little against its distance from the origin.
+            c_w, c_x, c_y, c_z = m_w / n_frames, m_x / n_frames, m_y / n_frames, m_z / n_frames
             for f in range(n_frames):
-                _nm_basis_into(trial[f, p], ox, oy, oz, inverse_scale, basis)
-                for i in range(4):
-                    basis[i] -= sums[i, p] / n_frames
-                for i in range(4):
-                    for j in range(4):
-                        within[i, j] += basis[i] * basis[j]
-            for k in range(4):
-                total[k] += sums[k, p]
+                x = (trial[f, p, 0] - ox) * inverse_scale
+                y = (trial[f, p, 1] - oy) * inverse_scale
+                z = (trial[f, p, 2] - oz) * inverse_scale
+                w = x * x + y * y + z * z - c_w
+                x -= c_x
+                y -= c_y
+                z -= c_z
+                z_ww += w * w
+                z_wx += w * x
+                z_wy += w * y
+                z_wz += w * z
+                z_xx += x * x
+                z_xy += x * y
+                z_xz += x * z
+                z_yy += y * y
+                z_yz += y * z
+                z_zz += z * z
+            t_w += m_w
+            t_x += m_x
+            t_y += m_y
+            t_z += m_z
+        _nm_symmetric_into(a_ww, a_wx, a_wy, a_wz, a_xx, a_xy, a_xz, a_yy, a_yz, a_zz, corner)
+        _nm_symmetric_into(z_ww, z_wx, z_wy, z_wz, z_xx, z_xy, z_xz, z_yy, z_yz, z_zz, within)
+        total[0], total[1], total[2], total[3] = t_w, t_x, t_y, t_z
         # Cholesky's pivots of S: A's, then the Schur complements' of N I - U U'.
-        regular = True
-        smallest, largest_pivot = np.inf, 0.0
-        for j in range(4):
-            pivot = corner[j, j]
-            for k in range(j):
-                pivot -= lower[j, k] * lower[j, k]
-            if not pivot > 0.0:
-                regular = False
-                break
-            smallest, largest_pivot = min(smallest, pivot), max(largest_pivot, pivot)
-            lower[j, j] = math.sqrt(pivot)
-            for i in range(j + 1, 4):
-                value = corner[i, j]
-                for k in range(j):
-                    value -= lower[i, k] * lower[j, k]
-                lower[i, j] = value / lower[j, j]
+        regular, smallest, largest_pivot = _nm_cholesky_into(corner, lower)
         carried[:] = 0.0
         for i in range(4):
             carried[i, i] = 1.0
@@ -595,24 +624,25 @@ def _nm_trials(
         if not (regular and smallest > 1e-9 * largest_pivot):
             failures[t] = 3
             continue
-        # H = G' S^-1 G: Z^-1 beside -Z^-1 b / N, b the sum of B's columns, and
-        # P / N + b' Z^-1 b / N^2.
-        within_inv = np.linalg.inv(within)
-        shifted = within_inv @ total
-        reduced[:4, :4] = within_inv
+        # H = G' S^-1 G = F F' with F = [[R, 0], [-b' R / N, sqrt(P / N)]], R = L_Z^-T from
+        # Z = L_Z L_Z' and b the sum of B's columns; a pivot of Z that is not positive is a
+        # singular scatter's rounding.
+        if not _nm_factor_into(within, total, n_frames, n_markers, lower, factor):
+            failures[t] = 3
+            continue
+        _nm_reduced_into(factor, n_markers, reduced)
+        symmetric_eigen_into(reduced, mu, eigenvectors, work)
+        largest = mu[4]
+        # u = S^-1 G x with x = F^-T y: u_1 = R y_1, x_5 = y_5 / sqrt(P / N), and
+        # u_2 = (x_5 - B' u_1) / N by the Schur complement of the diagonal block.
         for i in range(4):
-            reduced[i, 4] = reduced[4, i] = -shifted[i] / n_frames
-        reduced[4, 4] = n_markers / n_frames + (total @ shifted) / n_frames**2
-        factor = np.linalg.cholesky(reduced)
-        mu, eigenvectors = np.linalg.eigh(factor.T @ weights @ factor)
-        largest = mu[-1]
-        x = np.linalg.solve(factor.T, eigenvectors[:, 4])
-        # u = S^-1 G x, by the Schur complement of the diagonal block.
-        for i in range(4):
-            row[i] = x[i] - x[4] * total[i] / n_frames
-        u[:4] = within_inv @ row
+            value = 0.0
+            for k in range(i, 4):
+                value += factor[i, k] * eigenvectors[k, 4]
+            u[i] = value
+        x_5 = eigenvectors[4, 4] / factor[4, 4]
         for p in range(n_markers):
-            value = x[4]
+            value = x_5
             for i in range(4):
                 value -= sums[i, p] * u[i]
             u[4 + p] = value / n_frames
@@ -623,6 +653,83 @@ def _nm_trials(
         _nm_answer_into(
             u, largest, norm, eps, scale, ox, oy, oz, t, centers, radii, costs, failures
         )
+
+
+@kernel
+def _nm_cholesky_into(matrix: np.ndarray, lower: np.ndarray) -> tuple[bool, float, float]:
+    """The Cholesky factor ``L`` of the symmetric ``matrix`` ``(4, 4)`` (its lower triangle
+    read) into the lower triangle of ``lower`` ``(4, 4)``: ``(every pivot positive, least
+    pivot, largest pivot)``, stopping at the first pivot that is not positive (the pivots
+    then those before it). A compiled kernel."""
+    smallest, largest = np.inf, 0.0
+    for j in range(4):
+        pivot = matrix[j, j]
+        for k in range(j):
+            pivot -= lower[j, k] * lower[j, k]
+        if not pivot > 0.0:
+            return False, smallest, largest
+        smallest, largest = min(smallest, pivot), max(largest, pivot)
+        lower[j, j] = math.sqrt(pivot)
+        for i in range(j + 1, 4):
+            value = matrix[i, j]
+            for k in range(j):
+                value -= lower[i, k] * lower[j, k]
+            lower[i, j] = value / lower[j, j]
+    return True, smallest, largest
+
+
+@kernel
+def _nm_factor_into(
+    within: np.ndarray,
+    total: np.ndarray,
+    n_frames: int,
+    n_markers: int,
+    lower: np.ndarray,
+    factor: np.ndarray,
+) -> bool:
+    """A factor ``F`` ``(5, 5)`` of NM's reduced matrix ``H = G' S^-1 G = F F'`` (see
+    :func:`_nm_trials`) into ``factor``, from ``Z`` (``within``, ``(4, 4)``), ``b`` (``total``,
+    ``(4,)``, the sum of the scatter's columns ``B``), ``N`` frames and ``P`` markers:
+    ``F = [[R, 0], [-b' R / N, sqrt(P / N)]]`` with ``R = L^-T`` from ``Z = L L'``
+    (``lower`` ``(4, 4)``, scratch), as ``H = E' diag(Z^-1, P / N) E`` with
+    ``E = [[I, -b / N], [0, 1]]``. False where a pivot of ``Z`` is not positive. A compiled
+    kernel."""
+    if not _nm_cholesky_into(within, lower)[0]:
+        return False
+    # R = L^-T, upper triangular: row j of R is column j of L^-1, by forward substitution.
+    for j in range(4):
+        factor[j, j] = 1.0 / lower[j, j]
+        for i in range(j + 1, 4):
+            value = 0.0
+            for k in range(j, i):
+                value -= lower[i, k] * factor[j, k]
+            factor[j, i] = value / lower[i, i]
+        for i in range(j):
+            factor[j, i] = 0.0
+        factor[j, 4] = 0.0
+    for j in range(4):
+        value = 0.0
+        for k in range(j + 1):
+            value -= total[k] * factor[k, j]
+        factor[4, j] = value / n_frames
+    factor[4, 4] = math.sqrt(n_markers / n_frames)
+    return True
+
+
+@kernel
+def _nm_reduced_into(factor: np.ndarray, n_markers: int, out: np.ndarray) -> None:
+    """``F' K F`` ``(5, 5)`` into ``out`` for NM's factor ``F`` (:func:`_nm_factor_into`) and
+    ``K = [[0, 0, -2], [0, P I_3, 0], [-2, 0, 0]]`` by blocks 1, 3, 1, ``P`` markers: the
+    symmetric matrix whose eigenvector of the largest eigenvalue is NM's (see
+    :func:`_nm_trials`). Both triangles written. A compiled kernel."""
+    for i in range(5):
+        for j in range(i, 5):
+            value = n_markers * (
+                factor[1, i] * factor[1, j]
+                + factor[2, i] * factor[2, j]
+                + factor[3, i] * factor[3, j]
+            ) - 2.0 * (factor[0, i] * factor[4, j] + factor[4, i] * factor[0, j])
+            out[i, j] = out[j, i] = value
 
 
 @kernel
@@ -647,16 +754,25 @@ def _nm_origin_scale(trial: np.ndarray) -> tuple[float, float, float, float]:
 
 
 @kernel
-def _nm_basis_into(
-    point: np.ndarray, ox: float, oy: float, oz: float, inverse_scale: float, out: np.ndarray
+def _nm_symmetric_into(
+    ww: float,
+    wx: float,
+    wy: float,
+    wz: float,
+    xx: float,
+    xy: float,
+    xz: float,
+    yy: float,
+    yz: float,
+    zz: float,
+    out: np.ndarray,
 ) -> None:
-    """The basis ``(|s|^2, s)`` of NM's data matrix (paper A eq. 22) for the unit-RMS sample
-    ``s`` of ``point`` ``(3,)`` [mm] (origin ``(ox, oy, oz)`` [mm], ``inverse_scale``
-    [mm^-1]), into ``out`` ``(4,)``. A compiled kernel."""
-    x = (point[0] - ox) * inverse_scale
-    y = (point[1] - oy) * inverse_scale
-    z = (point[2] - oz) * inverse_scale
-    out[0], out[1], out[2], out[3] = x * x + y * y + z * z, x, y, z
+    """The symmetric 4 x 4 matrix of the basis ``(w, x, y, z)`` of NM's data matrix (paper A
+    eq. 22) with these distinct entries into ``out`` ``(4, 4)``. A compiled kernel."""
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = ww, wx, wy, wz
+    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = wx, xx, xy, xz
+    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = wy, xy, yy, yz
+    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = wz, xz, yz, zz
 
 
 @kernel
@@ -688,16 +804,18 @@ def _nm_answer_into(
         u[i] /= math.sqrt(norm)
     costs[t] = 1.0 / largest
     a = u[0]
-    if not abs(a) >= eps * np.abs(u).max():
+    biggest = 0.0
+    for i in range(u.shape[0]):
+        biggest = max(biggest, abs(u[i]))
+    if not abs(a) >= eps * biggest:
         failures[t] = 2
         return
-    center_scaled = u[1:4] / (-2.0 * a)
-    squared_distance = 0.0
-    for i in range(3):
-        squared_distance += center_scaled[i] * center_scaled[i]
-    centers[t, 0] = ox + scale * center_scaled[0]
-    centers[t, 1] = oy + scale * center_scaled[1]
-    centers[t, 2] = oz + scale * center_scaled[2]
+    # The scaled centre in scalars: slices and their quotient would be allocated per trial.
+    cx, cy, cz = u[1] / (-2.0 * a), u[2] / (-2.0 * a), u[3] / (-2.0 * a)
+    squared_distance = cx * cx + cy * cy + cz * cz
+    centers[t, 0] = ox + scale * cx
+    centers[t, 1] = oy + scale * cy
+    centers[t, 2] = oz + scale * cz
     for p in range(n_markers):
         radii[t, p] = scale * math.sqrt(max(squared_distance - u[4 + p] / a, 0.0))
 
