@@ -385,3 +385,17 @@ def test_the_readme_s_knee_centres_read_the_warning_it_states():
         sds.append(result.diagnostics["center_sd_mm"])
     assert f"{min(pulls):.1f}" == stated.group(1) and f"{max(pulls):.1f}" == stated.group(2)
     assert f"{min(sds):.2f}" == stated.group(3) and f"{max(sds):.2f}" == stated.group(4)
+
+
+def test_fewer_than_three_markers_are_refused_by_name():
+    """The pass over a chunk of frames keeps three rows of the pairs' values for its isotropic
+    moments, which two markers (one pair) do not have: given two, the test reads past its own
+    rows, so it refuses them rather than return numbers from another array's."""
+    rng = np.random.default_rng(5)
+    body = rng.normal(scale=40.0, size=(2, 3))
+    turns = rotation_matrix(rng.normal(scale=0.5, size=(200, 3)))
+    markers = np.einsum("kij,mj->kmi", turns, body) + rng.normal(scale=0.5, size=(200, 2, 3))
+    with pytest.raises(ValueError, match="2 markers"):
+        by_direction.sphericity_numbers(
+            markers[None], np.array([0.25]), np.array([1]), np.array([1]), support._FLEX, 0.0
+        )

@@ -220,6 +220,11 @@ def sphericity_numbers(
     ``rounding`` of the largest coordinate, the support verdict's), then the parts the
     estimate of ``Sigma`` reads (:func:`_trial_parts`)."""
     n_trials, _, n_markers, _ = markers.shape
+    if n_markers < 3:
+        # The pass over the frames (:func:`_frame_terms_into`) needs three pairs' rows.
+        raise ValueError(
+            f"the noise-direction test needs 3 markers or more per segment, got {n_markers} markers"
+        )
     out = np.empty((n_trials, row_length(n_markers)))
     _sphericity_into(
         kernel_array(markers),
