@@ -399,3 +399,69 @@ def test_fewer_than_three_markers_are_refused_by_name():
         by_direction.sphericity_numbers(
             markers[None], np.array([0.25]), np.array([1]), np.array([1]), support._FLEX, 0.0
         )
+
+
+def _terms_by_hand(inputs: tuple, frame: int) -> np.ndarray:
+    """One frame's terms ``(n + 5,)`` of :func:`by_direction._frame_terms_into` written out in
+    plain Python floats, each sum in the order its docstring gives: the pairs' values, the
+    markers' residuals, their squares and moments, less ``X_k' K~ X_k``'s moments."""
+    positions, differences, deviations, first, z, gram, pairs, expected, isotropic = inputs
+    n_markers, n_pairs = positions.shape[1], len(first)
+    values = []
+    for p in range(n_pairs):
+        value = 0.0
+        for q in range(n_pairs):
+            value += float(gram[p, q]) * (float(deviations[q, frame]) - float(z[q]))
+        value *= 1.0 / (float(deviations[p, frame]) + float(first[p]))
+        values.append(value)
+    residuals = [0.0] * (3 * n_markers)
+    for p in range(n_pairs):
+        for i in range(3):
+            step = values[p] * float(differences[p, i, frame])
+            residuals[3 * int(pairs[0][p]) + i] += step
+            residuals[3 * int(pairs[1][p]) + i] -= step
+    terms, moments = [], [0.0] * 6
+    for m in range(n_markers):
+        r0, r1, r2 = residuals[3 * m : 3 * m + 3]
+        terms.append(r0 * r0 + r1 * r1 + r2 * r2 - float(expected[m]))
+        for k, value in enumerate((r0 * r0, r0 * r1, r0 * r2, r1 * r1, r1 * r2, r2 * r2)):
+            moments[k] += value
+    x = positions[frame].tolist()
+    for a in range(n_markers):
+        w = [0.0, 0.0, 0.0]
+        for b in range(n_markers):
+            for i in range(3):
+                w[i] += float(isotropic[a, b]) * x[b][i]
+        products = (x[a][0] * w[0], x[a][0] * w[1], x[a][0] * w[2])
+        products += (x[a][1] * w[1], x[a][1] * w[2], x[a][2] * w[2])
+        for k, value in enumerate(products):
+            moments[k] -= value
+    q00, q01, q02, q11, q12, q22 = moments
+    return np.array([*terms, q00 - q11, q11 - q22, 2.0 * q01, 2.0 * q02, 2.0 * q12])
+
+
+@pytest.mark.parametrize("n_markers", [3, 6])
+def test_a_chunk_s_terms_are_those_written_out_at_its_boundaries(n_markers):
+    """Chunks of one frame, of the chunk size less one, of it and of one more, from the first
+    frame, across a chunk's boundary and ending at the last frame: every frame's terms are
+    the bits of the plain-Python sums."""
+    rng = np.random.default_rng(12)
+    n_frames = 2 * by_direction._CHUNK + 1
+    n_pairs = n_markers * (n_markers - 1) // 2
+    inputs = (
+        rng.normal(scale=50.0, size=(n_frames, n_markers, 3)),
+        rng.normal(size=(n_pairs, 3, n_frames)),
+        rng.normal(size=(n_pairs, n_frames)),
+        rng.uniform(40.0, 80.0, n_pairs),
+        rng.normal(size=n_pairs),
+        rng.normal(size=(n_pairs, n_pairs)),
+        by_direction._pairs(n_markers),
+        rng.normal(size=n_markers),
+        rng.normal(size=(n_markers, n_markers)),
+    )
+    size = by_direction._CHUNK
+    spans = ((0, 1), (0, size - 1), (0, size), (1, size), (size - 1, 2), (n_frames - 1, 1))
+    for begin, count in (*spans, (n_frames - size - 1, size + 1)):
+        found = _frame_terms(inputs, begin, count)
+        by_hand = np.stack([_terms_by_hand(inputs, begin + j) for j in range(count)], axis=1)
+        assert np.array_equal(found, by_hand), (begin, count)
