@@ -86,3 +86,22 @@ def test_nm_on_many_markers_takes_memory_linear_in_them(method):
     call = f"jointbench.fit_center(markers, {method!r}, artefacts='warn')"
     most_mb = (4 + MANY_MARKERS) ** 2 * 8 / 2**20
     assert peak_growth_mb(setup, call, 30, MANY_MARKERS) < most_mb
+
+
+def test_nearly_noise_free_small_arcs_are_solved_as_the_full_problem():
+    """Four markers on a 2 degree arc with 1e-11 mm of noise (a simulation's rounding): the
+    scatter passes the test of a singular one, but the reduced problem's ``G' S^-1 G`` can
+    round to indefinite. Every draw gets the full problem's answer (handed on where the
+    reduced one cannot be solved), none an error from inside the linear algebra."""
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 1.0, 120)
+    spiral = 6.0 * np.pi * t
+    rotvec = np.radians(2.0) * np.stack([t * np.cos(spiral), t * np.sin(spiral), 0.3 * t], -1)
+    turns = rotation_matrix(rotvec)
+    for _ in range(60):
+        body = rng.normal(scale=50.0, size=(4, 3))
+        markers = np.einsum("fij,mj->fmi", turns, body) + np.array([10.0, -20.0, 30.0])
+        markers = markers + rng.normal(scale=1e-11, size=markers.shape)
+        full = sphere._nm_singular(markers)
+        found = sphere.fit_nm(markers)
+        assert np.linalg.norm(found.center - full.center) <= AGREEMENT * np.linalg.norm(full.center)
