@@ -5,21 +5,21 @@ determined."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 import pytest
+from test_axis_motion_check import paper_b_trials
 from test_axis_sd_validity import swing
 
 import jointbench
 from jointbench import cli
-from jointbench.configuration.seeds import trial_rng
 from jointbench.estimators import registry, results
 from jointbench.estimators.results import MAX_AXIS_POINT_SD_MM
 from jointbench.geometry import angle_between_lines_deg, rotation_about_axis
 from jointbench.io import RecordingFit
 from jointbench.io.fit import NOT_DETERMINED
-from jointbench.simulate import hinge
 
 METHODS = ("planar", "radial", "combined", "SARA")
 POINT_NOT_DETERMINED = "warning: point not determined: "
@@ -175,15 +175,10 @@ def test_the_noise_share_is_read_for_the_combined_point_only():
     assert 0.0 < combined.diagnostics["axis_point_noise_share"] < 0.1
 
 
-# Paper B's hinge grid (§3.1; config/config.yaml's hinge study, its base seed), ten trials a
-# condition, built as the study builds them.
+# Paper B's hinge grid (§3.1; config/config.yaml's hinge study, its base seed and its
+# conditions' types, which the trials' seeds are read from), ten trials a condition.
 PAPER_B_SEED = 20070507
-PAPER_B_GRID = [
-    {"protocol": joint, "fe_rom_deg": rom, "aa_ratio": ratio}
-    for joint in ("knee", "mcp")
-    for rom in (30, 60, 90)
-    for ratio in (0.1, 0.3, 0.5, 0.7)
-]
+PAPER_B_GRID = list(itertools.product(("knee", "mcp"), (30, 60, 90), (0.1, 0.3, 0.5, 0.7)))
 
 
 def test_on_paper_bs_hinge_grid_no_combined_point_is_refused_for_the_noise_share():
@@ -194,9 +189,7 @@ def test_on_paper_bs_hinge_grid_no_combined_point_is_refused_for_the_noise_share
     all 109 stay ``ok``."""
     shares, n_ok = [], 0
     for condition in PAPER_B_GRID:
-        rngs = [trial_rng(PAPER_B_SEED, "hinge", condition, trial) for trial in range(10)]
-        protocol = hinge.HINGE_PROTOCOLS[condition["protocol"]]
-        moving = hinge.simulate(condition, protocol, rngs).segments["moving"]
+        moving = paper_b_trials(*condition, 10, base_seed=PAPER_B_SEED)
         for result in registry.many("axis", "combined")(moving):
             shares.append(result.diagnostics.get("axis_point_noise_share", math.nan))
             n_ok += result.status == "ok"
