@@ -29,11 +29,13 @@ METHODS = ("planar", "radial", "combined", "SARA")
 NOT_THE_MOTIONS = "axis not the motion's"
 
 
-def paper_b_trials(protocol: str, rom_deg: float, ratio: float, n_trials: int) -> np.ndarray:
+def paper_b_trials(
+    protocol: str, rom_deg: float, ratio: float, n_trials: int, base_seed: int = 0
+) -> np.ndarray:
     """Paper B's near-hinge (AA ``ratio`` times FE, 1 mm noise) as the hinge study simulates
-    it, ``(n_trials, 121, 3, 3)`` [mm]; its true axis is x."""
+    it, from the study's ``base_seed``, ``(n_trials, 121, 3, 3)`` [mm]; its true axis is x."""
     condition = {"protocol": protocol, "fe_rom_deg": rom_deg, "aa_ratio": ratio}
-    rngs = [trial_rng(0, "hinge", condition, trial) for trial in range(n_trials)]
+    rngs = [trial_rng(base_seed, "hinge", condition, trial) for trial in range(n_trials)]
     return paper_b.simulate(condition, paper_b.HINGE_PROTOCOLS[protocol], rngs).segments["moving"]
 
 

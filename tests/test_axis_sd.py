@@ -144,15 +144,33 @@ def _numerical_hessian(markers, foot, direction, basis, step=1e-4):
     )
 
 
+def _numerical_residual_jacobian(markers, foot, direction, basis, step=1e-6):
+    """The Jacobian ``(N P, 4)`` of the radial residuals (each sample's distance from the axis
+    less its marker's mean) in (tangent angles, shift), by central differences."""
+
+    def residuals(params):
+        n = direction + basis @ params[:2]
+        n = n / np.linalg.norm(n)
+        offsets = markers - (foot + basis @ params[2:])
+        distances = np.linalg.norm(offsets - (offsets @ n)[..., None] * n, axis=-1)
+        return (distances - distances.mean(axis=0)).ravel()
+
+    unit = np.eye(4) * step
+    return np.stack([(residuals(e) - residuals(-e)) / (2 * step) for e in unit], axis=1)
+
+
 def test_the_analytic_hessians_match_the_costs_central_differences():
     markers = hinge(0, 60.0)
     direction = np.array([0.05, -0.03, 1.0]) / np.linalg.norm([0.05, -0.03, 1.0])
     foot = CENTRE + np.array([0.4, -0.2, 20.0])
     basis = precision.tangent_basis(direction)
-    gradient, hessian, cost, _ = axis._radial_derivatives(markers, foot, direction, basis)
+    derivatives = axis._radial_derivatives(markers, foot, direction, basis)
+    gradient, hessian, cost, _, gauss_newton, _ = derivatives
     assert cost == pytest.approx(float(axis.AxisCosts(markers, foot).radial(direction)), rel=1e-12)
     expected = _numerical_hessian(markers, foot, direction, basis)
     assert np.abs(hessian - expected).max() < 1e-5 * np.abs(hessian).max()
+    jacobian = _numerical_residual_jacobian(markers, foot, direction, basis)
+    assert np.abs(gauss_newton - 2.0 * jacobian.T @ jacobian).max() < 1e-6 * np.abs(hessian).max()
     scatter = axis.AxisCosts(markers, foot).scatter[0]
     planar = axis._planar_hessian(scatter, direction, basis)
     step = 1e-4
@@ -168,6 +186,46 @@ def test_the_analytic_hessians_match_the_costs_central_differences():
     assert planar[0, 0] == pytest.approx(second, rel=1e-5)
     assert planar[0, 1] == pytest.approx(mixed, rel=1e-4, abs=1e-6 * abs(planar).max())
     assert np.linalg.norm(gradient) > 0  # off the minimum: the step is not zero
+
+
+@pytest.mark.parametrize("method", ["planar", "radial", "combined"])
+def test_the_noise_term_stated_is_the_mean_of_the_residuals_term_over_noise_draws(method):
+    """The residuals' own term ``N = G - H`` of each cost at the true axis, averaged over noise
+    draws, is the expected value the cost states under unit noise times the noise's variance
+    (:func:`jointbench.estimators.axis._radial_derivatives` derives the radial one), within 4
+    standard errors in every element (10 of them: a chance of 6e-4 of one beyond)."""
+    clean = hinge(3, 20.0, noise=0.0, n_frames=50)
+    axis_direction = np.array([0.0, 0.0, 1.0])
+    rng = np.random.default_rng(11)
+    noise = 1.0
+    terms = []
+    for _ in range(400):
+        markers = clean + rng.normal(scale=noise, size=clean.shape)
+        at = axis._cost_at(markers, CENTRE, axis_direction, method, fourths=False)
+        terms.append(at.gauss_newton - at.hessian)
+    terms = np.array(terms)
+    mean, se = terms.mean(axis=0), terms.std(axis=0) / math.sqrt(len(terms))
+    stated = noise**2 * axis._cost_at(clean, CENTRE, axis_direction, method).unit_noise_term
+    assert np.all(np.abs(mean - stated) <= 4.0 * se + 1e-9 * np.abs(stated).max())
+    assert np.abs(stated).max() > 10.0 * se.max()  # a term the draws resolve, not zero
+
+
+def test_the_planar_costs_noise_share_is_its_eigen_problems_with_the_noise_stated():
+    """:func:`jointbench.estimators.precision.noise_share` of the planar cost at its eigenvector
+    is ``s^2 P (N - 1) / (lambda_1 - s^2 P (N - 1))``: the planar eigen-problem's share with the
+    answer's eigenvalue read as the stated noise's, against the smaller gap it leaves."""
+    markers = hinge(4, 10.0, noise=1.0)
+    values, vectors = np.linalg.eigh(axis.trial_scatter(markers))
+    at = axis._cost_at(markers, np.zeros(3), vectors[:, 0], "planar", fourths=False)
+    n_frames, n_markers = markers.shape[:2]
+    for noise_variance in (0.5, 1.0):
+        noise_eigenvalue = noise_variance * n_markers * (n_frames - 1)
+        expected = noise_eigenvalue / (values[1] - noise_eigenvalue)
+        assert precision.noise_share(at, noise_variance) == pytest.approx(expected, rel=1e-9)
+    assert precision.noise_share(at, 0.0) == 0.0
+    assert math.isnan(precision.noise_share(at, math.nan))  # no noise stated: not read
+    beyond = 1.01 * values[1] / (n_markers * (n_frames - 1))  # the noise takes all of the gap
+    assert precision.noise_share(at, beyond) == math.inf
 
 
 @pytest.mark.parametrize("method", LEAST_SQUARES)

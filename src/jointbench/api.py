@@ -42,6 +42,9 @@ Every method is reached through the registry, which holds it to the same rules:
   leave undetermined across the axis (``diagnostics["axis_point_sd_mm"]`` above
   :data:`jointbench.estimators.results.MAX_AXIS_POINT_SD_MM`, with its covariance in
   ``diagnostics["axis_point_covariance_mm2"]``; ``"warning: point not determined: ..."``),
+  or, for the combined cost, where under the noise the support verdict states the noise's own
+  term in the curvature that covariance is read from is not below what it leaves of it
+  (``diagnostics["axis_point_noise_share"]`` not below 1),
   whatever its direction's SD: a short arc can fix an axis's direction and leave where it lies
   open by tens of millimetres;
 * a mistake in a method's code (a ``TypeError``, an ``IndexError``, arrays that do not

@@ -41,10 +41,15 @@ off; and how far ``m`` lies from that cost's minimum (its Newton step, carried t
 added as a bias (:func:`jointbench.estimators.precision.point_covariance`). The cost is taken
 at the line through ``m`` along the planar eigenvector, for the combined answer at its own
 line: a radial answer degrees off the axis still passes through ``m``, and expanding about it
-would carry that tilt to ``h`` as if ``m`` moved with it. On swings of 3-90 degrees
-(``tests/test_axis_point_sd.py``) the squared Mahalanobis distance of the ``ok`` answers'
-points from the axis averages about 2, as a calibrated 2-D statement's should (the README
-gives the counts).
+would carry that tilt to ``h`` as if ``m`` moved with it. The covariance is first order; for
+the combined answer, where under the support verdict's noise the noise's own term in the
+combined cost's curvature is not below what it leaves of it
+(:func:`jointbench.estimators.precision.noise_share`, the radial residuals' term derived at
+:func:`_radial_derivatives`), the point is said not to be determined: on a short noisy arc the
+cost, exact in its Hessian, can then rise to the true line by a few residual variances where
+its curvature puts it at tens. On swings of 3-90 degrees (``tests/test_axis_point_sd.py``) the
+squared Mahalanobis distance of the ``ok`` answers' points from the axis averages about 2, as a
+calibrated 2-D statement's should (the README gives the counts).
 
 Search (paper B §3): MATLAB's ``fminsearch`` (Nelder–Mead, Lagarias et al. 1998) as
 re-implemented in :mod:`jointbench.numerics.simplex`, from ten starting directions: one vertex
@@ -970,12 +975,15 @@ _IDENTITY_2.setflags(write=False)
 
 def _radial_derivatives(
     markers: np.ndarray, foot: np.ndarray, direction: np.ndarray, basis: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, float, float]:
+) -> tuple[np.ndarray, np.ndarray, float, float, np.ndarray, np.ndarray]:
     """The radial cost (radii profiled out) at the axis through ``foot`` (3,) [mm] along
     ``direction`` (3,), for ``markers`` ``(N, P, 3)`` [mm], with its gradient ``(4,)`` and
     exact Hessian ``(4, 4)`` in the tangent angles ``a`` [rad] of :func:`_planar_hessian` and
-    the axis's shift ``b`` [mm] along ``basis`` ``E`` ``(3, 2)``, and its residuals' fourth
-    powers summed: ``(gradient, hessian, cost, fourths)``.
+    the axis's shift ``b`` [mm] along ``basis`` ``E`` ``(3, 2)``, its residuals' fourth
+    powers summed, the Hessian's Gauss–Newton part ``2 sum grad(rho) grad(rho)'`` ``(4, 4)``,
+    and the expected value of the rest, the residuals' own term ``-2 sum rho d2d``, under
+    isotropic noise of unit variance per coordinate ``(4, 4)`` [per mm^2]:
+    ``(gradient, hessian, cost, fourths, gauss_newton, unit_noise_term)``.
 
     A sample's offset ``w = v - m`` has ``c = n . w`` along the axis and ``x = E' w`` across it,
     its distance being ``d = |x|``. At ``a = b = 0``: ``dd/da = -c x / d``,
@@ -986,10 +994,20 @@ def _radial_derivatives(
     (the radii's own derivatives sum to zero against ``rho``). A marker on the axis
     (``d = 0``), where the cost has no derivative, gives a Hessian that is not finite.
 
+    The noise's term: a sample's noise ``e`` (variance ``s^2`` per coordinate) moves ``rho`` by
+    ``(1 - 1/N) u . e`` (``u = x / d``; along the axis and around it, not at all) and ``d2d``
+    by that radial step times ``d(d2d)/dd`` at fixed ``u`` and ``c``: ``-(c^2 (I - u u') / d^2
+    + u u')``, ``-c (I - u u') / d^2``, ``-(I - u u') / d^2`` in the three blocks. So
+    ``E[-2 sum rho d2d] = 2 s^2 (1 - 1/N) sum (blocks of (I - u u') / d^2 times c^2, c, 1,
+    plus u u' in the angle-angle block)`` to second order in the noise (read at the answer in
+    place of the noise-free axis): ``tests/test_axis_sd.py`` holds it to the mean of
+    ``G - H`` over noise draws.
+
     Summed in one compiled pass over the samples (:func:`_radial_sums`): the paper's three
     costs all state the point's precision through these derivatives, and as NumPy arrays of
     every sample they cost a long trial's planar check ten times its own statement."""
     gradient, hessian = np.empty(4), np.empty((4, 4))
+    gauss_newton, unit_noise_term = np.empty((4, 4)), np.empty((4, 4))
     cost, fourths = _radial_sums(
         kernel_array(markers),
         kernel_array(foot),
@@ -997,8 +1015,10 @@ def _radial_derivatives(
         kernel_array(basis),
         gradient,
         hessian,
+        gauss_newton,
+        unit_noise_term,
     )
-    return gradient, hessian, cost, fourths
+    return gradient, hessian, cost, fourths, gauss_newton, unit_noise_term
 
 
 @kernel
@@ -1009,10 +1029,14 @@ def _radial_sums(
     basis: np.ndarray,
     gradient: np.ndarray,
     hessian: np.ndarray,
+    gauss_newton: np.ndarray,
+    unit_noise_term: np.ndarray,
 ) -> tuple[float, float]:
     """:func:`_radial_derivatives` of ``markers`` ``(N, P, 3)`` [mm]: the gradient into
-    ``gradient`` ``(4,)`` and the Hessian into ``hessian`` ``(4, 4)``; returns the cost [mm^2]
-    and its residuals' fourth powers [mm^4]. A compiled kernel: per marker, a first pass over
+    ``gradient`` ``(4,)``, the Hessian into ``hessian`` ``(4, 4)``, its Gauss–Newton part into
+    ``gauss_newton`` and the residuals' term's expected value under unit noise into
+    ``unit_noise_term`` (both ``(4, 4)``); returns the cost [mm^2] and its residuals' fourth
+    powers [mm^4]. A compiled kernel: per marker, a first pass over
     its frames for the means of its distance and of the distance's gradient, which the radii
     profiled out subtract (two passes: on a short arc the gradient barely changes, and its
     centred products would cancel in one), and a second for the sums; the second derivatives'
@@ -1024,10 +1048,13 @@ def _radial_sums(
     # The gradient's sums, sum rho grad(d), and the centred products' upper triangle.
     g0 = g1 = g2 = g3 = 0.0
     h00 = h01 = h02 = h03 = h11 = h12 = h13 = h22 = h23 = h33 = 0.0
-    # Per block weight (c^2, c, 1): sum w, sum w u0 u0, sum w u0 u1, sum w u1 u1 (w = rho / d);
-    # and sum rho d u u' (u0 u0, u0 u1, u1 u1).
-    aa0 = aa1 = aa2 = aa3 = ab0 = ab1 = ab2 = ab3 = bb0 = bb1 = bb2 = bb3 = 0.0
+    # Per block weight (c^2, c, 1): sum w, sum w u0 u0, sum w u0 u1, sum w u1 u1 (w = rho / d,
+    # _weighted); and sum rho d u u' (u0 u0, u0 u1, u1 u1).
+    aa = ab = bb = (0.0, 0.0, 0.0, 0.0)
     outer0 = outer1 = outer2 = 0.0
+    # The noise's term (_radial_derivatives): sum u u', and the same sums with w = 1 / d^2.
+    radial0 = radial1 = radial2 = 0.0
+    noise_aa = noise_ab = noise_bb = (0.0, 0.0, 0.0, 0.0)
     # A marker's samples in the axis's coordinates (c, u0, u1, d), kept from the first pass.
     coordinates = np.empty((n_frames, 4))
     for p in range(n_markers):
@@ -1077,20 +1104,18 @@ def _radial_sums(
             h33 += o3 * o3
             weight = residual / d
             u00, u01, u11 = u0 * u0, u0 * u1, u1 * u1
-            w = weight * (c * c)
-            aa0, aa1, aa2, aa3 = aa0 + w, aa1 + w * u00, aa2 + w * u01, aa3 + w * u11
-            w = weight * c
-            ab0, ab1, ab2, ab3 = ab0 + w, ab1 + w * u00, ab2 + w * u01, ab3 + w * u11
-            bb0, bb1, bb2, bb3 = (
-                bb0 + weight,
-                bb1 + weight * u00,
-                bb2 + weight * u01,
-                bb3 + weight * u11,
-            )
+            aa = _weighted(aa, weight * (c * c), u00, u01, u11)
+            ab = _weighted(ab, weight * c, u00, u01, u11)
+            bb = _weighted(bb, weight, u00, u01, u11)
             rd = residual * d
             outer0 += rd * u00
             outer1 += rd * u01
             outer2 += rd * u11
+            radial0, radial1, radial2 = radial0 + u00, radial1 + u01, radial2 + u11
+            inverse = 1.0 / (d * d)
+            noise_aa = _weighted(noise_aa, inverse * (c * c), u00, u01, u11)
+            noise_ab = _weighted(noise_ab, inverse * c, u00, u01, u11)
+            noise_bb = _weighted(noise_bb, inverse, u00, u01, u11)
     gradient[0], gradient[1], gradient[2], gradient[3] = 2.0 * g0, 2.0 * g1, 2.0 * g2, 2.0 * g3
     centred = (
         (h00, h01, h02, h03),
@@ -1101,22 +1126,53 @@ def _radial_sums(
     for i in range(4):
         for j in range(i, 4):
             hessian[i, j] = hessian[j, i] = 2.0 * centred[i][j]
+            gauss_newton[i, j] = gauss_newton[j, i] = 2.0 * centred[i][j]
+    # The noise's term: 2 (1 - 1/N) times the blocks sum (I - u u') / d^2 times c^2, c and 1,
+    # plus sum u u' in the angle-angle block.
+    factor = 2.0 * (1.0 - 1.0 / n_frames)
+    unit_noise_term[:, :] = 0.0
+    _add_tangential_blocks(unit_noise_term, (noise_aa, noise_ab, noise_bb), factor)
+    unit_noise_term[0, 0] += factor * radial0
+    unit_noise_term[0, 1] += factor * radial1
+    unit_noise_term[1, 0] += factor * radial1
+    unit_noise_term[1, 1] += factor * radial2
     # 2 sum rho d2d: the blocks sum w (I - u u') times c^2 (angle-angle), c (angle-shift) and
     # 1 (shift-shift), less sum rho d u u' in the angle-angle block.
-    tangential = ((aa0, aa1, aa2, aa3), (ab0, ab1, ab2, ab3), (bb0, bb1, bb2, bb3))
-    for b, (row, column) in enumerate(((0, 0), (0, 2), (2, 2))):
-        t = tangential[b]
-        block = ((t[0] - t[1], -t[2]), (-t[2], t[0] - t[3]))
-        for i in range(2):
-            for j in range(2):
-                hessian[row + i, column + j] += 2.0 * block[i][j]
-                if row != column:
-                    hessian[column + j, row + i] += 2.0 * block[i][j]
+    _add_tangential_blocks(hessian, (aa, ab, bb), 2.0)
     hessian[0, 0] -= 2.0 * outer0
     hessian[0, 1] -= 2.0 * outer1
     hessian[1, 0] -= 2.0 * outer1
     hessian[1, 1] -= 2.0 * outer2
     return cost, fourths
+
+
+@kernel
+def _weighted(
+    sums: tuple[float, float, float, float], weight: float, u00: float, u01: float, u11: float
+) -> tuple[float, float, float, float]:
+    """``sums`` of a weight ``w`` and of ``w`` times ``u0 u0``, ``u0 u1``, ``u1 u1`` with one
+    sample's ``weight`` and products added (:func:`_radial_sums`). A compiled kernel."""
+    return (
+        sums[0] + weight,
+        sums[1] + weight * u00,
+        sums[2] + weight * u01,
+        sums[3] + weight * u11,
+    )
+
+
+@kernel
+def _add_tangential_blocks(matrix: np.ndarray, sums: tuple, scale: float) -> None:
+    """Add to ``matrix`` ``(4, 4)`` ``scale`` times the blocks ``sum w (I - u u')`` of the
+    angle-angle, angle-shift (and its transpose) and shift-shift parts, from each block's
+    :func:`_weighted` ``sums``. A compiled kernel."""
+    for b, (row, column) in enumerate(((0, 0), (0, 2), (2, 2))):
+        t = sums[b]
+        block = ((t[0] - t[1], -t[2]), (-t[2], t[0] - t[3]))
+        for i in range(2):
+            for j in range(2):
+                matrix[row + i, column + j] += scale * block[i][j]
+                if row != column:
+                    matrix[column + j, row + i] += scale * block[i][j]
 
 
 @kernel
@@ -1171,28 +1227,37 @@ def _cost_at(
 ) -> precision.CostAt:
     """``method``'s cost at the axis through ``point`` (3,) [mm] along ``direction`` (3,) on the
     distinct frames ``markers`` ``(N_d, P, 3)`` [mm], with its analytic gradient and Hessian
-    (:func:`_direction_precision`); its residuals' fourth powers NaN unless ``fourths`` asks
-    for them (the point's covariance does not read them, and the planar residuals' take a
-    pass over every sample: :func:`_planar_terms`)."""
+    (:func:`_direction_precision`), the Hessian's Gauss–Newton part and the residuals' term's
+    expected value under unit noise (:func:`jointbench.estimators.precision.noise_share`); its
+    residuals' fourth powers NaN unless ``fourths`` asks for them (the point's covariance does
+    not read them, and the planar residuals' take a pass over every sample:
+    :func:`_planar_terms`)."""
     n_frames, n_markers = markers.shape[:2]
     basis = precision.tangent_basis(direction)
     n_params = 2 if method == "planar" else 4
-    if method == "planar":
-        gradient, hessian, cost, summed = _planar_terms(markers, direction, basis, fourths)
-    else:
-        gradient, hessian = np.zeros(n_params), np.zeros((n_params, n_params))
-        cost, summed = 0.0, 0.0
-    if method == "combined":
-        planar = _planar_terms(markers, direction, basis, fourths)
-        gradient[:2], hessian[:2, :2], cost, summed = planar
+    gradient, hessian = np.zeros(n_params), np.zeros((n_params, n_params))
+    gauss_newton, unit_noise_term = np.zeros((n_params, n_params)), np.zeros((n_params, n_params))
+    cost, summed = 0.0, 0.0
+    if method != "radial":
+        gradient[:2], hessian[:2, :2], cost, summed = _planar_terms(
+            markers, direction, basis, fourths
+        )
+        # The planar residuals n . u have second derivative -(n . u) I in the tangent angles
+        # (_planar_hessian): their term is 2 (n' S n) I, whose expected value under noise of
+        # unit variance is 2 I per residual less the centroids taken out, P (N - 1).
+        gauss_newton[:2, :2] = hessian[:2, :2] + 2.0 * cost * _IDENTITY_2
+        unit_noise_term[:2, :2] = 2.0 * n_markers * (n_frames - 1) * _IDENTITY_2
     if method != "planar":
         foot = point + direction * float(direction @ (_centroid(markers) - point))
         radial = _radial_derivatives(markers, foot, direction, basis)
         gradient, hessian = gradient + radial[0], hessian + radial[1]
         cost, summed = cost + radial[2], summed + radial[3]
+        gauss_newton, unit_noise_term = gauss_newton + radial[4], unit_noise_term + radial[5]
     n_residuals = _RESIDUAL_SETS[method] * n_markers * n_frames
     dof = _RESIDUAL_SETS[method] * n_markers * (n_frames - 1) - n_params
-    return precision.cost_at(gradient, hessian, cost, summed, n_residuals, dof)
+    return precision.cost_at(
+        gradient, hessian, cost, summed, n_residuals, dof, gauss_newton, unit_noise_term
+    )
 
 
 def _direction_precision(
@@ -1254,12 +1319,12 @@ def _annotated(result: AxisResult, markers: np.ndarray, verdict: Support) -> Axi
         annotated = precision.annotate_validity(annotated, *eigen, "the planar cost's scatter")
     annotated = precision.annotate_travel(annotated, verdict.motion_axis, cost_name)
     annotated = _misfit_annotated(annotated, at, markers.shape[:2], verdict)
-    return precision.annotate_point(annotated, _point_covariance(result, markers, at, verdict))
+    return precision.annotate_point(annotated, *_point_covariance(result, markers, at, verdict))
 
 
 def _point_covariance(
     result: AxisResult, markers: np.ndarray, at: precision.CostAt, verdict: Support
-) -> np.ndarray:
+) -> tuple[np.ndarray, float]:
     """The covariance ``(3, 3)`` [mm^2] of ``result``'s point ``m`` across the axis, for the
     distinct frames ``markers`` ``(N_d, P, 3)`` [mm] (module notes: which point, and why the
     circles' cost states it): :func:`jointbench.estimators.precision.point_covariance` of the
@@ -1267,18 +1332,35 @@ def _point_covariance(
     read), else at the line through ``m`` along the planar eigenvector the result carries; on
     the markers that read the rotation to first order where the support ``verdict``'s levers
     leave some out but not all, as the direction's SD is read
-    (:func:`_first_order_annotated`)."""
+    (:func:`_first_order_annotated`). With it, for the combined answer, the stated noise's
+    share of that cost's curvature (:func:`jointbench.estimators.precision.noise_share`, the
+    verdict's rigid-body noise): its line is that cost's own minimum, which no other check
+    holds to the noise's share (module notes); NaN for the others, whose lines are the planar
+    eigenvector's, held to its eigen-problem's share (the planar answer's own check, and the
+    radial answer's comparison with it)."""
     point = np.asarray(result.point)
     first_order = precision.first_order_markers(verdict.motion_axis)
     if first_order is not None and first_order.any() and not first_order.all():
         markers = markers[:, first_order]
     elif result.method == "combined":
-        return _point_covariance_at(at, point, np.asarray(result.direction), markers)
+        covariance = _point_covariance_at(at, point, np.asarray(result.direction), markers)
+        return covariance, precision.noise_share(at, _noise_variance(verdict))
     direction = np.asarray(
         result.direction if result.method == "combined" else result.diagnostics["eigenvector"]
     )
     at = _cost_at(markers, point, direction, "combined", fourths=False)
-    return _point_covariance_at(at, point, direction, markers)
+    covariance = _point_covariance_at(at, point, direction, markers)
+    if result.method != "combined":
+        return covariance, math.nan
+    return covariance, precision.noise_share(at, _noise_variance(verdict))
+
+
+def _noise_variance(verdict: Support) -> float:
+    """The marker noise's variance per coordinate [mm^2] the support ``verdict`` states, from
+    its rigid-body residual; NaN where it did not assess the data."""
+    if not verdict.diagnostics.get("assessed", False):
+        return math.nan
+    return verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
 
 
 def _point_covariance_at(
@@ -1348,7 +1430,7 @@ def _misfit_annotated(
     if not verdict.diagnostics.get("assessed", False):
         why = "the support verdict did not assess the data (no rigid-body residual)"
         return precision.annotate_misfit(result, None, why)
-    noise = verdict.diagnostics["rigid_residual_mm"] ** 2 / 3.0
+    noise = _noise_variance(verdict)
     n_frames, n_markers = shape
     found = precision.misfit(at, noise, precision.rigid_dof(n_markers, n_frames))
     if found is None:

@@ -231,6 +231,27 @@ point by its height along the axis, with the cost's Newton step as a bias (paper
 :mod:`jointbench.estimators.axis`); SARA states its point from its normal matrix, with the
 pull of its rotations' noise as the bias (:mod:`jointbench.estimators.twosegment`).
 
+That covariance is first order, as the direction's SD is, and fails where the planar SD does,
+in the errors-in-variables regime. The exact Hessian ``H`` of a least-squares cost is its
+Gauss–Newton part ``G = 2 sum grad(r) grad(r)'`` less the residuals' own term ``N = -2 sum r
+d2r``. Where the residuals are noise, ``N`` is the noise's: for the planar cost ``N = 2 (n' S n)
+I``, and ``lambda_0 / gap`` above is the largest eigenvalue of ``H^-1 N``. Read off the
+residuals, though, ``N`` also holds whatever motion the cost does not model (paper B's coupled
+abduction, whose misfit made that share 2-20 on its hinge grid while the answers' points lay
+within a millimetre of the axis). So the share is read from the stated noise instead: the
+expected value of ``N`` under the support verdict's rigid-body noise ``s^2``, which to second
+order in the noise is ``-2 s^2 sum grad_v(r) . grad_v(d2r)``, each residual's derivative in its
+marker's coordinates times its second derivative's (for the planar residuals ``2 s^2 P (N - 1)
+I``, the planar share with ``lambda_0`` read as the noise's ``s^2 P (N - 1)``; the radial
+residuals' is derived in :mod:`jointbench.estimators.axis`), against the curvature the cost's
+model then leaves, ``G - E[N]`` (``E[H]`` under that model; ``H`` itself also takes the
+misfit's term out). Where the largest eigenvalue of ``(G - E[N])^-1 E[N]`` (:func:`noise_share`)
+is not below 1, in any combination of the parameters, the noise's own term is the larger, the
+expansion the covariance rests on does not hold, and :func:`annotate_point` says the point is
+not determined. It is read for the combined answer, whose line is the combined cost's own
+minimum; the planar and radial answers' points are read at the planar eigenvector's line,
+whose eigen-problem the planar check holds to the same share.
+
 The simulated studies call the registered functions without this check, as they do without the
 self-check, so their results are the papers' methods alone.
 """
@@ -283,6 +304,7 @@ __all__ = [
     "first_order_markers",
     "line_angle_deg",
     "misfit",
+    "noise_share",
     "point_covariance",
     "rigid_dof",
     "smaller_eigenvalue",
@@ -383,14 +405,18 @@ def point_covariance(at: CostAt, direction: np.ndarray, height: float) -> np.nda
     return basis @ across @ basis.T
 
 
-def annotate_point(result, covariance: np.ndarray):
+def annotate_point(result, covariance: np.ndarray, share: float = math.nan):
     """``result`` with ``diagnostics["axis_point_covariance_mm2"]``, the ``covariance``
     ``(3, 3)`` [mm^2] of its point across the axis (:func:`point_covariance`), and
     ``diagnostics["axis_point_sd_mm"]``, the point's SD along its least determined direction
     across the axis [mm] (the root of the covariance's largest eigenvalue); above
-    :data:`MAX_AXIS_POINT_SD_MM`, a warning that the point is not determined. The direction's
-    statements are left as they are: a short arc can fix the axis's direction and leave where
-    it lies open. ``converged`` is left as the method set it."""
+    :data:`MAX_AXIS_POINT_SD_MM`, a warning that the point is not determined. ``share``, where
+    the covariance was read from a cost whose own minimum the answer's line is, is that cost's
+    :func:`noise_share` under the stated noise (``diagnostics["axis_point_noise_share"]``);
+    where it is not below 1 the noise's own term, which the first-order covariance leaves out,
+    is the larger, and the point is said not to be determined either (module docstring). NaN:
+    not read. The direction's statements are left as they are: a short arc can fix the axis's
+    direction and leave where it lies open. ``converged`` is left as the method set it."""
     covariance = np.asarray(covariance, dtype=float)
     finite = np.isfinite(covariance).all()
     sd_mm = math.sqrt(max(float(np.linalg.eigvalsh(covariance)[-1]), 0.0)) if finite else math.inf
@@ -403,7 +429,16 @@ def annotate_point(result, covariance: np.ndarray):
             f"{MAX_AXIS_POINT_SD_MM:g} mm), so the line may lie anywhere that far from the point "
             "given, whatever its direction's SD",
         )
+    elif share >= 1.0:
+        said = "takes all of" if math.isinf(share) else f"is {share:.2g} times what is left of"
+        warnings = (
+            f"point not determined: under the stated noise the noise's own term {said} the "
+            f"curvature its SD across the axis ({sd_mm:.1f} mm) is read from (a share not below "
+            "1), so the SD leaves out the larger part of the error",
+        )
     diagnostics = {"axis_point_sd_mm": sd_mm, "axis_point_covariance_mm2": covariance.tolist()}
+    if not math.isnan(share):
+        diagnostics["axis_point_noise_share"] = share
     return with_warnings(result, warnings, diagnostics)
 
 
@@ -465,6 +500,11 @@ class CostAt(NamedTuple):
     dof: int  # residuals less the centroids or radii they are taken from, less parameters
     inverse: np.ndarray | None  # (k, k) H^-1; None where H is not positive definite
     least: float  # the cost at the minimum a Newton step reaches [mm^2]; NaN without inverse
+    # (k, k): H's Gauss-Newton part 2 sum grad(r) grad(r)', and the expected value of the rest,
+    # the residuals' own term, under noise of unit variance per coordinate (noise_share); None
+    # where the cost gave none.
+    gauss_newton: np.ndarray | None = None
+    unit_noise_term: np.ndarray | None = None
 
 
 def cost_at(
@@ -474,19 +514,68 @@ def cost_at(
     fourths: float,
     n_residuals: int,
     dof: int,
+    gauss_newton: np.ndarray | None = None,
+    unit_noise_term: np.ndarray | None = None,
 ) -> CostAt:
     """The :class:`CostAt` of a least-squares cost with ``gradient`` ``g`` ``(k,)`` and
     ``hessian`` ``H`` ``(k, k)`` at the answer, its value ``cost`` [mm^2], its residuals'
     summed ``fourths`` powers [mm^4], their number ``n_residuals`` and its ``dof``: with
     ``H^-1`` and ``f - g' H^-1 g / 2``, the cost at the minimum a Newton step reaches (not below
-    zero), where ``H`` is positive definite and both are finite."""
+    zero), where ``H`` is positive definite and both are finite; ``gauss_newton`` and
+    ``unit_noise_term`` ``(k, k)``, where the caller has them, are ``H``'s Gauss–Newton part
+    and the expected value of the residuals' own term under unit noise (:func:`noise_share`)."""
     # The arrays' own methods: np.all, np.diag and np.outer would cost a quarter of the rest.
     hessian, gradient = np.asarray(hessian, dtype=float), np.asarray(gradient, dtype=float)
     inverse = _positive_definite_inverse(hessian) if np.isfinite(gradient).all() else None
-    if inverse is None:
-        return CostAt(gradient, hessian, cost, fourths, n_residuals, dof, None, math.nan)
-    least = max(cost - 0.5 * float(gradient @ inverse @ gradient), 0.0)
-    return CostAt(gradient, hessian, cost, fourths, n_residuals, dof, inverse, least)
+    least = math.nan
+    if inverse is not None:
+        least = max(cost - 0.5 * float(gradient @ inverse @ gradient), 0.0)
+    return CostAt(
+        gradient,
+        hessian,
+        cost,
+        fourths,
+        n_residuals,
+        dof,
+        inverse,
+        least,
+        gauss_newton,
+        unit_noise_term,
+    )
+
+
+def noise_share(at: CostAt, noise_variance: float) -> float:
+    """The noise's own share of a least-squares cost's curvature ``at`` an answer, under the
+    stated noise ``noise_variance`` [mm^2] per coordinate (module docstring): the largest
+    eigenvalue of ``(G - E[N])^-1 E[N]``, ``G`` the cost's Gauss–Newton Hessian and ``E[N] =
+    noise_variance`` times its ``unit_noise_term``, the residuals' own term's expected value,
+    in whichever combination of the parameters it is largest (unitless: the parameters' units
+    cancel). For the planar cost alone at its eigenvector it is ``lambda_0 / (lambda_1 -
+    lambda_0)`` with ``lambda_0 = s^2 P (N - 1)``: the planar eigen-problem's share
+    (:func:`annotate_validity`), the answer's eigenvalue read as the stated noise's. ``inf``
+    where ``G - E[N]`` is not positive definite (the noise's term takes all of the curvature in
+    some combination); NaN where the cost gave no such terms or the noise is not stated
+    (NaN)."""
+    if at.gauss_newton is None or at.unit_noise_term is None or not noise_variance >= 0.0:
+        return math.nan
+    expected = noise_variance * at.unit_noise_term
+    model = at.gauss_newton - expected
+    if not (np.isfinite(model).all() and np.isfinite(expected).all()):
+        return math.nan
+    # The generalised eigenvalues of (E[N], G - E[N]), read from both scaled to G - E[N]'s unit
+    # diagonal, where positive definiteness is judged (as _positive_definite_inverse does).
+    diagonal = model.diagonal()
+    if not (diagonal > 0.0).all():
+        return math.inf
+    scale = 1.0 / np.sqrt(diagonal)
+    scaling = scale[:, None] * scale
+    try:
+        factor = np.linalg.cholesky(model * scaling)
+    except np.linalg.LinAlgError:
+        return math.inf
+    share = np.linalg.solve(factor, expected * scaling)
+    share = np.linalg.solve(factor, share.T)
+    return float(np.linalg.eigvalsh(0.5 * (share + share.T))[-1])
 
 
 def _positive_definite_inverse(hessian: np.ndarray) -> np.ndarray | None:

@@ -126,9 +126,14 @@ def stated_point_sd(result) -> float | None:
     precision: the one the method gives (``diagnostics["axis_point_sd_mm"]``), at most
     :data:`MAX_AXIS_POINT_SD_MM`, above which the status says the point is not determined, and
     only where the answer's SD states a precision at all (:func:`states_precision`: the point's
-    is read from the same cost); ``None`` otherwise, and where the method gives none."""
+    is read from the same cost) and the stated noise's share of the curvature it is read from
+    is below 1 (``diagnostics["axis_point_noise_share"]``, where given:
+    :func:`jointbench.estimators.precision.annotate_point`); ``None`` otherwise, and where the
+    method gives none."""
     sd = result.diagnostics.get("axis_point_sd_mm")
     if sd is None or not states_precision(result):
+        return None
+    if result.diagnostics.get("axis_point_noise_share", 0.0) >= 1.0:
         return None
     # NaN fails the comparison: it states nothing either; nor does a negative number.
     return float(sd) if 0.0 <= sd <= MAX_AXIS_POINT_SD_MM else None
