@@ -70,7 +70,11 @@ def _shared(run: FinishedRun):
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Put each test that uses a shared run in the group named after the run's fixture
-    (before pytest-xdist reads the groups)."""
+    (before pytest-xdist reads the groups), and the end-to-end tests first."""
+    # pytest-xdist hands the tests out in this order, a few at a time to whichever worker is
+    # free: the runs of Snakemake, the longest tests (a minute or more each), start first, so
+    # that neither worker is left with one of them while the other has finished.
+    items.sort(key=lambda item: item.get_closest_marker("pipeline") is None)
     for item in items:
         runs = SHARED_RUNS & set(item.fixturenames)
         # A test of two runs would be in a group of its own, beside the tests that edit them.

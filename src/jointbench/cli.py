@@ -45,6 +45,7 @@ from jointbench.io import ARTEFACT_POLICIES, DEFAULT_METHODS, Recording, prepare
 from jointbench.io.fit import CENTER_IS, NOT_DETERMINED, SD_NAMES, SD_STATED, point_precision
 from jointbench.io.segments import HELD_SAMPLES, LAB_FIXED_FLAG, LAB_FIXED_MM
 from jointbench.papers import paper_labels
+from jointbench.precompile import precompile
 from jointbench.report import (
     dry_run_pending,
     jobs_named,
@@ -121,6 +122,15 @@ def _snapshot(args: argparse.Namespace) -> int:
     args.output.parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(args.output, index=False, float_format="%.12g")
     print(f"wrote {len(table)} values to {args.output}")
+    return 0
+
+
+def _precompile(args: argparse.Namespace) -> int:
+    total = 0.0
+    for kind, method, seconds in precompile():
+        print(f"{kind:<13} {method:<20} {seconds:8.2f} s")
+        total += seconds
+    print(f"compiled (or loaded from the cache) every method's kernels in {total:.1f} s")
     return 0
 
 
@@ -723,6 +733,19 @@ def _parser() -> argparse.ArgumentParser:
     _run_options(readme)
     readme.add_argument("--readme", type=Path, default=Path("README.md"))
     readme.set_defaults(run=_readme)
+
+    compile_all = sub.add_parser(
+        "precompile",
+        help="compile every built-in method's kernels now (minutes of one core in a fresh "
+        "install), so that no fit, job or test pays for it later",
+        description="Fit one small synthetic trial per built-in method and kind, by every path "
+        "(checked and not, one trial and a batch), so that every compiled kernel is in Numba's "
+        "cache beside the package: later processes load them. Run it once after installing, "
+        "before many jobs start at once (a cluster run), which would each compile the same "
+        "kernels.",
+        formatter_class=_Formatter,
+    )
+    compile_all.set_defaults(run=_precompile)
     return parser
 
 
