@@ -737,7 +737,7 @@ def _parser() -> argparse.ArgumentParser:
     compile_all = sub.add_parser(
         "precompile",
         help="compile every built-in method's kernels now (minutes of one core in a fresh "
-        "install), so that no fit, job or test pays for it later",
+        "install), so that later fits and jobs load them from the cache",
         description="Fit one small synthetic trial per built-in method and kind, by every path "
         "(checked and not, one trial and a batch), so that every compiled kernel is in Numba's "
         "cache beside the package: later processes load them. Run it once after installing, "
