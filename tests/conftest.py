@@ -71,9 +71,6 @@ def _shared(run: FinishedRun):
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Put each test that uses a shared run in the group named after the run's fixture
     (before pytest-xdist reads the groups)."""
-    # Not reordered, end-to-end tests first, on purpose: measured on CI, the tests took
-    # 17 min 55 s in the files' order and 20 min 0 s so reordered, likely because both workers
-    # then reach the checks' compiled kernels together and each compiles them.
     for item in items:
         runs = SHARED_RUNS & set(item.fixturenames)
         # A test of two runs would be in a group of its own, beside the tests that edit them.
